@@ -1,0 +1,1 @@
+//! The controller's equations, shared by the continuous simulation and the real-time controller.

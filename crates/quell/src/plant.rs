@@ -1,0 +1,124 @@
+//! The plant (1): ẋ = A x + B u_d + D ω(t), y = C x + Q ω(t), with per-channel input delays τ_i.
+
+use nalgebra::{DMatrix, DVector};
+use thiserror::Error;
+
+/// A plant checked for consistent shapes, finite entries and non-negative delays.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plant {
+    /// State matrix, n×n.
+    pub A: DMatrix<f64>,
+    /// Input matrix, n×m.
+    pub B: DMatrix<f64>,
+    /// Output matrix, m×n.
+    pub C: DMatrix<f64>,
+    /// Disturbance-to-state matrix, n×k.
+    pub D: DMatrix<f64>,
+    /// Disturbance-to-output matrix, m×k (used only by the simulated plant).
+    pub Q: DMatrix<f64>,
+    /// Input delays τ_i ≥ 0, one per channel.
+    pub delays: Vec<f64>,
+    /// Initial state x(0).
+    pub x0: DVector<f64>,
+}
+
+/// Why a set of matrices is not a plant. `name` is the matrix's name (`"A"`, `"B"`, …).
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum PlantError {
+    #[error("{name}: expected a {expected_rows}×{expected_cols} matrix, found {rows}×{cols}")]
+    Shape {
+        name: &'static str,
+        expected_rows: usize,
+        expected_cols: usize,
+        rows: usize,
+        cols: usize,
+    },
+    #[error("{name}[{row}][{col}]: expected a finite number, found {value}")]
+    NonFinite {
+        name: &'static str,
+        row: usize,
+        col: usize,
+        value: f64,
+    },
+    #[error("delays[{index}]: expected a finite delay ≥ 0, found {value}")]
+    BadDelay { index: usize, value: f64 },
+    #[error("{name}: expected {expected} entries (one per {per}), found {found}")]
+    Length {
+        name: &'static str,
+        per: &'static str,
+        expected: usize,
+        found: usize,
+    },
+    #[error("A: the plant needs at least one state, input and output (n, m ≥ 1); found n = {n}, m = {m}")]
+    Empty { n: usize, m: usize },
+}
+
+fn check(name: &'static str, M: &DMatrix<f64>, rows: usize, cols: usize) -> Result<(), PlantError> {
+    if M.nrows() != rows || M.ncols() != cols {
+        return Err(PlantError::Shape {
+            name,
+            expected_rows: rows,
+            expected_cols: cols,
+            rows: M.nrows(),
+            cols: M.ncols(),
+        });
+    }
+    for r in 0..rows {
+        for c in 0..cols {
+            let value = M[(r, c)];
+            if !value.is_finite() {
+                return Err(PlantError::NonFinite { name, row: r, col: c, value });
+            }
+        }
+    }
+    Ok(())
+}
+
+impl Plant {
+    /// Builds a plant, checking every shape against n = rows(A), m = cols(B), k = cols(D).
+    /// `x0 = None` means x(0) = 0.
+    pub fn new(
+        A: DMatrix<f64>,
+        B: DMatrix<f64>,
+        C: DMatrix<f64>,
+        D: DMatrix<f64>,
+        Q: DMatrix<f64>,
+        delays: Vec<f64>,
+        x0: Option<DVector<f64>>,
+    ) -> Result<Self, PlantError> {
+        let (n, m, k) = (A.nrows(), B.ncols(), D.ncols());
+        if n == 0 || m == 0 {
+            return Err(PlantError::Empty { n, m });
+        }
+        check("A", &A, n, n)?;
+        check("B", &B, n, m)?;
+        check("C", &C, m, n)?;
+        check("D", &D, n, k)?;
+        check("Q", &Q, m, k)?;
+        if delays.len() != m {
+            return Err(PlantError::Length { name: "delays", per: "input", expected: m, found: delays.len() });
+        }
+        if let Some((index, &value)) = delays.iter().enumerate().find(|(_, d)| !(d.is_finite() && **d >= 0.0)) {
+            return Err(PlantError::BadDelay { index, value });
+        }
+        let x0 = x0.unwrap_or_else(|| DVector::zeros(n));
+        if x0.len() != n {
+            return Err(PlantError::Length { name: "x0", per: "state", expected: n, found: x0.len() });
+        }
+        check("x0", &DMatrix::from_column_slice(n, 1, x0.as_slice()), n, 1)?;
+        Ok(Plant { A, B, C, D, Q, delays, x0 })
+    }
+
+    /// State dimension n.
+    pub fn n(&self) -> usize {
+        self.A.nrows()
+    }
+    /// Number of inputs = outputs = channels m.
+    pub fn m(&self) -> usize {
+        self.B.ncols()
+    }
+    /// Number of disturbance components k.
+    pub fn k(&self) -> usize {
+        self.D.ncols()
+    }
+}
