@@ -1,1 +1,107 @@
-//! Small dense linear-algebra helpers.
+//! Small dense linear-algebra helpers shared by the design layer.
+
+use nalgebra::{Complex, DMatrix};
+
+/// Coefficients `[a_0, …, a_{q−1}]` of the monic polynomial ∏(s − p_j) = s^q + a_{q−1}s^{q−1} + … + a_0.
+/// The poles must be closed under conjugation (callers check); imaginary round-off is dropped.
+pub fn poly_from_roots(poles: &[Complex<f64>]) -> Vec<f64> {
+    // c holds the monic polynomial's coefficients, ascending, with the leading 1 last.
+    let mut c = vec![Complex::new(1.0, 0.0)];
+    for &p in poles {
+        c.insert(0, Complex::new(0.0, 0.0));
+        for i in 0..c.len() - 1 {
+            let next = c[i + 1];
+            c[i] -= p * next;
+        }
+    }
+    c.pop();
+    c.into_iter().map(|z| z.re).collect()
+}
+
+/// Companion matrix of the monic polynomial with ascending coefficients `a` (length q): ones on the
+/// superdiagonal, last row −[a_0, …, a_{q−1}]. With input vector e_q, the transfer function to
+/// the first state is 1 / (s^q + a_{q−1}s^{q−1} + … + a_0).
+pub fn companion(a: &[f64]) -> DMatrix<f64> {
+    let q = a.len();
+    DMatrix::from_fn(q, q, |r, c| {
+        if r + 1 == q {
+            -a[c]
+        } else if c == r + 1 {
+            1.0
+        } else {
+            0.0
+        }
+    })
+}
+
+/// Block-diagonal matrix of the given blocks.
+pub fn blkdiag(blocks: &[DMatrix<f64>]) -> DMatrix<f64> {
+    let rows = blocks.iter().map(|b| b.nrows()).sum();
+    let cols = blocks.iter().map(|b| b.ncols()).sum();
+    let mut M = DMatrix::zeros(rows, cols);
+    let (mut r, mut c) = (0, 0);
+    for b in blocks {
+        M.view_mut((r, c), (b.nrows(), b.ncols())).copy_from(b);
+        r += b.nrows();
+        c += b.ncols();
+    }
+    M
+}
+
+/// Eigenvalues of a real square matrix, sorted by real part then imaginary part.
+pub fn eigenvalues(M: &DMatrix<f64>) -> Vec<Complex<f64>> {
+    if M.nrows() == 0 {
+        return Vec::new();
+    }
+    let mut ev: Vec<Complex<f64>> = M.complex_eigenvalues().iter().copied().collect();
+    ev.sort_by(|a, b| a.re.total_cmp(&b.re).then(a.im.total_cmp(&b.im)));
+    ev
+}
+
+/// Condition number σ_max/σ_min in the 2-norm (∞ for a singular or empty matrix).
+pub fn cond(M: &DMatrix<f64>) -> f64 {
+    let s = M.singular_values();
+    let (max, min) = (s.max(), s.min());
+    if min > 0.0 && s.len() > 0 {
+        max / min
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// Numerical rank: the number of singular values above `max(rows, cols)·eps·σ_max`.
+pub fn numerical_rank(M: &DMatrix<f64>) -> usize {
+    if M.is_empty() {
+        return 0;
+    }
+    let s = M.singular_values();
+    let tol = M.nrows().max(M.ncols()) as f64 * f64::EPSILON * s.max();
+    s.iter().filter(|&&v| v > tol).count()
+}
+
+/// True when every eigenvalue has real part below −`margin`.
+pub fn hurwitz(eigs: &[Complex<f64>], margin: f64) -> bool {
+    eigs.iter().all(|e| e.re < -margin)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn poly_of_paper_filter_poles() {
+        // (s + 1)(s + 6) = s² + 7s + 6: the paper's G_g1 = [[0, 1], [−6, −7]] (Section VIII).
+        let a = poly_from_roots(&[Complex::new(-1.0, 0.0), Complex::new(-6.0, 0.0)]);
+        assert_eq!(a, vec![6.0, 7.0]);
+        assert_eq!(
+            companion(&a),
+            DMatrix::from_row_slice(2, 2, &[0.0, 1.0, -6.0, -7.0])
+        );
+        // (s + 1)(s + 2)(s + 3) = s³ + 6s² + 11s + 6: the paper's third G_ω block.
+        let a = poly_from_roots(&[-1.0, -2.0, -3.0].map(|r| Complex::new(r, 0.0)));
+        assert_eq!(a, vec![6.0, 11.0, 6.0]);
+        // (s − (−1 + 2i))(s − (−1 − 2i)) = s² + 2s + 5.
+        let a = poly_from_roots(&[Complex::new(-1.0, 2.0), Complex::new(-1.0, -2.0)]);
+        assert_eq!(a, vec![5.0, 2.0]);
+    }
+}

@@ -67,7 +67,12 @@ fn check(name: &'static str, M: &DMatrix<f64>, rows: usize, cols: usize) -> Resu
         for c in 0..cols {
             let value = M[(r, c)];
             if !value.is_finite() {
-                return Err(PlantError::NonFinite { name, row: r, col: c, value });
+                return Err(PlantError::NonFinite {
+                    name,
+                    row: r,
+                    col: c,
+                    value,
+                });
             }
         }
     }
@@ -96,17 +101,39 @@ impl Plant {
         check("D", &D, n, k)?;
         check("Q", &Q, m, k)?;
         if delays.len() != m {
-            return Err(PlantError::Length { name: "delays", per: "input", expected: m, found: delays.len() });
+            return Err(PlantError::Length {
+                name: "delays",
+                per: "input",
+                expected: m,
+                found: delays.len(),
+            });
         }
-        if let Some((index, &value)) = delays.iter().enumerate().find(|(_, d)| !(d.is_finite() && **d >= 0.0)) {
+        if let Some((index, &value)) = delays
+            .iter()
+            .enumerate()
+            .find(|(_, d)| !(d.is_finite() && **d >= 0.0))
+        {
             return Err(PlantError::BadDelay { index, value });
         }
         let x0 = x0.unwrap_or_else(|| DVector::zeros(n));
         if x0.len() != n {
-            return Err(PlantError::Length { name: "x0", per: "state", expected: n, found: x0.len() });
+            return Err(PlantError::Length {
+                name: "x0",
+                per: "state",
+                expected: n,
+                found: x0.len(),
+            });
         }
         check("x0", &DMatrix::from_column_slice(n, 1, x0.as_slice()), n, 1)?;
-        Ok(Plant { A, B, C, D, Q, delays, x0 })
+        Ok(Plant {
+            A,
+            B,
+            C,
+            D,
+            Q,
+            delays,
+            x0,
+        })
     }
 
     /// State dimension n.

@@ -1,16 +1,402 @@
-//! The design layer: from a plant and the designer's choices to every gain the controller needs.
+//! The design layer: from a [`Plant`] and the designer's choices ([`DesignSpec`]) to every gain the
+//! controller needs ([`Design`]), with the paper's assumptions checked on the way.
 
 pub mod assumptions;
+pub mod decouple;
+pub mod internal_model;
 pub mod place;
 
+use nalgebra::{Complex, DMatrix};
+use thiserror::Error;
+
+pub use assumptions::{controllability, observability, RankTest};
+pub use decouple::{falb_wolovich, relative_degrees, FalbWolovich};
+pub use internal_model::{filter_pair, internal_model};
 pub use place::{place, PlaceError};
 
-/// The designer's choices. (placeholder)
-pub struct DesignSpec;
-/// Observer choice. (placeholder)
-pub enum ObserverChoice {}
-/// The design. (placeholder)
-pub struct Design;
-/// Design errors. (placeholder)
-#[derive(Debug, thiserror::Error)]
-pub enum DesignError {}
+use crate::linalg::{eigenvalues, hurwitz, numerical_rank, poly_from_roots};
+use crate::plant::Plant;
+
+/// How the Luenberger observer gain L of eq. (6) is chosen.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ObserverChoice {
+    /// L given (n×m).
+    Gain(DMatrix<f64>),
+    /// L = place(Aᵀ, Cᵀ, poles)ᵀ, so that eig(A − LC) = poles.
+    Poles(Vec<Complex<f64>>),
+}
+
+/// The designer's choices. Pole lists hold every pole (a complex pair appears as both conjugates).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DesignSpec {
+    pub observer: ObserverChoice,
+    /// Per output i: the σ_i poles λ_ij of G_ii(s).
+    pub channel_poles: Vec<Vec<Complex<f64>>>,
+    /// Per reference component: the q_gi poles of the filter (G_gi, l_gi), eq. (10).
+    pub reference_filter_poles: Vec<Vec<Complex<f64>>>,
+    /// Per disturbance component: the q_ωα poles of the filter (G_ωα, l_ωα), eq. (15).
+    pub disturbance_filter_poles: Vec<Vec<Complex<f64>>>,
+    /// Adaptation gains μ_i ≥ 0, eq. (33).
+    pub mu: Vec<f64>,
+    /// H(s) = 1/(β s + 1), β > 0.
+    pub beta: f64,
+}
+
+/// Channel i's decoupled transfer function G_ii(s) = q_i0 / ∏_j (s − λ_ij).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChannelTf {
+    pub poles: Vec<Complex<f64>>,
+    /// Ascending coefficients [a_0, …, a_{σ−1}] of the monic denominator; a_0 = q_i0.
+    pub den: Vec<f64>,
+}
+
+impl ChannelTf {
+    /// Relative degree σ_i.
+    pub fn sigma(&self) -> usize {
+        self.den.len()
+    }
+    /// Numerator q_i0 (= a_0, unit DC gain).
+    pub fn q0(&self) -> f64 {
+        self.den[0]
+    }
+    /// G_ii(s).
+    pub fn eval(&self, s: Complex<f64>) -> Complex<f64> {
+        let den = self
+            .den
+            .iter()
+            .rev()
+            .fold(Complex::new(1.0, 0.0), |acc, &a| acc * s + a);
+        Complex::new(self.q0(), 0.0) / den
+    }
+}
+
+/// Every matrix the controller needs, and the checks that were passed to get them.
+#[derive(Debug, Clone)]
+pub struct Design {
+    pub plant: Plant,
+    /// Observer gain, eq. (6).
+    pub L: DMatrix<f64>,
+    /// Decoupling gains, Proposition 1.
+    pub K: DMatrix<f64>,
+    pub F: DMatrix<f64>,
+    /// A_f = A − BK, B_f = BF (Proposition 1).
+    pub A_f: DMatrix<f64>,
+    pub B_f: DMatrix<f64>,
+    pub B_star: DMatrix<f64>,
+    pub cond_B_star: f64,
+    /// Relative degrees σ_i, eq. (7).
+    pub sigma: Vec<usize>,
+    /// G_ii(s), one per channel.
+    pub channels: Vec<ChannelTf>,
+    /// Reference internal model, eq. (11).
+    pub G_g: DMatrix<f64>,
+    pub L_g: DMatrix<f64>,
+    /// Disturbance internal model, eq. (16).
+    pub G_w: DMatrix<f64>,
+    pub L_w: DMatrix<f64>,
+    /// Disturbance observer gain, N D = L_ω (eq. (20)), minimum norm N = L_ω D⁺.
+    pub N: DMatrix<f64>,
+    pub mu: Vec<f64>,
+    pub beta: f64,
+    pub controllability: RankTest,
+    pub observability: RankTest,
+    /// eig(A − LC), sorted.
+    pub observer_eigenvalues: Vec<Complex<f64>>,
+    /// eig(A − BK), sorted.
+    pub decoupled_eigenvalues: Vec<Complex<f64>>,
+}
+
+/// Why no design exists for a plant and a set of choices. Messages name the scenario key.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum DesignError {
+    #[error("plant: (A, B) is not controllable (Assumption 1): numerical rank {rank} of {n} (tolerance {tol:.1e}); every mode must be reachable from the inputs")]
+    Uncontrollable { rank: usize, n: usize, tol: f64 },
+    #[error("plant: (A, C) is not observable (Assumption 1): numerical rank {rank} of {n} (tolerance {tol:.1e}); every mode must show in the outputs")]
+    Unobservable { rank: usize, n: usize, tol: f64 },
+    #[error("design.observer_poles: {0}")]
+    ObserverPoles(PlaceError),
+    #[error("design.observer_gain: expected a {n}×{m} matrix, found {rows}×{cols}")]
+    ObserverGainShape {
+        n: usize,
+        m: usize,
+        rows: usize,
+        cols: usize,
+    },
+    #[error("design.observer_gain: A − LC is not Hurwitz (eigenvalues {}); choose L with a stable observer, or give design.observer_poles instead", fmt_eigs(.eigenvalues))]
+    ObserverUnstable { eigenvalues: Vec<Complex<f64>> },
+    #[error("plant.C: output {} is reached by no input (c_i A^(l-1) B = 0 for every l ≤ n), so the plant cannot be decoupled", .channel + 1)]
+    NoRelativeDegree { channel: usize },
+    #[error("design.channel_poles[{channel}]: channel {} has relative degree {sigma}, so it needs {sigma} pole{}; got {got}", .channel + 1, if *.sigma == 1 { "" } else { "s" })]
+    ChannelPoleCount {
+        channel: usize,
+        sigma: usize,
+        got: usize,
+    },
+    #[error(
+        "plant: not decouplable (Proposition 1): B* is singular (condition number {cond:.3e})"
+    )]
+    NotDecouplable { cond: f64 },
+    #[error("plant: A − BK is not Hurwitz: the plant's zero dynamics are unstable (offending eigenvalues {}); this plant cannot be decoupled stably", fmt_eigs(.eigenvalues))]
+    UnstableZeroDynamics { eigenvalues: Vec<Complex<f64>> },
+    #[error("{key}: expected {expected} entries (one per {per}), got {got}")]
+    Count {
+        key: &'static str,
+        per: &'static str,
+        expected: usize,
+        got: usize,
+    },
+    #[error("{key}: pole {} is not in the open left half-plane; {what} poles must be Hurwitz (real part < 0)", fmt_eig(.pole))]
+    NotHurwitz {
+        key: String,
+        what: &'static str,
+        pole: Complex<f64>,
+    },
+    #[error("{key}: pole {} has no complex-conjugate partner in the list", fmt_eig(.pole))]
+    NotConjugateClosed { key: String, pole: Complex<f64> },
+    #[error("{key}: the list is empty; give at least one pole")]
+    NoPoles { key: String },
+    #[error("design.mu[{index}]: expected a finite adaptation gain ≥ 0, got {value}")]
+    BadMu { index: usize, value: f64 },
+    #[error("design.beta: expected a finite β > 0 (H(s) = 1/(βs + 1)), got {value}")]
+    BadBeta { value: f64 },
+    #[error("plant.D: rank D = {rank} < k = {k}, so N D = L_ω (eq. (20)) has no solution; disturbances must enter through independent directions")]
+    DisturbanceRank { rank: usize, k: usize },
+}
+
+fn fmt_eig(e: &Complex<f64>) -> String {
+    if e.im == 0.0 {
+        format!("{:.6}", e.re)
+    } else {
+        format!("{:.6}{:+.6}i", e.re, e.im)
+    }
+}
+
+fn fmt_eigs(e: &[Complex<f64>]) -> String {
+    e.iter().map(fmt_eig).collect::<Vec<_>>().join(", ")
+}
+
+/// Checks a pole list: not empty (when `nonempty`), finite, closed under conjugation, Hurwitz.
+fn check_poles(
+    key: String,
+    what: &'static str,
+    poles: &[Complex<f64>],
+    nonempty: bool,
+) -> Result<(), DesignError> {
+    if nonempty && poles.is_empty() {
+        return Err(DesignError::NoPoles { key });
+    }
+    for &p in poles {
+        if !(p.re.is_finite() && p.im.is_finite()) || p.re >= 0.0 {
+            return Err(DesignError::NotHurwitz { key, what, pole: p });
+        }
+        let partners = |z: Complex<f64>| {
+            poles
+                .iter()
+                .filter(|&&x| (x - z).norm() <= 1e-12 * (1.0 + z.norm()))
+                .count()
+        };
+        if p.im != 0.0 && partners(p.conj()) != partners(p) {
+            return Err(DesignError::NotConjugateClosed { key, pole: p });
+        }
+    }
+    Ok(())
+}
+
+/// Hurwitz margin used for eigenvalue checks: −eps^(1/2)·max(1, ‖M‖).
+fn margin(M: &DMatrix<f64>) -> f64 {
+    f64::EPSILON.sqrt() * M.norm().max(1.0)
+}
+
+impl Design {
+    /// Designs every gain (Sections III–V) and checks Assumption 1, Proposition 1's condition, stable
+    /// zero dynamics, a stable observer and rank D = k.
+    pub fn new(plant: &Plant, spec: &DesignSpec) -> Result<Design, DesignError> {
+        let (n, m, k) = (plant.n(), plant.m(), plant.k());
+        let (A, B, C, D) = (&plant.A, &plant.B, &plant.C, &plant.D);
+        let count = |key, per, expected, got| {
+            if expected == got {
+                Ok(())
+            } else {
+                Err(DesignError::Count {
+                    key,
+                    per,
+                    expected,
+                    got,
+                })
+            }
+        };
+        count(
+            "design.channel_poles",
+            "output",
+            m,
+            spec.channel_poles.len(),
+        )?;
+        count(
+            "design.reference_filter_poles",
+            "reference component (one per output)",
+            m,
+            spec.reference_filter_poles.len(),
+        )?;
+        count(
+            "design.disturbance_filter_poles",
+            "disturbance component (one per column of plant.D)",
+            k,
+            spec.disturbance_filter_poles.len(),
+        )?;
+        count("design.mu", "channel", m, spec.mu.len())?;
+        if let Some((index, &value)) = spec
+            .mu
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !(v.is_finite() && **v >= 0.0))
+        {
+            return Err(DesignError::BadMu { index, value });
+        }
+        if !(spec.beta.is_finite() && spec.beta > 0.0) {
+            return Err(DesignError::BadBeta { value: spec.beta });
+        }
+        for (i, p) in spec.channel_poles.iter().enumerate() {
+            check_poles(format!("design.channel_poles[{i}]"), "channel", p, false)?;
+        }
+        for (i, p) in spec.reference_filter_poles.iter().enumerate() {
+            check_poles(
+                format!("design.reference_filter_poles[{i}]"),
+                "internal-model filter",
+                p,
+                true,
+            )?;
+        }
+        for (i, p) in spec.disturbance_filter_poles.iter().enumerate() {
+            check_poles(
+                format!("design.disturbance_filter_poles[{i}]"),
+                "internal-model filter",
+                p,
+                true,
+            )?;
+        }
+
+        // Assumption 1.
+        let ctrb = controllability(A, B);
+        if !ctrb.full() {
+            return Err(DesignError::Uncontrollable {
+                rank: ctrb.rank,
+                n,
+                tol: ctrb.tol,
+            });
+        }
+        let obsv = observability(A, C);
+        if !obsv.full() {
+            return Err(DesignError::Unobservable {
+                rank: obsv.rank,
+                n,
+                tol: obsv.tol,
+            });
+        }
+
+        // Observer (6).
+        let L = match &spec.observer {
+            ObserverChoice::Gain(L) => {
+                if L.nrows() != n || L.ncols() != m {
+                    return Err(DesignError::ObserverGainShape {
+                        n,
+                        m,
+                        rows: L.nrows(),
+                        cols: L.ncols(),
+                    });
+                }
+                L.clone()
+            }
+            ObserverChoice::Poles(p) => {
+                check_poles("design.observer_poles".into(), "observer", p, false)?;
+                place(&A.transpose(), &C.transpose(), p)
+                    .map_err(DesignError::ObserverPoles)?
+                    .transpose()
+            }
+        };
+        let A_o = A - &L * C;
+        let observer_eigenvalues = eigenvalues(&A_o);
+        if !hurwitz(&observer_eigenvalues, margin(&A_o)) {
+            return Err(DesignError::ObserverUnstable {
+                eigenvalues: observer_eigenvalues,
+            });
+        }
+
+        // Decoupler (Proposition 1) and its zero dynamics.
+        let fw = falb_wolovich(A, B, C, &spec.channel_poles)?;
+        let A_f = A - B * &fw.K;
+        let B_f = B * &fw.F;
+        let decoupled_eigenvalues = eigenvalues(&A_f);
+        let tol = margin(&A_f);
+        let bad: Vec<_> = decoupled_eigenvalues
+            .iter()
+            .copied()
+            .filter(|e| e.re >= -tol)
+            .collect();
+        if !bad.is_empty() {
+            return Err(DesignError::UnstableZeroDynamics { eigenvalues: bad });
+        }
+        let channels = spec
+            .channel_poles
+            .iter()
+            .map(|p| ChannelTf {
+                poles: p.clone(),
+                den: poly_from_roots(p),
+            })
+            .collect();
+
+        // Internal models (11), (16) and the disturbance observer gain (20).
+        let (G_g, L_g) = internal_model(&spec.reference_filter_poles);
+        let (G_w, L_w) = internal_model(&spec.disturbance_filter_poles);
+        let rank = numerical_rank(D);
+        if rank < k {
+            return Err(DesignError::DisturbanceRank { rank, k });
+        }
+        let N = if k == 0 {
+            DMatrix::zeros(0, n)
+        } else {
+            // Minimum-norm solution of N D = L_ω: N = L_ω D⁺.
+            let pinv = D
+                .clone()
+                .pseudo_inverse(f64::EPSILON * n as f64 * D.norm())
+                .map_err(|_| DesignError::DisturbanceRank { rank, k })?;
+            &L_w * pinv
+        };
+
+        Ok(Design {
+            plant: plant.clone(),
+            L,
+            K: fw.K,
+            F: fw.F,
+            A_f,
+            B_f,
+            B_star: fw.B_star,
+            cond_B_star: fw.cond_B_star,
+            sigma: fw.sigma,
+            channels,
+            G_g,
+            L_g,
+            G_w,
+            L_w,
+            N,
+            mu: spec.mu.clone(),
+            beta: spec.beta,
+            controllability: ctrb,
+            observability: obsv,
+            observer_eigenvalues,
+            decoupled_eigenvalues,
+        })
+    }
+
+    /// Dimension q_g of the reference regressor ξ̂_g.
+    pub fn q_g(&self) -> usize {
+        self.G_g.nrows()
+    }
+    /// Dimension q_ω of the disturbance regressor ξ̂_ω.
+    pub fn q_w(&self) -> usize {
+        self.G_w.nrows()
+    }
+    /// Dimension q = q_g + q_ω of the regressor ξ̂ and of each η̂_i.
+    pub fn q(&self) -> usize {
+        self.q_g() + self.q_w()
+    }
+}
