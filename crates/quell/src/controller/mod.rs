@@ -1,1 +1,151 @@
-//! The controller's equations, shared by the continuous simulation and the real-time controller.
+//! The controller's equations, in one place, shared by the continuous simulation
+//! ([`crate::sim::closed_loop`]) and the real-time controller.
+//!
+//! The controller has three parts:
+//! - the **core**, a linear system with state z = [x̂; ξ̂_g; φ] driven by v = [y; g; u_d]: the
+//!   Luenberger observer (6) with the decoupling law (5) substituted, the reference observer (14) and
+//!   the disturbance observer (20); its outputs are the regressor ξ̂ = [ξ̂_g; φ + N x̂] and the plant
+//!   input u_f = −K x̂ + F u_d (5);
+//! - per channel, the **filters** of the adaptive law (33): G_ii(s) applied to the row
+//!   [u_i(t − τ_i), ξ̂ᵀ(t − τ_i)] (state W_i, σ_i × (1 + q)) and H(s) = 1/(βs + 1) giving Y_i and Ω_i;
+//! - the **adaptive law** (33) η̂_i' = μ_i (Y_i − Ω_i η̂_i) and the control law (25) u_i = −η̂_iᵀ ξ̂.
+
+pub mod packed;
+
+use nalgebra::{DMatrix, DVectorView, DVectorViewMut};
+
+use crate::design::Design;
+use crate::linalg::companion;
+
+/// Matrices of the controller's linear parts, built once from a [`Design`].
+#[derive(Debug, Clone)]
+pub struct Equations {
+    /// Plant order n, channels m, regressor size q (= q_g + q_ω).
+    pub n: usize,
+    pub m: usize,
+    pub q: usize,
+    /// Core state dimension n + q_g + q_ω.
+    pub nz: usize,
+    /// Core dynamics z' = A_z z + B_z [y; g; u_d]:
+    /// x̂' = (A_f − LC) x̂ + L y + B_f u_d,  ξ̂_g' = G_g ξ̂_g + L_g g,
+    /// φ' = G_ω φ + (G_ω N − N A_f) x̂ − N B_f u_d.
+    pub A_z: DMatrix<f64>,
+    pub B_z: DMatrix<f64>,
+    /// ξ̂ = C_ξ z = [ξ̂_g; φ + N x̂].
+    pub C_xi: DMatrix<f64>,
+    /// u_f = −K x̂ + F u_d (5), as u_f = K_z z + F u_d with K_z = [−K 0 0].
+    pub K_z: DMatrix<f64>,
+    pub F: DMatrix<f64>,
+    /// Per channel: G_ii(s) = q_i0 / den_i(s) realized as w' = A_i w + e_σ v, output q_i0·w_1.
+    pub channels: Vec<ChannelFilter>,
+    /// H(s) = 1/(βs + 1).
+    pub beta: f64,
+}
+
+/// Channel i's G_ii(s) realization and adaptation gain.
+#[derive(Debug, Clone)]
+pub struct ChannelFilter {
+    /// σ_i.
+    pub sigma: usize,
+    /// Companion matrix of den_i (σ_i × σ_i).
+    pub A: DMatrix<f64>,
+    /// Ascending denominator coefficients [a_0, …, a_{σ−1}].
+    pub den: Vec<f64>,
+    /// q_i0.
+    pub q0: f64,
+    /// μ_i.
+    pub mu: f64,
+    /// τ_i.
+    pub delay: f64,
+}
+
+impl Equations {
+    /// Assembles the controller's matrices from a design.
+    pub fn new(d: &Design) -> Equations {
+        let p = &d.plant;
+        let (n, m) = (p.n(), p.m());
+        let (q_g, q_w) = (d.q_g(), d.q_w());
+        let (q, nz) = (q_g + q_w, n + q_g + q_w);
+        let mut A_z = DMatrix::zeros(nz, nz);
+        let mut B_z = DMatrix::zeros(nz, 3 * m);
+        // Observer (6) with u_f = −K x̂ + F u_d: x̂' = (A − BK − LC) x̂ + L y + BF u_d.
+        A_z.view_mut((0, 0), (n, n)).copy_from(&(&d.A_f - &d.L * &p.C));
+        B_z.view_mut((0, 0), (n, m)).copy_from(&d.L);
+        B_z.view_mut((0, 2 * m), (n, m)).copy_from(&d.B_f);
+        // Reference observer (14).
+        A_z.view_mut((n, n), (q_g, q_g)).copy_from(&d.G_g);
+        B_z.view_mut((n, m), (q_g, m)).copy_from(&d.L_g);
+        // Disturbance observer (20).
+        let o = n + q_g;
+        A_z.view_mut((o, 0), (q_w, n)).copy_from(&(&d.G_w * &d.N - &d.N * &d.A_f));
+        A_z.view_mut((o, o), (q_w, q_w)).copy_from(&d.G_w);
+        B_z.view_mut((o, 2 * m), (q_w, m)).copy_from(&(-(&d.N * &d.B_f)));
+        // ξ̂ = [ξ̂_g; φ + N x̂].
+        let mut C_xi = DMatrix::zeros(q, nz);
+        C_xi.view_mut((0, n), (q_g, q_g)).fill_with_identity();
+        C_xi.view_mut((q_g, 0), (q_w, n)).copy_from(&d.N);
+        C_xi.view_mut((q_g, o), (q_w, q_w)).fill_with_identity();
+        let mut K_z = DMatrix::zeros(m, nz);
+        K_z.view_mut((0, 0), (m, n)).copy_from(&(-&d.K));
+        let channels = d
+            .channels
+            .iter()
+            .zip(&d.mu)
+            .zip(&p.delays)
+            .map(|((tf, &mu), &delay)| ChannelFilter {
+                sigma: tf.sigma(),
+                A: companion(&tf.den),
+                den: tf.den.clone(),
+                q0: tf.q0(),
+                mu,
+                delay,
+            })
+            .collect();
+        Equations { n, m, q, nz, A_z, B_z, C_xi, K_z, F: d.F.clone(), channels, beta: d.beta }
+    }
+
+    /// Regressor ξ̂ = C_ξ z.
+    pub fn regressor(&self, z: &[f64], xi: &mut [f64]) {
+        mat_vec(&self.C_xi, z, xi, false);
+    }
+
+    /// Plant input (5): u_f = −K x̂ + F u_d.
+    pub fn plant_input(&self, z: &[f64], u_d: &[f64], u_f: &mut [f64]) {
+        mat_vec(&self.K_z, z, u_f, false);
+        mat_vec(&self.F, u_d, u_f, true);
+    }
+
+    /// Number of states of channel i's G_ii filter bank (σ_i rows, 1 + q columns).
+    pub fn filter_len(&self, i: usize) -> usize {
+        self.channels[i].sigma * (1 + self.q)
+    }
+}
+
+/// Control law (25): u_i = −η̂_iᵀ ξ̂.
+pub fn command(eta: &[f64], xi: &[f64]) -> f64 {
+    -dot(eta, xi)
+}
+
+/// Channel i's filter-bank outputs from its state W (σ × (1 + q), row-major): the filtered delayed
+/// command G_ii[u_i(t − τ_i)] = q_i0 W[0][0] and the regressor row Δ_i = q_i0 W[0][1..] (eq. (33)).
+/// Returns ε̂_i = δ_i − G_ii[u_i(t − τ_i)] and writes Δ_i into `delta`.
+pub fn swapping_error(ch: &ChannelFilter, W: &[f64], delta_i: f64, Delta: &mut [f64]) -> f64 {
+    let q = Delta.len();
+    for (d, w) in Delta.iter_mut().zip(&W[1..=q]) {
+        *d = ch.q0 * w;
+    }
+    delta_i - ch.q0 * W[0]
+}
+
+/// Dot product.
+pub fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// out = M x (or out += M x when `add`), on slices; allocates nothing.
+pub fn mat_vec(M: &DMatrix<f64>, x: &[f64], out: &mut [f64], add: bool) {
+    let (r, c) = M.shape();
+    let x = DVectorView::from_slice(x, c);
+    let mut out = DVectorViewMut::from_slice(out, r);
+    out.gemv(1.0, M, &x, if add { 1.0 } else { 0.0 });
+}

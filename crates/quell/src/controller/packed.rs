@@ -1,0 +1,67 @@
+//! Symmetric q×q matrices (Ω_i of eq. (33)) in packed upper-triangular storage, q(q+1)/2 entries,
+//! row by row: (0,0), (0,1), …, (0,q−1), (1,1), ….
+
+/// Number of stored entries of a packed symmetric q×q matrix.
+pub fn len(q: usize) -> usize {
+    q * (q + 1) / 2
+}
+
+/// out = Ω x for packed Ω.
+pub fn sym_mat_vec(omega: &[f64], x: &[f64], out: &mut [f64]) {
+    let q = x.len();
+    out.fill(0.0);
+    let mut k = 0;
+    for i in 0..q {
+        out[i] += omega[k] * x[i];
+        k += 1;
+        for j in i + 1..q {
+            out[i] += omega[k] * x[j];
+            out[j] += omega[k] * x[i];
+            k += 1;
+        }
+    }
+}
+
+/// Calls `f(entry, Δ_i Δ_j)` for every packed entry of the rank-one matrix Δ Δᵀ.
+pub fn outer_for_each(delta: &[f64], omega: &mut [f64], mut f: impl FnMut(&mut f64, f64)) {
+    let q = delta.len();
+    let mut k = 0;
+    for i in 0..q {
+        for j in i..q {
+            f(&mut omega[k], delta[i] * delta[j]);
+            k += 1;
+        }
+    }
+}
+
+/// Unpacks into a dense q×q matrix, row-major.
+pub fn unpack(omega: &[f64], q: usize, dense: &mut [f64]) {
+    let mut k = 0;
+    for i in 0..q {
+        for j in i..q {
+            dense[i * q + j] = omega[k];
+            dense[j * q + i] = omega[k];
+            k += 1;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn packed_matches_dense() {
+        // Ω = [[2, 1, 0], [1, 3, -1], [0, -1, 4]], x = [1, 2, 3] → Ωx = [4, 4, 10] (by hand).
+        let omega = [2.0, 1.0, 0.0, 3.0, -1.0, 4.0];
+        let mut out = [0.0; 3];
+        sym_mat_vec(&omega, &[1.0, 2.0, 3.0], &mut out);
+        assert_eq!(out, [4.0, 4.0, 10.0]);
+        let mut dense = [0.0; 9];
+        unpack(&omega, 3, &mut dense);
+        assert_eq!(dense, [2.0, 1.0, 0.0, 1.0, 3.0, -1.0, 0.0, -1.0, 4.0]);
+        let mut o = [0.0; 6];
+        outer_for_each(&[1.0, 2.0, 3.0], &mut o, |e, v| *e = v);
+        assert_eq!(o, [1.0, 2.0, 3.0, 4.0, 6.0, 9.0]);
+    }
+}

@@ -1,0 +1,323 @@
+//! The continuous closed loop (notes, "The closed loop, wired once"): plant (1) with input (5),
+//! controller [`Equations`], integrated as a delay equation by [`dde::solve`].
+
+use std::ops::ControlFlow;
+
+use nalgebra::{DMatrix, DVector};
+
+use super::dde::{self, DelaySystem, Options, Past};
+use super::result::{Outcome, SimResult};
+use crate::controller::{command, mat_vec, packed, swapping_error, Equations};
+use crate::design::Design;
+use crate::signal::Signal;
+
+/// Offsets of the loop's state vector. The prefix [z, η̂_1, …, η̂_m] is what the delayed terms read.
+#[derive(Debug, Clone)]
+struct Layout {
+    nz: usize,
+    q: usize,
+    /// Start of x.
+    x: usize,
+    /// Per channel: start of W_i, Y_i, Ω_i (packed).
+    w: Vec<usize>,
+    y: Vec<usize>,
+    omega: Vec<usize>,
+    dim: usize,
+}
+
+impl Layout {
+    fn new(eq: &Equations) -> Layout {
+        let q = eq.q;
+        let x = eq.nz + eq.m * q;
+        let mut at = x + eq.n;
+        let (mut w, mut y, mut omega) = (vec![], vec![], vec![]);
+        for i in 0..eq.m {
+            w.push(at);
+            at += eq.filter_len(i);
+            y.push(at);
+            at += q;
+            omega.push(at);
+            at += packed::len(q);
+        }
+        Layout { nz: eq.nz, q, x, w, y, omega, dim: at }
+    }
+
+    fn eta(&self, i: usize) -> usize {
+        self.nz + i * self.q
+    }
+
+    fn n_delayed(&self) -> usize {
+        self.x
+    }
+
+    /// A readable name for state component `k`, for divergence messages.
+    fn name(&self, eq: &Equations, k: usize) -> String {
+        let (n, q) = (eq.n, self.q);
+        if k < n {
+            return format!("x_hat[{}] (observer state)", k + 1);
+        }
+        if k < eq.nz {
+            return format!("internal-model observer state [{}] (xi_g, phi)", k - n + 1);
+        }
+        if k < self.x {
+            let i = (k - eq.nz) / q;
+            return format!("eta{}[{}] (adaptive parameters)", i + 1, (k - eq.nz) % q + 1);
+        }
+        if k < self.x + n {
+            return format!("x[{}] (plant state)", k - self.x + 1);
+        }
+        for i in (0..eq.m).rev() {
+            if k >= self.omega[i] {
+                return format!("Omega{} (adaptive law memory)", i + 1);
+            }
+            if k >= self.y[i] {
+                return format!("Y{}[{}] (adaptive law memory)", i + 1, k - self.y[i] + 1);
+            }
+            if k >= self.w[i] {
+                return format!("filter state of channel {} (G_{}{} bank)", i + 1, i + 1, i + 1);
+            }
+        }
+        format!("state[{k}]")
+    }
+}
+
+/// The closed loop as a [`DelaySystem`]: plant (1), input (5), observers (6), (14), (20), filters and
+/// adaptive law (33), control law (25). All buffers are allocated once; `rhs` allocates nothing.
+pub struct ContinuousLoop<'a> {
+    eq: Equations,
+    A: &'a DMatrix<f64>,
+    B: &'a DMatrix<f64>,
+    C: &'a DMatrix<f64>,
+    D: &'a DMatrix<f64>,
+    Q: &'a DMatrix<f64>,
+    reference: &'a Signal,
+    disturbance: &'a Signal,
+    layout: Layout,
+    delays: Vec<f64>,
+    // Scratch.
+    g: Vec<f64>,
+    w: Vec<f64>,
+    y: Vec<f64>,
+    u_d: Vec<f64>,
+    u_f: Vec<f64>,
+    v: Vec<f64>,
+    z_d: Vec<f64>,
+    eta_d: Vec<f64>,
+    /// ξ̂(t − τ_i), m rows of q.
+    xi_d: Vec<f64>,
+    Delta: Vec<f64>,
+    tmp: Vec<f64>,
+}
+
+impl<'a> ContinuousLoop<'a> {
+    /// The loop for a design and the true reference and disturbance signals.
+    pub fn new(design: &'a Design, reference: &'a Signal, disturbance: &'a Signal) -> Self {
+        let eq = Equations::new(design);
+        let layout = Layout::new(&eq);
+        let p = &design.plant;
+        let mut delays: Vec<f64> = p.delays.iter().copied().filter(|&d| d > 0.0).collect();
+        delays.sort_by(f64::total_cmp);
+        delays.dedup();
+        let (m, q, k) = (eq.m, eq.q, p.k());
+        ContinuousLoop {
+            A: &p.A,
+            B: &p.B,
+            C: &p.C,
+            D: &p.D,
+            Q: &p.Q,
+            reference,
+            disturbance,
+            delays,
+            g: vec![0.0; m],
+            w: vec![0.0; k],
+            y: vec![0.0; m],
+            u_d: vec![0.0; m],
+            u_f: vec![0.0; m],
+            v: vec![0.0; 3 * m],
+            z_d: vec![0.0; eq.nz],
+            eta_d: vec![0.0; q],
+            xi_d: vec![0.0; m * q],
+            Delta: vec![0.0; q],
+            tmp: vec![0.0; q],
+            layout,
+            eq,
+        }
+    }
+
+    /// Initial state: x(0) = x0, every controller state 0 (notes, "Initial conditions").
+    pub fn initial_state(&self, x0: &DVector<f64>) -> Vec<f64> {
+        let mut s = vec![0.0; self.layout.dim];
+        s[self.layout.x..self.layout.x + self.eq.n].copy_from_slice(x0.as_slice());
+        s
+    }
+
+    /// Outputs at time t: y, g and the undelayed commands u (25) and η̂ (a view of the state).
+    pub fn outputs<'s>(&mut self, t: f64, s: &'s [f64], y: &mut [f64], g: &mut [f64], u: &mut [f64]) -> &'s [f64] {
+        let l = &self.layout;
+        self.disturbance.eval_into(t, &mut self.w);
+        self.reference.eval_into(t, g);
+        mat_vec(self.C, &s[l.x..l.x + self.eq.n], y, false);
+        mat_vec(self.Q, &self.w, y, true);
+        let xi = &mut self.tmp;
+        self.eq.regressor(&s[..l.nz], xi);
+        for (i, ui) in u.iter_mut().enumerate() {
+            *ui = command(&s[l.eta(i)..l.eta(i) + l.q], xi);
+        }
+        &s[l.nz..l.x]
+    }
+
+    /// Checks a state for divergence: the first non-finite component or one above `bound`.
+    pub fn check(&self, s: &[f64], bound: f64) -> Option<(String, f64)> {
+        s.iter()
+            .position(|v| !(v.abs() <= bound))
+            .map(|k| (self.layout.name(&self.eq, k), s[k]))
+    }
+}
+
+impl DelaySystem for ContinuousLoop<'_> {
+    fn dim(&self) -> usize {
+        self.layout.dim
+    }
+
+    fn n_delayed(&self) -> usize {
+        self.layout.n_delayed()
+    }
+
+    fn delays(&self) -> &[f64] {
+        &self.delays
+    }
+
+    fn rhs(&mut self, t: f64, s: &[f64], past: &Past<'_>, ds: &mut [f64]) {
+        let eq = &self.eq;
+        let l = &self.layout;
+        let (n, m, q, nz) = (eq.n, eq.m, eq.q, eq.nz);
+        self.reference.eval_into(t, &mut self.g);
+        self.disturbance.eval_into(t, &mut self.w);
+
+        // Delayed regressor ξ̂(t − τ_i) and command u_i(t − τ_i) = −η̂_iᵀ(t − τ_i) ξ̂(t − τ_i).
+        for (i, ch) in eq.channels.iter().enumerate() {
+            let xi_d = &mut self.xi_d[i * q..(i + 1) * q];
+            if ch.delay > 0.0 {
+                past.eval_into(t - ch.delay, 0, &mut self.z_d);
+                past.eval_into(t - ch.delay, l.eta(i), &mut self.eta_d);
+                eq.regressor(&self.z_d, xi_d);
+                self.u_d[i] = command(&self.eta_d, xi_d);
+            } else {
+                eq.regressor(&s[..nz], xi_d);
+                self.u_d[i] = command(&s[l.eta(i)..l.eta(i) + q], xi_d);
+            }
+        }
+
+        // Plant (1) with the decoupling law (5).
+        let x = &s[l.x..l.x + n];
+        mat_vec(self.C, x, &mut self.y, false);
+        mat_vec(self.Q, &self.w, &mut self.y, true);
+        eq.plant_input(&s[..nz], &self.u_d, &mut self.u_f);
+        let dx = &mut ds[l.x..l.x + n];
+        mat_vec(self.A, x, dx, false);
+        mat_vec(self.B, &self.u_f, dx, true);
+        mat_vec(self.D, &self.w, dx, true);
+
+        // Core: observers (6), (14), (20).
+        self.v[..m].copy_from_slice(&self.y);
+        self.v[m..2 * m].copy_from_slice(&self.g);
+        self.v[2 * m..].copy_from_slice(&self.u_d);
+        mat_vec(&eq.A_z, &s[..nz], &mut ds[..nz], false);
+        mat_vec(&eq.B_z, &self.v, &mut ds[..nz], true);
+
+        // Per channel: G_ii filter bank, H filters and the adaptive law (33).
+        let cols = 1 + q;
+        for (i, ch) in eq.channels.iter().enumerate() {
+            let (w0, w1) = (l.w[i], l.w[i] + ch.sigma * cols);
+            let W = &s[w0..w1];
+            let dW = &mut ds[w0..w1];
+            // W' = A_i W + e_σ [u_i(t − τ_i), ξ̂ᵀ(t − τ_i)] with A_i the companion matrix of den_i.
+            dW[..(ch.sigma - 1) * cols].copy_from_slice(&W[cols..]);
+            let last = &mut dW[(ch.sigma - 1) * cols..];
+            last[0] = self.u_d[i];
+            last[1..].copy_from_slice(&self.xi_d[i * q..(i + 1) * q]);
+            for (r, &a) in ch.den.iter().enumerate() {
+                for (d, w) in last.iter_mut().zip(&W[r * cols..(r + 1) * cols]) {
+                    *d -= a * w;
+                }
+            }
+            let eps = swapping_error(ch, W, self.y[i] - self.g[i], &mut self.Delta);
+
+            let inv_beta = 1.0 / eq.beta;
+            let (Y, dY) = (&s[l.y[i]..l.y[i] + q], l.y[i]);
+            for j in 0..q {
+                ds[dY + j] = (self.Delta[j] * eps - Y[j]) * inv_beta;
+            }
+            let omega = &s[l.omega[i]..l.omega[i] + packed::len(q)];
+            let d_omega = &mut ds[l.omega[i]..l.omega[i] + packed::len(q)];
+            d_omega.copy_from_slice(omega);
+            packed::outer_for_each(&self.Delta, d_omega, |o, dd| *o = (dd - *o) * inv_beta);
+
+            // η̂_i' = μ_i (Y_i − Ω_i η̂_i).
+            let eta = &s[l.eta(i)..l.eta(i) + q];
+            packed::sym_mat_vec(omega, eta, &mut self.tmp);
+            for j in 0..q {
+                ds[l.eta(i) + j] = ch.mu * (Y[j] - self.tmp[j]);
+            }
+        }
+    }
+}
+
+/// Settings of a continuous run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunSettings {
+    pub t_end: f64,
+    pub output_step: f64,
+    pub rtol: f64,
+    pub atol: f64,
+    /// A state above this magnitude counts as divergence.
+    pub divergence_bound: f64,
+}
+
+impl RunSettings {
+    /// Settings with the default divergence bound 1e9.
+    pub fn new(t_end: f64, output_step: f64, rtol: f64, atol: f64) -> Self {
+        RunSettings { t_end, output_step, rtol, atol, divergence_bound: 1e9 }
+    }
+}
+
+/// Simulates the continuous closed loop from t = 0 to `t_end`, recording every `output_step`.
+/// `on_progress(t)` is called at each recorded sample; returning `Break` interrupts the run.
+/// The result always holds what was computed; [`SimResult::outcome`] says how the run ended.
+pub fn simulate(
+    design: &Design,
+    reference: &Signal,
+    disturbance: &Signal,
+    settings: &RunSettings,
+    mut on_progress: impl FnMut(f64) -> ControlFlow<()>,
+) -> SimResult {
+    let mut sys = ContinuousLoop::new(design, reference, disturbance);
+    let s0 = sys.initial_state(&design.plant.x0);
+    let history = vec![0.0; sys.n_delayed()];
+    let (m, q) = (sys.eq.m, sys.eq.q);
+    let mut result = SimResult::new(m, q);
+    let (mut y, mut g, mut u) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
+    let opts = Options { rtol: settings.rtol, atol: settings.atol, ..Options::default() };
+    let mut outcome = Outcome::Completed;
+    // The solver borrows the system mutably; the output callback needs its own copy for `outputs`.
+    let mut probe = ContinuousLoop::new(design, reference, disturbance);
+    let solved = dde::solve(&mut sys, 0.0, &s0, &history, settings.t_end, settings.output_step, &opts, |t, s| {
+        if let Some((signal, value)) = probe.check(s, settings.divergence_bound) {
+            outcome = Outcome::Diverged { t, signal, value };
+            return ControlFlow::Break(());
+        }
+        let eta = probe.outputs(t, s, &mut y, &mut g, &mut u);
+        result.push(t, &y, &g, &u, eta);
+        if on_progress(t).is_break() {
+            outcome = Outcome::Interrupted { t };
+            return ControlFlow::Break(());
+        }
+        ControlFlow::Continue(())
+    });
+    match solved {
+        Ok(stats) => result.stats = stats,
+        Err(dde::SolveError::StepSizeTooSmall { t, .. }) => outcome = Outcome::StepSizeTooSmall { t },
+    }
+    result.outcome = Some(outcome);
+    result
+}

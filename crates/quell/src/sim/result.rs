@@ -1,0 +1,112 @@
+//! The one result type every simulation returns and every writer reads.
+
+use serde::Serialize;
+
+use super::dde::Stats;
+
+/// How a run ended.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "status", rename_all = "snake_case")]
+pub enum Outcome {
+    /// Reached t_end.
+    Completed,
+    /// A state became non-finite or exceeded the divergence bound at time `t`.
+    Diverged { t: f64, signal: String, value: f64 },
+    /// The solver could not meet the tolerance: its step size underflowed at time `t`.
+    StepSizeTooSmall { t: f64 },
+    /// Stopped from outside (e.g. Ctrl-C) at time `t`.
+    Interrupted { t: f64 },
+}
+
+/// Signals at t = k·output_step: rows of y, g, e = y − g, u (the adaptive command (25)) and η̂.
+#[derive(Debug, Clone, Default)]
+pub struct SimResult {
+    pub m: usize,
+    pub q: usize,
+    pub t: Vec<f64>,
+    /// Row-major, `t.len()` rows of m.
+    pub y: Vec<f64>,
+    pub g: Vec<f64>,
+    pub e: Vec<f64>,
+    pub u: Vec<f64>,
+    /// Row-major, `t.len()` rows of m·q (η̂_1, …, η̂_m).
+    pub eta: Vec<f64>,
+    pub stats: Stats,
+    pub outcome: Option<Outcome>,
+}
+
+/// Per-channel figures of merit.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ChannelSummary {
+    /// max |e_i| over the last 10 % of the horizon.
+    pub tail_max_abs_e: f64,
+    /// RMS of e_i over the last 10 % of the horizon.
+    pub tail_rms_e: f64,
+    /// max |u_i| over the run.
+    pub max_abs_u: f64,
+    /// ‖η̂_i‖ at the last sample.
+    pub final_eta_norm: f64,
+}
+
+impl SimResult {
+    /// An empty result for m channels and regressor size q.
+    pub fn new(m: usize, q: usize) -> Self {
+        SimResult { m, q, ..Default::default() }
+    }
+
+    /// Appends one sample.
+    pub fn push(&mut self, t: f64, y: &[f64], g: &[f64], u: &[f64], eta: &[f64]) {
+        self.t.push(t);
+        self.y.extend_from_slice(y);
+        self.g.extend_from_slice(g);
+        self.e.extend(y.iter().zip(g).map(|(a, b)| a - b));
+        self.u.extend_from_slice(u);
+        self.eta.extend_from_slice(eta);
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    /// True when no sample was recorded.
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+
+    /// Column `i` of a row-major signal with `width` columns.
+    pub fn column<'a>(&'a self, signal: &'a [f64], width: usize, i: usize) -> impl Iterator<Item = f64> + 'a {
+        signal.iter().skip(i).step_by(width).copied()
+    }
+
+    /// max |e_i| over samples with t in [from, to].
+    pub fn max_abs_error(&self, i: usize, from: f64, to: f64) -> f64 {
+        self.t
+            .iter()
+            .zip(self.column(&self.e, self.m, i))
+            .filter(|(t, _)| **t >= from && **t <= to)
+            .fold(0.0, |acc, (_, e)| acc.max(e.abs()))
+    }
+
+    /// Figures of merit per channel; the tail is the last 10 % of the recorded horizon.
+    pub fn summary(&self) -> Vec<ChannelSummary> {
+        let (Some(&t0), Some(&t1)) = (self.t.first(), self.t.last()) else {
+            return Vec::new();
+        };
+        let from = t1 - 0.1 * (t1 - t0);
+        (0..self.m)
+            .map(|i| {
+                let tail: Vec<f64> =
+                    self.t.iter().zip(self.column(&self.e, self.m, i)).filter(|(t, _)| **t >= from).map(|(_, e)| e).collect();
+                let rms = (tail.iter().map(|e| e * e).sum::<f64>() / tail.len().max(1) as f64).sqrt();
+                let last = &self.eta[self.eta.len() - self.m * self.q..];
+                ChannelSummary {
+                    tail_max_abs_e: tail.iter().fold(0.0, |a, e| a.max(e.abs())),
+                    tail_rms_e: rms,
+                    max_abs_u: self.column(&self.u, self.m, i).fold(0.0, |a, u| a.max(u.abs())),
+                    final_eta_norm: last[i * self.q..(i + 1) * self.q].iter().map(|v| v * v).sum::<f64>().sqrt(),
+                }
+            })
+            .collect()
+    }
+}
