@@ -1,1 +1,179 @@
-fn main() {}
+//! `quell`: design, simulate and plot direct adaptive output-feedback controllers.
+//!
+//! Exit codes: 0 success, 1 a run that failed (diverged, solver failure, interrupted),
+//! 2 bad input or an infeasible design.
+
+mod output;
+mod plot;
+mod report;
+
+use std::io::IsTerminal;
+use std::ops::ControlFlow;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use quell::scenario::{Scenario, PAPER_EXAMPLE};
+use quell::sim::{simulate, Outcome, RunSettings, SimResult};
+use quell::Design;
+use serde_json::json;
+
+#[derive(Parser)]
+#[command(name = "quell", version, about = "Direct adaptive output-feedback control of MIMO plants with distinct input delays")]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Compute every gain from a scenario file and check the paper's assumptions.
+    Design {
+        /// Scenario file (TOML).
+        scenario: PathBuf,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Simulate the closed loop; write signals.csv, design.json, summary.json and plots.
+    Run(RunArgs),
+}
+
+#[derive(clap::Args, Default)]
+struct RunArgs {
+    /// Scenario file (TOML); the paper's example (Section VIII) when omitted.
+    scenario: Option<PathBuf>,
+    /// Output directory.
+    #[arg(long, default_value = "quell-out")]
+    out: PathBuf,
+    /// Skip the PNG/SVG plots.
+    #[arg(long)]
+    no_plots: bool,
+}
+
+/// A failure with its exit code.
+enum Failure {
+    /// Bad input or an infeasible design: exit 2.
+    Input(String),
+    /// A run that failed: exit 1.
+    Run(String),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Some(Command::Design { scenario, json }) => design(&scenario, json),
+        Some(Command::Run(args)) => run(&args),
+        None => run(&RunArgs { out: PathBuf::from("quell-out"), ..Default::default() }),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure::Input(msg)) => {
+            eprintln!("error: {msg}");
+            ExitCode::from(2)
+        }
+        Err(Failure::Run(msg)) => {
+            eprintln!("error: {msg}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+fn load(path: Option<&Path>) -> Result<(Scenario, Design), Failure> {
+    let scenario = match path {
+        Some(p) => Scenario::from_path(p),
+        None => Scenario::from_toml(PAPER_EXAMPLE),
+    }
+    .map_err(|e| Failure::Input(e.to_string()))?;
+    let design = Design::new(&scenario.plant, &scenario.design).map_err(|e| Failure::Input(e.to_string()))?;
+    Ok((scenario, design))
+}
+
+fn design(path: &Path, as_json: bool) -> Result<(), Failure> {
+    let (_, d) = load(Some(path))?;
+    if as_json {
+        println!("{}", serde_json::to_string_pretty(&report::design_json(&d)).unwrap_or_default());
+    } else {
+        print!("{}", report::design_text(&d));
+    }
+    Ok(())
+}
+
+fn run(args: &RunArgs) -> Result<(), Failure> {
+    let (scenario, design) = load(args.scenario.as_deref())?;
+    let out = &args.out;
+    output::prepare_dir(out).map_err(|e| Failure::Input(format!("--out {}: cannot write there ({e}); choose a writable directory", out.display())))?;
+
+    let interrupted = Arc::new(AtomicBool::new(false));
+    {
+        let flag = interrupted.clone();
+        let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));
+    }
+    let sim = &scenario.simulation;
+    let bar = progress_bar(sim.t_end);
+    let settings = RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol);
+    let started = std::time::Instant::now();
+    let result = simulate(&design, &scenario.reference, &scenario.disturbance, &settings, |t| {
+        bar.set_position((t * 1000.0) as u64);
+        if interrupted.load(Ordering::SeqCst) { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+    });
+    bar.finish_and_clear();
+    let elapsed = started.elapsed();
+
+    write_outputs(out, &scenario, &design, &result, elapsed.as_secs_f64(), !args.no_plots)
+        .map_err(|e| Failure::Run(format!("writing {}: {e}", out.display())))?;
+    match result.outcome.as_ref().unwrap_or(&Outcome::Completed) {
+        Outcome::Completed => {
+            for (i, c) in result.summary().iter().enumerate() {
+                eprintln!("channel {}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {:.3}, ‖η̂‖ = {:.4}", i + 1, c.tail_max_abs_e, c.tail_rms_e, c.max_abs_u, c.final_eta_norm);
+            }
+            eprintln!("wrote {} ({} samples, {} steps, {:.3} s)", out.display(), result.len(), result.stats.steps, elapsed.as_secs_f64());
+            Ok(())
+        }
+        Outcome::Diverged { t, signal, value } => Err(Failure::Run(format!(
+            "the closed loop diverged at t = {t:.4}: {signal} = {value:e}; results up to then are in {}",
+            out.display()
+        ))),
+        Outcome::StepSizeTooSmall { t } => Err(Failure::Run(format!(
+            "the solver's step size underflowed at t = {t:.6} (the loop is too stiff or blows up there); results up to then are in {}",
+            out.display()
+        ))),
+        Outcome::Interrupted { t } => Err(Failure::Run(format!("interrupted at t = {t:.3}; results up to then are in {}", out.display()))),
+    }
+}
+
+fn progress_bar(t_end: f64) -> ProgressBar {
+    let bar = ProgressBar::new((t_end * 1000.0) as u64);
+    if std::io::stderr().is_terminal() {
+        bar.set_draw_target(ProgressDrawTarget::stderr());
+        if let Ok(style) = ProgressStyle::with_template("{bar:40} t = {msg} {elapsed_precise}") {
+            bar.set_style(style);
+        }
+    } else {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    bar
+}
+
+fn write_outputs(dir: &Path, scenario: &Scenario, design: &Design, r: &SimResult, seconds: f64, plots: bool) -> std::io::Result<()> {
+    output::write_signals(&dir.join("signals.csv"), r)?;
+    output::write_json(&dir.join("design.json"), &report::design_json(design))?;
+    let summary = json!({
+        "scenario": scenario.name,
+        "outcome": r.outcome,
+        "channels": r.summary(),
+        "solver": { "steps": r.stats.steps, "rejected_steps": r.stats.rejected, "rhs_evaluations": r.stats.rhs_evals },
+        "samples": r.len(),
+        "wall_time_s": seconds,
+    });
+    output::write_json(&dir.join("summary.json"), &summary)?;
+    if plots {
+        for i in 0..r.m {
+            plot::plot_channel(dir, r, i)?;
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,100 @@
+//! The design, as text for people and as JSON for programs (`quell design [--json]`, `design.json`).
+
+use std::fmt::Write;
+
+use quell::nalgebra::{Complex, DMatrix};
+use quell::Design;
+use serde_json::{json, Value};
+
+fn matrix(M: &DMatrix<f64>) -> Value {
+    Value::Array(M.row_iter().map(|r| json!(r.iter().collect::<Vec<_>>())).collect())
+}
+
+fn eigs(e: &[Complex<f64>]) -> Value {
+    Value::Array(e.iter().map(|z| json!([z.re, z.im])).collect())
+}
+
+/// The design as one JSON object: matrices as arrays of rows, eigenvalues as `[re, im]`.
+pub fn design_json(d: &Design) -> Value {
+    json!({
+        "n": d.plant.n(),
+        "m": d.plant.m(),
+        "k": d.plant.k(),
+        "q": d.q(),
+        "sigma": d.sigma,
+        "K": matrix(&d.K),
+        "F": matrix(&d.F),
+        "L": matrix(&d.L),
+        "N": matrix(&d.N),
+        "A_f": matrix(&d.A_f),
+        "B_f": matrix(&d.B_f),
+        "B_star": matrix(&d.B_star),
+        "G_g": matrix(&d.G_g),
+        "L_g": matrix(&d.L_g),
+        "G_w": matrix(&d.G_w),
+        "L_w": matrix(&d.L_w),
+        "q0": d.channels.iter().map(|c| c.q0()).collect::<Vec<_>>(),
+        "channels": d.channels.iter().map(|c| json!({
+            "poles": eigs(&c.poles),
+            "denominator": c.den,
+            "q0": c.q0(),
+        })).collect::<Vec<_>>(),
+        "mu": d.mu,
+        "beta": d.beta,
+        "observer_eigenvalues": eigs(&d.observer_eigenvalues),
+        "decoupled_eigenvalues": eigs(&d.decoupled_eigenvalues),
+        "checks": {
+            "controllability_rank": d.controllability.rank,
+            "observability_rank": d.observability.rank,
+            "cond_B_star": d.cond_B_star,
+        },
+    })
+}
+
+fn fmt_matrix(out: &mut String, name: &str, M: &DMatrix<f64>) {
+    let _ = writeln!(out, "{name} ({}×{}):", M.nrows(), M.ncols());
+    for r in M.row_iter() {
+        let row: Vec<String> = r.iter().map(|v| format!("{v:>11.5}")).collect();
+        let _ = writeln!(out, "  [{} ]", row.join(""));
+    }
+}
+
+fn fmt_eigs(e: &[Complex<f64>]) -> String {
+    e.iter()
+        .map(|z| if z.im == 0.0 { format!("{:.5}", z.re) } else { format!("{:.5}{:+.5}i", z.re, z.im) })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn tf(c: &quell::design::ChannelTf) -> String {
+    let poly: Vec<String> = c.poles.iter().map(|p| {
+        if p.im == 0.0 { format!("(s{:+})", -p.re) } else { format!("(s−({:.4}{:+.4}i))", p.re, p.im) }
+    }).collect();
+    format!("{} / {}", c.q0(), poly.join(""))
+}
+
+/// The design for people: the checks passed, σ, every gain and the eigenvalues achieved.
+pub fn design_text(d: &Design) -> String {
+    let p = &d.plant;
+    let mut s = String::new();
+    let _ = writeln!(s, "plant: n = {}, m = {}, k = {}, delays τ = {:?}, regressor q = {} (q_g = {}, q_ω = {})",
+        p.n(), p.m(), p.k(), p.delays, d.q(), d.q_g(), d.q_w());
+    let _ = writeln!(s, "\nassumption checks:");
+    let _ = writeln!(s, "  ✓ (A, B) controllable: numerical rank {} of {} (tol {:.1e})", d.controllability.rank, p.n(), d.controllability.tol);
+    let _ = writeln!(s, "  ✓ (A, C) observable:   numerical rank {} of {} (tol {:.1e})", d.observability.rank, p.n(), d.observability.tol);
+    let _ = writeln!(s, "  ✓ decouplable: B* nonsingular, condition number {:.3e}", d.cond_B_star);
+    let _ = writeln!(s, "  ✓ A_f = A − BK Hurwitz (stable zero dynamics): max Re λ = {:.5}", d.decoupled_eigenvalues.iter().map(|e| e.re).fold(f64::MIN, f64::max));
+    let _ = writeln!(s, "  ✓ observer A − LC Hurwitz: max Re λ = {:.5}", d.observer_eigenvalues.iter().map(|e| e.re).fold(f64::MIN, f64::max));
+    let _ = writeln!(s, "  ✓ rank D = k = {} (N D = L_ω solvable)", p.k());
+    let _ = writeln!(s, "\nrelative degrees σ = {:?}", d.sigma);
+    for (i, c) in d.channels.iter().enumerate() {
+        let _ = writeln!(s, "  G_{0}{0}(s) = {1}   (μ_{0} = {2})", i + 1, tf(c), d.mu[i]);
+    }
+    let _ = writeln!(s, "  H(s) = 1/({} s + 1)\n", d.beta);
+    for (name, M) in [("K", &d.K), ("F", &d.F), ("L", &d.L), ("B*", &d.B_star), ("G_g", &d.G_g), ("L_g", &d.L_g), ("G_ω", &d.G_w), ("L_ω", &d.L_w), ("N", &d.N)] {
+        fmt_matrix(&mut s, name, M);
+    }
+    let _ = writeln!(s, "\neig(A − LC) = {}", fmt_eigs(&d.observer_eigenvalues));
+    let _ = writeln!(s, "eig(A − BK) = {}", fmt_eigs(&d.decoupled_eigenvalues));
+    s
+}
