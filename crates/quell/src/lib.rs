@@ -19,6 +19,7 @@ pub mod scenario;
 pub mod signal;
 pub mod sim;
 
+pub use controller::{Controller, ControllerError};
 pub use design::{place, Design, DesignError, DesignSpec, ObserverChoice};
 pub use plant::{Plant, PlantError};
 pub use scenario::{Scenario, ScenarioError};

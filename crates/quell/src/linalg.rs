@@ -84,6 +84,18 @@ pub fn hurwitz(eigs: &[Complex<f64>], margin: f64) -> bool {
     eigs.iter().all(|e| e.re < -margin)
 }
 
+/// Exact zero-order-hold discretization of x' = A x + B v over a sample time T:
+/// x_{k+1} = Φ x_k + Γ v_k with Φ = e^{AT}, Γ = ∫_0^T e^{As} ds B, both read off
+/// exp([[A, B], [0, 0]]·T) (Van Loan's block method).
+pub fn zoh(A: &DMatrix<f64>, B: &DMatrix<f64>, T: f64) -> (DMatrix<f64>, DMatrix<f64>) {
+    let (n, m) = (A.nrows(), B.ncols());
+    let mut M = DMatrix::zeros(n + m, n + m);
+    M.view_mut((0, 0), (n, n)).copy_from(&(A * T));
+    M.view_mut((0, n), (n, m)).copy_from(&(B * T));
+    let E = M.exp();
+    (E.view((0, 0), (n, n)).into_owned(), E.view((0, n), (n, m)).into_owned())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -103,5 +115,18 @@ mod tests {
         // (s − (−1 + 2i))(s − (−1 − 2i)) = s² + 2s + 5.
         let a = poly_from_roots(&[Complex::new(-1.0, 2.0), Complex::new(-1.0, -2.0)]);
         assert_eq!(a, vec![5.0, 2.0]);
+    }
+
+    #[test]
+    fn zoh_of_first_order_lag() {
+        // x' = −x/β + v/β held over T: Φ = e^{−T/β}, Γ = 1 − e^{−T/β} (closed form).
+        let (beta, T) = (0.7, 0.05);
+        let (P, G) = zoh(&DMatrix::from_element(1, 1, -1.0 / beta), &DMatrix::from_element(1, 1, 1.0 / beta), T);
+        assert!((P[(0, 0)] - (-T / beta).exp()).abs() < 1e-15);
+        assert!((G[(0, 0)] - (1.0 - (-T / beta).exp())).abs() < 1e-15);
+        // Double integrator: Φ = [[1, T], [0, 1]], Γ = [T²/2, T] (closed form).
+        let (P, G) = zoh(&DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]), &DMatrix::from_row_slice(2, 1, &[0.0, 1.0]), T);
+        assert!((&P - DMatrix::from_row_slice(2, 2, &[1.0, T, 0.0, 1.0])).norm() < 1e-15);
+        assert!((&G - DMatrix::from_row_slice(2, 1, &[T * T / 2.0, T])).norm() < 1e-15);
     }
 }

@@ -1,6 +1,8 @@
 //! Multi-harmonic signals: each component is `bias + Σ amplitude·sin(frequency·t + phase)`.
 //! They model the reference g(t) (Assumption 2) and the disturbance ω(t) (Assumption 3).
 
+use nalgebra::{DMatrix, DVector};
+
 /// One sinusoid `amplitude·sin(frequency·t + phase)`, frequency in rad/s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Harmonic {
@@ -39,6 +41,31 @@ impl Component {
 }
 
 impl Signal {
+    /// A linear exosystem generating the signal exactly: w' = S w, value = H w, w(0) = w0
+    /// (one state per nonzero bias; two per harmonic, [sin, cos] of frequency·t + phase).
+    pub fn exosystem(&self) -> (DMatrix<f64>, DMatrix<f64>, DVector<f64>) {
+        let dim: usize = self.components.iter().map(|c| (c.bias != 0.0) as usize + 2 * c.harmonics.len()).sum();
+        let (mut S, mut H, mut w0) = (DMatrix::zeros(dim, dim), DMatrix::zeros(self.len(), dim), DVector::zeros(dim));
+        let mut at = 0;
+        for (a, c) in self.components.iter().enumerate() {
+            if c.bias != 0.0 {
+                H[(a, at)] = c.bias;
+                w0[at] = 1.0;
+                at += 1;
+            }
+            for h in &c.harmonics {
+                // d/dt [sin θ, cos θ] = ω [cos θ, −sin θ], θ = ω t + φ.
+                S[(at, at + 1)] = h.frequency;
+                S[(at + 1, at)] = -h.frequency;
+                H[(a, at)] = h.amplitude;
+                w0[at] = h.phase.sin();
+                w0[at + 1] = h.phase.cos();
+                at += 2;
+            }
+        }
+        (S, H, w0)
+    }
+
     /// Number of components.
     pub fn len(&self) -> usize {
         self.components.len()

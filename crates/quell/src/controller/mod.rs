@@ -10,7 +10,10 @@
 //!   [u_i(t − τ_i), ξ̂ᵀ(t − τ_i)] (state W_i, σ_i × (1 + q)) and H(s) = 1/(βs + 1) giving Y_i and Ω_i;
 //! - the **adaptive law** (33) η̂_i' = μ_i (Y_i − Ω_i η̂_i) and the control law (25) u_i = −η̂_iᵀ ξ̂.
 
+pub mod discrete;
 pub mod packed;
+
+pub use discrete::{Controller, ControllerError};
 
 use nalgebra::{DMatrix, DVectorView, DVectorViewMut};
 

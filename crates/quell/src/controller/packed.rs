@@ -22,6 +22,16 @@ pub fn sym_mat_vec(omega: &[f64], x: &[f64], out: &mut [f64]) {
     }
 }
 
+/// tr Ω of a packed q×q matrix.
+pub fn trace(omega: &[f64], q: usize) -> f64 {
+    let (mut sum, mut k) = (0.0, 0);
+    for i in 0..q {
+        sum += omega[k];
+        k += q - i;
+    }
+    sum
+}
+
 /// Calls `f(entry, Δ_i Δ_j)` for every packed entry of the rank-one matrix Δ Δᵀ.
 pub fn outer_for_each(delta: &[f64], omega: &mut [f64], mut f: impl FnMut(&mut f64, f64)) {
     let q = delta.len();
@@ -59,6 +69,7 @@ mod tests {
         assert_eq!(out, [4.0, 4.0, 10.0]);
         let mut dense = [0.0; 9];
         unpack(&omega, 3, &mut dense);
+        assert_eq!(trace(&omega, 3), 9.0);
         assert_eq!(dense, [2.0, 1.0, 0.0, 1.0, 3.0, -1.0, 0.0, -1.0, 4.0]);
         let mut o = [0.0; 6];
         outer_for_each(&[1.0, 2.0, 3.0], &mut o, |e, v| *e = v);

@@ -3,7 +3,10 @@
 
 pub mod closed_loop;
 pub mod dde;
+pub mod noise;
 pub mod result;
+pub mod sampled;
 
 pub use closed_loop::{simulate, ContinuousLoop, RunSettings};
 pub use result::{ChannelSummary, Outcome, SimResult};
+pub use sampled::{simulate_sampled, MeasurementNoise, SampledError, SampledSettings};

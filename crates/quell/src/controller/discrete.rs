@@ -1,0 +1,262 @@
+//! The real-time controller: the equations of [`Equations`] discretized exactly for a zero-order-hold
+//! input at sample time T_s, with delay lines for u_i(t − τ_i) and ξ̂(t − τ_i). [`Controller::step`]
+//! allocates nothing.
+
+use nalgebra::DMatrix;
+use thiserror::Error;
+
+use super::{command, mat_vec, packed, swapping_error, Equations};
+use crate::design::Design;
+use crate::linalg::zoh;
+
+/// Why a controller cannot run at the requested sample time.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ControllerError {
+    #[error("sample_time: expected a finite T_s > 0, found {value}")]
+    BadSampleTime { value: f64 },
+    #[error("sample_time: channel {}'s delay τ = {delay} s is not a whole number of samples of T_s = {sample_time} s ({ratio:.6} samples); the nearest valid sample time is {nearest} s", .channel + 1)]
+    DelayNotMultiple { channel: usize, delay: f64, sample_time: f64, ratio: f64, nearest: f64 },
+}
+
+/// A ring buffer holding the last `d + 1` rows of width w, so that row k − d is available at k.
+#[derive(Debug, Clone)]
+struct DelayLine {
+    width: usize,
+    len: usize,
+    head: usize,
+    data: Vec<f64>,
+}
+
+impl DelayLine {
+    fn new(samples: usize, width: usize) -> Self {
+        DelayLine { width, len: samples + 1, head: 0, data: vec![0.0; (samples + 1) * width] }
+    }
+    /// Writes the current row (the slot that held row k − d − 1), then returns row k − d.
+    fn push(&mut self, row: &[f64]) -> &[f64] {
+        let w = self.width;
+        self.data[self.head * w..(self.head + 1) * w].copy_from_slice(row);
+        self.head = (self.head + 1) % self.len;
+        // After the advance, `head` is the oldest row: k − d.
+        &self.data[self.head * w..(self.head + 1) * w]
+    }
+    fn clear(&mut self) {
+        self.data.fill(0.0);
+        self.head = 0;
+    }
+}
+
+/// One channel's discrete state and matrices.
+#[derive(Debug, Clone)]
+struct Channel {
+    /// G_ii filter bank: W ← Φ W + γ [u_i(k − d_i), ξ̂ᵀ(k − d_i)] (σ × (1 + q), row-major).
+    Phi: DMatrix<f64>,
+    gamma: Vec<f64>,
+    W: Vec<f64>,
+    W_next: Vec<f64>,
+    /// H filter memories Y_i and Ω_i (packed).
+    Y: Vec<f64>,
+    Omega: Vec<f64>,
+    /// Delay line of the row [u_i, ξ̂ᵀ].
+    line: DelayLine,
+    /// T_s μ_i.
+    c: f64,
+}
+
+/// The discrete-time adaptive controller (eqs. (5), (6), (14), (20), (25), (33)).
+#[derive(Debug, Clone)]
+pub struct Controller {
+    eq: Equations,
+    T: f64,
+    /// Core z_{k+1} = Φ_z z_k + Γ_z [y_k; g_k; u_d(k)].
+    Phi_z: DMatrix<f64>,
+    Gamma_z: DMatrix<f64>,
+    /// H(s) = 1/(βs + 1) at ZOH: x_{k+1} = a x_k + (1 − a) v_k, a = e^{−T_s/β}.
+    a: f64,
+    channels: Vec<Channel>,
+    z: Vec<f64>,
+    z_next: Vec<f64>,
+    v: Vec<f64>,
+    xi: Vec<f64>,
+    row: Vec<f64>,
+    Delta: Vec<f64>,
+    tmp: Vec<f64>,
+    u: Vec<f64>,
+    u_f: Vec<f64>,
+    /// η̂_1, …, η̂_m, concatenated.
+    eta: Vec<f64>,
+}
+
+/// Delay τ as a whole number of samples of T, or the nearest sample time that makes every delay whole.
+fn samples(delays: &[f64], T: f64) -> Result<Vec<usize>, ControllerError> {
+    let whole = |tau: f64, T: f64| {
+        let r = tau / T;
+        (r - r.round()).abs() <= 1e-9 * r.max(1.0)
+    };
+    for (channel, &delay) in delays.iter().enumerate() {
+        if !whole(delay, T) {
+            let ratio = delay / T;
+            // Nearest T' = τ/k (k ≥ 1 samples) that also fits every other channel.
+            let k0 = ratio.round().max(1.0) as i64;
+            let nearest = (0..10_000i64)
+                .flat_map(|j| [k0 + j, k0 - j])
+                .filter(|&k| k >= 1)
+                .map(|k| delay / k as f64)
+                .find(|&t| delays.iter().all(|&d| whole(d, t)))
+                .unwrap_or(delay / k0 as f64);
+            return Err(ControllerError::DelayNotMultiple { channel, delay, sample_time: T, ratio, nearest });
+        }
+    }
+    Ok(delays.iter().map(|d| (d / T).round() as usize).collect())
+}
+
+impl Controller {
+    /// Discretizes every linear block exactly for ZOH inputs at `sample_time` (matrix exponentials,
+    /// computed once here). Delays must be whole numbers of samples.
+    pub fn new(design: &Design, sample_time: f64) -> Result<Controller, ControllerError> {
+        let T = sample_time;
+        if !(T.is_finite() && T > 0.0) {
+            return Err(ControllerError::BadSampleTime { value: T });
+        }
+        let d = samples(&design.plant.delays, T)?;
+        let eq = Equations::new(design);
+        let (m, q, nz) = (eq.m, eq.q, eq.nz);
+        let (Phi_z, Gamma_z) = zoh(&eq.A_z, &eq.B_z, T);
+        let channels = eq
+            .channels
+            .iter()
+            .zip(&d)
+            .map(|(ch, &d)| {
+                let mut e = DMatrix::zeros(ch.sigma, 1);
+                e[(ch.sigma - 1, 0)] = 1.0;
+                let (Phi, gamma) = zoh(&ch.A, &e, T);
+                let len = ch.sigma * (1 + q);
+                Channel {
+                    Phi,
+                    gamma: gamma.iter().copied().collect(),
+                    W: vec![0.0; len],
+                    W_next: vec![0.0; len],
+                    Y: vec![0.0; q],
+                    Omega: vec![0.0; packed::len(q)],
+                    line: DelayLine::new(d, 1 + q),
+                    c: T * ch.mu,
+                }
+            })
+            .collect();
+        Ok(Controller {
+            T,
+            Phi_z,
+            Gamma_z,
+            a: (-T / eq.beta).exp(),
+            channels,
+            z: vec![0.0; nz],
+            z_next: vec![0.0; nz],
+            v: vec![0.0; 3 * m],
+            xi: vec![0.0; q],
+            row: vec![0.0; 1 + q],
+            Delta: vec![0.0; q],
+            tmp: vec![0.0; q],
+            u: vec![0.0; m],
+            u_f: vec![0.0; m],
+            eta: vec![0.0; m * q],
+            eq,
+        })
+    }
+
+    /// One sample: reads y(k) and g(k), returns the plant input u_f(k) = −K x̂ + F u_d (5) to hold
+    /// until the next sample. Allocates nothing.
+    pub fn step(&mut self, y: &[f64], g: &[f64]) -> &[f64] {
+        let (m, q) = (self.eq.m, self.eq.q);
+        assert!(y.len() == m && g.len() == m, "Controller::step: y and g need {m} entries");
+        let cols = 1 + q;
+        // ξ̂(k) = C_ξ z_k.
+        self.eq.regressor(&self.z, &mut self.xi);
+        let (one_minus_a, a) = (1.0 - self.a, self.a);
+        for ((i, ch), eta) in self.channels.iter_mut().enumerate().zip(self.eta.chunks_exact_mut(q)) {
+            // Control law (25) with η̂_i(k), then the delay line gives [u_i(k − d_i), ξ̂ᵀ(k − d_i)].
+            self.u[i] = command(eta, &self.xi);
+            self.row[0] = self.u[i];
+            self.row[1..].copy_from_slice(&self.xi);
+            let delayed = ch.line.push(&self.row);
+            self.v[2 * m + i] = delayed[0];
+
+            // Swapping error and filtered regressor from W_i(k) (eq. (33)).
+            let eps = swapping_error(&self.eq.channels[i], &ch.W, y[i] - g[i], &mut self.Delta);
+            // H filters at ZOH: Y ← aY + (1 − a)Δ ε̂,  Ω ← aΩ + (1 − a)ΔΔᵀ.
+            for (Yj, dj) in ch.Y.iter_mut().zip(&self.Delta) {
+                *Yj = a * *Yj + one_minus_a * dj * eps;
+            }
+            packed::outer_for_each(&self.Delta, &mut ch.Omega, |o, dd| *o = a * *o + one_minus_a * dd);
+            // Adaptive law (33), implicit in ρI with ρ ≥ λ_max(Ω) (see `adapt`).
+            adapt(ch.c, &ch.Omega, &ch.Y, eta, &mut self.tmp);
+
+            // G_ii filter bank: W ← Φ W + γ [u_i(k − d_i), ξ̂ᵀ(k − d_i)].
+            let sigma = ch.gamma.len();
+            for r in 0..sigma {
+                let out = &mut ch.W_next[r * cols..(r + 1) * cols];
+                for (o, d) in out.iter_mut().zip(delayed) {
+                    *o = ch.gamma[r] * d;
+                }
+                for s in 0..sigma {
+                    let p = ch.Phi[(r, s)];
+                    for (o, w) in out.iter_mut().zip(&ch.W[s * cols..(s + 1) * cols]) {
+                        *o += p * w;
+                    }
+                }
+            }
+            std::mem::swap(&mut ch.W, &mut ch.W_next);
+        }
+        // Plant input (5) and the core's ZOH step with v = [y; g; u_d].
+        self.v[..m].copy_from_slice(y);
+        self.v[m..2 * m].copy_from_slice(g);
+        let u_d = &self.v[2 * m..];
+        self.eq.plant_input(&self.z, u_d, &mut self.u_f);
+        mat_vec(&self.Phi_z, &self.z, &mut self.z_next, false);
+        mat_vec(&self.Gamma_z, &self.v, &mut self.z_next, true);
+        std::mem::swap(&mut self.z, &mut self.z_next);
+        &self.u_f
+    }
+
+    /// The adaptive command u(k) (25) of the last step, undelayed.
+    pub fn command(&self) -> &[f64] {
+        &self.u
+    }
+
+    /// η̂_1, …, η̂_m after the last step, concatenated (m·q).
+    pub fn eta(&self) -> &[f64] {
+        &self.eta
+    }
+
+    /// Sample time T_s.
+    pub fn sample_time(&self) -> f64 {
+        self.T
+    }
+
+    /// Number of channels m and regressor size q.
+    pub fn dims(&self) -> (usize, usize) {
+        (self.eq.m, self.eq.q)
+    }
+
+    /// Back to the initial state: every controller state and delay line zero.
+    pub fn reset(&mut self) {
+        self.z.fill(0.0);
+        self.eta.fill(0.0);
+        for ch in &mut self.channels {
+            ch.W.fill(0.0);
+            ch.Y.fill(0.0);
+            ch.Omega.fill(0.0);
+            ch.line.clear();
+        }
+    }
+}
+
+/// One step of η̂' = μ (Y − Ω η̂) (33) with c = T_s μ, implicit in ρI and explicit in the rest
+/// (Ω = ρI − (ρI − Ω)):  η̂ ← η̂ + c (Y − Ω η̂) / (1 + c ρ),  with ρ = tr Ω ≥ λ_max(Ω).
+/// For PSD Ω the map η̂ ↦ (I − cΩ/(1 + cρ)) η̂ has eigenvalues in [1/(1 + cρ), 1]: nonexpansive for
+/// every μ ≥ 0 and T_s, with the fixed points of (33), at O(q²) cost.
+pub fn adapt(c: f64, Omega: &[f64], Y: &[f64], eta: &mut [f64], tmp: &mut [f64]) {
+    packed::sym_mat_vec(Omega, eta, tmp);
+    let gain = c / (1.0 + c * packed::trace(Omega, eta.len()));
+    for ((e, y), w) in eta.iter_mut().zip(Y).zip(tmp.iter()) {
+        *e += gain * (y - w);
+    }
+}
