@@ -1,0 +1,67 @@
+//! Shared fixtures for the integration tests: the paper's example (Section VIII) and random systems.
+#![allow(non_snake_case, dead_code)]
+
+use quell::nalgebra::{Complex, DMatrix};
+use quell::{DesignSpec, ObserverChoice, Plant};
+
+pub fn re(x: f64) -> Complex<f64> {
+    Complex::new(x, 0.0)
+}
+
+pub fn mat(r: usize, c: usize, v: &[f64]) -> DMatrix<f64> {
+    DMatrix::from_row_slice(r, c, v)
+}
+
+/// The paper's plant, Section VIII (x0 = 0, as the notes fix).
+pub fn paper_plant() -> Plant {
+    Plant::new(
+        mat(3, 3, &[-3.2, -1.7, -3.0, 2.8, 1.3, 4.0, 0.3, 0.3, -0.5]),
+        mat(3, 2, &[-2.0, 1.0, 2.0, -1.0, 1.0, 0.0]),
+        mat(2, 3, &[2.0, 2.0, 0.0, 2.0, 1.0, 2.0]),
+        mat(3, 2, &[1.0, -3.0, 2.0, 1.0, 3.0, 1.0]),
+        mat(2, 2, &[1.0, 2.0, 1.0, 0.0]),
+        vec![1.0, 3.0],
+        None,
+    )
+    .expect("the paper's plant is well formed")
+}
+
+/// The paper's printed observer gain L (Section VIII).
+pub fn paper_L() -> DMatrix<f64> {
+    mat(3, 2, &[-8.0988, 4.4574, 10.6506, -5.0619, 2.7762, -1.1783])
+}
+
+/// The paper's design choices, Section VIII.
+pub fn paper_spec() -> DesignSpec {
+    DesignSpec {
+        observer: ObserverChoice::Gain(paper_L()),
+        channel_poles: vec![vec![re(-6.0), re(-2.0)], vec![re(-4.0)]],
+        reference_filter_poles: vec![vec![re(-1.0), re(-6.0)], vec![re(-9.0)]],
+        disturbance_filter_poles: vec![vec![re(-1.0), re(-3.0)], vec![re(-1.0), re(-2.0), re(-3.0)]],
+        mu: vec![20.0, 30.0],
+        beta: 1.0,
+    }
+}
+
+/// A small deterministic generator (SplitMix64) for seeded random test systems.
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    /// Uniform in [lo, hi).
+    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next()
+    }
+    pub fn matrix(&mut self, r: usize, c: usize) -> DMatrix<f64> {
+        DMatrix::from_fn(r, c, |_, _| self.uniform(-1.0, 1.0))
+    }
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next() * n as f64) as usize
+    }
+}
