@@ -22,7 +22,11 @@ use quell::Design;
 use serde_json::json;
 
 #[derive(Parser)]
-#[command(name = "quell", version, about = "Direct adaptive output-feedback control of MIMO plants with distinct input delays")]
+#[command(
+    name = "quell",
+    version,
+    about = "Direct adaptive output-feedback control of MIMO plants with distinct input delays"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
@@ -105,7 +109,9 @@ fn design(path: &Path, as_json: bool) -> Result<(), Failure> {
 fn run(args: &RunArgs) -> Result<(), Failure> {
     let (scenario, design) = load(args.scenario.as_deref())?;
     let out = &args.out;
-    output::prepare_dir(out).map_err(|e| Failure::Input(format!("--out {}: cannot write there ({e}); choose a writable directory", out.display())))?;
+    output::prepare_dir(out).map_err(|e| {
+        Failure::Input(format!("--out {}: cannot write there ({e}); choose a writable directory", out.display()))
+    })?;
 
     let interrupted = Arc::new(AtomicBool::new(false));
     {
@@ -118,7 +124,11 @@ fn run(args: &RunArgs) -> Result<(), Failure> {
     let started = std::time::Instant::now();
     let result = simulate(&design, &scenario.reference, &scenario.disturbance, &settings, |t| {
         bar.set_position((t * 1000.0) as u64);
-        if interrupted.load(Ordering::SeqCst) { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+        if interrupted.load(Ordering::SeqCst) {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
     });
     bar.finish_and_clear();
     let elapsed = started.elapsed();
@@ -158,7 +168,14 @@ fn progress_bar(t_end: f64) -> ProgressBar {
     bar
 }
 
-fn write_outputs(dir: &Path, scenario: &Scenario, design: &Design, r: &SimResult, seconds: f64, plots: bool) -> std::io::Result<()> {
+fn write_outputs(
+    dir: &Path,
+    scenario: &Scenario,
+    design: &Design,
+    r: &SimResult,
+    seconds: f64,
+    plots: bool,
+) -> std::io::Result<()> {
     output::write_signals(&dir.join("signals.csv"), r)?;
     output::write_json(&dir.join("design.json"), &report::design_json(design))?;
     let summary = json!({

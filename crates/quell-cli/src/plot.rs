@@ -17,17 +17,36 @@ static FONT: Once = Once::new();
 fn register_font() {
     FONT.call_once(|| {
         // DejaVu Sans (see assets/DejaVuSans.LICENSE), so PNGs render on machines without fonts.
-        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, include_bytes!("../assets/DejaVuSans.ttf"));
+        let _ =
+            plotters::style::register_font("sans-serif", FontStyle::Normal, include_bytes!("../assets/DejaVuSans.ttf"));
     });
 }
 
 type Series = (String, Vec<(f64, f64)>);
 
-fn panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, title: &str, ylabel: &str, series: &[Series]) -> Result<(), String> {
-    let (t0, t1) = series.iter().flat_map(|(_, p)| p.iter().map(|(t, _)| *t)).fold((f64::MAX, f64::MIN), |(a, b), t| (a.min(t), b.max(t)));
-    let (lo, hi) = series.iter().flat_map(|(_, p)| p.iter().map(|(_, v)| *v)).filter(|v| v.is_finite()).fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
+fn panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    title: &str,
+    ylabel: &str,
+    series: &[Series],
+) -> Result<(), String> {
+    let (t0, t1) = series
+        .iter()
+        .flat_map(|(_, p)| p.iter().map(|(t, _)| *t))
+        .fold((f64::MAX, f64::MIN), |(a, b), t| (a.min(t), b.max(t)));
+    let (lo, hi) = series
+        .iter()
+        .flat_map(|(_, p)| p.iter().map(|(_, v)| *v))
+        .filter(|v| v.is_finite())
+        .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
     let (t0, t1) = if t0 < t1 { (t0, t1) } else { (0.0, 1.0) };
-    let (lo, hi) = if lo < hi { (lo, hi) } else if lo == hi { (lo - 1.0, hi + 1.0) } else { (-1.0, 1.0) };
+    let (lo, hi) = if lo < hi {
+        (lo, hi)
+    } else if lo == hi {
+        (lo - 1.0, hi + 1.0)
+    } else {
+        (-1.0, 1.0)
+    };
     let pad = 0.05 * (hi - lo);
     let mut chart = ChartBuilder::on(area)
         .caption(title, ("sans-serif", 20))
@@ -67,7 +86,12 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &SimResult, i: usiz
     let col = |sig: &[f64]| r.t.iter().copied().zip(r.column(sig, r.m, i)).collect::<Vec<_>>();
     let c = i + 1;
     let areas = root.split_evenly((4, 1));
-    panel(&areas[0], &format!("Channel {c}: output and reference"), "y, g", &[(format!("y{c}"), col(&r.y)), (format!("g{c}"), col(&r.g))])?;
+    panel(
+        &areas[0],
+        &format!("Channel {c}: output and reference"),
+        "y, g",
+        &[(format!("y{c}"), col(&r.y)), (format!("g{c}"), col(&r.g))],
+    )?;
     panel(&areas[1], &format!("Channel {c}: tracking error"), "e = y − g", &[(format!("e{c}"), col(&r.e))])?;
     panel(&areas[2], &format!("Channel {c}: adaptive command (25)"), "u", &[(format!("u{c}"), col(&r.u))])?;
     let etas: Vec<Series> = (0..r.q)

@@ -67,9 +67,11 @@ fn fmt_eigs(e: &[Complex<f64>]) -> String {
 }
 
 fn tf(c: &quell::design::ChannelTf) -> String {
-    let poly: Vec<String> = c.poles.iter().map(|p| {
-        if p.im == 0.0 { format!("(s{:+})", -p.re) } else { format!("(s−({:.4}{:+.4}i))", p.re, p.im) }
-    }).collect();
+    let poly: Vec<String> = c
+        .poles
+        .iter()
+        .map(|p| if p.im == 0.0 { format!("(s{:+})", -p.re) } else { format!("(s−({:.4}{:+.4}i))", p.re, p.im) })
+        .collect();
     format!("{} / {}", c.q0(), poly.join(""))
 }
 
@@ -77,21 +79,60 @@ fn tf(c: &quell::design::ChannelTf) -> String {
 pub fn design_text(d: &Design) -> String {
     let p = &d.plant;
     let mut s = String::new();
-    let _ = writeln!(s, "plant: n = {}, m = {}, k = {}, delays τ = {:?}, regressor q = {} (q_g = {}, q_ω = {})",
-        p.n(), p.m(), p.k(), p.delays, d.q(), d.q_g(), d.q_w());
+    let _ = writeln!(
+        s,
+        "plant: n = {}, m = {}, k = {}, delays τ = {:?}, regressor q = {} (q_g = {}, q_ω = {})",
+        p.n(),
+        p.m(),
+        p.k(),
+        p.delays,
+        d.q(),
+        d.q_g(),
+        d.q_w()
+    );
     let _ = writeln!(s, "\nassumption checks:");
-    let _ = writeln!(s, "  ✓ (A, B) controllable: numerical rank {} of {} (tol {:.1e})", d.controllability.rank, p.n(), d.controllability.tol);
-    let _ = writeln!(s, "  ✓ (A, C) observable:   numerical rank {} of {} (tol {:.1e})", d.observability.rank, p.n(), d.observability.tol);
+    let _ = writeln!(
+        s,
+        "  ✓ (A, B) controllable: numerical rank {} of {} (tol {:.1e})",
+        d.controllability.rank,
+        p.n(),
+        d.controllability.tol
+    );
+    let _ = writeln!(
+        s,
+        "  ✓ (A, C) observable:   numerical rank {} of {} (tol {:.1e})",
+        d.observability.rank,
+        p.n(),
+        d.observability.tol
+    );
     let _ = writeln!(s, "  ✓ decouplable: B* nonsingular, condition number {:.3e}", d.cond_B_star);
-    let _ = writeln!(s, "  ✓ A_f = A − BK Hurwitz (stable zero dynamics): max Re λ = {:.5}", d.decoupled_eigenvalues.iter().map(|e| e.re).fold(f64::MIN, f64::max));
-    let _ = writeln!(s, "  ✓ observer A − LC Hurwitz: max Re λ = {:.5}", d.observer_eigenvalues.iter().map(|e| e.re).fold(f64::MIN, f64::max));
+    let _ = writeln!(
+        s,
+        "  ✓ A_f = A − BK Hurwitz (stable zero dynamics): max Re λ = {:.5}",
+        d.decoupled_eigenvalues.iter().map(|e| e.re).fold(f64::MIN, f64::max)
+    );
+    let _ = writeln!(
+        s,
+        "  ✓ observer A − LC Hurwitz: max Re λ = {:.5}",
+        d.observer_eigenvalues.iter().map(|e| e.re).fold(f64::MIN, f64::max)
+    );
     let _ = writeln!(s, "  ✓ rank D = k = {} (N D = L_ω solvable)", p.k());
     let _ = writeln!(s, "\nrelative degrees σ = {:?}", d.sigma);
     for (i, c) in d.channels.iter().enumerate() {
         let _ = writeln!(s, "  G_{0}{0}(s) = {1}   (μ_{0} = {2})", i + 1, tf(c), d.mu[i]);
     }
     let _ = writeln!(s, "  H(s) = 1/({} s + 1)\n", d.beta);
-    for (name, M) in [("K", &d.K), ("F", &d.F), ("L", &d.L), ("B*", &d.B_star), ("G_g", &d.G_g), ("L_g", &d.L_g), ("G_ω", &d.G_w), ("L_ω", &d.L_w), ("N", &d.N)] {
+    for (name, M) in [
+        ("K", &d.K),
+        ("F", &d.F),
+        ("L", &d.L),
+        ("B*", &d.B_star),
+        ("G_g", &d.G_g),
+        ("L_g", &d.L_g),
+        ("G_ω", &d.G_w),
+        ("L_ω", &d.L_w),
+        ("N", &d.N),
+    ] {
         fmt_matrix(&mut s, name, M);
     }
     let _ = writeln!(s, "\neig(A − LC) = {}", fmt_eigs(&d.observer_eigenvalues));

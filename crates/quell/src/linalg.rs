@@ -105,10 +105,7 @@ mod tests {
         // (s + 1)(s + 6) = s² + 7s + 6: the paper's G_g1 = [[0, 1], [−6, −7]] (Section VIII).
         let a = poly_from_roots(&[Complex::new(-1.0, 0.0), Complex::new(-6.0, 0.0)]);
         assert_eq!(a, vec![6.0, 7.0]);
-        assert_eq!(
-            companion(&a),
-            DMatrix::from_row_slice(2, 2, &[0.0, 1.0, -6.0, -7.0])
-        );
+        assert_eq!(companion(&a), DMatrix::from_row_slice(2, 2, &[0.0, 1.0, -6.0, -7.0]));
         // (s + 1)(s + 2)(s + 3) = s³ + 6s² + 11s + 6: the paper's third G_ω block.
         let a = poly_from_roots(&[-1.0, -2.0, -3.0].map(|r| Complex::new(r, 0.0)));
         assert_eq!(a, vec![6.0, 11.0, 6.0]);
@@ -125,7 +122,8 @@ mod tests {
         assert!((P[(0, 0)] - (-T / beta).exp()).abs() < 1e-15);
         assert!((G[(0, 0)] - (1.0 - (-T / beta).exp())).abs() < 1e-15);
         // Double integrator: Φ = [[1, T], [0, 1]], Γ = [T²/2, T] (closed form).
-        let (P, G) = zoh(&DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]), &DMatrix::from_row_slice(2, 1, &[0.0, 1.0]), T);
+        let (P, G) =
+            zoh(&DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]), &DMatrix::from_row_slice(2, 1, &[0.0, 1.0]), T);
         assert!((&P - DMatrix::from_row_slice(2, 2, &[1.0, T, 0.0, 1.0])).norm() < 1e-15);
         assert!((&G - DMatrix::from_row_slice(2, 1, &[T * T / 2.0, T])).norm() < 1e-15);
     }

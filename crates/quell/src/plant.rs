@@ -26,29 +26,13 @@ pub struct Plant {
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum PlantError {
     #[error("{name}: expected a {expected_rows}×{expected_cols} matrix, found {rows}×{cols}")]
-    Shape {
-        name: &'static str,
-        expected_rows: usize,
-        expected_cols: usize,
-        rows: usize,
-        cols: usize,
-    },
+    Shape { name: &'static str, expected_rows: usize, expected_cols: usize, rows: usize, cols: usize },
     #[error("{name}[{row}][{col}]: expected a finite number, found {value}")]
-    NonFinite {
-        name: &'static str,
-        row: usize,
-        col: usize,
-        value: f64,
-    },
+    NonFinite { name: &'static str, row: usize, col: usize, value: f64 },
     #[error("delays[{index}]: expected a finite delay ≥ 0, found {value}")]
     BadDelay { index: usize, value: f64 },
     #[error("{name}: expected {expected} entries (one per {per}), found {found}")]
-    Length {
-        name: &'static str,
-        per: &'static str,
-        expected: usize,
-        found: usize,
-    },
+    Length { name: &'static str, per: &'static str, expected: usize, found: usize },
     #[error("A: the plant needs at least one state, input and output (n, m ≥ 1); found n = {n}, m = {m}")]
     Empty { n: usize, m: usize },
 }
@@ -67,12 +51,7 @@ fn check(name: &'static str, M: &DMatrix<f64>, rows: usize, cols: usize) -> Resu
         for c in 0..cols {
             let value = M[(r, c)];
             if !value.is_finite() {
-                return Err(PlantError::NonFinite {
-                    name,
-                    row: r,
-                    col: c,
-                    value,
-                });
+                return Err(PlantError::NonFinite { name, row: r, col: c, value });
             }
         }
     }
@@ -101,39 +80,17 @@ impl Plant {
         check("D", &D, n, k)?;
         check("Q", &Q, m, k)?;
         if delays.len() != m {
-            return Err(PlantError::Length {
-                name: "delays",
-                per: "input",
-                expected: m,
-                found: delays.len(),
-            });
+            return Err(PlantError::Length { name: "delays", per: "input", expected: m, found: delays.len() });
         }
-        if let Some((index, &value)) = delays
-            .iter()
-            .enumerate()
-            .find(|(_, d)| !(d.is_finite() && **d >= 0.0))
-        {
+        if let Some((index, &value)) = delays.iter().enumerate().find(|(_, d)| !(d.is_finite() && **d >= 0.0)) {
             return Err(PlantError::BadDelay { index, value });
         }
         let x0 = x0.unwrap_or_else(|| DVector::zeros(n));
         if x0.len() != n {
-            return Err(PlantError::Length {
-                name: "x0",
-                per: "state",
-                expected: n,
-                found: x0.len(),
-            });
+            return Err(PlantError::Length { name: "x0", per: "state", expected: n, found: x0.len() });
         }
         check("x0", &DMatrix::from_column_slice(n, 1, x0.as_slice()), n, 1)?;
-        Ok(Plant {
-            A,
-            B,
-            C,
-            D,
-            Q,
-            delays,
-            x0,
-        })
+        Ok(Plant { A, B, C, D, Q, delays, x0 })
     }
 
     /// State dimension n.

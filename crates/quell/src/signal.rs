@@ -27,16 +27,12 @@ pub struct Signal {
 impl Component {
     /// Value at time `t`.
     pub fn eval(&self, t: f64) -> f64 {
-        self.harmonics.iter().fold(self.bias, |acc, h| {
-            acc + h.amplitude * (h.frequency * t + h.phase).sin()
-        })
+        self.harmonics.iter().fold(self.bias, |acc, h| acc + h.amplitude * (h.frequency * t + h.phase).sin())
     }
 
     /// Largest possible |value|: |bias| + Σ|amplitude|.
     pub fn peak(&self) -> f64 {
-        self.harmonics
-            .iter()
-            .fold(self.bias.abs(), |acc, h| acc + h.amplitude.abs())
+        self.harmonics.iter().fold(self.bias.abs(), |acc, h| acc + h.amplitude.abs())
     }
 }
 

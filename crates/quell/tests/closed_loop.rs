@@ -41,7 +41,11 @@ fn paper_example_converges() {
 fn paper_example_matches_independent_reference() {
     // ../shared/reference/paper_example_points.csv: y and u from an independent solver at 1e-12
     // (accurate to ~1e-8). quell at rtol = atol = 1e-10 must match to 1e-6 (issue 3's bound).
-    let csv = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/reference/paper_example_points.csv")).unwrap();
+    let csv = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/reference/paper_example_points.csv"
+    ))
+    .unwrap();
     let r = run(paper_spec(), 100.0, 0.1, 1e-10);
     let mut rows = 0;
     for line in csv.lines().skip(1) {

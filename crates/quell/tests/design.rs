@@ -103,10 +103,8 @@ fn decoupled_loop_is_diagonal_with_the_chosen_channels() {
     for _ in 0..300 {
         let (A, B, C) = random_system(&mut rng);
         let sigma = relative_degrees(&A, &B, &C);
-        let poles: Vec<Vec<Complex<f64>>> = sigma
-            .iter()
-            .map(|s| (0..s.unwrap_or(1)).map(|_| re(rng.uniform(-5.0, -0.5))).collect())
-            .collect();
+        let poles: Vec<Vec<Complex<f64>>> =
+            sigma.iter().map(|s| (0..s.unwrap_or(1)).map(|_| re(rng.uniform(-5.0, -0.5))).collect()).collect();
         let Ok(fw) = falb_wolovich(&A, &B, &C, &poles) else { continue };
         if fw.cond_B_star > 1e6 {
             continue;
@@ -129,7 +127,11 @@ fn decoupled_loop_is_diagonal_with_the_chosen_channels() {
                     } else {
                         Complex::new(0.0, 0.0)
                     };
-                    assert!((G[(i, j)] - want).norm() <= 1e-9 * scale, "G[{i},{j}] = {} want {want}, scale {scale}", G[(i, j)]);
+                    assert!(
+                        (G[(i, j)] - want).norm() <= 1e-9 * scale,
+                        "G[{i},{j}] = {} want {want}, scale {scale}",
+                        G[(i, j)]
+                    );
                 }
             }
         }
@@ -143,7 +145,16 @@ fn relative_degree_survives_six_digit_rounding() {
     // The notes: deciding c_i A^{l−1} B ≠ 0 by exact comparison lets rounding to six digits change σ.
     // A row of C orthogonal to B (σ ≥ 2), rounded to 6 significant digits, keeps σ = 2.
     let mut rng = Rng(7);
-    let round6 = |M: &DMatrix<f64>| M.map(|v| if v == 0.0 { 0.0 } else { let e = 10f64.powi(5 - v.abs().log10().floor() as i32); (v * e).round() / e });
+    let round6 = |M: &DMatrix<f64>| {
+        M.map(|v| {
+            if v == 0.0 {
+                0.0
+            } else {
+                let e = 10f64.powi(5 - v.abs().log10().floor() as i32);
+                (v * e).round() / e
+            }
+        })
+    };
     for _ in 0..50 {
         let (A, B) = (rng.matrix(5, 5), rng.matrix(5, 2));
         let Qb = B.clone().qr().q();
@@ -167,7 +178,8 @@ fn disturbance_observer_gain_solves_N_D_equals_L_w() {
         let n = 2 + rng.below(9);
         let k = 1 + rng.below(n.min(4));
         let D = rng.matrix(n, k);
-        let poles: Vec<Vec<Complex<f64>>> = (0..k).map(|_| (0..1 + rng.below(3)).map(|j| re(-1.0 - j as f64)).collect()).collect();
+        let poles: Vec<Vec<Complex<f64>>> =
+            (0..k).map(|_| (0..1 + rng.below(3)).map(|j| re(-1.0 - j as f64)).collect()).collect();
         let (_, L_w) = internal_model(&poles);
         let N = &L_w * D.clone().pseudo_inverse(1e-14).unwrap();
         assert!((&N * &D - &L_w).norm() <= 1e-10 * N.norm().max(1.0) * D.norm());
@@ -319,7 +331,10 @@ fn error_spec_values() {
     let mut spec = paper_spec();
     spec.reference_filter_poles[1] = vec![re(0.5)];
     let e = expect_err(&p, &spec);
-    assert!(e.to_string().starts_with("design.reference_filter_poles[1]: pole 0.500000 is not in the open left half-plane"), "{e}");
+    assert!(
+        e.to_string().starts_with("design.reference_filter_poles[1]: pole 0.500000 is not in the open left half-plane"),
+        "{e}"
+    );
     let mut spec = paper_spec();
     spec.disturbance_filter_poles[0] = vec![Complex::new(-1.0, 2.0), re(-1.0)];
     assert!(matches!(expect_err(&p, &spec), DesignError::NotConjugateClosed { .. }));

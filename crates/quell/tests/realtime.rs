@@ -139,7 +139,8 @@ fn sampled_data_loop_tracks_the_continuous_one() {
     let d = paper_design();
     let (g, w) = paper_signals();
     let cont = simulate(&d, &g, &w, &RunSettings::new(100.0, 0.1, 1e-9, 1e-9), |_| ControlFlow::Continue(()));
-    let settings = SampledSettings { t_end: 100.0, output_step: 0.1, sample_time: 1e-3, noise: None, divergence_bound: 1e9 };
+    let settings =
+        SampledSettings { t_end: 100.0, output_step: 0.1, sample_time: 1e-3, noise: None, divergence_bound: 1e9 };
     let samp = simulate_sampled(&d, &g, &w, &settings, |_| ControlFlow::Continue(())).unwrap();
     assert_eq!(samp.outcome, Some(Outcome::Completed));
     assert_eq!(samp.len(), cont.len());

@@ -15,11 +15,7 @@ pub const MAX_COND_B_STAR: f64 = 1e12;
 
 /// Relative degrees σ_i (eq. (7)): the least l with c_i A^{l−1} B ≠ 0, decided with
 /// [`RELATIVE_DEGREE_TOL`]. `None` for an output that no input reaches (c_i A^{l−1} B ≈ 0 for all l ≤ n).
-pub fn relative_degrees(
-    A: &DMatrix<f64>,
-    B: &DMatrix<f64>,
-    C: &DMatrix<f64>,
-) -> Vec<Option<usize>> {
+pub fn relative_degrees(A: &DMatrix<f64>, B: &DMatrix<f64>, C: &DMatrix<f64>) -> Vec<Option<usize>> {
     let n = A.nrows();
     let (nA, nB) = (A.norm(), B.norm());
     (0..C.nrows())
@@ -70,11 +66,7 @@ pub fn falb_wolovich(
         let s = s.ok_or(DesignError::NoRelativeDegree { channel })?;
         let got = channel_poles[channel].len();
         if got != s {
-            return Err(DesignError::ChannelPoleCount {
-                channel,
-                sigma: s,
-                got,
-            });
+            return Err(DesignError::ChannelPoleCount { channel, sigma: s, got });
         }
         sigma.push(s);
     }
@@ -104,13 +96,5 @@ pub fn falb_wolovich(
     };
     let K = &inv * &C_star;
     let F = &inv * DMatrix::from_diagonal(&nalgebra::DVector::from_vec(q0.clone()));
-    Ok(FalbWolovich {
-        sigma,
-        B_star,
-        C_star,
-        K,
-        F,
-        q0,
-        cond_B_star,
-    })
+    Ok(FalbWolovich { sigma, B_star, C_star, K, F, q0, cond_B_star })
 }

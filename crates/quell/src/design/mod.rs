@@ -61,11 +61,7 @@ impl ChannelTf {
     }
     /// G_ii(s).
     pub fn eval(&self, s: Complex<f64>) -> Complex<f64> {
-        let den = self
-            .den
-            .iter()
-            .rev()
-            .fold(Complex::new(1.0, 0.0), |acc, &a| acc * s + a);
+        let den = self.den.iter().rev().fold(Complex::new(1.0, 0.0), |acc, &a| acc * s + a);
         Complex::new(self.q0(), 0.0) / den
     }
 }
@@ -116,41 +112,21 @@ pub enum DesignError {
     #[error("design.observer_poles: {0}")]
     ObserverPoles(PlaceError),
     #[error("design.observer_gain: expected a {n}×{m} matrix, found {rows}×{cols}")]
-    ObserverGainShape {
-        n: usize,
-        m: usize,
-        rows: usize,
-        cols: usize,
-    },
+    ObserverGainShape { n: usize, m: usize, rows: usize, cols: usize },
     #[error("design.observer_gain: A − LC is not Hurwitz (eigenvalues {}); choose L with a stable observer, or give design.observer_poles instead", fmt_eigs(.eigenvalues))]
     ObserverUnstable { eigenvalues: Vec<Complex<f64>> },
     #[error("plant.C: output {} is reached by no input (c_i A^(l-1) B = 0 for every l ≤ n), so the plant cannot be decoupled", .channel + 1)]
     NoRelativeDegree { channel: usize },
     #[error("design.channel_poles[{channel}]: channel {} has relative degree {sigma}, so it needs {sigma} pole{}; got {got}", .channel + 1, if *.sigma == 1 { "" } else { "s" })]
-    ChannelPoleCount {
-        channel: usize,
-        sigma: usize,
-        got: usize,
-    },
-    #[error(
-        "plant: not decouplable (Proposition 1): B* is singular (condition number {cond:.3e})"
-    )]
+    ChannelPoleCount { channel: usize, sigma: usize, got: usize },
+    #[error("plant: not decouplable (Proposition 1): B* is singular (condition number {cond:.3e})")]
     NotDecouplable { cond: f64 },
     #[error("plant: A − BK is not Hurwitz: the plant's zero dynamics are unstable (offending eigenvalues {}); this plant cannot be decoupled stably", fmt_eigs(.eigenvalues))]
     UnstableZeroDynamics { eigenvalues: Vec<Complex<f64>> },
     #[error("{key}: expected {expected} entries (one per {per}), got {got}")]
-    Count {
-        key: &'static str,
-        per: &'static str,
-        expected: usize,
-        got: usize,
-    },
+    Count { key: &'static str, per: &'static str, expected: usize, got: usize },
     #[error("{key}: pole {} is not in the open left half-plane; {what} poles must be Hurwitz (real part < 0)", fmt_eig(.pole))]
-    NotHurwitz {
-        key: String,
-        what: &'static str,
-        pole: Complex<f64>,
-    },
+    NotHurwitz { key: String, what: &'static str, pole: Complex<f64> },
     #[error("{key}: pole {} has no complex-conjugate partner in the list", fmt_eig(.pole))]
     NotConjugateClosed { key: String, pole: Complex<f64> },
     #[error("{key}: the list is empty; give at least one pole")]
@@ -176,12 +152,7 @@ fn fmt_eigs(e: &[Complex<f64>]) -> String {
 }
 
 /// Checks a pole list: not empty (when `nonempty`), finite, closed under conjugation, Hurwitz.
-fn check_poles(
-    key: String,
-    what: &'static str,
-    poles: &[Complex<f64>],
-    nonempty: bool,
-) -> Result<(), DesignError> {
+fn check_poles(key: String, what: &'static str, poles: &[Complex<f64>], nonempty: bool) -> Result<(), DesignError> {
     if nonempty && poles.is_empty() {
         return Err(DesignError::NoPoles { key });
     }
@@ -189,12 +160,7 @@ fn check_poles(
         if !(p.re.is_finite() && p.im.is_finite()) || p.re >= 0.0 {
             return Err(DesignError::NotHurwitz { key, what, pole: p });
         }
-        let partners = |z: Complex<f64>| {
-            poles
-                .iter()
-                .filter(|&&x| (x - z).norm() <= 1e-12 * (1.0 + z.norm()))
-                .count()
-        };
+        let partners = |z: Complex<f64>| poles.iter().filter(|&&x| (x - z).norm() <= 1e-12 * (1.0 + z.norm())).count();
         if p.im != 0.0 && partners(p.conj()) != partners(p) {
             return Err(DesignError::NotConjugateClosed { key, pole: p });
         }
@@ -217,20 +183,10 @@ impl Design {
             if expected == got {
                 Ok(())
             } else {
-                Err(DesignError::Count {
-                    key,
-                    per,
-                    expected,
-                    got,
-                })
+                Err(DesignError::Count { key, per, expected, got })
             }
         };
-        count(
-            "design.channel_poles",
-            "output",
-            m,
-            spec.channel_poles.len(),
-        )?;
+        count("design.channel_poles", "output", m, spec.channel_poles.len())?;
         count(
             "design.reference_filter_poles",
             "reference component (one per output)",
@@ -244,12 +200,7 @@ impl Design {
             spec.disturbance_filter_poles.len(),
         )?;
         count("design.mu", "channel", m, spec.mu.len())?;
-        if let Some((index, &value)) = spec
-            .mu
-            .iter()
-            .enumerate()
-            .find(|(_, v)| !(v.is_finite() && **v >= 0.0))
-        {
+        if let Some((index, &value)) = spec.mu.iter().enumerate().find(|(_, v)| !(v.is_finite() && **v >= 0.0)) {
             return Err(DesignError::BadMu { index, value });
         }
         if !(spec.beta.is_finite() && spec.beta > 0.0) {
@@ -259,66 +210,39 @@ impl Design {
             check_poles(format!("design.channel_poles[{i}]"), "channel", p, false)?;
         }
         for (i, p) in spec.reference_filter_poles.iter().enumerate() {
-            check_poles(
-                format!("design.reference_filter_poles[{i}]"),
-                "internal-model filter",
-                p,
-                true,
-            )?;
+            check_poles(format!("design.reference_filter_poles[{i}]"), "internal-model filter", p, true)?;
         }
         for (i, p) in spec.disturbance_filter_poles.iter().enumerate() {
-            check_poles(
-                format!("design.disturbance_filter_poles[{i}]"),
-                "internal-model filter",
-                p,
-                true,
-            )?;
+            check_poles(format!("design.disturbance_filter_poles[{i}]"), "internal-model filter", p, true)?;
         }
 
         // Assumption 1.
         let ctrb = controllability(A, B);
         if !ctrb.full() {
-            return Err(DesignError::Uncontrollable {
-                rank: ctrb.rank,
-                n,
-                tol: ctrb.tol,
-            });
+            return Err(DesignError::Uncontrollable { rank: ctrb.rank, n, tol: ctrb.tol });
         }
         let obsv = observability(A, C);
         if !obsv.full() {
-            return Err(DesignError::Unobservable {
-                rank: obsv.rank,
-                n,
-                tol: obsv.tol,
-            });
+            return Err(DesignError::Unobservable { rank: obsv.rank, n, tol: obsv.tol });
         }
 
         // Observer (6).
         let L = match &spec.observer {
             ObserverChoice::Gain(L) => {
                 if L.nrows() != n || L.ncols() != m {
-                    return Err(DesignError::ObserverGainShape {
-                        n,
-                        m,
-                        rows: L.nrows(),
-                        cols: L.ncols(),
-                    });
+                    return Err(DesignError::ObserverGainShape { n, m, rows: L.nrows(), cols: L.ncols() });
                 }
                 L.clone()
             }
             ObserverChoice::Poles(p) => {
                 check_poles("design.observer_poles".into(), "observer", p, false)?;
-                place(&A.transpose(), &C.transpose(), p)
-                    .map_err(DesignError::ObserverPoles)?
-                    .transpose()
+                place(&A.transpose(), &C.transpose(), p).map_err(DesignError::ObserverPoles)?.transpose()
             }
         };
         let A_o = A - &L * C;
         let observer_eigenvalues = eigenvalues(&A_o);
         if !hurwitz(&observer_eigenvalues, margin(&A_o)) {
-            return Err(DesignError::ObserverUnstable {
-                eigenvalues: observer_eigenvalues,
-            });
+            return Err(DesignError::ObserverUnstable { eigenvalues: observer_eigenvalues });
         }
 
         // Decoupler (Proposition 1) and its zero dynamics.
@@ -327,22 +251,12 @@ impl Design {
         let B_f = B * &fw.F;
         let decoupled_eigenvalues = eigenvalues(&A_f);
         let tol = margin(&A_f);
-        let bad: Vec<_> = decoupled_eigenvalues
-            .iter()
-            .copied()
-            .filter(|e| e.re >= -tol)
-            .collect();
+        let bad: Vec<_> = decoupled_eigenvalues.iter().copied().filter(|e| e.re >= -tol).collect();
         if !bad.is_empty() {
             return Err(DesignError::UnstableZeroDynamics { eigenvalues: bad });
         }
-        let channels = spec
-            .channel_poles
-            .iter()
-            .map(|p| ChannelTf {
-                poles: p.clone(),
-                den: poly_from_roots(p),
-            })
-            .collect();
+        let channels =
+            spec.channel_poles.iter().map(|p| ChannelTf { poles: p.clone(), den: poly_from_roots(p) }).collect();
 
         // Internal models (11), (16) and the disturbance observer gain (20).
         let (G_g, L_g) = internal_model(&spec.reference_filter_poles);

@@ -46,11 +46,7 @@ pub struct Options {
 
 impl Default for Options {
     fn default() -> Self {
-        Options {
-            rtol: 1e-9,
-            atol: 1e-9,
-            h_max: f64::INFINITY,
-        }
+        Options { rtol: 1e-9, atol: 1e-9, h_max: f64::INFINITY }
     }
 }
 
@@ -65,9 +61,7 @@ pub struct Stats {
 /// Why the integration stopped early.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum SolveError {
-    #[error(
-        "step size underflow at t = {t}: the step shrank to {h:e} without meeting the tolerance"
-    )]
+    #[error("step size underflow at t = {t}: the step shrank to {h:e} without meeting the tolerance")]
     StepSizeTooSmall { t: f64, h: f64 },
 }
 

@@ -96,8 +96,13 @@ impl SimResult {
         let from = t1 - 0.1 * (t1 - t0);
         (0..self.m)
             .map(|i| {
-                let tail: Vec<f64> =
-                    self.t.iter().zip(self.column(&self.e, self.m, i)).filter(|(t, _)| **t >= from).map(|(_, e)| e).collect();
+                let tail: Vec<f64> = self
+                    .t
+                    .iter()
+                    .zip(self.column(&self.e, self.m, i))
+                    .filter(|(t, _)| **t >= from)
+                    .map(|(_, e)| e)
+                    .collect();
                 let rms = (tail.iter().map(|e| e * e).sum::<f64>() / tail.len().max(1) as f64).sqrt();
                 let last = &self.eta[self.eta.len() - self.m * self.q..];
                 ChannelSummary {

@@ -1,0 +1,31 @@
+//! The paper's example (Section VIII), 100 s of the continuous closed loop at rtol = atol = 1e-9
+//! (issue 3's speed target: under 10 ms on one core), and the sampled-data loop at T_s = 1 ms.
+
+use std::ops::ControlFlow;
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use quell::scenario::{Scenario, PAPER_EXAMPLE};
+use quell::sim::{simulate, simulate_sampled, RunSettings, SampledSettings};
+use quell::Design;
+
+fn paper(c: &mut Criterion) {
+    let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+    let d = Design::new(&s.plant, &s.design).unwrap();
+    let settings = RunSettings::new(100.0, 0.1, 1e-9, 1e-9);
+    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(()));
+    eprintln!("paper example: {:?}", r.stats);
+    let mut g = c.benchmark_group("paper_example");
+    g.sample_size(20);
+    g.bench_function("continuous_100s_rtol1e-9", |b| {
+        b.iter(|| simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())))
+    });
+    let sampled =
+        SampledSettings { t_end: 100.0, output_step: 0.1, sample_time: 1e-3, noise: None, divergence_bound: 1e9 };
+    g.bench_function("sampled_100s_Ts1ms", |b| {
+        b.iter(|| simulate_sampled(&d, &s.reference, &s.disturbance, &sampled, |_| ControlFlow::Continue(())).unwrap())
+    });
+    g.finish();
+}
+
+criterion_group!(benches, paper);
+criterion_main!(benches);
