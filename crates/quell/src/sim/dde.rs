@@ -1,9 +1,32 @@
 //! Adaptive, error-controlled Runge–Kutta integration of delay differential equations with
 //! constant delays by the method of steps, with dense output.
-//! STUB: owned by the integrator helper; the API below is the contract.
+//!
+//! The integrator is DOP853 (Dormand–Prince 8(5,3) with 7th-order dense output; Hairer, Nørsett
+//! & Wanner, *Solving Ordinary Differential Equations I*, 2nd ed., Sec. II.5 and II.6) applied
+//! by the method of steps (Bellen & Zennaro, *Numerical Methods for Delay Differential
+//! Equations*, Ch. 3–4):
+//!
+//! * every step is at most min(delays) long, so each delayed argument falls into an already
+//!   accepted step and is read from its dense output — no iteration is needed;
+//! * the derivative discontinuities t0 + Σ k_i τ_i (up to total order [`MAX_BREAKPOINT_LEVEL`])
+//!   are landed on exactly, and the step after one restarts with a fresh first stage;
+//! * the history keeps, in a ring buffer, only the dense-output coefficients of the delayed
+//!   state prefix over the last max(delays), so memory stays flat on arbitrarily long runs;
+//! * the step loop performs no allocation apart from the amortised growth of that ring.
 
+mod history;
+mod tableau;
+
+use history::{dense_eval, History, NCOEF};
 use std::ops::ControlFlow;
+use tableau::{A, C, D, E3, E5, STAGES, STAGES_DENSE};
 use thiserror::Error;
+
+/// Breakpoints t0 + Σ k_i τ_i are generated up to total order Σ k_i ≤ this level; beyond it
+/// the jumps sit in derivatives of order > 9 and no longer affect the 8th-order method.
+pub const MAX_BREAKPOINT_LEVEL: usize = 10;
+/// Upper bound on the number of breakpoints (lower levels are kept first).
+const MAX_BREAKPOINTS: usize = 20_000;
 
 /// A delay differential equation y'(t) = f(t, y(t), y(t − τ_1), …) with constant delays.
 ///
@@ -22,16 +45,38 @@ pub trait DelaySystem {
 }
 
 /// Read-only view of the dense history, handed to [`DelaySystem::rhs`].
+///
+/// Besides the history it knows the current stage time and step start, which decides the side
+/// of the jump at t0 (history ≠ y0 is allowed): the step never straddles t0 + τ, so for the
+/// delay τ = t_stage − s either the whole step reads the initial history (left limit at t0) or
+/// the whole step reads the dense output (right limit, y(t0) = y0).
 pub struct Past<'a> {
-    _p: std::marker::PhantomData<&'a ()>,
+    hist: &'a History,
+    initial: &'a [f64],
+    y0: &'a [f64],
+    t0: f64,
+    /// t_step_start − t_stage: the step's first delayed argument for the delay implied by s
+    /// is s + lead.
+    lead: f64,
+    tol: f64,
 }
 
 impl Past<'_> {
     /// Writes components `first..first + out.len()` of y(s) into `out`. Before t0 this is the
     /// constant initial history; at and after t0, the dense output of the accepted steps.
+    ///
+    /// # Panics
+    /// If `first + out.len()` exceeds [`DelaySystem::n_delayed`].
+    #[inline]
     pub fn eval_into(&self, s: f64, first: usize, out: &mut [f64]) {
-        let _ = (s, first, out);
-        todo!()
+        let n = out.len();
+        if s + self.lead < self.t0 - self.tol {
+            out.copy_from_slice(&self.initial[first..first + n]);
+        } else if self.hist.len() == 0 {
+            out.copy_from_slice(&self.y0[first..first + n]);
+        } else {
+            self.hist.eval_into(s.max(self.t0), first, out);
+        }
     }
 }
 
@@ -46,29 +91,140 @@ pub struct Options {
 
 impl Default for Options {
     fn default() -> Self {
-        Options { rtol: 1e-9, atol: 1e-9, h_max: f64::INFINITY }
+        Options {
+            rtol: 1e-9,
+            atol: 1e-9,
+            h_max: f64::INFINITY,
+        }
     }
 }
 
 /// Solver statistics.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Stats {
+    /// Accepted steps.
     pub steps: usize,
+    /// Rejected step attempts (error test failed or non-finite result).
     pub rejected: usize,
+    /// Evaluations of [`DelaySystem::rhs`].
     pub rhs_evals: usize,
+    /// Breakpoints (derivative discontinuities) landed on exactly.
+    pub breakpoints: usize,
+    /// Largest number of step records the dense history held at once.
+    pub max_history_len: usize,
 }
 
 /// Why the integration stopped early.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum SolveError {
-    #[error("step size underflow at t = {t}: the step shrank to {h:e} without meeting the tolerance")]
+    #[error(
+        "step size underflow at t = {t}: the step shrank to {h:e} without meeting the tolerance"
+    )]
     StepSizeTooSmall { t: f64, h: f64 },
+}
+
+/// Constant context of a run, shared by all RHS evaluations.
+struct Ctx<'a> {
+    initial: &'a [f64],
+    y0: &'a [f64],
+    t0: f64,
+    tol: f64,
+}
+
+/// One RHS evaluation at stage time `t` of the step starting at `t_n`.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+fn eval_rhs<S: DelaySystem>(
+    sys: &mut S,
+    ctx: &Ctx<'_>,
+    hist: &History,
+    stats: &mut Stats,
+    t_n: f64,
+    t: f64,
+    y: &[f64],
+    dy: &mut [f64],
+) {
+    let past = Past {
+        hist,
+        initial: ctx.initial,
+        y0: ctx.y0,
+        t0: ctx.t0,
+        lead: t_n - t,
+        tol: ctx.tol,
+    };
+    sys.rhs(t, y, &past, dy);
+    stats.rhs_evals += 1;
+}
+
+/// Sorted, deduplicated breakpoints t0 + Σ k_i τ_i, 1 ≤ Σ k_i ≤ [`MAX_BREAKPOINT_LEVEL`],
+/// strictly inside (t0, t_end) (Bellen & Zennaro, Sec. 4.1: discontinuity propagation).
+/// Points closer than ~1e-12 (relative) are merged.
+pub fn breakpoints(t0: f64, delays: &[f64], t_end: f64) -> Vec<f64> {
+    let span = t_end - t0;
+    let scale = t0.abs().max(t_end.abs()).max(1.0);
+    let tol = 1e-12 * scale;
+    let dedup = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v.dedup_by(|b, a| *b - *a <= tol);
+    };
+    let mut all: Vec<f64> = Vec::new();
+    let mut level = vec![0.0];
+    for _ in 0..MAX_BREAKPOINT_LEVEL {
+        let mut next = Vec::with_capacity(level.len() * delays.len());
+        for &x in &level {
+            for &d in delays {
+                let v = x + d;
+                if v < span - tol {
+                    next.push(v);
+                }
+            }
+        }
+        dedup(&mut next);
+        if next.is_empty() || all.len() + next.len() > MAX_BREAKPOINTS {
+            break;
+        }
+        all.extend_from_slice(&next);
+        level = next;
+    }
+    dedup(&mut all);
+    all.into_iter()
+        .map(|v| t0 + v)
+        .filter(|&b| b > t0 && b < t_end)
+        .collect()
+}
+
+/// Error-control constants of `dop853.f`.
+const SAFE: f64 = 0.9;
+/// Smallest step-size ratio h_new / h.
+const FAC_MIN: f64 = 0.333;
+/// Largest step-size ratio h_new / h.
+const FAC_MAX: f64 = 6.0;
+
+#[inline]
+fn tiny(t: f64) -> f64 {
+    16.0 * f64::EPSILON * t.abs().max(1.0)
+}
+
+#[inline]
+fn h_min(t: f64) -> f64 {
+    1e-14 * t.abs().max(1.0)
 }
 
 /// Integrates from `t0` (state `y0`, constant history `history` for t < t0, length `n_delayed`)
 /// to `t_end`, calling `on_output(t, y)` at t = t0 + k·output_step, k = 0, 1, … (the last one at
 /// t_end when it is a whole multiple). `on_output` returning `Break` stops the run early
 /// (the stats so far are returned).
+///
+/// y(t0) = `y0` may differ from `history` (a jump at t0). A non-positive or non-finite
+/// `output_step` reports only t0 and t_end.
+///
+/// # Errors
+/// [`SolveError::StepSizeTooSmall`] when the step shrinks below ~1e-14·max(1, |t|), e.g. at a
+/// finite-time blow-up or when the right-hand side keeps producing non-finite values.
+///
+/// # Panics
+/// On inconsistent dimensions, or on a delay that is not positive and finite.
+#[allow(clippy::too_many_arguments)]
 pub fn solve<S: DelaySystem>(
     sys: &mut S,
     t0: f64,
@@ -77,8 +233,342 @@ pub fn solve<S: DelaySystem>(
     t_end: f64,
     output_step: f64,
     opts: &Options,
-    on_output: impl FnMut(f64, &[f64]) -> ControlFlow<()>,
+    mut on_output: impl FnMut(f64, &[f64]) -> ControlFlow<()>,
 ) -> Result<Stats, SolveError> {
-    let _ = (sys, t0, y0, history, t_end, output_step, opts, on_output);
-    todo!()
+    let n = sys.dim();
+    let nd = sys.n_delayed();
+    assert_eq!(
+        y0.len(),
+        n,
+        "y0 has length {}, the system dimension is {n}",
+        y0.len()
+    );
+    assert!(nd <= n, "n_delayed = {nd} exceeds the dimension {n}");
+    assert_eq!(
+        history.len(),
+        nd,
+        "history must have length n_delayed = {nd}"
+    );
+    let delays: Vec<f64> = sys.delays().to_vec();
+    assert!(
+        delays.iter().all(|&d| d > 0.0 && d.is_finite()),
+        "delays must be positive and finite: {delays:?}"
+    );
+    let tau_min = delays.iter().copied().fold(f64::INFINITY, f64::min);
+    let tau_max = delays.iter().copied().fold(0.0, f64::max);
+
+    let mut stats = Stats::default();
+    if on_output(t0, y0).is_break() || t_end <= t0 {
+        return Ok(stats);
+    }
+    let span = t_end - t0;
+    let h_cap = opts.h_max.min(tau_min).min(span);
+    let bps = breakpoints(t0, &delays, t_end);
+    let (dt_out, n_out) = if output_step > 0.0 && output_step.is_finite() {
+        let out_tol = 1e-9 * output_step;
+        (
+            output_step,
+            ((span + out_tol) / output_step).floor() as usize,
+        )
+    } else {
+        (span, 1)
+    };
+
+    // Setup: every buffer of the step loop is allocated here.
+    let y0_prefix = y0[..nd].to_vec();
+    let ctx = Ctx {
+        initial: history,
+        y0: &y0_prefix,
+        t0,
+        tol: tiny(t_end),
+    };
+    let est_records = if tau_max > 0.0 {
+        (tau_max / h_cap.max(1e-300)).min(4096.0) as usize + 8
+    } else {
+        4
+    };
+    let mut hist = History::new(nd, est_records);
+    let mut k = vec![0.0; STAGES_DENSE * n];
+    let mut y = y0.to_vec();
+    let mut y_new = vec![0.0; n];
+    let mut y_stage = vec![0.0; n];
+    let mut y_out = vec![0.0; n];
+    let mut dense_full = vec![0.0; NCOEF * n];
+
+    let mut t = t0;
+    let mut next_out = 1usize;
+    eval_rhs(sys, &ctx, &hist, &mut stats, t, t, &y, &mut k[..n]);
+    let mut h = initial_step(
+        sys,
+        &ctx,
+        &hist,
+        &mut stats,
+        t,
+        &y,
+        &k[..n],
+        &mut y_stage,
+        &mut y_new,
+        opts,
+        h_cap,
+    );
+    let mut bp_idx = 0usize;
+    let mut last_rejected = false;
+
+    while t < t_end - tiny(t_end) {
+        while bp_idx < bps.len() && bps[bp_idx] <= t + tiny(t) {
+            bp_idx += 1;
+        }
+        let (stop, stop_is_bp) = if bp_idx < bps.len() {
+            (bps[bp_idx], true)
+        } else {
+            (t_end, false)
+        };
+        let h_prop = h;
+        let mut h_try = h.min(h_cap);
+        let mut lands = false;
+        if t + h_try >= stop || (stop - (t + h_try) < 0.01 * h_try && stop - t <= h_cap) {
+            h_try = stop - t;
+            lands = true;
+        }
+        let t_new = if lands { stop } else { t + h_try };
+
+        // Stages 1..=11.
+        for s in 1..STAGES {
+            combine(&y, &k, &A[s][..s], h_try, n, &mut y_stage);
+            let ts = if C[s] == 1.0 { t_new } else { t + C[s] * h_try };
+            let (_, rest) = k.split_at_mut(s * n);
+            eval_rhs(
+                sys,
+                &ctx,
+                &hist,
+                &mut stats,
+                t,
+                ts,
+                &y_stage,
+                &mut rest[..n],
+            );
+        }
+        combine(&y, &k, &A[12][..STAGES], h_try, n, &mut y_new);
+
+        // Error estimate (combined 5th/3rd-order norm of dop853.f).
+        let (mut s5, mut s3) = (0.0, 0.0);
+        for i in 0..n {
+            let sk = opts.atol + opts.rtol * y[i].abs().max(y_new[i].abs());
+            let (mut e5, mut e3) = (0.0, 0.0);
+            for j in 0..STAGES {
+                let kj = k[j * n + i];
+                e5 += E5[j] * kj;
+                e3 += E3[j] * kj;
+            }
+            s5 += (e5 / sk) * (e5 / sk);
+            s3 += (e3 / sk) * (e3 / sk);
+        }
+        let mut deno = s5 + 0.01 * s3;
+        if deno <= 0.0 {
+            deno = 1.0;
+        }
+        let mut err = h_try * s5 * (1.0 / (n.max(1) as f64 * deno)).sqrt();
+        if !err.is_finite() || !y_new.iter().all(|v| v.is_finite()) {
+            err = f64::INFINITY;
+        }
+        let fac11 = err.powf(0.125);
+
+        if err > 1.0 {
+            stats.rejected += 1;
+            last_rejected = true;
+            h = h_try / (1.0 / FAC_MIN).min(fac11 / SAFE);
+            if h < h_min(t) {
+                return Err(SolveError::StepSizeTooSmall { t, h });
+            }
+            continue;
+        }
+
+        // Accepted.
+        stats.steps += 1;
+        let fac = (fac11 / SAFE).clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
+        let mut h_next = h_try / fac;
+        if last_rejected {
+            h_next = h_next.min(h_try);
+        } else if lands && h_try < h_prop {
+            h_next = h_next.max(h_prop);
+        }
+        last_rejected = false;
+        h = h_next;
+
+        eval_rhs(
+            sys,
+            &ctx,
+            &hist,
+            &mut stats,
+            t,
+            t_new,
+            &y_new,
+            &mut k[12 * n..13 * n],
+        );
+        let out_here = next_out <= n_out && {
+            let t_k = t0 + next_out as f64 * dt_out;
+            t_k <= t_new || (t_new == t_end && t_k <= t_end + 1e-9 * dt_out)
+        };
+        if nd > 0 || out_here {
+            for s in 13..STAGES_DENSE {
+                combine(&y, &k, &A[s][..s], h_try, n, &mut y_stage);
+                let ts = t + C[s] * h_try;
+                let (_, rest) = k.split_at_mut(s * n);
+                eval_rhs(
+                    sys,
+                    &ctx,
+                    &hist,
+                    &mut stats,
+                    t,
+                    ts,
+                    &y_stage,
+                    &mut rest[..n],
+                );
+            }
+            if nd > 0 {
+                let slot = hist.push(t, h_try);
+                dense_coefficients(&y, &y_new, &k, h_try, n, 0..nd, slot);
+            }
+            if out_here {
+                dense_coefficients(&y, &y_new, &k, h_try, n, 0..n, &mut dense_full);
+            }
+        }
+        while out_here && next_out <= n_out {
+            let t_k = t0 + next_out as f64 * dt_out;
+            let t_k = if next_out == n_out && t_new == t_end {
+                t_k.min(t_end)
+            } else {
+                t_k
+            };
+            if t_k > t_new {
+                break;
+            }
+            let out: &[f64] = if t_k == t_new {
+                &y_new
+            } else {
+                let theta = (t_k - t) / h_try;
+                for (o, c) in y_out.iter_mut().zip(dense_full.chunks_exact(NCOEF)) {
+                    *o = dense_eval(c, theta);
+                }
+                &y_out
+            };
+            next_out += 1;
+            if on_output(t_k, out).is_break() {
+                stats.max_history_len = hist.max_len();
+                return Ok(stats);
+            }
+        }
+        hist.prune(t_new - tau_max);
+
+        t = t_new;
+        std::mem::swap(&mut y, &mut y_new);
+        if lands && stop_is_bp {
+            // Restart: the derivative may jump at a breakpoint, so FSAL does not apply.
+            stats.breakpoints += 1;
+            eval_rhs(sys, &ctx, &hist, &mut stats, t, t, &y, &mut k[..n]);
+        } else {
+            k.copy_within(12 * n..13 * n, 0);
+        }
+    }
+    stats.max_history_len = hist.max_len();
+    Ok(stats)
+}
+
+/// out ← y + h Σ_j a_j k_j (zero coefficients skipped).
+#[inline]
+fn combine(y: &[f64], k: &[f64], a: &[f64], h: f64, n: usize, out: &mut [f64]) {
+    out.copy_from_slice(y);
+    for (j, &aj) in a.iter().enumerate() {
+        if aj != 0.0 {
+            let ha = h * aj;
+            for (o, kj) in out.iter_mut().zip(&k[j * n..(j + 1) * n]) {
+                *o += ha * kj;
+            }
+        }
+    }
+}
+
+/// Dense-output coefficients (`rcont1..rcont8` of `dop853.f`) of the components in `range`,
+/// written component-major into `out` (`out[(i - range.start) * NCOEF + r]`).
+fn dense_coefficients(
+    y: &[f64],
+    y_new: &[f64],
+    k: &[f64],
+    h: f64,
+    n: usize,
+    range: std::ops::Range<usize>,
+    out: &mut [f64],
+) {
+    let first = range.start;
+    for i in range {
+        let c = &mut out[(i - first) * NCOEF..(i - first + 1) * NCOEF];
+        let ydiff = y_new[i] - y[i];
+        let bspl = h * k[i] - ydiff;
+        c[0] = y[i];
+        c[1] = ydiff;
+        c[2] = bspl;
+        c[3] = ydiff - h * k[12 * n + i] - bspl;
+        for (r, drow) in D.iter().enumerate() {
+            let mut acc = 0.0;
+            for (j, &d) in drow.iter().enumerate() {
+                if d != 0.0 {
+                    acc += d * k[j * n + i];
+                }
+            }
+            c[4 + r] = h * acc;
+        }
+    }
+}
+
+/// Initial step by Hairer's heuristic (`hinit` in `dop853.f`, RMS norms), capped at `h_cap`.
+#[allow(clippy::too_many_arguments)]
+fn initial_step<S: DelaySystem>(
+    sys: &mut S,
+    ctx: &Ctx<'_>,
+    hist: &History,
+    stats: &mut Stats,
+    t: f64,
+    y: &[f64],
+    f0: &[f64],
+    y1: &mut [f64],
+    f1: &mut [f64],
+    opts: &Options,
+    h_cap: f64,
+) -> f64 {
+    let n = y.len().max(1) as f64;
+    let (mut dnf, mut dny) = (0.0, 0.0);
+    for (yi, fi) in y.iter().zip(f0) {
+        let sk = opts.atol + opts.rtol * yi.abs();
+        dnf += (fi / sk) * (fi / sk);
+        dny += (yi / sk) * (yi / sk);
+    }
+    let (dnf, dny) = ((dnf / n).sqrt(), (dny / n).sqrt());
+    let mut h = if dnf <= 1e-5 || dny <= 1e-5 {
+        1e-6
+    } else {
+        0.01 * dny / dnf
+    };
+    h = h.min(h_cap);
+    for ((o, yi), fi) in y1.iter_mut().zip(y).zip(f0) {
+        *o = yi + h * fi;
+    }
+    eval_rhs(sys, ctx, hist, stats, t, t + h, y1, f1);
+    let mut der2 = 0.0;
+    for ((yi, a), b) in y.iter().zip(f0).zip(f1.iter()) {
+        let sk = opts.atol + opts.rtol * yi.abs();
+        der2 += ((b - a) / sk) * ((b - a) / sk);
+    }
+    let der2 = (der2 / n).sqrt() / h;
+    let der12 = der2.abs().max(dnf);
+    let h1 = if der12 <= 1e-15 {
+        (h * 1e-3).max(1e-6)
+    } else {
+        (0.01 / der12).powf(1.0 / 8.0)
+    };
+    let h = (100.0 * h).min(h1).min(h_cap);
+    if h.is_finite() && h > 0.0 {
+        h
+    } else {
+        h_cap.min(1e-6)
+    }
 }

@@ -1,0 +1,135 @@
+//! Ring buffer of dense-output step records for the delayed state prefix.
+
+/// Number of dense-output coefficients per component (7th-order polynomial).
+pub(super) const NCOEF: usize = 8;
+
+/// Dense history of the accepted steps: for each step its start time, its length and the
+/// [`NCOEF`] dense-output coefficients of the first `nd` components. Kept in a ring whose
+/// capacity only grows (doubling) until the pruned length stabilises, so a long run does not
+/// allocate once the ring is large enough to span the largest delay.
+pub(super) struct History {
+    nd: usize,
+    cap: usize,
+    head: usize,
+    len: usize,
+    max_len: usize,
+    start: Vec<f64>,
+    step: Vec<f64>,
+    coef: Vec<f64>,
+}
+
+impl History {
+    pub(super) fn new(nd: usize, cap: usize) -> Self {
+        let cap = cap.max(4);
+        History {
+            nd,
+            cap,
+            head: 0,
+            len: 0,
+            max_len: 0,
+            start: vec![0.0; cap],
+            step: vec![0.0; cap],
+            coef: vec![0.0; cap * NCOEF * nd],
+        }
+    }
+
+    #[inline]
+    fn phys(&self, i: usize) -> usize {
+        let p = self.head + i;
+        if p >= self.cap {
+            p - self.cap
+        } else {
+            p
+        }
+    }
+
+    pub(super) fn len(&self) -> usize {
+        self.len
+    }
+
+    pub(super) fn max_len(&self) -> usize {
+        self.max_len
+    }
+
+    /// Appends a record for the step [t, t + h] and returns its coefficient slot
+    /// (component-major: `slot[c * NCOEF + r]`) for the caller to fill.
+    pub(super) fn push(&mut self, t: f64, h: f64) -> &mut [f64] {
+        if self.len == self.cap {
+            self.grow();
+        }
+        let p = self.phys(self.len);
+        self.len += 1;
+        self.max_len = self.max_len.max(self.len);
+        self.start[p] = t;
+        self.step[p] = h;
+        let w = NCOEF * self.nd;
+        &mut self.coef[p * w..(p + 1) * w]
+    }
+
+    /// Doubles the capacity, unrolling the ring so that the head is at 0.
+    fn grow(&mut self) {
+        let new_cap = self.cap * 2;
+        let w = NCOEF * self.nd;
+        let mut start = vec![0.0; new_cap];
+        let mut step = vec![0.0; new_cap];
+        let mut coef = vec![0.0; new_cap * w];
+        for i in 0..self.len {
+            let p = self.phys(i);
+            start[i] = self.start[p];
+            step[i] = self.step[p];
+            coef[i * w..(i + 1) * w].copy_from_slice(&self.coef[p * w..(p + 1) * w]);
+        }
+        self.start = start;
+        self.step = step;
+        self.coef = coef;
+        self.cap = new_cap;
+        self.head = 0;
+    }
+
+    /// Drops records that no query at or after `t_keep` can reach, keeping one extra record
+    /// before `t_keep` as a margin against rounding in the delayed arguments.
+    pub(super) fn prune(&mut self, t_keep: f64) {
+        while self.len >= 3 && self.start[self.phys(2)] <= t_keep {
+            self.head = self.phys(1);
+            self.len -= 1;
+        }
+    }
+
+    /// Components `first..first + out.len()` of the dense output at `s` (the record with the
+    /// largest start ≤ s, found by binary search; extrapolates slightly outside the stored span).
+    /// The ring must not be empty.
+    pub(super) fn eval_into(&self, s: f64, first: usize, out: &mut [f64]) {
+        debug_assert!(self.len > 0);
+        assert!(
+            first + out.len() <= self.nd,
+            "Past::eval_into: components {}..{} requested, only {} are delayed",
+            first,
+            first + out.len(),
+            self.nd
+        );
+        let (mut lo, mut hi) = (0usize, self.len);
+        while lo < hi {
+            let mid = (lo + hi) / 2;
+            if self.start[self.phys(mid)] <= s {
+                lo = mid + 1;
+            } else {
+                hi = mid;
+            }
+        }
+        let p = self.phys(lo.saturating_sub(1));
+        let theta = (s - self.start[p]) / self.step[p];
+        let w = NCOEF * self.nd;
+        let rec = &self.coef[p * w..(p + 1) * w];
+        for (o, c) in out.iter_mut().zip(rec[first * NCOEF..].chunks_exact(NCOEF)) {
+            *o = dense_eval(c, theta);
+        }
+    }
+}
+
+/// Evaluates one component of the DOP853 dense output (`contd8` in `dop853.f`) at θ ∈ [0, 1].
+#[inline]
+pub(super) fn dense_eval(c: &[f64], theta: f64) -> f64 {
+    let s1 = 1.0 - theta;
+    let par = c[4] + theta * (c[5] + s1 * (c[6] + theta * c[7]));
+    c[0] + theta * (c[1] + s1 * (c[2] + theta * (c[3] + s1 * par)))
+}

@@ -1,0 +1,431 @@
+//! Tests of the DOP853 method-of-steps DDE integrator (`quell::sim::dde`).
+
+use quell::sim::dde::{breakpoints, solve, DelaySystem, Options, Past, SolveError, Stats};
+use serde_json::Value;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::ops::ControlFlow;
+
+// ---------------------------------------------------------------------------------------------
+// Allocation counting (per thread, so parallel tests do not interfere).
+
+struct Counting;
+
+thread_local! {
+    static ALLOCS: Cell<usize> = const { Cell::new(0) };
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
+        System.alloc(layout)
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        System.dealloc(ptr, layout)
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
+        System.realloc(ptr, layout, new_size)
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocs() -> usize {
+    ALLOCS.with(|c| c.get())
+}
+
+// ---------------------------------------------------------------------------------------------
+// Linear constant-delay systems y' = A0 y + Σ A_i y(t − τ_i).
+
+struct Linear {
+    n: usize,
+    a0: Vec<f64>,
+    a: Vec<Vec<f64>>,
+    delays: Vec<f64>,
+    buf: Vec<f64>,
+}
+
+impl Linear {
+    fn new(a0: Vec<Vec<f64>>, terms: Vec<(f64, Vec<Vec<f64>>)>) -> Self {
+        let n = a0.len();
+        let flat = |m: Vec<Vec<f64>>| m.into_iter().flatten().collect::<Vec<_>>();
+        let (delays, a): (Vec<_>, Vec<_>) = terms.into_iter().map(|(d, m)| (d, flat(m))).unzip();
+        Linear {
+            n,
+            a0: flat(a0),
+            a,
+            delays,
+            buf: vec![0.0; n],
+        }
+    }
+}
+
+impl DelaySystem for Linear {
+    fn dim(&self) -> usize {
+        self.n
+    }
+    fn n_delayed(&self) -> usize {
+        self.n
+    }
+    fn delays(&self) -> &[f64] {
+        &self.delays
+    }
+    fn rhs(&mut self, t: f64, y: &[f64], past: &Past<'_>, dy: &mut [f64]) {
+        let n = self.n;
+        for i in 0..n {
+            dy[i] = (0..n).map(|j| self.a0[i * n + j] * y[j]).sum();
+        }
+        for (d, a) in self.delays.iter().zip(&self.a) {
+            past.eval_into(t - d, 0, &mut self.buf);
+            for i in 0..n {
+                dy[i] += (0..n).map(|j| a[i * n + j] * self.buf[j]).sum::<f64>();
+            }
+        }
+    }
+}
+
+fn matrix(v: &Value) -> Vec<Vec<f64>> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            r.as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect()
+        })
+        .collect()
+}
+
+fn vector(v: &Value) -> Vec<f64> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
+/// Runs `sys` and collects every output.
+fn run<S: DelaySystem>(
+    sys: &mut S,
+    y0: &[f64],
+    history: &[f64],
+    t_end: f64,
+    dt: f64,
+    tol: f64,
+) -> (Vec<(f64, Vec<f64>)>, Stats) {
+    let opts = Options {
+        rtol: tol,
+        atol: tol,
+        ..Options::default()
+    };
+    let mut out = Vec::new();
+    let stats = solve(sys, 0.0, y0, history, t_end, dt, &opts, |t, y| {
+        out.push((t, y.to_vec()));
+        ControlFlow::Continue(())
+    })
+    .expect("solve failed");
+    (out, stats)
+}
+
+/// All seven linear cases of `shared/reference/dde_cases.json`, one harness, rtol = atol = 1e-10.
+///
+/// Per-case tolerance on |y − y_ref| / max(1, |y_ref|) (the scaling matters only for
+/// `matlab_ddex1_wille_baker_ex3`, whose values reach ~190):
+/// * ddepl_constant_1delay (history 0, jump to y0 = 1 at t = 0): 1e-8
+/// * ddepl_constant_2delays (history 0, jump to 1): 1e-8
+/// * paul_1_1_1_neg_unit (history = y0 = 1): 1e-8
+/// * matlab_ddex1_wille_baker_ex3 (history = y0 = [1,1,1]; growth to ~190 by t = 5): 1e-8
+/// * ddepl_constant_1delay_long (history 0, jump to 1; to t = 100): 1e-8
+/// * statefb_input_delay_pc_docstring_tau0p1 / _tau0p2 (history = y0 = [1,0]): 1e-8
+#[test]
+fn reference_cases() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/reference/dde_cases.json"
+    );
+    let text = std::fs::read_to_string(path).expect("read dde_cases.json");
+    let cases: Value = serde_json::from_str(&text).unwrap();
+    let cases = cases.as_array().unwrap();
+    assert_eq!(cases.len(), 7);
+    for case in cases {
+        let name = case["name"].as_str().unwrap();
+        let y0 = vector(&case["y0"]);
+        let hist_text = case["history"].as_str().unwrap();
+        // The histories are all constant: either 0 before t0 with a jump to y0, or equal to y0.
+        let history = if hist_text.starts_with("phi(t) = 0 for t < 0") {
+            vec![0.0; y0.len()]
+        } else if hist_text.contains("for t <= 0") {
+            y0.clone()
+        } else {
+            panic!("{name}: unrecognised history {hist_text:?}");
+        };
+        let terms = case["delayed_terms"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|d| (d["delay"].as_f64().unwrap(), matrix(&d["A"])))
+            .collect();
+        let mut sys = Linear::new(matrix(&case["A0"]), terms);
+        let t_end = vector(&case["tspan"])[1];
+        // All reference times are multiples of 0.05: compare at dense outputs.
+        let dt = 0.05;
+        let (out, stats) = run(&mut sys, &y0, &history, t_end, dt, 1e-10);
+        let ts = vector(&case["reference"]["t"]);
+        let ys = matrix(&case["reference"]["y"]);
+        let mut worst: f64 = 0.0;
+        for (t, yr) in ts.iter().zip(&ys) {
+            let k = (t / dt).round() as usize;
+            let (to, y) = &out[k];
+            assert!(
+                (to - t).abs() < 1e-9,
+                "{name}: output {k} at {to}, expected {t}"
+            );
+            for (a, b) in y.iter().zip(yr) {
+                let e = (a - b).abs() / b.abs().max(1.0);
+                worst = worst.max(e);
+                assert!(e < 1e-8, "{name}: t = {t}: {a} vs {b} (scaled error {e:e})");
+            }
+        }
+        println!(
+            "{name}: max scaled error {worst:.2e} ({} steps, {} rejected, {} rhs, {} breakpoints)",
+            stats.steps, stats.rejected, stats.rhs_evals, stats.breakpoints
+        );
+    }
+}
+
+/// x' = −x(t − 1), x = 1 for t ≤ 0: the method-of-steps polynomials on [0, 3].
+fn exact_unit(t: f64) -> f64 {
+    let mut x = 1.0 - t;
+    if t > 1.0 {
+        x += (t - 1.0).powi(2) / 2.0;
+    }
+    if t > 2.0 {
+        x -= (t - 2.0).powi(3) / 6.0;
+    }
+    x
+}
+
+#[test]
+fn closed_form_method_of_steps() {
+    let mut sys = Linear::new(vec![vec![0.0]], vec![(1.0, vec![vec![-1.0]])]);
+    let (out, stats) = run(&mut sys, &[1.0], &[1.0], 3.0, 0.01, 1e-10);
+    assert_eq!(out.len(), 301);
+    let mut worst: f64 = 0.0;
+    for (t, y) in &out {
+        let e = (y[0] - exact_unit(*t)).abs();
+        worst = worst.max(e);
+        assert!(e < 1e-9, "t = {t}: {} vs {}", y[0], exact_unit(*t));
+    }
+    assert!((out[300].0 - 3.0).abs() < 1e-12);
+    assert_eq!(stats.breakpoints, 2, "breakpoints 1 and 2 are landed on");
+    println!("closed form: max error {worst:.2e}, {stats:?}");
+}
+
+/// Jump in the history at t0 (history 0, y(0) = 1): u = 1 on [0,1], 2 − t on [1,2],
+/// −(3(t−2) − (t²−4)/2) on [2,3]. Accuracy right after the breakpoints t = 1, 2 shows they
+/// are landed on and that the delayed value switches side exactly there.
+#[test]
+fn history_jump_breakpoints() {
+    let exact = |t: f64| {
+        if t <= 1.0 {
+            1.0
+        } else if t <= 2.0 {
+            2.0 - t
+        } else {
+            -(3.0 * (t - 2.0) - (t * t - 4.0) / 2.0)
+        }
+    };
+    let mut sys = Linear::new(vec![vec![0.0]], vec![(1.0, vec![vec![-1.0]])]);
+    let (out, stats) = run(&mut sys, &[1.0], &[0.0], 3.0, 1e-3, 1e-10);
+    let mut worst: f64 = 0.0;
+    for (t, y) in &out {
+        let e = (y[0] - exact(*t)).abs();
+        worst = worst.max(e);
+        assert!(e < 1e-10, "t = {t}: {} vs {}", y[0], exact(*t));
+    }
+    assert_eq!(stats.breakpoints, 2);
+    println!("history jump: max error {worst:.2e}, {stats:?}");
+
+    // Two incommensurate delays: every generated breakpoint is landed on.
+    let delays = [1.0 / 3.0, 0.2];
+    let bps = breakpoints(0.0, &delays, 1.0);
+    assert!(bps.len() >= 8 && bps.windows(2).all(|w| w[1] > w[0]));
+    assert!(bps.iter().any(|b| (b - 8.0 / 15.0).abs() < 1e-12));
+    let mut sys = Linear::new(
+        vec![vec![0.0]],
+        vec![(delays[0], vec![vec![-1.0]]), (delays[1], vec![vec![-1.0]])],
+    );
+    let (_, stats) = run(&mut sys, &[1.0], &[0.0], 1.0, 0.1, 1e-10);
+    assert_eq!(stats.breakpoints, bps.len());
+}
+
+/// Plain ODE with finite-time blow-up: y' = y², y(0) = 1 explodes at t = 1.
+struct Blowup;
+
+impl DelaySystem for Blowup {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn n_delayed(&self) -> usize {
+        0
+    }
+    fn delays(&self) -> &[f64] {
+        &[]
+    }
+    fn rhs(&mut self, _t: f64, y: &[f64], _past: &Past<'_>, dy: &mut [f64]) {
+        dy[0] = y[0] * y[0];
+    }
+}
+
+#[test]
+fn step_size_underflow_at_blowup() {
+    let opts = Options {
+        rtol: 1e-10,
+        atol: 1e-10,
+        ..Options::default()
+    };
+    let r = solve(&mut Blowup, 0.0, &[1.0], &[], 2.0, 0.1, &opts, |_, _| {
+        ControlFlow::Continue(())
+    });
+    match r {
+        Err(SolveError::StepSizeTooSmall { t, h }) => {
+            println!("blow-up: stopped at t = {t}, h = {h:e}");
+            assert!((t - 1.0).abs() < 1e-6, "t = {t}");
+            assert!(h < 1e-12);
+        }
+        other => panic!("expected StepSizeTooSmall, got {other:?}"),
+    }
+}
+
+/// An RHS that turns NaN ends with an error instead of propagating NaN or looping.
+struct GoesNan;
+
+impl DelaySystem for GoesNan {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn n_delayed(&self) -> usize {
+        1
+    }
+    fn delays(&self) -> &[f64] {
+        &[0.5]
+    }
+    fn rhs(&mut self, t: f64, _y: &[f64], past: &Past<'_>, dy: &mut [f64]) {
+        past.eval_into(t - 0.5, 0, dy);
+        if t > 0.75 {
+            dy[0] = f64::NAN;
+        }
+    }
+}
+
+#[test]
+fn non_finite_rhs_is_an_error() {
+    let mut seen_nan = false;
+    let r = solve(
+        &mut GoesNan,
+        0.0,
+        &[1.0],
+        &[1.0],
+        2.0,
+        0.05,
+        &Options::default(),
+        |_, y| {
+            seen_nan |= !y[0].is_finite();
+            ControlFlow::Continue(())
+        },
+    );
+    assert!(
+        matches!(r, Err(SolveError::StepSizeTooSmall { t, .. }) if (t - 0.75).abs() < 1e-6),
+        "{r:?}"
+    );
+    assert!(!seen_nan);
+}
+
+#[test]
+fn early_stop() {
+    let mut sys = Linear::new(vec![vec![0.0]], vec![(1.0, vec![vec![-1.0]])]);
+    let mut count = 0;
+    let stats = solve(
+        &mut sys,
+        0.0,
+        &[1.0],
+        &[1.0],
+        100.0,
+        0.5,
+        &Options::default(),
+        |t, _| {
+            count += 1;
+            if t >= 1.0 {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
+            }
+        },
+    )
+    .unwrap();
+    assert_eq!(count, 3);
+    // Stopped right after the step containing t = 1: a handful of steps, not a run to 100.
+    assert!(stats.steps < 20, "{stats:?}");
+}
+
+/// x' = −x(t − 1) + sin t to t = 10 000: the history holds at most about max_delay / min_step
+/// records, and the step loop stops allocating (same allocation count at t_end = 1000 and 10 000).
+struct Forced {
+    buf: [f64; 1],
+}
+
+impl DelaySystem for Forced {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn n_delayed(&self) -> usize {
+        1
+    }
+    fn delays(&self) -> &[f64] {
+        &[1.0]
+    }
+    fn rhs(&mut self, t: f64, _y: &[f64], past: &Past<'_>, dy: &mut [f64]) {
+        past.eval_into(t - 1.0, 0, &mut self.buf);
+        dy[0] = -self.buf[0] + t.sin();
+    }
+}
+
+#[test]
+fn history_stays_bounded_and_no_allocation() {
+    let opts = Options {
+        rtol: 1e-10,
+        atol: 1e-10,
+        ..Options::default()
+    };
+    let measure = |t_end: f64| {
+        let mut sys = Forced { buf: [0.0] };
+        let before = allocs();
+        let mut last = 0.0;
+        let stats = solve(&mut sys, 0.0, &[1.0], &[1.0], t_end, 10.0, &opts, |_, y| {
+            last = y[0];
+            ControlFlow::Continue(())
+        })
+        .unwrap();
+        (allocs() - before, stats, last)
+    };
+    let (a_short, s_short, _) = measure(1000.0);
+    let (a_long, s_long, last) = measure(10_000.0);
+    println!(
+        "long run: {s_long:?}, allocations {a_long} (t_end = 1000: {a_short}), y(10000) = {last}"
+    );
+    assert!(last.is_finite() && last.abs() < 10.0);
+    assert_eq!(a_short, a_long, "the step loop allocates");
+    // Step records within one delay: 1 / (smallest step), plus the pruning margin.
+    let mean_records_per_delay = s_long.steps as f64 / 10_000.0;
+    assert!(
+        (s_long.max_history_len as f64) <= 2.0 * mean_records_per_delay + 5.0,
+        "history held {} records; {:.1} steps per unit time",
+        s_long.max_history_len,
+        mean_records_per_delay
+    );
+    assert_eq!(s_short.max_history_len, s_long.max_history_len);
+}
