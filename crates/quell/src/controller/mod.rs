@@ -15,7 +15,7 @@ pub mod packed;
 
 pub use discrete::{Controller, ControllerError};
 
-use nalgebra::{DMatrix, DVectorView, DVectorViewMut};
+use nalgebra::DMatrix;
 
 use crate::design::Design;
 use crate::linalg::companion;
@@ -147,8 +147,15 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
 
 /// out = M x (or out += M x when `add`), on slices; allocates nothing.
 pub fn mat_vec(M: &DMatrix<f64>, x: &[f64], out: &mut [f64], add: bool) {
-    let (r, c) = M.shape();
-    let x = DVectorView::from_slice(x, c);
-    let mut out = DVectorViewMut::from_slice(out, r);
-    out.gemv(1.0, M, &x, if add { 1.0 } else { 0.0 });
+    let r = M.nrows();
+    assert!(x.len() == M.ncols() && out.len() == r, "mat_vec: dimension mismatch");
+    if !add {
+        out.fill(0.0);
+    }
+    // Column-major storage: out += Σ_c x_c M[:, c].
+    for (col, &xc) in M.as_slice().chunks_exact(r.max(1)).zip(x) {
+        for (o, m) in out.iter_mut().zip(col) {
+            *o += m * xc;
+        }
+    }
 }
