@@ -74,13 +74,13 @@ impl DelaySystem for Linear {
     }
     fn rhs(&mut self, t: f64, y: &[f64], past: &Past<'_>, dy: &mut [f64]) {
         let n = self.n;
-        for i in 0..n {
-            dy[i] = (0..n).map(|j| self.a0[i * n + j] * y[j]).sum();
+        for (i, d) in dy.iter_mut().enumerate() {
+            *d = (0..n).map(|j| self.a0[i * n + j] * y[j]).sum();
         }
         for (d, a) in self.delays.iter().zip(&self.a) {
             past.eval_into(t - d, 0, &mut self.buf);
-            for i in 0..n {
-                dy[i] += (0..n).map(|j| a[i * n + j] * self.buf[j]).sum::<f64>();
+            for (i, dyi) in dy.iter_mut().enumerate() {
+                *dyi += (0..n).map(|j| a[i * n + j] * self.buf[j]).sum::<f64>();
             }
         }
     }

@@ -243,6 +243,10 @@ pub fn solve<S: DelaySystem>(
         "y0 has length {}, the system dimension is {n}",
         y0.len()
     );
+    assert!(
+        t0.is_finite() && t_end.is_finite(),
+        "t0 and t_end must be finite"
+    );
     assert!(nd <= n, "n_delayed = {nd} exceeds the dimension {n}");
     assert_eq!(
         history.len(),
@@ -326,7 +330,10 @@ pub fn solve<S: DelaySystem>(
         let h_prop = h;
         let mut h_try = h.min(h_cap);
         let mut lands = false;
-        if t + h_try >= stop || (stop - (t + h_try) < 0.01 * h_try && stop - t <= h_cap) {
+        // Land on `stop` if the step would reach it or leave only a sliver (a sliver below
+        // rounding level may make the step exceed h_cap by a few ulps, which is harmless).
+        let gap = stop - (t + h_try);
+        if gap <= tiny(stop) || (gap < 0.01 * h_try && stop - t <= h_cap) {
             h_try = stop - t;
             lands = true;
         }
@@ -336,7 +343,6 @@ pub fn solve<S: DelaySystem>(
         for s in 1..STAGES {
             combine(&y, &k, &A[s][..s], h_try, n, &mut y_stage);
             let ts = if C[s] == 1.0 { t_new } else { t + C[s] * h_try };
-            let (_, rest) = k.split_at_mut(s * n);
             eval_rhs(
                 sys,
                 &ctx,
@@ -345,7 +351,7 @@ pub fn solve<S: DelaySystem>(
                 t,
                 ts,
                 &y_stage,
-                &mut rest[..n],
+                &mut k[s * n..(s + 1) * n],
             );
         }
         combine(&y, &k, &A[12][..STAGES], h_try, n, &mut y_new);
@@ -371,6 +377,48 @@ pub fn solve<S: DelaySystem>(
         if !err.is_finite() || !y_new.iter().all(|v| v.is_finite()) {
             err = f64::INFINITY;
         }
+        // Tentatively accepted: FSAL evaluation and, when needed, the dense-output stages.
+        // A non-finite value there rejects the step as well.
+        let mut out_here = false;
+        let mut dense = false;
+        if err <= 1.0 {
+            eval_rhs(
+                sys,
+                &ctx,
+                &hist,
+                &mut stats,
+                t,
+                t_new,
+                &y_new,
+                &mut k[12 * n..13 * n],
+            );
+            out_here = next_out <= n_out && {
+                let t_k = t0 + next_out as f64 * dt_out;
+                t_k <= t_new || (t_new == t_end && t_k <= t_end + 1e-9 * dt_out)
+            };
+            dense = nd > 0 || out_here;
+            let mut last = 13;
+            if dense {
+                for s in 13..STAGES_DENSE {
+                    combine(&y, &k, &A[s][..s], h_try, n, &mut y_stage);
+                    let ts = t + C[s] * h_try;
+                    eval_rhs(
+                        sys,
+                        &ctx,
+                        &hist,
+                        &mut stats,
+                        t,
+                        ts,
+                        &y_stage,
+                        &mut k[s * n..(s + 1) * n],
+                    );
+                }
+                last = STAGES_DENSE;
+            }
+            if !k[12 * n..last * n].iter().all(|v| v.is_finite()) {
+                err = f64::INFINITY;
+            }
+        }
         let fac11 = err.powf(0.125);
 
         if err > 1.0 {
@@ -395,36 +443,7 @@ pub fn solve<S: DelaySystem>(
         last_rejected = false;
         h = h_next;
 
-        eval_rhs(
-            sys,
-            &ctx,
-            &hist,
-            &mut stats,
-            t,
-            t_new,
-            &y_new,
-            &mut k[12 * n..13 * n],
-        );
-        let out_here = next_out <= n_out && {
-            let t_k = t0 + next_out as f64 * dt_out;
-            t_k <= t_new || (t_new == t_end && t_k <= t_end + 1e-9 * dt_out)
-        };
-        if nd > 0 || out_here {
-            for s in 13..STAGES_DENSE {
-                combine(&y, &k, &A[s][..s], h_try, n, &mut y_stage);
-                let ts = t + C[s] * h_try;
-                let (_, rest) = k.split_at_mut(s * n);
-                eval_rhs(
-                    sys,
-                    &ctx,
-                    &hist,
-                    &mut stats,
-                    t,
-                    ts,
-                    &y_stage,
-                    &mut rest[..n],
-                );
-            }
+        if dense {
             if nd > 0 {
                 let slot = hist.push(t, h_try);
                 dense_coefficients(&y, &y_new, &k, h_try, n, 0..nd, slot);
