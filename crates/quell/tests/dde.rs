@@ -429,3 +429,90 @@ fn history_stays_bounded_and_no_allocation() {
     );
     assert_eq!(s_short.max_history_len, s_long.max_history_len);
 }
+
+/// No delays: a plain ODE (harmonic oscillator), full-state dense output with n_delayed = 0.
+struct Oscillator;
+
+impl DelaySystem for Oscillator {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn n_delayed(&self) -> usize {
+        0
+    }
+    fn delays(&self) -> &[f64] {
+        &[]
+    }
+    fn rhs(&mut self, _t: f64, y: &[f64], _past: &Past<'_>, dy: &mut [f64]) {
+        dy[0] = y[1];
+        dy[1] = -y[0];
+    }
+}
+
+#[test]
+fn plain_ode_dense_output() {
+    let (out, stats) = run(&mut Oscillator, &[1.0, 0.0], &[], 20.0, 0.07, 1e-11);
+    assert_eq!(out.len(), (20.0f64 / 0.07).floor() as usize + 1);
+    let mut worst: f64 = 0.0;
+    for (t, y) in &out {
+        worst = worst
+            .max((y[0] - t.cos()).abs())
+            .max((y[1] + t.sin()).abs());
+    }
+    println!("oscillator: max error {worst:.2e}, {stats:?}");
+    assert!(worst < 1e-9);
+    assert_eq!(stats.max_history_len, 0);
+}
+
+/// Only a prefix is delayed: x1' = −x1(t − 1), x2' = x1 (x1 = 1 for t ≤ 0, x2(0) = 0), so
+/// x2 = ∫ x1 = t − t²/2 + (t−1)³/6 − (t−2)⁴/24 on [0, 3] (terms active past 1 and 2).
+struct Prefix {
+    buf: [f64; 1],
+}
+
+impl DelaySystem for Prefix {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn n_delayed(&self) -> usize {
+        1
+    }
+    fn delays(&self) -> &[f64] {
+        &[1.0]
+    }
+    fn rhs(&mut self, t: f64, y: &[f64], past: &Past<'_>, dy: &mut [f64]) {
+        past.eval_into(t - 1.0, 0, &mut self.buf);
+        dy[0] = -self.buf[0];
+        dy[1] = y[0];
+    }
+}
+
+#[test]
+fn delayed_prefix_only() {
+    let x2 = |t: f64| {
+        let mut v = t - t * t / 2.0;
+        if t > 1.0 {
+            v += (t - 1.0).powi(3) / 6.0;
+        }
+        if t > 2.0 {
+            v -= (t - 2.0).powi(4) / 24.0;
+        }
+        v
+    };
+    let (out, stats) = run(
+        &mut Prefix { buf: [0.0] },
+        &[1.0, 0.0],
+        &[1.0],
+        3.0,
+        0.01,
+        1e-10,
+    );
+    let mut worst: f64 = 0.0;
+    for (t, y) in &out {
+        worst = worst
+            .max((y[0] - exact_unit(*t)).abs())
+            .max((y[1] - x2(*t)).abs());
+    }
+    println!("prefix: max error {worst:.2e}, {stats:?}");
+    assert!(worst < 1e-9);
+}
