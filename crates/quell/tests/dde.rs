@@ -220,6 +220,17 @@ fn history_jump_breakpoints() {
     assert_eq!(stats.breakpoints, 2);
     println!("history jump: max error {worst:.2e}, {stats:?}");
 
+    // The same with t0 = 0.1, where t0 + τ − τ ≠ t0 in floating point.
+    let mut sys = Linear::new(vec![vec![0.0]], vec![(1.0, vec![vec![-1.0]])]);
+    let opts = Options { rtol: 1e-10, atol: 1e-10, ..Options::default() };
+    let mut worst_shift: f64 = 0.0;
+    solve(&mut sys, 0.1, &[1.0], &[0.0], 3.1, 1e-3, &opts, |t, y| {
+        worst_shift = worst_shift.max((y[0] - exact(t - 0.1)).abs());
+        ControlFlow::Continue(())
+    })
+    .unwrap();
+    assert!(worst_shift < 1e-10, "t0 = 0.1: max error {worst_shift:e}");
+
     // Two incommensurate delays: every generated breakpoint is landed on.
     let delays = [1.0 / 3.0, 0.2];
     let bps = breakpoints(0.0, &delays, 1.0);
