@@ -31,17 +31,10 @@ impl DelaySystem for TwoDelays {
 
 fn bench(c: &mut Criterion) {
     for tol in [1e-6, 1e-10] {
-        let opts = Options {
-            rtol: tol,
-            atol: tol,
-            ..Options::default()
-        };
+        let opts = Options { rtol: tol, atol: tol, ..Options::default() };
         c.bench_function(&format!("dde_2delays_0_10_tol{tol:e}"), |b| {
             b.iter(|| {
-                let mut sys = TwoDelays {
-                    delays: [1.0 / 3.0, 0.2],
-                    buf: [0.0],
-                };
+                let mut sys = TwoDelays { delays: [1.0 / 3.0, 0.2], buf: [0.0] };
                 let mut last = 0.0;
                 let stats = solve(&mut sys, 0.0, &[1.0], &[0.0], 10.0, 0.1, &opts, |_, y| {
                     last = y[0];

@@ -52,13 +52,7 @@ impl Linear {
         let n = a0.len();
         let flat = |m: Vec<Vec<f64>>| m.into_iter().flatten().collect::<Vec<_>>();
         let (delays, a): (Vec<_>, Vec<_>) = terms.into_iter().map(|(d, m)| (d, flat(m))).unzip();
-        Linear {
-            n,
-            a0: flat(a0),
-            a,
-            delays,
-            buf: vec![0.0; n],
-        }
+        Linear { n, a0: flat(a0), a, delays, buf: vec![0.0; n] }
     }
 }
 
@@ -74,38 +68,24 @@ impl DelaySystem for Linear {
     }
     fn rhs(&mut self, t: f64, y: &[f64], past: &Past<'_>, dy: &mut [f64]) {
         let n = self.n;
-        for i in 0..n {
-            dy[i] = (0..n).map(|j| self.a0[i * n + j] * y[j]).sum();
+        for (i, d) in dy.iter_mut().enumerate() {
+            *d = (0..n).map(|j| self.a0[i * n + j] * y[j]).sum();
         }
         for (d, a) in self.delays.iter().zip(&self.a) {
             past.eval_into(t - d, 0, &mut self.buf);
-            for i in 0..n {
-                dy[i] += (0..n).map(|j| a[i * n + j] * self.buf[j]).sum::<f64>();
+            for (i, dyi) in dy.iter_mut().enumerate() {
+                *dyi += (0..n).map(|j| a[i * n + j] * self.buf[j]).sum::<f64>();
             }
         }
     }
 }
 
 fn matrix(v: &Value) -> Vec<Vec<f64>> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|r| {
-            r.as_array()
-                .unwrap()
-                .iter()
-                .map(|x| x.as_f64().unwrap())
-                .collect()
-        })
-        .collect()
+    v.as_array().unwrap().iter().map(|r| r.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()).collect()
 }
 
 fn vector(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect()
+    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
 }
 
 /// Runs `sys` and collects every output.
@@ -117,11 +97,7 @@ fn run<S: DelaySystem>(
     dt: f64,
     tol: f64,
 ) -> (Vec<(f64, Vec<f64>)>, Stats) {
-    let opts = Options {
-        rtol: tol,
-        atol: tol,
-        ..Options::default()
-    };
+    let opts = Options { rtol: tol, atol: tol, ..Options::default() };
     let mut out = Vec::new();
     let stats = solve(sys, 0.0, y0, history, t_end, dt, &opts, |t, y| {
         out.push((t, y.to_vec()));
@@ -143,10 +119,7 @@ fn run<S: DelaySystem>(
 /// * statefb_input_delay_pc_docstring_tau0p1 / _tau0p2 (history = y0 = [1,0]): 1e-8
 #[test]
 fn reference_cases() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/reference/dde_cases.json"
-    );
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/reference/dde_cases.json");
     let text = std::fs::read_to_string(path).expect("read dde_cases.json");
     let cases: Value = serde_json::from_str(&text).unwrap();
     let cases = cases.as_array().unwrap();
@@ -180,10 +153,7 @@ fn reference_cases() {
         for (t, yr) in ts.iter().zip(&ys) {
             let k = (t / dt).round() as usize;
             let (to, y) = &out[k];
-            assert!(
-                (to - t).abs() < 1e-9,
-                "{name}: output {k} at {to}, expected {t}"
-            );
+            assert!((to - t).abs() < 1e-9, "{name}: output {k} at {to}, expected {t}");
             for (a, b) in y.iter().zip(yr) {
                 let e = (a - b).abs() / b.abs().max(1.0);
                 worst = worst.max(e);
@@ -250,15 +220,23 @@ fn history_jump_breakpoints() {
     assert_eq!(stats.breakpoints, 2);
     println!("history jump: max error {worst:.2e}, {stats:?}");
 
+    // The same with t0 = 0.1, where t0 + τ − τ ≠ t0 in floating point.
+    let mut sys = Linear::new(vec![vec![0.0]], vec![(1.0, vec![vec![-1.0]])]);
+    let opts = Options { rtol: 1e-10, atol: 1e-10, ..Options::default() };
+    let mut worst_shift: f64 = 0.0;
+    solve(&mut sys, 0.1, &[1.0], &[0.0], 3.1, 1e-3, &opts, |t, y| {
+        worst_shift = worst_shift.max((y[0] - exact(t - 0.1)).abs());
+        ControlFlow::Continue(())
+    })
+    .unwrap();
+    assert!(worst_shift < 1e-10, "t0 = 0.1: max error {worst_shift:e}");
+
     // Two incommensurate delays: every generated breakpoint is landed on.
     let delays = [1.0 / 3.0, 0.2];
     let bps = breakpoints(0.0, &delays, 1.0);
     assert!(bps.len() >= 8 && bps.windows(2).all(|w| w[1] > w[0]));
     assert!(bps.iter().any(|b| (b - 8.0 / 15.0).abs() < 1e-12));
-    let mut sys = Linear::new(
-        vec![vec![0.0]],
-        vec![(delays[0], vec![vec![-1.0]]), (delays[1], vec![vec![-1.0]])],
-    );
+    let mut sys = Linear::new(vec![vec![0.0]], vec![(delays[0], vec![vec![-1.0]]), (delays[1], vec![vec![-1.0]])]);
     let (_, stats) = run(&mut sys, &[1.0], &[0.0], 1.0, 0.1, 1e-10);
     assert_eq!(stats.breakpoints, bps.len());
 }
@@ -283,14 +261,8 @@ impl DelaySystem for Blowup {
 
 #[test]
 fn step_size_underflow_at_blowup() {
-    let opts = Options {
-        rtol: 1e-10,
-        atol: 1e-10,
-        ..Options::default()
-    };
-    let r = solve(&mut Blowup, 0.0, &[1.0], &[], 2.0, 0.1, &opts, |_, _| {
-        ControlFlow::Continue(())
-    });
+    let opts = Options { rtol: 1e-10, atol: 1e-10, ..Options::default() };
+    let r = solve(&mut Blowup, 0.0, &[1.0], &[], 2.0, 0.1, &opts, |_, _| ControlFlow::Continue(()));
     match r {
         Err(SolveError::StepSizeTooSmall { t, h }) => {
             println!("blow-up: stopped at t = {t}, h = {h:e}");
@@ -325,23 +297,11 @@ impl DelaySystem for GoesNan {
 #[test]
 fn non_finite_rhs_is_an_error() {
     let mut seen_nan = false;
-    let r = solve(
-        &mut GoesNan,
-        0.0,
-        &[1.0],
-        &[1.0],
-        2.0,
-        0.05,
-        &Options::default(),
-        |_, y| {
-            seen_nan |= !y[0].is_finite();
-            ControlFlow::Continue(())
-        },
-    );
-    assert!(
-        matches!(r, Err(SolveError::StepSizeTooSmall { t, .. }) if (t - 0.75).abs() < 1e-6),
-        "{r:?}"
-    );
+    let r = solve(&mut GoesNan, 0.0, &[1.0], &[1.0], 2.0, 0.05, &Options::default(), |_, y| {
+        seen_nan |= !y[0].is_finite();
+        ControlFlow::Continue(())
+    });
+    assert!(matches!(r, Err(SolveError::StepSizeTooSmall { t, .. }) if (t - 0.75).abs() < 1e-6), "{r:?}");
     assert!(!seen_nan);
 }
 
@@ -349,23 +309,14 @@ fn non_finite_rhs_is_an_error() {
 fn early_stop() {
     let mut sys = Linear::new(vec![vec![0.0]], vec![(1.0, vec![vec![-1.0]])]);
     let mut count = 0;
-    let stats = solve(
-        &mut sys,
-        0.0,
-        &[1.0],
-        &[1.0],
-        100.0,
-        0.5,
-        &Options::default(),
-        |t, _| {
-            count += 1;
-            if t >= 1.0 {
-                ControlFlow::Break(())
-            } else {
-                ControlFlow::Continue(())
-            }
-        },
-    )
+    let stats = solve(&mut sys, 0.0, &[1.0], &[1.0], 100.0, 0.5, &Options::default(), |t, _| {
+        count += 1;
+        if t >= 1.0 {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    })
     .unwrap();
     assert_eq!(count, 3);
     // Stopped right after the step containing t = 1: a handful of steps, not a run to 100.
@@ -396,11 +347,7 @@ impl DelaySystem for Forced {
 
 #[test]
 fn history_stays_bounded_and_no_allocation() {
-    let opts = Options {
-        rtol: 1e-10,
-        atol: 1e-10,
-        ..Options::default()
-    };
+    let opts = Options { rtol: 1e-10, atol: 1e-10, ..Options::default() };
     let measure = |t_end: f64| {
         let mut sys = Forced { buf: [0.0] };
         let before = allocs();
@@ -414,9 +361,7 @@ fn history_stays_bounded_and_no_allocation() {
     };
     let (a_short, s_short, _) = measure(1000.0);
     let (a_long, s_long, last) = measure(10_000.0);
-    println!(
-        "long run: {s_long:?}, allocations {a_long} (t_end = 1000: {a_short}), y(10000) = {last}"
-    );
+    println!("long run: {s_long:?}, allocations {a_long} (t_end = 1000: {a_short}), y(10000) = {last}");
     assert!(last.is_finite() && last.abs() < 10.0);
     assert_eq!(a_short, a_long, "the step loop allocates");
     // Step records within one delay: 1 / (smallest step), plus the pruning margin.
@@ -428,4 +373,80 @@ fn history_stays_bounded_and_no_allocation() {
         mean_records_per_delay
     );
     assert_eq!(s_short.max_history_len, s_long.max_history_len);
+}
+
+/// No delays: a plain ODE (harmonic oscillator), full-state dense output with n_delayed = 0.
+struct Oscillator;
+
+impl DelaySystem for Oscillator {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn n_delayed(&self) -> usize {
+        0
+    }
+    fn delays(&self) -> &[f64] {
+        &[]
+    }
+    fn rhs(&mut self, _t: f64, y: &[f64], _past: &Past<'_>, dy: &mut [f64]) {
+        dy[0] = y[1];
+        dy[1] = -y[0];
+    }
+}
+
+#[test]
+fn plain_ode_dense_output() {
+    let (out, stats) = run(&mut Oscillator, &[1.0, 0.0], &[], 20.0, 0.07, 1e-11);
+    assert_eq!(out.len(), (20.0f64 / 0.07).floor() as usize + 1);
+    let mut worst: f64 = 0.0;
+    for (t, y) in &out {
+        worst = worst.max((y[0] - t.cos()).abs()).max((y[1] + t.sin()).abs());
+    }
+    println!("oscillator: max error {worst:.2e}, {stats:?}");
+    assert!(worst < 1e-9);
+    assert_eq!(stats.max_history_len, 0);
+}
+
+/// Only a prefix is delayed: x1' = −x1(t − 1), x2' = x1 (x1 = 1 for t ≤ 0, x2(0) = 0), so
+/// x2 = ∫ x1 = t − t²/2 + (t−1)³/6 − (t−2)⁴/24 on [0, 3] (terms active past 1 and 2).
+struct Prefix {
+    buf: [f64; 1],
+}
+
+impl DelaySystem for Prefix {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn n_delayed(&self) -> usize {
+        1
+    }
+    fn delays(&self) -> &[f64] {
+        &[1.0]
+    }
+    fn rhs(&mut self, t: f64, y: &[f64], past: &Past<'_>, dy: &mut [f64]) {
+        past.eval_into(t - 1.0, 0, &mut self.buf);
+        dy[0] = -self.buf[0];
+        dy[1] = y[0];
+    }
+}
+
+#[test]
+fn delayed_prefix_only() {
+    let x2 = |t: f64| {
+        let mut v = t - t * t / 2.0;
+        if t > 1.0 {
+            v += (t - 1.0).powi(3) / 6.0;
+        }
+        if t > 2.0 {
+            v -= (t - 2.0).powi(4) / 24.0;
+        }
+        v
+    };
+    let (out, stats) = run(&mut Prefix { buf: [0.0] }, &[1.0, 0.0], &[1.0], 3.0, 0.01, 1e-10);
+    let mut worst: f64 = 0.0;
+    for (t, y) in &out {
+        worst = worst.max((y[0] - exact_unit(*t)).abs()).max((y[1] - x2(*t)).abs());
+    }
+    println!("prefix: max error {worst:.2e}, {stats:?}");
+    assert!(worst < 1e-9);
 }

@@ -91,11 +91,7 @@ pub struct Options {
 
 impl Default for Options {
     fn default() -> Self {
-        Options {
-            rtol: 1e-9,
-            atol: 1e-9,
-            h_max: f64::INFINITY,
-        }
+        Options { rtol: 1e-9, atol: 1e-9, h_max: f64::INFINITY }
     }
 }
 
@@ -117,9 +113,7 @@ pub struct Stats {
 /// Why the integration stopped early.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum SolveError {
-    #[error(
-        "step size underflow at t = {t}: the step shrank to {h:e} without meeting the tolerance"
-    )]
+    #[error("step size underflow at t = {t}: the step shrank to {h:e} without meeting the tolerance")]
     StepSizeTooSmall { t: f64, h: f64 },
 }
 
@@ -144,14 +138,7 @@ fn eval_rhs<S: DelaySystem>(
     y: &[f64],
     dy: &mut [f64],
 ) {
-    let past = Past {
-        hist,
-        initial: ctx.initial,
-        y0: ctx.y0,
-        t0: ctx.t0,
-        lead: t_n - t,
-        tol: ctx.tol,
-    };
+    let past = Past { hist, initial: ctx.initial, y0: ctx.y0, t0: ctx.t0, lead: t_n - t, tol: ctx.tol };
     sys.rhs(t, y, &past, dy);
     stats.rhs_evals += 1;
 }
@@ -187,10 +174,7 @@ pub fn breakpoints(t0: f64, delays: &[f64], t_end: f64) -> Vec<f64> {
         level = next;
     }
     dedup(&mut all);
-    all.into_iter()
-        .map(|v| t0 + v)
-        .filter(|&b| b > t0 && b < t_end)
-        .collect()
+    all.into_iter().map(|v| t0 + v).filter(|&b| b > t0 && b < t_end).collect()
 }
 
 /// Error-control constants of `dop853.f`.
@@ -237,23 +221,12 @@ pub fn solve<S: DelaySystem>(
 ) -> Result<Stats, SolveError> {
     let n = sys.dim();
     let nd = sys.n_delayed();
-    assert_eq!(
-        y0.len(),
-        n,
-        "y0 has length {}, the system dimension is {n}",
-        y0.len()
-    );
+    assert_eq!(y0.len(), n, "y0 has length {}, the system dimension is {n}", y0.len());
+    assert!(t0.is_finite() && t_end.is_finite(), "t0 and t_end must be finite");
     assert!(nd <= n, "n_delayed = {nd} exceeds the dimension {n}");
-    assert_eq!(
-        history.len(),
-        nd,
-        "history must have length n_delayed = {nd}"
-    );
+    assert_eq!(history.len(), nd, "history must have length n_delayed = {nd}");
     let delays: Vec<f64> = sys.delays().to_vec();
-    assert!(
-        delays.iter().all(|&d| d > 0.0 && d.is_finite()),
-        "delays must be positive and finite: {delays:?}"
-    );
+    assert!(delays.iter().all(|&d| d > 0.0 && d.is_finite()), "delays must be positive and finite: {delays:?}");
     let tau_min = delays.iter().copied().fold(f64::INFINITY, f64::min);
     let tau_max = delays.iter().copied().fold(0.0, f64::max);
 
@@ -266,27 +239,15 @@ pub fn solve<S: DelaySystem>(
     let bps = breakpoints(t0, &delays, t_end);
     let (dt_out, n_out) = if output_step > 0.0 && output_step.is_finite() {
         let out_tol = 1e-9 * output_step;
-        (
-            output_step,
-            ((span + out_tol) / output_step).floor() as usize,
-        )
+        (output_step, ((span + out_tol) / output_step).floor() as usize)
     } else {
         (span, 1)
     };
 
     // Setup: every buffer of the step loop is allocated here.
     let y0_prefix = y0[..nd].to_vec();
-    let ctx = Ctx {
-        initial: history,
-        y0: &y0_prefix,
-        t0,
-        tol: tiny(t_end),
-    };
-    let est_records = if tau_max > 0.0 {
-        (tau_max / h_cap.max(1e-300)).min(4096.0) as usize + 8
-    } else {
-        4
-    };
+    let ctx = Ctx { initial: history, y0: &y0_prefix, t0, tol: tiny(t_end) };
+    let est_records = if tau_max > 0.0 { (tau_max / h_cap.max(1e-300)).min(4096.0) as usize + 8 } else { 4 };
     let mut hist = History::new(nd, est_records);
     let mut k = vec![0.0; STAGES_DENSE * n];
     let mut y = y0.to_vec();
@@ -298,19 +259,7 @@ pub fn solve<S: DelaySystem>(
     let mut t = t0;
     let mut next_out = 1usize;
     eval_rhs(sys, &ctx, &hist, &mut stats, t, t, &y, &mut k[..n]);
-    let mut h = initial_step(
-        sys,
-        &ctx,
-        &hist,
-        &mut stats,
-        t,
-        &y,
-        &k[..n],
-        &mut y_stage,
-        &mut y_new,
-        opts,
-        h_cap,
-    );
+    let mut h = initial_step(sys, &ctx, &hist, &mut stats, t, &y, &k[..n], &mut y_stage, &mut y_new, opts, h_cap);
     let mut bp_idx = 0usize;
     let mut last_rejected = false;
 
@@ -318,15 +267,14 @@ pub fn solve<S: DelaySystem>(
         while bp_idx < bps.len() && bps[bp_idx] <= t + tiny(t) {
             bp_idx += 1;
         }
-        let (stop, stop_is_bp) = if bp_idx < bps.len() {
-            (bps[bp_idx], true)
-        } else {
-            (t_end, false)
-        };
+        let (stop, stop_is_bp) = if bp_idx < bps.len() { (bps[bp_idx], true) } else { (t_end, false) };
         let h_prop = h;
         let mut h_try = h.min(h_cap);
         let mut lands = false;
-        if t + h_try >= stop || (stop - (t + h_try) < 0.01 * h_try && stop - t <= h_cap) {
+        // Land on `stop` if the step would reach it or leave only a sliver (a sliver below
+        // rounding level may make the step exceed h_cap by a few ulps, which is harmless).
+        let gap = stop - (t + h_try);
+        if gap <= tiny(stop) || (gap < 0.01 * h_try && stop - t <= h_cap) {
             h_try = stop - t;
             lands = true;
         }
@@ -336,17 +284,7 @@ pub fn solve<S: DelaySystem>(
         for s in 1..STAGES {
             combine(&y, &k, &A[s][..s], h_try, n, &mut y_stage);
             let ts = if C[s] == 1.0 { t_new } else { t + C[s] * h_try };
-            let (_, rest) = k.split_at_mut(s * n);
-            eval_rhs(
-                sys,
-                &ctx,
-                &hist,
-                &mut stats,
-                t,
-                ts,
-                &y_stage,
-                &mut rest[..n],
-            );
+            eval_rhs(sys, &ctx, &hist, &mut stats, t, ts, &y_stage, &mut k[s * n..(s + 1) * n]);
         }
         combine(&y, &k, &A[12][..STAGES], h_try, n, &mut y_new);
 
@@ -370,6 +308,30 @@ pub fn solve<S: DelaySystem>(
         let mut err = h_try * s5 * (1.0 / (n.max(1) as f64 * deno)).sqrt();
         if !err.is_finite() || !y_new.iter().all(|v| v.is_finite()) {
             err = f64::INFINITY;
+        }
+        // Tentatively accepted: FSAL evaluation and, when needed, the dense-output stages.
+        // A non-finite value there rejects the step as well.
+        let mut out_here = false;
+        let mut dense = false;
+        if err <= 1.0 {
+            eval_rhs(sys, &ctx, &hist, &mut stats, t, t_new, &y_new, &mut k[12 * n..13 * n]);
+            out_here = next_out <= n_out && {
+                let t_k = t0 + next_out as f64 * dt_out;
+                t_k <= t_new || (t_new == t_end && t_k <= t_end + 1e-9 * dt_out)
+            };
+            dense = nd > 0 || out_here;
+            let mut last = 13;
+            if dense {
+                for s in 13..STAGES_DENSE {
+                    combine(&y, &k, &A[s][..s], h_try, n, &mut y_stage);
+                    let ts = t + C[s] * h_try;
+                    eval_rhs(sys, &ctx, &hist, &mut stats, t, ts, &y_stage, &mut k[s * n..(s + 1) * n]);
+                }
+                last = STAGES_DENSE;
+            }
+            if !k[12 * n..last * n].iter().all(|v| v.is_finite()) {
+                err = f64::INFINITY;
+            }
         }
         let fac11 = err.powf(0.125);
 
@@ -395,36 +357,7 @@ pub fn solve<S: DelaySystem>(
         last_rejected = false;
         h = h_next;
 
-        eval_rhs(
-            sys,
-            &ctx,
-            &hist,
-            &mut stats,
-            t,
-            t_new,
-            &y_new,
-            &mut k[12 * n..13 * n],
-        );
-        let out_here = next_out <= n_out && {
-            let t_k = t0 + next_out as f64 * dt_out;
-            t_k <= t_new || (t_new == t_end && t_k <= t_end + 1e-9 * dt_out)
-        };
-        if nd > 0 || out_here {
-            for s in 13..STAGES_DENSE {
-                combine(&y, &k, &A[s][..s], h_try, n, &mut y_stage);
-                let ts = t + C[s] * h_try;
-                let (_, rest) = k.split_at_mut(s * n);
-                eval_rhs(
-                    sys,
-                    &ctx,
-                    &hist,
-                    &mut stats,
-                    t,
-                    ts,
-                    &y_stage,
-                    &mut rest[..n],
-                );
-            }
+        if dense {
             if nd > 0 {
                 let slot = hist.push(t, h_try);
                 dense_coefficients(&y, &y_new, &k, h_try, n, 0..nd, slot);
@@ -435,11 +368,7 @@ pub fn solve<S: DelaySystem>(
         }
         while out_here && next_out <= n_out {
             let t_k = t0 + next_out as f64 * dt_out;
-            let t_k = if next_out == n_out && t_new == t_end {
-                t_k.min(t_end)
-            } else {
-                t_k
-            };
+            let t_k = if next_out == n_out && t_new == t_end { t_k.min(t_end) } else { t_k };
             if t_k > t_new {
                 break;
             }
@@ -543,11 +472,7 @@ fn initial_step<S: DelaySystem>(
         dny += (yi / sk) * (yi / sk);
     }
     let (dnf, dny) = ((dnf / n).sqrt(), (dny / n).sqrt());
-    let mut h = if dnf <= 1e-5 || dny <= 1e-5 {
-        1e-6
-    } else {
-        0.01 * dny / dnf
-    };
+    let mut h = if dnf <= 1e-5 || dny <= 1e-5 { 1e-6 } else { 0.01 * dny / dnf };
     h = h.min(h_cap);
     for ((o, yi), fi) in y1.iter_mut().zip(y).zip(f0) {
         *o = yi + h * fi;
@@ -560,11 +485,7 @@ fn initial_step<S: DelaySystem>(
     }
     let der2 = (der2 / n).sqrt() / h;
     let der12 = der2.abs().max(dnf);
-    let h1 = if der12 <= 1e-15 {
-        (h * 1e-3).max(1e-6)
-    } else {
-        (0.01 / der12).powf(1.0 / 8.0)
-    };
+    let h1 = if der12 <= 1e-15 { (h * 1e-3).max(1e-6) } else { (0.01 / der12).powf(1.0 / 8.0) };
     let h = (100.0 * h).min(h1).min(h_cap);
     if h.is_finite() && h > 0.0 {
         h

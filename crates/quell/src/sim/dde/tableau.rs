@@ -5,6 +5,9 @@
 //! FSAL evaluation f(t + h, y_{n+1}) and stages 13..=15 are the extra stages of the 7th-order
 //! dense output.
 
+// The published digits are kept verbatim; they round to the nearest f64.
+#![allow(clippy::excessive_precision)]
+
 /// Number of stages of the basic method (without the FSAL evaluation).
 pub(super) const STAGES: usize = 12;
 /// Total number of stages including the FSAL evaluation and the three dense-output stages.
