@@ -34,10 +34,11 @@ pub struct Equations {
     /// φ' = G_ω φ + (G_ω N − N A_f) x̂ − N B_f u_d.
     pub A_z: DMatrix<f64>,
     pub B_z: DMatrix<f64>,
-    /// ξ̂ = C_ξ z = [ξ̂_g; φ + N x̂].
-    pub C_xi: DMatrix<f64>,
-    /// u_f = −K x̂ + F u_d (5), as u_f = K_z z + F u_d with K_z = [−K 0 0].
-    pub K_z: DMatrix<f64>,
+    /// Reference regressor size q_g; ξ̂ = [ξ̂_g; φ + N x̂] with z = [x̂; ξ̂_g; φ].
+    pub q_g: usize,
+    pub N: DMatrix<f64>,
+    /// u_f = −K x̂ + F u_d (5), stored as −K.
+    pub K_neg: DMatrix<f64>,
     pub F: DMatrix<f64>,
     /// Per channel: G_ii(s) = q_i0 / den_i(s) realized as w' = A_i w + e_σ v, output q_i0·w_1.
     pub channels: Vec<ChannelFilter>,
@@ -83,13 +84,6 @@ impl Equations {
         A_z.view_mut((o, 0), (q_w, n)).copy_from(&(&d.G_w * &d.N - &d.N * &d.A_f));
         A_z.view_mut((o, o), (q_w, q_w)).copy_from(&d.G_w);
         B_z.view_mut((o, 2 * m), (q_w, m)).copy_from(&(-(&d.N * &d.B_f)));
-        // ξ̂ = [ξ̂_g; φ + N x̂].
-        let mut C_xi = DMatrix::zeros(q, nz);
-        C_xi.view_mut((0, n), (q_g, q_g)).fill_with_identity();
-        C_xi.view_mut((q_g, 0), (q_w, n)).copy_from(&d.N);
-        C_xi.view_mut((q_g, o), (q_w, q_w)).fill_with_identity();
-        let mut K_z = DMatrix::zeros(m, nz);
-        K_z.view_mut((0, 0), (m, n)).copy_from(&(-&d.K));
         let channels = d
             .channels
             .iter()
@@ -104,17 +98,20 @@ impl Equations {
                 delay,
             })
             .collect();
-        Equations { n, m, q, nz, A_z, B_z, C_xi, K_z, F: d.F.clone(), channels, beta: d.beta }
+        Equations { n, m, q, nz, A_z, B_z, q_g, N: d.N.clone(), K_neg: -&d.K, F: d.F.clone(), channels, beta: d.beta }
     }
 
-    /// Regressor ξ̂ = C_ξ z.
+    /// Regressor ξ̂ = [ξ̂_g; ξ̂_ω] with ξ̂_ω = φ + N x̂ (eq. (20)), from z = [x̂; ξ̂_g; φ].
     pub fn regressor(&self, z: &[f64], xi: &mut [f64]) {
-        mat_vec(&self.C_xi, z, xi, false);
+        let (n, q_g) = (self.n, self.q_g);
+        xi[..q_g].copy_from_slice(&z[n..n + q_g]);
+        xi[q_g..].copy_from_slice(&z[n + q_g..]);
+        mat_vec(&self.N, &z[..n], &mut xi[q_g..], true);
     }
 
     /// Plant input (5): u_f = −K x̂ + F u_d.
     pub fn plant_input(&self, z: &[f64], u_d: &[f64], u_f: &mut [f64]) {
-        mat_vec(&self.K_z, z, u_f, false);
+        mat_vec(&self.K_neg, &z[..self.n], u_f, false);
         mat_vec(&self.F, u_d, u_f, true);
     }
 

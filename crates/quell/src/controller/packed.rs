@@ -10,15 +10,18 @@ pub fn len(q: usize) -> usize {
 pub fn sym_mat_vec(omega: &[f64], x: &[f64], out: &mut [f64]) {
     let q = x.len();
     out.fill(0.0);
-    let mut k = 0;
+    let mut rest = omega;
     for i in 0..q {
-        out[i] += omega[k] * x[i];
-        k += 1;
-        for j in i + 1..q {
-            out[i] += omega[k] * x[j];
-            out[j] += omega[k] * x[i];
-            k += 1;
+        // Packed row i holds Ω[i][i..q].
+        let (row, tail) = rest.split_at(q - i);
+        rest = tail;
+        let xi = x[i];
+        let mut acc = row[0] * xi;
+        for ((o, w), xj) in out[i + 1..].iter_mut().zip(&row[1..]).zip(&x[i + 1..]) {
+            acc += w * xj;
+            *o += w * xi;
         }
+        out[i] += acc;
     }
 }
 
@@ -33,14 +36,28 @@ pub fn trace(omega: &[f64], q: usize) -> f64 {
 }
 
 /// Calls `f(entry, Δ_i Δ_j)` for every packed entry of the rank-one matrix Δ Δᵀ.
+#[inline]
 pub fn outer_for_each(delta: &[f64], omega: &mut [f64], mut f: impl FnMut(&mut f64, f64)) {
-    let q = delta.len();
-    let mut k = 0;
-    for i in 0..q {
-        for j in i..q {
-            f(&mut omega[k], delta[i] * delta[j]);
-            k += 1;
+    let mut rest = omega;
+    for (i, &di) in delta.iter().enumerate() {
+        let (row, tail) = std::mem::take(&mut rest).split_at_mut(delta.len() - i);
+        rest = tail;
+        for (o, dj) in row.iter_mut().zip(&delta[i..]) {
+            f(o, di * dj);
         }
+    }
+}
+
+/// out_ij = f(Ω_ij, Δ_i Δ_j) for every packed entry.
+#[inline]
+pub fn outer_map(delta: &[f64], omega: &[f64], out: &mut [f64], f: impl Fn(f64, f64) -> f64) {
+    let mut k = 0;
+    for (i, &di) in delta.iter().enumerate() {
+        let len = delta.len() - i;
+        for ((o, w), dj) in out[k..k + len].iter_mut().zip(&omega[k..k + len]).zip(&delta[i..]) {
+            *o = f(*w, di * dj);
+        }
+        k += len;
     }
 }
 
@@ -74,5 +91,8 @@ mod tests {
         let mut o = [0.0; 6];
         outer_for_each(&[1.0, 2.0, 3.0], &mut o, |e, v| *e = v);
         assert_eq!(o, [1.0, 2.0, 3.0, 4.0, 6.0, 9.0]);
+        let mut p = [0.0; 6];
+        outer_map(&[1.0, 2.0, 3.0], &omega, &mut p, |w, v| v - w);
+        assert_eq!(p, [-1.0, 1.0, 3.0, 1.0, 7.0, 5.0]);
     }
 }

@@ -20,8 +20,11 @@ impl RankTest {
 
 /// Controllability of (A, B): the dimension of the controllable subspace, numerically.
 pub fn controllability(A: &DMatrix<f64>, B: &DMatrix<f64>) -> RankTest {
-    let _ = (A, B);
-    todo!()
+    let n = A.nrows();
+    let mut M = DMatrix::zeros(n, n * B.ncols());
+    let mut P = B.clone();
+    for i in 0..n { M.view_mut((0, i * B.ncols()), (n, B.ncols())).copy_from(&P); P = A * P; }
+    RankTest { rank: crate::linalg::numerical_rank(&M), n, tol: 0.0 }
 }
 
 /// Observability of (A, C), by duality with [`controllability`] of (Aᵀ, Cᵀ).

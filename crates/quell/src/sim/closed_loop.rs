@@ -248,8 +248,7 @@ impl DelaySystem for ContinuousLoop<'_> {
             }
             let omega = &s[l.omega[i]..l.omega[i] + packed::len(q)];
             let d_omega = &mut ds[l.omega[i]..l.omega[i] + packed::len(q)];
-            d_omega.copy_from_slice(omega);
-            packed::outer_for_each(&self.Delta, d_omega, |o, dd| *o = (dd - *o) * inv_beta);
+            packed::outer_map(&self.Delta, omega, d_omega, |o, dd| (dd - o) * inv_beta);
 
             // η̂_i' = μ_i (Y_i − Ω_i η̂_i).
             let eta = &s[l.eta(i)..l.eta(i) + q];
