@@ -55,9 +55,9 @@ pub enum PlaceError {
     #[error("matrix {which} contains NaN or infinite entries; fix the model")]
     NonFiniteSystem { which: &'static str },
     #[error(
-        "the computed gain places the poles with relative error {max_error:e} (> 1e-6); the \
-         problem is too ill-conditioned for these poles — move them apart or closer to the \
-         open-loop eigenvalues"
+        "the computed gain would miss the requested poles: verified error {max_error:e} exceeds \
+         1e-6 (relative to max(1, |p|)); the problem is too ill-conditioned for these poles — \
+         move them apart or closer to the open-loop eigenvalues"
     )]
     Inaccurate { max_error: f64 },
 }
