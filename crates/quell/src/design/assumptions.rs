@@ -71,8 +71,19 @@ fn full_left_svd(blk: &DMatrix<f64>) -> Option<(DMatrix<f64>, Vec<f64>)> {
 /// It stops when `r = 0` (the rest is uncontrollable) or all `n` states are reached.
 pub(crate) fn staircase(A: &DMatrix<f64>, B: &DMatrix<f64>, tol: f64) -> Staircase {
     let n = A.nrows();
-    assert_eq!(A.ncols(), n, "A must be square, got {}×{}", A.nrows(), A.ncols());
-    assert_eq!(B.nrows(), n, "B must have {n} rows (as A), got {}", B.nrows());
+    assert_eq!(
+        A.ncols(),
+        n,
+        "A must be square, got {}×{}",
+        A.nrows(),
+        A.ncols()
+    );
+    assert_eq!(
+        B.nrows(),
+        n,
+        "B must have {n} rows (as A), got {}",
+        B.nrows()
+    );
     let mut At = A.clone();
     let mut Bt = B.clone();
     let mut Z = DMatrix::<f64>::identity(n, n);
@@ -102,7 +113,8 @@ pub(crate) fn staircase(A: &DMatrix<f64>, B: &DMatrix<f64>, tol: f64) -> Stairca
         let cols_a = At.view((0, offset), (n, nk)) * &U;
         At.view_mut((0, offset), (n, nk)).copy_from(&cols_a);
         let rows_b = U.transpose() * Bt.view((offset, 0), (nk, Bt.ncols()));
-        Bt.view_mut((offset, 0), (nk, Bt.ncols())).copy_from(&rows_b);
+        Bt.view_mut((offset, 0), (nk, Bt.ncols()))
+            .copy_from(&rows_b);
         let cols_z = Z.view((0, offset), (n, nk)) * &U;
         Z.view_mut((0, offset), (n, nk)).copy_from(&cols_z);
         // The coupling block is now [R; 0] up to the neglected singular values: make it exact.
@@ -117,7 +129,13 @@ pub(crate) fn staircase(A: &DMatrix<f64>, B: &DMatrix<f64>, tol: f64) -> Stairca
         prev = offset;
         offset += r;
     }
-    Staircase { At, Bt, Z, blocks, rank: offset }
+    Staircase {
+        At,
+        Bt,
+        Z,
+        blocks,
+        rank: offset,
+    }
 }
 
 /// Controllability of (A, B): the dimension of the controllable subspace, numerically.
@@ -131,12 +149,27 @@ pub fn controllability(A: &DMatrix<f64>, B: &DMatrix<f64>) -> RankTest {
     let n = A.nrows();
     let tol = staircase_tol(A, B);
     if A.iter().chain(B.iter()).any(|x| !x.is_finite()) {
-        assert_eq!(A.ncols(), n, "A must be square, got {}×{}", A.nrows(), A.ncols());
-        assert_eq!(B.nrows(), n, "B must have {n} rows (as A), got {}", B.nrows());
+        assert_eq!(
+            A.ncols(),
+            n,
+            "A must be square, got {}×{}",
+            A.nrows(),
+            A.ncols()
+        );
+        assert_eq!(
+            B.nrows(),
+            n,
+            "B must have {n} rows (as A), got {}",
+            B.nrows()
+        );
         return RankTest { rank: 0, n, tol };
     }
     let s = staircase(A, B, tol);
-    RankTest { rank: s.rank, n, tol }
+    RankTest {
+        rank: s.rank,
+        n,
+        tol,
+    }
 }
 
 /// Observability of (A, C), by duality with [`controllability`] of (Aᵀ, Cᵀ).
