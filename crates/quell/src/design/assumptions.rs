@@ -1,5 +1,12 @@
-//! Assumption 1: controllability of (A, B) and observability of (A, C) by numerically sound rank tests.
-//! STUB: owned by the pole-placement helper.
+//! Assumption 1: controllability of (A, B) and observability of (A, C) by numerically sound rank
+//! tests.
+//!
+//! The rank of the controllability matrix `[B AB A²B …]` is a poor numerical test: its columns
+//! grow like the powers of A and its rank decision is made on a matrix whose condition number
+//! can exceed 1/eps even for perfectly controllable pairs. Instead we reduce (A, B) to the
+//! controllability *staircase form* by orthogonal similarity transformations (Van Dooren 1981,
+//! "The generalized eigenstructure problem in linear system theory"; SLICOT AB01OD/AB01ND), and
+//! decide each block rank by an SVD against a tolerance scaled to the data.
 
 use nalgebra::DMatrix;
 
@@ -18,13 +25,151 @@ impl RankTest {
     }
 }
 
+/// Result of the staircase reduction: `At = Zᵀ A Z`, `Bt = Zᵀ B` with `Z` orthogonal.
+///
+/// The leading `rank × rank` part of `At` is block upper Hessenberg with diagonal block sizes
+/// `blocks`, `Bt` is zero below its first `blocks[0]` rows, and the trailing `(n − rank)` rows of
+/// `At` are zero in the leading `rank` columns (the uncontrollable part).
+#[derive(Debug, Clone)]
+pub(crate) struct Staircase {
+    pub At: DMatrix<f64>,
+    pub Bt: DMatrix<f64>,
+    pub Z: DMatrix<f64>,
+    pub blocks: Vec<usize>,
+    pub rank: usize,
+}
+
+/// Default rank tolerance for the staircase: `10 · n · eps · max(‖A‖_F, ‖B‖_F)` (the same order
+/// as MATLAB's `ctrbf` default `10·n·‖A‖₁·eps`), so it scales with the data.
+pub(crate) fn staircase_tol(A: &DMatrix<f64>, B: &DMatrix<f64>) -> f64 {
+    let n = A.nrows().max(1) as f64;
+    10.0 * n * f64::EPSILON * A.norm().max(B.norm())
+}
+
+/// Left singular vectors (full, `k × k`) and descending singular values of a `k × c` block.
+/// Returns `None` if the SVD does not converge (non-finite data).
+fn full_left_svd(blk: &DMatrix<f64>) -> Option<(DMatrix<f64>, Vec<f64>)> {
+    let k = blk.nrows();
+    let c = blk.ncols();
+    if blk.iter().any(|x| !x.is_finite()) {
+        return None;
+    }
+    // Pad with k zero columns so that the thin U is the full k × k orthogonal factor.
+    let mut padded = DMatrix::<f64>::zeros(k, c + k);
+    padded.view_mut((0, 0), (k, c)).copy_from(blk);
+    let svd = padded.try_svd(true, false, f64::EPSILON, 10_000)?;
+    let u = svd.u?;
+    let sv: Vec<f64> = svd.singular_values.iter().take(c.min(k)).copied().collect();
+    Some((u, sv))
+}
+
+/// Orthogonal controllability staircase reduction of (A, B) with rank tolerance `tol`.
+///
+/// Each step takes the current coupling block (first `B`, then the sub-diagonal block of the
+/// transformed `A`), computes its SVD, keeps the `r` singular values above `tol`, and rotates the
+/// remaining state coordinates so that the block becomes `[R; 0]` with `R` of full row rank `r`.
+/// It stops when `r = 0` (the rest is uncontrollable) or all `n` states are reached.
+pub(crate) fn staircase(A: &DMatrix<f64>, B: &DMatrix<f64>, tol: f64) -> Staircase {
+    let n = A.nrows();
+    assert_eq!(
+        A.ncols(),
+        n,
+        "A must be square, got {}×{}",
+        A.nrows(),
+        A.ncols()
+    );
+    assert_eq!(
+        B.nrows(),
+        n,
+        "B must have {n} rows (as A), got {}",
+        B.nrows()
+    );
+    let mut At = A.clone();
+    let mut Bt = B.clone();
+    let mut Z = DMatrix::<f64>::identity(n, n);
+    let mut blocks = Vec::new();
+    let mut offset = 0usize;
+    let mut prev = 0usize;
+    while offset < n {
+        let nk = n - offset;
+        let blk: DMatrix<f64> = if blocks.is_empty() {
+            Bt.clone()
+        } else {
+            At.view((offset, prev), (nk, offset - prev)).into_owned()
+        };
+        if blk.ncols() == 0 {
+            break;
+        }
+        let Some((U, sv)) = full_left_svd(&blk) else {
+            break;
+        };
+        let r = sv.iter().filter(|&&s| s > tol).count();
+        if r == 0 {
+            break;
+        }
+        // Apply diag(I_offset, U) as a similarity on A, from the left on B, accumulate in Z.
+        let rows_a = U.transpose() * At.view((offset, 0), (nk, n));
+        At.view_mut((offset, 0), (nk, n)).copy_from(&rows_a);
+        let cols_a = At.view((0, offset), (n, nk)) * &U;
+        At.view_mut((0, offset), (n, nk)).copy_from(&cols_a);
+        let rows_b = U.transpose() * Bt.view((offset, 0), (nk, Bt.ncols()));
+        Bt.view_mut((offset, 0), (nk, Bt.ncols()))
+            .copy_from(&rows_b);
+        let cols_z = Z.view((0, offset), (n, nk)) * &U;
+        Z.view_mut((0, offset), (n, nk)).copy_from(&cols_z);
+        // The coupling block is now [R; 0] up to the neglected singular values: make it exact.
+        if blocks.is_empty() {
+            let m = Bt.ncols();
+            Bt.view_mut((offset + r, 0), (nk - r, m)).fill(0.0);
+        } else {
+            let w = offset - prev;
+            At.view_mut((offset + r, prev), (nk - r, w)).fill(0.0);
+        }
+        blocks.push(r);
+        prev = offset;
+        offset += r;
+    }
+    Staircase {
+        At,
+        Bt,
+        Z,
+        blocks,
+        rank: offset,
+    }
+}
+
 /// Controllability of (A, B): the dimension of the controllable subspace, numerically.
+///
+/// Computed from the orthogonal staircase form (see the module docs) with tolerance
+/// `tol = 10 · n · eps · max(‖A‖_F, ‖B‖_F)`; `rank` is the number of states reached by the
+/// staircase, i.e. the numerical dimension of the controllable subspace. Non-finite entries give
+/// `rank = 0` (nothing can be certified). Panics if A is not square or B has a different number
+/// of rows.
 pub fn controllability(A: &DMatrix<f64>, B: &DMatrix<f64>) -> RankTest {
     let n = A.nrows();
-    let mut M = DMatrix::zeros(n, n * B.ncols());
-    let mut P = B.clone();
-    for i in 0..n { M.view_mut((0, i * B.ncols()), (n, B.ncols())).copy_from(&P); P = A * P; }
-    RankTest { rank: crate::linalg::numerical_rank(&M), n, tol: 0.0 }
+    let tol = staircase_tol(A, B);
+    if A.iter().chain(B.iter()).any(|x| !x.is_finite()) {
+        assert_eq!(
+            A.ncols(),
+            n,
+            "A must be square, got {}×{}",
+            A.nrows(),
+            A.ncols()
+        );
+        assert_eq!(
+            B.nrows(),
+            n,
+            "B must have {n} rows (as A), got {}",
+            B.nrows()
+        );
+        return RankTest { rank: 0, n, tol };
+    }
+    let s = staircase(A, B, tol);
+    RankTest {
+        rank: s.rank,
+        n,
+        tol,
+    }
 }
 
 /// Observability of (A, C), by duality with [`controllability`] of (Aᵀ, Cᵀ).

@@ -1,26 +1,695 @@
 //! MIMO pole placement: K such that eig(A − B K) equals the requested poles.
-//! STUB: owned by the pole-placement helper.
+//!
+//! * Multi-input (numerical rank(B) = r > 1): the robust eigenstructure-assignment method 0 of
+//!   Kautsky, Nichols & Van Dooren (1985), "Robust pole assignment in linear state feedback",
+//!   Int. J. Control 41(5) — the "KNV0" iteration also used by SciPy's `place_poles` and
+//!   MATLAB's `place`. Eigenvectors are chosen one at a time in their admissible subspaces to
+//!   make the eigenvector matrix X as well conditioned as possible (maximise |det X| over unit
+//!   columns). Complex-conjugate pairs are updated as a unit (u ± i v) by the exact
+//!   |det X|-maximising rank-2 step, in the manner of Tits & Yang (1996), "Globally convergent
+//!   algorithms for robust pole assignment by state feedback", IEEE TAC 41(10). Repeated poles
+//!   (at most r copies) get independent eigenvectors from the same admissible space.
+//! * Single-input (r = 1): Ackermann's formula evaluated in the orthogonal controller-Hessenberg
+//!   (staircase) coordinates, where the controllability matrix is triangular and need not be
+//!   inverted; any multiplicity is allowed.
+//!
+//! Every gain is verified a posteriori against A − B K as actually formed, and an error is
+//! returned instead of an inaccurate K: with the intended eigenvectors X by a Bauer–Fike bound,
+//! and for single-input repeated poles (Jordan blocks) by the characteristic polynomial.
+//! nalgebra's Schur iteration is not used for the check: it has no exceptional shifts and can
+//! fail to converge on the tight clusters that repeated poles produce.
 
-use nalgebra::{Complex, DMatrix};
+use nalgebra::{Complex, DMatrix, DVector};
 use thiserror::Error;
+
+use super::assumptions::{staircase, staircase_tol};
+
+type C64 = Complex<f64>;
+
+/// Relative tolerance under which two requested poles count as the same (repeated) pole and a
+/// complex pole's conjugate partner is recognised.
+const SAME_POLE_RTOL: f64 = 1e-8;
+/// Relative tolerance of the final check, relative to max(1, |p|).
+const VERIFY_RTOL: f64 = 1e-6;
+/// Maximum number of KNV0 sweeps.
+const KNV_MAX_SWEEPS: usize = 60;
 
 /// Why no gain was returned.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum PlaceError {
-    #[error("(A, B) is not controllable: numerical rank of the controllability staircase is {rank}, need {n}")]
+    #[error(
+        "(A, B) is not controllable: numerical rank of the controllability staircase is {rank}, \
+         need {n}; uncontrollable modes cannot be moved by feedback — check B or remove them"
+    )]
     Uncontrollable { rank: usize, n: usize },
-    #[error("expected {expected} poles (one per state), got {found}")]
+    #[error(
+        "expected {expected} poles (one per state), got {found}; give exactly one pole per state"
+    )]
     WrongCount { expected: usize, found: usize },
-    #[error("pole {pole} has no complex-conjugate partner in the list; complex poles come in conjugate pairs")]
+    #[error(
+        "pole {pole} has no complex-conjugate partner in the list; complex poles must come in \
+         conjugate pairs so that K is real — add its conjugate"
+    )]
     NotConjugateClosed { pole: Complex<f64> },
-    #[error("pole {pole} is requested {multiplicity} times, but rank(B) = {max} allows at most {max}")]
-    Multiplicity { pole: Complex<f64>, multiplicity: usize, max: usize },
-    #[error("pole {pole} is not a finite number")]
+    #[error(
+        "pole {pole} is requested {multiplicity} times, but rank(B) = {max} allows at most {max}; \
+         spread the repeated poles slightly or use fewer copies"
+    )]
+    Multiplicity {
+        pole: Complex<f64>,
+        multiplicity: usize,
+        max: usize,
+    },
+    #[error("pole {pole} is not a finite number; request finite poles")]
     NonFinite { pole: Complex<f64> },
+    #[error("matrix {which} contains NaN or infinite entries; fix the model")]
+    NonFiniteSystem { which: &'static str },
+    #[error(
+        "the computed gain would miss the requested poles: verified error {max_error:e} exceeds \
+         1e-6 (relative to max(1, |p|)); the problem is too ill-conditioned for these poles — \
+         move them apart or closer to the open-loop eigenvalues"
+    )]
+    Inaccurate { max_error: f64 },
 }
 
-/// Pole placement like MATLAB's and python-control's `place`.
-pub fn place(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[Complex<f64>]) -> Result<DMatrix<f64>, PlaceError> {
-    let _ = (A, B, poles);
-    todo!("pole placement")
+/// One requested real pole or conjugate pair (stored with positive imaginary part).
+#[derive(Debug, Clone, Copy)]
+enum Slot {
+    Real(f64),
+    Pair(C64),
+}
+
+/// Pole placement like MATLAB's and python-control's `place`: returns the real `m × n` gain `K`
+/// with eig(A − B K) = `poles` (as a multiset).
+///
+/// `poles` must hold exactly n finite values, closed under complex conjugation. For
+/// rank(B) = r > 1 each pole may be repeated at most r times (the closed loop is then
+/// diagonalisable); for single-input systems any multiplicity is allowed (one Jordan block per
+/// pole). Method: KNV method 0 (Kautsky, Nichols & Van Dooren 1985) for r > 1, Ackermann's
+/// formula in orthogonal Hessenberg coordinates for r = 1 — see the module docs. The result is
+/// checked: if the eigenvalues of A − B K are not guaranteed within 1e-6 relative to
+/// max(1, |p|) of the request (for single-input repeated poles, whose Jordan-block eigenvalues
+/// are only computable to ~eps^(1/k): if the characteristic polynomial misses ∏(s − p) by more
+/// than 1e-6, relative to the coefficients of ∏(s + max(1, |p|))), the function returns
+/// [`PlaceError::Inaccurate`] rather than a wrong K.
+///
+/// An observer gain follows by duality: `L = place(Aᵀ, Cᵀ, p)ᵀ` gives eig(A − L C) = p.
+///
+/// Panics if A is not square or B has a different number of rows than A.
+pub fn place(
+    A: &DMatrix<f64>,
+    B: &DMatrix<f64>,
+    poles: &[Complex<f64>],
+) -> Result<DMatrix<f64>, PlaceError> {
+    let n = A.nrows();
+    assert_eq!(
+        A.ncols(),
+        n,
+        "place: A must be square, got {}×{}",
+        A.nrows(),
+        A.ncols()
+    );
+    assert_eq!(
+        B.nrows(),
+        n,
+        "place: B must have {n} rows (as A), got {}",
+        B.nrows()
+    );
+    let m = B.ncols();
+    if poles.len() != n {
+        return Err(PlaceError::WrongCount {
+            expected: n,
+            found: poles.len(),
+        });
+    }
+    if let Some(&pole) = poles
+        .iter()
+        .find(|p| !(p.re.is_finite() && p.im.is_finite()))
+    {
+        return Err(PlaceError::NonFinite { pole });
+    }
+    let slots = classify(poles)?;
+    if A.iter().any(|x| !x.is_finite()) {
+        return Err(PlaceError::NonFiniteSystem { which: "A" });
+    }
+    if B.iter().any(|x| !x.is_finite()) {
+        return Err(PlaceError::NonFiniteSystem { which: "B" });
+    }
+    if n == 0 {
+        return Ok(DMatrix::zeros(m, 0));
+    }
+
+    let tol = staircase_tol(A, B);
+    let st = staircase(A, B, tol);
+    if st.rank < n {
+        return Err(PlaceError::Uncontrollable { rank: st.rank, n });
+    }
+    let r = st.blocks[0]; // numerical rank of B, decided with the same tolerance
+
+    let expanded = expand(&slots);
+    if r > 1 {
+        check_multiplicity(&expanded, r)?;
+    }
+
+    // Reduce B to full column rank: B ≈ U_r Σ_r V_rᵀ, place with B_r = U_r Σ_r, K = V_r K_r.
+    let svd =
+        B.clone()
+            .try_svd(true, true, f64::EPSILON, 10_000)
+            .ok_or(PlaceError::Inaccurate {
+                max_error: f64::INFINITY,
+            })?;
+    let (Some(U), Some(Vt)) = (svd.u.as_ref(), svd.v_t.as_ref()) else {
+        return Err(PlaceError::Inaccurate {
+            max_error: f64::INFINITY,
+        });
+    };
+    let mut Br = U.columns(0, r).into_owned();
+    for j in 0..r {
+        let s = svd.singular_values[j];
+        Br.column_mut(j).scale_mut(s);
+    }
+    let Vr = Vt.rows(0, r).transpose();
+
+    // Closed-loop eigenvectors in real form (columns u, v for a pair u ± i v), when they are
+    // determined: always for r > 1 (KNV0 chooses them), for r = 1 if the poles are distinct.
+    let (Kr, X) = if r == 1 {
+        let Kr = single_input(A, &Br, &slots)?;
+        let distinct =
+            (0..expanded.len()).all(|i| (0..i).all(|j| !same_pole(expanded[i], expanded[j])));
+        let X = if distinct {
+            Some(eigenvectors_single_input(A, &Br, &slots)?)
+        } else {
+            None
+        };
+        (Kr, X)
+    } else {
+        let (Kr, X) = knv0(A, &Br, &slots)?;
+        (Kr, Some(X))
+    };
+    let K = Vr * Kr;
+    match X {
+        Some(X) => verify_eigenvectors(A, B, &K, &slots, &X)?,
+        None => verify_char_poly(A, B, &K, &expanded)?,
+    }
+    Ok(K)
+}
+
+/// Pair up complex poles with their conjugates; real poles are those with zero imaginary part.
+fn classify(poles: &[C64]) -> Result<Vec<Slot>, PlaceError> {
+    let mut used = vec![false; poles.len()];
+    let mut slots = Vec::with_capacity(poles.len());
+    for i in 0..poles.len() {
+        if used[i] {
+            continue;
+        }
+        used[i] = true;
+        let p = poles[i];
+        if p.im == 0.0 {
+            slots.push(Slot::Real(p.re));
+            continue;
+        }
+        let target = p.conj();
+        let scale = p.norm().max(1.0);
+        let partner = (0..poles.len())
+            .filter(|&j| !used[j] && poles[j].im != 0.0 && poles[j].im.signum() != p.im.signum())
+            .map(|j| (j, (poles[j] - target).norm()))
+            .filter(|&(_, d)| d <= SAME_POLE_RTOL * scale)
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        let Some((j, _)) = partner else {
+            return Err(PlaceError::NotConjugateClosed { pole: p });
+        };
+        used[j] = true;
+        let q = poles[j];
+        let re = 0.5 * (p.re + q.re);
+        let im = 0.5 * (p.im.abs() + q.im.abs());
+        slots.push(Slot::Pair(C64::new(re, im)));
+    }
+    Ok(slots)
+}
+
+/// The n poles in column order of the eigenvector matrix (a pair gives λ, λ̄).
+fn expand(slots: &[Slot]) -> Vec<C64> {
+    let mut out = Vec::new();
+    for s in slots {
+        match *s {
+            Slot::Real(l) => out.push(C64::new(l, 0.0)),
+            Slot::Pair(l) => {
+                out.push(l);
+                out.push(l.conj());
+            }
+        }
+    }
+    out
+}
+
+fn same_pole(a: C64, b: C64) -> bool {
+    (a - b).norm() <= SAME_POLE_RTOL * a.norm().max(b.norm()).max(1.0)
+}
+
+fn check_multiplicity(poles: &[C64], max: usize) -> Result<(), PlaceError> {
+    for &p in poles {
+        let multiplicity = poles.iter().filter(|&&q| same_pole(p, q)).count();
+        if multiplicity > max {
+            return Err(PlaceError::Multiplicity {
+                pole: p,
+                multiplicity,
+                max,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Single-input placement for `b` (n × 1): Ackermann's formula k = e_nᵀ C⁻¹ p(A) evaluated in
+/// the orthogonal Hessenberg coordinates of the staircase (Zᵀ A Z = H, Zᵀ b = β e₁), where the
+/// controllability matrix C is upper triangular, so e_nᵀ C⁻¹ = e_nᵀ / (β ∏ h_{i+1,i}).
+fn single_input(
+    A: &DMatrix<f64>,
+    b: &DMatrix<f64>,
+    slots: &[Slot],
+) -> Result<DMatrix<f64>, PlaceError> {
+    let n = A.nrows();
+    let st = staircase(A, b, staircase_tol(A, b));
+    if st.rank < n {
+        return Err(PlaceError::Uncontrollable { rank: st.rank, n });
+    }
+    let H = &st.At;
+    // w = e_nᵀ p(H), built factor by factor; after j factors only the last j + 1 entries are
+    // non-zero. Divide by one sub-diagonal entry per factor to keep the scale moderate.
+    let mut w = DMatrix::<f64>::zeros(1, n);
+    w[(0, n - 1)] = 1.0;
+    let mut denom_left: Vec<f64> = (1..n).map(|i| H[(i, i - 1)]).collect();
+    denom_left.push(st.Bt[(0, 0)]);
+    let mut next_div = denom_left.into_iter();
+    let mut divide = |w: &mut DMatrix<f64>| {
+        if let Some(d) = next_div.next() {
+            *w /= d;
+        }
+    };
+    for s in slots {
+        match *s {
+            Slot::Real(l) => {
+                let wh = &w * H;
+                w = wh - &w * l;
+                divide(&mut w);
+            }
+            Slot::Pair(l) => {
+                let wh = &w * H;
+                let whh = &wh * H;
+                w = whh - wh * (2.0 * l.re) + &w * l.norm_sqr();
+                divide(&mut w);
+                divide(&mut w);
+            }
+        }
+    }
+    if w.iter().any(|x| !x.is_finite()) {
+        return Err(PlaceError::Inaccurate {
+            max_error: f64::INFINITY,
+        });
+    }
+    Ok(w * st.Z.transpose())
+}
+
+/// Deterministic, generic coefficients for initial eigenvector choices (a tiny LCG).
+fn generic_coeffs(seed: usize, len: usize) -> Vec<f64> {
+    let mut state = (seed as u64)
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        .wrapping_add(0x2545_F491_4F6C_DD1D);
+    (0..len)
+        .map(|_| {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        })
+        .collect()
+}
+
+/// Orthonormal basis (n × m) of {x ∈ ℂⁿ : U1ᵀ (A − λ I) x = 0}: the eigenvectors for λ that some
+/// feedback can assign (Kautsky, Nichols & Van Dooren 1985, Theorem 3).
+fn admissible_complex(
+    A: &DMatrix<f64>,
+    U1: &DMatrix<f64>,
+    lambda: C64,
+) -> Result<DMatrix<C64>, PlaceError> {
+    let n = A.nrows();
+    let k = U1.ncols(); // n − m
+    if k == 0 {
+        return Ok(DMatrix::<C64>::identity(n, n));
+    }
+    let shifted = A.map(|x| C64::new(x, 0.0)) - DMatrix::<C64>::identity(n, n) * lambda;
+    let N = U1.transpose().map(|x| C64::new(x, 0.0)) * shifted; // k × n, full row rank
+    let mut padded = DMatrix::<C64>::zeros(n, n);
+    padded.view_mut((0, 0), (k, n)).copy_from(&N);
+    let svd = padded
+        .try_svd(false, true, f64::EPSILON, 10_000)
+        .ok_or(PlaceError::Inaccurate {
+            max_error: f64::INFINITY,
+        })?;
+    let Vt = svd.v_t.ok_or(PlaceError::Inaccurate {
+        max_error: f64::INFINITY,
+    })?;
+    // Rows of Vᴴ for the n − k smallest singular values (sorted descending) span the null space.
+    Ok(Vt.rows(k, n - k).adjoint())
+}
+
+/// Real version of [`admissible_complex`] for a real pole.
+fn admissible_real(
+    A: &DMatrix<f64>,
+    U1: &DMatrix<f64>,
+    lambda: f64,
+) -> Result<DMatrix<f64>, PlaceError> {
+    let n = A.nrows();
+    let k = U1.ncols();
+    if k == 0 {
+        return Ok(DMatrix::<f64>::identity(n, n));
+    }
+    let N = U1.transpose() * (A - DMatrix::<f64>::identity(n, n) * lambda);
+    let mut padded = DMatrix::<f64>::zeros(n, n);
+    padded.view_mut((0, 0), (k, n)).copy_from(&N);
+    let svd = padded
+        .try_svd(false, true, f64::EPSILON, 10_000)
+        .ok_or(PlaceError::Inaccurate {
+            max_error: f64::INFINITY,
+        })?;
+    let Vt = svd.v_t.ok_or(PlaceError::Inaccurate {
+        max_error: f64::INFINITY,
+    })?;
+    Ok(Vt.rows(k, n - k).transpose())
+}
+
+/// Orthonormal basis (n × |skip|) of the orthogonal complement of the columns of `X` other
+/// than those in `skip`.
+fn complement(X: &DMatrix<f64>, skip: &[usize]) -> DMatrix<f64> {
+    let n = X.nrows();
+    let mut M = DMatrix::<f64>::zeros(n, n);
+    for (c, j) in (0..n).filter(|j| !skip.contains(j)).enumerate() {
+        M.set_column(c, &X.column(j));
+    }
+    // M is square, so Q is complete; its last columns are orthogonal to the first n − |skip|.
+    M.qr().q().columns(n - skip.len(), skip.len()).into_owned()
+}
+
+/// Admissible space of one slot.
+enum Space {
+    Real(DMatrix<f64>),
+    Pair(DMatrix<C64>),
+}
+
+/// KNV method 0 for B of full column rank m > 1.
+///
+/// The eigenvector matrix is kept in real form X = [… x … u v …] (a pair's eigenvector is
+/// u + i v). A real pole's vector is replaced by the admissible unit vector closest to the
+/// normal of the other columns (KNV0). A pair's vector is replaced by the admissible unit
+/// vector u + i v that maximises |det X| with the other columns fixed — a rank-2 update in the
+/// manner of Tits & Yang (1996): with W the 2-dimensional complement of the other columns and
+/// z = Wᵀ (u + i v), det Wᵀ[u v] = Im(z̄₁ z₂), a Hermitian quadratic form in the coefficients.
+fn knv0(
+    A: &DMatrix<f64>,
+    B: &DMatrix<f64>,
+    slots: &[Slot],
+) -> Result<(DMatrix<f64>, DMatrix<f64>), PlaceError> {
+    let n = A.nrows();
+    let m = B.ncols();
+    let fail = PlaceError::Inaccurate {
+        max_error: f64::INFINITY,
+    };
+    // Full QR of B: B = [U0 U1] [Zb; 0].
+    let mut padded = DMatrix::<f64>::zeros(n, m + n);
+    padded.view_mut((0, 0), (n, m)).copy_from(B);
+    let qr = padded.qr();
+    let Q = qr.q();
+    let R = qr.r();
+    let U0 = Q.columns(0, m).into_owned();
+    let U1 = Q.columns(m, n - m).into_owned();
+    let Zb = R.view((0, 0), (m, m)).into_owned();
+
+    // Admissible spaces, column positions, and generic initial vectors.
+    let mut spaces = Vec::with_capacity(slots.len());
+    let mut cols = Vec::with_capacity(slots.len());
+    let mut X = DMatrix::<f64>::zeros(n, n);
+    let mut c = 0;
+    for (i, s) in slots.iter().enumerate() {
+        cols.push(c);
+        let re = DMatrix::from_vec(m, 1, generic_coeffs(2 * i, m));
+        match *s {
+            Slot::Real(l) => {
+                let S = admissible_real(A, &U1, l)?;
+                let x = &S * re;
+                X.set_column(c, &(&x / x.norm()).column(0));
+                spaces.push(Space::Real(S));
+                c += 1;
+            }
+            Slot::Pair(l) => {
+                let S = admissible_complex(A, &U1, l)?;
+                let im = DMatrix::from_vec(m, 1, generic_coeffs(2 * i + 1, m));
+                let coef = re.zip_map(&im, C64::new);
+                let x = (&S * coef).column(0).into_owned();
+                let x = &x / C64::new(x.norm(), 0.0);
+                set_pair(&mut X, c, &x);
+                spaces.push(Space::Pair(S));
+                c += 2;
+            }
+        }
+    }
+
+    let mut det_old = X.determinant().abs();
+    for _ in 0..KNV_MAX_SWEEPS {
+        for (i, space) in spaces.iter().enumerate() {
+            let c = cols[i];
+            match space {
+                Space::Real(S) => {
+                    let w = complement(&X, &[c]);
+                    let x = S * (S.transpose() * w);
+                    let nrm = x.norm();
+                    if nrm > 1e-12 {
+                        X.set_column(c, &(x / nrm).column(0));
+                    }
+                }
+                Space::Pair(S) => {
+                    let W = complement(&X, &[c, c + 1]).map(|x| C64::new(x, 0.0));
+                    let G = W.transpose() * S; // 2 × m
+                    let H = G.row(0).adjoint() * G.row(1);
+                    let Hh = (&H - H.adjoint()) * C64::new(0.0, -0.5);
+                    let Some(eig) = Hh.try_symmetric_eigen(f64::EPSILON, 10_000) else {
+                        continue;
+                    };
+                    let (best, val) = eig
+                        .eigenvalues
+                        .iter()
+                        .enumerate()
+                        .map(|(j, v)| (j, v.abs()))
+                        .fold((0, -1.0), |acc, e| if e.1 > acc.1 { e } else { acc });
+                    if val > 1e-14 {
+                        let x = S * eig.eigenvectors.column(best);
+                        let x = &x / C64::new(x.norm(), 0.0);
+                        set_pair(&mut X, c, &x);
+                    }
+                }
+            }
+        }
+        let det = X.determinant().abs();
+        let done = (det - det_old).abs() <= 1e-10 * det.max(f64::MIN_POSITIVE);
+        det_old = det;
+        if done {
+            break;
+        }
+    }
+
+    let L = real_form(slots);
+    let XL = &X * &L;
+    // M = XL X⁻¹  ⇔  Xᵀ Mᵀ = XLᵀ.
+    let Mt = X
+        .transpose()
+        .lu()
+        .solve(&XL.transpose())
+        .ok_or(fail.clone())?;
+    let rhs = U0.transpose() * (A - Mt.transpose());
+    let K = Zb.solve_upper_triangular(&rhs).ok_or(fail)?;
+    Ok((K, X))
+}
+
+/// Λ in real block-diagonal form, in the column order of the slots: λ for a real pole,
+/// [[a, b], [−b, a]] for a pair a ± i b (A x = λ x with x = u + i v ⇔
+/// A [u v] = [u v] [[a, b], [−b, a]]). Λ is normal.
+fn real_form(slots: &[Slot]) -> DMatrix<f64> {
+    let n = slots
+        .iter()
+        .map(|s| if let Slot::Pair(_) = s { 2 } else { 1 })
+        .sum();
+    let mut L = DMatrix::<f64>::zeros(n, n);
+    let mut c = 0;
+    for s in slots {
+        match *s {
+            Slot::Real(l) => {
+                L[(c, c)] = l;
+                c += 1;
+            }
+            Slot::Pair(l) => {
+                L[(c, c)] = l.re;
+                L[(c, c + 1)] = l.im;
+                L[(c + 1, c)] = -l.im;
+                L[(c + 1, c + 1)] = l.re;
+                c += 2;
+            }
+        }
+    }
+    L
+}
+
+/// Closed-loop eigenvectors of a single-input placement with distinct poles, in real form: each
+/// admissible space {x : U1ᵀ (A − λ I) x = 0} is one-dimensional.
+fn eigenvectors_single_input(
+    A: &DMatrix<f64>,
+    b: &DMatrix<f64>,
+    slots: &[Slot],
+) -> Result<DMatrix<f64>, PlaceError> {
+    let n = A.nrows();
+    let mut padded = DMatrix::<f64>::zeros(n, n + 1);
+    padded.view_mut((0, 0), (n, 1)).copy_from(b);
+    let Q = padded.qr().q();
+    let U1 = Q.columns(1, n - 1).into_owned();
+    let mut X = DMatrix::<f64>::zeros(n, n);
+    let mut c = 0;
+    for s in slots {
+        match *s {
+            Slot::Real(l) => {
+                X.set_column(c, &admissible_real(A, &U1, l)?.column(0));
+                c += 1;
+            }
+            Slot::Pair(l) => {
+                let x = admissible_complex(A, &U1, l)?.column(0).into_owned();
+                set_pair(&mut X, c, &x);
+                c += 2;
+            }
+        }
+    }
+    Ok(X)
+}
+
+/// Store the pair's eigenvector u + i v as columns c (u) and c + 1 (v).
+fn set_pair(X: &mut DMatrix<f64>, c: usize, x: &DVector<C64>) {
+    X.set_column(c, &x.map(|z| z.re));
+    X.set_column(c + 1, &x.map(|z| z.im));
+}
+
+/// A-posteriori check with the intended eigenvectors X (real form) and Λ = [`real_form`]:
+/// A − B K = X (Λ + E) X⁻¹ with E = X⁻¹ (M X − X Λ), and Λ is normal, so by Bauer–Fike every
+/// eigenvalue of A − B K lies within ‖E‖₂ ≤ ‖E‖_F of a requested pole (and, by continuity, each
+/// group of poles separated from the rest by more than 2‖E‖ keeps its count). This avoids
+/// trusting an eigenvalue solver on clustered spectra. Error measure: ‖E‖_F / max(1, min |p|).
+fn verify_eigenvectors(
+    A: &DMatrix<f64>,
+    B: &DMatrix<f64>,
+    K: &DMatrix<f64>,
+    slots: &[Slot],
+    X: &DMatrix<f64>,
+) -> Result<(), PlaceError> {
+    let bad = PlaceError::Inaccurate {
+        max_error: f64::INFINITY,
+    };
+    let M = A - B * K;
+    if M.iter().any(|x| !x.is_finite()) {
+        return Err(bad);
+    }
+    let L = real_form(slots);
+    let R = &M * X - X * &L;
+    let E = X.clone().lu().solve(&R).ok_or(bad.clone())?;
+    let scale = slots
+        .iter()
+        .map(|s| match *s {
+            Slot::Real(l) => l.abs(),
+            Slot::Pair(l) => l.norm(),
+        })
+        .fold(f64::INFINITY, f64::min)
+        .max(1.0);
+    let max_error = E.norm() / scale;
+    if max_error <= VERIFY_RTOL {
+        Ok(())
+    } else {
+        Err(PlaceError::Inaccurate {
+            max_error: if max_error.is_finite() {
+                max_error
+            } else {
+                f64::INFINITY
+            },
+        })
+    }
+}
+
+/// Check for single-input placements with repeated poles (a k-fold pole is a k×k Jordan block,
+/// whose eigenvalues are only computable to ~eps^(1/k)): the characteristic polynomial of
+/// A − B K, a well-conditioned function of the clusters, must match ∏(s − p) within
+/// [`VERIFY_RTOL`] relative to the coefficients of ∏(s + max(1, |p|)). The reported error is
+/// that coefficient error.
+fn verify_char_poly(
+    A: &DMatrix<f64>,
+    B: &DMatrix<f64>,
+    K: &DMatrix<f64>,
+    poles: &[C64],
+) -> Result<(), PlaceError> {
+    let M = A - B * K;
+    if M.iter().any(|x| !x.is_finite()) {
+        return Err(PlaceError::Inaccurate {
+            max_error: f64::INFINITY,
+        });
+    }
+    let got = hessenberg_char_poly(&M);
+    let want = poly_from_roots(poles);
+    let scale = poly_from_roots(
+        &poles
+            .iter()
+            .map(|p| C64::new(-p.norm().max(1.0), 0.0))
+            .collect::<Vec<_>>(),
+    );
+    let max_error = (0..got.len())
+        .map(|k| (got[k] - want[k]).abs() / scale[k])
+        .fold(0.0, f64::max);
+    if max_error <= VERIFY_RTOL {
+        Ok(())
+    } else {
+        Err(PlaceError::Inaccurate { max_error })
+    }
+}
+
+/// Coefficients (lowest degree first) of ∏(s − r), real parts (the roots are conjugate-closed).
+fn poly_from_roots(roots: &[C64]) -> Vec<f64> {
+    let mut c = vec![C64::new(1.0, 0.0)];
+    for &r in roots {
+        let mut next = vec![C64::new(0.0, 0.0); c.len() + 1];
+        for (i, &ci) in c.iter().enumerate() {
+            next[i + 1] += ci;
+            next[i] -= ci * r;
+        }
+        c = next;
+    }
+    c.iter().map(|z| z.re).collect()
+}
+
+/// Characteristic polynomial of M (lowest degree first): orthogonal Hessenberg reduction, then
+/// the recurrence over leading principal submatrices of the Hessenberg matrix H:
+/// p_k(s) = (s − h_kk) p_{k−1}(s) − Σ_{i<k} h_ik (h_{i+1,i} ⋯ h_{k,k−1}) p_{i−1}(s).
+fn hessenberg_char_poly(M: &DMatrix<f64>) -> Vec<f64> {
+    let n = M.nrows();
+    let H = M.clone().hessenberg().h();
+    let mut p: Vec<Vec<f64>> = vec![vec![1.0]];
+    for k in 0..n {
+        // (s − h_kk) p_{k−1}
+        let prev = &p[k];
+        let mut next = vec![0.0; k + 2];
+        for (j, &c) in prev.iter().enumerate() {
+            next[j + 1] += c;
+            next[j] -= H[(k, k)] * c;
+        }
+        let mut prod = 1.0;
+        for i in (0..k).rev() {
+            prod *= H[(i + 1, i)];
+            let f = H[(i, k)] * prod;
+            for (j, &c) in p[i].iter().enumerate() {
+                next[j] -= f * c;
+            }
+        }
+        p.push(next);
+    }
+    p.pop().unwrap_or_else(|| vec![1.0])
 }

@@ -1,0 +1,585 @@
+//! Tests of `quell::place` (KNV0 for rank(B) > 1, Hessenberg–Ackermann for rank(B) = 1).
+#![allow(non_snake_case)]
+
+use proptest::prelude::*;
+use quell::design::place::{place, PlaceError};
+use quell::nalgebra::{Complex, DMatrix};
+
+type C64 = Complex<f64>;
+
+fn re(x: f64) -> C64 {
+    C64::new(x, 0.0)
+}
+
+fn reals(xs: &[f64]) -> Vec<C64> {
+    xs.iter().map(|&x| re(x)).collect()
+}
+
+/// Small deterministic generator (xorshift64*), so failures are reproducible from the seed.
+struct Rng(u64);
+
+impl Rng {
+    fn new(seed: u64) -> Self {
+        Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
+    }
+    fn next_u64(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    /// Uniform in [lo, hi).
+    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
+    }
+    fn matrix(&mut self, r: usize, c: usize) -> DMatrix<f64> {
+        DMatrix::from_fn(r, c, |_, _| self.uniform(-1.0, 1.0))
+    }
+}
+
+/// Random pole set of size n: real poles and conjugate pairs with real parts in [-10, -0.5],
+/// imaginary parts in [0.5, 5], pairwise at least `sep` apart.
+fn random_poles(rng: &mut Rng, n: usize, sep: f64) -> Vec<C64> {
+    loop {
+        let mut poles = Vec::with_capacity(n);
+        while poles.len() < n {
+            let a = rng.uniform(-10.0, -0.5);
+            if n - poles.len() >= 2 && rng.uniform(0.0, 1.0) < 0.4 {
+                let b = rng.uniform(0.5, 5.0);
+                poles.push(C64::new(a, b));
+                poles.push(C64::new(a, -b));
+            } else {
+                poles.push(re(a));
+            }
+        }
+        let separated = (0..n).all(|i| (0..i).all(|j| (poles[i] - poles[j]).norm() >= sep));
+        if separated {
+            return poles;
+        }
+    }
+}
+
+/// Eigenvalues by nalgebra's Schur form (bounded iterations: its implicit double-shift QR has
+/// no exceptional shifts and can stall on tight clusters; shifting by the mean eigenvalue first
+/// resolves the all-equal case).
+fn eigenvalues(M: &DMatrix<f64>) -> Vec<C64> {
+    let n = M.nrows();
+    let sigma = M.trace() / n.max(1) as f64;
+    let shifted = M - DMatrix::<f64>::identity(n, n) * sigma;
+    let schur = shifted
+        .try_schur(f64::EPSILON, 100_000)
+        .expect("nalgebra Schur did not converge");
+    schur
+        .complex_eigenvalues()
+        .iter()
+        .map(|z| z + sigma)
+        .collect()
+}
+
+/// Largest error |μ − p| / max(1, |p|) after a greedy nearest matching of the multisets.
+fn max_rel_mismatch(requested: &[C64], got: &[C64]) -> f64 {
+    assert_eq!(requested.len(), got.len());
+    let mut pairs = Vec::new();
+    for (i, p) in requested.iter().enumerate() {
+        for (j, e) in got.iter().enumerate() {
+            pairs.push(((p - e).norm(), i, j));
+        }
+    }
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut used_i = vec![false; requested.len()];
+    let mut used_j = vec![false; got.len()];
+    let mut worst: f64 = 0.0;
+    for (d, i, j) in pairs {
+        if !used_i[i] && !used_j[j] {
+            used_i[i] = true;
+            used_j[j] = true;
+            worst = worst.max(d / requested[i].norm().max(1.0));
+        }
+    }
+    worst
+}
+
+fn closed_loop(A: &DMatrix<f64>, B: &DMatrix<f64>, K: &DMatrix<f64>) -> DMatrix<f64> {
+    A - B * K
+}
+
+/// Characteristic polynomial coefficients [c_0, …, c_{n−1}, 1] of M (Faddeev–LeVerrier; fine
+/// for the small, well-scaled matrices used here).
+fn char_poly(M: &DMatrix<f64>) -> Vec<f64> {
+    let n = M.nrows();
+    let mut c = vec![0.0; n + 1];
+    c[n] = 1.0;
+    let mut Mk = DMatrix::<f64>::zeros(n, n);
+    let I = DMatrix::<f64>::identity(n, n);
+    for k in 1..=n {
+        Mk = M * &Mk + &I * c[n - k + 1];
+        c[n - k] = -(M * &Mk).trace() / k as f64;
+    }
+    c
+}
+
+/// Coefficients of ∏(s − p), lowest degree first.
+fn poly_from_roots(roots: &[C64]) -> Vec<f64> {
+    let mut c = vec![C64::new(1.0, 0.0)];
+    for &r in roots {
+        let mut next = vec![C64::new(0.0, 0.0); c.len() + 1];
+        for (i, &ci) in c.iter().enumerate() {
+            next[i + 1] += ci;
+            next[i] -= ci * r;
+        }
+        c = next;
+    }
+    c.iter().map(|z| z.re).collect()
+}
+
+fn assert_places(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[C64], tol: f64) -> DMatrix<f64> {
+    let K = place(A, B, poles)
+        .unwrap_or_else(|e| panic!("place failed: {e}\nA = {A}B = {B}poles = {poles:?}"));
+    assert_eq!(K.shape(), (B.ncols(), A.nrows()));
+    assert!(K.iter().all(|x| x.is_finite()));
+    let err = max_rel_mismatch(poles, &eigenvalues(&closed_loop(A, B, &K)));
+    assert!(
+        err <= tol,
+        "relative pole error {err:e} > {tol:e}\nA = {A}B = {B}poles = {poles:?}"
+    );
+    K
+}
+
+/// Check of a placement with repeated poles without trusting an eigenvalue solver on clusters:
+/// (1) the characteristic polynomial of A − BK matches ∏(s − p) within `coeff_tol` relative to
+/// the coefficients of ∏(s + max(1, |p|)); (2) if `semisimple`, for each distinct pole λ of
+/// multiplicity k the k smallest singular values of A − BK − λI are ≤ 1e-9·‖A − BK‖_F, i.e.
+/// λ has k independent eigenvectors (KNV0 returns a diagonalisable closed loop).
+fn assert_repeated(
+    A: &DMatrix<f64>,
+    B: &DMatrix<f64>,
+    poles: &[C64],
+    coeff_tol: f64,
+    semisimple: bool,
+) {
+    let K = place(A, B, poles)
+        .unwrap_or_else(|e| panic!("place failed: {e}\nA = {A}B = {B}poles = {poles:?}"));
+    let M = closed_loop(A, B, &K);
+    let n = M.nrows();
+    let got = char_poly(&M);
+    let want = poly_from_roots(poles);
+    let scale = poly_from_roots(
+        &poles
+            .iter()
+            .map(|p| re(-p.norm().max(1.0)))
+            .collect::<Vec<_>>(),
+    );
+    for k in 0..=n {
+        assert!(
+            (got[k] - want[k]).abs() <= coeff_tol * scale[k],
+            "char poly {got:?} vs {want:?}"
+        );
+    }
+    if semisimple {
+        let norm = M.norm();
+        for &p in poles {
+            let k = poles.iter().filter(|&&q| q == p).count();
+            let shifted = M.map(|x| C64::new(x, 0.0)) - DMatrix::<C64>::identity(n, n) * p;
+            let sv = shifted.singular_values(); // descending
+            for j in n - k..n {
+                assert!(sv[j] <= 1e-9 * norm, "pole {p} ×{k}: singular values {sv}");
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------- hand-checked cases
+
+/// Double integrator: with K = [k1, k2], A − BK = [[0, 1], [−k1, −k2]] has characteristic
+/// polynomial s² + k2 s + k1; poles −1, −2 ⇔ s² + 3s + 2 ⇒ K = [2, 3] (by hand).
+#[test]
+fn double_integrator_by_hand() {
+    let A = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]);
+    let B = DMatrix::from_row_slice(2, 1, &[0.0, 1.0]);
+    let K = place(&A, &B, &reals(&[-1.0, -2.0])).unwrap();
+    assert!(
+        (K[(0, 0)] - 2.0).abs() < 1e-12 && (K[(0, 1)] - 3.0).abs() < 1e-12,
+        "K = {K}"
+    );
+}
+
+/// Complex pair on the double integrator: poles −1 ± 2i ⇔ s² + 2s + 5 ⇒ K = [5, 2] (by hand).
+#[test]
+fn double_integrator_complex_pair_by_hand() {
+    let A = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]);
+    let B = DMatrix::from_row_slice(2, 1, &[0.0, 1.0]);
+    let K = place(&A, &B, &[C64::new(-1.0, 2.0), C64::new(-1.0, -2.0)]).unwrap();
+    assert!(
+        (K[(0, 0)] - 5.0).abs() < 1e-12 && (K[(0, 1)] - 2.0).abs() < 1e-12,
+        "K = {K}"
+    );
+}
+
+/// The paper's observer example (Tu & Dudarenko 2026): L = place(Aᵀ, Cᵀ, p)ᵀ must give
+/// eig(A − L C) = {−2, −3, −4}. MIMO placement is not unique, so only eigenvalues are compared;
+/// the paper's printed L = [[-8.0988, 4.4574], [10.6506, -5.0619], [2.7762, -1.1783]] is checked
+/// to place the same poles to the accuracy of its 4 printed decimals.
+#[test]
+fn paper_observer_example() {
+    let A = DMatrix::from_row_slice(3, 3, &[-3.2, -1.7, -3.0, 2.8, 1.3, 4.0, 0.3, 0.3, -0.5]);
+    let C = DMatrix::from_row_slice(2, 3, &[2.0, 2.0, 0.0, 2.0, 1.0, 2.0]);
+    let p = reals(&[-2.0, -3.0, -4.0]);
+    let L = place(&A.transpose(), &C.transpose(), &p)
+        .unwrap()
+        .transpose();
+    assert_eq!(L.shape(), (3, 2));
+    let err = max_rel_mismatch(&p, &eigenvalues(&(&A - &L * &C)));
+    assert!(err < 1e-10, "observer poles off by {err:e}");
+
+    let L_paper =
+        DMatrix::from_row_slice(3, 2, &[-8.0988, 4.4574, 10.6506, -5.0619, 2.7762, -1.1783]);
+    let err = max_rel_mismatch(&p, &eigenvalues(&(&A - &L_paper * &C)));
+    assert!(err < 1e-2, "paper's L places the poles only to {err:e}");
+}
+
+/// Full-rank square B (m = n): any pole set, including n-fold repetition, is reachable.
+#[test]
+fn square_invertible_b() {
+    let mut rng = Rng::new(7);
+    let A = rng.matrix(4, 4);
+    let B = rng.matrix(4, 4);
+    assert_places(&A, &B, &reals(&[-1.0, -2.0, -3.0, -4.0]), 1e-10);
+    assert_repeated(&A, &B, &reals(&[-3.0; 4]), 1e-10, true);
+    let pair = [C64::new(-1.0, 1.0), C64::new(-1.0, -1.0)];
+    assert_repeated(&A, &B, &[pair[0], pair[1], pair[0], pair[1]], 1e-10, true);
+}
+
+/// More inputs than states (m > n) and a rank-deficient B.
+#[test]
+fn wide_and_rank_deficient_b() {
+    let mut rng = Rng::new(11);
+    let A = rng.matrix(2, 2);
+    let B = rng.matrix(2, 3);
+    assert_places(&A, &B, &reals(&[-1.0, -1.0]), 1e-10);
+
+    // B = b [1, 2, −1] has rank 1: handled as single input, any multiplicity.
+    let A = rng.matrix(3, 3);
+    let b = rng.matrix(3, 1);
+    let B = &b * DMatrix::from_row_slice(1, 3, &[1.0, 2.0, -1.0]);
+    let K = place(&A, &B, &reals(&[-1.0, -2.0, -3.0])).unwrap();
+    let err = max_rel_mismatch(
+        &reals(&[-1.0, -2.0, -3.0]),
+        &eigenvalues(&closed_loop(&A, &B, &K)),
+    );
+    assert!(err < 1e-9, "{err:e}");
+}
+
+#[test]
+fn zero_states() {
+    let A = DMatrix::<f64>::zeros(0, 0);
+    let B = DMatrix::<f64>::zeros(0, 2);
+    let K = place(&A, &B, &[]).unwrap();
+    assert_eq!(K.shape(), (2, 0));
+}
+
+// ---------------------------------------------------------------- repeated poles
+
+/// MIMO with multiplicities up to rank(B): n = 6, m = 3, poles {−1 ×3, −2 ×2, −5} and
+/// n = 4, m = 2 with a double complex pair. KNV0 gives a diagonalisable closed loop: checked by
+/// the characteristic polynomial (1e-9; 1e-6 for the doubled pair, see below) and the nullity of
+/// A − BK − λI (see `assert_repeated`).
+#[test]
+fn repeated_poles_mimo() {
+    for seed in 0..20 {
+        let mut rng = Rng::new(100 + seed);
+        let A = rng.matrix(6, 6);
+        let B = rng.matrix(6, 3);
+        assert_repeated(
+            &A,
+            &B,
+            &reals(&[-1.0, -1.0, -1.0, -2.0, -2.0, -5.0]),
+            1e-9,
+            true,
+        );
+
+        let A = rng.matrix(4, 4);
+        let B = rng.matrix(4, 2);
+        let (p, q) = (C64::new(-1.0, 2.0), C64::new(-1.0, -2.0));
+        // With m = 2, a doubled pair fixes the eigenvectors completely (they must span the whole
+        // admissible spaces of λ and λ̄), so KNV0 has no freedom to improve conditioning; some
+        // seeds give κ(X) ~ 1e4. The bound is then the function's own verification threshold.
+        assert_repeated(&A, &B, &[p, q, q, p], 1e-6, true);
+    }
+}
+
+/// Single input, all n = 4 poles at −2: the closed loop is one 4×4 Jordan block, whose
+/// eigenvalues are only accurate to ~eps^(1/4) ≈ 1e-4, so the characteristic polynomial is
+/// compared with (s + 2)⁴ = s⁴ + 8s³ + 24s² + 32s + 16 instead (coefficient error ≤ 1e-9
+/// relative to (s + 2)⁴'s own coefficients; observed ~2e-10 on random pairs, as K ~ 1e2 there).
+#[test]
+fn single_input_full_multiplicity_char_poly() {
+    let expected = poly_from_roots(&reals(&[-2.0; 4]));
+    assert_eq!(expected, vec![16.0, 32.0, 24.0, 8.0, 1.0]);
+    // The double-integrator chain and random single-input pairs.
+    let mut systems = vec![(
+        DMatrix::from_row_slice(
+            4,
+            4,
+            &[
+                0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0.,
+            ],
+        ),
+        DMatrix::from_row_slice(4, 1, &[0., 0., 0., 1.]),
+    )];
+    for seed in 0..10 {
+        let mut rng = Rng::new(200 + seed);
+        systems.push((rng.matrix(4, 4), rng.matrix(4, 1)));
+    }
+    for (A, B) in systems {
+        assert_repeated(&A, &B, &reals(&[-2.0; 4]), 1e-9, false);
+    }
+}
+
+/// Single input with mixed multiplicities (−1 ×3, −3 ×2) and a repeated pair, n = 5 / 4.
+/// Checked through the characteristic polynomial (tolerance 1e-9, see `assert_repeated`).
+#[test]
+fn single_input_mixed_multiplicity() {
+    let pair = [C64::new(-1.0, 1.0), C64::new(-1.0, -1.0)];
+    let cases: Vec<Vec<C64>> = vec![
+        reals(&[-1.0, -1.0, -1.0, -3.0, -3.0]),
+        vec![pair[0], pair[1], pair[1], pair[0]],
+    ];
+    for (i, poles) in cases.iter().enumerate() {
+        let n = poles.len();
+        for seed in 0..10 {
+            let mut rng = Rng::new(300 + 10 * i as u64 + seed);
+            let (A, B) = (rng.matrix(n, n), rng.matrix(n, 1));
+            assert_repeated(&A, &B, poles, 1e-9, false);
+        }
+    }
+}
+
+// ---------------------------------------------------------------- errors
+
+#[test]
+fn error_uncontrollable_reports_rank() {
+    let A = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 2.0]);
+    let B = DMatrix::from_row_slice(2, 1, &[1.0, 0.0]);
+    assert_eq!(
+        place(&A, &B, &reals(&[-1.0, -2.0])),
+        Err(PlaceError::Uncontrollable { rank: 1, n: 2 })
+    );
+    // MIMO: a mode hidden from both inputs.
+    let A = DMatrix::from_diagonal(&quell::nalgebra::DVector::from_vec(vec![1.0, 2.0, 3.0]));
+    let B = DMatrix::from_row_slice(3, 2, &[1.0, 0.0, 0.0, 1.0, 0.0, 0.0]);
+    assert_eq!(
+        place(&A, &B, &reals(&[-1.0, -2.0, -3.0])),
+        Err(PlaceError::Uncontrollable { rank: 2, n: 3 })
+    );
+}
+
+#[test]
+fn error_not_conjugate_closed() {
+    let A = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]);
+    let B = DMatrix::from_row_slice(2, 1, &[0.0, 1.0]);
+    let err = place(&A, &B, &[C64::new(-1.0, 1.0), C64::new(-1.0, 1.0)]).unwrap_err();
+    assert!(
+        matches!(err, PlaceError::NotConjugateClosed { pole } if pole == C64::new(-1.0, 1.0)),
+        "{err}"
+    );
+    let err = place(&A, &B, &[C64::new(-1.0, 1.0), re(-2.0)]).unwrap_err();
+    assert!(
+        matches!(err, PlaceError::NotConjugateClosed { .. }),
+        "{err}"
+    );
+}
+
+#[test]
+fn error_wrong_count() {
+    let A = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]);
+    let B = DMatrix::from_row_slice(2, 1, &[0.0, 1.0]);
+    assert_eq!(
+        place(&A, &B, &reals(&[-1.0])),
+        Err(PlaceError::WrongCount {
+            expected: 2,
+            found: 1
+        })
+    );
+    assert_eq!(
+        place(&A, &B, &reals(&[-1.0, -2.0, -3.0])),
+        Err(PlaceError::WrongCount {
+            expected: 2,
+            found: 3
+        })
+    );
+}
+
+#[test]
+fn error_multiplicity_above_rank_b() {
+    let mut rng = Rng::new(5);
+    let A = rng.matrix(3, 3);
+    let B = rng.matrix(3, 2);
+    let err = place(&A, &B, &reals(&[-1.0, -1.0, -1.0])).unwrap_err();
+    assert_eq!(
+        err,
+        PlaceError::Multiplicity {
+            pole: re(-1.0),
+            multiplicity: 3,
+            max: 2
+        }
+    );
+    // rank(B) = 2 although B has 3 columns.
+    let A = rng.matrix(3, 3);
+    let B = rng.matrix(3, 2) * rng.matrix(2, 3);
+    let err = place(&A, &B, &reals(&[-1.0, -1.0, -1.0])).unwrap_err();
+    assert_eq!(
+        err,
+        PlaceError::Multiplicity {
+            pole: re(-1.0),
+            multiplicity: 3,
+            max: 2
+        }
+    );
+}
+
+#[test]
+fn error_non_finite() {
+    let A = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]);
+    let B = DMatrix::from_row_slice(2, 1, &[0.0, 1.0]);
+    for bad in [
+        re(f64::NAN),
+        re(f64::INFINITY),
+        C64::new(-1.0, f64::NEG_INFINITY),
+    ] {
+        let err = place(&A, &B, &[bad, re(-1.0)]).unwrap_err();
+        assert!(matches!(err, PlaceError::NonFinite { .. }), "{err}");
+    }
+    let mut A_nan = A.clone();
+    A_nan[(0, 0)] = f64::NAN;
+    assert_eq!(
+        place(&A_nan, &B, &reals(&[-1.0, -2.0])),
+        Err(PlaceError::NonFiniteSystem { which: "A" })
+    );
+    let mut B_inf = B.clone();
+    B_inf[(0, 0)] = f64::INFINITY;
+    assert_eq!(
+        place(&A, &B_inf, &reals(&[-1.0, -2.0])),
+        Err(PlaceError::NonFiniteSystem { which: "B" })
+    );
+}
+
+/// Error messages say what to do.
+#[test]
+fn error_messages_are_actionable() {
+    let msg = PlaceError::Uncontrollable { rank: 1, n: 2 }.to_string();
+    assert!(
+        msg.contains("rank") && msg.contains('1') && msg.contains('2'),
+        "{msg}"
+    );
+    let msg = PlaceError::Inaccurate { max_error: 1e-3 }.to_string();
+    assert!(msg.contains("ill-conditioned"), "{msg}");
+}
+
+// ---------------------------------------------------------------- property tests
+
+/// κ₂ of the closed-loop eigenvector matrix, with the eigenvector of each (distinct) requested
+/// pole λ taken as the smallest right singular vector of M − λI.
+fn eigenvector_condition(M: &DMatrix<f64>, poles: &[C64]) -> f64 {
+    let n = M.nrows();
+    let Mc = M.map(|x| C64::new(x, 0.0));
+    let mut X = DMatrix::<C64>::zeros(n, n);
+    for (j, &p) in poles.iter().enumerate() {
+        let svd = (&Mc - DMatrix::<C64>::identity(n, n) * p).svd(false, true);
+        let vt = svd.v_t.expect("v_t requested");
+        X.set_column(j, &vt.row(n - 1).adjoint());
+    }
+    let sv = X.singular_values();
+    sv[0] / sv[n - 1]
+}
+
+/// Seeded sweep over 1000 random controllable systems (entries uniform in [−1, 1]), n ≤ 10,
+/// m ≤ 4, with random real/complex pole sets in [−10, −0.5] ± [0.5, 5]i, pairwise ≥ 0.3 apart.
+///
+/// Tolerance, relative to max(1, |p|): 1e-8 on well-conditioned problems, defined as
+/// κ(X)·(‖A‖_F + ‖B‖_F‖K‖_F) ≤ 1e5 (X the closed-loop eigenvectors; the first-order rounding
+/// bound eps·κ(X)·‖[A, BK]‖ is then ≤ 2e-11). Otherwise the function's own guarantee applies:
+/// error ≤ 1e-6 or `Inaccurate`. Single-input gains are unique and placing up to 10 poles far
+/// left of the open-loop spectrum gives κ(X) up to 1e8, so many single-input cases are in the
+/// second class. For m ≥ 2 (observed: 666 of 667 placed, 448 well conditioned) at least 98% must
+/// be placed and 60% be well conditioned, so the 1e-8 branch is not vacuous.
+#[test]
+fn random_systems_place_requested_poles() {
+    let (mut total, mut ok, mut well) = ([0usize; 2], [0usize; 2], [0usize; 2]);
+    for seed in 0..1000u64 {
+        let mut rng = Rng::new(seed);
+        let n = 1 + (rng.next_u64() % 10) as usize;
+        let m = (1 + (rng.next_u64() % 4) as usize).min(n);
+        let A = rng.matrix(n, n);
+        let B = rng.matrix(n, m);
+        let poles = random_poles(&mut rng, n, 0.3);
+        let class = usize::from(m > 1);
+        total[class] += 1;
+        match place(&A, &B, &poles) {
+            Ok(K) => {
+                ok[class] += 1;
+                let M = closed_loop(&A, &B, &K);
+                let err = max_rel_mismatch(&poles, &eigenvalues(&M));
+                let size = eigenvector_condition(&M, &poles) * (A.norm() + B.norm() * K.norm());
+                let tol = if size <= 1e5 { 1e-8 } else { 1e-6 };
+                well[class] += usize::from(size <= 1e5);
+                assert!(
+                    err <= tol,
+                    "seed {seed}: error {err:e} > {tol:e} (κ·size {size:e}); n = {n}, m = {m}"
+                );
+            }
+            Err(PlaceError::Inaccurate { .. }) => {}
+            Err(e) => panic!("seed {seed}: place failed: {e}; n = {n}, m = {m}"),
+        }
+    }
+    eprintln!(
+        "single input: {} cases, {} placed, {} well conditioned",
+        total[0], ok[0], well[0]
+    );
+    eprintln!(
+        "multi input:  {} cases, {} placed, {} well conditioned",
+        total[1], ok[1], well[1]
+    );
+    assert!(
+        ok[1] * 100 >= total[1] * 98,
+        "KNV0 refused too many multi-input cases"
+    );
+    assert!(
+        well[1] * 100 >= total[1] * 60,
+        "too few well-conditioned multi-input cases"
+    );
+    assert!(
+        ok[0] * 100 >= total[0] * 60,
+        "too many single-input refusals"
+    );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 256,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0x5eed),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    /// Never a wrong K: on nearly uncontrollable systems (a coupling of size δ down to 1e-12)
+    /// and random pole sets, the result is either accurate to the verification threshold
+    /// (1e-6 relative, plus 10% for the test's own eigenvalue computation) or an error.
+    #[test]
+    fn nearly_uncontrollable_never_wrong(seed in any::<u64>(), n in 2usize..=6, m in 1usize..=3, exp in 0i32..=12) {
+        let m = m.min(n - 1);
+        let mut rng = Rng::new(seed);
+        let mut A = rng.matrix(n, n);
+        let mut B = rng.matrix(n, m);
+        // Last state barely reachable: weak coupling into it, no direct input.
+        let delta = 10f64.powi(-exp);
+        for j in 0..n - 1 {
+            A[(n - 1, j)] *= delta;
+        }
+        B.row_mut(n - 1).fill(0.0);
+        let poles = random_poles(&mut rng, n, 0.3);
+        if let Ok(K) = place(&A, &B, &poles) {
+            let err = max_rel_mismatch(&poles, &eigenvalues(&closed_loop(&A, &B, &K)));
+            prop_assert!(err <= 1.1e-6, "accepted K with error {:e}", err);
+        }
+    }
+}
