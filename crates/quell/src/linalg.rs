@@ -48,14 +48,28 @@ pub fn blkdiag(blocks: &[DMatrix<f64>]) -> DMatrix<f64> {
     M
 }
 
-/// Eigenvalues of a real square matrix, sorted by real part then imaginary part.
-pub fn eigenvalues(M: &DMatrix<f64>) -> Vec<Complex<f64>> {
-    if M.nrows() == 0 {
-        return Vec::new();
+/// Eigenvalues of a real square matrix, sorted by real part then imaginary part; `None` when the
+/// Schur iteration does not converge. nalgebra's unbounded `complex_eigenvalues` can loop forever
+/// on tight clusters (repeated poles), so this bounds the iteration and retries once on M − (tr M/n)·I,
+/// which moves the cluster away from the shifts that stall.
+pub fn eigenvalues(M: &DMatrix<f64>) -> Option<Vec<Complex<f64>>> {
+    let n = M.nrows();
+    if n == 0 {
+        return Some(Vec::new());
     }
-    let mut ev: Vec<Complex<f64>> = M.complex_eigenvalues().iter().copied().collect();
-    ev.sort_by(|a, b| a.re.total_cmp(&b.re).then(a.im.total_cmp(&b.im)));
-    ev
+    if !M.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let mean = M.trace() / n as f64;
+    for shift in [0.0, mean] {
+        let S = M - DMatrix::identity(n, n) * shift;
+        if let Some(schur) = S.try_schur(f64::EPSILON, 1000 * n) {
+            let mut ev: Vec<Complex<f64>> = schur.complex_eigenvalues().iter().map(|z| z + shift).collect();
+            ev.sort_by(|a, b| a.re.total_cmp(&b.re).then(a.im.total_cmp(&b.im)));
+            return Some(ev);
+        }
+    }
+    None
 }
 
 /// Condition number σ_max/σ_min in the 2-norm (∞ for a singular or empty matrix).

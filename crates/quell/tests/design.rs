@@ -37,7 +37,7 @@ fn paper_example_printed_gains_are_not_propositions_result() {
     // ≈ 8.41, 0.08, −2.89 (unstable). This is why quell computes K from Proposition 1.
     let p = paper_plant();
     let K = mat(2, 3, &[12.1, 7.1, 0.0, 3.0, 1.0, 2.0]);
-    let ev = quell::linalg::eigenvalues(&(&p.A - &p.B * K));
+    let ev = quell::linalg::eigenvalues(&(&p.A - &p.B * K)).unwrap();
     let max = ev.iter().map(|e| e.re).fold(f64::MIN, f64::max);
     assert!((max - 8.41).abs() < 0.01, "{ev:?}");
 }
@@ -307,7 +307,7 @@ fn error_observer_choices() {
     assert_eq!(expect_err(&paper_plant(), &spec), DesignError::ObserverGainShape { n: 3, m: 2, rows: 2, cols: 3 });
     // L = 0 leaves A − LC = A, which is unstable for the paper's plant (eigenvalue ≈ 1.2 > 0? check).
     spec.observer = ObserverChoice::Gain(DMatrix::zeros(3, 2));
-    let open_loop = quell::linalg::eigenvalues(&paper_plant().A);
+    let open_loop = quell::linalg::eigenvalues(&paper_plant().A).unwrap();
     assert!(open_loop.iter().any(|e| e.re >= 0.0), "the paper's plant is open-loop unstable: {open_loop:?}");
     assert!(matches!(expect_err(&paper_plant(), &spec), DesignError::ObserverUnstable { .. }));
     spec.observer = ObserverChoice::Poles(vec![re(-2.0), re(3.0), re(-4.0)]);
@@ -358,4 +358,20 @@ fn complex_channel_poles_give_real_gains() {
     assert_eq!(d.channels[0].den, vec![5.0, 4.0]);
     assert!((d.channels[0].eval(Complex::new(0.0, 0.0)) - re(1.0)).norm() < 1e-15);
     assert!(d.decoupled_eigenvalues.iter().any(|e| (e - Complex::new(-2.0, 1.0)).norm() < 1e-9));
+}
+
+#[test]
+fn repeated_poles_everywhere_do_not_hang() {
+    // A − BK with the triple eigenvalue −2 and A − LC with a double one: nalgebra's unbounded Schur
+    // iteration can stall on such clusters; the design must finish (and succeed) anyway.
+    let mut spec = paper_spec();
+    spec.channel_poles = vec![vec![re(-2.0), re(-2.0)], vec![re(-2.0)]];
+    spec.observer = ObserverChoice::Poles(vec![re(-3.0), re(-3.0), re(-4.0)]);
+    let d = Design::new(&paper_plant(), &spec).unwrap();
+    // Eigenvalues of a defective triple root are only accurate to ~eps^(1/3) ≈ 6e-6.
+    assert!(d.decoupled_eigenvalues.iter().all(|e| (e - re(-2.0)).norm() < 1e-4), "{:?}", d.decoupled_eigenvalues);
+    assert!(d.observer_eigenvalues.iter().filter(|e| (*e - re(-3.0)).norm() < 1e-4).count() == 2);
+    // Observer poles with multiplicity 3 > rank C = 2 cannot be placed: an error, not a wrong L.
+    spec.observer = ObserverChoice::Poles(vec![re(-3.0); 3]);
+    assert!(matches!(Design::new(&paper_plant(), &spec), Err(DesignError::ObserverPoles(_))));
 }

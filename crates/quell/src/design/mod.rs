@@ -135,6 +135,8 @@ pub enum DesignError {
     BadMu { index: usize, value: f64 },
     #[error("design.beta: expected a finite β > 0 (H(s) = 1/(βs + 1)), got {value}")]
     BadBeta { value: f64 },
+    #[error("plant: the eigenvalues of {of} could not be computed (the Schur iteration did not converge); perturb the repeated poles slightly")]
+    Eigenvalues { of: &'static str },
     #[error("plant.D: rank D = {rank} < k = {k}, so N D = L_ω (eq. (20)) has no solution; disturbances must enter through independent directions")]
     DisturbanceRank { rank: usize, k: usize },
 }
@@ -240,7 +242,7 @@ impl Design {
             }
         };
         let A_o = A - &L * C;
-        let observer_eigenvalues = eigenvalues(&A_o);
+        let observer_eigenvalues = eigenvalues(&A_o).ok_or(DesignError::Eigenvalues { of: "A − LC" })?;
         if !hurwitz(&observer_eigenvalues, margin(&A_o)) {
             return Err(DesignError::ObserverUnstable { eigenvalues: observer_eigenvalues });
         }
@@ -249,7 +251,7 @@ impl Design {
         let fw = falb_wolovich(A, B, C, &spec.channel_poles)?;
         let A_f = A - B * &fw.K;
         let B_f = B * &fw.F;
-        let decoupled_eigenvalues = eigenvalues(&A_f);
+        let decoupled_eigenvalues = eigenvalues(&A_f).ok_or(DesignError::Eigenvalues { of: "A − BK" })?;
         let tol = margin(&A_f);
         let bad: Vec<_> = decoupled_eigenvalues.iter().copied().filter(|e| e.re >= -tol).collect();
         if !bad.is_empty() {
