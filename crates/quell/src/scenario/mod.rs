@@ -138,8 +138,12 @@ impl FromStr for Scenario {
 impl Scenario {
     /// Reads and validates a scenario file; I/O errors carry the path as key.
     pub fn from_path(path: &Path) -> Result<Scenario, ScenarioError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| err(path.display().to_string(), format!("cannot read the file: {e}")))?;
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            err(
+                path.display().to_string(),
+                format!("cannot read the file: {e}"),
+            )
+        })?;
         Scenario::from_toml(&text)
     }
 
@@ -155,7 +159,10 @@ impl Scenario {
                 .unwrap_or_default();
             err(
                 "syntax",
-                format!("{at}{} (the file is not valid TOML)", e.message().trim_end()),
+                format!(
+                    "{at}{} (the file is not valid TOML)",
+                    e.message().trim_end()
+                ),
             )
         })?;
         let root = Table::new("", &doc, TOP_KEYS)?;
@@ -177,9 +184,7 @@ impl Scenario {
             "the [design] table (observer, channel poles, filter poles, mu, beta)",
             design_spec,
         )?;
-        let simulation = root
-            .get("simulation", simulation)?
-            .unwrap_or_default();
+        let simulation = root.get("simulation", simulation)?.unwrap_or_default();
         let noise = root.get("noise", noise)?;
 
         let (m, k) = (plant.m(), plant.k());

@@ -234,7 +234,8 @@ impl<'a> Value<'a, '_> {
 
     /// One pole: a number (real) or `[re, im]` with im > 0 (the pair re ± i·im), appended to `out`.
     fn pole(&self, out: &mut Vec<Complex<f64>>) -> Result<(), ScenarioError> {
-        const FORM: &str = "a pole: a number (real pole) or [re, im] with im > 0 (the pair re ± i·im)";
+        const FORM: &str =
+            "a pole: a number (real pole) or [re, im] with im > 0 (the pair re ± i·im)";
         match self.value {
             toml::Value::Integer(_) | toml::Value::Float(_) => {
                 out.push(Complex::new(self.number()?, 0.0));
