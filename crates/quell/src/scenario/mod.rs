@@ -1,0 +1,556 @@
+//! Scenario files (TOML): parsing and validation at the boundary into typed values.
+//!
+//! A scenario holds the plant (1), the designer's choices ([`DesignSpec`]), the reference g(t)
+//! (Assumption 2), the disturbance ω(t) (Assumption 3) and the simulation settings. The format is
+//! documented by `examples/paper.toml` (the paper's Section VIII example, [`PAPER_EXAMPLE`]); every
+//! error names the offending key, see `docs/errors.md`.
+//!
+//! [`Scenario::from_toml`] checks the file's structure, types, shapes (through [`Plant::new`]),
+//! signals, simulation settings and the internal-model order of each signal component. Counts of
+//! poles and gains, Hurwitz poles, μ and β are checked by [`Design::new`]; [`load_and_design`] runs
+//! both.
+
+pub mod exosystem;
+mod read;
+
+use std::path::Path;
+use std::str::FromStr;
+
+use nalgebra::{DMatrix, DVector};
+use thiserror::Error;
+
+use crate::design::{Design, DesignError, DesignSpec, ObserverChoice};
+use crate::plant::{Plant, PlantError};
+use crate::signal::{Component, Harmonic, Signal};
+use exosystem::Exosystem;
+use read::{err, line_col, Table, Value};
+
+/// The paper's example (Section VIII) as a scenario file: `examples/paper.toml`.
+pub const PAPER_EXAMPLE: &str = include_str!("../../../../examples/paper.toml");
+
+/// A scenario error: the offending key and what was expected and found.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[error("{key}: {message}")]
+pub struct ScenarioError {
+    /// Full key path (`plant.A[1]`, `design.channel_poles[0][1]`), `syntax` for TOML syntax
+    /// errors, or the file's path for I/O errors.
+    pub key: String,
+    pub message: String,
+}
+
+/// A validated scenario.
+#[derive(Debug, Clone)]
+pub struct Scenario {
+    pub name: Option<String>,
+    pub plant: Plant,
+    pub design: DesignSpec,
+    /// g(t), one component per output.
+    pub reference: Signal,
+    /// ω(t), one component per column of D (empty when k = 0).
+    pub disturbance: Signal,
+    pub simulation: Simulation,
+    /// Measurement noise on y; only with a sampled-data run.
+    pub noise: Option<Noise>,
+}
+
+/// Simulation settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Simulation {
+    /// Final time, > 0.
+    pub t_end: f64,
+    /// Output rows at t = k·output_step, 0 < output_step ≤ t_end.
+    pub output_step: f64,
+    /// Solver tolerances, > 0.
+    pub rtol: f64,
+    pub atol: f64,
+    /// Sampling period of the discrete controller; `None` for the continuous-time controller.
+    pub sample_time: Option<f64>,
+}
+
+impl Default for Simulation {
+    fn default() -> Self {
+        Simulation {
+            t_end: 100.0,
+            output_step: 0.1,
+            rtol: 1e-9,
+            atol: 1e-9,
+            sample_time: None,
+        }
+    }
+}
+
+/// White measurement noise on y (sampled-data runs only).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Noise {
+    /// Absolute standard deviation per output, ≥ 0.
+    pub std: Vec<f64>,
+    pub seed: u64,
+}
+
+/// Why a scenario file gives no design: the file itself, or the design it asks for.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum LoadError {
+    #[error(transparent)]
+    Scenario(#[from] ScenarioError),
+    #[error(transparent)]
+    Design(#[from] DesignError),
+}
+
+/// Parses and validates a scenario, then designs every gain: the whole path from file to [`Design`].
+pub fn load_and_design(text: &str) -> Result<(Scenario, Design), LoadError> {
+    let scenario = Scenario::from_toml(text)?;
+    let design = scenario.design()?;
+    Ok((scenario, design))
+}
+
+const TOP_KEYS: &[&str] = &[
+    "name",
+    "plant",
+    "design",
+    "reference",
+    "disturbance",
+    "simulation",
+    "noise",
+];
+const PLANT_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0"];
+const DESIGN_KEYS: &[&str] = &[
+    "observer_gain",
+    "observer_poles",
+    "channel_poles",
+    "reference_filter_poles",
+    "disturbance_filter_poles",
+    "mu",
+    "beta",
+];
+const SIGNAL_KEYS: &[&str] = &["components"];
+const COMPONENT_KEYS: &[&str] = &["bias", "harmonics"];
+const HARMONIC_KEYS: &[&str] = &["amplitude", "frequency", "phase"];
+const SIMULATION_KEYS: &[&str] = &["t_end", "output_step", "rtol", "atol", "sample_time"];
+const NOISE_KEYS: &[&str] = &["std", "seed"];
+
+impl FromStr for Scenario {
+    type Err = ScenarioError;
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        Scenario::from_toml(text)
+    }
+}
+
+impl Scenario {
+    /// Reads and validates a scenario file; I/O errors carry the path as key.
+    pub fn from_path(path: &Path) -> Result<Scenario, ScenarioError> {
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            err(
+                path.display().to_string(),
+                format!("cannot read the file: {e}"),
+            )
+        })?;
+        Scenario::from_toml(&text)
+    }
+
+    /// Parses and validates a scenario.
+    pub fn from_toml(text: &str) -> Result<Scenario, ScenarioError> {
+        let doc: toml::Table = text.parse().map_err(|e: toml::de::Error| {
+            let at = e
+                .span()
+                .map(|s| {
+                    let (line, col) = line_col(text, s.start);
+                    format!("line {line}, column {col}: ")
+                })
+                .unwrap_or_default();
+            err(
+                "syntax",
+                format!(
+                    "{at}{} (the file is not valid TOML)",
+                    e.message().trim_end()
+                ),
+            )
+        })?;
+        let root = Table::new("", &doc, TOP_KEYS)?;
+
+        let name = root.get("name", |v| v.string())?;
+        let reference = root.require(
+            "reference",
+            "the [reference] table: g(t), one component per output",
+            signal,
+        )?;
+        let disturbance = root.get("disturbance", signal)?;
+        let plant = root.require(
+            "plant",
+            "the [plant] table (A, B, C, delays; D and Q with a [disturbance])",
+            |v| plant(v, disturbance.as_ref()),
+        )?;
+        let design = root.require(
+            "design",
+            "the [design] table (observer, channel poles, filter poles, mu, beta)",
+            design_spec,
+        )?;
+        let simulation = root.get("simulation", simulation)?.unwrap_or_default();
+        let noise = root.get("noise", noise)?;
+
+        let (m, k) = (plant.m(), plant.k());
+        if reference.len() != m {
+            return Err(err(
+                "reference.components",
+                format!(
+                    "expected {m} components (one per output, m = {m} columns of plant.B), found {}",
+                    reference.len()
+                ),
+            ));
+        }
+        let disturbance = match disturbance {
+            None if k > 0 => {
+                return Err(err(
+                    "disturbance",
+                    format!("missing; plant.D has {k} columns (k = {k} disturbance components), so a [disturbance] table with {k} components is required; or remove plant.D and plant.Q"),
+                ))
+            }
+            None => Signal::default(),
+            Some(d) if d.len() != k => {
+                return Err(err(
+                    "disturbance.components",
+                    format!(
+                        "expected {k} components (one per column of plant.D, k = {k}), found {}",
+                        d.len()
+                    ),
+                ))
+            }
+            Some(d) => d,
+        };
+        internal_model_order(
+            "reference",
+            &reference,
+            "design.reference_filter_poles",
+            &design.reference_filter_poles,
+        )?;
+        internal_model_order(
+            "disturbance",
+            &disturbance,
+            "design.disturbance_filter_poles",
+            &design.disturbance_filter_poles,
+        )?;
+        if let Some(noise) = &noise {
+            if simulation.sample_time.is_none() {
+                return Err(err(
+                    "noise",
+                    "measurement noise needs a sampled-data run; set simulation.sample_time (e.g. 0.001) or remove [noise]",
+                ));
+            }
+            if noise.std.len() != m {
+                return Err(err(
+                    "noise.std",
+                    format!(
+                        "expected {m} entries (one per output), found {}",
+                        noise.std.len()
+                    ),
+                ));
+            }
+            if let Some((i, s)) = noise.std.iter().enumerate().find(|(_, s)| **s < 0.0) {
+                return Err(err(
+                    format!("noise.std[{i}]"),
+                    format!("expected a standard deviation ≥ 0, found {s}"),
+                ));
+            }
+        }
+
+        Ok(Scenario {
+            name,
+            plant,
+            design,
+            reference,
+            disturbance,
+            simulation,
+            noise,
+        })
+    }
+
+    /// [`Design::new`] for this scenario's plant and choices.
+    pub fn design(&self) -> Result<Design, DesignError> {
+        Design::new(&self.plant, &self.design)
+    }
+}
+
+/// `[plant]`: matrices and delays, shapes checked by [`Plant::new`] with errors mapped to keys.
+fn plant(v: Value, disturbance: Option<&Signal>) -> Result<Plant, ScenarioError> {
+    let t = v.table(PLANT_KEYS)?;
+    let A = t.require("A", "the n×n state matrix", |v| v.matrix())?;
+    let B = t.require("B", "the n×m input matrix", |v| v.matrix())?;
+    let C = t.require("C", "the m×n output matrix", |v| v.matrix())?;
+    let D = t.get("D", |v| v.matrix())?;
+    let Q = t.get("Q", |v| v.matrix())?;
+    let delays = t.require("delays", "one input delay τ_i ≥ 0 per input", |v| {
+        v.numbers()
+    })?;
+    let x0 = t.get("x0", |v| v.numbers())?.map(DVector::from_vec);
+    let (n, m) = (A.nrows(), B.ncols());
+    let k_signal = disturbance.map_or(0, Signal::len);
+    // `D = []` (no rows) means no disturbance columns, like an absent D.
+    let D = match D {
+        Some(D) if D.nrows() > 0 => D,
+        None if k_signal > 0 => {
+            return Err(err(
+                t.key("D"),
+                format!("missing; [disturbance] has {k_signal} components, so plant.D (n×k, disturbance to state) is required"),
+            ))
+        }
+        _ => DMatrix::zeros(n, 0),
+    };
+    let k = D.ncols();
+    let Q = match Q {
+        Some(Q) if Q.nrows() > 0 => Q,
+        None if k > 0 => {
+            return Err(err(
+                t.key("Q"),
+                format!("missing; plant.D has {k} columns, so plant.Q ({m}×{k}, m×k, disturbance to output) is required; write zeros if ω does not reach y directly"),
+            ))
+        }
+        _ => DMatrix::zeros(m, 0),
+    };
+    Plant::new(A, B, C, D, Q, delays, x0).map_err(|e| plant_error(e, n, m, k))
+}
+
+/// A [`PlantError`] as a scenario error on key `plant.<name>`.
+fn plant_error(e: PlantError, n: usize, m: usize, k: usize) -> ScenarioError {
+    match e {
+        PlantError::Shape {
+            name,
+            expected_rows,
+            expected_cols,
+            rows,
+            cols,
+        } => {
+            let (dims, symbols): (&str, &[char]) = match name {
+                "A" => ("n×n", &[]),
+                "B" => ("n×m", &['n']),
+                "C" => ("m×n", &['m', 'n']),
+                "D" => ("n×k", &['n']),
+                "Q" => ("m×k", &['m', 'k']),
+                _ => ("", &[]),
+            };
+            let defs: Vec<String> = symbols
+                .iter()
+                .map(|s| match s {
+                    'n' => format!("n = {n} (rows of plant.A)"),
+                    'm' => format!("m = {m} (columns of plant.B)"),
+                    _ => format!("k = {k} (columns of plant.D)"),
+                })
+                .collect();
+            let hint = if name == "A" {
+                "; A must be square".to_string()
+            } else {
+                format!("; {}", defs.join(", "))
+            };
+            err(
+                format!("plant.{name}"),
+                format!("expected {expected_rows}×{expected_cols} ({dims}), found {rows}×{cols}{hint}"),
+            )
+        }
+        PlantError::NonFinite {
+            name,
+            row,
+            col,
+            value,
+        } => {
+            let key = if name == "x0" {
+                format!("plant.x0[{row}]")
+            } else {
+                format!("plant.{name}[{row}][{col}]")
+            };
+            err(key, format!("expected a finite number, found {value}"))
+        }
+        PlantError::BadDelay { index, value } => err(
+            format!("plant.delays[{index}]"),
+            format!("expected a finite delay ≥ 0, found {value}"),
+        ),
+        PlantError::Length {
+            name,
+            per,
+            expected,
+            found,
+        } => {
+            let of = if name == "x0" {
+                format!("n = {n} rows of plant.A")
+            } else {
+                format!("m = {m} columns of plant.B")
+            };
+            err(
+                format!("plant.{name}"),
+                format!("expected {expected} entries (one per {per}, {of}), found {found}"),
+            )
+        }
+        PlantError::Empty { n, m } => err(
+            if n == 0 { "plant.A" } else { "plant.B" },
+            format!("the plant needs at least one state, input and output (n, m ≥ 1); found n = {n}, m = {m}"),
+        ),
+    }
+}
+
+/// `[design]`: the observer, channel and filter poles, μ and β.
+fn design_spec(v: Value) -> Result<DesignSpec, ScenarioError> {
+    let t = v.table(DESIGN_KEYS)?;
+    let gain = t.get("observer_gain", |v| v.matrix())?;
+    let poles = t.get("observer_poles", |v| v.poles())?;
+    let observer = match (gain, poles) {
+        (Some(L), None) => ObserverChoice::Gain(L),
+        (None, Some(p)) => ObserverChoice::Poles(p),
+        (Some(_), Some(_)) => {
+            return Err(err(
+                "design",
+                "both observer_gain and observer_poles are given; give exactly one: the gain L (n×m), or the n poles of A − LC to place",
+            ))
+        }
+        (None, None) => {
+            return Err(err(
+                "design.observer_gain",
+                "missing; give exactly one of design.observer_gain (the gain L, n×m) and design.observer_poles (the n poles of A − LC)",
+            ))
+        }
+    };
+    Ok(DesignSpec {
+        observer,
+        channel_poles: t.require(
+            "channel_poles",
+            "one list of σ_i poles per output, e.g. [[-6.0, -2.0], [-4.0]]",
+            |v| v.pole_lists("output"),
+        )?,
+        reference_filter_poles: t.require(
+            "reference_filter_poles",
+            "one list of filter poles per reference component, e.g. [[-1.0, -6.0], [-9.0]]",
+            |v| v.pole_lists("reference component"),
+        )?,
+        disturbance_filter_poles: t
+            .get("disturbance_filter_poles", |v| {
+                v.pole_lists("disturbance component")
+            })?
+            .unwrap_or_default(),
+        mu: t.require("mu", "one adaptation gain μ_i ≥ 0 per channel", |v| {
+            v.numbers()
+        })?,
+        beta: t.require("beta", "β > 0 of H(s) = 1/(βs + 1)", |v| v.number())?,
+    })
+}
+
+/// `[reference]` or `[disturbance]`: `components = [{ bias, harmonics = [...] }, ...]`.
+fn signal(v: Value) -> Result<Signal, ScenarioError> {
+    let t = v.table(SIGNAL_KEYS)?;
+    let components = t.require(
+        "components",
+        "an array of components, each { bias = …, harmonics = [{ amplitude = …, frequency = … }] }",
+        |v| v.array("an array of components (inline tables)", component),
+    )?;
+    Ok(Signal { components })
+}
+
+fn component(v: Value) -> Result<Component, ScenarioError> {
+    let t = v.table(COMPONENT_KEYS)?;
+    Ok(Component {
+        bias: t.get("bias", |v| v.number())?.unwrap_or(0.0),
+        harmonics: t
+            .get("harmonics", |v| {
+                v.array("an array of harmonics (inline tables)", harmonic)
+            })?
+            .unwrap_or_default(),
+    })
+}
+
+fn harmonic(v: Value) -> Result<Harmonic, ScenarioError> {
+    let t = v.table(HARMONIC_KEYS)?;
+    let amplitude = t.require("amplitude", "the amplitude a of a·sin(ωt + φ)", |v| {
+        v.number()
+    })?;
+    let frequency = t.require("frequency", "the frequency ω ≥ 0 (rad/s) of a·sin(ωt + φ)", |v| {
+        let w = v.number()?;
+        if w < 0.0 {
+            return Err(err(
+                v.key,
+                format!("expected a frequency ≥ 0 (rad/s), found {w}; write a·sin(−ωt + φ) as a·sin(ωt + π − φ)"),
+            ));
+        }
+        Ok(w)
+    })?;
+    let phase = t.get("phase", |v| v.number())?.unwrap_or(0.0);
+    Ok(Harmonic {
+        amplitude,
+        frequency,
+        phase,
+    })
+}
+
+/// A number that must be > 0.
+fn positive(v: Value, what: &str) -> Result<f64, ScenarioError> {
+    let x = v.number()?;
+    if x > 0.0 {
+        Ok(x)
+    } else {
+        Err(err(v.key, format!("expected {what} > 0, found {x}")))
+    }
+}
+
+/// `[simulation]`, with defaults for absent keys.
+fn simulation(v: Value) -> Result<Simulation, ScenarioError> {
+    let t = v.table(SIMULATION_KEYS)?;
+    let default = Simulation::default();
+    let t_end = t
+        .get("t_end", |v| positive(v, "a final time"))?
+        .unwrap_or(default.t_end);
+    let output_step = match t.get("output_step", |v| positive(v, "an output step"))? {
+        Some(h) if h > t_end => {
+            return Err(err(
+                t.key("output_step"),
+                format!("expected an output step ≤ t_end = {t_end}, found {h}"),
+            ))
+        }
+        Some(h) => h,
+        None => default.output_step.min(t_end),
+    };
+    Ok(Simulation {
+        t_end,
+        output_step,
+        rtol: t
+            .get("rtol", |v| positive(v, "a relative tolerance"))?
+            .unwrap_or(default.rtol),
+        atol: t
+            .get("atol", |v| positive(v, "an absolute tolerance"))?
+            .unwrap_or(default.atol),
+        sample_time: t.get("sample_time", |v| positive(v, "a sampling period"))?,
+    })
+}
+
+/// `[noise]`: per-output standard deviations and a seed.
+fn noise(v: Value) -> Result<Noise, ScenarioError> {
+    let t = v.table(NOISE_KEYS)?;
+    Ok(Noise {
+        std: t.require("std", "one standard deviation ≥ 0 per output", |v| {
+            v.numbers()
+        })?,
+        seed: t.get("seed", |v| v.unsigned())?.unwrap_or(0),
+    })
+}
+
+/// Assumptions 2/3: each component's filter has at least as many poles as its exosystem has states.
+/// Skipped when the number of pole lists is wrong: [`Design::new`] reports that.
+fn internal_model_order(
+    what: &str,
+    signal: &Signal,
+    key: &str,
+    poles: &[Vec<nalgebra::Complex<f64>>],
+) -> Result<(), ScenarioError> {
+    if poles.len() != signal.len() {
+        return Ok(());
+    }
+    for (i, (c, p)) in signal.components.iter().zip(poles).enumerate() {
+        let exo = Exosystem::of(c);
+        if exo.dim() > p.len() {
+            return Err(err(
+                format!("{key}[{i}]"),
+                format!(
+                    "{what} component {} ({}) needs at least {} filter poles (internal-model order); got {}; add poles (a real pole counts 1, a pair [re, im] counts 2)",
+                    i + 1,
+                    exo.describe(),
+                    exo.dim(),
+                    p.len()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,313 @@
+//! Walking a parsed TOML document with the full key path at hand, so every error names the key
+//! (`plant.A[1][2]`, `reference.components[0].harmonics[1].frequency`).
+
+use nalgebra::{Complex, DMatrix};
+
+use super::ScenarioError;
+
+pub(super) fn err(key: impl Into<String>, message: impl Into<String>) -> ScenarioError {
+    ScenarioError {
+        key: key.into(),
+        message: message.into(),
+    }
+}
+
+/// "a string", "an integer", … for "found …" in messages.
+fn kind(v: &toml::Value) -> &'static str {
+    match v {
+        toml::Value::String(_) => "a string",
+        toml::Value::Integer(_) => "an integer",
+        toml::Value::Float(_) => "a floating-point number",
+        toml::Value::Boolean(_) => "a boolean",
+        toml::Value::Datetime(_) => "a date-time",
+        toml::Value::Array(a) if a.is_empty() => "an empty array",
+        toml::Value::Array(_) => "an array",
+        toml::Value::Table(_) => "a table",
+    }
+}
+
+/// Levenshtein distance, for "did you mean" hints on unknown keys.
+fn distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut cur = vec![i + 1; b.len() + 1];
+        for (j, &cb) in b.iter().enumerate() {
+            cur[j + 1] = (prev[j] + usize::from(ca != cb))
+                .min(prev[j + 1] + 1)
+                .min(cur[j] + 1);
+        }
+        prev = cur;
+    }
+    prev[b.len()]
+}
+
+fn child(parent: &str, name: &str) -> String {
+    if parent.is_empty() {
+        name.to_string()
+    } else {
+        format!("{parent}.{name}")
+    }
+}
+
+/// A table whose keys have all been checked against the valid ones.
+pub(super) struct Table<'a> {
+    key: String,
+    table: &'a toml::Table,
+}
+
+/// One value and its key path.
+#[derive(Clone, Copy)]
+pub(super) struct Value<'a, 'k> {
+    pub key: &'k str,
+    pub value: &'a toml::Value,
+}
+
+impl<'a> Table<'a> {
+    /// Wraps `table` (found at `key`, "" for the document), rejecting any key not in `valid`.
+    pub fn new(key: &str, table: &'a toml::Table, valid: &[&str]) -> Result<Self, ScenarioError> {
+        for name in table.keys() {
+            if !valid.contains(&name.as_str()) {
+                let place = if key.is_empty() {
+                    "at the top level".to_string()
+                } else {
+                    format!("in [{key}]")
+                };
+                let hint = valid
+                    .iter()
+                    .filter(|v| distance(&v.to_lowercase(), &name.to_lowercase()) <= 2)
+                    .min_by_key(|v| distance(v, name))
+                    .map(|v| format!(" (did you mean `{v}`?)"))
+                    .unwrap_or_default();
+                return Err(err(
+                    child(key, name),
+                    format!(
+                        "unknown key{hint}; valid keys {place}: {}",
+                        valid.join(", ")
+                    ),
+                ));
+            }
+        }
+        Ok(Table {
+            key: key.to_string(),
+            table,
+        })
+    }
+
+    /// The full key path of `name` in this table.
+    pub fn key(&self, name: &str) -> String {
+        child(&self.key, name)
+    }
+
+    /// Calls `f` with the value of `name` and its key path, if present.
+    pub fn get<T>(
+        &self,
+        name: &str,
+        f: impl FnOnce(Value<'a, '_>) -> Result<T, ScenarioError>,
+    ) -> Result<Option<T>, ScenarioError> {
+        match self.table.get(name) {
+            None => Ok(None),
+            Some(value) => {
+                let key = self.key(name);
+                f(Value { key: &key, value }).map(Some)
+            }
+        }
+    }
+
+    /// Like [`Table::get`], but a missing key is an error; `what` says what the key holds.
+    pub fn require<T>(
+        &self,
+        name: &str,
+        what: &str,
+        f: impl FnOnce(Value<'a, '_>) -> Result<T, ScenarioError>,
+    ) -> Result<T, ScenarioError> {
+        self.get(name, f)?
+            .ok_or_else(|| err(self.key(name), format!("missing; required: {what}")))
+    }
+}
+
+impl<'a> Value<'a, '_> {
+    fn found(&self, expected: &str) -> ScenarioError {
+        err(
+            self.key,
+            format!("expected {expected}, found {}", kind(self.value)),
+        )
+    }
+
+    /// A sub-table, checked against its valid keys.
+    pub fn table(&self, valid: &[&str]) -> Result<Table<'a>, ScenarioError> {
+        match self.value {
+            toml::Value::Table(t) => Table::new(self.key, t, valid),
+            _ => Err(self.found("a table")),
+        }
+    }
+
+    /// A string.
+    pub fn string(&self) -> Result<String, ScenarioError> {
+        match self.value {
+            toml::Value::String(s) => Ok(s.clone()),
+            _ => Err(self.found("a string")),
+        }
+    }
+
+    /// A finite number; integers are accepted.
+    pub fn number(&self) -> Result<f64, ScenarioError> {
+        let x = match self.value {
+            toml::Value::Float(x) => *x,
+            toml::Value::Integer(i) => *i as f64,
+            _ => return Err(self.found("a number")),
+        };
+        if x.is_finite() {
+            Ok(x)
+        } else {
+            Err(err(
+                self.key,
+                format!("expected a finite number, found {x}"),
+            ))
+        }
+    }
+
+    /// A non-negative integer.
+    pub fn unsigned(&self) -> Result<u64, ScenarioError> {
+        match self.value {
+            toml::Value::Integer(i) => u64::try_from(*i)
+                .map_err(|_| err(self.key, format!("expected an integer ≥ 0, found {i}"))),
+            _ => Err(self.found("an integer ≥ 0")),
+        }
+    }
+
+    /// An array, with each element's key path `key[i]`; `what` describes the expected array.
+    pub fn array<T>(
+        &self,
+        what: &str,
+        mut f: impl FnMut(Value<'a, '_>) -> Result<T, ScenarioError>,
+    ) -> Result<Vec<T>, ScenarioError> {
+        match self.value {
+            toml::Value::Array(items) => items
+                .iter()
+                .enumerate()
+                .map(|(i, value)| {
+                    let key = format!("{}[{i}]", self.key);
+                    f(Value { key: &key, value })
+                })
+                .collect(),
+            _ => Err(self.found(what)),
+        }
+    }
+
+    /// An array of finite numbers.
+    pub fn numbers(&self) -> Result<Vec<f64>, ScenarioError> {
+        self.array("an array of numbers", |v| v.number())
+    }
+
+    /// A matrix written as an array of rows of equal length. `[]` is a matrix with no rows.
+    pub fn matrix(&self) -> Result<DMatrix<f64>, ScenarioError> {
+        const FORM: &str = "a matrix (an array of rows, e.g. [[1.0, 0.0], [0.0, 1.0]])";
+        if let toml::Value::Array(items) = self.value {
+            if items
+                .first()
+                .is_some_and(|v| matches!(v, toml::Value::Integer(_) | toml::Value::Float(_)))
+            {
+                return Err(err(
+                    self.key,
+                    format!("expected {FORM}, found an array of numbers; put each row in brackets"),
+                ));
+            }
+        }
+        let rows = self.array(FORM, |row| {
+            row.array("a row (an array of numbers)", |v| v.number())
+        })?;
+        let cols = rows.first().map_or(0, Vec::len);
+        for (i, row) in rows.iter().enumerate() {
+            if row.len() != cols {
+                return Err(err(
+                    format!("{}[{i}]", self.key),
+                    format!(
+                        "expected {cols} entries (as in row 0; every row of a matrix has the same length), found {}",
+                        row.len()
+                    ),
+                ));
+            }
+        }
+        Ok(DMatrix::from_fn(rows.len(), cols, |r, c| rows[r][c]))
+    }
+
+    /// One pole: a number (real) or `[re, im]` with im > 0 (the pair re ± i·im), appended to `out`.
+    fn pole(&self, out: &mut Vec<Complex<f64>>) -> Result<(), ScenarioError> {
+        const FORM: &str =
+            "a pole: a number (real pole) or [re, im] with im > 0 (the pair re ± i·im)";
+        match self.value {
+            toml::Value::Integer(_) | toml::Value::Float(_) => {
+                out.push(Complex::new(self.number()?, 0.0));
+                Ok(())
+            }
+            toml::Value::Array(items) if items.len() == 2 => {
+                let parts = self.numbers()?;
+                let (re, im) = (parts[0], parts[1]);
+                if im > 0.0 {
+                    out.push(Complex::new(re, im));
+                    out.push(Complex::new(re, -im));
+                    Ok(())
+                } else if im == 0.0 {
+                    Err(err(
+                        self.key,
+                        format!("[{re}, {im}] has imaginary part 0; write a real pole as a number ({re}), and a complex pair as [re, im] with im > 0"),
+                    ))
+                } else {
+                    Err(err(
+                        self.key,
+                        format!("[{re}, {im}] has imaginary part {im} < 0; a pair [re, im] means re ± i·im, so write it as [{re}, {}]", -im),
+                    ))
+                }
+            }
+            toml::Value::Array(items) => Err(err(
+                self.key,
+                format!("expected {FORM}, found an array of {} entries", items.len()),
+            )),
+            _ => Err(self.found(FORM)),
+        }
+    }
+
+    /// A list of poles, complex pairs expanded into both conjugates.
+    pub fn poles(&self) -> Result<Vec<Complex<f64>>, ScenarioError> {
+        let mut out = Vec::new();
+        self.array(
+            "a list of poles (an array of numbers or [re, im] pairs)",
+            |p| p.pole(&mut out),
+        )?;
+        Ok(out)
+    }
+
+    /// One list of poles per channel or signal component.
+    pub fn pole_lists(&self, per: &str) -> Result<Vec<Vec<Complex<f64>>>, ScenarioError> {
+        if let toml::Value::Array(items) = self.value {
+            if items
+                .first()
+                .is_some_and(|v| matches!(v, toml::Value::Integer(_) | toml::Value::Float(_)))
+            {
+                return Err(err(
+                    self.key,
+                    format!("expected one list of poles per {per} (e.g. [[-6.0, -2.0], [-4.0]]), found a flat array of numbers; put each {per}'s poles in brackets"),
+                ));
+            }
+        }
+        self.array(&format!("one list of poles per {per}"), |p| p.poles())
+    }
+}
+
+/// Line and column (1-based) of byte `offset` in `text`.
+pub(super) fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let mut offset = offset.min(text.len());
+    while !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    let before = &text[..offset];
+    let line = before.matches('\n').count() + 1;
+    let col = before
+        .rfind('\n')
+        .map_or(before, |i| &before[i + 1..])
+        .chars()
+        .count()
+        + 1;
+    (line, col)
+}

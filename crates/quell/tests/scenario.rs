@@ -1,0 +1,894 @@
+//! Scenario files: the paper's example parses to the paper's numbers, and every row of
+//! `docs/errors.md` has a test here that checks the key, a telling fragment of the message, and that
+//! the documented message is the one the code produces.
+#![allow(non_snake_case)]
+
+use std::path::Path;
+
+use nalgebra::{Complex, DMatrix};
+use proptest::prelude::*;
+use quell::scenario::exosystem::Exosystem;
+use quell::scenario::{load_and_design, LoadError, Noise, Simulation, PAPER_EXAMPLE};
+use quell::{Component, Harmonic, ObserverChoice, Scenario};
+
+const DOCS: &str = include_str!("../../../docs/errors.md");
+
+/// The paper's example with each `(from, to)` replaced once; `from` must occur in it.
+fn with(edits: &[(&str, &str)]) -> String {
+    let mut text = PAPER_EXAMPLE.to_string();
+    for (from, to) in edits {
+        assert!(
+            text.contains(from),
+            "edit target not in the example: {from}"
+        );
+        text = text.replacen(from, to, 1);
+    }
+    text
+}
+
+/// Loads `text` through the whole path (scenario, then design) and checks the error: its key, a
+/// fragment of its message, and that `docs/errors.md` shows the message exactly.
+fn check(text: &str, key: &str, fragment: &str) {
+    check_upto(text, key, fragment, None);
+}
+
+/// Like [`check`], but `docs/errors.md` need only show the message up to `stop` (for numbers that
+/// depend on a numerical method's tolerance).
+fn check_upto(text: &str, key: &str, fragment: &str, stop: Option<&str>) {
+    let e = match load_and_design(text) {
+        Ok(_) => panic!("expected an error at {key}, but the scenario loaded"),
+        Err(e) => e,
+    };
+    let full = e.to_string();
+    if let LoadError::Scenario(s) = &e {
+        assert_eq!(s.key, key, "{full}");
+    }
+    assert!(full.starts_with(&format!("{key}: ")), "key {key}: {full}");
+    assert!(
+        full.contains(fragment),
+        "fragment {fragment:?} not in: {full}"
+    );
+    let shown = match stop.and_then(|s| full.find(s)) {
+        Some(i) => &full[..i],
+        None => &full,
+    };
+    assert!(
+        DOCS.contains(shown),
+        "docs/errors.md does not show this message:\n{full}"
+    );
+}
+
+const A_LINE: &str = "A = [[-3.2, -1.7, -3.0], [2.8, 1.3, 4.0], [0.3, 0.3, -0.5]]";
+const B_LINE: &str = "B = [[-2.0, 1.0], [2.0, -1.0], [1.0, 0.0]]\n";
+const C_LINE: &str = "C = [[2.0, 2.0, 0.0], [2.0, 1.0, 2.0]]";
+const D_LINE: &str = "D = [[1.0, -3.0], [2.0, 1.0], [3.0, 1.0]]\n";
+const Q_LINE: &str = "Q = [[1.0, 2.0], [1.0, 0.0]]\n";
+const DELAYS: &str = "delays = [1.0, 3.0]";
+const X0: &str = "x0 = [0.0, 0.0, 0.0]";
+const L_LINE: &str = "observer_gain = [[-8.0988, 4.4574], [10.6506, -5.0619], [2.7762, -1.1783]]";
+const CHANNEL: &str = "channel_poles = [[-6.0, -2.0], [-4.0]]";
+const REF_FILTER: &str = "reference_filter_poles = [[-1.0, -6.0], [-9.0]]";
+const DIST_FILTER: &str = "disturbance_filter_poles = [[-1.0, -3.0], [-1.0, -2.0, -3.0]]";
+const MU: &str = "mu = [20.0, 30.0]";
+const BETA: &str = "beta = 1.0 ";
+const REFERENCE: &str = "[reference]                                            # g(t), m components\ncomponents = [ { harmonics = [{ amplitude = 3.0, frequency = 2.0, phase = 0.0 }] }, { bias = 2.0 } ]\n";
+const REF_COMPONENTS: &str =
+    "components = [ { harmonics = [{ amplitude = 3.0, frequency = 2.0, phase = 0.0 }] }, { bias = 2.0 } ]";
+const DISTURBANCE: &str = "[disturbance]                                          # omega(t), k components\ncomponents = [ { harmonics = [{ amplitude = 1.0, frequency = 1.0 }] },\n               { bias = 1.0, harmonics = [{ amplitude = 2.0, frequency = 2.0 }] } ]\n";
+const T_END: &str = "t_end = 100.0";
+const OUTPUT_STEP: &str = "output_step = 0.1 ";
+const SAMPLED: &str = "# sample_time = 0.001";
+
+fn m(rows: &[&[f64]]) -> DMatrix<f64> {
+    DMatrix::from_fn(rows.len(), rows[0].len(), |r, c| rows[r][c])
+}
+
+fn real(p: &[f64]) -> Vec<Complex<f64>> {
+    p.iter().map(|&x| Complex::new(x, 0.0)).collect()
+}
+
+// ----------------------------------------------------------------------------------------------
+// Known answers
+
+#[test]
+fn paper_example_parses_into_the_papers_numbers() {
+    let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+    assert_eq!(s.name.as_deref(), Some("paper-example"));
+    let p = &s.plant;
+    assert_eq!(
+        p.A,
+        m(&[&[-3.2, -1.7, -3.0], &[2.8, 1.3, 4.0], &[0.3, 0.3, -0.5]])
+    );
+    assert_eq!(p.B, m(&[&[-2.0, 1.0], &[2.0, -1.0], &[1.0, 0.0]]));
+    assert_eq!(p.C, m(&[&[2.0, 2.0, 0.0], &[2.0, 1.0, 2.0]]));
+    assert_eq!(p.D, m(&[&[1.0, -3.0], &[2.0, 1.0], &[3.0, 1.0]]));
+    assert_eq!(p.Q, m(&[&[1.0, 2.0], &[1.0, 0.0]]));
+    assert_eq!(p.delays, vec![1.0, 3.0]);
+    assert_eq!(p.x0.as_slice(), &[0.0, 0.0, 0.0]);
+    let d = &s.design;
+    assert_eq!(
+        d.observer,
+        ObserverChoice::Gain(m(&[
+            &[-8.0988, 4.4574],
+            &[10.6506, -5.0619],
+            &[2.7762, -1.1783]
+        ]))
+    );
+    assert_eq!(d.channel_poles, vec![real(&[-6.0, -2.0]), real(&[-4.0])]);
+    assert_eq!(
+        d.reference_filter_poles,
+        vec![real(&[-1.0, -6.0]), real(&[-9.0])]
+    );
+    assert_eq!(
+        d.disturbance_filter_poles,
+        vec![real(&[-1.0, -3.0]), real(&[-1.0, -2.0, -3.0])]
+    );
+    assert_eq!(d.mu, vec![20.0, 30.0]);
+    assert_eq!(d.beta, 1.0);
+    // g(t) = [3 sin 2t, 2], ω(t) = [sin t, 1 + 2 sin 2t].
+    for t in [0.0, 0.3, 1.7, 42.0] {
+        let (mut g, mut w) = ([0.0; 2], [0.0; 2]);
+        s.reference.eval_into(t, &mut g);
+        s.disturbance.eval_into(t, &mut w);
+        assert_eq!(g, [3.0 * (2.0 * t).sin(), 2.0]);
+        assert_eq!(w, [t.sin(), 1.0 + 2.0 * (2.0 * t).sin()]);
+    }
+    assert_eq!(
+        s.simulation,
+        Simulation {
+            t_end: 100.0,
+            output_step: 0.1,
+            rtol: 1e-9,
+            atol: 1e-9,
+            sample_time: None
+        }
+    );
+    assert_eq!(s.noise, None);
+}
+
+#[test]
+fn paper_example_file_reads_from_path_and_from_str() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/paper.toml");
+    let a = Scenario::from_path(&path).unwrap();
+    let b: Scenario = PAPER_EXAMPLE.parse().unwrap();
+    assert_eq!(a.plant, b.plant);
+    assert_eq!(a.design, b.design);
+}
+
+#[test]
+fn pole_pairs_expand_into_both_conjugates() {
+    let s = Scenario::from_toml(&with(&[
+        (CHANNEL, "channel_poles = [[[-1.5, 2.0]], [-4.0]]"),
+        (L_LINE, "observer_poles = [-2.0, [-3.0, 0.5]]"),
+    ]))
+    .unwrap();
+    assert_eq!(
+        s.design.channel_poles[0],
+        vec![Complex::new(-1.5, 2.0), Complex::new(-1.5, -2.0)]
+    );
+    assert_eq!(
+        s.design.observer,
+        ObserverChoice::Poles(vec![
+            Complex::new(-2.0, 0.0),
+            Complex::new(-3.0, 0.5),
+            Complex::new(-3.0, -0.5)
+        ])
+    );
+}
+
+#[test]
+fn integers_are_accepted_where_floats_are_expected() {
+    let s = Scenario::from_toml(&with(&[
+        (A_LINE, "A = [[-3, -1, -3], [2, 1, 4], [0, 0, -1]]"),
+        (DELAYS, "delays = [1, 3]"),
+        (MU, "mu = [20, 30]"),
+        (BETA, "beta = 1 "),
+        (CHANNEL, "channel_poles = [[-6, [-2, 1]], [-4]]"),
+        (T_END, "t_end = 100"),
+        (
+            REF_COMPONENTS,
+            "components = [ { harmonics = [{ amplitude = 3, frequency = 2, phase = 0 }] }, { bias = 2 } ]",
+        ),
+    ]))
+    .unwrap();
+    assert_eq!(s.plant.A[(1, 2)], 4.0);
+    assert_eq!(s.plant.delays, vec![1.0, 3.0]);
+    assert_eq!(s.design.mu, vec![20.0, 30.0]);
+    assert_eq!(s.design.beta, 1.0);
+    assert_eq!(s.design.channel_poles[0][1], Complex::new(-2.0, 1.0));
+    assert_eq!(s.simulation.t_end, 100.0);
+    assert_eq!(s.reference.components[1].bias, 2.0);
+}
+
+#[test]
+fn defaults_for_optional_keys() {
+    let s = Scenario::from_toml(&with(&[
+        (X0, ""),
+        ("name = \"paper-example\"", ""),
+        ("[simulation]\nt_end = 100.0\noutput_step = 0.1     # rows of signals.csv at t = k * output_step\nrtol = 1e-9\natol = 1e-9\n", ""),
+    ]))
+    .unwrap();
+    assert_eq!(s.name, None);
+    assert_eq!(s.plant.x0.as_slice(), &[0.0; 3]);
+    assert_eq!(s.simulation, Simulation::default());
+    // output_step defaults to min(0.1, t_end).
+    let s = Scenario::from_toml(&with(&[(T_END, "t_end = 0.05"), (OUTPUT_STEP, "")])).unwrap();
+    assert_eq!(s.simulation.output_step, 0.05);
+    // Phase defaults to 0, bias to 0, harmonics to none.
+    assert_eq!(
+        s.disturbance.components[0],
+        Component {
+            bias: 0.0,
+            harmonics: vec![Harmonic {
+                amplitude: 1.0,
+                frequency: 1.0,
+                phase: 0.0
+            }]
+        }
+    );
+}
+
+#[test]
+fn no_disturbance_means_k_zero() {
+    for (d, q) in [("", ""), ("D = []\n", "Q = []\n")] {
+        let s = Scenario::from_toml(&with(&[
+            (D_LINE, d),
+            (Q_LINE, q),
+            (DISTURBANCE, ""),
+            (DIST_FILTER, ""),
+        ]))
+        .unwrap();
+        assert_eq!(s.plant.k(), 0);
+        assert_eq!(s.plant.D.shape(), (3, 0));
+        assert_eq!(s.plant.Q.shape(), (2, 0));
+        assert!(s.disturbance.is_empty());
+        assert!(s.design.disturbance_filter_poles.is_empty());
+    }
+}
+
+#[test]
+fn sampled_data_run_with_noise() {
+    let text = with(&[(SAMPLED, "sample_time = 0.001")]) + "[noise]\nstd = [0.03, 0]\nseed = 7\n";
+    let s = Scenario::from_toml(&text).unwrap();
+    assert_eq!(s.simulation.sample_time, Some(0.001));
+    assert_eq!(
+        s.noise,
+        Some(Noise {
+            std: vec![0.03, 0.0],
+            seed: 7
+        })
+    );
+}
+
+#[test]
+fn exosystem_dimension_counts_distinct_nonzero_harmonics_and_constant() {
+    let h = |amplitude, frequency, phase| Harmonic {
+        amplitude,
+        frequency,
+        phase,
+    };
+    let c = |bias, harmonics| Component { bias, harmonics };
+    let dim = |c: &Component| Exosystem::of(c).dim();
+    assert_eq!(dim(&c(0.0, vec![])), 0);
+    assert_eq!(dim(&c(2.0, vec![])), 1);
+    assert_eq!(dim(&c(1.0, vec![h(2.0, 2.0, 0.0)])), 3);
+    // Two harmonics at one frequency are one harmonic; a zero amplitude is none.
+    assert_eq!(dim(&c(0.0, vec![h(1.0, 2.0, 0.0), h(2.0, 2.0, 1.0)])), 2);
+    assert_eq!(dim(&c(0.0, vec![h(0.0, 3.0, 0.0)])), 0);
+    // sin t + sin(t + π) = 0.
+    assert_eq!(
+        dim(&c(
+            0.0,
+            vec![h(1.0, 1.0, 0.0), h(1.0, 1.0, std::f64::consts::PI)]
+        )),
+        0
+    );
+    // A zero-frequency harmonic a·sin(φ) is a constant.
+    assert_eq!(dim(&c(0.0, vec![h(1.0, 0.0, 1.0)])), 1);
+    assert_eq!(dim(&c(0.0, vec![h(1.0, 0.0, 0.0)])), 0);
+    assert_eq!(
+        Exosystem::of(&c(1.0, vec![h(1.0, 1.0, 0.0), h(1.0, 2.0, 0.0)])).describe(),
+        "2 harmonics + bias"
+    );
+}
+
+#[test]
+fn error_display_is_key_colon_message() {
+    let e = Scenario::from_toml(&with(&[(DELAYS, "delays = \"1, 3\"")])).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        format!("{}: {}", e.key, e.message),
+        "Display is key: message"
+    );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+    /// Any edit of the example gives a scenario or an error with a key, never a panic.
+    #[test]
+    fn edits_never_panic(at in 0usize..PAPER_EXAMPLE.len(), len in 0usize..8, insert in "[\\[\\]{}=,.\"a-z0-9\\- \n]{0,6}") {
+        let mut text = PAPER_EXAMPLE.to_string();
+        let mut at = at;
+        while !text.is_char_boundary(at) { at -= 1; }
+        let mut end = (at + len).min(text.len());
+        while !text.is_char_boundary(end) { end -= 1; }
+        text.replace_range(at..end, &insert);
+        if let Err(e) = Scenario::from_toml(&text) {
+            prop_assert!(!e.key.is_empty() && !e.message.is_empty());
+        }
+    }
+}
+
+// ----------------------------------------------------------------------------------------------
+// One test per row of docs/errors.md, in the same order.
+
+#[test]
+fn syntax_error() {
+    check(
+        &with(&[(C_LINE, "C = [[2.0, 2.0, 0.0], [2.0, 1.0, 2.0]")]),
+        "syntax",
+        "line 6, column",
+    );
+}
+
+#[test]
+fn unknown_top_level_key() {
+    check(
+        &with(&[("name = ", "nmae = ")]),
+        "nmae",
+        "unknown key (did you mean `name`?); valid keys at the top level: name, plant, design",
+    );
+}
+
+#[test]
+fn unknown_key_in_table() {
+    check(
+        &with(&[(DELAYS, "delay = [1.0, 3.0]")]),
+        "plant.delay",
+        "did you mean `delays`?",
+    );
+}
+
+#[test]
+fn unknown_key_nested() {
+    check(
+        &with(&[("amplitude = 3.0, frequency", "amplitude = 3.0, freq")]),
+        "reference.components[0].harmonics[0].freq",
+        "valid keys in [reference.components[0].harmonics[0]]: amplitude, frequency, phase",
+    );
+}
+
+#[test]
+fn missing_table() {
+    check(&with(&[(REFERENCE, "")]), "reference", "missing; required");
+}
+
+#[test]
+fn missing_key() {
+    check(
+        &with(&[(B_LINE, "")]),
+        "plant.B",
+        "missing; required: the n×m input matrix",
+    );
+}
+
+#[test]
+fn wrong_type() {
+    check(
+        &with(&[(DELAYS, "delays = \"1, 3\"")]),
+        "plant.delays",
+        "expected an array of numbers, found a string",
+    );
+}
+
+#[test]
+fn wrong_type_of_entry() {
+    check(
+        &with(&[("[[-3.2, -1.7,", "[[-3.2, \"-1.7\",")]),
+        "plant.A[0][1]",
+        "expected a number, found a string",
+    );
+}
+
+#[test]
+fn matrix_without_rows() {
+    check(
+        &with(&[(C_LINE, "C = [2.0, 2.0, 0.0]")]),
+        "plant.C",
+        "put each row in brackets",
+    );
+}
+
+#[test]
+fn ragged_matrix() {
+    check(
+        &with(&[("[2.8, 1.3, 4.0]", "[2.8, 1.3]")]),
+        "plant.A[1]",
+        "expected 3 entries",
+    );
+}
+
+#[test]
+fn non_square_A() {
+    check(
+        &with(&[(A_LINE, "A = [[-3.2, -1.7], [2.8, 1.3], [0.3, 0.3]]")]),
+        "plant.A",
+        "expected 3×3 (n×n), found 3×2; A must be square",
+    );
+}
+
+#[test]
+fn wrong_shape() {
+    check(
+        &with(&[(C_LINE, "C = [[2.0, 2.0], [2.0, 1.0]]")]),
+        "plant.C",
+        "expected 2×3 (m×n), found 2×2",
+    );
+}
+
+#[test]
+fn wrong_shape_of_Q() {
+    check(
+        &with(&[(Q_LINE, "Q = [[1.0], [1.0]]\n")]),
+        "plant.Q",
+        "expected 2×2 (m×k), found 2×1",
+    );
+}
+
+#[test]
+fn empty_plant() {
+    check(
+        &with(&[(A_LINE, "A = []")]),
+        "plant.A",
+        "at least one state",
+    );
+}
+
+#[test]
+fn non_finite_entry() {
+    check(
+        &with(&[("[0.3, 0.3, -0.5]", "[0.3, nan, -0.5]")]),
+        "plant.A[2][1]",
+        "expected a finite number, found NaN",
+    );
+}
+
+#[test]
+fn infinite_entry() {
+    check(
+        &with(&[(MU, "mu = [20.0, inf]")]),
+        "design.mu[1]",
+        "expected a finite number, found inf",
+    );
+}
+
+#[test]
+fn negative_delay() {
+    check(
+        &with(&[(DELAYS, "delays = [1.0, -3.0]")]),
+        "plant.delays[1]",
+        "expected a finite delay ≥ 0, found -3",
+    );
+}
+
+#[test]
+fn delay_count() {
+    check(
+        &with(&[(DELAYS, "delays = [1.0]")]),
+        "plant.delays",
+        "expected 2 entries (one per input",
+    );
+}
+
+#[test]
+fn x0_count() {
+    check(
+        &with(&[(X0, "x0 = [0.0, 0.0]")]),
+        "plant.x0",
+        "expected 3 entries (one per state",
+    );
+}
+
+#[test]
+fn missing_D_with_disturbance() {
+    check(
+        &with(&[(D_LINE, "")]),
+        "plant.D",
+        "[disturbance] has 2 components",
+    );
+}
+
+#[test]
+fn missing_Q_with_D() {
+    check(&with(&[(Q_LINE, "")]), "plant.Q", "write zeros");
+}
+
+#[test]
+fn missing_disturbance_with_D() {
+    check(
+        &with(&[(DISTURBANCE, "")]),
+        "disturbance",
+        "or remove plant.D and plant.Q",
+    );
+}
+
+#[test]
+fn disturbance_component_count() {
+    check(
+        &with(&[(
+            "components = [ { harmonics = [{ amplitude = 1.0, frequency = 1.0 }] },\n",
+            "components = [\n",
+        )]),
+        "disturbance.components",
+        "expected 2 components (one per column of plant.D, k = 2), found 1",
+    );
+}
+
+#[test]
+fn reference_component_count() {
+    check(
+        &with(&[(", { bias = 2.0 } ]", " ]")]),
+        "reference.components",
+        "expected 2 components (one per output",
+    );
+}
+
+#[test]
+fn negative_frequency() {
+    check(
+        &with(&[("frequency = 2.0, phase", "frequency = -2.0, phase")]),
+        "reference.components[0].harmonics[0].frequency",
+        "expected a frequency ≥ 0",
+    );
+}
+
+#[test]
+fn missing_amplitude() {
+    check(
+        &with(&[("amplitude = 1.0, frequency = 1.0", "frequency = 1.0")]),
+        "disturbance.components[0].harmonics[0].amplitude",
+        "missing",
+    );
+}
+
+#[test]
+fn both_observer_choices() {
+    check(
+        &with(&[(
+            L_LINE,
+            &format!("{L_LINE}\nobserver_poles = [-2.0, -3.0, -4.0]"),
+        )]),
+        "design",
+        "give exactly one",
+    );
+}
+
+#[test]
+fn neither_observer_choice() {
+    check(
+        &with(&[(L_LINE, "")]),
+        "design.observer_gain",
+        "give exactly one of design.observer_gain",
+    );
+}
+
+#[test]
+fn real_pole_written_as_pair() {
+    check(
+        &with(&[(CHANNEL, "channel_poles = [[-6.0, [-2.0, 0.0]], [-4.0]]")]),
+        "design.channel_poles[0][1]",
+        "write a real pole as a number",
+    );
+}
+
+#[test]
+fn pair_with_negative_imaginary_part() {
+    check(
+        &with(&[(CHANNEL, "channel_poles = [[[-2.0, -1.0]], [-4.0]]")]),
+        "design.channel_poles[0][0]",
+        "write it as [-2, 1]",
+    );
+}
+
+#[test]
+fn pole_of_wrong_form() {
+    check(
+        &with(&[(
+            REF_FILTER,
+            "reference_filter_poles = [[[-1.0, 2.0, 3.0]], [-9.0]]",
+        )]),
+        "design.reference_filter_poles[0][0]",
+        "found an array of 3 entries",
+    );
+}
+
+#[test]
+fn flat_pole_lists() {
+    check(
+        &with(&[(CHANNEL, "channel_poles = [-6.0, -2.0, -4.0]")]),
+        "design.channel_poles",
+        "put each output's poles in brackets",
+    );
+}
+
+#[test]
+fn reference_internal_model_order() {
+    check(
+        &with(&[("{ bias = 2.0 }", "{ bias = 2.0, harmonics = [{ amplitude = 1.0, frequency = 5.0 }] }")]),
+        "design.reference_filter_poles[1]",
+        "reference component 2 (1 harmonic + bias) needs at least 3 filter poles (internal-model order); got 1",
+    );
+}
+
+#[test]
+fn disturbance_internal_model_order() {
+    check(
+        &with(&[(
+            DIST_FILTER,
+            "disturbance_filter_poles = [[-1.0, -3.0], [-1.0, -2.0]]",
+        )]),
+        "design.disturbance_filter_poles[1]",
+        "disturbance component 2 (1 harmonic + bias) needs at least 3 filter poles",
+    );
+}
+
+#[test]
+fn t_end_not_positive() {
+    check(
+        &with(&[(T_END, "t_end = 0")]),
+        "simulation.t_end",
+        "expected a final time > 0, found 0",
+    );
+}
+
+#[test]
+fn output_step_not_positive() {
+    check(
+        &with(&[(OUTPUT_STEP, "output_step = -0.1 ")]),
+        "simulation.output_step",
+        "expected an output step > 0",
+    );
+}
+
+#[test]
+fn output_step_beyond_t_end() {
+    check(
+        &with(&[(T_END, "t_end = 0.05")]),
+        "simulation.output_step",
+        "expected an output step ≤ t_end = 0.05, found 0.1",
+    );
+}
+
+#[test]
+fn tolerance_not_positive() {
+    check(
+        &with(&[("rtol = 1e-9", "rtol = 0.0")]),
+        "simulation.rtol",
+        "expected a relative tolerance > 0",
+    );
+}
+
+#[test]
+fn sample_time_not_positive() {
+    check(
+        &with(&[(SAMPLED, "sample_time = -0.001")]),
+        "simulation.sample_time",
+        "expected a sampling period > 0",
+    );
+}
+
+#[test]
+fn noise_without_sample_time() {
+    check(
+        &(PAPER_EXAMPLE.to_string() + "[noise]\nstd = [0.03, 0.02]\n"),
+        "noise",
+        "set simulation.sample_time",
+    );
+}
+
+#[test]
+fn noise_count() {
+    check(
+        &(with(&[(SAMPLED, "sample_time = 0.001")]) + "[noise]\nstd = [0.03]\n"),
+        "noise.std",
+        "expected 2 entries (one per output), found 1",
+    );
+}
+
+#[test]
+fn noise_negative() {
+    check(
+        &(with(&[(SAMPLED, "sample_time = 0.001")]) + "[noise]\nstd = [0.03, -0.02]\n"),
+        "noise.std[1]",
+        "expected a standard deviation ≥ 0",
+    );
+}
+
+#[test]
+fn negative_seed() {
+    check(
+        &(with(&[(SAMPLED, "sample_time = 0.001")]) + "[noise]\nstd = [0.03, 0.02]\nseed = -1\n"),
+        "noise.seed",
+        "expected an integer ≥ 0, found -1",
+    );
+}
+
+#[test]
+fn unreadable_file() {
+    let e = Scenario::from_path(Path::new("no/such/scenario.toml")).unwrap_err();
+    assert_eq!(e.key, "no/such/scenario.toml");
+    assert!(e.message.starts_with("cannot read the file:"), "{e}");
+    assert!(DOCS.contains("cannot read the file:"));
+}
+
+// Rows checked by Design::new before its Assumption-1 tests.
+
+#[test]
+fn channel_pole_list_count() {
+    check(
+        &with(&[(CHANNEL, "channel_poles = [[-6.0, -2.0]]")]),
+        "design.channel_poles",
+        "expected 2 entries (one per output), got 1",
+    );
+}
+
+#[test]
+fn reference_filter_list_count() {
+    check(
+        &with(&[(REF_FILTER, "reference_filter_poles = [[-1.0, -6.0]]")]),
+        "design.reference_filter_poles",
+        "expected 2 entries",
+    );
+}
+
+#[test]
+fn disturbance_filter_list_count() {
+    check(
+        &with(&[(DIST_FILTER, "")]),
+        "design.disturbance_filter_poles",
+        "expected 2 entries",
+    );
+}
+
+#[test]
+fn mu_count() {
+    check(
+        &with(&[(MU, "mu = [20.0]")]),
+        "design.mu",
+        "expected 2 entries (one per channel), got 1",
+    );
+}
+
+#[test]
+fn negative_mu() {
+    check(
+        &with(&[(MU, "mu = [20.0, -1.0]")]),
+        "design.mu[1]",
+        "expected a finite adaptation gain ≥ 0, got -1",
+    );
+}
+
+#[test]
+fn beta_not_positive() {
+    check(
+        &with(&[(BETA, "beta = 0.0 ")]),
+        "design.beta",
+        "expected a finite β > 0",
+    );
+}
+
+#[test]
+fn channel_pole_not_hurwitz() {
+    check(
+        &with(&[(CHANNEL, "channel_poles = [[-6.0, 2.0], [-4.0]]")]),
+        "design.channel_poles[0]",
+        "pole 2.000000 is not in the open left half-plane",
+    );
+}
+
+#[test]
+fn filter_pole_not_hurwitz() {
+    check(
+        &with(&[(
+            REF_FILTER,
+            "reference_filter_poles = [[[0.0, 2.0]], [-9.0]]",
+        )]),
+        "design.reference_filter_poles[0]",
+        "internal-model filter poles must be Hurwitz",
+    );
+}
+
+#[test]
+fn empty_filter_pole_list() {
+    // A component that is identically zero needs no internal model, but its list must not be empty.
+    check(
+        &with(&[
+            (
+                "[[-1.0, -3.0], [-1.0, -2.0, -3.0]]",
+                "[[], [-1.0, -2.0, -3.0]]",
+            ),
+            (
+                "amplitude = 1.0, frequency = 1.0",
+                "amplitude = 0.0, frequency = 1.0",
+            ),
+        ]),
+        "design.disturbance_filter_poles[0]",
+        "the list is empty",
+    );
+}
+
+// Rows checked by Design::new after the controllability test (need `controllability`, `place`).
+
+#[test]
+fn channel_pole_count_vs_relative_degree() {
+    check(
+        &with(&[(CHANNEL, "channel_poles = [[-6.0], [-4.0]]")]),
+        "design.channel_poles[0]",
+        "channel 1 has relative degree 2, so it needs 2 poles; got 1",
+    );
+}
+
+#[test]
+fn observer_gain_shape() {
+    check(
+        &with(&[(
+            L_LINE,
+            "observer_gain = [[-8.0988, 4.4574], [10.6506, -5.0619]]",
+        )]),
+        "design.observer_gain",
+        "expected a 3×2 matrix, found 2×2",
+    );
+}
+
+#[test]
+fn observer_gain_unstable() {
+    check(
+        &with(&[(
+            L_LINE,
+            "observer_gain = [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]]",
+        )]),
+        "design.observer_gain",
+        "A − LC is not Hurwitz",
+    );
+}
+
+#[test]
+fn observer_pole_not_hurwitz() {
+    check(
+        &with(&[(L_LINE, "observer_poles = [-2.0, 3.0, -4.0]")]),
+        "design.observer_poles",
+        "observer poles must be Hurwitz",
+    );
+}
+
+#[test]
+fn observer_pole_count() {
+    check(
+        &with(&[(L_LINE, "observer_poles = [-2.0, -3.0]")]),
+        "design.observer_poles",
+        "expected 3 poles (one per state), got 2",
+    );
+}
+
+#[test]
+fn uncontrollable_plant() {
+    // The third state of diag(-1, -2, 3) is reached by no input.
+    check_upto(
+        &with(&[
+            (
+                A_LINE,
+                "A = [[-1.0, 0.0, 0.0], [0.0, -2.0, 0.0], [0.0, 0.0, 3.0]]",
+            ),
+            (B_LINE, "B = [[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]]\n"),
+        ]),
+        "plant",
+        "(A, B) is not controllable (Assumption 1): numerical rank 2 of 3",
+        Some(" (tolerance"),
+    );
+}
+
+#[test]
+fn paper_example_designs() {
+    let (_, design) = load_and_design(PAPER_EXAMPLE).unwrap();
+    assert_eq!(design.sigma, vec![2, 1]);
+}
