@@ -1,4 +1,5 @@
 //! `quell`: design, simulate and plot direct adaptive output-feedback controllers.
+#![allow(non_snake_case)]
 //!
 //! Exit codes: 0 success, 1 a run that failed (diverged, solver failure, interrupted),
 //! 2 bad input or an infeasible design.

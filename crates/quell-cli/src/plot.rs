@@ -51,6 +51,7 @@ fn panel<DB: DrawingBackend>(
     let mut chart = ChartBuilder::on(area)
         .caption(title, ("sans-serif", 20))
         .margin(8)
+        .margin_right(24)
         .x_label_area_size(36)
         .y_label_area_size(64)
         .build_cartesian_2d(t0..t1, (lo - pad)..(hi + pad))
@@ -64,7 +65,7 @@ fn panel<DB: DrawingBackend>(
         .map_err(|e| e.to_string())?;
     for (k, (name, points)) in series.iter().enumerate() {
         let color = Palette99::pick(k).to_rgba();
-        let style = if name.starts_with('g') { color.stroke_width(2) } else { color.stroke_width(2) };
+        let style = color.stroke_width(2);
         chart
             .draw_series(LineSeries::new(points.iter().copied().filter(|(_, v)| v.is_finite()), style))
             .map_err(|e| e.to_string())?
@@ -100,7 +101,7 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &SimResult, i: usiz
             (format!("η{c}_{}", j + 1), pts)
         })
         .collect();
-    panel(&areas[3], &format!("Channel {c}: adjustable parameters (33)"), "η̂", &etas)?;
+    panel(&areas[3], &format!("Channel {c}: adjustable parameters (33)"), "η", &etas)?;
     root.present().map_err(|e| e.to_string())
 }
 
