@@ -156,6 +156,25 @@ fn paper_example_file_reads_from_path_and_from_str() {
 }
 
 #[test]
+fn fuzz_seeds_parse() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/corpus/scenario");
+    let mut seeds = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path
+            .file_name()
+            .unwrap()
+            .to_string_lossy()
+            .starts_with("seed-")
+        {
+            Scenario::from_path(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            seeds += 1;
+        }
+    }
+    assert!(seeds >= 4);
+}
+
+#[test]
 fn pole_pairs_expand_into_both_conjugates() {
     let s = Scenario::from_toml(&with(&[
         (CHANNEL, "channel_poles = [[[-1.5, 2.0]], [-4.0]]"),
