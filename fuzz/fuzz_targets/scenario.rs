@@ -11,8 +11,6 @@ fuzz_target!(|data: &[u8]| {
         return;
     };
     if let Ok(scenario) = Scenario::from_toml(text) {
-        // FUZZ-DESIGN: `place` and `controllability` are still `todo!()` stubs on this branch; once
-        // they are merged, replace the next line by `let _ = scenario.design();`.
-        let _ = scenario;
+        let _ = scenario.design();
     }
 });

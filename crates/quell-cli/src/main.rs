@@ -18,7 +18,7 @@ use std::sync::Arc;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use quell::scenario::{Scenario, PAPER_EXAMPLE};
-use quell::sim::{simulate, Outcome, RunSettings, SimResult};
+use quell::sim::{simulate, simulate_sampled, Outcome, RunSettings, SampledSettings, SimResult};
 use quell::Design;
 use serde_json::json;
 
@@ -54,10 +54,17 @@ struct RunArgs {
     /// Output directory.
     #[arg(long, default_value = "quell-out")]
     out: PathBuf,
+    /// Sampled-data run with the discrete controller at this sample time (s); overrides
+    /// simulation.sample_time.
+    #[arg(long, value_name = "T_S")]
+    sample_time: Option<f64>,
     /// Skip the PNG/SVG plots.
     #[arg(long)]
     no_plots: bool,
 }
+
+/// A state above this magnitude means the loop diverged.
+const DIVERGENCE_BOUND: f64 = 1e9;
 
 /// A failure with its exit code.
 enum Failure {
@@ -120,17 +127,40 @@ fn run(args: &RunArgs) -> Result<(), Failure> {
         let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));
     }
     let sim = &scenario.simulation;
+    let sample_time = match args.sample_time {
+        Some(t) if !(t.is_finite() && t > 0.0) => {
+            return Err(Failure::Input(format!("--sample-time: expected a sample time > 0 in seconds, found {t}")))
+        }
+        Some(t) => Some(t),
+        None => sim.sample_time,
+    };
     let bar = progress_bar(sim.t_end);
-    let settings = RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol);
-    let started = std::time::Instant::now();
-    let result = simulate(&design, &scenario.reference, &scenario.disturbance, &settings, |t| {
+    let progress = |t: f64| {
         bar.set_position((t * 1000.0) as u64);
         if interrupted.load(Ordering::SeqCst) {
             ControlFlow::Break(())
         } else {
             ControlFlow::Continue(())
         }
-    });
+    };
+    let started = std::time::Instant::now();
+    let result = match sample_time {
+        None => {
+            let settings = RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol);
+            simulate(&design, &scenario.reference, &scenario.disturbance, &settings, progress)
+        }
+        Some(sample_time) => {
+            let settings = SampledSettings {
+                t_end: sim.t_end,
+                output_step: sim.output_step,
+                sample_time,
+                noise: scenario.noise.clone(),
+                divergence_bound: DIVERGENCE_BOUND,
+            };
+            simulate_sampled(&design, &scenario.reference, &scenario.disturbance, &settings, progress)
+                .map_err(|e| Failure::Input(e.to_string()))?
+        }
+    };
     bar.finish_and_clear();
     let elapsed = started.elapsed();
 

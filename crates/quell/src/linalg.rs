@@ -76,7 +76,7 @@ pub fn eigenvalues(M: &DMatrix<f64>) -> Option<Vec<Complex<f64>>> {
 pub fn cond(M: &DMatrix<f64>) -> f64 {
     let s = M.singular_values();
     let (max, min) = (s.max(), s.min());
-    if min > 0.0 && s.len() > 0 {
+    if min > 0.0 && !s.is_empty() {
         max / min
     } else {
         f64::INFINITY

@@ -10,9 +10,7 @@ fn diag(d: &[f64]) -> DMatrix<f64> {
 
 /// A fixed orthogonal matrix (Q of a QR of a deterministic full-rank matrix) to hide structure.
 fn orthogonal(n: usize) -> DMatrix<f64> {
-    let M = DMatrix::from_fn(n, n, |i, j| {
-        ((i * n + j) as f64 * 0.7 + 0.3).sin() + if i == j { 2.0 } else { 0.0 }
-    });
+    let M = DMatrix::from_fn(n, n, |i, j| ((i * n + j) as f64 * 0.7 + 0.3).sin() + if i == j { 2.0 } else { 0.0 });
     M.qr().q()
 }
 
@@ -48,10 +46,7 @@ fn decoupled_mode_is_uncontrollable_and_unobservable() {
 #[test]
 fn repeated_eigenvalue_needs_two_inputs() {
     let A = diag(&[3.0, 3.0]);
-    assert_eq!(
-        controllability(&A, &DMatrix::from_row_slice(2, 1, &[1.0, 1.0])).rank,
-        1
-    );
+    assert_eq!(controllability(&A, &DMatrix::from_row_slice(2, 1, &[1.0, 1.0])).rank, 1);
     assert_eq!(controllability(&A, &DMatrix::identity(2, 2)).rank, 2);
 }
 
@@ -61,16 +56,9 @@ fn repeated_eigenvalue_needs_two_inputs() {
 fn hidden_uncontrollable_part_mimo() {
     let n = 6;
     let mut A = DMatrix::<f64>::zeros(n, n);
-    let Ac = DMatrix::from_row_slice(
-        4,
-        4,
-        &[
-            0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., -1., -2., -3., -4.,
-        ],
-    );
+    let Ac = DMatrix::from_row_slice(4, 4, &[0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., -1., -2., -3., -4.]);
     A.view_mut((0, 0), (4, 4)).copy_from(&Ac);
-    A.view_mut((4, 4), (2, 2))
-        .copy_from(&DMatrix::from_row_slice(2, 2, &[-1.0, 5.0, -5.0, -1.0]));
+    A.view_mut((4, 4), (2, 2)).copy_from(&DMatrix::from_row_slice(2, 2, &[-1.0, 5.0, -5.0, -1.0]));
     A[(0, 5)] = 0.7; // coupling from the uncontrollable to the controllable part is allowed
     let mut B = DMatrix::<f64>::zeros(n, 2);
     B[(3, 0)] = 1.0;
@@ -94,11 +82,7 @@ fn tolerance_is_scaled_to_the_data() {
             let B = DMatrix::from_row_slice(2, 1, &[1.0, delta]) * scale;
             let t = controllability(&A, &B);
             assert_eq!(t.rank, want, "scale {scale}, δ {delta}: {t:?}");
-            assert!(
-                t.tol > 0.0 && (t.tol / scale) < 1e-12,
-                "tolerance {} not relative",
-                t.tol
-            );
+            assert!(t.tol > 0.0 && (t.tol / scale) < 1e-12, "tolerance {} not relative", t.tol);
         }
     }
 }
@@ -143,19 +127,10 @@ fn staircase_succeeds_where_controllability_matrix_fails() {
 #[test]
 fn degenerate_inputs() {
     // Zero B: nothing is controllable; zero A with full B: everything is.
-    assert_eq!(
-        controllability(&diag(&[1.0, 2.0, 3.0]), &DMatrix::zeros(3, 2)).rank,
-        0
-    );
-    assert_eq!(
-        controllability(&DMatrix::zeros(3, 3), &DMatrix::identity(3, 3)).rank,
-        3
-    );
+    assert_eq!(controllability(&diag(&[1.0, 2.0, 3.0]), &DMatrix::zeros(3, 2)).rank, 0);
+    assert_eq!(controllability(&DMatrix::zeros(3, 3), &DMatrix::identity(3, 3)).rank, 3);
     // No inputs at all, and the empty system.
-    assert_eq!(
-        controllability(&diag(&[1.0]), &DMatrix::zeros(1, 0)).rank,
-        0
-    );
+    assert_eq!(controllability(&diag(&[1.0]), &DMatrix::zeros(1, 0)).rank, 0);
     let t = controllability(&DMatrix::zeros(0, 0), &DMatrix::zeros(0, 1));
     assert!(t.full() && t.n == 0);
     // Non-finite data certifies nothing.

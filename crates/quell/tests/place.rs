@@ -66,14 +66,8 @@ fn eigenvalues(M: &DMatrix<f64>) -> Vec<C64> {
     let n = M.nrows();
     let sigma = M.trace() / n.max(1) as f64;
     let shifted = M - DMatrix::<f64>::identity(n, n) * sigma;
-    let schur = shifted
-        .try_schur(f64::EPSILON, 100_000)
-        .expect("nalgebra Schur did not converge");
-    schur
-        .complex_eigenvalues()
-        .iter()
-        .map(|z| z + sigma)
-        .collect()
+    let schur = shifted.try_schur(f64::EPSILON, 100_000).expect("nalgebra Schur did not converge");
+    schur.complex_eigenvalues().iter().map(|z| z + sigma).collect()
 }
 
 /// Largest error |μ − p| / max(1, |p|) after a greedy nearest matching of the multisets.
@@ -133,15 +127,11 @@ fn poly_from_roots(roots: &[C64]) -> Vec<f64> {
 }
 
 fn assert_places(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[C64], tol: f64) -> DMatrix<f64> {
-    let K = place(A, B, poles)
-        .unwrap_or_else(|e| panic!("place failed: {e}\nA = {A}B = {B}poles = {poles:?}"));
+    let K = place(A, B, poles).unwrap_or_else(|e| panic!("place failed: {e}\nA = {A}B = {B}poles = {poles:?}"));
     assert_eq!(K.shape(), (B.ncols(), A.nrows()));
     assert!(K.iter().all(|x| x.is_finite()));
     let err = max_rel_mismatch(poles, &eigenvalues(&closed_loop(A, B, &K)));
-    assert!(
-        err <= tol,
-        "relative pole error {err:e} > {tol:e}\nA = {A}B = {B}poles = {poles:?}"
-    );
+    assert!(err <= tol, "relative pole error {err:e} > {tol:e}\nA = {A}B = {B}poles = {poles:?}");
     K
 }
 
@@ -150,30 +140,15 @@ fn assert_places(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[C64], tol: f64) ->
 /// the coefficients of ∏(s + max(1, |p|)); (2) if `semisimple`, for each distinct pole λ of
 /// multiplicity k the k smallest singular values of A − BK − λI are ≤ 1e-9·‖A − BK‖_F, i.e.
 /// λ has k independent eigenvectors (KNV0 returns a diagonalisable closed loop).
-fn assert_repeated(
-    A: &DMatrix<f64>,
-    B: &DMatrix<f64>,
-    poles: &[C64],
-    coeff_tol: f64,
-    semisimple: bool,
-) {
-    let K = place(A, B, poles)
-        .unwrap_or_else(|e| panic!("place failed: {e}\nA = {A}B = {B}poles = {poles:?}"));
+fn assert_repeated(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[C64], coeff_tol: f64, semisimple: bool) {
+    let K = place(A, B, poles).unwrap_or_else(|e| panic!("place failed: {e}\nA = {A}B = {B}poles = {poles:?}"));
     let M = closed_loop(A, B, &K);
     let n = M.nrows();
     let got = char_poly(&M);
     let want = poly_from_roots(poles);
-    let scale = poly_from_roots(
-        &poles
-            .iter()
-            .map(|p| re(-p.norm().max(1.0)))
-            .collect::<Vec<_>>(),
-    );
+    let scale = poly_from_roots(&poles.iter().map(|p| re(-p.norm().max(1.0))).collect::<Vec<_>>());
     for k in 0..=n {
-        assert!(
-            (got[k] - want[k]).abs() <= coeff_tol * scale[k],
-            "char poly {got:?} vs {want:?}"
-        );
+        assert!((got[k] - want[k]).abs() <= coeff_tol * scale[k], "char poly {got:?} vs {want:?}");
     }
     if semisimple {
         let norm = M.norm();
@@ -197,10 +172,7 @@ fn double_integrator_by_hand() {
     let A = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]);
     let B = DMatrix::from_row_slice(2, 1, &[0.0, 1.0]);
     let K = place(&A, &B, &reals(&[-1.0, -2.0])).unwrap();
-    assert!(
-        (K[(0, 0)] - 2.0).abs() < 1e-12 && (K[(0, 1)] - 3.0).abs() < 1e-12,
-        "K = {K}"
-    );
+    assert!((K[(0, 0)] - 2.0).abs() < 1e-12 && (K[(0, 1)] - 3.0).abs() < 1e-12, "K = {K}");
 }
 
 /// Complex pair on the double integrator: poles −1 ± 2i ⇔ s² + 2s + 5 ⇒ K = [5, 2] (by hand).
@@ -209,10 +181,7 @@ fn double_integrator_complex_pair_by_hand() {
     let A = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]);
     let B = DMatrix::from_row_slice(2, 1, &[0.0, 1.0]);
     let K = place(&A, &B, &[C64::new(-1.0, 2.0), C64::new(-1.0, -2.0)]).unwrap();
-    assert!(
-        (K[(0, 0)] - 5.0).abs() < 1e-12 && (K[(0, 1)] - 2.0).abs() < 1e-12,
-        "K = {K}"
-    );
+    assert!((K[(0, 0)] - 5.0).abs() < 1e-12 && (K[(0, 1)] - 2.0).abs() < 1e-12, "K = {K}");
 }
 
 /// The paper's observer example (Tu & Dudarenko 2026): L = place(Aᵀ, Cᵀ, p)ᵀ must give
@@ -224,15 +193,12 @@ fn paper_observer_example() {
     let A = DMatrix::from_row_slice(3, 3, &[-3.2, -1.7, -3.0, 2.8, 1.3, 4.0, 0.3, 0.3, -0.5]);
     let C = DMatrix::from_row_slice(2, 3, &[2.0, 2.0, 0.0, 2.0, 1.0, 2.0]);
     let p = reals(&[-2.0, -3.0, -4.0]);
-    let L = place(&A.transpose(), &C.transpose(), &p)
-        .unwrap()
-        .transpose();
+    let L = place(&A.transpose(), &C.transpose(), &p).unwrap().transpose();
     assert_eq!(L.shape(), (3, 2));
     let err = max_rel_mismatch(&p, &eigenvalues(&(&A - &L * &C)));
     assert!(err < 1e-10, "observer poles off by {err:e}");
 
-    let L_paper =
-        DMatrix::from_row_slice(3, 2, &[-8.0988, 4.4574, 10.6506, -5.0619, 2.7762, -1.1783]);
+    let L_paper = DMatrix::from_row_slice(3, 2, &[-8.0988, 4.4574, 10.6506, -5.0619, 2.7762, -1.1783]);
     let err = max_rel_mismatch(&p, &eigenvalues(&(&A - &L_paper * &C)));
     assert!(err < 1e-2, "paper's L places the poles only to {err:e}");
 }
@@ -262,10 +228,7 @@ fn wide_and_rank_deficient_b() {
     let b = rng.matrix(3, 1);
     let B = &b * DMatrix::from_row_slice(1, 3, &[1.0, 2.0, -1.0]);
     let K = place(&A, &B, &reals(&[-1.0, -2.0, -3.0])).unwrap();
-    let err = max_rel_mismatch(
-        &reals(&[-1.0, -2.0, -3.0]),
-        &eigenvalues(&closed_loop(&A, &B, &K)),
-    );
+    let err = max_rel_mismatch(&reals(&[-1.0, -2.0, -3.0]), &eigenvalues(&closed_loop(&A, &B, &K)));
     assert!(err < 1e-9, "{err:e}");
 }
 
@@ -289,13 +252,7 @@ fn repeated_poles_mimo() {
         let mut rng = Rng::new(100 + seed);
         let A = rng.matrix(6, 6);
         let B = rng.matrix(6, 3);
-        assert_repeated(
-            &A,
-            &B,
-            &reals(&[-1.0, -1.0, -1.0, -2.0, -2.0, -5.0]),
-            1e-9,
-            true,
-        );
+        assert_repeated(&A, &B, &reals(&[-1.0, -1.0, -1.0, -2.0, -2.0, -5.0]), 1e-9, true);
 
         let A = rng.matrix(4, 4);
         let B = rng.matrix(4, 2);
@@ -317,13 +274,7 @@ fn single_input_full_multiplicity_char_poly() {
     assert_eq!(expected, vec![16.0, 32.0, 24.0, 8.0, 1.0]);
     // The double-integrator chain and random single-input pairs.
     let mut systems = vec![(
-        DMatrix::from_row_slice(
-            4,
-            4,
-            &[
-                0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0.,
-            ],
-        ),
+        DMatrix::from_row_slice(4, 4, &[0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0.]),
         DMatrix::from_row_slice(4, 1, &[0., 0., 0., 1.]),
     )];
     for seed in 0..10 {
@@ -340,10 +291,7 @@ fn single_input_full_multiplicity_char_poly() {
 #[test]
 fn single_input_mixed_multiplicity() {
     let pair = [C64::new(-1.0, 1.0), C64::new(-1.0, -1.0)];
-    let cases: Vec<Vec<C64>> = vec![
-        reals(&[-1.0, -1.0, -1.0, -3.0, -3.0]),
-        vec![pair[0], pair[1], pair[1], pair[0]],
-    ];
+    let cases: Vec<Vec<C64>> = vec![reals(&[-1.0, -1.0, -1.0, -3.0, -3.0]), vec![pair[0], pair[1], pair[1], pair[0]]];
     for (i, poles) in cases.iter().enumerate() {
         let n = poles.len();
         for seed in 0..10 {
@@ -360,17 +308,11 @@ fn single_input_mixed_multiplicity() {
 fn error_uncontrollable_reports_rank() {
     let A = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 2.0]);
     let B = DMatrix::from_row_slice(2, 1, &[1.0, 0.0]);
-    assert_eq!(
-        place(&A, &B, &reals(&[-1.0, -2.0])),
-        Err(PlaceError::Uncontrollable { rank: 1, n: 2 })
-    );
+    assert_eq!(place(&A, &B, &reals(&[-1.0, -2.0])), Err(PlaceError::Uncontrollable { rank: 1, n: 2 }));
     // MIMO: a mode hidden from both inputs.
     let A = DMatrix::from_diagonal(&quell::nalgebra::DVector::from_vec(vec![1.0, 2.0, 3.0]));
     let B = DMatrix::from_row_slice(3, 2, &[1.0, 0.0, 0.0, 1.0, 0.0, 0.0]);
-    assert_eq!(
-        place(&A, &B, &reals(&[-1.0, -2.0, -3.0])),
-        Err(PlaceError::Uncontrollable { rank: 2, n: 3 })
-    );
+    assert_eq!(place(&A, &B, &reals(&[-1.0, -2.0, -3.0])), Err(PlaceError::Uncontrollable { rank: 2, n: 3 }));
 }
 
 #[test]
@@ -378,35 +320,17 @@ fn error_not_conjugate_closed() {
     let A = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]);
     let B = DMatrix::from_row_slice(2, 1, &[0.0, 1.0]);
     let err = place(&A, &B, &[C64::new(-1.0, 1.0), C64::new(-1.0, 1.0)]).unwrap_err();
-    assert!(
-        matches!(err, PlaceError::NotConjugateClosed { pole } if pole == C64::new(-1.0, 1.0)),
-        "{err}"
-    );
+    assert!(matches!(err, PlaceError::NotConjugateClosed { pole } if pole == C64::new(-1.0, 1.0)), "{err}");
     let err = place(&A, &B, &[C64::new(-1.0, 1.0), re(-2.0)]).unwrap_err();
-    assert!(
-        matches!(err, PlaceError::NotConjugateClosed { .. }),
-        "{err}"
-    );
+    assert!(matches!(err, PlaceError::NotConjugateClosed { .. }), "{err}");
 }
 
 #[test]
 fn error_wrong_count() {
     let A = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]);
     let B = DMatrix::from_row_slice(2, 1, &[0.0, 1.0]);
-    assert_eq!(
-        place(&A, &B, &reals(&[-1.0])),
-        Err(PlaceError::WrongCount {
-            expected: 2,
-            found: 1
-        })
-    );
-    assert_eq!(
-        place(&A, &B, &reals(&[-1.0, -2.0, -3.0])),
-        Err(PlaceError::WrongCount {
-            expected: 2,
-            found: 3
-        })
-    );
+    assert_eq!(place(&A, &B, &reals(&[-1.0])), Err(PlaceError::WrongCount { expected: 2, found: 1 }));
+    assert_eq!(place(&A, &B, &reals(&[-1.0, -2.0, -3.0])), Err(PlaceError::WrongCount { expected: 2, found: 3 }));
 }
 
 #[test]
@@ -415,62 +339,35 @@ fn error_multiplicity_above_rank_b() {
     let A = rng.matrix(3, 3);
     let B = rng.matrix(3, 2);
     let err = place(&A, &B, &reals(&[-1.0, -1.0, -1.0])).unwrap_err();
-    assert_eq!(
-        err,
-        PlaceError::Multiplicity {
-            pole: re(-1.0),
-            multiplicity: 3,
-            max: 2
-        }
-    );
+    assert_eq!(err, PlaceError::Multiplicity { pole: re(-1.0), multiplicity: 3, max: 2 });
     // rank(B) = 2 although B has 3 columns.
     let A = rng.matrix(3, 3);
     let B = rng.matrix(3, 2) * rng.matrix(2, 3);
     let err = place(&A, &B, &reals(&[-1.0, -1.0, -1.0])).unwrap_err();
-    assert_eq!(
-        err,
-        PlaceError::Multiplicity {
-            pole: re(-1.0),
-            multiplicity: 3,
-            max: 2
-        }
-    );
+    assert_eq!(err, PlaceError::Multiplicity { pole: re(-1.0), multiplicity: 3, max: 2 });
 }
 
 #[test]
 fn error_non_finite() {
     let A = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]);
     let B = DMatrix::from_row_slice(2, 1, &[0.0, 1.0]);
-    for bad in [
-        re(f64::NAN),
-        re(f64::INFINITY),
-        C64::new(-1.0, f64::NEG_INFINITY),
-    ] {
+    for bad in [re(f64::NAN), re(f64::INFINITY), C64::new(-1.0, f64::NEG_INFINITY)] {
         let err = place(&A, &B, &[bad, re(-1.0)]).unwrap_err();
         assert!(matches!(err, PlaceError::NonFinite { .. }), "{err}");
     }
     let mut A_nan = A.clone();
     A_nan[(0, 0)] = f64::NAN;
-    assert_eq!(
-        place(&A_nan, &B, &reals(&[-1.0, -2.0])),
-        Err(PlaceError::NonFiniteSystem { which: "A" })
-    );
+    assert_eq!(place(&A_nan, &B, &reals(&[-1.0, -2.0])), Err(PlaceError::NonFiniteSystem { which: "A" }));
     let mut B_inf = B.clone();
     B_inf[(0, 0)] = f64::INFINITY;
-    assert_eq!(
-        place(&A, &B_inf, &reals(&[-1.0, -2.0])),
-        Err(PlaceError::NonFiniteSystem { which: "B" })
-    );
+    assert_eq!(place(&A, &B_inf, &reals(&[-1.0, -2.0])), Err(PlaceError::NonFiniteSystem { which: "B" }));
 }
 
 /// Error messages say what to do.
 #[test]
 fn error_messages_are_actionable() {
     let msg = PlaceError::Uncontrollable { rank: 1, n: 2 }.to_string();
-    assert!(
-        msg.contains("rank") && msg.contains('1') && msg.contains('2'),
-        "{msg}"
-    );
+    assert!(msg.contains("rank") && msg.contains('1') && msg.contains('2'), "{msg}");
     let msg = PlaceError::Inaccurate { max_error: 1e-3 }.to_string();
     assert!(msg.contains("ill-conditioned"), "{msg}");
 }
@@ -522,35 +419,17 @@ fn random_systems_place_requested_poles() {
                 let size = eigenvector_condition(&M, &poles) * (A.norm() + B.norm() * K.norm());
                 let tol = if size <= 1e5 { 1e-8 } else { 1e-6 };
                 well[class] += usize::from(size <= 1e5);
-                assert!(
-                    err <= tol,
-                    "seed {seed}: error {err:e} > {tol:e} (κ·size {size:e}); n = {n}, m = {m}"
-                );
+                assert!(err <= tol, "seed {seed}: error {err:e} > {tol:e} (κ·size {size:e}); n = {n}, m = {m}");
             }
             Err(PlaceError::Inaccurate { .. }) => {}
             Err(e) => panic!("seed {seed}: place failed: {e}; n = {n}, m = {m}"),
         }
     }
-    eprintln!(
-        "single input: {} cases, {} placed, {} well conditioned",
-        total[0], ok[0], well[0]
-    );
-    eprintln!(
-        "multi input:  {} cases, {} placed, {} well conditioned",
-        total[1], ok[1], well[1]
-    );
-    assert!(
-        ok[1] * 100 >= total[1] * 98,
-        "KNV0 refused too many multi-input cases"
-    );
-    assert!(
-        well[1] * 100 >= total[1] * 60,
-        "too few well-conditioned multi-input cases"
-    );
-    assert!(
-        ok[0] * 100 >= total[0] * 60,
-        "too many single-input refusals"
-    );
+    eprintln!("single input: {} cases, {} placed, {} well conditioned", total[0], ok[0], well[0]);
+    eprintln!("multi input:  {} cases, {} placed, {} well conditioned", total[1], ok[1], well[1]);
+    assert!(ok[1] * 100 >= total[1] * 98, "KNV0 refused too many multi-input cases");
+    assert!(well[1] * 100 >= total[1] * 60, "too few well-conditioned multi-input cases");
+    assert!(ok[0] * 100 >= total[0] * 60, "too many single-input refusals");
 }
 
 proptest! {

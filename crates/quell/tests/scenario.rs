@@ -17,10 +17,7 @@ const DOCS: &str = include_str!("../../../docs/errors.md");
 fn with(edits: &[(&str, &str)]) -> String {
     let mut text = PAPER_EXAMPLE.to_string();
     for (from, to) in edits {
-        assert!(
-            text.contains(from),
-            "edit target not in the example: {from}"
-        );
+        assert!(text.contains(from), "edit target not in the example: {from}");
         text = text.replacen(from, to, 1);
     }
     text
@@ -44,18 +41,12 @@ fn check_upto(text: &str, key: &str, fragment: &str, stop: Option<&str>) {
         assert_eq!(s.key, key, "{full}");
     }
     assert!(full.starts_with(&format!("{key}: ")), "key {key}: {full}");
-    assert!(
-        full.contains(fragment),
-        "fragment {fragment:?} not in: {full}"
-    );
+    assert!(full.contains(fragment), "fragment {fragment:?} not in: {full}");
     let shown = match stop.and_then(|s| full.find(s)) {
         Some(i) => &full[..i],
         None => &full,
     };
-    assert!(
-        DOCS.contains(shown),
-        "docs/errors.md does not show this message:\n{full}"
-    );
+    assert!(DOCS.contains(shown), "docs/errors.md does not show this message:\n{full}");
 }
 
 const A_LINE: &str = "A = [[-3.2, -1.7, -3.0], [2.8, 1.3, 4.0], [0.3, 0.3, -0.5]]";
@@ -95,10 +86,7 @@ fn paper_example_parses_into_the_papers_numbers() {
     let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
     assert_eq!(s.name.as_deref(), Some("paper-example"));
     let p = &s.plant;
-    assert_eq!(
-        p.A,
-        m(&[&[-3.2, -1.7, -3.0], &[2.8, 1.3, 4.0], &[0.3, 0.3, -0.5]])
-    );
+    assert_eq!(p.A, m(&[&[-3.2, -1.7, -3.0], &[2.8, 1.3, 4.0], &[0.3, 0.3, -0.5]]));
     assert_eq!(p.B, m(&[&[-2.0, 1.0], &[2.0, -1.0], &[1.0, 0.0]]));
     assert_eq!(p.C, m(&[&[2.0, 2.0, 0.0], &[2.0, 1.0, 2.0]]));
     assert_eq!(p.D, m(&[&[1.0, -3.0], &[2.0, 1.0], &[3.0, 1.0]]));
@@ -106,23 +94,10 @@ fn paper_example_parses_into_the_papers_numbers() {
     assert_eq!(p.delays, vec![1.0, 3.0]);
     assert_eq!(p.x0.as_slice(), &[0.0, 0.0, 0.0]);
     let d = &s.design;
-    assert_eq!(
-        d.observer,
-        ObserverChoice::Gain(m(&[
-            &[-8.0988, 4.4574],
-            &[10.6506, -5.0619],
-            &[2.7762, -1.1783]
-        ]))
-    );
+    assert_eq!(d.observer, ObserverChoice::Gain(m(&[&[-8.0988, 4.4574], &[10.6506, -5.0619], &[2.7762, -1.1783]])));
     assert_eq!(d.channel_poles, vec![real(&[-6.0, -2.0]), real(&[-4.0])]);
-    assert_eq!(
-        d.reference_filter_poles,
-        vec![real(&[-1.0, -6.0]), real(&[-9.0])]
-    );
-    assert_eq!(
-        d.disturbance_filter_poles,
-        vec![real(&[-1.0, -3.0]), real(&[-1.0, -2.0, -3.0])]
-    );
+    assert_eq!(d.reference_filter_poles, vec![real(&[-1.0, -6.0]), real(&[-9.0])]);
+    assert_eq!(d.disturbance_filter_poles, vec![real(&[-1.0, -3.0]), real(&[-1.0, -2.0, -3.0])]);
     assert_eq!(d.mu, vec![20.0, 30.0]);
     assert_eq!(d.beta, 1.0);
     // g(t) = [3 sin 2t, 2], ω(t) = [sin t, 1 + 2 sin 2t].
@@ -133,16 +108,7 @@ fn paper_example_parses_into_the_papers_numbers() {
         assert_eq!(g, [3.0 * (2.0 * t).sin(), 2.0]);
         assert_eq!(w, [t.sin(), 1.0 + 2.0 * (2.0 * t).sin()]);
     }
-    assert_eq!(
-        s.simulation,
-        Simulation {
-            t_end: 100.0,
-            output_step: 0.1,
-            rtol: 1e-9,
-            atol: 1e-9,
-            sample_time: None
-        }
-    );
+    assert_eq!(s.simulation, Simulation { t_end: 100.0, output_step: 0.1, rtol: 1e-9, atol: 1e-9, sample_time: None });
     assert_eq!(s.noise, None);
 }
 
@@ -161,12 +127,7 @@ fn fuzz_seeds_parse() {
     let mut seeds = 0;
     for entry in std::fs::read_dir(dir).unwrap() {
         let path = entry.unwrap().path();
-        if path
-            .file_name()
-            .unwrap()
-            .to_string_lossy()
-            .starts_with("seed-")
-        {
+        if path.file_name().unwrap().to_string_lossy().starts_with("seed-") {
             Scenario::from_path(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
             seeds += 1;
         }
@@ -181,17 +142,10 @@ fn pole_pairs_expand_into_both_conjugates() {
         (L_LINE, "observer_poles = [-2.0, [-3.0, 0.5]]"),
     ]))
     .unwrap();
-    assert_eq!(
-        s.design.channel_poles[0],
-        vec![Complex::new(-1.5, 2.0), Complex::new(-1.5, -2.0)]
-    );
+    assert_eq!(s.design.channel_poles[0], vec![Complex::new(-1.5, 2.0), Complex::new(-1.5, -2.0)]);
     assert_eq!(
         s.design.observer,
-        ObserverChoice::Poles(vec![
-            Complex::new(-2.0, 0.0),
-            Complex::new(-3.0, 0.5),
-            Complex::new(-3.0, -0.5)
-        ])
+        ObserverChoice::Poles(vec![Complex::new(-2.0, 0.0), Complex::new(-3.0, 0.5), Complex::new(-3.0, -0.5)])
     );
 }
 
@@ -236,27 +190,14 @@ fn defaults_for_optional_keys() {
     // Phase defaults to 0, bias to 0, harmonics to none.
     assert_eq!(
         s.disturbance.components[0],
-        Component {
-            bias: 0.0,
-            harmonics: vec![Harmonic {
-                amplitude: 1.0,
-                frequency: 1.0,
-                phase: 0.0
-            }]
-        }
+        Component { bias: 0.0, harmonics: vec![Harmonic { amplitude: 1.0, frequency: 1.0, phase: 0.0 }] }
     );
 }
 
 #[test]
 fn no_disturbance_means_k_zero() {
     for (d, q) in [("", ""), ("D = []\n", "Q = []\n")] {
-        let s = Scenario::from_toml(&with(&[
-            (D_LINE, d),
-            (Q_LINE, q),
-            (DISTURBANCE, ""),
-            (DIST_FILTER, ""),
-        ]))
-        .unwrap();
+        let s = Scenario::from_toml(&with(&[(D_LINE, d), (Q_LINE, q), (DISTURBANCE, ""), (DIST_FILTER, "")])).unwrap();
         assert_eq!(s.plant.k(), 0);
         assert_eq!(s.plant.D.shape(), (3, 0));
         assert_eq!(s.plant.Q.shape(), (2, 0));
@@ -270,22 +211,12 @@ fn sampled_data_run_with_noise() {
     let text = with(&[(SAMPLED, "sample_time = 0.001")]) + "[noise]\nstd = [0.03, 0]\nseed = 7\n";
     let s = Scenario::from_toml(&text).unwrap();
     assert_eq!(s.simulation.sample_time, Some(0.001));
-    assert_eq!(
-        s.noise,
-        Some(Noise {
-            std: vec![0.03, 0.0],
-            seed: 7
-        })
-    );
+    assert_eq!(s.noise, Some(Noise { std: vec![0.03, 0.0], seed: 7 }));
 }
 
 #[test]
 fn exosystem_dimension_counts_distinct_nonzero_harmonics_and_constant() {
-    let h = |amplitude, frequency, phase| Harmonic {
-        amplitude,
-        frequency,
-        phase,
-    };
+    let h = |amplitude, frequency, phase| Harmonic { amplitude, frequency, phase };
     let c = |bias, harmonics| Component { bias, harmonics };
     let dim = |c: &Component| Exosystem::of(c).dim();
     assert_eq!(dim(&c(0.0, vec![])), 0);
@@ -295,30 +226,17 @@ fn exosystem_dimension_counts_distinct_nonzero_harmonics_and_constant() {
     assert_eq!(dim(&c(0.0, vec![h(1.0, 2.0, 0.0), h(2.0, 2.0, 1.0)])), 2);
     assert_eq!(dim(&c(0.0, vec![h(0.0, 3.0, 0.0)])), 0);
     // sin t + sin(t + π) = 0.
-    assert_eq!(
-        dim(&c(
-            0.0,
-            vec![h(1.0, 1.0, 0.0), h(1.0, 1.0, std::f64::consts::PI)]
-        )),
-        0
-    );
+    assert_eq!(dim(&c(0.0, vec![h(1.0, 1.0, 0.0), h(1.0, 1.0, std::f64::consts::PI)])), 0);
     // A zero-frequency harmonic a·sin(φ) is a constant.
     assert_eq!(dim(&c(0.0, vec![h(1.0, 0.0, 1.0)])), 1);
     assert_eq!(dim(&c(0.0, vec![h(1.0, 0.0, 0.0)])), 0);
-    assert_eq!(
-        Exosystem::of(&c(1.0, vec![h(1.0, 1.0, 0.0), h(1.0, 2.0, 0.0)])).describe(),
-        "2 harmonics + bias"
-    );
+    assert_eq!(Exosystem::of(&c(1.0, vec![h(1.0, 1.0, 0.0), h(1.0, 2.0, 0.0)])).describe(), "2 harmonics + bias");
 }
 
 #[test]
 fn error_display_is_key_colon_message() {
     let e = Scenario::from_toml(&with(&[(DELAYS, "delays = \"1, 3\"")])).unwrap_err();
-    assert_eq!(
-        e.to_string(),
-        format!("{}: {}", e.key, e.message),
-        "Display is key: message"
-    );
+    assert_eq!(e.to_string(), format!("{}: {}", e.key, e.message), "Display is key: message");
 }
 
 proptest! {
@@ -343,11 +261,7 @@ proptest! {
 
 #[test]
 fn syntax_error() {
-    check(
-        &with(&[(C_LINE, "C = [[2.0, 2.0, 0.0], [2.0, 1.0, 2.0]")]),
-        "syntax",
-        "line 6, column",
-    );
+    check(&with(&[(C_LINE, "C = [[2.0, 2.0, 0.0], [2.0, 1.0, 2.0]")]), "syntax", "line 6, column");
 }
 
 #[test]
@@ -361,11 +275,7 @@ fn unknown_top_level_key() {
 
 #[test]
 fn unknown_key_in_table() {
-    check(
-        &with(&[(DELAYS, "delay = [1.0, 3.0]")]),
-        "plant.delay",
-        "did you mean `delays`?",
-    );
+    check(&with(&[(DELAYS, "delay = [1.0, 3.0]")]), "plant.delay", "did you mean `delays`?");
 }
 
 #[test]
@@ -384,47 +294,27 @@ fn missing_table() {
 
 #[test]
 fn missing_key() {
-    check(
-        &with(&[(B_LINE, "")]),
-        "plant.B",
-        "missing; required: the n×m input matrix",
-    );
+    check(&with(&[(B_LINE, "")]), "plant.B", "missing; required: the n×m input matrix");
 }
 
 #[test]
 fn wrong_type() {
-    check(
-        &with(&[(DELAYS, "delays = \"1, 3\"")]),
-        "plant.delays",
-        "expected an array of numbers, found a string",
-    );
+    check(&with(&[(DELAYS, "delays = \"1, 3\"")]), "plant.delays", "expected an array of numbers, found a string");
 }
 
 #[test]
 fn wrong_type_of_entry() {
-    check(
-        &with(&[("[[-3.2, -1.7,", "[[-3.2, \"-1.7\",")]),
-        "plant.A[0][1]",
-        "expected a number, found a string",
-    );
+    check(&with(&[("[[-3.2, -1.7,", "[[-3.2, \"-1.7\",")]), "plant.A[0][1]", "expected a number, found a string");
 }
 
 #[test]
 fn matrix_without_rows() {
-    check(
-        &with(&[(C_LINE, "C = [2.0, 2.0, 0.0]")]),
-        "plant.C",
-        "put each row in brackets",
-    );
+    check(&with(&[(C_LINE, "C = [2.0, 2.0, 0.0]")]), "plant.C", "put each row in brackets");
 }
 
 #[test]
 fn ragged_matrix() {
-    check(
-        &with(&[("[2.8, 1.3, 4.0]", "[2.8, 1.3]")]),
-        "plant.A[1]",
-        "expected 3 entries",
-    );
+    check(&with(&[("[2.8, 1.3, 4.0]", "[2.8, 1.3]")]), "plant.A[1]", "expected 3 entries");
 }
 
 #[test]
@@ -438,83 +328,47 @@ fn non_square_A() {
 
 #[test]
 fn wrong_shape() {
-    check(
-        &with(&[(C_LINE, "C = [[2.0, 2.0], [2.0, 1.0]]")]),
-        "plant.C",
-        "expected 2×3 (m×n), found 2×2",
-    );
+    check(&with(&[(C_LINE, "C = [[2.0, 2.0], [2.0, 1.0]]")]), "plant.C", "expected 2×3 (m×n), found 2×2");
 }
 
 #[test]
 fn wrong_shape_of_Q() {
-    check(
-        &with(&[(Q_LINE, "Q = [[1.0], [1.0]]\n")]),
-        "plant.Q",
-        "expected 2×2 (m×k), found 2×1",
-    );
+    check(&with(&[(Q_LINE, "Q = [[1.0], [1.0]]\n")]), "plant.Q", "expected 2×2 (m×k), found 2×1");
 }
 
 #[test]
 fn empty_plant() {
-    check(
-        &with(&[(A_LINE, "A = []")]),
-        "plant.A",
-        "at least one state",
-    );
+    check(&with(&[(A_LINE, "A = []")]), "plant.A", "at least one state");
 }
 
 #[test]
 fn non_finite_entry() {
-    check(
-        &with(&[("[0.3, 0.3, -0.5]", "[0.3, nan, -0.5]")]),
-        "plant.A[2][1]",
-        "expected a finite number, found NaN",
-    );
+    check(&with(&[("[0.3, 0.3, -0.5]", "[0.3, nan, -0.5]")]), "plant.A[2][1]", "expected a finite number, found NaN");
 }
 
 #[test]
 fn infinite_entry() {
-    check(
-        &with(&[(MU, "mu = [20.0, inf]")]),
-        "design.mu[1]",
-        "expected a finite number, found inf",
-    );
+    check(&with(&[(MU, "mu = [20.0, inf]")]), "design.mu[1]", "expected a finite number, found inf");
 }
 
 #[test]
 fn negative_delay() {
-    check(
-        &with(&[(DELAYS, "delays = [1.0, -3.0]")]),
-        "plant.delays[1]",
-        "expected a finite delay ≥ 0, found -3",
-    );
+    check(&with(&[(DELAYS, "delays = [1.0, -3.0]")]), "plant.delays[1]", "expected a finite delay ≥ 0, found -3");
 }
 
 #[test]
 fn delay_count() {
-    check(
-        &with(&[(DELAYS, "delays = [1.0]")]),
-        "plant.delays",
-        "expected 2 entries (one per input",
-    );
+    check(&with(&[(DELAYS, "delays = [1.0]")]), "plant.delays", "expected 2 entries (one per input");
 }
 
 #[test]
 fn x0_count() {
-    check(
-        &with(&[(X0, "x0 = [0.0, 0.0]")]),
-        "plant.x0",
-        "expected 3 entries (one per state",
-    );
+    check(&with(&[(X0, "x0 = [0.0, 0.0]")]), "plant.x0", "expected 3 entries (one per state");
 }
 
 #[test]
 fn missing_D_with_disturbance() {
-    check(
-        &with(&[(D_LINE, "")]),
-        "plant.D",
-        "[disturbance] has 2 components",
-    );
+    check(&with(&[(D_LINE, "")]), "plant.D", "[disturbance] has 2 components");
 }
 
 #[test]
@@ -524,20 +378,13 @@ fn missing_Q_with_D() {
 
 #[test]
 fn missing_disturbance_with_D() {
-    check(
-        &with(&[(DISTURBANCE, "")]),
-        "disturbance",
-        "or remove plant.D and plant.Q",
-    );
+    check(&with(&[(DISTURBANCE, "")]), "disturbance", "or remove plant.D and plant.Q");
 }
 
 #[test]
 fn disturbance_component_count() {
     check(
-        &with(&[(
-            "components = [ { harmonics = [{ amplitude = 1.0, frequency = 1.0 }] },\n",
-            "components = [\n",
-        )]),
+        &with(&[("components = [ { harmonics = [{ amplitude = 1.0, frequency = 1.0 }] },\n", "components = [\n")]),
         "disturbance.components",
         "expected 2 components (one per column of plant.D, k = 2), found 1",
     );
@@ -545,11 +392,7 @@ fn disturbance_component_count() {
 
 #[test]
 fn reference_component_count() {
-    check(
-        &with(&[(", { bias = 2.0 } ]", " ]")]),
-        "reference.components",
-        "expected 2 components (one per output",
-    );
+    check(&with(&[(", { bias = 2.0 } ]", " ]")]), "reference.components", "expected 2 components (one per output");
 }
 
 #[test]
@@ -572,23 +415,12 @@ fn missing_amplitude() {
 
 #[test]
 fn both_observer_choices() {
-    check(
-        &with(&[(
-            L_LINE,
-            &format!("{L_LINE}\nobserver_poles = [-2.0, -3.0, -4.0]"),
-        )]),
-        "design",
-        "give exactly one",
-    );
+    check(&with(&[(L_LINE, &format!("{L_LINE}\nobserver_poles = [-2.0, -3.0, -4.0]"))]), "design", "give exactly one");
 }
 
 #[test]
 fn neither_observer_choice() {
-    check(
-        &with(&[(L_LINE, "")]),
-        "design.observer_gain",
-        "give exactly one of design.observer_gain",
-    );
+    check(&with(&[(L_LINE, "")]), "design.observer_gain", "give exactly one of design.observer_gain");
 }
 
 #[test]
@@ -612,10 +444,7 @@ fn pair_with_negative_imaginary_part() {
 #[test]
 fn pole_of_wrong_form() {
     check(
-        &with(&[(
-            REF_FILTER,
-            "reference_filter_poles = [[[-1.0, 2.0, 3.0]], [-9.0]]",
-        )]),
+        &with(&[(REF_FILTER, "reference_filter_poles = [[[-1.0, 2.0, 3.0]], [-9.0]]")]),
         "design.reference_filter_poles[0][0]",
         "found an array of 3 entries",
     );
@@ -642,10 +471,7 @@ fn reference_internal_model_order() {
 #[test]
 fn disturbance_internal_model_order() {
     check(
-        &with(&[(
-            DIST_FILTER,
-            "disturbance_filter_poles = [[-1.0, -3.0], [-1.0, -2.0]]",
-        )]),
+        &with(&[(DIST_FILTER, "disturbance_filter_poles = [[-1.0, -3.0], [-1.0, -2.0]]")]),
         "design.disturbance_filter_poles[1]",
         "disturbance component 2 (1 harmonic + bias) needs at least 3 filter poles",
     );
@@ -653,20 +479,12 @@ fn disturbance_internal_model_order() {
 
 #[test]
 fn t_end_not_positive() {
-    check(
-        &with(&[(T_END, "t_end = 0")]),
-        "simulation.t_end",
-        "expected a final time > 0, found 0",
-    );
+    check(&with(&[(T_END, "t_end = 0")]), "simulation.t_end", "expected a final time > 0, found 0");
 }
 
 #[test]
 fn output_step_not_positive() {
-    check(
-        &with(&[(OUTPUT_STEP, "output_step = -0.1 ")]),
-        "simulation.output_step",
-        "expected an output step > 0",
-    );
+    check(&with(&[(OUTPUT_STEP, "output_step = -0.1 ")]), "simulation.output_step", "expected an output step > 0");
 }
 
 #[test]
@@ -680,29 +498,17 @@ fn output_step_beyond_t_end() {
 
 #[test]
 fn tolerance_not_positive() {
-    check(
-        &with(&[("rtol = 1e-9", "rtol = 0.0")]),
-        "simulation.rtol",
-        "expected a relative tolerance > 0",
-    );
+    check(&with(&[("rtol = 1e-9", "rtol = 0.0")]), "simulation.rtol", "expected a relative tolerance > 0");
 }
 
 #[test]
 fn sample_time_not_positive() {
-    check(
-        &with(&[(SAMPLED, "sample_time = -0.001")]),
-        "simulation.sample_time",
-        "expected a sampling period > 0",
-    );
+    check(&with(&[(SAMPLED, "sample_time = -0.001")]), "simulation.sample_time", "expected a sampling period > 0");
 }
 
 #[test]
 fn noise_without_sample_time() {
-    check(
-        &(PAPER_EXAMPLE.to_string() + "[noise]\nstd = [0.03, 0.02]\n"),
-        "noise",
-        "set simulation.sample_time",
-    );
+    check(&(PAPER_EXAMPLE.to_string() + "[noise]\nstd = [0.03, 0.02]\n"), "noise", "set simulation.sample_time");
 }
 
 #[test]
@@ -762,38 +568,22 @@ fn reference_filter_list_count() {
 
 #[test]
 fn disturbance_filter_list_count() {
-    check(
-        &with(&[(DIST_FILTER, "")]),
-        "design.disturbance_filter_poles",
-        "expected 2 entries",
-    );
+    check(&with(&[(DIST_FILTER, "")]), "design.disturbance_filter_poles", "expected 2 entries");
 }
 
 #[test]
 fn mu_count() {
-    check(
-        &with(&[(MU, "mu = [20.0]")]),
-        "design.mu",
-        "expected 2 entries (one per channel), got 1",
-    );
+    check(&with(&[(MU, "mu = [20.0]")]), "design.mu", "expected 2 entries (one per channel), got 1");
 }
 
 #[test]
 fn negative_mu() {
-    check(
-        &with(&[(MU, "mu = [20.0, -1.0]")]),
-        "design.mu[1]",
-        "expected a finite adaptation gain ≥ 0, got -1",
-    );
+    check(&with(&[(MU, "mu = [20.0, -1.0]")]), "design.mu[1]", "expected a finite adaptation gain ≥ 0, got -1");
 }
 
 #[test]
 fn beta_not_positive() {
-    check(
-        &with(&[(BETA, "beta = 0.0 ")]),
-        "design.beta",
-        "expected a finite β > 0",
-    );
+    check(&with(&[(BETA, "beta = 0.0 ")]), "design.beta", "expected a finite β > 0");
 }
 
 #[test]
@@ -808,10 +598,7 @@ fn channel_pole_not_hurwitz() {
 #[test]
 fn filter_pole_not_hurwitz() {
     check(
-        &with(&[(
-            REF_FILTER,
-            "reference_filter_poles = [[[0.0, 2.0]], [-9.0]]",
-        )]),
+        &with(&[(REF_FILTER, "reference_filter_poles = [[[0.0, 2.0]], [-9.0]]")]),
         "design.reference_filter_poles[0]",
         "internal-model filter poles must be Hurwitz",
     );
@@ -822,14 +609,8 @@ fn empty_filter_pole_list() {
     // A component that is identically zero needs no internal model, but its list must not be empty.
     check(
         &with(&[
-            (
-                "[[-1.0, -3.0], [-1.0, -2.0, -3.0]]",
-                "[[], [-1.0, -2.0, -3.0]]",
-            ),
-            (
-                "amplitude = 1.0, frequency = 1.0",
-                "amplitude = 0.0, frequency = 1.0",
-            ),
+            ("[[-1.0, -3.0], [-1.0, -2.0, -3.0]]", "[[], [-1.0, -2.0, -3.0]]"),
+            ("amplitude = 1.0, frequency = 1.0", "amplitude = 0.0, frequency = 1.0"),
         ]),
         "design.disturbance_filter_poles[0]",
         "the list is empty",
@@ -850,10 +631,7 @@ fn channel_pole_count_vs_relative_degree() {
 #[test]
 fn observer_gain_shape() {
     check(
-        &with(&[(
-            L_LINE,
-            "observer_gain = [[-8.0988, 4.4574], [10.6506, -5.0619]]",
-        )]),
+        &with(&[(L_LINE, "observer_gain = [[-8.0988, 4.4574], [10.6506, -5.0619]]")]),
         "design.observer_gain",
         "expected a 3×2 matrix, found 2×2",
     );
@@ -862,10 +640,7 @@ fn observer_gain_shape() {
 #[test]
 fn observer_gain_unstable() {
     check(
-        &with(&[(
-            L_LINE,
-            "observer_gain = [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]]",
-        )]),
+        &with(&[(L_LINE, "observer_gain = [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]]")]),
         "design.observer_gain",
         "A − LC is not Hurwitz",
     );
@@ -894,10 +669,7 @@ fn uncontrollable_plant() {
     // The third state of diag(-1, -2, 3) is reached by no input.
     check_upto(
         &with(&[
-            (
-                A_LINE,
-                "A = [[-1.0, 0.0, 0.0], [0.0, -2.0, 0.0], [0.0, 0.0, 3.0]]",
-            ),
+            (A_LINE, "A = [[-1.0, 0.0, 0.0], [0.0, -2.0, 0.0], [0.0, 0.0, 3.0]]"),
             (B_LINE, "B = [[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]]\n"),
         ]),
         "plant",

@@ -71,19 +71,8 @@ fn full_left_svd(blk: &DMatrix<f64>) -> Option<(DMatrix<f64>, Vec<f64>)> {
 /// It stops when `r = 0` (the rest is uncontrollable) or all `n` states are reached.
 pub(crate) fn staircase(A: &DMatrix<f64>, B: &DMatrix<f64>, tol: f64) -> Staircase {
     let n = A.nrows();
-    assert_eq!(
-        A.ncols(),
-        n,
-        "A must be square, got {}×{}",
-        A.nrows(),
-        A.ncols()
-    );
-    assert_eq!(
-        B.nrows(),
-        n,
-        "B must have {n} rows (as A), got {}",
-        B.nrows()
-    );
+    assert_eq!(A.ncols(), n, "A must be square, got {}×{}", A.nrows(), A.ncols());
+    assert_eq!(B.nrows(), n, "B must have {n} rows (as A), got {}", B.nrows());
     let mut At = A.clone();
     let mut Bt = B.clone();
     let mut Z = DMatrix::<f64>::identity(n, n);
@@ -92,11 +81,8 @@ pub(crate) fn staircase(A: &DMatrix<f64>, B: &DMatrix<f64>, tol: f64) -> Stairca
     let mut prev = 0usize;
     while offset < n {
         let nk = n - offset;
-        let blk: DMatrix<f64> = if blocks.is_empty() {
-            Bt.clone()
-        } else {
-            At.view((offset, prev), (nk, offset - prev)).into_owned()
-        };
+        let blk: DMatrix<f64> =
+            if blocks.is_empty() { Bt.clone() } else { At.view((offset, prev), (nk, offset - prev)).into_owned() };
         if blk.ncols() == 0 {
             break;
         }
@@ -113,8 +99,7 @@ pub(crate) fn staircase(A: &DMatrix<f64>, B: &DMatrix<f64>, tol: f64) -> Stairca
         let cols_a = At.view((0, offset), (n, nk)) * &U;
         At.view_mut((0, offset), (n, nk)).copy_from(&cols_a);
         let rows_b = U.transpose() * Bt.view((offset, 0), (nk, Bt.ncols()));
-        Bt.view_mut((offset, 0), (nk, Bt.ncols()))
-            .copy_from(&rows_b);
+        Bt.view_mut((offset, 0), (nk, Bt.ncols())).copy_from(&rows_b);
         let cols_z = Z.view((0, offset), (n, nk)) * &U;
         Z.view_mut((0, offset), (n, nk)).copy_from(&cols_z);
         // The coupling block is now [R; 0] up to the neglected singular values: make it exact.
@@ -129,13 +114,7 @@ pub(crate) fn staircase(A: &DMatrix<f64>, B: &DMatrix<f64>, tol: f64) -> Stairca
         prev = offset;
         offset += r;
     }
-    Staircase {
-        At,
-        Bt,
-        Z,
-        blocks,
-        rank: offset,
-    }
+    Staircase { At, Bt, Z, blocks, rank: offset }
 }
 
 /// Controllability of (A, B): the dimension of the controllable subspace, numerically.
@@ -149,27 +128,12 @@ pub fn controllability(A: &DMatrix<f64>, B: &DMatrix<f64>) -> RankTest {
     let n = A.nrows();
     let tol = staircase_tol(A, B);
     if A.iter().chain(B.iter()).any(|x| !x.is_finite()) {
-        assert_eq!(
-            A.ncols(),
-            n,
-            "A must be square, got {}×{}",
-            A.nrows(),
-            A.ncols()
-        );
-        assert_eq!(
-            B.nrows(),
-            n,
-            "B must have {n} rows (as A), got {}",
-            B.nrows()
-        );
+        assert_eq!(A.ncols(), n, "A must be square, got {}×{}", A.nrows(), A.ncols());
+        assert_eq!(B.nrows(), n, "B must have {n} rows (as A), got {}", B.nrows());
         return RankTest { rank: 0, n, tol };
     }
     let s = staircase(A, B, tol);
-    RankTest {
-        rank: s.rank,
-        n,
-        tol,
-    }
+    RankTest { rank: s.rank, n, tol }
 }
 
 /// Observability of (A, C), by duality with [`controllability`] of (Aᵀ, Cᵀ).

@@ -191,13 +191,13 @@ impl Design {
         count("design.channel_poles", "output", m, spec.channel_poles.len())?;
         count(
             "design.reference_filter_poles",
-            "reference component (one per output)",
+            "reference component, i.e. one per output",
             m,
             spec.reference_filter_poles.len(),
         )?;
         count(
             "design.disturbance_filter_poles",
-            "disturbance component (one per column of plant.D)",
+            "disturbance component, i.e. one per column of plant.D",
             k,
             spec.disturbance_filter_poles.len(),
         )?;

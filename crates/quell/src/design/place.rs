@@ -42,9 +42,7 @@ pub enum PlaceError {
          need {n}; uncontrollable modes cannot be moved by feedback — check B or remove them"
     )]
     Uncontrollable { rank: usize, n: usize },
-    #[error(
-        "expected {expected} poles (one per state), got {found}; give exactly one pole per state"
-    )]
+    #[error("expected {expected} poles (one per state), got {found}; give exactly one pole per state")]
     WrongCount { expected: usize, found: usize },
     #[error(
         "pole {pole} has no complex-conjugate partner in the list; complex poles must come in \
@@ -55,11 +53,7 @@ pub enum PlaceError {
         "pole {pole} is requested {multiplicity} times, but rank(B) = {max} allows at most {max}; \
          spread the repeated poles slightly or use fewer copies"
     )]
-    Multiplicity {
-        pole: Complex<f64>,
-        multiplicity: usize,
-        max: usize,
-    },
+    Multiplicity { pole: Complex<f64>, multiplicity: usize, max: usize },
     #[error("pole {pole} is not a finite number; request finite poles")]
     NonFinite { pole: Complex<f64> },
     #[error("matrix {which} contains NaN or infinite entries; fix the model")]
@@ -96,36 +90,15 @@ enum Slot {
 /// An observer gain follows by duality: `L = place(Aᵀ, Cᵀ, p)ᵀ` gives eig(A − L C) = p.
 ///
 /// Panics if A is not square or B has a different number of rows than A.
-pub fn place(
-    A: &DMatrix<f64>,
-    B: &DMatrix<f64>,
-    poles: &[Complex<f64>],
-) -> Result<DMatrix<f64>, PlaceError> {
+pub fn place(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[Complex<f64>]) -> Result<DMatrix<f64>, PlaceError> {
     let n = A.nrows();
-    assert_eq!(
-        A.ncols(),
-        n,
-        "place: A must be square, got {}×{}",
-        A.nrows(),
-        A.ncols()
-    );
-    assert_eq!(
-        B.nrows(),
-        n,
-        "place: B must have {n} rows (as A), got {}",
-        B.nrows()
-    );
+    assert_eq!(A.ncols(), n, "place: A must be square, got {}×{}", A.nrows(), A.ncols());
+    assert_eq!(B.nrows(), n, "place: B must have {n} rows (as A), got {}", B.nrows());
     let m = B.ncols();
     if poles.len() != n {
-        return Err(PlaceError::WrongCount {
-            expected: n,
-            found: poles.len(),
-        });
+        return Err(PlaceError::WrongCount { expected: n, found: poles.len() });
     }
-    if let Some(&pole) = poles
-        .iter()
-        .find(|p| !(p.re.is_finite() && p.im.is_finite()))
-    {
+    if let Some(&pole) = poles.iter().find(|p| !(p.re.is_finite() && p.im.is_finite())) {
         return Err(PlaceError::NonFinite { pole });
     }
     let slots = classify(poles)?;
@@ -152,16 +125,12 @@ pub fn place(
     }
 
     // Reduce B to full column rank: B ≈ U_r Σ_r V_rᵀ, place with B_r = U_r Σ_r, K = V_r K_r.
-    let svd =
-        B.clone()
-            .try_svd(true, true, f64::EPSILON, 10_000)
-            .ok_or(PlaceError::Inaccurate {
-                max_error: f64::INFINITY,
-            })?;
+    let svd = B
+        .clone()
+        .try_svd(true, true, f64::EPSILON, 10_000)
+        .ok_or(PlaceError::Inaccurate { max_error: f64::INFINITY })?;
     let (Some(U), Some(Vt)) = (svd.u.as_ref(), svd.v_t.as_ref()) else {
-        return Err(PlaceError::Inaccurate {
-            max_error: f64::INFINITY,
-        });
+        return Err(PlaceError::Inaccurate { max_error: f64::INFINITY });
     };
     let mut Br = U.columns(0, r).into_owned();
     for j in 0..r {
@@ -174,13 +143,8 @@ pub fn place(
     // determined: always for r > 1 (KNV0 chooses them), for r = 1 if the poles are distinct.
     let (Kr, X) = if r == 1 {
         let Kr = single_input(A, &Br, &slots)?;
-        let distinct =
-            (0..expanded.len()).all(|i| (0..i).all(|j| !same_pole(expanded[i], expanded[j])));
-        let X = if distinct {
-            Some(eigenvectors_single_input(A, &Br, &slots)?)
-        } else {
-            None
-        };
+        let distinct = (0..expanded.len()).all(|i| (0..i).all(|j| !same_pole(expanded[i], expanded[j])));
+        let X = if distinct { Some(eigenvectors_single_input(A, &Br, &slots)?) } else { None };
         (Kr, X)
     } else {
         let (Kr, X) = knv0(A, &Br, &slots)?;
@@ -250,11 +214,7 @@ fn check_multiplicity(poles: &[C64], max: usize) -> Result<(), PlaceError> {
     for &p in poles {
         let multiplicity = poles.iter().filter(|&&q| same_pole(p, q)).count();
         if multiplicity > max {
-            return Err(PlaceError::Multiplicity {
-                pole: p,
-                multiplicity,
-                max,
-            });
+            return Err(PlaceError::Multiplicity { pole: p, multiplicity, max });
         }
     }
     Ok(())
@@ -263,11 +223,7 @@ fn check_multiplicity(poles: &[C64], max: usize) -> Result<(), PlaceError> {
 /// Single-input placement for `b` (n × 1): Ackermann's formula k = e_nᵀ C⁻¹ p(A) evaluated in
 /// the orthogonal Hessenberg coordinates of the staircase (Zᵀ A Z = H, Zᵀ b = β e₁), where the
 /// controllability matrix C is upper triangular, so e_nᵀ C⁻¹ = e_nᵀ / (β ∏ h_{i+1,i}).
-fn single_input(
-    A: &DMatrix<f64>,
-    b: &DMatrix<f64>,
-    slots: &[Slot],
-) -> Result<DMatrix<f64>, PlaceError> {
+fn single_input(A: &DMatrix<f64>, b: &DMatrix<f64>, slots: &[Slot]) -> Result<DMatrix<f64>, PlaceError> {
     let n = A.nrows();
     let st = staircase(A, b, staircase_tol(A, b));
     if st.rank < n {
@@ -303,23 +259,17 @@ fn single_input(
         }
     }
     if w.iter().any(|x| !x.is_finite()) {
-        return Err(PlaceError::Inaccurate {
-            max_error: f64::INFINITY,
-        });
+        return Err(PlaceError::Inaccurate { max_error: f64::INFINITY });
     }
     Ok(w * st.Z.transpose())
 }
 
 /// Deterministic, generic coefficients for initial eigenvector choices (a tiny LCG).
 fn generic_coeffs(seed: usize, len: usize) -> Vec<f64> {
-    let mut state = (seed as u64)
-        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
-        .wrapping_add(0x2545_F491_4F6C_DD1D);
+    let mut state = (seed as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(0x2545_F491_4F6C_DD1D);
     (0..len)
         .map(|_| {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
+            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
             ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
         })
         .collect()
@@ -327,11 +277,7 @@ fn generic_coeffs(seed: usize, len: usize) -> Vec<f64> {
 
 /// Orthonormal basis (n × m) of {x ∈ ℂⁿ : U1ᵀ (A − λ I) x = 0}: the eigenvectors for λ that some
 /// feedback can assign (Kautsky, Nichols & Van Dooren 1985, Theorem 3).
-fn admissible_complex(
-    A: &DMatrix<f64>,
-    U1: &DMatrix<f64>,
-    lambda: C64,
-) -> Result<DMatrix<C64>, PlaceError> {
+fn admissible_complex(A: &DMatrix<f64>, U1: &DMatrix<f64>, lambda: C64) -> Result<DMatrix<C64>, PlaceError> {
     let n = A.nrows();
     let k = U1.ncols(); // n − m
     if k == 0 {
@@ -341,24 +287,15 @@ fn admissible_complex(
     let N = U1.transpose().map(|x| C64::new(x, 0.0)) * shifted; // k × n, full row rank
     let mut padded = DMatrix::<C64>::zeros(n, n);
     padded.view_mut((0, 0), (k, n)).copy_from(&N);
-    let svd = padded
-        .try_svd(false, true, f64::EPSILON, 10_000)
-        .ok_or(PlaceError::Inaccurate {
-            max_error: f64::INFINITY,
-        })?;
-    let Vt = svd.v_t.ok_or(PlaceError::Inaccurate {
-        max_error: f64::INFINITY,
-    })?;
+    let svd =
+        padded.try_svd(false, true, f64::EPSILON, 10_000).ok_or(PlaceError::Inaccurate { max_error: f64::INFINITY })?;
+    let Vt = svd.v_t.ok_or(PlaceError::Inaccurate { max_error: f64::INFINITY })?;
     // Rows of Vᴴ for the n − k smallest singular values (sorted descending) span the null space.
     Ok(Vt.rows(k, n - k).adjoint())
 }
 
 /// Real version of [`admissible_complex`] for a real pole.
-fn admissible_real(
-    A: &DMatrix<f64>,
-    U1: &DMatrix<f64>,
-    lambda: f64,
-) -> Result<DMatrix<f64>, PlaceError> {
+fn admissible_real(A: &DMatrix<f64>, U1: &DMatrix<f64>, lambda: f64) -> Result<DMatrix<f64>, PlaceError> {
     let n = A.nrows();
     let k = U1.ncols();
     if k == 0 {
@@ -367,14 +304,9 @@ fn admissible_real(
     let N = U1.transpose() * (A - DMatrix::<f64>::identity(n, n) * lambda);
     let mut padded = DMatrix::<f64>::zeros(n, n);
     padded.view_mut((0, 0), (k, n)).copy_from(&N);
-    let svd = padded
-        .try_svd(false, true, f64::EPSILON, 10_000)
-        .ok_or(PlaceError::Inaccurate {
-            max_error: f64::INFINITY,
-        })?;
-    let Vt = svd.v_t.ok_or(PlaceError::Inaccurate {
-        max_error: f64::INFINITY,
-    })?;
+    let svd =
+        padded.try_svd(false, true, f64::EPSILON, 10_000).ok_or(PlaceError::Inaccurate { max_error: f64::INFINITY })?;
+    let Vt = svd.v_t.ok_or(PlaceError::Inaccurate { max_error: f64::INFINITY })?;
     Ok(Vt.rows(k, n - k).transpose())
 }
 
@@ -404,16 +336,10 @@ enum Space {
 /// vector u + i v that maximises |det X| with the other columns fixed — a rank-2 update in the
 /// manner of Tits & Yang (1996): with W the 2-dimensional complement of the other columns and
 /// z = Wᵀ (u + i v), det Wᵀ[u v] = Im(z̄₁ z₂), a Hermitian quadratic form in the coefficients.
-fn knv0(
-    A: &DMatrix<f64>,
-    B: &DMatrix<f64>,
-    slots: &[Slot],
-) -> Result<(DMatrix<f64>, DMatrix<f64>), PlaceError> {
+fn knv0(A: &DMatrix<f64>, B: &DMatrix<f64>, slots: &[Slot]) -> Result<(DMatrix<f64>, DMatrix<f64>), PlaceError> {
     let n = A.nrows();
     let m = B.ncols();
-    let fail = PlaceError::Inaccurate {
-        max_error: f64::INFINITY,
-    };
+    let fail = PlaceError::Inaccurate { max_error: f64::INFINITY };
     // Full QR of B: B = [U0 U1] [Zb; 0].
     let mut padded = DMatrix::<f64>::zeros(n, m + n);
     padded.view_mut((0, 0), (n, m)).copy_from(B);
@@ -499,11 +425,7 @@ fn knv0(
     let L = real_form(slots);
     let XL = &X * &L;
     // M = XL X⁻¹  ⇔  Xᵀ Mᵀ = XLᵀ.
-    let Mt = X
-        .transpose()
-        .lu()
-        .solve(&XL.transpose())
-        .ok_or(fail.clone())?;
+    let Mt = X.transpose().lu().solve(&XL.transpose()).ok_or(fail.clone())?;
     let rhs = U0.transpose() * (A - Mt.transpose());
     let K = Zb.solve_upper_triangular(&rhs).ok_or(fail)?;
     Ok((K, X))
@@ -513,10 +435,7 @@ fn knv0(
 /// [[a, b], [−b, a]] for a pair a ± i b (A x = λ x with x = u + i v ⇔
 /// A [u v] = [u v] [[a, b], [−b, a]]). Λ is normal.
 fn real_form(slots: &[Slot]) -> DMatrix<f64> {
-    let n = slots
-        .iter()
-        .map(|s| if let Slot::Pair(_) = s { 2 } else { 1 })
-        .sum();
+    let n = slots.iter().map(|s| if let Slot::Pair(_) = s { 2 } else { 1 }).sum();
     let mut L = DMatrix::<f64>::zeros(n, n);
     let mut c = 0;
     for s in slots {
@@ -539,11 +458,7 @@ fn real_form(slots: &[Slot]) -> DMatrix<f64> {
 
 /// Closed-loop eigenvectors of a single-input placement with distinct poles, in real form: each
 /// admissible space {x : U1ᵀ (A − λ I) x = 0} is one-dimensional.
-fn eigenvectors_single_input(
-    A: &DMatrix<f64>,
-    b: &DMatrix<f64>,
-    slots: &[Slot],
-) -> Result<DMatrix<f64>, PlaceError> {
+fn eigenvectors_single_input(A: &DMatrix<f64>, b: &DMatrix<f64>, slots: &[Slot]) -> Result<DMatrix<f64>, PlaceError> {
     let n = A.nrows();
     let mut padded = DMatrix::<f64>::zeros(n, n + 1);
     padded.view_mut((0, 0), (n, 1)).copy_from(b);
@@ -585,9 +500,7 @@ fn verify_eigenvectors(
     slots: &[Slot],
     X: &DMatrix<f64>,
 ) -> Result<(), PlaceError> {
-    let bad = PlaceError::Inaccurate {
-        max_error: f64::INFINITY,
-    };
+    let bad = PlaceError::Inaccurate { max_error: f64::INFINITY };
     let M = A - B * K;
     if M.iter().any(|x| !x.is_finite()) {
         return Err(bad);
@@ -607,13 +520,7 @@ fn verify_eigenvectors(
     if max_error <= VERIFY_RTOL {
         Ok(())
     } else {
-        Err(PlaceError::Inaccurate {
-            max_error: if max_error.is_finite() {
-                max_error
-            } else {
-                f64::INFINITY
-            },
-        })
+        Err(PlaceError::Inaccurate { max_error: if max_error.is_finite() { max_error } else { f64::INFINITY } })
     }
 }
 
@@ -622,29 +529,15 @@ fn verify_eigenvectors(
 /// A − B K, a well-conditioned function of the clusters, must match ∏(s − p) within
 /// [`VERIFY_RTOL`] relative to the coefficients of ∏(s + max(1, |p|)). The reported error is
 /// that coefficient error.
-fn verify_char_poly(
-    A: &DMatrix<f64>,
-    B: &DMatrix<f64>,
-    K: &DMatrix<f64>,
-    poles: &[C64],
-) -> Result<(), PlaceError> {
+fn verify_char_poly(A: &DMatrix<f64>, B: &DMatrix<f64>, K: &DMatrix<f64>, poles: &[C64]) -> Result<(), PlaceError> {
     let M = A - B * K;
     if M.iter().any(|x| !x.is_finite()) {
-        return Err(PlaceError::Inaccurate {
-            max_error: f64::INFINITY,
-        });
+        return Err(PlaceError::Inaccurate { max_error: f64::INFINITY });
     }
     let got = hessenberg_char_poly(&M);
     let want = poly_from_roots(poles);
-    let scale = poly_from_roots(
-        &poles
-            .iter()
-            .map(|p| C64::new(-p.norm().max(1.0), 0.0))
-            .collect::<Vec<_>>(),
-    );
-    let max_error = (0..got.len())
-        .map(|k| (got[k] - want[k]).abs() / scale[k])
-        .fold(0.0, f64::max);
+    let scale = poly_from_roots(&poles.iter().map(|p| C64::new(-p.norm().max(1.0), 0.0)).collect::<Vec<_>>());
+    let max_error = (0..got.len()).map(|k| (got[k] - want[k]).abs() / scale[k]).fold(0.0, f64::max);
     if max_error <= VERIFY_RTOL {
         Ok(())
     } else {

@@ -39,10 +39,7 @@ impl Exosystem {
         }
         let nonzero = |value: f64, scale: f64| value.abs() > 1e-12 * scale;
         Exosystem {
-            harmonics: groups
-                .iter()
-                .filter(|(_, p, s)| nonzero(p.norm(), *s))
-                .count(),
+            harmonics: groups.iter().filter(|(_, p, s)| nonzero(p.norm(), *s)).count(),
             constant: nonzero(constant, scale),
         }
     }

@@ -69,23 +69,12 @@ pub struct Simulation {
 
 impl Default for Simulation {
     fn default() -> Self {
-        Simulation {
-            t_end: 100.0,
-            output_step: 0.1,
-            rtol: 1e-9,
-            atol: 1e-9,
-            sample_time: None,
-        }
+        Simulation { t_end: 100.0, output_step: 0.1, rtol: 1e-9, atol: 1e-9, sample_time: None }
     }
 }
 
 /// White measurement noise on y (sampled-data runs only).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Noise {
-    /// Absolute standard deviation per output, ≥ 0.
-    pub std: Vec<f64>,
-    pub seed: u64,
-}
+pub use crate::sim::MeasurementNoise as Noise;
 
 /// Why a scenario file gives no design: the file itself, or the design it asks for.
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -103,15 +92,7 @@ pub fn load_and_design(text: &str) -> Result<(Scenario, Design), LoadError> {
     Ok((scenario, design))
 }
 
-const TOP_KEYS: &[&str] = &[
-    "name",
-    "plant",
-    "design",
-    "reference",
-    "disturbance",
-    "simulation",
-    "noise",
-];
+const TOP_KEYS: &[&str] = &["name", "plant", "design", "reference", "disturbance", "simulation", "noise"];
 const PLANT_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0"];
 const DESIGN_KEYS: &[&str] = &[
     "observer_gain",
@@ -138,12 +119,8 @@ impl FromStr for Scenario {
 impl Scenario {
     /// Reads and validates a scenario file; I/O errors carry the path as key.
     pub fn from_path(path: &Path) -> Result<Scenario, ScenarioError> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            err(
-                path.display().to_string(),
-                format!("cannot read the file: {e}"),
-            )
-        })?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| err(path.display().to_string(), format!("cannot read the file: {e}")))?;
         Scenario::from_toml(&text)
     }
 
@@ -157,28 +134,17 @@ impl Scenario {
                     format!("line {line}, column {col}: ")
                 })
                 .unwrap_or_default();
-            err(
-                "syntax",
-                format!(
-                    "{at}{} (the file is not valid TOML)",
-                    e.message().trim_end()
-                ),
-            )
+            err("syntax", format!("{at}{} (the file is not valid TOML)", e.message().trim_end()))
         })?;
         let root = Table::new("", &doc, TOP_KEYS)?;
 
         let name = root.get("name", |v| v.string())?;
-        let reference = root.require(
-            "reference",
-            "the [reference] table: g(t), one component per output",
-            signal,
-        )?;
+        let reference = root.require("reference", "the [reference] table: g(t), one component per output", signal)?;
         let disturbance = root.get("disturbance", signal)?;
-        let plant = root.require(
-            "plant",
-            "the [plant] table (A, B, C, delays; D and Q with a [disturbance])",
-            |v| plant(v, disturbance.as_ref()),
-        )?;
+        let plant =
+            root.require("plant", "the [plant] table (A, B, C, delays; D and Q with a [disturbance])", |v| {
+                plant(v, disturbance.as_ref())
+            })?;
         let design = root.require(
             "design",
             "the [design] table (observer, channel poles, filter poles, mu, beta)",
@@ -216,12 +182,7 @@ impl Scenario {
             }
             Some(d) => d,
         };
-        internal_model_order(
-            "reference",
-            &reference,
-            "design.reference_filter_poles",
-            &design.reference_filter_poles,
-        )?;
+        internal_model_order("reference", &reference, "design.reference_filter_poles", &design.reference_filter_poles)?;
         internal_model_order(
             "disturbance",
             &disturbance,
@@ -238,29 +199,15 @@ impl Scenario {
             if noise.std.len() != m {
                 return Err(err(
                     "noise.std",
-                    format!(
-                        "expected {m} entries (one per output), found {}",
-                        noise.std.len()
-                    ),
+                    format!("expected {m} entries (one per output), found {}", noise.std.len()),
                 ));
             }
             if let Some((i, s)) = noise.std.iter().enumerate().find(|(_, s)| **s < 0.0) {
-                return Err(err(
-                    format!("noise.std[{i}]"),
-                    format!("expected a standard deviation ≥ 0, found {s}"),
-                ));
+                return Err(err(format!("noise.std[{i}]"), format!("expected a standard deviation ≥ 0, found {s}")));
             }
         }
 
-        Ok(Scenario {
-            name,
-            plant,
-            design,
-            reference,
-            disturbance,
-            simulation,
-            noise,
-        })
+        Ok(Scenario { name, plant, design, reference, disturbance, simulation, noise })
     }
 
     /// [`Design::new`] for this scenario's plant and choices.
@@ -277,21 +224,19 @@ fn plant(v: Value, disturbance: Option<&Signal>) -> Result<Plant, ScenarioError>
     let C = t.require("C", "the m×n output matrix", |v| v.matrix())?;
     let D = t.get("D", |v| v.matrix())?;
     let Q = t.get("Q", |v| v.matrix())?;
-    let delays = t.require("delays", "one input delay τ_i ≥ 0 per input", |v| {
-        v.numbers()
-    })?;
+    let delays = t.require("delays", "one input delay τ_i ≥ 0 per input", |v| v.numbers())?;
     let x0 = t.get("x0", |v| v.numbers())?.map(DVector::from_vec);
     let (n, m) = (A.nrows(), B.ncols());
     let k_signal = disturbance.map_or(0, Signal::len);
     // `D = []` (no rows) means no disturbance columns, like an absent D.
     let D = match D {
         Some(D) if D.nrows() > 0 => D,
-        None if k_signal > 0 => {
-            return Err(err(
-                t.key("D"),
-                format!("missing; [disturbance] has {k_signal} components, so plant.D (n×k, disturbance to state) is required"),
-            ))
-        }
+        None if k_signal > 0 => return Err(err(
+            t.key("D"),
+            format!(
+                "missing; [disturbance] has {k_signal} components, so plant.D (n×k, disturbance to state) is required"
+            ),
+        )),
         _ => DMatrix::zeros(n, 0),
     };
     let k = D.ncols();
@@ -311,13 +256,7 @@ fn plant(v: Value, disturbance: Option<&Signal>) -> Result<Plant, ScenarioError>
 /// A [`PlantError`] as a scenario error on key `plant.<name>`.
 fn plant_error(e: PlantError, n: usize, m: usize, k: usize) -> ScenarioError {
     match e {
-        PlantError::Shape {
-            name,
-            expected_rows,
-            expected_cols,
-            rows,
-            cols,
-        } => {
+        PlantError::Shape { name, expected_rows, expected_cols, rows, cols } => {
             let (dims, symbols): (&str, &[char]) = match name {
                 "A" => ("n×n", &[]),
                 "B" => ("n×m", &['n']),
@@ -334,48 +273,23 @@ fn plant_error(e: PlantError, n: usize, m: usize, k: usize) -> ScenarioError {
                     _ => format!("k = {k} (columns of plant.D)"),
                 })
                 .collect();
-            let hint = if name == "A" {
-                "; A must be square".to_string()
-            } else {
-                format!("; {}", defs.join(", "))
-            };
+            let hint = if name == "A" { "; A must be square".to_string() } else { format!("; {}", defs.join(", ")) };
             err(
                 format!("plant.{name}"),
                 format!("expected {expected_rows}×{expected_cols} ({dims}), found {rows}×{cols}{hint}"),
             )
         }
-        PlantError::NonFinite {
-            name,
-            row,
-            col,
-            value,
-        } => {
-            let key = if name == "x0" {
-                format!("plant.x0[{row}]")
-            } else {
-                format!("plant.{name}[{row}][{col}]")
-            };
+        PlantError::NonFinite { name, row, col, value } => {
+            let key = if name == "x0" { format!("plant.x0[{row}]") } else { format!("plant.{name}[{row}][{col}]") };
             err(key, format!("expected a finite number, found {value}"))
         }
-        PlantError::BadDelay { index, value } => err(
-            format!("plant.delays[{index}]"),
-            format!("expected a finite delay ≥ 0, found {value}"),
-        ),
-        PlantError::Length {
-            name,
-            per,
-            expected,
-            found,
-        } => {
-            let of = if name == "x0" {
-                format!("n = {n} rows of plant.A")
-            } else {
-                format!("m = {m} columns of plant.B")
-            };
-            err(
-                format!("plant.{name}"),
-                format!("expected {expected} entries (one per {per}, {of}), found {found}"),
-            )
+        PlantError::BadDelay { index, value } => {
+            err(format!("plant.delays[{index}]"), format!("expected a finite delay ≥ 0, found {value}"))
+        }
+        PlantError::Length { name, per, expected, found } => {
+            let of =
+                if name == "x0" { format!("n = {n} rows of plant.A") } else { format!("m = {m} columns of plant.B") };
+            err(format!("plant.{name}"), format!("expected {expected} entries (one per {per}, {of}), found {found}"))
         }
         PlantError::Empty { n, m } => err(
             if n == 0 { "plant.A" } else { "plant.B" },
@@ -418,13 +332,9 @@ fn design_spec(v: Value) -> Result<DesignSpec, ScenarioError> {
             |v| v.pole_lists("reference component"),
         )?,
         disturbance_filter_poles: t
-            .get("disturbance_filter_poles", |v| {
-                v.pole_lists("disturbance component")
-            })?
+            .get("disturbance_filter_poles", |v| v.pole_lists("disturbance component"))?
             .unwrap_or_default(),
-        mu: t.require("mu", "one adaptation gain μ_i ≥ 0 per channel", |v| {
-            v.numbers()
-        })?,
+        mu: t.require("mu", "one adaptation gain μ_i ≥ 0 per channel", |v| v.numbers())?,
         beta: t.require("beta", "β > 0 of H(s) = 1/(βs + 1)", |v| v.number())?,
     })
 }
@@ -445,18 +355,14 @@ fn component(v: Value) -> Result<Component, ScenarioError> {
     Ok(Component {
         bias: t.get("bias", |v| v.number())?.unwrap_or(0.0),
         harmonics: t
-            .get("harmonics", |v| {
-                v.array("an array of harmonics (inline tables)", harmonic)
-            })?
+            .get("harmonics", |v| v.array("an array of harmonics (inline tables)", harmonic))?
             .unwrap_or_default(),
     })
 }
 
 fn harmonic(v: Value) -> Result<Harmonic, ScenarioError> {
     let t = v.table(HARMONIC_KEYS)?;
-    let amplitude = t.require("amplitude", "the amplitude a of a·sin(ωt + φ)", |v| {
-        v.number()
-    })?;
+    let amplitude = t.require("amplitude", "the amplitude a of a·sin(ωt + φ)", |v| v.number())?;
     let frequency = t.require("frequency", "the frequency ω ≥ 0 (rad/s) of a·sin(ωt + φ)", |v| {
         let w = v.number()?;
         if w < 0.0 {
@@ -468,11 +374,7 @@ fn harmonic(v: Value) -> Result<Harmonic, ScenarioError> {
         Ok(w)
     })?;
     let phase = t.get("phase", |v| v.number())?.unwrap_or(0.0);
-    Ok(Harmonic {
-        amplitude,
-        frequency,
-        phase,
-    })
+    Ok(Harmonic { amplitude, frequency, phase })
 }
 
 /// A number that must be > 0.
@@ -489,15 +391,10 @@ fn positive(v: Value, what: &str) -> Result<f64, ScenarioError> {
 fn simulation(v: Value) -> Result<Simulation, ScenarioError> {
     let t = v.table(SIMULATION_KEYS)?;
     let default = Simulation::default();
-    let t_end = t
-        .get("t_end", |v| positive(v, "a final time"))?
-        .unwrap_or(default.t_end);
+    let t_end = t.get("t_end", |v| positive(v, "a final time"))?.unwrap_or(default.t_end);
     let output_step = match t.get("output_step", |v| positive(v, "an output step"))? {
         Some(h) if h > t_end => {
-            return Err(err(
-                t.key("output_step"),
-                format!("expected an output step ≤ t_end = {t_end}, found {h}"),
-            ))
+            return Err(err(t.key("output_step"), format!("expected an output step ≤ t_end = {t_end}, found {h}")))
         }
         Some(h) => h,
         None => default.output_step.min(t_end),
@@ -505,12 +402,8 @@ fn simulation(v: Value) -> Result<Simulation, ScenarioError> {
     Ok(Simulation {
         t_end,
         output_step,
-        rtol: t
-            .get("rtol", |v| positive(v, "a relative tolerance"))?
-            .unwrap_or(default.rtol),
-        atol: t
-            .get("atol", |v| positive(v, "an absolute tolerance"))?
-            .unwrap_or(default.atol),
+        rtol: t.get("rtol", |v| positive(v, "a relative tolerance"))?.unwrap_or(default.rtol),
+        atol: t.get("atol", |v| positive(v, "an absolute tolerance"))?.unwrap_or(default.atol),
         sample_time: t.get("sample_time", |v| positive(v, "a sampling period"))?,
     })
 }
@@ -519,9 +412,7 @@ fn simulation(v: Value) -> Result<Simulation, ScenarioError> {
 fn noise(v: Value) -> Result<Noise, ScenarioError> {
     let t = v.table(NOISE_KEYS)?;
     Ok(Noise {
-        std: t.require("std", "one standard deviation ≥ 0 per output", |v| {
-            v.numbers()
-        })?,
+        std: t.require("std", "one standard deviation ≥ 0 per output", |v| v.numbers())?,
         seed: t.get("seed", |v| v.unsigned())?.unwrap_or(0),
     })
 }

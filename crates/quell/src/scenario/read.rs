@@ -6,10 +6,7 @@ use nalgebra::{Complex, DMatrix};
 use super::ScenarioError;
 
 pub(super) fn err(key: impl Into<String>, message: impl Into<String>) -> ScenarioError {
-    ScenarioError {
-        key: key.into(),
-        message: message.into(),
-    }
+    ScenarioError { key: key.into(), message: message.into() }
 }
 
 /// "a string", "an integer", … for "found …" in messages.
@@ -33,9 +30,7 @@ fn distance(a: &str, b: &str) -> usize {
     for (i, ca) in a.chars().enumerate() {
         let mut cur = vec![i + 1; b.len() + 1];
         for (j, &cb) in b.iter().enumerate() {
-            cur[j + 1] = (prev[j] + usize::from(ca != cb))
-                .min(prev[j + 1] + 1)
-                .min(cur[j] + 1);
+            cur[j + 1] = (prev[j] + usize::from(ca != cb)).min(prev[j + 1] + 1).min(cur[j] + 1);
         }
         prev = cur;
     }
@@ -68,11 +63,7 @@ impl<'a> Table<'a> {
     pub fn new(key: &str, table: &'a toml::Table, valid: &[&str]) -> Result<Self, ScenarioError> {
         for name in table.keys() {
             if !valid.contains(&name.as_str()) {
-                let place = if key.is_empty() {
-                    "at the top level".to_string()
-                } else {
-                    format!("in [{key}]")
-                };
+                let place = if key.is_empty() { "at the top level".to_string() } else { format!("in [{key}]") };
                 let hint = valid
                     .iter()
                     .filter(|v| distance(&v.to_lowercase(), &name.to_lowercase()) <= 2)
@@ -81,17 +72,11 @@ impl<'a> Table<'a> {
                     .unwrap_or_default();
                 return Err(err(
                     child(key, name),
-                    format!(
-                        "unknown key{hint}; valid keys {place}: {}",
-                        valid.join(", ")
-                    ),
+                    format!("unknown key{hint}; valid keys {place}: {}", valid.join(", ")),
                 ));
             }
         }
-        Ok(Table {
-            key: key.to_string(),
-            table,
-        })
+        Ok(Table { key: key.to_string(), table })
     }
 
     /// The full key path of `name` in this table.
@@ -121,17 +106,13 @@ impl<'a> Table<'a> {
         what: &str,
         f: impl FnOnce(Value<'a, '_>) -> Result<T, ScenarioError>,
     ) -> Result<T, ScenarioError> {
-        self.get(name, f)?
-            .ok_or_else(|| err(self.key(name), format!("missing; required: {what}")))
+        self.get(name, f)?.ok_or_else(|| err(self.key(name), format!("missing; required: {what}")))
     }
 }
 
 impl<'a> Value<'a, '_> {
     fn found(&self, expected: &str) -> ScenarioError {
-        err(
-            self.key,
-            format!("expected {expected}, found {}", kind(self.value)),
-        )
+        err(self.key, format!("expected {expected}, found {}", kind(self.value)))
     }
 
     /// A sub-table, checked against its valid keys.
@@ -160,18 +141,16 @@ impl<'a> Value<'a, '_> {
         if x.is_finite() {
             Ok(x)
         } else {
-            Err(err(
-                self.key,
-                format!("expected a finite number, found {x}"),
-            ))
+            Err(err(self.key, format!("expected a finite number, found {x}")))
         }
     }
 
     /// A non-negative integer.
     pub fn unsigned(&self) -> Result<u64, ScenarioError> {
         match self.value {
-            toml::Value::Integer(i) => u64::try_from(*i)
-                .map_err(|_| err(self.key, format!("expected an integer ≥ 0, found {i}"))),
+            toml::Value::Integer(i) => {
+                u64::try_from(*i).map_err(|_| err(self.key, format!("expected an integer ≥ 0, found {i}")))
+            }
             _ => Err(self.found("an integer ≥ 0")),
         }
     }
@@ -204,19 +183,14 @@ impl<'a> Value<'a, '_> {
     pub fn matrix(&self) -> Result<DMatrix<f64>, ScenarioError> {
         const FORM: &str = "a matrix (an array of rows, e.g. [[1.0, 0.0], [0.0, 1.0]])";
         if let toml::Value::Array(items) = self.value {
-            if items
-                .first()
-                .is_some_and(|v| matches!(v, toml::Value::Integer(_) | toml::Value::Float(_)))
-            {
+            if items.first().is_some_and(|v| matches!(v, toml::Value::Integer(_) | toml::Value::Float(_))) {
                 return Err(err(
                     self.key,
                     format!("expected {FORM}, found an array of numbers; put each row in brackets"),
                 ));
             }
         }
-        let rows = self.array(FORM, |row| {
-            row.array("a row (an array of numbers)", |v| v.number())
-        })?;
+        let rows = self.array(FORM, |row| row.array("a row (an array of numbers)", |v| v.number()))?;
         let cols = rows.first().map_or(0, Vec::len);
         for (i, row) in rows.iter().enumerate() {
             if row.len() != cols {
@@ -234,8 +208,7 @@ impl<'a> Value<'a, '_> {
 
     /// One pole: a number (real) or `[re, im]` with im > 0 (the pair re ± i·im), appended to `out`.
     fn pole(&self, out: &mut Vec<Complex<f64>>) -> Result<(), ScenarioError> {
-        const FORM: &str =
-            "a pole: a number (real pole) or [re, im] with im > 0 (the pair re ± i·im)";
+        const FORM: &str = "a pole: a number (real pole) or [re, im] with im > 0 (the pair re ± i·im)";
         match self.value {
             toml::Value::Integer(_) | toml::Value::Float(_) => {
                 out.push(Complex::new(self.number()?, 0.0));
@@ -260,10 +233,9 @@ impl<'a> Value<'a, '_> {
                     ))
                 }
             }
-            toml::Value::Array(items) => Err(err(
-                self.key,
-                format!("expected {FORM}, found an array of {} entries", items.len()),
-            )),
+            toml::Value::Array(items) => {
+                Err(err(self.key, format!("expected {FORM}, found an array of {} entries", items.len())))
+            }
             _ => Err(self.found(FORM)),
         }
     }
@@ -271,20 +243,14 @@ impl<'a> Value<'a, '_> {
     /// A list of poles, complex pairs expanded into both conjugates.
     pub fn poles(&self) -> Result<Vec<Complex<f64>>, ScenarioError> {
         let mut out = Vec::new();
-        self.array(
-            "a list of poles (an array of numbers or [re, im] pairs)",
-            |p| p.pole(&mut out),
-        )?;
+        self.array("a list of poles (an array of numbers or [re, im] pairs)", |p| p.pole(&mut out))?;
         Ok(out)
     }
 
     /// One list of poles per channel or signal component.
     pub fn pole_lists(&self, per: &str) -> Result<Vec<Vec<Complex<f64>>>, ScenarioError> {
         if let toml::Value::Array(items) = self.value {
-            if items
-                .first()
-                .is_some_and(|v| matches!(v, toml::Value::Integer(_) | toml::Value::Float(_)))
-            {
+            if items.first().is_some_and(|v| matches!(v, toml::Value::Integer(_) | toml::Value::Float(_))) {
                 return Err(err(
                     self.key,
                     format!("expected one list of poles per {per} (e.g. [[-6.0, -2.0], [-4.0]]), found a flat array of numbers; put each {per}'s poles in brackets"),
@@ -303,11 +269,6 @@ pub(super) fn line_col(text: &str, offset: usize) -> (usize, usize) {
     }
     let before = &text[..offset];
     let line = before.matches('\n').count() + 1;
-    let col = before
-        .rfind('\n')
-        .map_or(before, |i| &before[i + 1..])
-        .chars()
-        .count()
-        + 1;
+    let col = before.rfind('\n').map_or(before, |i| &before[i + 1..]).chars().count() + 1;
     (line, col)
 }
