@@ -9,19 +9,19 @@ pub fn len(q: usize) -> usize {
 /// out = Ω x for packed Ω.
 pub fn sym_mat_vec(omega: &[f64], x: &[f64], out: &mut [f64]) {
     let q = x.len();
+    assert!(omega.len() == len(q) && out.len() == q, "sym_mat_vec: dimension mismatch");
     out.fill(0.0);
-    let mut rest = omega;
+    let mut k = 0;
     for i in 0..q {
-        // Packed row i holds Ω[i][i..q].
-        let (row, tail) = rest.split_at(q - i);
-        rest = tail;
         let xi = x[i];
-        let mut acc = row[0] * xi;
-        for ((o, w), xj) in out[i + 1..].iter_mut().zip(&row[1..]).zip(&x[i + 1..]) {
-            acc += w * xj;
-            *o += w * xi;
+        let mut acc = omega[k] * xi;
+        for j in i + 1..q {
+            let w = omega[k + j - i];
+            acc += w * x[j];
+            out[j] += w * xi;
         }
         out[i] += acc;
+        k += q - i;
     }
 }
 
@@ -48,16 +48,18 @@ pub fn outer_for_each(delta: &[f64], omega: &mut [f64], mut f: impl FnMut(&mut f
     }
 }
 
-/// out_ij = f(Ω_ij, Δ_i Δ_j) for every packed entry.
+/// out_ij = a·Ω_ij + b·Δ_i Δ_j for every packed entry.
 #[inline]
-pub fn outer_map(delta: &[f64], omega: &[f64], out: &mut [f64], f: impl Fn(f64, f64) -> f64) {
+pub fn outer_update(delta: &[f64], omega: &[f64], out: &mut [f64], a: f64, b: f64) {
+    let q = delta.len();
+    assert!(omega.len() == len(q) && out.len() == len(q), "outer_update: dimension mismatch");
     let mut k = 0;
-    for (i, &di) in delta.iter().enumerate() {
-        let len = delta.len() - i;
-        for ((o, w), dj) in out[k..k + len].iter_mut().zip(&omega[k..k + len]).zip(&delta[i..]) {
-            *o = f(*w, di * dj);
+    for i in 0..q {
+        let bdi = b * delta[i];
+        for j in i..q {
+            out[k] = a * omega[k] + bdi * delta[j];
+            k += 1;
         }
-        k += len;
     }
 }
 
@@ -92,7 +94,7 @@ mod tests {
         outer_for_each(&[1.0, 2.0, 3.0], &mut o, |e, v| *e = v);
         assert_eq!(o, [1.0, 2.0, 3.0, 4.0, 6.0, 9.0]);
         let mut p = [0.0; 6];
-        outer_map(&[1.0, 2.0, 3.0], &omega, &mut p, |w, v| v - w);
+        outer_update(&[1.0, 2.0, 3.0], &omega, &mut p, -1.0, 1.0);
         assert_eq!(p, [-1.0, 1.0, 3.0, 1.0, 7.0, 5.0]);
     }
 }

@@ -11,7 +11,8 @@ use crate::controller::{command, mat_vec, packed, swapping_error, Equations};
 use crate::design::Design;
 use crate::signal::Signal;
 
-/// Offsets of the loop's state vector. The prefix [z, η̂_1, …, η̂_m] is what the delayed terms read.
+/// Offsets of the loop's state vector. The prefix [z, η̂_1, …, η̂_m] is what the delayed terms read;
+/// with x after it, [z, η̂, x] is all the outputs need (the solver keeps dense output of just that).
 #[derive(Debug, Clone)]
 struct Layout {
     nz: usize,
@@ -48,6 +49,11 @@ impl Layout {
 
     fn n_delayed(&self) -> usize {
         self.x
+    }
+
+    /// z, η̂ and x: what y, u and η̂ are computed from.
+    fn n_output(&self, n: usize) -> usize {
+        self.x + n
     }
 
     /// A readable name for state component `k`, for divergence messages.
@@ -181,6 +187,10 @@ impl DelaySystem for ContinuousLoop<'_> {
         self.layout.n_delayed()
     }
 
+    fn n_output(&self) -> usize {
+        self.layout.n_output(self.eq.n)
+    }
+
     fn delays(&self) -> &[f64] {
         &self.delays
     }
@@ -248,7 +258,7 @@ impl DelaySystem for ContinuousLoop<'_> {
             }
             let omega = &s[l.omega[i]..l.omega[i] + packed::len(q)];
             let d_omega = &mut ds[l.omega[i]..l.omega[i] + packed::len(q)];
-            packed::outer_map(&self.Delta, omega, d_omega, |o, dd| (dd - o) * inv_beta);
+            packed::outer_update(&self.Delta, omega, d_omega, -inv_beta, inv_beta);
 
             // η̂_i' = μ_i (Y_i − Ω_i η̂_i).
             let eta = &s[l.eta(i)..l.eta(i) + q];

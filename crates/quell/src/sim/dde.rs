@@ -42,6 +42,12 @@ pub trait DelaySystem {
     /// dy ← f(t, y, past). `past.eval_into(s, first, out)` gives components `first..first+out.len()`
     /// of the state at s ≤ t − min(delays). Must not allocate.
     fn rhs(&mut self, t: f64, y: &[f64], past: &Past<'_>, dy: &mut [f64]);
+    /// Length of the state prefix that `on_output` needs (default: the whole state). Outputs between
+    /// step ends are interpolated for these components only, so a system whose outputs depend on a
+    /// prefix saves the dense output of the rest.
+    fn n_output(&self) -> usize {
+        self.dim()
+    }
 }
 
 /// Read-only view of the dense history, handed to [`DelaySystem::rhs`].
@@ -231,7 +237,7 @@ pub fn solve<S: DelaySystem>(
     let tau_max = delays.iter().copied().fold(0.0, f64::max);
 
     let mut stats = Stats::default();
-    if on_output(t0, y0).is_break() || t_end <= t0 {
+    if on_output(t0, &y0[..sys.n_output().min(n)]).is_break() || t_end <= t0 {
         return Ok(stats);
     }
     let span = t_end - t0;
@@ -253,8 +259,10 @@ pub fn solve<S: DelaySystem>(
     let mut y = y0.to_vec();
     let mut y_new = vec![0.0; n];
     let mut y_stage = vec![0.0; n];
-    let mut y_out = vec![0.0; n];
-    let mut dense_full = vec![0.0; NCOEF * n];
+    let n_o = sys.n_output().min(n);
+    let mut y_out = vec![0.0; n_o];
+    let mut dense_full = vec![0.0; NCOEF * n_o];
+    let (mut err5, mut err3) = (vec![0.0; n], vec![0.0; n]);
 
     let mut t = t0;
     let mut next_out = 1usize;
@@ -289,17 +297,15 @@ pub fn solve<S: DelaySystem>(
         combine(&y, &k, &A[12][..STAGES], h_try, n, &mut y_new);
 
         // Error estimate (combined 5th/3rd-order norm of dop853.f).
+        err5.fill(0.0);
+        lincomb(&mut err5, &k, n, &E5, 1.0, 0..n);
+        err3.fill(0.0);
+        lincomb(&mut err3, &k, n, &E3, 1.0, 0..n);
         let (mut s5, mut s3) = (0.0, 0.0);
-        for i in 0..n {
-            let sk = opts.atol + opts.rtol * y[i].abs().max(y_new[i].abs());
-            let (mut e5, mut e3) = (0.0, 0.0);
-            for j in 0..STAGES {
-                let kj = k[j * n + i];
-                e5 += E5[j] * kj;
-                e3 += E3[j] * kj;
-            }
-            s5 += (e5 / sk) * (e5 / sk);
-            s3 += (e3 / sk) * (e3 / sk);
+        for (((e5, e3), yo), yn) in err5.iter().zip(err3.iter()).zip(&y).zip(&y_new) {
+            let sk = 1.0 / (opts.atol + opts.rtol * yo.abs().max(yn.abs()));
+            s5 += (e5 * sk) * (e5 * sk);
+            s3 += (e3 * sk) * (e3 * sk);
         }
         let mut deno = s5 + 0.01 * s3;
         if deno <= 0.0 {
@@ -361,9 +367,15 @@ pub fn solve<S: DelaySystem>(
             if nd > 0 {
                 let slot = hist.push(t, h_try);
                 dense_coefficients(&y, &y_new, &k, h_try, n, 0..nd, slot);
+                if out_here && n_o <= nd {
+                    // The outputs' coefficients are a prefix of the history record's rows.
+                    for (row, rec) in dense_full.chunks_exact_mut(n_o.max(1)).zip(slot.chunks_exact(nd)) {
+                        row.copy_from_slice(&rec[..n_o]);
+                    }
+                }
             }
-            if out_here {
-                dense_coefficients(&y, &y_new, &k, h_try, n, 0..n, &mut dense_full);
+            if out_here && (nd == 0 || n_o > nd) {
+                dense_coefficients(&y, &y_new, &k, h_try, n, 0..n_o, &mut dense_full);
             }
         }
         while out_here && next_out <= n_out {
@@ -373,12 +385,10 @@ pub fn solve<S: DelaySystem>(
                 break;
             }
             let out: &[f64] = if t_k == t_new {
-                &y_new
+                &y_new[..n_o]
             } else {
                 let theta = (t_k - t) / h_try;
-                for (o, c) in y_out.iter_mut().zip(dense_full.chunks_exact(NCOEF)) {
-                    *o = dense_eval(c, theta);
-                }
+                dense_eval(&dense_full, theta, &mut y_out);
                 &y_out
             };
             next_out += 1;
@@ -407,18 +417,48 @@ pub fn solve<S: DelaySystem>(
 #[inline]
 fn combine(y: &[f64], k: &[f64], a: &[f64], h: f64, n: usize, out: &mut [f64]) {
     out.copy_from_slice(y);
-    for (j, &aj) in a.iter().enumerate() {
-        if aj != 0.0 {
-            let ha = h * aj;
-            for (o, kj) in out.iter_mut().zip(&k[j * n..(j + 1) * n]) {
-                *o += ha * kj;
+    lincomb(out, k, n, a, h, 0..n);
+}
+
+/// out += scale·Σ_j c_j k_j[range] over the nonzero c_j, fusing up to four stages per pass so the
+/// loop over components vectorizes and `out` is loaded and stored once per four terms.
+#[inline]
+fn lincomb(out: &mut [f64], k: &[f64], n: usize, c: &[f64], scale: f64, range: std::ops::Range<usize>) {
+    let mut terms = c.iter().enumerate().filter(|(_, &cj)| cj != 0.0).map(|(j, &cj)| {
+        (scale * cj, &k[j * n + range.start..j * n + range.end])
+    });
+    loop {
+        match (terms.next(), terms.next(), terms.next(), terms.next()) {
+            (Some((a, ka)), Some((b, kb)), Some((c, kc)), Some((d, kd))) => {
+                for ((((o, x), y), z), w) in out.iter_mut().zip(ka).zip(kb).zip(kc).zip(kd) {
+                    *o += a * x + b * y + c * z + d * w;
+                }
             }
+            (Some((a, ka)), Some((b, kb)), Some((c, kc)), None) => {
+                for (((o, x), y), z) in out.iter_mut().zip(ka).zip(kb).zip(kc) {
+                    *o += a * x + b * y + c * z;
+                }
+                return;
+            }
+            (Some((a, ka)), Some((b, kb)), None, _) => {
+                for ((o, x), y) in out.iter_mut().zip(ka).zip(kb) {
+                    *o += a * x + b * y;
+                }
+                return;
+            }
+            (Some((a, ka)), None, _, _) => {
+                for (o, x) in out.iter_mut().zip(ka) {
+                    *o += a * x;
+                }
+                return;
+            }
+            _ => return,
         }
     }
 }
 
 /// Dense-output coefficients (`rcont1..rcont8` of `dop853.f`) of the components in `range`,
-/// written component-major into `out` (`out[(i - range.start) * NCOEF + r]`).
+/// written coefficient-major into `out` (`out[r * len + (i − range.start)]`, len = range length).
 fn dense_coefficients(
     y: &[f64],
     y_new: &[f64],
@@ -428,24 +468,25 @@ fn dense_coefficients(
     range: std::ops::Range<usize>,
     out: &mut [f64],
 ) {
-    let first = range.start;
-    for i in range {
-        let c = &mut out[(i - first) * NCOEF..(i - first + 1) * NCOEF];
+    let len = range.len();
+    let (first, last) = (range.start, range.end);
+    let (c0, rest) = out.split_at_mut(len);
+    let (c1, rest) = rest.split_at_mut(len);
+    let (c2, rest) = rest.split_at_mut(len);
+    let (c3, rest) = rest.split_at_mut(len);
+    let (y, y_new, k1, k13) = (&y[first..last], &y_new[first..last], &k[first..last], &k[12 * n + first..12 * n + last]);
+    for i in 0..len {
         let ydiff = y_new[i] - y[i];
-        let bspl = h * k[i] - ydiff;
-        c[0] = y[i];
-        c[1] = ydiff;
-        c[2] = bspl;
-        c[3] = ydiff - h * k[12 * n + i] - bspl;
-        for (r, drow) in D.iter().enumerate() {
-            let mut acc = 0.0;
-            for (j, &d) in drow.iter().enumerate() {
-                if d != 0.0 {
-                    acc += d * k[j * n + i];
-                }
-            }
-            c[4 + r] = h * acc;
-        }
+        let bspl = h * k1[i] - ydiff;
+        c0[i] = y[i];
+        c1[i] = ydiff;
+        c2[i] = bspl;
+        c3[i] = ydiff - h * k13[i] - bspl;
+    }
+    for (r, drow) in D.iter().enumerate() {
+        let row = &mut rest[r * len..(r + 1) * len];
+        row.fill(0.0);
+        lincomb(row, k, n, drow, h, first..last);
     }
 }
 

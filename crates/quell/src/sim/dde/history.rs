@@ -52,7 +52,7 @@ impl History {
     }
 
     /// Appends a record for the step [t, t + h] and returns its coefficient slot
-    /// (component-major: `slot[c * NCOEF + r]`) for the caller to fill.
+    /// (coefficient-major: `slot[r * nd + c]`) for the caller to fill.
     pub(super) fn push(&mut self, t: f64, h: f64) -> &mut [f64] {
         if self.len == self.cap {
             self.grow();
@@ -120,16 +120,30 @@ impl History {
         let theta = (s - self.start[p]) / self.step[p];
         let w = NCOEF * self.nd;
         let rec = &self.coef[p * w..(p + 1) * w];
-        for (o, c) in out.iter_mut().zip(rec[first * NCOEF..].chunks_exact(NCOEF)) {
-            *o = dense_eval(c, theta);
-        }
+        let nd = self.nd;
+        let c = |r: usize| &rec[r * nd + first..r * nd + first + out.len()];
+        horner(c(0), c(1), c(2), c(3), c(4), c(5), c(6), c(7), theta, out);
     }
 }
 
-/// Evaluates one component of the DOP853 dense output (`contd8` in `dop853.f`) at θ ∈ [0, 1].
+/// Evaluates the DOP853 dense output (`contd8` in `dop853.f`) at θ ∈ [0, 1] for all components of
+/// a coefficient-major record (`c[r * len + i]`, len = `out.len()`).
 #[inline]
-pub(super) fn dense_eval(c: &[f64], theta: f64) -> f64 {
+pub(super) fn dense_eval(c: &[f64], theta: f64, out: &mut [f64]) {
+    let len = out.len();
+    let row = |r: usize| &c[r * len..(r + 1) * len];
+    horner(row(0), row(1), row(2), row(3), row(4), row(5), row(6), row(7), theta, out);
+}
+
+/// out_i = c0 + θ(c1 + s(c2 + θ(c3 + s(c4 + θ(c5 + s(c6 + θ c7)))))), s = 1 − θ, per component.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+fn horner(c0: &[f64], c1: &[f64], c2: &[f64], c3: &[f64], c4: &[f64], c5: &[f64], c6: &[f64], c7: &[f64], theta: f64, out: &mut [f64]) {
     let s1 = 1.0 - theta;
-    let par = c[4] + theta * (c[5] + s1 * (c[6] + theta * c[7]));
-    c[0] + theta * (c[1] + s1 * (c[2] + theta * (c[3] + s1 * par)))
+    let n = out.len();
+    let (c0, c1, c2, c3, c4, c5, c6, c7) = (&c0[..n], &c1[..n], &c2[..n], &c3[..n], &c4[..n], &c5[..n], &c6[..n], &c7[..n]);
+    for i in 0..n {
+        let par = c4[i] + theta * (c5[i] + s1 * (c6[i] + theta * c7[i]));
+        out[i] = c0[i] + theta * (c1[i] + s1 * (c2[i] + theta * (c3[i] + s1 * par)));
+    }
 }
