@@ -169,7 +169,7 @@ impl Controller {
         assert!(y.len() == m && g.len() == m, "Controller::step: y and g need {m} entries");
         let cols = 1 + q;
         // ξ̂(k) = C_ξ z_k.
-        self.eq.regressor(&self.z, &mut self.xi);
+        self.xi.copy_from_slice(self.eq.regressor(&self.z));
         let (one_minus_a, a) = (1.0 - self.a, self.a);
         for ((i, ch), eta) in self.channels.iter_mut().enumerate().zip(self.eta.chunks_exact_mut(q)) {
             // Control law (25) with η̂_i(k), then the delay line gives [u_i(k − d_i), ξ̂ᵀ(k − d_i)].

@@ -2,10 +2,13 @@
 //! ([`crate::sim::closed_loop`]) and the real-time controller.
 //!
 //! The controller has three parts:
-//! - the **core**, a linear system with state z = [x̂; ξ̂_g; φ] driven by v = [y; g; u_d]: the
-//!   Luenberger observer (6) with the decoupling law (5) substituted, the reference observer (14) and
-//!   the disturbance observer (20); its outputs are the regressor ξ̂ = [ξ̂_g; φ + N x̂] and the plant
-//!   input u_f = −K x̂ + F u_d (5);
+//! - the **core**, a linear system with state z = [ξ̂_g; ξ̂_ω; x̂] driven by v = [y; g; u_d]: the
+//!   reference observer (14), the disturbance observer (20) and the Luenberger observer (6) with the
+//!   decoupling law (5) substituted; the regressor ξ̂ = [ξ̂_g; ξ̂_ω] is its first q states and the plant
+//!   input is u_f = −K x̂ + F u_d (5). The disturbance observer is realized in the coordinates
+//!   ξ̂_ω = φ + N x̂ instead of φ: differentiating (20) with (6) gives ξ̂_ω' = G_ω ξ̂_ω + N L (y − C x̂),
+//!   the same signal without the N x̂ product, and without u_d (ξ̂ does not depend on u, as the notes
+//!   on the paper point out);
 //! - per channel, the **filters** of the adaptive law (33): G_ii(s) applied to the row
 //!   [u_i(t − τ_i), ξ̂ᵀ(t − τ_i)] (state W_i, σ_i × (1 + q)) and H(s) = 1/(βs + 1) giving Y_i and Ω_i;
 //! - the **adaptive law** (33) η̂_i' = μ_i (Y_i − Ω_i η̂_i) and the control law (25) u_i = −η̂_iᵀ ξ̂.
@@ -29,14 +32,11 @@ pub struct Equations {
     pub q: usize,
     /// Core state dimension n + q_g + q_ω.
     pub nz: usize,
-    /// Core dynamics z' = A_z z + B_z [y; g; u_d]:
-    /// x̂' = (A_f − LC) x̂ + L y + B_f u_d,  ξ̂_g' = G_g ξ̂_g + L_g g,
-    /// φ' = G_ω φ + (G_ω N − N A_f) x̂ − N B_f u_d.
+    /// Core dynamics z' = A_z z + B_z [y; g; u_d], z = [ξ̂_g; ξ̂_ω; x̂]:
+    /// ξ̂_g' = G_g ξ̂_g + L_g g,  ξ̂_ω' = G_ω ξ̂_ω + N L (y − C x̂),
+    /// x̂' = (A_f − LC) x̂ + L y + B_f u_d.
     pub A_z: DMatrix<f64>,
     pub B_z: DMatrix<f64>,
-    /// Reference regressor size q_g; ξ̂ = [ξ̂_g; φ + N x̂] with z = [x̂; ξ̂_g; φ].
-    pub q_g: usize,
-    pub N: DMatrix<f64>,
     /// u_f = −K x̂ + F u_d (5), stored as −K.
     pub K_neg: DMatrix<f64>,
     pub F: DMatrix<f64>,
@@ -72,18 +72,18 @@ impl Equations {
         let (q, nz) = (q_g + q_w, n + q_g + q_w);
         let mut A_z = DMatrix::zeros(nz, nz);
         let mut B_z = DMatrix::zeros(nz, 3 * m);
-        // Observer (6) with u_f = −K x̂ + F u_d: x̂' = (A − BK − LC) x̂ + L y + BF u_d.
-        A_z.view_mut((0, 0), (n, n)).copy_from(&(&d.A_f - &d.L * &p.C));
-        B_z.view_mut((0, 0), (n, m)).copy_from(&d.L);
-        B_z.view_mut((0, 2 * m), (n, m)).copy_from(&d.B_f);
         // Reference observer (14).
-        A_z.view_mut((n, n), (q_g, q_g)).copy_from(&d.G_g);
-        B_z.view_mut((n, m), (q_g, m)).copy_from(&d.L_g);
-        // Disturbance observer (20).
-        let o = n + q_g;
-        A_z.view_mut((o, 0), (q_w, n)).copy_from(&(&d.G_w * &d.N - &d.N * &d.A_f));
-        A_z.view_mut((o, o), (q_w, q_w)).copy_from(&d.G_w);
-        B_z.view_mut((o, 2 * m), (q_w, m)).copy_from(&(-(&d.N * &d.B_f)));
+        A_z.view_mut((0, 0), (q_g, q_g)).copy_from(&d.G_g);
+        B_z.view_mut((0, m), (q_g, m)).copy_from(&d.L_g);
+        // Disturbance observer (20) in the coordinates ξ̂_ω = φ + N x̂.
+        let NL = &d.N * &d.L;
+        A_z.view_mut((q_g, q_g), (q_w, q_w)).copy_from(&d.G_w);
+        A_z.view_mut((q_g, q), (q_w, n)).copy_from(&(-(&NL * &p.C)));
+        B_z.view_mut((q_g, 0), (q_w, m)).copy_from(&NL);
+        // Observer (6) with u_f = −K x̂ + F u_d: x̂' = (A − BK − LC) x̂ + L y + BF u_d.
+        A_z.view_mut((q, q), (n, n)).copy_from(&(&d.A_f - &d.L * &p.C));
+        B_z.view_mut((q, 0), (n, m)).copy_from(&d.L);
+        B_z.view_mut((q, 2 * m), (n, m)).copy_from(&d.B_f);
         let channels = d
             .channels
             .iter()
@@ -98,20 +98,22 @@ impl Equations {
                 delay,
             })
             .collect();
-        Equations { n, m, q, nz, A_z, B_z, q_g, N: d.N.clone(), K_neg: -&d.K, F: d.F.clone(), channels, beta: d.beta }
+        Equations { n, m, q, nz, A_z, B_z, K_neg: -&d.K, F: d.F.clone(), channels, beta: d.beta }
     }
 
-    /// Regressor ξ̂ = [ξ̂_g; ξ̂_ω] with ξ̂_ω = φ + N x̂ (eq. (20)), from z = [x̂; ξ̂_g; φ].
-    pub fn regressor(&self, z: &[f64], xi: &mut [f64]) {
-        let (n, q_g) = (self.n, self.q_g);
-        xi[..q_g].copy_from_slice(&z[n..n + q_g]);
-        xi[q_g..].copy_from_slice(&z[n + q_g..]);
-        mat_vec(&self.N, &z[..n], &mut xi[q_g..], true);
+    /// Regressor ξ̂ = [ξ̂_g; ξ̂_ω]: the first q core states.
+    pub fn regressor<'z>(&self, z: &'z [f64]) -> &'z [f64] {
+        &z[..self.q]
+    }
+
+    /// Observer state x̂: the last n core states.
+    pub fn x_hat<'z>(&self, z: &'z [f64]) -> &'z [f64] {
+        &z[self.q..self.nz]
     }
 
     /// Plant input (5): u_f = −K x̂ + F u_d.
     pub fn plant_input(&self, z: &[f64], u_d: &[f64], u_f: &mut [f64]) {
-        mat_vec(&self.K_neg, &z[..self.n], u_f, false);
+        mat_vec(&self.K_neg, self.x_hat(z), u_f, false);
         mat_vec(&self.F, u_d, u_f, true);
     }
 

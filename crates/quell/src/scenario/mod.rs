@@ -231,12 +231,14 @@ fn plant(v: Value, disturbance: Option<&Signal>) -> Result<Plant, ScenarioError>
     // `D = []` (no rows) means no disturbance columns, like an absent D.
     let D = match D {
         Some(D) if D.nrows() > 0 => D,
-        None if k_signal > 0 => return Err(err(
-            t.key("D"),
-            format!(
+        None if k_signal > 0 => {
+            return Err(err(
+                t.key("D"),
+                format!(
                 "missing; [disturbance] has {k_signal} components, so plant.D (n×k, disturbance to state) is required"
             ),
-        )),
+            ))
+        }
         _ => DMatrix::zeros(n, 0),
     };
     let k = D.ncols();

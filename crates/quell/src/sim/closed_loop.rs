@@ -11,8 +11,9 @@ use crate::controller::{command, mat_vec, packed, swapping_error, Equations};
 use crate::design::Design;
 use crate::signal::Signal;
 
-/// Offsets of the loop's state vector. The prefix [z, η̂_1, …, η̂_m] is what the delayed terms read;
-/// with x after it, [z, η̂, x] is all the outputs need (the solver keeps dense output of just that).
+/// Offsets of the loop's state vector [z = (ξ̂, x̂), η̂_1, …, η̂_m, x, filters]. The delayed terms
+/// read ξ̂ and η̂_i, within the prefix [z, η̂]; with x, [z, η̂, x] is all the outputs need (the solver
+/// keeps dense output of just that).
 #[derive(Debug, Clone)]
 struct Layout {
     nz: usize,
@@ -59,11 +60,11 @@ impl Layout {
     /// A readable name for state component `k`, for divergence messages.
     fn name(&self, eq: &Equations, k: usize) -> String {
         let (n, q) = (eq.n, self.q);
-        if k < n {
-            return format!("x_hat[{}] (observer state)", k + 1);
+        if k < q {
+            return format!("xi_hat[{}] (regressor)", k + 1);
         }
         if k < eq.nz {
-            return format!("internal-model observer state [{}] (xi_g, phi)", k - n + 1);
+            return format!("x_hat[{}] (observer state)", k - q + 1);
         }
         if k < self.x {
             let i = (k - eq.nz) / q;
@@ -107,7 +108,6 @@ pub struct ContinuousLoop<'a> {
     u_d: Vec<f64>,
     u_f: Vec<f64>,
     v: Vec<f64>,
-    z_d: Vec<f64>,
     eta_d: Vec<f64>,
     /// ξ̂(t − τ_i), m rows of q.
     xi_d: Vec<f64>,
@@ -140,7 +140,6 @@ impl<'a> ContinuousLoop<'a> {
             u_d: vec![0.0; m],
             u_f: vec![0.0; m],
             v: vec![0.0; 3 * m],
-            z_d: vec![0.0; eq.nz],
             eta_d: vec![0.0; q],
             xi_d: vec![0.0; m * q],
             Delta: vec![0.0; q],
@@ -164,8 +163,7 @@ impl<'a> ContinuousLoop<'a> {
         self.reference.eval_into(t, g);
         mat_vec(self.C, &s[l.x..l.x + self.eq.n], y, false);
         mat_vec(self.Q, &self.w, y, true);
-        let xi = &mut self.tmp;
-        self.eq.regressor(&s[..l.nz], xi);
+        let xi = self.eq.regressor(s);
         for (i, ui) in u.iter_mut().enumerate() {
             *ui = command(&s[l.eta(i)..l.eta(i) + l.q], xi);
         }
@@ -206,12 +204,11 @@ impl DelaySystem for ContinuousLoop<'_> {
         for (i, ch) in eq.channels.iter().enumerate() {
             let xi_d = &mut self.xi_d[i * q..(i + 1) * q];
             if ch.delay > 0.0 {
-                past.eval_into(t - ch.delay, 0, &mut self.z_d);
+                past.eval_into(t - ch.delay, 0, xi_d);
                 past.eval_into(t - ch.delay, l.eta(i), &mut self.eta_d);
-                eq.regressor(&self.z_d, xi_d);
                 self.u_d[i] = command(&self.eta_d, xi_d);
             } else {
-                eq.regressor(&s[..nz], xi_d);
+                xi_d.copy_from_slice(eq.regressor(s));
                 self.u_d[i] = command(&s[l.eta(i)..l.eta(i) + q], xi_d);
             }
         }

@@ -424,9 +424,11 @@ fn combine(y: &[f64], k: &[f64], a: &[f64], h: f64, n: usize, out: &mut [f64]) {
 /// loop over components vectorizes and `out` is loaded and stored once per four terms.
 #[inline]
 fn lincomb(out: &mut [f64], k: &[f64], n: usize, c: &[f64], scale: f64, range: std::ops::Range<usize>) {
-    let mut terms = c.iter().enumerate().filter(|(_, &cj)| cj != 0.0).map(|(j, &cj)| {
-        (scale * cj, &k[j * n + range.start..j * n + range.end])
-    });
+    let mut terms = c
+        .iter()
+        .enumerate()
+        .filter(|(_, &cj)| cj != 0.0)
+        .map(|(j, &cj)| (scale * cj, &k[j * n + range.start..j * n + range.end]));
     loop {
         match (terms.next(), terms.next(), terms.next(), terms.next()) {
             (Some((a, ka)), Some((b, kb)), Some((c, kc)), Some((d, kd))) => {
@@ -474,7 +476,8 @@ fn dense_coefficients(
     let (c1, rest) = rest.split_at_mut(len);
     let (c2, rest) = rest.split_at_mut(len);
     let (c3, rest) = rest.split_at_mut(len);
-    let (y, y_new, k1, k13) = (&y[first..last], &y_new[first..last], &k[first..last], &k[12 * n + first..12 * n + last]);
+    let (y, y_new, k1, k13) =
+        (&y[first..last], &y_new[first..last], &k[first..last], &k[12 * n + first..12 * n + last]);
     for i in 0..len {
         let ydiff = y_new[i] - y[i];
         let bspl = h * k1[i] - ydiff;

@@ -138,10 +138,22 @@ pub(super) fn dense_eval(c: &[f64], theta: f64, out: &mut [f64]) {
 /// out_i = c0 + θ(c1 + s(c2 + θ(c3 + s(c4 + θ(c5 + s(c6 + θ c7)))))), s = 1 − θ, per component.
 #[inline]
 #[allow(clippy::too_many_arguments)]
-fn horner(c0: &[f64], c1: &[f64], c2: &[f64], c3: &[f64], c4: &[f64], c5: &[f64], c6: &[f64], c7: &[f64], theta: f64, out: &mut [f64]) {
+fn horner(
+    c0: &[f64],
+    c1: &[f64],
+    c2: &[f64],
+    c3: &[f64],
+    c4: &[f64],
+    c5: &[f64],
+    c6: &[f64],
+    c7: &[f64],
+    theta: f64,
+    out: &mut [f64],
+) {
     let s1 = 1.0 - theta;
     let n = out.len();
-    let (c0, c1, c2, c3, c4, c5, c6, c7) = (&c0[..n], &c1[..n], &c2[..n], &c3[..n], &c4[..n], &c5[..n], &c6[..n], &c7[..n]);
+    let (c0, c1, c2, c3, c4, c5, c6, c7) =
+        (&c0[..n], &c1[..n], &c2[..n], &c3[..n], &c4[..n], &c5[..n], &c6[..n], &c7[..n]);
     for i in 0..n {
         let par = c4[i] + theta * (c5[i] + s1 * (c6[i] + theta * c7[i]));
         out[i] = c0[i] + theta * (c1[i] + s1 * (c2[i] + theta * (c3[i] + s1 * par)));
