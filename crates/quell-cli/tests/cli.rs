@@ -1,0 +1,413 @@
+//! End-to-end tests of the `quell` binary: exit codes, messages, and the files `quell run` writes.
+//! Every scenario in `examples/` is run here, so none of them rots.
+#![allow(non_snake_case)]
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use quell::scenario::Scenario;
+use serde_json::Value;
+
+fn quell(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_quell")).args(args).output().expect("the quell binary runs")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn examples_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")
+}
+
+fn paper() -> String {
+    examples_dir().join("paper.toml").display().to_string()
+}
+
+/// A fresh directory under the system's temp dir, removed when dropped.
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new(tag: &str) -> TempDir {
+        static COUNTER: AtomicUsize = AtomicUsize::new(0);
+        let n = COUNTER.fetch_add(1, Ordering::SeqCst);
+        let dir = std::env::temp_dir().join(format!("quell-cli-test-{}-{tag}-{n}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        TempDir(dir)
+    }
+    fn path(&self) -> &Path {
+        &self.0
+    }
+    fn join(&self, p: impl AsRef<Path>) -> PathBuf {
+        self.0.join(p)
+    }
+    fn str(&self) -> &str {
+        self.0.to_str().unwrap()
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = fs::remove_dir_all(&self.0);
+    }
+}
+
+fn read_json(path: &Path) -> Value {
+    serde_json::from_str(&fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())))
+        .unwrap_or_else(|e| panic!("{}: not JSON: {e}", path.display()))
+}
+
+fn matrix(v: &Value) -> Vec<Vec<f64>> {
+    v.as_array()
+        .expect("a matrix is an array of rows")
+        .iter()
+        .map(|r| r.as_array().expect("a row is an array").iter().map(|x| x.as_f64().unwrap()).collect())
+        .collect()
+}
+
+fn assert_matrix_close(name: &str, got: &[Vec<f64>], want: &[&[f64]], tol: f64) {
+    assert_eq!(got.len(), want.len(), "{name}: rows");
+    for (i, (g, w)) in got.iter().zip(want).enumerate() {
+        assert_eq!(g.len(), w.len(), "{name}[{i}]: columns");
+        for (j, (a, b)) in g.iter().zip(w.iter()).enumerate() {
+            assert!((a - b).abs() <= tol, "{name}[{i}][{j}] = {a}, expected {b}");
+        }
+    }
+}
+
+/// Runs a command that must fail with exit 2 before printing anything on stdout; returns stderr.
+fn input_error(args: &[&str]) -> String {
+    let o = quell(args);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "quell {args:?}: exit status; stderr: {err}");
+    assert!(o.stdout.is_empty(), "quell {args:?}: stdout should be empty, got {:?}", stdout(&o));
+    assert!(!err.trim().is_empty(), "quell {args:?}: no message on stderr");
+    err
+}
+
+/// `quell design` on the paper's example with one line of text replaced; returns stderr.
+fn design_with_edit(tag: &str, from: &str, to: &str) -> String {
+    let text = fs::read_to_string(paper()).unwrap();
+    assert!(text.contains(from), "paper.toml no longer contains {from:?}");
+    let dir = TempDir::new(tag);
+    let file = dir.join("scenario.toml");
+    fs::write(&file, text.replacen(from, to, 1)).unwrap();
+    let err = input_error(&["design", file.to_str().unwrap()]);
+    assert_eq!(err.trim().lines().count(), 1, "one message expected, got: {err}");
+    err
+}
+
+// ---------------------------------------------------------------------------------------------
+// Help
+
+#[test]
+fn help_exits_0() {
+    for args in [&["--help"][..], &["run", "--help"], &["design", "--help"]] {
+        let o = quell(args);
+        assert_eq!(o.status.code(), Some(0), "quell {args:?}: {}", stderr(&o));
+        assert!(stdout(&o).contains("Usage"), "quell {args:?}: {}", stdout(&o));
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// quell design
+
+#[test]
+fn design_text_on_paper_example() {
+    let o = quell(&["design", &paper()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(out.contains("σ = [2, 1]"), "{out}");
+    for line in ["[    9.26000    9.26000    7.10000 ]", "[    5.00000    2.50000    5.00000 ]"] {
+        assert!(out.contains(line), "K row {line:?} missing from:\n{out}");
+    }
+    for line in ["[    6.00000    0.00000 ]", "[    0.00000    4.00000 ]"] {
+        assert!(out.contains(line), "F row {line:?} missing from:\n{out}");
+    }
+    assert!(out.contains("K (2×3)") && out.contains("F (2×2)"), "{out}");
+}
+
+#[test]
+fn design_json_on_paper_example() {
+    let o = quell(&["design", "--json", &paper()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let d: Value = serde_json::from_slice(&o.stdout).expect("stdout is one JSON object");
+    for key in ["sigma", "K", "F", "L", "N", "observer_eigenvalues", "decoupled_eigenvalues"] {
+        assert!(d.get(key).is_some(), "key {key} missing");
+    }
+    assert_eq!(d["sigma"], serde_json::json!([2, 1]));
+    // Proposition 1 for the paper's A, B, C (docs/paper-example.md), not the printed K, F.
+    assert_matrix_close("K", &matrix(&d["K"]), &[&[9.26, 9.26, 7.1], &[5.0, 2.5, 5.0]], 1e-9);
+    assert_matrix_close("F", &matrix(&d["F"]), &[&[6.0, 0.0], &[0.0, 4.0]], 1e-9);
+    assert_matrix_close("L", &matrix(&d["L"]), &[&[-8.0988, 4.4574], &[10.6506, -5.0619], &[2.7762, -1.1783]], 0.0);
+
+    // Eigenvalues are [re, im] pairs; A − BK has exactly the channel poles {−6, −4, −2}.
+    let eig = |key: &str| -> Vec<(f64, f64)> {
+        d[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|z| {
+                let z = z.as_array().expect("an eigenvalue is [re, im]");
+                assert_eq!(z.len(), 2);
+                (z[0].as_f64().unwrap(), z[1].as_f64().unwrap())
+            })
+            .collect()
+    };
+    let mut dec = eig("decoupled_eigenvalues");
+    dec.sort_by(|a, b| a.0.total_cmp(&b.0));
+    assert_eq!(dec.len(), 3);
+    for ((re, im), want) in dec.iter().zip([-6.0, -4.0, -2.0]) {
+        assert!((re - want).abs() < 1e-9 && im.abs() < 1e-9, "eig(A − BK) ∋ {re}{im:+}i, expected {want}");
+    }
+    let obs = eig("observer_eigenvalues");
+    assert_eq!(obs.len(), 3);
+    assert!(obs.iter().all(|(re, _)| *re < 0.0), "observer not Hurwitz: {obs:?}");
+
+    // N D = L_ω, with D read from the scenario.
+    let scenario = Scenario::from_path(Path::new(&paper())).unwrap();
+    let D = &scenario.plant.D;
+    let N = matrix(&d["N"]);
+    let L_w = matrix(&d["L_w"]);
+    assert_eq!(N.len(), L_w.len());
+    assert_eq!(N[0].len(), D.nrows());
+    for (i, row) in N.iter().enumerate() {
+        for j in 0..D.ncols() {
+            let nd: f64 = row.iter().enumerate().map(|(l, x)| x * D[(l, j)]).sum();
+            assert!((nd - L_w[i][j]).abs() < 1e-9, "(N D)[{i}][{j}] = {nd}, L_ω = {}", L_w[i][j]);
+        }
+    }
+}
+
+#[test]
+fn design_missing_file_exits_2() {
+    let err = input_error(&["design", "no/such/scenario.toml"]);
+    assert!(err.contains("no/such/scenario.toml") && err.contains("cannot read"), "{err}");
+}
+
+#[test]
+fn design_syntax_error_exits_2() {
+    let err = design_with_edit("syntax", "delays = [1.0, 3.0]", "delays = [1.0 3.0]");
+    assert!(err.contains("syntax: line "), "{err}");
+}
+
+#[test]
+fn design_unknown_key_exits_2() {
+    let err = design_with_edit("unknown", "delays = [1.0, 3.0]", "delay = [1.0, 3.0]");
+    assert!(err.contains("plant.delay: unknown key") && err.contains("did you mean `delays`"), "{err}");
+}
+
+#[test]
+fn design_wrong_shape_exits_2() {
+    let err = design_with_edit("shape", "C = [[2.0, 2.0, 0.0], [2.0, 1.0, 2.0]]", "C = [[2.0, 2.0], [2.0, 1.0]]");
+    assert!(err.contains("plant.C: expected 2×3"), "{err}");
+}
+
+#[test]
+fn design_wrong_channel_pole_count_exits_2() {
+    let err = design_with_edit("poles", "channel_poles = [[-6.0, -2.0], [-4.0]]", "channel_poles = [[-6.0], [-4.0]]");
+    assert!(err.contains("design.channel_poles[0]") && err.contains("relative degree 2"), "{err}");
+}
+
+#[test]
+fn design_unstable_observer_exits_2() {
+    let err = design_with_edit(
+        "observer",
+        "observer_gain = [[-8.0988, 4.4574], [10.6506, -5.0619], [2.7762, -1.1783]]",
+        "observer_gain = [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]]",
+    );
+    assert!(err.contains("design.observer_gain") && err.contains("not Hurwitz"), "{err}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// quell run
+
+fn csv_header(m: usize, q: usize) -> String {
+    let mut h = vec!["t".to_string()];
+    for s in ["y", "g", "e", "u"] {
+        h.extend((1..=m).map(|i| format!("{s}{i}")));
+    }
+    for i in 1..=m {
+        h.extend((1..=q).map(|j| format!("eta{i}_{j}")));
+    }
+    h.join(",")
+}
+
+/// Names in `dir` that look like the writers' temporary files (`.name.tmp…`).
+fn leftovers(dir: &Path) -> Vec<String> {
+    fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.') && n.contains(".tmp"))
+        .collect()
+}
+
+#[test]
+fn run_paper_example_writes_every_file() {
+    let dir = TempDir::new("run-paper");
+    let o = quell(&["run", "--out", dir.str()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+
+    // signals.csv: the header, and one row per t = k·0.1, k = 0..=1000.
+    let csv = fs::read_to_string(dir.join("signals.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header = lines.next().unwrap();
+    assert_eq!(header, csv_header(2, 8));
+    let cols = header.split(',').count();
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len(), 1001);
+    for (k, row) in rows.iter().enumerate() {
+        let fields: Vec<f64> =
+            row.split(',').map(|s| s.parse().unwrap_or_else(|e| panic!("row {k}: {s:?}: {e}"))).collect();
+        assert_eq!(fields.len(), cols, "row {k}");
+        assert!((fields[0] - k as f64 * 0.1).abs() < 1e-9, "row {k}: t = {}", fields[0]);
+        assert!(fields.iter().all(|v| v.is_finite()), "row {k}: {row}");
+    }
+
+    // design.json is what `quell design --json` prints for the same scenario.
+    let design = quell(&["design", "--json", &paper()]);
+    assert_eq!(design.status.code(), Some(0));
+    let printed: Value = serde_json::from_slice(&design.stdout).unwrap();
+    assert_eq!(read_json(&dir.join("design.json")), printed);
+
+    // summary.json: per-channel figures and solver statistics; the paper's loop converges.
+    let s = read_json(&dir.join("summary.json"));
+    assert_eq!(s["outcome"]["status"], "completed", "{s}");
+    let channels = s["channels"].as_array().unwrap();
+    assert_eq!(channels.len(), 2);
+    for c in channels {
+        for key in ["tail_max_abs_e", "tail_rms_e", "max_abs_u", "final_eta_norm"] {
+            assert!(c[key].as_f64().is_some_and(f64::is_finite), "channels[].{key}: {c}");
+        }
+    }
+    for key in ["steps", "rejected_steps", "rhs_evaluations"] {
+        assert!(s["solver"][key].as_u64().is_some(), "solver.{key}: {s}");
+    }
+    assert!(s["solver"]["steps"].as_u64().unwrap() > 0);
+    let e1 = channels[0]["tail_max_abs_e"].as_f64().unwrap();
+    let e2 = channels[1]["tail_max_abs_e"].as_f64().unwrap();
+    assert!(e1 < 0.05, "tail max|e1| = {e1}");
+    assert!(e2 < 0.005, "tail max|e2| = {e2}");
+
+    // Plots: a PNG and an SVG per channel.
+    for c in 1..=2 {
+        let png = fs::read(dir.join(format!("channel{c}.png"))).unwrap();
+        assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"), "channel{c}.png is not a PNG");
+        assert!(png.len() > 10_000, "channel{c}.png has only {} bytes", png.len());
+        let svg = fs::read_to_string(dir.join(format!("channel{c}.svg"))).unwrap();
+        let head = svg.trim_start();
+        assert!(head.starts_with("<svg") || head.starts_with("<?xml"), "channel{c}.svg starts with {:?}", &head[..20]);
+        assert!(svg.len() > 10_000 && svg.trim_end().ends_with("</svg>"), "channel{c}.svg is truncated");
+    }
+    assert!(leftovers(dir.path()).is_empty(), "temporary files left: {:?}", leftovers(dir.path()));
+    assert!(!dir.join("channel3.png").exists());
+}
+
+#[test]
+fn run_no_plots_writes_no_images() {
+    let dir = TempDir::new("no-plots");
+    let o = quell(&["run", &paper(), "--no-plots", "--out", dir.str()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    for f in ["signals.csv", "design.json", "summary.json"] {
+        assert!(dir.join(f).is_file(), "{f} missing");
+    }
+    assert!(!dir.join("channel1.png").exists() && !dir.join("channel1.svg").exists());
+}
+
+#[test]
+fn run_out_unwritable_exits_2_before_work() {
+    let dir = TempDir::new("out-file");
+    let file = dir.join("a-file");
+    fs::write(&file, b"not a directory").unwrap();
+    let under_file = file.join("sub");
+    for out in [Path::new("/proc/forbidden"), file.as_path(), under_file.as_path()] {
+        let o = quell(&["run", "--out", out.to_str().unwrap()]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "--out {}: {err}", out.display());
+        assert!(err.contains("--out"), "--out {}: {err}", out.display());
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        // Before any work: no simulation summary on stderr.
+        assert!(!err.contains("channel 1:") && !err.contains("wrote"), "{err}");
+    }
+    assert_eq!(fs::read(&file).unwrap(), b"not a directory", "the file used as --out was changed");
+}
+
+#[test]
+fn run_sample_time_not_dividing_a_delay_exits_2() {
+    let dir = TempDir::new("ts-03");
+    let out = dir.join("out");
+    let err = input_error(&["run", "--sample-time", "0.3", "--out", out.to_str().unwrap()]);
+    assert!(err.contains("channel 1"), "{err}");
+    assert!(err.contains("nearest valid sample time is 0.333"), "{err}");
+    assert!(!out.join("signals.csv").exists());
+}
+
+#[test]
+fn run_negative_sample_time_exits_2() {
+    let dir = TempDir::new("ts-neg");
+    let out = dir.join("out");
+    // `--sample-time -1` is a usage error (clap reads -1 as a flag); `=-1` reaches the check.
+    for args in [&["run", "--sample-time", "-1"][..], &["run", "--sample-time=-1"], &["run", "--sample-time=0"]] {
+        let mut args = args.to_vec();
+        args.extend(["--out", out.to_str().unwrap()]);
+        let err = input_error(&args);
+        assert!(err.contains("sample-time") || err.contains("-1"), "quell {args:?}: {err}");
+    }
+    let err = input_error(&["run", "--sample-time=-1", "--out", out.to_str().unwrap()]);
+    assert!(err.contains("--sample-time") && err.contains("> 0"), "{err}");
+    assert!(!out.join("signals.csv").exists());
+}
+
+#[test]
+fn run_missing_scenario_exits_2() {
+    let dir = TempDir::new("missing");
+    let out = dir.join("out");
+    let err = input_error(&["run", "no/such/scenario.toml", "--out", out.to_str().unwrap()]);
+    assert!(err.contains("no/such/scenario.toml"), "{err}");
+    assert!(!out.exists(), "--out was created for a scenario that does not load");
+}
+
+// ---------------------------------------------------------------------------------------------
+// examples/
+
+/// Every scenario in `examples/` designs and runs to completion.
+#[test]
+fn every_example_runs() {
+    let mut files: Vec<PathBuf> = fs::read_dir(examples_dir())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 5, "examples/: {files:?}");
+    for file in &files {
+        let name = file.file_stem().unwrap().to_string_lossy().into_owned();
+        let dir = TempDir::new(&format!("example-{name}"));
+        let path = file.to_str().unwrap();
+
+        let d = quell(&["design", path]);
+        assert_eq!(d.status.code(), Some(0), "quell design {name}: {}", stderr(&d));
+
+        let o = quell(&["run", path, "--out", dir.str()]);
+        assert_eq!(o.status.code(), Some(0), "quell run {name}: {}", stderr(&o));
+        let s = read_json(&dir.join("summary.json"));
+        assert_eq!(s["outcome"]["status"], "completed", "{name}: {s}");
+        let scenario = Scenario::from_path(file).unwrap();
+        let m = scenario.plant.m();
+        assert_eq!(s["channels"].as_array().map(Vec::len), Some(m), "{name}: {s}");
+        for c in 1..=m {
+            assert!(dir.join(format!("channel{c}.png")).is_file(), "{name}: channel{c}.png missing");
+        }
+        let header = fs::read_to_string(dir.join("signals.csv")).unwrap();
+        let q = read_json(&dir.join("design.json"))["q"].as_u64().unwrap() as usize;
+        assert_eq!(header.lines().next(), Some(csv_header(m, q).as_str()), "{name}");
+        assert!(leftovers(dir.path()).is_empty(), "{name}: temporary files left");
+    }
+}
