@@ -56,7 +56,7 @@ struct RunArgs {
     out: PathBuf,
     /// Sampled-data run with the discrete controller at this sample time (s); overrides
     /// simulation.sample_time.
-    #[arg(long, value_name = "T_S")]
+    #[arg(long, value_name = "T_S", allow_negative_numbers = true)]
     sample_time: Option<f64>,
     /// Skip the PNG/SVG plots.
     #[arg(long)]
@@ -79,7 +79,12 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Some(Command::Design { scenario, json }) => design(&scenario, json),
         Some(Command::Run(args)) => run(&args),
-        None => run(&RunArgs { out: PathBuf::from("quell-out"), ..Default::default() }),
+        None => {
+            eprintln!(
+                "quell: running the paper's example (Section VIII) into quell-out/; `quell --help` lists the commands"
+            );
+            run(&RunArgs { out: PathBuf::from("quell-out"), ..Default::default() })
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -107,15 +112,44 @@ fn load(path: Option<&Path>) -> Result<(Scenario, Design), Failure> {
 fn design(path: &Path, as_json: bool) -> Result<(), Failure> {
     let (_, d) = load(Some(path))?;
     if as_json {
-        println!("{}", serde_json::to_string_pretty(&report::design_json(&d)).unwrap_or_default());
+        print_stdout(&format!("{}\n", serde_json::to_string_pretty(&report::design_json(&d)).unwrap_or_default()));
     } else {
-        print!("{}", report::design_text(&d));
+        print_stdout(&report::design_text(&d));
     }
     Ok(())
 }
 
+/// Writes to stdout; a closed pipe (`quell design … | head`) ends the output quietly.
+fn print_stdout(text: &str) {
+    use std::io::Write;
+    let _ = std::io::stdout().lock().write_all(text.as_bytes());
+}
+
 fn run(args: &RunArgs) -> Result<(), Failure> {
     let (scenario, design) = load(args.scenario.as_deref())?;
+    let sim = &scenario.simulation;
+    let sample_time = match args.sample_time {
+        Some(t) if !(t.is_finite() && t > 0.0) => {
+            return Err(Failure::Input(format!("--sample-time: expected a sample time > 0 in seconds, found {t}")))
+        }
+        Some(t) => Some(t),
+        None => sim.sample_time,
+    };
+    // Every check that can fail on input happens before the output directory is touched.
+    let sampled = match sample_time {
+        None => None,
+        Some(sample_time) => {
+            let settings = SampledSettings {
+                t_end: sim.t_end,
+                output_step: sim.output_step,
+                sample_time,
+                noise: scenario.noise.clone(),
+                divergence_bound: DIVERGENCE_BOUND,
+            };
+            settings.check(&design).map_err(|e| Failure::Input(e.to_string()))?;
+            Some(settings)
+        }
+    };
     let out = &args.out;
     output::prepare_dir(out).map_err(|e| {
         Failure::Input(format!("--out {}: cannot write there ({e}); choose a writable directory", out.display()))
@@ -126,14 +160,6 @@ fn run(args: &RunArgs) -> Result<(), Failure> {
         let flag = interrupted.clone();
         let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));
     }
-    let sim = &scenario.simulation;
-    let sample_time = match args.sample_time {
-        Some(t) if !(t.is_finite() && t > 0.0) => {
-            return Err(Failure::Input(format!("--sample-time: expected a sample time > 0 in seconds, found {t}")))
-        }
-        Some(t) => Some(t),
-        None => sim.sample_time,
-    };
     let bar = progress_bar(sim.t_end);
     let progress = |t: f64| {
         bar.set_position((t * 1000.0) as u64);
@@ -144,22 +170,13 @@ fn run(args: &RunArgs) -> Result<(), Failure> {
         }
     };
     let started = std::time::Instant::now();
-    let result = match sample_time {
+    let result = match &sampled {
         None => {
             let settings = RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol);
             simulate(&design, &scenario.reference, &scenario.disturbance, &settings, progress)
         }
-        Some(sample_time) => {
-            let settings = SampledSettings {
-                t_end: sim.t_end,
-                output_step: sim.output_step,
-                sample_time,
-                noise: scenario.noise.clone(),
-                divergence_bound: DIVERGENCE_BOUND,
-            };
-            simulate_sampled(&design, &scenario.reference, &scenario.disturbance, &settings, progress)
-                .map_err(|e| Failure::Input(e.to_string()))?
-        }
+        Some(settings) => simulate_sampled(&design, &scenario.reference, &scenario.disturbance, settings, progress)
+            .map_err(|e| Failure::Input(e.to_string()))?,
     };
     bar.finish_and_clear();
     let elapsed = started.elapsed();

@@ -56,12 +56,12 @@ pub fn write_signals(path: &Path, r: &SimResult) -> io::Result<()> {
         for k in 0..r.len() {
             write!(w, "{}", r.t[k])?;
             for sig in [&r.y, &r.g, &r.e, &r.u] {
-                for v in &sig[k * m..(k + 1) * m] {
-                    write!(w, ",{v:e}")?;
+                for &v in &sig[k * m..(k + 1) * m] {
+                    write!(w, ",{}", Num(v))?;
                 }
             }
-            for v in &r.eta[k * m * q..(k + 1) * m * q] {
-                write!(w, ",{v:e}")?;
+            for &v in &r.eta[k * m * q..(k + 1) * m * q] {
+                write!(w, ",{}", Num(v))?;
             }
             writeln!(w)?;
         }
@@ -75,4 +75,18 @@ pub fn write_json(path: &Path, value: &serde_json::Value) -> io::Result<()> {
         serde_json::to_writer_pretty(&mut *w, value)?;
         writeln!(w)
     })
+}
+
+/// A number as plain decimal where that is short, scientific otherwise; always round-trips.
+struct Num(f64);
+
+impl std::fmt::Display for Num {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let a = self.0.abs();
+        if a == 0.0 || (1e-4..1e15).contains(&a) || !a.is_finite() {
+            write!(f, "{}", self.0)
+        } else {
+            write!(f, "{:e}", self.0)
+        }
+    }
 }

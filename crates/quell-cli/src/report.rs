@@ -33,7 +33,6 @@ pub fn design_json(d: &Design) -> Value {
         "L_g": matrix(&d.L_g),
         "G_w": matrix(&d.G_w),
         "L_w": matrix(&d.L_w),
-        "q0": d.channels.iter().map(|c| c.q0()).collect::<Vec<_>>(),
         "channels": d.channels.iter().map(|c| json!({
             "poles": eigs(&c.poles),
             "denominator": c.den,

@@ -12,9 +12,9 @@ use crate::linalg::zoh;
 /// Why a controller cannot run at the requested sample time.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum ControllerError {
-    #[error("sample_time: expected a finite T_s > 0, found {value}")]
+    #[error("simulation.sample_time (--sample-time): expected a finite T_s > 0, found {value}")]
     BadSampleTime { value: f64 },
-    #[error("sample_time: channel {}'s delay τ = {delay} s is not a whole number of samples of T_s = {sample_time} s ({ratio:.6} samples); the nearest valid sample time is {nearest} s", .channel + 1)]
+    #[error("simulation.sample_time (--sample-time): channel {}'s delay τ = {delay} s is not a whole number of samples of T_s = {sample_time} s ({ratio:.6} samples); the nearest valid sample time is {nearest:.9} s", .channel + 1)]
     DelayNotMultiple { channel: usize, delay: f64, sample_time: f64, ratio: f64, nearest: f64 },
 }
 

@@ -43,6 +43,20 @@ pub enum SampledError {
     OutputStep { output_step: f64, sample_time: f64, ratio: f64 },
 }
 
+impl SampledSettings {
+    /// Checks that the controller can run at `sample_time` (delays whole numbers of samples) and
+    /// that `output_step` is a whole multiple of it; returns the controller and the samples per output.
+    pub fn check(&self, design: &Design) -> Result<(Controller, usize), SampledError> {
+        let T = self.sample_time;
+        let ctrl = Controller::new(design, T)?;
+        let ratio = self.output_step / T;
+        if (ratio - ratio.round()).abs() > 1e-9 * ratio.max(1.0) || ratio.round() < 1.0 {
+            return Err(SampledError::OutputStep { output_step: self.output_step, sample_time: T, ratio });
+        }
+        Ok((ctrl, ratio.round() as usize))
+    }
+}
+
 /// Runs the sampled-data loop from t = 0 to `t_end`; `on_progress(t)` at each recorded sample,
 /// `Break` interrupts. The result always holds what was computed.
 pub fn simulate_sampled(
@@ -53,12 +67,7 @@ pub fn simulate_sampled(
     mut on_progress: impl FnMut(f64) -> ControlFlow<()>,
 ) -> Result<SimResult, SampledError> {
     let T = settings.sample_time;
-    let mut ctrl = Controller::new(design, T)?;
-    let ratio = settings.output_step / T;
-    if (ratio - ratio.round()).abs() > 1e-9 * ratio.max(1.0) || ratio.round() < 1.0 {
-        return Err(SampledError::OutputStep { output_step: settings.output_step, sample_time: T, ratio });
-    }
-    let every = ratio.round() as usize;
+    let (mut ctrl, every) = settings.check(design)?;
     let p = &design.plant;
     let (n, m) = (p.n(), p.m());
     let (S, H, w0) = disturbance.exosystem();
