@@ -54,12 +54,12 @@ pub fn outer_update(delta: &[f64], omega: &[f64], out: &mut [f64], a: f64, b: f6
     let q = delta.len();
     assert!(omega.len() == len(q) && out.len() == len(q), "outer_update: dimension mismatch");
     let mut k = 0;
-    for i in 0..q {
-        let bdi = b * delta[i];
-        for j in i..q {
-            out[k] = a * omega[k] + bdi * delta[j];
-            k += 1;
+    for (i, &di) in delta.iter().enumerate() {
+        let bdi = b * di;
+        for ((o, w), dj) in out[k..k + q - i].iter_mut().zip(&omega[k..k + q - i]).zip(&delta[i..]) {
+            *o = a * w + bdi * dj;
         }
+        k += q - i;
     }
 }
 

@@ -172,7 +172,7 @@ impl<'a> ContinuousLoop<'a> {
 
     /// Checks a state for divergence: the first non-finite component or one above `bound`.
     pub fn check(&self, s: &[f64], bound: f64) -> Option<(String, f64)> {
-        s.iter().position(|v| !(v.abs() <= bound)).map(|k| (self.layout.name(&self.eq, k), s[k]))
+        s.iter().position(|&v| super::runaway(v, bound)).map(|k| (self.layout.name(&self.eq, k), s[k]))
     }
 }
 

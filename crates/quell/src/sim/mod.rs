@@ -7,6 +7,11 @@ pub mod noise;
 pub mod result;
 pub mod sampled;
 
+/// A state value that counts as divergence: non-finite, or larger in magnitude than `bound`.
+pub(crate) fn runaway(v: f64, bound: f64) -> bool {
+    !v.is_finite() || v.abs() > bound
+}
+
 pub use closed_loop::{simulate, ContinuousLoop, RunSettings};
 pub use result::{ChannelSummary, Outcome, SimResult};
 pub use sampled::{simulate_sampled, MeasurementNoise, SampledError, SampledSettings};
