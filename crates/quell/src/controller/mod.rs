@@ -129,7 +129,7 @@ pub fn command(eta: &[f64], xi: &[f64]) -> f64 {
 }
 
 /// Channel i's filter-bank outputs from its state W (σ × (1 + q), row-major): the filtered delayed
-/// command G_ii[u_i(t − τ_i)] = q_i0 W[0][0] and the regressor row Δ_i = q_i0 W[0][1..] (eq. (33)).
+/// command G_ii[u_i(t − τ_i)] = q_i0·W₀₀ and the regressor row Δ_i = q_i0·(W₀₁, …, W₀q) (eq. (33)).
 /// Returns ε̂_i = δ_i − G_ii[u_i(t − τ_i)] and writes Δ_i into `delta`.
 pub fn swapping_error(ch: &ChannelFilter, W: &[f64], delta_i: f64, Delta: &mut [f64]) -> f64 {
     let q = Delta.len();
