@@ -10,7 +10,6 @@ use std::ops::ControlFlow;
 
 use common::*;
 use quell::controller::discrete::adapt;
-use quell::controller::packed;
 use quell::sim::{simulate, simulate_sampled, Outcome, RunSettings, SampledSettings};
 use quell::{Controller, ControllerError, Design, Harmonic, Signal};
 
@@ -100,14 +99,7 @@ fn adaptive_step_is_nonexpansive_for_any_gain() {
         let rank = 1 + rng.below(q);
         let V = rng.matrix(q, rank) * rng.uniform(0.0, 30.0);
         let Om = &V * V.transpose();
-        let mut omega = vec![0.0; packed::len(q)];
-        let mut k = 0;
-        for i in 0..q {
-            for j in i..q {
-                omega[k] = Om[(i, j)];
-                k += 1;
-            }
-        }
+        let omega: Vec<f64> = Om.iter().copied().collect();
         let c = 10f64.powf(rng.uniform(-4.0, 8.0));
         let mut eta: Vec<f64> = (0..q).map(|_| rng.uniform(-1.0, 1.0)).collect();
         let before: f64 = eta.iter().map(|v| v * v).sum::<f64>().sqrt();
@@ -122,7 +114,7 @@ fn adaptive_step_is_nonexpansive_for_any_gain() {
 fn adaptive_step_converges_to_the_least_squares_fixed_point() {
     // For constant PD Ω and Y, repeated steps converge to Ω⁻¹ Y (the fixed point of (33)).
     let Om = mat(2, 2, &[2.0, 0.5, 0.5, 1.0]);
-    let omega = [2.0, 0.5, 1.0];
+    let omega = [2.0, 0.5, 0.5, 1.0];
     let Y = [1.0, -1.0];
     let want = Om.try_inverse().unwrap() * quell::nalgebra::DVector::from_row_slice(&Y);
     let (mut eta, mut tmp) = (vec![0.0; 2], vec![0.0; 2]);

@@ -5,7 +5,7 @@
 use nalgebra::DMatrix;
 use thiserror::Error;
 
-use super::{command, mat_vec, packed, swapping_error, Equations};
+use super::{command, mat_vec, swapping_error, Equations};
 use crate::design::Design;
 use crate::linalg::zoh;
 
@@ -53,7 +53,7 @@ struct Channel {
     gamma: Vec<f64>,
     W: Vec<f64>,
     W_next: Vec<f64>,
-    /// H filter memories Y_i and Ω_i (packed).
+    /// H filter memories Y_i and Ω_i (full q×q: dense loops vectorize, and memory is not scarce here).
     Y: Vec<f64>,
     Omega: Vec<f64>,
     /// Delay line of the row [u_i, ξ̂ᵀ].
@@ -136,7 +136,7 @@ impl Controller {
                     W: vec![0.0; len],
                     W_next: vec![0.0; len],
                     Y: vec![0.0; q],
-                    Omega: vec![0.0; packed::len(q)],
+                    Omega: vec![0.0; q * q],
                     line: DelayLine::new(d, 1 + q),
                     c: T * ch.mu,
                 }
@@ -185,7 +185,12 @@ impl Controller {
             for (Yj, dj) in ch.Y.iter_mut().zip(&self.Delta) {
                 *Yj = a * *Yj + one_minus_a * dj * eps;
             }
-            packed::outer_for_each(&self.Delta, &mut ch.Omega, |o, dd| *o = a * *o + one_minus_a * dd);
+            for (row, &di) in ch.Omega.chunks_exact_mut(q).zip(&self.Delta) {
+                let bdi = one_minus_a * di;
+                for (o, dj) in row.iter_mut().zip(&self.Delta) {
+                    *o = a * *o + bdi * dj;
+                }
+            }
             // Adaptive law (33), implicit in ρI with ρ ≥ λ_max(Ω) (see `adapt`).
             adapt(ch.c, &ch.Omega, &ch.Y, eta, &mut self.tmp);
 
@@ -252,10 +257,21 @@ impl Controller {
 /// One step of η̂' = μ (Y − Ω η̂) (33) with c = T_s μ, implicit in ρI and explicit in the rest
 /// (Ω = ρI − (ρI − Ω)):  η̂ ← η̂ + c (Y − Ω η̂) / (1 + c ρ),  with ρ = tr Ω ≥ λ_max(Ω).
 /// For PSD Ω the map η̂ ↦ (I − cΩ/(1 + cρ)) η̂ has eigenvalues in [1/(1 + cρ), 1]: nonexpansive for
-/// every μ ≥ 0 and T_s, with the fixed points of (33), at O(q²) cost.
+/// every μ ≥ 0 and T_s, with the fixed points of (33), at O(q²) cost. `Omega` is the full symmetric
+/// q×q matrix (either storage order).
 pub fn adapt(c: f64, Omega: &[f64], Y: &[f64], eta: &mut [f64], tmp: &mut [f64]) {
-    packed::sym_mat_vec(Omega, eta, tmp);
-    let gain = c / (1.0 + c * packed::trace(Omega, eta.len()));
+    let q = eta.len();
+    assert!(Omega.len() == q * q && Y.len() == q && tmp.len() == q, "adapt: dimension mismatch");
+    // tmp = Ω η̂ = Σ_j η̂_j Ω[j][:] (Ω symmetric), and tr Ω.
+    tmp.fill(0.0);
+    let mut trace = 0.0;
+    for (j, (row, &ej)) in Omega.chunks_exact(q).zip(eta.iter()).enumerate() {
+        trace += row[j];
+        for (t, w) in tmp.iter_mut().zip(row) {
+            *t += w * ej;
+        }
+    }
+    let gain = c / (1.0 + c * trace);
     for ((e, y), w) in eta.iter_mut().zip(Y).zip(tmp.iter()) {
         *e += gain * (y - w);
     }
