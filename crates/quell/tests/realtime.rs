@@ -146,3 +146,46 @@ fn sampled_data_loop_tracks_the_continuous_one() {
     let (e1, e2) = (samp.max_abs_error(0, 90.0, 100.0), samp.max_abs_error(1, 90.0, 100.0));
     assert!(e1 < 0.05 && e2 < 0.005, "tail errors {e1} {e2}");
 }
+
+/// The table in docs/sampled-data.md: run with
+/// `cargo test --release -p quell --test realtime sample_time_sweep -- --ignored --nocapture`.
+#[test]
+#[ignore = "prints the sample-time table for the docs (about 1 s in release)"]
+fn sample_time_sweep() {
+    let d = paper_design();
+    let (g, w) = paper_signals();
+    let cont = simulate(&d, &g, &w, &RunSettings::new(100.0, 0.1, 1e-10, 1e-10), |_| ControlFlow::Continue(()));
+    let peak = |s: &[f64], i| cont.column(s, 2, i).fold(0.0, |m: f64, v| m.max(v.abs()));
+    println!("| T_s | max abs e1 on [90, 100] | max abs e2 on [90, 100] | max abs(y − y_cont) / peak abs y_cont, channel 1 / 2 | outcome |");
+    println!("|---|---|---|---|---|");
+    let mut largest_bounded = 0.0;
+    let mut largest_meeting = 0.0;
+    for n in [2000u32, 1000, 500, 400, 250, 200, 100, 50, 20, 15, 12, 10, 8, 5] {
+        let ts = 1.0 / n as f64;
+        let out = if n % 10 == 0 { 0.1 } else { ts * (0.1 * n as f64).ceil() };
+        let settings = SampledSettings { t_end: 100.0, output_step: out, sample_time: ts, noise: None, divergence_bound: 1e9 };
+        let r = simulate_sampled(&d, &g, &w, &settings, |_| ControlFlow::Continue(())).unwrap();
+        let (e1, e2) = (r.max_abs_error(0, 90.0, 100.0), r.max_abs_error(1, 90.0, 100.0));
+        let dev = |i: usize| {
+            if n % 10 != 0 || r.len() != cont.len() {
+                return f64::NAN;
+            }
+            r.column(&r.y, 2, i).zip(cont.column(&cont.y, 2, i)).fold(0.0, |m: f64, (p, q)| m.max((p - q).abs()))
+                / peak(&cont.y, i)
+        };
+        let completed = r.outcome == Some(Outcome::Completed);
+        if completed && e1 < 0.3 && e2 < 0.2 {
+            largest_bounded = ts;
+        }
+        if completed && e1 < 0.05 && e2 < 0.005 {
+            largest_meeting = ts;
+        }
+        let outcome = match &r.outcome {
+            Some(Outcome::Diverged { t, .. }) => format!("diverged at t = {t:.1} s"),
+            _ => "completed".into(),
+        };
+        println!("| {:.2} ms | {e1:.4} | {e2:.4} | {:.2} % / {:.2} % | {outcome} |", ts * 1e3, 100.0 * dev(0), 100.0 * dev(1));
+    }
+    println!("largest T_s meeting the continuous loop's bounds: {:.2} ms", largest_meeting * 1e3);
+    println!("largest T_s that still tracks (tail max|e| < 10 % of the reference amplitude): {:.2} ms", largest_bounded * 1e3);
+}
