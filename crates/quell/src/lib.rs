@@ -5,6 +5,30 @@
 //! [`scenario`] file → validated [`Scenario`] → [`Design`] (every gain, [`design`]) →
 //! controller equations ([`controller`]) + plant → one [`sim::SimResult`].
 //!
+//! ```
+//! use std::ops::ControlFlow;
+//! use quell::scenario::{Scenario, PAPER_EXAMPLE};
+//! use quell::sim::{simulate, RunSettings};
+//! use quell::{Controller, Design};
+//!
+//! // The paper's example (Section VIII): every gain from the formulas, assumptions checked.
+//! let s = Scenario::from_toml(PAPER_EXAMPLE)?;
+//! let design = Design::new(&s.plant, &s.design)?;
+//! assert_eq!(design.sigma, vec![2, 1]);
+//!
+//! // The continuous closed loop with its input delays, 20 s of it.
+//! let run = simulate(&design, &s.reference, &s.disturbance, &RunSettings::new(20.0, 0.1, 1e-9, 1e-9), |_| {
+//!     ControlFlow::Continue(())
+//! });
+//! assert_eq!(run.len(), 201);
+//!
+//! // The same controller for a real plant, sampled every millisecond.
+//! let mut ctrl = Controller::new(&design, 1e-3)?;
+//! let u_f = ctrl.step(&[0.1, 1.9], &[0.0, 2.0]);
+//! assert_eq!(u_f.len(), 2);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
 //! Equation numbers refer to C. V. Tu, N. Dudarenko, "Direct adaptive output-feedback control for
 //! unstable linear multidimensional systems with distinct input delays" (2026).
 #![allow(non_snake_case)]
