@@ -99,12 +99,12 @@ fn adaptive_step_is_nonexpansive_for_any_gain() {
         let rank = 1 + rng.below(q);
         let V = rng.matrix(q, rank) * rng.uniform(0.0, 30.0);
         let Om = &V * V.transpose();
-        let omega: Vec<f64> = Om.iter().copied().collect();
+        let mut omega: Vec<f64> = Om.iter().copied().collect();
         let c = 10f64.powf(rng.uniform(-4.0, 8.0));
         let mut eta: Vec<f64> = (0..q).map(|_| rng.uniform(-1.0, 1.0)).collect();
         let before: f64 = eta.iter().map(|v| v * v).sum::<f64>().sqrt();
         let mut tmp = vec![0.0; q];
-        adapt(c, &omega, &vec![0.0; q], &mut eta, &mut tmp);
+        adapt(c, &mut omega, (1.0, 0.0), &vec![0.0; q], &vec![0.0; q], &mut eta, &mut tmp);
         let after: f64 = eta.iter().map(|v| v * v).sum::<f64>().sqrt();
         assert!(after <= before * (1.0 + 1e-12), "grew from {before} to {after} (c = {c})");
     }
@@ -114,12 +114,12 @@ fn adaptive_step_is_nonexpansive_for_any_gain() {
 fn adaptive_step_converges_to_the_least_squares_fixed_point() {
     // For constant PD Ω and Y, repeated steps converge to Ω⁻¹ Y (the fixed point of (33)).
     let Om = mat(2, 2, &[2.0, 0.5, 0.5, 1.0]);
-    let omega = [2.0, 0.5, 0.5, 1.0];
+    let mut omega = [2.0, 0.5, 0.5, 1.0];
     let Y = [1.0, -1.0];
     let want = Om.try_inverse().unwrap() * quell::nalgebra::DVector::from_row_slice(&Y);
     let (mut eta, mut tmp) = (vec![0.0; 2], vec![0.0; 2]);
     for _ in 0..2000 {
-        adapt(0.1, &omega, &Y, &mut eta, &mut tmp);
+        adapt(0.1, &mut omega, (1.0, 0.0), &[0.0; 2], &Y, &mut eta, &mut tmp);
     }
     assert!((eta[0] - want[0]).abs() < 1e-12 && (eta[1] - want[1]).abs() < 1e-12, "{eta:?} vs {want}");
 }
@@ -163,7 +163,8 @@ fn sample_time_sweep() {
     for n in [2000u32, 1000, 500, 400, 250, 200, 100, 50, 20, 15, 12, 10, 8, 5] {
         let ts = 1.0 / n as f64;
         let out = if n % 10 == 0 { 0.1 } else { ts * (0.1 * n as f64).ceil() };
-        let settings = SampledSettings { t_end: 100.0, output_step: out, sample_time: ts, noise: None, divergence_bound: 1e9 };
+        let settings =
+            SampledSettings { t_end: 100.0, output_step: out, sample_time: ts, noise: None, divergence_bound: 1e9 };
         let r = simulate_sampled(&d, &g, &w, &settings, |_| ControlFlow::Continue(())).unwrap();
         let (e1, e2) = (r.max_abs_error(0, 90.0, 100.0), r.max_abs_error(1, 90.0, 100.0));
         let dev = |i: usize| {
@@ -184,8 +185,27 @@ fn sample_time_sweep() {
             Some(Outcome::Diverged { t, .. }) => format!("diverged at t = {t:.1} s"),
             _ => "completed".into(),
         };
-        println!("| {:.2} ms | {e1:.4} | {e2:.4} | {:.2} % / {:.2} % | {outcome} |", ts * 1e3, 100.0 * dev(0), 100.0 * dev(1));
+        println!(
+            "| {:.2} ms | {e1:.4} | {e2:.4} | {:.2} % / {:.2} % | {outcome} |",
+            ts * 1e3,
+            100.0 * dev(0),
+            100.0 * dev(1)
+        );
     }
     println!("largest T_s meeting the continuous loop's bounds: {:.2} ms", largest_meeting * 1e3);
-    println!("largest T_s that still tracks (tail max|e| < 10 % of the reference amplitude): {:.2} ms", largest_bounded * 1e3);
+    println!(
+        "largest T_s that still tracks (tail max|e| < 10 % of the reference amplitude): {:.2} ms",
+        largest_bounded * 1e3
+    );
+}
+
+#[test]
+fn adaptive_step_applies_the_h_filter_to_omega_first() {
+    // Ω ← aΩ + bΔΔᵀ with Ω = I, a = 0.5, b = 0.25, Δ = [1, 2]: [[0.75, 0.5], [0.5, 1.5]] (by hand);
+    // with c = 0 the parameters do not move.
+    let mut omega = [1.0, 0.0, 0.0, 1.0];
+    let (mut eta, mut tmp) = ([0.3, -0.7], [0.0; 2]);
+    adapt(0.0, &mut omega, (0.5, 0.25), &[1.0, 2.0], &[1.0, 1.0], &mut eta, &mut tmp);
+    assert_eq!(omega, [0.75, 0.5, 0.5, 1.5]);
+    assert_eq!(eta, [0.3, -0.7]);
 }

@@ -31,11 +31,19 @@ impl DelayLine {
     fn new(samples: usize, width: usize) -> Self {
         DelayLine { width, len: samples + 1, head: 0, data: vec![0.0; (samples + 1) * width] }
     }
-    /// Writes the current row (the slot that held row k − d − 1), then returns row k − d.
-    fn push(&mut self, row: &[f64]) -> &[f64] {
+    /// Writes the current row [first, rest] (into the slot that held row k − d − 1), then returns
+    /// row k − d.
+    fn push(&mut self, first: f64, rest: &[f64]) -> &[f64] {
         let w = self.width;
-        self.data[self.head * w..(self.head + 1) * w].copy_from_slice(row);
-        self.head = (self.head + 1) % self.len;
+        let slot = &mut self.data[self.head * w..(self.head + 1) * w];
+        slot[0] = first;
+        for (o, v) in slot[1..].iter_mut().zip(rest) {
+            *o = *v;
+        }
+        self.head += 1;
+        if self.head == self.len {
+            self.head = 0;
+        }
         // After the advance, `head` is the oldest row: k − d.
         &self.data[self.head * w..(self.head + 1) * w]
     }
@@ -67,17 +75,15 @@ struct Channel {
 pub struct Controller {
     eq: Equations,
     T: f64,
-    /// Core z_{k+1} = Φ_z z_k + Γ_z [y_k; g_k; u_d(k)].
-    Phi_z: DMatrix<f64>,
-    Gamma_z: DMatrix<f64>,
+    /// Core z_{k+1} = [Φ_z Γ_z] [z_k; y_k; g_k; u_d(k)].
+    PhiGamma_z: DMatrix<f64>,
     /// H(s) = 1/(βs + 1) at ZOH: x_{k+1} = a x_k + (1 − a) v_k, a = e^{−T_s/β}.
     a: f64,
     channels: Vec<Channel>,
-    z: Vec<f64>,
+    /// [z; y; g; u_d]: the core state and its held inputs, contiguous for one product.
+    zv: Vec<f64>,
     z_next: Vec<f64>,
-    v: Vec<f64>,
     xi: Vec<f64>,
-    row: Vec<f64>,
     Delta: Vec<f64>,
     tmp: Vec<f64>,
     u: Vec<f64>,
@@ -121,6 +127,9 @@ impl Controller {
         let eq = Equations::new(design);
         let (m, q, nz) = (eq.m, eq.q, eq.nz);
         let (Phi_z, Gamma_z) = zoh(&eq.A_z, &eq.B_z, T);
+        let mut PhiGamma_z = DMatrix::zeros(nz, nz + 3 * m);
+        PhiGamma_z.view_mut((0, 0), (nz, nz)).copy_from(&Phi_z);
+        PhiGamma_z.view_mut((0, nz), (nz, 3 * m)).copy_from(&Gamma_z);
         let channels = eq
             .channels
             .iter()
@@ -144,15 +153,12 @@ impl Controller {
             .collect();
         Ok(Controller {
             T,
-            Phi_z,
-            Gamma_z,
+            PhiGamma_z,
             a: (-T / eq.beta).exp(),
             channels,
-            z: vec![0.0; nz],
+            zv: vec![0.0; nz + 3 * m],
             z_next: vec![0.0; nz],
-            v: vec![0.0; 3 * m],
             xi: vec![0.0; q],
-            row: vec![0.0; 1 + q],
             Delta: vec![0.0; q],
             tmp: vec![0.0; q],
             u: vec![0.0; m],
@@ -169,15 +175,14 @@ impl Controller {
         assert!(y.len() == m && g.len() == m, "Controller::step: y and g need {m} entries");
         let cols = 1 + q;
         // ξ̂(k) = C_ξ z_k.
-        self.xi.copy_from_slice(self.eq.regressor(&self.z));
+        let (nz, zv) = (self.eq.nz, &mut self.zv);
+        self.xi.copy_from_slice(self.eq.regressor(&zv[..nz]));
         let (one_minus_a, a) = (1.0 - self.a, self.a);
         for ((i, ch), eta) in self.channels.iter_mut().enumerate().zip(self.eta.chunks_exact_mut(q)) {
             // Control law (25) with η̂_i(k), then the delay line gives [u_i(k − d_i), ξ̂ᵀ(k − d_i)].
             self.u[i] = command(eta, &self.xi);
-            self.row[0] = self.u[i];
-            self.row[1..].copy_from_slice(&self.xi);
-            let delayed = ch.line.push(&self.row);
-            self.v[2 * m + i] = delayed[0];
+            let delayed = ch.line.push(self.u[i], &self.xi);
+            zv[nz + 2 * m + i] = delayed[0];
 
             // Swapping error and filtered regressor from W_i(k) (eq. (33)).
             let eps = swapping_error(&self.eq.channels[i], &ch.W, y[i] - g[i], &mut self.Delta);
@@ -185,14 +190,8 @@ impl Controller {
             for (Yj, dj) in ch.Y.iter_mut().zip(&self.Delta) {
                 *Yj = a * *Yj + one_minus_a * dj * eps;
             }
-            for (row, &di) in ch.Omega.chunks_exact_mut(q).zip(&self.Delta) {
-                let bdi = one_minus_a * di;
-                for (o, dj) in row.iter_mut().zip(&self.Delta) {
-                    *o = a * *o + bdi * dj;
-                }
-            }
-            // Adaptive law (33), implicit in ρI with ρ ≥ λ_max(Ω) (see `adapt`).
-            adapt(ch.c, &ch.Omega, &ch.Y, eta, &mut self.tmp);
+            // Adaptive law (33), implicit in ρI with ρ ≥ λ_max(Ω) (see `adapt`), in the same pass.
+            adapt(ch.c, &mut ch.Omega, (a, one_minus_a), &self.Delta, &ch.Y, eta, &mut self.tmp);
 
             // G_ii filter bank: W ← Φ W + γ [u_i(k − d_i), ξ̂ᵀ(k − d_i)].
             let sigma = ch.gamma.len();
@@ -211,13 +210,12 @@ impl Controller {
             std::mem::swap(&mut ch.W, &mut ch.W_next);
         }
         // Plant input (5) and the core's ZOH step with v = [y; g; u_d].
-        self.v[..m].copy_from_slice(y);
-        self.v[m..2 * m].copy_from_slice(g);
-        let u_d = &self.v[2 * m..];
-        self.eq.plant_input(&self.z, u_d, &mut self.u_f);
-        mat_vec(&self.Phi_z, &self.z, &mut self.z_next, false);
-        mat_vec(&self.Gamma_z, &self.v, &mut self.z_next, true);
-        std::mem::swap(&mut self.z, &mut self.z_next);
+        zv[nz..nz + m].copy_from_slice(y);
+        zv[nz + m..nz + 2 * m].copy_from_slice(g);
+        let (z, u_d) = (&zv[..nz], &zv[nz + 2 * m..]);
+        self.eq.plant_input(z, u_d, &mut self.u_f);
+        mat_vec(&self.PhiGamma_z, zv, &mut self.z_next, false);
+        zv[..nz].copy_from_slice(&self.z_next);
         &self.u_f
     }
 
@@ -243,7 +241,7 @@ impl Controller {
 
     /// Back to the initial state: every controller state and delay line zero.
     pub fn reset(&mut self) {
-        self.z.fill(0.0);
+        self.zv.fill(0.0);
         self.eta.fill(0.0);
         for ch in &mut self.channels {
             ch.W.fill(0.0);
@@ -254,22 +252,32 @@ impl Controller {
     }
 }
 
-/// One step of η̂' = μ (Y − Ω η̂) (33) with c = T_s μ, implicit in ρI and explicit in the rest
-/// (Ω = ρI − (ρI − Ω)):  η̂ ← η̂ + c (Y − Ω η̂) / (1 + c ρ),  with ρ = tr Ω ≥ λ_max(Ω).
+/// The H filter Ω ← aΩ + bΔΔᵀ (ZOH of H(s)), then one step of η̂' = μ (Y − Ω η̂) (33) with c = T_s μ,
+/// implicit in ρI and explicit in the rest (Ω = ρI − (ρI − Ω)):
+/// η̂ ← η̂ + c (Y − Ω η̂) / (1 + c ρ),  with ρ = tr Ω ≥ λ_max(Ω).
 /// For PSD Ω the map η̂ ↦ (I − cΩ/(1 + cρ)) η̂ has eigenvalues in [1/(1 + cρ), 1]: nonexpansive for
 /// every μ ≥ 0 and T_s, with the fixed points of (33), at O(q²) cost. `Omega` is the full symmetric
-/// q×q matrix (either storage order).
-pub fn adapt(c: f64, Omega: &[f64], Y: &[f64], eta: &mut [f64], tmp: &mut [f64]) {
+/// q×q matrix; one pass over it computes the update, Ω η̂ = Σ_i η̂_i Ω[i][:] and tr Ω.
+pub fn adapt(
+    c: f64,
+    Omega: &mut [f64],
+    (a, b): (f64, f64),
+    Delta: &[f64],
+    Y: &[f64],
+    eta: &mut [f64],
+    tmp: &mut [f64],
+) {
     let q = eta.len();
-    assert!(Omega.len() == q * q && Y.len() == q && tmp.len() == q, "adapt: dimension mismatch");
-    // tmp = Ω η̂ = Σ_j η̂_j Ω[j][:] (Ω symmetric), and tr Ω.
+    assert!(Omega.len() == q * q && Y.len() == q && tmp.len() == q && Delta.len() == q, "adapt: dimension mismatch");
     tmp.fill(0.0);
     let mut trace = 0.0;
-    for (j, (row, &ej)) in Omega.chunks_exact(q).zip(eta.iter()).enumerate() {
-        trace += row[j];
-        for (t, w) in tmp.iter_mut().zip(row) {
-            *t += w * ej;
+    for (i, ((row, &di), &ei)) in Omega.chunks_exact_mut(q).zip(Delta).zip(eta.iter()).enumerate() {
+        let bdi = b * di;
+        for ((o, dj), t) in row.iter_mut().zip(Delta).zip(tmp.iter_mut()) {
+            *o = a * *o + bdi * dj;
+            *t += *o * ei;
         }
+        trace += row[i];
     }
     let gain = c / (1.0 + c * trace);
     for ((e, y), w) in eta.iter_mut().zip(Y).zip(tmp.iter()) {
