@@ -204,8 +204,7 @@ impl DelaySystem for ContinuousLoop<'_> {
         for (i, ch) in eq.channels.iter().enumerate() {
             let xi_d = &mut self.xi_d[i * q..(i + 1) * q];
             if ch.delay > 0.0 {
-                past.eval_into(t - ch.delay, 0, xi_d);
-                past.eval_into(t - ch.delay, l.eta(i), &mut self.eta_d);
+                past.eval_ranges(t - ch.delay, [(0, &mut *xi_d), (l.eta(i), &mut self.eta_d[..])]);
                 self.u_d[i] = command(&self.eta_d, xi_d);
             } else {
                 xi_d.copy_from_slice(eq.regressor(s));

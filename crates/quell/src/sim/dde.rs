@@ -75,13 +75,26 @@ impl Past<'_> {
     /// If `first + out.len()` exceeds [`DelaySystem::n_delayed`].
     #[inline]
     pub fn eval_into(&self, s: f64, first: usize, out: &mut [f64]) {
-        let n = out.len();
+        self.eval_ranges(s, [(first, out)]);
+    }
+
+    /// [`Past::eval_into`] for several component ranges at the same time s, locating the step record
+    /// once.
+    #[inline]
+    pub fn eval_ranges<const R: usize>(&self, s: f64, ranges: [(usize, &mut [f64]); R]) {
         if s + self.lead < self.t0 - self.tol {
-            out.copy_from_slice(&self.initial[first..first + n]);
+            for (first, out) in ranges {
+                out.copy_from_slice(&self.initial[first..first + out.len()]);
+            }
         } else if self.hist.len() == 0 {
-            out.copy_from_slice(&self.y0[first..first + n]);
+            for (first, out) in ranges {
+                out.copy_from_slice(&self.y0[first..first + out.len()]);
+            }
         } else {
-            self.hist.eval_into(s.max(self.t0), first, out);
+            let at = self.hist.locate(s.max(self.t0));
+            for (first, out) in ranges {
+                self.hist.eval_at(at, first, out);
+            }
         }
     }
 }

@@ -95,18 +95,11 @@ impl History {
         }
     }
 
-    /// Components `first..first + out.len()` of the dense output at `s` (the record with the
-    /// largest start ≤ s, found by binary search; extrapolates slightly outside the stored span).
-    /// The ring must not be empty.
-    pub(super) fn eval_into(&self, s: f64, first: usize, out: &mut [f64]) {
+    /// The record holding `s` (the one with the largest start ≤ s, by binary search; extrapolates
+    /// slightly outside the stored span) and θ = (s − start)/h there. The ring must not be empty.
+    #[inline]
+    pub(super) fn locate(&self, s: f64) -> (usize, f64) {
         debug_assert!(self.len > 0);
-        assert!(
-            first + out.len() <= self.nd,
-            "Past::eval_into: components {}..{} requested, only {} are delayed",
-            first,
-            first + out.len(),
-            self.nd
-        );
         let (mut lo, mut hi) = (0usize, self.len);
         while lo < hi {
             let mid = (lo + hi) / 2;
@@ -117,10 +110,21 @@ impl History {
             }
         }
         let p = self.phys(lo.saturating_sub(1));
-        let theta = (s - self.start[p]) / self.step[p];
-        let w = NCOEF * self.nd;
-        let rec = &self.coef[p * w..(p + 1) * w];
+        (p, (s - self.start[p]) / self.step[p])
+    }
+
+    /// Components `first..first + out.len()` of the dense output at a point from [`History::locate`].
+    #[inline]
+    pub(super) fn eval_at(&self, (p, theta): (usize, f64), first: usize, out: &mut [f64]) {
+        assert!(
+            first + out.len() <= self.nd,
+            "Past::eval_into: components {}..{} requested, only {} are delayed",
+            first,
+            first + out.len(),
+            self.nd
+        );
         let nd = self.nd;
+        let rec = &self.coef[p * NCOEF * nd..(p + 1) * NCOEF * nd];
         let c = |r: usize| &rec[r * nd + first..r * nd + first + out.len()];
         horner(c(0), c(1), c(2), c(3), c(4), c(5), c(6), c(7), theta, out);
     }
