@@ -224,6 +224,19 @@ fn write_outputs(
     seconds: f64,
     plots: bool,
 ) -> std::io::Result<()> {
+    // Figures render on their own threads (one per channel) while the data files are written.
+    std::thread::scope(|scope| {
+        let figures: Vec<_> =
+            (0..if plots { r.m } else { 0 }).map(|i| scope.spawn(move || plot::plot_channel(dir, r, i))).collect();
+        let data = write_data(dir, scenario, design, r, seconds);
+        for figure in figures {
+            figure.join().map_err(|_| std::io::Error::other("plotting panicked"))??;
+        }
+        data
+    })
+}
+
+fn write_data(dir: &Path, scenario: &Scenario, design: &Design, r: &SimResult, seconds: f64) -> std::io::Result<()> {
     output::write_signals(&dir.join("signals.csv"), r)?;
     output::write_json(&dir.join("design.json"), &report::design_json(design))?;
     let summary = json!({
@@ -234,11 +247,5 @@ fn write_outputs(
         "samples": r.len(),
         "wall_time_s": seconds,
     });
-    output::write_json(&dir.join("summary.json"), &summary)?;
-    if plots {
-        for i in 0..r.m {
-            plot::plot_channel(dir, r, i)?;
-        }
-    }
-    Ok(())
+    output::write_json(&dir.join("summary.json"), &summary)
 }
