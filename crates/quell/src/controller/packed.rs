@@ -25,6 +25,41 @@ pub fn sym_mat_vec(omega: &[f64], x: &[f64], out: &mut [f64]) {
     }
 }
 
+/// The H filter's rate and the adaptive law's product in one pass over packed Ω (eq. (33)):
+/// d_omega = (ΔΔᵀ − Ω)/β and out = Ω x.
+pub fn filter_rate_and_apply(
+    delta: &[f64],
+    omega: &[f64],
+    inv_beta: f64,
+    x: &[f64],
+    d_omega: &mut [f64],
+    out: &mut [f64],
+) {
+    let q = x.len();
+    assert!(
+        delta.len() == q && omega.len() == len(q) && d_omega.len() == len(q) && out.len() == q,
+        "filter_rate_and_apply: dimension mismatch"
+    );
+    out.fill(0.0);
+    let mut k = 0;
+    for i in 0..q {
+        // Packed row i holds Ω[i][i..q].
+        let n = q - i;
+        let (row, d_row) = (&omega[k..k + n], &mut d_omega[k..k + n]);
+        let (dl, xl, ol) = (&delta[i..], &x[i..], &mut out[i..]);
+        let (di, xi) = (dl[0], xl[0]);
+        let mut acc = 0.0;
+        for ((((w, dw), dj), xj), o) in row.iter().zip(d_row.iter_mut()).zip(dl).zip(xl).zip(ol.iter_mut()) {
+            *dw = (di * dj - w) * inv_beta;
+            acc += w * xj;
+            *o += w * xi;
+        }
+        // The diagonal entry went into both sums.
+        ol[0] += acc - row[0] * xi;
+        k += n;
+    }
+}
+
 /// tr Ω of a packed q×q matrix.
 pub fn trace(omega: &[f64], q: usize) -> f64 {
     let (mut sum, mut k) = (0.0, 0);
@@ -93,6 +128,10 @@ mod tests {
         let mut o = [0.0; 6];
         outer_for_each(&[1.0, 2.0, 3.0], &mut o, |e, v| *e = v);
         assert_eq!(o, [1.0, 2.0, 3.0, 4.0, 6.0, 9.0]);
+        let (mut rate, mut ox) = ([0.0; 6], [0.0; 3]);
+        filter_rate_and_apply(&[1.0, 2.0, 3.0], &omega, 0.5, &[1.0, 2.0, 3.0], &mut rate, &mut ox);
+        assert_eq!(ox, [4.0, 4.0, 10.0]);
+        assert_eq!(rate, [-0.5, 0.5, 1.5, 0.5, 3.5, 2.5]);
         let mut p = [0.0; 6];
         outer_update(&[1.0, 2.0, 3.0], &omega, &mut p, -1.0, 1.0);
         assert_eq!(p, [-1.0, 1.0, 3.0, 1.0, 7.0, 5.0]);

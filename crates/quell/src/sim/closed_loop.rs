@@ -92,22 +92,19 @@ impl Layout {
 /// adaptive law (33), control law (25). All buffers are allocated once; `rhs` allocates nothing.
 pub struct ContinuousLoop<'a> {
     eq: Equations,
-    A: &'a DMatrix<f64>,
-    B: &'a DMatrix<f64>,
     C: &'a DMatrix<f64>,
-    D: &'a DMatrix<f64>,
     Q: &'a DMatrix<f64>,
+    /// Plant (1) with input (5) and the core, as one sparse operator (see [`LinearPart`]).
+    linear: LinearPart,
     reference: &'a Signal,
     disturbance: &'a Signal,
     layout: Layout,
     delays: Vec<f64>,
     // Scratch.
-    g: Vec<f64>,
     w: Vec<f64>,
     y: Vec<f64>,
-    u_d: Vec<f64>,
-    u_f: Vec<f64>,
-    v: Vec<f64>,
+    /// e = [g; ω; u_d], the loop's inputs other than the state.
+    e: Vec<f64>,
     eta_d: Vec<f64>,
     /// ξ̂(t − τ_i), m rows of q.
     xi_d: Vec<f64>,
@@ -126,20 +123,15 @@ impl<'a> ContinuousLoop<'a> {
         delays.dedup();
         let (m, q, k) = (eq.m, eq.q, p.k());
         ContinuousLoop {
-            A: &p.A,
-            B: &p.B,
+            linear: LinearPart::new(design, &eq, &layout),
             C: &p.C,
-            D: &p.D,
             Q: &p.Q,
             reference,
             disturbance,
             delays,
-            g: vec![0.0; m],
             w: vec![0.0; k],
             y: vec![0.0; m],
-            u_d: vec![0.0; m],
-            u_f: vec![0.0; m],
-            v: vec![0.0; 3 * m],
+            e: vec![0.0; 2 * m + k],
             eta_d: vec![0.0; q],
             xi_d: vec![0.0; m * q],
             Delta: vec![0.0; q],
@@ -196,38 +188,31 @@ impl DelaySystem for ContinuousLoop<'_> {
     fn rhs(&mut self, t: f64, s: &[f64], past: &Past<'_>, ds: &mut [f64]) {
         let eq = &self.eq;
         let l = &self.layout;
-        let (n, m, q, nz) = (eq.n, eq.m, eq.q, eq.nz);
-        self.reference.eval_into(t, &mut self.g);
-        self.disturbance.eval_into(t, &mut self.w);
+        let (n, m, q) = (eq.n, eq.m, eq.q);
+        let k = self.e.len() - 2 * m;
+        // e = [g; ω; u_d].
+        let (g, rest) = self.e.split_at_mut(m);
+        let (w, u_d) = rest.split_at_mut(k);
+        self.reference.eval_into(t, g);
+        self.disturbance.eval_into(t, w);
 
         // Delayed regressor ξ̂(t − τ_i) and command u_i(t − τ_i) = −η̂_iᵀ(t − τ_i) ξ̂(t − τ_i).
         for (i, ch) in eq.channels.iter().enumerate() {
             let xi_d = &mut self.xi_d[i * q..(i + 1) * q];
             if ch.delay > 0.0 {
                 past.eval_ranges(t - ch.delay, [(0, &mut *xi_d), (l.eta(i), &mut self.eta_d[..])]);
-                self.u_d[i] = command(&self.eta_d, xi_d);
+                u_d[i] = command(&self.eta_d, xi_d);
             } else {
                 xi_d.copy_from_slice(eq.regressor(s));
-                self.u_d[i] = command(&s[l.eta(i)..l.eta(i) + q], xi_d);
+                u_d[i] = command(&s[l.eta(i)..l.eta(i) + q], xi_d);
             }
         }
 
-        // Plant (1) with the decoupling law (5).
-        let x = &s[l.x..l.x + n];
-        mat_vec(self.C, x, &mut self.y, false);
-        mat_vec(self.Q, &self.w, &mut self.y, true);
-        eq.plant_input(&s[..nz], &self.u_d, &mut self.u_f);
-        let dx = &mut ds[l.x..l.x + n];
-        mat_vec(self.A, x, dx, false);
-        mat_vec(self.B, &self.u_f, dx, true);
-        mat_vec(self.D, &self.w, dx, true);
-
-        // Core: observers (6), (14), (20).
-        self.v[..m].copy_from_slice(&self.y);
-        self.v[m..2 * m].copy_from_slice(&self.g);
-        self.v[2 * m..].copy_from_slice(&self.u_d);
-        mat_vec(&eq.A_z, &s[..nz], &mut ds[..nz], false);
-        mat_vec(&eq.B_z, &self.v, &mut ds[..nz], true);
+        // Plant (1) with the decoupling law (5), observers (6), (14), (20): linear in [s; e].
+        self.linear.apply(s, &self.e, ds);
+        mat_vec(self.C, &s[l.x..l.x + n], &mut self.y, false);
+        mat_vec(self.Q, &self.e[m..m + k], &mut self.y, true);
+        let (g, u_d) = (&self.e[..m], &self.e[m + k..]);
 
         // Per channel: G_ii filter bank, H filters and the adaptive law (33).
         let cols = 1 + q;
@@ -238,14 +223,14 @@ impl DelaySystem for ContinuousLoop<'_> {
             // W' = A_i W + e_σ [u_i(t − τ_i), ξ̂ᵀ(t − τ_i)] with A_i the companion matrix of den_i.
             dW[..(ch.sigma - 1) * cols].copy_from_slice(&W[cols..]);
             let last = &mut dW[(ch.sigma - 1) * cols..];
-            last[0] = self.u_d[i];
+            last[0] = u_d[i];
             last[1..].copy_from_slice(&self.xi_d[i * q..(i + 1) * q]);
             for (r, &a) in ch.den.iter().enumerate() {
                 for (d, w) in last.iter_mut().zip(&W[r * cols..(r + 1) * cols]) {
                     *d -= a * w;
                 }
             }
-            let eps = swapping_error(ch, W, self.y[i] - self.g[i], &mut self.Delta);
+            let eps = swapping_error(ch, W, self.y[i] - g[i], &mut self.Delta);
 
             let inv_beta = 1.0 / eq.beta;
             let (Y, dY) = (&s[l.y[i]..l.y[i] + q], l.y[i]);
@@ -254,14 +239,100 @@ impl DelaySystem for ContinuousLoop<'_> {
             }
             let omega = &s[l.omega[i]..l.omega[i] + packed::len(q)];
             let d_omega = &mut ds[l.omega[i]..l.omega[i] + packed::len(q)];
-            packed::outer_update(&self.Delta, omega, d_omega, -inv_beta, inv_beta);
-
-            // η̂_i' = μ_i (Y_i − Ω_i η̂_i).
             let eta = &s[l.eta(i)..l.eta(i) + q];
-            packed::sym_mat_vec(omega, eta, &mut self.tmp);
+            // Ω_i' = (Δ_iᵀΔ_i − Ω_i)/β and, for η̂_i' = μ_i (Y_i − Ω_i η̂_i), Ω_i η̂_i.
+            packed::filter_rate_and_apply(&self.Delta, omega, inv_beta, eta, d_omega, &mut self.tmp);
             for j in 0..q {
                 ds[l.eta(i) + j] = ch.mu * (Y[j] - self.tmp[j]);
             }
+        }
+    }
+}
+
+/// The loop's linear part as a sparse operator: the rows of x (plant (1) with u_f = −K x̂ + F u_d,
+/// eq. (5)) and of the core z ([`Equations::A_z`], [`Equations::B_z`] with y = C x + Q ω substituted),
+/// over the state and e = [g; ω; u_d]. Built once; the products skip the many zeros of the
+/// block-structured matrices.
+#[derive(Debug, Clone)]
+struct LinearPart {
+    /// Per row: the index it writes in the derivative, its entries over the state [start, mid) and
+    /// over e [mid, end) in `cols`/`vals`.
+    rows: Vec<(usize, usize, usize, usize)>,
+    cols: Vec<usize>,
+    vals: Vec<f64>,
+}
+
+impl LinearPart {
+    fn new(design: &Design, eq: &Equations, l: &Layout) -> Self {
+        let p = &design.plant;
+        let (n, m, k, nz, dim) = (eq.n, eq.m, p.k(), eq.nz, l.dim);
+        let (e_g, e_w, e_u) = (dim, dim + m, dim + m + k);
+        let By = eq.B_z.columns(0, m);
+        // Each block: (matrix, first row it feeds in the derivative, first column it reads).
+        let x_hat = eq.q;
+        let blocks: [(DMatrix<f64>, usize, usize); 9] = [
+            (p.A.clone(), l.x, l.x),
+            (-(&p.B * &design.K), l.x, x_hat),
+            (p.D.clone(), l.x, e_w),
+            (&p.B * &design.F, l.x, e_u),
+            (eq.A_z.clone(), 0, 0),
+            (&By * &p.C, 0, l.x),
+            (&By * &p.Q, 0, e_w),
+            (eq.B_z.columns(m, m).into_owned(), 0, e_g),
+            (eq.B_z.columns(2 * m, m).into_owned(), 0, e_u),
+        ];
+        let mut entries: Vec<(usize, usize, f64)> = Vec::new();
+        for (M, row0, col0) in &blocks {
+            for r in 0..M.nrows() {
+                for c in 0..M.ncols() {
+                    if M[(r, c)] != 0.0 {
+                        entries.push((row0 + r, col0 + c, M[(r, c)]));
+                    }
+                }
+            }
+        }
+        entries.sort_by_key(|&(r, c, _)| (r, c));
+        let targets: Vec<usize> = (0..nz).chain(l.x..l.x + n).collect();
+        let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+        for t in targets {
+            let start = cols.len();
+            let mut mid = start;
+            // State entries first, then e entries; duplicates (two blocks on one entry) are merged.
+            for over_e in [false, true] {
+                let first = cols.len();
+                if over_e {
+                    mid = first;
+                }
+                for &(_, c, v) in entries.iter().filter(|&&(r, c, _)| r == t && (c >= dim) == over_e) {
+                    let c = if over_e { c - dim } else { c };
+                    match cols.last() {
+                        Some(&last) if cols.len() > first && last == c => {
+                            *vals.last_mut().expect("an entry was pushed") += v
+                        }
+                        _ => {
+                            cols.push(c);
+                            vals.push(v);
+                        }
+                    }
+                }
+            }
+            rows.push((t, start, mid, cols.len()));
+        }
+        LinearPart { rows, cols, vals }
+    }
+
+    /// ds[row] = Σ val·s[col] + Σ val·e[col] for every row of the operator.
+    #[inline]
+    fn apply(&self, s: &[f64], e: &[f64], ds: &mut [f64]) {
+        for &(target, start, mid, end) in &self.rows {
+            let mut acc = 0.0;
+            for (&c, &v) in self.cols[start..mid].iter().zip(&self.vals[start..mid]) {
+                acc += v * s[c];
+            }
+            for (&c, &v) in self.cols[mid..end].iter().zip(&self.vals[mid..end]) {
+                acc += v * e[c];
+            }
+            ds[target] = acc;
         }
     }
 }
