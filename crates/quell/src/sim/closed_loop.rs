@@ -276,8 +276,8 @@ impl LinearPart {
             (p.D.clone(), l.x, e_w),
             (&p.B * &design.F, l.x, e_u),
             (eq.A_z.clone(), 0, 0),
-            (&By * &p.C, 0, l.x),
-            (&By * &p.Q, 0, e_w),
+            (By * &p.C, 0, l.x),
+            (By * &p.Q, 0, e_w),
             (eq.B_z.columns(m, m).into_owned(), 0, e_g),
             (eq.B_z.columns(2 * m, m).into_owned(), 0, e_u),
         ];
