@@ -131,6 +131,14 @@ fn run(args: &RunArgs) -> Result<(), Failure> {
         Some(t) if !(t.is_finite() && t > 0.0) => {
             return Err(Failure::Input(format!("--sample-time: expected a sample time > 0 in seconds, found {t}")))
         }
+        Some(t) if sim.t_end / t > quell::scenario::MAX_SAMPLING_STEPS => {
+            return Err(Failure::Input(format!(
+                "--sample-time: t_end / sample time = {:.3e} controller steps; at most {:e} are run; choose a sample time ≥ {} s",
+                sim.t_end / t,
+                quell::scenario::MAX_SAMPLING_STEPS,
+                sim.t_end / quell::scenario::MAX_SAMPLING_STEPS
+            )))
+        }
         Some(t) => Some(t),
         None => sim.sample_time,
     };
@@ -179,7 +187,7 @@ fn run(args: &RunArgs) -> Result<(), Failure> {
             out.display()
         ))),
         Outcome::StepSizeTooSmall { t } => Err(Failure::Run(format!(
-            "the solver's step size underflowed at t = {t:.6} (the loop is too stiff or blows up there); results up to then are in {}",
+            "the solver's step size underflowed at t = {t:.6} (the loop is too stiff or blows up there, simulation.rtol/atol are tighter than floating point allows, or an input delay is shorter than a step can be); results up to then are in {}",
             out.display()
         ))),
         Outcome::Interrupted { t } => Err(Failure::Run(format!("interrupted at t = {t:.3}; results up to then are in {}", out.display()))),
