@@ -46,3 +46,39 @@ fn ctrl_c_leaves_complete_files() {
     assert!((t_summary - t).abs() < 1e-2, "summary t = {t_summary}, stderr t = {t}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn second_ctrl_c_quits_a_run_stuck_between_samples() {
+    // A disturbance at 1e300 rad/s makes the solver crawl (steps ~1e-10 s), so the next recorded
+    // sample is hours away and the first Ctrl-C cannot be honoured there; the second one quits.
+    let dir = scratch_dir("interrupt-twice");
+    let scenario =
+        paper_with(&dir, &[("{ amplitude = 1.0, frequency = 1.0 }", "{ amplitude = 1.0, frequency = 1e300 }")]);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_quell"))
+        .arg("run")
+        .arg(&scenario)
+        .arg("--no-plots")
+        .arg("--out")
+        .arg(dir.join("out"))
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start quell");
+    std::thread::sleep(Duration::from_millis(500));
+    sigint(child.id());
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(child.try_wait().expect("poll").is_none(), "the run ended on the first Ctrl-C");
+    sigint(child.id());
+    let started = std::time::Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("poll") {
+            break status;
+        }
+        assert!(started.elapsed() < Duration::from_secs(10), "the second Ctrl-C did not quit");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let output = child.wait_with_output().expect("stderr");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("interrupted twice"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
