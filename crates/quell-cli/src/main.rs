@@ -12,7 +12,7 @@ use std::io::IsTerminal;
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicU8, Ordering};
 use std::sync::Arc;
 
 use clap::{Parser, Subcommand};
@@ -62,6 +62,12 @@ struct RunArgs {
     #[arg(long)]
     no_plots: bool,
 }
+
+/// Phases of a run, for the Ctrl-C handler.
+const RUNNING: u8 = 0;
+const INTERRUPTED: u8 = 1;
+const QUITTING: u8 = 2;
+const WRITING: u8 = 3;
 
 /// A state above this magnitude means the loop diverged.
 const DIVERGENCE_BOUND: f64 = 1e9;
@@ -155,15 +161,25 @@ fn run(args: &RunArgs) -> Result<(), Failure> {
         Failure::Input(format!("--out {}: cannot write there ({e}); choose a writable directory", out.display()))
     })?;
 
-    let interrupted = Arc::new(AtomicBool::new(false));
+    // Ctrl-C: the first stops the run at its next recorded sample, and the files are written. A
+    // second one before that sample (a very stiff run can take long to reach it) quits at once,
+    // with no files; once writing has begun, further Ctrl-Cs are ignored so no file is cut short.
+    let phase = Arc::new(AtomicU8::new(RUNNING));
     {
-        let flag = interrupted.clone();
-        let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));
+        let phase = phase.clone();
+        let _ = ctrlc::set_handler(move || {
+            if phase.compare_exchange(RUNNING, INTERRUPTED, Ordering::SeqCst, Ordering::SeqCst).is_err()
+                && phase.compare_exchange(INTERRUPTED, QUITTING, Ordering::SeqCst, Ordering::SeqCst).is_ok()
+            {
+                eprintln!("error: interrupted twice before the next sample; stopped without writing files");
+                std::process::exit(1);
+            }
+        });
     }
     let bar = progress_bar(sim.t_end);
     let progress = |t: f64| {
         bar.set_position((t * 1000.0) as u64);
-        if interrupted.load(Ordering::SeqCst) {
+        if phase.load(Ordering::SeqCst) != RUNNING {
             ControlFlow::Break(())
         } else {
             ControlFlow::Continue(())
@@ -179,6 +195,12 @@ fn run(args: &RunArgs) -> Result<(), Failure> {
             .map_err(|e| Failure::Input(e.to_string()))?,
     };
     bar.finish_and_clear();
+    // From here on Ctrl-C is ignored (unless a second one is already quitting the process).
+    if phase.swap(WRITING, Ordering::SeqCst) == QUITTING {
+        loop {
+            std::thread::park();
+        }
+    }
     let elapsed = started.elapsed();
 
     write_outputs(out, &scenario, &design, &result, elapsed.as_secs_f64(), !args.no_plots)
@@ -196,7 +218,7 @@ fn run(args: &RunArgs) -> Result<(), Failure> {
             out.display()
         ))),
         Outcome::StepSizeTooSmall { t } => Err(Failure::Run(format!(
-            "the solver's step size underflowed at t = {t:.6} (the loop is too stiff or blows up there); results up to then are in {}",
+            "the solver's step size underflowed at t = {t:.6} (the loop is too stiff or blows up there, simulation.rtol/atol are tighter than floating point allows, or an input delay is shorter than a step can be); results up to then are in {}",
             out.display()
         ))),
         Outcome::Interrupted { t } => Err(Failure::Run(format!("interrupted at t = {t:.3}; results up to then are in {}", out.display()))),

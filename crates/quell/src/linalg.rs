@@ -98,6 +98,27 @@ pub fn hurwitz(eigs: &[Complex<f64>], margin: f64) -> bool {
     eigs.iter().all(|e| e.re < -margin)
 }
 
+/// A number for a message: six decimals in the usual range, scientific notation for very large or
+/// very small magnitudes (so that 1e300 does not print as 301 digits).
+pub fn fmt_number(x: f64) -> String {
+    let a = x.abs();
+    if a != 0.0 && a.is_finite() && !(1e-4..1e6).contains(&a) {
+        format!("{x:.6e}")
+    } else {
+        format!("{x:.6}")
+    }
+}
+
+/// A complex number for a message, `re` or `re±im·i`, each part as in [`fmt_number`].
+pub fn fmt_complex(z: &Complex<f64>) -> String {
+    if z.im == 0.0 {
+        fmt_number(z.re)
+    } else {
+        let im = fmt_number(z.im.abs());
+        format!("{}{}{im}i", fmt_number(z.re), if z.im < 0.0 { '-' } else { '+' })
+    }
+}
+
 /// Exact zero-order-hold discretization of x' = A x + B v over a sample time T:
 /// x_{k+1} = Φ x_k + Γ v_k with Φ = e^{AT}, Γ = ∫_0^T e^{As} ds B, both read off
 /// exp([[A, B], [0, 0]]·T) (Van Loan's block method).

@@ -70,27 +70,33 @@ impl Plant {
         delays: Vec<f64>,
         x0: Option<DVector<f64>>,
     ) -> Result<Self, PlantError> {
-        let (n, m, k) = (A.nrows(), B.ncols(), D.ncols());
+        let x0 = x0.unwrap_or_else(|| DVector::zeros(A.nrows()));
+        let plant = Plant { A, B, C, D, Q, delays, x0 };
+        plant.validate()?;
+        Ok(plant)
+    }
+
+    /// The checks of [`Plant::new`], for a plant built field by field (the fields are public).
+    pub fn validate(&self) -> Result<(), PlantError> {
+        let (n, m, k) = (self.A.nrows(), self.B.ncols(), self.D.ncols());
         if n == 0 || m == 0 {
             return Err(PlantError::Empty { n, m });
         }
-        check("A", &A, n, n)?;
-        check("B", &B, n, m)?;
-        check("C", &C, m, n)?;
-        check("D", &D, n, k)?;
-        check("Q", &Q, m, k)?;
-        if delays.len() != m {
-            return Err(PlantError::Length { name: "delays", per: "input", expected: m, found: delays.len() });
+        check("A", &self.A, n, n)?;
+        check("B", &self.B, n, m)?;
+        check("C", &self.C, m, n)?;
+        check("D", &self.D, n, k)?;
+        check("Q", &self.Q, m, k)?;
+        if self.delays.len() != m {
+            return Err(PlantError::Length { name: "delays", per: "input", expected: m, found: self.delays.len() });
         }
-        if let Some((index, &value)) = delays.iter().enumerate().find(|(_, d)| !(d.is_finite() && **d >= 0.0)) {
+        if let Some((index, &value)) = self.delays.iter().enumerate().find(|(_, d)| !(d.is_finite() && **d >= 0.0)) {
             return Err(PlantError::BadDelay { index, value });
         }
-        let x0 = x0.unwrap_or_else(|| DVector::zeros(n));
-        if x0.len() != n {
-            return Err(PlantError::Length { name: "x0", per: "state", expected: n, found: x0.len() });
+        if self.x0.len() != n {
+            return Err(PlantError::Length { name: "x0", per: "state", expected: n, found: self.x0.len() });
         }
-        check("x0", &DMatrix::from_column_slice(n, 1, x0.as_slice()), n, 1)?;
-        Ok(Plant { A, B, C, D, Q, delays, x0 })
+        check("x0", &DMatrix::from_column_slice(n, 1, self.x0.as_slice()), n, 1)
     }
 
     /// State dimension n.

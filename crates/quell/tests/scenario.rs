@@ -497,6 +497,15 @@ fn output_step_beyond_t_end() {
 }
 
 #[test]
+fn output_step_too_many_samples() {
+    check(
+        &with(&[(OUTPUT_STEP, "output_step = 1e-6 ")]),
+        "simulation.output_step",
+        "t_end / output_step = 1.000e8 rows of signals.csv; at most 1e7 are kept; choose output_step ≥ 0.00001",
+    );
+}
+
+#[test]
 fn tolerance_not_positive() {
     check(&with(&[("rtol = 1e-9", "rtol = 0.0")]), "simulation.rtol", "expected a relative tolerance > 0");
 }
@@ -504,6 +513,15 @@ fn tolerance_not_positive() {
 #[test]
 fn sample_time_not_positive() {
     check(&with(&[(SAMPLED, "sample_time = -0.001")]), "simulation.sample_time", "expected a sampling period > 0");
+}
+
+#[test]
+fn sample_time_too_many_steps() {
+    check(
+        &with(&[(SAMPLED, "sample_time = 1e-9")]),
+        "simulation.sample_time",
+        "t_end / sample_time = 1.000e11 controller steps; at most 1e10 are run; choose sample_time ≥ 0.00000001",
+    );
 }
 
 #[test]

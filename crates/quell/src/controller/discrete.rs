@@ -16,7 +16,12 @@ pub enum ControllerError {
     BadSampleTime { value: f64 },
     #[error("simulation.sample_time (--sample-time): channel {}'s delay τ = {delay} s is not a whole number of samples of T_s = {sample_time} s ({ratio:.6} samples); the nearest valid sample time is {nearest:.9} s", .channel + 1)]
     DelayNotMultiple { channel: usize, delay: f64, sample_time: f64, ratio: f64, nearest: f64 },
+    #[error("sample_time: channel {}'s delay τ = {delay} s is {samples:e} samples of T_s = {sample_time} s; a delay line holds at most {max:e} samples; use a longer sample time", .channel + 1, max = MAX_DELAY_SAMPLES)]
+    DelayTooLong { channel: usize, delay: f64, sample_time: f64, samples: f64 },
 }
+
+/// Longest delay line, in samples (its memory is this many rows of 1 + q numbers per channel).
+pub const MAX_DELAY_SAMPLES: f64 = 1e7;
 
 /// A ring buffer holding the last `d + 1` rows of width w, so that row k − d is available at k.
 #[derive(Debug, Clone)]
@@ -99,6 +104,9 @@ fn samples(delays: &[f64], T: f64) -> Result<Vec<usize>, ControllerError> {
         (r - r.round()).abs() <= 1e-9 * r.max(1.0)
     };
     for (channel, &delay) in delays.iter().enumerate() {
+        if (delay / T).is_nan() || delay / T > MAX_DELAY_SAMPLES {
+            return Err(ControllerError::DelayTooLong { channel, delay, sample_time: T, samples: delay / T });
+        }
         if !whole(delay, T) {
             let ratio = delay / T;
             // Nearest T' = τ/k (k ≥ 1 samples) that also fits every other channel.

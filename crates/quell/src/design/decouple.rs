@@ -61,6 +61,14 @@ pub fn falb_wolovich(
     channel_poles: &[Vec<Complex<f64>>],
 ) -> Result<FalbWolovich, DesignError> {
     let (m, n) = (C.nrows(), A.nrows());
+    if channel_poles.len() != m {
+        return Err(DesignError::Count {
+            key: "design.channel_poles",
+            per: "output",
+            expected: m,
+            got: channel_poles.len(),
+        });
+    }
     let mut sigma = Vec::with_capacity(m);
     for (channel, s) in relative_degrees(A, B, C).into_iter().enumerate() {
         let s = s.ok_or(DesignError::NoRelativeDegree { channel })?;

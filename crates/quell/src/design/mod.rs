@@ -15,7 +15,7 @@ pub use internal_model::{filter_pair, internal_model};
 pub use place::{place, PlaceError};
 
 use crate::linalg::{eigenvalues, hurwitz, numerical_rank, poly_from_roots};
-use crate::plant::Plant;
+use crate::plant::{Plant, PlantError};
 
 /// How the Luenberger observer gain L of eq. (6) is chosen.
 #[derive(Debug, Clone, PartialEq)]
@@ -111,6 +111,10 @@ pub enum DesignError {
     Unobservable { rank: usize, n: usize, tol: f64 },
     #[error("design.observer_poles: {0}")]
     ObserverPoles(PlaceError),
+    #[error("plant.{0}")]
+    Plant(#[from] PlantError),
+    #[error("design.observer_gain[{row}][{col}]: expected a finite number, found {value}")]
+    ObserverGainNonFinite { row: usize, col: usize, value: f64 },
     #[error("design.observer_gain: expected a {n}×{m} matrix, found {rows}×{cols}")]
     ObserverGainShape { n: usize, m: usize, rows: usize, cols: usize },
     #[error("design.observer_gain: A − LC is not Hurwitz (eigenvalues {}); choose L with a stable observer, or give design.observer_poles instead", fmt_eigs(.eigenvalues))]
@@ -142,11 +146,7 @@ pub enum DesignError {
 }
 
 fn fmt_eig(e: &Complex<f64>) -> String {
-    if e.im == 0.0 {
-        format!("{:.6}", e.re)
-    } else {
-        format!("{:.6}{:+.6}i", e.re, e.im)
-    }
+    crate::linalg::fmt_complex(e)
 }
 
 fn fmt_eigs(e: &[Complex<f64>]) -> String {
@@ -179,6 +179,8 @@ impl Design {
     /// Designs every gain (Sections III–V) and checks Assumption 1, Proposition 1's condition, stable
     /// zero dynamics, a stable observer and rank D = k.
     pub fn new(plant: &Plant, spec: &DesignSpec) -> Result<Design, DesignError> {
+        // The fields of a plant are public: check it again (Plant::new did, but a literal does not).
+        plant.validate()?;
         let (n, m, k) = (plant.n(), plant.m(), plant.k());
         let (A, B, C, D) = (&plant.A, &plant.B, &plant.C, &plant.D);
         let count = |key, per, expected, got| {
@@ -233,6 +235,9 @@ impl Design {
             ObserverChoice::Gain(L) => {
                 if L.nrows() != n || L.ncols() != m {
                     return Err(DesignError::ObserverGainShape { n, m, rows: L.nrows(), cols: L.ncols() });
+                }
+                if let Some(i) = L.iter().position(|v| !v.is_finite()) {
+                    return Err(DesignError::ObserverGainNonFinite { row: i % n, col: i / n, value: L[i] });
                 }
                 L.clone()
             }

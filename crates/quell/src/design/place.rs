@@ -45,16 +45,18 @@ pub enum PlaceError {
     #[error("expected {expected} poles (one per state), got {found}; give exactly one pole per state")]
     WrongCount { expected: usize, found: usize },
     #[error(
-        "pole {pole} has no complex-conjugate partner in the list; complex poles must come in \
-         conjugate pairs so that K is real — add its conjugate"
+        "pole {} has no complex-conjugate partner in the list; complex poles must come in \
+         conjugate pairs so that K is real — add its conjugate",
+        crate::linalg::fmt_complex(.pole)
     )]
     NotConjugateClosed { pole: Complex<f64> },
     #[error(
-        "pole {pole} is requested {multiplicity} times, but rank(B) = {max} allows at most {max}; \
-         spread the repeated poles slightly or use fewer copies"
+        "pole {} is requested {multiplicity} times, but rank(B) = {max} allows at most {max}; \
+         spread the repeated poles slightly or use fewer copies",
+        crate::linalg::fmt_complex(.pole)
     )]
     Multiplicity { pole: Complex<f64>, multiplicity: usize, max: usize },
-    #[error("pole {pole} is not a finite number; request finite poles")]
+    #[error("pole {} is not a finite number; request finite poles", crate::linalg::fmt_complex(.pole))]
     NonFinite { pole: Complex<f64> },
     #[error("matrix {which} contains NaN or infinite entries; fix the model")]
     NonFiniteSystem { which: &'static str },

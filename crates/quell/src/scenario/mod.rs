@@ -379,6 +379,10 @@ fn harmonic(v: Value) -> Result<Harmonic, ScenarioError> {
     Ok(Harmonic { amplitude, frequency, phase })
 }
 
+/// Most rows a run records (t_end / output_step): every row is kept in memory, ~200 bytes each.
+pub const MAX_OUTPUT_SAMPLES: f64 = 1e7;
+pub use crate::sim::sampled::MAX_SAMPLING_STEPS;
+
 /// A number that must be > 0.
 fn positive(v: Value, what: &str) -> Result<f64, ScenarioError> {
     let x = v.number()?;
@@ -401,12 +405,29 @@ fn simulation(v: Value) -> Result<Simulation, ScenarioError> {
         Some(h) => h,
         None => default.output_step.min(t_end),
     };
+    let samples = t_end / output_step;
+    if samples > MAX_OUTPUT_SAMPLES {
+        return Err(err(
+            t.key("output_step"),
+            format!("t_end / output_step = {samples:.3e} rows of signals.csv; at most {MAX_OUTPUT_SAMPLES:e} are kept; choose output_step ≥ {}", t_end / MAX_OUTPUT_SAMPLES),
+        ));
+    }
+    let sample_time = t.get("sample_time", |v| positive(v, "a sampling period"))?;
+    if let Some(T) = sample_time {
+        let steps = t_end / T;
+        if steps > MAX_SAMPLING_STEPS {
+            return Err(err(
+                t.key("sample_time"),
+                format!("t_end / sample_time = {steps:.3e} controller steps; at most {MAX_SAMPLING_STEPS:e} are run; choose sample_time ≥ {}", t_end / MAX_SAMPLING_STEPS),
+            ));
+        }
+    }
     Ok(Simulation {
         t_end,
         output_step,
         rtol: t.get("rtol", |v| positive(v, "a relative tolerance"))?.unwrap_or(default.rtol),
         atol: t.get("atol", |v| positive(v, "an absolute tolerance"))?.unwrap_or(default.atol),
-        sample_time: t.get("sample_time", |v| positive(v, "a sampling period"))?,
+        sample_time,
     })
 }
 

@@ -255,6 +255,10 @@ pub fn solve<S: DelaySystem>(
     }
     let span = t_end - t0;
     let h_cap = opts.h_max.min(tau_min).min(span);
+    if h_cap.is_nan() || h_cap < h_min(t_end) {
+        // A delay (or h_max) below rounding level of t would force steps that do not advance t.
+        return Err(SolveError::StepSizeTooSmall { t: t0, h: h_cap });
+    }
     let bps = breakpoints(t0, &delays, t_end);
     let (dt_out, n_out) = if output_step > 0.0 && output_step.is_finite() {
         let out_tol = 1e-9 * output_step;

@@ -7,9 +7,10 @@ pub mod noise;
 pub mod result;
 pub mod sampled;
 
-/// A state value that counts as divergence: non-finite, or larger in magnitude than `bound`.
+/// A state value that counts as divergence: anything but |v| ≤ `bound` (so NaN, ±∞, and every value
+/// when the bound itself is NaN).
 pub(crate) fn runaway(v: f64, bound: f64) -> bool {
-    !v.is_finite() || v.abs() > bound
+    !matches!(v.abs().partial_cmp(&bound), Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal))
 }
 
 pub use closed_loop::{simulate, ContinuousLoop, RunSettings};

@@ -22,6 +22,9 @@ pub struct MeasurementNoise {
     pub seed: u64,
 }
 
+/// Most controller steps of a sampled-data run (t_end / sample_time).
+pub const MAX_SAMPLING_STEPS: f64 = 1e10;
+
 /// Settings of a sampled-data run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SampledSettings {
@@ -39,6 +42,8 @@ pub struct SampledSettings {
 pub enum SampledError {
     #[error(transparent)]
     Controller(#[from] ControllerError),
+    #[error("simulation.sample_time (--sample-time): t_end / T_s = {steps:.3e} controller steps; at most {max:e} are run; choose a sample time ≥ {min_sample_time:e} s")]
+    TooManySteps { steps: f64, max: f64, min_sample_time: f64 },
     #[error("simulation.output_step: expected a whole multiple of sample_time = {sample_time} s, found {output_step} s ({ratio:.6} samples)")]
     OutputStep { output_step: f64, sample_time: f64, ratio: f64 },
 }
@@ -48,6 +53,10 @@ impl SampledSettings {
     /// that `output_step` is a whole multiple of it; returns the controller and the samples per output.
     pub fn check(&self, design: &Design) -> Result<(Controller, usize), SampledError> {
         let T = self.sample_time;
+        let max = MAX_SAMPLING_STEPS;
+        if self.t_end / T > max {
+            return Err(SampledError::TooManySteps { steps: self.t_end / T, max, min_sample_time: self.t_end / max });
+        }
         let ctrl = Controller::new(design, T)?;
         let ratio = self.output_step / T;
         if (ratio - ratio.round()).abs() > 1e-9 * ratio.max(1.0) || ratio.round() < 1.0 {

@@ -1,0 +1,84 @@
+//! Ctrl-C during a long run: exit status 1, the time on stderr, and complete output files of what
+//! was computed (every file is written to a temporary name and renamed into place).
+
+mod fault_support;
+
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+use fault_support::{check_outputs, paper_with, scratch_dir};
+
+fn sigint(pid: u32) {
+    let status = Command::new("kill").args(["-INT", &pid.to_string()]).status().expect("run kill");
+    assert!(status.success(), "kill -INT {pid} failed");
+}
+
+#[test]
+fn ctrl_c_leaves_complete_files() {
+    let dir = scratch_dir("interrupt");
+    // The paper's example to t = 1e5 s: ~40 s of work in release, far longer in debug.
+    let scenario = paper_with(&dir, &[("t_end = 100.0", "t_end = 100000.0")]);
+    let out = dir.join("out");
+    let child = Command::new(env!("CARGO_BIN_EXE_quell"))
+        .arg("run")
+        .arg(&scenario)
+        .arg("--out")
+        .arg(&out)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start quell");
+    std::thread::sleep(Duration::from_millis(500));
+    sigint(child.id());
+    // A second Ctrl-C while the files are being written must not leave half files either.
+    std::thread::sleep(Duration::from_millis(20));
+    let _ = Command::new("kill").args(["-INT", &child.id().to_string()]).status();
+    let output = child.wait_with_output().expect("wait for quell");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+
+    assert_eq!(output.status.code(), Some(1), "stderr: {stderr}");
+    let t =
+        fault_support::time_in(&stderr, "interrupted at t = ").unwrap_or_else(|| panic!("no time on stderr: {stderr}"));
+    assert!(t > 0.0 && t < 100000.0, "t = {t}");
+    let summary = check_outputs(&out);
+    assert_eq!(summary["outcome"]["status"], "interrupted", "{summary}");
+    let t_summary = summary["outcome"]["t"].as_f64().expect("outcome.t");
+    assert!((t_summary - t).abs() < 1e-2, "summary t = {t_summary}, stderr t = {t}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn second_ctrl_c_quits_a_run_stuck_between_samples() {
+    // A disturbance at 1e300 rad/s makes the solver crawl (steps ~1e-10 s), so the next recorded
+    // sample is hours away and the first Ctrl-C cannot be honoured there; the second one quits.
+    let dir = scratch_dir("interrupt-twice");
+    let scenario =
+        paper_with(&dir, &[("{ amplitude = 1.0, frequency = 1.0 }", "{ amplitude = 1.0, frequency = 1e300 }")]);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_quell"))
+        .arg("run")
+        .arg(&scenario)
+        .arg("--no-plots")
+        .arg("--out")
+        .arg(dir.join("out"))
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start quell");
+    std::thread::sleep(Duration::from_millis(500));
+    sigint(child.id());
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(child.try_wait().expect("poll").is_none(), "the run ended on the first Ctrl-C");
+    sigint(child.id());
+    let started = std::time::Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("poll") {
+            break status;
+        }
+        assert!(started.elapsed() < Duration::from_secs(10), "the second Ctrl-C did not quit");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let output = child.wait_with_output().expect("stderr");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("interrupted twice"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,67 @@
+//! Faults during a continuous run end it with an [`Outcome`] that names the time (and, for
+//! divergence, the signal), and the result keeps every sample computed before.
+
+use std::ops::ControlFlow;
+
+use quell::scenario::PAPER_EXAMPLE;
+use quell::sim::{simulate, Outcome, RunSettings};
+use quell::Scenario;
+
+#[test]
+fn divergence_bound_stops_the_continuous_loop() {
+    let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+    let d = s.design().unwrap();
+    // |g_2| = 2 alone exceeds a bound of 1 on the internal-model states soon after the start.
+    let settings = RunSettings { divergence_bound: 1.0, ..RunSettings::new(100.0, 0.1, 1e-9, 1e-9) };
+    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(()));
+    let Some(Outcome::Diverged { t, signal, value }) = r.outcome.clone() else {
+        panic!("expected divergence, got {:?}", r.outcome);
+    };
+    assert!(t > 0.0 && t < 100.0, "t = {t}");
+    assert!(value.abs() > 1.0 && !signal.is_empty(), "{signal} = {value}");
+    assert!(signal.contains('[') || signal.contains("Omega"), "signal not named: {signal}");
+    // Every sample before t was kept; the divergent one was not.
+    assert!(!r.is_empty());
+    assert!(r.t.last().is_some_and(|&last| last < t && last >= t - 0.1 - 1e-9));
+    assert_eq!(r.y.len(), r.len() * r.m);
+}
+
+#[test]
+fn non_finite_state_counts_as_divergence() {
+    // A bound of NaN would make every comparison false; the check treats "not ≤ bound" as
+    // divergence, so the very first sample is reported with its time.
+    let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+    let d = s.design().unwrap();
+    let settings = RunSettings { divergence_bound: f64::NAN, ..RunSettings::new(1.0, 0.1, 1e-9, 1e-9) };
+    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(()));
+    assert!(matches!(r.outcome, Some(Outcome::Diverged { t, .. }) if t == 0.0), "{:?}", r.outcome);
+    assert!(r.is_empty());
+}
+
+#[test]
+fn step_size_underflow_ends_the_run_with_the_time() {
+    // Tolerances below rounding level cannot be met at any step size: the solver must give up
+    // (not loop) and say when.
+    let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+    let d = s.design().unwrap();
+    let settings = RunSettings::new(10.0, 0.1, 1e-300, 1e-300);
+    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(()));
+    assert!(matches!(r.outcome, Some(Outcome::StepSizeTooSmall { t }) if (0.0..10.0).contains(&t)), "{:?}", r.outcome);
+    assert_eq!(r.len(), 1, "the sample at t = 0 is kept");
+}
+
+#[test]
+fn interruption_keeps_the_samples_so_far() {
+    let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+    let d = s.design().unwrap();
+    let settings = RunSettings::new(100.0, 0.1, 1e-9, 1e-9);
+    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |t| {
+        if t >= 5.0 {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    });
+    assert!(matches!(r.outcome, Some(Outcome::Interrupted { t }) if (t - 5.0).abs() < 1e-9), "{:?}", r.outcome);
+    assert_eq!(r.len(), 51);
+}
