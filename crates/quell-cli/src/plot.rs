@@ -1,6 +1,5 @@
 //! One figure per channel, like the paper's Figs. 1 and 2: y_i with g_i, e_i, u_i and η̂_i against t.
 
-use std::fs;
 use std::io;
 use std::path::Path;
 use std::sync::Once;
@@ -9,7 +8,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use quell::sim::SimResult;
 
-use crate::output::{tmp_name, write_atomic};
+use crate::output::write_atomic;
 
 const SIZE: (u32, u32) = (1000, 1150);
 static FONT: Once = Once::new();
@@ -109,13 +108,18 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &SimResult, i: usiz
 pub fn plot_channel(dir: &Path, r: &SimResult, i: usize) -> io::Result<()> {
     register_font();
     let png = dir.join(format!("channel{}.png", i + 1));
-    let tmp = tmp_name(&png);
-    let drawn = draw(BitMapBackend::new(&tmp, SIZE).into_drawing_area(), r, i);
-    if let Err(e) = drawn {
-        let _ = fs::remove_file(&tmp);
-        return Err(io::Error::other(format!("{}: {e}", png.display())));
-    }
-    fs::rename(&tmp, &png)?;
+    let mut rgb = vec![0u8; (SIZE.0 * SIZE.1 * 3) as usize];
+    draw(BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area(), r, i)
+        .map_err(|e| io::Error::other(format!("{}: {e}", png.display())))?;
+    write_atomic(&png, |w| {
+        let mut encoder = png::Encoder::new(w, SIZE.0, SIZE.1);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_adaptive_filter(png::AdaptiveFilterType::Adaptive);
+        let mut writer = encoder.write_header().map_err(io::Error::other)?;
+        writer.write_image_data(&rgb).map_err(io::Error::other)?;
+        writer.finish().map_err(io::Error::other)
+    })?;
     let mut svg = String::new();
     draw(SVGBackend::with_string(&mut svg, SIZE).into_drawing_area(), r, i).map_err(io::Error::other)?;
     write_atomic(&dir.join(format!("channel{}.svg", i + 1)), |w| w.write_all(svg.as_bytes()))
