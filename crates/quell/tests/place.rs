@@ -112,18 +112,11 @@ fn char_poly(M: &DMatrix<f64>) -> Vec<f64> {
     c
 }
 
-/// Coefficients of ∏(s − p), lowest degree first.
+/// Coefficients of ∏(s − r), lowest degree first, with the leading 1.
 fn poly_from_roots(roots: &[C64]) -> Vec<f64> {
-    let mut c = vec![C64::new(1.0, 0.0)];
-    for &r in roots {
-        let mut next = vec![C64::new(0.0, 0.0); c.len() + 1];
-        for (i, &ci) in c.iter().enumerate() {
-            next[i + 1] += ci;
-            next[i] -= ci * r;
-        }
-        c = next;
-    }
-    c.iter().map(|z| z.re).collect()
+    let mut c = quell::linalg::poly_from_roots(roots);
+    c.push(1.0);
+    c
 }
 
 fn assert_places(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[C64], tol: f64) -> DMatrix<f64> {

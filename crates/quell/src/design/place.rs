@@ -547,18 +547,11 @@ fn verify_char_poly(A: &DMatrix<f64>, B: &DMatrix<f64>, K: &DMatrix<f64>, poles:
     }
 }
 
-/// Coefficients (lowest degree first) of ∏(s − r), real parts (the roots are conjugate-closed).
+/// Coefficients of ∏(s − r), lowest degree first, with the leading 1.
 fn poly_from_roots(roots: &[C64]) -> Vec<f64> {
-    let mut c = vec![C64::new(1.0, 0.0)];
-    for &r in roots {
-        let mut next = vec![C64::new(0.0, 0.0); c.len() + 1];
-        for (i, &ci) in c.iter().enumerate() {
-            next[i + 1] += ci;
-            next[i] -= ci * r;
-        }
-        c = next;
-    }
-    c.iter().map(|z| z.re).collect()
+    let mut c = crate::linalg::poly_from_roots(roots);
+    c.push(1.0);
+    c
 }
 
 /// Characteristic polynomial of M (lowest degree first): orthogonal Hessenberg reduction, then
