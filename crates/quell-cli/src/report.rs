@@ -59,10 +59,7 @@ fn fmt_matrix(out: &mut String, name: &str, M: &DMatrix<f64>) {
 }
 
 fn fmt_eigs(e: &[Complex<f64>]) -> String {
-    e.iter()
-        .map(|z| if z.im == 0.0 { format!("{:.5}", z.re) } else { format!("{:.5}{:+.5}i", z.re, z.im) })
-        .collect::<Vec<_>>()
-        .join(", ")
+    e.iter().map(quell::linalg::fmt_complex).collect::<Vec<_>>().join(", ")
 }
 
 fn tf(c: &quell::design::ChannelTf) -> String {

@@ -14,7 +14,7 @@ pub use decouple::{falb_wolovich, relative_degrees, FalbWolovich};
 pub use internal_model::{filter_pair, internal_model};
 pub use place::{place, PlaceError};
 
-use crate::linalg::{eigenvalues, hurwitz, numerical_rank, poly_from_roots};
+use crate::linalg::{eigenvalues, fmt_complex, hurwitz, numerical_rank, poly_from_roots};
 use crate::plant::{Plant, PlantError};
 
 /// How the Luenberger observer gain L of eq. (6) is chosen.
@@ -129,9 +129,9 @@ pub enum DesignError {
     UnstableZeroDynamics { eigenvalues: Vec<Complex<f64>> },
     #[error("{key}: expected {expected} entries (one per {per}), got {got}")]
     Count { key: &'static str, per: &'static str, expected: usize, got: usize },
-    #[error("{key}: pole {} is not in the open left half-plane; {what} poles must be Hurwitz (real part < 0)", fmt_eig(.pole))]
+    #[error("{key}: pole {} is not in the open left half-plane; {what} poles must be Hurwitz (real part < 0)", fmt_complex(.pole))]
     NotHurwitz { key: String, what: &'static str, pole: Complex<f64> },
-    #[error("{key}: pole {} has no complex-conjugate partner in the list", fmt_eig(.pole))]
+    #[error("{key}: pole {} has no complex-conjugate partner in the list", fmt_complex(.pole))]
     NotConjugateClosed { key: String, pole: Complex<f64> },
     #[error("{key}: the list is empty; give at least one pole")]
     NoPoles { key: String },
@@ -145,12 +145,8 @@ pub enum DesignError {
     DisturbanceRank { rank: usize, k: usize },
 }
 
-fn fmt_eig(e: &Complex<f64>) -> String {
-    crate::linalg::fmt_complex(e)
-}
-
 fn fmt_eigs(e: &[Complex<f64>]) -> String {
-    e.iter().map(fmt_eig).collect::<Vec<_>>().join(", ")
+    e.iter().map(fmt_complex).collect::<Vec<_>>().join(", ")
 }
 
 /// Checks a pole list: not empty (when `nonempty`), finite, closed under conjugation, Hurwitz.
