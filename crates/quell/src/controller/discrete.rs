@@ -265,7 +265,7 @@ impl Controller {
 /// η̂ ← η̂ + c (Y − Ω η̂) / (1 + c ρ),  with ρ = tr Ω ≥ λ_max(Ω).
 /// For PSD Ω the map η̂ ↦ (I − cΩ/(1 + cρ)) η̂ has eigenvalues in [1/(1 + cρ), 1]: nonexpansive for
 /// every μ ≥ 0 and T_s, with the fixed points of (33), at O(q²) cost. `Omega` is the full symmetric
-/// q×q matrix; one pass over it computes the update, Ω η̂ = Σ_i η̂_i Ω[i][:] and tr Ω.
+/// q×q matrix; one pass over it computes the update, Ω η̂ = Σ_i η̂_i·(row i of Ω) and tr Ω.
 pub fn adapt(
     c: f64,
     Omega: &mut [f64],
