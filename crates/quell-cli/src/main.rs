@@ -229,7 +229,9 @@ fn progress_bar(t_end: f64) -> ProgressBar {
     let bar = ProgressBar::new((t_end * 1000.0) as u64);
     if std::io::stderr().is_terminal() {
         bar.set_draw_target(ProgressDrawTarget::stderr());
-        if let Ok(style) = ProgressStyle::with_template("{bar:40} t = {msg} {elapsed_precise}") {
+        if let Ok(style) = ProgressStyle::with_template(
+            "simulating {bar:40} {percent:>3}% of t_end, {elapsed_precise} elapsed, ETA {eta}",
+        ) {
             bar.set_style(style);
         }
     } else {
