@@ -57,7 +57,7 @@ impl Layout {
         self.x + n
     }
 
-    /// A readable name for state component `k`, for divergence messages.
+    /// A readable name for state component `k` of the output prefix, for divergence messages.
     fn name(&self, eq: &Equations, k: usize) -> String {
         let (n, q) = (eq.n, self.q);
         if k < q {
@@ -72,17 +72,6 @@ impl Layout {
         }
         if k < self.x + n {
             return format!("x[{}] (plant state)", k - self.x + 1);
-        }
-        for i in (0..eq.m).rev() {
-            if k >= self.omega[i] {
-                return format!("Omega{} (adaptive law memory)", i + 1);
-            }
-            if k >= self.y[i] {
-                return format!("Y{}[{}] (adaptive law memory)", i + 1, k - self.y[i] + 1);
-            }
-            if k >= self.w[i] {
-                return format!("filter state of channel {} (G_{}{} bank)", i + 1, i + 1, i + 1);
-            }
         }
         format!("state[{k}]")
     }
@@ -101,7 +90,6 @@ pub struct ContinuousLoop<'a> {
     layout: Layout,
     delays: Vec<f64>,
     // Scratch.
-    w: Vec<f64>,
     y: Vec<f64>,
     /// e = [g; ω; u_d], the loop's inputs other than the state.
     e: Vec<f64>,
@@ -129,7 +117,6 @@ impl<'a> ContinuousLoop<'a> {
             reference,
             disturbance,
             delays,
-            w: vec![0.0; k],
             y: vec![0.0; m],
             e: vec![0.0; 2 * m + k],
             eta_d: vec![0.0; q],
@@ -148,8 +135,34 @@ impl<'a> ContinuousLoop<'a> {
         s
     }
 
+    /// What the output callback needs, apart from the solver's borrow of the loop.
+    fn probe(&self) -> Probe<'a> {
+        Probe {
+            eq: self.eq.clone(),
+            layout: self.layout.clone(),
+            C: self.C,
+            Q: self.Q,
+            reference: self.reference,
+            disturbance: self.disturbance,
+            w: vec![0.0; self.e.len() - 2 * self.eq.m],
+        }
+    }
+}
+
+/// Reads y, g, u (25) and η̂ off the output prefix [z, η̂, x] of the loop's state.
+struct Probe<'a> {
+    eq: Equations,
+    layout: Layout,
+    C: &'a DMatrix<f64>,
+    Q: &'a DMatrix<f64>,
+    reference: &'a Signal,
+    disturbance: &'a Signal,
+    w: Vec<f64>,
+}
+
+impl Probe<'_> {
     /// Outputs at time t: y, g and the undelayed commands u (25) and η̂ (a view of the state).
-    pub fn outputs<'s>(&mut self, t: f64, s: &'s [f64], y: &mut [f64], g: &mut [f64], u: &mut [f64]) -> &'s [f64] {
+    fn outputs<'s>(&mut self, t: f64, s: &'s [f64], y: &mut [f64], g: &mut [f64], u: &mut [f64]) -> &'s [f64] {
         let l = &self.layout;
         self.disturbance.eval_into(t, &mut self.w);
         self.reference.eval_into(t, g);
@@ -162,8 +175,8 @@ impl<'a> ContinuousLoop<'a> {
         &s[l.nz..l.x]
     }
 
-    /// Checks a state for divergence: the first non-finite component or one above `bound`.
-    pub fn check(&self, s: &[f64], bound: f64) -> Option<(String, f64)> {
+    /// The first component of the output prefix that is non-finite or above `bound`, named.
+    fn check(&self, s: &[f64], bound: f64) -> Option<(String, f64)> {
         s.iter().position(|&v| super::runaway(v, bound)).map(|k| (self.layout.name(&self.eq, k), s[k]))
     }
 }
@@ -373,8 +386,8 @@ pub fn simulate(
     let (mut y, mut g, mut u) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
     let opts = Options { rtol: settings.rtol, atol: settings.atol, ..Options::default() };
     let mut outcome = Outcome::Completed;
-    // The solver borrows the system mutably; the output callback needs its own copy for `outputs`.
-    let mut probe = ContinuousLoop::new(design, reference, disturbance);
+    // The solver borrows the loop mutably; the output callback reads through its own probe.
+    let mut probe = sys.probe();
     let solved = dde::solve(&mut sys, 0.0, &s0, &history, settings.t_end, settings.output_step, &opts, |t, s| {
         if let Some((signal, value)) = probe.check(s, settings.divergence_bound) {
             outcome = Outcome::Diverged { t, signal, value };
