@@ -7,19 +7,21 @@ use std::process::Command;
 
 use fault_support::{check_outputs, paper_with, scratch_dir, time_in};
 
+/// Runs `quell ARGS OUT SCENARIO` (ARGS ending in `--out`); returns the output and its stderr.
+fn run_quell(args: &[&str], out: &std::path::Path, scenario: &std::path::Path) -> (std::process::Output, String) {
+    let output =
+        Command::new(env!("CARGO_BIN_EXE_quell")).args(args).arg(out).arg(scenario).output().expect("run quell");
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    (output, stderr)
+}
+
 #[test]
 fn diverging_sampled_run_exits_1_and_keeps_the_files() {
     // The paper's example sampled at T_s = 0.5 s is unstable: x[2] passes 1e9 at t ≈ 14.5 s.
     let dir = scratch_dir("diverge");
     let scenario = paper_with(&dir, &[("output_step = 0.1 ", "output_step = 0.5 ")]);
     let out = dir.join("out");
-    let output = Command::new(env!("CARGO_BIN_EXE_quell"))
-        .args(["run", "--no-plots", "--sample-time", "0.5", "--out"])
-        .arg(&out)
-        .arg(&scenario)
-        .output()
-        .expect("run quell");
-    let stderr = String::from_utf8_lossy(&output.stderr);
+    let (output, stderr) = run_quell(&["run", "--no-plots", "--sample-time", "0.5", "--out"], &out, &scenario);
     assert_eq!(output.status.code(), Some(1), "stderr: {stderr}");
     let t = time_in(&stderr, "diverged at t = ").unwrap_or_else(|| panic!("no time on stderr: {stderr}"));
     assert!((5.0..50.0).contains(&t), "t = {t}");
@@ -42,13 +44,7 @@ fn step_size_underflow_exits_1_with_the_time() {
     let dir = scratch_dir("underflow");
     let scenario = paper_with(&dir, &[("rtol = 1e-9", "rtol = 1e-300"), ("atol = 1e-9", "atol = 1e-300")]);
     let out = dir.join("out");
-    let output = Command::new(env!("CARGO_BIN_EXE_quell"))
-        .args(["run", "--no-plots", "--out"])
-        .arg(&out)
-        .arg(&scenario)
-        .output()
-        .expect("run quell");
-    let stderr = String::from_utf8_lossy(&output.stderr);
+    let (output, stderr) = run_quell(&["run", "--no-plots", "--out"], &out, &scenario);
     assert_eq!(output.status.code(), Some(1), "stderr: {stderr}");
     let t = time_in(&stderr, "step size underflowed at t = ").unwrap_or_else(|| panic!("no time on stderr: {stderr}"));
     assert!(t >= 0.0, "t = {t}");
