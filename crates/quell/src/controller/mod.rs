@@ -151,8 +151,21 @@ pub fn mat_vec(M: &DMatrix<f64>, x: &[f64], out: &mut [f64], add: bool) {
     if !add {
         out.fill(0.0);
     }
-    // Column-major storage: out += Σ_c x_c M[:, c].
-    for (col, &xc) in M.as_slice().chunks_exact(r.max(1)).zip(x) {
+    if r == 0 {
+        return;
+    }
+    // Column-major storage: out += Σ_c x_c M[:, c], four columns per pass over `out`.
+    let mut cols = M.as_slice().chunks_exact(4 * r);
+    let mut xs = x.chunks_exact(4);
+    for (block, x4) in (&mut cols).zip(&mut xs) {
+        let (c0, rest) = block.split_at(r);
+        let (c1, rest) = rest.split_at(r);
+        let (c2, c3) = rest.split_at(r);
+        for ((((o, a), b), c), d) in out.iter_mut().zip(c0).zip(c1).zip(c2).zip(c3) {
+            *o += a * x4[0] + b * x4[1] + c * x4[2] + d * x4[3];
+        }
+    }
+    for (col, &xc) in cols.remainder().chunks_exact(r).zip(xs.remainder()) {
         for (o, m) in out.iter_mut().zip(col) {
             *o += m * xc;
         }
