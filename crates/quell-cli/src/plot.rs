@@ -57,6 +57,7 @@ fn panel<DB: DrawingBackend>(
         .map_err(|e| e.to_string())?;
     chart
         .configure_mesh()
+        .max_light_lines(2)
         .x_desc("t, s")
         .y_desc(ylabel)
         .label_style(("sans-serif", 14))
