@@ -16,7 +16,7 @@ pub enum ControllerError {
     BadSampleTime { value: f64 },
     #[error("simulation.sample_time (--sample-time): channel {}'s delay τ = {delay} s is not a whole number of samples of T_s = {sample_time} s ({ratio:.6} samples); the nearest valid sample time is {nearest:.9} s", .channel + 1)]
     DelayNotMultiple { channel: usize, delay: f64, sample_time: f64, ratio: f64, nearest: f64 },
-    #[error("sample_time: channel {}'s delay τ = {delay} s is {samples:e} samples of T_s = {sample_time} s; a delay line holds at most {max:e} samples; use a longer sample time", .channel + 1, max = MAX_DELAY_SAMPLES)]
+    #[error("simulation.sample_time (--sample-time): channel {}'s delay τ = {} s is {samples:e} samples of T_s = {} s; a delay line holds at most {max:e} samples; use a longer sample time", .channel + 1, crate::linalg::fmt_number(*.delay), crate::linalg::fmt_number(*.sample_time), max = MAX_DELAY_SAMPLES)]
     DelayTooLong { channel: usize, delay: f64, sample_time: f64, samples: f64 },
 }
 
