@@ -16,6 +16,9 @@ pub(super) struct History {
     start: Vec<f64>,
     step: Vec<f64>,
     coef: Vec<f64>,
+    /// The last records found (logical indices), tried before a binary search: each delay's queries
+    /// move forward slowly, so consecutive lookups for one delay mostly land in the same record.
+    hints: [std::cell::Cell<usize>; 2],
 }
 
 impl History {
@@ -30,6 +33,7 @@ impl History {
             start: vec![0.0; cap],
             step: vec![0.0; cap],
             coef: vec![0.0; cap * NCOEF * nd],
+            hints: Default::default(),
         }
     }
 
@@ -92,6 +96,9 @@ impl History {
         while self.len >= 3 && self.start[self.phys(2)] <= t_keep {
             self.head = self.phys(1);
             self.len -= 1;
+            for hint in &self.hints {
+                hint.set(hint.get().saturating_sub(1));
+            }
         }
     }
 
@@ -100,6 +107,16 @@ impl History {
     #[inline]
     pub(super) fn locate(&self, s: f64) -> (usize, f64) {
         debug_assert!(self.len > 0);
+        let holds = |i: usize| {
+            i < self.len && self.start[self.phys(i)] <= s && (i + 1 == self.len || self.start[self.phys(i + 1)] > s)
+        };
+        for hint in &self.hints {
+            let i = hint.get();
+            if holds(i) {
+                let p = self.phys(i);
+                return (p, (s - self.start[p]) / self.step[p]);
+            }
+        }
         let (mut lo, mut hi) = (0usize, self.len);
         while lo < hi {
             let mid = (lo + hi) / 2;
@@ -109,7 +126,11 @@ impl History {
                 hi = mid;
             }
         }
-        let p = self.phys(lo.saturating_sub(1));
+        let i = lo.saturating_sub(1);
+        // Keep the two most recent distinct records.
+        self.hints[1].set(self.hints[0].get());
+        self.hints[0].set(i);
+        let p = self.phys(i);
         (p, (s - self.start[p]) / self.step[p])
     }
 
