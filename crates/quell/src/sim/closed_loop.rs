@@ -67,11 +67,10 @@ impl Layout {
             return format!("x_hat[{}] (observer state)", k - q + 1);
         }
         if k < self.x {
-            let i = (k - eq.nz) / q;
-            return format!("eta{}[{}] (adaptive parameters)", i + 1, (k - eq.nz) % q + 1);
+            return super::eta_name(k - eq.nz, q);
         }
         if k < self.x + n {
-            return format!("x[{}] (plant state)", k - self.x + 1);
+            return super::plant_state_name(k - self.x);
         }
         format!("state[{k}]")
     }

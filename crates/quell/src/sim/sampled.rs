@@ -118,14 +118,10 @@ pub fn simulate_sampled(
         mat_vec(&Gamma, u_f, s_next.as_mut_slice(), true);
         if k % every == 0 {
             let bound = settings.divergence_bound;
-            let bad =
-                (0..n).find(|&j| super::runaway(s[j], bound)).map(|j| (format!("x[{}] (plant state)", j + 1), s[j]));
+            let bad = (0..n).find(|&j| super::runaway(s[j], bound)).map(|j| (super::plant_state_name(j), s[j]));
             let eta = ctrl.eta();
             let bad = bad.or_else(|| {
-                eta.iter().position(|&v| super::runaway(v, bound)).map(|j| {
-                    let q = design.q();
-                    (format!("eta{}[{}] (adaptive parameters)", j / q + 1, j % q + 1), eta[j])
-                })
+                eta.iter().position(|&v| super::runaway(v, bound)).map(|j| (super::eta_name(j, design.q()), eta[j]))
             });
             if let Some((signal, value)) = bad {
                 outcome = Outcome::Diverged { t, signal, value };
