@@ -111,7 +111,7 @@ fn load(path: Option<&Path>) -> Result<(Scenario, Design), Failure> {
         None => Scenario::from_toml(PAPER_EXAMPLE),
     }
     .map_err(|e| Failure::Input(e.to_string()))?;
-    let design = Design::new(&scenario.plant, &scenario.design).map_err(|e| Failure::Input(e.to_string()))?;
+    let design = scenario.design().map_err(|e| Failure::Input(e.to_string()))?;
     Ok((scenario, design))
 }
 
