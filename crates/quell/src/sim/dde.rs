@@ -14,10 +14,12 @@
 //!   state prefix over the last max(delays), so memory stays flat on arbitrarily long runs;
 //! * the step loop performs no allocation apart from the amortised growth of that ring.
 
+mod hermite;
 mod history;
 mod tableau;
 
-use history::{dense_eval, History, NCOEF};
+use hermite::Stencil;
+use history::{newton, History, Nodes, NCOEF};
 use std::ops::ControlFlow;
 use tableau::{A, C, D, E3, E5, STAGES, STAGES_DENSE};
 use thiserror::Error;
@@ -277,13 +279,17 @@ pub fn solve<S: DelaySystem>(
     let mut y_new = vec![0.0; n];
     let mut y_stage = vec![0.0; n];
     let n_o = sys.n_output().min(n);
+    // The interpolated prefix: the history's and the outputs'.
+    let n_i = nd.max(n_o);
     let mut y_out = vec![0.0; n_o];
-    let mut dense_full = vec![0.0; NCOEF * n_o];
+    let mut dense = vec![0.0; NCOEF * n_i];
+    let mut stencil = Stencil::new(n_i);
     let (mut err5, mut err3) = (vec![0.0; n], vec![0.0; n]);
 
     let mut t = t0;
     let mut next_out = 1usize;
     eval_rhs(sys, &ctx, &hist, &mut stats, t, t, &y, &mut k[..n]);
+    stencil.restart(t, &y, &k[..n]);
     let mut h = initial_step(sys, &ctx, &hist, &mut stats, t, &y, &k[..n], &mut y_stage, &mut y_new, opts, h_cap);
     let mut bp_idx = 0usize;
     let mut last_rejected = false;
@@ -332,25 +338,31 @@ pub fn solve<S: DelaySystem>(
         if !err.is_finite() || !y_new.iter().all(|v| v.is_finite()) {
             err = f64::INFINITY;
         }
-        // Tentatively accepted: FSAL evaluation and, when needed, the dense-output stages.
-        // A non-finite value there rejects the step as well.
+        // Tentatively accepted: FSAL evaluation and, when a dense output is needed, its polynomial:
+        // the Hermite interpolant of the last four step points, or DOP853's own (three more
+        // stages). A non-finite value there rejects the step as well.
         let mut out_here = false;
-        let mut dense = false;
+        let mut nodes = None;
         if err <= 1.0 {
             eval_rhs(sys, &ctx, &hist, &mut stats, t, t_new, &y_new, &mut k[12 * n..13 * n]);
             out_here = next_out <= n_out && {
                 let t_k = t0 + next_out as f64 * dt_out;
                 t_k <= t_new || (t_new == t_end && t_k <= t_end + 1e-9 * dt_out)
             };
-            dense = nd > 0 || out_here;
             let mut last = 13;
-            if dense {
-                for s in 13..STAGES_DENSE {
-                    combine(&y, &k, &A[s][..s], h_try, n, &mut y_stage);
-                    let ts = t + C[s] * h_try;
-                    eval_rhs(sys, &ctx, &hist, &mut stats, t, ts, &y_stage, &mut k[s * n..(s + 1) * n]);
+            if nd > 0 || out_here {
+                let len = if out_here { n_i } else { nd };
+                nodes = stencil.interpolate(h_try, &y_new, &k[12 * n..13 * n], len, (opts.rtol, opts.atol), &mut dense);
+                if nodes.is_none() {
+                    for s in 13..STAGES_DENSE {
+                        combine(&y, &k, &A[s][..s], h_try, n, &mut y_stage);
+                        let ts = t + C[s] * h_try;
+                        eval_rhs(sys, &ctx, &hist, &mut stats, t, ts, &y_stage, &mut k[s * n..(s + 1) * n]);
+                    }
+                    last = STAGES_DENSE;
+                    dense_coefficients(&y, &y_new, &k, h_try, n, 0..len, &mut dense);
+                    nodes = Some(DOP853_NODES);
                 }
-                last = STAGES_DENSE;
             }
             if !k[12 * n..last * n].iter().all(|v| v.is_finite()) {
                 err = f64::INFINITY;
@@ -380,38 +392,31 @@ pub fn solve<S: DelaySystem>(
         last_rejected = false;
         h = h_next;
 
-        if dense {
+        if let Some(z) = &nodes {
+            let len = if out_here { n_i } else { nd };
             if nd > 0 {
-                let slot = hist.push(t, h_try);
-                dense_coefficients(&y, &y_new, &k, h_try, n, 0..nd, slot);
-                if out_here && n_o <= nd {
-                    // The outputs' coefficients are a prefix of the history record's rows.
-                    for (row, rec) in dense_full.chunks_exact_mut(n_o.max(1)).zip(slot.chunks_exact(nd)) {
-                        row.copy_from_slice(&rec[..n_o]);
-                    }
+                let slot = hist.push(t, h_try, z);
+                for (r, row) in slot.chunks_exact_mut(nd).enumerate() {
+                    row.copy_from_slice(&dense[r * len..r * len + nd]);
                 }
             }
-            if out_here && (nd == 0 || n_o > nd) {
-                dense_coefficients(&y, &y_new, &k, h_try, n, 0..n_o, &mut dense_full);
-            }
-        }
-        while out_here && next_out <= n_out {
-            let t_k = t0 + next_out as f64 * dt_out;
-            let t_k = if next_out == n_out && t_new == t_end { t_k.min(t_end) } else { t_k };
-            if t_k > t_new {
-                break;
-            }
-            let out: &[f64] = if t_k == t_new {
-                &y_new[..n_o]
-            } else {
-                let theta = (t_k - t) / h_try;
-                dense_eval(&dense_full, theta, &mut y_out);
-                &y_out
-            };
-            next_out += 1;
-            if on_output(t_k, out).is_break() {
-                stats.max_history_len = hist.max_len();
-                return Ok(stats);
+            while out_here && next_out <= n_out {
+                let t_k = t0 + next_out as f64 * dt_out;
+                let t_k = if next_out == n_out && t_new == t_end { t_k.min(t_end) } else { t_k };
+                if t_k > t_new {
+                    break;
+                }
+                let out: &[f64] = if t_k == t_new {
+                    &y_new[..n_o]
+                } else {
+                    newton(&dense, len, 0, z, (t_k - t) / h_try, &mut y_out);
+                    &y_out
+                };
+                next_out += 1;
+                if on_output(t_k, out).is_break() {
+                    stats.max_history_len = hist.max_len();
+                    return Ok(stats);
+                }
             }
         }
         hist.prune(t_new - tau_max);
@@ -422,8 +427,10 @@ pub fn solve<S: DelaySystem>(
             // Restart: the derivative may jump at a breakpoint, so FSAL does not apply.
             stats.breakpoints += 1;
             eval_rhs(sys, &ctx, &hist, &mut stats, t, t, &y, &mut k[..n]);
+            stencil.restart(t, &y, &k[..n]);
         } else {
             k.copy_within(12 * n..13 * n, 0);
+            stencil.push(t, &y, &k[..n]);
         }
     }
     stats.max_history_len = hist.max_len();
@@ -476,8 +483,14 @@ fn lincomb(out: &mut [f64], k: &[f64], n: usize, c: &[f64], scale: f64, range: s
     }
 }
 
-/// Dense-output coefficients (`rcont1..rcont8` of `dop853.f`) of the components in `range`,
-/// written coefficient-major into `out` (`out[r * len + (i − range.start)]`, len = range length).
+/// The Newton nodes of DOP853's dense output: `contd8` of `dop853.f` evaluates
+/// r0 + θ(r1 + (1 − θ)(r2 + θ(r3 + (1 − θ)(r4 + θ(r5 + (1 − θ)(r6 + θ r7)))))), which is the Newton
+/// form over these nodes with r2, r3, r6 and r7 negated.
+const DOP853_NODES: Nodes = [0.0, 1.0, 0.0, 1.0, 0.0, 1.0, 0.0];
+
+/// Dense-output coefficients (`rcont1..rcont8` of `dop853.f`) of the components in `range`, in the
+/// Newton form over [`DOP853_NODES`], written coefficient-major into `out`
+/// (`out[r * len + (i − range.start)]`, len = range length).
 fn dense_coefficients(
     y: &[f64],
     y_new: &[f64],
@@ -500,13 +513,14 @@ fn dense_coefficients(
         let bspl = h * k1[i] - ydiff;
         c0[i] = y[i];
         c1[i] = ydiff;
-        c2[i] = bspl;
-        c3[i] = ydiff - h * k13[i] - bspl;
+        c2[i] = -bspl;
+        c3[i] = bspl + h * k13[i] - ydiff;
     }
     for (r, drow) in D.iter().enumerate() {
         let row = &mut rest[r * len..(r + 1) * len];
         row.fill(0.0);
-        lincomb(row, k, n, drow, h, first..last);
+        // rcont5, rcont6 keep their sign; rcont7, rcont8 flip.
+        lincomb(row, k, n, drow, if r < 2 { h } else { -h }, first..last);
     }
 }
 

@@ -3,8 +3,12 @@
 /// Number of dense-output coefficients per component (7th-order polynomial).
 pub(super) const NCOEF: usize = 8;
 
-/// Dense history of the accepted steps: for each step its start time, its length and the
-/// [`NCOEF`] dense-output coefficients of the first `nd` components. Kept in a ring whose
+/// The nodes z_0..z_6 of a degree-7 polynomial in Newton form over θ = (t − start)/h:
+/// p(θ) = c_0 + (θ − z_0)(c_1 + (θ − z_1)(c_2 + … + (θ − z_6) c_7)).
+pub(super) type Nodes = [f64; NCOEF - 1];
+
+/// Dense history of the accepted steps: for each step its start time, its length, the Newton nodes
+/// of its polynomial and the [`NCOEF`] coefficients of the first `nd` components. Kept in a ring whose
 /// capacity only grows (doubling) until the pruned length stabilises, so a long run does not
 /// allocate once the ring is large enough to span the largest delay.
 pub(super) struct History {
@@ -15,6 +19,7 @@ pub(super) struct History {
     max_len: usize,
     start: Vec<f64>,
     step: Vec<f64>,
+    nodes: Vec<Nodes>,
     coef: Vec<f64>,
     /// The last records found (logical indices), tried before a binary search: each delay's queries
     /// move forward slowly, so consecutive lookups for one delay mostly land in the same record.
@@ -32,6 +37,7 @@ impl History {
             max_len: 0,
             start: vec![0.0; cap],
             step: vec![0.0; cap],
+            nodes: vec![[0.0; NCOEF - 1]; cap],
             coef: vec![0.0; cap * NCOEF * nd],
             hints: Default::default(),
         }
@@ -55,9 +61,9 @@ impl History {
         self.max_len
     }
 
-    /// Appends a record for the step [t, t + h] and returns its coefficient slot
-    /// (coefficient-major: `slot[r * nd + c]`) for the caller to fill.
-    pub(super) fn push(&mut self, t: f64, h: f64) -> &mut [f64] {
+    /// Appends a record for the step [t, t + h] with Newton nodes `nodes` and returns its
+    /// coefficient slot (coefficient-major: `slot[r * nd + c]`) for the caller to fill.
+    pub(super) fn push(&mut self, t: f64, h: f64, nodes: &Nodes) -> &mut [f64] {
         if self.len == self.cap {
             self.grow();
         }
@@ -66,6 +72,7 @@ impl History {
         self.max_len = self.max_len.max(self.len);
         self.start[p] = t;
         self.step[p] = h;
+        self.nodes[p] = *nodes;
         let w = NCOEF * self.nd;
         &mut self.coef[p * w..(p + 1) * w]
     }
@@ -76,15 +83,18 @@ impl History {
         let w = NCOEF * self.nd;
         let mut start = vec![0.0; new_cap];
         let mut step = vec![0.0; new_cap];
+        let mut nodes = vec![[0.0; NCOEF - 1]; new_cap];
         let mut coef = vec![0.0; new_cap * w];
         for i in 0..self.len {
             let p = self.phys(i);
             start[i] = self.start[p];
             step[i] = self.step[p];
+            nodes[i] = self.nodes[p];
             coef[i * w..(i + 1) * w].copy_from_slice(&self.coef[p * w..(p + 1) * w]);
         }
         self.start = start;
         self.step = step;
+        self.nodes = nodes;
         self.coef = coef;
         self.cap = new_cap;
         self.head = 0;
@@ -146,41 +156,20 @@ impl History {
         );
         let nd = self.nd;
         let rec = &self.coef[p * NCOEF * nd..(p + 1) * NCOEF * nd];
-        let c = |r: usize| &rec[r * nd + first..r * nd + first + out.len()];
-        horner(c(0), c(1), c(2), c(3), c(4), c(5), c(6), c(7), theta, out);
+        newton(rec, nd, first, &self.nodes[p], theta, out);
     }
 }
 
-/// Evaluates the DOP853 dense output (`contd8` in `dop853.f`) at θ ∈ [0, 1] for all components of
-/// a coefficient-major record (`c[r * len + i]`, len = `out.len()`).
+/// Evaluates a coefficient-major record (`c[r * stride + i]`) with Newton nodes `z` at θ, for
+/// components `first..first + out.len()`.
 #[inline]
-pub(super) fn dense_eval(c: &[f64], theta: f64, out: &mut [f64]) {
-    let len = out.len();
-    let row = |r: usize| &c[r * len..(r + 1) * len];
-    horner(row(0), row(1), row(2), row(3), row(4), row(5), row(6), row(7), theta, out);
-}
-
-/// out_i = c0 + θ(c1 + s(c2 + θ(c3 + s(c4 + θ(c5 + s(c6 + θ c7)))))), s = 1 − θ, per component.
-#[inline]
-#[allow(clippy::too_many_arguments)]
-fn horner(
-    c0: &[f64],
-    c1: &[f64],
-    c2: &[f64],
-    c3: &[f64],
-    c4: &[f64],
-    c5: &[f64],
-    c6: &[f64],
-    c7: &[f64],
-    theta: f64,
-    out: &mut [f64],
-) {
-    let s1 = 1.0 - theta;
+pub(super) fn newton(c: &[f64], stride: usize, first: usize, z: &Nodes, theta: f64, out: &mut [f64]) {
     let n = out.len();
-    let (c0, c1, c2, c3, c4, c5, c6, c7) =
-        (&c0[..n], &c1[..n], &c2[..n], &c3[..n], &c4[..n], &c5[..n], &c6[..n], &c7[..n]);
+    let row = |r: usize| &c[r * stride + first..r * stride + first + n];
+    let (c0, c1, c2, c3, c4, c5, c6, c7) = (row(0), row(1), row(2), row(3), row(4), row(5), row(6), row(7));
+    let d = z.map(|z| theta - z);
     for i in 0..n {
-        let par = c4[i] + theta * (c5[i] + s1 * (c6[i] + theta * c7[i]));
-        out[i] = c0[i] + theta * (c1[i] + s1 * (c2[i] + theta * (c3[i] + s1 * par)));
+        let inner = c4[i] + d[4] * (c5[i] + d[5] * (c6[i] + d[6] * c7[i]));
+        out[i] = c0[i] + d[0] * (c1[i] + d[1] * (c2[i] + d[2] * (c3[i] + d[3] * inner)));
     }
 }
