@@ -200,7 +200,7 @@ impl DelaySystem for ContinuousLoop<'_> {
     fn rhs(&mut self, t: f64, s: &[f64], past: &Past<'_>, ds: &mut [f64]) {
         let eq = &self.eq;
         let l = &self.layout;
-        let (n, m, q) = (eq.n, eq.m, eq.q);
+        let (m, q) = (eq.m, eq.q);
         let k = self.e.len() - 2 * m;
         // e = [g; ω; u_d].
         let (g, rest) = self.e.split_at_mut(m);
@@ -220,10 +220,9 @@ impl DelaySystem for ContinuousLoop<'_> {
             }
         }
 
-        // Plant (1) with the decoupling law (5), observers (6), (14), (20): linear in [s; e].
-        self.linear.apply(s, &self.e, ds);
-        mat_vec(self.C, &s[l.x..l.x + n], &mut self.y, false);
-        mat_vec(self.Q, &self.e[m..m + k], &mut self.y, true);
+        // Plant (1) with the decoupling law (5), observers (6), (14), (20), and y = C x + Q ω: linear
+        // in [s; e].
+        self.linear.apply(s, &self.e, ds, &mut self.y);
         let (g, u_d) = (&self.e[..m], &self.e[m + k..]);
 
         // Per channel: G_ii filter bank, H filters and the adaptive law (33).
@@ -263,13 +262,15 @@ impl DelaySystem for ContinuousLoop<'_> {
 
 /// The loop's linear part as a sparse operator: the rows of x (plant (1) with u_f = −K x̂ + F u_d,
 /// eq. (5)) and of the core z ([`Equations::A_z`], [`Equations::B_z`] with y = C x + Q ω substituted),
-/// over the state and e = [g; ω; u_d]. Built once; the products skip the many zeros of the
-/// block-structured matrices.
+/// and the output y = C x + Q ω itself, over the state and e = [g; ω; u_d]. Built once; the products
+/// skip the many zeros of the block-structured matrices.
 #[derive(Debug, Clone)]
 struct LinearPart {
-    /// Per row: the index it writes in the derivative, its entries over the state [start, mid) and
-    /// over e [mid, end) in `cols`/`vals`.
+    /// Per row: the index it writes (in the derivative, or in y for the last m rows), its entries
+    /// over the state [start, mid) and over e [mid, end) in `cols`/`vals`.
     rows: Vec<(usize, usize, usize, usize)>,
+    /// Rows before this one write the derivative; the rest write y.
+    n_state_rows: usize,
     cols: Vec<usize>,
     vals: Vec<f64>,
 }
@@ -282,7 +283,8 @@ impl LinearPart {
         let By = eq.B_z.columns(0, m);
         // Each block: (matrix, first row it feeds in the derivative, first column it reads).
         let x_hat = eq.q;
-        let blocks: [(DMatrix<f64>, usize, usize); 9] = [
+        // Rows of y are numbered after the state's.
+        let blocks: [(DMatrix<f64>, usize, usize); 11] = [
             (p.A.clone(), l.x, l.x),
             (-(&p.B * &design.K), l.x, x_hat),
             (p.D.clone(), l.x, e_w),
@@ -292,6 +294,8 @@ impl LinearPart {
             (By * &p.Q, 0, e_w),
             (eq.B_z.columns(m, m).into_owned(), 0, e_g),
             (eq.B_z.columns(2 * m, m).into_owned(), 0, e_u),
+            (p.C.clone(), dim, l.x),
+            (p.Q.clone(), dim, e_w),
         ];
         let mut entries: Vec<(usize, usize, f64)> = Vec::new();
         for (M, row0, col0) in &blocks {
@@ -304,7 +308,7 @@ impl LinearPart {
             }
         }
         entries.sort_by_key(|&(r, c, _)| (r, c));
-        let targets: Vec<usize> = (0..nz).chain(l.x..l.x + n).collect();
+        let targets: Vec<usize> = (0..nz).chain(l.x..l.x + n).chain(dim..dim + m).collect();
         let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
         for t in targets {
             let start = cols.len();
@@ -328,23 +332,31 @@ impl LinearPart {
                     }
                 }
             }
-            rows.push((t, start, mid, cols.len()));
+            rows.push((if t < dim { t } else { t - dim }, start, mid, cols.len()));
         }
-        LinearPart { rows, cols, vals }
+        LinearPart { rows, n_state_rows: nz + n, cols, vals }
     }
 
-    /// ds[row] = Σ val·s[col] + Σ val·e[col] for every row of the operator.
+    /// ds[row] (or y[row]) = Σ val·s[col] + Σ val·e[col] for every row of the operator.
     #[inline]
-    fn apply(&self, s: &[f64], e: &[f64], ds: &mut [f64]) {
-        for &(target, start, mid, end) in &self.rows {
+    fn apply(&self, s: &[f64], e: &[f64], ds: &mut [f64], y: &mut [f64]) {
+        #[inline(always)]
+        fn row(lp: &LinearPart, s: &[f64], e: &[f64], &(_, start, mid, end): &(usize, usize, usize, usize)) -> f64 {
             let mut acc = 0.0;
-            for (&c, &v) in self.cols[start..mid].iter().zip(&self.vals[start..mid]) {
+            for (&c, &v) in lp.cols[start..mid].iter().zip(&lp.vals[start..mid]) {
                 acc += v * s[c];
             }
-            for (&c, &v) in self.cols[mid..end].iter().zip(&self.vals[mid..end]) {
+            for (&c, &v) in lp.cols[mid..end].iter().zip(&lp.vals[mid..end]) {
                 acc += v * e[c];
             }
-            ds[target] = acc;
+            acc
+        }
+        let (state_rows, y_rows) = self.rows.split_at(self.n_state_rows);
+        for r in state_rows {
+            ds[r.0] = row(self, s, e, r);
+        }
+        for r in y_rows {
+            y[r.0] = row(self, s, e, r);
         }
     }
 }
