@@ -93,8 +93,6 @@ pub struct ContinuousLoop<'a> {
     /// e = [g; ω; u_d], the loop's inputs other than the state.
     e: Vec<f64>,
     eta_d: Vec<f64>,
-    /// ξ̂(t − τ_i), m rows of q.
-    xi_d: Vec<f64>,
     Delta: Vec<f64>,
     tmp: Vec<f64>,
 }
@@ -119,7 +117,6 @@ impl<'a> ContinuousLoop<'a> {
             y: vec![0.0; m],
             e: vec![0.0; 2 * m + k],
             eta_d: vec![0.0; q],
-            xi_d: vec![0.0; m * q],
             Delta: vec![0.0; q],
             tmp: vec![0.0; q],
             layout,
@@ -208,9 +205,12 @@ impl DelaySystem for ContinuousLoop<'_> {
         self.reference.eval_into(t, g);
         self.disturbance.eval_into(t, w);
 
-        // Delayed regressor ξ̂(t − τ_i) and command u_i(t − τ_i) = −η̂_iᵀ(t − τ_i) ξ̂(t − τ_i).
+        // Delayed command u_i(t − τ_i) = −η̂_iᵀ(t − τ_i) ξ̂(t − τ_i). The row [u_i(t − τ_i), ξ̂ᵀ(t − τ_i)],
+        // the input of channel i's filter bank, goes straight into the last row of W_i' (see below).
+        let cols = 1 + q;
         for (i, ch) in eq.channels.iter().enumerate() {
-            let xi_d = &mut self.xi_d[i * q..(i + 1) * q];
+            let input = &mut ds[l.w[i] + (ch.sigma - 1) * cols..l.w[i] + ch.sigma * cols];
+            let (u_in, xi_d) = input.split_at_mut(1);
             if ch.delay > 0.0 {
                 past.eval_ranges(t - ch.delay, [(0, &mut *xi_d), (l.eta(i), &mut self.eta_d[..])]);
                 u_d[i] = command(&self.eta_d, xi_d);
@@ -218,24 +218,23 @@ impl DelaySystem for ContinuousLoop<'_> {
                 xi_d.copy_from_slice(eq.regressor(s));
                 u_d[i] = command(&s[l.eta(i)..l.eta(i) + q], xi_d);
             }
+            u_in[0] = u_d[i];
         }
 
         // Plant (1) with the decoupling law (5), observers (6), (14), (20), and y = C x + Q ω: linear
         // in [s; e].
         self.linear.apply(s, &self.e, ds, &mut self.y);
-        let (g, u_d) = (&self.e[..m], &self.e[m + k..]);
+        let g = &self.e[..m];
 
         // Per channel: G_ii filter bank, H filters and the adaptive law (33).
-        let cols = 1 + q;
         for (i, ch) in eq.channels.iter().enumerate() {
             let (w0, w1) = (l.w[i], l.w[i] + ch.sigma * cols);
             let W = &s[w0..w1];
             let dW = &mut ds[w0..w1];
-            // W' = A_i W + e_σ [u_i(t − τ_i), ξ̂ᵀ(t − τ_i)] with A_i the companion matrix of den_i.
+            // W' = A_i W + e_σ [u_i(t − τ_i), ξ̂ᵀ(t − τ_i)] with A_i the companion matrix of den_i; the
+            // last row already holds the input.
             dW[..(ch.sigma - 1) * cols].copy_from_slice(&W[cols..]);
             let last = &mut dW[(ch.sigma - 1) * cols..];
-            last[0] = u_d[i];
-            last[1..].copy_from_slice(&self.xi_d[i * q..(i + 1) * q]);
             for (r, &a) in ch.den.iter().enumerate() {
                 for (d, w) in last.iter_mut().zip(&W[r * cols..(r + 1) * cols]) {
                     *d -= a * w;

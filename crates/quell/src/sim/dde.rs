@@ -14,6 +14,31 @@
 //!   state prefix over the last max(delays), so memory stays flat on arbitrarily long runs;
 //! * the step loop performs no allocation apart from the amortised growth of that ring.
 
+/// Defines `fn $name` running `$body` compiled for AVX2 (four components per instruction instead of
+/// two) when the CPU has it, checked at run time (std caches the check), and for the baseline
+/// x86-64 otherwise. For the solver's long loops over the state; results agree to rounding.
+macro_rules! with_avx2 {
+    ($(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
+        $(#[$meta])*
+        $vis fn $name($($arg: $ty),*) $(-> $ret)? {
+            #[inline(always)]
+            fn body($($arg: $ty),*) $(-> $ret)? $body
+            #[cfg(target_arch = "x86_64")]
+            {
+                #[target_feature(enable = "avx2")]
+                fn avx2($($arg: $ty),*) $(-> $ret)? {
+                    body($($arg),*)
+                }
+                if std::arch::is_x86_feature_detected!("avx2") {
+                    // SAFETY: the CPU supports AVX2, checked just above.
+                    return unsafe { avx2($($arg),*) };
+                }
+            }
+            body($($arg),*)
+        }
+    };
+}
+
 mod hermite;
 mod history;
 mod tableau;
@@ -324,18 +349,13 @@ pub fn solve<S: DelaySystem>(
         lincomb(&mut err5, &k, n, &E5, 1.0, 0..n);
         err3.fill(0.0);
         lincomb(&mut err3, &k, n, &E3, 1.0, 0..n);
-        let (mut s5, mut s3) = (0.0, 0.0);
-        for (((e5, e3), yo), yn) in err5.iter().zip(err3.iter()).zip(&y).zip(&y_new) {
-            let sk = 1.0 / (opts.atol + opts.rtol * yo.abs().max(yn.abs()));
-            s5 += (e5 * sk) * (e5 * sk);
-            s3 += (e3 * sk) * (e3 * sk);
-        }
+        let (s5, s3) = error_sums(&err5, &err3, &y, &y_new, opts.rtol, opts.atol);
         let mut deno = s5 + 0.01 * s3;
         if deno <= 0.0 {
             deno = 1.0;
         }
         let mut err = h_try * s5 * (1.0 / (n.max(1) as f64 * deno)).sqrt();
-        if !err.is_finite() || !y_new.iter().all(|v| v.is_finite()) {
+        if !err.is_finite() || !all_finite(&y_new) {
             err = f64::INFINITY;
         }
         // Tentatively accepted: FSAL evaluation and, when a dense output is needed, its polynomial:
@@ -364,7 +384,7 @@ pub fn solve<S: DelaySystem>(
                     nodes = Some(DOP853_NODES);
                 }
             }
-            if !k[12 * n..last * n].iter().all(|v| v.is_finite()) {
+            if !all_finite(&k[12 * n..last * n]) {
                 err = f64::INFINITY;
             }
         }
@@ -444,26 +464,10 @@ fn combine(y: &[f64], k: &[f64], a: &[f64], h: f64, n: usize, out: &mut [f64]) {
     lincomb(out, k, n, a, h, 0..n);
 }
 
-/// out += scale·Σ_j c_j k_j[range] over the nonzero c_j, fusing up to four stages per pass so the
-/// loop over components vectorizes and `out` is loaded and stored once per four terms.
-fn lincomb(out: &mut [f64], k: &[f64], n: usize, c: &[f64], scale: f64, range: std::ops::Range<usize>) {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU supports AVX2, checked just above.
-        return unsafe { lincomb_avx2(out, k, n, c, scale, range) };
-    }
-    lincomb_any(out, k, n, c, scale, range)
-}
-
-/// [`lincomb`] compiled for AVX2 (four components per instruction instead of two).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn lincomb_avx2(out: &mut [f64], k: &[f64], n: usize, c: &[f64], scale: f64, range: std::ops::Range<usize>) {
-    lincomb_any(out, k, n, c, scale, range)
-}
-
-#[inline(always)]
-fn lincomb_any(out: &mut [f64], k: &[f64], n: usize, c: &[f64], scale: f64, range: std::ops::Range<usize>) {
+with_avx2! {
+    /// out += scale·Σ_j c_j k_j[range] over the nonzero c_j, fusing up to four stages per pass so the
+    /// loop over components vectorizes and `out` is loaded and stored once per four terms.
+    fn lincomb(out: &mut [f64], k: &[f64], n: usize, c: &[f64], scale: f64, range: std::ops::Range<usize>) {
     let mut terms = c
         .iter()
         .enumerate()
@@ -496,6 +500,32 @@ fn lincomb_any(out: &mut [f64], k: &[f64], n: usize, c: &[f64], scale: f64, rang
             }
             _ => return,
         }
+    }
+}
+}
+
+with_avx2! {
+    /// dop853.f's error sums Σ (e5_i/sk_i)² and Σ (e3_i/sk_i)², sk_i = atol + rtol·max(|y_i|, |y_new_i|),
+    /// in four interleaved partial sums (which the compiler may keep in vector lanes).
+    fn error_sums(err5: &[f64], err3: &[f64], y: &[f64], y_new: &[f64], rtol: f64, atol: f64) -> (f64, f64) {
+        let n = err5.len();
+        let (err3, y, y_new) = (&err3[..n], &y[..n], &y_new[..n]);
+        let (mut s5, mut s3) = ([0.0; 4], [0.0; 4]);
+        for i in 0..n {
+            let sk = 1.0 / (atol + rtol * y[i].abs().max(y_new[i].abs()));
+            let (e5, e3) = (err5[i] * sk, err3[i] * sk);
+            s5[i % 4] += e5 * e5;
+            s3[i % 4] += e3 * e3;
+        }
+        ((s5[0] + s5[1]) + (s5[2] + s5[3]), (s3[0] + s3[1]) + (s3[2] + s3[3]))
+    }
+}
+
+with_avx2! {
+    /// True when no entry is infinite or NaN (a scan without early exit, so it vectorizes).
+    fn all_finite(v: &[f64]) -> bool {
+        const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
+        v.iter().fold(0u64, |bad, x| bad | u64::from(x.to_bits() & EXPONENT == EXPONENT)) == 0
     }
 }
 

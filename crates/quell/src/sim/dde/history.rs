@@ -160,16 +160,17 @@ impl History {
     }
 }
 
-/// Evaluates a coefficient-major record (`c[r * stride + i]`) with Newton nodes `z` at θ, for
-/// components `first..first + out.len()`.
-#[inline]
-pub(super) fn newton(c: &[f64], stride: usize, first: usize, z: &Nodes, theta: f64, out: &mut [f64]) {
-    let n = out.len();
-    let row = |r: usize| &c[r * stride + first..r * stride + first + n];
-    let (c0, c1, c2, c3, c4, c5, c6, c7) = (row(0), row(1), row(2), row(3), row(4), row(5), row(6), row(7));
-    let d = z.map(|z| theta - z);
-    for i in 0..n {
-        let inner = c4[i] + d[4] * (c5[i] + d[5] * (c6[i] + d[6] * c7[i]));
-        out[i] = c0[i] + d[0] * (c1[i] + d[1] * (c2[i] + d[2] * (c3[i] + d[3] * inner)));
+with_avx2! {
+    /// Evaluates a coefficient-major record (`c[r * stride + i]`) with Newton nodes `z` at θ, for
+    /// components `first..first + out.len()`.
+    pub(super) fn newton(c: &[f64], stride: usize, first: usize, z: &Nodes, theta: f64, out: &mut [f64]) {
+        let n = out.len();
+        let row = |r: usize| &c[r * stride + first..r * stride + first + n];
+        let (c0, c1, c2, c3, c4, c5, c6, c7) = (row(0), row(1), row(2), row(3), row(4), row(5), row(6), row(7));
+        let d = z.map(|z| theta - z);
+        for i in 0..n {
+            let inner = c4[i] + d[4] * (c5[i] + d[5] * (c6[i] + d[6] * c7[i]));
+            out[i] = c0[i] + d[0] * (c1[i] + d[1] * (c2[i] + d[2] * (c3[i] + d[3] * inner)));
+        }
     }
 }
