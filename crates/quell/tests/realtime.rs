@@ -11,7 +11,7 @@ use std::ops::ControlFlow;
 use common::*;
 use quell::controller::discrete::adapt;
 use quell::sim::{simulate, simulate_sampled, Outcome, RunSettings, SampledSettings};
-use quell::{Controller, ControllerError, Design, Harmonic, Signal};
+use quell::{Controller, ControllerError, Design};
 
 /// Counts allocations made by the current thread while `COUNTING` is set.
 struct Counting;
@@ -44,15 +44,6 @@ static GLOBAL: Counting = Counting;
 
 fn paper_design() -> Design {
     Design::new(&paper_plant(), &paper_spec()).unwrap()
-}
-
-fn paper_signals() -> (Signal, Signal) {
-    let h = |amplitude, frequency| Harmonic { amplitude, frequency, phase: 0.0 };
-    let c = |bias, harmonics| quell::Component { bias, harmonics };
-    (
-        Signal { components: vec![c(0.0, vec![h(3.0, 2.0)]), c(2.0, vec![])] },
-        Signal { components: vec![c(0.0, vec![h(1.0, 1.0)]), c(1.0, vec![h(2.0, 2.0)])] },
-    )
 }
 
 #[test]

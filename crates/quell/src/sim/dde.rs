@@ -15,8 +15,8 @@
 //! * the step loop performs no allocation apart from the amortised growth of that ring.
 
 /// Defines `fn $name` running `$body` compiled for AVX2 (four components per instruction instead of
-/// two) when the CPU has it, checked at run time (std caches the check), and for the baseline
-/// x86-64 otherwise. For the solver's long loops over the state; results agree to rounding.
+/// two) when [`avx2_in_use`], and for the baseline x86-64 otherwise. For the solver's long loops over
+/// the state; the two agree to rounding.
 macro_rules! with_avx2 {
     ($(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
         $(#[$meta])*
@@ -29,14 +29,31 @@ macro_rules! with_avx2 {
                 fn avx2($($arg: $ty),*) $(-> $ret)? {
                     body($($arg),*)
                 }
-                if std::arch::is_x86_feature_detected!("avx2") {
-                    // SAFETY: the CPU supports AVX2, checked just above.
+                if $crate::sim::dde::avx2_in_use() {
+                    // SAFETY: the CPU supports AVX2 (avx2_in_use checks it).
                     return unsafe { avx2($($arg),*) };
                 }
             }
             body($($arg),*)
         }
     };
+}
+
+/// Whether the solver runs its AVX2 compilation of its long loops: on x86-64 CPUs with AVX2, unless
+/// the environment variable `QUELL_NO_AVX2` is set (to any value) when the first solve starts. With
+/// it set, every x86-64 machine rounds the same way. Decided once per process.
+pub fn avx2_in_use() -> bool {
+    static IN_USE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *IN_USE.get_or_init(|| {
+        #[cfg(target_arch = "x86_64")]
+        {
+            std::env::var_os("QUELL_NO_AVX2").is_none() && std::arch::is_x86_feature_detected!("avx2")
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            false
+        }
+    })
 }
 
 mod hermite;
@@ -468,40 +485,40 @@ with_avx2! {
     /// out += scale·Σ_j c_j k_j[range] over the nonzero c_j, fusing up to four stages per pass so the
     /// loop over components vectorizes and `out` is loaded and stored once per four terms.
     fn lincomb(out: &mut [f64], k: &[f64], n: usize, c: &[f64], scale: f64, range: std::ops::Range<usize>) {
-    let mut terms = c
-        .iter()
-        .enumerate()
-        .filter(|(_, &cj)| cj != 0.0)
-        .map(|(j, &cj)| (scale * cj, &k[j * n + range.start..j * n + range.end]));
-    loop {
-        match (terms.next(), terms.next(), terms.next(), terms.next()) {
-            (Some((a, ka)), Some((b, kb)), Some((c, kc)), Some((d, kd))) => {
-                for ((((o, x), y), z), w) in out.iter_mut().zip(ka).zip(kb).zip(kc).zip(kd) {
-                    *o += a * x + b * y + c * z + d * w;
+        let mut terms = c
+            .iter()
+            .enumerate()
+            .filter(|(_, &cj)| cj != 0.0)
+            .map(|(j, &cj)| (scale * cj, &k[j * n + range.start..j * n + range.end]));
+        loop {
+            match (terms.next(), terms.next(), terms.next(), terms.next()) {
+                (Some((a, ka)), Some((b, kb)), Some((c, kc)), Some((d, kd))) => {
+                    for ((((o, x), y), z), w) in out.iter_mut().zip(ka).zip(kb).zip(kc).zip(kd) {
+                        *o += a * x + b * y + c * z + d * w;
+                    }
                 }
-            }
-            (Some((a, ka)), Some((b, kb)), Some((c, kc)), None) => {
-                for (((o, x), y), z) in out.iter_mut().zip(ka).zip(kb).zip(kc) {
-                    *o += a * x + b * y + c * z;
+                (Some((a, ka)), Some((b, kb)), Some((c, kc)), None) => {
+                    for (((o, x), y), z) in out.iter_mut().zip(ka).zip(kb).zip(kc) {
+                        *o += a * x + b * y + c * z;
+                    }
+                    return;
                 }
-                return;
-            }
-            (Some((a, ka)), Some((b, kb)), None, _) => {
-                for ((o, x), y) in out.iter_mut().zip(ka).zip(kb) {
-                    *o += a * x + b * y;
+                (Some((a, ka)), Some((b, kb)), None, _) => {
+                    for ((o, x), y) in out.iter_mut().zip(ka).zip(kb) {
+                        *o += a * x + b * y;
+                    }
+                    return;
                 }
-                return;
-            }
-            (Some((a, ka)), None, _, _) => {
-                for (o, x) in out.iter_mut().zip(ka) {
-                    *o += a * x;
+                (Some((a, ka)), None, _, _) => {
+                    for (o, x) in out.iter_mut().zip(ka) {
+                        *o += a * x;
+                    }
+                    return;
                 }
-                return;
+                _ => return,
             }
-            _ => return,
         }
     }
-}
 }
 
 with_avx2! {
