@@ -135,10 +135,8 @@ impl Past<'_> {
                 out.copy_from_slice(&self.y0[first..first + out.len()]);
             }
         } else {
-            let at = self.hist.locate(s.max(self.t0));
-            for (first, out) in ranges {
-                self.hist.eval_at(at, first, out);
-            }
+            let mut ranges = ranges;
+            self.hist.eval_at(self.hist.locate(s.max(self.t0)), &mut ranges);
         }
     }
 }
@@ -446,7 +444,7 @@ pub fn solve<S: DelaySystem>(
                 let out: &[f64] = if t_k == t_new {
                     &y_new[..n_o]
                 } else {
-                    newton(&dense, len, 0, z, (t_k - t) / h_try, &mut y_out);
+                    newton(&dense, len, z, (t_k - t) / h_try, &mut [(0, &mut y_out[..])]);
                     &y_out
                 };
                 next_out += 1;

@@ -171,7 +171,7 @@ mod tests {
             .map(|i| {
                 let th = i as f64 / 20.0;
                 let mut o = [0.0; 2];
-                newton(c, 2, 0, z, th, &mut o);
+                newton(c, 2, z, th, &mut [(0, &mut o[..])]);
                 (o[0] - y(th * h)).abs().max((o[1] - 2.0 * y(th * h)).abs() / 2.0)
             })
             .fold(0.0, f64::max)

@@ -144,33 +144,41 @@ impl History {
         (p, (s - self.start[p]) / self.step[p])
     }
 
-    /// Components `first..first + out.len()` of the dense output at a point from [`History::locate`].
+    /// For each (first, out): components `first..first + out.len()` of the dense output at a point from
+    /// [`History::locate`].
     #[inline]
-    pub(super) fn eval_at(&self, (p, theta): (usize, f64), first: usize, out: &mut [f64]) {
-        assert!(
-            first + out.len() <= self.nd,
-            "Past::eval_into: components {}..{} requested, only {} are delayed",
-            first,
-            first + out.len(),
-            self.nd
-        );
+    pub(super) fn eval_at(&self, (p, theta): (usize, f64), ranges: &mut [(usize, &mut [f64])]) {
+        for (first, out) in ranges.iter() {
+            assert!(
+                first + out.len() <= self.nd,
+                "Past::eval_into: components {}..{} requested, only {} are delayed",
+                first,
+                first + out.len(),
+                self.nd
+            );
+        }
         let nd = self.nd;
         let rec = &self.coef[p * NCOEF * nd..(p + 1) * NCOEF * nd];
-        newton(rec, nd, first, &self.nodes[p], theta, out);
+        newton(rec, nd, &self.nodes[p], theta, ranges);
     }
 }
 
 with_avx2! {
-    /// Evaluates a coefficient-major record (`c[r * stride + i]`) with Newton nodes `z` at θ, for
-    /// components `first..first + out.len()`.
-    pub(super) fn newton(c: &[f64], stride: usize, first: usize, z: &Nodes, theta: f64, out: &mut [f64]) {
-        let n = out.len();
-        let row = |r: usize| &c[r * stride + first..r * stride + first + n];
-        let (c0, c1, c2, c3, c4, c5, c6, c7) = (row(0), row(1), row(2), row(3), row(4), row(5), row(6), row(7));
+    /// Evaluates a coefficient-major record (`c[r * stride + i]`) with Newton nodes `z` at θ: for each
+    /// (first, out), components `first..first + out.len()`.
+    pub(super) fn newton(c: &[f64], stride: usize, z: &Nodes, theta: f64, ranges: &mut [(usize, &mut [f64])]) {
         let d = z.map(|z| theta - z);
-        for i in 0..n {
-            let inner = c4[i] + d[4] * (c5[i] + d[5] * (c6[i] + d[6] * c7[i]));
-            out[i] = c0[i] + d[0] * (c1[i] + d[1] * (c2[i] + d[2] * (c3[i] + d[3] * inner)));
+        // p = lo + (d0 d1 d2 d3)·hi: two independent nestings of four, half the dependency chain.
+        let d0123 = d[0] * d[1] * d[2] * d[3];
+        for (first, out) in ranges.iter_mut() {
+            let (n, first) = (out.len(), *first);
+            let row = |r: usize| &c[r * stride + first..r * stride + first + n];
+            let (c0, c1, c2, c3, c4, c5, c6, c7) = (row(0), row(1), row(2), row(3), row(4), row(5), row(6), row(7));
+            for i in 0..n {
+                let lo = c0[i] + d[0] * (c1[i] + d[1] * (c2[i] + d[2] * c3[i]));
+                let hi = c4[i] + d[4] * (c5[i] + d[5] * (c6[i] + d[6] * c7[i]));
+                out[i] = lo + d0123 * hi;
+            }
         }
     }
 }
