@@ -35,6 +35,9 @@
 
 pub use nalgebra;
 
+#[macro_use]
+pub mod simd;
+
 pub mod controller;
 pub mod design;
 pub mod linalg;

@@ -9,7 +9,7 @@ use super::dde::{self, DelaySystem, Options, Past};
 use super::result::{Outcome, SimResult};
 use crate::controller::{command, mat_vec, packed, swapping_error, Equations};
 use crate::design::Design;
-use crate::signal::Signal;
+use crate::signal::{Signal, SignalBank};
 
 /// Offsets of the loop's state vector [z = (ξ̂, x̂), η̂_1, …, η̂_m, x, filters]. The delayed terms
 /// read ξ̂ and η̂_i, within the prefix [z, η̂]; with x, [z, η̂, x] is all the outputs need (the solver
@@ -84,8 +84,8 @@ pub struct ContinuousLoop<'a> {
     Q: &'a DMatrix<f64>,
     /// Plant (1) with input (5) and the core, as one sparse operator (see [`LinearPart`]).
     linear: LinearPart,
-    reference: &'a Signal,
-    disturbance: &'a Signal,
+    /// g and ω, evaluated together.
+    signals: SignalBank,
     layout: Layout,
     delays: Vec<f64>,
     // Scratch.
@@ -111,8 +111,7 @@ impl<'a> ContinuousLoop<'a> {
             linear: LinearPart::new(design, &eq, &layout),
             C: &p.C,
             Q: &p.Q,
-            reference,
-            disturbance,
+            signals: SignalBank::new(&[reference, disturbance]),
             delays,
             y: vec![0.0; m],
             e: vec![0.0; 2 * m + k],
@@ -138,9 +137,8 @@ impl<'a> ContinuousLoop<'a> {
             layout: self.layout.clone(),
             C: self.C,
             Q: self.Q,
-            reference: self.reference,
-            disturbance: self.disturbance,
-            w: vec![0.0; self.e.len() - 2 * self.eq.m],
+            signals: self.signals.clone(),
+            gw: vec![0.0; self.signals.len()],
         }
     }
 }
@@ -151,19 +149,20 @@ struct Probe<'a> {
     layout: Layout,
     C: &'a DMatrix<f64>,
     Q: &'a DMatrix<f64>,
-    reference: &'a Signal,
-    disturbance: &'a Signal,
-    w: Vec<f64>,
+    signals: SignalBank,
+    /// [g; ω].
+    gw: Vec<f64>,
 }
 
 impl Probe<'_> {
     /// Outputs at time t: y, g and the undelayed commands u (25) and η̂ (a view of the state).
     fn outputs<'s>(&mut self, t: f64, s: &'s [f64], y: &mut [f64], g: &mut [f64], u: &mut [f64]) -> &'s [f64] {
         let l = &self.layout;
-        self.disturbance.eval_into(t, &mut self.w);
-        self.reference.eval_into(t, g);
+        self.signals.eval_into(t, &mut self.gw);
+        let (g_t, w) = self.gw.split_at(g.len());
+        g.copy_from_slice(g_t);
         mat_vec(self.C, &s[l.x..l.x + self.eq.n], y, false);
-        mat_vec(self.Q, &self.w, y, true);
+        mat_vec(self.Q, w, y, true);
         let xi = self.eq.regressor(s);
         for (i, ui) in u.iter_mut().enumerate() {
             *ui = command(&s[l.eta(i)..l.eta(i) + l.q], xi);
@@ -198,12 +197,9 @@ impl DelaySystem for ContinuousLoop<'_> {
         let eq = &self.eq;
         let l = &self.layout;
         let (m, q) = (eq.m, eq.q);
-        let k = self.e.len() - 2 * m;
         // e = [g; ω; u_d].
-        let (g, rest) = self.e.split_at_mut(m);
-        let (w, u_d) = rest.split_at_mut(k);
-        self.reference.eval_into(t, g);
-        self.disturbance.eval_into(t, w);
+        let (gw, u_d) = self.e.split_at_mut(self.signals.len());
+        self.signals.eval_into(t, gw);
 
         // Delayed command u_i(t − τ_i) = −η̂_iᵀ(t − τ_i) ξ̂(t − τ_i). The row [u_i(t − τ_i), ξ̂ᵀ(t − τ_i)],
         // the input of channel i's filter bank, goes straight into the last row of W_i' (see below).
