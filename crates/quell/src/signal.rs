@@ -197,7 +197,7 @@ with_avx2! {
             *o = sin_kernel(v);
         }
         for (o, &v) in out.iter_mut().zip(x) {
-            if !(v.abs() <= KERNEL_RANGE) {
+            if v.abs() > KERNEL_RANGE || v.is_nan() {
                 *o = v.sin();
             }
         }
