@@ -437,42 +437,58 @@ fn combine(y: &[f64], k: &[f64], a: &[f64], h: f64, n: usize, out: &mut [f64]) {
     lincomb(out, k, n, a, h, 0..n);
 }
 
+/// out += scale·Σ_j c_j k_j[range] over the nonzero c_j, fusing up to four stages per pass so the
+/// loop over components vectorizes and `out` is loaded and stored once per four terms.
+#[inline]
+fn lincomb(out: &mut [f64], k: &[f64], n: usize, c: &[f64], scale: f64, range: std::ops::Range<usize>) {
+    // A few components are cheaper inline than through the AVX2 dispatch.
+    if range.len() >= 8 {
+        lincomb_wide(out, k, n, c, scale, range)
+    } else {
+        lincomb_inline(out, k, n, c, scale, range)
+    }
+}
+
 with_avx2! {
-    /// out += scale·Σ_j c_j k_j[range] over the nonzero c_j, fusing up to four stages per pass so the
-    /// loop over components vectorizes and `out` is loaded and stored once per four terms.
-    fn lincomb(out: &mut [f64], k: &[f64], n: usize, c: &[f64], scale: f64, range: std::ops::Range<usize>) {
-        let mut terms = c
-            .iter()
-            .enumerate()
-            .filter(|(_, &cj)| cj != 0.0)
-            .map(|(j, &cj)| (scale * cj, &k[j * n + range.start..j * n + range.end]));
-        loop {
-            match (terms.next(), terms.next(), terms.next(), terms.next()) {
-                (Some((a, ka)), Some((b, kb)), Some((c, kc)), Some((d, kd))) => {
-                    for ((((o, x), y), z), w) in out.iter_mut().zip(ka).zip(kb).zip(kc).zip(kd) {
-                        *o += a * x + b * y + c * z + d * w;
-                    }
+    /// [`lincomb`] for many components.
+    fn lincomb_wide(out: &mut [f64], k: &[f64], n: usize, c: &[f64], scale: f64, range: std::ops::Range<usize>) {
+        lincomb_inline(out, k, n, c, scale, range)
+    }
+}
+
+#[inline(always)]
+fn lincomb_inline(out: &mut [f64], k: &[f64], n: usize, c: &[f64], scale: f64, range: std::ops::Range<usize>) {
+    let mut terms = c
+        .iter()
+        .enumerate()
+        .filter(|(_, &cj)| cj != 0.0)
+        .map(|(j, &cj)| (scale * cj, &k[j * n + range.start..j * n + range.end]));
+    loop {
+        match (terms.next(), terms.next(), terms.next(), terms.next()) {
+            (Some((a, ka)), Some((b, kb)), Some((c, kc)), Some((d, kd))) => {
+                for ((((o, x), y), z), w) in out.iter_mut().zip(ka).zip(kb).zip(kc).zip(kd) {
+                    *o += a * x + b * y + c * z + d * w;
                 }
-                (Some((a, ka)), Some((b, kb)), Some((c, kc)), None) => {
-                    for (((o, x), y), z) in out.iter_mut().zip(ka).zip(kb).zip(kc) {
-                        *o += a * x + b * y + c * z;
-                    }
-                    return;
-                }
-                (Some((a, ka)), Some((b, kb)), None, _) => {
-                    for ((o, x), y) in out.iter_mut().zip(ka).zip(kb) {
-                        *o += a * x + b * y;
-                    }
-                    return;
-                }
-                (Some((a, ka)), None, _, _) => {
-                    for (o, x) in out.iter_mut().zip(ka) {
-                        *o += a * x;
-                    }
-                    return;
-                }
-                _ => return,
             }
+            (Some((a, ka)), Some((b, kb)), Some((c, kc)), None) => {
+                for (((o, x), y), z) in out.iter_mut().zip(ka).zip(kb).zip(kc) {
+                    *o += a * x + b * y + c * z;
+                }
+                return;
+            }
+            (Some((a, ka)), Some((b, kb)), None, _) => {
+                for ((o, x), y) in out.iter_mut().zip(ka).zip(kb) {
+                    *o += a * x + b * y;
+                }
+                return;
+            }
+            (Some((a, ka)), None, _, _) => {
+                for (o, x) in out.iter_mut().zip(ka) {
+                    *o += a * x;
+                }
+                return;
+            }
+            _ => return,
         }
     }
 }

@@ -163,22 +163,38 @@ impl History {
     }
 }
 
+/// Evaluates a coefficient-major record (`c[r * stride + i]`) with Newton nodes `z` at θ: for each
+/// (first, out), components `first..first + out.len()`.
+#[inline]
+pub(super) fn newton(c: &[f64], stride: usize, z: &Nodes, theta: f64, ranges: &mut [(usize, &mut [f64])]) {
+    // A few components are cheaper inline than through the AVX2 dispatch.
+    if ranges.iter().map(|(_, out)| out.len()).sum::<usize>() >= 8 {
+        newton_wide(c, stride, z, theta, ranges)
+    } else {
+        newton_inline(c, stride, z, theta, ranges)
+    }
+}
+
 with_avx2! {
-    /// Evaluates a coefficient-major record (`c[r * stride + i]`) with Newton nodes `z` at θ: for each
-    /// (first, out), components `first..first + out.len()`.
-    pub(super) fn newton(c: &[f64], stride: usize, z: &Nodes, theta: f64, ranges: &mut [(usize, &mut [f64])]) {
-        let d = z.map(|z| theta - z);
-        // p = lo + (d0 d1 d2 d3)·hi: two independent nestings of four, half the dependency chain.
-        let d0123 = d[0] * d[1] * d[2] * d[3];
-        for (first, out) in ranges.iter_mut() {
-            let (n, first) = (out.len(), *first);
-            let row = |r: usize| &c[r * stride + first..r * stride + first + n];
-            let (c0, c1, c2, c3, c4, c5, c6, c7) = (row(0), row(1), row(2), row(3), row(4), row(5), row(6), row(7));
-            for i in 0..n {
-                let lo = c0[i] + d[0] * (c1[i] + d[1] * (c2[i] + d[2] * c3[i]));
-                let hi = c4[i] + d[4] * (c5[i] + d[5] * (c6[i] + d[6] * c7[i]));
-                out[i] = lo + d0123 * hi;
-            }
+    /// [`newton`] for many components.
+    fn newton_wide(c: &[f64], stride: usize, z: &Nodes, theta: f64, ranges: &mut [(usize, &mut [f64])]) {
+        newton_inline(c, stride, z, theta, ranges)
+    }
+}
+
+#[inline(always)]
+fn newton_inline(c: &[f64], stride: usize, z: &Nodes, theta: f64, ranges: &mut [(usize, &mut [f64])]) {
+    let d = z.map(|z| theta - z);
+    // p = lo + (d0 d1 d2 d3)·hi: two independent nestings of four, half the dependency chain.
+    let d0123 = d[0] * d[1] * d[2] * d[3];
+    for (first, out) in ranges.iter_mut() {
+        let (n, first) = (out.len(), *first);
+        let row = |r: usize| &c[r * stride + first..r * stride + first + n];
+        let (c0, c1, c2, c3, c4, c5, c6, c7) = (row(0), row(1), row(2), row(3), row(4), row(5), row(6), row(7));
+        for i in 0..n {
+            let lo = c0[i] + d[0] * (c1[i] + d[1] * (c2[i] + d[2] * c3[i]));
+            let hi = c4[i] + d[4] * (c5[i] + d[5] * (c6[i] + d[6] * c7[i]));
+            out[i] = lo + d0123 * hi;
         }
     }
 }
