@@ -10,9 +10,13 @@
 //!   accepted step and is read from its dense output — no iteration is needed;
 //! * the derivative discontinuities t0 + Σ k_i τ_i (up to total order [`MAX_BREAKPOINT_LEVEL`])
 //!   are landed on exactly, and the step after one restarts with a fresh first stage;
+//! * the dense output of a step is the Hermite interpolant of the last four step points when it
+//!   passes an a-posteriori error check (no extra stages; `dde/hermite.rs`), DOP853's own 7th-order
+//!   extension otherwise (three more stages);
 //! * the history keeps, in a ring buffer, only the dense-output coefficients of the delayed
 //!   state prefix over the last max(delays), so memory stays flat on arbitrarily long runs;
-//! * the step loop performs no allocation apart from the amortised growth of that ring.
+//! * the step loop performs no allocation apart from the amortised growth of that ring; its long
+//!   loops run an AVX2 compilation where the CPU has it ([`crate::simd`]).
 
 mod hermite;
 mod history;
