@@ -28,17 +28,20 @@ pub struct Signal {
 /// the integrator): [`sin_kernel`] for |x| ≤ 1e6, `f64::sin` beyond and for NaN and ±∞.
 #[inline]
 pub(crate) fn sin(x: f64) -> f64 {
-    if x.abs() <= KERNEL_RANGE {
+    if in_kernel_range(x) {
         sin_kernel(x)
     } else {
         x.sin()
     }
 }
 
-/// Where [`sin_kernel`]'s argument reduction is exact.
-const KERNEL_RANGE: f64 = 1e6;
+/// Whether [`sin_kernel`]'s argument reduction is exact at x: |x| ≤ 1e6 (false for NaN and ±∞).
+#[inline(always)]
+fn in_kernel_range(x: f64) -> bool {
+    x.abs() <= 1e6
+}
 
-/// sin x for |x| ≤ [`KERNEL_RANGE`], without branches (so a loop of them vectorizes): Cody–Waite
+/// sin x where [`in_kernel_range`], without branches (so a loop of them vectorizes): Cody–Waite
 /// reduction x = k·π/2 + r, |r| ≤ π/4, with π/2 in three parts of which the first two have 33
 /// significant bits (k·P1, k·P2 exact for |k| < 2²⁰), then the Taylor series of sin r and cos r to
 /// degrees 17 and 18 (truncation below 1e-19).
@@ -197,7 +200,7 @@ with_avx2! {
             *o = sin_kernel(v);
         }
         for (o, &v) in out.iter_mut().zip(x) {
-            if v.abs() > KERNEL_RANGE || v.is_nan() {
+            if !in_kernel_range(v) {
                 *o = v.sin();
             }
         }

@@ -36,14 +36,10 @@ fn baseline_compilation_meets_the_accuracy_bounds() {
     assert!(!avx2_in_use());
 
     // The method-of-steps polynomials on [0, 3], to 1e-9 (as tests/dde.rs).
-    let exact = |t: f64| {
-        1.0 - t + if t > 1.0 { (t - 1.0).powi(2) / 2.0 } else { 0.0 }
-            - if t > 2.0 { (t - 2.0).powi(3) / 6.0 } else { 0.0 }
-    };
     let opts = Options { rtol: 1e-10, atol: 1e-10, ..Options::default() };
     let mut worst: f64 = 0.0;
     solve(&mut UnitDelay, 0.0, &[1.0], &[1.0], 3.0, 0.01, &opts, |t, y| {
-        worst = worst.max((y[0] - exact(t)).abs());
+        worst = worst.max((y[0] - exact_unit(t)).abs());
         ControlFlow::Continue(())
     })
     .unwrap();

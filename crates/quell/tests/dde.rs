@@ -1,5 +1,8 @@
 //! Tests of the DOP853 method-of-steps DDE integrator (`quell::sim::dde`).
 
+mod common;
+
+use common::exact_unit;
 use quell::sim::dde::{breakpoints, solve, DelaySystem, Options, Past, SolveError, Stats};
 use serde_json::Value;
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -165,18 +168,6 @@ fn reference_cases() {
             stats.steps, stats.rejected, stats.rhs_evals, stats.breakpoints
         );
     }
-}
-
-/// x' = −x(t − 1), x = 1 for t ≤ 0: the method-of-steps polynomials on [0, 3].
-fn exact_unit(t: f64) -> f64 {
-    let mut x = 1.0 - t;
-    if t > 1.0 {
-        x += (t - 1.0).powi(2) / 2.0;
-    }
-    if t > 2.0 {
-        x -= (t - 2.0).powi(3) / 6.0;
-    }
-    x
 }
 
 #[test]

@@ -88,6 +88,18 @@ pub fn assert_matches_reference_points(r: &SimResult) {
     assert_eq!(rows, 7);
 }
 
+/// x' = −x(t − 1), x = 1 for t ≤ 0: the method-of-steps polynomials on [0, 3].
+pub fn exact_unit(t: f64) -> f64 {
+    let mut x = 1.0 - t;
+    if t > 1.0 {
+        x += (t - 1.0).powi(2) / 2.0;
+    }
+    if t > 2.0 {
+        x -= (t - 2.0).powi(3) / 6.0;
+    }
+    x
+}
+
 /// A small deterministic generator (SplitMix64) for seeded random test systems.
 pub struct Rng(pub u64);
 
