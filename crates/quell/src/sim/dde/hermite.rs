@@ -70,7 +70,8 @@ impl Stencil {
     /// The Hermite interpolant of the step from the newest point over [t, t + h] to
     /// (t + h, y_new, f_new), for the first `len` components: Newton coefficients written
     /// coefficient-major into `out` (`out[r * len + i]`) and the nodes returned, in
-    /// θ = (s − t)/h. `None` when the stencil is incomplete or badly spread.
+    /// θ = (s − t)/h. `None` when the stencil is incomplete or badly spread, or the interpolant fails
+    /// its error check.
     pub(super) fn interpolate(
         &self,
         h: f64,
