@@ -17,35 +17,35 @@ fn eigs(e: &[Complex<f64>]) -> Value {
 /// The design as one JSON object: matrices as arrays of rows, eigenvalues as `[re, im]`.
 pub fn design_json(d: &Design) -> Value {
     json!({
-        "n": d.plant.n(),
-        "m": d.plant.m(),
-        "k": d.plant.k(),
+        "n": d.plant().n(),
+        "m": d.plant().m(),
+        "k": d.plant().k(),
         "q": d.q(),
-        "sigma": d.sigma,
-        "K": matrix(&d.K),
-        "F": matrix(&d.F),
-        "L": matrix(&d.L),
-        "N": matrix(&d.N),
-        "A_f": matrix(&d.A_f),
-        "B_f": matrix(&d.B_f),
-        "B_star": matrix(&d.B_star),
-        "G_g": matrix(&d.G_g),
-        "L_g": matrix(&d.L_g),
-        "G_w": matrix(&d.G_w),
-        "L_w": matrix(&d.L_w),
-        "channels": d.channels.iter().map(|c| json!({
+        "sigma": d.sigma(),
+        "K": matrix(d.K()),
+        "F": matrix(d.F()),
+        "L": matrix(d.L()),
+        "N": matrix(d.N()),
+        "A_f": matrix(d.A_f()),
+        "B_f": matrix(d.B_f()),
+        "B_star": matrix(d.B_star()),
+        "G_g": matrix(d.G_g()),
+        "L_g": matrix(d.L_g()),
+        "G_w": matrix(d.G_w()),
+        "L_w": matrix(d.L_w()),
+        "channels": d.channels().iter().map(|c| json!({
             "poles": eigs(&c.poles),
             "denominator": c.den,
             "q0": c.q0(),
         })).collect::<Vec<_>>(),
-        "mu": d.mu,
-        "beta": d.beta,
-        "observer_eigenvalues": eigs(&d.observer_eigenvalues),
-        "decoupled_eigenvalues": eigs(&d.decoupled_eigenvalues),
+        "mu": d.mu(),
+        "beta": d.beta(),
+        "observer_eigenvalues": eigs(d.observer_eigenvalues()),
+        "decoupled_eigenvalues": eigs(d.decoupled_eigenvalues()),
         "checks": {
-            "controllability_rank": d.controllability.rank,
-            "observability_rank": d.observability.rank,
-            "cond_B_star": d.cond_B_star,
+            "controllability_rank": d.controllability().rank,
+            "observability_rank": d.observability().rank,
+            "cond_B_star": d.cond_B_star(),
         },
     })
 }
@@ -73,7 +73,7 @@ fn tf(c: &quell::design::ChannelTf) -> String {
 
 /// The design for people: the checks passed, σ, every gain and the eigenvalues achieved.
 pub fn design_text(d: &Design) -> String {
-    let p = &d.plant;
+    let p = d.plant();
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -90,48 +90,48 @@ pub fn design_text(d: &Design) -> String {
     let _ = writeln!(
         s,
         "  ✓ (A, B) controllable: numerical rank {} of {} (tol {:.1e})",
-        d.controllability.rank,
+        d.controllability().rank,
         p.n(),
-        d.controllability.tol
+        d.controllability().tol
     );
     let _ = writeln!(
         s,
         "  ✓ (A, C) observable:   numerical rank {} of {} (tol {:.1e})",
-        d.observability.rank,
+        d.observability().rank,
         p.n(),
-        d.observability.tol
+        d.observability().tol
     );
-    let _ = writeln!(s, "  ✓ decouplable: B* nonsingular, condition number {:.3e}", d.cond_B_star);
+    let _ = writeln!(s, "  ✓ decouplable: B* nonsingular, condition number {:.3e}", d.cond_B_star());
     let _ = writeln!(
         s,
         "  ✓ A_f = A − BK Hurwitz (stable zero dynamics): max Re λ = {:.5}",
-        d.decoupled_eigenvalues.iter().map(|e| e.re).fold(f64::MIN, f64::max)
+        d.decoupled_eigenvalues().iter().map(|e| e.re).fold(f64::MIN, f64::max)
     );
     let _ = writeln!(
         s,
         "  ✓ observer A − LC Hurwitz: max Re λ = {:.5}",
-        d.observer_eigenvalues.iter().map(|e| e.re).fold(f64::MIN, f64::max)
+        d.observer_eigenvalues().iter().map(|e| e.re).fold(f64::MIN, f64::max)
     );
     let _ = writeln!(s, "  ✓ rank D = k = {} (N D = L_ω solvable)", p.k());
-    let _ = writeln!(s, "\nrelative degrees σ = {:?}", d.sigma);
-    for (i, c) in d.channels.iter().enumerate() {
-        let _ = writeln!(s, "  G_{0}{0}(s) = {1}   (μ_{0} = {2})", i + 1, tf(c), d.mu[i]);
+    let _ = writeln!(s, "\nrelative degrees σ = {:?}", d.sigma());
+    for (i, c) in d.channels().iter().enumerate() {
+        let _ = writeln!(s, "  G_{0}{0}(s) = {1}   (μ_{0} = {2})", i + 1, tf(c), d.mu()[i]);
     }
-    let _ = writeln!(s, "  H(s) = 1/({} s + 1)\n", d.beta);
+    let _ = writeln!(s, "  H(s) = 1/({} s + 1)\n", d.beta());
     for (name, M) in [
-        ("K", &d.K),
-        ("F", &d.F),
-        ("L", &d.L),
-        ("B*", &d.B_star),
-        ("G_g", &d.G_g),
-        ("L_g", &d.L_g),
-        ("G_ω", &d.G_w),
-        ("L_ω", &d.L_w),
-        ("N", &d.N),
+        ("K", d.K()),
+        ("F", d.F()),
+        ("L", d.L()),
+        ("B*", d.B_star()),
+        ("G_g", d.G_g()),
+        ("L_g", d.L_g()),
+        ("G_ω", d.G_w()),
+        ("L_ω", d.L_w()),
+        ("N", d.N()),
     ] {
         fmt_matrix(&mut s, name, M);
     }
-    let _ = writeln!(s, "\neig(A − LC) = {}", fmt_eigs(&d.observer_eigenvalues));
-    let _ = writeln!(s, "eig(A − BK) = {}", fmt_eigs(&d.decoupled_eigenvalues));
+    let _ = writeln!(s, "\neig(A − LC) = {}", fmt_eigs(d.observer_eigenvalues()));
+    let _ = writeln!(s, "eig(A − BK) = {}", fmt_eigs(d.decoupled_eigenvalues()));
     s
 }

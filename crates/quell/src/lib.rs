@@ -14,7 +14,7 @@
 //! // The paper's example (Section VIII): every gain from the formulas, assumptions checked.
 //! let s = Scenario::from_toml(PAPER_EXAMPLE)?;
 //! let design = Design::new(&s.plant, &s.design)?;
-//! assert_eq!(design.sigma, vec![2, 1]);
+//! assert_eq!(design.sigma(), vec![2, 1]);
 //!
 //! // The continuous closed loop with its input delays, 20 s of it.
 //! let run = simulate(&design, &s.reference, &s.disturbance, &RunSettings::new(20.0, 0.1, 1e-9, 1e-9), |_| {

@@ -699,5 +699,5 @@ fn uncontrollable_plant() {
 #[test]
 fn paper_example_designs() {
     let (_, design) = load_and_design(PAPER_EXAMPLE).unwrap();
-    assert_eq!(design.sigma, vec![2, 1]);
+    assert_eq!(design.sigma(), vec![2, 1]);
 }

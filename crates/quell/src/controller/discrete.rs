@@ -131,7 +131,7 @@ impl Controller {
         if !(T.is_finite() && T > 0.0) {
             return Err(ControllerError::BadSampleTime { value: T });
         }
-        let d = samples(&design.plant.delays, T)?;
+        let d = samples(&design.plant().delays, T)?;
         let eq = Equations::new(design);
         let (m, q, nz) = (eq.m, eq.q, eq.nz);
         let (Phi_z, Gamma_z) = zoh(&eq.A_z, &eq.B_z, T);

@@ -66,28 +66,28 @@ pub struct ChannelFilter {
 impl Equations {
     /// Assembles the controller's matrices from a design.
     pub fn new(d: &Design) -> Equations {
-        let p = &d.plant;
+        let p = d.plant();
         let (n, m) = (p.n(), p.m());
         let (q_g, q_w) = (d.q_g(), d.q_w());
         let (q, nz) = (q_g + q_w, n + q_g + q_w);
         let mut A_z = DMatrix::zeros(nz, nz);
         let mut B_z = DMatrix::zeros(nz, 3 * m);
         // Reference observer (14).
-        A_z.view_mut((0, 0), (q_g, q_g)).copy_from(&d.G_g);
-        B_z.view_mut((0, m), (q_g, m)).copy_from(&d.L_g);
+        A_z.view_mut((0, 0), (q_g, q_g)).copy_from(d.G_g());
+        B_z.view_mut((0, m), (q_g, m)).copy_from(d.L_g());
         // Disturbance observer (20) in the coordinates ξ̂_ω = φ + N x̂.
-        let NL = &d.N * &d.L;
-        A_z.view_mut((q_g, q_g), (q_w, q_w)).copy_from(&d.G_w);
+        let NL = d.N() * d.L();
+        A_z.view_mut((q_g, q_g), (q_w, q_w)).copy_from(d.G_w());
         A_z.view_mut((q_g, q), (q_w, n)).copy_from(&(-(&NL * &p.C)));
         B_z.view_mut((q_g, 0), (q_w, m)).copy_from(&NL);
         // Observer (6) with u_f = −K x̂ + F u_d: x̂' = (A − BK − LC) x̂ + L y + BF u_d.
-        A_z.view_mut((q, q), (n, n)).copy_from(&(&d.A_f - &d.L * &p.C));
-        B_z.view_mut((q, 0), (n, m)).copy_from(&d.L);
-        B_z.view_mut((q, 2 * m), (n, m)).copy_from(&d.B_f);
+        A_z.view_mut((q, q), (n, n)).copy_from(&(d.A_f() - d.L() * &p.C));
+        B_z.view_mut((q, 0), (n, m)).copy_from(d.L());
+        B_z.view_mut((q, 2 * m), (n, m)).copy_from(d.B_f());
         let channels = d
-            .channels
+            .channels()
             .iter()
-            .zip(&d.mu)
+            .zip(d.mu())
             .zip(&p.delays)
             .map(|((tf, &mu), &delay)| ChannelFilter {
                 sigma: tf.sigma(),
@@ -98,7 +98,7 @@ impl Equations {
                 delay,
             })
             .collect();
-        Equations { n, m, q, nz, A_z, B_z, K_neg: -&d.K, F: d.F.clone(), channels, beta: d.beta }
+        Equations { n, m, q, nz, A_z, B_z, K_neg: -d.K(), F: d.F().clone(), channels, beta: d.beta() }
     }
 
     /// Regressor ξ̂ = [ξ̂_g; ξ̂_ω]: the first q core states.

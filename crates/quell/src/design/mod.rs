@@ -67,39 +67,39 @@ impl ChannelTf {
 }
 
 /// Every matrix the controller needs, and the checks that were passed to get them.
+///
+/// Built only by [`Design::new`]; the fields are private and read through accessors named as in
+/// the paper, so the derived parts (A_f = A − BK, B_f = BF, N = L_ω D⁺, the eigenvalues) always
+/// agree with the gains they come from:
+///
+/// ```compile_fail
+/// # let s = quell::Scenario::from_toml(quell::scenario::PAPER_EXAMPLE).unwrap();
+/// let mut design = quell::Design::new(&s.plant, &s.design).unwrap();
+/// design.K[(0, 0)] = 1.0; // private: K cannot drift from A_f = A − BK
+/// ```
 #[derive(Debug, Clone)]
 pub struct Design {
-    pub plant: Plant,
-    /// Observer gain, eq. (6).
-    pub L: DMatrix<f64>,
-    /// Decoupling gains, Proposition 1.
-    pub K: DMatrix<f64>,
-    pub F: DMatrix<f64>,
-    /// A_f = A − BK, B_f = BF (Proposition 1).
-    pub A_f: DMatrix<f64>,
-    pub B_f: DMatrix<f64>,
-    pub B_star: DMatrix<f64>,
-    pub cond_B_star: f64,
-    /// Relative degrees σ_i, eq. (7).
-    pub sigma: Vec<usize>,
-    /// G_ii(s), one per channel.
-    pub channels: Vec<ChannelTf>,
-    /// Reference internal model, eq. (11).
-    pub G_g: DMatrix<f64>,
-    pub L_g: DMatrix<f64>,
-    /// Disturbance internal model, eq. (16).
-    pub G_w: DMatrix<f64>,
-    pub L_w: DMatrix<f64>,
-    /// Disturbance observer gain, N D = L_ω (eq. (20)), minimum norm N = L_ω D⁺.
-    pub N: DMatrix<f64>,
-    pub mu: Vec<f64>,
-    pub beta: f64,
-    pub controllability: RankTest,
-    pub observability: RankTest,
-    /// eig(A − LC), sorted.
-    pub observer_eigenvalues: Vec<Complex<f64>>,
-    /// eig(A − BK), sorted.
-    pub decoupled_eigenvalues: Vec<Complex<f64>>,
+    plant: Plant,
+    L: DMatrix<f64>,
+    K: DMatrix<f64>,
+    F: DMatrix<f64>,
+    A_f: DMatrix<f64>,
+    B_f: DMatrix<f64>,
+    B_star: DMatrix<f64>,
+    cond_B_star: f64,
+    sigma: Vec<usize>,
+    channels: Vec<ChannelTf>,
+    G_g: DMatrix<f64>,
+    L_g: DMatrix<f64>,
+    G_w: DMatrix<f64>,
+    L_w: DMatrix<f64>,
+    N: DMatrix<f64>,
+    mu: Vec<f64>,
+    beta: f64,
+    controllability: RankTest,
+    observability: RankTest,
+    observer_eigenvalues: Vec<Complex<f64>>,
+    decoupled_eigenvalues: Vec<Complex<f64>>,
 }
 
 /// Why no design exists for a plant and a set of choices. Messages name the scenario key.
@@ -304,6 +304,90 @@ impl Design {
         })
     }
 
+    /// The plant the design is for.
+    pub fn plant(&self) -> &Plant {
+        &self.plant
+    }
+    /// Observer gain L, eq. (6).
+    pub fn L(&self) -> &DMatrix<f64> {
+        &self.L
+    }
+    /// Decoupling state feedback K = (B*)⁻¹ C* (Proposition 1).
+    pub fn K(&self) -> &DMatrix<f64> {
+        &self.K
+    }
+    /// Decoupling input gain F = (B*)⁻¹ diag(q_i0) (Proposition 1).
+    pub fn F(&self) -> &DMatrix<f64> {
+        &self.F
+    }
+    /// A_f = A − BK (Proposition 1).
+    pub fn A_f(&self) -> &DMatrix<f64> {
+        &self.A_f
+    }
+    /// B_f = BF (Proposition 1).
+    pub fn B_f(&self) -> &DMatrix<f64> {
+        &self.B_f
+    }
+    /// B*, row i = c_i A^(σ_i − 1) B (Proposition 1).
+    pub fn B_star(&self) -> &DMatrix<f64> {
+        &self.B_star
+    }
+    /// Condition number of B* in the 2-norm.
+    pub fn cond_B_star(&self) -> f64 {
+        self.cond_B_star
+    }
+    /// Relative degrees σ_i, eq. (7).
+    pub fn sigma(&self) -> &[usize] {
+        &self.sigma
+    }
+    /// G_ii(s), one per channel.
+    pub fn channels(&self) -> &[ChannelTf] {
+        &self.channels
+    }
+    /// Reference internal model G_g, eq. (11).
+    pub fn G_g(&self) -> &DMatrix<f64> {
+        &self.G_g
+    }
+    /// Reference internal model L_g, eq. (11).
+    pub fn L_g(&self) -> &DMatrix<f64> {
+        &self.L_g
+    }
+    /// Disturbance internal model G_ω, eq. (16).
+    pub fn G_w(&self) -> &DMatrix<f64> {
+        &self.G_w
+    }
+    /// Disturbance internal model L_ω, eq. (16).
+    pub fn L_w(&self) -> &DMatrix<f64> {
+        &self.L_w
+    }
+    /// Disturbance observer gain N with N D = L_ω (eq. (20)), the minimum-norm N = L_ω D⁺.
+    pub fn N(&self) -> &DMatrix<f64> {
+        &self.N
+    }
+    /// Adaptation gains μ_i, eq. (33).
+    pub fn mu(&self) -> &[f64] {
+        &self.mu
+    }
+    /// β of H(s) = 1/(βs + 1).
+    pub fn beta(&self) -> f64 {
+        self.beta
+    }
+    /// Assumption 1: the controllability rank test.
+    pub fn controllability(&self) -> &RankTest {
+        &self.controllability
+    }
+    /// Assumption 1: the observability rank test.
+    pub fn observability(&self) -> &RankTest {
+        &self.observability
+    }
+    /// eig(A − LC), sorted.
+    pub fn observer_eigenvalues(&self) -> &[Complex<f64>] {
+        &self.observer_eigenvalues
+    }
+    /// eig(A − BK), sorted.
+    pub fn decoupled_eigenvalues(&self) -> &[Complex<f64>] {
+        &self.decoupled_eigenvalues
+    }
     /// Dimension q_g of the reference regressor ξ̂_g.
     pub fn q_g(&self) -> usize {
         self.G_g.nrows()

@@ -102,7 +102,7 @@ impl<'a> ContinuousLoop<'a> {
     pub fn new(design: &'a Design, reference: &'a Signal, disturbance: &'a Signal) -> Self {
         let eq = Equations::new(design);
         let layout = Layout::new(&eq);
-        let p = &design.plant;
+        let p = design.plant();
         let mut delays: Vec<f64> = p.delays.iter().copied().filter(|&d| d > 0.0).collect();
         delays.sort_by(f64::total_cmp);
         delays.dedup();
@@ -272,7 +272,7 @@ struct LinearPart {
 
 impl LinearPart {
     fn new(design: &Design, eq: &Equations, l: &Layout) -> Self {
-        let p = &design.plant;
+        let p = design.plant();
         let (n, m, k, nz, dim) = (eq.n, eq.m, p.k(), eq.nz, l.dim);
         let (e_g, e_w, e_u) = (dim, dim + m, dim + m + k);
         let By = eq.B_z.columns(0, m);
@@ -281,9 +281,9 @@ impl LinearPart {
         // Rows of y are numbered after the state's.
         let blocks: [(DMatrix<f64>, usize, usize); 11] = [
             (p.A.clone(), l.x, l.x),
-            (-(&p.B * &design.K), l.x, x_hat),
+            (-(&p.B * design.K()), l.x, x_hat),
             (p.D.clone(), l.x, e_w),
-            (&p.B * &design.F, l.x, e_u),
+            (design.B_f().clone(), l.x, e_u),
             (eq.A_z.clone(), 0, 0),
             (By * &p.C, 0, l.x),
             (By * &p.Q, 0, e_w),
@@ -385,7 +385,7 @@ pub fn simulate(
     mut on_progress: impl FnMut(f64) -> ControlFlow<()>,
 ) -> SimResult {
     let mut sys = ContinuousLoop::new(design, reference, disturbance);
-    let s0 = sys.initial_state(&design.plant.x0);
+    let s0 = sys.initial_state(&design.plant().x0);
     let history = vec![0.0; sys.n_delayed()];
     let (m, q) = (sys.eq.m, sys.eq.q);
     let mut result = SimResult::new(m, q);

@@ -77,7 +77,7 @@ pub fn simulate_sampled(
 ) -> Result<SimResult, SampledError> {
     let T = settings.sample_time;
     let (mut ctrl, every) = settings.check(design)?;
-    let p = &design.plant;
+    let p = design.plant();
     let (n, m) = (p.n(), p.m());
     let (S, H, w0) = disturbance.exosystem();
     let nw = S.nrows();
