@@ -45,6 +45,7 @@ pub mod plant;
 pub mod scenario;
 pub mod signal;
 pub mod sim;
+pub mod study;
 
 pub use controller::{Controller, ControllerError};
 pub use design::{place, Design, DesignError, DesignSpec, ObserverChoice};

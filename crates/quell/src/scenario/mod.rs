@@ -136,7 +136,13 @@ impl Scenario {
                 .unwrap_or_default();
             err("syntax", format!("{at}{} (the file is not valid TOML)", e.message().trim_end()))
         })?;
-        let root = Table::new("", &doc, TOP_KEYS)?;
+        Scenario::from_document(&doc)
+    }
+
+    /// Validates a parsed scenario document (what [`Scenario::from_toml`] does after parsing the
+    /// text); studies edit documents by key path and validate them here.
+    pub fn from_document(doc: &toml::Table) -> Result<Scenario, ScenarioError> {
+        let root = Table::new("", doc, TOP_KEYS)?;
 
         let name = root.get("name", |v| v.string())?;
         let reference = root.require("reference", "the [reference] table: g(t), one component per output", signal)?;

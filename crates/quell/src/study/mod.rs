@@ -1,0 +1,573 @@
+//! Studies: many runs of one scenario. A study file names a scenario, a grid of scenario values
+//! (the cartesian product of `[grid]`), Monte Carlo draws of the true plant at every grid point
+//! (`[monte_carlo]`), the settling band (`[settle]`) and the per-channel tuning (`[tune]`).
+//!
+//! Every run is reproducible on its own: [`Study::spec`] builds run `index`'s [`RunSpec`] from the
+//! study alone (its seed from the study seed and the run's draw index, see [`run_seed`]), and
+//! [`run_one`] carries it out. [`sweep`] runs them in parallel (rayon), or every `count`-th of them
+//! for a [`Shard`]; [`Summary`] aggregates the rows per grid point. The format is documented in
+//! `docs/studies.md`; every error names the key, see `docs/errors.md`.
+
+mod output;
+mod path;
+mod run;
+mod summary;
+mod tune;
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use crate::scenario::{Scenario, PAPER_EXAMPLE};
+pub use output::{header, read_runs_csv, write_runs_csv, RunsFile};
+pub use path::{KeyPath, Shape};
+pub use run::{run_one, run_seed, sweep, ChannelFigures, Outcome, Row, RunSpec, Shard, Sweep, SweepOptions};
+pub use summary::{quantile, AxisMeta, ChannelQuantiles, PointSummary, Quantiles, StudyMeta, Summary, QUANTILES};
+pub use tune::{tune, Objective, TuneCurve, TunePoint, TuneResult, TuneSpec};
+
+/// A study-file error: the key path in the study file (`grid."design.mu[0]"[2]`) and what was
+/// expected and found.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[error("{key}: {message}")]
+pub struct StudyError {
+    pub key: String,
+    pub message: String,
+}
+
+fn err(key: impl Into<String>, message: impl Into<String>) -> StudyError {
+    StudyError { key: key.into(), message: message.into() }
+}
+
+/// Runs above which a sweep asks for confirmation (`quell sweep --yes`).
+pub const CONFIRM_RUNS: u64 = 10_000_000;
+
+/// One axis of the grid: a scenario key path and the values it takes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GridAxis {
+    /// The key path as written (`design.mu[0]`).
+    pub key: String,
+    path: KeyPath,
+    pub values: Vec<toml::Value>,
+}
+
+/// How a Monte Carlo draw perturbs every entry x of a value; ξ ~ N(0, 1), υ ~ U(−1, 1).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Law {
+    /// x (1 + r ξ).
+    Relative(f64),
+    /// x + σ ξ.
+    Normal(f64),
+    /// x + a υ.
+    Uniform(f64),
+}
+
+const LAWS: &str =
+    "{ relative = r } (x·(1 + r·ξ), ξ ~ N(0, 1)), { normal = σ } (x + σ·ξ) or { uniform = a } (x + U(−a, a))";
+
+/// A Monte Carlo perturbation of one scenario value.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Perturbation {
+    pub key: String,
+    path: KeyPath,
+    pub law: Law,
+}
+
+/// `[monte_carlo]`: draws per grid point and the perturbations of each draw.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MonteCarlo {
+    pub runs: usize,
+    pub seed: u64,
+    pub perturbations: Vec<Perturbation>,
+}
+
+/// The settling band of channel i: |e_i| ≤ max(relative · max_t |g_i(t)|, absolute).
+/// settle_t_i is the first recorded t after which |e_i| stays within it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Settle {
+    pub relative: f64,
+    pub absolute: f64,
+}
+
+impl Default for Settle {
+    /// 2 % of the reference's peak, the textbook settling band.
+    fn default() -> Self {
+        Settle { relative: 0.02, absolute: 0.0 }
+    }
+}
+
+/// A parsed and checked study.
+#[derive(Debug, Clone)]
+pub struct Study {
+    /// The scenario document with the study's `[simulation]` overrides applied.
+    base: toml::Table,
+    /// Where the scenario came from, for messages (`paper.toml`, or `the paper's example`).
+    pub scenario_source: String,
+    pub grid: Vec<GridAxis>,
+    pub monte_carlo: Option<MonteCarlo>,
+    pub settle: Settle,
+    pub tune: Option<TuneSpec>,
+    /// Channels m of the scenario.
+    pub m: usize,
+    fingerprint: u64,
+}
+
+const TOP_KEYS: &[&str] = &["scenario", "simulation", "grid", "monte_carlo", "settle", "tune"];
+const SETTLE_KEYS: &[&str] = &["relative", "absolute"];
+
+/// "a string", "an integer", … for "found …".
+fn kind(v: &toml::Value) -> &'static str {
+    match v {
+        toml::Value::String(_) => "a string",
+        toml::Value::Integer(_) => "an integer",
+        toml::Value::Float(_) => "a floating-point number",
+        toml::Value::Boolean(_) => "a boolean",
+        toml::Value::Datetime(_) => "a date-time",
+        toml::Value::Array(a) if a.is_empty() => "an empty array",
+        toml::Value::Array(_) => "an array",
+        toml::Value::Table(_) => "a table",
+    }
+}
+
+fn number(key: &str, v: &toml::Value, what: &str) -> Result<f64, StudyError> {
+    let x = match v {
+        toml::Value::Float(x) => *x,
+        toml::Value::Integer(i) => *i as f64,
+        _ => return Err(err(key, format!("expected {what}, found {}", kind(v)))),
+    };
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(err(key, format!("expected {what}, found {x}")))
+    }
+}
+
+fn non_negative(key: &str, v: &toml::Value, what: &str) -> Result<f64, StudyError> {
+    let x = number(key, v, what)?;
+    if x >= 0.0 {
+        Ok(x)
+    } else {
+        Err(err(key, format!("expected {what}, found {x}")))
+    }
+}
+
+fn unsigned(key: &str, v: &toml::Value, what: &str) -> Result<u64, StudyError> {
+    match v {
+        toml::Value::Integer(i) if *i >= 0 => Ok(*i as u64),
+        toml::Value::Integer(i) => Err(err(key, format!("expected {what}, found {i}"))),
+        _ => Err(err(key, format!("expected {what}, found {}", kind(v)))),
+    }
+}
+
+fn table<'a>(key: &str, v: &'a toml::Value) -> Result<&'a toml::Table, StudyError> {
+    v.as_table().ok_or_else(|| err(key, format!("expected a table, found {}", kind(v))))
+}
+
+fn unknown_keys(at: &str, t: &toml::Table, valid: &[&str]) -> Result<(), StudyError> {
+    match t.keys().find(|k| !valid.contains(&k.as_str())) {
+        Some(k) => Err(err(
+            if at.is_empty() { k.clone() } else { format!("{at}.{k}") },
+            format!(
+                "unknown key; valid keys {}: {}",
+                if at.is_empty() { "at the top level".to_string() } else { format!("in [{at}]") },
+                valid.join(", ")
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// FNV-1a, 64 bits: the study's fingerprint (stable across platforms and releases, unlike
+/// `std::hash`), so merged shards can be checked to come from one study.
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
+}
+
+/// A plant key of `[truth]` that may be perturbed before the scenario gives it.
+const TRUTH_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0"];
+
+/// Gives `doc` the value that `path` names when the scenario leaves it to a default: `truth.<X>`
+/// defaults to `plant.<X>`, and `plant.x0` (or `truth.x0`) to zeros. Other paths are left alone.
+fn fill_default(doc: &mut toml::Table, path: &KeyPath) {
+    let section = path.section();
+    let key = path.to_string();
+    let name = key.split(['.', '[']).nth(1).unwrap_or("");
+    if !TRUTH_KEYS.contains(&name) || !(section == "truth" || (section == "plant" && name == "x0")) {
+        return;
+    }
+    let plant = doc.get("plant").and_then(toml::Value::as_table);
+    let n = plant.and_then(|p| p.get("A")).and_then(toml::Value::as_array).map_or(0, Vec::len);
+    let from_plant = plant.and_then(|p| p.get(name)).cloned();
+    let zeros = || toml::Value::Array(vec![toml::Value::Float(0.0); n]);
+    if section == "plant" {
+        if from_plant.is_none() {
+            if let Some(toml::Value::Table(p)) = doc.get_mut("plant") {
+                p.insert("x0".into(), zeros());
+            }
+        }
+        return;
+    }
+    let value = match from_plant {
+        Some(v) => v,
+        None if name == "x0" => zeros(),
+        None => return,
+    };
+    let truth = doc.entry("truth").or_insert_with(|| toml::Value::Table(toml::Table::new()));
+    if let toml::Value::Table(t) = truth {
+        t.entry(name).or_insert(value);
+    }
+}
+
+impl Study {
+    /// Reads a study file; its `scenario` is relative to the file's directory.
+    pub fn from_path(path: &Path) -> Result<Study, StudyError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| err(path.display().to_string(), format!("cannot read the study file: {e}")))?;
+        Study::from_toml(&text, path.parent())
+    }
+
+    /// Parses and checks a study; `dir` is where a relative `scenario` path is looked up
+    /// (`None`: the working directory). Every grid value and perturbation is applied to the
+    /// scenario and checked (parse and design) before this returns.
+    pub fn from_toml(text: &str, dir: Option<&Path>) -> Result<Study, StudyError> {
+        let doc: toml::Table = text.parse().map_err(|e: toml::de::Error| {
+            let at = e.span().map(|s| {
+                let before = &text[..s.start.min(text.len())];
+                format!("line {}: ", before.matches('\n').count() + 1)
+            });
+            err(
+                "syntax",
+                format!("{}{} (the study file is not valid TOML)", at.unwrap_or_default(), e.message().trim_end()),
+            )
+        })?;
+        unknown_keys("", &doc, TOP_KEYS)?;
+
+        // The scenario and the study's [simulation] overrides.
+        let (scenario_text, scenario_source) = match doc.get("scenario") {
+            None => (PAPER_EXAMPLE.to_string(), "the paper's example".to_string()),
+            Some(toml::Value::String(s)) => {
+                let p = dir.map_or_else(|| PathBuf::from(s), |d| d.join(s));
+                let text = std::fs::read_to_string(&p).map_err(|e| {
+                    err(
+                        "scenario",
+                        format!(
+                            "cannot read the scenario file {} ({e}); the path is relative to the study file",
+                            p.display()
+                        ),
+                    )
+                })?;
+                (text, s.clone())
+            }
+            Some(v) => {
+                return Err(err("scenario", format!("expected the scenario file's path (a string), found {}", kind(v))))
+            }
+        };
+        let mut base: toml::Table = scenario_text.parse().map_err(|e: toml::de::Error| {
+            err("scenario", format!("{scenario_source} is not valid TOML: {}", e.message().trim_end()))
+        })?;
+        let in_scenario = |e: crate::ScenarioError| err("scenario", format!("{scenario_source}: {e}"));
+        if let Some(sim) = doc.get("simulation") {
+            let sim = table("simulation", sim)?;
+            let target = base.entry("simulation").or_insert_with(|| toml::Value::Table(toml::Table::new()));
+            if let toml::Value::Table(t) = target {
+                for (k, v) in sim {
+                    t.insert(k.clone(), v.clone());
+                }
+            }
+        }
+        let scenario = Scenario::from_document(&base).map_err(|e| {
+            if e.key.starts_with("simulation.")
+                && doc.get("simulation").and_then(|s| s.get(&e.key["simulation.".len()..])).is_some()
+            {
+                err(e.key.clone(), e.message)
+            } else {
+                in_scenario(e)
+            }
+        })?;
+        scenario.design().map_err(|e| err("scenario", format!("{scenario_source}: {e}")))?;
+        let m = scenario.plant.m();
+
+        // [grid]: each key a scenario path, each value a non-empty list of values of its shape.
+        let mut grid = Vec::new();
+        if let Some(g) = doc.get("grid") {
+            for (key, values) in table("grid", g)? {
+                let at = format!("grid.\"{key}\"");
+                let path = KeyPath::parse(key).map_err(|m| err(&at, m))?;
+                let values = match values {
+                    toml::Value::Array(v) if v.is_empty() => {
+                        return Err(err(&at, "expected a non-empty list of values, found an empty array; give at least one value or remove the key"))
+                    }
+                    toml::Value::Array(v) => v.clone(),
+                    v => return Err(err(&at, format!("expected a list of values (e.g. [5.0, 10.0]), found {}", kind(v)))),
+                };
+                let axis = GridAxis { key: key.clone(), path, values };
+                check_values(&base, &axis.path, &at, axis.values.iter().enumerate(), &scenario_source)?;
+                grid.push(axis);
+            }
+        }
+
+        // [monte_carlo].
+        let monte_carlo = match doc.get("monte_carlo") {
+            None => None,
+            Some(mc) => Some(monte_carlo(&base, table("monte_carlo", mc)?, &scenario_source)?),
+        };
+
+        let settle = match doc.get("settle") {
+            None => Settle::default(),
+            Some(s) => {
+                let t = table("settle", s)?;
+                unknown_keys("settle", t, SETTLE_KEYS)?;
+                let d = Settle::default();
+                let get =
+                    |k: &str, d: f64| t.get(k).map_or(Ok(d), |v| non_negative(&format!("settle.{k}"), v, "a band ≥ 0"));
+                let s = Settle { relative: get("relative", d.relative)?, absolute: get("absolute", d.absolute)? };
+                if s.relative == 0.0 && s.absolute == 0.0 {
+                    return Err(err(
+                        "settle",
+                        "both settle.relative and settle.absolute are 0, so no run could settle; give a band > 0",
+                    ));
+                }
+                s
+            }
+        };
+        let tune = match doc.get("tune") {
+            None => None,
+            Some(t) => Some(TuneSpec::parse(table("tune", t)?, &scenario)?),
+        };
+
+        let mut canonical = toml::to_string(&base).unwrap_or_default();
+        for key in ["grid", "monte_carlo", "settle"] {
+            if let Some(v) = doc.get(key) {
+                canonical.push_str(&format!("\n[{key}]\n{v}"));
+            }
+        }
+        let fingerprint = fnv1a(canonical.as_bytes());
+        Ok(Study { base, scenario_source, grid, monte_carlo, settle, tune, m, fingerprint })
+    }
+
+    /// Grid points: the product of the axes' lengths (1 without a grid).
+    pub fn points(&self) -> usize {
+        self.grid.iter().map(|a| a.values.len()).product()
+    }
+
+    /// Draws per grid point (1 without Monte Carlo).
+    pub fn draws(&self) -> usize {
+        self.monte_carlo.as_ref().map_or(1, |mc| mc.runs)
+    }
+
+    /// Runs: points × draws (saturating, so a huge study is still reported and refused).
+    pub fn len(&self) -> u64 {
+        (self.points() as u64).saturating_mul(self.draws() as u64)
+    }
+
+    /// True when the study has no runs (never: a grid axis and `runs` are never empty).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The study's fingerprint: a hash of its scenario, overrides, grid, draws and settle band.
+    pub fn fingerprint(&self) -> u64 {
+        self.fingerprint
+    }
+
+    /// Index of each axis at grid point `point`; the first axis varies slowest.
+    pub fn grid_index(&self, point: usize) -> Vec<usize> {
+        let mut rest = point;
+        let mut idx = vec![0; self.grid.len()];
+        for (i, axis) in self.grid.iter().enumerate().rev() {
+            idx[i] = rest % axis.values.len();
+            rest /= axis.values.len();
+        }
+        idx
+    }
+
+    /// The scenario document of run `index`: the grid point's values, then the draw's
+    /// perturbations, applied to the base scenario.
+    fn document(&self, point: usize, seed: Option<u64>) -> toml::Table {
+        let mut doc = self.base.clone();
+        for (axis, &i) in self.grid.iter().zip(&self.grid_index(point)) {
+            fill_default(&mut doc, &axis.path);
+            axis.path.set(&mut doc, axis.values[i].clone()).expect("checked when the study was read");
+        }
+        if let (Some(mc), Some(seed)) = (&self.monte_carlo, seed) {
+            let mut rng = crate::sim::noise::Gaussian::new(seed);
+            for p in &mc.perturbations {
+                fill_default(&mut doc, &p.path);
+                let v = p.path.get_mut(&mut doc).expect("checked when the study was read");
+                path::for_each_number(v, &mut |x| {
+                    *x = match p.law {
+                        Law::Relative(r) => *x * (1.0 + r * rng.sample()),
+                        Law::Normal(s) => *x + s * rng.sample(),
+                        Law::Uniform(a) => *x + a * (2.0 * rng.uniform() - 1.0),
+                    }
+                });
+            }
+        }
+        doc
+    }
+
+    /// Run `index`'s specification (panics if `index ≥ self.len()`: a programming error).
+    pub fn spec(&self, index: usize) -> RunSpec {
+        assert!((index as u64) < self.len(), "run {index} of a study of {} runs", self.len());
+        let draws = self.draws();
+        let (point, draw) = (index / draws, index % draws);
+        let seed = self.monte_carlo.as_ref().map(|mc| run_seed(mc.seed, draw));
+        let grid_index = self.grid_index(point);
+        RunSpec {
+            run: index,
+            point,
+            draw,
+            seed: seed.unwrap_or(0),
+            grid: self.grid.iter().zip(&grid_index).map(|(a, &i)| (a.key.clone(), a.values[i].clone())).collect(),
+            scenario: self.document(point, seed),
+            settle: self.settle,
+        }
+    }
+
+    /// Every run's specification, in index order (what `quell.sweep_runs` yields).
+    pub fn specs(&self) -> impl Iterator<Item = RunSpec> + '_ {
+        (0..self.len() as usize).map(|i| self.spec(i))
+    }
+
+    /// Whether some run's true plant differs from the design model: the scenario's `[truth]`
+    /// differs from `[plant]`, a grid value of a `truth.` key differs from the plant's, or a draw
+    /// perturbs a `truth.` key with a spread > 0.
+    pub fn truth_differs(&self) -> bool {
+        let plant_twin = |p: &KeyPath| KeyPath::parse(&p.to_string().replacen("truth", "plant", 1)).ok();
+        let mut plant_doc = self.base.clone();
+        let differs = |path: &KeyPath, v: &toml::Value| {
+            let twin = plant_twin(path);
+            if let Some(t) = &twin {
+                fill_default(&mut plant_doc, t);
+            }
+            twin.and_then(|t| t.get(&plant_doc).ok().map(|p| !path::same_numbers(p, v))).unwrap_or(true)
+        };
+        let mut differs = differs;
+        if let Some(toml::Value::Table(truth)) = self.base.get("truth") {
+            for (k, v) in truth {
+                if let Ok(p) = KeyPath::parse(&format!("truth.{k}")) {
+                    if differs(&p, v) {
+                        return true;
+                    }
+                }
+            }
+        }
+        for axis in self.grid.iter().filter(|a| a.path.section() == "truth") {
+            if axis.values.iter().any(|v| differs(&axis.path, v)) {
+                return true;
+            }
+        }
+        self.monte_carlo.as_ref().is_some_and(|mc| {
+            mc.perturbations.iter().any(|p| {
+                p.path.section() == "truth"
+                    && !matches!(p.law, Law::Relative(0.0) | Law::Normal(0.0) | Law::Uniform(0.0))
+            })
+        })
+    }
+
+    /// The scenario document with the study's `[simulation]` overrides, before any grid value.
+    pub(crate) fn base(&self) -> &toml::Table {
+        &self.base
+    }
+}
+
+/// Checks that each value, put at `path` in the scenario, has the scenario value's shape and gives
+/// a scenario that parses and designs. `at` is the study key of the list.
+fn check_values<'v>(
+    base: &toml::Table,
+    path: &KeyPath,
+    at: &str,
+    values: impl Iterator<Item = (usize, &'v toml::Value)>,
+    source: &str,
+) -> Result<(), StudyError> {
+    let mut doc = base.clone();
+    fill_default(&mut doc, path);
+    let current = path.get(&doc).map_err(|m| {
+        err(at, format!("{path} is not a value of the scenario ({m}); grid and Monte Carlo keys are scenario key paths as error messages write them, e.g. design.mu[0] or truth.A"))
+    })?;
+    let Some(expected) = path::shape(current) else {
+        return Err(err(at, format!("{path} in {source} is {}, not a number, vector or matrix", kind(current))));
+    };
+    for (i, v) in values {
+        let key = format!("{at}[{i}]");
+        match path::shape(v) {
+            Some(found) if found == expected => {}
+            Some(found) => {
+                return Err(err(key, format!("expected {expected} (the shape of {path} in {source}), found {found}")))
+            }
+            None => return Err(err(key, format!("expected {expected} (the shape of {path}), found {}", kind(v)))),
+        }
+        let mut trial = doc.clone();
+        path.set(&mut trial, v.clone()).expect("found above");
+        let checked = Scenario::from_document(&trial)
+            .map_err(|e| e.to_string())
+            .and_then(|s| s.design().map(|_| ()).map_err(|e| e.to_string()));
+        if let Err(e) = checked {
+            return Err(err(key, format!("with {path} = {v} the scenario is not valid: {e}")));
+        }
+    }
+    Ok(())
+}
+
+/// `[monte_carlo]`: `runs`, `seed` and one perturbation law per scenario key path.
+fn monte_carlo(base: &toml::Table, t: &toml::Table, source: &str) -> Result<MonteCarlo, StudyError> {
+    let runs = match t.get("runs") {
+        None => {
+            return Err(err(
+                "monte_carlo.runs",
+                "missing; required: the number of draws per grid point (an integer ≥ 1)",
+            ))
+        }
+        Some(v) => unsigned("monte_carlo.runs", v, "the number of draws per grid point (an integer ≥ 1)")?,
+    };
+    if runs == 0 {
+        return Err(err("monte_carlo.runs", "expected the number of draws per grid point (an integer ≥ 1), found 0"));
+    }
+    let seed = t.get("seed").map_or(Ok(0), |v| unsigned("monte_carlo.seed", v, "a seed (an integer ≥ 0)"))?;
+    let mut perturbations = Vec::new();
+    for (key, v) in t.iter().filter(|(k, _)| !matches!(k.as_str(), "runs" | "seed")) {
+        let at = format!("monte_carlo.\"{key}\"");
+        let path = KeyPath::parse(key).map_err(|m| err(&at, m))?;
+        let law = table(&at, v)
+            .map_err(|_| err(&at, format!("expected a distribution, one of {LAWS}; found {}", kind(v))))?;
+        let (name, size) = match law.iter().collect::<Vec<_>>()[..] {
+            [(name, size)] => (name, size),
+            _ => {
+                return Err(err(
+                    &at,
+                    format!("expected exactly one distribution, one of {LAWS}; found {} keys", law.len()),
+                ))
+            }
+        };
+        let size_key = format!("{at}.{name}");
+        let size = non_negative(&size_key, size, "a spread ≥ 0")?;
+        let law = match name.as_str() {
+            "relative" => Law::Relative(size),
+            "normal" => Law::Normal(size),
+            "uniform" => Law::Uniform(size),
+            _ => return Err(err(size_key, format!("unknown distribution; expected one of {LAWS}"))),
+        };
+        let mut doc = base.clone();
+        fill_default(&mut doc, &path);
+        let current = path.get(&doc).map_err(|m| {
+            err(&at, format!("{path} is not a value of the scenario ({m}); Monte Carlo keys are scenario key paths, e.g. truth.A or truth.delays[1]"))
+        })?;
+        if path::shape(current).is_none() {
+            return Err(err(&at, format!("{path} in {source} is {}, not a number, vector or matrix", kind(current))));
+        }
+        if contains_integer_key(&path) {
+            return Err(err(&at, format!("{path} is an integer setting; draws perturb real numbers only")));
+        }
+        perturbations.push(Perturbation { key: key.clone(), path, law });
+    }
+    Ok(MonteCarlo { runs: runs as usize, seed, perturbations })
+}
+
+/// Scenario values that must stay integers.
+fn contains_integer_key(path: &KeyPath) -> bool {
+    path.to_string() == "noise.seed"
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,156 @@
+//! runs.csv: one row per run, written and read back exactly (numbers in Rust's shortest
+//! round-trip form), so merged shards equal one unsharded sweep.
+
+use std::io::{self, Write};
+
+use super::run::{ChannelFigures, Outcome, Row};
+use super::summary::StudyMeta;
+
+/// The header: `run,point,draw,seed,<grid keys>,outcome,reason,tail_max_e1..m,tail_rms_e1..m,
+/// max_u1..m,settle_t1..m,steps,wall_ms`.
+pub fn header(meta: &StudyMeta) -> Vec<String> {
+    let mut h: Vec<String> = ["run", "point", "draw", "seed"].map(String::from).to_vec();
+    h.extend(meta.grid.iter().map(|a| a.key.clone()));
+    h.extend(["outcome", "reason"].map(String::from));
+    for name in ["tail_max_e", "tail_rms_e", "max_u", "settle_t"] {
+        h.extend((1..=meta.m).map(|i| format!("{name}{i}")));
+    }
+    h.extend(["steps", "wall_ms"].map(String::from));
+    h
+}
+
+/// A CSV field, quoted when it holds a comma, quote or line break (RFC 4180).
+fn field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+/// The line that ends an interrupted sweep's runs.csv.
+const PARTIAL: &str = "# partial:";
+
+/// Writes runs.csv: the header, `rows` in the order given, and for a partial sweep a last line
+/// `# partial: …` (read it with `pandas.read_csv(…, comment="#")`).
+pub fn write_runs_csv(w: &mut dyn Write, meta: &StudyMeta, rows: &[Row], partial: bool) -> io::Result<()> {
+    writeln!(w, "{}", header(meta).iter().map(|h| field(h)).collect::<Vec<_>>().join(","))?;
+    let opt = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
+    for r in rows {
+        let mut f: Vec<String> = vec![r.run.to_string(), r.point.to_string(), r.draw.to_string(), r.seed.to_string()];
+        f.extend(r.grid.iter().map(|g| field(g)));
+        f.push(r.outcome.as_str().to_string());
+        f.push(field(&r.reason));
+        let per = |get: &dyn Fn(&ChannelFigures) -> Option<f64>| {
+            (0..meta.m).map(|i| opt(r.channels.get(i).and_then(get))).collect::<Vec<_>>()
+        };
+        f.extend(per(&|c| Some(c.tail_max_e)));
+        f.extend(per(&|c| Some(c.tail_rms_e)));
+        f.extend(per(&|c| Some(c.max_u)));
+        f.extend(per(&|c| c.settle_t));
+        f.push(r.steps.to_string());
+        f.push(format!("{:.3}", r.wall_ms));
+        writeln!(w, "{}", f.join(","))?;
+    }
+    if partial {
+        writeln!(w, "{PARTIAL} {} of the shard's runs were carried out before the sweep was interrupted", rows.len())?;
+    }
+    Ok(())
+}
+
+/// Splits one CSV line into fields (RFC 4180 quoting; no line breaks inside fields).
+fn split(line: &str) -> Result<Vec<String>, String> {
+    let mut out = Vec::new();
+    let mut cur = String::new();
+    let mut chars = line.chars().peekable();
+    let mut quoted = false;
+    while let Some(c) = chars.next() {
+        match (quoted, c) {
+            (false, ',') => out.push(std::mem::take(&mut cur)),
+            (false, '"') if cur.is_empty() => quoted = true,
+            (true, '"') if chars.peek() == Some(&'"') => {
+                chars.next();
+                cur.push('"');
+            }
+            (true, '"') => quoted = false,
+            (_, c) => cur.push(c),
+        }
+    }
+    if quoted {
+        return Err("a quoted field is not closed".into());
+    }
+    out.push(cur);
+    Ok(out)
+}
+
+/// A runs.csv read back.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunsFile {
+    pub rows: Vec<Row>,
+    pub partial: bool,
+}
+
+/// Reads a runs.csv written by [`write_runs_csv`] for `meta`; the message names the line.
+pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
+    let mut lines = text.lines().enumerate();
+    let expected = header(meta);
+    match lines.next() {
+        Some((_, h)) if split(h)? == expected => {}
+        _ => return Err(format!("line 1: expected the header {}", expected.join(","))),
+    }
+    let (g, m) = (meta.grid.len(), meta.m);
+    let mut rows = Vec::new();
+    let mut partial = false;
+    for (n, line) in lines {
+        let at = |msg: String| format!("line {}: {msg}", n + 1);
+        if line.starts_with(PARTIAL) {
+            partial = true;
+            continue;
+        }
+        let f = split(line).map_err(at)?;
+        if f.len() != expected.len() {
+            return Err(at(format!("expected {} fields, found {}", expected.len(), f.len())));
+        }
+        let num = |i: usize| {
+            f[i].parse::<f64>().map_err(|_| at(format!("{}: expected a number, found `{}`", expected[i], f[i])))
+        };
+        let int = |i: usize| {
+            f[i].parse::<u64>().map_err(|_| at(format!("{}: expected an integer, found `{}`", expected[i], f[i])))
+        };
+        let opt = |i: usize| if f[i].is_empty() { Ok(None) } else { num(i).map(Some) };
+        let outcome = match f[4 + g].as_str() {
+            "completed" => Outcome::Completed,
+            "diverged" => Outcome::Diverged,
+            "failed" => Outcome::Failed,
+            o => return Err(at(format!("outcome: expected completed, diverged or failed, found `{o}`"))),
+        };
+        let first = 6 + g;
+        let channels = if outcome == Outcome::Completed {
+            (0..m)
+                .map(|i| {
+                    Ok(ChannelFigures {
+                        tail_max_e: num(first + i)?,
+                        tail_rms_e: num(first + m + i)?,
+                        max_u: num(first + 2 * m + i)?,
+                        settle_t: opt(first + 3 * m + i)?,
+                    })
+                })
+                .collect::<Result<Vec<_>, String>>()?
+        } else {
+            Vec::new()
+        };
+        rows.push(Row {
+            run: int(0)? as usize,
+            point: int(1)? as usize,
+            draw: int(2)? as usize,
+            seed: int(3)?,
+            grid: f[4..4 + g].to_vec(),
+            outcome,
+            reason: f[5 + g].clone(),
+            channels,
+            steps: int(first + 4 * m)?,
+            wall_ms: num(first + 4 * m + 1)?,
+        });
+    }
+    Ok(RunsFile { rows, partial })
+}

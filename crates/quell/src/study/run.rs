@@ -1,0 +1,291 @@
+//! One run of a study, its row of figures, and the parallel sweep over many runs.
+
+use std::ops::ControlFlow;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use super::{Settle, Study};
+use crate::scenario::Scenario;
+use crate::sim::{self, RunSettings, SampledSettings, SimResult};
+
+/// SplitMix64's finalizer: a bijection of u64 that scrambles every bit.
+fn mix(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// The seed of Monte Carlo draw `draw` of a study with seed `study_seed`. It depends on nothing
+/// else, so a run can be carried out alone (on any machine, in any order), and draw d perturbs the
+/// plant the same way at every grid point (common random numbers: differences between grid points
+/// are the grid's, not the draws').
+pub fn run_seed(study_seed: u64, draw: usize) -> u64 {
+    mix(mix(study_seed).wrapping_add(0x9E37_79B9_7F4A_7C15u64.wrapping_mul(draw as u64 + 1)))
+}
+
+/// Everything one run needs, self-contained and serializable (for `quell.sweep_runs` and a
+/// cluster's workers): [`run_one`] carries it out.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunSpec {
+    /// Run index: point × draws + draw.
+    pub run: usize,
+    pub point: usize,
+    pub draw: usize,
+    /// The seed of the draw (0 without Monte Carlo).
+    pub seed: u64,
+    /// The grid point's values, (key as written, value).
+    pub grid: Vec<(String, toml::Value)>,
+    /// The run's scenario document: grid values and the draw's perturbations applied.
+    pub scenario: toml::Table,
+    pub settle: Settle,
+}
+
+/// How a run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    /// Reached t_end.
+    Completed,
+    /// A state left the divergence bound.
+    Diverged,
+    /// The run could not be carried out: its scenario or design is invalid (a draw or a combination
+    /// of grid values made it so) or the solver's step underflowed.
+    Failed,
+}
+
+impl Outcome {
+    /// The word in runs.csv.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Outcome::Completed => "completed",
+            Outcome::Diverged => "diverged",
+            Outcome::Failed => "failed",
+        }
+    }
+}
+
+/// Channel i's figures of a completed run.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ChannelFigures {
+    /// max |e_i| over the last 10 % of the horizon.
+    pub tail_max_e: f64,
+    /// RMS of e_i over the last 10 % of the horizon.
+    pub tail_rms_e: f64,
+    /// max |u_i| over the run.
+    pub max_u: f64,
+    /// First recorded t after which |e_i| stays within the settling band ([`Settle`]); `None` if
+    /// the last sample is outside it.
+    pub settle_t: Option<f64>,
+}
+
+/// One row of runs.csv.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Row {
+    pub run: usize,
+    pub point: usize,
+    pub draw: usize,
+    pub seed: u64,
+    /// The grid values as written in the study file (TOML syntax).
+    pub grid: Vec<String>,
+    pub outcome: Outcome,
+    /// Why a run diverged or failed; empty when it completed.
+    pub reason: String,
+    /// One per channel when completed, else empty.
+    pub channels: Vec<ChannelFigures>,
+    /// Solver steps (controller steps of a sampled-data run).
+    pub steps: u64,
+    /// Wall time of the run in ms, to the microsecond.
+    pub wall_ms: f64,
+}
+
+/// settle_t of one channel from its samples e(t_k), g(t_k): the first t_k after which
+/// |e| ≤ max(relative · max_k |g(t_k)|, absolute) at every sample.
+fn settle_time(t: &[f64], e: &[f64], g: &[f64], s: &Settle) -> Option<f64> {
+    let band = (s.relative * g.iter().fold(0.0f64, |a, v| a.max(v.abs()))).max(s.absolute);
+    match e.iter().rposition(|v| !(v.abs() <= band)) {
+        None => t.first().copied(),
+        Some(k) => t.get(k + 1).copied(),
+    }
+}
+
+/// The figures of each channel of a completed run.
+pub(crate) fn figures(r: &SimResult, settle: &Settle) -> Vec<ChannelFigures> {
+    r.summary()
+        .iter()
+        .enumerate()
+        .map(|(i, c)| ChannelFigures {
+            tail_max_e: c.tail_max_abs_e,
+            tail_rms_e: c.tail_rms_e,
+            max_u: c.max_abs_u,
+            settle_t: {
+                let (e, g): (Vec<f64>, Vec<f64>) = r.column(&r.e, r.m, i).zip(r.column(&r.g, r.m, i)).unzip();
+                settle_time(&r.t, &e, &g, settle)
+            },
+        })
+        .collect()
+}
+
+/// Simulates a scenario as its `[simulation]` says (continuous, or sampled-data with a
+/// `sample_time`); `Err` when it cannot start.
+pub(crate) fn simulate(s: &Scenario, stop: &dyn Fn() -> bool) -> Result<SimResult, String> {
+    let design = s.design().map_err(|e| e.to_string())?;
+    let sim = &s.simulation;
+    let progress = |_t: f64| if stop() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
+    match sim.sample_time {
+        None => {
+            let settings = RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol);
+            Ok(sim::simulate(&design, &s.reference, &s.disturbance, &settings, progress))
+        }
+        Some(sample_time) => {
+            let settings = SampledSettings {
+                t_end: sim.t_end,
+                output_step: sim.output_step,
+                sample_time,
+                noise: s.noise.clone(),
+                divergence_bound: RunSettings::new(1.0, 1.0, 1.0, 1.0).divergence_bound,
+            };
+            sim::simulate_sampled(&design, &s.reference, &s.disturbance, &settings, progress).map_err(|e| e.to_string())
+        }
+    }
+}
+
+/// Carries out one run; `None` when `stop` interrupted it.
+fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
+    let started = Instant::now();
+    let mut row = Row {
+        run: spec.run,
+        point: spec.point,
+        draw: spec.draw,
+        seed: spec.seed,
+        grid: spec.grid.iter().map(|(_, v)| v.to_string()).collect(),
+        outcome: Outcome::Failed,
+        reason: String::new(),
+        channels: Vec::new(),
+        steps: 0,
+        wall_ms: 0.0,
+    };
+    let result = Scenario::from_document(&spec.scenario).map_err(|e| e.to_string()).and_then(|s| simulate(&s, stop));
+    match result {
+        Err(reason) => row.reason = reason,
+        Ok(r) => {
+            row.steps = r.stats.steps as u64;
+            match r.outcome.as_ref().unwrap_or(&sim::Outcome::Completed) {
+                sim::Outcome::Completed => {
+                    row.outcome = Outcome::Completed;
+                    row.channels = figures(&r, &spec.settle);
+                }
+                sim::Outcome::Diverged { t, signal, value } => {
+                    row.outcome = Outcome::Diverged;
+                    row.reason = format!("{signal} = {value:e} at t = {t:.4}");
+                }
+                sim::Outcome::StepSizeTooSmall { t } => {
+                    row.reason = format!("the solver's step size underflowed at t = {t:.6}");
+                }
+                sim::Outcome::Interrupted { .. } => return None,
+            }
+        }
+    }
+    // Whole microseconds, as runs.csv writes them, so a row reads back exactly.
+    row.wall_ms = started.elapsed().as_micros() as f64 / 1e3;
+    Some(row)
+}
+
+/// Carries out one run: its row (a diverging or invalid run is a row too, never an error).
+pub fn run_one(spec: &RunSpec) -> Row {
+    execute(spec, &|| false).expect("a run without a stop signal is never interrupted")
+}
+
+/// Runs with index ≡ `index` (mod `count`): machine `index` of `count`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Shard {
+    pub index: usize,
+    pub count: usize,
+}
+
+impl Shard {
+    /// Every run.
+    pub const ALL: Shard = Shard { index: 0, count: 1 };
+
+    /// Parses `I/N` with 0 ≤ I < N; the message says what is wrong.
+    pub fn parse(text: &str) -> Result<Shard, String> {
+        let bad = || format!("expected I/N with 0 ≤ I < N (machine I of N, counting from 0), e.g. 0/4; found `{text}`");
+        let (i, n) = text.split_once('/').ok_or_else(bad)?;
+        let (index, count) =
+            (i.trim().parse::<usize>().map_err(|_| bad())?, n.trim().parse::<usize>().map_err(|_| bad())?);
+        if count == 0 {
+            return Err(format!("expected N ≥ 1 shards, found `{text}`"));
+        }
+        if index >= count {
+            return Err(format!(
+                "shard index {index} ≥ N = {count}: shards count from 0, so the last is {}/{count}",
+                count - 1
+            ));
+        }
+        Ok(Shard { index, count })
+    }
+
+    /// The run indices of this shard among `runs`.
+    pub fn runs(self, runs: usize) -> impl Iterator<Item = usize> {
+        (self.index..runs).step_by(self.count)
+    }
+
+    /// How many of `runs` this shard holds.
+    pub fn len(self, runs: usize) -> usize {
+        runs.saturating_sub(self.index).div_ceil(self.count)
+    }
+
+    /// True when this shard holds none of `runs`.
+    pub fn is_empty(self, runs: usize) -> bool {
+        self.len(runs) == 0
+    }
+}
+
+/// How [`sweep`] runs.
+#[derive(Clone, Copy)]
+pub struct SweepOptions<'a> {
+    pub shard: Shard,
+    /// Set (e.g. by Ctrl-C) to stop: runs under way are abandoned, no new one starts.
+    pub stop: Option<&'a AtomicBool>,
+    /// Called after each run (from the worker threads).
+    pub on_row: Option<&'a (dyn Fn(&Row) + Sync)>,
+}
+
+impl Default for SweepOptions<'_> {
+    fn default() -> Self {
+        SweepOptions { shard: Shard::ALL, stop: None, on_row: None }
+    }
+}
+
+/// The rows of a sweep, in run order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sweep {
+    pub rows: Vec<Row>,
+    /// True when stopped before every run of the shard was carried out.
+    pub partial: bool,
+}
+
+/// Carries out the shard's runs in parallel on rayon's current pool (set its size with
+/// `rayon::ThreadPool::install`), every run from its own [`RunSpec`].
+pub fn sweep(study: &Study, opts: &SweepOptions<'_>) -> Sweep {
+    let runs = usize::try_from(study.len()).unwrap_or(usize::MAX);
+    let stopped = || opts.stop.is_some_and(|s| s.load(Ordering::Relaxed));
+    let indices: Vec<usize> = opts.shard.runs(runs).collect();
+    let rows: Vec<Row> = indices
+        .into_par_iter()
+        .filter_map(|i| {
+            if stopped() {
+                return None;
+            }
+            let row = execute(&study.spec(i), &stopped)?;
+            if let Some(f) = opts.on_row {
+                f(&row);
+            }
+            Some(row)
+        })
+        .collect();
+    let partial = rows.len() < opts.shard.len(runs);
+    Sweep { rows, partial }
+}

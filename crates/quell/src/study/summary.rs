@@ -1,0 +1,196 @@
+//! Aggregation per grid point: quantiles of each channel's figures over the draws, and the
+//! fractions that diverged or failed (summary.json).
+
+use serde::{Deserialize, Serialize};
+
+use super::run::{Outcome, Row, Shard};
+use super::Study;
+
+/// The quantile levels of summary.json and of the plots' bands.
+pub const QUANTILES: [f64; 5] = [0.05, 0.25, 0.5, 0.75, 0.95];
+
+/// Quantile `p` of sorted data by linear interpolation between order statistics (Hyndman and Fan's
+/// type 7, the default of NumPy and R): h = (n − 1) p, x[⌊h⌋] + (h − ⌊h⌋)(x[⌊h⌋+1] − x[⌊h⌋]).
+/// `None` for no data.
+pub fn quantile(sorted: &[f64], p: f64) -> Option<f64> {
+    let n = sorted.len();
+    if n == 0 {
+        return None;
+    }
+    let h = (n - 1) as f64 * p.clamp(0.0, 1.0);
+    let lo = h.floor() as usize;
+    let hi = (lo + 1).min(n - 1);
+    let (a, b) = (sorted[lo], sorted[hi]);
+    // Equal neighbours (also both +∞) give the value itself, never ∞ − ∞.
+    Some(if a == b { a } else { a + (h - lo as f64) * (b - a) })
+}
+
+/// Quantiles of one figure over a grid point's completed runs. `null` in JSON where there is no
+/// data, or where a settling time's quantile falls among runs that never settled.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Quantiles {
+    pub min: Option<f64>,
+    pub p05: Option<f64>,
+    pub p25: Option<f64>,
+    pub p50: Option<f64>,
+    pub p75: Option<f64>,
+    pub p95: Option<f64>,
+    pub max: Option<f64>,
+}
+
+impl Quantiles {
+    /// Of `values` (+∞ counts as "never", shown as `None`).
+    pub fn of(mut values: Vec<f64>) -> Quantiles {
+        values.sort_by(f64::total_cmp);
+        let q = |p| quantile(&values, p).filter(|v| v.is_finite());
+        Quantiles { min: q(0.0), p05: q(0.05), p25: q(0.25), p50: q(0.5), p75: q(0.75), p95: q(0.95), max: q(1.0) }
+    }
+
+    /// The value at level `p` of [`QUANTILES`] (or 0 / 1 for min / max).
+    pub fn at(&self, p: f64) -> Option<f64> {
+        match p {
+            p if p <= 0.0 => self.min,
+            p if p >= 1.0 => self.max,
+            p if (p - 0.05).abs() < 1e-12 => self.p05,
+            p if (p - 0.25).abs() < 1e-12 => self.p25,
+            p if (p - 0.5).abs() < 1e-12 => self.p50,
+            p if (p - 0.75).abs() < 1e-12 => self.p75,
+            p if (p - 0.95).abs() < 1e-12 => self.p95,
+            _ => None,
+        }
+    }
+}
+
+/// One channel's figures at a grid point.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ChannelQuantiles {
+    pub tail_max_e: Quantiles,
+    pub tail_rms_e: Quantiles,
+    pub max_u: Quantiles,
+    pub settle_t: Quantiles,
+    /// Of the completed runs, the fraction that never settled.
+    pub never_settled: f64,
+}
+
+/// One grid point of summary.json.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PointSummary {
+    pub point: usize,
+    /// The grid values, as written.
+    pub grid: Vec<String>,
+    /// Runs of this point carried out (all draws, unless the sweep was sharded or interrupted).
+    pub runs: usize,
+    pub completed: usize,
+    pub diverged_fraction: f64,
+    pub failed_fraction: f64,
+    pub channels: Vec<ChannelQuantiles>,
+}
+
+/// One grid axis in summary.json.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AxisMeta {
+    pub key: String,
+    pub values: Vec<String>,
+}
+
+/// What identifies a study's sweep: enough to merge shards and plot without the study file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StudyMeta {
+    /// [`Study::fingerprint`] in hex.
+    pub fingerprint: String,
+    pub scenario: String,
+    pub grid: Vec<AxisMeta>,
+    /// Draws per grid point.
+    pub draws: usize,
+    pub seed: Option<u64>,
+    /// Runs of the whole study.
+    pub runs: u64,
+    /// Channels.
+    pub m: usize,
+    /// Whether some run's true plant differs from the design model (`[truth]`, or a grid or draw
+    /// on a `truth.` key).
+    pub truth_differs: bool,
+    pub shard: Shard,
+}
+
+impl StudyMeta {
+    /// The study's identity as swept by `shard`.
+    pub fn new(study: &Study, shard: Shard) -> StudyMeta {
+        StudyMeta {
+            fingerprint: format!("{:016x}", study.fingerprint()),
+            scenario: study.scenario_source.clone(),
+            grid: study
+                .grid
+                .iter()
+                .map(|a| AxisMeta { key: a.key.clone(), values: a.values.iter().map(|v| v.to_string()).collect() })
+                .collect(),
+            draws: study.draws(),
+            seed: study.monte_carlo.as_ref().map(|mc| mc.seed),
+            runs: study.len(),
+            m: study.m,
+            truth_differs: study.truth_differs(),
+            shard,
+        }
+    }
+
+    /// Grid points.
+    pub fn points(&self) -> usize {
+        self.grid.iter().map(|a| a.values.len()).product()
+    }
+}
+
+/// summary.json.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Summary {
+    pub study: StudyMeta,
+    /// True when the sweep was interrupted: not every run of the shard is in runs.csv.
+    pub partial: bool,
+    pub runs_done: usize,
+    pub points: Vec<PointSummary>,
+}
+
+impl Summary {
+    /// Aggregates `rows` (any order) per grid point.
+    pub fn new(study: StudyMeta, rows: &[Row], partial: bool) -> Summary {
+        let mut by_point: Vec<Vec<&Row>> = vec![Vec::new(); study.points()];
+        for r in rows {
+            if let Some(p) = by_point.get_mut(r.point) {
+                p.push(r);
+            }
+        }
+        let points = by_point
+            .iter()
+            .enumerate()
+            .filter(|(_, rs)| !rs.is_empty())
+            .map(|(point, rs)| {
+                let done: Vec<&Row> = rs.iter().copied().filter(|r| r.outcome == Outcome::Completed).collect();
+                let frac = |o: Outcome| rs.iter().filter(|r| r.outcome == o).count() as f64 / rs.len() as f64;
+                let channels = (0..study.m)
+                    .map(|i| {
+                        let col = |f: &dyn Fn(&super::ChannelFigures) -> f64| {
+                            Quantiles::of(done.iter().map(|r| f(&r.channels[i])).collect())
+                        };
+                        let never = done.iter().filter(|r| r.channels[i].settle_t.is_none()).count();
+                        ChannelQuantiles {
+                            tail_max_e: col(&|c| c.tail_max_e),
+                            tail_rms_e: col(&|c| c.tail_rms_e),
+                            max_u: col(&|c| c.max_u),
+                            settle_t: col(&|c| c.settle_t.unwrap_or(f64::INFINITY)),
+                            never_settled: if done.is_empty() { 0.0 } else { never as f64 / done.len() as f64 },
+                        }
+                    })
+                    .collect();
+                PointSummary {
+                    point,
+                    grid: rs[0].grid.clone(),
+                    runs: rs.len(),
+                    completed: done.len(),
+                    diverged_fraction: frac(Outcome::Diverged),
+                    failed_fraction: frac(Outcome::Failed),
+                    channels,
+                }
+            })
+            .collect();
+        Summary { study, partial, runs_done: rows.len(), points }
+    }
+}

@@ -1,0 +1,179 @@
+//! Study-file parsing: every mistake names its key; expansion, seeds, draws and quantiles.
+
+use super::*;
+
+fn study(text: &str) -> Result<Study, StudyError> {
+    Study::from_toml(text, None)
+}
+
+/// The error of a study with `text`, as `key: message`.
+fn error(text: &str) -> String {
+    study(text).expect_err("the study must be refused").to_string()
+}
+
+#[test]
+fn paper_example_by_default() {
+    let s = study("").unwrap();
+    assert_eq!((s.points(), s.draws(), s.len(), s.m), (1, 1, 1, 2));
+    assert_eq!(s.scenario_source, "the paper's example");
+    assert!(!s.truth_differs());
+}
+
+#[test]
+fn grid_is_a_product_with_the_first_axis_slowest() {
+    let s = study("[grid]\n\"design.mu[0]\" = [5.0, 10.0, 20.0]\n\"design.beta\" = [1.0, 2.0]\n").unwrap();
+    assert_eq!(s.points(), 6);
+    let idx: Vec<Vec<usize>> = (0..6).map(|p| s.grid_index(p)).collect();
+    assert_eq!(idx, [[0, 0], [0, 1], [1, 0], [1, 1], [2, 0], [2, 1]]);
+    let spec = s.spec(3);
+    assert_eq!(spec.scenario["design"]["mu"][0].as_float(), Some(10.0));
+    assert_eq!(spec.scenario["design"]["beta"].as_float(), Some(2.0));
+    assert_eq!(spec.scenario["design"]["mu"][1].as_float(), Some(30.0));
+}
+
+#[test]
+fn whole_vectors_and_matrices_are_grid_keys() {
+    let s = study("[grid]\n\"design.mu\" = [[20, 30], [25, 25]]\n\"plant.x0\" = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]]\n")
+        .unwrap();
+    assert_eq!(s.points(), 4);
+    assert_eq!(s.spec(3).scenario["plant"]["x0"][0].as_float(), Some(0.1));
+    assert_eq!(s.spec(3).grid[0].1.to_string(), "[25, 25]");
+}
+
+#[test]
+fn study_mistakes_name_their_key() {
+    let cases: &[(&str, &str)] = &[
+        ("sceanrio = \"x.toml\"", "sceanrio: unknown key; valid keys at the top level"),
+        ("scenario = 3", "scenario: expected the scenario file's path (a string), found an integer"),
+        ("scenario = \"/nonexistent/x.toml\"", "scenario: cannot read the scenario file /nonexistent/x.toml"),
+        ("[grid]\n\"design.nu\" = [1.0]", "grid.\"design.nu\": design.nu is not a value of the scenario (design has no nu)"),
+        ("[grid]\n\"design.mu[2]\" = [1.0]", "grid.\"design.mu[2]\": design.mu[2] is not a value of the scenario (design.mu has no [2] (it has 2 entries))"),
+        ("[grid]\n\"design.mu\" = [[1.0, 2.0, 3.0]]", "grid.\"design.mu\"[0]: expected a vector of 2 numbers (the shape of design.mu in the paper's example), found a vector of 3 numbers"),
+        ("[grid]\n\"plant.A\" = [[[1.0]]]", "grid.\"plant.A\"[0]: expected a 3×3 matrix"),
+        ("[grid]\n\"design.mu[0]\" = []", "grid.\"design.mu[0]\": expected a non-empty list of values, found an empty array"),
+        ("[grid]\n\"design.mu[0]\" = 5.0", "grid.\"design.mu[0]\": expected a list of values (e.g. [5.0, 10.0]), found a floating-point number"),
+        ("[grid]\n\"design.mu[0]\" = [5.0, \"x\"]", "grid.\"design.mu[0]\"[1]: expected a number (the shape of design.mu[0]), found a string"),
+        ("[grid]\n\"design.mu[0]\" = [5.0, -1.0]", "grid.\"design.mu[0]\"[1]: with design.mu[0] = -1.0 the scenario is not valid: design.mu[0]"),
+        ("[grid]\n\"name\" = [1.0]", "grid.\"name\": name in the paper's example is a string, not a number, vector or matrix"),
+        ("[grid]\n\"design.mu[x]\" = [1.0]", "grid.\"design.mu[x]\": `design.mu[x]` is not a key path"),
+        ("[monte_carlo]\nseed = 1", "monte_carlo.runs: missing"),
+        ("[monte_carlo]\nruns = 0", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found 0"),
+        ("[monte_carlo]\nruns = -3", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found -3"),
+        ("[monte_carlo]\nruns = 2\nseed = 1.5", "monte_carlo.seed: expected a seed (an integer ≥ 0), found a floating-point number"),
+        ("[monte_carlo]\nruns = 2\n\"plant.A\" = { gaussian = 0.1 }", "monte_carlo.\"plant.A\".gaussian: unknown distribution; expected one of { relative = r }"),
+        ("[monte_carlo]\nruns = 2\n\"plant.A\" = { relative = -0.1 }", "monte_carlo.\"plant.A\".relative: expected a spread ≥ 0, found -0.1"),
+        ("[monte_carlo]\nruns = 2\n\"plant.A\" = 0.1", "monte_carlo.\"plant.A\": expected a distribution"),
+        ("[monte_carlo]\nruns = 2\n\"plant.A\" = { relative = 0.1, uniform = 0.1 }", "monte_carlo.\"plant.A\": expected exactly one distribution"),
+        ("[monte_carlo]\nruns = 2\n\"plant.E\" = { relative = 0.1 }", "monte_carlo.\"plant.E\": plant.E is not a value of the scenario (plant has no E)"),
+        ("[simulation]\nt_end = -1.0", "simulation.t_end: expected a final time > 0, found -1"),
+        ("[simulation]\nsteps = 3", "simulation.steps: unknown key; valid keys in [simulation]"),
+        ("[settle]\nrelative = -0.1", "settle.relative: expected a band ≥ 0, found -0.1"),
+        ("[settle]\nrelative = 0.0", "settle: both settle.relative and settle.absolute are 0"),
+        ("[settle]\nband = 0.1", "settle.band: unknown key; valid keys in [settle]: relative, absolute"),
+        ("[tune]\nobjective = \"settle_t\"", "tune.mu: missing; required: the search interval"),
+        ("[tune]\nmu = [[1.0, 2.0]]", "tune.mu: expected 2 entries (one per channel), found 1"),
+        ("[tune]\nmu = [0.0, 10.0]", "tune.mu[0]: expected 0 < μ_min ≤ μ_max (the search is on a log scale), found [0, 10]"),
+        ("[tune]\nmu = [1.0, 10.0]\nobjective = \"fast\"", "tune.objective: expected \"settle_t\", \"tail_rms_e\" or \"tail_max_e\", found \"fast\""),
+        ("[tune]\nmu = [1.0, 10.0]\nmax_u = [1.0, -2.0]", "tune.max_u[1]: expected a limit on max |u_i| > 0, found -2"),
+        ("[tune]\nmu = [1.0, 10.0]\npoints = 1", "tune.points: expected an integer in [2, 10000], found 1"),
+        ("[grid", "syntax: line 1: "),
+    ];
+    for (text, expected) in cases {
+        let got = error(text);
+        assert!(got.starts_with(expected), "study:\n{text}\nexpected: {expected}\ngot:      {got}");
+    }
+}
+
+#[test]
+fn truth_defaults_to_the_plant_and_a_draw_on_it_differs() {
+    let s = study("[monte_carlo]\nruns = 2\n\"plant.delays\" = { uniform = 0.0 }\n").unwrap();
+    assert!(!s.truth_differs());
+    assert_eq!(s.spec(1).scenario["plant"]["delays"][1].as_float(), Some(3.0));
+}
+
+/// Draw d's seed depends on the study seed and d only: the same at every grid point, and the
+/// specs do not depend on the order they are built in.
+#[test]
+fn seeds_come_from_the_study_seed_and_the_draw() {
+    let s = study("[grid]\n\"design.mu[0]\" = [5.0, 10.0]\n[monte_carlo]\nruns = 3\nseed = 7\n\"design.beta\" = { relative = 0.1 }\n").unwrap();
+    assert_eq!(s.len(), 6);
+    let later = s.spec(5);
+    let specs: Vec<RunSpec> = s.specs().collect();
+    assert_eq!(specs[5], later);
+    for d in 0..3 {
+        assert_eq!(specs[d].seed, run_seed(7, d));
+        assert_eq!(specs[d].seed, specs[3 + d].seed);
+        assert_eq!(specs[d].scenario["design"]["beta"], specs[3 + d].scenario["design"]["beta"]);
+    }
+    assert_ne!(specs[0].seed, specs[1].seed);
+    assert_ne!(run_seed(7, 0), run_seed(8, 0));
+}
+
+/// The draws follow their laws: sample moments of 4,000 draws of β = 1 within 5 standard errors
+/// (mean: σ/√N; variance: σ²√(2/N) for the normal, and for the uniform σ² √((9/5 − 1)/N)).
+#[test]
+fn draws_follow_their_laws() {
+    let n = 4000;
+    let moments = |law: &str| {
+        let s = study(&format!("[monte_carlo]\nruns = {n}\nseed = 3\n\"design.beta\" = {law}\n")).unwrap();
+        let xs: Vec<f64> = (0..n).map(|i| s.spec(i).scenario["design"]["beta"].as_float().unwrap()).collect();
+        let mean = xs.iter().sum::<f64>() / n as f64;
+        let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+        (mean, var, xs)
+    };
+    let nf = n as f64;
+    let (mean, var, _) = moments("{ relative = 0.1 }");
+    assert!((mean - 1.0).abs() < 5.0 * 0.1 / nf.sqrt(), "mean {mean}");
+    assert!((var - 0.01).abs() < 5.0 * 0.01 * (2.0 / nf).sqrt(), "variance {var}");
+    let (mean, var, _) = moments("{ normal = 0.2 }");
+    assert!((mean - 1.0).abs() < 5.0 * 0.2 / nf.sqrt(), "mean {mean}");
+    assert!((var - 0.04).abs() < 5.0 * 0.04 * (2.0 / nf).sqrt(), "variance {var}");
+    let (mean, var, xs) = moments("{ uniform = 0.3 }");
+    let v: f64 = 0.09 / 3.0;
+    assert!((mean - 1.0).abs() < 5.0 * v.sqrt() / nf.sqrt(), "mean {mean}");
+    assert!((var - v).abs() < 5.0 * v * (0.8 / nf).sqrt(), "variance {var}");
+    assert!(xs.iter().all(|x| (x - 1.0).abs() <= 0.3));
+}
+
+/// Every entry of a matrix is perturbed on its own.
+#[test]
+fn a_relative_draw_perturbs_every_entry() {
+    let s = study("[monte_carlo]\nruns = 1\n\"plant.A\" = { relative = 0.05 }\n").unwrap();
+    let a = &s.spec(0).scenario["plant"]["A"];
+    let nominal = [[-3.2, -1.7, -3.0], [2.8, 1.3, 4.0], [0.3, 0.3, -0.5]];
+    for (r, row) in nominal.iter().enumerate() {
+        for (c, &x) in row.iter().enumerate() {
+            let y = a[r][c].as_float().unwrap();
+            assert!(y != x && (y / x - 1.0).abs() < 0.05 * 6.0, "A[{r}][{c}] = {y}");
+        }
+    }
+}
+
+/// NumPy's default quantile (method "linear"): numpy.quantile([1, 2, 3, 4], [0, .25, .5, .9, 1])
+/// = [1, 1.75, 2.5, 3.7, 4]; numpy.quantile([3, 1, 2], .5) = 2.
+#[test]
+fn quantiles_match_numpy() {
+    let x = [1.0, 2.0, 3.0, 4.0];
+    let q: Vec<f64> = [0.0, 0.25, 0.5, 0.9, 1.0].iter().map(|&p| quantile(&x, p).unwrap()).collect();
+    for (a, b) in q.iter().zip([1.0, 1.75, 2.5, 3.7, 4.0]) {
+        assert!((a - b).abs() < 1e-15, "{q:?}");
+    }
+    assert_eq!(Quantiles::of(vec![3.0, 1.0, 2.0]).p50, Some(2.0));
+    assert_eq!(quantile(&[], 0.5), None);
+    let settle = Quantiles::of(vec![1.0, 2.0, f64::INFINITY, f64::INFINITY]);
+    assert_eq!((settle.p25, settle.p50, settle.max), (Some(1.75), None, None));
+}
+
+#[test]
+fn shards_partition_the_runs() {
+    assert_eq!(Shard::parse("1/3").unwrap(), Shard { index: 1, count: 3 });
+    assert!(Shard::parse("3/3").unwrap_err().starts_with("shard index 3 ≥ N = 3"));
+    assert!(Shard::parse("0/0").unwrap_err().starts_with("expected N ≥ 1"));
+    assert!(Shard::parse("a/2").is_err() && Shard::parse("2").is_err());
+    for runs in [0, 1, 7, 10] {
+        let mut all: Vec<usize> = (0..3).flat_map(|i| Shard { index: i, count: 3 }.runs(runs)).collect();
+        assert_eq!((0..3).map(|i| Shard { index: i, count: 3 }.len(runs)).sum::<usize>(), runs);
+        all.sort();
+        assert_eq!(all, (0..runs).collect::<Vec<_>>());
+    }
+}

@@ -1,0 +1,257 @@
+//! Per-channel tuning of μ (`quell tune`): the channels are decoupled (Proposition 1), so μ is
+//! tuned by m one-dimensional searches over μ_i, the others held at the scenario's values, and the
+//! joint run with every tuned μ_i is checked to reproduce each channel's figure.
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use super::run::{run_one, ChannelFigures, Outcome, Row, RunSpec};
+use super::{err, kind, number, Study, StudyError};
+use crate::scenario::Scenario;
+
+/// What a search minimizes for channel i.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Objective {
+    /// settle_t_i (a run that never settles scores +∞).
+    SettleT,
+    /// RMS of e_i over the last 10 % of the horizon.
+    TailRmsE,
+    /// max |e_i| over the last 10 % of the horizon.
+    TailMaxE,
+}
+
+impl Objective {
+    fn of(self, c: &ChannelFigures) -> f64 {
+        match self {
+            Objective::SettleT => c.settle_t.unwrap_or(f64::INFINITY),
+            Objective::TailRmsE => c.tail_rms_e,
+            Objective::TailMaxE => c.tail_max_e,
+        }
+    }
+}
+
+/// `[tune]` of a study file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TuneSpec {
+    pub objective: Objective,
+    /// Per channel, [μ_min, μ_max] with 0 < μ_min ≤ μ_max.
+    pub bounds: Vec<[f64; 2]>,
+    /// Per channel, the limit on max |u_i| (+∞ without one).
+    pub max_u: Vec<f64>,
+    /// Log-spaced values per channel before refining (≥ 2).
+    pub points: usize,
+    /// Golden-section steps around the best of them.
+    pub refine: usize,
+}
+
+const TUNE_KEYS: &[&str] = &["objective", "mu", "max_u", "points", "refine"];
+const OBJECTIVES: &str = "\"settle_t\", \"tail_rms_e\" or \"tail_max_e\"";
+
+impl TuneSpec {
+    pub(super) fn parse(t: &toml::Table, s: &Scenario) -> Result<TuneSpec, StudyError> {
+        super::unknown_keys("tune", t, TUNE_KEYS)?;
+        let m = s.plant.m();
+        let objective = match t.get("objective") {
+            None => Objective::SettleT,
+            Some(toml::Value::String(o)) => match o.as_str() {
+                "settle_t" => Objective::SettleT,
+                "tail_rms_e" => Objective::TailRmsE,
+                "tail_max_e" => Objective::TailMaxE,
+                _ => return Err(err("tune.objective", format!("expected {OBJECTIVES}, found \"{o}\""))),
+            },
+            Some(v) => return Err(err("tune.objective", format!("expected {OBJECTIVES}, found {}", kind(v)))),
+        };
+        let per_channel = |key: &str, v: &toml::Value| -> Result<Vec<toml::Value>, StudyError> {
+            match v {
+                toml::Value::Array(a) if a.len() == m => Ok(a.clone()),
+                toml::Value::Array(a) => {
+                    Err(err(key, format!("expected {m} entries (one per channel), found {}", a.len())))
+                }
+                v => Ok(vec![v.clone(); m]),
+            }
+        };
+        let bounds = match t.get("mu") {
+            None => return Err(err("tune.mu", "missing; required: the search interval [μ_min, μ_max] of every channel, e.g. [[1.0, 200.0], [1.0, 200.0]] (or one [μ_min, μ_max] for all)")),
+            Some(v) => {
+                // One [lo, hi] for every channel, or one per channel.
+                let list = match v {
+                    toml::Value::Array(a) if a.len() == 2 && a.iter().all(|x| x.is_integer() || x.is_float()) => vec![v.clone(); m],
+                    _ => per_channel("tune.mu", v)?,
+                };
+                list.iter()
+                    .enumerate()
+                    .map(|(i, b)| {
+                        let key = format!("tune.mu[{i}]");
+                        let pair = b.as_array().filter(|a| a.len() == 2).ok_or_else(|| {
+                            err(&key, format!("expected [μ_min, μ_max], found {}", kind(b)))
+                        })?;
+                        let (lo, hi) = (number(&key, &pair[0], "a number")?, number(&key, &pair[1], "a number")?);
+                        if !(lo > 0.0 && lo <= hi) {
+                            return Err(err(key, format!("expected 0 < μ_min ≤ μ_max (the search is on a log scale), found [{lo}, {hi}]")));
+                        }
+                        Ok([lo, hi])
+                    })
+                    .collect::<Result<Vec<_>, _>>()?
+            }
+        };
+        let max_u = match t.get("max_u") {
+            None => vec![f64::INFINITY; m],
+            Some(v) => per_channel("tune.max_u", v)?
+                .iter()
+                .enumerate()
+                .map(|(i, x)| {
+                    let key = format!("tune.max_u[{i}]");
+                    let x = number(&key, x, "a limit on max |u_i| > 0")?;
+                    if x > 0.0 {
+                        Ok(x)
+                    } else {
+                        Err(err(key, format!("expected a limit on max |u_i| > 0, found {x}")))
+                    }
+                })
+                .collect::<Result<Vec<_>, _>>()?,
+        };
+        let count = |key: &str, d: usize, min: u64| -> Result<usize, StudyError> {
+            match t.get(key) {
+                None => Ok(d),
+                Some(toml::Value::Integer(i)) if *i >= min as i64 && *i <= 10_000 => Ok(*i as usize),
+                Some(v) => Err(err(format!("tune.{key}"), format!("expected an integer in [{min}, 10000], found {v}"))),
+            }
+        };
+        Ok(TuneSpec { objective, bounds, max_u, points: count("points", 13, 2)?, refine: count("refine", 8, 0)? })
+    }
+}
+
+/// One evaluation of a channel's search.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TunePoint {
+    pub mu: f64,
+    /// The objective, `None` when the run did not complete, never settled, or broke the limit.
+    pub objective: Option<f64>,
+    pub outcome: Outcome,
+    /// Channel i's figures (when completed).
+    pub figures: Option<ChannelFigures>,
+}
+
+/// Channel i's search: every evaluation in order of μ, and the chosen one.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TuneCurve {
+    pub channel: usize,
+    pub curve: Vec<TunePoint>,
+    /// The best feasible point, `None` if no μ in the bounds was feasible.
+    pub chosen: Option<TunePoint>,
+}
+
+/// The tuned μ, each channel's curve, and the joint run's check.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TuneResult {
+    pub objective: Objective,
+    pub channels: Vec<TuneCurve>,
+    /// The tuned μ (the scenario's μ_i where a channel had no feasible point).
+    pub mu: Vec<f64>,
+    /// The run with every μ_i tuned at once.
+    pub joint: Row,
+    /// Per channel: the joint run's objective minus the search's, and whether it is within the
+    /// reproduction tolerance ([`TuneResult::reproduced`]).
+    pub joint_difference: Vec<Option<f64>>,
+    pub reproduced: Vec<bool>,
+}
+
+/// The run of `study`'s scenario (no grid, no draws) with μ = `mu`.
+fn run_with(study: &Study, mu: &[f64]) -> Row {
+    let mut doc = study.base().clone();
+    let mu_value = toml::Value::Array(mu.iter().map(|&x| toml::Value::Float(x)).collect());
+    super::KeyPath::parse("design.mu").expect("a key path").set(&mut doc, mu_value).expect("a scenario has design.mu");
+    run_one(&RunSpec { run: 0, point: 0, draw: 0, seed: 0, grid: Vec::new(), scenario: doc, settle: study.settle })
+}
+
+/// How close the joint run's objective must be to the search's: relative 1e-3 of the figure plus
+/// 1e-9 absolute for error figures; one output step for settling times (they are read off the
+/// recorded samples).
+fn tolerance(obj: Objective, value: f64, output_step: f64) -> f64 {
+    match obj {
+        Objective::SettleT => output_step * (1.0 + 1e-9),
+        _ => 1e-3 * value.abs() + 1e-9,
+    }
+}
+
+/// Runs the m searches of `study.tune` (in parallel) and the joint check.
+pub fn tune(study: &Study) -> Result<TuneResult, StudyError> {
+    let spec = study
+        .tune
+        .as_ref()
+        .ok_or_else(|| err("tune", "missing; `quell tune` needs a [tune] table (objective, mu bounds, max_u)"))?;
+    let scenario = Scenario::from_document(study.base()).map_err(|e| err("scenario", e.to_string()))?;
+    let base_mu = scenario.design.mu.clone();
+    let m = base_mu.len();
+    let score = |i: usize, mu_i: f64| -> TunePoint {
+        let mut mu = base_mu.clone();
+        mu[i] = mu_i;
+        let row = run_with(study, &mu);
+        let figures = row.channels.get(i).copied();
+        let objective =
+            figures.filter(|c| c.max_u <= spec.max_u[i]).map(|c| spec.objective.of(&c)).filter(|v| v.is_finite());
+        TunePoint { mu: mu_i, objective, outcome: row.outcome, figures }
+    };
+    let key = |p: &TunePoint| p.objective.unwrap_or(f64::INFINITY);
+    let log_grid = |i: usize| {
+        let [lo, hi] = spec.bounds[i];
+        (0..spec.points).map(move |k| lo * (hi / lo).powf(k as f64 / (spec.points - 1) as f64))
+    };
+    let jobs: Vec<(usize, f64)> = (0..m).flat_map(|i| log_grid(i).map(move |mu| (i, mu))).collect();
+    let coarse: Vec<(usize, TunePoint)> = jobs.into_par_iter().map(|(i, mu)| (i, score(i, mu))).collect();
+    let channels: Vec<TuneCurve> = (0..m)
+        .into_par_iter()
+        .map(|i| {
+            let mut curve: Vec<TunePoint> = coarse.iter().filter(|(c, _)| *c == i).map(|(_, p)| p.clone()).collect();
+            // Golden-section search on log μ over the best point's neighbours.
+            if let Some(best) = (0..curve.len()).min_by(|&a, &b| key(&curve[a]).total_cmp(&key(&curve[b]))) {
+                if curve[best].objective.is_some() && spec.refine > 0 {
+                    let (mut a, mut b) =
+                        (curve[best.saturating_sub(1)].mu.ln(), curve[(best + 1).min(curve.len() - 1)].mu.ln());
+                    let r = (5f64.sqrt() - 1.0) / 2.0;
+                    let (mut c, mut d) = (b - r * (b - a), a + r * (b - a));
+                    let (mut fc, mut fd) = (score(i, c.exp()), score(i, d.exp()));
+                    for _ in 2..spec.refine {
+                        if key(&fc) <= key(&fd) {
+                            b = d;
+                            d = c;
+                            curve.push(std::mem::replace(&mut fd, fc.clone()));
+                            c = b - r * (b - a);
+                            fc = score(i, c.exp());
+                        } else {
+                            a = c;
+                            c = d;
+                            curve.push(std::mem::replace(&mut fc, fd.clone()));
+                            d = a + r * (b - a);
+                            fd = score(i, d.exp());
+                        }
+                    }
+                    curve.push(fc);
+                    curve.push(fd);
+                }
+            }
+            curve.sort_by(|a, b| a.mu.total_cmp(&b.mu));
+            let chosen =
+                curve.iter().filter(|p| p.objective.is_some()).min_by(|a, b| key(a).total_cmp(&key(b))).cloned();
+            TuneCurve { channel: i, curve, chosen }
+        })
+        .collect();
+    let mu: Vec<f64> = channels.iter().zip(&base_mu).map(|(c, &m0)| c.chosen.as_ref().map_or(m0, |p| p.mu)).collect();
+    let joint = run_with(study, &mu);
+    let step = scenario.simulation.output_step;
+    let (joint_difference, reproduced) = channels
+        .iter()
+        .map(|c| {
+            let search = c.chosen.as_ref().and_then(|p| p.figures).map(|f| spec.objective.of(&f));
+            let joint_value = joint.channels.get(c.channel).map(|f| spec.objective.of(f));
+            match (search, joint_value) {
+                (Some(s), Some(j)) if s.is_finite() && j.is_finite() => {
+                    (Some(j - s), (j - s).abs() <= tolerance(spec.objective, s, step))
+                }
+                _ => (None, false),
+            }
+        })
+        .unzip();
+    Ok(TuneResult { objective: spec.objective, channels, mu, joint, joint_difference, reproduced })
+}
