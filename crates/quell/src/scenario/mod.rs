@@ -23,6 +23,7 @@ use crate::design::{Design, DesignError, DesignSpec, ObserverChoice};
 use crate::plant::{Plant, PlantError};
 use crate::signal::{Component, Harmonic, Signal};
 use exosystem::Exosystem;
+pub(crate) use read::kind;
 use read::{err, line_col, Table, Value};
 
 /// The paper's example (Section VIII) as a scenario file: `examples/paper.toml`.

@@ -10,7 +10,7 @@ pub(super) fn err(key: impl Into<String>, message: impl Into<String>) -> Scenari
 }
 
 /// "a string", "an integer", … for "found …" in messages.
-fn kind(v: &toml::Value) -> &'static str {
+pub(crate) fn kind(v: &toml::Value) -> &'static str {
     match v {
         toml::Value::String(_) => "a string",
         toml::Value::Integer(_) => "an integer",

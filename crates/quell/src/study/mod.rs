@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::scenario::{Scenario, PAPER_EXAMPLE};
+use crate::scenario::{kind, Scenario, PAPER_EXAMPLE};
 pub use output::{header, read_runs_csv, write_runs_csv, RunsFile};
 pub use path::{KeyPath, Shape};
 pub use run::{run_one, run_seed, sweep, ChannelFigures, Outcome, Row, RunSpec, Shard, Sweep, SweepOptions};
@@ -115,20 +115,6 @@ pub struct Study {
 
 const TOP_KEYS: &[&str] = &["scenario", "simulation", "grid", "monte_carlo", "settle", "tune"];
 const SETTLE_KEYS: &[&str] = &["relative", "absolute"];
-
-/// "a string", "an integer", … for "found …".
-fn kind(v: &toml::Value) -> &'static str {
-    match v {
-        toml::Value::String(_) => "a string",
-        toml::Value::Integer(_) => "an integer",
-        toml::Value::Float(_) => "a floating-point number",
-        toml::Value::Boolean(_) => "a boolean",
-        toml::Value::Datetime(_) => "a date-time",
-        toml::Value::Array(a) if a.is_empty() => "an empty array",
-        toml::Value::Array(_) => "an array",
-        toml::Value::Table(_) => "a table",
-    }
-}
 
 fn number(key: &str, v: &toml::Value, what: &str) -> Result<f64, StudyError> {
     let x = match v {

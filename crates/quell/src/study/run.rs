@@ -105,7 +105,7 @@ pub struct Row {
 /// |e| ≤ max(relative · max_k |g(t_k)|, absolute) at every sample.
 fn settle_time(t: &[f64], e: &[f64], g: &[f64], s: &Settle) -> Option<f64> {
     let band = (s.relative * g.iter().fold(0.0f64, |a, v| a.max(v.abs()))).max(s.absolute);
-    match e.iter().rposition(|v| !(v.abs() <= band)) {
+    match e.iter().rposition(|&v| crate::sim::runaway(v, band)) {
         None => t.first().copied(),
         Some(k) => t.get(k + 1).copied(),
     }

@@ -6,7 +6,8 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::run::{run_one, ChannelFigures, Outcome, Row, RunSpec};
-use super::{err, kind, number, Study, StudyError};
+use super::{err, number, Study, StudyError};
+use crate::scenario::kind;
 use crate::scenario::Scenario;
 
 /// What a search minimizes for channel i.
