@@ -40,6 +40,7 @@ pub mod simd;
 
 pub mod controller;
 pub mod design;
+pub mod export;
 pub mod linalg;
 pub mod plant;
 pub mod scenario;

@@ -260,6 +260,30 @@ impl Controller {
     }
 }
 
+/// The discretized matrices of a [`Controller`], read-only, for code generation ([`crate::export`]).
+pub(crate) struct Discretized<'c> {
+    /// The continuous-time equations (dimensions, −K, F, each channel's σ_i and q_i0).
+    pub eq: &'c Equations,
+    /// [Φ_z Γ_z]: z_{k+1} = Φ_z z_k + Γ_z [y_k; g_k; u_d(k)].
+    pub PhiGamma_z: &'c DMatrix<f64>,
+    /// a = e^{−T_s/β} of H(s) at ZOH.
+    pub a: f64,
+    /// Per channel: (Φ_i, γ_i, T_s μ_i, d_i) of its G_ii filter bank and delay line.
+    pub channels: Vec<(&'c DMatrix<f64>, &'c [f64], f64, usize)>,
+}
+
+impl Controller {
+    /// The read-only view of every discretized matrix.
+    pub(crate) fn discretized(&self) -> Discretized<'_> {
+        Discretized {
+            eq: &self.eq,
+            PhiGamma_z: &self.PhiGamma_z,
+            a: self.a,
+            channels: self.channels.iter().map(|ch| (&ch.Phi, &ch.gamma[..], ch.c, ch.line.len - 1)).collect(),
+        }
+    }
+}
+
 /// The H filter Ω ← aΩ + bΔΔᵀ (ZOH of H(s)), then one step of η̂' = μ (Y − Ω η̂) (33) with c = T_s μ,
 /// implicit in ρI and explicit in the rest (Ω = ρI − (ρI − Ω)):
 /// η̂ ← η̂ + c (Y − Ω η̂) / (1 + c ρ),  with ρ = tr Ω ≥ λ_max(Ω).

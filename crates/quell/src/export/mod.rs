@@ -1,0 +1,138 @@
+//! C code generation: the real-time [`Controller`] as dependency-free C99 for microcontrollers and
+//! PLCs (`quell export`; docs/deployment.md).
+//!
+//! [`generate`] discretizes the design exactly as [`Controller::new`] does (it builds that
+//! controller and reads its matrices, so the validation and the numbers are the same) and writes
+//! `<prefix>_controller.h` and `<prefix>_controller.c`: every matrix a `static const` array, the
+//! state one struct of fixed-size arrays, no dynamic memory, no libm, no global mutable state. The
+//! step performs the arithmetic of [`Controller::step`] in the same order wherever the order is a
+//! choice of the algorithm (sums may associate differently), so in double precision the two agree
+//! to rounding.
+
+mod c;
+
+use thiserror::Error;
+
+use crate::controller::{Controller, ControllerError};
+use crate::design::Design;
+
+/// Floating-point type of the generated code.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Precision {
+    /// `double`: the Rust [`Controller`]'s arithmetic.
+    #[default]
+    F64,
+    /// `float`: for microcontrollers whose FPU is single precision (Cortex-M4F, M33).
+    F32,
+}
+
+impl Precision {
+    /// The C type.
+    pub fn c_type(self) -> &'static str {
+        match self {
+            Precision::F64 => "double",
+            Precision::F32 => "float",
+        }
+    }
+    /// Bytes of one number.
+    pub fn bytes(self) -> usize {
+        match self {
+            Precision::F64 => 8,
+            Precision::F32 => 4,
+        }
+    }
+    /// The name `--precision` takes: `f64` or `f32`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Precision::F64 => "f64",
+            Precision::F32 => "f32",
+        }
+    }
+}
+
+impl std::str::FromStr for Precision {
+    type Err = ExportError;
+    fn from_str(s: &str) -> Result<Precision, ExportError> {
+        match s {
+            "f64" => Ok(Precision::F64),
+            "f32" => Ok(Precision::F32),
+            _ => Err(ExportError::Precision { found: s.to_string() }),
+        }
+    }
+}
+
+/// What to generate besides the controller itself.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ExportOptions {
+    /// Prefix of every name (`<prefix>_step`, `<PREFIX>_M`, the files), so that several
+    /// controllers can live in one firmware. A C identifier.
+    pub prefix: String,
+    pub precision: Precision,
+    /// The scenario's name, for the header comment.
+    pub scenario_name: Option<String>,
+}
+
+impl Default for ExportOptions {
+    fn default() -> Self {
+        ExportOptions { prefix: "quell".to_string(), precision: Precision::F64, scenario_name: None }
+    }
+}
+
+/// The generated header and source, and their memory figures.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CCode {
+    /// `<prefix>_controller.h` and its text.
+    pub header_name: String,
+    pub header: String,
+    /// `<prefix>_controller.c` and its text.
+    pub source_name: String,
+    pub source: String,
+    /// Bytes of the `static const` data (flash).
+    pub constant_bytes: usize,
+    /// `sizeof(<prefix>_state)` (RAM), where a number is aligned to its size.
+    pub state_bytes: usize,
+}
+
+/// Why no C code can be generated.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ExportError {
+    /// The controller cannot run at this sample time (the checks of [`Controller::new`]).
+    #[error(transparent)]
+    Controller(#[from] ControllerError),
+    #[error("--prefix: expected a C identifier (a letter, then letters, digits or _), found {found:?}; e.g. --prefix motor1")]
+    Prefix { found: String },
+    #[error("--precision: expected f64 or f32, found {found:?}")]
+    Precision { found: String },
+    #[error("simulation.sample_time (--sample-time): {what} is {value} after discretizing at T_s = {sample_time} s; the design's dynamics overflow at this sample time; choose a shorter one")]
+    NotFinite { what: String, value: f64, sample_time: f64 },
+    #[error("--precision f32: {what} = {value:e} is beyond the range of float (±3.4e38); use --precision f64")]
+    F32Range { what: String, value: f64 },
+}
+
+/// Generates the C controller for `design` at `sample_time`: the same controller as
+/// `Controller::new(design, sample_time)`, with the same errors.
+pub fn generate(design: &Design, sample_time: f64, options: &ExportOptions) -> Result<CCode, ExportError> {
+    let prefix = &options.prefix;
+    let mut chars = prefix.chars();
+    let identifier = chars.next().is_some_and(|c| c.is_ascii_alphabetic())
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_');
+    if !identifier {
+        return Err(ExportError::Prefix { found: prefix.clone() });
+    }
+    let ctrl = Controller::new(design, sample_time)?;
+    c::write(design, &ctrl, options)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn precision_names_round_trip() {
+        for p in [Precision::F64, Precision::F32] {
+            assert_eq!(p.name().parse::<Precision>(), Ok(p));
+        }
+        let e = "f16".parse::<Precision>().unwrap_err().to_string();
+        assert_eq!(e, "--precision: expected f64 or f32, found \"f16\"");
+    }
+}
