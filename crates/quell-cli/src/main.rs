@@ -4,6 +4,7 @@
 //! Exit codes: 0 success, 1 a run that failed (diverged, solver failure, interrupted),
 //! 2 bad input or an infeasible design.
 
+mod export;
 mod output;
 mod plot;
 mod report;
@@ -45,6 +46,8 @@ enum Command {
     },
     /// Simulate the closed loop; write signals.csv, design.json, summary.json and plots.
     Run(RunArgs),
+    /// Write the real-time controller as dependency-free C99 (<PREFIX>_controller.h and .c).
+    Export(export::ExportArgs),
 }
 
 #[derive(clap::Args, Default)]
@@ -85,6 +88,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Some(Command::Design { scenario, json }) => design(&scenario, json),
         Some(Command::Run(args)) => run(&args),
+        Some(Command::Export(args)) => export::run(&args),
         None => {
             eprintln!(
                 "quell: running the paper's example (Section VIII) into quell-out/; `quell --help` lists the commands"

@@ -103,7 +103,7 @@ pub enum ExportError {
     Prefix { found: String },
     #[error("--precision: expected f64 or f32, found {found:?}")]
     Precision { found: String },
-    #[error("simulation.sample_time (--sample-time): {what} is {value} after discretizing at T_s = {sample_time} s; the design's dynamics overflow at this sample time; choose a shorter one")]
+    #[error("simulation.sample_time (--sample-time): {what} is {value} after discretizing at T_s = {sample_time} s; the exact discretization overflowed (the design's eigenvalues times T_s are beyond floating point); choose a shorter sample time or poles of smaller magnitude")]
     NotFinite { what: String, value: f64, sample_time: f64 },
     #[error("--precision f32: {what} = {value:e} is beyond the range of float (±3.4e38); use --precision f64")]
     F32Range { what: String, value: f64 },
@@ -114,8 +114,8 @@ pub enum ExportError {
 pub fn generate(design: &Design, sample_time: f64, options: &ExportOptions) -> Result<CCode, ExportError> {
     let prefix = &options.prefix;
     let mut chars = prefix.chars();
-    let identifier = chars.next().is_some_and(|c| c.is_ascii_alphabetic())
-        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_');
+    let identifier =
+        chars.next().is_some_and(|c| c.is_ascii_alphabetic()) && chars.all(|c| c.is_ascii_alphanumeric() || c == '_');
     if !identifier {
         return Err(ExportError::Prefix { found: prefix.clone() });
     }

@@ -1,0 +1,60 @@
+//! `quell export`: the real-time controller as dependency-free C99 (`quell::export`).
+
+use std::path::PathBuf;
+
+use quell::export::{generate, ExportOptions};
+
+use crate::{load, output, Failure};
+
+#[derive(clap::Args)]
+pub struct ExportArgs {
+    /// Scenario file (TOML).
+    scenario: PathBuf,
+    /// Sample time T_s in seconds; every input delay must be a whole number of samples.
+    /// Defaults to the scenario's simulation.sample_time.
+    #[arg(long, value_name = "T_S", allow_negative_numbers = true)]
+    sample_time: Option<f64>,
+    /// Output directory for <PREFIX>_controller.h and <PREFIX>_controller.c.
+    #[arg(long, default_value = ".")]
+    out: PathBuf,
+    /// Prefix of every generated name, so several controllers can share one firmware.
+    #[arg(long, default_value = "quell")]
+    prefix: String,
+    /// Floating-point type of the generated code: f64 (double) or f32 (float, for single-precision FPUs).
+    #[arg(long, default_value = "f64", value_parser = ["f64", "f32"])]
+    precision: String,
+}
+
+/// Generates, then writes both files (each to a temporary name, then renamed).
+pub fn run(args: &ExportArgs) -> Result<(), Failure> {
+    let (scenario, design) = load(Some(&args.scenario))?;
+    let sample_time = args.sample_time.or(scenario.simulation.sample_time).ok_or_else(|| {
+        Failure::Input(
+            "--sample-time: missing; the controller runs at a sample time T_s in seconds (or set simulation.sample_time in the scenario)".into(),
+        )
+    })?;
+    let options = ExportOptions {
+        prefix: args.prefix.clone(),
+        precision: args.precision.parse().map_err(|e: quell::export::ExportError| Failure::Input(e.to_string()))?,
+        scenario_name: scenario.name.clone(),
+    };
+    let code = generate(&design, sample_time, &options).map_err(|e| Failure::Input(e.to_string()))?;
+    let out = &args.out;
+    output::prepare_dir(out).map_err(|e| {
+        Failure::Input(format!("--out {}: cannot write there ({e}); choose a writable directory", out.display()))
+    })?;
+    for (name, text) in [(&code.header_name, &code.header), (&code.source_name, &code.source)] {
+        output::write_atomic(&out.join(name), |w| w.write_all(text.as_bytes()))
+            .map_err(|e| Failure::Run(format!("writing {}: {e}", out.join(name).display())))?;
+    }
+    eprintln!(
+        "wrote {} and {} in {} (T_s = {sample_time} s, {}; {} bytes of constants, {} bytes of state)",
+        code.header_name,
+        code.source_name,
+        out.display(),
+        options.precision.c_type(),
+        code.constant_bytes,
+        code.state_bytes
+    );
+    Ok(())
+}

@@ -1,0 +1,118 @@
+//! `quell export`: the files it writes compile and run as C99, and bad input exits with 2 naming
+//! the flag or key. gcc is required.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn quell(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_quell")).args(args).output().expect("the quell binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn example(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples").join(name).display().to_string()
+}
+
+fn temp_dir(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("quell-cli-export-{}-{tag}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+#[test]
+fn export_writes_a_controller_that_compiles_and_runs() {
+    let dir = temp_dir("ok");
+    let out = dir.display().to_string();
+    let o = quell(&["export", &example("paper.toml"), "--sample-time", "0.001", "--out", &out, "--prefix", "arm"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("arm_controller.h and arm_controller.c"), "{}", stderr(&o));
+    let header = std::fs::read_to_string(dir.join("arm_controller.h")).unwrap();
+    assert!(header.contains("scenario \"paper-example\"") && header.contains("#define ARM_SAMPLE_TIME 0.001"));
+    // No temporary file is left behind.
+    let mut names: Vec<String> =
+        std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    names.sort();
+    assert_eq!(names, ["arm_controller.c", "arm_controller.h"]);
+    // Same input, same bytes.
+    let first = std::fs::read(dir.join("arm_controller.c")).unwrap();
+    let o = quell(&["export", &example("paper.toml"), "--sample-time", "0.001", "--out", &out, "--prefix", "arm"]);
+    assert!(o.status.success());
+    assert_eq!(std::fs::read(dir.join("arm_controller.c")).unwrap(), first);
+
+    // A firmware-style main: init, then steps; it must compile strictly and run.
+    std::fs::write(
+        dir.join("main.c"),
+        r#"#include "arm_controller.h"
+static arm_state s;
+int main(void)
+{
+    const double y[ARM_M] = {0.1, -0.2}, g[ARM_M] = {1.0, 2.0};
+    double u_f[ARM_M], u[ARM_M];
+    arm_init(&s);
+    for (int k = 0; k < 5000; k++)
+        arm_step(&s, y, g, u_f);
+    arm_command(&s, u);
+    return (u_f[0] == u_f[0] && u[1] == u[1]) ? 0 : 1;
+}
+"#,
+    )
+    .unwrap();
+    let gcc = Command::new("gcc")
+        .args([
+            "-std=c99",
+            "-Wall",
+            "-Wextra",
+            "-Werror",
+            "-pedantic",
+            "-O2",
+            "main.c",
+            "arm_controller.c",
+            "-o",
+            "main",
+        ])
+        .current_dir(&dir)
+        .output()
+        .expect("gcc is required for this test");
+    assert!(gcc.status.success(), "{}", String::from_utf8_lossy(&gcc.stderr));
+    assert!(Command::new(dir.join("main")).status().unwrap().success());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn f32_export_uses_float() {
+    let dir = temp_dir("f32");
+    let out = dir.display().to_string();
+    // The sample time comes from the scenario's simulation.sample_time.
+    let o = quell(&["export", &example("paper-sampled.toml"), "--out", &out, "--precision", "f32"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let header = std::fs::read_to_string(dir.join("quell_controller.h")).unwrap();
+    assert!(header.contains("const float y[QUELL_M]") && header.contains("--precision f32"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_export_input_exits_2_naming_the_flag() {
+    let dir = temp_dir("bad");
+    let out = dir.display().to_string();
+    let paper = example("paper.toml");
+    for (args, message) in [
+        (
+            vec!["--sample-time", "0.3"],
+            "error: simulation.sample_time (--sample-time): channel 1's delay τ = 1 s is not a whole number of samples of T_s = 0.3 s (3.333333 samples); the nearest valid sample time is 0.333333333 s",
+        ),
+        (vec!["--sample-time", "-1"], "error: simulation.sample_time (--sample-time): expected a finite T_s > 0, found -1"),
+        (vec![], "error: --sample-time: missing;"),
+        (vec!["--sample-time", "0.001", "--prefix", "9lives"], "error: --prefix: expected a C identifier"),
+        (vec!["--sample-time", "0.001", "--precision", "f16"], "invalid value 'f16' for '--precision <PRECISION>'"),
+    ] {
+        let mut all = vec!["export", paper.as_str(), "--out", out.as_str()];
+        all.extend(args.iter().copied());
+        let o = quell(&all);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(message), "{args:?}: {}", stderr(&o));
+        assert!(!dir.exists(), "{args:?}: the output directory was touched");
+    }
+}
