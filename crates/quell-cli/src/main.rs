@@ -19,7 +19,7 @@ use std::sync::Arc;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use quell::scenario::{Scenario, PAPER_EXAMPLE};
-use quell::sim::{simulate, simulate_sampled, Outcome, RunSettings, SampledSettings, SimResult};
+use quell::sim::{simulate, simulate_sampled, Outcome, RunSettings, RunStats, SampledSettings, SimResult};
 use quell::Design;
 use serde_json::json;
 
@@ -71,9 +71,6 @@ const RUNNING: u8 = 0;
 const INTERRUPTED: u8 = 1;
 const QUITTING: u8 = 2;
 const WRITING: u8 = 3;
-
-/// A state above this magnitude means the loop diverged.
-const DIVERGENCE_BOUND: f64 = 1e9;
 
 /// A failure with its exit code.
 enum Failure {
@@ -150,13 +147,12 @@ fn run(args: &RunArgs) -> Result<(), Failure> {
         None => None,
         Some(sample_time) => {
             let settings = SampledSettings {
-                t_end: sim.t_end,
-                output_step: sim.output_step,
-                sample_time,
                 noise: scenario.noise.clone(),
-                divergence_bound: DIVERGENCE_BOUND,
+                ..SampledSettings::new(sim.t_end, sim.output_step, sample_time)
             };
-            settings.check(&design).map_err(|e| Failure::Input(e.to_string()))?;
+            settings
+                .check(&design, &scenario.reference, &scenario.disturbance)
+                .map_err(|e| Failure::Input(e.to_string()))?;
             Some(settings)
         }
     };
@@ -195,9 +191,9 @@ fn run(args: &RunArgs) -> Result<(), Failure> {
             let settings = RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol);
             simulate(&design, &scenario.reference, &scenario.disturbance, &settings, progress)
         }
-        Some(settings) => simulate_sampled(&design, &scenario.reference, &scenario.disturbance, settings, progress)
-            .map_err(|e| Failure::Input(e.to_string()))?,
-    };
+        Some(settings) => simulate_sampled(&design, &scenario.reference, &scenario.disturbance, settings, progress),
+    }
+    .map_err(|e| Failure::Input(e.to_string()))?;
     bar.finish_and_clear();
     // From here on Ctrl-C is ignored (unless a second one is already quitting the process).
     if phase.swap(WRITING, Ordering::SeqCst) == QUITTING {
@@ -214,7 +210,11 @@ fn run(args: &RunArgs) -> Result<(), Failure> {
             for (i, c) in result.summary().iter().enumerate() {
                 eprintln!("channel {}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {:.3}, ‖η̂‖ = {:.4}", i + 1, c.tail_max_abs_e, c.tail_rms_e, c.max_abs_u, c.final_eta_norm);
             }
-            eprintln!("wrote {} ({} samples, {} steps, {:.3} s)", out.display(), result.len(), result.stats.steps, elapsed.as_secs_f64());
+            let steps = match result.stats {
+                RunStats::Continuous { steps, .. } => format!("{steps} solver steps"),
+                RunStats::Sampled { controller_steps, .. } => format!("{controller_steps} controller steps"),
+            };
+            eprintln!("wrote {} ({} samples, {steps}, {:.3} s)", out.display(), result.len(), elapsed.as_secs_f64());
             Ok(())
         }
         Outcome::Diverged { t, signal, value } => Err(Failure::Run(format!(
@@ -271,7 +271,7 @@ fn write_data(dir: &Path, scenario: &Scenario, design: &Design, r: &SimResult, s
         "scenario": scenario.name,
         "outcome": r.outcome,
         "channels": r.summary(),
-        "solver": { "steps": r.stats.steps, "rejected_steps": r.stats.rejected, "rhs_evaluations": r.stats.rhs_evals },
+        "stats": r.stats,
         "samples": r.len(),
         "wall_time_s": seconds,
     });

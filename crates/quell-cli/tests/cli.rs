@@ -287,10 +287,12 @@ fn run_paper_example_writes_every_file() {
             assert!(c[key].as_f64().is_some_and(f64::is_finite), "channels[].{key}: {c}");
         }
     }
-    for key in ["steps", "rejected_steps", "rhs_evaluations"] {
-        assert!(s["solver"][key].as_u64().is_some(), "solver.{key}: {s}");
+    assert_eq!(s["stats"]["loop"], "continuous", "{s}");
+    for key in ["steps", "rejected_steps", "rhs_evaluations", "breakpoints", "max_history_len"] {
+        assert!(s["stats"][key].as_u64().is_some(), "stats.{key}: {s}");
     }
-    assert!(s["solver"]["steps"].as_u64().unwrap() > 0);
+    let (steps, evals) = (s["stats"]["steps"].as_u64().unwrap(), s["stats"]["rhs_evaluations"].as_u64().unwrap());
+    assert!(steps > 0 && evals >= 11 * steps, "DOP853 takes at least 11 evaluations a step: {s}");
     let e1 = channels[0]["tail_max_abs_e"].as_f64().unwrap();
     let e2 = channels[1]["tail_max_abs_e"].as_f64().unwrap();
     assert!(e1 < 0.05, "tail max|e1| = {e1}");
@@ -376,6 +378,21 @@ fn run_missing_scenario_exits_2() {
 
 // ---------------------------------------------------------------------------------------------
 // examples/
+
+/// A sampled-data run reports its controller steps, not solver figures it does not have.
+#[test]
+fn sampled_summary_reports_controller_steps() {
+    let dir = TempDir::new("sampled-summary");
+    let o = quell(&["run", "--no-plots", "--sample-time", "0.001", "--out", dir.str()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let s = read_json(&dir.join("summary.json"));
+    assert_eq!(s["stats"]["loop"], "sampled", "{s}");
+    // 100 s at 1 ms: samples k = 0, …, 100,000.
+    assert_eq!(s["stats"]["controller_steps"], 100_001, "{s}");
+    assert_eq!(s["stats"]["sample_time"], 0.001, "{s}");
+    assert!(s["stats"].get("rhs_evaluations").is_none(), "{s}");
+    assert!(stderr(&o).contains("100001 controller steps"), "{}", stderr(&o));
+}
 
 /// Every scenario in `examples/` designs and runs to completion.
 #[test]

@@ -12,12 +12,12 @@ fn paper(c: &mut Criterion) {
     let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
     let d = Design::new(&s.plant, &s.design).unwrap();
     let settings = RunSettings::new(100.0, 0.1, 1e-9, 1e-9);
-    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(()));
+    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())).unwrap();
     eprintln!("paper example: {:?}", r.stats);
     let mut g = c.benchmark_group("paper_example");
     g.sample_size(20);
     g.bench_function("continuous_100s_rtol1e-9", |b| {
-        b.iter(|| simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())))
+        b.iter(|| simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())).unwrap())
     });
     let sampled =
         SampledSettings { t_end: 100.0, output_step: 0.1, sample_time: 1e-3, noise: None, divergence_bound: 1e9 };

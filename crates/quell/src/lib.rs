@@ -3,7 +3,8 @@
 //!
 //! Data flows one way:
 //! [`scenario`] file → validated [`Scenario`] → [`Design`] (every gain, [`design`]) →
-//! controller equations ([`controller`]) + plant → one [`sim::SimResult`].
+//! controller equations ([`controller`]) + plant → one [`sim::SimResult`]. Run settings, their
+//! limits and checks ([`settings`]) are shared by the scenario reader and the loops.
 //!
 //! ```
 //! use std::ops::ControlFlow;
@@ -19,7 +20,7 @@
 //! // The continuous closed loop with its input delays, 20 s of it.
 //! let run = simulate(&design, &s.reference, &s.disturbance, &RunSettings::new(20.0, 0.1, 1e-9, 1e-9), |_| {
 //!     ControlFlow::Continue(())
-//! });
+//! })?;
 //! assert_eq!(run.len(), 201);
 //!
 //! // The same controller for a real plant, sampled every millisecond.
@@ -44,6 +45,7 @@ pub mod export;
 pub mod linalg;
 pub mod plant;
 pub mod scenario;
+pub mod settings;
 pub mod signal;
 pub mod sim;
 pub mod study;

@@ -3,6 +3,9 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use crate::plant::Plant;
+use crate::settings::KeyError;
+
 /// One sinusoid `amplitude·sin(frequency·t + phase)`, frequency in rad/s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Harmonic {
@@ -90,6 +93,32 @@ impl Component {
 }
 
 impl Signal {
+    /// Checks that the signal has `expected` components (`per` says why, for the message) and finite
+    /// parameters; `key` names the signal (`reference`, `disturbance`).
+    pub fn check(&self, key: &str, expected: usize, per: &str) -> Result<(), KeyError> {
+        if self.len() != expected {
+            return Err(KeyError::new(
+                format!("{key}.components"),
+                format!("expected {expected} components ({per}), found {}", self.len()),
+            ));
+        }
+        let finite = |field: String, v: f64| match v.is_finite() {
+            true => Ok(()),
+            false => {
+                Err(KeyError::new(format!("{key}.components{field}"), format!("expected a finite number, found {v}")))
+            }
+        };
+        for (i, c) in self.components.iter().enumerate() {
+            finite(format!("[{i}].bias"), c.bias)?;
+            for (j, h) in c.harmonics.iter().enumerate() {
+                for (name, v) in [("amplitude", h.amplitude), ("frequency", h.frequency), ("phase", h.phase)] {
+                    finite(format!("[{i}].harmonics[{j}].{name}"), v)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// A linear exosystem generating the signal exactly: w' = S w, value = H w, w(0) = w0
     /// (one state per nonzero bias; two per harmonic, [sin, cos] of frequency·t + phase).
     pub fn exosystem(&self) -> (DMatrix<f64>, DMatrix<f64>, DVector<f64>) {
@@ -131,6 +160,14 @@ impl Signal {
             *o = c.eval(t);
         }
     }
+}
+
+/// Checks the reference g (one component per output) and the disturbance ω (one per column of D)
+/// for `plant`.
+pub fn check_signals(plant: &Plant, reference: &Signal, disturbance: &Signal) -> Result<(), KeyError> {
+    let (m, k) = (plant.m(), plant.k());
+    reference.check("reference", m, &format!("one per output, m = {m} columns of plant.B"))?;
+    disturbance.check("disturbance", k, &format!("one per column of plant.D, k = {k}"))
 }
 
 /// The harmonics of several signals in flat arrays, so that all their sines are one vectorizable pass

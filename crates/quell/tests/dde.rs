@@ -255,7 +255,7 @@ fn step_size_underflow_at_blowup() {
     let opts = Options { rtol: 1e-10, atol: 1e-10, ..Options::default() };
     let r = solve(&mut Blowup, 0.0, &[1.0], &[], 2.0, 0.1, &opts, |_, _| ControlFlow::Continue(()));
     match r {
-        Err(SolveError::StepSizeTooSmall { t, h }) => {
+        Err(SolveError::StepSizeTooSmall { t, h, .. }) => {
             println!("blow-up: stopped at t = {t}, h = {h:e}");
             assert!((t - 1.0).abs() < 1e-6, "t = {t}");
             assert!(h < 1e-12);

@@ -144,7 +144,8 @@ fn delay_below_rounding_level_stops_the_solver() {
     let started = Instant::now();
     let r = simulate(&d, &s.reference, &s.disturbance, &RunSettings::new(1.0, 0.1, 1e-9, 1e-9), |_| {
         std::ops::ControlFlow::Continue(())
-    });
+    })
+    .unwrap();
     assert!(started.elapsed() < Duration::from_secs(1));
     assert_eq!(r.outcome, Some(Outcome::StepSizeTooSmall { t: 0.0 }));
 }

@@ -13,7 +13,7 @@ fn divergence_bound_stops_the_continuous_loop() {
     let d = s.design().unwrap();
     // |g_2| = 2 alone exceeds a bound of 1 on the internal-model states soon after the start.
     let settings = RunSettings { divergence_bound: 1.0, ..RunSettings::new(100.0, 0.1, 1e-9, 1e-9) };
-    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(()));
+    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())).unwrap();
     let Some(Outcome::Diverged { t, signal, value }) = r.outcome.clone() else {
         panic!("expected divergence, got {:?}", r.outcome);
     };
@@ -27,15 +27,14 @@ fn divergence_bound_stops_the_continuous_loop() {
 }
 
 #[test]
-fn non_finite_state_counts_as_divergence() {
-    // A bound of NaN would make every comparison false; the check treats "not ≤ bound" as
-    // divergence, so the very first sample is reported with its time.
+fn a_nan_divergence_bound_is_refused() {
+    // A bound of NaN would make every comparison false; it is refused, naming the setting (that a
+    // non-finite state counts as divergence is `tests/sim_inputs.rs`).
     let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
     let d = s.design().unwrap();
     let settings = RunSettings { divergence_bound: f64::NAN, ..RunSettings::new(1.0, 0.1, 1e-9, 1e-9) };
-    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(()));
-    assert!(matches!(r.outcome, Some(Outcome::Diverged { t, .. }) if t == 0.0), "{:?}", r.outcome);
-    assert!(r.is_empty());
+    let e = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())).unwrap_err();
+    assert!(e.to_string().starts_with("divergence_bound: expected a bound > 0"), "{e}");
 }
 
 #[test]
@@ -45,7 +44,7 @@ fn step_size_underflow_ends_the_run_with_the_time() {
     let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
     let d = s.design().unwrap();
     let settings = RunSettings::new(10.0, 0.1, 1e-300, 1e-300);
-    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(()));
+    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())).unwrap();
     assert!(matches!(r.outcome, Some(Outcome::StepSizeTooSmall { t }) if (0.0..10.0).contains(&t)), "{:?}", r.outcome);
     assert_eq!(r.len(), 1, "the sample at t = 0 is kept");
 }
@@ -61,7 +60,8 @@ fn interruption_keeps_the_samples_so_far() {
         } else {
             ControlFlow::Continue(())
         }
-    });
+    })
+    .unwrap();
     assert!(matches!(r.outcome, Some(Outcome::Interrupted { t }) if (t - 5.0).abs() < 1e-9), "{:?}", r.outcome);
     assert_eq!(r.len(), 51);
 }

@@ -10,7 +10,9 @@
 use std::ops::ControlFlow;
 
 use quell::scenario::PAPER_EXAMPLE;
-use quell::sim::{simulate, simulate_sampled, MeasurementNoise, Outcome, RunSettings, SampledSettings, SimResult};
+use quell::sim::{
+    simulate, simulate_sampled, MeasurementNoise, Outcome, RunSettings, RunStats, SampledSettings, SimResult,
+};
 use quell::{Design, Scenario};
 
 fn paper() -> (Scenario, Design) {
@@ -22,7 +24,7 @@ fn paper() -> (Scenario, Design) {
 fn continuous(t_end: f64, output_step: f64) -> SimResult {
     let (s, d) = paper();
     let settings = RunSettings::new(t_end, output_step, 1e-9, 1e-9);
-    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(()));
+    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())).unwrap();
     assert_eq!(r.outcome, Some(Outcome::Completed));
     r
 }
@@ -77,10 +79,15 @@ fn paper_example_to_10000_s() {
 
     // Memory: the dense history holds the last max τ seconds only, so its peak length does not
     // grow with the horizon.
-    let (h100, h10k) = (short.stats.max_history_len, long.stats.max_history_len);
+    let history = |r: &SimResult| match r.stats {
+        RunStats::Continuous { max_history_len, .. } => max_history_len,
+        RunStats::Sampled { .. } => unreachable!("a continuous run"),
+    };
+    let (h100, h10k) = (history(&short), history(&long));
     println!(
         "solver: max_history_len {h100} (100 s) vs {h10k} (10,000 s); steps {} vs {}",
-        short.stats.steps, long.stats.steps
+        short.stats.steps(),
+        long.stats.steps()
     );
     assert!(h10k <= 2 * h100 + 16, "history grew from {h100} to {h10k} records");
 }

@@ -121,7 +121,7 @@ fn sampled_data_loop_tracks_the_continuous_one() {
     // meets the same tail bounds (max |e_1| on [90, 100] < 0.05, max |e_2| < 0.005).
     let d = paper_design();
     let (g, w) = paper_signals();
-    let cont = simulate(&d, &g, &w, &RunSettings::new(100.0, 0.1, 1e-9, 1e-9), |_| ControlFlow::Continue(()));
+    let cont = simulate(&d, &g, &w, &RunSettings::new(100.0, 0.1, 1e-9, 1e-9), |_| ControlFlow::Continue(())).unwrap();
     let settings =
         SampledSettings { t_end: 100.0, output_step: 0.1, sample_time: 1e-3, noise: None, divergence_bound: 1e9 };
     let samp = simulate_sampled(&d, &g, &w, &settings, |_| ControlFlow::Continue(())).unwrap();
@@ -145,7 +145,8 @@ fn sampled_data_loop_tracks_the_continuous_one() {
 fn sample_time_sweep() {
     let d = paper_design();
     let (g, w) = paper_signals();
-    let cont = simulate(&d, &g, &w, &RunSettings::new(100.0, 0.1, 1e-10, 1e-10), |_| ControlFlow::Continue(()));
+    let cont =
+        simulate(&d, &g, &w, &RunSettings::new(100.0, 0.1, 1e-10, 1e-10), |_| ControlFlow::Continue(())).unwrap();
     let peak = |s: &[f64], i| cont.column(s, 2, i).fold(0.0, |m: f64, v| m.max(v.abs()));
     println!("| T_s | max abs e1 on [90, 100] | max abs e2 on [90, 100] | max abs(y − y_cont) / peak abs y_cont, channel 1 / 2 | outcome |");
     println!("|---|---|---|---|---|");

@@ -237,6 +237,16 @@ impl Controller {
         &self.eta
     }
 
+    /// The regressor ξ̂ after the last step (q).
+    pub fn xi_hat(&self) -> &[f64] {
+        self.eq.regressor(&self.zv)
+    }
+
+    /// The observer state x̂ after the last step (n).
+    pub fn x_hat(&self) -> &[f64] {
+        self.eq.x_hat(&self.zv)
+    }
+
     /// Sample time T_s.
     pub fn sample_time(&self) -> f64 {
         self.T

@@ -21,7 +21,8 @@ use thiserror::Error;
 
 use crate::design::{Design, DesignError, DesignSpec, ObserverChoice};
 use crate::plant::{Plant, PlantError};
-use crate::signal::{Component, Harmonic, Signal};
+use crate::settings::{self, KeyError};
+use crate::signal::{check_signals, Component, Harmonic, Signal};
 use exosystem::Exosystem;
 pub(crate) use read::kind;
 use read::{err, line_col, Table, Value};
@@ -75,7 +76,14 @@ impl Default for Simulation {
 }
 
 /// White measurement noise on y (sampled-data runs only).
-pub use crate::sim::MeasurementNoise as Noise;
+pub use crate::settings::MeasurementNoise as Noise;
+pub use crate::settings::{MAX_OUTPUT_SAMPLES, MAX_SAMPLING_STEPS};
+
+impl From<KeyError> for ScenarioError {
+    fn from(e: KeyError) -> Self {
+        ScenarioError { key: e.key, message: e.message }
+    }
+}
 
 /// Why a scenario file gives no design: the file itself, or the design it asks for.
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -161,34 +169,16 @@ impl Scenario {
         let noise = root.get("noise", noise)?;
 
         let (m, k) = (plant.m(), plant.k());
-        if reference.len() != m {
-            return Err(err(
-                "reference.components",
-                format!(
-                    "expected {m} components (one per output, m = {m} columns of plant.B), found {}",
-                    reference.len()
-                ),
-            ));
-        }
         let disturbance = match disturbance {
-            None if k > 0 => {
+            None if k > 0 && reference.len() == m => {
                 return Err(err(
                     "disturbance",
                     format!("missing; plant.D has {k} columns (k = {k} disturbance components), so a [disturbance] table with {k} components is required; or remove plant.D and plant.Q"),
                 ))
             }
-            None => Signal::default(),
-            Some(d) if d.len() != k => {
-                return Err(err(
-                    "disturbance.components",
-                    format!(
-                        "expected {k} components (one per column of plant.D, k = {k}), found {}",
-                        d.len()
-                    ),
-                ))
-            }
-            Some(d) => d,
+            d => d.unwrap_or_default(),
         };
+        check_signals(&plant, &reference, &disturbance)?;
         internal_model_order("reference", &reference, "design.reference_filter_poles", &design.reference_filter_poles)?;
         internal_model_order(
             "disturbance",
@@ -203,15 +193,7 @@ impl Scenario {
                     "measurement noise needs a sampled-data run; set simulation.sample_time (e.g. 0.001) or remove [noise]",
                 ));
             }
-            if noise.std.len() != m {
-                return Err(err(
-                    "noise.std",
-                    format!("expected {m} entries (one per output), found {}", noise.std.len()),
-                ));
-            }
-            if let Some((i, s)) = noise.std.iter().enumerate().find(|(_, s)| **s < 0.0) {
-                return Err(err(format!("noise.std[{i}]"), format!("expected a standard deviation ≥ 0, found {s}")));
-            }
+            noise.check(m)?;
         }
 
         Ok(Scenario { name, plant, design, reference, disturbance, simulation, noise })
@@ -386,56 +368,21 @@ fn harmonic(v: Value) -> Result<Harmonic, ScenarioError> {
     Ok(Harmonic { amplitude, frequency, phase })
 }
 
-/// Most rows a run records (t_end / output_step): every row is kept in memory, ~200 bytes each.
-pub const MAX_OUTPUT_SAMPLES: f64 = 1e7;
-pub use crate::sim::sampled::MAX_SAMPLING_STEPS;
-
-/// A number that must be > 0.
-fn positive(v: Value, what: &str) -> Result<f64, ScenarioError> {
-    let x = v.number()?;
-    if x > 0.0 {
-        Ok(x)
-    } else {
-        Err(err(v.key, format!("expected {what} > 0, found {x}")))
-    }
-}
-
-/// `[simulation]`, with defaults for absent keys.
+/// `[simulation]`, with defaults for absent keys; the ranges are [`settings`]' checks.
 fn simulation(v: Value) -> Result<Simulation, ScenarioError> {
     let t = v.table(SIMULATION_KEYS)?;
     let default = Simulation::default();
-    let t_end = t.get("t_end", |v| positive(v, "a final time"))?.unwrap_or(default.t_end);
-    let output_step = match t.get("output_step", |v| positive(v, "an output step"))? {
-        Some(h) if h > t_end => {
-            return Err(err(t.key("output_step"), format!("expected an output step ≤ t_end = {t_end}, found {h}")))
-        }
-        Some(h) => h,
-        None => default.output_step.min(t_end),
-    };
-    let samples = t_end / output_step;
-    if samples > MAX_OUTPUT_SAMPLES {
-        return Err(err(
-            t.key("output_step"),
-            format!("t_end / output_step = {samples:.3e} rows of signals.csv; at most {MAX_OUTPUT_SAMPLES:e} are kept; choose output_step ≥ {}", t_end / MAX_OUTPUT_SAMPLES),
-        ));
-    }
-    let sample_time = t.get("sample_time", |v| positive(v, "a sampling period"))?;
+    let number = |key| t.get(key, |v| v.number());
+    let t_end = number("t_end")?.unwrap_or(default.t_end);
+    let output_step = number("output_step")?.unwrap_or(default.output_step.min(t_end));
+    settings::check_horizon(t_end, output_step)?;
+    let sample_time = number("sample_time")?;
     if let Some(T) = sample_time {
-        let steps = t_end / T;
-        if steps > MAX_SAMPLING_STEPS {
-            return Err(err(
-                t.key("sample_time"),
-                format!("t_end / sample_time = {steps:.3e} controller steps; at most {MAX_SAMPLING_STEPS:e} are run; choose sample_time ≥ {}", t_end / MAX_SAMPLING_STEPS),
-            ));
-        }
+        settings::check_sample_time(t_end, T)?;
     }
-    Ok(Simulation {
-        t_end,
-        output_step,
-        rtol: t.get("rtol", |v| positive(v, "a relative tolerance"))?.unwrap_or(default.rtol),
-        atol: t.get("atol", |v| positive(v, "an absolute tolerance"))?.unwrap_or(default.atol),
-        sample_time,
-    })
+    let (rtol, atol) = (number("rtol")?.unwrap_or(default.rtol), number("atol")?.unwrap_or(default.atol));
+    settings::check_tolerances(rtol, atol)?;
+    Ok(Simulation { t_end, output_step, rtol, atol, sample_time })
 }
 
 /// `[noise]`: per-output standard deviations and a seed.

@@ -6,7 +6,9 @@ use std::ops::ControlFlow;
 use nalgebra::{DMatrix, DVector};
 
 use super::dde::{self, DelaySystem, Options, Past};
-use super::result::{Outcome, SimResult};
+use super::divergence::{Watched, DIVERGENCE_BOUND};
+use super::result::{Outcome, RunStats, SimResult};
+use super::{check_run, SimError};
 use crate::controller::{command, mat_vec, packed, swapping_error, Equations};
 use crate::design::Design;
 use crate::signal::{Signal, SignalBank};
@@ -55,24 +57,6 @@ impl Layout {
     /// z, η̂ and x: what y, u and η̂ are computed from.
     fn n_output(&self, n: usize) -> usize {
         self.x + n
-    }
-
-    /// A readable name for state component `k` of the output prefix, for divergence messages.
-    fn name(&self, eq: &Equations, k: usize) -> String {
-        let (n, q) = (eq.n, self.q);
-        if k < q {
-            return format!("xi_hat[{}] (regressor)", k + 1);
-        }
-        if k < eq.nz {
-            return format!("x_hat[{}] (observer state)", k - q + 1);
-        }
-        if k < self.x {
-            return super::eta_name(k - eq.nz, q);
-        }
-        if k < self.x + n {
-            return super::plant_state_name(k - self.x);
-        }
-        format!("state[{k}]")
     }
 }
 
@@ -170,9 +154,15 @@ impl Probe<'_> {
         &s[l.nz..l.x]
     }
 
-    /// The first component of the output prefix that is non-finite or above `bound`, named.
-    fn check(&self, s: &[f64], bound: f64) -> Option<(String, f64)> {
-        s.iter().position(|&v| super::runaway(v, bound)).map(|k| (self.layout.name(&self.eq, k), s[k]))
+    /// The watched signals ξ̂, x̂, η̂ and x in the output prefix.
+    fn watched<'s>(&self, s: &'s [f64]) -> Watched<'s> {
+        let l = &self.layout;
+        Watched {
+            xi_hat: self.eq.regressor(s),
+            x_hat: self.eq.x_hat(s),
+            eta: &s[l.nz..l.x],
+            x: &s[l.x..l.x + self.eq.n],
+        }
     }
 }
 
@@ -363,40 +353,45 @@ pub struct RunSettings {
     pub output_step: f64,
     pub rtol: f64,
     pub atol: f64,
-    /// A state above this magnitude counts as divergence.
+    /// A watched signal above this magnitude counts as divergence ([`Watched`]).
     pub divergence_bound: f64,
 }
 
 impl RunSettings {
-    /// Settings with the default divergence bound 1e9.
+    /// Settings with the default divergence bound [`DIVERGENCE_BOUND`].
     pub fn new(t_end: f64, output_step: f64, rtol: f64, atol: f64) -> Self {
-        RunSettings { t_end, output_step, rtol, atol, divergence_bound: 1e9 }
+        RunSettings { t_end, output_step, rtol, atol, divergence_bound: DIVERGENCE_BOUND }
     }
 }
 
 /// Simulates the continuous closed loop from t = 0 to `t_end`, recording every `output_step`.
 /// `on_progress(t)` is called at each recorded sample; returning `Break` interrupts the run.
-/// The result always holds what was computed; [`SimResult::outcome`] says how the run ended.
+/// The result always holds what was computed; [`SimResult::outcome`] says how the run ended. The
+/// settings and signals are checked first (horizon, tolerances, divergence bound, m reference and k
+/// disturbance components with finite parameters).
 pub fn simulate(
     design: &Design,
     reference: &Signal,
     disturbance: &Signal,
     settings: &RunSettings,
     mut on_progress: impl FnMut(f64) -> ControlFlow<()>,
-) -> SimResult {
+) -> Result<SimResult, SimError> {
+    let RunSettings { t_end, output_step, rtol, atol, divergence_bound } = *settings;
+    check_run(design, reference, disturbance, t_end, output_step, divergence_bound)?;
+    crate::settings::check_tolerances(rtol, atol)?;
     let mut sys = ContinuousLoop::new(design, reference, disturbance);
     let s0 = sys.initial_state(&design.plant().x0);
     let history = vec![0.0; sys.n_delayed()];
     let (m, q) = (sys.eq.m, sys.eq.q);
-    let mut result = SimResult::new(m, q);
+    let mut result = SimResult::new(m, q, RunStats::continuous(&dde::Stats::default()));
     let (mut y, mut g, mut u) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
-    let opts = Options { rtol: settings.rtol, atol: settings.atol, ..Options::default() };
+    let opts = Options { rtol, atol, ..Options::default() };
     let mut outcome = Outcome::Completed;
     // The solver borrows the loop mutably; the output callback reads through its own probe.
     let mut probe = sys.probe();
-    let solved = dde::solve(&mut sys, 0.0, &s0, &history, settings.t_end, settings.output_step, &opts, |t, s| {
-        if let Some((signal, value)) = probe.check(s, settings.divergence_bound) {
-            outcome = Outcome::Diverged { t, signal, value };
+    let solved = dde::solve(&mut sys, 0.0, &s0, &history, t_end, output_step, &opts, |t, s| {
+        if let Some(diverged) = probe.watched(s).diverged(t, divergence_bound) {
+            outcome = diverged;
             return ControlFlow::Break(());
         }
         let eta = probe.outputs(t, s, &mut y, &mut g, &mut u);
@@ -408,9 +403,12 @@ pub fn simulate(
         ControlFlow::Continue(())
     });
     match solved {
-        Ok(stats) => result.stats = stats,
-        Err(dde::SolveError::StepSizeTooSmall { t, .. }) => outcome = Outcome::StepSizeTooSmall { t },
+        Ok(stats) => result.stats = RunStats::continuous(&stats),
+        Err(dde::SolveError::StepSizeTooSmall { t, stats, .. }) => {
+            result.stats = RunStats::continuous(&stats);
+            outcome = Outcome::StepSizeTooSmall { t };
+        }
     }
     result.outcome = Some(outcome);
-    result
+    Ok(result)
 }

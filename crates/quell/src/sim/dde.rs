@@ -136,8 +136,9 @@ pub struct Stats {
 /// Why the integration stopped early.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum SolveError {
+    /// With the statistics up to then.
     #[error("step size underflow at t = {t}: the step shrank to {h:e} without meeting the tolerance")]
-    StepSizeTooSmall { t: f64, h: f64 },
+    StepSizeTooSmall { t: f64, h: f64, stats: Stats },
 }
 
 /// Constant context of a run, shared by all RHS evaluations.
@@ -261,7 +262,7 @@ pub fn solve<S: DelaySystem>(
     let h_cap = opts.h_max.min(tau_min).min(span);
     if h_cap.is_nan() || h_cap < h_min(t_end) {
         // A delay (or h_max) below rounding level of t would force steps that do not advance t.
-        return Err(SolveError::StepSizeTooSmall { t: t0, h: h_cap });
+        return Err(SolveError::StepSizeTooSmall { t: t0, h: h_cap, stats });
     }
     let bps = breakpoints(t0, &delays, t_end);
     let (dt_out, n_out) = if output_step > 0.0 && output_step.is_finite() {
@@ -372,7 +373,7 @@ pub fn solve<S: DelaySystem>(
             last_rejected = true;
             h = h_try / (1.0 / FAC_MIN).min(fac11 / SAFE);
             if h < h_min(t) {
-                return Err(SolveError::StepSizeTooSmall { t, h });
+                return Err(SolveError::StepSizeTooSmall { t, h, stats });
             }
             continue;
         }

@@ -1,28 +1,45 @@
-//! Simulation of the closed loop: the delay-equation integrator, the continuous loop and the one
-//! result type.
+//! Simulation of the closed loop: the delay-equation integrator, the continuous and the
+//! sampled-data loops, the divergence check they share, and the one result type.
 
 pub mod closed_loop;
 pub mod dde;
+pub mod divergence;
 pub mod noise;
 pub mod result;
 pub mod sampled;
 
-/// A state value that counts as divergence: anything but |v| ≤ `bound` (so NaN, ±∞, and every value
-/// when the bound itself is NaN).
-pub(crate) fn runaway(v: f64, bound: f64) -> bool {
-    !matches!(v.abs().partial_cmp(&bound), Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal))
-}
+use crate::controller::ControllerError;
+use crate::design::Design;
+use crate::settings::{self, KeyError};
+use crate::signal::{check_signals, Signal};
 
-/// Divergence-message name of plant state x_j (j from 0).
-pub(crate) fn plant_state_name(j: usize) -> String {
-    format!("x[{}] (plant state)", j + 1)
-}
-
-/// Divergence-message name of entry j (from 0) of η̂ = [η̂_1; …; η̂_m], each of length q.
-pub(crate) fn eta_name(j: usize, q: usize) -> String {
-    format!("eta{}[{}] (adaptive parameters)", j / q + 1, j % q + 1)
-}
-
+pub use crate::settings::MeasurementNoise;
 pub use closed_loop::{simulate, ContinuousLoop, RunSettings};
-pub use result::{ChannelSummary, Outcome, SimResult};
-pub use sampled::{simulate_sampled, MeasurementNoise, SampledError, SampledSettings};
+pub use divergence::{Watched, DIVERGENCE_BOUND};
+pub use result::{ChannelSummary, Outcome, RunStats, SimResult};
+pub use sampled::{simulate_sampled, simulate_sampled_with, SampledController, SampledSettings};
+
+/// Why a run cannot start: a setting or signal out of range (named by its scenario key), or a
+/// controller that cannot run at the sample time.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SimError {
+    #[error(transparent)]
+    Input(#[from] KeyError),
+    #[error(transparent)]
+    Controller(#[from] ControllerError),
+}
+
+/// The checks both loops make: the horizon, the divergence bound, and the signals against the
+/// design's plant (m reference components, k disturbance components, finite parameters).
+fn check_run(
+    design: &Design,
+    reference: &Signal,
+    disturbance: &Signal,
+    t_end: f64,
+    output_step: f64,
+    divergence_bound: f64,
+) -> Result<(), KeyError> {
+    settings::check_horizon(t_end, output_step)?;
+    divergence::check_bound(divergence_bound)?;
+    check_signals(design.plant(), reference, disturbance)
+}

@@ -18,8 +18,50 @@ pub enum Outcome {
     Interrupted { t: f64 },
 }
 
+/// What a run did, in the figures its loop has.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "loop", rename_all = "snake_case")]
+pub enum RunStats {
+    /// The continuous loop: the delay-equation integrator's statistics.
+    Continuous {
+        /// Accepted steps.
+        steps: usize,
+        /// Rejected step attempts.
+        rejected_steps: usize,
+        /// Evaluations of the loop's right-hand side.
+        rhs_evaluations: usize,
+        /// Derivative discontinuities landed on.
+        breakpoints: usize,
+        /// Most step records the delay history held at once.
+        max_history_len: usize,
+    },
+    /// The sampled-data loop: controller steps taken, at the sample time.
+    Sampled { controller_steps: usize, sample_time: f64 },
+}
+
+impl RunStats {
+    /// The continuous loop's figures from the integrator's.
+    pub fn continuous(s: &Stats) -> Self {
+        RunStats::Continuous {
+            steps: s.steps,
+            rejected_steps: s.rejected,
+            rhs_evaluations: s.rhs_evals,
+            breakpoints: s.breakpoints,
+            max_history_len: s.max_history_len,
+        }
+    }
+
+    /// Steps taken: the integrator's accepted steps, or the controller's steps.
+    pub fn steps(&self) -> usize {
+        match *self {
+            RunStats::Continuous { steps, .. } => steps,
+            RunStats::Sampled { controller_steps, .. } => controller_steps,
+        }
+    }
+}
+
 /// Signals at t = k·output_step: rows of y, g, e = y − g, u (the adaptive command (25)) and η̂.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct SimResult {
     pub m: usize,
     pub q: usize,
@@ -31,7 +73,8 @@ pub struct SimResult {
     pub u: Vec<f64>,
     /// Row-major, `t.len()` rows of m·q (η̂_1, …, η̂_m).
     pub eta: Vec<f64>,
-    pub stats: Stats,
+    /// What the loop did (so far, when it stopped early).
+    pub stats: RunStats,
     pub outcome: Option<Outcome>,
 }
 
@@ -49,9 +92,10 @@ pub struct ChannelSummary {
 }
 
 impl SimResult {
-    /// An empty result for m channels and regressor size q.
-    pub fn new(m: usize, q: usize) -> Self {
-        SimResult { m, q, ..Default::default() }
+    /// An empty result for m channels and regressor size q, with the loop's statistics so far.
+    pub fn new(m: usize, q: usize, stats: RunStats) -> Self {
+        let (t, y, g, e, u, eta) = Default::default();
+        SimResult { m, q, t, y, g, e, u, eta, stats, outcome: None }
     }
 
     /// Appends one sample.

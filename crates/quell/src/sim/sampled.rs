@@ -8,22 +8,15 @@ use std::ops::ControlFlow;
 
 use nalgebra::{DMatrix, DVector};
 
+use super::divergence::{Watched, DIVERGENCE_BOUND};
 use super::noise::Gaussian;
-use super::result::{Outcome, SimResult};
-use crate::controller::{mat_vec, Controller, ControllerError};
+use super::result::{Outcome, RunStats, SimResult};
+use super::{check_run, SimError};
+use crate::controller::{mat_vec, Controller};
 use crate::design::Design;
 use crate::linalg::zoh;
+use crate::settings::{self, KeyError, MeasurementNoise};
 use crate::signal::Signal;
-
-/// White Gaussian measurement noise on y: standard deviation per output and a seed.
-#[derive(Debug, Clone, PartialEq)]
-pub struct MeasurementNoise {
-    pub std: Vec<f64>,
-    pub seed: u64,
-}
-
-/// Most controller steps of a sampled-data run (t_end / sample_time).
-pub const MAX_SAMPLING_STEPS: f64 = 1e10;
 
 /// Settings of a sampled-data run.
 #[derive(Debug, Clone, PartialEq)]
@@ -33,50 +26,101 @@ pub struct SampledSettings {
     pub output_step: f64,
     pub sample_time: f64,
     pub noise: Option<MeasurementNoise>,
-    /// A state above this magnitude counts as divergence.
+    /// A watched signal above this magnitude counts as divergence ([`Watched`]).
     pub divergence_bound: f64,
 }
 
-/// Why a sampled-data run cannot start.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum SampledError {
-    #[error(transparent)]
-    Controller(#[from] ControllerError),
-    #[error("simulation.sample_time (--sample-time): t_end / T_s = {steps:.3e} controller steps; at most {max:e} are run; choose a sample time ≥ {min_sample_time:e} s")]
-    TooManySteps { steps: f64, max: f64, min_sample_time: f64 },
-    #[error("simulation.output_step: expected a whole multiple of sample_time = {sample_time} s, found {output_step} s ({ratio:.6} samples)")]
-    OutputStep { output_step: f64, sample_time: f64, ratio: f64 },
+/// What the sampled-data loop needs of a discrete controller. [`Controller`] is one; another
+/// implementation of the same equations (generated C through FFI, say) can stand in for it in
+/// [`simulate_sampled_with`].
+pub trait SampledController {
+    /// One sample: reads y(k) and g(k), returns the plant input u_f(k) (m entries) to hold until the
+    /// next sample.
+    fn step(&mut self, y: &[f64], g: &[f64]) -> &[f64];
+    /// The adaptive command u(k) (25) of the last step.
+    fn command(&self) -> &[f64];
+    /// ξ̂, x̂ and η̂ after the last step (`x` is left empty: the loop fills in the plant's).
+    fn watched(&self) -> Watched<'_>;
 }
 
-impl SampledSettings {
-    /// Checks that the controller can run at `sample_time` (delays whole numbers of samples) and
-    /// that `output_step` is a whole multiple of it; returns the controller and the samples per output.
-    pub fn check(&self, design: &Design) -> Result<(Controller, usize), SampledError> {
-        let T = self.sample_time;
-        let max = MAX_SAMPLING_STEPS;
-        if self.t_end / T > max {
-            return Err(SampledError::TooManySteps { steps: self.t_end / T, max, min_sample_time: self.t_end / max });
-        }
-        let ctrl = Controller::new(design, T)?;
-        let ratio = self.output_step / T;
-        if (ratio - ratio.round()).abs() > 1e-9 * ratio.max(1.0) || ratio.round() < 1.0 {
-            return Err(SampledError::OutputStep { output_step: self.output_step, sample_time: T, ratio });
-        }
-        Ok((ctrl, ratio.round() as usize))
+impl SampledController for Controller {
+    fn step(&mut self, y: &[f64], g: &[f64]) -> &[f64] {
+        Controller::step(self, y, g)
+    }
+    fn command(&self) -> &[f64] {
+        Controller::command(self)
+    }
+    fn watched(&self) -> Watched<'_> {
+        Watched { xi_hat: self.xi_hat(), x_hat: self.x_hat(), eta: self.eta(), x: &[] }
     }
 }
 
-/// Runs the sampled-data loop from t = 0 to `t_end`; `on_progress(t)` at each recorded sample,
-/// `Break` interrupts. The result always holds what was computed.
+impl SampledSettings {
+    /// Settings without noise and with the default divergence bound.
+    pub fn new(t_end: f64, output_step: f64, sample_time: f64) -> Self {
+        SampledSettings { t_end, output_step, sample_time, noise: None, divergence_bound: DIVERGENCE_BOUND }
+    }
+
+    /// Checks everything the run needs (horizon, sample time, signals for the design's plant, noise,
+    /// divergence bound), that the controller can run at `sample_time` (delays whole numbers of
+    /// samples) and that `output_step` is a whole multiple of it; returns the controller.
+    pub fn check(&self, design: &Design, reference: &Signal, disturbance: &Signal) -> Result<Controller, SimError> {
+        self.check_settings(design, reference, disturbance)?;
+        let ctrl = Controller::new(design, self.sample_time)?;
+        self.samples_per_output()?;
+        Ok(ctrl)
+    }
+
+    /// Every check but the controller's.
+    fn check_settings(&self, design: &Design, reference: &Signal, disturbance: &Signal) -> Result<(), SimError> {
+        check_run(design, reference, disturbance, self.t_end, self.output_step, self.divergence_bound)?;
+        settings::check_sample_time(self.t_end, self.sample_time)?;
+        if let Some(noise) = &self.noise {
+            noise.check(design.plant().m())?;
+        }
+        Ok(())
+    }
+
+    /// Controller steps per recorded sample: output_step / sample_time, a whole number ≥ 1.
+    fn samples_per_output(&self) -> Result<usize, KeyError> {
+        let (T, h) = (self.sample_time, self.output_step);
+        let ratio = h / T;
+        if (ratio - ratio.round()).abs() > 1e-9 * ratio.max(1.0) || ratio.round() < 1.0 {
+            return Err(KeyError::new(
+                "simulation.output_step",
+                format!("expected a whole multiple of sample_time = {T} s, found {h} s ({ratio:.6} samples)"),
+            ));
+        }
+        Ok(ratio.round() as usize)
+    }
+}
+
+/// Runs the sampled-data loop with [`Controller`] from t = 0 to `t_end`; `on_progress(t)` at each
+/// recorded sample, `Break` interrupts. The result always holds what was computed.
 pub fn simulate_sampled(
     design: &Design,
     reference: &Signal,
     disturbance: &Signal,
     settings: &SampledSettings,
+    on_progress: impl FnMut(f64) -> ControlFlow<()>,
+) -> Result<SimResult, SimError> {
+    let mut ctrl = settings.check(design, reference, disturbance)?;
+    simulate_sampled_with(design, &mut ctrl, reference, disturbance, settings, on_progress)
+}
+
+/// [`simulate_sampled`] with any [`SampledController`] in the loop, from its current state; the
+/// controller must run at `settings.sample_time` (its own constructor checks the delays).
+pub fn simulate_sampled_with(
+    design: &Design,
+    ctrl: &mut impl SampledController,
+    reference: &Signal,
+    disturbance: &Signal,
+    settings: &SampledSettings,
     mut on_progress: impl FnMut(f64) -> ControlFlow<()>,
-) -> Result<SimResult, SampledError> {
+) -> Result<SimResult, SimError> {
+    settings.check_settings(design, reference, disturbance)?;
+    let every = settings.samples_per_output()?;
     let T = settings.sample_time;
-    let (mut ctrl, every) = settings.check(design)?;
     let p = design.plant();
     let (n, m) = (p.n(), p.m());
     let (S, H, w0) = disturbance.exosystem();
@@ -100,9 +144,11 @@ pub fn simulate_sampled(
     let mut s_next = s.clone();
     let (mut y, mut y_meas, mut g) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
     let mut noise = settings.noise.as_ref().map(|nz| (Gaussian::new(nz.seed), nz.std.clone()));
-    let mut result = SimResult::new(m, design.q());
+    let stats = |controller_steps| RunStats::Sampled { controller_steps, sample_time: T };
+    let mut result = SimResult::new(m, design.q(), stats(0));
     let steps = (settings.t_end / T + 1e-9).floor() as usize;
     let mut outcome = Outcome::Completed;
+    let mut taken = 0;
     for k in 0..=steps {
         let t = k as f64 * T;
         mat_vec(&Cy, s.as_slice(), &mut y, false);
@@ -114,20 +160,16 @@ pub fn simulate_sampled(
             }
         }
         let u_f = ctrl.step(&y_meas, &g);
+        taken += 1;
         mat_vec(&Phi, s.as_slice(), s_next.as_mut_slice(), false);
         mat_vec(&Gamma, u_f, s_next.as_mut_slice(), true);
         if k % every == 0 {
-            let bound = settings.divergence_bound;
-            let bad = (0..n).find(|&j| super::runaway(s[j], bound)).map(|j| (super::plant_state_name(j), s[j]));
-            let eta = ctrl.eta();
-            let bad = bad.or_else(|| {
-                eta.iter().position(|&v| super::runaway(v, bound)).map(|j| (super::eta_name(j, design.q()), eta[j]))
-            });
-            if let Some((signal, value)) = bad {
-                outcome = Outcome::Diverged { t, signal, value };
+            let watched = Watched { x: &s.as_slice()[..n], ..ctrl.watched() };
+            if let Some(diverged) = watched.diverged(t, settings.divergence_bound) {
+                outcome = diverged;
                 break;
             }
-            result.push(t, &y, &g, ctrl.command(), eta);
+            result.push(t, &y, &g, ctrl.command(), watched.eta);
             if on_progress(t).is_break() {
                 outcome = Outcome::Interrupted { t };
                 break;
@@ -135,7 +177,7 @@ pub fn simulate_sampled(
         }
         std::mem::swap(&mut s, &mut s_next);
     }
-    result.stats.steps = steps + 1;
+    result.stats = stats(taken);
     result.outcome = Some(outcome);
     Ok(result)
 }

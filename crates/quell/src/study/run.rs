@@ -105,7 +105,7 @@ pub struct Row {
 /// |e| ≤ max(relative · max_k |g(t_k)|, absolute) at every sample.
 fn settle_time(t: &[f64], e: &[f64], g: &[f64], s: &Settle) -> Option<f64> {
     let band = (s.relative * g.iter().fold(0.0f64, |a, v| a.max(v.abs()))).max(s.absolute);
-    match e.iter().rposition(|&v| crate::sim::runaway(v, band)) {
+    match e.iter().rposition(|&v| crate::sim::divergence::beyond(v, band)) {
         None => t.first().copied(),
         Some(k) => t.get(k + 1).copied(),
     }
@@ -137,15 +137,12 @@ pub(crate) fn simulate(s: &Scenario, stop: &dyn Fn() -> bool) -> Result<SimResul
     match sim.sample_time {
         None => {
             let settings = RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol);
-            Ok(sim::simulate(&design, &s.reference, &s.disturbance, &settings, progress))
+            sim::simulate(&design, &s.reference, &s.disturbance, &settings, progress).map_err(|e| e.to_string())
         }
         Some(sample_time) => {
             let settings = SampledSettings {
-                t_end: sim.t_end,
-                output_step: sim.output_step,
-                sample_time,
                 noise: s.noise.clone(),
-                divergence_bound: RunSettings::new(1.0, 1.0, 1.0, 1.0).divergence_bound,
+                ..SampledSettings::new(sim.t_end, sim.output_step, sample_time)
             };
             sim::simulate_sampled(&design, &s.reference, &s.disturbance, &settings, progress).map_err(|e| e.to_string())
         }
@@ -171,7 +168,7 @@ fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
     match result {
         Err(reason) => row.reason = reason,
         Ok(r) => {
-            row.steps = r.stats.steps as u64;
+            row.steps = r.stats.steps() as u64;
             match r.outcome.as_ref().unwrap_or(&sim::Outcome::Completed) {
                 sim::Outcome::Completed => {
                     row.outcome = Outcome::Completed;

@@ -60,7 +60,8 @@ pub fn paper_signals() -> (Signal, Signal) {
 pub fn run_paper(spec: DesignSpec, t_end: f64, output_step: f64, tol: f64) -> SimResult {
     let d = Design::new(&paper_plant(), &spec).unwrap();
     let (g, w) = paper_signals();
-    let r = simulate(&d, &g, &w, &RunSettings::new(t_end, output_step, tol, tol), |_| ControlFlow::Continue(()));
+    let r =
+        simulate(&d, &g, &w, &RunSettings::new(t_end, output_step, tol, tol), |_| ControlFlow::Continue(())).unwrap();
     assert_eq!(r.outcome, Some(Outcome::Completed));
     r
 }

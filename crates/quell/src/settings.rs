@@ -1,0 +1,114 @@
+//! What a run is asked for, and the limits on it: horizon, output step, tolerances, sample time and
+//! measurement noise. Each is checked once, here; the scenario reader ([`crate::scenario`]) and both
+//! loops ([`crate::sim`]) call these checks, so the boundary module does not know the simulator and
+//! the library refuses what the scenario file would.
+
+use thiserror::Error;
+
+/// A value out of range, named by its scenario key path (`simulation.t_end`, `noise.std[1]`), with
+/// what was expected and found. The message also names the CLI flag that overrides the key, if any.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[error("{key}{}: {message}", cli_flag(key).map(|f| format!(" ({f})")).unwrap_or_default())]
+pub struct KeyError {
+    pub key: String,
+    pub message: String,
+}
+
+impl KeyError {
+    pub fn new(key: impl Into<String>, message: impl Into<String>) -> Self {
+        KeyError { key: key.into(), message: message.into() }
+    }
+}
+
+/// The `quell run` flag that overrides a scenario key.
+fn cli_flag(key: &str) -> Option<&'static str> {
+    (key == "simulation.sample_time").then_some("--sample-time")
+}
+
+/// Most rows a run records (t_end / output_step): every row is kept in memory, ~200 bytes each.
+pub const MAX_OUTPUT_SAMPLES: f64 = 1e7;
+
+/// Most controller steps of a sampled-data run (t_end / sample_time).
+pub const MAX_SAMPLING_STEPS: f64 = 1e10;
+
+/// White Gaussian measurement noise on y (sampled-data runs only): standard deviation per output and
+/// a seed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeasurementNoise {
+    pub std: Vec<f64>,
+    pub seed: u64,
+}
+
+impl MeasurementNoise {
+    /// One finite standard deviation ≥ 0 per output (m of them).
+    pub fn check(&self, m: usize) -> Result<(), KeyError> {
+        if self.std.len() != m {
+            return Err(KeyError::new(
+                "noise.std",
+                format!("expected {m} entries (one per output), found {}", self.std.len()),
+            ));
+        }
+        match self.std.iter().enumerate().find(|(_, s)| !(**s >= 0.0 && s.is_finite())) {
+            Some((i, s)) => {
+                let finite = if *s >= 0.0 { "finite " } else { "" };
+                Err(KeyError::new(
+                    format!("noise.std[{i}]"),
+                    format!("expected a {finite}standard deviation ≥ 0, found {s}"),
+                ))
+            }
+            None => Ok(()),
+        }
+    }
+}
+
+/// `x` if it is finite and > 0; otherwise an error on `key` describing it as `what`.
+pub fn positive(key: &str, what: &str, x: f64) -> Result<f64, KeyError> {
+    if x > 0.0 && x.is_finite() {
+        Ok(x)
+    } else {
+        let finite = if x.is_infinite() { " and finite" } else { "" };
+        Err(KeyError::new(key, format!("expected {what} > 0{finite}, found {x}")))
+    }
+}
+
+/// The horizon of a run: 0 < output_step ≤ t_end, both finite, and at most [`MAX_OUTPUT_SAMPLES`]
+/// rows.
+pub fn check_horizon(t_end: f64, output_step: f64) -> Result<(), KeyError> {
+    positive("simulation.t_end", "a final time", t_end)?;
+    positive("simulation.output_step", "an output step", output_step)?;
+    if output_step > t_end {
+        return Err(KeyError::new(
+            "simulation.output_step",
+            format!("expected an output step ≤ t_end = {t_end}, found {output_step}"),
+        ));
+    }
+    let samples = t_end / output_step;
+    if samples > MAX_OUTPUT_SAMPLES {
+        return Err(KeyError::new(
+            "simulation.output_step",
+            format!("t_end / output_step = {samples:.3e} rows of signals.csv; at most {MAX_OUTPUT_SAMPLES:e} are kept; choose output_step ≥ {}", t_end / MAX_OUTPUT_SAMPLES),
+        ));
+    }
+    Ok(())
+}
+
+/// The integrator's tolerances: finite and > 0.
+pub fn check_tolerances(rtol: f64, atol: f64) -> Result<(), KeyError> {
+    positive("simulation.rtol", "a relative tolerance", rtol)?;
+    positive("simulation.atol", "an absolute tolerance", atol)?;
+    Ok(())
+}
+
+/// A sampling period: finite, > 0, and at most [`MAX_SAMPLING_STEPS`] controller steps to t_end.
+pub fn check_sample_time(t_end: f64, sample_time: f64) -> Result<(), KeyError> {
+    const KEY: &str = "simulation.sample_time";
+    positive(KEY, "a sampling period", sample_time)?;
+    let steps = t_end / sample_time;
+    if steps > MAX_SAMPLING_STEPS {
+        return Err(KeyError::new(
+            KEY,
+            format!("t_end / sample_time = {steps:.3e} controller steps; at most {MAX_SAMPLING_STEPS:e} are run; choose sample_time ≥ {}", t_end / MAX_SAMPLING_STEPS),
+        ));
+    }
+    Ok(())
+}
