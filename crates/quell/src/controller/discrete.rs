@@ -5,7 +5,7 @@
 use nalgebra::DMatrix;
 use thiserror::Error;
 
-use super::{command, mat_vec, swapping_error, Equations};
+use super::{command, mat_vec, packed, swapping_error, Equations};
 use crate::design::Design;
 use crate::linalg::zoh;
 
@@ -66,7 +66,7 @@ struct Channel {
     gamma: Vec<f64>,
     W: Vec<f64>,
     W_next: Vec<f64>,
-    /// H filter memories Y_i and Ω_i (full q×q: dense loops vectorize, and memory is not scarce here).
+    /// H filter memories Y_i and Ω_i (packed symmetric, [`packed`], as in the continuous loop).
     Y: Vec<f64>,
     Omega: Vec<f64>,
     /// Delay line of the row [u_i, ξ̂ᵀ].
@@ -153,7 +153,7 @@ impl Controller {
                     W: vec![0.0; len],
                     W_next: vec![0.0; len],
                     Y: vec![0.0; q],
-                    Omega: vec![0.0; q * q],
+                    Omega: vec![0.0; packed::len(q)],
                     line: DelayLine::new(d, 1 + q),
                     c: T * ch.mu,
                 }
@@ -298,8 +298,8 @@ impl Controller {
 /// implicit in ρI and explicit in the rest (Ω = ρI − (ρI − Ω)):
 /// η̂ ← η̂ + c (Y − Ω η̂) / (1 + c ρ),  with ρ = tr Ω ≥ λ_max(Ω).
 /// For PSD Ω the map η̂ ↦ (I − cΩ/(1 + cρ)) η̂ has eigenvalues in [1/(1 + cρ), 1]: nonexpansive for
-/// every μ ≥ 0 and T_s, with the fixed points of (33), at O(q²) cost. `Omega` is the full symmetric
-/// q×q matrix; one pass over it computes the update, Ω η̂ = Σ_i η̂_i·(row i of Ω) and tr Ω.
+/// every μ ≥ 0 and T_s, with the fixed points of (33), at O(q²) cost. `Omega` is packed symmetric
+/// ([`packed`]); one pass updates it and computes Ω η̂ and tr Ω.
 pub fn adapt(
     c: f64,
     Omega: &mut [f64],
@@ -309,18 +309,8 @@ pub fn adapt(
     eta: &mut [f64],
     tmp: &mut [f64],
 ) {
-    let q = eta.len();
-    assert!(Omega.len() == q * q && Y.len() == q && tmp.len() == q && Delta.len() == q, "adapt: dimension mismatch");
-    tmp.fill(0.0);
-    let mut trace = 0.0;
-    for (i, ((row, &di), &ei)) in Omega.chunks_exact_mut(q).zip(Delta).zip(eta.iter()).enumerate() {
-        let bdi = b * di;
-        for ((o, dj), t) in row.iter_mut().zip(Delta).zip(tmp.iter_mut()) {
-            *o = a * *o + bdi * dj;
-            *t += *o * ei;
-        }
-        trace += row[i];
-    }
+    assert!(Y.len() == eta.len(), "adapt: dimension mismatch");
+    let trace = packed::filter_step_and_apply(a, b, Delta, Omega, eta, tmp);
     let gain = c / (1.0 + c * trace);
     for ((e, y), w) in eta.iter_mut().zip(Y).zip(tmp.iter()) {
         *e += gain * (y - w);
