@@ -8,6 +8,7 @@ mod export;
 mod output;
 mod plot;
 mod report;
+mod sweep;
 
 use std::io::IsTerminal;
 use std::ops::ControlFlow;
@@ -48,6 +49,8 @@ enum Command {
     Run(RunArgs),
     /// Write the real-time controller as dependency-free C99 (<PREFIX>_controller.h and .c).
     Export(export::ExportArgs),
+    /// Run every point of a study's grid and Monte Carlo draws; write runs.csv, summary.json, sweep.png.
+    Sweep(sweep::SweepArgs),
 }
 
 #[derive(clap::Args, Default)]
@@ -73,7 +76,7 @@ const QUITTING: u8 = 2;
 const WRITING: u8 = 3;
 
 /// A failure with its exit code.
-enum Failure {
+pub(crate) enum Failure {
     /// Bad input or an infeasible design: exit 2.
     Input(String),
     /// A run that failed: exit 1.
@@ -86,6 +89,7 @@ fn main() -> ExitCode {
         Some(Command::Design { scenario, json }) => design(&scenario, json),
         Some(Command::Run(args)) => run(&args),
         Some(Command::Export(args)) => export::run(&args),
+        Some(Command::Sweep(args)) => sweep::sweep(&args),
         None => {
             eprintln!(
                 "quell: running the paper's example (Section VIII) into quell-out/; `quell --help` lists the commands"

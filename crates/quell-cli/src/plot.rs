@@ -120,17 +120,212 @@ pub fn plot_channel(dir: &Path, r: &SimResult, i: usize) -> io::Result<()> {
     let mut rgb = vec![255u8; (SIZE.0 * SIZE.1 * 3) as usize];
     draw(BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area(), r, i, false)
         .map_err(|e| io::Error::other(format!("{}: {e}", png.display())))?;
-    write_atomic(&png, |w| {
-        let mut encoder = png::Encoder::new(w, SIZE.0, SIZE.1);
+    write_png(&png, &rgb, SIZE)?;
+    let mut svg = String::new();
+    draw(SVGBackend::with_string(&mut svg, SIZE).into_drawing_area(), r, i, true).map_err(io::Error::other)?;
+    write_atomic(&dir.join(format!("channel{}.svg", i + 1)), |w| w.write_all(svg.as_bytes()))
+}
+
+/// Writes an RGB buffer of `size` as a PNG, atomically.
+fn write_png(path: &Path, rgb: &[u8], size: (u32, u32)) -> io::Result<()> {
+    write_atomic(path, |w| {
+        let mut encoder = png::Encoder::new(w, size.0, size.1);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
         // Fast deflate: about twice the file size of the default level, a third of the time.
         encoder.set_compression(png::Compression::Fast);
         let mut writer = encoder.write_header().map_err(io::Error::other)?;
-        writer.write_image_data(&rgb).map_err(io::Error::other)?;
+        writer.write_image_data(rgb).map_err(io::Error::other)?;
         writer.finish().map_err(io::Error::other)
-    })?;
+    })
+}
+
+/// A grid axis's values as plot coordinates: the numbers themselves when every value is one,
+/// else their positions 0, 1, … (labelled by the values).
+fn axis_coords(values: &[String]) -> (Vec<f64>, bool) {
+    match values.iter().map(|v| v.parse::<f64>()).collect::<Result<Vec<f64>, _>>() {
+        Ok(x) if x.iter().all(|v| v.is_finite()) => (x, true),
+        _ => ((0..values.len()).map(|k| k as f64).collect(), false),
+    }
+}
+
+/// The figures a sweep plots, with their axis labels.
+const SWEEP_FIGURES: [(&str, &str); 3] =
+    [("tail RMS e", "tail_rms_e"), ("max |u|", "max_u"), ("settling time, s", "settle_t")];
+
+fn figure_of<'a>(c: &'a quell::study::ChannelQuantiles, name: &str) -> &'a quell::study::Quantiles {
+    match name {
+        "tail_rms_e" => &c.tail_rms_e,
+        "max_u" => &c.max_u,
+        _ => &c.settle_t,
+    }
+}
+
+/// 1-D grid: rows = figures, columns = channels; the median with 25–75 % and 5–95 % bands.
+fn draw_sweep_1d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::study::Summary) -> Result<(), String> {
+    let axis = &s.study.grid[0];
+    let (x, numeric) = axis_coords(&axis.values);
+    let areas = root.split_evenly((SWEEP_FIGURES.len(), s.study.m));
+    for (f, (label, name)) in SWEEP_FIGURES.iter().enumerate() {
+        for i in 0..s.study.m {
+            let area = &areas[f * s.study.m + i];
+            let at = |p: f64| -> Vec<(f64, f64)> {
+                s.points
+                    .iter()
+                    .filter_map(|pt| figure_of(&pt.channels[i], name).at(p).map(|v| (x[pt.point], v)))
+                    .collect()
+            };
+            let all: Vec<f64> = [0.05, 0.5, 0.95].iter().flat_map(|&p| at(p)).map(|(_, v)| v).collect();
+            let (lo, hi) = all.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+            let (lo, hi) = if lo < hi {
+                (lo, hi)
+            } else if lo == hi {
+                (lo - 1.0, hi + 1.0)
+            } else {
+                (0.0, 1.0)
+            };
+            let (x0, x1) = x.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+            let (x0, x1) = if x0 < x1 { (x0, x1) } else { (x0 - 1.0, x0 + 1.0) };
+            let pad = 0.05 * (hi - lo);
+            let mut chart = ChartBuilder::on(area)
+                .caption(format!("Channel {}: {label}", i + 1), ("sans-serif", 18))
+                .margin(8)
+                .margin_right(20)
+                .x_label_area_size(36)
+                .y_label_area_size(80)
+                .build_cartesian_2d(x0..x1, (lo - pad)..(hi + pad))
+                .map_err(|e| e.to_string())?;
+            let values = axis.values.clone();
+            let fmt = move |v: &f64| {
+                if numeric {
+                    format!("{v}")
+                } else {
+                    values.get(v.round() as usize).cloned().unwrap_or_default()
+                }
+            };
+            chart
+                .configure_mesh()
+                .max_light_lines(2)
+                .x_desc(axis.key.as_str())
+                .y_desc(*label)
+                .x_label_formatter(&fmt)
+                .label_style(("sans-serif", 13))
+                .draw()
+                .map_err(|e| e.to_string())?;
+            let color = Palette99::pick(i).to_rgba();
+            for (a, b, alpha) in [(0.05, 0.95, 0.15), (0.25, 0.75, 0.3)] {
+                let (low, high) = (at(a), at(b));
+                if low.len() >= 2 && low.len() == high.len() {
+                    let ring: Vec<(f64, f64)> = low.iter().copied().chain(high.iter().rev().copied()).collect();
+                    chart
+                        .draw_series(std::iter::once(Polygon::new(ring, color.mix(alpha).filled())))
+                        .map_err(|e| e.to_string())?;
+                }
+            }
+            let median = at(0.5);
+            chart
+                .draw_series(LineSeries::new(median.iter().copied(), color.stroke_width(2)))
+                .map_err(|e| e.to_string())?;
+            chart.draw_series(median.iter().map(|&p| Circle::new(p, 3, color.filled()))).map_err(|e| e.to_string())?;
+        }
+    }
+    root.present().map_err(|e| e.to_string())
+}
+
+/// A colour from dark blue (t = 0) through green to yellow (t = 1), roughly viridis.
+fn ramp(t: f64) -> RGBColor {
+    let t = t.clamp(0.0, 1.0);
+    let stops =
+        [(68.0, 1.0, 84.0), (59.0, 82.0, 139.0), (33.0, 145.0, 140.0), (94.0, 201.0, 98.0), (253.0, 231.0, 37.0)];
+    let k = (t * 4.0).floor().min(3.0) as usize;
+    let u = t * 4.0 - k as f64;
+    let (a, b) = (stops[k], stops[k + 1]);
+    let mix = |x: f64, y: f64| (x + u * (y - x)).round() as u8;
+    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}
+
+/// 2-D grid: per channel, a heat map of the median tail RMS e (log colour scale), the value in
+/// each cell.
+fn draw_sweep_2d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::study::Summary) -> Result<(), String> {
+    let (ax, ay) = (&s.study.grid[0], &s.study.grid[1]);
+    let (nx, ny) = (ax.values.len(), ay.values.len());
+    let areas = root.split_evenly((1, s.study.m));
+    for (i, area) in areas.iter().enumerate() {
+        let cell = |pt: &quell::study::PointSummary| pt.channels[i].tail_rms_e.p50.filter(|v| *v > 0.0);
+        let logs: Vec<f64> = s.points.iter().filter_map(cell).map(f64::log10).collect();
+        let (lo, hi) = logs.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+        let span = if hi > lo { hi - lo } else { 1.0 };
+        let mut chart = ChartBuilder::on(area)
+            .caption(format!("Channel {}: median tail RMS e", i + 1), ("sans-serif", 18))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d(-0.5..nx as f64 - 0.5, -0.5..ny as f64 - 0.5)
+            .map_err(|e| e.to_string())?;
+        let (xv, yv) = (ax.values.clone(), ay.values.clone());
+        let fx = move |v: &f64| xv.get(v.round().max(0.0) as usize).cloned().unwrap_or_default();
+        let fy = move |v: &f64| yv.get(v.round().max(0.0) as usize).cloned().unwrap_or_default();
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_labels(nx.min(12))
+            .y_labels(ny.min(12))
+            .x_desc(ax.key.as_str())
+            .y_desc(ay.key.as_str())
+            .x_label_formatter(&fx)
+            .y_label_formatter(&fy)
+            .label_style(("sans-serif", 13))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        for pt in &s.points {
+            let (gx, gy) = (pt.point / ny, pt.point % ny);
+            let (x, y) = (gx as f64, gy as f64);
+            let (shade, text) = match cell(pt) {
+                Some(v) => ((v.log10() - lo) / span, format!("{v:.2e}")),
+                None => (1.0, "—".to_string()),
+            };
+            let color = if text == "—" { RGBColor(200, 200, 200) } else { ramp(shade) };
+            let ink = if shade > 0.6 { BLACK } else { WHITE };
+            chart
+                .draw_series(std::iter::once(Rectangle::new([(x - 0.5, y - 0.5), (x + 0.5, y + 0.5)], color.filled())))
+                .map_err(|e| e.to_string())?;
+            if nx * ny <= 144 {
+                chart
+                    .draw_series(std::iter::once(Text::new(
+                        text,
+                        (x - 0.3, y + 0.1),
+                        ("sans-serif", 12).into_font().color(&ink),
+                    )))
+                    .map_err(|e| e.to_string())?;
+            }
+        }
+    }
+    root.present().map_err(|e| e.to_string())
+}
+
+/// Writes sweep.png and sweep.svg for a 1-D or 2-D grid (other grids have no figure).
+pub fn plot_sweep(dir: &Path, s: &quell::study::Summary) -> io::Result<()> {
+    register_font();
+    let draw = match s.study.grid.len() {
+        1 => draw_sweep_1d::<BitMapBackend>,
+        2 => draw_sweep_2d::<BitMapBackend>,
+        _ => return Ok(()),
+    };
+    let size = (520 * s.study.m as u32, if s.study.grid.len() == 1 { 900 } else { 520 });
+    let png = dir.join("sweep.png");
+    let mut rgb = vec![255u8; (size.0 * size.1 * 3) as usize];
+    draw(BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area(), s)
+        .map_err(|e| io::Error::other(format!("{}: {e}", png.display())))?;
+    write_png(&png, &rgb, size)?;
     let mut svg = String::new();
-    draw(SVGBackend::with_string(&mut svg, SIZE).into_drawing_area(), r, i, true).map_err(io::Error::other)?;
-    write_atomic(&dir.join(format!("channel{}.svg", i + 1)), |w| w.write_all(svg.as_bytes()))
+    {
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| io::Error::other(e.to_string()))?;
+        match s.study.grid.len() {
+            1 => draw_sweep_1d(root, s),
+            _ => draw_sweep_2d(root, s),
+        }
+        .map_err(io::Error::other)?;
+    }
+    write_atomic(&dir.join("sweep.svg"), |w| w.write_all(svg.as_bytes()))
 }

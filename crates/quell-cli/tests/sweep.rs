@@ -1,0 +1,178 @@
+//! `quell sweep` end to end: sharded and merged equals unsharded, exit codes and messages for
+//! bad study files and bad merges, Ctrl-C leaves complete rows marked partial.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::Duration;
+
+fn quell(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_quell")).args(args).output().expect("the quell binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn scratch(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("quell-sweep-test-{}-{tag}", std::process::id()));
+    let _ = fs::remove_dir_all(&dir);
+    fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn write_study(dir: &Path, name: &str, text: &str) -> String {
+    let p = dir.join(name);
+    fs::write(&p, text).unwrap();
+    p.display().to_string()
+}
+
+const STUDY: &str = r#"
+scenario = "paper.toml"
+[simulation]
+t_end = 10.0
+rtol = 1e-6
+atol = 1e-6
+[grid]
+"design.mu[0]" = [10.0, 40.0]
+"design.beta" = [1.0, 2.0]
+[monte_carlo]
+runs = 2
+seed = 5
+"plant.x0" = { normal = 0.2 }
+"#;
+
+fn paper_into(dir: &Path) {
+    fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/paper.toml"), dir.join("paper.toml")).unwrap();
+}
+
+/// runs.csv without the wall_ms column (the only one that depends on the machine).
+fn rows_without_wall_time(dir: &Path) -> Vec<String> {
+    let text = fs::read_to_string(dir.join("runs.csv")).unwrap();
+    text.lines().map(|l| l.rsplit_once(',').unwrap().0.to_string()).collect()
+}
+
+#[test]
+fn sharded_and_merged_equals_unsharded() {
+    let dir = scratch("shards");
+    paper_into(&dir);
+    let study = write_study(&dir, "study.toml", STUDY);
+    let out = |name: &str| dir.join(name).display().to_string();
+    let o = quell(&["sweep", &study, "--out", &out("all"), "--jobs", "2"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("8 of 8 runs: 8 completed"), "{}", stderr(&o));
+    for name in ["runs.csv", "summary.json", "sweep.png", "sweep.svg"] {
+        assert!(dir.join("all").join(name).is_file(), "{name}");
+    }
+    for i in 0..3 {
+        let o = quell(&[
+            "sweep",
+            &study,
+            "--shard",
+            &format!("{i}/3"),
+            "--out",
+            &out(&format!("s{i}")),
+            "--no-plots",
+            "--jobs",
+            "1",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let o = quell(&["sweep", "--merge", &out("s2"), &out("s0"), &out("s1"), "--out", &out("merged")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (all, merged) = (rows_without_wall_time(&dir.join("all")), rows_without_wall_time(&dir.join("merged")));
+    assert_eq!(all.len(), 9);
+    assert_eq!(all, merged);
+    let summary = |d: &str| {
+        let v: serde_json::Value =
+            serde_json::from_str(&fs::read_to_string(dir.join(d).join("summary.json")).unwrap()).unwrap();
+        v["points"].as_array().unwrap().len()
+    };
+    assert_eq!(summary("all"), 4);
+    assert_eq!(summary("merged"), 4);
+
+    // Merging a shard twice, leaving one out, or mixing studies is refused with exit code 2.
+    let o = quell(&["sweep", "--merge", &out("s0"), &out("s0"), &out("s1"), "--out", &out("bad")]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("shard 0/3 is given twice"), "{}", stderr(&o));
+    let o = quell(&["sweep", "--merge", &out("s0"), &out("s1"), "--out", &out("bad")]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("shard 2/3 is missing"), "{}", stderr(&o));
+    let other = write_study(&dir, "other.toml", &STUDY.replace("seed = 5", "seed = 6"));
+    let o = quell(&["sweep", &other, "--shard", "1/3", "--out", &out("o1"), "--no-plots"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = quell(&["sweep", "--merge", &out("s0"), &out("o1"), &out("s2"), "--out", &out("bad")]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("comes from a different study than"), "{}", stderr(&o));
+    let _ = fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_study_files_exit_2_naming_the_key() {
+    let dir = scratch("bad");
+    paper_into(&dir);
+    let cases: &[(&str, &[&str], &str)] = &[
+        ("[grid]\n\"design.nu\" = [1.0]\n", &[], "grid.\"design.nu\": design.nu is not a value of the scenario"),
+        (
+            "[monte_carlo]\nruns = 2\n\"truth.A\" = { cauchy = 1.0 }\n",
+            &[],
+            "monte_carlo.\"truth.A\".cauchy: unknown distribution",
+        ),
+        ("", &["--shard", "3/3"], "--shard: shard index 3 ≥ N = 3"),
+        ("", &["--jobs", "0"], "--jobs: expected at least 1 worker thread, found 0"),
+        (
+            "[grid]\n\"design.beta\" = [1.0, 2.0]\n[monte_carlo]\nruns = 6000000\n",
+            &[],
+            "more than 1e7; check the grid, or pass --yes",
+        ),
+    ];
+    for (k, (text, flags, expected)) in cases.iter().enumerate() {
+        let study = write_study(&dir, &format!("s{k}.toml"), text);
+        let out = dir.join(format!("o{k}")).display().to_string();
+        let mut args = vec!["sweep", study.as_str(), "--out", out.as_str()];
+        args.extend_from_slice(flags);
+        let o = quell(&args);
+        assert_eq!(o.status.code(), Some(2), "{text}: {}", stderr(&o));
+        assert!(stderr(&o).contains(expected), "{text}\nexpected: {expected}\ngot: {}", stderr(&o));
+        assert!(!dir.join(format!("o{k}")).exists(), "nothing is written for a bad study");
+    }
+    let _ = fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn ctrl_c_writes_the_rows_done_marked_partial() {
+    let dir = scratch("interrupt");
+    // 4,000 runs of 100 s: minutes of work, interrupted after a second.
+    let study = write_study(
+        &dir,
+        "study.toml",
+        "[simulation]\nrtol = 1e-6\natol = 1e-6\n[monte_carlo]\nruns = 4000\n\"plant.x0\" = { normal = 0.1 }\n",
+    );
+    let out = dir.join("out");
+    let child = Command::new(env!("CARGO_BIN_EXE_quell"))
+        .args(["sweep", &study, "--no-plots", "--out"])
+        .arg(&out)
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start quell");
+    std::thread::sleep(Duration::from_millis(1500));
+    let status = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(status.success());
+    let output = child.wait_with_output().unwrap();
+    let err = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{err}");
+    assert!(err.contains("interrupted after"), "{err}");
+    let csv = fs::read_to_string(out.join("runs.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert!(lines.last().unwrap().starts_with("# partial: "), "{}", lines.last().unwrap());
+    let header_fields = lines[0].split(',').count();
+    assert!(lines.len() > 2 && lines.len() < 4002, "{} lines", lines.len());
+    for l in &lines[1..lines.len() - 1] {
+        assert_eq!(l.split(',').count(), header_fields, "every row is whole: {l}");
+    }
+    let summary: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["partial"], true);
+    assert_eq!(summary["runs_done"].as_u64().unwrap() as usize, lines.len() - 2);
+    let _ = fs::remove_dir_all(&dir);
+}
