@@ -9,6 +9,7 @@ mod output;
 mod plot;
 mod report;
 mod sweep;
+mod tune;
 
 use std::io::IsTerminal;
 use std::ops::ControlFlow;
@@ -51,6 +52,8 @@ enum Command {
     Export(export::ExportArgs),
     /// Run every point of a study's grid and Monte Carlo draws; write runs.csv, summary.json, sweep.png.
     Sweep(sweep::SweepArgs),
+    /// Tune μ one channel at a time (the study's [tune]); write the chosen μ and each channel's curve.
+    Tune(tune::TuneArgs),
 }
 
 #[derive(clap::Args, Default)]
@@ -90,6 +93,7 @@ fn main() -> ExitCode {
         Some(Command::Run(args)) => run(&args),
         Some(Command::Export(args)) => export::run(&args),
         Some(Command::Sweep(args)) => sweep::sweep(&args),
+        Some(Command::Tune(args)) => tune::tune(&args),
         None => {
             eprintln!(
                 "quell: running the paper's example (Section VIII) into quell-out/; `quell --help` lists the commands"

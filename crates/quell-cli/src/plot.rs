@@ -329,3 +329,66 @@ pub fn plot_sweep(dir: &Path, s: &quell::study::Summary) -> io::Result<()> {
     }
     write_atomic(&dir.join("sweep.svg"), |w| w.write_all(svg.as_bytes()))
 }
+
+/// tune.png/.svg: per channel, the objective against μ_i (log scale), the chosen μ_i marked.
+fn draw_tune<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &quell::study::TuneResult) -> Result<(), String> {
+    let areas = root.split_evenly((1, r.channels.len()));
+    for (c, area) in r.channels.iter().zip(areas.iter()) {
+        let pts: Vec<(f64, f64)> = c.curve.iter().filter_map(|p| p.objective.map(|o| (p.mu, o))).collect();
+        let (m0, m1) = c.curve.iter().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p.mu), b.max(p.mu)));
+        let (m0, m1) = if m0 < m1 { (m0, m1) } else { (m0 / 2.0, m0 * 2.0) };
+        let (lo, hi) = pts.iter().fold((f64::MAX, f64::MIN), |(a, b), &(_, v)| (a.min(v), b.max(v)));
+        let (lo, hi) = if lo < hi {
+            (lo, hi)
+        } else if lo == hi {
+            (lo - 1.0, hi + 1.0)
+        } else {
+            (0.0, 1.0)
+        };
+        let pad = 0.05 * (hi - lo);
+        let mut chart = ChartBuilder::on(area)
+            .caption(
+                format!("Channel {}: {} against μ{}", c.channel + 1, r.objective.name(), c.channel + 1),
+                ("sans-serif", 18),
+            )
+            .margin(10)
+            .margin_right(24)
+            .x_label_area_size(40)
+            .y_label_area_size(80)
+            .build_cartesian_2d((m0..m1).log_scale(), (lo - pad)..(hi + pad))
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc(format!("μ{} (others at the scenario's)", c.channel + 1))
+            .label_style(("sans-serif", 13))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        let color = Palette99::pick(c.channel).to_rgba();
+        chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2))).map_err(|e| e.to_string())?;
+        chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled()))).map_err(|e| e.to_string())?;
+        if let Some(best) = c.chosen.as_ref().and_then(|p| p.objective.map(|o| (p.mu, o))) {
+            chart
+                .draw_series(std::iter::once(Circle::new(best, 7, BLACK.stroke_width(2))))
+                .map_err(|e| e.to_string())?;
+        }
+    }
+    root.present().map_err(|e| e.to_string())
+}
+
+/// Writes tune.png and tune.svg.
+pub fn plot_tune(dir: &Path, r: &quell::study::TuneResult) -> io::Result<()> {
+    register_font();
+    let size = (560 * r.channels.len().max(1) as u32, 460);
+    let png = dir.join("tune.png");
+    let mut rgb = vec![255u8; (size.0 * size.1 * 3) as usize];
+    draw_tune(BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area(), r)
+        .map_err(|e| io::Error::other(format!("{}: {e}", png.display())))?;
+    write_png(&png, &rgb, size)?;
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| io::Error::other(e.to_string()))?;
+        draw_tune(root, r).map_err(io::Error::other)?;
+    }
+    write_atomic(&dir.join("tune.svg"), |w| w.write_all(svg.as_bytes()))
+}

@@ -102,7 +102,7 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-fn thread_pool(jobs: Option<usize>) -> Result<rayon::ThreadPool, Failure> {
+pub(crate) fn thread_pool(jobs: Option<usize>) -> Result<rayon::ThreadPool, Failure> {
     if jobs == Some(0) {
         return Err(Failure::Input("--jobs: expected at least 1 worker thread, found 0".into()));
     }

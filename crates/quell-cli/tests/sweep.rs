@@ -176,3 +176,37 @@ fn ctrl_c_writes_the_rows_done_marked_partial() {
     assert_eq!(summary["runs_done"].as_u64().unwrap() as usize, lines.len() - 2);
     let _ = fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn tune_writes_the_chosen_mu_and_each_curve() {
+    let dir = scratch("tune");
+    let text = "[simulation]\nt_end = 40.0\nrtol = 1e-6\natol = 1e-6\n[tune]\nobjective = \"tail_rms_e\"\nmu = [2.0, 200.0]\nmax_u = 22.0\npoints = 5\nrefine = 2\n";
+    let study = write_study(&dir, "tune.toml", text);
+    let out = dir.join("out").display().to_string();
+    let o = quell(&["tune", &study, "--out", &out]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let printed = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(printed.contains("channel 1: mu = ") && printed.contains("joint run reproduces it"), "{printed}");
+    let csv = fs::read_to_string(dir.join("out/tune.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 2 * (5 + 2));
+    assert_eq!(csv.lines().filter(|l| l.ends_with(",true")).count(), 2, "one chosen μ per channel");
+    let json: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(dir.join("out/tune.json")).unwrap()).unwrap();
+    assert_eq!(json["mu"].as_array().unwrap().len(), 2);
+    assert!(dir.join("out/tune.png").is_file() && dir.join("out/tune.svg").is_file());
+
+    // No [tune], and a limit no μ meets: exit code 2, naming the key.
+    let o = quell(&["tune", &write_study(&dir, "none.toml", ""), "--out", &out]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("tune: missing"), "{}", stderr(&o));
+    let o =
+        quell(&["tune", &write_study(&dir, "tight.toml", &text.replace("max_u = 22.0", "max_u = 1.0")), "--out", &out]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o)
+            .contains("channel 1: no μ in tune.mu[0] completed with max |u_1| ≤ tune.max_u[0] and a finite tail_rms_e"),
+        "{}",
+        stderr(&o)
+    );
+    let _ = fs::remove_dir_all(&dir);
+}

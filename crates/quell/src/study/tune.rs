@@ -23,6 +23,15 @@ pub enum Objective {
 }
 
 impl Objective {
+    /// The name in the study file and the runs.csv column it reads.
+    pub fn name(self) -> &'static str {
+        match self {
+            Objective::SettleT => "settle_t",
+            Objective::TailRmsE => "tail_rms_e",
+            Objective::TailMaxE => "tail_max_e",
+        }
+    }
+
     fn of(self, c: &ChannelFigures) -> f64 {
         match self {
             Objective::SettleT => c.settle_t.unwrap_or(f64::INFINITY),
@@ -166,13 +175,19 @@ fn run_with(study: &Study, mu: &[f64]) -> Row {
     run_one(&RunSpec { run: 0, point: 0, draw: 0, seed: 0, grid: Vec::new(), scenario: doc, settle: study.settle })
 }
 
-/// How close the joint run's objective must be to the search's: relative 1e-3 of the figure plus
-/// 1e-9 absolute for error figures; one output step for settling times (they are read off the
-/// recorded samples).
-fn tolerance(obj: Objective, value: f64, output_step: f64) -> f64 {
+/// How close the joint run's objective must be to the search's: for error figures, relative 1e-3
+/// plus 100 (rtol·ĝ + atol), the solver's local error bound on e_i (ĝ = |bias| + Σ|amplitude|
+/// bounds |g_i|) with a factor 100 for its accumulation over the horizon; for settling times, one
+/// output step (they are read off the recorded samples).
+fn tolerance(obj: Objective, value: f64, s: &Scenario, i: usize) -> f64 {
+    let sim = &s.simulation;
     match obj {
-        Objective::SettleT => output_step * (1.0 + 1e-9),
-        _ => 1e-3 * value.abs() + 1e-9,
+        Objective::SettleT => sim.output_step * (1.0 + 1e-9),
+        _ => {
+            let c = &s.reference.components[i];
+            let g = c.bias.abs() + c.harmonics.iter().map(|h| h.amplitude.abs()).sum::<f64>();
+            1e-3 * value.abs() + 100.0 * (sim.rtol * g + sim.atol)
+        }
     }
 }
 
@@ -240,7 +255,6 @@ pub fn tune(study: &Study) -> Result<TuneResult, StudyError> {
         .collect();
     let mu: Vec<f64> = channels.iter().zip(&base_mu).map(|(c, &m0)| c.chosen.as_ref().map_or(m0, |p| p.mu)).collect();
     let joint = run_with(study, &mu);
-    let step = scenario.simulation.output_step;
     let (joint_difference, reproduced) = channels
         .iter()
         .map(|c| {
@@ -248,7 +262,7 @@ pub fn tune(study: &Study) -> Result<TuneResult, StudyError> {
             let joint_value = joint.channels.get(c.channel).map(|f| spec.objective.of(f));
             match (search, joint_value) {
                 (Some(s), Some(j)) if s.is_finite() && j.is_finite() => {
-                    (Some(j - s), (j - s).abs() <= tolerance(spec.objective, s, step))
+                    (Some(j - s), (j - s).abs() <= tolerance(spec.objective, s, &scenario, c.channel))
                 }
                 _ => (None, false),
             }
