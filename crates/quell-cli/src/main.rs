@@ -21,7 +21,9 @@ use std::sync::Arc;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use quell::scenario::{Scenario, PAPER_EXAMPLE};
-use quell::sim::{simulate, simulate_sampled, Outcome, RunSettings, RunStats, SampledSettings, SimResult};
+use quell::sim::{
+    simulate_sampled_with_truth, simulate_with_truth, Outcome, RunSettings, RunStats, SampledSettings, SimResult,
+};
 use quell::Design;
 use serde_json::json;
 
@@ -197,9 +199,23 @@ fn run(args: &RunArgs) -> Result<(), Failure> {
     let result = match &sampled {
         None => {
             let settings = RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol);
-            simulate(&design, &scenario.reference, &scenario.disturbance, &settings, progress)
+            simulate_with_truth(
+                &design,
+                scenario.true_plant(),
+                &scenario.reference,
+                &scenario.disturbance,
+                &settings,
+                progress,
+            )
         }
-        Some(settings) => simulate_sampled(&design, &scenario.reference, &scenario.disturbance, settings, progress),
+        Some(settings) => simulate_sampled_with_truth(
+            &design,
+            scenario.true_plant(),
+            &scenario.reference,
+            &scenario.disturbance,
+            settings,
+            progress,
+        ),
     }
     .map_err(|e| Failure::Input(e.to_string()))?;
     bar.finish_and_clear();
@@ -277,6 +293,7 @@ fn write_data(dir: &Path, scenario: &Scenario, design: &Design, r: &SimResult, s
     output::write_json(&dir.join("design.json"), &report::design_json(design))?;
     let summary = json!({
         "scenario": scenario.name,
+        "truth_differs": scenario.truth_differs(),
         "outcome": r.outcome,
         "channels": r.summary(),
         "stats": r.stats,

@@ -119,3 +119,24 @@ fn tuned_channels_are_reproduced_by_the_joint_run() {
     assert_eq!(r.mu, [r.channels[0].chosen.as_ref().unwrap().mu, r.channels[1].chosen.as_ref().unwrap().mu]);
     assert_eq!(r.reproduced, [true, true], "joint differences {:?}", r.joint_difference);
 }
+
+/// A grid over the true delay: the design keeps τ₂ = 3 at every point, the point where the truth
+/// equals the plant is the nominal run exactly, and the summary records that the truth differs.
+#[test]
+fn a_grid_over_the_true_delay_keeps_the_design() {
+    let text = "[simulation]\nt_end = 20.0\nrtol = 1e-6\natol = 1e-6\n[grid]\n\"truth.delays[1]\" = [2.7, 3.0, 3.3]\n[monte_carlo]\nruns = 2\n\"truth.A\" = { relative = 0.0 }\n";
+    let study = Study::from_toml(text, None).unwrap();
+    assert!(study.truth_differs());
+    let spec = study.spec(2);
+    assert_eq!(spec.scenario["plant"]["delays"][1].as_float(), Some(3.0));
+    assert_eq!(spec.scenario["truth"]["delays"][1].as_float(), Some(3.0));
+    assert_eq!(study.spec(0).scenario["truth"]["delays"][1].as_float(), Some(2.7));
+    let rows = sweep(&study, &SweepOptions::default()).rows;
+    let nominal = Study::from_toml("[simulation]\nt_end = 20.0\nrtol = 1e-6\natol = 1e-6\n", None).unwrap();
+    let base = run_one(&nominal.spec(0));
+    assert_eq!(rows[2].channels, base.channels, "truth = plant is the nominal run");
+    assert_ne!(rows[0].channels, base.channels);
+    assert_ne!(rows[4].channels, base.channels);
+    assert!(StudyMeta::new(&study, Shard::ALL).truth_differs);
+    assert!(!StudyMeta::new(&nominal, Shard::ALL).truth_differs);
+}

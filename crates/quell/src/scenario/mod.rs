@@ -53,6 +53,9 @@ pub struct Scenario {
     pub simulation: Simulation,
     /// Measurement noise on y; only with a sampled-data run.
     pub noise: Option<Noise>,
+    /// `[truth]`: the simulated plant when it differs from the design model `plant` (any of A, B, C,
+    /// D, Q, delays, x0 given, the rest `plant`'s); the design always uses `plant`.
+    pub truth: Option<Plant>,
 }
 
 /// Simulation settings.
@@ -101,7 +104,7 @@ pub fn load_and_design(text: &str) -> Result<(Scenario, Design), LoadError> {
     Ok((scenario, design))
 }
 
-const TOP_KEYS: &[&str] = &["name", "plant", "design", "reference", "disturbance", "simulation", "noise"];
+const TOP_KEYS: &[&str] = &["name", "plant", "design", "reference", "disturbance", "simulation", "noise", "truth"];
 const PLANT_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0"];
 const DESIGN_KEYS: &[&str] = &[
     "observer_gain",
@@ -160,6 +163,7 @@ impl Scenario {
             root.require("plant", "the [plant] table (A, B, C, delays; D and Q with a [disturbance])", |v| {
                 plant(v, disturbance.as_ref())
             })?;
+        let truth = root.get("truth", |v| truth(v, &plant))?;
         let design = root.require(
             "design",
             "the [design] table (observer, channel poles, filter poles, mu, beta)",
@@ -196,7 +200,17 @@ impl Scenario {
             noise.check(m)?;
         }
 
-        Ok(Scenario { name, plant, design, reference, disturbance, simulation, noise })
+        Ok(Scenario { name, plant, design, reference, disturbance, simulation, noise, truth })
+    }
+
+    /// The plant that is simulated: `[truth]`, or the design model `plant` without one.
+    pub fn true_plant(&self) -> &Plant {
+        self.truth.as_ref().unwrap_or(&self.plant)
+    }
+
+    /// Whether the simulated plant differs from the design model.
+    pub fn truth_differs(&self) -> bool {
+        self.truth.as_ref().is_some_and(|t| *t != self.plant)
     }
 
     /// [`Design::new`] for this scenario's plant and choices.
@@ -242,6 +256,53 @@ fn plant(v: Value, disturbance: Option<&Signal>) -> Result<Plant, ScenarioError>
         _ => DMatrix::zeros(m, 0),
     };
     Plant::new(A, B, C, D, Q, delays, x0).map_err(|e| plant_error(e, n, m, k))
+}
+
+/// `[truth]`: each given matrix has its `[plant]` counterpart's shape, the rest is `plant`'s.
+fn truth(v: Value, plant: &Plant) -> Result<Plant, ScenarioError> {
+    let t = v.table(PLANT_KEYS)?;
+    let matrix = |name: &str, like: &DMatrix<f64>| -> Result<DMatrix<f64>, ScenarioError> {
+        let Some(M) = t.get(name, |v| v.matrix())? else { return Ok(like.clone()) };
+        // `[]` stands for a matrix without columns, as in [plant].
+        let M = if M.nrows() == 0 && like.ncols() == 0 { like.clone() } else { M };
+        if M.shape() != like.shape() {
+            return Err(err(
+                t.key(name),
+                format!(
+                    "expected {}×{} (the shape of plant.{name}: the true plant has the design model's dimensions), found {}×{}",
+                    like.nrows(),
+                    like.ncols(),
+                    M.nrows(),
+                    M.ncols()
+                ),
+            ));
+        }
+        Ok(M)
+    };
+    let vector = |name: &str, like: &[f64]| -> Result<Vec<f64>, ScenarioError> {
+        let Some(x) = t.get(name, |v| v.numbers())? else { return Ok(like.to_vec()) };
+        if x.len() != like.len() {
+            return Err(err(
+                t.key(name),
+                format!("expected {} entries (as plant.{name}), found {}", like.len(), x.len()),
+            ));
+        }
+        Ok(x)
+    };
+    let (n, m, k) = (plant.n(), plant.m(), plant.k());
+    Plant::new(
+        matrix("A", &plant.A)?,
+        matrix("B", &plant.B)?,
+        matrix("C", &plant.C)?,
+        matrix("D", &plant.D)?,
+        matrix("Q", &plant.Q)?,
+        vector("delays", &plant.delays)?,
+        Some(DVector::from_vec(vector("x0", plant.x0.as_slice())?)),
+    )
+    .map_err(|e| {
+        let e = plant_error(e, n, m, k);
+        err(e.key.replacen("plant.", "truth.", 1), e.message)
+    })
 }
 
 /// A [`PlantError`] as a scenario error on key `plant.<name>`.

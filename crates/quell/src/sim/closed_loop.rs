@@ -11,6 +11,7 @@ use super::result::{Outcome, RunStats, SimResult};
 use super::{check_run, SimError};
 use crate::controller::{command, mat_vec, packed, swapping_error, Equations};
 use crate::design::Design;
+use crate::plant::Plant;
 use crate::signal::{Signal, SignalBank};
 
 /// Offsets of the loop's state vector [z = (ξ̂, x̂), η̂_1, …, η̂_m, x, filters]. The delayed terms
@@ -72,11 +73,16 @@ pub struct ContinuousLoop<'a> {
     signals: SignalBank,
     layout: Layout,
     delays: Vec<f64>,
+    /// The true plant's input delays where one differs from the design's (`[truth]`): the plant
+    /// then reads u_i(t − τ_i^true) while the controller keeps τ_i. Empty when all agree.
+    true_delays: Vec<f64>,
     // Scratch.
     y: Vec<f64>,
-    /// e = [g; ω; u_d], the loop's inputs other than the state.
+    /// e = [g; ω; u_d] (and u_d at the true delays, with `true_delays`), the loop's inputs other
+    /// than the state.
     e: Vec<f64>,
     eta_d: Vec<f64>,
+    xi_d: Vec<f64>,
     Delta: Vec<f64>,
     tmp: Vec<f64>,
 }
@@ -84,22 +90,31 @@ pub struct ContinuousLoop<'a> {
 impl<'a> ContinuousLoop<'a> {
     /// The loop for a design and the true reference and disturbance signals.
     pub fn new(design: &'a Design, reference: &'a Signal, disturbance: &'a Signal) -> Self {
+        ContinuousLoop::with_truth(design, design.plant(), reference, disturbance)
+    }
+
+    /// The loop whose simulated plant is `truth` (same dimensions as the design's plant, checked by
+    /// [`check_truth`](super::check_truth)); observers, filters and gains keep the design model.
+    pub fn with_truth(design: &'a Design, truth: &'a Plant, reference: &'a Signal, disturbance: &'a Signal) -> Self {
         let eq = Equations::new(design);
         let layout = Layout::new(&eq);
         let p = design.plant();
-        let mut delays: Vec<f64> = p.delays.iter().copied().filter(|&d| d > 0.0).collect();
+        let true_delays = if truth.delays == p.delays { Vec::new() } else { truth.delays.clone() };
+        let mut delays: Vec<f64> = p.delays.iter().chain(&true_delays).copied().filter(|&d| d > 0.0).collect();
         delays.sort_by(f64::total_cmp);
         delays.dedup();
         let (m, q, k) = (eq.m, eq.q, p.k());
         ContinuousLoop {
-            linear: LinearPart::new(design, &eq, &layout),
-            C: &p.C,
-            Q: &p.Q,
+            linear: LinearPart::new(design, truth, &eq, &layout, !true_delays.is_empty()),
+            C: &truth.C,
+            Q: &truth.Q,
             signals: SignalBank::new(&[reference, disturbance]),
             delays,
             y: vec![0.0; m],
-            e: vec![0.0; 2 * m + k],
+            e: vec![0.0; 2 * m + k + true_delays.len()],
+            true_delays,
             eta_d: vec![0.0; q],
+            xi_d: vec![0.0; q],
             Delta: vec![0.0; q],
             tmp: vec![0.0; q],
             layout,
@@ -206,6 +221,20 @@ impl DelaySystem for ContinuousLoop<'_> {
             }
             u_in[0] = u_d[i];
         }
+        // The true plant's input reads the command at its own delays (`[truth]`).
+        if !self.true_delays.is_empty() {
+            let (u_d, u_true) = u_d.split_at_mut(m);
+            for (i, (&tau, u)) in self.true_delays.iter().zip(u_true.iter_mut()).enumerate() {
+                *u = if tau == eq.channels[i].delay {
+                    u_d[i]
+                } else if tau > 0.0 {
+                    past.eval_ranges(t - tau, [(0, &mut self.xi_d[..]), (l.eta(i), &mut self.eta_d[..])]);
+                    command(&self.eta_d, &self.xi_d)
+                } else {
+                    command(&s[l.eta(i)..l.eta(i) + q], eq.regressor(s))
+                };
+            }
+        }
 
         // Plant (1) with the decoupling law (5), observers (6), (14), (20), and y = C x + Q ω: linear
         // in [s; e].
@@ -261,10 +290,14 @@ struct LinearPart {
 }
 
 impl LinearPart {
-    fn new(design: &Design, eq: &Equations, l: &Layout) -> Self {
-        let p = design.plant();
+    /// `p` is the simulated plant; with `true_input` its input reads u_d at the true delays, the
+    /// entries of e after u_d.
+    fn new(design: &Design, p: &Plant, eq: &Equations, l: &Layout, true_input: bool) -> Self {
         let (n, m, k, nz, dim) = (eq.n, eq.m, p.k(), eq.nz, l.dim);
         let (e_g, e_w, e_u) = (dim, dim + m, dim + m + k);
+        let e_u_plant = if true_input { e_u + m } else { e_u };
+        // B F, as the design computed it when the plant is the design model.
+        let B_f = if p == design.plant() { design.B_f().clone() } else { &p.B * design.F() };
         let By = eq.B_z.columns(0, m);
         // Each block: (matrix, first row it feeds in the derivative, first column it reads).
         let x_hat = eq.q;
@@ -273,7 +306,7 @@ impl LinearPart {
             (p.A.clone(), l.x, l.x),
             (-(&p.B * design.K()), l.x, x_hat),
             (p.D.clone(), l.x, e_w),
-            (design.B_f().clone(), l.x, e_u),
+            (B_f, l.x, e_u_plant),
             (eq.A_z.clone(), 0, 0),
             (By * &p.C, 0, l.x),
             (By * &p.Q, 0, e_w),
@@ -374,13 +407,29 @@ pub fn simulate(
     reference: &Signal,
     disturbance: &Signal,
     settings: &RunSettings,
+    on_progress: impl FnMut(f64) -> ControlFlow<()>,
+) -> Result<SimResult, SimError> {
+    simulate_with_truth(design, design.plant(), reference, disturbance, settings, on_progress)
+}
+
+/// [`simulate`] with the simulated plant `truth` in place of the design model (`[truth]`): the
+/// plant is ẋ = A x + B u_f + D ω, y = C x + Q ω with truth's matrices, x(0) = truth.x0, and
+/// u_f = −K x̂ + F [u_1(t − τ_1^true), …]; the observers (6), (20) and the filters of the
+/// adaptive law keep the design's matrices and delays.
+pub fn simulate_with_truth(
+    design: &Design,
+    truth: &Plant,
+    reference: &Signal,
+    disturbance: &Signal,
+    settings: &RunSettings,
     mut on_progress: impl FnMut(f64) -> ControlFlow<()>,
 ) -> Result<SimResult, SimError> {
     let RunSettings { t_end, output_step, rtol, atol, divergence_bound } = *settings;
     check_run(design, reference, disturbance, t_end, output_step, divergence_bound)?;
     crate::settings::check_tolerances(rtol, atol)?;
-    let mut sys = ContinuousLoop::new(design, reference, disturbance);
-    let s0 = sys.initial_state(&design.plant().x0);
+    super::check_truth(design, truth)?;
+    let mut sys = ContinuousLoop::with_truth(design, truth, reference, disturbance);
+    let s0 = sys.initial_state(&truth.x0);
     let history = vec![0.0; sys.n_delayed()];
     let (m, q) = (sys.eq.m, sys.eq.q);
     let mut result = SimResult::new(m, q, RunStats::continuous(&dde::Stats::default()));

@@ -14,10 +14,12 @@ use crate::settings::{self, KeyError};
 use crate::signal::{check_signals, Signal};
 
 pub use crate::settings::MeasurementNoise;
-pub use closed_loop::{simulate, ContinuousLoop, RunSettings};
+pub use closed_loop::{simulate, simulate_with_truth, ContinuousLoop, RunSettings};
 pub use divergence::{Watched, DIVERGENCE_BOUND};
 pub use result::{ChannelSummary, Outcome, RunStats, SimResult};
-pub use sampled::{simulate_sampled, simulate_sampled_with, SampledController, SampledSettings};
+pub use sampled::{
+    simulate_sampled, simulate_sampled_with, simulate_sampled_with_truth, SampledController, SampledSettings,
+};
 
 /// Why a run cannot start: a setting or signal out of range (named by its scenario key), or a
 /// controller that cannot run at the sample time.
@@ -42,4 +44,41 @@ fn check_run(
     settings::check_horizon(t_end, output_step)?;
     divergence::check_bound(divergence_bound)?;
     check_signals(design.plant(), reference, disturbance)
+}
+
+/// A true plant (`[truth]`) must have the design plant's dimensions n, m, k.
+pub(crate) fn check_truth(design: &Design, truth: &crate::plant::Plant) -> Result<(), KeyError> {
+    let p = design.plant();
+    for (name, a, b) in [
+        ("A", &truth.A, &p.A),
+        ("B", &truth.B, &p.B),
+        ("C", &truth.C, &p.C),
+        ("D", &truth.D, &p.D),
+        ("Q", &truth.Q, &p.Q),
+    ] {
+        if a.shape() != b.shape() {
+            return Err(KeyError::new(
+                format!("truth.{name}"),
+                format!(
+                    "expected {}×{} (the shape of plant.{name}), found {}×{}",
+                    b.nrows(),
+                    b.ncols(),
+                    a.nrows(),
+                    a.ncols()
+                ),
+            ));
+        }
+    }
+    if truth.delays.len() != p.delays.len() || truth.x0.len() != p.x0.len() {
+        let (name, a, b) = if truth.delays.len() != p.delays.len() {
+            ("delays", truth.delays.len(), p.delays.len())
+        } else {
+            ("x0", truth.x0.len(), p.x0.len())
+        };
+        return Err(KeyError::new(
+            format!("truth.{name}"),
+            format!("expected {b} entries (as plant.{name}), found {a}"),
+        ));
+    }
+    truth.validate().map_err(|e| KeyError::new("truth", e.to_string()))
 }

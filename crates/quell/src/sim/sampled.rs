@@ -15,6 +15,7 @@ use super::{check_run, SimError};
 use crate::controller::{mat_vec, Controller};
 use crate::design::Design;
 use crate::linalg::zoh;
+use crate::plant::Plant;
 use crate::settings::{self, KeyError, MeasurementNoise};
 use crate::signal::Signal;
 
@@ -116,12 +117,106 @@ pub fn simulate_sampled_with(
     reference: &Signal,
     disturbance: &Signal,
     settings: &SampledSettings,
+    on_progress: impl FnMut(f64) -> ControlFlow<()>,
+) -> Result<SimResult, SimError> {
+    sampled_loop(design, design.plant(), ctrl, reference, disturbance, settings, on_progress)
+}
+
+/// [`simulate_sampled`] with the simulated plant `truth` in place of the design model (`[truth]`):
+/// the plant advances with truth's matrices from truth.x0 and its input is
+/// u_f = −K x̂ + F [u_1(k − d_1^true), …] with the true delays (whole samples); the controller keeps
+/// the design's matrices and delays.
+pub fn simulate_sampled_with_truth(
+    design: &Design,
+    truth: &Plant,
+    reference: &Signal,
+    disturbance: &Signal,
+    settings: &SampledSettings,
+    on_progress: impl FnMut(f64) -> ControlFlow<()>,
+) -> Result<SimResult, SimError> {
+    let mut ctrl = settings.check(design, reference, disturbance)?;
+    sampled_loop(design, truth, &mut ctrl, reference, disturbance, settings, on_progress)
+}
+
+/// The plant input at the true delays: u_f + F (u(k − d^true) − u(k − d)), from the commands of
+/// the last max d + 1 samples.
+struct TrueInput {
+    d: Vec<usize>,
+    d_true: Vec<usize>,
+    F: DMatrix<f64>,
+    /// Row k mod len: u(k).
+    past: Vec<f64>,
+    len: usize,
+    du: Vec<f64>,
+    u_f: Vec<f64>,
+}
+
+impl TrueInput {
+    /// `None` when the true delays are the design's.
+    fn new(design: &Design, truth: &Plant, T: f64) -> Result<Option<TrueInput>, KeyError> {
+        let p = design.plant();
+        if truth.delays == p.delays {
+            return Ok(None);
+        }
+        let samples = |key: &str, delays: &[f64]| {
+            delays
+                .iter()
+                .enumerate()
+                .map(|(i, &tau)| {
+                    let r = tau / T;
+                    if r > crate::controller::discrete::MAX_DELAY_SAMPLES || (r - r.round()).abs() > 1e-9 * r.max(1.0) {
+                        return Err(KeyError::new(
+                            format!("{key}[{i}]"),
+                            format!("τ = {tau} s is {r:.6} samples of T_s = {T} s; a sampled-data run needs whole numbers of samples (at most 1e7)"),
+                        ));
+                    }
+                    Ok(r.round() as usize)
+                })
+                .collect::<Result<Vec<usize>, KeyError>>()
+        };
+        let (d, d_true) = (samples("plant.delays", &p.delays)?, samples("truth.delays", &truth.delays)?);
+        let m = d.len();
+        let len = d.iter().chain(&d_true).max().map_or(1, |x| x + 1);
+        Ok(Some(TrueInput {
+            d,
+            d_true,
+            F: design.F().clone(),
+            past: vec![0.0; len * m],
+            len,
+            du: vec![0.0; m],
+            u_f: vec![0.0; m],
+        }))
+    }
+
+    /// Records u(k) and returns the true plant input from the controller's `u_f` (in `self.u_f`).
+    fn apply(&mut self, k: usize, u: &[f64]) -> &[f64] {
+        let m = u.len();
+        self.past[(k % self.len) * m..(k % self.len + 1) * m].copy_from_slice(u);
+        let at = |d: usize, i: usize| if k >= d { self.past[((k - d) % self.len) * m + i] } else { 0.0 };
+        for i in 0..m {
+            self.du[i] = at(self.d_true[i], i) - at(self.d[i], i);
+        }
+        mat_vec(&self.F, &self.du, &mut self.u_f, true);
+        &self.u_f
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn sampled_loop(
+    design: &Design,
+    truth: &Plant,
+    ctrl: &mut impl SampledController,
+    reference: &Signal,
+    disturbance: &Signal,
+    settings: &SampledSettings,
     mut on_progress: impl FnMut(f64) -> ControlFlow<()>,
 ) -> Result<SimResult, SimError> {
     settings.check_settings(design, reference, disturbance)?;
+    super::check_truth(design, truth)?;
     let every = settings.samples_per_output()?;
     let T = settings.sample_time;
-    let p = design.plant();
+    let mut shift = TrueInput::new(design, truth, T)?;
+    let p = truth;
     let (n, m) = (p.n(), p.m());
     let (S, H, w0) = disturbance.exosystem();
     let nw = S.nrows();
@@ -159,7 +254,13 @@ pub fn simulate_sampled_with(
                 *v += sd * rng.sample();
             }
         }
-        let u_f = ctrl.step(&y_meas, &g);
+        let u_f: &[f64] = match shift.as_mut() {
+            None => ctrl.step(&y_meas, &g),
+            Some(sh) => {
+                sh.u_f.copy_from_slice(ctrl.step(&y_meas, &g));
+                sh.apply(k, ctrl.command())
+            }
+        };
         taken += 1;
         mat_vec(&Phi, s.as_slice(), s_next.as_mut_slice(), false);
         mat_vec(&Gamma, u_f, s_next.as_mut_slice(), true);

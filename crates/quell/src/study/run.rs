@@ -137,14 +137,16 @@ pub(crate) fn simulate(s: &Scenario, stop: &dyn Fn() -> bool) -> Result<SimResul
     match sim.sample_time {
         None => {
             let settings = RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol);
-            sim::simulate(&design, &s.reference, &s.disturbance, &settings, progress).map_err(|e| e.to_string())
+            sim::simulate_with_truth(&design, s.true_plant(), &s.reference, &s.disturbance, &settings, progress)
+                .map_err(|e| e.to_string())
         }
         Some(sample_time) => {
             let settings = SampledSettings {
                 noise: s.noise.clone(),
                 ..SampledSettings::new(sim.t_end, sim.output_step, sample_time)
             };
-            sim::simulate_sampled(&design, &s.reference, &s.disturbance, &settings, progress).map_err(|e| e.to_string())
+            sim::simulate_sampled_with_truth(&design, s.true_plant(), &s.reference, &s.disturbance, &settings, progress)
+                .map_err(|e| e.to_string())
         }
     }
 }

@@ -1,0 +1,184 @@
+//! `[truth]`: the simulated plant differs from the design model. A truth equal to the plant
+//! reproduces the run bit for bit, a small mismatch changes it continuously (half the mismatch, half
+//! the change), and the sampled-data loop with a truth tracks the continuous loop with that truth
+//! (two independent discretizations of the same physics).
+#![allow(non_snake_case)]
+
+use std::ops::ControlFlow;
+
+use quell::scenario::{Scenario, PAPER_EXAMPLE};
+use quell::sim::{simulate_sampled_with_truth, simulate_with_truth, Outcome, RunSettings, SampledSettings, SimResult};
+
+/// The paper's example with `truth` appended as its [truth] table.
+fn scenario(truth: &str) -> Scenario {
+    let text =
+        if truth.is_empty() { PAPER_EXAMPLE.to_string() } else { format!("{PAPER_EXAMPLE}\n[truth]\n{truth}\n") };
+    Scenario::from_toml(&text).unwrap()
+}
+
+fn continuous(s: &Scenario, t_end: f64, tol: f64) -> SimResult {
+    let d = s.design().unwrap();
+    let settings = RunSettings::new(t_end, 0.1, tol, tol);
+    let r =
+        simulate_with_truth(&d, s.true_plant(), &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(()))
+            .unwrap();
+    assert_eq!(r.outcome, Some(Outcome::Completed));
+    r
+}
+
+fn sampled(s: &Scenario, t_end: f64, T: f64) -> SimResult {
+    let d = s.design().unwrap();
+    let settings = SampledSettings::new(t_end, 0.1, T);
+    let r = simulate_sampled_with_truth(&d, s.true_plant(), &s.reference, &s.disturbance, &settings, |_| {
+        ControlFlow::Continue(())
+    })
+    .unwrap();
+    assert_eq!(r.outcome, Some(Outcome::Completed));
+    r
+}
+
+/// sup over the samples of |y − y_ref|, both channels.
+fn change(a: &SimResult, b: &SimResult) -> f64 {
+    a.y.iter().zip(&b.y).fold(0.0, |m: f64, (p, q)| m.max((p - q).abs()))
+}
+
+const PLANT_AS_TRUTH: &str = "A = [[-3.2, -1.7, -3.0], [2.8, 1.3, 4.0], [0.3, 0.3, -0.5]]
+B = [[-2.0, 1.0], [2.0, -1.0], [1.0, 0.0]]
+C = [[2.0, 2.0, 0.0], [2.0, 1.0, 2.0]]
+D = [[1.0, -3.0], [2.0, 1.0], [3.0, 1.0]]
+Q = [[1.0, 2.0], [1.0, 0.0]]
+delays = [1.0, 3.0]
+x0 = [0.0, 0.0, 0.0]";
+
+#[test]
+fn truth_equal_to_the_plant_reproduces_the_run_bit_for_bit() {
+    let (nominal, twin) = (scenario(""), scenario(PLANT_AS_TRUTH));
+    assert!(twin.truth.is_some() && !twin.truth_differs());
+    let (a, b) = (continuous(&nominal, 20.0, 1e-9), continuous(&twin, 20.0, 1e-9));
+    assert_eq!((&a.t, &a.y, &a.u, &a.eta), (&b.t, &b.y, &b.u, &b.eta));
+    let (a, b) = (sampled(&nominal, 20.0, 1e-3), sampled(&twin, 20.0, 1e-3));
+    assert_eq!((&a.t, &a.y, &a.u, &a.eta), (&b.t, &b.y, &b.u, &b.eta));
+}
+
+/// The change in y is differentiable in the mismatch, so halving a small mismatch halves it: the
+/// ratio of the changes is 2 up to the second-order term (≈ 1 + ε‖second derivative‖/‖first‖,
+/// a few per cent at these ε) and the solver's error (rtol = 1e-10, far below the changes of 1e-4
+/// and more). Bounds [1.8, 2.2].
+#[test]
+fn halving_a_small_mismatch_roughly_halves_the_change() {
+    let nominal = continuous(&scenario(""), 30.0, 1e-10);
+    let ratio = |truth: &dyn Fn(f64) -> String, eps: f64, run: &dyn Fn(&Scenario) -> SimResult, base: &SimResult| {
+        let (full, half) =
+            (change(&run(&scenario(&truth(eps))), base), change(&run(&scenario(&truth(eps / 2.0))), base));
+        assert!(full > 1e-5, "the mismatch changes the run: {full}");
+        full / half
+    };
+    let a_scaled = |eps: f64| {
+        let A = [[-3.2, -1.7, -3.0], [2.8, 1.3, 4.0], [0.3, 0.3, -0.5]];
+        let rows: Vec<String> = A
+            .iter()
+            .map(|r| format!("[{}]", r.iter().map(|x| format!("{:?}", x * (1.0 + eps))).collect::<Vec<_>>().join(", ")))
+            .collect();
+        format!("A = [{}]", rows.join(", "))
+    };
+    let delays = |eps: f64| format!("delays = [{:?}, {:?}]", 1.0 + eps, 3.0 - eps);
+    let cont = |s: &Scenario| continuous(s, 30.0, 1e-10);
+    for (name, truth, eps) in [("truth.A", &a_scaled as &dyn Fn(f64) -> String, 2e-3), ("truth.delays", &delays, 4e-3)]
+    {
+        let r = ratio(truth, eps, &cont, &nominal);
+        assert!((1.8..=2.2).contains(&r), "{name}, continuous: ratio {r}");
+    }
+    // The sampled-data loop, with delays in whole samples of T = 1 ms.
+    let T = 1e-3;
+    let nominal = sampled(&scenario(""), 30.0, T);
+    let samp = |s: &Scenario| sampled(s, 30.0, T);
+    for (name, truth, eps) in
+        [("truth.A", &a_scaled as &dyn Fn(f64) -> String, 2e-3), ("truth.delays", &delays, 4.0 * T)]
+    {
+        let r = ratio(truth, eps, &samp, &nominal);
+        assert!((1.8..=2.2).contains(&r), "{name}, sampled: ratio {r}");
+    }
+}
+
+/// Both loops with the same truth (A 5 % off, delays 0.1 s off, so the controller's delays are
+/// wrong) are two independent discretizations of one delay equation: the sampled-data loop's
+/// deviation from the continuous one is first order in T (halving T from 2 ms to 1 ms halves it,
+/// ratio in [1.8, 2.2], as it does without a truth), and at 1 ms it is below 10 % of the signal's
+/// peak while the truth moves the run far more than that.
+#[test]
+fn sampled_loop_with_truth_converges_to_the_continuous_one() {
+    let truth = "A = [[-3.36, -1.785, -3.15], [2.94, 1.365, 4.2], [0.315, 0.315, -0.525]]\ndelays = [1.1, 2.9]";
+    let s = scenario(truth);
+    assert!(s.truth_differs());
+    let cont = continuous(&s, 60.0, 1e-10);
+    let (coarse, fine) = (sampled(&s, 60.0, 2e-3), sampled(&s, 60.0, 1e-3));
+    for (name, pick) in
+        [("y", (|r: &SimResult| r.y.clone()) as fn(&SimResult) -> Vec<f64>), ("u", |r: &SimResult| r.u.clone())]
+    {
+        let reference = pick(&cont);
+        for i in 0..2 {
+            let dev = |r: &SimResult| {
+                let v = pick(r);
+                v.iter().zip(&reference).skip(i).step_by(2).fold(0.0, |m: f64, (p, q)| m.max((p - q).abs()))
+            };
+            let peak = reference.iter().skip(i).step_by(2).fold(0.0, |m: f64, v| m.max(v.abs()));
+            let (d2, d1) = (dev(&coarse), dev(&fine));
+            assert!((1.8..=2.2).contains(&(d2 / d1)), "{name}{}: deviations {d2} (2 ms), {d1} (1 ms)", i + 1);
+            assert!(d1 < 0.1 * peak, "{name}{}: deviation {d1} vs peak {peak}", i + 1);
+        }
+    }
+    let nominal = continuous(&scenario(""), 60.0, 1e-10);
+    assert!(
+        change(&cont, &nominal) > 5.0 * change(&fine, &cont),
+        "{} vs {}",
+        change(&cont, &nominal),
+        change(&fine, &cont)
+    );
+}
+
+#[test]
+fn truth_mistakes_name_their_key() {
+    let cases = [
+        (
+            "B = [[1.0, 0.0], [0.0, 1.0]]",
+            "truth.B: expected 3×2 (the shape of plant.B: the true plant has the design model's dimensions), found 2×2",
+        ),
+        ("delays = [1.0]", "truth.delays: expected 2 entries (as plant.delays), found 1"),
+        ("delays = [1.0, -3.0]", "truth.delays[1]: expected a finite delay ≥ 0, found -3"),
+        ("x0 = [0.0]", "truth.x0: expected 3 entries (as plant.x0), found 1"),
+        ("E = [[1.0]]", "truth.E: unknown key"),
+    ];
+    for (truth, expected) in cases {
+        let e = Scenario::from_toml(&format!("{PAPER_EXAMPLE}\n[truth]\n{truth}\n")).unwrap_err().to_string();
+        assert!(e.starts_with(expected), "{truth}\nexpected: {expected}\ngot:      {e}");
+    }
+    // A sampled-data run needs the true delays in whole samples.
+    let s = scenario("delays = [1.0005, 3.0]");
+    let d = s.design().unwrap();
+    let e = simulate_sampled_with_truth(
+        &d,
+        s.true_plant(),
+        &s.reference,
+        &s.disturbance,
+        &SampledSettings::new(1.0, 0.1, 1e-3),
+        |_| ControlFlow::Continue(()),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.starts_with("truth.delays[0]: τ = 1.0005 s is 1000.500000 samples of T_s = 0.001 s"), "{e}");
+    // Called directly with a plant of other dimensions.
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/siso-complex.toml")).unwrap();
+    let other = Scenario::from_toml(&text).unwrap();
+    let e = simulate_with_truth(
+        &d,
+        &other.plant,
+        &s.reference,
+        &s.disturbance,
+        &RunSettings::new(1.0, 0.1, 1e-6, 1e-6),
+        |_| ControlFlow::Continue(()),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.starts_with("truth.A: expected 3×3 (the shape of plant.A)"), "{e}");
+}
