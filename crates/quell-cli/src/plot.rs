@@ -23,6 +23,18 @@ fn register_font() {
 
 type Series = (String, Vec<(f64, f64)>);
 
+/// The finite values' range, widened to a non-empty one (±1 around a single value, [−1, 1] for none).
+fn value_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = values.filter(|v| v.is_finite()).fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
+    if lo < hi {
+        (lo, hi)
+    } else if lo == hi {
+        (lo - 1.0, hi + 1.0)
+    } else {
+        (-1.0, 1.0)
+    }
+}
+
 fn panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     title: &str,
@@ -33,19 +45,8 @@ fn panel<DB: DrawingBackend>(
         .iter()
         .flat_map(|(_, p)| p.iter().map(|(t, _)| *t))
         .fold((f64::MAX, f64::MIN), |(a, b), t| (a.min(t), b.max(t)));
-    let (lo, hi) = series
-        .iter()
-        .flat_map(|(_, p)| p.iter().map(|(_, v)| *v))
-        .filter(|v| v.is_finite())
-        .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
     let (t0, t1) = if t0 < t1 { (t0, t1) } else { (0.0, 1.0) };
-    let (lo, hi) = if lo < hi {
-        (lo, hi)
-    } else if lo == hi {
-        (lo - 1.0, hi + 1.0)
-    } else {
-        (-1.0, 1.0)
-    };
+    let (lo, hi) = value_range(series.iter().flat_map(|(_, p)| p.iter().map(|(_, v)| *v)));
     let pad = 0.05 * (hi - lo);
     let mut chart = ChartBuilder::on(area)
         .caption(title, ("sans-serif", 20))
@@ -175,15 +176,7 @@ fn draw_sweep_1d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
                     .filter_map(|pt| figure_of(&pt.channels[i], name).at(p).map(|v| (x[pt.point], v)))
                     .collect()
             };
-            let all: Vec<f64> = [0.05, 0.5, 0.95].iter().flat_map(|&p| at(p)).map(|(_, v)| v).collect();
-            let (lo, hi) = all.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
-            let (lo, hi) = if lo < hi {
-                (lo, hi)
-            } else if lo == hi {
-                (lo - 1.0, hi + 1.0)
-            } else {
-                (0.0, 1.0)
-            };
+            let (lo, hi) = value_range([0.05, 0.5, 0.95].iter().flat_map(|&p| at(p)).map(|(_, v)| v));
             let (x0, x1) = x.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
             let (x0, x1) = if x0 < x1 { (x0, x1) } else { (x0 - 1.0, x0 + 1.0) };
             let pad = 0.05 * (hi - lo);
@@ -303,31 +296,38 @@ fn draw_sweep_2d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
     root.present().map_err(|e| e.to_string())
 }
 
+/// Writes `<name>.png` and `<name>.svg` of `size` into `dir`, each atomically, drawn by `png` and
+/// `svg` (the same drawing on the two backends).
+fn write_figure(
+    dir: &Path,
+    name: &str,
+    size: (u32, u32),
+    png: impl FnOnce(DrawingArea<BitMapBackend, Shift>) -> Result<(), String>,
+    svg: impl FnOnce(DrawingArea<SVGBackend, Shift>) -> Result<(), String>,
+) -> io::Result<()> {
+    register_font();
+    let path = dir.join(format!("{name}.png"));
+    let mut rgb = vec![255u8; (size.0 * size.1 * 3) as usize];
+    png(BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area())
+        .map_err(|e| io::Error::other(format!("{}: {e}", path.display())))?;
+    write_png(&path, &rgb, size)?;
+    let mut text = String::new();
+    {
+        let root = SVGBackend::with_string(&mut text, size).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| io::Error::other(e.to_string()))?;
+        svg(root).map_err(io::Error::other)?;
+    }
+    write_atomic(&dir.join(format!("{name}.svg")), |w| w.write_all(text.as_bytes()))
+}
+
 /// Writes sweep.png and sweep.svg for a 1-D or 2-D grid (other grids have no figure).
 pub fn plot_sweep(dir: &Path, s: &quell::study::Summary) -> io::Result<()> {
-    register_font();
-    let draw = match s.study.grid.len() {
-        1 => draw_sweep_1d::<BitMapBackend>,
-        2 => draw_sweep_2d::<BitMapBackend>,
-        _ => return Ok(()),
-    };
-    let size = (520 * s.study.m as u32, if s.study.grid.len() == 1 { 900 } else { 520 });
-    let png = dir.join("sweep.png");
-    let mut rgb = vec![255u8; (size.0 * size.1 * 3) as usize];
-    draw(BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area(), s)
-        .map_err(|e| io::Error::other(format!("{}: {e}", png.display())))?;
-    write_png(&png, &rgb, size)?;
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| io::Error::other(e.to_string()))?;
-        match s.study.grid.len() {
-            1 => draw_sweep_1d(root, s),
-            _ => draw_sweep_2d(root, s),
-        }
-        .map_err(io::Error::other)?;
+    let size = |rows| (520 * s.study.m as u32, rows);
+    match s.study.grid.len() {
+        1 => write_figure(dir, "sweep", size(900), |r| draw_sweep_1d(r, s), |r| draw_sweep_1d(r, s)),
+        2 => write_figure(dir, "sweep", size(520), |r| draw_sweep_2d(r, s), |r| draw_sweep_2d(r, s)),
+        _ => Ok(()),
     }
-    write_atomic(&dir.join("sweep.svg"), |w| w.write_all(svg.as_bytes()))
 }
 
 /// tune.png/.svg: per channel, the objective against μ_i (log scale), the chosen μ_i marked.
@@ -337,14 +337,7 @@ fn draw_tune<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &quell::study:
         let pts: Vec<(f64, f64)> = c.curve.iter().filter_map(|p| p.objective.map(|o| (p.mu, o))).collect();
         let (m0, m1) = c.curve.iter().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p.mu), b.max(p.mu)));
         let (m0, m1) = if m0 < m1 { (m0, m1) } else { (m0 / 2.0, m0 * 2.0) };
-        let (lo, hi) = pts.iter().fold((f64::MAX, f64::MIN), |(a, b), &(_, v)| (a.min(v), b.max(v)));
-        let (lo, hi) = if lo < hi {
-            (lo, hi)
-        } else if lo == hi {
-            (lo - 1.0, hi + 1.0)
-        } else {
-            (0.0, 1.0)
-        };
+        let (lo, hi) = value_range(pts.iter().map(|&(_, v)| v));
         let pad = 0.05 * (hi - lo);
         let mut chart = ChartBuilder::on(area)
             .caption(
@@ -377,18 +370,6 @@ fn draw_tune<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &quell::study:
 
 /// Writes tune.png and tune.svg.
 pub fn plot_tune(dir: &Path, r: &quell::study::TuneResult) -> io::Result<()> {
-    register_font();
     let size = (560 * r.channels.len().max(1) as u32, 460);
-    let png = dir.join("tune.png");
-    let mut rgb = vec![255u8; (size.0 * size.1 * 3) as usize];
-    draw_tune(BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area(), r)
-        .map_err(|e| io::Error::other(format!("{}: {e}", png.display())))?;
-    write_png(&png, &rgb, size)?;
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| io::Error::other(e.to_string()))?;
-        draw_tune(root, r).map_err(io::Error::other)?;
-    }
-    write_atomic(&dir.join("tune.svg"), |w| w.write_all(svg.as_bytes()))
+    write_figure(dir, "tune", size, |root| draw_tune(root, r), |root| draw_tune(root, r))
 }

@@ -93,8 +93,8 @@ impl<'a> ContinuousLoop<'a> {
         ContinuousLoop::with_truth(design, design.plant(), reference, disturbance)
     }
 
-    /// The loop whose simulated plant is `truth` (same dimensions as the design's plant, checked by
-    /// [`check_truth`](super::check_truth)); observers, filters and gains keep the design model.
+    /// The loop whose simulated plant is `truth` (with the design plant's dimensions, which
+    /// [`simulate_with_truth`] checks); observers, filters and gains keep the design model.
     pub fn with_truth(design: &'a Design, truth: &'a Plant, reference: &'a Signal, disturbance: &'a Signal) -> Self {
         let eq = Equations::new(design);
         let layout = Layout::new(&eq);

@@ -105,8 +105,7 @@ pub fn simulate_sampled(
     settings: &SampledSettings,
     on_progress: impl FnMut(f64) -> ControlFlow<()>,
 ) -> Result<SimResult, SimError> {
-    let mut ctrl = settings.check(design, reference, disturbance)?;
-    simulate_sampled_with(design, &mut ctrl, reference, disturbance, settings, on_progress)
+    simulate_sampled_with_truth(design, design.plant(), reference, disturbance, settings, on_progress)
 }
 
 /// [`simulate_sampled`] with any [`SampledController`] in the loop, from its current state; the
