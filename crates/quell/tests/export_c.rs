@@ -249,3 +249,31 @@ int main(void)
     tool("gcc", &args, &dir.0);
     tool(&dir.0.join("two").display().to_string(), &[], &dir.0);
 }
+
+/// The Cortex-M4F build of docs/deployment.md (f32, hard float): warning-free, no writable data, no
+/// library calls but memset/memcpy, and in particular no software double-precision routine
+/// (`__aeabi_d*`): every operation runs on the single-precision FPU. Prints `arm-none-eabi-size`.
+/// Run with `cargo test -p quell --release --test export_c cortex_m4f -- --ignored --nocapture`.
+#[test]
+#[ignore = "needs arm-none-eabi-gcc (Debian's gcc-arm-none-eabi)"]
+fn cortex_m4f_f32_build() {
+    let (_, d) = example("paper");
+    let code = export(&d, 1e-3, "quell", Precision::F32);
+    let dir = TempDir::new("m4f");
+    write_code(&code, &dir.0);
+    for opt in ["-O2", "-Os"] {
+        let mut args: Vec<&str> = STRICT.iter().chain(EXTRA).copied().collect();
+        args.extend([opt, "-mcpu=cortex-m4", "-mthumb", "-mfloat-abi=hard", "-mfpu=fpv4-sp-d16"]);
+        args.extend(["-c", "quell_controller.c", "-o", "m4f.o"]);
+        tool("arm-none-eabi-gcc", &args, &dir.0);
+        let undefined = tool("arm-none-eabi-nm", &["-u", "m4f.o"], &dir.0);
+        for sym in undefined.split_whitespace().filter(|s| *s != "U") {
+            assert!(["memset", "memcpy", "memmove"].contains(&sym), "{opt}: refers to {sym}");
+        }
+        let size = tool("arm-none-eabi-size", &["m4f.o"], &dir.0);
+        println!("{opt}:\n{size}");
+        let fields: Vec<&str> = size.lines().nth(1).unwrap().split_whitespace().collect();
+        assert_eq!((fields[1], fields[2]), ("0", "0"), "{opt}: data and bss must be empty");
+    }
+    println!("state: {} bytes (RAM), constants: {} bytes", code.state_bytes, code.constant_bytes);
+}

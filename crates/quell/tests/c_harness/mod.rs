@@ -172,6 +172,20 @@ impl CController {
         &self.u_f
     }
 
+    /// A function of the compiled code, e.g. `<p>_step` itself.
+    ///
+    /// # Safety
+    /// `F` must be the function's true signature.
+    pub unsafe fn function<F: Copy>(&self, name: &str) -> F {
+        // SAFETY: the caller's promise; the library outlives `self`'s use of the pointer.
+        unsafe { *self._lib.get::<F>(name.as_bytes()).unwrap() }
+    }
+
+    /// The state buffer, for calling the compiled functions directly.
+    pub fn state_ptr(&mut self) -> *mut u64 {
+        self.state.as_mut_ptr()
+    }
+
     /// u(k) of the last step (`<p>_command`).
     pub fn command(&self) -> &[f64] {
         &self.u
