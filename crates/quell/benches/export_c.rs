@@ -25,7 +25,7 @@ fn step(c: &mut Criterion) {
 
     let options = |precision| ExportOptions { precision, ..ExportOptions::default() };
     let code = generate(&d, 1e-3, &options(Precision::F64)).unwrap();
-    let mut ctrl = CController::build(&code, "quell", Precision::F64, 2, 8, "-O2");
+    let mut ctrl = CController::build(&code, "quell", Precision::F64, (2, 8, 3), "-O2");
     // SAFETY: `quell_step` of an f64 export has this signature; the buffers hold M = 2 numbers.
     let step64: Step<f64> = unsafe { ctrl.function("quell_step") };
     let state = ctrl.state_ptr();
@@ -38,7 +38,7 @@ fn step(c: &mut Criterion) {
     });
 
     let code = generate(&d, 1e-3, &options(Precision::F32)).unwrap();
-    let mut ctrl = CController::build(&code, "quell", Precision::F32, 2, 8, "-O2");
+    let mut ctrl = CController::build(&code, "quell", Precision::F32, (2, 8, 3), "-O2");
     // SAFETY: as above, in float.
     let step32: Step<f32> = unsafe { ctrl.function("quell_step") };
     let state = ctrl.state_ptr();

@@ -39,18 +39,11 @@ pub(super) fn write(design: &Design, ctrl: &Controller, o: &ExportOptions) -> Re
     let dim = |s: &str| format!("{P}_{s}");
     let mut constants = vec![
         Constant {
-            name: "Phi_z".into(),
-            dims: vec![dim("NZ"), dim("NZ")],
-            cols: nz,
-            values: block(view.PhiGamma_z, (0, 0), (nz, nz)),
-            comment: Some("Core (observers (6), (14), (20) with (5) substituted) at ZOH: z(k+1) = Phi_z z(k) + Gamma_z [y(k); g(k); u_d(k)].".into()),
-        },
-        Constant {
-            name: "Gamma_z".into(),
-            dims: vec![dim("NZ"), format!("3 * {P}_M")],
-            cols: 3 * m,
-            values: block(view.PhiGamma_z, (0, nz), (nz, 3 * m)),
-            comment: None,
+            name: "PhiGamma_z".into(),
+            dims: vec![dim("NZ"), format!("{P}_NZ + 3 * {P}_M")],
+            cols: nz + 3 * m,
+            values: block(view.PhiGamma_z, (0, 0), (nz, nz + 3 * m)),
+            comment: Some("Core (observers (6), (14), (20) with (5) substituted) at ZOH: z(k+1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)].".into()),
         },
         Constant {
             name: "K_neg".into(),
@@ -141,7 +134,7 @@ pub(super) fn write(design: &Design, ctrl: &Controller, o: &ExportOptions) -> Re
 
     let w = o.precision.bytes();
     let constant_bytes = w * constants.iter().map(|c| c.values.len()).sum::<usize>() + 4 * m;
-    let state_numbers = nz + sigma_sum * (q + 1) + m * q + m * q * (q + 1) / 2 + m * q + m + (delay_max + 1) * (m + q);
+    let state_numbers = nz + sigma_sum * (q + 1) + m * q + m * q * q + m * q + m + (delay_max + 1) * (m + q);
     let state_bytes = (w * state_numbers + 4).div_ceil(w) * w;
 
     let name = o.scenario_name.as_deref().map(|s| s.escape_default().to_string().replace("*/", "*\\/"));
@@ -196,7 +189,7 @@ typedef struct {{
     {R} z[{P}_NZ];                              /* core: observers (14), (20), (6) */
     {R} W[{P}_SIGMA_SUM][{P}_Q + 1];            /* G_ii filter banks, channel by channel */
     {R} Y[{P}_M][{P}_Q];                        /* H filter memories Y_i (33) */
-    {R} Omega[{P}_M][{P}_Q * ({P}_Q + 1) / 2];   /* H filter memories Omega_i, upper triangle by rows */
+    {R} Omega[{P}_M][{P}_Q][{P}_Q];             /* H filter memories Omega_i (33) */
     {R} eta[{P}_M][{P}_Q];                      /* adaptive parameters eta_i (33) */
     {R} u[{P}_M];                               /* adaptive command u(k) (25) */
     {R} line[{P}_DELAY_MAX + 1][{P}_M + {P}_Q]; /* delay line of rows [u(k), xi_hat^T(k)] */
@@ -255,7 +248,7 @@ void {p}_command(const {p}_state *s, {R} u[{P}_M]);
     for (i, &s) in sigma.iter().enumerate() {
         let _ = writeln!(
             calls,
-            "    v[2 * {P}_M + {i}] = {p}_channel(s, {i}u, {s}u, {p}_Phi_{k}, {p}_gamma_{k}, {row}u, y[{i}] - g[{i}]);",
+            "    u_d[{i}] = {p}_channel(s, {i}u, {s}u, {p}_Phi_{k}, {p}_gamma_{k}, {row}u, y[{i}] - g[{i}]);",
             k = i + 1
         );
         row += s;
@@ -274,6 +267,18 @@ void {p}_command(const {p}_state *s, {R} u[{P}_M]);
 
 /// The functions of the source; `{p}`, `{P}` and `{R}` are the prefix, its upper case and the type.
 const FUNCTIONS: &str = r#"
+/* acc + sum_j M[j] x[j], four terms at a time: the order in which the Rust Controller sums, so that
+ * the two give the same bits. */
+static {R} {p}_dot(const {R} *M, const {R} *x, unsigned len, {R} acc)
+{
+    unsigned j = 0;
+    for (; j + 4 <= len; j += 4)
+        acc += M[j] * x[j] + M[j + 1] * x[j + 1] + M[j + 2] * x[j + 2] + M[j + 3] * x[j + 3];
+    for (; j < len; j++)
+        acc += M[j] * x[j];
+    return acc;
+}
+
 void {p}_init({p}_state *s)
 {
     for (unsigned i = 0; i < {P}_NZ; i++)
@@ -285,9 +290,9 @@ void {p}_init({p}_state *s)
         for (unsigned j = 0; j < {P}_Q; j++) {
             s->Y[i][j] = 0;
             s->eta[i][j] = 0;
+            for (unsigned t = 0; t < {P}_Q; t++)
+                s->Omega[i][j][t] = 0;
         }
-        for (unsigned j = 0; j < {P}_Q * ({P}_Q + 1) / 2; j++)
-            s->Omega[i][j] = 0;
         s->u[i] = 0;
     }
     for (uint32_t k = 0; k < {P}_DELAY_MAX + 1; k++)
@@ -303,7 +308,8 @@ static {R} {p}_channel({p}_state *s, unsigned i, unsigned sigma, const {R} *Phi,
                        unsigned row, {R} delta)
 {
     {R} (*W)[{P}_Q + 1] = s->W + row;
-    {R} *Y = s->Y[i], *Omega = s->Omega[i], *eta = s->eta[i];
+    {R} (*Omega)[{P}_Q] = s->Omega[i];
+    {R} *Y = s->Y[i], *eta = s->eta[i];
     const uint32_t d = {p}_delay[i];
     const {R} *past = s->line[s->head >= d ? s->head - d : s->head + ((uint32_t){P}_DELAY_MAX + 1u) - d];
     const {R} q0 = {p}_q0[i], c = {p}_c[i];
@@ -316,22 +322,17 @@ static {R} {p}_channel({p}_state *s, unsigned i, unsigned sigma, const {R} *Phi,
         Delta[j] = q0 * W[0][1 + j];
         Omega_eta[j] = 0;
     }
-    /* H filters at ZOH: Y <- a Y + b Delta eps, Omega <- a Omega + b Delta Delta^T (row j of the
-     * packed triangle is the diagonal, then Omega[j][t] for t > j), and in the same pass tr Omega
-     * and Omega eta, each entry summed over the row index in order. */
+    /* H filters at ZOH: Y <- a Y + b Delta eps, Omega <- a Omega + b Delta Delta^T, and in the same
+     * pass Omega eta = sum_j eta_j (row j of Omega) and tr Omega. */
     for (unsigned j = 0; j < {P}_Q; j++)
         Y[j] = {p}_a * Y[j] + {p}_b * Delta[j] * eps;
-    for (unsigned j = 0, k = 0; j < {P}_Q; j++) {
+    for (unsigned j = 0; j < {P}_Q; j++) {
         const {R} bd = {p}_b * Delta[j];
-        Omega[k] = {p}_a * Omega[k] + bd * Delta[j];
-        trace += Omega[k];
-        Omega_eta[j] += Omega[k] * eta[j];
-        k++;
-        for (unsigned t = j + 1; t < {P}_Q; t++, k++) {
-            Omega[k] = {p}_a * Omega[k] + bd * Delta[t];
-            Omega_eta[j] += Omega[k] * eta[t];
-            Omega_eta[t] += Omega[k] * eta[j];
+        for (unsigned t = 0; t < {P}_Q; t++) {
+            Omega[j][t] = {p}_a * Omega[j][t] + bd * Delta[t];
+            Omega_eta[t] += Omega[j][t] * eta[j];
         }
+        trace += Omega[j][j];
     }
     /* Adaptive step (33), implicit in rho I with rho = tr Omega >= lambda_max(Omega), explicit in
      * the rest: eta <- eta + c (Y - Omega eta) / (1 + c rho), c = T_s mu_i; nonexpansive for any c. */
@@ -356,8 +357,8 @@ static {R} {p}_channel({p}_state *s, unsigned i, unsigned sigma, const {R} *Phi,
 void {p}_step({p}_state *s, const {R} y[{P}_M], const {R} g[{P}_M], {R} u_f[{P}_M])
 {
     {R} *now = s->line[s->head];
-    {R} v[3 * {P}_M]; /* [y(k); g(k); u_d(k)], u_d(k) = [u_1(k - d_1), ...] */
-    {R} z_next[{P}_NZ];
+    {R} zv[{P}_NZ + 3 * {P}_M]; /* [z(k); y(k); g(k); u_d(k)], u_d(k) = [u_1(k - d_1), ...] */
+    {R} *u_d = zv + {P}_NZ + 2 * {P}_M;
 
     /* Control law (25) with eta_i(k): u_i(k) = -eta_i^T xi_hat(k), xi_hat = the first q core states;
      * the delay line records [u(k), xi_hat^T(k)]. */
@@ -373,29 +374,17 @@ void {p}_step({p}_state *s, const {R} y[{P}_M], const {R} g[{P}_M], {R} u_f[{P}_
     /* The adaptive law (33), channel by channel. */
 {calls}
     /* Plant input (5): u_f = -K x_hat + F u_d, x_hat = the last n core states. */
+    for (unsigned i = 0; i < {P}_M; i++)
+        u_f[i] = {p}_dot({p}_F[i], u_d, {P}_M, {p}_dot({p}_K_neg[i], s->z + {P}_Q, {P}_N, 0));
+    /* Core at ZOH: z(k + 1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
+    for (unsigned i = 0; i < {P}_NZ; i++)
+        zv[i] = s->z[i];
     for (unsigned i = 0; i < {P}_M; i++) {
-        {R} acc = 0;
-        for (unsigned j = 0; j < {P}_N; j++)
-            acc += {p}_K_neg[i][j] * s->z[{P}_Q + j];
-        for (unsigned j = 0; j < {P}_M; j++)
-            acc += {p}_F[i][j] * v[2 * {P}_M + j];
-        u_f[i] = acc;
-    }
-    /* Core at ZOH: z(k + 1) = Phi_z z(k) + Gamma_z [y(k); g(k); u_d(k)]. */
-    for (unsigned i = 0; i < {P}_M; i++) {
-        v[i] = y[i];
-        v[{P}_M + i] = g[i];
-    }
-    for (unsigned i = 0; i < {P}_NZ; i++) {
-        {R} acc = 0;
-        for (unsigned j = 0; j < {P}_NZ; j++)
-            acc += {p}_Phi_z[i][j] * s->z[j];
-        for (unsigned j = 0; j < 3 * {P}_M; j++)
-            acc += {p}_Gamma_z[i][j] * v[j];
-        z_next[i] = acc;
+        zv[{P}_NZ + i] = y[i];
+        zv[{P}_NZ + {P}_M + i] = g[i];
     }
     for (unsigned i = 0; i < {P}_NZ; i++)
-        s->z[i] = z_next[i];
+        s->z[i] = {p}_dot({p}_PhiGamma_z[i], zv, {P}_NZ + 3 * {P}_M, 0);
     s->head = s->head == {P}_DELAY_MAX ? 0 : s->head + 1;
 }
 

@@ -5,9 +5,9 @@
 //! controller and reads its matrices, so the validation and the numbers are the same) and writes
 //! `<prefix>_controller.h` and `<prefix>_controller.c`: every matrix a `static const` array, the
 //! state one struct of fixed-size arrays, no dynamic memory, no libm, no global mutable state. The
-//! step performs the arithmetic of [`Controller::step`] in the same order wherever the order is a
-//! choice of the algorithm (sums may associate differently), so in double precision the two agree
-//! to rounding.
+//! step performs the arithmetic of [`Controller::step`] in the same order, so in `double` on a
+//! machine without fused multiply-adds in its C code (x86-64; C99 forbids contracting across
+//! statements, and `-std=c99` turns gcc's contraction off) the two give the same bits.
 
 mod c;
 

@@ -5,7 +5,7 @@
 //! In-process calls (a few ns each) let the sampled-data loop call the C controller every sample,
 //! which a harness over stdin/stdout (two pipe transfers per sample) would make slow and fiddly.
 //! gcc is required: a machine without it fails these tests with a message saying so.
-#![allow(dead_code)]
+#![allow(dead_code, non_snake_case)]
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -13,6 +13,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use libloading::Library;
 use quell::export::{CCode, Precision};
+use quell::sim::{SampledController, Watched};
 
 /// The warnings of the issue, as errors.
 pub const STRICT: &[&str] = &["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic"];
@@ -60,18 +61,19 @@ pub fn tool(program: &str, args: &[&str], dir: &Path) -> String {
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
-/// The shim: `<p>_t_size`, and `<p>_t_step` (step, command and η̂, in doubles).
-fn shim(code: &CCode, prefix: &str, precision: Precision) -> String {
+/// The shim: `<p>_t_size`, `<p>_t_init` and `<p>_t_step` (step, then command, η̂ and the core
+/// state z = [ξ̂; x̂], in doubles).
+fn shim(prefix: &str, precision: Precision) -> String {
     let (P, R) = (prefix.to_ascii_uppercase(), precision.c_type());
     format!(
         r#"#include <stddef.h>
-#include "{h}"
+#include "{prefix}_controller.h"
 size_t {prefix}_t_size(void);
 void {prefix}_t_init(void *s);
-void {prefix}_t_step(void *s, const double *y, const double *g, double *u_f, double *u, double *eta);
+void {prefix}_t_step(void *s, const double *y, const double *g, double *u_f, double *u, double *eta, double *z);
 size_t {prefix}_t_size(void) {{ return sizeof({prefix}_state); }}
 void {prefix}_t_init(void *s) {{ {prefix}_init(({prefix}_state *)s); }}
-void {prefix}_t_step(void *s, const double *y, const double *g, double *u_f, double *u, double *eta)
+void {prefix}_t_step(void *s, const double *y, const double *g, double *u_f, double *u, double *eta, double *z)
 {{
     {R} yy[{P}_M], gg[{P}_M], uf[{P}_M], uu[{P}_M];
     {prefix}_state *st = ({prefix}_state *)s;
@@ -87,13 +89,14 @@ void {prefix}_t_step(void *s, const double *y, const double *g, double *u_f, dou
         for (unsigned j = 0; j < {P}_Q; j++)
             eta[i * {P}_Q + j] = st->eta[i][j];
     }}
+    for (unsigned j = 0; j < {P}_NZ; j++)
+        z[j] = st->z[j];
 }}
-"#,
-        h = code.header_name
+"#
     )
 }
 
-type StepFn = unsafe extern "C" fn(*mut u64, *const f64, *const f64, *mut f64, *mut f64, *mut f64);
+type StepFn = unsafe extern "C" fn(*mut u64, *const f64, *const f64, *mut f64, *mut f64, *mut f64, *mut f64);
 type InitFn = unsafe extern "C" fn(*mut u64);
 type SizeFn = unsafe extern "C" fn() -> usize;
 
@@ -108,17 +111,38 @@ pub struct CController {
     u_f: Vec<f64>,
     u: Vec<f64>,
     eta: Vec<f64>,
+    /// [ξ̂; x̂] after the last step; q of it is ξ̂.
+    z: Vec<f64>,
+    q: usize,
 }
 
 impl CController {
-    /// Compiles `code` (generated with `prefix` and `precision`) with gcc and `opt` (e.g. "-O2").
-    pub fn build(code: &CCode, prefix: &str, precision: Precision, m: usize, q: usize, opt: &str) -> CController {
+    /// Compiles `code` (generated with `prefix` and `precision`) with gcc and `opt` (e.g. "-O2");
+    /// the design has m channels, regressor size q and n plant states.
+    pub fn build(
+        code: &CCode,
+        prefix: &str,
+        precision: Precision,
+        (m, q, n): (usize, usize, usize),
+        opt: &str,
+    ) -> CController {
         let dir = TempDir::new(&format!("{prefix}{opt}"));
-        let source = write_code(code, &dir.0);
-        std::fs::write(dir.0.join("shim.c"), shim(code, prefix, precision)).unwrap();
+        write_code(code, &dir.0);
+        CController::build_in(dir, prefix, precision, (m, q, n), opt)
+    }
+
+    /// Compiles `<prefix>_controller.c` as found in `dir`.
+    pub fn build_in(
+        dir: TempDir,
+        prefix: &str,
+        precision: Precision,
+        (m, q, n): (usize, usize, usize),
+        opt: &str,
+    ) -> CController {
+        std::fs::write(dir.0.join("shim.c"), shim(prefix, precision)).unwrap();
         let lib = dir.0.join("libctrl.so");
         let mut args: Vec<&str> = STRICT.to_vec();
-        let (source, lib_s) = (source.display().to_string(), lib.display().to_string());
+        let (source, lib_s) = (format!("{prefix}_controller.c"), lib.display().to_string());
         args.extend([opt, "-shared", "-fPIC", "-o", &lib_s, &source, "shim.c"]);
         tool("gcc", &args, &dir.0);
         // SAFETY: the library is the code just compiled; its initializers do nothing.
@@ -144,6 +168,8 @@ impl CController {
             u_f: vec![0.0; m],
             u: vec![0.0; m],
             eta: vec![0.0; m * q],
+            z: vec![0.0; q + n],
+            q,
         };
         c.reset();
         c
@@ -158,7 +184,7 @@ impl CController {
     /// `<p>_step`, returning u_f(k).
     pub fn step(&mut self, y: &[f64], g: &[f64]) -> &[f64] {
         assert!(y.len() == self.u.len() && g.len() == self.u.len());
-        // SAFETY: every buffer has the length the compiled code reads or writes (m, m·q).
+        // SAFETY: every buffer has the length the compiled code reads or writes (m, m·q, q + n).
         unsafe {
             (self.step_fn)(
                 self.state.as_mut_ptr(),
@@ -167,6 +193,7 @@ impl CController {
                 self.u_f.as_mut_ptr(),
                 self.u.as_mut_ptr(),
                 self.eta.as_mut_ptr(),
+                self.z.as_mut_ptr(),
             )
         }
         &self.u_f
@@ -194,5 +221,17 @@ impl CController {
     /// η̂ after the last step, concatenated.
     pub fn eta(&self) -> &[f64] {
         &self.eta
+    }
+}
+
+impl SampledController for CController {
+    fn step(&mut self, y: &[f64], g: &[f64]) -> &[f64] {
+        CController::step(self, y, g)
+    }
+    fn command(&self) -> &[f64] {
+        &self.u
+    }
+    fn watched(&self) -> Watched<'_> {
+        Watched { x: &[], xi_hat: &self.z[..self.q], x_hat: &self.z[self.q..], eta: &self.eta }
     }
 }
