@@ -134,7 +134,7 @@ pub(super) fn write(design: &Design, ctrl: &Controller, o: &ExportOptions) -> Re
 
     let w = o.precision.bytes();
     let constant_bytes = w * constants.iter().map(|c| c.values.len()).sum::<usize>() + 4 * m;
-    let state_numbers = nz + sigma_sum * (q + 1) + m * q + m * q * q + m * q + m + (delay_max + 1) * (m + q);
+    let state_numbers = nz + sigma_sum * (q + 1) + m * q + m * q * (q + 1) / 2 + m * q + m + (delay_max + 1) * (m + q);
     let state_bytes = (w * state_numbers + 4).div_ceil(w) * w;
 
     let name = o.scenario_name.as_deref().map(|s| s.escape_default().to_string().replace("*/", "*\\/"));
@@ -189,7 +189,7 @@ typedef struct {{
     {R} z[{P}_NZ];                              /* core: observers (14), (20), (6) */
     {R} W[{P}_SIGMA_SUM][{P}_Q + 1];            /* G_ii filter banks, channel by channel */
     {R} Y[{P}_M][{P}_Q];                        /* H filter memories Y_i (33) */
-    {R} Omega[{P}_M][{P}_Q][{P}_Q];             /* H filter memories Omega_i (33) */
+    {R} Omega[{P}_M][{P}_Q * ({P}_Q + 1) / 2];   /* H filter memories Omega_i (33), upper triangle by rows */
     {R} eta[{P}_M][{P}_Q];                      /* adaptive parameters eta_i (33) */
     {R} u[{P}_M];                               /* adaptive command u(k) (25) */
     {R} line[{P}_DELAY_MAX + 1][{P}_M + {P}_Q]; /* delay line of rows [u(k), xi_hat^T(k)] */
@@ -267,14 +267,11 @@ void {p}_command(const {p}_state *s, {R} u[{P}_M]);
 
 /// The functions of the source; `{p}`, `{P}` and `{R}` are the prefix, its upper case and the type.
 const FUNCTIONS: &str = r#"
-/* acc + sum_j M[j] x[j], four terms at a time: the order in which the Rust Controller sums, so that
- * the two give the same bits. */
+/* acc + sum_j M[j] x[j], in j order (every sum here runs in the Rust Controller's order, so that an
+ * f64 export and the Controller give the same bits). */
 static {R} {p}_dot(const {R} *M, const {R} *x, unsigned len, {R} acc)
 {
-    unsigned j = 0;
-    for (; j + 4 <= len; j += 4)
-        acc += M[j] * x[j] + M[j + 1] * x[j + 1] + M[j + 2] * x[j + 2] + M[j + 3] * x[j + 3];
-    for (; j < len; j++)
+    for (unsigned j = 0; j < len; j++)
         acc += M[j] * x[j];
     return acc;
 }
@@ -290,9 +287,9 @@ void {p}_init({p}_state *s)
         for (unsigned j = 0; j < {P}_Q; j++) {
             s->Y[i][j] = 0;
             s->eta[i][j] = 0;
-            for (unsigned t = 0; t < {P}_Q; t++)
-                s->Omega[i][j][t] = 0;
         }
+        for (unsigned j = 0; j < {P}_Q * ({P}_Q + 1) / 2; j++)
+            s->Omega[i][j] = 0;
         s->u[i] = 0;
     }
     for (uint32_t k = 0; k < {P}_DELAY_MAX + 1; k++)
@@ -308,8 +305,7 @@ static {R} {p}_channel({p}_state *s, unsigned i, unsigned sigma, const {R} *Phi,
                        unsigned row, {R} delta)
 {
     {R} (*W)[{P}_Q + 1] = s->W + row;
-    {R} (*Omega)[{P}_Q] = s->Omega[i];
-    {R} *Y = s->Y[i], *eta = s->eta[i];
+    {R} *Y = s->Y[i], *Omega = s->Omega[i], *eta = s->eta[i];
     const uint32_t d = {p}_delay[i];
     const {R} *past = s->line[s->head >= d ? s->head - d : s->head + ((uint32_t){P}_DELAY_MAX + 1u) - d];
     const {R} q0 = {p}_q0[i], c = {p}_c[i];
@@ -322,17 +318,22 @@ static {R} {p}_channel({p}_state *s, unsigned i, unsigned sigma, const {R} *Phi,
         Delta[j] = q0 * W[0][1 + j];
         Omega_eta[j] = 0;
     }
-    /* H filters at ZOH: Y <- a Y + b Delta eps, Omega <- a Omega + b Delta Delta^T, and in the same
-     * pass Omega eta = sum_j eta_j (row j of Omega) and tr Omega. */
+    /* H filters at ZOH: Y <- a Y + b Delta eps, Omega <- a Omega + b Delta Delta^T (symmetric, kept
+     * as its upper triangle row by row: row j is Omega[j][j], then Omega[j][t] for t > j), and in
+     * the same pass tr Omega and Omega eta, each entry summed over the column index in order. */
     for (unsigned j = 0; j < {P}_Q; j++)
         Y[j] = {p}_a * Y[j] + {p}_b * Delta[j] * eps;
-    for (unsigned j = 0; j < {P}_Q; j++) {
+    for (unsigned j = 0, k = 0; j < {P}_Q; j++) {
         const {R} bd = {p}_b * Delta[j];
-        for (unsigned t = 0; t < {P}_Q; t++) {
-            Omega[j][t] = {p}_a * Omega[j][t] + bd * Delta[t];
-            Omega_eta[t] += Omega[j][t] * eta[j];
+        Omega[k] = {p}_a * Omega[k] + bd * Delta[j];
+        trace += Omega[k];
+        Omega_eta[j] += Omega[k] * eta[j];
+        k++;
+        for (unsigned t = j + 1; t < {P}_Q; t++, k++) {
+            Omega[k] = {p}_a * Omega[k] + bd * Delta[t];
+            Omega_eta[j] += Omega[k] * eta[t];
+            Omega_eta[t] += Omega[k] * eta[j];
         }
-        trace += Omega[j][j];
     }
     /* Adaptive step (33), implicit in rho I with rho = tr Omega >= lambda_max(Omega), explicit in
      * the rest: eta <- eta + c (Y - Omega eta) / (1 + c rho), c = T_s mu_i; nonexpansive for any c. */
