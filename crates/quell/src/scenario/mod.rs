@@ -12,6 +12,7 @@
 
 pub mod exosystem;
 mod read;
+mod write;
 
 use std::path::Path;
 use std::str::FromStr;
@@ -26,6 +27,7 @@ use crate::signal::{check_signals, Component, Harmonic, Signal};
 use exosystem::Exosystem;
 pub(crate) use read::kind;
 use read::{err, line_col, Table, Value};
+pub use write::{design_table, plant_table, pole_list, signal_table};
 
 /// The paper's example (Section VIII) as a scenario file: `examples/paper.toml`.
 pub const PAPER_EXAMPLE: &str = include_str!("../../../../examples/paper.toml");

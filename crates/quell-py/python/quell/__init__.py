@@ -1,0 +1,44 @@
+"""quell: direct adaptive output-feedback control of unstable MIMO linear plants with distinct
+input delays and unknown multi-harmonic references and disturbances.
+
+It implements C. V. Tu and N. Dudarenko, "Direct adaptive output-feedback control for unstable
+linear multidimensional systems with distinct input delays" (2026); equation numbers in the
+docstrings refer to that paper.
+
+>>> import quell
+>>> scenario = quell.paper_example()                 # Section VIII
+>>> result = quell.simulate(scenario)                # the continuous loop, 100 s
+>>> result.outcome
+{'status': 'completed'}
+"""
+
+from ._errors import DesignError, QuellError, ScenarioError, SimulationError
+from ._quell import (
+    Controller,
+    Design,
+    Plant,
+    Scenario,
+    SimResult,
+    __version__,
+    design,
+    paper_example,
+    place,
+    simulate,
+)
+
+__all__ = [
+    "Controller",
+    "Design",
+    "DesignError",
+    "Plant",
+    "QuellError",
+    "Scenario",
+    "ScenarioError",
+    "SimResult",
+    "SimulationError",
+    "__version__",
+    "design",
+    "paper_example",
+    "place",
+    "simulate",
+]

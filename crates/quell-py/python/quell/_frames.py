@@ -1,0 +1,58 @@
+"""SimResult.to_pandas and SimResult.plot: pandas and matplotlib are imported only here, when used."""
+
+
+def columns(m, q):
+    """The header of signals.csv: t, y1..ym, g1..gm, e1..em, u1..um, eta1_1..etam_q."""
+    names = ["t"]
+    for signal in ("y", "g", "e", "u"):
+        names += [f"{signal}{i}" for i in range(1, m + 1)]
+    names += [f"eta{i}_{j}" for i in range(1, m + 1) for j in range(1, q + 1)]
+    return names
+
+
+def to_pandas(result):
+    """The columns of signals.csv as a DataFrame (one row per sample)."""
+    try:
+        import pandas as pd
+    except ImportError as e:
+        raise ImportError("SimResult.to_pandas needs pandas: pip install pandas") from e
+    import numpy as np
+
+    n, m, q = len(result), result.m, result.q
+    data = np.column_stack(
+        [result.t, result.y, result.g, result.e, result.u, np.asarray(result.eta).reshape(n, m * q)]
+    )
+    return pd.DataFrame(data, columns=columns(m, q))
+
+
+def plot(result, channel=1, fig=None):
+    """Channel ``channel`` (1-based) in the four panels of the CLI's figure, like the paper's
+    Figs. 1 and 2: y_i with g_i, e_i = y_i - g_i, u_i, and eta_i against t."""
+    try:
+        import matplotlib.pyplot as plt
+    except ImportError as e:
+        raise ImportError("SimResult.plot needs matplotlib: pip install matplotlib") from e
+    m = result.m
+    if not isinstance(channel, int) or not 1 <= channel <= m:
+        raise ValueError(f"channel: expected a channel number from 1 to {m}, found {channel!r}")
+    i = channel - 1
+    t = result.t
+    if fig is None:
+        fig = plt.figure(figsize=(10, 11.5))
+    axes = fig.subplots(4, 1, sharex=True)
+    c = channel
+    axes[0].plot(t, result.g[:, i], "--", label=f"g{c} (reference)")
+    axes[0].plot(t, result.y[:, i], label=f"y{c}")
+    axes[0].set(title=f"Channel {c}: output and reference", ylabel="y, g")
+    axes[1].plot(t, result.e[:, i], label=f"e{c}")
+    axes[1].set(title=f"Channel {c}: tracking error", ylabel="e = y − g")
+    axes[2].plot(t, result.u[:, i], label=f"u{c}")
+    axes[2].set(title=f"Channel {c}: adaptive command (25)", ylabel="u")
+    for j in range(result.q):
+        axes[3].plot(t, result.eta[:, i, j], label=f"η{c}_{j + 1}")
+    axes[3].set(title=f"Channel {c}: adjustable parameters (33)", ylabel="η", xlabel="t")
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="upper right", fontsize="small", ncol=1 + (ax is axes[3]) * 2)
+    fig.tight_layout()
+    return fig

@@ -1,0 +1,196 @@
+//! Python values in, checked Rust values out (and numpy arrays back): every failure is a
+//! `ValueError` subclass naming the argument, what was expected and what was found.
+
+use numpy::ndarray::Array2;
+use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::{PyComplex, PyDict, PyString};
+use quell::nalgebra::{Complex, DMatrix};
+
+use crate::errors::Kind;
+
+/// Python's name for the type of `obj` ("list", "str", "numpy.ndarray").
+pub fn type_name(obj: &Bound<'_, PyAny>) -> String {
+    obj.get_type().name().map(|n| n.to_string()).unwrap_or_else(|_| "object".into())
+}
+
+/// `obj` as a float64 numpy array: any array-like of real numbers (ints, floats, numpy arrays).
+fn real_array<'py>(obj: &Bound<'py, PyAny>, name: &str, kind: Kind) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let py = obj.py();
+    let np = py.import("numpy")?;
+    let arr = np.call_method1("asarray", (obj,)).map_err(|e| {
+        kind.err(
+            py,
+            format!(
+                "{name}: expected an array-like of real numbers, found a {} that numpy cannot read as an array ({e})",
+                type_name(obj)
+            ),
+        )
+    })?;
+    let dtype = arr.getattr("dtype")?;
+    let code: String = dtype.getattr("kind")?.extract()?;
+    if !matches!(code.as_str(), "i" | "u" | "f") {
+        let found = match code.as_str() {
+            "c" => "complex numbers".to_string(),
+            "b" => "booleans".to_string(),
+            "U" | "S" => "strings".to_string(),
+            "O" => "entries that are not all numbers (or rows of unequal length)".to_string(),
+            _ => format!("an array of dtype {}", dtype.str()?),
+        };
+        return Err(kind.err(py, format!("{name}: expected real numbers, found {found}")));
+    }
+    Ok(arr.call_method1("astype", ("float64",))?.cast_into::<PyArrayDyn<f64>>()?)
+}
+
+fn shape_text(shape: &[usize]) -> String {
+    match shape {
+        [] => "a scalar".into(),
+        [n] => format!("a 1-D array of shape ({n},)"),
+        s => format!(
+            "a {}-D array of shape ({})",
+            s.len(),
+            s.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(", ")
+        ),
+    }
+}
+
+fn finite(name: &str, index: &[usize], v: f64, kind: Kind, py: Python<'_>) -> PyResult<f64> {
+    if v.is_finite() {
+        return Ok(v);
+    }
+    let at: String = index.iter().map(|i| format!("[{i}]")).collect();
+    Err(kind.err(py, format!("{name}{at}: expected a finite number, found {v}")))
+}
+
+/// A real matrix (2-D array-like: a list of rows, or a numpy array) with finite entries.
+pub fn matrix(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<DMatrix<f64>> {
+    let py = obj.py();
+    let arr = real_array(obj, name, kind)?;
+    if arr.ndim() != 2 {
+        return Err(kind.err(
+            py,
+            format!(
+                "{name}: expected a matrix (2-D array, e.g. [[1.0, 0.0], [0.0, 1.0]]), found {}; write each row in brackets",
+                shape_text(arr.shape())
+            ),
+        ));
+    }
+    let view = arr.readonly();
+    let a = view.as_array();
+    let (r, c) = (a.shape()[0], a.shape()[1]);
+    let mut M = DMatrix::zeros(r, c);
+    for i in 0..r {
+        for j in 0..c {
+            M[(i, j)] = finite(name, &[i, j], a[[i, j]], kind, py)?;
+        }
+    }
+    Ok(M)
+}
+
+/// A real vector (1-D array-like; a number counts as one entry) with finite entries.
+pub fn vector(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<f64>> {
+    let py = obj.py();
+    let arr = real_array(obj, name, kind)?;
+    if arr.ndim() > 1 {
+        return Err(kind.err(py, format!("{name}: expected a 1-D array of numbers, found {}", shape_text(arr.shape()))));
+    }
+    let view = arr.readonly();
+    view.as_array().iter().enumerate().map(|(i, &v)| finite(name, &[i], v, kind, py)).collect()
+}
+
+/// A real number.
+pub fn number(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<f64> {
+    let py = obj.py();
+    if obj.is_instance_of::<PyString>() || obj.is_instance_of::<PyComplex>() {
+        return Err(kind.err(py, format!("{name}: expected a real number, found a {}", type_name(obj))));
+    }
+    obj.extract::<f64>()
+        .map_err(|_| kind.err(py, format!("{name}: expected a real number, found a {}", type_name(obj))))
+}
+
+/// A list of poles: real numbers, Python complex numbers (a conjugate pair both listed), or
+/// `[re, im]` with im > 0 meaning the pair re ± i·im (as in scenario files).
+pub fn poles(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<Complex<f64>>> {
+    let py = obj.py();
+    let form = "a list of poles (numbers, complex numbers, or [re, im] pairs meaning re ± i·im)";
+    if obj.is_instance_of::<PyString>() || obj.is_instance_of::<PyDict>() {
+        return Err(kind.err(py, format!("{name}: expected {form}, found a {}", type_name(obj))));
+    }
+    let items =
+        obj.try_iter().map_err(|_| kind.err(py, format!("{name}: expected {form}, found a {}", type_name(obj))))?;
+    let mut out = Vec::new();
+    for (i, item) in items.enumerate() {
+        let item = item?;
+        let key = format!("{name}[{i}]");
+        let bad = |what: String| {
+            kind.err(
+                py,
+                format!("{key}: expected a pole: a number, a complex number or [re, im] with im > 0, found {what}"),
+            )
+        };
+        if item.is_instance_of::<PyString>() {
+            return Err(bad("a str".into()));
+        }
+        let numpy_complex =
+            item.getattr("dtype").and_then(|d| d.getattr("kind")).is_ok_and(|k| k.eq("c").unwrap_or(false));
+        if item.is_instance_of::<PyComplex>() || numpy_complex {
+            let re: f64 = item.getattr("real")?.extract()?;
+            let im: f64 = item.getattr("imag")?.extract()?;
+            out.push(Complex::new(finite(&key, &[], re, kind, py)?, finite(&key, &[], im, kind, py)?));
+        } else if let Ok(re) = item.extract::<f64>() {
+            out.push(Complex::new(finite(&key, &[], re, kind, py)?, 0.0));
+        } else {
+            let pair = vector(&item, &key, kind).map_err(|_| bad(type_name(&item)))?;
+            let [re, im] = pair[..] else {
+                return Err(bad(format!("{} entries", pair.len())));
+            };
+            if im > 0.0 {
+                out.extend([Complex::new(re, im), Complex::new(re, -im)]);
+            } else if im == 0.0 {
+                return Err(kind.err(py, format!("{key}: [{re}, {im}] has imaginary part 0; write a real pole as a number ({re}), and a complex pair as [re, im] with im > 0")));
+            } else {
+                return Err(kind.err(py, format!("{key}: [{re}, {im}] has imaginary part {im} < 0; a pair [re, im] means re ± i·im, so write it as [{re}, {}]", -im)));
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// One list of poles per channel or signal component.
+pub fn pole_lists(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<Vec<Complex<f64>>>> {
+    let py = obj.py();
+    let items = obj.try_iter().map_err(|_| {
+        kind.err(
+            py,
+            format!(
+                "{name}: expected one list of poles per channel or component, e.g. [[-6, -2], [-4]], found a {}",
+                type_name(obj)
+            ),
+        )
+    })?;
+    let mut out = Vec::new();
+    for (i, item) in items.enumerate() {
+        let item = item?;
+        if item.extract::<f64>().is_ok() || item.is_instance_of::<PyComplex>() {
+            return Err(kind.err(py, format!("{name}: expected one list of poles per channel or component (e.g. [[-6, -2], [-4]]), found a flat list of numbers; put each one's poles in brackets")));
+        }
+        out.push(poles(&item, &format!("{name}[{i}]"), kind)?);
+    }
+    Ok(out)
+}
+
+/// A matrix as a new numpy array.
+pub fn to_numpy<'py>(py: Python<'py>, M: &DMatrix<f64>) -> Bound<'py, PyArray2<f64>> {
+    PyArray2::from_owned_array(py, Array2::from_shape_fn((M.nrows(), M.ncols()), |(i, j)| M[(i, j)]))
+}
+
+/// Complex values as a numpy complex128 vector.
+pub fn complex_numpy<'py>(py: Python<'py>, z: &[Complex<f64>]) -> PyResult<Bound<'py, PyAny>> {
+    let values: Vec<Bound<'py, PyComplex>> = z.iter().map(|c| PyComplex::from_doubles(py, c.re, c.im)).collect();
+    py.import("numpy")?.call_method1("array", (values, "complex128"))
+}
+
+/// A slice as a new numpy vector.
+pub fn vec_numpy<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyArray1<f64>> {
+    PyArray1::from_slice(py, v)
+}

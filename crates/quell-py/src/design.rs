@@ -1,0 +1,245 @@
+//! `quell.design`, `quell.Design` and `quell.place`: every gain of Sections III–V.
+
+use std::sync::Arc;
+
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use quell::design::{DesignSpec, ObserverChoice};
+
+use crate::convert::{complex_numpy, matrix, number, pole_lists, poles, to_numpy, vector};
+use crate::errors::{raise, Kind};
+use crate::plant::{plant_arg, PyPlant};
+
+/// Every matrix the controller needs, with the assumption checks that were passed to get them.
+#[pyclass(module = "quell", name = "Design", frozen)]
+pub struct PyDesign {
+    pub inner: Arc<quell::Design>,
+}
+
+/// The designer's choices as keyword arguments of `quell.design` (names as in `[design]`).
+#[allow(clippy::too_many_arguments)]
+pub fn spec(
+    py: Python<'_>,
+    channel_poles: &Bound<'_, PyAny>,
+    reference_filter_poles: &Bound<'_, PyAny>,
+    disturbance_filter_poles: Option<&Bound<'_, PyAny>>,
+    mu: &Bound<'_, PyAny>,
+    beta: &Bound<'_, PyAny>,
+    observer_poles: Option<&Bound<'_, PyAny>>,
+    observer_gain: Option<&Bound<'_, PyAny>>,
+) -> PyResult<DesignSpec> {
+    let k = Kind::Design;
+    let observer = match (observer_gain, observer_poles) {
+        (Some(L), None) => ObserverChoice::Gain(matrix(L, "design.observer_gain", k)?),
+        (None, Some(p)) => ObserverChoice::Poles(poles(p, "design.observer_poles", k)?),
+        (Some(_), Some(_)) => return Err(k.err(py, "design: both observer_gain and observer_poles are given; give exactly one: the gain L (n×m), or the n poles of A − LC to place")),
+        (None, None) => return Err(k.err(py, "design.observer_gain: missing; give exactly one of observer_gain (the gain L, n×m) and observer_poles (the n poles of A − LC)")),
+    };
+    Ok(DesignSpec {
+        observer,
+        channel_poles: pole_lists(channel_poles, "design.channel_poles", k)?,
+        reference_filter_poles: pole_lists(reference_filter_poles, "design.reference_filter_poles", k)?,
+        disturbance_filter_poles: disturbance_filter_poles
+            .map(|p| pole_lists(p, "design.disturbance_filter_poles", k))
+            .transpose()?
+            .unwrap_or_default(),
+        mu: vector(mu, "design.mu", k)?,
+        beta: number(beta, "design.beta", k)?,
+    })
+}
+
+/// Designs every gain for `plant` (Sections III–V) and checks the paper's assumptions.
+#[pyfunction]
+#[pyo3(signature = (plant, *, channel_poles, reference_filter_poles, mu, beta, disturbance_filter_poles=None, observer_poles=None, observer_gain=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn design(
+    py: Python<'_>,
+    plant: &Bound<'_, PyAny>,
+    channel_poles: &Bound<'_, PyAny>,
+    reference_filter_poles: &Bound<'_, PyAny>,
+    mu: &Bound<'_, PyAny>,
+    beta: &Bound<'_, PyAny>,
+    disturbance_filter_poles: Option<&Bound<'_, PyAny>>,
+    observer_poles: Option<&Bound<'_, PyAny>>,
+    observer_gain: Option<&Bound<'_, PyAny>>,
+) -> PyResult<PyDesign> {
+    let plant = plant_arg(plant, "plant")?;
+    let spec = spec(
+        py,
+        channel_poles,
+        reference_filter_poles,
+        disturbance_filter_poles,
+        mu,
+        beta,
+        observer_poles,
+        observer_gain,
+    )?;
+    let d = quell::Design::new(&plant.inner, &spec).map_err(|e| raise(py, Kind::Design)(&e))?;
+    Ok(PyDesign { inner: Arc::new(d) })
+}
+
+/// State feedback K with eig(A − BK) = poles (KNV / Tits–Yang for several inputs), as `control.place`.
+#[pyfunction]
+pub fn place<'py>(
+    py: Python<'py>,
+    A: &Bound<'py, PyAny>,
+    B: &Bound<'py, PyAny>,
+    poles: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let k = Kind::Design;
+    let (A, B) = (matrix(A, "A", k)?, matrix(B, "B", k)?);
+    let p = crate::convert::poles(poles, "poles", k)?;
+    let (n, m) = (A.nrows(), B.ncols());
+    if A.ncols() != n {
+        return Err(k.err(py, format!("A: expected a square matrix, found {}×{}", n, A.ncols())));
+    }
+    if B.nrows() != n {
+        return Err(k.err(py, format!("B: expected {n} rows (one per state, as A), found {}×{m}", B.nrows())));
+    }
+    if p.len() != n {
+        return Err(k.err(py, format!("poles: expected {n} poles (one per state), found {}", p.len())));
+    }
+    let K = py.detach(|| quell::place(&A, &B, &p)).map_err(|e| k.err(py, format!("poles: {e}")))?;
+    Ok(to_numpy(py, &K).into_any())
+}
+
+#[pymethods]
+impl PyDesign {
+    /// Decoupling feedback K (m×n), Proposition 1: u_f = −K x̂ + F u_d (5).
+    #[getter]
+    fn K<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_numpy(py, &self.inner.K).into_any()
+    }
+    /// Decoupling input gain F (m×m), Proposition 1.
+    #[getter]
+    fn F<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_numpy(py, &self.inner.F).into_any()
+    }
+    /// Luenberger observer gain L (n×m), eq. (6).
+    #[getter]
+    fn L<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_numpy(py, &self.inner.L).into_any()
+    }
+    /// Disturbance observer gain N (q_ω×n), the minimum-norm solution of N D = L_ω, eq. (20).
+    #[getter]
+    fn N<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_numpy(py, &self.inner.N).into_any()
+    }
+    /// A_f = A − BK (n×n), Proposition 1.
+    #[getter]
+    fn A_f<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_numpy(py, &self.inner.A_f).into_any()
+    }
+    /// B_f = BF (n×m), Proposition 1.
+    #[getter]
+    fn B_f<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_numpy(py, &self.inner.B_f).into_any()
+    }
+    /// B* (m×m), row i = c_i A^(σ_i − 1) B, eq. (7).
+    #[getter]
+    fn B_star<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_numpy(py, &self.inner.B_star).into_any()
+    }
+    /// Reference internal model G_g (q_g×q_g), eq. (11).
+    #[getter]
+    fn G_g<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_numpy(py, &self.inner.G_g).into_any()
+    }
+    /// Reference internal model input L_g (q_g×m), eq. (11).
+    #[getter]
+    fn L_g<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_numpy(py, &self.inner.L_g).into_any()
+    }
+    /// Disturbance internal model G_ω (q_ω×q_ω), eq. (16).
+    #[getter]
+    fn G_w<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_numpy(py, &self.inner.G_w).into_any()
+    }
+    /// Disturbance internal model input L_ω (q_ω×k), eq. (16).
+    #[getter]
+    fn L_w<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_numpy(py, &self.inner.L_w).into_any()
+    }
+    /// Relative degrees σ_i, eq. (7).
+    #[getter]
+    fn sigma(&self) -> Vec<usize> {
+        self.inner.sigma.clone()
+    }
+    /// eig(A − LC), sorted (complex array).
+    #[getter]
+    fn observer_eigenvalues<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        complex_numpy(py, &self.inner.observer_eigenvalues)
+    }
+    /// eig(A − BK), sorted (complex array): the Σσ_i channel poles and the plant's zeros.
+    #[getter]
+    fn decoupled_eigenvalues<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        complex_numpy(py, &self.inner.decoupled_eigenvalues)
+    }
+    /// Adaptation gains μ_i, eq. (33).
+    #[getter]
+    fn mu(&self) -> Vec<f64> {
+        self.inner.mu.clone()
+    }
+    /// β of H(s) = 1/(βs + 1).
+    #[getter]
+    fn beta(&self) -> f64 {
+        self.inner.beta
+    }
+    /// Regressor size q = q_g + q_ω (the length of each η̂_i).
+    #[getter]
+    fn q(&self) -> usize {
+        self.inner.q()
+    }
+    /// The plant the design is for.
+    #[getter]
+    fn plant(&self) -> PyPlant {
+        PyPlant { inner: self.inner.plant.clone() }
+    }
+    /// Per channel: the decoupled transfer function G_ii(s) = q0 / (s^σ + a_{σ−1} s^{σ−1} + … + a_0)
+    /// as a dict with `poles`, `denominator` (ascending [a_0, …, a_{σ−1}]) and `q0`.
+    #[getter]
+    fn channels<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        self.inner
+            .channels
+            .iter()
+            .map(|c| {
+                let d = PyDict::new(py);
+                d.set_item("poles", complex_numpy(py, &c.poles)?)?;
+                d.set_item("denominator", c.den.clone())?;
+                d.set_item("q0", c.q0())?;
+                Ok(d)
+            })
+            .collect()
+    }
+    /// The assumption checks passed (the `checks` of `quell design --json`, and more): ranks and
+    /// tolerances of Assumption 1, cond(B*) of Proposition 1, the largest real parts of eig(A − BK)
+    /// and eig(A − LC), rank D.
+    #[getter]
+    fn checks<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = &self.inner;
+        let max_re = |e: &[quell::nalgebra::Complex<f64>]| e.iter().map(|z| z.re).fold(f64::NEG_INFINITY, f64::max);
+        let c = PyDict::new(py);
+        c.set_item("controllability_rank", d.controllability.rank)?;
+        c.set_item("controllability_tol", d.controllability.tol)?;
+        c.set_item("observability_rank", d.observability.rank)?;
+        c.set_item("observability_tol", d.observability.tol)?;
+        c.set_item("cond_B_star", d.cond_B_star)?;
+        c.set_item("max_re_decoupled_eigenvalue", max_re(&d.decoupled_eigenvalues))?;
+        c.set_item("max_re_observer_eigenvalue", max_re(&d.observer_eigenvalues))?;
+        c.set_item("disturbance_rank", d.plant.k())?;
+        Ok(c)
+    }
+
+    fn __repr__(&self) -> String {
+        let d = &self.inner;
+        format!(
+            "Design(n={}, m={}, q={}, sigma={:?}, mu={:?}, beta={})",
+            d.plant.n(),
+            d.plant.m(),
+            d.q(),
+            d.sigma,
+            d.mu,
+            d.beta
+        )
+    }
+}

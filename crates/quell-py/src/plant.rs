@@ -1,0 +1,163 @@
+//! `quell.Plant`: the plant (1), ẋ = A x + B u_d + D ω, y = C x + Q ω, with input delays τ_i.
+
+use pyo3::prelude::*;
+use quell::nalgebra::DMatrix;
+
+use crate::convert::{matrix, to_numpy, type_name, vec_numpy, vector};
+use crate::errors::{raise, Kind};
+
+/// The plant (1) of the paper: ẋ = A x + B u_d(t) + D ω(t), y = C x + Q ω(t), where
+/// u_d,i(t) = u_f,i(t − τ_i) is input i delayed by τ_i.
+#[pyclass(module = "quell", name = "Plant", frozen)]
+pub struct PyPlant {
+    pub inner: quell::Plant,
+}
+
+/// Whether `obj` looks like a `control.StateSpace` (has A, B, C, D and nstates).
+fn is_state_space(obj: &Bound<'_, PyAny>) -> bool {
+    ["A", "B", "C", "D", "nstates"].iter().all(|a| obj.hasattr(*a).unwrap_or(false))
+}
+
+fn required<'a, 'py>(
+    py: Python<'py>,
+    v: Option<&'a Bound<'py, PyAny>>,
+    name: &str,
+    what: &str,
+) -> PyResult<&'a Bound<'py, PyAny>> {
+    v.ok_or_else(|| {
+        Kind::Scenario
+            .err(py, format!("{name}: missing; required: {what} (or pass a control.StateSpace as the first argument)"))
+    })
+}
+
+#[pymethods]
+impl PyPlant {
+    #[new]
+    #[pyo3(signature = (A, B=None, C=None, D=None, Q=None, delays=None, x0=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        A: &Bound<'_, PyAny>,
+        B: Option<&Bound<'_, PyAny>>,
+        C: Option<&Bound<'_, PyAny>>,
+        D: Option<&Bound<'_, PyAny>>,
+        Q: Option<&Bound<'_, PyAny>>,
+        delays: Option<&Bound<'_, PyAny>>,
+        x0: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let py = A.py();
+        let k = Kind::Scenario;
+        let (A, B, C) = if is_state_space(A) {
+            let sys = A;
+            if B.is_some() || C.is_some() {
+                return Err(k.err(py, "B, C: the first argument is a state-space system, which gives A, B and C; pass D and Q (the disturbance matrices) as keywords: Plant(sys, D=..., Q=..., delays=...)"));
+            }
+            let dt = sys.getattr("dt").ok().filter(|d| !d.is_none());
+            if let Some(dt) = dt {
+                if dt.extract::<f64>().map_or(true, |v| v != 0.0) {
+                    return Err(k.err(py, format!("sys: expected a continuous-time system (dt = 0), found dt = {}; quell designs for continuous plants (sample the controller with Controller(design, sample_time))", dt.str()?)));
+                }
+            }
+            let feedthrough = matrix(&sys.getattr("D")?, "sys.D", k)?;
+            if let Some(v) = feedthrough.iter().find(|v| **v != 0.0) {
+                return Err(k.err(py, format!("sys.D: python-control's D is the feedthrough from u to y, which the plant (1) does not have; found a nonzero entry {v}; give the disturbance matrices as Plant(sys, D=..., Q=...)")));
+            }
+            (
+                matrix(&sys.getattr("A")?, "A", k)?,
+                matrix(&sys.getattr("B")?, "B", k)?,
+                matrix(&sys.getattr("C")?, "C", k)?,
+            )
+        } else {
+            (
+                matrix(A, "A", k)?,
+                matrix(required(py, B, "B", "the n×m input matrix")?, "B", k)?,
+                matrix(required(py, C, "C", "the m×n output matrix")?, "C", k)?,
+            )
+        };
+        let (n, m) = (A.nrows(), B.ncols());
+        let empty = |v: &Bound<'_, PyAny>| v.len().is_ok_and(|l| l == 0);
+        let D = match D {
+            Some(D) if !empty(D) => matrix(D, "D", k)?,
+            _ => DMatrix::zeros(n, 0),
+        };
+        let Q = match Q {
+            Some(Q) if !empty(Q) => matrix(Q, "Q", k)?,
+            _ => DMatrix::zeros(m, D.ncols()),
+        };
+        let delays = match delays {
+            Some(d) => vector(d, "delays", k)?,
+            None => vec![0.0; m],
+        };
+        let x0 = x0.map(|x| vector(x, "x0", k)).transpose()?.map(quell::nalgebra::DVector::from_vec);
+        let inner = quell::Plant::new(A, B, C, D, Q, delays, x0).map_err(|e| raise(py, k)(&e))?;
+        Ok(PyPlant { inner })
+    }
+
+    /// State matrix A (n×n).
+    #[getter]
+    fn A<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_numpy(py, &self.inner.A).into_any()
+    }
+    /// Input matrix B (n×m).
+    #[getter]
+    fn B<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_numpy(py, &self.inner.B).into_any()
+    }
+    /// Output matrix C (m×n).
+    #[getter]
+    fn C<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_numpy(py, &self.inner.C).into_any()
+    }
+    /// Disturbance-to-state matrix D (n×k); not python-control's feedthrough.
+    #[getter]
+    fn D<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_numpy(py, &self.inner.D).into_any()
+    }
+    /// Disturbance-to-output matrix Q (m×k).
+    #[getter]
+    fn Q<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_numpy(py, &self.inner.Q).into_any()
+    }
+    /// Input delays τ_i (m,).
+    #[getter]
+    fn delays<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        vec_numpy(py, &self.inner.delays).into_any()
+    }
+    /// Initial state x(0) (n,).
+    #[getter]
+    fn x0<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        vec_numpy(py, self.inner.x0.as_slice()).into_any()
+    }
+    /// State dimension n.
+    #[getter]
+    fn n(&self) -> usize {
+        self.inner.n()
+    }
+    /// Channels m (inputs = outputs).
+    #[getter]
+    fn m(&self) -> usize {
+        self.inner.m()
+    }
+    /// Disturbance components k.
+    #[getter]
+    fn k(&self) -> usize {
+        self.inner.k()
+    }
+
+    fn __repr__(&self) -> String {
+        let p = &self.inner;
+        format!("Plant(n={}, m={}, k={}, delays={:?})", p.n(), p.m(), p.k(), p.delays)
+    }
+}
+
+/// `obj` as a Plant, or a ScenarioError naming `name`.
+pub fn plant_arg<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<PyRef<'py, PyPlant>> {
+    obj.extract::<PyRef<'py, PyPlant>>().map_err(|_| {
+        Kind::Scenario.err(
+            obj.py(),
+            format!(
+                "{name}: expected a quell.Plant, found a {}; build one with quell.Plant(A, B, C, D, Q, delays=...)",
+                type_name(obj)
+            ),
+        )
+    })
+}

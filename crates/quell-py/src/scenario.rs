@@ -1,0 +1,304 @@
+//! `quell.Scenario`: a validated scenario, from a TOML file or from Python values.
+//!
+//! Python values are written into the TOML document form and read by `Scenario::from_toml`, so
+//! every check and every message is the library's, with the TOML key path (`reference.components[0]
+//! .harmonics[0].frequency` is `reference[0]["harmonics"][0]["frequency"]`).
+
+use std::path::PathBuf;
+use std::sync::{Arc, OnceLock};
+
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyComplex, PyDict, PyFloat, PyInt, PyString};
+use quell::design::DesignError;
+use quell::scenario::{plant_table, pole_list, PAPER_EXAMPLE};
+use quell::signal::Signal;
+use toml::{Table, Value};
+
+use crate::convert::{pole_lists, poles, type_name};
+use crate::design::PyDesign;
+use crate::errors::{raise, Kind};
+use crate::plant::{plant_arg, PyPlant};
+
+/// A scenario: plant, design choices, reference g(t), disturbance ω(t), simulation settings, noise.
+#[pyclass(module = "quell", name = "Scenario", frozen)]
+pub struct PyScenario {
+    pub inner: quell::Scenario,
+    design: OnceLock<Arc<quell::Design>>,
+}
+
+impl PyScenario {
+    pub fn new(inner: quell::Scenario) -> Self {
+        PyScenario { inner, design: OnceLock::new() }
+    }
+
+    /// Parses and validates `text`, or raises ScenarioError.
+    pub fn parse(py: Python<'_>, text: &str) -> PyResult<Self> {
+        quell::Scenario::from_toml(text).map(Self::new).map_err(|e| scenario_error(py, &e))
+    }
+
+    /// The design of this scenario, computed once.
+    pub fn design_arc(&self, py: Python<'_>) -> PyResult<Arc<quell::Design>> {
+        if let Some(d) = self.design.get() {
+            return Ok(d.clone());
+        }
+        let d = Arc::new(self.inner.design().map_err(|e| raise(py, Kind::Design)(&e))?);
+        Ok(self.design.get_or_init(|| d).clone())
+    }
+}
+
+/// A ScenarioError with `.key` set to the offending key path.
+pub fn scenario_error(py: Python<'_>, e: &quell::ScenarioError) -> PyErr {
+    let err = Kind::Scenario.err(py, e.to_string());
+    let _ = err.value(py).setattr("key", e.key.clone());
+    err
+}
+
+/// A Python value (numbers, strings, lists, dicts, numpy arrays and scalars) as a TOML value.
+pub fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
+    let py = obj.py();
+    let bad =
+        |what: &str| Kind::Scenario.err(py, format!("{key}: expected a number, string, list or dict, found {what}"));
+    if obj.is_instance_of::<PyBool>() {
+        return Ok(Value::Boolean(obj.extract()?));
+    }
+    if obj.is_instance_of::<PyInt>() {
+        return obj.extract::<i64>().map(Value::Integer).or_else(|_| Ok(Value::Float(obj.extract::<f64>()?)));
+    }
+    if obj.is_instance_of::<PyFloat>() {
+        return Ok(Value::Float(obj.extract()?));
+    }
+    if obj.is_instance_of::<PyString>() {
+        return Ok(Value::String(obj.extract()?));
+    }
+    if obj.is_instance_of::<PyComplex>() {
+        return Err(Kind::Scenario.err(py, format!("{key}: expected a real number, found a complex number (complex numbers are poles, in the *_poles lists)")));
+    }
+    if let Ok(d) = obj.cast::<PyDict>() {
+        let mut t = Table::new();
+        for (k, v) in d.iter() {
+            let name: String = k.extract().map_err(|_| bad(&format!("a dict key of type {}", type_name(&k))))?;
+            if !v.is_none() {
+                let child = if key.is_empty() { name.clone() } else { format!("{key}.{name}") };
+                t.insert(name, toml_value(&v, &child)?);
+            }
+        }
+        return Ok(Value::Table(t));
+    }
+    // numpy arrays and scalars: as Python lists and numbers.
+    if obj.hasattr("dtype")? {
+        if let Ok(v) = obj.call_method0("tolist") {
+            return toml_value(&v, key);
+        }
+    }
+    if obj.is_none() {
+        return Err(bad("None"));
+    }
+    match obj.try_iter() {
+        Ok(items) => items
+            .enumerate()
+            .map(|(i, v)| toml_value(&v?, &format!("{key}[{i}]")))
+            .collect::<PyResult<Vec<_>>>()
+            .map(Value::Array),
+        Err(_) => Err(bad(&format!("a {}", type_name(obj)))),
+    }
+}
+
+/// A pole list in the file's form; a complex pole without its conjugate is the library's DesignError.
+fn poles_value(list: Vec<quell::nalgebra::Complex<f64>>, key: &str, py: Python<'_>) -> PyResult<Value> {
+    pole_list(&list)
+        .map_err(|pole| raise(py, Kind::Design)(&DesignError::NotConjugateClosed { key: key.to_string(), pole }))
+}
+
+/// The `[design]` table from keyword arguments: pole lists in the file's form, the rest as values.
+fn design_value(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Table> {
+    let mut t = Table::new();
+    let Some(kwargs) = kwargs else { return Ok(t) };
+    for (k, v) in kwargs.iter() {
+        let name: String = k.extract()?;
+        let key = format!("design.{name}");
+        let py = v.py();
+        if v.is_none() {
+            continue;
+        }
+        let value = match name.as_str() {
+            "observer_poles" => poles_value(poles(&v, &key, Kind::Scenario)?, &key, py)?,
+            "channel_poles" | "reference_filter_poles" | "disturbance_filter_poles" => Value::Array(
+                pole_lists(&v, &key, Kind::Scenario)?
+                    .into_iter()
+                    .enumerate()
+                    .map(|(i, p)| poles_value(p, &format!("{key}[{i}]"), py))
+                    .collect::<PyResult<_>>()?,
+            ),
+            _ => toml_value(&v, &key)?,
+        };
+        t.insert(name, value);
+    }
+    Ok(t)
+}
+
+fn signal_py<'py>(py: Python<'py>, s: &Signal) -> PyResult<Vec<Bound<'py, PyDict>>> {
+    s.components
+        .iter()
+        .map(|c| {
+            let d = PyDict::new(py);
+            d.set_item("bias", c.bias)?;
+            let h: Vec<Bound<'py, PyDict>> = c
+                .harmonics
+                .iter()
+                .map(|h| {
+                    let d = PyDict::new(py);
+                    d.set_item("amplitude", h.amplitude)?;
+                    d.set_item("frequency", h.frequency)?;
+                    d.set_item("phase", h.phase)?;
+                    Ok(d)
+                })
+                .collect::<PyResult<_>>()?;
+            d.set_item("harmonics", h)?;
+            Ok(d)
+        })
+        .collect()
+}
+
+#[pymethods]
+impl PyScenario {
+    #[new]
+    #[pyo3(signature = (plant, reference, disturbance=None, *, name=None, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, noise=None, **design))]
+    #[allow(clippy::too_many_arguments)]
+    fn py_new(
+        py: Python<'_>,
+        plant: &Bound<'_, PyAny>,
+        reference: &Bound<'_, PyAny>,
+        disturbance: Option<&Bound<'_, PyAny>>,
+        name: Option<&Bound<'_, PyAny>>,
+        t_end: Option<&Bound<'_, PyAny>>,
+        output_step: Option<&Bound<'_, PyAny>>,
+        rtol: Option<&Bound<'_, PyAny>>,
+        atol: Option<&Bound<'_, PyAny>>,
+        sample_time: Option<&Bound<'_, PyAny>>,
+        noise: Option<&Bound<'_, PyAny>>,
+        design: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        let plant = plant_arg(plant, "plant")?;
+        let mut doc = Table::new();
+        if let Some(name) = name {
+            doc.insert("name".into(), toml_value(name, "name")?);
+        }
+        doc.insert("plant".into(), Value::Table(plant_table(&plant.inner)));
+        doc.insert("design".into(), Value::Table(design_value(design)?));
+        let signal = |v: &Bound<'_, PyAny>, key: &str| -> PyResult<Value> {
+            let components = toml_value(v, &format!("{key}.components"))?;
+            Ok(Value::Table(Table::from_iter([("components".to_string(), components)])))
+        };
+        doc.insert("reference".into(), signal(reference, "reference")?);
+        if let Some(d) = disturbance.filter(|d| !d.is_none()) {
+            doc.insert("disturbance".into(), signal(d, "disturbance")?);
+        }
+        let mut sim = Table::new();
+        for (key, v) in [
+            ("t_end", t_end),
+            ("output_step", output_step),
+            ("rtol", rtol),
+            ("atol", atol),
+            ("sample_time", sample_time),
+        ] {
+            if let Some(v) = v.filter(|v| !v.is_none()) {
+                sim.insert(key.into(), toml_value(v, &format!("simulation.{key}"))?);
+            }
+        }
+        doc.insert("simulation".into(), Value::Table(sim));
+        if let Some(n) = noise.filter(|n| !n.is_none()) {
+            doc.insert("noise".into(), toml_value(n, "noise")?);
+        }
+        let text = toml::to_string(&doc)
+            .map_err(|e| Kind::Scenario.err(py, format!("scenario: cannot be written as TOML ({e})")))?;
+        Self::parse(py, &text)
+    }
+
+    /// Parses and validates a scenario file's text (the format of `examples/paper.toml`).
+    #[staticmethod]
+    fn from_toml(py: Python<'_>, text: &str) -> PyResult<Self> {
+        Self::parse(py, text)
+    }
+
+    /// Reads and validates a scenario file.
+    #[staticmethod]
+    fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        quell::Scenario::from_path(&path).map(Self::new).map_err(|e| scenario_error(py, &e))
+    }
+
+    /// The scenario as a TOML document; `Scenario.from_toml(s.to_toml())` gives the same scenario.
+    fn to_toml(&self) -> String {
+        self.inner.to_toml()
+    }
+
+    /// The design of this scenario's plant and choices (computed once; raises DesignError).
+    fn design(&self, py: Python<'_>) -> PyResult<PyDesign> {
+        Ok(PyDesign { inner: self.design_arc(py)? })
+    }
+
+    /// The plant (1).
+    #[getter]
+    fn plant(&self) -> PyPlant {
+        PyPlant { inner: self.inner.plant.clone() }
+    }
+    /// The scenario's name, if it has one.
+    #[getter]
+    fn name(&self) -> Option<String> {
+        self.inner.name.clone()
+    }
+    /// g(t): one dict {bias, harmonics: [{amplitude, frequency, phase}]} per output.
+    #[getter]
+    fn reference<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        signal_py(py, &self.inner.reference)
+    }
+    /// ω(t): one dict per column of D.
+    #[getter]
+    fn disturbance<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        signal_py(py, &self.inner.disturbance)
+    }
+    /// The `[simulation]` settings: t_end, output_step, rtol, atol, sample_time (None: continuous).
+    #[getter]
+    fn simulation<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let s = &self.inner.simulation;
+        let d = PyDict::new(py);
+        d.set_item("t_end", s.t_end)?;
+        d.set_item("output_step", s.output_step)?;
+        d.set_item("rtol", s.rtol)?;
+        d.set_item("atol", s.atol)?;
+        d.set_item("sample_time", s.sample_time)?;
+        Ok(d)
+    }
+    /// Measurement noise {std, seed}, or None.
+    #[getter]
+    fn noise<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        self.inner
+            .noise
+            .as_ref()
+            .map(|n| {
+                let d = PyDict::new(py);
+                d.set_item("std", n.std.clone())?;
+                d.set_item("seed", n.seed)?;
+                Ok(d)
+            })
+            .transpose()
+    }
+
+    fn __repr__(&self) -> String {
+        let s = &self.inner;
+        format!(
+            "Scenario(name={:?}, n={}, m={}, k={}, t_end={}, sample_time={:?})",
+            s.name.as_deref().unwrap_or(""),
+            s.plant.n(),
+            s.plant.m(),
+            s.plant.k(),
+            s.simulation.t_end,
+            s.simulation.sample_time
+        )
+    }
+}
+
+/// The paper's example (Section VIII), `examples/paper.toml`.
+#[pyfunction]
+pub fn paper_example(py: Python<'_>) -> PyResult<PyScenario> {
+    PyScenario::parse(py, PAPER_EXAMPLE)
+}

@@ -1,0 +1,286 @@
+//! `quell.simulate` and `quell.SimResult`: the closed loop, continuous (the delay equation) or
+//! sampled-data (the real-time controller), with the GIL released while it runs.
+
+use std::ops::ControlFlow;
+use std::time::{Duration, Instant};
+
+use numpy::{PyArray1, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use quell::sim::{simulate as run_continuous, simulate_sampled, Outcome, RunSettings, SampledSettings, SimResult};
+use toml::Value;
+
+use crate::convert::number;
+use crate::errors::{raise, simulation_error, Kind};
+use crate::scenario::PyScenario;
+
+/// A state above this magnitude means the loop diverged (as in `quell run`).
+const DIVERGENCE_BOUND: f64 = 1e9;
+
+/// How often a running simulation looks for Ctrl-C.
+const SIGNAL_CHECK: Duration = Duration::from_millis(100);
+
+/// The signals of a run at t = k·output_step, as read-only numpy arrays, and how it ended.
+#[pyclass(module = "quell", name = "SimResult", frozen)]
+pub struct PySimResult {
+    inner: SimResult,
+    sampled: bool,
+    /// t, y, g, e, u, eta.
+    arrays: [Py<PyAny>; 6],
+}
+
+fn frozen_array(py: Python<'_>, data: &[f64], shape: &[usize]) -> PyResult<Py<PyAny>> {
+    let a = PyArray1::from_slice(py, data).reshape(shape.to_vec())?.into_any();
+    let kwargs = PyDict::new(py);
+    kwargs.set_item("write", false)?;
+    a.call_method("setflags", (), Some(&kwargs))?;
+    Ok(a.unbind())
+}
+
+impl PySimResult {
+    fn new(py: Python<'_>, r: SimResult, sampled: bool) -> PyResult<Self> {
+        let (n, m, q) = (r.len(), r.m, r.q);
+        let arrays = [
+            frozen_array(py, &r.t, &[n])?,
+            frozen_array(py, &r.y, &[n, m])?,
+            frozen_array(py, &r.g, &[n, m])?,
+            frozen_array(py, &r.e, &[n, m])?,
+            frozen_array(py, &r.u, &[n, m])?,
+            frozen_array(py, &r.eta, &[n, m, q])?,
+        ];
+        Ok(PySimResult { inner: r, sampled, arrays })
+    }
+}
+
+fn outcome_dict<'py>(py: Python<'py>, o: &Outcome) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    match o {
+        Outcome::Completed => d.set_item("status", "completed")?,
+        Outcome::Diverged { t, signal, value } => {
+            d.set_item("status", "diverged")?;
+            d.set_item("t", t)?;
+            d.set_item("signal", signal)?;
+            d.set_item("value", value)?;
+        }
+        Outcome::StepSizeTooSmall { t } => {
+            d.set_item("status", "step_size_too_small")?;
+            d.set_item("t", t)?;
+        }
+        Outcome::Interrupted { t } => {
+            d.set_item("status", "interrupted")?;
+            d.set_item("t", t)?;
+        }
+    }
+    Ok(d)
+}
+
+#[pymethods]
+impl PySimResult {
+    /// Sample times (N,).
+    #[getter]
+    fn t(&self, py: Python<'_>) -> Py<PyAny> {
+        self.arrays[0].clone_ref(py)
+    }
+    /// Outputs y (N, m).
+    #[getter]
+    fn y(&self, py: Python<'_>) -> Py<PyAny> {
+        self.arrays[1].clone_ref(py)
+    }
+    /// References g (N, m).
+    #[getter]
+    fn g(&self, py: Python<'_>) -> Py<PyAny> {
+        self.arrays[2].clone_ref(py)
+    }
+    /// Tracking errors e = y − g (N, m).
+    #[getter]
+    fn e(&self, py: Python<'_>) -> Py<PyAny> {
+        self.arrays[3].clone_ref(py)
+    }
+    /// Adaptive commands u (25), undelayed (N, m).
+    #[getter]
+    fn u(&self, py: Python<'_>) -> Py<PyAny> {
+        self.arrays[4].clone_ref(py)
+    }
+    /// Adaptive parameters η̂_i (N, m, q), eq. (33).
+    #[getter]
+    fn eta(&self, py: Python<'_>) -> Py<PyAny> {
+        self.arrays[5].clone_ref(py)
+    }
+    /// Channels m.
+    #[getter]
+    fn m(&self) -> usize {
+        self.inner.m
+    }
+    /// Regressor size q.
+    #[getter]
+    fn q(&self) -> usize {
+        self.inner.q
+    }
+    /// How the run ended, as in summary.json: {"status": "completed"}, or "diverged" with t,
+    /// signal and value, or "step_size_too_small" / "interrupted" with t.
+    #[getter]
+    fn outcome<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        outcome_dict(py, self.inner.outcome.as_ref().unwrap_or(&Outcome::Completed))
+    }
+    /// The loop's statistics: accepted steps, rejected steps and right-hand-side evaluations of
+    /// the delay-equation solver; controller steps of a sampled-data run.
+    #[getter]
+    fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let s = &self.inner.stats;
+        let d = PyDict::new(py);
+        if self.sampled {
+            d.set_item("controller_steps", s.steps)?;
+        } else {
+            d.set_item("steps", s.steps)?;
+            d.set_item("rejected_steps", s.rejected)?;
+            d.set_item("rhs_evaluations", s.rhs_evals)?;
+        }
+        Ok(d)
+    }
+    /// Per channel, as summary.json: tail max |e_i| and RMS e_i over the last 10 % of the horizon,
+    /// max |u_i|, and ‖η̂_i‖ at the end.
+    fn summary<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        self.inner
+            .summary()
+            .iter()
+            .map(|c| {
+                let d = PyDict::new(py);
+                d.set_item("tail_max_abs_e", c.tail_max_abs_e)?;
+                d.set_item("tail_rms_e", c.tail_rms_e)?;
+                d.set_item("max_abs_u", c.max_abs_u)?;
+                d.set_item("final_eta_norm", c.final_eta_norm)?;
+                Ok(d)
+            })
+            .collect()
+    }
+    /// The columns of signals.csv (t, y1.., g1.., e1.., u1.., eta1_1..) as a pandas DataFrame.
+    fn to_pandas(slf: &Bound<'_, Self>) -> PyResult<Py<PyAny>> {
+        Ok(slf.py().import("quell._frames")?.call_method1("to_pandas", (slf,))?.unbind())
+    }
+    /// The CLI's figure of one channel (1-based), like the paper's Figs. 1 and 2: y_i with g_i,
+    /// e_i, u_i and η̂_i against t, in four panels. Returns the matplotlib Figure.
+    #[pyo3(signature = (channel=1, **kwargs))]
+    fn plot(slf: &Bound<'_, Self>, channel: usize, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Py<PyAny>> {
+        let f = slf.py().import("quell._frames")?.getattr("plot")?;
+        Ok(f.call((slf, channel), kwargs)?.unbind())
+    }
+    fn __len__(&self) -> usize {
+        self.inner.len()
+    }
+    fn __repr__(&self) -> String {
+        format!(
+            "SimResult(samples={}, m={}, q={}, outcome={:?})",
+            self.inner.len(),
+            self.inner.m,
+            self.inner.q,
+            self.inner.outcome
+        )
+    }
+}
+
+/// Simulates a scenario's closed loop: the continuous-time controller on the delay equation, or,
+/// with a sample time, the sampled-data loop with the real-time controller. Keywords override the
+/// scenario's `[simulation]`; with `check` a run that does not reach t_end raises SimulationError.
+#[pyfunction]
+#[pyo3(signature = (scenario, *, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, check=true))]
+#[allow(clippy::too_many_arguments)]
+pub fn simulate(
+    py: Python<'_>,
+    scenario: &Bound<'_, PyAny>,
+    t_end: Option<&Bound<'_, PyAny>>,
+    output_step: Option<&Bound<'_, PyAny>>,
+    rtol: Option<&Bound<'_, PyAny>>,
+    atol: Option<&Bound<'_, PyAny>>,
+    sample_time: Option<&Bound<'_, PyAny>>,
+    check: bool,
+) -> PyResult<Py<PySimResult>> {
+    let s: PyRef<'_, PyScenario> = scenario.extract().map_err(|_| {
+        Kind::Scenario
+            .err(py, format!("scenario: expected a quell.Scenario, found a {}", crate::convert::type_name(scenario)))
+    })?;
+    let design = s.design_arc(py)?;
+    // Overrides go through the scenario's own checks of [simulation].
+    let overrides =
+        [("t_end", t_end), ("output_step", output_step), ("rtol", rtol), ("atol", atol), ("sample_time", sample_time)];
+    let edited;
+    let scn = if overrides.iter().any(|(_, v)| v.is_some()) {
+        let mut doc = s.inner.to_table();
+        if let Some(Value::Table(sim)) = doc.get_mut("simulation") {
+            for (key, v) in overrides {
+                if let Some(v) = v {
+                    sim.insert(key.into(), Value::Float(number(v, key, Kind::Scenario)?));
+                }
+            }
+        }
+        edited = PyScenario::parse(py, &toml::to_string(&doc).unwrap_or_default())?;
+        &edited.inner
+    } else {
+        &s.inner
+    };
+    let sim = scn.simulation;
+    let sampled = sim.sample_time.map(|T| SampledSettings {
+        t_end: sim.t_end,
+        output_step: sim.output_step,
+        sample_time: T,
+        noise: scn.noise.clone(),
+        divergence_bound: DIVERGENCE_BOUND,
+    });
+    if let Some(settings) = &sampled {
+        settings.check(&design).map_err(|e| raise(py, Kind::Scenario)(&e))?;
+    }
+
+    let mut interrupt: Option<PyErr> = None;
+    let result = py.detach(|| {
+        let mut last = Instant::now();
+        let progress = |_t: f64| {
+            if last.elapsed() < SIGNAL_CHECK {
+                return ControlFlow::Continue(());
+            }
+            last = Instant::now();
+            match Python::attach(|py| py.check_signals()) {
+                Ok(()) => ControlFlow::Continue(()),
+                Err(e) => {
+                    interrupt = Some(e);
+                    ControlFlow::Break(())
+                }
+            }
+        };
+        match &sampled {
+            None => {
+                let settings = RunSettings {
+                    divergence_bound: DIVERGENCE_BOUND,
+                    ..RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol)
+                };
+                Ok(run_continuous(&design, &scn.reference, &scn.disturbance, &settings, progress))
+            }
+            Some(settings) => simulate_sampled(&design, &scn.reference, &scn.disturbance, settings, progress),
+        }
+    });
+    if let Some(e) = interrupt {
+        return Err(e);
+    }
+    let result = result.map_err(|e| raise(py, Kind::Scenario)(&e))?;
+    let outcome = result.outcome.clone().unwrap_or(Outcome::Completed);
+    let result = Py::new(py, PySimResult::new(py, result, sampled.is_some())?)?;
+    if !check {
+        return Ok(result);
+    }
+    let failure = match outcome {
+        Outcome::Completed => return Ok(result),
+        Outcome::Diverged { t, signal, value } => (
+            format!("the closed loop diverged at t = {t:.4}: {signal} = {value:e}; the samples up to then are in the exception's .result"),
+            t,
+            Some(signal),
+            Some(value),
+        ),
+        Outcome::StepSizeTooSmall { t } => (
+            format!("the solver's step size underflowed at t = {t:.6} (the loop is too stiff or blows up there, rtol/atol are tighter than floating point allows, or an input delay is shorter than a step can be); the samples up to then are in the exception's .result"),
+            t,
+            None,
+            None,
+        ),
+        Outcome::Interrupted { t } => (format!("interrupted at t = {t:.3}"), t, None, None),
+    };
+    let (message, t, signal, value) = failure;
+    Err(simulation_error(py, message, t, signal, value, result.into_any()))
+}

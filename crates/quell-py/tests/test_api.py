@@ -1,0 +1,160 @@
+"""The API names of issue 11, and that its ways of saying the same thing agree."""
+
+import ast
+import pathlib
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import quell
+
+from conftest import EXAMPLES
+
+PAPER_DESIGN = dict(
+    channel_poles=[[-6, -2], [-4]],
+    reference_filter_poles=[[-1, -6], [-9]],
+    disturbance_filter_poles=[[-1, -3], [-1, -2, -3]],
+    mu=[20, 30],
+    beta=1.0,
+)
+A = [[-3.2, -1.7, -3.0], [2.8, 1.3, 4.0], [0.3, 0.3, -0.5]]
+B = [[-2.0, 1.0], [2.0, -1.0], [1.0, 0.0]]
+C = [[2.0, 2.0, 0.0], [2.0, 1.0, 2.0]]
+D = [[1.0, -3.0], [2.0, 1.0], [3.0, 1.0]]
+Q = [[1.0, 2.0], [1.0, 0.0]]
+L = [[-8.0988, 4.4574], [10.6506, -5.0619], [2.7762, -1.1783]]
+REFERENCE = [{"harmonics": [{"amplitude": 3.0, "frequency": 2.0}]}, {"bias": 2.0}]
+DISTURBANCE = [{"harmonics": [{"amplitude": 1.0, "frequency": 1.0}]},
+               {"bias": 1.0, "harmonics": [{"amplitude": 2.0, "frequency": 2.0}]}]
+
+
+def paper_from_values(**overrides):
+    plant = quell.Plant(A, B, C, D, Q=Q, delays=[1.0, 3.0])
+    kw = dict(PAPER_DESIGN, observer_gain=L, t_end=100.0, output_step=0.1, rtol=1e-9, atol=1e-9)
+    kw.update(overrides)
+    return quell.Scenario(plant, reference=REFERENCE, disturbance=DISTURBANCE, name="paper-example", **kw)
+
+
+def test_scenario_from_values_is_the_paper_file():
+    a, b = paper_from_values(), quell.paper_example()
+    assert a.to_toml() == b.to_toml()
+    assert np.array_equal(quell.simulate(a).y, quell.simulate(b).y)
+
+
+def test_scenario_round_trips_through_toml():
+    for path in sorted(EXAMPLES.glob("*.toml")):
+        s = quell.Scenario.load(path)
+        back = quell.Scenario.from_toml(s.to_toml())
+        assert back.to_toml() == s.to_toml(), path
+        assert back.reference == s.reference and back.simulation == s.simulation and back.noise == s.noise
+    assert quell.Scenario.load(EXAMPLES / "paper.toml").to_toml() == quell.paper_example().to_toml()
+
+
+def test_scenario_accessors():
+    s = quell.paper_example()
+    assert s.name == "paper-example"
+    assert s.plant.n == 3 and s.plant.m == 2 and s.plant.k == 2
+    np.testing.assert_array_equal(s.plant.A, A)
+    np.testing.assert_array_equal(s.plant.delays, [1.0, 3.0])
+    assert s.reference[1] == {"bias": 2.0, "harmonics": []}
+    assert s.simulation == {"t_end": 100.0, "output_step": 0.1, "rtol": 1e-9, "atol": 1e-9, "sample_time": None}
+    assert s.noise is None
+    # scenario.design() is the Design of quell.design on the same plant and choices.
+    d1 = s.design()
+    d2 = quell.design(s.plant, observer_gain=L, **PAPER_DESIGN)
+    for name in ["K", "F", "L", "N", "A_f", "B_f", "G_g", "L_g", "G_w", "L_w"]:
+        np.testing.assert_array_equal(getattr(d1, name), getattr(d2, name), err_msg=name)
+    assert d1.sigma == d2.sigma == [2, 1]
+
+
+def test_complex_poles_in_scenarios():
+    a = paper_from_values(channel_poles=[[-1 + 2j, -1 - 2j], [-4]])
+    b = paper_from_values(channel_poles=[[[-1, 2]], [-4]])
+    assert a.to_toml() == b.to_toml()
+    with pytest.raises(quell.DesignError, match="no complex-conjugate partner"):
+        paper_from_values(channel_poles=[[-1 + 2j, -3], [-4]])
+
+
+def test_simulate_shapes_and_overrides():
+    s = quell.paper_example()
+    r = quell.simulate(s, t_end=10.0)
+    n = len(r)
+    assert n == 101 and r.t.shape == (n,)
+    for a in (r.y, r.g, r.e, r.u):
+        assert a.shape == (n, 2)
+    assert r.eta.shape == (n, 2, 8)
+    np.testing.assert_array_equal(r.e, r.y - r.g)
+    with pytest.raises(ValueError):
+        r.y[0, 0] = 1.0  # results are read-only
+    sampled = quell.simulate(s, t_end=10.0, sample_time=1e-3)
+    assert sampled.stats == {"controller_steps": 10001}
+    with pytest.raises(quell.ScenarioError, match="simulation.output_step"):
+        quell.simulate(s, t_end=0.05)
+
+
+def test_plant_from_python_control():
+    control = pytest.importorskip("control")
+    sys_ = control.ss(A, B, C, np.zeros((2, 2)))
+    p = quell.Plant(sys_, D=D, Q=Q, delays=[1.0, 3.0])
+    np.testing.assert_array_equal(p.A, A)
+    np.testing.assert_array_equal(p.D, D)
+    with pytest.raises(quell.ScenarioError, match="feedthrough"):
+        quell.Plant(control.ss(A, B, C, np.ones((2, 2))), delays=[1.0, 3.0])
+    with pytest.raises(quell.ScenarioError, match="continuous-time"):
+        quell.Plant(control.ss(A, B, C, np.zeros((2, 2)), 0.1), delays=[1.0, 3.0])
+    with pytest.raises(quell.ScenarioError, match="keywords"):
+        quell.Plant(sys_, B)
+
+
+def test_plant_defaults():
+    p = quell.Plant(A, B, C)
+    assert p.k == 0 and p.D.shape == (3, 0) and p.Q.shape == (2, 0)
+    np.testing.assert_array_equal(p.delays, [0.0, 0.0])
+    np.testing.assert_array_equal(p.x0, [0.0, 0.0, 0.0])
+    p = quell.Plant(A, B, C, D, delays=[1, 3], x0=[1, 2, 3])
+    np.testing.assert_array_equal(p.Q, np.zeros((2, 2)))  # Q defaults to 0
+
+
+def test_to_pandas_and_plot():
+    pytest.importorskip("pandas")
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    r = quell.simulate(quell.paper_example(), t_end=5.0)
+    df = r.to_pandas()
+    assert list(df.columns[:9]) == ["t", "y1", "y2", "g1", "g2", "e1", "e2", "u1", "u2"]
+    assert df.columns[-1] == "eta2_8" and len(df) == len(r)
+    fig = r.plot(channel=2)
+    assert len(fig.axes) == 4
+    assert fig.axes[0].get_title() == "Channel 2: output and reference"
+    with pytest.raises(ValueError, match="channel"):
+        r.plot(channel=3)
+
+
+def test_optional_dependencies_are_imported_only_when_used():
+    code = "import quell, sys; r = quell.simulate(quell.paper_example(), t_end=1.0); print(sorted(m for m in ('pandas', 'matplotlib', 'control', 'scipy') if m in sys.modules))"
+    out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True).stdout
+    assert out.strip() == "[]"
+
+
+def test_stub_matches_the_module():
+    """The .pyi stub declares exactly the public names, and each class's public members."""
+    stub = pathlib.Path(quell.__file__).with_name("__init__.pyi")
+    tree = ast.parse(stub.read_text())
+    names = set()
+    members = {}
+    for node in tree.body:
+        if isinstance(node, (ast.FunctionDef, ast.ClassDef)):
+            names.add(node.name)
+        if isinstance(node, ast.ClassDef):
+            members[node.name] = {n.name for n in node.body if isinstance(n, ast.FunctionDef) and not n.name.startswith("_")}
+            members[node.name] |= {n.target.id for n in node.body if isinstance(n, ast.AnnAssign)}
+        if isinstance(node, ast.AnnAssign):
+            names.add(node.target.id)
+    assert names == set(quell.__all__)
+    for cls, declared in members.items():
+        actual = {n for n in dir(getattr(quell, cls)) if not n.startswith("_")}
+        if issubclass(getattr(quell, cls), BaseException):
+            actual -= set(dir(Exception))
+        assert declared == actual, cls

@@ -1,0 +1,115 @@
+"""Bad arguments from Python: a ValueError naming the argument (or a TypeError from Python's own
+argument handling), never a Rust panic (pyo3_runtime.PanicException derives from BaseException,
+so `except Exception` would not even catch it)."""
+
+import itertools
+
+import numpy as np
+import pytest
+
+import quell
+
+A = [[-3.2, -1.7, -3.0], [2.8, 1.3, 4.0], [0.3, 0.3, -0.5]]
+B = [[-2.0, 1.0], [2.0, -1.0], [1.0, 0.0]]
+C = [[2.0, 2.0, 0.0], [2.0, 1.0, 2.0]]
+
+
+@pytest.mark.parametrize(
+    "kwargs,exc,fragment",
+    [
+        (dict(A=[[1, 2]], B=[[1]], C=[[1]]), quell.ScenarioError, r"^A: expected a 1×1 matrix, found 1×2"),
+        (dict(A=[[np.nan]], B=[[1]], C=[[1]]), quell.ScenarioError, r"^A\[0\]\[0\]: expected a finite number, found NaN"),
+        (dict(A=A, B=B, C=C, delays=[1.0, np.inf]), quell.ScenarioError, r"^delays\[1\]: expected a finite number"),
+        (dict(A="abc", B=B, C=C), quell.ScenarioError, r"^A: expected real numbers, found strings"),
+        (dict(A=[[1, 2], [3]], B=B, C=C), quell.ScenarioError, r"^A: expected an array-like of real numbers"),
+        (dict(A=[[1 + 1j]], B=[[1]], C=[[1]]), quell.ScenarioError, r"^A: expected real numbers, found complex numbers"),
+        (dict(A=A, B=[1, 2, 3], C=C), quell.ScenarioError, r"^B: expected a matrix \(2-D array"),
+        (dict(A=A, B=B, C=C, delays=[1.0]), quell.ScenarioError, r"^delays: expected 2 entries"),
+        (dict(A=A, B=B, C=C, delays=[1.0, -3.0]), quell.ScenarioError, r"^delays\[1\]: expected a finite delay ≥ 0"),
+        (dict(A=A, B=B, C=C, x0=[0, 0]), quell.ScenarioError, r"^x0: expected 3 entries"),
+        (dict(A=A, B=B), quell.ScenarioError, r"^C: missing"),
+        (dict(A=A, B=B, C=C, D=[[1], [1], [1]], Q=[[1, 2], [1, 2]]), quell.ScenarioError, r"^Q: expected a 2×1 matrix"),
+        (dict(A=object(), B=B, C=C), quell.ScenarioError, r"^A: expected real numbers"),
+    ],
+)
+def test_plant_arguments(kwargs, exc, fragment):
+    with pytest.raises(exc, match=fragment):
+        quell.Plant(**kwargs)
+
+
+PLANT = quell.paper_example().plant
+DESIGN = dict(channel_poles=[[-6, -2], [-4]], reference_filter_poles=[[-1, -6], [-9]],
+              disturbance_filter_poles=[[-1, -3], [-1, -2, -3]], mu=[20, 30], beta=1.0, observer_poles=[-2, -3, -4])
+
+
+@pytest.mark.parametrize(
+    "change,fragment",
+    [
+        (dict(channel_poles=[-6, -2, -4]), "put each one's poles in brackets"),
+        (dict(channel_poles=[["a"], [-4]]), r"design.channel_poles\[0\]\[0\]: expected a pole"),
+        (dict(channel_poles=[[[-2, 0]], [-4]]), "has imaginary part 0"),
+        (dict(channel_poles=[[[-2, -1]], [-4]]), "write it as"),
+        (dict(channel_poles=[[-1 + 2j, -3], [-4]]), "no complex-conjugate partner"),
+        (dict(channel_poles=[[np.nan, -2], [-4]]), "expected a finite number"),
+        (dict(mu=[20]), r"design.mu: expected 2 entries"),
+        (dict(mu=[[20, 30]]), r"design.mu: expected a 1-D array"),
+        (dict(beta="one"), r"design.beta: expected a real number"),
+        (dict(beta=0.0), r"design.beta: expected a finite β > 0"),
+        (dict(observer_gain=[[1, 2]]), "both observer_gain and observer_poles"),
+        (dict(observer_poles=None), "missing; give exactly one of observer_gain"),
+        (dict(observer_poles=[-2, -3]), "design.observer_poles"),
+    ],
+)
+def test_design_arguments(change, fragment):
+    with pytest.raises(quell.DesignError, match=fragment):
+        quell.design(PLANT, **dict(DESIGN, **change))
+
+
+def test_design_needs_a_plant():
+    with pytest.raises(quell.ScenarioError, match="plant: expected a quell.Plant, found a list"):
+        quell.design([[1]], **DESIGN)
+
+
+def test_scenario_arguments():
+    ref = [{"bias": 1.0}, {"bias": 2.0}]
+    kw = dict(DESIGN)
+    with pytest.raises(quell.ScenarioError, match=r"reference.components\[0\].bais: unknown key \(did you mean `bias`\?\)"):
+        quell.Scenario(PLANT, [{"bais": 1.0}, {"bias": 2.0}], quell.paper_example().disturbance, **kw)
+    with pytest.raises(quell.ScenarioError, match="disturbance: missing"):
+        quell.Scenario(PLANT, ref, **kw)
+    with pytest.raises(quell.ScenarioError, match=r"simulation.t_end: expected a final time > 0"):
+        quell.Scenario(PLANT, ref, quell.paper_example().disturbance, t_end=-1, **kw)
+    with pytest.raises(quell.ScenarioError, match=r"simulation.rtol: expected a number, found a string"):
+        quell.Scenario(PLANT, ref, quell.paper_example().disturbance, rtol="tight", **kw)
+    with pytest.raises(quell.ScenarioError, match=r"reference.components\[0\].bias: expected a real number, found a complex"):
+        quell.Scenario(PLANT, [{"bias": 1j}, {"bias": 2.0}], quell.paper_example().disturbance, **kw)
+    with pytest.raises(quell.ScenarioError, match=r"design.mue: unknown key \(did you mean `mu`\?\)"):
+        quell.Scenario(PLANT, ref, quell.paper_example().disturbance, mue=[1, 2], **kw)
+    with pytest.raises(quell.ScenarioError, match="scenario: expected a quell.Scenario"):
+        quell.simulate("paper.toml")
+
+
+JUNK = [None, "x", 1j, [], [[]], [[1, 2], [3]], {"a": 1}, object(), np.array([np.nan]), float("inf"), -1, 1e308, [[1e308, -1e308]]]
+
+
+def test_no_panic_on_junk():
+    """Every entry point with junk in every position: only Python exceptions of the documented kinds."""
+    d = quell.paper_example().design()
+    calls = [
+        lambda a, b: quell.Plant(a, b, C),
+        lambda a, b: quell.Plant(A, B, C, a, b),
+        lambda a, b: quell.place(a, B, b),
+        lambda a, b: quell.place(A, a, b),
+        lambda a, b: quell.design(PLANT, **dict(DESIGN, channel_poles=a, mu=b)),
+        lambda a, b: quell.design(PLANT, **dict(DESIGN, observer_poles=None, observer_gain=a, beta=b)),
+        lambda a, b: quell.Controller(d, a),
+        lambda a, b: quell.Controller(d, 1e-3).step(a, b),
+        lambda a, b: quell.simulate(quell.paper_example(), t_end=a, rtol=b),
+        lambda a, b: quell.Scenario(PLANT, a, b, **DESIGN),
+        lambda a, b: quell.Scenario.from_toml(a),
+    ]
+    for call, a, b in itertools.product(calls, JUNK, JUNK[:5]):
+        try:
+            call(a, b)
+        except (ValueError, TypeError, quell.QuellError):
+            pass

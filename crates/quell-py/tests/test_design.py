@@ -1,0 +1,93 @@
+"""Design properties, each checked by numpy/SciPy on the returned matrices (issue 11, "Design
+properties"): eig(A − BK) holds the channel poles, the decoupled transfer matrix
+C (sI − A_f)⁻¹ B_f is diagonal with G_ii(s) = q_i0 / ∏(s − λ_ij), N D = L_ω, eig(A − LC) as asked."""
+
+import numpy as np
+import pytest
+
+import quell
+
+S = [0.3j, 1.0j, 2.0 + 1.0j, 10.0j, -0.5 + 3.0j]   # sample frequencies, away from every pole
+
+
+def paper_design():
+    return quell.paper_example().design()
+
+
+def test_decoupled_eigenvalues():
+    d = paper_design()
+    A, B = d.plant.A, d.plant.B
+    eig = np.sort_complex(np.linalg.eigvals(A - B @ d.K))
+    np.testing.assert_allclose(eig, np.sort_complex(d.decoupled_eigenvalues), atol=1e-9)
+    np.testing.assert_allclose(d.A_f, A - B @ d.K, atol=1e-14)
+    np.testing.assert_allclose(d.B_f, B @ d.F, atol=1e-14)
+    # The Σσ_i = 3 = n channel poles are all of eig(A − BK) here (no zeros).
+    np.testing.assert_allclose(eig, [-6, -4, -2], atol=1e-9)
+
+
+@pytest.mark.parametrize("s", S)
+def test_decoupled_transfer_matrix_is_diagonal(s):
+    d = paper_design()
+    C, n = d.plant.C, d.plant.n
+    G = C @ np.linalg.solve(s * np.eye(n) - d.A_f, d.B_f)
+    for i, ch in enumerate(d.channels):
+        G_ii = ch["q0"] / np.prod([s - p for p in ch["poles"]])
+        assert abs(G[i, i] - G_ii) <= 1e-10 * abs(G_ii)
+    off = G - np.diag(np.diag(G))
+    assert np.abs(off).max() <= 1e-10 * np.abs(np.diag(G)).max()
+
+
+def test_unit_dc_gain_and_channel_denominators():
+    d = paper_design()
+    for ch, poles in zip(d.channels, [[-6, -2], [-4]]):
+        np.testing.assert_allclose(np.sort_complex(ch["poles"]), np.sort_complex(poles))
+        # Ascending coefficients of ∏(s − λ): numpy's np.poly is descending.
+        np.testing.assert_allclose(ch["denominator"], np.poly(poles)[::-1][:-1].real)
+        assert ch["q0"] == pytest.approx(ch["denominator"][0])
+
+
+def test_disturbance_observer_gain():
+    d = paper_design()
+    np.testing.assert_allclose(d.N @ d.plant.D, d.L_w, atol=1e-12)
+    # Minimum norm: N's rows lie in the column space of D (N = L_ω D⁺).
+    D = d.plant.D
+    P = D @ np.linalg.pinv(D)
+    np.testing.assert_allclose(d.N @ P, d.N, atol=1e-12)
+
+
+def test_internal_models_have_the_filter_poles():
+    d = paper_design()
+    np.testing.assert_allclose(np.sort(np.linalg.eigvals(d.G_g).real), [-9, -6, -1], atol=1e-12)
+    np.testing.assert_allclose(np.sort(np.linalg.eigvals(d.G_w).real), [-3, -3, -2, -1, -1], atol=1e-6)
+    assert d.G_g.shape == (3, 3) and d.L_g.shape == (3, 2) and d.G_w.shape == (5, 5) and d.L_w.shape == (5, 2)
+    assert d.q == 8 and d.sigma == [2, 1]
+
+
+def test_observer_poles_placed():
+    p = quell.paper_example().plant
+    d = quell.design(p, channel_poles=[[-6, -2], [-4]], reference_filter_poles=[[-1, -6], [-9]],
+                     disturbance_filter_poles=[[-1, -3], [-1, -2, -3]], mu=[20, 30], beta=1.0,
+                     observer_poles=[-2, -3, -4])
+    eig = np.sort(np.linalg.eigvals(p.A - d.L @ p.C).real)
+    np.testing.assert_allclose(eig, [-4, -3, -2], atol=1e-9)
+    np.testing.assert_allclose(np.sort_complex(d.observer_eigenvalues), [-4, -3, -2], atol=1e-9)
+
+
+def test_complex_channel_poles_both_forms():
+    """A conjugate pair as Python complex numbers or as [re, im] gives the same design."""
+    p = quell.paper_example().plant
+    kw = dict(reference_filter_poles=[[-1, -6], [-9]], disturbance_filter_poles=[[-1, -3], [-1, -2, -3]],
+              mu=[20, 30], beta=1.0, observer_poles=[-2, -3, -4])
+    a = quell.design(p, channel_poles=[[-1 + 2j, -1 - 2j], [-4]], **kw)
+    b = quell.design(p, channel_poles=[[[-1, 2]], [-4]], **kw)
+    np.testing.assert_array_equal(a.K, b.K)
+    eig = np.linalg.eigvals(p.A - p.B @ a.K)
+    np.testing.assert_allclose(np.sort_complex(eig), np.sort_complex([-1 + 2j, -1 - 2j, -4]), atol=1e-9)
+
+
+def test_checks_report():
+    c = paper_design().checks
+    assert c["controllability_rank"] == 3 and c["observability_rank"] == 3
+    assert 1 <= c["cond_B_star"] < 1e3
+    assert c["max_re_decoupled_eigenvalue"] == pytest.approx(-2, abs=1e-9)
+    assert c["max_re_observer_eigenvalue"] < 0

@@ -1,0 +1,193 @@
+//! Scenarios back to TOML: the inverse of [`Scenario::from_toml`], in the format of
+//! `examples/paper.toml`, so that `Scenario::from_toml(&s.to_toml())` gives `s` again.
+//!
+//! Numbers are written in Rust's shortest round-trip form, so every value survives exactly.
+
+use nalgebra::{Complex, DMatrix};
+use toml::{Table, Value};
+
+use super::{Noise, Scenario, Simulation};
+use crate::design::{DesignSpec, ObserverChoice};
+use crate::plant::Plant;
+use crate::signal::Signal;
+
+impl Scenario {
+    /// The scenario as a TOML document that [`Scenario::from_toml`] reads back to the same values.
+    pub fn to_toml(&self) -> String {
+        toml::to_string(&self.to_table()).unwrap_or_default()
+    }
+
+    /// The scenario as a TOML table: `name`, `[plant]`, `[design]`, `[reference]`, `[disturbance]`
+    /// (when k > 0), `[simulation]` and `[noise]` (when present).
+    pub fn to_table(&self) -> Table {
+        let mut doc = Table::new();
+        if let Some(name) = &self.name {
+            doc.insert("name".into(), Value::String(name.clone()));
+        }
+        doc.insert("plant".into(), Value::Table(plant_table(&self.plant)));
+        doc.insert("design".into(), Value::Table(design_table(&self.design)));
+        doc.insert("reference".into(), Value::Table(signal_table(&self.reference)));
+        if !self.disturbance.components.is_empty() {
+            doc.insert("disturbance".into(), Value::Table(signal_table(&self.disturbance)));
+        }
+        doc.insert("simulation".into(), Value::Table(simulation_table(&self.simulation)));
+        if let Some(noise) = &self.noise {
+            doc.insert("noise".into(), Value::Table(noise_table(noise)));
+        }
+        doc
+    }
+}
+
+fn numbers(v: &[f64]) -> Value {
+    Value::Array(v.iter().map(|&x| Value::Float(x)).collect())
+}
+
+fn matrix(M: &DMatrix<f64>) -> Value {
+    Value::Array(M.row_iter().map(|r| Value::Array(r.iter().map(|&x| Value::Float(x)).collect())).collect())
+}
+
+/// `[plant]`: A, B, C, delays, x0, and D, Q when k > 0.
+pub fn plant_table(p: &Plant) -> Table {
+    let mut t = Table::new();
+    t.insert("A".into(), matrix(&p.A));
+    t.insert("B".into(), matrix(&p.B));
+    t.insert("C".into(), matrix(&p.C));
+    if p.k() > 0 {
+        t.insert("D".into(), matrix(&p.D));
+        t.insert("Q".into(), matrix(&p.Q));
+    }
+    t.insert("delays".into(), numbers(&p.delays));
+    t.insert("x0".into(), numbers(p.x0.as_slice()));
+    t
+}
+
+/// A pole list in the file's form: a real pole as a number, a pair re ± i·im as `[re, im]` (written
+/// once, for im > 0). Err with the first complex pole whose conjugate is not in the list, which the
+/// file's form cannot express.
+pub fn pole_list(poles: &[Complex<f64>]) -> Result<Value, Complex<f64>> {
+    let mut out = Vec::new();
+    let mut pending: Vec<Complex<f64>> = Vec::new();
+    for &p in poles {
+        if p.im == 0.0 {
+            out.push(Value::Float(p.re));
+        } else if let Some(i) = pending.iter().position(|&z| z == p.conj()) {
+            let z = pending.swap_remove(i);
+            out.push(Value::Array(vec![Value::Float(z.re), Value::Float(z.im.abs())]));
+        } else {
+            pending.push(p);
+        }
+    }
+    match pending.first() {
+        Some(&p) => Err(p),
+        None => Ok(Value::Array(out)),
+    }
+}
+
+/// [`pole_list`], with a pole that lacks its conjugate written as the pair `[re, |im|]`.
+fn poles_value(poles: &[Complex<f64>]) -> Value {
+    pole_list(poles).unwrap_or_else(|_| {
+        let closed: Vec<_> = poles.iter().flat_map(|&z| [z, z.conj()]).filter(|z| z.im >= 0.0).collect();
+        pole_list(&closed).unwrap_or(Value::Array(Vec::new()))
+    })
+}
+
+fn pole_lists(lists: &[Vec<Complex<f64>>]) -> Value {
+    Value::Array(lists.iter().map(|p| poles_value(p)).collect())
+}
+
+/// `[design]`. A complex pole whose conjugate is missing (which no [`DesignSpec`] read from a file
+/// has; [`pole_list`] finds them) is written as the pair.
+pub fn design_table(d: &DesignSpec) -> Table {
+    let mut t = Table::new();
+    match &d.observer {
+        ObserverChoice::Gain(L) => t.insert("observer_gain".into(), matrix(L)),
+        ObserverChoice::Poles(p) => t.insert("observer_poles".into(), poles_value(p)),
+    };
+    t.insert("channel_poles".into(), pole_lists(&d.channel_poles));
+    t.insert("reference_filter_poles".into(), pole_lists(&d.reference_filter_poles));
+    if !d.disturbance_filter_poles.is_empty() {
+        t.insert("disturbance_filter_poles".into(), pole_lists(&d.disturbance_filter_poles));
+    }
+    t.insert("mu".into(), numbers(&d.mu));
+    t.insert("beta".into(), Value::Float(d.beta));
+    t
+}
+
+/// `[reference]` or `[disturbance]`: `components = [{ bias, harmonics = [...] }, ...]`.
+pub fn signal_table(s: &Signal) -> Table {
+    let components = s
+        .components
+        .iter()
+        .map(|c| {
+            let mut t = Table::new();
+            t.insert("bias".into(), Value::Float(c.bias));
+            let harmonics = c
+                .harmonics
+                .iter()
+                .map(|h| {
+                    let mut t = Table::new();
+                    t.insert("amplitude".into(), Value::Float(h.amplitude));
+                    t.insert("frequency".into(), Value::Float(h.frequency));
+                    t.insert("phase".into(), Value::Float(h.phase));
+                    Value::Table(t)
+                })
+                .collect();
+            t.insert("harmonics".into(), Value::Array(harmonics));
+            Value::Table(t)
+        })
+        .collect();
+    Table::from_iter([("components".to_string(), Value::Array(components))])
+}
+
+fn simulation_table(s: &Simulation) -> Table {
+    let mut t = Table::new();
+    t.insert("t_end".into(), Value::Float(s.t_end));
+    t.insert("output_step".into(), Value::Float(s.output_step));
+    t.insert("rtol".into(), Value::Float(s.rtol));
+    t.insert("atol".into(), Value::Float(s.atol));
+    if let Some(T) = s.sample_time {
+        t.insert("sample_time".into(), Value::Float(T));
+    }
+    t
+}
+
+fn noise_table(n: &Noise) -> Table {
+    let mut t = Table::new();
+    t.insert("std".into(), numbers(&n.std));
+    // Seeds above i64::MAX cannot be written in TOML; from_toml reads none.
+    t.insert("seed".into(), Value::Integer(i64::try_from(n.seed).unwrap_or(i64::MAX)));
+    t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_example_round_trips() {
+        for entry in std::fs::read_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples")).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "toml") {
+                let s = Scenario::from_path(&path).unwrap();
+                let text = s.to_toml();
+                let back = Scenario::from_toml(&text).unwrap_or_else(|e| panic!("{}: {e}\n{text}", path.display()));
+                assert_eq!(back.to_toml(), text, "{}", path.display());
+                assert_eq!(back.plant, s.plant);
+                assert_eq!(back.design, s.design);
+                assert_eq!(back.reference, s.reference);
+                assert_eq!(back.disturbance, s.disturbance);
+                assert_eq!(back.simulation, s.simulation);
+                assert_eq!(back.noise, s.noise);
+                assert_eq!(back.name, s.name);
+            }
+        }
+    }
+
+    #[test]
+    fn unpaired_complex_pole_has_no_file_form() {
+        let p = [Complex::new(-1.0, 2.0), Complex::new(-3.0, 0.0)];
+        assert_eq!(pole_list(&p), Err(p[0]));
+        let q = [Complex::new(-1.0, -2.0), Complex::new(-3.0, 0.0), Complex::new(-1.0, 2.0)];
+        assert_eq!(pole_list(&q).unwrap().to_string(), "[-3.0, [-1.0, 2.0]]");
+    }
+}
