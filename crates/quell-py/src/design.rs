@@ -108,82 +108,82 @@ impl PyDesign {
     /// Decoupling feedback K (m×n), Proposition 1: u_f = −K x̂ + F u_d (5).
     #[getter]
     fn K<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.K).into_any()
+        to_numpy(py, &self.inner.K()).into_any()
     }
     /// Decoupling input gain F (m×m), Proposition 1.
     #[getter]
     fn F<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.F).into_any()
+        to_numpy(py, &self.inner.F()).into_any()
     }
     /// Luenberger observer gain L (n×m), eq. (6).
     #[getter]
     fn L<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.L).into_any()
+        to_numpy(py, &self.inner.L()).into_any()
     }
     /// Disturbance observer gain N (q_ω×n), the minimum-norm solution of N D = L_ω, eq. (20).
     #[getter]
     fn N<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.N).into_any()
+        to_numpy(py, &self.inner.N()).into_any()
     }
     /// A_f = A − BK (n×n), Proposition 1.
     #[getter]
     fn A_f<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.A_f).into_any()
+        to_numpy(py, &self.inner.A_f()).into_any()
     }
     /// B_f = BF (n×m), Proposition 1.
     #[getter]
     fn B_f<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.B_f).into_any()
+        to_numpy(py, &self.inner.B_f()).into_any()
     }
     /// B* (m×m), row i = c_i A^(σ_i − 1) B, eq. (7).
     #[getter]
     fn B_star<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.B_star).into_any()
+        to_numpy(py, &self.inner.B_star()).into_any()
     }
     /// Reference internal model G_g (q_g×q_g), eq. (11).
     #[getter]
     fn G_g<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.G_g).into_any()
+        to_numpy(py, &self.inner.G_g()).into_any()
     }
     /// Reference internal model input L_g (q_g×m), eq. (11).
     #[getter]
     fn L_g<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.L_g).into_any()
+        to_numpy(py, &self.inner.L_g()).into_any()
     }
     /// Disturbance internal model G_ω (q_ω×q_ω), eq. (16).
     #[getter]
     fn G_w<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.G_w).into_any()
+        to_numpy(py, &self.inner.G_w()).into_any()
     }
     /// Disturbance internal model input L_ω (q_ω×k), eq. (16).
     #[getter]
     fn L_w<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.L_w).into_any()
+        to_numpy(py, &self.inner.L_w()).into_any()
     }
     /// Relative degrees σ_i, eq. (7).
     #[getter]
     fn sigma(&self) -> Vec<usize> {
-        self.inner.sigma.clone()
+        self.inner.sigma().to_vec()
     }
     /// eig(A − LC), sorted (complex array).
     #[getter]
     fn observer_eigenvalues<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        complex_numpy(py, &self.inner.observer_eigenvalues)
+        complex_numpy(py, &self.inner.observer_eigenvalues())
     }
     /// eig(A − BK), sorted (complex array): the Σσ_i channel poles and the plant's zeros.
     #[getter]
     fn decoupled_eigenvalues<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        complex_numpy(py, &self.inner.decoupled_eigenvalues)
+        complex_numpy(py, &self.inner.decoupled_eigenvalues())
     }
     /// Adaptation gains μ_i, eq. (33).
     #[getter]
     fn mu(&self) -> Vec<f64> {
-        self.inner.mu.clone()
+        self.inner.mu().to_vec()
     }
     /// β of H(s) = 1/(βs + 1).
     #[getter]
     fn beta(&self) -> f64 {
-        self.inner.beta
+        self.inner.beta()
     }
     /// Regressor size q = q_g + q_ω (the length of each η̂_i).
     #[getter]
@@ -193,14 +193,14 @@ impl PyDesign {
     /// The plant the design is for.
     #[getter]
     fn plant(&self) -> PyPlant {
-        PyPlant { inner: self.inner.plant.clone() }
+        PyPlant { inner: self.inner.plant().clone() }
     }
     /// Per channel: the decoupled transfer function G_ii(s) = q0 / (s^σ + a_{σ−1} s^{σ−1} + … + a_0)
     /// as a dict with `poles`, `denominator` (ascending [a_0, …, a_{σ−1}]) and `q0`.
     #[getter]
     fn channels<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         self.inner
-            .channels
+            .channels()
             .iter()
             .map(|c| {
                 let d = PyDict::new(py);
@@ -219,14 +219,14 @@ impl PyDesign {
         let d = &self.inner;
         let max_re = |e: &[quell::nalgebra::Complex<f64>]| e.iter().map(|z| z.re).fold(f64::NEG_INFINITY, f64::max);
         let c = PyDict::new(py);
-        c.set_item("controllability_rank", d.controllability.rank)?;
-        c.set_item("controllability_tol", d.controllability.tol)?;
-        c.set_item("observability_rank", d.observability.rank)?;
-        c.set_item("observability_tol", d.observability.tol)?;
-        c.set_item("cond_B_star", d.cond_B_star)?;
-        c.set_item("max_re_decoupled_eigenvalue", max_re(&d.decoupled_eigenvalues))?;
-        c.set_item("max_re_observer_eigenvalue", max_re(&d.observer_eigenvalues))?;
-        c.set_item("disturbance_rank", d.plant.k())?;
+        c.set_item("controllability_rank", d.controllability().rank)?;
+        c.set_item("controllability_tol", d.controllability().tol)?;
+        c.set_item("observability_rank", d.observability().rank)?;
+        c.set_item("observability_tol", d.observability().tol)?;
+        c.set_item("cond_B_star", d.cond_B_star())?;
+        c.set_item("max_re_decoupled_eigenvalue", max_re(&d.decoupled_eigenvalues()))?;
+        c.set_item("max_re_observer_eigenvalue", max_re(&d.observer_eigenvalues()))?;
+        c.set_item("disturbance_rank", d.plant().k())?;
         Ok(c)
     }
 
@@ -234,12 +234,12 @@ impl PyDesign {
         let d = &self.inner;
         format!(
             "Design(n={}, m={}, q={}, sigma={:?}, mu={:?}, beta={})",
-            d.plant.n(),
-            d.plant.m(),
+            d.plant().n(),
+            d.plant().m(),
             d.q(),
-            d.sigma,
-            d.mu,
-            d.beta
+            d.sigma(),
+            d.mu(),
+            d.beta()
         )
     }
 }
