@@ -55,7 +55,7 @@ impl PyController {
         let T = number(sample_time, "sample_time", Kind::Scenario)?;
         let inner = quell::Controller::new(&d.inner, T).map_err(|e| raise(py, Kind::Scenario)(&e))?;
         let (m, _) = inner.dims();
-        Ok(PyController { inner, n: d.inner.plant().n(), y: vec![0.0; m], g: vec![0.0; m] })
+        Ok(PyController { inner, y: vec![0.0; m], g: vec![0.0; m] })
     }
 
     /// One sample: reads y(k) and g(k) (m each) and returns the plant input u_f(k) = −K x̂ + F u_d (5)

@@ -108,57 +108,57 @@ impl PyDesign {
     /// Decoupling feedback K (m×n), Proposition 1: u_f = −K x̂ + F u_d (5).
     #[getter]
     fn K<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.K()).into_any()
+        to_numpy(py, self.inner.K()).into_any()
     }
     /// Decoupling input gain F (m×m), Proposition 1.
     #[getter]
     fn F<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.F()).into_any()
+        to_numpy(py, self.inner.F()).into_any()
     }
     /// Luenberger observer gain L (n×m), eq. (6).
     #[getter]
     fn L<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.L()).into_any()
+        to_numpy(py, self.inner.L()).into_any()
     }
     /// Disturbance observer gain N (q_ω×n), the minimum-norm solution of N D = L_ω, eq. (20).
     #[getter]
     fn N<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.N()).into_any()
+        to_numpy(py, self.inner.N()).into_any()
     }
     /// A_f = A − BK (n×n), Proposition 1.
     #[getter]
     fn A_f<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.A_f()).into_any()
+        to_numpy(py, self.inner.A_f()).into_any()
     }
     /// B_f = BF (n×m), Proposition 1.
     #[getter]
     fn B_f<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.B_f()).into_any()
+        to_numpy(py, self.inner.B_f()).into_any()
     }
     /// B* (m×m), row i = c_i A^(σ_i − 1) B, eq. (7).
     #[getter]
     fn B_star<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.B_star()).into_any()
+        to_numpy(py, self.inner.B_star()).into_any()
     }
     /// Reference internal model G_g (q_g×q_g), eq. (11).
     #[getter]
     fn G_g<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.G_g()).into_any()
+        to_numpy(py, self.inner.G_g()).into_any()
     }
     /// Reference internal model input L_g (q_g×m), eq. (11).
     #[getter]
     fn L_g<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.L_g()).into_any()
+        to_numpy(py, self.inner.L_g()).into_any()
     }
     /// Disturbance internal model G_ω (q_ω×q_ω), eq. (16).
     #[getter]
     fn G_w<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.G_w()).into_any()
+        to_numpy(py, self.inner.G_w()).into_any()
     }
     /// Disturbance internal model input L_ω (q_ω×k), eq. (16).
     #[getter]
     fn L_w<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_numpy(py, &self.inner.L_w()).into_any()
+        to_numpy(py, self.inner.L_w()).into_any()
     }
     /// Relative degrees σ_i, eq. (7).
     #[getter]
@@ -168,12 +168,12 @@ impl PyDesign {
     /// eig(A − LC), sorted (complex array).
     #[getter]
     fn observer_eigenvalues<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        complex_numpy(py, &self.inner.observer_eigenvalues())
+        complex_numpy(py, self.inner.observer_eigenvalues())
     }
     /// eig(A − BK), sorted (complex array): the Σσ_i channel poles and the plant's zeros.
     #[getter]
     fn decoupled_eigenvalues<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        complex_numpy(py, &self.inner.decoupled_eigenvalues())
+        complex_numpy(py, self.inner.decoupled_eigenvalues())
     }
     /// Adaptation gains μ_i, eq. (33).
     #[getter]
@@ -224,8 +224,8 @@ impl PyDesign {
         c.set_item("observability_rank", d.observability().rank)?;
         c.set_item("observability_tol", d.observability().tol)?;
         c.set_item("cond_B_star", d.cond_B_star())?;
-        c.set_item("max_re_decoupled_eigenvalue", max_re(&d.decoupled_eigenvalues()))?;
-        c.set_item("max_re_observer_eigenvalue", max_re(&d.observer_eigenvalues()))?;
+        c.set_item("max_re_decoupled_eigenvalue", max_re(d.decoupled_eigenvalues()))?;
+        c.set_item("max_re_observer_eigenvalue", max_re(d.observer_eigenvalues()))?;
         c.set_item("disturbance_rank", d.plant().k())?;
         Ok(c)
     }

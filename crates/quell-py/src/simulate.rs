@@ -7,15 +7,14 @@ use std::time::{Duration, Instant};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use quell::sim::{simulate as run_continuous, simulate_sampled, Outcome, RunSettings, SampledSettings, SimResult};
+use quell::sim::{
+    simulate as run_continuous, simulate_sampled, Outcome, RunSettings, RunStats, SampledSettings, SimResult,
+};
 use toml::Value;
 
 use crate::convert::number;
 use crate::errors::{raise, simulation_error, Kind};
 use crate::scenario::PyScenario;
-
-/// A state above this magnitude means the loop diverged (as in `quell run`).
-const DIVERGENCE_BOUND: f64 = 1e9;
 
 /// How often a running simulation looks for Ctrl-C.
 const SIGNAL_CHECK: Duration = Duration::from_millis(100);
@@ -24,7 +23,6 @@ const SIGNAL_CHECK: Duration = Duration::from_millis(100);
 #[pyclass(module = "quell", name = "SimResult", frozen)]
 pub struct PySimResult {
     inner: SimResult,
-    sampled: bool,
     /// t, y, g, e, u, eta.
     arrays: [Py<PyAny>; 6],
 }
@@ -38,7 +36,7 @@ fn frozen_array(py: Python<'_>, data: &[f64], shape: &[usize]) -> PyResult<Py<Py
 }
 
 impl PySimResult {
-    fn new(py: Python<'_>, r: SimResult, sampled: bool) -> PyResult<Self> {
+    fn new(py: Python<'_>, r: SimResult) -> PyResult<Self> {
         let (n, m, q) = (r.len(), r.m, r.q);
         let arrays = [
             frozen_array(py, &r.t, &[n])?,
@@ -48,7 +46,7 @@ impl PySimResult {
             frozen_array(py, &r.u, &[n, m])?,
             frozen_array(py, &r.eta, &[n, m, q])?,
         ];
-        Ok(PySimResult { inner: r, sampled, arrays })
+        Ok(PySimResult { inner: r, arrays })
     }
 }
 
@@ -122,18 +120,24 @@ impl PySimResult {
     fn outcome<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         outcome_dict(py, self.inner.outcome.as_ref().unwrap_or(&Outcome::Completed))
     }
-    /// The loop's statistics: accepted steps, rejected steps and right-hand-side evaluations of
-    /// the delay-equation solver; controller steps of a sampled-data run.
+    /// The loop's statistics, as summary.json's `stats`: for the continuous loop the delay-equation
+    /// solver's steps, rejected_steps, rhs_evaluations, breakpoints and max_history_len; for the
+    /// sampled-data loop controller_steps and sample_time.
     #[getter]
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let s = &self.inner.stats;
         let d = PyDict::new(py);
-        if self.sampled {
-            d.set_item("controller_steps", s.steps)?;
-        } else {
-            d.set_item("steps", s.steps)?;
-            d.set_item("rejected_steps", s.rejected)?;
-            d.set_item("rhs_evaluations", s.rhs_evals)?;
+        match self.inner.stats {
+            RunStats::Continuous { steps, rejected_steps, rhs_evaluations, breakpoints, max_history_len } => {
+                d.set_item("steps", steps)?;
+                d.set_item("rejected_steps", rejected_steps)?;
+                d.set_item("rhs_evaluations", rhs_evaluations)?;
+                d.set_item("breakpoints", breakpoints)?;
+                d.set_item("max_history_len", max_history_len)?;
+            }
+            RunStats::Sampled { controller_steps, sample_time } => {
+                d.set_item("controller_steps", controller_steps)?;
+                d.set_item("sample_time", sample_time)?;
+            }
         }
         Ok(d)
     }
@@ -218,16 +222,9 @@ pub fn simulate(
         &s.inner
     };
     let sim = scn.simulation;
-    let sampled = sim.sample_time.map(|T| SampledSettings {
-        t_end: sim.t_end,
-        output_step: sim.output_step,
-        sample_time: T,
-        noise: scn.noise.clone(),
-        divergence_bound: DIVERGENCE_BOUND,
-    });
-    if let Some(settings) = &sampled {
-        settings.check(&design).map_err(|e| raise(py, Kind::Scenario)(&e))?;
-    }
+    let sampled = sim
+        .sample_time
+        .map(|T| SampledSettings { noise: scn.noise.clone(), ..SampledSettings::new(sim.t_end, sim.output_step, T) });
 
     let mut interrupt: Option<PyErr> = None;
     let result = py.detach(|| {
@@ -247,11 +244,8 @@ pub fn simulate(
         };
         match &sampled {
             None => {
-                let settings = RunSettings {
-                    divergence_bound: DIVERGENCE_BOUND,
-                    ..RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol)
-                };
-                Ok(run_continuous(&design, &scn.reference, &scn.disturbance, &settings, progress))
+                let settings = RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol);
+                run_continuous(&design, &scn.reference, &scn.disturbance, &settings, progress)
             }
             Some(settings) => simulate_sampled(&design, &scn.reference, &scn.disturbance, settings, progress),
         }
@@ -261,7 +255,7 @@ pub fn simulate(
     }
     let result = result.map_err(|e| raise(py, Kind::Scenario)(&e))?;
     let outcome = result.outcome.clone().unwrap_or(Outcome::Completed);
-    let result = Py::new(py, PySimResult::new(py, result, sampled.is_some())?)?;
+    let result = Py::new(py, PySimResult::new(py, result)?)?;
     if !check {
         return Ok(result);
     }

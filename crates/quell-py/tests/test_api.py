@@ -89,7 +89,7 @@ def test_simulate_shapes_and_overrides():
     with pytest.raises(ValueError):
         r.y[0, 0] = 1.0  # results are read-only
     sampled = quell.simulate(s, t_end=10.0, sample_time=1e-3)
-    assert sampled.stats == {"controller_steps": 10001}
+    assert sampled.stats == {"controller_steps": 10001, "sample_time": 1e-3}
     with pytest.raises(quell.ScenarioError, match="simulation.output_step"):
         quell.simulate(s, t_end=0.05)
 
