@@ -162,7 +162,7 @@ fn signal_py<'py>(py: Python<'py>, s: &Signal) -> PyResult<Vec<Bound<'py, PyDict
 #[pymethods]
 impl PyScenario {
     #[new]
-    #[pyo3(signature = (plant, reference, disturbance=None, *, name=None, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, noise=None, **design))]
+    #[pyo3(signature = (plant, reference, disturbance=None, *, name=None, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, noise=None, truth=None, **design))]
     #[allow(clippy::too_many_arguments)]
     fn py_new(
         py: Python<'_>,
@@ -176,6 +176,7 @@ impl PyScenario {
         atol: Option<&Bound<'_, PyAny>>,
         sample_time: Option<&Bound<'_, PyAny>>,
         noise: Option<&Bound<'_, PyAny>>,
+        truth: Option<&Bound<'_, PyAny>>,
         design: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let plant = plant_arg(plant, "plant")?;
@@ -209,6 +210,9 @@ impl PyScenario {
         if let Some(n) = noise.filter(|n| !n.is_none()) {
             doc.insert("noise".into(), toml_value(n, "noise")?);
         }
+        if let Some(t) = truth.filter(|t| !t.is_none()) {
+            doc.insert("truth".into(), Value::Table(plant_table(&plant_arg(t, "truth")?.inner)));
+        }
         let text = toml::to_string(&doc)
             .map_err(|e| Kind::Scenario.err(py, format!("scenario: cannot be written as TOML ({e})")))?;
         Self::parse(py, &text)
@@ -240,6 +244,12 @@ impl PyScenario {
     #[getter]
     fn plant(&self) -> PyPlant {
         PyPlant { inner: self.inner.plant.clone() }
+    }
+    /// The true plant that is simulated when it differs from the design model `plant` (`[truth]`),
+    /// or None.
+    #[getter]
+    fn truth(&self) -> Option<PyPlant> {
+        self.inner.truth.clone().map(|inner| PyPlant { inner })
     }
     /// The scenario's name, if it has one.
     #[getter]

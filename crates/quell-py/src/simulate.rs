@@ -8,7 +8,7 @@ use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use quell::sim::{
-    simulate as run_continuous, simulate_sampled, Outcome, RunSettings, RunStats, SampledSettings, SimResult,
+    simulate_sampled_with_truth, simulate_with_truth, Outcome, RunSettings, RunStats, SampledSettings, SimResult,
 };
 use toml::Value;
 
@@ -183,7 +183,8 @@ impl PySimResult {
 }
 
 /// Simulates a scenario's closed loop: the continuous-time controller on the delay equation, or,
-/// with a sample time, the sampled-data loop with the real-time controller. Keywords override the
+/// with a sample time, the sampled-data loop with the real-time controller; the plant simulated is
+/// the scenario's `[truth]` where it has one. Keywords override the
 /// scenario's `[simulation]`; with `check` a run that does not reach t_end raises SimulationError.
 #[pyfunction]
 #[pyo3(signature = (scenario, *, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, check=true))]
@@ -226,6 +227,8 @@ pub fn simulate(
         .sample_time
         .map(|T| SampledSettings { noise: scn.noise.clone(), ..SampledSettings::new(sim.t_end, sim.output_step, T) });
 
+    // The simulated plant is `[truth]` where the scenario has one; the design keeps `[plant]`.
+    let truth = scn.true_plant();
     let mut interrupt: Option<PyErr> = None;
     let result = py.detach(|| {
         let mut last = Instant::now();
@@ -245,9 +248,11 @@ pub fn simulate(
         match &sampled {
             None => {
                 let settings = RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol);
-                run_continuous(&design, &scn.reference, &scn.disturbance, &settings, progress)
+                simulate_with_truth(&design, truth, &scn.reference, &scn.disturbance, &settings, progress)
             }
-            Some(settings) => simulate_sampled(&design, &scn.reference, &scn.disturbance, settings, progress),
+            Some(settings) => {
+                simulate_sampled_with_truth(&design, truth, &scn.reference, &scn.disturbance, settings, progress)
+            }
         }
     });
     if let Some(e) = interrupt {

@@ -52,6 +52,21 @@ def test_scenario_round_trips_through_toml():
     assert quell.Scenario.load(EXAMPLES / "paper.toml").to_toml() == quell.paper_example().to_toml()
 
 
+def test_truth_differs_from_the_design_model():
+    """[truth]: the simulated plant; the design (and so scenario.design()) keeps [plant]."""
+    true_plant = quell.Plant(A, B, C, D, Q=Q, delays=[1.0, 3.2])
+    s = paper_from_values(truth=true_plant, t_end=20.0)
+    assert s.truth is not None and list(s.truth.delays) == [1.0, 3.2]
+    assert list(s.plant.delays) == [1.0, 3.0]
+    back = quell.Scenario.from_toml(s.to_toml())
+    assert list(back.truth.delays) == [1.0, 3.2]
+    nominal = quell.simulate(paper_from_values(t_end=20.0))
+    mismatched = quell.simulate(s)
+    np.testing.assert_array_equal(s.design().K, quell.paper_example().design().K)
+    assert not np.array_equal(nominal.y, mismatched.y)
+    assert quell.paper_example().truth is None
+
+
 def test_scenario_accessors():
     s = quell.paper_example()
     assert s.name == "paper-example"

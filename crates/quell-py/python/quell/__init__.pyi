@@ -124,6 +124,7 @@ class Scenario:
         atol: Optional[float] = None,
         sample_time: Optional[float] = None,
         noise: Optional[Dict[str, Any]] = None,
+        truth: Optional[Plant] = None,
         **design: Any,
     ) -> None: ...
     @staticmethod
@@ -134,6 +135,8 @@ class Scenario:
     def design(self) -> Design: ...
     @property
     def plant(self) -> Plant: ...
+    @property
+    def truth(self) -> Optional[Plant]: ...
     @property
     def name(self) -> Optional[str]: ...
     @property

@@ -18,7 +18,7 @@ impl Scenario {
     }
 
     /// The scenario as a TOML table: `name`, `[plant]`, `[design]`, `[reference]`, `[disturbance]`
-    /// (when k > 0), `[simulation]` and `[noise]` (when present).
+    /// (when k > 0), `[simulation]`, and `[noise]` and `[truth]` (when present; the truth in full).
     pub fn to_table(&self) -> Table {
         let mut doc = Table::new();
         if let Some(name) = &self.name {
@@ -33,6 +33,9 @@ impl Scenario {
         doc.insert("simulation".into(), Value::Table(simulation_table(&self.simulation)));
         if let Some(noise) = &self.noise {
             doc.insert("noise".into(), Value::Table(noise_table(noise)));
+        }
+        if let Some(truth) = &self.truth {
+            doc.insert("truth".into(), Value::Table(plant_table(truth)));
         }
         doc
     }
@@ -179,8 +182,18 @@ mod tests {
                 assert_eq!(back.simulation, s.simulation);
                 assert_eq!(back.noise, s.noise);
                 assert_eq!(back.name, s.name);
+                assert_eq!(back.truth, s.truth);
             }
         }
+    }
+
+    #[test]
+    fn truth_round_trips() {
+        let text = format!("{}\n[truth]\ndelays = [1.1, 2.9]\nx0 = [0.5, 0.0, 0.0]\n", crate::scenario::PAPER_EXAMPLE);
+        let s = Scenario::from_toml(&text).unwrap();
+        let back = Scenario::from_toml(&s.to_toml()).unwrap();
+        assert_eq!(back.truth, s.truth);
+        assert_eq!(back.truth.unwrap().delays, vec![1.1, 2.9]);
     }
 
     #[test]
