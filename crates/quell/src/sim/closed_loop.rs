@@ -325,33 +325,31 @@ impl LinearPart {
                 }
             }
         }
+        // In row order, state columns (< dim) before e's; two blocks on one entry are merged.
         entries.sort_by_key(|&(r, c, _)| (r, c));
-        let targets: Vec<usize> = (0..nz).chain(l.x..l.x + n).chain(dim..dim + m).collect();
+        entries.dedup_by(|later, kept| {
+            let same = (later.0, later.1) == (kept.0, kept.1);
+            if same {
+                kept.2 += later.2;
+            }
+            same
+        });
+        let targets = (0..nz).chain(l.x..l.x + n).chain(dim..dim + m);
         let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+        let mut entries = entries.into_iter().peekable();
         for t in targets {
             let start = cols.len();
-            let mut mid = start;
-            // State entries first, then e entries; duplicates (two blocks on one entry) are merged.
-            for over_e in [false, true] {
-                let first = cols.len();
-                if over_e {
-                    mid = first;
+            let mut mid = None;
+            while let Some((_, c, v)) = entries.next_if(|&(r, _, _)| r == t) {
+                if c >= dim {
+                    mid.get_or_insert(cols.len());
                 }
-                for &(_, c, v) in entries.iter().filter(|&&(r, c, _)| r == t && (c >= dim) == over_e) {
-                    let c = if over_e { c - dim } else { c };
-                    match cols.last() {
-                        Some(&last) if cols.len() > first && last == c => {
-                            *vals.last_mut().expect("an entry was pushed") += v
-                        }
-                        _ => {
-                            cols.push(c);
-                            vals.push(v);
-                        }
-                    }
-                }
+                cols.push(if c >= dim { c - dim } else { c });
+                vals.push(v);
             }
-            rows.push((if t < dim { t } else { t - dim }, start, mid, cols.len()));
+            rows.push((if t < dim { t } else { t - dim }, start, mid.unwrap_or(cols.len()), cols.len()));
         }
+        debug_assert!(entries.next().is_none(), "every block feeds a row of the operator");
         LinearPart { rows, n_state_rows: nz + n, cols, vals }
     }
 

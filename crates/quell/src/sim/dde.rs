@@ -144,7 +144,8 @@ pub enum SolveError {
 /// Constant context of a run, shared by all RHS evaluations.
 struct Ctx<'a> {
     initial: &'a [f64],
-    y0: &'a [f64],
+    /// The delayed prefix of y(t0).
+    y0: Vec<f64>,
     t0: f64,
     tol: f64,
 }
@@ -162,7 +163,7 @@ fn eval_rhs<S: DelaySystem>(
     y: &[f64],
     dy: &mut [f64],
 ) {
-    let past = Past { hist, initial: ctx.initial, y0: ctx.y0, t0: ctx.t0, lead: t_n - t, tol: ctx.tol };
+    let past = Past { hist, initial: ctx.initial, y0: &ctx.y0, t0: ctx.t0, lead: t_n - t, tol: ctx.tol };
     sys.rhs(t, y, &past, dy);
     stats.rhs_evals += 1;
 }
@@ -252,187 +253,373 @@ pub fn solve<S: DelaySystem>(
     let delays: Vec<f64> = sys.delays().to_vec();
     assert!(delays.iter().all(|&d| d > 0.0 && d.is_finite()), "delays must be positive and finite: {delays:?}");
     let tau_min = delays.iter().copied().fold(f64::INFINITY, f64::min);
-    let tau_max = delays.iter().copied().fold(0.0, f64::max);
 
-    let mut stats = Stats::default();
     if on_output(t0, &y0[..sys.n_output().min(n)]).is_break() || t_end <= t0 {
-        return Ok(stats);
+        return Ok(Stats::default());
     }
-    let span = t_end - t0;
-    let h_cap = opts.h_max.min(tau_min).min(span);
+    let h_cap = opts.h_max.min(tau_min).min(t_end - t0);
     if h_cap.is_nan() || h_cap < h_min(t_end) {
         // A delay (or h_max) below rounding level of t would force steps that do not advance t.
-        return Err(SolveError::StepSizeTooSmall { t: t0, h: h_cap, stats });
+        return Err(SolveError::StepSizeTooSmall { t: t0, h: h_cap, stats: Stats::default() });
     }
-    let bps = breakpoints(t0, &delays, t_end);
-    let (dt_out, n_out) = if output_step > 0.0 && output_step.is_finite() {
-        let out_tol = 1e-9 * output_step;
-        (output_step, ((span + out_tol) / output_step).floor() as usize)
-    } else {
-        (span, 1)
-    };
-
-    // Setup: every buffer of the step loop is allocated here.
-    let y0_prefix = y0[..nd].to_vec();
-    let ctx = Ctx { initial: history, y0: &y0_prefix, t0, tol: tiny(t_end) };
-    let est_records = if tau_max > 0.0 { (tau_max / h_cap.max(1e-300)).min(4096.0) as usize + 8 } else { 4 };
-    let mut hist = History::new(nd, est_records);
-    let mut k = vec![0.0; STAGES_DENSE * n];
-    let mut y = y0.to_vec();
-    let mut y_new = vec![0.0; n];
-    let mut y_stage = vec![0.0; n];
-    let n_o = sys.n_output().min(n);
-    // The interpolated prefix: the history's and the outputs'.
-    let n_i = nd.max(n_o);
-    let mut y_out = vec![0.0; n_o];
-    let mut dense = vec![0.0; NCOEF * n_i];
-    let mut stencil = Stencil::new(n_i);
-    let (mut err5, mut err3) = (vec![0.0; n], vec![0.0; n]);
-
-    let mut t = t0;
-    let mut next_out = 1usize;
-    eval_rhs(sys, &ctx, &hist, &mut stats, t, t, &y, &mut k[..n]);
-    stencil.restart(t, &y, &k[..n]);
-    let mut h = initial_step(sys, &ctx, &hist, &mut stats, t, &y, &k[..n], &mut y_stage, &mut y_new, opts, h_cap);
-    let mut bp_idx = 0usize;
-    let mut last_rejected = false;
-
-    while t < t_end - tiny(t_end) {
-        while bp_idx < bps.len() && bps[bp_idx] <= t + tiny(t) {
-            bp_idx += 1;
+    // attempt → (reject | accept → record and emit → advance), until t_end.
+    let mut steps = Steps::new(sys, t0, y0, history, t_end, output_step, opts, h_cap, &delays);
+    while steps.t < t_end - tiny(t_end) {
+        let step = steps.propose();
+        let Some(len) = steps.attempt(&step) else {
+            steps.reject(&step)?;
+            continue;
+        };
+        steps.accept(&step);
+        if steps.record_and_emit(&step, len, &mut on_output).is_break() {
+            return Ok(steps.finish());
         }
-        let (stop, stop_is_bp) = if bp_idx < bps.len() { (bps[bp_idx], true) } else { (t_end, false) };
-        let h_prop = h;
-        let mut h_try = h.min(h_cap);
-        let mut lands = false;
-        // Land on `stop` if the step would reach it or leave only a sliver (a sliver below
-        // rounding level may make the step exceed h_cap by a few ulps, which is harmless).
-        let gap = stop - (t + h_try);
-        if gap <= tiny(stop) || (gap < 0.01 * h_try && stop - t <= h_cap) {
-            h_try = stop - t;
-            lands = true;
-        }
-        let t_new = if lands { stop } else { t + h_try };
+        steps.advance(&step);
+    }
+    Ok(steps.finish())
+}
 
-        // Stages 1..=11.
+/// The output schedule t0 + k·dt, k = 1…n (the last one clamped to t_end when it lands there).
+struct Schedule {
+    t0: f64,
+    dt: f64,
+    n: usize,
+    /// The next k to emit.
+    next: usize,
+}
+
+impl Schedule {
+    /// The next output time if it lies in (·, t_new] (at t_end, within rounding of the last one).
+    fn due(&self, t_new: f64, t_end: f64) -> Option<f64> {
+        if self.next > self.n {
+            return None;
+        }
+        let t_k = self.t0 + self.next as f64 * self.dt;
+        let t_k = if self.next == self.n && t_new == t_end { t_k.min(t_end) } else { t_k };
+        (t_k <= t_new || (t_new == t_end && t_k <= t_end + 1e-9 * self.dt)).then_some(t_k)
+    }
+}
+
+/// One step's plan: from t to `t_new` = t + `h`, landing exactly on the next breakpoint or t_end
+/// when it would (nearly) reach it.
+struct Step {
+    h: f64,
+    t_new: f64,
+    lands: bool,
+    at_breakpoint: bool,
+    /// The step size the controller proposed before capping or landing.
+    h_proposed: f64,
+}
+
+/// The state the steps of [`solve`] share: the current point, the stages, the dense output and its
+/// history, the step-size control and the output schedule. Every buffer is allocated in `new`.
+struct Steps<'a, S: DelaySystem> {
+    sys: &'a mut S,
+    opts: &'a Options,
+    ctx: Ctx<'a>,
+    hist: History,
+    stats: Stats,
+    /// State dimension, delayed prefix, output prefix, interpolated prefix (max of the two).
+    n: usize,
+    nd: usize,
+    n_o: usize,
+    n_i: usize,
+    t_end: f64,
+    tau_max: f64,
+    h_cap: f64,
+    t: f64,
+    y: Vec<f64>,
+    /// Stage derivatives k_1, …, k_16, n each (k_1 = f(t, y); k_13 = f(t_new, y_new), the FSAL stage).
+    k: Vec<f64>,
+    y_new: Vec<f64>,
+    y_stage: Vec<f64>,
+    err5: Vec<f64>,
+    err3: Vec<f64>,
+    /// The step's dense output: Newton coefficients, coefficient-major over the `len` components it
+    /// covers (the delayed prefix, or the interpolated prefix when an output falls in the step),
+    /// and their nodes.
+    dense: Vec<f64>,
+    nodes: Nodes,
+    y_out: Vec<f64>,
+    stencil: Stencil,
+    /// Proposed next step size, and whether the last attempt was rejected.
+    h: f64,
+    last_rejected: bool,
+    breakpoints: Vec<f64>,
+    next_breakpoint: usize,
+    schedule: Schedule,
+    /// The error norm of the last attempt (≤ 1: accepted).
+    err: f64,
+}
+
+impl<'a, S: DelaySystem> Steps<'a, S> {
+    /// Allocates every buffer, evaluates f(t0, y0) and chooses the initial step.
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        sys: &'a mut S,
+        t0: f64,
+        y0: &[f64],
+        history: &'a [f64],
+        t_end: f64,
+        output_step: f64,
+        opts: &'a Options,
+        h_cap: f64,
+        delays: &[f64],
+    ) -> Self {
+        let (n, nd) = (sys.dim(), sys.n_delayed());
+        let tau_max = delays.iter().copied().fold(0.0, f64::max);
+        let span = t_end - t0;
+        let (dt, n_out) = if output_step > 0.0 && output_step.is_finite() {
+            (output_step, ((span + 1e-9 * output_step) / output_step).floor() as usize)
+        } else {
+            (span, 1)
+        };
+        let est_records = if tau_max > 0.0 { (tau_max / h_cap.max(1e-300)).min(4096.0) as usize + 8 } else { 4 };
+        let n_o = sys.n_output().min(n);
+        let n_i = nd.max(n_o);
+        let mut steps = Steps {
+            ctx: Ctx { initial: history, y0: y0[..nd].to_vec(), t0, tol: tiny(t_end) },
+            hist: History::new(nd, est_records),
+            stats: Stats::default(),
+            n,
+            nd,
+            n_o,
+            n_i,
+            t_end,
+            tau_max,
+            h_cap,
+            t: t0,
+            y: y0.to_vec(),
+            k: vec![0.0; STAGES_DENSE * n],
+            y_new: vec![0.0; n],
+            y_stage: vec![0.0; n],
+            err5: vec![0.0; n],
+            err3: vec![0.0; n],
+            dense: vec![0.0; NCOEF * n_i],
+            nodes: DOP853_NODES,
+            y_out: vec![0.0; n_o],
+            stencil: Stencil::new(n_i),
+            h: 0.0,
+            last_rejected: false,
+            breakpoints: breakpoints(t0, delays, t_end),
+            next_breakpoint: 0,
+            schedule: Schedule { t0, dt, n: n_out, next: 1 },
+            err: 0.0,
+            sys,
+            opts,
+        };
+        steps.restart();
+        let (t, n) = (steps.t, steps.n);
+        steps.h = initial_step(
+            steps.sys,
+            &steps.ctx,
+            &steps.hist,
+            &mut steps.stats,
+            t,
+            &steps.y,
+            &steps.k[..n],
+            &mut steps.y_stage,
+            &mut steps.y_new,
+            opts,
+            h_cap,
+        );
+        steps
+    }
+
+    /// k_1 = f(t, y) afresh and a new Hermite stencil: at t0 and after a breakpoint, where the
+    /// derivative may jump so FSAL does not apply.
+    fn restart(&mut self) {
+        let (t, n) = (self.t, self.n);
+        eval_rhs(self.sys, &self.ctx, &self.hist, &mut self.stats, t, t, &self.y, &mut self.k[..n]);
+        self.stencil.restart(t, &self.y, &self.k[..n]);
+    }
+
+    /// The next step: the proposed size capped at h_cap, landing on the next breakpoint or t_end
+    /// if it would reach it or leave only a sliver (a sliver below rounding level may make the step
+    /// exceed h_cap by a few ulps, which is harmless).
+    fn propose(&mut self) -> Step {
+        let (t, bps) = (self.t, &self.breakpoints);
+        while self.next_breakpoint < bps.len() && bps[self.next_breakpoint] <= t + tiny(t) {
+            self.next_breakpoint += 1;
+        }
+        let (stop, at_breakpoint) = match bps.get(self.next_breakpoint) {
+            Some(&b) => (b, true),
+            None => (self.t_end, false),
+        };
+        let mut h = self.h.min(self.h_cap);
+        let gap = stop - (t + h);
+        let lands = gap <= tiny(stop) || (gap < 0.01 * h && stop - t <= self.h_cap);
+        if lands {
+            h = stop - t;
+        }
+        Step {
+            h,
+            t_new: if lands { stop } else { t + h },
+            lands,
+            at_breakpoint: lands && at_breakpoint,
+            h_proposed: self.h,
+        }
+    }
+
+    /// Stages 2…12 and y_new, the error norm (the combined 5th/3rd-order norm of `dop853.f`), and
+    /// for a step within tolerance its tentative acceptance: the FSAL stage and, when the history or
+    /// an output needs one, the dense output. `None` when the step is rejected (error above 1, or a
+    /// non-finite value in y_new or those stages); otherwise the number of components the dense
+    /// output covers.
+    fn attempt(&mut self, step: &Step) -> Option<usize> {
+        let (n, t, h) = (self.n, self.t, step.h);
         for s in 1..STAGES {
-            combine(&y, &k, &A[s][..s], h_try, n, &mut y_stage);
-            let ts = if C[s] == 1.0 { t_new } else { t + C[s] * h_try };
-            eval_rhs(sys, &ctx, &hist, &mut stats, t, ts, &y_stage, &mut k[s * n..(s + 1) * n]);
+            combine(&self.y, &self.k, &A[s][..s], h, n, &mut self.y_stage);
+            let ts = if C[s] == 1.0 { step.t_new } else { t + C[s] * h };
+            eval_rhs(
+                self.sys,
+                &self.ctx,
+                &self.hist,
+                &mut self.stats,
+                t,
+                ts,
+                &self.y_stage,
+                &mut self.k[s * n..(s + 1) * n],
+            );
         }
-        combine(&y, &k, &A[12][..STAGES], h_try, n, &mut y_new);
+        combine(&self.y, &self.k, &A[12][..STAGES], h, n, &mut self.y_new);
 
-        // Error estimate (combined 5th/3rd-order norm of dop853.f).
-        err5.fill(0.0);
-        lincomb(&mut err5, &k, n, &E5, 1.0, 0..n);
-        err3.fill(0.0);
-        lincomb(&mut err3, &k, n, &E3, 1.0, 0..n);
-        let (s5, s3) = error_sums(&err5, &err3, &y, &y_new, opts.rtol, opts.atol);
+        self.err5.fill(0.0);
+        lincomb(&mut self.err5, &self.k, n, &E5, 1.0, 0..n);
+        self.err3.fill(0.0);
+        lincomb(&mut self.err3, &self.k, n, &E3, 1.0, 0..n);
+        let (s5, s3) = error_sums(&self.err5, &self.err3, &self.y, &self.y_new, self.opts.rtol, self.opts.atol);
         let mut deno = s5 + 0.01 * s3;
         if deno <= 0.0 {
             deno = 1.0;
         }
-        let mut err = h_try * s5 * (1.0 / (n.max(1) as f64 * deno)).sqrt();
-        if !err.is_finite() || !all_finite(&y_new) {
-            err = f64::INFINITY;
+        self.err = h * s5 * (1.0 / (n.max(1) as f64 * deno)).sqrt();
+        if !self.err.is_finite() || !all_finite(&self.y_new) {
+            self.err = f64::INFINITY;
         }
-        // Tentatively accepted: FSAL evaluation and, when a dense output is needed, its polynomial:
-        // the Hermite interpolant of the last four step points, or DOP853's own (three more
-        // stages). A non-finite value there rejects the step as well.
-        let mut out_here = false;
-        let mut nodes = None;
-        if err <= 1.0 {
-            eval_rhs(sys, &ctx, &hist, &mut stats, t, t_new, &y_new, &mut k[12 * n..13 * n]);
-            out_here = next_out <= n_out && {
-                let t_k = t0 + next_out as f64 * dt_out;
-                t_k <= t_new || (t_new == t_end && t_k <= t_end + 1e-9 * dt_out)
-            };
-            let mut last = 13;
-            if nd > 0 || out_here {
-                let len = if out_here { n_i } else { nd };
-                nodes = stencil.interpolate(h_try, &y_new, &k[12 * n..13 * n], len, (opts.rtol, opts.atol), &mut dense);
-                if nodes.is_none() {
+        if self.err > 1.0 {
+            return None;
+        }
+        let dense = self.tentatively_accept(step);
+        (self.err <= 1.0).then_some(dense)
+    }
+
+    /// The FSAL evaluation k_13 = f(t_new, y_new) and, when needed, the step's dense output: the
+    /// Hermite interpolant of the last four step points, or DOP853's own (three more stages). A
+    /// non-finite value there rejects the step after all (sets the error to ∞).
+    fn tentatively_accept(&mut self, step: &Step) -> usize {
+        let (n, t, h) = (self.n, self.t, step.h);
+        eval_rhs(
+            self.sys,
+            &self.ctx,
+            &self.hist,
+            &mut self.stats,
+            t,
+            step.t_new,
+            &self.y_new,
+            &mut self.k[12 * n..13 * n],
+        );
+        let outputs = self.schedule.due(step.t_new, self.t_end).is_some();
+        let len = if outputs { self.n_i } else { self.nd };
+        let mut last = 13;
+        if self.nd > 0 || outputs {
+            let tol = (self.opts.rtol, self.opts.atol);
+            match self.stencil.interpolate(h, &self.y_new, &self.k[12 * n..13 * n], len, tol, &mut self.dense) {
+                Some(nodes) => self.nodes = nodes,
+                None => {
                     for s in 13..STAGES_DENSE {
-                        combine(&y, &k, &A[s][..s], h_try, n, &mut y_stage);
-                        let ts = t + C[s] * h_try;
-                        eval_rhs(sys, &ctx, &hist, &mut stats, t, ts, &y_stage, &mut k[s * n..(s + 1) * n]);
+                        combine(&self.y, &self.k, &A[s][..s], h, n, &mut self.y_stage);
+                        let ts = t + C[s] * h;
+                        let k_s = &mut self.k[s * n..(s + 1) * n];
+                        eval_rhs(self.sys, &self.ctx, &self.hist, &mut self.stats, t, ts, &self.y_stage, k_s);
                     }
                     last = STAGES_DENSE;
-                    dense_coefficients(&y, &y_new, &k, h_try, n, 0..len, &mut dense);
-                    nodes = Some(DOP853_NODES);
-                }
-            }
-            if !all_finite(&k[12 * n..last * n]) {
-                err = f64::INFINITY;
-            }
-        }
-        let fac11 = err.powf(0.125);
-
-        if err > 1.0 {
-            stats.rejected += 1;
-            last_rejected = true;
-            h = h_try / (1.0 / FAC_MIN).min(fac11 / SAFE);
-            if h < h_min(t) {
-                return Err(SolveError::StepSizeTooSmall { t, h, stats });
-            }
-            continue;
-        }
-
-        // Accepted.
-        stats.steps += 1;
-        let fac = (fac11 / SAFE).clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
-        let mut h_next = h_try / fac;
-        if last_rejected {
-            h_next = h_next.min(h_try);
-        } else if lands && h_try < h_prop {
-            h_next = h_next.max(h_prop);
-        }
-        last_rejected = false;
-        h = h_next;
-
-        if let Some(z) = &nodes {
-            let len = if out_here { n_i } else { nd };
-            if nd > 0 {
-                let slot = hist.push(t, h_try, z);
-                for (r, row) in slot.chunks_exact_mut(nd).enumerate() {
-                    row.copy_from_slice(&dense[r * len..r * len + nd]);
-                }
-            }
-            while out_here && next_out <= n_out {
-                let t_k = t0 + next_out as f64 * dt_out;
-                let t_k = if next_out == n_out && t_new == t_end { t_k.min(t_end) } else { t_k };
-                if t_k > t_new {
-                    break;
-                }
-                let out: &[f64] = if t_k == t_new {
-                    &y_new[..n_o]
-                } else {
-                    newton(&dense, len, z, (t_k - t) / h_try, &mut [(0, &mut y_out[..])]);
-                    &y_out
-                };
-                next_out += 1;
-                if on_output(t_k, out).is_break() {
-                    stats.max_history_len = hist.max_len();
-                    return Ok(stats);
+                    dense_coefficients(&self.y, &self.y_new, &self.k, h, n, 0..len, &mut self.dense);
+                    self.nodes = DOP853_NODES;
                 }
             }
         }
-        hist.prune(t_new - tau_max);
+        if !all_finite(&self.k[12 * n..last * n]) {
+            self.err = f64::INFINITY;
+        }
+        len
+    }
 
-        t = t_new;
-        std::mem::swap(&mut y, &mut y_new);
-        if lands && stop_is_bp {
-            // Restart: the derivative may jump at a breakpoint, so FSAL does not apply.
-            stats.breakpoints += 1;
-            eval_rhs(sys, &ctx, &hist, &mut stats, t, t, &y, &mut k[..n]);
-            stencil.restart(t, &y, &k[..n]);
+    /// A rejected attempt: a smaller step, or the end of the run when it falls below ~1e-14·|t|.
+    fn reject(&mut self, step: &Step) -> Result<(), SolveError> {
+        self.stats.rejected += 1;
+        self.last_rejected = true;
+        self.h = step.h / (1.0 / FAC_MIN).min(self.err.powf(0.125) / SAFE);
+        if self.h < h_min(self.t) {
+            return Err(SolveError::StepSizeTooSmall { t: self.t, h: self.h, stats: self.finish() });
+        }
+        Ok(())
+    }
+
+    /// An accepted step: the next step size (`dop853.f`'s controller, no growth right after a
+    /// rejection, and not shrunk by a landing).
+    fn accept(&mut self, step: &Step) {
+        self.stats.steps += 1;
+        let fac = (self.err.powf(0.125) / SAFE).clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
+        let mut h_next = step.h / fac;
+        if self.last_rejected {
+            h_next = h_next.min(step.h);
+        } else if step.lands && step.h < step.h_proposed {
+            h_next = h_next.max(step.h_proposed);
+        }
+        self.last_rejected = false;
+        self.h = h_next;
+    }
+
+    /// Stores the step's dense output of the delayed prefix in the history and emits the outputs
+    /// that fall in (t, t_new]; `Break` when `on_output` asks to stop.
+    fn record_and_emit(
+        &mut self,
+        step: &Step,
+        len: usize,
+        on_output: &mut impl FnMut(f64, &[f64]) -> ControlFlow<()>,
+    ) -> ControlFlow<()> {
+        let nd = self.nd;
+        if nd > 0 {
+            let slot = self.hist.push(self.t, step.h, &self.nodes);
+            for (r, row) in slot.chunks_exact_mut(nd).enumerate() {
+                row.copy_from_slice(&self.dense[r * len..r * len + nd]);
+            }
+        }
+        // Outputs are due here exactly when `tentatively_accept` interpolated for them.
+        while let Some(t_k) = self.schedule.due(step.t_new, self.t_end) {
+            let out: &[f64] = if t_k == step.t_new {
+                &self.y_new[..self.n_o]
+            } else {
+                newton(&self.dense, len, &self.nodes, (t_k - self.t) / step.h, &mut [(0, &mut self.y_out[..])]);
+                &self.y_out
+            };
+            self.schedule.next += 1;
+            on_output(t_k, out)?;
+        }
+        ControlFlow::Continue(())
+    }
+
+    /// Moves to t_new: prunes the history to the last max τ, then restarts at a breakpoint or
+    /// carries the FSAL stage over.
+    fn advance(&mut self, step: &Step) {
+        self.hist.prune(step.t_new - self.tau_max);
+        self.t = step.t_new;
+        std::mem::swap(&mut self.y, &mut self.y_new);
+        if step.at_breakpoint {
+            self.stats.breakpoints += 1;
+            self.restart();
         } else {
-            k.copy_within(12 * n..13 * n, 0);
-            stencil.push(t, &y, &k[..n]);
+            let n = self.n;
+            self.k.copy_within(12 * n..13 * n, 0);
+            self.stencil.push(self.t, &self.y, &self.k[..n]);
         }
     }
-    stats.max_history_len = hist.max_len();
-    Ok(stats)
+
+    /// The statistics, with the history's peak length.
+    fn finish(&self) -> Stats {
+        Stats { max_history_len: self.hist.max_len(), ..self.stats }
+    }
 }
 
 /// out ← y + h Σ_j a_j k_j (zero coefficients skipped).
