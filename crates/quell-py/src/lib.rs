@@ -13,6 +13,7 @@ mod errors;
 mod plant;
 mod scenario;
 mod simulate;
+mod study;
 
 use pyo3::prelude::*;
 
@@ -28,5 +29,11 @@ fn _quell(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(design::place, m)?)?;
     m.add_function(wrap_pyfunction!(scenario::paper_example, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::simulate, m)?)?;
+    m.add_class::<study::PyStudy>()?;
+    m.add_class::<study::PyRunSpec>()?;
+    m.add_class::<study::PyRunSpecs>()?;
+    m.add_function(wrap_pyfunction!(study::sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(study::sweep_runs, m)?)?;
+    m.add_function(wrap_pyfunction!(study::run_one, m)?)?;
     Ok(())
 }

@@ -56,3 +56,14 @@ def plot(result, channel=1, fig=None):
         ax.legend(loc="upper right", fontsize="small", ncol=1 + (ax is axes[3]) * 2)
     fig.tight_layout()
     return fig
+
+
+def runs_frame(text):
+    """runs.csv's text (quell.sweep) as a DataFrame, read as `pandas.read_csv(path, comment="#")` reads the file."""
+    try:
+        import pandas as pd
+    except ImportError as e:
+        raise ImportError("quell.sweep needs pandas: pip install pandas") from e
+    import io
+
+    return pd.read_csv(io.StringIO(text), comment="#")

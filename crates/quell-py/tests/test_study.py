@@ -1,0 +1,96 @@
+"""Issue 12 from Python: quell.sweep as a DataFrame, and quell.sweep_runs/run_one mapped over a
+dask LocalCluster of two worker processes, both compared with the rows of `quell sweep`."""
+
+import pickle
+import subprocess
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import quell
+
+from conftest import EXAMPLES
+
+STUDY = """
+scenario = "{scenario}"
+[simulation]
+t_end = 20.0
+rtol = 1e-6
+atol = 1e-6
+[grid]
+"design.mu[0]" = [10.0, 40.0]
+[monte_carlo]
+runs = 2
+seed = 7
+"truth.A" = {{ relative = 0.02 }}
+"""
+
+
+@pytest.fixture(scope="module")
+def study_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("study") / "study.toml"
+    path.write_text(STUDY.format(scenario=(EXAMPLES / "paper.toml").as_posix()))
+    return path
+
+
+@pytest.fixture(scope="module")
+def cli_rows(study_file, quell_bin, tmp_path_factory):
+    out = tmp_path_factory.mktemp("sweep")
+    subprocess.run([quell_bin, "sweep", study_file, "--out", out, "--no-plots"], check=True, capture_output=True)
+    return pd.read_csv(out / "runs.csv", comment="#")
+
+
+def same_rows(a, b):
+    """Equal in every column but the wall time, which is a measurement (missing values as None)."""
+    a, b = (f.drop(columns="wall_ms").reset_index(drop=True) for f in (a, b))
+    a, b = (f.astype(object).where(f.notna(), None) for f in (a, b))
+    assert list(a.columns) == list(b.columns)
+    pd.testing.assert_frame_equal(a, b, check_dtype=False)
+
+
+def test_sweep_is_the_cli_rows(study_file, cli_rows):
+    study = quell.Study.load(study_file)
+    assert len(study) == 4 and study.columns == list(cli_rows.columns)
+    frame = quell.sweep(study, jobs=2)
+    same_rows(frame, cli_rows)
+    assert (frame["outcome"] == "completed").all()
+    # A path works as well as a Study.
+    same_rows(quell.sweep(study_file, jobs=1), cli_rows)
+
+
+def test_run_specs_are_picklable(study_file):
+    specs = list(quell.sweep_runs(quell.Study.load(study_file)))
+    assert [s.run for s in specs] == [0, 1, 2, 3]
+    assert specs[2].grid == {"design.mu[0]": 40.0} and specs[2].draw == 0
+    back = pickle.loads(pickle.dumps(specs[3]))
+    assert back.to_json() == specs[3].to_json()
+    # The run's scenario carries its grid value and its draw of the true plant.
+    s = specs[3].scenario()
+    assert s.design().mu == [40.0, 30.0]
+    assert s.truth is not None and not np.array_equal(s.truth.A, s.plant.A)
+
+
+def test_dask_local_cluster_of_two_processes(study_file, cli_rows):
+    distributed = pytest.importorskip("distributed")
+    specs = list(quell.sweep_runs(study_file))
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            assert len(client.scheduler_info()["workers"]) == 2
+            rows = client.gather(client.map(quell.run_one, specs))
+    same_rows(pd.DataFrame(rows), cli_rows)
+
+
+def test_study_errors_name_the_key(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(STUDY.format(scenario=(EXAMPLES / "paper.toml").as_posix()).replace('"design.mu[0]"', '"design.nu[0]"'))
+    with pytest.raises(quell.ScenarioError) as info:
+        quell.Study.load(bad)
+    assert "design.nu[0]" in str(info.value)
+    with pytest.raises(quell.ScenarioError, match="cannot read the study file"):
+        quell.sweep(bad.with_name("missing.toml"))
+
+
+def test_jobs_must_be_positive(study_file):
+    with pytest.raises(quell.ScenarioError, match="jobs"):
+        quell.sweep(study_file, jobs=0)
