@@ -30,6 +30,7 @@ fn export_writes_a_controller_that_compiles_and_runs() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("arm_controller.h and arm_controller.c"), "{}", stderr(&o));
     let header = std::fs::read_to_string(dir.join("arm_controller.h")).unwrap();
+    let header = header.split_whitespace().collect::<Vec<_>>().join(" ");
     assert!(header.contains("scenario \"paper-example\"") && header.contains("#define ARM_SAMPLE_TIME 0.001"));
     // No temporary file is left behind.
     let mut names: Vec<String> =
