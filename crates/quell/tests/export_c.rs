@@ -383,3 +383,58 @@ fn step_cost() {
     }
     assert!(sum.is_finite());
 }
+
+/// The Cortex-M4F f32 build run on an emulated Cortex-M4 (QEMU's mps2-an386, semihosting) computes
+/// the same floats as the host's f32 build, bit for bit: 20,000 steps of pseudo-random y, g
+/// (`c_harness/drive.c`). With `closed_loop_with_the_c_controller_and_f32_tail_bounds` this carries
+/// the f32 results over to the target. Needs arm-none-eabi-gcc and qemu-system-arm (Debian's
+/// gcc-arm-none-eabi, qemu-system-arm); run with
+/// `cargo test -p quell --release --test export_c cortex_m4f -- --ignored --nocapture`.
+#[test]
+#[ignore = "needs arm-none-eabi-gcc and qemu-system-arm"]
+fn cortex_m4f_under_qemu_matches_the_host_bit_for_bit() {
+    let (_, d) = example("paper");
+    let dir = TempDir::new("qemu");
+    write_code(&export(&d, 1e-3, "quell", Precision::F32), &dir.0);
+    std::fs::write(dir.0.join("drive.c"), include_str!("c_harness/drive.c")).unwrap();
+    std::fs::write(dir.0.join("mps2.ld"), include_str!("c_harness/mps2.ld")).unwrap();
+    let mut host: Vec<&str> = STRICT.to_vec();
+    host.extend(["-O2", "drive.c", "quell_controller.c", "-o", "host"]);
+    tool("gcc", &host, &dir.0);
+    let want = tool(&dir.0.join("host").display().to_string(), &[], &dir.0);
+
+    let cpu = ["-mcpu=cortex-m4", "-mthumb", "-mfloat-abi=hard", "-mfpu=fpv4-sp-d16"];
+    let mut args: Vec<&str> = STRICT.to_vec();
+    args.extend(cpu);
+    args.extend(["-O2", "-c", "quell_controller.c", "-o", "c.o"]);
+    tool("arm-none-eabi-gcc", &args, &dir.0);
+    // The bare-metal harness (GNU asm, its own memset/memcpy) at -O1, so that gcc does not turn
+    // those loops back into calls to themselves.
+    let mut args = vec!["-std=gnu99", "-O1", "-ffreestanding"];
+    args.extend(cpu);
+    args.extend(["-c", "drive.c", "-o", "d.o"]);
+    tool("arm-none-eabi-gcc", &args, &dir.0);
+    let mut args = vec!["-nostdlib", "-T", "mps2.ld"];
+    args.extend(cpu);
+    args.extend(["d.o", "c.o", "-lgcc", "-o", "m4f.elf"]);
+    tool("arm-none-eabi-gcc", &args, &dir.0);
+    let run = std::process::Command::new("qemu-system-arm")
+        .args([
+            "-M",
+            "mps2-an386",
+            "-nographic",
+            "-semihosting-config",
+            "enable=on,target=native",
+            "-kernel",
+            "m4f.elf",
+        ])
+        .current_dir(&dir.0)
+        .output()
+        .expect("qemu-system-arm runs");
+    assert!(run.status.success(), "qemu: {}", String::from_utf8_lossy(&run.stderr));
+    // Semihosting's SYS_WRITE0 goes to QEMU's stderr.
+    let got = String::from_utf8_lossy(&run.stderr);
+    println!("{got}");
+    assert_eq!(got, want);
+    assert_eq!(want.lines().count(), 11);
+}
