@@ -221,6 +221,16 @@ fn same_controller_as_rust_on_random_sequences() {
         println!("{name}: u_f {:.1e}, u {:.1e}, eta {:.1e}", dev[0], dev[1], dev[2]);
         assert!(dev.iter().all(|&e| e <= 1e-12), "{name}: {dev:?}");
     }
+    // No delay at all: a delay line of one row, read where it is written.
+    let text = std::fs::read_to_string(format!("{}/../../examples/paper.toml", env!("CARGO_MANIFEST_DIR")))
+        .unwrap()
+        .replace("delays = [1.0, 3.0]", "delays = [0.0, 0.0]");
+    let d = Scenario::from_toml(&text).unwrap().design().unwrap();
+    let code = export(&d, 1e-3, "quell", Precision::F64);
+    assert!(code.header.contains("QUELL_DELAY_MAX   0 "), "{}", code.header);
+    let mut c = CController::build(&code, "quell", Precision::F64, (2, 8, 3), "-O2");
+    let dev = compare(&d, 1e-3, &mut c, random_inputs(2, 20_000, 4));
+    assert!(dev.iter().all(|&e| e <= 1e-12), "no delay: {dev:?}");
 }
 
 /// The Rust controller, recording the y and g it is given.
