@@ -250,6 +250,7 @@ fn run(args: &RunArgs) -> Result<(), Failure> {
             out.display()
         ))),
         Outcome::Interrupted { t } => Err(Failure::Run(format!("interrupted at t = {t:.3}; results up to then are in {}", out.display()))),
+        Outcome::TooManySteps { t, max_steps } => Err(Failure::Run(format!("the solver needed more than {max_steps} steps by t = {t:.6}; results up to then are in {}", out.display()))),
     }
 }
 

@@ -68,6 +68,11 @@ fn outcome_dict<'py>(py: Python<'py>, o: &Outcome) -> PyResult<Bound<'py, PyDict
             d.set_item("status", "interrupted")?;
             d.set_item("t", t)?;
         }
+        Outcome::TooManySteps { t, max_steps } => {
+            d.set_item("status", "too_many_steps")?;
+            d.set_item("t", t)?;
+            d.set_item("max_steps", max_steps)?;
+        }
     }
     Ok(d)
 }
@@ -279,6 +284,9 @@ pub fn simulate(
             None,
         ),
         Outcome::Interrupted { t } => (format!("interrupted at t = {t:.3}"), t, None, None),
+        Outcome::TooManySteps { t, max_steps } => {
+            (format!("the solver needed more than {max_steps} steps by t = {t:.6}"), t, None, None)
+        }
     };
     let (message, t, signal, value) = failure;
     Err(simulation_error(py, message, t, signal, value, result.into_any()))

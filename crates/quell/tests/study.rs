@@ -140,3 +140,16 @@ fn a_grid_over_the_true_delay_keeps_the_design() {
     assert!(StudyMeta::new(&study, Shard::ALL).truth_differs);
     assert!(!StudyMeta::new(&nominal, Shard::ALL).truth_differs);
 }
+
+/// A draw whose loop blows up turns stiff long before a state reaches the divergence bound; the
+/// step budget ends it as a failed row (draw 7 of this study: 5 % off in A destabilizes the loop,
+/// y grows tenfold every 2 s from t ≈ 4 s), and the other draws are unaffected.
+#[test]
+fn a_stiff_blow_up_is_a_failed_row_within_the_step_budget() {
+    let text = "max_steps = 20000\n[simulation]\nt_end = 100.0\nrtol = 1e-6\natol = 1e-6\n[monte_carlo]\nruns = 8\nseed = 1\n\"truth.A\" = { relative = 0.05 }\n";
+    let study = Study::from_toml(text, None).unwrap();
+    let rows = sweep(&study, &SweepOptions::default()).rows;
+    assert_eq!(rows[7].outcome, Outcome::Failed);
+    assert!(rows[7].reason.starts_with("the solver needed more than 20000 steps by t = "), "{}", rows[7].reason);
+    assert!(rows[..7].iter().all(|r| r.outcome == Outcome::Completed && r.steps < 20000));
+}

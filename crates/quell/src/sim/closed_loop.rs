@@ -386,12 +386,14 @@ pub struct RunSettings {
     pub atol: f64,
     /// A watched signal above this magnitude counts as divergence ([`Watched`]).
     pub divergence_bound: f64,
+    /// Most solver steps ([`Outcome::TooManySteps`] beyond); unlimited by default.
+    pub max_steps: usize,
 }
 
 impl RunSettings {
     /// Settings with the default divergence bound [`DIVERGENCE_BOUND`].
     pub fn new(t_end: f64, output_step: f64, rtol: f64, atol: f64) -> Self {
-        RunSettings { t_end, output_step, rtol, atol, divergence_bound: DIVERGENCE_BOUND }
+        RunSettings { t_end, output_step, rtol, atol, divergence_bound: DIVERGENCE_BOUND, max_steps: usize::MAX }
     }
 }
 
@@ -422,7 +424,7 @@ pub fn simulate_with_truth(
     settings: &RunSettings,
     mut on_progress: impl FnMut(f64) -> ControlFlow<()>,
 ) -> Result<SimResult, SimError> {
-    let RunSettings { t_end, output_step, rtol, atol, divergence_bound } = *settings;
+    let RunSettings { t_end, output_step, rtol, atol, divergence_bound, max_steps } = *settings;
     check_run(design, reference, disturbance, t_end, output_step, divergence_bound)?;
     crate::settings::check_tolerances(rtol, atol)?;
     super::check_truth(design, truth)?;
@@ -432,7 +434,7 @@ pub fn simulate_with_truth(
     let (m, q) = (sys.eq.m, sys.eq.q);
     let mut result = SimResult::new(m, q, RunStats::continuous(&dde::Stats::default()));
     let (mut y, mut g, mut u) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
-    let opts = Options { rtol, atol, ..Options::default() };
+    let opts = Options { rtol, atol, max_steps, ..Options::default() };
     let mut outcome = Outcome::Completed;
     // The solver borrows the loop mutably; the output callback reads through its own probe.
     let mut probe = sys.probe();
@@ -451,6 +453,10 @@ pub fn simulate_with_truth(
     });
     match solved {
         Ok(stats) => result.stats = RunStats::continuous(&stats),
+        Err(dde::SolveError::TooManySteps { t, stats }) => {
+            result.stats = RunStats::continuous(&stats);
+            outcome = Outcome::TooManySteps { t, max_steps };
+        }
         Err(dde::SolveError::StepSizeTooSmall { t, stats, .. }) => {
             result.stats = RunStats::continuous(&stats);
             outcome = Outcome::StepSizeTooSmall { t };

@@ -110,11 +110,15 @@ pub struct Options {
     pub atol: f64,
     /// Largest step; the solver also never steps further than the smallest delay.
     pub h_max: f64,
+    /// Most accepted steps; a run that needs more ends with [`SolveError::TooManySteps`] (a loop
+    /// blowing up turns stiff long before its states reach a divergence bound, and its history
+    /// would fill memory).
+    pub max_steps: usize,
 }
 
 impl Default for Options {
     fn default() -> Self {
-        Options { rtol: 1e-9, atol: 1e-9, h_max: f64::INFINITY }
+        Options { rtol: 1e-9, atol: 1e-9, h_max: f64::INFINITY, max_steps: usize::MAX }
     }
 }
 
@@ -139,6 +143,9 @@ pub enum SolveError {
     /// With the statistics up to then.
     #[error("step size underflow at t = {t}: the step shrank to {h:e} without meeting the tolerance")]
     StepSizeTooSmall { t: f64, h: f64, stats: Stats },
+    /// More than [`Options::max_steps`] accepted steps were needed by time `t`.
+    #[error("more than {} steps by t = {t}", .stats.steps - 1)]
+    TooManySteps { t: f64, stats: Stats },
 }
 
 /// Constant context of a run, shared by all RHS evaluations.
@@ -270,7 +277,7 @@ pub fn solve<S: DelaySystem>(
             steps.reject(&step)?;
             continue;
         };
-        steps.accept(&step);
+        steps.accept(&step)?;
         if steps.record_and_emit(&step, len, &mut on_output).is_break() {
             return Ok(steps.finish());
         }
@@ -557,9 +564,12 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
     }
 
     /// An accepted step: the next step size (`dop853.f`'s controller, no growth right after a
-    /// rejection, and not shrunk by a landing).
-    fn accept(&mut self, step: &Step) {
+    /// rejection, and not shrunk by a landing); the end of the run beyond `max_steps`.
+    fn accept(&mut self, step: &Step) -> Result<(), SolveError> {
         self.stats.steps += 1;
+        if self.stats.steps > self.opts.max_steps {
+            return Err(SolveError::TooManySteps { t: self.t, stats: self.finish() });
+        }
         let fac = (self.err.powf(0.125) / SAFE).clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
         let mut h_next = step.h / fac;
         if self.last_rejected {
@@ -569,6 +579,7 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
         }
         self.last_rejected = false;
         self.h = h_next;
+        Ok(())
     }
 
     /// Stores the step's dense output of the delayed prefix in the history and emits the outputs

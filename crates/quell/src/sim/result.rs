@@ -14,6 +14,8 @@ pub enum Outcome {
     Diverged { t: f64, signal: String, value: f64 },
     /// The solver could not meet the tolerance: its step size underflowed at time `t`.
     StepSizeTooSmall { t: f64 },
+    /// The solver needed more than `max_steps` steps by time `t` (`RunSettings::max_steps`).
+    TooManySteps { t: f64, max_steps: usize },
     /// Stopped from outside (e.g. Ctrl-C) at time `t`.
     Interrupted { t: f64 },
 }

@@ -41,6 +41,8 @@ pub struct RunSpec {
     /// The run's scenario document: grid values and the draw's perturbations applied.
     pub scenario: toml::Table,
     pub settle: Settle,
+    /// The solver's step budget of a continuous run ([`Study::max_steps`]).
+    pub max_steps: usize,
 }
 
 /// How a run ended.
@@ -130,13 +132,14 @@ pub(crate) fn figures(r: &SimResult, settle: &Settle) -> Vec<ChannelFigures> {
 
 /// Simulates a scenario as its `[simulation]` says (continuous, or sampled-data with a
 /// `sample_time`); `Err` when it cannot start.
-pub(crate) fn simulate(s: &Scenario, stop: &dyn Fn() -> bool) -> Result<SimResult, String> {
+pub(crate) fn simulate(s: &Scenario, max_steps: usize, stop: &dyn Fn() -> bool) -> Result<SimResult, String> {
     let design = s.design().map_err(|e| e.to_string())?;
     let sim = &s.simulation;
     let progress = |_t: f64| if stop() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
     match sim.sample_time {
         None => {
-            let settings = RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol);
+            let settings =
+                RunSettings { max_steps, ..RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol) };
             sim::simulate_with_truth(&design, s.true_plant(), &s.reference, &s.disturbance, &settings, progress)
                 .map_err(|e| e.to_string())
         }
@@ -166,7 +169,9 @@ fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
         steps: 0,
         wall_ms: 0.0,
     };
-    let result = Scenario::from_document(&spec.scenario).map_err(|e| e.to_string()).and_then(|s| simulate(&s, stop));
+    let result = Scenario::from_document(&spec.scenario)
+        .map_err(|e| e.to_string())
+        .and_then(|s| simulate(&s, spec.max_steps, stop));
     match result {
         Err(reason) => row.reason = reason,
         Ok(r) => {
@@ -182,6 +187,11 @@ fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                 }
                 sim::Outcome::StepSizeTooSmall { t } => {
                     row.reason = format!("the solver's step size underflowed at t = {t:.6}");
+                }
+                sim::Outcome::TooManySteps { t, max_steps } => {
+                    row.reason = format!(
+                        "the solver needed more than {max_steps} steps by t = {t:.4} (a loop blowing up turns stiff before its states reach the divergence bound; raise max_steps in the study file if the run is sound)"
+                    );
                 }
                 sim::Outcome::Interrupted { .. } => return None,
             }

@@ -67,6 +67,7 @@ fn study_mistakes_name_their_key() {
         ("[monte_carlo]\nruns = 2\n\"plant.E\" = { relative = 0.1 }", "monte_carlo.\"plant.E\": plant.E is not a value of the scenario (plant has no E)"),
         ("[simulation]\nt_end = -1.0", "simulation.t_end: expected a final time > 0, found -1"),
         ("[simulation]\nsteps = 3", "simulation.steps: unknown key; valid keys in [simulation]"),
+        ("max_steps = 0", "max_steps: expected a step budget per run (an integer ≥ 1), found 0"),
         ("[settle]\nrelative = -0.1", "settle.relative: expected a band ≥ 0, found -0.1"),
         ("[settle]\nrelative = 0.0", "settle: both settle.relative and settle.absolute are 0"),
         ("[settle]\nband = 0.1", "settle.band: unknown key; valid keys in [settle]: relative, absolute"),

@@ -172,7 +172,17 @@ fn run_with(study: &Study, mu: &[f64]) -> Row {
     let mut doc = study.base().clone();
     let mu_value = toml::Value::Array(mu.iter().map(|&x| toml::Value::Float(x)).collect());
     super::KeyPath::parse("design.mu").expect("a key path").set(&mut doc, mu_value).expect("a scenario has design.mu");
-    run_one(&RunSpec { run: 0, point: 0, draw: 0, seed: 0, grid: Vec::new(), scenario: doc, settle: study.settle })
+    let settle = study.settle;
+    run_one(&RunSpec {
+        run: 0,
+        point: 0,
+        draw: 0,
+        seed: 0,
+        grid: Vec::new(),
+        scenario: doc,
+        settle,
+        max_steps: study.max_steps,
+    })
 }
 
 /// How close the joint run's objective must be to the search's: for error figures, relative 1e-3
