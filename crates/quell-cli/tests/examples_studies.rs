@@ -11,7 +11,7 @@ fn example_studies_parse() {
         let path = entry.unwrap().path();
         if path.extension().is_some_and(|e| e == "toml") {
             let study = Study::from_path(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-            assert!(study.len() >= 1);
+            assert!(!study.is_empty());
             seen += 1;
         }
     }
