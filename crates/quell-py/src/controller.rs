@@ -2,6 +2,7 @@
 
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
+use pyo3::types::{PyList, PyTuple};
 
 use crate::convert::{number, type_name, vec_numpy, vector};
 use crate::design::PyDesign;
@@ -16,8 +17,8 @@ pub struct PyController {
     g: Vec<f64>,
 }
 
-/// Reads a length-m vector into `out`: a float64 numpy vector directly, anything else through
-/// numpy. Wrong length or a non-finite entry is a ValueError naming `name`.
+/// Reads a length-m vector into `out`: a float64 numpy vector or a list of numbers directly,
+/// anything else through numpy. Wrong length or a non-finite entry is a ValueError naming `name`.
 fn read(obj: &Bound<'_, PyAny>, name: &str, out: &mut [f64]) -> PyResult<()> {
     let py = obj.py();
     let m = out.len();
@@ -39,6 +40,11 @@ fn read(obj: &Bound<'_, PyAny>, name: &str, out: &mut [f64]) -> PyResult<()> {
         // rust-numpy's borrow tracking, which costs more than the rest of a step.
         if let Ok(s) = unsafe { a.as_slice() } {
             return check(s, out);
+        }
+    }
+    if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
+        if let Ok(v) = obj.extract::<Vec<f64>>() {
+            return check(&v, out);
         }
     }
     check(&vector(obj, name, Kind::Value)?, out)
