@@ -33,3 +33,20 @@ def test_two_threads_run_four_simulations_in_parallel():
     # The runs are the same computation: threads do not disturb each other's results.
     first = runs[0][1]
     assert all((r.y == first.y).all() for _, r in runs)
+
+
+def test_ctrl_c_stops_a_running_simulation():
+    """SIGINT during simulate (GIL released, in Rust) raises KeyboardInterrupt within ~0.1 s."""
+    import signal
+    import subprocess
+    import sys
+
+    code = "import quell; print('ready', flush=True); quell.simulate(quell.paper_example(), t_end=1e5, output_step=1.0)"
+    child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert child.stdout.readline().strip() == "ready"
+    time.sleep(0.5)  # into the run, which takes tens of seconds
+    sent = time.perf_counter()
+    child.send_signal(signal.SIGINT)
+    _, err = child.communicate(timeout=30)
+    assert "KeyboardInterrupt" in err, err
+    assert time.perf_counter() - sent < 5

@@ -1,17 +1,39 @@
 """Type stubs of the quell package (the native module quell._quell and quell._errors)."""
 
 from os import PathLike
-from typing import Any, Dict, Iterator, List, Optional, Sequence, Union
+from typing import Any, Dict, Iterator, List, Optional, Sequence, Union, final
 
 import numpy as np
 import numpy.typing as npt
+from typing_extensions import Self
 
-ArrayLike = npt.ArrayLike
-#: A pole: a real number, a complex number (a conjugate pair lists both), or [re, im] meaning re ± i·im.
-Pole = Union[float, complex, Sequence[float]]
-Poles = Sequence[Pole]
+_ArrayLike = npt.ArrayLike
+# A pole: a real number, a complex number (a conjugate pair lists both), or [re, im] meaning re ± i·im.
+_Pole = Union[float, complex, Sequence[float]]
+_Poles = Sequence[_Pole]
 
 __version__: str
+__all__ = [
+    "Controller",
+    "Design",
+    "DesignError",
+    "Plant",
+    "QuellError",
+    "RunSpec",
+    "Scenario",
+    "ScenarioError",
+    "SimResult",
+    "SimulationError",
+    "Study",
+    "__version__",
+    "design",
+    "paper_example",
+    "place",
+    "run_one",
+    "simulate",
+    "sweep",
+    "sweep_runs",
+]
 
 class QuellError(Exception): ...
 
@@ -21,27 +43,28 @@ class ScenarioError(QuellError, ValueError):
 class DesignError(QuellError, ValueError): ...
 
 class SimulationError(QuellError, RuntimeError):
-    t: float
+    t: Optional[float]
     signal: Optional[str]
     value: Optional[float]
-    result: SimResult
+    result: Optional[SimResult]
 
+@final
 class Plant:
     """The plant (1): ẋ = A x + B u_d + D ω, y = C x + Q ω, input i delayed by τ_i.
 
     A control.StateSpace may stand for A, B, C (its D is python-control's feedthrough, which this
     plant does not have: it must be zero; give the disturbance matrices D and Q as keywords)."""
 
-    def __init__(
-        self,
+    def __new__(
+        cls,
         A: Any,
-        B: Optional[ArrayLike] = None,
-        C: Optional[ArrayLike] = None,
-        D: Optional[ArrayLike] = None,
-        Q: Optional[ArrayLike] = None,
-        delays: Optional[ArrayLike] = None,
-        x0: Optional[ArrayLike] = None,
-    ) -> None: ...
+        B: Optional[_ArrayLike] = None,
+        C: Optional[_ArrayLike] = None,
+        D: Optional[_ArrayLike] = None,
+        Q: Optional[_ArrayLike] = None,
+        delays: Optional[_ArrayLike] = None,
+        x0: Optional[_ArrayLike] = None,
+    ) -> Self: ...
     @property
     def A(self) -> npt.NDArray[np.float64]: ...
     @property
@@ -63,6 +86,7 @@ class Plant:
     @property
     def k(self) -> int: ...
 
+@final
 class Design:
     """Every gain of Sections III–V and the assumption checks passed."""
 
@@ -107,12 +131,13 @@ class Design:
     @property
     def checks(self) -> Dict[str, Union[int, float]]: ...
 
+@final
 class Scenario:
     """Plant, design choices, reference g(t), disturbance ω(t), simulation settings and noise: the
     sections of a scenario file as Python values."""
 
-    def __init__(
-        self,
+    def __new__(
+        cls,
         plant: Plant,
         reference: Sequence[Dict[str, Any]],
         disturbance: Optional[Sequence[Dict[str, Any]]] = None,
@@ -126,7 +151,7 @@ class Scenario:
         noise: Optional[Dict[str, Any]] = None,
         truth: Optional[Plant] = None,
         **design: Any,
-    ) -> None: ...
+    ) -> Self: ...
     @staticmethod
     def from_toml(text: str) -> Scenario: ...
     @staticmethod
@@ -148,6 +173,7 @@ class Scenario:
     @property
     def noise(self) -> Optional[Dict[str, Any]]: ...
 
+@final
 class SimResult:
     """Signals at t = k·output_step (read-only arrays) and how the run ended."""
 
@@ -176,11 +202,12 @@ class SimResult:
     def plot(self, channel: int = 1, **kwargs: Any) -> Any: ...
     def __len__(self) -> int: ...
 
+@final
 class Controller:
     """The discrete-time adaptive controller at sample time T_s (exact ZOH discretization)."""
 
-    def __init__(self, design: Design, sample_time: float) -> None: ...
-    def step(self, y: ArrayLike, g: ArrayLike) -> npt.NDArray[np.float64]: ...
+    def __new__(cls, design: Design, sample_time: float) -> Self: ...
+    def step(self, y: _ArrayLike, g: _ArrayLike) -> npt.NDArray[np.float64]: ...
     def command(self) -> npt.NDArray[np.float64]: ...
     def eta(self) -> npt.NDArray[np.float64]: ...
     def x_hat(self) -> npt.NDArray[np.float64]: ...
@@ -192,15 +219,15 @@ class Controller:
 def design(
     plant: Plant,
     *,
-    channel_poles: Sequence[Poles],
-    reference_filter_poles: Sequence[Poles],
-    mu: ArrayLike,
+    channel_poles: Sequence[_Poles],
+    reference_filter_poles: Sequence[_Poles],
+    mu: _ArrayLike,
     beta: float,
-    disturbance_filter_poles: Optional[Sequence[Poles]] = None,
-    observer_poles: Optional[Poles] = None,
-    observer_gain: Optional[ArrayLike] = None,
+    disturbance_filter_poles: Optional[Sequence[_Poles]] = None,
+    observer_poles: Optional[_Poles] = None,
+    observer_gain: Optional[_ArrayLike] = None,
 ) -> Design: ...
-def place(A: ArrayLike, B: ArrayLike, poles: Poles) -> npt.NDArray[np.float64]: ...
+def place(A: _ArrayLike, B: _ArrayLike, poles: _Poles) -> npt.NDArray[np.float64]: ...
 def paper_example() -> Scenario: ...
 def simulate(
     scenario: Scenario,
@@ -213,6 +240,7 @@ def simulate(
     check: bool = True,
 ) -> SimResult: ...
 
+@final
 class Study:
     """A study file (quell sweep's input): scenario, grid and Monte Carlo draws."""
 
@@ -224,10 +252,11 @@ class Study:
     def columns(self) -> List[str]: ...
     def __len__(self) -> int: ...
 
+@final
 class RunSpec:
     """One run of a study, self-contained and picklable."""
 
-    def __init__(self, json: str) -> None: ...
+    def __new__(cls, json: str) -> Self: ...
     def to_json(self) -> str: ...
     def scenario(self) -> Scenario: ...
     @property
