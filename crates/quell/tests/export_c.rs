@@ -347,6 +347,16 @@ int main(void)
     args.extend(["-O2", "main.c", "roll_controller.c", "pitch_controller.c", "-o", "two"]);
     tool("gcc", &args, &dir.0);
     tool(&dir.0.join("two").display().to_string(), &[], &dir.0);
+    // Also as one translation unit (a unity build): the static names carry the prefix too.
+    std::fs::write(
+        dir.0.join("unity.c"),
+        "#include \"roll_controller.c\"\n#include \"pitch_controller.c\"\n#include \"main.c\"\n",
+    )
+    .unwrap();
+    let mut args: Vec<&str> = STRICT.to_vec();
+    args.extend(["-O2", "unity.c", "-o", "unity"]);
+    tool("gcc", &args, &dir.0);
+    tool(&dir.0.join("unity").display().to_string(), &[], &dir.0);
 }
 
 /// The Cortex-M4F build of docs/deployment.md (f32, hard float): warning-free, no writable data, no
