@@ -3,42 +3,30 @@
 
 use std::fs;
 use std::io::{self, BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use quell::sim::SimResult;
 
-/// Writes a file atomically: `contents` fills `path.tmp`, which is then renamed to `path`.
+/// Writes a file atomically: `contents` fills a uniquely named temporary file beside `path`
+/// (`.stem.XXXXXX.tmp.ext`, so two runs sharing a directory never collide), which is then renamed
+/// to `path`. On error the temporary file is removed.
 pub fn write_atomic(path: &Path, contents: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> io::Result<()> {
-    let tmp = tmp_name(path);
-    let result = (|| {
-        let mut w = BufWriter::new(fs::File::create(&tmp)?);
-        contents(&mut w)?;
-        w.into_inner().map_err(|e| e.into_error())?.sync_all()
-    })();
-    match result {
-        Ok(()) => fs::rename(&tmp, path),
-        Err(e) => {
-            let _ = fs::remove_file(&tmp);
-            Err(e)
-        }
-    }
-}
-
-/// The temporary name beside `path`, keeping its extension: `.stem.tmp.ext`.
-pub fn tmp_name(path: &Path) -> PathBuf {
     let stem = path.file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    match path.extension() {
-        Some(ext) => path.with_file_name(format!(".{stem}.tmp.{}", ext.to_string_lossy())),
-        None => path.with_file_name(format!(".{stem}.tmp")),
-    }
+    let ext = path.extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let mut tmp =
+        tempfile::Builder::new().prefix(&format!(".{stem}.")).suffix(&format!(".tmp{ext}")).tempfile_in(dir)?;
+    let mut w = BufWriter::new(tmp.as_file_mut());
+    contents(&mut w)?;
+    w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+    tmp.persist(path).map_err(|e| e.error)?;
+    Ok(())
 }
 
-/// Creates `dir` and proves it writable, before any work is done.
+/// Creates `dir` and proves it writable (with a uniquely named probe file), before any work is done.
 pub fn prepare_dir(dir: &Path) -> io::Result<()> {
     fs::create_dir_all(dir)?;
-    let probe = dir.join(".quell-write-test.tmp");
-    fs::write(&probe, b"")?;
-    fs::remove_file(probe)
+    tempfile::Builder::new().prefix(".quell-write-test.").suffix(".tmp").tempfile_in(dir)?.close()
 }
 
 /// `signals.csv`: t, y1..ym, g1..gm, e1..em, u1..um, eta1_1..etam_q.
@@ -88,5 +76,42 @@ impl std::fmt::Display for Num {
         } else {
             write!(f, "{:e}", self.0)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn two_writers_of_one_file_do_not_collide() {
+        // A second writer of the same path starts and finishes while the first is mid-write (two
+        // runs sharing an output directory). With one fixed temporary name the second truncated and
+        // renamed the first's file, and the first's rename then failed.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("signals.csv");
+        write_atomic(&path, |w| {
+            w.write_all(b"first,")?;
+            write_atomic(&path, |w| w.write_all(b"second"))?;
+            assert_eq!(fs::read_to_string(&path)?, "second");
+            w.write_all(b"complete")
+        })
+        .unwrap();
+        assert_eq!(fs::read_to_string(&path).unwrap(), "first,complete");
+        let names: Vec<String> =
+            fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        assert_eq!(names, ["signals.csv"], "temporary files left");
+    }
+
+    #[test]
+    fn a_failed_write_leaves_neither_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("summary.json");
+        let e = write_atomic(&path, |w| {
+            w.write_all(b"{")?;
+            Err(io::Error::other("disk full"))
+        });
+        assert_eq!(e.unwrap_err().to_string(), "disk full");
+        assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
     }
 }

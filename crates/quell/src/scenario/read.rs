@@ -23,20 +23,6 @@ pub(crate) fn kind(v: &toml::Value) -> &'static str {
     }
 }
 
-/// Levenshtein distance, for "did you mean" hints on unknown keys.
-fn distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut prev: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut cur = vec![i + 1; b.len() + 1];
-        for (j, &cb) in b.iter().enumerate() {
-            cur[j + 1] = (prev[j] + usize::from(ca != cb)).min(prev[j + 1] + 1).min(cur[j] + 1);
-        }
-        prev = cur;
-    }
-    prev[b.len()]
-}
-
 fn child(parent: &str, name: &str) -> String {
     if parent.is_empty() {
         name.to_string()
@@ -66,8 +52,8 @@ impl<'a> Table<'a> {
                 let place = if key.is_empty() { "at the top level".to_string() } else { format!("in [{key}]") };
                 let hint = valid
                     .iter()
-                    .filter(|v| distance(&v.to_lowercase(), &name.to_lowercase()) <= 2)
-                    .min_by_key(|v| distance(v, name))
+                    .filter(|v| strsim::levenshtein(&v.to_lowercase(), &name.to_lowercase()) <= 2)
+                    .min_by_key(|v| strsim::levenshtein(v, name))
                     .map(|v| format!(" (did you mean `{v}`?)"))
                     .unwrap_or_default();
                 return Err(err(

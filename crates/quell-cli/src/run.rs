@@ -1,0 +1,233 @@
+//! `quell run`: load the scenario and design, check every input, simulate (Ctrl-C stops at the next
+//! recorded sample), write the files, report how the run ended.
+
+use std::io::IsTerminal;
+use std::ops::ControlFlow;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU8, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use quell::scenario::Scenario;
+use quell::sim::{
+    simulate_sampled_with_truth, simulate_with_truth, Outcome, RunSettings, RunStats, SampledSettings, SimResult,
+};
+use quell::Design;
+use serde_json::json;
+
+use crate::{load, output, plot, report, Failure};
+
+#[derive(clap::Args, Default)]
+pub struct RunArgs {
+    /// Scenario file (TOML); the paper's example (Section VIII) when omitted.
+    pub scenario: Option<PathBuf>,
+    /// Output directory.
+    #[arg(long, default_value = "quell-out")]
+    pub out: PathBuf,
+    /// Sampled-data run with the discrete controller at this sample time (s); overrides
+    /// simulation.sample_time.
+    #[arg(long, value_name = "T_S", allow_negative_numbers = true)]
+    pub sample_time: Option<f64>,
+    /// Skip the PNG/SVG plots.
+    #[arg(long)]
+    pub no_plots: bool,
+}
+
+pub fn run(args: &RunArgs) -> Result<(), Failure> {
+    let (scenario, design) = load(args.scenario.as_deref())?;
+    // Every check that can fail on input happens before the output directory is touched.
+    let sampled = sampled_settings(args, &scenario, &design)?;
+    let out = &args.out;
+    output::prepare_dir(out).map_err(|e| {
+        Failure::Input(format!("--out {}: cannot write there ({e}); choose a writable directory", out.display()))
+    })?;
+    let ctrl_c = CtrlC::install();
+    let started = Instant::now();
+    let result = simulate(&scenario, &design, sampled.as_ref(), &ctrl_c)?;
+    ctrl_c.start_writing();
+    let seconds = started.elapsed().as_secs_f64();
+    write_outputs(out, &scenario, &design, &result, seconds, !args.no_plots)
+        .map_err(|e| Failure::Run(format!("writing {}: {e}", out.display())))?;
+    report_outcome(&result, out, seconds)
+}
+
+/// The sampled-data settings when `--sample-time` or `simulation.sample_time` asks for a discrete
+/// controller, checked (delays whole samples, output step a multiple, noise, signals).
+fn sampled_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result<Option<SampledSettings>, Failure> {
+    let sim = &scenario.simulation;
+    let sample_time = match args.sample_time {
+        Some(t) if !(t.is_finite() && t > 0.0) => {
+            return Err(Failure::Input(format!("--sample-time: expected a sample time > 0 in seconds, found {t}")))
+        }
+        Some(t) => t,
+        None => match sim.sample_time {
+            Some(t) => t,
+            None => return Ok(None),
+        },
+    };
+    let settings = SampledSettings {
+        noise: scenario.noise.clone(),
+        ..SampledSettings::new(sim.t_end, sim.output_step, sample_time)
+    };
+    settings.check(design, &scenario.reference, &scenario.disturbance).map_err(|e| Failure::Input(e.to_string()))?;
+    Ok(Some(settings))
+}
+
+/// Ctrl-C during a run: the first stops it at its next recorded sample, and the files are written. A
+/// second one before that sample (a very stiff run can take long to reach it) quits at once, with
+/// no files; once writing has begun, further Ctrl-Cs are ignored so no file is cut short.
+struct CtrlC(Arc<AtomicU8>);
+
+/// Phases of a run, for the Ctrl-C handler.
+const RUNNING: u8 = 0;
+const INTERRUPTED: u8 = 1;
+const QUITTING: u8 = 2;
+const WRITING: u8 = 3;
+
+impl CtrlC {
+    fn install() -> Self {
+        let phase = Arc::new(AtomicU8::new(RUNNING));
+        let handler = phase.clone();
+        let _ = ctrlc::set_handler(move || {
+            if handler.compare_exchange(RUNNING, INTERRUPTED, Ordering::SeqCst, Ordering::SeqCst).is_err()
+                && handler.compare_exchange(INTERRUPTED, QUITTING, Ordering::SeqCst, Ordering::SeqCst).is_ok()
+            {
+                eprintln!("error: interrupted twice before the next sample; stopped without writing files");
+                std::process::exit(1);
+            }
+        });
+        CtrlC(phase)
+    }
+
+    fn interrupted(&self) -> bool {
+        self.0.load(Ordering::SeqCst) != RUNNING
+    }
+
+    /// From here on Ctrl-C is ignored (unless a second one is already quitting the process).
+    fn start_writing(&self) {
+        if self.0.swap(WRITING, Ordering::SeqCst) == QUITTING {
+            loop {
+                std::thread::park();
+            }
+        }
+    }
+}
+
+/// The continuous or the sampled-data loop on the scenario's true plant, with a progress bar.
+fn simulate(
+    scenario: &Scenario,
+    design: &Design,
+    sampled: Option<&SampledSettings>,
+    ctrl_c: &CtrlC,
+) -> Result<SimResult, Failure> {
+    let sim = &scenario.simulation;
+    let bar = progress_bar(sim.t_end);
+    let progress = |t: f64| {
+        bar.set_position((t * 1000.0) as u64);
+        if ctrl_c.interrupted() {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    };
+    let (truth, g, w) = (scenario.true_plant(), &scenario.reference, &scenario.disturbance);
+    let result = match sampled {
+        None => {
+            let settings = RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol);
+            simulate_with_truth(design, truth, g, w, &settings, progress)
+        }
+        Some(settings) => simulate_sampled_with_truth(design, truth, g, w, settings, progress),
+    }
+    .map_err(|e| Failure::Input(e.to_string()))?;
+    bar.finish_and_clear();
+    Ok(result)
+}
+
+fn progress_bar(t_end: f64) -> ProgressBar {
+    let bar = ProgressBar::new((t_end * 1000.0) as u64);
+    if std::io::stderr().is_terminal() {
+        bar.set_draw_target(ProgressDrawTarget::stderr());
+        if let Ok(style) = ProgressStyle::with_template(
+            "simulating {bar:40} {percent:>3}% of t_end, {elapsed_precise} elapsed, ETA {eta}",
+        ) {
+            bar.set_style(style);
+        }
+    } else {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    bar
+}
+
+fn write_outputs(
+    dir: &Path,
+    scenario: &Scenario,
+    design: &Design,
+    r: &SimResult,
+    seconds: f64,
+    plots: bool,
+) -> std::io::Result<()> {
+    // Figures render on their own threads (one per channel) while the data files are written.
+    std::thread::scope(|scope| {
+        let figures: Vec<_> =
+            (0..if plots { r.m } else { 0 }).map(|i| scope.spawn(move || plot::plot_channel(dir, r, i))).collect();
+        let data = write_data(dir, scenario, design, r, seconds);
+        for figure in figures {
+            figure.join().map_err(|_| std::io::Error::other("plotting panicked"))??;
+        }
+        data
+    })
+}
+
+fn write_data(dir: &Path, scenario: &Scenario, design: &Design, r: &SimResult, seconds: f64) -> std::io::Result<()> {
+    output::write_signals(&dir.join("signals.csv"), r)?;
+    output::write_json(&dir.join("design.json"), &report::design_json(design))?;
+    let summary = json!({
+        "scenario": scenario.name,
+        "truth_differs": scenario.truth_differs(),
+        "outcome": r.outcome,
+        "channels": r.summary(),
+        "stats": r.stats,
+        "samples": r.len(),
+        "wall_time_s": seconds,
+    });
+    output::write_json(&dir.join("summary.json"), &summary)
+}
+
+/// The per-channel figures and what was written (exit 0), or why the run did not reach t_end
+/// (exit 1; the files hold the samples up to then).
+fn report_outcome(result: &SimResult, out: &Path, seconds: f64) -> Result<(), Failure> {
+    let out = out.display();
+    match result.outcome.as_ref().unwrap_or(&Outcome::Completed) {
+        Outcome::Completed => {
+            for (i, c) in result.summary().iter().enumerate() {
+                eprintln!(
+                    "channel {}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {:.3}, ‖η̂‖ = {:.4}",
+                    i + 1,
+                    c.tail_max_abs_e,
+                    c.tail_rms_e,
+                    c.max_abs_u,
+                    c.final_eta_norm
+                );
+            }
+            let steps = match result.stats {
+                RunStats::Continuous { steps, .. } => format!("{steps} solver steps"),
+                RunStats::Sampled { controller_steps, .. } => format!("{controller_steps} controller steps"),
+            };
+            eprintln!("wrote {out} ({} samples, {steps}, {seconds:.3} s)", result.len());
+            Ok(())
+        }
+        Outcome::Diverged { t, signal, value } => Err(Failure::Run(format!(
+            "the closed loop diverged at t = {t:.4}: {signal} = {value:e}; results up to then are in {out}"
+        ))),
+        Outcome::StepSizeTooSmall { t } => Err(Failure::Run(format!(
+            "the solver's step size underflowed at t = {t:.6} (the loop is too stiff or blows up there, simulation.rtol/atol are tighter than floating point allows, or an input delay is shorter than a step can be); results up to then are in {out}"
+        ))),
+        Outcome::Interrupted { t } => {
+            Err(Failure::Run(format!("interrupted at t = {t:.3}; results up to then are in {out}")))
+        }
+        Outcome::TooManySteps { t, max_steps } => Err(Failure::Run(format!(
+            "the solver needed more than {max_steps} steps by t = {t:.6}; results up to then are in {out}"
+        ))),
+    }
+}
