@@ -48,28 +48,132 @@ pub fn blkdiag(blocks: &[DMatrix<f64>]) -> DMatrix<f64> {
     M
 }
 
-/// Eigenvalues of a real square matrix, sorted by real part then imaginary part; `None` when the
-/// Schur iteration does not converge. nalgebra's unbounded `complex_eigenvalues` can loop forever
-/// on tight clusters (repeated poles), so this bounds the iteration and retries once on M − (tr M/n)·I,
-/// which moves the cluster away from the shifts that stall.
-pub fn eigenvalues(M: &DMatrix<f64>) -> Option<Vec<Complex<f64>>> {
+/// Why [`eigenvalues`] returned no eigenvalues.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EigenError {
+    /// The matrix has a NaN or infinite entry (e.g. a gain that overflowed).
+    NonFinite,
+    /// faer's QR iteration hit its iteration limit (not seen on finite input of size ≤ 100).
+    NoConvergence,
+}
+
+/// Eigenvalues of a real square matrix, sorted by real part then imaginary part.
+///
+/// Parlett–Reinsch balancing by powers of 2 (an exact similarity, as LAPACK's `dgebal`), then
+/// faer's nonsymmetric eigensolver: Hessenberg reduction and the multishift QR of LAPACK's
+/// `dhseqr`, with exceptional shifts and aggressive early deflation, so tight clusters (repeated,
+/// defective eigenvalues) and cyclic matrices converge. A k-fold defective eigenvalue is computed
+/// only to ≈ (ε‖M‖)^(1/k): see [`clusters`].
+pub fn eigenvalues(M: &DMatrix<f64>) -> Result<Vec<Complex<f64>>, EigenError> {
     let n = M.nrows();
-    if n == 0 {
-        return Some(Vec::new());
-    }
     if !M.iter().all(|v| v.is_finite()) {
-        return None;
+        return Err(EigenError::NonFinite);
     }
-    let mean = M.trace() / n as f64;
-    for shift in [0.0, mean] {
-        let S = M - DMatrix::identity(n, n) * shift;
-        if let Some(schur) = S.try_schur(f64::EPSILON, 1000 * n) {
-            let mut ev: Vec<Complex<f64>> = schur.complex_eigenvalues().iter().map(|z| z + shift).collect();
-            ev.sort_by(|a, b| a.re.total_cmp(&b.re).then(a.im.total_cmp(&b.im)));
-            return Some(ev);
+    if n == 0 {
+        return Ok(Vec::new());
+    }
+    let B = balance(M);
+    let F = faer::Mat::<f64>::from_fn(n, n, |r, c| B[(r, c)]);
+    let mut ev = F.eigenvalues().map_err(|_| EigenError::NoConvergence)?;
+    if ev.iter().any(|z| !(z.re.is_finite() && z.im.is_finite())) {
+        return Err(EigenError::NoConvergence);
+    }
+    ev.sort_by(|a, b| a.re.total_cmp(&b.re).then(a.im.total_cmp(&b.im)));
+    Ok(ev)
+}
+
+/// D⁻¹ M D with D diagonal of powers of 2 chosen so that each row and column have comparable
+/// norms (Parlett & Reinsch 1969, the scaling loop of LAPACK's `dgebal`). Exact in floating point.
+fn balance(M: &DMatrix<f64>) -> DMatrix<f64> {
+    let n = M.nrows();
+    let mut B = M.clone();
+    let mut converged = false;
+    while !converged {
+        converged = true;
+        for i in 0..n {
+            let c: f64 = (0..n).filter(|&j| j != i).map(|j| B[(j, i)].abs()).sum();
+            let r: f64 = (0..n).filter(|&j| j != i).map(|j| B[(i, j)].abs()).sum();
+            if c == 0.0 || r == 0.0 {
+                continue;
+            }
+            let (mut f, mut cs) = (1.0, c);
+            while cs < r / 2.0 {
+                f *= 2.0;
+                cs *= 4.0;
+            }
+            while cs >= r * 2.0 {
+                f /= 2.0;
+                cs /= 4.0;
+            }
+            // Apply only when it reduces the row-plus-column sum by 5 % (dgebal's test).
+            if (c * f + r / f) < 0.95 * (c + r) {
+                converged = false;
+                B.column_mut(i).scale_mut(f);
+                B.row_mut(i).scale_mut(1.0 / f);
+            }
         }
     }
-    None
+    B
+}
+
+/// Backward-error factor δ = 1000·n·ε of the eigensolver, used by [`cluster_radius`].
+fn backward_error(n: usize) -> f64 {
+    1000.0 * n.max(1) as f64 * f64::EPSILON
+}
+
+/// How far the computed copies of a k-fold defective eigenvalue λ of a matrix of norm `size` can
+/// scatter: (δ‖M‖/s)^(1/k)·s with s = max(|λ|, δ‖M‖) (perturbation theory of a k×k Jordan block
+/// under a backward error δ‖M‖, made scale-free with |λ|).
+pub fn cluster_radius(k: usize, center: Complex<f64>, size: f64, n: usize) -> f64 {
+    let d = backward_error(n) * size;
+    let s = center.norm().max(d).max(f64::MIN_POSITIVE);
+    (d / s).powf(1.0 / k as f64) * s
+}
+
+/// Computed eigenvalues grouped into clusters, each the computed copies of one (possibly
+/// defective) eigenvalue: greedily from the largest size k down, the k nearest eigenvalues around
+/// one of them form a cluster when all lie within [`cluster_radius`] of their mean. Returns the
+/// indices of each cluster; singletons last.
+pub fn clusters(eigs: &[Complex<f64>], size: f64) -> Vec<Vec<usize>> {
+    let n = eigs.len();
+    let mut free: Vec<usize> = (0..n).collect();
+    let mut out = Vec::new();
+    for k in (2..=n).rev() {
+        let mut i = 0;
+        while i < free.len() && free.len() >= k {
+            let mut near = free.clone();
+            let c = eigs[free[i]];
+            near.sort_by(|&a, &b| (eigs[a] - c).norm().total_cmp(&(eigs[b] - c).norm()));
+            near.truncate(k);
+            let mean = near.iter().map(|&j| eigs[j]).sum::<Complex<f64>>() / k as f64;
+            let spread = near.iter().map(|&j| (eigs[j] - mean).norm()).fold(0.0, f64::max);
+            if spread <= cluster_radius(k, mean, size, n) {
+                free.retain(|j| !near.contains(j));
+                out.push(near);
+                i = 0;
+            } else {
+                i += 1;
+            }
+        }
+    }
+    out.extend(free.into_iter().map(|j| vec![j]));
+    out
+}
+
+/// The eigenvalues that fail a Hurwitz test allowing for multiplicity: each cluster of
+/// [`clusters`] (the k scattered copies of a k-fold eigenvalue) is judged by its mean, which is
+/// accurate to O(ε‖M‖) where its members are only accurate to ≈ (ε‖M‖)^(1/k), against the margin
+/// −√ε·max(1, `size`). Returns each failing cluster's mean, once per member (empty: Hurwitz).
+pub fn unstable(eigs: &[Complex<f64>], size: f64) -> Vec<Complex<f64>> {
+    let margin = f64::EPSILON.sqrt() * size.max(1.0);
+    let mut bad = Vec::new();
+    for c in clusters(eigs, size) {
+        let mean = c.iter().map(|&j| eigs[j]).sum::<Complex<f64>>() / c.len() as f64;
+        if mean.re >= -margin {
+            bad.extend(std::iter::repeat_n(mean, c.len()));
+        }
+    }
+    bad
 }
 
 /// Condition number σ_max/σ_min in the 2-norm (∞ for a singular or empty matrix).
@@ -91,11 +195,6 @@ pub fn numerical_rank(M: &DMatrix<f64>) -> usize {
     let s = M.singular_values();
     let tol = M.nrows().max(M.ncols()) as f64 * f64::EPSILON * s.max();
     s.iter().filter(|&&v| v > tol).count()
-}
-
-/// True when every eigenvalue has real part below −`margin`.
-pub fn hurwitz(eigs: &[Complex<f64>], margin: f64) -> bool {
-    eigs.iter().all(|e| e.re < -margin)
 }
 
 /// A number for a message: six decimals in the usual range, scientific notation for very large or
@@ -161,5 +260,170 @@ mod tests {
             zoh(&DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]), &DMatrix::from_row_slice(2, 1, &[0.0, 1.0]), T);
         assert!((&P - DMatrix::from_row_slice(2, 2, &[1.0, T, 0.0, 1.0])).norm() < 1e-15);
         assert!((&G - DMatrix::from_row_slice(2, 1, &[T * T / 2.0, T])).norm() < 1e-15);
+    }
+
+    /// xorshift64*, seeded, so failures reproduce.
+    struct Rng(u64);
+    impl Rng {
+        fn uniform(&mut self) -> f64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        }
+        fn matrix(&mut self, r: usize, c: usize) -> DMatrix<f64> {
+            DMatrix::from_fn(r, c, |_, _| self.uniform())
+        }
+    }
+
+    fn re(x: f64) -> Complex<f64> {
+        Complex::new(x, 0.0)
+    }
+
+    /// Largest distance from a computed eigenvalue to the nearest wanted one, and the multiset check
+    /// that every wanted eigenvalue is matched (greedy nearest matching).
+    fn mismatch(want: &[Complex<f64>], got: &[Complex<f64>]) -> f64 {
+        assert_eq!(want.len(), got.len());
+        let mut free: Vec<Complex<f64>> = got.to_vec();
+        let mut worst: f64 = 0.0;
+        for w in want {
+            let (j, d) = free.iter().enumerate().map(|(j, g)| (j, (g - w).norm())).fold((0, f64::INFINITY), |a, b| {
+                if b.1 < a.1 {
+                    b
+                } else {
+                    a
+                }
+            });
+            worst = worst.max(d);
+            free.swap_remove(j);
+        }
+        worst
+    }
+
+    #[test]
+    fn companion_of_a_k_fold_root() {
+        // (s + 1)^k, k ≤ 10: a k×k Jordan block in disguise. Perturbation theory: a backward error
+        // ε‖M‖ moves a k-fold defective eigenvalue of modulus 1 by ≈ (ε‖M‖)^(1/k); allow 4× that.
+        // The cluster mean is the trace/k = −1 up to rounding: 100·k·ε·‖M‖.
+        for k in 1..=10 {
+            let M = companion(&poly_from_roots(&vec![re(-1.0); k]));
+            let ev = eigenvalues(&M).unwrap();
+            let size = M.norm();
+            let tol = 4.0 * (f64::EPSILON * size).powf(1.0 / k as f64);
+            assert!(mismatch(&vec![re(-1.0); k], &ev) <= tol, "k = {k}: {ev:?}");
+            let mean = ev.iter().sum::<Complex<f64>>() / k as f64;
+            assert!((mean + 1.0).norm() <= 100.0 * k as f64 * f64::EPSILON * size, "k = {k}: mean {mean}");
+            assert_eq!(clusters(&ev, size).len(), 1, "k = {k}: one cluster of {k}");
+            assert!(unstable(&ev, size).is_empty(), "k = {k}: (s + 1)^k is Hurwitz");
+        }
+    }
+
+    #[test]
+    fn jordan_blocks_under_random_similarity() {
+        // J = J_3(−1) ⊕ J_2(0.5) ⊕ (−2 ± 3i as a real 2×2 block) ⊕ J_1(−4), M = X J X⁻¹ with X random.
+        // Known eigenvalues; a k-fold one is accurate to ≈ (ε‖M‖κ(X))^(1/k)·|λ|^(1−1/k): allow 10× that.
+        let mut rng = Rng(0x9e37_79b9);
+        for _ in 0..50 {
+            let mut J = DMatrix::zeros(8, 8);
+            for (i, v) in [-1.0, -1.0, -1.0, 0.5, 0.5].iter().enumerate() {
+                J[(i, i)] = *v;
+            }
+            J[(0, 1)] = 1.0;
+            J[(1, 2)] = 1.0;
+            J[(3, 4)] = 1.0;
+            J.view_mut((5, 5), (2, 2)).copy_from(&DMatrix::from_row_slice(2, 2, &[-2.0, 3.0, -3.0, -2.0]));
+            J[(7, 7)] = -4.0;
+            let X = rng.matrix(8, 8);
+            let Xi = X.clone().try_inverse().unwrap();
+            let M = &X * &J * &Xi;
+            let kappa = cond(&X);
+            let ev = eigenvalues(&M).unwrap();
+            let acc = |k: usize, l: f64| 10.0 * (f64::EPSILON * M.norm() * kappa).powf(1.0 / k as f64) * l.max(1.0);
+            let groups: [(Vec<Complex<f64>>, f64); 4] = [
+                (vec![re(-1.0); 3], acc(3, 1.0)),
+                (vec![re(0.5); 2], acc(2, 0.5)),
+                (vec![Complex::new(-2.0, 3.0), Complex::new(-2.0, -3.0)], acc(1, 3.6)),
+                (vec![re(-4.0)], acc(1, 4.0)),
+            ];
+            let mut left = ev.clone();
+            for (want, tol) in groups {
+                for w in want {
+                    let (j, d) = left.iter().enumerate().map(|(j, g)| (j, (g - w).norm())).fold(
+                        (0, f64::INFINITY),
+                        |a, b| if b.1 < a.1 { b } else { a },
+                    );
+                    assert!(d <= tol, "eigenvalue {w} missed by {d:e} > {tol:e}: {ev:?}");
+                    left.swap_remove(j);
+                }
+            }
+            // J_2(0.5) is unstable whatever the scatter; the cluster check names it twice.
+            let bad = unstable(&ev, M.norm());
+            assert_eq!(bad.len(), 2, "{bad:?}");
+            assert!(bad.iter().all(|b| (b - re(0.5)).norm() < 1e-8), "{bad:?}");
+        }
+    }
+
+    #[test]
+    fn cyclic_permutations() {
+        // The n-cycle's eigenvalues are the n-th roots of unity (normal matrix: accurate to ~nε).
+        // Trace 0 and all eigenvalues on the unit circle: the case that stalled nalgebra's Schur.
+        for n in 2..=12 {
+            let P = DMatrix::from_fn(n, n, |r, c| if (r + 1) % n == c { 1.0 } else { 0.0 });
+            let want: Vec<Complex<f64>> =
+                (0..n).map(|j| Complex::from_polar(1.0, 2.0 * std::f64::consts::PI * j as f64 / n as f64)).collect();
+            let ev = eigenvalues(&P).unwrap();
+            assert!(mismatch(&want, &ev) <= 100.0 * n as f64 * f64::EPSILON, "n = {n}: {ev:?}");
+        }
+    }
+
+    #[test]
+    fn paper_plant_matches_its_characteristic_polynomial() {
+        // Section VIII's A: the eigenvalues' elementary symmetric functions equal the characteristic
+        // polynomial's coefficients, computed here by hand (trace, principal 2×2 minors, det).
+        let A = DMatrix::from_row_slice(3, 3, &[-3.2, -1.7, -3.0, 2.8, 1.3, 4.0, 0.3, 0.3, -0.5]);
+        let a = |r: usize, c: usize| A[(r, c)];
+        let tr = a(0, 0) + a(1, 1) + a(2, 2);
+        let minors = a(0, 0) * a(1, 1) - a(0, 1) * a(1, 0) + a(0, 0) * a(2, 2) - a(0, 2) * a(2, 0) + a(1, 1) * a(2, 2)
+            - a(1, 2) * a(2, 1);
+        let ev = eigenvalues(&A).unwrap();
+        let e1: Complex<f64> = ev.iter().sum();
+        let e2 = ev[0] * ev[1] + ev[0] * ev[2] + ev[1] * ev[2];
+        let e3 = ev[0] * ev[1] * ev[2];
+        assert!((e1 - tr).norm() < 1e-13 && (e2 - minors).norm() < 1e-13, "{ev:?}");
+        assert!((e3 - A.determinant()).norm() < 1e-13, "{ev:?}");
+    }
+
+    #[test]
+    fn always_converges_on_finite_input_up_to_100() {
+        // Seeded families that defeat plain QR: random dense, sparse integer, nilpotent shifts (all
+        // eigenvalues 0), permutations, Jordan-like blocks of −2, entries spanning 1e±150, and
+        // companions of (s + 1)^n. Each must return n finite eigenvalues whose sum is the trace
+        // (to 1e-8·(‖M‖·n + |tr M|)... loose: the sum of a defective cluster is well conditioned).
+        let mut rng = Rng(12345);
+        for n in (1..=100).step_by(3).chain([100]) {
+            let dense = rng.matrix(n, n);
+            let sparse = dense.map(|v| if v.abs() < 0.7 { 0.0 } else { (v * 3.0).round() });
+            let shift = DMatrix::from_fn(n, n, |r, c| if c == r + 1 { 1.0 } else { 0.0 });
+            let perm = DMatrix::from_fn(n, n, |r, c| if (r + 7) % n == c { 1.0 } else { 0.0 });
+            let jordan = DMatrix::from_fn(n, n, |r, c| if r == c { -2.0 } else if c == r + 1 { 1.0 } else { 0.0 });
+            let graded = DMatrix::from_fn(n, n, |r, c| dense[(r, c)] * 10f64.powf(150.0 * (r as f64 - c as f64) / n as f64));
+            let comp = companion(&poly_from_roots(&vec![re(-1.0); n.min(30)]));
+            for (name, M) in [
+                ("dense", dense.clone()),
+                ("sparse", sparse),
+                ("shift", shift),
+                ("perm", perm),
+                ("jordan", jordan),
+                ("graded", graded),
+                ("companion", comp),
+            ] {
+                let ev = eigenvalues(&M).unwrap_or_else(|e| panic!("{name} n = {n}: {e:?}"));
+                assert_eq!(ev.len(), M.nrows());
+                let sum: Complex<f64> = ev.iter().sum();
+                let tol = 1e-8 * (M.norm() + M.trace().abs()).max(1.0);
+                assert!((sum - M.trace()).norm() <= tol, "{name} n = {n}: Σλ = {sum} ≠ tr = {}", M.trace());
+            }
+        }
+        assert_eq!(eigenvalues(&DMatrix::from_element(2, 2, f64::NAN)), Err(EigenError::NonFinite));
     }
 }

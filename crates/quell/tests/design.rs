@@ -109,32 +109,8 @@ fn decoupled_loop_is_diagonal_with_the_chosen_channels() {
         if fw.cond_B_star > 1e6 {
             continue;
         }
-        let A_f = &A - &B * &fw.K;
-        let B_f = &B * &fw.F;
-        let n = A.nrows();
-        for s in [Complex::new(0.3, 1.1), Complex::new(0.0, 2.0), Complex::new(5.0, 0.0), Complex::new(-0.2, 7.0)] {
-            let M = DMatrix::<Complex<f64>>::identity(n, n) * s - A_f.map(|v| Complex::new(v, 0.0));
-            let Minv = M.try_inverse().expect("s is not an eigenvalue");
-            let Cc = C.map(|v| Complex::new(v, 0.0));
-            let Bc = B_f.map(|v| Complex::new(v, 0.0));
-            let G = &Cc * &Minv * &Bc;
-            let scale = Cc.norm() * Minv.norm() * Bc.norm();
-            for i in 0..C.nrows() {
-                for j in 0..C.nrows() {
-                    let want = if i == j {
-                        let den: Complex<f64> = poles[i].iter().map(|p| s - p).product();
-                        Complex::new(fw.q0[i], 0.0) / den
-                    } else {
-                        Complex::new(0.0, 0.0)
-                    };
-                    assert!(
-                        (G[(i, j)] - want).norm() <= 1e-9 * scale,
-                        "G[{i},{j}] = {} want {want}, scale {scale}",
-                        G[(i, j)]
-                    );
-                }
-            }
-        }
+        let err = decoupling_error(&C, &(&A - &B * &fw.K), &(&B * &fw.F), &poles);
+        assert!(err <= 1e-9, "decoupling error {err:e}");
         checked += 1;
     }
     assert!(checked > 150, "only {checked} systems were decouplable and well conditioned");
@@ -262,11 +238,43 @@ fn siso_spec() -> quell::DesignSpec {
 }
 
 #[test]
-fn error_unstable_zero_dynamics_lists_eigenvalues() {
-    match expect_err(&nonminimum_phase_plant(), &siso_spec()) {
-        DesignError::UnstableZeroDynamics { eigenvalues } => {
-            assert_eq!(eigenvalues.len(), 1);
-            assert!((eigenvalues[0] - re(1.0)).norm() < 1e-9, "{eigenvalues:?}");
+fn error_unstable_zero_dynamics_names_the_zeros() {
+    // G(s) = (s − 1)/((s + 1)(s + 2)): σ = 1, one channel pole placed at −2, and the one zero, s = 1
+    // (closed form), left as the other eigenvalue of A − BK.
+    let e = expect_err(&nonminimum_phase_plant(), &siso_spec());
+    match &e {
+        DesignError::UnstableZeroDynamics { placed, zeros, unstable } => {
+            assert_eq!(*placed, 1);
+            assert_eq!(zeros.len(), 1);
+            assert!((zeros[0] - re(1.0)).norm() < 1e-12, "{zeros:?}");
+            assert_eq!(unstable.len(), 1);
+        }
+        e => panic!("unexpected {e}"),
+    }
+    assert!(e.to_string().contains("the plant's 1 zero (its eigenvalues besides the 1 channel poles"), "{e}");
+    assert!(e.to_string().contains(": 1.000000"), "{e}");
+}
+
+#[test]
+fn zero_dynamics_set_the_channel_poles_aside() {
+    // G(s) = (s + 1)(s − 3)/((s + 2)(s + 4)(s + 5)) in controllable canonical form: σ = 1, zeros −1
+    // and 3 (closed form). The channel pole is placed at −1, on top of the stable zero: only the
+    // zeros are judged, and the message lists both zeros and names 3 as the unstable one.
+    let den = quell::linalg::poly_from_roots(&[re(-2.0), re(-4.0), re(-5.0)]); // [40, 38, 11]
+    let num = quell::linalg::poly_from_roots(&[re(-1.0), re(3.0)]); // [−3, −2]
+    let A = quell::linalg::companion(&den);
+    let B = mat(3, 1, &[0.0, 0.0, 1.0]);
+    let C = mat(1, 3, &[num[0], num[1], 1.0]);
+    let plant = Plant::new(A, B, C, mat(3, 1, &[1.0, 0.0, 0.0]), mat(1, 1, &[0.0]), vec![0.0], None).unwrap();
+    let mut spec = siso_spec();
+    spec.observer = ObserverChoice::Poles(vec![re(-3.0), re(-4.0), re(-5.0)]);
+    spec.channel_poles = vec![vec![re(-1.0)]];
+    match expect_err(&plant, &spec) {
+        DesignError::UnstableZeroDynamics { placed, zeros, unstable } => {
+            assert_eq!(placed, 1);
+            assert!((zeros[0] - re(-1.0)).norm() < 1e-12 && (zeros[1] - re(3.0)).norm() < 1e-12, "{zeros:?}");
+            assert_eq!(unstable.len(), 1);
+            assert!((unstable[0] - re(3.0)).norm() < 1e-12, "{unstable:?}");
         }
         e => panic!("unexpected {e}"),
     }
@@ -374,4 +382,40 @@ fn repeated_poles_everywhere_do_not_hang() {
     // Observer poles with multiplicity 3 > rank C = 2 cannot be placed: an error, not a wrong L.
     spec.observer = ObserverChoice::Poles(vec![re(-3.0); 3]);
     assert!(matches!(Design::new(&paper_plant(), &spec), Err(DesignError::ObserverPoles(_))));
+}
+
+/// A 4-state, 3-output plant with σ = [2, 1, 1] (c_1 ⟂ range B), so Σσ_i = n: no zero dynamics.
+fn four_state_three_output(seed: u64) -> Plant {
+    let mut rng = Rng(seed);
+    let (A, B, mut C) = (rng.matrix(4, 4), rng.matrix(4, 3), rng.matrix(3, 4));
+    let Qb = B.clone().qr().q();
+    let c = C.row(0).transpose();
+    C.set_row(0, &(&c - &Qb * (Qb.transpose() * &c)).transpose());
+    Plant::new(A, B, C, rng.matrix(4, 1), rng.matrix(3, 1), vec![0.0; 3], None).unwrap()
+}
+
+#[test]
+fn triple_channel_pole_is_designed() {
+    // The case: channel_poles = [[−2, −5], [−2], [−2]] makes −2 a triple eigenvalue of
+    // A − BK (nalgebra's Schur did not converge on it). Independent checks: eig(A − BK) is the
+    // multiset {−2, −2, −2, −5} to the accuracy of a 3-fold eigenvalue (10·(ε‖A_f‖)^(1/3)), and the
+    // decoupled transfer matrix is diag(10/((s + 2)(s + 5)), 2/(s + 2), 2/(s + 2)) to 1e-9.
+    let plant = four_state_three_output(41);
+    let channel_poles = vec![vec![re(-2.0), re(-5.0)], vec![re(-2.0)], vec![re(-2.0)]];
+    let spec = quell::DesignSpec {
+        observer: ObserverChoice::Poles(vec![re(-3.0), re(-3.0), re(-4.0), re(-6.0)]),
+        channel_poles: channel_poles.clone(),
+        reference_filter_poles: vec![vec![re(-1.0)]; 3],
+        disturbance_filter_poles: vec![vec![re(-1.0)]],
+        mu: vec![1.0; 3],
+        beta: 1.0,
+    };
+    let d = Design::new(&plant, &spec).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(d.sigma(), &[2, 1, 1]);
+    let tol = 10.0 * (f64::EPSILON * d.A_f().norm()).cbrt();
+    let want = [re(-2.0), re(-2.0), re(-2.0), re(-5.0)];
+    assert!(multiset_mismatch(&want, d.decoupled_eigenvalues()) <= tol, "{:?}", d.decoupled_eigenvalues());
+    assert!(decoupling_error(&plant.C, d.A_f(), d.B_f(), &channel_poles) <= 1e-9);
+    let want = [re(-3.0), re(-3.0), re(-4.0), re(-6.0)];
+    assert!(multiset_mismatch(&want, d.observer_eigenvalues()) <= 1e-6, "{:?}", d.observer_eigenvalues());
 }

@@ -14,7 +14,7 @@ pub use decouple::{falb_wolovich, relative_degrees, FalbWolovich};
 pub use internal_model::{filter_pair, internal_model};
 pub use place::{place, PlaceError};
 
-use crate::linalg::{eigenvalues, fmt_complex, hurwitz, numerical_rank, poly_from_roots};
+use crate::linalg::{eigenvalues, fmt_complex, numerical_rank, poly_from_roots, unstable, EigenError};
 use crate::plant::{Plant, PlantError};
 
 /// How the Luenberger observer gain L of eq. (6) is chosen.
@@ -125,8 +125,8 @@ pub enum DesignError {
     ChannelPoleCount { channel: usize, sigma: usize, got: usize },
     #[error("plant: not decouplable (Proposition 1): B* is singular (condition number {cond:.3e})")]
     NotDecouplable { cond: f64 },
-    #[error("plant: A − BK is not Hurwitz: the plant's zero dynamics are unstable (offending eigenvalues {}); this plant cannot be decoupled stably", fmt_eigs(.eigenvalues))]
-    UnstableZeroDynamics { eigenvalues: Vec<Complex<f64>> },
+    #[error("plant: unstable zero dynamics: A − BK keeps the plant's {} zero{} (its eigenvalues besides the {placed} channel poles that Proposition 1 places), and {} not in the open left half-plane: {}; this plant cannot be decoupled stably", .zeros.len(), if .zeros.len() == 1 { "" } else { "s" }, if .unstable.len() == 1 { "this one is" } else { "these are" }, fmt_eigs(.unstable))]
+    UnstableZeroDynamics { placed: usize, zeros: Vec<Complex<f64>>, unstable: Vec<Complex<f64>> },
     #[error("{key}: expected {expected} entries (one per {per}), got {got}")]
     Count { key: &'static str, per: &'static str, expected: usize, got: usize },
     #[error("{key}: pole {} is not in the open left half-plane; {what} poles must be Hurwitz (real part < 0)", fmt_complex(.pole))]
@@ -139,8 +139,8 @@ pub enum DesignError {
     BadMu { index: usize, value: f64 },
     #[error("design.beta: expected a finite β > 0 (H(s) = 1/(βs + 1)), got {value}")]
     BadBeta { value: f64 },
-    #[error("plant: the eigenvalues of {of} could not be computed (the Schur iteration did not converge); perturb the repeated poles slightly")]
-    Eigenvalues { of: &'static str },
+    #[error("{key}: the eigenvalues of {of} could not be computed: {reason}")]
+    Eigenvalues { key: &'static str, of: &'static str, reason: &'static str },
     #[error("plant.D: rank D = {rank} < k = {k}, so N D = L_ω (eq. (20)) has no solution; disturbances must enter through independent directions")]
     DisturbanceRank { rank: usize, k: usize },
 }
@@ -166,119 +166,26 @@ fn check_poles(key: String, what: &'static str, poles: &[Complex<f64>], nonempty
     Ok(())
 }
 
-/// Hurwitz margin used for eigenvalue checks: −eps^(1/2)·max(1, ‖M‖).
-fn margin(M: &DMatrix<f64>) -> f64 {
-    f64::EPSILON.sqrt() * M.norm().max(1.0)
-}
-
 impl Design {
-    /// Designs every gain (Sections III–V) and checks Assumption 1, Proposition 1's condition, stable
-    /// zero dynamics, a stable observer and rank D = k.
+    /// Designs every gain in the paper's order and checks each condition on the way: the choices
+    /// (Section VIII), Assumption 1, the observer (6), the decoupler of Proposition 1 with stable
+    /// zero dynamics, the internal models (11), (16) and the disturbance observer gain (20).
     pub fn new(plant: &Plant, spec: &DesignSpec) -> Result<Design, DesignError> {
         // The fields of a plant are public: check it again (Plant::new did, but a literal does not).
         plant.validate()?;
-        let (n, m, k) = (plant.n(), plant.m(), plant.k());
-        let (A, B, C, D) = (&plant.A, &plant.B, &plant.C, &plant.D);
-        let count = |key, per, expected, got| {
-            if expected == got {
-                Ok(())
-            } else {
-                Err(DesignError::Count { key, per, expected, got })
-            }
-        };
-        count("design.channel_poles", "output", m, spec.channel_poles.len())?;
-        count(
-            "design.reference_filter_poles",
-            "reference component, i.e. one per output",
-            m,
-            spec.reference_filter_poles.len(),
-        )?;
-        count(
-            "design.disturbance_filter_poles",
-            "disturbance component, i.e. one per column of plant.D",
-            k,
-            spec.disturbance_filter_poles.len(),
-        )?;
-        count("design.mu", "channel", m, spec.mu.len())?;
-        if let Some((index, &value)) = spec.mu.iter().enumerate().find(|(_, v)| !(v.is_finite() && **v >= 0.0)) {
-            return Err(DesignError::BadMu { index, value });
-        }
-        if !(spec.beta.is_finite() && spec.beta > 0.0) {
-            return Err(DesignError::BadBeta { value: spec.beta });
-        }
-        for (i, p) in spec.channel_poles.iter().enumerate() {
-            check_poles(format!("design.channel_poles[{i}]"), "channel", p, false)?;
-        }
-        for (i, p) in spec.reference_filter_poles.iter().enumerate() {
-            check_poles(format!("design.reference_filter_poles[{i}]"), "internal-model filter", p, true)?;
-        }
-        for (i, p) in spec.disturbance_filter_poles.iter().enumerate() {
-            check_poles(format!("design.disturbance_filter_poles[{i}]"), "internal-model filter", p, true)?;
-        }
-
-        // Assumption 1.
-        let ctrb = controllability(A, B);
-        if !ctrb.full() {
-            return Err(DesignError::Uncontrollable { rank: ctrb.rank, n, tol: ctrb.tol });
-        }
-        let obsv = observability(A, C);
-        if !obsv.full() {
-            return Err(DesignError::Unobservable { rank: obsv.rank, n, tol: obsv.tol });
-        }
-
-        // Observer (6).
-        let L = match &spec.observer {
-            ObserverChoice::Gain(L) => {
-                if L.nrows() != n || L.ncols() != m {
-                    return Err(DesignError::ObserverGainShape { n, m, rows: L.nrows(), cols: L.ncols() });
-                }
-                if let Some(i) = L.iter().position(|v| !v.is_finite()) {
-                    return Err(DesignError::ObserverGainNonFinite { row: i % n, col: i / n, value: L[i] });
-                }
-                L.clone()
-            }
-            ObserverChoice::Poles(p) => {
-                check_poles("design.observer_poles".into(), "observer", p, false)?;
-                place(&A.transpose(), &C.transpose(), p).map_err(DesignError::ObserverPoles)?.transpose()
-            }
-        };
-        let A_o = A - &L * C;
-        let observer_eigenvalues = eigenvalues(&A_o).ok_or(DesignError::Eigenvalues { of: "A − LC" })?;
-        if !hurwitz(&observer_eigenvalues, margin(&A_o)) {
-            return Err(DesignError::ObserverUnstable { eigenvalues: observer_eigenvalues });
-        }
-
-        // Decoupler (Proposition 1) and its zero dynamics.
-        let fw = falb_wolovich(A, B, C, &spec.channel_poles)?;
-        let A_f = A - B * &fw.K;
-        let B_f = B * &fw.F;
-        let decoupled_eigenvalues = eigenvalues(&A_f).ok_or(DesignError::Eigenvalues { of: "A − BK" })?;
-        let tol = margin(&A_f);
-        let bad: Vec<_> = decoupled_eigenvalues.iter().copied().filter(|e| e.re >= -tol).collect();
-        if !bad.is_empty() {
-            return Err(DesignError::UnstableZeroDynamics { eigenvalues: bad });
-        }
+        check_spec(plant, spec)?;
+        let (controllability, observability) = assumption_1(plant)?;
+        let (L, observer_eigenvalues) = observer(plant, &spec.observer)?;
+        let fw = falb_wolovich(&plant.A, &plant.B, &plant.C, &spec.channel_poles)?;
+        let A_f = &plant.A - &plant.B * &fw.K;
+        let B_f = &plant.B * &fw.F;
+        let decoupled_eigenvalues = eigenvalues(&A_f).map_err(|e| eigen_error("plant", "A − BK", e))?;
+        check_zero_dynamics(plant, &fw.sigma, &A_f)?;
         let channels =
             spec.channel_poles.iter().map(|p| ChannelTf { poles: p.clone(), den: poly_from_roots(p) }).collect();
-
-        // Internal models (11), (16) and the disturbance observer gain (20).
         let (G_g, L_g) = internal_model(&spec.reference_filter_poles);
         let (G_w, L_w) = internal_model(&spec.disturbance_filter_poles);
-        let rank = numerical_rank(D);
-        if rank < k {
-            return Err(DesignError::DisturbanceRank { rank, k });
-        }
-        let N = if k == 0 {
-            DMatrix::zeros(0, n)
-        } else {
-            // Minimum-norm solution of N D = L_ω: N = L_ω D⁺.
-            let pinv = D
-                .clone()
-                .pseudo_inverse(f64::EPSILON * n as f64 * D.norm())
-                .map_err(|_| DesignError::DisturbanceRank { rank, k })?;
-            &L_w * pinv
-        };
-
+        let N = disturbance_observer_gain(&plant.D, &L_w)?;
         Ok(Design {
             plant: plant.clone(),
             L,
@@ -297,8 +204,8 @@ impl Design {
             N,
             mu: spec.mu.clone(),
             beta: spec.beta,
-            controllability: ctrb,
-            observability: obsv,
+            controllability,
+            observability,
             observer_eigenvalues,
             decoupled_eigenvalues,
         })
@@ -400,4 +307,166 @@ impl Design {
     pub fn q(&self) -> usize {
         self.q_g() + self.q_w()
     }
+}
+
+/// The designer's choices: one entry per channel / component, μ_i ≥ 0, β > 0, every pole list
+/// Hurwitz and closed under conjugation.
+fn check_spec(plant: &Plant, spec: &DesignSpec) -> Result<(), DesignError> {
+    let (m, k) = (plant.m(), plant.k());
+    let count = |key, per, expected, got| {
+        if expected == got {
+            Ok(())
+        } else {
+            Err(DesignError::Count { key, per, expected, got })
+        }
+    };
+    count("design.channel_poles", "output", m, spec.channel_poles.len())?;
+    count("design.reference_filter_poles", "reference component, i.e. one per output", m, spec.reference_filter_poles.len())?;
+    count(
+        "design.disturbance_filter_poles",
+        "disturbance component, i.e. one per column of plant.D",
+        k,
+        spec.disturbance_filter_poles.len(),
+    )?;
+    count("design.mu", "channel", m, spec.mu.len())?;
+    if let Some((index, &value)) = spec.mu.iter().enumerate().find(|(_, v)| !(v.is_finite() && **v >= 0.0)) {
+        return Err(DesignError::BadMu { index, value });
+    }
+    if !(spec.beta.is_finite() && spec.beta > 0.0) {
+        return Err(DesignError::BadBeta { value: spec.beta });
+    }
+    for (i, p) in spec.channel_poles.iter().enumerate() {
+        check_poles(format!("design.channel_poles[{i}]"), "channel", p, false)?;
+    }
+    for (i, p) in spec.reference_filter_poles.iter().enumerate() {
+        check_poles(format!("design.reference_filter_poles[{i}]"), "internal-model filter", p, true)?;
+    }
+    for (i, p) in spec.disturbance_filter_poles.iter().enumerate() {
+        check_poles(format!("design.disturbance_filter_poles[{i}]"), "internal-model filter", p, true)?;
+    }
+    if let ObserverChoice::Poles(p) = &spec.observer {
+        check_poles("design.observer_poles".into(), "observer", p, false)?;
+    }
+    Ok(())
+}
+
+/// Assumption 1: (A, B) controllable and (A, C) observable, by the staircase rank tests.
+fn assumption_1(plant: &Plant) -> Result<(RankTest, RankTest), DesignError> {
+    let n = plant.n();
+    let ctrb = controllability(&plant.A, &plant.B);
+    if !ctrb.full() {
+        return Err(DesignError::Uncontrollable { rank: ctrb.rank, n, tol: ctrb.tol });
+    }
+    let obsv = observability(&plant.A, &plant.C);
+    if !obsv.full() {
+        return Err(DesignError::Unobservable { rank: obsv.rank, n, tol: obsv.tol });
+    }
+    Ok((ctrb, obsv))
+}
+
+/// The observer gain L of eq. (6), given or placed by duality (L = place(Aᵀ, Cᵀ, p)ᵀ), and
+/// eig(A − LC), which must be Hurwitz.
+fn observer(plant: &Plant, choice: &ObserverChoice) -> Result<(DMatrix<f64>, Vec<Complex<f64>>), DesignError> {
+    let (n, m) = (plant.n(), plant.m());
+    let (A, C) = (&plant.A, &plant.C);
+    let (L, key) = match choice {
+        ObserverChoice::Gain(L) => {
+            if L.nrows() != n || L.ncols() != m {
+                return Err(DesignError::ObserverGainShape { n, m, rows: L.nrows(), cols: L.ncols() });
+            }
+            if let Some(i) = L.iter().position(|v| !v.is_finite()) {
+                return Err(DesignError::ObserverGainNonFinite { row: i % n, col: i / n, value: L[i] });
+            }
+            (L.clone(), "design.observer_gain")
+        }
+        ObserverChoice::Poles(p) => (
+            place(&A.transpose(), &C.transpose(), p).map_err(DesignError::ObserverPoles)?.transpose(),
+            "design.observer_poles",
+        ),
+    };
+    let A_o = A - &L * C;
+    let eigs = eigenvalues(&A_o).map_err(|e| eigen_error(key, "A − LC", e))?;
+    if !unstable(&eigs, A_o.norm()).is_empty() {
+        return Err(DesignError::ObserverUnstable { eigenvalues: eigs });
+    }
+    Ok((L, eigs))
+}
+
+/// The zero dynamics of the decoupled loop (Proposition 1): A − BK places the Σσ_i channel poles
+/// on the observable part of (A − BK, C), spanned by the rows c_i A^j, j < σ_i; its other
+/// n − Σσ_i eigenvalues are the plant's zeros. They are the eigenvalues of A − BK restricted to
+/// the invariant subspace ker [c_i A^j] (an orthonormal basis W: zeros = eig(Wᵀ (A − BK) W)), so
+/// they are judged without the placed, possibly repeated, channel poles. Each must be Hurwitz.
+fn check_zero_dynamics(plant: &Plant, sigma: &[usize], A_f: &DMatrix<f64>) -> Result<(), DesignError> {
+    let n = plant.n();
+    let placed: usize = sigma.iter().sum();
+    let W = zero_dynamics_basis(&plant.A, &plant.C, sigma);
+    if W.ncols() == 0 {
+        return Ok(());
+    }
+    let Z = W.transpose() * A_f * &W;
+    let zeros = eigenvalues(&Z).map_err(|e| eigen_error("plant", "the zero dynamics of A − BK", e))?;
+    let bad = unstable(&zeros, A_f.norm());
+    if bad.is_empty() {
+        Ok(())
+    } else {
+        debug_assert_eq!(zeros.len(), n - placed);
+        Err(DesignError::UnstableZeroDynamics { placed, zeros, unstable: bad })
+    }
+}
+
+/// Orthonormal basis (n × (n − Σσ_i)) of the kernel of the rows c_i A^j, j < σ_i, each row scaled
+/// to unit norm: the unobservable subspace of the decoupled loop.
+fn zero_dynamics_basis(A: &DMatrix<f64>, C: &DMatrix<f64>, sigma: &[usize]) -> DMatrix<f64> {
+    let n = A.nrows();
+    let placed: usize = sigma.iter().sum();
+    let mut T = DMatrix::zeros(n, n); // padded to square so the SVD returns all of V
+    let mut r = 0;
+    for (i, &s) in sigma.iter().enumerate() {
+        let mut row = C.row(i).clone_owned();
+        for _ in 0..s {
+            let nrm = row.norm();
+            if nrm > 0.0 {
+                row /= nrm;
+            }
+            T.set_row(r, &row);
+            row = &row * A;
+            r += 1;
+        }
+    }
+    let svd = T.svd(false, true);
+    let Vt = svd.v_t.expect("requested");
+    // Singular values are sorted descending: the last n − Σσ_i right vectors span the kernel.
+    Vt.rows(placed, n - placed).transpose()
+}
+
+/// N = L_ω D⁺, the minimum-norm solution of N D = L_ω (eq. (20)); rank D = k is required.
+fn disturbance_observer_gain(D: &DMatrix<f64>, L_w: &DMatrix<f64>) -> Result<DMatrix<f64>, DesignError> {
+    let (n, k) = (D.nrows(), D.ncols());
+    let rank = numerical_rank(D);
+    if rank < k {
+        return Err(DesignError::DisturbanceRank { rank, k });
+    }
+    if k == 0 {
+        return Ok(DMatrix::zeros(0, n));
+    }
+    let pinv = D
+        .clone()
+        .pseudo_inverse(f64::EPSILON * n as f64 * D.norm())
+        .map_err(|_| DesignError::DisturbanceRank { rank, k })?;
+    Ok(L_w * pinv)
+}
+
+/// The error for eigenvalues that could not be computed, with the reason a user can act on.
+fn eigen_error(key: &'static str, of: &'static str, e: EigenError) -> DesignError {
+    let reason = match (e, key) {
+        (EigenError::NonFinite, "design.observer_gain") => {
+            "the matrix overflows (entries beyond 1e308); give a smaller design.observer_gain"
+        }
+        (EigenError::NonFinite, _) => "the matrix overflows (entries beyond 1e308); rescale the plant's units",
+        (EigenError::NoConvergence, _) => {
+            "faer's QR iteration did not converge, which should not happen for finite input; please report the scenario"
+        }
+    };
+    DesignError::Eigenvalues { key, of, reason }
 }

@@ -123,3 +123,58 @@ impl Rng {
         (self.next() * n as f64) as usize
     }
 }
+
+/// Largest |μ − p| / max(1, |p|) over a greedy nearest matching of the multisets `want` and `got`.
+pub fn multiset_mismatch(want: &[Complex<f64>], got: &[Complex<f64>]) -> f64 {
+    assert_eq!(want.len(), got.len(), "want {want:?}, got {got:?}");
+    let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
+    for (i, p) in want.iter().enumerate() {
+        for (j, e) in got.iter().enumerate() {
+            pairs.push(((p - e).norm(), i, j));
+        }
+    }
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (mut used_i, mut used_j) = (vec![false; want.len()], vec![false; got.len()]);
+    let mut worst: f64 = 0.0;
+    for (d, i, j) in pairs {
+        if !used_i[i] && !used_j[j] {
+            used_i[i] = true;
+            used_j[j] = true;
+            worst = worst.max(d / want[i].norm().max(1.0));
+        }
+    }
+    worst
+}
+
+/// Proposition 1 / eq. (8), checked by evaluating C (sI − A_f)⁻¹ B_f at four points s off the
+/// spectrum: it must equal diag{q_i0 / ∏_j (s − λ_ij)}. Error relative to ‖C‖‖(sI − A_f)⁻¹‖‖B_f‖,
+/// the size of the product, which bounds the rounding of the solve. Returns the worst such error.
+pub fn decoupling_error(
+    C: &DMatrix<f64>,
+    A_f: &DMatrix<f64>,
+    B_f: &DMatrix<f64>,
+    poles: &[Vec<Complex<f64>>],
+) -> f64 {
+    let n = A_f.nrows();
+    let c = |M: &DMatrix<f64>| M.map(|v| Complex::new(v, 0.0));
+    let (Cc, Bc) = (c(C), c(B_f));
+    let mut worst: f64 = 0.0;
+    for s in [Complex::new(0.3, 1.1), Complex::new(0.0, 2.0), Complex::new(5.0, 0.0), Complex::new(-0.2, 7.0)] {
+        let M = DMatrix::<Complex<f64>>::identity(n, n) * s - c(A_f);
+        let Minv = M.try_inverse().expect("s is not an eigenvalue");
+        let G = &Cc * &Minv * &Bc;
+        let scale = Cc.norm() * Minv.norm() * Bc.norm();
+        for i in 0..C.nrows() {
+            for j in 0..C.nrows() {
+                let want = if i == j {
+                    let q0: Complex<f64> = poles[i].iter().map(|p| -p).product();
+                    q0 / poles[i].iter().map(|p| s - p).product::<Complex<f64>>()
+                } else {
+                    Complex::new(0.0, 0.0)
+                };
+                worst = worst.max((G[(i, j)] - want).norm() / scale);
+            }
+        }
+    }
+    worst
+}
