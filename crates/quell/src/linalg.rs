@@ -348,10 +348,11 @@ mod tests {
             let mut left = ev.clone();
             for (want, tol) in groups {
                 for w in want {
-                    let (j, d) = left.iter().enumerate().map(|(j, g)| (j, (g - w).norm())).fold(
-                        (0, f64::INFINITY),
-                        |a, b| if b.1 < a.1 { b } else { a },
-                    );
+                    let (j, d) = left
+                        .iter()
+                        .enumerate()
+                        .map(|(j, g)| (j, (g - w).norm()))
+                        .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
                     assert!(d <= tol, "eigenvalue {w} missed by {d:e} > {tol:e}: {ev:?}");
                     left.swap_remove(j);
                 }
@@ -405,8 +406,17 @@ mod tests {
             let sparse = dense.map(|v| if v.abs() < 0.7 { 0.0 } else { (v * 3.0).round() });
             let shift = DMatrix::from_fn(n, n, |r, c| if c == r + 1 { 1.0 } else { 0.0 });
             let perm = DMatrix::from_fn(n, n, |r, c| if (r + 7) % n == c { 1.0 } else { 0.0 });
-            let jordan = DMatrix::from_fn(n, n, |r, c| if r == c { -2.0 } else if c == r + 1 { 1.0 } else { 0.0 });
-            let graded = DMatrix::from_fn(n, n, |r, c| dense[(r, c)] * 10f64.powf(150.0 * (r as f64 - c as f64) / n as f64));
+            let jordan = DMatrix::from_fn(n, n, |r, c| {
+                if r == c {
+                    -2.0
+                } else if c == r + 1 {
+                    1.0
+                } else {
+                    0.0
+                }
+            });
+            let graded =
+                DMatrix::from_fn(n, n, |r, c| dense[(r, c)] * 10f64.powf(150.0 * (r as f64 - c as f64) / n as f64));
             let comp = companion(&poly_from_roots(&vec![re(-1.0); n.min(30)]));
             for (name, M) in [
                 ("dense", dense.clone()),

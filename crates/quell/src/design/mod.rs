@@ -321,7 +321,12 @@ fn check_spec(plant: &Plant, spec: &DesignSpec) -> Result<(), DesignError> {
         }
     };
     count("design.channel_poles", "output", m, spec.channel_poles.len())?;
-    count("design.reference_filter_poles", "reference component, i.e. one per output", m, spec.reference_filter_poles.len())?;
+    count(
+        "design.reference_filter_poles",
+        "reference component, i.e. one per output",
+        m,
+        spec.reference_filter_poles.len(),
+    )?;
     count(
         "design.disturbance_filter_poles",
         "disturbance component, i.e. one per column of plant.D",

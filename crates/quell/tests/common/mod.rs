@@ -149,12 +149,7 @@ pub fn multiset_mismatch(want: &[Complex<f64>], got: &[Complex<f64>]) -> f64 {
 /// Proposition 1 / eq. (8), checked by evaluating C (sI − A_f)⁻¹ B_f at four points s off the
 /// spectrum: it must equal diag{q_i0 / ∏_j (s − λ_ij)}. Error relative to ‖C‖‖(sI − A_f)⁻¹‖‖B_f‖,
 /// the size of the product, which bounds the rounding of the solve. Returns the worst such error.
-pub fn decoupling_error(
-    C: &DMatrix<f64>,
-    A_f: &DMatrix<f64>,
-    B_f: &DMatrix<f64>,
-    poles: &[Vec<Complex<f64>>],
-) -> f64 {
+pub fn decoupling_error(C: &DMatrix<f64>, A_f: &DMatrix<f64>, B_f: &DMatrix<f64>, poles: &[Vec<Complex<f64>>]) -> f64 {
     let n = A_f.nrows();
     let c = |M: &DMatrix<f64>| M.map(|v| Complex::new(v, 0.0));
     let (Cc, Bc) = (c(C), c(B_f));
