@@ -1,6 +1,9 @@
 //! Tests of `quell::place` (KNV0 for rank(B) > 1, Hessenberg–Ackermann for rank(B) = 1).
 #![allow(non_snake_case)]
 
+mod common;
+
+use common::multiset_mismatch as max_rel_mismatch;
 use proptest::prelude::*;
 use quell::design::place::{place, PlaceError};
 use quell::nalgebra::{Complex, DMatrix};
@@ -68,29 +71,6 @@ fn eigenvalues(M: &DMatrix<f64>) -> Vec<C64> {
     let shifted = M - DMatrix::<f64>::identity(n, n) * sigma;
     let schur = shifted.try_schur(f64::EPSILON, 100_000).expect("nalgebra Schur did not converge");
     schur.complex_eigenvalues().iter().map(|z| z + sigma).collect()
-}
-
-/// Largest error |μ − p| / max(1, |p|) after a greedy nearest matching of the multisets.
-fn max_rel_mismatch(requested: &[C64], got: &[C64]) -> f64 {
-    assert_eq!(requested.len(), got.len());
-    let mut pairs = Vec::new();
-    for (i, p) in requested.iter().enumerate() {
-        for (j, e) in got.iter().enumerate() {
-            pairs.push(((p - e).norm(), i, j));
-        }
-    }
-    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut used_i = vec![false; requested.len()];
-    let mut used_j = vec![false; got.len()];
-    let mut worst: f64 = 0.0;
-    for (d, i, j) in pairs {
-        if !used_i[i] && !used_j[j] {
-            used_i[i] = true;
-            used_j[j] = true;
-            worst = worst.max(d / requested[i].norm().max(1.0));
-        }
-    }
-    worst
 }
 
 fn closed_loop(A: &DMatrix<f64>, B: &DMatrix<f64>, K: &DMatrix<f64>) -> DMatrix<f64> {
