@@ -46,6 +46,10 @@ pub fn design_json(d: &Design) -> Value {
             "controllability_rank": d.controllability().rank,
             "observability_rank": d.observability().rank,
             "cond_B_star": d.cond_B_star(),
+            "cond_D": d.cond_D(),
+            "tolerance": quell::design::TOL,
+            "relative_degree_measures": d.relative_degree_decisions().iter().map(|r| r.deciding()).collect::<Vec<_>>(),
+            "relative_degree_close": d.relative_degree_decisions().iter().map(|r| r.is_close()).collect::<Vec<_>>(),
         },
     })
 }
@@ -101,7 +105,13 @@ pub fn design_text(d: &Design) -> String {
         p.n(),
         d.observability().tol
     );
-    let _ = writeln!(s, "  ✓ decouplable: B* nonsingular, condition number {:.3e}", d.cond_B_star());
+    let tol = quell::design::TOL;
+    let _ = writeln!(
+        s,
+        "  ✓ decouplable: B* nonsingular, scale-free condition number {:.3e} (smallest singular value ≥ τ = {:.0e})",
+        d.cond_B_star(),
+        tol
+    );
     let _ = writeln!(
         s,
         "  ✓ A_f = A − BK Hurwitz (stable zero dynamics): max Re λ = {:.5}",
@@ -112,8 +122,28 @@ pub fn design_text(d: &Design) -> String {
         "  ✓ observer A − LC Hurwitz: max Re λ = {:.5}",
         d.observer_eigenvalues().iter().map(|e| e.re).fold(f64::MIN, f64::max)
     );
-    let _ = writeln!(s, "  ✓ rank D = k = {} (N D = L_ω solvable)", p.k());
-    let _ = writeln!(s, "\nrelative degrees σ = {:?}", d.sigma());
+    let _ = writeln!(
+        s,
+        "  ✓ rank D = k = {} (N D = L_ω solvable), D with unit columns has condition number {:.3e}",
+        p.k(),
+        d.cond_D()
+    );
+    let _ = writeln!(
+        s,
+        "\nrelative degrees σ = {:?} (c_i A^(l−1) B ≠ 0 when its largest cosine ≥ τ = {tol:.0e})",
+        d.sigma()
+    );
+    for (i, r) in d.relative_degree_decisions().iter().enumerate().filter(|(_, r)| r.is_close()) {
+        let measures: Vec<String> = r.deciding().iter().map(|m| format!("{m:.2e}")).collect();
+        let _ = writeln!(
+            s,
+            "  ⚠ close decision for output {}: cosines for l = 1…{} are [{}], within ×{} of τ; check row {i} of plant.C and plant.B",
+            i + 1,
+            r.deciding().len(),
+            measures.join(", "),
+            quell::design::CLOSE_FACTOR
+        );
+    }
     for (i, c) in d.channels().iter().enumerate() {
         let _ = writeln!(s, "  G_{0}{0}(s) = {1}   (μ_{0} = {2})", i + 1, tf(c), d.mu()[i]);
     }

@@ -5,34 +5,91 @@ use nalgebra::{Complex, DMatrix, RowDVector};
 use super::DesignError;
 use crate::linalg::{cond, poly_from_roots};
 
-/// Relative tolerance for deciding c_i A^{l−1} B ≠ 0 in eq. (7), relative to ‖c_i‖‖A‖^{l−1}‖B‖.
-/// Data rounded to six significant digits (relative error 5e-7 per entry) must not change σ_i,
-/// so the threshold sits above that and far below any gain a decoupler could invert sensibly.
-pub const RELATIVE_DEGREE_TOL: f64 = 1e-5;
+/// The design layer's one tolerance τ. Every "is it zero?" and "is it singular?" decision is made
+/// on a scale-free measure in [0, 1] (it does not grow with ‖A‖^(l−1), nor change with the units of
+/// the inputs, outputs or disturbances) and compared with τ:
+///
+/// | decision | measure | passes when |
+/// |---|---|---|
+/// | c_i A^(l−1) B ≠ 0, eq. (7) | largest cosine between c_i A^(l−1) and a column of B | ≥ τ |
+/// | B* nonsingular, Proposition 1 | smallest singular value of B* with rows c_i A^(σ_i−1) and columns of B at unit norm (entries are those cosines) | ≥ τ |
+/// | N = L_ω D⁺ well posed, eq. (20) | smallest singular value of D with unit columns | ≥ τ |
+///
+/// τ = 1e-5: data rounded to six significant digits (relative error 5e-7 per entry) moves an exactly
+/// zero cosine by about 1e-6, a factor 10 below τ. A row of the scaled B* has norm at most √m times
+/// its largest cosine, so a σ_i decided on a cosine just above τ leaves a B* the second test judges
+/// by the same τ (for m = 1 the two tests coincide). A measure within [`CLOSE_FACTOR`] of τ is reported as close.
+pub const TOL: f64 = 1e-5;
 
-/// B* is treated as singular above this condition number.
-pub const MAX_COND_B_STAR: f64 = 1e12;
+/// A decision is close when its measure lies within this factor of [`TOL`] (either side).
+pub const CLOSE_FACTOR: f64 = 100.0;
 
-/// Relative degrees σ_i (eq. (7)): the least l with c_i A^{l−1} B ≠ 0, decided with
-/// [`RELATIVE_DEGREE_TOL`]. `None` for an output that no input reaches (c_i A^{l−1} B ≈ 0 for all l ≤ n).
-pub fn relative_degrees(A: &DMatrix<f64>, B: &DMatrix<f64>, C: &DMatrix<f64>) -> Vec<Option<usize>> {
+/// True when `measure` is within [`CLOSE_FACTOR`] of [`TOL`].
+pub fn close(measure: f64) -> bool {
+    (TOL / CLOSE_FACTOR..=TOL * CLOSE_FACTOR).contains(&measure)
+}
+
+/// The decision of eq. (7) for one output: σ_i and the measure at each l = 1, …, n.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RelativeDegree {
+    /// σ_i, the least l whose measure is ≥ [`TOL`]; `None` when no l ≤ n passes.
+    pub sigma: Option<usize>,
+    /// measures[l − 1] = max_j |c_i A^(l−1) b_j| / (‖c_i A^(l−1)‖ ‖b_j‖), for l = 1, …, n.
+    pub measures: Vec<f64>,
+}
+
+impl RelativeDegree {
+    /// The measures that decided σ_i (l ≤ σ_i, or all of them when no l passed).
+    pub fn deciding(&self) -> &[f64] {
+        &self.measures[..self.sigma.unwrap_or(self.measures.len())]
+    }
+    /// True when a deciding measure is close to [`TOL`] (see [`close`]).
+    pub fn is_close(&self) -> bool {
+        self.deciding().iter().any(|&m| close(m))
+    }
+}
+
+/// B with unit-norm columns (a zero column stays zero).
+pub(crate) fn unit_columns(B: &DMatrix<f64>) -> DMatrix<f64> {
+    let mut Bn = B.clone();
+    for mut c in Bn.column_iter_mut() {
+        let nrm = c.norm();
+        if nrm > 0.0 {
+            c /= nrm;
+        }
+    }
+    Bn
+}
+
+/// Eq. (7) for every output, on the normalized iterates r_l = c_i A^(l−1) / ‖c_i A^(l−1)‖: the
+/// measure at l is max_j |r_l b̂_j| with b̂_j the unit columns of B (see [`TOL`]).
+pub fn relative_degree_measures(A: &DMatrix<f64>, B: &DMatrix<f64>, C: &DMatrix<f64>) -> Vec<RelativeDegree> {
     let n = A.nrows();
-    let (nA, nB) = (A.norm(), B.norm());
+    let Bn = unit_columns(B);
     (0..C.nrows())
         .map(|i| {
-            let ci = C.row(i).clone_owned();
-            let mut row: RowDVector<f64> = ci.clone(); // c_i A^{l−1}
-            let mut scale = ci.norm() * nB; // ‖c_i‖‖A‖^{l−1}‖B‖
-            for l in 1..=n {
-                if (&row * B).norm() > RELATIVE_DEGREE_TOL * scale {
-                    return Some(l);
+            let mut row: RowDVector<f64> = C.row(i).clone_owned();
+            let mut measures = Vec::with_capacity(n);
+            for _ in 0..n {
+                let nrm = row.norm();
+                if nrm == 0.0 || !nrm.is_finite() {
+                    measures.resize(n, 0.0);
+                    break;
                 }
+                row /= nrm;
+                measures.push((&row * &Bn).amax());
                 row = &row * A;
-                scale *= nA;
             }
-            None
+            let sigma = measures.iter().position(|&m| m >= TOL).map(|l| l + 1);
+            RelativeDegree { sigma, measures }
         })
         .collect()
+}
+
+/// Relative degrees σ_i (eq. (7)), decided as in [`relative_degree_measures`]. `None` for an output
+/// that no input reaches (every measure below [`TOL`] for l ≤ n).
+pub fn relative_degrees(A: &DMatrix<f64>, B: &DMatrix<f64>, C: &DMatrix<f64>) -> Vec<Option<usize>> {
+    relative_degree_measures(A, B, C).into_iter().map(|d| d.sigma).collect()
 }
 
 /// Proposition 1's result: the decoupling gains and the closed loop they give.
@@ -47,8 +104,12 @@ pub struct FalbWolovich {
     pub F: DMatrix<f64>,
     /// q_i0 = ∏_j (−λ_ij), the numerator of G_ii(s).
     pub q0: Vec<f64>,
-    /// Condition number of B*.
+    /// Condition number of B* scaled as in [`TOL`] (rows and the columns of B to unit norm).
     pub cond_B_star: f64,
+    /// Smallest singular value of that scaled B* (≥ [`TOL`]).
+    pub smallest_B_star: f64,
+    /// The decision of eq. (7) for each output.
+    pub degrees: Vec<RelativeDegree>,
 }
 
 /// Falb–Wolovich decoupler (Proposition 1) for per-channel poles `channel_poles[i]` (σ_i each, closed
@@ -69,9 +130,11 @@ pub fn falb_wolovich(
             got: channel_poles.len(),
         });
     }
+    let degrees = relative_degree_measures(A, B, C);
     let mut sigma = Vec::with_capacity(m);
-    for (channel, s) in relative_degrees(A, B, C).into_iter().enumerate() {
-        let s = s.ok_or(DesignError::NoRelativeDegree { channel })?;
+    for (channel, d) in degrees.iter().enumerate() {
+        let largest = d.measures.iter().copied().fold(0.0, f64::max);
+        let s = d.sigma.ok_or(DesignError::NoRelativeDegree { channel, largest })?;
         let got = channel_poles[channel].len();
         if got != s {
             return Err(DesignError::ChannelPoleCount { channel, sigma: s, got });
@@ -81,6 +144,7 @@ pub fn falb_wolovich(
     let mut B_star = DMatrix::zeros(m, B.ncols());
     let mut C_star = DMatrix::zeros(m, n);
     let mut q0 = Vec::with_capacity(m);
+    let mut row_norms = Vec::with_capacity(m);
     for i in 0..m {
         // q = [q_i0, …, q_i(σ−1)] of ∏(s − λ_ij) (eq. for G_ii(s)).
         let q = poly_from_roots(&channel_poles[i]);
@@ -93,16 +157,29 @@ pub fn falb_wolovich(
         // row is now c_i A^{σ_i}; B* uses c_i A^{σ_i − 1} B.
         c_star += &row;
         let prev = C.row(i) * A.pow((sigma[i] - 1) as u32);
+        row_norms.push(prev.norm());
         B_star.set_row(i, &(prev * B));
         C_star.set_row(i, &c_star);
         q0.push(q[0]);
     }
-    let cond_B_star = cond(&B_star);
+    // The scale-free B* of the tolerance policy: entry (i, j) is the cosine between
+    // c_i A^(σ_i−1) and b_j.
+    let scaled = DMatrix::from_fn(m, B.ncols(), |i, j| {
+        let d = row_norms[i] * B.column(j).norm();
+        if d > 0.0 {
+            B_star[(i, j)] / d
+        } else {
+            0.0
+        }
+    });
+    let sv = scaled.singular_values();
+    let smallest = sv.min();
+    let cond_B_star = cond(&scaled);
     let inv = match B_star.clone().try_inverse() {
-        Some(inv) if cond_B_star <= MAX_COND_B_STAR => inv,
-        _ => return Err(DesignError::NotDecouplable { cond: cond_B_star }),
+        Some(inv) if smallest >= TOL => inv,
+        _ => return Err(DesignError::NotDecouplable { smallest, cond: cond_B_star }),
     };
     let K = &inv * &C_star;
     let F = &inv * DMatrix::from_diagonal(&nalgebra::DVector::from_vec(q0.clone()));
-    Ok(FalbWolovich { sigma, B_star, C_star, K, F, q0, cond_B_star })
+    Ok(FalbWolovich { sigma, B_star, C_star, K, F, q0, cond_B_star, smallest_B_star: smallest, degrees })
 }

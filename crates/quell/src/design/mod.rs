@@ -10,11 +10,13 @@ use nalgebra::{Complex, DMatrix};
 use thiserror::Error;
 
 pub use assumptions::{controllability, observability, RankTest};
-pub use decouple::{falb_wolovich, relative_degrees, FalbWolovich};
+pub use decouple::{
+    close, falb_wolovich, relative_degree_measures, relative_degrees, FalbWolovich, RelativeDegree, CLOSE_FACTOR, TOL,
+};
 pub use internal_model::{filter_pair, internal_model};
 pub use place::{place, PlaceError};
 
-use crate::linalg::{eigenvalues, fmt_complex, numerical_rank, poly_from_roots, unstable, EigenError};
+use crate::linalg::{cond, eigenvalues, fmt_complex, numerical_rank, poly_from_roots, unstable, EigenError};
 use crate::plant::{Plant, PlantError};
 
 /// How the Luenberger observer gain L of eq. (6) is chosen.
@@ -88,12 +90,14 @@ pub struct Design {
     B_star: DMatrix<f64>,
     cond_B_star: f64,
     sigma: Vec<usize>,
+    degrees: Vec<RelativeDegree>,
     channels: Vec<ChannelTf>,
     G_g: DMatrix<f64>,
     L_g: DMatrix<f64>,
     G_w: DMatrix<f64>,
     L_w: DMatrix<f64>,
     N: DMatrix<f64>,
+    cond_D: f64,
     mu: Vec<f64>,
     beta: f64,
     controllability: RankTest,
@@ -111,6 +115,8 @@ pub enum DesignError {
     Unobservable { rank: usize, n: usize, tol: f64 },
     #[error("design.observer_poles: {0}")]
     ObserverPoles(PlaceError),
+    #[error("design.observer_poles: pole {} is requested {multiplicity} times, but the plant has rank C = {outputs} independent outputs, so A − LC can have it at most {outputs} times; spread the repeated poles slightly or use fewer copies", fmt_complex(.pole))]
+    ObserverMultiplicity { pole: Complex<f64>, multiplicity: usize, outputs: usize },
     #[error("plant.{0}")]
     Plant(#[from] PlantError),
     #[error("design.observer_gain[{row}][{col}]: expected a finite number, found {value}")]
@@ -119,12 +125,12 @@ pub enum DesignError {
     ObserverGainShape { n: usize, m: usize, rows: usize, cols: usize },
     #[error("design.observer_gain: A − LC is not Hurwitz (eigenvalues {}); choose L with a stable observer, or give design.observer_poles instead", fmt_eigs(.eigenvalues))]
     ObserverUnstable { eigenvalues: Vec<Complex<f64>> },
-    #[error("plant.C: output {} is reached by no input (c_i A^(l-1) B = 0 for every l ≤ n), so the plant cannot be decoupled", .channel + 1)]
-    NoRelativeDegree { channel: usize },
+    #[error("plant.C: output {} is reached by no input: c_i A^(l-1) B = 0 for every l ≤ n (largest cosine between c_i A^(l-1) and a column of B: {largest:.1e}, below τ = {tol:.0e}), so the plant cannot be decoupled; check row {channel} of plant.C", .channel + 1, tol = TOL)]
+    NoRelativeDegree { channel: usize, largest: f64 },
     #[error("design.channel_poles[{channel}]: channel {} has relative degree {sigma}, so it needs {sigma} pole{}; got {got}", .channel + 1, if *.sigma == 1 { "" } else { "s" })]
     ChannelPoleCount { channel: usize, sigma: usize, got: usize },
-    #[error("plant: not decouplable (Proposition 1): B* is singular (condition number {cond:.3e})")]
-    NotDecouplable { cond: f64 },
+    #[error("plant: not decouplable (Proposition 1): B* is singular: with rows c_i A^(σ_i-1) and the columns of B scaled to unit norm its smallest singular value is {smallest:.3e}, below τ = {tol:.0e} (condition number {cond:.3e}); the outputs' leading responses to the inputs are (nearly) dependent", tol = TOL)]
+    NotDecouplable { smallest: f64, cond: f64 },
     #[error("plant: unstable zero dynamics: A − BK keeps the plant's {} zero{} (its eigenvalues besides the {placed} channel poles that Proposition 1 places), and {} not in the open left half-plane: {}; this plant cannot be decoupled stably", .zeros.len(), if .zeros.len() == 1 { "" } else { "s" }, if .unstable.len() == 1 { "this one is" } else { "these are" }, fmt_eigs(.unstable))]
     UnstableZeroDynamics { placed: usize, zeros: Vec<Complex<f64>>, unstable: Vec<Complex<f64>> },
     #[error("{key}: expected {expected} entries (one per {per}), got {got}")]
@@ -143,6 +149,8 @@ pub enum DesignError {
     Eigenvalues { key: &'static str, of: &'static str, reason: &'static str },
     #[error("plant.D: rank D = {rank} < k = {k}, so N D = L_ω (eq. (20)) has no solution; disturbances must enter through independent directions")]
     DisturbanceRank { rank: usize, k: usize },
+    #[error("plant.D: the disturbance directions are nearly parallel: D with unit columns has smallest singular value {smallest:.3e}, below τ = {tol:.0e} (condition number {cond:.3e}), so N = L_ω D⁺ (eq. (20)) would be huge (‖N‖ ≈ {norm_N:.1e}); merge the nearly parallel disturbance components into one", tol = TOL)]
+    DisturbanceConditioning { smallest: f64, cond: f64, norm_N: f64 },
 }
 
 fn fmt_eigs(e: &[Complex<f64>]) -> String {
@@ -185,7 +193,7 @@ impl Design {
             spec.channel_poles.iter().map(|p| ChannelTf { poles: p.clone(), den: poly_from_roots(p) }).collect();
         let (G_g, L_g) = internal_model(&spec.reference_filter_poles);
         let (G_w, L_w) = internal_model(&spec.disturbance_filter_poles);
-        let N = disturbance_observer_gain(&plant.D, &L_w)?;
+        let (N, cond_D) = disturbance_observer_gain(&plant.D, &L_w)?;
         Ok(Design {
             plant: plant.clone(),
             L,
@@ -196,12 +204,14 @@ impl Design {
             B_star: fw.B_star,
             cond_B_star: fw.cond_B_star,
             sigma: fw.sigma,
+            degrees: fw.degrees,
             channels,
             G_g,
             L_g,
             G_w,
             L_w,
             N,
+            cond_D,
             mu: spec.mu.clone(),
             beta: spec.beta,
             controllability,
@@ -247,6 +257,10 @@ impl Design {
     pub fn sigma(&self) -> &[usize] {
         &self.sigma
     }
+    /// The decision of eq. (7) for each output: σ_i and the scale-free measures behind it.
+    pub fn relative_degree_decisions(&self) -> &[RelativeDegree] {
+        &self.degrees
+    }
     /// G_ii(s), one per channel.
     pub fn channels(&self) -> &[ChannelTf] {
         &self.channels
@@ -270,6 +284,10 @@ impl Design {
     /// Disturbance observer gain N with N D = L_ω (eq. (20)), the minimum-norm N = L_ω D⁺.
     pub fn N(&self) -> &DMatrix<f64> {
         &self.N
+    }
+    /// Condition number of D with unit columns (the measure of the tolerance policy, [`TOL`]).
+    pub fn cond_D(&self) -> f64 {
+        self.cond_D
     }
     /// Adaptation gains μ_i, eq. (33).
     pub fn mu(&self) -> &[f64] {
@@ -385,7 +403,15 @@ fn observer(plant: &Plant, choice: &ObserverChoice) -> Result<(DMatrix<f64>, Vec
             (L.clone(), "design.observer_gain")
         }
         ObserverChoice::Poles(p) => (
-            place(&A.transpose(), &C.transpose(), p).map_err(DesignError::ObserverPoles)?.transpose(),
+            place(&A.transpose(), &C.transpose(), p)
+                .map_err(|e| match e {
+                    // By duality rank(Cᵀ) = rank C limits the multiplicity: say so in the outputs' terms.
+                    PlaceError::Multiplicity { pole, multiplicity, max } => {
+                        DesignError::ObserverMultiplicity { pole, multiplicity, outputs: max }
+                    }
+                    e => DesignError::ObserverPoles(e),
+                })?
+                .transpose(),
             "design.observer_poles",
         ),
     };
@@ -445,21 +471,28 @@ fn zero_dynamics_basis(A: &DMatrix<f64>, C: &DMatrix<f64>, sigma: &[usize]) -> D
     Vt.rows(placed, n - placed).transpose()
 }
 
-/// N = L_ω D⁺, the minimum-norm solution of N D = L_ω (eq. (20)); rank D = k is required.
-fn disturbance_observer_gain(D: &DMatrix<f64>, L_w: &DMatrix<f64>) -> Result<DMatrix<f64>, DesignError> {
+/// N = L_ω D⁺, the minimum-norm solution of N D = L_ω (eq. (20)), and the condition number of D
+/// with unit columns, whose smallest singular value must be ≥ τ ([`TOL`]); rank D = k is required.
+fn disturbance_observer_gain(D: &DMatrix<f64>, L_w: &DMatrix<f64>) -> Result<(DMatrix<f64>, f64), DesignError> {
     let (n, k) = (D.nrows(), D.ncols());
     let rank = numerical_rank(D);
     if rank < k {
         return Err(DesignError::DisturbanceRank { rank, k });
     }
     if k == 0 {
-        return Ok(DMatrix::zeros(0, n));
+        return Ok((DMatrix::zeros(0, n), 1.0));
     }
     let pinv = D
         .clone()
         .pseudo_inverse(f64::EPSILON * n as f64 * D.norm())
         .map_err(|_| DesignError::DisturbanceRank { rank, k })?;
-    Ok(L_w * pinv)
+    let N = L_w * pinv;
+    let unit = decouple::unit_columns(D);
+    let (smallest, cond_D) = (unit.singular_values().min(), cond(&unit));
+    if smallest < TOL {
+        return Err(DesignError::DisturbanceConditioning { smallest, cond: cond_D, norm_N: N.norm() });
+    }
+    Ok((N, cond_D))
 }
 
 /// The error for eigenvalues that could not be computed, with the reason a user can act on.
