@@ -4,7 +4,6 @@
 mod common;
 
 use common::multiset_mismatch as max_rel_mismatch;
-use proptest::prelude::*;
 use quell::design::place::{place, PlaceError};
 use quell::nalgebra::{Complex, DMatrix};
 
@@ -338,11 +337,35 @@ fn error_non_finite() {
 
 /// Error messages say what to do.
 #[test]
-fn error_messages_are_actionable() {
-    let msg = PlaceError::Uncontrollable { rank: 1, n: 2 }.to_string();
-    assert!(msg.contains("rank") && msg.contains('1') && msg.contains('2'), "{msg}");
-    let msg = PlaceError::Inaccurate { max_error: 1e-3 }.to_string();
-    assert!(msg.contains("ill-conditioned"), "{msg}");
+fn refusals_from_real_problems() {
+    // diag(1, 2) with b = e_1: the second mode is unreachable, so the staircase reaches rank 1 of 2
+    // (closed form); the error carries those numbers.
+    let A = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 2.0]);
+    let B = DMatrix::from_row_slice(2, 1, &[1.0, 0.0]);
+    let e = place(&A, &B, &reals(&[-1.0, -2.0])).unwrap_err();
+    assert_eq!(e, PlaceError::Uncontrollable { rank: 1, n: 2 });
+    assert!(e.to_string().contains("staircase is 1, need 2"), "{e}");
+    // The observer of a 12-state integrator chain (y = x₁) with poles −2, −2.7, …, −9.7 by duality:
+    // the single-input problem in these coordinates is ill-conditioned; whatever place returns
+    // must reach the poles (checked by the characteristic polynomial, which is well conditioned
+    // here), or be the Inaccurate refusal with the error it measured.
+    let n = 12;
+    let A = DMatrix::from_fn(n, n, |r, c| if c == r + 1 { 1.0 } else { 0.0 });
+    let mut C = DMatrix::zeros(1, n);
+    C[(0, 0)] = 1.0;
+    let poles: Vec<C64> = (0..n).map(|j| re(-2.0 - 0.7 * j as f64)).collect();
+    match place(&A.transpose(), &C.transpose(), &poles) {
+        Ok(Lt) => {
+            let M = &A - Lt.transpose() * &C;
+            let got = char_poly(&M);
+            let want = poly_from_roots(&poles);
+            for k in 0..n {
+                assert!((got[k] - want[k]).abs() <= 1e-6 * want[k].abs(), "coefficient {k}: {} vs {}", got[k], want[k]);
+            }
+        }
+        Err(PlaceError::Inaccurate { max_error }) => assert!(max_error > 1e-6 && max_error.is_finite()),
+        Err(e) => panic!("unexpected {e}"),
+    }
 }
 
 // ---------------------------------------------------------------- property tests
@@ -405,33 +428,35 @@ fn random_systems_place_requested_poles() {
     assert!(ok[0] * 100 >= total[0] * 60, "too many single-input refusals");
 }
 
-proptest! {
-    #![proptest_config(ProptestConfig {
-        cases: 256,
-        rng_seed: proptest::test_runner::RngSeed::Fixed(0x5eed),
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    })]
-
-    /// Never a wrong K: on nearly uncontrollable systems (a coupling of size δ down to 1e-12)
-    /// and random pole sets, the result is either accurate to the verification threshold
-    /// (1e-6 relative, plus 10% for the test's own eigenvalue computation) or an error.
-    #[test]
-    fn nearly_uncontrollable_never_wrong(seed in any::<u64>(), n in 2usize..=6, m in 1usize..=3, exp in 0i32..=12) {
-        let m = m.min(n - 1);
-        let mut rng = Rng::new(seed);
+/// Never a wrong K: on nearly uncontrollable systems (a coupling of size δ = 10^−e, e = 0…12, into
+/// the last state) and random pole sets, the result is either accurate to the verification
+/// threshold (1e-6 relative, plus 10% for the test's own eigenvalue computation) or an error. The
+/// accepted cases are counted so the test cannot pass by refusing everything: with δ ≥ 0.01 the
+/// problem is well posed and at least half must be placed.
+#[test]
+fn nearly_uncontrollable_never_wrong() {
+    let (mut accepted, mut well_posed, mut accepted_well_posed) = (0, 0, 0);
+    for seed in 0..256u64 {
+        let mut rng = Rng::new(seed ^ 0x5eed);
+        let n = 2 + (rng.next_u64() % 5) as usize;
+        let m = (1 + (rng.next_u64() % 3) as usize).min(n - 1);
+        let exp = (rng.next_u64() % 13) as i32;
         let mut A = rng.matrix(n, n);
         let mut B = rng.matrix(n, m);
-        // Last state barely reachable: weak coupling into it, no direct input.
         let delta = 10f64.powi(-exp);
         for j in 0..n - 1 {
             A[(n - 1, j)] *= delta;
         }
         B.row_mut(n - 1).fill(0.0);
         let poles = random_poles(&mut rng, n, 0.3);
+        well_posed += usize::from(exp <= 2);
         if let Ok(K) = place(&A, &B, &poles) {
             let err = max_rel_mismatch(&poles, &eigenvalues(&closed_loop(&A, &B, &K)));
-            prop_assert!(err <= 1.1e-6, "accepted K with error {:e}", err);
+            assert!(err <= 1.1e-6, "seed {seed}: accepted K with error {err:e}");
+            accepted += 1;
+            accepted_well_posed += usize::from(exp <= 2);
         }
     }
+    eprintln!("accepted {accepted} of 256; {accepted_well_posed} of {well_posed} with δ ≥ 0.01");
+    assert!(accepted_well_posed * 2 >= well_posed, "{accepted_well_posed} of {well_posed} well-posed cases placed");
 }
