@@ -191,7 +191,9 @@ fn draw_sweep_1d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
             let values = axis.values.clone();
             let fmt = move |v: &f64| {
                 if numeric {
-                    format!("{v}")
+                    // Tick values like 2.8000000000000003 read as 2.8.
+                    let short = format!("{v:.6}");
+                    short.trim_end_matches('0').trim_end_matches('.').to_string()
                 } else {
                     values.get(v.round() as usize).cloned().unwrap_or_default()
                 }
@@ -199,6 +201,7 @@ fn draw_sweep_1d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
             chart
                 .configure_mesh()
                 .max_light_lines(2)
+                .x_labels(6)
                 .x_desc(axis.key.as_str())
                 .y_desc(*label)
                 .x_label_formatter(&fmt)
