@@ -8,6 +8,14 @@ use crate::errors::{raise, Kind};
 
 /// The plant (1) of the paper: ẋ = A x + B u_d(t) + D ω(t), y = C x + Q ω(t), where
 /// u_d,i(t) = u_f,i(t − τ_i) is input i delayed by τ_i.
+///
+/// `Plant(A, B, C, D=None, Q=None, delays=None, x0=None)`: array-likes; without D there is no
+/// disturbance (k = 0); Q defaults to 0, delays to 0 and x0 to 0.
+///
+/// `Plant(sys, D=..., Q=..., delays=...)` takes A, B and C from a `control.StateSpace`. Its D is
+/// python-control's feedthrough from u to y, which the plant (1) does not have: it must be zero (and
+/// the system continuous-time); D and Q of this plant are the disturbance matrices, given as
+/// keywords.
 #[pyclass(module = "quell", name = "Plant", frozen)]
 pub struct PyPlant {
     pub inner: quell::Plant,

@@ -19,7 +19,16 @@ use crate::design::PyDesign;
 use crate::errors::{raise, Kind};
 use crate::plant::{plant_arg, PyPlant};
 
-/// A scenario: plant, design choices, reference g(t), disturbance ω(t), simulation settings, noise.
+/// A scenario: plant (1), design choices, reference g(t) (Assumption 2), disturbance ω(t)
+/// (Assumption 3), simulation settings, noise and the true plant.
+///
+/// `Scenario(plant, reference, disturbance=None, *, name, t_end, output_step, rtol, atol,
+/// sample_time, noise, truth, **design)` takes the scenario file's sections as Python values:
+/// `reference=[{"harmonics": [{"amplitude": 3.0, "frequency": 2.0}]}, {"bias": 2.0}]` (one
+/// component per output, bias + Σ amplitude·sin(frequency·t + phase)), the `[design]` keys as
+/// keywords (channel_poles, reference_filter_poles, disturbance_filter_poles, mu, beta, and
+/// observer_poles or observer_gain), `noise={"std": [...], "seed": 0}`, `truth=` a Plant. Errors
+/// name the scenario key (`reference.components[0].harmonics[0].frequency`).
 #[pyclass(module = "quell", name = "Scenario", frozen)]
 pub struct PyScenario {
     pub inner: quell::Scenario,
