@@ -9,6 +9,9 @@
 //!   |det X|-maximising rank-2 step, in the manner of Tits & Yang (1996), "Globally convergent
 //!   algorithms for robust pole assignment by state feedback", IEEE TAC 41(10). Repeated poles
 //!   (at most r copies) get independent eigenvectors from the same admissible space.
+//! * A pole repeated more than r times (the closed loop must have a Jordan block): a seeded
+//!   generic K₀ makes A − B K₀ cyclic, then single-input placement on (A − B K₀, B v) for a
+//!   generic combination v of the inputs; K = K₀ + v k (see [`cyclic`]).
 //! * Single-input (r = 1): Ackermann's formula evaluated in the orthogonal controller-Hessenberg
 //!   (staircase) coordinates, where the controllability matrix is triangular and need not be
 //!   inverted; any multiplicity is allowed.
@@ -33,6 +36,8 @@ const SAME_POLE_RTOL: f64 = 1e-8;
 const VERIFY_RTOL: f64 = 1e-6;
 /// Maximum number of KNV0 sweeps.
 const KNV_MAX_SWEEPS: usize = 60;
+/// Number of seeded (K₀, v) candidates tried by [`cyclic`].
+const CYCLIC_TRIES: usize = 8;
 
 /// Why no gain was returned.
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -50,12 +55,6 @@ pub enum PlaceError {
         crate::linalg::fmt_complex(.pole)
     )]
     NotConjugateClosed { pole: Complex<f64> },
-    #[error(
-        "pole {} is requested {multiplicity} times, but rank(B) = {max} allows at most {max}; \
-         spread the repeated poles slightly or use fewer copies",
-        crate::linalg::fmt_complex(.pole)
-    )]
-    Multiplicity { pole: Complex<f64>, multiplicity: usize, max: usize },
     #[error("pole {} is not a finite number; request finite poles", crate::linalg::fmt_complex(.pole))]
     NonFinite { pole: Complex<f64> },
     #[error("matrix {which} contains NaN or infinite entries; fix the model")]
@@ -78,16 +77,18 @@ enum Slot {
 /// Pole placement like MATLAB's and python-control's `place`: returns the real `m × n` gain `K`
 /// with eig(A − B K) = `poles` (as a multiset).
 ///
-/// `poles` must hold exactly n finite values, closed under complex conjugation. For
-/// rank(B) = r > 1 each pole may be repeated at most r times (the closed loop is then
-/// diagonalisable); for single-input systems any multiplicity is allowed (one Jordan block per
-/// pole). Method: KNV method 0 (Kautsky, Nichols & Van Dooren 1985) for r > 1, Ackermann's
-/// formula in orthogonal Hessenberg coordinates for r = 1 — see the module docs. The result is
-/// checked: if the eigenvalues of A − B K are not guaranteed within 1e-6 relative to
-/// max(1, |p|) of the request (for single-input repeated poles, whose Jordan-block eigenvalues
-/// are only computable to ~eps^(1/k): if the characteristic polynomial misses ∏(s − p) by more
-/// than 1e-6, relative to the coefficients of ∏(s + max(1, |p|))), the function returns
-/// [`PlaceError::Inaccurate`] rather than a wrong K.
+/// `poles` must hold exactly n finite values, closed under complex conjugation; any
+/// multiplicity is allowed when (A, B) is controllable. With rank(B) = r > 1 and every pole
+/// repeated at most r times: KNV method 0 (Kautsky, Nichols & Van Dooren 1985), a
+/// diagonalisable closed loop with a well-conditioned eigenvector matrix. A pole repeated more
+/// than r times needs a Jordan block (its eigenvectors cannot be independent): a seeded cyclic
+/// feedback then single-input placement, see [`cyclic`]. For r = 1: Ackermann's formula in
+/// orthogonal Hessenberg coordinates (one Jordan block per repeated pole) — see the module docs.
+/// The result is checked: if the eigenvalues of A − B K are not guaranteed within 1e-6 relative
+/// to max(1, |p|) of the request (for Jordan blocks, whose eigenvalues are only computable to
+/// ~eps^(1/k): if the characteristic polynomial misses ∏(s − p) by more than 1e-6, relative to
+/// the coefficients of ∏(s + max(1, |p|))), the function returns [`PlaceError::Inaccurate`]
+/// rather than a wrong K. How fragile the placed closed loop is: [`eigenvector_condition`].
 ///
 /// An observer gain follows by duality: `L = place(Aᵀ, Cᵀ, p)ᵀ` gives eig(A − L C) = p.
 ///
@@ -122,9 +123,6 @@ pub fn place(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[Complex<f64>]) -> Resu
     let r = st.blocks[0]; // numerical rank of B, decided with the same tolerance
 
     let expanded = expand(&slots);
-    if r > 1 {
-        check_multiplicity(&expanded, r)?;
-    }
 
     // Reduce B to full column rank: B ≈ U_r Σ_r V_rᵀ, place with B_r = U_r Σ_r, K = V_r K_r.
     let svd = B
@@ -148,9 +146,11 @@ pub fn place(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[Complex<f64>]) -> Resu
         let distinct = (0..expanded.len()).all(|i| (0..i).all(|j| !same_pole(expanded[i], expanded[j])));
         let X = if distinct { Some(eigenvectors_single_input(A, &Br, &slots)?) } else { None };
         (Kr, X)
-    } else {
+    } else if max_multiplicity(&expanded) <= r {
         let (Kr, X) = knv0(A, &Br, &slots)?;
         (Kr, Some(X))
+    } else {
+        (cyclic(A, &Br, &slots, &expanded)?, None)
     };
     let K = Vr * Kr;
     match X {
@@ -212,14 +212,43 @@ fn same_pole(a: C64, b: C64) -> bool {
     (a - b).norm() <= SAME_POLE_RTOL * a.norm().max(b.norm()).max(1.0)
 }
 
-fn check_multiplicity(poles: &[C64], max: usize) -> Result<(), PlaceError> {
-    for &p in poles {
-        let multiplicity = poles.iter().filter(|&&q| same_pole(p, q)).count();
-        if multiplicity > max {
-            return Err(PlaceError::Multiplicity { pole: p, multiplicity, max });
+/// The largest number of times one pole is requested.
+fn max_multiplicity(poles: &[C64]) -> usize {
+    poles.iter().map(|&p| poles.iter().filter(|&&q| same_pole(p, q)).count()).max().unwrap_or(0)
+}
+
+/// Placement for a pole requested more than r = rank(B) times (the closed loop then needs Jordan
+/// blocks, which KNV0's diagonalisable X cannot give). A generic feedback K₀ makes A − B K₀
+/// cyclic, and then (A − B K₀, B v) is controllable for a generic v, so the single-input
+/// placement k of [`single_input`] on it gives A − B (K₀ + v k) with the requested characteristic
+/// polynomial (the classical proof of pole assignability, e.g. Wonham 1967; Kailath, *Linear
+/// Systems*, §7.2). K₀ and v come from fixed seeds (deterministic): [`CYCLIC_TRIES`] candidates,
+/// the first with K₀ = 0, and the one whose characteristic polynomial is closest to ∏(s − p)
+/// is returned (verified again by the caller).
+fn cyclic(A: &DMatrix<f64>, B: &DMatrix<f64>, slots: &[Slot], poles: &[C64]) -> Result<DMatrix<f64>, PlaceError> {
+    let (n, r) = (A.nrows(), B.ncols());
+    let pole_scale = poles.iter().map(|p| p.norm()).fold(1.0, f64::max);
+    let gain_scale = A.norm().max(pole_scale) / B.norm();
+    let mut best: Option<(f64, DMatrix<f64>)> = None;
+    for t in 0..CYCLIC_TRIES {
+        let K0 = if t == 0 {
+            DMatrix::zeros(r, n)
+        } else {
+            DMatrix::from_vec(r, n, generic_coeffs(1000 + 2 * t, r * n)) * gain_scale
+        };
+        let mut v = DMatrix::from_vec(r, 1, generic_coeffs(1001 + 2 * t, r));
+        v /= v.norm();
+        let A0 = A - B * &K0;
+        let Ok(k) = single_input(&A0, &(B * &v), slots) else {
+            continue;
+        };
+        let Kr = K0 + v * k;
+        let error = char_poly_error(A, B, &Kr, poles);
+        if error.is_finite() && best.as_ref().is_none_or(|(e, _)| error < *e) {
+            best = Some((error, Kr));
         }
     }
-    Ok(())
+    best.map(|(_, K)| K).ok_or(PlaceError::Inaccurate { max_error: f64::INFINITY })
 }
 
 /// Single-input placement for `b` (n × 1): Ackermann's formula k = e_nᵀ C⁻¹ p(A) evaluated in
@@ -532,18 +561,28 @@ fn verify_eigenvectors(
 /// [`VERIFY_RTOL`] relative to the coefficients of ∏(s + max(1, |p|)). The reported error is
 /// that coefficient error.
 fn verify_char_poly(A: &DMatrix<f64>, B: &DMatrix<f64>, K: &DMatrix<f64>, poles: &[C64]) -> Result<(), PlaceError> {
-    let M = A - B * K;
-    if M.iter().any(|x| !x.is_finite()) {
-        return Err(PlaceError::Inaccurate { max_error: f64::INFINITY });
-    }
-    let got = hessenberg_char_poly(&M);
-    let want = poly_from_roots(poles);
-    let scale = poly_from_roots(&poles.iter().map(|p| C64::new(-p.norm().max(1.0), 0.0)).collect::<Vec<_>>());
-    let max_error = (0..got.len()).map(|k| (got[k] - want[k]).abs() / scale[k]).fold(0.0, f64::max);
+    let max_error = char_poly_error(A, B, K, poles);
     if max_error <= VERIFY_RTOL {
         Ok(())
     } else {
         Err(PlaceError::Inaccurate { max_error })
+    }
+}
+
+/// The coefficient error of [`verify_char_poly`] (∞ if A − B K is not finite).
+fn char_poly_error(A: &DMatrix<f64>, B: &DMatrix<f64>, K: &DMatrix<f64>, poles: &[C64]) -> f64 {
+    let M = A - B * K;
+    if M.iter().any(|x| !x.is_finite()) {
+        return f64::INFINITY;
+    }
+    let got = hessenberg_char_poly(&M);
+    let want = poly_from_roots(poles);
+    let scale = poly_from_roots(&poles.iter().map(|p| C64::new(-p.norm().max(1.0), 0.0)).collect::<Vec<_>>());
+    let e = (0..got.len()).map(|k| (got[k] - want[k]).abs() / scale[k]).fold(0.0, f64::max);
+    if e.is_finite() {
+        e
+    } else {
+        f64::INFINITY
     }
 }
 
@@ -580,4 +619,60 @@ fn hessenberg_char_poly(M: &DMatrix<f64>) -> Vec<f64> {
         p.push(next);
     }
     p.pop().unwrap_or_else(|| vec![1.0])
+}
+
+/// Condition number κ₂(X) = σ_max(X)/σ_min(X) of the eigenvector matrix X of the closed loop
+/// A − B K: the factor by which Bauer–Fike amplifies a perturbation of A − B K into its
+/// eigenvalues (MATLAB's `place` reports the same kind of figure). ∞ when A − B K is defective
+/// (a Jordan block: no basis of eigenvectors exists) or not finite.
+///
+/// X is built from the computed eigenvalues ([`crate::linalg::eigenvalues`]) grouped by
+/// [`crate::linalg::clusters`] (the copies of one repeated eigenvalue): for a cluster of k copies
+/// around its mean μ, the k right singular vectors of M − μI for its k smallest singular values
+/// (an orthonormal basis of the eigenspace, the best-conditioned choice within it). The cluster is
+/// declared defective (result ∞) when the largest of those k singular values exceeds
+/// √ε·‖M‖_F, i.e. when μ has fewer than k independent eigenvectors to half the working precision.
+///
+/// Panics if the shapes do not agree (A n×n, B n×m, K m×n).
+pub fn eigenvector_condition(A: &DMatrix<f64>, B: &DMatrix<f64>, K: &DMatrix<f64>) -> f64 {
+    let n = A.nrows();
+    assert!(
+        A.ncols() == n && B.nrows() == n && K.nrows() == B.ncols() && K.ncols() == n,
+        "eigenvector_condition: shapes"
+    );
+    if n == 0 {
+        return 1.0;
+    }
+    let M = A - B * K;
+    let Ok(eigs) = crate::linalg::eigenvalues(&M) else {
+        return f64::INFINITY;
+    };
+    let size = M.norm();
+    let Mc = M.map(|x| C64::new(x, 0.0));
+    let mut X = DMatrix::<C64>::zeros(n, n);
+    let mut c = 0;
+    for cluster in crate::linalg::clusters(&eigs, size) {
+        let k = cluster.len();
+        let mu = cluster.iter().map(|&j| eigs[j]).sum::<C64>() / k as f64;
+        let shifted = &Mc - DMatrix::<C64>::identity(n, n) * mu;
+        let Some(svd) = shifted.try_svd(false, true, f64::EPSILON, 10_000) else {
+            return f64::INFINITY;
+        };
+        let Some(Vt) = svd.v_t.as_ref() else {
+            return f64::INFINITY;
+        };
+        // Singular values sorted descending: the last k belong to the (near) null space.
+        if svd.singular_values[n - k] > f64::EPSILON.sqrt() * size {
+            return f64::INFINITY;
+        }
+        X.view_mut((0, c), (n, k)).copy_from(&Vt.rows(n - k, k).adjoint());
+        c += k;
+    }
+    let s = X.singular_values();
+    let (max, min) = (s.max(), s.min());
+    if min > 0.0 {
+        max / min
+    } else {
+        f64::INFINITY
+    }
 }
