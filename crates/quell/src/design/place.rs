@@ -11,7 +11,7 @@
 //!   (at most r copies) get independent eigenvectors from the same admissible space.
 //! * A pole repeated more than r times (the closed loop must have a Jordan block): a seeded
 //!   generic K₀ makes A − B K₀ cyclic, then single-input placement on (A − B K₀, B v) for a
-//!   generic combination v of the inputs; K = K₀ + v k (see [`cyclic`]).
+//!   generic combination v of the inputs; K = K₀ + v k (Wonham 1967; Kailath, *Linear Systems*, §7.2).
 //! * Single-input (r = 1): Ackermann's formula evaluated in the orthogonal controller-Hessenberg
 //!   (staircase) coordinates, where the controllability matrix is triangular and need not be
 //!   inverted; any multiplicity is allowed.
@@ -82,7 +82,7 @@ enum Slot {
 /// repeated at most r times: KNV method 0 (Kautsky, Nichols & Van Dooren 1985), a
 /// diagonalisable closed loop with a well-conditioned eigenvector matrix. A pole repeated more
 /// than r times needs a Jordan block (its eigenvectors cannot be independent): a seeded cyclic
-/// feedback then single-input placement, see [`cyclic`]. For r = 1: Ackermann's formula in
+/// feedback then single-input placement (module docs). For r = 1: Ackermann's formula in
 /// orthogonal Hessenberg coordinates (one Jordan block per repeated pole) — see the module docs.
 /// The result is checked: if the eigenvalues of A − B K are not guaranteed within 1e-6 relative
 /// to max(1, |p|) of the request (for Jordan blocks, whose eigenvalues are only computable to
