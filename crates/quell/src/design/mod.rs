@@ -115,8 +115,6 @@ pub enum DesignError {
     Unobservable { rank: usize, n: usize, tol: f64 },
     #[error("design.observer_poles: {0}")]
     ObserverPoles(PlaceError),
-    #[error("design.observer_poles: pole {} is requested {multiplicity} times, but the plant has rank C = {outputs} independent outputs, so A − LC can have it at most {outputs} times; spread the repeated poles slightly or use fewer copies", fmt_complex(.pole))]
-    ObserverMultiplicity { pole: Complex<f64>, multiplicity: usize, outputs: usize },
     #[error("plant.{0}")]
     Plant(#[from] PlantError),
     #[error("design.observer_gain[{row}][{col}]: expected a finite number, found {value}")]
@@ -403,15 +401,7 @@ fn observer(plant: &Plant, choice: &ObserverChoice) -> Result<(DMatrix<f64>, Vec
             (L.clone(), "design.observer_gain")
         }
         ObserverChoice::Poles(p) => (
-            place(&A.transpose(), &C.transpose(), p)
-                .map_err(|e| match e {
-                    // By duality rank(Cᵀ) = rank C limits the multiplicity: say so in the outputs' terms.
-                    PlaceError::Multiplicity { pole, multiplicity, max } => {
-                        DesignError::ObserverMultiplicity { pole, multiplicity, outputs: max }
-                    }
-                    e => DesignError::ObserverPoles(e),
-                })?
-                .transpose(),
+            place(&A.transpose(), &C.transpose(), p).map_err(DesignError::ObserverPoles)?.transpose(),
             "design.observer_poles",
         ),
     };
