@@ -138,7 +138,7 @@ fn the_checks_of_controller_new_with_the_same_messages() {
         assert!(matches!(got, ExportError::Controller(_)), "{got:?}");
     }
     match generate(&d, 0.3, &ExportOptions::default()) {
-        Err(ExportError::Controller(ControllerError::DelayNotMultiple { nearest, .. })) => {
+        Err(ExportError::Controller(ControllerError::DelayNotMultiple { nearest: Some(nearest), .. })) => {
             // The suggestion is valid: it exports.
             assert!(generate(&d, nearest, &ExportOptions::default()).is_ok());
         }
@@ -304,8 +304,8 @@ fn closed_loop_with_the_c_controller_and_f32_tail_bounds() {
     let mut c32 =
         CController::build(&export(&d, 1e-3, "quell", Precision::F32), "quell", Precision::F32, (2, 8, 3), "-O2");
     let r32 = paper_run(&mut c32, &d);
-    let (e1, e2) = (r32.max_abs_error(0, 90.0, 100.0), r32.max_abs_error(1, 90.0, 100.0));
-    let (f1, f2) = (rust.max_abs_error(0, 90.0, 100.0), rust.max_abs_error(1, 90.0, 100.0));
+    let (e1, e2) = (r32.max_abs_error(0, 90.0, 100.0).unwrap(), r32.max_abs_error(1, 90.0, 100.0).unwrap());
+    let (f1, f2) = (rust.max_abs_error(0, 90.0, 100.0).unwrap(), rust.max_abs_error(1, 90.0, 100.0).unwrap());
     let dev = run_deviation(&r32, &rust);
     println!("f32: tail max |e1| = {e1:.5}, |e2| = {e2:.5} (f64: {f1:.5}, {f2:.5})");
     println!(

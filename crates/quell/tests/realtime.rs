@@ -46,6 +46,44 @@ fn paper_design() -> Design {
     Design::new(&paper_plant(), &paper_spec()).unwrap()
 }
 
+/// The sample time printed in a `DelayNotMultiple` message, as a user would type it back.
+fn printed_suggestion(e: &ControllerError) -> Option<f64> {
+    let text = e.to_string();
+    let tail = text.split("the nearest valid sample time is ").nth(1)?;
+    Some(tail.trim_end_matches(" s").parse().unwrap())
+}
+
+#[test]
+fn suggested_sample_times_pass_the_check_or_none_is_offered() {
+    let design_with = |delays: &[f64]| {
+        let mut p = paper_plant();
+        p.delays = delays.to_vec();
+        Design::new(&p, &paper_spec()).unwrap()
+    };
+    // τ_2/τ_1 = 1.41421356237 is a ratio of 12-digit integers: no τ_c/k within 10⁴ samples of
+    // 1 ms makes both delays whole (to 1e-9), so no suggestion is offered.
+    let irrational = design_with(&[1.0, 1.41421356237]);
+    let e = Controller::new(&irrational, 1e-3).unwrap_err();
+    assert!(matches!(e, ControllerError::DelayNotMultiple { channel: 1, nearest: None, .. }), "{e:?}");
+    assert!(e.to_string().contains("no sample time") && e.to_string().contains("not commensurate"), "{e}");
+    // Commensurate delays: every suggestion (as stored and as printed) passes Controller::new.
+    let mut offered = 0;
+    for (delays, T) in [(&[1.0, 3.0][..], 0.3), (&[1.0, 1.5], 7e-4), (&[0.7, 2.1], 0.0013), (&[1.0, 3.0], 0.0011)] {
+        let d = design_with(delays);
+        match Controller::new(&d, T) {
+            Err(e @ ControllerError::DelayNotMultiple { nearest: Some(t), .. }) => {
+                assert!(Controller::new(&d, t).is_ok(), "{delays:?} at {T}: suggested {t}");
+                let printed = printed_suggestion(&e).unwrap();
+                assert!(Controller::new(&d, printed).is_ok(), "{delays:?} at {T}: printed {printed} ({e})");
+                assert!((t / T - 1.0).abs() < 0.5, "{delays:?} at {T}: {t} is not near");
+                offered += 1;
+            }
+            other => panic!("{delays:?} at {T}: {other:?}"),
+        }
+    }
+    assert_eq!(offered, 4);
+}
+
 #[test]
 fn step_allocates_nothing() {
     let mut ctrl = Controller::new(&paper_design(), 1e-3).unwrap();
@@ -67,9 +105,11 @@ fn delays_must_be_whole_samples() {
     let d = paper_design();
     // τ = [1, 3]: T_s = 0.3 gives 3.33… samples for channel 1; the nearest valid T_s is 1/3 s.
     match Controller::new(&d, 0.3) {
-        Err(ControllerError::DelayNotMultiple { channel, nearest, .. }) => {
+        Err(ControllerError::DelayNotMultiple { channel, nearest: Some(nearest), .. }) => {
             assert_eq!(channel, 0);
-            assert!((nearest - 1.0 / 3.0).abs() < 1e-12, "nearest {nearest}");
+            // 1/3 to the fewest digits that pass the 1e-9 check: 0.3333333333 (10 digits).
+            assert!((nearest - 1.0 / 3.0).abs() < 1e-9, "nearest {nearest}");
+            assert!(Controller::new(&d, nearest).is_ok(), "nearest {nearest}");
         }
         other => panic!("unexpected {other:?}"),
     }
@@ -136,7 +176,7 @@ fn sampled_data_loop_tracks_the_continuous_one() {
             assert!(dev < 0.05 * peak, "{name}{}: deviation {dev} vs peak {peak}", i + 1);
         }
     }
-    let (e1, e2) = (samp.max_abs_error(0, 90.0, 100.0), samp.max_abs_error(1, 90.0, 100.0));
+    let (e1, e2) = (samp.max_abs_error(0, 90.0, 100.0).unwrap(), samp.max_abs_error(1, 90.0, 100.0).unwrap());
     assert!(e1 < 0.05 && e2 < 0.005, "tail errors {e1} {e2}");
 }
 
@@ -160,7 +200,10 @@ fn sample_time_sweep() {
         let settings =
             SampledSettings { t_end: 100.0, output_step: out, sample_time: ts, noise: None, divergence_bound: 1e9 };
         let r = simulate_sampled(&d, &g, &w, &settings, |_| ControlFlow::Continue(())).unwrap();
-        let (e1, e2) = (r.max_abs_error(0, 90.0, 100.0), r.max_abs_error(1, 90.0, 100.0));
+        let (e1, e2) = (
+            r.max_abs_error(0, 90.0, 100.0).unwrap_or(f64::INFINITY),
+            r.max_abs_error(1, 90.0, 100.0).unwrap_or(f64::INFINITY),
+        );
         let dev = |i: usize| {
             if n % 10 != 0 || r.len() != cont.len() {
                 return f64::NAN;

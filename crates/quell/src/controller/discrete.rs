@@ -14,8 +14,10 @@ use crate::linalg::zoh;
 pub enum ControllerError {
     #[error("simulation.sample_time (--sample-time): expected a finite T_s > 0, found {value}")]
     BadSampleTime { value: f64 },
-    #[error("simulation.sample_time (--sample-time): channel {}'s delay τ = {delay} s is not a whole number of samples of T_s = {sample_time} s ({ratio:.6} samples); the nearest valid sample time is {nearest:.9} s", .channel + 1)]
-    DelayNotMultiple { channel: usize, delay: f64, sample_time: f64, ratio: f64, nearest: f64 },
+    /// `nearest` is a sample time that passes this same check, written with the fewest digits that do
+    /// (so the printed value works when typed back), or `None` when no τ_c/k near T_s fits every delay.
+    #[error("simulation.sample_time (--sample-time): channel {}'s delay τ = {delay} s is not a whole number of samples of T_s = {sample_time} s ({ratio:.6} samples); {}", .channel + 1, suggestion(*.nearest))]
+    DelayNotMultiple { channel: usize, delay: f64, sample_time: f64, ratio: f64, nearest: Option<f64> },
     #[error("simulation.sample_time (--sample-time): channel {}'s delay τ = {} s is {samples:e} samples of T_s = {} s; a delay line holds at most {max:e} samples; use a longer sample time", .channel + 1, crate::linalg::fmt_number(*.delay), crate::linalg::fmt_number(*.sample_time), max = MAX_DELAY_SAMPLES)]
     DelayTooLong { channel: usize, delay: f64, sample_time: f64, samples: f64 },
 }
@@ -97,26 +99,45 @@ pub struct Controller {
     eta: Vec<f64>,
 }
 
+fn suggestion(nearest: Option<f64>) -> String {
+    match nearest {
+        Some(t) => format!("the nearest valid sample time is {t} s"),
+        None => format!(
+            "no sample time τ_c/k within {SEARCHED} samples of it makes every delay whole (the delays are not commensurate); \
+             change the delays to whole multiples of one sample time"
+        ),
+    }
+}
+
+/// How many candidate sample counts k on either side of τ_c/T_s the suggestion tries.
+const SEARCHED: i64 = 10_000;
+
+/// True when τ/T is a whole number (to 1e-9 relative) of at most [`MAX_DELAY_SAMPLES`] samples.
+fn whole(tau: f64, T: f64) -> bool {
+    let r = tau / T;
+    r <= MAX_DELAY_SAMPLES && (r - r.round()).abs() <= 1e-9 * r.max(1.0)
+}
+
 /// Delay τ as a whole number of samples of T, or the nearest sample time that makes every delay whole.
 fn samples(delays: &[f64], T: f64) -> Result<Vec<usize>, ControllerError> {
-    let whole = |tau: f64, T: f64| {
-        let r = tau / T;
-        (r - r.round()).abs() <= 1e-9 * r.max(1.0)
-    };
     for (channel, &delay) in delays.iter().enumerate() {
         if (delay / T).is_nan() || delay / T > MAX_DELAY_SAMPLES {
             return Err(ControllerError::DelayTooLong { channel, delay, sample_time: T, samples: delay / T });
         }
         if !whole(delay, T) {
             let ratio = delay / T;
-            // Nearest T' = τ/k (k ≥ 1 samples) that also fits every other channel.
+            // Nearest T' = τ/k (k ≥ 1 samples) that fits every channel, rounded to the fewest
+            // significant digits that still fit, so that the printed value passes when typed back.
             let k0 = ratio.round().max(1.0) as i64;
-            let nearest = (0..10_000i64)
+            let fits = |t: f64| delays.iter().all(|&d| whole(d, t));
+            let nearest = (0..SEARCHED)
                 .flat_map(|j| [k0 + j, k0 - j])
                 .filter(|&k| k >= 1)
                 .map(|k| delay / k as f64)
-                .find(|&t| delays.iter().all(|&d| whole(d, t)))
-                .unwrap_or(delay / k0 as f64);
+                .find(|&t| fits(t))
+                .and_then(|t| {
+                    (1..17).map(|p| format!("{t:.p$e}").parse::<f64>().unwrap_or(t)).chain([t]).find(|&r| fits(r))
+                });
             return Err(ControllerError::DelayNotMultiple { channel, delay, sample_time: T, ratio, nearest });
         }
     }

@@ -125,13 +125,16 @@ impl SimResult {
         signal.iter().skip(i).step_by(width).copied()
     }
 
-    /// max |e_i| over samples with t in [from, to].
-    pub fn max_abs_error(&self, i: usize, from: f64, to: f64) -> f64 {
+    /// max |e_i| over samples with t in [from, to]; `None` when no sample lies in the window (a run
+    /// that stopped early, or a window past the horizon), so that it cannot pass for a zero error.
+    /// A NaN error in the window gives NaN.
+    pub fn max_abs_error(&self, i: usize, from: f64, to: f64) -> Option<f64> {
         self.t
             .iter()
             .zip(self.column(&self.e, self.m, i))
             .filter(|(t, _)| **t >= from && **t <= to)
-            .fold(0.0, |acc, (_, e)| acc.max(e.abs()))
+            .map(|(_, e)| e.abs())
+            .reduce(|a, b| if a.is_nan() || b.is_nan() { f64::NAN } else { a.max(b) })
     }
 
     /// Figures of merit per channel; the tail is the last 10 % of the recorded horizon.
@@ -159,5 +162,26 @@ impl SimResult {
                 }
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn max_abs_error_is_none_for_an_empty_window_and_nan_propagates() {
+        let mut r = SimResult::new(1, 1, RunStats::Sampled { controller_steps: 0, sample_time: 0.1 });
+        assert_eq!(r.max_abs_error(0, 0.0, 1.0), None, "no sample at all");
+        // e = y − g at t = 0, 1, 2: −0.5, 2, −3.
+        for (t, y) in [(0.0, 0.5), (1.0, 3.0), (2.0, -2.0)] {
+            r.push(t, &[y], &[1.0], &[0.0], &[0.0]);
+        }
+        assert_eq!(r.max_abs_error(0, 0.0, 1.0), Some(2.0));
+        assert_eq!(r.max_abs_error(0, 0.0, 2.0), Some(3.0));
+        assert_eq!(r.max_abs_error(0, 0.5, 0.9), None, "window between samples");
+        assert_eq!(r.max_abs_error(0, 90.0, 100.0), None, "window past the horizon (a run that stopped early)");
+        r.push(3.0, &[f64::NAN], &[1.0], &[0.0], &[0.0]);
+        assert!(r.max_abs_error(0, 0.0, 3.0).unwrap().is_nan(), "a NaN error is not hidden by max");
     }
 }
