@@ -394,7 +394,29 @@ fn sampled_summary_reports_controller_steps() {
     assert!(stderr(&o).contains("100001 controller steps"), "{}", stderr(&o));
 }
 
-/// Every scenario in `examples/` designs and runs to completion.
+/// The bound that example `name`'s tail error on channel `i` (summary.json's `tail_max_abs_e`: max |e_i|
+/// over the last 10 % of the horizon) must meet.
+fn tail_bound(name: &str, scenario: &Scenario, i: usize) -> f64 {
+    // The paper's example (Section VIII) claims asymptotic tracking; an independent solution of it
+    // (/work/shared/reference/paper_example_points.csv's setup, tolerance 1e-12) has max |e| ≈ 0.027 and
+    // 0.002 on [90, 100]. 0.05 and 0.005 leave about 2× for what the variants change (T_s = 1 ms:
+    // O(T_s); L placed from the poles, which the printed L has to 1e-4) and still fail a loop that has
+    // not converged by then (errors of the order of the reference, 2–3).
+    let paper = [0.05, 0.005];
+    match name {
+        "paper" | "paper-observer-poles" | "paper-sampled" => paper[i],
+        // Measurement noise of standard deviation σ_i on y_i reaches e_i only through the controller,
+        // which must not amplify it: allow σ_i (0.03, 0.02) on top of the noise-free bound.
+        "paper-noise" => paper[i] + scenario.noise.as_ref().unwrap().std[i],
+        // Every other example is written to have settled by the last 10 % of its horizon (see each
+        // file's comment): max |e_i| there must lie inside a 1 % band of the reference's peak |g_i|
+        // (|bias| + Σ|amplitude|), half the usual 2 % settling band.
+        _ => 0.01 * scenario.reference.components[i].peak(),
+    }
+}
+
+/// Every scenario in `examples/` designs, runs to completion and meets its tail-error bound
+/// ([`tail_bound`]).
 #[test]
 fn every_example_runs() {
     let mut files: Vec<PathBuf> = fs::read_dir(examples_dir())
@@ -419,6 +441,10 @@ fn every_example_runs() {
         let scenario = Scenario::from_path(file).unwrap();
         let m = scenario.plant.m();
         assert_eq!(s["channels"].as_array().map(Vec::len), Some(m), "{name}: {s}");
+        for i in 0..m {
+            let (e, bound) = (s["channels"][i]["tail_max_abs_e"].as_f64().unwrap(), tail_bound(&name, &scenario, i));
+            assert!(e < bound, "{name}: tail max |e{}| = {e}, bound {bound}", i + 1);
+        }
         for c in 1..=m {
             assert!(dir.join(format!("channel{c}.png")).is_file(), "{name}: channel{c}.png missing");
         }
