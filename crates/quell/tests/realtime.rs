@@ -54,6 +54,7 @@ fn printed_suggestion(e: &ControllerError) -> Option<f64> {
 }
 
 #[test]
+#[allow(clippy::approx_constant)] // 1.41421356237 is the user's 12-digit delay, not √2
 fn suggested_sample_times_pass_the_check_or_none_is_offered() {
     let design_with = |delays: &[f64]| {
         let mut p = paper_plant();

@@ -113,7 +113,7 @@ fn suggestion(nearest: Option<f64>) -> String {
 const SEARCHED: i64 = 10_000;
 
 /// True when τ/T is a whole number (to 1e-9 relative) of at most [`MAX_DELAY_SAMPLES`] samples.
-fn whole(tau: f64, T: f64) -> bool {
+pub(crate) fn whole(tau: f64, T: f64) -> bool {
     let r = tau / T;
     r <= MAX_DELAY_SAMPLES && (r - r.round()).abs() <= 1e-9 * r.max(1.0)
 }

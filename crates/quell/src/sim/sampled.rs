@@ -163,7 +163,7 @@ impl TrueInput {
                 .enumerate()
                 .map(|(i, &tau)| {
                     let r = tau / T;
-                    if r > crate::controller::discrete::MAX_DELAY_SAMPLES || (r - r.round()).abs() > 1e-9 * r.max(1.0) {
+                    if !crate::controller::discrete::whole(tau, T) {
                         return Err(KeyError::new(
                             format!("{key}[{i}]"),
                             format!("τ = {tau} s is {r:.6} samples of T_s = {T} s; a sampled-data run needs whole numbers of samples (at most 1e7)"),
