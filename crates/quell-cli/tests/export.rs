@@ -102,7 +102,7 @@ fn bad_export_input_exits_2_naming_the_flag() {
     for (args, message) in [
         (
             vec!["--sample-time", "0.3"],
-            "error: simulation.sample_time (--sample-time): channel 1's delay τ = 1 s is not a whole number of samples of T_s = 0.3 s (3.333333 samples); the nearest valid sample time is 0.3333333333 s",
+            "error: simulation.sample_time (--sample-time): channel 1's delay τ = 1 s is not a whole number of samples of T_s = 0.3 s (3.333333 samples); the nearest valid sample time is 0.33333333333 s",
         ),
         (vec!["--sample-time", "-1"], "error: simulation.sample_time (--sample-time): expected a finite T_s > 0, found -1"),
         (vec![], "error: --sample-time: missing;"),

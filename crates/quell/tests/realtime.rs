@@ -108,7 +108,7 @@ fn delays_must_be_whole_samples() {
     match Controller::new(&d, 0.3) {
         Err(ControllerError::DelayNotMultiple { channel, nearest: Some(nearest), .. }) => {
             assert_eq!(channel, 0);
-            // 1/3 to the fewest digits that pass the 1e-9 check: 0.3333333333 (10 digits).
+            // 1/3 to the fewest digits that pass the 1e-9 check with a 10× margin: 0.33333333333.
             assert!((nearest - 1.0 / 3.0).abs() < 1e-9, "nearest {nearest}");
             assert!(Controller::new(&d, nearest).is_ok(), "nearest {nearest}");
         }

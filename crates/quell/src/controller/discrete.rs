@@ -114,8 +114,12 @@ const SEARCHED: i64 = 10_000;
 
 /// True when τ/T is a whole number (to 1e-9 relative) of at most [`MAX_DELAY_SAMPLES`] samples.
 pub(crate) fn whole(tau: f64, T: f64) -> bool {
+    whole_within(tau, T, 1e-9)
+}
+
+fn whole_within(tau: f64, T: f64, tol: f64) -> bool {
     let r = tau / T;
-    r <= MAX_DELAY_SAMPLES && (r - r.round()).abs() <= 1e-9 * r.max(1.0)
+    r <= MAX_DELAY_SAMPLES && (r - r.round()).abs() <= tol * r.max(1.0)
 }
 
 /// Delay τ as a whole number of samples of T, or the nearest sample time that makes every delay whole.
@@ -127,9 +131,10 @@ fn samples(delays: &[f64], T: f64) -> Result<Vec<usize>, ControllerError> {
         if !whole(delay, T) {
             let ratio = delay / T;
             // Nearest T' = τ/k (k ≥ 1 samples) that fits every channel, rounded to the fewest
-            // significant digits that still fit, so that the printed value passes when typed back.
+            // significant digits that fit 10× inside the tolerance, so that the printed value passes
+            // when typed back, and not by a hair.
             let k0 = ratio.round().max(1.0) as i64;
-            let fits = |t: f64| delays.iter().all(|&d| whole(d, t));
+            let fits = |t: f64| delays.iter().all(|&d| whole_within(d, t, 1e-10));
             let nearest = (0..SEARCHED)
                 .flat_map(|j| [k0 + j, k0 - j])
                 .filter(|&k| k >= 1)
