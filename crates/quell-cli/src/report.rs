@@ -42,6 +42,9 @@ pub fn design_json(d: &Design) -> Value {
         "beta": d.beta(),
         "observer_eigenvalues": eigs(d.observer_eigenvalues()),
         "decoupled_eigenvalues": eigs(d.decoupled_eigenvalues()),
+        // κ₂ of the closed-loop eigenvector matrices; null when defective (a Jordan block).
+        "observer_eigenvector_condition": finite(d.observer_eigenvector_condition()),
+        "decoupled_eigenvector_condition": finite(d.decoupled_eigenvector_condition()),
         "checks": {
             "controllability_rank": d.controllability().rank,
             "observability_rank": d.observability().rank,
@@ -163,5 +166,28 @@ pub fn design_text(d: &Design) -> String {
     }
     let _ = writeln!(s, "\neig(A − LC) = {}", fmt_eigs(d.observer_eigenvalues()));
     let _ = writeln!(s, "eig(A − BK) = {}", fmt_eigs(d.decoupled_eigenvalues()));
+    let _ = writeln!(
+        s,
+        "eigenvector condition numbers κ₂(X): A − LC {}, A − BK {}",
+        fmt_condition(d.observer_eigenvector_condition()),
+        fmt_condition(d.decoupled_eigenvector_condition())
+    );
     s
+}
+
+/// A condition number as JSON: null when infinite (JSON has no ∞).
+fn finite(x: f64) -> Value {
+    if x.is_finite() {
+        json!(x)
+    } else {
+        Value::Null
+    }
+}
+
+fn fmt_condition(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x:.3e}")
+    } else {
+        "∞ (defective: a Jordan block, fragile under model error)".to_string()
+    }
 }

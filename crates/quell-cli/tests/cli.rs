@@ -167,6 +167,19 @@ fn design_json_on_paper_example() {
     for ((re, im), want) in dec.iter().zip([-6.0, -4.0, -2.0]) {
         assert!((re - want).abs() < 1e-9 && im.abs() < 1e-9, "eig(A − BK) ∋ {re}{im:+}i, expected {want}");
     }
+    // κ₂ of the unit-column eigenvector matrices: numpy.linalg.cond(numpy.linalg.eig(M)[1]) for
+    // the paper's A − BK and A − LC (NumPy 2.4) gives 19.21 and 27.45 (4 digits).
+    let kappa = |key: &str| d[key].as_f64().unwrap_or_else(|| panic!("{key} is a number"));
+    assert!(
+        (kappa("decoupled_eigenvector_condition") / 19.21 - 1.0).abs() < 1e-3,
+        "{}",
+        d["decoupled_eigenvector_condition"]
+    );
+    assert!(
+        (kappa("observer_eigenvector_condition") / 27.45 - 1.0).abs() < 1e-3,
+        "{}",
+        d["observer_eigenvector_condition"]
+    );
     let obs = eig("observer_eigenvalues");
     assert_eq!(obs.len(), 3);
     assert!(obs.iter().all(|(re, _)| *re < 0.0), "observer not Hurwitz: {obs:?}");
@@ -453,4 +466,23 @@ fn every_example_runs() {
         assert_eq!(header.lines().next(), Some(csv_header(m, q).as_str()), "{name}");
         assert!(leftovers(dir.path()).is_empty(), "{name}: temporary files left");
     }
+}
+
+#[test]
+fn a_jordan_observer_design_reports_an_infinite_eigenvector_condition() {
+    // Observer poles −2 three times with two outputs: more copies than rank C, so A − LC has a
+    // Jordan block and no eigenvector basis (κ₂ = ∞: JSON null, and the text says defective).
+    let text = fs::read_to_string(paper()).unwrap();
+    let from = "observer_gain = [[-8.0988, 4.4574], [10.6506, -5.0619], [2.7762, -1.1783]]";
+    assert!(text.contains(from));
+    let dir = TempDir::new("jordan-observer");
+    let file = dir.join("scenario.toml");
+    fs::write(&file, text.replacen(from, "observer_poles = [-2.0, -2.0, -2.0]", 1)).unwrap();
+    let o = quell(&["design", "--json", file.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let d: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(d["observer_eigenvector_condition"].is_null(), "{}", d["observer_eigenvector_condition"]);
+    assert!(d["decoupled_eigenvector_condition"].as_f64().is_some_and(|k| k.is_finite() && k >= 1.0));
+    let o = quell(&["design", file.to_str().unwrap()]);
+    assert!(stdout(&o).contains("A − LC ∞ (defective"), "{}", stdout(&o));
 }
