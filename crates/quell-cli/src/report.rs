@@ -53,6 +53,8 @@ pub fn design_json(d: &Design) -> Value {
             "tolerance": quell::design::TOL,
             "relative_degree_measures": d.relative_degree_decisions().iter().map(|r| r.deciding()).collect::<Vec<_>>(),
             "relative_degree_close": d.relative_degree_decisions().iter().map(|r| r.is_close()).collect::<Vec<_>>(),
+            // σ_i from design.relative_degrees (null where eq. (7) decided it).
+            "relative_degrees_given": d.relative_degree_decisions().iter().map(|r| r.given).collect::<Vec<_>>(),
         },
     })
 }
@@ -136,16 +138,25 @@ pub fn design_text(d: &Design) -> String {
         "\nrelative degrees σ = {:?} (c_i A^(l−1) B ≠ 0 when its largest cosine ≥ τ = {tol:.0e})",
         d.sigma()
     );
-    for (i, r) in d.relative_degree_decisions().iter().enumerate().filter(|(_, r)| r.is_close()) {
+    for (i, r) in d.relative_degree_decisions().iter().enumerate() {
         let measures: Vec<String> = r.deciding().iter().map(|m| format!("{m:.2e}")).collect();
-        let _ = writeln!(
-            s,
-            "  ⚠ close decision for output {}: cosines for l = 1…{} are [{}], within ×{} of τ; check row {i} of plant.C and plant.B",
-            i + 1,
-            r.deciding().len(),
-            measures.join(", "),
-            quell::design::CLOSE_FACTOR
-        );
+        let (l, cf) = (r.deciding().len(), quell::design::CLOSE_FACTOR);
+        if let Some(given) = r.given {
+            let decided = r.sigma.map_or("none".to_string(), |s| s.to_string());
+            let _ = writeln!(
+                s,
+                "  σ_{} = {given} given by design.relative_degrees, not decided (eq. (7) decides {decided}); cosines for l = 1…{l} are [{}]",
+                i + 1,
+                measures.join(", "),
+            );
+        } else if r.is_close() {
+            let _ = writeln!(
+                s,
+                "  ⚠ close decision for output {}: cosines for l = 1…{l} are [{}], within ×{cf} of τ; check row {i} of plant.C and plant.B, or give design.relative_degrees",
+                i + 1,
+                measures.join(", "),
+            );
+        }
     }
     for (i, c) in d.channels().iter().enumerate() {
         let _ = writeln!(s, "  G_{0}{0}(s) = {1}   (μ_{0} = {2})", i + 1, tf(c), d.mu()[i]);

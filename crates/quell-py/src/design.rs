@@ -6,7 +6,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use quell::design::{DesignSpec, ObserverChoice};
 
-use crate::convert::{complex_numpy, matrix, number, pole_lists, poles, to_numpy, vector};
+use crate::convert::{complex_numpy, matrix, number, pole_lists, poles, to_numpy, type_name, vector};
 use crate::errors::{raise, Kind};
 use crate::plant::{plant_arg, PyPlant};
 
@@ -27,6 +27,7 @@ pub fn spec(
     beta: &Bound<'_, PyAny>,
     observer_poles: Option<&Bound<'_, PyAny>>,
     observer_gain: Option<&Bound<'_, PyAny>>,
+    relative_degrees: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<DesignSpec> {
     let k = Kind::Design;
     let observer = match (observer_gain, observer_poles) {
@@ -45,12 +46,43 @@ pub fn spec(
             .unwrap_or_default(),
         mu: vector(mu, "design.mu", k)?,
         beta: number(beta, "design.beta", k)?,
+        relative_degrees: relative_degrees.map(|s| integers(s, "design.relative_degrees", k)).transpose()?,
     })
+}
+
+/// A sequence of integers ≥ 1 (a bool or float is refused, naming `name[i]`).
+fn integers(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<usize>> {
+    let py = obj.py();
+    let items = obj
+        .try_iter()
+        .map_err(|_| kind.err(py, format!("{name}: expected a list of integers ≥ 1, found a {}", type_name(obj))))?;
+    items
+        .enumerate()
+        .map(|(i, v)| {
+            let v = v?;
+            let bad = || {
+                kind.err(
+                    py,
+                    format!(
+                        "{name}[{i}]: expected an integer ≥ 1, found {}",
+                        v.repr().map_or_else(|_| type_name(&v), |r| r.to_string())
+                    ),
+                )
+            };
+            if v.is_instance_of::<pyo3::types::PyBool>() || !v.is_instance_of::<pyo3::types::PyInt>() {
+                return Err(bad());
+            }
+            match v.extract::<usize>() {
+                Ok(s) if s >= 1 => Ok(s),
+                _ => Err(bad()),
+            }
+        })
+        .collect()
 }
 
 /// Designs every gain for `plant` (Sections III–V) and checks the paper's assumptions.
 #[pyfunction]
-#[pyo3(signature = (plant, *, channel_poles, reference_filter_poles, mu, beta, disturbance_filter_poles=None, observer_poles=None, observer_gain=None))]
+#[pyo3(signature = (plant, *, channel_poles, reference_filter_poles, mu, beta, disturbance_filter_poles=None, observer_poles=None, observer_gain=None, relative_degrees=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn design(
     py: Python<'_>,
@@ -62,6 +94,7 @@ pub fn design(
     disturbance_filter_poles: Option<&Bound<'_, PyAny>>,
     observer_poles: Option<&Bound<'_, PyAny>>,
     observer_gain: Option<&Bound<'_, PyAny>>,
+    relative_degrees: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyDesign> {
     let plant = plant_arg(plant, "plant")?;
     let spec = spec(
@@ -73,6 +106,7 @@ pub fn design(
         beta,
         observer_poles,
         observer_gain,
+        relative_degrees,
     )?;
     let d = quell::Design::new(&plant.inner, &spec).map_err(|e| raise(py, Kind::Design)(&e))?;
     Ok(PyDesign { inner: Arc::new(d) })

@@ -91,3 +91,19 @@ def test_checks_report():
     assert 1 <= c["cond_B_star"] < 1e3
     assert c["max_re_decoupled_eigenvalue"] == pytest.approx(-2, abs=1e-9)
     assert c["max_re_observer_eigenvalue"] < 0
+
+
+def test_relative_degrees_given():
+    """design(relative_degrees=...) overrides eq. (7); the paper's σ = (2, 1) gives the decided K,
+    a contradicting σ is DesignError naming the channel, a non-integer names the entry."""
+    p = quell.paper_example().plant
+    kw = dict(channel_poles=[[-6, -2], [-4]], reference_filter_poles=[[-1, -6], [-9]],
+              disturbance_filter_poles=[[-1, -3], [-1, -2, -3]], mu=[20, 30], beta=1.0, observer_poles=[-2, -3, -4])
+    given = quell.design(p, relative_degrees=[2, 1], **kw)
+    np.testing.assert_array_equal(given.K, quell.design(p, **kw).K)
+    assert list(given.sigma) == [2, 1]
+    with pytest.raises(quell.DesignError, match=r"^design.relative_degrees\[0\]: σ_1 = 1 contradicts the plant"):
+        quell.design(p, relative_degrees=[1, 1], **dict(kw, channel_poles=[[-6], [-4]]))
+    for bad in ([2, 1.0], [2, True], [2, 0]):
+        with pytest.raises(quell.DesignError, match=r"^design.relative_degrees\[1\]: expected an integer ≥ 1"):
+            quell.design(p, relative_degrees=bad, **kw)

@@ -33,6 +33,7 @@ fn synthetic(m: usize, q: usize) -> Design {
         disturbance_filter_poles: vec![],
         mu: vec![10.0; m],
         beta: 1.0,
+        relative_degrees: None,
     };
     Design::new(&plant, &spec).unwrap()
 }

@@ -5,7 +5,7 @@
 mod common;
 
 use common::*;
-use quell::design::{falb_wolovich, relative_degree_measures, relative_degrees};
+use quell::design::{falb_wolovich, falb_wolovich_given, relative_degree_measures, relative_degrees};
 use quell::nalgebra::{Complex, DMatrix};
 use quell::{Design, DesignError, ObserverChoice, Plant};
 
@@ -263,6 +263,44 @@ fn one_tolerance_for_sigma_and_B_star() {
     }
 }
 
+#[test]
+fn relative_degrees_given_inside_the_close_band() {
+    // The plant of `one_tolerance_for_sigma_and_B_star`. At cosine 3e-5 eq. (7) decides σ_2 = 1 (a
+    // close decision). A designer who knows c_2 B is a rounding artefact gives σ_2 = 2: accepted,
+    // and the gains are those of the exact plant (c_2 B = 0, σ_2 = 2) to O(cosine) (independent
+    // answer: the decided design of the exact plant). At cosine 3e-6 (decided σ_2 = 2) a given
+    // σ_2 = 1 is not contradicted (3e-6 ≥ τ/100) but leaves B* with smallest scaled singular value
+    // ≈ 2e-6 < τ: refused as not decouplable, as the tolerance policy says.
+    let A = mat(3, 3, &[0.0, 1.0, 0.0, 0.0, 0.0, 1.0, -1.0, -3.0, -3.0]);
+    let B = mat(3, 2, &[1.0, 0.0, 0.0, 0.0, 0.0, 1.0]);
+    let c = |cosine: f64| mat(2, 3, &[1.0, 0.0, 1.0, cosine, 1.0, 0.0]);
+    let poles = vec![vec![re(-1.0)], vec![re(-2.0), re(-3.0)]];
+    let exact = falb_wolovich(&A, &B, &c(0.0), &poles).unwrap();
+    assert_eq!(exact.sigma, vec![1, 2]);
+    let given = falb_wolovich_given(&A, &B, &c(3e-5), &poles, Some(&[1, 2])).unwrap();
+    assert_eq!(given.sigma, vec![1, 2]);
+    assert_eq!((given.degrees[1].sigma, given.degrees[1].given), (Some(1), Some(2)));
+    assert!((&given.K - &exact.K).norm() <= 1e-3 * exact.K.norm(), "{} vs {}", given.K, exact.K);
+    let e = falb_wolovich_given(&A, &B, &c(3e-6), &[vec![re(-1.0)], vec![re(-2.0)]], Some(&[1, 1])).unwrap_err();
+    assert!(matches!(e, DesignError::NotDecouplable { smallest, .. } if smallest < quell::design::TOL), "{e}");
+    // Clearly contradicted either way: σ_1 = 2 although c_1 B = [1, 1]; σ_2 = 3 although c_2 A B = [0, 1].
+    // (The contradiction is found before the channel poles are counted.)
+    for (sigma, channel, l) in [([2, 2], 0, 1), ([1, 3], 1, 2)] {
+        match falb_wolovich_given(&A, &B, &c(3e-5), &poles, Some(&sigma)).unwrap_err() {
+            DesignError::RelativeDegreeTooHigh { channel: ch, l: at, measure, .. } => {
+                assert_eq!((ch, at), (channel, l));
+                assert!(measure > 0.5, "{measure}");
+            }
+            e => panic!("{e}"),
+        }
+    }
+    // Σσ_i > n: both given σ_i = 2 are inside the band (cosines 3e-5), but 2 + 2 > 3.
+    let C = mat(2, 3, &[3e-5, 1.0, 0.0, 0.0, 1.0, 3e-5]);
+    let two = vec![vec![re(-1.0), re(-2.0)]; 2];
+    let e = falb_wolovich_given(&A, &B, &C, &two, Some(&[2, 2])).unwrap_err();
+    assert_eq!(e, DesignError::RelativeDegreeSum { sum: 4, n: 3 });
+}
+
 fn expect_err(plant: &Plant, spec: &quell::DesignSpec) -> DesignError {
     match Design::new(plant, spec) {
         Ok(_) => panic!("expected a design error"),
@@ -310,6 +348,7 @@ fn error_not_decouplable_observable_plant() {
         disturbance_filter_poles: vec![vec![re(-1.0)]],
         mu: vec![1.0, 1.0],
         beta: 1.0,
+        relative_degrees: None,
     };
     match expect_err(&plant, &spec) {
         DesignError::NotDecouplable { smallest, .. } => assert!(smallest < 1e-12, "σ_min {smallest}"),
@@ -333,6 +372,7 @@ fn siso_spec() -> quell::DesignSpec {
         disturbance_filter_poles: vec![vec![re(-1.0)]],
         mu: vec![1.0],
         beta: 1.0,
+        relative_degrees: None,
     }
 }
 
@@ -510,6 +550,7 @@ fn triple_channel_pole_is_designed() {
         disturbance_filter_poles: vec![vec![re(-1.0)]],
         mu: vec![1.0; 3],
         beta: 1.0,
+        relative_degrees: None,
     };
     let d = Design::new(&plant, &spec).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(d.sigma(), &[2, 1, 1]);

@@ -647,6 +647,71 @@ fn channel_pole_count_vs_relative_degree() {
 }
 
 #[test]
+fn relative_degrees_count() {
+    check(
+        &with(&[(BETA, "beta = 1.0\nrelative_degrees = [2]\n")]),
+        "design.relative_degrees",
+        "expected 2 entries (one per output), got 1",
+    );
+}
+
+#[test]
+fn relative_degree_not_an_integer() {
+    check(
+        &with(&[(BETA, "beta = 1.0\nrelative_degrees = [2, 1.5]\n")]),
+        "design.relative_degrees[1]",
+        "expected a relative degree σ_i, an integer ≥ 1, found a floating-point number",
+    );
+    check(
+        &with(&[(BETA, "beta = 1.0\nrelative_degrees = [2, 0]\n")]),
+        "design.relative_degrees[1]",
+        "expected a relative degree σ_i, an integer ≥ 1, found 0",
+    );
+}
+
+#[test]
+fn relative_degree_above_n() {
+    check(
+        &with(&[(BETA, "beta = 1.0\nrelative_degrees = [4, 1]\n")]),
+        "design.relative_degrees[0]",
+        "expected a relative degree 1 ≤ σ_i ≤ n = 3, found 4",
+    );
+}
+
+#[test]
+fn relative_degree_contradicts_plant() {
+    // c_2 B = [0, 1] is clearly non-zero (cosine 1/(3·√2) = 0.236), so σ_2 = 2 is refused.
+    check(
+        &with(&[(BETA, "beta = 1.0\nrelative_degrees = [2, 2]\n"), (CHANNEL, "channel_poles = [[-6.0, -2.0], [-4.0, -5.0]]")]),
+        "design.relative_degrees[1]",
+        "σ_2 = 2 contradicts the plant: c_2 A^(0) B is clearly non-zero (largest cosine between c_2 A^(0) and a column of B: 2.36e-1",
+    );
+    // c_1 B = [0, 0] exactly, so σ_1 = 1 is refused.
+    check(
+        &with(&[(BETA, "beta = 1.0\nrelative_degrees = [1, 1]\n")]),
+        "design.relative_degrees[0]",
+        "σ_1 = 1 contradicts the plant: c_1 A^(0) B is clearly zero (largest cosine between c_1 A^(0) and a column of B: 0.00e0",
+    );
+}
+
+#[test]
+fn relative_degrees_given_round_trip_and_design_as_decided() {
+    let text = with(&[(BETA, "beta = 1.0\nrelative_degrees = [2, 1]\n")]);
+    let (s, d) = load_and_design(&text).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.design.relative_degrees, Some(vec![2, 1]));
+    let back = Scenario::from_toml(&s.to_toml()).unwrap();
+    assert_eq!(back.design, s.design);
+    assert!(s.to_toml().contains("relative_degrees = [2, 1]"), "{}", s.to_toml());
+    // The paper's σ = (2, 1) given is the decided design, gain for gain.
+    let (_, decided) = load_and_design(PAPER_EXAMPLE).unwrap();
+    assert_eq!(d.K(), decided.K());
+    assert_eq!(d.sigma(), decided.sigma());
+    let given: Vec<_> = d.relative_degree_decisions().iter().map(|r| (r.sigma, r.given)).collect();
+    assert_eq!(given, vec![(Some(2), Some(2)), (Some(1), Some(1))]);
+    assert!(decided.relative_degree_decisions().iter().all(|r| r.given.is_none()));
+}
+
+#[test]
 fn observer_gain_shape() {
     check(
         &with(&[(L_LINE, "observer_gain = [[-8.0988, 4.4574], [10.6506, -5.0619]]")]),

@@ -32,16 +32,22 @@ pub fn close(measure: f64) -> bool {
 /// The decision of eq. (7) for one output: σ_i and the measure at each l = 1, …, n.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RelativeDegree {
-    /// σ_i, the least l whose measure is ≥ [`TOL`]; `None` when no l ≤ n passes.
+    /// σ_i as eq. (7) decides it, the least l whose measure is ≥ [`TOL`]; `None` when no l ≤ n passes.
     pub sigma: Option<usize>,
+    /// σ_i as the designer gave it (`design.relative_degrees`), which the design then uses.
+    pub given: Option<usize>,
     /// measures[l − 1] = max_j |c_i A^(l−1) b_j| / (‖c_i A^(l−1)‖ ‖b_j‖), for l = 1, …, n.
     pub measures: Vec<f64>,
 }
 
 impl RelativeDegree {
-    /// The measures that decided σ_i (l ≤ σ_i, or all of them when no l passed).
+    /// The σ_i the design uses: the given one, else the decided one.
+    pub fn used(&self) -> Option<usize> {
+        self.given.or(self.sigma)
+    }
+    /// The measures behind the σ_i in use (l ≤ σ_i, or all of them when no l passed).
     pub fn deciding(&self) -> &[f64] {
-        &self.measures[..self.sigma.unwrap_or(self.measures.len())]
+        &self.measures[..self.used().unwrap_or(self.measures.len())]
     }
     /// True when a deciding measure is close to [`TOL`] (see [`close`]).
     pub fn is_close(&self) -> bool {
@@ -81,7 +87,7 @@ pub fn relative_degree_measures(A: &DMatrix<f64>, B: &DMatrix<f64>, C: &DMatrix<
                 row = &row * A;
             }
             let sigma = measures.iter().position(|&m| m >= TOL).map(|l| l + 1);
-            RelativeDegree { sigma, measures }
+            RelativeDegree { sigma, given: None, measures }
         })
         .collect()
 }
@@ -113,13 +119,28 @@ pub struct FalbWolovich {
 }
 
 /// Falb–Wolovich decoupler (Proposition 1) for per-channel poles `channel_poles[i]` (σ_i each, closed
-/// under conjugation; the caller checks that). Errors when an output is unreachable, a channel has the
-/// wrong number of poles, or B* is singular.
+/// under conjugation; the caller checks that), with σ_i decided by eq. (7). Errors when an output is
+/// unreachable, a channel has the wrong number of poles, or B* is singular.
 pub fn falb_wolovich(
     A: &DMatrix<f64>,
     B: &DMatrix<f64>,
     C: &DMatrix<f64>,
     channel_poles: &[Vec<Complex<f64>>],
+) -> Result<FalbWolovich, DesignError> {
+    falb_wolovich_given(A, B, C, channel_poles, None)
+}
+
+/// [`falb_wolovich`] with σ_i optionally given (`design.relative_degrees`, each in 1..=n) instead of
+/// decided. A given σ_i is used unless the plant clearly contradicts it: some l < σ_i has measure
+/// above [`CLOSE_FACTOR`]·τ (c_i A^(l−1) B is clearly non-zero), or l = σ_i has measure < τ/[`CLOSE_FACTOR`]
+/// (c_i A^(σ_i−1) B is clearly zero). Within that band, where eq. (7) itself reports a close decision,
+/// the designer's word decides; B* is then judged as always (smallest scaled singular value ≥ τ).
+pub fn falb_wolovich_given(
+    A: &DMatrix<f64>,
+    B: &DMatrix<f64>,
+    C: &DMatrix<f64>,
+    channel_poles: &[Vec<Complex<f64>>],
+    given: Option<&[usize]>,
 ) -> Result<FalbWolovich, DesignError> {
     let (m, n) = (C.nrows(), A.nrows());
     if channel_poles.len() != m {
@@ -130,16 +151,42 @@ pub fn falb_wolovich(
             got: channel_poles.len(),
         });
     }
-    let degrees = relative_degree_measures(A, B, C);
+    if let Some(g) = given.filter(|g| g.len() != m) {
+        return Err(DesignError::Count { key: "design.relative_degrees", per: "output", expected: m, got: g.len() });
+    }
+    let mut degrees = relative_degree_measures(A, B, C);
     let mut sigma = Vec::with_capacity(m);
-    for (channel, d) in degrees.iter().enumerate() {
-        let largest = d.measures.iter().copied().fold(0.0, f64::max);
-        let s = d.sigma.ok_or(DesignError::NoRelativeDegree { channel, largest })?;
+    for (channel, d) in degrees.iter_mut().enumerate() {
+        let s = match given.map(|g| g[channel]) {
+            Some(s) => {
+                if s == 0 || s > n {
+                    return Err(DesignError::RelativeDegreeRange { index: channel, value: s, n });
+                }
+                if let Some(l) = d.measures[..s - 1].iter().position(|&x| x > TOL * CLOSE_FACTOR) {
+                    let measure = d.measures[l];
+                    return Err(DesignError::RelativeDegreeTooHigh { channel, given: s, l: l + 1, measure });
+                }
+                if d.measures[s - 1] < TOL / CLOSE_FACTOR {
+                    let measure = d.measures[s - 1];
+                    return Err(DesignError::RelativeDegreeTooLow { channel, given: s, measure });
+                }
+                d.given = Some(s);
+                s
+            }
+            None => {
+                let largest = d.measures.iter().copied().fold(0.0, f64::max);
+                d.sigma.ok_or(DesignError::NoRelativeDegree { channel, largest })?
+            }
+        };
         let got = channel_poles[channel].len();
         if got != s {
             return Err(DesignError::ChannelPoleCount { channel, sigma: s, got });
         }
         sigma.push(s);
+    }
+    let sum: usize = sigma.iter().sum();
+    if sum > n {
+        return Err(DesignError::RelativeDegreeSum { sum, n });
     }
     let mut B_star = DMatrix::zeros(m, B.ncols());
     let mut C_star = DMatrix::zeros(m, n);
@@ -150,15 +197,16 @@ pub fn falb_wolovich(
         let q = poly_from_roots(&channel_poles[i]);
         let mut row: RowDVector<f64> = C.row(i).clone_owned(); // c_i A^z
         let mut c_star = RowDVector::zeros(n);
+        let mut last = RowDVector::zeros(n); // c_i A^(σ_i − 1), the row of B*
         for &qz in &q {
             c_star += qz * &row;
-            row = &row * A;
+            last = row;
+            row = &last * A;
         }
         // row is now c_i A^{σ_i}; B* uses c_i A^{σ_i − 1} B.
         c_star += &row;
-        let prev = C.row(i) * A.pow((sigma[i] - 1) as u32);
-        row_norms.push(prev.norm());
-        B_star.set_row(i, &(prev * B));
+        row_norms.push(last.norm());
+        B_star.set_row(i, &(&last * B));
         C_star.set_row(i, &c_star);
         q0.push(q[0]);
     }

@@ -11,7 +11,8 @@ use thiserror::Error;
 
 pub use assumptions::{controllability, observability, RankTest};
 pub use decouple::{
-    close, falb_wolovich, relative_degree_measures, relative_degrees, FalbWolovich, RelativeDegree, CLOSE_FACTOR, TOL,
+    close, falb_wolovich, falb_wolovich_given, relative_degree_measures, relative_degrees, FalbWolovich,
+    RelativeDegree, CLOSE_FACTOR, TOL,
 };
 pub use internal_model::{filter_pair, internal_model};
 pub use place::{place, PlaceError};
@@ -42,6 +43,10 @@ pub struct DesignSpec {
     pub mu: Vec<f64>,
     /// H(s) = 1/(β s + 1), β > 0.
     pub beta: f64,
+    /// σ_i given by the designer (`design.relative_degrees`) instead of decided by eq. (7); `None`
+    /// lets eq. (7) decide. Accepted unless the plant clearly contradicts it
+    /// ([`decouple::falb_wolovich_given`]).
+    pub relative_degrees: Option<Vec<usize>>,
 }
 
 /// Channel i's decoupled transfer function G_ii(s) = q_i0 / ∏_j (s − λ_ij).
@@ -131,6 +136,14 @@ pub enum DesignError {
     NotDecouplable { smallest: f64, cond: f64 },
     #[error("plant: unstable zero dynamics: A − BK keeps the plant's {} zero{} (its eigenvalues besides the {placed} channel poles that Proposition 1 places), and {} not in the open left half-plane: {}; this plant cannot be decoupled stably", .zeros.len(), if .zeros.len() == 1 { "" } else { "s" }, if .unstable.len() == 1 { "this one is" } else { "these are" }, fmt_eigs(.unstable))]
     UnstableZeroDynamics { placed: usize, zeros: Vec<Complex<f64>>, unstable: Vec<Complex<f64>> },
+    #[error("design.relative_degrees[{index}]: expected a relative degree 1 ≤ σ_i ≤ n = {n}, found {value}")]
+    RelativeDegreeRange { index: usize, value: usize, n: usize },
+    #[error("design.relative_degrees[{channel}]: σ_{} = {given} contradicts the plant: c_{0} A^({}) B is clearly non-zero (largest cosine between c_{0} A^({1}) and a column of B: {measure:.2e}, above {cf}·τ = {bound:.0e}), so channel {0} has relative degree at most {l}; give σ_{0} ≤ {l}, or remove design.relative_degrees to let eq. (7) decide", .channel + 1, .l - 1, cf = CLOSE_FACTOR, bound = TOL * CLOSE_FACTOR)]
+    RelativeDegreeTooHigh { channel: usize, given: usize, l: usize, measure: f64 },
+    #[error("design.relative_degrees[{channel}]: σ_{} = {given} contradicts the plant: c_{0} A^({}) B is clearly zero (largest cosine between c_{0} A^({1}) and a column of B: {measure:.2e}, below τ/{cf} = {bound:.0e}), so no input reaches output {0} at l = {given}; give a larger σ_{0}, or remove design.relative_degrees to let eq. (7) decide", .channel + 1, .given - 1, cf = CLOSE_FACTOR, bound = TOL / CLOSE_FACTOR)]
+    RelativeDegreeTooLow { channel: usize, given: usize, measure: f64 },
+    #[error("design.relative_degrees: Σσ_i = {sum} exceeds n = {n}; for a decouplable plant the Σσ_i rows c_i A^j (j < σ_i) are independent, so Σσ_i ≤ n; give smaller relative degrees, or remove design.relative_degrees to let eq. (7) decide")]
+    RelativeDegreeSum { sum: usize, n: usize },
     #[error("{key}: expected {expected} entries (one per {per}), got {got}")]
     Count { key: &'static str, per: &'static str, expected: usize, got: usize },
     #[error("{key}: pole {} is not in the open left half-plane; {what} poles must be Hurwitz (real part < 0)", fmt_complex(.pole))]
@@ -182,7 +195,8 @@ impl Design {
         check_spec(plant, spec)?;
         let (controllability, observability) = assumption_1(plant)?;
         let (L, observer_eigenvalues) = observer(plant, &spec.observer)?;
-        let fw = falb_wolovich(&plant.A, &plant.B, &plant.C, &spec.channel_poles)?;
+        let fw =
+            falb_wolovich_given(&plant.A, &plant.B, &plant.C, &spec.channel_poles, spec.relative_degrees.as_deref())?;
         let A_f = &plant.A - &plant.B * &fw.K;
         let B_f = &plant.B * &fw.F;
         let decoupled_eigenvalues = eigenvalues(&A_f).map_err(|e| eigen_error("plant", "A − BK", e))?;

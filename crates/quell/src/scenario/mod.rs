@@ -116,6 +116,7 @@ const DESIGN_KEYS: &[&str] = &[
     "disturbance_filter_poles",
     "mu",
     "beta",
+    "relative_degrees",
 ];
 const SIGNAL_KEYS: &[&str] = &["components"];
 const COMPONENT_KEYS: &[&str] = &["bias", "harmonics"];
@@ -390,6 +391,9 @@ fn design_spec(v: Value) -> Result<DesignSpec, ScenarioError> {
             .unwrap_or_default(),
         mu: t.require("mu", "one adaptation gain μ_i ≥ 0 per channel", |v| v.numbers())?,
         beta: t.require("beta", "β > 0 of H(s) = 1/(βs + 1)", |v| v.number())?,
+        relative_degrees: t.get("relative_degrees", |v| {
+            v.array("one relative degree σ_i ≥ 1 per output, e.g. [2, 1]", |s| s.positive("a relative degree σ_i"))
+        })?,
     })
 }
 

@@ -141,6 +141,17 @@ impl<'a> Value<'a, '_> {
         }
     }
 
+    /// An integer ≥ 1; `what` names it.
+    pub fn positive(&self, what: &str) -> Result<usize, ScenarioError> {
+        match self.value {
+            toml::Value::Integer(i) if *i >= 1 => {
+                usize::try_from(*i).map_err(|_| err(self.key, format!("expected {what}, an integer ≥ 1, found {i}")))
+            }
+            toml::Value::Integer(i) => Err(err(self.key, format!("expected {what}, an integer ≥ 1, found {i}"))),
+            _ => Err(self.found(&format!("{what}, an integer ≥ 1"))),
+        }
+    }
+
     /// An array, with each element's key path `key[i]`; `what` describes the expected array.
     pub fn array<T>(
         &self,

@@ -113,6 +113,10 @@ pub fn design_table(d: &DesignSpec) -> Table {
     }
     t.insert("mu".into(), numbers(&d.mu));
     t.insert("beta".into(), Value::Float(d.beta));
+    if let Some(sigma) = &d.relative_degrees {
+        let sigma = sigma.iter().map(|&s| Value::Integer(i64::try_from(s).unwrap_or(i64::MAX))).collect();
+        t.insert("relative_degrees".into(), Value::Array(sigma));
+    }
     t
 }
 

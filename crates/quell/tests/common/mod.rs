@@ -43,6 +43,7 @@ pub fn paper_spec() -> DesignSpec {
         disturbance_filter_poles: vec![vec![re(-1.0), re(-3.0)], vec![re(-1.0), re(-2.0), re(-3.0)]],
         mu: vec![20.0, 30.0],
         beta: 1.0,
+        relative_degrees: None,
     }
 }
 
