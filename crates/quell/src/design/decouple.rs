@@ -192,9 +192,9 @@ pub fn falb_wolovich_given(
     let mut C_star = DMatrix::zeros(m, n);
     let mut q0 = Vec::with_capacity(m);
     let mut row_norms = Vec::with_capacity(m);
-    for i in 0..m {
+    for (i, poles) in channel_poles.iter().enumerate() {
         // q = [q_i0, …, q_i(σ−1)] of ∏(s − λ_ij) (eq. for G_ii(s)).
-        let q = poly_from_roots(&channel_poles[i]);
+        let q = poly_from_roots(poles);
         let mut row: RowDVector<f64> = C.row(i).clone_owned(); // c_i A^z
         let mut c_star = RowDVector::zeros(n);
         let mut last = RowDVector::zeros(n); // c_i A^(σ_i − 1), the row of B*
