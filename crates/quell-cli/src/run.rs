@@ -9,10 +9,9 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use quell::run::LoopSettings;
 use quell::scenario::Scenario;
-use quell::sim::{
-    simulate_sampled_with_truth, simulate_with_truth, Outcome, RunSettings, RunStats, SampledSettings, SimResult,
-};
+use quell::sim::{Outcome, RunStats, SimResult};
 use quell::Design;
 use serde_json::json;
 
@@ -37,14 +36,14 @@ pub struct RunArgs {
 pub fn run(args: &RunArgs) -> Result<(), Failure> {
     let (scenario, design) = load(args.scenario.as_deref())?;
     // Every check that can fail on input happens before the output directory is touched.
-    let sampled = sampled_settings(args, &scenario, &design)?;
+    let settings = loop_settings(args, &scenario, &design)?;
     let out = &args.out;
     output::prepare_dir(out).map_err(|e| {
         Failure::Input(format!("--out {}: cannot write there ({e}); choose a writable directory", out.display()))
     })?;
     let ctrl_c = CtrlC::install();
     let started = Instant::now();
-    let result = simulate(&scenario, &design, sampled.as_ref(), &ctrl_c)?;
+    let result = simulate(&scenario, &design, &settings, &ctrl_c)?;
     ctrl_c.start_writing();
     let seconds = started.elapsed().as_secs_f64();
     write_outputs(out, &scenario, &design, &result, seconds, !args.no_plots)
@@ -52,26 +51,20 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     report_outcome(&result, out, seconds)
 }
 
-/// The sampled-data settings when `--sample-time` or `simulation.sample_time` asks for a discrete
-/// controller, checked (delays whole samples, output step a multiple, noise, signals).
-fn sampled_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result<Option<SampledSettings>, Failure> {
-    let sim = &scenario.simulation;
-    let sample_time = match args.sample_time {
+/// The scenario's loop ([`LoopSettings::of`]), or the sampled-data loop at `--sample-time`; a
+/// sampled-data loop is checked (delays whole samples, output step a multiple, noise, signals).
+fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result<LoopSettings, Failure> {
+    let settings = match args.sample_time {
         Some(t) if !(t.is_finite() && t > 0.0) => {
             return Err(Failure::Input(format!("--sample-time: expected a sample time > 0 in seconds, found {t}")))
         }
-        Some(t) => t,
-        None => match sim.sample_time {
-            Some(t) => t,
-            None => return Ok(None),
-        },
+        Some(t) => LoopSettings::sampled(scenario, t),
+        None => LoopSettings::of(scenario),
     };
-    let settings = SampledSettings {
-        noise: scenario.noise.clone(),
-        ..SampledSettings::new(sim.t_end, sim.output_step, sample_time)
-    };
-    settings.check(design, &scenario.reference, &scenario.disturbance).map_err(|e| Failure::Input(e.to_string()))?;
-    Ok(Some(settings))
+    if let LoopSettings::Sampled(st) = &settings {
+        st.check(design, &scenario.reference, &scenario.disturbance).map_err(|e| Failure::Input(e.to_string()))?;
+    }
+    Ok(settings)
 }
 
 /// Ctrl-C during a run: the first stops it at its next recorded sample, and the files are written. A
@@ -118,11 +111,10 @@ impl CtrlC {
 fn simulate(
     scenario: &Scenario,
     design: &Design,
-    sampled: Option<&SampledSettings>,
+    settings: &LoopSettings,
     ctrl_c: &CtrlC,
 ) -> Result<SimResult, Failure> {
-    let sim = &scenario.simulation;
-    let bar = progress_bar(sim.t_end);
+    let bar = progress_bar(scenario.simulation.t_end);
     let progress = |t: f64| {
         bar.set_position((t * 1000.0) as u64);
         if ctrl_c.interrupted() {
@@ -131,15 +123,8 @@ fn simulate(
             ControlFlow::Continue(())
         }
     };
-    let (truth, g, w) = (scenario.true_plant(), &scenario.reference, &scenario.disturbance);
-    let result = match sampled {
-        None => {
-            let settings = RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol);
-            simulate_with_truth(design, truth, g, w, &settings, progress)
-        }
-        Some(settings) => simulate_sampled_with_truth(design, truth, g, w, settings, progress),
-    }
-    .map_err(|e| Failure::Input(e.to_string()))?;
+    let result =
+        quell::run::simulate(scenario, design, settings, progress).map_err(|e| Failure::Input(e.to_string()))?;
     bar.finish_and_clear();
     Ok(result)
 }

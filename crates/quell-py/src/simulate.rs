@@ -7,9 +7,8 @@ use std::time::{Duration, Instant};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use quell::sim::{
-    simulate_sampled_with_truth, simulate_with_truth, Outcome, RunSettings, RunStats, SampledSettings, SimResult,
-};
+use quell::run::LoopSettings;
+use quell::sim::{Outcome, RunStats, SimResult};
 use toml::Value;
 
 use crate::convert::number;
@@ -227,13 +226,7 @@ pub fn simulate(
     } else {
         &s.inner
     };
-    let sim = scn.simulation;
-    let sampled = sim
-        .sample_time
-        .map(|T| SampledSettings { noise: scn.noise.clone(), ..SampledSettings::new(sim.t_end, sim.output_step, T) });
-
-    // The simulated plant is `[truth]` where the scenario has one; the design keeps `[plant]`.
-    let truth = scn.true_plant();
+    let settings = LoopSettings::of(scn);
     let mut interrupt: Option<PyErr> = None;
     let result = py.detach(|| {
         let mut last = Instant::now();
@@ -250,15 +243,7 @@ pub fn simulate(
                 }
             }
         };
-        match &sampled {
-            None => {
-                let settings = RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol);
-                simulate_with_truth(&design, truth, &scn.reference, &scn.disturbance, &settings, progress)
-            }
-            Some(settings) => {
-                simulate_sampled_with_truth(&design, truth, &scn.reference, &scn.disturbance, settings, progress)
-            }
-        }
+        quell::run::simulate(scn, &design, &settings, progress)
     });
     if let Some(e) = interrupt {
         return Err(e);

@@ -3,7 +3,8 @@
 //!
 //! Data flows one way:
 //! [`scenario`] file → validated [`Scenario`] → [`Design`] (every gain, [`design`]) →
-//! controller equations ([`controller`]) + plant → one [`sim::SimResult`]. Run settings, their
+//! controller equations ([`controller`]) + plant → one [`sim::SimResult`] ([`run::simulate`] carries a
+//! scenario through). Run settings, their
 //! limits and checks ([`settings`]) are shared by the scenario reader and the loops.
 //!
 //! ```
@@ -44,6 +45,7 @@ pub mod design;
 pub mod export;
 pub mod linalg;
 pub mod plant;
+pub mod run;
 pub mod scenario;
 pub mod settings;
 pub mod signal;

@@ -6,7 +6,7 @@ use std::ops::ControlFlow;
 use nalgebra::{DMatrix, DVector};
 
 use super::dde::{self, DelaySystem, Options, Past};
-use super::divergence::{Watched, DIVERGENCE_BOUND};
+use super::divergence::{Peaks, Watched, DIVERGENCE_BOUND};
 use super::result::{Outcome, RunStats, SimResult};
 use super::{check_run, SimError};
 use crate::controller::{command, mat_vec, packed, swapping_error, Equations};
@@ -388,12 +388,16 @@ pub struct RunSettings {
     pub divergence_bound: f64,
     /// Most solver steps ([`Outcome::TooManySteps`] beyond); unlimited by default.
     pub max_steps: usize,
+    /// Bounds per watched signal (x, x̂, ξ̂, η̂) below `divergence_bound`: a signal beyond its bound
+    /// counts as divergence too. Studies set these to a factor times the nominal run's
+    /// [`SimResult::peaks`] (docs/studies.md, "Runaway"); `None` by default.
+    pub runaway: Option<Peaks>,
 }
 
 impl RunSettings {
     /// Settings with the default divergence bound [`DIVERGENCE_BOUND`].
     pub fn new(t_end: f64, output_step: f64, rtol: f64, atol: f64) -> Self {
-        RunSettings { t_end, output_step, rtol, atol, divergence_bound: DIVERGENCE_BOUND, max_steps: usize::MAX }
+        RunSettings { t_end, output_step, rtol, atol, divergence_bound: DIVERGENCE_BOUND, max_steps: usize::MAX, runaway: None }
     }
 }
 
@@ -424,7 +428,7 @@ pub fn simulate_with_truth(
     settings: &RunSettings,
     mut on_progress: impl FnMut(f64) -> ControlFlow<()>,
 ) -> Result<SimResult, SimError> {
-    let RunSettings { t_end, output_step, rtol, atol, divergence_bound, max_steps } = *settings;
+    let RunSettings { t_end, output_step, rtol, atol, divergence_bound, max_steps, runaway } = *settings;
     check_run(design, reference, disturbance, t_end, output_step, divergence_bound)?;
     crate::settings::check_tolerances(rtol, atol)?;
     super::check_truth(design, truth)?;
@@ -436,13 +440,16 @@ pub fn simulate_with_truth(
     let (mut y, mut g, mut u) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
     let opts = Options { rtol, atol, max_steps, ..Options::default() };
     let mut outcome = Outcome::Completed;
+    let bounds = Peaks(runaway.map_or([divergence_bound; 4], |r| r.0.map(|b| b.min(divergence_bound))));
     // The solver borrows the loop mutably; the output callback reads through its own probe.
     let mut probe = sys.probe();
     let solved = dde::solve(&mut sys, 0.0, &s0, &history, t_end, output_step, &opts, |t, s| {
-        if let Some(diverged) = probe.watched(s).diverged(t, divergence_bound) {
+        let watched = probe.watched(s);
+        if let Some(diverged) = watched.beyond(t, &bounds) {
             outcome = diverged;
             return ControlFlow::Break(());
         }
+        result.peaks.record(&watched);
         let eta = probe.outputs(t, s, &mut y, &mut g, &mut u);
         result.push(t, &y, &g, &u, eta);
         if on_progress(t).is_break() {

@@ -1,5 +1,7 @@
 //! When a run counts as diverged: one bound and the same signals for both loops (and for sweeps).
 
+use serde::{Deserialize, Serialize};
+
 use super::result::Outcome;
 
 /// The default divergence bound: a watched signal above this magnitude ends the run.
@@ -16,9 +18,20 @@ pub struct Watched<'a> {
 }
 
 impl Watched<'_> {
+    /// The signals in the order x, x̂, ξ̂, η̂ (the order of [`Peaks`]).
+    fn signals(&self) -> [&[f64]; 4] {
+        [self.x, self.x_hat, self.xi_hat, self.eta]
+    }
+
     /// The first watched value (in the order x, x̂, ξ̂, η̂: the plant first) that is non-finite or
     /// above `bound` in magnitude, as the outcome of a run diverged at time `t`.
     pub fn diverged(&self, t: f64, bound: f64) -> Option<Outcome> {
+        self.beyond(t, &Peaks([bound; 4]))
+    }
+
+    /// [`Watched::diverged`] with a bound per signal: the first value that is non-finite or above
+    /// its signal's bound in magnitude.
+    pub fn beyond(&self, t: f64, bounds: &Peaks) -> Option<Outcome> {
         let q = self.xi_hat.len();
         let name = |signal: usize, j: usize| match signal {
             0 => format!("x[{}] (plant state)", j + 1),
@@ -26,13 +39,37 @@ impl Watched<'_> {
             2 => format!("xi_hat[{}] (regressor)", j + 1),
             _ => format!("eta{}[{}] (adaptive parameters)", j / q + 1, j % q + 1),
         };
-        [self.x, self.x_hat, self.xi_hat, self.eta].iter().enumerate().find_map(|(signal, values)| {
-            values.iter().position(|&v| !(v.is_finite() && v.abs() <= bound)).map(|j| Outcome::Diverged {
+        self.signals().iter().zip(bounds.0).enumerate().find_map(|(signal, (values, bound))| {
+            values.iter().position(|&v| beyond(v, bound)).map(|j| Outcome::Diverged {
                 t,
                 signal: name(signal, j),
                 value: values[j],
             })
         })
+    }
+}
+
+/// The largest magnitude each watched signal reached, in the order x, x̂, ξ̂, η̂ (max over its
+/// entries and the recorded samples); also used as one bound per signal ([`Watched::beyond`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct Peaks(pub [f64; 4]);
+
+impl Peaks {
+    /// Raises each peak to the signal's largest magnitude now.
+    pub fn record(&mut self, w: &Watched<'_>) {
+        for (p, values) in self.0.iter_mut().zip(w.signals()) {
+            *p = values.iter().fold(*p, |a, v| a.max(v.abs()));
+        }
+    }
+
+    /// Each peak times `factor`.
+    pub fn scaled(&self, factor: f64) -> Peaks {
+        Peaks(self.0.map(|p| p * factor))
+    }
+
+    /// The name of signal `i` (0: x, 1: x̂, 2: ξ̂, 3: η̂), as [`Outcome::Diverged`] names its entries.
+    pub fn name(i: usize) -> &'static str {
+        ["x (plant state)", "x_hat (observer state)", "xi_hat (regressor)", "eta (adaptive parameters)"][i]
     }
 }
 
@@ -50,5 +87,29 @@ pub(crate) fn check_bound(bound: f64) -> Result<(), crate::settings::KeyError> {
             "divergence_bound",
             format!("expected a bound > 0 (or +inf for none; default {DIVERGENCE_BOUND:e}), found {bound}"),
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn peaks_record_the_largest_magnitudes_and_bound_each_signal() {
+        let w = Watched { x: &[1.0, -3.0], x_hat: &[0.5], xi_hat: &[-0.25, 0.125], eta: &[2.0, -4.0, 1.0, 0.0] };
+        let mut p = Peaks::default();
+        p.record(&w);
+        assert_eq!(p, Peaks([3.0, 0.5, 0.25, 4.0]));
+        p.record(&Watched { x: &[-5.0, 0.0], ..w });
+        assert_eq!(p, Peaks([5.0, 0.5, 0.25, 4.0]), "a later, larger value raises its peak only");
+        // Per-signal bounds: ξ̂[2] = 0.125 is within 0.2, ξ̂[1] = −0.25 is not.
+        let bounds = Peaks([10.0, 10.0, 0.2, 10.0]);
+        assert_eq!(
+            w.beyond(7.0, &bounds),
+            Some(Outcome::Diverged { t: 7.0, signal: "xi_hat[1] (regressor)".into(), value: -0.25 })
+        );
+        assert_eq!(w.beyond(7.0, &p.scaled(1.0)), None, "every value is within its own peak");
+        assert_eq!(w.diverged(7.0, 3.5), w.beyond(7.0, &Peaks([3.5; 4])));
+        assert!(matches!(w.diverged(7.0, 3.5), Some(Outcome::Diverged { ref signal, .. }) if signal == "eta1[2] (adaptive parameters)"));
     }
 }

@@ -3,6 +3,7 @@
 use serde::Serialize;
 
 use super::dde::Stats;
+use super::divergence::Peaks;
 
 /// How a run ended.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -78,6 +79,8 @@ pub struct SimResult {
     /// What the loop did (so far, when it stopped early).
     pub stats: RunStats,
     pub outcome: Option<Outcome>,
+    /// The largest magnitude of each watched signal (x, x̂, ξ̂, η̂) at the recorded samples.
+    pub peaks: Peaks,
 }
 
 /// Per-channel figures of merit.
@@ -97,7 +100,7 @@ impl SimResult {
     /// An empty result for m channels and regressor size q, with the loop's statistics so far.
     pub fn new(m: usize, q: usize, stats: RunStats) -> Self {
         let (t, y, g, e, u, eta) = Default::default();
-        SimResult { m, q, t, y, g, e, u, eta, stats, outcome: None }
+        SimResult { m, q, t, y, g, e, u, eta, stats, outcome: None, peaks: Peaks::default() }
     }
 
     /// Appends one sample.

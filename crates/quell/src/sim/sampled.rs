@@ -269,6 +269,7 @@ fn sampled_loop(
                 outcome = diverged;
                 break;
             }
+            result.peaks.record(&watched);
             result.push(t, &y, &g, ctrl.command(), watched.eta);
             if on_progress(t).is_break() {
                 outcome = Outcome::Interrupted { t };

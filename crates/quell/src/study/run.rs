@@ -8,8 +8,9 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::{Settle, Study};
+use crate::run::LoopSettings;
 use crate::scenario::Scenario;
-use crate::sim::{self, RunSettings, SampledSettings, SimResult};
+use crate::sim::{self, SimResult};
 
 /// SplitMix64's finalizer: a bijection of u64 that scrambles every bit.
 fn mix(mut z: u64) -> u64 {
@@ -130,28 +131,16 @@ pub(crate) fn figures(r: &SimResult, settle: &Settle) -> Vec<ChannelFigures> {
         .collect()
 }
 
-/// Simulates a scenario as its `[simulation]` says (continuous, or sampled-data with a
-/// `sample_time`); `Err` when it cannot start.
+/// Simulates a scenario as its `[simulation]` says ([`crate::run::simulate`]), a continuous run
+/// within the step budget `max_steps`; `Err` when it cannot start.
 pub(crate) fn simulate(s: &Scenario, max_steps: usize, stop: &dyn Fn() -> bool) -> Result<SimResult, String> {
     let design = s.design().map_err(|e| e.to_string())?;
-    let sim = &s.simulation;
-    let progress = |_t: f64| if stop() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
-    match sim.sample_time {
-        None => {
-            let settings =
-                RunSettings { max_steps, ..RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol) };
-            sim::simulate_with_truth(&design, s.true_plant(), &s.reference, &s.disturbance, &settings, progress)
-                .map_err(|e| e.to_string())
-        }
-        Some(sample_time) => {
-            let settings = SampledSettings {
-                noise: s.noise.clone(),
-                ..SampledSettings::new(sim.t_end, sim.output_step, sample_time)
-            };
-            sim::simulate_sampled_with_truth(&design, s.true_plant(), &s.reference, &s.disturbance, &settings, progress)
-                .map_err(|e| e.to_string())
-        }
+    let mut settings = LoopSettings::of(s);
+    if let LoopSettings::Continuous(st) = &mut settings {
+        st.max_steps = max_steps;
     }
+    let progress = |_t: f64| if stop() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
+    crate::run::simulate(s, &design, &settings, progress).map_err(|e| e.to_string())
 }
 
 /// Carries out one run; `None` when `stop` interrupted it.
