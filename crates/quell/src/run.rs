@@ -57,7 +57,7 @@ pub fn simulate(
 mod tests {
     use super::*;
     use crate::scenario::PAPER_EXAMPLE;
-    use crate::sim::RunStats;
+    use crate::sim::{Peaks, RunStats};
 
     fn scenario(extra: &str) -> Scenario {
         let text = PAPER_EXAMPLE.replace("t_end = 100.0", "t_end = 2.0");
@@ -82,5 +82,26 @@ mod tests {
             let (a, b) = (run(&nominal, &settings), run(&truth, &settings));
             assert_eq!([b.y[0] - a.y[0], b.y[1] - a.y[1]], [2.0, 2.0], "{settings:?}");
         }
+    }
+
+    #[test]
+    fn runaway_bounds_end_a_continuous_run_at_the_first_signal_beyond_its_bound() {
+        let s = scenario("");
+        let LoopSettings::Continuous(st) = LoopSettings::of(&s) else { unreachable!() };
+        let full = run(&s, &LoopSettings::Continuous(st));
+        let peaks = full.peaks;
+        assert!(peaks.0.iter().all(|&p| p > 0.0 && p.is_finite()), "{peaks:?}");
+        // Bounds at the run's own peaks let it complete; half of x̂'s peak ends it where x̂ first
+        // exceeds that, with the value reported.
+        let within = run(&s, &LoopSettings::Continuous(RunSettings { runaway: Some(peaks), ..st }));
+        assert_eq!(within.outcome, Some(sim::Outcome::Completed));
+        assert_eq!(within.y, full.y);
+        let mut half = Peaks([f64::INFINITY; 4]);
+        half.0[1] = 0.5 * peaks.0[1];
+        let ended = run(&s, &LoopSettings::Continuous(RunSettings { runaway: Some(half), ..st }));
+        let Some(sim::Outcome::Diverged { t, signal, value }) = ended.outcome else { panic!("{:?}", ended.outcome) };
+        assert!(signal.starts_with("x_hat[") && value.abs() > half.0[1], "{signal} = {value}");
+        assert!(t < 2.0 && ended.peaks.0[1] <= half.0[1], "t = {t}, recorded peaks {:?}", ended.peaks);
+        assert_eq!(ended.y[..], full.y[..ended.y.len()], "the run is the same up to then");
     }
 }
