@@ -397,7 +397,15 @@ pub struct RunSettings {
 impl RunSettings {
     /// Settings with the default divergence bound [`DIVERGENCE_BOUND`].
     pub fn new(t_end: f64, output_step: f64, rtol: f64, atol: f64) -> Self {
-        RunSettings { t_end, output_step, rtol, atol, divergence_bound: DIVERGENCE_BOUND, max_steps: usize::MAX, runaway: None }
+        RunSettings {
+            t_end,
+            output_step,
+            rtol,
+            atol,
+            divergence_bound: DIVERGENCE_BOUND,
+            max_steps: usize::MAX,
+            runaway: None,
+        }
     }
 }
 

@@ -110,6 +110,8 @@ mod tests {
         );
         assert_eq!(w.beyond(7.0, &p.scaled(1.0)), None, "every value is within its own peak");
         assert_eq!(w.diverged(7.0, 3.5), w.beyond(7.0, &Peaks([3.5; 4])));
-        assert!(matches!(w.diverged(7.0, 3.5), Some(Outcome::Diverged { ref signal, .. }) if signal == "eta1[2] (adaptive parameters)"));
+        assert!(
+            matches!(w.diverged(7.0, 3.5), Some(Outcome::Diverged { ref signal, .. }) if signal == "eta1[2] (adaptive parameters)")
+        );
     }
 }
