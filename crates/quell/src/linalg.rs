@@ -51,7 +51,9 @@ pub fn blkdiag(blocks: &[DMatrix<f64>]) -> DMatrix<f64> {
 /// Why [`eigenvalues`] returned no eigenvalues.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum EigenError {
-    /// The matrix has a NaN or infinite entry (e.g. a gain that overflowed).
+    /// The matrix has a NaN or infinite entry (e.g. a gain that overflowed), or entries so large
+    /// (≳ 1e154) that ‖M‖_F overflows: balancing and the QR iteration would overflow (or, near
+    /// f64::MAX, never end).
     NonFinite,
     /// faer's QR iteration hit its iteration limit (not seen on finite input of size ≤ 100).
     NoConvergence,
@@ -66,7 +68,7 @@ pub enum EigenError {
 /// only to ≈ (ε‖M‖)^(1/k): see [`clusters`].
 pub fn eigenvalues(M: &DMatrix<f64>) -> Result<Vec<Complex<f64>>, EigenError> {
     let n = M.nrows();
-    if !M.iter().all(|v| v.is_finite()) {
+    if !M.iter().all(|v| v.is_finite()) || !M.norm().is_finite() {
         return Err(EigenError::NonFinite);
     }
     if n == 0 {

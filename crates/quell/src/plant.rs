@@ -3,7 +3,13 @@
 use nalgebra::{DMatrix, DVector};
 use thiserror::Error;
 
-/// A plant checked for consistent shapes, finite entries and non-negative delays.
+/// Largest magnitude of a plant entry. The design forms products of two entries summed over n
+/// terms (A², c_i A B, A − BK) and squared Frobenius norms (the rank tests' tolerances); with every
+/// entry at most 1e150 these stay below n·1e300, finite for any n < 1e8 (f64::MAX ≈ 1.8e308).
+pub const MAX_ENTRY: f64 = 1e150;
+
+/// A plant checked for consistent shapes, finite entries of magnitude ≤ [`MAX_ENTRY`] and
+/// non-negative delays.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Plant {
     /// State matrix, n×n.
@@ -29,6 +35,11 @@ pub enum PlantError {
     Shape { name: &'static str, expected_rows: usize, expected_cols: usize, rows: usize, cols: usize },
     #[error("{name}[{row}][{col}]: expected a finite number, found {value}")]
     NonFinite { name: &'static str, row: usize, col: usize, value: f64 },
+    #[error(
+        "{name}[{row}][{col}]: expected a magnitude ≤ 1e150, found {value:e}; products and norms of such \
+         entries overflow double precision — rescale the plant's units"
+    )]
+    TooLarge { name: &'static str, row: usize, col: usize, value: f64 },
     #[error("delays[{index}]: expected a finite delay ≥ 0, found {value}")]
     BadDelay { index: usize, value: f64 },
     #[error("{name}: expected {expected} entries (one per {per}), found {found}")]
@@ -37,7 +48,8 @@ pub enum PlantError {
     Empty { n: usize, m: usize },
 }
 
-fn check(name: &'static str, M: &DMatrix<f64>, rows: usize, cols: usize) -> Result<(), PlantError> {
+/// `M` is `rows × cols`.
+pub(crate) fn check_shape(name: &'static str, M: &DMatrix<f64>, rows: usize, cols: usize) -> Result<(), PlantError> {
     if M.nrows() != rows || M.ncols() != cols {
         return Err(PlantError::Shape {
             name,
@@ -47,15 +59,30 @@ fn check(name: &'static str, M: &DMatrix<f64>, rows: usize, cols: usize) -> Resu
             cols: M.ncols(),
         });
     }
-    for r in 0..rows {
-        for c in 0..cols {
+    Ok(())
+}
+
+/// Every entry of `M` is finite and of magnitude ≤ [`MAX_ENTRY`]; the first offending entry in
+/// row-major order is reported.
+pub(crate) fn check_entries(name: &'static str, M: &DMatrix<f64>) -> Result<(), PlantError> {
+    for r in 0..M.nrows() {
+        for c in 0..M.ncols() {
             let value = M[(r, c)];
             if !value.is_finite() {
                 return Err(PlantError::NonFinite { name, row: r, col: c, value });
             }
+            if value.abs() > MAX_ENTRY {
+                return Err(PlantError::TooLarge { name, row: r, col: c, value });
+            }
         }
     }
     Ok(())
+}
+
+/// Shape, then entries.
+pub(crate) fn check(name: &'static str, M: &DMatrix<f64>, rows: usize, cols: usize) -> Result<(), PlantError> {
+    check_shape(name, M, rows, cols)?;
+    check_entries(name, M)
 }
 
 impl Plant {

@@ -86,10 +86,27 @@ pub fn check_horizon(t_end: f64, output_step: f64) -> Result<(), KeyError> {
     if samples > MAX_OUTPUT_SAMPLES {
         return Err(KeyError::new(
             "simulation.output_step",
-            format!("t_end / output_step = {samples:.3e} rows of signals.csv; at most {MAX_OUTPUT_SAMPLES:e} are kept; choose output_step ≥ {}", t_end / MAX_OUTPUT_SAMPLES),
+            format!("t_end / output_step = {samples:.3e} rows of signals.csv; at most {MAX_OUTPUT_SAMPLES:e} are kept; choose output_step ≥ {}", at_least(t_end / MAX_OUTPUT_SAMPLES, |h| t_end / h <= MAX_OUTPUT_SAMPLES)),
         ));
     }
     Ok(())
+}
+
+/// A value to suggest for a lower bound `x`: the number nearest `x` with three significant digits,
+/// raised in its third digit until `passes`, written as Rust's shortest form (`{}` between 1e-4 and
+/// 1e6, otherwise `{:e}`), so that 1e293 does not print as 294 digits and the value typed back
+/// passes the check.
+fn at_least(x: f64, passes: impl Fn(f64) -> bool) -> String {
+    let e = (x.log10().floor() as i32).saturating_sub(2);
+    let mut digits = (x / 10f64.powi(e)).round();
+    for _ in 0..1000 {
+        let v: f64 = format!("{digits}e{e}").parse().unwrap_or(f64::NAN);
+        if v.is_finite() && passes(v) {
+            return if (1e-4..1e6).contains(&v) { format!("{v}") } else { format!("{v:e}") };
+        }
+        digits += 1.0;
+    }
+    format!("{x:e}")
 }
 
 /// The integrator's tolerances: finite and > 0.
@@ -107,7 +124,7 @@ pub fn check_sample_time(t_end: f64, sample_time: f64) -> Result<(), KeyError> {
     if steps > MAX_SAMPLING_STEPS {
         return Err(KeyError::new(
             KEY,
-            format!("t_end / sample_time = {steps:.3e} controller steps; at most {MAX_SAMPLING_STEPS:e} are run; choose sample_time ≥ {}", t_end / MAX_SAMPLING_STEPS),
+            format!("t_end / sample_time = {steps:.3e} controller steps; at most {MAX_SAMPLING_STEPS:e} are run; choose sample_time ≥ {}", at_least(t_end / MAX_SAMPLING_STEPS, |h| t_end / h <= MAX_SAMPLING_STEPS)),
         ));
     }
     Ok(())

@@ -347,6 +347,15 @@ fn non_finite_entry() {
 }
 
 #[test]
+fn entry_too_large() {
+    check(
+        &with(&[("[0.3, 0.3, -0.5]", "[0.3, 0.3, -5e200]")]),
+        "plant.A[2][2]",
+        "expected a magnitude ≤ 1e150, found -5e200",
+    );
+}
+
+#[test]
 fn infinite_entry() {
     check(&with(&[(MU, "mu = [20.0, inf]")]), "design.mu[1]", "expected a finite number, found inf");
 }
@@ -501,7 +510,7 @@ fn output_step_too_many_samples() {
     check(
         &with(&[(OUTPUT_STEP, "output_step = 1e-6 ")]),
         "simulation.output_step",
-        "t_end / output_step = 1.000e8 rows of signals.csv; at most 1e7 are kept; choose output_step ≥ 0.00001",
+        "t_end / output_step = 1.000e8 rows of signals.csv; at most 1e7 are kept; choose output_step ≥ 1e-5",
     );
 }
 
@@ -520,7 +529,7 @@ fn sample_time_too_many_steps() {
     check(
         &with(&[(SAMPLED, "sample_time = 1e-9")]),
         "simulation.sample_time",
-        "t_end / sample_time = 1.000e11 controller steps; at most 1e10 are run; choose sample_time ≥ 0.00000001",
+        "t_end / sample_time = 1.000e11 controller steps; at most 1e10 are run; choose sample_time ≥ 1e-8",
     );
 }
 

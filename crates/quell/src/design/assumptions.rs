@@ -10,6 +10,8 @@
 
 use nalgebra::DMatrix;
 
+use crate::plant::{check, PlantError};
+
 /// Outcome of a rank test: the numerical rank found and the tolerance used.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RankTest {
@@ -121,22 +123,28 @@ pub(crate) fn staircase(A: &DMatrix<f64>, B: &DMatrix<f64>, tol: f64) -> Stairca
 ///
 /// Computed from the orthogonal staircase form (see the module docs) with tolerance
 /// `tol = 10 · n · eps · max(‖A‖_F, ‖B‖_F)`; `rank` is the number of states reached by the
-/// staircase, i.e. the numerical dimension of the controllable subspace. Non-finite entries give
-/// `rank = 0` (nothing can be certified). Panics if A is not square or B has a different number
-/// of rows.
-pub fn controllability(A: &DMatrix<f64>, B: &DMatrix<f64>) -> RankTest {
+/// staircase, i.e. the numerical dimension of the controllable subspace. An error, not a rank,
+/// when A is not square, B has not A's rows, or an entry is non-finite or beyond
+/// [`MAX_ENTRY`](crate::plant::MAX_ENTRY) (where ‖·‖_F and the tolerance overflow, so that no
+/// rank could be certified).
+pub fn controllability(A: &DMatrix<f64>, B: &DMatrix<f64>) -> Result<RankTest, PlantError> {
     let n = A.nrows();
-    let tol = staircase_tol(A, B);
-    if A.iter().chain(B.iter()).any(|x| !x.is_finite()) {
-        assert_eq!(A.ncols(), n, "A must be square, got {}×{}", A.nrows(), A.ncols());
-        assert_eq!(B.nrows(), n, "B must have {n} rows (as A), got {}", B.nrows());
-        return RankTest { rank: 0, n, tol };
-    }
-    let s = staircase(A, B, tol);
-    RankTest { rank: s.rank, n, tol }
+    check("A", A, n, n)?;
+    check("B", B, n, B.ncols())?;
+    Ok(rank_test(A, B))
 }
 
-/// Observability of (A, C), by duality with [`controllability`] of (Aᵀ, Cᵀ).
-pub fn observability(A: &DMatrix<f64>, C: &DMatrix<f64>) -> RankTest {
-    controllability(&A.transpose(), &C.transpose())
+/// Observability of (A, C), by duality with [`controllability`] of (Aᵀ, Cᵀ); errors as there,
+/// with C required to have A's columns.
+pub fn observability(A: &DMatrix<f64>, C: &DMatrix<f64>) -> Result<RankTest, PlantError> {
+    let n = A.nrows();
+    check("A", A, n, n)?;
+    check("C", C, C.nrows(), n)?;
+    Ok(rank_test(&A.transpose(), &C.transpose()))
+}
+
+/// The staircase rank test of (A, B), whose shapes and entries have been checked.
+fn rank_test(A: &DMatrix<f64>, B: &DMatrix<f64>) -> RankTest {
+    let tol = staircase_tol(A, B);
+    RankTest { rank: staircase(A, B, tol).rank, n: A.nrows(), tol }
 }

@@ -398,11 +398,11 @@ fn check_spec(plant: &Plant, spec: &DesignSpec) -> Result<(), DesignError> {
 /// Assumption 1: (A, B) controllable and (A, C) observable, by the staircase rank tests.
 fn assumption_1(plant: &Plant) -> Result<(RankTest, RankTest), DesignError> {
     let n = plant.n();
-    let ctrb = controllability(&plant.A, &plant.B);
+    let ctrb = controllability(&plant.A, &plant.B)?;
     if !ctrb.full() {
         return Err(DesignError::Uncontrollable { rank: ctrb.rank, n, tol: ctrb.tol });
     }
-    let obsv = observability(&plant.A, &plant.C);
+    let obsv = observability(&plant.A, &plant.C)?;
     if !obsv.full() {
         return Err(DesignError::Unobservable { rank: obsv.rank, n, tol: obsv.tol });
     }
@@ -513,9 +513,11 @@ fn disturbance_observer_gain(D: &DMatrix<f64>, L_w: &DMatrix<f64>) -> Result<(DM
 fn eigen_error(key: &'static str, of: &'static str, e: EigenError) -> DesignError {
     let reason = match (e, key) {
         (EigenError::NonFinite, "design.observer_gain") => {
-            "the matrix overflows (entries beyond 1e308); give a smaller design.observer_gain"
+            "the matrix overflows double precision (its Frobenius norm is beyond 1.8e308); give a smaller design.observer_gain"
         }
-        (EigenError::NonFinite, _) => "the matrix overflows (entries beyond 1e308); rescale the plant's units",
+        (EigenError::NonFinite, _) => {
+            "the matrix overflows double precision (its Frobenius norm is beyond 1.8e308); rescale the plant's units"
+        }
         (EigenError::NoConvergence, _) => {
             "faer's QR iteration did not converge, which should not happen for finite input; please report the scenario"
         }

@@ -26,6 +26,7 @@ use nalgebra::{Complex, DMatrix, DVector};
 use thiserror::Error;
 
 use super::assumptions::{staircase, staircase_tol};
+use crate::plant::{check_entries, check_shape, PlantError};
 
 type C64 = Complex<f64>;
 
@@ -59,6 +60,9 @@ pub enum PlaceError {
     NonFinite { pole: Complex<f64> },
     #[error("matrix {which} contains NaN or infinite entries; fix the model")]
     NonFiniteSystem { which: &'static str },
+    /// A not square, B without A's rows, or an entry beyond [`MAX_ENTRY`](crate::plant::MAX_ENTRY).
+    #[error("{0}")]
+    Matrix(PlantError),
     #[error(
         "the computed gain would miss the requested poles: verified error {max_error:e} exceeds \
          1e-6 (relative to max(1, |p|)); the problem is too ill-conditioned for these poles — \
@@ -92,12 +96,11 @@ enum Slot {
 ///
 /// An observer gain follows by duality: `L = place(Aᵀ, Cᵀ, p)ᵀ` gives eig(A − L C) = p.
 ///
-/// Panics if A is not square or B has a different number of rows than A.
+/// A not square, B without A's rows, or an entry beyond [`MAX_ENTRY`](crate::plant::MAX_ENTRY) is [`PlaceError::Matrix`].
 pub fn place(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[Complex<f64>]) -> Result<DMatrix<f64>, PlaceError> {
     let n = A.nrows();
-    assert_eq!(A.ncols(), n, "place: A must be square, got {}×{}", A.nrows(), A.ncols());
-    assert_eq!(B.nrows(), n, "place: B must have {n} rows (as A), got {}", B.nrows());
     let m = B.ncols();
+    check_shape("A", A, n, n).and_then(|()| check_shape("B", B, n, m)).map_err(PlaceError::Matrix)?;
     if poles.len() != n {
         return Err(PlaceError::WrongCount { expected: n, found: poles.len() });
     }
@@ -111,6 +114,7 @@ pub fn place(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[Complex<f64>]) -> Resu
     if B.iter().any(|x| !x.is_finite()) {
         return Err(PlaceError::NonFiniteSystem { which: "B" });
     }
+    check_entries("A", A).and_then(|()| check_entries("B", B)).map_err(PlaceError::Matrix)?;
     if n == 0 {
         return Ok(DMatrix::zeros(m, 0));
     }

@@ -308,6 +308,15 @@ fn truth(v: Value, plant: &Plant) -> Result<Plant, ScenarioError> {
     })
 }
 
+/// The key of entry (row, col) of plant matrix `name` (x0 is a vector: one index).
+fn entry_key(name: &str, row: usize, col: usize) -> String {
+    if name == "x0" {
+        format!("plant.x0[{row}]")
+    } else {
+        format!("plant.{name}[{row}][{col}]")
+    }
+}
+
 /// A [`PlantError`] as a scenario error on key `plant.<name>`.
 fn plant_error(e: PlantError, n: usize, m: usize, k: usize) -> ScenarioError {
     match e {
@@ -335,8 +344,12 @@ fn plant_error(e: PlantError, n: usize, m: usize, k: usize) -> ScenarioError {
             )
         }
         PlantError::NonFinite { name, row, col, value } => {
-            let key = if name == "x0" { format!("plant.x0[{row}]") } else { format!("plant.{name}[{row}][{col}]") };
-            err(key, format!("expected a finite number, found {value}"))
+            err(entry_key(name, row, col), format!("expected a finite number, found {value}"))
+        }
+        too_large @ PlantError::TooLarge { name, row, col, .. } => {
+            let full = too_large.to_string();
+            let message = full.split_once(": ").map_or(full.as_str(), |(_, m)| m);
+            err(entry_key(name, row, col), message)
         }
         PlantError::BadDelay { index, value } => {
             err(format!("plant.delays[{index}]"), format!("expected a finite delay ≥ 0, found {value}"))

@@ -1,0 +1,114 @@
+//! The public functions outside `controller/` return an error, never panic, on inputs of the wrong
+//! shape or scale (issue 9, "A library that checks its inputs"). Each case panicked, hung or
+//! answered wrongly before it was fixed.
+#![allow(non_snake_case)]
+
+use quell::design::{controllability, observability, place, PlaceError};
+use quell::linalg::{eigenvalues, EigenError};
+use quell::nalgebra::{Complex, DMatrix};
+use quell::PlantError;
+
+fn poles(p: &[f64]) -> Vec<Complex<f64>> {
+    p.iter().map(|&x| Complex::new(x, 0.0)).collect()
+}
+
+/// A controllable and observable 3-state pair: a chain with B = e₃, C = e₁ᵀ.
+fn chain() -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
+    let A = DMatrix::from_row_slice(3, 3, &[0.0, 1.0, 0.0, 0.0, 0.0, 1.0, -1.0, -2.0, -3.0]);
+    let B = DMatrix::from_row_slice(3, 1, &[0.0, 0.0, 1.0]);
+    let C = DMatrix::from_row_slice(1, 3, &[1.0, 0.0, 0.0]);
+    (A, B, C)
+}
+
+fn shape(name: &'static str, expected: (usize, usize), found: (usize, usize)) -> PlantError {
+    PlantError::Shape { name, expected_rows: expected.0, expected_cols: expected.1, rows: found.0, cols: found.1 }
+}
+
+#[test]
+fn place_refuses_wrong_shapes() {
+    let (A, B, _) = chain();
+    let p = poles(&[-1.0, -2.0, -3.0]);
+    let A32 = A.rows(0, 2).into_owned().transpose(); // 3×2
+    assert_eq!(place(&A32, &B, &p), Err(PlaceError::Matrix(shape("A", (3, 3), (3, 2)))));
+    let B2 = B.rows(0, 2).into_owned();
+    assert_eq!(place(&A, &B2, &p), Err(PlaceError::Matrix(shape("B", (3, 1), (2, 1)))));
+    // The shapes are checked before the pole count, which depends on them.
+    assert_eq!(place(&A32, &B, &p[..2]), Err(PlaceError::Matrix(shape("A", (3, 3), (3, 2)))));
+    // Still placed with the right shapes.
+    assert!(place(&A, &B, &p).is_ok());
+}
+
+#[test]
+fn place_refuses_entries_that_overflow() {
+    // Was "(A, B) is not controllable … rank 0": the staircase tolerance overflowed to inf.
+    let (mut A, B, _) = chain();
+    A[(2, 0)] = -1e300;
+    let e = place(&A, &B, &poles(&[-1.0, -2.0, -3.0])).unwrap_err();
+    assert_eq!(e, PlaceError::Matrix(PlantError::TooLarge { name: "A", row: 2, col: 0, value: -1e300 }));
+    assert!(e.to_string().contains("rescale the plant's units"), "{e}");
+}
+
+#[test]
+fn rank_tests_refuse_wrong_shapes() {
+    let (A, B, C) = chain();
+    let A23 = A.rows(0, 2).into_owned();
+    assert_eq!(controllability(&A23, &B), Err(shape("A", (2, 2), (2, 3))));
+    assert_eq!(controllability(&A, &B.rows(0, 2).into_owned()), Err(shape("B", (3, 1), (2, 1))));
+    assert_eq!(observability(&A23, &C), Err(shape("A", (2, 2), (2, 3))));
+    assert_eq!(observability(&A, &C.columns(0, 2).into_owned()), Err(shape("C", (1, 3), (1, 2))));
+    // The right shapes still give the rank.
+    assert!(controllability(&A, &B).unwrap().full() && observability(&A, &C).unwrap().full());
+}
+
+#[test]
+fn rank_tests_refuse_non_finite_and_huge_entries() {
+    // NaN gave rank 0 ("nothing can be certified"), 1e300 gave "rank 0, tolerance inf": both read
+    // as an uncontrollable plant.
+    let (mut A, B, mut C) = chain();
+    A[(0, 1)] = f64::NAN;
+    assert!(matches!(controllability(&A, &B), Err(PlantError::NonFinite { name: "A", row: 0, col: 1, .. })));
+    let (A, mut B, _) = chain();
+    B[(2, 0)] = 2e300;
+    assert_eq!(controllability(&A, &B), Err(PlantError::TooLarge { name: "B", row: 2, col: 0, value: 2e300 }));
+    C[(0, 0)] = -1e151;
+    assert_eq!(observability(&A, &C), Err(PlantError::TooLarge { name: "C", row: 0, col: 0, value: -1e151 }));
+    // At the bound the test still decides, with a finite tolerance.
+    C[(0, 0)] = 1e150;
+    let t = observability(&A, &C).unwrap();
+    assert!(t.tol.is_finite() && t.tol > 0.0, "{t:?}");
+}
+
+#[test]
+fn eigenvalues_of_entries_near_the_largest_double_are_an_overflow_error() {
+    // The balancing loop never ended on 1e307·M (its row sums overflow to inf), and faer's QR did
+    // not converge on A − LC with L ≈ 8e300. Both are now EigenError::NonFinite.
+    let (A, _, _) = chain();
+    for scale in [1e155, 1e300, 1e307] {
+        assert_eq!(eigenvalues(&(&A * scale)), Err(EigenError::NonFinite), "scale {scale:e}");
+    }
+    // Large but representable: the eigenvalues scale with the matrix; their sum is the trace, −3e150.
+    let e = eigenvalues(&(&A * 1e150)).unwrap();
+    let trace: f64 = e.iter().map(|z| z.re).sum();
+    assert!((trace / -3e150 - 1.0).abs() < 1e-12, "{e:?}");
+}
+
+#[test]
+fn suggested_output_step_and_sample_time_are_short_and_pass() {
+    // t_end = 1e300 printed "choose output_step ≥ 1000000000000000100…" (294 digits).
+    use quell::settings::{check_horizon, check_sample_time};
+    for (t_end, step) in [(1e300, 0.1), (100.0, 1e-6), (3.0, 1e-7), (1e20, 1e-300)] {
+        let e = check_horizon(t_end, step).unwrap_err();
+        let suggested = e.message.rsplit("choose output_step ≥ ").next().unwrap();
+        assert!(suggested.len() <= 8, "{e}");
+        let h: f64 = suggested.parse().unwrap();
+        assert!(check_horizon(t_end, h).is_ok(), "{e}");
+        let e = check_sample_time(t_end, step * 1e-4).unwrap_err();
+        let suggested = e.message.rsplit("choose sample_time ≥ ").next().unwrap();
+        assert!(suggested.len() <= 8, "{e}");
+        assert!(check_sample_time(t_end, suggested.parse().unwrap()).is_ok(), "{e}");
+    }
+    // 1e300 / 1e293 rounds to just above 1e7, so the suggestion is the next 3-digit value.
+    let e = check_horizon(1e300, 0.1).unwrap_err();
+    assert!(e.message.ends_with("choose output_step ≥ 1.01e293"), "{e}");
+    assert!(check_horizon(1e300, 1e293).is_err());
+}
