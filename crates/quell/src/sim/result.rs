@@ -137,7 +137,7 @@ impl SimResult {
             .zip(self.column(&self.e, self.m, i))
             .filter(|(t, _)| **t >= from && **t <= to)
             .map(|(_, e)| e.abs())
-            .reduce(|a, b| if a.is_nan() || b.is_nan() { f64::NAN } else { a.max(b) })
+            .reduce(max_or_nan)
     }
 
     /// Figures of merit per channel; the tail is the last 10 % of the recorded horizon.
@@ -158,13 +158,23 @@ impl SimResult {
                 let rms = (tail.iter().map(|e| e * e).sum::<f64>() / tail.len().max(1) as f64).sqrt();
                 let last = &self.eta[self.eta.len() - self.m * self.q..];
                 ChannelSummary {
-                    tail_max_abs_e: tail.iter().fold(0.0, |a, e| a.max(e.abs())),
+                    tail_max_abs_e: tail.iter().fold(0.0, |a, e| max_or_nan(a, e.abs())),
                     tail_rms_e: rms,
-                    max_abs_u: self.column(&self.u, self.m, i).fold(0.0, |a, u| a.max(u.abs())),
+                    max_abs_u: self.column(&self.u, self.m, i).fold(0.0, |a, u| max_or_nan(a, u.abs())),
                     final_eta_norm: last[i * self.q..(i + 1) * self.q].iter().map(|v| v * v).sum::<f64>().sqrt(),
                 }
             })
             .collect()
+    }
+}
+
+/// max(a, b), but NaN when either is NaN (`f64::max` returns the other one), so that a NaN in a
+/// run shows in its figures instead of passing for a finite value.
+fn max_or_nan(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.max(b)
     }
 }
 
@@ -186,5 +196,23 @@ mod tests {
         assert_eq!(r.max_abs_error(0, 90.0, 100.0), None, "window past the horizon (a run that stopped early)");
         r.push(3.0, &[f64::NAN], &[1.0], &[0.0], &[0.0]);
         assert!(r.max_abs_error(0, 0.0, 3.0).unwrap().is_nan(), "a NaN error is not hidden by max");
+    }
+
+    #[test]
+    fn summary_shows_a_nan_in_the_error_or_the_input() {
+        // Two channels; channel 0's error is NaN at t = 9.5 (in the last 10 %), channel 1's input
+        // is NaN at t = 0 (outside the tail, but max |u| is over the whole run).
+        let mut r = SimResult::new(2, 1, RunStats::Sampled { controller_steps: 0, sample_time: 0.5 });
+        for k in 0..=20 {
+            let t = 0.5 * k as f64;
+            let y0 = if k == 19 { f64::NAN } else { 1.0 };
+            let u1 = if k == 0 { f64::NAN } else { -4.0 };
+            r.push(t, &[y0, 2.0], &[1.0, 1.0], &[3.0, u1], &[0.0, 0.0]);
+        }
+        let s = r.summary();
+        assert!(s[0].tail_max_abs_e.is_nan() && s[0].tail_rms_e.is_nan(), "{:?}", s[0]);
+        assert_eq!(s[0].max_abs_u, 3.0);
+        assert_eq!((s[1].tail_max_abs_e, s[1].tail_rms_e), (1.0, 1.0));
+        assert!(s[1].max_abs_u.is_nan(), "{:?}", s[1]);
     }
 }
