@@ -86,7 +86,7 @@ pub fn eigenvalues(M: &DMatrix<f64>) -> Result<Vec<Complex<f64>>, EigenError> {
 
 /// D⁻¹ M D with D diagonal of powers of 2 chosen so that each row and column have comparable
 /// norms (Parlett & Reinsch 1969, the scaling loop of LAPACK's `dgebal`). Exact in floating point.
-fn balance(M: &DMatrix<f64>) -> DMatrix<f64> {
+pub(crate) fn balance(M: &DMatrix<f64>) -> DMatrix<f64> {
     let n = M.nrows();
     let mut B = M.clone();
     let mut converged = false;

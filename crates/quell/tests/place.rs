@@ -64,16 +64,66 @@ fn random_poles(rng: &mut Rng, n: usize, sep: f64) -> Vec<C64> {
 /// Eigenvalues by nalgebra's Schur form (bounded iterations: its implicit double-shift QR has
 /// no exceptional shifts and can stall on tight clusters; shifting by the mean eigenvalue first
 /// resolves the all-equal case).
+///
+/// M is first scaled by an exact diagonal similarity (Osborne's iteration in the 2-norm, factors
+/// rounded to powers of 2): gains of 1e14 next to O(1) entries otherwise give the QR iteration a
+/// backward error of ε‖M‖ that swamps the eigenvalues the gain was built to place.
 fn eigenvalues(M: &DMatrix<f64>) -> Vec<C64> {
     let n = M.nrows();
+    let M = balanced(M);
     let sigma = M.trace() / n.max(1) as f64;
-    let shifted = M - DMatrix::<f64>::identity(n, n) * sigma;
+    let shifted = &M - DMatrix::<f64>::identity(n, n) * sigma;
     let schur = shifted.try_schur(f64::EPSILON, 100_000).expect("nalgebra Schur did not converge");
     schur.complex_eigenvalues().iter().map(|z| z + sigma).collect()
 }
 
+/// The test's own exact diagonal similarity of [`eigenvalues`] (Osborne, powers of 2).
+fn balanced(M: &DMatrix<f64>) -> DMatrix<f64> {
+    let n = M.nrows();
+    let mut M = M.clone();
+    for _ in 0..100 {
+        let mut changed = false;
+        for i in 0..n {
+            let off = |v: f64, j: usize| if j == i { 0.0 } else { v * v };
+            let col = M.column(i).iter().enumerate().map(|(j, &v)| off(v, j)).sum::<f64>().sqrt();
+            let row = M.row(i).iter().enumerate().map(|(j, &v)| off(v, j)).sum::<f64>().sqrt();
+            if col > 0.0 && row > 0.0 {
+                let f = (row / col).sqrt().log2().round().exp2();
+                if f != 1.0 {
+                    M.column_mut(i).scale_mut(f);
+                    M.row_mut(i).scale_mut(1.0 / f);
+                    changed = true;
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    M
+}
+
 fn closed_loop(A: &DMatrix<f64>, B: &DMatrix<f64>, K: &DMatrix<f64>) -> DMatrix<f64> {
     A - B * K
+}
+/// With `QUELL_DUMP_DIR` set, writes M (exact decimal forms) and the poles to `<dir>/<name>.txt`
+/// for `scripts/mp_eigenvalues.py`, which recomputes the pole errors with 60-digit eigenvalues.
+fn dump(name: &str, M: &DMatrix<f64>, poles: &[C64]) {
+    let Ok(dir) = std::env::var("QUELL_DUMP_DIR") else { return };
+    let mut out: Vec<String> =
+        M.row_iter().map(|r| r.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(" ")).collect();
+    out.push(format!("# {}", poles.iter().map(|p| format!("{:?},{:?}", p.re, p.im)).collect::<Vec<_>>().join(" ")));
+    std::fs::write(format!("{dir}/{name}.txt"), out.join("\n")).unwrap();
+}
+
+/// First-order error of the test's own [`eigenvalues`] on M, relative to max(1, min|p|):
+/// κ₂(X)·nε‖M_b‖_F with X the eigenvectors of the balanced M_b (the QR iteration's backward error
+/// nε‖M_b‖, amplified by Bauer–Fike). Where it exceeds the 1e-6 being checked, the test's solver
+/// cannot judge the placement; those cases are dumped (see [`dump`]) and counted.
+fn solver_error(M: &DMatrix<f64>, poles: &[C64]) -> f64 {
+    let Mb = balanced(M);
+    let scale = poles.iter().map(|p| p.norm()).fold(f64::INFINITY, f64::min).max(1.0);
+    eigenvector_condition_at(&Mb, poles) * Mb.nrows() as f64 * f64::EPSILON * Mb.norm() / scale
 }
 
 /// Characteristic polynomial coefficients [c_0, …, c_{n−1}, 1] of M (Faddeev–LeVerrier; fine
@@ -529,27 +579,80 @@ fn refusals_from_real_problems() {
     let e = place(&A, &B, &reals(&[-1.0, -2.0])).unwrap_err();
     assert_eq!(e, PlaceError::Uncontrollable { rank: 1, n: 2 });
     assert!(e.to_string().contains("staircase is 1, need 2"), "{e}");
-    // The observer of a 12-state integrator chain (y = x₁) with poles −2, −2.7, …, −9.7 by duality:
-    // the single-input problem in these coordinates is ill-conditioned; whatever place returns
-    // must reach the poles (checked by the characteristic polynomial, which is well conditioned
-    // here), or be the Inaccurate refusal with the error it measured.
+}
+
+/// The case: the observer of the 12-state integrator chain (companion form of s¹², y = x₁)
+/// with poles −2, −2.7, …, −9.7, by duality. Independent answer, Ackermann in the chain's own
+/// coordinates: A − L C has −L in its first column and ones on the superdiagonal, a companion
+/// matrix with characteristic polynomial s¹² + l₁ s¹¹ + … + l₁₂, so L = (a₁₁, a₁₀, …, a₀), the
+/// coefficients of ∏(s − p) (all positive, so each is computed to ≈ 12ε relative).
+/// Accuracy the problem allows: rounding those coefficients moves pole p by
+/// |δp| ≤ ε Σ_k |a_k| |p|^k / |p′(p)| (first order), up to 1.2e-7·|p| here. Demanded: place accepts,
+/// L matches the closed form to 1e-12 (entrywise relative), and the eigenvalues of A − LC (nalgebra's
+/// Schur after balancing, not the code under test) are within 10× that floor + 1e-9, and within
+/// 1e-6 relative (observed 1.4e-7).
+#[test]
+fn chain_observer_places_to_the_accuracy_the_problem_allows() {
     let n = 12;
     let A = DMatrix::from_fn(n, n, |r, c| if c == r + 1 { 1.0 } else { 0.0 });
     let mut C = DMatrix::zeros(1, n);
     C[(0, 0)] = 1.0;
     let poles: Vec<C64> = (0..n).map(|j| re(-2.0 - 0.7 * j as f64)).collect();
-    match place(&A.transpose(), &C.transpose(), &poles) {
-        Ok(Lt) => {
-            let M = &A - Lt.transpose() * &C;
-            let got = char_poly(&M);
-            let want = poly_from_roots(&poles);
-            for k in 0..n {
-                assert!((got[k] - want[k]).abs() <= 1e-6 * want[k].abs(), "coefficient {k}: {} vs {}", got[k], want[k]);
+    let L = place(&A.transpose(), &C.transpose(), &poles).unwrap_or_else(|e| panic!("{e}")).transpose();
+    let a = poly_from_roots(&poles); // a_0 … a_11, 1
+    for i in 0..n {
+        let want = a[n - 1 - i];
+        assert!((L[(i, 0)] - want).abs() <= 1e-12 * want, "l_{} = {} vs {want}", i + 1, L[(i, 0)]);
+    }
+    let eigs = eigenvalues(&(&A - &L * &C));
+    dump("chain", &(&A - &L * &C), &poles);
+    let mut worst: f64 = 0.0;
+    for &p in &poles {
+        let x = p.re;
+        let floor = f64::EPSILON * (0..=n).map(|k| a[k].abs() * x.abs().powi(k as i32)).sum::<f64>()
+            / (1..=n).map(|k| k as f64 * a[k] * x.powi(k as i32 - 1)).sum::<f64>().abs();
+        let err = eigs.iter().map(|l| (l - p).norm()).fold(f64::INFINITY, f64::min);
+        assert!(err <= 10.0 * floor + 1e-9, "pole {x}: error {err:e}, floor {floor:e}");
+        worst = worst.max(err / x.abs());
+    }
+    eprintln!("chain observer: worst relative pole error {worst:.2e}");
+    assert!(worst <= 1e-6);
+}
+
+/// The honest refusal stays: on a single-input plant whose last state is coupled by 1e-12 (nearly
+/// uncontrollable) the gain to move its poles to −1 … −8 is ≈ 1e15 and the poles of A − BK as
+/// formed mostly miss by 1e-5 … 1e-1: place refuses those (observed 8 of 10), and what it accepts
+/// is within 1e-6 (plus the test solver's own error; by 60-digit eigenvalues 7.0e-7 and 9.9e-7).
+#[test]
+fn single_input_truly_ill_conditioned_is_refused() {
+    let n = 8;
+    let mut refused = 0;
+    for seed in 0..10 {
+        let mut rng = Rng::new(900 + seed);
+        let mut A = rng.matrix(n, n);
+        let mut B = rng.matrix(n, 1);
+        for j in 0..n - 1 {
+            A[(n - 1, j)] *= 1e-12;
+        }
+        B[(n - 1, 0)] = 0.0;
+        let poles: Vec<C64> = (1..=n).map(|j| re(-(j as f64))).collect();
+        match place(&A, &B, &poles) {
+            Err(PlaceError::Inaccurate { max_error }) => {
+                assert!(max_error > 1e-6, "{max_error}");
+                refused += 1;
+            }
+            Err(e) => panic!("seed {seed}: {e}"),
+            Ok(K) => {
+                let M = closed_loop(&A, &B, &K);
+                let err = max_rel_mismatch(&poles, &eigenvalues(&M));
+                let own = solver_error(&M, &poles);
+                dump(&format!("truly_{seed}"), &M, &poles);
+                assert!(err <= 1.1e-6 + own, "seed {seed}: accepted K with error {err:e} (test solver {own:e})");
             }
         }
-        Err(PlaceError::Inaccurate { max_error }) => assert!(max_error > 1e-6 && max_error.is_finite()),
-        Err(e) => panic!("unexpected {e}"),
     }
+    eprintln!("δ = 1e-12, n = 8: {refused} of 10 refused");
+    assert!(refused >= 5, "{refused} of 10 refused");
 }
 
 // ---------------------------------------------------------------- property tests
@@ -574,14 +677,15 @@ fn eigenvector_condition_at(M: &DMatrix<f64>, poles: &[C64]) -> f64 {
 ///
 /// Tolerance, relative to max(1, |p|): 1e-8 on well-conditioned problems, defined as
 /// κ(X)·(‖A‖_F + ‖B‖_F‖K‖_F) ≤ 1e5 (X the closed-loop eigenvectors; the first-order rounding
-/// bound eps·κ(X)·‖[A, BK]‖ is then ≤ 2e-11). Otherwise the function's own guarantee applies:
-/// error ≤ 1e-6 or `Inaccurate`. Single-input gains are unique and placing up to 10 poles far
-/// left of the open-loop spectrum gives κ(X) up to 1e8, so many single-input cases are in the
-/// second class. For m ≥ 2 (observed: 666 of 667 placed, 448 well conditioned) at least 98% must
-/// be placed and 60% be well conditioned, so the 1e-8 branch is not vacuous.
+/// bound eps·κ(X)·‖[A, BK]‖ is then ≤ 2e-11). Otherwise the function's guarantee, 1e-6, plus the
+/// test solver's own first-order error ([`solver_error`]). Single-input gains are unique and
+/// placing up to 10 poles far left of the open-loop spectrum gives κ(X) up to 1e15, so many
+/// single-input cases are in the second class. Counted: for m ≥ 2 (observed: 667 of 667 placed,
+/// 448 well conditioned) at least 99% must be placed and 60% be well conditioned, so the 1e-8
+/// branch is not vacuous; for m = 1 (observed 240 of 333) at least 70%.
 #[test]
 fn random_systems_place_requested_poles() {
-    let (mut total, mut ok, mut well) = ([0usize; 2], [0usize; 2], [0usize; 2]);
+    let (mut total, mut ok, mut well, mut judged) = ([0usize; 2], [0usize; 2], [0usize; 2], 0);
     for seed in 0..1000u64 {
         let mut rng = Rng::new(seed);
         let n = 1 + (rng.next_u64() % 10) as usize;
@@ -597,8 +701,17 @@ fn random_systems_place_requested_poles() {
                 let M = closed_loop(&A, &B, &K);
                 let err = max_rel_mismatch(&poles, &eigenvalues(&M));
                 let size = eigenvector_condition_at(&M, &poles) * (A.norm() + B.norm() * K.norm());
-                let tol = if size <= 1e5 { 1e-8 } else { 1e-6 };
-                well[class] += usize::from(size <= 1e5);
+                let tol = if size <= 1e5 {
+                    well[class] += 1;
+                    1e-8
+                } else {
+                    let own = solver_error(&M, &poles);
+                    judged += usize::from(own <= 1e-6);
+                    if own > 1e-7 {
+                        dump(&format!("random_{seed}"), &M, &poles);
+                    }
+                    1e-6 + own
+                };
                 assert!(err <= tol, "seed {seed}: error {err:e} > {tol:e} (κ·size {size:e}); n = {n}, m = {m}");
             }
             Err(PlaceError::Inaccurate { .. }) => {}
@@ -607,16 +720,18 @@ fn random_systems_place_requested_poles() {
     }
     eprintln!("single input: {} cases, {} placed, {} well conditioned", total[0], ok[0], well[0]);
     eprintln!("multi input:  {} cases, {} placed, {} well conditioned", total[1], ok[1], well[1]);
-    assert!(ok[1] * 100 >= total[1] * 98, "KNV0 refused too many multi-input cases");
+    eprintln!("ill conditioned: {judged} judged by the test's solver to better than 1e-6");
+    assert!(ok[1] * 100 >= total[1] * 99, "KNV0 refused too many multi-input cases");
     assert!(well[1] * 100 >= total[1] * 60, "too few well-conditioned multi-input cases");
-    assert!(ok[0] * 100 >= total[0] * 60, "too many single-input refusals");
+    assert!(ok[0] * 100 >= total[0] * 70, "too many single-input refusals");
 }
 
 /// Never a wrong K: on nearly uncontrollable systems (a coupling of size δ = 10^−e, e = 0…12, into
 /// the last state) and random pole sets, the result is either accurate to the verification
-/// threshold (1e-6 relative, plus 10% for the test's own eigenvalue computation) or an error. The
-/// accepted cases are counted so the test cannot pass by refusing everything: with δ ≥ 0.01 the
-/// problem is well posed and at least half must be placed.
+/// threshold (1e-6 relative, plus 10% and the test solver's own first-order error,
+/// [`solver_error`]) or an error. The accepted cases are counted so the test cannot pass by
+/// refusing everything: with δ ≥ 0.01 the problem is well posed and (observed 59 of 61) at least
+/// 90% must be placed.
 #[test]
 fn nearly_uncontrollable_never_wrong() {
     let (mut accepted, mut well_posed, mut accepted_well_posed) = (0, 0, 0);
@@ -635,12 +750,20 @@ fn nearly_uncontrollable_never_wrong() {
         let poles = random_poles(&mut rng, n, 0.3);
         well_posed += usize::from(exp <= 2);
         if let Ok(K) = place(&A, &B, &poles) {
-            let err = max_rel_mismatch(&poles, &eigenvalues(&closed_loop(&A, &B, &K)));
-            assert!(err <= 1.1e-6, "seed {seed}: accepted K with error {err:e}");
+            let M = closed_loop(&A, &B, &K);
+            let err = max_rel_mismatch(&poles, &eigenvalues(&M));
+            let own = solver_error(&M, &poles);
+            if own > 1e-7 {
+                dump(&format!("nearly_{seed}"), &M, &poles);
+            }
+            assert!(err <= 1.1e-6 + own, "seed {seed}: accepted K with error {err:e} (test solver {own:e})");
             accepted += 1;
             accepted_well_posed += usize::from(exp <= 2);
         }
     }
     eprintln!("accepted {accepted} of 256; {accepted_well_posed} of {well_posed} with δ ≥ 0.01");
-    assert!(accepted_well_posed * 2 >= well_posed, "{accepted_well_posed} of {well_posed} well-posed cases placed");
+    assert!(
+        accepted_well_posed * 10 >= well_posed * 9,
+        "{accepted_well_posed} of {well_posed} well-posed cases placed"
+    );
 }
