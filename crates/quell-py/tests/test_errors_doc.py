@@ -68,6 +68,7 @@ CASES = [
     ("wrong_shape_of_Q", edit((Q_LINE, "Q = [[1.0], [1.0]]\n")), "plant.Q", None),
     ("empty_plant", edit((A_LINE, "A = []")), "plant.A", None),
     ("non_finite_entry", edit(("[0.3, 0.3, -0.5]", "[0.3, nan, -0.5]")), "plant.A[2][1]", None),
+    ("entry_too_large", edit(("[0.3, 0.3, -0.5]", "[0.3, 0.3, -5e200]")), "plant.A[2][2]", None),
     ("infinite_entry", edit((MU, "mu = [20.0, inf]")), "design.mu[1]", None),
     ("negative_delay", edit((DELAYS, "delays = [1.0, -3.0]")), "plant.delays[1]", None),
     ("delay_count", edit((DELAYS, "delays = [1.0]")), "plant.delays", None),
