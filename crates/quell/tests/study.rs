@@ -2,7 +2,7 @@
 //! run in a sweep, and runs.csv reads back exactly.
 
 use quell::study::{
-    read_runs_csv, run_one, sweep, write_runs_csv, Outcome, Row, RunSpec, Shard, Study, StudyMeta, Summary,
+    read_runs_csv, run_one, sweep, write_runs_csv, Outcome, Row, RunSpec, Runaway, Shard, Study, StudyMeta, Summary,
     SweepOptions,
 };
 
@@ -146,10 +146,66 @@ fn a_grid_over_the_true_delay_keeps_the_design() {
 /// y grows tenfold every 2 s from t ≈ 4 s), and the other draws are unaffected.
 #[test]
 fn a_stiff_blow_up_is_a_failed_row_within_the_step_budget() {
-    let text = "max_steps = 20000\n[simulation]\nt_end = 100.0\nrtol = 1e-6\natol = 1e-6\n[monte_carlo]\nruns = 8\nseed = 1\n\"truth.A\" = { relative = 0.05 }\n";
-    let study = Study::from_toml(text, None).unwrap();
+    // The runaway rules off: only the absolute budget stops draw 7 (A 5 % off), which blows up.
+    let text = format!("max_steps = 20000\n{MC8}[runaway]\npeak = inf\nsteps = inf\n");
+    let study = Study::from_toml(&text, None).unwrap();
     let rows = sweep(&study, &SweepOptions::default()).rows;
     assert_eq!(rows[7].outcome, Outcome::Failed);
     assert!(rows[7].reason.starts_with("the solver needed more than 20000 steps by t = "), "{}", rows[7].reason);
     assert!(rows[..7].iter().all(|r| r.outcome == Outcome::Completed && r.steps < 20000));
+}
+
+/// The first 8 draws of examples/studies/monte-carlo-A.toml: draw 7 blows up (y grows tenfold
+/// every ~2 s from t ≈ 4 s), the others converge.
+const MC8: &str = "[simulation]\nt_end = 100.0\nrtol = 1e-6\natol = 1e-6\n[monte_carlo]\nruns = 8\nseed = 1\n\"truth.A\" = { relative = 0.05 }\n";
+
+#[test]
+fn the_nominal_run_is_the_grid_point_without_draws() {
+    let study = Study::from_toml(MC8, None).unwrap();
+    let nominal = study.nominal(0).expect("the paper's loop completes");
+    // The same scenario without [monte_carlo] is one run: the nominal one.
+    let plain = Study::from_toml(&MC8[..MC8.find("[monte_carlo]").unwrap()], None).unwrap();
+    assert_eq!(plain.nominal(0), None, "without draws a run is its own nominal run");
+    let row = &sweep(&plain, &SweepOptions::default()).rows[0];
+    assert_eq!((row.outcome, row.steps), (Outcome::Completed, nominal.steps as u64));
+    assert!(nominal.peaks.0.iter().all(|&p| p > 0.0 && p.is_finite()), "{nominal:?}");
+    let spec = study.spec(3);
+    assert_eq!((spec.nominal, spec.runaway), (Some(nominal), Runaway { peak: 100.0, steps: 3.0 }));
+    // A sampled-data loop has no runaway rules (its cost does not grow when it blows up).
+    let sampled = Study::from_toml(&MC8.replace("atol = 1e-6", "atol = 1e-6\nsample_time = 0.01"), None).unwrap();
+    assert_eq!(sampled.nominal(0), None);
+}
+
+#[test]
+fn a_runaway_draw_is_diverged_early_and_converging_draws_are_untouched() {
+    let off = Study::from_toml(&format!("{MC8}[runaway]\npeak = inf\nsteps = inf\n"), None).unwrap();
+    let on = Study::from_toml(MC8, None).unwrap();
+    let (off, on) = (sweep(&off, &SweepOptions::default()).rows, sweep(&on, &SweepOptions::default()).rows);
+    assert_eq!(timeless(&off[..7]), timeless(&on[..7]), "the converging draws give the same rows");
+    let nominal = Study::from_toml(MC8, None).unwrap().nominal(0).unwrap();
+    let r = &on[7];
+    assert_eq!(r.outcome, Outcome::Diverged, "{}", r.reason);
+    assert!(
+        r.reason.contains(": beyond 100 × its peak") && r.reason.ends_with("in the nominal run (runaway.peak)"),
+        "{}",
+        r.reason
+    );
+    // It ends before the step budget would have ended it, within 3 × the nominal run's steps.
+    assert_eq!(off[7].outcome, Outcome::Failed);
+    assert!(r.steps <= 3 * nominal.steps as u64 && r.steps < off[7].steps / 10, "{} vs {}", r.steps, off[7].steps);
+
+    // With the peak rule off, the relative step budget ends it: failed, at 3 × the nominal steps.
+    let budget = Study::from_toml(&format!("{MC8}[runaway]\npeak = inf\n"), None).unwrap();
+    let r = run_one(&budget.spec(7));
+    let limit = 3 * nominal.steps;
+    assert_eq!(r.outcome, Outcome::Failed);
+    assert_eq!(r.steps, limit as u64 + 1, "the step after the budget ends it");
+    assert!(
+        r.reason.starts_with(&format!(
+            "step budget: more than 3 × the nominal run's {} solver steps ({limit}) by t = ",
+            nominal.steps
+        )),
+        "{}",
+        r.reason
+    );
 }

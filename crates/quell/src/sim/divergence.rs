@@ -62,14 +62,15 @@ impl Peaks {
         }
     }
 
-    /// Each peak times `factor`.
-    pub fn scaled(&self, factor: f64) -> Peaks {
-        Peaks(self.0.map(|p| p * factor))
+    /// Bounds `factor` times each peak, as [`Watched::beyond`] takes them; +∞ for a signal whose
+    /// peak is 0 (or not finite), which gives no scale.
+    pub fn bounds(&self, factor: f64) -> Peaks {
+        Peaks(self.0.map(|p| if p > 0.0 && p.is_finite() { factor * p } else { f64::INFINITY }))
     }
 
-    /// The name of signal `i` (0: x, 1: x̂, 2: ξ̂, 3: η̂), as [`Outcome::Diverged`] names its entries.
-    pub fn name(i: usize) -> &'static str {
-        ["x (plant state)", "x_hat (observer state)", "xi_hat (regressor)", "eta (adaptive parameters)"][i]
+    /// The index (0: x, 1: x̂, 2: ξ̂, 3: η̂) of the signal an [`Outcome::Diverged`] names.
+    pub fn index_of(signal: &str) -> usize {
+        ["x[", "x_hat[", "xi_hat[", "eta"].iter().rposition(|p| signal.starts_with(p)).unwrap_or(0)
     }
 }
 
@@ -108,7 +109,19 @@ mod tests {
             w.beyond(7.0, &bounds),
             Some(Outcome::Diverged { t: 7.0, signal: "xi_hat[1] (regressor)".into(), value: -0.25 })
         );
-        assert_eq!(w.beyond(7.0, &p.scaled(1.0)), None, "every value is within its own peak");
+        assert_eq!(w.beyond(7.0, &p.bounds(1.0)), None, "every value is within its own peak");
+        assert_eq!(Peaks([2.0, 0.0, 1.0, f64::NAN]).bounds(10.0), Peaks([20.0, f64::INFINITY, 10.0, f64::INFINITY]));
+        for (i, signal) in [
+            "x[1] (plant state)",
+            "x_hat[2] (observer state)",
+            "xi_hat[3] (regressor)",
+            "eta2[1] (adaptive parameters)",
+        ]
+        .iter()
+        .enumerate()
+        {
+            assert_eq!(Peaks::index_of(signal), i);
+        }
         assert_eq!(w.diverged(7.0, 3.5), w.beyond(7.0, &Peaks([3.5; 4])));
         assert!(
             matches!(w.diverged(7.0, 3.5), Some(Outcome::Diverged { ref signal, .. }) if signal == "eta1[2] (adaptive parameters)")

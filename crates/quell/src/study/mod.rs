@@ -15,11 +15,13 @@ mod summary;
 mod tune;
 
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::scenario::{kind, Scenario, PAPER_EXAMPLE};
+use crate::sim::Peaks;
 pub use output::{header, read_runs_csv, write_runs_csv, RunsFile};
 pub use path::{KeyPath, Shape};
 pub use run::{run_one, run_seed, sweep, ChannelFigures, Outcome, Row, RunSpec, Shard, Sweep, SweepOptions};
@@ -97,6 +99,37 @@ impl Default for Settle {
     }
 }
 
+/// `[runaway]`: early ends for the Monte Carlo draws of a continuous loop, relative to the
+/// *nominal run* of their grid point (its scenario without draws). A loop that blows up turns
+/// stiff (the adaptive law's rate μ_i Ω_i grows with the square of the regressor) long before a
+/// state reaches the divergence bound, so without these rules it spends the step budget instead
+/// (docs/studies.md, "Runaway").
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Runaway {
+    /// A watched signal (x, x̂, ξ̂ or η̂) beyond `peak` times its peak in the nominal run: the run
+    /// is `diverged`.
+    pub peak: f64,
+    /// More than `steps` times the nominal run's solver steps: the run is `failed` ("step budget").
+    pub steps: f64,
+}
+
+impl Default for Runaway {
+    fn default() -> Self {
+        Runaway { peak: 100.0, steps: 3.0 }
+    }
+}
+
+const RUNAWAY_KEYS: &[&str] = &["peak", "steps"];
+
+/// What a grid point's nominal run did: the scale [`Runaway`] compares a draw with.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Nominal {
+    /// Solver steps.
+    pub steps: usize,
+    /// The peaks of its watched signals.
+    pub peaks: Peaks,
+}
+
 /// A parsed and checked study.
 #[derive(Debug, Clone)]
 pub struct Study {
@@ -110,12 +143,17 @@ pub struct Study {
     pub tune: Option<TuneSpec>,
     /// The solver's step budget per continuous run (`max_steps`, default [`MAX_STEPS`]).
     pub max_steps: usize,
+    /// `[runaway]` (defaults: [`Runaway::default`]).
+    pub runaway: Runaway,
     /// Channels m of the scenario.
     pub m: usize,
     fingerprint: u64,
+    /// Per grid point with Monte Carlo draws, its nominal run (`None`: sampled-data, or it did not
+    /// complete), carried out at the point's first [`Study::spec`].
+    nominal: Vec<OnceLock<Option<Nominal>>>,
 }
 
-const TOP_KEYS: &[&str] = &["scenario", "max_steps", "simulation", "grid", "monte_carlo", "settle", "tune"];
+const TOP_KEYS: &[&str] = &["scenario", "max_steps", "runaway", "simulation", "grid", "monte_carlo", "settle", "tune"];
 
 /// Default step budget of a run: 10,000 steps, 15 times what the paper's example takes at
 /// rtol = 1e-6 and 5 times at 1e-9. A run that blows up reaches it within a few simulated seconds
@@ -142,6 +180,18 @@ fn non_negative(key: &str, v: &toml::Value, what: &str) -> Result<f64, StudyErro
         Ok(x)
     } else {
         Err(err(key, format!("expected {what}, found {x}")))
+    }
+}
+
+/// A factor of `[runaway]`: ≥ 1, or `inf` (the rule off).
+fn factor(key: &str, v: &toml::Value) -> Result<f64, StudyError> {
+    const WHAT: &str = "a factor ≥ 1 (or inf to turn the rule off)";
+    match v {
+        toml::Value::Float(x) if *x >= 1.0 => Ok(*x),
+        toml::Value::Integer(i) if *i >= 1 => Ok(*i as f64),
+        toml::Value::Float(x) => Err(err(key, format!("expected {WHAT}, found {x}"))),
+        toml::Value::Integer(i) => Err(err(key, format!("expected {WHAT}, found {i}"))),
+        _ => Err(err(key, format!("expected {WHAT}, found {}", kind(v)))),
     }
 }
 
@@ -331,19 +381,43 @@ impl Study {
                 n => usize::try_from(n).unwrap_or(usize::MAX),
             },
         };
+        let runaway = match doc.get("runaway") {
+            None => Runaway::default(),
+            Some(r) => {
+                let t = table("runaway", r)?;
+                unknown_keys("runaway", t, RUNAWAY_KEYS)?;
+                let d = Runaway::default();
+                let get = |k: &str, d: f64| t.get(k).map_or(Ok(d), |v| factor(&format!("runaway.{k}"), v));
+                Runaway { peak: get("peak", d.peak)?, steps: get("steps", d.steps)? }
+            }
+        };
         let tune = match doc.get("tune") {
             None => None,
             Some(t) => Some(TuneSpec::parse(table("tune", t)?, &scenario)?),
         };
 
         let mut canonical = toml::to_string(&base).unwrap_or_default();
-        for key in ["grid", "monte_carlo", "settle", "max_steps"] {
+        for key in ["grid", "monte_carlo", "settle", "max_steps", "runaway"] {
             if let Some(v) = doc.get(key) {
                 canonical.push_str(&format!("\n[{key}]\n{v}"));
             }
         }
         let fingerprint = fnv1a(canonical.as_bytes());
-        Ok(Study { base, scenario_source, grid, monte_carlo, settle, tune, max_steps, m, fingerprint })
+        let points = grid.iter().map(|a| a.values.len()).product();
+        let nominal = (0..if monte_carlo.is_some() { points } else { 0 }).map(|_| OnceLock::new()).collect();
+        Ok(Study {
+            base,
+            scenario_source,
+            grid,
+            monte_carlo,
+            settle,
+            tune,
+            max_steps,
+            runaway,
+            m,
+            fingerprint,
+            nominal,
+        })
     }
 
     /// Grid points: the product of the axes' lengths (1 without a grid).
@@ -407,7 +481,8 @@ impl Study {
         doc
     }
 
-    /// Run `index`'s specification (panics if `index ≥ self.len()`: a programming error).
+    /// Run `index`'s specification (panics if `index ≥ self.len()`: a programming error). The
+    /// first of a grid point's specifications carries out its nominal run ([`Study::nominal`]).
     pub fn spec(&self, index: usize) -> RunSpec {
         assert!((index as u64) < self.len(), "run {index} of a study of {} runs", self.len());
         let draws = self.draws();
@@ -423,7 +498,24 @@ impl Study {
             scenario: self.document(point, seed),
             settle: self.settle,
             max_steps: self.max_steps,
+            runaway: self.runaway,
+            nominal: self.nominal(point),
         }
+    }
+
+    /// The nominal run of grid point `point` (its scenario without draws), carried out once, when
+    /// the study has draws and the point's loop is continuous; `None` when it has not, or when the
+    /// nominal run does not complete (its draws then have no [`Runaway`] rules).
+    pub fn nominal(&self, point: usize) -> Option<Nominal> {
+        *self.nominal.get(point)?.get_or_init(|| {
+            let s = Scenario::from_document(&self.document(point, None)).ok()?;
+            if s.simulation.sample_time.is_some() {
+                return None;
+            }
+            let r = run::simulate(&s, self.max_steps, None, &|| false).ok()?;
+            (r.outcome == Some(crate::sim::Outcome::Completed))
+                .then_some(Nominal { steps: r.stats.steps(), peaks: r.peaks })
+        })
     }
 
     /// Every run's specification, in index order (what `quell.sweep_runs` yields).

@@ -7,10 +7,10 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::{Settle, Study};
+use super::{Nominal, Runaway, Settle, Study};
 use crate::run::LoopSettings;
 use crate::scenario::Scenario;
-use crate::sim::{self, SimResult};
+use crate::sim::{self, Peaks, SimResult, DIVERGENCE_BOUND};
 
 /// SplitMix64's finalizer: a bijection of u64 that scrambles every bit.
 fn mix(mut z: u64) -> u64 {
@@ -44,6 +44,27 @@ pub struct RunSpec {
     pub settle: Settle,
     /// The solver's step budget of a continuous run ([`Study::max_steps`]).
     pub max_steps: usize,
+    /// The runaway rules ([`Study::runaway`]) and the grid point's nominal run they compare with;
+    /// without a nominal run the rules do not apply.
+    #[serde(default)]
+    pub runaway: Runaway,
+    #[serde(default)]
+    pub nominal: Option<Nominal>,
+}
+
+impl RunSpec {
+    /// The step budget and the bounds per watched signal of this run: `max_steps` and none, or
+    /// with a nominal run min(max_steps, ⌈steps · its steps⌉) and peak · its peaks (no bound on a
+    /// signal that stayed 0 there).
+    fn limits(&self) -> (usize, Option<Peaks>) {
+        match self.nominal {
+            None => (self.max_steps, None),
+            Some(n) => {
+                let budget = (self.runaway.steps * n.steps as f64).ceil() as usize;
+                (self.max_steps.min(budget), Some(n.peaks.bounds(self.runaway.peak)))
+            }
+        }
+    }
 }
 
 /// How a run ended.
@@ -132,12 +153,19 @@ pub(crate) fn figures(r: &SimResult, settle: &Settle) -> Vec<ChannelFigures> {
 }
 
 /// Simulates a scenario as its `[simulation]` says ([`crate::run::simulate`]), a continuous run
-/// within the step budget `max_steps`; `Err` when it cannot start.
-pub(crate) fn simulate(s: &Scenario, max_steps: usize, stop: &dyn Fn() -> bool) -> Result<SimResult, String> {
+/// within the step budget `max_steps` and the bounds `runaway` per watched signal; `Err` when it
+/// cannot start.
+pub(crate) fn simulate(
+    s: &Scenario,
+    max_steps: usize,
+    runaway: Option<Peaks>,
+    stop: &dyn Fn() -> bool,
+) -> Result<SimResult, String> {
     let design = s.design().map_err(|e| e.to_string())?;
     let mut settings = LoopSettings::of(s);
     if let LoopSettings::Continuous(st) = &mut settings {
         st.max_steps = max_steps;
+        st.runaway = runaway;
     }
     let progress = |_t: f64| if stop() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
     crate::run::simulate(s, &design, &settings, progress).map_err(|e| e.to_string())
@@ -158,9 +186,10 @@ fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
         steps: 0,
         wall_ms: 0.0,
     };
+    let (budget, bounds) = spec.limits();
     let result = Scenario::from_document(&spec.scenario)
         .map_err(|e| e.to_string())
-        .and_then(|s| simulate(&s, spec.max_steps, stop));
+        .and_then(|s| simulate(&s, budget, bounds, stop));
     match result {
         Err(reason) => row.reason = reason,
         Ok(r) => {
@@ -173,9 +202,23 @@ fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                 sim::Outcome::Diverged { t, signal, value } => {
                     row.outcome = Outcome::Diverged;
                     row.reason = format!("{signal} = {value:e} at t = {t:.4}");
+                    if let (Some(n), true) = (spec.nominal, value.abs() <= DIVERGENCE_BOUND) {
+                        let peak = n.peaks.0[Peaks::index_of(signal)];
+                        row.reason += &format!(
+                            ": beyond {} × its peak {peak:.4e} in the nominal run (runaway.peak)",
+                            spec.runaway.peak
+                        );
+                    }
                 }
                 sim::Outcome::StepSizeTooSmall { t } => {
                     row.reason = format!("the solver's step size underflowed at t = {t:.6}");
+                }
+                sim::Outcome::TooManySteps { t, max_steps } if *max_steps < spec.max_steps => {
+                    let n = spec.nominal.map_or(0, |n| n.steps);
+                    row.reason = format!(
+                        "step budget: more than {} × the nominal run's {n} solver steps ({max_steps}) by t = {t:.4} (the loop turned stiff: its signals grew well beyond the nominal run's; raise runaway.steps in the study file if the run is sound)",
+                        spec.runaway.steps
+                    );
                 }
                 sim::Outcome::TooManySteps { t, max_steps } => {
                     row.reason = format!(

@@ -182,6 +182,8 @@ fn run_with(study: &Study, mu: &[f64]) -> Row {
         scenario: doc,
         settle,
         max_steps: study.max_steps,
+        runaway: study.runaway,
+        nominal: None,
     })
 }
 
