@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::solve_two_delays;
+use common::{solve_two_delays, synthetic};
 use std::hint::black_box;
 use std::ops::ControlFlow;
 
@@ -17,7 +17,8 @@ use quell::{Controller, Design};
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with("--")).collect();
     let work = args.first().map_or("continuous", String::as_str);
-    let n: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(1);
+    let number = |i: usize, default: usize| args.get(i).and_then(|s| s.parse().ok()).unwrap_or(default);
+    let n = number(if work == "step_scaling" { 3 } else { 1 }, 1);
     let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
     let d = Design::new(&s.plant, &s.design).unwrap();
     for _ in 0..n {
@@ -41,17 +42,23 @@ fn main() {
                         .unwrap(),
                 );
             }
-            "step" => {
-                let mut ctrl = Controller::new(&d, 1e-3).unwrap();
-                let (y, g) = ([0.3, -0.2], [1.0, 2.0]);
-                for _ in 0..100_000 {
-                    black_box(ctrl.step(black_box(&y), black_box(&g))[0]);
-                }
+            "step" => steps(&d, &[0.3, -0.2], &[1.0, 2.0]),
+            "step_scaling" => {
+                let m = number(1, 2);
+                steps(&synthetic(m, number(2, 8)), &vec![0.1; m], &vec![1.0; m]);
             }
             "dde" => {
                 black_box(solve_two_delays(1e-10));
             }
             _ => {}
         }
+    }
+}
+
+/// 100,000 controller steps at T_s = 1 ms with constant y and g.
+fn steps(d: &Design, y: &[f64], g: &[f64]) {
+    let mut ctrl = Controller::new(d, 1e-3).unwrap();
+    for _ in 0..100_000 {
+        black_box(ctrl.step(black_box(y), black_box(g))[0]);
     }
 }
