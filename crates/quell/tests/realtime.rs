@@ -131,8 +131,7 @@ fn adaptive_step_is_nonexpansive_for_any_gain() {
         let rank = 1 + rng.below(q);
         let V = rng.matrix(q, rank) * rng.uniform(0.0, 30.0);
         let Om = &V * V.transpose();
-        // Packed upper triangle, row by row.
-        let mut omega: Vec<f64> = (0..q).flat_map(|i| (i..q).map(move |j| (i, j))).map(|ij| Om[ij]).collect();
+        let mut omega: Vec<f64> = Om.iter().copied().collect();
         let c = 10f64.powf(rng.uniform(-4.0, 8.0));
         let mut eta: Vec<f64> = (0..q).map(|_| rng.uniform(-1.0, 1.0)).collect();
         let before: f64 = eta.iter().map(|v| v * v).sum::<f64>().sqrt();
@@ -144,11 +143,35 @@ fn adaptive_step_is_nonexpansive_for_any_gain() {
 }
 
 #[test]
+fn adaptive_step_keeps_omega_exactly_symmetric_and_sums_in_order() {
+    // The C export keeps Ω's triangle only and sums (Ω η̂)_j over i in order; the Controller's full Ω
+    // must therefore stay symmetric to the last bit and give that same sum, for every q and step.
+    let mut rng = Rng(5);
+    for q in [1, 2, 3, 5, 8, 13, 16, 32] {
+        let mut omega = vec![0.0; q * q];
+        let (mut eta, mut tmp) = (vec![0.0; q], vec![0.0; q]);
+        let a = rng.uniform(0.5, 1.0);
+        for _ in 0..50 {
+            let Delta: Vec<f64> = (0..q).map(|_| rng.uniform(-3.0, 3.0)).collect();
+            let Y: Vec<f64> = (0..q).map(|_| rng.uniform(-1.0, 1.0)).collect();
+            let eta_before = eta.clone();
+            adapt(0.7, &mut omega, (a, 1.0 - a), &Delta, &Y, &mut eta, &mut tmp);
+            for i in 0..q {
+                for j in 0..i {
+                    assert_eq!(omega[i * q + j].to_bits(), omega[j * q + i].to_bits(), "q {q}: Ω[{i}][{j}]");
+                }
+                let natural = (0..q).fold(0.0, |acc, j| acc + omega[i * q + j] * eta_before[j]);
+                assert_eq!(tmp[i].to_bits(), natural.to_bits(), "q {q}: (Ω η̂)_{i}");
+            }
+        }
+    }
+}
+
+#[test]
 fn adaptive_step_converges_to_the_least_squares_fixed_point() {
     // For constant PD Ω and Y, repeated steps converge to Ω⁻¹ Y (the fixed point of (33)).
     let Om = mat(2, 2, &[2.0, 0.5, 0.5, 1.0]);
-    // Packed: (0,0), (0,1), (1,1).
-    let mut omega = [2.0, 0.5, 1.0];
+    let mut omega = [2.0, 0.5, 0.5, 1.0];
     let Y = [1.0, -1.0];
     let want = Om.try_inverse().unwrap() * quell::nalgebra::DVector::from_row_slice(&Y);
     let (mut eta, mut tmp) = (vec![0.0; 2], vec![0.0; 2]);
@@ -260,9 +283,9 @@ fn sample_time_sweep() {
 fn adaptive_step_applies_the_h_filter_to_omega_first() {
     // Ω ← aΩ + bΔΔᵀ with Ω = I, a = 0.5, b = 0.25, Δ = [1, 2]: [[0.75, 0.5], [0.5, 1.5]] (by hand);
     // with c = 0 the parameters do not move.
-    let mut omega = [1.0, 0.0, 1.0];
+    let mut omega = [1.0, 0.0, 0.0, 1.0];
     let (mut eta, mut tmp) = ([0.3, -0.7], [0.0; 2]);
     adapt(0.0, &mut omega, (0.5, 0.25), &[1.0, 2.0], &[1.0, 1.0], &mut eta, &mut tmp);
-    assert_eq!(omega, [0.75, 0.5, 1.5]);
+    assert_eq!(omega, [0.75, 0.5, 0.5, 1.5]);
     assert_eq!(eta, [0.3, -0.7]);
 }

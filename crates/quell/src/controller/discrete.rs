@@ -5,7 +5,9 @@
 use nalgebra::DMatrix;
 use thiserror::Error;
 
-use super::{command, mat_vec, packed, swapping_error, Equations};
+#[cfg(doc)]
+use super::packed;
+use super::{command, mat_vec, swapping_error, Equations};
 use crate::design::Design;
 use crate::linalg::zoh;
 
@@ -60,6 +62,25 @@ impl DelayLine {
     }
 }
 
+/// n numbers starting on a 64-byte boundary: [`adapt`] adds into them row after row, and AVX2's
+/// 32-byte stores and reloads that straddle cache lines took twice the time of the whole step (the
+/// paper's design, `docs/performance.md`). The offset is found on each access, so clones stay aligned.
+#[derive(Debug, Clone)]
+struct Aligned {
+    buf: Vec<f64>,
+    n: usize,
+}
+
+impl Aligned {
+    fn new(n: usize) -> Self {
+        Aligned { buf: vec![0.0; n + 7], n }
+    }
+    fn get(&mut self) -> &mut [f64] {
+        let at = self.buf.as_ptr().align_offset(64).min(7);
+        &mut self.buf[at..at + self.n]
+    }
+}
+
 /// One channel's discrete state and matrices.
 #[derive(Debug, Clone)]
 struct Channel {
@@ -68,7 +89,7 @@ struct Channel {
     gamma: Vec<f64>,
     W: Vec<f64>,
     W_next: Vec<f64>,
-    /// H filter memories Y_i and Ω_i (packed symmetric, [`packed`], as in the continuous loop).
+    /// H filter memories Y_i and Ω_i (q×q, exactly symmetric, see [`adapt`]).
     Y: Vec<f64>,
     Omega: Vec<f64>,
     /// Delay line of the row [u_i, ξ̂ᵀ].
@@ -92,7 +113,8 @@ pub struct Controller {
     z_next: Vec<f64>,
     xi: Vec<f64>,
     Delta: Vec<f64>,
-    tmp: Vec<f64>,
+    /// Ω η̂ of [`adapt`].
+    Omega_eta: Aligned,
     u: Vec<f64>,
     u_f: Vec<f64>,
     /// η̂_1, …, η̂_m, concatenated.
@@ -179,7 +201,7 @@ impl Controller {
                     W: vec![0.0; len],
                     W_next: vec![0.0; len],
                     Y: vec![0.0; q],
-                    Omega: vec![0.0; packed::len(q)],
+                    Omega: vec![0.0; q * q],
                     line: DelayLine::new(d, 1 + q),
                     c: T * ch.mu,
                 }
@@ -194,7 +216,7 @@ impl Controller {
             z_next: vec![0.0; nz],
             xi: vec![0.0; q],
             Delta: vec![0.0; q],
-            tmp: vec![0.0; q],
+            Omega_eta: Aligned::new(q),
             u: vec![0.0; m],
             u_f: vec![0.0; m],
             eta: vec![0.0; m * q],
@@ -220,12 +242,12 @@ impl Controller {
 
             // Swapping error and filtered regressor from W_i(k) (eq. (33)).
             let eps = swapping_error(&self.eq.channels[i], &ch.W, y[i] - g[i], &mut self.Delta);
-            // H filters at ZOH: Y ← aY + (1 − a)Δ ε̂,  Ω ← aΩ + (1 − a)ΔΔᵀ.
+            // H filters at ZOH: Y ← aY + (1 − a)Δ ε̂,  Ω ← aΩ + (1 − a)(ΔΔᵀ).
             for (Yj, dj) in ch.Y.iter_mut().zip(&self.Delta) {
                 *Yj = a * *Yj + one_minus_a * dj * eps;
             }
             // Adaptive law (33), implicit in ρI with ρ ≥ λ_max(Ω) (see `adapt`), in the same pass.
-            adapt(ch.c, &mut ch.Omega, (a, one_minus_a), &self.Delta, &ch.Y, eta, &mut self.tmp);
+            adapt(ch.c, &mut ch.Omega, (a, one_minus_a), &self.Delta, &ch.Y, eta, self.Omega_eta.get());
 
             // G_ii filter bank: W ← Φ W + γ [u_i(k − d_i), ξ̂ᵀ(k − d_i)].
             let sigma = ch.gamma.len();
@@ -320,25 +342,45 @@ impl Controller {
     }
 }
 
-/// The H filter Ω ← aΩ + bΔΔᵀ (ZOH of H(s)), then one step of η̂' = μ (Y − Ω η̂) (33) with c = T_s μ,
-/// implicit in ρI and explicit in the rest (Ω = ρI − (ρI − Ω)):
-/// η̂ ← η̂ + c (Y − Ω η̂) / (1 + c ρ),  with ρ = tr Ω ≥ λ_max(Ω).
-/// For PSD Ω the map η̂ ↦ (I − cΩ/(1 + cρ)) η̂ has eigenvalues in [1/(1 + cρ), 1]: nonexpansive for
-/// every μ ≥ 0 and T_s, with the fixed points of (33), at O(q²) cost. `Omega` is packed symmetric
-/// ([`packed`]); one pass updates it and computes Ω η̂ and tr Ω.
-pub fn adapt(
-    c: f64,
-    Omega: &mut [f64],
-    (a, b): (f64, f64),
-    Delta: &[f64],
-    Y: &[f64],
-    eta: &mut [f64],
-    tmp: &mut [f64],
-) {
-    assert!(Y.len() == eta.len(), "adapt: dimension mismatch");
-    let trace = packed::filter_step_and_apply(a, b, Delta, Omega, eta, tmp);
-    let gain = c / (1.0 + c * trace);
-    for ((e, y), w) in eta.iter_mut().zip(Y).zip(tmp.iter()) {
-        *e += gain * (y - w);
+with_avx2! {
+    /// The H filter Ω ← aΩ + bΔΔᵀ (ZOH of H(s)), then one step of η̂' = μ (Y − Ω η̂) (33) with c = T_s μ,
+    /// implicit in ρI and explicit in the rest (Ω = ρI − (ρI − Ω)):
+    /// η̂ ← η̂ + c (Y − Ω η̂) / (1 + c ρ),  with ρ = tr Ω ≥ λ_max(Ω).
+    /// For PSD Ω the map η̂ ↦ (I − cΩ/(1 + cρ)) η̂ has eigenvalues in [1/(1 + cρ), 1]: nonexpansive for
+    /// every μ ≥ 0 and T_s, with the fixed points of (33), at O(q²) cost.
+    ///
+    /// `Omega` is the full q×q matrix (row-major), kept exactly symmetric: b (Δ_i Δ_j) rounds as
+    /// b (Δ_j Δ_i). One pass over its rows updates it and sums
+    /// (Ω η̂)_j = Σ_i Ω_ij η̂_i over i in order (the order of the generated C, [`crate::export`], which keeps
+    /// the triangle only) and tr Ω. The continuous loop keeps Ω packed ([`packed`]), because there it
+    /// is integrated state; here full rows make the pass contiguous (`docs/performance.md`).
+    pub fn adapt(
+        c: f64,
+        Omega: &mut [f64],
+        ab: (f64, f64),
+        Delta: &[f64],
+        Y: &[f64],
+        eta: &mut [f64],
+        tmp: &mut [f64],
+    ) {
+        let ((a, b), q) = (ab, eta.len());
+        assert!(
+            Omega.len() == q * q && Delta.len() == q && Y.len() == q && tmp.len() == q,
+            "adapt: dimension mismatch"
+        );
+        tmp.fill(0.0);
+        let mut trace = 0.0;
+        for (i, (row, &eta_i)) in Omega.chunks_exact_mut(q).zip(eta.iter()).enumerate() {
+            let d_i = Delta[i];
+            for ((o, d_j), t) in row.iter_mut().zip(Delta).zip(tmp.iter_mut()) {
+                *o = a * *o + b * (d_i * d_j);
+                *t += *o * eta_i;
+            }
+            trace += row[i];
+        }
+        let gain = c / (1.0 + c * trace);
+        for ((e, y), w) in eta.iter_mut().zip(Y).zip(tmp.iter()) {
+            *e += gain * (y - w);
+        }
     }
 }

@@ -1,5 +1,7 @@
 //! Symmetric q×q matrices (Ω_i of eq. (33)) in packed upper-triangular storage, q(q+1)/2 entries,
-//! row by row: (0,0), (0,1), …, (0,q−1), (1,1), ….
+//! row by row: (0,0), (0,1), …, (0,q−1), (1,1), …. The continuous loop integrates Ω_i as part of its
+//! state, where this halves those states; the real-time controller keeps a full, exactly symmetric Ω_i
+//! (see [`crate::controller::discrete::adapt`]).
 
 /// Number of stored entries of a packed symmetric q×q matrix.
 #[inline(always)]
@@ -59,40 +61,6 @@ pub fn filter_rate_and_apply(
         apply_rows(q, omega, x, out);
     }
     by_size!(q, fixed, rows, (delta, omega, inv_beta, x, d_omega, out))
-}
-
-/// The sampled H filter at ZOH and the adaptive law's product (eq. (33)) over packed Ω:
-/// Ω ← aΩ + bΔΔᵀ (each symmetric pair computed once), then out = Ω x; returns tr Ω.
-pub fn filter_step_and_apply(a: f64, b: f64, delta: &[f64], omega: &mut [f64], x: &[f64], out: &mut [f64]) -> f64 {
-    let q = x.len();
-    assert!(delta.len() == q && omega.len() == len(q) && out.len() == q, "filter_step_and_apply: dimension mismatch");
-    #[inline(always)]
-    fn step(q: usize, a: f64, b: f64, delta: &[f64], omega: &mut [f64]) -> f64 {
-        let (delta, omega) = (&delta[..q], &mut omega[..len(q)]);
-        let (mut k, mut trace) = (0, 0.0);
-        for i in 0..q {
-            let bdi = b * delta[i];
-            for j in i..q {
-                omega[k + j - i] = a * omega[k + j - i] + bdi * delta[j];
-            }
-            trace += omega[k];
-            k += q - i;
-        }
-        trace
-    }
-    #[inline(always)]
-    fn fixed<const Q: usize>(a: f64, b: f64, delta: &[f64], omega: &mut [f64], x: &[f64], out: &mut [f64]) -> f64 {
-        let trace = step(Q, a, b, delta, omega);
-        apply_fixed::<Q>(omega, x, out);
-        trace
-    }
-    fn rows(a: f64, b: f64, delta: &[f64], omega: &mut [f64], x: &[f64], out: &mut [f64]) -> f64 {
-        let q = x.len();
-        let trace = step(q, a, b, delta, omega);
-        apply_rows(q, omega, x, out);
-        trace
-    }
-    by_size!(q, fixed, rows, (a, b, delta, omega, x, out))
 }
 
 /// out = Ω x for a fixed q: (Ω x)_i = Σ_j Ω_ij x_j over the full row i in j order, each in its own
@@ -205,38 +173,7 @@ mod tests {
     }
 
     proptest! {
-        /// The sampled H filter step against the dense definition: aΩ + bΔΔᵀ entrywise (the same
-        /// formula, so exactly), tr Ω, and Ω x to 1e-14 relative to Σ|Ω_ij x_j|.
-        #[test]
-        fn filter_step_and_apply_matches_dense(q in 1usize..=16, seed in any::<u64>(), a in 0.0f64..1.0) {
-            let mut next = uniform(seed);
-            let b = 1.0 - a;
-            let delta: Vec<f64> = (0..q).map(|_| next()).collect();
-            let x: Vec<f64> = (0..q).map(|_| next()).collect();
-            let mut omega: Vec<f64> = (0..len(q)).map(|_| next()).collect();
-            let mut dense = vec![0.0; q * q];
-            unpack(&omega, q, &mut dense);
-            let mut ox = vec![0.0; q];
-            let trace = filter_step_and_apply(a, b, &delta, &mut omega, &x, &mut ox);
-            let mut k = 0;
-            for i in 0..q {
-                for j in i..q {
-                    prop_assert_eq!(omega[k], a * dense[i * q + j] + b * delta[i] * delta[j]);
-                    k += 1;
-                }
-            }
-            unpack(&omega, q, &mut dense);
-            let want_trace: f64 = (0..q).map(|i| dense[i * q + i]).sum();
-            prop_assert!((trace - want_trace).abs() <= 1e-14 * want_trace.abs().max(1.0));
-            for i in 0..q {
-                let want: f64 = (0..q).map(|j| dense[i * q + j] * x[j]).sum();
-                let scale: f64 = (0..q).map(|j| (dense[i * q + j] * x[j]).abs()).sum();
-                prop_assert!((ox[i] - want).abs() <= 1e-14 * scale.max(1e-300), "q {q}: (Ωx)_{i}");
-            }
-        }
-
-        /// The unrolled and the general product sum in the same order, so they agree bit for bit
-        /// (generated code that follows the general loop reproduces the controller exactly).
+        /// The unrolled and the general product sum in the same order, so they agree bit for bit.
         #[test]
         fn fixed_and_general_products_agree_exactly(seed in any::<u64>()) {
             let mut next = uniform(seed);

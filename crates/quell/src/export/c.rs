@@ -335,19 +335,18 @@ static {R} {p}_channel({p}_state *s, unsigned i, unsigned sigma, const {R} *Phi,
         Delta[j] = q0 * W[0][1 + j];
         Omega_eta[j] = 0;
     }
-    /* H filters at ZOH: Y <- a Y + b Delta eps, Omega <- a Omega + b Delta Delta^T (symmetric, kept
+    /* H filters at ZOH: Y <- a Y + b Delta eps, Omega <- a Omega + b (Delta Delta^T) (symmetric, kept
      * as its upper triangle row by row: row j is Omega[j][j], then Omega[j][t] for t > j), and in
      * the same pass tr Omega and Omega eta, each entry summed over the column index in order. */
     for (unsigned j = 0; j < {P}_Q; j++)
         Y[j] = {p}_a * Y[j] + {p}_b * Delta[j] * eps;
     for (unsigned j = 0, k = 0; j < {P}_Q; j++) {
-        const {R} bd = {p}_b * Delta[j];
-        Omega[k] = {p}_a * Omega[k] + bd * Delta[j];
+        Omega[k] = {p}_a * Omega[k] + {p}_b * (Delta[j] * Delta[j]);
         trace += Omega[k];
         Omega_eta[j] += Omega[k] * eta[j];
         k++;
         for (unsigned t = j + 1; t < {P}_Q; t++, k++) {
-            Omega[k] = {p}_a * Omega[k] + bd * Delta[t];
+            Omega[k] = {p}_a * Omega[k] + {p}_b * (Delta[j] * Delta[t]);
             Omega_eta[j] += Omega[k] * eta[t];
             Omega_eta[t] += Omega[k] * eta[j];
         }
