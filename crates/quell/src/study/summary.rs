@@ -110,6 +110,9 @@ pub struct StudyMeta {
     /// Whether some run's true plant differs from the design model (`[truth]`, or a grid or draw
     /// on a `truth.` key).
     pub truth_differs: bool,
+    /// The runaway rules the draws were run with ([`Study::runaway`]).
+    #[serde(default)]
+    pub runaway: super::Runaway,
     pub shard: Shard,
 }
 
@@ -129,6 +132,7 @@ impl StudyMeta {
             runs: study.len(),
             m: study.m,
             truth_differs: study.truth_differs(),
+            runaway: study.runaway,
             shard,
         }
     }
