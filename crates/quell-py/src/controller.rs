@@ -69,7 +69,8 @@ impl PyController {
     fn step<'py>(&mut self, y: &Bound<'py, PyAny>, g: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray1<f64>>> {
         read(y, "y", &mut self.y)?;
         read(g, "g", &mut self.g)?;
-        Ok(PyArray1::from_slice(y.py(), self.inner.step(&self.y, &self.g)))
+        let u_f = self.inner.step(&self.y, &self.g).map_err(|e| raise(y.py(), Kind::Value)(&e))?;
+        Ok(PyArray1::from_slice(y.py(), u_f))
     }
 
     /// The adaptive command u(k) (25) of the last step, undelayed (m,).

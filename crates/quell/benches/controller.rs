@@ -16,7 +16,7 @@ fn step(c: &mut Criterion) {
     let d = Design::new(&s.plant, &s.design).unwrap();
     let mut ctrl = Controller::new(&d, 1e-3).unwrap();
     let (y, g) = ([0.3, -0.2], [1.0, 2.0]);
-    c.bench_function("step/paper_n3_m2_q8", |b| b.iter(|| ctrl.step(black_box(&y), black_box(&g))[0]));
+    c.bench_function("step/paper_n3_m2_q8", |b| b.iter(|| ctrl.step(black_box(&y), black_box(&g)).unwrap()[0]));
 
     let mut group = c.benchmark_group("step_scaling");
     for m in [2, 4, 8] {
@@ -25,7 +25,7 @@ fn step(c: &mut Criterion) {
             let mut ctrl = Controller::new(&d, 1e-3).unwrap();
             let (y, g) = (vec![0.1; m], vec![1.0; m]);
             group.bench_with_input(BenchmarkId::new(format!("m{m}"), q), &q, |b, _| {
-                b.iter(|| ctrl.step(black_box(&y), black_box(&g))[0])
+                b.iter(|| ctrl.step(black_box(&y), black_box(&g)).unwrap()[0])
             });
         }
     }

@@ -21,7 +21,7 @@ fn step(c: &mut Criterion) {
     let d = s.design().unwrap();
     let mut rust = Controller::new(&d, 1e-3).unwrap();
     let (y, g) = ([0.3, -0.2], [1.0, 2.0]);
-    c.bench_function("export_c/rust_step_paper", |b| b.iter(|| rust.step(black_box(&y), black_box(&g))[0]));
+    c.bench_function("export_c/rust_step_paper", |b| b.iter(|| rust.step(black_box(&y), black_box(&g)).unwrap()[0]));
 
     let options = |precision| ExportOptions { precision, ..ExportOptions::default() };
     let code = generate(&d, 1e-3, &options(Precision::F64)).unwrap();

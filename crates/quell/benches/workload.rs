@@ -59,6 +59,6 @@ fn main() {
 fn steps(d: &Design, y: &[f64], g: &[f64]) {
     let mut ctrl = Controller::new(d, 1e-3).unwrap();
     for _ in 0..100_000 {
-        black_box(ctrl.step(black_box(y), black_box(g))[0]);
+        black_box(ctrl.step(black_box(y), black_box(g)).unwrap()[0]);
     }
 }

@@ -26,7 +26,7 @@
 //!
 //! // The same controller for a real plant, sampled every millisecond.
 //! let mut ctrl = Controller::new(&design, 1e-3)?;
-//! let u_f = ctrl.step(&[0.1, 1.9], &[0.0, 2.0]);
+//! let u_f = ctrl.step(&[0.1, 1.9], &[0.0, 2.0])?;
 //! assert_eq!(u_f.len(), 2);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```

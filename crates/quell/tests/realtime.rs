@@ -89,12 +89,12 @@ fn suggested_sample_times_pass_the_check_or_none_is_offered() {
 fn step_allocates_nothing() {
     let mut ctrl = Controller::new(&paper_design(), 1e-3).unwrap();
     let (y, g) = ([0.3, -0.2], [1.0, 2.0]);
-    ctrl.step(&y, &g); // warm-up outside the counted region (nothing should allocate anyway)
+    ctrl.step(&y, &g).unwrap(); // warm-up outside the counted region (nothing should allocate anyway)
     COUNTING.with(|c| c.set(true));
     let mut acc = 0.0;
     for k in 0..20_000 {
         let s = (k as f64 * 1e-3).sin();
-        acc += ctrl.step(&[s, 0.5 * s], &g)[0];
+        acc += ctrl.step(&[s, 0.5 * s], &g).unwrap()[0];
     }
     COUNTING.with(|c| c.set(false));
     assert!(acc.is_finite());
@@ -119,6 +119,54 @@ fn delays_must_be_whole_samples() {
     assert!(matches!(Controller::new(&d, 0.0), Err(ControllerError::BadSampleTime { .. })));
     assert!(matches!(Controller::new(&d, f64::NAN), Err(ControllerError::BadSampleTime { .. })));
     assert!(Controller::new(&d, 1e-3).is_ok());
+}
+
+#[test]
+fn step_refuses_inputs_of_the_wrong_length_and_keeps_its_state() {
+    // m = 2: a y or g of 1 or 3 entries is an error naming it (before, an assertion panicked), and
+    // the refused call leaves the controller as it was: the next steps equal a fresh controller's.
+    let d = paper_design();
+    let (mut ctrl, mut fresh) = (Controller::new(&d, 1e-3).unwrap(), Controller::new(&d, 1e-3).unwrap());
+    let (y, g) = ([0.3, -0.2], [1.0, 2.0]);
+    for (yy, gg, name, found) in [(&y[..1], &g[..], "y", 1), (&y[..], &[1.0, 2.0, 3.0][..], "g", 3)] {
+        let e = ctrl.step(yy, gg).unwrap_err();
+        assert_eq!(e, ControllerError::InputLength { name, expected: 2, found });
+        assert_eq!(e.to_string(), format!("Controller::step: {name} needs 2 entries (one per channel), found {found}"));
+    }
+    for _ in 0..100 {
+        assert_eq!(ctrl.step(&y, &g).unwrap(), fresh.step(&y, &g).unwrap());
+    }
+}
+
+#[test]
+fn a_discretization_that_overflows_is_refused_naming_the_block() {
+    // T_s = 1e100 s passes the sample-time and whole-delay checks (1/1e100 rounds to 0 samples), but
+    // e^(A_z T_s) by scaling and squaring overflows to NaN; before, the controller was built and
+    // its second step returned NaN.
+    let d = paper_design();
+    match Controller::new(&d, 1e100) {
+        Err(ControllerError::NotFinite { what, sample_time }) => {
+            assert_eq!(sample_time, 1e100);
+            assert!(what.contains("[Φ_z Γ_z]"), "{what}");
+        }
+        other => panic!("{other:?}"),
+    }
+    let e = Controller::new(&d, 1e100).unwrap_err().to_string();
+    assert!(e.starts_with("simulation.sample_time (--sample-time): the observers' [Φ_z Γ_z]"), "{e}");
+    assert!(
+        e.contains("is not finite after discretizing at T_s = 1e100 s") && e.contains("shorter sample time"),
+        "{e}"
+    );
+    // The adaptation step T_s μ_i beyond floating point: μ_1 = 1e300 at T_s = 1e10 s.
+    let mut spec = paper_spec();
+    spec.mu = vec![1e300, 30.0];
+    let big = Design::new(&paper_plant(), &spec).unwrap();
+    assert!(Controller::new(&big, 1e-3).is_ok());
+    let e = Controller::new(&big, 1e10).unwrap_err();
+    assert!(
+        matches!(&e, ControllerError::NotFinite { what, .. } if what == "channel 1's adaptation step T_s μ_i"),
+        "{e:?}"
+    );
 }
 
 #[test]

@@ -22,6 +22,12 @@ pub enum ControllerError {
     DelayNotMultiple { channel: usize, delay: f64, sample_time: f64, ratio: f64, nearest: Option<f64> },
     #[error("simulation.sample_time (--sample-time): channel {}'s delay τ = {} s is {samples:e} samples of T_s = {} s; a delay line holds at most {max:e} samples; use a longer sample time", .channel + 1, crate::linalg::fmt_number(*.delay), crate::linalg::fmt_number(*.sample_time), max = MAX_DELAY_SAMPLES)]
     DelayTooLong { channel: usize, delay: f64, sample_time: f64, samples: f64 },
+    /// A discretized block is not finite at this sample time.
+    #[error("simulation.sample_time (--sample-time): {what} is not finite after discretizing at T_s = {sample_time:e} s; the exact discretization overflowed (the design's eigenvalues or gains times T_s are beyond floating point); choose a shorter sample time or poles of smaller magnitude")]
+    NotFinite { what: String, sample_time: f64 },
+    /// [`Controller::step`] was given y or g of the wrong length.
+    #[error("Controller::step: {name} needs {expected} entries (one per channel), found {found}")]
+    InputLength { name: &'static str, expected: usize, found: usize },
 }
 
 /// Longest delay line, in samples (its memory is this many rows of 1 + q numbers per channel).
@@ -186,16 +192,26 @@ impl Controller {
         let mut PhiGamma_z = DMatrix::zeros(nz, nz + 3 * m);
         PhiGamma_z.view_mut((0, 0), (nz, nz)).copy_from(&Phi_z);
         PhiGamma_z.view_mut((0, nz), (nz, 3 * m)).copy_from(&Gamma_z);
+        let finite = |values: &[f64], what: &dyn Fn() -> String| match values.iter().all(|v| v.is_finite()) {
+            true => Ok(()),
+            false => Err(ControllerError::NotFinite { what: what(), sample_time: T }),
+        };
+        finite(PhiGamma_z.as_slice(), &|| "the observers' [Φ_z Γ_z] (eqs. (6), (14), (20))".into())?;
         let channels = eq
             .channels
             .iter()
             .zip(&d)
-            .map(|(ch, &d)| {
+            .enumerate()
+            .map(|(i, (ch, &d))| {
                 let mut e = DMatrix::zeros(ch.sigma, 1);
                 e[(ch.sigma - 1, 0)] = 1.0;
                 let (Phi, gamma) = zoh(&ch.A, &e, T);
+                let channel = |what: &str| format!("channel {}'s {what}", i + 1);
+                finite(Phi.as_slice(), &|| channel("G_ii filter Φ_i"))?;
+                finite(gamma.as_slice(), &|| channel("G_ii filter γ_i"))?;
+                finite(&[T * ch.mu], &|| channel("adaptation step T_s μ_i"))?;
                 let len = ch.sigma * (1 + q);
-                Channel {
+                Ok(Channel {
                     Phi,
                     gamma: gamma.iter().copied().collect(),
                     W: vec![0.0; len],
@@ -204,9 +220,9 @@ impl Controller {
                     Omega: vec![0.0; q * q],
                     line: DelayLine::new(d, 1 + q),
                     c: T * ch.mu,
-                }
+                })
             })
-            .collect();
+            .collect::<Result<_, _>>()?;
         Ok(Controller {
             T,
             PhiGamma_z,
@@ -225,10 +241,15 @@ impl Controller {
     }
 
     /// One sample: reads y(k) and g(k), returns the plant input u_f(k) = −K x̂ + F u_d (5) to hold
-    /// until the next sample. Allocates nothing.
-    pub fn step(&mut self, y: &[f64], g: &[f64]) -> &[f64] {
+    /// until the next sample. Allocates nothing. y or g of other than m entries is an error
+    /// ([`ControllerError::InputLength`]), and the state is left as it was.
+    pub fn step(&mut self, y: &[f64], g: &[f64]) -> Result<&[f64], ControllerError> {
         let (m, q) = (self.eq.m, self.eq.q);
-        assert!(y.len() == m && g.len() == m, "Controller::step: y and g need {m} entries");
+        for (name, v) in [("y", y), ("g", g)] {
+            if v.len() != m {
+                return Err(ControllerError::InputLength { name, expected: m, found: v.len() });
+            }
+        }
         let cols = 1 + q;
         // ξ̂(k) = C_ξ z_k.
         let (nz, zv) = (self.eq.nz, &mut self.zv);
@@ -272,7 +293,7 @@ impl Controller {
         self.eq.plant_input(z, u_d, &mut self.u_f);
         mat_vec(&self.PhiGamma_z, zv, &mut self.z_next, false);
         zv[..nz].copy_from_slice(&self.z_next);
-        &self.u_f
+        Ok(&self.u_f)
     }
 
     /// The adaptive command u(k) (25) of the last step, undelayed.

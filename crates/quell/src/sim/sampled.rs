@@ -12,7 +12,7 @@ use super::divergence::{Watched, DIVERGENCE_BOUND};
 use super::noise::Gaussian;
 use super::result::{Outcome, RunStats, SimResult};
 use super::{check_run, SimError};
-use crate::controller::{mat_vec, Controller};
+use crate::controller::{mat_vec, Controller, ControllerError};
 use crate::design::Design;
 use crate::linalg::zoh;
 use crate::plant::Plant;
@@ -36,8 +36,8 @@ pub struct SampledSettings {
 /// [`simulate_sampled_with`].
 pub trait SampledController {
     /// One sample: reads y(k) and g(k), returns the plant input u_f(k) (m entries) to hold until the
-    /// next sample.
-    fn step(&mut self, y: &[f64], g: &[f64]) -> &[f64];
+    /// next sample, or why it cannot.
+    fn step(&mut self, y: &[f64], g: &[f64]) -> Result<&[f64], ControllerError>;
     /// The adaptive command u(k) (25) of the last step.
     fn command(&self) -> &[f64];
     /// ξ̂, x̂ and η̂ after the last step (`x` is left empty: the loop fills in the plant's).
@@ -45,7 +45,7 @@ pub trait SampledController {
 }
 
 impl SampledController for Controller {
-    fn step(&mut self, y: &[f64], g: &[f64]) -> &[f64] {
+    fn step(&mut self, y: &[f64], g: &[f64]) -> Result<&[f64], ControllerError> {
         Controller::step(self, y, g)
     }
     fn command(&self) -> &[f64] {
@@ -254,9 +254,9 @@ fn sampled_loop(
             }
         }
         let u_f: &[f64] = match shift.as_mut() {
-            None => ctrl.step(&y_meas, &g),
+            None => ctrl.step(&y_meas, &g)?,
             Some(sh) => {
-                sh.u_f.copy_from_slice(ctrl.step(&y_meas, &g));
+                sh.u_f.copy_from_slice(ctrl.step(&y_meas, &g)?);
                 sh.apply(k, ctrl.command())
             }
         };

@@ -14,6 +14,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use libloading::Library;
 use quell::export::{CCode, Precision};
 use quell::sim::{SampledController, Watched};
+use quell::ControllerError;
 
 /// The warnings of the issue, as errors.
 pub const STRICT: &[&str] = &["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic"];
@@ -225,8 +226,8 @@ impl CController {
 }
 
 impl SampledController for CController {
-    fn step(&mut self, y: &[f64], g: &[f64]) -> &[f64] {
-        CController::step(self, y, g)
+    fn step(&mut self, y: &[f64], g: &[f64]) -> Result<&[f64], ControllerError> {
+        Ok(CController::step(self, y, g))
     }
     fn command(&self) -> &[f64] {
         &self.u
