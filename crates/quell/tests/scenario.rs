@@ -644,6 +644,20 @@ fn empty_filter_pole_list() {
     );
 }
 
+#[test]
+fn pole_out_of_span() {
+    check(
+        &with(&[(CHANNEL, "channel_poles = [[-1e9, -2.0], [-4.0]]")]),
+        "design.channel_poles[0]",
+        "out of the design's span of rates",
+    );
+}
+
+#[test]
+fn beta_out_of_span() {
+    check(&with(&[(BETA, "beta = 1e-9 ")]), "design.beta", "expected 1.490116e-8 ≤ β ≤ 7.456540e6");
+}
+
 // Rows checked by Design::new after the controllability test (need `controllability`, `place`).
 
 #[test]

@@ -17,7 +17,9 @@ pub use decouple::{
 pub use internal_model::{filter_pair, internal_model};
 pub use place::{place, PlaceError};
 
-use crate::linalg::{cond, eigenvalues, fmt_complex, numerical_rank, poly_from_roots, unstable, EigenError};
+use crate::linalg::{
+    cond, eigenvalues, fmt_complex, fmt_number, numerical_rank, poly_from_roots, unstable, EigenError,
+};
 use crate::plant::{Plant, PlantError};
 
 /// How the Luenberger observer gain L of eq. (6) is chosen.
@@ -156,6 +158,10 @@ pub enum DesignError {
     BadMu { index: usize, value: f64 },
     #[error("design.beta: expected a finite β > 0 (H(s) = 1/(βs + 1)), got {value}")]
     BadBeta { value: f64 },
+    #[error("{key}: pole {} is out of the design's span of rates: given the other pole lists and 1/β, expected decay rate −Re p ≥ {} and magnitude ≤ {}; {SPAN_WHY}", fmt_complex(.pole), fmt_number(*.min_decay), fmt_number(*.max_magnitude))]
+    PoleOutOfSpan { key: String, pole: Complex<f64>, min_decay: f64, max_magnitude: f64 },
+    #[error("design.beta: β = {} is out of the design's span of rates: given its poles, expected {} ≤ β ≤ {}; {SPAN_WHY}", fmt_number(*.value), fmt_number(*.min), fmt_number(*.max))]
+    BetaOutOfSpan { value: f64, min: f64, max: f64 },
     #[error("{key}: the eigenvalues of {of} could not be computed: {reason}")]
     Eigenvalues { key: &'static str, of: &'static str, reason: &'static str },
     #[error("plant.D: rank D = {rank} < k = {k}, so N D = L_ω (eq. (20)) has no solution; disturbances must enter through independent directions")]
@@ -163,6 +169,16 @@ pub enum DesignError {
     #[error("plant.D: the disturbance directions are nearly parallel: D with unit columns has smallest singular value {smallest:.3e}, below τ = {tol:.0e} (condition number {cond:.3e}), so N = L_ω D⁺ (eq. (20)) would be huge (‖N‖ ≈ {norm_N:.1e}); merge the nearly parallel disturbance components into one", tol = TOL)]
     DisturbanceConditioning { smallest: f64, cond: f64, norm_N: f64 },
 }
+
+/// Largest ratio between two rates of one design: a pole's magnitude |p| (or 1/β, the pole of H)
+/// against a decay rate |Re p| (or 1/β). A pole slower than √ε times the fastest lies inside the
+/// margin √ε·‖M‖ within which the Hurwitz checks ([`unstable`]) cannot tell it from the imaginary
+/// axis, and the loop's integrator would need about 1/√ε steps for it to settle.
+pub const RATE_SPAN: f64 = 67_108_864.0; // 1/√ε = 2^26
+
+const SPAN_WHY: &str = "every pole's magnitude and 1/β may exceed every decay rate −Re p (and 1/β) by at \
+                        most 1/√ε ≈ 6.7e7: a slower pole lies within the rounding margin of the imaginary axis \
+                        that the stability checks use; bring the poles and β to a common time scale";
 
 fn fmt_eigs(e: &[Complex<f64>]) -> String {
     e.iter().map(fmt_complex).collect::<Vec<_>>().join(", ")
@@ -392,7 +408,50 @@ fn check_spec(plant: &Plant, spec: &DesignSpec) -> Result<(), DesignError> {
     if let ObserverChoice::Poles(p) = &spec.observer {
         check_poles("design.observer_poles".into(), "observer", p, false)?;
     }
-    Ok(())
+    check_rate_span(spec)
+}
+
+/// The choices' rates (every requested pole, and 1/β) span at most [`RATE_SPAN`]: the fastest
+/// magnitude is at most RATE_SPAN times the slowest decay rate. Otherwise the rate farthest (by
+/// ratio) from the median magnitude is named, with the range that the other lists leave it.
+fn check_rate_span(spec: &DesignSpec) -> Result<(), DesignError> {
+    // (key, pole or None for β, magnitude, decay rate)
+    let mut rates: Vec<(String, Option<Complex<f64>>, f64, f64)> = Vec::new();
+    let mut lists: Vec<(String, &[Complex<f64>])> = Vec::new();
+    for (name, list) in [
+        ("channel_poles", &spec.channel_poles),
+        ("reference_filter_poles", &spec.reference_filter_poles),
+        ("disturbance_filter_poles", &spec.disturbance_filter_poles),
+    ] {
+        lists.extend(list.iter().enumerate().map(|(i, p)| (format!("design.{name}[{i}]"), &p[..])));
+    }
+    if let ObserverChoice::Poles(p) = &spec.observer {
+        lists.push(("design.observer_poles".into(), p));
+    }
+    for (key, poles) in lists {
+        rates.extend(poles.iter().map(|&p| (key.clone(), Some(p), p.norm(), -p.re)));
+    }
+    rates.push(("design.beta".into(), None, 1.0 / spec.beta, 1.0 / spec.beta));
+    // The fastest magnitude and the slowest decay rate outside the list `skip`.
+    let span = |skip: &str| {
+        let others = || rates.iter().filter(move |r| r.0 != skip);
+        (others().map(|r| r.2).fold(0.0, f64::max), others().map(|r| r.3).fold(f64::INFINITY, f64::min))
+    };
+    let (fastest, slowest) = span("");
+    if fastest <= RATE_SPAN * slowest {
+        return Ok(());
+    }
+    let mut magnitudes: Vec<f64> = rates.iter().map(|r| r.2).collect();
+    magnitudes.sort_by(f64::total_cmp);
+    let median = magnitudes[magnitudes.len() / 2];
+    let extremity = |r: &(String, Option<Complex<f64>>, f64, f64)| (r.2 / median).max(median / r.3);
+    let blamed = (0..rates.len()).max_by(|&i, &j| extremity(&rates[i]).total_cmp(&extremity(&rates[j]))).unwrap_or(0);
+    let (fast, slow) = span(&rates[blamed].0);
+    let (min_decay, max_magnitude) = (fast / RATE_SPAN, slow * RATE_SPAN);
+    Err(match &rates[blamed] {
+        (key, Some(pole), ..) => DesignError::PoleOutOfSpan { key: key.clone(), pole: *pole, min_decay, max_magnitude },
+        _ => DesignError::BetaOutOfSpan { value: spec.beta, min: 1.0 / max_magnitude, max: 1.0 / min_decay },
+    })
 }
 
 /// Assumption 1: (A, B) controllable and (A, C) observable, by the staircase rank tests.
