@@ -123,17 +123,10 @@ pub fn place<'py>(
     let k = Kind::Design;
     let (A, B) = (matrix(A, "A", k)?, matrix(B, "B", k)?);
     let p = crate::convert::poles(poles, "poles", k)?;
-    let (n, m) = (A.nrows(), B.ncols());
-    if A.ncols() != n {
-        return Err(k.err(py, format!("A: expected a square matrix, found {}×{}", n, A.ncols())));
-    }
-    if B.nrows() != n {
-        return Err(k.err(py, format!("B: expected {n} rows (one per state, as A), found {}×{m}", B.nrows())));
-    }
-    if p.len() != n {
-        return Err(k.err(py, format!("poles: expected {n} poles (one per state), found {}", p.len())));
-    }
-    let K = py.detach(|| quell::place(&A, &B, &p)).map_err(|e| k.err(py, format!("poles: {e}")))?;
+    let K = py.detach(|| quell::place(&A, &B, &p)).map_err(|e| match e {
+        quell::PlaceError::Matrix(e) => k.err(py, e.to_string()),
+        e => k.err(py, format!("poles: {e}")),
+    })?;
     Ok(to_numpy(py, &K).into_any())
 }
 

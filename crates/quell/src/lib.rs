@@ -53,7 +53,7 @@ pub mod sim;
 pub mod study;
 
 pub use controller::{Controller, ControllerError};
-pub use design::{place, Design, DesignError, DesignSpec, ObserverChoice};
+pub use design::{place, Design, DesignError, DesignSpec, ObserverChoice, PlaceError};
 pub use plant::{Plant, PlantError};
 pub use scenario::{Scenario, ScenarioError};
 pub use signal::{Component, Harmonic, Signal};

@@ -112,3 +112,68 @@ fn suggested_output_step_and_sample_time_are_short_and_pass() {
     assert!(e.message.ends_with("choose output_step ≥ 1.01e293"), "{e}");
     assert!(check_horizon(1e300, 1e293).is_err());
 }
+
+#[test]
+fn relative_degrees_and_the_decoupler_refuse_wrong_shapes() {
+    use quell::design::{falb_wolovich, relative_degree_measures, relative_degrees};
+    let s = quell::Scenario::from_toml(quell::scenario::PAPER_EXAMPLE).unwrap();
+    let (A, B, C) = (&s.plant.A, &s.plant.B, &s.plant.C);
+    // These panicked in a matrix product ("Gemv: dimensions mismatch").
+    let C2 = C.columns(0, 2).into_owned();
+    assert_eq!(relative_degrees(A, B, &C2), Err(shape("C", (2, 3), (2, 2))));
+    let B2 = B.rows(0, 2).into_owned();
+    assert_eq!(relative_degrees(A, &B2, C), Err(shape("B", (3, 2), (2, 2))));
+    let A32 = A.columns(0, 2).into_owned();
+    assert_eq!(relative_degree_measures(&A32, B, C).map(|_| ()), Err(shape("A", (3, 3), (3, 2))));
+    assert_eq!(relative_degrees(A, B, C).unwrap(), vec![Some(2), Some(1)]);
+    // One input for two outputs was "output 2 is reached by no input".
+    let poles = &s.design.channel_poles;
+    let B1 = B.columns(0, 1).into_owned();
+    let e = falb_wolovich(A, &B1, C, poles).map(|_| ()).unwrap_err();
+    assert_eq!(e, quell::DesignError::Plant(shape("C", (1, 3), (2, 3))));
+}
+
+#[test]
+fn design_and_runs_refuse_inputs_built_in_rust_with_wrong_lengths() {
+    // A probe over the public API with a DesignSpec, a true plant, signals and settings built
+    // directly (not read from a file): each is an error naming its key, none panics.
+    use quell::sim::{simulate_sampled, simulate_with_truth, MeasurementNoise, RunSettings, SampledSettings, SimError};
+    use quell::{Design, DesignError};
+    use std::ops::ControlFlow;
+    let s = quell::Scenario::from_toml(quell::scenario::PAPER_EXAMPLE).unwrap();
+    let count = |f: &dyn Fn(&mut quell::DesignSpec)| {
+        let mut spec = s.design.clone();
+        f(&mut spec);
+        match Design::new(&s.plant, &spec) {
+            Err(DesignError::Count { key, expected, got, .. }) => (key, expected, got),
+            other => panic!("{:?}", other.map(|_| ())),
+        }
+    };
+    assert_eq!(count(&|d| d.mu = vec![1.0]), ("design.mu", 2, 1));
+    assert_eq!(count(&|d| d.channel_poles.push(poles(&[-1.0]))), ("design.channel_poles", 2, 3));
+    assert_eq!(count(&|d| drop(d.reference_filter_poles.pop())), ("design.reference_filter_poles", 2, 1));
+    assert_eq!(count(&|d| d.disturbance_filter_poles.clear()), ("design.disturbance_filter_poles", 2, 0));
+    assert_eq!(count(&|d| d.relative_degrees = Some(vec![1])), ("design.relative_degrees", 2, 1));
+
+    let d = s.design().unwrap();
+    let go = ControlFlow::Continue;
+    let run = RunSettings::new(1.0, 0.1, 1e-9, 1e-9);
+    let key = |r: Result<quell::sim::SimResult, SimError>| match r {
+        Err(SimError::Input(e)) => e.key,
+        other => panic!("{:?}", other.map(|r| r.outcome)),
+    };
+    let mut truth = s.plant.clone();
+    truth.x0 = quell::nalgebra::DVector::zeros(2);
+    assert_eq!(key(simulate_with_truth(&d, &truth, &s.reference, &s.disturbance, &run, |_| go(()))), "truth.x0");
+    let mut truth = s.plant.clone();
+    truth.x0[0] = 1e200;
+    assert_eq!(key(simulate_with_truth(&d, &truth, &s.reference, &s.disturbance, &run, |_| go(()))), "truth");
+    let mut reference = s.reference.clone();
+    reference.components.pop();
+    assert_eq!(key(quell::sim::simulate(&d, &reference, &s.disturbance, &run, |_| go(()))), "reference.components");
+    let mut sampled = SampledSettings::new(1.0, 0.1, 0.001);
+    sampled.noise = Some(MeasurementNoise { std: vec![0.1], seed: 0 });
+    assert_eq!(key(simulate_sampled(&d, &s.reference, &s.disturbance, &sampled, |_| go(()))), "noise.std");
+    let sampled = SampledSettings::new(1.0, 0.15, 0.1);
+    assert_eq!(key(simulate_sampled(&d, &s.reference, &s.disturbance, &sampled, |_| go(()))), "simulation.output_step");
+}

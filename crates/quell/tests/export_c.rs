@@ -158,14 +158,18 @@ fn the_checks_of_controller_new_with_the_same_messages() {
     assert!(matches!(&e, ExportError::F32Range { what, .. } if what == "quell_c[0]"), "{e:?}");
     assert!(e.to_string().contains("use --precision f64"), "{e}");
     assert!(generate(&big, 1e-3, &options("quell", Precision::F64)).is_ok());
-    // A discretization that overflows: a reference filter pole at -6e300 (the design accepts it).
-    let text = text.replace("[[-1.0, -6.0], [-9.0]]", "[[-1.0, -6e300], [-9.0]]");
-    let wild = Scenario::from_toml(&text).unwrap().design().unwrap();
+    // A discretization that overflows: T_s = 1e100 s (the case used before, a reference filter pole
+    // at -6e300, is now refused by the design: its rates may span at most 1/√ε).
+    let wild =
+        Scenario::from_toml(&text.replace("[[-1.0, -6.0], [-9.0]]", "[[-1.0, -6e300], [-9.0]]")).unwrap().design();
+    assert!(
+        matches!(&wild, Err(quell::DesignError::PoleOutOfSpan { key, .. }) if key == "design.reference_filter_poles[0]")
+    );
     // Controller::new refuses it, and so the generator.
-    let e = generate(&wild, 1e-3, &ExportOptions::default()).unwrap_err();
+    let e = generate(&big, 1e100, &ExportOptions::default()).unwrap_err();
     assert!(matches!(&e, ExportError::Controller(ControllerError::NotFinite { .. })), "{e:?}");
     assert!(e.to_string().starts_with("simulation.sample_time (--sample-time): the observers' [Φ_z Γ_z]"), "{e}");
-    assert_eq!(e.to_string(), Controller::new(&wild, 1e-3).unwrap_err().to_string());
+    assert_eq!(e.to_string(), Controller::new(&big, 1e100).unwrap_err().to_string());
 }
 
 /// Drives the Rust and the C controller with the same inputs; returns the relative deviations of

@@ -4,6 +4,7 @@ use nalgebra::{Complex, DMatrix, RowDVector};
 
 use super::DesignError;
 use crate::linalg::{cond, poly_from_roots};
+use crate::plant::{check, PlantError};
 
 /// The design layer's one tolerance τ. Every "is it zero?" and "is it singular?" decision is made
 /// on a scale-free measure in [0, 1] (it does not grow with ‖A‖^(l−1), nor change with the units of
@@ -68,11 +69,20 @@ pub(crate) fn unit_columns(B: &DMatrix<f64>) -> DMatrix<f64> {
 }
 
 /// Eq. (7) for every output, on the normalized iterates r_l = c_i A^(l−1) / ‖c_i A^(l−1)‖: the
-/// measure at l is max_j |r_l b̂_j| with b̂_j the unit columns of B (see [`TOL`]).
-pub fn relative_degree_measures(A: &DMatrix<f64>, B: &DMatrix<f64>, C: &DMatrix<f64>) -> Vec<RelativeDegree> {
+/// measure at l is max_j |r_l b̂_j| with b̂_j the unit columns of B (see [`TOL`]). An error when A
+/// is not square, B has not A's rows or C not A's columns, or an entry is non-finite or beyond
+/// [`MAX_ENTRY`](crate::plant::MAX_ENTRY).
+pub fn relative_degree_measures(
+    A: &DMatrix<f64>,
+    B: &DMatrix<f64>,
+    C: &DMatrix<f64>,
+) -> Result<Vec<RelativeDegree>, PlantError> {
     let n = A.nrows();
+    check("A", A, n, n)?;
+    check("B", B, n, B.ncols())?;
+    check("C", C, C.nrows(), n)?;
     let Bn = unit_columns(B);
-    (0..C.nrows())
+    Ok((0..C.nrows())
         .map(|i| {
             let mut row: RowDVector<f64> = C.row(i).clone_owned();
             let mut measures = Vec::with_capacity(n);
@@ -89,13 +99,17 @@ pub fn relative_degree_measures(A: &DMatrix<f64>, B: &DMatrix<f64>, C: &DMatrix<
             let sigma = measures.iter().position(|&m| m >= TOL).map(|l| l + 1);
             RelativeDegree { sigma, given: None, measures }
         })
-        .collect()
+        .collect())
 }
 
 /// Relative degrees σ_i (eq. (7)), decided as in [`relative_degree_measures`]. `None` for an output
-/// that no input reaches (every measure below [`TOL`] for l ≤ n).
-pub fn relative_degrees(A: &DMatrix<f64>, B: &DMatrix<f64>, C: &DMatrix<f64>) -> Vec<Option<usize>> {
-    relative_degree_measures(A, B, C).into_iter().map(|d| d.sigma).collect()
+/// that no input reaches (every measure below [`TOL`] for l ≤ n). Errors as there.
+pub fn relative_degrees(
+    A: &DMatrix<f64>,
+    B: &DMatrix<f64>,
+    C: &DMatrix<f64>,
+) -> Result<Vec<Option<usize>>, PlantError> {
+    Ok(relative_degree_measures(A, B, C)?.into_iter().map(|d| d.sigma).collect())
 }
 
 /// Proposition 1's result: the decoupling gains and the closed loop they give.
@@ -142,7 +156,10 @@ pub fn falb_wolovich_given(
     channel_poles: &[Vec<Complex<f64>>],
     given: Option<&[usize]>,
 ) -> Result<FalbWolovich, DesignError> {
-    let (m, n) = (C.nrows(), A.nrows());
+    let (m, n) = (B.ncols(), A.nrows());
+    check("A", A, n, n)?;
+    check("B", B, n, m)?;
+    check("C", C, m, n)?; // as many outputs as inputs
     if channel_poles.len() != m {
         return Err(DesignError::Count {
             key: "design.channel_poles",
@@ -154,7 +171,7 @@ pub fn falb_wolovich_given(
     if let Some(g) = given.filter(|g| g.len() != m) {
         return Err(DesignError::Count { key: "design.relative_degrees", per: "output", expected: m, got: g.len() });
     }
-    let mut degrees = relative_degree_measures(A, B, C);
+    let mut degrees = relative_degree_measures(A, B, C)?;
     let mut sigma = Vec::with_capacity(m);
     for (channel, d) in degrees.iter_mut().enumerate() {
         let s = match given.map(|g| g[channel]) {
