@@ -126,6 +126,8 @@ CASES = [
      edit(("[[-1.0, -3.0], [-1.0, -2.0, -3.0]]", "[[], [-1.0, -2.0, -3.0]]"),
           ("amplitude = 1.0, frequency = 1.0", "amplitude = 0.0, frequency = 1.0")),
      "design.disturbance_filter_poles[0]", None),
+    ("pole_out_of_span", edit((CHANNEL, "channel_poles = [[-1e9, -2.0], [-4.0]]")), "design.channel_poles[0]", None),
+    ("beta_out_of_span", edit((BETA, "beta = 1e-9 ")), "design.beta", None),
     ("channel_pole_count_vs_relative_degree", edit((CHANNEL, "channel_poles = [[-6.0], [-4.0]]")),
      "design.channel_poles[0]", None),
     ("relative_degrees_count", edit((BETA, "beta = 1.0\nrelative_degrees = [2]\n")),
