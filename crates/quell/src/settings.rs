@@ -92,6 +92,23 @@ pub fn check_horizon(t_end: f64, output_step: f64) -> Result<(), KeyError> {
     Ok(())
 }
 
+/// The continuous loop's delays against its horizon: the integrator's steps are at most min τ long
+/// (over the nonzero delays), so t_end / τ must not exceed [`MAX_SAMPLING_STEPS`], the limit of a
+/// sampled-data run. `key` names the delays (`plant.delays`, `truth.delays`).
+pub fn check_integrator_delays(key: &str, delays: &[f64], t_end: f64) -> Result<(), KeyError> {
+    match delays.iter().enumerate().find(|(_, &tau)| tau > 0.0 && t_end / tau > MAX_SAMPLING_STEPS) {
+        None => Ok(()),
+        Some((i, &tau)) => Err(KeyError::new(
+            format!("{key}[{i}]"),
+            format!(
+                "τ = {tau:e} s caps the integrator's steps at τ, so t_end = {t_end} s needs more than {:.3e} steps; at most {MAX_SAMPLING_STEPS:e} are run (as in a sampled-data run); expected 0 (no delay) or τ ≥ {}",
+                t_end / tau,
+                at_least(t_end / MAX_SAMPLING_STEPS, |d| t_end / d <= MAX_SAMPLING_STEPS)
+            ),
+        )),
+    }
+}
+
 /// A value to suggest for a lower bound `x`: the number nearest `x` with three significant digits,
 /// raised in its third digit until `passes`, written as Rust's shortest form (`{}` between 1e-4 and
 /// 1e6, otherwise `{:e}`), so that 1e293 does not print as 294 digits and the value typed back

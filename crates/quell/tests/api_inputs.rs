@@ -168,6 +168,10 @@ fn design_and_runs_refuse_inputs_built_in_rust_with_wrong_lengths() {
     let mut truth = s.plant.clone();
     truth.x0[0] = 1e200;
     assert_eq!(key(simulate_with_truth(&d, &truth, &s.reference, &s.disturbance, &run, |_| go(()))), "truth");
+    // A true delay that forces more than 1e10 integrator steps (steps are at most min τ long).
+    let mut truth = s.plant.clone();
+    truth.delays[0] = 1e-300;
+    assert_eq!(key(simulate_with_truth(&d, &truth, &s.reference, &s.disturbance, &run, |_| go(()))), "truth.delays[0]");
     let mut reference = s.reference.clone();
     reference.components.pop();
     assert_eq!(key(quell::sim::simulate(&d, &reference, &s.disturbance, &run, |_| go(()))), "reference.components");

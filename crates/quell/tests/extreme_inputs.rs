@@ -224,11 +224,28 @@ fn delays_at_the_edges_are_accepted_and_the_loop_says_what_it_can_run() {
         sampled,
         Err(quell::sim::SimError::Controller(quell::ControllerError::DelayTooLong { channel: 0, .. }))
     ));
-    // τ_1 = 1e-300 s: 0 samples at T_s = 1 ms; the integrator (steps at most min τ) refuses at t = 0.
+    // τ_1 = 1e-300 s: 0 samples at T_s = 1 ms, so the sampled loop runs; the integrator's steps are
+    // at most min τ long, so the continuous loop would need 1e301 steps: an input error, as for a
+    // sampled-data run beyond 1e10 steps (was StepSizeTooSmall at t = 0, a failed run).
     let (s, d) = load("delays = [1.0, 3.0]", "delays = [1e-300, 3.0]").unwrap();
-    let (cont, sampled) = runs(&s, &d);
-    assert_eq!(cont, Outcome::StepSizeTooSmall { t: 0.0 });
+    let settings = RunSettings::new(10.0, 0.1, 1e-9, 1e-9);
+    match simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())) {
+        Err(quell::sim::SimError::Input(e)) => {
+            assert_eq!(e.key, "plant.delays[0]");
+            assert!(e.message.ends_with("expected 0 (no delay) or τ ≥ 1e-9"), "{e}");
+        }
+        other => panic!("{:?}", other.map(|r| r.outcome)),
+    }
+    let sampled = simulate_sampled(&d, &s.reference, &s.disturbance, &SampledSettings::new(10.0, 0.1, 0.001), |_| {
+        ControlFlow::Continue(())
+    });
     assert_eq!(sampled.unwrap().outcome, Some(Outcome::Completed));
+    // At the limit (t_end / τ = 1e10) the continuous loop starts.
+    let (s, d) = load("delays = [1.0, 3.0]", "delays = [1e-9, 3.0]").unwrap();
+    let mut settings = RunSettings::new(10.0, 0.1, 1e-9, 1e-9);
+    settings.max_steps = 10;
+    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())).unwrap();
+    assert!(matches!(r.outcome, Some(Outcome::TooManySteps { .. })), "{:?}", r.outcome);
 }
 
 #[test]

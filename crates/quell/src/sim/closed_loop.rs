@@ -440,6 +440,8 @@ pub fn simulate_with_truth(
     check_run(design, reference, disturbance, t_end, output_step, divergence_bound)?;
     crate::settings::check_tolerances(rtol, atol)?;
     super::check_truth(design, truth)?;
+    crate::settings::check_integrator_delays("plant.delays", &design.plant().delays, t_end)?;
+    crate::settings::check_integrator_delays("truth.delays", &truth.delays, t_end)?;
     let mut sys = ContinuousLoop::with_truth(design, truth, reference, disturbance);
     let s0 = sys.initial_state(&truth.x0);
     let history = vec![0.0; sys.n_delayed()];
