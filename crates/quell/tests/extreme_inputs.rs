@@ -74,7 +74,7 @@ fn tiny_plant_entries_are_decided_as_zeros_would_be() {
     // a11 = −3.2e-300 ≈ 0: the paper's L no longer stabilizes A − LC; the eigenvalues in the error
     // sum to trace(A − LC) with a11 = 0, computed here directly.
     let e = design_error("A = [[-3.2,", "A = [[-3.2e-300,");
-    let DesignError::ObserverUnstable { eigenvalues } = &e else { panic!("{e}") };
+    let DesignError::ObserverUnstable { key: "design.observer_gain", eigenvalues } = &e else { panic!("{e}") };
     let (_, paper) = load_and_design(PAPER_EXAMPLE).unwrap();
     let p = paper.plant();
     let trace = (&p.A - paper.L() * &p.C).trace() + 3.2;
@@ -155,6 +155,20 @@ fn poles_and_beta_beyond_the_span_of_rates_are_refused() {
     // 1/β) is designed.
     assert!(load(CHANNEL, &format!("channel_poles = [[-{RATE_SPAN:e}, -2.0], [-4.0]]")).is_ok());
     assert!(load(CHANNEL, &format!("channel_poles = [[-{:e}, -2.0], [-4.0]]", 1.01 * RATE_SPAN)).is_err());
+}
+
+#[test]
+fn observer_poles_too_slow_for_the_plant_name_the_poles() {
+    // A double integrator with a large coupling (‖A − LC‖_F ≈ 1e6): observer poles at −1e-3 and
+    // −2e-3 are placed (σ = 2, every rate within the span), but they lie inside the Hurwitz margin
+    // √ε·‖A − LC‖_F ≈ 1.5e-2. The message said "choose L …" although L was placed from the poles.
+    let text = "[plant]\nA = [[0.0, 1e6], [0.0, 0.0]]\nB = [[0.0], [1.0]]\nC = [[1.0, 0.0]]\ndelays = [0.0]\n\
+                [design]\nobserver_poles = [-1e-3, -2e-3]\nchannel_poles = [[-1e-3, -2e-3]]\n\
+                reference_filter_poles = [[-1e-3]]\nmu = [1.0]\nbeta = 1e3\n\
+                [reference]\ncomponents = [{ bias = 1.0 }]\n";
+    let Err(LoadError::Design(e)) = load_and_design(text) else { panic!("expected a design error") };
+    assert!(matches!(&e, DesignError::ObserverUnstable { key: "design.observer_poles", .. }), "{e}");
+    assert!(e.to_string().contains("choose observer poles with larger decay rates"), "{e}");
 }
 
 #[test]

@@ -128,8 +128,8 @@ pub enum DesignError {
     ObserverGainNonFinite { row: usize, col: usize, value: f64 },
     #[error("design.observer_gain: expected a {n}×{m} matrix, found {rows}×{cols}")]
     ObserverGainShape { n: usize, m: usize, rows: usize, cols: usize },
-    #[error("design.observer_gain: A − LC is not Hurwitz (eigenvalues {}); choose L with a stable observer, or give design.observer_poles instead", fmt_eigs(.eigenvalues))]
-    ObserverUnstable { eigenvalues: Vec<Complex<f64>> },
+    #[error("{key}: A − LC is not Hurwitz (eigenvalues {}); {}", fmt_eigs(.eigenvalues), if *.key == "design.observer_gain" { "choose L with a stable observer, or give design.observer_poles instead" } else { "the placed poles lie within the margin √ε·‖A − LC‖_F of the imaginary axis for this plant; choose observer poles with larger decay rates" })]
+    ObserverUnstable { key: &'static str, eigenvalues: Vec<Complex<f64>> },
     #[error("plant.C: output {} is reached by no input: c_i A^(l-1) B = 0 for every l ≤ n (largest cosine between c_i A^(l-1) and a column of B: {largest:.1e}, below τ = {tol:.0e}), so the plant cannot be decoupled; check row {channel} of plant.C", .channel + 1, tol = TOL)]
     NoRelativeDegree { channel: usize, largest: f64 },
     #[error("design.channel_poles[{channel}]: channel {} has relative degree {sigma}, so it needs {sigma} pole{}; got {got}", .channel + 1, if *.sigma == 1 { "" } else { "s" })]
@@ -491,7 +491,7 @@ fn observer(plant: &Plant, choice: &ObserverChoice) -> Result<(DMatrix<f64>, Vec
     let A_o = A - &L * C;
     let eigs = eigenvalues(&A_o).map_err(|e| eigen_error(key, "A − LC", e))?;
     if !unstable(&eigs, A_o.norm()).is_empty() {
-        return Err(DesignError::ObserverUnstable { eigenvalues: eigs });
+        return Err(DesignError::ObserverUnstable { key, eigenvalues: eigs });
     }
     Ok((L, eigs))
 }
