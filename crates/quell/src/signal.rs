@@ -93,8 +93,8 @@ impl Component {
 }
 
 impl Signal {
-    /// Checks that the signal has `expected` components (`per` says why, for the message) and finite
-    /// parameters; `key` names the signal (`reference`, `disturbance`).
+    /// Checks that the signal has `expected` components (`per` says why, for the message), finite
+    /// parameters and frequencies ≥ 0; `key` names the signal (`reference`, `disturbance`).
     pub fn check(&self, key: &str, expected: usize, per: &str) -> Result<(), KeyError> {
         if self.len() != expected {
             return Err(KeyError::new(
@@ -113,6 +113,10 @@ impl Signal {
             for (j, h) in c.harmonics.iter().enumerate() {
                 for (name, v) in [("amplitude", h.amplitude), ("frequency", h.frequency), ("phase", h.phase)] {
                     finite(format!("[{i}].harmonics[{j}].{name}"), v)?;
+                }
+                if h.frequency < 0.0 {
+                    let key = format!("{key}.components[{i}].harmonics[{j}].frequency");
+                    return Err(KeyError::new(key, negative_frequency(h.frequency)));
                 }
             }
         }
@@ -160,6 +164,11 @@ impl Signal {
             *o = c.eval(t);
         }
     }
+}
+
+/// The message for a negative frequency ω (the scenario reader's and [`Signal::check`]'s).
+pub(crate) fn negative_frequency(w: f64) -> String {
+    format!("expected a frequency ≥ 0 (rad/s), found {w}; write a·sin(−ωt + φ) as a·sin(ωt + π − φ)")
 }
 
 /// Checks the reference g (one component per output) and the disturbance ω (one per column of D)

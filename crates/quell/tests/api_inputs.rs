@@ -175,6 +175,13 @@ fn design_and_runs_refuse_inputs_built_in_rust_with_wrong_lengths() {
     let mut reference = s.reference.clone();
     reference.components.pop();
     assert_eq!(key(quell::sim::simulate(&d, &reference, &s.disturbance, &run, |_| go(()))), "reference.components");
+    // A negative frequency (refused by the scenario reader) ran when the Signal was built in Rust.
+    let mut reference = s.reference.clone();
+    reference.components[0].harmonics[0].frequency = -2.0;
+    assert_eq!(
+        key(quell::sim::simulate(&d, &reference, &s.disturbance, &run, |_| go(()))),
+        "reference.components[0].harmonics[0].frequency"
+    );
     let mut sampled = SampledSettings::new(1.0, 0.1, 0.001);
     sampled.noise = Some(MeasurementNoise { std: vec![0.1], seed: 0 });
     assert_eq!(key(simulate_sampled(&d, &s.reference, &s.disturbance, &sampled, |_| go(()))), "noise.std");

@@ -437,10 +437,7 @@ fn harmonic(v: Value) -> Result<Harmonic, ScenarioError> {
     let frequency = t.require("frequency", "the frequency ω ≥ 0 (rad/s) of a·sin(ωt + φ)", |v| {
         let w = v.number()?;
         if w < 0.0 {
-            return Err(err(
-                v.key,
-                format!("expected a frequency ≥ 0 (rad/s), found {w}; write a·sin(−ωt + φ) as a·sin(ωt + π − φ)"),
-            ));
+            return Err(err(v.key, crate::signal::negative_frequency(w)));
         }
         Ok(w)
     })?;
