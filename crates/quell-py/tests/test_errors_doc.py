@@ -82,6 +82,8 @@ CASES = [
      "disturbance.components", None),
     ("negative_frequency", edit(("frequency = 2.0, phase", "frequency = -2.0, phase")),
      "reference.components[0].harmonics[0].frequency", None),
+    ("signal_too_large", edit(("amplitude = 3.0, frequency = 2.0", "amplitude = 3e300, frequency = 2.0")),
+     "reference.components[0].harmonics[0].amplitude", None),
     ("missing_amplitude", edit(("amplitude = 1.0, frequency = 1.0", "frequency = 1.0")),
      "disturbance.components[0].harmonics[0].amplitude", None),
     ("reference_internal_model_order",

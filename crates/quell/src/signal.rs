@@ -3,7 +3,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::plant::Plant;
+use crate::plant::{Plant, MAX_ENTRY};
 use crate::settings::KeyError;
 
 /// One sinusoid `amplitude·sin(frequency·t + phase)`, frequency in rad/s.
@@ -94,7 +94,7 @@ impl Component {
 
 impl Signal {
     /// Checks that the signal has `expected` components (`per` says why, for the message), finite
-    /// parameters and frequencies ≥ 0; `key` names the signal (`reference`, `disturbance`).
+    /// parameters, amplitudes and biases of magnitude ≤ [`MAX_ENTRY`] and frequencies ≥ 0; `key` names the signal (`reference`, `disturbance`).
     pub fn check(&self, key: &str, expected: usize, per: &str) -> Result<(), KeyError> {
         if self.len() != expected {
             return Err(KeyError::new(
@@ -108,12 +108,26 @@ impl Signal {
                 Err(KeyError::new(format!("{key}.components{field}"), format!("expected a finite number, found {v}")))
             }
         };
+        // Amplitudes and biases scale the loop's states like plant entries do (the sum of a channel's,
+        // their products with D, Q and the gains): bounded by the same MAX_ENTRY.
+        let moderate = |field: String, v: f64| match v.abs() <= MAX_ENTRY {
+            true => Ok(()),
+            false => Err(KeyError::new(
+                format!("{key}.components{field}"),
+                format!(
+                    "expected a magnitude ≤ 1e150, found {v:e}; the loop's states scale with it and their \
+                     products overflow double precision — rescale the signal's units"
+                ),
+            )),
+        };
         for (i, c) in self.components.iter().enumerate() {
             finite(format!("[{i}].bias"), c.bias)?;
+            moderate(format!("[{i}].bias"), c.bias)?;
             for (j, h) in c.harmonics.iter().enumerate() {
                 for (name, v) in [("amplitude", h.amplitude), ("frequency", h.frequency), ("phase", h.phase)] {
                     finite(format!("[{i}].harmonics[{j}].{name}"), v)?;
                 }
+                moderate(format!("[{i}].harmonics[{j}].amplitude"), h.amplitude)?;
                 if h.frequency < 0.0 {
                     let key = format!("{key}.components[{i}].harmonics[{j}].frequency");
                     return Err(KeyError::new(key, negative_frequency(h.frequency)));

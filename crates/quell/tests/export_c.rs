@@ -149,11 +149,16 @@ fn the_checks_of_controller_new_with_the_same_messages() {
         assert_eq!(e, ExportError::Prefix { found: bad.into() });
         assert!(e.to_string().starts_with("--prefix: expected a C identifier"), "{e}");
     }
-    // A constant beyond float's range: c_1 = T_s μ_1 with μ_1 = 1e300.
-    let text = std::fs::read_to_string(format!("{}/../../examples/paper.toml", env!("CARGO_MANIFEST_DIR")))
-        .unwrap()
-        .replace("mu = [20.0, 30.0]", "mu = [1e300, 30.0]");
+    // A constant beyond float's range: c_1 = T_s μ_1 = 1e97 with μ_1 = 1e100.
+    let paper = std::fs::read_to_string(format!("{}/../../examples/paper.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let text = paper.replace("mu = [20.0, 30.0]", "mu = [1e100, 30.0]");
     let big = Scenario::from_toml(&text).unwrap().design().unwrap();
+    // μ_1 = 1e300: T_s μ_1 = 1e297 > 1e150, where the adaptation gain would round to 0; the
+    // controller, and so the generator, refuses it.
+    let huge =
+        Scenario::from_toml(&paper.replace("mu = [20.0, 30.0]", "mu = [1e300, 30.0]")).unwrap().design().unwrap();
+    let e = generate(&huge, 1e-3, &ExportOptions::default()).unwrap_err();
+    assert!(matches!(&e, ExportError::Controller(ControllerError::AdaptationStepTooLarge { channel: 0, .. })), "{e:?}");
     let e = generate(&big, 1e-3, &options("quell", Precision::F32)).unwrap_err();
     assert!(matches!(&e, ExportError::F32Range { what, .. } if what == "quell_c[0]"), "{e:?}");
     assert!(e.to_string().contains("use --precision f64"), "{e}");

@@ -1,8 +1,9 @@
 //! Scenario values at the edges of floating point (1e±300 entries, poles, gains, signals): each
 //! gives an error of the right kind, naming its key, or a design (and run) with its property. The
 //! decisions are tabled in /work/notes/issue9-api.md; in short, plant entries beyond 1e150 and rates
-//! spanning more than 1/√ε are refused, tiny plant entries are decided like zeros, and μ, delays and
-//! signal values are accepted, with the loop reporting what it can and cannot run.
+//! spanning more than 1/√ε, signal amplitudes and biases beyond 1e150 and sampled adaptation steps
+//! T_s μ beyond 1e150 are refused, tiny plant entries are decided like zeros, and μ, delays and
+//! frequencies are accepted, with the loop reporting what it can and cannot run.
 #![allow(non_snake_case)]
 
 use std::ops::ControlFlow;
@@ -194,29 +195,43 @@ fn runs(s: &Scenario, d: &Design) -> (Outcome, Result<quell::sim::SimResult, que
 }
 
 #[test]
-fn huge_mu_is_designed_and_the_sampled_loop_runs() {
-    // μ = 1e300: the sampled adaptive law η̂ += c(Y − Ωη̂)/(1 + c tr Ω) is nonexpansive for every
-    // μ ≥ 0 (its μ → ∞ limit is a normalized gradient step), so the design is accepted; the
-    // continuous law is infinitely stiff and the integrator says so.
+fn huge_mu_is_designed_and_the_sampled_controller_refuses_it() {
+    // μ = 1e300: the design is accepted (μ alone is not a rate; μ·tr Ω is), the continuous law is
+    // infinitely stiff and the integrator says so. The sampled law η̂ += c(Y − Ωη̂)/(1 + c tr Ω) is
+    // nonexpansive for every μ ≥ 0, but with c = T_s μ = 1e297 the product c·tr Ω overflows and the
+    // gain becomes 0 (adaptation off without a sign): Controller::new refuses T_s μ > 1e150.
     let (s, d) = load("mu = [20.0, 30.0]", "mu = [1e300, 30.0]").unwrap();
     assert_eq!(d.mu(), &[1e300, 30.0]);
     let (cont, sampled) = runs(&s, &d);
     assert!(matches!(cont, Outcome::StepSizeTooSmall { .. } | Outcome::TooManySteps { .. }), "{cont:?}");
-    let r = sampled.unwrap();
+    assert!(matches!(
+        sampled,
+        Err(quell::sim::SimError::Controller(quell::ControllerError::AdaptationStepTooLarge { channel: 0, .. }))
+    ));
+    // μ = 1e150 (T_s μ = 1e147): the sampled loop completes with η̂ finite.
+    let (s, d) = load("mu = [20.0, 30.0]", "mu = [1e150, 30.0]").unwrap();
+    let r = runs(&s, &d).1.unwrap();
     assert_eq!(r.outcome, Some(Outcome::Completed));
     assert!(r.eta.iter().all(|v| v.is_finite()));
 }
 
 #[test]
-fn signals_at_the_edges_are_accepted_and_the_loop_says_what_it_can_run() {
+fn signals_at_the_edges_are_refused_or_run() {
+    // An amplitude or bias beyond 1e150 is bad input, naming its key (was a Diverged run, exit 1).
+    assert_eq!(
+        scenario_key("amplitude = 3.0, frequency = 2.0", "amplitude = 3e300, frequency = 2.0"),
+        "reference.components[0].harmonics[0].amplitude"
+    );
+    assert_eq!(scenario_key("{ bias = 2.0 }", "{ bias = -2e151 }"), "reference.components[1].bias");
+    assert_eq!(scenario_key("bias = 1.0, harmonics", "bias = 1e200, harmonics"), "disturbance.components[1].bias");
     // The design does not depend on the signals.
     let (_, paper) = load_and_design(PAPER_EXAMPLE).unwrap();
-    for to in ["amplitude = 3e300, frequency = 2e300", "amplitude = 3e-300, frequency = 2e-300"] {
+    for to in ["amplitude = 1e150, frequency = 2e300", "amplitude = 3e-300, frequency = 2e-300"] {
         let (s, d) = load("amplitude = 3.0, frequency = 2.0", to).unwrap();
         assert_eq!(d.K(), paper.K(), "{to}");
         let (cont, sampled) = runs(&s, &d);
         let sampled = sampled.unwrap().outcome.unwrap();
-        if to.contains("e300") {
+        if to.contains("2e300") {
             // 2e300 rad/s cannot be resolved by the integrator; the sampled loop's regressor passes
             // the divergence bound at its first output sample.
             assert!(matches!(cont, Outcome::StepSizeTooSmall { t } if t == 0.0), "{cont:?}");

@@ -161,7 +161,20 @@ fn a_discretization_that_overflows_is_refused_naming_the_block() {
     let mut spec = paper_spec();
     spec.mu = vec![1e300, 30.0];
     let big = Design::new(&paper_plant(), &spec).unwrap();
-    assert!(Controller::new(&big, 1e-3).is_ok());
+    // T_s μ_1 = 1e297 at T_s = 1 ms is finite, but c·tr Ω overflows as soon as tr Ω > 2e11, and the
+    // gain c/(1 + c tr Ω) becomes 0: adaptation would stop without a sign (was accepted).
+    let e = Controller::new(&big, 1e-3).unwrap_err();
+    assert_eq!(e, ControllerError::AdaptationStepTooLarge { channel: 0, mu: 1e300, sample_time: 1e-3 });
+    assert!(
+        e.to_string().starts_with(
+            "design.mu[0]: expected T_s μ_i ≤ 1e150 (μ_i ≤ 1e153 at T_s = 0.001 s), found μ_i = 1e300; the sampled \
+             adaptation gain"
+        ),
+        "{e}"
+    );
+    // At the limit, T_s μ_1 = 1e150 (T_s = 1 s, both delays whole), the controller is built.
+    spec.mu = vec![1e150, 30.0];
+    assert!(Controller::new(&Design::new(&paper_plant(), &spec).unwrap(), 1.0).is_ok());
     let e = Controller::new(&big, 1e10).unwrap_err();
     assert!(
         matches!(&e, ControllerError::NotFinite { what, .. } if what == "channel 1's adaptation step T_s μ_i"),

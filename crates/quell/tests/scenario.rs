@@ -405,6 +405,15 @@ fn reference_component_count() {
 }
 
 #[test]
+fn signal_too_large() {
+    check(
+        &with(&[("amplitude = 3.0, frequency = 2.0", "amplitude = 3e300, frequency = 2.0")]),
+        "reference.components[0].harmonics[0].amplitude",
+        "expected a magnitude ≤ 1e150, found 3e300; the loop's states scale with it",
+    );
+}
+
+#[test]
 fn negative_frequency() {
     check(
         &with(&[("frequency = 2.0, phase", "frequency = -2.0, phase")]),

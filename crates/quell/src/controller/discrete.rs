@@ -25,10 +25,18 @@ pub enum ControllerError {
     /// A discretized block is not finite at this sample time.
     #[error("simulation.sample_time (--sample-time): {what} is not finite after discretizing at T_s = {sample_time:e} s; the exact discretization overflowed (the design's eigenvalues or gains times T_s are beyond floating point); choose a shorter sample time or poles of smaller magnitude")]
     NotFinite { what: String, sample_time: f64 },
+    /// T_s μ_i is beyond [`MAX_ADAPTATION_STEP`]: the gain c/(1 + c tr Ω) of [`adapt`] would overflow to
+    /// 0 once c·tr Ω overflows, turning adaptation off without a sign.
+    #[error("design.mu[{channel}]: expected T_s μ_i ≤ 1e150 (μ_i ≤ {limit:e} at T_s = {sample_time} s), found μ_i = {mu:e}; the sampled adaptation gain T_s μ_i / (1 + T_s μ_i tr Ω_i) overflows to 0 and adaptation stops — choose a smaller μ_i", limit = MAX_ADAPTATION_STEP / .sample_time)]
+    AdaptationStepTooLarge { channel: usize, mu: f64, sample_time: f64 },
     /// [`Controller::step`] was given y or g of the wrong length.
     #[error("Controller::step: {name} needs {expected} entries (one per channel), found {found}")]
     InputLength { name: &'static str, expected: usize, found: usize },
 }
+
+/// Largest adaptation step c = T_s μ_i: with c and tr Ω_i both ≤ 1e150 (the plant's and signals'
+/// [`crate::plant::MAX_ENTRY`]), c·tr Ω_i ≤ 1e300 stays finite.
+pub const MAX_ADAPTATION_STEP: f64 = 1e150;
 
 /// Longest delay line, in samples (its memory is this many rows of 1 + q numbers per channel).
 pub const MAX_DELAY_SAMPLES: f64 = 1e7;
@@ -210,6 +218,9 @@ impl Controller {
                 finite(Phi.as_slice(), &|| channel("G_ii filter Φ_i"))?;
                 finite(gamma.as_slice(), &|| channel("G_ii filter γ_i"))?;
                 finite(&[T * ch.mu], &|| channel("adaptation step T_s μ_i"))?;
+                if T * ch.mu > MAX_ADAPTATION_STEP {
+                    return Err(ControllerError::AdaptationStepTooLarge { channel: i, mu: ch.mu, sample_time: T });
+                }
                 let len = ch.sigma * (1 + q);
                 Ok(Channel {
                     Phi,

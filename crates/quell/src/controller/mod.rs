@@ -16,7 +16,7 @@
 pub mod discrete;
 pub mod packed;
 
-pub use discrete::{Controller, ControllerError};
+pub use discrete::{Controller, ControllerError, MAX_ADAPTATION_STEP};
 
 use nalgebra::DMatrix;
 

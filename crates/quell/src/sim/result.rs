@@ -170,7 +170,7 @@ impl SimResult {
 
 /// max(a, b), but NaN when either is NaN (`f64::max` returns the other one), so that a NaN in a
 /// run shows in its figures instead of passing for a finite value.
-fn max_or_nan(a: f64, b: f64) -> f64 {
+pub(crate) fn max_or_nan(a: f64, b: f64) -> f64 {
     if a.is_nan() || b.is_nan() {
         f64::NAN
     } else {

@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 use super::{Nominal, Runaway, Settle, Study};
 use crate::run::LoopSettings;
 use crate::scenario::Scenario;
+use crate::sim::result::max_or_nan;
 use crate::sim::{self, Peaks, SimResult, DIVERGENCE_BOUND};
 
 /// SplitMix64's finalizer: a bijection of u64 that scrambles every bit.
@@ -126,9 +127,10 @@ pub struct Row {
 }
 
 /// settle_t of one channel from its samples e(t_k), g(t_k): the first t_k after which
-/// |e| ≤ max(relative · max_k |g(t_k)|, absolute) at every sample.
+/// |e| ≤ max(relative · max_k |g(t_k)|, absolute) at every sample. A NaN in g makes the band NaN,
+/// so the channel never settles (`f64::max` would drop the NaN and judge by the other samples).
 fn settle_time(t: &[f64], e: &[f64], g: &[f64], s: &Settle) -> Option<f64> {
-    let band = (s.relative * g.iter().fold(0.0f64, |a, v| a.max(v.abs()))).max(s.absolute);
+    let band = max_or_nan(s.relative * g.iter().fold(0.0, |a, v| max_or_nan(a, v.abs())), s.absolute);
     match e.iter().rposition(|&v| crate::sim::divergence::beyond(v, band)) {
         None => t.first().copied(),
         Some(k) => t.get(k + 1).copied(),
@@ -329,4 +331,22 @@ pub fn sweep(study: &Study, opts: &SweepOptions<'_>) -> Sweep {
         .collect();
     let partial = rows.len() < opts.shard.len(runs);
     Sweep { rows, partial }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_nan_in_the_reference_means_never_settled() {
+        let s = Settle { relative: 0.02, absolute: 0.0 };
+        let t = [0.0, 1.0, 2.0, 3.0];
+        let e = [1.0, 0.5, 0.01, 0.01];
+        // Band 0.02 · 1 = 0.02: settled from t = 2.
+        assert_eq!(settle_time(&t, &e, &[1.0, 1.0, 1.0, 1.0], &s), Some(2.0));
+        // Was Some(2.0): the NaN sample was dropped by f64::max.
+        assert_eq!(settle_time(&t, &e, &[1.0, f64::NAN, 1.0, 1.0], &s), None);
+        let s = Settle { relative: 0.02, absolute: 0.05 };
+        assert_eq!(settle_time(&t, &e, &[1.0, f64::NAN, 1.0, 1.0], &s), None);
+    }
 }
