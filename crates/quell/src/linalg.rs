@@ -2,6 +2,8 @@
 
 use nalgebra::{Complex, DMatrix};
 
+use crate::plant::{check_shape, PlantError};
+
 /// Coefficients `[a_0, …, a_{q−1}]` of the monic polynomial ∏(s − p_j) = s^q + a_{q−1}s^{q−1} + … + a_0.
 /// The poles must be closed under conjugation (callers check); imaginary round-off is dropped.
 pub fn poly_from_roots(poles: &[Complex<f64>]) -> Vec<f64> {
@@ -180,6 +182,10 @@ pub fn unstable(eigs: &[Complex<f64>], size: f64) -> Vec<Complex<f64>> {
 
 /// Condition number σ_max/σ_min in the 2-norm (∞ for a singular or empty matrix).
 pub fn cond(M: &DMatrix<f64>) -> f64 {
+    if M.is_empty() {
+        // nalgebra's SVD panics on an empty matrix.
+        return f64::INFINITY;
+    }
     let s = M.singular_values();
     let (max, min) = (s.max(), s.min());
     if min > 0.0 && !s.is_empty() {
@@ -223,7 +229,17 @@ pub fn fmt_complex(z: &Complex<f64>) -> String {
 /// Exact zero-order-hold discretization of x' = A x + B v over a sample time T:
 /// x_{k+1} = Φ x_k + Γ v_k with Φ = e^{AT}, Γ = ∫_0^T e^{As} ds B, both read off
 /// exp([[A, B], [0, 0]]·T) (Van Loan's block method).
-pub fn zoh(A: &DMatrix<f64>, B: &DMatrix<f64>, T: f64) -> (DMatrix<f64>, DMatrix<f64>) {
+///
+/// A not square or B without A's rows is [`PlantError::Shape`].
+pub fn zoh(A: &DMatrix<f64>, B: &DMatrix<f64>, T: f64) -> Result<(DMatrix<f64>, DMatrix<f64>), PlantError> {
+    let n = A.nrows();
+    check_shape("A", A, n, n)?;
+    check_shape("B", B, n, B.ncols())?;
+    Ok(zoh_unchecked(A, B, T))
+}
+
+/// [`zoh`] for shapes known to agree (the controller's and the sampled loop's own blocks).
+pub(crate) fn zoh_unchecked(A: &DMatrix<f64>, B: &DMatrix<f64>, T: f64) -> (DMatrix<f64>, DMatrix<f64>) {
     let (n, m) = (A.nrows(), B.ncols());
     let mut M = DMatrix::zeros(n + m, n + m);
     M.view_mut((0, 0), (n, n)).copy_from(&(A * T));
@@ -254,12 +270,14 @@ mod tests {
     fn zoh_of_first_order_lag() {
         // x' = −x/β + v/β held over T: Φ = e^{−T/β}, Γ = 1 − e^{−T/β} (closed form).
         let (beta, T) = (0.7, 0.05);
-        let (P, G) = zoh(&DMatrix::from_element(1, 1, -1.0 / beta), &DMatrix::from_element(1, 1, 1.0 / beta), T);
+        let (P, G) =
+            zoh(&DMatrix::from_element(1, 1, -1.0 / beta), &DMatrix::from_element(1, 1, 1.0 / beta), T).unwrap();
         assert!((P[(0, 0)] - (-T / beta).exp()).abs() < 1e-15);
         assert!((G[(0, 0)] - (1.0 - (-T / beta).exp())).abs() < 1e-15);
         // Double integrator: Φ = [[1, T], [0, 1]], Γ = [T²/2, T] (closed form).
         let (P, G) =
-            zoh(&DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]), &DMatrix::from_row_slice(2, 1, &[0.0, 1.0]), T);
+            zoh(&DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]), &DMatrix::from_row_slice(2, 1, &[0.0, 1.0]), T)
+                .unwrap();
         assert!((&P - DMatrix::from_row_slice(2, 2, &[1.0, T, 0.0, 1.0])).norm() < 1e-15);
         assert!((&G - DMatrix::from_row_slice(2, 1, &[T * T / 2.0, T])).norm() < 1e-15);
     }

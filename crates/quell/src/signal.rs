@@ -172,11 +172,28 @@ impl Signal {
         self.components.is_empty()
     }
 
-    /// Writes the value at `t` into `out` (length [`Signal::len`]); allocates nothing.
-    pub fn eval_into(&self, t: f64, out: &mut [f64]) {
+    /// Writes the value at `t` into `out`; allocates nothing. An `out` that is not
+    /// [`Signal::len`] long is an error naming `out`.
+    pub fn eval_into(&self, t: f64, out: &mut [f64]) -> Result<(), KeyError> {
+        check_out(out, self.len())?;
+        self.eval_into_unchecked(t, out);
+        Ok(())
+    }
+
+    /// [`Signal::eval_into`] for an `out` known to be [`Signal::len`] long (the sampled loop's, every
+    /// sample).
+    pub(crate) fn eval_into_unchecked(&self, t: f64, out: &mut [f64]) {
         for (o, c) in out.iter_mut().zip(&self.components) {
             *o = c.eval(t);
         }
+    }
+}
+
+/// `out` has `len` entries, one per component.
+fn check_out(out: &[f64], len: usize) -> Result<(), KeyError> {
+    match out.len() == len {
+        true => Ok(()),
+        false => Err(KeyError::new("out", format!("expected {len} entries (one per component), found {}", out.len()))),
     }
 }
 
@@ -237,9 +254,17 @@ impl SignalBank {
         self.bias.is_empty()
     }
 
-    /// Writes the concatenated signals at `t` into `out` (length [`SignalBank::len`]); allocates
-    /// nothing.
-    pub fn eval_into(&mut self, t: f64, out: &mut [f64]) {
+    /// Writes the concatenated signals at `t` into `out`; allocates nothing. An `out` that is not
+    /// [`SignalBank::len`] long is an error naming `out`.
+    pub fn eval_into(&mut self, t: f64, out: &mut [f64]) -> Result<(), KeyError> {
+        check_out(out, self.len())?;
+        self.eval_into_unchecked(t, out);
+        Ok(())
+    }
+
+    /// [`SignalBank::eval_into`] for an `out` known to be [`SignalBank::len`] long (the continuous
+    /// loop's, at every stage of the integrator).
+    pub(crate) fn eval_into_unchecked(&mut self, t: f64, out: &mut [f64]) {
         out.copy_from_slice(&self.bias);
         for ((a, f), p) in self.angle.iter_mut().zip(&self.frequency).zip(&self.phase) {
             *a = f * t + p;
@@ -317,10 +342,10 @@ mod tests {
         assert_eq!(bank.len(), 5);
         let (mut out, mut each) = ([0.0; 5], [0.0; 5]);
         for t in [0.0, 0.37, 12.5, 99.9, 1e3] {
-            bank.eval_into(t, &mut out);
-            g.eval_into(t, &mut each[..2]);
-            w.eval_into(t, &mut each[2..4]);
-            x.eval_into(t, &mut each[4..]);
+            bank.eval_into(t, &mut out).unwrap();
+            g.eval_into(t, &mut each[..2]).unwrap();
+            w.eval_into(t, &mut each[2..4]).unwrap();
+            x.eval_into(t, &mut each[4..]).unwrap();
             for (a, b) in out.iter().zip(&each) {
                 assert!((a - b).abs() <= 1e-15 * b.abs().max(1.0), "t = {t}: {out:?} vs {each:?}");
             }

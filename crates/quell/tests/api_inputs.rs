@@ -188,3 +188,64 @@ fn design_and_runs_refuse_inputs_built_in_rust_with_wrong_lengths() {
     let sampled = SampledSettings::new(1.0, 0.15, 0.1);
     assert_eq!(key(simulate_sampled(&d, &s.reference, &s.disturbance, &sampled, |_| go(()))), "simulation.output_step");
 }
+
+#[test]
+fn zoh_cond_and_eigenvector_condition_refuse_wrong_shapes() {
+    use quell::design::place::eigenvector_condition;
+    use quell::linalg::{cond, zoh};
+    let (A, B, _) = chain();
+    // Were panics in nalgebra's copy_from (zoh), SVD (cond of an empty matrix) and an assert.
+    let A32 = A.columns(0, 2).into_owned();
+    assert_eq!(zoh(&A32, &B, 0.1).map(|_| ()), Err(shape("A", (3, 3), (3, 2))));
+    assert_eq!(zoh(&A, &B.rows(0, 2).into_owned(), 0.1).map(|_| ()), Err(shape("B", (3, 1), (2, 1))));
+    // The right shapes: e^{A·0} = I, Γ = 0 at T = 0.
+    let (Phi, Gamma) = zoh(&A, &B, 0.0).unwrap();
+    assert_eq!((Phi, Gamma), (DMatrix::identity(3, 3), DMatrix::zeros(3, 1)));
+    for (r, c) in [(0, 0), (0, 3), (3, 0)] {
+        assert_eq!(cond(&DMatrix::zeros(r, c)), f64::INFINITY, "{r}×{c}");
+    }
+    assert_eq!(cond(&DMatrix::from_row_slice(2, 2, &[4.0, 0.0, 0.0, -0.5])), 8.0);
+    let K = DMatrix::from_row_slice(1, 3, &[1.0, 2.0, 3.0]);
+    assert_eq!(eigenvector_condition(&A32, &B, &K), Err(shape("A", (3, 3), (3, 2))));
+    assert_eq!(eigenvector_condition(&A, &B.rows(0, 2).into_owned(), &K), Err(shape("B", (3, 1), (2, 1))));
+    assert_eq!(eigenvector_condition(&A, &B, &K.columns(0, 2).into_owned()), Err(shape("K", (1, 3), (1, 2))));
+    // A − BK is a companion matrix with distinct eigenvalues: a finite κ ≥ 1.
+    let kappa = eigenvector_condition(&A, &B, &K).unwrap();
+    assert!(kappa.is_finite() && kappa >= 1.0, "{kappa}");
+}
+
+#[test]
+fn signals_and_the_continuous_loop_refuse_wrong_lengths() {
+    use quell::signal::SignalBank;
+    use quell::sim::ContinuousLoop;
+    let s = quell::Scenario::from_toml(quell::scenario::PAPER_EXAMPLE).unwrap();
+    let d = s.design().unwrap();
+    // Signal::eval_into wrote min(len, out.len()) entries without a word; SignalBank's panicked.
+    let mut short = [0.0; 1];
+    let e = s.reference.eval_into(0.5, &mut short).unwrap_err();
+    assert_eq!((e.key.as_str(), e.message.as_str()), ("out", "expected 2 entries (one per component), found 1"));
+    assert!(s.reference.eval_into(0.5, &mut [0.0; 3]).is_err());
+    let mut g = [0.0; 2];
+    s.reference.eval_into(0.5, &mut g).unwrap();
+    assert_eq!(g, [3.0 * 1f64.sin(), 2.0]);
+    let mut bank = SignalBank::new(&[&s.reference, &s.disturbance]);
+    let e = bank.eval_into(0.5, &mut [0.0; 3]).unwrap_err();
+    assert_eq!((e.key.as_str(), e.message.as_str()), ("out", "expected 4 entries (one per component), found 3"));
+    let mut gw = [0.0; 4];
+    bank.eval_into(0.5, &mut gw).unwrap();
+    assert_eq!(gw, [3.0 * 1f64.sin(), 2.0, 0.5f64.sin(), 1.0 + 2.0 * 1f64.sin()]);
+    // ContinuousLoop: signals without m = 2 and k = 2 components panicked in its right-hand side,
+    // and a short x0 in initial_state.
+    let mut one = s.reference.clone();
+    one.components.pop();
+    let e = ContinuousLoop::new(&d, &one, &s.disturbance).map(|_| ()).unwrap_err();
+    assert_eq!(e.key, "reference.components");
+    let e = ContinuousLoop::new(&d, &s.reference, &one).map(|_| ()).unwrap_err();
+    assert_eq!(e.key, "disturbance.components");
+    let sys = ContinuousLoop::new(&d, &s.reference, &s.disturbance).unwrap();
+    let e = sys.initial_state(&quell::nalgebra::DVector::zeros(2)).unwrap_err();
+    assert_eq!(e, PlantError::Length { name: "x0", per: "state", expected: 3, found: 2 });
+    let x0 = quell::nalgebra::DVector::from_vec(vec![1.0, 2.0, 3.0]);
+    let s0 = sys.initial_state(&x0).unwrap();
+    assert_eq!(s0.iter().filter(|&&v| v != 0.0).copied().collect::<Vec<_>>(), [1.0, 2.0, 3.0]);
+}

@@ -481,7 +481,7 @@ fn eigenvector_condition_closed_forms() {
     let A = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]);
     let B = DMatrix::from_row_slice(2, 1, &[0.0, 1.0]);
     let K = DMatrix::from_row_slice(1, 2, &[2.0, 3.0]);
-    let kappa = eigenvector_condition(&A, &B, &K);
+    let kappa = eigenvector_condition(&A, &B, &K).unwrap();
     assert!((kappa - (10f64.sqrt() + 3.0)).abs() <= 1e-10, "κ = {kappa}");
     // A normal closed loop (symmetric A, K = 0): orthonormal eigenvectors, κ = 1; also with a
     // repeated eigenvalue (A = diag(−1, −1, −2): semisimple, κ = 1, not ∞).
@@ -489,13 +489,13 @@ fn eigenvector_condition_closed_forms() {
     let S = rng.matrix(4, 4);
     let S = &S + S.transpose();
     let Z = DMatrix::zeros(4, 4);
-    assert!((eigenvector_condition(&S, &Z, &Z) - 1.0).abs() <= 1e-10);
+    assert!((eigenvector_condition(&S, &Z, &Z).unwrap() - 1.0).abs() <= 1e-10);
     let D = DMatrix::from_diagonal(&quell::nalgebra::DVector::from_vec(vec![-1.0, -1.0, -2.0]));
     let Z = DMatrix::zeros(3, 3);
-    assert!((eigenvector_condition(&D, &Z, &Z) - 1.0).abs() <= 1e-10);
+    assert!((eigenvector_condition(&D, &Z, &Z).unwrap() - 1.0).abs() <= 1e-10);
     // A Jordan block: defective, κ = ∞. Double integrator with poles −2, −2 (K = [4, 4]).
     let K = DMatrix::from_row_slice(1, 2, &[4.0, 4.0]);
-    assert_eq!(eigenvector_condition(&A, &B, &K), f64::INFINITY);
+    assert_eq!(eigenvector_condition(&A, &B, &K).unwrap(), f64::INFINITY);
 }
 
 /// For placed gains: a KNV0 design with a semisimple triple pole is finite and moderate; the
@@ -507,15 +507,15 @@ fn eigenvector_condition_of_placed_gains() {
         let mut rng = Rng::new(400 + seed);
         let (A, B) = (rng.matrix(6, 6), rng.matrix(6, 3));
         let K = place(&A, &B, &reals(&[-1.0, -1.0, -1.0, -2.0, -2.0, -5.0])).unwrap();
-        let kappa = eigenvector_condition(&A, &B, &K);
+        let kappa = eigenvector_condition(&A, &B, &K).unwrap();
         assert!((1.0..1e6).contains(&kappa), "seed {seed}: κ = {kappa}");
         let K = place(&A, &B, &reals(&[-1.0; 6])).unwrap();
-        assert_eq!(eigenvector_condition(&A, &B, &K), f64::INFINITY, "seed {seed}");
+        assert_eq!(eigenvector_condition(&A, &B, &K).unwrap(), f64::INFINITY, "seed {seed}");
         let (A, b) = (rng.matrix(4, 4), rng.matrix(4, 1));
         let poles = reals(&[-1.0, -2.0, -3.0, -4.0]);
         let K = place(&A, &b, &poles).unwrap();
         let want = eigenvector_condition_at(&closed_loop(&A, &b, &K), &poles);
-        let got = eigenvector_condition(&A, &b, &K);
+        let got = eigenvector_condition(&A, &b, &K).unwrap();
         assert!((got - want).abs() <= 1e-6 * want, "seed {seed}: κ = {got}, by singular vectors {want}");
     }
 }

@@ -103,8 +103,8 @@ fn paper_example_parses_into_the_papers_numbers() {
     // g(t) = [3 sin 2t, 2], ω(t) = [sin t, 1 + 2 sin 2t].
     for t in [0.0, 0.3, 1.7, 42.0] {
         let (mut g, mut w) = ([0.0; 2], [0.0; 2]);
-        s.reference.eval_into(t, &mut g);
-        s.disturbance.eval_into(t, &mut w);
+        s.reference.eval_into(t, &mut g).unwrap();
+        s.disturbance.eval_into(t, &mut w).unwrap();
         assert_eq!(g, [3.0 * (2.0 * t).sin(), 2.0]);
         assert_eq!(w, [t.sin(), 1.0 + 2.0 * (2.0 * t).sin()]);
     }

@@ -9,7 +9,7 @@ use thiserror::Error;
 use super::packed;
 use super::{command, mat_vec, swapping_error, Equations};
 use crate::design::Design;
-use crate::linalg::zoh;
+use crate::linalg::zoh_unchecked;
 
 /// Why a controller cannot run at the requested sample time.
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -196,7 +196,7 @@ impl Controller {
         let d = samples(&design.plant().delays, T)?;
         let eq = Equations::new(design);
         let (m, q, nz) = (eq.m, eq.q, eq.nz);
-        let (Phi_z, Gamma_z) = zoh(&eq.A_z, &eq.B_z, T);
+        let (Phi_z, Gamma_z) = zoh_unchecked(&eq.A_z, &eq.B_z, T);
         let mut PhiGamma_z = DMatrix::zeros(nz, nz + 3 * m);
         PhiGamma_z.view_mut((0, 0), (nz, nz)).copy_from(&Phi_z);
         PhiGamma_z.view_mut((0, nz), (nz, 3 * m)).copy_from(&Gamma_z);
@@ -213,7 +213,7 @@ impl Controller {
             .map(|(i, (ch, &d))| {
                 let mut e = DMatrix::zeros(ch.sigma, 1);
                 e[(ch.sigma - 1, 0)] = 1.0;
-                let (Phi, gamma) = zoh(&ch.A, &e, T);
+                let (Phi, gamma) = zoh_unchecked(&ch.A, &e, T);
                 let channel = |what: &str| format!("channel {}'s {what}", i + 1);
                 finite(Phi.as_slice(), &|| channel("G_ii filter Φ_i"))?;
                 finite(gamma.as_slice(), &|| channel("G_ii filter γ_i"))?;

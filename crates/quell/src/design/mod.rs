@@ -345,11 +345,11 @@ impl Design {
     /// how much a perturbation of the model moves the observer poles; ∞ for a Jordan design.
     pub fn observer_eigenvector_condition(&self) -> f64 {
         let p = &self.plant;
-        place::eigenvector_condition(&p.A.transpose(), &p.C.transpose(), &self.L.transpose())
+        place::closed_loop_condition(&p.A.transpose(), &p.C.transpose(), &self.L.transpose())
     }
     /// κ₂ of the eigenvector matrix of A − BK = A_f; ∞ for a Jordan design.
     pub fn decoupled_eigenvector_condition(&self) -> f64 {
-        place::eigenvector_condition(&self.plant.A, &self.plant.B, &self.K)
+        place::closed_loop_condition(&self.plant.A, &self.plant.B, &self.K)
     }
     /// Dimension q_g of the reference regressor ξ̂_g.
     pub fn q_g(&self) -> usize {

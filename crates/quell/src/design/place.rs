@@ -784,13 +784,18 @@ fn hessenberg_char_poly(M: &DMatrix<f64>) -> Vec<f64> {
 /// declared defective (result ∞) when the largest of those k singular values exceeds
 /// √ε·‖M‖_F, i.e. when μ has fewer than k independent eigenvectors to half the working precision.
 ///
-/// Panics if the shapes do not agree (A n×n, B n×m, K m×n).
-pub fn eigenvector_condition(A: &DMatrix<f64>, B: &DMatrix<f64>, K: &DMatrix<f64>) -> f64 {
+/// Shapes that do not agree (A n×n, B n×m, K m×n) are [`PlantError::Shape`], naming the first.
+pub fn eigenvector_condition(A: &DMatrix<f64>, B: &DMatrix<f64>, K: &DMatrix<f64>) -> Result<f64, PlantError> {
+    let (n, m) = (A.nrows(), B.ncols());
+    check_shape("A", A, n, n)?;
+    check_shape("B", B, n, m)?;
+    check_shape("K", K, m, n)?;
+    Ok(closed_loop_condition(A, B, K))
+}
+
+/// [`eigenvector_condition`] for shapes known to agree (a [`crate::Design`]'s).
+pub(crate) fn closed_loop_condition(A: &DMatrix<f64>, B: &DMatrix<f64>, K: &DMatrix<f64>) -> f64 {
     let n = A.nrows();
-    assert!(
-        A.ncols() == n && B.nrows() == n && K.nrows() == B.ncols() && K.ncols() == n,
-        "eigenvector_condition: shapes"
-    );
     if n == 0 {
         return 1.0;
     }

@@ -11,7 +11,8 @@ use super::result::{Outcome, RunStats, SimResult};
 use super::{check_run, SimError};
 use crate::controller::{command, mat_vec, packed, swapping_error, Equations};
 use crate::design::Design;
-use crate::plant::Plant;
+use crate::plant::{Plant, PlantError};
+use crate::settings::KeyError;
 use crate::signal::{Signal, SignalBank};
 
 /// Offsets of the loop's state vector [z = (ξ̂, x̂), η̂_1, …, η̂_m, x, filters]. The delayed terms
@@ -89,13 +90,21 @@ pub struct ContinuousLoop<'a> {
 
 impl<'a> ContinuousLoop<'a> {
     /// The loop for a design and the true reference and disturbance signals.
-    pub fn new(design: &'a Design, reference: &'a Signal, disturbance: &'a Signal) -> Self {
+    pub fn new(design: &'a Design, reference: &'a Signal, disturbance: &'a Signal) -> Result<Self, KeyError> {
         ContinuousLoop::with_truth(design, design.plant(), reference, disturbance)
     }
 
-    /// The loop whose simulated plant is `truth` (with the design plant's dimensions, which
-    /// [`simulate_with_truth`] checks); observers, filters and gains keep the design model.
-    pub fn with_truth(design: &'a Design, truth: &'a Plant, reference: &'a Signal, disturbance: &'a Signal) -> Self {
+    /// The loop whose simulated plant is `truth`; observers, filters and gains keep the design
+    /// model. A truth without the design plant's dimensions, or signals without its m reference
+    /// and k disturbance components, is an error naming the key.
+    pub fn with_truth(
+        design: &'a Design,
+        truth: &'a Plant,
+        reference: &'a Signal,
+        disturbance: &'a Signal,
+    ) -> Result<Self, KeyError> {
+        super::check_truth(design, truth)?;
+        crate::signal::check_signals(design.plant(), reference, disturbance)?;
         let eq = Equations::new(design);
         let layout = Layout::new(&eq);
         let p = design.plant();
@@ -104,7 +113,7 @@ impl<'a> ContinuousLoop<'a> {
         delays.sort_by(f64::total_cmp);
         delays.dedup();
         let (m, q, k) = (eq.m, eq.q, p.k());
-        ContinuousLoop {
+        Ok(ContinuousLoop {
             linear: LinearPart::new(design, truth, &eq, &layout, !true_delays.is_empty()),
             C: &truth.C,
             Q: &truth.Q,
@@ -119,14 +128,19 @@ impl<'a> ContinuousLoop<'a> {
             tmp: vec![0.0; q],
             layout,
             eq,
-        }
+        })
     }
 
-    /// Initial state: x(0) = x0, every controller state 0 (notes, "Initial conditions").
-    pub fn initial_state(&self, x0: &DVector<f64>) -> Vec<f64> {
+    /// Initial state: x(0) = x0, every controller state 0 (notes, "Initial conditions"). An x0 that
+    /// is not n long is [`PlantError::Length`].
+    pub fn initial_state(&self, x0: &DVector<f64>) -> Result<Vec<f64>, PlantError> {
+        let n = self.eq.n;
+        if x0.len() != n {
+            return Err(PlantError::Length { name: "x0", per: "state", expected: n, found: x0.len() });
+        }
         let mut s = vec![0.0; self.layout.dim];
-        s[self.layout.x..self.layout.x + self.eq.n].copy_from_slice(x0.as_slice());
-        s
+        s[self.layout.x..self.layout.x + n].copy_from_slice(x0.as_slice());
+        Ok(s)
     }
 
     /// What the output callback needs, apart from the solver's borrow of the loop.
@@ -157,7 +171,7 @@ impl Probe<'_> {
     /// Outputs at time t: y, g and the undelayed commands u (25) and η̂ (a view of the state).
     fn outputs<'s>(&mut self, t: f64, s: &'s [f64], y: &mut [f64], g: &mut [f64], u: &mut [f64]) -> &'s [f64] {
         let l = &self.layout;
-        self.signals.eval_into(t, &mut self.gw);
+        self.signals.eval_into_unchecked(t, &mut self.gw);
         let (g_t, w) = self.gw.split_at(g.len());
         g.copy_from_slice(g_t);
         mat_vec(self.C, &s[l.x..l.x + self.eq.n], y, false);
@@ -204,7 +218,7 @@ impl DelaySystem for ContinuousLoop<'_> {
         let (m, q) = (eq.m, eq.q);
         // e = [g; ω; u_d].
         let (gw, u_d) = self.e.split_at_mut(self.signals.len());
-        self.signals.eval_into(t, gw);
+        self.signals.eval_into_unchecked(t, gw);
 
         // Delayed command u_i(t − τ_i) = −η̂_iᵀ(t − τ_i) ξ̂(t − τ_i). The row [u_i(t − τ_i), ξ̂ᵀ(t − τ_i)],
         // the input of channel i's filter bank, goes straight into the last row of W_i' (see below).
@@ -442,8 +456,9 @@ pub fn simulate_with_truth(
     super::check_truth(design, truth)?;
     crate::settings::check_integrator_delays("plant.delays", &design.plant().delays, t_end)?;
     crate::settings::check_integrator_delays("truth.delays", &truth.delays, t_end)?;
-    let mut sys = ContinuousLoop::with_truth(design, truth, reference, disturbance);
-    let s0 = sys.initial_state(&truth.x0);
+    let mut sys = ContinuousLoop::with_truth(design, truth, reference, disturbance)?;
+    // check_truth has checked x0's length.
+    let s0 = sys.initial_state(&truth.x0).map_err(|e| KeyError::new("truth.x0", e.to_string()))?;
     let history = vec![0.0; sys.n_delayed()];
     let (m, q) = (sys.eq.m, sys.eq.q);
     let mut result = SimResult::new(m, q, RunStats::continuous(&dde::Stats::default()));

@@ -14,7 +14,7 @@ use super::result::{Outcome, RunStats, SimResult};
 use super::{check_run, SimError};
 use crate::controller::{mat_vec, Controller, ControllerError};
 use crate::design::Design;
-use crate::linalg::zoh;
+use crate::linalg::zoh_unchecked;
 use crate::plant::Plant;
 use crate::settings::{self, KeyError, MeasurementNoise};
 use crate::signal::Signal;
@@ -226,7 +226,7 @@ fn sampled_loop(
     M.view_mut((n, n), (nw, nw)).copy_from(&S);
     let mut Bu = DMatrix::zeros(n + nw, m);
     Bu.view_mut((0, 0), (n, m)).copy_from(&p.B);
-    let (Phi, Gamma) = zoh(&M, &Bu, T);
+    let (Phi, Gamma) = zoh_unchecked(&M, &Bu, T);
     // y = [C, Q H] [x; w].
     let mut Cy = DMatrix::zeros(m, n + nw);
     Cy.view_mut((0, 0), (m, n)).copy_from(&p.C);
@@ -246,7 +246,7 @@ fn sampled_loop(
     for k in 0..=steps {
         let t = k as f64 * T;
         mat_vec(&Cy, s.as_slice(), &mut y, false);
-        reference.eval_into(t, &mut g);
+        reference.eval_into_unchecked(t, &mut g);
         y_meas.copy_from_slice(&y);
         if let Some((rng, std)) = noise.as_mut() {
             for (v, sd) in y_meas.iter_mut().zip(std.iter()) {
