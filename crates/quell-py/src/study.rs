@@ -216,11 +216,9 @@ impl PyRunSpecs {
         slf
     }
     fn __next__(&mut self) -> Option<PyRunSpec> {
-        if (self.next as u64) >= self.study.len() {
-            return None;
-        }
+        let inner = self.study.spec(self.next)?;
         self.next += 1;
-        Some(PyRunSpec { inner: self.study.spec(self.next - 1) })
+        Some(PyRunSpec { inner })
     }
     fn __len__(&self) -> usize {
         usize::try_from(self.study.len()).unwrap_or(usize::MAX).saturating_sub(self.next)

@@ -249,3 +249,60 @@ fn signals_and_the_continuous_loop_refuse_wrong_lengths() {
     let s0 = sys.initial_state(&x0).unwrap();
     assert_eq!(s0.iter().filter(|&&v| v != 0.0).copied().collect::<Vec<_>>(), [1.0, 2.0, 3.0]);
 }
+
+#[test]
+fn the_dde_solver_refuses_inconsistent_arguments() {
+    use quell::sim::dde::{solve, DelaySystem, Options, Past, SolveError};
+    use std::ops::ControlFlow;
+    /// y' = −y(t − τ), one state, delayed.
+    struct Lag(Vec<f64>);
+    impl DelaySystem for Lag {
+        fn dim(&self) -> usize {
+            1
+        }
+        fn n_delayed(&self) -> usize {
+            1
+        }
+        fn delays(&self) -> &[f64] {
+            &self.0
+        }
+        fn rhs(&mut self, t: f64, _: &[f64], past: &Past<'_>, dy: &mut [f64]) {
+            past.eval_into(t - self.0[0], 0, dy);
+            dy[0] = -dy[0];
+        }
+    }
+    let go = |_: f64, _: &[f64]| ControlFlow::Continue(());
+    let opts = Options::default();
+    let input = |r: Result<_, SolveError>| match r {
+        Err(SolveError::Input { argument, found, .. }) => (argument, found),
+        other => panic!("{other:?}"),
+    };
+    // Each was an assert.
+    assert_eq!(input(solve(&mut Lag(vec![1.0]), 0.0, &[1.0, 2.0], &[1.0], 1.0, 0.5, &opts, go)), ("y0", "2".into()));
+    assert_eq!(input(solve(&mut Lag(vec![1.0]), 0.0, &[1.0], &[], 1.0, 0.5, &opts, go)), ("history", "0".into()));
+    assert_eq!(
+        input(solve(&mut Lag(vec![1.0]), 0.0, &[1.0], &[1.0], f64::NAN, 0.5, &opts, go)),
+        ("t_end", "NaN".into())
+    );
+    assert_eq!(input(solve(&mut Lag(vec![-1.0]), 0.0, &[1.0], &[1.0], 1.0, 0.5, &opts, go)), ("delays()", "-1".into()));
+    let e = solve(&mut Lag(vec![1.0]), 0.0, &[1.0, 2.0], &[1.0], 1.0, 0.5, &opts, go).unwrap_err();
+    assert_eq!(e.to_string(), "dde::solve: y0: expected 1 entries (the system's dim()), found 2");
+    // The right arguments: on [0, 1] with history 1, y(t) = 1 − t exactly (the method's order ≥ 1).
+    let mut last = 0.0;
+    solve(&mut Lag(vec![1.0]), 0.0, &[1.0], &[1.0], 1.0, 0.5, &opts, |_, y| {
+        last = y[0];
+        ControlFlow::Continue(())
+    })
+    .unwrap();
+    assert!(last.abs() < 1e-12, "{last}");
+}
+
+#[test]
+fn a_study_run_index_beyond_the_study_is_none() {
+    // Was an assert.
+    let study = quell::study::Study::from_toml("[grid]\n\"design.mu[0]\" = [10.0, 40.0]\n", None).unwrap();
+    assert_eq!(study.len(), 2);
+    assert_eq!(study.spec(1).map(|s| s.run), Some(1));
+    assert!(study.spec(2).is_none() && study.spec(usize::MAX).is_none());
+    assert_eq!(study.specs().count(), 2);
+}

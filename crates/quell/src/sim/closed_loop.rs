@@ -493,6 +493,8 @@ pub fn simulate_with_truth(
             result.stats = RunStats::continuous(&stats);
             outcome = Outcome::StepSizeTooSmall { t };
         }
+        // The loop's own state, history and delays (positive: zero delays are filtered out).
+        Err(e @ dde::SolveError::Input { .. }) => return Err(KeyError::new("simulation", e.to_string()).into()),
     }
     result.outcome = Some(outcome);
     Ok(result)

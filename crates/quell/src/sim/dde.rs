@@ -146,6 +146,10 @@ pub enum SolveError {
     /// More than [`Options::max_steps`] accepted steps were needed by time `t`.
     #[error("more than {} steps by t = {t}", .stats.steps - 1)]
     TooManySteps { t: f64, stats: Stats },
+    /// An argument of [`solve`] (or the system's [`DelaySystem::delays`]) of the wrong length or
+    /// value; nothing was integrated.
+    #[error("dde::solve: {argument}: expected {expected}, found {found}")]
+    Input { argument: &'static str, expected: String, found: String },
 }
 
 /// Constant context of a run, shared by all RHS evaluations.
@@ -238,8 +242,8 @@ fn h_min(t: f64) -> f64 {
 /// [`SolveError::StepSizeTooSmall`] when the step shrinks below ~1e-14·max(1, |t|), e.g. at a
 /// finite-time blow-up or when the right-hand side keeps producing non-finite values.
 ///
-/// # Panics
-/// On inconsistent dimensions, or on a delay that is not positive and finite.
+/// Inconsistent dimensions, a non-finite t0 or t_end, or a delay that is not positive and finite
+/// are [`SolveError::Input`].
 #[allow(clippy::too_many_arguments)]
 pub fn solve<S: DelaySystem>(
     sys: &mut S,
@@ -253,12 +257,25 @@ pub fn solve<S: DelaySystem>(
 ) -> Result<Stats, SolveError> {
     let n = sys.dim();
     let nd = sys.n_delayed();
-    assert_eq!(y0.len(), n, "y0 has length {}, the system dimension is {n}", y0.len());
-    assert!(t0.is_finite() && t_end.is_finite(), "t0 and t_end must be finite");
-    assert!(nd <= n, "n_delayed = {nd} exceeds the dimension {n}");
-    assert_eq!(history.len(), nd, "history must have length n_delayed = {nd}");
+    let input = |argument, expected: String, found: String| Err(SolveError::Input { argument, expected, found });
+    if y0.len() != n {
+        return input("y0", format!("{n} entries (the system's dim())"), y0.len().to_string());
+    }
+    for (argument, t) in [("t0", t0), ("t_end", t_end)] {
+        if !t.is_finite() {
+            return input(argument, "a finite time".into(), t.to_string());
+        }
+    }
+    if nd > n {
+        return input("n_delayed()", format!("at most dim() = {n}"), nd.to_string());
+    }
+    if history.len() != nd {
+        return input("history", format!("{nd} entries (the system's n_delayed())"), history.len().to_string());
+    }
     let delays: Vec<f64> = sys.delays().to_vec();
-    assert!(delays.iter().all(|&d| d > 0.0 && d.is_finite()), "delays must be positive and finite: {delays:?}");
+    if let Some(d) = delays.iter().find(|&&d| !(d > 0.0 && d.is_finite())) {
+        return input("delays()", "positive, finite delays".into(), d.to_string());
+    }
     let tau_min = delays.iter().copied().fold(f64::INFINITY, f64::min);
 
     if on_output(t0, &y0[..sys.n_output().min(n)]).is_break() || t_end <= t0 {

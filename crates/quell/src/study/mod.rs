@@ -481,15 +481,17 @@ impl Study {
         doc
     }
 
-    /// Run `index`'s specification (panics if `index ≥ self.len()`: a programming error). The
+    /// Run `index`'s specification, or `None` if `index ≥ self.len()` (as `slice::get`). The
     /// first of a grid point's specifications carries out its nominal run ([`Study::nominal`]).
-    pub fn spec(&self, index: usize) -> RunSpec {
-        assert!((index as u64) < self.len(), "run {index} of a study of {} runs", self.len());
+    pub fn spec(&self, index: usize) -> Option<RunSpec> {
+        if index as u64 >= self.len() {
+            return None;
+        }
         let draws = self.draws();
         let (point, draw) = (index / draws, index % draws);
         let seed = self.monte_carlo.as_ref().map(|mc| run_seed(mc.seed, draw));
         let grid_index = self.grid_index(point);
-        RunSpec {
+        Some(RunSpec {
             run: index,
             point,
             draw,
@@ -500,7 +502,7 @@ impl Study {
             max_steps: self.max_steps,
             runaway: self.runaway,
             nominal: self.nominal(point),
-        }
+        })
     }
 
     /// The nominal run of grid point `point` (its scenario without draws), carried out once, when
@@ -520,7 +522,7 @@ impl Study {
 
     /// Every run's specification, in index order (what `quell.sweep_runs` yields).
     pub fn specs(&self) -> impl Iterator<Item = RunSpec> + '_ {
-        (0..self.len() as usize).map(|i| self.spec(i))
+        (0..self.len() as usize).map_while(|i| self.spec(i))
     }
 
     /// Whether some run's true plant differs from the design model: the scenario's `[truth]`

@@ -25,7 +25,7 @@ fn grid_is_a_product_with_the_first_axis_slowest() {
     assert_eq!(s.points(), 6);
     let idx: Vec<Vec<usize>> = (0..6).map(|p| s.grid_index(p)).collect();
     assert_eq!(idx, [[0, 0], [0, 1], [1, 0], [1, 1], [2, 0], [2, 1]]);
-    let spec = s.spec(3);
+    let spec = s.spec(3).unwrap();
     assert_eq!(spec.scenario["design"]["mu"][0].as_float(), Some(10.0));
     assert_eq!(spec.scenario["design"]["beta"].as_float(), Some(2.0));
     assert_eq!(spec.scenario["design"]["mu"][1].as_float(), Some(30.0));
@@ -36,8 +36,8 @@ fn whole_vectors_and_matrices_are_grid_keys() {
     let s = study("[grid]\n\"design.mu\" = [[20, 30], [25, 25]]\n\"plant.x0\" = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]]\n")
         .unwrap();
     assert_eq!(s.points(), 4);
-    assert_eq!(s.spec(3).scenario["plant"]["x0"][0].as_float(), Some(0.1));
-    assert_eq!(s.spec(3).grid[0].1.to_string(), "[25, 25]");
+    assert_eq!(s.spec(3).unwrap().scenario["plant"]["x0"][0].as_float(), Some(0.1));
+    assert_eq!(s.spec(3).unwrap().grid[0].1.to_string(), "[25, 25]");
 }
 
 #[test]
@@ -95,7 +95,7 @@ fn study_mistakes_name_their_key() {
 fn truth_defaults_to_the_plant_and_a_draw_on_it_differs() {
     let s = study("[monte_carlo]\nruns = 2\n\"plant.delays\" = { uniform = 0.0 }\n").unwrap();
     assert!(!s.truth_differs());
-    assert_eq!(s.spec(1).scenario["plant"]["delays"][1].as_float(), Some(3.0));
+    assert_eq!(s.spec(1).unwrap().scenario["plant"]["delays"][1].as_float(), Some(3.0));
 }
 
 /// Draw d's seed depends on the study seed and d only: the same at every grid point, and the
@@ -104,7 +104,7 @@ fn truth_defaults_to_the_plant_and_a_draw_on_it_differs() {
 fn seeds_come_from_the_study_seed_and_the_draw() {
     let s = study("[grid]\n\"design.mu[0]\" = [5.0, 10.0]\n[monte_carlo]\nruns = 3\nseed = 7\n\"design.beta\" = { relative = 0.1 }\n").unwrap();
     assert_eq!(s.len(), 6);
-    let later = s.spec(5);
+    let later = s.spec(5).unwrap();
     let specs: Vec<RunSpec> = s.specs().collect();
     assert_eq!(specs[5], later);
     for d in 0..3 {
@@ -123,7 +123,7 @@ fn draws_follow_their_laws() {
     let n = 4000;
     let moments = |law: &str| {
         let s = study(&format!("[monte_carlo]\nruns = {n}\nseed = 3\n\"design.beta\" = {law}\n")).unwrap();
-        let xs: Vec<f64> = (0..n).map(|i| s.spec(i).scenario["design"]["beta"].as_float().unwrap()).collect();
+        let xs: Vec<f64> = (0..n).map(|i| s.spec(i).unwrap().scenario["design"]["beta"].as_float().unwrap()).collect();
         let mean = xs.iter().sum::<f64>() / n as f64;
         let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
         (mean, var, xs)
@@ -146,7 +146,7 @@ fn draws_follow_their_laws() {
 #[test]
 fn a_relative_draw_perturbs_every_entry() {
     let s = study("[monte_carlo]\nruns = 1\n\"plant.A\" = { relative = 0.05 }\n").unwrap();
-    let a = &s.spec(0).scenario["plant"]["A"];
+    let a = &s.spec(0).unwrap().scenario["plant"]["A"];
     let nominal = [[-3.2, -1.7, -3.0], [2.8, 1.3, 4.0], [0.3, 0.3, -0.5]];
     for (r, row) in nominal.iter().enumerate() {
         for (c, &x) in row.iter().enumerate() {
