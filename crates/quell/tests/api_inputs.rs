@@ -306,3 +306,20 @@ fn a_study_run_index_beyond_the_study_is_none() {
     assert!(study.spec(2).is_none() && study.spec(usize::MAX).is_none());
     assert_eq!(study.specs().count(), 2);
 }
+
+#[test]
+fn the_adaptive_step_refuses_buffers_of_the_wrong_length() {
+    use quell::controller::discrete::adapt;
+    use quell::ControllerError;
+    let (mut omega, mut eta, mut tmp) = (vec![0.0; 4], vec![0.0; 2], vec![0.0; 2]);
+    // Was an assert.
+    let e = adapt(0.1, &mut omega[..3], (0.5, 0.5), &[1.0, 0.0], &[1.0, 0.0], &mut eta, &mut tmp).unwrap_err();
+    assert_eq!(e, ControllerError::Length { function: "adapt", name: "Omega", expected: 4, found: 3 });
+    assert_eq!(e.to_string(), "adapt: Omega needs 4 entries, found 3");
+    let e = adapt(0.1, &mut omega, (0.5, 0.5), &[1.0], &[1.0, 0.0], &mut eta, &mut tmp).unwrap_err();
+    assert_eq!(e, ControllerError::Length { function: "adapt", name: "Delta", expected: 2, found: 1 });
+    // The right lengths: Ω = 0.5·ΔΔᵀ = diag(0.5, 0), tr Ω = 0.5; η̂ += c·Y/(1 + c·0.5) (η̂ was 0).
+    adapt(0.1, &mut omega, (0.5, 0.5), &[1.0, 0.0], &[1.0, 0.0], &mut eta, &mut tmp).unwrap();
+    assert_eq!(omega, [0.5, 0.0, 0.0, 0.0]);
+    assert_eq!(eta, [0.1 / 1.05, 0.0]);
+}

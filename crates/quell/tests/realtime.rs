@@ -197,7 +197,7 @@ fn adaptive_step_is_nonexpansive_for_any_gain() {
         let mut eta: Vec<f64> = (0..q).map(|_| rng.uniform(-1.0, 1.0)).collect();
         let before: f64 = eta.iter().map(|v| v * v).sum::<f64>().sqrt();
         let mut tmp = vec![0.0; q];
-        adapt(c, &mut omega, (1.0, 0.0), &vec![0.0; q], &vec![0.0; q], &mut eta, &mut tmp);
+        adapt(c, &mut omega, (1.0, 0.0), &vec![0.0; q], &vec![0.0; q], &mut eta, &mut tmp).unwrap();
         let after: f64 = eta.iter().map(|v| v * v).sum::<f64>().sqrt();
         assert!(after <= before * (1.0 + 1e-12), "grew from {before} to {after} (c = {c})");
     }
@@ -216,7 +216,7 @@ fn adaptive_step_keeps_omega_exactly_symmetric_and_sums_in_order() {
             let Delta: Vec<f64> = (0..q).map(|_| rng.uniform(-3.0, 3.0)).collect();
             let Y: Vec<f64> = (0..q).map(|_| rng.uniform(-1.0, 1.0)).collect();
             let eta_before = eta.clone();
-            adapt(0.7, &mut omega, (a, 1.0 - a), &Delta, &Y, &mut eta, &mut tmp);
+            adapt(0.7, &mut omega, (a, 1.0 - a), &Delta, &Y, &mut eta, &mut tmp).unwrap();
             for i in 0..q {
                 for j in 0..i {
                     assert_eq!(omega[i * q + j].to_bits(), omega[j * q + i].to_bits(), "q {q}: Ω[{i}][{j}]");
@@ -237,7 +237,7 @@ fn adaptive_step_converges_to_the_least_squares_fixed_point() {
     let want = Om.try_inverse().unwrap() * quell::nalgebra::DVector::from_row_slice(&Y);
     let (mut eta, mut tmp) = (vec![0.0; 2], vec![0.0; 2]);
     for _ in 0..2000 {
-        adapt(0.1, &mut omega, (1.0, 0.0), &[0.0; 2], &Y, &mut eta, &mut tmp);
+        adapt(0.1, &mut omega, (1.0, 0.0), &[0.0; 2], &Y, &mut eta, &mut tmp).unwrap();
     }
     assert!((eta[0] - want[0]).abs() < 1e-12 && (eta[1] - want[1]).abs() < 1e-12, "{eta:?} vs {want}");
 }
@@ -346,7 +346,7 @@ fn adaptive_step_applies_the_h_filter_to_omega_first() {
     // with c = 0 the parameters do not move.
     let mut omega = [1.0, 0.0, 0.0, 1.0];
     let (mut eta, mut tmp) = ([0.3, -0.7], [0.0; 2]);
-    adapt(0.0, &mut omega, (0.5, 0.25), &[1.0, 2.0], &[1.0, 1.0], &mut eta, &mut tmp);
+    adapt(0.0, &mut omega, (0.5, 0.25), &[1.0, 2.0], &[1.0, 1.0], &mut eta, &mut tmp).unwrap();
     assert_eq!(omega, [0.75, 0.5, 0.5, 1.5]);
     assert_eq!(eta, [0.3, -0.7]);
 }

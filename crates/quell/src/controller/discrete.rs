@@ -5,8 +5,6 @@
 use nalgebra::DMatrix;
 use thiserror::Error;
 
-#[cfg(doc)]
-use super::packed;
 use super::{command, mat_vec, swapping_error, Equations};
 use crate::design::Design;
 use crate::linalg::zoh_unchecked;
@@ -29,6 +27,9 @@ pub enum ControllerError {
     /// 0 once c·tr Ω overflows, turning adaptation off without a sign.
     #[error("design.mu[{channel}]: expected T_s μ_i ≤ 1e150 (μ_i ≤ {limit:e} at T_s = {sample_time} s), found μ_i = {mu:e}; the sampled adaptation gain T_s μ_i / (1 + T_s μ_i tr Ω_i) overflows to 0 and adaptation stops — choose a smaller μ_i", limit = MAX_ADAPTATION_STEP / .sample_time)]
     AdaptationStepTooLarge { channel: usize, mu: f64, sample_time: f64 },
+    /// A kernel ([`adapt`]) was given a buffer of the wrong length.
+    #[error("{function}: {name} needs {expected} entries, found {found}")]
+    Length { function: &'static str, name: &'static str, expected: usize, found: usize },
     /// [`Controller::step`] was given y or g of the wrong length.
     #[error("Controller::step: {name} needs {expected} entries (one per channel), found {found}")]
     InputLength { name: &'static str, expected: usize, found: usize },
@@ -279,7 +280,7 @@ impl Controller {
                 *Yj = a * *Yj + one_minus_a * dj * eps;
             }
             // Adaptive law (33), implicit in ρI with ρ ≥ λ_max(Ω) (see `adapt`), in the same pass.
-            adapt(ch.c, &mut ch.Omega, (a, one_minus_a), &self.Delta, &ch.Y, eta, self.Omega_eta.get());
+            adapt_unchecked(ch.c, &mut ch.Omega, (a, one_minus_a), &self.Delta, &ch.Y, eta, self.Omega_eta.get());
 
             // G_ii filter bank: W ← Φ W + γ [u_i(k − d_i), ξ̂ᵀ(k − d_i)].
             let sigma = ch.gamma.len();
@@ -374,19 +375,44 @@ impl Controller {
     }
 }
 
+/// The H filter Ω ← aΩ + bΔΔᵀ (ZOH of H(s)), then one step of η̂' = μ (Y − Ω η̂) (33) with c = T_s μ,
+/// implicit in ρI and explicit in the rest (Ω = ρI − (ρI − Ω)):
+/// η̂ ← η̂ + c (Y − Ω η̂) / (1 + c ρ),  with ρ = tr Ω ≥ λ_max(Ω).
+/// For PSD Ω the map η̂ ↦ (I − cΩ/(1 + cρ)) η̂ has eigenvalues in [1/(1 + cρ), 1]: nonexpansive for
+/// every μ ≥ 0 and T_s, with the fixed points of (33), at O(q²) cost.
+///
+/// `Omega` is the full q×q matrix (row-major), kept exactly symmetric: b (Δ_i Δ_j) rounds as
+/// b (Δ_j Δ_i). One pass over its rows updates it and sums
+/// (Ω η̂)_j = Σ_i Ω_ij η̂_i over i in order (the order of the generated C, [`crate::export`], which keeps
+/// the triangle only) and tr Ω. The continuous loop keeps Ω packed (`controller/packed.rs`), because there it
+/// is integrated state; here full rows make the pass contiguous (`docs/performance.md`).
+///
+/// Omega, Delta, Y and tmp not fitting q = eta.len() are [`ControllerError::Length`]. The
+/// controller calls the kernel without the checks (its buffers are built to size).
+pub fn adapt(
+    c: f64,
+    Omega: &mut [f64],
+    ab: (f64, f64),
+    Delta: &[f64],
+    Y: &[f64],
+    eta: &mut [f64],
+    tmp: &mut [f64],
+) -> Result<(), ControllerError> {
+    let q = eta.len();
+    for (name, expected, found) in
+        [("Omega", q * q, Omega.len()), ("Delta", q, Delta.len()), ("Y", q, Y.len()), ("tmp", q, tmp.len())]
+    {
+        if found != expected {
+            return Err(ControllerError::Length { function: "adapt", name, expected, found });
+        }
+    }
+    adapt_unchecked(c, Omega, ab, Delta, Y, eta, tmp);
+    Ok(())
+}
+
 with_avx2! {
-    /// The H filter Ω ← aΩ + bΔΔᵀ (ZOH of H(s)), then one step of η̂' = μ (Y − Ω η̂) (33) with c = T_s μ,
-    /// implicit in ρI and explicit in the rest (Ω = ρI − (ρI − Ω)):
-    /// η̂ ← η̂ + c (Y − Ω η̂) / (1 + c ρ),  with ρ = tr Ω ≥ λ_max(Ω).
-    /// For PSD Ω the map η̂ ↦ (I − cΩ/(1 + cρ)) η̂ has eigenvalues in [1/(1 + cρ), 1]: nonexpansive for
-    /// every μ ≥ 0 and T_s, with the fixed points of (33), at O(q²) cost.
-    ///
-    /// `Omega` is the full q×q matrix (row-major), kept exactly symmetric: b (Δ_i Δ_j) rounds as
-    /// b (Δ_j Δ_i). One pass over its rows updates it and sums
-    /// (Ω η̂)_j = Σ_i Ω_ij η̂_i over i in order (the order of the generated C, [`crate::export`], which keeps
-    /// the triangle only) and tr Ω. The continuous loop keeps Ω packed ([`packed`]), because there it
-    /// is integrated state; here full rows make the pass contiguous (`docs/performance.md`).
-    pub fn adapt(
+    /// [`adapt`] for buffers known to fit (the controller's).
+    pub(crate) fn adapt_unchecked(
         c: f64,
         Omega: &mut [f64],
         ab: (f64, f64),

@@ -14,7 +14,7 @@
 //! - the **adaptive law** (33) η̂_i' = μ_i (Y_i − Ω_i η̂_i) and the control law (25) u_i = −η̂_iᵀ ξ̂.
 
 pub mod discrete;
-pub mod packed;
+pub(crate) mod packed;
 
 pub use discrete::{Controller, ControllerError, MAX_ADAPTATION_STEP};
 
@@ -102,36 +102,36 @@ impl Equations {
     }
 
     /// Regressor ξ̂ = [ξ̂_g; ξ̂_ω]: the first q core states.
-    pub fn regressor<'z>(&self, z: &'z [f64]) -> &'z [f64] {
+    pub(crate) fn regressor<'z>(&self, z: &'z [f64]) -> &'z [f64] {
         &z[..self.q]
     }
 
     /// Observer state x̂: the last n core states.
-    pub fn x_hat<'z>(&self, z: &'z [f64]) -> &'z [f64] {
+    pub(crate) fn x_hat<'z>(&self, z: &'z [f64]) -> &'z [f64] {
         &z[self.q..self.nz]
     }
 
     /// Plant input (5): u_f = −K x̂ + F u_d.
-    pub fn plant_input(&self, z: &[f64], u_d: &[f64], u_f: &mut [f64]) {
+    pub(crate) fn plant_input(&self, z: &[f64], u_d: &[f64], u_f: &mut [f64]) {
         mat_vec(&self.K_neg, self.x_hat(z), u_f, false);
         mat_vec(&self.F, u_d, u_f, true);
     }
 
     /// Number of states of channel i's G_ii filter bank (σ_i rows, 1 + q columns).
-    pub fn filter_len(&self, i: usize) -> usize {
+    pub(crate) fn filter_len(&self, i: usize) -> usize {
         self.channels[i].sigma * (1 + self.q)
     }
 }
 
 /// Control law (25): u_i = −η̂_iᵀ ξ̂.
-pub fn command(eta: &[f64], xi: &[f64]) -> f64 {
+pub(crate) fn command(eta: &[f64], xi: &[f64]) -> f64 {
     -dot(eta, xi)
 }
 
 /// Channel i's filter-bank outputs from its state W (σ × (1 + q), row-major): the filtered delayed
 /// command G_ii[u_i(t − τ_i)] = q_i0·W₀₀ and the regressor row Δ_i = q_i0·(W₀₁, …, W₀q) (eq. (33)).
 /// Returns ε̂_i = δ_i − G_ii[u_i(t − τ_i)] and writes Δ_i into `delta`.
-pub fn swapping_error(ch: &ChannelFilter, W: &[f64], delta_i: f64, Delta: &mut [f64]) -> f64 {
+pub(crate) fn swapping_error(ch: &ChannelFilter, W: &[f64], delta_i: f64, Delta: &mut [f64]) -> f64 {
     let q = Delta.len();
     for (d, w) in Delta.iter_mut().zip(&W[1..=q]) {
         *d = ch.q0 * w;
@@ -140,7 +140,7 @@ pub fn swapping_error(ch: &ChannelFilter, W: &[f64], delta_i: f64, Delta: &mut [
 }
 
 /// Dot product.
-pub fn dot(a: &[f64], b: &[f64]) -> f64 {
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
@@ -148,7 +148,7 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// column by column in natural order: the order generated C ([`crate::export`]) follows, so the two
 /// agree bit for bit. (A hand loop over four columns at a time took 5 % fewer instructions in
 /// `Controller::step`, but rounds differently; `docs/performance.md`.)
-pub fn mat_vec(M: &DMatrix<f64>, x: &[f64], out: &mut [f64], add: bool) {
+pub(crate) fn mat_vec(M: &DMatrix<f64>, x: &[f64], out: &mut [f64], add: bool) {
     let (r, c) = M.shape();
     assert!(x.len() == c && out.len() == r, "mat_vec: dimension mismatch");
     let x = nalgebra::DVectorView::from_slice(x, c);
