@@ -131,11 +131,12 @@ fn progress_bar(len: u64) -> ProgressBar {
 fn report(rows: &[Row], n: usize, seconds: f64, jobs: usize, out: &Path) {
     let count = |o: Outcome| rows.iter().filter(|r| r.outcome == o).count();
     eprintln!(
-        "{} of {n} runs: {} completed, {} diverged, {} failed; {seconds:.2} s on {jobs} threads ({:.2} ms per run); wrote {}",
+        "{} of {n} runs: {} completed, {} diverged, {} failed; {seconds:.2} s on {jobs} thread{} ({:.2} ms per run); wrote {}",
         rows.len(),
         count(Outcome::Completed),
         count(Outcome::Diverged),
         count(Outcome::Failed),
+        if jobs == 1 { "" } else { "s" },
         1e3 * seconds / rows.len().max(1) as f64,
         out.display()
     );
