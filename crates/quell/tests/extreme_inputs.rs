@@ -1,9 +1,10 @@
 //! Scenario values at the edges of floating point (1e±300 entries, poles, gains, signals): each
 //! gives an error of the right kind, naming its key, or a design (and run) with its property. The
-//! decisions are tabled in /work/notes/issue9-api.md; in short, plant entries beyond 1e150 and rates
-//! spanning more than 1/√ε, signal amplitudes and biases beyond 1e150 and sampled adaptation steps
-//! T_s μ beyond 1e150 are refused, tiny plant entries are decided like zeros, and μ, delays and
-//! frequencies are accepted, with the loop reporting what it can and cannot run.
+//! decisions are tabled in docs/errors.md ("Values at the edges of floating point"); in short,
+//! plant entries beyond 1e150 and rates spanning more than 1/√ε, signal amplitudes and biases
+//! beyond 1e150 and sampled adaptation steps T_s μ beyond 1e150 are refused, tiny plant entries are
+//! decided like zeros, and μ, delays and frequencies are accepted, with the loop reporting what it
+//! can and cannot run.
 #![allow(non_snake_case)]
 
 use std::ops::ControlFlow;
