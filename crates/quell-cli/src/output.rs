@@ -14,8 +14,13 @@ pub fn write_atomic(path: &Path, contents: impl FnOnce(&mut dyn Write) -> io::Re
     let stem = path.file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let ext = path.extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let mut tmp =
-        tempfile::Builder::new().prefix(&format!(".{stem}.")).suffix(&format!(".tmp{ext}")).tempfile_in(dir)?;
+    let (prefix, suffix) = (format!(".{stem}."), format!(".tmp{ext}"));
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(&suffix);
+    // tempfile creates 0600; ask for 0666 less the umask, the mode `File::create` gives an output.
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let mut tmp = builder.tempfile_in(dir)?;
     let mut w = BufWriter::new(tmp.as_file_mut());
     contents(&mut w)?;
     w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
@@ -101,6 +106,18 @@ mod tests {
         let names: Vec<String> =
             fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
         assert_eq!(names, ["signals.csv"], "temporary files left");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn an_output_gets_the_mode_a_created_file_gets() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let (written, created) = (dir.path().join("runs.csv"), dir.path().join("created.csv"));
+        write_atomic(&written, |w| w.write_all(b"run")).unwrap();
+        fs::File::create(&created).unwrap();
+        let mode = |p: &Path| fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode(&written), mode(&created), "umask applied as by File::create, not tempfile's 0600");
     }
 
     #[test]
