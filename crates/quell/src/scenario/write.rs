@@ -88,10 +88,13 @@ pub fn pole_list(poles: &[Complex<f64>]) -> Result<Value, Complex<f64>> {
 
 /// [`pole_list`], with a pole that lacks its conjugate written as the pair `[re, |im|]`.
 fn poles_value(poles: &[Complex<f64>]) -> Value {
-    pole_list(poles).unwrap_or_else(|_| {
-        let closed: Vec<_> = poles.iter().flat_map(|&z| [z, z.conj()]).filter(|z| z.im >= 0.0).collect();
-        pole_list(&closed).unwrap_or(Value::Array(Vec::new()))
-    })
+    let mut closed = poles.to_vec();
+    loop {
+        match pole_list(&closed) {
+            Ok(v) => return v,
+            Err(p) => closed.push(p.conj()),
+        }
+    }
 }
 
 fn pole_lists(lists: &[Vec<Complex<f64>>]) -> Value {
@@ -206,5 +209,11 @@ mod tests {
         assert_eq!(pole_list(&p), Err(p[0]));
         let q = [Complex::new(-1.0, -2.0), Complex::new(-3.0, 0.0), Complex::new(-1.0, 2.0)];
         assert_eq!(pole_list(&q).unwrap().to_string(), "[-3.0, [-1.0, 2.0]]");
+    }
+
+    #[test]
+    fn an_unpaired_complex_pole_is_written_as_its_pair() {
+        let p = [Complex::new(-1.0, -2.0), Complex::new(-3.0, 0.0), Complex::new(-4.0, 1.0), Complex::new(-4.0, -1.0)];
+        assert_eq!(poles_value(&p).to_string(), "[-3.0, [-4.0, 1.0], [-1.0, 2.0]]");
     }
 }
