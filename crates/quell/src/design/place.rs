@@ -156,7 +156,7 @@ pub fn place(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[Complex<f64>]) -> Resu
     // determined: always for r > 1 (KNV0 chooses them), for r = 1 if the poles are distinct.
     if r == 1 {
         let Kr = single_input(A, &Br, &slots)?;
-        let distinct = (0..expanded.len()).all(|i| (0..i).all(|j| !same_pole(expanded[i], expanded[j])));
+        let distinct = max_multiplicity(&expanded) <= 1;
         let X = if distinct { Some(eigenvectors_single_input(A, &Br, &slots)?) } else { None };
         let K = Vr * Kr;
         verify(A, B, &K, &expanded, X.as_ref())?;
@@ -266,7 +266,7 @@ fn cyclic(A: &DMatrix<f64>, B: &DMatrix<f64>, slots: &[Slot], poles: &[C64]) -> 
             continue;
         };
         let Kr = K0 + v * k;
-        let error = char_poly_error(A, B, &Kr, poles);
+        let error = char_poly_error(&(A - B * &Kr), poles);
         if error.is_finite() && best.as_ref().is_none_or(|(e, _)| error < *e) {
             best = Some((error, Kr));
         }
@@ -589,21 +589,25 @@ fn verified_error(
     if M.iter().any(|x| !x.is_finite()) {
         return f64::INFINITY;
     }
-    let coefficients = || char_poly_error(A, B, K, poles);
+    let coefficients = || char_poly_error(&M, poles);
     let Some(X) = X else {
         return coefficients();
     };
-    let computed = crate::linalg::eigenvalues(&M).map_or(f64::INFINITY, |eigs| matching_error(&eigs, poles));
     let scale = poles.iter().map(|p| p.norm()).fold(f64::INFINITY, f64::min).max(1.0);
     let floor = crate::linalg::cond(X) * M.nrows() as f64 * f64::EPSILON * M.norm() / scale;
-    if floor <= 0.1 * VERIFY_RTOL {
-        computed + floor
-    } else if max_multiplicity(poles) > 1 {
+    let well_conditioned = floor <= 0.1 * VERIFY_RTOL;
+    if !well_conditioned && max_multiplicity(poles) > 1 {
         // A repeated pole is an ill-conditioned (semisimple) multiple eigenvalue: judged as a
         // cluster by the characteristic polynomial, as for a Jordan block.
-        coefficients()
+        return coefficients();
+    }
+    let Ok(eigs) = crate::linalg::eigenvalues(&M) else {
+        return f64::INFINITY;
+    };
+    if well_conditioned {
+        matching_error(&eigs, poles) + floor
     } else {
-        refined_error(&M, poles).max(coefficients())
+        refined_error(&M, eigs, poles).max(coefficients())
     }
 }
 
@@ -615,20 +619,15 @@ fn verified_error(
 /// (M_b − λ I) v = 0, v_k = 1 (Dongarra, Moler & Wilkinson 1983, "Improving the accuracy of
 /// computed eigenvalues and eigenvectors", SIAM J. Numer. Anal. 20), with the residual in twice
 /// the working precision ([`residual`]). Error: the largest (|λ − p| + |last step|) / max(1, |p|);
-/// ∞ when a refinement does not converge or two poles end at the same eigenvalue.
-fn refined_error(M: &DMatrix<f64>, poles: &[C64]) -> f64 {
+/// ∞ when a refinement does not converge or two poles end at the same eigenvalue. `eigs`: M's
+/// eigenvalues ([`crate::linalg::eigenvalues`]).
+fn refined_error(M: &DMatrix<f64>, mut free: Vec<C64>, poles: &[C64]) -> f64 {
     let n = M.nrows();
-    let Ok(mut free) = crate::linalg::eigenvalues(M) else {
-        return f64::INFINITY;
-    };
     let Mb = crate::linalg::balance(M);
     let mut refined: Vec<(C64, f64)> = Vec::with_capacity(n);
     let mut worst: f64 = 0.0;
     for &p in poles {
-        let Some((j, _)) = free.iter().map(|&l| (l - p).norm()).enumerate().min_by(|a, b| a.1.total_cmp(&b.1)) else {
-            return f64::INFINITY;
-        };
-        let Some((lambda, step)) = refine(&Mb, free.swap_remove(j)) else {
+        let Some((lambda, step)) = take_nearest(&mut free, p).and_then(|l| refine(&Mb, l)) else {
             return f64::INFINITY;
         };
         if refined.iter().any(|&(mu, s)| (mu - lambda).norm() <= 2.0 * (s + step) + 4.0 * f64::EPSILON * mu.norm()) {
@@ -711,22 +710,27 @@ fn matching_error(eigs: &[C64], poles: &[C64]) -> f64 {
     let mut free: Vec<C64> = eigs.to_vec();
     let mut worst: f64 = 0.0;
     for &p in poles {
-        let Some((j, d)) = free.iter().map(|&l| (l - p).norm()).enumerate().min_by(|a, b| a.1.total_cmp(&b.1)) else {
+        let Some(l) = take_nearest(&mut free, p) else {
             return f64::INFINITY;
         };
-        free.swap_remove(j);
-        worst = worst.max(d / p.norm().max(1.0));
+        worst = worst.max((l - p).norm() / p.norm().max(1.0));
     }
     worst
 }
 
-/// The coefficient error of [`verify`]'s ill-conditioned test (∞ if A − B K is not finite).
-fn char_poly_error(A: &DMatrix<f64>, B: &DMatrix<f64>, K: &DMatrix<f64>, poles: &[C64]) -> f64 {
-    let M = A - B * K;
+/// Removes the eigenvalue nearest p from `free` and returns it (`None` when `free` is empty).
+fn take_nearest(free: &mut Vec<C64>, p: C64) -> Option<C64> {
+    let (j, _) = free.iter().map(|&l| (l - p).norm()).enumerate().min_by(|a, b| a.1.total_cmp(&b.1))?;
+    Some(free.swap_remove(j))
+}
+
+/// The coefficient error of [`verify`]'s ill-conditioned test for M = A − B K (∞ if M is not
+/// finite).
+fn char_poly_error(M: &DMatrix<f64>, poles: &[C64]) -> f64 {
     if M.iter().any(|x| !x.is_finite()) {
         return f64::INFINITY;
     }
-    let got = hessenberg_char_poly(&M);
+    let got = hessenberg_char_poly(M);
     let want = poly_from_roots(poles);
     let scale = poly_from_roots(&poles.iter().map(|p| C64::new(-p.norm().max(1.0), 0.0)).collect::<Vec<_>>());
     let e = (0..got.len()).map(|k| (got[k] - want[k]).abs() / scale[k]).fold(0.0, f64::max);
