@@ -453,11 +453,10 @@ pub fn simulate_with_truth(
     let RunSettings { t_end, output_step, rtol, atol, divergence_bound, max_steps, runaway } = *settings;
     check_run(design, reference, disturbance, t_end, output_step, divergence_bound)?;
     crate::settings::check_tolerances(rtol, atol)?;
-    super::check_truth(design, truth)?;
+    let mut sys = ContinuousLoop::with_truth(design, truth, reference, disturbance)?;
     crate::settings::check_integrator_delays("plant.delays", &design.plant().delays, t_end)?;
     crate::settings::check_integrator_delays("truth.delays", &truth.delays, t_end)?;
-    let mut sys = ContinuousLoop::with_truth(design, truth, reference, disturbance)?;
-    // check_truth has checked x0's length.
+    // with_truth has checked x0's length (check_truth).
     let s0 = sys.initial_state(&truth.x0).map_err(|e| KeyError::new("truth.x0", e.to_string()))?;
     let history = vec![0.0; sys.n_delayed()];
     let (m, q) = (sys.eq.m, sys.eq.q);
