@@ -36,8 +36,9 @@ pub enum PlantError {
     #[error("{name}[{row}][{col}]: expected a finite number, found {value}")]
     NonFinite { name: &'static str, row: usize, col: usize, value: f64 },
     #[error(
-        "{name}[{row}][{col}]: expected a magnitude ≤ 1e150, found {value:e}; products and norms of such \
-         entries overflow double precision — rescale the plant's units"
+        "{name}[{row}][{col}]: expected a magnitude ≤ {max:e}, found {value:e}; products and norms of such \
+         entries overflow double precision — rescale the plant's units",
+        max = MAX_ENTRY
     )]
     TooLarge { name: &'static str, row: usize, col: usize, value: f64 },
     #[error("delays[{index}]: expected a finite delay ≥ 0, found {value}")]

@@ -86,7 +86,7 @@ pub fn check_horizon(t_end: f64, output_step: f64) -> Result<(), KeyError> {
     if samples > MAX_OUTPUT_SAMPLES {
         return Err(KeyError::new(
             "simulation.output_step",
-            format!("t_end / output_step = {samples:.3e} rows of signals.csv; at most {MAX_OUTPUT_SAMPLES:e} are kept; choose output_step ≥ {}", at_least(t_end / MAX_OUTPUT_SAMPLES, |h| t_end / h <= MAX_OUTPUT_SAMPLES)),
+            format!("t_end / output_step = {samples:.3e} rows of signals.csv; at most {MAX_OUTPUT_SAMPLES:e} are kept; choose output_step ≥ {}", at_least(t_end, MAX_OUTPUT_SAMPLES)),
         ));
     }
     Ok(())
@@ -103,17 +103,18 @@ pub fn check_integrator_delays(key: &str, delays: &[f64], t_end: f64) -> Result<
             format!(
                 "τ = {tau:e} s caps the integrator's steps at τ, so t_end = {t_end} s needs more than {:.3e} steps; at most {MAX_SAMPLING_STEPS:e} are run (as in a sampled-data run); expected 0 (no delay) or τ ≥ {}",
                 t_end / tau,
-                at_least(t_end / MAX_SAMPLING_STEPS, |d| t_end / d <= MAX_SAMPLING_STEPS)
+                at_least(t_end, MAX_SAMPLING_STEPS)
             ),
         )),
     }
 }
 
-/// A value to suggest for a lower bound `x`: the number nearest `x` with three significant digits,
-/// raised in its third digit until `passes`, written as Rust's shortest form (`{}` between 1e-4 and
-/// 1e6, otherwise `{:e}`), so that 1e293 does not print as 294 digits and the value typed back
-/// passes the check.
-fn at_least(x: f64, passes: impl Fn(f64) -> bool) -> String {
+/// A step h to suggest so that t_end / h ≤ `limit`: the number nearest x = t_end / limit with three
+/// significant digits, raised in its third digit until it passes, written as Rust's shortest form
+/// (`{}` between 1e-4 and 1e6, otherwise `{:e}`), so that 1e293 does not print as 294 digits and
+/// the value typed back passes the check.
+fn at_least(t_end: f64, limit: f64) -> String {
+    let (x, passes) = (t_end / limit, |h: f64| t_end / h <= limit);
     let e = (x.log10().floor() as i32).saturating_sub(2);
     let mut digits = (x / 10f64.powi(e)).round();
     for _ in 0..1000 {
@@ -141,7 +142,7 @@ pub fn check_sample_time(t_end: f64, sample_time: f64) -> Result<(), KeyError> {
     if steps > MAX_SAMPLING_STEPS {
         return Err(KeyError::new(
             KEY,
-            format!("t_end / sample_time = {steps:.3e} controller steps; at most {MAX_SAMPLING_STEPS:e} are run; choose sample_time ≥ {}", at_least(t_end / MAX_SAMPLING_STEPS, |h| t_end / h <= MAX_SAMPLING_STEPS)),
+            format!("t_end / sample_time = {steps:.3e} controller steps; at most {MAX_SAMPLING_STEPS:e} are run; choose sample_time ≥ {}", at_least(t_end, MAX_SAMPLING_STEPS)),
         ));
     }
     Ok(())

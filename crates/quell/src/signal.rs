@@ -115,7 +115,7 @@ impl Signal {
             false => Err(KeyError::new(
                 format!("{key}.components{field}"),
                 format!(
-                    "expected a magnitude ≤ 1e150, found {v:e}; the loop's states scale with it and their \
+                    "expected a magnitude ≤ {MAX_ENTRY:e}, found {v:e}; the loop's states scale with it and their \
                      products overflow double precision — rescale the signal's units"
                 ),
             )),

@@ -25,7 +25,7 @@ pub enum ControllerError {
     NotFinite { what: String, sample_time: f64 },
     /// T_s μ_i is beyond [`MAX_ADAPTATION_STEP`]: the gain c/(1 + c tr Ω) of [`adapt`] would overflow to
     /// 0 once c·tr Ω overflows, turning adaptation off without a sign.
-    #[error("design.mu[{channel}]: expected T_s μ_i ≤ 1e150 (μ_i ≤ {limit:e} at T_s = {sample_time} s), found μ_i = {mu:e}; the sampled adaptation gain T_s μ_i / (1 + T_s μ_i tr Ω_i) overflows to 0 and adaptation stops — choose a smaller μ_i", limit = MAX_ADAPTATION_STEP / .sample_time)]
+    #[error("design.mu[{channel}]: expected T_s μ_i ≤ {max:e} (μ_i ≤ {limit:e} at T_s = {sample_time} s), found μ_i = {mu:e}; the sampled adaptation gain T_s μ_i / (1 + T_s μ_i tr Ω_i) overflows to 0 and adaptation stops — choose a smaller μ_i", max = MAX_ADAPTATION_STEP, limit = MAX_ADAPTATION_STEP / .sample_time)]
     AdaptationStepTooLarge { channel: usize, mu: f64, sample_time: f64 },
     /// A kernel ([`adapt`]) was given a buffer of the wrong length.
     #[error("{function}: {name} needs {expected} entries, found {found}")]
@@ -37,7 +37,7 @@ pub enum ControllerError {
 
 /// Largest adaptation step c = T_s μ_i: with c and tr Ω_i both ≤ 1e150 (the plant's and signals'
 /// [`crate::plant::MAX_ENTRY`]), c·tr Ω_i ≤ 1e300 stays finite.
-pub const MAX_ADAPTATION_STEP: f64 = 1e150;
+pub const MAX_ADAPTATION_STEP: f64 = crate::plant::MAX_ENTRY;
 
 /// Longest delay line, in samples (its memory is this many rows of 1 + q numbers per channel).
 pub const MAX_DELAY_SAMPLES: f64 = 1e7;
