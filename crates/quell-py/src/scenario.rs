@@ -45,6 +45,11 @@ impl PyScenario {
         quell::Scenario::from_toml(text).map(Self::new).map_err(|e| scenario_error(py, &e))
     }
 
+    /// Validates a scenario document (a parsed file's table).
+    pub fn from_document(py: Python<'_>, doc: &Table) -> PyResult<Self> {
+        quell::Scenario::from_document(doc).map(Self::new).map_err(|e| scenario_error(py, &e))
+    }
+
     /// The design of this scenario, computed once.
     pub fn design_arc(&self, py: Python<'_>) -> PyResult<Arc<quell::Design>> {
         if let Some(d) = self.design.get() {
@@ -222,9 +227,7 @@ impl PyScenario {
         if let Some(t) = truth.filter(|t| !t.is_none()) {
             doc.insert("truth".into(), Value::Table(plant_table(&plant_arg(t, "truth")?.inner)));
         }
-        let text = toml::to_string(&doc)
-            .map_err(|e| Kind::Scenario.err(py, format!("scenario: cannot be written as TOML ({e})")))?;
-        Self::parse(py, &text)
+        Self::from_document(py, &doc)
     }
 
     /// Parses and validates a scenario file's text (the format of `examples/paper.toml`).

@@ -221,7 +221,7 @@ pub fn simulate(
                 }
             }
         }
-        edited = PyScenario::parse(py, &toml::to_string(&doc).unwrap_or_default())?;
+        edited = PyScenario::from_document(py, &doc)?;
         &edited.inner
     } else {
         &s.inner

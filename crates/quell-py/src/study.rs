@@ -215,8 +215,10 @@ impl PyRunSpecs {
     fn __iter__(slf: PyRef<'_, Self>) -> PyRef<'_, Self> {
         slf
     }
-    fn __next__(&mut self) -> Option<PyRunSpec> {
-        let inner = self.study.spec(self.next)?;
+    fn __next__(&mut self, py: Python<'_>) -> Option<PyRunSpec> {
+        // The first spec of a grid point carries out that point's nominal run: without the GIL.
+        let (study, index) = (&self.study, self.next);
+        let inner = py.detach(|| study.spec(index))?;
         self.next += 1;
         Some(PyRunSpec { inner })
     }
