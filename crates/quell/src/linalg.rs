@@ -183,17 +183,18 @@ pub fn unstable(eigs: &[Complex<f64>], size: f64) -> Vec<Complex<f64>> {
 
 /// Condition number σ_max/σ_min in the 2-norm (∞ for a singular or empty matrix).
 pub fn cond(M: &DMatrix<f64>) -> f64 {
+    singular_extremes(M).1
+}
+
+/// The smallest singular value and the condition number of M from one SVD: (0, ∞) for an empty
+/// matrix (nalgebra's SVD panics on one), cond ∞ for a singular one.
+pub fn singular_extremes(M: &DMatrix<f64>) -> (f64, f64) {
     if M.is_empty() {
-        // nalgebra's SVD panics on an empty matrix.
-        return f64::INFINITY;
+        return (0.0, f64::INFINITY);
     }
     let s = M.singular_values();
     let (max, min) = (s.max(), s.min());
-    if min > 0.0 && !s.is_empty() {
-        max / min
-    } else {
-        f64::INFINITY
-    }
+    (min, if min > 0.0 { max / min } else { f64::INFINITY })
 }
 
 /// Numerical rank: the number of singular values above `max(rows, cols)·eps·σ_max`.

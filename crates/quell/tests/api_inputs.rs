@@ -323,3 +323,14 @@ fn the_adaptive_step_refuses_buffers_of_the_wrong_length() {
     assert_eq!(omega, [0.5, 0.0, 0.0, 0.0]);
     assert_eq!(eta, [0.1 / 1.05, 0.0]);
 }
+
+#[test]
+fn falb_wolovich_without_channels_is_an_error() {
+    // m = 0 (B n×0, C 0×n): the B* of no channel has no SVD (nalgebra panicked on the empty matrix).
+    let (A, _, _) = chain();
+    let e = quell::design::falb_wolovich(&A, &DMatrix::zeros(3, 0), &DMatrix::zeros(0, 3), &[]);
+    assert!(
+        matches!(e, Err(quell::DesignError::NotDecouplable { smallest, cond }) if smallest == 0.0 && cond == f64::INFINITY),
+        "{e:?}"
+    );
+}

@@ -3,7 +3,7 @@
 use nalgebra::{Complex, DMatrix, RowDVector};
 
 use super::DesignError;
-use crate::linalg::{cond, poly_from_roots};
+use crate::linalg::{poly_from_roots, singular_extremes};
 use crate::plant::{check, PlantError};
 
 /// The design layer's one tolerance τ. Every "is it zero?" and "is it singular?" decision is made
@@ -237,9 +237,7 @@ pub fn falb_wolovich_given(
             0.0
         }
     });
-    let sv = scaled.singular_values();
-    let smallest = sv.min();
-    let cond_B_star = cond(&scaled);
+    let (smallest, cond_B_star) = singular_extremes(&scaled);
     let inv = match B_star.clone().try_inverse() {
         Some(inv) if smallest >= TOL => inv,
         _ => return Err(DesignError::NotDecouplable { smallest, cond: cond_B_star }),

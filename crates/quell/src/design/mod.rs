@@ -18,7 +18,7 @@ pub use internal_model::{filter_pair, internal_model};
 pub use place::{place, PlaceError};
 
 use crate::linalg::{
-    cond, eigenvalues, fmt_complex, fmt_number, numerical_rank, poly_from_roots, unstable, EigenError,
+    eigenvalues, fmt_complex, fmt_number, numerical_rank, poly_from_roots, singular_extremes, unstable, EigenError,
 };
 use crate::plant::{Plant, PlantError};
 
@@ -561,7 +561,7 @@ fn disturbance_observer_gain(D: &DMatrix<f64>, L_w: &DMatrix<f64>) -> Result<(DM
         .map_err(|_| DesignError::DisturbanceRank { rank, k })?;
     let N = L_w * pinv;
     let unit = decouple::unit_columns(D);
-    let (smallest, cond_D) = (unit.singular_values().min(), cond(&unit));
+    let (smallest, cond_D) = singular_extremes(&unit);
     if smallest < TOL {
         return Err(DesignError::DisturbanceConditioning { smallest, cond: cond_D, norm_N: N.norm() });
     }
