@@ -9,7 +9,7 @@ fn files(dir: &Path, exts: &[&str], out: &mut Vec<PathBuf>) {
         let path = entry.unwrap().path();
         if path.is_dir() {
             files(&path, exts, out);
-        } else if path.extension().map_or(true, |e| exts.iter().any(|x| e == *x)) {
+        } else if path.extension().is_none_or(|e| exts.iter().any(|x| e == *x)) {
             out.push(path);
         }
     }
