@@ -161,10 +161,7 @@ fn the_checks_of_controller_new_with_the_same_messages() {
     assert!(matches!(&e, ExportError::Controller(ControllerError::AdaptationStepTooLarge { channel: 0, .. })), "{e:?}");
     let e = generate(&big, 1e-3, &options("quell", Precision::F32)).unwrap_err();
     assert!(matches!(&e, ExportError::F32Range { what, .. } if what == "quell_c[0]"), "{e:?}");
-    assert!(
-        e.to_string().starts_with("precision f32: quell_c[0] = 1e97") && e.to_string().ends_with("use f64"),
-        "{e}"
-    );
+    assert!(e.to_string().starts_with("precision f32: quell_c[0] = 1e97") && e.to_string().ends_with("use f64"), "{e}");
     assert!(generate(&big, 1e-3, &options("quell", Precision::F64)).is_ok());
     // A discretization that overflows: T_s = 1e100 s (the case used before, a reference filter pole
     // at -6e300, is now refused by the design: its rates may span at most 1/√ε).
