@@ -186,8 +186,13 @@ fn report_outcome(result: &SimResult, out: &Path, seconds: f64) -> Result<(), Fa
     match result.outcome.as_ref().unwrap_or(&Outcome::Completed) {
         Outcome::Completed => {
             for (i, c) in result.summary().iter().enumerate() {
+                let settle = match (c.settle_t, &c.settle_note) {
+                    (Some(t), _) => format!("settled (2 % band) at t = {t}"),
+                    (None, Some(note)) => note.clone(),
+                    (None, None) => "not settled".into(),
+                };
                 eprintln!(
-                    "channel {}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {:.3}, ‖η̂‖ = {:.4}",
+                    "channel {}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {:.3}, ‖η̂‖ = {:.4}, {settle}",
                     i + 1,
                     c.tail_max_abs_e,
                     c.tail_rms_e,

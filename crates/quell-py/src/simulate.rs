@@ -146,7 +146,8 @@ impl PySimResult {
         Ok(d)
     }
     /// Per channel, as summary.json: tail max |e_i| and RMS e_i over the last 10 % of the horizon,
-    /// max |u_i|, and ‖η̂_i‖ at the end.
+    /// max |u_i|, ‖η̂_i‖ at the end, settle_t (2 % band; None when not settled, or only in the
+    /// last 5 % of the horizon) and settle_note (why settle_t is None).
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         self.inner
             .summary()
@@ -157,6 +158,8 @@ impl PySimResult {
                 d.set_item("tail_rms_e", c.tail_rms_e)?;
                 d.set_item("max_abs_u", c.max_abs_u)?;
                 d.set_item("final_eta_norm", c.final_eta_norm)?;
+                d.set_item("settle_t", c.settle_t)?;
+                d.set_item("settle_note", c.settle_note.as_deref())?;
                 Ok(d)
             })
             .collect()
