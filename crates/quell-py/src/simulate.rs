@@ -24,6 +24,8 @@ pub struct PySimResult {
     inner: SimResult,
     /// t, y, g, e, u, eta.
     arrays: [Py<PyAny>; 6],
+    /// The run's convergence diagnostics as JSON ([`quell::diagnostics::Diagnostics`]).
+    diagnostics: String,
 }
 
 fn frozen_array(py: Python<'_>, data: &[f64], shape: &[usize]) -> PyResult<Py<PyAny>> {
@@ -35,7 +37,7 @@ fn frozen_array(py: Python<'_>, data: &[f64], shape: &[usize]) -> PyResult<Py<Py
 }
 
 impl PySimResult {
-    fn new(py: Python<'_>, r: SimResult) -> PyResult<Self> {
+    fn new(py: Python<'_>, r: SimResult, diagnostics: String) -> PyResult<Self> {
         let (n, m, q) = (r.len(), r.m, r.q);
         let arrays = [
             frozen_array(py, &r.t, &[n])?,
@@ -45,7 +47,7 @@ impl PySimResult {
             frozen_array(py, &r.u, &[n, m])?,
             frozen_array(py, &r.eta, &[n, m, q])?,
         ];
-        Ok(PySimResult { inner: r, arrays })
+        Ok(PySimResult { inner: r, arrays, diagnostics })
     }
 }
 
@@ -164,6 +166,12 @@ impl PySimResult {
             })
             .collect()
     }
+    /// Convergence diagnostics, as summary.json: {"channels": [per channel lambda_min_omega,
+    /// lambda_max_omega, convergence_time, adaptation_rate, predicted_final_rms_e, tail_trend,
+    /// excitation, advice], "observer_fidelity": [...], "advice": [...]}; see docs/tuning.md.
+    fn diagnostics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        py.import("json")?.call_method1("loads", (&self.diagnostics,))
+    }
     /// The columns of signals.csv (t, y1.., g1.., e1.., u1.., eta1_1..) as a pandas DataFrame.
     fn to_pandas(slf: &Bound<'_, Self>) -> PyResult<Py<PyAny>> {
         Ok(slf.py().import("quell._frames")?.call_method1("to_pandas", (slf,))?.unbind())
@@ -253,7 +261,9 @@ pub fn simulate(
     }
     let result = result.map_err(|e| raise(py, Kind::Scenario)(&e))?;
     let outcome = result.outcome.clone().unwrap_or(Outcome::Completed);
-    let result = Py::new(py, PySimResult::new(py, result)?)?;
+    let diagnostics = quell::diagnostics::diagnose(&design, &scn.reference, &scn.disturbance, &result);
+    let diagnostics = serde_json::to_string(&diagnostics).unwrap_or_default();
+    let result = Py::new(py, PySimResult::new(py, result, diagnostics)?)?;
     if !check {
         return Ok(result);
     }
