@@ -99,7 +99,9 @@ pub(crate) fn load(path: Option<&Path>) -> Result<(Scenario, Design), Failure> {
 
 fn design(args: &auto::DesignArgs) -> Result<(), Failure> {
     if let Some(flag) = args.auto_only_flag() {
-        return Err(Failure::Input(format!("{flag}: only with --auto (the automatic design); add --auto or remove {flag}")));
+        return Err(Failure::Input(format!(
+            "{flag}: only with --auto (the automatic design); add --auto or remove {flag}"
+        )));
     }
     let (_, d) = load(Some(&args.scenario))?;
     if args.json {

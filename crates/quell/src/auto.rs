@@ -145,7 +145,7 @@ fn adjust_mu(mu: &mut [f64], tail: &[f64], bound: &[f64], max_u: &[f64], targets
         if targets.u_limit.is_some_and(|l| max_u[i] > l) {
             mu[i] *= 0.5;
             changed = true;
-        } else if !(tail[i] <= bound[i]) {
+        } else if tail[i].is_nan() || tail[i] > bound[i] {
             mu[i] *= 4.0;
             changed = true;
         }
@@ -163,6 +163,9 @@ fn note_verification(choices: &mut [Choice], mu: &[f64], runs: usize) {
     }
 }
 
+/// One pole list per component or channel.
+type PoleLists = Vec<Vec<Complex<f64>>>;
+
 /// Distinct real poles −r·f^j, j = 0..count, centred (in ratio) on r when `centred`.
 fn spread(r: f64, count: usize, factor: f64, centred: bool) -> Vec<Complex<f64>> {
     let shift = if centred { (count as f64 - 1.0) / 2.0 } else { 0.0 };
@@ -170,8 +173,10 @@ fn spread(r: f64, count: usize, factor: f64, centred: bool) -> Vec<Complex<f64>>
 }
 
 fn fmt_lists(lists: &[Vec<Complex<f64>>]) -> String {
-    let inner: Vec<String> =
-        lists.iter().map(|l| format!("[{}]", l.iter().map(|p| format!("{:.4e}", p.re)).collect::<Vec<_>>().join(", "))).collect();
+    let inner: Vec<String> = lists
+        .iter()
+        .map(|l| format!("[{}]", l.iter().map(|p| format!("{:.4e}", p.re)).collect::<Vec<_>>().join(", ")))
+        .collect();
     format!("[{}]", inner.join(", "))
 }
 
@@ -195,12 +200,7 @@ fn time_scale(s: &Scenario) -> Result<(f64, Option<f64>), AutoError> {
 }
 
 /// Filter orders and poles of one signal's components.
-fn filters(
-    signal: &Signal,
-    orders: Option<&[usize]>,
-    r: f64,
-    key: &str,
-) -> Result<(Vec<Vec<Complex<f64>>>, String), ScenarioError> {
+fn filters(signal: &Signal, orders: Option<&[usize]>, r: f64, key: &str) -> Result<(PoleLists, String), ScenarioError> {
     if let Some(o) = orders {
         if o.len() != signal.len() {
             return Err(ScenarioError {
@@ -216,7 +216,11 @@ fn filters(
         if order < need {
             return Err(ScenarioError {
                 key: format!("design.{key}_filter_orders[{i}]"),
-                message: format!("{key} component {} ({}) needs at least {need} filter poles; got {order}", i + 1, Exosystem::of(c).describe()),
+                message: format!(
+                    "{key} component {} ({}) needs at least {need} filter poles; got {order}",
+                    i + 1,
+                    Exosystem::of(c).describe()
+                ),
             });
         }
         let ws: Vec<f64> = frequencies(c).collect();
@@ -259,7 +263,12 @@ fn choose(
         }
     };
     let (reference_filter_poles, disturbance_filter_poles) = {
-        let both = |given: Option<Vec<Vec<Complex<f64>>>>, signal: &Signal, orders: Option<&[usize]>, key: &str, note: &mut dyn FnMut(&str, String, String)| -> Result<_, ScenarioError> {
+        let both = |given: Option<Vec<Vec<Complex<f64>>>>,
+                    signal: &Signal,
+                    orders: Option<&[usize]>,
+                    key: &str,
+                    note: &mut dyn FnMut(&str, String, String)|
+         -> Result<_, ScenarioError> {
             match given {
                 Some(g) => Ok(g),
                 None if signal.is_empty() => Ok(Vec::new()),
@@ -271,8 +280,20 @@ fn choose(
             }
         };
         (
-            both(partial.reference_filter_poles, &s.reference, partial.reference_filter_orders.as_deref(), "reference", &mut note)?,
-            both(partial.disturbance_filter_poles, &s.disturbance, partial.disturbance_filter_orders.as_deref(), "disturbance", &mut note)?,
+            both(
+                partial.reference_filter_poles,
+                &s.reference,
+                partial.reference_filter_orders.as_deref(),
+                "reference",
+                &mut note,
+            )?,
+            both(
+                partial.disturbance_filter_poles,
+                &s.disturbance,
+                partial.disturbance_filter_orders.as_deref(),
+                "disturbance",
+                &mut note,
+            )?,
         )
     };
     let beta = match partial.beta {
