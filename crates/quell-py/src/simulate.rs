@@ -182,11 +182,18 @@ impl PySimResult {
         Ok(slf.py().import("quell._frames")?.call_method1("to_pandas", (slf,))?.unbind())
     }
     /// The CLI's figure of one channel (1-based), like the paper's Figs. 1 and 2: y_i with g_i,
-    /// e_i, u_i and η̂_i against t, in four panels. Returns the matplotlib Figure.
-    #[pyo3(signature = (channel=1, **kwargs))]
-    fn plot(slf: &Bound<'_, Self>, channel: usize, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Py<PyAny>> {
+    /// e_i, u_i and η̂_i against t, in four panels. Returns the matplotlib Figure. `ax`: one Axes
+    /// (y_i and g_i only) or four; else a new figure of `figsize`, or the panels added to `fig`.
+    #[pyo3(signature = (channel=None, *, ax=None, figsize=None, fig=None))]
+    fn plot(
+        slf: &Bound<'_, Self>,
+        channel: Option<&Bound<'_, PyAny>>,
+        ax: Option<&Bound<'_, PyAny>>,
+        figsize: Option<&Bound<'_, PyAny>>,
+        fig: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Py<PyAny>> {
         let f = slf.py().import("quell._frames")?.getattr("plot")?;
-        Ok(f.call((slf, channel), kwargs)?.unbind())
+        Ok(f.call1((slf, channel, fig, ax, figsize))?.unbind())
     }
     fn __len__(&self) -> usize {
         self.inner.len()

@@ -38,3 +38,25 @@ def test_reprs_are_python():
     assert not any("Some(" in t or "None)" in t and "=None" not in t for t in texts), texts
     assert repr(s).startswith("Scenario(name='paper-example',") and "sample_time=None" in repr(s)
     assert repr(r).endswith("outcome={'status': 'completed'})")
+
+
+def test_plot_takes_axes_and_figsize():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import pytest
+
+    r = quell.simulate(quell.paper_example(), t_end=1.0)
+    fig = r.plot(channel=2, figsize=(4, 5))
+    assert tuple(fig.get_size_inches()) == (4.0, 5.0) and len(fig.axes) == 4
+    own, one = plt.subplots()
+    assert r.plot(channel=1, ax=one) is own
+    np.testing.assert_array_equal(one.lines[1].get_ydata(), r.y[:, 0])  # y1 drawn on the given axes
+    own4, four = plt.subplots(2, 2)
+    assert r.plot(ax=four) is own4 and four[1, 1].get_title().startswith("Channel 1: adjustable")
+    with pytest.raises(TypeError, match="channel: expected an int"):
+        r.plot(channel="2")
+    with pytest.raises(TypeError, match="ax: expected one matplotlib Axes or four"):
+        r.plot(ax=[one, one])
+    plt.close("all")

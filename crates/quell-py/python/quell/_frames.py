@@ -25,36 +25,48 @@ def to_pandas(result):
     return pd.DataFrame(data, columns=columns(m, q))
 
 
-def plot(result, channel=1, fig=None):
-    """Channel ``channel`` (1-based) in the four panels of the CLI's figure, like the paper's
-    Figs. 1 and 2: y_i with g_i, e_i = y_i - g_i, u_i, and eta_i against t."""
+def plot(result, channel=1, fig=None, ax=None, figsize=None):
+    """Channel ``channel`` (1-based; None is 1) in the four panels of the CLI's figure, like the paper's
+    Figs. 1 and 2: y_i with g_i, e_i = y_i - g_i, u_i, and eta_i against t.
+
+    ``ax``: one matplotlib Axes (then only y_i and g_i are drawn, on it) or four (the four panels);
+    otherwise a new figure of ``figsize`` (default (10, 11.5)), or the panels are added to ``fig``.
+    Returns the Figure."""
     try:
         import matplotlib.pyplot as plt
     except ImportError as e:
         raise ImportError("SimResult.plot needs matplotlib: pip install matplotlib") from e
     m = result.m
-    if not isinstance(channel, int) or not 1 <= channel <= m:
+    channel = 1 if channel is None else channel
+    if isinstance(channel, bool) or not isinstance(channel, int):
+        raise TypeError(f"channel: expected an int from 1 to {m}, found a {type(channel).__name__}")
+    if not 1 <= channel <= m:
         raise ValueError(f"channel: expected a channel number from 1 to {m}, found {channel!r}")
-    i = channel - 1
-    t = result.t
-    if fig is None:
-        fig = plt.figure(figsize=(10, 11.5))
-    axes = fig.subplots(4, 1, sharex=True)
-    c = channel
+    i, c, t = channel - 1, channel, result.t
+    if ax is not None:
+        axes = list(ax.flat) if hasattr(ax, "flat") else list(ax) if isinstance(ax, (list, tuple)) else [ax]
+        if len(axes) not in (1, 4) or not all(hasattr(a, "plot") for a in axes):
+            raise TypeError(f"ax: expected one matplotlib Axes or four, found {ax!r}")
+        fig = axes[0].figure
+    else:
+        fig = fig if fig is not None else plt.figure(figsize=figsize if figsize is not None else (10, 11.5))
+        axes = fig.subplots(4, 1, sharex=True)
     axes[0].plot(t, result.g[:, i], "--", label=f"g{c} (reference)")
     axes[0].plot(t, result.y[:, i], label=f"y{c}")
     axes[0].set(title=f"Channel {c}: output and reference", ylabel="y, g")
-    axes[1].plot(t, result.e[:, i], label=f"e{c}")
-    axes[1].set(title=f"Channel {c}: tracking error", ylabel="e = y − g")
-    axes[2].plot(t, result.u[:, i], label=f"u{c}")
-    axes[2].set(title=f"Channel {c}: adaptive command (25)", ylabel="u")
-    for j in range(result.q):
-        axes[3].plot(t, result.eta[:, i, j], label=f"η{c}_{j + 1}")
-    axes[3].set(title=f"Channel {c}: adjustable parameters (33)", ylabel="η", xlabel="t")
-    for ax in axes:
-        ax.grid(True, alpha=0.3)
-        ax.legend(loc="upper right", fontsize="small", ncol=1 + (ax is axes[3]) * 2)
-    fig.tight_layout()
+    if len(axes) == 4:
+        axes[1].plot(t, result.e[:, i], label=f"e{c}")
+        axes[1].set(title=f"Channel {c}: tracking error", ylabel="e = y − g")
+        axes[2].plot(t, result.u[:, i], label=f"u{c}")
+        axes[2].set(title=f"Channel {c}: adaptive command (25)", ylabel="u")
+        for j in range(result.q):
+            axes[3].plot(t, result.eta[:, i, j], label=f"η{c}_{j + 1}")
+        axes[3].set(title=f"Channel {c}: adjustable parameters (33)", ylabel="η", xlabel="t")
+    for a in axes:
+        a.grid(True, alpha=0.3)
+        a.legend(loc="upper right", fontsize="small", ncol=1 + (len(axes) == 4 and a is axes[3]) * 2)
+    if ax is None:
+        fig.tight_layout()
     return fig
 
 
