@@ -170,6 +170,7 @@ fn write_data(dir: &Path, scenario: &Scenario, design: &Design, r: &SimResult, s
     let summary = json!({
         "scenario": scenario.name,
         "truth_differs": scenario.truth_differs(),
+        "limited_fraction": (!r.limited.is_empty()).then(|| r.limited_fraction()),
         "outcome": r.outcome,
         "channels": r.summary(),
         "stats": r.stats,
@@ -193,6 +194,13 @@ fn report_outcome(result: &SimResult, out: &Path, seconds: f64) -> Result<(), Fa
                     c.tail_rms_e,
                     c.max_abs_u,
                     c.final_eta_norm
+                );
+            }
+            for (i, f) in result.limited_fraction().iter().enumerate().filter(|(_, &f)| f > 0.0) {
+                eprintln!(
+                    "input {}: clipped by truth.u_max[{i}] at {:.1} % of the recorded samples",
+                    i + 1,
+                    100.0 * f
                 );
             }
             let steps = match result.stats {
