@@ -112,7 +112,7 @@ impl Actuator {
                 format!("expected a finite delay ≥ 0 in seconds, found {d}"),
             ));
         }
-        if let Some((i, u)) = self.limits.iter().enumerate().find(|(_, u)| !(**u > 0.0)) {
+        if let Some((i, u)) = self.limits.iter().enumerate().find(|(_, u)| u.is_nan() || **u <= 0.0) {
             return Err(KeyError::new(
                 format!("truth.u_max[{i}]"),
                 format!("expected a limit > 0 (inf for none), found {u}"),

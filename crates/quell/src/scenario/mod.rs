@@ -84,9 +84,9 @@ impl Default for Simulation {
     }
 }
 
+pub use crate::settings::Actuator;
 /// Measurement noise on y.
 pub use crate::settings::MeasurementNoise as Noise;
-pub use crate::settings::Actuator;
 pub use crate::settings::{MAX_OUTPUT_SAMPLES, MAX_SAMPLING_STEPS};
 
 impl From<KeyError> for ScenarioError {

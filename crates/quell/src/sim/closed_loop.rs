@@ -305,7 +305,7 @@ impl DelaySystem for ContinuousLoop<'_> {
         if let Some(act) = &mut self.actuator {
             let at = u_d.len() - m;
             let u_p = &mut u_d[at..];
-            act.input(t, s, past, eq, l, (&mut self.eta_d, &mut self.xi_d), u_p);
+            act.input(t, s, past, (eq, l), (&mut self.eta_d, &mut self.xi_d), u_p);
         } else if !self.true_delays.is_empty() {
             let at = u_d.len() - 2 * m;
             let (u_d, u_true) = u_d[at..].split_at_mut(m);
@@ -418,8 +418,7 @@ impl ActuatorPath {
         t: f64,
         s: &[f64],
         past: &Past<'_>,
-        eq: &Equations,
-        l: &Layout,
+        (eq, l): (&Equations, &Layout),
         scratch: (&mut [f64], &mut [f64]),
         u_p: &mut [f64],
     ) {

@@ -231,7 +231,8 @@ impl TrueInput {
         if truth.delays == p.delays {
             return Ok(None);
         }
-        let (d, d_true) = (whole_samples("plant.delays", &p.delays, T)?, whole_samples("truth.delays", &truth.delays, T)?);
+        let (d, d_true) =
+            (whole_samples("plant.delays", &p.delays, T)?, whole_samples("truth.delays", &truth.delays, T)?);
         let m = d.len();
         let len = d.iter().chain(&d_true).max().map_or(1, |x| x + 1);
         Ok(Some(TrueInput {
