@@ -2,6 +2,7 @@
 //! delays τ_i.
 
 use pyo3::prelude::*;
+use pyo3::types::PyTuple;
 use quell::nalgebra::DMatrix;
 
 use crate::convert::{matrix, to_numpy, type_name, vec_numpy, vector};
@@ -165,6 +166,29 @@ impl PyPlant {
     fn __repr__(&self) -> String {
         let p = &self.inner;
         format!("Plant(n={}, m={}, k={}, delays={:?})", p.n(), p.m(), p.k(), p.delays)
+    }
+    /// Equal plants: the same matrices, delays and x0, entry for entry.
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other.cast::<PyPlant>().is_ok_and(|o| o.get().inner == self.inner)
+    }
+    /// Pickles as `Plant(A, B, C, D, Q, delays, x0)` (D and Q omitted without a disturbance).
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let py = slf.py();
+        let (p, me) = (&slf.get().inner, slf.get());
+        let disturbance = p.k() > 0;
+        let args = PyTuple::new(
+            py,
+            [
+                me.A(py),
+                me.B(py),
+                me.C(py),
+                if disturbance { me.D(py) } else { py.None().into_bound(py) },
+                if disturbance { me.Q(py) } else { py.None().into_bound(py) },
+                me.delays(py),
+                me.x0(py),
+            ],
+        )?;
+        Ok((slf.get_type().into_any(), args))
     }
 }
 
