@@ -1,4 +1,5 @@
-//! `quell.Plant`: the plant (1), ẋ = A x + B u_d + D ω, y = C x + Q ω, with input delays τ_i.
+//! `quell.Plant`: the plant (1), ẋ = A x + B u_f + D ω, y = C x + Q ω, with the adaptive command's
+//! delays τ_i.
 
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
@@ -7,8 +8,9 @@ use quell::nalgebra::DMatrix;
 use crate::convert::{matrix, to_numpy, type_name, vec_numpy, vector};
 use crate::errors::{raise, Kind};
 
-/// The plant (1) of the paper: ẋ = A x + B u_d(t) + D ω(t), y = C x + Q ω(t), where
-/// u_d,i(t) = u_f,i(t − τ_i) is input i delayed by τ_i.
+/// The plant (1) of the paper: ẋ = A x + B u_f(t) + D ω(t), y = C x + Q ω(t), driven by the
+/// decoupling law u_f = −K x̂ + F u_d, where u_d,i(t) = u_i(t − τ_i) is adaptive command i delayed by
+/// τ_i (the feedback −K x̂ acts without delay).
 ///
 /// `Plant(A, B, C, D=None, Q=None, delays=None, x0=None)`: array-likes; without D there is no
 /// disturbance (k = 0); Q defaults to 0, delays to 0 and x0 to 0.

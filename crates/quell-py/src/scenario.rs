@@ -300,7 +300,7 @@ impl PyScenario {
         d.set_item("sample_time", s.sample_time)?;
         Ok(d)
     }
-    /// Measurement noise {std, seed}, or None.
+    /// Measurement noise {std, seed, bandwidth} (bandwidth None: white per sample), or None.
     #[getter]
     fn noise<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         self.inner
@@ -310,6 +310,7 @@ impl PyScenario {
                 let d = PyDict::new(py);
                 d.set_item("std", n.std.clone())?;
                 d.set_item("seed", n.seed)?;
+                d.set_item("bandwidth", n.bandwidth)?;
                 Ok(d)
             })
             .transpose()
