@@ -168,7 +168,7 @@ impl ChannelAverage {
     }
 
     /// The averaged law's RMS tracking error at time t for adaptation gain μ:
-    /// √(Σ_k e_k exp(−2μλ_k t) + r²) ([`ChannelAverage::modes`]).
+    /// √(Σ_k e_k exp(−2μλ_k t) + r²) (`ChannelAverage::modes`).
     pub fn predicted_error(&self, mu: f64, t: f64) -> f64 {
         let sum: f64 = self.modes().map(|(l, e)| e * (-2.0 * mu * l * t).exp()).sum();
         (sum + self.residual_rms.powi(2)).sqrt()
