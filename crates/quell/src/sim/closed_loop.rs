@@ -230,7 +230,7 @@ impl DelaySystem for ContinuousLoop<'_> {
     }
 
     /// Per channel (I + c μ_i Ω_i) η̂_i = r_i + c μ_i Y_i, by Cholesky.
-    fn solve_implicit(&mut self, c: f64, z: &mut [f64]) -> bool {
+    fn solve_implicit(&mut self, _t: f64, c: f64, z: &mut [f64]) -> bool {
         let (l, q) = (&self.layout, self.layout.q);
         for (i, ch) in self.eq.channels.iter().enumerate() {
             let (c_mu, eta) = (c * ch.mu, l.eta(i));

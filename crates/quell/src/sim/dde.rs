@@ -66,10 +66,11 @@ pub trait DelaySystem {
     fn implicit_rate(&self, _y: &[f64]) -> f64 {
         0.0
     }
-    /// Solves z_I = r + c·f_I(z) for z_I, where on entry z_I holds r and the other components of z
-    /// are final: (I + c M) z_I = r + c·c(z). `false` when the solve fails (the step is then rejected
-    /// and retried shorter). Must not allocate.
-    fn solve_implicit(&mut self, _c: f64, _z: &mut [f64]) -> bool {
+    /// Solves z_I = r + c·f_I(t, z) for z_I, where on entry z_I holds r and the other components of
+    /// z are final: (I + c M) z_I = r + c·c(t, z). f_I is [`DelaySystem::rhs`] on the implicit block,
+    /// which must not read the past. `false` when the solve fails (the step is then rejected and
+    /// retried shorter). Must not allocate.
+    fn solve_implicit(&mut self, _t: f64, _c: f64, _z: &mut [f64]) -> bool {
         true
     }
 }
@@ -419,8 +420,10 @@ struct Steps<'a, S: DelaySystem> {
     implicit: std::ops::Range<usize>,
     /// Whether the steps are taken by the implicit method (ARK4(3)6L[2]SA) rather than DOP853.
     stiff: bool,
-    /// Consecutive accepted steps that argue for switching method ([`Steps::watch_stiffness`]).
-    stiff_run: usize,
+    /// When to switch method under [`Method::Auto`] ([`Steps::watch_stiffness`]).
+    switching: imex::Switching,
+    /// The implicit block at the step points before the current one, while on the implicit method.
+    earlier: imex::Earlier,
     /// The Hermite stencil must restart at the next step point (after a switch back to DOP853).
     fresh_stencil: bool,
 }
@@ -480,7 +483,8 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
             err: 0.0,
             implicit: sys.implicit(),
             stiff: opts.method == Method::Implicit,
-            stiff_run: 0,
+            switching: imex::Switching::default(),
+            earlier: imex::Earlier::new(sys.implicit().len()),
             fresh_stencil: false,
             sys,
             opts,
@@ -689,6 +693,11 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
     /// carries the FSAL stage over.
     fn advance(&mut self, step: &Step) {
         self.hist.prune(step.t_new - self.tau_max);
+        if self.stiff {
+            self.earlier.push(self.t, &self.y[self.implicit.clone()]);
+        } else {
+            self.earlier.clear();
+        }
         self.t = step.t_new;
         std::mem::swap(&mut self.y, &mut self.y_new);
         if step.at_breakpoint {
