@@ -60,9 +60,11 @@ impl Case {
 /// Factors of μ: 1, 10, …, 1e7.
 const FACTORS: [f64; 8] = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7];
 
-/// Prints the table and returns the stiff onset factor μ_s.
+/// Prints the table, checks the target (steps at 1000 μ_s at most 3× those at μ_s) and returns the
+/// stiff onset factor μ_s.
 fn table(case: &Case) -> f64 {
     let mut onset = None;
+    let mut auto_steps = Vec::new();
     for f in FACTORS {
         let d = case.design(f);
         for method in [Method::Auto, Method::Explicit] {
@@ -79,15 +81,24 @@ fn table(case: &Case) -> f64 {
                         "{} μ×{f:e} {method:?}: {} steps ({} implicit, {} switches), {} rejected, {} RHS, {ms:.1} ms",
                         case.name, s.steps, s.implicit_steps, s.switches, s.rejected, s.rhs_evals
                     );
-                    if method == Method::Auto && 2 * s.implicit_steps > s.steps && onset.is_none() {
-                        onset = Some(f);
+                    if method == Method::Auto {
+                        auto_steps.push((f, s.steps));
+                        if 2 * s.implicit_steps > s.steps && onset.is_none() {
+                            onset = Some(f);
+                        }
                     }
                 }
                 Err(e) => eprintln!("{} μ×{f:e} {method:?}: {e} ({ms:.1} ms)", case.name),
             }
         }
     }
-    onset.unwrap_or(1.0)
+    let onset = onset.expect("the loop turns stiff within the factors tried");
+    let steps_at = |f: f64| auto_steps.iter().find(|&&(g, _)| g == f).map(|&(_, s)| s as f64);
+    if let (Some(s0), Some(s3)) = (steps_at(onset), steps_at(onset * 1e3)) {
+        eprintln!("{}: μ_s = μ × {onset:e}; steps at 1000 μ_s / at μ_s = {:.2}", case.name, s3 / s0);
+        assert!(s3 <= 3.0 * s0, "{}: steps grew {:.2}× from μ_s to 1000 μ_s", case.name, s3 / s0);
+    }
+    onset
 }
 
 fn stiff(c: &mut Criterion) {

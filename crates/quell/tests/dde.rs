@@ -538,10 +538,8 @@ fn relax_error(lambda: f64, layer: bool, method: Method) -> (f64, Stats) {
     let (out, stats) = run_with(&mut sys, &[eta0, 0.0], &[eta0], 10.0, 0.05, 1e-8, method);
     let exact = Relax::new(lambda, layer);
     eprintln!("λ = {lambda:e}, {method:?}: {stats:?}");
-    let worst = out
-        .iter()
-        .flat_map(|(t, y)| y.iter().zip(exact.exact(*t)).map(|(a, b)| (a - b).abs()))
-        .fold(0.0, f64::max);
+    let worst =
+        out.iter().flat_map(|(t, y)| y.iter().zip(exact.exact(*t)).map(|(a, b)| (a - b).abs())).fold(0.0, f64::max);
     eprintln!("  max error {worst:e}");
     (worst, stats)
 }

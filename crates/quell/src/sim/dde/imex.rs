@@ -208,7 +208,15 @@ impl<S: DelaySystem> Steps<'_, S> {
         nodes[k + 1] = 1.0;
         let (w0, w1) = slope_weights(&nodes[..k + 2]);
         for (r, i) in imp.enumerate() {
-            let value = |j: usize| if j < k { e.y[j * b + r] } else if j == k { self.y[i] } else { self.y_new[i] };
+            let value = |j: usize| {
+                if j < k {
+                    e.y[j * b + r]
+                } else if j == k {
+                    self.y[i]
+                } else {
+                    self.y_new[i]
+                }
+            };
             let (s0, s1) = (0..k + 2).fold((0.0, 0.0), |(a, c), j| (a + w0[j] * value(j), c + w1[j] * value(j)));
             let dy = self.y_new[i] - self.y[i];
             c1[i] = s0;
