@@ -91,19 +91,7 @@ fn vector(v: &Value) -> Vec<f64> {
     v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
 }
 
-/// Runs `sys` and collects every output.
-fn run<S: DelaySystem>(
-    sys: &mut S,
-    y0: &[f64],
-    history: &[f64],
-    t_end: f64,
-    dt: f64,
-    tol: f64,
-) -> (Vec<(f64, Vec<f64>)>, Stats) {
-    run_with(sys, y0, history, t_end, dt, tol, Method::Auto)
-}
-
-/// [`run`] with the given method.
+/// Runs `sys` with `method` and collects every output.
 fn run_with<S: DelaySystem>(
     sys: &mut S,
     y0: &[f64],
@@ -197,7 +185,7 @@ fn reference_cases_with(method: Method, bound: f64) {
 #[test]
 fn closed_form_method_of_steps() {
     let mut sys = Linear::new(vec![vec![0.0]], vec![(1.0, vec![vec![-1.0]])]);
-    let (out, stats) = run(&mut sys, &[1.0], &[1.0], 3.0, 0.01, 1e-10);
+    let (out, stats) = run_with(&mut sys, &[1.0], &[1.0], 3.0, 0.01, 1e-10, Method::Auto);
     assert_eq!(out.len(), 301);
     let mut worst: f64 = 0.0;
     for (t, y) in &out {
@@ -225,7 +213,7 @@ fn history_jump_breakpoints() {
         }
     };
     let mut sys = Linear::new(vec![vec![0.0]], vec![(1.0, vec![vec![-1.0]])]);
-    let (out, stats) = run(&mut sys, &[1.0], &[0.0], 3.0, 1e-3, 1e-10);
+    let (out, stats) = run_with(&mut sys, &[1.0], &[0.0], 3.0, 1e-3, 1e-10, Method::Auto);
     let mut worst: f64 = 0.0;
     for (t, y) in &out {
         let e = (y[0] - exact(*t)).abs();
@@ -252,7 +240,7 @@ fn history_jump_breakpoints() {
     assert!(bps.len() >= 8 && bps.windows(2).all(|w| w[1] > w[0]));
     assert!(bps.iter().any(|b| (b - 8.0 / 15.0).abs() < 1e-12));
     let mut sys = Linear::new(vec![vec![0.0]], vec![(delays[0], vec![vec![-1.0]]), (delays[1], vec![vec![-1.0]])]);
-    let (_, stats) = run(&mut sys, &[1.0], &[0.0], 1.0, 0.1, 1e-10);
+    let (_, stats) = run_with(&mut sys, &[1.0], &[0.0], 1.0, 0.1, 1e-10, Method::Auto);
     assert_eq!(stats.breakpoints, bps.len());
 }
 
@@ -411,7 +399,7 @@ impl DelaySystem for Oscillator {
 
 #[test]
 fn plain_ode_dense_output() {
-    let (out, stats) = run(&mut Oscillator, &[1.0, 0.0], &[], 20.0, 0.07, 1e-11);
+    let (out, stats) = run_with(&mut Oscillator, &[1.0, 0.0], &[], 20.0, 0.07, 1e-11, Method::Auto);
     assert_eq!(out.len(), (20.0f64 / 0.07).floor() as usize + 1);
     let mut worst: f64 = 0.0;
     for (t, y) in &out {
@@ -457,7 +445,7 @@ fn delayed_prefix_only() {
         }
         v
     };
-    let (out, stats) = run(&mut Prefix { buf: [0.0] }, &[1.0, 0.0], &[1.0], 3.0, 0.01, 1e-10);
+    let (out, stats) = run_with(&mut Prefix { buf: [0.0] }, &[1.0, 0.0], &[1.0], 3.0, 0.01, 1e-10, Method::Auto);
     let mut worst: f64 = 0.0;
     for (t, y) in &out {
         worst = worst.max((y[0] - exact_unit(*t)).abs()).max((y[1] - x2(*t)).abs());
