@@ -106,6 +106,15 @@ fn stiff(c: &mut Criterion) {
         let onset = table(&case);
         let mut g = c.benchmark_group(format!("stiff_{}", case.name));
         g.sample_size(10);
+        if case.name == "paper" {
+            // The non-stiff run: the automatic method's only extra work is the stiffness watch.
+            let d = case.design(1.0);
+            for method in [Method::Explicit, Method::Auto] {
+                g.bench_with_input(BenchmarkId::new(format!("{method:?}"), 1), &d, |b, d| {
+                    b.iter(|| case.run(d, method).unwrap())
+                });
+            }
+        }
         for k in 0..4 {
             let factor = onset * 10f64.powi(k);
             let d = case.design(factor);
