@@ -36,6 +36,7 @@ pub struct RunArgs {
 
 pub fn run(args: &RunArgs) -> Result<(), Failure> {
     let (scenario, design) = load(args.scenario.as_deref())?;
+    eprint!("{}", report::warnings_text(&quell::design::warnings(&design, &scenario.design)));
     // Every check that can fail on input happens before the output directory is touched.
     let settings = loop_settings(args, &scenario, &design)?;
     let out = &args.out;
@@ -176,7 +177,8 @@ fn write_data(
     seconds: f64,
 ) -> std::io::Result<()> {
     output::write_signals(&dir.join("signals.csv"), r)?;
-    output::write_json(&dir.join("design.json"), &report::design_json(design))?;
+    let warnings = quell::design::warnings(design, &scenario.design);
+    output::write_json(&dir.join("design.json"), &report::with_warnings(report::design_json(design), &warnings))?;
     let summary = json!({
         "scenario": scenario.name,
         "truth_differs": scenario.truth_differs(),

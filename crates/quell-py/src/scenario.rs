@@ -56,6 +56,7 @@ impl PyScenario {
             return Ok(d.clone());
         }
         let d = Arc::new(self.inner.design().map_err(|e| raise(py, Kind::Design)(&e))?);
+        crate::errors::warn_fragile(py, &d, &self.inner.design)?;
         Ok(self.design.get_or_init(|| d).clone())
     }
 }
