@@ -214,7 +214,7 @@ fn report_outcome(result: &SimResult, diagnostics: &Diagnostics, out: &Path, sec
         Outcome::Completed => {
             for (i, c) in result.summary().iter().enumerate() {
                 let settle = match (c.settle_t, &c.settle_note) {
-                    (Some(t), _) => format!("settled (2 % band) at t = {t}"),
+                    (Some(t), _) => format!("settled (2 % band) at t = {t:.6}"),
                     (None, Some(note)) => note.clone(),
                     (None, None) => "not settled".into(),
                 };

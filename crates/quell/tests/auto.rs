@@ -35,7 +35,8 @@ fn scenario(rng: &mut Rng, sigma: &[usize], zeros: &[Vec<f64>], scale: f64) -> S
     let mut at = 0;
     for i in 0..m {
         let ni = sizes[i];
-        let poles: Vec<Complex<f64>> = (0..ni).map(|j| Complex::new(rng.uniform(-3.0, 1.0) - 0.2 * j as f64, 0.0)).collect();
+        let poles: Vec<Complex<f64>> =
+            (0..ni).map(|j| Complex::new(rng.uniform(-3.0, 1.0) - 0.2 * j as f64, 0.0)).collect();
         A.view_mut((at, at), (ni, ni)).copy_from(&companion(&poly_from_roots(&poles)));
         B[(at + ni - 1, i)] = 1.0;
         let mut num = poly_from_roots(&zeros[i].iter().map(|&z| Complex::new(z, 0.0)).collect::<Vec<_>>());

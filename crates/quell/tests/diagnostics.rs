@@ -78,10 +78,16 @@ fn omega_bar_matches_the_mean_of_delta_delta_from_a_simulated_run() {
     let T = 1e-3;
     let settings = SampledSettings::new(40.0, 0.1, T);
     let mut rec = Recording { ctrl: Controller::new(&design, T).unwrap(), xi: Vec::new() };
-    let r = simulate_sampled_with(&design, &mut rec, &s.reference, &s.disturbance, &settings, |_| {
-        ControlFlow::Continue(())
-    })
-    .unwrap();
+    let r =
+        simulate_sampled_with(
+            &design,
+            &mut rec,
+            &s.reference,
+            &s.disturbance,
+            &settings,
+            |_| ControlFlow::Continue(()),
+        )
+        .unwrap();
     let q = design.q();
     let avg = Averaged::new(&design, &s.reference, &s.disturbance);
     for (i, c) in avg.channels.iter().enumerate() {

@@ -1,7 +1,7 @@
 """Type stubs of the quell package (the native module quell._quell and quell._errors)."""
 
 from os import PathLike
-from typing import Any, Dict, Iterator, List, Optional, Sequence, Union, final
+from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple, Union, final
 
 import numpy as np
 import numpy.typing as npt
@@ -275,3 +275,7 @@ class RunSpec:
 def sweep(study: Union[Study, str, PathLike[str]], *, jobs: Optional[int] = None) -> Any: ...
 def sweep_runs(study: Union[Study, str, PathLike[str]]) -> Iterator[RunSpec]: ...
 def run_one(spec: RunSpec) -> Dict[str, Any]: ...
+
+def auto_design(
+    text: str, *, convergence_time: Optional[float] = None, u_limit: Optional[float] = None
+) -> Tuple[Scenario, Dict[str, Any]]: ...

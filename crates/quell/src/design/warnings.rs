@@ -43,9 +43,12 @@ pub fn warnings(design: &Design, spec: &DesignSpec) -> Vec<DesignWarning> {
         }
         ObserverChoice::Gain(_) => (1, None, None),
     };
-    if multiplicity > rank || !(kappa <= FRAGILE_CONDITION) || error.is_some_and(|e| e > FRAGILE_ERROR) {
+    if multiplicity > rank || fragile(kappa) || error.is_some_and(|e| e > FRAGILE_ERROR) {
         let why = match repeated.filter(|_| multiplicity > rank) {
-            Some(pole) => format!("pole {} is requested {multiplicity} times, more than rank C = {rank}, so A − LC has a Jordan block; ", fmt_complex(&pole)),
+            Some(pole) => format!(
+                "pole {} is requested {multiplicity} times, more than rank C = {rank}, so A − LC has a Jordan block; ",
+                fmt_complex(&pole)
+            ),
             None => String::new(),
         };
         out.push(DesignWarning {
@@ -61,7 +64,7 @@ pub fn warnings(design: &Design, spec: &DesignSpec) -> Vec<DesignWarning> {
         });
     }
     let kappa = design.decoupled_eigenvector_condition();
-    if !(kappa <= FRAGILE_CONDITION) {
+    if fragile(kappa) {
         out.push(DesignWarning {
             key: "design.channel_poles",
             multiplicity: 0,
@@ -74,6 +77,11 @@ pub fn warnings(design: &Design, spec: &DesignSpec) -> Vec<DesignWarning> {
         });
     }
     out
+}
+
+/// κ₂ above [`FRAGILE_CONDITION`], or NaN.
+fn fragile(kappa: f64) -> bool {
+    kappa.is_nan() || kappa > FRAGILE_CONDITION
 }
 
 /// The pole requested most often and its count (relative tolerance 1e-8).
@@ -130,6 +138,10 @@ mod tests {
         let o = w.iter().find(|w| w.key == "design.observer_poles").expect("a warning on the observer");
         assert_eq!((o.multiplicity, o.rank), (3, 2));
         assert!(o.eigenvector_condition > FRAGILE_CONDITION, "{o:?}");
-        assert!(o.message.contains("requested 3 times, more than rank C = 2") && o.message.contains("give distinct poles"), "{}", o.message);
+        assert!(
+            o.message.contains("requested 3 times, more than rank C = 2") && o.message.contains("give distinct poles"),
+            "{}",
+            o.message
+        );
     }
 }
