@@ -12,7 +12,7 @@ docstrings refer to that paper.
 {'status': 'completed'}
 """
 
-from ._errors import DesignError, QuellError, ScenarioError, SimulationError
+from ._errors import DesignError, ExportError, QuellError, ScenarioError, SimulationError
 from ._quell import (
     Controller,
     Design,
@@ -24,6 +24,7 @@ from ._quell import (
     __version__,
     auto_design,
     design,
+    export,
     paper_example,
     place,
     run_one,
@@ -36,6 +37,7 @@ __all__ = [
     "Controller",
     "Design",
     "DesignError",
+    "ExportError",
     "Plant",
     "QuellError",
     "RunSpec",
@@ -47,6 +49,7 @@ __all__ = [
     "__version__",
     "auto_design",
     "design",
+    "export",
     "paper_example",
     "place",
     "run_one",
