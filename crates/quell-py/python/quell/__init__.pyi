@@ -28,6 +28,7 @@ __all__ = [
     "SimulationError",
     "Study",
     "__version__",
+    "auto_design",
     "design",
     "export",
     "paper_example",
