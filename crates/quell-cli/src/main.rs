@@ -121,11 +121,12 @@ fn design(args: &auto::DesignArgs) -> Result<(), Failure> {
             "{flag}: only with --auto (the automatic design); add --auto or remove {flag}"
         )));
     }
-    let (_, d) = load(Some(&args.scenario))?;
+    let (s, d) = load(Some(&args.scenario))?;
+    let warnings = quell::design::warnings(&d, &s.design);
     if args.json {
-        print_stdout(&format!("{}\n", serde_json::to_string_pretty(&report::design_json(&d)).unwrap_or_default()));
+        print_json(&report::with_warnings(report::design_json(&d), &warnings));
     } else {
-        print_stdout(&report::design_text(&d));
+        print_stdout(&format!("{}{}", report::design_text(&d), report::warnings_text(&warnings)));
     }
     Ok(())
 }
