@@ -5,6 +5,7 @@
 //! 2 bad input or an infeasible design.
 
 mod export;
+mod interrupt;
 mod output;
 mod plot;
 mod report;
@@ -98,6 +99,7 @@ pub(crate) fn load(path: Option<&Path>) -> Result<(Scenario, Design), Failure> {
 }
 
 fn design(path: &Path, as_json: bool) -> Result<(), Failure> {
+    interrupt::Interrupt::quit_with("interrupted during the design; nothing was printed");
     let (_, d) = load(Some(path))?;
     if as_json {
         print_stdout(&format!("{}\n", serde_json::to_string_pretty(&report::design_json(&d)).unwrap_or_default()));
@@ -108,7 +110,24 @@ fn design(path: &Path, as_json: bool) -> Result<(), Failure> {
 }
 
 /// Writes to stdout; a closed pipe (`quell design … | head`) ends the output quietly.
-fn print_stdout(text: &str) {
+pub(crate) fn print_stdout(text: &str) {
     use std::io::Write;
     let _ = std::io::stdout().lock().write_all(text.as_bytes());
+}
+
+/// A progress bar of `len` steps drawn on stderr with `template` when stderr is a terminal, hidden
+/// otherwise.
+pub(crate) fn progress_bar(len: u64, template: &str) -> indicatif::ProgressBar {
+    use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+    use std::io::IsTerminal;
+    let bar = ProgressBar::new(len);
+    if std::io::stderr().is_terminal() {
+        bar.set_draw_target(ProgressDrawTarget::stderr());
+        if let Ok(style) = ProgressStyle::with_template(template) {
+            bar.set_style(style);
+        }
+    } else {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    bar
 }

@@ -93,3 +93,39 @@ fn second_ctrl_c_quits_a_run_stuck_between_samples() {
     assert!(stderr.contains("interrupted twice"), "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn sigterm_is_handled_like_ctrl_c() {
+    // A batch system's time limit (Slurm sends SIGTERM) killed the run with nothing written.
+    let dir = scratch_dir("sigterm");
+    let scenario = paper_with(&dir, &[("t_end = 100.0", "t_end = 100000.0")]);
+    let out = dir.join("out");
+    let mut wait = Duration::from_millis(500);
+    let (output, stderr) = loop {
+        let child = Command::new(env!("CARGO_BIN_EXE_quell"))
+            .arg("run")
+            .arg(&scenario)
+            .arg("--no-plots")
+            .arg("--out")
+            .arg(&out)
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start quell");
+        std::thread::sleep(wait);
+        let status = Command::new("kill").args(["-TERM", &child.id().to_string()]).status().expect("run kill");
+        assert!(status.success());
+        let output = child.wait_with_output().expect("wait for quell");
+        let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+        // Before its first recorded sample the run cannot stop at one; wait longer and retry.
+        if output.status.code() != Some(1) && wait < Duration::from_secs(8) {
+            wait *= 2;
+            continue;
+        }
+        break (output, stderr);
+    };
+    assert_eq!(output.status.code(), Some(1), "stderr: {stderr}");
+    assert!(stderr.contains("interrupted at t = "), "{stderr}");
+    let summary = check_outputs(&out);
+    assert_eq!(summary["outcome"]["status"], "interrupted", "{summary}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
