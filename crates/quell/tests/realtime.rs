@@ -387,11 +387,15 @@ fn a_spike_beyond_the_measurement_bound_is_refused_and_one_within_it_stays_finit
     assert_eq!(e, "Controller::step: y[0] = 1e160 is beyond ±1e100 (or not finite), the largest measurement the controller takes; the step was refused and its state kept (hold the previous input, check the sensor, and call reset() if the fault persisted)");
 
     // At the bound: accepted. Such a spike is beyond what the paper's design can follow (η̂ jumps to
-    // ~1e95, and u = −η̂ᵀξ̂ squares the scale at every pass of the delay lines), so the state
-    // overflows some 2500 steps later: every step until then gives a finite u_f, and from then on
+    // ~1e95 after 6 s of a sawtooth y, and u = −η̂ᵀξ̂ squares the scale at every pass of the delay
+    // lines), so the state overflows some 3000 steps later: every step until then gives a finite u_f, and from then on
     // each one says so (never a NaN as a result) until reset(), after which it is a fresh controller.
     let mut ctrl = Controller::new(&d, 1e-3).unwrap();
     let mut fresh = Controller::new(&d, 1e-3).unwrap();
+    for k in 0..6000 {
+        let y = [0.3 * (k % 100) as f64 / 100.0, -0.2 * (k % 37) as f64 / 37.0];
+        ctrl.step(&y, &[1.0, 2.0]).unwrap();
+    }
     ctrl.step(&[1e100, -1e100], &[1.0, 2.0]).unwrap();
     let mut failed_at = None;
     for k in 0..6000 {
