@@ -4,6 +4,7 @@
 //! Exit codes: 0 success, 1 a run that failed (diverged, solver failure, interrupted),
 //! 2 bad input or an infeasible design.
 
+mod auto;
 mod export;
 mod interrupt;
 mod output;
@@ -35,13 +36,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Compute every gain from a scenario file and check the paper's assumptions.
-    Design {
-        /// Scenario file (TOML).
-        scenario: PathBuf,
-        /// Print one JSON object instead of text.
-        #[arg(long)]
-        json: bool,
-    },
+    Design(auto::DesignArgs),
     /// Simulate the closed loop; write signals.csv, design.json, summary.json and plots.
     Run(run::RunArgs),
     /// Write the real-time controller as dependency-free C99 (<PREFIX>_controller.h and .c).
@@ -63,7 +58,8 @@ pub(crate) enum Failure {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Some(Command::Design { scenario, json }) => design(&scenario, json),
+        Some(Command::Design(args)) if args.auto => auto::auto(&args),
+        Some(Command::Design(args)) => design(&args),
         Some(Command::Run(args)) => run::run(&args),
         Some(Command::Export(args)) => export::run(&args),
         Some(Command::Sweep(args)) => sweep::sweep(&args),
@@ -88,6 +84,10 @@ fn main() -> ExitCode {
     }
 }
 
+pub(crate) fn print_json(value: &serde_json::Value) {
+    print_stdout(&format!("{}\n", serde_json::to_string_pretty(value).unwrap_or_default()));
+}
+
 pub(crate) fn load(path: Option<&Path>) -> Result<(Scenario, Design), Failure> {
     let scenario = match path {
         Some(p) => Scenario::from_path(p),
@@ -98,10 +98,15 @@ pub(crate) fn load(path: Option<&Path>) -> Result<(Scenario, Design), Failure> {
     Ok((scenario, design))
 }
 
-fn design(path: &Path, as_json: bool) -> Result<(), Failure> {
+fn design(args: &auto::DesignArgs) -> Result<(), Failure> {
+    if let Some(flag) = args.auto_only_flag() {
+        return Err(Failure::Input(format!(
+            "{flag}: only with --auto (the automatic design); add --auto or remove {flag}"
+        )));
+    }
     interrupt::Interrupt::quit_with("interrupted during the design; nothing was printed");
-    let (_, d) = load(Some(path))?;
-    if as_json {
+    let (_, d) = load(Some(&args.scenario))?;
+    if args.json {
         print_stdout(&format!("{}\n", serde_json::to_string_pretty(&report::design_json(&d)).unwrap_or_default()));
     } else {
         print_stdout(&report::design_text(&d));

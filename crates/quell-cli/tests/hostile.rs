@@ -244,7 +244,7 @@ fn the_report_prints_eta_with_significant_digits() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let line = stderr(&o).lines().find(|l| l.starts_with("channel 1:")).unwrap().to_string();
-    let eta = line.split("‖η̂‖ = ").nth(1).unwrap();
+    let eta = line.split("‖η̂‖ = ").nth(1).unwrap().split(',').next().unwrap();
     assert!(eta.contains('e'), "{line}");
     let value: f64 = eta.trim().parse().unwrap();
     assert!(value > 0.0, "{line}");

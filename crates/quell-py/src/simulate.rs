@@ -24,6 +24,8 @@ pub struct PySimResult {
     inner: SimResult,
     /// t, y, g, e, u, eta.
     arrays: [Py<PyAny>; 6],
+    /// The run's convergence diagnostics as JSON ([`quell::diagnostics::Diagnostics`]).
+    diagnostics: String,
 }
 
 fn frozen_array(py: Python<'_>, data: &[f64], shape: &[usize]) -> PyResult<Py<PyAny>> {
@@ -35,7 +37,7 @@ fn frozen_array(py: Python<'_>, data: &[f64], shape: &[usize]) -> PyResult<Py<Py
 }
 
 impl PySimResult {
-    fn new(py: Python<'_>, r: SimResult) -> PyResult<Self> {
+    fn new(py: Python<'_>, r: SimResult, diagnostics: String) -> PyResult<Self> {
         let (n, m, q) = (r.len(), r.m, r.q);
         let arrays = [
             frozen_array(py, &r.t, &[n])?,
@@ -45,7 +47,7 @@ impl PySimResult {
             frozen_array(py, &r.u, &[n, m])?,
             frozen_array(py, &r.eta, &[n, m, q])?,
         ];
-        Ok(PySimResult { inner: r, arrays })
+        Ok(PySimResult { inner: r, arrays, diagnostics })
     }
 }
 
@@ -146,7 +148,8 @@ impl PySimResult {
         Ok(d)
     }
     /// Per channel, as summary.json: tail max |e_i| and RMS e_i over the last 10 % of the horizon,
-    /// max |u_i|, and ‖η̂_i‖ at the end.
+    /// max |u_i|, ‖η̂_i‖ at the end, settle_t (2 % band; None when not settled, or only in the
+    /// last 5 % of the horizon) and settle_note (why settle_t is None).
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         self.inner
             .summary()
@@ -157,9 +160,17 @@ impl PySimResult {
                 d.set_item("tail_rms_e", c.tail_rms_e)?;
                 d.set_item("max_abs_u", c.max_abs_u)?;
                 d.set_item("final_eta_norm", c.final_eta_norm)?;
+                d.set_item("settle_t", c.settle_t)?;
+                d.set_item("settle_note", c.settle_note.as_deref())?;
                 Ok(d)
             })
             .collect()
+    }
+    /// Convergence diagnostics, as summary.json: {"channels": [per channel lambda_min_omega,
+    /// lambda_max_omega, convergence_time, adaptation_rate, predicted_final_rms_e, tail_trend,
+    /// excitation, advice], "observer_fidelity": [...], "advice": [...]}; see docs/tuning.md.
+    fn diagnostics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        py.import("json")?.call_method1("loads", (&self.diagnostics,))
     }
     /// The columns of signals.csv (t, y1.., g1.., e1.., u1.., eta1_1..) as a pandas DataFrame.
     fn to_pandas(slf: &Bound<'_, Self>) -> PyResult<Py<PyAny>> {
@@ -250,7 +261,9 @@ pub fn simulate(
     }
     let result = result.map_err(|e| raise(py, Kind::Scenario)(&e))?;
     let outcome = result.outcome.clone().unwrap_or(Outcome::Completed);
-    let result = Py::new(py, PySimResult::new(py, result)?)?;
+    let diagnostics = quell::diagnostics::diagnose(&design, &scn.reference, &scn.disturbance, &result);
+    let diagnostics = serde_json::to_string(&diagnostics).unwrap_or_default();
+    let result = Py::new(py, PySimResult::new(py, result, diagnostics)?)?;
     if !check {
         return Ok(result);
     }
