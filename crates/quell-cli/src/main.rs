@@ -74,14 +74,32 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure::Input(msg)) => {
-            eprintln!("error: {msg}");
+            eprintln!("error: {}", in_flags(msg));
             ExitCode::from(2)
         }
         Err(Failure::Run(msg)) => {
-            eprintln!("error: {msg}");
+            eprintln!("error: {}", in_flags(msg));
             ExitCode::from(1)
         }
     }
+}
+
+/// Library keys that a flag sets, as the CLI names them.
+const FLAGS: [(&str, &str); 4] = [
+    ("simulation.sample_time", "simulation.sample_time (--sample-time)"),
+    ("prefix", "--prefix"),
+    ("precision", "--precision"),
+    ("compiler", "--compiler"),
+];
+
+/// A library message whose leading key a flag sets, with the flag named.
+fn in_flags(msg: String) -> String {
+    for (key, flag) in FLAGS {
+        if let Some(rest) = msg.strip_prefix(key).filter(|r| r.starts_with([':', ' '])) {
+            return format!("{flag}{rest}");
+        }
+    }
+    msg
 }
 
 pub(crate) fn print_json(value: &serde_json::Value) {

@@ -1,6 +1,7 @@
 """Type stubs of the quell package (the native module quell._quell and quell._errors)."""
 
 from os import PathLike
+from pathlib import Path
 from typing import Any, Dict, Iterator, List, Optional, Sequence, Union, final
 
 import numpy as np
@@ -17,6 +18,7 @@ __all__ = [
     "Controller",
     "Design",
     "DesignError",
+    "ExportError",
     "Plant",
     "QuellError",
     "RunSpec",
@@ -27,6 +29,7 @@ __all__ = [
     "Study",
     "__version__",
     "design",
+    "export",
     "paper_example",
     "place",
     "run_one",
@@ -41,6 +44,7 @@ class ScenarioError(QuellError, ValueError):
     key: Optional[str]
 
 class DesignError(QuellError, ValueError): ...
+class ExportError(QuellError, ValueError): ...
 
 class SimulationError(QuellError, RuntimeError):
     t: Optional[float]
@@ -231,6 +235,16 @@ def design(
 ) -> Design: ...
 def place(A: _ArrayLike, B: _ArrayLike, poles: _Poles) -> npt.NDArray[np.float64]: ...
 def paper_example() -> Scenario: ...
+def export(
+    source: Union[Scenario, Design],
+    sample_time: Optional[float] = None,
+    *,
+    out: Union[str, PathLike[str], None] = None,
+    prefix: str = "quell",
+    precision: Optional[str] = None,
+    fmu: bool = False,
+    compiler: Optional[str] = None,
+) -> List[Path]: ...
 def simulate(
     scenario: Scenario,
     *,
