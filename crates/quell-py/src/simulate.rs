@@ -172,6 +172,11 @@ impl PySimResult {
     fn diagnostics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         py.import("json")?.call_method1("loads", (&self.diagnostics,))
     }
+    /// The run as a `control.TimeResponseData`: outputs y (m × samples, labels `y[i]`), inputs the
+    /// adaptive commands u (labels `u[i]`), so python-control's plotting and analysis apply.
+    fn to_control(slf: &Bound<'_, Self>) -> PyResult<Py<PyAny>> {
+        Ok(slf.py().import("quell._control")?.call_method1("to_control", (slf,))?.unbind())
+    }
     /// The columns of signals.csv (t, y1.., g1.., e1.., u1.., eta1_1..) as a pandas DataFrame.
     fn to_pandas(slf: &Bound<'_, Self>) -> PyResult<Py<PyAny>> {
         Ok(slf.py().import("quell._frames")?.call_method1("to_pandas", (slf,))?.unbind())
@@ -186,14 +191,15 @@ impl PySimResult {
     fn __len__(&self) -> usize {
         self.inner.len()
     }
-    fn __repr__(&self) -> String {
-        format!(
-            "SimResult(samples={}, m={}, q={}, outcome={:?})",
+    /// Python's repr, the outcome as the `outcome` property's dict.
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        Ok(format!(
+            "SimResult(samples={}, m={}, q={}, outcome={})",
             self.inner.len(),
             self.inner.m,
             self.inner.q,
-            self.inner.outcome
-        )
+            self.outcome(py)?.repr()?
+        ))
     }
 }
 

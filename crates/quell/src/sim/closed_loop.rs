@@ -1,7 +1,9 @@
 //! The continuous closed loop (notes, "The closed loop, wired once"): plant (1) with input (5),
 //! controller [`Equations`], integrated as a delay equation by [`dde::solve`].
 
+use std::cell::Cell;
 use std::ops::ControlFlow;
+use std::rc::Rc;
 
 use nalgebra::{DMatrix, DVector};
 
@@ -12,7 +14,7 @@ use super::{check_run, SimError};
 use crate::controller::{command, mat_vec, packed, swapping_error, Equations};
 use crate::design::Design;
 use crate::plant::{Plant, PlantError};
-use crate::settings::KeyError;
+use crate::settings::{Actuator, KeyError, MeasurementNoise};
 use crate::signal::{Signal, SignalBank};
 
 /// Offsets of the loop's state vector [z = (ξ̂, x̂), η̂_1, …, η̂_m, x, filters]. The delayed terms
@@ -75,12 +77,16 @@ pub struct ContinuousLoop<'a> {
     layout: Layout,
     delays: Vec<f64>,
     /// The true plant's input delays where one differs from the design's (`[truth]`): the plant
-    /// then reads u_i(t − τ_i^true) while the controller keeps τ_i. Empty when all agree.
+    /// then reads u_i(t − τ_i^true) while the controller keeps τ_i. Empty when all agree, and with
+    /// an `actuator` (which reads the true delays itself).
     true_delays: Vec<f64>,
+    /// The true plant's actuator, when it delays or limits u_f.
+    actuator: Option<ActuatorPath>,
     // Scratch.
     y: Vec<f64>,
-    /// e = [g; ω; u_d] (and u_d at the true delays, with `true_delays`), the loop's inputs other
-    /// than the state.
+    /// e = [g; ω; n; u_d; u_p], the loop's inputs other than the state: the measurement noise n
+    /// when there is some, and the true plant's input u_p (u_d at the true delays with
+    /// `true_delays`, the whole input with an `actuator`) when it is not the design's.
     e: Vec<f64>,
     eta_d: Vec<f64>,
     xi_d: Vec<f64>,
@@ -92,6 +98,59 @@ impl<'a> ContinuousLoop<'a> {
     /// The loop for a design and the true reference and disturbance signals.
     pub fn new(design: &'a Design, reference: &'a Signal, disturbance: &'a Signal) -> Result<Self, KeyError> {
         ContinuousLoop::with_truth(design, design.plant(), reference, disturbance)
+    }
+
+    /// [`ContinuousLoop::with_truth`] with the true plant's actuator between u_f and the plant
+    /// ([`Actuator`]; `None` or an ideal one: u_f itself) and band-limited measurement noise added
+    /// to the y the controller reads ([`MeasurementNoise`] with a bandwidth; the recorded y stays
+    /// the plant's).
+    pub fn with_physics(
+        design: &'a Design,
+        truth: &'a Plant,
+        reference: &'a Signal,
+        disturbance: &'a Signal,
+        actuator: Option<&Actuator>,
+        noise: Option<&MeasurementNoise>,
+    ) -> Result<Self, KeyError> {
+        let m = design.plant().m();
+        let actuator = actuator.filter(|a| !a.is_ideal());
+        if let Some(a) = actuator {
+            a.check(m)?;
+        }
+        let noise = match noise {
+            Some(nz) => {
+                nz.check(m)?;
+                nz.check_continuous()?;
+                super::noise::band_limited(nz)
+            }
+            None => None,
+        };
+        let mut lp = ContinuousLoop::with_truth(design, truth, reference, disturbance)?;
+        if actuator.is_none() && noise.is_none() {
+            return Ok(lp);
+        }
+        let eq = &lp.eq;
+        let n_signals = lp.signals.len() + noise.as_ref().map_or(0, Signal::len);
+        let path = actuator.map(|a| ActuatorPath::new(design, truth, a));
+        if let Some(path) = &path {
+            lp.delays.extend(path.delays().filter(|&d| d > 0.0));
+            lp.delays.sort_by(f64::total_cmp);
+            lp.delays.dedup();
+            lp.true_delays.clear();
+        }
+        let input = match (&path, lp.true_delays.is_empty()) {
+            (Some(_), _) => PlantInput::Explicit,
+            (None, false) => PlantInput::TrueDelays,
+            (None, true) => PlantInput::Design,
+        };
+        let e_len = n_signals + m + if input == PlantInput::Design { 0 } else { m };
+        let at = InputsAt::new(&lp.layout, m, truth.k(), noise.is_some());
+        lp.linear = LinearPart::new(design, truth, eq, &lp.layout, at, input);
+        let signals: Vec<&Signal> = [reference, disturbance].into_iter().chain(noise.as_ref()).collect();
+        lp.signals = SignalBank::new(&signals);
+        lp.e = vec![0.0; e_len];
+        lp.actuator = path;
+        Ok(lp)
     }
 
     /// The loop whose simulated plant is `truth`; observers, filters and gains keep the design
@@ -113,8 +172,10 @@ impl<'a> ContinuousLoop<'a> {
         delays.sort_by(f64::total_cmp);
         delays.dedup();
         let (m, q, k) = (eq.m, eq.q, p.k());
+        let input = if true_delays.is_empty() { PlantInput::Design } else { PlantInput::TrueDelays };
         Ok(ContinuousLoop {
-            linear: LinearPart::new(design, truth, &eq, &layout, !true_delays.is_empty()),
+            linear: LinearPart::new(design, truth, &eq, &layout, InputsAt::new(&layout, m, k, false), input),
+            actuator: None,
             C: &truth.C,
             Q: &truth.Q,
             signals: SignalBank::new(&[reference, disturbance]),
@@ -152,6 +213,7 @@ impl<'a> ContinuousLoop<'a> {
             Q: self.Q,
             signals: self.signals.clone(),
             gw: vec![0.0; self.signals.len()],
+            limited: self.actuator.as_ref().map(|a| a.limited.clone()),
         }
     }
 }
@@ -163,8 +225,10 @@ struct Probe<'a> {
     C: &'a DMatrix<f64>,
     Q: &'a DMatrix<f64>,
     signals: SignalBank,
-    /// [g; ω].
+    /// [g; ω] (and the noise n, not read here).
     gw: Vec<f64>,
+    /// Per input: whether the actuator's limit clipped it at the latest evaluation of the derivative.
+    limited: Option<Rc<[Cell<bool>]>>,
 }
 
 impl Probe<'_> {
@@ -173,6 +237,7 @@ impl Probe<'_> {
         let l = &self.layout;
         self.signals.eval_into_unchecked(t, &mut self.gw);
         let (g_t, w) = self.gw.split_at(g.len());
+        let w = &w[..self.Q.ncols()];
         g.copy_from_slice(g_t);
         mat_vec(self.C, &s[l.x..l.x + self.eq.n], y, false);
         mat_vec(self.Q, w, y, true);
@@ -216,7 +281,7 @@ impl DelaySystem for ContinuousLoop<'_> {
         let eq = &self.eq;
         let l = &self.layout;
         let (m, q) = (eq.m, eq.q);
-        // e = [g; ω; u_d].
+        // e = [g; ω; n; u_d; u_p].
         let (gw, u_d) = self.e.split_at_mut(self.signals.len());
         self.signals.eval_into_unchecked(t, gw);
 
@@ -235,17 +300,20 @@ impl DelaySystem for ContinuousLoop<'_> {
             }
             u_in[0] = u_d[i];
         }
-        // The true plant's input reads the command at its own delays (`[truth]`).
-        if !self.true_delays.is_empty() {
-            let (u_d, u_true) = u_d.split_at_mut(m);
+        // The true plant's input through its actuator, or reading the command at its own delays
+        // (`[truth]`).
+        if let Some(act) = &mut self.actuator {
+            let at = u_d.len() - m;
+            let u_p = &mut u_d[at..];
+            act.input(t, s, past, (eq, l), (&mut self.eta_d, &mut self.xi_d), u_p);
+        } else if !self.true_delays.is_empty() {
+            let at = u_d.len() - 2 * m;
+            let (u_d, u_true) = u_d[at..].split_at_mut(m);
             for (i, (&tau, u)) in self.true_delays.iter().zip(u_true.iter_mut()).enumerate() {
                 *u = if tau == eq.channels[i].delay {
                     u_d[i]
-                } else if tau > 0.0 {
-                    past.eval_ranges(t - tau, [(0, &mut self.xi_d[..]), (l.eta(i), &mut self.eta_d[..])]);
-                    command(&self.eta_d, &self.xi_d)
                 } else {
-                    command(&s[l.eta(i)..l.eta(i) + q], eq.regressor(s))
+                    command_at(eq, l, (t, tau), i, s, past, (&mut self.eta_d, &mut self.xi_d))
                 };
             }
         }
@@ -288,6 +356,127 @@ impl DelaySystem for ContinuousLoop<'_> {
     }
 }
 
+/// u_j(t − lag), the command (25) of channel j, from the state (lag = 0) or the history; `at` is
+/// (t, lag), `scratch` (η̂_j, ξ̂) at t − lag.
+#[inline]
+fn command_at(
+    eq: &Equations,
+    l: &Layout,
+    (t, lag): (f64, f64),
+    j: usize,
+    s: &[f64],
+    past: &Past<'_>,
+    (eta_d, xi_d): (&mut [f64], &mut [f64]),
+) -> f64 {
+    if lag > 0.0 {
+        past.eval_ranges(t - lag, [(0, &mut *xi_d), (l.eta(j), &mut *eta_d)]);
+        command(eta_d, xi_d)
+    } else {
+        command(&s[l.eta(j)..l.eta(j) + l.q], eq.regressor(s))
+    }
+}
+
+/// The true plant's input through its actuator ([`Actuator`]):
+/// u_p,i(t) = sat_i(−K_i x̂(t − τ_a,i) + Σ_j F_ij u_j(t − τ_a,i − τ_j^true)), i.e. input (5) delayed
+/// by τ_a,i and clipped to ±u_max,i.
+struct ActuatorPath {
+    actuator: Actuator,
+    /// τ_j^true: the true plant's delays of the adaptive command.
+    command_delays: Vec<f64>,
+    K: DMatrix<f64>,
+    F: DMatrix<f64>,
+    /// Scratch: x̂ and the commands u_j at the delayed times.
+    x_hat: Vec<f64>,
+    u: Vec<f64>,
+    /// Per input: whether the limit clipped it at the latest evaluation (shared with the probe).
+    limited: Rc<[Cell<bool>]>,
+}
+
+impl ActuatorPath {
+    fn new(design: &Design, truth: &Plant, actuator: &Actuator) -> Self {
+        let m = truth.m();
+        ActuatorPath {
+            actuator: actuator.clone(),
+            command_delays: truth.delays.clone(),
+            K: design.K().clone(),
+            F: design.F().clone(),
+            x_hat: vec![0.0; truth.n()],
+            u: vec![0.0; m],
+            limited: (0..m).map(|_| Cell::new(false)).collect(),
+        }
+    }
+
+    /// Every delay the input reads: τ_a,i and τ_a,i + τ_j^true.
+    fn delays(&self) -> impl Iterator<Item = f64> + '_ {
+        let a = &self.actuator.delays;
+        a.iter().copied().chain(a.iter().flat_map(|ta| self.command_delays.iter().map(move |tj| ta + tj)))
+    }
+
+    /// u_p at time t.
+    fn input(
+        &mut self,
+        t: f64,
+        s: &[f64],
+        past: &Past<'_>,
+        (eq, l): (&Equations, &Layout),
+        scratch: (&mut [f64], &mut [f64]),
+        u_p: &mut [f64],
+    ) {
+        let (eta_d, xi_d) = scratch;
+        for (i, u_i) in u_p.iter_mut().enumerate() {
+            let ta = self.actuator.delays[i];
+            if ta > 0.0 {
+                past.eval_ranges(t - ta, [(eq.q, &mut self.x_hat[..])]);
+            } else {
+                self.x_hat.copy_from_slice(eq.x_hat(s));
+            }
+            for (j, u_j) in self.u.iter_mut().enumerate() {
+                *u_j = command_at(eq, l, (t, ta + self.command_delays[j]), j, s, past, (&mut *eta_d, &mut *xi_d));
+            }
+            let mut v = 0.0;
+            for c in 0..self.x_hat.len() {
+                v -= self.K[(i, c)] * self.x_hat[c];
+            }
+            for j in 0..self.u.len() {
+                v += self.F[(i, j)] * self.u[j];
+            }
+            let limit = self.actuator.limits[i];
+            self.limited[i].set(v.abs() > limit);
+            *u_i = v.clamp(-limit, limit);
+        }
+    }
+}
+
+/// How the simulated plant's input enters the linear part.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum PlantInput {
+    /// u_f = −K x̂ + F u_d as the controller computes it.
+    Design,
+    /// −K x̂ + F u_d at the true delays (the entries u_p of e).
+    TrueDelays,
+    /// B u_p with u_p the whole input computed in `rhs` (an actuator).
+    Explicit,
+}
+
+/// Where the loop's inputs sit among the operator's columns (after the state's `dim`): e = [g; ω;
+/// n; u_d; u_p].
+#[derive(Debug, Clone, Copy)]
+struct InputsAt {
+    g: usize,
+    w: usize,
+    noise: Option<usize>,
+    u_d: usize,
+    u_p: usize,
+}
+
+impl InputsAt {
+    fn new(l: &Layout, m: usize, k: usize, noise: bool) -> Self {
+        let (g, w) = (l.dim, l.dim + m);
+        let u_d = w + k + if noise { m } else { 0 };
+        InputsAt { g, w, noise: noise.then_some(w + k), u_d, u_p: u_d + m }
+    }
+}
+
 /// The loop's linear part as a sparse operator: the rows of x (plant (1) with u_f = −K x̂ + F u_d,
 /// eq. (5)) and of the core z ([`Equations::A_z`], [`Equations::B_z`] with y = C x + Q ω substituted),
 /// and the output y = C x + Q ω itself, over the state and e = [g; ω; u_d]. Built once; the products
@@ -304,31 +493,35 @@ struct LinearPart {
 }
 
 impl LinearPart {
-    /// `p` is the simulated plant; with `true_input` its input reads u_d at the true delays, the
-    /// entries of e after u_d.
-    fn new(design: &Design, p: &Plant, eq: &Equations, l: &Layout, true_input: bool) -> Self {
-        let (n, m, k, nz, dim) = (eq.n, eq.m, p.k(), eq.nz, l.dim);
-        let (e_g, e_w, e_u) = (dim, dim + m, dim + m + k);
-        let e_u_plant = if true_input { e_u + m } else { e_u };
+    /// `p` is the simulated plant, `input` how its input enters; `at` places e's entries. The
+    /// noise n (when `at` has it) adds to the measured y that the core and the y rows read.
+    fn new(design: &Design, p: &Plant, eq: &Equations, l: &Layout, at: InputsAt, input: PlantInput) -> Self {
+        let (n, m, nz, dim) = (eq.n, eq.m, eq.nz, l.dim);
         // B F, as the design computed it when the plant is the design model.
         let B_f = if p == design.plant() { design.B_f().clone() } else { &p.B * design.F() };
         let By = eq.B_z.columns(0, m);
         // Each block: (matrix, first row it feeds in the derivative, first column it reads).
         let x_hat = eq.q;
         // Rows of y are numbered after the state's.
-        let blocks: [(DMatrix<f64>, usize, usize); 11] = [
+        let mut blocks: Vec<(DMatrix<f64>, usize, usize)> = vec![
             (p.A.clone(), l.x, l.x),
-            (-(&p.B * design.K()), l.x, x_hat),
-            (p.D.clone(), l.x, e_w),
-            (B_f, l.x, e_u_plant),
+            (p.D.clone(), l.x, at.w),
             (eq.A_z.clone(), 0, 0),
             (By * &p.C, 0, l.x),
-            (By * &p.Q, 0, e_w),
-            (eq.B_z.columns(m, m).into_owned(), 0, e_g),
-            (eq.B_z.columns(2 * m, m).into_owned(), 0, e_u),
+            (By * &p.Q, 0, at.w),
+            (eq.B_z.columns(m, m).into_owned(), 0, at.g),
+            (eq.B_z.columns(2 * m, m).into_owned(), 0, at.u_d),
             (p.C.clone(), dim, l.x),
-            (p.Q.clone(), dim, e_w),
+            (p.Q.clone(), dim, at.w),
         ];
+        match input {
+            PlantInput::Design => blocks.extend([(-(&p.B * design.K()), l.x, x_hat), (B_f, l.x, at.u_d)]),
+            PlantInput::TrueDelays => blocks.extend([(-(&p.B * design.K()), l.x, x_hat), (B_f, l.x, at.u_p)]),
+            PlantInput::Explicit => blocks.push((p.B.clone(), l.x, at.u_p)),
+        }
+        if let Some(e_n) = at.noise {
+            blocks.extend([(By.into_owned(), 0, e_n), (DMatrix::identity(m, m), dim, e_n)]);
+        }
         let mut entries: Vec<(usize, usize, f64)> = Vec::new();
         for (M, row0, col0) in &blocks {
             for r in 0..M.nrows() {
@@ -392,7 +585,7 @@ impl LinearPart {
 }
 
 /// Settings of a continuous run.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct RunSettings {
     pub t_end: f64,
     pub output_step: f64,
@@ -406,6 +599,10 @@ pub struct RunSettings {
     /// counts as divergence too. Studies set these to a factor times the nominal run's
     /// [`SimResult::peaks`] (docs/studies.md, "Runaway"); `None` by default.
     pub runaway: Option<Peaks>,
+    /// Band-limited measurement noise on the y the controller reads (needs a bandwidth).
+    pub noise: Option<MeasurementNoise>,
+    /// The true plant's actuator (delay on u_f, limits); `None`: the plant receives u_f.
+    pub actuator: Option<Actuator>,
 }
 
 impl RunSettings {
@@ -419,6 +616,8 @@ impl RunSettings {
             divergence_bound: DIVERGENCE_BOUND,
             max_steps: usize::MAX,
             runaway: None,
+            noise: None,
+            actuator: None,
         }
     }
 }
@@ -439,9 +638,11 @@ pub fn simulate(
 }
 
 /// [`simulate`] with the simulated plant `truth` in place of the design model (`[truth]`): the
-/// plant is ẋ = A x + B u_f + D ω, y = C x + Q ω with truth's matrices, x(0) = truth.x0, and
-/// u_f = −K x̂ + F [u_1(t − τ_1^true), …]; the observers (6), (20) and the filters of the
-/// adaptive law keep the design's matrices and delays.
+/// plant is ẋ = A x + B u_p + D ω, y = C x + Q ω with truth's matrices, x(0) = truth.x0, and
+/// u_p = u_f = −K x̂ + F [u_1(t − τ_1^true), …], or with `settings.actuator` that u_f delayed by
+/// τ_a,i and clipped ([`Actuator`]); the observers (6), (20) and the filters of the adaptive law keep
+/// the design's matrices and delays, and read y plus `settings.noise`. [`SimResult::limited`]
+/// reports how often each limit clipped.
 pub fn simulate_with_truth(
     design: &Design,
     truth: &Plant,
@@ -450,12 +651,16 @@ pub fn simulate_with_truth(
     settings: &RunSettings,
     mut on_progress: impl FnMut(f64) -> ControlFlow<()>,
 ) -> Result<SimResult, SimError> {
-    let RunSettings { t_end, output_step, rtol, atol, divergence_bound, max_steps, runaway } = *settings;
+    let RunSettings { t_end, output_step, rtol, atol, divergence_bound, max_steps, runaway, .. } = *settings;
     check_run(design, reference, disturbance, t_end, output_step, divergence_bound)?;
     crate::settings::check_tolerances(rtol, atol)?;
-    let mut sys = ContinuousLoop::with_truth(design, truth, reference, disturbance)?;
+    let (actuator, noise) = (settings.actuator.as_ref(), settings.noise.as_ref());
+    let mut sys = ContinuousLoop::with_physics(design, truth, reference, disturbance, actuator, noise)?;
     crate::settings::check_integrator_delays("plant.delays", &design.plant().delays, t_end)?;
     crate::settings::check_integrator_delays("truth.delays", &truth.delays, t_end)?;
+    if let Some(a) = actuator {
+        crate::settings::check_integrator_delays("truth.actuator_delays", &a.delays, t_end)?;
+    }
     // with_truth has checked x0's length (check_truth).
     let s0 = sys.initial_state(&truth.x0).map_err(|e| KeyError::new("truth.x0", e.to_string()))?;
     let history = vec![0.0; sys.n_delayed()];
@@ -476,6 +681,9 @@ pub fn simulate_with_truth(
         result.peaks.record(&watched);
         let eta = probe.outputs(t, s, &mut y, &mut g, &mut u);
         result.push(t, &y, &g, &u, eta);
+        if let Some(limited) = &probe.limited {
+            result.count_limited(limited.iter().map(Cell::get));
+        }
         if on_progress(t).is_break() {
             outcome = Outcome::Interrupted { t };
             return ControlFlow::Break(());
