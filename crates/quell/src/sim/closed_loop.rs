@@ -92,6 +92,8 @@ pub struct ContinuousLoop<'a> {
     xi_d: Vec<f64>,
     Delta: Vec<f64>,
     tmp: Vec<f64>,
+    /// The Cholesky factor of I + hγμ_iΩ_i in the implicit stages ([`DelaySystem::solve_implicit`]).
+    factor: Vec<f64>,
 }
 
 impl<'a> ContinuousLoop<'a> {
@@ -187,6 +189,7 @@ impl<'a> ContinuousLoop<'a> {
             xi_d: vec![0.0; q],
             Delta: vec![0.0; q],
             tmp: vec![0.0; q],
+            factor: vec![0.0; packed::len(q)],
             layout,
             eq,
         })
@@ -275,6 +278,38 @@ impl DelaySystem for ContinuousLoop<'_> {
 
     fn delays(&self) -> &[f64] {
         &self.delays
+    }
+
+    /// The adaptive law (33), η̂_i' = μ_i (Y_i − Ω_i η̂_i): linear in η̂_i, stiff when μ_i λ_max(Ω_i) is
+    /// large.
+    fn implicit(&self) -> std::ops::Range<usize> {
+        self.layout.nz..self.layout.x
+    }
+
+    /// max_i μ_i · (Gershgorin bound of λ_max(Ω_i)).
+    fn implicit_rate(&self, s: &[f64]) -> f64 {
+        let (l, q) = (&self.layout, self.layout.q);
+        self.eq.channels.iter().enumerate().fold(0.0, |rate, (i, ch)| {
+            rate.max(ch.mu.abs() * packed::max_row_sum(&s[l.omega[i]..l.omega[i] + packed::len(q)], q))
+        })
+    }
+
+    /// Per channel (I + c μ_i Ω_i) η̂_i = r_i + c μ_i Y_i, by Cholesky.
+    fn solve_implicit(&mut self, _t: f64, c: f64, z: &mut [f64]) -> bool {
+        let (l, q) = (&self.layout, self.layout.q);
+        for (i, ch) in self.eq.channels.iter().enumerate() {
+            let (c_mu, eta) = (c * ch.mu, l.eta(i));
+            let (head, rest) = z.split_at_mut(l.x);
+            let (Y, omega) = (&rest[l.y[i] - l.x..l.y[i] - l.x + q], &rest[l.omega[i] - l.x..]);
+            let x = &mut head[eta..eta + q];
+            for (xj, yj) in x.iter_mut().zip(Y) {
+                *xj += c_mu * yj;
+            }
+            if !packed::solve_shifted(omega, c_mu, x, &mut self.factor) {
+                return false;
+            }
+        }
+        true
     }
 
     fn rhs(&mut self, t: f64, s: &[f64], past: &Past<'_>, ds: &mut [f64]) {
@@ -599,6 +634,8 @@ pub struct RunSettings {
     /// counts as divergence too. Studies set these to a factor times the nominal run's
     /// [`SimResult::peaks`] (docs/studies.md, "Runaway"); `None` by default.
     pub runaway: Option<Peaks>,
+    /// The integrator ([`dde::Method::Auto`] by default: DOP853, implicit in η̂ while it is stiff).
+    pub method: dde::Method,
     /// Band-limited measurement noise on the y the controller reads (needs a bandwidth).
     pub noise: Option<MeasurementNoise>,
     /// The true plant's actuator (delay on u_f, limits); `None`: the plant receives u_f.
@@ -616,6 +653,7 @@ impl RunSettings {
             divergence_bound: DIVERGENCE_BOUND,
             max_steps: usize::MAX,
             runaway: None,
+            method: dde::Method::Auto,
             noise: None,
             actuator: None,
         }
@@ -651,7 +689,7 @@ pub fn simulate_with_truth(
     settings: &RunSettings,
     mut on_progress: impl FnMut(f64) -> ControlFlow<()>,
 ) -> Result<SimResult, SimError> {
-    let RunSettings { t_end, output_step, rtol, atol, divergence_bound, max_steps, runaway, .. } = *settings;
+    let RunSettings { t_end, output_step, rtol, atol, divergence_bound, max_steps, runaway, method, .. } = *settings;
     check_run(design, reference, disturbance, t_end, output_step, divergence_bound)?;
     crate::settings::check_tolerances(rtol, atol)?;
     let (actuator, noise) = (settings.actuator.as_ref(), settings.noise.as_ref());
@@ -667,7 +705,7 @@ pub fn simulate_with_truth(
     let (m, q) = (sys.eq.m, sys.eq.q);
     let mut result = SimResult::new(m, q, RunStats::continuous(&dde::Stats::default()));
     let (mut y, mut g, mut u) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
-    let opts = Options { rtol, atol, max_steps, ..Options::default() };
+    let opts = Options { rtol, atol, max_steps, method, ..Options::default() };
     let mut outcome = Outcome::Completed;
     let bounds = Peaks(runaway.map_or([divergence_bound; 4], |r| r.0.map(|b| b.min(divergence_bound))));
     // The solver borrows the loop mutably; the output callback reads through its own probe.
