@@ -123,11 +123,12 @@ fn design(args: &auto::DesignArgs) -> Result<(), Failure> {
         )));
     }
     interrupt::Interrupt::quit_with("interrupted during the design; nothing was printed");
-    let (_, d) = load(Some(&args.scenario))?;
+    let (s, d) = load(Some(&args.scenario))?;
+    let warnings = quell::design::warnings(&d, &s.design);
     if args.json {
-        print_stdout(&format!("{}\n", serde_json::to_string_pretty(&report::design_json(&d)).unwrap_or_default()));
+        print_json(&report::with_warnings(report::design_json(&d), &warnings));
     } else {
-        print_stdout(&report::design_text(&d));
+        print_stdout(&format!("{}{}", report::design_text(&d), report::warnings_text(&warnings)));
     }
     Ok(())
 }

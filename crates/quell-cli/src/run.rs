@@ -33,6 +33,7 @@ pub struct RunArgs {
 
 pub fn run(args: &RunArgs) -> Result<(), Failure> {
     let (scenario, design) = load(args.scenario.as_deref())?;
+    eprint!("{}", report::warnings_text(&quell::design::warnings(&design, &scenario.design)));
     // Every check that can fail on input happens before the output directory is touched.
     let settings = loop_settings(args, &scenario, &design)?;
     let out = &args.out;
@@ -124,7 +125,8 @@ fn write_data(
     seconds: f64,
 ) -> std::io::Result<()> {
     output::write_signals(&dir.join("signals.csv"), r)?;
-    output::write_json(&dir.join("design.json"), &report::design_json(design))?;
+    let warnings = quell::design::warnings(design, &scenario.design);
+    output::write_json(&dir.join("design.json"), &report::with_warnings(report::design_json(design), &warnings))?;
     let summary = json!({
         "scenario": scenario.name,
         "truth_differs": scenario.truth_differs(),
@@ -161,7 +163,7 @@ fn report_outcome(result: &SimResult, diagnostics: &Diagnostics, out: &Path, sec
         Outcome::Completed => {
             for (i, c) in result.summary().iter().enumerate() {
                 let settle = match (c.settle_t, &c.settle_note) {
-                    (Some(t), _) => format!("settled (2 % band) at t = {t}"),
+                    (Some(t), _) => format!("settled (2 % band) at t = {t:.6}"),
                     (None, Some(note)) => note.clone(),
                     (None, None) => "not settled".into(),
                 };
