@@ -6,6 +6,7 @@
 
 mod auto;
 mod export;
+mod interrupt;
 mod output;
 mod plot;
 mod report;
@@ -121,6 +122,7 @@ fn design(args: &auto::DesignArgs) -> Result<(), Failure> {
             "{flag}: only with --auto (the automatic design); add --auto or remove {flag}"
         )));
     }
+    interrupt::Interrupt::quit_with("interrupted during the design; nothing was printed");
     let (s, d) = load(Some(&args.scenario))?;
     let warnings = quell::design::warnings(&d, &s.design);
     if args.json {
@@ -135,4 +137,21 @@ fn design(args: &auto::DesignArgs) -> Result<(), Failure> {
 pub(crate) fn print_stdout(text: &str) {
     use std::io::Write;
     let _ = std::io::stdout().lock().write_all(text.as_bytes());
+}
+
+/// A progress bar of `len` steps drawn on stderr with `template` when stderr is a terminal, hidden
+/// otherwise.
+pub(crate) fn progress_bar(len: u64, template: &str) -> indicatif::ProgressBar {
+    use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+    use std::io::IsTerminal;
+    let bar = ProgressBar::new(len);
+    if std::io::stderr().is_terminal() {
+        bar.set_draw_target(ProgressDrawTarget::stderr());
+        if let Ok(style) = ProgressStyle::with_template(template) {
+            bar.set_style(style);
+        }
+    } else {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    bar
 }

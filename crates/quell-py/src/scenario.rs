@@ -77,7 +77,17 @@ pub fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
         return Ok(Value::Boolean(obj.extract()?));
     }
     if obj.is_instance_of::<PyInt>() {
-        return obj.extract::<i64>().map(Value::Integer).or_else(|_| Ok(Value::Float(obj.extract::<f64>()?)));
+        if let Ok(i) = obj.extract::<i64>() {
+            return Ok(Value::Integer(i));
+        }
+        // A seed is an integer, never rounded to a float (which the reader would then refuse as
+        // "a floating-point number"); any other key takes a huge integer as the float it is.
+        if key.rsplit('.').next() == Some("seed") {
+            return Err(
+                Kind::Scenario.err(py, format!("{key}: expected a seed, an integer from 0 to 2**63 - 1, found {obj}"))
+            );
+        }
+        return Ok(Value::Float(obj.extract::<f64>()?));
     }
     if obj.is_instance_of::<PyFloat>() {
         return Ok(Value::Float(obj.extract()?));

@@ -314,10 +314,25 @@ fn sampled_loop(
         if let Some(noise) = noise.as_mut() {
             noise.add(t, &mut y_meas);
         }
-        let mut u_f: &[f64] = match shift.as_mut() {
-            None => ctrl.step(&y_meas, &g)?,
-            Some(sh) => {
-                sh.u_f.copy_from_slice(ctrl.step(&y_meas, &g)?);
+        // A measurement beyond the controller's bound, or a state gone non-finite, ends the run
+        // as diverged (as the next record's check would have), not as an error.
+        let stepped = match ctrl.step(&y_meas, &g) {
+            Err(ControllerError::InputOutOfRange { name, index, value }) => {
+                Err(Outcome::Diverged { t, signal: format!("{name}[{}] (controller input)", index + 1), value })
+            }
+            Err(ControllerError::StateNotFinite { value }) => {
+                Err(Outcome::Diverged { t, signal: "u_f (controller output)".to_string(), value })
+            }
+            other => Ok(other?),
+        };
+        let mut u_f: &[f64] = match (stepped, shift.as_mut()) {
+            (Err(diverged), _) => {
+                outcome = diverged;
+                break;
+            }
+            (Ok(u_f), None) => u_f,
+            (Ok(u_f), Some(sh)) => {
+                sh.u_f.copy_from_slice(u_f);
                 sh.apply(k, ctrl.command())
             }
         };
