@@ -31,6 +31,10 @@ pub struct RunArgs {
     /// Skip the PNG/SVG plots.
     #[arg(long)]
     pub no_plots: bool,
+    /// Also record the plant state x and the observer state x̂ (columns x1..xn, xhat1..xhatn of
+    /// signals.csv).
+    #[arg(long)]
+    pub states: bool,
 }
 
 pub fn run(args: &RunArgs) -> Result<(), Failure> {
@@ -64,6 +68,8 @@ fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result
     if let LoopSettings::Sampled(st) = &settings {
         st.check(design, &scenario.reference, &scenario.disturbance).map_err(|e| Failure::Input(e.to_string()))?;
     }
+    let mut settings = settings;
+    settings.record_states(args.states);
     Ok(settings)
 }
 
@@ -187,11 +193,12 @@ fn report_outcome(result: &SimResult, out: &Path, seconds: f64) -> Result<(), Fa
         Outcome::Completed => {
             for (i, c) in result.summary().iter().enumerate() {
                 eprintln!(
-                    "channel {}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {:.3}, ‖η̂‖ = {:.4}",
+                    "channel {}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {:.3}, max|u_f| = {:.3}, ‖η̂‖ = {:.4}",
                     i + 1,
                     c.tail_max_abs_e,
                     c.tail_rms_e,
                     c.max_abs_u,
+                    c.max_abs_uf,
                     c.final_eta_norm
                 );
             }

@@ -296,7 +296,7 @@ fn run_paper_example_writes_every_file() {
     let channels = s["channels"].as_array().unwrap();
     assert_eq!(channels.len(), 2);
     for c in channels {
-        for key in ["tail_max_abs_e", "tail_rms_e", "max_abs_u", "final_eta_norm"] {
+        for key in ["tail_max_abs_e", "tail_rms_e", "max_abs_u", "max_abs_uf", "final_eta_norm"] {
             assert!(c[key].as_f64().is_some_and(f64::is_finite), "channels[].{key}: {c}");
         }
     }

@@ -28,6 +28,14 @@ impl LoopSettings {
         }
     }
 
+    /// Records the plant state x and the observer state x̂ too (in either loop), or not.
+    pub fn record_states(&mut self, on: bool) {
+        match self {
+            LoopSettings::Continuous(st) => st.record_states = on,
+            LoopSettings::Sampled(st) => st.record_states = on,
+        }
+    }
+
     /// The sampled-data loop at `sample_time` (in place of the scenario's), with its `[noise]`.
     pub fn sampled(s: &Scenario, sample_time: f64) -> Self {
         let sim = &s.simulation;

@@ -7,7 +7,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::dde::{self, DelaySystem, Options, Past};
 use super::divergence::{Peaks, Watched, DIVERGENCE_BOUND};
-use super::result::{Outcome, RunStats, SimResult};
+use super::result::{Outcome, RunStats, Sample, SimResult};
 use super::{check_run, SimError};
 use crate::controller::{command, mat_vec, packed, swapping_error, Equations};
 use crate::design::Design;
@@ -84,8 +84,11 @@ pub struct ContinuousLoop<'a> {
     e: Vec<f64>,
     eta_d: Vec<f64>,
     xi_d: Vec<f64>,
+    u_d: Vec<f64>,
     Delta: Vec<f64>,
     tmp: Vec<f64>,
+    /// What [`DelaySystem::observe`] records; `None` for a loop used as a bare [`DelaySystem`].
+    record: Option<Record>,
 }
 
 impl<'a> ContinuousLoop<'a> {
@@ -124,8 +127,10 @@ impl<'a> ContinuousLoop<'a> {
             true_delays,
             eta_d: vec![0.0; q],
             xi_d: vec![0.0; q],
+            u_d: vec![0.0; m],
             Delta: vec![0.0; q],
             tmp: vec![0.0; q],
+            record: None,
             layout,
             eq,
         })
@@ -143,56 +148,47 @@ impl<'a> ContinuousLoop<'a> {
         Ok(s)
     }
 
-    /// What the output callback needs, apart from the solver's borrow of the loop.
-    fn probe(&self) -> Probe<'a> {
-        Probe {
-            eq: self.eq.clone(),
-            layout: self.layout.clone(),
-            C: self.C,
-            Q: self.Q,
-            signals: self.signals.clone(),
-            gw: vec![0.0; self.signals.len()],
+    /// The command u_i(t − τ) (25) of channel i at delay τ ≥ 0: from the past for τ > 0, from the
+    /// state s at t for τ = 0. ξ̂(t − τ) is left in `xi_d`.
+    #[inline]
+    fn command_at(&mut self, i: usize, tau: f64, t: f64, s: &[f64], past: &Past<'_>, xi_d: &mut [f64]) -> f64 {
+        let (l, q) = (&self.layout, self.eq.q);
+        if tau > 0.0 {
+            past.eval_ranges(t - tau, [(0, &mut *xi_d), (l.eta(i), &mut self.eta_d[..])]);
+            command(&self.eta_d, xi_d)
+        } else {
+            xi_d.copy_from_slice(self.eq.regressor(s));
+            command(&s[l.eta(i)..l.eta(i) + q], xi_d)
         }
+    }
+
+    /// The plant input u_f = −K x̂(t) + F u_d(t) (5) at the true delays, into `u_f`.
+    fn plant_input(&mut self, t: f64, s: &[f64], past: &Past<'_>, u_f: &mut [f64]) {
+        let mut xi_d = std::mem::take(&mut self.xi_d);
+        for i in 0..self.eq.m {
+            let tau = self.true_delays.get(i).copied().unwrap_or(self.eq.channels[i].delay);
+            self.u_d[i] = self.command_at(i, tau, t, s, past, &mut xi_d);
+        }
+        self.xi_d = xi_d;
+        self.eq.plant_input(s, &self.u_d, u_f);
     }
 }
 
-/// Reads y, g, u (25) and η̂ off the output prefix [z, η̂, x] of the loop's state.
-struct Probe<'a> {
-    eq: Equations,
-    layout: Layout,
-    C: &'a DMatrix<f64>,
-    Q: &'a DMatrix<f64>,
-    signals: SignalBank,
-    /// [g; ω].
+/// What a run records at each output time, and the bounds it watches; kept by the loop, whose
+/// [`DelaySystem::observe`] fills it.
+struct Record {
+    result: SimResult,
+    /// Bounds per watched signal (x, x̂, ξ̂, η̂).
+    bounds: Peaks,
+    /// The run's end when a watched signal crossed its bound.
+    diverged: Option<Outcome>,
+    /// x and x̂ too ([`RunSettings::record_states`]).
+    states: bool,
+    /// [g; ω], y, u, u_f.
     gw: Vec<f64>,
-}
-
-impl Probe<'_> {
-    /// Outputs at time t: y, g and the undelayed commands u (25) and η̂ (a view of the state).
-    fn outputs<'s>(&mut self, t: f64, s: &'s [f64], y: &mut [f64], g: &mut [f64], u: &mut [f64]) -> &'s [f64] {
-        let l = &self.layout;
-        self.signals.eval_into_unchecked(t, &mut self.gw);
-        let (g_t, w) = self.gw.split_at(g.len());
-        g.copy_from_slice(g_t);
-        mat_vec(self.C, &s[l.x..l.x + self.eq.n], y, false);
-        mat_vec(self.Q, w, y, true);
-        let xi = self.eq.regressor(s);
-        for (i, ui) in u.iter_mut().enumerate() {
-            *ui = command(&s[l.eta(i)..l.eta(i) + l.q], xi);
-        }
-        &s[l.nz..l.x]
-    }
-
-    /// The watched signals ξ̂, x̂, η̂ and x in the output prefix.
-    fn watched<'s>(&self, s: &'s [f64]) -> Watched<'s> {
-        let l = &self.layout;
-        Watched {
-            xi_hat: self.eq.regressor(s),
-            x_hat: self.eq.x_hat(s),
-            eta: &s[l.nz..l.x],
-            x: &s[l.x..l.x + self.eq.n],
-        }
-    }
+    y: Vec<f64>,
+    u: Vec<f64>,
+    u_f: Vec<f64>,
 }
 
 impl DelaySystem for ContinuousLoop<'_> {
@@ -212,47 +208,66 @@ impl DelaySystem for ContinuousLoop<'_> {
         &self.delays
     }
 
+    /// Records y, g, u (25), u_f (5) and η̂ (and x, x̂) at t, unless a watched signal is beyond its
+    /// bound: then the run ends as diverged.
+    fn observe(&mut self, t: f64, s: &[f64], past: &Past<'_>) -> ControlFlow<()> {
+        let Some(mut rec) = self.record.take() else { return ControlFlow::Continue(()) };
+        let (eq, l) = (&self.eq, &self.layout);
+        let (xi, x_hat, eta, x) = (eq.regressor(s), eq.x_hat(s), &s[l.nz..l.x], &s[l.x..l.x + eq.n]);
+        let watched = Watched { xi_hat: xi, x_hat, eta, x };
+        let flow = if let Some(diverged) = watched.beyond(t, &rec.bounds) {
+            rec.diverged = Some(diverged);
+            ControlFlow::Break(())
+        } else {
+            rec.result.peaks.record(&watched);
+            self.signals.eval_into_unchecked(t, &mut rec.gw);
+            let (g, w) = rec.gw.split_at(eq.m);
+            mat_vec(self.C, x, &mut rec.y, false);
+            mat_vec(self.Q, w, &mut rec.y, true);
+            for (i, u) in rec.u.iter_mut().enumerate() {
+                *u = command(&s[l.eta(i)..l.eta(i) + l.q], xi);
+            }
+            self.plant_input(t, s, past, &mut rec.u_f);
+            let states = rec.states.then_some((x, x_hat));
+            let (y, u, u_f) = (&rec.y, &rec.u, &rec.u_f);
+            rec.result.push(&Sample { t, y, g, u, u_f, eta, states });
+            ControlFlow::Continue(())
+        };
+        self.record = Some(rec);
+        flow
+    }
+
     fn rhs(&mut self, t: f64, s: &[f64], past: &Past<'_>, ds: &mut [f64]) {
-        let eq = &self.eq;
-        let l = &self.layout;
-        let (m, q) = (eq.m, eq.q);
         // e = [g; ω; u_d].
-        let (gw, u_d) = self.e.split_at_mut(self.signals.len());
-        self.signals.eval_into_unchecked(t, gw);
+        self.signals.eval_into_unchecked(t, &mut self.e[..self.signals.len()]);
 
         // Delayed command u_i(t − τ_i) = −η̂_iᵀ(t − τ_i) ξ̂(t − τ_i). The row [u_i(t − τ_i), ξ̂ᵀ(t − τ_i)],
         // the input of channel i's filter bank, goes straight into the last row of W_i' (see below).
-        let cols = 1 + q;
-        for (i, ch) in eq.channels.iter().enumerate() {
-            let input = &mut ds[l.w[i] + (ch.sigma - 1) * cols..l.w[i] + ch.sigma * cols];
-            let (u_in, xi_d) = input.split_at_mut(1);
-            if ch.delay > 0.0 {
-                past.eval_ranges(t - ch.delay, [(0, &mut *xi_d), (l.eta(i), &mut self.eta_d[..])]);
-                u_d[i] = command(&self.eta_d, xi_d);
-            } else {
-                xi_d.copy_from_slice(eq.regressor(s));
-                u_d[i] = command(&s[l.eta(i)..l.eta(i) + q], xi_d);
-            }
-            u_in[0] = u_d[i];
+        let (m, ns, cols) = (self.eq.m, self.signals.len(), 1 + self.eq.q);
+        for i in 0..m {
+            let (sigma, delay, w) = (self.eq.channels[i].sigma, self.eq.channels[i].delay, self.layout.w[i]);
+            let (u_in, xi_d) = ds[w + (sigma - 1) * cols..w + sigma * cols].split_at_mut(1);
+            u_in[0] = self.command_at(i, delay, t, s, past, xi_d);
+            self.e[ns + i] = u_in[0];
         }
         // The true plant's input reads the command at its own delays (`[truth]`).
         if !self.true_delays.is_empty() {
-            let (u_d, u_true) = u_d.split_at_mut(m);
-            for (i, (&tau, u)) in self.true_delays.iter().zip(u_true.iter_mut()).enumerate() {
-                *u = if tau == eq.channels[i].delay {
-                    u_d[i]
-                } else if tau > 0.0 {
-                    past.eval_ranges(t - tau, [(0, &mut self.xi_d[..]), (l.eta(i), &mut self.eta_d[..])]);
-                    command(&self.eta_d, &self.xi_d)
+            let mut xi_d = std::mem::take(&mut self.xi_d);
+            for i in 0..m {
+                let tau = self.true_delays[i];
+                self.e[ns + m + i] = if tau == self.eq.channels[i].delay {
+                    self.e[ns + i]
                 } else {
-                    command(&s[l.eta(i)..l.eta(i) + q], eq.regressor(s))
+                    self.command_at(i, tau, t, s, past, &mut xi_d)
                 };
             }
+            self.xi_d = xi_d;
         }
 
         // Plant (1) with the decoupling law (5), observers (6), (14), (20), and y = C x + Q ω: linear
         // in [s; e].
         self.linear.apply(s, &self.e, ds, &mut self.y);
+        let (eq, l, q) = (&self.eq, &self.layout, self.eq.q);
         let g = &self.e[..m];
 
         // Per channel: G_ii filter bank, H filters and the adaptive law (33).
@@ -406,6 +421,8 @@ pub struct RunSettings {
     /// counts as divergence too. Studies set these to a factor times the nominal run's
     /// [`SimResult::peaks`] (docs/studies.md, "Runaway"); `None` by default.
     pub runaway: Option<Peaks>,
+    /// Record the plant state x and the observer state x̂ too ([`SimResult::x`]); off by default.
+    pub record_states: bool,
 }
 
 impl RunSettings {
@@ -419,6 +436,7 @@ impl RunSettings {
             divergence_bound: DIVERGENCE_BOUND,
             max_steps: usize::MAX,
             runaway: None,
+            record_states: false,
         }
     }
 }
@@ -450,7 +468,8 @@ pub fn simulate_with_truth(
     settings: &RunSettings,
     mut on_progress: impl FnMut(f64) -> ControlFlow<()>,
 ) -> Result<SimResult, SimError> {
-    let RunSettings { t_end, output_step, rtol, atol, divergence_bound, max_steps, runaway } = *settings;
+    let RunSettings { t_end, output_step, rtol, atol, divergence_bound, max_steps, runaway, record_states } =
+        *settings;
     check_run(design, reference, disturbance, t_end, output_step, divergence_bound)?;
     crate::settings::check_tolerances(rtol, atol)?;
     let mut sys = ContinuousLoop::with_truth(design, truth, reference, disturbance)?;
@@ -459,29 +478,31 @@ pub fn simulate_with_truth(
     // with_truth has checked x0's length (check_truth).
     let s0 = sys.initial_state(&truth.x0).map_err(|e| KeyError::new("truth.x0", e.to_string()))?;
     let history = vec![0.0; sys.n_delayed()];
-    let (m, q) = (sys.eq.m, sys.eq.q);
-    let mut result = SimResult::new(m, q, RunStats::continuous(&dde::Stats::default()));
-    let (mut y, mut g, mut u) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
+    let (m, q, n) = (sys.eq.m, sys.eq.q, sys.eq.n);
+    sys.record = Some(Record {
+        result: SimResult::new(m, q, n, RunStats::continuous(&dde::Stats::default())),
+        bounds: Peaks(runaway.map_or([divergence_bound; 4], |r| r.0.map(|b| b.min(divergence_bound)))),
+        diverged: None,
+        states: record_states,
+        gw: vec![0.0; sys.signals.len()],
+        y: vec![0.0; m],
+        u: vec![0.0; m],
+        u_f: vec![0.0; m],
+    });
     let opts = Options { rtol, atol, max_steps, ..Options::default() };
     let mut outcome = Outcome::Completed;
-    let bounds = Peaks(runaway.map_or([divergence_bound; 4], |r| r.0.map(|b| b.min(divergence_bound))));
-    // The solver borrows the loop mutably; the output callback reads through its own probe.
-    let mut probe = sys.probe();
-    let solved = dde::solve(&mut sys, 0.0, &s0, &history, t_end, output_step, &opts, |t, s| {
-        let watched = probe.watched(s);
-        if let Some(diverged) = watched.beyond(t, &bounds) {
-            outcome = diverged;
-            return ControlFlow::Break(());
-        }
-        result.peaks.record(&watched);
-        let eta = probe.outputs(t, s, &mut y, &mut g, &mut u);
-        result.push(t, &y, &g, &u, eta);
+    // The loop records each sample (observe); here only the progress and an interruption.
+    let solved = dde::solve(&mut sys, 0.0, &s0, &history, t_end, output_step, &opts, |t, _| {
         if on_progress(t).is_break() {
             outcome = Outcome::Interrupted { t };
             return ControlFlow::Break(());
         }
         ControlFlow::Continue(())
     });
+    let Record { mut result, diverged, .. } = sys.record.take().expect("the loop keeps its record");
+    if let Some(diverged) = diverged {
+        outcome = diverged;
+    }
     match solved {
         Ok(stats) => result.stats = RunStats::continuous(&stats),
         Err(dde::SolveError::TooManySteps { t, stats }) => {

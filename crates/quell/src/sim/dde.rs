@@ -54,6 +54,12 @@ pub trait DelaySystem {
     fn n_output(&self) -> usize {
         self.dim()
     }
+    /// Called at each output time t, before `on_output`, with the output prefix `y` of the state and
+    /// the past (delayed arguments t − τ read as in [`DelaySystem::rhs`]): for outputs that depend on
+    /// delayed values. `Break` stops the run as `on_output`'s does. Default: nothing.
+    fn observe(&mut self, _t: f64, _y: &[f64], _past: &Past<'_>) -> ControlFlow<()> {
+        ControlFlow::Continue(())
+    }
 }
 
 /// Read-only view of the dense history, handed to [`DelaySystem::rhs`].
@@ -278,7 +284,9 @@ pub fn solve<S: DelaySystem>(
     }
     let tau_min = delays.iter().copied().fold(f64::INFINITY, f64::min);
 
-    if on_output(t0, &y0[..sys.n_output().min(n)]).is_break() || t_end <= t0 {
+    let y_out0 = &y0[..sys.n_output().min(n)];
+    let past0 = Past { hist: &History::new(nd, 0), initial: history, y0: &y0[..nd], t0, lead: 0.0, tol: tiny(t_end) };
+    if sys.observe(t0, y_out0, &past0).is_break() || on_output(t0, y_out0).is_break() || t_end <= t0 {
         return Ok(Stats::default());
     }
     let h_cap = opts.h_max.min(tau_min).min(t_end - t0);
@@ -623,6 +631,10 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
                 &self.y_out
             };
             self.schedule.next += 1;
+            // The step is in the history, and t_k − τ ≤ t_new − min τ ≤ t: the past is all known.
+            let ctx = &self.ctx;
+            let past = Past { hist: &self.hist, initial: ctx.initial, y0: &ctx.y0, t0: ctx.t0, lead: self.t - t_k, tol: ctx.tol };
+            self.sys.observe(t_k, out, &past)?;
             on_output(t_k, out)?;
         }
         ControlFlow::Continue(())

@@ -16,7 +16,7 @@ use crate::signal::{check_signals, Signal};
 pub use crate::settings::MeasurementNoise;
 pub use closed_loop::{simulate, simulate_with_truth, ContinuousLoop, RunSettings};
 pub use divergence::{Peaks, Watched, DIVERGENCE_BOUND};
-pub use result::{ChannelSummary, Outcome, RunStats, SimResult};
+pub use result::{ChannelSummary, Outcome, RunStats, Sample, SimResult};
 pub use sampled::{
     simulate_sampled, simulate_sampled_with, simulate_sampled_with_truth, SampledController, SampledSettings,
 };

@@ -10,7 +10,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::divergence::{Watched, DIVERGENCE_BOUND};
 use super::noise::Gaussian;
-use super::result::{Outcome, RunStats, SimResult};
+use super::result::{Outcome, RunStats, Sample, SimResult};
 use super::{check_run, SimError};
 use crate::controller::{mat_vec, Controller, ControllerError};
 use crate::design::Design;
@@ -29,6 +29,8 @@ pub struct SampledSettings {
     pub noise: Option<MeasurementNoise>,
     /// A watched signal above this magnitude counts as divergence ([`Watched`]).
     pub divergence_bound: f64,
+    /// Record the plant state x and the observer state x̂ too ([`SimResult::x`]); off by default.
+    pub record_states: bool,
 }
 
 /// What the sampled-data loop needs of a discrete controller. [`Controller`] is one; another
@@ -59,7 +61,14 @@ impl SampledController for Controller {
 impl SampledSettings {
     /// Settings without noise and with the default divergence bound.
     pub fn new(t_end: f64, output_step: f64, sample_time: f64) -> Self {
-        SampledSettings { t_end, output_step, sample_time, noise: None, divergence_bound: DIVERGENCE_BOUND }
+        SampledSettings {
+            t_end,
+            output_step,
+            sample_time,
+            noise: None,
+            divergence_bound: DIVERGENCE_BOUND,
+            record_states: false,
+        }
     }
 
     /// Checks everything the run needs (horizon, sample time, signals for the design's plant, noise,
@@ -239,7 +248,9 @@ fn sampled_loop(
     let (mut y, mut y_meas, mut g) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
     let mut noise = settings.noise.as_ref().map(|nz| (Gaussian::new(nz.seed), nz.std.clone()));
     let stats = |controller_steps| RunStats::Sampled { controller_steps, sample_time: T };
-    let mut result = SimResult::new(m, design.q(), stats(0));
+    let mut result = SimResult::new(m, design.q(), n, stats(0));
+    // u_f(k) and, when states are recorded, x̂(k) (read before the step moves it to x̂(k + 1)).
+    let (mut u_f, mut x_hat) = (vec![0.0; m], vec![0.0; n]);
     let steps = (settings.t_end / T + 1e-9).floor() as usize;
     let mut outcome = Outcome::Completed;
     let mut taken = 0;
@@ -253,16 +264,19 @@ fn sampled_loop(
                 *v += sd * rng.sample();
             }
         }
-        let u_f: &[f64] = match shift.as_mut() {
-            None => ctrl.step(&y_meas, &g)?,
+        if settings.record_states && k % every == 0 {
+            x_hat.copy_from_slice(ctrl.watched().x_hat);
+        }
+        match shift.as_mut() {
+            None => u_f.copy_from_slice(ctrl.step(&y_meas, &g)?),
             Some(sh) => {
                 sh.u_f.copy_from_slice(ctrl.step(&y_meas, &g)?);
-                sh.apply(k, ctrl.command())
+                u_f.copy_from_slice(sh.apply(k, ctrl.command()));
             }
-        };
+        }
         taken += 1;
         mat_vec(&Phi, s.as_slice(), s_next.as_mut_slice(), false);
-        mat_vec(&Gamma, u_f, s_next.as_mut_slice(), true);
+        mat_vec(&Gamma, &u_f, s_next.as_mut_slice(), true);
         if k % every == 0 {
             let watched = Watched { x: &s.as_slice()[..n], ..ctrl.watched() };
             if let Some(diverged) = watched.diverged(t, settings.divergence_bound) {
@@ -270,7 +284,9 @@ fn sampled_loop(
                 break;
             }
             result.peaks.record(&watched);
-            result.push(t, &y, &g, ctrl.command(), watched.eta);
+            let states = settings.record_states.then_some((watched.x, &x_hat[..]));
+            let (u, eta) = (ctrl.command(), watched.eta);
+            result.push(&Sample { t, y: &y, g: &g, u, u_f: &u_f, eta, states });
             if on_progress(t).is_break() {
                 outcome = Outcome::Interrupted { t };
                 break;

@@ -99,8 +99,10 @@ pub struct ChannelFigures {
     pub tail_max_e: f64,
     /// RMS of e_i over the last 10 % of the horizon.
     pub tail_rms_e: f64,
-    /// max |u_i| over the run.
+    /// max |u_i| over the run (the adaptive command (25)).
     pub max_u: f64,
+    /// max |u_f,i| over the run (the plant input (5), what the actuator delivers).
+    pub max_uf: f64,
     /// First recorded t after which |e_i| stays within the settling band ([`Settle`]); `None` if
     /// the last sample is outside it.
     pub settle_t: Option<f64>,
@@ -146,6 +148,7 @@ pub(crate) fn figures(r: &SimResult, settle: &Settle) -> Vec<ChannelFigures> {
             tail_max_e: c.tail_max_abs_e,
             tail_rms_e: c.tail_rms_e,
             max_u: c.max_abs_u,
+            max_uf: c.max_abs_uf,
             settle_t: {
                 let (e, g): (Vec<f64>, Vec<f64>) = r.column(&r.e, r.m, i).zip(r.column(&r.g, r.m, i)).unzip();
                 settle_time(&r.t, &e, &g, settle)
