@@ -411,7 +411,7 @@ fn sampled_summary_reports_controller_steps() {
 /// over the last 10 % of the horizon) must meet.
 fn tail_bound(name: &str, scenario: &Scenario, i: usize) -> f64 {
     // The paper's example (Section VIII) claims asymptotic tracking; an independent solution of it
-    // (/work/shared/reference/paper_example_points.csv's setup, tolerance 1e-12) has max |e| ≈ 0.027 and
+    // (crates/quell/tests/data/paper_example_points.csv's setup, tolerance 1e-12) has max |e| ≈ 0.027 and
     // 0.002 on [90, 100]. 0.05 and 0.005 leave about 2× for what the variants change (T_s = 1 ms:
     // O(T_s); L placed from the poles, which the printed L has to 1e-4) and still fail a loop that has
     // not converged by then (errors of the order of the reference, 2–3).

@@ -1,5 +1,5 @@
 """Shared paths and fixtures. The tests check quell against independent references (SciPy,
-python-control, closed forms, ../shared/reference/) and against the CLI, never against its own output."""
+python-control, closed forms, the reference data in crates/quell/tests/data/) and against the CLI, never against its own output."""
 
 import os
 import pathlib
@@ -7,7 +7,7 @@ import pathlib
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[3]
-SHARED = ROOT.parent / "shared"
+REFERENCE = ROOT / "crates" / "quell" / "tests" / "data"
 EXAMPLES = ROOT / "examples"
 
 
@@ -22,10 +22,10 @@ def quell_bin():
 
 @pytest.fixture(scope="session")
 def reference_points():
-    """y and u of the paper's example from an independent solver (../shared/reference/)."""
-    path = SHARED / "reference" / "paper_example_points.csv"
+    """y and u of the paper's example from an independent solver (crates/quell/tests/data/, see its README)."""
+    path = REFERENCE / "paper_example_points.csv"
     if not path.is_file():
-        pytest.fail(f"{path} is missing: ../shared must sit beside the repository")
+        pytest.fail(f"{path} is missing from the repository")
     import numpy as np
 
     return np.loadtxt(path, delimiter=",", skiprows=1)

@@ -110,7 +110,7 @@ fn run<S: DelaySystem>(
     (out, stats)
 }
 
-/// All seven linear cases of `shared/reference/dde_cases.json`, one harness, rtol = atol = 1e-10.
+/// All seven linear cases of `tests/data/dde_cases.json`, one harness, rtol = atol = 1e-10.
 ///
 /// Per-case tolerance on |y − y_ref| / max(1, |y_ref|) (the scaling matters only for
 /// `matlab_ddex1_wille_baker_ex3`, whose values reach ~190):
@@ -122,7 +122,7 @@ fn run<S: DelaySystem>(
 /// * statefb_input_delay_pc_docstring_tau0p1 / _tau0p2 (history = y0 = [1,0]): 1e-8
 #[test]
 fn reference_cases() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/reference/dde_cases.json");
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/dde_cases.json");
     let text = std::fs::read_to_string(path).expect("read dde_cases.json");
     let cases: Value = serde_json::from_str(&text).unwrap();
     let cases = cases.as_array().unwrap();

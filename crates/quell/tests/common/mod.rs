@@ -67,14 +67,11 @@ pub fn run_paper(spec: DesignSpec, t_end: f64, output_step: f64, tol: f64) -> Si
     r
 }
 
-/// Checks a 100 s run sampled every 0.1 s against `../shared/reference/paper_example_points.csv`:
+/// Checks a 100 s run sampled every 0.1 s against `tests/data/paper_example_points.csv`:
 /// y and u from an independent solver at 1e-12 (accurate to ~1e-8), to 1e-6 (issue 3's bound).
 pub fn assert_matches_reference_points(r: &SimResult) {
-    let csv = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/reference/paper_example_points.csv"
-    ))
-    .unwrap();
+    let csv =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/paper_example_points.csv")).unwrap();
     let mut rows = 0;
     for line in csv.lines().skip(1) {
         let v: Vec<f64> = line.split(',').map(|s| s.trim().parse().unwrap()).collect();

@@ -1,0 +1,100 @@
+//! `docs/architecture.md` names only what exists: every file or folder it cites in backticks, and
+//! every `quell::module` it names, is checked against the tree, so the map cannot drift from the code.
+
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// The backticked spans of a Markdown text.
+fn code_spans(text: &str) -> Vec<&str> {
+    text.split('`').skip(1).step_by(2).filter(|s| !s.is_empty()).collect()
+}
+
+/// A span that names a file or folder: it has a slash or a file extension, and no spaces or `::`.
+fn is_path(span: &str) -> bool {
+    let ext = [".rs", ".md", ".py", ".pyi", ".toml", ".c", ".h", ".json", ".csv"];
+    !span.contains(' ') && !span.contains("::") && (span.contains('/') || ext.iter().any(|e| span.ends_with(e)))
+}
+
+/// Every file below `dir` (skipping build outputs) whose name is `name`.
+fn find(dir: &Path, name: &str, out: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(dir).unwrap().flatten() {
+        let path = entry.path();
+        let file = entry.file_name();
+        if path.is_dir() {
+            if file != "target" && file != ".git" {
+                find(&path, name, out);
+            }
+        } else if file == name {
+            out.push(path);
+        }
+    }
+}
+
+/// A path span resolves when it exists from the repository root, from one of the crates' roots,
+/// or (a bare file name such as `hermite.rs`) when exactly that file name exists under `crates/`.
+fn resolves(span: &str) -> bool {
+    let root = root();
+    let bases = [root.clone(), root.join("crates/quell"), root.join("crates/quell-cli"), root.join("crates/quell-py")];
+    if bases.iter().any(|b| b.join(span.trim_end_matches('/')).exists()) {
+        return true;
+    }
+    if !span.contains('/') {
+        let mut hits = Vec::new();
+        find(&root.join("crates"), span, &mut hits);
+        return !hits.is_empty();
+    }
+    false
+}
+
+/// `quell::a::b` names a module `a` (then `b`) under `crates/quell/src`, or an item re-exported there.
+fn module_exists(span: &str) -> bool {
+    let src = root().join("crates/quell/src");
+    let parts: Vec<&str> = span.trim_start_matches("quell::").split("::").collect();
+    let mut dir = src.clone();
+    for (k, part) in parts.iter().enumerate() {
+        let part = part.trim_end_matches("()");
+        let (file, folder) = (dir.join(format!("{part}.rs")), dir.join(part));
+        if folder.join("mod.rs").exists() || folder.is_dir() {
+            dir = folder;
+        } else if file.exists() {
+            dir = dir.join(part);
+        } else {
+            // Not a module: an item of the module reached so far (or of the crate root).
+            let module = if k == 0 {
+                src.join("lib.rs")
+            } else if dir.is_dir() {
+                dir.join("mod.rs")
+            } else {
+                dir.with_extension("rs")
+            };
+            let text = std::fs::read_to_string(&module).unwrap_or_default();
+            return text.contains(part);
+        }
+    }
+    true
+}
+
+#[test]
+fn architecture_names_only_what_exists() {
+    let text = std::fs::read_to_string(root().join("docs/architecture.md")).unwrap();
+    let spans = code_spans(&text);
+    let paths: Vec<&str> = spans.iter().copied().filter(|s| is_path(s)).collect();
+    let modules: Vec<&str> = spans.iter().copied().filter(|s| s.starts_with("quell::")).collect();
+    assert!(paths.len() >= 15, "docs/architecture.md names only {} paths", paths.len());
+    let missing: Vec<_> = paths.iter().filter(|p| !resolves(p)).collect();
+    assert!(missing.is_empty(), "docs/architecture.md names paths that do not exist: {missing:?}");
+    let unknown: Vec<_> = modules.iter().filter(|m| !module_exists(m)).collect();
+    assert!(unknown.is_empty(), "docs/architecture.md names modules or items that do not exist: {unknown:?}");
+}
+
+#[test]
+fn the_checker_catches_a_missing_path() {
+    assert!(!resolves("crates/quell/src/no_such_module.rs"));
+    assert!(!resolves("no_such_file.rs"));
+    assert!(resolves("crates/quell/src/plant.rs"));
+    assert!(!module_exists("quell::no_such_module"));
+    assert!(module_exists("quell::sim"));
+}
