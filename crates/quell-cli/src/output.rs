@@ -53,7 +53,8 @@ pub fn write_signals(path: &Path, r: &SimResult) -> io::Result<()> {
         }
         writeln!(w, "{}", header.join(","))?;
         // Each signal with its width, in the header's order.
-        let mut signals: Vec<(&[f64], usize)> = vec![(&r.y, m), (&r.g, m), (&r.e, m), (&r.u, m), (&r.u_f, m), (&r.eta, m * q)];
+        let mut signals: Vec<(&[f64], usize)> =
+            vec![(&r.y, m), (&r.g, m), (&r.e, m), (&r.u, m), (&r.u_f, m), (&r.eta, m * q)];
         if states {
             signals.extend([(&r.x[..], n), (&r.x_hat[..], n)]);
         }

@@ -31,6 +31,10 @@ pub struct RunArgs {
     /// Skip the PNG/SVG plots.
     #[arg(long)]
     pub no_plots: bool,
+    /// Step budget of the continuous loop (default: derived from the problem's time scales; see
+    /// docs/running.md). A run that needs more ends as failed, its results up to then written.
+    #[arg(long, value_name = "N")]
+    pub max_steps: Option<usize>,
     /// Also record the plant state x and the observer state x̂ (columns x1..xn, xhat1..xhatn of
     /// signals.csv).
     #[arg(long)]
@@ -70,6 +74,7 @@ fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result
     }
     let mut settings = settings;
     settings.record_states(args.states);
+    settings.set_max_steps(args.max_steps).map_err(|e| Failure::Input(format!("--max-steps: {}", e.message)))?;
     Ok(settings)
 }
 
@@ -185,6 +190,9 @@ fn write_data(dir: &Path, scenario: &Scenario, design: &Design, r: &SimResult, s
     output::write_json(&dir.join("summary.json"), &summary)
 }
 
+/// What a run that spent its budget means, and what to do.
+const RUNAWAY_HINT: &str = "the loop turned stiff, as a loop blowing up does before its states reach the divergence bound, or its adaptation is stiff from the start; raise --max-steps if the run is sound";
+
 /// The per-channel figures and what was written (exit 0), or why the run did not reach t_end
 /// (exit 1; the files hold the samples up to then).
 fn report_outcome(result: &SimResult, out: &Path, seconds: f64) -> Result<(), Failure> {
@@ -219,7 +227,13 @@ fn report_outcome(result: &SimResult, out: &Path, seconds: f64) -> Result<(), Fa
             Err(Failure::Run(format!("interrupted at t = {t:.3}; results up to then are in {out}")))
         }
         Outcome::TooManySteps { t, max_steps } => Err(Failure::Run(format!(
-            "the solver needed more than {max_steps} steps by t = {t:.6}; results up to then are in {out}"
+            "the solver needed more than {max_steps} steps by t = {t:.6} (the step budget; {}); results up to then are in {out}",
+            RUNAWAY_HINT
+        ))),
+        Outcome::HistoryTooLarge { t, max_bytes } => Err(Failure::Run(format!(
+            "the delay history would have exceeded {} MB by t = {t:.6} (the memory budget; {}); results up to then are in {out}",
+            max_bytes >> 20,
+            RUNAWAY_HINT
         ))),
     }
 }

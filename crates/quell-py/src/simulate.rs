@@ -79,6 +79,11 @@ fn outcome_dict<'py>(py: Python<'py>, o: &Outcome) -> PyResult<Bound<'py, PyDict
             d.set_item("t", t)?;
             d.set_item("max_steps", max_steps)?;
         }
+        Outcome::HistoryTooLarge { t, max_bytes } => {
+            d.set_item("status", "history_too_large")?;
+            d.set_item("t", t)?;
+            d.set_item("max_bytes", max_bytes)?;
+        }
     }
     Ok(d)
 }
@@ -221,7 +226,7 @@ impl PySimResult {
 /// scenario's `[simulation]`; with `states` the plant and observer states x, x̂ are recorded too;
 /// with `check` a run that does not reach t_end raises SimulationError.
 #[pyfunction]
-#[pyo3(signature = (scenario, *, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, states=false, check=true))]
+#[pyo3(signature = (scenario, *, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, max_steps=None, states=false, check=true))]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate(
     py: Python<'_>,
@@ -231,6 +236,7 @@ pub fn simulate(
     rtol: Option<&Bound<'_, PyAny>>,
     atol: Option<&Bound<'_, PyAny>>,
     sample_time: Option<&Bound<'_, PyAny>>,
+    max_steps: Option<&Bound<'_, PyAny>>,
     states: bool,
     check: bool,
 ) -> PyResult<Py<PySimResult>> {
@@ -259,6 +265,18 @@ pub fn simulate(
     };
     let mut settings = LoopSettings::of(scn);
     settings.record_states(states);
+    let max_steps = match max_steps {
+        None => None,
+        Some(v) => match v.extract::<usize>() {
+            Ok(n) if n >= 1 => Some(n),
+            _ => {
+                let found = v.repr().map_or_else(|_| "?".to_string(), |r| r.to_string());
+                let msg = format!("max_steps: expected a step budget (an integer ≥ 1), found {found}");
+                return Err(Kind::Scenario.err(py, msg));
+            }
+        },
+    };
+    settings.set_max_steps(max_steps).map_err(|e| Kind::Scenario.err(py, e.to_string()))?;
     let mut interrupt: Option<PyErr> = None;
     let result = py.detach(|| {
         let mut last = Instant::now();
@@ -301,9 +319,18 @@ pub fn simulate(
             None,
         ),
         Outcome::Interrupted { t } => (format!("interrupted at t = {t:.3}"), t, None, None),
-        Outcome::TooManySteps { t, max_steps } => {
-            (format!("the solver needed more than {max_steps} steps by t = {t:.6}"), t, None, None)
-        }
+        Outcome::TooManySteps { t, max_steps } => (
+            format!("the solver needed more than {max_steps} steps by t = {t:.6} (the step budget: the loop turned stiff, as a loop blowing up does, or its adaptation is stiff from the start; raise max_steps= if the run is sound); the samples up to then are in the exception's .result"),
+            t,
+            None,
+            None,
+        ),
+        Outcome::HistoryTooLarge { t, max_bytes } => (
+            format!("the delay history would have exceeded {} MB by t = {t:.6} (the memory budget: the solver's steps had become tiny); the samples up to then are in the exception's .result", max_bytes >> 20),
+            t,
+            None,
+            None,
+        ),
     };
     let (message, t, signal, value) = failure;
     Err(simulation_error(py, message, t, signal, value, result.into_any()))

@@ -36,6 +36,7 @@ fn main() {
                     sample_time: 1e-3,
                     noise: None,
                     divergence_bound: 1e9,
+                    record_states: false,
                 };
                 black_box(
                     simulate_sampled(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(()))

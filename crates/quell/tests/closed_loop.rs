@@ -64,7 +64,8 @@ fn plant_input_deviation(r: &SimResult, d: &Design, shift: &[usize]) -> (f64, f6
     let (mut dev, mut peak) = (0.0f64, 0.0f64);
     for k in 0..r.len() {
         let x_hat = DVector::from_column_slice(&r.x_hat[k * n..(k + 1) * n]);
-        let u_d = DVector::from_iterator(m, (0..m).map(|i| if k >= shift[i] { r.u[(k - shift[i]) * m + i] } else { 0.0 }));
+        let u_d =
+            DVector::from_iterator(m, (0..m).map(|i| if k >= shift[i] { r.u[(k - shift[i]) * m + i] } else { 0.0 }));
         let want = d.F() * u_d - d.K() * x_hat;
         for i in 0..m {
             dev = dev.max((r.u_f[k * m + i] - want[i]).abs());

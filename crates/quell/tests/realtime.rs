@@ -254,7 +254,14 @@ fn sampled_data_loop_converges_to_the_continuous_one_at_order_one() {
     let cont =
         simulate(&d, &g, &w, &RunSettings::new(t_end, 0.1, 1e-10, 1e-10), |_| ControlFlow::Continue(())).unwrap();
     let dev = |ts: f64| -> [f64; 2] {
-        let settings = SampledSettings { t_end, output_step: 0.1, sample_time: ts, noise: None, divergence_bound: 1e9 };
+        let settings = SampledSettings {
+            t_end,
+            output_step: 0.1,
+            sample_time: ts,
+            noise: None,
+            divergence_bound: 1e9,
+            record_states: false,
+        };
         let samp = simulate_sampled(&d, &g, &w, &settings, |_| ControlFlow::Continue(())).unwrap();
         assert_eq!(samp.outcome, Some(Outcome::Completed));
         assert_eq!(samp.len(), cont.len());
@@ -301,8 +308,14 @@ fn sample_time_sweep() {
     for n in [2000u32, 1000, 500, 400, 250, 200, 100, 50, 20, 15, 12, 10, 8, 5] {
         let ts = 1.0 / n as f64;
         let out = if n % 10 == 0 { 0.1 } else { ts * (0.1 * n as f64).ceil() };
-        let settings =
-            SampledSettings { t_end: 100.0, output_step: out, sample_time: ts, noise: None, divergence_bound: 1e9 };
+        let settings = SampledSettings {
+            t_end: 100.0,
+            output_step: out,
+            sample_time: ts,
+            noise: None,
+            divergence_bound: 1e9,
+            record_states: false,
+        };
         let r = simulate_sampled(&d, &g, &w, &settings, |_| ControlFlow::Continue(())).unwrap();
         let (e1, e2) = (
             r.max_abs_error(0, 90.0, 100.0).unwrap_or(f64::INFINITY),

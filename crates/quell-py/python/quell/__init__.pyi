@@ -246,6 +246,7 @@ def simulate(
     rtol: Optional[float] = None,
     atol: Optional[float] = None,
     sample_time: Optional[float] = None,
+    max_steps: Optional[int] = None,
     states: bool = False,
     check: bool = True,
 ) -> SimResult: ...

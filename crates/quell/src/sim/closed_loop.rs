@@ -415,8 +415,12 @@ pub struct RunSettings {
     pub atol: f64,
     /// A watched signal above this magnitude counts as divergence ([`Watched`]).
     pub divergence_bound: f64,
-    /// Most solver steps ([`Outcome::TooManySteps`] beyond); unlimited by default.
-    pub max_steps: usize,
+    /// Most solver steps ([`Outcome::TooManySteps`] beyond); `None`: [`default_max_steps`], derived
+    /// from the problem.
+    pub max_steps: Option<usize>,
+    /// Most bytes the delay history may hold ([`Outcome::HistoryTooLarge`] beyond); default
+    /// [`MAX_HISTORY_BYTES`].
+    pub max_history_bytes: usize,
     /// Bounds per watched signal (x, x̂, ξ̂, η̂) below `divergence_bound`: a signal beyond its bound
     /// counts as divergence too. Studies set these to a factor times the nominal run's
     /// [`SimResult::peaks`] (docs/studies.md, "Runaway"); `None` by default.
@@ -434,10 +438,67 @@ impl RunSettings {
             rtol,
             atol,
             divergence_bound: DIVERGENCE_BOUND,
-            max_steps: usize::MAX,
+            max_steps: None,
+            max_history_bytes: MAX_HISTORY_BYTES,
             runaway: None,
             record_states: false,
         }
+    }
+}
+
+/// Default memory budget of a continuous run's delay history: 1 GiB. The recorded rows come on top;
+/// they are known before the run (at most [`crate::settings::MAX_OUTPUT_SAMPLES`]).
+pub const MAX_HISTORY_BYTES: usize = 1 << 30;
+
+/// Steps of the default budget per unit of ρ·t_end ([`default_max_steps`]).
+pub const BUDGET_STEPS_PER_RATE: f64 = 100.0;
+
+/// The default budget's least number of steps (a study's default budget, `study::MAX_STEPS`).
+pub const BUDGET_MIN_STEPS: usize = 10_000;
+
+/// The default step budget of a continuous run, from the problem's time scales:
+/// [`BUDGET_MIN_STEPS`] + [`BUDGET_STEPS_PER_RATE`]·(ρ·t_end + t_end/τ_min). ρ is the fastest rate
+/// the loop is built from: the largest |λ| of the true plant's A, of A − BK, A − LC, G_g, G_ω and
+/// the channels' G_ii(s), 1/β, and the signals' highest frequency; τ_min is the shortest positive
+/// delay (a step is at most τ_min long). A healthy run takes a few steps per unit of ρ·t (the
+/// paper's example about 2 at rtol = 1e-9), so the budget leaves a margin of tens; a loop that
+/// turns stiff as it blows up spends it in seconds. The adaptation's own rate μ_i·λ_max(Ω_i) is not
+/// known before the run and is not counted.
+pub fn default_max_steps(design: &Design, truth: &Plant, signals: [&Signal; 2], t_end: f64) -> usize {
+    let radius = |M: &DMatrix<f64>| {
+        if M.is_empty() {
+            0.0
+        } else {
+            M.complex_eigenvalues().iter().fold(0.0, |r: f64, z| r.max(z.norm()))
+        }
+    };
+    let largest = |e: &[nalgebra::Complex<f64>]| e.iter().fold(0.0, |r: f64, z| r.max(z.norm()));
+    let channels = design.channels().iter().fold(0.0, |r: f64, c| r.max(largest(&c.poles)));
+    let frequency = signals
+        .iter()
+        .flat_map(|s| s.components.iter().flat_map(|c| c.harmonics.iter().map(|h| h.frequency.abs())))
+        .fold(0.0, f64::max);
+    let rho = [
+        radius(&truth.A),
+        largest(design.decoupled_eigenvalues()),
+        largest(design.observer_eigenvalues()),
+        radius(design.G_g()),
+        radius(design.G_w()),
+        channels,
+        1.0 / design.beta(),
+        frequency,
+    ]
+    .into_iter()
+    .filter(|r| r.is_finite())
+    .fold(0.0, f64::max);
+    let delays = design.plant().delays.iter().chain(&truth.delays).filter(|&&d| d > 0.0);
+    let tau_min = delays.fold(f64::INFINITY, |a, &d| a.min(d));
+    let scale = rho * t_end + if tau_min.is_finite() { t_end / tau_min } else { 0.0 };
+    let steps = BUDGET_MIN_STEPS as f64 + BUDGET_STEPS_PER_RATE * scale;
+    if steps.is_finite() && steps < usize::MAX as f64 {
+        steps as usize
+    } else {
+        usize::MAX
     }
 }
 
@@ -468,8 +529,17 @@ pub fn simulate_with_truth(
     settings: &RunSettings,
     mut on_progress: impl FnMut(f64) -> ControlFlow<()>,
 ) -> Result<SimResult, SimError> {
-    let RunSettings { t_end, output_step, rtol, atol, divergence_bound, max_steps, runaway, record_states } =
-        *settings;
+    let RunSettings {
+        t_end,
+        output_step,
+        rtol,
+        atol,
+        divergence_bound,
+        max_steps,
+        max_history_bytes,
+        runaway,
+        record_states,
+    } = *settings;
     check_run(design, reference, disturbance, t_end, output_step, divergence_bound)?;
     crate::settings::check_tolerances(rtol, atol)?;
     let mut sys = ContinuousLoop::with_truth(design, truth, reference, disturbance)?;
@@ -489,7 +559,10 @@ pub fn simulate_with_truth(
         u: vec![0.0; m],
         u_f: vec![0.0; m],
     });
-    let opts = Options { rtol, atol, max_steps, ..Options::default() };
+    let max_steps = max_steps.unwrap_or_else(|| default_max_steps(design, truth, [reference, disturbance], t_end));
+    // The history's ring may double past its length: half the budget in records.
+    let max_history_len = max_history_bytes / (2 * dde::record_bytes(sys.n_delayed()));
+    let opts = Options { rtol, atol, max_steps, max_history_len, ..Options::default() };
     let mut outcome = Outcome::Completed;
     // The loop records each sample (observe); here only the progress and an interruption.
     let solved = dde::solve(&mut sys, 0.0, &s0, &history, t_end, output_step, &opts, |t, _| {
@@ -508,6 +581,10 @@ pub fn simulate_with_truth(
         Err(dde::SolveError::TooManySteps { t, stats }) => {
             result.stats = RunStats::continuous(&stats);
             outcome = Outcome::TooManySteps { t, max_steps };
+        }
+        Err(dde::SolveError::HistoryTooLong { t, stats }) => {
+            result.stats = RunStats::continuous(&stats);
+            outcome = Outcome::HistoryTooLarge { t, max_bytes: max_history_bytes };
         }
         Err(dde::SolveError::StepSizeTooSmall { t, stats, .. }) => {
             result.stats = RunStats::continuous(&stats);

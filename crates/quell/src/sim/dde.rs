@@ -120,12 +120,22 @@ pub struct Options {
     /// blowing up turns stiff long before its states reach a divergence bound, and its history
     /// would fill memory).
     pub max_steps: usize,
+    /// Most step records the delay history may hold at once (its memory is about
+    /// [`record_bytes`] each, twice that while its ring doubles); a run that needs more ends with
+    /// [`SolveError::HistoryTooLong`].
+    pub max_history_len: usize,
 }
 
 impl Default for Options {
     fn default() -> Self {
-        Options { rtol: 1e-9, atol: 1e-9, h_max: f64::INFINITY, max_steps: usize::MAX }
+        Options { rtol: 1e-9, atol: 1e-9, h_max: f64::INFINITY, max_steps: usize::MAX, max_history_len: usize::MAX }
     }
+}
+
+/// Bytes of one step record of the history for `n_delayed` components: its coefficients, start,
+/// length and nodes.
+pub fn record_bytes(n_delayed: usize) -> usize {
+    (NCOEF * n_delayed + 2 + (NCOEF - 1)) * std::mem::size_of::<f64>()
 }
 
 /// Solver statistics.
@@ -152,6 +162,9 @@ pub enum SolveError {
     /// More than [`Options::max_steps`] accepted steps were needed by time `t`.
     #[error("more than {} steps by t = {t}", .stats.steps - 1)]
     TooManySteps { t: f64, stats: Stats },
+    /// The history would have held more than [`Options::max_history_len`] step records at time `t`.
+    #[error("more than {} step records in the delay history at t = {t}", .stats.max_history_len)]
+    HistoryTooLong { t: f64, stats: Stats },
     /// An argument of [`solve`] (or the system's [`DelaySystem::delays`]) of the wrong length or
     /// value; nothing was integrated.
     #[error("dde::solve: {argument}: expected {expected}, found {found}")]
@@ -595,6 +608,9 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
         if self.stats.steps > self.opts.max_steps {
             return Err(SolveError::TooManySteps { t: self.t, stats: self.finish() });
         }
+        if self.nd > 0 && self.hist.len() >= self.opts.max_history_len {
+            return Err(SolveError::HistoryTooLong { t: self.t, stats: self.finish() });
+        }
         let fac = (self.err.powf(0.125) / SAFE).clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
         let mut h_next = step.h / fac;
         if self.last_rejected {
@@ -633,7 +649,14 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
             self.schedule.next += 1;
             // The step is in the history, and t_k − τ ≤ t_new − min τ ≤ t: the past is all known.
             let ctx = &self.ctx;
-            let past = Past { hist: &self.hist, initial: ctx.initial, y0: &ctx.y0, t0: ctx.t0, lead: self.t - t_k, tol: ctx.tol };
+            let past = Past {
+                hist: &self.hist,
+                initial: ctx.initial,
+                y0: &ctx.y0,
+                t0: ctx.t0,
+                lead: self.t - t_k,
+                tol: ctx.tol,
+            };
             self.sys.observe(t_k, out, &past)?;
             on_output(t_k, out)?;
         }

@@ -17,6 +17,9 @@ pub enum Outcome {
     StepSizeTooSmall { t: f64 },
     /// The solver needed more than `max_steps` steps by time `t` (`RunSettings::max_steps`).
     TooManySteps { t: f64, max_steps: usize },
+    /// The delay history would have held more than `max_bytes` at time `t`
+    /// (`RunSettings::max_history_bytes`): the solver's steps had become tiny.
+    HistoryTooLarge { t: f64, max_bytes: usize },
     /// Stopped from outside (e.g. Ctrl-C) at time `t`.
     Interrupted { t: f64 },
 }

@@ -169,7 +169,7 @@ pub(crate) fn simulate(
     let design = s.design().map_err(|e| e.to_string())?;
     let mut settings = LoopSettings::of(s);
     if let LoopSettings::Continuous(st) = &mut settings {
-        st.max_steps = max_steps;
+        st.max_steps = Some(max_steps);
         st.runaway = runaway;
     }
     let progress = |_t: f64| if stop() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
@@ -223,6 +223,12 @@ fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                     row.reason = format!(
                         "step budget: more than {} × the nominal run's {n} solver steps ({max_steps}) by t = {t:.4} (the loop turned stiff: its signals grew well beyond the nominal run's; raise runaway.steps in the study file if the run is sound)",
                         spec.runaway.steps
+                    );
+                }
+                sim::Outcome::HistoryTooLarge { t, max_bytes } => {
+                    row.reason = format!(
+                        "the delay history would have exceeded {} MB by t = {t:.4} (the solver's steps had become tiny: a loop blowing up turns stiff)",
+                        max_bytes >> 20
                     );
                 }
                 sim::Outcome::TooManySteps { t, max_steps } => {

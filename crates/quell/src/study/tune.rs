@@ -131,7 +131,14 @@ impl TuneSpec {
                 Some(v) => Err(err(format!("tune.{key}"), format!("expected an integer in [{min}, 10000], found {v}"))),
             }
         };
-        Ok(TuneSpec { objective, bounds, max_u, max_uf, points: count("points", 13, 2)?, refine: count("refine", 8, 0)? })
+        Ok(TuneSpec {
+            objective,
+            bounds,
+            max_u,
+            max_uf,
+            points: count("points", 13, 2)?,
+            refine: count("refine", 8, 0)?,
+        })
     }
 }
 
@@ -220,8 +227,10 @@ pub fn tune(study: &Study) -> Result<TuneResult, StudyError> {
         mu[i] = mu_i;
         let row = run_with(study, &mu);
         let figures = row.channels.get(i).copied();
-        let objective =
-            figures.filter(|c| c.max_u <= spec.max_u[i] && c.max_uf <= spec.max_uf[i]).map(|c| spec.objective.of(&c)).filter(|v| v.is_finite());
+        let objective = figures
+            .filter(|c| c.max_u <= spec.max_u[i] && c.max_uf <= spec.max_uf[i])
+            .map(|c| spec.objective.of(&c))
+            .filter(|v| v.is_finite());
         TunePoint { mu: mu_i, objective, outcome: row.outcome, figures }
     };
     let key = |p: &TunePoint| p.objective.unwrap_or(f64::INFINITY);
