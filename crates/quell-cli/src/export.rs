@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use quell::export::{generate, ExportOptions};
+use quell::export::{generate, generate_fmu, ExportError, ExportOptions};
 
 use crate::{load, output, Failure};
 
@@ -23,6 +23,14 @@ pub struct ExportArgs {
     /// Floating-point type of the generated code: f64 (double) or f32 (float, for single-precision FPUs).
     #[arg(long, default_value = "f64", value_parser = ["f64", "f32"])]
     precision: String,
+    /// Also write <PREFIX>.fmu: an FMI 2.0 co-simulation FMU of the same C (inputs y, g; outputs
+    /// u_f, u), with its sources and a binary for this machine built by --compiler.
+    #[arg(long)]
+    fmu: bool,
+    /// C compiler for the FMU's binary (gcc's flags); defaults to $CC, else cc. "none" writes a
+    /// source-only FMU.
+    #[arg(long, value_name = "COMPILER", requires = "fmu")]
+    compiler: Option<String>,
 }
 
 /// Generates, then writes both files (each to a temporary name, then renamed).
@@ -35,10 +43,17 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
     })?;
     let options = ExportOptions {
         prefix: args.prefix.clone(),
-        precision: args.precision.parse().map_err(|e: quell::export::ExportError| Failure::Input(e.to_string()))?,
+        precision: args.precision.parse().map_err(export_failure)?,
         scenario_name: scenario.name.clone(),
     };
-    let code = generate(&design, sample_time, &options).map_err(|e| Failure::Input(e.to_string()))?;
+    let code = generate(&design, sample_time, &options).map_err(export_failure)?;
+    let fmu = if args.fmu {
+        let cc = args.compiler.clone().or_else(|| std::env::var("CC").ok()).unwrap_or_else(|| "cc".to_string());
+        let compiler = (cc != "none").then_some(cc.as_str());
+        Some(generate_fmu(&design, sample_time, &options, compiler).map_err(export_failure)?)
+    } else {
+        None
+    };
     let out = &args.out;
     output::prepare_dir(out).map_err(|e| {
         Failure::Input(format!("--out {}: cannot write there ({e}); choose a writable directory", out.display()))
@@ -46,6 +61,13 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
     for (name, text) in [(&code.header_name, &code.header), (&code.source_name, &code.source)] {
         output::write_atomic(&out.join(name), |w| w.write_all(text.as_bytes()))
             .map_err(|e| Failure::Run(format!("writing {}: {e}", out.join(name).display())))?;
+    }
+    if let Some(fmu) = &fmu {
+        let path = out.join(&fmu.file_name);
+        output::write_atomic(&path, |w| w.write_all(&fmu.bytes))
+            .map_err(|e| Failure::Run(format!("writing {}: {e}", path.display())))?;
+        let binary = fmu.platform.map(|p| format!("binary for {p}")).unwrap_or_else(|| "sources only".into());
+        eprintln!("wrote {} in {} (FMI 2.0 co-simulation, {binary})", fmu.file_name, out.display());
     }
     eprintln!(
         "wrote {} and {} in {} (T_s = {sample_time} s, {}; {} bytes of constants, {} bytes of state)",
@@ -57,4 +79,13 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
         code.state_bytes
     );
     Ok(())
+}
+
+/// An export error as the CLI reports it: a compiler that fails or an archive that cannot be built
+/// is a failed run (1), the rest bad input (2).
+fn export_failure(e: ExportError) -> Failure {
+    match e {
+        ExportError::Compiler { .. } | ExportError::Archive { .. } => Failure::Run(e.to_string()),
+        _ => Failure::Input(e.to_string()),
+    }
 }

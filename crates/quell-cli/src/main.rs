@@ -4,6 +4,7 @@
 //! Exit codes: 0 success, 1 a run that failed (diverged, solver failure, interrupted),
 //! 2 bad input or an infeasible design.
 
+mod auto;
 mod export;
 mod output;
 mod plot;
@@ -34,13 +35,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Compute every gain from a scenario file and check the paper's assumptions.
-    Design {
-        /// Scenario file (TOML).
-        scenario: PathBuf,
-        /// Print one JSON object instead of text.
-        #[arg(long)]
-        json: bool,
-    },
+    Design(auto::DesignArgs),
     /// Simulate the closed loop; write signals.csv, design.json, summary.json and plots.
     Run(run::RunArgs),
     /// Write the real-time controller as dependency-free C99 (<PREFIX>_controller.h and .c).
@@ -62,7 +57,8 @@ pub(crate) enum Failure {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Some(Command::Design { scenario, json }) => design(&scenario, json),
+        Some(Command::Design(args)) if args.auto => auto::auto(&args),
+        Some(Command::Design(args)) => design(&args),
         Some(Command::Run(args)) => run::run(&args),
         Some(Command::Export(args)) => export::run(&args),
         Some(Command::Sweep(args)) => sweep::sweep(&args),
@@ -77,14 +73,36 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure::Input(msg)) => {
-            eprintln!("error: {msg}");
+            eprintln!("error: {}", in_flags(msg));
             ExitCode::from(2)
         }
         Err(Failure::Run(msg)) => {
-            eprintln!("error: {msg}");
+            eprintln!("error: {}", in_flags(msg));
             ExitCode::from(1)
         }
     }
+}
+
+/// Library keys that a flag sets, as the CLI names them.
+const FLAGS: [(&str, &str); 4] = [
+    ("simulation.sample_time", "simulation.sample_time (--sample-time)"),
+    ("prefix", "--prefix"),
+    ("precision", "--precision"),
+    ("compiler", "--compiler"),
+];
+
+/// A library message whose leading key a flag sets, with the flag named.
+fn in_flags(msg: String) -> String {
+    for (key, flag) in FLAGS {
+        if let Some(rest) = msg.strip_prefix(key).filter(|r| r.starts_with([':', ' '])) {
+            return format!("{flag}{rest}");
+        }
+    }
+    msg
+}
+
+pub(crate) fn print_json(value: &serde_json::Value) {
+    print_stdout(&format!("{}\n", serde_json::to_string_pretty(value).unwrap_or_default()));
 }
 
 pub(crate) fn load(path: Option<&Path>) -> Result<(Scenario, Design), Failure> {
@@ -97,9 +115,14 @@ pub(crate) fn load(path: Option<&Path>) -> Result<(Scenario, Design), Failure> {
     Ok((scenario, design))
 }
 
-fn design(path: &Path, as_json: bool) -> Result<(), Failure> {
-    let (_, d) = load(Some(path))?;
-    if as_json {
+fn design(args: &auto::DesignArgs) -> Result<(), Failure> {
+    if let Some(flag) = args.auto_only_flag() {
+        return Err(Failure::Input(format!(
+            "{flag}: only with --auto (the automatic design); add --auto or remove {flag}"
+        )));
+    }
+    let (_, d) = load(Some(&args.scenario))?;
+    if args.json {
         print_stdout(&format!("{}\n", serde_json::to_string_pretty(&report::design_json(&d)).unwrap_or_default()));
     } else {
         print_stdout(&report::design_text(&d));
@@ -108,7 +131,7 @@ fn design(path: &Path, as_json: bool) -> Result<(), Failure> {
 }
 
 /// Writes to stdout; a closed pipe (`quell design … | head`) ends the output quietly.
-fn print_stdout(text: &str) {
+pub(crate) fn print_stdout(text: &str) {
     use std::io::Write;
     let _ = std::io::stdout().lock().write_all(text.as_bytes());
 }

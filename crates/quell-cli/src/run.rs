@@ -9,6 +9,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use quell::diagnostics::{ChannelDiagnostics, Diagnostics};
 use quell::run::LoopSettings;
 use quell::scenario::Scenario;
 use quell::sim::{Outcome, RunStats, SimResult};
@@ -54,9 +55,10 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     let result = simulate(&scenario, &design, &settings, &ctrl_c)?;
     ctrl_c.start_writing();
     let seconds = started.elapsed().as_secs_f64();
-    write_outputs(out, &scenario, &design, &result, seconds, !args.no_plots)
+    let diagnostics = quell::diagnostics::diagnose(&design, &scenario.reference, &scenario.disturbance, &result);
+    write_outputs(out, &scenario, &design, &result, &diagnostics, seconds, !args.no_plots)
         .map_err(|e| Failure::Run(format!("writing {}: {e}", out.display())))?;
-    report_outcome(&result, out, seconds)
+    report_outcome(&result, &diagnostics, out, seconds)
 }
 
 /// The scenario's loop ([`LoopSettings::of`]), or the sampled-data loop at `--sample-time`; a
@@ -160,6 +162,7 @@ fn write_outputs(
     scenario: &Scenario,
     design: &Design,
     r: &SimResult,
+    diagnostics: &Diagnostics,
     seconds: f64,
     plots: bool,
 ) -> std::io::Result<()> {
@@ -167,7 +170,7 @@ fn write_outputs(
     std::thread::scope(|scope| {
         let figures: Vec<_> =
             (0..if plots { r.m } else { 0 }).map(|i| scope.spawn(move || plot::plot_channel(dir, r, i))).collect();
-        let data = write_data(dir, scenario, design, r, seconds);
+        let data = write_data(dir, scenario, design, r, diagnostics, seconds);
         for figure in figures {
             figure.join().map_err(|_| std::io::Error::other("plotting panicked"))??;
         }
@@ -175,7 +178,14 @@ fn write_outputs(
     })
 }
 
-fn write_data(dir: &Path, scenario: &Scenario, design: &Design, r: &SimResult, seconds: f64) -> std::io::Result<()> {
+fn write_data(
+    dir: &Path,
+    scenario: &Scenario,
+    design: &Design,
+    r: &SimResult,
+    diagnostics: &Diagnostics,
+    seconds: f64,
+) -> std::io::Result<()> {
     output::write_signals(&dir.join("signals.csv"), r)?;
     output::write_json(&dir.join("design.json"), &report::design_json(design))?;
     let summary = json!({
@@ -186,22 +196,41 @@ fn write_data(dir: &Path, scenario: &Scenario, design: &Design, r: &SimResult, s
         "stats": r.stats,
         "samples": r.len(),
         "wall_time_s": seconds,
+        "diagnostics": diagnostics.channels,
+        "observer_fidelity": diagnostics.observer_fidelity,
+        "advice": diagnostics.advice,
     });
     output::write_json(&dir.join("summary.json"), &summary)
 }
 
 /// What a run that spent its budget means, and what to do.
 const RUNAWAY_HINT: &str = "the loop turned stiff, as a loop blowing up does before its states reach the divergence bound, or its adaptation is stiff from the start; raise --max-steps if the run is sound";
+/// Channel i's convergence figures and advice, under its line of figures.
+fn report_diagnostics(d: &ChannelDiagnostics) {
+    let trend = d.tail_trend.map_or(String::new(), |r| format!(", tail RMS ratio (last two tenths) {r:.2}"));
+    eprintln!(
+        "  Ω̄: λ_min = {:.3e}, λ_max = {:.3e}; convergence time 1/(μλ_min) = {:.3e} s, adaptation rate μλ_max = {:.3e}/s{trend}",
+        d.lambda_min_omega, d.lambda_max_omega, d.convergence_time, d.adaptation_rate
+    );
+    for line in &d.advice {
+        eprintln!("  advice: {line}");
+    }
+}
 
 /// The per-channel figures and what was written (exit 0), or why the run did not reach t_end
 /// (exit 1; the files hold the samples up to then).
-fn report_outcome(result: &SimResult, out: &Path, seconds: f64) -> Result<(), Failure> {
+fn report_outcome(result: &SimResult, diagnostics: &Diagnostics, out: &Path, seconds: f64) -> Result<(), Failure> {
     let out = out.display();
     match result.outcome.as_ref().unwrap_or(&Outcome::Completed) {
         Outcome::Completed => {
             for (i, c) in result.summary().iter().enumerate() {
+                let settle = match (c.settle_t, &c.settle_note) {
+                    (Some(t), _) => format!("settled (2 % band) at t = {t}"),
+                    (None, Some(note)) => note.clone(),
+                    (None, None) => "not settled".into(),
+                };
                 eprintln!(
-                    "channel {}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {:.3}, max|u_f| = {:.3}, ‖η̂‖ = {:.4}",
+                    "channel {}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {:.3}, max|u_f| = {:.3}, ‖η̂‖ = {:.4}, {settle}",
                     i + 1,
                     c.tail_max_abs_e,
                     c.tail_rms_e,
@@ -209,6 +238,12 @@ fn report_outcome(result: &SimResult, out: &Path, seconds: f64) -> Result<(), Fa
                     c.max_abs_uf,
                     c.final_eta_norm
                 );
+                if let Some(d) = diagnostics.channels.get(i) {
+                    report_diagnostics(d);
+                }
+            }
+            for line in &diagnostics.advice {
+                eprintln!("  advice: {line}");
             }
             let steps = match result.stats {
                 RunStats::Continuous { steps, .. } => format!("{steps} solver steps"),

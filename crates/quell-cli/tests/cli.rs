@@ -514,3 +514,54 @@ fn run_states_records_x_and_x_hat_and_x_gives_y() {
         }
     }
 }
+
+/// The paper's example with its whole [design] table left out.
+fn paper_without_design(dir: &TempDir) -> PathBuf {
+    let text = fs::read_to_string(examples_dir().join("paper.toml")).unwrap();
+    let start = text.find("[design]").unwrap();
+    let end = start + text[start..].find("[reference]").unwrap();
+    let path = dir.join("no-design.toml");
+    fs::write(&path, format!("{}[design]\n{}", &text[..start], &text[end..])).unwrap();
+    path
+}
+
+#[test]
+fn design_auto_writes_a_complete_scenario_that_meets_the_tail_bound() {
+    let dir = TempDir::new("auto");
+    let input = paper_without_design(&dir);
+    // Without --auto the missing keys are an input error that names --auto.
+    let o = quell(&["run", input.to_str().unwrap(), "--out", dir.join("x").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--auto"), "{}", stderr(&o));
+    let out = dir.join("auto.toml");
+    let o = quell(&["design", input.to_str().unwrap(), "--auto", "--write", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}{}", stdout(&o), stderr(&o));
+    for key in ["design.observer_poles", "design.channel_poles", "design.mu", "design.beta", "verification"] {
+        assert!(stdout(&o).contains(key), "the report explains {key}:\n{}", stdout(&o));
+    }
+    // The written scenario is complete, and running it (an independent run of the file) meets
+    // the bound the verification promised: tail max |e_i| ≤ 1 % of the reference's peak (3 and 2).
+    let s = Scenario::from_path(&out).unwrap();
+    assert_eq!(s.plant, Scenario::from_path(&examples_dir().join("paper.toml")).unwrap().plant);
+    let run_dir = dir.join("run");
+    let o = quell(&["run", out.to_str().unwrap(), "--out", run_dir.to_str().unwrap(), "--no-plots"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let summary = read_json(&run_dir.join("summary.json"));
+    for (c, peak) in summary["channels"].as_array().unwrap().iter().zip([3.0, 2.0]) {
+        let tail = c["tail_max_abs_e"].as_f64().unwrap();
+        assert!(tail <= 0.01 * peak, "tail max|e| {tail} against 1 % of {peak}");
+    }
+    // Every channel has its diagnostics, with the keys scripts read.
+    for d in summary["diagnostics"].as_array().unwrap() {
+        for key in ["lambda_min_omega", "lambda_max_omega", "convergence_time", "adaptation_rate"] {
+            assert!(d.get(key).is_some(), "{key} in {d}");
+        }
+    }
+    // --write without --auto, and a bad target, are input errors.
+    let o = quell(&["design", input.to_str().unwrap(), "--write", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--write: only with --auto"), "{}", stderr(&o));
+    let o = quell(&["design", input.to_str().unwrap(), "--auto", "--convergence-time", "-1"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--convergence-time: expected a finite number > 0, found -1"), "{}", stderr(&o));
+}

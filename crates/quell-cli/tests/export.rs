@@ -118,6 +118,43 @@ fn bad_export_input_exits_2_naming_the_flag() {
     }
 }
 
+#[test]
+fn export_fmu_writes_one_archive_or_fails_with_1() {
+    // The FMU's content is validated and simulated by FMPy in crates/quell-py/tests/test_fmu.py;
+    // here: the CLI writes NAME.fmu (a zip holding the model description, the sources and the
+    // binary for this platform) and a compiler that cannot run is a failed run that writes nothing.
+    let dir = temp_dir("fmu");
+    let out = dir.display().to_string();
+    let three = example("three-channel.toml");
+    let o = quell(&["export", &three, "--sample-time", "0.05", "--out", &out, "--prefix", "plant3", "--fmu"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("wrote plant3.fmu"), "{}", stderr(&o));
+    let fmu = std::fs::read(dir.join("plant3.fmu")).unwrap();
+    assert_eq!(&fmu[..4], b"PK\x03\x04");
+    let text = String::from_utf8_lossy(&fmu);
+    for name in
+        ["modelDescription.xml", "sources/plant3_fmu.c", "sources/plant3_controller.c", "binaries/linux64/plant3.so"]
+    {
+        assert!(text.contains(name), "{name} is missing from the archive");
+    }
+    let bad = temp_dir("fmu-bad");
+    let bad_out = bad.display().to_string();
+    let o = quell(&[
+        "export",
+        &three,
+        "--sample-time",
+        "0.05",
+        "--out",
+        &bad_out,
+        "--fmu",
+        "--compiler",
+        "/nonexistent/cc",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("error: --compiler \"/nonexistent/cc\": cannot run it"), "{}", stderr(&o));
+    assert!(!bad.exists(), "the output directory was touched");
+}
+
 #[path = "../../quell/tests/c_harness/mod.rs"]
 mod c_harness;
 

@@ -6,7 +6,7 @@ use pyo3::types::{PyList, PyTuple};
 
 use crate::convert::{number, type_name, vec_numpy, vector};
 use crate::design::PyDesign;
-use crate::errors::{raise, Kind};
+use crate::errors::{in_arguments, raise, Kind};
 
 /// The discrete-time adaptive controller of a design at sample time T_s (eqs. (5), (6), (14),
 /// (20), (25), (33)). `step` allocates nothing in Rust and costs about 1 µs from Python.
@@ -59,7 +59,8 @@ impl PyController {
             Kind::Value.err(py, format!("design: expected a quell.Design, found a {}", type_name(design)))
         })?;
         let T = number(sample_time, "sample_time", Kind::Scenario)?;
-        let inner = quell::Controller::new(&d.inner, T).map_err(|e| raise(py, Kind::Scenario)(&e))?;
+        let inner =
+            quell::Controller::new(&d.inner, T).map_err(|e| Kind::Scenario.err(py, in_arguments(e.to_string())))?;
         let (m, _) = inner.dims();
         Ok(PyController { inner, y: vec![0.0; m], g: vec![0.0; m] })
     }

@@ -217,6 +217,17 @@ impl PyDesign {
     fn q(&self) -> usize {
         self.inner.q()
     }
+    /// The delay-free decoupled plant (Proposition 1, x̂ = x) as a labelled `control.StateSpace`:
+    /// ẋ = A_f x + B_f u_d, y = C x; inputs `u_d[i]`, outputs `y[i]`, states `x[j]`. Its transfer
+    /// matrix is diagonal with entries G_ii(s) (see `channels`).
+    fn decoupled_system(slf: &Bound<'_, Self>) -> PyResult<Py<PyAny>> {
+        Ok(slf.py().import("quell._control")?.call_method1("decoupled_system", (slf,))?.unbind())
+    }
+    /// The Luenberger observer (6) as a labelled `control.StateSpace`: x̂' = (A − LC) x̂ + B u_f + L y;
+    /// inputs `u_f[i]` then `y[i]`, outputs `x_hat[j]`.
+    fn observer_system(slf: &Bound<'_, Self>) -> PyResult<Py<PyAny>> {
+        Ok(slf.py().import("quell._control")?.call_method1("observer_system", (slf,))?.unbind())
+    }
     /// The plant the design is for.
     #[getter]
     fn plant(&self) -> PyPlant {

@@ -14,6 +14,21 @@ pub enum Kind {
     Design,
     /// Plain `ValueError`: arguments of the real-time controller.
     Value,
+    /// `quell.ExportError`: the export's own arguments (prefix, precision, compiler).
+    Export,
+}
+
+/// The library's keys as the Python arguments that set them, for messages of calls that take them.
+pub const ARGUMENTS: [(&str, &str); 1] = [("simulation.sample_time", "sample_time")];
+
+/// A library message whose leading key one of the call's arguments sets, with the argument named.
+pub fn in_arguments(message: String) -> String {
+    for (key, argument) in ARGUMENTS {
+        if let Some(rest) = message.strip_prefix(key).filter(|r| r.starts_with([':', ' '])) {
+            return format!("{argument}{rest}");
+        }
+    }
+    message
 }
 
 fn class<'py>(py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyType>> {
@@ -27,6 +42,7 @@ impl Kind {
         let name = match self {
             Kind::Scenario => "ScenarioError",
             Kind::Design => "DesignError",
+            Kind::Export => "ExportError",
             Kind::Value => return PyValueError::new_err(message),
         };
         match class(py, name) {

@@ -10,6 +10,7 @@ mod controller;
 mod convert;
 mod design;
 mod errors;
+mod export;
 mod plant;
 mod scenario;
 mod simulate;
@@ -35,5 +36,6 @@ fn _quell(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(study::sweep, m)?)?;
     m.add_function(wrap_pyfunction!(study::sweep_runs, m)?)?;
     m.add_function(wrap_pyfunction!(study::run_one, m)?)?;
+    m.add_function(wrap_pyfunction!(export::export, m)?)?;
     Ok(())
 }

@@ -15,7 +15,8 @@ use crate::errors::{raise, Kind};
 /// `Plant(sys, D=..., Q=..., delays=...)` takes A, B and C from a `control.StateSpace`. Its D is
 /// python-control's feedthrough from u to y, which the plant (1) does not have: it must be zero (and
 /// the system continuous-time); D and Q of this plant are the disturbance matrices, given as
-/// keywords.
+/// keywords. A `control.TransferFunction` is realized first: `control.minreal` cancels its
+/// pole-zero pairs, `control.ss` gives the state space (for MIMO, python-control needs slycot).
 #[pyclass(module = "quell", name = "Plant", frozen)]
 pub struct PyPlant {
     pub inner: quell::Plant,
@@ -54,6 +55,14 @@ impl PyPlant {
     ) -> PyResult<Self> {
         let py = A.py();
         let k = Kind::Scenario;
+        // A control.TransferFunction becomes its minimal state-space realization.
+        let realized;
+        let A = if type_name(A) == "TransferFunction" {
+            realized = py.import("quell._control")?.call_method1("state_space", (A,))?;
+            &realized
+        } else {
+            A
+        };
         let (A, B, C) = if is_state_space(A) {
             let sys = A;
             if B.is_some() || C.is_some() {

@@ -26,6 +26,8 @@ pub struct PySimResult {
     arrays: [Py<PyAny>; 7],
     /// x, x̂ when the run recorded them.
     states: Option<[Py<PyAny>; 2]>,
+    /// The run's convergence diagnostics as JSON ([`quell::diagnostics::Diagnostics`]).
+    diagnostics: String,
 }
 
 fn frozen_array(py: Python<'_>, data: &[f64], shape: &[usize]) -> PyResult<Py<PyAny>> {
@@ -37,7 +39,7 @@ fn frozen_array(py: Python<'_>, data: &[f64], shape: &[usize]) -> PyResult<Py<Py
 }
 
 impl PySimResult {
-    fn new(py: Python<'_>, r: SimResult) -> PyResult<Self> {
+    fn new(py: Python<'_>, r: SimResult, diagnostics: String) -> PyResult<Self> {
         let (k, m, q, n) = (r.len(), r.m, r.q, r.n);
         let arrays = [
             frozen_array(py, &r.t, &[k])?,
@@ -52,7 +54,7 @@ impl PySimResult {
             true => Some([frozen_array(py, &r.x, &[k, n])?, frozen_array(py, &r.x_hat, &[k, n])?]),
             false => None,
         };
-        Ok(PySimResult { inner: r, arrays, states })
+        Ok(PySimResult { inner: r, arrays, states, diagnostics })
     }
 }
 
@@ -178,7 +180,8 @@ impl PySimResult {
         Ok(d)
     }
     /// Per channel, as summary.json: tail max |e_i| and RMS e_i over the last 10 % of the horizon,
-    /// max |u_i|, max |u_f,i| (the plant input), and ‖η̂_i‖ at the end.
+    /// max |u_i|, max |u_f,i| (the plant input), ‖η̂_i‖ at the end, settle_t (2 % band; None when
+    /// not settled, or only in the last 5 % of the horizon) and settle_note (why settle_t is None).
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         self.inner
             .summary()
@@ -190,9 +193,22 @@ impl PySimResult {
                 d.set_item("max_abs_u", c.max_abs_u)?;
                 d.set_item("max_abs_uf", c.max_abs_uf)?;
                 d.set_item("final_eta_norm", c.final_eta_norm)?;
+                d.set_item("settle_t", c.settle_t)?;
+                d.set_item("settle_note", c.settle_note.as_deref())?;
                 Ok(d)
             })
             .collect()
+    }
+    /// Convergence diagnostics, as summary.json: {"channels": [per channel lambda_min_omega,
+    /// lambda_max_omega, convergence_time, adaptation_rate, predicted_final_rms_e, tail_trend,
+    /// excitation, advice], "observer_fidelity": [...], "advice": [...]}; see docs/tuning.md.
+    fn diagnostics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        py.import("json")?.call_method1("loads", (&self.diagnostics,))
+    }
+    /// The run as a `control.TimeResponseData`: outputs y (m × samples, labels `y[i]`), inputs the
+    /// adaptive commands u (labels `u[i]`), so python-control's plotting and analysis apply.
+    fn to_control(slf: &Bound<'_, Self>) -> PyResult<Py<PyAny>> {
+        Ok(slf.py().import("quell._control")?.call_method1("to_control", (slf,))?.unbind())
     }
     /// The columns of signals.csv (t, y1.., g1.., e1.., u1.., uf1.., eta1_1.., and x1.., xhat1.. when
     /// recorded) as a pandas DataFrame.
@@ -300,7 +316,9 @@ pub fn simulate(
     }
     let result = result.map_err(|e| raise(py, Kind::Scenario)(&e))?;
     let outcome = result.outcome.clone().unwrap_or(Outcome::Completed);
-    let result = Py::new(py, PySimResult::new(py, result)?)?;
+    let diagnostics = quell::diagnostics::diagnose(&design, &scn.reference, &scn.disturbance, &result);
+    let diagnostics = serde_json::to_string(&diagnostics).unwrap_or_default();
+    let result = Py::new(py, PySimResult::new(py, result, diagnostics)?)?;
     if !check {
         return Ok(result);
     }

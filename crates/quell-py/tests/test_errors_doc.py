@@ -94,6 +94,8 @@ CASES = [
      "design.disturbance_filter_poles[1]", None),
     ("both_observer_choices", edit((L_LINE, L_LINE + "\nobserver_poles = [-2.0, -3.0, -4.0]")), "design", None),
     ("neither_observer_choice", edit((L_LINE, "")), "design.observer_gain", None),
+    ("filter_orders_without_auto", edit((CHANNEL, CHANNEL + "\nreference_filter_orders = [2, 1]")),
+     "design.reference_filter_orders", None),
     ("real_pole_written_as_pair", edit((CHANNEL, "channel_poles = [[-6.0, [-2.0, 0.0]], [-4.0]]")),
      "design.channel_poles[0][1]", None),
     ("pair_with_negative_imaginary_part", edit((CHANNEL, "channel_poles = [[[-2.0, -1.0]], [-4.0]]")),

@@ -40,8 +40,10 @@ pub use nalgebra;
 #[macro_use]
 pub mod simd;
 
+pub mod auto;
 pub mod controller;
 pub mod design;
+pub mod diagnostics;
 pub mod export;
 pub mod linalg;
 pub mod plant;

@@ -6,9 +6,10 @@
 use thiserror::Error;
 
 /// A value out of range, named by its scenario key path (`simulation.t_end`, `noise.std[1]`), with
-/// what was expected and found. The message also names the CLI flag that overrides the key, if any.
+/// what was expected and found. Each front names the key in its own words where it differs (the CLI
+/// adds the flag that overrides it, Python the argument).
 #[derive(Debug, Clone, PartialEq, Error)]
-#[error("{key}{}: {message}", cli_flag(key).map(|f| format!(" ({f})")).unwrap_or_default())]
+#[error("{key}: {message}")]
 pub struct KeyError {
     pub key: String,
     pub message: String,
@@ -18,11 +19,6 @@ impl KeyError {
     pub fn new(key: impl Into<String>, message: impl Into<String>) -> Self {
         KeyError { key: key.into(), message: message.into() }
     }
-}
-
-/// The `quell run` flag that overrides a scenario key.
-fn cli_flag(key: &str) -> Option<&'static str> {
-    (key == "simulation.sample_time").then_some("--sample-time")
 }
 
 /// Most rows a run records (t_end / output_step): every row is kept in memory, ~200 bytes each.

@@ -152,7 +152,7 @@ fn a_discretization_that_overflows_is_refused_naming_the_block() {
         other => panic!("{other:?}"),
     }
     let e = Controller::new(&d, 1e100).unwrap_err().to_string();
-    assert!(e.starts_with("simulation.sample_time (--sample-time): the observers' [Φ_z Γ_z]"), "{e}");
+    assert!(e.starts_with("simulation.sample_time: the observers' [Φ_z Γ_z]"), "{e}");
     assert!(
         e.contains("is not finite after discretizing at T_s = 1e100 s") && e.contains("shorter sample time"),
         "{e}"

@@ -442,6 +442,15 @@ fn neither_observer_choice() {
 }
 
 #[test]
+fn filter_orders_without_auto() {
+    check(
+        &with(&[(CHANNEL, &format!("{CHANNEL}\nreference_filter_orders = [2, 1]"))]),
+        "design.reference_filter_orders",
+        "read only by an automatic design",
+    );
+}
+
+#[test]
 fn real_pole_written_as_pair() {
     check(
         &with(&[(CHANNEL, "channel_poles = [[-6.0, [-2.0, 0.0]], [-4.0]]")]),

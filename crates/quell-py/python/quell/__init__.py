@@ -12,7 +12,7 @@ docstrings refer to that paper.
 {'status': 'completed'}
 """
 
-from ._errors import DesignError, QuellError, ScenarioError, SimulationError
+from ._errors import DesignError, ExportError, QuellError, ScenarioError, SimulationError
 from ._quell import (
     Controller,
     Design,
@@ -23,6 +23,7 @@ from ._quell import (
     Study,
     __version__,
     design,
+    export,
     paper_example,
     place,
     run_one,
@@ -35,6 +36,7 @@ __all__ = [
     "Controller",
     "Design",
     "DesignError",
+    "ExportError",
     "Plant",
     "QuellError",
     "RunSpec",
@@ -45,6 +47,7 @@ __all__ = [
     "Study",
     "__version__",
     "design",
+    "export",
     "paper_example",
     "place",
     "run_one",

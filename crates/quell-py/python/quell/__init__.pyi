@@ -1,6 +1,7 @@
 """Type stubs of the quell package (the native module quell._quell and quell._errors)."""
 
 from os import PathLike
+from pathlib import Path
 from typing import Any, Dict, Iterator, List, Optional, Sequence, Union, final
 
 import numpy as np
@@ -17,6 +18,7 @@ __all__ = [
     "Controller",
     "Design",
     "DesignError",
+    "ExportError",
     "Plant",
     "QuellError",
     "RunSpec",
@@ -27,6 +29,7 @@ __all__ = [
     "Study",
     "__version__",
     "design",
+    "export",
     "paper_example",
     "place",
     "run_one",
@@ -41,6 +44,7 @@ class ScenarioError(QuellError, ValueError):
     key: Optional[str]
 
 class DesignError(QuellError, ValueError): ...
+class ExportError(QuellError, ValueError): ...
 
 class SimulationError(QuellError, RuntimeError):
     t: Optional[float]
@@ -53,7 +57,8 @@ class Plant:
     """The plant (1): ẋ = A x + B u_d + D ω, y = C x + Q ω, input i delayed by τ_i.
 
     A control.StateSpace may stand for A, B, C (its D is python-control's feedthrough, which this
-    plant does not have: it must be zero; give the disturbance matrices D and Q as keywords)."""
+    plant does not have: it must be zero; give the disturbance matrices D and Q as keywords). A
+    control.TransferFunction is realized minimally (control.minreal, then control.ss)."""
 
     def __new__(
         cls,
@@ -130,6 +135,8 @@ class Design:
     def channels(self) -> List[Dict[str, Any]]: ...
     @property
     def checks(self) -> Dict[str, Union[int, float]]: ...
+    def decoupled_system(self) -> Any: ...
+    def observer_system(self) -> Any: ...
 
 @final
 class Scenario:
@@ -205,7 +212,9 @@ class SimResult:
     def outcome(self) -> Dict[str, Any]: ...
     @property
     def stats(self) -> Dict[str, int]: ...
-    def summary(self) -> List[Dict[str, float]]: ...
+    def summary(self) -> List[Dict[str, Any]]: ...
+    def diagnostics(self) -> Dict[str, Any]: ...
+    def to_control(self) -> Any: ...
     def to_pandas(self) -> Any: ...
     def plot(self, channel: int = 1, **kwargs: Any) -> Any: ...
     def __len__(self) -> int: ...
@@ -238,6 +247,16 @@ def design(
 ) -> Design: ...
 def place(A: _ArrayLike, B: _ArrayLike, poles: _Poles) -> npt.NDArray[np.float64]: ...
 def paper_example() -> Scenario: ...
+def export(
+    source: Union[Scenario, Design],
+    sample_time: Optional[float] = None,
+    *,
+    out: Union[str, PathLike[str], None] = None,
+    prefix: str = "quell",
+    precision: Optional[str] = None,
+    fmu: bool = False,
+    compiler: Optional[str] = None,
+) -> List[Path]: ...
 def simulate(
     scenario: Scenario,
     *,

@@ -18,6 +18,11 @@ class DesignError(QuellError, ValueError):
     assumptions fail)."""
 
 
+class ExportError(QuellError, ValueError):
+    """An argument of :func:`quell.export` that is not valid (``prefix``, ``precision``), or a C
+    compiler that cannot build the FMU's binary (``compiler``)."""
+
+
 class SimulationError(QuellError, RuntimeError):
     """A run that did not reach t_end: it diverged or the solver's step underflowed.
 

@@ -12,16 +12,16 @@ use crate::linalg::zoh_unchecked;
 /// Why a controller cannot run at the requested sample time.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum ControllerError {
-    #[error("simulation.sample_time (--sample-time): expected a finite T_s > 0, found {value}")]
+    #[error("simulation.sample_time: expected a finite T_s > 0, found {value}")]
     BadSampleTime { value: f64 },
     /// `nearest` is a sample time that passes this same check, written with the fewest digits that do
     /// (so the printed value works when typed back), or `None` when no τ_c/k near T_s fits every delay.
-    #[error("simulation.sample_time (--sample-time): channel {}'s delay τ = {delay} s is not a whole number of samples of T_s = {sample_time} s ({ratio:.6} samples); {}", .channel + 1, suggestion(*.nearest))]
+    #[error("simulation.sample_time: channel {}'s delay τ = {delay} s is not a whole number of samples of T_s = {sample_time} s ({ratio:.6} samples); {}", .channel + 1, suggestion(*.nearest))]
     DelayNotMultiple { channel: usize, delay: f64, sample_time: f64, ratio: f64, nearest: Option<f64> },
-    #[error("simulation.sample_time (--sample-time): channel {}'s delay τ = {} s is {samples:e} samples of T_s = {} s; a delay line holds at most {max:e} samples; use a longer sample time", .channel + 1, crate::linalg::fmt_number(*.delay), crate::linalg::fmt_number(*.sample_time), max = MAX_DELAY_SAMPLES)]
+    #[error("simulation.sample_time: channel {}'s delay τ = {} s is {samples:e} samples of T_s = {} s; a delay line holds at most {max:e} samples; use a longer sample time", .channel + 1, crate::linalg::fmt_number(*.delay), crate::linalg::fmt_number(*.sample_time), max = MAX_DELAY_SAMPLES)]
     DelayTooLong { channel: usize, delay: f64, sample_time: f64, samples: f64 },
     /// A discretized block is not finite at this sample time.
-    #[error("simulation.sample_time (--sample-time): {what} is not finite after discretizing at T_s = {sample_time:e} s; the exact discretization overflowed (the design's eigenvalues or gains times T_s are beyond floating point); choose a shorter sample time or poles of smaller magnitude")]
+    #[error("simulation.sample_time: {what} is not finite after discretizing at T_s = {sample_time:e} s; the exact discretization overflowed (the design's eigenvalues or gains times T_s are beyond floating point); choose a shorter sample time or poles of smaller magnitude")]
     NotFinite { what: String, sample_time: f64 },
     /// T_s μ_i is beyond [`MAX_ADAPTATION_STEP`]: the gain c/(1 + c tr Ω) of [`adapt`] would overflow to
     /// 0 once c·tr Ω overflows, turning adaptation off without a sign.

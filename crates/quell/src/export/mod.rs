@@ -10,6 +10,9 @@
 //! statements, and `-std=c99` turns gcc's contraction off) the two give the same bits.
 
 mod c;
+mod fmu;
+
+pub use fmu::{generate_fmu, Fmu};
 
 use thiserror::Error;
 
@@ -41,7 +44,7 @@ impl Precision {
             Precision::F32 => 4,
         }
     }
-    /// The name `--precision` takes: `f64` or `f32`.
+    /// The name of the key `precision`: `f64` or `f32`.
     pub fn name(self) -> &'static str {
         match self {
             Precision::F64 => "f64",
@@ -99,14 +102,18 @@ pub enum ExportError {
     /// The controller cannot run at this sample time (the checks of [`Controller::new`]).
     #[error(transparent)]
     Controller(#[from] ControllerError),
-    #[error("--prefix: expected a C identifier (a letter, then letters, digits or _), found {found:?}; e.g. --prefix motor1")]
+    #[error("prefix: expected a C identifier (a letter, then letters, digits or _), found {found:?}; e.g. motor1")]
     Prefix { found: String },
-    #[error("--precision: expected f64 or f32, found {found:?}")]
+    #[error("precision: expected f64 or f32, found {found:?}")]
     Precision { found: String },
-    #[error("simulation.sample_time (--sample-time): {what} is {value} after discretizing at T_s = {sample_time} s; the exact discretization overflowed (the design's eigenvalues times T_s are beyond floating point); choose a shorter sample time or poles of smaller magnitude")]
+    #[error("simulation.sample_time: {what} is {value} after discretizing at T_s = {sample_time} s; the exact discretization overflowed (the design's eigenvalues times T_s are beyond floating point); choose a shorter sample time or poles of smaller magnitude")]
     NotFinite { what: String, value: f64, sample_time: f64 },
-    #[error("--precision f32: {what} = {value:e} is beyond the range of float (±3.4e38); use --precision f64")]
+    #[error("precision f32: {what} = {value:e} is beyond the range of float (±3.4e38); use f64")]
     F32Range { what: String, value: f64 },
+    #[error("compiler {compiler:?}: {message}")]
+    Compiler { compiler: String, message: String },
+    #[error("writing the FMU archive failed: {message}")]
+    Archive { message: String },
 }
 
 /// Generates the C controller for `design` at `sample_time`: the same controller as
@@ -133,6 +140,6 @@ mod tests {
             assert_eq!(p.name().parse::<Precision>(), Ok(p));
         }
         let e = "f16".parse::<Precision>().unwrap_err().to_string();
-        assert_eq!(e, "--precision: expected f64 or f32, found \"f16\"");
+        assert_eq!(e, "precision: expected f64 or f32, found \"f16\"");
     }
 }

@@ -17,7 +17,7 @@ mod write;
 use std::path::Path;
 use std::str::FromStr;
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{Complex, DMatrix, DVector};
 use thiserror::Error;
 
 use crate::design::{Design, DesignError, DesignSpec, ObserverChoice};
@@ -117,6 +117,8 @@ const DESIGN_KEYS: &[&str] = &[
     "mu",
     "beta",
     "relative_degrees",
+    "reference_filter_orders",
+    "disturbance_filter_orders",
 ];
 const SIGNAL_KEYS: &[&str] = &["components"];
 const COMPONENT_KEYS: &[&str] = &["bias", "harmonics"];
@@ -141,22 +143,22 @@ impl Scenario {
 
     /// Parses and validates a scenario.
     pub fn from_toml(text: &str) -> Result<Scenario, ScenarioError> {
-        let doc: toml::Table = text.parse().map_err(|e: toml::de::Error| {
-            let at = e
-                .span()
-                .map(|s| {
-                    let (line, col) = line_col(text, s.start);
-                    format!("line {line}, column {col}: ")
-                })
-                .unwrap_or_default();
-            err("syntax", format!("{at}{} (the file is not valid TOML)", e.message().trim_end()))
-        })?;
-        Scenario::from_document(&doc)
+        Scenario::from_document(&parse_document(text)?)
     }
 
     /// Validates a parsed scenario document (what [`Scenario::from_toml`] does after parsing the
     /// text); studies edit documents by key path and validate them here.
     pub fn from_document(doc: &toml::Table) -> Result<Scenario, ScenarioError> {
+        Scenario::from_document_with(doc, |partial, _| partial.complete())
+    }
+
+    /// [`Scenario::from_document`] with `[design]` completed by `complete` from the keys given
+    /// ([`PartialDesign`]) and the rest of the scenario (its `design` is a placeholder then):
+    /// the automatic design ([`crate::auto`]) chooses the keys a scenario leaves out.
+    pub fn from_document_with<E: From<ScenarioError>>(
+        doc: &toml::Table,
+        complete: impl FnOnce(PartialDesign, &Scenario) -> Result<DesignSpec, E>,
+    ) -> Result<Scenario, E> {
         let root = Table::new("", doc, TOP_KEYS)?;
 
         let name = root.get("name", |v| v.string())?;
@@ -167,10 +169,10 @@ impl Scenario {
                 plant(v, disturbance.as_ref())
             })?;
         let truth = root.get("truth", |v| truth(v, &plant))?;
-        let design = root.require(
+        let partial = root.require(
             "design",
             "the [design] table (observer, channel poles, filter poles, mu, beta)",
-            design_spec,
+            partial_design,
         )?;
         let simulation = root.get("simulation", simulation)?.unwrap_or_default();
         let noise = root.get("noise", noise)?;
@@ -181,29 +183,52 @@ impl Scenario {
                 return Err(err(
                     "disturbance",
                     format!("missing; plant.D has {k} columns (k = {k} disturbance components), so a [disturbance] table with {k} components is required; or remove plant.D and plant.Q"),
-                ))
+                ).into())
             }
             d => d.unwrap_or_default(),
         };
-        check_signals(&plant, &reference, &disturbance)?;
-        internal_model_order("reference", &reference, "design.reference_filter_poles", &design.reference_filter_poles)?;
+        check_signals(&plant, &reference, &disturbance).map_err(ScenarioError::from)?;
+        let mut scenario = Scenario {
+            name,
+            plant,
+            design: PartialDesign::placeholder(),
+            reference,
+            disturbance,
+            simulation,
+            noise,
+            truth,
+        };
+        scenario.design = complete(partial, &scenario)?;
+        scenario.check_after_design()?;
+        Ok(scenario)
+    }
+
+    /// The checks that need `[design]`: each signal component's internal-model order, and noise
+    /// only with a sampled-data run.
+    fn check_after_design(&self) -> Result<(), ScenarioError> {
+        let (design, simulation) = (&self.design, &self.simulation);
+        internal_model_order(
+            "reference",
+            &self.reference,
+            "design.reference_filter_poles",
+            &design.reference_filter_poles,
+        )?;
         internal_model_order(
             "disturbance",
-            &disturbance,
+            &self.disturbance,
             "design.disturbance_filter_poles",
             &design.disturbance_filter_poles,
         )?;
-        if let Some(noise) = &noise {
+        if let Some(noise) = &self.noise {
             if simulation.sample_time.is_none() {
                 return Err(err(
                     "noise",
                     "measurement noise needs a sampled-data run; set simulation.sample_time (e.g. 0.001) or remove [noise]",
                 ));
             }
-            noise.check(m)?;
+            noise.check(self.plant.m())?;
         }
-
-        Ok(Scenario { name, plant, design, reference, disturbance, simulation, noise, truth })
+        Ok(())
     }
 
     /// The plant that is simulated: `[truth]`, or the design model `plant` without one.
@@ -220,6 +245,27 @@ impl Scenario {
     pub fn design(&self) -> Result<Design, DesignError> {
         Design::new(&self.plant, &self.design)
     }
+}
+
+/// Parses a scenario file's TOML (syntax only), errors with line and column under the key `syntax`.
+pub fn parse_document(text: &str) -> Result<toml::Table, ScenarioError> {
+    text.parse().map_err(|e: toml::de::Error| {
+        let at = e
+            .span()
+            .map(|s| {
+                let (line, col) = line_col(text, s.start);
+                format!("line {line}, column {col}: ")
+            })
+            .unwrap_or_default();
+        err("syntax", format!("{at}{} (the file is not valid TOML)", e.message().trim_end()))
+    })
+}
+
+/// Reads a scenario file's TOML document; I/O errors carry the path as key.
+pub fn read_document(path: &Path) -> Result<toml::Table, ScenarioError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| err(path.display().to_string(), format!("cannot read the file: {e}")))?;
+    parse_document(&text)
 }
 
 /// `[plant]`: matrices and delays, shapes checked by [`Plant::new`] with errors mapped to keys.
@@ -366,47 +412,115 @@ fn plant_error(e: PlantError, n: usize, m: usize, k: usize) -> ScenarioError {
     }
 }
 
-/// `[design]`: the observer, channel and filter poles, μ and β.
-fn design_spec(v: Value) -> Result<DesignSpec, ScenarioError> {
+/// `[design]` as written, every key optional: [`PartialDesign::complete`] requires the keys of a
+/// hand-made design, an automatic design ([`crate::auto`]) chooses the missing ones.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PartialDesign {
+    pub observer: Option<ObserverChoice>,
+    pub channel_poles: Option<Vec<Vec<Complex<f64>>>>,
+    pub reference_filter_poles: Option<Vec<Vec<Complex<f64>>>>,
+    pub disturbance_filter_poles: Option<Vec<Vec<Complex<f64>>>>,
+    pub mu: Option<Vec<f64>>,
+    pub beta: Option<f64>,
+    pub relative_degrees: Option<Vec<usize>>,
+    /// Filter orders per reference component, for an automatic design in place of the poles.
+    pub reference_filter_orders: Option<Vec<usize>>,
+    /// Filter orders per disturbance component, for an automatic design in place of the poles.
+    pub disturbance_filter_orders: Option<Vec<usize>>,
+}
+
+/// How to get an automatic design, for the messages on a missing key.
+const AUTO_HINT: &str = "or let `quell design SCENARIO --auto --write OUT.toml` choose it";
+
+impl PartialDesign {
+    /// The choices of a hand-made design: every key but relative_degrees required, no filter orders.
+    pub fn complete(self) -> Result<DesignSpec, ScenarioError> {
+        fn required<T>(v: Option<T>, key: &str, what: &str) -> Result<T, ScenarioError> {
+            v.ok_or_else(|| err(format!("design.{key}"), format!("missing; required: {what}; {AUTO_HINT}")))
+        }
+        for (key, orders) in [
+            ("reference_filter_orders", &self.reference_filter_orders),
+            ("disturbance_filter_orders", &self.disturbance_filter_orders),
+        ] {
+            if orders.is_some() {
+                return Err(err(
+                    format!("design.{key}"),
+                    format!("filter orders are read only by an automatic design; run `quell design SCENARIO --auto --write OUT.toml`, or give design.{} instead", key.replace("orders", "poles")),
+                ));
+            }
+        }
+        let observer = self.observer.ok_or_else(|| {
+            err(
+                "design.observer_gain",
+                format!("missing; give exactly one of design.observer_gain (the gain L, n×m) and design.observer_poles (the n poles of A − LC); {AUTO_HINT}"),
+            )
+        })?;
+        Ok(DesignSpec {
+            observer,
+            channel_poles: required(
+                self.channel_poles,
+                "channel_poles",
+                "one list of σ_i poles per output, e.g. [[-6.0, -2.0], [-4.0]]",
+            )?,
+            reference_filter_poles: required(
+                self.reference_filter_poles,
+                "reference_filter_poles",
+                "one list of filter poles per reference component, e.g. [[-1.0, -6.0], [-9.0]]",
+            )?,
+            disturbance_filter_poles: self.disturbance_filter_poles.unwrap_or_default(),
+            mu: required(self.mu, "mu", "one adaptation gain μ_i ≥ 0 per channel")?,
+            beta: required(self.beta, "beta", "β > 0 of H(s) = 1/(βs + 1)")?,
+            relative_degrees: self.relative_degrees,
+        })
+    }
+
+    /// A design spec with nothing in it, held by a scenario only while its design is completed.
+    fn placeholder() -> DesignSpec {
+        DesignSpec {
+            observer: ObserverChoice::Poles(Vec::new()),
+            channel_poles: Vec::new(),
+            reference_filter_poles: Vec::new(),
+            disturbance_filter_poles: Vec::new(),
+            mu: Vec::new(),
+            beta: 1.0,
+            relative_degrees: None,
+        }
+    }
+}
+
+/// `[design]`: the observer, channel and filter poles (or orders), μ and β, each optional here.
+fn partial_design(v: Value) -> Result<PartialDesign, ScenarioError> {
     let t = v.table(DESIGN_KEYS)?;
     let gain = t.get("observer_gain", |v| v.matrix())?;
     let poles = t.get("observer_poles", |v| v.poles())?;
     let observer = match (gain, poles) {
-        (Some(L), None) => ObserverChoice::Gain(L),
-        (None, Some(p)) => ObserverChoice::Poles(p),
+        (Some(L), None) => Some(ObserverChoice::Gain(L)),
+        (None, Some(p)) => Some(ObserverChoice::Poles(p)),
         (Some(_), Some(_)) => {
             return Err(err(
                 "design",
                 "both observer_gain and observer_poles are given; give exactly one: the gain L (n×m), or the n poles of A − LC to place",
             ))
         }
-        (None, None) => {
-            return Err(err(
-                "design.observer_gain",
-                "missing; give exactly one of design.observer_gain (the gain L, n×m) and design.observer_poles (the n poles of A − LC)",
-            ))
-        }
+        (None, None) => None,
     };
-    Ok(DesignSpec {
+    let orders = |key: &str, per: &str| {
+        t.get(key, |v| {
+            v.array(&format!("one filter order ≥ 1 per {per}, e.g. [2, 1]"), |s| s.positive("a filter order"))
+        })
+    };
+    Ok(PartialDesign {
         observer,
-        channel_poles: t.require(
-            "channel_poles",
-            "one list of σ_i poles per output, e.g. [[-6.0, -2.0], [-4.0]]",
-            |v| v.pole_lists("output"),
-        )?,
-        reference_filter_poles: t.require(
-            "reference_filter_poles",
-            "one list of filter poles per reference component, e.g. [[-1.0, -6.0], [-9.0]]",
-            |v| v.pole_lists("reference component"),
-        )?,
-        disturbance_filter_poles: t
-            .get("disturbance_filter_poles", |v| v.pole_lists("disturbance component"))?
-            .unwrap_or_default(),
-        mu: t.require("mu", "one adaptation gain μ_i ≥ 0 per channel", |v| v.numbers())?,
-        beta: t.require("beta", "β > 0 of H(s) = 1/(βs + 1)", |v| v.number())?,
+        channel_poles: t.get("channel_poles", |v| v.pole_lists("output"))?,
+        reference_filter_poles: t.get("reference_filter_poles", |v| v.pole_lists("reference component"))?,
+        disturbance_filter_poles: t.get("disturbance_filter_poles", |v| v.pole_lists("disturbance component"))?,
+        mu: t.get("mu", |v| v.numbers())?,
+        beta: t.get("beta", |v| v.number())?,
         relative_degrees: t.get("relative_degrees", |v| {
             v.array("one relative degree σ_i ≥ 1 per output, e.g. [2, 1]", |s| s.positive("a relative degree σ_i"))
         })?,
+        reference_filter_orders: orders("reference_filter_orders", "reference component")?,
+        disturbance_filter_orders: orders("disturbance_filter_orders", "disturbance component")?,
     })
 }
 

@@ -7,6 +7,7 @@ pub mod divergence;
 pub mod noise;
 pub mod result;
 pub mod sampled;
+pub mod settle;
 
 use crate::controller::ControllerError;
 use crate::design::Design;
@@ -23,6 +24,7 @@ pub use result::{ChannelSummary, Outcome, RunStats, Sample, SimResult};
 pub use sampled::{
     simulate_sampled, simulate_sampled_with, simulate_sampled_with_truth, SampledController, SampledSettings,
 };
+pub use settle::{Settle, Settling};
 
 /// Why a run cannot start: a setting or signal out of range (named by its scenario key), or a
 /// controller that cannot run at the sample time.

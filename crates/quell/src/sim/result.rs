@@ -4,6 +4,7 @@ use serde::Serialize;
 
 use super::dde::Stats;
 use super::divergence::Peaks;
+use super::settle::{settling, Settle, Settling};
 
 /// How a run ended.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -122,6 +123,11 @@ pub struct ChannelSummary {
     pub max_abs_uf: f64,
     /// ‖η̂_i‖ at the last sample.
     pub final_eta_norm: f64,
+    /// When e_i settled into 2 % of the reference's peak ([`Settle::default`], [`crate::sim::settle`]);
+    /// `None` when it did not, or only in the last 5 % of the horizon.
+    pub settle_t: Option<f64>,
+    /// Why `settle_t` is empty; `None` when settled.
+    pub settle_note: Option<String>,
 }
 
 impl SimResult {
@@ -179,6 +185,13 @@ impl SimResult {
             .reduce(max_or_nan)
     }
 
+    /// How channel i's error met the band `settle` (of its reference's recorded peak): the one
+    /// definition of [`crate::sim::settle`].
+    pub fn settling(&self, i: usize, settle: &Settle) -> Settling {
+        let e: Vec<f64> = self.column(&self.e, self.m, i).collect();
+        settling(&self.t, &e, settle.band(self.column(&self.g, self.m, i)))
+    }
+
     /// Figures of merit per channel; the tail is the last 10 % of the recorded horizon.
     pub fn summary(&self) -> Vec<ChannelSummary> {
         let (Some(&t0), Some(&t1)) = (self.t.first(), self.t.last()) else {
@@ -196,12 +209,15 @@ impl SimResult {
                     .collect();
                 let rms = (tail.iter().map(|e| e * e).sum::<f64>() / tail.len().max(1) as f64).sqrt();
                 let last = &self.eta[self.eta.len() - self.m * self.q..];
+                let settling = self.settling(i, &Settle::default());
                 ChannelSummary {
                     tail_max_abs_e: tail.iter().fold(0.0, |a, e| max_or_nan(a, e.abs())),
                     tail_rms_e: rms,
                     max_abs_u: self.column(&self.u, self.m, i).fold(0.0, |a, u| max_or_nan(a, u.abs())),
                     max_abs_uf: self.column(&self.u_f, self.m, i).fold(0.0, |a, u| max_or_nan(a, u.abs())),
                     final_eta_norm: last[i * self.q..(i + 1) * self.q].iter().map(|v| v * v).sum::<f64>().sqrt(),
+                    settle_t: settling.time(),
+                    settle_note: settling.reason(),
                 }
             })
             .collect()

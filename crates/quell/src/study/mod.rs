@@ -21,6 +21,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::scenario::{kind, Scenario, PAPER_EXAMPLE};
+pub use crate::sim::settle::Settle;
 use crate::sim::Peaks;
 pub use output::{header, read_runs_csv, write_runs_csv, RunsFile};
 pub use path::{KeyPath, Shape};
@@ -82,21 +83,6 @@ pub struct MonteCarlo {
     pub runs: usize,
     pub seed: u64,
     pub perturbations: Vec<Perturbation>,
-}
-
-/// The settling band of channel i: |e_i| ≤ max(relative · max_t |g_i(t)|, absolute).
-/// settle_t_i is the first recorded t after which |e_i| stays within it.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Settle {
-    pub relative: f64,
-    pub absolute: f64,
-}
-
-impl Default for Settle {
-    /// 2 % of the reference's peak, the textbook settling band.
-    fn default() -> Self {
-        Settle { relative: 0.02, absolute: 0.0 }
-    }
 }
 
 /// `[runaway]`: early ends for the Monte Carlo draws of a continuous loop, relative to the

@@ -10,7 +10,6 @@ use serde::{Deserialize, Serialize};
 use super::{Nominal, Runaway, Settle, Study};
 use crate::run::LoopSettings;
 use crate::scenario::Scenario;
-use crate::sim::result::max_or_nan;
 use crate::sim::{self, Peaks, SimResult, DIVERGENCE_BOUND};
 
 /// SplitMix64's finalizer: a bijection of u64 that scrambles every bit.
@@ -103,8 +102,8 @@ pub struct ChannelFigures {
     pub max_u: f64,
     /// max |u_f,i| over the run (the plant input (5), what the actuator delivers).
     pub max_uf: f64,
-    /// First recorded t after which |e_i| stays within the settling band ([`Settle`]); `None` if
-    /// the last sample is outside it.
+    /// First recorded t after which |e_i| stays within the settling band ([`Settle`]); `None` when
+    /// the channel did not settle, or only in the last 5 % of the horizon ([`crate::sim::settle`]).
     pub settle_t: Option<f64>,
 }
 
@@ -128,17 +127,6 @@ pub struct Row {
     pub wall_ms: f64,
 }
 
-/// settle_t of one channel from its samples e(t_k), g(t_k): the first t_k after which
-/// |e| ≤ max(relative · max_k |g(t_k)|, absolute) at every sample. A NaN in g makes the band NaN,
-/// so the channel never settles (`f64::max` would drop the NaN and judge by the other samples).
-fn settle_time(t: &[f64], e: &[f64], g: &[f64], s: &Settle) -> Option<f64> {
-    let band = max_or_nan(s.relative * g.iter().fold(0.0, |a, v| max_or_nan(a, v.abs())), s.absolute);
-    match e.iter().rposition(|&v| crate::sim::divergence::beyond(v, band)) {
-        None => t.first().copied(),
-        Some(k) => t.get(k + 1).copied(),
-    }
-}
-
 /// The figures of each channel of a completed run.
 pub(crate) fn figures(r: &SimResult, settle: &Settle) -> Vec<ChannelFigures> {
     r.summary()
@@ -149,10 +137,7 @@ pub(crate) fn figures(r: &SimResult, settle: &Settle) -> Vec<ChannelFigures> {
             tail_rms_e: c.tail_rms_e,
             max_u: c.max_abs_u,
             max_uf: c.max_abs_uf,
-            settle_t: {
-                let (e, g): (Vec<f64>, Vec<f64>) = r.column(&r.e, r.m, i).zip(r.column(&r.g, r.m, i)).unzip();
-                settle_time(&r.t, &e, &g, settle)
-            },
+            settle_t: r.settling(i, settle).time(),
         })
         .collect()
 }
@@ -345,17 +330,19 @@ pub fn sweep(study: &Study, opts: &SweepOptions<'_>) -> Sweep {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sim::settle::settling;
 
     #[test]
     fn a_nan_in_the_reference_means_never_settled() {
         let s = Settle { relative: 0.02, absolute: 0.0 };
-        let t = [0.0, 1.0, 2.0, 3.0];
-        let e = [1.0, 0.5, 0.01, 0.01];
+        let t = [0.0, 1.0, 2.0, 3.0, 4.0];
+        let e = [1.0, 0.5, 0.01, 0.01, 0.01];
+        let time = |g: [f64; 5], s: &Settle| settling(&t, &e, s.band(g)).time();
         // Band 0.02 · 1 = 0.02: settled from t = 2.
-        assert_eq!(settle_time(&t, &e, &[1.0, 1.0, 1.0, 1.0], &s), Some(2.0));
+        assert_eq!(time([1.0; 5], &s), Some(2.0));
         // Was Some(2.0): the NaN sample was dropped by f64::max.
-        assert_eq!(settle_time(&t, &e, &[1.0, f64::NAN, 1.0, 1.0], &s), None);
+        assert_eq!(time([1.0, f64::NAN, 1.0, 1.0, 1.0], &s), None);
         let s = Settle { relative: 0.02, absolute: 0.05 };
-        assert_eq!(settle_time(&t, &e, &[1.0, f64::NAN, 1.0, 1.0], &s), None);
+        assert_eq!(time([1.0, f64::NAN, 1.0, 1.0, 1.0], &s), None);
     }
 }

@@ -1,0 +1,117 @@
+//! `quell design SCENARIO --auto --write OUT.toml`: the automatic design ([`quell::auto`]), its
+//! choices explained, verified by simulation, written as a complete scenario.
+
+use std::path::PathBuf;
+
+use quell::auto::{auto_design, AutoDesign, AutoError, Targets};
+use serde_json::json;
+
+use crate::{output, print_json, print_stdout, Failure};
+
+/// `quell design`'s arguments.
+#[derive(clap::Args)]
+pub struct DesignArgs {
+    /// Scenario file (TOML).
+    pub scenario: PathBuf,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Choose every [design] key the scenario leaves out, verify by simulation (docs/tuning.md).
+    #[arg(long)]
+    pub auto: bool,
+    /// With --auto: write the complete scenario here (only when the verification passes).
+    #[arg(long, value_name = "OUT.toml")]
+    pub write: Option<PathBuf>,
+    /// With --auto: when the error should be down to 0.2 % of the reference's peak (s; default
+    /// half of simulation.t_end).
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    pub convergence_time: Option<f64>,
+    /// With --auto: actuator limit on |u_i|, the adaptive command.
+    #[arg(long, value_name = "U", allow_negative_numbers = true)]
+    pub u_limit: Option<f64>,
+}
+
+impl DesignArgs {
+    /// The first flag given that only --auto reads.
+    pub fn auto_only_flag(&self) -> Option<&'static str> {
+        [
+            ("--write", self.write.is_some()),
+            ("--convergence-time", self.convergence_time.is_some()),
+            ("--u-limit", self.u_limit.is_some()),
+        ]
+        .into_iter()
+        .find_map(|(flag, given)| given.then_some(flag))
+    }
+}
+
+fn positive(flag: &str, v: Option<f64>) -> Result<Option<f64>, Failure> {
+    match v {
+        Some(x) if !(x.is_finite() && x > 0.0) => {
+            Err(Failure::Input(format!("{flag}: expected a finite number > 0, found {x}")))
+        }
+        _ => Ok(v),
+    }
+}
+
+pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
+    let targets = Targets {
+        convergence_time: positive("--convergence-time", args.convergence_time)?,
+        u_limit: positive("--u-limit", args.u_limit)?,
+    };
+    let doc = quell::scenario::read_document(&args.scenario).map_err(|e| Failure::Input(e.to_string()))?;
+    let auto = auto_design(&doc, &targets).map_err(|e| match e {
+        AutoError::Run(_) => Failure::Run(e.to_string()),
+        _ => Failure::Input(e.to_string()),
+    })?;
+    if args.json {
+        print_json(&report_json(&auto));
+    } else {
+        print_stdout(&report_text(&auto));
+    }
+    let v = &auto.verification;
+    if !v.passed {
+        return Err(Failure::Run(format!(
+            "the automatic design did not pass its verifying simulation (tail max|e| {:?} against bounds {:?}{}); nothing written; see docs/tuning.md",
+            v.tail_max_e,
+            v.bound,
+            targets.u_limit.map_or(String::new(), |l| format!(", max|u| {:?} against the limit {l}", v.max_u))
+        )));
+    }
+    if let Some(out) = &args.write {
+        let text = auto.scenario.to_toml();
+        output::write_atomic(out, |w| w.write_all(text.as_bytes()))
+            .map_err(|e| Failure::Run(format!("--write {}: cannot write there ({e})", out.display())))?;
+        eprintln!("wrote {}", out.display());
+    }
+    Ok(())
+}
+
+fn report_json(a: &AutoDesign) -> serde_json::Value {
+    json!({
+        "choices": a.choices,
+        "verification": a.verification,
+        "design": crate::report::design_json(&a.design),
+    })
+}
+
+fn report_text(a: &AutoDesign) -> String {
+    let mut s = String::from("automatic design: the keys chosen, and why\n");
+    for c in &a.choices {
+        s.push_str(&format!("  {} = {}\n    {}\n", c.key, c.value, c.why));
+    }
+    let v = &a.verification;
+    s.push_str(&format!("verification ({} simulation{}):\n", v.runs, if v.runs == 1 { "" } else { "s" }));
+    for i in 0..v.bound.len() {
+        s.push_str(&format!(
+            "  channel {}: tail max|e| = {:.3e} (bound {:.3e}: 1 % of the reference's peak) {}, max|u| = {:.4}\n",
+            i + 1,
+            v.tail_max_e[i],
+            v.bound[i],
+            if v.tail_max_e[i] <= v.bound[i] { "✓" } else { "✗" },
+            v.max_u[i]
+        ));
+    }
+    s.push('\n');
+    s.push_str(&crate::report::design_text(&a.design));
+    s
+}

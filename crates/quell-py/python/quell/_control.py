@@ -1,0 +1,86 @@
+"""The python-control side of quell: a design's loops as labelled ``control.StateSpace`` objects, a
+``TransferFunction`` as a plant, and a result as ``control.TimeResponseData``. python-control is
+imported only when one of these is called."""
+
+import numpy as np
+
+
+def _labels(name, count):
+    return [f"{name}[{i + 1}]" for i in range(count)]
+
+
+def decoupled_system(design):
+    """The delay-free decoupled plant of Proposition 1 with x̂ = x: ẋ = A_f x + B_f u_d, y = C x,
+    from the (delayed) adaptive commands u_d to y. Its transfer matrix is diagonal, channel i's
+    entry G_ii(s) = q_i0 / ∏_j (s − λ_ij)."""
+    import control
+
+    plant = design.plant
+    n, m = plant.n, plant.m
+    return control.ss(
+        design.A_f,
+        design.B_f,
+        plant.C,
+        np.zeros((m, m)),
+        inputs=_labels("u_d", m),
+        outputs=_labels("y", m),
+        states=_labels("x", n),
+        name="decoupled",
+    )
+
+
+def observer_system(design):
+    """The Luenberger observer (6) as a system from the plant's input and output to the estimate:
+    x̂' = (A − L C) x̂ + B u_f + L y, inputs u_f and y, outputs x̂ (all n states)."""
+    import control
+
+    plant = design.plant
+    n, m = plant.n, plant.m
+    A, B, C, L = plant.A, plant.B, plant.C, design.L
+    return control.ss(
+        A - L @ C,
+        np.hstack([B, L]),
+        np.eye(n),
+        np.zeros((n, 2 * m)),
+        inputs=_labels("u_f", m) + _labels("y", m),
+        outputs=_labels("x_hat", n),
+        states=_labels("x_hat", n),
+        name="observer",
+    )
+
+
+def state_space(sys):
+    """A ``control.TransferFunction`` as a minimal ``control.StateSpace`` (pole-zero pairs cancelled
+    by ``control.minreal``, then ``control.ss``); anything else unchanged."""
+    import control
+
+    if not isinstance(sys, control.TransferFunction):
+        return sys
+    reduced = control.minreal(sys, verbose=False)  # cancels pole-zero pairs (no slycot needed)
+    try:
+        return control.ss(reduced)
+    except (ImportError, TypeError, ValueError) as e:
+        from ._errors import ScenarioError
+
+        raise ScenarioError(
+            f"sys: python-control cannot realize this {reduced.noutputs}x{reduced.ninputs} transfer function "
+            f"as a state-space system ({e}); a MIMO realization needs slycot: install it, or pass a StateSpace"
+        ) from e
+
+
+def to_control(result):
+    """A SimResult as ``control.TimeResponseData``: outputs y (m × samples) with labels y[i], and
+    the adaptive commands u as inputs, labels u[i]."""
+    import control
+
+    m = result.m
+    return control.TimeResponseData(
+        np.asarray(result.t),
+        np.asarray(result.y).T,
+        inputs=np.asarray(result.u).T,
+        output_labels=_labels("y", m),
+        input_labels=_labels("u", m),
+        issiso=m == 1,
+        title="quell simulation",
+        sysname="quell",
+    )

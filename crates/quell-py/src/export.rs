@@ -1,0 +1,102 @@
+//! `quell.export`: the C controller and its FMU, as `quell export` writes them (`quell::export`).
+
+use std::path::{Path, PathBuf};
+
+use pyo3::prelude::*;
+use quell::export::{generate, generate_fmu, ExportError, ExportOptions};
+
+use crate::convert::{number, type_name};
+use crate::design::PyDesign;
+use crate::errors::{in_arguments, Kind};
+use crate::scenario::PyScenario;
+
+/// The library's message, its key named as this function's argument.
+fn message(e: &ExportError) -> String {
+    in_arguments(e.to_string())
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same directory, renamed into place.
+fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let mut tmp = tempfile::Builder::new().prefix(".quell-export.").suffix(".tmp").tempfile_in(dir)?;
+    std::io::Write::write_all(tmp.as_file_mut(), bytes)?;
+    tmp.as_file().sync_all()?;
+    tmp.persist(path).map_err(|e| e.error)?;
+    Ok(())
+}
+
+/// Writes the real-time controller of a design as C99, and optionally as an FMI 2.0 co-simulation
+/// FMU, like ``quell export``.
+#[pyfunction]
+#[pyo3(signature = (source, sample_time=None, *, out=None, prefix="quell", precision=None, fmu=false, compiler=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn export(
+    py: Python<'_>,
+    source: &Bound<'_, PyAny>,
+    sample_time: Option<&Bound<'_, PyAny>>,
+    out: Option<PathBuf>,
+    prefix: &str,
+    precision: Option<&Bound<'_, PyAny>>,
+    fmu: bool,
+    compiler: Option<&str>,
+) -> PyResult<Vec<PathBuf>> {
+    let (design, scenario_name, scenario_T) = if let Ok(s) = source.cast::<PyScenario>() {
+        let s = s.get();
+        (s.design_arc(py)?, s.inner.name.clone(), s.inner.simulation.sample_time)
+    } else if let Ok(d) = source.cast::<PyDesign>() {
+        (d.get().inner.clone(), None, None)
+    } else {
+        return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+            "source: expected a quell.Scenario or quell.Design, found a {}",
+            type_name(source)
+        )));
+    };
+    let T = match sample_time {
+        Some(v) => number(v, "sample_time", Kind::Scenario)?,
+        None => scenario_T.ok_or_else(|| {
+            Kind::Scenario.err(py, "sample_time: missing; pass the controller's sample time T_s in seconds (or set simulation.sample_time in the scenario)")
+        })?,
+    };
+    let precision = match precision {
+        None => Default::default(),
+        Some(p) => p
+            .extract::<String>()
+            .map_err(|_| {
+                pyo3::exceptions::PyTypeError::new_err(format!(
+                    "precision: expected \"f64\" or \"f32\", found a {}",
+                    type_name(p)
+                ))
+            })?
+            .parse()
+            .map_err(|e: ExportError| Kind::Export.err(py, message(&e)))?,
+    };
+    let options = ExportOptions { prefix: prefix.to_string(), precision, scenario_name };
+    let raise = |e: ExportError| match e {
+        ExportError::Controller(_) | ExportError::NotFinite { .. } => Kind::Scenario.err(py, message(&e)),
+        _ => Kind::Export.err(py, message(&e)),
+    };
+    let cc = compiler.map(str::to_string).or_else(|| std::env::var("CC").ok()).unwrap_or_else(|| "cc".into());
+    let compiler = (cc != "none").then_some(cc.as_str());
+    let (code, archive) = py
+        .detach(|| -> Result<_, ExportError> {
+            let code = generate(&design, T, &options)?;
+            let archive = if fmu { Some(generate_fmu(&design, T, &options, compiler)?) } else { None };
+            Ok((code, archive))
+        })
+        .map_err(raise)?;
+    let out = out.unwrap_or_else(|| PathBuf::from("."));
+    std::fs::create_dir_all(&out).map_err(|e| {
+        Kind::Export.err(py, format!("out: cannot create {} ({e}); choose a writable directory", out.display()))
+    })?;
+    let mut files = vec![(code.header_name, code.header.into_bytes()), (code.source_name, code.source.into_bytes())];
+    files.extend(archive.map(|a| (a.file_name, a.bytes)));
+    let mut written = Vec::new();
+    for (name, bytes) in files {
+        let path = out.join(name);
+        write_atomic(&path, &bytes).map_err(|e| {
+            pyo3::exceptions::PyOSError::new_err(format!("out: writing {} failed ({e})", path.display()))
+        })?;
+        written.push(path);
+    }
+    Ok(written)
+}

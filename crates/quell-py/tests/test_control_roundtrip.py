@@ -1,0 +1,104 @@
+"""The python-control round trip, checked with python-control's own functions (poles, frequency
+response, forced_response, minreal): a design's decoupled plant and observer as labelled
+StateSpace objects, a TransferFunction as a plant, and a result as TimeResponseData."""
+
+import control
+import numpy as np
+import pytest
+
+import quell
+from conftest import EXAMPLES
+
+# Decoupling and the observer's unbiasedness are exact in exact arithmetic; K, F and L come from
+# O(10) operations on matrices with entries of O(10), so a relative 1e-9 leaves rounding (~1e-13)
+# several orders of room and still fails on any wrong gain, sign or index.
+TOL = 1e-9
+POINTS = [0.3j, 1.0j, 2.0 + 1.0j, -0.5 + 4.0j]
+
+
+def designs():
+    return [
+        ("paper", quell.paper_example().design()),
+        ("three-channel", quell.Scenario.load(EXAMPLES / "three-channel.toml").design()),
+    ]
+
+
+@pytest.mark.parametrize("name, d", designs())
+def test_decoupled_system_is_diagonal_with_the_channel_transfer_functions(name, d):
+    sys = d.decoupled_system()
+    m, n = d.plant.m, d.plant.n
+    assert isinstance(sys, control.StateSpace)
+    assert sys.input_labels == [f"u_d[{i + 1}]" for i in range(m)]
+    assert sys.output_labels == [f"y[{i + 1}]" for i in range(m)]
+    assert sys.state_labels == [f"x[{j + 1}]" for j in range(n)]
+    np.testing.assert_allclose(np.sort_complex(sys.poles()), np.sort_complex(d.decoupled_eigenvalues), rtol=TOL, atol=TOL)
+    for s in POINTS:
+        H = sys(s)  # python-control's transfer matrix at s
+        scale = np.max(np.abs(H))
+        for i, ch in enumerate(d.channels):
+            G_ii = ch["q0"] / np.prod(s - np.asarray(ch["poles"]))
+            assert abs(H[i, i] - G_ii) <= TOL * scale, (name, s, i)
+            off = np.delete(H[i], i)
+            assert np.all(np.abs(off) <= TOL * scale), (name, s, i, off)
+
+
+def test_forced_response_of_a_channel_is_its_transfer_function():
+    """control.forced_response of the decoupled plant with a step on u_d[1] only: y[1] is the step
+    response of G_11 = q0 / ∏(s − λ) (python-control again, from the channel's poles) and y[2] stays
+    zero: the loop with η̂ frozen is m separate channels."""
+    d = quell.paper_example().design()
+    sys = d.decoupled_system()
+    t = np.linspace(0.0, 5.0, 501)
+    u = np.zeros((2, t.size))
+    u[0] = 1.0
+    resp = control.forced_response(sys, T=t, U=u)
+    ch = d.channels[0]
+    G = control.tf([ch["q0"]], np.real(np.poly(ch["poles"])))
+    ref = control.forced_response(G, T=t, U=u[0])
+    np.testing.assert_allclose(resp.outputs[0], ref.outputs, rtol=0, atol=1e-9 * np.max(np.abs(ref.outputs)))
+    assert np.max(np.abs(resp.outputs[1])) <= 1e-9 * np.max(np.abs(ref.outputs))
+
+
+@pytest.mark.parametrize("name, d", designs())
+def test_observer_system_has_the_observer_poles_and_is_unbiased(name, d):
+    obs = d.observer_system()
+    p = d.plant
+    n, m = p.n, p.m
+    assert obs.input_labels == [f"u_f[{i + 1}]" for i in range(m)] + [f"y[{i + 1}]" for i in range(m)]
+    assert obs.output_labels == [f"x_hat[{j + 1}]" for j in range(n)]
+    np.testing.assert_allclose(np.sort_complex(obs.poles()), np.sort_complex(d.observer_eigenvalues), rtol=TOL, atol=TOL)
+    # Driven by the plant's own y, the estimate equals the state for any input: X̂(s) = X(s).
+    plant_y = control.ss(p.A, p.B, p.C, np.zeros((m, m)))
+    plant_x = control.ss(p.A, p.B, np.eye(n), np.zeros((n, m)))
+    for s in POINTS:
+        O = obs(s)
+        x_hat = O[:, :m] + O[:, m:] @ plant_y(s)
+        x = plant_x(s)
+        np.testing.assert_allclose(x_hat, x, rtol=0, atol=TOL * np.max(np.abs(x)))
+
+
+def test_plant_from_a_transfer_function_is_its_minimal_realization():
+    # (s + 1) / ((s + 1)(s − 1)(s + 3)): an unstable plant with a cancelling pair; minreal leaves 2 states.
+    G = control.tf([1.0, 1.0], np.poly([-1.0, 1.0, -3.0]))
+    plant = quell.Plant(G, delays=[0.2])
+    assert (plant.n, plant.m) == (2, 1)
+    realized = control.ss(plant.A, plant.B, plant.C, 0)
+    for s in POINTS:
+        expected = 1.0 / ((s - 1.0) * (s + 3.0))
+        assert abs(realized(s) - expected) <= 1e-12 * abs(expected)
+    # A StateSpace keeps its own realization.
+    ss = control.ss(np.array([[0.0, 1.0], [2.0, -1.0]]), np.array([[0.0], [1.0]]), np.array([[1.0, 0.0]]), 0)
+    np.testing.assert_array_equal(quell.Plant(ss).A, ss.A)
+
+
+def test_result_to_control_is_outputs_by_time_with_labels():
+    result = quell.simulate(quell.paper_example(), t_end=2.0)
+    resp = result.to_control()
+    assert isinstance(resp, control.TimeResponseData)
+    np.testing.assert_array_equal(resp.time, result.t)
+    assert resp.outputs.shape == (2, len(result.t))
+    np.testing.assert_array_equal(resp.outputs, result.y.T)
+    np.testing.assert_array_equal(resp.inputs, result.u.T)
+    assert resp.output_labels == ["y[1]", "y[2]"] and resp.input_labels == ["u[1]", "u[2]"]
+    frame = resp.to_pandas()  # python-control's own conversion reads the labels
+    np.testing.assert_array_equal(frame["y[2]"].to_numpy(), result.y[:, 1])

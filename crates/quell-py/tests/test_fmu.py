@@ -1,0 +1,115 @@
+"""The FMU of `quell.export(..., fmu=True)` against FMPy, the independent side: FMPy validates its
+model description (the FMI 2.0 schema and the standard's rules) and runs it with its own
+co-simulation master; the FMU's u_f and u must be the Controller's and the sampled loop's.
+
+Tolerance 1e-12 (relative to the signal's size): the FMU's binary is the generated C compiled with
+-std=c99 -ffp-contract=off, which performs the Controller's operations in its order, so in f64 the
+two agree to the last bit; 1e-12 leaves room only for a compiler that contracts a product into a
+fused multiply-add, nothing for a wrong index or a sample of delay."""
+
+import zipfile
+
+import numpy as np
+import pytest
+from fmpy import read_model_description, simulate_fmu
+from fmpy.validation import validate_fmu
+
+import quell
+from conftest import EXAMPLES
+
+
+def _closed_loop(path, T, t_end):
+    """A scenario's sampled loop, one row per sample, and its FMU."""
+    scenario = quell.Scenario.load(path)
+    result = quell.simulate(scenario, sample_time=T, t_end=t_end, output_step=T)
+    return scenario, result
+
+
+def _fmu_run(fmu, result, T):
+    """FMPy's master steps the FMU at T with the loop's y and g at each sample as inputs."""
+    m = result.y.shape[1]
+    names = [f"y[{i + 1}]" for i in range(m)] + [f"g[{i + 1}]" for i in range(m)]
+    inputs = np.zeros(len(result.t), dtype=[("time", np.float64)] + [(n, np.float64) for n in names])
+    inputs["time"] = result.t
+    for i in range(m):
+        inputs[f"y[{i + 1}]"] = result.y[:, i]
+        inputs[f"g[{i + 1}]"] = result.g[:, i]
+    outputs = [f"u_f[{i + 1}]" for i in range(m)] + [f"u[{i + 1}]" for i in range(m)]
+    return simulate_fmu(
+        str(fmu), start_time=0.0, stop_time=result.t[-1], step_size=T, output_interval=T, input=inputs, output=outputs
+    )
+
+
+def _close(a, b):
+    scale = max(1.0, float(np.max(np.abs(b))))
+    np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * scale)
+
+
+@pytest.mark.parametrize(
+    "example, T, t_end",
+    [
+        ("paper-sampled.toml", 1e-3, 4.0),  # the paper's plant, m = 2, delays 1 s and 3 s
+        ("three-channel.toml", 0.05, 20.0),  # m = 3, n = 4, delays 10, 20 and 40 samples
+    ],
+)
+def test_fmu_is_the_controller(tmp_path, example, T, t_end):
+    scenario, result = _closed_loop(EXAMPLES / example, T, t_end)
+    written = quell.export(scenario, T, out=tmp_path, fmu=True, prefix="ctrl")
+    fmu = tmp_path / "ctrl.fmu"
+    assert fmu in written
+    assert validate_fmu(str(fmu)) == []
+    md = read_model_description(str(fmu))
+    m = result.y.shape[1]
+    assert md.fmiVersion == "2.0" and md.coSimulation.modelIdentifier == "ctrl"
+    assert [v.name for v in md.modelVariables if v.causality == "input"] == [f"y[{i + 1}]" for i in range(m)] + [
+        f"g[{i + 1}]" for i in range(m)
+    ]
+    names = zipfile.ZipFile(fmu).namelist()
+    assert "binaries/linux64/ctrl.so" in names
+    assert {"sources/ctrl_controller.c", "sources/ctrl_fmu.c", "sources/fmi2Functions.h"} <= set(names)
+
+    sim = _fmu_run(fmu, result, T)
+    k = len(result.t)
+    assert len(sim) == k and np.allclose(sim["time"], result.t, rtol=0, atol=1e-9 * t_end)
+    # The Controller fed the same samples: step k returns u_f(k), which the FMU reports at t_k.
+    ctrl = quell.Controller(scenario.design(), sample_time=T)
+    u_f = np.empty((k, m))
+    u = np.empty((k, m))
+    for j in range(k):
+        u_f[j] = ctrl.step(result.y[j], result.g[j])
+        u[j] = ctrl.command()
+    fmu_u_f = np.column_stack([sim[f"u_f[{i + 1}]"] for i in range(m)])
+    fmu_u = np.column_stack([sim[f"u[{i + 1}]"] for i in range(m)])
+    _close(fmu_u_f, u_f)
+    _close(fmu_u, u)
+    # ... and the sampled loop's own record of the adaptive command u(k) (25).
+    _close(fmu_u, result.u)
+    assert np.max(np.abs(u_f)) > 0.1  # the controller acted: the comparison is not of zeros
+
+
+def test_communication_step_must_be_whole_samples(tmp_path):
+    """A master stepping at 1.5 T_s gets fmi2Error from fmi2DoStep, which FMPy raises."""
+    scenario, result = _closed_loop(EXAMPLES / "three-channel.toml", 0.05, 1.0)
+    quell.export(scenario, 0.05, out=tmp_path, fmu=True)
+    with pytest.raises(Exception, match="fmi2DoStep"):
+        simulate_fmu(str(tmp_path / "quell.fmu"), stop_time=1.0, step_size=0.075, output_interval=0.075)
+
+
+def test_source_only_fmu_and_bad_arguments(tmp_path):
+    scenario = quell.Scenario.load(EXAMPLES / "three-channel.toml")
+    quell.export(scenario, 0.05, out=tmp_path, fmu=True, compiler="none")
+    fmu = str(tmp_path / "quell.fmu")
+    assert validate_fmu(fmu) == []
+    assert not any(n.startswith("binaries/") for n in zipfile.ZipFile(fmu).namelist())
+    with pytest.raises(quell.ExportError, match=r"^prefix: expected a C identifier.*found \"9lives\""):
+        quell.export(scenario, 0.05, out=tmp_path, prefix="9lives")
+    with pytest.raises(quell.ExportError, match=r"^precision: expected f64 or f32, found \"f16\""):
+        quell.export(scenario, 0.05, out=tmp_path, precision="f16")
+    with pytest.raises(TypeError, match="precision: expected"):
+        quell.export(scenario, 0.05, out=tmp_path, precision=64)
+    with pytest.raises(TypeError, match="source: expected a quell.Scenario or quell.Design, found a str"):
+        quell.export("three-channel.toml", 0.05, out=tmp_path)
+    with pytest.raises(quell.ScenarioError, match=r"^sample_time: channel 1's delay"):
+        quell.export(scenario.design(), 0.3, out=tmp_path)
+    with pytest.raises(quell.ExportError, match=r"^compiler \"/nonexistent/cc\": cannot run it"):
+        quell.export(scenario, 0.05, out=tmp_path, fmu=True, compiler="/nonexistent/cc")

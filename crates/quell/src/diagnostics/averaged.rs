@@ -1,0 +1,320 @@
+//! The adaptive loop in steady state, from the design and the signals alone (averaging).
+//!
+//! With x̂ − x independent of u (observer (6)) and the decoupler in place, the regressor ξ̂ is a
+//! linear image of g and ω only: ξ̂_g = (sI − G_g)⁻¹ L_g g (14) and, from (20) with x̂ in place of x,
+//! ξ̂_ω = (sI − G_ω)⁻¹ T(s) ω with T(s) = N L [C (sI − A + LC)⁻¹ (D − LQ) + Q] (N D = L_ω only when
+//! x̂ = x). For signals that are sums of sines and biases every filtered signal is a sum of
+//! phasors, so the time averages that set the adaptive law's pace follow in closed form:
+//!
+//! * Ω̄_i = mean of Δ_iᵀ Δ_i (eq. (33), Δ_i = G_ii(s)[ξ̂ᵀ(t − τ_i)]): what Ω_i = H[Δ_iᵀ Δ_i]
+//!   settles to, up to a ripple at the sum and difference frequencies that H attenuates;
+//! * Ȳ_i = mean of Δ_iᵀ ε̂_i with ε̂_i = δ_i of the loop without adaptive command (u = 0): the
+//!   augmented error does not depend on η̂, so η̂_i → η*_i = Ω̄_i⁺ Ȳ_i;
+//! * the averaged law η̃' = −μ_i Ω̄_i η̃ with η̃(0) = η*_i (η̂(0) = 0) and e_i ≈ Δ_i η̃ give the RMS
+//!   tracking error at time t: √(η̃(t)ᵀ Ω̄_i η̃(t) + r_i²), r_i the part of δ_i no η explains.
+
+use nalgebra::{Complex, DMatrix, DVector, SymmetricEigen};
+
+use crate::design::Design;
+use crate::signal::Signal;
+
+type C64 = Complex<f64>;
+
+/// One frequency of the signals (0 for the biases) and the phasors of g and ω there:
+/// a·sin(wt + φ) = Re(−j a e^{jφ} e^{jwt}); a constant b is the real phasor b at w = 0.
+#[derive(Debug, Clone)]
+struct Tone {
+    w: f64,
+    g: DVector<C64>,
+    omega: DVector<C64>,
+}
+
+/// Every distinct frequency of g and ω with their phasors, ascending.
+fn tones(reference: &Signal, disturbance: &Signal) -> Vec<Tone> {
+    let (m, k) = (reference.len(), disturbance.len());
+    let mut tones: Vec<Tone> = Vec::new();
+    let mut add = |w: f64, which: usize, index: usize, phasor: C64| {
+        let at = match tones.iter().position(|t| t.w == w) {
+            Some(at) => at,
+            None => {
+                tones.push(Tone { w, g: DVector::zeros(m), omega: DVector::zeros(k) });
+                tones.len() - 1
+            }
+        };
+        let v = if which == 0 { &mut tones[at].g } else { &mut tones[at].omega };
+        v[index] += phasor;
+    };
+    for (which, signal) in [reference, disturbance].into_iter().enumerate() {
+        for (index, c) in signal.components.iter().enumerate() {
+            if c.bias != 0.0 {
+                add(0.0, which, index, C64::new(c.bias, 0.0));
+            }
+            for h in &c.harmonics {
+                let phasor = if h.frequency == 0.0 {
+                    C64::new(h.amplitude * h.phase.sin(), 0.0)
+                } else {
+                    C64::new(0.0, -h.amplitude) * C64::from_polar(1.0, h.phase)
+                };
+                add(h.frequency, which, index, phasor);
+            }
+        }
+    }
+    tones.sort_by(|a, b| a.w.total_cmp(&b.w));
+    tones
+}
+
+fn complex(M: &DMatrix<f64>) -> DMatrix<C64> {
+    M.map(|x| C64::new(x, 0.0))
+}
+
+/// (jwI − M)⁻¹ B; M must have no eigenvalue at jw (Hurwitz matrices here).
+fn resolvent(M: &DMatrix<f64>, w: f64, B: &DMatrix<C64>) -> DMatrix<C64> {
+    if M.nrows() == 0 || B.ncols() == 0 {
+        return DMatrix::zeros(M.nrows(), B.ncols());
+    }
+    let mut S = -complex(M);
+    for i in 0..M.nrows() {
+        S[(i, i)] += C64::new(0.0, w);
+    }
+    S.lu().solve(B).unwrap_or_else(|| DMatrix::from_element(B.nrows(), B.ncols(), C64::new(f64::NAN, 0.0)))
+}
+
+/// (jwI − M)⁻¹ b for one column b.
+fn resolvent_vec(M: &DMatrix<f64>, w: f64, b: DVector<C64>) -> DVector<C64> {
+    let n = b.len();
+    resolvent(M, w, &DMatrix::from_column_slice(n, 1, b.as_slice())).column(0).into_owned()
+}
+
+/// The weight of a product's mean: mean(Re(X e^{jwt}) Re(Y e^{jwt})) = weight · Re(X Ȳ).
+fn weight(w: f64) -> f64 {
+    if w == 0.0 {
+        1.0
+    } else {
+        0.5
+    }
+}
+
+/// The disturbance observer's input gain T(jw) = N L [C (jwI − A + LC)⁻¹ (D − LQ) + Q]
+/// (q_ω × k); equal to N D = L_ω when the observer reproduces x.
+pub fn disturbance_observer_gain(design: &Design, w: f64) -> DMatrix<C64> {
+    let p = design.plant();
+    let (L, N) = (design.L(), design.N());
+    let A_o = &p.A - L * &p.C;
+    let E = complex(&(&p.D - L * &p.Q));
+    complex(&(N * L)) * (complex(&p.C) * resolvent(&A_o, w, &E) + complex(&p.Q))
+}
+
+/// How faithfully the disturbance observer (20) passes one frequency of ω: the relative error
+/// ‖(T(jw) − L_ω) e_α‖ / ‖L_ω e_α‖, largest over the components α with energy at w.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Fidelity {
+    /// rad/s (0: the biases).
+    pub frequency: f64,
+    pub relative_error: f64,
+}
+
+/// The excitation one frequency gives channel i's Ω̄_i: the smaller nonzero eigenvalue of its
+/// rank-2 part (the larger one of its rank-1 part at w = 0). Ω̄_i is the sum of these parts, so a
+/// frequency whose excitation is tiny leaves a direction of η̂_i that converges slowly.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Excitation {
+    /// rad/s (0: the biases).
+    pub frequency: f64,
+    pub excitation: f64,
+}
+
+/// Channel i in steady state.
+#[derive(Debug, Clone)]
+pub struct ChannelAverage {
+    /// Ω̄_i (q × q, symmetric positive semidefinite).
+    pub omega: DMatrix<f64>,
+    /// Eigenvalues of Ω̄_i, ascending, and their eigenvectors (columns).
+    pub lambda: Vec<f64>,
+    vectors: DMatrix<f64>,
+    /// Ȳ_i.
+    pub y: DVector<f64>,
+    /// RMS of δ_i without adaptive command (the error η̂_i has to remove).
+    pub open_loop_rms: f64,
+    /// RMS of the part of δ_i that no η explains (0 when the internal models are exact).
+    pub residual_rms: f64,
+    pub excitation: Vec<Excitation>,
+}
+
+impl ChannelAverage {
+    /// λ_min(Ω̄_i).
+    pub fn lambda_min(&self) -> f64 {
+        self.lambda.first().copied().unwrap_or(0.0)
+    }
+    /// λ_max(Ω̄_i).
+    pub fn lambda_max(&self) -> f64 {
+        self.lambda.last().copied().unwrap_or(0.0)
+    }
+
+    /// The eigenvalues above 1e-13·λ_max (the directions the signals excite, to Ω̄'s rounding).
+    pub fn excited(&self) -> impl Iterator<Item = f64> + '_ {
+        let floor = 1e-13 * self.lambda_max();
+        self.lambda.iter().copied().filter(move |&l| l > floor)
+    }
+
+    /// The directions that matter: eigenvalues λ_k with the energy (v_kᵀ Ȳ)²/λ_k that the error
+    /// carries along them at t = 0 (η̃(0) = η*); eigenvalues below 1e-13·λ_max are left out (no
+    /// error lies along them that Ω̄'s rounding can tell).
+    fn modes(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        let floor = 1e-13 * self.lambda_max();
+        self.lambda.iter().enumerate().filter(move |(_, &l)| l > floor).map(move |(k, &l)| {
+            let c = self.vectors.column(k).dot(&self.y);
+            (l, c * c / l)
+        })
+    }
+
+    /// The averaged law's RMS tracking error at time t for adaptation gain μ:
+    /// √(Σ_k e_k exp(−2μλ_k t) + r²) ([`ChannelAverage::modes`]).
+    pub fn predicted_error(&self, mu: f64, t: f64) -> f64 {
+        let sum: f64 = self.modes().map(|(l, e)| e * (-2.0 * mu * l * t).exp()).sum();
+        (sum + self.residual_rms.powi(2)).sqrt()
+    }
+
+    /// The slowest eigenvalue that carries at least `share` of the initial error energy: the λ
+    /// whose rate μλ decides when the error falls below √share of its start.
+    pub fn slowest_relevant(&self, share: f64) -> f64 {
+        let total: f64 = self.modes().map(|(_, e)| e).sum();
+        self.modes().filter(|(_, e)| *e >= share * total).map(|(l, _)| l).fold(f64::INFINITY, f64::min)
+    }
+}
+
+/// The steady state of a design's adaptive loop for the given signals.
+#[derive(Debug, Clone)]
+pub struct Averaged {
+    pub channels: Vec<ChannelAverage>,
+    /// Per nonzero-energy frequency of ω.
+    pub fidelity: Vec<Fidelity>,
+}
+
+impl Averaged {
+    /// Ω̄_i, Ȳ_i and the rest for every channel of `design` under g = `reference`, ω = `disturbance`.
+    pub fn new(design: &Design, reference: &Signal, disturbance: &Signal) -> Averaged {
+        let p = design.plant();
+        let (m, n, q) = (p.m(), p.n(), design.q());
+        let tones = tones(reference, disturbance);
+        // The loop without adaptive command: z = [x; x̂], z' = M z + [D; LQ] ω, y = C x + Q ω.
+        let (L, K) = (design.L(), design.K());
+        let mut M = DMatrix::zeros(2 * n, 2 * n);
+        M.view_mut((0, 0), (n, n)).copy_from(&p.A);
+        M.view_mut((0, n), (n, n)).copy_from(&(-(&p.B * K)));
+        M.view_mut((n, 0), (n, n)).copy_from(&(L * &p.C));
+        M.view_mut((n, n), (n, n)).copy_from(&(design.A_f() - L * &p.C));
+        let mut E = DMatrix::zeros(2 * n, p.k());
+        E.view_mut((0, 0), (n, p.k())).copy_from(&p.D);
+        E.view_mut((n, 0), (n, p.k())).copy_from(&(L * &p.Q));
+        let mut C_z = DMatrix::zeros(m, 2 * n);
+        C_z.view_mut((0, 0), (m, n)).copy_from(&p.C);
+        // Per tone: ξ̂ (q) and δ without adaptive command (m).
+        let mut fidelity = Vec::new();
+        let per_tone: Vec<(f64, DVector<C64>, DVector<C64>)> = tones
+            .iter()
+            .map(|tone| {
+                let T = disturbance_observer_gain(design, tone.w);
+                fidelity.extend(fidelity_at(design, tone, &T));
+                let xi_g = resolvent_vec(design.G_g(), tone.w, complex(design.L_g()) * &tone.g);
+                let xi_w = resolvent_vec(design.G_w(), tone.w, &T * &tone.omega);
+                let mut xi = DVector::zeros(q);
+                xi.rows_mut(0, design.q_g()).copy_from(&xi_g);
+                xi.rows_mut(design.q_g(), design.q_w()).copy_from(&xi_w);
+                let y =
+                    complex(&C_z) * resolvent_vec(&M, tone.w, complex(&E) * &tone.omega) + complex(&p.Q) * &tone.omega;
+                (tone.w, xi, y - &tone.g)
+            })
+            .collect();
+        let channels = (0..m).map(|i| channel(design, i, &per_tone)).collect();
+        Averaged { channels, fidelity }
+    }
+}
+
+/// Fidelity of the disturbance observer at one tone, over the components of ω with energy there.
+fn fidelity_at(design: &Design, tone: &Tone, T: &DMatrix<C64>) -> Option<Fidelity> {
+    let L_w = complex(design.L_w());
+    tone.omega
+        .iter()
+        .enumerate()
+        .filter(|(_, a)| a.norm() > 0.0)
+        .map(|(alpha, _)| (T.column(alpha) - L_w.column(alpha)).norm() / L_w.column(alpha).norm())
+        .reduce(f64::max)
+        .map(|relative_error| Fidelity { frequency: tone.w, relative_error })
+}
+
+/// Channel i's averages from the tones' ξ̂ and δ phasors.
+fn channel(design: &Design, i: usize, tones: &[(f64, DVector<C64>, DVector<C64>)]) -> ChannelAverage {
+    let q = design.q();
+    let tau = design.plant().delays[i];
+    let G = &design.channels()[i];
+    let (mut omega, mut y) = (DMatrix::zeros(q, q), DVector::zeros(q));
+    let (mut open_loop, mut excitation) = (0.0, Vec::new());
+    for (w, xi, delta) in tones {
+        let a = xi * (G.eval(C64::new(0.0, *w)) * C64::from_polar(1.0, -w * tau));
+        let (u, v) = (a.map(|z| z.re), a.map(|z| z.im));
+        let c = weight(*w);
+        let part = (&u * u.transpose() + &v * v.transpose()) * c;
+        omega += &part;
+        y += (&u * delta[i].re + &v * delta[i].im) * c;
+        open_loop += c * delta[i].norm_sqr();
+        // The nonzero eigenvalues of c (u uᵀ + v vᵀ) are those of c·[[u·u, u·v], [u·v, v·v]].
+        let (uu, uv, vv) = (u.dot(&u), u.dot(&v), v.dot(&v));
+        let (mean, half) = (0.5 * (uu + vv), (0.25 * (uu - vv).powi(2) + uv * uv).sqrt());
+        let lambda = if *w == 0.0 { mean + half } else { mean - half };
+        excitation.push(Excitation { frequency: *w, excitation: c * lambda.max(0.0) });
+    }
+    let eig = SymmetricEigen::new(omega.clone());
+    let mut order: Vec<usize> = (0..q).collect();
+    order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+    let lambda: Vec<f64> = order.iter().map(|&k| eig.eigenvalues[k].max(0.0)).collect();
+    let vectors = DMatrix::from_fn(q, q, |r, c| eig.eigenvectors[(r, order[c])]);
+    let mut avg =
+        ChannelAverage { omega, lambda, vectors, y, open_loop_rms: open_loop.sqrt(), residual_rms: 0.0, excitation };
+    let explained: f64 = avg.modes().map(|(_, e)| e).sum();
+    avg.residual_rms = (open_loop - explained).max(0.0).sqrt();
+    avg
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::Scenario;
+
+    /// A first-order plant with one sine reference: x' = −x + u_f, y = x, σ = 1, channel pole −2,
+    /// reference filter poles −1, −3 for g = sin(2t), no disturbance, no delay.
+    fn siso(delay: f64) -> Scenario {
+        Scenario::from_toml(&format!(
+            "[plant]\nA = [[-1.0]]\nB = [[1.0]]\nC = [[1.0]]\ndelays = [{delay}]\n\
+             [design]\nobserver_poles = [-5.0]\nchannel_poles = [[-2.0]]\nreference_filter_poles = [[-1.0, -3.0]]\n\
+             mu = [10.0]\nbeta = 1.0\n[reference]\ncomponents = [{{ harmonics = [{{ amplitude = 1.0, frequency = 2.0 }}] }}]\n"
+        ))
+        .unwrap()
+    }
+
+    #[test]
+    fn omega_bar_is_the_closed_form_mean_for_one_sine() {
+        // ξ̂_g = [1, s]ᵀ/((s + 1)(s + 3)) g, Δ = 2/(s + 2) ξ̂ᵀ. At s = 2j the entries' phasors are
+        // a_1 = 2/((2j+1)(2j+3)(2j+2))·(−j), a_2 = 2j·a_1, so with |a_1|² = 4/(5·13·8),
+        // Ω̄ = ½ Re(a aᴴ) = ½ |a_1|² [[1, 0], [0, 4]] (a_2 is a_1 turned by 90°).
+        let s = siso(0.0);
+        let avg = Averaged::new(&s.design().unwrap(), &s.reference, &s.disturbance);
+        let a1 = 4.0 / (5.0 * 13.0 * 8.0);
+        let expected = [[0.5 * a1, 0.0], [0.0, 2.0 * a1]];
+        let c = &avg.channels[0];
+        let expected =
+            nalgebra::DMatrix::from_row_slice(2, 2, &[expected[0][0], expected[0][1], expected[1][0], expected[1][1]]);
+        // Rounding of a 2×2 complex solve: 1e-15 absolute on entries of size ≈ 0.02.
+        assert!((&c.omega - &expected).amax() <= 1e-15, "{}", c.omega);
+        assert!((c.lambda_min() - 0.5 * a1).abs() <= 1e-15 && (c.lambda_max() - 2.0 * a1).abs() <= 1e-15);
+        // δ without adaptive command is −g (no disturbance, x0 = 0): RMS 1/√2; the sine is in the
+        // span of the two-dimensional regressor, so nothing is left unexplained.
+        assert!((c.open_loop_rms - 0.5f64.sqrt()).abs() <= 1e-15, "{}", c.open_loop_rms);
+        assert!(c.residual_rms <= 1e-7, "{}", c.residual_rms);
+        assert!((c.predicted_error(10.0, 0.0) - c.open_loop_rms).abs() <= 1e-12);
+        // The single tone's excitation is λ_min of its rank-2 part, here all of Ω̄.
+        assert!((c.excitation[0].excitation - c.lambda_min()).abs() <= 1e-15);
+        // A delay turns a by e^{−2jτ}: Ω̄ is unchanged.
+        let d = Averaged::new(&siso(0.7).design().unwrap(), &s.reference, &s.disturbance);
+        assert!((&d.channels[0].omega - &c.omega).norm() <= 1e-15);
+    }
+}

@@ -1,0 +1,167 @@
+//! Convergence diagnostics: why a channel converges slowly and which knob to turn.
+//!
+//! Per channel, from the design and the signals ([`averaged`]): λ_min and λ_max of Ω̄_i (the mean
+//! that Ω_i of eq. (33) settles to), the predicted convergence time 1/(μ_i λ_min), the adaptation
+//! rate μ_i λ_max, the excitation each frequency of g and ω gives Ω̄_i and, for the disturbance
+//! observer (20), how faithfully it passes each frequency of ω (T(jw) against N D = L_ω). From the
+//! run: whether the tail error is still shrinking. One line of advice per problem found.
+
+pub mod averaged;
+
+use serde::Serialize;
+
+pub use averaged::{disturbance_observer_gain, Averaged, ChannelAverage, Excitation, Fidelity};
+
+use crate::design::Design;
+use crate::signal::Signal;
+use crate::sim::SimResult;
+
+/// A disturbance frequency reaching ξ̂_ω with a larger relative error than this gets advice.
+pub const FIDELITY_LIMIT: f64 = 0.3;
+/// Tail RMS over the last 10 % against the 10 % before: below this the error is still shrinking.
+pub const SHRINKING: f64 = 0.8;
+/// … above this it grows.
+pub const GROWING: f64 = 1.25;
+/// A direction of η̂_i carrying at least this share of the initial error energy counts as relevant
+/// for the advice on μ.
+pub const RELEVANT_SHARE: f64 = 1e-4;
+
+/// One channel's diagnostics (`summary.json` → `diagnostics[i]`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ChannelDiagnostics {
+    /// 1-based.
+    pub channel: usize,
+    /// λ_min(Ω̄_i).
+    pub lambda_min_omega: f64,
+    /// λ_max(Ω̄_i).
+    pub lambda_max_omega: f64,
+    /// 1/(μ_i λ_min(Ω̄_i)) in s; ∞ (null in JSON) for μ_i = 0 or a singular Ω̄_i.
+    pub convergence_time: f64,
+    /// μ_i λ_max(Ω̄_i) in 1/s: the fastest rate of the adaptive law.
+    pub adaptation_rate: f64,
+    /// Rank of Ω̄_i (eigenvalues above 1e-13·λ_max): fewer than q when the signals excite fewer
+    /// directions than the regressor has (e.g. a frequency shared by g and ω); the error does
+    /// not depend on the other directions.
+    pub excited_rank: usize,
+    /// The smallest eigenvalue of Ω̄_i above 1e-13·λ_max, and 1/(μ_i times it) in s: the slowest
+    /// convergence among the directions the signals excite.
+    pub lambda_min_excited_omega: f64,
+    pub convergence_time_excited: f64,
+    /// The averaged law's RMS error at the end of the horizon ([`ChannelAverage::predicted_error`]).
+    pub predicted_final_rms_e: f64,
+    /// RMS of e_i over the last 10 % of the run divided by that over the 10 % before; `None` when
+    /// the run is too short for two windows or the earlier one is 0.
+    pub tail_trend: Option<f64>,
+    /// Per frequency of g and ω ([`Excitation`]).
+    pub excitation: Vec<Excitation>,
+    /// One line per problem found: which knob, which way.
+    pub advice: Vec<String>,
+}
+
+/// The diagnostics of one run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Diagnostics {
+    pub channels: Vec<ChannelDiagnostics>,
+    /// Per frequency of ω ([`Fidelity`]).
+    pub observer_fidelity: Vec<Fidelity>,
+    /// Advice on the disturbance observer (shared by all channels).
+    pub advice: Vec<String>,
+}
+
+/// The diagnostics of `result`, a run of `design` under g = `reference`, ω = `disturbance`.
+pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, result: &SimResult) -> Diagnostics {
+    let avg = Averaged::new(design, reference, disturbance);
+    let t_end = result.t.last().copied().unwrap_or(0.0);
+    let advice = avg
+        .fidelity
+        .iter()
+        .filter(|f| f.relative_error > FIDELITY_LIMIT)
+        .map(|f| {
+            format!(
+                "the disturbance observer passes ω at {} rad/s with relative error {:.2} (it is driven by x̂, not x, eq. (20)): give design.observer_poles faster than the plant and the signals (e.g. 3× their rates)",
+                f.frequency, f.relative_error
+            )
+        })
+        .collect();
+    let channels =
+        avg.channels.iter().enumerate().map(|(i, c)| channel(design, i, c, &avg.fidelity, result, t_end)).collect();
+    Diagnostics { channels, observer_fidelity: avg.fidelity, advice }
+}
+
+/// RMS of e_i over the last 10 % of the run against the 10 % before.
+pub fn tail_trend(result: &SimResult, i: usize) -> Option<f64> {
+    let (t0, t1) = (*result.t.first()?, *result.t.last()?);
+    let span = t1 - t0;
+    let rms = |from: f64, to: f64| {
+        let (sum, count) = result
+            .t
+            .iter()
+            .zip(result.column(&result.e, result.m, i))
+            .filter(|(t, _)| **t > from && **t <= to)
+            .fold((0.0, 0usize), |(s, n), (_, e)| (s + e * e, n + 1));
+        (count > 0).then(|| (sum / count as f64).sqrt())
+    };
+    let (last, before) = (rms(t1 - 0.1 * span, t1)?, rms(t1 - 0.2 * span, t1 - 0.1 * span)?);
+    (before > 0.0).then_some(last / before)
+}
+
+fn channel(
+    design: &Design,
+    i: usize,
+    c: &ChannelAverage,
+    fidelity: &[Fidelity],
+    result: &SimResult,
+    t_end: f64,
+) -> ChannelDiagnostics {
+    let mu = design.mu()[i];
+    let key = format!("design.mu[{i}]");
+    let trend = tail_trend(result, i);
+    let mut advice = Vec::new();
+    let relevant = c.slowest_relevant(RELEVANT_SHARE);
+    if relevant.is_finite() && mu * relevant * t_end < 5.0 {
+        let weakest = c.excitation.iter().min_by(|a, b| a.excitation.total_cmp(&b.excitation));
+        let poor = weakest
+            .and_then(|w| fidelity.iter().find(|f| f.frequency == w.frequency && f.relative_error > FIDELITY_LIMIT));
+        match (weakest, poor) {
+            (Some(w), Some(f)) => advice.push(format!(
+                "Ω̄_{} is weakly excited at {} rad/s ({:.1e}), where the disturbance observer's relative error is {:.2}: give design.observer_poles faster (raising μ would only make the loop stiff)",
+                i + 1, w.frequency, w.excitation, f.relative_error
+            )),
+            _ => advice.push(format!(
+                "{key} = {mu} is too small for the horizon: the error's slowest relevant direction decays at μ λ = {:.2e}/s; raise {key} to about {:.3e} (5/(λ t_end)) or lengthen simulation.t_end",
+                mu * relevant, 5.0 / (relevant * t_end)
+            )),
+        }
+    }
+    match trend {
+        Some(r) if r < SHRINKING => advice.push(format!(
+            "channel {}'s error is still shrinking over the tail (RMS ratio {r:.2} between the last two tenths of the run): lengthen simulation.t_end or raise {key}",
+            i + 1
+        )),
+        Some(r) if r > GROWING => advice.push(format!(
+            "channel {}'s error grows over the tail (RMS ratio {r:.2}): check the run for divergence; a model error ([truth]) or a too large {key} can do this",
+            i + 1
+        )),
+        _ => {}
+    }
+    if c.residual_rms > 1e-3 * c.open_loop_rms.max(f64::MIN_POSITIVE) {
+        advice.push(format!(
+            "part of channel {}'s error (RMS {:.2e} of {:.2e}) lies outside the regressor's span: give every signal frequency its filter poles (two per harmonic, one per bias)",
+            i + 1, c.residual_rms, c.open_loop_rms
+        ));
+    }
+    ChannelDiagnostics {
+        channel: i + 1,
+        lambda_min_omega: c.lambda_min(),
+        lambda_max_omega: c.lambda_max(),
+        convergence_time: 1.0 / (mu * c.lambda_min()),
+        adaptation_rate: mu * c.lambda_max(),
+        excited_rank: c.excited().count(),
+        lambda_min_excited_omega: c.excited().fold(f64::INFINITY, f64::min),
+        convergence_time_excited: 1.0 / (mu * c.excited().fold(f64::INFINITY, f64::min)),
+        predicted_final_rms_e: c.predicted_error(mu, t_end),
+        tail_trend: trend,
+        excitation: c.excitation.clone(),
+        advice,
+    }
+}
