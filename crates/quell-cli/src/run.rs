@@ -191,6 +191,7 @@ fn write_data(
     let summary = json!({
         "scenario": scenario.name,
         "truth_differs": scenario.truth_differs(),
+        "limited_fraction": (!r.limited.is_empty()).then(|| r.limited_fraction()),
         "outcome": r.outcome,
         "channels": r.summary(),
         "stats": r.stats,
@@ -244,6 +245,13 @@ fn report_outcome(result: &SimResult, diagnostics: &Diagnostics, out: &Path, sec
             }
             for line in &diagnostics.advice {
                 eprintln!("  advice: {line}");
+            }
+            for (i, f) in result.limited_fraction().iter().enumerate().filter(|(_, &f)| f > 0.0) {
+                eprintln!(
+                    "input {}: clipped by truth.u_max[{i}] at {:.1} % of the recorded samples",
+                    i + 1,
+                    100.0 * f
+                );
             }
             let steps = match result.stats {
                 RunStats::Continuous { steps, .. } => format!("{steps} solver steps"),

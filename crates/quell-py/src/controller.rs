@@ -1,6 +1,8 @@
 //! `quell.Controller`: the real-time controller, discretized exactly for a zero-order hold.
 
 use numpy::{PyArray1, PyArrayMethods};
+use std::sync::{Mutex, MutexGuard};
+
 use pyo3::prelude::*;
 use pyo3::types::{PyList, PyTuple};
 
@@ -9,12 +11,26 @@ use crate::design::PyDesign;
 use crate::errors::{in_arguments, raise, Kind};
 
 /// The discrete-time adaptive controller of a design at sample time T_s (eqs. (5), (6), (14),
-/// (20), (25), (33)). `step` allocates nothing in Rust and costs about 1 µs from Python.
-#[pyclass(module = "quell", name = "Controller")]
+/// (20), (25), (33)). `step` costs about 1 µs from Python. One controller may be shared between
+/// threads: its calls are serialized by a lock held only while Rust steps it (never across a call
+/// into Python, so it cannot deadlock with the GIL).
+#[pyclass(module = "quell", name = "Controller", frozen)]
 pub struct PyController {
-    inner: quell::Controller,
-    y: Vec<f64>,
-    g: Vec<f64>,
+    inner: Mutex<quell::Controller>,
+    m: usize,
+}
+
+impl PyController {
+    /// The controller, locked (a panic cannot poison it: no Rust code here panics while holding it).
+    fn lock(&self) -> MutexGuard<'_, quell::Controller> {
+        self.inner.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// A copy of one of the controller's vectors, taken under the lock (numpy arrays are built
+    /// after it is released).
+    fn copy(&self, part: impl FnOnce(&quell::Controller) -> &[f64]) -> Vec<f64> {
+        part(&self.lock()).to_vec()
+    }
 }
 
 /// Reads a length-m vector into `out`: a float64 numpy vector or a list of numbers directly,
@@ -62,52 +78,55 @@ impl PyController {
         let inner =
             quell::Controller::new(&d.inner, T).map_err(|e| Kind::Scenario.err(py, in_arguments(e.to_string())))?;
         let (m, _) = inner.dims();
-        Ok(PyController { inner, y: vec![0.0; m], g: vec![0.0; m] })
+        Ok(PyController { inner: Mutex::new(inner), m })
     }
 
     /// One sample: reads y(k) and g(k) (m each) and returns the plant input u_f(k) = −K x̂ + F u_d (5)
     /// to hold until the next sample.
-    fn step<'py>(&mut self, y: &Bound<'py, PyAny>, g: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        read(y, "y", &mut self.y)?;
-        read(g, "g", &mut self.g)?;
-        let u_f = self.inner.step(&self.y, &self.g).map_err(|e| raise(y.py(), Kind::Value)(&e))?;
-        Ok(PyArray1::from_slice(y.py(), u_f))
+    fn step<'py>(&self, y: &Bound<'py, PyAny>, g: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        // Read first (reading may call into Python), then step under the lock.
+        let (mut y_k, mut g_k) = (vec![0.0; self.m], vec![0.0; self.m]);
+        read(y, "y", &mut y_k)?;
+        read(g, "g", &mut g_k)?;
+        let u_f = self.lock().step(&y_k, &g_k).map(|u| u.to_vec()).map_err(|e| raise(y.py(), Kind::Value)(&e))?;
+        Ok(PyArray1::from_vec(y.py(), u_f))
     }
 
     /// The adaptive command u(k) (25) of the last step, undelayed (m,).
     fn command<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vec_numpy(py, self.inner.command())
+        vec_numpy(py, &self.copy(|c| c.command()))
     }
 
     /// η̂_i after the last step (m, q), eq. (33).
     fn eta<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let (m, q) = self.inner.dims();
-        Ok(vec_numpy(py, self.inner.eta()).reshape([m, q])?.into_any())
+        let (m, q) = self.lock().dims();
+        Ok(vec_numpy(py, &self.copy(|c| c.eta())).reshape([m, q])?.into_any())
     }
 
     /// The observer's estimate x̂ (n,) that the next step starts from, eq. (6).
     fn x_hat<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vec_numpy(py, self.inner.x_hat())
+        vec_numpy(py, &self.copy(|c| c.x_hat()))
     }
 
     /// The regressor ξ̂ = [ξ̂_g; ξ̂_ω] (q,) that the next step starts from, eqs. (14), (20).
     fn xi_hat<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vec_numpy(py, self.inner.xi_hat())
+        vec_numpy(py, &self.copy(|c| c.xi_hat()))
     }
 
     /// Back to the initial state: every controller state and delay line zero.
-    fn reset(&mut self) {
-        self.inner.reset();
+    fn reset(&self) {
+        self.lock().reset();
     }
 
     /// Sample time T_s.
     #[getter]
     fn sample_time(&self) -> f64 {
-        self.inner.sample_time()
+        self.lock().sample_time()
     }
 
     fn __repr__(&self) -> String {
-        let (m, q) = self.inner.dims();
-        format!("Controller(m={m}, q={q}, sample_time={})", self.inner.sample_time())
+        let c = self.lock();
+        let (m, q) = c.dims();
+        format!("Controller(m={m}, q={q}, sample_time={})", c.sample_time())
     }
 }

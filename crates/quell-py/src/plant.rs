@@ -1,13 +1,16 @@
-//! `quell.Plant`: the plant (1), ẋ = A x + B u_d + D ω, y = C x + Q ω, with input delays τ_i.
+//! `quell.Plant`: the plant (1), ẋ = A x + B u_f + D ω, y = C x + Q ω, with the adaptive command's
+//! delays τ_i.
 
 use pyo3::prelude::*;
+use pyo3::types::PyTuple;
 use quell::nalgebra::DMatrix;
 
 use crate::convert::{matrix, to_numpy, type_name, vec_numpy, vector};
 use crate::errors::{raise, Kind};
 
-/// The plant (1) of the paper: ẋ = A x + B u_d(t) + D ω(t), y = C x + Q ω(t), where
-/// u_d,i(t) = u_f,i(t − τ_i) is input i delayed by τ_i.
+/// The plant (1) of the paper: ẋ = A x + B u_f(t) + D ω(t), y = C x + Q ω(t), driven by the
+/// decoupling law u_f = −K x̂ + F u_d, where u_d,i(t) = u_i(t − τ_i) is adaptive command i delayed by
+/// τ_i (the feedback −K x̂ acts without delay).
 ///
 /// `Plant(A, B, C, D=None, Q=None, delays=None, x0=None)`: array-likes; without D there is no
 /// disturbance (k = 0); Q defaults to 0, delays to 0 and x0 to 0.
@@ -163,6 +166,29 @@ impl PyPlant {
     fn __repr__(&self) -> String {
         let p = &self.inner;
         format!("Plant(n={}, m={}, k={}, delays={:?})", p.n(), p.m(), p.k(), p.delays)
+    }
+    /// Equal plants: the same matrices, delays and x0, entry for entry.
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other.cast::<PyPlant>().is_ok_and(|o| o.get().inner == self.inner)
+    }
+    /// Pickles as `Plant(A, B, C, D, Q, delays, x0)` (D and Q omitted without a disturbance).
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let py = slf.py();
+        let (p, me) = (&slf.get().inner, slf.get());
+        let disturbance = p.k() > 0;
+        let args = PyTuple::new(
+            py,
+            [
+                me.A(py),
+                me.B(py),
+                me.C(py),
+                if disturbance { me.D(py) } else { py.None().into_bound(py) },
+                if disturbance { me.Q(py) } else { py.None().into_bound(py) },
+                me.delays(py),
+                me.x0(py),
+            ],
+        )?;
+        Ok((slf.get_type().into_any(), args))
     }
 }
 

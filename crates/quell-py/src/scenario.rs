@@ -247,6 +247,16 @@ impl PyScenario {
         self.inner.to_toml()
     }
 
+    /// Equal scenarios: the same TOML document (`to_toml` writes every key the scenario holds).
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other.cast::<PyScenario>().is_ok_and(|o| o.get().inner.to_toml() == self.inner.to_toml())
+    }
+
+    /// Pickles as `Scenario.from_toml(s.to_toml())`.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        Ok((slf.get_type().getattr("from_toml")?, (slf.get().inner.to_toml(),)))
+    }
+
     /// The design of this scenario's plant and choices (computed once; raises DesignError).
     fn design(&self, py: Python<'_>) -> PyResult<PyDesign> {
         Ok(PyDesign { inner: self.design_arc(py)? })
@@ -290,7 +300,7 @@ impl PyScenario {
         d.set_item("sample_time", s.sample_time)?;
         Ok(d)
     }
-    /// Measurement noise {std, seed}, or None.
+    /// Measurement noise {std, seed, bandwidth} (bandwidth None: white per sample), or None.
     #[getter]
     fn noise<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         self.inner
@@ -300,22 +310,24 @@ impl PyScenario {
                 let d = PyDict::new(py);
                 d.set_item("std", n.std.clone())?;
                 d.set_item("seed", n.seed)?;
+                d.set_item("bandwidth", n.bandwidth)?;
                 Ok(d)
             })
             .transpose()
     }
 
-    fn __repr__(&self) -> String {
+    /// Python's repr: strings quoted as Python quotes them, None for what is unset.
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
         let s = &self.inner;
-        format!(
-            "Scenario(name={:?}, n={}, m={}, k={}, t_end={}, sample_time={:?})",
-            s.name.as_deref().unwrap_or(""),
+        Ok(format!(
+            "Scenario(name={}, n={}, m={}, k={}, t_end={}, sample_time={})",
+            s.name.clone().into_pyobject(py)?.repr()?,
             s.plant.n(),
             s.plant.m(),
             s.plant.k(),
             s.simulation.t_end,
-            s.simulation.sample_time
-        )
+            s.simulation.sample_time.into_pyobject(py)?.repr()?
+        ))
     }
 }
 

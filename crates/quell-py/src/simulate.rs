@@ -225,14 +225,15 @@ impl PySimResult {
     fn __len__(&self) -> usize {
         self.inner.len()
     }
-    fn __repr__(&self) -> String {
-        format!(
-            "SimResult(samples={}, m={}, q={}, outcome={:?})",
+    /// Python's repr, the outcome as the `outcome` property's dict.
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        Ok(format!(
+            "SimResult(samples={}, m={}, q={}, outcome={})",
             self.inner.len(),
             self.inner.m,
             self.inner.q,
-            self.inner.outcome
-        )
+            self.outcome(py)?.repr()?
+        ))
     }
 }
 

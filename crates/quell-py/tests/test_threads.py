@@ -50,3 +50,35 @@ def test_ctrl_c_stops_a_running_simulation():
     _, err = child.communicate(timeout=30)
     assert "KeyboardInterrupt" in err, err
     assert time.perf_counter() - sent < 5
+
+
+def test_one_controller_shared_by_threads_serializes_its_steps():
+    """Eight threads step one Controller 500 times each with the same y and g (as tuples of numpy
+    scalars, the slow reading path, and with a tiny switch interval to interleave them): no error
+    (PyO3's "Already borrowed" before), and the state is that of 4000 steps taken in one thread."""
+    import sys
+    from concurrent.futures import ThreadPoolExecutor
+
+    import numpy as np
+
+    d = quell.paper_example().design()
+    y, g = (np.float64(0.3), np.float64(-0.1)), (np.float64(1.0), np.float64(2.0))
+    shared = quell.Controller(d, sample_time=1e-3)
+
+    def work(_):
+        for _ in range(500):
+            shared.step(y, g)
+            shared.eta()
+
+    old = sys.getswitchinterval()
+    sys.setswitchinterval(1e-6)
+    try:
+        with ThreadPoolExecutor(8) as pool:
+            list(pool.map(work, range(8)))
+    finally:
+        sys.setswitchinterval(old)
+    alone = quell.Controller(d, sample_time=1e-3)
+    for _ in range(4000):
+        alone.step(y, g)
+    np.testing.assert_array_equal(shared.eta(), alone.eta())
+    np.testing.assert_array_equal(shared.x_hat(), alone.x_hat())

@@ -30,14 +30,7 @@ fn main() {
                 );
             }
             "sampled" => {
-                let settings = SampledSettings {
-                    t_end: 100.0,
-                    output_step: 0.1,
-                    sample_time: 1e-3,
-                    noise: None,
-                    divergence_bound: 1e9,
-                    record_states: false,
-                };
+                let settings = SampledSettings { divergence_bound: 1e9, ..SampledSettings::new(100.0, 0.1, 1e-3) };
                 black_box(
                     simulate_sampled(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(()))
                         .unwrap(),

@@ -1,4 +1,7 @@
-//! The plant (1): ẋ = A x + B u_d + D ω(t), y = C x + Q ω(t), with per-channel input delays τ_i.
+//! The plant (1): ẋ = A x + B u_f + D ω(t), y = C x + Q ω(t), driven through the decoupling law (5)
+//! u_f = −K x̂ + F u_d with u_d,i(t) = u_i(t − τ_i): the delays τ_i act on the adaptive command u only,
+//! the feedback −K x̂ acts without delay. A delay or a limit on the whole u_f is a different plant,
+//! simulated with `[truth]`'s actuator ([`crate::settings::Actuator`]).
 
 use nalgebra::{DMatrix, DVector};
 use thiserror::Error;
@@ -22,7 +25,7 @@ pub struct Plant {
     pub D: DMatrix<f64>,
     /// Disturbance-to-output matrix, m×k (used only by the simulated plant).
     pub Q: DMatrix<f64>,
-    /// Input delays τ_i ≥ 0, one per channel.
+    /// Delays τ_i ≥ 0 of the adaptive command, one per channel: u_d,i(t) = u_i(t − τ_i) in (5).
     pub delays: Vec<f64>,
     /// Initial state x(0).
     pub x0: DVector<f64>,

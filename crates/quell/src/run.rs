@@ -19,12 +19,17 @@ pub enum LoopSettings {
 
 impl LoopSettings {
     /// The scenario's `[simulation]`: the sampled-data loop when it gives a `sample_time`, else the
-    /// continuous loop (default divergence bound, no step budget).
+    /// continuous loop (default divergence bound, no step budget); either with the scenario's
+    /// `[noise]` and the actuator of its `[truth]`.
     pub fn of(s: &Scenario) -> Self {
         let sim = &s.simulation;
         match sim.sample_time {
             Some(sample_time) => LoopSettings::sampled(s, sample_time),
-            None => LoopSettings::Continuous(RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol)),
+            None => LoopSettings::Continuous(RunSettings {
+                noise: s.noise.clone(),
+                actuator: s.actuator.clone(),
+                ..RunSettings::new(sim.t_end, sim.output_step, sim.rtol, sim.atol)
+            }),
         }
     }
 
@@ -56,11 +61,13 @@ impl LoopSettings {
         Ok(())
     }
 
-    /// The sampled-data loop at `sample_time` (in place of the scenario's), with its `[noise]`.
+    /// The sampled-data loop at `sample_time` (in place of the scenario's), with its `[noise]` and
+    /// actuator.
     pub fn sampled(s: &Scenario, sample_time: f64) -> Self {
         let sim = &s.simulation;
         LoopSettings::Sampled(SampledSettings {
             noise: s.noise.clone(),
+            actuator: s.actuator.clone(),
             ..SampledSettings::new(sim.t_end, sim.output_step, sample_time)
         })
     }
@@ -162,17 +169,17 @@ mod tests {
     fn runaway_bounds_end_a_continuous_run_at_the_first_signal_beyond_its_bound() {
         let s = scenario("");
         let LoopSettings::Continuous(st) = LoopSettings::of(&s) else { unreachable!() };
-        let full = run(&s, &LoopSettings::Continuous(st));
+        let full = run(&s, &LoopSettings::Continuous(st.clone()));
         let peaks = full.peaks;
         assert!(peaks.0.iter().all(|&p| p > 0.0 && p.is_finite()), "{peaks:?}");
         // Bounds at the run's own peaks let it complete; half of x̂'s peak ends it where x̂ first
         // exceeds that, with the value reported.
-        let within = run(&s, &LoopSettings::Continuous(RunSettings { runaway: Some(peaks), ..st }));
+        let within = run(&s, &LoopSettings::Continuous(RunSettings { runaway: Some(peaks), ..st.clone() }));
         assert_eq!(within.outcome, Some(sim::Outcome::Completed));
         assert_eq!(within.y, full.y);
         let mut half = Peaks([f64::INFINITY; 4]);
         half.0[1] = 0.5 * peaks.0[1];
-        let ended = run(&s, &LoopSettings::Continuous(RunSettings { runaway: Some(half), ..st }));
+        let ended = run(&s, &LoopSettings::Continuous(RunSettings { runaway: Some(half), ..st.clone() }));
         let Some(sim::Outcome::Diverged { t, signal, value }) = ended.outcome else { panic!("{:?}", ended.outcome) };
         assert!(signal.starts_with("x_hat[") && value.abs() > half.0[1], "{signal} = {value}");
         assert!(t < 2.0 && ended.peaks.0[1] <= half.0[1], "t = {t}, recorded peaks {:?}", ended.peaks);

@@ -27,22 +27,33 @@ pub const MAX_OUTPUT_SAMPLES: f64 = 1e7;
 /// Most controller steps of a sampled-data run (t_end / sample_time).
 pub const MAX_SAMPLING_STEPS: f64 = 1e10;
 
-/// White Gaussian measurement noise on y (sampled-data runs only): standard deviation per output and
-/// a seed.
+/// Gaussian measurement noise on y: standard deviation per output and a seed. Without a
+/// `bandwidth` it is white at the sample rate (sampled-data runs only); with one it is band-limited
+/// to `bandwidth` Hz ([`crate::sim::noise::band_limited`]), the same n(t) in both loops.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeasurementNoise {
     pub std: Vec<f64>,
     pub seed: u64,
+    /// Highest frequency of the band-limited noise, Hz; `None`: white at the sample rate.
+    pub bandwidth: Option<f64>,
 }
 
 impl MeasurementNoise {
-    /// One finite standard deviation ≥ 0 per output (m of them).
+    /// White noise at the sample rate.
+    pub fn white(std: Vec<f64>, seed: u64) -> Self {
+        MeasurementNoise { std, seed, bandwidth: None }
+    }
+
+    /// One finite standard deviation ≥ 0 per output (m of them); a bandwidth > 0 and finite.
     pub fn check(&self, m: usize) -> Result<(), KeyError> {
         if self.std.len() != m {
             return Err(KeyError::new(
                 "noise.std",
                 format!("expected {m} entries (one per output), found {}", self.std.len()),
             ));
+        }
+        if let Some(b) = self.bandwidth {
+            positive("noise.bandwidth", "a bandwidth in Hz", b)?;
         }
         match self.std.iter().enumerate().find(|(_, s)| !(**s >= 0.0 && s.is_finite())) {
             Some((i, s)) => {
@@ -54,6 +65,61 @@ impl MeasurementNoise {
             }
             None => Ok(()),
         }
+    }
+
+    /// The continuous loop needs band-limited noise (white noise has no value at a time t).
+    pub fn check_continuous(&self) -> Result<(), KeyError> {
+        match self.bandwidth {
+            Some(_) => Ok(()),
+            None => Err(KeyError::new(
+                "noise.bandwidth",
+                "missing; noise in the continuous loop is band-limited: set noise.bandwidth (Hz, e.g. 10 times the \
+                 loop's bandwidth), or set simulation.sample_time for white noise at the sample rate",
+            )),
+        }
+    }
+}
+
+/// The true plant's actuator beyond the model (1) (`[truth]` `actuator_delays`, `u_max`): the plant
+/// receives sat(u_f(t − τ_a,i)) on input i, where u_f = −K x̂ + F u_d is the controller's input (5),
+/// sat clips input i to [−u_max,i, u_max,i]. The controller knows neither.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Actuator {
+    /// τ_a,i ≥ 0 per input: a delay on the whole u_f,i (actuator or network), not only on u_i.
+    pub delays: Vec<f64>,
+    /// u_max,i > 0 per input (∞: no limit).
+    pub limits: Vec<f64>,
+}
+
+impl Actuator {
+    /// m delays ≥ 0 and finite, m limits > 0 (∞ allowed).
+    pub fn check(&self, m: usize) -> Result<(), KeyError> {
+        for (name, v) in [("actuator_delays", &self.delays), ("u_max", &self.limits)] {
+            if v.len() != m {
+                return Err(KeyError::new(
+                    format!("truth.{name}"),
+                    format!("expected {m} entries (one per input), found {}", v.len()),
+                ));
+            }
+        }
+        if let Some((i, d)) = self.delays.iter().enumerate().find(|(_, d)| !(d.is_finite() && **d >= 0.0)) {
+            return Err(KeyError::new(
+                format!("truth.actuator_delays[{i}]"),
+                format!("expected a finite delay ≥ 0 in seconds, found {d}"),
+            ));
+        }
+        if let Some((i, u)) = self.limits.iter().enumerate().find(|(_, u)| u.is_nan() || **u <= 0.0) {
+            return Err(KeyError::new(
+                format!("truth.u_max[{i}]"),
+                format!("expected a limit > 0 (inf for none), found {u}"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// True when the actuator changes nothing (no delay, no finite limit).
+    pub fn is_ideal(&self) -> bool {
+        self.delays.iter().all(|&d| d == 0.0) && self.limits.iter().all(|u| u.is_infinite())
     }
 }
 

@@ -183,7 +183,7 @@ fn design_and_runs_refuse_inputs_built_in_rust_with_wrong_lengths() {
         "reference.components[0].harmonics[0].frequency"
     );
     let mut sampled = SampledSettings::new(1.0, 0.1, 0.001);
-    sampled.noise = Some(MeasurementNoise { std: vec![0.1], seed: 0 });
+    sampled.noise = Some(MeasurementNoise::white(vec![0.1], 0));
     assert_eq!(key(simulate_sampled(&d, &s.reference, &s.disturbance, &sampled, |_| go(()))), "noise.std");
     let sampled = SampledSettings::new(1.0, 0.15, 0.1);
     assert_eq!(key(simulate_sampled(&d, &s.reference, &s.disturbance, &sampled, |_| go(()))), "simulation.output_step");

@@ -261,6 +261,7 @@ fn sampled_data_loop_converges_to_the_continuous_one_at_order_one() {
             noise: None,
             divergence_bound: 1e9,
             record_states: false,
+            actuator: None,
         };
         let samp = simulate_sampled(&d, &g, &w, &settings, |_| ControlFlow::Continue(())).unwrap();
         assert_eq!(samp.outcome, Some(Outcome::Completed));
@@ -315,6 +316,7 @@ fn sample_time_sweep() {
             noise: None,
             divergence_bound: 1e9,
             record_states: false,
+            actuator: None,
         };
         let r = simulate_sampled(&d, &g, &w, &settings, |_| ControlFlow::Continue(())).unwrap();
         let (e1, e2) = (

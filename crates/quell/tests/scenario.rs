@@ -211,7 +211,7 @@ fn sampled_data_run_with_noise() {
     let text = with(&[(SAMPLED, "sample_time = 0.001")]) + "[noise]\nstd = [0.03, 0]\nseed = 7\n";
     let s = Scenario::from_toml(&text).unwrap();
     assert_eq!(s.simulation.sample_time, Some(0.001));
-    assert_eq!(s.noise, Some(Noise { std: vec![0.03, 0.0], seed: 7 }));
+    assert_eq!(s.noise, Some(Noise::white(vec![0.03, 0.0], 7)));
 }
 
 #[test]
@@ -552,8 +552,17 @@ fn sample_time_too_many_steps() {
 }
 
 #[test]
-fn noise_without_sample_time() {
-    check(&(PAPER_EXAMPLE.to_string() + "[noise]\nstd = [0.03, 0.02]\n"), "noise", "set simulation.sample_time");
+fn noise_without_bandwidth() {
+    check(&(PAPER_EXAMPLE.to_string() + "[noise]\nstd = [0.03, 0.02]\n"), "noise.bandwidth", "set noise.bandwidth");
+}
+
+#[test]
+fn noise_bandwidth_not_positive() {
+    check(
+        &(PAPER_EXAMPLE.to_string() + "[noise]\nstd = [0.03, 0.02]\nbandwidth = 0\n"),
+        "noise.bandwidth",
+        "expected a bandwidth in Hz > 0, found 0",
+    );
 }
 
 #[test]

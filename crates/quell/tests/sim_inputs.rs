@@ -46,7 +46,7 @@ fn wrong_number_of_signal_components_is_an_error_in_both_loops() {
     let long = Signal { components: [s.disturbance.components.clone(), s.disturbance.components.clone()].concat() };
     let cont = RunSettings::new(1.0, 0.1, 1e-9, 1e-9);
     let samp = SampledSettings::new(1.0, 0.1, 1e-3);
-    assert_eq!(continuous_key(&short, &s.disturbance, cont), "reference.components");
+    assert_eq!(continuous_key(&short, &s.disturbance, cont.clone()), "reference.components");
     assert_eq!(sampled_key(&short, &s.disturbance, samp.clone()), "reference.components");
     assert_eq!(continuous_key(&s.reference, &long, cont), "disturbance.components");
     assert_eq!(sampled_key(&s.reference, &long, samp.clone()), "disturbance.components");
@@ -96,7 +96,7 @@ fn noise_and_divergence_bound_are_checked() {
     let (s, _) = paper();
     let (g, w) = (&s.reference, &s.disturbance);
     let noisy = |std: Vec<f64>| SampledSettings {
-        noise: Some(MeasurementNoise { std, seed: 1 }),
+        noise: Some(MeasurementNoise::white(std, 1)),
         ..SampledSettings::new(1.0, 0.1, 1e-3)
     };
     assert_eq!(sampled_key(g, w, noisy(vec![0.1])), "noise.std");

@@ -147,6 +147,12 @@ fn truth_mistakes_name_their_key() {
         ("delays = [1.0, -3.0]", "truth.delays[1]: expected a finite delay ≥ 0, found -3"),
         ("x0 = [0.0]", "truth.x0: expected 3 entries (as plant.x0), found 1"),
         ("E = [[1.0]]", "truth.E: unknown key"),
+        ("u_max = [1.0]", "truth.u_max: expected 2 entries (one per input), found 1"),
+        (
+            "actuator_delays = [-0.1, 0.0]",
+            "truth.actuator_delays[0]: expected a finite delay ≥ 0 in seconds, found -0.1",
+        ),
+        ("u_max = [1.0, 0.0]", "truth.u_max[1]: expected a limit > 0 (inf for none), found 0"),
     ];
     for (truth, expected) in cases {
         let e = Scenario::from_toml(&format!("{PAPER_EXAMPLE}\n[truth]\n{truth}\n")).unwrap_err().to_string();
@@ -166,6 +172,14 @@ fn truth_mistakes_name_their_key() {
     .unwrap_err()
     .to_string();
     assert!(e.starts_with("truth.delays[0]: τ = 1.0005 s is 1000.500000 samples of T_s = 0.001 s"), "{e}");
+    let s = scenario("actuator_delays = [0.0005, 0.0]");
+    let settings = SampledSettings { actuator: s.actuator.clone(), ..SampledSettings::new(1.0, 0.1, 1e-3) };
+    let e = simulate_sampled_with_truth(&d, s.true_plant(), &s.reference, &s.disturbance, &settings, |_| {
+        ControlFlow::Continue(())
+    })
+    .unwrap_err()
+    .to_string();
+    assert!(e.starts_with("truth.actuator_delays[0]: τ = 0.0005 s is 0.500000 samples of T_s = 0.001 s"), "{e}");
     // Called directly with a plant of other dimensions.
     let text =
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/siso-complex.toml")).unwrap();

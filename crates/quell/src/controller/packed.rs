@@ -113,6 +113,55 @@ fn apply_rows(q: usize, omega: &[f64], x: &[f64], out: &mut [f64]) {
     }
 }
 
+/// Packed index of Ω_rc, r ≤ c.
+#[inline(always)]
+const fn at(q: usize, r: usize, c: usize) -> usize {
+    r * q - r * r.saturating_sub(1) / 2 + (c - r)
+}
+
+/// The largest absolute row sum of Ω, a bound of its spectral radius (Gershgorin).
+pub fn max_row_sum(omega: &[f64], q: usize) -> f64 {
+    (0..q)
+        .map(|i| (0..q).map(|j| omega[if i <= j { at(q, i, j) } else { at(q, j, i) }].abs()).sum::<f64>())
+        .fold(0.0, f64::max)
+}
+
+/// Solves (I + c Ω) x = b in place (`x` holds b on entry) by a Cholesky factorization into
+/// `factor` (packed, q(q+1)/2 long): the implicit stage of the adaptive law η̂' = μ (Y − Ω η̂)
+/// (eq. (33)) with c = h γ μ. `false`, x unspecified, when I + c Ω is not numerically positive
+/// definite (Ω not positive semidefinite, or non-finite entries).
+pub fn solve_shifted(omega: &[f64], c: f64, x: &mut [f64], factor: &mut [f64]) -> bool {
+    let q = x.len();
+    let (omega, r) = (&omega[..len(q)], &mut factor[..len(q)]);
+    for i in 0..q {
+        for j in i..q {
+            let mut s = c * omega[at(q, i, j)] + if i == j { 1.0 } else { 0.0 };
+            for k in 0..i {
+                s -= r[at(q, k, i)] * r[at(q, k, j)];
+            }
+            if i == j {
+                // NaN fails this test too.
+                if !(s > 0.0 && s.is_finite()) {
+                    return false;
+                }
+                r[at(q, i, i)] = s.sqrt();
+            } else {
+                r[at(q, i, j)] = s / r[at(q, i, i)];
+            }
+        }
+    }
+    // Rᵀ y = b, then R x = y.
+    for i in 0..q {
+        let s: f64 = (0..i).map(|k| r[at(q, k, i)] * x[k]).sum();
+        x[i] = (x[i] - s) / r[at(q, i, i)];
+    }
+    for i in (0..q).rev() {
+        let s: f64 = (i + 1..q).map(|j| r[at(q, i, j)] * x[j]).sum();
+        x[i] = (x[i] - s) / r[at(q, i, i)];
+    }
+    true
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -189,6 +238,52 @@ mod tests {
             }
             each!(1 2 3 4 5 6 7 8 9 10 11 12);
         }
+    }
+
+    proptest! {
+        /// (I + cΩ) x = b for a random positive semidefinite Ω = G Gᵀ against the dense product, to
+        /// 1e-12 relative to |b| + c|Ω||x| (the backward error of Cholesky is a few ulps times q).
+        #[test]
+        fn solve_shifted_solves_the_shifted_system(q in 1usize..=12, seed in any::<u64>(), e in -3i32..9) {
+            let mut next = uniform(seed);
+            let g: Vec<f64> = (0..q * q).map(|_| next()).collect();
+            let mut dense = vec![0.0; q * q];
+            for i in 0..q {
+                for j in 0..q {
+                    dense[i * q + j] = (0..q).map(|k| g[i * q + k] * g[j * q + k]).sum();
+                }
+            }
+            let omega: Vec<f64> = (0..q).flat_map(|i| (i..q).map(move |j| (i, j))).map(|(i, j)| dense[i * q + j]).collect();
+            let b: Vec<f64> = (0..q).map(|_| next()).collect();
+            let c = 10f64.powi(e);
+            let (mut x, mut factor) = (b.clone(), vec![0.0; len(q)]);
+            prop_assert!(solve_shifted(&omega, c, &mut x, &mut factor));
+            for i in 0..q {
+                let (mut lhs, mut scale) = (x[i], b[i].abs() + x[i].abs());
+                for j in 0..q {
+                    lhs += c * dense[i * q + j] * x[j];
+                    scale += (c * dense[i * q + j] * x[j]).abs();
+                }
+                prop_assert!((lhs - b[i]).abs() <= 1e-12 * scale, "q {q}, c {c}: row {i}: {lhs} vs {}", b[i]);
+            }
+            // Gershgorin bounds every eigenvalue, so in particular Ω's largest, |Ω g_1|/|g_1| ≤ bound
+            // is a necessary check; the trace bounds λ_max of a PSD matrix from above too.
+            let trace: f64 = (0..q).map(|i| dense[i * q + i]).sum();
+            prop_assert!(max_row_sum(&omega, q) <= trace * q as f64 + 1e-12);
+            prop_assert!(max_row_sum(&omega, q) >= trace / q as f64 - 1e-12);
+        }
+    }
+
+    #[test]
+    fn solve_shifted_refuses_an_indefinite_matrix() {
+        // Ω = [[0, 2], [2, 0]] has eigenvalue −2: I + Ω is indefinite.
+        let (mut x, mut f) = ([1.0, 1.0], [0.0; 3]);
+        assert!(!solve_shifted(&[0.0, 2.0, 0.0], 1.0, &mut x, &mut f));
+        assert!(!solve_shifted(&[f64::NAN, 0.0, 1.0], 1.0, &mut x, &mut f));
+        // (I + 0.5 [[2, 1], [1, 2]]) x = [3, 3] → x = [1.2, 1.2] by hand ([[2, .5], [.5, 2]] x = 3).
+        let mut x = [3.0, 3.0];
+        assert!(solve_shifted(&[2.0, 1.0, 2.0], 0.5, &mut x, &mut f));
+        assert!((x[0] - 1.2).abs() < 1e-15 && (x[1] - 1.2).abs() < 1e-15, "{x:?}");
     }
 
     #[test]

@@ -53,11 +53,15 @@ pub struct Scenario {
     /// ω(t), one component per column of D (empty when k = 0).
     pub disturbance: Signal,
     pub simulation: Simulation,
-    /// Measurement noise on y; only with a sampled-data run.
+    /// Measurement noise on y: white at the sample rate (sampled-data runs), or band-limited with
+    /// `bandwidth` (both loops).
     pub noise: Option<Noise>,
     /// `[truth]`: the simulated plant when it differs from the design model `plant` (any of A, B, C,
     /// D, Q, delays, x0 given, the rest `plant`'s); the design always uses `plant`.
     pub truth: Option<Plant>,
+    /// `[truth]` `actuator_delays` and `u_max`: what the true plant's actuator does to u_f (the
+    /// design knows nothing of it).
+    pub actuator: Option<Actuator>,
 }
 
 /// Simulation settings.
@@ -80,7 +84,8 @@ impl Default for Simulation {
     }
 }
 
-/// White measurement noise on y (sampled-data runs only).
+pub use crate::settings::Actuator;
+/// Measurement noise on y.
 pub use crate::settings::MeasurementNoise as Noise;
 pub use crate::settings::{MAX_OUTPUT_SAMPLES, MAX_SAMPLING_STEPS};
 
@@ -108,6 +113,7 @@ pub fn load_and_design(text: &str) -> Result<(Scenario, Design), LoadError> {
 
 const TOP_KEYS: &[&str] = &["name", "plant", "design", "reference", "disturbance", "simulation", "noise", "truth"];
 const PLANT_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0"];
+const TRUTH_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0", "actuator_delays", "u_max"];
 const DESIGN_KEYS: &[&str] = &[
     "observer_gain",
     "observer_poles",
@@ -124,7 +130,7 @@ const SIGNAL_KEYS: &[&str] = &["components"];
 const COMPONENT_KEYS: &[&str] = &["bias", "harmonics"];
 const HARMONIC_KEYS: &[&str] = &["amplitude", "frequency", "phase"];
 const SIMULATION_KEYS: &[&str] = &["t_end", "output_step", "rtol", "atol", "sample_time"];
-const NOISE_KEYS: &[&str] = &["std", "seed"];
+const NOISE_KEYS: &[&str] = &["std", "seed", "bandwidth"];
 
 impl FromStr for Scenario {
     type Err = ScenarioError;
@@ -168,7 +174,8 @@ impl Scenario {
             root.require("plant", "the [plant] table (A, B, C, delays; D and Q with a [disturbance])", |v| {
                 plant(v, disturbance.as_ref())
             })?;
-        let truth = root.get("truth", |v| truth(v, &plant))?;
+        let (truth, actuator) = root.get("truth", |v| truth(v, &plant))?.unzip();
+        let actuator = actuator.flatten();
         let partial = root.require(
             "design",
             "the [design] table (observer, channel poles, filter poles, mu, beta)",
@@ -197,6 +204,7 @@ impl Scenario {
             simulation,
             noise,
             truth,
+            actuator,
         };
         scenario.design = complete(partial, &scenario)?;
         scenario.check_after_design()?;
@@ -204,7 +212,7 @@ impl Scenario {
     }
 
     /// The checks that need `[design]`: each signal component's internal-model order, and noise
-    /// only with a sampled-data run.
+    /// (band-limited in a continuous run).
     fn check_after_design(&self) -> Result<(), ScenarioError> {
         let (design, simulation) = (&self.design, &self.simulation);
         internal_model_order(
@@ -220,13 +228,10 @@ impl Scenario {
             &design.disturbance_filter_poles,
         )?;
         if let Some(noise) = &self.noise {
-            if simulation.sample_time.is_none() {
-                return Err(err(
-                    "noise",
-                    "measurement noise needs a sampled-data run; set simulation.sample_time (e.g. 0.001) or remove [noise]",
-                ));
-            }
             noise.check(self.plant.m())?;
+            if simulation.sample_time.is_none() {
+                noise.check_continuous()?;
+            }
         }
         Ok(())
     }
@@ -236,9 +241,10 @@ impl Scenario {
         self.truth.as_ref().unwrap_or(&self.plant)
     }
 
-    /// Whether the simulated plant differs from the design model.
+    /// Whether the simulated plant differs from the design model (its matrices, delays, x0 or
+    /// its actuator).
     pub fn truth_differs(&self) -> bool {
-        self.truth.as_ref().is_some_and(|t| *t != self.plant)
+        self.truth.as_ref().is_some_and(|t| *t != self.plant) || self.actuator.as_ref().is_some_and(|a| !a.is_ideal())
     }
 
     /// [`Design::new`] for this scenario's plant and choices.
@@ -307,9 +313,20 @@ fn plant(v: Value, disturbance: Option<&Signal>) -> Result<Plant, ScenarioError>
     Plant::new(A, B, C, D, Q, delays, x0).map_err(|e| plant_error(e, n, m, k))
 }
 
-/// `[truth]`: each given matrix has its `[plant]` counterpart's shape, the rest is `plant`'s.
-fn truth(v: Value, plant: &Plant) -> Result<Plant, ScenarioError> {
-    let t = v.table(PLANT_KEYS)?;
+/// `[truth]`: each given matrix has its `[plant]` counterpart's shape, the rest is `plant`'s; and the
+/// actuator when `actuator_delays` or `u_max` is given (the other defaulting to 0 and ∞).
+fn truth(v: Value, plant: &Plant) -> Result<(Plant, Option<Actuator>), ScenarioError> {
+    let t = v.table(TRUTH_KEYS)?;
+    let m = plant.m();
+    let delays = t.get("actuator_delays", |v| v.numbers())?;
+    let limits = t.get("u_max", |v| v.limits())?;
+    let actuator = (delays.is_some() || limits.is_some()).then(|| Actuator {
+        delays: delays.unwrap_or_else(|| vec![0.0; m]),
+        limits: limits.unwrap_or_else(|| vec![f64::INFINITY; m]),
+    });
+    if let Some(a) = &actuator {
+        a.check(m)?;
+    }
     let matrix = |name: &str, like: &DMatrix<f64>| -> Result<DMatrix<f64>, ScenarioError> {
         let Some(M) = t.get(name, |v| v.matrix())? else { return Ok(like.clone()) };
         // `[]` stands for a matrix without columns, as in [plant].
@@ -338,8 +355,8 @@ fn truth(v: Value, plant: &Plant) -> Result<Plant, ScenarioError> {
         }
         Ok(x)
     };
-    let (n, m, k) = (plant.n(), plant.m(), plant.k());
-    Plant::new(
+    let (n, k) = (plant.n(), plant.k());
+    let truth = Plant::new(
         matrix("A", &plant.A)?,
         matrix("B", &plant.B)?,
         matrix("C", &plant.C)?,
@@ -351,7 +368,8 @@ fn truth(v: Value, plant: &Plant) -> Result<Plant, ScenarioError> {
     .map_err(|e| {
         let e = plant_error(e, n, m, k);
         err(e.key.replacen("plant.", "truth.", 1), e.message)
-    })
+    })?;
+    Ok((truth, actuator))
 }
 
 /// The key of entry (row, col) of plant matrix `name` (x0 is a vector: one index).
@@ -582,6 +600,7 @@ fn noise(v: Value) -> Result<Noise, ScenarioError> {
     Ok(Noise {
         std: t.require("std", "one standard deviation ≥ 0 per output", |v| v.numbers())?,
         seed: t.get("seed", |v| v.unsigned())?.unwrap_or(0),
+        bandwidth: t.get("bandwidth", |v| v.number())?,
     })
 }
 

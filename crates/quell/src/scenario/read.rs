@@ -176,6 +176,14 @@ impl<'a> Value<'a, '_> {
         self.array("an array of numbers", |v| v.number())
     }
 
+    /// An array of numbers that may be `inf` (limits; NaN and −∞ are refused).
+    pub fn limits(&self) -> Result<Vec<f64>, ScenarioError> {
+        self.array("an array of numbers (inf for no limit)", |v| match v.value {
+            toml::Value::Float(x) if *x == f64::INFINITY => Ok(*x),
+            _ => v.number(),
+        })
+    }
+
     /// A matrix written as an array of rows of equal length. `[]` is a matrix with no rows.
     pub fn matrix(&self) -> Result<DMatrix<f64>, ScenarioError> {
         const FORM: &str = "a matrix (an array of rows, e.g. [[1.0, 0.0], [0.0, 1.0]])";

@@ -35,7 +35,12 @@ impl Scenario {
             doc.insert("noise".into(), Value::Table(noise_table(noise)));
         }
         if let Some(truth) = &self.truth {
-            doc.insert("truth".into(), Value::Table(plant_table(truth)));
+            let mut t = plant_table(truth);
+            if let Some(a) = &self.actuator {
+                t.insert("actuator_delays".into(), numbers(&a.delays));
+                t.insert("u_max".into(), numbers(&a.limits));
+            }
+            doc.insert("truth".into(), Value::Table(t));
         }
         doc
     }
@@ -166,6 +171,9 @@ fn noise_table(n: &Noise) -> Table {
     t.insert("std".into(), numbers(&n.std));
     // Seeds above i64::MAX cannot be written in TOML; from_toml reads none.
     t.insert("seed".into(), Value::Integer(i64::try_from(n.seed).unwrap_or(i64::MAX)));
+    if let Some(b) = n.bandwidth {
+        t.insert("bandwidth".into(), Value::Float(b));
+    }
     t
 }
 

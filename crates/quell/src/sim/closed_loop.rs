@@ -1,7 +1,9 @@
 //! The continuous closed loop (notes, "The closed loop, wired once"): plant (1) with input (5),
 //! controller [`Equations`], integrated as a delay equation by [`dde::solve`].
 
+use std::cell::Cell;
 use std::ops::ControlFlow;
+use std::rc::Rc;
 
 use nalgebra::{DMatrix, DVector};
 
@@ -12,7 +14,7 @@ use super::{check_run, SimError};
 use crate::controller::{command, mat_vec, packed, swapping_error, Equations};
 use crate::design::Design;
 use crate::plant::{Plant, PlantError};
-use crate::settings::KeyError;
+use crate::settings::{Actuator, KeyError, MeasurementNoise};
 use crate::signal::{Signal, SignalBank};
 
 /// Offsets of the loop's state vector [z = (ξ̂, x̂), η̂_1, …, η̂_m, x, filters]. The delayed terms
@@ -75,18 +77,24 @@ pub struct ContinuousLoop<'a> {
     layout: Layout,
     delays: Vec<f64>,
     /// The true plant's input delays where one differs from the design's (`[truth]`): the plant
-    /// then reads u_i(t − τ_i^true) while the controller keeps τ_i. Empty when all agree.
+    /// then reads u_i(t − τ_i^true) while the controller keeps τ_i. Empty when all agree, and with
+    /// an `actuator` (which reads the true delays itself).
     true_delays: Vec<f64>,
+    /// The true plant's actuator, when it delays or limits u_f.
+    actuator: Option<ActuatorPath>,
     // Scratch.
     y: Vec<f64>,
-    /// e = [g; ω; u_d] (and u_d at the true delays, with `true_delays`), the loop's inputs other
-    /// than the state.
+    /// e = [g; ω; n; u_d; u_p], the loop's inputs other than the state: the measurement noise n
+    /// when there is some, and the true plant's input u_p (u_d at the true delays with
+    /// `true_delays`, the whole input with an `actuator`) when it is not the design's.
     e: Vec<f64>,
     eta_d: Vec<f64>,
     xi_d: Vec<f64>,
-    u_d: Vec<f64>,
     Delta: Vec<f64>,
     tmp: Vec<f64>,
+    /// The Cholesky factor of I + hγμ_iΩ_i in the implicit stages ([`DelaySystem::solve_implicit`]).
+    factor: Vec<f64>,
+    u_d: Vec<f64>,
     /// What [`DelaySystem::observe`] records; `None` for a loop used as a bare [`DelaySystem`].
     record: Option<Record>,
 }
@@ -95,6 +103,59 @@ impl<'a> ContinuousLoop<'a> {
     /// The loop for a design and the true reference and disturbance signals.
     pub fn new(design: &'a Design, reference: &'a Signal, disturbance: &'a Signal) -> Result<Self, KeyError> {
         ContinuousLoop::with_truth(design, design.plant(), reference, disturbance)
+    }
+
+    /// [`ContinuousLoop::with_truth`] with the true plant's actuator between u_f and the plant
+    /// ([`Actuator`]; `None` or an ideal one: u_f itself) and band-limited measurement noise added
+    /// to the y the controller reads ([`MeasurementNoise`] with a bandwidth; the recorded y stays
+    /// the plant's).
+    pub fn with_physics(
+        design: &'a Design,
+        truth: &'a Plant,
+        reference: &'a Signal,
+        disturbance: &'a Signal,
+        actuator: Option<&Actuator>,
+        noise: Option<&MeasurementNoise>,
+    ) -> Result<Self, KeyError> {
+        let m = design.plant().m();
+        let actuator = actuator.filter(|a| !a.is_ideal());
+        if let Some(a) = actuator {
+            a.check(m)?;
+        }
+        let noise = match noise {
+            Some(nz) => {
+                nz.check(m)?;
+                nz.check_continuous()?;
+                super::noise::band_limited(nz)
+            }
+            None => None,
+        };
+        let mut lp = ContinuousLoop::with_truth(design, truth, reference, disturbance)?;
+        if actuator.is_none() && noise.is_none() {
+            return Ok(lp);
+        }
+        let eq = &lp.eq;
+        let n_signals = lp.signals.len() + noise.as_ref().map_or(0, Signal::len);
+        let path = actuator.map(|a| ActuatorPath::new(design, truth, a));
+        if let Some(path) = &path {
+            lp.delays.extend(path.delays().filter(|&d| d > 0.0));
+            lp.delays.sort_by(f64::total_cmp);
+            lp.delays.dedup();
+            lp.true_delays.clear();
+        }
+        let input = match (&path, lp.true_delays.is_empty()) {
+            (Some(_), _) => PlantInput::Explicit,
+            (None, false) => PlantInput::TrueDelays,
+            (None, true) => PlantInput::Design,
+        };
+        let e_len = n_signals + m + if input == PlantInput::Design { 0 } else { m };
+        let at = InputsAt::new(&lp.layout, m, truth.k(), noise.is_some());
+        lp.linear = LinearPart::new(design, truth, eq, &lp.layout, at, input);
+        let signals: Vec<&Signal> = [reference, disturbance].into_iter().chain(noise.as_ref()).collect();
+        lp.signals = SignalBank::new(&signals);
+        lp.e = vec![0.0; e_len];
+        lp.actuator = path;
+        Ok(lp)
     }
 
     /// The loop whose simulated plant is `truth`; observers, filters and gains keep the design
@@ -116,8 +177,10 @@ impl<'a> ContinuousLoop<'a> {
         delays.sort_by(f64::total_cmp);
         delays.dedup();
         let (m, q, k) = (eq.m, eq.q, p.k());
+        let input = if true_delays.is_empty() { PlantInput::Design } else { PlantInput::TrueDelays };
         Ok(ContinuousLoop {
-            linear: LinearPart::new(design, truth, &eq, &layout, !true_delays.is_empty()),
+            linear: LinearPart::new(design, truth, &eq, &layout, InputsAt::new(&layout, m, k, false), input),
+            actuator: None,
             C: &truth.C,
             Q: &truth.Q,
             signals: SignalBank::new(&[reference, disturbance]),
@@ -127,9 +190,10 @@ impl<'a> ContinuousLoop<'a> {
             true_delays,
             eta_d: vec![0.0; q],
             xi_d: vec![0.0; q],
-            u_d: vec![0.0; m],
             Delta: vec![0.0; q],
             tmp: vec![0.0; q],
+            factor: vec![0.0; packed::len(q)],
+            u_d: vec![0.0; m],
             record: None,
             layout,
             eq,
@@ -148,29 +212,19 @@ impl<'a> ContinuousLoop<'a> {
         Ok(s)
     }
 
-    /// The command u_i(t − τ) (25) of channel i at delay τ ≥ 0: from the past for τ > 0, from the
-    /// state s at t for τ = 0. ξ̂(t − τ) is left in `xi_d`.
-    #[inline]
-    fn command_at(&mut self, i: usize, tau: f64, t: f64, s: &[f64], past: &Past<'_>, xi_d: &mut [f64]) -> f64 {
-        let (l, q) = (&self.layout, self.eq.q);
-        if tau > 0.0 {
-            past.eval_ranges(t - tau, [(0, &mut *xi_d), (l.eta(i), &mut self.eta_d[..])]);
-            command(&self.eta_d, xi_d)
-        } else {
-            xi_d.copy_from_slice(self.eq.regressor(s));
-            command(&s[l.eta(i)..l.eta(i) + q], xi_d)
-        }
-    }
-
-    /// The plant input u_f = −K x̂(t) + F u_d(t) (5) at the true delays, into `u_f`.
+    /// The plant input u_f = −K x̂(t) + F u_d(t) (5) as the true plant receives it (at its delays,
+    /// through its actuator), into `u_f`.
     fn plant_input(&mut self, t: f64, s: &[f64], past: &Past<'_>, u_f: &mut [f64]) {
-        let mut xi_d = std::mem::take(&mut self.xi_d);
-        for i in 0..self.eq.m {
-            let tau = self.true_delays.get(i).copied().unwrap_or(self.eq.channels[i].delay);
-            self.u_d[i] = self.command_at(i, tau, t, s, past, &mut xi_d);
+        let (eq, l) = (&self.eq, &self.layout);
+        if let Some(act) = &mut self.actuator {
+            act.input(t, s, past, (eq, l), (&mut self.eta_d, &mut self.xi_d), u_f);
+            return;
         }
-        self.xi_d = xi_d;
-        self.eq.plant_input(s, &self.u_d, u_f);
+        for i in 0..eq.m {
+            let tau = self.true_delays.get(i).copied().unwrap_or(eq.channels[i].delay);
+            self.u_d[i] = command_at(eq, l, (t, tau), i, s, past, (&mut self.eta_d, &mut self.xi_d));
+        }
+        eq.plant_input(s, &self.u_d, u_f);
     }
 }
 
@@ -184,7 +238,7 @@ struct Record {
     diverged: Option<Outcome>,
     /// x and x̂ too ([`RunSettings::record_states`]).
     states: bool,
-    /// [g; ω], y, u, u_f.
+    /// [g; ω] (and the noise n, not read here), y, u, u_f.
     gw: Vec<f64>,
     y: Vec<f64>,
     u: Vec<f64>,
@@ -208,6 +262,38 @@ impl DelaySystem for ContinuousLoop<'_> {
         &self.delays
     }
 
+    /// The adaptive law (33), η̂_i' = μ_i (Y_i − Ω_i η̂_i): linear in η̂_i, stiff when μ_i λ_max(Ω_i) is
+    /// large.
+    fn implicit(&self) -> std::ops::Range<usize> {
+        self.layout.nz..self.layout.x
+    }
+
+    /// max_i μ_i · (Gershgorin bound of λ_max(Ω_i)).
+    fn implicit_rate(&self, s: &[f64]) -> f64 {
+        let (l, q) = (&self.layout, self.layout.q);
+        self.eq.channels.iter().enumerate().fold(0.0, |rate, (i, ch)| {
+            rate.max(ch.mu.abs() * packed::max_row_sum(&s[l.omega[i]..l.omega[i] + packed::len(q)], q))
+        })
+    }
+
+    /// Per channel (I + c μ_i Ω_i) η̂_i = r_i + c μ_i Y_i, by Cholesky.
+    fn solve_implicit(&mut self, _t: f64, c: f64, z: &mut [f64]) -> bool {
+        let (l, q) = (&self.layout, self.layout.q);
+        for (i, ch) in self.eq.channels.iter().enumerate() {
+            let (c_mu, eta) = (c * ch.mu, l.eta(i));
+            let (head, rest) = z.split_at_mut(l.x);
+            let (Y, omega) = (&rest[l.y[i] - l.x..l.y[i] - l.x + q], &rest[l.omega[i] - l.x..]);
+            let x = &mut head[eta..eta + q];
+            for (xj, yj) in x.iter_mut().zip(Y) {
+                *xj += c_mu * yj;
+            }
+            if !packed::solve_shifted(omega, c_mu, x, &mut self.factor) {
+                return false;
+            }
+        }
+        true
+    }
+
     /// Records y, g, u (25), u_f (5) and η̂ (and x, x̂) at t, unless a watched signal is beyond its
     /// bound: then the run ends as diverged.
     fn observe(&mut self, t: f64, s: &[f64], past: &Past<'_>) -> ControlFlow<()> {
@@ -223,7 +309,7 @@ impl DelaySystem for ContinuousLoop<'_> {
             self.signals.eval_into_unchecked(t, &mut rec.gw);
             let (g, w) = rec.gw.split_at(eq.m);
             mat_vec(self.C, x, &mut rec.y, false);
-            mat_vec(self.Q, w, &mut rec.y, true);
+            mat_vec(self.Q, &w[..self.Q.ncols()], &mut rec.y, true);
             for (i, u) in rec.u.iter_mut().enumerate() {
                 *u = command(&s[l.eta(i)..l.eta(i) + l.q], xi);
             }
@@ -231,6 +317,9 @@ impl DelaySystem for ContinuousLoop<'_> {
             let states = rec.states.then_some((x, x_hat));
             let (y, u, u_f) = (&rec.y, &rec.u, &rec.u_f);
             rec.result.push(&Sample { t, y, g, u, u_f, eta, states });
+            if let Some(act) = &self.actuator {
+                rec.result.count_limited(act.limited.iter().map(Cell::get));
+            }
             ControlFlow::Continue(())
         };
         self.record = Some(rec);
@@ -238,36 +327,49 @@ impl DelaySystem for ContinuousLoop<'_> {
     }
 
     fn rhs(&mut self, t: f64, s: &[f64], past: &Past<'_>, ds: &mut [f64]) {
-        // e = [g; ω; u_d].
-        self.signals.eval_into_unchecked(t, &mut self.e[..self.signals.len()]);
+        let eq = &self.eq;
+        let l = &self.layout;
+        let (m, q) = (eq.m, eq.q);
+        // e = [g; ω; n; u_d; u_p].
+        let (gw, u_d) = self.e.split_at_mut(self.signals.len());
+        self.signals.eval_into_unchecked(t, gw);
 
         // Delayed command u_i(t − τ_i) = −η̂_iᵀ(t − τ_i) ξ̂(t − τ_i). The row [u_i(t − τ_i), ξ̂ᵀ(t − τ_i)],
         // the input of channel i's filter bank, goes straight into the last row of W_i' (see below).
-        let (m, ns, cols) = (self.eq.m, self.signals.len(), 1 + self.eq.q);
-        for i in 0..m {
-            let (sigma, delay, w) = (self.eq.channels[i].sigma, self.eq.channels[i].delay, self.layout.w[i]);
-            let (u_in, xi_d) = ds[w + (sigma - 1) * cols..w + sigma * cols].split_at_mut(1);
-            u_in[0] = self.command_at(i, delay, t, s, past, xi_d);
-            self.e[ns + i] = u_in[0];
+        let cols = 1 + q;
+        for (i, ch) in eq.channels.iter().enumerate() {
+            let input = &mut ds[l.w[i] + (ch.sigma - 1) * cols..l.w[i] + ch.sigma * cols];
+            let (u_in, xi_d) = input.split_at_mut(1);
+            if ch.delay > 0.0 {
+                past.eval_ranges(t - ch.delay, [(0, &mut *xi_d), (l.eta(i), &mut self.eta_d[..])]);
+                u_d[i] = command(&self.eta_d, xi_d);
+            } else {
+                xi_d.copy_from_slice(eq.regressor(s));
+                u_d[i] = command(&s[l.eta(i)..l.eta(i) + q], xi_d);
+            }
+            u_in[0] = u_d[i];
         }
-        // The true plant's input reads the command at its own delays (`[truth]`).
-        if !self.true_delays.is_empty() {
-            let mut xi_d = std::mem::take(&mut self.xi_d);
-            for i in 0..m {
-                let tau = self.true_delays[i];
-                self.e[ns + m + i] = if tau == self.eq.channels[i].delay {
-                    self.e[ns + i]
+        // The true plant's input through its actuator, or reading the command at its own delays
+        // (`[truth]`).
+        if let Some(act) = &mut self.actuator {
+            let at = u_d.len() - m;
+            let u_p = &mut u_d[at..];
+            act.input(t, s, past, (eq, l), (&mut self.eta_d, &mut self.xi_d), u_p);
+        } else if !self.true_delays.is_empty() {
+            let at = u_d.len() - 2 * m;
+            let (u_d, u_true) = u_d[at..].split_at_mut(m);
+            for (i, (&tau, u)) in self.true_delays.iter().zip(u_true.iter_mut()).enumerate() {
+                *u = if tau == eq.channels[i].delay {
+                    u_d[i]
                 } else {
-                    self.command_at(i, tau, t, s, past, &mut xi_d)
+                    command_at(eq, l, (t, tau), i, s, past, (&mut self.eta_d, &mut self.xi_d))
                 };
             }
-            self.xi_d = xi_d;
         }
 
         // Plant (1) with the decoupling law (5), observers (6), (14), (20), and y = C x + Q ω: linear
         // in [s; e].
         self.linear.apply(s, &self.e, ds, &mut self.y);
-        let (eq, l, q) = (&self.eq, &self.layout, self.eq.q);
         let g = &self.e[..m];
 
         // Per channel: G_ii filter bank, H filters and the adaptive law (33).
@@ -303,6 +405,127 @@ impl DelaySystem for ContinuousLoop<'_> {
     }
 }
 
+/// u_j(t − lag), the command (25) of channel j, from the state (lag = 0) or the history; `at` is
+/// (t, lag), `scratch` (η̂_j, ξ̂) at t − lag.
+#[inline]
+fn command_at(
+    eq: &Equations,
+    l: &Layout,
+    (t, lag): (f64, f64),
+    j: usize,
+    s: &[f64],
+    past: &Past<'_>,
+    (eta_d, xi_d): (&mut [f64], &mut [f64]),
+) -> f64 {
+    if lag > 0.0 {
+        past.eval_ranges(t - lag, [(0, &mut *xi_d), (l.eta(j), &mut *eta_d)]);
+        command(eta_d, xi_d)
+    } else {
+        command(&s[l.eta(j)..l.eta(j) + l.q], eq.regressor(s))
+    }
+}
+
+/// The true plant's input through its actuator ([`Actuator`]):
+/// u_p,i(t) = sat_i(−K_i x̂(t − τ_a,i) + Σ_j F_ij u_j(t − τ_a,i − τ_j^true)), i.e. input (5) delayed
+/// by τ_a,i and clipped to ±u_max,i.
+struct ActuatorPath {
+    actuator: Actuator,
+    /// τ_j^true: the true plant's delays of the adaptive command.
+    command_delays: Vec<f64>,
+    K: DMatrix<f64>,
+    F: DMatrix<f64>,
+    /// Scratch: x̂ and the commands u_j at the delayed times.
+    x_hat: Vec<f64>,
+    u: Vec<f64>,
+    /// Per input: whether the limit clipped it at the latest evaluation (shared with the probe).
+    limited: Rc<[Cell<bool>]>,
+}
+
+impl ActuatorPath {
+    fn new(design: &Design, truth: &Plant, actuator: &Actuator) -> Self {
+        let m = truth.m();
+        ActuatorPath {
+            actuator: actuator.clone(),
+            command_delays: truth.delays.clone(),
+            K: design.K().clone(),
+            F: design.F().clone(),
+            x_hat: vec![0.0; truth.n()],
+            u: vec![0.0; m],
+            limited: (0..m).map(|_| Cell::new(false)).collect(),
+        }
+    }
+
+    /// Every delay the input reads: τ_a,i and τ_a,i + τ_j^true.
+    fn delays(&self) -> impl Iterator<Item = f64> + '_ {
+        let a = &self.actuator.delays;
+        a.iter().copied().chain(a.iter().flat_map(|ta| self.command_delays.iter().map(move |tj| ta + tj)))
+    }
+
+    /// u_p at time t.
+    fn input(
+        &mut self,
+        t: f64,
+        s: &[f64],
+        past: &Past<'_>,
+        (eq, l): (&Equations, &Layout),
+        scratch: (&mut [f64], &mut [f64]),
+        u_p: &mut [f64],
+    ) {
+        let (eta_d, xi_d) = scratch;
+        for (i, u_i) in u_p.iter_mut().enumerate() {
+            let ta = self.actuator.delays[i];
+            if ta > 0.0 {
+                past.eval_ranges(t - ta, [(eq.q, &mut self.x_hat[..])]);
+            } else {
+                self.x_hat.copy_from_slice(eq.x_hat(s));
+            }
+            for (j, u_j) in self.u.iter_mut().enumerate() {
+                *u_j = command_at(eq, l, (t, ta + self.command_delays[j]), j, s, past, (&mut *eta_d, &mut *xi_d));
+            }
+            let mut v = 0.0;
+            for c in 0..self.x_hat.len() {
+                v -= self.K[(i, c)] * self.x_hat[c];
+            }
+            for j in 0..self.u.len() {
+                v += self.F[(i, j)] * self.u[j];
+            }
+            let limit = self.actuator.limits[i];
+            self.limited[i].set(v.abs() > limit);
+            *u_i = v.clamp(-limit, limit);
+        }
+    }
+}
+
+/// How the simulated plant's input enters the linear part.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum PlantInput {
+    /// u_f = −K x̂ + F u_d as the controller computes it.
+    Design,
+    /// −K x̂ + F u_d at the true delays (the entries u_p of e).
+    TrueDelays,
+    /// B u_p with u_p the whole input computed in `rhs` (an actuator).
+    Explicit,
+}
+
+/// Where the loop's inputs sit among the operator's columns (after the state's `dim`): e = [g; ω;
+/// n; u_d; u_p].
+#[derive(Debug, Clone, Copy)]
+struct InputsAt {
+    g: usize,
+    w: usize,
+    noise: Option<usize>,
+    u_d: usize,
+    u_p: usize,
+}
+
+impl InputsAt {
+    fn new(l: &Layout, m: usize, k: usize, noise: bool) -> Self {
+        let (g, w) = (l.dim, l.dim + m);
+        let u_d = w + k + if noise { m } else { 0 };
+        InputsAt { g, w, noise: noise.then_some(w + k), u_d, u_p: u_d + m }
+    }
+}
+
 /// The loop's linear part as a sparse operator: the rows of x (plant (1) with u_f = −K x̂ + F u_d,
 /// eq. (5)) and of the core z ([`Equations::A_z`], [`Equations::B_z`] with y = C x + Q ω substituted),
 /// and the output y = C x + Q ω itself, over the state and e = [g; ω; u_d]. Built once; the products
@@ -319,31 +542,35 @@ struct LinearPart {
 }
 
 impl LinearPart {
-    /// `p` is the simulated plant; with `true_input` its input reads u_d at the true delays, the
-    /// entries of e after u_d.
-    fn new(design: &Design, p: &Plant, eq: &Equations, l: &Layout, true_input: bool) -> Self {
-        let (n, m, k, nz, dim) = (eq.n, eq.m, p.k(), eq.nz, l.dim);
-        let (e_g, e_w, e_u) = (dim, dim + m, dim + m + k);
-        let e_u_plant = if true_input { e_u + m } else { e_u };
+    /// `p` is the simulated plant, `input` how its input enters; `at` places e's entries. The
+    /// noise n (when `at` has it) adds to the measured y that the core and the y rows read.
+    fn new(design: &Design, p: &Plant, eq: &Equations, l: &Layout, at: InputsAt, input: PlantInput) -> Self {
+        let (n, m, nz, dim) = (eq.n, eq.m, eq.nz, l.dim);
         // B F, as the design computed it when the plant is the design model.
         let B_f = if p == design.plant() { design.B_f().clone() } else { &p.B * design.F() };
         let By = eq.B_z.columns(0, m);
         // Each block: (matrix, first row it feeds in the derivative, first column it reads).
         let x_hat = eq.q;
         // Rows of y are numbered after the state's.
-        let blocks: [(DMatrix<f64>, usize, usize); 11] = [
+        let mut blocks: Vec<(DMatrix<f64>, usize, usize)> = vec![
             (p.A.clone(), l.x, l.x),
-            (-(&p.B * design.K()), l.x, x_hat),
-            (p.D.clone(), l.x, e_w),
-            (B_f, l.x, e_u_plant),
+            (p.D.clone(), l.x, at.w),
             (eq.A_z.clone(), 0, 0),
             (By * &p.C, 0, l.x),
-            (By * &p.Q, 0, e_w),
-            (eq.B_z.columns(m, m).into_owned(), 0, e_g),
-            (eq.B_z.columns(2 * m, m).into_owned(), 0, e_u),
+            (By * &p.Q, 0, at.w),
+            (eq.B_z.columns(m, m).into_owned(), 0, at.g),
+            (eq.B_z.columns(2 * m, m).into_owned(), 0, at.u_d),
             (p.C.clone(), dim, l.x),
-            (p.Q.clone(), dim, e_w),
+            (p.Q.clone(), dim, at.w),
         ];
+        match input {
+            PlantInput::Design => blocks.extend([(-(&p.B * design.K()), l.x, x_hat), (B_f, l.x, at.u_d)]),
+            PlantInput::TrueDelays => blocks.extend([(-(&p.B * design.K()), l.x, x_hat), (B_f, l.x, at.u_p)]),
+            PlantInput::Explicit => blocks.push((p.B.clone(), l.x, at.u_p)),
+        }
+        if let Some(e_n) = at.noise {
+            blocks.extend([(By.into_owned(), 0, e_n), (DMatrix::identity(m, m), dim, e_n)]);
+        }
         let mut entries: Vec<(usize, usize, f64)> = Vec::new();
         for (M, row0, col0) in &blocks {
             for r in 0..M.nrows() {
@@ -407,7 +634,7 @@ impl LinearPart {
 }
 
 /// Settings of a continuous run.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct RunSettings {
     pub t_end: f64,
     pub output_step: f64,
@@ -425,6 +652,12 @@ pub struct RunSettings {
     /// counts as divergence too. Studies set these to a factor times the nominal run's
     /// [`SimResult::peaks`] (docs/studies.md, "Runaway"); `None` by default.
     pub runaway: Option<Peaks>,
+    /// The integrator ([`dde::Method::Auto`] by default: DOP853, implicit in η̂ while it is stiff).
+    pub method: dde::Method,
+    /// Band-limited measurement noise on the y the controller reads (needs a bandwidth).
+    pub noise: Option<MeasurementNoise>,
+    /// The true plant's actuator (delay on u_f, limits); `None`: the plant receives u_f.
+    pub actuator: Option<Actuator>,
     /// Record the plant state x and the observer state x̂ too ([`SimResult::x`]); off by default.
     pub record_states: bool,
 }
@@ -441,6 +674,9 @@ impl RunSettings {
             max_steps: None,
             max_history_bytes: MAX_HISTORY_BYTES,
             runaway: None,
+            method: dde::Method::Auto,
+            noise: None,
+            actuator: None,
             record_states: false,
         }
     }
@@ -502,6 +738,7 @@ pub fn default_max_steps(design: &Design, truth: &Plant, signals: [&Signal; 2], 
     }
 }
 
+
 /// Simulates the continuous closed loop from t = 0 to `t_end`, recording every `output_step`.
 /// `on_progress(t)` is called at each recorded sample; returning `Break` interrupts the run.
 /// The result always holds what was computed; [`SimResult::outcome`] says how the run ended. The
@@ -518,9 +755,11 @@ pub fn simulate(
 }
 
 /// [`simulate`] with the simulated plant `truth` in place of the design model (`[truth]`): the
-/// plant is ẋ = A x + B u_f + D ω, y = C x + Q ω with truth's matrices, x(0) = truth.x0, and
-/// u_f = −K x̂ + F [u_1(t − τ_1^true), …]; the observers (6), (20) and the filters of the
-/// adaptive law keep the design's matrices and delays.
+/// plant is ẋ = A x + B u_p + D ω, y = C x + Q ω with truth's matrices, x(0) = truth.x0, and
+/// u_p = u_f = −K x̂ + F [u_1(t − τ_1^true), …], or with `settings.actuator` that u_f delayed by
+/// τ_a,i and clipped ([`Actuator`]); the observers (6), (20) and the filters of the adaptive law keep
+/// the design's matrices and delays, and read y plus `settings.noise`. [`SimResult::limited`]
+/// reports how often each limit clipped.
 pub fn simulate_with_truth(
     design: &Design,
     truth: &Plant,
@@ -530,21 +769,17 @@ pub fn simulate_with_truth(
     mut on_progress: impl FnMut(f64) -> ControlFlow<()>,
 ) -> Result<SimResult, SimError> {
     let RunSettings {
-        t_end,
-        output_step,
-        rtol,
-        atol,
-        divergence_bound,
-        max_steps,
-        max_history_bytes,
-        runaway,
-        record_states,
+        t_end, output_step, rtol, atol, divergence_bound, max_steps, max_history_bytes, runaway, method, record_states, ..
     } = *settings;
     check_run(design, reference, disturbance, t_end, output_step, divergence_bound)?;
     crate::settings::check_tolerances(rtol, atol)?;
-    let mut sys = ContinuousLoop::with_truth(design, truth, reference, disturbance)?;
+    let (actuator, noise) = (settings.actuator.as_ref(), settings.noise.as_ref());
+    let mut sys = ContinuousLoop::with_physics(design, truth, reference, disturbance, actuator, noise)?;
     crate::settings::check_integrator_delays("plant.delays", &design.plant().delays, t_end)?;
     crate::settings::check_integrator_delays("truth.delays", &truth.delays, t_end)?;
+    if let Some(a) = actuator {
+        crate::settings::check_integrator_delays("truth.actuator_delays", &a.delays, t_end)?;
+    }
     // with_truth has checked x0's length (check_truth).
     let s0 = sys.initial_state(&truth.x0).map_err(|e| KeyError::new("truth.x0", e.to_string()))?;
     let history = vec![0.0; sys.n_delayed()];
@@ -562,7 +797,7 @@ pub fn simulate_with_truth(
     let max_steps = max_steps.unwrap_or_else(|| default_max_steps(design, truth, [reference, disturbance], t_end));
     // The history's ring may double past its length: half the budget in records.
     let max_history_len = max_history_bytes / (2 * dde::record_bytes(sys.n_delayed()));
-    let opts = Options { rtol, atol, max_steps, max_history_len, ..Options::default() };
+    let opts = Options { rtol, atol, max_steps, max_history_len, method, ..Options::default() };
     let mut outcome = Outcome::Completed;
     // The loop records each sample (observe); here only the progress and an interruption.
     let solved = dde::solve(&mut sys, 0.0, &s0, &history, t_end, output_step, &opts, |t, _| {

@@ -18,8 +18,10 @@
 //! * the step loop performs no allocation apart from the amortised growth of that ring; its long
 //!   loops run an AVX2 compilation where the CPU has it ([`crate::simd`]).
 
+mod ark;
 mod hermite;
 mod history;
+mod imex;
 mod tableau;
 
 use hermite::Stencil;
@@ -59,6 +61,23 @@ pub trait DelaySystem {
     /// delayed values. `Break` stops the run as `on_output`'s does. Default: nothing.
     fn observe(&mut self, _t: f64, _y: &[f64], _past: &Past<'_>) -> ControlFlow<()> {
         ControlFlow::Continue(())
+    }
+    /// The components (default: none) whose rate is linear in themselves and may be stiff:
+    /// f_I(y) = c(y) − M(y) y_I on this range, with M positive semidefinite and c, M depending
+    /// on the other components only. The stiff method integrates them implicitly (see `dde/ark.rs`).
+    fn implicit(&self) -> std::ops::Range<usize> {
+        0..0
+    }
+    /// An upper bound of M(y)'s spectral radius, the rate of the fastest implicit mode.
+    fn implicit_rate(&self, _y: &[f64]) -> f64 {
+        0.0
+    }
+    /// Solves z_I = r + c·f_I(t, z) for z_I, where on entry z_I holds r and the other components of
+    /// z are final: (I + c M) z_I = r + c·c(t, z). f_I is [`DelaySystem::rhs`] on the implicit block,
+    /// which must not read the past. `false` when the solve fails (the step is then rejected and
+    /// retried shorter). Must not allocate.
+    fn solve_implicit(&mut self, _t: f64, _c: f64, _z: &mut [f64]) -> bool {
+        true
     }
 }
 
@@ -124,11 +143,20 @@ pub struct Options {
     /// [`record_bytes`] each, twice that while its ring doubles); a run that needs more ends with
     /// [`SolveError::HistoryTooLong`].
     pub max_history_len: usize,
+    /// Which method integrates the steps.
+    pub method: Method,
 }
 
 impl Default for Options {
     fn default() -> Self {
-        Options { rtol: 1e-9, atol: 1e-9, h_max: f64::INFINITY, max_steps: usize::MAX, max_history_len: usize::MAX }
+        Options {
+            rtol: 1e-9,
+            atol: 1e-9,
+            h_max: f64::INFINITY,
+            max_steps: usize::MAX,
+            max_history_len: usize::MAX,
+            method: Method::Auto,
+        }
     }
 }
 
@@ -136,6 +164,19 @@ impl Default for Options {
 /// length and nodes.
 pub fn record_bytes(n_delayed: usize) -> usize {
     (NCOEF * n_delayed + 2 + (NCOEF - 1)) * std::mem::size_of::<f64>()
+}
+
+/// The integrator of the steps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Method {
+    /// DOP853, switching to [`Method::Implicit`] while the system's [`DelaySystem::implicit`] block
+    /// limits DOP853's step by stability, and back when it no longer would.
+    #[default]
+    Auto,
+    /// DOP853 throughout.
+    Explicit,
+    /// ARK4(3)6L[2]SA throughout: explicit in every component but [`DelaySystem::implicit`]'s.
+    Implicit,
 }
 
 /// Solver statistics.
@@ -151,6 +192,10 @@ pub struct Stats {
     pub breakpoints: usize,
     /// Largest number of step records the dense history held at once.
     pub max_history_len: usize,
+    /// Accepted steps taken by the implicit method (ARK4(3)6L[2]SA).
+    pub implicit_steps: usize,
+    /// Switches between the explicit and the implicit method.
+    pub switches: usize,
 }
 
 /// Why the integration stopped early.
@@ -308,10 +353,14 @@ pub fn solve<S: DelaySystem>(
         return Err(SolveError::StepSizeTooSmall { t: t0, h: h_cap, stats: Stats::default() });
     }
     // attempt → (reject | accept → record and emit → advance), until t_end.
+    if sys.implicit().end > n {
+        return input("implicit()", format!("a range within 0..{n}"), format!("{:?}", sys.implicit()));
+    }
     let mut steps = Steps::new(sys, t0, y0, history, t_end, output_step, opts, h_cap, &delays);
     while steps.t < t_end - tiny(t_end) {
         let step = steps.propose();
-        let Some(len) = steps.attempt(&step) else {
+        let attempted = if steps.stiff { steps.attempt_implicit(&step) } else { steps.attempt(&step) };
+        let Some(len) = attempted else {
             steps.reject(&step)?;
             continue;
         };
@@ -395,6 +444,16 @@ struct Steps<'a, S: DelaySystem> {
     schedule: Schedule,
     /// The error norm of the last attempt (≤ 1: accepted).
     err: f64,
+    /// The system's implicit block ([`DelaySystem::implicit`]).
+    implicit: std::ops::Range<usize>,
+    /// Whether the steps are taken by the implicit method (ARK4(3)6L[2]SA) rather than DOP853.
+    stiff: bool,
+    /// When to switch method under [`Method::Auto`] ([`Steps::watch_stiffness`]).
+    switching: imex::Switching,
+    /// The implicit block at the step points before the current one, while on the implicit method.
+    earlier: imex::Earlier,
+    /// The Hermite stencil must restart at the next step point (after a switch back to DOP853).
+    fresh_stencil: bool,
 }
 
 impl<'a, S: DelaySystem> Steps<'a, S> {
@@ -450,6 +509,11 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
             next_breakpoint: 0,
             schedule: Schedule { t0, dt, n: n_out, next: 1 },
             err: 0.0,
+            implicit: sys.implicit(),
+            stiff: opts.method == Method::Implicit,
+            switching: imex::Switching::default(),
+            earlier: imex::Earlier::new(sys.implicit().len()),
+            fresh_stencil: false,
             sys,
             opts,
         };
@@ -594,7 +658,7 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
     fn reject(&mut self, step: &Step) -> Result<(), SolveError> {
         self.stats.rejected += 1;
         self.last_rejected = true;
-        self.h = step.h / (1.0 / FAC_MIN).min(self.err.powf(0.125) / SAFE);
+        self.h = step.h / (1.0 / FAC_MIN).min(self.err.powf(self.exponent()) / SAFE);
         if self.h < h_min(self.t) {
             return Err(SolveError::StepSizeTooSmall { t: self.t, h: self.h, stats: self.finish() });
         }
@@ -611,7 +675,7 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
         if self.nd > 0 && self.hist.len() >= self.opts.max_history_len {
             return Err(SolveError::HistoryTooLong { t: self.t, stats: self.finish() });
         }
-        let fac = (self.err.powf(0.125) / SAFE).clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
+        let fac = (self.err.powf(self.exponent()) / SAFE).clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
         let mut h_next = step.h / fac;
         if self.last_rejected {
             h_next = h_next.min(step.h);
@@ -620,6 +684,10 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
         }
         self.last_rejected = false;
         self.h = h_next;
+        if self.stiff {
+            self.stats.implicit_steps += 1;
+        }
+        self.watch_stiffness(step);
         Ok(())
     }
 
@@ -667,15 +735,25 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
     /// carries the FSAL stage over.
     fn advance(&mut self, step: &Step) {
         self.hist.prune(step.t_new - self.tau_max);
+        if self.stiff {
+            self.earlier.push(self.t, &self.y[self.implicit.clone()]);
+        } else {
+            self.earlier.clear();
+        }
         self.t = step.t_new;
         std::mem::swap(&mut self.y, &mut self.y_new);
         if step.at_breakpoint {
+            self.fresh_stencil = false;
             self.stats.breakpoints += 1;
             self.restart();
         } else {
             let n = self.n;
             self.k.copy_within(12 * n..13 * n, 0);
-            self.stencil.push(self.t, &self.y, &self.k[..n]);
+            if std::mem::take(&mut self.fresh_stencil) {
+                self.stencil.restart(self.t, &self.y, &self.k[..n]);
+            } else {
+                self.stencil.push(self.t, &self.y, &self.k[..n]);
+            }
         }
     }
 

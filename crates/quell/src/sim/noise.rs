@@ -1,5 +1,41 @@
-//! Seeded white Gaussian measurement noise (SplitMix64 with the Box–Muller transform), so runs are
-//! reproducible without a random-number dependency.
+//! Seeded measurement noise: white Gaussian samples (SplitMix64 with the Box–Muller transform), so
+//! runs are reproducible without a random-number dependency, and band-limited noise as a sum of
+//! random-phase sines that both loops evaluate at any t.
+
+use crate::settings::MeasurementNoise;
+use crate::signal::{Component, Harmonic, Signal};
+
+/// Sines per output of the band-limited noise: enough for a near-Gaussian amplitude distribution
+/// (the sum of 64 independent random-phase sines has excess kurtosis −1.5/64 ≈ −0.02).
+pub const NOISE_SINES: usize = 64;
+
+/// Band-limited noise n(t) with the standard deviations of `noise`, `None` without a bandwidth:
+/// per output, [`NOISE_SINES`] sines with frequencies uniform on (0, bandwidth] Hz and phases uniform
+/// on [0, 2π) drawn from the seed, each of amplitude std·√(2/N), so the mean square over time is
+/// std² and the spectrum is empty above the bandwidth (random-phase multisine; Pintelon &
+/// Schoukens, *System Identification*, 2nd ed., Sec. 2.4). Output i draws from seed + i.
+pub fn band_limited(noise: &MeasurementNoise) -> Option<Signal> {
+    let bandwidth = noise.bandwidth?;
+    let w_max = 2.0 * std::f64::consts::PI * bandwidth;
+    let amplitude = (2.0 / NOISE_SINES as f64).sqrt();
+    let components = noise
+        .std
+        .iter()
+        .enumerate()
+        .map(|(i, &std)| {
+            let mut rng = Gaussian::new(noise.seed.wrapping_add(i as u64));
+            let harmonics = (0..NOISE_SINES)
+                .map(|_| Harmonic {
+                    amplitude: std * amplitude,
+                    frequency: w_max * rng.uniform(),
+                    phase: 2.0 * std::f64::consts::PI * rng.uniform(),
+                })
+                .collect();
+            Component { bias: 0.0, harmonics }
+        })
+        .collect();
+    Some(Signal { components })
+}
 
 /// A reproducible stream of standard normal samples.
 #[derive(Debug, Clone)]

@@ -95,6 +95,10 @@ pub struct SimResult {
     pub outcome: Option<Outcome>,
     /// The largest magnitude of each watched signal (x, x̂, ξ̂, η̂) at the recorded samples.
     pub peaks: Peaks,
+    /// Per input, at how many recorded samples the true plant's actuator limit (`[truth]` u_max)
+    /// clipped it; empty without an actuator. The continuous loop reads the clipping at the
+    /// integrator's latest evaluation of the derivative (within one step of the sample).
+    pub limited: Vec<usize>,
 }
 
 /// One recorded instant, as the loops hand it to [`SimResult::push`]: y, g, u, u_f (m each), η̂
@@ -135,7 +139,21 @@ impl SimResult {
     /// statistics so far.
     pub fn new(m: usize, q: usize, n: usize, stats: RunStats) -> Self {
         let (t, y, g, e, u, u_f, eta, x, x_hat) = Default::default();
-        SimResult { m, q, n, t, y, g, e, u, u_f, eta, x, x_hat, stats, outcome: None, peaks: Peaks::default() }
+        SimResult { m, q, n, t, y, g, e, u, u_f, eta, x, x_hat, stats, outcome: None, peaks: Peaks::default(), limited: Vec::new() }
+    }
+
+    /// Counts, per input, whether its actuator limit clipped it at the sample just recorded.
+    pub(crate) fn count_limited(&mut self, clipped: impl ExactSizeIterator<Item = bool>) {
+        self.limited.resize(clipped.len(), 0);
+        for (c, on) in self.limited.iter_mut().zip(clipped) {
+            *c += usize::from(on);
+        }
+    }
+
+    /// Per input, the fraction of the recorded samples at which its limit clipped it; empty when
+    /// the true plant has no limits.
+    pub fn limited_fraction(&self) -> Vec<f64> {
+        self.limited.iter().map(|&c| c as f64 / self.len().max(1) as f64).collect()
     }
 
     /// Appends one sample.

@@ -16,8 +16,8 @@ use crate::controller::{mat_vec, Controller, ControllerError};
 use crate::design::Design;
 use crate::linalg::zoh_unchecked;
 use crate::plant::Plant;
-use crate::settings::{self, KeyError, MeasurementNoise};
-use crate::signal::Signal;
+use crate::settings::{self, Actuator, KeyError, MeasurementNoise};
+use crate::signal::{Signal, SignalBank};
 
 /// Settings of a sampled-data run.
 #[derive(Debug, Clone, PartialEq)]
@@ -26,11 +26,16 @@ pub struct SampledSettings {
     /// A whole multiple of `sample_time`.
     pub output_step: f64,
     pub sample_time: f64,
+    /// Measurement noise on the y the controller reads: white per sample, or band-limited with a
+    /// bandwidth (the continuous loop's n(t) at the sample times).
     pub noise: Option<MeasurementNoise>,
     /// A watched signal above this magnitude counts as divergence ([`Watched`]).
     pub divergence_bound: f64,
     /// Record the plant state x and the observer state x̂ too ([`SimResult::x`]); off by default.
     pub record_states: bool,
+    /// The true plant's actuator (delay on u_f in whole samples, limits); `None`: the plant
+    /// receives u_f.
+    pub actuator: Option<Actuator>,
 }
 
 /// What the sampled-data loop needs of a discrete controller. [`Controller`] is one; another
@@ -68,6 +73,7 @@ impl SampledSettings {
             noise: None,
             divergence_bound: DIVERGENCE_BOUND,
             record_states: false,
+            actuator: None,
         }
     }
 
@@ -87,6 +93,9 @@ impl SampledSettings {
         settings::check_sample_time(self.t_end, self.sample_time)?;
         if let Some(noise) = &self.noise {
             noise.check(design.plant().m())?;
+        }
+        if let Some(a) = &self.actuator {
+            a.check(design.plant().m())?;
         }
         Ok(())
     }
@@ -132,8 +141,9 @@ pub fn simulate_sampled_with(
 
 /// [`simulate_sampled`] with the simulated plant `truth` in place of the design model (`[truth]`):
 /// the plant advances with truth's matrices from truth.x0 and its input is
-/// u_f = −K x̂ + F [u_1(k − d_1^true), …] with the true delays (whole samples); the controller keeps
-/// the design's matrices and delays.
+/// u_f = −K x̂ + F [u_1(k − d_1^true), …] with the true delays (whole samples), through
+/// `settings.actuator` when there is one (u_f,i(k − d_a,i) clipped to ±u_max,i); the controller
+/// keeps the design's matrices and delays.
 pub fn simulate_sampled_with_truth(
     design: &Design,
     truth: &Plant,
@@ -144,6 +154,64 @@ pub fn simulate_sampled_with_truth(
 ) -> Result<SimResult, SimError> {
     let mut ctrl = settings.check(design, reference, disturbance)?;
     sampled_loop(design, truth, &mut ctrl, reference, disturbance, settings, on_progress)
+}
+
+/// The actuator in whole samples: u_p,i(k) = sat_i(u_f,i(k − d_a,i)), u_f = 0 before k = 0.
+struct ActuatorLine {
+    d: Vec<usize>,
+    limits: Vec<f64>,
+    /// Row k mod len: u_f(k).
+    past: Vec<f64>,
+    len: usize,
+    u_p: Vec<f64>,
+    limited: Vec<bool>,
+}
+
+impl ActuatorLine {
+    fn new(actuator: &Actuator, T: f64) -> Result<Self, KeyError> {
+        let d = whole_samples("truth.actuator_delays", &actuator.delays, T)?;
+        let m = d.len();
+        let len = d.iter().max().map_or(1, |x| x + 1);
+        Ok(ActuatorLine {
+            d,
+            limits: actuator.limits.clone(),
+            past: vec![0.0; len * m],
+            len,
+            u_p: vec![0.0; m],
+            limited: vec![false; m],
+        })
+    }
+
+    /// Records u_f(k) and returns u_p(k).
+    fn apply(&mut self, k: usize, u_f: &[f64]) -> &[f64] {
+        let m = u_f.len();
+        self.past[(k % self.len) * m..(k % self.len + 1) * m].copy_from_slice(u_f);
+        for i in 0..m {
+            let d = self.d[i];
+            let v = if k >= d { self.past[((k - d) % self.len) * m + i] } else { 0.0 };
+            self.limited[i] = v.abs() > self.limits[i];
+            self.u_p[i] = v.clamp(-self.limits[i], self.limits[i]);
+        }
+        &self.u_p
+    }
+}
+
+/// Each delay as a whole number of samples of T, or an error on `key[i]`.
+fn whole_samples(key: &str, delays: &[f64], T: f64) -> Result<Vec<usize>, KeyError> {
+    delays
+        .iter()
+        .enumerate()
+        .map(|(i, &tau)| {
+            let r = tau / T;
+            if !crate::controller::discrete::whole(tau, T) {
+                return Err(KeyError::new(
+                    format!("{key}[{i}]"),
+                    format!("τ = {tau} s is {r:.6} samples of T_s = {T} s; a sampled-data run needs whole numbers of samples (at most 1e7)"),
+                ));
+            }
+            Ok(r.round() as usize)
+        })
+        .collect()
 }
 
 /// The plant input at the true delays: u_f + F (u(k − d^true) − u(k − d)), from the commands of
@@ -166,23 +234,8 @@ impl TrueInput {
         if truth.delays == p.delays {
             return Ok(None);
         }
-        let samples = |key: &str, delays: &[f64]| {
-            delays
-                .iter()
-                .enumerate()
-                .map(|(i, &tau)| {
-                    let r = tau / T;
-                    if !crate::controller::discrete::whole(tau, T) {
-                        return Err(KeyError::new(
-                            format!("{key}[{i}]"),
-                            format!("τ = {tau} s is {r:.6} samples of T_s = {T} s; a sampled-data run needs whole numbers of samples (at most 1e7)"),
-                        ));
-                    }
-                    Ok(r.round() as usize)
-                })
-                .collect::<Result<Vec<usize>, KeyError>>()
-        };
-        let (d, d_true) = (samples("plant.delays", &p.delays)?, samples("truth.delays", &truth.delays)?);
+        let (d, d_true) =
+            (whole_samples("plant.delays", &p.delays, T)?, whole_samples("truth.delays", &truth.delays, T)?);
         let m = d.len();
         let len = d.iter().chain(&d_true).max().map_or(1, |x| x + 1);
         Ok(Some(TrueInput {
@@ -224,6 +277,10 @@ fn sampled_loop(
     let every = settings.samples_per_output()?;
     let T = settings.sample_time;
     let mut shift = TrueInput::new(design, truth, T)?;
+    let mut actuator = match settings.actuator.as_ref().filter(|a| !a.is_ideal()) {
+        Some(a) => Some(ActuatorLine::new(a, T)?),
+        None => None,
+    };
     let p = truth;
     let (n, m) = (p.n(), p.m());
     let (S, H, w0) = disturbance.exosystem();
@@ -246,7 +303,7 @@ fn sampled_loop(
     s.rows_mut(n, nw).copy_from(&w0);
     let mut s_next = s.clone();
     let (mut y, mut y_meas, mut g) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
-    let mut noise = settings.noise.as_ref().map(|nz| (Gaussian::new(nz.seed), nz.std.clone()));
+    let mut noise = settings.noise.as_ref().map(|nz| Noise::new(nz, m));
     let stats = |controller_steps| RunStats::Sampled { controller_steps, sample_time: T };
     let mut result = SimResult::new(m, design.q(), n, stats(0));
     // u_f(k) and, when states are recorded, x̂(k) (read before the step moves it to x̂(k + 1)).
@@ -259,10 +316,8 @@ fn sampled_loop(
         mat_vec(&Cy, s.as_slice(), &mut y, false);
         reference.eval_into_unchecked(t, &mut g);
         y_meas.copy_from_slice(&y);
-        if let Some((rng, std)) = noise.as_mut() {
-            for (v, sd) in y_meas.iter_mut().zip(std.iter()) {
-                *v += sd * rng.sample();
-            }
+        if let Some(noise) = noise.as_mut() {
+            noise.add(t, &mut y_meas);
         }
         if settings.record_states && k % every == 0 {
             x_hat.copy_from_slice(ctrl.watched().x_hat);
@@ -273,6 +328,10 @@ fn sampled_loop(
                 sh.u_f.copy_from_slice(ctrl.step(&y_meas, &g)?);
                 u_f.copy_from_slice(sh.apply(k, ctrl.command()));
             }
+        }
+        if let Some(a) = actuator.as_mut() {
+            let applied = a.apply(k, &u_f);
+            u_f.copy_from_slice(applied);
         }
         taken += 1;
         mat_vec(&Phi, s.as_slice(), s_next.as_mut_slice(), false);
@@ -287,6 +346,9 @@ fn sampled_loop(
             let states = settings.record_states.then_some((watched.x, &x_hat[..]));
             let (u, eta) = (ctrl.command(), watched.eta);
             result.push(&Sample { t, y: &y, g: &g, u, u_f: &u_f, eta, states });
+            if let Some(a) = &actuator {
+                result.count_limited(a.limited.iter().copied());
+            }
             if on_progress(t).is_break() {
                 outcome = Outcome::Interrupted { t };
                 break;
@@ -297,4 +359,37 @@ fn sampled_loop(
     result.stats = stats(taken);
     result.outcome = Some(outcome);
     Ok(result)
+}
+
+/// The sampled loop's measurement noise: white samples, or the band-limited n(t) at the sample
+/// times.
+enum Noise {
+    White { rng: Gaussian, std: Vec<f64> },
+    Band { bank: SignalBank, n: Vec<f64> },
+}
+
+impl Noise {
+    fn new(noise: &MeasurementNoise, m: usize) -> Self {
+        match super::noise::band_limited(noise) {
+            Some(signal) => Noise::Band { bank: SignalBank::new(&[&signal]), n: vec![0.0; m] },
+            None => Noise::White { rng: Gaussian::new(noise.seed), std: noise.std.clone() },
+        }
+    }
+
+    /// y ← y + n(t).
+    fn add(&mut self, t: f64, y: &mut [f64]) {
+        match self {
+            Noise::White { rng, std } => {
+                for (v, sd) in y.iter_mut().zip(std.iter()) {
+                    *v += sd * rng.sample();
+                }
+            }
+            Noise::Band { bank, n } => {
+                bank.eval_into_unchecked(t, n);
+                for (v, x) in y.iter_mut().zip(n.iter()) {
+                    *v += x;
+                }
+            }
+        }
+    }
 }

@@ -1,0 +1,93 @@
+//! The continuous loop with a stiff adaptive law (33): the automatic switch to the implicit
+//! ARK4(3)6L[2]SA against DOP853 alone where both run, on the paper's example with μ scaled up and
+//! on the quadruple-tank process of Johansson (2000) in its own units (`tests/data/quadruple-tank.toml`).
+
+use std::ops::ControlFlow;
+
+use quell::scenario::{Scenario, PAPER_EXAMPLE};
+use quell::sim::dde::Method;
+use quell::sim::{simulate, Outcome, RunSettings, RunStats, SimResult};
+use quell::Design;
+
+const QUADRUPLE_TANK: &str = include_str!("data/quadruple-tank.toml");
+
+/// The run of `toml`'s scenario with every μ_i times `factor`, to its own t_end, at `tol`.
+fn run(toml: &str, factor: f64, tol: f64, method: Method) -> SimResult {
+    let s = Scenario::from_toml(toml).unwrap();
+    let mut spec = s.design.clone();
+    spec.mu.iter_mut().for_each(|mu| *mu *= factor);
+    let d = Design::new(&s.plant, &spec).unwrap();
+    let settings = RunSettings { method, ..RunSettings::new(s.simulation.t_end, s.simulation.output_step, tol, tol) };
+    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())).unwrap();
+    assert_eq!(r.outcome, Some(Outcome::Completed), "μ × {factor}, {method:?}");
+    r
+}
+
+/// max |a − b| over the outputs y, relative to max |b|.
+fn deviation(a: &SimResult, b: &SimResult) -> f64 {
+    assert_eq!(a.t, b.t);
+    let peak = b.y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    a.y.iter().zip(&b.y).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / peak
+}
+
+/// Where the adaptive law is not stiff (the paper's example as published, and every example's
+/// continuous loop at its own tolerance but one), the automatic method is DOP853: the same outputs
+/// and statistics bit for bit. `three-channel.toml` (μ = 2000) is stiff: DOP853 alone spends 9,136
+/// steps and 138k right-hand sides on it, mostly at its stability bound; the automatic run switches,
+/// needs about a third of the evaluations and agrees to 1e-6 of the peak (measured 1.1e-8).
+#[test]
+fn examples_are_unchanged() {
+    let examples = [
+        PAPER_EXAMPLE,
+        include_str!("../../../examples/paper-noise.toml"),
+        include_str!("../../../examples/paper-observer-poles.toml"),
+        include_str!("../../../examples/paper-sampled.toml"),
+        include_str!("../../../examples/siso-complex.toml"),
+    ];
+    for toml in examples {
+        let tol = Scenario::from_toml(toml).unwrap().simulation.rtol;
+        let auto = run(toml, 1.0, tol, Method::Auto);
+        let explicit = run(toml, 1.0, tol, Method::Explicit);
+        assert_eq!((auto.t.clone(), auto.y.clone(), auto.u.clone()), (explicit.t, explicit.y, explicit.u));
+        assert_eq!(auto.stats, explicit.stats);
+    }
+    let three = include_str!("../../../examples/three-channel.toml");
+    let auto = run(three, 1.0, 1e-9, Method::Auto);
+    let explicit = run(three, 1.0, 1e-9, Method::Explicit);
+    assert!(deviation(&auto, &explicit) < 1e-6, "{:e}", deviation(&auto, &explicit));
+    let evals = |r: &SimResult| match r.stats {
+        RunStats::Continuous { rhs_evaluations, .. } => rhs_evaluations,
+        RunStats::Sampled { .. } => unreachable!("a continuous run"),
+    };
+    assert!(2 * evals(&auto) < evals(&explicit), "{:?} vs {:?}", auto.stats, explicit.stats);
+}
+
+/// The implicit method throughout, and the automatic one, against DOP853 alone at μ × 10, 100 and
+/// 1000 (DOP853 needs 2.5k, 15k and 144k steps there). Both runs carry global errors of ~1e-8 of the
+/// peak at rtol = atol = 1e-9 (measured against runs at 1e-11); 1e-6 leaves room for the
+/// implicit method's lower order.
+#[test]
+fn stiff_paths_match_dop853_where_both_run() {
+    for factor in [10.0, 100.0, 1000.0] {
+        let explicit = run(PAPER_EXAMPLE, factor, 1e-9, Method::Explicit);
+        let methods: &[Method] = if factor < 1000.0 { &[Method::Implicit, Method::Auto] } else { &[Method::Auto] };
+        for &method in methods {
+            let r = run(PAPER_EXAMPLE, factor, 1e-9, method);
+            let dev = deviation(&r, &explicit);
+            assert!(dev < 1e-6, "μ × {factor}, {method:?}: {dev:e} of the peak");
+        }
+    }
+}
+
+/// The quadruple tank is stiff at its nominal μ = 1 already (DOP853 alone takes over a million steps
+/// for its first 70 s). The automatic run at rtol = atol = 1e-6 against the implicit method at 1e-10:
+/// agreement to 1e-4 of the peak output (the loose run's global error; its tolerance is absolute in
+/// levels of order 1 V).
+#[test]
+fn quadruple_tank_converges() {
+    let loose = run(QUADRUPLE_TANK, 1.0, 1e-6, Method::Auto);
+    let tight = run(QUADRUPLE_TANK, 1.0, 1e-10, Method::Implicit);
+    let dev = deviation(&loose, &tight);
+    assert!(dev < 1e-4, "{dev:e} of the peak");
+    assert!(loose.stats.steps() < 5_000, "{:?}", loose.stats);
+}
