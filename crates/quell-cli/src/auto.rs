@@ -90,7 +90,10 @@ fn report_json(a: &AutoDesign) -> serde_json::Value {
     json!({
         "choices": a.choices,
         "verification": a.verification,
-        "design": crate::report::design_json(&a.design),
+        "design": crate::report::with_warnings(
+            crate::report::design_json(&a.design),
+            &quell::design::warnings(&a.design, &a.scenario.design)
+        ),
     })
 }
 
@@ -113,5 +116,6 @@ fn report_text(a: &AutoDesign) -> String {
     }
     s.push('\n');
     s.push_str(&crate::report::design_text(&a.design));
+    s.push_str(&crate::report::warnings_text(&quell::design::warnings(&a.design, &a.scenario.design)));
     s
 }

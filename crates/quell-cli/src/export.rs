@@ -55,13 +55,14 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
         None
     };
     let out = &args.out;
-    output::prepare_dir(out).map_err(|e| {
-        Failure::Input(format!("--out {}: cannot write there ({e}); choose a writable directory", out.display()))
+    output::prepare_out(out, &[&code.header_name, &code.source_name])?;
+    // Both files are written before either is renamed into place: a failed write never leaves a
+    // new header beside an old source (a mismatched pair would not compile anyway: LAYOUT_ID).
+    let files =
+        [(out.join(&code.header_name), code.header.as_bytes()), (out.join(&code.source_name), code.source.as_bytes())];
+    output::write_atomic_all(&files).map_err(|e| {
+        Failure::Run(format!("writing {} and {} in {}: {e}", code.header_name, code.source_name, out.display()))
     })?;
-    for (name, text) in [(&code.header_name, &code.header), (&code.source_name, &code.source)] {
-        output::write_atomic(&out.join(name), |w| w.write_all(text.as_bytes()))
-            .map_err(|e| Failure::Run(format!("writing {}: {e}", out.join(name).display())))?;
-    }
     if let Some(fmu) = &fmu {
         let path = out.join(&fmu.file_name);
         output::write_atomic(&path, |w| w.write_all(&fmu.bytes))

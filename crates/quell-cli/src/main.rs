@@ -6,6 +6,7 @@
 
 mod auto;
 mod export;
+mod interrupt;
 mod output;
 mod plot;
 mod report;
@@ -121,11 +122,13 @@ fn design(args: &auto::DesignArgs) -> Result<(), Failure> {
             "{flag}: only with --auto (the automatic design); add --auto or remove {flag}"
         )));
     }
-    let (_, d) = load(Some(&args.scenario))?;
+    interrupt::Interrupt::quit_with("interrupted during the design; nothing was printed");
+    let (s, d) = load(Some(&args.scenario))?;
+    let warnings = quell::design::warnings(&d, &s.design);
     if args.json {
-        print_stdout(&format!("{}\n", serde_json::to_string_pretty(&report::design_json(&d)).unwrap_or_default()));
+        print_json(&report::with_warnings(report::design_json(&d), &warnings));
     } else {
-        print_stdout(&report::design_text(&d));
+        print_stdout(&format!("{}{}", report::design_text(&d), report::warnings_text(&warnings)));
     }
     Ok(())
 }
@@ -134,4 +137,21 @@ fn design(args: &auto::DesignArgs) -> Result<(), Failure> {
 pub(crate) fn print_stdout(text: &str) {
     use std::io::Write;
     let _ = std::io::stdout().lock().write_all(text.as_bytes());
+}
+
+/// A progress bar of `len` steps drawn on stderr with `template` when stderr is a terminal, hidden
+/// otherwise.
+pub(crate) fn progress_bar(len: u64, template: &str) -> indicatif::ProgressBar {
+    use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+    use std::io::IsTerminal;
+    let bar = ProgressBar::new(len);
+    if std::io::stderr().is_terminal() {
+        bar.set_draw_target(ProgressDrawTarget::stderr());
+        if let Ok(style) = ProgressStyle::with_template(template) {
+            bar.set_style(style);
+        }
+    } else {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    bar
 }

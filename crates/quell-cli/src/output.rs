@@ -3,15 +3,39 @@
 
 use std::fs;
 use std::io::{self, BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use quell::sim::SimResult;
+use tempfile::NamedTempFile;
+
+use crate::Failure;
 
 /// Writes a file atomically: `contents` fills a uniquely named temporary file beside `path`
 /// (`.stem.XXXXXX.tmp.ext`, so two runs sharing a directory never collide), which is then renamed
 /// to `path`. On error the temporary file is removed.
 pub fn write_atomic(path: &Path, contents: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> io::Result<()> {
-    let stem = path.file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    stage(path, contents)?.persist(path).map_err(|e| e.error)?;
+    Ok(())
+}
+
+/// Writes several files so that none is renamed into place unless every one was written: each
+/// goes to its temporary name first, then all are renamed (a failed write leaves the old files
+/// together, never a new one beside an old one).
+pub fn write_atomic_all(files: &[(PathBuf, &[u8])]) -> io::Result<()> {
+    let staged =
+        files.iter().map(|(path, bytes)| stage(path, |w| w.write_all(bytes))).collect::<io::Result<Vec<_>>>()?;
+    for (tmp, (path, _)) in staged.into_iter().zip(files) {
+        tmp.persist(path).map_err(|e| e.error)?;
+    }
+    Ok(())
+}
+
+/// The temporary file of [`write_atomic`], written and synced, not yet renamed. Its name keeps at
+/// most 32 bytes of the stem, so a file name near the system's limit (255 bytes) still has one.
+fn stage(path: &Path, contents: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> io::Result<NamedTempFile> {
+    let mut stem = path.file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let cut = (0..=stem.len().min(32)).rev().find(|&k| stem.is_char_boundary(k)).unwrap_or(0);
+    stem.truncate(cut);
     let ext = path.extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let (prefix, suffix) = (format!(".{stem}."), format!(".tmp{ext}"));
@@ -24,14 +48,36 @@ pub fn write_atomic(path: &Path, contents: impl FnOnce(&mut dyn Write) -> io::Re
     let mut w = BufWriter::new(tmp.as_file_mut());
     contents(&mut w)?;
     w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
-    tmp.persist(path).map_err(|e| e.error)?;
+    Ok(tmp)
+}
+
+/// Removes the figures (`<stem>.png`, `<stem>.svg`) in `dir` whose stem `ours` claims, before new
+/// ones are written: an earlier run's figures must not stand beside new data.
+pub fn remove_figures(dir: &Path, ours: impl Fn(&str) -> bool) -> io::Result<()> {
+    for entry in fs::read_dir(dir)? {
+        let path = entry?.path();
+        let figure = matches!(path.extension().and_then(|e| e.to_str()), Some("png" | "svg"));
+        if figure && path.file_stem().and_then(|s| s.to_str()).is_some_and(&ours) {
+            match fs::remove_file(&path) {
+                Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(e),
+                _ => {}
+            }
+        }
+    }
     Ok(())
 }
 
-/// Creates `dir` and proves it writable (with a uniquely named probe file), before any work is done.
-pub fn prepare_dir(dir: &Path) -> io::Result<()> {
-    fs::create_dir_all(dir)?;
-    tempfile::Builder::new().prefix(".quell-write-test.").suffix(".tmp").tempfile_in(dir)?.close()
+/// Creates `--out` and proves it writable (with a uniquely named probe file), and that none of the
+/// `files` to be written there is a directory, before any work is done: every output-path problem
+/// is bad input (exit 2) naming the path.
+pub fn prepare_out(dir: &Path, files: &[&str]) -> Result<(), Failure> {
+    let bad = |e: String| Failure::Input(format!("--out {}: {e}; choose another output directory", dir.display()));
+    let probe = || tempfile::Builder::new().prefix(".quell-write-test.").suffix(".tmp").tempfile_in(dir)?.close();
+    fs::create_dir_all(dir).and_then(|()| probe()).map_err(|e| bad(format!("cannot write there ({e})")))?;
+    match files.iter().map(|f| dir.join(f)).find(|p| p.is_dir()) {
+        Some(p) => Err(bad(format!("{} is a directory, where the output file goes", p.display()))),
+        None => Ok(()),
+    }
 }
 
 /// `signals.csv`: t, y1..ym, g1..gm, e1..em, u1..um, eta1_1..etam_q.

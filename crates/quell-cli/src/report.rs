@@ -202,3 +202,16 @@ fn fmt_condition(x: f64) -> String {
         "∞ (defective: a Jordan block, fragile under model error)".to_string()
     }
 }
+
+/// The fragile-gain warnings ([`quell::design::warnings`]) added to a design's JSON as `warnings`.
+pub fn with_warnings(mut design: Value, warnings: &[quell::design::DesignWarning]) -> Value {
+    if let Value::Object(map) = &mut design {
+        map.insert("warnings".into(), json!(warnings));
+    }
+    design
+}
+
+/// The fragile-gain warnings as lines of text (empty when there are none).
+pub fn warnings_text(warnings: &[quell::design::DesignWarning]) -> String {
+    warnings.iter().map(|w| format!("⚠ warning: {}\n", w.message)).collect()
+}

@@ -1,14 +1,10 @@
 //! `quell run`: load the scenario and design, check every input, simulate (Ctrl-C stops at the next
 //! recorded sample), write the files, report how the run ended.
 
-use std::io::IsTerminal;
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU8, Ordering};
-use std::sync::Arc;
 use std::time::Instant;
 
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use quell::diagnostics::{ChannelDiagnostics, Diagnostics};
 use quell::run::LoopSettings;
 use quell::scenario::Scenario;
@@ -16,6 +12,7 @@ use quell::sim::{Outcome, RunStats, SimResult};
 use quell::Design;
 use serde_json::json;
 
+use crate::interrupt::Interrupt;
 use crate::{load, output, plot, report, Failure};
 
 #[derive(clap::Args, Default)]
@@ -44,13 +41,14 @@ pub struct RunArgs {
 
 pub fn run(args: &RunArgs) -> Result<(), Failure> {
     let (scenario, design) = load(args.scenario.as_deref())?;
+    eprint!("{}", report::warnings_text(&quell::design::warnings(&design, &scenario.design)));
     // Every check that can fail on input happens before the output directory is touched.
     let settings = loop_settings(args, &scenario, &design)?;
     let out = &args.out;
-    output::prepare_dir(out).map_err(|e| {
-        Failure::Input(format!("--out {}: cannot write there ({e}); choose a writable directory", out.display()))
-    })?;
-    let ctrl_c = CtrlC::install();
+    output::prepare_out(out, &["signals.csv", "design.json", "summary.json"])?;
+    // Ctrl-C or SIGTERM stops the run at its next recorded sample; a second one before that sample
+    // (a very stiff run can take long to reach it) quits with no files.
+    let ctrl_c = Interrupt::install("interrupted twice before the next sample; stopped without writing files");
     let started = Instant::now();
     let result = simulate(&scenario, &design, &settings, &ctrl_c)?;
     ctrl_c.start_writing();
@@ -80,54 +78,17 @@ fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result
     Ok(settings)
 }
 
-/// Ctrl-C during a run: the first stops it at its next recorded sample, and the files are written. A
-/// second one before that sample (a very stiff run can take long to reach it) quits at once, with
-/// no files; once writing has begun, further Ctrl-Cs are ignored so no file is cut short.
-struct CtrlC(Arc<AtomicU8>);
-
-/// Phases of a run, for the Ctrl-C handler.
-const RUNNING: u8 = 0;
-const INTERRUPTED: u8 = 1;
-const QUITTING: u8 = 2;
-const WRITING: u8 = 3;
-
-impl CtrlC {
-    fn install() -> Self {
-        let phase = Arc::new(AtomicU8::new(RUNNING));
-        let handler = phase.clone();
-        let _ = ctrlc::set_handler(move || {
-            if handler.compare_exchange(RUNNING, INTERRUPTED, Ordering::SeqCst, Ordering::SeqCst).is_err()
-                && handler.compare_exchange(INTERRUPTED, QUITTING, Ordering::SeqCst, Ordering::SeqCst).is_ok()
-            {
-                eprintln!("error: interrupted twice before the next sample; stopped without writing files");
-                std::process::exit(1);
-            }
-        });
-        CtrlC(phase)
-    }
-
-    fn interrupted(&self) -> bool {
-        self.0.load(Ordering::SeqCst) != RUNNING
-    }
-
-    /// From here on Ctrl-C is ignored (unless a second one is already quitting the process).
-    fn start_writing(&self) {
-        if self.0.swap(WRITING, Ordering::SeqCst) == QUITTING {
-            loop {
-                std::thread::park();
-            }
-        }
-    }
-}
-
 /// The continuous or the sampled-data loop on the scenario's true plant, with a progress bar.
 fn simulate(
     scenario: &Scenario,
     design: &Design,
     settings: &LoopSettings,
-    ctrl_c: &CtrlC,
+    ctrl_c: &Interrupt,
 ) -> Result<SimResult, Failure> {
-    let bar = progress_bar(scenario.simulation.t_end);
+    let bar = crate::progress_bar(
+        (scenario.simulation.t_end * 1000.0) as u64,
+        "simulating {bar:40} {percent:>3}% of t_end, {elapsed_precise} elapsed, ETA {eta}",
+    );
     let progress = |t: f64| {
         bar.set_position((t * 1000.0) as u64);
         if ctrl_c.interrupted() {
@@ -142,21 +103,6 @@ fn simulate(
     Ok(result)
 }
 
-fn progress_bar(t_end: f64) -> ProgressBar {
-    let bar = ProgressBar::new((t_end * 1000.0) as u64);
-    if std::io::stderr().is_terminal() {
-        bar.set_draw_target(ProgressDrawTarget::stderr());
-        if let Ok(style) = ProgressStyle::with_template(
-            "simulating {bar:40} {percent:>3}% of t_end, {elapsed_precise} elapsed, ETA {eta}",
-        ) {
-            bar.set_style(style);
-        }
-    } else {
-        bar.set_draw_target(ProgressDrawTarget::hidden());
-    }
-    bar
-}
-
 fn write_outputs(
     dir: &Path,
     scenario: &Scenario,
@@ -166,6 +112,9 @@ fn write_outputs(
     seconds: f64,
     plots: bool,
 ) -> std::io::Result<()> {
+    // Figures of an earlier run (more channels, or plots now skipped) must not stand beside the new
+    // data; removed first, so a failed write leaves figures missing rather than stale.
+    output::remove_figures(dir, |stem| stem.strip_prefix("channel").is_some_and(|i| i.parse::<usize>().is_ok()))?;
     // Figures render on their own threads (one per channel) while the data files are written.
     std::thread::scope(|scope| {
         let figures: Vec<_> =
@@ -187,7 +136,8 @@ fn write_data(
     seconds: f64,
 ) -> std::io::Result<()> {
     output::write_signals(&dir.join("signals.csv"), r)?;
-    output::write_json(&dir.join("design.json"), &report::design_json(design))?;
+    let warnings = quell::design::warnings(design, &scenario.design);
+    output::write_json(&dir.join("design.json"), &report::with_warnings(report::design_json(design), &warnings))?;
     let summary = json!({
         "scenario": scenario.name,
         "truth_differs": scenario.truth_differs(),
@@ -226,12 +176,12 @@ fn report_outcome(result: &SimResult, diagnostics: &Diagnostics, out: &Path, sec
         Outcome::Completed => {
             for (i, c) in result.summary().iter().enumerate() {
                 let settle = match (c.settle_t, &c.settle_note) {
-                    (Some(t), _) => format!("settled (2 % band) at t = {t}"),
+                    (Some(t), _) => format!("settled (2 % band) at t = {t:.6}"),
                     (None, Some(note)) => note.clone(),
                     (None, None) => "not settled".into(),
                 };
                 eprintln!(
-                    "channel {}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {:.3}, max|u_f| = {:.3}, ‖η̂‖ = {:.4}, {settle}",
+                    "channel {}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {:.3}, max|u_f| = {:.3}, ‖η̂‖ = {:.4e}, {settle}",
                     i + 1,
                     c.tail_max_abs_e,
                     c.tail_rms_e,

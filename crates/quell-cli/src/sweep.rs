@@ -1,16 +1,13 @@
 //! `quell sweep`: every run of a study file (or one shard of them), in parallel, into runs.csv,
 //! summary.json and sweep.png/.svg; `--merge` joins the shards' directories into one.
 
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicU8, Ordering};
-use std::sync::Arc;
 use std::time::Instant;
 
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use quell::study::{self, Outcome, Row, Shard, Study, StudyMeta, Summary, SweepOptions};
+use quell::study::{self, Outcome, Row, Shard, Study, StudyMeta, Summary, SweepOptions, MAX_JOBS};
 
-use crate::output::{prepare_dir, write_atomic};
+use crate::interrupt::Interrupt;
+use crate::output::{prepare_out, write_atomic};
 use crate::Failure;
 
 #[derive(clap::Args)]
@@ -22,13 +19,13 @@ pub struct SweepArgs {
     #[arg(long, default_value = "quell-sweep")]
     out: PathBuf,
     /// Only the runs with index ≡ I (mod N): machine I of N, counting from 0.
-    #[arg(long, value_name = "I/N")]
+    #[arg(long, value_name = "I/N", allow_hyphen_values = true)]
     shard: Option<String>,
     /// Join the output directories of every shard of one study into --out.
     #[arg(long, num_args = 1.., value_name = "DIR")]
     merge: Vec<PathBuf>,
     /// Worker threads (default: one per core).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_jobs)]
     jobs: Option<usize>,
     /// Skip sweep.png/.svg.
     #[arg(long)]
@@ -38,12 +35,16 @@ pub struct SweepArgs {
     yes: bool,
 }
 
-/// Phases for the Ctrl-C handler.
-const RUNNING: u8 = 0;
-const STOPPING: u8 = 1;
+/// The files a sweep writes into --out (besides its figures).
+const OUTPUTS: &[&str] = &["runs.csv", "summary.json"];
 
 pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     if !args.merge.is_empty() {
+        if let Some(s) = &args.shard {
+            return Err(Failure::Input(format!(
+                "--shard {s}: --merge joins every shard into one directory, so it takes no --shard; remove it"
+            )));
+        }
         return merge(&args.merge, &args.out, !args.no_plots);
     }
     let path = args.study.as_deref().expect("clap requires a study without --merge");
@@ -62,32 +63,20 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
             study::CONFIRM_RUNS as f64
         )));
     }
-    let pool = thread_pool(args.jobs)?;
-    prepare_dir(&args.out).map_err(|e| {
-        Failure::Input(format!("--out {}: cannot write there ({e}); choose a writable directory", args.out.display()))
-    })?;
-
-    // Ctrl-C: the first stops the sweep (runs under way are abandoned) and the rows done are
-    // written; a second quits at once.
-    let stop = Arc::new(AtomicBool::new(false));
-    let phase = Arc::new(AtomicU8::new(RUNNING));
-    {
-        let (stop, phase) = (stop.clone(), phase.clone());
-        let _ = ctrlc::set_handler(move || {
-            stop.store(true, Ordering::SeqCst);
-            if phase.swap(STOPPING, Ordering::SeqCst) == STOPPING {
-                eprintln!("error: interrupted twice; stopped without writing files");
-                std::process::exit(1);
-            }
-        });
-    }
     let n = shard.len(usize::try_from(runs).unwrap_or(usize::MAX));
-    let bar = progress_bar(n as u64);
+    let pool = thread_pool(args.jobs, n)?;
+    prepare_out(&args.out, OUTPUTS)?;
+
+    // Ctrl-C or SIGTERM: the first stops the sweep (runs under way are abandoned) and the rows done
+    // are written; a second before writing begins quits at once.
+    let interrupt = Interrupt::install("interrupted twice; stopped without writing files");
+    let bar = crate::progress_bar(n as u64, "sweeping {bar:40} {pos}/{len} runs, {elapsed_precise} elapsed, ETA {eta}");
     let on_row = |_: &Row| bar.inc(1);
     let started = Instant::now();
-    let result =
-        pool.install(|| study::sweep(&study, &SweepOptions { shard, stop: Some(&stop), on_row: Some(&on_row) }));
+    let options = SweepOptions { shard, stop: Some(interrupt.stop_flag()), on_row: Some(&on_row) };
+    let result = pool.install(|| study::sweep(&study, &options));
     bar.finish_and_clear();
+    interrupt.start_writing();
     let seconds = started.elapsed().as_secs_f64();
     let meta = StudyMeta::new(&study, shard);
     write_all(&args.out, &meta, &result.rows, result.partial, !args.no_plots)?;
@@ -102,29 +91,22 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-pub(crate) fn thread_pool(jobs: Option<usize>) -> Result<rayon::ThreadPool, Failure> {
-    if jobs == Some(0) {
-        return Err(Failure::Input("--jobs: expected at least 1 worker thread, found 0".into()));
+/// `--jobs N`: 1 ≤ N ≤ [`MAX_JOBS`]; clap prints the message after the flag's name.
+pub(crate) fn parse_jobs(text: &str) -> Result<usize, String> {
+    let bad = || format!("expected a number of worker threads from 1 to {MAX_JOBS} (omit --jobs for one per core)");
+    match text.trim().parse::<i128>() {
+        Ok(n) if (1..=MAX_JOBS as i128).contains(&n) => Ok(n as usize),
+        _ => Err(bad()),
     }
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(jobs.unwrap_or(0))
-        .build()
-        .map_err(|e| Failure::Run(format!("cannot start the worker threads: {e}")))
 }
 
-fn progress_bar(len: u64) -> ProgressBar {
-    let bar = ProgressBar::new(len);
-    if std::io::stderr().is_terminal() {
-        bar.set_draw_target(ProgressDrawTarget::stderr());
-        if let Ok(style) =
-            ProgressStyle::with_template("sweeping {bar:40} {pos}/{len} runs, {elapsed_precise} elapsed, ETA {eta}")
-        {
-            bar.set_style(style);
-        }
-    } else {
-        bar.set_draw_target(ProgressDrawTarget::hidden());
-    }
-    bar
+/// A pool of `jobs` threads (default one per core), never more than the `runs` it is to carry out.
+pub(crate) fn thread_pool(jobs: Option<usize>, runs: usize) -> Result<rayon::ThreadPool, Failure> {
+    let threads = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.min(runs).max(1))
+        .build()
+        .map_err(|e| Failure::Run(format!("cannot start the worker threads: {e}")))
 }
 
 /// One line per outcome and the rate, to stderr.
@@ -152,8 +134,49 @@ fn write_all(dir: &Path, meta: &StudyMeta, rows: &[Row], partial: bool, plots: b
         writeln!(w)
     })
     .map_err(failed)?;
+    // A figure of an earlier sweep (plots now skipped, or a grid that has none) must not stand
+    // beside the new rows.
+    crate::output::remove_figures(dir, |stem| stem == "sweep").map_err(failed)?;
     if plots {
         crate::plot::plot_sweep(dir, &summary).map_err(failed)?;
+    }
+    Ok(())
+}
+
+/// Checks that a shard's rows are exactly its runs (index ≡ I mod N, each once, all of them), so
+/// a truncated runs.csv or one copied from another shard is named instead of merged.
+fn check_shard_rows(dir: &Path, shard: Shard, rows: &[Row], total: usize) -> Result<(), Failure> {
+    let here = format!("--merge {}", dir.display());
+    let expected = shard.len(total);
+    let mut runs = shard.runs(total);
+    for (k, row) in rows.iter().enumerate() {
+        match runs.next() {
+            Some(run) if run == row.run => {}
+            Some(run) => {
+                return Err(Failure::Input(format!(
+                    "{here}: row {} of runs.csv is run {}, but shard {}/{} holds runs {} + k·{} and the next of them is {run}; its runs.csv was edited or comes from another shard: rerun `quell sweep STUDY --shard {}/{}` into it",
+                    k + 1,
+                    row.run,
+                    shard.index,
+                    shard.count,
+                    shard.index,
+                    shard.count,
+                    shard.index,
+                    shard.count
+                )))
+            }
+            None => break,
+        }
+    }
+    if rows.len() != expected {
+        return Err(Failure::Input(format!(
+            "{here}: runs.csv holds {} rows, but shard {}/{} has {expected} runs (is runs.csv truncated?); rerun `quell sweep STUDY --shard {}/{}` into it",
+            rows.len(),
+            shard.index,
+            shard.count,
+            shard.index,
+            shard.count
+        )));
     }
     Ok(())
 }
@@ -172,6 +195,14 @@ fn read_shard(dir: &Path) -> Result<(StudyMeta, Vec<Row>, bool), Failure> {
 /// `--merge DIR…`: the shards of one study (same fingerprint, every shard I/N once, none
 /// partial) into one directory whose rows are those of an unsharded sweep.
 fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
+    let same = |a: &Path, b: &Path| a.canonicalize().ok().is_some_and(|a| b.canonicalize().ok() == Some(a));
+    if let Some(dir) = dirs.iter().find(|d| same(d, out)) {
+        return Err(Failure::Input(format!(
+            "--out {}: is one of the --merge directories ({}); merging into it would replace that shard's rows; choose a new output directory",
+            out.display(),
+            dir.display()
+        )));
+    }
     let mut shards = Vec::new();
     for dir in dirs {
         shards.push((dir, read_shard(dir)?));
@@ -217,19 +248,14 @@ fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
             count - 1
         )));
     }
+    let total = usize::try_from(first.runs).unwrap_or(usize::MAX);
+    for (dir, (meta, rows, _)) in &shards {
+        check_shard_rows(dir, meta.shard, rows, total)?;
+    }
     let mut rows: Vec<Row> = shards.into_iter().flat_map(|(_, (_, rows, _))| rows).collect();
     rows.sort_by_key(|r| r.run);
-    if rows.len() as u64 != first.runs {
-        return Err(Failure::Input(format!(
-            "--merge: the shards hold {} runs, but the study has {}; rerun the incomplete shards",
-            rows.len(),
-            first.runs
-        )));
-    }
     let meta = StudyMeta { shard: Shard::ALL, ..first.clone() };
-    prepare_dir(out).map_err(|e| {
-        Failure::Input(format!("--out {}: cannot write there ({e}); choose a writable directory", out.display()))
-    })?;
+    prepare_out(out, OUTPUTS)?;
     write_all(out, &meta, &rows, false, plots)?;
     eprintln!("merged {} shards: {} runs into {}", count, rows.len(), out.display());
     Ok(())

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use quell::study::{self, Study, TuneResult};
 
-use crate::output::{prepare_dir, write_atomic};
+use crate::output::{prepare_out, write_atomic};
 use crate::Failure;
 
 #[derive(clap::Args)]
@@ -16,7 +16,7 @@ pub struct TuneArgs {
     #[arg(long, default_value = "quell-tune")]
     out: PathBuf,
     /// Worker threads (default: one per core).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = crate::sweep::parse_jobs)]
     jobs: Option<usize>,
     /// Skip tune.png/.svg.
     #[arg(long)]
@@ -32,10 +32,10 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
             path.display()
         )));
     }
-    let pool = crate::sweep::thread_pool(args.jobs)?;
-    prepare_dir(&args.out).map_err(|e| {
-        Failure::Input(format!("--out {}: cannot write there ({e}); choose a writable directory", args.out.display()))
-    })?;
+    let pool = crate::sweep::thread_pool(args.jobs, usize::MAX)?;
+    // The searches write nothing until every channel is done, so a signal quits at once.
+    crate::interrupt::Interrupt::quit_with("interrupted during tuning; nothing was written (tune.csv and tune.json are written once every channel's search is done)");
+    prepare_out(&args.out, &["tune.json", "tune.csv"])?;
     let result =
         pool.install(|| study::tune(&study)).map_err(|e| Failure::Input(format!("{}: {e}", path.display())))?;
     let failed = |e: std::io::Error| Failure::Run(format!("writing {}: {e}", args.out.display()));
@@ -48,7 +48,7 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
     if !args.no_plots {
         crate::plot::plot_tune(&args.out, &result).map_err(failed)?;
     }
-    print_stdout(&report(&result));
+    crate::print_stdout(&report(&result));
     if let Some(c) = result.channels.iter().find(|c| c.chosen.is_none()) {
         return Err(Failure::Input(format!(
             "channel {}: no μ in tune.mu[{}] completed with max |u_{}| ≤ tune.max_u[{}], max |u_f,{}| ≤ tune.max_uf[{}] and a finite {}; widen the bounds, raise the limits or lengthen simulation.t_end (the curve is in {})",
@@ -63,11 +63,6 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
         )));
     }
     Ok(())
-}
-
-fn print_stdout(text: &str) {
-    use std::io::Write;
-    let _ = std::io::stdout().lock().write_all(text.as_bytes());
 }
 
 /// tune.csv: every evaluation of every channel's search.

@@ -565,3 +565,32 @@ fn design_auto_writes_a_complete_scenario_that_meets_the_tail_bound() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("--convergence-time: expected a finite number > 0, found -1"), "{}", stderr(&o));
 }
+
+#[test]
+fn design_warns_of_a_pole_repeated_beyond_rank_c() {
+    // Three copies of −5 for the observer of a plant with two outputs: A − LC needs a Jordan
+    // block (rank C = 2 eigenvectors at most for one eigenvalue), so the gain is fragile.
+    let dir = TempDir::new("fragile");
+    let text = fs::read_to_string(paper()).unwrap().replacen(
+        "observer_gain = [[-8.0988, 4.4574], [10.6506, -5.0619], [2.7762, -1.1783]]",
+        "observer_poles = [-5.0, -5.0, -5.0]",
+        1,
+    );
+    let file = dir.join("jordan.toml");
+    fs::write(&file, text).unwrap();
+    let o = quell(&["design", file.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0));
+    assert!(stdout(&o).contains("⚠ warning: design.observer_poles: fragile observer gain: pole -5.000000 is requested 3 times, more than rank C = 2"), "{}", stdout(&o));
+    let o = quell(&["design", file.to_str().unwrap(), "--json"]);
+    let v: Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let w = &v["warnings"][0];
+    assert_eq!((w["multiplicity"].as_u64(), w["rank"].as_u64()), (Some(3), Some(2)), "{w}");
+    // A 3-fold defective eigenvalue computed in double precision scatters by ≈ ε^(1/3) ≈ 6e-6
+    // (relative, times a constant of order 1–10): far above the 1e-8 threshold, far below 1e-3.
+    let e = w["verified_error"].as_f64().unwrap();
+    assert!(e > 1e-8 && e < 1e-3, "{e}");
+    // The paper's printed gain: no warning.
+    let o = quell(&["design", &paper(), "--json"]);
+    let v: Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(v["warnings"], serde_json::json!([]));
+}

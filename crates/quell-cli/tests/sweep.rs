@@ -119,7 +119,11 @@ fn bad_study_files_exit_2_naming_the_key() {
             "monte_carlo.\"truth.A\".cauchy: unknown distribution",
         ),
         ("", &["--shard", "3/3"], "--shard: shard index 3 ≥ N = 3"),
-        ("", &["--jobs", "0"], "--jobs: expected at least 1 worker thread, found 0"),
+        (
+            "",
+            &["--jobs", "0"],
+            "invalid value '0' for '--jobs <N>': expected a number of worker threads from 1 to 1024",
+        ),
         (
             "[grid]\n\"design.beta\" = [1.0, 2.0]\n[monte_carlo]\nruns = 6000000\n",
             &[],

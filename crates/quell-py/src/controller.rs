@@ -4,7 +4,7 @@ use numpy::{PyArray1, PyArrayMethods};
 use std::sync::{Mutex, MutexGuard};
 
 use pyo3::prelude::*;
-use pyo3::types::{PyList, PyTuple};
+use pyo3::types::{PyBool, PyList, PyTuple};
 
 use crate::convert::{number, type_name, vec_numpy, vector};
 use crate::design::PyDesign;
@@ -59,6 +59,10 @@ fn read(obj: &Bound<'_, PyAny>, name: &str, out: &mut [f64]) -> PyResult<()> {
         }
     }
     if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
+        // Booleans are refused as `Plant` refuses a boolean array, not read as 0 and 1.
+        if obj.try_iter().is_ok_and(|mut items| items.any(|x| x.is_ok_and(|x| x.is_instance_of::<PyBool>()))) {
+            return Err(Kind::Value.err(py, format!("{name}: expected real numbers, found booleans")));
+        }
         if let Ok(v) = obj.extract::<Vec<f64>>() {
             return check(&v, out);
         }

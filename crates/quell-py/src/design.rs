@@ -109,6 +109,7 @@ pub fn design(
         relative_degrees,
     )?;
     let d = quell::Design::new(&plant.inner, &spec).map_err(|e| raise(py, Kind::Design)(&e))?;
+    crate::errors::warn_fragile(py, &d, &spec)?;
     Ok(PyDesign { inner: Arc::new(d) })
 }
 

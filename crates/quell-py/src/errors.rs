@@ -76,3 +76,13 @@ pub fn simulation_error(
     };
     build().unwrap_or_else(|e| e)
 }
+
+/// Issues each fragile-gain warning of a design ([`quell::design::warnings`]) as a Python
+/// `UserWarning`, with its message (figures and what to do).
+pub fn warn_fragile(py: Python<'_>, design: &quell::Design, spec: &quell::DesignSpec) -> PyResult<()> {
+    for w in quell::design::warnings(design, spec) {
+        let message = std::ffi::CString::new(w.message.replace('\0', " ")).unwrap_or_default();
+        PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyUserWarning>(), &message, 1)?;
+    }
+    Ok(())
+}

@@ -29,6 +29,7 @@ fn _quell(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(design::design, m)?)?;
     m.add_function(wrap_pyfunction!(design::place, m)?)?;
     m.add_function(wrap_pyfunction!(scenario::paper_example, m)?)?;
+    m.add_function(wrap_pyfunction!(scenario::auto_design, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::simulate, m)?)?;
     m.add_class::<study::PyStudy>()?;
     m.add_class::<study::PyRunSpec>()?;

@@ -56,6 +56,7 @@ impl PyScenario {
             return Ok(d.clone());
         }
         let d = Arc::new(self.inner.design().map_err(|e| raise(py, Kind::Design)(&e))?);
+        crate::errors::warn_fragile(py, &d, &self.inner.design)?;
         Ok(self.design.get_or_init(|| d).clone())
     }
 }
@@ -76,7 +77,17 @@ pub fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
         return Ok(Value::Boolean(obj.extract()?));
     }
     if obj.is_instance_of::<PyInt>() {
-        return obj.extract::<i64>().map(Value::Integer).or_else(|_| Ok(Value::Float(obj.extract::<f64>()?)));
+        if let Ok(i) = obj.extract::<i64>() {
+            return Ok(Value::Integer(i));
+        }
+        // A seed is an integer, never rounded to a float (which the reader would then refuse as
+        // "a floating-point number"); any other key takes a huge integer as the float it is.
+        if key.rsplit('.').next() == Some("seed") {
+            return Err(
+                Kind::Scenario.err(py, format!("{key}: expected a seed, an integer from 0 to 2**63 - 1, found {obj}"))
+            );
+        }
+        return Ok(Value::Float(obj.extract::<f64>()?));
     }
     if obj.is_instance_of::<PyFloat>() {
         return Ok(Value::Float(obj.extract()?));
@@ -335,4 +346,39 @@ impl PyScenario {
 #[pyfunction]
 pub fn paper_example(py: Python<'_>) -> PyResult<PyScenario> {
     PyScenario::parse(py, PAPER_EXAMPLE)
+}
+
+/// The automatic design (`quell design --auto`): chooses every `[design]` key the scenario file's
+/// text leaves out (observer, channel and filter poles, μ, β; filter orders from
+/// reference_filter_orders / disturbance_filter_orders or the signals), verifies by simulation
+/// (tail max |e_i| ≤ 1 % of the reference's peak) and returns (Scenario, report) with report =
+/// {"choices": [{"key", "value", "why"}], "verification": {...}, "passed": bool}. A design that
+/// fails its verification is returned too, with passed False. The GIL is released meanwhile.
+#[pyfunction]
+#[pyo3(signature = (text, *, convergence_time=None, u_limit=None))]
+pub fn auto_design<'py>(
+    py: Python<'py>,
+    text: &str,
+    convergence_time: Option<f64>,
+    u_limit: Option<f64>,
+) -> PyResult<(PyScenario, Bound<'py, PyAny>)> {
+    for (name, v) in [("convergence_time", convergence_time), ("u_limit", u_limit)] {
+        if let Some(x) = v.filter(|x| !(x.is_finite() && *x > 0.0)) {
+            return Err(Kind::Design.err(py, format!("{name}: expected a finite number > 0, found {x}")));
+        }
+    }
+    let doc = quell::scenario::parse_document(text).map_err(|e| scenario_error(py, &e))?;
+    let targets = quell::auto::Targets { convergence_time, u_limit };
+    let auto = py.detach(|| quell::auto::auto_design(&doc, &targets)).map_err(|e| match e {
+        quell::auto::AutoError::Scenario(e) => scenario_error(py, &e),
+        e => Kind::Design.err(py, e.to_string()),
+    })?;
+    let report = serde_json::json!({
+        "choices": auto.choices,
+        "verification": auto.verification,
+        "passed": auto.verification.passed,
+    });
+    let report = py.import("json")?.call_method1("loads", (report.to_string(),))?;
+    crate::errors::warn_fragile(py, &auto.design, &auto.scenario.design)?;
+    Ok((PyScenario::new(auto.scenario), report))
 }

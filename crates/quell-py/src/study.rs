@@ -253,14 +253,48 @@ pub fn sweep_runs(py: Python<'_>, study: &Bound<'_, PyAny>) -> PyResult<PyRunSpe
 /// Every run of a study, in parallel on `jobs` threads (default: every core), with the GIL
 /// released; returns runs.csv's rows as a pandas DataFrame. Ctrl-C stops the sweep.
 #[pyfunction]
-#[pyo3(signature = (study, *, jobs=None))]
-pub fn sweep(py: Python<'_>, study: &Bound<'_, PyAny>, jobs: Option<usize>) -> PyResult<Py<PyAny>> {
+#[pyo3(signature = (study, *, jobs=None, yes=false))]
+pub fn sweep(
+    py: Python<'_>,
+    study: &Bound<'_, PyAny>,
+    jobs: Option<&Bound<'_, PyAny>>,
+    yes: bool,
+) -> PyResult<Py<PyAny>> {
     let study = study_arg(py, study)?;
-    if jobs == Some(0) {
-        return Err(Kind::Scenario.err(py, "jobs: expected a number of threads ≥ 1, found 0"));
+    let jobs = match jobs {
+        None => None,
+        Some(j) => match j.extract::<i128>() {
+            Ok(n) if !j.is_instance_of::<pyo3::types::PyBool>() && (1..=study::MAX_JOBS as i128).contains(&n) => {
+                Some(n as usize)
+            }
+            _ => {
+                return Err(Kind::Scenario.err(
+                    py,
+                    format!(
+                        "jobs: expected a number of threads from 1 to {} (None for one per core), found {}",
+                        study::MAX_JOBS,
+                        j.repr().map_or_else(|_| "?".to_string(), |r| r.to_string())
+                    ),
+                ))
+            }
+        },
+    };
+    if study.len() > study::CONFIRM_RUNS && !yes {
+        return Err(Kind::Scenario.err(
+            py,
+            format!(
+                "the study has {} runs ({} grid points × {} draws), more than {:e}, and sweep keeps every row in memory (~200 bytes each); check the grid, pass yes=True to run it, or iterate quell.sweep_runs(study) with quell.run_one",
+                study.len(),
+                study.points(),
+                study.draws(),
+                study::CONFIRM_RUNS as f64
+            ),
+        ));
     }
+    let runs = usize::try_from(study.len()).unwrap_or(usize::MAX);
+    let threads = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(jobs.unwrap_or(0))
+        .num_threads(threads.min(runs).max(1))
         .build()
         .map_err(|e| Kind::Scenario.err(py, format!("jobs: cannot start the threads ({e})")))?;
     let stop = AtomicBool::new(false);

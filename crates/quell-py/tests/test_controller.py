@@ -104,3 +104,26 @@ def test_sample_time_must_divide_the_delays():
             quell.Controller(d, sample_time=bad)
     with pytest.raises(quell.ScenarioError, match="sample_time: expected a real number"):
         quell.Controller(d, sample_time="1ms")
+
+
+def test_a_spike_is_refused_and_the_state_kept():
+    """A finite spike of 1e300 made u_f NaN for ever; now any entry beyond ±1e100 is refused
+    (ValueError naming it) and the next steps are those of a controller that never saw it."""
+    d = quell.paper_example().design()
+    a, b = quell.Controller(d, sample_time=1e-3), quell.Controller(d, sample_time=1e-3)
+    for k in range(300):
+        y, g = [0.3 * np.sin(k * 1e-2), -0.1], [1.0, 2.0]
+        if k == 150:
+            for bad_y, bad_g, key in (([1e300, 0.0], g, r"y\[0\] = 1e300"), (y, [0.0, -1e160], r"g\[1\] = -1e160")):
+                with pytest.raises(ValueError, match=key + r" is beyond ±1e100 \(or not finite\)"):
+                    a.step(bad_y, bad_g)
+        np.testing.assert_array_equal(a.step(y, g), b.step(y, g))
+
+
+@pytest.mark.parametrize("y", [[True, False], (False, 1.0), np.array([True, False])])
+def test_step_refuses_booleans_as_plant_does(y):
+    ctrl = quell.Controller(quell.paper_example().design(), sample_time=1e-3)
+    with pytest.raises(ValueError, match="y: .*booleans"):
+        ctrl.step(y, [0.0, 0.0])
+    with pytest.raises(ValueError, match="booleans"):
+        quell.Plant([[True]], [[1.0]], [[1.0]])

@@ -94,3 +94,33 @@ def test_study_errors_name_the_key(tmp_path):
 def test_jobs_must_be_positive(study_file):
     with pytest.raises(quell.ScenarioError, match="jobs"):
         quell.sweep(study_file, jobs=0)
+
+
+@pytest.mark.parametrize("jobs", [-1, 2**70, 1025, True, 1.5])
+def test_jobs_out_of_range_name_the_argument(study_file, jobs):
+    # jobs=-1 raised a bare OverflowError.
+    with pytest.raises(quell.ScenarioError, match=r"jobs: expected a number of threads from 1 to 1024"):
+        quell.sweep(study_file, jobs=jobs)
+
+
+def test_huge_studies_are_refused_not_allocated(tmp_path):
+    # runs near 2**63 aborted the interpreter in quell.sweep, and len(Study) raised OverflowError.
+    text = STUDY.format(scenario=(EXAMPLES / "paper.toml").as_posix())
+    huge = tmp_path / "huge.toml"
+    huge.write_text(text.replace("runs = 2", "runs = 9223372036854775807"))
+    with pytest.raises(quell.ScenarioError, match=r"monte_carlo.runs: expected at most 1e9 draws"):
+        quell.sweep(huge)
+    big = tmp_path / "big.toml"
+    big.write_text(text.replace("runs = 2", "runs = 6000000"))
+    study = quell.Study.load(big)
+    assert len(study) == 12_000_000
+    with pytest.raises(quell.ScenarioError, match=r"the study has 12000000 runs .*pass yes=True"):
+        quell.sweep(study)
+
+
+def test_a_seed_beyond_64_bits_is_named_as_a_seed():
+    # 2**70 was rounded to a float and refused as "a floating-point number".
+    from test_api import paper_from_values
+
+    with pytest.raises(quell.ScenarioError, match=r"noise.seed: expected a seed, an integer from 0 to 2\*\*63 - 1, found 1180591620717411303424"):
+        paper_from_values(sample_time=1e-3, noise={"std": [0.01, 0.01], "seed": 2**70})

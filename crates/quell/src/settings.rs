@@ -24,6 +24,28 @@ impl KeyError {
 /// Most rows a run records (t_end / output_step): every row is kept in memory, ~200 bytes each.
 pub const MAX_OUTPUT_SAMPLES: f64 = 1e7;
 
+/// Largest scenario or study file read (64 MiB): the paper's example is 2 kB and a plant of
+/// n = 1000 states about 20 MB, so anything longer is the wrong path (`/dev/zero`), which would
+/// otherwise be read until memory runs out.
+pub const MAX_INPUT_BYTES: u64 = 64 << 20;
+
+/// Reads a scenario or study file as text, at most [`MAX_INPUT_BYTES`] of it; the message (without
+/// the path, which the caller names) says what is wrong.
+pub fn read_input(path: &std::path::Path) -> Result<String, String> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let mut bytes = Vec::new();
+    file.take(MAX_INPUT_BYTES + 1).read_to_end(&mut bytes).map_err(|e| e.to_string())?;
+    if bytes.len() as u64 > MAX_INPUT_BYTES {
+        return Err(format!(
+            "longer than {} MiB, the most a scenario or study file may be (is it the right path? a device such as /dev/zero never ends)",
+            MAX_INPUT_BYTES >> 20
+        ));
+    }
+    String::from_utf8(bytes)
+        .map_err(|e| format!("not UTF-8 text (invalid byte at offset {})", e.utf8_error().valid_up_to()))
+}
+
 /// Most controller steps of a sampled-data run (t_end / sample_time).
 pub const MAX_SAMPLING_STEPS: f64 = 1e10;
 

@@ -112,7 +112,7 @@ fn output_is_deterministic_and_records_the_design() {
         "#define QUELL_N 3",
         "#define QUELL_Q 8",
         "#define QUELL_SAMPLE_TIME 0.001",
-        "void quell_step(quell_state *s, const double y[QUELL_M], const double g[QUELL_M], double u_f[QUELL_M]);",
+        "int quell_step(quell_state *s, const double y[QUELL_M], const double g[QUELL_M], double u_f[QUELL_M]);",
         "void quell_command(const quell_state *s, double u[QUELL_M]);",
         "void quell_init(quell_state *s);",
     ] {
@@ -468,4 +468,130 @@ fn cortex_m4f_under_qemu_matches_the_host_bit_for_bit() {
     println!("{got}");
     assert_eq!(got, want);
     assert_eq!(want.lines().count(), 11);
+}
+
+/// Compiles `files` with the strict flags into `dir/name`; `Err(stderr)` when gcc refuses.
+fn try_compile(dir: &std::path::Path, files: &[&str], name: &str) -> Result<(), String> {
+    let mut args: Vec<&str> = STRICT.to_vec();
+    args.extend(["-O1"]);
+    args.extend(files);
+    args.extend(["-o", name]);
+    let out = std::process::Command::new("gcc").args(&args).current_dir(dir).output().expect("run gcc");
+    if out.status.success() {
+        Ok(())
+    } else {
+        Err(String::from_utf8_lossy(&out.stderr).into_owned())
+    }
+}
+
+#[test]
+fn a_header_and_source_of_different_exports_do_not_compile_together() {
+    // A failed write could leave a new header beside an old source; the pair compiled cleanly and
+    // indexed out of bounds at run time. Now the header's LAYOUT_ID must be the source's own.
+    let (_, d) = example("paper");
+    let old = export(&d, 1e-3, "quell", Precision::F64);
+    let new = export(&d, 2e-3, "quell", Precision::F64);
+    let dir = TempDir::new("pair");
+    write_code(&new, &dir.0);
+    try_compile(&dir.0, &["-c", "quell_controller.c"], "matched.o").expect("a matched pair compiles");
+    std::fs::write(dir.0.join("quell_controller.c"), &old.source).unwrap();
+    let e = try_compile(&dir.0, &["-c", "quell_controller.c"], "mismatched.o")
+        .expect_err("a mismatched pair must not compile");
+    assert!(e.contains("quell_header_matches_source"), "gcc names the check: {e}");
+}
+
+#[test]
+fn a_scenario_name_with_comment_delimiters_stays_inside_the_comment() {
+    // `/*` inside the header's comment is a nested comment (-Werror=comment), and `*/` ended it.
+    let (_, d) = example("paper");
+    let o = ExportOptions {
+        prefix: "quell".into(),
+        precision: Precision::F64,
+        scenario_name: Some("a /* b */ c */ /*/".into()),
+    };
+    let code = generate(&d, 1e-3, &o).unwrap();
+    let h = &code.header;
+    let comment = &h[..h.find("*/\n#ifndef").expect("the header comment ends before the guard")];
+    assert_eq!(comment.matches("/*").count(), 1, "one comment opener:\n{comment}");
+    assert!(!comment[..comment.len() - 1].contains("*/"), "no early end:\n{comment}");
+    let dir = TempDir::new("name");
+    write_code(&code, &dir.0);
+    try_compile(&dir.0, &["-c", "quell_controller.c"], "c.o").unwrap();
+}
+
+#[test]
+fn the_c_step_refuses_a_spike_and_keeps_its_state_in_double_and_float() {
+    // A finite spike (1e160 in double, 1e22 in float) made u_f NaN for ever. The generated step now
+    // returns 1 for any entry beyond QUELL_INPUT_BOUND (1e100; 1e12 in float) or NaN, leaving the
+    // state and u_f as they were: after it, u_f equals that of a controller that never saw it.
+    let (_, d) = example("paper");
+    for (precision, spike, bound) in [(Precision::F64, "1e160", "1e100"), (Precision::F32, "1e22f", "1000000000000.0f")]
+    {
+        let code = export(&d, 1e-3, "quell", precision);
+        let h = code.header.split_whitespace().collect::<Vec<_>>().join(" ");
+        assert!(h.contains(&format!("#define QUELL_INPUT_BOUND {bound}")), "{h}");
+        let R = precision.c_type();
+        let main = format!(
+            r#"#include "quell_controller.h"
+static quell_state a, b;
+int main(void)
+{{
+    {R} y[QUELL_M], g[QUELL_M] = {{1, 2}}, ua[QUELL_M], ub[QUELL_M], bad[QUELL_M], nan[QUELL_M];
+    volatile {R} zero = 0;
+    quell_init(&a);
+    quell_init(&b);
+    for (int k = 0; k < 6000; k++) {{
+        y[0] = ({R})(0.3 * (k % 100) / 100.0);
+        y[1] = ({R})(-0.2 * (k % 37) / 37.0);
+        if (k % 1000 == 500) {{
+            bad[0] = {spike};
+            bad[1] = y[1];
+            nan[0] = y[0];
+            nan[1] = zero / zero;
+            ua[0] = 7;
+            if (quell_step(&a, bad, g, ua) != 1 || quell_step(&a, y, bad, ua) != 1 || quell_step(&a, nan, g, ua) != 1)
+                return 2;
+            if (ua[0] != 7)
+                return 3;
+        }}
+        if (quell_step(&a, y, g, ua) != 0 || quell_step(&b, y, g, ub) != 0)
+            return 4;
+        for (int i = 0; i < QUELL_M; i++)
+            if (ua[i] != ub[i] || ua[i] != ua[i])
+                return 5;
+    }}
+    /* At the bound: accepted; afterwards every step either gives a finite u_f (0) or, once the
+     * state overflowed, says so (2) until quell_init, after which it is a fresh controller. */
+    y[0] = QUELL_INPUT_BOUND;
+    y[1] = -QUELL_INPUT_BOUND;
+    if (quell_step(&a, y, g, ua) != 0)
+        return 6;
+    y[0] = 0;
+    y[1] = 0;
+    int failed = 0;
+    for (int k = 0; k < 6000; k++) {{
+        int r = quell_step(&a, y, g, ua);
+        if (r == 0 && failed)
+            return 7;
+        failed |= r == 2;
+        for (int i = 0; i < QUELL_M; i++)
+            if (r == 0 && !(ua[i] - ua[i] == 0)) /* NaN or infinite */
+                return 8;
+    }}
+    quell_init(&a);
+    quell_init(&b);
+    for (int k = 0; k < 100; k++)
+        if (quell_step(&a, g, y, ua) != 0 || quell_step(&b, g, y, ub) != 0 || ua[0] != ub[0] || ua[1] != ub[1])
+            return 9;
+    return 0;
+}}
+"#
+        );
+        let dir = TempDir::new("spike");
+        write_code(&code, &dir.0);
+        std::fs::write(dir.0.join("main.c"), main).unwrap();
+        try_compile(&dir.0, &["main.c", "quell_controller.c"], "spike").unwrap_or_else(|e| panic!("{e}"));
+        let status = std::process::Command::new(dir.0.join("spike")).status().expect("run");
+        assert_eq!(status.code(), Some(0), "{precision:?}: the driver's check {:?} failed", status.code());
+    }
 }

@@ -365,3 +365,73 @@ fn adaptive_step_applies_the_h_filter_to_omega_first() {
     assert_eq!(omega, [0.75, 0.5, 0.5, 1.5]);
     assert_eq!(eta, [0.3, -0.7]);
 }
+
+#[test]
+fn a_spike_beyond_the_measurement_bound_is_refused_and_one_within_it_stays_finite() {
+    // A finite spike of 1e160 (1e300 from Python) made Δ Δᵀ overflow, η̂ and so u_f NaN for ever.
+    // Now any entry of y or g beyond ±1e100, or not finite, is refused with the state kept: the
+    // next steps equal those of a controller that never saw it.
+    let d = paper_design();
+    let (mut ctrl, mut fresh) = (Controller::new(&d, 1e-3).unwrap(), Controller::new(&d, 1e-3).unwrap());
+    let signal = |k: usize| {
+        let t = k as f64 * 1e-3;
+        ([0.3 * (2.0 * t).sin(), -0.2 * t.cos()], [1.0, 2.0])
+    };
+    for k in 0..5000 {
+        let (y, g) = signal(k);
+        if k % 1000 == 500 {
+            for (bad_y, bad_g, name, index, value) in [
+                ([1e160, y[1]], g, "y", 0, 1e160),
+                ([y[0], -1e300], g, "y", 1, -1e300),
+                (y, [f64::NAN, g[1]], "g", 0, f64::NAN),
+                (y, [g[0], f64::INFINITY], "g", 1, f64::INFINITY),
+                ([1.0000000000000002e100, y[1]], g, "y", 0, 1.0000000000000002e100),
+            ] {
+                match ctrl.step(&bad_y, &bad_g).unwrap_err() {
+                    ControllerError::InputOutOfRange { name: n, index: i, value: v } => {
+                        assert_eq!((n, i), (name, index));
+                        assert!(v == value || (v.is_nan() && value.is_nan()));
+                    }
+                    other => panic!("{other:?}"),
+                }
+            }
+        }
+        assert_eq!(ctrl.step(&y, &g).unwrap(), fresh.step(&y, &g).unwrap(), "step {k}");
+    }
+    let e = ctrl.step(&[1e160, 0.0], &[0.0, 0.0]).unwrap_err().to_string();
+    assert_eq!(e, "Controller::step: y[0] = 1e160 is beyond ±1e100 (or not finite), the largest measurement the controller takes; the step was refused and its state kept (hold the previous input, check the sensor, and call reset() if the fault persisted)");
+
+    // At the bound: accepted. Such a spike is beyond what the paper's design can follow (η̂ jumps to
+    // ~1e95 after 6 s of a sawtooth y, and u = −η̂ᵀξ̂ squares the scale at every pass of the delay
+    // lines), so the state overflows some 3000 steps later: every step until then gives a finite u_f, and from then on
+    // each one says so (never a NaN as a result) until reset(), after which it is a fresh controller.
+    let mut ctrl = Controller::new(&d, 1e-3).unwrap();
+    let mut fresh = Controller::new(&d, 1e-3).unwrap();
+    for k in 0..6000 {
+        let y = [0.3 * (k % 100) as f64 / 100.0, -0.2 * (k % 37) as f64 / 37.0];
+        ctrl.step(&y, &[1.0, 2.0]).unwrap();
+    }
+    ctrl.step(&[1e100, -1e100], &[1.0, 2.0]).unwrap();
+    let mut failed_at = None;
+    for k in 0..6000 {
+        match ctrl.step(&[0.0, 0.0], &[1.0, 2.0]) {
+            Ok(u_f) => {
+                assert!(failed_at.is_none(), "step {k} succeeded after the state overflowed");
+                assert!(u_f.iter().all(|v| v.is_finite()), "step {k}: {u_f:?}");
+            }
+            Err(ControllerError::StateNotFinite { value }) => {
+                assert!(!value.is_finite());
+                failed_at.get_or_insert(k);
+            }
+            Err(other) => panic!("{other:?}"),
+        }
+    }
+    assert!(failed_at.is_some(), "the spike at the bound was expected to overflow this design's state");
+    let e = ctrl.step(&[0.0, 0.0], &[1.0, 2.0]).unwrap_err().to_string();
+    assert!(e.starts_with("Controller::step: the controller's state is no longer finite"), "{e}");
+    ctrl.reset();
+    for k in 0..2000 {
+        let (y, g) = signal(k);
+        assert_eq!(ctrl.step(&y, &g).unwrap(), fresh.step(&y, &g).unwrap(), "step {k} after reset");
+    }
+}

@@ -150,8 +150,16 @@ fn a_stiff_blow_up_is_a_failed_row_within_the_step_budget() {
     let text = format!("max_steps = 20000\n{MC8}[runaway]\npeak = inf\nsteps = inf\n");
     let study = Study::from_toml(&text, None).unwrap();
     let rows = sweep(&study, &SweepOptions::default()).rows;
-    assert_eq!(rows[7].outcome, Outcome::Failed);
-    assert!(rows[7].reason.starts_with("the solver needed more than 20000 steps by t = "), "{}", rows[7].reason);
+    // Since the stiff adaptive law is integrated implicitly (docs/performance.md), the blow-up may
+    // instead reach the divergence bound within the budget: either way it ends early, not completed.
+    let r = &rows[7];
+    match r.outcome {
+        Outcome::Failed => {
+            assert!(r.reason.starts_with("the solver needed more than 20000 steps by t = "), "{}", r.reason)
+        }
+        Outcome::Diverged => assert!(r.steps <= 20000, "{}", r.steps),
+        other => panic!("draw 7 ended {other:?}: {}", r.reason),
+    }
     assert!(rows[..7].iter().all(|r| r.outcome == Outcome::Completed && r.steps < 20000));
 }
 
@@ -190,9 +198,10 @@ fn a_runaway_draw_is_diverged_early_and_converging_draws_are_untouched() {
         "{}",
         r.reason
     );
-    // It ends before the step budget would have ended it, within 3 × the nominal run's steps.
-    assert_eq!(off[7].outcome, Outcome::Failed);
-    assert!(r.steps <= 3 * nominal.steps as u64 && r.steps < off[7].steps / 10, "{} vs {}", r.steps, off[7].steps);
+    // It ends within 3 × the nominal run's steps, and before the rules-off run (which the step budget
+    // or, the stiff blow-up integrated implicitly, the divergence bound ends) would have.
+    assert!(matches!(off[7].outcome, Outcome::Failed | Outcome::Diverged), "{:?}", off[7].outcome);
+    assert!(r.steps <= 3 * nominal.steps as u64 && r.steps < off[7].steps, "{} vs {}", r.steps, off[7].steps);
 
     // With the peak rule off, the relative step budget ends it: failed, at 3 × the nominal steps.
     let budget = Study::from_toml(&format!("{MC8}[runaway]\npeak = inf\n"), None).unwrap();

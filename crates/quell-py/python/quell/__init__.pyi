@@ -2,7 +2,7 @@
 
 from os import PathLike
 from pathlib import Path
-from typing import Any, Dict, Iterator, List, Optional, Sequence, Union, final
+from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple, Union, final
 
 import numpy as np
 import numpy.typing as npt
@@ -28,6 +28,7 @@ __all__ = [
     "SimulationError",
     "Study",
     "__version__",
+    "auto_design",
     "design",
     "export",
     "paper_example",
@@ -300,6 +301,10 @@ class RunSpec:
     @property
     def grid(self) -> Dict[str, Any]: ...
 
-def sweep(study: Union[Study, str, PathLike[str]], *, jobs: Optional[int] = None) -> Any: ...
+def sweep(study: Union[Study, str, PathLike[str]], *, jobs: Optional[int] = None, yes: bool = False) -> Any: ...
 def sweep_runs(study: Union[Study, str, PathLike[str]]) -> Iterator[RunSpec]: ...
 def run_one(spec: RunSpec) -> Dict[str, Any]: ...
+
+def auto_design(
+    text: str, *, convergence_time: Optional[float] = None, u_limit: Optional[float] = None
+) -> Tuple[Scenario, Dict[str, Any]]: ...

@@ -33,7 +33,25 @@ pub enum ControllerError {
     /// [`Controller::step`] was given y or g of the wrong length.
     #[error("Controller::step: {name} needs {expected} entries (one per channel), found {found}")]
     InputLength { name: &'static str, expected: usize, found: usize },
+    /// [`Controller::step`] was given an entry of y or g that is not finite or beyond
+    /// ±[`MAX_MEASUREMENT`]; the step was refused and the state kept.
+    #[error("Controller::step: {name}[{index}] = {value:e} is beyond ±{max:e} (or not finite), the largest measurement the controller takes; the step was refused and its state kept (hold the previous input, check the sensor, and call reset() if the fault persisted)", max = MAX_MEASUREMENT)]
+    InputOutOfRange { name: &'static str, index: usize, value: f64 },
+    /// The step's output u_f or command u is not finite: inputs the design cannot follow (a
+    /// growing loop, spikes near the bound) overflowed the state. Every step reports it until
+    /// [`Controller::reset`].
+    #[error("Controller::step: the controller's state is no longer finite (an output is {value}); the inputs grew beyond what the design can follow — hold a safe input and call reset()")]
+    StateNotFinite { value: f64 },
 }
+
+/// Largest |y_i| and |g_i| [`Controller::step`] takes (the generated C in double likewise; in float,
+/// 1e12). The adaptive law multiplies two signals (Δ ε̂, Δ Δᵀ, η̂ᵀ ξ̂), so one sample of 1e160
+/// overflowed them at once and made η̂, hence u_f, NaN for ever. Such a value is a sensor or wiring
+/// fault, not a measurement: it is refused with the state untouched (not clipped). Below the bound
+/// the products stay finite for that step; what a loop does with inputs far beyond its design's
+/// scale is the design's, and a state that overflows later is reported
+/// ([`ControllerError::StateNotFinite`]) until [`Controller::reset`].
+pub const MAX_MEASUREMENT: f64 = 1e100;
 
 /// Largest adaptation step c = T_s μ_i: with c and tr Ω_i both ≤ 1e150 (the plant's and signals'
 /// [`crate::plant::MAX_ENTRY`]), c·tr Ω_i ≤ 1e300 stays finite.
@@ -253,13 +271,17 @@ impl Controller {
     }
 
     /// One sample: reads y(k) and g(k), returns the plant input u_f(k) = −K x̂ + F u_d (5) to hold
-    /// until the next sample. Allocates nothing. y or g of other than m entries is an error
-    /// ([`ControllerError::InputLength`]), and the state is left as it was.
+    /// until the next sample. Allocates nothing. y or g of other than m entries
+    /// ([`ControllerError::InputLength`]), or with an entry not finite or beyond ±[`MAX_MEASUREMENT`]
+    /// ([`ControllerError::InputOutOfRange`]), is an error, and the state is left as it was.
     pub fn step(&mut self, y: &[f64], g: &[f64]) -> Result<&[f64], ControllerError> {
         let (m, q) = (self.eq.m, self.eq.q);
         for (name, v) in [("y", y), ("g", g)] {
             if v.len() != m {
                 return Err(ControllerError::InputLength { name, expected: m, found: v.len() });
+            }
+            if let Some(index) = v.iter().position(|x| x.is_nan() || x.abs() > MAX_MEASUREMENT) {
+                return Err(ControllerError::InputOutOfRange { name, index, value: v[index] });
             }
         }
         let cols = 1 + q;
@@ -305,7 +327,11 @@ impl Controller {
         self.eq.plant_input(z, u_d, &mut self.u_f);
         mat_vec(&self.PhiGamma_z, zv, &mut self.z_next, false);
         zv[..nz].copy_from_slice(&self.z_next);
-        Ok(&self.u_f)
+        // u = −η̂ᵀ ξ̂ is non-finite once η̂ or ξ̂ is, and u_f once x̂ or the delayed u is.
+        match self.u_f.iter().chain(&self.u).find(|v| !v.is_finite()) {
+            Some(&value) => Err(ControllerError::StateNotFinite { value }),
+            None => Ok(&self.u_f),
+        }
     }
 
     /// The adaptive command u(k) (25) of the last step, undelayed.

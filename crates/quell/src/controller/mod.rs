@@ -16,7 +16,7 @@
 pub mod discrete;
 pub(crate) mod packed;
 
-pub use discrete::{Controller, ControllerError, MAX_ADAPTATION_STEP};
+pub use discrete::{Controller, ControllerError, MAX_ADAPTATION_STEP, MAX_MEASUREMENT};
 
 use nalgebra::DMatrix;
 

@@ -5,6 +5,7 @@ pub mod assumptions;
 pub mod decouple;
 pub mod internal_model;
 pub mod place;
+pub mod warnings;
 
 use nalgebra::{Complex, DMatrix};
 use thiserror::Error;
@@ -16,6 +17,7 @@ pub use decouple::{
 };
 pub use internal_model::{filter_pair, internal_model};
 pub use place::{place, PlaceError};
+pub use warnings::{warnings, DesignWarning};
 
 use crate::linalg::{
     eigenvalues, fmt_complex, fmt_number, numerical_rank, poly_from_roots, singular_extremes, unstable, EigenError,

@@ -138,7 +138,7 @@ pub(super) fn write(design: &Design, ctrl: &Controller, o: &ExportOptions) -> Re
     let state_numbers = nz + sigma_sum * (q + 1) + m * q + m * q * (q + 1) / 2 + m * q + m + (delay_max + 1) * (m + q);
     let state_bytes = (w * state_numbers + 4).div_ceil(w) * w;
 
-    let name = o.scenario_name.as_deref().map(|s| s.escape_default().to_string().replace("*/", "*\\/"));
+    let name = o.scenario_name.as_deref().map(comment_safe);
     let eigen = |z: &[nalgebra::Complex<f64>]| z.iter().map(fmt_complex).collect::<Vec<_>>().join(", ");
     let delay_text = (0..m)
         .map(|i| format!("channel {}: {} s = {} samples", i + 1, design.plant().delays[i], delays[i]))
@@ -155,6 +155,7 @@ pub(super) fn write(design: &Design, ctrl: &Controller, o: &ExportOptions) -> Re
         ("SIGMA_SUM", sigma_sum.to_string(), "filter-bank rows, sigma_1 + ... + sigma_m"),
         ("SIGMA_MAX", sigma_max.to_string(), "largest relative degree"),
         ("DELAY_MAX", delay_max.to_string(), "longest input delay in samples"),
+        ("INPUT_BOUND", number(o.precision.input_bound()), "largest |y_i|, |g_i| a step takes"),
     ]
     .iter()
     .map(|(k, v, c)| format!("#define {:<w$} {v:<12} /* {c} */", format!("{P}_{k}"), w = P.len() + 12))
@@ -215,8 +216,12 @@ typedef struct {{
 /* The Controller's zero state (also to restart it). */
 void {p}_init({p}_state *s);
 /* One sample: reads y(k) and g(k), writes the plant input u_f(k) = -K x_hat + F u_d (5), to hold
- * until the next sample. */
-void {p}_step({p}_state *s, const {R} y[{P}_M], const {R} g[{P}_M], {R} u_f[{P}_M]);
+ * until the next sample, and returns 0. An entry of y or g that is NaN or beyond +-{P}_INPUT_BOUND
+ * (a sensor fault) is refused: it returns 1 and leaves the state and u_f untouched; hold the
+ * previous input. It returns 2 when u_f or u is no longer finite (inputs the design cannot follow
+ * overflowed the state), and keeps returning 2: hold a safe input and call {p}_init
+ * (docs/deployment.md). Needs IEEE arithmetic (no -ffast-math). */
+int {p}_step({p}_state *s, const {R} y[{P}_M], const {R} g[{P}_M], {R} u_f[{P}_M]);
 /* The adaptive command u(k) (25) of the last step, undelayed. */
 void {p}_command(const {p}_state *s, {R} u[{P}_M]);
 
@@ -271,6 +276,7 @@ void {p}_command(const {p}_state *s, {R} u[{P}_M]);
         row += s;
     }
     c.push_str(&FUNCTIONS.replace("{calls}", calls.trim_end()).replace("{p}", p).replace("{P}", &P).replace("{R}", R));
+    pair_layout_id(&mut h, &mut c, p, &P);
 
     Ok(CCode {
         header_name: format!("{p}_controller.h"),
@@ -280,6 +286,31 @@ void {p}_command(const {p}_state *s, {R} u[{P}_M]);
         constant_bytes,
         state_bytes,
     })
+}
+
+/// `text` for a C comment: escaped (one line, ASCII), with `/*` and `*/` broken by a backslash so
+/// the comment neither ends nor nests early.
+fn comment_safe(text: &str) -> String {
+    text.escape_default().to_string().replace("/*", "/\\*").replace("*/", "*\\/")
+}
+
+/// A check that a header and a source were generated together: the header defines
+/// `<P>_LAYOUT_ID`, a hash of both texts, and the source declares an array of size −1 unless the
+/// header's id is its own, so a mismatched pair (a failed or partial update) does not compile.
+fn pair_layout_id(h: &mut String, c: &mut String, p: &str, P: &str) {
+    let id = crate::study::fnv1a(format!("{h}{c}").as_bytes());
+    let guard = format!("#endif /* {P}_CONTROLLER_H */");
+    *h = h.replacen(
+        &guard,
+        &format!("/* Identifies this header's source: {p}_controller.c compiles only with it. */\n#define {P}_LAYOUT_ID 0x{id:016x}u\n\n{guard}"),
+        1,
+    );
+    let include = format!("#include \"{p}_controller.h\"\n");
+    *c = c.replacen(
+        &include,
+        &format!("{include}\n/* A header from another export fails here (size -1): regenerate both files together. */\ntypedef char {p}_header_matches_source[{P}_LAYOUT_ID == 0x{id:016x}u ? 1 : -1];\n"),
+        1,
+    );
 }
 
 /// The functions of the source; `{p}`, `{P}` and `{R}` are the prefix, its upper case and the type.
@@ -371,11 +402,16 @@ static {R} {p}_channel({p}_state *s, unsigned i, unsigned sigma, const {R} *Phi,
     return past[i];
 }
 
-void {p}_step({p}_state *s, const {R} y[{P}_M], const {R} g[{P}_M], {R} u_f[{P}_M])
+int {p}_step({p}_state *s, const {R} y[{P}_M], const {R} g[{P}_M], {R} u_f[{P}_M])
 {
     {R} *now = s->line[s->head];
     {R} zv[{P}_NZ + 3 * {P}_M]; /* [z(k); y(k); g(k); u_d(k)], u_d(k) = [u_1(k - d_1), ...] */
     {R} *u_d = zv + {P}_NZ + 2 * {P}_M;
+
+    /* Refuse a NaN or a spike beyond the bound before anything changes (false for NaN). */
+    for (unsigned i = 0; i < {P}_M; i++)
+        if (!(y[i] >= -{P}_INPUT_BOUND && y[i] <= {P}_INPUT_BOUND && g[i] >= -{P}_INPUT_BOUND && g[i] <= {P}_INPUT_BOUND))
+            return 1;
 
     /* Control law (25) with eta_i(k): u_i(k) = -eta_i^T xi_hat(k), xi_hat = the first q core states;
      * the delay line records [u(k), xi_hat^T(k)]. */
@@ -403,6 +439,11 @@ void {p}_step({p}_state *s, const {R} y[{P}_M], const {R} g[{P}_M], {R} u_f[{P}_
     for (unsigned i = 0; i < {P}_NZ; i++)
         s->z[i] = {p}_dot({p}_PhiGamma_z[i], zv, {P}_NZ + 3 * {P}_M, 0);
     s->head = s->head == {P}_DELAY_MAX ? 0 : s->head + 1;
+    /* x - x is 0 unless x is infinite or NaN. */
+    for (unsigned i = 0; i < {P}_M; i++)
+        if (!(u_f[i] - u_f[i] == 0 && s->u[i] - s->u[i] == 0))
+            return 2;
+    return 0;
 }
 
 void {p}_command(const {p}_state *s, {R} u[{P}_M])

@@ -419,8 +419,18 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSet
         y[i] = ({R})f->input[i];
         g[i] = ({R})f->input[{P}_M + i];
     }
-    for (double j = 0; j < steps; j++)
-        {p}_step(&f->state, y, g, u_f);
+    for (double j = 0; j < steps; j++) {
+        /* Inputs are the same at every j, so a refused reading (1) is refused at j = 0. */
+        const int refused = {p}_step(&f->state, y, g, u_f);
+        if (refused == 1) {
+            {p}_log(f, f->name, fmi2Error, "fmi2DoStep: an input (y or g) is NaN or beyond +-%g; the step was refused", (double){P}_INPUT_BOUND, 0.0);
+            return fmi2Error;
+        }
+        if (refused) {
+            {p}_log(f, f->name, fmi2Error, "fmi2DoStep: the controller's state is no longer finite; call fmi2Reset", 0.0, 0.0);
+            return fmi2Error;
+        }
+    }
     f->k += steps;
     {p}_outputs(f);
     return fmi2OK;

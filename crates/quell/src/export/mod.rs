@@ -38,6 +38,15 @@ impl Precision {
         }
     }
     /// Bytes of one number.
+    /// Largest |y_i|, |g_i| the generated step takes: [`MAX_MEASUREMENT`] in double, 1e12 in float
+    /// (float's products of two signals stay below 1e24 · gains, far from its 3.4e38).
+    pub fn input_bound(self) -> f64 {
+        match self {
+            Precision::F64 => crate::controller::MAX_MEASUREMENT,
+            Precision::F32 => 1e12,
+        }
+    }
+
     pub fn bytes(self) -> usize {
         match self {
             Precision::F64 => 8,
@@ -96,6 +105,10 @@ pub struct CCode {
     pub state_bytes: usize,
 }
 
+/// Longest `prefix`: `<prefix>_controller.h` must fit a file name (255 bytes on common file
+/// systems) with room for its temporary name while it is written.
+pub const MAX_PREFIX: usize = 200;
+
 /// Why no C code can be generated.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum ExportError {
@@ -104,6 +117,8 @@ pub enum ExportError {
     Controller(#[from] ControllerError),
     #[error("prefix: expected a C identifier (a letter, then letters, digits or _), found {found:?}; e.g. motor1")]
     Prefix { found: String },
+    #[error("prefix: expected at most {MAX_PREFIX} characters, found {length}; the file names <prefix>_controller.h/.c must fit the file system's 255 bytes")]
+    PrefixLength { length: usize },
     #[error("precision: expected f64 or f32, found {found:?}")]
     Precision { found: String },
     #[error("simulation.sample_time: {what} is {value} after discretizing at T_s = {sample_time} s; the exact discretization overflowed (the design's eigenvalues times T_s are beyond floating point); choose a shorter sample time or poles of smaller magnitude")]
@@ -125,6 +140,9 @@ pub fn generate(design: &Design, sample_time: f64, options: &ExportOptions) -> R
         chars.next().is_some_and(|c| c.is_ascii_alphabetic()) && chars.all(|c| c.is_ascii_alphanumeric() || c == '_');
     if !identifier {
         return Err(ExportError::Prefix { found: prefix.clone() });
+    }
+    if prefix.len() > MAX_PREFIX {
+        return Err(ExportError::PrefixLength { length: prefix.len() });
     }
     let ctrl = Controller::new(design, sample_time)?;
     c::write(design, &ctrl, options)

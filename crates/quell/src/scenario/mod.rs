@@ -142,7 +142,7 @@ impl FromStr for Scenario {
 impl Scenario {
     /// Reads and validates a scenario file; I/O errors carry the path as key.
     pub fn from_path(path: &Path) -> Result<Scenario, ScenarioError> {
-        let text = std::fs::read_to_string(path)
+        let text = crate::settings::read_input(path)
             .map_err(|e| err(path.display().to_string(), format!("cannot read the file: {e}")))?;
         Scenario::from_toml(&text)
     }

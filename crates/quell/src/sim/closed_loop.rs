@@ -738,7 +738,6 @@ pub fn default_max_steps(design: &Design, truth: &Plant, signals: [&Signal; 2], 
     }
 }
 
-
 /// Simulates the continuous closed loop from t = 0 to `t_end`, recording every `output_step`.
 /// `on_progress(t)` is called at each recorded sample; returning `Break` interrupts the run.
 /// The result always holds what was computed; [`SimResult::outcome`] says how the run ended. The
@@ -769,7 +768,17 @@ pub fn simulate_with_truth(
     mut on_progress: impl FnMut(f64) -> ControlFlow<()>,
 ) -> Result<SimResult, SimError> {
     let RunSettings {
-        t_end, output_step, rtol, atol, divergence_bound, max_steps, max_history_bytes, runaway, method, record_states, ..
+        t_end,
+        output_step,
+        rtol,
+        atol,
+        divergence_bound,
+        max_steps,
+        max_history_bytes,
+        runaway,
+        method,
+        record_states,
+        ..
     } = *settings;
     check_run(design, reference, disturbance, t_end, output_step, divergence_bound)?;
     crate::settings::check_tolerances(rtol, atol)?;

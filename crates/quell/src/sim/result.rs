@@ -139,7 +139,24 @@ impl SimResult {
     /// statistics so far.
     pub fn new(m: usize, q: usize, n: usize, stats: RunStats) -> Self {
         let (t, y, g, e, u, u_f, eta, x, x_hat) = Default::default();
-        SimResult { m, q, n, t, y, g, e, u, u_f, eta, x, x_hat, stats, outcome: None, peaks: Peaks::default(), limited: Vec::new() }
+        SimResult {
+            m,
+            q,
+            n,
+            t,
+            y,
+            g,
+            e,
+            u,
+            u_f,
+            eta,
+            x,
+            x_hat,
+            stats,
+            outcome: None,
+            peaks: Peaks::default(),
+            limited: Vec::new(),
+        }
     }
 
     /// Counts, per input, whether its actuator limit clipped it at the sample just recorded.

@@ -322,10 +322,25 @@ fn sampled_loop(
         if settings.record_states && k % every == 0 {
             x_hat.copy_from_slice(ctrl.watched().x_hat);
         }
-        match shift.as_mut() {
-            None => u_f.copy_from_slice(ctrl.step(&y_meas, &g)?),
-            Some(sh) => {
-                sh.u_f.copy_from_slice(ctrl.step(&y_meas, &g)?);
+        // A measurement beyond the controller's bound, or a state gone non-finite, ends the run
+        // as diverged (as the next record's check would have), not as an error.
+        let stepped = match ctrl.step(&y_meas, &g) {
+            Err(ControllerError::InputOutOfRange { name, index, value }) => {
+                Err(Outcome::Diverged { t, signal: format!("{name}[{}] (controller input)", index + 1), value })
+            }
+            Err(ControllerError::StateNotFinite { value }) => {
+                Err(Outcome::Diverged { t, signal: "u_f (controller output)".to_string(), value })
+            }
+            other => Ok(other?),
+        };
+        match (stepped, shift.as_mut()) {
+            (Err(diverged), _) => {
+                outcome = diverged;
+                break;
+            }
+            (Ok(v), None) => u_f.copy_from_slice(v),
+            (Ok(v), Some(sh)) => {
+                sh.u_f.copy_from_slice(v);
                 u_f.copy_from_slice(sh.apply(k, ctrl.command()));
             }
         }

@@ -45,6 +45,14 @@ fn err(key: impl Into<String>, message: impl Into<String>) -> StudyError {
 /// Runs above which a sweep asks for confirmation (`quell sweep --yes`).
 pub const CONFIRM_RUNS: u64 = 10_000_000;
 
+/// Worker threads a sweep or tuning may ask for (`--jobs`, `jobs=`): far more than any machine's
+/// cores, few enough that starting them is quick (10⁴ threads took over a minute).
+pub const MAX_JOBS: usize = 1024;
+
+/// Runs a study may have at most: 10⁹ runs are ~200 GB of rows and, at ~60 ms each, ~700
+/// CPU-days; beyond, a study file is refused when it is read (before anything is allocated).
+pub const MAX_RUNS: u64 = 1_000_000_000;
+
 /// One axis of the grid: a scenario key path and the values it takes.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GridAxis {
@@ -209,7 +217,7 @@ fn unknown_keys(at: &str, t: &toml::Table, valid: &[&str]) -> Result<(), StudyEr
 
 /// FNV-1a, 64 bits: the study's fingerprint (stable across platforms and releases, unlike
 /// `std::hash`), so merged shards can be checked to come from one study.
-fn fnv1a(bytes: &[u8]) -> u64 {
+pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
 }
 
@@ -251,7 +259,7 @@ fn fill_default(doc: &mut toml::Table, path: &KeyPath) {
 impl Study {
     /// Reads a study file; its `scenario` is relative to the file's directory.
     pub fn from_path(path: &Path) -> Result<Study, StudyError> {
-        let text = std::fs::read_to_string(path)
+        let text = crate::settings::read_input(path)
             .map_err(|e| err(path.display().to_string(), format!("cannot read the study file: {e}")))?;
         Study::from_toml(&text, path.parent())
     }
@@ -277,7 +285,7 @@ impl Study {
             None => (PAPER_EXAMPLE.to_string(), "the paper's example".to_string()),
             Some(toml::Value::String(s)) => {
                 let p = dir.map_or_else(|| PathBuf::from(s), |d| d.join(s));
-                let text = std::fs::read_to_string(&p).map_err(|e| {
+                let text = crate::settings::read_input(&p).map_err(|e| {
                     err(
                         "scenario",
                         format!(
@@ -330,6 +338,15 @@ impl Study {
                     toml::Value::Array(v) => v.clone(),
                     v => return Err(err(&at, format!("expected a list of values (e.g. [5.0, 10.0]), found {}", kind(v)))),
                 };
+                if let Some(other) = grid.iter().find(|a: &&GridAxis| a.path.overlaps(&path)) {
+                    return Err(err(
+                        &at,
+                        format!(
+                            "names the same value as grid.\"{}\" (or a part of it), so one would overwrite the other and runs.csv would record a value that was not used; keep one of the two keys",
+                            other.key
+                        ),
+                    ));
+                }
                 let axis = GridAxis { key: key.clone(), path, values };
                 check_values(&base, &axis.path, &at, axis.values.iter().enumerate(), &scenario_source)?;
                 grid.push(axis);
@@ -389,7 +406,7 @@ impl Study {
             }
         }
         let fingerprint = fnv1a(canonical.as_bytes());
-        let points = grid.iter().map(|a| a.values.len()).product();
+        let points = study_size(&grid, monte_carlo.as_ref())?;
         let nominal = (0..if monte_carlo.is_some() { points } else { 0 }).map(|_| OnceLock::new()).collect();
         Ok(Study {
             base,
@@ -416,9 +433,9 @@ impl Study {
         self.monte_carlo.as_ref().map_or(1, |mc| mc.runs)
     }
 
-    /// Runs: points × draws (saturating, so a huge study is still reported and refused).
+    /// Runs: points × draws (at most [`MAX_RUNS`], checked when the study is read).
     pub fn len(&self) -> u64 {
-        (self.points() as u64).saturating_mul(self.draws() as u64)
+        self.points() as u64 * self.draws() as u64
     }
 
     /// True when the study has no runs (never: a grid axis and `runs` are never empty).
@@ -553,6 +570,29 @@ impl Study {
     }
 }
 
+/// The number of grid points, after checking that points × draws is at most [`MAX_RUNS`].
+fn study_size(grid: &[GridAxis], mc: Option<&MonteCarlo>) -> Result<usize, StudyError> {
+    let draws = mc.map_or(1, |mc| mc.runs as u128);
+    let points = grid.iter().fold(1u128, |p, a| p.saturating_mul(a.values.len() as u128));
+    let runs = points.saturating_mul(draws);
+    if runs <= u128::from(MAX_RUNS) {
+        return Ok(points as usize);
+    }
+    // Exact below 2¹²⁸, else the float of the saturated count says "at least".
+    let count = |x: u128| if x < 1_000_000_000_000 { x.to_string() } else { format!("{:.3e}", x as f64) };
+    let lengths: Vec<String> = grid.iter().map(|a| a.values.len().to_string()).collect();
+    Err(err(
+        if mc.is_some() { "monte_carlo.runs" } else { "grid" },
+        format!(
+            "the study has {}{} runs ({} grid points ({}) × {draws} draws), more than the {MAX_RUNS:.0e} a study may have; reduce the grid values or draws, or split the study into several files",
+            if runs == u128::MAX { "at least " } else { "" },
+            count(runs),
+            count(points),
+            lengths.join(" × "),
+        ),
+    ))
+}
+
 /// Checks that each value, put at `path` in the scenario, has the scenario value's shape and gives
 /// a scenario that parses and designs. `at` is the study key of the list.
 fn check_values<'v>(
@@ -604,6 +644,12 @@ fn monte_carlo(base: &toml::Table, t: &toml::Table, source: &str) -> Result<Mont
     };
     if runs == 0 {
         return Err(err("monte_carlo.runs", "expected the number of draws per grid point (an integer ≥ 1), found 0"));
+    }
+    if runs > MAX_RUNS {
+        return Err(err(
+            "monte_carlo.runs",
+            format!("expected at most {MAX_RUNS:.0e} draws (a study may have at most {MAX_RUNS:.0e} runs), found {runs}; reduce the draws, or split the study into several files with different seeds"),
+        ));
     }
     let seed = t.get("seed").map_or(Ok(0), |v| unsigned("monte_carlo.seed", v, "a seed (an integer ≥ 0)"))?;
     let mut perturbations = Vec::new();

@@ -126,6 +126,14 @@ impl KeyPath {
         Ok(KeyPath { text: text.to_string(), steps })
     }
 
+    /// True when one path names the other's value or a part of it (`design.mu` and
+    /// `design.mu[0]`, or `design.mu[0]` and `design.mu[00]`): setting both would let one
+    /// overwrite the other.
+    pub fn overlaps(&self, other: &KeyPath) -> bool {
+        let n = self.steps.len().min(other.steps.len());
+        self.steps[..n] == other.steps[..n]
+    }
+
     /// The first key (`plant`, `design`, `truth`, …).
     pub fn section(&self) -> &str {
         match &self.steps[0] {

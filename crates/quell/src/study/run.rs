@@ -309,9 +309,10 @@ pub struct Sweep {
 pub fn sweep(study: &Study, opts: &SweepOptions<'_>) -> Sweep {
     let runs = usize::try_from(study.len()).unwrap_or(usize::MAX);
     let stopped = || opts.stop.is_some_and(|s| s.load(Ordering::Relaxed));
-    let indices: Vec<usize> = opts.shard.runs(runs).collect();
-    let rows: Vec<Row> = indices
+    let shard = opts.shard;
+    let rows: Vec<Row> = (0..shard.len(runs))
         .into_par_iter()
+        .map(|k| shard.index + k * shard.count)
         .filter_map(|i| {
             if stopped() {
                 return None;

@@ -184,3 +184,93 @@ fn shards_partition_the_runs() {
         assert_eq!(all, (0..runs).collect::<Vec<_>>());
     }
 }
+
+#[test]
+fn studies_beyond_max_runs_are_refused_when_read_with_their_true_size() {
+    // 1e12 draws aborted allocating 8 TB, and 2⁶³ − 1 panicked ("capacity overflow"); both are
+    // refused before anything is allocated, with the number the file gives.
+    for runs in ["1000000000000", "9223372036854775807"] {
+        let e = error(&format!("[monte_carlo]\nruns = {runs}"));
+        assert_eq!(
+            e,
+            format!("monte_carlo.runs: expected at most 1e9 draws (a study may have at most 1e9 runs), found {runs}; reduce the draws, or split the study into several files with different seeds")
+        );
+    }
+    // Within the draws' limit, beyond it with the grid: the exact product, not a saturated count.
+    let e = error("[grid]\n\"design.beta\" = [1.0, 2.0, 3.0]\n[monte_carlo]\nruns = 600000000");
+    assert!(
+        e.starts_with(
+            "monte_carlo.runs: the study has 1800000000 runs (3 grid points (3) × 600000000 draws), more than the 1e9"
+        ),
+        "{e}"
+    );
+    // A grid alone: 10 axes of 10 values are 1e10 points.
+    let axes: String = [
+        "design.mu[0]",
+        "design.mu[1]",
+        "design.beta",
+        "plant.x0[0]",
+        "plant.x0[1]",
+        "plant.x0[2]",
+        "truth.x0[0]",
+        "truth.x0[1]",
+        "truth.x0[2]",
+        "simulation.t_end",
+    ]
+    .iter()
+    .map(|k| {
+        let values: Vec<String> = (1..=10).map(|v| format!("{}.0", v)).collect();
+        format!("\"{k}\" = [{}]\n", values.join(", "))
+    })
+    .collect();
+    let e = error(&format!("[grid]\n{axes}"));
+    assert!(e.starts_with("grid: the study has 10000000000 runs (10000000000 grid points (10 × 10 × 10 × 10 × 10 × 10 × 10 × 10 × 10 × 10) × 1 draws)"), "{e}");
+    // At the limit: read, and its length is exact.
+    let s = study("[grid]\n\"design.beta\" = [1.0, 2.0]\n[monte_carlo]\nruns = 500000000").unwrap();
+    assert_eq!(s.len(), MAX_RUNS);
+}
+
+#[test]
+fn two_spellings_of_one_grid_value_are_refused() {
+    // design.mu[00] is design.mu[0]; design.mu holds design.mu[1]. Both were accepted, and runs.csv
+    // recorded for one key a value the other had overwritten.
+    for (a, b) in [("design.mu[0]", "design.mu[00]"), ("design.mu", "design.mu[1]"), ("design.mu[1]", "design.mu")] {
+        let value = |k: &str| if k == "design.mu" { "[[10.0, 20.0]]" } else { "[10.0]" };
+        let e = error(&format!("[grid]\n\"{a}\" = {}\n\"{b}\" = {}", value(a), value(b)));
+        assert_eq!(
+            e,
+            format!("grid.\"{b}\": names the same value as grid.\"{a}\" (or a part of it), so one would overwrite the other and runs.csv would record a value that was not used; keep one of the two keys")
+        );
+    }
+    // Neighbours that do not overlap stay accepted.
+    assert!(study("[grid]\n\"design.mu[0]\" = [10.0]\n\"design.mu[1]\" = [10.0]").is_ok());
+}
+
+#[test]
+fn tune_refuses_a_grid_or_draws_it_would_ignore() {
+    let tune = "[tune]\nobjective = \"tail_rms_e\"\nmu = [1.0, 100.0]\n";
+    for (table, key) in
+        [("[grid]\n\"design.beta\" = [1.0, 2.0]\n", "grid"), ("[monte_carlo]\nruns = 2\n", "monte_carlo")]
+    {
+        let s = study(&format!("{table}{tune}")).unwrap();
+        let e = super::tune(&s).expect_err("refused").to_string();
+        assert!(
+            e.starts_with(&format!("{key}: tuning runs the scenario alone, so [{key}] would be ignored; remove it")),
+            "{e}"
+        );
+    }
+}
+
+#[cfg(unix)]
+#[test]
+fn an_endless_input_file_is_refused_naming_its_path() {
+    // /dev/zero was read for ever (4 GB in 15 s); now 64 MiB of it, then the error. 64 MiB of zeros
+    // is read in well under a second.
+    let zero = Path::new("/dev/zero");
+    let e = Study::from_path(zero).expect_err("refused").to_string();
+    assert_eq!(e, "/dev/zero: cannot read the study file: longer than 64 MiB, the most a scenario or study file may be (is it the right path? a device such as /dev/zero never ends)");
+    let e = crate::Scenario::from_path(zero).expect_err("refused").to_string();
+    assert!(e.starts_with("/dev/zero: cannot read the file: longer than 64 MiB"), "{e}");
+    let e = error("scenario = \"/dev/zero\"");
+    assert!(e.starts_with("scenario: cannot read the scenario file /dev/zero (longer than 64 MiB"), "{e}");
+}

@@ -219,6 +219,15 @@ pub fn tune(study: &Study) -> Result<TuneResult, StudyError> {
         .tune
         .as_ref()
         .ok_or_else(|| err("tune", "missing; `quell tune` needs a [tune] table (objective, mu bounds, max_u)"))?;
+    // Tuning searches μ on the scenario alone; a grid or draws in the file would be ignored.
+    for (key, present) in [("grid", !study.grid.is_empty()), ("monte_carlo", study.monte_carlo.is_some())] {
+        if present {
+            return Err(err(
+                key,
+                format!("tuning runs the scenario alone, so [{key}] would be ignored; remove it (or tune a copy of the study without it, and sweep the tuned μ with `quell sweep`)"),
+            ));
+        }
+    }
     let scenario = Scenario::from_document(study.base()).map_err(|e| err("scenario", e.to_string()))?;
     let base_mu = scenario.design.mu.clone();
     let m = base_mu.len();

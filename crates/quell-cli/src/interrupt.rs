@@ -1,0 +1,66 @@
+//! Ctrl-C (SIGINT), and SIGTERM and SIGHUP alike (a batch system's time limit, a closed terminal),
+//! for the long commands. The first signal asks the work to stop and the results so far to be
+//! written; a second one before writing has begun quits at once with nothing written; once writing
+//! has begun further signals wait for it, so no file is cut short and no temporary is left.
+
+use std::sync::atomic::{AtomicBool, AtomicU8, Ordering};
+use std::sync::Arc;
+
+/// Phases of a command, for the handler.
+const RUNNING: u8 = 0;
+const INTERRUPTED: u8 = 1;
+const QUITTING: u8 = 2;
+const WRITING: u8 = 3;
+
+/// The installed handler's state.
+pub struct Interrupt {
+    phase: Arc<AtomicU8>,
+    stop: Arc<AtomicBool>,
+}
+
+impl Interrupt {
+    /// Installs the handler; `twice` is the message of a second signal before writing began.
+    pub fn install(twice: &'static str) -> Self {
+        let (phase, stop) = (Arc::new(AtomicU8::new(RUNNING)), Arc::new(AtomicBool::new(false)));
+        let (handler_phase, handler_stop) = (phase.clone(), stop.clone());
+        let _ = ctrlc::set_handler(move || {
+            handler_stop.store(true, Ordering::SeqCst);
+            if handler_phase.compare_exchange(RUNNING, INTERRUPTED, Ordering::SeqCst, Ordering::SeqCst).is_err()
+                && handler_phase.compare_exchange(INTERRUPTED, QUITTING, Ordering::SeqCst, Ordering::SeqCst).is_ok()
+            {
+                eprintln!("error: {twice}");
+                std::process::exit(1);
+            }
+        });
+        Interrupt { phase, stop }
+    }
+
+    /// Installs a handler for a command with nothing to write: the first signal quits with
+    /// `message` and exit status 1 (a result that is not complete), not the shell's 130.
+    pub fn quit_with(message: &'static str) {
+        let _ = ctrlc::set_handler(move || {
+            eprintln!("error: {message}");
+            std::process::exit(1);
+        });
+    }
+
+    /// True once a signal asked the work to stop.
+    pub fn interrupted(&self) -> bool {
+        self.stop.load(Ordering::SeqCst)
+    }
+
+    /// The flag a signal sets (what `quell::study::sweep` polls).
+    pub fn stop_flag(&self) -> &AtomicBool {
+        &self.stop
+    }
+
+    /// From here on signals are ignored until the files are written (unless a second one is
+    /// already quitting the process).
+    pub fn start_writing(&self) {
+        if self.phase.swap(WRITING, Ordering::SeqCst) == QUITTING {
+            loop {
+                std::thread::park();
+            }
+        }
+    }
+}

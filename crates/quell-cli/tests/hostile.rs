@@ -1,0 +1,251 @@
+//! Hostile and extreme inputs to the CLI: each case once crashed, hung, corrupted an output or gave
+//! a silently wrong result; now each is a clear error (exit 2 naming the flag, key or path) or a
+//! correct result.
+
+use std::fs;
+use std::path::Path;
+use std::process::{Command, Output};
+use std::time::{Duration, Instant};
+
+use tempfile::TempDir;
+
+fn quell(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_quell")).args(args).output().expect("the quell binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Exit status 2 and `fragment` in stderr.
+fn refused(o: &Output, fragment: &str) {
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(o));
+    assert!(stderr(o).contains(fragment), "expected {fragment:?} in:\n{}", stderr(o));
+}
+
+fn paper() -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/paper.toml").display().to_string()
+}
+
+/// A study of the paper's example over `grid` (TOML lines), 1 s long, written into `dir`.
+fn study(dir: &Path, name: &str, extra: &str) -> String {
+    let text = format!("scenario = {:?}\n[simulation]\nt_end = 1.0\n{extra}", paper());
+    let path = dir.join(name);
+    fs::write(&path, text).unwrap();
+    path.display().to_string()
+}
+
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> =
+        fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn study_size_jobs_and_shard_flags_are_refused_with_their_message() {
+    let tmp = TempDir::new().unwrap();
+    let (dir, out) = (tmp.path(), tmp.path().join("out").display().to_string());
+    // 1e12 draws with --yes aborted allocating 8 TB; near 2⁶³ it panicked.
+    for runs in ["1000000000000", "9223372036854775807"] {
+        let s = study(dir, "huge.toml", &format!("[monte_carlo]\nruns = {runs}\n"));
+        refused(
+            &quell(&["sweep", &s, "--yes", "--out", &out]),
+            &format!("monte_carlo.runs: expected at most 1e9 draws (a study may have at most 1e9 runs), found {runs}"),
+        );
+    }
+    // The refusal without --yes gives the exact count (it printed a saturated one).
+    let s = study(dir, "big.toml", "[grid]\n\"design.beta\" = [1.0, 2.0]\n[monte_carlo]\nruns = 300000000\n");
+    refused(
+        &quell(&["sweep", &s, "--out", &out]),
+        "the study has 600000000 runs (2 grid points × 300000000 draws), more than 1e7",
+    );
+
+    // --jobs 10000 on a 3-run study ran past 60 s; -1 got clap's "unexpected argument".
+    let s = study(dir, "three.toml", "[grid]\n\"design.beta\" = [1.0, 2.0, 3.0]\n");
+    for jobs in ["10000", "-1", "0", "1e3"] {
+        refused(
+            &quell(&["sweep", &s, "--jobs", jobs, "--out", &out]),
+            &format!("invalid value '{jobs}' for '--jobs <N>': expected a number of worker threads from 1 to 1024"),
+        );
+    }
+    // The most threads, on 3 runs: only 3 are started, so it is as quick as ever (the runs take
+    // ~0.1 s; the bound is slack for a loaded machine).
+    let started = Instant::now();
+    let o = quell(&["sweep", &s, "--jobs", "1024", "--no-plots", "--out", &out]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(started.elapsed() < Duration::from_secs(20), "{:?}", started.elapsed());
+    assert!(stderr(&o).contains("on 3 threads"), "{}", stderr(&o));
+    refused(&quell(&["tune", &s, "--jobs", "-1"]), "invalid value '-1' for '--jobs <N>'");
+
+    // --shard -1/2 got clap's "unexpected argument"; with --merge it was ignored.
+    refused(&quell(&["sweep", &s, "--shard", "-1/2", "--out", &out]), "--shard: expected I/N with 0 ≤ I < N");
+    refused(
+        &quell(&["sweep", "--merge", &out, "--shard", "0/2", "--out", &out]),
+        "--shard 0/2: --merge joins every shard into one directory, so it takes no --shard",
+    );
+}
+
+#[test]
+fn merge_checks_every_shards_run_indices_and_its_output_folder() {
+    let tmp = TempDir::new().unwrap();
+    let dir = tmp.path();
+    let s = study(dir, "study.toml", "[grid]\n\"design.beta\" = [1.0, 2.0, 3.0, 4.0]\n");
+    let at = |name: &str| dir.join(name).display().to_string();
+    for i in 0..2 {
+        let o = quell(&["sweep", &s, "--shard", &format!("{i}/2"), "--no-plots", "--out", &at(&format!("s{i}"))]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let good = fs::read_to_string(dir.join("s1/runs.csv")).unwrap();
+
+    // Shard 0's rows under shard 1's summary (a copied runs.csv) merged with run 0 twice and run 1
+    // missing.
+    fs::copy(dir.join("s0/runs.csv"), dir.join("s1/runs.csv")).unwrap();
+    refused(
+        &quell(&["sweep", "--merge", &at("s0"), &at("s1"), "--out", &at("m")]),
+        &format!(
+            "--merge {}: row 1 of runs.csv is run 0, but shard 1/2 holds runs 1 + k·2 and the next of them is 1",
+            at("s1")
+        ),
+    );
+    // A runs.csv cut at a line end: named, with what is missing.
+    let mut lines: Vec<&str> = good.lines().collect();
+    lines.pop();
+    fs::write(dir.join("s1/runs.csv"), lines.join("\n") + "\n").unwrap();
+    refused(
+        &quell(&["sweep", "--merge", &at("s0"), &at("s1"), "--out", &at("m")]),
+        &format!("--merge {}: runs.csv holds 1 rows, but shard 1/2 has 2 runs (is runs.csv truncated?)", at("s1")),
+    );
+    fs::write(dir.join("s1/runs.csv"), &good).unwrap();
+    // Merging into one of the shards replaced it.
+    let before = fs::read_to_string(dir.join("s0/runs.csv")).unwrap();
+    refused(
+        &quell(&["sweep", "--merge", &at("s0"), &at("s1"), "--out", &at("s0")]),
+        "is one of the --merge directories",
+    );
+    assert_eq!(fs::read_to_string(dir.join("s0/runs.csv")).unwrap(), before);
+    let o = quell(&["sweep", "--merge", &at("s0"), &at("s1"), "--out", &at("m"), "--no-plots"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+#[test]
+fn output_path_problems_are_all_exit_2_naming_the_path() {
+    let tmp = TempDir::new().unwrap();
+    let dir = tmp.path();
+    let s = study(dir, "study.toml", "[grid]\n\"design.beta\" = [1.0, 2.0]\n");
+    // An existing file as --out.
+    let file = dir.join("a-file");
+    fs::write(&file, "x").unwrap();
+    refused(
+        &quell(&["sweep", &s, "--out", &file.display().to_string()]),
+        &format!("--out {}: cannot write there", file.display()),
+    );
+    // A directory where runs.csv goes: was exit 1 after every run was done.
+    let out = dir.join("out");
+    fs::create_dir_all(out.join("runs.csv")).unwrap();
+    refused(
+        &quell(&["sweep", &s, "--out", &out.display().to_string()]),
+        &format!(
+            "--out {}: {} is a directory, where the output file goes",
+            out.display(),
+            out.join("runs.csv").display()
+        ),
+    );
+    fs::create_dir_all(out.join("signals.csv")).unwrap();
+    refused(&quell(&["run", &paper(), "--out", &out.display().to_string()]), "signals.csv is a directory");
+}
+
+#[test]
+fn figures_of_an_earlier_run_do_not_stay_beside_new_data() {
+    let tmp = TempDir::new().unwrap();
+    let out = tmp.path().join("out");
+    fs::create_dir_all(&out).unwrap();
+    // A three-channel run's figures, and a sweep's.
+    for name in ["channel1.png", "channel1.svg", "channel3.png", "channel3.svg", "sweep.png", "notes.png"] {
+        fs::write(out.join(name), "old").unwrap();
+    }
+    let scenario = tmp.path().join("short.toml");
+    fs::write(&scenario, fs::read_to_string(paper()).unwrap().replacen("t_end = 100.0", "t_end = 2.0", 1)).unwrap();
+    let o = quell(&["run", &scenario.display().to_string(), "--no-plots", "--out", &out.display().to_string()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Plots skipped: no channel figure is left; files that are not a run's are kept.
+    assert_eq!(names(&out), ["design.json", "notes.png", "signals.csv", "summary.json", "sweep.png"]);
+    let o = quell(&["run", &scenario.display().to_string(), "--out", &out.display().to_string()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(names(&out).contains(&"channel2.svg".to_string()) && !names(&out).contains(&"channel3.png".to_string()));
+    // A sweep whose grid has no figure (three axes) removes an earlier sweep.png.
+    let s = study(
+        tmp.path(),
+        "study.toml",
+        "[grid]\n\"design.beta\" = [1.0]\n\"design.mu[0]\" = [10.0]\n\"design.mu[1]\" = [10.0]\n",
+    );
+    let o = quell(&["sweep", &s, "--out", &out.display().to_string()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!names(&out).contains(&"sweep.png".to_string()), "{:?}", names(&out));
+}
+
+#[cfg(unix)]
+#[test]
+fn an_endless_input_file_is_refused_naming_its_path() {
+    // /dev/zero as a scenario or study was read for ever (4 GB in 15 s).
+    for args in [&["run", "/dev/zero"][..], &["sweep", "/dev/zero"], &["design", "/dev/zero"], &["export", "/dev/zero"]]
+    {
+        let started = Instant::now();
+        let o = quell(args);
+        refused(&o, "/dev/zero: cannot read the");
+        assert!(stderr(&o).contains("longer than 64 MiB"), "{}", stderr(&o));
+        assert!(started.elapsed() < Duration::from_secs(20), "{args:?}: {:?}", started.elapsed());
+    }
+}
+
+#[test]
+fn long_prefixes_are_written_or_refused_naming_the_flag() {
+    let tmp = TempDir::new().unwrap();
+    let out = tmp.path().display().to_string();
+    // 190 characters: <prefix>_controller.h is 203 bytes, within a file name's 255, but its
+    // temporary name (the stem and 13 more) was not: exit 1 without naming the flag.
+    let prefix = format!("p{}", "x".repeat(189));
+    let o = quell(&["export", &paper(), "--sample-time", "0.001", "--prefix", &prefix, "--out", &out]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(names(tmp.path()), [format!("{prefix}_controller.c"), format!("{prefix}_controller.h")]);
+    let prefix = format!("p{}", "x".repeat(240));
+    let o = quell(&["export", &paper(), "--sample-time", "0.001", "--prefix", &prefix, "--out", &out]);
+    refused(&o, "--prefix: expected at most 200 characters, found 241");
+}
+
+#[test]
+fn tune_refuses_a_grid_or_draws() {
+    let tmp = TempDir::new().unwrap();
+    let s = study(
+        tmp.path(),
+        "t.toml",
+        "[grid]\n\"design.beta\" = [1.0, 2.0]\n[tune]\nobjective = \"tail_rms_e\"\nmu = [1.0, 100.0]\n",
+    );
+    refused(
+        &quell(&["tune", &s, "--out", &tmp.path().join("o").display().to_string()]),
+        "grid: tuning runs the scenario alone, so [grid] would be ignored",
+    );
+}
+
+#[test]
+fn the_report_prints_eta_with_significant_digits() {
+    // ‖η̂‖ was printed with four decimals, so a converged η̂ of 1e-6 read 0.0000; now in scientific
+    // notation, which parses back to the positive value.
+    let tmp = TempDir::new().unwrap();
+    let scenario = tmp.path().join("slow.toml");
+    let text = fs::read_to_string(paper()).unwrap().replacen("t_end = 100.0", "t_end = 2.0", 1);
+    fs::write(&scenario, text).unwrap();
+    let o = quell(&[
+        "run",
+        &scenario.display().to_string(),
+        "--no-plots",
+        "--out",
+        &tmp.path().join("o").display().to_string(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let line = stderr(&o).lines().find(|l| l.starts_with("channel 1:")).unwrap().to_string();
+    let eta = line.split("‖η̂‖ = ").nth(1).unwrap().split(',').next().unwrap();
+    assert!(eta.contains('e'), "{line}");
+    let value: f64 = eta.trim().parse().unwrap();
+    assert!(value > 0.0, "{line}");
+}

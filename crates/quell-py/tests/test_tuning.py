@@ -1,0 +1,90 @@
+"""Diagnostics, automatic design and fragile-gain warnings through Python (docs/tuning.md).
+
+The diagnostics' Ω̄ is checked against Ω computed independently here with SciPy: the regressor ξ̂
+simulated from g(t) and ω(t) by scipy.signal.lsim (ξ̂ does not depend on u: the observer error
+e_x' = (A − LC) e_x + (D − LQ) ω, ξ̂_g' = G_g ξ̂_g + L_g g, ξ̂_ω' = G_ω ξ̂_ω + N L (C e_x + Q ω)),
+filtered through G_ii(s) with the channel's delay, and Ω̄_i the mean of Δ_iᵀ Δ_i over whole periods."""
+
+import warnings
+
+import numpy as np
+import pytest
+from scipy import signal
+
+import quell
+
+from conftest import EXAMPLES
+
+PAPER = (EXAMPLES / "paper.toml").read_text()
+L_LINE = "observer_gain = [[-8.0988, 4.4574], [10.6506, -5.0619], [2.7762, -1.1783]]"
+
+
+def without_design(text):
+    start = text.index("[design]")
+    end = text.index("[reference]")
+    return text[:start] + "[design]\n" + text[end:]
+
+
+def test_diagnostics_match_omega_from_scipy():
+    s = quell.Scenario.from_toml(PAPER)
+    d = s.design()
+    p = d.plant
+    r = quell.simulate(s, t_end=10.0)
+    diag = r.diagnostics()
+    n, q_g, q_w = p.n, d.G_g.shape[0], d.G_w.shape[0]
+    A, C, D, Q, L, N = p.A, p.C, p.D, p.Q, d.L, d.N
+    # The paper's signals: g = [3 sin 2t, 2], ω = [sin t, 1 + 2 sin 2t].
+    dt, t_end = 0.002, 60.0
+    t = np.arange(0.0, t_end + dt / 2, dt)
+    g = np.column_stack([3 * np.sin(2 * t), 2 * np.ones_like(t)])
+    w = np.column_stack([np.sin(t), 1 + 2 * np.sin(2 * t)])
+    # State [e_x; ξ̂_g; ξ̂_ω], input [g; ω].
+    M = np.zeros((n + q_g + q_w, n + q_g + q_w))
+    M[:n, :n] = A - L @ C
+    M[n:n + q_g, n:n + q_g] = d.G_g
+    M[n + q_g:, :n] = N @ L @ C
+    M[n + q_g:, n + q_g:] = d.G_w
+    Bm = np.zeros((M.shape[0], 4))
+    Bm[:n, 2:] = D - L @ Q
+    Bm[n:n + q_g, :2] = d.L_g
+    Bm[n + q_g:, 2:] = N @ L @ Q
+    Cm = np.hstack([np.zeros((q_g + q_w, n)), np.eye(q_g + q_w)])
+    _, xi, _ = signal.lsim((M, Bm, Cm, np.zeros((q_g + q_w, 4))), np.hstack([g, w]), t)
+    window = t >= t_end - 4 * np.pi  # two periods of 1 rad/s, four of 2 rad/s; transients gone
+    for i, c in enumerate(d.channels):
+        steps = int(round(p.delays[i] / dt))
+        delayed = np.vstack([np.zeros((steps, xi.shape[1])), xi[: len(t) - steps]])
+        den = np.asarray(c["denominator"])[::-1]  # ascending a_0.. → descending, leading 1
+        G = signal.lti([c["q0"]], np.concatenate([[1.0], den]))
+        delta = np.column_stack([signal.lsim(G, delayed[:, j], t)[1] for j in range(xi.shape[1])])
+        omega = delta[window].T @ delta[window] / window.sum()
+        lam = np.linalg.eigvalsh(omega)
+        got = diag["channels"][i]
+        # 1 % of λ_max: lsim's interpolation at 2 ms against rates ≤ 9/s, and a window of whole
+        # periods only to the 2 ms grid.
+        assert got["lambda_max_omega"] == pytest.approx(lam[-1], rel=1e-2)
+        excited = lam[lam > 1e-6 * lam[-1]]
+        assert got["excited_rank"] == len(excited) == 5
+        assert got["lambda_min_excited_omega"] == pytest.approx(excited[0], rel=1e-2, abs=1e-2 * lam[-1])
+        assert got["adaptation_rate"] == pytest.approx(d.mu[i] * got["lambda_max_omega"], rel=1e-15)
+
+
+def test_auto_design_meets_the_tail_bound():
+    scenario, report = quell.auto_design(without_design(PAPER))
+    assert report["passed"], report
+    keys = {c["key"] for c in report["choices"]}
+    assert {"design.observer_poles", "design.channel_poles", "design.mu", "design.beta"} <= keys
+    r = quell.simulate(scenario)
+    tail = [c["tail_max_abs_e"] for c in r.summary()]
+    assert tail[0] <= 0.01 * 3.0 and tail[1] <= 0.01 * 2.0, tail
+    with pytest.raises(quell.DesignError, match="convergence_time: expected a finite number > 0, found -1"):
+        quell.auto_design(without_design(PAPER), convergence_time=-1.0)
+
+
+def test_fragile_observer_gain_warns():
+    text = PAPER.replace(L_LINE, "observer_poles = [-5.0, -5.0, -5.0]")
+    with pytest.warns(UserWarning, match="requested 3 times, more than rank C = 2"):
+        quell.Scenario.from_toml(text).design()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        quell.Scenario.from_toml(PAPER).design()
