@@ -83,24 +83,33 @@ pub fn prepare_out(dir: &Path, files: &[&str]) -> Result<(), Failure> {
 /// `signals.csv`: t, y1..ym, g1..gm, e1..em, u1..um, eta1_1..etam_q.
 pub fn write_signals(path: &Path, r: &SimResult) -> io::Result<()> {
     write_atomic(path, |w| {
-        let (m, q) = (r.m, r.q);
+        let (m, q, n) = (r.m, r.q, r.n);
         let mut header = vec!["t".to_string()];
-        for name in ["y", "g", "e", "u"] {
+        for name in ["y", "g", "e", "u", "uf"] {
             header.extend((1..=m).map(|i| format!("{name}{i}")));
         }
         for i in 1..=m {
             header.extend((1..=q).map(|j| format!("eta{i}_{j}")));
         }
+        let states = r.has_states();
+        if states {
+            for name in ["x", "xhat"] {
+                header.extend((1..=n).map(|i| format!("{name}{i}")));
+            }
+        }
         writeln!(w, "{}", header.join(","))?;
+        // Each signal with its width, in the header's order.
+        let mut signals: Vec<(&[f64], usize)> =
+            vec![(&r.y, m), (&r.g, m), (&r.e, m), (&r.u, m), (&r.u_f, m), (&r.eta, m * q)];
+        if states {
+            signals.extend([(&r.x[..], n), (&r.x_hat[..], n)]);
+        }
         for k in 0..r.len() {
             write!(w, "{}", r.t[k])?;
-            for sig in [&r.y, &r.g, &r.e, &r.u] {
-                for &v in &sig[k * m..(k + 1) * m] {
+            for (sig, width) in &signals {
+                for &v in &sig[k * width..(k + 1) * width] {
                     write!(w, ",{}", Num(v))?;
                 }
-            }
-            for &v in &r.eta[k * m * q..(k + 1) * m * q] {
-                write!(w, ",{}", Num(v))?;
             }
             writeln!(w)?;
         }

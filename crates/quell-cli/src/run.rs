@@ -29,6 +29,14 @@ pub struct RunArgs {
     /// Skip the PNG/SVG plots.
     #[arg(long)]
     pub no_plots: bool,
+    /// Step budget of the continuous loop (default: derived from the problem's time scales; see
+    /// docs/running.md). A run that needs more ends as failed, its results up to then written.
+    #[arg(long, value_name = "N")]
+    pub max_steps: Option<usize>,
+    /// Also record the plant state x and the observer state x̂ (columns x1..xn, xhat1..xhatn of
+    /// signals.csv).
+    #[arg(long)]
+    pub states: bool,
 }
 
 pub fn run(args: &RunArgs) -> Result<(), Failure> {
@@ -64,6 +72,9 @@ fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result
     if let LoopSettings::Sampled(st) = &settings {
         st.check(design, &scenario.reference, &scenario.disturbance).map_err(|e| Failure::Input(e.to_string()))?;
     }
+    let mut settings = settings;
+    settings.record_states(args.states);
+    settings.set_max_steps(args.max_steps).map_err(|e| Failure::Input(format!("--max-steps: {}", e.message)))?;
     Ok(settings)
 }
 
@@ -143,6 +154,8 @@ fn write_data(
     output::write_json(&dir.join("summary.json"), &summary)
 }
 
+/// What a run that spent its budget means, and what to do.
+const RUNAWAY_HINT: &str = "the loop turned stiff, as a loop blowing up does before its states reach the divergence bound, or its adaptation is stiff from the start; raise --max-steps if the run is sound";
 /// Channel i's convergence figures and advice, under its line of figures.
 fn report_diagnostics(d: &ChannelDiagnostics) {
     let trend = d.tail_trend.map_or(String::new(), |r| format!(", tail RMS ratio (last two tenths) {r:.2}"));
@@ -168,11 +181,12 @@ fn report_outcome(result: &SimResult, diagnostics: &Diagnostics, out: &Path, sec
                     (None, None) => "not settled".into(),
                 };
                 eprintln!(
-                    "channel {}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {:.3}, ‖η̂‖ = {:.4e}, {settle}",
+                    "channel {}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {:.3}, max|u_f| = {:.3}, ‖η̂‖ = {:.4e}, {settle}",
                     i + 1,
                     c.tail_max_abs_e,
                     c.tail_rms_e,
                     c.max_abs_u,
+                    c.max_abs_uf,
                     c.final_eta_norm
                 );
                 if let Some(d) = diagnostics.channels.get(i) {
@@ -206,7 +220,13 @@ fn report_outcome(result: &SimResult, diagnostics: &Diagnostics, out: &Path, sec
             Err(Failure::Run(format!("interrupted at t = {t:.3}; results up to then are in {out}")))
         }
         Outcome::TooManySteps { t, max_steps } => Err(Failure::Run(format!(
-            "the solver needed more than {max_steps} steps by t = {t:.6}; results up to then are in {out}"
+            "the solver needed more than {max_steps} steps by t = {t:.6} (the step budget; {}); results up to then are in {out}",
+            RUNAWAY_HINT
+        ))),
+        Outcome::HistoryTooLarge { t, max_bytes } => Err(Failure::Run(format!(
+            "the delay history would have exceeded {} MB by t = {t:.6} (the memory budget; {}); results up to then are in {out}",
+            max_bytes >> 20,
+            RUNAWAY_HINT
         ))),
     }
 }

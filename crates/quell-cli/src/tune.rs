@@ -51,7 +51,9 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
     crate::print_stdout(&report(&result));
     if let Some(c) = result.channels.iter().find(|c| c.chosen.is_none()) {
         return Err(Failure::Input(format!(
-            "channel {}: no μ in tune.mu[{}] completed with max |u_{}| ≤ tune.max_u[{}] and a finite {}; widen the bounds, raise the limit or lengthen simulation.t_end (the curve is in {})",
+            "channel {}: no μ in tune.mu[{}] completed with max |u_{}| ≤ tune.max_u[{}], max |u_f,{}| ≤ tune.max_uf[{}] and a finite {}; widen the bounds, raise the limits or lengthen simulation.t_end (the curve is in {})",
+            c.channel + 1,
+            c.channel,
             c.channel + 1,
             c.channel,
             c.channel + 1,
@@ -65,7 +67,7 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
 
 /// tune.csv: every evaluation of every channel's search.
 fn write_curves(w: &mut dyn std::io::Write, r: &TuneResult) -> std::io::Result<()> {
-    writeln!(w, "channel,mu,objective,outcome,tail_max_e,tail_rms_e,max_u,settle_t,chosen")?;
+    writeln!(w, "channel,mu,objective,outcome,tail_max_e,tail_rms_e,max_u,max_uf,settle_t,chosen")?;
     let opt = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
     for c in &r.channels {
         for p in &c.curve {
@@ -73,7 +75,7 @@ fn write_curves(w: &mut dyn std::io::Write, r: &TuneResult) -> std::io::Result<(
             let chosen = c.chosen.as_ref().is_some_and(|q| q.mu == p.mu);
             writeln!(
                 w,
-                "{},{},{},{},{},{},{},{},{chosen}",
+                "{},{},{},{},{},{},{},{},{},{chosen}",
                 c.channel + 1,
                 p.mu,
                 opt(p.objective),
@@ -81,6 +83,7 @@ fn write_curves(w: &mut dyn std::io::Write, r: &TuneResult) -> std::io::Result<(
                 opt(f.map(|f| f.tail_max_e)),
                 opt(f.map(|f| f.tail_rms_e)),
                 opt(f.map(|f| f.max_u)),
+                opt(f.map(|f| f.max_uf)),
                 opt(f.and_then(|f| f.settle_t)),
             )?;
         }

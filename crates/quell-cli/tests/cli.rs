@@ -244,7 +244,7 @@ fn design_unstable_observer_exits_2() {
 
 fn csv_header(m: usize, q: usize) -> String {
     let mut h = vec!["t".to_string()];
-    for s in ["y", "g", "e", "u"] {
+    for s in ["y", "g", "e", "u", "uf"] {
         h.extend((1..=m).map(|i| format!("{s}{i}")));
     }
     for i in 1..=m {
@@ -296,7 +296,7 @@ fn run_paper_example_writes_every_file() {
     let channels = s["channels"].as_array().unwrap();
     assert_eq!(channels.len(), 2);
     for c in channels {
-        for key in ["tail_max_abs_e", "tail_rms_e", "max_abs_u", "final_eta_norm"] {
+        for key in ["tail_max_abs_e", "tail_rms_e", "max_abs_u", "max_abs_uf", "final_eta_norm"] {
             assert!(c[key].as_f64().is_some_and(f64::is_finite), "channels[].{key}: {c}");
         }
     }
@@ -485,6 +485,34 @@ fn a_jordan_observer_design_reports_an_infinite_eigenvector_condition() {
     assert!(d["decoupled_eigenvector_condition"].as_f64().is_some_and(|k| k.is_finite() && k >= 1.0));
     let o = quell(&["design", file.to_str().unwrap()]);
     assert!(stdout(&o).contains("A − LC ∞ (defective"), "{}", stdout(&o));
+}
+
+#[test]
+fn run_states_records_x_and_x_hat_and_x_gives_y() {
+    // `--states` adds x1..x3, xhat1..xhat3; the recorded x must give the recorded y through the
+    // paper's y = C x + Q ω with ω = [sin t, 1 + 2 sin 2t] evaluated here (1e-9: the CSV's
+    // shortest round-trip numbers are exact, the rest is rounding of three products).
+    let dir = TempDir::new("run-states");
+    let o = quell(&["run", "--states", "--no-plots", "--out", dir.str()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let csv = fs::read_to_string(dir.join("signals.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(lines.next().unwrap(), format!("{},x1,x2,x3,xhat1,xhat2,xhat3", csv_header(2, 8)));
+    for row in lines {
+        let f: Vec<f64> = row.split(',').map(|s| s.parse().unwrap()).collect();
+        let (t, y, x) = (f[0], [f[1], f[2]], &f[f.len() - 6..f.len() - 3]);
+        let w = [t.sin(), 1.0 + 2.0 * (2.0 * t).sin()];
+        let want = [2.0 * x[0] + 2.0 * x[1] + w[0] + 2.0 * w[1], 2.0 * x[0] + x[1] + 2.0 * x[2] + w[0]];
+        for i in 0..2 {
+            assert!(
+                (y[i] - want[i]).abs() <= 1e-9 * (1.0 + want[i].abs()),
+                "t = {t}: y{} = {}, C x + Q ω = {}",
+                i + 1,
+                y[i],
+                want[i]
+            );
+        }
+    }
 }
 
 /// The paper's example with its whole [design] table left out.

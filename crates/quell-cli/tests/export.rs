@@ -186,12 +186,12 @@ fn the_exported_c_in_the_loop_gives_the_signals_of_quell_run() {
     let csv = std::fs::read_to_string(run_dir.join("signals.csv")).unwrap();
     let rows: Vec<Vec<f64>> = csv.lines().skip(1).map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
     assert_eq!(rows.len(), r.len());
-    // Columns: t, y1..2, g1..2, e1..2, u1..2, eta1_1..eta2_8.
+    // Columns: t, y1..2, g1..2, e1..2, u1..2, uf1..2, eta1_1..eta2_8.
     let (m, q) = (2, d.q());
     let ours: Vec<Vec<f64>> = (0..r.len())
         .map(|k| {
             let mut row = vec![r.t[k]];
-            for sig in [&r.y, &r.g, &r.e, &r.u] {
+            for sig in [&r.y, &r.g, &r.e, &r.u, &r.u_f] {
                 row.extend_from_slice(&sig[k * m..(k + 1) * m]);
             }
             row.extend_from_slice(&r.eta[k * m * q..(k + 1) * m * q]);

@@ -208,7 +208,7 @@ fn tune_writes_the_chosen_mu_and_each_curve() {
     assert_eq!(o.status.code(), Some(2));
     assert!(
         stderr(&o)
-            .contains("channel 1: no μ in tune.mu[0] completed with max |u_1| ≤ tune.max_u[0] and a finite tail_rms_e"),
+            .contains("channel 1: no μ in tune.mu[0] completed with max |u_1| ≤ tune.max_u[0], max |u_f,1| ≤ tune.max_uf[0] and a finite tail_rms_e"),
         "{}",
         stderr(&o)
     );

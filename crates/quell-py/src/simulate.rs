@@ -22,8 +22,10 @@ const SIGNAL_CHECK: Duration = Duration::from_millis(100);
 #[pyclass(module = "quell", name = "SimResult", frozen)]
 pub struct PySimResult {
     inner: SimResult,
-    /// t, y, g, e, u, eta.
-    arrays: [Py<PyAny>; 6],
+    /// t, y, g, e, u, u_f, eta.
+    arrays: [Py<PyAny>; 7],
+    /// x, x̂ when the run recorded them.
+    states: Option<[Py<PyAny>; 2]>,
     /// The run's convergence diagnostics as JSON ([`quell::diagnostics::Diagnostics`]).
     diagnostics: String,
 }
@@ -38,16 +40,21 @@ fn frozen_array(py: Python<'_>, data: &[f64], shape: &[usize]) -> PyResult<Py<Py
 
 impl PySimResult {
     fn new(py: Python<'_>, r: SimResult, diagnostics: String) -> PyResult<Self> {
-        let (n, m, q) = (r.len(), r.m, r.q);
+        let (k, m, q, n) = (r.len(), r.m, r.q, r.n);
         let arrays = [
-            frozen_array(py, &r.t, &[n])?,
-            frozen_array(py, &r.y, &[n, m])?,
-            frozen_array(py, &r.g, &[n, m])?,
-            frozen_array(py, &r.e, &[n, m])?,
-            frozen_array(py, &r.u, &[n, m])?,
-            frozen_array(py, &r.eta, &[n, m, q])?,
+            frozen_array(py, &r.t, &[k])?,
+            frozen_array(py, &r.y, &[k, m])?,
+            frozen_array(py, &r.g, &[k, m])?,
+            frozen_array(py, &r.e, &[k, m])?,
+            frozen_array(py, &r.u, &[k, m])?,
+            frozen_array(py, &r.u_f, &[k, m])?,
+            frozen_array(py, &r.eta, &[k, m, q])?,
         ];
-        Ok(PySimResult { inner: r, arrays, diagnostics })
+        let states = match r.has_states() {
+            true => Some([frozen_array(py, &r.x, &[k, n])?, frozen_array(py, &r.x_hat, &[k, n])?]),
+            false => None,
+        };
+        Ok(PySimResult { inner: r, arrays, states, diagnostics })
     }
 }
 
@@ -73,6 +80,11 @@ fn outcome_dict<'py>(py: Python<'py>, o: &Outcome) -> PyResult<Bound<'py, PyDict
             d.set_item("status", "too_many_steps")?;
             d.set_item("t", t)?;
             d.set_item("max_steps", max_steps)?;
+        }
+        Outcome::HistoryTooLarge { t, max_bytes } => {
+            d.set_item("status", "history_too_large")?;
+            d.set_item("t", t)?;
+            d.set_item("max_bytes", max_bytes)?;
         }
     }
     Ok(d)
@@ -105,10 +117,30 @@ impl PySimResult {
     fn u(&self, py: Python<'_>) -> Py<PyAny> {
         self.arrays[4].clone_ref(py)
     }
+    /// Plant inputs u_f = −K x̂ + F u_d (5), what the actuators deliver (N, m).
+    #[getter]
+    fn u_f(&self, py: Python<'_>) -> Py<PyAny> {
+        self.arrays[5].clone_ref(py)
+    }
     /// Adaptive parameters η̂_i (N, m, q), eq. (33).
     #[getter]
     fn eta(&self, py: Python<'_>) -> Py<PyAny> {
-        self.arrays[5].clone_ref(py)
+        self.arrays[6].clone_ref(py)
+    }
+    /// Plant states x (N, n), or None unless simulated with `states=True`.
+    #[getter]
+    fn x(&self, py: Python<'_>) -> Option<Py<PyAny>> {
+        self.states.as_ref().map(|s| s[0].clone_ref(py))
+    }
+    /// Observer states x̂ (N, n), eq. (6), or None unless simulated with `states=True`.
+    #[getter]
+    fn x_hat(&self, py: Python<'_>) -> Option<Py<PyAny>> {
+        self.states.as_ref().map(|s| s[1].clone_ref(py))
+    }
+    /// Plant order n.
+    #[getter]
+    fn n(&self) -> usize {
+        self.inner.n
     }
     /// Channels m.
     #[getter]
@@ -148,8 +180,8 @@ impl PySimResult {
         Ok(d)
     }
     /// Per channel, as summary.json: tail max |e_i| and RMS e_i over the last 10 % of the horizon,
-    /// max |u_i|, ‖η̂_i‖ at the end, settle_t (2 % band; None when not settled, or only in the
-    /// last 5 % of the horizon) and settle_note (why settle_t is None).
+    /// max |u_i|, max |u_f,i| (the plant input), ‖η̂_i‖ at the end, settle_t (2 % band; None when
+    /// not settled, or only in the last 5 % of the horizon) and settle_note (why settle_t is None).
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         self.inner
             .summary()
@@ -159,6 +191,7 @@ impl PySimResult {
                 d.set_item("tail_max_abs_e", c.tail_max_abs_e)?;
                 d.set_item("tail_rms_e", c.tail_rms_e)?;
                 d.set_item("max_abs_u", c.max_abs_u)?;
+                d.set_item("max_abs_uf", c.max_abs_uf)?;
                 d.set_item("final_eta_norm", c.final_eta_norm)?;
                 d.set_item("settle_t", c.settle_t)?;
                 d.set_item("settle_note", c.settle_note.as_deref())?;
@@ -177,7 +210,8 @@ impl PySimResult {
     fn to_control(slf: &Bound<'_, Self>) -> PyResult<Py<PyAny>> {
         Ok(slf.py().import("quell._control")?.call_method1("to_control", (slf,))?.unbind())
     }
-    /// The columns of signals.csv (t, y1.., g1.., e1.., u1.., eta1_1..) as a pandas DataFrame.
+    /// The columns of signals.csv (t, y1.., g1.., e1.., u1.., uf1.., eta1_1.., and x1.., xhat1.. when
+    /// recorded) as a pandas DataFrame.
     fn to_pandas(slf: &Bound<'_, Self>) -> PyResult<Py<PyAny>> {
         Ok(slf.py().import("quell._frames")?.call_method1("to_pandas", (slf,))?.unbind())
     }
@@ -213,9 +247,10 @@ impl PySimResult {
 /// Simulates a scenario's closed loop: the continuous-time controller on the delay equation, or,
 /// with a sample time, the sampled-data loop with the real-time controller; the plant simulated is
 /// the scenario's `[truth]` where it has one. Keywords override the
-/// scenario's `[simulation]`; with `check` a run that does not reach t_end raises SimulationError.
+/// scenario's `[simulation]`; with `states` the plant and observer states x, x̂ are recorded too;
+/// with `check` a run that does not reach t_end raises SimulationError.
 #[pyfunction]
-#[pyo3(signature = (scenario, *, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, check=true))]
+#[pyo3(signature = (scenario, *, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, max_steps=None, states=false, check=true))]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate(
     py: Python<'_>,
@@ -225,6 +260,8 @@ pub fn simulate(
     rtol: Option<&Bound<'_, PyAny>>,
     atol: Option<&Bound<'_, PyAny>>,
     sample_time: Option<&Bound<'_, PyAny>>,
+    max_steps: Option<&Bound<'_, PyAny>>,
+    states: bool,
     check: bool,
 ) -> PyResult<Py<PySimResult>> {
     let s: PyRef<'_, PyScenario> = scenario.extract().map_err(|_| {
@@ -250,7 +287,20 @@ pub fn simulate(
     } else {
         &s.inner
     };
-    let settings = LoopSettings::of(scn);
+    let mut settings = LoopSettings::of(scn);
+    settings.record_states(states);
+    let max_steps = match max_steps {
+        None => None,
+        Some(v) => match v.extract::<usize>() {
+            Ok(n) if n >= 1 => Some(n),
+            _ => {
+                let found = v.repr().map_or_else(|_| "?".to_string(), |r| r.to_string());
+                let msg = format!("max_steps: expected a step budget (an integer ≥ 1), found {found}");
+                return Err(Kind::Scenario.err(py, msg));
+            }
+        },
+    };
+    settings.set_max_steps(max_steps).map_err(|e| Kind::Scenario.err(py, e.to_string()))?;
     let mut interrupt: Option<PyErr> = None;
     let result = py.detach(|| {
         let mut last = Instant::now();
@@ -295,9 +345,18 @@ pub fn simulate(
             None,
         ),
         Outcome::Interrupted { t } => (format!("interrupted at t = {t:.3}"), t, None, None),
-        Outcome::TooManySteps { t, max_steps } => {
-            (format!("the solver needed more than {max_steps} steps by t = {t:.6}"), t, None, None)
-        }
+        Outcome::TooManySteps { t, max_steps } => (
+            format!("the solver needed more than {max_steps} steps by t = {t:.6} (the step budget: the loop turned stiff, as a loop blowing up does, or its adaptation is stiff from the start; raise max_steps= if the run is sound); the samples up to then are in the exception's .result"),
+            t,
+            None,
+            None,
+        ),
+        Outcome::HistoryTooLarge { t, max_bytes } => (
+            format!("the delay history would have exceeded {} MB by t = {t:.6} (the memory budget: the solver's steps had become tiny); the samples up to then are in the exception's .result", max_bytes >> 20),
+            t,
+            None,
+            None,
+        ),
     };
     let (message, t, signal, value) = failure;
     Err(simulation_error(py, message, t, signal, value, result.into_any()))

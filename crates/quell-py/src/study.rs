@@ -184,6 +184,7 @@ fn row_dict<'py>(py: Python<'py>, spec: &RunSpec, row: &study::Row) -> PyResult<
         ),
         ("tail_rms_e", &|c: &study::ChannelFigures| Some(c.tail_rms_e)),
         ("max_u", &|c: &study::ChannelFigures| Some(c.max_u)),
+        ("max_uf", &|c: &study::ChannelFigures| Some(c.max_uf)),
         ("settle_t", &|c: &study::ChannelFigures| c.settle_t),
     ] {
         for i in 0..m {

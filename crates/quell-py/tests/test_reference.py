@@ -18,11 +18,12 @@ def test_arrays_equal_signals_csv(quell_bin, tmp_path):
     frame = r.to_pandas()
     assert list(frame.columns) == header
     n, m, q = len(r), r.m, r.q
-    assert table.shape == (n, 1 + 4 * m + m * q)
+    assert table.shape == (n, 1 + 5 * m + m * q)
     assert np.array_equal(frame.to_numpy(), table)
     assert np.array_equal(r.t, table[:, 0])
     assert np.array_equal(r.y, table[:, 1 : 1 + m])
-    assert np.array_equal(r.eta.reshape(n, m * q), table[:, 1 + 4 * m :])
+    assert np.array_equal(r.u_f, table[:, 1 + 4 * m : 1 + 5 * m])
+    assert np.array_equal(r.eta.reshape(n, m * q), table[:, 1 + 5 * m :])
 
 
 def test_paper_reference_points(reference_points):

@@ -33,6 +33,34 @@ impl LoopSettings {
         }
     }
 
+    /// Records the plant state x and the observer state x̂ too (in either loop), or not.
+    pub fn record_states(&mut self, on: bool) {
+        match self {
+            LoopSettings::Continuous(st) => st.record_states = on,
+            LoopSettings::Sampled(st) => st.record_states = on,
+        }
+    }
+
+    /// The continuous loop's step budget (`None`: [`sim::default_max_steps`], derived from the
+    /// problem). A sampled-data run takes t_end / sample_time controller steps, known before it
+    /// starts; a budget for it is an error naming `max_steps`.
+    pub fn set_max_steps(&mut self, max_steps: Option<usize>) -> Result<(), crate::settings::KeyError> {
+        match (self, max_steps) {
+            (LoopSettings::Continuous(st), _) => st.max_steps = max_steps,
+            (LoopSettings::Sampled(_), None) => {}
+            (LoopSettings::Sampled(st), Some(_)) => {
+                return Err(crate::settings::KeyError::new(
+                    "max_steps",
+                    format!(
+                        "a step budget applies to the continuous loop; this sampled-data run takes t_end / sample_time = {:.0} controller steps, known before it starts: leave max_steps out",
+                        (st.t_end / st.sample_time).floor() + 1.0
+                    ),
+                ))
+            }
+        }
+        Ok(())
+    }
+
     /// The sampled-data loop at `sample_time` (in place of the scenario's), with its `[noise]` and
     /// actuator.
     pub fn sampled(s: &Scenario, sample_time: f64) -> Self {
@@ -91,6 +119,50 @@ mod tests {
             let (a, b) = (run(&nominal, &settings), run(&truth, &settings));
             assert_eq!([b.y[0] - a.y[0], b.y[1] - a.y[1]], [2.0, 2.0], "{settings:?}");
         }
+    }
+
+    /// The paper's plant with A × 1.3 and τ_2 = 2.6 s as the true plant: the loop blows up.
+    const DIVERGING_TRUTH: &str =
+        "[truth]\nA = [[-4.16, -2.21, -3.9], [3.64, 1.69, 5.2], [0.39, 0.39, -0.65]]\ndelays = [1.0, 2.6]";
+
+    #[test]
+    fn the_default_step_budget_follows_the_problem_and_ends_a_runaway() {
+        let s = Scenario::from_toml(&format!("{PAPER_EXAMPLE}\n{DIVERGING_TRUTH}")).unwrap();
+        let d = s.design().unwrap();
+        // ρ = 9 (the reference filter pole −9 is the fastest rate; |eig(1.3 A)| ≤ 3.9, the channel
+        // poles 6, the observer's 4, ω ≤ 2 rad/s, 1/β = 1), τ_min = 1 s, t_end = 100 s:
+        // 10,000 + 100·(9·100 + 100/1) = 110,000.
+        let budget = sim::default_max_steps(&d, s.true_plant(), [&s.reference, &s.disturbance], 100.0);
+        assert_eq!(budget, 110_000);
+        let r = simulate(&s, &d, &LoopSettings::of(&s), |_| ControlFlow::Continue(())).unwrap();
+        let Some(sim::Outcome::TooManySteps { t, max_steps }) = r.outcome else { panic!("{:?}", r.outcome) };
+        assert_eq!((max_steps, r.stats.steps()), (budget, budget + 1));
+        // It ends where it turned stiff, with its samples up to then.
+        assert!(t > 10.0 && t < 100.0 && r.t.last().is_some_and(|&l| l <= t && l > t - 0.2), "t = {t}");
+        // A budget given instead of the default; a sampled-data run has none.
+        let mut st = LoopSettings::of(&s);
+        st.set_max_steps(Some(2_000)).unwrap();
+        let r = simulate(&s, &d, &st, |_| ControlFlow::Continue(())).unwrap();
+        assert!(matches!(r.outcome, Some(sim::Outcome::TooManySteps { max_steps: 2_000, .. })), "{:?}", r.outcome);
+        let err = LoopSettings::sampled(&s, 0.01).set_max_steps(Some(10)).unwrap_err();
+        assert_eq!(err.key, "max_steps");
+    }
+
+    #[test]
+    fn the_memory_budget_ends_a_run_whose_history_would_exceed_it() {
+        let s = Scenario::from_toml(&format!("{PAPER_EXAMPLE}\n{DIVERGING_TRUTH}")).unwrap();
+        let d = s.design().unwrap();
+        let LoopSettings::Continuous(st) = LoopSettings::of(&s) else { unreachable!() };
+        let bytes = 2 << 20;
+        let st = RunSettings { max_history_bytes: bytes, ..st };
+        let r = simulate(&s, &d, &LoopSettings::Continuous(st), |_| ControlFlow::Continue(())).unwrap();
+        let Some(sim::Outcome::HistoryTooLarge { t, max_bytes }) = r.outcome else { panic!("{:?}", r.outcome) };
+        assert!(max_bytes == bytes && t > 1.0 && t < 100.0, "t = {t}");
+        // The history held at most half the budget's records (the ring may double): nd = 27 delayed
+        // components of the paper's loop (ξ̂, x̂: 11; η̂: 16), 8·27 + 9 numbers a record.
+        let RunStats::Continuous { max_history_len, .. } = r.stats else { unreachable!() };
+        let record = (8 * 27 + 9) * 8;
+        assert!(max_history_len <= bytes / (2 * record) && max_history_len + 1 >= bytes / (2 * record));
     }
 
     #[test]

@@ -5,7 +5,11 @@
 mod common;
 
 use common::*;
-use quell::sim::SimResult;
+use std::ops::ControlFlow;
+
+use quell::nalgebra::DVector;
+use quell::sim::{simulate_sampled, Outcome, RunSettings, SampledSettings, SimResult};
+use quell::Design;
 
 #[test]
 fn paper_example_converges() {
@@ -50,4 +54,65 @@ fn channel_independence_mu1_leaves_channel_2_unchanged() {
     assert!(dev(col(&base, &base.u), col(&other, &other.u)) < 1e-8);
     // ... while channel 1 does change (the test can fail).
     assert!(dev(base.column(&base.y, 2, 0).collect(), other.column(&other.y, 2, 0).collect()) > 1e-3);
+}
+
+/// u_f(t_k) recomputed from the recorded x̂ and u with the design's K and F (eq. (5)): −K x̂(t_k) +
+/// F [u_1(t_k − τ_1), …], u before t = 0 being 0, the delays whole numbers `shift` of rows. Returns
+/// the largest deviation from the recorded u_f and the largest |u_f|.
+fn plant_input_deviation(r: &SimResult, d: &Design, shift: &[usize]) -> (f64, f64) {
+    let (m, n) = (r.m, r.n);
+    let (mut dev, mut peak) = (0.0f64, 0.0f64);
+    for k in 0..r.len() {
+        let x_hat = DVector::from_column_slice(&r.x_hat[k * n..(k + 1) * n]);
+        let u_d =
+            DVector::from_iterator(m, (0..m).map(|i| if k >= shift[i] { r.u[(k - shift[i]) * m + i] } else { 0.0 }));
+        let want = d.F() * u_d - d.K() * x_hat;
+        for i in 0..m {
+            dev = dev.max((r.u_f[k * m + i] - want[i]).abs());
+            peak = peak.max(want[i].abs());
+        }
+    }
+    (dev, peak)
+}
+
+#[test]
+fn plant_input_is_recorded_as_minus_K_x_hat_plus_F_delayed_u() {
+    // The continuous loop, with true delays that differ from the design's (τ = [1, 3] designed,
+    // [1.05, 3] true: u_f is the input the true plant receives) and x0 ≠ 0. The delays are whole
+    // numbers of output steps, so u(t − τ) is a recorded sample; the loop reads it from the
+    // integrator's history, the same dense output, so both agree to rounding (1e-10 of the peak).
+    let d = Design::new(&paper_plant(), &paper_spec()).unwrap();
+    let (g, w) = paper_signals();
+    let mut truth = paper_plant();
+    truth.delays = vec![1.05, 3.0];
+    truth.x0 = DVector::from_column_slice(&[0.5, -0.2, 0.1]);
+    let st = RunSettings { record_states: true, ..RunSettings::new(20.0, 0.05, 1e-9, 1e-9) };
+    let r = quell::sim::simulate_with_truth(&d, &truth, &g, &w, &st, |_| ControlFlow::Continue(())).unwrap();
+    assert_eq!(r.outcome, Some(Outcome::Completed));
+    assert_eq!((r.x.len(), r.x_hat.len()), (3 * r.len(), 3 * r.len()));
+    // Row 0: x = x0 as given.
+    assert_eq!(r.x[..3], [0.5, -0.2, 0.1]);
+    let (dev, peak) = plant_input_deviation(&r, &d, &[21, 60]);
+    assert!(peak > 1.0 && dev <= 1e-10 * peak, "max deviation {dev:e}, peak {peak}");
+    // With the design's delays instead the check fails: the test tells the delays apart.
+    let (dev, _) = plant_input_deviation(&r, &d, &[20, 60]);
+    assert!(dev > 1e-3 * peak, "{dev:e}");
+
+    // The sampled-data loop: u_f(k) = −K x̂(k) + F u(k − d_i) exactly (d = τ / T_s samples).
+    let st = SampledSettings { record_states: true, ..SampledSettings::new(20.0, 0.01, 0.01) };
+    let r = simulate_sampled(&d, &g, &w, &st, |_| ControlFlow::Continue(())).unwrap();
+    let (dev, peak) = plant_input_deviation(&r, &d, &[100, 300]);
+    assert!(peak > 1.0 && dev <= 1e-12 * peak, "sampled: max deviation {dev:e}, peak {peak}");
+}
+
+#[test]
+fn summary_reports_the_plant_input_peak_and_states_are_recorded_only_when_asked() {
+    let r = run_paper(paper_spec(), 20.0, 0.1, 1e-9);
+    let s = r.summary();
+    for (i, c) in s.iter().enumerate() {
+        let peak = r.column(&r.u_f, 2, i).fold(0.0, |a: f64, v| a.max(v.abs()));
+        assert_eq!(c.max_abs_uf, peak);
+        assert!(c.max_abs_uf != c.max_abs_u, "u_f is not the command u: {c:?}");
+    }
+    assert!(r.x.is_empty() && r.x_hat.is_empty() && !r.has_states());
 }

@@ -187,7 +187,7 @@ fn a_triple_observer_pole_is_placed() {
 /// 10⁵ steps so that a stiff loop ends (TooManySteps) instead of crawling.
 fn runs(s: &Scenario, d: &Design) -> (Outcome, Result<quell::sim::SimResult, quell::sim::SimError>) {
     let mut settings = RunSettings::new(10.0, 0.1, 1e-9, 1e-9);
-    settings.max_steps = 100_000;
+    settings.max_steps = Some(100_000);
     let cont = simulate(d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())).unwrap();
     let sampled = simulate_sampled(d, &s.reference, &s.disturbance, &SampledSettings::new(10.0, 0.1, 0.001), |_| {
         ControlFlow::Continue(())
@@ -273,7 +273,7 @@ fn delays_at_the_edges_are_accepted_and_the_loop_says_what_it_can_run() {
     // At the limit (t_end / τ = 1e10) the continuous loop starts.
     let (s, d) = load("delays = [1.0, 3.0]", "delays = [1e-9, 3.0]").unwrap();
     let mut settings = RunSettings::new(10.0, 0.1, 1e-9, 1e-9);
-    settings.max_steps = 10;
+    settings.max_steps = Some(10);
     let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())).unwrap();
     assert!(matches!(r.outcome, Some(Outcome::TooManySteps { .. })), "{:?}", r.outcome);
 }

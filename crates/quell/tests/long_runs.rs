@@ -103,6 +103,7 @@ fn sampled_with_measurement_noise_1000_s() {
         sample_time: 0.001,
         noise: Some(MeasurementNoise::white(vec![0.03, 0.02], 1)),
         divergence_bound: 1e9,
+        record_states: false,
         actuator: None,
     };
     let r = simulate_sampled(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(()))

@@ -260,6 +260,7 @@ fn sampled_data_loop_converges_to_the_continuous_one_at_order_one() {
             sample_time: ts,
             noise: None,
             divergence_bound: 1e9,
+            record_states: false,
             actuator: None,
         };
         let samp = simulate_sampled(&d, &g, &w, &settings, |_| ControlFlow::Continue(())).unwrap();
@@ -314,6 +315,7 @@ fn sample_time_sweep() {
             sample_time: ts,
             noise: None,
             divergence_bound: 1e9,
+            record_states: false,
             actuator: None,
         };
         let r = simulate_sampled(&d, &g, &w, &settings, |_| ControlFlow::Continue(())).unwrap();

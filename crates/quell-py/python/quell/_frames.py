@@ -1,12 +1,15 @@
 """SimResult.to_pandas and SimResult.plot: pandas and matplotlib are imported only here, when used."""
 
 
-def columns(m, q):
-    """The header of signals.csv: t, y1..ym, g1..gm, e1..em, u1..um, eta1_1..etam_q."""
+def columns(m, q, n=0):
+    """The header of signals.csv: t, y1..ym, g1..gm, e1..em, u1..um, uf1..ufm, eta1_1..etam_q, and
+    with recorded states (n > 0) x1..xn, xhat1..xhatn."""
     names = ["t"]
-    for signal in ("y", "g", "e", "u"):
+    for signal in ("y", "g", "e", "u", "uf"):
         names += [f"{signal}{i}" for i in range(1, m + 1)]
     names += [f"eta{i}_{j}" for i in range(1, m + 1) for j in range(1, q + 1)]
+    for signal in ("x", "xhat") if n else ():
+        names += [f"{signal}{i}" for i in range(1, n + 1)]
     return names
 
 
@@ -18,11 +21,13 @@ def to_pandas(result):
         raise ImportError("SimResult.to_pandas needs pandas: pip install pandas") from e
     import numpy as np
 
-    n, m, q = len(result), result.m, result.q
-    data = np.column_stack(
-        [result.t, result.y, result.g, result.e, result.u, np.asarray(result.eta).reshape(n, m * q)]
-    )
-    return pd.DataFrame(data, columns=columns(m, q))
+    k, m, q = len(result), result.m, result.q
+    blocks = [result.t, result.y, result.g, result.e, result.u, result.u_f, np.asarray(result.eta).reshape(k, m * q)]
+    states = result.x is not None
+    if states:
+        blocks += [result.x, result.x_hat]
+    data = np.column_stack(blocks)
+    return pd.DataFrame(data, columns=columns(m, q, result.n if states else 0))
 
 
 def plot(result, channel=1, fig=None, ax=None, figsize=None):

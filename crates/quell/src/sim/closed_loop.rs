@@ -9,7 +9,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::dde::{self, DelaySystem, Options, Past};
 use super::divergence::{Peaks, Watched, DIVERGENCE_BOUND};
-use super::result::{Outcome, RunStats, SimResult};
+use super::result::{Outcome, RunStats, Sample, SimResult};
 use super::{check_run, SimError};
 use crate::controller::{command, mat_vec, packed, swapping_error, Equations};
 use crate::design::Design;
@@ -94,6 +94,9 @@ pub struct ContinuousLoop<'a> {
     tmp: Vec<f64>,
     /// The Cholesky factor of I + hγμ_iΩ_i in the implicit stages ([`DelaySystem::solve_implicit`]).
     factor: Vec<f64>,
+    u_d: Vec<f64>,
+    /// What [`DelaySystem::observe`] records; `None` for a loop used as a bare [`DelaySystem`].
+    record: Option<Record>,
 }
 
 impl<'a> ContinuousLoop<'a> {
@@ -190,6 +193,8 @@ impl<'a> ContinuousLoop<'a> {
             Delta: vec![0.0; q],
             tmp: vec![0.0; q],
             factor: vec![0.0; packed::len(q)],
+            u_d: vec![0.0; m],
+            record: None,
             layout,
             eq,
         })
@@ -207,60 +212,37 @@ impl<'a> ContinuousLoop<'a> {
         Ok(s)
     }
 
-    /// What the output callback needs, apart from the solver's borrow of the loop.
-    fn probe(&self) -> Probe<'a> {
-        Probe {
-            eq: self.eq.clone(),
-            layout: self.layout.clone(),
-            C: self.C,
-            Q: self.Q,
-            signals: self.signals.clone(),
-            gw: vec![0.0; self.signals.len()],
-            limited: self.actuator.as_ref().map(|a| a.limited.clone()),
+    /// The plant input u_f = −K x̂(t) + F u_d(t) (5) as the true plant receives it (at its delays,
+    /// through its actuator), into `u_f`.
+    fn plant_input(&mut self, t: f64, s: &[f64], past: &Past<'_>, u_f: &mut [f64]) {
+        let (eq, l) = (&self.eq, &self.layout);
+        if let Some(act) = &mut self.actuator {
+            act.input(t, s, past, (eq, l), (&mut self.eta_d, &mut self.xi_d), u_f);
+            return;
         }
+        for i in 0..eq.m {
+            let tau = self.true_delays.get(i).copied().unwrap_or(eq.channels[i].delay);
+            self.u_d[i] = command_at(eq, l, (t, tau), i, s, past, (&mut self.eta_d, &mut self.xi_d));
+        }
+        eq.plant_input(s, &self.u_d, u_f);
     }
 }
 
-/// Reads y, g, u (25) and η̂ off the output prefix [z, η̂, x] of the loop's state.
-struct Probe<'a> {
-    eq: Equations,
-    layout: Layout,
-    C: &'a DMatrix<f64>,
-    Q: &'a DMatrix<f64>,
-    signals: SignalBank,
-    /// [g; ω] (and the noise n, not read here).
+/// What a run records at each output time, and the bounds it watches; kept by the loop, whose
+/// [`DelaySystem::observe`] fills it.
+struct Record {
+    result: SimResult,
+    /// Bounds per watched signal (x, x̂, ξ̂, η̂).
+    bounds: Peaks,
+    /// The run's end when a watched signal crossed its bound.
+    diverged: Option<Outcome>,
+    /// x and x̂ too ([`RunSettings::record_states`]).
+    states: bool,
+    /// [g; ω] (and the noise n, not read here), y, u, u_f.
     gw: Vec<f64>,
-    /// Per input: whether the actuator's limit clipped it at the latest evaluation of the derivative.
-    limited: Option<Rc<[Cell<bool>]>>,
-}
-
-impl Probe<'_> {
-    /// Outputs at time t: y, g and the undelayed commands u (25) and η̂ (a view of the state).
-    fn outputs<'s>(&mut self, t: f64, s: &'s [f64], y: &mut [f64], g: &mut [f64], u: &mut [f64]) -> &'s [f64] {
-        let l = &self.layout;
-        self.signals.eval_into_unchecked(t, &mut self.gw);
-        let (g_t, w) = self.gw.split_at(g.len());
-        let w = &w[..self.Q.ncols()];
-        g.copy_from_slice(g_t);
-        mat_vec(self.C, &s[l.x..l.x + self.eq.n], y, false);
-        mat_vec(self.Q, w, y, true);
-        let xi = self.eq.regressor(s);
-        for (i, ui) in u.iter_mut().enumerate() {
-            *ui = command(&s[l.eta(i)..l.eta(i) + l.q], xi);
-        }
-        &s[l.nz..l.x]
-    }
-
-    /// The watched signals ξ̂, x̂, η̂ and x in the output prefix.
-    fn watched<'s>(&self, s: &'s [f64]) -> Watched<'s> {
-        let l = &self.layout;
-        Watched {
-            xi_hat: self.eq.regressor(s),
-            x_hat: self.eq.x_hat(s),
-            eta: &s[l.nz..l.x],
-            x: &s[l.x..l.x + self.eq.n],
-        }
-    }
+    y: Vec<f64>,
+    u: Vec<f64>,
+    u_f: Vec<f64>,
 }
 
 impl DelaySystem for ContinuousLoop<'_> {
@@ -310,6 +292,38 @@ impl DelaySystem for ContinuousLoop<'_> {
             }
         }
         true
+    }
+
+    /// Records y, g, u (25), u_f (5) and η̂ (and x, x̂) at t, unless a watched signal is beyond its
+    /// bound: then the run ends as diverged.
+    fn observe(&mut self, t: f64, s: &[f64], past: &Past<'_>) -> ControlFlow<()> {
+        let Some(mut rec) = self.record.take() else { return ControlFlow::Continue(()) };
+        let (eq, l) = (&self.eq, &self.layout);
+        let (xi, x_hat, eta, x) = (eq.regressor(s), eq.x_hat(s), &s[l.nz..l.x], &s[l.x..l.x + eq.n]);
+        let watched = Watched { xi_hat: xi, x_hat, eta, x };
+        let flow = if let Some(diverged) = watched.beyond(t, &rec.bounds) {
+            rec.diverged = Some(diverged);
+            ControlFlow::Break(())
+        } else {
+            rec.result.peaks.record(&watched);
+            self.signals.eval_into_unchecked(t, &mut rec.gw);
+            let (g, w) = rec.gw.split_at(eq.m);
+            mat_vec(self.C, x, &mut rec.y, false);
+            mat_vec(self.Q, &w[..self.Q.ncols()], &mut rec.y, true);
+            for (i, u) in rec.u.iter_mut().enumerate() {
+                *u = command(&s[l.eta(i)..l.eta(i) + l.q], xi);
+            }
+            self.plant_input(t, s, past, &mut rec.u_f);
+            let states = rec.states.then_some((x, x_hat));
+            let (y, u, u_f) = (&rec.y, &rec.u, &rec.u_f);
+            rec.result.push(&Sample { t, y, g, u, u_f, eta, states });
+            if let Some(act) = &self.actuator {
+                rec.result.count_limited(act.limited.iter().map(Cell::get));
+            }
+            ControlFlow::Continue(())
+        };
+        self.record = Some(rec);
+        flow
     }
 
     fn rhs(&mut self, t: f64, s: &[f64], past: &Past<'_>, ds: &mut [f64]) {
@@ -628,8 +642,12 @@ pub struct RunSettings {
     pub atol: f64,
     /// A watched signal above this magnitude counts as divergence ([`Watched`]).
     pub divergence_bound: f64,
-    /// Most solver steps ([`Outcome::TooManySteps`] beyond); unlimited by default.
-    pub max_steps: usize,
+    /// Most solver steps ([`Outcome::TooManySteps`] beyond); `None`: [`default_max_steps`], derived
+    /// from the problem.
+    pub max_steps: Option<usize>,
+    /// Most bytes the delay history may hold ([`Outcome::HistoryTooLarge`] beyond); default
+    /// [`MAX_HISTORY_BYTES`].
+    pub max_history_bytes: usize,
     /// Bounds per watched signal (x, x̂, ξ̂, η̂) below `divergence_bound`: a signal beyond its bound
     /// counts as divergence too. Studies set these to a factor times the nominal run's
     /// [`SimResult::peaks`] (docs/studies.md, "Runaway"); `None` by default.
@@ -640,6 +658,8 @@ pub struct RunSettings {
     pub noise: Option<MeasurementNoise>,
     /// The true plant's actuator (delay on u_f, limits); `None`: the plant receives u_f.
     pub actuator: Option<Actuator>,
+    /// Record the plant state x and the observer state x̂ too ([`SimResult::x`]); off by default.
+    pub record_states: bool,
 }
 
 impl RunSettings {
@@ -651,12 +671,70 @@ impl RunSettings {
             rtol,
             atol,
             divergence_bound: DIVERGENCE_BOUND,
-            max_steps: usize::MAX,
+            max_steps: None,
+            max_history_bytes: MAX_HISTORY_BYTES,
             runaway: None,
             method: dde::Method::Auto,
             noise: None,
             actuator: None,
+            record_states: false,
         }
+    }
+}
+
+/// Default memory budget of a continuous run's delay history: 1 GiB. The recorded rows come on top;
+/// they are known before the run (at most [`crate::settings::MAX_OUTPUT_SAMPLES`]).
+pub const MAX_HISTORY_BYTES: usize = 1 << 30;
+
+/// Steps of the default budget per unit of ρ·t_end ([`default_max_steps`]).
+pub const BUDGET_STEPS_PER_RATE: f64 = 100.0;
+
+/// The default budget's least number of steps (a study's default budget, `study::MAX_STEPS`).
+pub const BUDGET_MIN_STEPS: usize = 10_000;
+
+/// The default step budget of a continuous run, from the problem's time scales:
+/// [`BUDGET_MIN_STEPS`] + [`BUDGET_STEPS_PER_RATE`]·(ρ·t_end + t_end/τ_min). ρ is the fastest rate
+/// the loop is built from: the largest |λ| of the true plant's A, of A − BK, A − LC, G_g, G_ω and
+/// the channels' G_ii(s), 1/β, and the signals' highest frequency; τ_min is the shortest positive
+/// delay (a step is at most τ_min long). A healthy run takes a few steps per unit of ρ·t (the
+/// paper's example about 2 at rtol = 1e-9), so the budget leaves a margin of tens; a loop that
+/// turns stiff as it blows up spends it in seconds. The adaptation's own rate μ_i·λ_max(Ω_i) is not
+/// known before the run and is not counted.
+pub fn default_max_steps(design: &Design, truth: &Plant, signals: [&Signal; 2], t_end: f64) -> usize {
+    let radius = |M: &DMatrix<f64>| {
+        if M.is_empty() {
+            0.0
+        } else {
+            M.complex_eigenvalues().iter().fold(0.0, |r: f64, z| r.max(z.norm()))
+        }
+    };
+    let largest = |e: &[nalgebra::Complex<f64>]| e.iter().fold(0.0, |r: f64, z| r.max(z.norm()));
+    let channels = design.channels().iter().fold(0.0, |r: f64, c| r.max(largest(&c.poles)));
+    let frequency = signals
+        .iter()
+        .flat_map(|s| s.components.iter().flat_map(|c| c.harmonics.iter().map(|h| h.frequency.abs())))
+        .fold(0.0, f64::max);
+    let rho = [
+        radius(&truth.A),
+        largest(design.decoupled_eigenvalues()),
+        largest(design.observer_eigenvalues()),
+        radius(design.G_g()),
+        radius(design.G_w()),
+        channels,
+        1.0 / design.beta(),
+        frequency,
+    ]
+    .into_iter()
+    .filter(|r| r.is_finite())
+    .fold(0.0, f64::max);
+    let delays = design.plant().delays.iter().chain(&truth.delays).filter(|&&d| d > 0.0);
+    let tau_min = delays.fold(f64::INFINITY, |a, &d| a.min(d));
+    let scale = rho * t_end + if tau_min.is_finite() { t_end / tau_min } else { 0.0 };
+    let steps = BUDGET_MIN_STEPS as f64 + BUDGET_STEPS_PER_RATE * scale;
+    if steps.is_finite() && steps < usize::MAX as f64 {
+        steps as usize
+    } else {
+        usize::MAX
     }
 }
 
@@ -689,7 +767,19 @@ pub fn simulate_with_truth(
     settings: &RunSettings,
     mut on_progress: impl FnMut(f64) -> ControlFlow<()>,
 ) -> Result<SimResult, SimError> {
-    let RunSettings { t_end, output_step, rtol, atol, divergence_bound, max_steps, runaway, method, .. } = *settings;
+    let RunSettings {
+        t_end,
+        output_step,
+        rtol,
+        atol,
+        divergence_bound,
+        max_steps,
+        max_history_bytes,
+        runaway,
+        method,
+        record_states,
+        ..
+    } = *settings;
     check_run(design, reference, disturbance, t_end, output_step, divergence_bound)?;
     crate::settings::check_tolerances(rtol, atol)?;
     let (actuator, noise) = (settings.actuator.as_ref(), settings.noise.as_ref());
@@ -702,37 +792,43 @@ pub fn simulate_with_truth(
     // with_truth has checked x0's length (check_truth).
     let s0 = sys.initial_state(&truth.x0).map_err(|e| KeyError::new("truth.x0", e.to_string()))?;
     let history = vec![0.0; sys.n_delayed()];
-    let (m, q) = (sys.eq.m, sys.eq.q);
-    let mut result = SimResult::new(m, q, RunStats::continuous(&dde::Stats::default()));
-    let (mut y, mut g, mut u) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
-    let opts = Options { rtol, atol, max_steps, method, ..Options::default() };
+    let (m, q, n) = (sys.eq.m, sys.eq.q, sys.eq.n);
+    sys.record = Some(Record {
+        result: SimResult::new(m, q, n, RunStats::continuous(&dde::Stats::default())),
+        bounds: Peaks(runaway.map_or([divergence_bound; 4], |r| r.0.map(|b| b.min(divergence_bound)))),
+        diverged: None,
+        states: record_states,
+        gw: vec![0.0; sys.signals.len()],
+        y: vec![0.0; m],
+        u: vec![0.0; m],
+        u_f: vec![0.0; m],
+    });
+    let max_steps = max_steps.unwrap_or_else(|| default_max_steps(design, truth, [reference, disturbance], t_end));
+    // The history's ring may double past its length: half the budget in records.
+    let max_history_len = max_history_bytes / (2 * dde::record_bytes(sys.n_delayed()));
+    let opts = Options { rtol, atol, max_steps, max_history_len, method, ..Options::default() };
     let mut outcome = Outcome::Completed;
-    let bounds = Peaks(runaway.map_or([divergence_bound; 4], |r| r.0.map(|b| b.min(divergence_bound))));
-    // The solver borrows the loop mutably; the output callback reads through its own probe.
-    let mut probe = sys.probe();
-    let solved = dde::solve(&mut sys, 0.0, &s0, &history, t_end, output_step, &opts, |t, s| {
-        let watched = probe.watched(s);
-        if let Some(diverged) = watched.beyond(t, &bounds) {
-            outcome = diverged;
-            return ControlFlow::Break(());
-        }
-        result.peaks.record(&watched);
-        let eta = probe.outputs(t, s, &mut y, &mut g, &mut u);
-        result.push(t, &y, &g, &u, eta);
-        if let Some(limited) = &probe.limited {
-            result.count_limited(limited.iter().map(Cell::get));
-        }
+    // The loop records each sample (observe); here only the progress and an interruption.
+    let solved = dde::solve(&mut sys, 0.0, &s0, &history, t_end, output_step, &opts, |t, _| {
         if on_progress(t).is_break() {
             outcome = Outcome::Interrupted { t };
             return ControlFlow::Break(());
         }
         ControlFlow::Continue(())
     });
+    let Record { mut result, diverged, .. } = sys.record.take().expect("the loop keeps its record");
+    if let Some(diverged) = diverged {
+        outcome = diverged;
+    }
     match solved {
         Ok(stats) => result.stats = RunStats::continuous(&stats),
         Err(dde::SolveError::TooManySteps { t, stats }) => {
             result.stats = RunStats::continuous(&stats);
             outcome = Outcome::TooManySteps { t, max_steps };
+        }
+        Err(dde::SolveError::HistoryTooLong { t, stats }) => {
+            result.stats = RunStats::continuous(&stats);
+            outcome = Outcome::HistoryTooLarge { t, max_bytes: max_history_bytes };
         }
         Err(dde::SolveError::StepSizeTooSmall { t, stats, .. }) => {
             result.stats = RunStats::continuous(&stats);

@@ -56,6 +56,12 @@ pub trait DelaySystem {
     fn n_output(&self) -> usize {
         self.dim()
     }
+    /// Called at each output time t, before `on_output`, with the output prefix `y` of the state and
+    /// the past (delayed arguments t − τ read as in [`DelaySystem::rhs`]): for outputs that depend on
+    /// delayed values. `Break` stops the run as `on_output`'s does. Default: nothing.
+    fn observe(&mut self, _t: f64, _y: &[f64], _past: &Past<'_>) -> ControlFlow<()> {
+        ControlFlow::Continue(())
+    }
     /// The components (default: none) whose rate is linear in themselves and may be stiff:
     /// f_I(y) = c(y) − M(y) y_I on this range, with M positive semidefinite and c, M depending
     /// on the other components only. The stiff method integrates them implicitly (see `dde/ark.rs`).
@@ -133,14 +139,31 @@ pub struct Options {
     /// blowing up turns stiff long before its states reach a divergence bound, and its history
     /// would fill memory).
     pub max_steps: usize,
+    /// Most step records the delay history may hold at once (its memory is about
+    /// [`record_bytes`] each, twice that while its ring doubles); a run that needs more ends with
+    /// [`SolveError::HistoryTooLong`].
+    pub max_history_len: usize,
     /// Which method integrates the steps.
     pub method: Method,
 }
 
 impl Default for Options {
     fn default() -> Self {
-        Options { rtol: 1e-9, atol: 1e-9, h_max: f64::INFINITY, max_steps: usize::MAX, method: Method::Auto }
+        Options {
+            rtol: 1e-9,
+            atol: 1e-9,
+            h_max: f64::INFINITY,
+            max_steps: usize::MAX,
+            max_history_len: usize::MAX,
+            method: Method::Auto,
+        }
     }
+}
+
+/// Bytes of one step record of the history for `n_delayed` components: its coefficients, start,
+/// length and nodes.
+pub fn record_bytes(n_delayed: usize) -> usize {
+    (NCOEF * n_delayed + 2 + (NCOEF - 1)) * std::mem::size_of::<f64>()
 }
 
 /// The integrator of the steps.
@@ -184,6 +207,9 @@ pub enum SolveError {
     /// More than [`Options::max_steps`] accepted steps were needed by time `t`.
     #[error("more than {} steps by t = {t}", .stats.steps - 1)]
     TooManySteps { t: f64, stats: Stats },
+    /// The history would have held more than [`Options::max_history_len`] step records at time `t`.
+    #[error("more than {} step records in the delay history at t = {t}", .stats.max_history_len)]
+    HistoryTooLong { t: f64, stats: Stats },
     /// An argument of [`solve`] (or the system's [`DelaySystem::delays`]) of the wrong length or
     /// value; nothing was integrated.
     #[error("dde::solve: {argument}: expected {expected}, found {found}")]
@@ -316,7 +342,9 @@ pub fn solve<S: DelaySystem>(
     }
     let tau_min = delays.iter().copied().fold(f64::INFINITY, f64::min);
 
-    if on_output(t0, &y0[..sys.n_output().min(n)]).is_break() || t_end <= t0 {
+    let y_out0 = &y0[..sys.n_output().min(n)];
+    let past0 = Past { hist: &History::new(nd, 0), initial: history, y0: &y0[..nd], t0, lead: 0.0, tol: tiny(t_end) };
+    if sys.observe(t0, y_out0, &past0).is_break() || on_output(t0, y_out0).is_break() || t_end <= t0 {
         return Ok(Stats::default());
     }
     let h_cap = opts.h_max.min(tau_min).min(t_end - t0);
@@ -644,6 +672,9 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
         if self.stats.steps > self.opts.max_steps {
             return Err(SolveError::TooManySteps { t: self.t, stats: self.finish() });
         }
+        if self.nd > 0 && self.hist.len() >= self.opts.max_history_len {
+            return Err(SolveError::HistoryTooLong { t: self.t, stats: self.finish() });
+        }
         let fac = (self.err.powf(self.exponent()) / SAFE).clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
         let mut h_next = step.h / fac;
         if self.last_rejected {
@@ -684,6 +715,17 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
                 &self.y_out
             };
             self.schedule.next += 1;
+            // The step is in the history, and t_k − τ ≤ t_new − min τ ≤ t: the past is all known.
+            let ctx = &self.ctx;
+            let past = Past {
+                hist: &self.hist,
+                initial: ctx.initial,
+                y0: &ctx.y0,
+                t0: ctx.t0,
+                lead: self.t - t_k,
+                tol: ctx.tol,
+            };
+            self.sys.observe(t_k, out, &past)?;
             on_output(t_k, out)?;
         }
         ControlFlow::Continue(())

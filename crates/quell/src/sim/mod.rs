@@ -15,9 +15,12 @@ use crate::settings::{self, KeyError};
 use crate::signal::{check_signals, Signal};
 
 pub use crate::settings::MeasurementNoise;
-pub use closed_loop::{simulate, simulate_with_truth, ContinuousLoop, RunSettings};
+pub use closed_loop::{
+    default_max_steps, simulate, simulate_with_truth, ContinuousLoop, RunSettings, BUDGET_MIN_STEPS,
+    BUDGET_STEPS_PER_RATE, MAX_HISTORY_BYTES,
+};
 pub use divergence::{Peaks, Watched, DIVERGENCE_BOUND};
-pub use result::{ChannelSummary, Outcome, RunStats, SimResult};
+pub use result::{ChannelSummary, Outcome, RunStats, Sample, SimResult};
 pub use sampled::{
     simulate_sampled, simulate_sampled_with, simulate_sampled_with_truth, SampledController, SampledSettings,
 };

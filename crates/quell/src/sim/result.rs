@@ -18,6 +18,9 @@ pub enum Outcome {
     StepSizeTooSmall { t: f64 },
     /// The solver needed more than `max_steps` steps by time `t` (`RunSettings::max_steps`).
     TooManySteps { t: f64, max_steps: usize },
+    /// The delay history would have held more than `max_bytes` at time `t`
+    /// (`RunSettings::max_history_bytes`): the solver's steps had become tiny.
+    HistoryTooLarge { t: f64, max_bytes: usize },
     /// Stopped from outside (e.g. Ctrl-C) at time `t`.
     Interrupted { t: f64 },
 }
@@ -64,19 +67,29 @@ impl RunStats {
     }
 }
 
-/// Signals at t = k·output_step: rows of y, g, e = y − g, u (the adaptive command (25)) and η̂.
+/// Signals at t = k·output_step: rows of y, g, e = y − g, u (the adaptive command (25)), the plant
+/// input u_f (5), η̂, and optionally the plant and observer states x, x̂.
 #[derive(Debug, Clone)]
 pub struct SimResult {
     pub m: usize,
     pub q: usize,
+    /// Plant order (the width of `x` and `x_hat`).
+    pub n: usize,
     pub t: Vec<f64>,
     /// Row-major, `t.len()` rows of m.
     pub y: Vec<f64>,
     pub g: Vec<f64>,
     pub e: Vec<f64>,
     pub u: Vec<f64>,
+    /// The plant input u_f = −K x̂ + F u_d (5) as the simulated plant receives it (with `[truth]`'s
+    /// delays): what an actuator must deliver. Row-major, rows of m.
+    pub u_f: Vec<f64>,
     /// Row-major, `t.len()` rows of m·q (η̂_1, …, η̂_m).
     pub eta: Vec<f64>,
+    /// Plant state x and observer state x̂ (6), rows of n; empty unless the run recorded states
+    /// (`record_states` in its settings).
+    pub x: Vec<f64>,
+    pub x_hat: Vec<f64>,
     /// What the loop did (so far, when it stopped early).
     pub stats: RunStats,
     pub outcome: Option<Outcome>,
@@ -88,6 +101,19 @@ pub struct SimResult {
     pub limited: Vec<usize>,
 }
 
+/// One recorded instant, as the loops hand it to [`SimResult::push`]: y, g, u, u_f (m each), η̂
+/// (m·q) and, when states are recorded, (x, x̂).
+#[derive(Debug, Clone, Copy)]
+pub struct Sample<'a> {
+    pub t: f64,
+    pub y: &'a [f64],
+    pub g: &'a [f64],
+    pub u: &'a [f64],
+    pub u_f: &'a [f64],
+    pub eta: &'a [f64],
+    pub states: Option<(&'a [f64], &'a [f64])>,
+}
+
 /// Per-channel figures of merit.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ChannelSummary {
@@ -95,8 +121,10 @@ pub struct ChannelSummary {
     pub tail_max_abs_e: f64,
     /// RMS of e_i over the last 10 % of the horizon.
     pub tail_rms_e: f64,
-    /// max |u_i| over the run.
+    /// max |u_i| over the run (the adaptive command (25)).
     pub max_abs_u: f64,
+    /// max |u_f,i| over the run: the plant input (5), what the actuator delivers.
+    pub max_abs_uf: f64,
     /// ‖η̂_i‖ at the last sample.
     pub final_eta_norm: f64,
     /// When e_i settled into 2 % of the reference's peak ([`Settle::default`], [`crate::sim::settle`]);
@@ -107,10 +135,28 @@ pub struct ChannelSummary {
 }
 
 impl SimResult {
-    /// An empty result for m channels and regressor size q, with the loop's statistics so far.
-    pub fn new(m: usize, q: usize, stats: RunStats) -> Self {
-        let (t, y, g, e, u, eta) = Default::default();
-        SimResult { m, q, t, y, g, e, u, eta, stats, outcome: None, peaks: Peaks::default(), limited: Vec::new() }
+    /// An empty result for m channels, regressor size q and plant order n, with the loop's
+    /// statistics so far.
+    pub fn new(m: usize, q: usize, n: usize, stats: RunStats) -> Self {
+        let (t, y, g, e, u, u_f, eta, x, x_hat) = Default::default();
+        SimResult {
+            m,
+            q,
+            n,
+            t,
+            y,
+            g,
+            e,
+            u,
+            u_f,
+            eta,
+            x,
+            x_hat,
+            stats,
+            outcome: None,
+            peaks: Peaks::default(),
+            limited: Vec::new(),
+        }
     }
 
     /// Counts, per input, whether its actuator limit clipped it at the sample just recorded.
@@ -128,13 +174,23 @@ impl SimResult {
     }
 
     /// Appends one sample.
-    pub fn push(&mut self, t: f64, y: &[f64], g: &[f64], u: &[f64], eta: &[f64]) {
-        self.t.push(t);
-        self.y.extend_from_slice(y);
-        self.g.extend_from_slice(g);
-        self.e.extend(y.iter().zip(g).map(|(a, b)| a - b));
-        self.u.extend_from_slice(u);
-        self.eta.extend_from_slice(eta);
+    pub fn push(&mut self, s: &Sample<'_>) {
+        self.t.push(s.t);
+        self.y.extend_from_slice(s.y);
+        self.g.extend_from_slice(s.g);
+        self.e.extend(s.y.iter().zip(s.g).map(|(a, b)| a - b));
+        self.u.extend_from_slice(s.u);
+        self.u_f.extend_from_slice(s.u_f);
+        self.eta.extend_from_slice(s.eta);
+        if let Some((x, x_hat)) = s.states {
+            self.x.extend_from_slice(x);
+            self.x_hat.extend_from_slice(x_hat);
+        }
+    }
+
+    /// Whether x and x̂ were recorded.
+    pub fn has_states(&self) -> bool {
+        !self.x.is_empty()
     }
 
     /// Number of samples.
@@ -193,6 +249,7 @@ impl SimResult {
                     tail_max_abs_e: tail.iter().fold(0.0, |a, e| max_or_nan(a, e.abs())),
                     tail_rms_e: rms,
                     max_abs_u: self.column(&self.u, self.m, i).fold(0.0, |a, u| max_or_nan(a, u.abs())),
+                    max_abs_uf: self.column(&self.u_f, self.m, i).fold(0.0, |a, u| max_or_nan(a, u.abs())),
                     final_eta_norm: last[i * self.q..(i + 1) * self.q].iter().map(|v| v * v).sum::<f64>().sqrt(),
                     settle_t: settling.time(),
                     settle_note: settling.reason(),
@@ -218,17 +275,20 @@ mod tests {
 
     #[test]
     fn max_abs_error_is_none_for_an_empty_window_and_nan_propagates() {
-        let mut r = SimResult::new(1, 1, RunStats::Sampled { controller_steps: 0, sample_time: 0.1 });
+        let mut r = SimResult::new(1, 1, 1, RunStats::Sampled { controller_steps: 0, sample_time: 0.1 });
+        let push = |r: &mut SimResult, t: f64, y: f64| {
+            r.push(&Sample { t, y: &[y], g: &[1.0], u: &[0.0], u_f: &[0.0], eta: &[0.0], states: None })
+        };
         assert_eq!(r.max_abs_error(0, 0.0, 1.0), None, "no sample at all");
         // e = y − g at t = 0, 1, 2: −0.5, 2, −3.
         for (t, y) in [(0.0, 0.5), (1.0, 3.0), (2.0, -2.0)] {
-            r.push(t, &[y], &[1.0], &[0.0], &[0.0]);
+            push(&mut r, t, y);
         }
         assert_eq!(r.max_abs_error(0, 0.0, 1.0), Some(2.0));
         assert_eq!(r.max_abs_error(0, 0.0, 2.0), Some(3.0));
         assert_eq!(r.max_abs_error(0, 0.5, 0.9), None, "window between samples");
         assert_eq!(r.max_abs_error(0, 90.0, 100.0), None, "window past the horizon (a run that stopped early)");
-        r.push(3.0, &[f64::NAN], &[1.0], &[0.0], &[0.0]);
+        push(&mut r, 3.0, f64::NAN);
         assert!(r.max_abs_error(0, 0.0, 3.0).unwrap().is_nan(), "a NaN error is not hidden by max");
     }
 
@@ -236,17 +296,20 @@ mod tests {
     fn summary_shows_a_nan_in_the_error_or_the_input() {
         // Two channels; channel 0's error is NaN at t = 9.5 (in the last 10 %), channel 1's input
         // is NaN at t = 0 (outside the tail, but max |u| is over the whole run).
-        let mut r = SimResult::new(2, 1, RunStats::Sampled { controller_steps: 0, sample_time: 0.5 });
+        let mut r = SimResult::new(2, 1, 1, RunStats::Sampled { controller_steps: 0, sample_time: 0.5 });
         for k in 0..=20 {
             let t = 0.5 * k as f64;
             let y0 = if k == 19 { f64::NAN } else { 1.0 };
             let u1 = if k == 0 { f64::NAN } else { -4.0 };
-            r.push(t, &[y0, 2.0], &[1.0, 1.0], &[3.0, u1], &[0.0, 0.0]);
+            let (u, u_f) = ([3.0, u1], [-5.0, 2.0 * k as f64]);
+            r.push(&Sample { t, y: &[y0, 2.0], g: &[1.0, 1.0], u: &u, u_f: &u_f, eta: &[0.0, 0.0], states: None });
         }
         let s = r.summary();
         assert!(s[0].tail_max_abs_e.is_nan() && s[0].tail_rms_e.is_nan(), "{:?}", s[0]);
         assert_eq!(s[0].max_abs_u, 3.0);
         assert_eq!((s[1].tail_max_abs_e, s[1].tail_rms_e), (1.0, 1.0));
         assert!(s[1].max_abs_u.is_nan(), "{:?}", s[1]);
+        // max |u_f| is the plant input's, not the command's: 5 and 2·20.
+        assert_eq!((s[0].max_abs_uf, s[1].max_abs_uf), (5.0, 40.0));
     }
 }

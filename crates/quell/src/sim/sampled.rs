@@ -10,7 +10,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::divergence::{Watched, DIVERGENCE_BOUND};
 use super::noise::Gaussian;
-use super::result::{Outcome, RunStats, SimResult};
+use super::result::{Outcome, RunStats, Sample, SimResult};
 use super::{check_run, SimError};
 use crate::controller::{mat_vec, Controller, ControllerError};
 use crate::design::Design;
@@ -31,6 +31,8 @@ pub struct SampledSettings {
     pub noise: Option<MeasurementNoise>,
     /// A watched signal above this magnitude counts as divergence ([`Watched`]).
     pub divergence_bound: f64,
+    /// Record the plant state x and the observer state x̂ too ([`SimResult::x`]); off by default.
+    pub record_states: bool,
     /// The true plant's actuator (delay on u_f in whole samples, limits); `None`: the plant
     /// receives u_f.
     pub actuator: Option<Actuator>,
@@ -70,6 +72,7 @@ impl SampledSettings {
             sample_time,
             noise: None,
             divergence_bound: DIVERGENCE_BOUND,
+            record_states: false,
             actuator: None,
         }
     }
@@ -302,7 +305,9 @@ fn sampled_loop(
     let (mut y, mut y_meas, mut g) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
     let mut noise = settings.noise.as_ref().map(|nz| Noise::new(nz, m));
     let stats = |controller_steps| RunStats::Sampled { controller_steps, sample_time: T };
-    let mut result = SimResult::new(m, design.q(), stats(0));
+    let mut result = SimResult::new(m, design.q(), n, stats(0));
+    // u_f(k) and, when states are recorded, x̂(k) (read before the step moves it to x̂(k + 1)).
+    let (mut u_f, mut x_hat) = (vec![0.0; m], vec![0.0; n]);
     let steps = (settings.t_end / T + 1e-9).floor() as usize;
     let mut outcome = Outcome::Completed;
     let mut taken = 0;
@@ -313,6 +318,9 @@ fn sampled_loop(
         y_meas.copy_from_slice(&y);
         if let Some(noise) = noise.as_mut() {
             noise.add(t, &mut y_meas);
+        }
+        if settings.record_states && k % every == 0 {
+            x_hat.copy_from_slice(ctrl.watched().x_hat);
         }
         // A measurement beyond the controller's bound, or a state gone non-finite, ends the run
         // as diverged (as the next record's check would have), not as an error.
@@ -325,23 +333,24 @@ fn sampled_loop(
             }
             other => Ok(other?),
         };
-        let mut u_f: &[f64] = match (stepped, shift.as_mut()) {
+        match (stepped, shift.as_mut()) {
             (Err(diverged), _) => {
                 outcome = diverged;
                 break;
             }
-            (Ok(u_f), None) => u_f,
-            (Ok(u_f), Some(sh)) => {
-                sh.u_f.copy_from_slice(u_f);
-                sh.apply(k, ctrl.command())
+            (Ok(v), None) => u_f.copy_from_slice(v),
+            (Ok(v), Some(sh)) => {
+                sh.u_f.copy_from_slice(v);
+                u_f.copy_from_slice(sh.apply(k, ctrl.command()));
             }
-        };
+        }
         if let Some(a) = actuator.as_mut() {
-            u_f = a.apply(k, u_f);
+            let applied = a.apply(k, &u_f);
+            u_f.copy_from_slice(applied);
         }
         taken += 1;
         mat_vec(&Phi, s.as_slice(), s_next.as_mut_slice(), false);
-        mat_vec(&Gamma, u_f, s_next.as_mut_slice(), true);
+        mat_vec(&Gamma, &u_f, s_next.as_mut_slice(), true);
         if k % every == 0 {
             let watched = Watched { x: &s.as_slice()[..n], ..ctrl.watched() };
             if let Some(diverged) = watched.diverged(t, settings.divergence_bound) {
@@ -349,7 +358,9 @@ fn sampled_loop(
                 break;
             }
             result.peaks.record(&watched);
-            result.push(t, &y, &g, ctrl.command(), watched.eta);
+            let states = settings.record_states.then_some((watched.x, &x_hat[..]));
+            let (u, eta) = (ctrl.command(), watched.eta);
+            result.push(&Sample { t, y: &y, g: &g, u, u_f: &u_f, eta, states });
             if let Some(a) = &actuator {
                 result.count_limited(a.limited.iter().copied());
             }

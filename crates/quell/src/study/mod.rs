@@ -152,7 +152,7 @@ const TOP_KEYS: &[&str] = &["scenario", "max_steps", "runaway", "simulation", "g
 /// Default step budget of a run: 10,000 steps, 15 times what the paper's example takes at
 /// rtol = 1e-6 and 5 times at 1e-9. A run that blows up reaches it within a few simulated seconds
 /// of turning stiff, at ~60 ms of CPU (13 healthy runs), with its dense history below ~25 MB.
-pub const MAX_STEPS: usize = 10_000;
+pub const MAX_STEPS: usize = crate::sim::BUDGET_MIN_STEPS;
 const SETTLE_KEYS: &[&str] = &["relative", "absolute"];
 
 fn number(key: &str, v: &toml::Value, what: &str) -> Result<f64, StudyError> {

@@ -7,12 +7,12 @@ use super::run::{ChannelFigures, Outcome, Row};
 use super::summary::StudyMeta;
 
 /// The header: `run,point,draw,seed,<grid keys>,outcome,reason,tail_max_e1..m,tail_rms_e1..m,
-/// max_u1..m,settle_t1..m,steps,wall_ms`.
+/// max_u1..m,max_uf1..m,settle_t1..m,steps,wall_ms`.
 pub fn header(meta: &StudyMeta) -> Vec<String> {
     let mut h: Vec<String> = ["run", "point", "draw", "seed"].map(String::from).to_vec();
     h.extend(meta.grid.iter().map(|a| a.key.clone()));
     h.extend(["outcome", "reason"].map(String::from));
-    for name in ["tail_max_e", "tail_rms_e", "max_u", "settle_t"] {
+    for name in ["tail_max_e", "tail_rms_e", "max_u", "max_uf", "settle_t"] {
         h.extend((1..=meta.m).map(|i| format!("{name}{i}")));
     }
     h.extend(["steps", "wall_ms"].map(String::from));
@@ -47,6 +47,7 @@ pub fn write_runs_csv(w: &mut dyn Write, meta: &StudyMeta, rows: &[Row], partial
         f.extend(per(&|c| Some(c.tail_max_e)));
         f.extend(per(&|c| Some(c.tail_rms_e)));
         f.extend(per(&|c| Some(c.max_u)));
+        f.extend(per(&|c| Some(c.max_uf)));
         f.extend(per(&|c| c.settle_t));
         f.push(r.steps.to_string());
         f.push(format!("{:.3}", r.wall_ms));
@@ -132,7 +133,8 @@ pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
                         tail_max_e: num(first + i)?,
                         tail_rms_e: num(first + m + i)?,
                         max_u: num(first + 2 * m + i)?,
-                        settle_t: opt(first + 3 * m + i)?,
+                        max_uf: num(first + 3 * m + i)?,
+                        settle_t: opt(first + 4 * m + i)?,
                     })
                 })
                 .collect::<Result<Vec<_>, String>>()?
@@ -148,8 +150,8 @@ pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
             outcome,
             reason: f[5 + g].clone(),
             channels,
-            steps: int(first + 4 * m)?,
-            wall_ms: num(first + 4 * m + 1)?,
+            steps: int(first + 5 * m)?,
+            wall_ms: num(first + 5 * m + 1)?,
         });
     }
     Ok(RunsFile { rows, partial })

@@ -98,8 +98,10 @@ pub struct ChannelFigures {
     pub tail_max_e: f64,
     /// RMS of e_i over the last 10 % of the horizon.
     pub tail_rms_e: f64,
-    /// max |u_i| over the run.
+    /// max |u_i| over the run (the adaptive command (25)).
     pub max_u: f64,
+    /// max |u_f,i| over the run (the plant input (5), what the actuator delivers).
+    pub max_uf: f64,
     /// First recorded t after which |e_i| stays within the settling band ([`Settle`]); `None` when
     /// the channel did not settle, or only in the last 5 % of the horizon ([`crate::sim::settle`]).
     pub settle_t: Option<f64>,
@@ -134,6 +136,7 @@ pub(crate) fn figures(r: &SimResult, settle: &Settle) -> Vec<ChannelFigures> {
             tail_max_e: c.tail_max_abs_e,
             tail_rms_e: c.tail_rms_e,
             max_u: c.max_abs_u,
+            max_uf: c.max_abs_uf,
             settle_t: r.settling(i, settle).time(),
         })
         .collect()
@@ -151,7 +154,7 @@ pub(crate) fn simulate(
     let design = s.design().map_err(|e| e.to_string())?;
     let mut settings = LoopSettings::of(s);
     if let LoopSettings::Continuous(st) = &mut settings {
-        st.max_steps = max_steps;
+        st.max_steps = Some(max_steps);
         st.runaway = runaway;
     }
     let progress = |_t: f64| if stop() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
@@ -205,6 +208,12 @@ fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                     row.reason = format!(
                         "step budget: more than {} × the nominal run's {n} solver steps ({max_steps}) by t = {t:.4} (the loop turned stiff: its signals grew well beyond the nominal run's; raise runaway.steps in the study file if the run is sound)",
                         spec.runaway.steps
+                    );
+                }
+                sim::Outcome::HistoryTooLarge { t, max_bytes } => {
+                    row.reason = format!(
+                        "the delay history would have exceeded {} MB by t = {t:.4} (the solver's steps had become tiny: a loop blowing up turns stiff)",
+                        max_bytes >> 20
                     );
                 }
                 sim::Outcome::TooManySteps { t, max_steps } => {

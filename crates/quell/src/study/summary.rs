@@ -67,6 +67,7 @@ pub struct ChannelQuantiles {
     pub tail_max_e: Quantiles,
     pub tail_rms_e: Quantiles,
     pub max_u: Quantiles,
+    pub max_uf: Quantiles,
     pub settle_t: Quantiles,
     /// Of the completed runs, the fraction that never settled.
     pub never_settled: f64,
@@ -179,6 +180,7 @@ impl Summary {
                             tail_max_e: col(&|c| c.tail_max_e),
                             tail_rms_e: col(&|c| c.tail_rms_e),
                             max_u: col(&|c| c.max_u),
+                            max_uf: col(&|c| c.max_uf),
                             settle_t: col(&|c| c.settle_t.unwrap_or(f64::INFINITY)),
                             never_settled: if done.is_empty() { 0.0 } else { never as f64 / done.len() as f64 },
                         }

@@ -47,15 +47,17 @@ pub struct TuneSpec {
     pub objective: Objective,
     /// Per channel, [μ_min, μ_max] with 0 < μ_min ≤ μ_max.
     pub bounds: Vec<[f64; 2]>,
-    /// Per channel, the limit on max |u_i| (+∞ without one).
+    /// Per channel, the limit on max |u_i|, the adaptive command (25) (+∞ without one).
     pub max_u: Vec<f64>,
+    /// Per channel, the actuator limit on max |u_f,i|, the plant input (5) (+∞ without one).
+    pub max_uf: Vec<f64>,
     /// Log-spaced values per channel before refining (≥ 2).
     pub points: usize,
     /// Golden-section steps around the best of them.
     pub refine: usize,
 }
 
-const TUNE_KEYS: &[&str] = &["objective", "mu", "max_u", "points", "refine"];
+const TUNE_KEYS: &[&str] = &["objective", "mu", "max_u", "max_uf", "points", "refine"];
 const OBJECTIVES: &str = "\"settle_t\", \"tail_rms_e\" or \"tail_max_e\"";
 
 impl TuneSpec {
@@ -105,22 +107,23 @@ impl TuneSpec {
                     .collect::<Result<Vec<_>, _>>()?
             }
         };
-        let max_u = match t.get("max_u") {
-            None => vec![f64::INFINITY; m],
-            Some(v) => per_channel("tune.max_u", v)?
-                .iter()
-                .enumerate()
-                .map(|(i, x)| {
-                    let key = format!("tune.max_u[{i}]");
-                    let x = number(&key, x, "a limit on max |u_i| > 0")?;
-                    if x > 0.0 {
-                        Ok(x)
-                    } else {
-                        Err(err(key, format!("expected a limit on max |u_i| > 0, found {x}")))
-                    }
-                })
-                .collect::<Result<Vec<_>, _>>()?,
+        let limits = |name: &str, what: &str| -> Result<Vec<f64>, StudyError> {
+            match t.get(name) {
+                None => Ok(vec![f64::INFINITY; m]),
+                Some(v) => per_channel(&format!("tune.{name}"), v)?
+                    .iter()
+                    .enumerate()
+                    .map(|(i, x)| {
+                        let (key, what) = (format!("tune.{name}[{i}]"), format!("a limit on {what} > 0"));
+                        match number(&key, x, &what)? {
+                            x if x > 0.0 => Ok(x),
+                            x => Err(err(key, format!("expected {what}, found {x}"))),
+                        }
+                    })
+                    .collect(),
+            }
         };
+        let (max_u, max_uf) = (limits("max_u", "max |u_i|")?, limits("max_uf", "max |u_f,i| (the plant input)")?);
         let count = |key: &str, d: usize, min: u64| -> Result<usize, StudyError> {
             match t.get(key) {
                 None => Ok(d),
@@ -128,7 +131,14 @@ impl TuneSpec {
                 Some(v) => Err(err(format!("tune.{key}"), format!("expected an integer in [{min}, 10000], found {v}"))),
             }
         };
-        Ok(TuneSpec { objective, bounds, max_u, points: count("points", 13, 2)?, refine: count("refine", 8, 0)? })
+        Ok(TuneSpec {
+            objective,
+            bounds,
+            max_u,
+            max_uf,
+            points: count("points", 13, 2)?,
+            refine: count("refine", 8, 0)?,
+        })
     }
 }
 
@@ -226,8 +236,10 @@ pub fn tune(study: &Study) -> Result<TuneResult, StudyError> {
         mu[i] = mu_i;
         let row = run_with(study, &mu);
         let figures = row.channels.get(i).copied();
-        let objective =
-            figures.filter(|c| c.max_u <= spec.max_u[i]).map(|c| spec.objective.of(&c)).filter(|v| v.is_finite());
+        let objective = figures
+            .filter(|c| c.max_u <= spec.max_u[i] && c.max_uf <= spec.max_uf[i])
+            .map(|c| spec.objective.of(&c))
+            .filter(|v| v.is_finite());
         TunePoint { mu: mu_i, objective, outcome: row.outcome, figures }
     };
     let key = |p: &TunePoint| p.objective.unwrap_or(f64::INFINITY);

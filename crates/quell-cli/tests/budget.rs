@@ -1,0 +1,81 @@
+//! Every run is bounded: a diverging continuous run (the paper's plant with A × 1.3 and τ_2 = 2.6 s
+//! as the true plant) ends by the default step budget, exit status 1, naming the time and the
+//! budget, with its files up to then, in seconds and a bounded amount of memory.
+
+mod fault_support;
+
+use std::process::Command;
+use std::time::Instant;
+
+use fault_support::{check_outputs, paper_with, scratch_dir, time_in};
+
+const TRUTH: &str =
+    "\n[truth]\nA = [[-4.16, -2.21, -3.9], [3.64, 1.69, 5.2], [0.39, 0.39, -0.65]]\ndelays = [1.0, 2.6]\n";
+
+/// The largest resident set of this process's waited-for children, in bytes (Linux: ru_maxrss in KiB).
+fn children_max_rss() -> u64 {
+    // SAFETY: getrusage writes the struct it is given.
+    let mut ru: libc::rusage = unsafe { std::mem::zeroed() };
+    assert_eq!(unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut ru) }, 0);
+    ru.ru_maxrss as u64 * 1024
+}
+
+#[test]
+fn a_diverging_continuous_run_ends_within_its_default_budget() {
+    let dir = scratch_dir("budget");
+    let scenario = paper_with(&dir, &[("# [noise]", &format!("{TRUTH}# [noise]"))]);
+    let out = dir.join("out");
+    let started = Instant::now();
+    let output = Command::new(env!("CARGO_BIN_EXE_quell"))
+        .args(["run", "--no-plots", "--out"])
+        .arg(&out)
+        .arg(&scenario)
+        .output()
+        .expect("run quell");
+    let (elapsed, rss) = (started.elapsed().as_secs_f64(), children_max_rss());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "stderr: {stderr}");
+    // The budget derived from the problem: 10,000 + 100·(ρ t_end + t_end/τ_min) with ρ = 9 (the
+    // fastest filter pole), t_end = 100 s, τ_min = 1 s.
+    assert!(stderr.contains("more than 110000 steps by t = ") && stderr.contains("--max-steps"), "{stderr}");
+    let t = time_in(&stderr, "steps by t = ").unwrap_or_else(|| panic!("no time on stderr: {stderr}"));
+    assert!(t > 10.0 && t < 100.0, "t = {t}");
+    let summary = check_outputs(&out);
+    assert_eq!(summary["outcome"]["status"], "too_many_steps", "{summary}");
+    assert_eq!(summary["stats"]["steps"], 110_001);
+    // Without the budget this run held 15 GB by t = 35 s. With it, 110,000 steps of ~30 µs at most
+    // and a history of at most that many records of 1.8 kB (the paper's loop delays 27 states, 8
+    // coefficients each): the bounds below leave a factor ~5 for a loaded machine and the ring's
+    // doubling, and still fail if the budget is lost.
+    assert!(elapsed < 20.0, "{elapsed:.1} s");
+    assert!(rss < 1 << 30, "peak resident set {} MB", rss >> 20);
+
+    // --max-steps changes the budget.
+    let output = Command::new(env!("CARGO_BIN_EXE_quell"))
+        .args(["run", "--no-plots", "--max-steps", "3000", "--out"])
+        .arg(&out)
+        .arg(&scenario)
+        .output()
+        .expect("run quell");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "stderr: {stderr}");
+    assert!(stderr.contains("more than 3000 steps by t = "), "{stderr}");
+    assert!(time_in(&stderr, "steps by t = ").is_some_and(|t2| t2 < t));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn max_steps_is_refused_for_a_sampled_data_run() {
+    let dir = scratch_dir("budget-sampled");
+    let scenario = paper_with(&dir, &[]);
+    let output = Command::new(env!("CARGO_BIN_EXE_quell"))
+        .args(["run", "--no-plots", "--sample-time", "0.01", "--max-steps", "10", "--out"])
+        .arg(dir.join("out"))
+        .arg(&scenario)
+        .output()
+        .expect("run quell");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "stderr: {stderr}");
+    assert!(stderr.contains("--max-steps: a step budget applies to the continuous loop"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,41 @@
+"""The plant input u_f = -K x_hat + F u_d (eq. (5)) as a result of quell.simulate: recomputed here with
+numpy from the design's K and F, the recorded observer state x_hat and the recorded command u read at
+t - tau_i by interpolation (u = 0 before t = 0)."""
+
+import numpy as np
+import pytest
+
+import quell
+
+
+def delayed(t, u, tau):
+    """u(t - tau) by linear interpolation in the recorded samples; 0 before t = 0."""
+    return np.where(t - tau >= 0.0, np.interp(t - tau, t, u), 0.0)
+
+
+@pytest.mark.parametrize("sample_time", [None, 0.01])
+def test_u_f_is_minus_K_x_hat_plus_F_u_delayed(sample_time):
+    s = quell.paper_example()
+    d = s.design()
+    r = quell.simulate(s, t_end=20.0, output_step=0.05, sample_time=sample_time, states=True)
+    assert r.x.shape == r.x_hat.shape == (len(r), 3)
+    taus = s.plant.delays
+    u_d = np.column_stack([delayed(r.t, r.u[:, i], tau) for i, tau in enumerate(taus)])
+    want = u_d @ d.F.T - r.x_hat @ d.K.T
+    # The delays (1 s, 3 s) are whole numbers of output steps, so the interpolation reads recorded
+    # samples; the continuous loop reads the same dense output from its history: agreement to
+    # rounding, 1e-10 of the peak (the sampled loop's is exact to 1e-12).
+    peak = np.abs(want).max()
+    np.testing.assert_allclose(r.u_f, want, rtol=0, atol=1e-10 * peak)
+    assert np.abs(r.u_f - r.u).max() > 1.0, "u_f is not the command u"
+    # summary() and to_pandas() carry u_f (and the states when recorded).
+    assert [c["max_abs_uf"] for c in r.summary()] == list(np.abs(r.u_f).max(axis=0))
+    df = r.to_pandas()
+    np.testing.assert_array_equal(df[["uf1", "uf2"]].to_numpy(), r.u_f)
+    np.testing.assert_array_equal(df[["xhat1", "xhat2", "xhat3"]].to_numpy(), r.x_hat)
+
+
+def test_states_are_recorded_only_when_asked():
+    r = quell.simulate(quell.paper_example(), t_end=1.0)
+    assert r.x is None and r.x_hat is None and r.u_f.shape == (len(r), 2)
+    assert "x1" not in r.to_pandas().columns
