@@ -38,7 +38,7 @@ impl Precision {
         }
     }
     /// Bytes of one number.
-    /// Largest |y_i|, |g_i| the generated step takes: [`MAX_MEASUREMENT`] in double, 1e12 in float
+    /// Largest |y_i|, |g_i| the generated step takes: [`MAX_MEASUREMENT`](crate::controller::MAX_MEASUREMENT) in double, 1e12 in float
     /// (float's products of two signals stay below 1e24 · gains, far from its 3.4e38).
     pub fn input_bound(self) -> f64 {
         match self {

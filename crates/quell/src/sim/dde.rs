@@ -175,7 +175,7 @@ pub enum Method {
     Auto,
     /// DOP853 throughout.
     Explicit,
-    /// ARK4(3)6L[2]SA throughout: explicit in every component but [`DelaySystem::implicit`]'s.
+    /// ARK4(3)6L\[2\]SA throughout: explicit in every component but [`DelaySystem::implicit`]'s.
     Implicit,
 }
 
@@ -192,7 +192,7 @@ pub struct Stats {
     pub breakpoints: usize,
     /// Largest number of step records the dense history held at once.
     pub max_history_len: usize,
-    /// Accepted steps taken by the implicit method (ARK4(3)6L[2]SA).
+    /// Accepted steps taken by the implicit method (ARK4(3)6L\[2\]SA).
     pub implicit_steps: usize,
     /// Switches between the explicit and the implicit method.
     pub switches: usize,
@@ -446,7 +446,7 @@ struct Steps<'a, S: DelaySystem> {
     err: f64,
     /// The system's implicit block ([`DelaySystem::implicit`]).
     implicit: std::ops::Range<usize>,
-    /// Whether the steps are taken by the implicit method (ARK4(3)6L[2]SA) rather than DOP853.
+    /// Whether the steps are taken by the implicit method (ARK4(3)6L\[2\]SA) rather than DOP853.
     stiff: bool,
     /// When to switch method under [`Method::Auto`] ([`Steps::watch_stiffness`]).
     switching: imex::Switching,

@@ -1,4 +1,4 @@
-//! Coefficients of ARK4(3)6L[2]SA (Kennedy & Carpenter, "Additive Runge–Kutta schemes for
+//! Coefficients of ARK4(3)6L\[2\]SA (Kennedy & Carpenter, "Additive Runge–Kutta schemes for
 //! convection–diffusion–reaction equations", *Appl. Numer. Math.* 44 (2003), Table 5; as tabulated
 //! in SUNDIALS ARKode, `ARKODE_ARK436L2SA_ERK_6_3_4` and `ARKODE_ARK436L2SA_DIRK_6_3_4`).
 //!

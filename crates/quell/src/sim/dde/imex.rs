@@ -1,4 +1,4 @@
-//! The implicit–explicit steps: ARK4(3)6L[2]SA ([`super::ark`]) with the system's implicit block
+//! The implicit–explicit steps: ARK4(3)6L\[2\]SA ([`super::ark`]) with the system's implicit block
 //! ([`DelaySystem::implicit`]) taken by the ESDIRK part and every other component by the explicit
 //! part, and the switch between it and DOP853.
 //!
@@ -133,7 +133,7 @@ impl<S: DelaySystem> Steps<'_, S> {
         }
     }
 
-    /// An ARK4(3)6L[2]SA attempt: stages 2…6, y_new, the embedded error estimate and, for a step
+    /// An ARK4(3)6L\[2\]SA attempt: stages 2…6, y_new, the embedded error estimate and, for a step
     /// within tolerance, f(t_new, y_new) and the dense output. Like [`Steps::attempt`]: `None` when
     /// rejected (error above 1, a failed implicit solve, or a non-finite value), otherwise the
     /// number of components the dense output covers.
