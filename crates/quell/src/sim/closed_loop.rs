@@ -136,7 +136,7 @@ impl<'a> ContinuousLoop<'a> {
         }
         let eq = &lp.eq;
         let n_signals = lp.signals.len() + noise.as_ref().map_or(0, Signal::len);
-        let path = actuator.map(|a| ActuatorPath::new(design, truth, a));
+        let path = actuator.map(|a| ActuatorPath::new(truth, a));
         if let Some(path) = &path {
             lp.delays.extend(path.delays().filter(|&d| d > 0.0));
             lp.delays.sort_by(f64::total_cmp);
@@ -432,8 +432,6 @@ struct ActuatorPath {
     actuator: Actuator,
     /// τ_j^true: the true plant's delays of the adaptive command.
     command_delays: Vec<f64>,
-    K: DMatrix<f64>,
-    F: DMatrix<f64>,
     /// Scratch: x̂ and the commands u_j at the delayed times.
     x_hat: Vec<f64>,
     u: Vec<f64>,
@@ -442,13 +440,11 @@ struct ActuatorPath {
 }
 
 impl ActuatorPath {
-    fn new(design: &Design, truth: &Plant, actuator: &Actuator) -> Self {
+    fn new(truth: &Plant, actuator: &Actuator) -> Self {
         let m = truth.m();
         ActuatorPath {
             actuator: actuator.clone(),
             command_delays: truth.delays.clone(),
-            K: design.K().clone(),
-            F: design.F().clone(),
             x_hat: vec![0.0; truth.n()],
             u: vec![0.0; m],
             limited: (0..m).map(|_| Cell::new(false)).collect(),
@@ -482,12 +478,13 @@ impl ActuatorPath {
             for (j, u_j) in self.u.iter_mut().enumerate() {
                 *u_j = command_at(eq, l, (t, ta + self.command_delays[j]), j, s, past, (&mut *eta_d, &mut *xi_d));
             }
+            // Row i of (5) from the controller's own matrices: (−K)_i x̂ + F_i u.
             let mut v = 0.0;
             for c in 0..self.x_hat.len() {
-                v -= self.K[(i, c)] * self.x_hat[c];
+                v += eq.K_neg[(i, c)] * self.x_hat[c];
             }
             for j in 0..self.u.len() {
-                v += self.F[(i, j)] * self.u[j];
+                v += eq.F[(i, j)] * self.u[j];
             }
             let limit = self.actuator.limits[i];
             self.limited[i].set(v.abs() > limit);
