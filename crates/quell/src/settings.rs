@@ -139,6 +139,12 @@ impl Actuator {
         Ok(())
     }
 
+    /// sat_i(v): input i clipped to ±u_max,i, and whether the limit was active.
+    pub(crate) fn clip(&self, i: usize, v: f64) -> (f64, bool) {
+        let limit = self.limits[i];
+        (v.clamp(-limit, limit), v.abs() > limit)
+    }
+
     /// True when the actuator changes nothing (no delay, no finite limit).
     pub fn is_ideal(&self) -> bool {
         self.delays.iter().all(|&d| d == 0.0) && self.limits.iter().all(|u| u.is_infinite())

@@ -486,9 +486,9 @@ impl ActuatorPath {
             for j in 0..self.u.len() {
                 v += eq.F[(i, j)] * self.u[j];
             }
-            let limit = self.actuator.limits[i];
-            self.limited[i].set(v.abs() > limit);
-            *u_i = v.clamp(-limit, limit);
+            let (clipped, limited) = self.actuator.clip(i, v);
+            self.limited[i].set(limited);
+            *u_i = clipped;
         }
     }
 }

@@ -159,7 +159,7 @@ pub fn simulate_sampled_with_truth(
 /// The actuator in whole samples: u_p,i(k) = sat_i(u_f,i(k − d_a,i)), u_f = 0 before k = 0.
 struct ActuatorLine {
     d: Vec<usize>,
-    limits: Vec<f64>,
+    actuator: Actuator,
     /// Row k mod len: u_f(k).
     past: Vec<f64>,
     len: usize,
@@ -174,7 +174,7 @@ impl ActuatorLine {
         let len = d.iter().max().map_or(1, |x| x + 1);
         Ok(ActuatorLine {
             d,
-            limits: actuator.limits.clone(),
+            actuator: actuator.clone(),
             past: vec![0.0; len * m],
             len,
             u_p: vec![0.0; m],
@@ -189,8 +189,7 @@ impl ActuatorLine {
         for i in 0..m {
             let d = self.d[i];
             let v = if k >= d { self.past[((k - d) % self.len) * m + i] } else { 0.0 };
-            self.limited[i] = v.abs() > self.limits[i];
-            self.u_p[i] = v.clamp(-self.limits[i], self.limits[i]);
+            (self.u_p[i], self.limited[i]) = self.actuator.clip(i, v);
         }
         &self.u_p
     }
