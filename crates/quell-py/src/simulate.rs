@@ -7,8 +7,7 @@ use std::time::{Duration, Instant};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use quell::run::LoopSettings;
-use quell::sim::{Outcome, RunStats, SimResult};
+use quell::sim::{Outcome, Run, RunSettings, RunStats, SimResult};
 use toml::Value;
 
 use crate::convert::number;
@@ -165,12 +164,12 @@ impl PySimResult {
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
         match self.inner.stats {
-            RunStats::Continuous { steps, rejected_steps, rhs_evaluations, breakpoints, max_history_len } => {
-                d.set_item("steps", steps)?;
-                d.set_item("rejected_steps", rejected_steps)?;
-                d.set_item("rhs_evaluations", rhs_evaluations)?;
-                d.set_item("breakpoints", breakpoints)?;
-                d.set_item("max_history_len", max_history_len)?;
+            RunStats::Continuous(s) => {
+                d.set_item("steps", s.steps)?;
+                d.set_item("rejected_steps", s.rejected)?;
+                d.set_item("rhs_evaluations", s.rhs_evals)?;
+                d.set_item("breakpoints", s.breakpoints)?;
+                d.set_item("max_history_len", s.max_history_len)?;
             }
             RunStats::Sampled { controller_steps, sample_time } => {
                 d.set_item("controller_steps", controller_steps)?;
@@ -287,8 +286,8 @@ pub fn simulate(
     } else {
         &s.inner
     };
-    let mut settings = LoopSettings::of(scn);
-    settings.record_states(states);
+    let mut settings = RunSettings::of(scn);
+    settings.record_states = states;
     let max_steps = match max_steps {
         None => None,
         Some(v) => match v.extract::<usize>() {
@@ -317,7 +316,7 @@ pub fn simulate(
                 }
             }
         };
-        quell::run::simulate(scn, &design, &settings, progress)
+        Run::of(scn, &design).settings(settings).simulate(progress)
     });
     if let Some(e) = interrupt {
         return Err(e);

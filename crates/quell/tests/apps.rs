@@ -4,9 +4,9 @@
 
 use std::ops::ControlFlow;
 
-use quell::run::{simulate, LoopSettings};
 use quell::scenario::Scenario;
 use quell::sim::Outcome;
+use quell::sim::Run;
 
 fn app(name: &str) -> Scenario {
     let path = format!("{}/../../examples/apps/{name}/scenario.toml", env!("CARGO_MANIFEST_DIR"));
@@ -16,7 +16,7 @@ fn app(name: &str) -> Scenario {
 /// Runs the scenario and returns max |e_i| over the last 10 % of the horizon.
 fn tail_errors(s: &Scenario) -> Vec<f64> {
     let d = s.design().unwrap();
-    let r = simulate(s, &d, &LoopSettings::of(s), |_| ControlFlow::Continue(())).unwrap();
+    let r = Run::of(s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
     assert_eq!(r.outcome, Some(Outcome::Completed));
     r.summary().iter().map(|c| c.tail_max_abs_e).collect()
 }
