@@ -24,7 +24,7 @@ fn children_max_rss() -> u64 {
 fn a_diverging_continuous_run_ends_within_its_default_budget() {
     let dir_tmp = scratch_dir("budget");
     let dir = dir_tmp.path();
-    let scenario = paper_with(&dir, &[("# [noise]", &format!("{TRUTH}# [noise]"))]);
+    let scenario = paper_with(dir, &[("# [noise]", &format!("{TRUTH}# [noise]"))]);
     let out = dir.join("out");
     let started = Instant::now();
     let output = Command::new(env!("CARGO_BIN_EXE_quell"))
@@ -68,7 +68,7 @@ fn a_diverging_continuous_run_ends_within_its_default_budget() {
 fn max_steps_is_refused_for_a_sampled_data_run() {
     let dir_tmp = scratch_dir("budget-sampled");
     let dir = dir_tmp.path();
-    let scenario = paper_with(&dir, &[]);
+    let scenario = paper_with(dir, &[]);
     let output = Command::new(env!("CARGO_BIN_EXE_quell"))
         .args(["run", "--no-plots", "--sample-time", "0.01", "--max-steps", "10", "--out"])
         .arg(dir.join("out"))

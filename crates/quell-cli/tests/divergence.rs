@@ -20,7 +20,7 @@ fn diverging_sampled_run_exits_1_and_keeps_the_files() {
     // The paper's example sampled at T_s = 0.5 s is unstable: x[2] passes 1e9 at t ≈ 14.5 s.
     let dir_tmp = scratch_dir("diverge");
     let dir = dir_tmp.path();
-    let scenario = paper_with(&dir, &[("output_step = 0.1 ", "output_step = 0.5 ")]);
+    let scenario = paper_with(dir, &[("output_step = 0.1 ", "output_step = 0.5 ")]);
     let out = dir.join("out");
     let (output, stderr) = run_quell(&["run", "--no-plots", "--sample-time", "0.5", "--out"], &out, &scenario);
     assert_eq!(output.status.code(), Some(1), "stderr: {stderr}");
@@ -43,7 +43,7 @@ fn step_size_underflow_exits_1_with_the_time() {
     // underflows, which must end the run (not loop) with the time.
     let dir_tmp = scratch_dir("underflow");
     let dir = dir_tmp.path();
-    let scenario = paper_with(&dir, &[("rtol = 1e-9", "rtol = 1e-300"), ("atol = 1e-9", "atol = 1e-300")]);
+    let scenario = paper_with(dir, &[("rtol = 1e-9", "rtol = 1e-300"), ("atol = 1e-9", "atol = 1e-300")]);
     let out = dir.join("out");
     let (output, stderr) = run_quell(&["run", "--no-plots", "--out"], &out, &scenario);
     assert_eq!(output.status.code(), Some(1), "stderr: {stderr}");
@@ -67,7 +67,7 @@ fn absurd_sample_times_are_input_errors_not_crashes() {
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(stderr.starts_with("error: simulation.sample_time (--sample-time): "), "{stderr}");
 
-    let scenario = paper_with(&dir, &[("delays = [1.0, 3.0]", "delays = [1e300, 3.0]")]);
+    let scenario = paper_with(dir, &[("delays = [1.0, 3.0]", "delays = [1e300, 3.0]")]);
     let out = quell(&["run", "--no-plots", "--sample-time", "0.001", scenario.to_str().unwrap_or_default()]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");

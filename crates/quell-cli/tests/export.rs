@@ -33,7 +33,7 @@ fn export_writes_a_controller_that_compiles_and_runs() {
     assert!(header.contains("scenario \"paper-example\"") && header.contains("#define ARM_SAMPLE_TIME 0.001"));
     // No temporary file is left behind.
     let mut names: Vec<String> =
-        std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
     names.sort();
     assert_eq!(names, ["arm_controller.c", "arm_controller.h"]);
     // Same input, same bytes.
@@ -73,7 +73,7 @@ int main(void)
             "-o",
             "main",
         ])
-        .current_dir(&dir)
+        .current_dir(dir)
         .output()
         .expect("gcc is required for this test");
     assert!(gcc.status.success(), "{}", String::from_utf8_lossy(&gcc.stderr));

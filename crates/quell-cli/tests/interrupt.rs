@@ -19,7 +19,7 @@ fn sigint(pid: u32) {
 fn interrupt_long_run(tag: &str, signals: &[&str]) {
     let dir_tmp = scratch_dir(tag);
     let dir = dir_tmp.path();
-    let scenario = paper_with(&dir, &[("t_end = 100.0", "t_end = 100000.0")]);
+    let scenario = paper_with(dir, &[("t_end = 100.0", "t_end = 100000.0")]);
     let out = dir.join("out");
     // The first signal must reach the run after it has recorded a sample. On a loaded machine the
     // process may not get there within the first wait; the run then (rightly) quits on a second
@@ -80,7 +80,7 @@ fn second_ctrl_c_quits_a_run_stuck_between_samples() {
     let dir_tmp = scratch_dir("interrupt-twice");
     let dir = dir_tmp.path();
     let scenario =
-        paper_with(&dir, &[("{ amplitude = 1.0, frequency = 1.0 }", "{ amplitude = 1.0, frequency = 1e300 }")]);
+        paper_with(dir, &[("{ amplitude = 1.0, frequency = 1.0 }", "{ amplitude = 1.0, frequency = 1e300 }")]);
     let mut child = Command::new(env!("CARGO_BIN_EXE_quell"))
         .arg("run")
         .arg(&scenario)

@@ -53,8 +53,8 @@ fn rows_without_wall_time(dir: &Path) -> Vec<String> {
 fn sharded_and_merged_equals_unsharded() {
     let dir_tmp = scratch("shards");
     let dir = dir_tmp.path();
-    paper_into(&dir);
-    let study = write_study(&dir, "study.toml", STUDY);
+    paper_into(dir);
+    let study = write_study(dir, "study.toml", STUDY);
     let out = |name: &str| dir.join(name).display().to_string();
     let o = quell(&["sweep", &study, "--out", &out("all"), "--jobs", "2"]);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -96,7 +96,7 @@ fn sharded_and_merged_equals_unsharded() {
     let o = quell(&["sweep", "--merge", &out("s0"), &out("s1"), "--out", &out("bad")]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("shard 2/3 is missing"), "{}", stderr(&o));
-    let other = write_study(&dir, "other.toml", &STUDY.replace("seed = 5", "seed = 6"));
+    let other = write_study(dir, "other.toml", &STUDY.replace("seed = 5", "seed = 6"));
     let o = quell(&["sweep", &other, "--shard", "1/3", "--out", &out("o1"), "--no-plots"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let o = quell(&["sweep", "--merge", &out("s0"), &out("o1"), &out("s2"), "--out", &out("bad")]);
@@ -108,7 +108,7 @@ fn sharded_and_merged_equals_unsharded() {
 fn bad_study_files_exit_2_naming_the_key() {
     let dir_tmp = scratch("bad");
     let dir = dir_tmp.path();
-    paper_into(&dir);
+    paper_into(dir);
     let cases: &[(&str, &[&str], &str)] = &[
         ("[grid]\n\"design.nu\" = [1.0]\n", &[], "grid.\"design.nu\": design.nu is not a value of the scenario"),
         (
@@ -129,7 +129,7 @@ fn bad_study_files_exit_2_naming_the_key() {
         ),
     ];
     for (k, (text, flags, expected)) in cases.iter().enumerate() {
-        let study = write_study(&dir, &format!("s{k}.toml"), text);
+        let study = write_study(dir, &format!("s{k}.toml"), text);
         let out = dir.join(format!("o{k}")).display().to_string();
         let mut args = vec!["sweep", study.as_str(), "--out", out.as_str()];
         args.extend_from_slice(flags);
@@ -146,7 +146,7 @@ fn ctrl_c_writes_the_rows_done_marked_partial() {
     let dir = dir_tmp.path();
     // 4,000 runs of 100 s: minutes of work, interrupted after a second.
     let study = write_study(
-        &dir,
+        dir,
         "study.toml",
         "[simulation]\nrtol = 1e-6\natol = 1e-6\n[monte_carlo]\nruns = 4000\n\"plant.x0\" = { normal = 0.1 }\n",
     );
@@ -183,7 +183,7 @@ fn tune_writes_the_chosen_mu_and_each_curve() {
     let dir_tmp = scratch("tune");
     let dir = dir_tmp.path();
     let text = "[simulation]\nt_end = 40.0\nrtol = 1e-6\natol = 1e-6\n[tune]\nobjective = \"tail_rms_e\"\nmu = [2.0, 200.0]\nmax_u = 22.0\npoints = 5\nrefine = 2\n";
-    let study = write_study(&dir, "tune.toml", text);
+    let study = write_study(dir, "tune.toml", text);
     let out = dir.join("out").display().to_string();
     let o = quell(&["tune", &study, "--out", &out]);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -198,11 +198,11 @@ fn tune_writes_the_chosen_mu_and_each_curve() {
     assert!(dir.join("out/tune.png").is_file() && dir.join("out/tune.svg").is_file());
 
     // No [tune], and a limit no μ meets: exit code 2, naming the key.
-    let o = quell(&["tune", &write_study(&dir, "none.toml", ""), "--out", &out]);
+    let o = quell(&["tune", &write_study(dir, "none.toml", ""), "--out", &out]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("tune: missing"), "{}", stderr(&o));
     let o =
-        quell(&["tune", &write_study(&dir, "tight.toml", &text.replace("max_u = 22.0", "max_u = 1.0")), "--out", &out]);
+        quell(&["tune", &write_study(dir, "tight.toml", &text.replace("max_u = 22.0", "max_u = 1.0")), "--out", &out]);
     assert_eq!(o.status.code(), Some(2));
     assert!(
         stderr(&o)
