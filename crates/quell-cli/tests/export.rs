@@ -95,7 +95,7 @@ fn f32_export_uses_float() {
 #[test]
 fn bad_export_input_exits_2_naming_the_flag() {
     let dir_tmp = temp_dir("bad");
-    let dir = dir_tmp.path();
+    let dir = dir_tmp.path().join("out");
     let out = dir.display().to_string();
     let paper = example("paper.toml");
     for (args, message) in [
@@ -138,7 +138,7 @@ fn export_fmu_writes_one_archive_or_fails_with_1() {
         assert!(text.contains(name), "{name} is missing from the archive");
     }
     let bad_tmp = temp_dir("fmu-bad");
-    let bad = bad_tmp.path();
+    let bad = bad_tmp.path().join("out");
     let bad_out = bad.display().to_string();
     let o = quell(&[
         "export",
