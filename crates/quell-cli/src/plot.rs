@@ -41,10 +41,11 @@ fn value_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
 /// other, and no trailing zeros.
 fn tick_label(v: f64, lo: f64, hi: f64) -> String {
     let scale = lo.abs().max(hi.abs());
-    if v == 0.0 || !v.is_finite() || !scale.is_normal() {
+    let spacing = if hi > lo { (hi - lo) / 10.0 } else { scale };
+    // A tick at zero computed as lo + k·step can come out as −8.5e-22.
+    if v.abs() <= 1e-6 * spacing || !v.is_finite() || !scale.is_normal() {
         return if v.is_finite() { "0".into() } else { v.to_string() };
     }
-    let spacing = if hi > lo { (hi - lo) / 10.0 } else { scale };
     // The small offset keeps log10(1e-7) = −7.000…01 at −7.
     let exponent = |x: f64| (x.log10() + 1e-9).floor();
     let spacing_exp = exponent(spacing);
@@ -431,5 +432,6 @@ mod tests {
         // A narrow band around a large offset: enough digits to tell the ticks apart.
         assert_eq!(tick_label(100.05, 100.0, 100.1), "100.05");
         assert_eq!(tick_label(0.0, -1.0, 1.0), "0");
+        assert_eq!(tick_label(-8.5e-22, -6.5e-6, 2e-7), "0");
     }
 }
