@@ -53,13 +53,18 @@ fn tick_label(v: f64, lo: f64, hi: f64) -> String {
         let digits = (exponent(scale) - spacing_exp).clamp(0.0, 6.0) as usize;
         let s = format!("{v:.digits$e}");
         let (mantissa, exp) = s.split_once('e').unwrap_or((&s, "0"));
-        let mantissa = if mantissa.contains('.') { mantissa.trim_end_matches('0').trim_end_matches('.') } else { mantissa };
+        let mantissa =
+            if mantissa.contains('.') { mantissa.trim_end_matches('0').trim_end_matches('.') } else { mantissa };
         format!("{mantissa}e{exp}")
     } else {
         let decimals = (-spacing_exp).clamp(0.0, 9.0) as usize;
         let s = format!("{v:.decimals$}");
         let s = if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.') } else { &s };
-        if s == "-0" { "0".into() } else { s.into() }
+        if s == "-0" {
+            "0".into()
+        } else {
+            s.into()
+        }
     }
 }
 
