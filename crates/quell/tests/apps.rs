@@ -154,6 +154,14 @@ fn every_apps_exported_c_is_current_compiles_and_is_the_rust_controller() {
             b[2].extend_from_slice(rust.eta());
         }
         let dev = [0, 1, 2].map(|i| relative_deviation(&a[i], &b[i]));
+        println!(
+            "{}: C against Rust over {} steps: u_f {:.1e}, u {:.1e}, η̂ {:.1e}",
+            app.dir,
+            r.t.len(),
+            dev[0],
+            dev[1],
+            dev[2]
+        );
         // 1e-12 relative to the peaks, as for the paper's controller (tests/export_c.rs); on x86-64
         // the C sums in the Controller's order and the bits agree.
         assert!(dev.iter().all(|&e| e <= 1e-12), "{}: u_f, u, η̂ deviate by {dev:?}", app.dir);
@@ -234,6 +242,7 @@ fn vessel_thrust_limits_clip_what_the_recorded_thrust_shows() {
     let (r, e) = tail_errors(&vessel_with_truth("u_max = [1.3e6, 0.9e6, 7e6]"));
     assert_within(&VESSEL, &e);
     let fraction = r.limited_fraction();
+    println!("limits at 80 %: clipped fractions {fraction:?}, tail {e:?}");
     for (i, lim) in u_max.iter().enumerate() {
         let column: Vec<f64> = r.column(&r.u_f, 3, i).collect();
         assert!(column.iter().all(|v| v.abs() <= *lim), "input {}: thrust beyond its limit", i + 1);
@@ -274,8 +283,9 @@ fn vessel_measurement_noise_moves_the_tail_in_proportion_to_its_size() {
             (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt()
         };
         let ratio = rms(&two) / rms(&one);
-        // 2 within 15 %: what η̂'s own response to the noise may add.
-        assert!((ratio - 2.0).abs() < 0.3, "channel {}: noise share grows by {ratio} for twice the noise", i + 1);
+        println!("channel {}: noise share of y in the tail, 2σ over σ: {ratio:.3}", i + 1);
+        // 2 within 5 % (measured 1.96–1.99): what η̂'s own response to the noise may add.
+        assert!((ratio - 2.0).abs() < 0.1, "channel {}: noise share grows by {ratio} for twice the noise", i + 1);
     }
     // README: σ = 0.2 m, 0.2 m, 2e-3 rad gives 0.45 m, 0.24 m, 4.0e-3 rad; here σ/4 and σ/2 stay
     // below those figures.
