@@ -12,6 +12,7 @@ use std::ops::ControlFlow;
 use std::path::PathBuf;
 
 use c_harness::{CController, TempDir};
+use quell::auto::{auto_design, Targets};
 use quell::export::{generate, ExportOptions, Precision};
 use quell::run::{simulate, LoopSettings};
 use quell::scenario::Scenario;
@@ -103,6 +104,46 @@ fn the_active_suspension_holds_the_body_where_the_passive_one_moves_47_mm() {
     let model = (0..4).map(|j| x[j] * C[(0, j)]).sum::<nalgebra::Complex<f64>>().norm() * 1000.0 * 0.020;
     // Relative 1e-9: the two evaluations of one rational function differ by rounding only.
     assert!((model - passive).abs() <= 1e-9 * passive, "scenario {model} m against the source's {passive} m");
+}
+
+/// The scenario's automatic design with the `[design]` keys `auto` removed, and `targets`.
+fn auto_of(app: &App, auto: &[&str], targets: Targets) -> Scenario {
+    let mut doc: toml::Table = scenario_text(app).parse().unwrap();
+    let design = doc.get_mut("design").and_then(|d| d.as_table_mut()).unwrap();
+    for key in auto {
+        assert!(design.remove(*key).is_some(), "{}: design.{key}", app.dir);
+    }
+    let a = auto_design(&doc, &targets).unwrap();
+    assert!(a.verification.passed, "{}: {:?}", app.dir, a.verification);
+    a.scenario
+}
+
+#[test]
+fn the_keys_each_page_says_are_automatic_are_what_quell_design_auto_chooses() {
+    // dc-motor: every key, default targets.
+    let keys = ["observer_poles", "channel_poles", "reference_filter_poles", "disturbance_filter_poles", "mu", "beta"];
+    let auto = auto_of(&MOTOR, &keys, Targets::default());
+    assert_eq!(auto.design, Scenario::from_toml(&scenario_text(&MOTOR)).unwrap().design);
+    // active-suspension: the road filter, β and μ with --convergence-time 5.
+    let keys = ["disturbance_filter_poles", "mu", "beta"];
+    let auto = auto_of(&SUSPENSION, &keys, Targets { convergence_time: Some(5.0), u_limit: None });
+    assert_eq!(auto.design, Scenario::from_toml(&scenario_text(&SUSPENSION)).unwrap().design);
+    // supply-vessel: the filters and β; μ is the automatic choice for channels 1 and 2 divided by
+    // 333 (README), within 1 % as the page rounds it.
+    let keys = ["reference_filter_poles", "disturbance_filter_poles", "beta", "mu"];
+    let (auto, page) = (auto_of(&VESSEL, &keys, Targets::default()).design, vessel_with_truth("").design);
+    // The page writes −1.2 for the computed −0.8 × 1.5 = −1.2000000000000002: equal to 1e-15.
+    let poles = |d: &quell::DesignSpec| -> Vec<f64> {
+        d.reference_filter_poles.iter().chain(&d.disturbance_filter_poles).flatten().map(|p| p.re).collect()
+    };
+    for (a, b) in poles(&auto).iter().zip(poles(&page)) {
+        assert!((a - b).abs() <= 1e-15 * b.abs(), "filter pole {a} against the page's {b}");
+    }
+    assert_eq!((poles(&auto).len(), auto.beta), (poles(&page).len(), page.beta));
+    for i in 0..2 {
+        let ratio = auto.mu[i] / page.mu[i];
+        assert!((ratio / 333.0 - 1.0).abs() < 0.01, "channel {}: automatic μ / page's μ = {ratio}", i + 1);
+    }
 }
 
 /// max_k |a(k) − b(k)| / max_k |b(k)| over two runs stored row after row.
