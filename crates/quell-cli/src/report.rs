@@ -68,7 +68,7 @@ fn fmt_matrix(out: &mut String, name: &str, M: &DMatrix<f64>) {
 }
 
 fn fmt_eigs(e: &[Complex<f64>]) -> String {
-    e.iter().map(quell::linalg::fmt_complex).collect::<Vec<_>>().join(", ")
+    e.iter().map(quell::fmt_complex).collect::<Vec<_>>().join(", ")
 }
 
 fn tf(c: &quell::design::ChannelTf) -> String {

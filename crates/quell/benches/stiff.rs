@@ -11,9 +11,9 @@ use std::ops::ControlFlow;
 use std::time::Instant;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use quell::bench_api::dde::{self, Method, Options};
+use quell::bench_api::ContinuousLoop;
 use quell::scenario::{Scenario, PAPER_EXAMPLE};
-use quell::sim::dde::{self, Method, Options};
-use quell::sim::ContinuousLoop;
 use quell::Design;
 
 const QUADRUPLE_TANK: &str = include_str!("../tests/data/quadruple-tank.toml");

@@ -2,8 +2,6 @@
 
 use nalgebra::{Complex, DMatrix};
 
-use crate::plant::{check_shape, PlantError};
-
 /// Coefficients `[a_0, …, a_{q−1}]` of the monic polynomial ∏(s − p_j) = s^q + a_{q−1}s^{q−1} + … + a_0.
 /// The poles must be closed under conjugation (callers check); imaginary round-off is dropped.
 pub fn poly_from_roots(poles: &[Complex<f64>]) -> Vec<f64> {
@@ -231,16 +229,7 @@ pub fn fmt_complex(z: &Complex<f64>) -> String {
 /// Exact zero-order-hold discretization of x' = A x + B v over a sample time T:
 /// x_{k+1} = Φ x_k + Γ v_k with Φ = e^{AT}, Γ = ∫_0^T e^{As} ds B, both read off
 /// exp([[A, B], [0, 0]]·T) (Van Loan's block method).
-///
-/// A not square or B without A's rows is [`PlantError::Shape`].
-pub fn zoh(A: &DMatrix<f64>, B: &DMatrix<f64>, T: f64) -> Result<(DMatrix<f64>, DMatrix<f64>), PlantError> {
-    let n = A.nrows();
-    check_shape("A", A, n, n)?;
-    check_shape("B", B, n, B.ncols())?;
-    Ok(zoh_unchecked(A, B, T))
-}
-
-/// [`zoh`] for shapes known to agree (the controller's and the sampled loop's own blocks).
+/// A square and B with A's rows (the controller's and the sampled loop's own blocks).
 pub(crate) fn zoh_unchecked(A: &DMatrix<f64>, B: &DMatrix<f64>, T: f64) -> (DMatrix<f64>, DMatrix<f64>) {
     let (n, m) = (A.nrows(), B.ncols());
     let mut M = DMatrix::zeros(n + m, n + m);
@@ -273,13 +262,12 @@ mod tests {
         // x' = −x/β + v/β held over T: Φ = e^{−T/β}, Γ = 1 − e^{−T/β} (closed form).
         let (beta, T) = (0.7, 0.05);
         let (P, G) =
-            zoh(&DMatrix::from_element(1, 1, -1.0 / beta), &DMatrix::from_element(1, 1, 1.0 / beta), T).unwrap();
+            zoh_unchecked(&DMatrix::from_element(1, 1, -1.0 / beta), &DMatrix::from_element(1, 1, 1.0 / beta), T);
         assert!((P[(0, 0)] - (-T / beta).exp()).abs() < 1e-15);
         assert!((G[(0, 0)] - (1.0 - (-T / beta).exp())).abs() < 1e-15);
         // Double integrator: Φ = [[1, T], [0, 1]], Γ = [T²/2, T] (closed form).
-        let (P, G) =
-            zoh(&DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]), &DMatrix::from_row_slice(2, 1, &[0.0, 1.0]), T)
-                .unwrap();
+        let (A, B) = (DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]), DMatrix::from_row_slice(2, 1, &[0.0, 1.0]));
+        let (P, G) = zoh_unchecked(&A, &B, T);
         assert!((&P - DMatrix::from_row_slice(2, 2, &[1.0, T, 0.0, 1.0])).norm() < 1e-15);
         assert!((&G - DMatrix::from_row_slice(2, 1, &[T * T / 2.0, T])).norm() < 1e-15);
     }
@@ -457,5 +445,38 @@ mod tests {
             }
         }
         assert_eq!(eigenvalues(&DMatrix::from_element(2, 2, f64::NAN)), Err(EigenError::NonFinite));
+    }
+
+    /// A 3-state chain: companion matrix of s³ + 3s² + 2s + 1, input into the last state.
+    fn chain() -> (DMatrix<f64>, DMatrix<f64>) {
+        let A = DMatrix::from_row_slice(3, 3, &[0.0, 1.0, 0.0, 0.0, 0.0, 1.0, -1.0, -2.0, -3.0]);
+        (A, DMatrix::from_row_slice(3, 1, &[0.0, 0.0, 1.0]))
+    }
+
+    #[test]
+    fn eigenvalues_of_entries_near_the_largest_double_are_an_overflow_error() {
+        // The balancing loop never ended on 1e307·M (its row sums overflow to inf), and faer's QR did
+        // not converge on A − LC with L ≈ 8e300. Both are now EigenError::NonFinite.
+        let (A, _) = chain();
+        for scale in [1e155, 1e300, 1e307] {
+            assert_eq!(eigenvalues(&(&A * scale)), Err(EigenError::NonFinite), "scale {scale:e}");
+        }
+        // Large but representable: the eigenvalues scale with the matrix; their sum is the trace, −3e150.
+        let e = eigenvalues(&(&A * 1e150)).unwrap();
+        let trace: f64 = e.iter().map(|z| z.re).sum();
+        assert!((trace / -3e150 - 1.0).abs() < 1e-12, "{e:?}");
+    }
+
+    #[test]
+    fn zoh_at_zero_and_cond_of_empty_matrices() {
+        let (A, B) = chain();
+        // e^{A·0} = I, Γ = 0 at T = 0.
+        let (Phi, Gamma) = zoh_unchecked(&A, &B, 0.0);
+        assert_eq!((Phi, Gamma), (DMatrix::identity(3, 3), DMatrix::zeros(3, 1)));
+        // Was a panic in nalgebra's SVD.
+        for (r, c) in [(0, 0), (0, 3), (3, 0)] {
+            assert_eq!(cond(&DMatrix::zeros(r, c)), f64::INFINITY, "{r}×{c}");
+        }
+        assert_eq!(cond(&DMatrix::from_row_slice(2, 2, &[4.0, 0.0, 0.0, -0.5])), 8.0);
     }
 }

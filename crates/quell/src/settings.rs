@@ -152,7 +152,7 @@ impl Actuator {
 }
 
 /// `x` if it is finite and > 0; otherwise an error on `key` describing it as `what`.
-pub fn positive(key: &str, what: &str, x: f64) -> Result<f64, KeyError> {
+pub(crate) fn positive(key: &str, what: &str, x: f64) -> Result<f64, KeyError> {
     if x > 0.0 && x.is_finite() {
         Ok(x)
     } else {
@@ -163,7 +163,7 @@ pub fn positive(key: &str, what: &str, x: f64) -> Result<f64, KeyError> {
 
 /// The horizon of a run: 0 < output_step ≤ t_end, both finite, and at most [`MAX_OUTPUT_SAMPLES`]
 /// rows.
-pub fn check_horizon(t_end: f64, output_step: f64) -> Result<(), KeyError> {
+pub(crate) fn check_horizon(t_end: f64, output_step: f64) -> Result<(), KeyError> {
     positive("simulation.t_end", "a final time", t_end)?;
     positive("simulation.output_step", "an output step", output_step)?;
     if output_step > t_end {
@@ -185,7 +185,7 @@ pub fn check_horizon(t_end: f64, output_step: f64) -> Result<(), KeyError> {
 /// The continuous loop's delays against its horizon: the integrator's steps are at most min τ long
 /// (over the nonzero delays), so t_end / τ must not exceed [`MAX_SAMPLING_STEPS`], the limit of a
 /// sampled-data run. `key` names the delays (`plant.delays`, `truth.delays`).
-pub fn check_integrator_delays(key: &str, delays: &[f64], t_end: f64) -> Result<(), KeyError> {
+pub(crate) fn check_integrator_delays(key: &str, delays: &[f64], t_end: f64) -> Result<(), KeyError> {
     match delays.iter().enumerate().find(|(_, &tau)| tau > 0.0 && t_end / tau > MAX_SAMPLING_STEPS) {
         None => Ok(()),
         Some((i, &tau)) => Err(KeyError::new(
@@ -218,14 +218,14 @@ fn at_least(t_end: f64, limit: f64) -> String {
 }
 
 /// The integrator's tolerances: finite and > 0.
-pub fn check_tolerances(rtol: f64, atol: f64) -> Result<(), KeyError> {
+pub(crate) fn check_tolerances(rtol: f64, atol: f64) -> Result<(), KeyError> {
     positive("simulation.rtol", "a relative tolerance", rtol)?;
     positive("simulation.atol", "an absolute tolerance", atol)?;
     Ok(())
 }
 
 /// A sampling period: finite, > 0, and at most [`MAX_SAMPLING_STEPS`] controller steps to t_end.
-pub fn check_sample_time(t_end: f64, sample_time: f64) -> Result<(), KeyError> {
+pub(crate) fn check_sample_time(t_end: f64, sample_time: f64) -> Result<(), KeyError> {
     const KEY: &str = "simulation.sample_time";
     positive(KEY, "a sampling period", sample_time)?;
     let steps = t_end / sample_time;
@@ -236,4 +236,29 @@ pub fn check_sample_time(t_end: f64, sample_time: f64) -> Result<(), KeyError> {
         ));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn suggested_output_step_and_sample_time_are_short_and_pass() {
+        // t_end = 1e300 printed "choose output_step ≥ 1000000000000000100…" (294 digits).
+        for (t_end, step) in [(1e300, 0.1), (100.0, 1e-6), (3.0, 1e-7), (1e20, 1e-300)] {
+            let e = check_horizon(t_end, step).unwrap_err();
+            let suggested = e.message.rsplit("choose output_step ≥ ").next().unwrap();
+            assert!(suggested.len() <= 8, "{e}");
+            let h: f64 = suggested.parse().unwrap();
+            assert!(check_horizon(t_end, h).is_ok(), "{e}");
+            let e = check_sample_time(t_end, step * 1e-4).unwrap_err();
+            let suggested = e.message.rsplit("choose sample_time ≥ ").next().unwrap();
+            assert!(suggested.len() <= 8, "{e}");
+            assert!(check_sample_time(t_end, suggested.parse().unwrap()).is_ok(), "{e}");
+        }
+        // 1e300 / 1e293 rounds to just above 1e7, so the suggestion is the next 3-digit value.
+        let e = check_horizon(1e300, 0.1).unwrap_err();
+        assert!(e.message.ends_with("choose output_step ≥ 1.01e293"), "{e}");
+        assert!(check_horizon(1e300, 1e293).is_err());
+    }
 }

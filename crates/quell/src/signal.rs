@@ -204,7 +204,7 @@ pub(crate) fn negative_frequency(w: f64) -> String {
 
 /// Checks the reference g (one component per output) and the disturbance ω (one per column of D)
 /// for `plant`.
-pub fn check_signals(plant: &Plant, reference: &Signal, disturbance: &Signal) -> Result<(), KeyError> {
+pub(crate) fn check_signals(plant: &Plant, reference: &Signal, disturbance: &Signal) -> Result<(), KeyError> {
     let (m, k) = (plant.m(), plant.k());
     reference.check("reference", m, &format!("one per output, m = {m} columns of plant.B"))?;
     disturbance.check("disturbance", k, &format!("one per column of plant.D, k = {k}"))
@@ -214,7 +214,7 @@ pub fn check_signals(plant: &Plant, reference: &Signal, disturbance: &Signal) ->
 /// (the closed loop evaluates g and ω at every stage of the integrator). Same values as
 /// [`Signal::eval_into`].
 #[derive(Debug, Clone)]
-pub struct SignalBank {
+pub(crate) struct SignalBank {
     /// Per output entry.
     bias: Vec<f64>,
     /// Per harmonic: its output entry, frequency, phase and amplitude.
@@ -249,21 +249,8 @@ impl SignalBank {
         self.bias.len()
     }
 
-    /// True when there are no components.
-    pub fn is_empty(&self) -> bool {
-        self.bias.is_empty()
-    }
-
-    /// Writes the concatenated signals at `t` into `out`; allocates nothing. An `out` that is not
-    /// [`SignalBank::len`] long is an error naming `out`.
-    pub fn eval_into(&mut self, t: f64, out: &mut [f64]) -> Result<(), KeyError> {
-        check_out(out, self.len())?;
-        self.eval_into_unchecked(t, out);
-        Ok(())
-    }
-
-    /// [`SignalBank::eval_into`] for an `out` known to be [`SignalBank::len`] long (the continuous
-    /// loop's, at every stage of the integrator).
+    /// Writes the concatenated signals at `t` into `out`, [`SignalBank::len`] long (the continuous
+    /// loop's, at every stage of the integrator); allocates nothing.
     pub(crate) fn eval_into_unchecked(&mut self, t: f64, out: &mut [f64]) {
         out.copy_from_slice(&self.bias);
         for ((a, f), p) in self.angle.iter_mut().zip(&self.frequency).zip(&self.phase) {
@@ -342,7 +329,7 @@ mod tests {
         assert_eq!(bank.len(), 5);
         let (mut out, mut each) = ([0.0; 5], [0.0; 5]);
         for t in [0.0, 0.37, 12.5, 99.9, 1e3] {
-            bank.eval_into(t, &mut out).unwrap();
+            bank.eval_into_unchecked(t, &mut out);
             g.eval_into(t, &mut each[..2]).unwrap();
             w.eval_into(t, &mut each[2..4]).unwrap();
             x.eval_into(t, &mut each[4..]).unwrap();
@@ -350,5 +337,14 @@ mod tests {
                 assert!((a - b).abs() <= 1e-15 * b.abs().max(1.0), "t = {t}: {out:?} vs {each:?}");
             }
         }
+    }
+
+    #[test]
+    fn the_bank_is_the_signals_concatenated() {
+        let s = crate::Scenario::from_toml(crate::scenario::PAPER_EXAMPLE).unwrap();
+        let mut bank = SignalBank::new(&[&s.reference, &s.disturbance]);
+        let mut gw = [0.0; 4];
+        bank.eval_into_unchecked(0.5, &mut gw);
+        assert_eq!(gw, [3.0 * 1f64.sin(), 2.0, 0.5f64.sin(), 1.0 + 2.0 * 1f64.sin()]);
     }
 }

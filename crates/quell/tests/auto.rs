@@ -8,9 +8,8 @@ mod common;
 
 use std::ops::ControlFlow;
 
-use common::Rng;
+use common::{companion, poly_from_roots, Rng};
 use quell::auto::{auto_design, Targets};
-use quell::linalg::{companion, poly_from_roots};
 use quell::nalgebra::{Complex, DMatrix};
 use quell::scenario::Scenario;
 use quell::sim::Run;

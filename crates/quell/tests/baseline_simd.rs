@@ -7,8 +7,8 @@ mod common;
 use std::ops::ControlFlow;
 
 use common::*;
-use quell::sim::dde::{solve, DelaySystem, Options, Past};
-use quell::simd::avx2_in_use;
+use quell::bench_api::avx2_in_use;
+use quell::bench_api::dde::{solve, DelaySystem, Options, Past};
 
 /// x' = −x(t − 1), x = 1 for t ≤ 0.
 struct UnitDelay;

@@ -1,9 +1,9 @@
-//! Tests of the DOP853 method-of-steps DDE integrator (`quell::sim::dde`).
+//! Tests of the DOP853 method-of-steps DDE integrator (`quell::bench_api::dde`).
 
 mod common;
 
 use common::exact_unit;
-use quell::sim::dde::{breakpoints, solve, DelaySystem, Method, Options, Past, SolveError, Stats};
+use quell::bench_api::dde::{breakpoints, solve, DelaySystem, Method, Options, Past, SolveError, Stats};
 use serde_json::Value;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -565,4 +565,50 @@ fn auto_without_implicit_block_is_dop853() {
     assert_eq!(sa, sb);
     assert_eq!(out_a, out_b);
     assert_eq!((sa.switches, sa.implicit_steps), (0, 0));
+}
+
+#[test]
+fn the_dde_solver_refuses_inconsistent_arguments() {
+    use std::ops::ControlFlow;
+    /// y' = −y(t − τ), one state, delayed.
+    struct Lag(Vec<f64>);
+    impl DelaySystem for Lag {
+        fn dim(&self) -> usize {
+            1
+        }
+        fn n_delayed(&self) -> usize {
+            1
+        }
+        fn delays(&self) -> &[f64] {
+            &self.0
+        }
+        fn rhs(&mut self, t: f64, _: &[f64], past: &Past<'_>, dy: &mut [f64]) {
+            past.eval_into(t - self.0[0], 0, dy);
+            dy[0] = -dy[0];
+        }
+    }
+    let go = |_: f64, _: &[f64]| ControlFlow::Continue(());
+    let opts = Options::default();
+    let input = |r: Result<_, SolveError>| match r {
+        Err(SolveError::Input { argument, found, .. }) => (argument, found),
+        other => panic!("{other:?}"),
+    };
+    // Each was an assert.
+    assert_eq!(input(solve(&mut Lag(vec![1.0]), 0.0, &[1.0, 2.0], &[1.0], 1.0, 0.5, &opts, go)), ("y0", "2".into()));
+    assert_eq!(input(solve(&mut Lag(vec![1.0]), 0.0, &[1.0], &[], 1.0, 0.5, &opts, go)), ("history", "0".into()));
+    assert_eq!(
+        input(solve(&mut Lag(vec![1.0]), 0.0, &[1.0], &[1.0], f64::NAN, 0.5, &opts, go)),
+        ("t_end", "NaN".into())
+    );
+    assert_eq!(input(solve(&mut Lag(vec![-1.0]), 0.0, &[1.0], &[1.0], 1.0, 0.5, &opts, go)), ("delays()", "-1".into()));
+    let e = solve(&mut Lag(vec![1.0]), 0.0, &[1.0, 2.0], &[1.0], 1.0, 0.5, &opts, go).unwrap_err();
+    assert_eq!(e.to_string(), "dde::solve: y0: expected 1 entries (the system's dim()), found 2");
+    // The right arguments: on [0, 1] with history 1, y(t) = 1 − t exactly (the method's order ≥ 1).
+    let mut last = 0.0;
+    solve(&mut Lag(vec![1.0]), 0.0, &[1.0], &[1.0], 1.0, 0.5, &opts, |_, y| {
+        last = y[0];
+        ControlFlow::Continue(())
+    })
+    .unwrap();
+    assert!(last.abs() < 1e-12, "{last}");
 }

@@ -37,7 +37,7 @@ fn paper_example_printed_gains_are_not_propositions_result() {
     // ≈ 8.41, 0.08, −2.89 (unstable). This is why quell computes K from Proposition 1.
     let p = paper_plant();
     let K = mat(2, 3, &[12.1, 7.1, 0.0, 3.0, 1.0, 2.0]);
-    let ev = quell::linalg::eigenvalues(&(&p.A - &p.B * K)).unwrap();
+    let ev = eigenvalues(&(&p.A - &p.B * K));
     let max = ev.iter().map(|e| e.re).fold(f64::MIN, f64::max);
     assert!((max - 8.41).abs() < 0.01, "{ev:?}");
 }
@@ -201,7 +201,7 @@ fn nearly_parallel_disturbances_are_refused_with_cond_D() {
 /// with roots `poles` and numerator 1 (relative degree = the number of poles).
 fn canonical_siso(poles: &[Complex<f64>]) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
     let n = poles.len();
-    let A = quell::linalg::companion(&quell::linalg::poly_from_roots(poles));
+    let A = companion(&poly_from_roots(poles));
     let mut B = DMatrix::zeros(n, 1);
     B[(n - 1, 0)] = 1.0;
     let mut C = DMatrix::zeros(1, n);
@@ -399,9 +399,9 @@ fn zero_dynamics_set_the_channel_poles_aside() {
     // G(s) = (s + 1)(s − 3)/((s + 2)(s + 4)(s + 5)) in controllable canonical form: σ = 1, zeros −1
     // and 3 (closed form). The channel pole is placed at −1, on top of the stable zero: only the
     // zeros are judged, and the message lists both zeros and names 3 as the unstable one.
-    let den = quell::linalg::poly_from_roots(&[re(-2.0), re(-4.0), re(-5.0)]); // [40, 38, 11]
-    let num = quell::linalg::poly_from_roots(&[re(-1.0), re(3.0)]); // [−3, −2]
-    let A = quell::linalg::companion(&den);
+    let den = poly_from_roots(&[re(-2.0), re(-4.0), re(-5.0)]); // [40, 38, 11]
+    let num = poly_from_roots(&[re(-1.0), re(3.0)]); // [−3, −2]
+    let A = companion(&den);
     let B = mat(3, 1, &[0.0, 0.0, 1.0]);
     let C = mat(1, 3, &[num[0], num[1], 1.0]);
     let plant = Plant::new(A, B, C, mat(3, 1, &[1.0, 0.0, 0.0]), mat(1, 1, &[0.0]), vec![0.0], None).unwrap();
@@ -454,7 +454,7 @@ fn error_observer_choices() {
     assert_eq!(expect_err(&paper_plant(), &spec), DesignError::ObserverGainShape { n: 3, m: 2, rows: 2, cols: 3 });
     // L = 0 leaves A − LC = A, which is unstable for the paper's plant (eigenvalue ≈ 1.2 > 0? check).
     spec.observer = ObserverChoice::Gain(DMatrix::zeros(3, 2));
-    let open_loop = quell::linalg::eigenvalues(&paper_plant().A).unwrap();
+    let open_loop = eigenvalues(&paper_plant().A);
     assert!(open_loop.iter().any(|e| e.re >= 0.0), "the paper's plant is open-loop unstable: {open_loop:?}");
     assert!(matches!(expect_err(&paper_plant(), &spec), DesignError::ObserverUnstable { .. }));
     spec.observer = ObserverChoice::Poles(vec![re(-2.0), re(3.0), re(-4.0)]);

@@ -117,7 +117,7 @@ fn output_is_deterministic_and_records_the_design() {
         assert!(h.contains(text), "header lacks {text:?}:\n{h}");
     }
     for z in d.observer_eigenvalues().iter().chain(d.decoupled_eigenvalues()) {
-        assert!(h.contains(&quell::linalg::fmt_complex(z)), "eigenvalue {z} missing");
+        assert!(h.contains(&quell::fmt_complex(z)), "eigenvalue {z} missing");
     }
     assert!(a.header.is_ascii() && a.source.is_ascii());
     // f32: float everywhere, every literal suffixed.

@@ -4,6 +4,7 @@
 mod common;
 
 use common::multiset_mismatch as max_rel_mismatch;
+use common::{balanced, eigenvalues};
 use quell::design::place::{eigenvector_condition, place, PlaceError};
 use quell::nalgebra::{Complex, DMatrix};
 
@@ -61,48 +62,6 @@ fn random_poles(rng: &mut Rng, n: usize, sep: f64) -> Vec<C64> {
     }
 }
 
-/// Eigenvalues by nalgebra's Schur form (bounded iterations: its implicit double-shift QR has
-/// no exceptional shifts and can stall on tight clusters; shifting by the mean eigenvalue first
-/// resolves the all-equal case).
-///
-/// M is first scaled by an exact diagonal similarity (Osborne's iteration in the 2-norm, factors
-/// rounded to powers of 2): gains of 1e14 next to O(1) entries otherwise give the QR iteration a
-/// backward error of ε‖M‖ that swamps the eigenvalues the gain was built to place.
-fn eigenvalues(M: &DMatrix<f64>) -> Vec<C64> {
-    let n = M.nrows();
-    let M = balanced(M);
-    let sigma = M.trace() / n.max(1) as f64;
-    let shifted = &M - DMatrix::<f64>::identity(n, n) * sigma;
-    let schur = shifted.try_schur(f64::EPSILON, 100_000).expect("nalgebra Schur did not converge");
-    schur.complex_eigenvalues().iter().map(|z| z + sigma).collect()
-}
-
-/// The test's own exact diagonal similarity of [`eigenvalues`] (Osborne, powers of 2).
-fn balanced(M: &DMatrix<f64>) -> DMatrix<f64> {
-    let n = M.nrows();
-    let mut M = M.clone();
-    for _ in 0..100 {
-        let mut changed = false;
-        for i in 0..n {
-            let off = |v: f64, j: usize| if j == i { 0.0 } else { v * v };
-            let col = M.column(i).iter().enumerate().map(|(j, &v)| off(v, j)).sum::<f64>().sqrt();
-            let row = M.row(i).iter().enumerate().map(|(j, &v)| off(v, j)).sum::<f64>().sqrt();
-            if col > 0.0 && row > 0.0 {
-                let f = (row / col).sqrt().log2().round().exp2();
-                if f != 1.0 {
-                    M.column_mut(i).scale_mut(f);
-                    M.row_mut(i).scale_mut(1.0 / f);
-                    changed = true;
-                }
-            }
-        }
-        if !changed {
-            break;
-        }
-    }
-    M
-}
-
 fn closed_loop(A: &DMatrix<f64>, B: &DMatrix<f64>, K: &DMatrix<f64>) -> DMatrix<f64> {
     A - B * K
 }
@@ -143,7 +102,7 @@ fn char_poly(M: &DMatrix<f64>) -> Vec<f64> {
 
 /// Coefficients of ∏(s − r), lowest degree first, with the leading 1.
 fn poly_from_roots(roots: &[C64]) -> Vec<f64> {
-    let mut c = quell::linalg::poly_from_roots(roots);
+    let mut c = common::poly_from_roots(roots);
     c.push(1.0);
     c
 }

@@ -10,8 +10,7 @@ use std::ops::ControlFlow;
 
 use quell::scenario::{Actuator, Noise, Scenario, PAPER_EXAMPLE};
 use quell::signal::Signal;
-use quell::sim::noise::{band_limited, NOISE_SINES};
-use quell::sim::{Outcome, Run, RunSettings, SimResult};
+use quell::sim::{band_limited, Outcome, Run, RunSettings, SimResult, NOISE_SINES};
 
 /// ẋ = x + u_p, y = x (unstable), channel pole −2 (K = 3, F = 2), observer pole −5 (l = 6), g = 0.
 const SCALAR: &str = r#"

@@ -4,8 +4,8 @@
 
 use std::ops::ControlFlow;
 
+use quell::bench_api::dde::{solve, DelaySystem, Options, Past, Stats};
 use quell::nalgebra::{Complex, DMatrix};
-use quell::sim::dde::{solve, DelaySystem, Options, Past, Stats};
 use quell::{Design, DesignSpec, ObserverChoice, Plant};
 
 /// u'(t) = −u(t − 1/3) − u(t − 1/5).

@@ -23,13 +23,10 @@ pub enum ControllerError {
     /// A discretized block is not finite at this sample time.
     #[error("simulation.sample_time: {what} is not finite after discretizing at T_s = {sample_time:e} s; the exact discretization overflowed (the design's eigenvalues or gains times T_s are beyond floating point); choose a shorter sample time or poles of smaller magnitude")]
     NotFinite { what: String, sample_time: f64 },
-    /// T_s μ_i is beyond [`MAX_ADAPTATION_STEP`]: the gain c/(1 + c tr Ω) of [`adapt`] would overflow to
+    /// T_s μ_i is beyond [`MAX_ADAPTATION_STEP`]: the gain c/(1 + c tr Ω) of the adaptive step would overflow to
     /// 0 once c·tr Ω overflows, turning adaptation off without a sign.
     #[error("design.mu[{channel}]: expected T_s μ_i ≤ {max:e} (μ_i ≤ {limit:e} at T_s = {sample_time} s), found μ_i = {mu:e}; the sampled adaptation gain T_s μ_i / (1 + T_s μ_i tr Ω_i) overflows to 0 and adaptation stops — choose a smaller μ_i", max = MAX_ADAPTATION_STEP, limit = MAX_ADAPTATION_STEP / .sample_time)]
     AdaptationStepTooLarge { channel: usize, mu: f64, sample_time: f64 },
-    /// A kernel ([`adapt`]) was given a buffer of the wrong length.
-    #[error("{function}: {name} needs {expected} entries, found {found}")]
-    Length { function: &'static str, name: &'static str, expected: usize, found: usize },
     /// [`Controller::step`] was given y or g of the wrong length.
     #[error("Controller::step: {name} needs {expected} entries (one per channel), found {found}")]
     InputLength { name: &'static str, expected: usize, found: usize },
@@ -314,7 +311,7 @@ impl Controller {
                 *Yj = a * *Yj + one_minus_a * dj * eps;
             }
             // Adaptive law (33), implicit in ρI with ρ ≥ λ_max(Ω) (see `adapt`), in the same pass.
-            adapt_unchecked(ch.c, &mut ch.Omega, (a, one_minus_a), &self.Delta, &ch.Y, eta, self.Omega_eta.get());
+            adapt(ch.c, &mut ch.Omega, (a, one_minus_a), &self.Delta, &ch.Y, eta, self.Omega_eta.get());
 
             // G_ii filter bank: W ← Φ W + γ [u_i(k − d_i), ξ̂ᵀ(k − d_i)].
             let sigma = ch.gamma.len();
@@ -413,44 +410,22 @@ impl Controller {
     }
 }
 
-/// The H filter Ω ← aΩ + bΔΔᵀ (ZOH of H(s)), then one step of η̂' = μ (Y − Ω η̂) (33) with c = T_s μ,
-/// implicit in ρI and explicit in the rest (Ω = ρI − (ρI − Ω)):
-/// η̂ ← η̂ + c (Y − Ω η̂) / (1 + c ρ),  with ρ = tr Ω ≥ λ_max(Ω).
-/// For PSD Ω the map η̂ ↦ (I − cΩ/(1 + cρ)) η̂ has eigenvalues in [1/(1 + cρ), 1]: nonexpansive for
-/// every μ ≥ 0 and T_s, with the fixed points of (33), at O(q²) cost.
-///
-/// `Omega` is the full q×q matrix (row-major), kept exactly symmetric: b (Δ_i Δ_j) rounds as
-/// b (Δ_j Δ_i). One pass over its rows updates it and sums
-/// (Ω η̂)_j = Σ_i Ω_ij η̂_i over i in order (the order of the generated C, [`crate::export`], which keeps
-/// the triangle only) and tr Ω. The continuous loop keeps Ω packed (`controller/packed.rs`), because there it
-/// is integrated state; here full rows make the pass contiguous (`docs/performance.md`).
-///
-/// Omega, Delta, Y and tmp not fitting q = eta.len() are [`ControllerError::Length`]. The
-/// controller calls the kernel without the checks (its buffers are built to size).
-pub fn adapt(
-    c: f64,
-    Omega: &mut [f64],
-    ab: (f64, f64),
-    Delta: &[f64],
-    Y: &[f64],
-    eta: &mut [f64],
-    tmp: &mut [f64],
-) -> Result<(), ControllerError> {
-    let q = eta.len();
-    for (name, expected, found) in
-        [("Omega", q * q, Omega.len()), ("Delta", q, Delta.len()), ("Y", q, Y.len()), ("tmp", q, tmp.len())]
-    {
-        if found != expected {
-            return Err(ControllerError::Length { function: "adapt", name, expected, found });
-        }
-    }
-    adapt_unchecked(c, Omega, ab, Delta, Y, eta, tmp);
-    Ok(())
-}
-
 with_avx2! {
-    /// [`adapt`] for buffers known to fit (the controller's).
-    pub(crate) fn adapt_unchecked(
+    /// The H filter Ω ← aΩ + bΔΔᵀ (ZOH of H(s)), then one step of η̂' = μ (Y − Ω η̂) (33) with c = T_s μ,
+    /// implicit in ρI and explicit in the rest (Ω = ρI − (ρI − Ω)):
+    /// η̂ ← η̂ + c (Y − Ω η̂) / (1 + c ρ),  with ρ = tr Ω ≥ λ_max(Ω).
+    /// For PSD Ω the map η̂ ↦ (I − cΩ/(1 + cρ)) η̂ has eigenvalues in [1/(1 + cρ), 1]: nonexpansive for
+    /// every μ ≥ 0 and T_s, with the fixed points of (33), at O(q²) cost.
+    ///
+    /// `Omega` is the full q×q matrix (row-major), kept exactly symmetric: b (Δ_i Δ_j) rounds as
+    /// b (Δ_j Δ_i). One pass over its rows updates it and sums
+    /// (Ω η̂)_j = Σ_i Ω_ij η̂_i over i in order (the order of the generated C, [`crate::export`], which keeps
+    /// the triangle only) and tr Ω. The continuous loop keeps Ω packed (`controller/packed.rs`), because there it
+    /// is integrated state; here full rows make the pass contiguous (`docs/performance.md`).
+    ///
+    /// The buffers must fit q = eta.len() (Omega q·q, Delta, Y and tmp q): the controller builds them
+    /// to size.
+    pub(crate) fn adapt(
         c: f64,
         Omega: &mut [f64],
         ab: (f64, f64),
@@ -478,5 +453,92 @@ with_avx2! {
         for ((e, y), w) in eta.iter_mut().zip(Y).zip(tmp.iter()) {
             *e += gain * (y - w);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::noise::Gaussian;
+
+    /// Uniform on (lo, hi].
+    fn between(rng: &mut Gaussian, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * rng.uniform()
+    }
+
+    /// Uniform on {0, …, n − 1}.
+    fn below(rng: &mut Gaussian, n: usize) -> usize {
+        ((rng.uniform() * n as f64) as usize).min(n - 1)
+    }
+
+    #[test]
+    fn adaptive_step_is_nonexpansive_for_any_gain() {
+        // With Y = 0, η ↦ (I − cΩ/(1 + c tr Ω)) η must not grow for any PSD Ω and any c = T_s μ ≥ 0,
+        // including huge ones where explicit Euler (factor 1 − cλ) would blow up.
+        let mut rng = Gaussian::new(11);
+        for _ in 0..2000 {
+            let q = 1 + below(&mut rng, 12);
+            let rank = 1 + below(&mut rng, q);
+            let V = DMatrix::from_fn(q, rank, |_, _| between(&mut rng, -1.0, 1.0)) * between(&mut rng, 0.0, 30.0);
+            let Om = &V * V.transpose();
+            let mut omega: Vec<f64> = Om.iter().copied().collect();
+            let c = 10f64.powf(between(&mut rng, -4.0, 8.0));
+            let mut eta: Vec<f64> = (0..q).map(|_| between(&mut rng, -1.0, 1.0)).collect();
+            let before: f64 = eta.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let mut tmp = vec![0.0; q];
+            adapt(c, &mut omega, (1.0, 0.0), &vec![0.0; q], &vec![0.0; q], &mut eta, &mut tmp);
+            let after: f64 = eta.iter().map(|v| v * v).sum::<f64>().sqrt();
+            assert!(after <= before * (1.0 + 1e-12), "grew from {before} to {after} (c = {c})");
+        }
+    }
+
+    #[test]
+    fn adaptive_step_keeps_omega_exactly_symmetric_and_sums_in_order() {
+        // The C export keeps Ω's triangle only and sums (Ω η̂)_j over i in order; the Controller's full Ω
+        // must therefore stay symmetric to the last bit and give that same sum, for every q and step.
+        let mut rng = Gaussian::new(5);
+        for q in [1, 2, 3, 5, 8, 13, 16, 32] {
+            let mut omega = vec![0.0; q * q];
+            let (mut eta, mut tmp) = (vec![0.0; q], vec![0.0; q]);
+            let a = between(&mut rng, 0.5, 1.0);
+            for _ in 0..50 {
+                let Delta: Vec<f64> = (0..q).map(|_| between(&mut rng, -3.0, 3.0)).collect();
+                let Y: Vec<f64> = (0..q).map(|_| between(&mut rng, -1.0, 1.0)).collect();
+                let eta_before = eta.clone();
+                adapt(0.7, &mut omega, (a, 1.0 - a), &Delta, &Y, &mut eta, &mut tmp);
+                for i in 0..q {
+                    for j in 0..i {
+                        assert_eq!(omega[i * q + j].to_bits(), omega[j * q + i].to_bits(), "q {q}: Ω[{i}][{j}]");
+                    }
+                    let natural = (0..q).fold(0.0, |acc, j| acc + omega[i * q + j] * eta_before[j]);
+                    assert_eq!(tmp[i].to_bits(), natural.to_bits(), "q {q}: (Ω η̂)_{i}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn adaptive_step_converges_to_the_least_squares_fixed_point() {
+        // For constant PD Ω and Y, repeated steps converge to Ω⁻¹ Y (the fixed point of (33)).
+        let Om = DMatrix::from_row_slice(2, 2, &[2.0, 0.5, 0.5, 1.0]);
+        let mut omega = [2.0, 0.5, 0.5, 1.0];
+        let Y = [1.0, -1.0];
+        let want = Om.try_inverse().unwrap() * nalgebra::DVector::from_row_slice(&Y);
+        let (mut eta, mut tmp) = (vec![0.0; 2], vec![0.0; 2]);
+        for _ in 0..2000 {
+            adapt(0.1, &mut omega, (1.0, 0.0), &[0.0; 2], &Y, &mut eta, &mut tmp);
+        }
+        assert!((eta[0] - want[0]).abs() < 1e-12 && (eta[1] - want[1]).abs() < 1e-12, "{eta:?} vs {want}");
+    }
+
+    #[test]
+    fn adaptive_step_applies_the_h_filter_to_omega_first() {
+        // Ω ← aΩ + bΔΔᵀ with Ω = I, a = 0.5, b = 0.25, Δ = [1, 2]: [[0.75, 0.5], [0.5, 1.5]] (by hand);
+        // with c = 0 the parameters do not move.
+        let mut omega = [1.0, 0.0, 0.0, 1.0];
+        let (mut eta, mut tmp) = ([0.3, -0.7], [0.0; 2]);
+        adapt(0.0, &mut omega, (0.5, 0.25), &[1.0, 2.0], &[1.0, 1.0], &mut eta, &mut tmp);
+        assert_eq!(omega, [0.75, 0.5, 0.5, 1.5]);
+        assert_eq!(eta, [0.3, -0.7]);
     }
 }

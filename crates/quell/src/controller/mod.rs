@@ -1,5 +1,5 @@
 //! The controller's equations, in one place, shared by the continuous simulation
-//! ([`crate::sim::closed_loop`]) and the real-time controller.
+//! (`sim/closed_loop.rs`) and the real-time controller.
 //!
 //! The controller has three parts:
 //! - the **core**, a linear system with state z = [ξ̂_g; ξ̂_ω; x̂] driven by v = [y; g; u_d]: the
@@ -13,10 +13,10 @@
 //!   [u_i(t − τ_i), ξ̂ᵀ(t − τ_i)] (state W_i, σ_i × (1 + q)) and H(s) = 1/(βs + 1) giving Y_i and Ω_i;
 //! - the **adaptive law** (33) η̂_i' = μ_i (Y_i − Ω_i η̂_i) and the control law (25) u_i = −η̂_iᵀ ξ̂.
 
-pub mod discrete;
+pub(crate) mod discrete;
 pub(crate) mod packed;
 
-pub use discrete::{Controller, ControllerError, MAX_ADAPTATION_STEP, MAX_MEASUREMENT};
+pub use discrete::{Controller, ControllerError, MAX_ADAPTATION_STEP, MAX_DELAY_SAMPLES, MAX_MEASUREMENT};
 
 use nalgebra::DMatrix;
 
@@ -25,7 +25,7 @@ use crate::linalg::companion;
 
 /// Matrices of the controller's linear parts, built once from a [`Design`].
 #[derive(Debug, Clone)]
-pub struct Equations {
+pub(crate) struct Equations {
     /// Plant order n, channels m, regressor size q (= q_g + q_ω).
     pub n: usize,
     pub m: usize,
@@ -48,7 +48,7 @@ pub struct Equations {
 
 /// Channel i's G_ii(s) realization and adaptation gain.
 #[derive(Debug, Clone)]
-pub struct ChannelFilter {
+pub(crate) struct ChannelFilter {
     /// σ_i.
     pub sigma: usize,
     /// Companion matrix of den_i (σ_i × σ_i).

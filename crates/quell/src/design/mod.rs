@@ -182,7 +182,7 @@ pub enum DesignError {
 
 /// Largest ratio between two rates of one design: a pole's magnitude |p| (or 1/β, the pole of H)
 /// against a decay rate |Re p| (or 1/β). A pole slower than √ε times the fastest lies inside the
-/// margin √ε·‖M‖ within which the Hurwitz checks ([`unstable`]) cannot tell it from the imaginary
+/// margin √ε·‖M‖ within which the Hurwitz checks (`linalg::unstable`) cannot tell it from the imaginary
 /// axis, and the loop's integrator would need about 1/√ε steps for it to settle.
 pub const RATE_SPAN: f64 = 67_108_864.0; // 1/√ε = 2^26
 

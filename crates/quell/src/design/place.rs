@@ -805,8 +805,8 @@ fn hessenberg_char_poly(M: &DMatrix<f64>) -> Vec<f64> {
 /// eigenvalues (MATLAB's `place` reports the same kind of figure). ∞ when A − B K is defective
 /// (a Jordan block: no basis of eigenvectors exists) or not finite.
 ///
-/// X is built from the computed eigenvalues ([`crate::linalg::eigenvalues`]) grouped by
-/// [`crate::linalg::clusters`] (the copies of one repeated eigenvalue): for a cluster of k copies
+/// X is built from the computed eigenvalues (`linalg::eigenvalues`) grouped by
+/// `linalg::clusters` (the copies of one repeated eigenvalue): for a cluster of k copies
 /// around its mean μ, the k right singular vectors of M − μI for its k smallest singular values
 /// (an orthonormal basis of the eigenspace, the best-conditioned choice within it). The cluster is
 /// declared defective (result ∞) when the largest of those k singular values exceeds

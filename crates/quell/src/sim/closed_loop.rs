@@ -760,3 +760,27 @@ pub(super) fn simulate(
     result.outcome = Some(ended.unwrap_or(outcome));
     Ok(result)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_loop_refuses_signals_and_a_state_of_the_wrong_lengths() {
+        let s = crate::Scenario::from_toml(crate::scenario::PAPER_EXAMPLE).unwrap();
+        let d = s.design().unwrap();
+        // Signals without m = 2 and k = 2 components panicked in its right-hand side, and a short x0
+        // in initial_state.
+        let mut one = s.reference.clone();
+        one.components.pop();
+        let e = ContinuousLoop::new(&d, &one, &s.disturbance).map(|_| ()).unwrap_err();
+        assert_eq!(e.key, "reference.components");
+        let e = ContinuousLoop::new(&d, &s.reference, &one).map(|_| ()).unwrap_err();
+        assert_eq!(e.key, "disturbance.components");
+        let sys = ContinuousLoop::new(&d, &s.reference, &s.disturbance).unwrap();
+        let e = sys.initial_state(&DVector::zeros(2)).unwrap_err();
+        assert_eq!(e, PlantError::Length { name: "x0", per: "state", expected: 3, found: 2 });
+        let s0 = sys.initial_state(&DVector::from_vec(vec![1.0, 2.0, 3.0])).unwrap();
+        assert_eq!(s0.iter().filter(|&&v| v != 0.0).copied().collect::<Vec<_>>(), [1.0, 2.0, 3.0]);
+    }
+}

@@ -75,7 +75,7 @@ impl Peaks {
 }
 
 /// Whether v is outside [−bound, bound] or not finite (so NaN is always beyond).
-pub fn beyond(v: f64, bound: f64) -> bool {
+pub(crate) fn beyond(v: f64, bound: f64) -> bool {
     !(v.is_finite() && v.abs() <= bound)
 }
 

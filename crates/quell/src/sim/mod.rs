@@ -4,10 +4,10 @@
 //! with the discrete [`Controller`](crate::Controller). Either returns one [`SimResult`], whose
 //! [`Outcome`] says how the run ended.
 
-mod closed_loop;
-pub mod dde;
+pub(crate) mod closed_loop;
+pub(crate) mod dde;
 mod divergence;
-pub mod noise;
+pub(crate) mod noise;
 mod result;
 mod sampled;
 mod scenario;
@@ -22,9 +22,10 @@ use crate::settings::{self, Actuator, KeyError};
 use crate::signal::{check_signals, Signal};
 
 pub use crate::settings::MeasurementNoise;
-pub use closed_loop::{default_max_steps, ContinuousLoop, BUDGET_MIN_STEPS, BUDGET_STEPS_PER_RATE, MAX_HISTORY_BYTES};
+pub use closed_loop::{default_max_steps, BUDGET_MIN_STEPS, BUDGET_STEPS_PER_RATE, MAX_HISTORY_BYTES};
 pub use dde::{Method, Stats};
 pub use divergence::{Peaks, Watched, DIVERGENCE_BOUND};
+pub use noise::{band_limited, NOISE_SINES};
 pub use result::{ChannelSummary, Outcome, RunStats, Sample, SimResult};
 pub use sampled::SampledController;
 pub use settle::{Settle, Settling};

@@ -172,3 +172,75 @@ pub fn decoupling_error(C: &DMatrix<f64>, A_f: &DMatrix<f64>, B_f: &DMatrix<f64>
     }
     worst
 }
+
+/// Coefficients [a_0, …, a_{q−1}] of the monic polynomial ∏(s − r_j) = s^q + a_{q−1}s^{q−1} + … + a_0
+/// (the leading 1 left out), multiplied out factor by factor; the roots closed under conjugation.
+pub fn poly_from_roots(roots: &[Complex<f64>]) -> Vec<f64> {
+    let mut c = vec![Complex::new(1.0, 0.0)]; // ascending, leading coefficient last
+    for r in roots {
+        let mut next = vec![Complex::new(0.0, 0.0); c.len() + 1];
+        for (i, ci) in c.iter().enumerate() {
+            next[i + 1] += ci;
+            next[i] -= r * ci;
+        }
+        c = next;
+    }
+    c.pop();
+    c.iter().map(|z| z.re).collect()
+}
+
+/// The companion matrix of s^q + a_{q−1}s^{q−1} + … + a_0 (ascending `a`): ones on the
+/// superdiagonal, last row −a; its characteristic polynomial is that one.
+pub fn companion(a: &[f64]) -> DMatrix<f64> {
+    let q = a.len();
+    let mut M = DMatrix::zeros(q, q);
+    for r in 0..q.saturating_sub(1) {
+        M[(r, r + 1)] = 1.0;
+    }
+    for (c, &ac) in a.iter().enumerate() {
+        M[(q - 1, c)] = -ac;
+    }
+    M
+}
+
+/// Eigenvalues by nalgebra's Schur form (bounded iterations: its implicit double-shift QR has
+/// no exceptional shifts and can stall on tight clusters; shifting by the mean eigenvalue first
+/// resolves the all-equal case).
+///
+/// M is first scaled by an exact diagonal similarity (Osborne's iteration in the 2-norm, factors
+/// rounded to powers of 2): gains of 1e14 next to O(1) entries otherwise give the QR iteration a
+/// backward error of ε‖M‖ that swamps the eigenvalues the gain was built to place.
+pub fn eigenvalues(M: &DMatrix<f64>) -> Vec<Complex<f64>> {
+    let n = M.nrows();
+    let M = balanced(M);
+    let sigma = M.trace() / n.max(1) as f64;
+    let shifted = &M - DMatrix::<f64>::identity(n, n) * sigma;
+    let schur = shifted.try_schur(f64::EPSILON, 100_000).expect("nalgebra Schur did not converge");
+    schur.complex_eigenvalues().iter().map(|z| z + sigma).collect()
+}
+
+/// The test's own exact diagonal similarity of [`eigenvalues`] (Osborne, powers of 2).
+pub fn balanced(M: &DMatrix<f64>) -> DMatrix<f64> {
+    let n = M.nrows();
+    let mut M = M.clone();
+    for _ in 0..100 {
+        let mut changed = false;
+        for i in 0..n {
+            let off = |v: f64, j: usize| if j == i { 0.0 } else { v * v };
+            let col = M.column(i).iter().enumerate().map(|(j, &v)| off(v, j)).sum::<f64>().sqrt();
+            let row = M.row(i).iter().enumerate().map(|(j, &v)| off(v, j)).sum::<f64>().sqrt();
+            if col > 0.0 && row > 0.0 {
+                let f = (row / col).sqrt().log2().round().exp2();
+                if f != 1.0 {
+                    M.column_mut(i).scale_mut(f);
+                    M.row_mut(i).scale_mut(1.0 / f);
+                    changed = true;
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    M
+}
