@@ -26,7 +26,7 @@
 
 mod common;
 
-use common::{companion, decoupling_error, eigenvalues, poly_from_roots, Rng};
+use common::{companion, decoupling_error, eigenvalues_faer as eigenvalues, poly_from_roots, Rng};
 use quell::nalgebra::{Complex, DMatrix};
 use quell::{Design, DesignError, DesignSpec, ObserverChoice, Plant};
 
