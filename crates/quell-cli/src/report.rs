@@ -67,10 +67,6 @@ fn fmt_matrix(out: &mut String, name: &str, M: &DMatrix<f64>) {
     }
 }
 
-fn fmt_eigs(e: &[Complex<f64>]) -> String {
-    e.iter().map(quell::linalg::fmt_complex).collect::<Vec<_>>().join(", ")
-}
-
 fn tf(c: &quell::design::ChannelTf) -> String {
     let poly: Vec<String> = c
         .poles
@@ -142,7 +138,7 @@ pub fn design_text(d: &Design) -> String {
         let measures: Vec<String> = r.deciding().iter().map(|m| format!("{m:.2e}")).collect();
         let (l, cf) = (r.deciding().len(), quell::design::CLOSE_FACTOR);
         if let Some(given) = r.given {
-            let decided = r.sigma.map_or("none".to_string(), |s| s.to_string());
+            let decided = r.decided.map_or("none".to_string(), |s| s.to_string());
             let _ = writeln!(
                 s,
                 "  σ_{} = {given} given by design.relative_degrees, not decided (eq. (7) decides {decided}); cosines for l = 1…{l} are [{}]",
@@ -175,8 +171,8 @@ pub fn design_text(d: &Design) -> String {
     ] {
         fmt_matrix(&mut s, name, M);
     }
-    let _ = writeln!(s, "\neig(A − LC) = {}", fmt_eigs(d.observer_eigenvalues()));
-    let _ = writeln!(s, "eig(A − BK) = {}", fmt_eigs(d.decoupled_eigenvalues()));
+    let _ = writeln!(s, "\neig(A − LC) = {}", quell::linalg::fmt_complex_list(d.observer_eigenvalues()));
+    let _ = writeln!(s, "eig(A − BK) = {}", quell::linalg::fmt_complex_list(d.decoupled_eigenvalues()));
     let _ = writeln!(
         s,
         "eigenvector condition numbers κ₂(X): A − LC {}, A − BK {}",

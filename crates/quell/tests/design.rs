@@ -228,7 +228,7 @@ fn relative_degrees_that_do_not_scale_with_A() {
     assert_eq!(relative_degrees(&chain, &b, &c).unwrap(), vec![Some(11)]);
     let (A, B, C) = canonical_siso(&[re(-1000.0); 3]);
     let decided = &relative_degree_measures(&A, &B, &C).unwrap()[0];
-    assert_eq!(decided.sigma, Some(3));
+    assert_eq!(decided.decided, Some(3));
     assert_eq!(decided.deciding(), &[0.0, 0.0, 1.0]);
     assert!(!decided.is_close());
     // And the design goes through: G(s) = 6/((s + 1)(s + 2)(s + 3)) exactly (decoupling check).
@@ -252,8 +252,8 @@ fn one_tolerance_for_sigma_and_B_star() {
         // c_1 B = [1, 1]; c_2 B = [ε, 0]; c_2 A B = [0, 1]: B* is nonsingular either way.
         let C = mat(2, 3, &[1.0, 0.0, 1.0, cosine, 1.0, 0.0]);
         let decided = relative_degree_measures(&A, &B, &C).unwrap();
-        assert_eq!(decided[0].sigma, Some(1));
-        assert_eq!(decided[1].sigma, Some(sigma2), "cosine {cosine}");
+        assert_eq!(decided[0].decided, Some(1));
+        assert_eq!(decided[1].decided, Some(sigma2), "cosine {cosine}");
         assert!(decided[1].is_close(), "cosine {cosine} is within ×100 of τ");
         let measure = decided[1].measures[0];
         assert!((measure - cosine / (1.0 + cosine * cosine).sqrt()).abs() < 1e-15, "{measure}");
@@ -276,10 +276,10 @@ fn relative_degrees_given_inside_the_close_band() {
     let c = |cosine: f64| mat(2, 3, &[1.0, 0.0, 1.0, cosine, 1.0, 0.0]);
     let poles = vec![vec![re(-1.0)], vec![re(-2.0), re(-3.0)]];
     let exact = falb_wolovich(&A, &B, &c(0.0), &poles).unwrap();
-    assert_eq!(exact.sigma, vec![1, 2]);
+    assert_eq!(exact.sigma(), vec![1, 2]);
     let given = falb_wolovich_given(&A, &B, &c(3e-5), &poles, Some(&[1, 2])).unwrap();
-    assert_eq!(given.sigma, vec![1, 2]);
-    assert_eq!((given.degrees[1].sigma, given.degrees[1].given), (Some(1), Some(2)));
+    assert_eq!(given.sigma(), vec![1, 2]);
+    assert_eq!((given.degrees[1].decided, given.degrees[1].given), (Some(1), Some(2)));
     assert!((&given.K - &exact.K).norm() <= 1e-3 * exact.K.norm(), "{} vs {}", given.K, exact.K);
     let e = falb_wolovich_given(&A, &B, &c(3e-6), &[vec![re(-1.0)], vec![re(-2.0)]], Some(&[1, 1])).unwrap_err();
     assert!(matches!(e, DesignError::NotDecouplable { smallest, .. } if smallest < quell::design::TOL), "{e}");

@@ -19,6 +19,7 @@ use std::io::Write as _;
 use std::path::Path;
 use std::process::Command;
 
+use super::c::fill;
 use super::{generate, CCode, ExportError, ExportOptions};
 use crate::design::Design;
 
@@ -72,12 +73,16 @@ pub fn generate_fmu(
     let mut sources: Vec<(String, String)> =
         vec![(code.header_name.clone(), code.header.clone()), (code.source_name.clone(), code.source.clone())];
     let guid = guid(&[&code.header, &code.source]);
-    let wrapper = WRAPPER
-        .replace("{guid}", &guid)
-        .replace("{version}", env!("CARGO_PKG_VERSION"))
-        .replace("{p}", p)
-        .replace("{P}", &p.to_ascii_uppercase())
-        .replace("{R}", options.precision.c_type());
+    let wrapper = fill(
+        WRAPPER,
+        &[
+            ("guid", &guid),
+            ("version", env!("CARGO_PKG_VERSION")),
+            ("p", p),
+            ("P", &p.to_ascii_uppercase()),
+            ("R", options.precision.c_type()),
+        ],
+    );
     sources.push((wrapper_name.clone(), wrapper));
     sources.extend(FMI2_HEADERS.iter().map(|(n, t)| (n.to_string(), t.to_string())));
     let model_description = model_description(options, m, sample_time, &guid, &[&wrapper_name, &code.source_name]);
