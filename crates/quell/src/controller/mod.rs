@@ -7,8 +7,7 @@
 //!   decoupling law (5) substituted; the regressor ξ̂ = [ξ̂_g; ξ̂_ω] is its first q states and the plant
 //!   input is u_f = −K x̂ + F u_d (5). The disturbance observer is realized in the coordinates
 //!   ξ̂_ω = φ + N x̂ instead of φ: differentiating (20) with (6) gives ξ̂_ω' = G_ω ξ̂_ω + N L (y − C x̂),
-//!   the same signal without the N x̂ product, and without u_d (ξ̂ does not depend on u, as the notes
-//!   on the paper point out);
+//!   the same signal without the N x̂ product and without u_d: ξ̂ does not depend on u;
 //! - per channel, the **filters** of the adaptive law (33): G_ii(s) applied to the row
 //!   [u_i(t − τ_i), ξ̂ᵀ(t − τ_i)] (state W_i, σ_i × (1 + q)) and H(s) = 1/(βs + 1) giving Y_i and Ω_i;
 //! - the **adaptive law** (33) η̂_i' = μ_i (Y_i − Ω_i η̂_i) and the control law (25) u_i = −η̂_iᵀ ξ̂.

@@ -1,5 +1,4 @@
-//! FMI 2.0 co-simulation FMU of the generated C controller (`quell export --fmu`;
-//! docs/deployment.md).
+//! FMI 2.0 co-simulation FMU of the generated C controller (docs/deployment.md).
 //!
 //! The archive holds `modelDescription.xml`, the controller's C ([`super::generate`]) with a
 //! wrapper implementing the FMI functions and the FMI 2.0.1 headers under `sources/`, and, when a

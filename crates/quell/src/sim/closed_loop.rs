@@ -1,4 +1,4 @@
-//! The continuous closed loop (notes, "The closed loop, wired once"): plant (1) with input (5),
+//! The continuous closed loop, wired once: plant (1) with input (5),
 //! controller [`Equations`], integrated as a delay equation by [`dde::solve`].
 
 use std::cell::Cell;
@@ -200,7 +200,7 @@ impl<'a> ContinuousLoop<'a> {
         })
     }
 
-    /// Initial state: x(0) = x0, every controller state 0 (notes, "Initial conditions"). An x0 that
+    /// Initial state: x(0) = x0, every controller state 0 (the paper's filters and observers start at rest). An x0 that
     /// is not n long is [`PlantError::Length`].
     pub fn initial_state(&self, x0: &DVector<f64>) -> Result<Vec<f64>, PlantError> {
         let n = self.eq.n;
