@@ -185,7 +185,7 @@ fn long_functions(file: &str, text: &str) -> Vec<Long> {
 fn find_fn(line: &str) -> Option<usize> {
     let at = line.find("fn ")?;
     let before = &line[..at];
-    let prefix_ok = before.trim().split_whitespace().all(|w| {
+    let prefix_ok = before.split_whitespace().all(|w| {
         ["pub", "const", "async", "unsafe", "extern", "default"].contains(&w)
             || w.starts_with("pub(")
             || w.starts_with('"')
@@ -204,7 +204,7 @@ const BEING_SPLIT: &[(&str, &str, &str)] = &[
     ("crates/quell/src/design/place.rs", "knv0", "TODO(harden)"),
     ("crates/quell/src/sim/closed_loop.rs", "simulate_with_truth", "TODO(front)"),
     ("crates/quell/src/sim/sampled.rs", "sampled_loop", "TODO(front)"),
-    ("crates/quell/src/study/mod.rs", "from_toml", "TODO(front)"),
+    ("crates/quell/src/study/mod.rs", "from_table", "TODO(front)"),
     ("crates/quell/src/study/tune.rs", "tune", "TODO(front)"),
     ("crates/quell-py/src/simulate.rs", "simulate", "TODO(python)"),
 ];
