@@ -137,7 +137,7 @@ fn relative_degrees_and_the_decoupler_refuse_wrong_shapes() {
 fn design_and_runs_refuse_inputs_built_in_rust_with_wrong_lengths() {
     // A probe over the public API with a DesignSpec, a true plant, signals and settings built
     // directly (not read from a file): each is an error naming its key, none panics.
-    use quell::sim::{simulate_sampled, simulate_with_truth, MeasurementNoise, RunSettings, SampledSettings, SimError};
+    use quell::sim::{MeasurementNoise, Run, RunSettings, SimError};
     use quell::{Design, DesignError};
     use std::ops::ControlFlow;
     let s = quell::Scenario::from_toml(quell::scenario::PAPER_EXAMPLE).unwrap();
@@ -157,36 +157,45 @@ fn design_and_runs_refuse_inputs_built_in_rust_with_wrong_lengths() {
 
     let d = s.design().unwrap();
     let go = ControlFlow::Continue;
-    let run = RunSettings::new(1.0, 0.1, 1e-9, 1e-9);
+    let run = RunSettings::continuous(1.0, 0.1, 1e-9, 1e-9);
     let key = |r: Result<quell::sim::SimResult, SimError>| match r {
         Err(SimError::Input(e)) => e.key,
         other => panic!("{:?}", other.map(|r| r.outcome)),
     };
     let mut truth = s.plant.clone();
     truth.x0 = quell::nalgebra::DVector::zeros(2);
-    assert_eq!(key(simulate_with_truth(&d, &truth, &s.reference, &s.disturbance, &run, |_| go(()))), "truth.x0");
+    assert_eq!(
+        key(Run::new(&d, &s.reference, &s.disturbance, run.clone()).truth(&truth).simulate(|_| go(()))),
+        "truth.x0"
+    );
     let mut truth = s.plant.clone();
     truth.x0[0] = 1e200;
-    assert_eq!(key(simulate_with_truth(&d, &truth, &s.reference, &s.disturbance, &run, |_| go(()))), "truth");
+    assert_eq!(
+        key(Run::new(&d, &s.reference, &s.disturbance, run.clone()).truth(&truth).simulate(|_| go(()))),
+        "truth"
+    );
     // A true delay that forces more than 1e10 integrator steps (steps are at most min τ long).
     let mut truth = s.plant.clone();
     truth.delays[0] = 1e-300;
-    assert_eq!(key(simulate_with_truth(&d, &truth, &s.reference, &s.disturbance, &run, |_| go(()))), "truth.delays[0]");
+    assert_eq!(
+        key(Run::new(&d, &s.reference, &s.disturbance, run.clone()).truth(&truth).simulate(|_| go(()))),
+        "truth.delays[0]"
+    );
     let mut reference = s.reference.clone();
     reference.components.pop();
-    assert_eq!(key(quell::sim::simulate(&d, &reference, &s.disturbance, &run, |_| go(()))), "reference.components");
+    assert_eq!(key(Run::new(&d, &reference, &s.disturbance, run.clone()).simulate(|_| go(()))), "reference.components");
     // A negative frequency (refused by the scenario reader) ran when the Signal was built in Rust.
     let mut reference = s.reference.clone();
     reference.components[0].harmonics[0].frequency = -2.0;
     assert_eq!(
-        key(quell::sim::simulate(&d, &reference, &s.disturbance, &run, |_| go(()))),
+        key(Run::new(&d, &reference, &s.disturbance, run).simulate(|_| go(()))),
         "reference.components[0].harmonics[0].frequency"
     );
-    let mut sampled = SampledSettings::new(1.0, 0.1, 0.001);
+    let mut sampled = RunSettings::sampled(1.0, 0.1, 0.001);
     sampled.noise = Some(MeasurementNoise::white(vec![0.1], 0));
-    assert_eq!(key(simulate_sampled(&d, &s.reference, &s.disturbance, &sampled, |_| go(()))), "noise.std");
-    let sampled = SampledSettings::new(1.0, 0.15, 0.1);
-    assert_eq!(key(simulate_sampled(&d, &s.reference, &s.disturbance, &sampled, |_| go(()))), "simulation.output_step");
+    assert_eq!(key(Run::new(&d, &s.reference, &s.disturbance, sampled).simulate(|_| go(()))), "noise.std");
+    let sampled = RunSettings::sampled(1.0, 0.15, 0.1);
+    assert_eq!(key(Run::new(&d, &s.reference, &s.disturbance, sampled).simulate(|_| go(()))), "simulation.output_step");
 }
 
 #[test]

@@ -167,14 +167,26 @@ fn suggestion(nearest: Option<f64>) -> String {
 /// How many candidate sample counts k on either side of τ_c/T_s the suggestion tries.
 const SEARCHED: i64 = 10_000;
 
-/// True when τ/T is a whole number (to 1e-9 relative) of at most [`MAX_DELAY_SAMPLES`] samples.
-pub(crate) fn whole(tau: f64, T: f64) -> bool {
-    whole_within(tau, T, 1e-9)
+/// Relative tolerance of a whole number of samples: x/T within 1e-9·max(x/T, 1) of an integer.
+const WHOLE_TOLERANCE: f64 = 1e-9;
+
+/// x/T rounded, when it is a whole number of samples of T (to [`WHOLE_TOLERANCE`] relative).
+pub(crate) fn whole_multiple(x: f64, T: f64) -> Option<usize> {
+    whole_within(x, T, WHOLE_TOLERANCE)
 }
 
-fn whole_within(tau: f64, T: f64, tol: f64) -> bool {
-    let r = tau / T;
-    r <= MAX_DELAY_SAMPLES && (r - r.round()).abs() <= tol * r.max(1.0)
+/// True when τ/T is a whole number (to [`WHOLE_TOLERANCE`]) of at most [`MAX_DELAY_SAMPLES`] samples.
+pub(crate) fn whole(tau: f64, T: f64) -> bool {
+    delay_within(tau, T, WHOLE_TOLERANCE)
+}
+
+fn delay_within(tau: f64, T: f64, tol: f64) -> bool {
+    tau / T <= MAX_DELAY_SAMPLES && whole_within(tau, T, tol).is_some()
+}
+
+fn whole_within(x: f64, T: f64, tol: f64) -> Option<usize> {
+    let r = x / T;
+    ((r - r.round()).abs() <= tol * r.max(1.0)).then(|| r.round() as usize)
 }
 
 /// Delay τ as a whole number of samples of T, or the nearest sample time that makes every delay whole.
@@ -189,7 +201,7 @@ fn samples(delays: &[f64], T: f64) -> Result<Vec<usize>, ControllerError> {
             // significant digits that fit 10× inside the tolerance, so that the printed value passes
             // when typed back, and not by a hair.
             let k0 = ratio.round().max(1.0) as i64;
-            let fits = |t: f64| delays.iter().all(|&d| whole_within(d, t, 1e-10));
+            let fits = |t: f64| delays.iter().all(|&d| delay_within(d, t, 1e-10));
             let nearest = (0..SEARCHED)
                 .flat_map(|j| [k0 + j, k0 - j])
                 .filter(|&k| k >= 1)

@@ -4,7 +4,7 @@
 use std::ops::ControlFlow;
 
 use quell::nalgebra::{Complex, DMatrix};
-use quell::sim::{simulate, Outcome, RunSettings, SimResult};
+use quell::sim::{Outcome, Run, RunSettings, SimResult};
 use quell::{Component, Design, DesignSpec, Harmonic, ObserverChoice, Plant, Signal};
 
 pub fn re(x: f64) -> Complex<f64> {
@@ -61,8 +61,9 @@ pub fn paper_signals() -> (Signal, Signal) {
 pub fn run_paper(spec: DesignSpec, t_end: f64, output_step: f64, tol: f64) -> SimResult {
     let d = Design::new(&paper_plant(), &spec).unwrap();
     let (g, w) = paper_signals();
-    let r =
-        simulate(&d, &g, &w, &RunSettings::new(t_end, output_step, tol, tol), |_| ControlFlow::Continue(())).unwrap();
+    let r = Run::new(&d, &g, &w, RunSettings::continuous(t_end, output_step, tol, tol))
+        .simulate(|_| ControlFlow::Continue(()))
+        .unwrap();
     assert_eq!(r.outcome, Some(Outcome::Completed));
     r
 }
