@@ -126,7 +126,8 @@ pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, A
         }
         let tail_max_e: Vec<f64> = (0..m).map(|i| r.max_abs_error(i, 0.9 * t_end, t_end).unwrap_or(f64::NAN)).collect();
         let max_u_f: Vec<f64> = r.summary().iter().map(|c| c.max_abs_uf).collect();
-        let retry = !given_mu && runs <= 3 && adjust_mu(&mut scenario.design.mu, &tail_max_e, &bound, &max_u_f, targets);
+        let retry =
+            !given_mu && runs <= 3 && adjust_mu(&mut scenario.design.mu, &tail_max_e, &bound, &max_u_f, targets);
         if !retry {
             let within_u = targets.u_limit.is_none_or(|l| max_u_f.iter().all(|u| *u <= l));
             let passed = within_u && tail_max_e.iter().zip(&bound).all(|(e, b)| e <= b);
@@ -363,7 +364,9 @@ fn design_poles(spec: &DesignSpec) -> Vec<f64> {
 /// error (it is driven by x̂, not x, eq. (20)). Candidates `place` rejects are skipped.
 fn observer(s: &Scenario, spec: &mut DesignSpec, r_0: f64, n: usize) -> Result<(Design, String), AutoError> {
     let candidates = (0..4).flat_map(|k| [2.0, 4.0].map(|width| (r_0 * 2f64.powi(k), width)));
-    let mut best: Option<(Design, Vec<Complex<f64>>, f64, (f64, f64))> = None;
+    /// A candidate's design, poles, worst fidelity error and (r_o, spread).
+    type Candidate = (Design, Vec<Complex<f64>>, f64, (f64, f64));
+    let mut best: Option<Candidate> = None;
     let mut first_error = None;
     for (rate, width) in candidates {
         let factor = if n > 1 { f64::powf(width, 1.0 / (n as f64 - 1.0)) } else { 1.0 };

@@ -115,8 +115,11 @@ fn scenario(rng: &mut Rng, sigma: &[usize], zeros: &[Vec<f64>], scale: f64, unit
     )
 }
 
+/// A plant shape: its name, σ_i and the zeros of each channel.
+type Shape = (&'static str, Vec<usize>, Vec<Vec<f64>>);
+
 /// The plant shapes of the family: relative degrees and zeros per channel (Σσ_i < n: zero dynamics).
-fn shapes() -> Vec<(&'static str, Vec<usize>, Vec<Vec<f64>>)> {
+fn shapes() -> Vec<Shape> {
     vec![
         ("σ=[1]", vec![1], vec![vec![]]),
         ("σ=[2]", vec![2], vec![vec![]]),

@@ -466,7 +466,10 @@ impl PartialDesign {
             if orders.is_some() {
                 return Err(err(
                     format!("design.{key}"),
-                    format!("filter orders are read only by {AUTO_DESIGN}, which writes the poles; give design.{} instead", key.replace("orders", "poles")),
+                    format!(
+                        "filter orders are read only by {AUTO_DESIGN}, which writes the poles; give design.{} instead",
+                        key.replace("orders", "poles")
+                    ),
                 ));
             }
         }
