@@ -12,8 +12,8 @@ use common::Rng;
 use quell::auto::{auto_design, Targets, TAIL_BOUND};
 use quell::linalg::{companion, poly_from_roots};
 use quell::nalgebra::{Complex, DMatrix};
-use quell::run::{simulate, LoopSettings};
 use quell::scenario::Scenario;
+use quell::sim::Run;
 
 fn rows(M: &DMatrix<f64>) -> String {
     let r: Vec<String> = M
@@ -152,7 +152,7 @@ fn case(seed: u64, shape: usize, scale: f64, units: Units) -> Result<Vec<f64>, S
     }
     let s = Scenario::from_toml(&auto.scenario.to_toml()).unwrap();
     let design = s.design().unwrap();
-    let r = simulate(&s, &design, &LoopSettings::of(&s), |_| ControlFlow::Continue(())).unwrap();
+    let r = Run::of(&s, &design).simulate(|_| ControlFlow::Continue(())).unwrap();
     let t_end = s.simulation.t_end;
     s.reference
         .components
