@@ -208,7 +208,7 @@ fn the_actuator_limit_bounds_the_recorded_plant_input() {
     assert!(free.verification.passed);
     let rerun = |a: &quell::auto::AutoDesign| {
         let s = Scenario::from_toml(&a.scenario.to_toml()).unwrap();
-        let r = simulate(&s, &s.design().unwrap(), &LoopSettings::of(&s), |_| ControlFlow::Continue(())).unwrap();
+        let r = Run::of(&s, &s.design().unwrap()).simulate(|_| ControlFlow::Continue(())).unwrap();
         let u_f = r.u_f.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let u = r.u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         (u_f, u)
