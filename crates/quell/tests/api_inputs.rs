@@ -1,6 +1,6 @@
 //! The public functions outside `controller/` return an error, never panic, on inputs of the wrong
-//! shape or scale (issue 9, "A library that checks its inputs"). Each case panicked, hung or
-//! answered wrongly before it was fixed.
+//! shape or scale. Each case is one a library caller can reach: a panic, a hang or a wrong answer
+//! there would be a defect.
 #![allow(non_snake_case)]
 
 use quell::design::{controllability, observability, place, PlaceError};
@@ -286,7 +286,7 @@ fn the_dde_solver_refuses_inconsistent_arguments() {
         Err(SolveError::Input { argument, found, .. }) => (argument, found),
         other => panic!("{other:?}"),
     };
-    // Each was an assert.
+    // Each returns an error; none panics.
     assert_eq!(input(solve(&mut Lag(vec![1.0]), 0.0, &[1.0, 2.0], &[1.0], 1.0, 0.5, &opts, go)), ("y0", "2".into()));
     assert_eq!(input(solve(&mut Lag(vec![1.0]), 0.0, &[1.0], &[], 1.0, 0.5, &opts, go)), ("history", "0".into()));
     assert_eq!(
@@ -308,7 +308,7 @@ fn the_dde_solver_refuses_inconsistent_arguments() {
 
 #[test]
 fn a_study_run_index_beyond_the_study_is_none() {
-    // Was an assert.
+    // An error, not a panic.
     let study = quell::study::Study::from_toml("[grid]\n\"design.mu[0]\" = [10.0, 40.0]\n", None).unwrap();
     assert_eq!(study.len(), 2);
     assert_eq!(study.spec(1).map(|s| s.run), Some(1));
@@ -321,7 +321,7 @@ fn the_adaptive_step_refuses_buffers_of_the_wrong_length() {
     use quell::controller::discrete::adapt;
     use quell::ControllerError;
     let (mut omega, mut eta, mut tmp) = (vec![0.0; 4], vec![0.0; 2], vec![0.0; 2]);
-    // Was an assert.
+    // An error, not a panic.
     let e = adapt(0.1, &mut omega[..3], (0.5, 0.5), &[1.0, 0.0], &[1.0, 0.0], &mut eta, &mut tmp).unwrap_err();
     assert_eq!(e, ControllerError::Length { function: "adapt", name: "Omega", expected: 4, found: 3 });
     assert_eq!(e.to_string(), "adapt: Omega needs 4 entries, found 3");
