@@ -6,14 +6,37 @@ use std::sync::{Mutex, MutexGuard};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyList, PyTuple};
 
-use crate::convert::{number, type_name, vec_numpy, vector};
+use crate::convert::{number, vec_numpy, vector};
 use crate::design::PyDesign;
-use crate::errors::{in_arguments, raise, Kind};
+use crate::errors::{in_python, raise, Kind};
 
-/// The discrete-time adaptive controller of a design at sample time T_s (eqs. (5), (6), (14),
-/// (20), (25), (33)). `step` costs about 1 µs from Python. One controller may be shared between
-/// threads: its calls are serialized by a lock held only while Rust steps it (never across a call
-/// into Python, so it cannot deadlock with the GIL).
+/// The discrete-time adaptive controller of a design at sample time T_s, discretized exactly for a
+/// zero-order hold (eqs. (5), (6), (14), (20), (25), (33)); `step` costs about 1 µs from Python. One
+/// controller may be shared between threads: its calls are serialized by a lock held only while
+/// Rust steps it. It does not pickle (it is the running state of one loop).
+///
+/// Parameters
+/// ----------
+/// design : Design
+///     The design.
+/// sample_time : float
+///     T_s in seconds; every delay must be a whole number of samples.
+///
+/// Raises
+/// ------
+/// TypeError
+///     An argument of the wrong type.
+/// ScenarioError
+///     A sample time that is not > 0 or does not divide the delays (the message names
+///     `sample_time` and the nearest valid one).
+///
+/// Examples
+/// --------
+/// >>> c = quell.Controller(quell.paper_example().design(), 1e-3)
+/// >>> c
+/// Controller(m=2, q=8, sample_time=0.001)
+/// >>> c.step([0.0, 0.0], [0.0, 2.0]).shape
+/// (2,)
 #[pyclass(module = "quell", name = "Controller", frozen)]
 pub struct PyController {
     inner: Mutex<quell::Controller>,
@@ -41,11 +64,11 @@ fn read(obj: &Bound<'_, PyAny>, name: &str, out: &mut [f64]) -> PyResult<()> {
     let check = |v: &[f64], out: &mut [f64]| -> PyResult<()> {
         if v.len() != m {
             return Err(
-                Kind::Value.err(py, format!("{name}: expected {m} entries (one per output), found {}", v.len()))
+                Kind::Controller.err(py, format!("{name}: expected {m} entries (one per output), found {}", v.len()))
             );
         }
         if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-            return Err(Kind::Value.err(py, format!("{name}[{i}]: expected a finite number, found {}", v[i])));
+            return Err(Kind::Controller.err(py, format!("{name}[{i}]: expected a finite number, found {}", v[i])));
         }
         out.copy_from_slice(v);
         Ok(())
@@ -61,13 +84,15 @@ fn read(obj: &Bound<'_, PyAny>, name: &str, out: &mut [f64]) -> PyResult<()> {
     if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
         // Booleans are refused as `Plant` refuses a boolean array, not read as 0 and 1.
         if obj.try_iter().is_ok_and(|mut items| items.any(|x| x.is_ok_and(|x| x.is_instance_of::<PyBool>()))) {
-            return Err(Kind::Value.err(py, format!("{name}: expected real numbers, found booleans")));
+            return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+                "{name}: expected real numbers, found booleans"
+            )));
         }
         if let Ok(v) = obj.extract::<Vec<f64>>() {
             return check(&v, out);
         }
     }
-    check(&vector(obj, name, Kind::Value)?, out)
+    check(&vector(obj, name, Kind::Controller)?, out)
 }
 
 #[pymethods]
@@ -75,49 +100,148 @@ impl PyController {
     #[new]
     fn new(design: &Bound<'_, PyAny>, sample_time: &Bound<'_, PyAny>) -> PyResult<Self> {
         let py = design.py();
-        let d: PyRef<'_, PyDesign> = design.extract().map_err(|_| {
-            Kind::Value.err(py, format!("design: expected a quell.Design, found a {}", type_name(design)))
-        })?;
-        let T = number(sample_time, "sample_time", Kind::Scenario)?;
+        let d: PyRef<'_, PyDesign> =
+            design.extract().map_err(|_| crate::errors::type_error("design", "a quell.Design", design))?;
+        let T = number(sample_time, "sample_time")?;
         let inner =
-            quell::Controller::new(&d.inner, T).map_err(|e| Kind::Scenario.err(py, in_arguments(e.to_string())))?;
+            quell::Controller::new(&d.inner, T).map_err(|e| Kind::Scenario.err(py, in_python(e.to_string())))?;
         let (m, _) = inner.dims();
         Ok(PyController { inner: Mutex::new(inner), m })
     }
 
-    /// One sample: reads y(k) and g(k) (m each) and returns the plant input u_f(k) = −K x̂ + F u_d (5)
-    /// to hold until the next sample.
+    /// One sample: reads y(k) and g(k) and returns the plant input u_f(k) = −K x̂ + F u_d (5) to hold
+    /// until the next sample.
+    ///
+    /// Parameters
+    /// ----------
+    /// y : array_like
+    ///     The measured outputs y(k) (m).
+    /// g : array_like
+    ///     The reference g(k) (m).
+    ///
+    /// Returns
+    /// -------
+    /// numpy.ndarray
+    ///     u_f(k) (m).
+    ///
+    /// Raises
+    /// ------
+    /// TypeError
+    ///     An argument that is not an array of real numbers.
+    /// ControllerError
+    ///     A wrong length, an entry not finite or beyond ±1e100 (the state is kept), or a state that
+    ///     overflowed.
+    ///
+    /// Examples
+    /// --------
+    /// >>> c = quell.Controller(quell.paper_example().design(), 1e-3)
+    /// >>> u_f = c.step(np.zeros(2), np.array([0.0, 2.0]))
+    /// >>> bool(np.all(np.isfinite(u_f)))
+    /// True
     fn step<'py>(&self, y: &Bound<'py, PyAny>, g: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray1<f64>>> {
         // Read first (reading may call into Python), then step under the lock.
         let (mut y_k, mut g_k) = (vec![0.0; self.m], vec![0.0; self.m]);
         read(y, "y", &mut y_k)?;
         read(g, "g", &mut g_k)?;
-        let u_f = self.lock().step(&y_k, &g_k).map(|u| u.to_vec()).map_err(|e| raise(y.py(), Kind::Value)(&e))?;
+        let u_f = self.lock().step(&y_k, &g_k).map(|u| u.to_vec()).map_err(|e| raise(y.py(), Kind::Controller)(&e))?;
         Ok(PyArray1::from_vec(y.py(), u_f))
     }
 
-    /// The adaptive command u(k) (25) of the last step, undelayed (m,).
+    /// The adaptive command u(k) (25) of the last step, undelayed.
+    ///
+    /// Returns
+    /// -------
+    /// numpy.ndarray
+    ///     u(k) (m).
+    ///
+    /// Raises
+    /// ------
+    /// This method raises nothing.
+    ///
+    /// Examples
+    /// --------
+    /// >>> c = quell.Controller(quell.paper_example().design(), 1e-3)
+    /// >>> c.command()
+    /// array([0., 0.])
     fn command<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         vec_numpy(py, &self.copy(|c| c.command()))
     }
 
-    /// η̂_i after the last step (m, q), eq. (33).
+    /// The adaptive parameters η̂_i after the last step, eq. (33).
+    ///
+    /// Returns
+    /// -------
+    /// numpy.ndarray
+    ///     η̂ (m, q).
+    ///
+    /// Raises
+    /// ------
+    /// This method raises nothing.
+    ///
+    /// Examples
+    /// --------
+    /// >>> quell.Controller(quell.paper_example().design(), 1e-3).eta().shape
+    /// (2, 8)
     fn eta<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let (m, q) = self.lock().dims();
         Ok(vec_numpy(py, &self.copy(|c| c.eta())).reshape([m, q])?.into_any())
     }
 
-    /// The observer's estimate x̂ (n,) that the next step starts from, eq. (6).
+    /// The observer's estimate x̂ that the next step starts from, eq. (6).
+    ///
+    /// Returns
+    /// -------
+    /// numpy.ndarray
+    ///     x̂ (n).
+    ///
+    /// Raises
+    /// ------
+    /// This method raises nothing.
+    ///
+    /// Examples
+    /// --------
+    /// >>> quell.Controller(quell.paper_example().design(), 1e-3).x_hat()
+    /// array([0., 0., 0.])
     fn x_hat<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         vec_numpy(py, &self.copy(|c| c.x_hat()))
     }
 
-    /// The regressor ξ̂ = [ξ̂_g; ξ̂_ω] (q,) that the next step starts from, eqs. (14), (20).
+    /// The regressor ξ̂ = [ξ̂_g; ξ̂_ω] that the next step starts from, eqs. (14), (20).
+    ///
+    /// Returns
+    /// -------
+    /// numpy.ndarray
+    ///     ξ̂ (q).
+    ///
+    /// Raises
+    /// ------
+    /// This method raises nothing.
+    ///
+    /// Examples
+    /// --------
+    /// >>> quell.Controller(quell.paper_example().design(), 1e-3).xi_hat().shape
+    /// (8,)
     fn xi_hat<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         vec_numpy(py, &self.copy(|c| c.xi_hat()))
     }
 
     /// Back to the initial state: every controller state and delay line zero.
+    ///
+    /// Returns
+    /// -------
+    /// None
+    ///
+    /// Raises
+    /// ------
+    /// This method raises nothing.
+    ///
+    /// Examples
+    /// --------
+    /// >>> c = quell.Controller(quell.paper_example().design(), 1e-3)
+    /// >>> _ = c.step([1.0, 1.0], [0.0, 2.0])
+    /// >>> c.reset()
+    /// >>> c.x_hat()
+    /// array([0., 0., 0.])
     fn reset(&self) {
         self.lock().reset();
     }
@@ -138,6 +262,6 @@ impl PyController {
     fn __repr__(&self) -> String {
         let c = self.lock();
         let (m, q) = c.dims();
-        format!("Controller(m={m}, q={q}, sample_time={})", c.sample_time())
+        format!("Controller(m={m}, q={q}, sample_time={:?})", c.sample_time())
     }
 }

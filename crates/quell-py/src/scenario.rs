@@ -7,6 +7,7 @@
 use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
 
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyComplex, PyDict, PyFloat, PyInt, PyString};
 use quell::design::DesignError;
@@ -16,30 +17,72 @@ use toml::{Table, Value};
 
 use crate::convert::{pole_lists, poles, type_name};
 use crate::design::PyDesign;
-use crate::errors::{raise, Kind};
+use crate::errors::{in_python, raise, type_error, Kind};
 use crate::plant::{plant_arg, Labels, PyPlant};
 
 /// A scenario: plant (1), design choices, reference g(t) (Assumption 2), disturbance ω(t)
-/// (Assumption 3), simulation settings, noise and the true plant.
+/// (Assumption 3), simulation settings, noise and the true plant: the sections of a scenario file
+/// as Python values. Every check and message is the scenario reader's; the messages name the
+/// argument (`reference[0]["harmonics"][0]["frequency"]`, `mu[1]`, `t_end`).
 ///
-/// `Scenario(plant, reference, disturbance=None, *, name, t_end, output_step, rtol, atol,
-/// sample_time, noise, truth, **design)` takes the scenario file's sections as Python values:
-/// `reference=[{"harmonics": [{"amplitude": 3.0, "frequency": 2.0}]}, {"bias": 2.0}]` (one
-/// component per output, bias + Σ amplitude·sin(frequency·t + phase)), the `[design]` keys as
-/// keywords (channel_poles, reference_filter_poles, disturbance_filter_poles, mu, beta, and
-/// observer_poles or observer_gain), `noise={"std": [...], "seed": 0}`, `truth=` a Plant. Errors
-/// name the scenario key (`reference.components[0].harmonics[0].frequency`).
+/// Parameters
+/// ----------
+/// plant : Plant
+///     The design model (1).
+/// reference : list of dict
+///     g(t), one component per output: `{"bias": b, "harmonics": [{"amplitude": a,
+///     "frequency": ω, "phase": φ}]}` is b + Σ a·sin(ω t + φ).
+/// disturbance : list of dict, optional
+///     ω(t), one component per column of the plant's D, in the same form.
+/// name : str, optional
+///     The scenario's name.
+/// t_end : float, optional
+///     Final time in seconds (default 100).
+/// output_step : float, optional
+///     Interval of the recorded samples (default 0.1 s).
+/// rtol, atol : float, optional
+///     The solver's tolerances (default 1e-9).
+/// sample_time : float, optional
+///     T_s: the sampled-data loop with the real-time controller; None: the continuous loop.
+/// noise : dict, optional
+///     Measurement noise `{"std": [σ_i], "seed": 0, "bandwidth": None}`.
+/// truth : Plant, optional
+///     The plant that is simulated, when it differs from the design model.
+/// **design
+///     The `[design]` keys: channel_poles, reference_filter_poles, disturbance_filter_poles, mu,
+///     beta, and observer_poles or observer_gain (as `quell.design` takes them).
+///
+/// Raises
+/// ------
+/// TypeError
+///     An argument of the wrong type.
+/// ScenarioError
+///     A value that is not valid (the message names it; `.key` is its scenario key).
+/// DesignError
+///     A complex pole without its conjugate.
+///
+/// Examples
+/// --------
+/// >>> p = quell.paper_example()
+/// >>> s = quell.Scenario(p.plant, [{"harmonics": [{"amplitude": 3.0, "frequency": 2.0}]}, {"bias": 2.0}],
+/// ...                    p.disturbance, t_end=10.0, **p.design().choices)
+/// >>> s
+/// Scenario(name=None, n=3, m=2, k=2, t_end=10.0, sample_time=None)
+/// >>> quell.simulate(s).outcome
+/// {'status': 'completed'}
 #[pyclass(module = "quell", name = "Scenario", frozen)]
 pub struct PyScenario {
     pub inner: quell::Scenario,
     design: OnceLock<Arc<quell::Design>>,
     /// The plant's signal names (a scenario file has none).
     pub labels: Labels,
+    /// Built from Python values: messages name the arguments (`mu[0]`), not the file's keys.
+    from_values: bool,
 }
 
 impl PyScenario {
     pub fn new(inner: quell::Scenario) -> Self {
-        PyScenario { inner, design: OnceLock::new(), labels: Labels::default() }
+        PyScenario { inner, design: OnceLock::new(), labels: Labels::default(), from_values: false }
     }
 
     /// Parses and validates `text`, or raises ScenarioError.
@@ -57,7 +100,10 @@ impl PyScenario {
         if let Some(d) = self.design.get() {
             return Ok(d.clone());
         }
-        let d = Arc::new(self.inner.design().map_err(|e| raise(py, Kind::Design)(&e))?);
+        let d = Arc::new(self.inner.design().map_err(|e| {
+            let message = e.to_string();
+            Kind::Design.err(py, if self.from_values { in_python(message) } else { message })
+        })?);
         crate::errors::warn_fragile(py, &d, &self.inner.design)?;
         Ok(self.design.get_or_init(|| d).clone())
     }
@@ -70,11 +116,20 @@ pub fn scenario_error(py: Python<'_>, e: &quell::ScenarioError) -> PyErr {
     err
 }
 
-/// A Python value (numbers, strings, lists, dicts, numpy arrays and scalars) as a TOML value.
+/// A ScenarioError of a call with Python arguments: the message names the argument
+/// ([`in_python`]), `.key` the scenario key path.
+pub fn argument_error(py: Python<'_>, e: &quell::ScenarioError) -> PyErr {
+    let err = Kind::Scenario.err(py, in_python(e.to_string()));
+    let _ = err.value(py).setattr("key", e.key.clone());
+    err
+}
+
+/// A Python value (numbers, strings, lists, dicts, numpy arrays and scalars) as a TOML value;
+/// `key` names it in messages, as Python spells it (`reference[0]["bias"]`).
 pub fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
     let py = obj.py();
     let bad =
-        |what: &str| Kind::Scenario.err(py, format!("{key}: expected a number, string, list or dict, found {what}"));
+        |what: &str| PyTypeError::new_err(format!("{key}: expected a number, string, list or dict, found {what}"));
     if obj.is_instance_of::<PyBool>() {
         return Ok(Value::Boolean(obj.extract()?));
     }
@@ -84,7 +139,7 @@ pub fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
         }
         // A seed is an integer, never rounded to a float (which the reader would then refuse as
         // "a floating-point number"); any other key takes a huge integer as the float it is.
-        if key.rsplit('.').next() == Some("seed") {
+        if key.ends_with("[\"seed\"]") {
             return Err(
                 Kind::Scenario.err(py, format!("{key}: expected a seed, an integer from 0 to 2**63 - 1, found {obj}"))
             );
@@ -98,14 +153,16 @@ pub fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
         return Ok(Value::String(obj.extract()?));
     }
     if obj.is_instance_of::<PyComplex>() {
-        return Err(Kind::Scenario.err(py, format!("{key}: expected a real number, found a complex number (complex numbers are poles, in the *_poles lists)")));
+        return Err(PyTypeError::new_err(format!(
+            "{key}: expected a real number, found a complex number (complex numbers are poles, in the *_poles lists)"
+        )));
     }
     if let Ok(d) = obj.cast::<PyDict>() {
         let mut t = Table::new();
         for (k, v) in d.iter() {
             let name: String = k.extract().map_err(|_| bad(&format!("a dict key of type {}", type_name(&k))))?;
             if !v.is_none() {
-                let child = if key.is_empty() { name.clone() } else { format!("{key}.{name}") };
+                let child = format!("{key}[{name:?}]");
                 t.insert(name, toml_value(&v, &child)?);
             }
         }
@@ -142,7 +199,7 @@ fn design_value(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Table> {
     let Some(kwargs) = kwargs else { return Ok(t) };
     for (k, v) in kwargs.iter() {
         let name: String = k.extract()?;
-        let key = format!("design.{name}");
+        let key = name.clone();
         let py = v.py();
         if v.is_none() {
             continue;
@@ -208,13 +265,18 @@ impl PyScenario {
     ) -> PyResult<Self> {
         let plant = plant_arg(plant, "plant")?;
         let mut doc = Table::new();
-        if let Some(name) = name {
-            doc.insert("name".into(), toml_value(name, "name")?);
+        if let Some(name) = name.filter(|n| !n.is_none()) {
+            let text: String = name.extract().map_err(|_| type_error("name", "a str", name))?;
+            doc.insert("name".into(), Value::String(text));
         }
         doc.insert("plant".into(), Value::Table(plant_table(&plant.inner)));
         doc.insert("design".into(), Value::Table(design_value(design)?));
         let signal = |v: &Bound<'_, PyAny>, key: &str| -> PyResult<Value> {
-            let components = toml_value(v, &format!("{key}.components"))?;
+            let form = "a list of components, one dict {bias, harmonics} per signal";
+            if v.is_instance_of::<PyString>() || v.is_instance_of::<PyDict>() || v.try_iter().is_err() {
+                return Err(type_error(key, form, v));
+            }
+            let components = toml_value(v, key)?;
             Ok(Value::Table(Table::from_iter([("components".to_string(), components)])))
         };
         doc.insert("reference".into(), signal(reference, "reference")?);
@@ -230,17 +292,21 @@ impl PyScenario {
             ("sample_time", sample_time),
         ] {
             if let Some(v) = v.filter(|v| !v.is_none()) {
-                sim.insert(key.into(), toml_value(v, &format!("simulation.{key}"))?);
+                sim.insert(key.into(), Value::Float(crate::convert::number(v, key)?));
             }
         }
         doc.insert("simulation".into(), Value::Table(sim));
         if let Some(n) = noise.filter(|n| !n.is_none()) {
+            if !n.is_instance_of::<PyDict>() {
+                return Err(type_error("noise", "a dict {std, seed, bandwidth}", n));
+            }
             doc.insert("noise".into(), toml_value(n, "noise")?);
         }
         if let Some(t) = truth.filter(|t| !t.is_none()) {
             doc.insert("truth".into(), Value::Table(plant_table(&plant_arg(t, "truth")?.inner)));
         }
-        Ok(PyScenario { labels: plant.labels.clone(), ..Self::from_document(py, &doc)? })
+        let inner = quell::Scenario::from_document(&doc).map_err(|e| argument_error(py, &e))?;
+        Ok(PyScenario { labels: plant.labels.clone(), from_values: true, ..Self::new(inner) })
     }
 
     /// Rebuilds a pickled scenario: its TOML and its plant's signal names.
@@ -256,18 +322,79 @@ impl PyScenario {
     }
 
     /// Parses and validates a scenario file's text (the format of `examples/paper.toml`).
+    ///
+    /// Parameters
+    /// ----------
+    /// text : str
+    ///     The TOML text.
+    ///
+    /// Returns
+    /// -------
+    /// Scenario
+    ///     The scenario.
+    ///
+    /// Raises
+    /// ------
+    /// TypeError
+    ///     `text` is not a str.
+    /// ScenarioError
+    ///     The text is not valid TOML or not a valid scenario (the message names the key).
+    ///
+    /// Examples
+    /// --------
+    /// >>> s = quell.Scenario.from_toml(quell.paper_example().to_toml())
+    /// >>> s == quell.paper_example()
+    /// True
     #[staticmethod]
     fn from_toml(py: Python<'_>, text: &str) -> PyResult<Self> {
         Self::parse(py, text)
     }
 
     /// Reads and validates a scenario file.
+    ///
+    /// Parameters
+    /// ----------
+    /// path : str or os.PathLike
+    ///     The file's path.
+    ///
+    /// Returns
+    /// -------
+    /// Scenario
+    ///     The scenario.
+    ///
+    /// Raises
+    /// ------
+    /// TypeError
+    ///     `path` is not a path.
+    /// ScenarioError
+    ///     The file cannot be read or is not a valid scenario.
+    ///
+    /// Examples
+    /// --------
+    /// >>> import pathlib
+    /// >>> _ = pathlib.Path("mine.toml").write_text(quell.paper_example().to_toml())
+    /// >>> quell.Scenario.load("mine.toml").name
+    /// 'paper-example'
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         quell::Scenario::from_path(&path).map(Self::new).map_err(|e| scenario_error(py, &e))
     }
 
-    /// The scenario as a TOML document; `Scenario.from_toml(s.to_toml())` gives the same scenario.
+    /// The scenario as a TOML document, every key written.
+    ///
+    /// Returns
+    /// -------
+    /// str
+    ///     The document; `Scenario.from_toml(s.to_toml())` is `s` again (signal names aside).
+    ///
+    /// Raises
+    /// ------
+    /// This method raises nothing.
+    ///
+    /// Examples
+    /// --------
+    /// >>> print(quell.paper_example().to_toml().splitlines()[0])
+    /// name = "paper-example"
     fn to_toml(&self) -> String {
         self.inner.to_toml()
     }
@@ -290,7 +417,22 @@ impl PyScenario {
         Ok((slf.get_type().getattr("_restore")?, args))
     }
 
-    /// The design of this scenario's plant and choices (computed once; raises DesignError).
+    /// The design of this scenario's plant and choices (computed once).
+    ///
+    /// Returns
+    /// -------
+    /// Design
+    ///     The gains; fragile gains are reported as a `UserWarning`.
+    ///
+    /// Raises
+    /// ------
+    /// DesignError
+    ///     No design exists for these choices.
+    ///
+    /// Examples
+    /// --------
+    /// >>> quell.paper_example().design().sigma
+    /// [2, 1]
     fn design(&self, py: Python<'_>) -> PyResult<PyDesign> {
         Ok(PyDesign { inner: self.design_arc(py)?, spec: self.inner.design.clone(), labels: self.labels.clone() })
     }
@@ -353,7 +495,7 @@ impl PyScenario {
     fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
         let s = &self.inner;
         Ok(format!(
-            "Scenario(name={}, n={}, m={}, k={}, t_end={}, sample_time={})",
+            "Scenario(name={}, n={}, m={}, k={}, t_end={:?}, sample_time={})",
             s.name.clone().into_pyobject(py)?.repr()?,
             s.plant.n(),
             s.plant.m(),
@@ -365,17 +507,62 @@ impl PyScenario {
 }
 
 /// The paper's example (Section VIII), `examples/paper.toml`.
+///
+/// Returns
+/// -------
+/// Scenario
+///     Three states, two channels with delays 1 s and 3 s, a harmonic reference and disturbance.
+///
+/// Raises
+/// ------
+/// This function raises nothing.
+///
+/// Examples
+/// --------
+/// >>> s = quell.paper_example()
+/// >>> s.plant.delays
+/// array([1., 3.])
 #[pyfunction]
 pub fn paper_example(py: Python<'_>) -> PyResult<PyScenario> {
     PyScenario::parse(py, PAPER_EXAMPLE)
 }
 
 /// The automatic design (`quell design --auto`): chooses every `[design]` key the scenario file's
-/// text leaves out (observer, channel and filter poles, μ, β; filter orders from
-/// reference_filter_orders / disturbance_filter_orders or the signals), verifies by simulation
-/// (tail max |e_i| ≤ 1 % of the reference's peak) and returns (Scenario, report) with report =
-/// {"choices": [{"key", "value", "why"}], "verification": {...}, "passed": bool}. A design that
-/// fails its verification is returned too, with passed False. The GIL is released meanwhile.
+/// text leaves out (observer, channel and filter poles, μ, β) and verifies it by simulation
+/// (tail max |e_i| ≤ 1 % of the reference's peak). The GIL is released meanwhile.
+///
+/// Parameters
+/// ----------
+/// text : str
+///     A scenario file's text; its `[design]` keys are kept, the others chosen.
+/// convergence_time : float, optional
+///     The time within which the adaptation should converge (s).
+/// u_limit : float, optional
+///     A limit on max |u_i|.
+///
+/// Returns
+/// -------
+/// tuple of (Scenario, dict)
+///     The designed scenario and the report `{"choices": [{"key", "value", "why"}],
+///     "verification": {...}, "passed": bool}`; a design that fails its verification is
+///     returned too, with passed False.
+///
+/// Raises
+/// ------
+/// TypeError
+///     An argument of the wrong type.
+/// ScenarioError
+///     The text is not a valid scenario.
+/// DesignError
+///     A target that is not a finite number > 0, or no design was found.
+///
+/// Examples
+/// --------
+/// >>> text = quell.paper_example().to_toml()
+/// >>> plant, rest = text.split("[design]")
+/// >>> s, report = quell.auto_design(plant + "[design]\n" + rest[rest.index("[[reference"):])
+/// >>> report["passed"], [c["key"] for c in report["choices"]][:2]
+/// (True, ['design.channel_poles', 'design.reference_filter_poles'])
 #[pyfunction]
 #[pyo3(signature = (text, *, convergence_time=None, u_limit=None))]
 pub fn auto_design<'py>(

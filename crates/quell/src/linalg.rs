@@ -226,6 +226,11 @@ pub fn fmt_complex(z: &Complex<f64>) -> String {
     }
 }
 
+/// A list of complex numbers as [`fmt_complex`] writes each, joined by ", ".
+pub fn fmt_complex_list(z: &[Complex<f64>]) -> String {
+    z.iter().map(fmt_complex).collect::<Vec<_>>().join(", ")
+}
+
 /// Exact zero-order-hold discretization of x' = A x + B v over a sample time T:
 /// x_{k+1} = Φ x_k + Γ v_k with Φ = e^{AT}, Γ = ∫_0^T e^{As} ds B, both read off
 /// exp([[A, B], [0, 0]]·T) (Van Loan's block method).
@@ -473,7 +478,7 @@ mod tests {
         // e^{A·0} = I, Γ = 0 at T = 0.
         let (Phi, Gamma) = zoh_unchecked(&A, &B, 0.0);
         assert_eq!((Phi, Gamma), (DMatrix::identity(3, 3), DMatrix::zeros(3, 1)));
-        // Was a panic in nalgebra's SVD.
+        // An empty matrix has no singular values: infinitely ill-conditioned, not a panic.
         for (r, c) in [(0, 0), (0, 3), (3, 0)] {
             assert_eq!(cond(&DMatrix::zeros(r, c)), f64::INFINITY, "{r}×{c}");
         }

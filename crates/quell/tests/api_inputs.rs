@@ -1,6 +1,6 @@
 //! The public functions outside `controller/` return an error, never panic, on inputs of the wrong
-//! shape or scale (issue 9, "A library that checks its inputs"). Each case panicked, hung or
-//! answered wrongly before it was fixed.
+//! shape or scale. Each case is one a library caller can reach: a panic, a hang or a wrong answer
+//! there would be a defect.
 #![allow(non_snake_case)]
 
 use quell::design::{controllability, observability, place, PlaceError};
@@ -167,7 +167,6 @@ fn eigenvector_condition_refuses_wrong_shapes() {
     use quell::design::place::eigenvector_condition;
     let (A, B, _) = chain();
     let A32 = A.columns(0, 2).into_owned();
-    // Was an assert.
     let K = DMatrix::from_row_slice(1, 3, &[1.0, 2.0, 3.0]);
     assert_eq!(eigenvector_condition(&A32, &B, &K), Err(shape("A", (3, 3), (3, 2))));
     assert_eq!(eigenvector_condition(&A, &B.rows(0, 2).into_owned(), &K), Err(shape("B", (3, 1), (2, 1))));
@@ -192,7 +191,7 @@ fn signals_refuse_wrong_lengths() {
 
 #[test]
 fn a_study_run_index_beyond_the_study_is_none() {
-    // Was an assert.
+    // An error, not a panic.
     let study = quell::study::Study::from_toml("[grid]\n\"design.mu[0]\" = [10.0, 40.0]\n", None).unwrap();
     assert_eq!(study.len(), 2);
     assert_eq!(study.spec(1).map(|s| s.run), Some(1));

@@ -13,7 +13,7 @@ use quell::Design;
 
 #[test]
 fn paper_example_converges() {
-    // Issue 3: max |e_1| on [90, 100] < 0.05 and max |e_2| < 0.005 (an independent solution gives
+    // max |e_1| on [90, 100] < 0.05 and max |e_2| < 0.005 (an independent solution gives
     // ≈ 0.027 and 0.002).
     let r = run_paper(paper_spec(), 100.0, 0.1, 1e-9);
     let (e1, e2) = (r.max_abs_error(0, 90.0, 100.0).unwrap(), r.max_abs_error(1, 90.0, 100.0).unwrap());
@@ -29,7 +29,7 @@ fn paper_example_matches_independent_reference() {
 
 #[test]
 fn tolerance_1e9_agrees_with_1e12() {
-    // Issue 3: the run at rtol = atol = 1e-9 agrees with the same run at 1e-12 to 1e-7 (y, u and η̂
+    // The run at rtol = atol = 1e-9 agrees with the same run at 1e-12 to 1e-7 (y, u and η̂
     // at every output sample).
     let a = run_paper(paper_spec(), 100.0, 0.1, 1e-9);
     let b = run_paper(paper_spec(), 100.0, 0.1, 1e-12);
@@ -41,7 +41,7 @@ fn tolerance_1e9_agrees_with_1e12() {
 
 #[test]
 fn channel_independence_mu1_leaves_channel_2_unchanged() {
-    // The paper's main claim (notes, "Properties worth testing"): with the decoupler in place, channel
+    // The paper's main claim: with the decoupler in place, channel
     // 2's trajectory does not depend on μ_1. Both runs at 1e-12, so the solver's error is ~1e-10 and
     // the 1e-8 bound tests the claim, not the solver.
     let base = run_paper(paper_spec(), 60.0, 0.1, 1e-12);

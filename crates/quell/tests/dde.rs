@@ -593,7 +593,7 @@ fn the_dde_solver_refuses_inconsistent_arguments() {
         Err(SolveError::Input { argument, found, .. }) => (argument, found),
         other => panic!("{other:?}"),
     };
-    // Each was an assert.
+    // Each returns an error; none panics.
     assert_eq!(input(solve(&mut Lag(vec![1.0]), 0.0, &[1.0, 2.0], &[1.0], 1.0, 0.5, &opts, go)), ("y0", "2".into()));
     assert_eq!(input(solve(&mut Lag(vec![1.0]), 0.0, &[1.0], &[], 1.0, 0.5, &opts, go)), ("history", "0".into()));
     assert_eq!(

@@ -1,4 +1,4 @@
-//! The generated C controller (issue 13): it compiles warning-free as C99, uses no dynamic memory,
+//! The generated C controller: it compiles warning-free as C99, uses no dynamic memory,
 //! no libm and no writable globals, and it is the same controller as the Rust `Controller`.
 //! gcc and binutils (nm) are required.
 #![allow(non_snake_case)]
@@ -35,7 +35,7 @@ fn relative_deviation(a: &[f64], b: &[f64]) -> f64 {
     dev / peak
 }
 
-/// Beyond the issue's flags, those firmware projects commonly add; the code must pass them too.
+/// Beyond the strict flags, those firmware projects commonly add; the code must pass them too.
 const EXTRA: &[&str] = &[
     "-Wconversion",
     "-Wdouble-promotion",
@@ -204,7 +204,7 @@ fn random_inputs(m: usize, steps: usize, seed: u64) -> impl Iterator<Item = (Vec
 #[test]
 fn same_controller_as_rust_on_random_sequences() {
     // 100,000 steps of random y, g, at -O0 and -O2; and the other examples' shapes (σ up to 2, m = 3,
-    // complex filter poles, one channel). Bound: 1e-12 relative to the run's peak (issue 13).
+    // complex filter poles, one channel). Bound: 1e-12 relative to the run's peak.
     let (_, paper) = example("paper");
     for opt in ["-O0", "-O2"] {
         let code = export(&paper, 1e-3, "quell", Precision::F64);

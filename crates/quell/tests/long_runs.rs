@@ -1,4 +1,4 @@
-//! Long runs of the paper's example (issue "Bad input, numerical faults and long runs").
+//! Long runs of the paper's example.
 //! Ignored by default; run with
 //!
 //! ```text

@@ -1,5 +1,5 @@
 //! The real-time controller: allocation-free `step`, sample-time validation, a nonexpansive adaptive
-//! step, and the sampled-data loop against the continuous one (issue 4).
+//! step, and the sampled-data loop against the continuous one.
 #![allow(non_snake_case)]
 
 mod common;

@@ -19,6 +19,11 @@ class StudyResult:
     frame : pandas.DataFrame
         Its rows: the columns of runs.csv, then the drawn values.
 
+    Raises
+    ------
+    TypeError
+        ``study`` is not a Study or ``frame`` not a DataFrame.
+
     Attributes
     ----------
     study : Study
@@ -38,6 +43,12 @@ class StudyResult:
     """
 
     def __init__(self, study, frame):
+        from ._quell import Study
+
+        if not isinstance(study, Study):
+            raise TypeError(f"study: expected a quell.Study, found a {type(study).__name__}")
+        if not all(hasattr(frame, a) for a in ("columns", "iloc", "to_numpy")):
+            raise TypeError(f"frame: expected a pandas DataFrame, found a {type(frame).__name__}")
         self.study = study
         self.frame = frame
 
@@ -66,7 +77,8 @@ class StudyResult:
 
         Raises
         ------
-        This method raises nothing.
+        ImportError
+            pandas is not installed.
 
         Examples
         --------

@@ -239,8 +239,8 @@ impl Controller {
             .zip(&d)
             .enumerate()
             .map(|(i, (ch, &d))| {
-                let mut e = DMatrix::zeros(ch.sigma, 1);
-                e[(ch.sigma - 1, 0)] = 1.0;
+                let mut e = DMatrix::zeros(ch.sigma(), 1);
+                e[(ch.sigma() - 1, 0)] = 1.0;
                 let (Phi, gamma) = zoh_unchecked(&ch.A, &e, T);
                 let channel = |what: &str| format!("channel {}'s {what}", i + 1);
                 finite(Phi.as_slice(), &|| channel("G_ii filter Φ_i"))?;
@@ -249,7 +249,7 @@ impl Controller {
                 if T * ch.mu > MAX_ADAPTATION_STEP {
                     return Err(ControllerError::AdaptationStepTooLarge { channel: i, mu: ch.mu, sample_time: T });
                 }
-                let len = ch.sigma * (1 + q);
+                let len = ch.sigma() * (1 + q);
                 Ok(Channel {
                     Phi,
                     gamma: gamma.iter().copied().collect(),
@@ -314,7 +314,7 @@ impl Controller {
             adapt(ch.c, &mut ch.Omega, (a, one_minus_a), &self.Delta, &ch.Y, eta, self.Omega_eta.get());
 
             // G_ii filter bank: W ← Φ W + γ [u_i(k − d_i), ξ̂ᵀ(k − d_i)].
-            let sigma = ch.gamma.len();
+            let sigma = self.eq.channels[i].sigma();
             for r in 0..sigma {
                 let out = &mut ch.W_next[r * cols..(r + 1) * cols];
                 for (o, d) in out.iter_mut().zip(delayed) {
@@ -394,8 +394,19 @@ pub(crate) struct Discretized<'c> {
     pub PhiGamma_z: &'c DMatrix<f64>,
     /// a = e^{−T_s/β} of H(s) at ZOH.
     pub a: f64,
-    /// Per channel: (Φ_i, γ_i, T_s μ_i, d_i) of its G_ii filter bank and delay line.
-    pub channels: Vec<(&'c DMatrix<f64>, &'c [f64], f64, usize)>,
+    /// Per channel: its G_ii filter bank and delay line.
+    pub channels: Vec<DiscreteChannel<'c>>,
+}
+
+/// One channel of [`Discretized`].
+pub(crate) struct DiscreteChannel<'c> {
+    /// G_ii filter bank at ZOH: W ← Φ_i W + γ_i [u_i(k − d_i), ξ̂ᵀ(k − d_i)].
+    pub Phi: &'c DMatrix<f64>,
+    pub gamma: &'c [f64],
+    /// The adaptation step c_i = T_s μ_i (33).
+    pub c: f64,
+    /// d_i = τ_i / T_s, in samples.
+    pub delay_samples: usize,
 }
 
 impl Controller {
@@ -405,7 +416,11 @@ impl Controller {
             eq: &self.eq,
             PhiGamma_z: &self.PhiGamma_z,
             a: self.a,
-            channels: self.channels.iter().map(|ch| (&ch.Phi, &ch.gamma[..], ch.c, ch.line.len - 1)).collect(),
+            channels: self
+                .channels
+                .iter()
+                .map(|ch| DiscreteChannel { Phi: &ch.Phi, gamma: &ch.gamma, c: ch.c, delay_samples: ch.line.len - 1 })
+                .collect(),
         }
     }
 }

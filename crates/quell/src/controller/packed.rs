@@ -1,7 +1,7 @@
 //! Symmetric q×q matrices (Ω_i of eq. (33)) in packed upper-triangular storage, q(q+1)/2 entries,
 //! row by row: (0,0), (0,1), …, (0,q−1), (1,1), …. The continuous loop integrates Ω_i as part of its
 //! state, where this halves those states; the real-time controller keeps a full, exactly symmetric Ω_i
-//! (see [`crate::controller::discrete::adapt`]).
+//! (see `adapt` in `controller/discrete.rs`).
 
 /// Number of stored entries of a packed symmetric q×q matrix.
 #[inline(always)]

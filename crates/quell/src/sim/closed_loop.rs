@@ -1,4 +1,4 @@
-//! The continuous closed loop (notes, "The closed loop, wired once"): plant (1) with input (5),
+//! The continuous closed loop, wired once: plant (1) with input (5),
 //! controller [`Equations`], integrated as a delay equation by [`dde::solve`].
 
 use std::cell::Cell;
@@ -200,7 +200,7 @@ impl<'a> ContinuousLoop<'a> {
         })
     }
 
-    /// Initial state: x(0) = x0, every controller state 0 (notes, "Initial conditions"). An x0 that
+    /// Initial state: x(0) = x0, every controller state 0 (the paper's filters and observers start at rest). An x0 that
     /// is not n long is [`PlantError::Length`].
     pub fn initial_state(&self, x0: &DVector<f64>) -> Result<Vec<f64>, PlantError> {
         let n = self.eq.n;
@@ -338,7 +338,7 @@ impl DelaySystem for ContinuousLoop<'_> {
         // the input of channel i's filter bank, goes straight into the last row of W_i' (see below).
         let cols = 1 + q;
         for (i, ch) in eq.channels.iter().enumerate() {
-            let input = &mut ds[l.w[i] + (ch.sigma - 1) * cols..l.w[i] + ch.sigma * cols];
+            let input = &mut ds[l.w[i] + (ch.sigma() - 1) * cols..l.w[i] + ch.sigma() * cols];
             let (u_in, xi_d) = input.split_at_mut(1);
             if ch.delay > 0.0 {
                 past.eval_ranges(t - ch.delay, [(0, &mut *xi_d), (l.eta(i), &mut self.eta_d[..])]);
@@ -374,14 +374,14 @@ impl DelaySystem for ContinuousLoop<'_> {
 
         // Per channel: G_ii filter bank, H filters and the adaptive law (33).
         for (i, ch) in eq.channels.iter().enumerate() {
-            let (w0, w1) = (l.w[i], l.w[i] + ch.sigma * cols);
+            let (w0, w1) = (l.w[i], l.w[i] + ch.sigma() * cols);
             let W = &s[w0..w1];
             let dW = &mut ds[w0..w1];
             // W' = A_i W + e_σ [u_i(t − τ_i), ξ̂ᵀ(t − τ_i)] with A_i the companion matrix of den_i; the
             // last row already holds the input.
-            dW[..(ch.sigma - 1) * cols].copy_from_slice(&W[cols..]);
-            let last = &mut dW[(ch.sigma - 1) * cols..];
-            for (r, &a) in ch.den.iter().enumerate() {
+            dW[..(ch.sigma() - 1) * cols].copy_from_slice(&W[cols..]);
+            let last = &mut dW[(ch.sigma() - 1) * cols..];
+            for (r, &a) in ch.tf.den.iter().enumerate() {
                 for (d, w) in last.iter_mut().zip(&W[r * cols..(r + 1) * cols]) {
                     *d -= a * w;
                 }
@@ -769,8 +769,7 @@ mod tests {
     fn the_loop_refuses_signals_and_a_state_of_the_wrong_lengths() {
         let s = crate::Scenario::from_toml(crate::scenario::PAPER_EXAMPLE).unwrap();
         let d = s.design().unwrap();
-        // Signals without m = 2 and k = 2 components panicked in its right-hand side, and a short x0
-        // in initial_state.
+        // Signals without m = 2 and k = 2 components, and a short x0, are errors naming the key.
         let mut one = s.reference.clone();
         one.components.pop();
         let e = ContinuousLoop::new(&d, &one, &s.disturbance).map(|_| ()).unwrap_err();
