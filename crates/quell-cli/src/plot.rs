@@ -1,5 +1,6 @@
 //! One figure per channel, like the paper's Figs. 1 and 2: y_i with g_i, e_i, u_i and η̂_i against t.
 
+use quell::study::QUANTILES as Q;
 use std::io;
 use std::path::Path;
 use std::sync::Once;
@@ -233,7 +234,7 @@ fn draw_sweep_1d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
                     .filter_map(|pt| figure_of(&pt.channels[i], name).at(p).map(|v| (x[pt.point], v)))
                     .collect()
             };
-            let (lo, hi) = value_range([0.05, 0.5, 0.95].iter().flat_map(|&p| at(p)).map(|(_, v)| v));
+            let (lo, hi) = value_range([Q[0], Q[2], Q[4]].iter().flat_map(|&p| at(p)).map(|(_, v)| v));
             let (x0, x1) = x.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
             let (x0, x1) = if x0 < x1 { (x0, x1) } else { (x0 - 1.0, x0 + 1.0) };
             let pad = 0.05 * (hi - lo);
@@ -271,7 +272,7 @@ fn draw_sweep_1d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
                 .draw()
                 .map_err(|e| e.to_string())?;
             let color = Palette99::pick(i).to_rgba();
-            for (a, b, alpha) in [(0.05, 0.95, 0.15), (0.25, 0.75, 0.3)] {
+            for (a, b, alpha) in [(Q[0], Q[4], 0.15), (Q[1], Q[3], 0.3)] {
                 let (low, high) = (at(a), at(b));
                 if low.len() >= 2 && low.len() == high.len() {
                     let ring: Vec<(f64, f64)> = low.iter().copied().chain(high.iter().rev().copied()).collect();

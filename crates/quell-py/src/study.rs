@@ -234,7 +234,7 @@ impl PyStudy {
         let len = self.inner.len();
         let index = run_index(run, len)?;
         let study = &self.inner;
-        let inner = py.detach(|| study.spec(index)).ok_or_else(|| out_of_range(index as i128, len))?;
+        let inner = py.detach(|| study.spec_with_nominal(index)).ok_or_else(|| out_of_range(index as i128, len))?;
         Ok(PyRunSpec { inner, drawn: drawn_keys(study) })
     }
 
@@ -675,7 +675,7 @@ impl PyRunSpecs {
     fn __next__(&mut self, py: Python<'_>) -> Option<PyRunSpec> {
         // The first spec of a grid point carries out that point's nominal run: without the GIL.
         let (study, index) = (&self.study, self.next);
-        let inner = py.detach(|| study.spec(index))?;
+        let inner = py.detach(|| study.spec_with_nominal(index))?;
         self.next += 1;
         Some(PyRunSpec { inner, drawn: drawn_keys(study) })
     }
@@ -847,7 +847,7 @@ fn sweep_frame(
     if !keys.is_empty() {
         let mut columns: Vec<(String, Vec<f64>)> = Vec::new();
         for row in &swept.rows {
-            let values = study.spec(row.run).map(|spec| drawn_values(&keys, &spec)).unwrap_or_default();
+            let values = study.spec_with_nominal(row.run).map(|spec| drawn_values(&keys, &spec)).unwrap_or_default();
             for (i, (name, v)) in values.into_iter().enumerate() {
                 match columns.get_mut(i) {
                     Some(c) => c.1.push(v),

@@ -21,6 +21,9 @@ impl KeyError {
     }
 }
 
+/// The integrator's default relative and absolute tolerance (`simulation.rtol`, `atol`).
+pub const DEFAULT_TOLERANCE: f64 = 1e-9;
+
 /// Most rows a run records (t_end / output_step): every row is kept in memory, ~200 bytes each.
 pub const MAX_OUTPUT_SAMPLES: f64 = 1e7;
 

@@ -194,9 +194,9 @@ fn a_study_run_index_beyond_the_study_is_none() {
     // An error, not a panic.
     let study = quell::study::Study::from_toml("[grid]\n\"design.mu[0]\" = [10.0, 40.0]\n", None).unwrap();
     assert_eq!(study.len(), 2);
-    assert_eq!(study.spec(1).map(|s| s.run), Some(1));
-    assert!(study.spec(2).is_none() && study.spec(usize::MAX).is_none());
-    assert_eq!(study.specs().count(), 2);
+    assert_eq!(study.spec_with_nominal(1).map(|s| s.run), Some(1));
+    assert!(study.spec_with_nominal(2).is_none() && study.spec_with_nominal(usize::MAX).is_none());
+    assert_eq!(study.specs_with_nominal().count(), 2);
 }
 
 #[test]

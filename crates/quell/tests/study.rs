@@ -51,7 +51,7 @@ fn sharded_and_merged_equals_unsharded() {
 
     // Each run alone, from its specification sent through JSON (as to a cluster's worker).
     for r in &all.rows {
-        let json = serde_json::to_string(&study.spec(r.run).unwrap()).unwrap();
+        let json = serde_json::to_string(&study.spec_with_nominal(r.run).unwrap()).unwrap();
         let spec: RunSpec = serde_json::from_str(&json).unwrap();
         assert_eq!(timeless(&[run_one(&spec)]), timeless(std::slice::from_ref(r)));
     }
@@ -74,7 +74,7 @@ fn an_invalid_draw_is_a_failed_row() {
     let failed: Vec<&Row> = rows.iter().filter(|r| r.outcome == Outcome::Failed).collect();
     assert!(!failed.is_empty() && failed.len() < 40, "{} failed", failed.len());
     for r in failed {
-        let beta = study.spec(r.run).unwrap().scenario["design"]["beta"].as_float().unwrap();
+        let beta = study.spec_with_nominal(r.run).unwrap().scenario["design"]["beta"].as_float().unwrap();
         assert!(beta <= 0.0 && r.reason.contains("design.beta"), "{beta}: {}", r.reason);
         assert!(r.channels.is_empty());
     }
@@ -127,13 +127,13 @@ fn a_grid_over_the_true_delay_keeps_the_design() {
     let text = "[simulation]\nt_end = 20.0\nrtol = 1e-6\natol = 1e-6\n[grid]\n\"truth.delays[1]\" = [2.7, 3.0, 3.3]\n[monte_carlo]\nruns = 2\n\"truth.A\" = { relative = 0.0 }\n";
     let study = Study::from_toml(text, None).unwrap();
     assert!(study.truth_differs());
-    let spec = study.spec(2).unwrap();
+    let spec = study.spec_with_nominal(2).unwrap();
     assert_eq!(spec.scenario["plant"]["delays"][1].as_float(), Some(3.0));
     assert_eq!(spec.scenario["truth"]["delays"][1].as_float(), Some(3.0));
-    assert_eq!(study.spec(0).unwrap().scenario["truth"]["delays"][1].as_float(), Some(2.7));
+    assert_eq!(study.spec_with_nominal(0).unwrap().scenario["truth"]["delays"][1].as_float(), Some(2.7));
     let rows = sweep(&study, &SweepOptions::default()).rows;
     let nominal = Study::from_toml("[simulation]\nt_end = 20.0\nrtol = 1e-6\natol = 1e-6\n", None).unwrap();
-    let base = run_one(&nominal.spec(0).unwrap());
+    let base = run_one(&nominal.spec_with_nominal(0).unwrap());
     assert_eq!(rows[2].channels, base.channels, "truth = plant is the nominal run");
     assert_ne!(rows[0].channels, base.channels);
     assert_ne!(rows[4].channels, base.channels);
@@ -177,7 +177,7 @@ fn the_nominal_run_is_the_grid_point_without_draws() {
     let row = &sweep(&plain, &SweepOptions::default()).rows[0];
     assert_eq!((row.outcome, row.steps), (Outcome::Completed, nominal.steps as u64));
     assert!(nominal.peaks.0.iter().all(|&p| p > 0.0 && p.is_finite()), "{nominal:?}");
-    let spec = study.spec(3).unwrap();
+    let spec = study.spec_with_nominal(3).unwrap();
     assert_eq!((spec.nominal, spec.runaway), (Some(nominal), Runaway { peak: 100.0, steps: 3.0 }));
     // A sampled-data loop has no runaway rules (its cost does not grow when it blows up).
     let sampled = Study::from_toml(&MC8.replace("atol = 1e-6", "atol = 1e-6\nsample_time = 0.01"), None).unwrap();
@@ -205,7 +205,7 @@ fn a_runaway_draw_is_diverged_early_and_converging_draws_are_untouched() {
 
     // With the peak rule off, the relative step budget ends it: failed, at 3 × the nominal steps.
     let budget = Study::from_toml(&format!("{MC8}[runaway]\npeak = inf\n"), None).unwrap();
-    let r = run_one(&budget.spec(7).unwrap());
+    let r = run_one(&budget.spec_with_nominal(7).unwrap());
     let limit = 3 * nominal.steps;
     assert_eq!(r.outcome, Outcome::Failed);
     assert_eq!(r.steps, limit as u64 + 1, "the step after the budget ends it");

@@ -11,7 +11,7 @@
 //! both.
 
 pub mod exosystem;
-mod read;
+pub(crate) mod read;
 mod write;
 
 use std::path::Path;
@@ -80,7 +80,13 @@ pub struct Simulation {
 
 impl Default for Simulation {
     fn default() -> Self {
-        Simulation { t_end: 100.0, output_step: 0.1, rtol: 1e-9, atol: 1e-9, sample_time: None }
+        Simulation {
+            t_end: 100.0,
+            output_step: 0.1,
+            rtol: settings::DEFAULT_TOLERANCE,
+            atol: settings::DEFAULT_TOLERANCE,
+            sample_time: None,
+        }
     }
 }
 

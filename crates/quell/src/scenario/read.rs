@@ -32,14 +32,14 @@ fn child(parent: &str, name: &str) -> String {
 }
 
 /// A table whose keys have all been checked against the valid ones.
-pub(super) struct Table<'a> {
+pub(crate) struct Table<'a> {
     key: String,
     table: &'a toml::Table,
 }
 
 /// One value and its key path.
 #[derive(Clone, Copy)]
-pub(super) struct Value<'a, 'k> {
+pub(crate) struct Value<'a, 'k> {
     pub key: &'k str,
     pub value: &'a toml::Value,
 }

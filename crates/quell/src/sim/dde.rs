@@ -150,8 +150,8 @@ pub struct Options {
 impl Default for Options {
     fn default() -> Self {
         Options {
-            rtol: 1e-9,
-            atol: 1e-9,
+            rtol: crate::settings::DEFAULT_TOLERANCE,
+            atol: crate::settings::DEFAULT_TOLERANCE,
             h_max: f64::INFINITY,
             max_steps: usize::MAX,
             max_history_len: usize::MAX,

@@ -2,7 +2,7 @@
 //! (the cartesian product of `[grid]`), Monte Carlo draws of the true plant at every grid point
 //! (`[monte_carlo]`), the settling band (`[settle]`) and the per-channel tuning (`[tune]`).
 //!
-//! Every run is reproducible on its own: [`Study::spec`] builds run `index`'s [`RunSpec`] from the
+//! Every run is reproducible on its own: [`Study::spec_with_nominal`] builds run `index`'s [`RunSpec`] from the
 //! study alone (its seed from the study seed and the run's draw index, see [`run_seed`]), and
 //! [`run_one`] carries it out. [`sweep`] runs them in parallel (rayon), or every `count`-th of them
 //! for a [`Shard`]; [`Summary`] aggregates the rows per grid point. The format is documented in
@@ -40,6 +40,13 @@ pub struct StudyError {
 
 fn err(key: impl Into<String>, message: impl Into<String>) -> StudyError {
     StudyError { key: key.into(), message: message.into() }
+}
+
+/// The scenario reader's errors ([`crate::scenario::read`]) name study keys when it reads a study.
+impl From<crate::ScenarioError> for StudyError {
+    fn from(e: crate::ScenarioError) -> Self {
+        StudyError { key: e.key, message: e.message }
+    }
 }
 
 /// Runs above which a front end asks for confirmation before a sweep starts.
@@ -133,6 +140,8 @@ pub struct Study {
     /// Where the scenario came from, for messages (`paper.toml`, or `the paper's example`).
     pub scenario_source: String,
     pub grid: Vec<GridAxis>,
+    /// Grid points: the product of the axes' lengths (1 without a grid), counted once when read.
+    points: usize,
     pub monte_carlo: Option<MonteCarlo>,
     pub settle: Settle,
     pub tune: Option<TuneSpec>,
@@ -147,7 +156,7 @@ pub struct Study {
     /// overrides applied to it.
     document: toml::Table,
     /// Per grid point with Monte Carlo draws, its nominal run (`None`: sampled-data, or it did not
-    /// complete), carried out at the point's first [`Study::spec`].
+    /// complete), carried out at the point's first [`Study::spec_with_nominal`].
     nominal: Vec<OnceLock<Option<Nominal>>>,
 }
 
@@ -205,18 +214,11 @@ fn table<'a>(key: &str, v: &'a toml::Value) -> Result<&'a toml::Table, StudyErro
     v.as_table().ok_or_else(|| err(key, format!("expected a table, found {}", kind(v))))
 }
 
+/// Every key of `t` (the table at `at`, "" for the document) is one of `valid`: the scenario
+/// reader's check, with its did-you-mean hint.
 fn unknown_keys(at: &str, t: &toml::Table, valid: &[&str]) -> Result<(), StudyError> {
-    match t.keys().find(|k| !valid.contains(&k.as_str())) {
-        Some(k) => Err(err(
-            if at.is_empty() { k.clone() } else { format!("{at}.{k}") },
-            format!(
-                "unknown key; valid keys {}: {}",
-                if at.is_empty() { "at the top level".to_string() } else { format!("in [{at}]") },
-                valid.join(", ")
-            ),
-        )),
-        None => Ok(()),
-    }
+    crate::scenario::read::Table::new(at, t, valid)?;
+    Ok(())
 }
 
 /// FNV-1a, 64 bits: the study's fingerprint (stable across platforms and releases, unlike
@@ -289,153 +291,34 @@ impl Study {
     /// `scenario` is a file's path (looked up in `dir`) or the scenario document itself, a table.
     pub fn from_table(doc: &toml::Table, dir: Option<&Path>) -> Result<Study, StudyError> {
         unknown_keys("", doc, TOP_KEYS)?;
-
-        // The scenario and the study's [simulation] overrides.
-        let (mut base, scenario_source): (toml::Table, String) = match doc.get("scenario") {
-            None => (PAPER_EXAMPLE.parse().expect("the paper's example is valid TOML"), "the paper's example".into()),
-            Some(toml::Value::String(s)) => {
-                let p = dir.map_or_else(|| PathBuf::from(s), |d| d.join(s));
-                let text = crate::settings::read_input(&p).map_err(|e| {
-                    err(
-                        "scenario",
-                        format!(
-                            "cannot read the scenario file {} ({e}); the path is relative to the study file",
-                            p.display()
-                        ),
-                    )
-                })?;
-                let base = text.parse().map_err(|e: toml::de::Error| {
-                    err("scenario", format!("{s} is not valid TOML: {}", e.message().trim_end()))
-                })?;
-                (base, s.clone())
-            }
-            Some(toml::Value::Table(t)) => (t.clone(), "the study's scenario".into()),
-            Some(v) => {
-                return Err(err(
-                    "scenario",
-                    format!("expected the scenario file's path (a string) or a scenario table, found {}", kind(v)),
-                ))
-            }
-        };
-        let in_scenario = |e: crate::ScenarioError| err("scenario", format!("{scenario_source}: {e}"));
-        if let Some(sim) = doc.get("simulation") {
-            let sim = table("simulation", sim)?;
-            let target = base.entry("simulation").or_insert_with(|| toml::Value::Table(toml::Table::new()));
-            if let toml::Value::Table(t) = target {
-                for (k, v) in sim {
-                    t.insert(k.clone(), v.clone());
-                }
-            }
-        }
-        let scenario = Scenario::from_document(&base).map_err(|e| {
-            if e.key.starts_with("simulation.")
-                && doc.get("simulation").and_then(|s| s.get(&e.key["simulation.".len()..])).is_some()
-            {
-                err(e.key.clone(), e.message)
-            } else {
-                in_scenario(e)
-            }
-        })?;
-        scenario.design().map_err(|e| err("scenario", format!("{scenario_source}: {e}")))?;
-        let m = scenario.plant.m();
-
-        // [grid]: each key a scenario path, each value a non-empty list of values of its shape.
-        let mut grid = Vec::new();
-        if let Some(g) = doc.get("grid") {
-            for (key, values) in table("grid", g)? {
-                let at = format!("grid.\"{key}\"");
-                let path = KeyPath::parse(key).map_err(|m| err(&at, m))?;
-                let values = match values {
-                    toml::Value::Array(v) if v.is_empty() => {
-                        return Err(err(&at, "expected a non-empty list of values, found an empty array; give at least one value or remove the key"))
-                    }
-                    toml::Value::Array(v) => v.clone(),
-                    v => return Err(err(&at, format!("expected a list of values (e.g. [5.0, 10.0]), found {}", kind(v)))),
-                };
-                if let Some(other) = grid.iter().find(|a: &&GridAxis| a.path.overlaps(&path)) {
-                    return Err(err(
-                        &at,
-                        format!(
-                            "names the same value as grid.\"{}\" (or a part of it), so one would overwrite the other and runs.csv would record a value that was not used; keep one of the two keys",
-                            other.key
-                        ),
-                    ));
-                }
-                let axis = GridAxis { key: key.clone(), path, values };
-                check_values(&base, &axis.path, &at, axis.values.iter().enumerate(), &scenario_source)?;
-                grid.push(axis);
-            }
-        }
-
-        // [monte_carlo].
+        let (mut base, scenario_source) = base_scenario(doc, dir)?;
+        let scenario = apply_simulation(doc, &mut base, &scenario_source)?;
+        let grid = read_grid(doc, &base, &scenario_source)?;
         let monte_carlo = match doc.get("monte_carlo") {
             None => None,
             Some(mc) => Some(monte_carlo(&base, table("monte_carlo", mc)?, &scenario_source)?),
-        };
-
-        let settle = match doc.get("settle") {
-            None => Settle::default(),
-            Some(s) => {
-                let t = table("settle", s)?;
-                unknown_keys("settle", t, SETTLE_KEYS)?;
-                let d = Settle::default();
-                let get =
-                    |k: &str, d: f64| t.get(k).map_or(Ok(d), |v| non_negative(&format!("settle.{k}"), v, "a band ≥ 0"));
-                let s = Settle { relative: get("relative", d.relative)?, absolute: get("absolute", d.absolute)? };
-                if s.relative == 0.0 && s.absolute == 0.0 {
-                    return Err(err(
-                        "settle",
-                        "both settle.relative and settle.absolute are 0, so no run could settle; give a band > 0",
-                    ));
-                }
-                s
-            }
-        };
-        let max_steps = match doc.get("max_steps") {
-            None => MAX_STEPS,
-            Some(v) => match unsigned("max_steps", v, "a step budget per run (an integer ≥ 1)")? {
-                0 => return Err(err("max_steps", "expected a step budget per run (an integer ≥ 1), found 0")),
-                n => usize::try_from(n).unwrap_or(usize::MAX),
-            },
-        };
-        let runaway = match doc.get("runaway") {
-            None => Runaway::default(),
-            Some(r) => {
-                let t = table("runaway", r)?;
-                unknown_keys("runaway", t, RUNAWAY_KEYS)?;
-                let d = Runaway::default();
-                let get = |k: &str, d: f64| t.get(k).map_or(Ok(d), |v| factor(&format!("runaway.{k}"), v));
-                Runaway { peak: get("peak", d.peak)?, steps: get("steps", d.steps)? }
-            }
         };
         let tune = match doc.get("tune") {
             None => None,
             Some(t) => Some(TuneSpec::parse(table("tune", t)?, &scenario)?),
         };
-
-        let mut canonical = toml::to_string(&base).unwrap_or_default();
-        for key in ["grid", "monte_carlo", "settle", "max_steps", "runaway"] {
-            if let Some(v) = doc.get(key) {
-                canonical.push_str(&format!("\n[{key}]\n{v}"));
-            }
-        }
-        let fingerprint = fnv1a(canonical.as_bytes());
         let points = study_size(&grid, monte_carlo.as_ref())?;
         let nominal = (0..if monte_carlo.is_some() { points } else { 0 }).map(|_| OnceLock::new()).collect();
         let mut document = doc.clone();
         document.remove("simulation");
         document.insert("scenario".into(), toml::Value::Table(base.clone()));
         Ok(Study {
+            fingerprint: fingerprint(doc, &base),
             base,
             scenario_source,
             grid,
+            points,
             monte_carlo,
-            settle,
+            settle: read_settle(doc)?,
             tune,
-            max_steps,
-            runaway,
-            m,
-            fingerprint,
+            max_steps: read_max_steps(doc)?,
+            runaway: read_runaway(doc)?,
+            m: scenario.plant.m(),
             document,
             nominal,
         })
@@ -449,7 +332,7 @@ impl Study {
 
     /// Grid points: the product of the axes' lengths (1 without a grid).
     pub fn points(&self) -> usize {
-        self.grid.iter().map(|a| a.values.len()).product()
+        self.points
     }
 
     /// Draws per grid point (1 without Monte Carlo).
@@ -509,9 +392,10 @@ impl Study {
         doc
     }
 
-    /// Run `index`'s specification, or `None` if `index ≥ self.len()` (as `slice::get`). The
-    /// first of a grid point's specifications carries out its nominal run ([`Study::nominal`]).
-    pub fn spec(&self, index: usize) -> Option<RunSpec> {
+    /// Run `index`'s specification, or `None` if `index ≥ self.len()` (as `slice::get`), with its
+    /// grid point's nominal run: the first call for a point of a study with draws *simulates* that
+    /// run ([`Study::nominal`], once per point), so it costs a whole run; later calls are cheap.
+    pub fn spec_with_nominal(&self, index: usize) -> Option<RunSpec> {
         if index as u64 >= self.len() {
             return None;
         }
@@ -548,9 +432,10 @@ impl Study {
         })
     }
 
-    /// Every run's specification, in index order (what `quell.sweep_runs` yields).
-    pub fn specs(&self) -> impl Iterator<Item = RunSpec> + '_ {
-        (0..self.len() as usize).map_while(|i| self.spec(i))
+    /// Every run's specification, in index order (what `quell.sweep_runs` yields), each with its
+    /// nominal run ([`Study::spec_with_nominal`]: one simulation per grid point of a study with draws).
+    pub fn specs_with_nominal(&self) -> impl Iterator<Item = RunSpec> + '_ {
+        (0..self.len() as usize).map_while(|i| self.spec_with_nominal(i))
     }
 
     /// Whether some run's true plant differs from the design model: the scenario's `[truth]`
@@ -596,6 +481,140 @@ impl Study {
     pub(crate) fn base(&self) -> &toml::Table {
         &self.base
     }
+}
+
+/// The study's scenario document and where it came from (for messages): the paper's example, a
+/// file's path (relative to `dir`) or the scenario table itself.
+fn base_scenario(doc: &toml::Table, dir: Option<&Path>) -> Result<(toml::Table, String), StudyError> {
+    match doc.get("scenario") {
+        None => Ok((PAPER_EXAMPLE.parse().expect("the paper's example is valid TOML"), "the paper's example".into())),
+        Some(toml::Value::String(s)) => {
+            let p = dir.map_or_else(|| PathBuf::from(s), |d| d.join(s));
+            let text = crate::settings::read_input(&p).map_err(|e| {
+                err(
+                    "scenario",
+                    format!(
+                        "cannot read the scenario file {} ({e}); the path is relative to the study file",
+                        p.display()
+                    ),
+                )
+            })?;
+            let base = text.parse().map_err(|e: toml::de::Error| {
+                err("scenario", format!("{s} is not valid TOML: {}", e.message().trim_end()))
+            })?;
+            Ok((base, s.clone()))
+        }
+        Some(toml::Value::Table(t)) => Ok((t.clone(), "the study's scenario".into())),
+        Some(v) => Err(err(
+            "scenario",
+            format!("expected the scenario file's path (a string) or a scenario table, found {}", kind(v)),
+        )),
+    }
+}
+
+/// Puts the study's `[simulation]` into the scenario document `base`, and reads and designs the
+/// result; an error in a value the study set names the study's key.
+fn apply_simulation(doc: &toml::Table, base: &mut toml::Table, source: &str) -> Result<Scenario, StudyError> {
+    if let Some(sim) = doc.get("simulation") {
+        let sim = table("simulation", sim)?;
+        let target = base.entry("simulation").or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        if let toml::Value::Table(t) = target {
+            for (k, v) in sim {
+                t.insert(k.clone(), v.clone());
+            }
+        }
+    }
+    let scenario = Scenario::from_document(base).map_err(|e| {
+        let set_here = |key: &str| doc.get("simulation").and_then(|s| s.get(key)).is_some();
+        match e.key.strip_prefix("simulation.") {
+            Some(key) if set_here(key) => err(e.key.clone(), e.message),
+            _ => err("scenario", format!("{source}: {e}")),
+        }
+    })?;
+    scenario.design().map_err(|e| err("scenario", format!("{source}: {e}")))?;
+    Ok(scenario)
+}
+
+/// `[grid]`: each key a scenario path, each value a non-empty list of values of its shape, no two
+/// keys naming the same value.
+fn read_grid(doc: &toml::Table, base: &toml::Table, source: &str) -> Result<Vec<GridAxis>, StudyError> {
+    let mut grid: Vec<GridAxis> = Vec::new();
+    let Some(g) = doc.get("grid") else { return Ok(grid) };
+    for (key, values) in table("grid", g)? {
+        let at = format!("grid.\"{key}\"");
+        let path = KeyPath::parse(key).map_err(|m| err(&at, m))?;
+        let values = match values {
+            toml::Value::Array(v) if v.is_empty() => return Err(err(
+                &at,
+                "expected a non-empty list of values, found an empty array; give at least one value or remove the key",
+            )),
+            toml::Value::Array(v) => v.clone(),
+            v => return Err(err(&at, format!("expected a list of values (e.g. [5.0, 10.0]), found {}", kind(v)))),
+        };
+        if let Some(other) = grid.iter().find(|a| a.path.overlaps(&path)) {
+            return Err(err(
+                &at,
+                format!(
+                    "names the same value as grid.\"{}\" (or a part of it), so one would overwrite the other and runs.csv would record a value that was not used; keep one of the two keys",
+                    other.key
+                ),
+            ));
+        }
+        check_values(base, &path, &at, values.iter().enumerate(), source)?;
+        grid.push(GridAxis { key: key.clone(), path, values });
+    }
+    Ok(grid)
+}
+
+/// `[settle]`: the band, not both parts 0.
+fn read_settle(doc: &toml::Table) -> Result<Settle, StudyError> {
+    let Some(s) = doc.get("settle") else { return Ok(Settle::default()) };
+    let t = table("settle", s)?;
+    unknown_keys("settle", t, SETTLE_KEYS)?;
+    let d = Settle::default();
+    let get = |k: &str, d: f64| t.get(k).map_or(Ok(d), |v| non_negative(&format!("settle.{k}"), v, "a band ≥ 0"));
+    let s = Settle { relative: get("relative", d.relative)?, absolute: get("absolute", d.absolute)? };
+    if s.relative == 0.0 && s.absolute == 0.0 {
+        return Err(err(
+            "settle",
+            "both settle.relative and settle.absolute are 0, so no run could settle; give a band > 0",
+        ));
+    }
+    Ok(s)
+}
+
+/// `max_steps`: a step budget ≥ 1 ([`MAX_STEPS`] by default).
+fn read_max_steps(doc: &toml::Table) -> Result<usize, StudyError> {
+    const WHAT: &str = "a step budget per run (an integer ≥ 1)";
+    match doc.get("max_steps") {
+        None => Ok(MAX_STEPS),
+        Some(v) => match unsigned("max_steps", v, WHAT)? {
+            0 => Err(err("max_steps", format!("expected {WHAT}, found 0"))),
+            n => Ok(usize::try_from(n).unwrap_or(usize::MAX)),
+        },
+    }
+}
+
+/// `[runaway]`: its two factors ([`Runaway::default`] for those not given).
+fn read_runaway(doc: &toml::Table) -> Result<Runaway, StudyError> {
+    let Some(r) = doc.get("runaway") else { return Ok(Runaway::default()) };
+    let t = table("runaway", r)?;
+    unknown_keys("runaway", t, RUNAWAY_KEYS)?;
+    let d = Runaway::default();
+    let get = |k: &str, d: f64| t.get(k).map_or(Ok(d), |v| factor(&format!("runaway.{k}"), v));
+    Ok(Runaway { peak: get("peak", d.peak)?, steps: get("steps", d.steps)? })
+}
+
+/// The study's fingerprint: FNV-1a of its scenario (with the `[simulation]` overrides) and of the
+/// sections that decide its runs.
+fn fingerprint(doc: &toml::Table, base: &toml::Table) -> u64 {
+    let mut canonical = toml::to_string(base).unwrap_or_default();
+    for key in ["grid", "monte_carlo", "settle", "max_steps", "runaway"] {
+        if let Some(v) = doc.get(key) {
+            canonical.push_str(&format!("\n[{key}]\n{v}"));
+        }
+    }
+    fnv1a(canonical.as_bytes())
 }
 
 /// The number of grid points, after checking that points × draws is at most [`MAX_RUNS`].

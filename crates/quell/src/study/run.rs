@@ -325,7 +325,7 @@ pub fn sweep(study: &Study, opts: &SweepOptions<'_>) -> Sweep {
             if stopped() {
                 return None;
             }
-            let row = execute(&study.spec(i)?, &stopped)?;
+            let row = execute(&study.spec_with_nominal(i)?, &stopped)?;
             if let Some(f) = opts.on_row {
                 f(&row);
             }

@@ -9,6 +9,9 @@ use super::Study;
 /// The quantile levels of summary.json and of the plots' bands.
 pub const QUANTILES: [f64; 5] = [0.05, 0.25, 0.5, 0.75, 0.95];
 
+/// The levels of [`Quantiles`]' fields, in order: min, [`QUANTILES`], max.
+const LEVELS: [f64; 7] = [0.0, QUANTILES[0], QUANTILES[1], QUANTILES[2], QUANTILES[3], QUANTILES[4], 1.0];
+
 /// Quantile `p` of sorted data by linear interpolation between order statistics (Hyndman and Fan's
 /// type 7, the default of NumPy and R): h = (n − 1) p, x[⌊h⌋] + (h − ⌊h⌋)(x[⌊h⌋+1] − x[⌊h⌋]).
 /// `None` for no data.
@@ -42,22 +45,15 @@ impl Quantiles {
     /// Of `values` (+∞ counts as "never", shown as `None`).
     pub fn of(mut values: Vec<f64>) -> Quantiles {
         values.sort_by(f64::total_cmp);
-        let q = |p| quantile(&values, p).filter(|v| v.is_finite());
-        Quantiles { min: q(0.0), p05: q(0.05), p25: q(0.25), p50: q(0.5), p75: q(0.75), p95: q(0.95), max: q(1.0) }
+        let [min, p05, p25, p50, p75, p95, max] = LEVELS.map(|p| quantile(&values, p).filter(|v| v.is_finite()));
+        Quantiles { min, p05, p25, p50, p75, p95, max }
     }
 
     /// The value at level `p` of [`QUANTILES`] (or 0 / 1 for min / max).
     pub fn at(&self, p: f64) -> Option<f64> {
-        match p {
-            p if p <= 0.0 => self.min,
-            p if p >= 1.0 => self.max,
-            p if (p - 0.05).abs() < 1e-12 => self.p05,
-            p if (p - 0.25).abs() < 1e-12 => self.p25,
-            p if (p - 0.5).abs() < 1e-12 => self.p50,
-            p if (p - 0.75).abs() < 1e-12 => self.p75,
-            p if (p - 0.95).abs() < 1e-12 => self.p95,
-            _ => None,
-        }
+        let Quantiles { min, p05, p25, p50, p75, p95, max } = *self;
+        let p = p.clamp(0.0, 1.0);
+        LEVELS.iter().position(|l| (l - p).abs() < 1e-12).and_then(|i| [min, p05, p25, p50, p75, p95, max][i])
     }
 }
 

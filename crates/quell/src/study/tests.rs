@@ -25,7 +25,7 @@ fn grid_is_a_product_with_the_first_axis_slowest() {
     assert_eq!(s.points(), 6);
     let idx: Vec<Vec<usize>> = (0..6).map(|p| s.grid_index(p)).collect();
     assert_eq!(idx, [[0, 0], [0, 1], [1, 0], [1, 1], [2, 0], [2, 1]]);
-    let spec = s.spec(3).unwrap();
+    let spec = s.spec_with_nominal(3).unwrap();
     assert_eq!(spec.scenario["design"]["mu"][0].as_float(), Some(10.0));
     assert_eq!(spec.scenario["design"]["beta"].as_float(), Some(2.0));
     assert_eq!(spec.scenario["design"]["mu"][1].as_float(), Some(30.0));
@@ -36,14 +36,15 @@ fn whole_vectors_and_matrices_are_grid_keys() {
     let s = study("[grid]\n\"design.mu\" = [[20, 30], [25, 25]]\n\"plant.x0\" = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]]\n")
         .unwrap();
     assert_eq!(s.points(), 4);
-    assert_eq!(s.spec(3).unwrap().scenario["plant"]["x0"][0].as_float(), Some(0.1));
-    assert_eq!(s.spec(3).unwrap().grid[0].1.to_string(), "[25, 25]");
+    assert_eq!(s.spec_with_nominal(3).unwrap().scenario["plant"]["x0"][0].as_float(), Some(0.1));
+    assert_eq!(s.spec_with_nominal(3).unwrap().grid[0].1.to_string(), "[25, 25]");
 }
 
 #[test]
 fn study_mistakes_name_their_key() {
     let cases: &[(&str, &str)] = &[
-        ("sceanrio = \"x.toml\"", "sceanrio: unknown key; valid keys at the top level"),
+        ("sceanrio = \"x.toml\"", "sceanrio: unknown key (did you mean `scenario`?); valid keys at the top level"),
+        ("[runaway]\npaek = 50", "runaway.paek: unknown key (did you mean `peak`?); valid keys in [runaway]: peak, steps"),
         ("scenario = 3", "scenario: expected the scenario file's path (a string) or a scenario table, found an integer"),
         ("scenario = \"/nonexistent/x.toml\"", "scenario: cannot read the scenario file /nonexistent/x.toml"),
         ("[grid]\n\"design.nu\" = [1.0]", "grid.\"design.nu\": design.nu is not a value of the scenario (design has no nu)"),
@@ -95,7 +96,7 @@ fn study_mistakes_name_their_key() {
 fn truth_defaults_to_the_plant_and_a_draw_on_it_differs() {
     let s = study("[monte_carlo]\nruns = 2\n\"plant.delays\" = { uniform = 0.0 }\n").unwrap();
     assert!(!s.truth_differs());
-    assert_eq!(s.spec(1).unwrap().scenario["plant"]["delays"][1].as_float(), Some(3.0));
+    assert_eq!(s.spec_with_nominal(1).unwrap().scenario["plant"]["delays"][1].as_float(), Some(3.0));
 }
 
 /// Draw d's seed depends on the study seed and d only: the same at every grid point, and the
@@ -104,8 +105,8 @@ fn truth_defaults_to_the_plant_and_a_draw_on_it_differs() {
 fn seeds_come_from_the_study_seed_and_the_draw() {
     let s = study("[grid]\n\"design.mu[0]\" = [5.0, 10.0]\n[monte_carlo]\nruns = 3\nseed = 7\n\"design.beta\" = { relative = 0.1 }\n").unwrap();
     assert_eq!(s.len(), 6);
-    let later = s.spec(5).unwrap();
-    let specs: Vec<RunSpec> = s.specs().collect();
+    let later = s.spec_with_nominal(5).unwrap();
+    let specs: Vec<RunSpec> = s.specs_with_nominal().collect();
     assert_eq!(specs[5], later);
     for d in 0..3 {
         assert_eq!(specs[d].seed, run_seed(7, d));
@@ -123,7 +124,8 @@ fn draws_follow_their_laws() {
     let n = 4000;
     let moments = |law: &str| {
         let s = study(&format!("[monte_carlo]\nruns = {n}\nseed = 3\n\"design.beta\" = {law}\n")).unwrap();
-        let xs: Vec<f64> = (0..n).map(|i| s.spec(i).unwrap().scenario["design"]["beta"].as_float().unwrap()).collect();
+        let xs: Vec<f64> =
+            (0..n).map(|i| s.spec_with_nominal(i).unwrap().scenario["design"]["beta"].as_float().unwrap()).collect();
         let mean = xs.iter().sum::<f64>() / n as f64;
         let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
         (mean, var, xs)
@@ -146,7 +148,7 @@ fn draws_follow_their_laws() {
 #[test]
 fn a_relative_draw_perturbs_every_entry() {
     let s = study("[monte_carlo]\nruns = 1\n\"plant.A\" = { relative = 0.05 }\n").unwrap();
-    let a = &s.spec(0).unwrap().scenario["plant"]["A"];
+    let a = &s.spec_with_nominal(0).unwrap().scenario["plant"]["A"];
     let nominal = [[-3.2, -1.7, -3.0], [2.8, 1.3, 4.0], [0.3, 0.3, -0.5]];
     for (r, row) in nominal.iter().enumerate() {
         for (c, &x) in row.iter().enumerate() {
@@ -285,7 +287,8 @@ fn a_relative_uniform_draw_stays_within_its_fraction() {
         study(&format!("[monte_carlo]\nruns = {n}\nseed = 11\n\"truth.delays[1]\" = {{ relative_uniform = 0.1 }}\n"))
             .unwrap();
     assert!(s.truth_differs());
-    let xs: Vec<f64> = (0..n).map(|i| s.spec(i).unwrap().scenario["truth"]["delays"][1].as_float().unwrap()).collect();
+    let xs: Vec<f64> =
+        (0..n).map(|i| s.spec_with_nominal(i).unwrap().scenario["truth"]["delays"][1].as_float().unwrap()).collect();
     assert!(xs.iter().all(|x| (2.7..=3.3).contains(x)), "{:?}", xs.iter().cloned().fold(f64::NAN, f64::max));
     let nf = n as f64;
     let mean = xs.iter().sum::<f64>() / nf;
@@ -294,7 +297,7 @@ fn a_relative_uniform_draw_stays_within_its_fraction() {
     assert!((mean - 3.0).abs() < 5.0 * v.sqrt() / nf.sqrt(), "mean {mean}");
     assert!((var - v).abs() < 5.0 * v * (0.8 / nf).sqrt(), "variance {var}");
     // The delay of channel 1 is not drawn.
-    assert!((0..10).all(|i| s.spec(i).unwrap().scenario["truth"]["delays"][0].as_float() == Some(1.0)));
+    assert!((0..10).all(|i| s.spec_with_nominal(i).unwrap().scenario["truth"]["delays"][0].as_float() == Some(1.0)));
 }
 
 /// A study whose scenario is a table is the study of that scenario's file, and its document reads
@@ -310,7 +313,7 @@ fn a_study_document_is_self_contained() {
     for s in [&from_table, &back] {
         assert_eq!(s.fingerprint(), from_file.fingerprint());
         assert_eq!(s.to_table(), from_file.to_table());
-        assert_eq!(s.spec(3).unwrap().scenario, from_file.spec(3).unwrap().scenario);
+        assert_eq!(s.spec_with_nominal(3).unwrap().scenario, from_file.spec_with_nominal(3).unwrap().scenario);
     }
     assert_eq!(from_file.to_table()["scenario"]["simulation"]["t_end"].as_float(), Some(5.0));
     assert!(!from_file.to_table().contains_key("simulation"));
