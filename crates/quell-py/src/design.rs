@@ -28,6 +28,7 @@ pub fn spec(
     observer_poles: Option<&Bound<'_, PyAny>>,
     observer_gain: Option<&Bound<'_, PyAny>>,
     relative_degrees: Option<&Bound<'_, PyAny>>,
+    regressor_scaling: Option<&str>,
 ) -> PyResult<DesignSpec> {
     let k = Kind::Design;
     let observer = match (observer_gain, observer_poles) {
@@ -47,6 +48,13 @@ pub fn spec(
         mu: vector(mu, "design.mu", k)?,
         beta: number(beta, "design.beta", k)?,
         relative_degrees: relative_degrees.map(|s| integers(s, "design.relative_degrees", k)).transpose()?,
+        regressor_scaling: regressor_scaling
+            .map(|name| {
+                quell::design::RegressorScaling::from_name(name)
+                    .map_err(|e| k.err(py, format!("design.regressor_scaling: {e}")))
+            })
+            .transpose()?
+            .unwrap_or_default(),
     })
 }
 
@@ -82,7 +90,7 @@ fn integers(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<usiz
 
 /// Designs every gain for `plant` (Sections III–V) and checks the paper's assumptions.
 #[pyfunction]
-#[pyo3(signature = (plant, *, channel_poles, reference_filter_poles, mu, beta, disturbance_filter_poles=None, observer_poles=None, observer_gain=None, relative_degrees=None))]
+#[pyo3(signature = (plant, *, channel_poles, reference_filter_poles, mu, beta, disturbance_filter_poles=None, observer_poles=None, observer_gain=None, relative_degrees=None, regressor_scaling=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn design(
     py: Python<'_>,
@@ -95,6 +103,7 @@ pub fn design(
     observer_poles: Option<&Bound<'_, PyAny>>,
     observer_gain: Option<&Bound<'_, PyAny>>,
     relative_degrees: Option<&Bound<'_, PyAny>>,
+    regressor_scaling: Option<&str>,
 ) -> PyResult<PyDesign> {
     let plant = plant_arg(plant, "plant")?;
     let spec = spec(
@@ -107,6 +116,7 @@ pub fn design(
         observer_poles,
         observer_gain,
         relative_degrees,
+        regressor_scaling,
     )?;
     let d = quell::Design::new(&plant.inner, &spec).map_err(|e| raise(py, Kind::Design)(&e))?;
     crate::errors::warn_fragile(py, &d, &spec)?;
@@ -212,6 +222,12 @@ impl PyDesign {
     #[getter]
     fn beta(&self) -> f64 {
         self.inner.beta()
+    }
+    /// How the internal-model filters are realized: "paper" (l = e_q) or "normalized" (unit DC
+    /// gain, ξ̂ of the signals' size).
+    #[getter]
+    fn regressor_scaling(&self) -> &'static str {
+        self.inner.regressor_scaling().name()
     }
     /// Regressor size q = q_g + q_ω (the length of each η̂_i).
     #[getter]

@@ -273,6 +273,20 @@ impl PyScenario {
         Ok(PyDesign { inner: self.design_arc(py)? })
     }
 
+    /// The adaptive law's pace before a run, per channel (`quell design`'s "adaptation"): μ_i,
+    /// λ_max and λ_min of the averaged Ω̄_i, the rate μ_i λ_max against the loop's fastest other rate,
+    /// the predicted convergence time 1/(μ_i λ_min), and the flags `stiff` and `weakly_excited` with
+    /// advice. A list of dicts; raises DesignError when the scenario has no design.
+    fn adaptation<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let d = self.design_arc(py)?;
+        let s = &self.inner;
+        let e = py.detach(|| {
+            quell::diagnostics::estimate(&d, s.true_plant(), &s.reference, &s.disturbance, s.simulation.t_end)
+        });
+        let text = serde_json::to_string(&e).unwrap_or_default();
+        py.import("json")?.call_method1("loads", (text,))
+    }
+
     /// The plant (1).
     #[getter]
     fn plant(&self) -> PyPlant {

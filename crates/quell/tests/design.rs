@@ -349,6 +349,7 @@ fn error_not_decouplable_observable_plant() {
         mu: vec![1.0, 1.0],
         beta: 1.0,
         relative_degrees: None,
+        regressor_scaling: Default::default(),
     };
     match expect_err(&plant, &spec) {
         DesignError::NotDecouplable { smallest, .. } => assert!(smallest < 1e-12, "σ_min {smallest}"),
@@ -373,6 +374,7 @@ fn siso_spec() -> quell::DesignSpec {
         mu: vec![1.0],
         beta: 1.0,
         relative_degrees: None,
+        regressor_scaling: Default::default(),
     }
 }
 
@@ -551,6 +553,7 @@ fn triple_channel_pole_is_designed() {
         mu: vec![1.0; 3],
         beta: 1.0,
         relative_degrees: None,
+        regressor_scaling: Default::default(),
     };
     let d = Design::new(&plant, &spec).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(d.sigma(), &[2, 1, 1]);

@@ -16,7 +16,7 @@ use crate::signal::{check_signals, Signal};
 
 pub use crate::settings::MeasurementNoise;
 pub use closed_loop::{
-    default_max_steps, simulate, simulate_with_truth, ContinuousLoop, RunSettings, BUDGET_MIN_STEPS,
+    default_max_steps, loop_rate, simulate, simulate_with_truth, ContinuousLoop, RunSettings, BUDGET_MIN_STEPS,
     BUDGET_STEPS_PER_RATE, MAX_HISTORY_BYTES,
 };
 pub use divergence::{Peaks, Watched, DIVERGENCE_BOUND};
