@@ -35,6 +35,39 @@ fn value_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     }
 }
 
+/// The label of tick value `v` on an axis spanning [lo, hi]: scientific notation when the axis's
+/// largest magnitude is below 1e-3 or at least 1e5 (plotters' default prints 1e-6 as "0.0"), plain
+/// decimals otherwise; either with the digits that tell ticks about (hi − lo)/10 apart from each
+/// other, and no trailing zeros.
+fn tick_label(v: f64, lo: f64, hi: f64) -> String {
+    let scale = lo.abs().max(hi.abs());
+    let spacing = if hi > lo { (hi - lo) / 10.0 } else { scale };
+    // A tick at zero computed as lo + k·step can come out as −8.5e-22.
+    if v.abs() <= 1e-6 * spacing || !v.is_finite() || !scale.is_normal() {
+        return if v.is_finite() { "0".into() } else { v.to_string() };
+    }
+    // The small offset keeps log10(1e-7) = −7.000…01 at −7.
+    let exponent = |x: f64| (x.log10() + 1e-9).floor();
+    let spacing_exp = exponent(spacing);
+    if !(1e-3..1e5).contains(&scale) {
+        let digits = (exponent(scale) - spacing_exp).clamp(0.0, 6.0) as usize;
+        let s = format!("{v:.digits$e}");
+        let (mantissa, exp) = s.split_once('e').unwrap_or((&s, "0"));
+        let mantissa =
+            if mantissa.contains('.') { mantissa.trim_end_matches('0').trim_end_matches('.') } else { mantissa };
+        format!("{mantissa}e{exp}")
+    } else {
+        let decimals = (-spacing_exp).clamp(0.0, 9.0) as usize;
+        let s = format!("{v:.decimals$}");
+        let s = if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.') } else { &s };
+        if s == "-0" {
+            "0".into()
+        } else {
+            s.into()
+        }
+    }
+}
+
 fn panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     title: &str,
@@ -48,19 +81,21 @@ fn panel<DB: DrawingBackend>(
     let (t0, t1) = if t0 < t1 { (t0, t1) } else { (0.0, 1.0) };
     let (lo, hi) = value_range(series.iter().flat_map(|(_, p)| p.iter().map(|(_, v)| *v)));
     let pad = 0.05 * (hi - lo);
+    let (y0, y1) = (lo - pad, hi + pad);
     let mut chart = ChartBuilder::on(area)
         .caption(title, ("sans-serif", 20))
         .margin(8)
         .margin_right(24)
         .x_label_area_size(36)
-        .y_label_area_size(64)
-        .build_cartesian_2d(t0..t1, (lo - pad)..(hi + pad))
+        .y_label_area_size(72)
+        .build_cartesian_2d(t0..t1, y0..y1)
         .map_err(|e| e.to_string())?;
     chart
         .configure_mesh()
         .max_light_lines(2)
         .x_desc("t, s")
         .y_desc(ylabel)
+        .y_label_formatter(&|v| tick_label(*v, y0, y1))
         .label_style(("sans-serif", 14))
         .draw()
         .map_err(|e| e.to_string())?;
@@ -180,13 +215,14 @@ fn draw_sweep_1d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
             let (x0, x1) = x.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
             let (x0, x1) = if x0 < x1 { (x0, x1) } else { (x0 - 1.0, x0 + 1.0) };
             let pad = 0.05 * (hi - lo);
+            let (y0, y1) = (lo - pad, hi + pad);
             let mut chart = ChartBuilder::on(area)
                 .caption(format!("Channel {}: {label}", i + 1), ("sans-serif", 18))
                 .margin(8)
                 .margin_right(20)
                 .x_label_area_size(36)
                 .y_label_area_size(80)
-                .build_cartesian_2d(x0..x1, (lo - pad)..(hi + pad))
+                .build_cartesian_2d(x0..x1, y0..y1)
                 .map_err(|e| e.to_string())?;
             let values = axis.values.clone();
             let fmt = move |v: &f64| {
@@ -205,6 +241,7 @@ fn draw_sweep_1d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
                 .x_desc(axis.key.as_str())
                 .y_desc(*label)
                 .x_label_formatter(&fmt)
+                .y_label_formatter(&|v| tick_label(*v, y0, y1))
                 .label_style(("sans-serif", 13))
                 .draw()
                 .map_err(|e| e.to_string())?;
@@ -375,4 +412,31 @@ fn draw_tune<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &quell::study:
 pub fn plot_tune(dir: &Path, r: &quell::study::TuneResult) -> io::Result<()> {
     let size = (560 * r.channels.len().max(1) as u32, 460);
     write_figure(dir, "tune", size, |root| draw_tune(root, r), |root| draw_tune(root, r))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::tick_label;
+
+    #[test]
+    fn tick_labels_tell_small_and_large_ticks_apart() {
+        // An η̂ axis of micro-units: plotters' default printed every tick as "0.0".
+        let ticks: Vec<String> = (0..=5).map(|k| tick_label(k as f64 * 2e-7, 0.0, 1e-6)).collect();
+        assert_eq!(ticks, ["0", "2e-7", "4e-7", "6e-7", "8e-7", "1e-6"]);
+        assert_eq!(tick_label(1.5e-6, -1e-6, 2e-6), "1.5e-6");
+        assert_eq!(tick_label(-2.5e-5, -3e-5, 3e-5), "-2.5e-5");
+        // Forces in newtons: 2.5e5, not 250000.0.
+        assert_eq!(tick_label(2.5e5, 0.0, 4e5), "2.5e5");
+        assert_eq!(tick_label(1.2e6, -2e6, 2e6), "1.2e6");
+        // Ordinary ranges keep decimals, as many as the spacing needs.
+        assert_eq!(tick_label(0.25, 0.0, 0.5), "0.25");
+        assert_eq!(tick_label(0.3, 0.0, 0.5), "0.3");
+        assert_eq!(tick_label(-1.0, -4.5, 2.0), "-1");
+        assert_eq!(tick_label(600.0, 0.0, 600.0), "600");
+        assert_eq!(tick_label(1e-17, -0.5, 0.5), "0");
+        // A narrow band around a large offset: enough digits to tell the ticks apart.
+        assert_eq!(tick_label(100.05, 100.0, 100.1), "100.05");
+        assert_eq!(tick_label(0.0, -1.0, 1.0), "0");
+        assert_eq!(tick_label(-8.5e-22, -6.5e-6, 2e-7), "0");
+    }
 }

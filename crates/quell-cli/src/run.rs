@@ -70,12 +70,41 @@ fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result
         None => LoopSettings::of(scenario),
     };
     if let LoopSettings::Sampled(st) = &settings {
-        st.check(design, &scenario.reference, &scenario.disturbance).map_err(|e| Failure::Input(e.to_string()))?;
+        st.check(design, &scenario.reference, &scenario.disturbance).map_err(|e| match args.sample_time {
+            // The flag, not the file's key, made the output step invalid: name both.
+            Some(t) if e.to_string().starts_with("simulation.output_step:") => {
+                output_step_error(t, scenario.simulation.output_step)
+            }
+            _ => Failure::Input(e.to_string()),
+        })?;
     }
     let mut settings = settings;
     settings.record_states(args.states);
     settings.set_max_steps(args.max_steps).map_err(|e| Failure::Input(format!("--max-steps: {}", e.message)))?;
     Ok(settings)
+}
+
+/// `--sample-time T` against the file's `simulation.output_step` h, which is not a whole number ≥ 1
+/// of samples (every recorded row is a controller step): the error names the flag and the key,
+/// with the nearest fix on either side.
+fn output_step_error(T: f64, h: f64) -> Failure {
+    let ratio = h / T;
+    let divisor = h / ratio.ceil().max(1.0);
+    let multiple = T * ratio.round().max(1.0);
+    Failure::Input(format!(
+        "--sample-time {}: simulation.output_step = {} s (from the scenario file) is not a whole number of samples of {} s ({ratio:.6} samples; each recorded row is a controller step); give a --sample-time that divides it, e.g. {} s, or set simulation.output_step to a multiple of the sample time, e.g. {} s",
+        short(T),
+        short(h),
+        short(T),
+        short(divisor),
+        short(multiple)
+    ))
+}
+
+/// A time for a message, to 12 significant digits and without trailing zeros.
+fn short(x: f64) -> String {
+    let s = format!("{:.12e}", x);
+    s.parse::<f64>().map_or(s, |v| v.to_string())
 }
 
 /// The continuous or the sampled-data loop on the scenario's true plant, with a progress bar.

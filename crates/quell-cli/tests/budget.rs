@@ -22,8 +22,9 @@ fn children_max_rss() -> u64 {
 
 #[test]
 fn a_diverging_continuous_run_ends_within_its_default_budget() {
-    let dir = scratch_dir("budget");
-    let scenario = paper_with(&dir, &[("# [noise]", &format!("{TRUTH}# [noise]"))]);
+    let dir_tmp = scratch_dir("budget");
+    let dir = dir_tmp.path();
+    let scenario = paper_with(dir, &[("# [noise]", &format!("{TRUTH}# [noise]"))]);
     let out = dir.join("out");
     let started = Instant::now();
     let output = Command::new(env!("CARGO_BIN_EXE_quell"))
@@ -61,13 +62,13 @@ fn a_diverging_continuous_run_ends_within_its_default_budget() {
     assert_eq!(output.status.code(), Some(1), "stderr: {stderr}");
     assert!(stderr.contains("more than 3000 steps by t = "), "{stderr}");
     assert!(time_in(&stderr, "steps by t = ").is_some_and(|t2| t2 < t));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn max_steps_is_refused_for_a_sampled_data_run() {
-    let dir = scratch_dir("budget-sampled");
-    let scenario = paper_with(&dir, &[]);
+    let dir_tmp = scratch_dir("budget-sampled");
+    let dir = dir_tmp.path();
+    let scenario = paper_with(dir, &[]);
     let output = Command::new(env!("CARGO_BIN_EXE_quell"))
         .args(["run", "--no-plots", "--sample-time", "0.01", "--max-steps", "10", "--out"])
         .arg(dir.join("out"))
@@ -77,5 +78,4 @@ fn max_steps_is_refused_for_a_sampled_data_run() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(2), "stderr: {stderr}");
     assert!(stderr.contains("--max-steps: a step budget applies to the continuous loop"), "{stderr}");
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -5,10 +5,10 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use quell::scenario::Scenario;
 use serde_json::Value;
+use tempfile::TempDir;
 
 fn quell(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_quell")).args(args).output().expect("the quell binary runs")
@@ -31,32 +31,8 @@ fn paper() -> String {
 }
 
 /// A fresh directory under the system's temp dir, removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(tag: &str) -> TempDir {
-        static COUNTER: AtomicUsize = AtomicUsize::new(0);
-        let n = COUNTER.fetch_add(1, Ordering::SeqCst);
-        let dir = std::env::temp_dir().join(format!("quell-cli-test-{}-{tag}-{n}", std::process::id()));
-        let _ = fs::remove_dir_all(&dir);
-        fs::create_dir_all(&dir).unwrap();
-        TempDir(dir)
-    }
-    fn path(&self) -> &Path {
-        &self.0
-    }
-    fn join(&self, p: impl AsRef<Path>) -> PathBuf {
-        self.0.join(p)
-    }
-    fn str(&self) -> &str {
-        self.0.to_str().unwrap()
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = fs::remove_dir_all(&self.0);
-    }
+fn temp_dir(tag: &str) -> TempDir {
+    tempfile::Builder::new().prefix(&format!("quell-cli-test-{tag}-")).tempdir().unwrap()
 }
 
 fn read_json(path: &Path) -> Value {
@@ -96,8 +72,8 @@ fn input_error(args: &[&str]) -> String {
 fn design_with_edit(tag: &str, from: &str, to: &str) -> String {
     let text = fs::read_to_string(paper()).unwrap();
     assert!(text.contains(from), "paper.toml no longer contains {from:?}");
-    let dir = TempDir::new(tag);
-    let file = dir.join("scenario.toml");
+    let dir = temp_dir(tag);
+    let file = dir.path().join("scenario.toml");
     fs::write(&file, text.replacen(from, to, 1)).unwrap();
     let err = input_error(&["design", file.to_str().unwrap()]);
     assert_eq!(err.trim().lines().count(), 1, "one message expected, got: {err}");
@@ -297,12 +273,12 @@ fn leftovers(dir: &Path) -> Vec<String> {
 
 #[test]
 fn run_paper_example_writes_every_file() {
-    let dir = TempDir::new("run-paper");
-    let o = quell(&["run", "--out", dir.str()]);
+    let dir = temp_dir("run-paper");
+    let o = quell(&["run", "--out", dir.path().to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 
     // signals.csv: the header, and one row per t = k·0.1, k = 0..=1000.
-    let csv = fs::read_to_string(dir.join("signals.csv")).unwrap();
+    let csv = fs::read_to_string(dir.path().join("signals.csv")).unwrap();
     let mut lines = csv.lines();
     let header = lines.next().unwrap();
     assert_eq!(header, csv_header(2, 8));
@@ -321,10 +297,10 @@ fn run_paper_example_writes_every_file() {
     let design = quell(&["design", "--json", &paper()]);
     assert_eq!(design.status.code(), Some(0));
     let printed: Value = serde_json::from_slice(&design.stdout).unwrap();
-    assert_eq!(read_json(&dir.join("design.json")), printed);
+    assert_eq!(read_json(&dir.path().join("design.json")), printed);
 
     // summary.json: per-channel figures and solver statistics; the paper's loop converges.
-    let s = read_json(&dir.join("summary.json"));
+    let s = read_json(&dir.path().join("summary.json"));
     assert_eq!(s["outcome"]["status"], "completed", "{s}");
     let channels = s["channels"].as_array().unwrap();
     assert_eq!(channels.len(), 2);
@@ -346,33 +322,33 @@ fn run_paper_example_writes_every_file() {
 
     // Plots: a PNG and an SVG per channel.
     for c in 1..=2 {
-        let png = fs::read(dir.join(format!("channel{c}.png"))).unwrap();
+        let png = fs::read(dir.path().join(format!("channel{c}.png"))).unwrap();
         assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"), "channel{c}.png is not a PNG");
         assert!(png.len() > 10_000, "channel{c}.png has only {} bytes", png.len());
-        let svg = fs::read_to_string(dir.join(format!("channel{c}.svg"))).unwrap();
+        let svg = fs::read_to_string(dir.path().join(format!("channel{c}.svg"))).unwrap();
         let head = svg.trim_start();
         assert!(head.starts_with("<svg") || head.starts_with("<?xml"), "channel{c}.svg starts with {:?}", &head[..20]);
         assert!(svg.len() > 10_000 && svg.trim_end().ends_with("</svg>"), "channel{c}.svg is truncated");
     }
     assert!(leftovers(dir.path()).is_empty(), "temporary files left: {:?}", leftovers(dir.path()));
-    assert!(!dir.join("channel3.png").exists());
+    assert!(!dir.path().join("channel3.png").exists());
 }
 
 #[test]
 fn run_no_plots_writes_no_images() {
-    let dir = TempDir::new("no-plots");
-    let o = quell(&["run", &paper(), "--no-plots", "--out", dir.str()]);
+    let dir = temp_dir("no-plots");
+    let o = quell(&["run", &paper(), "--no-plots", "--out", dir.path().to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     for f in ["signals.csv", "design.json", "summary.json"] {
-        assert!(dir.join(f).is_file(), "{f} missing");
+        assert!(dir.path().join(f).is_file(), "{f} missing");
     }
-    assert!(!dir.join("channel1.png").exists() && !dir.join("channel1.svg").exists());
+    assert!(!dir.path().join("channel1.png").exists() && !dir.path().join("channel1.svg").exists());
 }
 
 #[test]
 fn run_out_unwritable_exits_2_before_work() {
-    let dir = TempDir::new("out-file");
-    let file = dir.join("a-file");
+    let dir = temp_dir("out-file");
+    let file = dir.path().join("a-file");
     fs::write(&file, b"not a directory").unwrap();
     let under_file = file.join("sub");
     for out in [Path::new("/proc/forbidden"), file.as_path(), under_file.as_path()] {
@@ -389,8 +365,8 @@ fn run_out_unwritable_exits_2_before_work() {
 
 #[test]
 fn run_sample_time_not_dividing_a_delay_exits_2() {
-    let dir = TempDir::new("ts-03");
-    let out = dir.join("out");
+    let dir = temp_dir("ts-03");
+    let out = dir.path().join("out");
     let err = input_error(&["run", "--sample-time", "0.3", "--out", out.to_str().unwrap()]);
     assert!(err.contains("channel 1"), "{err}");
     assert!(err.contains("nearest valid sample time is 0.333"), "{err}");
@@ -398,9 +374,63 @@ fn run_sample_time_not_dividing_a_delay_exits_2() {
 }
 
 #[test]
+fn run_sample_time_flag_the_output_step_is_not_a_multiple_of_names_both() {
+    // paper.toml records every 0.1 s. `--sample-time 0.2` stopped with "simulation.output_step:
+    // expected a whole multiple of sample_time", a key the user had not touched, and no way out.
+    let dir = temp_dir("ts-output-step");
+    let out = dir.path().join("out");
+    for (flag, ratio, divisor, multiple) in
+        [("0.2", "0.500000", "0.1 s", "0.2 s"), ("0.04", "2.500000", "0.03333333333333 s", "0.12 s")]
+    {
+        let err = input_error(&["run", "--sample-time", flag, "--no-plots", "--out", out.to_str().unwrap()]);
+        assert!(err.starts_with(&format!("error: --sample-time {flag}: simulation.output_step = 0.1 s")), "{err}");
+        // The nearest fixes, by hand: 0.1 / ceil(0.1 / T) divides 0.1; T·round(0.1 / T) is a multiple.
+        assert!(err.contains(&format!("({ratio} samples")) && err.contains(&format!("e.g. {divisor}")), "{err}");
+        assert!(err.contains(&format!("multiple of the sample time, e.g. {multiple}")), "{err}");
+        assert!(!out.exists(), "--out was touched");
+    }
+    // A divisor of the output step is accepted (0.025 s: 4 samples a row, delays 40 and 120 samples).
+    let o = quell(&["run", "--sample-time", "0.025", "--no-plots", "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
+
+#[test]
+fn design_of_a_12_state_chain_observer_is_accepted_with_its_fragility() {
+    // The observer of a 12-state integrator chain with poles −2, −2.7, …, −9.7 was refused: "A − LC
+    // is not Hurwitz (eigenvalues −9.7, …, −2.0)". Now designed (exit 0), eig(A − LC) shown at the
+    // requested poles (to the 6 decimals printed) and the fragility (κ₂ ≫ 1e8) reported.
+    let n = 12;
+    let rows = |f: &dyn Fn(usize, usize) -> f64, r: usize, c: usize| {
+        let row = |i| format!("[{}]", (0..c).map(|j| format!("{:.1}", f(i, j))).collect::<Vec<_>>().join(", "));
+        format!("[{}]", (0..r).map(row).collect::<Vec<_>>().join(", "))
+    };
+    let poles: Vec<String> = (0..n).map(|j| format!("{:.1}", -2.0 - 0.7 * j as f64)).collect();
+    let channel: Vec<String> = (0..n).map(|j| format!("{:.1}", -1.0 - 0.5 * j as f64)).collect();
+    let text = format!(
+        "[plant]\nA = {}\nB = {}\nC = {}\ndelays = [0.0]\n[design]\nobserver_poles = [{}]\nchannel_poles = [[{}]]\n\
+         reference_filter_poles = [[-1.0]]\nmu = [1.0]\nbeta = 1.0\n[reference]\ncomponents = [{{ bias = 1.0 }}]\n",
+        rows(&|r, c| if c == r + 1 { 1.0 } else { 0.0 }, n, n),
+        rows(&|r, _| if r + 1 == n { 1.0 } else { 0.0 }, n, 1),
+        rows(&|_, c| if c == 0 { 1.0 } else { 0.0 }, 1, n),
+        poles.join(", "),
+        channel.join(", "),
+    );
+    let dir = temp_dir("chain12");
+    let file = dir.path().join("chain.toml");
+    fs::write(&file, text).unwrap();
+    let o = quell(&["design", file.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(out.contains("fragile observer gain") && out.contains("κ₂ = "), "{out}");
+    for p in &poles {
+        assert!(out.contains(&format!("{p}00000")), "pole {p} not among eig(A − LC) in:\n{out}");
+    }
+}
+
+#[test]
 fn run_negative_sample_time_exits_2() {
-    let dir = TempDir::new("ts-neg");
-    let out = dir.join("out");
+    let dir = temp_dir("ts-neg");
+    let out = dir.path().join("out");
     // `--sample-time -1` is a usage error (clap reads -1 as a flag); `=-1` reaches the check.
     for args in [&["run", "--sample-time", "-1"][..], &["run", "--sample-time=-1"], &["run", "--sample-time=0"]] {
         let mut args = args.to_vec();
@@ -415,8 +445,8 @@ fn run_negative_sample_time_exits_2() {
 
 #[test]
 fn run_missing_scenario_exits_2() {
-    let dir = TempDir::new("missing");
-    let out = dir.join("out");
+    let dir = temp_dir("missing");
+    let out = dir.path().join("out");
     let err = input_error(&["run", "no/such/scenario.toml", "--out", out.to_str().unwrap()]);
     assert!(err.contains("no/such/scenario.toml"), "{err}");
     assert!(!out.exists(), "--out was created for a scenario that does not load");
@@ -428,10 +458,10 @@ fn run_missing_scenario_exits_2() {
 /// A sampled-data run reports its controller steps, not solver figures it does not have.
 #[test]
 fn sampled_summary_reports_controller_steps() {
-    let dir = TempDir::new("sampled-summary");
-    let o = quell(&["run", "--no-plots", "--sample-time", "0.001", "--out", dir.str()]);
+    let dir = temp_dir("sampled-summary");
+    let o = quell(&["run", "--no-plots", "--sample-time", "0.001", "--out", dir.path().to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let s = read_json(&dir.join("summary.json"));
+    let s = read_json(&dir.path().join("summary.json"));
     assert_eq!(s["stats"]["loop"], "sampled", "{s}");
     // 100 s at 1 ms: samples k = 0, …, 100,000.
     assert_eq!(s["stats"]["controller_steps"], 100_001, "{s}");
@@ -474,15 +504,15 @@ fn every_example_runs() {
     assert!(files.len() >= 5, "examples/: {files:?}");
     for file in &files {
         let name = file.file_stem().unwrap().to_string_lossy().into_owned();
-        let dir = TempDir::new(&format!("example-{name}"));
+        let dir = temp_dir(&format!("example-{name}"));
         let path = file.to_str().unwrap();
 
         let d = quell(&["design", path]);
         assert_eq!(d.status.code(), Some(0), "quell design {name}: {}", stderr(&d));
 
-        let o = quell(&["run", path, "--out", dir.str()]);
+        let o = quell(&["run", path, "--out", dir.path().to_str().unwrap()]);
         assert_eq!(o.status.code(), Some(0), "quell run {name}: {}", stderr(&o));
-        let s = read_json(&dir.join("summary.json"));
+        let s = read_json(&dir.path().join("summary.json"));
         assert_eq!(s["outcome"]["status"], "completed", "{name}: {s}");
         let scenario = Scenario::from_path(file).unwrap();
         let m = scenario.plant.m();
@@ -492,10 +522,10 @@ fn every_example_runs() {
             assert!(e < bound, "{name}: tail max |e{}| = {e}, bound {bound}", i + 1);
         }
         for c in 1..=m {
-            assert!(dir.join(format!("channel{c}.png")).is_file(), "{name}: channel{c}.png missing");
+            assert!(dir.path().join(format!("channel{c}.png")).is_file(), "{name}: channel{c}.png missing");
         }
-        let header = fs::read_to_string(dir.join("signals.csv")).unwrap();
-        let q = read_json(&dir.join("design.json"))["q"].as_u64().unwrap() as usize;
+        let header = fs::read_to_string(dir.path().join("signals.csv")).unwrap();
+        let q = read_json(&dir.path().join("design.json"))["q"].as_u64().unwrap() as usize;
         assert_eq!(header.lines().next(), Some(csv_header(m, q).as_str()), "{name}");
         assert!(leftovers(dir.path()).is_empty(), "{name}: temporary files left");
     }
@@ -508,8 +538,8 @@ fn a_jordan_observer_design_reports_an_infinite_eigenvector_condition() {
     let text = fs::read_to_string(paper()).unwrap();
     let from = "observer_gain = [[-8.0988, 4.4574], [10.6506, -5.0619], [2.7762, -1.1783]]";
     assert!(text.contains(from));
-    let dir = TempDir::new("jordan-observer");
-    let file = dir.join("scenario.toml");
+    let dir = temp_dir("jordan-observer");
+    let file = dir.path().join("scenario.toml");
     fs::write(&file, text.replacen(from, "observer_poles = [-2.0, -2.0, -2.0]", 1)).unwrap();
     let o = quell(&["design", "--json", file.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
@@ -525,10 +555,10 @@ fn run_states_records_x_and_x_hat_and_x_gives_y() {
     // `--states` adds x1..x3, xhat1..xhat3; the recorded x must give the recorded y through the
     // paper's y = C x + Q ω with ω = [sin t, 1 + 2 sin 2t] evaluated here (1e-9: the CSV's
     // shortest round-trip numbers are exact, the rest is rounding of three products).
-    let dir = TempDir::new("run-states");
-    let o = quell(&["run", "--states", "--no-plots", "--out", dir.str()]);
+    let dir = temp_dir("run-states");
+    let o = quell(&["run", "--states", "--no-plots", "--out", dir.path().to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let csv = fs::read_to_string(dir.join("signals.csv")).unwrap();
+    let csv = fs::read_to_string(dir.path().join("signals.csv")).unwrap();
     let mut lines = csv.lines();
     assert_eq!(lines.next().unwrap(), format!("{},x1,x2,x3,xhat1,xhat2,xhat3", csv_header(2, 8)));
     for row in lines {
@@ -553,20 +583,20 @@ fn paper_without_design(dir: &TempDir) -> PathBuf {
     let text = fs::read_to_string(examples_dir().join("paper.toml")).unwrap();
     let start = text.find("[design]").unwrap();
     let end = start + text[start..].find("[reference]").unwrap();
-    let path = dir.join("no-design.toml");
+    let path = dir.path().join("no-design.toml");
     fs::write(&path, format!("{}[design]\n{}", &text[..start], &text[end..])).unwrap();
     path
 }
 
 #[test]
 fn design_auto_writes_a_complete_scenario_that_meets_the_tail_bound() {
-    let dir = TempDir::new("auto");
+    let dir = temp_dir("auto");
     let input = paper_without_design(&dir);
     // Without --auto the missing keys are an input error that names --auto.
-    let o = quell(&["run", input.to_str().unwrap(), "--out", dir.join("x").to_str().unwrap()]);
+    let o = quell(&["run", input.to_str().unwrap(), "--out", dir.path().join("x").to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("--auto"), "{}", stderr(&o));
-    let out = dir.join("auto.toml");
+    let out = dir.path().join("auto.toml");
     let o = quell(&["design", input.to_str().unwrap(), "--auto", "--write", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}{}", stdout(&o), stderr(&o));
     for key in ["design.observer_poles", "design.channel_poles", "design.mu", "design.beta", "verification"] {
@@ -576,7 +606,7 @@ fn design_auto_writes_a_complete_scenario_that_meets_the_tail_bound() {
     // the bound the verification promised: tail max |e_i| ≤ 1 % of the reference's peak (3 and 2).
     let s = Scenario::from_path(&out).unwrap();
     assert_eq!(s.plant, Scenario::from_path(&examples_dir().join("paper.toml")).unwrap().plant);
-    let run_dir = dir.join("run");
+    let run_dir = dir.path().join("run");
     let o = quell(&["run", out.to_str().unwrap(), "--out", run_dir.to_str().unwrap(), "--no-plots"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let summary = read_json(&run_dir.join("summary.json"));
@@ -603,13 +633,13 @@ fn design_auto_writes_a_complete_scenario_that_meets_the_tail_bound() {
 fn design_warns_of_a_pole_repeated_beyond_rank_c() {
     // Three copies of −5 for the observer of a plant with two outputs: A − LC needs a Jordan
     // block (rank C = 2 eigenvectors at most for one eigenvalue), so the gain is fragile.
-    let dir = TempDir::new("fragile");
+    let dir = temp_dir("fragile");
     let text = fs::read_to_string(paper()).unwrap().replacen(
         "observer_gain = [[-8.0988, 4.4574], [10.6506, -5.0619], [2.7762, -1.1783]]",
         "observer_poles = [-5.0, -5.0, -5.0]",
         1,
     );
-    let file = dir.join("jordan.toml");
+    let file = dir.path().join("jordan.toml");
     fs::write(&file, text).unwrap();
     let o = quell(&["design", file.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0));

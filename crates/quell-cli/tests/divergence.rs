@@ -18,8 +18,9 @@ fn run_quell(args: &[&str], out: &std::path::Path, scenario: &std::path::Path) -
 #[test]
 fn diverging_sampled_run_exits_1_and_keeps_the_files() {
     // The paper's example sampled at T_s = 0.5 s is unstable: x[2] passes 1e9 at t ≈ 14.5 s.
-    let dir = scratch_dir("diverge");
-    let scenario = paper_with(&dir, &[("output_step = 0.1 ", "output_step = 0.5 ")]);
+    let dir_tmp = scratch_dir("diverge");
+    let dir = dir_tmp.path();
+    let scenario = paper_with(dir, &[("output_step = 0.1 ", "output_step = 0.5 ")]);
     let out = dir.join("out");
     let (output, stderr) = run_quell(&["run", "--no-plots", "--sample-time", "0.5", "--out"], &out, &scenario);
     assert_eq!(output.status.code(), Some(1), "stderr: {stderr}");
@@ -34,15 +35,15 @@ fn diverging_sampled_run_exits_1_and_keeps_the_files() {
     let csv = std::fs::read_to_string(out.join("signals.csv")).unwrap_or_default();
     let last: f64 = csv.lines().last().and_then(|l| l.split(',').next()).and_then(|s| s.parse().ok()).unwrap_or(-1.0);
     assert!(last < t && last >= t - 0.5 - 1e-9, "last row t = {last}, divergence at {t}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn step_size_underflow_exits_1_with_the_time() {
     // Tolerances no arithmetic can meet: the error test fails at every step size until the step
     // underflows, which must end the run (not loop) with the time.
-    let dir = scratch_dir("underflow");
-    let scenario = paper_with(&dir, &[("rtol = 1e-9", "rtol = 1e-300"), ("atol = 1e-9", "atol = 1e-300")]);
+    let dir_tmp = scratch_dir("underflow");
+    let dir = dir_tmp.path();
+    let scenario = paper_with(dir, &[("rtol = 1e-9", "rtol = 1e-300"), ("atol = 1e-9", "atol = 1e-300")]);
     let out = dir.join("out");
     let (output, stderr) = run_quell(&["run", "--no-plots", "--out"], &out, &scenario);
     assert_eq!(output.status.code(), Some(1), "stderr: {stderr}");
@@ -50,14 +51,14 @@ fn step_size_underflow_exits_1_with_the_time() {
     assert!(t >= 0.0, "t = {t}");
     let summary = check_outputs(&out);
     assert_eq!(summary["outcome"]["status"], "step_size_too_small", "{summary}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn absurd_sample_times_are_input_errors_not_crashes() {
     // 1e-300 s: too many controller steps. With 1e300 s of delay at 1 ms: a delay line of 1e303
     // rows. Both were panics (slice index, allocation) before; now exit 2 with the key.
-    let dir = scratch_dir("absurd");
+    let dir_tmp = scratch_dir("absurd");
+    let dir = dir_tmp.path();
     let quell = |args: &[&str]| {
         Command::new(env!("CARGO_BIN_EXE_quell")).args(args).arg("--out").arg(dir.join("out")).output().expect("run")
     };
@@ -66,10 +67,9 @@ fn absurd_sample_times_are_input_errors_not_crashes() {
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(stderr.starts_with("error: simulation.sample_time (--sample-time): "), "{stderr}");
 
-    let scenario = paper_with(&dir, &[("delays = [1.0, 3.0]", "delays = [1e300, 3.0]")]);
+    let scenario = paper_with(dir, &[("delays = [1.0, 3.0]", "delays = [1e300, 3.0]")]);
     let out = quell(&["run", "--no-plots", "--sample-time", "0.001", scenario.to_str().unwrap_or_default()]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("a delay line holds at most"), "{stderr}");
-    let _ = std::fs::remove_dir_all(&dir);
 }

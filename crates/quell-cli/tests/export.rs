@@ -1,7 +1,7 @@
 //! `quell export`: the files it writes compile and run as C99, and bad input exits with 2 naming
 //! the flag or key. gcc is required.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn quell(args: &[&str]) -> Output {
@@ -16,15 +16,14 @@ fn example(name: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples").join(name).display().to_string()
 }
 
-fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("quell-cli-export-{}-{tag}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
+fn temp_dir(tag: &str) -> tempfile::TempDir {
+    tempfile::Builder::new().prefix(&format!("quell-cli-export-{tag}-")).tempdir().unwrap()
 }
 
 #[test]
 fn export_writes_a_controller_that_compiles_and_runs() {
-    let dir = temp_dir("ok");
+    let dir_tmp = temp_dir("ok");
+    let dir = dir_tmp.path();
     let out = dir.display().to_string();
     let o = quell(&["export", &example("paper.toml"), "--sample-time", "0.001", "--out", &out, "--prefix", "arm"]);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -34,7 +33,7 @@ fn export_writes_a_controller_that_compiles_and_runs() {
     assert!(header.contains("scenario \"paper-example\"") && header.contains("#define ARM_SAMPLE_TIME 0.001"));
     // No temporary file is left behind.
     let mut names: Vec<String> =
-        std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
     names.sort();
     assert_eq!(names, ["arm_controller.c", "arm_controller.h"]);
     // Same input, same bytes.
@@ -74,29 +73,29 @@ int main(void)
             "-o",
             "main",
         ])
-        .current_dir(&dir)
+        .current_dir(dir)
         .output()
         .expect("gcc is required for this test");
     assert!(gcc.status.success(), "{}", String::from_utf8_lossy(&gcc.stderr));
     assert!(Command::new(dir.join("main")).status().unwrap().success());
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn f32_export_uses_float() {
-    let dir = temp_dir("f32");
+    let dir_tmp = temp_dir("f32");
+    let dir = dir_tmp.path();
     let out = dir.display().to_string();
     // The sample time comes from the scenario's simulation.sample_time.
     let o = quell(&["export", &example("paper-sampled.toml"), "--out", &out, "--precision", "f32"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let header = std::fs::read_to_string(dir.join("quell_controller.h")).unwrap();
     assert!(header.contains("const float y[QUELL_M]") && header.contains("--precision f32"));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn bad_export_input_exits_2_naming_the_flag() {
-    let dir = temp_dir("bad");
+    let dir_tmp = temp_dir("bad");
+    let dir = dir_tmp.path().join("out");
     let out = dir.display().to_string();
     let paper = example("paper.toml");
     for (args, message) in [
@@ -123,7 +122,8 @@ fn export_fmu_writes_one_archive_or_fails_with_1() {
     // The FMU's content is validated and simulated by FMPy in crates/quell-py/tests/test_fmu.py;
     // here: the CLI writes NAME.fmu (a zip holding the model description, the sources and the
     // binary for this platform) and a compiler that cannot run is a failed run that writes nothing.
-    let dir = temp_dir("fmu");
+    let dir_tmp = temp_dir("fmu");
+    let dir = dir_tmp.path();
     let out = dir.display().to_string();
     let three = example("three-channel.toml");
     let o = quell(&["export", &three, "--sample-time", "0.05", "--out", &out, "--prefix", "plant3", "--fmu"]);
@@ -137,7 +137,8 @@ fn export_fmu_writes_one_archive_or_fails_with_1() {
     {
         assert!(text.contains(name), "{name} is missing from the archive");
     }
-    let bad = temp_dir("fmu-bad");
+    let bad_tmp = temp_dir("fmu-bad");
+    let bad = bad_tmp.path().join("out");
     let bad_out = bad.display().to_string();
     let o = quell(&[
         "export",
@@ -166,7 +167,8 @@ fn the_exported_c_in_the_loop_gives_the_signals_of_quell_run() {
     use quell::export::Precision;
     use quell::sim::{simulate_sampled_with, SampledSettings};
     let code_dir = c_harness::TempDir::new("cli-loop");
-    let run_dir = temp_dir("run");
+    let run_dir_tmp = temp_dir("run");
+    let run_dir = run_dir_tmp.path();
     let (code, run) = (code_dir.0.display().to_string(), run_dir.display().to_string());
     let paper = example("paper.toml");
     let o = quell(&["export", &paper, "--sample-time", "0.001", "--out", &code]);
@@ -203,5 +205,4 @@ fn the_exported_c_in_the_loop_gives_the_signals_of_quell_run() {
         let dev = rows.iter().zip(&ours).fold(0.0f64, |p, (a, b)| p.max((a[col] - b[col]).abs()));
         assert!(dev <= 1e-12 * peak, "column {col}: deviation {dev:e}, peak {peak}");
     }
-    let _ = std::fs::remove_dir_all(&run_dir);
 }

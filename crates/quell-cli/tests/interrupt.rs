@@ -17,8 +17,9 @@ fn sigint(pid: u32) {
 /// `signals` (e.g. `-INT`), 20 ms apart, and checks that it stopped at a sample with exit status 1
 /// and complete files.
 fn interrupt_long_run(tag: &str, signals: &[&str]) {
-    let dir = scratch_dir(tag);
-    let scenario = paper_with(&dir, &[("t_end = 100.0", "t_end = 100000.0")]);
+    let dir_tmp = scratch_dir(tag);
+    let dir = dir_tmp.path();
+    let scenario = paper_with(dir, &[("t_end = 100.0", "t_end = 100000.0")]);
     let out = dir.join("out");
     // The first signal must reach the run after it has recorded a sample. On a loaded machine the
     // process may not get there within the first wait; the run then (rightly) quits on a second
@@ -59,7 +60,6 @@ fn interrupt_long_run(tag: &str, signals: &[&str]) {
     assert_eq!(summary["outcome"]["status"], "interrupted", "{summary}");
     let t_summary = summary["outcome"]["t"].as_f64().expect("outcome.t");
     assert!((t_summary - t).abs() < 1e-2, "summary t = {t_summary}, stderr t = {t}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -77,9 +77,10 @@ fn sigterm_is_handled_like_ctrl_c() {
 fn second_ctrl_c_quits_a_run_stuck_between_samples() {
     // A disturbance at 1e300 rad/s makes the solver crawl (steps ~1e-10 s), so the next recorded
     // sample is hours away and the first Ctrl-C cannot be honoured there; the second one quits.
-    let dir = scratch_dir("interrupt-twice");
+    let dir_tmp = scratch_dir("interrupt-twice");
+    let dir = dir_tmp.path();
     let scenario =
-        paper_with(&dir, &[("{ amplitude = 1.0, frequency = 1.0 }", "{ amplitude = 1.0, frequency = 1e300 }")]);
+        paper_with(dir, &[("{ amplitude = 1.0, frequency = 1.0 }", "{ amplitude = 1.0, frequency = 1e300 }")]);
     let mut child = Command::new(env!("CARGO_BIN_EXE_quell"))
         .arg("run")
         .arg(&scenario)
@@ -106,5 +107,4 @@ fn second_ctrl_c_quits_a_run_stuck_between_samples() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("interrupted twice"), "{stderr}");
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -2,7 +2,7 @@
 //! bad study files and bad merges, Ctrl-C leaves complete rows marked partial.
 
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::Duration;
 
@@ -14,11 +14,8 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-fn scratch(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("quell-sweep-test-{}-{tag}", std::process::id()));
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).unwrap();
-    dir
+fn scratch(tag: &str) -> tempfile::TempDir {
+    tempfile::Builder::new().prefix(&format!("quell-sweep-test-{tag}-")).tempdir().unwrap()
 }
 
 fn write_study(dir: &Path, name: &str, text: &str) -> String {
@@ -54,9 +51,10 @@ fn rows_without_wall_time(dir: &Path) -> Vec<String> {
 
 #[test]
 fn sharded_and_merged_equals_unsharded() {
-    let dir = scratch("shards");
-    paper_into(&dir);
-    let study = write_study(&dir, "study.toml", STUDY);
+    let dir_tmp = scratch("shards");
+    let dir = dir_tmp.path();
+    paper_into(dir);
+    let study = write_study(dir, "study.toml", STUDY);
     let out = |name: &str| dir.join(name).display().to_string();
     let o = quell(&["sweep", &study, "--out", &out("all"), "--jobs", "2"]);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -98,19 +96,19 @@ fn sharded_and_merged_equals_unsharded() {
     let o = quell(&["sweep", "--merge", &out("s0"), &out("s1"), "--out", &out("bad")]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("shard 2/3 is missing"), "{}", stderr(&o));
-    let other = write_study(&dir, "other.toml", &STUDY.replace("seed = 5", "seed = 6"));
+    let other = write_study(dir, "other.toml", &STUDY.replace("seed = 5", "seed = 6"));
     let o = quell(&["sweep", &other, "--shard", "1/3", "--out", &out("o1"), "--no-plots"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let o = quell(&["sweep", "--merge", &out("s0"), &out("o1"), &out("s2"), "--out", &out("bad")]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("comes from a different study than"), "{}", stderr(&o));
-    let _ = fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn bad_study_files_exit_2_naming_the_key() {
-    let dir = scratch("bad");
-    paper_into(&dir);
+    let dir_tmp = scratch("bad");
+    let dir = dir_tmp.path();
+    paper_into(dir);
     let cases: &[(&str, &[&str], &str)] = &[
         ("[grid]\n\"design.nu\" = [1.0]\n", &[], "grid.\"design.nu\": design.nu is not a value of the scenario"),
         (
@@ -131,7 +129,7 @@ fn bad_study_files_exit_2_naming_the_key() {
         ),
     ];
     for (k, (text, flags, expected)) in cases.iter().enumerate() {
-        let study = write_study(&dir, &format!("s{k}.toml"), text);
+        let study = write_study(dir, &format!("s{k}.toml"), text);
         let out = dir.join(format!("o{k}")).display().to_string();
         let mut args = vec!["sweep", study.as_str(), "--out", out.as_str()];
         args.extend_from_slice(flags);
@@ -140,15 +138,15 @@ fn bad_study_files_exit_2_naming_the_key() {
         assert!(stderr(&o).contains(expected), "{text}\nexpected: {expected}\ngot: {}", stderr(&o));
         assert!(!dir.join(format!("o{k}")).exists(), "nothing is written for a bad study");
     }
-    let _ = fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn ctrl_c_writes_the_rows_done_marked_partial() {
-    let dir = scratch("interrupt");
+    let dir_tmp = scratch("interrupt");
+    let dir = dir_tmp.path();
     // 4,000 runs of 100 s: minutes of work, interrupted after a second.
     let study = write_study(
-        &dir,
+        dir,
         "study.toml",
         "[simulation]\nrtol = 1e-6\natol = 1e-6\n[monte_carlo]\nruns = 4000\n\"plant.x0\" = { normal = 0.1 }\n",
     );
@@ -178,14 +176,14 @@ fn ctrl_c_writes_the_rows_done_marked_partial() {
         serde_json::from_str(&fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["partial"], true);
     assert_eq!(summary["runs_done"].as_u64().unwrap() as usize, lines.len() - 2);
-    let _ = fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn tune_writes_the_chosen_mu_and_each_curve() {
-    let dir = scratch("tune");
+    let dir_tmp = scratch("tune");
+    let dir = dir_tmp.path();
     let text = "[simulation]\nt_end = 40.0\nrtol = 1e-6\natol = 1e-6\n[tune]\nobjective = \"tail_rms_e\"\nmu = [2.0, 200.0]\nmax_u = 22.0\npoints = 5\nrefine = 2\n";
-    let study = write_study(&dir, "tune.toml", text);
+    let study = write_study(dir, "tune.toml", text);
     let out = dir.join("out").display().to_string();
     let o = quell(&["tune", &study, "--out", &out]);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -200,11 +198,11 @@ fn tune_writes_the_chosen_mu_and_each_curve() {
     assert!(dir.join("out/tune.png").is_file() && dir.join("out/tune.svg").is_file());
 
     // No [tune], and a limit no μ meets: exit code 2, naming the key.
-    let o = quell(&["tune", &write_study(&dir, "none.toml", ""), "--out", &out]);
+    let o = quell(&["tune", &write_study(dir, "none.toml", ""), "--out", &out]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("tune: missing"), "{}", stderr(&o));
     let o =
-        quell(&["tune", &write_study(&dir, "tight.toml", &text.replace("max_u = 22.0", "max_u = 1.0")), "--out", &out]);
+        quell(&["tune", &write_study(dir, "tight.toml", &text.replace("max_u = 22.0", "max_u = 1.0")), "--out", &out]);
     assert_eq!(o.status.code(), Some(2));
     assert!(
         stderr(&o)
@@ -212,5 +210,4 @@ fn tune_writes_the_chosen_mu_and_each_curve() {
         "{}",
         stderr(&o)
     );
-    let _ = fs::remove_dir_all(&dir);
 }

@@ -39,6 +39,17 @@ fn frozen_array(py: Python<'_>, data: &[f64], shape: &[usize]) -> PyResult<Py<Py
 }
 
 impl PySimResult {
+    /// A run of `scenario` with `design`, its convergence diagnostics computed.
+    pub fn from_run(
+        py: Python<'_>,
+        scenario: &quell::Scenario,
+        design: &quell::Design,
+        r: SimResult,
+    ) -> PyResult<Self> {
+        let diagnostics = quell::diagnostics::diagnose(design, &scenario.reference, &scenario.disturbance, &r);
+        PySimResult::new(py, r, serde_json::to_string(&diagnostics).unwrap_or_default())
+    }
+
     fn new(py: Python<'_>, r: SimResult, diagnostics: String) -> PyResult<Self> {
         let (k, m, q, n) = (r.len(), r.m, r.q, r.n);
         let arrays = [
@@ -324,9 +335,7 @@ pub fn simulate(
     }
     let result = result.map_err(|e| raise(py, Kind::Scenario)(&e))?;
     let outcome = result.outcome.clone().unwrap_or(Outcome::Completed);
-    let diagnostics = quell::diagnostics::diagnose(&design, &scn.reference, &scn.disturbance, &result);
-    let diagnostics = serde_json::to_string(&diagnostics).unwrap_or_default();
-    let result = Py::new(py, PySimResult::new(py, result, diagnostics)?)?;
+    let result = Py::new(py, PySimResult::from_run(py, scn, &design, result)?)?;
     if !check {
         return Ok(result);
     }

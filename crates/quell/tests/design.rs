@@ -577,3 +577,73 @@ fn overflowing_observer_gain_names_the_gain_not_the_poles() {
     assert!(text.starts_with("design.observer_gain: the eigenvalues of A − LC could not be computed"), "{text}");
     assert!(text.contains("give a smaller design.observer_gain") && !text.contains("perturb"), "{text}");
 }
+
+/// A SISO integrator chain of n states (companion form of sⁿ): y = x₁, u enters the last state.
+fn chain_plant(n: usize) -> Plant {
+    let A = DMatrix::from_fn(n, n, |r, c| if c == r + 1 { 1.0 } else { 0.0 });
+    let B = DMatrix::from_fn(n, 1, |r, _| if r + 1 == n { 1.0 } else { 0.0 });
+    let C = DMatrix::from_fn(1, n, |_, c| if c == 0 { 1.0 } else { 0.0 });
+    Plant::new(A, B, C, DMatrix::zeros(n, 0), DMatrix::zeros(1, 0), vec![0.0], None).unwrap()
+}
+
+#[test]
+fn chain_observer_with_a_large_gain_is_designed_and_reported_fragile() {
+    // The 12-state chain's observer with poles −2, −2.7, …, −9.7 has ‖A − LC‖_F ≈ 1.2e9 (L holds the
+    // coefficients of ∏(s − p), up to ∏|p| ≈ 1.2e9), so the rounding margin √ε·‖A − LC‖_F ≈ 18
+    // exceeds every decay rate: it was refused as "not Hurwitz (eigenvalues −9.7, …, −2.0)". The
+    // eigenvalues, refined in twice the working precision, are the requested poles: accepted.
+    // Independent side: the requested poles themselves (1e-6 relative: place's verified bound) and
+    // the warning's κ₂, which must exceed FRAGILE_CONDITION = 1e8 (the eigenvectors of a companion
+    // matrix are the columns of a Vandermonde matrix in the poles, κ₂ ≈ 1e15 here).
+    let n = 12;
+    let plant = chain_plant(n);
+    let poles: Vec<Complex<f64>> = (0..n).map(|j| re(-2.0 - 0.7 * j as f64)).collect();
+    let spec = quell::DesignSpec {
+        observer: ObserverChoice::Poles(poles.clone()),
+        channel_poles: vec![(0..n).map(|j| re(-1.0 - 0.5 * j as f64)).collect()],
+        reference_filter_poles: vec![vec![re(-1.0)]],
+        disturbance_filter_poles: vec![],
+        mu: vec![1.0],
+        beta: 1.0,
+        relative_degrees: None,
+    };
+    let d = Design::new(&plant, &spec).unwrap_or_else(|e| panic!("{e}"));
+    assert!(multiset_mismatch(&poles, d.observer_eigenvalues()) <= 1e-6 * 9.7, "{:?}", d.observer_eigenvalues());
+    let warnings = quell::design::warnings(&d, &spec);
+    let w = warnings.iter().find(|w| w.key == "design.observer_poles").expect("a fragility warning");
+    assert!(w.eigenvector_condition > 1e8, "{w:?}");
+    assert!(w.message.contains("κ₂"), "{}", w.message);
+}
+
+#[test]
+fn an_observer_that_cannot_be_confirmed_hurwitz_says_so_with_its_figures() {
+    // A − LC = [[−l₁, 1e6, 0], [−l₂, 0, 1e6], [−l₃, 0, 0]] with l chosen so that its characteristic
+    // polynomial is (s + 1e-3)³ (closed form: l = (3a, 3a²/1e6, a³/1e12), a = 1e-3): a triple,
+    // defective eigenvalue at −1e-3 inside the rounding margin √ε·‖A − LC‖_F ≈ 2e-2, which Newton
+    // refinement cannot settle (a Jordan block). The error must not claim "not Hurwitz" while
+    // listing negative eigenvalues: it names the margin, the eigenvalues in it and κ₂ (∞ here).
+    let A = DMatrix::from_row_slice(3, 3, &[0.0, 1e6, 0.0, 0.0, 0.0, 1e6, 0.0, 0.0, 0.0]);
+    let B = DMatrix::from_row_slice(3, 1, &[0.0, 0.0, 1.0]);
+    let C = DMatrix::from_row_slice(1, 3, &[1.0, 0.0, 0.0]);
+    let plant = Plant::new(A, B, C, DMatrix::zeros(3, 0), DMatrix::zeros(1, 0), vec![0.0], None).unwrap();
+    let a: f64 = 1e-3;
+    let L = DMatrix::from_row_slice(3, 1, &[3.0 * a, 3.0 * a * a / 1e6, a.powi(3) / 1e12]);
+    let spec = quell::DesignSpec {
+        observer: ObserverChoice::Gain(L),
+        channel_poles: vec![vec![re(-1e-3), re(-2e-3), re(-3e-3)]],
+        reference_filter_poles: vec![vec![re(-1e-3)]],
+        disturbance_filter_poles: vec![],
+        mu: vec![1.0],
+        beta: 1e3,
+        relative_degrees: None,
+    };
+    let e = expect_err(&plant, &spec);
+    let DesignError::ObserverUnconfirmed { key, eigenvalues, in_margin, margin, kappa } = &e else { panic!("{e}") };
+    assert_eq!(*key, "design.observer_gain");
+    assert!(eigenvalues.iter().all(|z| z.re < 0.0), "{e}");
+    assert!(!in_margin.is_empty() && (*margin / (f64::EPSILON.sqrt() * 2f64.sqrt() * 1e6) - 1.0).abs() < 1e-3, "{e}");
+    assert!(*kappa > 1e8, "{e}");
+    let text = e.to_string();
+    eprintln!("{text}");
+    assert!(text.contains("could not be confirmed Hurwitz") && !text.contains("not Hurwitz ("), "{text}");
+}

@@ -4,12 +4,9 @@
 
 use std::path::{Path, PathBuf};
 
-/// A fresh, empty directory under the system's temporary directory.
-pub fn scratch_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("quell-test-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("create scratch dir");
-    dir
+/// A fresh, empty directory under the system's temporary directory, removed when dropped.
+pub fn scratch_dir(name: &str) -> tempfile::TempDir {
+    tempfile::Builder::new().prefix(&format!("quell-test-{name}-")).tempdir().expect("create scratch dir")
 }
 
 /// `examples/paper.toml` with textual replacements, written to `dir/scenario.toml`.

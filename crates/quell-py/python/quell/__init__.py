@@ -13,6 +13,7 @@ docstrings refer to that paper.
 """
 
 from ._errors import DesignError, ExportError, QuellError, ScenarioError, SimulationError
+from ._study import StudyResult
 from ._quell import (
     Controller,
     Design,
@@ -46,6 +47,7 @@ __all__ = [
     "SimResult",
     "SimulationError",
     "Study",
+    "StudyResult",
     "__version__",
     "auto_design",
     "design",

@@ -75,12 +75,16 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None):
     return fig
 
 
-def runs_frame(text):
-    """runs.csv's text (quell.sweep) as a DataFrame, read as `pandas.read_csv(path, comment="#")` reads the file."""
+def runs_frame(text, drawn=None):
+    """runs.csv's text (quell.sweep) as a DataFrame, read as `pandas.read_csv(path, comment="#")` reads
+    the file, then the drawn values (a dict of columns) after its columns."""
     try:
         import pandas as pd
     except ImportError as e:
         raise ImportError("quell.sweep needs pandas: pip install pandas") from e
     import io
 
-    return pd.read_csv(io.StringIO(text), comment="#")
+    frame = pd.read_csv(io.StringIO(text), comment="#")
+    for name, values in (drawn or {}).items():
+        frame[name] = values
+    return frame

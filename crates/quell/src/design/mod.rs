@@ -134,8 +134,16 @@ pub enum DesignError {
     ObserverGainNonFinite { row: usize, col: usize, value: f64 },
     #[error("design.observer_gain: expected a {n}×{m} matrix, found {rows}×{cols}")]
     ObserverGainShape { n: usize, m: usize, rows: usize, cols: usize },
-    #[error("{key}: A − LC is not Hurwitz (eigenvalues {}); {}", fmt_eigs(.eigenvalues), if *.key == "design.observer_gain" { "choose L with a stable observer, or give design.observer_poles instead" } else { "the placed poles lie within the margin √ε·‖A − LC‖_F of the imaginary axis for this plant; choose observer poles with larger decay rates" })]
+    #[error("{key}: A − LC is not Hurwitz (eigenvalues {}); {}", fmt_eigs(.eigenvalues), if *.key == "design.observer_gain" { "choose L with a stable observer, or give design.observer_poles instead" } else { "choose observer poles with larger decay rates" })]
     ObserverUnstable { key: &'static str, eigenvalues: Vec<Complex<f64>> },
+    #[error("{key}: A − LC could not be confirmed Hurwitz: its eigenvalues computed as {} include {} within the rounding margin √ε·‖A − LC‖_F = {} of the imaginary axis, and refining them in twice the working precision did not settle their sign (eigenvector condition number κ₂ = {}: a relative error ε in A − LC can move its poles by about κ₂·ε·‖A − LC‖); {}", fmt_eigs(.eigenvalues), fmt_eigs(.in_margin), fmt_number(*.margin), fmt_number(*.kappa), if *.key == "design.observer_gain" { "choose L with a better-conditioned stable observer, or give design.observer_poles instead" } else { "choose observer poles with larger decay rates, distinct and not far faster than the plant" })]
+    ObserverUnconfirmed {
+        key: &'static str,
+        eigenvalues: Vec<Complex<f64>>,
+        in_margin: Vec<Complex<f64>>,
+        margin: f64,
+        kappa: f64,
+    },
     #[error("plant.C: output {} is reached by no input: c_i A^(l-1) B = 0 for every l ≤ n (largest cosine between c_i A^(l-1) and a column of B: {largest:.1e}, below τ = {tol:.0e}), so the plant cannot be decoupled; check row {channel} of plant.C", .channel + 1, tol = TOL)]
     NoRelativeDegree { channel: usize, largest: f64 },
     #[error("design.channel_poles[{channel}]: channel {} has relative degree {sigma}, so it needs {sigma} pole{}; got {got}", .channel + 1, if *.sigma == 1 { "" } else { "s" })]
@@ -501,10 +509,34 @@ fn observer(plant: &Plant, choice: &ObserverChoice) -> Result<(DMatrix<f64>, Vec
     };
     let A_o = A - &L * C;
     let eigs = eigenvalues(&A_o).map_err(|e| eigen_error(key, "A − LC", e))?;
-    if !unstable(&eigs, A_o.norm()).is_empty() {
+    check_observer_hurwitz(plant, key, &L, &A_o, eigs.clone())?;
+    Ok((L, eigs))
+}
+
+/// A − LC must be Hurwitz. Every computed eigenvalue left of the rounding margin −√ε·‖A − LC‖_F
+/// ([`unstable`]) passes at once. Otherwise the margin, which grows with ‖A − LC‖ (≈ 15 for the
+/// observer of a 12-state chain with poles −2 … −9.7, whose ‖A − LC‖_F ≈ 1e9), decides nothing by
+/// itself: each eigenvalue is refined in twice the working precision
+/// ([`place::refined_left_half_plane`]) and judged by its refined value and error. A computed
+/// eigenvalue with a real part ≥ 0 is [`DesignError::ObserverUnstable`]; one whose sign refining
+/// cannot settle is [`DesignError::ObserverUnconfirmed`], with κ₂ of the eigenvectors.
+fn check_observer_hurwitz(
+    plant: &Plant,
+    key: &'static str,
+    L: &DMatrix<f64>,
+    A_o: &DMatrix<f64>,
+    eigs: Vec<Complex<f64>>,
+) -> Result<(), DesignError> {
+    let in_margin = unstable(&eigs, A_o.norm());
+    if in_margin.is_empty() || place::refined_left_half_plane(A_o, &eigs) {
+        return Ok(());
+    }
+    if eigs.iter().any(|z| z.re >= 0.0) {
         return Err(DesignError::ObserverUnstable { key, eigenvalues: eigs });
     }
-    Ok((L, eigs))
+    let kappa = place::closed_loop_condition(&plant.A.transpose(), &plant.C.transpose(), &L.transpose());
+    let margin = f64::EPSILON.sqrt() * A_o.norm().max(1.0);
+    Err(DesignError::ObserverUnconfirmed { key, eigenvalues: eigs, in_margin, margin, kappa })
 }
 
 /// The zero dynamics of the decoupled loop (Proposition 1): A − BK places the Σσ_i channel poles

@@ -630,7 +630,7 @@ fn refined_error(M: &DMatrix<f64>, mut free: Vec<C64>, poles: &[C64]) -> f64 {
         let Some((lambda, step)) = take_nearest(&mut free, p).and_then(|l| refine(&Mb, l)) else {
             return f64::INFINITY;
         };
-        if refined.iter().any(|&(mu, s)| (mu - lambda).norm() <= 2.0 * (s + step) + 4.0 * f64::EPSILON * mu.norm()) {
+        if coincides(&refined, lambda, step) {
             return f64::INFINITY;
         }
         refined.push((lambda, step));
@@ -641,6 +641,30 @@ fn refined_error(M: &DMatrix<f64>, mut free: Vec<C64>, poles: &[C64]) -> f64 {
     } else {
         worst
     }
+}
+
+/// True when every eigenvalue of M (`eigs`, computed by [`crate::linalg::eigenvalues`]), refined
+/// as in [`refined_error`], converges to a distinct value λ with Re λ + |last step| < 0: M is
+/// Hurwitz to the accuracy with which the formed M defines its eigenvalues, whatever ‖M‖. False
+/// when a refinement does not converge (e.g. a Jordan block) or two end at the same eigenvalue.
+pub(crate) fn refined_left_half_plane(M: &DMatrix<f64>, eigs: &[C64]) -> bool {
+    let Mb = crate::linalg::balance(M);
+    let mut refined: Vec<(C64, f64)> = Vec::with_capacity(eigs.len());
+    for &l in eigs {
+        let Some((lambda, step)) = refine(&Mb, l) else {
+            return false;
+        };
+        if coincides(&refined, lambda, step) || lambda.re + step >= 0.0 {
+            return false;
+        }
+        refined.push((lambda, step));
+    }
+    true
+}
+
+/// True when λ (refined, last step `step`) is, within the steps, one already in `refined`.
+fn coincides(refined: &[(C64, f64)], lambda: C64, step: f64) -> bool {
+    refined.iter().any(|&(mu, s)| (mu - lambda).norm() <= 2.0 * (s + step) + 4.0 * f64::EPSILON * mu.norm())
 }
 
 /// Newton's method for the eigenpair of M near λ₀ (see [`refined_error`]): returns the refined λ

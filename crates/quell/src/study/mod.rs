@@ -68,14 +68,15 @@ pub struct GridAxis {
 pub enum Law {
     /// x (1 + r ξ).
     Relative(f64),
+    /// x (1 + r υ): within ±r·|x| of x, the sign kept for r < 1 (a delay stays a delay).
+    RelativeUniform(f64),
     /// x + σ ξ.
     Normal(f64),
     /// x + a υ.
     Uniform(f64),
 }
 
-const LAWS: &str =
-    "{ relative = r } (x·(1 + r·ξ), ξ ~ N(0, 1)), { normal = σ } (x + σ·ξ) or { uniform = a } (x + U(−a, a))";
+const LAWS: &str = "{ relative = r } (x·(1 + r·ξ), ξ ~ N(0, 1)), { relative_uniform = r } (x·(1 + U(−r, r))), { normal = σ } (x + σ·ξ) or { uniform = a } (x + U(−a, a))";
 
 /// A Monte Carlo perturbation of one scenario value.
 #[derive(Debug, Clone, PartialEq)]
@@ -142,6 +143,9 @@ pub struct Study {
     /// Channels m of the scenario.
     pub m: usize,
     fingerprint: u64,
+    /// The study as one self-contained document: `scenario` the scenario table, `[simulation]`'s
+    /// overrides applied to it.
+    document: toml::Table,
     /// Per grid point with Monte Carlo draws, its nominal run (`None`: sampled-data, or it did not
     /// complete), carried out at the point's first [`Study::spec`].
     nominal: Vec<OnceLock<Option<Nominal>>>,
@@ -278,11 +282,17 @@ impl Study {
                 format!("{}{} (the study file is not valid TOML)", at.unwrap_or_default(), e.message().trim_end()),
             )
         })?;
-        unknown_keys("", &doc, TOP_KEYS)?;
+        Study::from_table(&doc, dir)
+    }
+
+    /// Checks a parsed study document (what [`Study::from_toml`] does after parsing). Its
+    /// `scenario` is a file's path (looked up in `dir`) or the scenario document itself, a table.
+    pub fn from_table(doc: &toml::Table, dir: Option<&Path>) -> Result<Study, StudyError> {
+        unknown_keys("", doc, TOP_KEYS)?;
 
         // The scenario and the study's [simulation] overrides.
-        let (scenario_text, scenario_source) = match doc.get("scenario") {
-            None => (PAPER_EXAMPLE.to_string(), "the paper's example".to_string()),
+        let (mut base, scenario_source): (toml::Table, String) = match doc.get("scenario") {
+            None => (PAPER_EXAMPLE.parse().expect("the paper's example is valid TOML"), "the paper's example".into()),
             Some(toml::Value::String(s)) => {
                 let p = dir.map_or_else(|| PathBuf::from(s), |d| d.join(s));
                 let text = crate::settings::read_input(&p).map_err(|e| {
@@ -294,15 +304,19 @@ impl Study {
                         ),
                     )
                 })?;
-                (text, s.clone())
+                let base = text.parse().map_err(|e: toml::de::Error| {
+                    err("scenario", format!("{s} is not valid TOML: {}", e.message().trim_end()))
+                })?;
+                (base, s.clone())
             }
+            Some(toml::Value::Table(t)) => (t.clone(), "the study's scenario".into()),
             Some(v) => {
-                return Err(err("scenario", format!("expected the scenario file's path (a string), found {}", kind(v))))
+                return Err(err(
+                    "scenario",
+                    format!("expected the scenario file's path (a string) or a scenario table, found {}", kind(v)),
+                ))
             }
         };
-        let mut base: toml::Table = scenario_text.parse().map_err(|e: toml::de::Error| {
-            err("scenario", format!("{scenario_source} is not valid TOML: {}", e.message().trim_end()))
-        })?;
         let in_scenario = |e: crate::ScenarioError| err("scenario", format!("{scenario_source}: {e}"));
         if let Some(sim) = doc.get("simulation") {
             let sim = table("simulation", sim)?;
@@ -408,6 +422,9 @@ impl Study {
         let fingerprint = fnv1a(canonical.as_bytes());
         let points = study_size(&grid, monte_carlo.as_ref())?;
         let nominal = (0..if monte_carlo.is_some() { points } else { 0 }).map(|_| OnceLock::new()).collect();
+        let mut document = doc.clone();
+        document.remove("simulation");
+        document.insert("scenario".into(), toml::Value::Table(base.clone()));
         Ok(Study {
             base,
             scenario_source,
@@ -419,8 +436,15 @@ impl Study {
             runaway,
             m,
             fingerprint,
+            document,
             nominal,
         })
+    }
+
+    /// The study as one self-contained document, its scenario inline: [`Study::from_table`] reads
+    /// it back to the same study (same runs, same fingerprint) on any machine.
+    pub fn to_table(&self) -> &toml::Table {
+        &self.document
     }
 
     /// Grid points: the product of the axes' lengths (1 without a grid).
@@ -475,6 +499,7 @@ impl Study {
                 path::for_each_number(v, &mut |x| {
                     *x = match p.law {
                         Law::Relative(r) => *x * (1.0 + r * rng.sample()),
+                        Law::RelativeUniform(r) => *x * (1.0 + r * (2.0 * rng.uniform() - 1.0)),
                         Law::Normal(s) => *x + s * rng.sample(),
                         Law::Uniform(a) => *x + a * (2.0 * rng.uniform() - 1.0),
                     }
@@ -559,7 +584,10 @@ impl Study {
         self.monte_carlo.as_ref().is_some_and(|mc| {
             mc.perturbations.iter().any(|p| {
                 p.path.section() == "truth"
-                    && !matches!(p.law, Law::Relative(0.0) | Law::Normal(0.0) | Law::Uniform(0.0))
+                    && !matches!(
+                        p.law,
+                        Law::Relative(0.0) | Law::RelativeUniform(0.0) | Law::Normal(0.0) | Law::Uniform(0.0)
+                    )
             })
         })
     }
@@ -671,6 +699,7 @@ fn monte_carlo(base: &toml::Table, t: &toml::Table, source: &str) -> Result<Mont
         let size = non_negative(&size_key, size, "a spread ≥ 0")?;
         let law = match name.as_str() {
             "relative" => Law::Relative(size),
+            "relative_uniform" => Law::RelativeUniform(size),
             "normal" => Law::Normal(size),
             "uniform" => Law::Uniform(size),
             _ => return Err(err(size_key, format!("unknown distribution; expected one of {LAWS}"))),

@@ -65,6 +65,19 @@ impl RunSpec {
             }
         }
     }
+
+    /// Simulates the run's scenario within its limits (step budget, [`Runaway`] rules): the
+    /// signals behind its row of [`run_one`]. `Err` when its scenario or design is invalid.
+    pub fn simulate(&self) -> Result<SimResult, String> {
+        self.simulate_until(&|| false)
+    }
+
+    fn simulate_until(&self, stop: &dyn Fn() -> bool) -> Result<SimResult, String> {
+        let (budget, bounds) = self.limits();
+        Scenario::from_document(&self.scenario)
+            .map_err(|e| e.to_string())
+            .and_then(|s| simulate(&s, budget, bounds, stop))
+    }
 }
 
 /// How a run ended.
@@ -176,11 +189,7 @@ fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
         steps: 0,
         wall_ms: 0.0,
     };
-    let (budget, bounds) = spec.limits();
-    let result = Scenario::from_document(&spec.scenario)
-        .map_err(|e| e.to_string())
-        .and_then(|s| simulate(&s, budget, bounds, stop));
-    match result {
+    match spec.simulate_until(stop) {
         Err(reason) => row.reason = reason,
         Ok(r) => {
             row.steps = r.stats.steps() as u64;
