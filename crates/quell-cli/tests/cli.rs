@@ -183,8 +183,8 @@ fn design_json_on_paper_example() {
 fn design_reports_the_adaptation_pace() {
     let tank = Path::new(env!("CARGO_MANIFEST_DIR")).join("../quell/tests/data/quadruple-tank.toml");
     let text = std::fs::read_to_string(&tank).unwrap();
-    let dir = TempDir::new("pace");
-    let normalized = dir.join("tank-normalized.toml");
+    let dir = temp_dir("pace");
+    let normalized = dir.path().join("tank-normalized.toml");
     std::fs::write(&normalized, text.replace("beta = 10.0", "beta = 10.0\nregressor_scaling = \"normalized\""))
         .unwrap();
     for (file, scaling, stiff) in [

@@ -606,6 +606,7 @@ fn chain_observer_with_a_large_gain_is_designed_and_reported_fragile() {
         mu: vec![1.0],
         beta: 1.0,
         relative_degrees: None,
+        regressor_scaling: Default::default(),
     };
     let d = Design::new(&plant, &spec).unwrap_or_else(|e| panic!("{e}"));
     assert!(multiset_mismatch(&poles, d.observer_eigenvalues()) <= 1e-6 * 9.7, "{:?}", d.observer_eigenvalues());
@@ -636,6 +637,7 @@ fn an_observer_that_cannot_be_confirmed_hurwitz_says_so_with_its_figures() {
         mu: vec![1.0],
         beta: 1e3,
         relative_degrees: None,
+        regressor_scaling: Default::default(),
     };
     let e = expect_err(&plant, &spec);
     let DesignError::ObserverUnconfirmed { key, eigenvalues, in_margin, margin, kappa } = &e else { panic!("{e}") };
