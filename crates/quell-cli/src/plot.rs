@@ -118,16 +118,8 @@ fn panel<DB: DrawingBackend>(
         .map_err(|e| e.to_string())
 }
 
-/// Draws the figure; `background` paints it white first (a bitmap buffer can start white instead).
-fn draw<DB: DrawingBackend>(
-    root: DrawingArea<DB, Shift>,
-    r: &SimResult,
-    i: usize,
-    background: bool,
-) -> Result<(), String> {
-    if background {
-        root.fill(&WHITE).map_err(|e| e.to_string())?;
-    }
+/// Draws channel i's figure (on a white background, see [`write_figure`]).
+fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &SimResult, i: usize) -> Result<(), String> {
     let col = |sig: &[f64]| r.t.iter().copied().zip(r.column(sig, r.m, i)).collect::<Vec<_>>();
     let c = i + 1;
     let areas = root.split_evenly((4, 1));
@@ -151,15 +143,7 @@ fn draw<DB: DrawingBackend>(
 
 /// Writes `channel{i+1}.png` and `.svg` into `dir`, each atomically.
 pub fn plot_channel(dir: &Path, r: &SimResult, i: usize) -> io::Result<()> {
-    register_font();
-    let png = dir.join(format!("channel{}.png", i + 1));
-    let mut rgb = vec![255u8; (SIZE.0 * SIZE.1 * 3) as usize];
-    draw(BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area(), r, i, false)
-        .map_err(|e| io::Error::other(format!("{}: {e}", png.display())))?;
-    write_png(&png, &rgb, SIZE)?;
-    let mut svg = String::new();
-    draw(SVGBackend::with_string(&mut svg, SIZE).into_drawing_area(), r, i, true).map_err(io::Error::other)?;
-    write_atomic(&dir.join(format!("channel{}.svg", i + 1)), |w| w.write_all(svg.as_bytes()))
+    write_figure(dir, &format!("channel{}", i + 1), SIZE, |root| draw(root, r, i), |root| draw(root, r, i))
 }
 
 /// Writes an RGB buffer of `size` as a PNG, atomically.

@@ -128,6 +128,13 @@ impl PyController {
         self.lock().sample_time()
     }
 
+    /// A controller does not pickle: it is the running state of one real-time loop.
+    fn __reduce__(&self) -> PyResult<()> {
+        Err(pyo3::exceptions::PyTypeError::new_err(
+            "cannot pickle a quell.Controller: it is the running state of one real-time loop (x̂, ξ̂, η̂ and the delay lines of the commands), which a copy would fork; pickle its Design and build Controller(design, sample_time) where it runs (it starts from reset)",
+        ))
+    }
+
     fn __repr__(&self) -> String {
         let c = self.lock();
         let (m, q) = c.dims();

@@ -17,7 +17,7 @@ use toml::{Table, Value};
 use crate::convert::{pole_lists, poles, type_name};
 use crate::design::PyDesign;
 use crate::errors::{raise, Kind};
-use crate::plant::{plant_arg, PyPlant};
+use crate::plant::{plant_arg, Labels, PyPlant};
 
 /// A scenario: plant (1), design choices, reference g(t) (Assumption 2), disturbance ω(t)
 /// (Assumption 3), simulation settings, noise and the true plant.
@@ -33,11 +33,13 @@ use crate::plant::{plant_arg, PyPlant};
 pub struct PyScenario {
     pub inner: quell::Scenario,
     design: OnceLock<Arc<quell::Design>>,
+    /// The plant's signal names (a scenario file has none).
+    pub labels: Labels,
 }
 
 impl PyScenario {
     pub fn new(inner: quell::Scenario) -> Self {
-        PyScenario { inner, design: OnceLock::new() }
+        PyScenario { inner, design: OnceLock::new(), labels: Labels::default() }
     }
 
     /// Parses and validates `text`, or raises ScenarioError.
@@ -238,7 +240,19 @@ impl PyScenario {
         if let Some(t) = truth.filter(|t| !t.is_none()) {
             doc.insert("truth".into(), Value::Table(plant_table(&plant_arg(t, "truth")?.inner)));
         }
-        Self::from_document(py, &doc)
+        Ok(PyScenario { labels: plant.labels.clone(), ..Self::from_document(py, &doc)? })
+    }
+
+    /// Rebuilds a pickled scenario: its TOML and its plant's signal names.
+    #[staticmethod]
+    fn _restore(
+        py: Python<'_>,
+        text: &str,
+        inputs: Option<Vec<String>>,
+        outputs: Option<Vec<String>>,
+        states: Option<Vec<String>>,
+    ) -> PyResult<Self> {
+        Ok(PyScenario { labels: Labels { inputs, outputs, states }, ..Self::parse(py, text)? })
     }
 
     /// Parses and validates a scenario file's text (the format of `examples/paper.toml`).
@@ -258,19 +272,27 @@ impl PyScenario {
         self.inner.to_toml()
     }
 
-    /// Equal scenarios: the same TOML document (`to_toml` writes every key the scenario holds).
+    /// Equal scenarios: the same TOML document (`to_toml` writes every key the scenario holds) and
+    /// the same signal names.
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
-        other.cast::<PyScenario>().is_ok_and(|o| o.get().inner.to_toml() == self.inner.to_toml())
+        other
+            .cast::<PyScenario>()
+            .is_ok_and(|o| o.get().inner.to_toml() == self.inner.to_toml() && o.get().labels == self.labels)
     }
 
-    /// Pickles as `Scenario.from_toml(s.to_toml())`.
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
-        Ok((slf.get_type().getattr("from_toml")?, (slf.get().inner.to_toml(),)))
+    /// Pickles as its TOML and its plant's signal names.
+    #[allow(clippy::type_complexity)]
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, (String, Option<Vec<String>>, Option<Vec<String>>, Option<Vec<String>>))> {
+        let (me, l) = (slf.get(), &slf.get().labels);
+        let args = (me.inner.to_toml(), l.inputs.clone(), l.outputs.clone(), l.states.clone());
+        Ok((slf.get_type().getattr("_restore")?, args))
     }
 
     /// The design of this scenario's plant and choices (computed once; raises DesignError).
     fn design(&self, py: Python<'_>) -> PyResult<PyDesign> {
-        Ok(PyDesign { inner: self.design_arc(py)? })
+        Ok(PyDesign { inner: self.design_arc(py)?, spec: self.inner.design.clone(), labels: self.labels.clone() })
     }
 
     /// The adaptive law's pace before a run, per channel (`quell design`'s "adaptation"): μ_i,
@@ -290,13 +312,13 @@ impl PyScenario {
     /// The plant (1).
     #[getter]
     fn plant(&self) -> PyPlant {
-        PyPlant { inner: self.inner.plant.clone() }
+        PyPlant { inner: self.inner.plant.clone(), labels: self.labels.clone() }
     }
     /// The true plant that is simulated when it differs from the design model `plant` (`[truth]`),
     /// or None.
     #[getter]
     fn truth(&self) -> Option<PyPlant> {
-        self.inner.truth.clone().map(|inner| PyPlant { inner })
+        self.inner.truth.clone().map(|inner| PyPlant { inner, labels: self.labels.clone() })
     }
     /// The scenario's name, if it has one.
     #[getter]

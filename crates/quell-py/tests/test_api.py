@@ -1,4 +1,4 @@
-"""The API names of issue 11, and that its ways of saying the same thing agree."""
+"""The API's names, and that its ways of saying the same thing agree."""
 
 import pathlib
 import subprocess

@@ -1,5 +1,4 @@
-"""Design properties, each checked by numpy/SciPy on the returned matrices (issue 11, "Design
-properties"): eig(A − BK) holds the channel poles, the decoupled transfer matrix
+"""Design properties, each checked by numpy/SciPy on the returned matrices: eig(A − BK) holds the channel poles, the decoupled transfer matrix
 C (sI − A_f)⁻¹ B_f is diagonal with G_ii(s) = q_i0 / ∏(s − λ_ij), N D = L_ω, eig(A − LC) as asked."""
 
 from pathlib import Path

@@ -1,4 +1,4 @@
-"""Issue 12 from Python: quell.sweep as a DataFrame, and quell.sweep_runs/run_one mapped over a
+"""Studies from Python: quell.sweep as a DataFrame, and quell.sweep_runs/run_one mapped over a
 dask LocalCluster of two worker processes, both compared with the rows of `quell sweep`."""
 
 import pickle

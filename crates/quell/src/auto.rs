@@ -31,11 +31,10 @@ use thiserror::Error;
 use crate::design::{relative_degrees, Design, DesignError, DesignSpec, ObserverChoice};
 use crate::diagnostics::Averaged;
 use crate::linalg::eigenvalues;
-use crate::run::{simulate, LoopSettings};
 use crate::scenario::exosystem::Exosystem;
 use crate::scenario::{PartialDesign, Scenario, ScenarioError};
 use crate::signal::{Component, Signal};
-use crate::sim::{Outcome, SimError};
+use crate::sim::{Outcome, Run, SimError};
 
 /// Fastest adaptation rate μ_i λ_max(Ω̄_i) the automatic design chooses, per unit of the time
 /// scale r: faster buys little (the error is then limited by the filters) and makes the loop stiff.
@@ -114,7 +113,7 @@ pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, A
     let mut runs = 0;
     loop {
         runs += 1;
-        let r = simulate(&scenario, &design, &LoopSettings::of(&scenario), |_| ControlFlow::Continue(()))?;
+        let r = Run::of(&scenario, &design).simulate(|_| ControlFlow::Continue(()))?;
         match r.outcome.clone().unwrap_or(Outcome::Completed) {
             Outcome::Completed => {}
             other => return Err(AutoError::Run(other)),

@@ -12,8 +12,8 @@ use common::Rng;
 use quell::auto::{auto_design, Targets};
 use quell::linalg::{companion, poly_from_roots};
 use quell::nalgebra::{Complex, DMatrix};
-use quell::run::{simulate, LoopSettings};
 use quell::scenario::Scenario;
+use quell::sim::Run;
 
 fn rows(M: &DMatrix<f64>) -> String {
     let r: Vec<String> = M
@@ -91,7 +91,7 @@ fn check(seed: u64, sigma: &[usize], zeros: &[Vec<f64>], scale: f64) {
     // The written scenario, read back and run again.
     let s = Scenario::from_toml(&auto.scenario.to_toml()).unwrap();
     let design = s.design().unwrap();
-    let r = simulate(&s, &design, &LoopSettings::of(&s), |_| ControlFlow::Continue(())).unwrap();
+    let r = Run::of(&s, &design).simulate(|_| ControlFlow::Continue(())).unwrap();
     let t_end = s.simulation.t_end;
     for (i, c) in s.reference.components.iter().enumerate() {
         let tail = r.max_abs_error(i, 0.9 * t_end, t_end).unwrap();

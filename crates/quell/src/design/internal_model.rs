@@ -66,8 +66,8 @@ impl fmt::Display for RegressorScaling {
 }
 
 /// (G, l) for poles p_1..p_q. [`RegressorScaling::Paper`]: G is the companion matrix of ∏(s − p_j)
-/// (ones on the superdiagonal, last row −[a_0, …, a_{q−1}]) and l = e_q, the convention of the notes
-/// on the paper. [`RegressorScaling::Normalized`]: that pair in the coordinates ξ̃_k = a_0 ξ_k / ω₀^(k−1)
+/// (ones on the superdiagonal, last row −[a_0, …, a_{q−1}]) and l = e_q, the form of G_g and G_ω
+/// printed in Section VIII. [`RegressorScaling::Normalized`]: that pair in the coordinates ξ̃_k = a_0 ξ_k / ω₀^(k−1)
 /// with ω₀ = a_0^(1/q), i.e. G = ω₀·companion of the polynomial with roots p_j/ω₀ and l = ω₀ e_q.
 pub fn filter_pair(poles: &[Complex<f64>], scaling: RegressorScaling) -> (DMatrix<f64>, DMatrix<f64>) {
     let q = poles.len();
