@@ -158,6 +158,7 @@ fn restore(py: Python<'_>, plant: &PyPlant, choices: &Bound<'_, PyDict>) -> PyRe
         get("observer_poles")?.as_ref(),
         get("observer_gain")?.as_ref(),
         get("relative_degrees")?.filter(|v| !v.is_none()).as_ref(),
+        get("regressor_scaling")?.map(|v| v.extract::<String>()).transpose()?.as_deref(),
     )?;
     let d = quell::Design::new(&plant.inner, &spec).map_err(|e| raise(py, Kind::Design)(&e))?;
     Ok(PyDesign { inner: Arc::new(d), spec, labels: plant.labels.clone() })
@@ -292,7 +293,7 @@ impl PyDesign {
     }
     /// The designer's choices, as `quell.design`'s keyword arguments: channel_poles,
     /// reference_filter_poles, disturbance_filter_poles, mu, beta, observer_gain or
-    /// observer_poles, and relative_degrees when given.
+    /// observer_poles, relative_degrees when given, and regressor_scaling.
     #[getter]
     fn choices<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let s = &self.spec;
@@ -309,6 +310,7 @@ impl PyDesign {
         if let Some(r) = &s.relative_degrees {
             d.set_item("relative_degrees", r.clone())?;
         }
+        d.set_item("regressor_scaling", s.regressor_scaling.name())?;
         Ok(d)
     }
     /// Rebuilds a pickled design.
