@@ -446,7 +446,7 @@ fn filter_orders_without_auto() {
     check(
         &with(&[(CHANNEL, &format!("{CHANNEL}\nreference_filter_orders = [2, 1]"))]),
         "design.reference_filter_orders",
-        "read only by an automatic design",
+        "read only by the automatic design (`auto_design`)",
     );
 }
 
