@@ -146,6 +146,9 @@ fn integers(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<usiz
 ///     The observer gain L (n×m), eq. (6).
 /// relative_degrees : list of int, optional
 ///     σ_i given instead of decided by eq. (7).
+/// regressor_scaling : str, optional
+///     "paper" (default: the paper's filters, l = e_q) or "normalized" (filters of unit DC gain at
+///     their own time scale, so ξ̂ has the signals' size).
 ///
 /// Returns
 /// -------

@@ -437,10 +437,26 @@ impl PyScenario {
         Ok(PyDesign { inner: self.design_arc(py)?, spec: self.inner.design.clone(), labels: self.labels.clone() })
     }
 
-    /// The adaptive law's pace before a run, per channel (`quell design`'s "adaptation"): μ_i,
-    /// λ_max and λ_min of the averaged Ω̄_i, the rate μ_i λ_max against the loop's fastest other rate,
-    /// the predicted convergence time 1/(μ_i λ_min), and the flags `stiff` and `weakly_excited` with
-    /// advice. A list of dicts; raises DesignError when the scenario has no design.
+    /// The adaptive law's pace before a run, per channel (`quell design`'s "adaptation"), from the
+    /// averaged Ω̄_i over g and ω.
+    ///
+    /// Returns
+    /// -------
+    /// list of dict
+    ///     Per channel: `mu`, `lambda_max_omega`, `lambda_min_omega`, `excited_rank`,
+    ///     `lambda_min_excited_omega`, `adaptation_rate` (μ_i λ_max), `loop_rate` (the loop's fastest
+    ///     other rate ρ), `convergence_time` (1/(μ_i λ_min) over the excited directions, s), the
+    ///     flags `stiff` (rate > 100 ρ) and `weakly_excited`, and `advice`.
+    ///
+    /// Raises
+    /// ------
+    /// DesignError
+    ///     No design exists for these choices.
+    ///
+    /// Examples
+    /// --------
+    /// >>> [c["stiff"] for c in quell.paper_example().adaptation()]
+    /// [False, False]
     fn adaptation<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let d = self.design_arc(py)?;
         let s = &self.inner;
