@@ -65,7 +65,7 @@
 //!
 //! **[`design`]**: every gain of the controller from the plant and the choices, [`Design::new`]
 //! (the decoupler of Proposition 1 with σ_i from eq. (7), the observer (6), the internal models
-//! (11), (16) and N of eq. (20)), the paper's assumptions checked on the way; [`place`] for pole
+//! (11), (16) and N of eq. (20)), the paper's assumptions checked on the way; [`place()`] for pole
 //! placement.
 //!
 //! ```
