@@ -7,7 +7,7 @@ use pyo3::types::{PyComplex, PyDict, PyList, PyTuple};
 use quell::design::{DesignSpec, ObserverChoice};
 
 use crate::convert::{complex_numpy, matrix, number, pole_lists, poles, to_numpy, type_name, vector};
-use crate::errors::{raise, Kind};
+use crate::errors::{in_python, raise, type_error, Kind};
 use crate::plant::{plant_arg, Labels, PyPlant};
 
 /// Every matrix the controller needs, with the assumption checks that were passed to get them.
@@ -50,32 +50,36 @@ pub fn spec(
     relative_degrees: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<DesignSpec> {
     let k = Kind::Design;
-    let observer = match (observer_gain, observer_poles) {
-        (Some(L), None) => ObserverChoice::Gain(matrix(L, "design.observer_gain", k)?),
-        (None, Some(p)) => ObserverChoice::Poles(poles(p, "design.observer_poles", k)?),
-        (Some(_), Some(_)) => return Err(k.err(py, "design: both observer_gain and observer_poles are given; give exactly one: the gain L (n×m), or the n poles of A − LC to place")),
-        (None, None) => return Err(k.err(py, "design.observer_gain: missing; give exactly one of observer_gain (the gain L, n×m) and observer_poles (the n poles of A − LC)")),
+    // Both are read first, so that a wrong type is named before a wrong combination.
+    let gain = observer_gain.map(|L| matrix(L, "observer_gain", k)).transpose()?;
+    let placed = observer_poles.map(|p| poles(p, "observer_poles", k)).transpose()?;
+    let observer = match (gain, placed) {
+        (Some(L), None) => ObserverChoice::Gain(L),
+        (None, Some(p)) => ObserverChoice::Poles(p),
+        (Some(_), Some(_)) => return Err(k.err(py, "observer_gain, observer_poles: both are given; give exactly one: the gain L (n×m), or the n poles of A − LC to place")),
+        (None, None) => return Err(k.err(py, "observer_gain: missing; give exactly one of observer_gain (the gain L, n×m) and observer_poles (the n poles of A − LC)")),
     };
     Ok(DesignSpec {
         observer,
-        channel_poles: pole_lists(channel_poles, "design.channel_poles", k)?,
-        reference_filter_poles: pole_lists(reference_filter_poles, "design.reference_filter_poles", k)?,
+        channel_poles: pole_lists(channel_poles, "channel_poles", k)?,
+        reference_filter_poles: pole_lists(reference_filter_poles, "reference_filter_poles", k)?,
         disturbance_filter_poles: disturbance_filter_poles
-            .map(|p| pole_lists(p, "design.disturbance_filter_poles", k))
+            .map(|p| pole_lists(p, "disturbance_filter_poles", k))
             .transpose()?
             .unwrap_or_default(),
-        mu: vector(mu, "design.mu", k)?,
-        beta: number(beta, "design.beta", k)?,
-        relative_degrees: relative_degrees.map(|s| integers(s, "design.relative_degrees", k)).transpose()?,
+        mu: vector(mu, "mu", k)?,
+        beta: number(beta, "beta")?,
+        relative_degrees: relative_degrees.map(|s| integers(s, "relative_degrees", k)).transpose()?,
     })
 }
 
 /// A sequence of integers ≥ 1 (a bool or float is refused, naming `name[i]`).
 fn integers(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<usize>> {
     let py = obj.py();
-    let items = obj
-        .try_iter()
-        .map_err(|_| kind.err(py, format!("{name}: expected a list of integers ≥ 1, found a {}", type_name(obj))))?;
+    if obj.is_instance_of::<pyo3::types::PyString>() {
+        return Err(type_error(name, "a list of integers ≥ 1", obj));
+    }
+    let items = obj.try_iter().map_err(|_| type_error(name, "a list of integers ≥ 1", obj))?;
     items
         .enumerate()
         .map(|(i, v)| {
@@ -90,7 +94,7 @@ fn integers(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<usiz
                 )
             };
             if v.is_instance_of::<pyo3::types::PyBool>() || !v.is_instance_of::<pyo3::types::PyInt>() {
-                return Err(bad());
+                return Err(type_error(&format!("{name}[{i}]"), "an integer ≥ 1", &v));
             }
             match v.extract::<usize>() {
                 Ok(s) if s >= 1 => Ok(s),
@@ -128,7 +132,7 @@ pub fn design(
         observer_gain,
         relative_degrees,
     )?;
-    let d = quell::Design::new(&plant.inner, &spec).map_err(|e| raise(py, Kind::Design)(&e))?;
+    let d = quell::Design::new(&plant.inner, &spec).map_err(|e| Kind::Design.err(py, in_python(e.to_string())))?;
     crate::errors::warn_fragile(py, &d, &spec)?;
     Ok(PyDesign { inner: Arc::new(d), spec, labels: plant.labels.clone() })
 }

@@ -116,9 +116,11 @@ fn required<'a, 'py>(
     name: &str,
     what: &str,
 ) -> PyResult<&'a Bound<'py, PyAny>> {
+    let _ = py;
     v.ok_or_else(|| {
-        Kind::Scenario
-            .err(py, format!("{name}: missing; required: {what} (or pass a control.StateSpace as the first argument)"))
+        PyTypeError::new_err(format!(
+            "{name}: missing; required: {what} (or pass a control.StateSpace as the first argument)"
+        ))
     })
 }
 
@@ -309,12 +311,9 @@ impl PyPlant {
 /// `obj` as a Plant, or a ScenarioError naming `name`.
 pub fn plant_arg<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<PyRef<'py, PyPlant>> {
     obj.extract::<PyRef<'py, PyPlant>>().map_err(|_| {
-        Kind::Scenario.err(
-            obj.py(),
-            format!(
-                "{name}: expected a quell.Plant, found a {}; build one with quell.Plant(A, B, C, D, Q, delays=...)",
-                type_name(obj)
-            ),
-        )
+        PyTypeError::new_err(format!(
+            "{name}: expected a quell.Plant, found a {}; build one with quell.Plant(A, B, C, D, Q, delays=...)",
+            type_name(obj)
+        ))
     })
 }

@@ -11,7 +11,7 @@ use quell::sim::{Outcome, Peaks, Run, RunSettings, RunStats, SimResult, Stats};
 use toml::Value;
 
 use crate::convert::number;
-use crate::errors::{raise, simulation_error, Kind};
+use crate::errors::{in_python, simulation_error, Kind};
 use crate::plant::Labels;
 use crate::scenario::PyScenario;
 
@@ -402,10 +402,8 @@ pub fn simulate(
     states: bool,
     check: bool,
 ) -> PyResult<Py<PySimResult>> {
-    let s: PyRef<'_, PyScenario> = scenario.extract().map_err(|_| {
-        Kind::Scenario
-            .err(py, format!("scenario: expected a quell.Scenario, found a {}", crate::convert::type_name(scenario)))
-    })?;
+    let s: PyRef<'_, PyScenario> =
+        scenario.extract().map_err(|_| crate::errors::type_error("scenario", "a quell.Scenario", scenario))?;
     let design = s.design_arc(py)?;
     // Overrides go through the scenario's own checks of [simulation].
     let overrides =
@@ -416,19 +414,22 @@ pub fn simulate(
         if let Some(Value::Table(sim)) = doc.get_mut("simulation") {
             for (key, v) in overrides {
                 if let Some(v) = v {
-                    sim.insert(key.into(), Value::Float(number(v, key, Kind::Scenario)?));
+                    sim.insert(key.into(), Value::Float(number(v, key)?));
                 }
             }
         }
-        edited = PyScenario::from_document(py, &doc)?;
-        &edited.inner
+        edited = quell::Scenario::from_document(&doc).map_err(|e| crate::scenario::argument_error(py, &e))?;
+        &edited
     } else {
         &s.inner
     };
     let mut settings = RunSettings::of(scn);
     settings.record_states = states;
-    let max_steps = match max_steps {
+    let max_steps = match max_steps.filter(|v| !v.is_none()) {
         None => None,
+        Some(v) if v.is_instance_of::<pyo3::types::PyBool>() || !v.is_instance_of::<pyo3::types::PyInt>() => {
+            return Err(crate::errors::type_error("max_steps", "an int (a step budget) or None", v));
+        }
         Some(v) => match v.extract::<usize>() {
             Ok(n) if n >= 1 => Some(n),
             _ => {
@@ -438,7 +439,7 @@ pub fn simulate(
             }
         },
     };
-    settings.set_max_steps(max_steps).map_err(|e| Kind::Scenario.err(py, e.to_string()))?;
+    settings.set_max_steps(max_steps).map_err(|e| Kind::Scenario.err(py, in_python(e.to_string())))?;
     let mut interrupt: Option<PyErr> = None;
     let result = py.detach(|| {
         let mut last = Instant::now();
@@ -460,7 +461,7 @@ pub fn simulate(
     if let Some(e) = interrupt {
         return Err(e);
     }
-    let result = result.map_err(|e| raise(py, Kind::Scenario)(&e))?;
+    let result = result.map_err(|e| Kind::Scenario.err(py, in_python(e.to_string())))?;
     let outcome = result.outcome.clone().unwrap_or(Outcome::Completed);
     let result = Py::new(py, PySimResult::from_run(py, scn, &design, result, s.labels.clone())?)?;
     if !check {

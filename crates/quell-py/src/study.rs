@@ -15,7 +15,7 @@ use quell::study::{self, KeyPath, RunSpec, Shard, StudyMeta, SweepOptions};
 use toml::{Table, Value};
 
 use crate::convert::type_name;
-use crate::errors::Kind;
+use crate::errors::{subscripts, Kind};
 use crate::scenario::{toml_value, PyScenario};
 use crate::simulate::PySimResult;
 
@@ -38,30 +38,10 @@ const DICT_ARGUMENTS: [&str; 5] = ["grid", "monte_carlo", "settle", "runaway", "
 /// A study key as the Python arguments spell it: `grid."design.mu[0]"[1]` is
 /// `grid["design.mu[0]"][1]`, `monte_carlo.runs` is `monte_carlo["runs"]`.
 pub fn python_key(key: &str) -> String {
-    let Some((section, rest)) = key.split_once('.').filter(|(s, _)| DICT_ARGUMENTS.contains(s)) else {
-        return key.to_string();
-    };
-    let mut out = section.to_string();
-    let mut rest = format!(".{rest}");
-    while let Some(c) = rest.chars().next() {
-        let (part, tail) = match c {
-            '.' if rest[1..].starts_with('"') => {
-                let end = rest[2..].find('"').map_or(rest.len(), |i| i + 3);
-                (format!("[{}]", &rest[1..end]), rest[end..].to_string())
-            }
-            '.' => {
-                let end = rest[1..].find(['.', '[']).map_or(rest.len(), |i| i + 1);
-                (format!("[\"{}\"]", &rest[1..end]), rest[end..].to_string())
-            }
-            _ => {
-                let end = rest.find(']').map_or(rest.len(), |i| i + 1);
-                (rest[..end].to_string(), rest[end..].to_string())
-            }
-        };
-        out.push_str(&part);
-        rest = tail;
+    match key.split_once('.').filter(|(s, _)| DICT_ARGUMENTS.contains(s)) {
+        Some((section, rest)) => format!("{section}{}", subscripts(&format!(".{rest}"))),
+        None => key.to_string(),
     }
-    out
 }
 
 /// A study error of `quell.Study(...)`: the message names the Python argument, `.key` the study key.

@@ -136,5 +136,5 @@ def test_a_seed_beyond_64_bits_is_named_as_a_seed():
     # 2**70 was rounded to a float and refused as "a floating-point number".
     from test_api import paper_from_values
 
-    with pytest.raises(quell.ScenarioError, match=r"noise.seed: expected a seed, an integer from 0 to 2\*\*63 - 1, found 1180591620717411303424"):
+    with pytest.raises(quell.ScenarioError, match=r"noise\[\"seed\"\]: expected a seed, an integer from 0 to 2\*\*63 - 1, found 1180591620717411303424"):
         paper_from_values(sample_time=1e-3, noise={"std": [0.01, 0.01], "seed": 2**70})

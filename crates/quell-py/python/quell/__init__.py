@@ -12,7 +12,7 @@ docstrings refer to that paper.
 {'status': 'completed'}
 """
 
-from ._errors import DesignError, ExportError, QuellError, ScenarioError, SimulationError
+from ._errors import ControllerError, DesignError, ExportError, QuellError, ScenarioError, SimulationError
 from ._study import StudyResult
 from ._quell import (
     Controller,
@@ -36,6 +36,7 @@ from ._quell import (
 
 __all__ = [
     "Controller",
+    "ControllerError",
     "Design",
     "DesignError",
     "ExportError",

@@ -16,6 +16,7 @@ _Poles = Sequence[_Pole]
 __version__: str
 __all__ = [
     "Controller",
+    "ControllerError",
     "Design",
     "DesignError",
     "ExportError",
@@ -46,6 +47,7 @@ class ScenarioError(QuellError, ValueError):
     key: Optional[str]
 
 class DesignError(QuellError, ValueError): ...
+class ControllerError(QuellError, ValueError): ...
 class ExportError(QuellError, ValueError): ...
 
 class SimulationError(QuellError, RuntimeError):

@@ -38,6 +38,12 @@ class StudyResult:
     """
 
     def __init__(self, study, frame):
+        from ._quell import Study
+
+        if not isinstance(study, Study):
+            raise TypeError(f"study: expected a quell.Study, found a {type(study).__name__}")
+        if not all(hasattr(frame, a) for a in ("columns", "iloc", "to_numpy")):
+            raise TypeError(f"frame: expected a pandas DataFrame, found a {type(frame).__name__}")
         self.study = study
         self.frame = frame
 

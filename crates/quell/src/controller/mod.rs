@@ -1,5 +1,5 @@
 //! The controller's equations, in one place, shared by the continuous simulation
-//! ([`crate::sim::closed_loop`]) and the real-time controller.
+//! ([`crate::sim::ContinuousLoop`]) and the real-time controller.
 //!
 //! The controller has three parts:
 //! - the **core**, a linear system with state z = [ξ̂_g; ξ̂_ω; x̂] driven by v = [y; g; u_d]: the
