@@ -59,7 +59,7 @@ pub fn spec(
     observer_poles: Option<&Bound<'_, PyAny>>,
     observer_gain: Option<&Bound<'_, PyAny>>,
     relative_degrees: Option<&Bound<'_, PyAny>>,
-    regressor_scaling: Option<&str>,
+    regressor_scaling: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<DesignSpec> {
     let k = Kind::Design;
     // Both are read first, so that a wrong type is named before a wrong combination.
@@ -83,8 +83,11 @@ pub fn spec(
         beta: number(beta, "beta")?,
         relative_degrees: relative_degrees.map(|s| integers(s, "relative_degrees", k)).transpose()?,
         regressor_scaling: regressor_scaling
-            .map(|name| {
-                quell::design::RegressorScaling::from_name(name)
+            .map(|obj| {
+                let name: String = obj
+                    .extract()
+                    .map_err(|_| crate::errors::type_error("regressor_scaling", "\"paper\" or \"normalized\"", obj))?;
+                quell::design::RegressorScaling::from_name(&name)
                     .map_err(|e| k.err(py, format!("regressor_scaling: {e}")))
             })
             .transpose()?
@@ -184,7 +187,7 @@ pub fn design(
     observer_poles: Option<&Bound<'_, PyAny>>,
     observer_gain: Option<&Bound<'_, PyAny>>,
     relative_degrees: Option<&Bound<'_, PyAny>>,
-    regressor_scaling: Option<&str>,
+    regressor_scaling: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyDesign> {
     let plant = plant_arg(plant, "plant")?;
     let spec = spec(
@@ -219,7 +222,7 @@ fn restore(py: Python<'_>, plant: &PyPlant, choices: &Bound<'_, PyDict>) -> PyRe
         get("observer_poles")?.as_ref(),
         get("observer_gain")?.as_ref(),
         get("relative_degrees")?.filter(|v| !v.is_none()).as_ref(),
-        get("regressor_scaling")?.map(|v| v.extract::<String>()).transpose()?.as_deref(),
+        get("regressor_scaling")?.as_ref(),
     )?;
     let d = quell::Design::new(&plant.inner, &spec).map_err(|e| raise(py, Kind::Design)(&e))?;
     Ok(PyDesign { inner: Arc::new(d), spec, labels: plant.labels.clone() })
