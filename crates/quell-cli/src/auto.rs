@@ -26,7 +26,7 @@ pub struct DesignArgs {
     /// half of simulation.t_end).
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     pub convergence_time: Option<f64>,
-    /// With --auto: actuator limit on |u_i|, the adaptive command.
+    /// With --auto: actuator limit on |u_f,i|, the plant input u_f = −K x̂ + F u_d.
     #[arg(long, value_name = "U", allow_negative_numbers = true)]
     pub u_limit: Option<f64>,
 }
@@ -74,7 +74,7 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
             "the automatic design did not pass its verifying simulation (tail max|e| {:?} against bounds {:?}{}); nothing written; see docs/tuning.md",
             v.tail_max_e,
             v.bound,
-            targets.u_limit.map_or(String::new(), |l| format!(", max|u| {:?} against the limit {l}", v.max_u))
+            targets.u_limit.map_or(String::new(), |l| format!(", max|u_f| {:?} against the limit {l}", v.max_u_f))
         )));
     }
     if let Some(out) = &args.write {
@@ -106,12 +106,12 @@ fn report_text(a: &AutoDesign) -> String {
     s.push_str(&format!("verification ({} simulation{}):\n", v.runs, if v.runs == 1 { "" } else { "s" }));
     for i in 0..v.bound.len() {
         s.push_str(&format!(
-            "  channel {}: tail max|e| = {:.3e} (bound {:.3e}: 1 % of the reference's peak) {}, max|u| = {:.4}\n",
+            "  channel {}: tail max|e| = {:.3e} (bound {:.3e}: 1 % of the reference's peak) {}, max|u_f| = {:.4}\n",
             i + 1,
             v.tail_max_e[i],
             v.bound[i],
             if v.tail_max_e[i] <= v.bound[i] { "✓" } else { "✗" },
-            v.max_u[i]
+            v.max_u_f[i]
         ));
     }
     s.push('\n');

@@ -94,6 +94,7 @@ const FLAGS: [(&str, &str); 4] = [
 
 /// A library message whose leading key a flag sets, with the flag named.
 fn in_flags(msg: String) -> String {
+    let msg = msg.replace(quell::scenario::AUTO_DESIGN, "`quell design SCENARIO --auto --write OUT.toml`");
     for (key, flag) in FLAGS {
         if let Some(rest) = msg.strip_prefix(key).filter(|r| r.starts_with([':', ' '])) {
             return format!("{flag}{rest}");

@@ -118,16 +118,8 @@ fn panel<DB: DrawingBackend>(
         .map_err(|e| e.to_string())
 }
 
-/// Draws the figure; `background` paints it white first (a bitmap buffer can start white instead).
-fn draw<DB: DrawingBackend>(
-    root: DrawingArea<DB, Shift>,
-    r: &SimResult,
-    i: usize,
-    background: bool,
-) -> Result<(), String> {
-    if background {
-        root.fill(&WHITE).map_err(|e| e.to_string())?;
-    }
+/// Draws channel i's figure (on a white background, see [`write_figure`]).
+fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &SimResult, i: usize) -> Result<(), String> {
     let col = |sig: &[f64]| r.t.iter().copied().zip(r.column(sig, r.m, i)).collect::<Vec<_>>();
     let c = i + 1;
     let areas = root.split_evenly((4, 1));
@@ -151,15 +143,7 @@ fn draw<DB: DrawingBackend>(
 
 /// Writes `channel{i+1}.png` and `.svg` into `dir`, each atomically.
 pub fn plot_channel(dir: &Path, r: &SimResult, i: usize) -> io::Result<()> {
-    register_font();
-    let png = dir.join(format!("channel{}.png", i + 1));
-    let mut rgb = vec![255u8; (SIZE.0 * SIZE.1 * 3) as usize];
-    draw(BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area(), r, i, false)
-        .map_err(|e| io::Error::other(format!("{}: {e}", png.display())))?;
-    write_png(&png, &rgb, SIZE)?;
-    let mut svg = String::new();
-    draw(SVGBackend::with_string(&mut svg, SIZE).into_drawing_area(), r, i, true).map_err(io::Error::other)?;
-    write_atomic(&dir.join(format!("channel{}.svg", i + 1)), |w| w.write_all(svg.as_bytes()))
+    write_figure(dir, &format!("channel{}", i + 1), SIZE, |root| draw(root, r, i), |root| draw(root, r, i))
 }
 
 /// Writes an RGB buffer of `size` as a PNG, atomically.
@@ -183,6 +167,44 @@ fn axis_coords(values: &[String]) -> (Vec<f64>, bool) {
         Ok(x) if x.iter().all(|v| v.is_finite()) => (x, true),
         _ => ((0..values.len()).map(|k| k as f64).collect(), false),
     }
+}
+
+/// A grid value as a tick label: every number in it to 4 significant digits
+/// (`[0.0, -6.666666666666667]` reads `[0, -6.667]`), the rest as written.
+fn short_value(value: &str) -> String {
+    let number = |c: char| c.is_ascii_digit() || matches!(c, '.' | 'e' | 'E' | '+' | '-');
+    let mut out = String::new();
+    let mut rest = value;
+    while let Some(start) = rest.find(number) {
+        out.push_str(&rest[..start]);
+        let len = rest[start..].find(|c: char| !number(c)).unwrap_or(rest.len() - start);
+        let token = &rest[start..start + len];
+        match token.parse::<f64>() {
+            Ok(v) if v.is_finite() => {
+                let short = if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e5) {
+                    let t = format!("{v:.3e}");
+                    let (mantissa, exp) = t.split_once('e').unwrap_or((&t, "0"));
+                    format!("{}e{exp}", mantissa.trim_end_matches('0').trim_end_matches('.'))
+                } else {
+                    // 4 significant digits, trailing zeros dropped.
+                    let magnitude = if v == 0.0 { 0.0 } else { v.abs().log10().floor() };
+                    let decimals = (3.0 - magnitude).clamp(0.0, 12.0) as usize;
+                    let t = format!("{v:.decimals$}");
+                    let t = if t.contains('.') { t.trim_end_matches('0').trim_end_matches('.') } else { &t };
+                    if t == "-0" {
+                        "0".to_string()
+                    } else {
+                        t.to_string()
+                    }
+                };
+                out.push_str(if short.len() < token.len() { &short } else { token });
+            }
+            _ => out.push_str(token),
+        }
+        rest = &rest[start + len..];
+    }
+    out.push_str(rest);
+    out
 }
 
 /// The figures a sweep plots, with their axis labels.
@@ -219,25 +241,28 @@ fn draw_sweep_1d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
             let mut chart = ChartBuilder::on(area)
                 .caption(format!("Channel {}: {label}", i + 1), ("sans-serif", 18))
                 .margin(8)
-                .margin_right(20)
+                .margin_right(if numeric { 20 } else { 56 })
                 .x_label_area_size(36)
                 .y_label_area_size(80)
                 .build_cartesian_2d(x0..x1, y0..y1)
                 .map_err(|e| e.to_string())?;
-            let values = axis.values.clone();
+            let values: Vec<String> = axis.values.iter().map(|v| short_value(v)).collect();
             let fmt = move |v: &f64| {
                 if numeric {
                     // Tick values like 2.8000000000000003 read as 2.8.
                     let short = format!("{v:.6}");
                     short.trim_end_matches('0').trim_end_matches('.').to_string()
-                } else {
+                } else if (v - v.round()).abs() < 1e-6 {
+                    // A value's label only at its own position, not at the ticks between.
                     values.get(v.round() as usize).cloned().unwrap_or_default()
+                } else {
+                    String::new()
                 }
             };
             chart
                 .configure_mesh()
                 .max_light_lines(2)
-                .x_labels(6)
+                .x_labels(if numeric { 6 } else { axis.values.len().min(12) })
                 .x_desc(axis.key.as_str())
                 .y_desc(*label)
                 .x_label_formatter(&fmt)
@@ -438,5 +463,15 @@ mod tests {
         assert_eq!(tick_label(100.05, 100.0, 100.1), "100.05");
         assert_eq!(tick_label(0.0, -1.0, 1.0), "0");
         assert_eq!(tick_label(-8.5e-22, -6.5e-6, 2e-7), "0");
+    }
+
+    #[test]
+    fn grid_values_shorten_to_four_significant_digits() {
+        use super::short_value;
+        assert_eq!(short_value("[0.0, -6.666666666666667, 0.6666666666666666]"), "[0, -6.667, 0.6667]");
+        assert_eq!(short_value("[[1.23456e-13, 2.5e6], [12345.678]]"), "[[1.235e-13, 2.5e6], [12346]]");
+        assert_eq!(short_value("0.004"), "0.004");
+        assert_eq!(short_value("\"dop853\""), "\"dop853\"");
+        assert_eq!(short_value("-1.2000000000000002"), "-1.2");
     }
 }

@@ -2,6 +2,7 @@
 
 use std::fmt::Write;
 
+use quell::linalg::fmt_complex_list;
 use quell::nalgebra::{Complex, DMatrix};
 use quell::Design;
 use serde_json::{json, Value};
@@ -67,10 +68,6 @@ fn fmt_matrix(out: &mut String, name: &str, M: &DMatrix<f64>) {
     }
 }
 
-fn fmt_eigs(e: &[Complex<f64>]) -> String {
-    e.iter().map(quell::linalg::fmt_complex).collect::<Vec<_>>().join(", ")
-}
-
 fn tf(c: &quell::design::ChannelTf) -> String {
     let poly: Vec<String> = c
         .poles
@@ -95,69 +92,8 @@ pub fn design_text(d: &Design) -> String {
         d.q_g(),
         d.q_w()
     );
-    let _ = writeln!(s, "\nassumption checks:");
-    let _ = writeln!(
-        s,
-        "  ✓ (A, B) controllable: numerical rank {} of {} (tol {:.1e})",
-        d.controllability().rank,
-        p.n(),
-        d.controllability().tol
-    );
-    let _ = writeln!(
-        s,
-        "  ✓ (A, C) observable:   numerical rank {} of {} (tol {:.1e})",
-        d.observability().rank,
-        p.n(),
-        d.observability().tol
-    );
-    let tol = quell::design::TOL;
-    let _ = writeln!(
-        s,
-        "  ✓ decouplable: B* nonsingular, scale-free condition number {:.3e} (smallest singular value ≥ τ = {:.0e})",
-        d.cond_B_star(),
-        tol
-    );
-    let _ = writeln!(
-        s,
-        "  ✓ A_f = A − BK Hurwitz (stable zero dynamics): max Re λ = {:.5}",
-        d.decoupled_eigenvalues().iter().map(|e| e.re).fold(f64::MIN, f64::max)
-    );
-    let _ = writeln!(
-        s,
-        "  ✓ observer A − LC Hurwitz: max Re λ = {:.5}",
-        d.observer_eigenvalues().iter().map(|e| e.re).fold(f64::MIN, f64::max)
-    );
-    let _ = writeln!(
-        s,
-        "  ✓ rank D = k = {} (N D = L_ω solvable), D with unit columns has condition number {:.3e}",
-        p.k(),
-        d.cond_D()
-    );
-    let _ = writeln!(
-        s,
-        "\nrelative degrees σ = {:?} (c_i A^(l−1) B ≠ 0 when its largest cosine ≥ τ = {tol:.0e})",
-        d.sigma()
-    );
-    for (i, r) in d.relative_degree_decisions().iter().enumerate() {
-        let measures: Vec<String> = r.deciding().iter().map(|m| format!("{m:.2e}")).collect();
-        let (l, cf) = (r.deciding().len(), quell::design::CLOSE_FACTOR);
-        if let Some(given) = r.given {
-            let decided = r.sigma.map_or("none".to_string(), |s| s.to_string());
-            let _ = writeln!(
-                s,
-                "  σ_{} = {given} given by design.relative_degrees, not decided (eq. (7) decides {decided}); cosines for l = 1…{l} are [{}]",
-                i + 1,
-                measures.join(", "),
-            );
-        } else if r.is_close() {
-            let _ = writeln!(
-                s,
-                "  ⚠ close decision for output {}: cosines for l = 1…{l} are [{}], within ×{cf} of τ; check row {i} of plant.C and plant.B, or give design.relative_degrees",
-                i + 1,
-                measures.join(", "),
-            );
-        }
-    }
+    assumption_checks(&mut s, d);
+    relative_degrees(&mut s, d);
     for (i, c) in d.channels().iter().enumerate() {
         let _ = writeln!(s, "  G_{0}{0}(s) = {1}   (μ_{0} = {2})", i + 1, tf(c), d.mu()[i]);
     }
@@ -175,8 +111,8 @@ pub fn design_text(d: &Design) -> String {
     ] {
         fmt_matrix(&mut s, name, M);
     }
-    let _ = writeln!(s, "\neig(A − LC) = {}", fmt_eigs(d.observer_eigenvalues()));
-    let _ = writeln!(s, "eig(A − BK) = {}", fmt_eigs(d.decoupled_eigenvalues()));
+    let _ = writeln!(s, "\neig(A − LC) = {}", fmt_complex_list(d.observer_eigenvalues()));
+    let _ = writeln!(s, "eig(A − BK) = {}", fmt_complex_list(d.decoupled_eigenvalues()));
     let _ = writeln!(
         s,
         "eigenvector condition numbers κ₂(X): A − LC {}, A − BK {}",
@@ -184,6 +120,64 @@ pub fn design_text(d: &Design) -> String {
         fmt_condition(d.decoupled_eigenvector_condition())
     );
     s
+}
+
+/// The paper's assumptions and the design's conditions, each with the figure that passed.
+fn assumption_checks(s: &mut String, d: &Design) {
+    let p = d.plant();
+    let max_re = |e: &[Complex<f64>]| e.iter().map(|e| e.re).fold(f64::MIN, f64::max);
+    let _ = writeln!(s, "\nassumption checks:");
+    for (what, test) in [("(A, B) controllable:", d.controllability()), ("(A, C) observable:  ", d.observability())] {
+        let _ = writeln!(s, "  ✓ {what} numerical rank {} of {} (tol {:.1e})", test.rank, p.n(), test.tol);
+    }
+    let _ = writeln!(
+        s,
+        "  ✓ decouplable: B* nonsingular, scale-free condition number {:.3e} (smallest singular value ≥ τ = {:.0e})",
+        d.cond_B_star(),
+        quell::design::TOL
+    );
+    let _ = writeln!(
+        s,
+        "  ✓ A_f = A − BK Hurwitz (stable zero dynamics): max Re λ = {:.5}",
+        max_re(d.decoupled_eigenvalues())
+    );
+    let _ = writeln!(s, "  ✓ observer A − LC Hurwitz: max Re λ = {:.5}", max_re(d.observer_eigenvalues()));
+    let _ = writeln!(
+        s,
+        "  ✓ rank D = k = {} (N D = L_ω solvable), D with unit columns has condition number {:.3e}",
+        p.k(),
+        d.cond_D()
+    );
+}
+
+/// σ, and for each channel a σ_i given by the designer or decided close to τ.
+fn relative_degrees(s: &mut String, d: &Design) {
+    let (tol, cf) = (quell::design::TOL, quell::design::CLOSE_FACTOR);
+    let _ = writeln!(
+        s,
+        "\nrelative degrees σ = {:?} (c_i A^(l−1) B ≠ 0 when its largest cosine ≥ τ = {tol:.0e})",
+        d.sigma()
+    );
+    for (i, r) in d.relative_degree_decisions().iter().enumerate() {
+        let measures: Vec<String> = r.deciding().iter().map(|m| format!("{m:.2e}")).collect();
+        let l = r.deciding().len();
+        if let Some(given) = r.given {
+            let decided = r.decided.map_or("none".to_string(), |s| s.to_string());
+            let _ = writeln!(
+                s,
+                "  σ_{} = {given} given by design.relative_degrees, not decided (eq. (7) decides {decided}); cosines for l = 1…{l} are [{}]",
+                i + 1,
+                measures.join(", "),
+            );
+        } else if r.is_close() {
+            let _ = writeln!(
+                s,
+                "  ⚠ close decision for output {}: cosines for l = 1…{l} are [{}], within ×{cf} of τ; check row {i} of plant.C and plant.B, or give design.relative_degrees",
+                i + 1,
+                measures.join(", "),
+            );
+        }
+    }
 }
 
 /// A condition number as JSON: null when infinite (JSON has no ∞).

@@ -6,9 +6,8 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use quell::diagnostics::{ChannelDiagnostics, Diagnostics};
-use quell::run::LoopSettings;
 use quell::scenario::Scenario;
-use quell::sim::{Outcome, RunStats, SimResult};
+use quell::sim::{Loop, Outcome, Run, RunSettings, RunStats, SimResult};
 use quell::Design;
 use serde_json::json;
 
@@ -50,7 +49,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     // (a very stiff run can take long to reach it) quits with no files.
     let ctrl_c = Interrupt::install("interrupted twice before the next sample; stopped without writing files");
     let started = Instant::now();
-    let result = simulate(&scenario, &design, &settings, &ctrl_c)?;
+    let result = simulate(&scenario, &design, settings, &ctrl_c)?;
     ctrl_c.start_writing();
     let seconds = started.elapsed().as_secs_f64();
     let diagnostics = quell::diagnostics::diagnose(&design, &scenario.reference, &scenario.disturbance, &result);
@@ -59,18 +58,19 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     report_outcome(&result, &diagnostics, out, seconds)
 }
 
-/// The scenario's loop ([`LoopSettings::of`]), or the sampled-data loop at `--sample-time`; a
-/// sampled-data loop is checked (delays whole samples, output step a multiple, noise, signals).
-fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result<LoopSettings, Failure> {
-    let settings = match args.sample_time {
+/// The scenario's loop ([`RunSettings::of`]), or the sampled-data loop at `--sample-time`, checked
+/// (settings, signals, truth; a sampled-data loop's delays whole samples, output step a multiple).
+fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result<RunSettings, Failure> {
+    let mut settings = match args.sample_time {
         Some(t) if !(t.is_finite() && t > 0.0) => {
             return Err(Failure::Input(format!("--sample-time: expected a sample time > 0 in seconds, found {t}")))
         }
-        Some(t) => LoopSettings::sampled(scenario, t),
-        None => LoopSettings::of(scenario),
+        Some(sample_time) => RunSettings { mode: Loop::Sampled { sample_time }, ..RunSettings::of(scenario) },
+        None => RunSettings::of(scenario),
     };
-    if let LoopSettings::Sampled(st) = &settings {
-        st.check(design, &scenario.reference, &scenario.disturbance).map_err(|e| match args.sample_time {
+    if let Loop::Sampled { .. } = settings.mode {
+        let run = Run::of(scenario, design).settings(settings.clone());
+        run.check().map_err(|e| match args.sample_time {
             // The flag, not the file's key, made the output step invalid: name both.
             Some(t) if e.to_string().starts_with("simulation.output_step:") => {
                 output_step_error(t, scenario.simulation.output_step)
@@ -78,8 +78,7 @@ fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result
             _ => Failure::Input(e.to_string()),
         })?;
     }
-    let mut settings = settings;
-    settings.record_states(args.states);
+    settings.record_states = args.states;
     settings.set_max_steps(args.max_steps).map_err(|e| Failure::Input(format!("--max-steps: {}", e.message)))?;
     Ok(settings)
 }
@@ -111,7 +110,7 @@ fn short(x: f64) -> String {
 fn simulate(
     scenario: &Scenario,
     design: &Design,
-    settings: &LoopSettings,
+    settings: RunSettings,
     ctrl_c: &Interrupt,
 ) -> Result<SimResult, Failure> {
     let bar = crate::progress_bar(
@@ -126,8 +125,8 @@ fn simulate(
             ControlFlow::Continue(())
         }
     };
-    let result =
-        quell::run::simulate(scenario, design, settings, progress).map_err(|e| Failure::Input(e.to_string()))?;
+    let run = Run::of(scenario, design).settings(settings);
+    let result = run.simulate(progress).map_err(|e| Failure::Input(e.to_string()))?;
     bar.finish_and_clear();
     Ok(result)
 }
@@ -233,7 +232,7 @@ fn report_outcome(result: &SimResult, diagnostics: &Diagnostics, out: &Path, sec
                 );
             }
             let steps = match result.stats {
-                RunStats::Continuous { steps, .. } => format!("{steps} solver steps"),
+                RunStats::Continuous(stats) => format!("{} solver steps", stats.steps),
                 RunStats::Sampled { controller_steps, .. } => format!("{controller_steps} controller steps"),
             };
             eprintln!("wrote {out} ({} samples, {steps}, {seconds:.3} s)", result.len());

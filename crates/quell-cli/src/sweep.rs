@@ -254,7 +254,7 @@ fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
     }
     let mut rows: Vec<Row> = shards.into_iter().flat_map(|(_, (_, rows, _))| rows).collect();
     rows.sort_by_key(|r| r.run);
-    let meta = StudyMeta { shard: Shard::ALL, ..first.clone() };
+    let meta = StudyMeta { shard: Shard::ALL, ..first };
     prepare_out(out, OUTPUTS)?;
     write_all(out, &meta, &rows, false, plots)?;
     eprintln!("merged {} shards: {} runs into {}", count, rows.len(), out.display());

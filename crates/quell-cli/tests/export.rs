@@ -165,7 +165,7 @@ fn the_exported_c_in_the_loop_gives_the_signals_of_quell_run() {
     // in place of the Rust controller, against the signals.csv of `quell run --sample-time 0.001`:
     // every column agrees to 1e-12 relative to its peak.
     use quell::export::Precision;
-    use quell::sim::{simulate_sampled_with, SampledSettings};
+    use quell::sim::{Run, RunSettings};
     let code_dir = c_harness::TempDir::new("cli-loop");
     let run_dir_tmp = temp_dir("run");
     let run_dir = run_dir_tmp.path();
@@ -179,11 +179,11 @@ fn the_exported_c_in_the_loop_gives_the_signals_of_quell_run() {
     let s = quell::Scenario::from_path(Path::new(&paper)).unwrap();
     let d = s.design().unwrap();
     let mut c = c_harness::CController::build_in(code_dir, "quell", Precision::F64, (2, d.q(), 3), "-O2");
-    let settings = SampledSettings::new(s.simulation.t_end, s.simulation.output_step, 1e-3);
-    let r = simulate_sampled_with(&d, &mut c, &s.reference, &s.disturbance, &settings, |_| {
-        std::ops::ControlFlow::Continue(())
-    })
-    .unwrap();
+    let settings = RunSettings::sampled(s.simulation.t_end, s.simulation.output_step, 1e-3);
+    let r = Run::new(&d, &s.reference, &s.disturbance, settings)
+        .controller(&mut c)
+        .simulate(|_| std::ops::ControlFlow::Continue(()))
+        .unwrap();
 
     let csv = std::fs::read_to_string(run_dir.join("signals.csv")).unwrap();
     let rows: Vec<Vec<f64>> = csv.lines().skip(1).map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();

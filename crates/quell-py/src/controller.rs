@@ -6,9 +6,9 @@ use std::sync::{Mutex, MutexGuard};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyList, PyTuple};
 
-use crate::convert::{number, type_name, vec_numpy, vector};
+use crate::convert::{number, vec_numpy, vector};
 use crate::design::PyDesign;
-use crate::errors::{in_arguments, raise, Kind};
+use crate::errors::{in_python, raise, Kind};
 
 /// The discrete-time adaptive controller of a design at sample time T_s (eqs. (5), (6), (14),
 /// (20), (25), (33)). `step` costs about 1 µs from Python. One controller may be shared between
@@ -41,11 +41,11 @@ fn read(obj: &Bound<'_, PyAny>, name: &str, out: &mut [f64]) -> PyResult<()> {
     let check = |v: &[f64], out: &mut [f64]| -> PyResult<()> {
         if v.len() != m {
             return Err(
-                Kind::Value.err(py, format!("{name}: expected {m} entries (one per output), found {}", v.len()))
+                Kind::Controller.err(py, format!("{name}: expected {m} entries (one per output), found {}", v.len()))
             );
         }
         if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-            return Err(Kind::Value.err(py, format!("{name}[{i}]: expected a finite number, found {}", v[i])));
+            return Err(Kind::Controller.err(py, format!("{name}[{i}]: expected a finite number, found {}", v[i])));
         }
         out.copy_from_slice(v);
         Ok(())
@@ -61,13 +61,15 @@ fn read(obj: &Bound<'_, PyAny>, name: &str, out: &mut [f64]) -> PyResult<()> {
     if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
         // Booleans are refused as `Plant` refuses a boolean array, not read as 0 and 1.
         if obj.try_iter().is_ok_and(|mut items| items.any(|x| x.is_ok_and(|x| x.is_instance_of::<PyBool>()))) {
-            return Err(Kind::Value.err(py, format!("{name}: expected real numbers, found booleans")));
+            return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+                "{name}: expected real numbers, found booleans"
+            )));
         }
         if let Ok(v) = obj.extract::<Vec<f64>>() {
             return check(&v, out);
         }
     }
-    check(&vector(obj, name, Kind::Value)?, out)
+    check(&vector(obj, name, Kind::Controller)?, out)
 }
 
 #[pymethods]
@@ -75,12 +77,11 @@ impl PyController {
     #[new]
     fn new(design: &Bound<'_, PyAny>, sample_time: &Bound<'_, PyAny>) -> PyResult<Self> {
         let py = design.py();
-        let d: PyRef<'_, PyDesign> = design.extract().map_err(|_| {
-            Kind::Value.err(py, format!("design: expected a quell.Design, found a {}", type_name(design)))
-        })?;
-        let T = number(sample_time, "sample_time", Kind::Scenario)?;
+        let d: PyRef<'_, PyDesign> =
+            design.extract().map_err(|_| crate::errors::type_error("design", "a quell.Design", design))?;
+        let T = number(sample_time, "sample_time")?;
         let inner =
-            quell::Controller::new(&d.inner, T).map_err(|e| Kind::Scenario.err(py, in_arguments(e.to_string())))?;
+            quell::Controller::new(&d.inner, T).map_err(|e| Kind::Scenario.err(py, in_python(e.to_string())))?;
         let (m, _) = inner.dims();
         Ok(PyController { inner: Mutex::new(inner), m })
     }
@@ -92,7 +93,7 @@ impl PyController {
         let (mut y_k, mut g_k) = (vec![0.0; self.m], vec![0.0; self.m]);
         read(y, "y", &mut y_k)?;
         read(g, "g", &mut g_k)?;
-        let u_f = self.lock().step(&y_k, &g_k).map(|u| u.to_vec()).map_err(|e| raise(y.py(), Kind::Value)(&e))?;
+        let u_f = self.lock().step(&y_k, &g_k).map(|u| u.to_vec()).map_err(|e| raise(y.py(), Kind::Controller)(&e))?;
         Ok(PyArray1::from_vec(y.py(), u_f))
     }
 
@@ -126,6 +127,13 @@ impl PyController {
     #[getter]
     fn sample_time(&self) -> f64 {
         self.lock().sample_time()
+    }
+
+    /// A controller does not pickle: it is the running state of one real-time loop.
+    fn __reduce__(&self) -> PyResult<()> {
+        Err(pyo3::exceptions::PyTypeError::new_err(
+            "cannot pickle a quell.Controller: it is the running state of one real-time loop (x̂, ξ̂, η̂ and the delay lines of the commands), which a copy would fork; pickle its Design and build Controller(design, sample_time) where it runs (it starts from reset)",
+        ))
     }
 
     fn __repr__(&self) -> String {

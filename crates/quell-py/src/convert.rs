@@ -1,13 +1,15 @@
-//! Python values in, checked Rust values out (and numpy arrays back): every failure is a
-//! `ValueError` subclass naming the argument, what was expected and what was found.
+//! Python values in, checked Rust values out (and numpy arrays back): a value of the wrong type is
+//! a `TypeError`, a value of the right type that is not valid (shape, NaN) a `QuellError` subclass;
+//! both name the argument, what was expected and what was found.
 
 use numpy::ndarray::Array2;
 use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyComplex, PyDict, PyString};
+use pyo3::types::{PyBool, PyComplex, PyDict, PyString};
 use quell::nalgebra::{Complex, DMatrix};
 
-use crate::errors::Kind;
+use crate::errors::{type_error, Kind};
 
 /// Python's name for the type of `obj` ("list", "str", "numpy.ndarray").
 pub fn type_name(obj: &Bound<'_, PyAny>) -> String {
@@ -15,9 +17,14 @@ pub fn type_name(obj: &Bound<'_, PyAny>) -> String {
 }
 
 /// `obj` as a float64 numpy array: any array-like of real numbers (ints, floats, numpy arrays).
+/// Something that is not an array-like of numbers is a `TypeError`; rows of unequal length are
+/// `kind`'s error.
 fn real_array<'py>(obj: &Bound<'py, PyAny>, name: &str, kind: Kind) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let py = obj.py();
     let np = py.import("numpy")?;
+    if obj.is_none() || obj.is_instance_of::<PyDict>() {
+        return Err(type_error(name, "an array-like of real numbers", obj));
+    }
     let arr = np.call_method1("asarray", (obj,)).map_err(|e| {
         kind.err(
             py,
@@ -34,10 +41,11 @@ fn real_array<'py>(obj: &Bound<'py, PyAny>, name: &str, kind: Kind) -> PyResult<
             "c" => "complex numbers".to_string(),
             "b" => "booleans".to_string(),
             "U" | "S" => "strings".to_string(),
-            "O" => "entries that are not all numbers (or rows of unequal length)".to_string(),
+            "O" if arr.getattr("ndim")?.extract::<usize>()? == 0 => format!("a {}", type_name(obj)),
+            "O" => "entries that are not all numbers".to_string(),
             _ => format!("an array of dtype {}", dtype.str()?),
         };
-        return Err(kind.err(py, format!("{name}: expected real numbers, found {found}")));
+        return Err(PyTypeError::new_err(format!("{name}: expected real numbers, found {found}")));
     }
     Ok(arr.call_method1("astype", ("float64",))?.cast_into::<PyArrayDyn<f64>>()?)
 }
@@ -98,14 +106,12 @@ pub fn vector(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<f6
     view.as_array().iter().enumerate().map(|(i, &v)| finite(name, &[i], v, kind, py)).collect()
 }
 
-/// A real number.
-pub fn number(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<f64> {
-    let py = obj.py();
-    if obj.is_instance_of::<PyString>() || obj.is_instance_of::<PyComplex>() {
-        return Err(kind.err(py, format!("{name}: expected a real number, found a {}", type_name(obj))));
+/// A real number (an int, a float or a numpy scalar; not a bool).
+pub fn number(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<f64> {
+    if obj.is_instance_of::<PyString>() || obj.is_instance_of::<PyComplex>() || obj.is_instance_of::<PyBool>() {
+        return Err(type_error(name, "a real number", obj));
     }
-    obj.extract::<f64>()
-        .map_err(|_| kind.err(py, format!("{name}: expected a real number, found a {}", type_name(obj))))
+    obj.extract::<f64>().map_err(|_| type_error(name, "a real number", obj))
 }
 
 /// A list of poles: real numbers, Python complex numbers (a conjugate pair both listed), or
@@ -114,22 +120,17 @@ pub fn poles(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<Com
     let py = obj.py();
     let form = "a list of poles (numbers, complex numbers, or [re, im] pairs meaning re ± i·im)";
     if obj.is_instance_of::<PyString>() || obj.is_instance_of::<PyDict>() {
-        return Err(kind.err(py, format!("{name}: expected {form}, found a {}", type_name(obj))));
+        return Err(type_error(name, form, obj));
     }
-    let items =
-        obj.try_iter().map_err(|_| kind.err(py, format!("{name}: expected {form}, found a {}", type_name(obj))))?;
+    let items = obj.try_iter().map_err(|_| type_error(name, form, obj))?;
     let mut out = Vec::new();
     for (i, item) in items.enumerate() {
         let item = item?;
         let key = format!("{name}[{i}]");
-        let bad = |what: String| {
-            kind.err(
-                py,
-                format!("{key}: expected a pole: a number, a complex number or [re, im] with im > 0, found {what}"),
-            )
-        };
-        if item.is_instance_of::<PyString>() {
-            return Err(bad("a str".into()));
+        let pole = "a pole: a number, a complex number or [re, im] with im > 0";
+        let bad = |what: String| kind.err(py, format!("{key}: expected {pole}, found {what}"));
+        if item.is_instance_of::<PyString>() || item.is_instance_of::<PyBool>() || item.is_none() {
+            return Err(type_error(&key, pole, &item));
         }
         let numpy_complex =
             item.getattr("dtype").and_then(|d| d.getattr("kind")).is_ok_and(|k| k.eq("c").unwrap_or(false));
@@ -140,7 +141,16 @@ pub fn poles(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<Com
         } else if let Ok(re) = item.extract::<f64>() {
             out.push(Complex::new(finite(&key, &[], re, kind, py)?, 0.0));
         } else {
-            let pair = vector(&item, &key, kind).map_err(|_| bad(type_name(&item)))?;
+            if item.try_iter().is_err() {
+                return Err(type_error(&key, pole, &item));
+            }
+            let pair = vector(&item, &key, kind).map_err(|e| {
+                if e.is_instance_of::<PyTypeError>(py) {
+                    type_error(&key, pole, &item)
+                } else {
+                    bad(type_name(&item))
+                }
+            })?;
             let [re, im] = pair[..] else {
                 return Err(bad(format!("{} entries", pair.len())));
             };
@@ -159,15 +169,11 @@ pub fn poles(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<Com
 /// One list of poles per channel or signal component.
 pub fn pole_lists(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<Vec<Complex<f64>>>> {
     let py = obj.py();
-    let items = obj.try_iter().map_err(|_| {
-        kind.err(
-            py,
-            format!(
-                "{name}: expected one list of poles per channel or component, e.g. [[-6, -2], [-4]], found a {}",
-                type_name(obj)
-            ),
-        )
-    })?;
+    let form = "one list of poles per channel or component, e.g. [[-6, -2], [-4]]";
+    if obj.is_instance_of::<PyString>() || obj.is_instance_of::<PyDict>() {
+        return Err(type_error(name, form, obj));
+    }
+    let items = obj.try_iter().map_err(|_| type_error(name, form, obj))?;
     let mut out = Vec::new();
     for (i, item) in items.enumerate() {
         let item = item?;

@@ -3,17 +3,37 @@
 use std::sync::Arc;
 
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyComplex, PyDict, PyList, PyTuple};
 use quell::design::{DesignSpec, ObserverChoice};
 
 use crate::convert::{complex_numpy, matrix, number, pole_lists, poles, to_numpy, type_name, vector};
-use crate::errors::{raise, Kind};
-use crate::plant::{plant_arg, PyPlant};
+use crate::errors::{in_python, raise, type_error, Kind};
+use crate::plant::{plant_arg, Labels, PyPlant};
 
 /// Every matrix the controller needs, with the assumption checks that were passed to get them.
 #[pyclass(module = "quell", name = "Design", frozen)]
 pub struct PyDesign {
     pub inner: Arc<quell::Design>,
+    /// The choices it was designed with.
+    pub spec: DesignSpec,
+    /// The plant's signal names.
+    pub labels: Labels,
+}
+
+/// Poles as Python values: real ones as float, the others as complex.
+fn py_poles<'py>(py: Python<'py>, poles: &[quell::nalgebra::Complex<f64>]) -> PyResult<Bound<'py, PyList>> {
+    let items: Vec<Bound<'py, PyAny>> = poles
+        .iter()
+        .map(|z| match z.im {
+            0.0 => Ok(z.re.into_pyobject(py)?.into_any()),
+            _ => Ok(PyComplex::from_doubles(py, z.re, z.im).into_any()),
+        })
+        .collect::<PyResult<_>>()?;
+    PyList::new(py, items)
+}
+
+fn py_pole_lists<'py>(py: Python<'py>, lists: &[Vec<quell::nalgebra::Complex<f64>>]) -> PyResult<Bound<'py, PyList>> {
+    PyList::new(py, lists.iter().map(|p| py_poles(py, p)).collect::<PyResult<Vec<_>>>()?)
 }
 
 /// The designer's choices as keyword arguments of `quell.design` (names as in `[design]`).
@@ -30,32 +50,36 @@ pub fn spec(
     relative_degrees: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<DesignSpec> {
     let k = Kind::Design;
-    let observer = match (observer_gain, observer_poles) {
-        (Some(L), None) => ObserverChoice::Gain(matrix(L, "design.observer_gain", k)?),
-        (None, Some(p)) => ObserverChoice::Poles(poles(p, "design.observer_poles", k)?),
-        (Some(_), Some(_)) => return Err(k.err(py, "design: both observer_gain and observer_poles are given; give exactly one: the gain L (n×m), or the n poles of A − LC to place")),
-        (None, None) => return Err(k.err(py, "design.observer_gain: missing; give exactly one of observer_gain (the gain L, n×m) and observer_poles (the n poles of A − LC)")),
+    // Both are read first, so that a wrong type is named before a wrong combination.
+    let gain = observer_gain.map(|L| matrix(L, "observer_gain", k)).transpose()?;
+    let placed = observer_poles.map(|p| poles(p, "observer_poles", k)).transpose()?;
+    let observer = match (gain, placed) {
+        (Some(L), None) => ObserverChoice::Gain(L),
+        (None, Some(p)) => ObserverChoice::Poles(p),
+        (Some(_), Some(_)) => return Err(k.err(py, "observer_gain, observer_poles: both are given; give exactly one: the gain L (n×m), or the n poles of A − LC to place")),
+        (None, None) => return Err(k.err(py, "observer_gain: missing; give exactly one of observer_gain (the gain L, n×m) and observer_poles (the n poles of A − LC)")),
     };
     Ok(DesignSpec {
         observer,
-        channel_poles: pole_lists(channel_poles, "design.channel_poles", k)?,
-        reference_filter_poles: pole_lists(reference_filter_poles, "design.reference_filter_poles", k)?,
+        channel_poles: pole_lists(channel_poles, "channel_poles", k)?,
+        reference_filter_poles: pole_lists(reference_filter_poles, "reference_filter_poles", k)?,
         disturbance_filter_poles: disturbance_filter_poles
-            .map(|p| pole_lists(p, "design.disturbance_filter_poles", k))
+            .map(|p| pole_lists(p, "disturbance_filter_poles", k))
             .transpose()?
             .unwrap_or_default(),
-        mu: vector(mu, "design.mu", k)?,
-        beta: number(beta, "design.beta", k)?,
-        relative_degrees: relative_degrees.map(|s| integers(s, "design.relative_degrees", k)).transpose()?,
+        mu: vector(mu, "mu", k)?,
+        beta: number(beta, "beta")?,
+        relative_degrees: relative_degrees.map(|s| integers(s, "relative_degrees", k)).transpose()?,
     })
 }
 
 /// A sequence of integers ≥ 1 (a bool or float is refused, naming `name[i]`).
 fn integers(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<usize>> {
     let py = obj.py();
-    let items = obj
-        .try_iter()
-        .map_err(|_| kind.err(py, format!("{name}: expected a list of integers ≥ 1, found a {}", type_name(obj))))?;
+    if obj.is_instance_of::<pyo3::types::PyString>() {
+        return Err(type_error(name, "a list of integers ≥ 1", obj));
+    }
+    let items = obj.try_iter().map_err(|_| type_error(name, "a list of integers ≥ 1", obj))?;
     items
         .enumerate()
         .map(|(i, v)| {
@@ -70,7 +94,7 @@ fn integers(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<usiz
                 )
             };
             if v.is_instance_of::<pyo3::types::PyBool>() || !v.is_instance_of::<pyo3::types::PyInt>() {
-                return Err(bad());
+                return Err(type_error(&format!("{name}[{i}]"), "an integer ≥ 1", &v));
             }
             match v.extract::<usize>() {
                 Ok(s) if s >= 1 => Ok(s),
@@ -108,9 +132,29 @@ pub fn design(
         observer_gain,
         relative_degrees,
     )?;
-    let d = quell::Design::new(&plant.inner, &spec).map_err(|e| raise(py, Kind::Design)(&e))?;
+    let d = quell::Design::new(&plant.inner, &spec).map_err(|e| Kind::Design.err(py, in_python(e.to_string())))?;
     crate::errors::warn_fragile(py, &d, &spec)?;
-    Ok(PyDesign { inner: Arc::new(d) })
+    Ok(PyDesign { inner: Arc::new(d), spec, labels: plant.labels.clone() })
+}
+
+/// The design of `plant` with `choices` (a `Design.choices` dict), without warnings: how a pickled
+/// design is rebuilt.
+fn restore(py: Python<'_>, plant: &PyPlant, choices: &Bound<'_, PyDict>) -> PyResult<PyDesign> {
+    let get = |k: &str| choices.get_item(k);
+    let required = |k: &str| get(k)?.ok_or_else(|| Kind::Design.err(py, format!("choices: missing {k}")));
+    let spec = spec(
+        py,
+        &required("channel_poles")?,
+        &required("reference_filter_poles")?,
+        get("disturbance_filter_poles")?.as_ref(),
+        &required("mu")?,
+        &required("beta")?,
+        get("observer_poles")?.as_ref(),
+        get("observer_gain")?.as_ref(),
+        get("relative_degrees")?.filter(|v| !v.is_none()).as_ref(),
+    )?;
+    let d = quell::Design::new(&plant.inner, &spec).map_err(|e| raise(py, Kind::Design)(&e))?;
+    Ok(PyDesign { inner: Arc::new(d), spec, labels: plant.labels.clone() })
 }
 
 /// State feedback K with eig(A − BK) = poles (KNV / Tits–Yang for several inputs), as `control.place`.
@@ -232,7 +276,47 @@ impl PyDesign {
     /// The plant the design is for.
     #[getter]
     fn plant(&self) -> PyPlant {
-        PyPlant { inner: self.inner.plant().clone() }
+        PyPlant { inner: self.inner.plant().clone(), labels: self.labels.clone() }
+    }
+    /// The designer's choices, as `quell.design`'s keyword arguments: channel_poles,
+    /// reference_filter_poles, disturbance_filter_poles, mu, beta, observer_gain or
+    /// observer_poles, and relative_degrees when given.
+    #[getter]
+    fn choices<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let s = &self.spec;
+        let d = PyDict::new(py);
+        d.set_item("channel_poles", py_pole_lists(py, &s.channel_poles)?)?;
+        d.set_item("reference_filter_poles", py_pole_lists(py, &s.reference_filter_poles)?)?;
+        d.set_item("disturbance_filter_poles", py_pole_lists(py, &s.disturbance_filter_poles)?)?;
+        d.set_item("mu", s.mu.clone())?;
+        d.set_item("beta", s.beta)?;
+        match &s.observer {
+            ObserverChoice::Gain(L) => d.set_item("observer_gain", to_numpy(py, L))?,
+            ObserverChoice::Poles(p) => d.set_item("observer_poles", py_poles(py, p)?)?,
+        }
+        if let Some(r) = &s.relative_degrees {
+            d.set_item("relative_degrees", r.clone())?;
+        }
+        Ok(d)
+    }
+    /// Rebuilds a pickled design.
+    #[staticmethod]
+    fn _restore(py: Python<'_>, plant: PyRef<'_, PyPlant>, choices: &Bound<'_, PyDict>) -> PyResult<Self> {
+        restore(py, &plant, choices)
+    }
+    /// Pickles as the plant and the choices, designed again when unpickled (the same gains).
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let py = slf.py();
+        let me = slf.get();
+        let args = PyTuple::new(py, [Py::new(py, me.plant())?.into_bound(py).into_any(), me.choices(py)?.into_any()])?;
+        Ok((slf.get_type().getattr("_restore")?, args))
+    }
+    /// Equal designs: the same plant (signal names too) and the same choices, so the same gains.
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other.cast::<PyDesign>().is_ok_and(|o| {
+            let o = o.get();
+            o.inner.plant() == self.inner.plant() && o.spec == self.spec && o.labels == self.labels
+        })
     }
     /// Per channel: the decoupled transfer function G_ii(s) = q0 / (s^σ + a_{σ−1} s^{σ−1} + … + a_0)
     /// as a dict with `poles`, `denominator` (ascending [a_0, …, a_{σ−1}]) and `q0`.

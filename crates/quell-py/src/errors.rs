@@ -1,7 +1,6 @@
 //! The exception classes live in Python (`quell/_errors.py`, so that `ScenarioError` can subclass
 //! both `QuellError` and `ValueError`); this raises them with the library's messages.
 
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyType;
 
@@ -12,23 +11,74 @@ pub enum Kind {
     Scenario,
     /// `quell.DesignError`: the designer's choices, or no design exists.
     Design,
-    /// Plain `ValueError`: arguments of the real-time controller.
-    Value,
+    /// `quell.ControllerError`: the real-time controller's measurements and state.
+    Controller,
     /// `quell.ExportError`: the export's own arguments (prefix, precision, compiler).
     Export,
 }
 
-/// The library's keys as the Python arguments that set them, for messages of calls that take them.
-pub const ARGUMENTS: [(&str, &str); 1] = [("simulation.sample_time", "sample_time")];
-
-/// A library message whose leading key one of the call's arguments sets, with the argument named.
-pub fn in_arguments(message: String) -> String {
-    for (key, argument) in ARGUMENTS {
-        if let Some(rest) = message.strip_prefix(key).filter(|r| r.starts_with([':', ' '])) {
-            return format!("{argument}{rest}");
-        }
+/// `.name`, `."quoted name"` and `[i]` steps as Python subscripts: `.harmonics[0].frequency` is
+/// `["harmonics"][0]["frequency"]`.
+pub fn subscripts(mut rest: &str) -> String {
+    let mut out = String::new();
+    while let Some(c) = rest.chars().next() {
+        let end = match c {
+            '.' if rest[1..].starts_with('"') => {
+                let end = rest[2..].find('"').map_or(rest.len(), |i| i + 3);
+                out.push_str(&format!("[{}]", &rest[1..end]));
+                end
+            }
+            '.' => {
+                let end = rest[1..].find(['.', '[']).map_or(rest.len(), |i| i + 1);
+                out.push_str(&format!("[\"{}\"]", &rest[1..end]));
+                end
+            }
+            _ => {
+                let end = rest.find(']').map_or(rest.len(), |i| i + 1);
+                out.push_str(&rest[..end]);
+                end
+            }
+        };
+        rest = &rest[end..];
     }
-    message
+    out
+}
+
+/// A scenario key as the Python argument that sets it: `simulation.t_end` is `t_end` (a keyword of
+/// `Scenario` and `simulate`), `design.mu[0]` is `mu[0]`, `reference.components[0].bias` is
+/// `reference[0]["bias"]`, `noise.std` is `noise["std"]`; `plant.A` (an attribute of the plant
+/// argument) and other keys are left as they are.
+pub fn python_key(key: &str) -> String {
+    let keyword = key.strip_prefix("simulation.").or_else(|| key.strip_prefix("design."));
+    let (head, rest) = if let Some(r) = keyword {
+        let end = r.find(['.', '[']).unwrap_or(r.len());
+        (&r[..end], &r[end..])
+    } else if let Some(r) = key.strip_prefix("reference.components") {
+        ("reference", r)
+    } else if let Some(r) = key.strip_prefix("disturbance.components") {
+        ("disturbance", r)
+    } else if let Some(r) = key.strip_prefix("noise") {
+        ("noise", r)
+    } else {
+        return key.to_string();
+    };
+    format!("{head}{}", subscripts(rest))
+}
+
+/// A library message (`key: …`) with its leading key as the Python argument ([`python_key`]).
+pub fn in_python(message: String) -> String {
+    match message.split_once(": ") {
+        Some((key, rest)) if !key.contains(' ') => format!("{}: {rest}", python_key(key)),
+        _ => message,
+    }
+}
+
+/// `TypeError: {name}: expected {expected}, found a {type of obj}`.
+pub fn type_error(name: &str, expected: &str, obj: &Bound<'_, PyAny>) -> PyErr {
+    pyo3::exceptions::PyTypeError::new_err(format!(
+        "{name}: expected {expected}, found a {}",
+        crate::convert::type_name(obj)
+    ))
 }
 
 fn class<'py>(py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyType>> {
@@ -43,7 +93,7 @@ impl Kind {
             Kind::Scenario => "ScenarioError",
             Kind::Design => "DesignError",
             Kind::Export => "ExportError",
-            Kind::Value => return PyValueError::new_err(message),
+            Kind::Controller => "ControllerError",
         };
         match class(py, name) {
             Ok(cls) => PyErr::from_type(cls, message),

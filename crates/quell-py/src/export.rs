@@ -7,12 +7,12 @@ use quell::export::{generate, generate_fmu, ExportError, ExportOptions};
 
 use crate::convert::{number, type_name};
 use crate::design::PyDesign;
-use crate::errors::{in_arguments, Kind};
+use crate::errors::{in_python, Kind};
 use crate::scenario::PyScenario;
 
 /// The library's message, its key named as this function's argument.
 fn message(e: &ExportError) -> String {
-    in_arguments(e.to_string())
+    in_python(e.to_string())
 }
 
 /// Writes `bytes` to `path` through a temporary file in the same directory, renamed into place.
@@ -52,7 +52,7 @@ pub fn export(
         )));
     };
     let T = match sample_time {
-        Some(v) => number(v, "sample_time", Kind::Scenario)?,
+        Some(v) => number(v, "sample_time")?,
         None => scenario_T.ok_or_else(|| {
             Kind::Scenario.err(py, "sample_time: missing; pass the controller's sample time T_s in seconds (or set simulation.sample_time in the scenario)")
         })?,

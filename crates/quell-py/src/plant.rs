@@ -1,6 +1,7 @@
 //! `quell.Plant`: the plant (1), ẋ = A x + B u_f + D ω, y = C x + Q ω, with the adaptive command's
 //! delays τ_i.
 
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use quell::nalgebra::DMatrix;
@@ -23,6 +24,85 @@ use crate::errors::{raise, Kind};
 #[pyclass(module = "quell", name = "Plant", frozen)]
 pub struct PyPlant {
     pub inner: quell::Plant,
+    pub labels: Labels,
+}
+
+/// The names of a plant's signals (`inputs=`, `outputs=`, `states=`, or a `control.StateSpace`'s
+/// labels); `None` where none were given: `u_f[i]`, `y[i]`, `x[j]`, counting from 1.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Labels {
+    pub inputs: Option<Vec<String>>,
+    pub outputs: Option<Vec<String>>,
+    pub states: Option<Vec<String>>,
+}
+
+impl Labels {
+    fn or_default(given: &Option<Vec<String>>, prefix: &str, count: usize) -> Vec<String> {
+        given.clone().unwrap_or_else(|| (1..=count).map(|i| format!("{prefix}[{i}]")).collect())
+    }
+    /// The inputs' names (m).
+    pub fn inputs(&self, m: usize) -> Vec<String> {
+        Self::or_default(&self.inputs, "u_f", m)
+    }
+    /// The outputs' names (m).
+    pub fn outputs(&self, m: usize) -> Vec<String> {
+        Self::or_default(&self.outputs, "y", m)
+    }
+    /// The states' names (n).
+    pub fn states(&self, n: usize) -> Vec<String> {
+        Self::or_default(&self.states, "x", n)
+    }
+}
+
+impl PyPlant {
+    /// A plant without signal names.
+    pub fn unlabelled(inner: quell::Plant) -> Self {
+        PyPlant { inner, labels: Labels::default() }
+    }
+}
+
+/// `count` distinct names for `name` (a list of str), or None.
+fn names(obj: Option<&Bound<'_, PyAny>>, name: &str, count: usize) -> PyResult<Option<Vec<String>>> {
+    let Some(obj) = obj.filter(|o| !o.is_none()) else { return Ok(None) };
+    let py = obj.py();
+    let expected = format!("a list of {count} names (str)");
+    if obj.is_instance_of::<pyo3::types::PyString>() {
+        return Err(PyTypeError::new_err(format!("{name}: expected {expected}, found a str")));
+    }
+    let items = obj
+        .try_iter()
+        .map_err(|_| PyTypeError::new_err(format!("{name}: expected {expected}, found a {}", type_name(obj))))?;
+    let mut out: Vec<String> = Vec::new();
+    for (i, item) in items.enumerate() {
+        let item = item?;
+        let text: String = item.extract().map_err(|_| {
+            PyTypeError::new_err(format!("{name}[{i}]: expected a str (a signal name), found a {}", type_name(&item)))
+        })?;
+        if out.contains(&text) {
+            return Err(Kind::Scenario
+                .err(py, format!("{name}[{i}]: {text:?} names another signal too; give each signal its own name")));
+        }
+        out.push(text);
+    }
+    if out.len() != count {
+        return Err(Kind::Scenario.err(
+            py,
+            format!(
+                "{name}: expected {count} names (one per {}), found {}",
+                if name == "states" { "state" } else { "channel" },
+                out.len()
+            ),
+        ));
+    }
+    Ok(Some(out))
+}
+
+/// A `control.StateSpace`'s labels of one kind, unless they are python-control's own
+/// (`u[0]`, `u[1]`, …, counting from 0).
+fn system_labels(sys: &Bound<'_, PyAny>, attribute: &str, generic: &str) -> Option<Vec<String>> {
+    let labels: Vec<String> = sys.getattr(attribute).ok()?.extract().ok()?;
+    let default = (0..labels.len()).all(|i| labels[i] == format!("{generic}[{i}]"));
+    (!default).then_some(labels)
 }
 
 /// Whether `obj` looks like a `control.StateSpace` (has A, B, C, D and nstates).
@@ -36,16 +116,18 @@ fn required<'a, 'py>(
     name: &str,
     what: &str,
 ) -> PyResult<&'a Bound<'py, PyAny>> {
+    let _ = py;
     v.ok_or_else(|| {
-        Kind::Scenario
-            .err(py, format!("{name}: missing; required: {what} (or pass a control.StateSpace as the first argument)"))
+        PyTypeError::new_err(format!(
+            "{name}: missing; required: {what} (or pass a control.StateSpace as the first argument)"
+        ))
     })
 }
 
 #[pymethods]
 impl PyPlant {
     #[new]
-    #[pyo3(signature = (A, B=None, C=None, D=None, Q=None, delays=None, x0=None))]
+    #[pyo3(signature = (A, B=None, C=None, D=None, Q=None, delays=None, x0=None, inputs=None, outputs=None, states=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         A: &Bound<'_, PyAny>,
@@ -55,6 +137,9 @@ impl PyPlant {
         Q: Option<&Bound<'_, PyAny>>,
         delays: Option<&Bound<'_, PyAny>>,
         x0: Option<&Bound<'_, PyAny>>,
+        inputs: Option<&Bound<'_, PyAny>>,
+        outputs: Option<&Bound<'_, PyAny>>,
+        states: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let py = A.py();
         let k = Kind::Scenario;
@@ -66,8 +151,14 @@ impl PyPlant {
         } else {
             A
         };
+        let mut labels = Labels::default();
         let (A, B, C) = if is_state_space(A) {
             let sys = A;
+            labels = Labels {
+                inputs: system_labels(sys, "input_labels", "u"),
+                outputs: system_labels(sys, "output_labels", "y"),
+                states: system_labels(sys, "state_labels", "x"),
+            };
             if B.is_some() || C.is_some() {
                 return Err(k.err(py, "B, C: the first argument is a state-space system, which gives A, B and C; pass D and Q (the disturbance matrices) as keywords: Plant(sys, D=..., Q=..., delays=...)"));
             }
@@ -109,7 +200,11 @@ impl PyPlant {
         };
         let x0 = x0.map(|x| vector(x, "x0", k)).transpose()?.map(quell::nalgebra::DVector::from_vec);
         let inner = quell::Plant::new(A, B, C, D, Q, delays, x0).map_err(|e| raise(py, k)(&e))?;
-        Ok(PyPlant { inner })
+        let (n, m) = (inner.n(), inner.m());
+        labels.inputs = names(inputs, "inputs", m)?.or(labels.inputs);
+        labels.outputs = names(outputs, "outputs", m)?.or(labels.outputs);
+        labels.states = names(states, "states", n)?.or(labels.states);
+        Ok(PyPlant { inner, labels })
     }
 
     /// State matrix A (n×n).
@@ -163,19 +258,37 @@ impl PyPlant {
         self.inner.k()
     }
 
+    /// Names of the inputs u_f (m): `inputs=`, a `control.StateSpace`'s input labels, or `u_f[i]`.
+    #[getter]
+    fn inputs(&self) -> Vec<String> {
+        self.labels.inputs(self.inner.m())
+    }
+    /// Names of the outputs y (m): `outputs=`, a `control.StateSpace`'s output labels, or `y[i]`.
+    #[getter]
+    fn outputs(&self) -> Vec<String> {
+        self.labels.outputs(self.inner.m())
+    }
+    /// Names of the states x (n): `states=`, a `control.StateSpace`'s state labels, or `x[j]`.
+    #[getter]
+    fn states(&self) -> Vec<String> {
+        self.labels.states(self.inner.n())
+    }
+
     fn __repr__(&self) -> String {
         let p = &self.inner;
         format!("Plant(n={}, m={}, k={}, delays={:?})", p.n(), p.m(), p.k(), p.delays)
     }
-    /// Equal plants: the same matrices, delays and x0, entry for entry.
+    /// Equal plants: the same matrices, delays, x0 and signal names, entry for entry.
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
-        other.cast::<PyPlant>().is_ok_and(|o| o.get().inner == self.inner)
+        other.cast::<PyPlant>().is_ok_and(|o| o.get().inner == self.inner && o.get().labels == self.labels)
     }
-    /// Pickles as `Plant(A, B, C, D, Q, delays, x0)` (D and Q omitted without a disturbance).
+    /// Pickles as `Plant(A, B, C, D, Q, delays, x0, inputs, outputs, states)` (D and Q omitted
+    /// without a disturbance, names without names).
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
         let py = slf.py();
         let (p, me) = (&slf.get().inner, slf.get());
         let disturbance = p.k() > 0;
+        let l = &me.labels;
         let args = PyTuple::new(
             py,
             [
@@ -186,6 +299,9 @@ impl PyPlant {
                 if disturbance { me.Q(py) } else { py.None().into_bound(py) },
                 me.delays(py),
                 me.x0(py),
+                l.inputs.clone().into_pyobject(py)?,
+                l.outputs.clone().into_pyobject(py)?,
+                l.states.clone().into_pyobject(py)?,
             ],
         )?;
         Ok((slf.get_type().into_any(), args))
@@ -195,12 +311,9 @@ impl PyPlant {
 /// `obj` as a Plant, or a ScenarioError naming `name`.
 pub fn plant_arg<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<PyRef<'py, PyPlant>> {
     obj.extract::<PyRef<'py, PyPlant>>().map_err(|_| {
-        Kind::Scenario.err(
-            obj.py(),
-            format!(
-                "{name}: expected a quell.Plant, found a {}; build one with quell.Plant(A, B, C, D, Q, delays=...)",
-                type_name(obj)
-            ),
-        )
+        PyTypeError::new_err(format!(
+            "{name}: expected a quell.Plant, found a {}; build one with quell.Plant(A, B, C, D, Q, delays=...)",
+            type_name(obj)
+        ))
     })
 }

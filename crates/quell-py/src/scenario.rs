@@ -7,6 +7,7 @@
 use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
 
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyComplex, PyDict, PyFloat, PyInt, PyString};
 use quell::design::DesignError;
@@ -16,8 +17,8 @@ use toml::{Table, Value};
 
 use crate::convert::{pole_lists, poles, type_name};
 use crate::design::PyDesign;
-use crate::errors::{raise, Kind};
-use crate::plant::{plant_arg, PyPlant};
+use crate::errors::{in_python, raise, type_error, Kind};
+use crate::plant::{plant_arg, Labels, PyPlant};
 
 /// A scenario: plant (1), design choices, reference g(t) (Assumption 2), disturbance ω(t)
 /// (Assumption 3), simulation settings, noise and the true plant.
@@ -33,11 +34,15 @@ use crate::plant::{plant_arg, PyPlant};
 pub struct PyScenario {
     pub inner: quell::Scenario,
     design: OnceLock<Arc<quell::Design>>,
+    /// The plant's signal names (a scenario file has none).
+    pub labels: Labels,
+    /// Built from Python values: messages name the arguments (`mu[0]`), not the file's keys.
+    from_values: bool,
 }
 
 impl PyScenario {
     pub fn new(inner: quell::Scenario) -> Self {
-        PyScenario { inner, design: OnceLock::new() }
+        PyScenario { inner, design: OnceLock::new(), labels: Labels::default(), from_values: false }
     }
 
     /// Parses and validates `text`, or raises ScenarioError.
@@ -55,7 +60,10 @@ impl PyScenario {
         if let Some(d) = self.design.get() {
             return Ok(d.clone());
         }
-        let d = Arc::new(self.inner.design().map_err(|e| raise(py, Kind::Design)(&e))?);
+        let d = Arc::new(self.inner.design().map_err(|e| {
+            let message = e.to_string();
+            Kind::Design.err(py, if self.from_values { in_python(message) } else { message })
+        })?);
         crate::errors::warn_fragile(py, &d, &self.inner.design)?;
         Ok(self.design.get_or_init(|| d).clone())
     }
@@ -68,11 +76,20 @@ pub fn scenario_error(py: Python<'_>, e: &quell::ScenarioError) -> PyErr {
     err
 }
 
-/// A Python value (numbers, strings, lists, dicts, numpy arrays and scalars) as a TOML value.
+/// A ScenarioError of a call with Python arguments: the message names the argument
+/// ([`in_python`]), `.key` the scenario key path.
+pub fn argument_error(py: Python<'_>, e: &quell::ScenarioError) -> PyErr {
+    let err = Kind::Scenario.err(py, in_python(e.to_string()));
+    let _ = err.value(py).setattr("key", e.key.clone());
+    err
+}
+
+/// A Python value (numbers, strings, lists, dicts, numpy arrays and scalars) as a TOML value;
+/// `key` names it in messages, as Python spells it (`reference[0]["bias"]`).
 pub fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
     let py = obj.py();
     let bad =
-        |what: &str| Kind::Scenario.err(py, format!("{key}: expected a number, string, list or dict, found {what}"));
+        |what: &str| PyTypeError::new_err(format!("{key}: expected a number, string, list or dict, found {what}"));
     if obj.is_instance_of::<PyBool>() {
         return Ok(Value::Boolean(obj.extract()?));
     }
@@ -82,7 +99,7 @@ pub fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
         }
         // A seed is an integer, never rounded to a float (which the reader would then refuse as
         // "a floating-point number"); any other key takes a huge integer as the float it is.
-        if key.rsplit('.').next() == Some("seed") {
+        if key.ends_with("[\"seed\"]") {
             return Err(
                 Kind::Scenario.err(py, format!("{key}: expected a seed, an integer from 0 to 2**63 - 1, found {obj}"))
             );
@@ -96,14 +113,16 @@ pub fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
         return Ok(Value::String(obj.extract()?));
     }
     if obj.is_instance_of::<PyComplex>() {
-        return Err(Kind::Scenario.err(py, format!("{key}: expected a real number, found a complex number (complex numbers are poles, in the *_poles lists)")));
+        return Err(PyTypeError::new_err(format!(
+            "{key}: expected a real number, found a complex number (complex numbers are poles, in the *_poles lists)"
+        )));
     }
     if let Ok(d) = obj.cast::<PyDict>() {
         let mut t = Table::new();
         for (k, v) in d.iter() {
             let name: String = k.extract().map_err(|_| bad(&format!("a dict key of type {}", type_name(&k))))?;
             if !v.is_none() {
-                let child = if key.is_empty() { name.clone() } else { format!("{key}.{name}") };
+                let child = format!("{key}[{name:?}]");
                 t.insert(name, toml_value(&v, &child)?);
             }
         }
@@ -140,7 +159,7 @@ fn design_value(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Table> {
     let Some(kwargs) = kwargs else { return Ok(t) };
     for (k, v) in kwargs.iter() {
         let name: String = k.extract()?;
-        let key = format!("design.{name}");
+        let key = name.clone();
         let py = v.py();
         if v.is_none() {
             continue;
@@ -206,13 +225,18 @@ impl PyScenario {
     ) -> PyResult<Self> {
         let plant = plant_arg(plant, "plant")?;
         let mut doc = Table::new();
-        if let Some(name) = name {
-            doc.insert("name".into(), toml_value(name, "name")?);
+        if let Some(name) = name.filter(|n| !n.is_none()) {
+            let text: String = name.extract().map_err(|_| type_error("name", "a str", name))?;
+            doc.insert("name".into(), Value::String(text));
         }
         doc.insert("plant".into(), Value::Table(plant_table(&plant.inner)));
         doc.insert("design".into(), Value::Table(design_value(design)?));
         let signal = |v: &Bound<'_, PyAny>, key: &str| -> PyResult<Value> {
-            let components = toml_value(v, &format!("{key}.components"))?;
+            let form = "a list of components, one dict {bias, harmonics} per signal";
+            if v.is_instance_of::<PyString>() || v.is_instance_of::<PyDict>() || v.try_iter().is_err() {
+                return Err(type_error(key, form, v));
+            }
+            let components = toml_value(v, key)?;
             Ok(Value::Table(Table::from_iter([("components".to_string(), components)])))
         };
         doc.insert("reference".into(), signal(reference, "reference")?);
@@ -228,17 +252,33 @@ impl PyScenario {
             ("sample_time", sample_time),
         ] {
             if let Some(v) = v.filter(|v| !v.is_none()) {
-                sim.insert(key.into(), toml_value(v, &format!("simulation.{key}"))?);
+                sim.insert(key.into(), Value::Float(crate::convert::number(v, key)?));
             }
         }
         doc.insert("simulation".into(), Value::Table(sim));
         if let Some(n) = noise.filter(|n| !n.is_none()) {
+            if !n.is_instance_of::<PyDict>() {
+                return Err(type_error("noise", "a dict {std, seed, bandwidth}", n));
+            }
             doc.insert("noise".into(), toml_value(n, "noise")?);
         }
         if let Some(t) = truth.filter(|t| !t.is_none()) {
             doc.insert("truth".into(), Value::Table(plant_table(&plant_arg(t, "truth")?.inner)));
         }
-        Self::from_document(py, &doc)
+        let inner = quell::Scenario::from_document(&doc).map_err(|e| argument_error(py, &e))?;
+        Ok(PyScenario { labels: plant.labels.clone(), from_values: true, ..Self::new(inner) })
+    }
+
+    /// Rebuilds a pickled scenario: its TOML and its plant's signal names.
+    #[staticmethod]
+    fn _restore(
+        py: Python<'_>,
+        text: &str,
+        inputs: Option<Vec<String>>,
+        outputs: Option<Vec<String>>,
+        states: Option<Vec<String>>,
+    ) -> PyResult<Self> {
+        Ok(PyScenario { labels: Labels { inputs, outputs, states }, ..Self::parse(py, text)? })
     }
 
     /// Parses and validates a scenario file's text (the format of `examples/paper.toml`).
@@ -258,31 +298,39 @@ impl PyScenario {
         self.inner.to_toml()
     }
 
-    /// Equal scenarios: the same TOML document (`to_toml` writes every key the scenario holds).
+    /// Equal scenarios: the same TOML document (`to_toml` writes every key the scenario holds) and
+    /// the same signal names.
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
-        other.cast::<PyScenario>().is_ok_and(|o| o.get().inner.to_toml() == self.inner.to_toml())
+        other
+            .cast::<PyScenario>()
+            .is_ok_and(|o| o.get().inner.to_toml() == self.inner.to_toml() && o.get().labels == self.labels)
     }
 
-    /// Pickles as `Scenario.from_toml(s.to_toml())`.
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
-        Ok((slf.get_type().getattr("from_toml")?, (slf.get().inner.to_toml(),)))
+    /// Pickles as its TOML and its plant's signal names.
+    #[allow(clippy::type_complexity)]
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, (String, Option<Vec<String>>, Option<Vec<String>>, Option<Vec<String>>))> {
+        let (me, l) = (slf.get(), &slf.get().labels);
+        let args = (me.inner.to_toml(), l.inputs.clone(), l.outputs.clone(), l.states.clone());
+        Ok((slf.get_type().getattr("_restore")?, args))
     }
 
     /// The design of this scenario's plant and choices (computed once; raises DesignError).
     fn design(&self, py: Python<'_>) -> PyResult<PyDesign> {
-        Ok(PyDesign { inner: self.design_arc(py)? })
+        Ok(PyDesign { inner: self.design_arc(py)?, spec: self.inner.design.clone(), labels: self.labels.clone() })
     }
 
     /// The plant (1).
     #[getter]
     fn plant(&self) -> PyPlant {
-        PyPlant { inner: self.inner.plant.clone() }
+        PyPlant { inner: self.inner.plant.clone(), labels: self.labels.clone() }
     }
     /// The true plant that is simulated when it differs from the design model `plant` (`[truth]`),
     /// or None.
     #[getter]
     fn truth(&self) -> Option<PyPlant> {
-        self.inner.truth.clone().map(|inner| PyPlant { inner })
+        self.inner.truth.clone().map(|inner| PyPlant { inner, labels: self.labels.clone() })
     }
     /// The scenario's name, if it has one.
     #[getter]

@@ -6,13 +6,13 @@ use std::time::{Duration, Instant};
 
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
-use quell::run::LoopSettings;
-use quell::sim::{Outcome, RunStats, SimResult};
+use pyo3::types::{PyBytes, PyDict};
+use quell::sim::{Outcome, Peaks, Run, RunSettings, RunStats, SimResult, Stats};
 use toml::Value;
 
 use crate::convert::number;
-use crate::errors::{raise, simulation_error, Kind};
+use crate::errors::{in_python, simulation_error, Kind};
+use crate::plant::Labels;
 use crate::scenario::PyScenario;
 
 /// How often a running simulation looks for Ctrl-C.
@@ -28,6 +28,8 @@ pub struct PySimResult {
     states: Option<[Py<PyAny>; 2]>,
     /// The run's convergence diagnostics as JSON ([`quell::diagnostics::Diagnostics`]).
     diagnostics: String,
+    /// The plant's signal names.
+    labels: Labels,
 }
 
 fn frozen_array(py: Python<'_>, data: &[f64], shape: &[usize]) -> PyResult<Py<PyAny>> {
@@ -39,7 +41,19 @@ fn frozen_array(py: Python<'_>, data: &[f64], shape: &[usize]) -> PyResult<Py<Py
 }
 
 impl PySimResult {
-    fn new(py: Python<'_>, r: SimResult, diagnostics: String) -> PyResult<Self> {
+    /// A run of `scenario` with `design`, its convergence diagnostics computed.
+    pub fn from_run(
+        py: Python<'_>,
+        scenario: &quell::Scenario,
+        design: &quell::Design,
+        r: SimResult,
+        labels: Labels,
+    ) -> PyResult<Self> {
+        let diagnostics = quell::diagnostics::diagnose(design, &scenario.reference, &scenario.disturbance, &r);
+        PySimResult::new(py, r, serde_json::to_string(&diagnostics).unwrap_or_default(), labels)
+    }
+
+    fn new(py: Python<'_>, r: SimResult, diagnostics: String, labels: Labels) -> PyResult<Self> {
         let (k, m, q, n) = (r.len(), r.m, r.q, r.n);
         let arrays = [
             frozen_array(py, &r.t, &[k])?,
@@ -54,7 +68,7 @@ impl PySimResult {
             true => Some([frozen_array(py, &r.x, &[k, n])?, frozen_array(py, &r.x_hat, &[k, n])?]),
             false => None,
         };
-        Ok(PySimResult { inner: r, arrays, states, diagnostics })
+        Ok(PySimResult { inner: r, arrays, states, diagnostics, labels })
     }
 }
 
@@ -88,6 +102,44 @@ fn outcome_dict<'py>(py: Python<'py>, o: &Outcome) -> PyResult<Bound<'py, PyDict
         }
     }
     Ok(d)
+}
+
+/// An outcome from the `outcome` property's dict.
+fn outcome_from(d: &Bound<'_, PyDict>) -> Option<Outcome> {
+    let get = |k: &str| d.get_item(k).ok().flatten();
+    let t: Option<f64> = get("t").and_then(|v| v.extract().ok());
+    let status: String = get("status")?.extract().ok()?;
+    Some(match status.as_str() {
+        "completed" => Outcome::Completed,
+        "diverged" => {
+            Outcome::Diverged { t: t?, signal: get("signal")?.extract().ok()?, value: get("value")?.extract().ok()? }
+        }
+        "step_size_too_small" => Outcome::StepSizeTooSmall { t: t? },
+        "interrupted" => Outcome::Interrupted { t: t? },
+        "too_many_steps" => Outcome::TooManySteps { t: t?, max_steps: get("max_steps")?.extract().ok()? },
+        "history_too_large" => Outcome::HistoryTooLarge { t: t?, max_bytes: get("max_bytes")?.extract().ok()? },
+        _ => return None,
+    })
+}
+
+/// Run statistics from the `stats` property's dict.
+fn stats_from(d: &Bound<'_, PyDict>) -> Option<RunStats> {
+    let int = |k: &str| d.get_item(k).ok().flatten()?.extract::<usize>().ok();
+    Some(match int("controller_steps") {
+        Some(controller_steps) => RunStats::Sampled {
+            controller_steps,
+            sample_time: d.get_item("sample_time").ok().flatten()?.extract().ok()?,
+        },
+        None => RunStats::Continuous(Stats {
+            steps: int("steps")?,
+            rejected: int("rejected_steps")?,
+            rhs_evals: int("rhs_evaluations")?,
+            breakpoints: int("breakpoints")?,
+            max_history_len: int("max_history_len")?,
+            implicit_steps: int("implicit_steps").unwrap_or(0),
+            switches: int("switches").unwrap_or(0),
+        }),
+    })
 }
 
 #[pymethods]
@@ -165,12 +217,12 @@ impl PySimResult {
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
         match self.inner.stats {
-            RunStats::Continuous { steps, rejected_steps, rhs_evaluations, breakpoints, max_history_len } => {
-                d.set_item("steps", steps)?;
-                d.set_item("rejected_steps", rejected_steps)?;
-                d.set_item("rhs_evaluations", rhs_evaluations)?;
-                d.set_item("breakpoints", breakpoints)?;
-                d.set_item("max_history_len", max_history_len)?;
+            RunStats::Continuous(s) => {
+                d.set_item("steps", s.steps)?;
+                d.set_item("rejected_steps", s.rejected)?;
+                d.set_item("rhs_evaluations", s.rhs_evals)?;
+                d.set_item("breakpoints", s.breakpoints)?;
+                d.set_item("max_history_len", s.max_history_len)?;
             }
             RunStats::Sampled { controller_steps, sample_time } => {
                 d.set_item("controller_steps", controller_steps)?;
@@ -208,7 +260,8 @@ impl PySimResult {
     /// The run as a `control.TimeResponseData`: outputs y (m × samples, labels `y[i]`), inputs the
     /// adaptive commands u (labels `u[i]`), so python-control's plotting and analysis apply.
     fn to_control(slf: &Bound<'_, Self>) -> PyResult<Py<PyAny>> {
-        Ok(slf.py().import("quell._control")?.call_method1("to_control", (slf,))?.unbind())
+        let outputs = slf.get().labels.outputs(slf.get().inner.m);
+        Ok(slf.py().import("quell._control")?.call_method1("to_control", (slf, outputs))?.unbind())
     }
     /// The columns of signals.csv (t, y1.., g1.., e1.., u1.., uf1.., eta1_1.., and x1.., xhat1.. when
     /// recorded) as a pandas DataFrame.
@@ -231,6 +284,91 @@ impl PySimResult {
     }
     fn __len__(&self) -> usize {
         self.inner.len()
+    }
+    /// Equal results: the same samples (bit for bit), outcome, statistics, peaks and signal names.
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        let Ok(o) = other.cast::<PySimResult>() else { return false };
+        let (a, b) = (&self.inner, &o.get().inner);
+        let same =
+            |x: &[f64], y: &[f64]| x.len() == y.len() && x.iter().zip(y).all(|(u, v)| u.to_bits() == v.to_bits());
+        (a.m, a.q, a.n) == (b.m, b.q, b.n)
+            && [(&a.t, &b.t), (&a.y, &b.y), (&a.g, &b.g), (&a.e, &b.e), (&a.u, &b.u), (&a.u_f, &b.u_f)]
+                .iter()
+                .chain([(&a.eta, &b.eta), (&a.x, &b.x), (&a.x_hat, &b.x_hat)].iter())
+                .all(|(x, y)| same(x, y))
+            && a.outcome.as_ref().unwrap_or(&Outcome::Completed) == b.outcome.as_ref().unwrap_or(&Outcome::Completed)
+            && a.stats == b.stats
+            && same(&a.peaks.0, &b.peaks.0)
+            && a.limited == b.limited
+            && self.labels == o.get().labels
+    }
+    /// Pickles as its samples (raw float64 bytes), outcome, statistics and diagnostics.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyDict>,))> {
+        let py = slf.py();
+        let me = slf.get();
+        let r = &me.inner;
+        let d = PyDict::new(py);
+        d.set_item("m", r.m)?;
+        d.set_item("q", r.q)?;
+        d.set_item("n", r.n)?;
+        for (name, v) in [
+            ("t", &r.t),
+            ("y", &r.y),
+            ("g", &r.g),
+            ("e", &r.e),
+            ("u", &r.u),
+            ("u_f", &r.u_f),
+            ("eta", &r.eta),
+            ("x", &r.x),
+            ("x_hat", &r.x_hat),
+        ] {
+            let bytes: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
+            d.set_item(name, PyBytes::new(py, &bytes))?;
+        }
+        d.set_item("outcome", me.outcome(py)?)?;
+        let stats = me.stats(py)?;
+        if let RunStats::Continuous(s) = r.stats {
+            // Beyond summary.json's figures, so that a result compares equal to its pickle.
+            stats.set_item("implicit_steps", s.implicit_steps)?;
+            stats.set_item("switches", s.switches)?;
+        }
+        d.set_item("stats", stats)?;
+        d.set_item("peaks", r.peaks.0.to_vec())?;
+        d.set_item("limited", r.limited.clone())?;
+        d.set_item("diagnostics", &me.diagnostics)?;
+        d.set_item("labels", (me.labels.inputs.clone(), me.labels.outputs.clone(), me.labels.states.clone()))?;
+        Ok((slf.get_type().getattr("_restore")?, (d,)))
+    }
+    /// Rebuilds a pickled result.
+    #[staticmethod]
+    fn _restore(py: Python<'_>, state: &Bound<'_, PyDict>) -> PyResult<Self> {
+        let bad = |what: &str| Kind::Scenario.err(py, format!("state: not a pickled quell.SimResult ({what})"));
+        let item = |k: &str| state.get_item(k)?.ok_or_else(|| bad(&format!("no {k}")));
+        let floats = |k: &str| -> PyResult<Vec<f64>> {
+            let b: Vec<u8> = item(k)?.extract()?;
+            Ok(b.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8]))).collect())
+        };
+        let (inputs, outputs, states) = item("labels")?.extract()?;
+        let peaks: Vec<f64> = item("peaks")?.extract()?;
+        let r = SimResult {
+            m: item("m")?.extract()?,
+            q: item("q")?.extract()?,
+            n: item("n")?.extract()?,
+            t: floats("t")?,
+            y: floats("y")?,
+            g: floats("g")?,
+            e: floats("e")?,
+            u: floats("u")?,
+            u_f: floats("u_f")?,
+            eta: floats("eta")?,
+            x: floats("x")?,
+            x_hat: floats("x_hat")?,
+            stats: stats_from(&item("stats")?.cast_into::<PyDict>()?).ok_or_else(|| bad("stats"))?,
+            outcome: Some(outcome_from(&item("outcome")?.cast_into::<PyDict>()?).ok_or_else(|| bad("outcome"))?),
+            peaks: Peaks(peaks.try_into().map_err(|_| bad("peaks"))?),
+            limited: item("limited")?.extract()?,
+        };
+        PySimResult::new(py, r, item("diagnostics")?.extract()?, Labels { inputs, outputs, states })
     }
     /// Python's repr, the outcome as the `outcome` property's dict.
     fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
@@ -264,10 +402,8 @@ pub fn simulate(
     states: bool,
     check: bool,
 ) -> PyResult<Py<PySimResult>> {
-    let s: PyRef<'_, PyScenario> = scenario.extract().map_err(|_| {
-        Kind::Scenario
-            .err(py, format!("scenario: expected a quell.Scenario, found a {}", crate::convert::type_name(scenario)))
-    })?;
+    let s: PyRef<'_, PyScenario> =
+        scenario.extract().map_err(|_| crate::errors::type_error("scenario", "a quell.Scenario", scenario))?;
     let design = s.design_arc(py)?;
     // Overrides go through the scenario's own checks of [simulation].
     let overrides =
@@ -278,19 +414,22 @@ pub fn simulate(
         if let Some(Value::Table(sim)) = doc.get_mut("simulation") {
             for (key, v) in overrides {
                 if let Some(v) = v {
-                    sim.insert(key.into(), Value::Float(number(v, key, Kind::Scenario)?));
+                    sim.insert(key.into(), Value::Float(number(v, key)?));
                 }
             }
         }
-        edited = PyScenario::from_document(py, &doc)?;
-        &edited.inner
+        edited = quell::Scenario::from_document(&doc).map_err(|e| crate::scenario::argument_error(py, &e))?;
+        &edited
     } else {
         &s.inner
     };
-    let mut settings = LoopSettings::of(scn);
-    settings.record_states(states);
-    let max_steps = match max_steps {
+    let mut settings = RunSettings::of(scn);
+    settings.record_states = states;
+    let max_steps = match max_steps.filter(|v| !v.is_none()) {
         None => None,
+        Some(v) if v.is_instance_of::<pyo3::types::PyBool>() || !v.is_instance_of::<pyo3::types::PyInt>() => {
+            return Err(crate::errors::type_error("max_steps", "an int (a step budget) or None", v));
+        }
         Some(v) => match v.extract::<usize>() {
             Ok(n) if n >= 1 => Some(n),
             _ => {
@@ -300,7 +439,7 @@ pub fn simulate(
             }
         },
     };
-    settings.set_max_steps(max_steps).map_err(|e| Kind::Scenario.err(py, e.to_string()))?;
+    settings.set_max_steps(max_steps).map_err(|e| Kind::Scenario.err(py, in_python(e.to_string())))?;
     let mut interrupt: Option<PyErr> = None;
     let result = py.detach(|| {
         let mut last = Instant::now();
@@ -317,16 +456,14 @@ pub fn simulate(
                 }
             }
         };
-        quell::run::simulate(scn, &design, &settings, progress)
+        Run::of(scn, &design).settings(settings).simulate(progress)
     });
     if let Some(e) = interrupt {
         return Err(e);
     }
-    let result = result.map_err(|e| raise(py, Kind::Scenario)(&e))?;
+    let result = result.map_err(|e| Kind::Scenario.err(py, in_python(e.to_string())))?;
     let outcome = result.outcome.clone().unwrap_or(Outcome::Completed);
-    let diagnostics = quell::diagnostics::diagnose(&design, &scn.reference, &scn.disturbance, &result);
-    let diagnostics = serde_json::to_string(&diagnostics).unwrap_or_default();
-    let result = Py::new(py, PySimResult::new(py, result, diagnostics)?)?;
+    let result = Py::new(py, PySimResult::from_run(py, scn, &design, result, s.labels.clone())?)?;
     if !check {
         return Ok(result);
     }

@@ -1,18 +1,23 @@
-//! Issue 12 from Python: `quell.Study`, `quell.sweep` (a pandas DataFrame of runs.csv's rows),
-//! `quell.sweep_runs` (picklable `RunSpec`s) and `quell.run_one`, so that dask.distributed or Ray
-//! can map the runs over a cluster.
+//! Studies from Python: `quell.Study` (from a file, or from a Scenario and dicts), `quell.sweep` and
+//! `Study.sweep` (runs.csv's rows and the drawn values, a pandas DataFrame), `quell.sweep_runs`
+//! (picklable `RunSpec`s) and `quell.run_one`, so that dask.distributed or Ray can map the runs over
+//! a cluster.
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
+use pyo3::exceptions::{PyIndexError, PyTypeError};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList, PyTuple};
-use quell::study::{self, RunSpec, Shard, StudyMeta, SweepOptions};
+use pyo3::types::{PyDict, PyInt, PyList, PyString, PyTuple};
+use quell::study::{self, KeyPath, RunSpec, Shard, StudyMeta, SweepOptions};
+use toml::{Table, Value};
 
-use crate::errors::Kind;
-use crate::scenario::PyScenario;
+use crate::convert::type_name;
+use crate::errors::{subscripts, Kind};
+use crate::scenario::{toml_value, PyScenario};
+use crate::simulate::PySimResult;
 
 /// A study file (`quell sweep`'s input): a scenario, a grid of scenario values and Monte Carlo
 /// draws of the true plant.
@@ -27,8 +32,166 @@ fn study_error(py: Python<'_>, e: &study::StudyError) -> PyErr {
     err
 }
 
+/// Sections of a study that `quell.Study(...)` takes as dicts.
+const DICT_ARGUMENTS: [&str; 5] = ["grid", "monte_carlo", "settle", "runaway", "simulation"];
+
+/// A study key as the Python arguments spell it: `grid."design.mu[0]"[1]` is
+/// `grid["design.mu[0]"][1]`, `monte_carlo.runs` is `monte_carlo["runs"]`.
+pub fn python_key(key: &str) -> String {
+    match key.split_once('.').filter(|(s, _)| DICT_ARGUMENTS.contains(s)) {
+        Some((section, rest)) => format!("{section}{}", subscripts(&format!(".{rest}"))),
+        None => key.to_string(),
+    }
+}
+
+/// A study error of `quell.Study(...)`: the message names the Python argument, `.key` the study key.
+fn argument_error(py: Python<'_>, e: &study::StudyError) -> PyErr {
+    let err = Kind::Scenario.err(py, format!("{}: {}", python_key(&e.key), e.message));
+    let _ = err.value(py).setattr("key", e.key.clone());
+    err
+}
+
+/// A dict argument of `quell.Study(...)` as a TOML table.
+fn dict_arg(obj: &Bound<'_, PyAny>, name: &str, what: &str) -> PyResult<Table> {
+    let d = obj
+        .cast::<PyDict>()
+        .map_err(|_| PyTypeError::new_err(format!("{name}: expected a dict ({what}), found a {}", type_name(obj))))?;
+    let mut t = Table::new();
+    for (k, v) in d.iter() {
+        let key: String = k.extract().map_err(|_| {
+            PyTypeError::new_err(format!("{name}: expected str keys ({what}), found a key of type {}", type_name(&k)))
+        })?;
+        if !v.is_none() {
+            let value = toml_value(&v, &format!("{name}[{key:?}]"))?;
+            t.insert(key, value);
+        }
+    }
+    Ok(t)
+}
+
+/// Every number of `v` (a number, vector or matrix) as a column named `name` with its indices.
+fn flatten(name: String, v: &Value, out: &mut Vec<(String, f64)>) {
+    match v {
+        Value::Float(x) => out.push((name, *x)),
+        Value::Integer(i) => out.push((name, *i as f64)),
+        Value::Array(a) => a.iter().enumerate().for_each(|(i, x)| flatten(format!("{name}[{i}]"), x, out)),
+        _ => {}
+    }
+}
+
+/// The values a run's draw gave each perturbed key (flattened: `truth.A[0][1]`); a column that
+/// would share its name with a grid column is `… (drawn)`.
+fn drawn_values(keys: &[String], spec: &RunSpec) -> Vec<(String, f64)> {
+    let mut out = Vec::new();
+    for key in keys {
+        if let Some(v) = KeyPath::parse(key).ok().and_then(|p| p.get(&spec.scenario).ok()) {
+            let name = if spec.grid.iter().any(|(g, _)| g == key) { format!("{key} (drawn)") } else { key.clone() };
+            flatten(name, v, &mut out);
+        }
+    }
+    out
+}
+
+/// The perturbed keys of a study's Monte Carlo draws, in the study's order.
+fn drawn_keys(study: &study::Study) -> Vec<String> {
+    study.monte_carlo.as_ref().map_or_else(Vec::new, |mc| mc.perturbations.iter().map(|p| p.key.clone()).collect())
+}
+
 #[pymethods]
 impl PyStudy {
+    #[new]
+    #[pyo3(signature = (scenario, *, grid=None, monte_carlo=None, settle=None, max_steps=None, runaway=None, simulation=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn py_new(
+        py: Python<'_>,
+        scenario: &Bound<'_, PyAny>,
+        grid: Option<&Bound<'_, PyAny>>,
+        monte_carlo: Option<&Bound<'_, PyAny>>,
+        settle: Option<&Bound<'_, PyAny>>,
+        max_steps: Option<&Bound<'_, PyAny>>,
+        runaway: Option<&Bound<'_, PyAny>>,
+        simulation: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let s = scenario.cast::<PyScenario>().map_err(|_| {
+            PyTypeError::new_err(format!("scenario: expected a quell.Scenario, found a {}", type_name(scenario)))
+        })?;
+        let mut doc = Table::new();
+        doc.insert("scenario".into(), Value::Table(s.get().inner.to_table()));
+        for (name, v, what) in [
+            ("grid", grid, "scenario key path: list of values"),
+            ("monte_carlo", monte_carlo, "runs, seed, and scenario key path: {law: spread}"),
+            ("settle", settle, "relative, absolute"),
+            ("runaway", runaway, "peak, steps"),
+            ("simulation", simulation, "overrides of the scenario's simulation settings"),
+        ] {
+            if let Some(v) = v.filter(|v| !v.is_none()) {
+                doc.insert(name.into(), Value::Table(dict_arg(v, name, what)?));
+            }
+        }
+        if let Some(n) = max_steps.filter(|v| !v.is_none()) {
+            if n.is_instance_of::<pyo3::types::PyBool>() || !n.is_instance_of::<PyInt>() {
+                return Err(PyTypeError::new_err(format!(
+                    "max_steps: expected an int (a step budget per run), found a {}",
+                    type_name(n)
+                )));
+            }
+            doc.insert("max_steps".into(), toml_value(n, "max_steps")?);
+        }
+        let inner = py.detach(|| study::Study::from_table(&doc, None)).map_err(|e| argument_error(py, &e))?;
+        Ok(PyStudy { inner: Arc::new(inner) })
+    }
+
+    /// The study as one TOML document, its scenario inline (`Study.from_toml(study.to_toml())`
+    /// is the same study).
+    fn to_toml(&self) -> String {
+        toml::to_string(self.inner.to_table()).unwrap_or_default()
+    }
+
+    /// Equal studies: the same document (scenario, grid, draws, settings).
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other.cast::<PyStudy>().is_ok_and(|o| o.get().inner.to_table() == self.inner.to_table())
+    }
+
+    /// Pickles as `Study.from_toml(study.to_toml())`.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        Ok((slf.get_type().getattr("from_toml")?, (slf.get().to_toml(),)))
+    }
+
+    /// Run `run`'s specification.
+    fn spec(&self, py: Python<'_>, run: &Bound<'_, PyAny>) -> PyResult<PyRunSpec> {
+        let len = self.inner.len();
+        let index = run_index(run, len)?;
+        let study = &self.inner;
+        let inner = py.detach(|| study.spec(index)).ok_or_else(|| out_of_range(index as i128, len))?;
+        Ok(PyRunSpec { inner, drawn: drawn_keys(study) })
+    }
+
+    /// Every run, in parallel on `jobs` threads; a `StudyResult`.
+    #[pyo3(signature = (*, jobs=None, yes=false))]
+    fn sweep(slf: &Bound<'_, Self>, jobs: Option<&Bound<'_, PyAny>>, yes: bool) -> PyResult<Py<PyAny>> {
+        let py = slf.py();
+        let frame = sweep_frame(py, &slf.get().inner, jobs, yes)?;
+        Ok(py.import("quell._study")?.getattr("StudyResult")?.call1((slf, frame))?.unbind())
+    }
+
+    /// Channels m of the study's scenario.
+    #[getter]
+    fn m(&self) -> usize {
+        self.inner.m
+    }
+
+    /// Grid points.
+    #[getter]
+    fn points(&self) -> usize {
+        self.inner.points()
+    }
+
+    /// Monte Carlo draws per grid point (1 without draws).
+    #[getter]
+    fn draws(&self) -> usize {
+        self.inner.draws()
+    }
+
     /// Reads a study file; its `scenario` path is relative to the file's directory.
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
@@ -65,6 +228,29 @@ impl PyStudy {
 #[pyclass(module = "quell", name = "RunSpec", frozen)]
 pub struct PyRunSpec {
     inner: RunSpec,
+    /// The keys its study's draws perturb.
+    drawn: Vec<String>,
+}
+
+/// `run` as an index below `len` (an int; negative counts from the end, as in a list).
+fn run_index(run: &Bound<'_, PyAny>, len: u64) -> PyResult<usize> {
+    if run.is_instance_of::<pyo3::types::PyBool>() || !run.is_instance_of::<PyInt>() {
+        return Err(PyTypeError::new_err(format!("run: expected an int (a run index), found a {}", type_name(run))));
+    }
+    let i: i128 = run.extract().map_err(|_| out_of_range(i128::MAX, len))?;
+    let index = if i < 0 { i + len as i128 } else { i };
+    if (0..len as i128).contains(&index) {
+        Ok(index as usize)
+    } else {
+        Err(out_of_range(i, len))
+    }
+}
+
+fn out_of_range(i: i128, len: u64) -> PyErr {
+    PyIndexError::new_err(format!(
+        "run: expected a run index from 0 to {} (the study has {len} runs), found {i}",
+        len.saturating_sub(1)
+    ))
 }
 
 /// A TOML value as a Python value.
@@ -100,18 +286,47 @@ fn grid_cell<'py>(py: Python<'py>, v: &toml::Value) -> PyResult<Bound<'py, PyAny
 impl PyRunSpec {
     /// A run specification from its JSON form (`spec.to_json()`); this is how pickle rebuilds it.
     #[new]
-    fn new(py: Python<'_>, json: &str) -> PyResult<Self> {
+    #[pyo3(signature = (json, drawn=None))]
+    fn new(py: Python<'_>, json: &str, drawn: Option<Vec<String>>) -> PyResult<Self> {
         serde_json::from_str(json)
-            .map(|inner| PyRunSpec { inner })
+            .map(|inner| PyRunSpec { inner, drawn: drawn.unwrap_or_default() })
             .map_err(|e| Kind::Scenario.err(py, format!("json: not a quell run specification ({e})")))
+    }
+    /// The values the run's draw gave each perturbed key, flattened (`truth.A[0][1]`), as the
+    /// study's DataFrame columns; empty without Monte Carlo.
+    #[getter]
+    fn drawn<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (k, v) in drawn_values(&self.drawn, &self.inner) {
+            d.set_item(k, v)?;
+        }
+        Ok(d)
+    }
+    /// Simulates the run as the sweep did (its scenario, step budget and runaway rules) and
+    /// returns the signals, however the run ended (a diverged run is not an error).
+    fn simulate(&self, py: Python<'_>) -> PyResult<PySimResult> {
+        let scenario = quell::Scenario::from_document(&self.inner.scenario)
+            .map_err(|e| crate::scenario::scenario_error(py, &e))?;
+        let design = scenario.design().map_err(|e| crate::errors::raise(py, Kind::Design)(&e))?;
+        let spec = &self.inner;
+        let result = py.detach(|| spec.simulate()).map_err(|e| Kind::Scenario.err(py, e))?;
+        PySimResult::from_run(py, &scenario, &design, result, Default::default())
+    }
+    /// Equal specifications: the same run of the same study.
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other.cast::<PyRunSpec>().is_ok_and(|o| o.get().inner == self.inner && o.get().drawn == self.drawn)
     }
     /// The JSON form of the specification.
     fn to_json(&self) -> String {
         serde_json::to_string(&self.inner).unwrap_or_default()
     }
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
-        let json = slf.get().to_json();
-        PyTuple::new(slf.py(), [slf.get_type().into_any(), PyTuple::new(slf.py(), [json])?.into_any()])
+        let py = slf.py();
+        let args = PyTuple::new(
+            py,
+            [slf.get().to_json().into_pyobject(py)?.into_any(), PyList::new(py, &slf.get().drawn)?.into_any()],
+        )?;
+        PyTuple::new(py, [slf.get_type().into_any(), args.into_any()])
     }
     /// Run index (point × draws + draw).
     #[getter]
@@ -201,7 +416,11 @@ fn row_dict<'py>(py: Python<'py>, spec: &RunSpec, row: &study::Row) -> PyResult<
 pub fn run_one<'py>(py: Python<'py>, spec: PyRef<'py, PyRunSpec>) -> PyResult<Bound<'py, PyDict>> {
     let s = &spec.inner;
     let row = py.detach(|| study::run_one(s));
-    row_dict(py, s, &row)
+    let d = row_dict(py, s, &row)?;
+    for (k, v) in drawn_values(&spec.drawn, s) {
+        d.set_item(k, v)?;
+    }
+    Ok(d)
 }
 
 /// An iterator over a study's run specifications, in run order.
@@ -221,7 +440,7 @@ impl PyRunSpecs {
         let (study, index) = (&self.study, self.next);
         let inner = py.detach(|| study.spec(index))?;
         self.next += 1;
-        Some(PyRunSpec { inner })
+        Some(PyRunSpec { inner, drawn: drawn_keys(study) })
     }
     fn __len__(&self) -> usize {
         usize::try_from(self.study.len()).unwrap_or(usize::MAX).saturating_sub(self.next)
@@ -232,16 +451,14 @@ fn study_arg(py: Python<'_>, study: &Bound<'_, PyAny>) -> PyResult<Arc<study::St
     if let Ok(s) = study.extract::<PyRef<'_, PyStudy>>() {
         return Ok(s.inner.clone());
     }
-    let path: PathBuf = study.extract().map_err(|_| {
-        Kind::Scenario.err(
-            py,
-            format!(
-                "study: expected a quell.Study or the path of a study file, found a {}",
-                crate::convert::type_name(study)
-            ),
-        )
-    })?;
-    study::Study::from_path(&path).map(Arc::new).map_err(|e| study_error(py, &e))
+    if study.is_instance_of::<PyString>() || study.hasattr("__fspath__")? {
+        let path: PathBuf = study.extract()?;
+        return study::Study::from_path(&path).map(Arc::new).map_err(|e| study_error(py, &e));
+    }
+    Err(PyTypeError::new_err(format!(
+        "study: expected a quell.Study or the path of a study file, found a {}",
+        type_name(study)
+    )))
 }
 
 /// The study's run specifications (picklable), for `run_one` on a cluster.
@@ -251,7 +468,8 @@ pub fn sweep_runs(py: Python<'_>, study: &Bound<'_, PyAny>) -> PyResult<PyRunSpe
 }
 
 /// Every run of a study, in parallel on `jobs` threads (default: every core), with the GIL
-/// released; returns runs.csv's rows as a pandas DataFrame. Ctrl-C stops the sweep.
+/// released; returns runs.csv's rows and the drawn values as a pandas DataFrame. Ctrl-C stops the
+/// sweep.
 #[pyfunction]
 #[pyo3(signature = (study, *, jobs=None, yes=false))]
 pub fn sweep(
@@ -260,25 +478,39 @@ pub fn sweep(
     jobs: Option<&Bound<'_, PyAny>>,
     yes: bool,
 ) -> PyResult<Py<PyAny>> {
-    let study = study_arg(py, study)?;
-    let jobs = match jobs {
-        None => None,
-        Some(j) => match j.extract::<i128>() {
-            Ok(n) if !j.is_instance_of::<pyo3::types::PyBool>() && (1..=study::MAX_JOBS as i128).contains(&n) => {
-                Some(n as usize)
-            }
-            _ => {
-                return Err(Kind::Scenario.err(
-                    py,
-                    format!(
-                        "jobs: expected a number of threads from 1 to {} (None for one per core), found {}",
-                        study::MAX_JOBS,
-                        j.repr().map_or_else(|_| "?".to_string(), |r| r.to_string())
-                    ),
-                ))
-            }
-        },
-    };
+    sweep_frame(py, &study_arg(py, study)?, jobs, yes)
+}
+
+/// `jobs=`: None, or a number of threads from 1 to [`study::MAX_JOBS`].
+fn jobs_arg(py: Python<'_>, jobs: Option<&Bound<'_, PyAny>>) -> PyResult<Option<usize>> {
+    let Some(j) = jobs.filter(|j| !j.is_none()) else { return Ok(None) };
+    if j.is_instance_of::<pyo3::types::PyBool>() || !j.is_instance_of::<PyInt>() {
+        return Err(PyTypeError::new_err(format!(
+            "jobs: expected an int (a number of threads) or None, found a {}",
+            type_name(j)
+        )));
+    }
+    match j.extract::<i128>() {
+        Ok(n) if (1..=study::MAX_JOBS as i128).contains(&n) => Ok(Some(n as usize)),
+        _ => Err(Kind::Scenario.err(
+            py,
+            format!(
+                "jobs: expected a number of threads from 1 to {} (None for one per core), found {}",
+                study::MAX_JOBS,
+                j.repr().map_or_else(|_| "?".to_string(), |r| r.to_string())
+            ),
+        )),
+    }
+}
+
+/// The sweep of `study` as a DataFrame: runs.csv's columns, then the drawn values.
+fn sweep_frame(
+    py: Python<'_>,
+    study: &Arc<study::Study>,
+    jobs: Option<&Bound<'_, PyAny>>,
+    yes: bool,
+) -> PyResult<Py<PyAny>> {
+    let jobs = jobs_arg(py, jobs)?;
     if study.len() > study::CONFIRM_RUNS && !yes {
         return Err(Kind::Scenario.err(
             py,
@@ -318,10 +550,28 @@ pub fn sweep(
         return Err(e);
     }
     let swept = swept.map_err(|_| pyo3::exceptions::PyRuntimeError::new_err("the sweep's threads panicked"))?;
-    let meta = StudyMeta::new(&study, Shard::ALL);
+    let meta = StudyMeta::new(study, Shard::ALL);
     let mut text = Vec::new();
     study::write_runs_csv(&mut text, &meta, &swept.rows, swept.partial)
         .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
     let text = String::from_utf8_lossy(&text).into_owned();
-    Ok(py.import("quell._frames")?.call_method1("runs_frame", (text,))?.unbind())
+    // The drawn values, one column per number, from each run's specification.
+    let keys = drawn_keys(study);
+    let drawn = PyDict::new(py);
+    if !keys.is_empty() {
+        let mut columns: Vec<(String, Vec<f64>)> = Vec::new();
+        for row in &swept.rows {
+            let values = study.spec(row.run).map(|spec| drawn_values(&keys, &spec)).unwrap_or_default();
+            for (i, (name, v)) in values.into_iter().enumerate() {
+                match columns.get_mut(i) {
+                    Some(c) => c.1.push(v),
+                    None => columns.push((name, vec![v])),
+                }
+            }
+        }
+        for (name, values) in columns {
+            drawn.set_item(name, values)?;
+        }
+    }
+    Ok(py.import("quell._frames")?.call_method1("runs_frame", (text, drawn))?.unbind())
 }

@@ -102,3 +102,53 @@ def test_result_to_control_is_outputs_by_time_with_labels():
     assert resp.output_labels == ["y[1]", "y[2]"] and resp.input_labels == ["u[1]", "u[2]"]
     frame = resp.to_pandas()  # python-control's own conversion reads the labels
     np.testing.assert_array_equal(frame["y[2]"].to_numpy(), result.y[:, 1])
+
+
+def test_state_space_signal_names_are_kept_through_to_the_loops_and_results():
+    """A control.StateSpace's names reach the plant, the design's systems, the result's
+    TimeResponseData and pickles; python-control's own generic names (u[0], …) are not names."""
+    import pickle
+
+    from test_api import A, B, C, D, DISTURBANCE, L, PAPER_DESIGN, Q, REFERENCE
+
+    sys_ = control.ss(A, B, C, np.zeros((2, 2)), inputs=["thrust", "torque"], outputs=["height", "angle"],
+                      states=["h", "v", "w"])
+    plant = quell.Plant(sys_, D=D, Q=Q, delays=[1.0, 3.0])
+    assert (plant.inputs, plant.outputs, plant.states) == (["thrust", "torque"], ["height", "angle"], ["h", "v", "w"])
+    s = quell.Scenario(plant, REFERENCE, DISTURBANCE, t_end=1.0, observer_gain=L, **PAPER_DESIGN)
+    for d in (s.design(), quell.design(plant, observer_gain=L, **PAPER_DESIGN)):
+        dec, obs = d.decoupled_system(), d.observer_system()
+        assert dec.output_labels == ["height", "angle"] and dec.state_labels == ["h", "v", "w"]
+        assert obs.input_labels == ["thrust", "torque", "height", "angle"]
+        assert obs.output_labels == ["h_hat", "v_hat", "w_hat"]
+        # python-control finds the signals by name: the decoupled channel from u_d[1] to height.
+        sub = dec[dec.find_output("height"), dec.find_input("u_d[1]")]
+        assert abs(complex(sub(1j)) - d.channels[0]["q0"] / np.prod(1j - np.asarray(d.channels[0]["poles"]))) < 1e-9
+    resp = quell.simulate(s).to_control()
+    assert resp.output_labels == ["height", "angle"]
+    for obj in (plant, s, s.design(), quell.simulate(s)):
+        back = pickle.loads(pickle.dumps(obj))
+        assert back == obj
+    assert pickle.loads(pickle.dumps(s)).plant.outputs == ["height", "angle"]
+    assert pickle.loads(pickle.dumps(quell.simulate(s))).to_control().output_labels == ["height", "angle"]
+    # Names make plants differ; python-control's generic names are no names.
+    unnamed = quell.Plant(control.ss(A, B, C, np.zeros((2, 2))), D=D, Q=Q, delays=[1.0, 3.0])
+    assert unnamed != plant and unnamed == quell.Plant(A, B, C, D, Q, delays=[1.0, 3.0])
+    assert unnamed.inputs == ["u_f[1]", "u_f[2]"] and unnamed.states == ["x[1]", "x[2]", "x[3]"]
+    # Keywords name the signals of a plant from matrices, and override a system's.
+    renamed = quell.Plant(sys_, D=D, Q=Q, delays=[1.0, 3.0], outputs=["z1", "z2"])
+    assert renamed.outputs == ["z1", "z2"] and renamed.inputs == ["thrust", "torque"]
+    with pytest.raises(quell.ScenarioError, match=r"outputs: expected 2 names \(one per channel\), found 3"):
+        quell.Plant(A, B, C, outputs=["a", "b", "c"])
+    with pytest.raises(quell.ScenarioError, match=r'states\[2\]: "a" names another signal too'):
+        quell.Plant(A, B, C, states=["a", "b", "a"])
+    with pytest.raises(TypeError, match=r"inputs\[1\]: expected a str \(a signal name\), found a int"):
+        quell.Plant(A, B, C, inputs=["a", 2])
+    with pytest.raises(TypeError, match=r"inputs: expected a list of 2 names \(str\), found a str"):
+        quell.Plant(A, B, C, inputs="ab")
+
+
+def test_transfer_function_names_are_kept():
+    G = control.tf([1.0], [1.0, 2.0, 1.0], inputs="force", outputs="position")
+    p = quell.Plant(G, delays=[0.1])
+    assert p.inputs == ["force"] and p.outputs == ["position"]

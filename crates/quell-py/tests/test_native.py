@@ -60,3 +60,75 @@ def test_plot_takes_axes_and_figsize():
     with pytest.raises(TypeError, match="ax: expected one matplotlib Axes or four"):
         r.plot(ax=[one, one])
     plt.close("all")
+
+
+def _simulate_in_worker(scenario):
+    """Runs in another process: the scenario and the result both cross the process boundary."""
+    return quell.simulate(scenario, t_end=2.0)
+
+
+def test_designs_pickle_and_compare():
+    import warnings
+
+    from test_api import PAPER_DESIGN, paper_from_values
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the three-channel example's gains are fragile by design
+        cases = [
+            quell.paper_example().design(),
+            quell.Scenario.load(EXAMPLES / "three-channel.toml").design(),
+            quell.design(quell.paper_example().plant, observer_poles=[-5, -6 + 1j, -6 - 1j], relative_degrees=[2, 1], **PAPER_DESIGN),
+        ]
+    for d in cases:
+        back = pickle.loads(pickle.dumps(d))
+        assert back == d and back is not d
+        # The gains are designed again from the plant and the choices: the same, entry for entry.
+        for name in ("K", "F", "L", "N", "A_f", "B_f", "G_g", "L_g", "G_w", "L_w", "B_star"):
+            np.testing.assert_array_equal(getattr(back, name), getattr(d, name), err_msg=name)
+        assert back.sigma == d.sigma and back.mu == d.mu and back.beta == d.beta
+    assert cases[0] != cases[2] and cases[0] != "a design"
+    assert cases[2].choices["observer_poles"] == [-5.0, -6 + 1j, -6 - 1j]
+    assert paper_from_values(mu=[20.0, 31.0]).design() != cases[0]
+
+
+def test_results_pickle_and_compare():
+    s = quell.paper_example()
+    continuous = quell.simulate(s, t_end=3.0, states=True)
+    sampled = quell.simulate(s, t_end=1.0, sample_time=1e-3)
+    from test_budget import diverging
+
+    diverged = quell.simulate(diverging(), max_steps=2000, check=False)
+    assert diverged.outcome["status"] != "completed"
+    for r in (continuous, sampled, diverged):
+        back = pickle.loads(pickle.dumps(r))
+        assert back == r and back is not r
+        for name in ("t", "y", "g", "e", "u", "u_f", "eta", "x", "x_hat"):
+            a, b = getattr(r, name), getattr(back, name)
+            assert (a is None and b is None) or (np.array_equal(a, b) and not b.flags.writeable), name
+        assert back.outcome == r.outcome and back.stats == r.stats
+        assert back.summary() == r.summary() and back.diagnostics() == r.diagnostics()
+    assert continuous != quell.simulate(s, t_end=3.0)  # without the states
+    assert continuous != "a result"
+
+
+def test_objects_cross_to_worker_processes():
+    """multiprocessing (spawn: a fresh interpreter unpickles them) sends scenarios and gets
+    results back, equal to the same runs here."""
+    import multiprocessing
+
+    scenarios = [quell.paper_example(), quell.Scenario.load(EXAMPLES / "three-channel.toml")]
+    with multiprocessing.get_context("spawn").Pool(2) as pool:
+        results = pool.map(_simulate_in_worker, scenarios)
+    assert results == [quell.simulate(s, t_end=2.0) for s in scenarios]
+
+
+def test_a_controller_refuses_to_pickle_saying_why():
+    import copy
+
+    import pytest
+
+    c = quell.Controller(quell.paper_example().design(), 1e-3)
+    for dump in (pickle.dumps, copy.copy, copy.deepcopy):
+        with pytest.raises(TypeError, match=r"cannot pickle a quell.Controller: it is the running state of one real-time loop .* pickle its Design"):
+            dump(c)
+    assert c == c and c != quell.Controller(quell.paper_example().design(), 1e-3)  # identity

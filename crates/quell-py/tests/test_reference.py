@@ -38,7 +38,7 @@ def test_paper_reference_points(reference_points):
 
 
 def test_paper_tail_bounds():
-    """The paper's Figs. 1 and 2: the tracking errors vanish (issue 3's bounds on [90, 100])."""
+    """The paper's Figs. 1 and 2: the tracking errors vanish (max |e_1| < 0.05 and max |e_2| < 0.005 on [90, 100])."""
     r = quell.simulate(quell.paper_example())
     tail = r.t >= 90
     assert np.abs(r.e[tail, 0]).max() < 0.05

@@ -1,4 +1,4 @@
-"""Issue 12 from Python: quell.sweep as a DataFrame, and quell.sweep_runs/run_one mapped over a
+"""Studies from Python: quell.sweep as a DataFrame, and quell.sweep_runs/run_one mapped over a
 dask LocalCluster of two worker processes, both compared with the rows of `quell sweep`."""
 
 import pickle
@@ -53,10 +53,13 @@ def test_sweep_is_the_cli_rows(study_file, cli_rows):
     study = quell.Study.load(study_file)
     assert len(study) == 4 and study.columns == list(cli_rows.columns)
     frame = quell.sweep(study, jobs=2)
-    same_rows(frame, cli_rows)
+    # runs.csv's columns, then the drawn values (one column per entry of truth.A).
+    drawn = [f"truth.A[{i}][{j}]" for i in range(3) for j in range(3)]
+    assert list(frame.columns) == study.columns + drawn
+    same_rows(frame[study.columns], cli_rows)
     assert (frame["outcome"] == "completed").all()
     # A path works as well as a Study.
-    same_rows(quell.sweep(study_file, jobs=1), cli_rows)
+    same_rows(quell.sweep(study_file, jobs=1)[study.columns], cli_rows)
 
 
 def test_run_specs_are_picklable(study_file):
@@ -78,7 +81,12 @@ def test_dask_local_cluster_of_two_processes(study_file, cli_rows):
         with distributed.Client(cluster) as client:
             assert len(client.scheduler_info()["workers"]) == 2
             rows = client.gather(client.map(quell.run_one, specs))
-    same_rows(pd.DataFrame(rows), cli_rows)
+    frame = pd.DataFrame(rows)
+    same_rows(frame[list(cli_rows.columns)], cli_rows)
+    # Each row has its draw's values, as quell.sweep's DataFrame has.
+    drawn = [c for c in frame.columns if c.startswith("truth.A")]
+    assert len(drawn) == 9
+    pd.testing.assert_frame_equal(frame[drawn], quell.sweep(study_file)[drawn])
 
 
 def test_study_errors_name_the_key(tmp_path):
@@ -96,10 +104,16 @@ def test_jobs_must_be_positive(study_file):
         quell.sweep(study_file, jobs=0)
 
 
-@pytest.mark.parametrize("jobs", [-1, 2**70, 1025, True, 1.5])
+@pytest.mark.parametrize("jobs", [-1, 2**70, 1025])
 def test_jobs_out_of_range_name_the_argument(study_file, jobs):
     # jobs=-1 raised a bare OverflowError.
     with pytest.raises(quell.ScenarioError, match=r"jobs: expected a number of threads from 1 to 1024"):
+        quell.sweep(study_file, jobs=jobs)
+
+
+@pytest.mark.parametrize("jobs", [True, 1.5, "2"])
+def test_jobs_of_another_type_is_a_type_error(study_file, jobs):
+    with pytest.raises(TypeError, match=r"jobs: expected an int \(a number of threads\) or None, found a (bool|float|str)"):
         quell.sweep(study_file, jobs=jobs)
 
 
@@ -122,5 +136,5 @@ def test_a_seed_beyond_64_bits_is_named_as_a_seed():
     # 2**70 was rounded to a float and refused as "a floating-point number".
     from test_api import paper_from_values
 
-    with pytest.raises(quell.ScenarioError, match=r"noise.seed: expected a seed, an integer from 0 to 2\*\*63 - 1, found 1180591620717411303424"):
+    with pytest.raises(quell.ScenarioError, match=r"noise\[\"seed\"\]: expected a seed, an integer from 0 to 2\*\*63 - 1, found 1180591620717411303424"):
         paper_from_values(sample_time=1e-3, noise={"std": [0.01, 0.01], "seed": 2**70})

@@ -5,23 +5,30 @@ use std::ops::ControlFlow;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use quell::scenario::{Scenario, PAPER_EXAMPLE};
-use quell::sim::{simulate, simulate_sampled, RunSettings, SampledSettings};
+use quell::sim::{Run, RunSettings};
 use quell::Design;
 
 fn paper(c: &mut Criterion) {
     let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
     let d = Design::new(&s.plant, &s.design).unwrap();
-    let settings = RunSettings::new(100.0, 0.1, 1e-9, 1e-9);
-    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())).unwrap();
+    let settings = RunSettings::continuous(100.0, 0.1, 1e-9, 1e-9);
+    let r =
+        Run::new(&d, &s.reference, &s.disturbance, settings.clone()).simulate(|_| ControlFlow::Continue(())).unwrap();
     eprintln!("paper example: {:?}", r.stats);
     let mut g = c.benchmark_group("paper_example");
     g.sample_size(20);
     g.bench_function("continuous_100s_rtol1e-9", |b| {
-        b.iter(|| simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())).unwrap())
+        b.iter(|| {
+            Run::new(&d, &s.reference, &s.disturbance, settings.clone())
+                .simulate(|_| ControlFlow::Continue(()))
+                .unwrap()
+        })
     });
-    let sampled = SampledSettings { divergence_bound: 1e9, ..SampledSettings::new(100.0, 0.1, 1e-3) };
+    let sampled = RunSettings { divergence_bound: 1e9, ..RunSettings::sampled(100.0, 0.1, 1e-3) };
     g.bench_function("sampled_100s_Ts1ms", |b| {
-        b.iter(|| simulate_sampled(&d, &s.reference, &s.disturbance, &sampled, |_| ControlFlow::Continue(())).unwrap())
+        b.iter(|| {
+            Run::new(&d, &s.reference, &s.disturbance, sampled.clone()).simulate(|_| ControlFlow::Continue(())).unwrap()
+        })
     });
     g.finish();
 }

@@ -11,7 +11,7 @@ use std::hint::black_box;
 use std::ops::ControlFlow;
 
 use quell::scenario::{Scenario, PAPER_EXAMPLE};
-use quell::sim::{simulate, simulate_sampled, RunSettings, SampledSettings};
+use quell::sim::{Run, RunSettings};
 use quell::{Controller, Design};
 
 fn main() {
@@ -24,15 +24,18 @@ fn main() {
     for _ in 0..n {
         match work {
             "continuous" => {
-                let settings = RunSettings::new(100.0, 0.1, 1e-9, 1e-9);
+                let settings = RunSettings::continuous(100.0, 0.1, 1e-9, 1e-9);
                 black_box(
-                    simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())).unwrap(),
+                    Run::new(&d, &s.reference, &s.disturbance, settings.clone())
+                        .simulate(|_| ControlFlow::Continue(()))
+                        .unwrap(),
                 );
             }
             "sampled" => {
-                let settings = SampledSettings { divergence_bound: 1e9, ..SampledSettings::new(100.0, 0.1, 1e-3) };
+                let settings = RunSettings { divergence_bound: 1e9, ..RunSettings::sampled(100.0, 0.1, 1e-3) };
                 black_box(
-                    simulate_sampled(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(()))
+                    Run::new(&d, &s.reference, &s.disturbance, settings.clone())
+                        .simulate(|_| ControlFlow::Continue(()))
                         .unwrap(),
                 );
             }

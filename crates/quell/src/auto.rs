@@ -1,7 +1,7 @@
 //! Design from targets: every `[design]` key a scenario leaves out (observer, channel and filter
 //! poles, μ, β) chosen from the plant's time scales, the signals' frequencies and the averaged
 //! adaptive law ([`crate::diagnostics::averaged`]), verified by simulation before it is returned.
-//! `quell design SCENARIO --auto --write OUT.toml` and `quell.auto_design` call [`auto_design`];
+//! The CLI's `design` subcommand and Python's `quell.auto_design` call [`auto_design`];
 //! docs/tuning.md explains each rule.
 //!
 //! The rules, for a time scale r (rad/s) = the largest of the signals' frequencies, the plant's
@@ -31,11 +31,10 @@ use thiserror::Error;
 use crate::design::{relative_degrees, Design, DesignError, DesignSpec, ObserverChoice};
 use crate::diagnostics::Averaged;
 use crate::linalg::eigenvalues;
-use crate::run::{simulate, LoopSettings};
 use crate::scenario::exosystem::Exosystem;
 use crate::scenario::{PartialDesign, Scenario, ScenarioError};
 use crate::signal::{Component, Signal};
-use crate::sim::{Outcome, SimError};
+use crate::sim::{Outcome, Run, SimError};
 
 /// Fastest adaptation rate μ_i λ_max(Ω̄_i) the automatic design chooses, per unit of the time
 /// scale r: faster buys little (the error is then limited by the filters) and makes the loop stiff.
@@ -44,6 +43,10 @@ pub const MAX_RATE_PER_SCALE: f64 = 200.0;
 pub const TAIL_BOUND: f64 = 0.01;
 /// The RMS error the choice of μ aims at by the convergence time (a margin of 5 on [`TAIL_BOUND`]).
 const AIM: f64 = 0.002;
+/// β is at most t_end / this: H's lag then leaves most of the horizon to converge.
+const BETA_HORIZON: f64 = 10.0;
+/// The disturbance observer's relative error (eq. (20) driven by x̂) the observer poles aim at.
+const FIDELITY_AIM: f64 = 0.05;
 
 /// Optional targets of an automatic design.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -51,7 +54,7 @@ pub struct Targets {
     /// When the averaged law should have brought the error to 0.2 % of the reference's peak (s);
     /// default: half the horizon.
     pub convergence_time: Option<f64>,
-    /// Actuator limit on |u_i| (the adaptive command (25)).
+    /// Actuator limit on |u_f,i|, the plant input u_f = −K x̂ + F u_d (5) the actuator delivers.
     pub u_limit: Option<f64>,
 }
 
@@ -71,7 +74,8 @@ pub struct Verification {
     pub tail_max_e: Vec<f64>,
     /// [`TAIL_BOUND`] times the reference's peak.
     pub bound: Vec<f64>,
-    pub max_u: Vec<f64>,
+    /// max |u_f,i| over the run: the plant input (5), what [`Targets::u_limit`] bounds.
+    pub max_u_f: Vec<f64>,
     /// Simulations run (1 + the retries).
     pub runs: usize,
     /// Every channel within its bound (and the actuator limit).
@@ -114,35 +118,36 @@ pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, A
     let mut runs = 0;
     loop {
         runs += 1;
-        let r = simulate(&scenario, &design, &LoopSettings::of(&scenario), |_| ControlFlow::Continue(()))?;
+        let r = Run::of(&scenario, &design).simulate(|_| ControlFlow::Continue(()))?;
         match r.outcome.clone().unwrap_or(Outcome::Completed) {
             Outcome::Completed => {}
             other => return Err(AutoError::Run(other)),
         }
         let tail_max_e: Vec<f64> = (0..m).map(|i| r.max_abs_error(i, 0.9 * t_end, t_end).unwrap_or(f64::NAN)).collect();
-        let max_u: Vec<f64> = r.summary().iter().map(|c| c.max_abs_u).collect();
-        let retry = !given_mu && runs <= 3 && adjust_mu(&mut scenario.design.mu, &tail_max_e, &bound, &max_u, targets);
+        let max_u_f: Vec<f64> = r.summary().iter().map(|c| c.max_abs_uf).collect();
+        let retry =
+            !given_mu && runs <= 3 && adjust_mu(&mut scenario.design.mu, &tail_max_e, &bound, &max_u_f, targets);
         if !retry {
-            let within_u = targets.u_limit.is_none_or(|l| max_u.iter().all(|u| *u <= l));
+            let within_u = targets.u_limit.is_none_or(|l| max_u_f.iter().all(|u| *u <= l));
             let passed = within_u && tail_max_e.iter().zip(&bound).all(|(e, b)| e <= b);
             note_verification(&mut choices, &scenario.design.mu, runs);
             return Ok(AutoDesign {
                 scenario,
                 design,
                 choices,
-                verification: Verification { tail_max_e, bound, max_u, runs, passed },
+                verification: Verification { tail_max_e, bound, max_u_f, runs, passed },
             });
         }
         design = scenario.design()?;
     }
 }
 
-/// Raises μ_i ×4 where the tail error is beyond its bound, halves it where |u_i| is beyond the
+/// Raises μ_i ×4 where the tail error is beyond its bound, halves it where |u_f,i| is beyond the
 /// actuator limit; whether anything changed.
-fn adjust_mu(mu: &mut [f64], tail: &[f64], bound: &[f64], max_u: &[f64], targets: &Targets) -> bool {
+fn adjust_mu(mu: &mut [f64], tail: &[f64], bound: &[f64], max_u_f: &[f64], targets: &Targets) -> bool {
     let mut changed = false;
     for i in 0..mu.len() {
-        if targets.u_limit.is_some_and(|l| max_u[i] > l) {
+        if targets.u_limit.is_some_and(|l| max_u_f[i] > l) {
             mu[i] *= 0.5;
             changed = true;
         } else if tail[i].is_nan() || tail[i] > bound[i] {
@@ -185,18 +190,27 @@ fn frequencies(c: &Component) -> impl Iterator<Item = f64> + '_ {
     c.harmonics.iter().filter(|h| h.frequency > 0.0 && h.amplitude != 0.0).map(|h| h.frequency)
 }
 
-/// The time scale r of the scenario (module docs) and the slowest nonzero signal frequency.
-fn time_scale(s: &Scenario) -> Result<(f64, Option<f64>), AutoError> {
+/// The time scale r of the scenario (module docs).
+fn time_scale(s: &Scenario) -> Result<f64, AutoError> {
     let comps = || s.reference.components.iter().chain(&s.disturbance.components);
     let w_max = comps().flat_map(frequencies).fold(0.0, f64::max);
-    let w_min = comps().flat_map(frequencies).fold(f64::INFINITY, f64::min);
     let plant = eigenvalues(&s.plant.A)
         .map_err(|_| ScenarioError { key: "plant.A".into(), message: "its eigenvalues could not be computed".into() })?
         .iter()
         .map(|z| z.norm())
         .fold(0.0, f64::max);
     let r = w_max.max(plant).max(20.0 / s.simulation.t_end);
-    Ok((r, w_min.is_finite().then_some(w_min)))
+    Ok(r)
+}
+
+/// The smallest gap between distinct frequencies of g and ω, 0 (a bias, or the slowest harmonic's
+/// distance from DC) included; `None` without harmonics.
+fn smallest_gap(s: &Scenario) -> Option<f64> {
+    let comps = s.reference.components.iter().chain(&s.disturbance.components);
+    let mut ws: Vec<f64> = comps.flat_map(frequencies).collect();
+    ws.push(0.0);
+    ws.sort_by(f64::total_cmp);
+    ws.windows(2).map(|w| w[1] - w[0]).filter(|g| *g > 0.0).reduce(f64::min)
 }
 
 /// Filter orders and poles of one signal's components.
@@ -244,7 +258,7 @@ fn choose(
 ) -> Result<DesignSpec, AutoError> {
     let p = &s.plant;
     let (n, m) = (p.n(), p.m());
-    let (r, w_min) = time_scale(s)?;
+    let r = time_scale(s)?;
     let mut note = |key: &str, value: String, why: String| choices.push(Choice { key: key.into(), value, why });
     let sigma: Vec<usize> = match &partial.relative_degrees {
         Some(s) => s.clone(),
@@ -299,8 +313,9 @@ fn choose(
     let beta = match partial.beta {
         Some(b) => b,
         None => {
-            let b = (1.0 / w_min.unwrap_or(r)).min(s.simulation.t_end / 50.0);
-            note("design.beta", format!("{b:.4e}"), "1/(slowest harmonic's frequency) so that H averages over about a period (1/r without harmonics), at most t_end/50".into());
+            let gap = smallest_gap(s);
+            let b = (1.0 / gap.unwrap_or(r)).min(s.simulation.t_end / BETA_HORIZON);
+            note("design.beta", format!("{b:.4e}"), format!("1/(smallest gap between the signals' frequencies, 0 included) so that H averages over a beat of the two closest harmonics (1/r without harmonics), at most t_end/{BETA_HORIZON}"));
             b
         }
     };
@@ -342,32 +357,47 @@ fn design_poles(spec: &DesignSpec) -> Vec<f64> {
     }
 }
 
-/// Observer poles from −r_o to −2r_o, r_o doubled while the disturbance observer's worst fidelity
-/// error at the frequencies of ω exceeds 5 % and each doubling still cuts it by a fifth (at most five
-/// doublings; with Q ≠ 0 a faster observer need not help, and it only makes the loop stiffer).
-fn observer(s: &Scenario, spec: &mut DesignSpec, r_o: f64, n: usize) -> Result<(Design, String), AutoError> {
-    let factor = if n > 1 { 2f64.powf(1.0 / (n as f64 - 1.0)) } else { 1.0 };
-    let attempt = |spec: &mut DesignSpec, rate: f64| -> Result<(Design, f64), AutoError> {
-        spec.observer = ObserverChoice::Poles(spread(rate, n, factor, false));
-        let design = Design::new(&s.plant, spec)?;
+/// Observer poles: n distinct real poles from −r_o to −`spread`·r_o, for r_o = r_0·2^k (k = 0..5)
+/// and spreads 2 and 4; the first (slowest) candidate whose disturbance observer passes every
+/// frequency of ω with relative error ≤ [`FIDELITY_AIM`], else the candidate with the smallest
+/// error (it is driven by x̂, not x, eq. (20)). Candidates `place` rejects are skipped.
+fn observer(s: &Scenario, spec: &mut DesignSpec, r_0: f64, n: usize) -> Result<(Design, String), AutoError> {
+    let candidates = (0..4).flat_map(|k| [2.0, 4.0].map(|width| (r_0 * 2f64.powi(k), width)));
+    /// A candidate's design, poles, worst fidelity error and (r_o, spread).
+    type Candidate = (Design, Vec<Complex<f64>>, f64, (f64, f64));
+    let mut best: Option<Candidate> = None;
+    let mut first_error = None;
+    for (rate, width) in candidates {
+        let factor = if n > 1 { f64::powf(width, 1.0 / (n as f64 - 1.0)) } else { 1.0 };
+        let poles = spread(rate, n, factor, false);
+        spec.observer = ObserverChoice::Poles(poles.clone());
+        let design = match Design::new(&s.plant, spec) {
+            Ok(d) => d,
+            Err(e) => {
+                first_error.get_or_insert(e);
+                continue;
+            }
+        };
         let fidelity = Averaged::new(&design, &s.reference, &s.disturbance).fidelity;
-        Ok((design, fidelity.iter().map(|f| f.relative_error).fold(0.0, f64::max)))
-    };
-    let (mut rate, mut doublings) = (r_o, 0);
-    let (mut best, mut error) = attempt(spec, rate)?;
-    while error > 0.05 && doublings < 5 {
-        let (design, e) = attempt(spec, 2.0 * rate)?;
-        if e > 0.8 * error {
+        let error = fidelity.iter().map(|f| f.relative_error).fold(0.0, f64::max);
+        let done = error <= FIDELITY_AIM;
+        if best.as_ref().is_none_or(|b| error < b.2) {
+            best = Some((design, poles, error, (rate, width)));
+        }
+        if done {
             break;
         }
-        (best, error, rate, doublings) = (design, e, 2.0 * rate, doublings + 1);
     }
-    spec.observer = ObserverChoice::Poles(spread(rate, n, factor, false));
+    let (design, poles, error, (rate, width)) = match (best, first_error) {
+        (Some(b), _) => b,
+        (None, Some(e)) => return Err(e.into()),
+        (None, None) => unreachable!("at least one candidate is tried"),
+    };
+    spec.observer = ObserverChoice::Poles(poles);
     let why = format!(
-        "n distinct real poles from −r_o to −2r_o, r_o = {rate:.4e} (3× the fastest channel pole{}); the disturbance observer passes ω with relative error {error:.2e} at worst (a faster observer would not cut it by a fifth)",
-        if doublings > 0 { format!(", doubled {doublings}× for the disturbance observer's fidelity") } else { String::new() }
+        "n distinct real poles from −r_o to −{width}·r_o, r_o = {rate:.4e}: the slowest of r_0·2^k (r_0 = 3× the fastest channel pole, k ≤ 3) whose disturbance observer (eq. (20), driven by x̂) passes every frequency of ω with relative error ≤ {FIDELITY_AIM}, else the best; its error is {error:.2e} at worst"
     );
-    Ok((best, why))
+    Ok((design, why))
 }
 
 /// μ_i from the averaged law: the smallest gain whose predicted RMS error by the convergence time

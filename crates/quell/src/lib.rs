@@ -3,14 +3,14 @@
 //!
 //! Data flows one way:
 //! [`scenario`] file → validated [`Scenario`] → [`Design`] (every gain, [`design`]) →
-//! controller equations ([`controller`]) + plant → one [`sim::SimResult`] ([`run::simulate`] carries a
-//! scenario through). Run settings, their
+//! controller equations ([`controller`]) + plant → one [`sim::SimResult`] (a [`sim::Run`], from a
+//! scenario by [`sim::Run::of`]). Run settings, their
 //! limits and checks ([`settings`]) are shared by the scenario reader and the loops.
 //!
 //! ```
 //! use std::ops::ControlFlow;
 //! use quell::scenario::{Scenario, PAPER_EXAMPLE};
-//! use quell::sim::{simulate, RunSettings};
+//! use quell::sim::{Run, RunSettings};
 //! use quell::{Controller, Design};
 //!
 //! // The paper's example (Section VIII): every gain from the formulas, assumptions checked.
@@ -19,9 +19,8 @@
 //! assert_eq!(design.sigma(), vec![2, 1]);
 //!
 //! // The continuous closed loop with its input delays, 20 s of it.
-//! let run = simulate(&design, &s.reference, &s.disturbance, &RunSettings::new(20.0, 0.1, 1e-9, 1e-9), |_| {
-//!     ControlFlow::Continue(())
-//! })?;
+//! let settings = RunSettings::continuous(20.0, 0.1, 1e-9, 1e-9);
+//! let run = Run::new(&design, &s.reference, &s.disturbance, settings).simulate(|_| ControlFlow::Continue(()))?;
 //! assert_eq!(run.len(), 201);
 //!
 //! // The same controller for a real plant, sampled every millisecond.
@@ -48,7 +47,6 @@ pub mod diagnostics;
 pub mod export;
 pub mod linalg;
 pub mod plant;
-pub mod run;
 pub mod scenario;
 pub mod settings;
 pub mod signal;

@@ -270,6 +270,11 @@ pub fn fmt_complex(z: &Complex<f64>) -> String {
     }
 }
 
+/// A list of complex numbers as [`fmt_complex`] writes each, joined by ", ".
+pub fn fmt_complex_list(z: &[Complex<f64>]) -> String {
+    z.iter().map(fmt_complex).collect::<Vec<_>>().join(", ")
+}
+
 /// Exact zero-order-hold discretization of x' = A x + B v over a sample time T:
 /// x_{k+1} = Φ x_k + Γ v_k with Φ = e^{AT}, Γ = ∫_0^T e^{As} ds B, both read off
 /// exp([[A, B], [0, 0]]·T) (Van Loan's block method).

@@ -1,6 +1,6 @@
 //! The public functions outside `controller/` return an error, never panic, on inputs of the wrong
-//! shape or scale (issue 9, "A library that checks its inputs"). Each case panicked, hung or
-//! answered wrongly before it was fixed.
+//! shape or scale. Each case is one a library caller can reach: a panic, a hang or a wrong answer
+//! there would be a defect.
 #![allow(non_snake_case)]
 
 use quell::design::{controllability, observability, place, PlaceError};
@@ -137,7 +137,7 @@ fn relative_degrees_and_the_decoupler_refuse_wrong_shapes() {
 fn design_and_runs_refuse_inputs_built_in_rust_with_wrong_lengths() {
     // A probe over the public API with a DesignSpec, a true plant, signals and settings built
     // directly (not read from a file): each is an error naming its key, none panics.
-    use quell::sim::{simulate_sampled, simulate_with_truth, MeasurementNoise, RunSettings, SampledSettings, SimError};
+    use quell::sim::{MeasurementNoise, Run, RunSettings, SimError};
     use quell::{Design, DesignError};
     use std::ops::ControlFlow;
     let s = quell::Scenario::from_toml(quell::scenario::PAPER_EXAMPLE).unwrap();
@@ -157,36 +157,45 @@ fn design_and_runs_refuse_inputs_built_in_rust_with_wrong_lengths() {
 
     let d = s.design().unwrap();
     let go = ControlFlow::Continue;
-    let run = RunSettings::new(1.0, 0.1, 1e-9, 1e-9);
+    let run = RunSettings::continuous(1.0, 0.1, 1e-9, 1e-9);
     let key = |r: Result<quell::sim::SimResult, SimError>| match r {
         Err(SimError::Input(e)) => e.key,
         other => panic!("{:?}", other.map(|r| r.outcome)),
     };
     let mut truth = s.plant.clone();
     truth.x0 = quell::nalgebra::DVector::zeros(2);
-    assert_eq!(key(simulate_with_truth(&d, &truth, &s.reference, &s.disturbance, &run, |_| go(()))), "truth.x0");
+    assert_eq!(
+        key(Run::new(&d, &s.reference, &s.disturbance, run.clone()).truth(&truth).simulate(|_| go(()))),
+        "truth.x0"
+    );
     let mut truth = s.plant.clone();
     truth.x0[0] = 1e200;
-    assert_eq!(key(simulate_with_truth(&d, &truth, &s.reference, &s.disturbance, &run, |_| go(()))), "truth");
+    assert_eq!(
+        key(Run::new(&d, &s.reference, &s.disturbance, run.clone()).truth(&truth).simulate(|_| go(()))),
+        "truth"
+    );
     // A true delay that forces more than 1e10 integrator steps (steps are at most min τ long).
     let mut truth = s.plant.clone();
     truth.delays[0] = 1e-300;
-    assert_eq!(key(simulate_with_truth(&d, &truth, &s.reference, &s.disturbance, &run, |_| go(()))), "truth.delays[0]");
+    assert_eq!(
+        key(Run::new(&d, &s.reference, &s.disturbance, run.clone()).truth(&truth).simulate(|_| go(()))),
+        "truth.delays[0]"
+    );
     let mut reference = s.reference.clone();
     reference.components.pop();
-    assert_eq!(key(quell::sim::simulate(&d, &reference, &s.disturbance, &run, |_| go(()))), "reference.components");
+    assert_eq!(key(Run::new(&d, &reference, &s.disturbance, run.clone()).simulate(|_| go(()))), "reference.components");
     // A negative frequency (refused by the scenario reader) ran when the Signal was built in Rust.
     let mut reference = s.reference.clone();
     reference.components[0].harmonics[0].frequency = -2.0;
     assert_eq!(
-        key(quell::sim::simulate(&d, &reference, &s.disturbance, &run, |_| go(()))),
+        key(Run::new(&d, &reference, &s.disturbance, run).simulate(|_| go(()))),
         "reference.components[0].harmonics[0].frequency"
     );
-    let mut sampled = SampledSettings::new(1.0, 0.1, 0.001);
+    let mut sampled = RunSettings::sampled(1.0, 0.1, 0.001);
     sampled.noise = Some(MeasurementNoise::white(vec![0.1], 0));
-    assert_eq!(key(simulate_sampled(&d, &s.reference, &s.disturbance, &sampled, |_| go(()))), "noise.std");
-    let sampled = SampledSettings::new(1.0, 0.15, 0.1);
-    assert_eq!(key(simulate_sampled(&d, &s.reference, &s.disturbance, &sampled, |_| go(()))), "simulation.output_step");
+    assert_eq!(key(Run::new(&d, &s.reference, &s.disturbance, sampled).simulate(|_| go(()))), "noise.std");
+    let sampled = RunSettings::sampled(1.0, 0.15, 0.1);
+    assert_eq!(key(Run::new(&d, &s.reference, &s.disturbance, sampled).simulate(|_| go(()))), "simulation.output_step");
 }
 
 #[test]
@@ -277,7 +286,7 @@ fn the_dde_solver_refuses_inconsistent_arguments() {
         Err(SolveError::Input { argument, found, .. }) => (argument, found),
         other => panic!("{other:?}"),
     };
-    // Each was an assert.
+    // Each returns an error; none panics.
     assert_eq!(input(solve(&mut Lag(vec![1.0]), 0.0, &[1.0, 2.0], &[1.0], 1.0, 0.5, &opts, go)), ("y0", "2".into()));
     assert_eq!(input(solve(&mut Lag(vec![1.0]), 0.0, &[1.0], &[], 1.0, 0.5, &opts, go)), ("history", "0".into()));
     assert_eq!(
@@ -299,7 +308,7 @@ fn the_dde_solver_refuses_inconsistent_arguments() {
 
 #[test]
 fn a_study_run_index_beyond_the_study_is_none() {
-    // Was an assert.
+    // An error, not a panic.
     let study = quell::study::Study::from_toml("[grid]\n\"design.mu[0]\" = [10.0, 40.0]\n", None).unwrap();
     assert_eq!(study.len(), 2);
     assert_eq!(study.spec(1).map(|s| s.run), Some(1));
@@ -312,7 +321,7 @@ fn the_adaptive_step_refuses_buffers_of_the_wrong_length() {
     use quell::controller::discrete::adapt;
     use quell::ControllerError;
     let (mut omega, mut eta, mut tmp) = (vec![0.0; 4], vec![0.0; 2], vec![0.0; 2]);
-    // Was an assert.
+    // An error, not a panic.
     let e = adapt(0.1, &mut omega[..3], (0.5, 0.5), &[1.0, 0.0], &[1.0, 0.0], &mut eta, &mut tmp).unwrap_err();
     assert_eq!(e, ControllerError::Length { function: "adapt", name: "Omega", expected: 4, found: 3 });
     assert_eq!(e.to_string(), "adapt: Omega needs 4 entries, found 3");

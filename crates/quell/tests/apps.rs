@@ -14,9 +14,8 @@ use std::path::PathBuf;
 use c_harness::{CController, TempDir};
 use quell::auto::{auto_design, Targets};
 use quell::export::{generate, ExportOptions, Precision};
-use quell::run::{simulate, LoopSettings};
 use quell::scenario::Scenario;
-use quell::sim::{Outcome, SimResult};
+use quell::sim::{Outcome, Run, SimResult};
 use quell::study::{sweep, Shard, Study, StudyMeta, Summary, SweepOptions};
 use quell::Controller;
 
@@ -50,7 +49,7 @@ fn scenario_text(app: &App) -> String {
 }
 
 fn run(s: &Scenario) -> SimResult {
-    simulate(s, &s.design().unwrap(), &LoopSettings::of(s), |_| ControlFlow::Continue(())).unwrap()
+    Run::of(s, &s.design().unwrap()).simulate(|_| ControlFlow::Continue(())).unwrap()
 }
 
 /// Runs the scenario to completion and returns max |e_i| over the last 10 % of the horizon.

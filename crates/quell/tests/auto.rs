@@ -9,11 +9,11 @@ mod common;
 use std::ops::ControlFlow;
 
 use common::Rng;
-use quell::auto::{auto_design, Targets};
+use quell::auto::{auto_design, Targets, TAIL_BOUND};
 use quell::linalg::{companion, poly_from_roots};
 use quell::nalgebra::{Complex, DMatrix};
-use quell::run::{simulate, LoopSettings};
 use quell::scenario::Scenario;
+use quell::sim::Run;
 
 fn rows(M: &DMatrix<f64>) -> String {
     let r: Vec<String> = M
@@ -23,11 +23,38 @@ fn rows(M: &DMatrix<f64>) -> String {
     format!("[{}]", r.join(", "))
 }
 
+/// The plants' units: outputs, references and the disturbance in `y` of the base unit (D in the
+/// matching unit), inputs in `u`. (A disturbance in units unrelated to the outputs' scales ξ̂_ω against ξ̂_g by their ratio,
+/// and Ω̄_i's conditioning by its square: docs/tuning.md.)
+#[derive(Clone, Copy)]
+struct Units {
+    y: f64,
+    u: f64,
+}
+
+const BASE: Units = Units { y: 1.0, u: 1.0 };
+
+/// Reference frequencies for m channels in (0.3–1.5)·scale rad/s, redrawn until every gap between
+/// them, the disturbance's 0.7·scale and 0 spans at least one beat over the horizon 80/scale
+/// (gap ≥ 2π/80·scale): closer harmonics cannot be told apart within the horizon (docs/tuning.md).
+fn separated_frequencies(rng: &mut Rng, m: usize) -> Vec<f64> {
+    loop {
+        let ws: Vec<f64> = (0..m).map(|_| rng.uniform(0.3, 1.5)).collect();
+        let mut all = ws.clone();
+        all.extend([0.0, 0.7]);
+        all.sort_by(f64::total_cmp);
+        if all.windows(2).all(|w| w[1] - w[0] >= 2.0 * std::f64::consts::PI / 80.0) {
+            return ws;
+        }
+    }
+}
+
 /// A plant of m channels, channel i with relative degree sigma[i] and zeros[i] (stable), poles in
 /// [−3, 1]·scale (unstable ones allowed), mixed by a well-conditioned similarity; g_i a sine at
-/// (0.3–1.5)·scale rad/s plus a bias, one input disturbance (Q = 0) at 0.7·scale rad/s with a bias.
-/// The time axis is scaled by `scale` (delays and horizon by 1/scale).
-fn scenario(rng: &mut Rng, sigma: &[usize], zeros: &[Vec<f64>], scale: f64) -> String {
+/// (0.3–1.5)·scale rad/s ([`separated_frequencies`]) plus a bias, one input disturbance (Q = 0) at
+/// 0.7·scale rad/s with a bias. The time axis is scaled by `scale` (delays and horizon by 1/scale);
+/// outputs and references are in units of `units.y`, inputs of `units.u`.
+fn scenario(rng: &mut Rng, sigma: &[usize], zeros: &[Vec<f64>], scale: f64, units: Units) -> String {
     let m = sigma.len();
     let sizes: Vec<usize> = sigma.iter().zip(zeros).map(|(s, z)| s + z.len()).collect();
     let n: usize = sizes.iter().sum();
@@ -51,23 +78,27 @@ fn scenario(rng: &mut Rng, sigma: &[usize], zeros: &[Vec<f64>], scale: f64) -> S
     // Time scaling: A → scale·A (and B → scale^σ·B keeps the outputs' size comparable).
     let A = &T * A * &Ti * scale;
     let B = &T * B * scale.powi(sigma.iter().copied().max().unwrap() as i32);
-    let C = C * &Ti;
-    let D = rng.matrix(n, 1);
+    let C = C * &Ti * units.y;
+    let B = B / units.u;
+    // The disturbance measured in the outputs' units: ω × units.y, D / units.y.
+    let D = rng.matrix(n, 1) / units.y;
     let delays: Vec<String> = (0..m).map(|_| format!("{:e}", rng.uniform(0.0, 0.5) / scale)).collect();
-    let refs: Vec<String> = (0..m)
-        .map(|_| {
+    let frequencies = separated_frequencies(rng, m);
+    let refs: Vec<String> = frequencies
+        .iter()
+        .map(|w| {
             format!(
                 "{{ bias = {:e}, harmonics = [{{ amplitude = {:e}, frequency = {:e} }}] }}",
-                rng.uniform(-1.0, 1.0),
-                rng.uniform(0.5, 2.0),
-                rng.uniform(0.3, 1.5) * scale
+                rng.uniform(-1.0, 1.0) * units.y,
+                rng.uniform(0.5, 2.0) * units.y,
+                w * scale
             )
         })
         .collect();
     format!(
         "[plant]\nA = {}\nB = {}\nC = {}\nD = {}\nQ = {}\ndelays = [{}]\n[design]\n\
          [reference]\ncomponents = [{}]\n\
-         [disturbance]\ncomponents = [{{ bias = 0.3, harmonics = [{{ amplitude = 0.5, frequency = {:e} }}] }}]\n\
+         [disturbance]\ncomponents = [{{ bias = {:e}, harmonics = [{{ amplitude = {:e}, frequency = {:e} }}] }}]\n\
          [simulation]\nt_end = {:e}\noutput_step = {:e}\nrtol = 1e-7\natol = 1e-9\n",
         rows(&A),
         rows(&B),
@@ -76,39 +107,144 @@ fn scenario(rng: &mut Rng, sigma: &[usize], zeros: &[Vec<f64>], scale: f64) -> S
         rows(&DMatrix::zeros(m, 1)),
         delays.join(", "),
         refs.join(", "),
+        0.3 * units.y,
+        0.5 * units.y,
         0.7 * scale,
         80.0 / scale,
         0.05 / scale
     )
 }
 
-fn check(seed: u64, sigma: &[usize], zeros: &[Vec<f64>], scale: f64) {
+/// A plant shape: its name, σ_i and the zeros of each channel.
+type Shape = (&'static str, Vec<usize>, Vec<Vec<f64>>);
+
+/// The plant shapes of the family: relative degrees and zeros per channel (Σσ_i < n: zero dynamics).
+fn shapes() -> Vec<Shape> {
+    vec![
+        ("σ=[1]", vec![1], vec![vec![]]),
+        ("σ=[2]", vec![2], vec![vec![]]),
+        ("σ=[3]", vec![3], vec![vec![]]),
+        ("σ=[4]", vec![4], vec![vec![]]),
+        ("σ=[2], zero −1", vec![2], vec![vec![-1.0]]),
+        ("σ=[1, 1]", vec![1, 1], vec![vec![], vec![]]),
+        ("σ=[1, 2]", vec![1, 2], vec![vec![], vec![]]),
+        ("σ=[2, 1], zero −1.5", vec![2, 1], vec![vec![-1.5], vec![]]),
+        ("σ=[1, 2, 1], zero −2", vec![1, 2, 1], vec![vec![], vec![], vec![-2.0]]),
+    ]
+}
+
+/// Unit systems cycled through the family: base units; outputs in mm with inputs in kV; outputs
+/// in km with inputs in mA.
+const UNITS: [Units; 3] = [BASE, Units { y: 1e3, u: 1e-3 }, Units { y: 1e-3, u: 1e3 }];
+
+/// The automatic design of one random plant: its verification must pass and the complete scenario
+/// it writes, read back from TOML and run again, must keep every channel's tail error (last 10 %
+/// of the horizon) within 1 % of its reference's peak. Err: what failed.
+fn case(seed: u64, shape: usize, scale: f64, units: Units) -> Result<Vec<f64>, String> {
+    let (name, sigma, zeros) = &shapes()[shape];
     let mut rng = Rng(seed);
-    let text = scenario(&mut rng, sigma, zeros, scale);
+    let text = scenario(&mut rng, sigma, zeros, scale, units);
     let doc: toml::Table = text.parse().unwrap();
-    let auto = auto_design(&doc, &Targets::default()).unwrap_or_else(|e| panic!("seed {seed}: {e}\n{text}"));
-    assert!(auto.verification.passed, "seed {seed}: {:?}\n{:#?}", auto.verification, auto.choices);
-    // The written scenario, read back and run again.
+    let what = format!("{name}, scale {scale:e}, units y×{:e} u×{:e}, seed {seed}", units.y, units.u);
+    let auto = auto_design(&doc, &Targets::default()).map_err(|e| format!("{what}: {e}"))?;
+    if !auto.verification.passed {
+        return Err(format!("{what}: verification {:?}", auto.verification));
+    }
     let s = Scenario::from_toml(&auto.scenario.to_toml()).unwrap();
     let design = s.design().unwrap();
-    let r = simulate(&s, &design, &LoopSettings::of(&s), |_| ControlFlow::Continue(())).unwrap();
+    let r = Run::of(&s, &design).simulate(|_| ControlFlow::Continue(())).unwrap();
     let t_end = s.simulation.t_end;
-    for (i, c) in s.reference.components.iter().enumerate() {
-        let tail = r.max_abs_error(i, 0.9 * t_end, t_end).unwrap();
-        assert!(tail <= 0.01 * c.peak(), "seed {seed}, channel {}: tail max|e| {tail:e} > 1 % of {}", i + 1, c.peak());
-    }
+    s.reference
+        .components
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let ratio = r.max_abs_error(i, 0.9 * t_end, t_end).unwrap_or(f64::NAN) / (TAIL_BOUND * c.peak());
+            if ratio <= 1.0 {
+                Ok(ratio)
+            } else {
+                Err(format!("{what}: channel {} of the written scenario: tail max|e| / bound = {ratio:e}", i + 1))
+            }
+        })
+        .collect()
 }
 
-#[test]
-fn siso_stable_and_unstable_relative_degrees_one_to_four() {
-    for (seed, sigma) in [(1, 1), (2, 2), (3, 3), (4, 4)] {
-        check(seed, &[sigma], &[vec![]], 1.0);
+/// Runs `count` plants per time scale 1e-3…1e3 (shapes and units cycling with the seed) and
+/// asserts that every one meets the tail bound: the failure rate on this family is 0.
+fn family(scales: &[f64], count: u64, first_seed: u64) {
+    let shapes = shapes().len() as u64;
+    let mut failures = Vec::new();
+    let mut worst: f64 = 0.0;
+    for (k, &scale) in scales.iter().enumerate() {
+        for j in 0..count {
+            let seed = first_seed + 100 * k as u64 + j;
+            let shape = ((j + k as u64) % shapes) as usize;
+            match case(seed, shape, scale, UNITS[(j % 3) as usize]) {
+                Ok(ratios) => worst = ratios.into_iter().fold(worst, f64::max),
+                Err(e) => failures.push(e),
+            }
+        }
     }
+    let total = scales.len() as u64 * count;
+    assert!(failures.is_empty(), "{} of {total} plants failed:\n{}", failures.len(), failures.join("\n"));
+    println!("worst tail max|e| / bound over {total} plants: {worst:.3}");
 }
 
+/// 18 plants (every shape twice, units cycling) at the time scale 1 s.
 #[test]
-fn two_channels_and_zero_dynamics() {
-    check(33, &[2], &[vec![-1.0]], 1.0);
-    check(34, &[1], &[vec![-2.0]], 1.0);
-    check(37, &[1, 2], &[vec![], vec![]], 1.0);
+fn random_plants_in_three_unit_systems_meet_the_tail_bound() {
+    family(&[1.0], 18, 1);
+}
+
+/// A Targets::u_limit bounds the plant input u_f (5), as the verifying run records it: an
+/// unreachable limit fails the verification, and the reported max |u_f,i| is the recorded one of
+/// the written scenario's run (u_f recomputed there, not the adaptive command u); a loose limit
+/// changes nothing.
+#[test]
+fn the_actuator_limit_bounds_the_recorded_plant_input() {
+    let text = scenario(&mut Rng(7), &[2], &[vec![]], 1.0, BASE);
+    let doc: toml::Table = text.parse().unwrap();
+    let free = auto_design(&doc, &Targets::default()).unwrap();
+    assert!(free.verification.passed);
+    let rerun = |a: &quell::auto::AutoDesign| {
+        let s = Scenario::from_toml(&a.scenario.to_toml()).unwrap();
+        let r = Run::of(&s, &s.design().unwrap()).simulate(|_| ControlFlow::Continue(())).unwrap();
+        let u_f = r.u_f.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let u = r.u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        (u_f, u)
+    };
+    let (u_f, u) = rerun(&free);
+    // The same run, the same samples: equal to rounding.
+    assert!((free.verification.max_u_f[0] - u_f).abs() <= 1e-12 * u_f, "{:?} vs {u_f}", free.verification);
+    assert!(u_f != u, "u_f {u_f} and u {u} must differ for this check to tell them apart");
+    let loose = auto_design(&doc, &Targets { u_limit: Some(10.0 * u_f), ..Targets::default() }).unwrap();
+    assert!(loose.verification.passed && loose.scenario.design.mu == free.scenario.design.mu);
+    let tight = auto_design(&doc, &Targets { u_limit: Some(1e-3 * u_f), ..Targets::default() }).unwrap();
+    assert!(!tight.verification.passed, "{:?}", tight.verification);
+    let (u_f, _) = rerun(&tight);
+    assert!((tight.verification.max_u_f[0] - u_f).abs() <= 1e-12 * u_f && u_f > 1e-3 * free.verification.max_u_f[0]);
+}
+
+/// Exploration (not a check): AUTO_EXPLORE="shape index;scale;seeds;units index|…" prints each case.
+#[test]
+#[ignore]
+fn explore() {
+    let spec = std::env::var("AUTO_EXPLORE").unwrap_or_else(|_| "0;1;10;0".into());
+    for part in spec.split('|') {
+        let f: Vec<&str> = part.split(';').collect();
+        let (shape, scale, seeds, units): (usize, f64, u64, usize) =
+            (f[0].parse().unwrap(), f[1].parse().unwrap(), f[2].parse().unwrap(), f[3].parse().unwrap());
+        let mut fails = 0;
+        for seed in 0..seeds {
+            let t0 = std::time::Instant::now();
+            match case(1000 + seed, shape, scale, UNITS[units]) {
+                Ok(r) => println!("ok {r:.2?} {:.2}s", t0.elapsed().as_secs_f64()),
+                Err(e) => {
+                    fails += 1;
+                    println!("FAIL {e}");
+                }
+            }
+        }
+        println!("== {} scale {scale}: {fails}/{seeds} failed", shapes()[shape].0);
+    }
 }

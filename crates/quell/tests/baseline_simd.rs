@@ -45,7 +45,7 @@ fn baseline_compilation_meets_the_accuracy_bounds() {
     .unwrap();
     assert!(worst < 1e-9, "closed form: max error {worst:e}");
 
-    // The paper's example against the independent solver (1e-6) and its convergence (issue 3).
+    // The paper's example against the independent solver (1e-6) and its convergence.
     let r = run_paper(paper_spec(), 100.0, 0.1, 1e-10);
     assert_matches_reference_points(&r);
     let (e1, e2) = (r.max_abs_error(0, 90.0, 100.0).unwrap(), r.max_abs_error(1, 90.0, 100.0).unwrap());

@@ -8,12 +8,12 @@ use common::*;
 use std::ops::ControlFlow;
 
 use quell::nalgebra::DVector;
-use quell::sim::{simulate_sampled, Outcome, RunSettings, SampledSettings, SimResult};
+use quell::sim::{Outcome, Run, RunSettings, SimResult};
 use quell::Design;
 
 #[test]
 fn paper_example_converges() {
-    // Issue 3: max |e_1| on [90, 100] < 0.05 and max |e_2| < 0.005 (an independent solution gives
+    // max |e_1| on [90, 100] < 0.05 and max |e_2| < 0.005 (an independent solution gives
     // ≈ 0.027 and 0.002).
     let r = run_paper(paper_spec(), 100.0, 0.1, 1e-9);
     let (e1, e2) = (r.max_abs_error(0, 90.0, 100.0).unwrap(), r.max_abs_error(1, 90.0, 100.0).unwrap());
@@ -29,7 +29,7 @@ fn paper_example_matches_independent_reference() {
 
 #[test]
 fn tolerance_1e9_agrees_with_1e12() {
-    // Issue 3: the run at rtol = atol = 1e-9 agrees with the same run at 1e-12 to 1e-7 (y, u and η̂
+    // The run at rtol = atol = 1e-9 agrees with the same run at 1e-12 to 1e-7 (y, u and η̂
     // at every output sample).
     let a = run_paper(paper_spec(), 100.0, 0.1, 1e-9);
     let b = run_paper(paper_spec(), 100.0, 0.1, 1e-12);
@@ -41,7 +41,7 @@ fn tolerance_1e9_agrees_with_1e12() {
 
 #[test]
 fn channel_independence_mu1_leaves_channel_2_unchanged() {
-    // The paper's main claim (notes, "Properties worth testing"): with the decoupler in place, channel
+    // The paper's main claim: with the decoupler in place, channel
     // 2's trajectory does not depend on μ_1. Both runs at 1e-12, so the solver's error is ~1e-10 and
     // the 1e-8 bound tests the claim, not the solver.
     let base = run_paper(paper_spec(), 60.0, 0.1, 1e-12);
@@ -86,8 +86,8 @@ fn plant_input_is_recorded_as_minus_K_x_hat_plus_F_delayed_u() {
     let mut truth = paper_plant();
     truth.delays = vec![1.05, 3.0];
     truth.x0 = DVector::from_column_slice(&[0.5, -0.2, 0.1]);
-    let st = RunSettings { record_states: true, ..RunSettings::new(20.0, 0.05, 1e-9, 1e-9) };
-    let r = quell::sim::simulate_with_truth(&d, &truth, &g, &w, &st, |_| ControlFlow::Continue(())).unwrap();
+    let st = RunSettings { record_states: true, ..RunSettings::continuous(20.0, 0.05, 1e-9, 1e-9) };
+    let r = Run::new(&d, &g, &w, st).truth(&truth).simulate(|_| ControlFlow::Continue(())).unwrap();
     assert_eq!(r.outcome, Some(Outcome::Completed));
     assert_eq!((r.x.len(), r.x_hat.len()), (3 * r.len(), 3 * r.len()));
     // Row 0: x = x0 as given.
@@ -99,8 +99,8 @@ fn plant_input_is_recorded_as_minus_K_x_hat_plus_F_delayed_u() {
     assert!(dev > 1e-3 * peak, "{dev:e}");
 
     // The sampled-data loop: u_f(k) = −K x̂(k) + F u(k − d_i) exactly (d = τ / T_s samples).
-    let st = SampledSettings { record_states: true, ..SampledSettings::new(20.0, 0.01, 0.01) };
-    let r = simulate_sampled(&d, &g, &w, &st, |_| ControlFlow::Continue(())).unwrap();
+    let st = RunSettings { record_states: true, ..RunSettings::sampled(20.0, 0.01, 0.01) };
+    let r = Run::new(&d, &g, &w, st).simulate(|_| ControlFlow::Continue(())).unwrap();
     let (dev, peak) = plant_input_deviation(&r, &d, &[100, 300]);
     assert!(peak > 1.0 && dev <= 1e-12 * peak, "sampled: max deviation {dev:e}, peak {peak}");
 }

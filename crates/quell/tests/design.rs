@@ -1,4 +1,4 @@
-//! The design layer: the paper's example (known answers from the notes on the paper), seeded random
+//! The design layer: the paper's example (known answers worked out from the paper's formulas), seeded random
 //! property tests of Proposition 1 and eq. (20), and every error path of `Design::new`.
 #![allow(non_snake_case)]
 
@@ -15,7 +15,7 @@ fn paper_design() -> Design {
 
 #[test]
 fn paper_example_decoupler() {
-    // Known answer: NOTES-ON-THE-PAPER.md, "The printed example does not satisfy its own formulas":
+    // Known answer: the printed example does not satisfy its own formulas:
     // σ = [2, 1], B* = diag(2, 1), K = [[9.26, 9.26, 7.1], [5, 2.5, 5]], F = diag(6, 4),
     // eig(A − BK) = {−6, −4, −2}. Entries are short decimals, so 1e-12 covers the rounding of the
     // arithmetic (‖K‖ ≈ 17, a handful of flops).
@@ -33,7 +33,7 @@ fn paper_example_decoupler() {
 
 #[test]
 fn paper_example_printed_gains_are_not_propositions_result() {
-    // The paper prints K = [[12.1, 7.1, 0], [3, 1, 2]]; the notes: A − BK then has eigenvalues
+    // The paper prints K = [[12.1, 7.1, 0], [3, 1, 2]]; A − BK then has eigenvalues
     // ≈ 8.41, 0.08, −2.89 (unstable). This is why quell computes K from Proposition 1.
     let p = paper_plant();
     let K = mat(2, 3, &[12.1, 7.1, 0.0, 3.0, 1.0, 2.0]);
@@ -45,11 +45,11 @@ fn paper_example_printed_gains_are_not_propositions_result() {
 #[test]
 fn paper_example_observer_and_internal_models() {
     let d = paper_design();
-    // The printed L places eig(A − LC) at −2, −3, −4 to about 1e-4 (notes): it is rounded to 4 decimals.
+    // The printed L places eig(A − LC) at −2, −3, −4 to about 1e-4: it is rounded to 4 decimals.
     for (got, want) in d.observer_eigenvalues().iter().zip([-4.0, -3.0, -2.0]) {
         assert!((got - Complex::new(want, 0.0)).norm() < 2e-3, "{:?}", d.observer_eigenvalues());
     }
-    // G_g and G_ω as printed in Section VIII (they follow the notes' companion convention).
+    // G_g and G_ω as printed in Section VIII (companion form, last row −[a_0, …, a_{q−1}]).
     let G_g = mat(3, 3, &[0.0, 1.0, 0.0, -6.0, -7.0, 0.0, 0.0, 0.0, -9.0]);
     let L_g = mat(3, 2, &[0.0, 0.0, 1.0, 0.0, 0.0, 1.0]);
     assert_eq!(d.G_g(), &G_g);
@@ -65,7 +65,7 @@ fn paper_example_observer_and_internal_models() {
     assert_eq!(d.G_w(), &G_w);
     // N D = L_ω (eq. (20)), to rounding: ‖N‖‖D‖ ≈ 10, so 1e-12.
     assert!((d.N() * &d.plant().D - d.L_w()).norm() < 1e-12);
-    // The printed N does not (notes): its 2nd row times D is ≈ [2.0, 0.43], not [1, 0].
+    // The printed N does not: its 2nd row times D is ≈ [2.0, 0.43], not [1, 0].
     let printed_row2 = mat(1, 3, &[0.1007, 0.3022, 0.4317]);
     let r = printed_row2 * &d.plant().D;
     assert!((r[(0, 0)] - 2.0).abs() < 0.01 && (r[(0, 1)] - 0.43).abs() < 0.01, "{r}");
@@ -118,7 +118,7 @@ fn decoupled_loop_is_diagonal_with_the_chosen_channels() {
 
 #[test]
 fn relative_degree_survives_six_digit_rounding() {
-    // The notes: deciding c_i A^{l−1} B ≠ 0 by exact comparison lets rounding to six digits change σ.
+    // Deciding c_i A^{l−1} B ≠ 0 by exact comparison lets rounding to six digits change σ.
     // A row of C orthogonal to B (σ ≥ 2), rounded to 6 significant digits, keeps σ = 2.
     let mut rng = Rng(7);
     let round6 = |M: &DMatrix<f64>| {
@@ -211,7 +211,7 @@ fn canonical_siso(poles: &[Complex<f64>]) -> (DMatrix<f64>, DMatrix<f64>, DMatri
 
 #[test]
 fn relative_degrees_that_do_not_scale_with_A() {
-    // The three cases, all "reached by no input" before (the bound grew with ‖A‖^(l−1)).
+    // Three cases an absolute bound (growing with ‖A‖^(l−1)) would call "reached by no input".
     // Known answers: 1/(s + 1)^5 has relative degree 5 in any coordinates; an 11-state integrator
     // chain has 11; 1/(s + 1000)^3 has 3.
     let mut rng = Rng(5);
@@ -228,7 +228,7 @@ fn relative_degrees_that_do_not_scale_with_A() {
     assert_eq!(relative_degrees(&chain, &b, &c).unwrap(), vec![Some(11)]);
     let (A, B, C) = canonical_siso(&[re(-1000.0); 3]);
     let decided = &relative_degree_measures(&A, &B, &C).unwrap()[0];
-    assert_eq!(decided.sigma, Some(3));
+    assert_eq!(decided.decided, Some(3));
     assert_eq!(decided.deciding(), &[0.0, 0.0, 1.0]);
     assert!(!decided.is_close());
     // And the design goes through: G(s) = 6/((s + 1)(s + 2)(s + 3)) exactly (decoupling check).
@@ -252,8 +252,8 @@ fn one_tolerance_for_sigma_and_B_star() {
         // c_1 B = [1, 1]; c_2 B = [ε, 0]; c_2 A B = [0, 1]: B* is nonsingular either way.
         let C = mat(2, 3, &[1.0, 0.0, 1.0, cosine, 1.0, 0.0]);
         let decided = relative_degree_measures(&A, &B, &C).unwrap();
-        assert_eq!(decided[0].sigma, Some(1));
-        assert_eq!(decided[1].sigma, Some(sigma2), "cosine {cosine}");
+        assert_eq!(decided[0].decided, Some(1));
+        assert_eq!(decided[1].decided, Some(sigma2), "cosine {cosine}");
         assert!(decided[1].is_close(), "cosine {cosine} is within ×100 of τ");
         let measure = decided[1].measures[0];
         assert!((measure - cosine / (1.0 + cosine * cosine).sqrt()).abs() < 1e-15, "{measure}");
@@ -276,10 +276,10 @@ fn relative_degrees_given_inside_the_close_band() {
     let c = |cosine: f64| mat(2, 3, &[1.0, 0.0, 1.0, cosine, 1.0, 0.0]);
     let poles = vec![vec![re(-1.0)], vec![re(-2.0), re(-3.0)]];
     let exact = falb_wolovich(&A, &B, &c(0.0), &poles).unwrap();
-    assert_eq!(exact.sigma, vec![1, 2]);
+    assert_eq!(exact.sigma(), vec![1, 2]);
     let given = falb_wolovich_given(&A, &B, &c(3e-5), &poles, Some(&[1, 2])).unwrap();
-    assert_eq!(given.sigma, vec![1, 2]);
-    assert_eq!((given.degrees[1].sigma, given.degrees[1].given), (Some(1), Some(2)));
+    assert_eq!(given.sigma(), vec![1, 2]);
+    assert_eq!((given.degrees[1].decided, given.degrees[1].given), (Some(1), Some(2)));
     assert!((&given.K - &exact.K).norm() <= 1e-3 * exact.K.norm(), "{} vs {}", given.K, exact.K);
     let e = falb_wolovich_given(&A, &B, &c(3e-6), &[vec![re(-1.0)], vec![re(-2.0)]], Some(&[1, 1])).unwrap_err();
     assert!(matches!(e, DesignError::NotDecouplable { smallest, .. } if smallest < quell::design::TOL), "{e}");
@@ -537,7 +537,7 @@ fn four_state_three_output(seed: u64) -> Plant {
 
 #[test]
 fn triple_channel_pole_is_designed() {
-    // The case: channel_poles = [[−2, −5], [−2], [−2]] makes −2 a triple eigenvalue of
+    // A case: channel_poles = [[−2, −5], [−2], [−2]] makes −2 a triple eigenvalue of
     // A − BK (nalgebra's Schur did not converge on it). Independent checks: eig(A − BK) is the
     // multiset {−2, −2, −2, −5} to the accuracy of a 3-fold eigenvalue (10·(ε‖A_f‖)^(1/3)), and the
     // decoupled transfer matrix is diag(10/((s + 2)(s + 5)), 2/(s + 2), 2/(s + 2)) to 1e-9.

@@ -10,7 +10,7 @@ use quell::controller::ControllerError;
 use quell::diagnostics::{diagnose, Averaged};
 use quell::nalgebra::DMatrix;
 use quell::scenario::{Scenario, PAPER_EXAMPLE};
-use quell::sim::{simulate_sampled_with, SampledController, SampledSettings, Watched};
+use quell::sim::{Run, RunSettings, SampledController, Watched};
 use quell::Controller;
 
 /// The real-time controller, recording ξ̂ at every step.
@@ -76,17 +76,11 @@ fn omega_bar_matches_the_mean_of_delta_delta_from_a_simulated_run() {
     let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
     let design = s.design().unwrap();
     let T = 1e-3;
-    let settings = SampledSettings::new(40.0, 0.1, T);
+    let settings = RunSettings::sampled(40.0, 0.1, T);
     let mut rec = Recording { ctrl: Controller::new(&design, T).unwrap(), xi: Vec::new() };
-    let r =
-        simulate_sampled_with(
-            &design,
-            &mut rec,
-            &s.reference,
-            &s.disturbance,
-            &settings,
-            |_| ControlFlow::Continue(()),
-        )
+    let r = Run::new(&design, &s.reference, &s.disturbance, settings)
+        .controller(&mut rec)
+        .simulate(|_| ControlFlow::Continue(()))
         .unwrap();
     let q = design.q();
     let avg = Averaged::new(&design, &s.reference, &s.disturbance);

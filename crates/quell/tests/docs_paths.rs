@@ -90,6 +90,85 @@ fn architecture_names_only_what_exists() {
     assert!(unknown.is_empty(), "docs/architecture.md names modules or items that do not exist: {unknown:?}");
 }
 
+/// The text of every `.rs` file of the library, concatenated.
+fn library_source() -> String {
+    fn walk(dir: &Path, out: &mut String) {
+        for entry in std::fs::read_dir(dir).unwrap().flatten() {
+            let path = entry.path();
+            if path.is_dir() {
+                walk(&path, out);
+            } else if path.extension().is_some_and(|e| e == "rs") {
+                out.push_str(&std::fs::read_to_string(&path).unwrap());
+            }
+        }
+    }
+    let mut text = String::new();
+    walk(&root().join("crates/quell/src"), &mut text);
+    text
+}
+
+/// True when `word` is a Rust identifier.
+fn identifier(word: &str) -> bool {
+    word.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+        && word.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+/// A span that names a Rust item of the library: `Name` or `Name::member`, with `Name` in
+/// CamelCase (a type or trait), or `snake_name` (a function or constant such as `mat_vec`).
+fn is_item(span: &str) -> bool {
+    let parts: Vec<&str> = span.split("::").collect();
+    !span.starts_with("quell::")
+        && (1..=2).contains(&parts.len())
+        && parts.iter().all(|p| identifier(p))
+        && (parts.len() == 2 || parts[0].contains('_') || parts[0].starts_with(|c: char| c.is_ascii_uppercase()))
+}
+
+/// `Name` is defined (struct, enum, trait, type, fn or const), and `Name::member` has a function
+/// or an enum variant `member`.
+fn item_exists(source: &str, span: &str) -> bool {
+    let defined = |name: &str| {
+        ["struct", "enum", "trait", "type", "fn", "const", "static"].iter().any(|k| {
+            source.contains(&format!("{k} {name}<"))
+                || source.contains(&format!("{k} {name} "))
+                || source.contains(&format!("{k} {name}("))
+                || source.contains(&format!("{k} {name}:"))
+        })
+    };
+    match span.split_once("::") {
+        None => defined(span),
+        Some((ty, member)) => {
+            defined(ty)
+                && (source.contains(&format!("fn {member}("))
+                    || source.contains(&format!("fn {member}<"))
+                    || [" {", "(", ",", " =", "\n"].iter().any(|end| source.contains(&format!("    {member}{end}"))))
+        }
+    }
+}
+
+#[test]
+fn architecture_names_only_items_that_exist() {
+    let text = std::fs::read_to_string(root().join("docs/architecture.md")).unwrap();
+    let source = library_source();
+    let items: Vec<&str> = code_spans(&text).into_iter().filter(|s| is_item(s)).collect();
+    assert!(items.len() >= 15, "docs/architecture.md names only {} items", items.len());
+    let unknown: Vec<_> = items.iter().filter(|i| !item_exists(&source, i)).collect();
+    assert!(unknown.is_empty(), "docs/architecture.md names items the library does not define: {unknown:?}");
+}
+
+#[test]
+fn architecture_maps_every_module_of_the_library() {
+    let text = std::fs::read_to_string(root().join("docs/architecture.md")).unwrap();
+    let lib = std::fs::read_to_string(root().join("crates/quell/src/lib.rs")).unwrap();
+    let modules: Vec<&str> = lib
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("pub mod ").or_else(|| l.trim().strip_prefix("mod ")))
+        .filter_map(|l| l.strip_suffix(';'))
+        .collect();
+    assert!(modules.len() >= 10, "lib.rs declares only {modules:?}");
+    let missing: Vec<_> = modules.iter().filter(|m| !text.contains(&format!("`quell::{m}`"))).collect();
+    assert!(missing.is_empty(), "docs/architecture.md does not place these modules: {missing:?}");
+}
+
 #[test]
 fn the_checker_catches_a_missing_path() {
     assert!(!resolves("crates/quell/src/no_such_module.rs"));
@@ -97,4 +176,9 @@ fn the_checker_catches_a_missing_path() {
     assert!(resolves("crates/quell/src/plant.rs"));
     assert!(!module_exists("quell::no_such_module"));
     assert!(module_exists("quell::sim"));
+    let source = library_source();
+    assert!(is_item("Run::of") && is_item("mat_vec") && is_item("Controller") && !is_item("quell::sim"));
+    assert!(!is_item("plant") && !is_item("crates/quell/src/plant.rs"));
+    assert!(item_exists(&source, "Run::of") && item_exists(&source, "RunStats::Sampled"));
+    assert!(!item_exists(&source, "Run::no_such_method") && !item_exists(&source, "NoSuchType"));
 }

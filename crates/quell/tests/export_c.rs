@@ -1,4 +1,4 @@
-//! The generated C controller (issue 13): it compiles warning-free as C99, uses no dynamic memory,
+//! The generated C controller: it compiles warning-free as C99, uses no dynamic memory,
 //! no libm and no writable globals, and it is the same controller as the Rust `Controller`.
 //! gcc and binutils (nm) are required.
 #![allow(non_snake_case)]
@@ -10,9 +10,7 @@ use c_harness::{tool, write_code, CController, TempDir, STRICT};
 use common::{paper_signals, Rng};
 use quell::export::{generate, CCode, ExportError, ExportOptions, Precision};
 use quell::scenario::Scenario;
-use quell::sim::{
-    simulate_sampled, simulate_sampled_with, Outcome, SampledController, SampledSettings, SimResult, Watched,
-};
+use quell::sim::{Outcome, Run, RunSettings, SampledController, SimResult, Watched};
 use quell::{Controller, ControllerError, Design};
 
 fn example(name: &str) -> (Scenario, Design) {
@@ -37,7 +35,7 @@ fn relative_deviation(a: &[f64], b: &[f64]) -> f64 {
     dev / peak
 }
 
-/// Beyond the issue's flags, those firmware projects commonly add; the code must pass them too.
+/// Beyond the strict flags, those firmware projects commonly add; the code must pass them too.
 const EXTRA: &[&str] = &[
     "-Wconversion",
     "-Wdouble-promotion",
@@ -206,7 +204,7 @@ fn random_inputs(m: usize, steps: usize, seed: u64) -> impl Iterator<Item = (Vec
 #[test]
 fn same_controller_as_rust_on_random_sequences() {
     // 100,000 steps of random y, g, at -O0 and -O2; and the other examples' shapes (σ up to 2, m = 3,
-    // complex filter poles, one channel). Bound: 1e-12 relative to the run's peak (issue 13).
+    // complex filter poles, one channel). Bound: 1e-12 relative to the run's peak.
     let (_, paper) = example("paper");
     for opt in ["-O0", "-O2"] {
         let code = export(&paper, 1e-3, "quell", Precision::F64);
@@ -266,8 +264,8 @@ impl SampledController for Recorder {
 /// The paper's sampled-data run: 100 s at T_s = 1 ms (100,001 samples), output every 0.1 s.
 fn paper_run(ctrl: &mut impl SampledController, d: &Design) -> SimResult {
     let (g, w) = paper_signals();
-    let settings = SampledSettings::new(100.0, 0.1, 1e-3);
-    let r = simulate_sampled_with(d, ctrl, &g, &w, &settings, |_| std::ops::ControlFlow::Continue(())).unwrap();
+    let settings = RunSettings::sampled(100.0, 0.1, 1e-3);
+    let r = Run::new(d, &g, &w, settings).controller(ctrl).simulate(|_| std::ops::ControlFlow::Continue(())).unwrap();
     assert_eq!(r.outcome, Some(Outcome::Completed));
     r
 }
@@ -298,13 +296,13 @@ fn run_deviation(a: &SimResult, b: &SimResult) -> [f64; 4] {
 #[test]
 fn closed_loop_with_the_c_controller_and_f32_tail_bounds() {
     // The sampled-data loop with the generated C (f64, -O2) in place of the Rust controller gives
-    // the signals of `simulate_sampled` (what `quell run --sample-time` runs) to 1e-12; in f32 the
+    // the signals of the sampled-data `Run` (what `quell run --sample-time` runs) to 1e-12; in f32 the
     // paper's tail bounds still hold (max |e1| < 0.05, max |e2| < 0.005 on [90, 100]).
     let (_, d) = example("paper");
     let (g, w) = paper_signals();
-    let rust =
-        simulate_sampled(&d, &g, &w, &SampledSettings::new(100.0, 0.1, 1e-3), |_| std::ops::ControlFlow::Continue(()))
-            .unwrap();
+    let rust = Run::new(&d, &g, &w, RunSettings::sampled(100.0, 0.1, 1e-3))
+        .simulate(|_| std::ops::ControlFlow::Continue(()))
+        .unwrap();
     let mut c64 =
         CController::build(&export(&d, 1e-3, "quell", Precision::F64), "quell", Precision::F64, (2, 8, 3), "-O2");
     let r64 = paper_run(&mut c64, &d);

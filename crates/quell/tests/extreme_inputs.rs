@@ -12,7 +12,7 @@ use std::ops::ControlFlow;
 use quell::design::{controllability, RATE_SPAN};
 use quell::nalgebra::Complex;
 use quell::scenario::{load_and_design, LoadError, PAPER_EXAMPLE};
-use quell::sim::{simulate, simulate_sampled, Outcome, RunSettings, SampledSettings};
+use quell::sim::{Outcome, Run, RunSettings};
 use quell::{Design, DesignError, Scenario};
 
 /// The paper's example with one textual replacement.
@@ -190,12 +190,12 @@ fn a_triple_observer_pole_is_placed() {
 /// The continuous and the sampled-data (T_s = 1 ms) loop over 10 s; the continuous one with at most
 /// 10⁵ steps so that a stiff loop ends (TooManySteps) instead of crawling.
 fn runs(s: &Scenario, d: &Design) -> (Outcome, Result<quell::sim::SimResult, quell::sim::SimError>) {
-    let mut settings = RunSettings::new(10.0, 0.1, 1e-9, 1e-9);
-    settings.max_steps = Some(100_000);
-    let cont = simulate(d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())).unwrap();
-    let sampled = simulate_sampled(d, &s.reference, &s.disturbance, &SampledSettings::new(10.0, 0.1, 0.001), |_| {
-        ControlFlow::Continue(())
-    });
+    let mut settings = RunSettings::continuous(10.0, 0.1, 1e-9, 1e-9);
+    settings.set_max_steps(Some(100_000)).unwrap();
+    let cont =
+        Run::new(d, &s.reference, &s.disturbance, settings.clone()).simulate(|_| ControlFlow::Continue(())).unwrap();
+    let sampled = Run::new(d, &s.reference, &s.disturbance, RunSettings::sampled(10.0, 0.1, 0.001))
+        .simulate(|_| ControlFlow::Continue(()));
     (cont.outcome.unwrap(), sampled)
 }
 
@@ -262,23 +262,23 @@ fn delays_at_the_edges_are_accepted_and_the_loop_says_what_it_can_run() {
     // at most min τ long, so the continuous loop would need 1e301 steps: an input error, as for a
     // sampled-data run beyond 1e10 steps (was StepSizeTooSmall at t = 0, a failed run).
     let (s, d) = load("delays = [1.0, 3.0]", "delays = [1e-300, 3.0]").unwrap();
-    let settings = RunSettings::new(10.0, 0.1, 1e-9, 1e-9);
-    match simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())) {
+    let settings = RunSettings::continuous(10.0, 0.1, 1e-9, 1e-9);
+    match Run::new(&d, &s.reference, &s.disturbance, settings).simulate(|_| ControlFlow::Continue(())) {
         Err(quell::sim::SimError::Input(e)) => {
             assert_eq!(e.key, "plant.delays[0]");
             assert!(e.message.ends_with("expected 0 (no delay) or τ ≥ 1e-9"), "{e}");
         }
         other => panic!("{:?}", other.map(|r| r.outcome)),
     }
-    let sampled = simulate_sampled(&d, &s.reference, &s.disturbance, &SampledSettings::new(10.0, 0.1, 0.001), |_| {
-        ControlFlow::Continue(())
-    });
+    let sampled = Run::new(&d, &s.reference, &s.disturbance, RunSettings::sampled(10.0, 0.1, 0.001))
+        .simulate(|_| ControlFlow::Continue(()));
     assert_eq!(sampled.unwrap().outcome, Some(Outcome::Completed));
     // At the limit (t_end / τ = 1e10) the continuous loop starts.
     let (s, d) = load("delays = [1.0, 3.0]", "delays = [1e-9, 3.0]").unwrap();
-    let mut settings = RunSettings::new(10.0, 0.1, 1e-9, 1e-9);
-    settings.max_steps = Some(10);
-    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())).unwrap();
+    let mut settings = RunSettings::continuous(10.0, 0.1, 1e-9, 1e-9);
+    settings.set_max_steps(Some(10)).unwrap();
+    let r =
+        Run::new(&d, &s.reference, &s.disturbance, settings.clone()).simulate(|_| ControlFlow::Continue(())).unwrap();
     assert!(matches!(r.outcome, Some(Outcome::TooManySteps { .. })), "{:?}", r.outcome);
 }
 

@@ -4,7 +4,7 @@
 use std::ops::ControlFlow;
 
 use quell::scenario::PAPER_EXAMPLE;
-use quell::sim::{simulate, Outcome, RunSettings};
+use quell::sim::{Outcome, Run, RunSettings};
 use quell::Scenario;
 
 #[test]
@@ -12,8 +12,8 @@ fn divergence_bound_stops_the_continuous_loop() {
     let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
     let d = s.design().unwrap();
     // |g_2| = 2 alone exceeds a bound of 1 on the internal-model states soon after the start.
-    let settings = RunSettings { divergence_bound: 1.0, ..RunSettings::new(100.0, 0.1, 1e-9, 1e-9) };
-    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())).unwrap();
+    let settings = RunSettings { divergence_bound: 1.0, ..RunSettings::continuous(100.0, 0.1, 1e-9, 1e-9) };
+    let r = Run::new(&d, &s.reference, &s.disturbance, settings).simulate(|_| ControlFlow::Continue(())).unwrap();
     let Some(Outcome::Diverged { t, signal, value }) = r.outcome.clone() else {
         panic!("expected divergence, got {:?}", r.outcome);
     };
@@ -32,8 +32,8 @@ fn a_nan_divergence_bound_is_refused() {
     // non-finite state counts as divergence is `tests/sim_inputs.rs`).
     let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
     let d = s.design().unwrap();
-    let settings = RunSettings { divergence_bound: f64::NAN, ..RunSettings::new(1.0, 0.1, 1e-9, 1e-9) };
-    let e = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())).unwrap_err();
+    let settings = RunSettings { divergence_bound: f64::NAN, ..RunSettings::continuous(1.0, 0.1, 1e-9, 1e-9) };
+    let e = Run::new(&d, &s.reference, &s.disturbance, settings).simulate(|_| ControlFlow::Continue(())).unwrap_err();
     assert!(e.to_string().starts_with("divergence_bound: expected a bound > 0"), "{e}");
 }
 
@@ -43,8 +43,8 @@ fn step_size_underflow_ends_the_run_with_the_time() {
     // (not loop) and say when.
     let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
     let d = s.design().unwrap();
-    let settings = RunSettings::new(10.0, 0.1, 1e-300, 1e-300);
-    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())).unwrap();
+    let settings = RunSettings::continuous(10.0, 0.1, 1e-300, 1e-300);
+    let r = Run::new(&d, &s.reference, &s.disturbance, settings).simulate(|_| ControlFlow::Continue(())).unwrap();
     assert!(matches!(r.outcome, Some(Outcome::StepSizeTooSmall { t }) if (0.0..10.0).contains(&t)), "{:?}", r.outcome);
     assert_eq!(r.len(), 1, "the sample at t = 0 is kept");
 }
@@ -53,15 +53,10 @@ fn step_size_underflow_ends_the_run_with_the_time() {
 fn interruption_keeps_the_samples_so_far() {
     let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
     let d = s.design().unwrap();
-    let settings = RunSettings::new(100.0, 0.1, 1e-9, 1e-9);
-    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |t| {
-        if t >= 5.0 {
-            ControlFlow::Break(())
-        } else {
-            ControlFlow::Continue(())
-        }
-    })
-    .unwrap();
+    let settings = RunSettings::continuous(100.0, 0.1, 1e-9, 1e-9);
+    let r = Run::new(&d, &s.reference, &s.disturbance, settings)
+        .simulate(|t| if t >= 5.0 { ControlFlow::Break(()) } else { ControlFlow::Continue(()) })
+        .unwrap();
     assert!(matches!(r.outcome, Some(Outcome::Interrupted { t }) if (t - 5.0).abs() < 1e-9), "{:?}", r.outcome);
     assert_eq!(r.len(), 51);
 }

@@ -1,4 +1,4 @@
-//! Long runs of the paper's example (issue "Bad input, numerical faults and long runs").
+//! Long runs of the paper's example.
 //! Ignored by default; run with
 //!
 //! ```text
@@ -10,9 +10,7 @@
 use std::ops::ControlFlow;
 
 use quell::scenario::PAPER_EXAMPLE;
-use quell::sim::{
-    simulate, simulate_sampled, MeasurementNoise, Outcome, RunSettings, RunStats, SampledSettings, SimResult,
-};
+use quell::sim::{MeasurementNoise, Outcome, Run, RunSettings, RunStats, SimResult};
 use quell::{Design, Scenario};
 
 fn paper() -> (Scenario, Design) {
@@ -23,8 +21,8 @@ fn paper() -> (Scenario, Design) {
 
 fn continuous(t_end: f64, output_step: f64) -> SimResult {
     let (s, d) = paper();
-    let settings = RunSettings::new(t_end, output_step, 1e-9, 1e-9);
-    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())).unwrap();
+    let settings = RunSettings::continuous(t_end, output_step, 1e-9, 1e-9);
+    let r = Run::new(&d, &s.reference, &s.disturbance, settings).simulate(|_| ControlFlow::Continue(())).unwrap();
     assert_eq!(r.outcome, Some(Outcome::Completed));
     r
 }
@@ -80,7 +78,7 @@ fn paper_example_to_10000_s() {
     // Memory: the dense history holds the last max τ seconds only, so its peak length does not
     // grow with the horizon.
     let history = |r: &SimResult| match r.stats {
-        RunStats::Continuous { max_history_len, .. } => max_history_len,
+        RunStats::Continuous(stats) => stats.max_history_len,
         RunStats::Sampled { .. } => unreachable!("a continuous run"),
     };
     let (h100, h10k) = (history(&short), history(&long));
@@ -97,16 +95,13 @@ fn paper_example_to_10000_s() {
 fn sampled_with_measurement_noise_1000_s() {
     // T_s = 1 ms, white noise on y with σ = 1 % of the outputs' amplitude (g peaks at 3 and 2).
     let (s, d) = paper();
-    let settings = SampledSettings {
-        t_end: 1_000.0,
-        output_step: 0.1,
-        sample_time: 0.001,
+    let settings = RunSettings {
         noise: Some(MeasurementNoise::white(vec![0.03, 0.02], 1)),
         divergence_bound: 1e9,
-        record_states: false,
-        actuator: None,
+        ..RunSettings::sampled(1_000.0, 0.1, 0.001)
     };
-    let r = simulate_sampled(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(()))
+    let r = Run::new(&d, &s.reference, &s.disturbance, settings)
+        .simulate(|_| ControlFlow::Continue(()))
         .expect("sampled run starts");
     assert_eq!(r.outcome, Some(Outcome::Completed));
     assert_eq!(r.len(), 10_001);

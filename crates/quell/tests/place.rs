@@ -581,7 +581,7 @@ fn refusals_from_real_problems() {
     assert!(e.to_string().contains("staircase is 1, need 2"), "{e}");
 }
 
-/// The case: the observer of the 12-state integrator chain (companion form of s¹², y = x₁)
+/// A hard case: the observer of the 12-state integrator chain (companion form of s¹², y = x₁)
 /// with poles −2, −2.7, …, −9.7, by duality. Independent answer, Ackermann in the chain's own
 /// coordinates: A − L C has −L in its first column and ones on the superdiagonal, a companion
 /// matrix with characteristic polynomial s¹² + l₁ s¹¹ + … + l₁₂, so L = (a₁₁, a₁₀, …, a₀), the

@@ -1,4 +1,4 @@
-//! Seeded property tests of the whole design layer (issue 9, "Done when") on plants whose answer
+//! Seeded property tests of the whole design layer on plants whose answer
 //! is known by construction: m = 1…4 SISO channels, each in controllable canonical form with a
 //! chosen relative degree r_i ∈ 1…6 and chosen zeros (Σ zeros = zero-dynamics dimension 0…3),
 //! stacked block-diagonally (n ≤ 10), then disguised by a random well-conditioned similarity, a

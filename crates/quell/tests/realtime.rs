@@ -1,5 +1,5 @@
 //! The real-time controller: allocation-free `step`, sample-time validation, a nonexpansive adaptive
-//! step, and the sampled-data loop against the continuous one (issue 4).
+//! step, and the sampled-data loop against the continuous one.
 #![allow(non_snake_case)]
 
 mod common;
@@ -10,7 +10,7 @@ use std::ops::ControlFlow;
 
 use common::*;
 use quell::controller::discrete::adapt;
-use quell::sim::{simulate, simulate_sampled, Outcome, RunSettings, SampledSettings};
+use quell::sim::{Outcome, Run, RunSettings};
 use quell::{Controller, ControllerError, Design};
 
 /// Counts allocations made by the current thread while `COUNTING` is set.
@@ -251,19 +251,12 @@ fn sampled_data_loop_converges_to_the_continuous_one_at_order_one() {
     let d = paper_design();
     let (g, w) = paper_signals();
     let t_end = 20.0;
-    let cont =
-        simulate(&d, &g, &w, &RunSettings::new(t_end, 0.1, 1e-10, 1e-10), |_| ControlFlow::Continue(())).unwrap();
+    let cont = Run::new(&d, &g, &w, RunSettings::continuous(t_end, 0.1, 1e-10, 1e-10))
+        .simulate(|_| ControlFlow::Continue(()))
+        .unwrap();
     let dev = |ts: f64| -> [f64; 2] {
-        let settings = SampledSettings {
-            t_end,
-            output_step: 0.1,
-            sample_time: ts,
-            noise: None,
-            divergence_bound: 1e9,
-            record_states: false,
-            actuator: None,
-        };
-        let samp = simulate_sampled(&d, &g, &w, &settings, |_| ControlFlow::Continue(())).unwrap();
+        let settings = RunSettings { divergence_bound: 1e9, ..RunSettings::sampled(t_end, 0.1, ts) };
+        let samp = Run::new(&d, &g, &w, settings).simulate(|_| ControlFlow::Continue(())).unwrap();
         assert_eq!(samp.outcome, Some(Outcome::Completed));
         assert_eq!(samp.len(), cont.len());
         std::array::from_fn(|i| {
@@ -299,8 +292,9 @@ fn sampled_data_loop_converges_to_the_continuous_one_at_order_one() {
 fn sample_time_sweep() {
     let d = paper_design();
     let (g, w) = paper_signals();
-    let cont =
-        simulate(&d, &g, &w, &RunSettings::new(100.0, 0.1, 1e-10, 1e-10), |_| ControlFlow::Continue(())).unwrap();
+    let cont = Run::new(&d, &g, &w, RunSettings::continuous(100.0, 0.1, 1e-10, 1e-10))
+        .simulate(|_| ControlFlow::Continue(()))
+        .unwrap();
     let peak = |s: &[f64], i| cont.column(s, 2, i).fold(0.0, |m: f64, v| m.max(v.abs()));
     println!("| T_s | max abs e1 on [90, 100] | max abs e2 on [90, 100] | max abs(y − y_cont) / peak abs y_cont, channel 1 / 2 | outcome |");
     println!("|---|---|---|---|---|");
@@ -309,16 +303,8 @@ fn sample_time_sweep() {
     for n in [2000u32, 1000, 500, 400, 250, 200, 100, 50, 20, 15, 12, 10, 8, 5] {
         let ts = 1.0 / n as f64;
         let out = if n % 10 == 0 { 0.1 } else { ts * (0.1 * n as f64).ceil() };
-        let settings = SampledSettings {
-            t_end: 100.0,
-            output_step: out,
-            sample_time: ts,
-            noise: None,
-            divergence_bound: 1e9,
-            record_states: false,
-            actuator: None,
-        };
-        let r = simulate_sampled(&d, &g, &w, &settings, |_| ControlFlow::Continue(())).unwrap();
+        let settings = RunSettings { divergence_bound: 1e9, ..RunSettings::sampled(100.0, out, ts) };
+        let r = Run::new(&d, &g, &w, settings).simulate(|_| ControlFlow::Continue(())).unwrap();
         let (e1, e2) = (
             r.max_abs_error(0, 90.0, 100.0).unwrap_or(f64::INFINITY),
             r.max_abs_error(1, 90.0, 100.0).unwrap_or(f64::INFINITY),

@@ -446,7 +446,7 @@ fn filter_orders_without_auto() {
     check(
         &with(&[(CHANNEL, &format!("{CHANNEL}\nreference_filter_orders = [2, 1]"))]),
         "design.reference_filter_orders",
-        "read only by an automatic design",
+        "read only by the automatic design (`auto_design`)",
     );
 }
 
@@ -756,7 +756,7 @@ fn relative_degrees_given_round_trip_and_design_as_decided() {
     let (_, decided) = load_and_design(PAPER_EXAMPLE).unwrap();
     assert_eq!(d.K(), decided.K());
     assert_eq!(d.sigma(), decided.sigma());
-    let given: Vec<_> = d.relative_degree_decisions().iter().map(|r| (r.sigma, r.given)).collect();
+    let given: Vec<_> = d.relative_degree_decisions().iter().map(|r| (r.decided, r.given)).collect();
     assert_eq!(given, vec![(Some(2), Some(2)), (Some(1), Some(1))]);
     assert!(decided.relative_degree_decisions().iter().all(|r| r.given.is_none()));
 }

@@ -6,9 +6,7 @@
 use std::ops::ControlFlow;
 
 use quell::scenario::PAPER_EXAMPLE;
-use quell::sim::{
-    simulate, simulate_sampled, MeasurementNoise, Outcome, RunSettings, RunStats, SampledSettings, SimError,
-};
+use quell::sim::{MeasurementNoise, Outcome, Run, RunSettings, RunStats, SimError, Stats};
 use quell::{Design, Scenario, Signal};
 
 fn paper() -> (Scenario, Design) {
@@ -31,12 +29,12 @@ fn key(e: SimError) -> String {
 
 fn continuous_key(g: &Signal, w: &Signal, settings: RunSettings) -> String {
     let (_, d) = paper();
-    key(simulate(&d, g, w, &settings, go).expect_err("an input error"))
+    key(Run::new(&d, g, w, settings).simulate(go).expect_err("an input error"))
 }
 
-fn sampled_key(g: &Signal, w: &Signal, settings: SampledSettings) -> String {
+fn sampled_key(g: &Signal, w: &Signal, settings: RunSettings) -> String {
     let (_, d) = paper();
-    key(simulate_sampled(&d, g, w, &settings, go).expect_err("an input error"))
+    key(Run::new(&d, g, w, settings).simulate(go).expect_err("an input error"))
 }
 
 #[test]
@@ -44,14 +42,14 @@ fn wrong_number_of_signal_components_is_an_error_in_both_loops() {
     let (s, _) = paper();
     let short = Signal { components: s.reference.components[..1].to_vec() };
     let long = Signal { components: [s.disturbance.components.clone(), s.disturbance.components.clone()].concat() };
-    let cont = RunSettings::new(1.0, 0.1, 1e-9, 1e-9);
-    let samp = SampledSettings::new(1.0, 0.1, 1e-3);
+    let cont = RunSettings::continuous(1.0, 0.1, 1e-9, 1e-9);
+    let samp = RunSettings::sampled(1.0, 0.1, 1e-3);
     assert_eq!(continuous_key(&short, &s.disturbance, cont.clone()), "reference.components");
     assert_eq!(sampled_key(&short, &s.disturbance, samp.clone()), "reference.components");
     assert_eq!(continuous_key(&s.reference, &long, cont), "disturbance.components");
     assert_eq!(sampled_key(&s.reference, &long, samp.clone()), "disturbance.components");
     let (_, d) = paper();
-    let e = simulate_sampled(&d, &short, &s.disturbance, &samp, go).unwrap_err().to_string();
+    let e = Run::new(&d, &short, &s.disturbance, samp).simulate(go).unwrap_err().to_string();
     assert_eq!(e, "reference.components: expected 2 components (one per output, m = 2 columns of plant.B), found 1");
 }
 
@@ -60,18 +58,19 @@ fn non_finite_signal_parameters_are_errors() {
     let (s, _) = paper();
     let mut g = s.reference.clone();
     g.components[0].harmonics[0].amplitude = f64::INFINITY;
-    let k = continuous_key(&g, &s.disturbance, RunSettings::new(1.0, 0.1, 1e-9, 1e-9));
+    let k = continuous_key(&g, &s.disturbance, RunSettings::continuous(1.0, 0.1, 1e-9, 1e-9));
     assert_eq!(k, "reference.components[0].harmonics[0].amplitude");
     let mut w = s.disturbance.clone();
     w.components[1].bias = f64::NAN;
-    assert_eq!(sampled_key(&s.reference, &w, SampledSettings::new(1.0, 0.1, 1e-3)), "disturbance.components[1].bias");
+    assert_eq!(sampled_key(&s.reference, &w, RunSettings::sampled(1.0, 0.1, 1e-3)), "disturbance.components[1].bias");
 }
 
 #[test]
 fn horizons_and_tolerances_are_checked() {
     let (s, _) = paper();
     let (g, w) = (&s.reference, &s.disturbance);
-    let cont = |t_end, output_step, rtol, atol| continuous_key(g, w, RunSettings::new(t_end, output_step, rtol, atol));
+    let cont =
+        |t_end, output_step, rtol, atol| continuous_key(g, w, RunSettings::continuous(t_end, output_step, rtol, atol));
     for t_end in [0.0, -1.0, f64::NAN, f64::INFINITY] {
         assert_eq!(cont(t_end, 0.1, 1e-9, 1e-9), "simulation.t_end", "t_end = {t_end}");
     }
@@ -83,7 +82,7 @@ fn horizons_and_tolerances_are_checked() {
         assert_eq!(cont(1.0, 0.1, tol, 1e-9), "simulation.rtol", "rtol = {tol}");
         assert_eq!(cont(1.0, 0.1, 1e-9, tol), "simulation.atol", "atol = {tol}");
     }
-    let samp = |t_end, h, ts| sampled_key(g, w, SampledSettings::new(t_end, h, ts));
+    let samp = |t_end, h, ts| sampled_key(g, w, RunSettings::sampled(t_end, h, ts));
     assert_eq!(samp(f64::NAN, 0.1, 1e-3), "simulation.t_end");
     assert_eq!(samp(1.0, 2.0, 1e-3), "simulation.output_step");
     assert_eq!(samp(1.0, 0.1, f64::NAN), "simulation.sample_time");
@@ -95,17 +94,17 @@ fn horizons_and_tolerances_are_checked() {
 fn noise_and_divergence_bound_are_checked() {
     let (s, _) = paper();
     let (g, w) = (&s.reference, &s.disturbance);
-    let noisy = |std: Vec<f64>| SampledSettings {
+    let noisy = |std: Vec<f64>| RunSettings {
         noise: Some(MeasurementNoise::white(std, 1)),
-        ..SampledSettings::new(1.0, 0.1, 1e-3)
+        ..RunSettings::sampled(1.0, 0.1, 1e-3)
     };
     assert_eq!(sampled_key(g, w, noisy(vec![0.1])), "noise.std");
     assert_eq!(sampled_key(g, w, noisy(vec![0.1, -0.1])), "noise.std[1]");
     assert_eq!(sampled_key(g, w, noisy(vec![f64::NAN, 0.1])), "noise.std[0]");
     for bound in [f64::NAN, 0.0, -1.0] {
-        let cont = RunSettings { divergence_bound: bound, ..RunSettings::new(1.0, 0.1, 1e-9, 1e-9) };
+        let cont = RunSettings { divergence_bound: bound, ..RunSettings::continuous(1.0, 0.1, 1e-9, 1e-9) };
         assert_eq!(continuous_key(g, w, cont), "divergence_bound");
-        let samp = SampledSettings { divergence_bound: bound, ..SampledSettings::new(1.0, 0.1, 1e-3) };
+        let samp = RunSettings { divergence_bound: bound, ..RunSettings::sampled(1.0, 0.1, 1e-3) };
         assert_eq!(sampled_key(g, w, samp), "divergence_bound");
     }
 }
@@ -117,10 +116,10 @@ fn both_loops_watch_the_same_signals() {
     // observer state, at nearly the same time (the controller at 1 ms approximates the continuous one).
     let (s, d) = paper();
     let (g, w) = (&s.reference, &s.disturbance);
-    let cont = RunSettings { divergence_bound: 1.0, ..RunSettings::new(100.0, 0.01, 1e-9, 1e-9) };
-    let samp = SampledSettings { divergence_bound: 1.0, ..SampledSettings::new(100.0, 0.01, 1e-3) };
-    let a = simulate(&d, g, w, &cont, go).unwrap().outcome;
-    let b = simulate_sampled(&d, g, w, &samp, go).unwrap().outcome;
+    let cont = RunSettings { divergence_bound: 1.0, ..RunSettings::continuous(100.0, 0.01, 1e-9, 1e-9) };
+    let samp = RunSettings { divergence_bound: 1.0, ..RunSettings::sampled(100.0, 0.01, 1e-3) };
+    let a = Run::new(&d, g, w, cont).simulate(go).unwrap().outcome;
+    let b = Run::new(&d, g, w, samp).simulate(go).unwrap().outcome;
     let (Some(Outcome::Diverged { t: ta, signal: sa, .. }), Some(Outcome::Diverged { t: tb, signal: sb, .. })) =
         (&a, &b)
     else {
@@ -137,8 +136,8 @@ fn a_non_finite_state_is_divergence_even_without_a_bound() {
     // until it overflows, or until y passes the controller's measurement bound (1e100, which it
     // refuses), and either counts as divergence.
     let (s, d) = paper();
-    let settings = SampledSettings { divergence_bound: f64::INFINITY, ..SampledSettings::new(5000.0, 0.5, 0.5) };
-    let r = simulate_sampled(&d, &s.reference, &s.disturbance, &settings, go).unwrap();
+    let settings = RunSettings { divergence_bound: f64::INFINITY, ..RunSettings::sampled(5000.0, 0.5, 0.5) };
+    let r = Run::new(&d, &s.reference, &s.disturbance, settings).simulate(go).unwrap();
     let Some(Outcome::Diverged { t, value, signal }) = r.outcome else { panic!("{:?}", r.outcome) };
     let refused = signal.ends_with("(controller input)") && value.abs() > quell::controller::MAX_MEASUREMENT;
     assert!(!value.is_finite() || refused, "{signal} = {value} at t = {t}");
@@ -149,18 +148,20 @@ fn a_non_finite_state_is_divergence_even_without_a_bound() {
 fn each_loop_reports_its_own_statistics() {
     let (s, d) = paper();
     let (g, w) = (&s.reference, &s.disturbance);
-    let r = simulate_sampled(&d, g, w, &SampledSettings::new(10.0, 0.1, 1e-3), go).unwrap();
+    let r = Run::new(&d, g, w, RunSettings::sampled(10.0, 0.1, 1e-3)).simulate(go).unwrap();
     // Samples k = 0, …, 10,000.
     assert_eq!(r.stats, RunStats::Sampled { controller_steps: 10_001, sample_time: 1e-3 });
-    let r = simulate(&d, g, w, &RunSettings::new(10.0, 0.1, 1e-9, 1e-9), go).unwrap();
-    let RunStats::Continuous { steps, rhs_evaluations, breakpoints, .. } = r.stats else { panic!("{:?}", r.stats) };
+    let r = Run::new(&d, g, w, RunSettings::continuous(10.0, 0.1, 1e-9, 1e-9)).simulate(go).unwrap();
+    let RunStats::Continuous(Stats { steps, rhs_evals: rhs_evaluations, breakpoints, .. }) = r.stats else {
+        panic!("{:?}", r.stats)
+    };
     // DOP853 evaluates the right-hand side at least 11 times per accepted step (12 stages, the
     // first shared with the previous step's last).
     assert!(steps > 0 && rhs_evaluations >= 11 * steps, "{:?}", r.stats);
     // Delays 1 and 3 s: breakpoints at every whole second in (0, 10).
     assert_eq!(breakpoints, 9, "{:?}", r.stats);
     // A run that stops early keeps the statistics up to then.
-    let r = simulate(&d, g, w, &RunSettings::new(10.0, 0.1, 1e-300, 1e-300), go).unwrap();
+    let r = Run::new(&d, g, w, RunSettings::continuous(10.0, 0.1, 1e-300, 1e-300)).simulate(go).unwrap();
     assert!(matches!(r.outcome, Some(Outcome::StepSizeTooSmall { .. })));
-    assert!(matches!(r.stats, RunStats::Continuous { rhs_evaluations, .. } if rhs_evaluations > 0), "{:?}", r.stats);
+    assert!(matches!(r.stats, RunStats::Continuous(stats) if stats.rhs_evals > 0), "{:?}", r.stats);
 }

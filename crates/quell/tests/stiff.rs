@@ -5,8 +5,7 @@
 use std::ops::ControlFlow;
 
 use quell::scenario::{Scenario, PAPER_EXAMPLE};
-use quell::sim::dde::Method;
-use quell::sim::{simulate, Outcome, RunSettings, RunStats, SimResult};
+use quell::sim::{Integrator, Loop, Method, Outcome, Run, RunSettings, RunStats, SimResult};
 use quell::Design;
 
 const QUADRUPLE_TANK: &str = include_str!("data/quadruple-tank.toml");
@@ -19,12 +18,9 @@ fn run(toml: &str, factor: f64, tol: f64, method: Method) -> SimResult {
     let d = Design::new(&s.plant, &spec).unwrap();
     // DOP853 alone at μ × 1000 needs about 144k steps, beyond the default budget (which leaves the
     // adaptation rate out): the reference runs get a budget of their own.
-    let settings = RunSettings {
-        method,
-        max_steps: Some(2_000_000),
-        ..RunSettings::new(s.simulation.t_end, s.simulation.output_step, tol, tol)
-    };
-    let r = simulate(&d, &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(())).unwrap();
+    let integrator = Integrator { method, max_steps: Some(2_000_000), ..Integrator::new(tol, tol) };
+    let settings = RunSettings::new(s.simulation.t_end, s.simulation.output_step, Loop::Continuous(integrator));
+    let r = Run::new(&d, &s.reference, &s.disturbance, settings).simulate(|_| ControlFlow::Continue(())).unwrap();
     assert_eq!(r.outcome, Some(Outcome::Completed), "μ × {factor}, {method:?}");
     r
 }
@@ -62,7 +58,7 @@ fn examples_are_unchanged() {
     let explicit = run(three, 1.0, 1e-9, Method::Explicit);
     assert!(deviation(&auto, &explicit) < 1e-6, "{:e}", deviation(&auto, &explicit));
     let evals = |r: &SimResult| match r.stats {
-        RunStats::Continuous { rhs_evaluations, .. } => rhs_evaluations,
+        RunStats::Continuous(stats) => stats.rhs_evals,
         RunStats::Sampled { .. } => unreachable!("a continuous run"),
     };
     assert!(2 * evals(&auto) < evals(&explicit), "{:?} vs {:?}", auto.stats, explicit.stats);

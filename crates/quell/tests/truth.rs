@@ -7,7 +7,7 @@
 use std::ops::ControlFlow;
 
 use quell::scenario::{Scenario, PAPER_EXAMPLE};
-use quell::sim::{simulate_sampled_with_truth, simulate_with_truth, Outcome, RunSettings, SampledSettings, SimResult};
+use quell::sim::{Outcome, Run, RunSettings, SimResult};
 
 /// The paper's example with `truth` appended as its [truth] table.
 fn scenario(truth: &str) -> Scenario {
@@ -18,21 +18,22 @@ fn scenario(truth: &str) -> Scenario {
 
 fn continuous(s: &Scenario, t_end: f64, tol: f64) -> SimResult {
     let d = s.design().unwrap();
-    let settings = RunSettings::new(t_end, 0.1, tol, tol);
-    let r =
-        simulate_with_truth(&d, s.true_plant(), &s.reference, &s.disturbance, &settings, |_| ControlFlow::Continue(()))
-            .unwrap();
+    let settings = RunSettings::continuous(t_end, 0.1, tol, tol);
+    let r = Run::new(&d, &s.reference, &s.disturbance, settings)
+        .truth(s.true_plant())
+        .simulate(|_| ControlFlow::Continue(()))
+        .unwrap();
     assert_eq!(r.outcome, Some(Outcome::Completed));
     r
 }
 
 fn sampled(s: &Scenario, t_end: f64, T: f64) -> SimResult {
     let d = s.design().unwrap();
-    let settings = SampledSettings::new(t_end, 0.1, T);
-    let r = simulate_sampled_with_truth(&d, s.true_plant(), &s.reference, &s.disturbance, &settings, |_| {
-        ControlFlow::Continue(())
-    })
-    .unwrap();
+    let settings = RunSettings::sampled(t_end, 0.1, T);
+    let r = Run::new(&d, &s.reference, &s.disturbance, settings)
+        .truth(s.true_plant())
+        .simulate(|_| ControlFlow::Continue(()))
+        .unwrap();
     assert_eq!(r.outcome, Some(Outcome::Completed));
     r
 }
@@ -161,38 +162,28 @@ fn truth_mistakes_name_their_key() {
     // A sampled-data run needs the true delays in whole samples.
     let s = scenario("delays = [1.0005, 3.0]");
     let d = s.design().unwrap();
-    let e = simulate_sampled_with_truth(
-        &d,
-        s.true_plant(),
-        &s.reference,
-        &s.disturbance,
-        &SampledSettings::new(1.0, 0.1, 1e-3),
-        |_| ControlFlow::Continue(()),
-    )
-    .unwrap_err()
-    .to_string();
+    let e = Run::new(&d, &s.reference, &s.disturbance, RunSettings::sampled(1.0, 0.1, 1e-3))
+        .truth(s.true_plant())
+        .simulate(|_| ControlFlow::Continue(()))
+        .unwrap_err()
+        .to_string();
     assert!(e.starts_with("truth.delays[0]: τ = 1.0005 s is 1000.500000 samples of T_s = 0.001 s"), "{e}");
     let s = scenario("actuator_delays = [0.0005, 0.0]");
-    let settings = SampledSettings { actuator: s.actuator.clone(), ..SampledSettings::new(1.0, 0.1, 1e-3) };
-    let e = simulate_sampled_with_truth(&d, s.true_plant(), &s.reference, &s.disturbance, &settings, |_| {
-        ControlFlow::Continue(())
-    })
-    .unwrap_err()
-    .to_string();
+    let settings = RunSettings { actuator: s.actuator.clone(), ..RunSettings::sampled(1.0, 0.1, 1e-3) };
+    let e = Run::new(&d, &s.reference, &s.disturbance, settings)
+        .truth(s.true_plant())
+        .simulate(|_| ControlFlow::Continue(()))
+        .unwrap_err()
+        .to_string();
     assert!(e.starts_with("truth.actuator_delays[0]: τ = 0.0005 s is 0.500000 samples of T_s = 0.001 s"), "{e}");
     // Called directly with a plant of other dimensions.
     let text =
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/siso-complex.toml")).unwrap();
     let other = Scenario::from_toml(&text).unwrap();
-    let e = simulate_with_truth(
-        &d,
-        &other.plant,
-        &s.reference,
-        &s.disturbance,
-        &RunSettings::new(1.0, 0.1, 1e-6, 1e-6),
-        |_| ControlFlow::Continue(()),
-    )
-    .unwrap_err()
-    .to_string();
+    let e = Run::new(&d, &s.reference, &s.disturbance, RunSettings::continuous(1.0, 0.1, 1e-6, 1e-6))
+        .truth(&other.plant)
+        .simulate(|_| ControlFlow::Continue(()))
+        .unwrap_err()
+        .to_string();
     assert!(e.starts_with("truth.A: expected 3×3 (the shape of plant.A)"), "{e}");
 }

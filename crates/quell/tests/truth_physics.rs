@@ -11,7 +11,7 @@ use std::ops::ControlFlow;
 use quell::scenario::{Actuator, Noise, Scenario, PAPER_EXAMPLE};
 use quell::signal::Signal;
 use quell::sim::noise::{band_limited, NOISE_SINES};
-use quell::sim::{simulate_sampled_with_truth, simulate_with_truth, Outcome, RunSettings, SampledSettings, SimResult};
+use quell::sim::{Outcome, Run, RunSettings, SimResult};
 
 /// ẋ = x + u_p, y = x (unstable), channel pole −2 (K = 3, F = 2), observer pole −5 (l = 6), g = 0.
 const SCALAR: &str = r#"
@@ -39,8 +39,8 @@ fn go(_: f64) -> ControlFlow<()> {
 
 fn continuous(s: &Scenario, t_end: f64, actuator: Option<Actuator>, noise: Option<Noise>) -> SimResult {
     let d = s.design().unwrap();
-    let settings = RunSettings { actuator, noise, ..RunSettings::new(t_end, 0.1, 1e-10, 1e-10) };
-    let r = simulate_with_truth(&d, s.true_plant(), &s.reference, &s.disturbance, &settings, go).unwrap();
+    let settings = RunSettings { actuator, noise, ..RunSettings::continuous(t_end, 0.1, 1e-10, 1e-10) };
+    let r = Run::new(&d, &s.reference, &s.disturbance, settings).truth(s.true_plant()).simulate(go).unwrap();
     assert_eq!(r.outcome, Some(Outcome::Completed));
     r
 }
@@ -145,7 +145,7 @@ fn band_limited_noise_has_its_standard_deviation_and_band() {
     }
     // Seeded: the same seed gives the same noise, another seed another.
     assert_eq!(band_limited(&noise), Some(s.clone()));
-    assert_ne!(band_limited(&Noise { seed: 12, ..noise.clone() }), Some(s));
+    assert_ne!(band_limited(&Noise { seed: 12, ..noise }), Some(s));
     assert_eq!(band_limited(&Noise::white(vec![1.0], 0)), None);
 }
 
@@ -164,12 +164,9 @@ fn sampled_loop_with_the_physics_converges_to_the_continuous_one() {
     let cont = continuous(&s, 10.0, s.actuator.clone(), s.noise.clone());
     assert!(cont.limited[0] == 0 && cont.limited[1] > 0, "input 2 clips: {:?}", cont.limited);
     let sampled = |ts: f64| {
-        let settings = SampledSettings {
-            actuator: s.actuator.clone(),
-            noise: s.noise.clone(),
-            ..SampledSettings::new(10.0, 0.1, ts)
-        };
-        simulate_sampled_with_truth(&d, s.true_plant(), &s.reference, &s.disturbance, &settings, go).unwrap()
+        let settings =
+            RunSettings { actuator: s.actuator.clone(), noise: s.noise.clone(), ..RunSettings::sampled(10.0, 0.1, ts) };
+        Run::new(&d, &s.reference, &s.disturbance, settings).truth(s.true_plant()).simulate(go).unwrap()
     };
     let (e1, e2) = (max_diff(&sampled(0.002).y, &cont.y), max_diff(&sampled(0.001).y, &cont.y));
     // First order: ratio 2; [1.6, 2.5] leaves room for the kinks of the limit.

@@ -12,7 +12,8 @@ docstrings refer to that paper.
 {'status': 'completed'}
 """
 
-from ._errors import DesignError, ExportError, QuellError, ScenarioError, SimulationError
+from ._errors import ControllerError, DesignError, ExportError, QuellError, ScenarioError, SimulationError
+from ._study import StudyResult
 from ._quell import (
     Controller,
     Design,
@@ -35,6 +36,7 @@ from ._quell import (
 
 __all__ = [
     "Controller",
+    "ControllerError",
     "Design",
     "DesignError",
     "ExportError",
@@ -46,6 +48,7 @@ __all__ = [
     "SimResult",
     "SimulationError",
     "Study",
+    "StudyResult",
     "__version__",
     "auto_design",
     "design",

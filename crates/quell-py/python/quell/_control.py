@@ -16,15 +16,15 @@ def decoupled_system(design):
     import control
 
     plant = design.plant
-    n, m = plant.n, plant.m
+    m = plant.m
     return control.ss(
         design.A_f,
         design.B_f,
         plant.C,
         np.zeros((m, m)),
         inputs=_labels("u_d", m),
-        outputs=_labels("y", m),
-        states=_labels("x", n),
+        outputs=plant.outputs,
+        states=plant.states,
         name="decoupled",
     )
 
@@ -37,16 +37,22 @@ def observer_system(design):
     plant = design.plant
     n, m = plant.n, plant.m
     A, B, C, L = plant.A, plant.B, plant.C, design.L
+    estimates = [_hat(name) for name in plant.states]
     return control.ss(
         A - L @ C,
         np.hstack([B, L]),
         np.eye(n),
         np.zeros((n, 2 * m)),
-        inputs=_labels("u_f", m) + _labels("y", m),
-        outputs=_labels("x_hat", n),
-        states=_labels("x_hat", n),
+        inputs=plant.inputs + plant.outputs,
+        outputs=estimates,
+        states=estimates,
         name="observer",
     )
+
+
+def _hat(state):
+    """The estimate's name of a state: x[j] gives x_hat[j], any other name gains a _hat."""
+    return "x_hat" + state[1:] if state.startswith("x[") else state + "_hat"
 
 
 def state_space(sys):
@@ -58,7 +64,10 @@ def state_space(sys):
         return sys
     reduced = control.minreal(sys, verbose=False)  # cancels pole-zero pairs (no slycot needed)
     try:
-        return control.ss(reduced)
+        realized = control.ss(reduced)
+        # minreal drops the signal names: the realization gets the transfer function's.
+        return control.ss(realized.A, realized.B, realized.C, realized.D,
+                          inputs=sys.input_labels, outputs=sys.output_labels)
     except (ImportError, TypeError, ValueError) as e:
         from ._errors import ScenarioError
 
@@ -68,9 +77,10 @@ def state_space(sys):
         ) from e
 
 
-def to_control(result):
-    """A SimResult as ``control.TimeResponseData``: outputs y (m × samples) with labels y[i], and
-    the adaptive commands u as inputs, labels u[i]."""
+def to_control(result, outputs):
+    """A SimResult as ``control.TimeResponseData``: outputs y (m × samples) labelled with the
+    plant's output names (``outputs``, by default y[i]), and the adaptive commands u as inputs,
+    labels u[i]."""
     import control
 
     m = result.m
@@ -78,7 +88,7 @@ def to_control(result):
         np.asarray(result.t),
         np.asarray(result.y).T,
         inputs=np.asarray(result.u).T,
-        output_labels=_labels("y", m),
+        output_labels=list(outputs),
         input_labels=_labels("u", m),
         issiso=m == 1,
         title="quell simulation",

@@ -23,6 +23,11 @@ class ExportError(QuellError, ValueError):
     compiler that cannot build the FMU's binary (``compiler``)."""
 
 
+class ControllerError(QuellError, ValueError):
+    """A measurement or reference that :meth:`quell.Controller.step` refuses (wrong length, not finite,
+    beyond ±1e100), or a controller state that overflowed (until ``reset``)."""
+
+
 class SimulationError(QuellError, RuntimeError):
     """A run that did not reach t_end: it diverged or the solver's step underflowed.
 

@@ -48,6 +48,13 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None):
     if not 1 <= channel <= m:
         raise ValueError(f"channel: expected a channel number from 1 to {m}, found {channel!r}")
     i, c, t = channel - 1, channel, result.t
+    if figsize is not None and not (
+        isinstance(figsize, (tuple, list)) and len(figsize) == 2
+        and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in figsize)
+    ):
+        raise TypeError(f"figsize: expected (width, height) in inches, found a {type(figsize).__name__}")
+    if fig is not None and not hasattr(fig, "subplots"):
+        raise TypeError(f"fig: expected a matplotlib Figure, found a {type(fig).__name__}")
     if ax is not None:
         axes = list(ax.flat) if hasattr(ax, "flat") else list(ax) if isinstance(ax, (list, tuple)) else [ax]
         if len(axes) not in (1, 4) or not all(hasattr(a, "plot") for a in axes):
@@ -75,12 +82,16 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None):
     return fig
 
 
-def runs_frame(text):
-    """runs.csv's text (quell.sweep) as a DataFrame, read as `pandas.read_csv(path, comment="#")` reads the file."""
+def runs_frame(text, drawn=None):
+    """runs.csv's text (quell.sweep) as a DataFrame, read as `pandas.read_csv(path, comment="#")` reads
+    the file, then the drawn values (a dict of columns) after its columns."""
     try:
         import pandas as pd
     except ImportError as e:
         raise ImportError("quell.sweep needs pandas: pip install pandas") from e
     import io
 
-    return pd.read_csv(io.StringIO(text), comment="#")
+    frame = pd.read_csv(io.StringIO(text), comment="#")
+    for name, values in (drawn or {}).items():
+        frame[name] = values
+    return frame

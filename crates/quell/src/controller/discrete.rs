@@ -167,14 +167,26 @@ fn suggestion(nearest: Option<f64>) -> String {
 /// How many candidate sample counts k on either side of τ_c/T_s the suggestion tries.
 const SEARCHED: i64 = 10_000;
 
-/// True when τ/T is a whole number (to 1e-9 relative) of at most [`MAX_DELAY_SAMPLES`] samples.
-pub(crate) fn whole(tau: f64, T: f64) -> bool {
-    whole_within(tau, T, 1e-9)
+/// Relative tolerance of a whole number of samples: x/T within 1e-9·max(x/T, 1) of an integer.
+const WHOLE_TOLERANCE: f64 = 1e-9;
+
+/// x/T rounded, when it is a whole number of samples of T (to [`WHOLE_TOLERANCE`] relative).
+pub(crate) fn whole_multiple(x: f64, T: f64) -> Option<usize> {
+    whole_within(x, T, WHOLE_TOLERANCE)
 }
 
-fn whole_within(tau: f64, T: f64, tol: f64) -> bool {
-    let r = tau / T;
-    r <= MAX_DELAY_SAMPLES && (r - r.round()).abs() <= tol * r.max(1.0)
+/// True when τ/T is a whole number (to [`WHOLE_TOLERANCE`]) of at most [`MAX_DELAY_SAMPLES`] samples.
+pub(crate) fn whole(tau: f64, T: f64) -> bool {
+    delay_within(tau, T, WHOLE_TOLERANCE)
+}
+
+fn delay_within(tau: f64, T: f64, tol: f64) -> bool {
+    tau / T <= MAX_DELAY_SAMPLES && whole_within(tau, T, tol).is_some()
+}
+
+fn whole_within(x: f64, T: f64, tol: f64) -> Option<usize> {
+    let r = x / T;
+    ((r - r.round()).abs() <= tol * r.max(1.0)).then(|| r.round() as usize)
 }
 
 /// Delay τ as a whole number of samples of T, or the nearest sample time that makes every delay whole.
@@ -189,7 +201,7 @@ fn samples(delays: &[f64], T: f64) -> Result<Vec<usize>, ControllerError> {
             // significant digits that fit 10× inside the tolerance, so that the printed value passes
             // when typed back, and not by a hair.
             let k0 = ratio.round().max(1.0) as i64;
-            let fits = |t: f64| delays.iter().all(|&d| whole_within(d, t, 1e-10));
+            let fits = |t: f64| delays.iter().all(|&d| delay_within(d, t, 1e-10));
             let nearest = (0..SEARCHED)
                 .flat_map(|j| [k0 + j, k0 - j])
                 .filter(|&k| k >= 1)
@@ -230,8 +242,8 @@ impl Controller {
             .zip(&d)
             .enumerate()
             .map(|(i, (ch, &d))| {
-                let mut e = DMatrix::zeros(ch.sigma, 1);
-                e[(ch.sigma - 1, 0)] = 1.0;
+                let mut e = DMatrix::zeros(ch.sigma(), 1);
+                e[(ch.sigma() - 1, 0)] = 1.0;
                 let (Phi, gamma) = zoh_unchecked(&ch.A, &e, T);
                 let channel = |what: &str| format!("channel {}'s {what}", i + 1);
                 finite(Phi.as_slice(), &|| channel("G_ii filter Φ_i"))?;
@@ -240,7 +252,7 @@ impl Controller {
                 if T * ch.mu > MAX_ADAPTATION_STEP {
                     return Err(ControllerError::AdaptationStepTooLarge { channel: i, mu: ch.mu, sample_time: T });
                 }
-                let len = ch.sigma * (1 + q);
+                let len = ch.sigma() * (1 + q);
                 Ok(Channel {
                     Phi,
                     gamma: gamma.iter().copied().collect(),
@@ -305,7 +317,7 @@ impl Controller {
             adapt_unchecked(ch.c, &mut ch.Omega, (a, one_minus_a), &self.Delta, &ch.Y, eta, self.Omega_eta.get());
 
             // G_ii filter bank: W ← Φ W + γ [u_i(k − d_i), ξ̂ᵀ(k − d_i)].
-            let sigma = ch.gamma.len();
+            let sigma = self.eq.channels[i].sigma();
             for r in 0..sigma {
                 let out = &mut ch.W_next[r * cols..(r + 1) * cols];
                 for (o, d) in out.iter_mut().zip(delayed) {
@@ -385,8 +397,19 @@ pub(crate) struct Discretized<'c> {
     pub PhiGamma_z: &'c DMatrix<f64>,
     /// a = e^{−T_s/β} of H(s) at ZOH.
     pub a: f64,
-    /// Per channel: (Φ_i, γ_i, T_s μ_i, d_i) of its G_ii filter bank and delay line.
-    pub channels: Vec<(&'c DMatrix<f64>, &'c [f64], f64, usize)>,
+    /// Per channel: its G_ii filter bank and delay line.
+    pub channels: Vec<DiscreteChannel<'c>>,
+}
+
+/// One channel of [`Discretized`].
+pub(crate) struct DiscreteChannel<'c> {
+    /// G_ii filter bank at ZOH: W ← Φ_i W + γ_i [u_i(k − d_i), ξ̂ᵀ(k − d_i)].
+    pub Phi: &'c DMatrix<f64>,
+    pub gamma: &'c [f64],
+    /// The adaptation step c_i = T_s μ_i (33).
+    pub c: f64,
+    /// d_i = τ_i / T_s, in samples.
+    pub delay_samples: usize,
 }
 
 impl Controller {
@@ -396,7 +419,11 @@ impl Controller {
             eq: &self.eq,
             PhiGamma_z: &self.PhiGamma_z,
             a: self.a,
-            channels: self.channels.iter().map(|ch| (&ch.Phi, &ch.gamma[..], ch.c, ch.line.len - 1)).collect(),
+            channels: self
+                .channels
+                .iter()
+                .map(|ch| DiscreteChannel { Phi: &ch.Phi, gamma: &ch.gamma, c: ch.c, delay_samples: ch.line.len - 1 })
+                .collect(),
         }
     }
 }

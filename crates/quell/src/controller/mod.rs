@@ -1,5 +1,5 @@
 //! The controller's equations, in one place, shared by the continuous simulation
-//! ([`crate::sim::closed_loop`]) and the real-time controller.
+//! ([`crate::sim::ContinuousLoop`]) and the real-time controller.
 //!
 //! The controller has three parts:
 //! - the **core**, a linear system with state z = [ξ̂_g; ξ̂_ω; x̂] driven by v = [y; g; u_d]: the
@@ -7,8 +7,7 @@
 //!   decoupling law (5) substituted; the regressor ξ̂ = [ξ̂_g; ξ̂_ω] is its first q states and the plant
 //!   input is u_f = −K x̂ + F u_d (5). The disturbance observer is realized in the coordinates
 //!   ξ̂_ω = φ + N x̂ instead of φ: differentiating (20) with (6) gives ξ̂_ω' = G_ω ξ̂_ω + N L (y − C x̂),
-//!   the same signal without the N x̂ product, and without u_d (ξ̂ does not depend on u, as the notes
-//!   on the paper point out);
+//!   the same signal without the N x̂ product and without u_d: ξ̂ does not depend on u;
 //! - per channel, the **filters** of the adaptive law (33): G_ii(s) applied to the row
 //!   [u_i(t − τ_i), ξ̂ᵀ(t − τ_i)] (state W_i, σ_i × (1 + q)) and H(s) = 1/(βs + 1) giving Y_i and Ω_i;
 //! - the **adaptive law** (33) η̂_i' = μ_i (Y_i − Ω_i η̂_i) and the control law (25) u_i = −η̂_iᵀ ξ̂.
@@ -16,11 +15,12 @@
 pub mod discrete;
 pub(crate) mod packed;
 
+pub(crate) use discrete::Discretized;
 pub use discrete::{Controller, ControllerError, MAX_ADAPTATION_STEP, MAX_MEASUREMENT};
 
 use nalgebra::DMatrix;
 
-use crate::design::Design;
+use crate::design::{ChannelTf, Design};
 use crate::linalg::companion;
 
 /// Matrices of the controller's linear parts, built once from a [`Design`].
@@ -49,18 +49,25 @@ pub struct Equations {
 /// Channel i's G_ii(s) realization and adaptation gain.
 #[derive(Debug, Clone)]
 pub struct ChannelFilter {
-    /// σ_i.
-    pub sigma: usize,
+    /// G_ii(s) as designed, the one record of σ_i and q_i0.
+    pub tf: ChannelTf,
     /// Companion matrix of den_i (σ_i × σ_i).
     pub A: DMatrix<f64>,
-    /// Ascending denominator coefficients [a_0, …, a_{σ−1}].
-    pub den: Vec<f64>,
-    /// q_i0.
-    pub q0: f64,
     /// μ_i.
     pub mu: f64,
     /// τ_i.
     pub delay: f64,
+}
+
+impl ChannelFilter {
+    /// σ_i.
+    pub fn sigma(&self) -> usize {
+        self.tf.sigma()
+    }
+    /// q_i0.
+    pub fn q0(&self) -> f64 {
+        self.tf.q0()
+    }
 }
 
 impl Equations {
@@ -89,14 +96,7 @@ impl Equations {
             .iter()
             .zip(d.mu())
             .zip(&p.delays)
-            .map(|((tf, &mu), &delay)| ChannelFilter {
-                sigma: tf.sigma(),
-                A: companion(&tf.den),
-                den: tf.den.clone(),
-                q0: tf.q0(),
-                mu,
-                delay,
-            })
+            .map(|((tf, &mu), &delay)| ChannelFilter { tf: tf.clone(), A: companion(&tf.den), mu, delay })
             .collect();
         Equations { n, m, q, nz, A_z, B_z, K_neg: -d.K(), F: d.F().clone(), channels, beta: d.beta() }
     }
@@ -119,7 +119,7 @@ impl Equations {
 
     /// Number of states of channel i's G_ii filter bank (σ_i rows, 1 + q columns).
     pub(crate) fn filter_len(&self, i: usize) -> usize {
-        self.channels[i].sigma * (1 + self.q)
+        self.channels[i].sigma() * (1 + self.q)
     }
 }
 
@@ -133,10 +133,11 @@ pub(crate) fn command(eta: &[f64], xi: &[f64]) -> f64 {
 /// Returns ε̂_i = δ_i − G_ii[u_i(t − τ_i)] and writes Δ_i into `delta`.
 pub(crate) fn swapping_error(ch: &ChannelFilter, W: &[f64], delta_i: f64, Delta: &mut [f64]) -> f64 {
     let q = Delta.len();
+    let q0 = ch.q0();
     for (d, w) in Delta.iter_mut().zip(&W[1..=q]) {
-        *d = ch.q0 * w;
+        *d = q0 * w;
     }
-    delta_i - ch.q0 * W[0]
+    delta_i - q0 * W[0]
 }
 
 /// Dot product.

@@ -1,9 +1,9 @@
 //! Falb–Wolovich decoupling by state feedback (Section III, eq. (7), Proposition 1).
 
-use nalgebra::{Complex, DMatrix, RowDVector};
+use nalgebra::{Complex, DMatrix, DVector, RowDVector};
 
-use super::DesignError;
-use crate::linalg::{poly_from_roots, singular_extremes};
+use super::{ChannelTf, DesignError};
+use crate::linalg::singular_extremes;
 use crate::plant::{check, PlantError};
 
 /// The design layer's one tolerance τ. Every "is it zero?" and "is it singular?" decision is made
@@ -34,7 +34,7 @@ pub fn close(measure: f64) -> bool {
 #[derive(Debug, Clone, PartialEq)]
 pub struct RelativeDegree {
     /// σ_i as eq. (7) decides it, the least l whose measure is ≥ [`TOL`]; `None` when no l ≤ n passes.
-    pub sigma: Option<usize>,
+    pub decided: Option<usize>,
     /// σ_i as the designer gave it (`design.relative_degrees`), which the design then uses.
     pub given: Option<usize>,
     /// measures[l − 1] = max_j |c_i A^(l−1) b_j| / (‖c_i A^(l−1)‖ ‖b_j‖), for l = 1, …, n.
@@ -44,7 +44,7 @@ pub struct RelativeDegree {
 impl RelativeDegree {
     /// The σ_i the design uses: the given one, else the decided one.
     pub fn used(&self) -> Option<usize> {
-        self.given.or(self.sigma)
+        self.given.or(self.decided)
     }
     /// The measures behind the σ_i in use (l ≤ σ_i, or all of them when no l passed).
     pub fn deciding(&self) -> &[f64] {
@@ -96,8 +96,8 @@ pub fn relative_degree_measures(
                 measures.push((&row * &Bn).amax());
                 row = &row * A;
             }
-            let sigma = measures.iter().position(|&m| m >= TOL).map(|l| l + 1);
-            RelativeDegree { sigma, given: None, measures }
+            let decided = measures.iter().position(|&m| m >= TOL).map(|l| l + 1);
+            RelativeDegree { decided, given: None, measures }
         })
         .collect())
 }
@@ -109,27 +109,33 @@ pub fn relative_degrees(
     B: &DMatrix<f64>,
     C: &DMatrix<f64>,
 ) -> Result<Vec<Option<usize>>, PlantError> {
-    Ok(relative_degree_measures(A, B, C)?.into_iter().map(|d| d.sigma).collect())
+    Ok(relative_degree_measures(A, B, C)?.into_iter().map(|d| d.decided).collect())
 }
 
 /// Proposition 1's result: the decoupling gains and the closed loop they give.
 #[derive(Debug, Clone)]
 pub struct FalbWolovich {
-    pub sigma: Vec<usize>,
+    /// G_ii(s) = q_i0 / ∏_j (s − λ_ij) per channel: the record of σ_i (its order) and q_i0.
+    pub channels: Vec<ChannelTf>,
     pub B_star: DMatrix<f64>,
     pub C_star: DMatrix<f64>,
     /// K = (B*)⁻¹ C*.
     pub K: DMatrix<f64>,
     /// F = (B*)⁻¹ diag(q_i0).
     pub F: DMatrix<f64>,
-    /// q_i0 = ∏_j (−λ_ij), the numerator of G_ii(s).
-    pub q0: Vec<f64>,
     /// Condition number of B* scaled as in [`TOL`] (rows and the columns of B to unit norm).
     pub cond_B_star: f64,
     /// Smallest singular value of that scaled B* (≥ [`TOL`]).
     pub smallest_B_star: f64,
     /// The decision of eq. (7) for each output.
     pub degrees: Vec<RelativeDegree>,
+}
+
+impl FalbWolovich {
+    /// Relative degrees σ_i in use, eq. (7).
+    pub fn sigma(&self) -> Vec<usize> {
+        self.channels.iter().map(ChannelTf::sigma).collect()
+    }
 }
 
 /// Falb–Wolovich decoupler (Proposition 1) for per-channel poles `channel_poles[i]` (σ_i each, closed
@@ -172,50 +178,76 @@ pub fn falb_wolovich_given(
         return Err(DesignError::Count { key: "design.relative_degrees", per: "output", expected: m, got: g.len() });
     }
     let mut degrees = relative_degree_measures(A, B, C)?;
-    let mut sigma = Vec::with_capacity(m);
+    let mut sum = 0;
     for (channel, d) in degrees.iter_mut().enumerate() {
-        let s = match given.map(|g| g[channel]) {
-            Some(s) => {
-                if s == 0 || s > n {
-                    return Err(DesignError::RelativeDegreeRange { index: channel, value: s, n });
-                }
-                if let Some(l) = d.measures[..s - 1].iter().position(|&x| x > TOL * CLOSE_FACTOR) {
-                    let measure = d.measures[l];
-                    return Err(DesignError::RelativeDegreeTooHigh { channel, given: s, l: l + 1, measure });
-                }
-                if d.measures[s - 1] < TOL / CLOSE_FACTOR {
-                    let measure = d.measures[s - 1];
-                    return Err(DesignError::RelativeDegreeTooLow { channel, given: s, measure });
-                }
-                d.given = Some(s);
-                s
-            }
-            None => {
-                let largest = d.measures.iter().copied().fold(0.0, f64::max);
-                d.sigma.ok_or(DesignError::NoRelativeDegree { channel, largest })?
-            }
-        };
+        let s = relative_degree_in_use(d, channel, given.map(|g| g[channel]), n)?;
         let got = channel_poles[channel].len();
         if got != s {
             return Err(DesignError::ChannelPoleCount { channel, sigma: s, got });
         }
-        sigma.push(s);
+        sum += s;
     }
-    let sum: usize = sigma.iter().sum();
     if sum > n {
         return Err(DesignError::RelativeDegreeSum { sum, n });
     }
+    let channels: Vec<ChannelTf> = channel_poles.iter().map(|p| ChannelTf::new(p)).collect();
+    let (B_star, C_star, scaled) = decoupling_rows(A, B, C, &channels);
+    let (smallest, cond_B_star) = singular_extremes(&scaled);
+    let inv = match B_star.clone().try_inverse() {
+        Some(inv) if smallest >= TOL => inv,
+        _ => return Err(DesignError::NotDecouplable { smallest, cond: cond_B_star }),
+    };
+    let K = &inv * &C_star;
+    let q0 = DVector::from_iterator(m, channels.iter().map(ChannelTf::q0));
+    let F = &inv * DMatrix::from_diagonal(&q0);
+    Ok(FalbWolovich { channels, B_star, C_star, K, F, cond_B_star, smallest_B_star: smallest, degrees })
+}
+
+/// The σ_i channel `channel` uses: the `given` one unless the plant clearly contradicts it (see
+/// [`falb_wolovich_given`]; recorded in `d.given`), else the one eq. (7) decided.
+fn relative_degree_in_use(
+    d: &mut RelativeDegree,
+    channel: usize,
+    given: Option<usize>,
+    n: usize,
+) -> Result<usize, DesignError> {
+    let Some(s) = given else {
+        let largest = d.measures.iter().copied().fold(0.0, f64::max);
+        return d.decided.ok_or(DesignError::NoRelativeDegree { channel, largest });
+    };
+    if s == 0 || s > n {
+        return Err(DesignError::RelativeDegreeRange { index: channel, value: s, n });
+    }
+    if let Some(l) = d.measures[..s - 1].iter().position(|&x| x > TOL * CLOSE_FACTOR) {
+        let measure = d.measures[l];
+        return Err(DesignError::RelativeDegreeTooHigh { channel, given: s, l: l + 1, measure });
+    }
+    if d.measures[s - 1] < TOL / CLOSE_FACTOR {
+        let measure = d.measures[s - 1];
+        return Err(DesignError::RelativeDegreeTooLow { channel, given: s, measure });
+    }
+    d.given = Some(s);
+    Ok(s)
+}
+
+/// Proposition 1's rows for each channel: B* with row i = c_i A^(σ_i−1) B, C* with row
+/// i = c_i A^(σ_i) + Σ_z q_iz c_i A^z (q_iz the coefficients of ∏_j (s − λ_ij)), and the B* of the
+/// tolerance policy, entry (i, j) the cosine between c_i A^(σ_i−1) and b_j.
+fn decoupling_rows(
+    A: &DMatrix<f64>,
+    B: &DMatrix<f64>,
+    C: &DMatrix<f64>,
+    channels: &[ChannelTf],
+) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
+    let (m, n) = (channels.len(), A.nrows());
     let mut B_star = DMatrix::zeros(m, B.ncols());
     let mut C_star = DMatrix::zeros(m, n);
-    let mut q0 = Vec::with_capacity(m);
     let mut row_norms = Vec::with_capacity(m);
-    for (i, poles) in channel_poles.iter().enumerate() {
-        // q = [q_i0, …, q_i(σ−1)] of ∏(s − λ_ij) (eq. for G_ii(s)).
-        let q = poly_from_roots(poles);
+    for (i, tf) in channels.iter().enumerate() {
         let mut row: RowDVector<f64> = C.row(i).clone_owned(); // c_i A^z
         let mut c_star = RowDVector::zeros(n);
         let mut last = RowDVector::zeros(n); // c_i A^(σ_i − 1), the row of B*
-        for &qz in &q {
+        for &qz in &tf.den {
             c_star += qz * &row;
             last = row;
             row = &last * A;
@@ -225,10 +257,7 @@ pub fn falb_wolovich_given(
         row_norms.push(last.norm());
         B_star.set_row(i, &(&last * B));
         C_star.set_row(i, &c_star);
-        q0.push(q[0]);
     }
-    // The scale-free B* of the tolerance policy: entry (i, j) is the cosine between
-    // c_i A^(σ_i−1) and b_j.
     let scaled = DMatrix::from_fn(m, B.ncols(), |i, j| {
         let d = row_norms[i] * B.column(j).norm();
         if d > 0.0 {
@@ -237,12 +266,5 @@ pub fn falb_wolovich_given(
             0.0
         }
     });
-    let (smallest, cond_B_star) = singular_extremes(&scaled);
-    let inv = match B_star.clone().try_inverse() {
-        Some(inv) if smallest >= TOL => inv,
-        _ => return Err(DesignError::NotDecouplable { smallest, cond: cond_B_star }),
-    };
-    let K = &inv * &C_star;
-    let F = &inv * DMatrix::from_diagonal(&nalgebra::DVector::from_vec(q0.clone()));
-    Ok(FalbWolovich { sigma, B_star, C_star, K, F, q0, cond_B_star, smallest_B_star: smallest, degrees })
+    (B_star, C_star, scaled)
 }

@@ -6,7 +6,7 @@ use nalgebra::{Complex, DMatrix};
 use crate::linalg::{blkdiag, companion, poly_from_roots};
 
 /// (G, l) for poles p_1..p_q: G is the companion matrix of ∏(s − p_j) (ones on the superdiagonal,
-/// last row −[a_0, …, a_{q−1}]) and l = e_q, the convention of the notes on the paper.
+/// last row −[a_0, …, a_{q−1}]) and l = e_q, the form of G_g and G_ω printed in Section VIII.
 pub fn filter_pair(poles: &[Complex<f64>]) -> (DMatrix<f64>, DMatrix<f64>) {
     let q = poles.len();
     let G = companion(&poly_from_roots(poles));

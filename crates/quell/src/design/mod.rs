@@ -20,7 +20,8 @@ pub use place::{place, PlaceError};
 pub use warnings::{warnings, DesignWarning};
 
 use crate::linalg::{
-    eigenvalues, fmt_complex, fmt_number, numerical_rank, poly_from_roots, singular_extremes, unstable, EigenError,
+    eigenvalues, fmt_complex, fmt_complex_list, fmt_number, numerical_rank, poly_from_roots, singular_extremes,
+    unstable, EigenError,
 };
 use crate::plant::{Plant, PlantError};
 
@@ -62,6 +63,10 @@ pub struct ChannelTf {
 }
 
 impl ChannelTf {
+    /// G_ii(s) with these poles (σ_i of them), denominator ∏_j (s − λ_ij).
+    pub fn new(poles: &[Complex<f64>]) -> ChannelTf {
+        ChannelTf { poles: poles.to_vec(), den: poly_from_roots(poles) }
+    }
     /// Relative degree σ_i.
     pub fn sigma(&self) -> usize {
         self.den.len()
@@ -98,7 +103,6 @@ pub struct Design {
     B_f: DMatrix<f64>,
     B_star: DMatrix<f64>,
     cond_B_star: f64,
-    sigma: Vec<usize>,
     degrees: Vec<RelativeDegree>,
     channels: Vec<ChannelTf>,
     G_g: DMatrix<f64>,
@@ -134,9 +138,9 @@ pub enum DesignError {
     ObserverGainNonFinite { row: usize, col: usize, value: f64 },
     #[error("design.observer_gain: expected a {n}×{m} matrix, found {rows}×{cols}")]
     ObserverGainShape { n: usize, m: usize, rows: usize, cols: usize },
-    #[error("{key}: A − LC is not Hurwitz (eigenvalues {}); {}", fmt_eigs(.eigenvalues), if *.key == "design.observer_gain" { "choose L with a stable observer, or give design.observer_poles instead" } else { "choose observer poles with larger decay rates" })]
+    #[error("{key}: A − LC is not Hurwitz (eigenvalues {}); {}", fmt_complex_list(.eigenvalues), if *.key == "design.observer_gain" { "choose L with a stable observer, or give design.observer_poles instead" } else { "choose observer poles with larger decay rates" })]
     ObserverUnstable { key: &'static str, eigenvalues: Vec<Complex<f64>> },
-    #[error("{key}: A − LC could not be confirmed Hurwitz: its eigenvalues computed as {} include {} within the rounding margin √ε·‖A − LC‖_F = {} of the imaginary axis, and refining them in twice the working precision did not settle their sign (eigenvector condition number κ₂ = {}: a relative error ε in A − LC can move its poles by about κ₂·ε·‖A − LC‖); {}", fmt_eigs(.eigenvalues), fmt_eigs(.in_margin), fmt_number(*.margin), fmt_number(*.kappa), if *.key == "design.observer_gain" { "choose L with a better-conditioned stable observer, or give design.observer_poles instead" } else { "choose observer poles with larger decay rates, distinct and not far faster than the plant" })]
+    #[error("{key}: A − LC could not be confirmed Hurwitz: its eigenvalues computed as {} include {} within the rounding margin √ε·‖A − LC‖_F = {} of the imaginary axis, and refining them in twice the working precision did not settle their sign (eigenvector condition number κ₂ = {}: a relative error ε in A − LC can move its poles by about κ₂·ε·‖A − LC‖); {}", fmt_complex_list(.eigenvalues), fmt_complex_list(.in_margin), fmt_number(*.margin), fmt_number(*.kappa), if *.key == "design.observer_gain" { "choose L with a better-conditioned stable observer, or give design.observer_poles instead" } else { "choose observer poles with larger decay rates, distinct and not far faster than the plant" })]
     ObserverUnconfirmed {
         key: &'static str,
         eigenvalues: Vec<Complex<f64>>,
@@ -150,7 +154,7 @@ pub enum DesignError {
     ChannelPoleCount { channel: usize, sigma: usize, got: usize },
     #[error("plant: not decouplable (Proposition 1): B* is singular: with rows c_i A^(σ_i-1) and the columns of B scaled to unit norm its smallest singular value is {smallest:.3e}, below τ = {tol:.0e} (condition number {cond:.3e}); the outputs' leading responses to the inputs are (nearly) dependent", tol = TOL)]
     NotDecouplable { smallest: f64, cond: f64 },
-    #[error("plant: unstable zero dynamics: A − BK keeps the plant's {} zero{} (its eigenvalues besides the {placed} channel poles that Proposition 1 places), and {} not in the open left half-plane: {}; this plant cannot be decoupled stably", .zeros.len(), if .zeros.len() == 1 { "" } else { "s" }, if .unstable.len() == 1 { "this one is" } else { "these are" }, fmt_eigs(.unstable))]
+    #[error("plant: unstable zero dynamics: A − BK keeps the plant's {} zero{} (its eigenvalues besides the {placed} channel poles that Proposition 1 places), and {} not in the open left half-plane: {}; this plant cannot be decoupled stably", .zeros.len(), if .zeros.len() == 1 { "" } else { "s" }, if .unstable.len() == 1 { "this one is" } else { "these are" }, fmt_complex_list(.unstable))]
     UnstableZeroDynamics { placed: usize, zeros: Vec<Complex<f64>>, unstable: Vec<Complex<f64>> },
     #[error("design.relative_degrees[{index}]: expected a relative degree 1 ≤ σ_i ≤ n = {n}, found {value}")]
     RelativeDegreeRange { index: usize, value: usize, n: usize },
@@ -204,10 +208,6 @@ const SPAN_WHY: &str = "every pole's magnitude and 1/β may exceed every decay r
                         most 1/√ε ≈ 6.7e7: a slower pole lies within the rounding margin of the imaginary axis \
                         that the stability checks use; bring the poles and β to a common time scale";
 
-fn fmt_eigs(e: &[Complex<f64>]) -> String {
-    e.iter().map(fmt_complex).collect::<Vec<_>>().join(", ")
-}
-
 /// Checks a pole list: not empty (when `nonempty`), finite, closed under conjugation, Hurwitz.
 fn check_poles(key: String, what: &'static str, poles: &[Complex<f64>], nonempty: bool) -> Result<(), DesignError> {
     if nonempty && poles.is_empty() {
@@ -243,9 +243,7 @@ impl Design {
         let A_f = &plant.A - &plant.B * &fw.K;
         let B_f = &plant.B * &fw.F;
         let decoupled_eigenvalues = eigenvalues(&A_f).map_err(|e| eigen_error("plant", "A − BK", e))?;
-        check_zero_dynamics(plant, &fw.sigma, &A_f)?;
-        let channels =
-            spec.channel_poles.iter().map(|p| ChannelTf { poles: p.clone(), den: poly_from_roots(p) }).collect();
+        check_zero_dynamics(plant, &fw.sigma(), &A_f)?;
         let (G_g, L_g) = internal_model(&spec.reference_filter_poles);
         let (G_w, L_w) = internal_model(&spec.disturbance_filter_poles);
         let (N, cond_D) = disturbance_observer_gain(&plant.D, &L_w)?;
@@ -258,9 +256,8 @@ impl Design {
             B_f,
             B_star: fw.B_star,
             cond_B_star: fw.cond_B_star,
-            sigma: fw.sigma,
             degrees: fw.degrees,
-            channels,
+            channels: fw.channels,
             G_g,
             L_g,
             G_w,
@@ -310,9 +307,9 @@ impl Design {
     pub fn cond_B_star(&self) -> f64 {
         self.cond_B_star
     }
-    /// Relative degrees σ_i, eq. (7).
-    pub fn sigma(&self) -> &[usize] {
-        &self.sigma
+    /// Relative degrees σ_i, eq. (7): the order of each channel's G_ii(s).
+    pub fn sigma(&self) -> Vec<usize> {
+        self.channels.iter().map(ChannelTf::sigma).collect()
     }
     /// The decision of eq. (7) for each output: σ_i and the scale-free measures behind it.
     pub fn relative_degree_decisions(&self) -> &[RelativeDegree] {

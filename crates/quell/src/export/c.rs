@@ -2,10 +2,12 @@
 
 use std::fmt::Write;
 
+use nalgebra::DMatrix;
+
 use super::{CCode, ExportError, ExportOptions, Precision};
-use crate::controller::Controller;
+use crate::controller::{Controller, Discretized};
 use crate::design::Design;
-use crate::linalg::fmt_complex;
+use crate::linalg::fmt_complex_list;
 
 /// One `static const` array (or scalar, with no `dims`) of the generated source.
 struct Constant {
@@ -20,264 +22,133 @@ struct Constant {
     comment: Option<String>,
 }
 
+impl Constant {
+    fn new(name: impl Into<String>, dims: Vec<String>, cols: usize, values: Vec<f64>) -> Constant {
+        Constant { name: name.into(), dims, cols, values, comment: None }
+    }
+    fn with_comment(self, comment: impl Into<String>) -> Constant {
+        Constant { comment: Some(comment.into()), ..self }
+    }
+    /// The C name of entry `k`, e.g. `quell_Phi_1[4]` or `quell_F[1][0]`.
+    fn entry(&self, p: &str, k: usize) -> String {
+        let at = match self.dims.len() {
+            0 => String::new(),
+            1 => format!("[{k}]"),
+            _ => format!("[{}][{}]", k / self.cols, k % self.cols),
+        };
+        format!("{p}_{}{at}", self.name)
+    }
+}
+
+/// The sizes of one export, read once from the discretized controller.
+struct Layout {
+    n: usize,
+    m: usize,
+    q: usize,
+    nz: usize,
+    /// σ_i per channel.
+    sigma: Vec<usize>,
+    /// d_i = τ_i / T_s per channel, in samples.
+    delays: Vec<usize>,
+}
+
+impl Layout {
+    fn new(view: &Discretized) -> Layout {
+        let eq = view.eq;
+        Layout {
+            n: eq.n,
+            m: eq.m,
+            q: eq.q,
+            nz: eq.nz,
+            sigma: eq.channels.iter().map(|ch| ch.sigma()).collect(),
+            delays: view.channels.iter().map(|ch| ch.delay_samples).collect(),
+        }
+    }
+    fn sigma_sum(&self) -> usize {
+        self.sigma.iter().sum()
+    }
+    fn sigma_max(&self) -> usize {
+        self.sigma.iter().copied().max().unwrap_or(1)
+    }
+    fn delay_max(&self) -> usize {
+        self.delays.iter().copied().max().unwrap_or(0)
+    }
+    /// The fields of `<prefix>_state`, in order: the one description both the struct's text and
+    /// its size come from.
+    fn state_fields(&self) -> [Field; 8] {
+        let (m, q, nz) = (self.m, self.q, self.nz);
+        let real = |name: &'static str, dims: &'static str, count: usize, comment: &'static str| Field {
+            integer: false,
+            name,
+            dims,
+            count,
+            comment,
+        };
+        [
+            real("z", "[{P}_NZ]", nz, "core: observers (14), (20), (6)"),
+            real(
+                "W",
+                "[{P}_SIGMA_SUM][{P}_Q + 1]",
+                self.sigma_sum() * (q + 1),
+                "G_ii filter banks, channel by channel",
+            ),
+            real("Y", "[{P}_M][{P}_Q]", m * q, "H filter memories Y_i (33)"),
+            real(
+                "Omega",
+                "[{P}_M][{P}_Q * ({P}_Q + 1) / 2]",
+                m * q * (q + 1) / 2,
+                "H filter memories Omega_i (33), upper triangle by rows",
+            ),
+            real("eta", "[{P}_M][{P}_Q]", m * q, "adaptive parameters eta_i (33)"),
+            real("u", "[{P}_M]", m, "adaptive command u(k) (25)"),
+            real(
+                "line",
+                "[{P}_DELAY_MAX + 1][{P}_M + {P}_Q]",
+                (self.delay_max() + 1) * (m + q),
+                "delay line of rows [u(k), xi_hat^T(k)]",
+            ),
+            Field { integer: true, name: "head", dims: "", count: 1, comment: "row of line holding sample k" },
+        ]
+    }
+}
+
+/// One field of the state struct: `count` numbers of the real type, or one `uint32_t`.
+struct Field {
+    integer: bool,
+    name: &'static str,
+    /// C dimensions, with `{P}` for the upper-case prefix.
+    dims: &'static str,
+    count: usize,
+    comment: &'static str,
+}
+
+/// `sizeof` of a struct of `fields` where a number is aligned to its size (`real_bytes` for the
+/// real type, 4 for `uint32_t`): each field starts at a multiple of its size, the whole at a
+/// multiple of the largest.
+fn struct_bytes(fields: &[Field], real_bytes: usize) -> usize {
+    let mut offset = 0usize;
+    let mut align = 1;
+    for f in fields {
+        let size = if f.integer { 4 } else { real_bytes };
+        offset = offset.next_multiple_of(size) + size * f.count;
+        align = align.max(size);
+    }
+    offset.next_multiple_of(align)
+}
+
 /// Builds both files; the constants are checked (finite; in float's range for f32) first.
 pub(super) fn write(design: &Design, ctrl: &Controller, o: &ExportOptions) -> Result<CCode, ExportError> {
     let view = ctrl.discretized();
-    let eq = view.eq;
-    let (n, m, q, nz) = (eq.n, eq.m, eq.q, eq.nz);
-    let (p, P) = (o.prefix.as_str(), o.prefix.to_ascii_uppercase());
-    let R = o.precision.c_type();
-    let T = ctrl.sample_time();
-    let sigma: Vec<usize> = eq.channels.iter().map(|ch| ch.sigma).collect();
-    let delays: Vec<usize> = view.channels.iter().map(|ch| ch.3).collect();
-    let (sigma_sum, sigma_max) = (sigma.iter().sum::<usize>(), sigma.iter().copied().max().unwrap_or(1));
-    let delay_max = delays.iter().copied().max().unwrap_or(0);
-
-    // Row-major entries of rows r0.. and columns c0.. of a matrix.
-    let block = |M: &nalgebra::DMatrix<f64>, (r0, c0): (usize, usize), (r, c): (usize, usize)| {
-        (r0..r0 + r).flat_map(|i| (c0..c0 + c).map(move |j| M[(i, j)])).collect::<Vec<f64>>()
-    };
-    let dim = |s: &str| format!("{P}_{s}");
-    let mut constants = vec![
-        Constant {
-            name: "PhiGamma_z".into(),
-            dims: vec![dim("NZ"), format!("{P}_NZ + 3 * {P}_M")],
-            cols: nz + 3 * m,
-            values: block(view.PhiGamma_z, (0, 0), (nz, nz + 3 * m)),
-            comment: Some("Core (observers (6), (14), (20) with (5) substituted) at ZOH: z(k+1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)].".into()),
-        },
-        Constant {
-            name: "K_neg".into(),
-            dims: vec![dim("M"), dim("N")],
-            cols: n,
-            values: block(&eq.K_neg, (0, 0), (m, n)),
-            comment: Some("Plant input (5): u_f = -K x_hat + F u_d.".into()),
-        },
-        Constant {
-            name: "F".into(),
-            dims: vec![dim("M"), dim("M")],
-            cols: m,
-            values: block(&eq.F, (0, 0), (m, m)),
-            comment: None,
-        },
-    ];
-    for (i, (Phi, gamma, _, _)) in view.channels.iter().enumerate() {
-        let s = sigma[i];
-        constants.push(Constant {
-            name: format!("Phi_{}", i + 1),
-            dims: vec![format!("{}", s * s)],
-            cols: s,
-            values: block(Phi, (0, 0), (s, s)),
-            comment: Some(format!(
-                "Channel {}'s G_ii filter bank (sigma = {s}) at ZOH: W <- Phi W + gamma [u_{}(k - d), xi^T(k - d)]; Phi row-major.",
-                i + 1,
-                i + 1
-            )),
-        });
-        constants.push(Constant {
-            name: format!("gamma_{}", i + 1),
-            dims: vec![format!("{s}")],
-            cols: s,
-            values: gamma.to_vec(),
-            comment: None,
-        });
-    }
-    constants.push(Constant {
-        name: "q0".into(),
-        dims: vec![dim("M")],
-        cols: m,
-        values: eq.channels.iter().map(|ch| ch.q0).collect(),
-        comment: Some("Per channel: G_ii's numerator q_i0, the adaptive law's c_i = T_s mu_i (33).".into()),
-    });
-    constants.push(Constant {
-        name: "c".into(),
-        dims: vec![dim("M")],
-        cols: m,
-        values: view.channels.iter().map(|ch| ch.2).collect(),
-        comment: None,
-    });
-    constants.push(Constant {
-        name: "a".into(),
-        dims: vec![],
-        cols: 1,
-        values: vec![view.a],
-        comment: Some(format!(
-            "H(s) = 1/(beta s + 1) at ZOH: x <- a x + b v, a = exp(-T_s/beta), b = 1 - a (beta = {}).",
-            eq.beta
-        )),
-    });
-    constants.push(Constant { name: "b".into(), dims: vec![], cols: 1, values: vec![1.0 - view.a], comment: None });
-
-    let number = |x: f64| match o.precision {
-        Precision::F64 => format!("{x:?}"),
-        Precision::F32 => format!("{:?}f", x as f32),
-    };
-    for c in &constants {
-        for (k, &x) in c.values.iter().enumerate() {
-            let what = || {
-                let at = if c.dims.is_empty() {
-                    String::new()
-                } else if c.dims.len() == 1 {
-                    format!("[{k}]")
-                } else {
-                    format!("[{}][{}]", k / c.cols, k % c.cols)
-                };
-                format!("{p}_{}{at}", c.name)
-            };
-            if !x.is_finite() {
-                return Err(ExportError::NotFinite { what: what(), value: x, sample_time: T });
-            }
-            if o.precision == Precision::F32 && x.abs() > f32::MAX as f64 {
-                return Err(ExportError::F32Range { what: what(), value: x });
-            }
-        }
-    }
-
+    let layout = Layout::new(&view);
+    let constants = constants(&view, &layout, &o.prefix.to_ascii_uppercase());
+    check(&constants, o, ctrl.sample_time())?;
     let w = o.precision.bytes();
-    let constant_bytes = w * constants.iter().map(|c| c.values.len()).sum::<usize>() + 4 * m;
-    let state_numbers = nz + sigma_sum * (q + 1) + m * q + m * q * (q + 1) / 2 + m * q + m + (delay_max + 1) * (m + q);
-    let state_bytes = (w * state_numbers + 4).div_ceil(w) * w;
-
-    let name = o.scenario_name.as_deref().map(comment_safe);
-    let eigen = |z: &[nalgebra::Complex<f64>]| z.iter().map(fmt_complex).collect::<Vec<_>>().join(", ");
-    let delay_text = (0..m)
-        .map(|i| format!("channel {}: {} s = {} samples", i + 1, design.plant().delays[i], delays[i]))
-        .collect::<Vec<_>>()
-        .join("; ");
-
-    // The sizes, one aligned block.
-    let defines = [
-        ("N", n.to_string(), "plant states"),
-        ("M", m.to_string(), "channels: outputs y, references g, inputs u_f"),
-        ("Q", q.to_string(), "regressor xi_hat = [xi_g; xi_w] and each eta_i"),
-        ("SAMPLE_TIME", number(T), "T_s in seconds"),
-        ("NZ", nz.to_string(), "state sizes: core [xi_g; xi_w; x_hat]"),
-        ("SIGMA_SUM", sigma_sum.to_string(), "filter-bank rows, sigma_1 + ... + sigma_m"),
-        ("SIGMA_MAX", sigma_max.to_string(), "largest relative degree"),
-        ("DELAY_MAX", delay_max.to_string(), "longest input delay in samples"),
-        ("INPUT_BOUND", number(o.precision.input_bound()), "largest |y_i|, |g_i| a step takes"),
-    ]
-    .iter()
-    .map(|(k, v, c)| format!("#define {:<w$} {v:<12} /* {c} */", format!("{P}_{k}"), w = P.len() + 12))
-    .collect::<Vec<_>>()
-    .join("\n");
-    let fields = [
-        (format!("{R} z[{P}_NZ];"), "core: observers (14), (20), (6)"),
-        (format!("{R} W[{P}_SIGMA_SUM][{P}_Q + 1];"), "G_ii filter banks, channel by channel"),
-        (format!("{R} Y[{P}_M][{P}_Q];"), "H filter memories Y_i (33)"),
-        (
-            format!("{R} Omega[{P}_M][{P}_Q * ({P}_Q + 1) / 2];"),
-            "H filter memories Omega_i (33), upper triangle by rows",
-        ),
-        (format!("{R} eta[{P}_M][{P}_Q];"), "adaptive parameters eta_i (33)"),
-        (format!("{R} u[{P}_M];"), "adaptive command u(k) (25)"),
-        (format!("{R} line[{P}_DELAY_MAX + 1][{P}_M + {P}_Q];"), "delay line of rows [u(k), xi_hat^T(k)]"),
-        ("uint32_t head;".to_string(), "row of line holding sample k"),
-    ];
-    let width = fields.iter().map(|(f, _)| f.len()).max().unwrap_or(0);
-    let fields = fields.iter().map(|(f, c)| format!("    {f:<width$} /* {c} */")).collect::<Vec<_>>().join("\n");
-    // Header.
-    let mut h = String::new();
-    let _ = write!(
-        h,
-        "/* {p}_controller.h: direct adaptive output-feedback controller (C. V. Tu, N. Dudarenko, eqs.
- * (5), (6), (14), (20), (25), (33)), discretized exactly for a zero-order hold.
- *
- * Generated by quell {version}{from}. Do not edit: after a design
- * change, regenerate with
- *     quell export SCENARIO --sample-time {T:?} --prefix {p} --precision {prec}
- *
- * Sample time T_s = {T:?} s: call {p}_step once per sample (docs/deployment.md).
- * Plant: n = {n} states, m = {m} channels; regressor q = {q} (q_g = {qg}, q_w = {qw}).
- * Input delays: {delay_text}.
- * Eigenvalues of the design (continuous time):
- *   observer A - L C:  {obs}
- *   decoupled A - B K: {dec}
- * Memory: {constant_bytes} bytes of constants (static const), {state_bytes} bytes of state
- *   (sizeof({p}_state) where a {R} is aligned to its size).
- * Arithmetic: {R} throughout. No dynamic memory, no libm, no global mutable state.
- */
-#ifndef {P}_CONTROLLER_H
-#define {P}_CONTROLLER_H
-
-#include <stdint.h>
-
-#ifdef __cplusplus
-extern \"C\" {{
-#endif
-
-{defines}
-
-/* Everything that changes; {p}_init zeroes it. */
-typedef struct {{
-{fields}
-}} {p}_state;
-
-/* The Controller's zero state (also to restart it). */
-void {p}_init({p}_state *s);
-/* One sample: reads y(k) and g(k), writes the plant input u_f(k) = -K x_hat + F u_d (5), to hold
- * until the next sample, and returns 0. An entry of y or g that is NaN or beyond +-{P}_INPUT_BOUND
- * (a sensor fault) is refused: it returns 1 and leaves the state and u_f untouched; hold the
- * previous input. It returns 2 when u_f or u is no longer finite (inputs the design cannot follow
- * overflowed the state), and keeps returning 2: hold a safe input and call {p}_init
- * (docs/deployment.md). Needs IEEE arithmetic (no -ffast-math). */
-int {p}_step({p}_state *s, const {R} y[{P}_M], const {R} g[{P}_M], {R} u_f[{P}_M]);
-/* The adaptive command u(k) (25) of the last step, undelayed. */
-void {p}_command(const {p}_state *s, {R} u[{P}_M]);
-
-#ifdef __cplusplus
-}}
-#endif
-
-#endif /* {P}_CONTROLLER_H */
-",
-        version = env!("CARGO_PKG_VERSION"),
-        from = name.as_ref().map(|s| format!(" from scenario \"{s}\"")).unwrap_or_default(),
-        prec = o.precision.name(),
-        qg = design.q_g(),
-        qw = design.q_w(),
-        obs = eigen(design.observer_eigenvalues()),
-        dec = eigen(design.decoupled_eigenvalues()),
-        defines = defines,
-        fields = fields,
-    );
-
-    // Source: the constants, then the functions.
-    let mut c = String::new();
-    let _ =
-        writeln!(c, "/* {p}_controller.c: generated by quell {}; see {p}_controller.h. */", env!("CARGO_PKG_VERSION"));
-    let _ = writeln!(c, "#include \"{p}_controller.h\"");
-    for k in &constants {
-        let _ = writeln!(c);
-        if let Some(text) = &k.comment {
-            let _ = writeln!(c, "/* {text} */");
-        }
-        let dims: String = k.dims.iter().map(|d| format!("[{d}]")).collect();
-        let rows: Vec<String> =
-            k.values.chunks(k.cols).map(|r| r.iter().map(|&x| number(x)).collect::<Vec<_>>().join(", ")).collect();
-        let init = match (k.dims.len(), rows.len()) {
-            (0, _) => rows.join(""),
-            (1, _) => format!("{{{}}}", rows.join(", ")),
-            _ => format!("{{\n    {{{}}},\n}}", rows.join("},\n    {")),
-        };
-        let _ = writeln!(c, "static const {R} {p}_{}{dims} = {init};", k.name);
-    }
-    let delay_list = delays.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(", ");
-    let _ = writeln!(c, "\n/* Delay lines: d_i = tau_i / T_s samples. */");
-    let _ = writeln!(c, "static const uint32_t {p}_delay[{P}_M] = {{{delay_list}}};");
-    let mut calls = String::new();
-    let mut row = 0;
-    for (i, &s) in sigma.iter().enumerate() {
-        let _ = writeln!(
-            calls,
-            "    u_d[{i}] = {p}_channel(s, {i}u, {s}u, {p}_Phi_{k}, {p}_gamma_{k}, {row}u, y[{i}] - g[{i}]);",
-            k = i + 1
-        );
-        row += s;
-    }
-    c.push_str(&FUNCTIONS.replace("{calls}", calls.trim_end()).replace("{p}", p).replace("{P}", &P).replace("{R}", R));
-    pair_layout_id(&mut h, &mut c, p, &P);
-
+    let constant_bytes = w * constants.iter().map(|c| c.values.len()).sum::<usize>() + 4 * layout.m;
+    let state_bytes = struct_bytes(&layout.state_fields(), w);
+    let mut h = header(design, ctrl.sample_time(), &layout, o, (constant_bytes, state_bytes));
+    let mut c = source(&constants, &layout, o);
+    let p = o.prefix.as_str();
+    pair_layout_id(&mut h, &mut c, p, &p.to_ascii_uppercase());
     Ok(CCode {
         header_name: format!("{p}_controller.h"),
         header: h,
@@ -286,6 +157,200 @@ void {p}_command(const {p}_state *s, {R} u[{P}_M]);
         constant_bytes,
         state_bytes,
     })
+}
+
+/// Row-major entries of rows r0.. and columns c0.. of a matrix.
+fn block(M: &DMatrix<f64>, (r0, c0): (usize, usize), (r, c): (usize, usize)) -> Vec<f64> {
+    (r0..r0 + r).flat_map(|i| (c0..c0 + c).map(move |j| M[(i, j)])).collect()
+}
+
+/// Every `static const` array of the source, in order; `P` is the upper-case prefix.
+fn constants(view: &Discretized, layout: &Layout, P: &str) -> Vec<Constant> {
+    let eq = view.eq;
+    let (n, m, nz) = (layout.n, layout.m, layout.nz);
+    let dim = |s: &str| format!("{P}_{s}");
+    let mut constants = vec![
+        Constant::new("PhiGamma_z", vec![dim("NZ"), format!("{P}_NZ + 3 * {P}_M")], nz + 3 * m, block(view.PhiGamma_z, (0, 0), (nz, nz + 3 * m)))
+            .with_comment("Core (observers (6), (14), (20) with (5) substituted) at ZOH: z(k+1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]."),
+        Constant::new("K_neg", vec![dim("M"), dim("N")], n, block(&eq.K_neg, (0, 0), (m, n)))
+            .with_comment("Plant input (5): u_f = -K x_hat + F u_d."),
+        Constant::new("F", vec![dim("M"), dim("M")], m, block(&eq.F, (0, 0), (m, m))),
+    ];
+    for (i, ch) in view.channels.iter().enumerate() {
+        let (s, k) = (layout.sigma[i], i + 1);
+        constants.push(Constant::new(format!("Phi_{k}"), vec![format!("{}", s * s)], s, block(ch.Phi, (0, 0), (s, s))).with_comment(
+            format!("Channel {k}'s G_ii filter bank (sigma = {s}) at ZOH: W <- Phi W + gamma [u_{k}(k - d), xi^T(k - d)]; Phi row-major."),
+        ));
+        constants.push(Constant::new(format!("gamma_{k}"), vec![format!("{s}")], s, ch.gamma.to_vec()));
+    }
+    constants.push(
+        Constant::new("q0", vec![dim("M")], m, eq.channels.iter().map(|ch| ch.q0()).collect())
+            .with_comment("Per channel: G_ii's numerator q_i0, the adaptive law's c_i = T_s mu_i (33)."),
+    );
+    constants.push(Constant::new("c", vec![dim("M")], m, view.channels.iter().map(|ch| ch.c).collect()));
+    constants.push(Constant::new("a", vec![], 1, vec![view.a]).with_comment(format!(
+        "H(s) = 1/(beta s + 1) at ZOH: x <- a x + b v, a = exp(-T_s/beta), b = 1 - a (beta = {}).",
+        eq.beta
+    )));
+    constants.push(Constant::new("b", vec![], 1, vec![1.0 - view.a]));
+    constants
+}
+
+/// Every constant finite, and in float's range for f32.
+fn check(constants: &[Constant], o: &ExportOptions, sample_time: f64) -> Result<(), ExportError> {
+    for c in constants {
+        for (k, &x) in c.values.iter().enumerate() {
+            if !x.is_finite() {
+                return Err(ExportError::NotFinite { what: c.entry(&o.prefix, k), value: x, sample_time });
+            }
+            if o.precision == Precision::F32 && x.abs() > f32::MAX as f64 {
+                return Err(ExportError::F32Range { what: c.entry(&o.prefix, k), value: x });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A number as a C literal of the export's type (`0.5`, `0.5f`), with the digits that read back
+/// to the same value.
+fn number(x: f64, precision: Precision) -> String {
+    match precision {
+        Precision::F64 => format!("{x:?}"),
+        Precision::F32 => format!("{:?}f", x as f32),
+    }
+}
+
+/// `template` with each `{key}` of `values` replaced, in one pass (a value is not searched again);
+/// any other brace is kept.
+pub(super) fn fill(template: &str, values: &[(&str, &str)]) -> String {
+    let mut out = String::with_capacity(template.len());
+    let mut rest = template;
+    while let Some(open) = rest.find('{') {
+        out.push_str(&rest[..open]);
+        let after = &rest[open + 1..];
+        let key = after.find('}').map(|close| &after[..close]);
+        match key.and_then(|k| values.iter().find(|(name, _)| *name == k)) {
+            Some((name, value)) => {
+                out.push_str(value);
+                rest = &after[name.len() + 1..];
+            }
+            None => {
+                out.push('{');
+                rest = after;
+            }
+        }
+    }
+    out.push_str(rest);
+    out
+}
+
+/// The header: what the controller is, its sizes, its state struct and the three functions.
+fn header(
+    design: &Design,
+    T: f64,
+    layout: &Layout,
+    o: &ExportOptions,
+    (constant_bytes, state_bytes): (usize, usize),
+) -> String {
+    let (p, P, R) = (o.prefix.as_str(), o.prefix.to_ascii_uppercase(), o.precision.c_type());
+    let num = |x: f64| number(x, o.precision);
+    let delay_text = (0..layout.m)
+        .map(|i| format!("channel {}: {} s = {} samples", i + 1, design.plant().delays[i], layout.delays[i]))
+        .collect::<Vec<_>>()
+        .join("; ");
+    // The sizes, one aligned block.
+    let defines = [
+        ("N", layout.n.to_string(), "plant states"),
+        ("M", layout.m.to_string(), "channels: outputs y, references g, inputs u_f"),
+        ("Q", layout.q.to_string(), "regressor xi_hat = [xi_g; xi_w] and each eta_i"),
+        ("SAMPLE_TIME", num(T), "T_s in seconds"),
+        ("NZ", layout.nz.to_string(), "state sizes: core [xi_g; xi_w; x_hat]"),
+        ("SIGMA_SUM", layout.sigma_sum().to_string(), "filter-bank rows, sigma_1 + ... + sigma_m"),
+        ("SIGMA_MAX", layout.sigma_max().to_string(), "largest relative degree"),
+        ("DELAY_MAX", layout.delay_max().to_string(), "longest input delay in samples"),
+        ("INPUT_BOUND", num(o.precision.input_bound()), "largest |y_i|, |g_i| a step takes"),
+    ]
+    .iter()
+    .map(|(k, v, c)| format!("#define {:<w$} {v:<12} /* {c} */", format!("{P}_{k}"), w = P.len() + 12))
+    .collect::<Vec<_>>()
+    .join("\n");
+    let fields: Vec<(String, &str)> = layout
+        .state_fields()
+        .iter()
+        .map(|f| {
+            (format!("{} {}{};", if f.integer { "uint32_t" } else { R }, f.name, f.dims.replace("{P}", &P)), f.comment)
+        })
+        .collect();
+    let width = fields.iter().map(|(f, _)| f.len()).max().unwrap_or(0);
+    let fields = fields.iter().map(|(f, c)| format!("    {f:<width$} /* {c} */")).collect::<Vec<_>>().join("\n");
+    let from =
+        o.scenario_name.as_deref().map(|s| format!(" from scenario \"{}\"", comment_safe(s))).unwrap_or_default();
+    fill(
+        HEADER,
+        &[
+            ("p", p),
+            ("P", &P),
+            ("R", R),
+            ("version", env!("CARGO_PKG_VERSION")),
+            ("from", &from),
+            ("T", &format!("{T:?}")),
+            ("prec", o.precision.name()),
+            ("n", &layout.n.to_string()),
+            ("m", &layout.m.to_string()),
+            ("q", &layout.q.to_string()),
+            ("qg", &design.q_g().to_string()),
+            ("qw", &design.q_w().to_string()),
+            ("delay_text", &delay_text),
+            ("obs", &fmt_complex_list(design.observer_eigenvalues())),
+            ("dec", &fmt_complex_list(design.decoupled_eigenvalues())),
+            ("constant_bytes", &constant_bytes.to_string()),
+            ("state_bytes", &state_bytes.to_string()),
+            ("defines", &defines),
+            ("fields", &fields),
+        ],
+    )
+}
+
+/// The source: the constants, the delays, then the functions with one call per channel.
+fn source(constants: &[Constant], layout: &Layout, o: &ExportOptions) -> String {
+    let (p, P, R) = (o.prefix.as_str(), o.prefix.to_ascii_uppercase(), o.precision.c_type());
+    let mut c = String::new();
+    let _ =
+        writeln!(c, "/* {p}_controller.c: generated by quell {}; see {p}_controller.h. */", env!("CARGO_PKG_VERSION"));
+    let _ = writeln!(c, "#include \"{p}_controller.h\"");
+    for k in constants {
+        let _ = writeln!(c);
+        if let Some(text) = &k.comment {
+            let _ = writeln!(c, "/* {text} */");
+        }
+        let dims: String = k.dims.iter().map(|d| format!("[{d}]")).collect();
+        let rows: Vec<String> = k
+            .values
+            .chunks(k.cols)
+            .map(|r| r.iter().map(|&x| number(x, o.precision)).collect::<Vec<_>>().join(", "))
+            .collect();
+        let init = match k.dims.len() {
+            0 => rows.join(""),
+            1 => format!("{{{}}}", rows.join(", ")),
+            _ => format!("{{\n    {{{}}},\n}}", rows.join("},\n    {")),
+        };
+        let _ = writeln!(c, "static const {R} {p}_{}{dims} = {init};", k.name);
+    }
+    let delay_list = layout.delays.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(", ");
+    let _ = writeln!(c, "\n/* Delay lines: d_i = tau_i / T_s samples. */");
+    let _ = writeln!(c, "static const uint32_t {p}_delay[{P}_M] = {{{delay_list}}};");
+    let mut calls = String::new();
+    let mut row = 0;
+    for (i, &s) in layout.sigma.iter().enumerate() {
+        let _ = writeln!(
+            calls,
+            "    u_d[{i}] = {p}_channel(s, {i}u, {s}u, {p}_Phi_{k}, {p}_gamma_{k}, {row}u, y[{i}] - g[{i}]);",
+            k = i + 1
+        );
+        row += s;
+    }
+    c.push_str(&fill(FUNCTIONS, &[("calls", calls.trim_end()), ("p", p), ("P", &P), ("R", R)]));
+    c
 }
 
 /// `text` for a C comment: escaped (one line, ASCII), with `/*` and `*/` broken by a backslash so
@@ -312,6 +377,60 @@ fn pair_layout_id(h: &mut String, c: &mut String, p: &str, P: &str) {
         1,
     );
 }
+
+/// The header; `{p}`, `{P}`, `{R}` are the prefix, its upper case and the type, the rest what
+/// [`header`] fills in.
+const HEADER: &str = r#"/* {p}_controller.h: direct adaptive output-feedback controller (C. V. Tu, N. Dudarenko, eqs.
+ * (5), (6), (14), (20), (25), (33)), discretized exactly for a zero-order hold.
+ *
+ * Generated by quell {version}{from}. Do not edit: after a design
+ * change, regenerate with
+ *     quell export SCENARIO --sample-time {T} --prefix {p} --precision {prec}
+ *
+ * Sample time T_s = {T} s: call {p}_step once per sample (docs/deployment.md).
+ * Plant: n = {n} states, m = {m} channels; regressor q = {q} (q_g = {qg}, q_w = {qw}).
+ * Input delays: {delay_text}.
+ * Eigenvalues of the design (continuous time):
+ *   observer A - L C:  {obs}
+ *   decoupled A - B K: {dec}
+ * Memory: {constant_bytes} bytes of constants (static const), {state_bytes} bytes of state
+ *   (sizeof({p}_state) where a {R} is aligned to its size).
+ * Arithmetic: {R} throughout. No dynamic memory, no libm, no global mutable state.
+ */
+#ifndef {P}_CONTROLLER_H
+#define {P}_CONTROLLER_H
+
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+{defines}
+
+/* Everything that changes; {p}_init zeroes it. */
+typedef struct {
+{fields}
+} {p}_state;
+
+/* The Controller's zero state (also to restart it). */
+void {p}_init({p}_state *s);
+/* One sample: reads y(k) and g(k), writes the plant input u_f(k) = -K x_hat + F u_d (5), to hold
+ * until the next sample, and returns 0. An entry of y or g that is NaN or beyond +-{P}_INPUT_BOUND
+ * (a sensor fault) is refused: it returns 1 and leaves the state and u_f untouched; hold the
+ * previous input. It returns 2 when u_f or u is no longer finite (inputs the design cannot follow
+ * overflowed the state), and keeps returning 2: hold a safe input and call {p}_init
+ * (docs/deployment.md). Needs IEEE arithmetic (no -ffast-math). */
+int {p}_step({p}_state *s, const {R} y[{P}_M], const {R} g[{P}_M], {R} u_f[{P}_M]);
+/* The adaptive command u(k) (25) of the last step, undelayed. */
+void {p}_command(const {p}_state *s, {R} u[{P}_M]);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* {P}_CONTROLLER_H */
+"#;
 
 /// The functions of the source; `{p}`, `{P}` and `{R}` are the prefix, its upper case and the type.
 const FUNCTIONS: &str = r#"
@@ -452,3 +571,17 @@ void {p}_command(const {p}_state *s, {R} u[{P}_M])
         u[i] = s->u[i];
 }
 "#;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fill_replaces_known_keys_once_and_keeps_other_braces() {
+        let text = fill("{p}_f(void) { return {x}; } /* {P} */", &[("p", "{P}"), ("P", "Q")]);
+        // The value "{P}" is not searched again; `{ return` and `{x}` are not keys.
+        assert_eq!(text, "{P}_f(void) { return {x}; } /* Q */");
+        assert_eq!(fill("{", &[("p", "a")]), "{");
+        assert_eq!(fill("}{p}", &[("p", "a")]), "}a");
+    }
+}

@@ -1,5 +1,4 @@
-//! FMI 2.0 co-simulation FMU of the generated C controller (`quell export --fmu`;
-//! docs/deployment.md).
+//! FMI 2.0 co-simulation FMU of the generated C controller (docs/deployment.md).
 //!
 //! The archive holds `modelDescription.xml`, the controller's C ([`super::generate`]) with a
 //! wrapper implementing the FMI functions and the FMI 2.0.1 headers under `sources/`, and, when a
@@ -19,6 +18,7 @@ use std::io::Write as _;
 use std::path::Path;
 use std::process::Command;
 
+use super::c::fill;
 use super::{generate, CCode, ExportError, ExportOptions};
 use crate::design::Design;
 
@@ -72,12 +72,16 @@ pub fn generate_fmu(
     let mut sources: Vec<(String, String)> =
         vec![(code.header_name.clone(), code.header.clone()), (code.source_name.clone(), code.source.clone())];
     let guid = guid(&[&code.header, &code.source]);
-    let wrapper = WRAPPER
-        .replace("{guid}", &guid)
-        .replace("{version}", env!("CARGO_PKG_VERSION"))
-        .replace("{p}", p)
-        .replace("{P}", &p.to_ascii_uppercase())
-        .replace("{R}", options.precision.c_type());
+    let wrapper = fill(
+        WRAPPER,
+        &[
+            ("guid", &guid),
+            ("version", env!("CARGO_PKG_VERSION")),
+            ("p", p),
+            ("P", &p.to_ascii_uppercase()),
+            ("R", options.precision.c_type()),
+        ],
+    );
     sources.push((wrapper_name.clone(), wrapper));
     sources.extend(FMI2_HEADERS.iter().map(|(n, t)| (n.to_string(), t.to_string())));
     let model_description = model_description(options, m, sample_time, &guid, &[&wrapper_name, &code.source_name]);

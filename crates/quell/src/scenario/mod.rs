@@ -447,8 +447,11 @@ pub struct PartialDesign {
     pub disturbance_filter_orders: Option<Vec<usize>>,
 }
 
+/// The automatic design as the library's messages name it ([`crate::auto::auto_design`]); a front
+/// end replaces this phrase by its own words for it.
+pub const AUTO_DESIGN: &str = "the automatic design (`auto_design`)";
 /// How to get an automatic design, for the messages on a missing key.
-const AUTO_HINT: &str = "or let `quell design SCENARIO --auto --write OUT.toml` choose it";
+const AUTO_HINT: &str = "or let the automatic design (`auto_design`) choose it";
 
 impl PartialDesign {
     /// The choices of a hand-made design: every key but relative_degrees required, no filter orders.
@@ -463,7 +466,10 @@ impl PartialDesign {
             if orders.is_some() {
                 return Err(err(
                     format!("design.{key}"),
-                    format!("filter orders are read only by an automatic design; run `quell design SCENARIO --auto --write OUT.toml`, or give design.{} instead", key.replace("orders", "poles")),
+                    format!(
+                        "filter orders are read only by {AUTO_DESIGN}, which writes the poles; give design.{} instead",
+                        key.replace("orders", "poles")
+                    ),
                 ));
             }
         }

@@ -1,4 +1,4 @@
-//! The continuous closed loop (notes, "The closed loop, wired once"): plant (1) with input (5),
+//! The continuous closed loop, wired once: plant (1) with input (5),
 //! controller [`Equations`], integrated as a delay equation by [`dde::solve`].
 
 use std::cell::Cell;
@@ -8,13 +8,13 @@ use std::rc::Rc;
 use nalgebra::{DMatrix, DVector};
 
 use super::dde::{self, DelaySystem, Options, Past};
-use super::divergence::{Peaks, Watched, DIVERGENCE_BOUND};
+use super::divergence::{Peaks, Watched};
 use super::result::{Outcome, RunStats, Sample, SimResult};
-use super::{check_run, SimError};
+use super::{check_run, Integrator, Run, SimError};
 use crate::controller::{command, mat_vec, packed, swapping_error, Equations};
 use crate::design::Design;
 use crate::plant::{Plant, PlantError};
-use crate::settings::{Actuator, KeyError, MeasurementNoise};
+use crate::settings::{self, Actuator, KeyError, MeasurementNoise};
 use crate::signal::{Signal, SignalBank};
 
 /// Offsets of the loop's state vector [z = (ξ̂, x̂), η̂_1, …, η̂_m, x, filters]. The delayed terms
@@ -200,7 +200,7 @@ impl<'a> ContinuousLoop<'a> {
         })
     }
 
-    /// Initial state: x(0) = x0, every controller state 0 (notes, "Initial conditions"). An x0 that
+    /// Initial state: x(0) = x0, every controller state 0 (the paper's filters and observers start at rest). An x0 that
     /// is not n long is [`PlantError::Length`].
     pub fn initial_state(&self, x0: &DVector<f64>) -> Result<Vec<f64>, PlantError> {
         let n = self.eq.n;
@@ -236,7 +236,7 @@ struct Record {
     bounds: Peaks,
     /// The run's end when a watched signal crossed its bound.
     diverged: Option<Outcome>,
-    /// x and x̂ too ([`RunSettings::record_states`]).
+    /// x and x̂ too ([`super::RunSettings::record_states`]).
     states: bool,
     /// [g; ω] (and the noise n, not read here), y, u, u_f.
     gw: Vec<f64>,
@@ -338,7 +338,7 @@ impl DelaySystem for ContinuousLoop<'_> {
         // the input of channel i's filter bank, goes straight into the last row of W_i' (see below).
         let cols = 1 + q;
         for (i, ch) in eq.channels.iter().enumerate() {
-            let input = &mut ds[l.w[i] + (ch.sigma - 1) * cols..l.w[i] + ch.sigma * cols];
+            let input = &mut ds[l.w[i] + (ch.sigma() - 1) * cols..l.w[i] + ch.sigma() * cols];
             let (u_in, xi_d) = input.split_at_mut(1);
             if ch.delay > 0.0 {
                 past.eval_ranges(t - ch.delay, [(0, &mut *xi_d), (l.eta(i), &mut self.eta_d[..])]);
@@ -374,14 +374,14 @@ impl DelaySystem for ContinuousLoop<'_> {
 
         // Per channel: G_ii filter bank, H filters and the adaptive law (33).
         for (i, ch) in eq.channels.iter().enumerate() {
-            let (w0, w1) = (l.w[i], l.w[i] + ch.sigma * cols);
+            let (w0, w1) = (l.w[i], l.w[i] + ch.sigma() * cols);
             let W = &s[w0..w1];
             let dW = &mut ds[w0..w1];
             // W' = A_i W + e_σ [u_i(t − τ_i), ξ̂ᵀ(t − τ_i)] with A_i the companion matrix of den_i; the
             // last row already holds the input.
-            dW[..(ch.sigma - 1) * cols].copy_from_slice(&W[cols..]);
-            let last = &mut dW[(ch.sigma - 1) * cols..];
-            for (r, &a) in ch.den.iter().enumerate() {
+            dW[..(ch.sigma() - 1) * cols].copy_from_slice(&W[cols..]);
+            let last = &mut dW[(ch.sigma() - 1) * cols..];
+            for (r, &a) in ch.tf.den.iter().enumerate() {
                 for (d, w) in last.iter_mut().zip(&W[r * cols..(r + 1) * cols]) {
                     *d -= a * w;
                 }
@@ -630,55 +630,6 @@ impl LinearPart {
     }
 }
 
-/// Settings of a continuous run.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RunSettings {
-    pub t_end: f64,
-    pub output_step: f64,
-    pub rtol: f64,
-    pub atol: f64,
-    /// A watched signal above this magnitude counts as divergence ([`Watched`]).
-    pub divergence_bound: f64,
-    /// Most solver steps ([`Outcome::TooManySteps`] beyond); `None`: [`default_max_steps`], derived
-    /// from the problem.
-    pub max_steps: Option<usize>,
-    /// Most bytes the delay history may hold ([`Outcome::HistoryTooLarge`] beyond); default
-    /// [`MAX_HISTORY_BYTES`].
-    pub max_history_bytes: usize,
-    /// Bounds per watched signal (x, x̂, ξ̂, η̂) below `divergence_bound`: a signal beyond its bound
-    /// counts as divergence too. Studies set these to a factor times the nominal run's
-    /// [`SimResult::peaks`] (docs/studies.md, "Runaway"); `None` by default.
-    pub runaway: Option<Peaks>,
-    /// The integrator ([`dde::Method::Auto`] by default: DOP853, implicit in η̂ while it is stiff).
-    pub method: dde::Method,
-    /// Band-limited measurement noise on the y the controller reads (needs a bandwidth).
-    pub noise: Option<MeasurementNoise>,
-    /// The true plant's actuator (delay on u_f, limits); `None`: the plant receives u_f.
-    pub actuator: Option<Actuator>,
-    /// Record the plant state x and the observer state x̂ too ([`SimResult::x`]); off by default.
-    pub record_states: bool,
-}
-
-impl RunSettings {
-    /// Settings with the default divergence bound [`DIVERGENCE_BOUND`].
-    pub fn new(t_end: f64, output_step: f64, rtol: f64, atol: f64) -> Self {
-        RunSettings {
-            t_end,
-            output_step,
-            rtol,
-            atol,
-            divergence_bound: DIVERGENCE_BOUND,
-            max_steps: None,
-            max_history_bytes: MAX_HISTORY_BYTES,
-            runaway: None,
-            method: dde::Method::Auto,
-            noise: None,
-            actuator: None,
-            record_states: false,
-        }
-    }
-}
-
 /// Default memory budget of a continuous run's delay history: 1 GiB. The recorded rows come on top;
 /// they are known before the run (at most [`crate::settings::MAX_OUTPUT_SAMPLES`]).
 pub const MAX_HISTORY_BYTES: usize = 1 << 30;
@@ -735,78 +686,56 @@ pub fn default_max_steps(design: &Design, truth: &Plant, signals: [&Signal; 2], 
     }
 }
 
-/// Simulates the continuous closed loop from t = 0 to `t_end`, recording every `output_step`.
-/// `on_progress(t)` is called at each recorded sample; returning `Break` interrupts the run.
-/// The result always holds what was computed; [`SimResult::outcome`] says how the run ended. The
-/// settings and signals are checked first (horizon, tolerances, divergence bound, m reference and k
-/// disturbance components with finite parameters).
-pub fn simulate(
-    design: &Design,
-    reference: &Signal,
-    disturbance: &Signal,
-    settings: &RunSettings,
-    on_progress: impl FnMut(f64) -> ControlFlow<()>,
-) -> Result<SimResult, SimError> {
-    simulate_with_truth(design, design.plant(), reference, disturbance, settings, on_progress)
+/// Every check of a continuous run (the settings, the signals, the truth, the delays against the
+/// horizon); the loop, ready to run.
+pub(super) fn check<'a>(run: &Run<'a>, integrator: &Integrator) -> Result<ContinuousLoop<'a>, SimError> {
+    let (st, truth) = (&run.settings, run.truth);
+    check_run(run)?;
+    settings::check_tolerances(integrator.rtol, integrator.atol)?;
+    let (actuator, noise) = (st.actuator.as_ref(), st.noise.as_ref());
+    let sys = ContinuousLoop::with_physics(run.design, truth, run.reference, run.disturbance, actuator, noise)?;
+    settings::check_integrator_delays("plant.delays", &run.design.plant().delays, st.t_end)?;
+    settings::check_integrator_delays("truth.delays", &truth.delays, st.t_end)?;
+    if let Some(a) = actuator {
+        settings::check_integrator_delays("truth.actuator_delays", &a.delays, st.t_end)?;
+    }
+    Ok(sys)
 }
 
-/// [`simulate`] with the simulated plant `truth` in place of the design model (`[truth]`): the
-/// plant is ẋ = A x + B u_p + D ω, y = C x + Q ω with truth's matrices, x(0) = truth.x0, and
-/// u_p = u_f = −K x̂ + F [u_1(t − τ_1^true), …], or with `settings.actuator` that u_f delayed by
-/// τ_a,i and clipped ([`Actuator`]); the observers (6), (20) and the filters of the adaptive law keep
-/// the design's matrices and delays, and read y plus `settings.noise`. [`SimResult::limited`]
-/// reports how often each limit clipped.
-pub fn simulate_with_truth(
-    design: &Design,
-    truth: &Plant,
-    reference: &Signal,
-    disturbance: &Signal,
-    settings: &RunSettings,
+/// The continuous loop of `run` ([`Run::simulate`]), integrated as `integrator` says: the plant
+/// (the truth) with input u_f (5) delayed by τ_i^true, or through the settings' actuator, and the
+/// controller's observers and filters reading y plus the settings' noise. [`SimResult::limited`]
+/// reports how often each actuator limit clipped.
+pub(super) fn simulate(
+    run: &Run<'_>,
+    integrator: &Integrator,
     mut on_progress: impl FnMut(f64) -> ControlFlow<()>,
 ) -> Result<SimResult, SimError> {
-    let RunSettings {
-        t_end,
-        output_step,
-        rtol,
-        atol,
-        divergence_bound,
-        max_steps,
-        max_history_bytes,
-        runaway,
-        method,
-        record_states,
-        ..
-    } = *settings;
-    check_run(design, reference, disturbance, t_end, output_step, divergence_bound)?;
-    crate::settings::check_tolerances(rtol, atol)?;
-    let (actuator, noise) = (settings.actuator.as_ref(), settings.noise.as_ref());
-    let mut sys = ContinuousLoop::with_physics(design, truth, reference, disturbance, actuator, noise)?;
-    crate::settings::check_integrator_delays("plant.delays", &design.plant().delays, t_end)?;
-    crate::settings::check_integrator_delays("truth.delays", &truth.delays, t_end)?;
-    if let Some(a) = actuator {
-        crate::settings::check_integrator_delays("truth.actuator_delays", &a.delays, t_end)?;
-    }
+    let mut sys = check(run, integrator)?;
+    let (st, truth) = (&run.settings, run.truth);
+    let Integrator { rtol, atol, method, max_steps, max_history_bytes } = *integrator;
     // with_truth has checked x0's length (check_truth).
     let s0 = sys.initial_state(&truth.x0).map_err(|e| KeyError::new("truth.x0", e.to_string()))?;
     let history = vec![0.0; sys.n_delayed()];
     let (m, q, n) = (sys.eq.m, sys.eq.q, sys.eq.n);
     sys.record = Some(Record {
-        result: SimResult::new(m, q, n, RunStats::continuous(&dde::Stats::default())),
-        bounds: Peaks(runaway.map_or([divergence_bound; 4], |r| r.0.map(|b| b.min(divergence_bound)))),
+        result: SimResult::new(m, q, n, RunStats::Continuous(dde::Stats::default())),
+        bounds: st.bounds(),
         diverged: None,
-        states: record_states,
+        states: st.record_states,
         gw: vec![0.0; sys.signals.len()],
         y: vec![0.0; m],
         u: vec![0.0; m],
         u_f: vec![0.0; m],
     });
-    let max_steps = max_steps.unwrap_or_else(|| default_max_steps(design, truth, [reference, disturbance], t_end));
+    let signals = [run.reference, run.disturbance];
+    let max_steps = max_steps.unwrap_or_else(|| default_max_steps(run.design, truth, signals, st.t_end));
     // The history's ring may double past its length: half the budget in records.
     let max_history_len = max_history_bytes / (2 * dde::record_bytes(sys.n_delayed()));
     let opts = Options { rtol, atol, max_steps, max_history_len, method, ..Options::default() };
     let mut outcome = Outcome::Completed;
     // The loop records each sample (observe); here only the progress and an interruption.
-    let solved = dde::solve(&mut sys, 0.0, &s0, &history, t_end, output_step, &opts, |t, _| {
+    let solved = dde::solve(&mut sys, 0.0, &s0, &history, st.t_end, st.output_step, &opts, |t, _| {
         if on_progress(t).is_break() {
             outcome = Outcome::Interrupted { t };
             return ControlFlow::Break(());
@@ -817,23 +746,17 @@ pub fn simulate_with_truth(
     if let Some(diverged) = diverged {
         outcome = diverged;
     }
-    match solved {
-        Ok(stats) => result.stats = RunStats::continuous(&stats),
-        Err(dde::SolveError::TooManySteps { t, stats }) => {
-            result.stats = RunStats::continuous(&stats);
-            outcome = Outcome::TooManySteps { t, max_steps };
-        }
+    let (stats, ended) = match solved {
+        Ok(stats) => (stats, None),
+        Err(dde::SolveError::TooManySteps { t, stats }) => (stats, Some(Outcome::TooManySteps { t, max_steps })),
         Err(dde::SolveError::HistoryTooLong { t, stats }) => {
-            result.stats = RunStats::continuous(&stats);
-            outcome = Outcome::HistoryTooLarge { t, max_bytes: max_history_bytes };
+            (stats, Some(Outcome::HistoryTooLarge { t, max_bytes: max_history_bytes }))
         }
-        Err(dde::SolveError::StepSizeTooSmall { t, stats, .. }) => {
-            result.stats = RunStats::continuous(&stats);
-            outcome = Outcome::StepSizeTooSmall { t };
-        }
+        Err(dde::SolveError::StepSizeTooSmall { t, stats, .. }) => (stats, Some(Outcome::StepSizeTooSmall { t })),
         // The loop's own state, history and delays (positive: zero delays are filtered out).
         Err(e @ dde::SolveError::Input { .. }) => return Err(KeyError::new("simulation", e.to_string()).into()),
-    }
-    result.outcome = Some(outcome);
+    };
+    result.stats = RunStats::Continuous(stats);
+    result.outcome = Some(ended.unwrap_or(outcome));
     Ok(result)
 }

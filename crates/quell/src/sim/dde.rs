@@ -179,22 +179,27 @@ pub enum Method {
     Implicit,
 }
 
-/// Solver statistics.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+/// Solver statistics (as a run's summary.json writes them: the names after `rename`, the method's
+/// figures left out).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
 pub struct Stats {
     /// Accepted steps.
     pub steps: usize,
     /// Rejected step attempts (error test failed or non-finite result).
+    #[serde(rename = "rejected_steps")]
     pub rejected: usize,
     /// Evaluations of [`DelaySystem::rhs`].
+    #[serde(rename = "rhs_evaluations")]
     pub rhs_evals: usize,
     /// Breakpoints (derivative discontinuities) landed on exactly.
     pub breakpoints: usize,
     /// Largest number of step records the dense history held at once.
     pub max_history_len: usize,
     /// Accepted steps taken by the implicit method (ARK4(3)6L\[2\]SA).
+    #[serde(skip)]
     pub implicit_steps: usize,
     /// Switches between the explicit and the implicit method.
+    #[serde(skip)]
     pub switches: usize,
 }
 

@@ -1,30 +1,38 @@
-//! Simulation of the closed loop: the delay-equation integrator, the continuous and the
-//! sampled-data loops, the divergence check they share, and the one result type.
+//! Simulation of the closed loop, through one door: a [`Run`] of a design on its (true) plant
+//! with a reference and a disturbance, in the loop its [`RunSettings`] name ([`Loop`]): the
+//! continuous loop (the delay equation, integrated as [`Integrator`] says) or the sampled-data loop
+//! with the discrete [`Controller`](crate::Controller). Either returns one [`SimResult`], whose
+//! [`Outcome`] says how the run ended.
 
-pub mod closed_loop;
+mod closed_loop;
 pub mod dde;
-pub mod divergence;
+mod divergence;
 pub mod noise;
-pub mod result;
-pub mod sampled;
+mod result;
+mod sampled;
+mod scenario;
 pub mod settle;
+
+use std::ops::ControlFlow;
 
 use crate::controller::ControllerError;
 use crate::design::Design;
-use crate::settings::{self, KeyError};
+use crate::plant::Plant;
+use crate::settings::{self, Actuator, KeyError};
 use crate::signal::{check_signals, Signal};
 
 pub use crate::settings::MeasurementNoise;
-pub use closed_loop::{
-    default_max_steps, simulate, simulate_with_truth, ContinuousLoop, RunSettings, BUDGET_MIN_STEPS,
-    BUDGET_STEPS_PER_RATE, MAX_HISTORY_BYTES,
-};
+pub use closed_loop::{default_max_steps, ContinuousLoop, BUDGET_MIN_STEPS, BUDGET_STEPS_PER_RATE, MAX_HISTORY_BYTES};
+pub use dde::{Method, Stats};
 pub use divergence::{Peaks, Watched, DIVERGENCE_BOUND};
 pub use result::{ChannelSummary, Outcome, RunStats, Sample, SimResult};
-pub use sampled::{
-    simulate_sampled, simulate_sampled_with, simulate_sampled_with_truth, SampledController, SampledSettings,
-};
+pub use sampled::SampledController;
 pub use settle::{Settle, Settling};
+
+/// The front door as `docs/running.md` shows it, compiled and run as a doc test.
+#[cfg(doctest)]
+#[doc = include_str!("../../../../docs/running.md")]
+struct RunningDoc;
 
 /// Why a run cannot start: a setting or signal out of range (named by its scenario key), or a
 /// controller that cannot run at the sample time.
@@ -36,23 +44,210 @@ pub enum SimError {
     Controller(#[from] ControllerError),
 }
 
+/// Which closed loop a run simulates.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Loop {
+    /// The continuous loop: plant (1), controller (5)–(33), integrated as a delay equation.
+    Continuous(Integrator),
+    /// The sampled-data loop: the discrete controller every `sample_time` seconds, the plant advanced
+    /// exactly between samples with its input held.
+    Sampled { sample_time: f64 },
+}
+
+/// How the continuous loop is integrated: tolerances, method and budgets.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Integrator {
+    pub rtol: f64,
+    pub atol: f64,
+    /// [`Method::Auto`] by default: DOP853, implicit in η̂ while it is stiff.
+    pub method: Method,
+    /// Most solver steps ([`Outcome::TooManySteps`] beyond); `None`: [`default_max_steps`], derived
+    /// from the problem.
+    pub max_steps: Option<usize>,
+    /// Most bytes the delay history may hold ([`Outcome::HistoryTooLarge`] beyond); default
+    /// [`MAX_HISTORY_BYTES`].
+    pub max_history_bytes: usize,
+}
+
+impl Integrator {
+    /// Tolerances `rtol`, `atol`, the automatic method, the default budgets.
+    pub fn new(rtol: f64, atol: f64) -> Self {
+        Integrator { rtol, atol, method: Method::Auto, max_steps: None, max_history_bytes: MAX_HISTORY_BYTES }
+    }
+}
+
+/// What a run is asked for: its horizon, its loop and what the true plant adds to the model.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunSettings {
+    pub t_end: f64,
+    /// Time between recorded samples; in the sampled-data loop a whole multiple of `sample_time`.
+    pub output_step: f64,
+    /// The continuous loop (with its integrator) or the sampled-data loop (with its sample time).
+    pub mode: Loop,
+    /// A watched signal above this magnitude counts as divergence ([`Watched`]).
+    pub divergence_bound: f64,
+    /// Bounds per watched signal (x, x̂, ξ̂, η̂) below `divergence_bound`: a signal beyond its bound
+    /// counts as divergence too. Studies set these to a factor times the nominal run's
+    /// [`SimResult::peaks`] (docs/studies.md, "Runaway"); `None` by default.
+    pub runaway: Option<Peaks>,
+    /// Measurement noise on the y the controller reads: white per sample (sampled-data loop only),
+    /// or band-limited with a bandwidth (the same n(t) in both loops).
+    pub noise: Option<MeasurementNoise>,
+    /// The true plant's actuator (delay on u_f, limits; whole samples in the sampled-data loop);
+    /// `None`: the plant receives u_f.
+    pub actuator: Option<Actuator>,
+    /// Record the plant state x and the observer state x̂ too ([`SimResult::x`]); off by default.
+    pub record_states: bool,
+}
+
+impl RunSettings {
+    /// Settings of a run in loop `mode`: no noise, an ideal actuator, the default divergence bound
+    /// [`DIVERGENCE_BOUND`], no runaway bounds, no states recorded.
+    pub fn new(t_end: f64, output_step: f64, mode: Loop) -> Self {
+        RunSettings {
+            t_end,
+            output_step,
+            mode,
+            divergence_bound: DIVERGENCE_BOUND,
+            runaway: None,
+            noise: None,
+            actuator: None,
+            record_states: false,
+        }
+    }
+
+    /// The continuous loop at tolerances `rtol`, `atol` ([`Integrator::new`]).
+    pub fn continuous(t_end: f64, output_step: f64, rtol: f64, atol: f64) -> Self {
+        RunSettings::new(t_end, output_step, Loop::Continuous(Integrator::new(rtol, atol)))
+    }
+
+    /// The sampled-data loop at `sample_time`.
+    pub fn sampled(t_end: f64, output_step: f64, sample_time: f64) -> Self {
+        RunSettings::new(t_end, output_step, Loop::Sampled { sample_time })
+    }
+
+    /// The continuous loop's step budget (`None`: [`default_max_steps`], derived from the problem).
+    /// A sampled-data run takes t_end / sample_time controller steps, known before it starts; a
+    /// budget for it is an error naming `max_steps`.
+    pub fn set_max_steps(&mut self, max_steps: Option<usize>) -> Result<(), KeyError> {
+        match (&mut self.mode, max_steps) {
+            (Loop::Continuous(integrator), _) => integrator.max_steps = max_steps,
+            (Loop::Sampled { .. }, None) => {}
+            (Loop::Sampled { sample_time }, Some(_)) => {
+                return Err(KeyError::new(
+                    "max_steps",
+                    format!(
+                        "a step budget applies to the continuous loop; this sampled-data run takes t_end / sample_time = {:.0} controller steps, known before it starts: leave max_steps out",
+                        (self.t_end / *sample_time).floor() + 1.0
+                    ),
+                ))
+            }
+        }
+        Ok(())
+    }
+
+    /// The bound per watched signal: `runaway`'s, at most `divergence_bound`.
+    fn bounds(&self) -> Peaks {
+        let bound = self.divergence_bound;
+        Peaks(self.runaway.map_or([bound; 4], |r| r.0.map(|b| b.min(bound))))
+    }
+}
+
+/// One run of the closed loop: a design, the plant simulated (its model unless [`Run::truth`]
+/// gives the true one), the reference g and disturbance ω, and the settings; [`Run::simulate`]
+/// carries it out. Built by [`Run::new`], or from a scenario by [`Run::of`].
+///
+/// ```
+/// use std::ops::ControlFlow;
+/// use quell::scenario::{Scenario, PAPER_EXAMPLE};
+/// use quell::sim::{Run, RunSettings};
+///
+/// let s = Scenario::from_toml(PAPER_EXAMPLE)?;
+/// let design = s.design()?;
+/// // 20 s of the continuous loop at rtol = atol = 1e-9, then 20 s sampled every 10 ms.
+/// let settings = RunSettings::continuous(20.0, 0.1, 1e-9, 1e-9);
+/// let r = Run::new(&design, &s.reference, &s.disturbance, settings).simulate(|_| ControlFlow::Continue(()))?;
+/// assert_eq!(r.len(), 201);
+/// let sampled = RunSettings::sampled(20.0, 0.1, 0.01);
+/// let r = Run::of(&s, &design).settings(sampled).simulate(|_| ControlFlow::Continue(()))?;
+/// assert_eq!(r.stats.steps(), 2001);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub struct Run<'a> {
+    design: &'a Design,
+    truth: &'a Plant,
+    reference: &'a Signal,
+    disturbance: &'a Signal,
+    settings: RunSettings,
+    controller: Option<&'a mut dyn SampledController>,
+}
+
+impl<'a> Run<'a> {
+    /// A run of `design` on its own plant model.
+    pub fn new(design: &'a Design, reference: &'a Signal, disturbance: &'a Signal, settings: RunSettings) -> Self {
+        Run { design, truth: design.plant(), reference, disturbance, settings, controller: None }
+    }
+
+    /// The simulated plant `truth` in place of the design model (`[truth]`): the plant is
+    /// ẋ = A x + B u_p + D ω, y = C x + Q ω with truth's matrices, x(0) = truth.x0, and
+    /// u_p = u_f = −K x̂ + F [u_1(t − τ_1^true), …] (through the settings' actuator when there is
+    /// one); the observers (6), (20) and the filters of the adaptive law keep the design's matrices
+    /// and delays. A truth without the design plant's dimensions is an error naming the key.
+    pub fn truth(self, truth: &'a Plant) -> Self {
+        Run { truth, ..self }
+    }
+
+    /// These settings in place of the ones given before.
+    pub fn settings(self, settings: RunSettings) -> Self {
+        Run { settings, ..self }
+    }
+
+    /// In the sampled-data loop, `controller` from its current state in place of a new
+    /// [`Controller`](crate::Controller) (another implementation of the same equations, e.g.
+    /// generated C through FFI); it must run at the settings' sample time. Ignored by the
+    /// continuous loop.
+    pub fn controller(self, controller: &'a mut dyn SampledController) -> Self {
+        Run { controller: Some(controller), ..self }
+    }
+
+    /// Every check the run makes before it starts (settings, signals, truth; in the sampled-data
+    /// loop also that the controller can run at the sample time), without running it.
+    pub fn check(&self) -> Result<(), SimError> {
+        match &self.settings.mode {
+            Loop::Continuous(integrator) => closed_loop::check(self, integrator).map(|_| ()),
+            Loop::Sampled { sample_time } => {
+                sampled::check(self, *sample_time)?;
+                crate::Controller::new(self.design, *sample_time)?;
+                Ok(())
+            }
+        }
+    }
+
+    /// Simulates the loop from t = 0 to t_end, recording every output step; `on_progress(t)` is
+    /// called at each recorded sample, and returning `Break` interrupts the run. The result always
+    /// holds what was computed; [`SimResult::outcome`] says how the run ended. The settings and
+    /// signals are checked first (horizon, tolerances or sample time, divergence bound, noise,
+    /// actuator, m reference and k disturbance components with finite parameters, the truth's
+    /// dimensions).
+    pub fn simulate(self, on_progress: impl FnMut(f64) -> ControlFlow<()>) -> Result<SimResult, SimError> {
+        match self.settings.mode.clone() {
+            Loop::Continuous(integrator) => closed_loop::simulate(&self, &integrator, on_progress),
+            Loop::Sampled { sample_time } => sampled::simulate(self, sample_time, on_progress),
+        }
+    }
+}
+
 /// The checks both loops make: the horizon, the divergence bound, and the signals against the
 /// design's plant (m reference components, k disturbance components, finite parameters).
-fn check_run(
-    design: &Design,
-    reference: &Signal,
-    disturbance: &Signal,
-    t_end: f64,
-    output_step: f64,
-    divergence_bound: f64,
-) -> Result<(), KeyError> {
-    settings::check_horizon(t_end, output_step)?;
-    divergence::check_bound(divergence_bound)?;
-    check_signals(design.plant(), reference, disturbance)
+fn check_run(run: &Run<'_>) -> Result<(), KeyError> {
+    let st = &run.settings;
+    settings::check_horizon(st.t_end, st.output_step)?;
+    divergence::check_bound(st.divergence_bound)?;
+    check_signals(run.design.plant(), run.reference, run.disturbance)
 }
 
 /// A true plant (`[truth]`) must have the design plant's dimensions n, m, k.
-pub(crate) fn check_truth(design: &Design, truth: &crate::plant::Plant) -> Result<(), KeyError> {
+pub(crate) fn check_truth(design: &Design, truth: &Plant) -> Result<(), KeyError> {
     let p = design.plant();
     for (name, a, b) in [
         ("A", &truth.A, &p.A),

@@ -30,38 +30,16 @@ pub enum Outcome {
 #[serde(tag = "loop", rename_all = "snake_case")]
 pub enum RunStats {
     /// The continuous loop: the delay-equation integrator's statistics.
-    Continuous {
-        /// Accepted steps.
-        steps: usize,
-        /// Rejected step attempts.
-        rejected_steps: usize,
-        /// Evaluations of the loop's right-hand side.
-        rhs_evaluations: usize,
-        /// Derivative discontinuities landed on.
-        breakpoints: usize,
-        /// Most step records the delay history held at once.
-        max_history_len: usize,
-    },
+    Continuous(Stats),
     /// The sampled-data loop: controller steps taken, at the sample time.
     Sampled { controller_steps: usize, sample_time: f64 },
 }
 
 impl RunStats {
-    /// The continuous loop's figures from the integrator's.
-    pub fn continuous(s: &Stats) -> Self {
-        RunStats::Continuous {
-            steps: s.steps,
-            rejected_steps: s.rejected,
-            rhs_evaluations: s.rhs_evals,
-            breakpoints: s.breakpoints,
-            max_history_len: s.max_history_len,
-        }
-    }
-
     /// Steps taken: the integrator's accepted steps, or the controller's steps.
     pub fn steps(&self) -> usize {
         match *self {
-            RunStats::Continuous { steps, .. } => steps,
+            RunStats::Continuous(Stats { steps, .. }) => steps,
             RunStats::Sampled { controller_steps, .. } => controller_steps,
         }
     }

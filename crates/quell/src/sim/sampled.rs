@@ -8,10 +8,11 @@ use std::ops::ControlFlow;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::divergence::{Watched, DIVERGENCE_BOUND};
+use super::divergence::Watched;
 use super::noise::Gaussian;
 use super::result::{Outcome, RunStats, Sample, SimResult};
-use super::{check_run, SimError};
+use super::{check_run, Run, SimError};
+use crate::controller::discrete::{self, MAX_DELAY_SAMPLES};
 use crate::controller::{mat_vec, Controller, ControllerError};
 use crate::design::Design;
 use crate::linalg::zoh_unchecked;
@@ -19,28 +20,9 @@ use crate::plant::Plant;
 use crate::settings::{self, Actuator, KeyError, MeasurementNoise};
 use crate::signal::{Signal, SignalBank};
 
-/// Settings of a sampled-data run.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SampledSettings {
-    pub t_end: f64,
-    /// A whole multiple of `sample_time`.
-    pub output_step: f64,
-    pub sample_time: f64,
-    /// Measurement noise on the y the controller reads: white per sample, or band-limited with a
-    /// bandwidth (the continuous loop's n(t) at the sample times).
-    pub noise: Option<MeasurementNoise>,
-    /// A watched signal above this magnitude counts as divergence ([`Watched`]).
-    pub divergence_bound: f64,
-    /// Record the plant state x and the observer state x̂ too ([`SimResult::x`]); off by default.
-    pub record_states: bool,
-    /// The true plant's actuator (delay on u_f in whole samples, limits); `None`: the plant
-    /// receives u_f.
-    pub actuator: Option<Actuator>,
-}
-
 /// What the sampled-data loop needs of a discrete controller. [`Controller`] is one; another
 /// implementation of the same equations (generated C through FFI, say) can stand in for it in
-/// [`simulate_sampled_with`].
+/// a [`Run`](super::Run) ([`Run::controller`](super::Run::controller)).
 pub trait SampledController {
     /// One sample: reads y(k) and g(k), returns the plant input u_f(k) (m entries) to hold until the
     /// next sample, or why it cannot.
@@ -63,97 +45,51 @@ impl SampledController for Controller {
     }
 }
 
-impl SampledSettings {
-    /// Settings without noise and with the default divergence bound.
-    pub fn new(t_end: f64, output_step: f64, sample_time: f64) -> Self {
-        SampledSettings {
-            t_end,
-            output_step,
-            sample_time,
-            noise: None,
-            divergence_bound: DIVERGENCE_BOUND,
-            record_states: false,
-            actuator: None,
-        }
+/// Every check of a sampled-data run, in this order: the settings (horizon, sample time, signals
+/// for the design's plant, noise, actuator, divergence bound), the controller (a new [`Controller`]
+/// at `sample_time` when the run brings none: delays whole numbers of samples), the output step (a
+/// whole multiple of `sample_time`), the truth. Returns that controller and the controller steps
+/// per recorded sample.
+pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controller>, usize), SimError> {
+    let st = &run.settings;
+    let m = run.design.plant().m();
+    check_run(run)?;
+    settings::check_sample_time(st.t_end, sample_time)?;
+    if let Some(noise) = &st.noise {
+        noise.check(m)?;
     }
-
-    /// Checks everything the run needs (horizon, sample time, signals for the design's plant, noise,
-    /// divergence bound), that the controller can run at `sample_time` (delays whole numbers of
-    /// samples) and that `output_step` is a whole multiple of it; returns the controller.
-    pub fn check(&self, design: &Design, reference: &Signal, disturbance: &Signal) -> Result<Controller, SimError> {
-        self.check_settings(design, reference, disturbance)?;
-        let ctrl = Controller::new(design, self.sample_time)?;
-        self.samples_per_output()?;
-        Ok(ctrl)
+    if let Some(a) = &st.actuator {
+        a.check(m)?;
     }
-
-    /// Every check but the controller's.
-    fn check_settings(&self, design: &Design, reference: &Signal, disturbance: &Signal) -> Result<(), SimError> {
-        check_run(design, reference, disturbance, self.t_end, self.output_step, self.divergence_bound)?;
-        settings::check_sample_time(self.t_end, self.sample_time)?;
-        if let Some(noise) = &self.noise {
-            noise.check(design.plant().m())?;
-        }
-        if let Some(a) = &self.actuator {
-            a.check(design.plant().m())?;
-        }
-        Ok(())
-    }
-
-    /// Controller steps per recorded sample: output_step / sample_time, a whole number ≥ 1.
-    fn samples_per_output(&self) -> Result<usize, KeyError> {
-        let (T, h) = (self.sample_time, self.output_step);
-        let ratio = h / T;
-        if (ratio - ratio.round()).abs() > 1e-9 * ratio.max(1.0) || ratio.round() < 1.0 {
-            return Err(KeyError::new(
-                "simulation.output_step",
-                format!("expected a whole multiple of sample_time = {T} s, found {h} s ({ratio:.6} samples)"),
-            ));
-        }
-        Ok(ratio.round() as usize)
-    }
+    let own = match run.controller {
+        Some(_) => None,
+        None => Some(Controller::new(run.design, sample_time)?),
+    };
+    let (T, h) = (sample_time, st.output_step);
+    let every = discrete::whole_multiple(h, T).filter(|&k| k >= 1).ok_or_else(|| {
+        KeyError::new(
+            "simulation.output_step",
+            format!("expected a whole multiple of sample_time = {T} s, found {h} s ({:.6} samples)", h / T),
+        )
+    })?;
+    super::check_truth(run.design, run.truth)?;
+    Ok((own, every))
 }
 
-/// Runs the sampled-data loop with [`Controller`] from t = 0 to `t_end`; `on_progress(t)` at each
-/// recorded sample, `Break` interrupts. The result always holds what was computed.
-pub fn simulate_sampled(
-    design: &Design,
-    reference: &Signal,
-    disturbance: &Signal,
-    settings: &SampledSettings,
+/// The sampled-data loop of `run` ([`Run::simulate`]) at `sample_time`, with the run's controller
+/// or a new [`Controller`].
+pub(super) fn simulate(
+    run: Run<'_>,
+    sample_time: f64,
     on_progress: impl FnMut(f64) -> ControlFlow<()>,
 ) -> Result<SimResult, SimError> {
-    simulate_sampled_with_truth(design, design.plant(), reference, disturbance, settings, on_progress)
-}
-
-/// [`simulate_sampled`] with any [`SampledController`] in the loop, from its current state; the
-/// controller must run at `settings.sample_time` (its own constructor checks the delays).
-pub fn simulate_sampled_with(
-    design: &Design,
-    ctrl: &mut impl SampledController,
-    reference: &Signal,
-    disturbance: &Signal,
-    settings: &SampledSettings,
-    on_progress: impl FnMut(f64) -> ControlFlow<()>,
-) -> Result<SimResult, SimError> {
-    sampled_loop(design, design.plant(), ctrl, reference, disturbance, settings, on_progress)
-}
-
-/// [`simulate_sampled`] with the simulated plant `truth` in place of the design model (`[truth]`):
-/// the plant advances with truth's matrices from truth.x0 and its input is
-/// u_f = −K x̂ + F [u_1(k − d_1^true), …] with the true delays (whole samples), through
-/// `settings.actuator` when there is one (u_f,i(k − d_a,i) clipped to ±u_max,i); the controller
-/// keeps the design's matrices and delays.
-pub fn simulate_sampled_with_truth(
-    design: &Design,
-    truth: &Plant,
-    reference: &Signal,
-    disturbance: &Signal,
-    settings: &SampledSettings,
-    on_progress: impl FnMut(f64) -> ControlFlow<()>,
-) -> Result<SimResult, SimError> {
-    let mut ctrl = settings.check(design, reference, disturbance)?;
-    sampled_loop(design, truth, &mut ctrl, reference, disturbance, settings, on_progress)
+    let (own, every) = check(&run, sample_time)?;
+    let mut run = run;
+    match (run.controller.take(), own) {
+        (Some(ctrl), _) => sampled_loop(&run, ctrl, (sample_time, every), on_progress),
+        (None, Some(mut ctrl)) => sampled_loop(&run, &mut ctrl, (sample_time, every), on_progress),
+        (None, None) => unreachable!("check builds a controller for a run without one"),
+    }
 }
 
 /// The actuator in whole samples: u_p,i(k) = sat_i(u_f,i(k − d_a,i)), u_f = 0 before k = 0.
@@ -197,18 +133,15 @@ impl ActuatorLine {
 
 /// Each delay as a whole number of samples of T, or an error on `key[i]`.
 fn whole_samples(key: &str, delays: &[f64], T: f64) -> Result<Vec<usize>, KeyError> {
-    delays
-        .iter()
-        .enumerate()
+    let whole = |tau: f64| discrete::whole(tau, T).then(|| discrete::whole_multiple(tau, T)).flatten();
+    (delays.iter().enumerate())
         .map(|(i, &tau)| {
-            let r = tau / T;
-            if !crate::controller::discrete::whole(tau, T) {
-                return Err(KeyError::new(
+            whole(tau).ok_or_else(|| {
+                KeyError::new(
                     format!("{key}[{i}]"),
-                    format!("τ = {tau} s is {r:.6} samples of T_s = {T} s; a sampled-data run needs whole numbers of samples (at most 1e7)"),
-                ));
-            }
-            Ok(r.round() as usize)
+                    format!("τ = {tau} s is {:.6} samples of T_s = {T} s; a sampled-data run needs whole numbers of samples (at most {MAX_DELAY_SAMPLES:e})", tau / T),
+                )
+            })
         })
         .collect()
 }
@@ -261,45 +194,55 @@ impl TrueInput {
     }
 }
 
-#[allow(clippy::too_many_arguments)]
-fn sampled_loop(
-    design: &Design,
-    truth: &Plant,
-    ctrl: &mut impl SampledController,
-    reference: &Signal,
-    disturbance: &Signal,
-    settings: &SampledSettings,
+/// The plant and the disturbance's exosystem as one linear system sampled exactly:
+/// [x; w]_{k+1} = Φ [x; w]_k + Γ u_f(k), y_k = C_y [x; w]_k, from [x; w]_0 = s0.
+struct ExactPlant {
+    Phi: DMatrix<f64>,
+    Gamma: DMatrix<f64>,
+    Cy: DMatrix<f64>,
+    s0: DVector<f64>,
+}
+
+impl ExactPlant {
+    fn new(p: &Plant, disturbance: &Signal, T: f64) -> Self {
+        let (n, m) = (p.n(), p.m());
+        let (S, H, w0) = disturbance.exosystem();
+        let nw = S.nrows();
+        // [x; w]' = [[A, D H], [0, S]] [x; w] + [B; 0] u_f.
+        let mut M = DMatrix::zeros(n + nw, n + nw);
+        M.view_mut((0, 0), (n, n)).copy_from(&p.A);
+        M.view_mut((0, n), (n, nw)).copy_from(&(&p.D * &H));
+        M.view_mut((n, n), (nw, nw)).copy_from(&S);
+        let mut Bu = DMatrix::zeros(n + nw, m);
+        Bu.view_mut((0, 0), (n, m)).copy_from(&p.B);
+        let (Phi, Gamma) = zoh_unchecked(&M, &Bu, T);
+        // y = [C, Q H] [x; w].
+        let mut Cy = DMatrix::zeros(m, n + nw);
+        Cy.view_mut((0, 0), (m, n)).copy_from(&p.C);
+        Cy.view_mut((0, n), (m, nw)).copy_from(&(&p.Q * &H));
+        let mut s0 = DVector::zeros(n + nw);
+        s0.rows_mut(0, n).copy_from(&p.x0);
+        s0.rows_mut(n, nw).copy_from(&w0);
+        ExactPlant { Phi, Gamma, Cy, s0 }
+    }
+}
+
+/// The loop itself, on checked settings: `T` the sample time, `every` controller steps per
+/// recorded sample.
+fn sampled_loop<C: SampledController + ?Sized>(
+    run: &Run<'_>,
+    ctrl: &mut C,
+    (T, every): (f64, usize),
     mut on_progress: impl FnMut(f64) -> ControlFlow<()>,
 ) -> Result<SimResult, SimError> {
-    settings.check_settings(design, reference, disturbance)?;
-    super::check_truth(design, truth)?;
-    let every = settings.samples_per_output()?;
-    let T = settings.sample_time;
+    let (design, truth, reference, settings) = (run.design, run.truth, run.reference, &run.settings);
     let mut shift = TrueInput::new(design, truth, T)?;
     let mut actuator = match settings.actuator.as_ref().filter(|a| !a.is_ideal()) {
         Some(a) => Some(ActuatorLine::new(a, T)?),
         None => None,
     };
-    let p = truth;
-    let (n, m) = (p.n(), p.m());
-    let (S, H, w0) = disturbance.exosystem();
-    let nw = S.nrows();
-    // [x; w]' = [[A, D H], [0, S]] [x; w] + [B; 0] u_f.
-    let mut M = DMatrix::zeros(n + nw, n + nw);
-    M.view_mut((0, 0), (n, n)).copy_from(&p.A);
-    M.view_mut((0, n), (n, nw)).copy_from(&(&p.D * &H));
-    M.view_mut((n, n), (nw, nw)).copy_from(&S);
-    let mut Bu = DMatrix::zeros(n + nw, m);
-    Bu.view_mut((0, 0), (n, m)).copy_from(&p.B);
-    let (Phi, Gamma) = zoh_unchecked(&M, &Bu, T);
-    // y = [C, Q H] [x; w].
-    let mut Cy = DMatrix::zeros(m, n + nw);
-    Cy.view_mut((0, 0), (m, n)).copy_from(&p.C);
-    Cy.view_mut((0, n), (m, nw)).copy_from(&(&p.Q * &H));
-
-    let mut s = DVector::zeros(n + nw);
-    s.rows_mut(0, n).copy_from(&p.x0);
-    s.rows_mut(n, nw).copy_from(&w0);
+    let (n, m) = (truth.n(), truth.m());
+    let ExactPlant { Phi, Gamma, Cy, s0: mut s } = ExactPlant::new(truth, run.disturbance, T);
     let mut s_next = s.clone();
     let (mut y, mut y_meas, mut g) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
     let mut noise = settings.noise.as_ref().map(|nz| Noise::new(nz, m));
@@ -308,6 +251,7 @@ fn sampled_loop(
     // u_f(k) and, when states are recorded, x̂(k) (read before the step moves it to x̂(k + 1)).
     let (mut u_f, mut x_hat) = (vec![0.0; m], vec![0.0; n]);
     let steps = (settings.t_end / T + 1e-9).floor() as usize;
+    let bounds = settings.bounds();
     let mut outcome = Outcome::Completed;
     let mut taken = 0;
     for k in 0..=steps {
@@ -352,7 +296,7 @@ fn sampled_loop(
         mat_vec(&Gamma, &u_f, s_next.as_mut_slice(), true);
         if k % every == 0 {
             let watched = Watched { x: &s.as_slice()[..n], ..ctrl.watched() };
-            if let Some(diverged) = watched.diverged(t, settings.divergence_bound) {
+            if let Some(diverged) = watched.beyond(t, &bounds) {
                 outcome = diverged;
                 break;
             }

@@ -113,7 +113,7 @@ mod tests {
     #[test]
     fn an_error_oscillating_across_the_band_does_not_settle_at_its_last_samples() {
         // 0.035·sin(3(t − 60)) around a 0.02 band on a 60 s run at 0.1 s: the last three samples
-        // (|e| = 0.0198, 0.0103, 0) lie inside the band, so the old definition reported 59.8 s;
+        // (|e| = 0.0198, 0.0103, 0) lie inside the band, so a rule that looked only at the last samples would report 59.8 s;
         // no stretch of the last 5 % stays inside.
         let t = grid(600, 60.0);
         let e: Vec<f64> = t.iter().map(|t| 0.035 * (3.0 * (t - 60.0)).sin()).collect();

@@ -42,10 +42,10 @@ fn err(key: impl Into<String>, message: impl Into<String>) -> StudyError {
     StudyError { key: key.into(), message: message.into() }
 }
 
-/// Runs above which a sweep asks for confirmation (`quell sweep --yes`).
+/// Runs above which a front end asks for confirmation before a sweep starts.
 pub const CONFIRM_RUNS: u64 = 10_000_000;
 
-/// Worker threads a sweep or tuning may ask for (`--jobs`, `jobs=`): far more than any machine's
+/// Worker threads a sweep or tuning may ask for (`jobs`): far more than any machine's
 /// cores, few enough that starting them is quick (10⁴ threads took over a minute).
 pub const MAX_JOBS: usize = 1024;
 

@@ -8,9 +8,8 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::{Nominal, Runaway, Settle, Study};
-use crate::run::LoopSettings;
 use crate::scenario::Scenario;
-use crate::sim::{self, Peaks, SimResult, DIVERGENCE_BOUND};
+use crate::sim::{self, Loop, Peaks, Run, RunSettings, SimResult, DIVERGENCE_BOUND};
 
 /// SplitMix64's finalizer: a bijection of u64 that scrambles every bit.
 fn mix(mut z: u64) -> u64 {
@@ -155,7 +154,7 @@ pub(crate) fn figures(r: &SimResult, settle: &Settle) -> Vec<ChannelFigures> {
         .collect()
 }
 
-/// Simulates a scenario as its `[simulation]` says ([`crate::run::simulate`]), a continuous run
+/// Simulates a scenario as its `[simulation]` says ([`Run::of`]), a continuous run
 /// within the step budget `max_steps` and the bounds `runaway` per watched signal; `Err` when it
 /// cannot start.
 pub(crate) fn simulate(
@@ -165,13 +164,13 @@ pub(crate) fn simulate(
     stop: &dyn Fn() -> bool,
 ) -> Result<SimResult, String> {
     let design = s.design().map_err(|e| e.to_string())?;
-    let mut settings = LoopSettings::of(s);
-    if let LoopSettings::Continuous(st) = &mut settings {
-        st.max_steps = Some(max_steps);
-        st.runaway = runaway;
+    let mut settings = RunSettings::of(s);
+    if let Loop::Continuous(integrator) = &mut settings.mode {
+        integrator.max_steps = Some(max_steps);
+        settings.runaway = runaway;
     }
     let progress = |_t: f64| if stop() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
-    crate::run::simulate(s, &design, &settings, progress).map_err(|e| e.to_string())
+    Run::of(s, &design).settings(settings).simulate(progress).map_err(|e| e.to_string())
 }
 
 /// Carries out one run; `None` when `stop` interrupted it.

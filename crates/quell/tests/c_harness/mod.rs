@@ -16,7 +16,7 @@ use quell::export::{CCode, Precision};
 use quell::sim::{SampledController, Watched};
 use quell::ControllerError;
 
-/// The warnings of the issue, as errors.
+/// Strict C99 with the common warnings, as errors.
 pub const STRICT: &[&str] = &["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic"];
 
 /// A fresh directory under the system's temp dir, removed when dropped.

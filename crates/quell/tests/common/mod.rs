@@ -4,7 +4,7 @@
 use std::ops::ControlFlow;
 
 use quell::nalgebra::{Complex, DMatrix};
-use quell::sim::{simulate, Outcome, RunSettings, SimResult};
+use quell::sim::{Outcome, Run, RunSettings, SimResult};
 use quell::{Component, Design, DesignSpec, Harmonic, ObserverChoice, Plant, Signal};
 
 pub fn re(x: f64) -> Complex<f64> {
@@ -15,7 +15,7 @@ pub fn mat(r: usize, c: usize, v: &[f64]) -> DMatrix<f64> {
     DMatrix::from_row_slice(r, c, v)
 }
 
-/// The paper's plant, Section VIII (x0 = 0, as the notes fix).
+/// The paper's plant, Section VIII (x0 = 0).
 pub fn paper_plant() -> Plant {
     Plant::new(
         mat(3, 3, &[-3.2, -1.7, -3.0, 2.8, 1.3, 4.0, 0.3, 0.3, -0.5]),
@@ -61,14 +61,15 @@ pub fn paper_signals() -> (Signal, Signal) {
 pub fn run_paper(spec: DesignSpec, t_end: f64, output_step: f64, tol: f64) -> SimResult {
     let d = Design::new(&paper_plant(), &spec).unwrap();
     let (g, w) = paper_signals();
-    let r =
-        simulate(&d, &g, &w, &RunSettings::new(t_end, output_step, tol, tol), |_| ControlFlow::Continue(())).unwrap();
+    let r = Run::new(&d, &g, &w, RunSettings::continuous(t_end, output_step, tol, tol))
+        .simulate(|_| ControlFlow::Continue(()))
+        .unwrap();
     assert_eq!(r.outcome, Some(Outcome::Completed));
     r
 }
 
 /// Checks a 100 s run sampled every 0.1 s against `tests/data/paper_example_points.csv`:
-/// y and u from an independent solver at 1e-12 (accurate to ~1e-8), to 1e-6 (issue 3's bound).
+/// y and u from an independent solver at 1e-12 (accurate to ~1e-8), to 1e-6.
 pub fn assert_matches_reference_points(r: &SimResult) {
     let csv =
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/paper_example_points.csv")).unwrap();
