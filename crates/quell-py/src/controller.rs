@@ -10,10 +10,33 @@ use crate::convert::{number, vec_numpy, vector};
 use crate::design::PyDesign;
 use crate::errors::{in_python, raise, Kind};
 
-/// The discrete-time adaptive controller of a design at sample time T_s (eqs. (5), (6), (14),
-/// (20), (25), (33)). `step` costs about 1 µs from Python. One controller may be shared between
-/// threads: its calls are serialized by a lock held only while Rust steps it (never across a call
-/// into Python, so it cannot deadlock with the GIL).
+/// The discrete-time adaptive controller of a design at sample time T_s, discretized exactly for a
+/// zero-order hold (eqs. (5), (6), (14), (20), (25), (33)); `step` costs about 1 µs from Python. One
+/// controller may be shared between threads: its calls are serialized by a lock held only while
+/// Rust steps it. It does not pickle (it is the running state of one loop).
+///
+/// Parameters
+/// ----------
+/// design : Design
+///     The design.
+/// sample_time : float
+///     T_s in seconds; every delay must be a whole number of samples.
+///
+/// Raises
+/// ------
+/// TypeError
+///     An argument of the wrong type.
+/// ScenarioError
+///     A sample time that is not > 0 or does not divide the delays (the message names
+///     `sample_time` and the nearest valid one).
+///
+/// Examples
+/// --------
+/// >>> c = quell.Controller(quell.paper_example().design(), 1e-3)
+/// >>> c
+/// Controller(m=2, q=8, sample_time=0.001)
+/// >>> c.step([0.0, 0.0], [0.0, 2.0]).shape
+/// (2,)
 #[pyclass(module = "quell", name = "Controller", frozen)]
 pub struct PyController {
     inner: Mutex<quell::Controller>,
@@ -86,8 +109,35 @@ impl PyController {
         Ok(PyController { inner: Mutex::new(inner), m })
     }
 
-    /// One sample: reads y(k) and g(k) (m each) and returns the plant input u_f(k) = −K x̂ + F u_d (5)
-    /// to hold until the next sample.
+    /// One sample: reads y(k) and g(k) and returns the plant input u_f(k) = −K x̂ + F u_d (5) to hold
+    /// until the next sample.
+    ///
+    /// Parameters
+    /// ----------
+    /// y : array_like
+    ///     The measured outputs y(k) (m).
+    /// g : array_like
+    ///     The reference g(k) (m).
+    ///
+    /// Returns
+    /// -------
+    /// numpy.ndarray
+    ///     u_f(k) (m).
+    ///
+    /// Raises
+    /// ------
+    /// TypeError
+    ///     An argument that is not an array of real numbers.
+    /// ControllerError
+    ///     A wrong length, an entry not finite or beyond ±1e100 (the state is kept), or a state that
+    ///     overflowed.
+    ///
+    /// Examples
+    /// --------
+    /// >>> c = quell.Controller(quell.paper_example().design(), 1e-3)
+    /// >>> u_f = c.step(np.zeros(2), np.array([0.0, 2.0]))
+    /// >>> bool(np.all(np.isfinite(u_f)))
+    /// True
     fn step<'py>(&self, y: &Bound<'py, PyAny>, g: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray1<f64>>> {
         // Read first (reading may call into Python), then step under the lock.
         let (mut y_k, mut g_k) = (vec![0.0; self.m], vec![0.0; self.m]);
@@ -97,28 +147,101 @@ impl PyController {
         Ok(PyArray1::from_vec(y.py(), u_f))
     }
 
-    /// The adaptive command u(k) (25) of the last step, undelayed (m,).
+    /// The adaptive command u(k) (25) of the last step, undelayed.
+    ///
+    /// Returns
+    /// -------
+    /// numpy.ndarray
+    ///     u(k) (m).
+    ///
+    /// Raises
+    /// ------
+    /// This method raises nothing.
+    ///
+    /// Examples
+    /// --------
+    /// >>> c = quell.Controller(quell.paper_example().design(), 1e-3)
+    /// >>> c.command()
+    /// array([0., 0.])
     fn command<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         vec_numpy(py, &self.copy(|c| c.command()))
     }
 
-    /// η̂_i after the last step (m, q), eq. (33).
+    /// The adaptive parameters η̂_i after the last step, eq. (33).
+    ///
+    /// Returns
+    /// -------
+    /// numpy.ndarray
+    ///     η̂ (m, q).
+    ///
+    /// Raises
+    /// ------
+    /// This method raises nothing.
+    ///
+    /// Examples
+    /// --------
+    /// >>> quell.Controller(quell.paper_example().design(), 1e-3).eta().shape
+    /// (2, 8)
     fn eta<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let (m, q) = self.lock().dims();
         Ok(vec_numpy(py, &self.copy(|c| c.eta())).reshape([m, q])?.into_any())
     }
 
-    /// The observer's estimate x̂ (n,) that the next step starts from, eq. (6).
+    /// The observer's estimate x̂ that the next step starts from, eq. (6).
+    ///
+    /// Returns
+    /// -------
+    /// numpy.ndarray
+    ///     x̂ (n).
+    ///
+    /// Raises
+    /// ------
+    /// This method raises nothing.
+    ///
+    /// Examples
+    /// --------
+    /// >>> quell.Controller(quell.paper_example().design(), 1e-3).x_hat()
+    /// array([0., 0., 0.])
     fn x_hat<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         vec_numpy(py, &self.copy(|c| c.x_hat()))
     }
 
-    /// The regressor ξ̂ = [ξ̂_g; ξ̂_ω] (q,) that the next step starts from, eqs. (14), (20).
+    /// The regressor ξ̂ = [ξ̂_g; ξ̂_ω] that the next step starts from, eqs. (14), (20).
+    ///
+    /// Returns
+    /// -------
+    /// numpy.ndarray
+    ///     ξ̂ (q).
+    ///
+    /// Raises
+    /// ------
+    /// This method raises nothing.
+    ///
+    /// Examples
+    /// --------
+    /// >>> quell.Controller(quell.paper_example().design(), 1e-3).xi_hat().shape
+    /// (8,)
     fn xi_hat<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         vec_numpy(py, &self.copy(|c| c.xi_hat()))
     }
 
     /// Back to the initial state: every controller state and delay line zero.
+    ///
+    /// Returns
+    /// -------
+    /// None
+    ///
+    /// Raises
+    /// ------
+    /// This method raises nothing.
+    ///
+    /// Examples
+    /// --------
+    /// >>> c = quell.Controller(quell.paper_example().design(), 1e-3)
+    /// >>> _ = c.step([1.0, 1.0], [0.0, 2.0])
+    /// >>> c.reset()
+    /// >>> c.x_hat()
+    /// array([0., 0., 0.])
     fn reset(&self) {
         self.lock().reset();
     }
@@ -139,6 +262,6 @@ impl PyController {
     fn __repr__(&self) -> String {
         let c = self.lock();
         let (m, q) = c.dims();
-        format!("Controller(m={m}, q={q}, sample_time={})", c.sample_time())
+        format!("Controller(m={m}, q={q}, sample_time={:?})", c.sample_time())
     }
 }

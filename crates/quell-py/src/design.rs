@@ -10,7 +10,18 @@ use crate::convert::{complex_numpy, matrix, number, pole_lists, poles, to_numpy,
 use crate::errors::{in_python, raise, type_error, Kind};
 use crate::plant::{plant_arg, Labels, PyPlant};
 
-/// Every matrix the controller needs, with the assumption checks that were passed to get them.
+/// Every gain of Sections III–V (K, F, L, N, the internal models, μ, β) and the assumption checks
+/// that were passed to get them; built by `quell.design` or `Scenario.design`.
+///
+/// Examples
+/// --------
+/// >>> d = quell.paper_example().design()
+/// >>> d
+/// Design(n=3, m=2, q=8, sigma=[2, 1], mu=[20.0, 30.0], beta=1.0)
+/// >>> d.K.shape, d.F.shape, d.L.shape
+/// ((2, 3), (2, 2), (3, 2))
+/// >>> bool(np.all(np.real(d.observer_eigenvalues) < 0))
+/// True
 #[pyclass(module = "quell", name = "Design", frozen)]
 pub struct PyDesign {
     pub inner: Arc<quell::Design>,
@@ -104,7 +115,50 @@ fn integers(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<usiz
         .collect()
 }
 
-/// Designs every gain for `plant` (Sections III–V) and checks the paper's assumptions.
+/// Designs every gain for a plant (Sections III–V) and checks the paper's assumptions.
+///
+/// Parameters
+/// ----------
+/// plant : Plant
+///     The plant (1).
+/// channel_poles : list of list of pole
+///     Per output i, the σ_i poles λ_ij of the decoupled channel G_ii(s) (Proposition 1). A pole
+///     is a number, a complex number (a pair lists both) or [re, im] meaning re ± i·im.
+/// reference_filter_poles : list of list of pole
+///     Per reference component, the poles of its filter, eq. (10).
+/// mu : array_like
+///     Adaptation gains μ_i ≥ 0 (m), eq. (33).
+/// beta : float
+///     β > 0 of H(s) = 1/(βs + 1).
+/// disturbance_filter_poles : list of list of pole, optional
+///     Per disturbance component, the poles of its filter, eq. (15).
+/// observer_poles : list of pole, optional
+///     The n poles of A − LC to place; give this or observer_gain.
+/// observer_gain : array_like, optional
+///     The observer gain L (n×m), eq. (6).
+/// relative_degrees : list of int, optional
+///     σ_i given instead of decided by eq. (7).
+///
+/// Returns
+/// -------
+/// Design
+///     The gains and the checks passed.
+///
+/// Raises
+/// ------
+/// TypeError
+///     An argument of the wrong type (a string for μ, a plant that is not a `quell.Plant`).
+/// DesignError
+///     A choice that is not valid, or no design exists (the message says which assumption fails).
+///
+/// Examples
+/// --------
+/// >>> p = quell.paper_example().plant
+/// >>> d = quell.design(p, channel_poles=[[-6, -2], [-4]], reference_filter_poles=[[-1, -6], [-9]],
+/// ...                  disturbance_filter_poles=[[-1, -3], [-1, -2, -3]], mu=[20, 30], beta=1.0,
+/// ...                  observer_poles=[-2, -3, -4])
+/// >>> np.sort(np.real(d.observer_eigenvalues))
+/// array([-4., -3., -2.])
 #[pyfunction]
 #[pyo3(signature = (plant, *, channel_poles, reference_filter_poles, mu, beta, disturbance_filter_poles=None, observer_poles=None, observer_gain=None, relative_degrees=None))]
 #[allow(clippy::too_many_arguments)]
@@ -157,7 +211,35 @@ fn restore(py: Python<'_>, plant: &PyPlant, choices: &Bound<'_, PyDict>) -> PyRe
     Ok(PyDesign { inner: Arc::new(d), spec, labels: plant.labels.clone() })
 }
 
-/// State feedback K with eig(A − BK) = poles (KNV / Tits–Yang for several inputs), as `control.place`.
+/// State feedback K with eig(A − BK) = poles (KNV / Tits–Yang for several inputs), as
+/// `control.place`.
+///
+/// Parameters
+/// ----------
+/// A : array_like
+///     The state matrix (n×n).
+/// B : array_like
+///     The input matrix (n×m).
+/// poles : list of pole
+///     The n poles to place: numbers, complex numbers (a pair lists both) or [re, im] pairs.
+///
+/// Returns
+/// -------
+/// numpy.ndarray
+///     K (m×n).
+///
+/// Raises
+/// ------
+/// TypeError
+///     An argument of the wrong type.
+/// DesignError
+///     (A, B) is not controllable, the poles are not conjugate-closed, or not n of them.
+///
+/// Examples
+/// --------
+/// >>> K = quell.place([[0.0, 1.0], [0.0, 0.0]], [[0.0], [1.0]], [-1.0, -2.0])
+/// >>> K
+/// array([[2., 3.]])
 #[pyfunction]
 pub fn place<'py>(
     py: Python<'py>,
@@ -263,13 +345,47 @@ impl PyDesign {
         self.inner.q()
     }
     /// The delay-free decoupled plant (Proposition 1, x̂ = x) as a labelled `control.StateSpace`:
-    /// ẋ = A_f x + B_f u_d, y = C x; inputs `u_d[i]`, outputs `y[i]`, states `x[j]`. Its transfer
-    /// matrix is diagonal with entries G_ii(s) (see `channels`).
+    /// ẋ = A_f x + B_f u_d, y = C x, whose transfer matrix is diagonal with entries G_ii(s).
+    ///
+    /// Returns
+    /// -------
+    /// control.StateSpace
+    ///     Inputs `u_d[i]`, outputs and states named as the plant's (`y[i]`, `x[j]` by default).
+    ///
+    /// Raises
+    /// ------
+    /// ImportError
+    ///     python-control is not installed.
+    ///
+    /// Examples
+    /// --------
+    /// >>> sys = quell.paper_example().design().decoupled_system()
+    /// >>> sys.input_labels, sys.output_labels
+    /// (['u_d[1]', 'u_d[2]'], ['y[1]', 'y[2]'])
     fn decoupled_system(slf: &Bound<'_, Self>) -> PyResult<Py<PyAny>> {
         Ok(slf.py().import("quell._control")?.call_method1("decoupled_system", (slf,))?.unbind())
     }
-    /// The Luenberger observer (6) as a labelled `control.StateSpace`: x̂' = (A − LC) x̂ + B u_f + L y;
-    /// inputs `u_f[i]` then `y[i]`, outputs `x_hat[j]`.
+    /// The Luenberger observer (6) as a labelled `control.StateSpace`: x̂' = (A − LC) x̂ + B u_f + L y.
+    ///
+    /// Returns
+    /// -------
+    /// control.StateSpace
+    ///     Inputs the plant's inputs then its outputs (`u_f[i]`, `y[i]` by default), outputs and
+    ///     states the estimates (`x_hat[j]`, or `<state>_hat` for a named state).
+    ///
+    /// Raises
+    /// ------
+    /// ImportError
+    ///     python-control is not installed.
+    ///
+    /// Examples
+    /// --------
+    /// >>> d = quell.paper_example().design()
+    /// >>> obs = d.observer_system()
+    /// >>> obs.input_labels
+    /// ['u_f[1]', 'u_f[2]', 'y[1]', 'y[2]']
+    /// >>> bool(np.allclose(np.sort_complex(obs.poles()), np.sort_complex(d.observer_eigenvalues)))
+    /// True
     fn observer_system(slf: &Bound<'_, Self>) -> PyResult<Py<PyAny>> {
         Ok(slf.py().import("quell._control")?.call_method1("observer_system", (slf,))?.unbind())
     }
@@ -356,7 +472,7 @@ impl PyDesign {
     fn __repr__(&self) -> String {
         let d = &self.inner;
         format!(
-            "Design(n={}, m={}, q={}, sigma={:?}, mu={:?}, beta={})",
+            "Design(n={}, m={}, q={}, sigma={:?}, mu={:?}, beta={:?})",
             d.plant().n(),
             d.plant().m(),
             d.q(),

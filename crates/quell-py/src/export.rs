@@ -25,8 +25,48 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     Ok(())
 }
 
-/// Writes the real-time controller of a design as C99, and optionally as an FMI 2.0 co-simulation
-/// FMU, like ``quell export``.
+/// Writes the real-time controller of a design as C99 (`<prefix>_controller.h` and `.c`), and
+/// optionally as an FMI 2.0 co-simulation FMU, like `quell export`; files are written to a
+/// temporary name, then renamed.
+///
+/// Parameters
+/// ----------
+/// source : Scenario or Design
+///     What to export (a scenario gives its design, name and sample time).
+/// sample_time : float, optional
+///     T_s in seconds; default the scenario's.
+/// out : str or os.PathLike, optional
+///     The directory (created; default the working directory).
+/// prefix : str, optional
+///     The C identifiers' prefix (default "quell").
+/// precision : str, optional
+///     "f64" (default) or "f32".
+/// fmu : bool, optional
+///     Also write `<prefix>.fmu`.
+/// compiler : str, optional
+///     The C compiler for the FMU's binary (default $CC or cc; "none": sources only).
+///
+/// Returns
+/// -------
+/// list of pathlib.Path
+///     The files written.
+///
+/// Raises
+/// ------
+/// TypeError
+///     An argument of the wrong type.
+/// ScenarioError
+///     A sample time that is missing, not > 0 or does not divide the delays.
+/// ExportError
+///     A prefix, precision or compiler that is not valid.
+/// OSError
+///     The directory cannot be written.
+///
+/// Examples
+/// --------
+/// >>> paths = quell.export(quell.paper_example().design(), 1e-3, out="c", prefix="loop")
+/// >>> [p.name for p in paths]
+/// ['loop_controller.h', 'loop_controller.c']
 #[pyfunction]
 #[pyo3(signature = (source, sample_time=None, *, out=None, prefix="quell", precision=None, fmu=false, compiler=None))]
 #[allow(clippy::too_many_arguments)]

@@ -10,17 +10,45 @@ use crate::convert::{matrix, to_numpy, type_name, vec_numpy, vector};
 use crate::errors::{raise, Kind};
 
 /// The plant (1) of the paper: ẋ = A x + B u_f(t) + D ω(t), y = C x + Q ω(t), driven by the
-/// decoupling law u_f = −K x̂ + F u_d, where u_d,i(t) = u_i(t − τ_i) is adaptive command i delayed by
-/// τ_i (the feedback −K x̂ acts without delay).
+/// decoupling law u_f = −K x̂ + F u_d, where u_d,i(t) = u_i(t − τ_i) is adaptive command i delayed
+/// by τ_i (the feedback −K x̂ acts without delay).
 ///
-/// `Plant(A, B, C, D=None, Q=None, delays=None, x0=None)`: array-likes; without D there is no
-/// disturbance (k = 0); Q defaults to 0, delays to 0 and x0 to 0.
+/// Parameters
+/// ----------
+/// A : array_like or control.StateSpace or control.TransferFunction
+///     The state matrix (n×n); or a python-control system, which gives A, B, C and its signal
+///     names (its D, python-control's feedthrough, must be zero; a transfer function is
+///     realized minimally with `control.minreal` and `control.ss`).
+/// B : array_like, optional
+///     The input matrix (n×m); required unless A is a system.
+/// C : array_like, optional
+///     The output matrix (m×n); required unless A is a system.
+/// D : array_like, optional
+///     The disturbance-to-state matrix (n×k); None: no disturbance (k = 0).
+/// Q : array_like, optional
+///     The disturbance-to-output matrix (m×k); default zeros.
+/// delays : array_like, optional
+///     The input delays τ_i ≥ 0 in seconds (m); default zeros.
+/// x0 : array_like, optional
+///     The initial state x(0) (n); default zeros.
+/// inputs, outputs, states : list of str, optional
+///     The signals' names (m, m and n distinct names); default a system's labels, else
+///     `u_f[i]`, `y[i]`, `x[j]`.
 ///
-/// `Plant(sys, D=..., Q=..., delays=...)` takes A, B and C from a `control.StateSpace`. Its D is
-/// python-control's feedthrough from u to y, which the plant (1) does not have: it must be zero (and
-/// the system continuous-time); D and Q of this plant are the disturbance matrices, given as
-/// keywords. A `control.TransferFunction` is realized first: `control.minreal` cancels its
-/// pole-zero pairs, `control.ss` gives the state space (for MIMO, python-control needs slycot).
+/// Raises
+/// ------
+/// TypeError
+///     An argument of the wrong type (a string for a matrix, complex entries), or B or C
+///     missing.
+/// ScenarioError
+///     A wrong shape, a non-finite entry, a negative delay, or names of the wrong number.
+///
+/// Examples
+/// --------
+/// >>> p = quell.Plant([[0.0, 1.0], [2.0, -1.0]], [[0.0], [1.0]], [[1.0, 0.0]], delays=[0.25],
+/// ...                 outputs=["angle"])
+/// >>> p.n, p.m, p.k, p.outputs, p.inputs
+/// (2, 1, 0, ['angle'], ['u_f[1]'])
 #[pyclass(module = "quell", name = "Plant", frozen)]
 pub struct PyPlant {
     pub inner: quell::Plant,

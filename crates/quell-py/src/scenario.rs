@@ -21,15 +21,55 @@ use crate::errors::{in_python, raise, type_error, Kind};
 use crate::plant::{plant_arg, Labels, PyPlant};
 
 /// A scenario: plant (1), design choices, reference g(t) (Assumption 2), disturbance ω(t)
-/// (Assumption 3), simulation settings, noise and the true plant.
+/// (Assumption 3), simulation settings, noise and the true plant: the sections of a scenario file
+/// as Python values. Every check and message is the scenario reader's; the messages name the
+/// argument (`reference[0]["harmonics"][0]["frequency"]`, `mu[1]`, `t_end`).
 ///
-/// `Scenario(plant, reference, disturbance=None, *, name, t_end, output_step, rtol, atol,
-/// sample_time, noise, truth, **design)` takes the scenario file's sections as Python values:
-/// `reference=[{"harmonics": [{"amplitude": 3.0, "frequency": 2.0}]}, {"bias": 2.0}]` (one
-/// component per output, bias + Σ amplitude·sin(frequency·t + phase)), the `[design]` keys as
-/// keywords (channel_poles, reference_filter_poles, disturbance_filter_poles, mu, beta, and
-/// observer_poles or observer_gain), `noise={"std": [...], "seed": 0}`, `truth=` a Plant. Errors
-/// name the scenario key (`reference.components[0].harmonics[0].frequency`).
+/// Parameters
+/// ----------
+/// plant : Plant
+///     The design model (1).
+/// reference : list of dict
+///     g(t), one component per output: `{"bias": b, "harmonics": [{"amplitude": a,
+///     "frequency": ω, "phase": φ}]}` is b + Σ a·sin(ω t + φ).
+/// disturbance : list of dict, optional
+///     ω(t), one component per column of the plant's D, in the same form.
+/// name : str, optional
+///     The scenario's name.
+/// t_end : float, optional
+///     Final time in seconds (default 100).
+/// output_step : float, optional
+///     Interval of the recorded samples (default 0.1 s).
+/// rtol, atol : float, optional
+///     The solver's tolerances (default 1e-9).
+/// sample_time : float, optional
+///     T_s: the sampled-data loop with the real-time controller; None: the continuous loop.
+/// noise : dict, optional
+///     Measurement noise `{"std": [σ_i], "seed": 0, "bandwidth": None}`.
+/// truth : Plant, optional
+///     The plant that is simulated, when it differs from the design model.
+/// **design
+///     The `[design]` keys: channel_poles, reference_filter_poles, disturbance_filter_poles, mu,
+///     beta, and observer_poles or observer_gain (as `quell.design` takes them).
+///
+/// Raises
+/// ------
+/// TypeError
+///     An argument of the wrong type.
+/// ScenarioError
+///     A value that is not valid (the message names it; `.key` is its scenario key).
+/// DesignError
+///     A complex pole without its conjugate.
+///
+/// Examples
+/// --------
+/// >>> p = quell.paper_example()
+/// >>> s = quell.Scenario(p.plant, [{"harmonics": [{"amplitude": 3.0, "frequency": 2.0}]}, {"bias": 2.0}],
+/// ...                    p.disturbance, t_end=10.0, **p.design().choices)
+/// >>> s
+/// Scenario(name=None, n=3, m=2, k=2, t_end=10.0, sample_time=None)
+/// >>> quell.simulate(s).outcome
+/// {'status': 'completed'}
 #[pyclass(module = "quell", name = "Scenario", frozen)]
 pub struct PyScenario {
     pub inner: quell::Scenario,
@@ -282,18 +322,79 @@ impl PyScenario {
     }
 
     /// Parses and validates a scenario file's text (the format of `examples/paper.toml`).
+    ///
+    /// Parameters
+    /// ----------
+    /// text : str
+    ///     The TOML text.
+    ///
+    /// Returns
+    /// -------
+    /// Scenario
+    ///     The scenario.
+    ///
+    /// Raises
+    /// ------
+    /// TypeError
+    ///     `text` is not a str.
+    /// ScenarioError
+    ///     The text is not valid TOML or not a valid scenario (the message names the key).
+    ///
+    /// Examples
+    /// --------
+    /// >>> s = quell.Scenario.from_toml(quell.paper_example().to_toml())
+    /// >>> s == quell.paper_example()
+    /// True
     #[staticmethod]
     fn from_toml(py: Python<'_>, text: &str) -> PyResult<Self> {
         Self::parse(py, text)
     }
 
     /// Reads and validates a scenario file.
+    ///
+    /// Parameters
+    /// ----------
+    /// path : str or os.PathLike
+    ///     The file's path.
+    ///
+    /// Returns
+    /// -------
+    /// Scenario
+    ///     The scenario.
+    ///
+    /// Raises
+    /// ------
+    /// TypeError
+    ///     `path` is not a path.
+    /// ScenarioError
+    ///     The file cannot be read or is not a valid scenario.
+    ///
+    /// Examples
+    /// --------
+    /// >>> import pathlib
+    /// >>> _ = pathlib.Path("mine.toml").write_text(quell.paper_example().to_toml())
+    /// >>> quell.Scenario.load("mine.toml").name
+    /// 'paper-example'
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         quell::Scenario::from_path(&path).map(Self::new).map_err(|e| scenario_error(py, &e))
     }
 
-    /// The scenario as a TOML document; `Scenario.from_toml(s.to_toml())` gives the same scenario.
+    /// The scenario as a TOML document, every key written.
+    ///
+    /// Returns
+    /// -------
+    /// str
+    ///     The document; `Scenario.from_toml(s.to_toml())` is `s` again (signal names aside).
+    ///
+    /// Raises
+    /// ------
+    /// This method raises nothing.
+    ///
+    /// Examples
+    /// --------
+    /// >>> print(quell.paper_example().to_toml().splitlines()[0])
+    /// name = "paper-example"
     fn to_toml(&self) -> String {
         self.inner.to_toml()
     }
@@ -316,7 +417,22 @@ impl PyScenario {
         Ok((slf.get_type().getattr("_restore")?, args))
     }
 
-    /// The design of this scenario's plant and choices (computed once; raises DesignError).
+    /// The design of this scenario's plant and choices (computed once).
+    ///
+    /// Returns
+    /// -------
+    /// Design
+    ///     The gains; fragile gains are reported as a `UserWarning`.
+    ///
+    /// Raises
+    /// ------
+    /// DesignError
+    ///     No design exists for these choices.
+    ///
+    /// Examples
+    /// --------
+    /// >>> quell.paper_example().design().sigma
+    /// [2, 1]
     fn design(&self, py: Python<'_>) -> PyResult<PyDesign> {
         Ok(PyDesign { inner: self.design_arc(py)?, spec: self.inner.design.clone(), labels: self.labels.clone() })
     }
@@ -379,7 +495,7 @@ impl PyScenario {
     fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
         let s = &self.inner;
         Ok(format!(
-            "Scenario(name={}, n={}, m={}, k={}, t_end={}, sample_time={})",
+            "Scenario(name={}, n={}, m={}, k={}, t_end={:?}, sample_time={})",
             s.name.clone().into_pyobject(py)?.repr()?,
             s.plant.n(),
             s.plant.m(),
@@ -391,17 +507,62 @@ impl PyScenario {
 }
 
 /// The paper's example (Section VIII), `examples/paper.toml`.
+///
+/// Returns
+/// -------
+/// Scenario
+///     Three states, two channels with delays 1 s and 3 s, a harmonic reference and disturbance.
+///
+/// Raises
+/// ------
+/// This function raises nothing.
+///
+/// Examples
+/// --------
+/// >>> s = quell.paper_example()
+/// >>> s.plant.delays
+/// array([1., 3.])
 #[pyfunction]
 pub fn paper_example(py: Python<'_>) -> PyResult<PyScenario> {
     PyScenario::parse(py, PAPER_EXAMPLE)
 }
 
 /// The automatic design (`quell design --auto`): chooses every `[design]` key the scenario file's
-/// text leaves out (observer, channel and filter poles, μ, β; filter orders from
-/// reference_filter_orders / disturbance_filter_orders or the signals), verifies by simulation
-/// (tail max |e_i| ≤ 1 % of the reference's peak) and returns (Scenario, report) with report =
-/// {"choices": [{"key", "value", "why"}], "verification": {...}, "passed": bool}. A design that
-/// fails its verification is returned too, with passed False. The GIL is released meanwhile.
+/// text leaves out (observer, channel and filter poles, μ, β) and verifies it by simulation
+/// (tail max |e_i| ≤ 1 % of the reference's peak). The GIL is released meanwhile.
+///
+/// Parameters
+/// ----------
+/// text : str
+///     A scenario file's text; its `[design]` keys are kept, the others chosen.
+/// convergence_time : float, optional
+///     The time within which the adaptation should converge (s).
+/// u_limit : float, optional
+///     A limit on max |u_i|.
+///
+/// Returns
+/// -------
+/// tuple of (Scenario, dict)
+///     The designed scenario and the report `{"choices": [{"key", "value", "why"}],
+///     "verification": {...}, "passed": bool}`; a design that fails its verification is
+///     returned too, with passed False.
+///
+/// Raises
+/// ------
+/// TypeError
+///     An argument of the wrong type.
+/// ScenarioError
+///     The text is not a valid scenario.
+/// DesignError
+///     A target that is not a finite number > 0, or no design was found.
+///
+/// Examples
+/// --------
+/// >>> text = quell.paper_example().to_toml()
+/// >>> plant, rest = text.split("[design]")
+/// >>> s, report = quell.auto_design(plant + "[design]\n" + rest[rest.index("[[reference"):])
+/// >>> report["passed"], [c["key"] for c in report["choices"]][:2]
+/// (True, ['design.channel_poles', 'design.reference_filter_poles'])
 #[pyfunction]
 #[pyo3(signature = (text, *, convergence_time=None, u_limit=None))]
 pub fn auto_design<'py>(

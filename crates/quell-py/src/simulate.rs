@@ -18,7 +18,18 @@ use crate::scenario::PyScenario;
 /// How often a running simulation looks for Ctrl-C.
 const SIGNAL_CHECK: Duration = Duration::from_millis(100);
 
-/// The signals of a run at t = k·output_step, as read-only numpy arrays, and how it ended.
+/// The signals of a run at t = k·output_step, as read-only numpy arrays, and how it ended; what
+/// `quell.simulate` returns (equal to `quell run`'s signals.csv).
+///
+/// Examples
+/// --------
+/// >>> r = quell.simulate(quell.paper_example(), t_end=1.0)
+/// >>> r
+/// SimResult(samples=11, m=2, q=8, outcome={'status': 'completed'})
+/// >>> r.t.shape, r.y.shape, r.eta.shape
+/// ((11,), (11, 2), (11, 2, 8))
+/// >>> bool(np.array_equal(r.e, r.y - r.g))
+/// True
 #[pyclass(module = "quell", name = "SimResult", frozen)]
 pub struct PySimResult {
     inner: SimResult,
@@ -231,9 +242,25 @@ impl PySimResult {
         }
         Ok(d)
     }
-    /// Per channel, as summary.json: tail max |e_i| and RMS e_i over the last 10 % of the horizon,
-    /// max |u_i|, max |u_f,i| (the plant input), ‖η̂_i‖ at the end, settle_t (2 % band; None when
-    /// not settled, or only in the last 5 % of the horizon) and settle_note (why settle_t is None).
+    /// Per channel, the figures of summary.json.
+    ///
+    /// Returns
+    /// -------
+    /// list of dict
+    ///     Per channel: tail max |e_i| and RMS e_i over the last 10 % of the horizon
+    ///     (`tail_max_abs_e`, `tail_rms_e`), `max_abs_u`, `max_abs_uf` (the plant input),
+    ///     `final_eta_norm` (‖η̂_i‖ at the end), `settle_t` (2 % band; None when not settled, or only
+    ///     in the last 5 % of the horizon) and `settle_note` (why settle_t is None).
+    ///
+    /// Raises
+    /// ------
+    /// This method raises nothing.
+    ///
+    /// Examples
+    /// --------
+    /// >>> c = quell.simulate(quell.paper_example(), t_end=20.0).summary()[1]
+    /// >>> sorted(c)
+    /// ['final_eta_norm', 'max_abs_u', 'max_abs_uf', 'settle_note', 'settle_t', 'tail_max_abs_e', 'tail_rms_e']
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         self.inner
             .summary()
@@ -251,26 +278,103 @@ impl PySimResult {
             })
             .collect()
     }
-    /// Convergence diagnostics, as summary.json: {"channels": [per channel lambda_min_omega,
-    /// lambda_max_omega, convergence_time, adaptation_rate, predicted_final_rms_e, tail_trend,
-    /// excitation, advice], "observer_fidelity": [...], "advice": [...]}; see docs/tuning.md.
+    /// Convergence diagnostics, as summary.json's (see docs/tuning.md).
+    ///
+    /// Returns
+    /// -------
+    /// dict
+    ///     `{"channels": [...], "observer_fidelity": [...], "advice": [...]}`; per channel
+    ///     lambda_min_omega, lambda_max_omega, convergence_time, adaptation_rate,
+    ///     predicted_final_rms_e, tail_trend, excitation and advice.
+    ///
+    /// Raises
+    /// ------
+    /// This method raises nothing.
+    ///
+    /// Examples
+    /// --------
+    /// >>> d = quell.simulate(quell.paper_example(), t_end=5.0).diagnostics()
+    /// >>> len(d["channels"])
+    /// 2
     fn diagnostics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         py.import("json")?.call_method1("loads", (&self.diagnostics,))
     }
-    /// The run as a `control.TimeResponseData`: outputs y (m × samples, labels `y[i]`), inputs the
-    /// adaptive commands u (labels `u[i]`), so python-control's plotting and analysis apply.
+    /// The run as a `control.TimeResponseData`, so python-control's plotting and analysis apply.
+    ///
+    /// Returns
+    /// -------
+    /// control.TimeResponseData
+    ///     Outputs y (m × samples) labelled with the plant's output names (`y[i]` by default);
+    ///     inputs the adaptive commands u (labels `u[i]`).
+    ///
+    /// Raises
+    /// ------
+    /// ImportError
+    ///     python-control is not installed.
+    ///
+    /// Examples
+    /// --------
+    /// >>> resp = quell.simulate(quell.paper_example(), t_end=1.0).to_control()
+    /// >>> resp.outputs.shape, resp.output_labels
+    /// ((2, 11), ['y[1]', 'y[2]'])
     fn to_control(slf: &Bound<'_, Self>) -> PyResult<Py<PyAny>> {
         let outputs = slf.get().labels.outputs(slf.get().inner.m);
         Ok(slf.py().import("quell._control")?.call_method1("to_control", (slf, outputs))?.unbind())
     }
-    /// The columns of signals.csv (t, y1.., g1.., e1.., u1.., uf1.., eta1_1.., and x1.., xhat1.. when
-    /// recorded) as a pandas DataFrame.
+    /// The columns of signals.csv as a pandas DataFrame.
+    ///
+    /// Returns
+    /// -------
+    /// pandas.DataFrame
+    ///     One row per sample: t, y1.., g1.., e1.., u1.., uf1.., eta1_1.., and x1.., xhat1.. when
+    ///     the run recorded states.
+    ///
+    /// Raises
+    /// ------
+    /// ImportError
+    ///     pandas is not installed.
+    ///
+    /// Examples
+    /// --------
+    /// >>> df = quell.simulate(quell.paper_example(), t_end=1.0).to_pandas()
+    /// >>> list(df.columns[:5]), len(df)
+    /// (['t', 'y1', 'y2', 'g1', 'g2'], 11)
     fn to_pandas(slf: &Bound<'_, Self>) -> PyResult<Py<PyAny>> {
         Ok(slf.py().import("quell._frames")?.call_method1("to_pandas", (slf,))?.unbind())
     }
-    /// The CLI's figure of one channel (1-based), like the paper's Figs. 1 and 2: y_i with g_i,
-    /// e_i, u_i and η̂_i against t, in four panels. Returns the matplotlib Figure. `ax`: one Axes
-    /// (y_i and g_i only) or four; else a new figure of `figsize`, or the panels added to `fig`.
+    /// The CLI's figure of one channel, like the paper's Figs. 1 and 2: y_i with g_i, e_i, u_i and η̂_i
+    /// against t, in four panels.
+    ///
+    /// Parameters
+    /// ----------
+    /// channel : int, optional
+    ///     The channel, from 1 (default 1).
+    /// ax : matplotlib Axes or sequence of four, optional
+    ///     One Axes (y_i and g_i only are drawn on it) or four (every panel).
+    /// figsize : (float, float), optional
+    ///     Size of a new figure in inches (default (10, 11.5)).
+    /// fig : matplotlib Figure, optional
+    ///     A figure to add the four panels to.
+    ///
+    /// Returns
+    /// -------
+    /// matplotlib.figure.Figure
+    ///     The figure drawn on.
+    ///
+    /// Raises
+    /// ------
+    /// TypeError
+    ///     An argument of the wrong type.
+    /// ValueError
+    ///     A channel that is not from 1 to m.
+    /// ImportError
+    ///     matplotlib is not installed.
+    ///
+    /// Examples
+    /// --------
+    /// >>> fig = quell.simulate(quell.paper_example(), t_end=1.0).plot(channel=2, figsize=(6, 8))
+    /// >>> len(fig.axes), fig.axes[0].get_title()
+    /// (4, 'Channel 2: output and reference')
     #[pyo3(signature = (channel=None, *, ax=None, figsize=None, fig=None))]
     fn plot(
         slf: &Bound<'_, Self>,
@@ -384,9 +488,44 @@ impl PySimResult {
 
 /// Simulates a scenario's closed loop: the continuous-time controller on the delay equation, or,
 /// with a sample time, the sampled-data loop with the real-time controller; the plant simulated is
-/// the scenario's `[truth]` where it has one. Keywords override the
-/// scenario's `[simulation]`; with `states` the plant and observer states x, x̂ are recorded too;
-/// with `check` a run that does not reach t_end raises SimulationError.
+/// the scenario's truth where it has one. The GIL is released; Ctrl-C stops the run.
+///
+/// Parameters
+/// ----------
+/// scenario : Scenario
+///     The scenario.
+/// t_end, output_step, rtol, atol, sample_time : float, optional
+///     Override the scenario's simulation settings.
+/// max_steps : int, optional
+///     The continuous solver's step budget (default: derived from the problem).
+/// states : bool, optional
+///     Record the plant and observer states x, x̂ too.
+/// check : bool, optional
+///     Raise SimulationError when the run does not reach t_end (default True); False returns
+///     the result whatever its outcome.
+///
+/// Returns
+/// -------
+/// SimResult
+///     The signals and how the run ended.
+///
+/// Raises
+/// ------
+/// TypeError
+///     An argument of the wrong type.
+/// ScenarioError
+///     An override that is not valid (named as the argument: `sample_time`, not
+///     `simulation.sample_time`).
+/// DesignError
+///     No design exists for the scenario.
+/// SimulationError
+///     With check, a run that diverged or failed; its `.result` holds the samples up to then.
+///
+/// Examples
+/// --------
+/// >>> r = quell.simulate(quell.paper_example(), t_end=2.0, sample_time=1e-3)
+/// >>> r.stats
+/// {'controller_steps': 2001, 'sample_time': 0.001}
 #[pyfunction]
 #[pyo3(signature = (scenario, *, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, max_steps=None, states=false, check=true))]
 #[allow(clippy::too_many_arguments)]

@@ -19,8 +19,43 @@ use crate::errors::{subscripts, Kind};
 use crate::scenario::{toml_value, PyScenario};
 use crate::simulate::PySimResult;
 
-/// A study file (`quell sweep`'s input): a scenario, a grid of scenario values and Monte Carlo
-/// draws of the true plant.
+/// A study: many runs of one scenario, over a grid of its values and Monte Carlo draws of the true
+/// plant, with the semantics and checks of a study file (docs/studies.md), whose tables the
+/// arguments are.
+///
+/// Parameters
+/// ----------
+/// scenario : Scenario
+///     The scenario.
+/// grid : dict, optional
+///     Scenario key path → list of values: the cartesian product, the first key slowest
+///     (`{"design.mu[0]": [10.0, 40.0]}`).
+/// monte_carlo : dict, optional
+///     `{"runs": N, "seed": s, path: {law: spread}}`, laws `relative` (x·(1 + r ξ)),
+///     `relative_uniform` (x·(1 + U(−r, r))), `normal` (x + σ ξ), `uniform` (x + U(−a, a)).
+/// settle : dict, optional
+///     The settling band `{"relative": 0.02, "absolute": 0.0}`.
+/// max_steps : int, optional
+///     The solver's step budget per run (default 10,000).
+/// runaway : dict, optional
+///     `{"peak": 100, "steps": 3}`: early ends of draws relative to their nominal run.
+/// simulation : dict, optional
+///     Overrides of the scenario's simulation settings (`{"t_end": 20.0}`).
+///
+/// Raises
+/// ------
+/// TypeError
+///     An argument of the wrong type.
+/// ScenarioError
+///     A value that is not valid; the message names the argument
+///     (`grid["design.mu[0]"][1]: …`), `.key` the study key.
+///
+/// Examples
+/// --------
+/// >>> study = quell.Study(quell.paper_example(), grid={"design.beta": [1.0, 2.0]},
+/// ...                     monte_carlo={"runs": 3, "truth.delays[1]": {"relative_uniform": 0.05}})
+/// >>> study
+/// Study(runs=6, points=2, draws=3)
 #[pyclass(module = "quell", name = "Study", frozen)]
 pub struct PyStudy {
     inner: Arc<study::Study>,
@@ -141,8 +176,22 @@ impl PyStudy {
         Ok(PyStudy { inner: Arc::new(inner) })
     }
 
-    /// The study as one TOML document, its scenario inline (`Study.from_toml(study.to_toml())`
-    /// is the same study).
+    /// The study as one TOML document, its scenario inline.
+    ///
+    /// Returns
+    /// -------
+    /// str
+    ///     The document; `Study.from_toml(study.to_toml())` is the same study.
+    ///
+    /// Raises
+    /// ------
+    /// This method raises nothing.
+    ///
+    /// Examples
+    /// --------
+    /// >>> study = quell.Study(quell.paper_example(), grid={"design.beta": [1.0, 2.0]})
+    /// >>> quell.Study.from_toml(study.to_toml()) == study
+    /// True
     fn to_toml(&self) -> String {
         toml::to_string(self.inner.to_table()).unwrap_or_default()
     }
@@ -157,7 +206,30 @@ impl PyStudy {
         Ok((slf.get_type().getattr("from_toml")?, (slf.get().to_toml(),)))
     }
 
-    /// Run `run`'s specification.
+    /// Run `run`'s specification (carrying out its grid point's nominal run first, if it has draws).
+    ///
+    /// Parameters
+    /// ----------
+    /// run : int
+    ///     The run index (point × draws + draw; negative counts from the end).
+    ///
+    /// Returns
+    /// -------
+    /// RunSpec
+    ///     The run's specification.
+    ///
+    /// Raises
+    /// ------
+    /// TypeError
+    ///     `run` is not an int.
+    /// IndexError
+    ///     `run` is not a run of the study.
+    ///
+    /// Examples
+    /// --------
+    /// >>> study = quell.Study(quell.paper_example(), grid={"design.beta": [1.0, 2.0]})
+    /// >>> study.spec(1).grid
+    /// {'design.beta': 2.0}
     fn spec(&self, py: Python<'_>, run: &Bound<'_, PyAny>) -> PyResult<PyRunSpec> {
         let len = self.inner.len();
         let index = run_index(run, len)?;
@@ -166,7 +238,32 @@ impl PyStudy {
         Ok(PyRunSpec { inner, drawn: drawn_keys(study) })
     }
 
-    /// Every run, in parallel on `jobs` threads; a `StudyResult`.
+    /// Every run, in parallel on `jobs` threads with the GIL released; Ctrl-C stops the sweep.
+    ///
+    /// Parameters
+    /// ----------
+    /// jobs : int, optional
+    ///     Threads, 1 to 1024 (default one per core).
+    /// yes : bool, optional
+    ///     Run a study of more than 10⁷ runs (whose rows are kept in memory).
+    ///
+    /// Returns
+    /// -------
+    /// StudyResult
+    ///     The rows (runs.csv's columns, then the drawn values) and the study.
+    ///
+    /// Raises
+    /// ------
+    /// TypeError
+    ///     An argument of the wrong type.
+    /// ScenarioError
+    ///     `jobs` out of range, or more than 10⁷ runs without `yes`.
+    ///
+    /// Examples
+    /// --------
+    /// >>> result = quell.Study(quell.paper_example(), simulation={"t_end": 2.0}).sweep(jobs=1)
+    /// >>> result.frame["outcome"].tolist()
+    /// ['completed']
     #[pyo3(signature = (*, jobs=None, yes=false))]
     fn sweep(slf: &Bound<'_, Self>, jobs: Option<&Bound<'_, PyAny>>, yes: bool) -> PyResult<Py<PyAny>> {
         let py = slf.py();
@@ -193,13 +290,60 @@ impl PyStudy {
     }
 
     /// Reads a study file; its `scenario` path is relative to the file's directory.
+    ///
+    /// Parameters
+    /// ----------
+    /// path : str or os.PathLike
+    ///     The study file.
+    ///
+    /// Returns
+    /// -------
+    /// Study
+    ///     The study.
+    ///
+    /// Raises
+    /// ------
+    /// TypeError
+    ///     `path` is not a path.
+    /// ScenarioError
+    ///     The file cannot be read or is not a valid study (the message names the key).
+    ///
+    /// Examples
+    /// --------
+    /// >>> import pathlib
+    /// >>> _ = pathlib.Path("study.toml").write_text('[grid]\n"design.beta" = [1.0, 2.0]\n')
+    /// >>> len(quell.Study.load("study.toml"))
+    /// 2
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         study::Study::from_path(&path).map(|s| PyStudy { inner: Arc::new(s) }).map_err(|e| study_error(py, &e))
     }
 
-    /// Parses a study; a relative `scenario` path is looked up in `dir` (default: the working
-    /// directory).
+    /// Parses a study file's text.
+    ///
+    /// Parameters
+    /// ----------
+    /// text : str
+    ///     The TOML text; without `scenario`, the paper's example.
+    /// dir : str or os.PathLike, optional
+    ///     Where a relative `scenario` path is looked up (default the working directory).
+    ///
+    /// Returns
+    /// -------
+    /// Study
+    ///     The study.
+    ///
+    /// Raises
+    /// ------
+    /// TypeError
+    ///     An argument of the wrong type.
+    /// ScenarioError
+    ///     The text is not a valid study.
+    ///
+    /// Examples
+    /// --------
+    /// >>> quell.Study.from_toml('[monte_carlo]\nruns = 4\n"truth.A" = { relative = 0.01 }\n').draws
+    /// 4
     #[staticmethod]
     #[pyo3(signature = (text, dir=None))]
     fn from_toml(py: Python<'_>, text: &str, dir: Option<PathBuf>) -> PyResult<Self> {
@@ -224,7 +368,30 @@ impl PyStudy {
 }
 
 /// Everything one run of a study needs, self-contained and picklable (it travels to a cluster's
-/// workers as JSON); `quell.run_one(spec)` carries it out.
+/// workers as JSON); `quell.run_one(spec)` carries it out and `spec.simulate()` gives its signals.
+///
+/// Parameters
+/// ----------
+/// json : str
+///     Its JSON form (`spec.to_json()`).
+/// drawn : list of str, optional
+///     The keys its study's draws perturb (for `drawn`).
+///
+/// Raises
+/// ------
+/// TypeError
+///     An argument of the wrong type.
+/// ScenarioError
+///     `json` is not a run specification.
+///
+/// Examples
+/// --------
+/// >>> spec = quell.Study(quell.paper_example(), monte_carlo={"runs": 2, "seed": 3,
+/// ...                    "truth.delays[1]": {"relative_uniform": 0.1}}).spec(1)
+/// >>> spec
+/// RunSpec(run=1, point=0, draw=1, seed=...)
+/// >>> 2.7 <= spec.drawn["truth.delays[1]"] <= 3.3
+/// True
 #[pyclass(module = "quell", name = "RunSpec", frozen)]
 pub struct PyRunSpec {
     inner: RunSpec,
@@ -302,8 +469,25 @@ impl PyRunSpec {
         }
         Ok(d)
     }
-    /// Simulates the run as the sweep did (its scenario, step budget and runaway rules) and
-    /// returns the signals, however the run ended (a diverged run is not an error).
+    /// Simulates the run as the sweep does (its scenario, step budget and runaway rules).
+    ///
+    /// Returns
+    /// -------
+    /// SimResult
+    ///     The signals, however the run ended (a diverged run is returned, not raised).
+    ///
+    /// Raises
+    /// ------
+    /// ScenarioError
+    ///     The run's scenario is not valid (a draw made it so).
+    /// DesignError
+    ///     No design exists for the run's scenario.
+    ///
+    /// Examples
+    /// --------
+    /// >>> spec = quell.Study(quell.paper_example(), simulation={"t_end": 2.0}).spec(0)
+    /// >>> spec.simulate().outcome
+    /// {'status': 'completed'}
     fn simulate(&self, py: Python<'_>) -> PyResult<PySimResult> {
         let scenario = quell::Scenario::from_document(&self.inner.scenario)
             .map_err(|e| crate::scenario::scenario_error(py, &e))?;
@@ -317,6 +501,21 @@ impl PyRunSpec {
         other.cast::<PyRunSpec>().is_ok_and(|o| o.get().inner == self.inner && o.get().drawn == self.drawn)
     }
     /// The JSON form of the specification.
+    ///
+    /// Returns
+    /// -------
+    /// str
+    ///     JSON; `quell.RunSpec(spec.to_json())` rebuilds it.
+    ///
+    /// Raises
+    /// ------
+    /// This method raises nothing.
+    ///
+    /// Examples
+    /// --------
+    /// >>> spec = quell.Study(quell.paper_example()).spec(0)
+    /// >>> quell.RunSpec(spec.to_json()) == spec
+    /// True
     fn to_json(&self) -> String {
         serde_json::to_string(&self.inner).unwrap_or_default()
     }
@@ -357,7 +556,23 @@ impl PyRunSpec {
         }
         Ok(d)
     }
-    /// The run's scenario: grid values and the draw's perturbations applied.
+    /// The run's scenario: its grid values and draws applied.
+    ///
+    /// Returns
+    /// -------
+    /// Scenario
+    ///     The scenario.
+    ///
+    /// Raises
+    /// ------
+    /// ScenarioError
+    ///     The run's scenario is not valid (a draw made it so).
+    ///
+    /// Examples
+    /// --------
+    /// >>> spec = quell.Study(quell.paper_example(), grid={"design.beta": [1.0, 2.0]}).spec(1)
+    /// >>> spec.scenario().design().beta
+    /// 2.0
     fn scenario(&self, py: Python<'_>) -> PyResult<PyScenario> {
         quell::Scenario::from_document(&self.inner.scenario)
             .map(PyScenario::new)
@@ -411,7 +626,29 @@ fn row_dict<'py>(py: Python<'py>, spec: &RunSpec, row: &study::Row) -> PyResult<
     Ok(d)
 }
 
-/// Carries out one run (releasing the GIL) and returns its runs.csv row as a dict.
+/// Carries out one run (releasing the GIL) and returns its row of runs.csv.
+///
+/// Parameters
+/// ----------
+/// spec : RunSpec
+///     The run.
+///
+/// Returns
+/// -------
+/// dict
+///     The row, keyed by runs.csv's columns, then the drawn values; a run that diverged or
+///     failed is a row too, never an error.
+///
+/// Raises
+/// ------
+/// TypeError
+///     `spec` is not a RunSpec.
+///
+/// Examples
+/// --------
+/// >>> spec = quell.Study(quell.paper_example(), simulation={"t_end": 2.0}).spec(0)
+/// >>> quell.run_one(spec)["outcome"]
+/// 'completed'
 #[pyfunction]
 pub fn run_one<'py>(py: Python<'py>, spec: PyRef<'py, PyRunSpec>) -> PyResult<Bound<'py, PyDict>> {
     let s = &spec.inner;
@@ -461,15 +698,64 @@ fn study_arg(py: Python<'_>, study: &Bound<'_, PyAny>) -> PyResult<Arc<study::St
     )))
 }
 
-/// The study's run specifications (picklable), for `run_one` on a cluster.
+/// The study's run specifications, in run order (picklable), for `run_one` on a cluster.
+///
+/// Parameters
+/// ----------
+/// study : Study or str or os.PathLike
+///     The study, or a study file's path.
+///
+/// Returns
+/// -------
+/// iterator of RunSpec
+///     One per run; building the first of a grid point with draws carries out its nominal run.
+///
+/// Raises
+/// ------
+/// TypeError
+///     `study` is neither.
+/// ScenarioError
+///     The file cannot be read or is not a valid study.
+///
+/// Examples
+/// --------
+/// >>> specs = list(quell.sweep_runs(quell.Study(quell.paper_example(), grid={"design.beta": [1.0, 2.0]})))
+/// >>> [s.run for s in specs]
+/// [0, 1]
 #[pyfunction]
 pub fn sweep_runs(py: Python<'_>, study: &Bound<'_, PyAny>) -> PyResult<PyRunSpecs> {
     Ok(PyRunSpecs { study: study_arg(py, study)?, next: 0 })
 }
 
 /// Every run of a study, in parallel on `jobs` threads (default: every core), with the GIL
-/// released; returns runs.csv's rows and the drawn values as a pandas DataFrame. Ctrl-C stops the
-/// sweep.
+/// released; Ctrl-C stops the sweep. `Study.sweep` returns the same rows with the study.
+///
+/// Parameters
+/// ----------
+/// study : Study or str or os.PathLike
+///     The study, or a study file's path.
+/// jobs : int, optional
+///     Threads, 1 to 1024 (default one per core).
+/// yes : bool, optional
+///     Run a study of more than 10⁷ runs.
+///
+/// Returns
+/// -------
+/// pandas.DataFrame
+///     runs.csv's rows, then the drawn values.
+///
+/// Raises
+/// ------
+/// TypeError
+///     An argument of the wrong type.
+/// ScenarioError
+///     The study is not valid, `jobs` is out of range, or more than 10⁷ runs without `yes`.
+///
+/// Examples
+/// --------
+/// >>> frame = quell.sweep(quell.Study(quell.paper_example(), simulation={"t_end": 2.0}), jobs=1)
+/// >>> list(frame.columns[:5])
+/// ['run', 'point', 'draw', 'seed', 'outcome']
 #[pyfunction]
 #[pyo3(signature = (study, *, jobs=None, yes=false))]
 pub fn sweep(

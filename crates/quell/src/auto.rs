@@ -357,19 +357,45 @@ fn design_poles(spec: &DesignSpec) -> Vec<f64> {
     }
 }
 
-/// Observer poles: n distinct real poles from −r_o to −`spread`·r_o, for r_o = r_0·2^k (k = 0..5)
-/// and spreads 2 and 4; the first (slowest) candidate whose disturbance observer passes every
-/// frequency of ω with relative error ≤ [`FIDELITY_AIM`], else the candidate with the smallest
-/// error (it is driven by x̂, not x, eq. (20)). Candidates `place` rejects are skipped.
+/// Observer poles, searched for the disturbance observer's fidelity (eq. (20) is driven by x̂, so
+/// it receives ω through T(s) = N L C (sI − A + LC)⁻¹ D, [`crate::diagnostics::averaged`]). For
+/// r_o = r_0·2^k (k = 0..3) the candidates are n distinct real poles from −r_o to −2r_o and to
+/// −4r_o and, when C D has full column rank k_ω, the n − k_ω zeros of (A, D, C) (the nonzero
+/// eigenvalues of (I − D (CD)⁺ C) A, when all stable) with k_ω poles from −r_o: then L C x̃
+/// reconstructs D ω as r_o grows, as the unknown-input observers do, where all-fast poles leave
+/// the error the zeros impose. The first candidate whose relative error is ≤ [`FIDELITY_AIM`] at
+/// every frequency of ω is taken, else the best; candidates `place` rejects are skipped.
 fn observer(s: &Scenario, spec: &mut DesignSpec, r_0: f64, n: usize) -> Result<(Design, String), AutoError> {
-    let candidates = (0..4).flat_map(|k| [2.0, 4.0].map(|width| (r_0 * 2f64.powi(k), width)));
-    /// A candidate's design, poles, worst fidelity error and (r_o, spread).
-    type Candidate = (Design, Vec<Complex<f64>>, f64, (f64, f64));
+    let zeros = crate::diagnostics::disturbance_zeros(&s.plant);
+    let mut candidates: Vec<(Vec<Complex<f64>>, String)> = Vec::new();
+    for k in 0..4 {
+        let rate = r_0 * 2f64.powi(k);
+        for width in [2.0, 4.0] {
+            let factor = if n > 1 { f64::powf(width, 1.0 / (n as f64 - 1.0)) } else { 1.0 };
+            candidates.push((
+                spread(rate, n, factor, false),
+                format!("n distinct real poles from −r_o to −{width}·r_o, r_o = {rate:.4e}"),
+            ));
+        }
+        if let Some(z) = &zeros {
+            let fast = n - z.len();
+            let factor = if fast > 1 { f64::powf(2.0, 1.0 / (fast as f64 - 1.0)) } else { 1.0 };
+            let mut poles = z.clone();
+            poles.extend(spread(rate, fast, factor, false));
+            candidates.push((
+                poles,
+                format!(
+                    "the {} zeros of (A, D, C) and {fast} real poles from −r_o to −2·r_o, r_o = {rate:.4e}",
+                    z.len()
+                ),
+            ));
+        }
+    }
+    /// A candidate's design, poles, worst fidelity error and description.
+    type Candidate = (Design, Vec<Complex<f64>>, f64, String);
     let mut best: Option<Candidate> = None;
     let mut first_error = None;
-    for (rate, width) in candidates {
-        let factor = if n > 1 { f64::powf(width, 1.0 / (n as f64 - 1.0)) } else { 1.0 };
-        let poles = spread(rate, n, factor, false);
+    for (poles, what) in candidates {
         spec.observer = ObserverChoice::Poles(poles.clone());
         let design = match Design::new(&s.plant, spec) {
             Ok(d) => d,
@@ -382,20 +408,20 @@ fn observer(s: &Scenario, spec: &mut DesignSpec, r_0: f64, n: usize) -> Result<(
         let error = fidelity.iter().map(|f| f.relative_error).fold(0.0, f64::max);
         let done = error <= FIDELITY_AIM;
         if best.as_ref().is_none_or(|b| error < b.2) {
-            best = Some((design, poles, error, (rate, width)));
+            best = Some((design, poles, error, what));
         }
         if done {
             break;
         }
     }
-    let (design, poles, error, (rate, width)) = match (best, first_error) {
+    let (design, poles, error, what) = match (best, first_error) {
         (Some(b), _) => b,
         (None, Some(e)) => return Err(e.into()),
         (None, None) => unreachable!("at least one candidate is tried"),
     };
     spec.observer = ObserverChoice::Poles(poles);
     let why = format!(
-        "n distinct real poles from −r_o to −{width}·r_o, r_o = {rate:.4e}: the slowest of r_0·2^k (r_0 = 3× the fastest channel pole, k ≤ 3) whose disturbance observer (eq. (20), driven by x̂) passes every frequency of ω with relative error ≤ {FIDELITY_AIM}, else the best; its error is {error:.2e} at worst"
+        "{what}: the first candidate (r_o = r_0·2^k, r_0 = 3× the fastest channel pole, k ≤ 3; spreads ×2, ×4; the zeros of (A, D, C) kept) whose disturbance observer (eq. (20), driven by x̂) passes every frequency of ω with relative error ≤ {FIDELITY_AIM}, else the best; its error is {error:.2e} at worst"
     );
     Ok((design, why))
 }

@@ -19,6 +19,11 @@ class StudyResult:
     frame : pandas.DataFrame
         Its rows: the columns of runs.csv, then the drawn values.
 
+    Raises
+    ------
+    TypeError
+        ``study`` is not a Study or ``frame`` not a DataFrame.
+
     Attributes
     ----------
     study : Study
@@ -72,7 +77,8 @@ class StudyResult:
 
         Raises
         ------
-        This method raises nothing.
+        ImportError
+            pandas is not installed.
 
         Examples
         --------

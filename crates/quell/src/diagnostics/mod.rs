@@ -12,7 +12,11 @@ use serde::Serialize;
 
 pub use averaged::{disturbance_observer_gain, Averaged, ChannelAverage, Excitation, Fidelity};
 
+use nalgebra::{Complex, DMatrix};
+
 use crate::design::Design;
+use crate::linalg::{eigenvalues, fmt_complex_list, numerical_rank};
+use crate::plant::Plant;
 use crate::signal::Signal;
 use crate::sim::SimResult;
 
@@ -72,20 +76,64 @@ pub struct Diagnostics {
 pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, result: &SimResult) -> Diagnostics {
     let avg = Averaged::new(design, reference, disturbance);
     let t_end = result.t.last().copied().unwrap_or(0.0);
+    let remedy = observer_remedy(design);
     let advice = avg
         .fidelity
         .iter()
         .filter(|f| f.relative_error > FIDELITY_LIMIT)
         .map(|f| {
             format!(
-                "the disturbance observer passes ω at {} rad/s with relative error {:.2} (it is driven by x̂, not x, eq. (20)): give design.observer_poles faster than the plant and the signals (e.g. 3× their rates)",
+                "the disturbance observer passes ω at {} rad/s with relative error {:.2} (it is driven by x̂, not x, eq. (20)): {remedy}",
                 f.frequency, f.relative_error
             )
         })
         .collect();
-    let channels =
-        avg.channels.iter().enumerate().map(|(i, c)| channel(design, i, c, &avg.fidelity, result, t_end)).collect();
+    let channels = avg
+        .channels
+        .iter()
+        .enumerate()
+        .map(|(i, c)| channel(design, i, c, &avg.fidelity, result, t_end, &remedy))
+        .collect();
     Diagnostics { channels, observer_fidelity: avg.fidelity, advice }
+}
+
+/// The zeros of (A, D, C) that an unknown-input observer keeps among its poles: when C D has full
+/// column rank k, the n − k eigenvalues of (I − D (CD)⁺ C) A other than its k zeros (that
+/// projection annihilates D's columns), ascending in magnitude; `None` unless 1 ≤ k < n and all of
+/// them lie in the open left half-plane. With these among the observer poles and the others fast,
+/// L C (x − x̂) reconstructs D ω and the disturbance observer (20) passes ω faithfully; with all
+/// poles fast the zeros keep an error whatever the speed.
+pub fn disturbance_zeros(p: &Plant) -> Option<Vec<Complex<f64>>> {
+    let (n, k) = (p.n(), p.k());
+    if k == 0 || k >= n {
+        return None;
+    }
+    let CD = &p.C * &p.D;
+    if numerical_rank(&CD) < k {
+        return None;
+    }
+    let P = DMatrix::identity(n, n) - &p.D * CD.clone().pseudo_inverse(1e-12 * CD.norm()).ok()? * &p.C;
+    let mut z = eigenvalues(&(P * &p.A)).ok()?;
+    z.sort_by(|a, b| a.norm().total_cmp(&b.norm()));
+    let z: Vec<Complex<f64>> = z
+        .split_off(k)
+        .into_iter()
+        .map(|z| if z.im.abs() <= 1e-9 * z.norm() { Complex::new(z.re, 0.0) } else { z })
+        .collect();
+    let scale = p.A.norm().max(f64::MIN_POSITIVE);
+    z.iter().all(|z| z.re < -1e-6 * scale).then_some(z)
+}
+
+/// Which observer poles to give when the disturbance observer passes ω badly.
+fn observer_remedy(design: &Design) -> String {
+    match disturbance_zeros(design.plant()) {
+        Some(z) => format!(
+            "give design.observer_poles the zeros of (A, D, C), [{}], and the other {} poles faster than the plant and the signals (e.g. 3× their rates); all-fast poles cannot remove this error",
+            fmt_complex_list(&z),
+            design.plant().k()
+        ),
+        None => "give design.observer_poles faster than the plant and the signals (e.g. 3× their rates)".into(),
+    }
 }
 
 /// RMS of e_i over the last 10 % of the run against the 10 % before.
@@ -112,6 +160,7 @@ fn channel(
     fidelity: &[Fidelity],
     result: &SimResult,
     t_end: f64,
+    remedy: &str,
 ) -> ChannelDiagnostics {
     let mu = design.mu()[i];
     let key = format!("design.mu[{i}]");
@@ -124,7 +173,7 @@ fn channel(
             .and_then(|w| fidelity.iter().find(|f| f.frequency == w.frequency && f.relative_error > FIDELITY_LIMIT));
         match (weakest, poor) {
             (Some(w), Some(f)) => advice.push(format!(
-                "Ω̄_{} is weakly excited at {} rad/s ({:.1e}), where the disturbance observer's relative error is {:.2}: give design.observer_poles faster (raising μ would only make the loop stiff)",
+                "Ω̄_{} is weakly excited at {} rad/s ({:.1e}), where the disturbance observer's relative error is {:.2}: {remedy} (raising μ would only make the loop stiff)",
                 i + 1, w.frequency, w.excitation, f.relative_error
             )),
             _ => advice.push(format!(
