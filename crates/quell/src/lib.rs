@@ -201,6 +201,7 @@ pub use nalgebra;
 pub mod simd;
 
 pub mod auto;
+pub mod cancel;
 pub mod controller;
 pub mod design;
 pub mod diagnostics;

@@ -121,6 +121,10 @@ pub struct Design {
     observability: RankTest,
     observer_eigenvalues: Vec<Complex<f64>>,
     decoupled_eigenvalues: Vec<Complex<f64>>,
+    /// κ₂ of A − LC's and A − BK's eigenvectors, computed once when first asked (an eigen-
+    /// decomposition each: seconds for n in the hundreds).
+    observer_kappa: std::sync::OnceLock<f64>,
+    decoupled_kappa: std::sync::OnceLock<f64>,
 }
 
 /// Why no design exists for a plant and a set of choices. Messages name the scenario key.
@@ -172,6 +176,8 @@ pub enum DesignError {
     NotConjugateClosed { key: String, pole: Complex<f64> },
     #[error("{key}: the list is empty; give at least one pole")]
     NoPoles { key: String },
+    #[error("plant.A: n = {n} states; a design is limited to n ≤ {MAX_STATES} (quell::design::MAX_STATES): its eigen-decompositions and pole placement grow as n³ (seconds at n = {MAX_STATES}, minutes beyond 1000); reduce the model first (e.g. balanced truncation to the modes that matter)")]
+    TooManyStates { n: usize },
     #[error("design.mu[{index}]: expected a finite adaptation gain ≥ 0, got {value}")]
     BadMu { index: usize, value: f64 },
     #[error("design.beta: expected a finite β > 0 (H(s) = 1/(βs + 1)), got {value}")]
@@ -186,6 +192,9 @@ pub enum DesignError {
     DisturbanceRank { rank: usize, k: usize },
     #[error("plant.D: the disturbance directions are nearly parallel: D with unit columns has smallest singular value {smallest:.3e}, below τ = {tol:.0e} (condition number {cond:.3e}), so N = L_ω D⁺ (eq. (20)) would be huge (‖N‖ ≈ {norm_N:.1e}); merge the nearly parallel disturbance components into one", tol = TOL)]
     DisturbanceConditioning { smallest: f64, cond: f64, norm_N: f64 },
+    /// The stop flag of [`crate::cancel::with_stop`] was set (e.g. by Ctrl-C) during the design.
+    #[error("interrupted during the design")]
+    Interrupted,
 }
 
 /// Largest ratio between two rates of one design: a pole's magnitude |p| (or 1/β, the pole of H)
@@ -193,6 +202,11 @@ pub enum DesignError {
 /// margin √ε·‖M‖ within which the Hurwitz checks ([`unstable`]) cannot tell it from the imaginary
 /// axis, and the loop's integrator would need about 1/√ε steps for it to settle.
 pub const RATE_SPAN: f64 = 67_108_864.0; // 1/√ε = 2^26
+
+/// The most states a design takes: the eigen-decompositions, rank tests and pole placement of
+/// [`Design::new`] cost O(n³) (a few CPU seconds at n = 500; a pole placement that fails and tries
+/// its fallback takes longest), so a larger model is refused at once rather than computed for minutes.
+pub const MAX_STATES: usize = 500;
 
 const SPAN_WHY: &str = "every pole's magnitude and 1/β may exceed every decay rate −Re p (and 1/β) by at \
                         most 1/√ε ≈ 6.7e7: a slower pole lies within the rounding margin of the imaginary axis \
@@ -222,6 +236,9 @@ impl Design {
     pub fn new(plant: &Plant, spec: &DesignSpec) -> Result<Design, DesignError> {
         // The fields of a plant are public: check it again (Plant::new did, but a literal does not).
         plant.validate()?;
+        if plant.n() > MAX_STATES {
+            return Err(DesignError::TooManyStates { n: plant.n() });
+        }
         check_spec(plant, spec)?;
         let (controllability, observability) = assumption_1(plant)?;
         let (L, observer_eigenvalues) = observer(plant, &spec.observer)?;
@@ -258,6 +275,8 @@ impl Design {
             observability,
             observer_eigenvalues,
             decoupled_eigenvalues,
+            observer_kappa: std::sync::OnceLock::new(),
+            decoupled_kappa: std::sync::OnceLock::new(),
         })
     }
 
@@ -361,11 +380,13 @@ impl Design {
     /// how much a perturbation of the model moves the observer poles; ∞ for a Jordan design.
     pub fn observer_eigenvector_condition(&self) -> f64 {
         let p = &self.plant;
-        place::closed_loop_condition(&p.A.transpose(), &p.C.transpose(), &self.L.transpose())
+        *self
+            .observer_kappa
+            .get_or_init(|| place::closed_loop_condition(&p.A.transpose(), &p.C.transpose(), &self.L.transpose()))
     }
     /// κ₂ of the eigenvector matrix of A − BK = A_f; ∞ for a Jordan design.
     pub fn decoupled_eigenvector_condition(&self) -> f64 {
-        place::closed_loop_condition(&self.plant.A, &self.plant.B, &self.K)
+        *self.decoupled_kappa.get_or_init(|| place::closed_loop_condition(&self.plant.A, &self.plant.B, &self.K))
     }
     /// Dimension q_g of the reference regressor ξ̂_g.
     pub fn q_g(&self) -> usize {
@@ -500,7 +521,12 @@ fn observer(plant: &Plant, choice: &ObserverChoice) -> Result<(DMatrix<f64>, Vec
             (L.clone(), "design.observer_gain")
         }
         ObserverChoice::Poles(p) => (
-            place(&A.transpose(), &C.transpose(), p).map_err(DesignError::ObserverPoles)?.transpose(),
+            place(&A.transpose(), &C.transpose(), p)
+                .map_err(|e| match e {
+                    PlaceError::Interrupted => DesignError::Interrupted,
+                    e => DesignError::ObserverPoles(e),
+                })?
+                .transpose(),
             "design.observer_poles",
         ),
     };
