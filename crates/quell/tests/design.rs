@@ -663,6 +663,7 @@ fn a_plant_beyond_the_state_limit_is_refused_naming_the_key_and_the_limit() {
         mu: vec![1.0],
         beta: 1.0,
         relative_degrees: None,
+        regressor_scaling: Default::default(),
     };
     let e = expect_err(&chain_plant(n), &spec);
     assert_eq!(e, DesignError::TooManyStates { n });
