@@ -7,20 +7,19 @@
 //! The rules, for a time scale r (rad/s) = the largest of the signals' frequencies, the plant's
 //! eigenvalue magnitudes and 20/t_end:
 //! * channel poles (G_ii, Proposition 1): σ_i distinct real poles from −2r down by factors 1.5;
-//! * observer poles (6): n distinct real poles from −r_o to −2r_o, r_o = 3·(2r), raised ×2 (up to
-//!   five times) until the disturbance observer (20) passes every frequency of ω with relative
-//!   error ≤ 5 % (it is driven by x̂, not x);
+//! * observer poles (6): searched over speed, spread and the zeros of (A, D, C) for the disturbance
+//!   observer's fidelity (it is driven by x̂, not x, eq. (20)), the slowest good enough candidate;
 //! * filter orders: `reference_filter_orders` / `disturbance_filter_orders`, else two per harmonic
 //!   and one per bias (Assumptions 2, 3); their poles distinct real, spread by factors 1.5 around
 //!   the geometric mean of the component's frequencies (r for a bias alone);
-//! * β = 1/(slowest nonzero frequency) (r without harmonics), at most t_end/50: H averages over
-//!   about a period of the slowest harmonic;
+//! * β = 1/(smallest gap between the signals' frequencies, 0 included), at most t_end/10: H averages
+//!   over a beat of the two closest harmonics;
 //! * μ_i: the smallest gain for which the averaged law predicts an RMS error ≤ 0.2 % of the
 //!   reference's peak by the target convergence time (half the horizon by default), with μ_i λ_max
 //!   at most [`MAX_RATE_PER_SCALE`]·r;
 //! * verification: the scenario is simulated; a channel whose tail error exceeds 1 % of its
-//!   reference's peak gets 4× its μ (up to three times); a channel whose |u_i| exceeds the actuator
-//!   limit gets half its μ.
+//!   reference's peak gets 4× its μ (up to three times); a channel whose plant input |u_f,i|
+//!   exceeds the actuator limit gets half its μ.
 
 use std::ops::ControlFlow;
 
