@@ -224,7 +224,8 @@ fn restore(py: Python<'_>, plant: &PyPlant, choices: &Bound<'_, PyDict>) -> PyRe
         get("relative_degrees")?.filter(|v| !v.is_none()).as_ref(),
         get("regressor_scaling")?.as_ref(),
     )?;
-    let d = quell::Design::new(&plant.inner, &spec).map_err(|e| raise(py, Kind::Design)(&e))?;
+    let d = crate::interrupt::interruptible(py, || quell::Design::new(&plant.inner, &spec))?
+        .map_err(|e| raise(py, Kind::Design)(&e))?;
     Ok(PyDesign { inner: Arc::new(d), spec, labels: plant.labels.clone() })
 }
 
