@@ -117,8 +117,8 @@ pub fn write_signals(path: &Path, r: &SimResult) -> io::Result<()> {
     })
 }
 
-/// Writes a JSON value, pretty-printed.
-pub fn write_json(path: &Path, value: &serde_json::Value) -> io::Result<()> {
+/// Writes a value as JSON, pretty-printed, with a final newline.
+pub fn write_json(path: &Path, value: &impl serde::Serialize) -> io::Result<()> {
     write_atomic(path, |w| {
         serde_json::to_writer_pretty(&mut *w, value)?;
         writeln!(w)

@@ -129,11 +129,7 @@ fn write_all(dir: &Path, meta: &StudyMeta, rows: &[Row], partial: bool, plots: b
     let failed = |e: std::io::Error| Failure::Run(format!("writing {}: {e}", dir.display()));
     write_atomic(&dir.join("runs.csv"), |w| study::write_runs_csv(w, meta, rows, partial)).map_err(failed)?;
     let summary = Summary::new(meta.clone(), rows, partial);
-    write_atomic(&dir.join("summary.json"), |w| {
-        serde_json::to_writer_pretty(&mut *w, &summary)?;
-        writeln!(w)
-    })
-    .map_err(failed)?;
+    crate::output::write_json(&dir.join("summary.json"), &summary).map_err(failed)?;
     // A figure of an earlier sweep (plots now skipped, or a grid that has none) must not stand
     // beside the new rows.
     crate::output::remove_figures(dir, |stem| stem == "sweep").map_err(failed)?;

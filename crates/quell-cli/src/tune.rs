@@ -39,11 +39,7 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
     let result =
         pool.install(|| study::tune(&study)).map_err(|e| Failure::Input(format!("{}: {e}", path.display())))?;
     let failed = |e: std::io::Error| Failure::Run(format!("writing {}: {e}", args.out.display()));
-    write_atomic(&args.out.join("tune.json"), |w| {
-        serde_json::to_writer_pretty(&mut *w, &result)?;
-        writeln!(w)
-    })
-    .map_err(failed)?;
+    crate::output::write_json(&args.out.join("tune.json"), &result).map_err(failed)?;
     write_atomic(&args.out.join("tune.csv"), |w| write_curves(w, &result)).map_err(failed)?;
     if !args.no_plots {
         crate::plot::plot_tune(&args.out, &result).map_err(failed)?;

@@ -108,3 +108,58 @@ fn second_ctrl_c_quits_a_run_stuck_between_samples() {
     assert_eq!(status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("interrupted twice"), "{stderr}");
 }
+
+#[test]
+#[allow(non_snake_case)]
+fn ctrl_c_during_a_large_design_quits_at_once() {
+    // A 500-state plant whose 500 observer poles two outputs must place: seconds of pole placement
+    // (which KNV0 then refuses). Ctrl-C quits at once with status 1, as for an unfinished run (not
+    // the shell's 130, docs/errors.md), and says that nothing was printed.
+    let n = 500;
+    let mut state: u64 = 1;
+    let mut next = || {
+        state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+        ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+    };
+    let rows = |m: &[Vec<f64>]| {
+        let row = |r: &Vec<f64>| format!("[{}]", r.iter().map(|x| format!("{x:e}")).collect::<Vec<_>>().join(", "));
+        format!("[{}]", m.iter().map(row).collect::<Vec<_>>().join(", "))
+    };
+    let mut A = vec![vec![0.0; n]; n];
+    for (r, row) in A.iter_mut().enumerate() {
+        for (c, a) in row.iter_mut().enumerate() {
+            *a = if r == c { -1.0 - 0.05 * r as f64 } else { 0.02 * next() };
+        }
+    }
+    let B: Vec<Vec<f64>> = (0..n).map(|_| vec![next(), next()]).collect();
+    let C: Vec<Vec<f64>> = (0..2).map(|j| B.iter().map(|b| b[j]).collect()).collect();
+    let poles: Vec<String> = (0..n).map(|j| format!("{:e}", -1.3 - 0.05 * j as f64)).collect();
+    let text = format!(
+        "[plant]\nA = {}\nB = {}\nC = {}\ndelays = [0.0, 0.0]\n[design]\nobserver_poles = [{}]\n\
+         channel_poles = [[-2.0], [-3.0]]\nreference_filter_poles = [[-1.0], [-1.0]]\nmu = [1.0, 1.0]\nbeta = 1.0\n\
+         [reference]\ncomponents = [{{ bias = 1.0 }}, {{ bias = 1.0 }}]\n",
+        rows(&A),
+        rows(&B),
+        rows(&C),
+        poles.join(", ")
+    );
+    let tmp = scratch_dir("design-interrupt");
+    let file = tmp.path().join("large.toml");
+    std::fs::write(&file, text).unwrap();
+    let child = Command::new(env!("CARGO_BIN_EXE_quell"))
+        .arg("design")
+        .arg(&file)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start quell");
+    std::thread::sleep(Duration::from_millis(1000));
+    let sent = std::time::Instant::now();
+    sigint(child.id());
+    let output = child.wait_with_output().expect("wait for quell");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("interrupted during the design; nothing was printed"), "{stderr}");
+    assert!(output.stdout.is_empty());
+    assert!(sent.elapsed() < Duration::from_secs(5), "quit {:?} after the signal", sent.elapsed());
+}

@@ -106,6 +106,22 @@ pub fn vector(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<f6
     view.as_array().iter().enumerate().map(|(i, &v)| finite(name, &[i], v, kind, py)).collect()
 }
 
+/// A str argument, or a TypeError naming it.
+pub fn text(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<String> {
+    match obj.is_instance_of::<PyString>() {
+        true => obj.extract(),
+        false => Err(type_error(name, "a str", obj)),
+    }
+}
+
+/// A path argument (a str or an `os.PathLike`), or a TypeError naming it.
+pub fn path(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<std::path::PathBuf> {
+    if obj.is_instance_of::<PyString>() || obj.hasattr("__fspath__")? {
+        return obj.extract().map_err(|_| type_error(name, "a path (str or os.PathLike)", obj));
+    }
+    Err(type_error(name, "a path (str or os.PathLike)", obj))
+}
+
 /// A real number (an int, a float or a numpy scalar; not a bool).
 pub fn number(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<f64> {
     if obj.is_instance_of::<PyString>() || obj.is_instance_of::<PyComplex>() || obj.is_instance_of::<PyBool>() {

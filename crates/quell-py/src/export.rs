@@ -74,11 +74,11 @@ pub fn export(
     py: Python<'_>,
     source: &Bound<'_, PyAny>,
     sample_time: Option<&Bound<'_, PyAny>>,
-    out: Option<PathBuf>,
+    out: Option<&Bound<'_, PyAny>>,
     prefix: &str,
     precision: Option<&Bound<'_, PyAny>>,
     fmu: bool,
-    compiler: Option<&str>,
+    compiler: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Vec<PathBuf>> {
     let (design, scenario_name, scenario_T) = if let Ok(s) = source.cast::<PyScenario>() {
         let s = s.get();
@@ -115,7 +115,9 @@ pub fn export(
         ExportError::Controller(_) | ExportError::NotFinite { .. } => Kind::Scenario.err(py, message(&e)),
         _ => Kind::Export.err(py, message(&e)),
     };
-    let cc = compiler.map(str::to_string).or_else(|| std::env::var("CC").ok()).unwrap_or_else(|| "cc".into());
+    let out = out.filter(|o| !o.is_none()).map(|o| crate::convert::path(o, "out")).transpose()?;
+    let compiler = compiler.filter(|c| !c.is_none()).map(|c| crate::convert::text(c, "compiler")).transpose()?;
+    let cc = compiler.or_else(|| std::env::var("CC").ok()).unwrap_or_else(|| "cc".into());
     let compiler = (cc != "none").then_some(cc.as_str());
     let (code, archive) = py
         .detach(|| -> Result<_, ExportError> {

@@ -11,6 +11,7 @@ mod convert;
 mod design;
 mod errors;
 mod export;
+mod interrupt;
 mod plant;
 mod scenario;
 mod simulate;

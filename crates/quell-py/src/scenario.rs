@@ -4,7 +4,6 @@
 //! every check and every message is the library's, with the TOML key path (`reference.components[0]
 //! .harmonics[0].frequency` is `reference[0]["harmonics"][0]["frequency"]`).
 
-use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
 
 use pyo3::exceptions::PyTypeError;
@@ -15,7 +14,7 @@ use quell::scenario::{plant_table, pole_list, PAPER_EXAMPLE};
 use quell::signal::Signal;
 use toml::{Table, Value};
 
-use crate::convert::{pole_lists, poles, type_name};
+use crate::convert::{number, pole_lists, poles, type_name};
 use crate::design::PyDesign;
 use crate::errors::{in_python, raise, type_error, Kind};
 use crate::plant::{plant_arg, Labels, PyPlant};
@@ -346,8 +345,8 @@ impl PyScenario {
     /// >>> s == quell.paper_example()
     /// True
     #[staticmethod]
-    fn from_toml(py: Python<'_>, text: &str) -> PyResult<Self> {
-        Self::parse(py, text)
+    fn from_toml(py: Python<'_>, text: &Bound<'_, PyAny>) -> PyResult<Self> {
+        Self::parse(py, &crate::convert::text(text, "text")?)
     }
 
     /// Reads and validates a scenario file.
@@ -376,7 +375,8 @@ impl PyScenario {
     /// >>> quell.Scenario.load("mine.toml").name
     /// 'paper-example'
     #[staticmethod]
-    fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+    fn load(py: Python<'_>, path: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let path = crate::convert::path(path, "path")?;
         quell::Scenario::from_path(&path).map(Self::new).map_err(|e| scenario_error(py, &e))
     }
 
@@ -435,6 +435,36 @@ impl PyScenario {
     /// [2, 1]
     fn design(&self, py: Python<'_>) -> PyResult<PyDesign> {
         Ok(PyDesign { inner: self.design_arc(py)?, spec: self.inner.design.clone(), labels: self.labels.clone() })
+    }
+
+    /// The adaptive law's pace before a run, per channel (`quell design`'s "adaptation"), from the
+    /// averaged Ω̄_i over g and ω.
+    ///
+    /// Returns
+    /// -------
+    /// list of dict
+    ///     Per channel: `mu`, `lambda_max_omega`, `lambda_min_omega`, `excited_rank`,
+    ///     `lambda_min_excited_omega`, `adaptation_rate` (μ_i λ_max), `loop_rate` (the loop's fastest
+    ///     other rate ρ), `convergence_time` (1/(μ_i λ_min) over the excited directions, s), the
+    ///     flags `stiff` (rate > 100 ρ) and `weakly_excited`, and `advice`.
+    ///
+    /// Raises
+    /// ------
+    /// DesignError
+    ///     No design exists for these choices.
+    ///
+    /// Examples
+    /// --------
+    /// >>> [c["stiff"] for c in quell.paper_example().adaptation()]
+    /// [False, False]
+    fn adaptation<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let d = self.design_arc(py)?;
+        let s = &self.inner;
+        let e = py.detach(|| {
+            quell::diagnostics::estimate(&d, s.true_plant(), &s.reference, &s.disturbance, s.simulation.t_end)
+        });
+        let text = serde_json::to_string(&e).unwrap_or_default();
+        py.import("json")?.call_method1("loads", (text,))
     }
 
     /// The plant (1).
@@ -567,16 +597,19 @@ pub fn paper_example(py: Python<'_>) -> PyResult<PyScenario> {
 #[pyo3(signature = (text, *, convergence_time=None, u_limit=None))]
 pub fn auto_design<'py>(
     py: Python<'py>,
-    text: &str,
-    convergence_time: Option<f64>,
-    u_limit: Option<f64>,
+    text: &Bound<'py, PyAny>,
+    convergence_time: Option<&Bound<'py, PyAny>>,
+    u_limit: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<(PyScenario, Bound<'py, PyAny>)> {
+    let text = crate::convert::text(text, "text")?;
+    let target = |v: Option<&Bound<'py, PyAny>>, name| v.filter(|v| !v.is_none()).map(|v| number(v, name)).transpose();
+    let (convergence_time, u_limit) = (target(convergence_time, "convergence_time")?, target(u_limit, "u_limit")?);
     for (name, v) in [("convergence_time", convergence_time), ("u_limit", u_limit)] {
         if let Some(x) = v.filter(|x| !(x.is_finite() && *x > 0.0)) {
             return Err(Kind::Design.err(py, format!("{name}: expected a finite number > 0, found {x}")));
         }
     }
-    let doc = quell::scenario::parse_document(text).map_err(|e| scenario_error(py, &e))?;
+    let doc = quell::scenario::parse_document(&text).map_err(|e| scenario_error(py, &e))?;
     let targets = quell::auto::Targets { convergence_time, u_limit };
     let auto = py.detach(|| quell::auto::auto_design(&doc, &targets)).map_err(|e| match e {
         quell::auto::AutoError::Scenario(e) => scenario_error(py, &e),

@@ -315,7 +315,8 @@ impl PyStudy {
     /// >>> len(quell.Study.load("study.toml"))
     /// 2
     #[staticmethod]
-    fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+    fn load(py: Python<'_>, path: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let path = crate::convert::path(path, "path")?;
         study::Study::from_path(&path).map(|s| PyStudy { inner: Arc::new(s) }).map_err(|e| study_error(py, &e))
     }
 
@@ -346,8 +347,10 @@ impl PyStudy {
     /// 4
     #[staticmethod]
     #[pyo3(signature = (text, dir=None))]
-    fn from_toml(py: Python<'_>, text: &str, dir: Option<PathBuf>) -> PyResult<Self> {
-        study::Study::from_toml(text, dir.as_deref())
+    fn from_toml(py: Python<'_>, text: &Bound<'_, PyAny>, dir: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+        let text = crate::convert::text(text, "text")?;
+        let dir = dir.filter(|d| !d.is_none()).map(|d| crate::convert::path(d, "dir")).transpose()?;
+        study::Study::from_toml(&text, dir.as_deref())
             .map(|s| PyStudy { inner: Arc::new(s) })
             .map_err(|e| study_error(py, &e))
     }
@@ -454,8 +457,8 @@ impl PyRunSpec {
     /// A run specification from its JSON form (`spec.to_json()`); this is how pickle rebuilds it.
     #[new]
     #[pyo3(signature = (json, drawn=None))]
-    fn new(py: Python<'_>, json: &str, drawn: Option<Vec<String>>) -> PyResult<Self> {
-        serde_json::from_str(json)
+    fn new(py: Python<'_>, json: &Bound<'_, PyAny>, drawn: Option<Vec<String>>) -> PyResult<Self> {
+        serde_json::from_str(&crate::convert::text(json, "json")?)
             .map(|inner| PyRunSpec { inner, drawn: drawn.unwrap_or_default() })
             .map_err(|e| Kind::Scenario.err(py, format!("json: not a quell run specification ({e})")))
     }
@@ -650,7 +653,8 @@ fn row_dict<'py>(py: Python<'py>, spec: &RunSpec, row: &study::Row) -> PyResult<
 /// >>> quell.run_one(spec)["outcome"]
 /// 'completed'
 #[pyfunction]
-pub fn run_one<'py>(py: Python<'py>, spec: PyRef<'py, PyRunSpec>) -> PyResult<Bound<'py, PyDict>> {
+pub fn run_one<'py>(py: Python<'py>, spec: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyDict>> {
+    let spec = spec.cast::<PyRunSpec>().map_err(|_| crate::errors::type_error("spec", "a quell.RunSpec", spec))?.get();
     let s = &spec.inner;
     let row = py.detach(|| study::run_one(s));
     let d = row_dict(py, s, &row)?;

@@ -82,3 +82,34 @@ def test_one_controller_shared_by_threads_serializes_its_steps():
         alone.step(y, g)
     np.testing.assert_array_equal(shared.eta(), alone.eta())
     np.testing.assert_array_equal(shared.x_hat(), alone.x_hat())
+
+
+def test_ctrl_c_stops_a_large_design():
+    """SIGINT during quell.design of a 500-state plant (seconds of pole placement: 2 outputs place
+    500 observer poles, which KNV0 sweeps and then refuses) raises KeyboardInterrupt promptly, not
+    when the design returns."""
+    import signal
+    import subprocess
+    import sys
+
+    code = (
+        "import numpy as np, quell\n"
+        "n = 500; rng = np.random.default_rng(1)\n"
+        "G = rng.normal(size=(n, n)) * 0.3 / np.sqrt(n)\n"
+        "A = -np.diag(1.0 + 0.05 * np.arange(n)) + (G + G.T) / 2\n"
+        "B = rng.normal(size=(n, 2))\n"
+        "p = quell.Plant(A, B, B.T.copy(), delays=[0.0, 0.0])\n"
+        "print('ready', flush=True)\n"
+        "quell.design(p, observer_poles=list(np.linalg.eigvalsh(A) - 0.3), channel_poles=[[-2.0], [-3.0]],\n"
+        "             reference_filter_poles=[[-1.0], [-1.0]], mu=[1.0, 1.0], beta=1.0)\n"
+        "print('finished', flush=True)\n"
+    )
+    child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert child.stdout.readline().strip() == "ready"
+    time.sleep(1.0)  # into the design
+    sent = time.perf_counter()
+    child.send_signal(signal.SIGINT)
+    out, err = child.communicate(timeout=60)
+    assert "KeyboardInterrupt" in err, err
+    assert "finished" not in out
+    assert time.perf_counter() - sent < 5

@@ -26,6 +26,7 @@ def _valid():
         "Plant": (quell.Plant, dict(A=A, B=B, C=C, D=D, Q=Q, delays=[1.0, 3.0], x0=[0, 0, 0], inputs=["a", "b"],
                                     outputs=["c", "d"], states=["x", "y", "z"])),
         "design": (quell.design, dict(plant=plant, observer_gain=L, observer_poles=None, relative_degrees=[2, 1],
+                                      regressor_scaling="paper",
                                       **PAPER_DESIGN)),
         "place": (quell.place, dict(A=A, B=B, poles=[-1, -2, -3])),
         "auto_design": (quell.auto_design, dict(text=s.to_toml(), convergence_time=10.0, u_limit=100.0)),
@@ -61,6 +62,8 @@ def _valid():
 VALID = _valid()
 # The keyword arguments of `Scenario(**design)` that are the design's.
 DESIGN_KEYS = ["channel_poles", "reference_filter_poles", "disturbance_filter_poles", "mu", "beta", "observer_gain"]
+# Parameters whose wrong type PyO3 reports itself (their defaults are Python values).
+PYO3_OWN = {"states", "check", "fmu", "yes", "prefix", "drawn"}
 CASES = [(name, param) for name, (f, kwargs) in VALID.items() for param in kwargs]
 
 
@@ -84,11 +87,13 @@ def test_a_wrong_type_is_a_type_error_naming_the_parameter(name, param, tmp_path
         pytest.importorskip("matplotlib").use("Agg")
     with pytest.raises(TypeError) as info:
         f(**dict(kwargs, **{param: WRONG}))
-    # Ours say "param: expected …, found a object"; PyO3's own (str, bool, path and float
-    # parameters) say "'object' object is not an instance of 'str'" with the note "while
-    # processing 'param'", which a traceback shows under the message.
+    # Ours say "param: expected …, found a object"; PyO3's own (the bool parameters, `prefix` and
+    # `drawn`, whose defaults are Python values) say "'object' object is not an instance of
+    # 'bool'" with the note "while processing 'param'", which a traceback shows under it.
     message = "\n".join([str(info.value)] + getattr(info.value, "__notes__", []))
     assert param in message and "object" in message, message
+    if param not in PYO3_OWN:
+        assert param in str(info.value) and "expected" in str(info.value), str(info.value)
     if name == "Scenario" and param in DESIGN_KEYS:
         assert message.startswith(param), message
 

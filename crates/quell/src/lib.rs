@@ -30,6 +30,167 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
+//! # The public API, with an example each
+//!
+//! **[`scenario`]**: a scenario file read and checked at the boundary into a [`Scenario`] (plant,
+//! design choices, reference, disturbance, settings); every error names its key.
+//!
+//! ```
+//! use quell::scenario::{Scenario, PAPER_EXAMPLE};
+//!
+//! let s = Scenario::from_toml(PAPER_EXAMPLE)?;
+//! assert_eq!((s.plant.n(), s.plant.m(), s.plant.k()), (3, 2, 2));
+//! let e = Scenario::from_toml(&PAPER_EXAMPLE.replace("t_end = 100.0", "t_end = -1.0")).unwrap_err();
+//! assert!(e.to_string().starts_with("simulation.t_end"), "{e}");
+//! // Written back, it reads as the same scenario.
+//! assert_eq!(Scenario::from_toml(&s.to_toml())?.plant, s.plant);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! **[`plant`]** and **[`signal`]**: the plant (1) as [`Plant`] (A, B, C, D, Q, delays τ_i), the
+//! reference g(t) and disturbance ω(t) as a [`Signal`] of biases and harmonics.
+//!
+//! ```
+//! use quell::nalgebra::dmatrix;
+//! use quell::{Component, Harmonic, Plant, Signal};
+//!
+//! // x' = −x + u(t − 0.2) + ω, y = x.
+//! let plant = Plant::new(dmatrix![-1.0], dmatrix![1.0], dmatrix![1.0], dmatrix![1.0], dmatrix![0.0], vec![0.2], None)?;
+//! assert_eq!(plant.n(), 1);
+//! let g = Signal { components: vec![Component { bias: 1.0, harmonics: vec![Harmonic { amplitude: 0.5, frequency: 2.0, phase: 0.0 }] }] };
+//! assert_eq!(g.components[0].eval(0.0), 1.0);
+//! assert_eq!(g.components[0].peak(), 1.5);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! **[`design`]**: every gain of the controller from the plant and the choices, [`Design::new`]
+//! (the decoupler of Proposition 1 with σ_i from eq. (7), the observer (6), the internal models
+//! (11), (16) and N of eq. (20)), the paper's assumptions checked on the way; [`place()`] for pole
+//! placement.
+//!
+//! ```
+//! use quell::scenario::{Scenario, PAPER_EXAMPLE};
+//! use quell::Design;
+//!
+//! let s = Scenario::from_toml(PAPER_EXAMPLE)?;
+//! let design = Design::new(&s.plant, &s.design)?;
+//! assert_eq!(design.sigma(), vec![2, 1]);
+//! // G_11(s) = q_10 / ((s + 6)(s + 2)) with unit DC gain: q_10 = 12.
+//! assert_eq!(design.channels()[0].q0(), 12.0);
+//! // The decoupled loop A − BK has exactly the channel poles.
+//! let mut re: Vec<f64> = design.decoupled_eigenvalues().iter().map(|z| z.re).collect();
+//! re.sort_by(f64::total_cmp);
+//! assert!(re.iter().zip([-6.0, -4.0, -2.0]).all(|(a, b)| (a - b).abs() < 1e-9));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! **[`controller`]**: the real-time [`Controller`], discretized exactly for a zero-order hold;
+//! [`Controller::step`] takes y(k), g(k) and returns the plant input u_f(k) (5) without allocating.
+//!
+//! ```
+//! use quell::scenario::{Scenario, PAPER_EXAMPLE};
+//! use quell::Controller;
+//!
+//! let design = Scenario::from_toml(PAPER_EXAMPLE)?.design()?;
+//! let mut ctrl = Controller::new(&design, 1e-3)?;
+//! let u_f = ctrl.step(&[0.1, 1.9], &[0.0, 2.0])?.to_vec();
+//! assert_eq!(u_f.len(), 2);
+//! // A reading beyond the bound is refused and the state kept.
+//! assert!(ctrl.step(&[f64::NAN, 0.0], &[0.0, 0.0]).is_err());
+//! // A delay that is not a whole number of samples is an error naming the key.
+//! let e = Controller::new(&design, 0.3).unwrap_err();
+//! assert!(e.to_string().starts_with("simulation.sample_time"), "{e}");
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! **[`sim`]**: the one front door for a run, [`sim::Run`] with [`sim::RunSettings`]: the
+//! continuous loop (the delay equation) or the sampled-data loop, on the design's plant or a true
+//! one; one [`sim::SimResult`] whose [`sim::Outcome`] says how the run ended.
+//!
+//! ```
+//! use std::ops::ControlFlow;
+//! use quell::scenario::{Scenario, PAPER_EXAMPLE};
+//! use quell::sim::{Outcome, Run, RunSettings};
+//!
+//! let s = Scenario::from_toml(PAPER_EXAMPLE)?;
+//! let design = s.design()?;
+//! let sampled = RunSettings::sampled(2.0, 0.1, 0.01);
+//! let r = Run::of(&s, &design).settings(sampled).simulate(|_| ControlFlow::Continue(()))?;
+//! assert_eq!((r.len(), r.outcome), (21, Some(Outcome::Completed)));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! **[`export`]**: the same controller as dependency-free C99 ([`export::generate`]) and as an FMI
+//! 2.0 co-simulation FMU ([`export::generate_fmu`]).
+//!
+//! ```
+//! use quell::export::{generate, ExportOptions};
+//! use quell::scenario::{Scenario, PAPER_EXAMPLE};
+//!
+//! let design = Scenario::from_toml(PAPER_EXAMPLE)?.design()?;
+//! let code = generate(&design, 0.01, &ExportOptions::default())?;
+//! assert_eq!(code.header_name, "quell_controller.h");
+//! assert!(code.header.contains("int quell_step(quell_state *s"));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! **[`study`]**: many runs of one scenario, a grid of values and Monte Carlo draws of the true
+//! plant ([`study::Study`], [`study::sweep`]), aggregated per grid point ([`study::Summary`]), and
+//! the per-channel tuning of μ_i ([`study::tune`]).
+//!
+//! ```
+//! use quell::study::{sweep, Study, SweepOptions};
+//!
+//! // The paper's example (no scenario named), 1 s, at two values of μ_1.
+//! let text = "[simulation]\nt_end = 1.0\nrtol = 1e-6\natol = 1e-6\n[grid]\n\"design.mu[0]\" = [10.0, 20.0]\n";
+//! let study = Study::from_toml(text, None)?;
+//! assert_eq!(study.len(), 2);
+//! let rows = sweep(&study, &SweepOptions::default()).rows;
+//! assert_eq!(rows.len(), 2);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! **[`diagnostics`]**: why a channel converges slowly, from the averaged adaptive law (33) and the
+//! run ([`diagnostics::diagnose`]).
+//!
+//! ```
+//! use std::ops::ControlFlow;
+//! use quell::scenario::{Scenario, PAPER_EXAMPLE};
+//! use quell::sim::{Run, RunSettings};
+//!
+//! let s = Scenario::from_toml(PAPER_EXAMPLE)?;
+//! let design = s.design()?;
+//! let r = Run::of(&s, &design).settings(RunSettings::sampled(2.0, 0.1, 0.01)).simulate(|_| ControlFlow::Continue(()))?;
+//! let d = quell::diagnostics::diagnose(&design, &s.reference, &s.disturbance, &r);
+//! assert_eq!(d.channels.len(), 2);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! **[`auto`]**: every design key a scenario leaves out chosen from the plant's time scales and the
+//! signals' frequencies, verified by simulation ([`auto::auto_design`]).
+//!
+//! ```
+//! use quell::auto::{auto_design, Targets};
+//!
+//! // A first-order unstable plant with a 0.1 s input delay and no design keys at all.
+//! let text = "[plant]\nA = [[0.5]]\nB = [[1.0]]\nC = [[1.0]]\nD = [[1.0]]\nQ = [[0.0]]\ndelays = [0.1]\n\
+//!             [design]\n[reference]\ncomponents = [{ bias = 1.0 }]\n\
+//!             [disturbance]\ncomponents = [{ harmonics = [{ amplitude = 0.2, frequency = 1.0 }] }]\n\
+//!             [simulation]\nt_end = 20.0\n";
+//! let auto = auto_design(&text.parse()?, &Targets::default())?;
+//! assert!(auto.verification.passed);
+//! assert_eq!(auto.scenario.design.mu.len(), 1);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! **[`settings`]**: the run settings' limits and checks, shared by the scenario reader and both
+//! loops; a value out of range is a [`settings::KeyError`] naming its scenario key.
+//!
+//! ```
+//! let e = quell::settings::check_horizon(10.0, 0.0).unwrap_err();
+//! assert_eq!(e.key, "simulation.output_step");
+//! ```
+//!
 //! Equation numbers refer to C. V. Tu, N. Dudarenko, "Direct adaptive output-feedback control for
 //! unstable linear multidimensional systems with distinct input delays" (2026).
 #![allow(non_snake_case)]
@@ -40,6 +201,7 @@ pub use nalgebra;
 mod simd;
 
 pub mod auto;
+pub mod cancel;
 pub mod controller;
 pub mod design;
 pub mod diagnostics;

@@ -133,34 +133,76 @@ pub fn cluster_radius(k: usize, center: Complex<f64>, size: f64, n: usize) -> f6
     (d / s).powf(1.0 / k as f64) * s
 }
 
+/// The most copies of one defective eigenvalue that [`clusters`] groups: a k-fold one is computable
+/// only to ≈ (ε‖M‖)^(1/k), a third of its size for k = 32, so larger groups would be meaningless.
+pub const MAX_CLUSTER: usize = 32;
+
 /// Computed eigenvalues grouped into clusters, each the computed copies of one (possibly
 /// defective) eigenvalue: greedily from the largest size k down, the k nearest eigenvalues around
-/// one of them form a cluster when all lie within [`cluster_radius`] of their mean. Returns the
-/// indices of each cluster; singletons last.
+/// one of them form a cluster when all lie within [`cluster_radius`] of their mean and, unless
+/// they lie within the backward error δ‖M‖ of it (a semisimple multiple eigenvalue), they are
+/// spread as the computed copies of a k-fold defective eigenvalue are: about the k-th roots of
+/// one small number around their mean (`jordan_shaped`). Without that shape test a row of k
+/// distinct eigenvalues (a normal matrix of n ≳ 40) passed as one "cluster" whose mean could hide
+/// an unstable member. Clusters have at most [`MAX_CLUSTER`] members. Returns the indices of each
+/// cluster; singletons last.
 pub fn clusters(eigs: &[Complex<f64>], size: f64) -> Vec<Vec<usize>> {
     let n = eigs.len();
-    let mut free: Vec<usize> = (0..n).collect();
+    // Each eigenvalue's neighbours, nearest first (itself first), computed once.
+    let order: Vec<Vec<usize>> = (0..n)
+        .map(|i| {
+            let mut near: Vec<usize> = (0..n).collect();
+            near.sort_by(|&a, &b| (eigs[a] - eigs[i]).norm().total_cmp(&(eigs[b] - eigs[i]).norm()));
+            near
+        })
+        .collect();
+    let mut free = vec![true; n];
+    let mut left = n;
     let mut out = Vec::new();
-    for k in (2..=n).rev() {
+    let mut near = Vec::with_capacity(n);
+    let largest = eigs.iter().map(|z| z.norm()).fold(0.0, f64::max);
+    for k in (2..=n.min(MAX_CLUSTER)).rev() {
+        // No k-cluster has members farther apart than twice this (cluster_radius grows with |λ|).
+        let reach = 2.0 * cluster_radius(k, Complex::new(largest, 0.0), size, n);
         let mut i = 0;
-        while i < free.len() && free.len() >= k {
-            let mut near = free.clone();
-            let c = eigs[free[i]];
-            near.sort_by(|&a, &b| (eigs[a] - c).norm().total_cmp(&(eigs[b] - c).norm()));
-            near.truncate(k);
+        while i < n && left >= k {
+            if !free[i] || (eigs[order[i][k - 1]] - eigs[i]).norm() > reach {
+                i += 1;
+                continue;
+            }
+            near.clear();
+            near.extend(order[i].iter().copied().filter(|&j| free[j]).take(k));
             let mean = near.iter().map(|&j| eigs[j]).sum::<Complex<f64>>() / k as f64;
             let spread = near.iter().map(|&j| (eigs[j] - mean).norm()).fold(0.0, f64::max);
-            if spread <= cluster_radius(k, mean, size, n) {
-                free.retain(|j| !near.contains(j));
-                out.push(near);
+            let semisimple = spread <= backward_error(n) * size;
+            if spread <= cluster_radius(k, mean, size, n) && (semisimple || jordan_shaped(eigs, &near, mean)) {
+                for &j in &near {
+                    free[j] = false;
+                }
+                left -= k;
+                out.push(near.clone());
                 i = 0;
             } else {
                 i += 1;
             }
         }
     }
-    out.extend(free.into_iter().map(|j| vec![j]));
+    out.extend((0..n).filter(|&j| free[j]).map(|j| vec![j]));
     out
+}
+
+/// True when the members z_j = λ_j − mean of a group of k ≥ 3 look like the k-th roots of one
+/// number, as the computed copies of a k-fold defective eigenvalue do (to first order in their
+/// radius over |λ|): the power sums Σ z_j^p, p = 2, 3 (below k), vanish for those roots; each must be
+/// at most half of Σ |z_j|^p. Two members are always symmetric about their mean (true for k = 2).
+fn jordan_shaped(eigs: &[Complex<f64>], members: &[usize], mean: Complex<f64>) -> bool {
+    let k = members.len();
+    (2..k.min(4)).all(|p| {
+        let z = members.iter().map(|&j| eigs[j] - mean);
+        let sum: Complex<f64> = z.clone().map(|z| z.powi(p as i32)).sum();
+        let scale: f64 = z.map(|z| z.norm().powi(p as i32)).sum();
+        sum.norm() <= 0.5 * scale
+    })
 }
 
 /// The eigenvalues that fail a Hurwitz test allowing for multiplicity: each cluster of
@@ -483,5 +525,16 @@ mod tests {
             assert_eq!(cond(&DMatrix::zeros(r, c)), f64::INFINITY, "{r}×{c}");
         }
         assert_eq!(cond(&DMatrix::from_row_slice(2, 2, &[4.0, 0.0, 0.0, -0.5])), 8.0);
+    }
+
+    #[test]
+    fn a_row_of_distinct_eigenvalues_is_not_one_defective_cluster() {
+        // 59 distinct eigenvalues −3, −2.95, …, −0.1 and one at +0.02: the Hurwitz check, which
+        // judges a cluster by its mean, must not take a run of them for the scattered copies of one
+        // defective eigenvalue and hide the unstable member. Known answer: +0.02, alone.
+        let mut eigs: Vec<Complex<f64>> = (0..60).map(|j| Complex::new(-3.0 + 0.05 * j as f64, 0.0)).collect();
+        eigs[59] = Complex::new(0.02, 0.0);
+        let M = DMatrix::from_diagonal(&nalgebra::DVector::from_iterator(60, eigs.iter().map(|z| z.re)));
+        assert_eq!(unstable(&eigs, M.norm()), vec![Complex::new(0.02, 0.0)]);
     }
 }

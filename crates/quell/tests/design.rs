@@ -349,6 +349,7 @@ fn error_not_decouplable_observable_plant() {
         mu: vec![1.0, 1.0],
         beta: 1.0,
         relative_degrees: None,
+        regressor_scaling: Default::default(),
     };
     match expect_err(&plant, &spec) {
         DesignError::NotDecouplable { smallest, .. } => assert!(smallest < 1e-12, "σ_min {smallest}"),
@@ -373,6 +374,7 @@ fn siso_spec() -> quell::DesignSpec {
         mu: vec![1.0],
         beta: 1.0,
         relative_degrees: None,
+        regressor_scaling: Default::default(),
     }
 }
 
@@ -551,6 +553,7 @@ fn triple_channel_pole_is_designed() {
         mu: vec![1.0; 3],
         beta: 1.0,
         relative_degrees: None,
+        regressor_scaling: Default::default(),
     };
     let d = Design::new(&plant, &spec).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(d.sigma(), &[2, 1, 1]);
@@ -603,6 +606,7 @@ fn chain_observer_with_a_large_gain_is_designed_and_reported_fragile() {
         mu: vec![1.0],
         beta: 1.0,
         relative_degrees: None,
+        regressor_scaling: Default::default(),
     };
     let d = Design::new(&plant, &spec).unwrap_or_else(|e| panic!("{e}"));
     assert!(multiset_mismatch(&poles, d.observer_eigenvalues()) <= 1e-6 * 9.7, "{:?}", d.observer_eigenvalues());
@@ -633,6 +637,7 @@ fn an_observer_that_cannot_be_confirmed_hurwitz_says_so_with_its_figures() {
         mu: vec![1.0],
         beta: 1e3,
         relative_degrees: None,
+        regressor_scaling: Default::default(),
     };
     let e = expect_err(&plant, &spec);
     let DesignError::ObserverUnconfirmed { key, eigenvalues, in_margin, margin, kappa } = &e else { panic!("{e}") };
@@ -643,4 +648,42 @@ fn an_observer_that_cannot_be_confirmed_hurwitz_says_so_with_its_figures() {
     let text = e.to_string();
     eprintln!("{text}");
     assert!(text.contains("could not be confirmed Hurwitz") && !text.contains("not Hurwitz ("), "{text}");
+}
+
+#[test]
+fn a_plant_beyond_the_state_limit_is_refused_naming_the_key_and_the_limit() {
+    // n = MAX_STATES + 1 integrators in a chain: refused before any O(n³) work (an n = 1000 design
+    // took more than a minute), with the key, the limit and what to do.
+    let n = quell::design::MAX_STATES + 1;
+    let spec = quell::DesignSpec {
+        observer: ObserverChoice::Gain(DMatrix::zeros(n, 1)),
+        channel_poles: vec![vec![re(-1.0); n]],
+        reference_filter_poles: vec![vec![re(-1.0)]],
+        disturbance_filter_poles: vec![],
+        mu: vec![1.0],
+        beta: 1.0,
+        relative_degrees: None,
+        regressor_scaling: Default::default(),
+    };
+    let e = expect_err(&chain_plant(n), &spec);
+    assert_eq!(e, DesignError::TooManyStates { n });
+    let text = e.to_string();
+    assert!(text.starts_with("plant.A: n = 501 states; a design is limited to n ≤ 500"), "{text}");
+    assert!(text.contains("reduce the model"), "{text}");
+}
+
+#[test]
+fn a_row_of_distinct_eigenvalues_is_not_one_defective_cluster() {
+    // 59 distinct eigenvalues −3, −2.95, …, −0.1 and one at +0.02: the cluster test took runs of
+    // them (≈ 30 wide) for the scattered copies of one defective eigenvalue (its radius grows
+    // towards |λ| as k grows), so κ₂ of this diagonal (normal) matrix came out ∞ ("defective"),
+    // and the Hurwitz check, which judges a cluster by its mean, could hide an unstable member.
+    // Known answers: the unstable eigenvalue is reported, alone; a diagonal matrix has κ₂ = 1.
+    let mut eigs: Vec<Complex<f64>> = (0..60).map(|j| re(-3.0 + 0.05 * j as f64)).collect();
+    eigs[59] = re(0.02);
+    let M = DMatrix::from_diagonal(&quell::nalgebra::DVector::from_iterator(60, eigs.iter().map(|z| z.re)));
+    // (The unstable eigenvalue alone: linalg's unit test of the same row.)
+    let zero = DMatrix::zeros(60, 1);
+    let kappa = quell::design::place::eigenvector_condition(&M, &zero, &DMatrix::zeros(1, 60)).unwrap();
+    assert!((kappa - 1.0).abs() < 1e-12, "κ₂ = {kappa}");
 }

@@ -48,21 +48,18 @@ pub(crate) fn staircase_tol(A: &DMatrix<f64>, B: &DMatrix<f64>) -> f64 {
     10.0 * n * f64::EPSILON * A.norm().max(B.norm())
 }
 
-/// Left singular vectors (full, `k × k`) and descending singular values of a `k × c` block.
-/// Returns `None` if the SVD does not converge (non-finite data).
-fn full_left_svd(blk: &DMatrix<f64>) -> Option<(DMatrix<f64>, Vec<f64>)> {
-    let k = blk.nrows();
-    let c = blk.ncols();
+/// The left singular structure of a coupling block (k × c): its singular values (descending) and
+/// a k × k orthogonal Q, kept as Householder reflections (a QR of the thin left singular vectors
+/// U), whose first min(k, c) columns are U up to signs, so that Qᵀ blk = [R Σ Vᵀ; 0] with R upper
+/// triangular. Applying Q costs O(k·c) per column instead of a k × k product. `None` for a block
+/// that is not finite or an SVD that does not converge.
+fn left_svd(blk: &DMatrix<f64>) -> Option<(nalgebra::linalg::QR<f64, nalgebra::Dyn, nalgebra::Dyn>, Vec<f64>)> {
     if blk.iter().any(|x| !x.is_finite()) {
         return None;
     }
-    // Pad with k zero columns so that the thin U is the full k × k orthogonal factor.
-    let mut padded = DMatrix::<f64>::zeros(k, c + k);
-    padded.view_mut((0, 0), (k, c)).copy_from(blk);
-    let svd = padded.try_svd(true, false, f64::EPSILON, 10_000)?;
-    let u = svd.u?;
-    let sv: Vec<f64> = svd.singular_values.iter().take(c.min(k)).copied().collect();
-    Some((u, sv))
+    let svd = blk.clone().try_svd(true, false, f64::EPSILON, 10_000)?;
+    let sv: Vec<f64> = svd.singular_values.iter().copied().collect();
+    Some((svd.u?.qr(), sv))
 }
 
 /// Orthogonal controllability staircase reduction of (A, B) with rank tolerance `tol`.
@@ -88,22 +85,27 @@ pub(crate) fn staircase(A: &DMatrix<f64>, B: &DMatrix<f64>, tol: f64) -> Stairca
         if blk.ncols() == 0 {
             break;
         }
-        let Some((U, sv)) = full_left_svd(&blk) else {
+        let Some((U, sv)) = left_svd(&blk) else {
             break;
         };
         let r = sv.iter().filter(|&&s| s > tol).count();
         if r == 0 {
             break;
         }
-        // Apply diag(I_offset, U) as a similarity on A, from the left on B, accumulate in Z.
-        let rows_a = U.transpose() * At.view((offset, 0), (nk, n));
+        // Apply diag(I_offset, Q) as a similarity on A, from the left on B, accumulate in Z
+        // (M Q = (Qᵀ Mᵀ)ᵀ for the columns).
+        let mut rows_a = At.view((offset, 0), (nk, n)).into_owned();
+        U.q_tr_mul(&mut rows_a);
         At.view_mut((offset, 0), (nk, n)).copy_from(&rows_a);
-        let cols_a = At.view((0, offset), (n, nk)) * &U;
-        At.view_mut((0, offset), (n, nk)).copy_from(&cols_a);
-        let rows_b = U.transpose() * Bt.view((offset, 0), (nk, Bt.ncols()));
+        let mut cols_a = At.view((0, offset), (n, nk)).transpose();
+        U.q_tr_mul(&mut cols_a);
+        At.view_mut((0, offset), (n, nk)).copy_from(&cols_a.transpose());
+        let mut rows_b = Bt.view((offset, 0), (nk, Bt.ncols())).into_owned();
+        U.q_tr_mul(&mut rows_b);
         Bt.view_mut((offset, 0), (nk, Bt.ncols())).copy_from(&rows_b);
-        let cols_z = Z.view((0, offset), (n, nk)) * &U;
-        Z.view_mut((0, offset), (n, nk)).copy_from(&cols_z);
+        let mut cols_z = Z.view((0, offset), (n, nk)).transpose();
+        U.q_tr_mul(&mut cols_z);
+        Z.view_mut((0, offset), (n, nk)).copy_from(&cols_z.transpose());
         // The coupling block is now [R; 0] up to the neglected singular values: make it exact.
         if blocks.is_empty() {
             let m = Bt.ncols();

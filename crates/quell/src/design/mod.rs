@@ -15,7 +15,7 @@ pub use decouple::{
     close, falb_wolovich, falb_wolovich_given, relative_degree_measures, relative_degrees, FalbWolovich,
     RelativeDegree, CLOSE_FACTOR, TOL,
 };
-pub use internal_model::{filter_pair, internal_model};
+pub use internal_model::{filter_pair, internal_model, RegressorScaling};
 pub use place::{place, PlaceError};
 pub use warnings::{warnings, DesignWarning};
 
@@ -52,6 +52,9 @@ pub struct DesignSpec {
     /// lets eq. (7) decide. Accepted unless the plant clearly contradicts it
     /// ([`decouple::falb_wolovich_given`]).
     pub relative_degrees: Option<Vec<usize>>,
+    /// How the internal-model filters are realized, and so the size of ξ̂ and the meaning of μ
+    /// (`design.regressor_scaling`; [`RegressorScaling::Paper`] by default).
+    pub regressor_scaling: RegressorScaling,
 }
 
 /// Channel i's decoupled transfer function G_ii(s) = q_i0 / ∏_j (s − λ_ij).
@@ -113,10 +116,15 @@ pub struct Design {
     cond_D: f64,
     mu: Vec<f64>,
     beta: f64,
+    regressor_scaling: RegressorScaling,
     controllability: RankTest,
     observability: RankTest,
     observer_eigenvalues: Vec<Complex<f64>>,
     decoupled_eigenvalues: Vec<Complex<f64>>,
+    /// κ₂ of A − LC's and A − BK's eigenvectors, computed once when first asked (an eigen-
+    /// decomposition each: seconds for n in the hundreds).
+    observer_kappa: std::sync::OnceLock<f64>,
+    decoupled_kappa: std::sync::OnceLock<f64>,
 }
 
 /// Why no design exists for a plant and a set of choices. Messages name the scenario key.
@@ -168,6 +176,8 @@ pub enum DesignError {
     NotConjugateClosed { key: String, pole: Complex<f64> },
     #[error("{key}: the list is empty; give at least one pole")]
     NoPoles { key: String },
+    #[error("plant.A: n = {n} states; a design is limited to n ≤ {MAX_STATES} (quell::design::MAX_STATES): its eigen-decompositions and pole placement grow as n³ (seconds at n = {MAX_STATES}, minutes beyond 1000); reduce the model first (e.g. balanced truncation to the modes that matter)")]
+    TooManyStates { n: usize },
     #[error("design.mu[{index}]: expected a finite adaptation gain ≥ 0, got {value}")]
     BadMu { index: usize, value: f64 },
     #[error("design.beta: expected a finite β > 0 (H(s) = 1/(βs + 1)), got {value}")]
@@ -182,6 +192,9 @@ pub enum DesignError {
     DisturbanceRank { rank: usize, k: usize },
     #[error("plant.D: the disturbance directions are nearly parallel: D with unit columns has smallest singular value {smallest:.3e}, below τ = {tol:.0e} (condition number {cond:.3e}), so N = L_ω D⁺ (eq. (20)) would be huge (‖N‖ ≈ {norm_N:.1e}); merge the nearly parallel disturbance components into one", tol = TOL)]
     DisturbanceConditioning { smallest: f64, cond: f64, norm_N: f64 },
+    /// The stop flag of [`crate::cancel::with_stop`] was set (e.g. by Ctrl-C) during the design.
+    #[error("interrupted during the design")]
+    Interrupted,
 }
 
 /// Largest ratio between two rates of one design: a pole's magnitude |p| (or 1/β, the pole of H)
@@ -189,6 +202,11 @@ pub enum DesignError {
 /// margin √ε·‖M‖ within which the Hurwitz checks (`linalg::unstable`) cannot tell it from the imaginary
 /// axis, and the loop's integrator would need about 1/√ε steps for it to settle.
 pub const RATE_SPAN: f64 = 67_108_864.0; // 1/√ε = 2^26
+
+/// The most states a design takes: the eigen-decompositions, rank tests and pole placement of
+/// [`Design::new`] cost O(n³) (a few CPU seconds at n = 500; a pole placement that fails and tries
+/// its fallback takes longest), so a larger model is refused at once rather than computed for minutes.
+pub const MAX_STATES: usize = 500;
 
 const SPAN_WHY: &str = "every pole's magnitude and 1/β may exceed every decay rate −Re p (and 1/β) by at \
                         most 1/√ε ≈ 6.7e7: a slower pole lies within the rounding margin of the imaginary axis \
@@ -218,6 +236,9 @@ impl Design {
     pub fn new(plant: &Plant, spec: &DesignSpec) -> Result<Design, DesignError> {
         // The fields of a plant are public: check it again (Plant::new did, but a literal does not).
         plant.validate()?;
+        if plant.n() > MAX_STATES {
+            return Err(DesignError::TooManyStates { n: plant.n() });
+        }
         check_spec(plant, spec)?;
         let (controllability, observability) = assumption_1(plant)?;
         let (L, observer_eigenvalues) = observer(plant, &spec.observer)?;
@@ -227,8 +248,8 @@ impl Design {
         let B_f = &plant.B * &fw.F;
         let decoupled_eigenvalues = eigenvalues(&A_f).map_err(|e| eigen_error("plant", "A − BK", e))?;
         check_zero_dynamics(plant, &fw.sigma(), &A_f)?;
-        let (G_g, L_g) = internal_model(&spec.reference_filter_poles);
-        let (G_w, L_w) = internal_model(&spec.disturbance_filter_poles);
+        let (G_g, L_g) = internal_model(&spec.reference_filter_poles, spec.regressor_scaling);
+        let (G_w, L_w) = internal_model(&spec.disturbance_filter_poles, spec.regressor_scaling);
         let (N, cond_D) = disturbance_observer_gain(&plant.D, &L_w)?;
         Ok(Design {
             plant: plant.clone(),
@@ -249,10 +270,13 @@ impl Design {
             cond_D,
             mu: spec.mu.clone(),
             beta: spec.beta,
+            regressor_scaling: spec.regressor_scaling,
             controllability,
             observability,
             observer_eigenvalues,
             decoupled_eigenvalues,
+            observer_kappa: std::sync::OnceLock::new(),
+            decoupled_kappa: std::sync::OnceLock::new(),
         })
     }
 
@@ -332,6 +356,10 @@ impl Design {
     pub fn beta(&self) -> f64 {
         self.beta
     }
+    /// How the internal-model filters are realized ([`RegressorScaling`]).
+    pub fn regressor_scaling(&self) -> RegressorScaling {
+        self.regressor_scaling
+    }
     /// Assumption 1: the controllability rank test.
     pub fn controllability(&self) -> &RankTest {
         &self.controllability
@@ -352,11 +380,13 @@ impl Design {
     /// how much a perturbation of the model moves the observer poles; ∞ for a Jordan design.
     pub fn observer_eigenvector_condition(&self) -> f64 {
         let p = &self.plant;
-        place::closed_loop_condition(&p.A.transpose(), &p.C.transpose(), &self.L.transpose())
+        *self
+            .observer_kappa
+            .get_or_init(|| place::closed_loop_condition(&p.A.transpose(), &p.C.transpose(), &self.L.transpose()))
     }
     /// κ₂ of the eigenvector matrix of A − BK = A_f; ∞ for a Jordan design.
     pub fn decoupled_eigenvector_condition(&self) -> f64 {
-        place::closed_loop_condition(&self.plant.A, &self.plant.B, &self.K)
+        *self.decoupled_kappa.get_or_init(|| place::closed_loop_condition(&self.plant.A, &self.plant.B, &self.K))
     }
     /// Dimension q_g of the reference regressor ξ̂_g.
     pub fn q_g(&self) -> usize {
@@ -491,7 +521,12 @@ fn observer(plant: &Plant, choice: &ObserverChoice) -> Result<(DMatrix<f64>, Vec
             (L.clone(), "design.observer_gain")
         }
         ObserverChoice::Poles(p) => (
-            place(&A.transpose(), &C.transpose(), p).map_err(DesignError::ObserverPoles)?.transpose(),
+            place(&A.transpose(), &C.transpose(), p)
+                .map_err(|e| match e {
+                    PlaceError::Interrupted => DesignError::Interrupted,
+                    e => DesignError::ObserverPoles(e),
+                })?
+                .transpose(),
             "design.observer_poles",
         ),
     };

@@ -24,7 +24,7 @@
 //! precision (and the characteristic polynomial) where it is not, e.g. the observer of a
 //! 12-state chain; the characteristic polynomial for Jordan designs.
 
-use nalgebra::{Complex, DMatrix, DVector};
+use nalgebra::{Complex, ComplexField, DMatrix, DVector};
 use thiserror::Error;
 
 use super::assumptions::{staircase, staircase_tol};
@@ -39,8 +39,14 @@ const SAME_POLE_RTOL: f64 = 1e-8;
 const VERIFY_RTOL: f64 = 1e-6;
 /// Newton steps of [`refine`] per eigenvalue.
 const REFINE_STEPS: usize = 12;
+/// Largest n for which eigenvalues are refined ([`refined_error`], O(n⁴): about a second at n = 64).
+const REFINE_MAX_N: usize = 64;
 /// Maximum number of KNV0 sweeps.
 const KNV_MAX_SWEEPS: usize = 60;
+/// KNV0 sweeps between recomputations of X⁻¹ from X.
+const KNV_REFRESH: usize = 4;
+/// Residual factor up to which the admissible space from (A − λ I)⁻¹ B is kept ([`admissible`]).
+const ADMISSIBLE_RTOL: f64 = 100.0;
 /// Number of seeded (K₀, v) candidates tried by [`cyclic`].
 const CYCLIC_TRIES: usize = 8;
 
@@ -73,6 +79,9 @@ pub enum PlaceError {
          move them apart or closer to the open-loop eigenvalues"
     )]
     Inaccurate { max_error: f64 },
+    /// The stop flag of [`crate::cancel::with_stop`] was set during the placement.
+    #[error("interrupted during pole placement")]
+    Interrupted,
 }
 
 /// One requested real pole or conjugate pair (stored with positive imaginary part).
@@ -254,6 +263,7 @@ fn cyclic(A: &DMatrix<f64>, B: &DMatrix<f64>, slots: &[Slot], poles: &[C64]) -> 
     let gain_scale = A.norm().max(pole_scale) / B.norm();
     let mut best: Option<(f64, DMatrix<f64>)> = None;
     for t in 0..CYCLIC_TRIES {
+        crate::cancel::check().map_err(|_| PlaceError::Interrupted)?;
         let K0 = if t == 0 {
             DMatrix::zeros(r, n)
         } else {
@@ -329,17 +339,58 @@ fn generic_coeffs(seed: usize, len: usize) -> Vec<f64> {
         .collect()
 }
 
-/// Orthonormal basis (n × m) of {x ∈ ℂⁿ : U1ᵀ (A − λ I) x = 0}: the eigenvectors for λ that some
-/// feedback can assign (Kautsky, Nichols & Van Dooren 1985, Theorem 3).
-fn admissible_complex(A: &DMatrix<f64>, U1: &DMatrix<f64>, lambda: C64) -> Result<DMatrix<C64>, PlaceError> {
-    let n = A.nrows();
-    let k = U1.ncols(); // n − m
-    if k == 0 {
-        return Ok(DMatrix::<C64>::identity(n, n));
+/// A = Q H Qᵀ (H upper Hessenberg), Qᵀ B, and B's orthonormal bases [U0 U1] (B = U0 Z_b), in
+/// the scalar type of the poles: each admissible space then costs O(n² m), not an n × n SVD.
+struct Reduced<T: ComplexField> {
+    A: DMatrix<T>,
+    Q: DMatrix<T>,
+    H: DMatrix<T>,
+    QtB: DMatrix<T>,
+    U0: DMatrix<T>,
+    U1: DMatrix<T>,
+}
+
+impl Reduced<f64> {
+    fn new(A: &DMatrix<f64>, B: &DMatrix<f64>, U0: &DMatrix<f64>, U1: &DMatrix<f64>) -> Self {
+        let (Q, H) = A.clone().hessenberg().unpack();
+        let QtB = Q.transpose() * B;
+        Reduced { A: A.clone(), Q, H, QtB, U0: U0.clone(), U1: U1.clone() }
     }
-    let shifted = A.map(|x| C64::new(x, 0.0)) - DMatrix::<C64>::identity(n, n) * lambda;
-    let N = U1.transpose().map(|x| C64::new(x, 0.0)) * shifted; // k × n, full row rank
-    let mut padded = DMatrix::<C64>::zeros(n, n);
+
+    fn complex(&self) -> Reduced<C64> {
+        let c = |M: &DMatrix<f64>| M.map(|x| C64::new(x, 0.0));
+        Reduced { A: c(&self.A), Q: c(&self.Q), H: c(&self.H), QtB: c(&self.QtB), U0: c(&self.U0), U1: c(&self.U1) }
+    }
+}
+
+/// Orthonormal basis (n × m) of {x : U1ᵀ (A − λ I) x = 0} = {x : (A − λ I) x ∈ range B}: the
+/// eigenvectors for λ that some feedback can assign (Kautsky, Nichols & Van Dooren 1985,
+/// Theorem 3). For λ not an eigenvalue of A this is range (A − λ I)⁻¹ B, solved on the Hessenberg
+/// form and orthonormalised, and kept when its residual ‖(I − U0 U0ᴴ)(A − λ I) S‖_F is at most
+/// [`ADMISSIBLE_RTOL`]·n·ε·‖A − λ I‖_F; otherwise (λ at or near an eigenvalue of A) the null
+/// space of U1ᵀ (A − λ I) from an SVD.
+fn admissible<T>(r: &Reduced<T>, lambda: T) -> Result<DMatrix<T>, PlaceError>
+where
+    T: ComplexField<RealField = f64> + Copy,
+{
+    let n = r.A.nrows();
+    let k = r.U1.ncols(); // n − m
+    if k == 0 {
+        return Ok(DMatrix::<T>::identity(n, n));
+    }
+    let size = r.A.norm() + lambda.modulus() * (n as f64).sqrt();
+    let mut Y = r.QtB.clone();
+    if hessenberg_solve(&r.H, lambda, &mut Y) {
+        let S = &r.Q * Y.qr().q();
+        let R = &r.A * &S - &S * lambda;
+        let residual = (&R - &r.U0 * (r.U0.adjoint() * &R)).norm();
+        if residual <= ADMISSIBLE_RTOL * n as f64 * f64::EPSILON * size && S.iter().all(|x| x.is_finite()) {
+            return Ok(S);
+        }
+    }
+    let shifted = &r.A - DMatrix::<T>::identity(n, n) * lambda;
+    let N = r.U1.adjoint() * shifted; // k × n, full row rank
+    let mut padded = DMatrix::<T>::zeros(n, n);
     padded.view_mut((0, 0), (k, n)).copy_from(&N);
     let svd =
         padded.try_svd(false, true, f64::EPSILON, 10_000).ok_or(PlaceError::Inaccurate { max_error: f64::INFINITY })?;
@@ -348,38 +399,114 @@ fn admissible_complex(A: &DMatrix<f64>, U1: &DMatrix<f64>, lambda: C64) -> Resul
     Ok(Vt.rows(k, n - k).adjoint())
 }
 
-/// Real version of [`admissible_complex`] for a real pole.
-fn admissible_real(A: &DMatrix<f64>, U1: &DMatrix<f64>, lambda: f64) -> Result<DMatrix<f64>, PlaceError> {
-    let n = A.nrows();
-    let k = U1.ncols();
-    if k == 0 {
-        return Ok(DMatrix::<f64>::identity(n, n));
+/// Solves (H − λ I) Y = R in place (R becomes Y) for upper Hessenberg H: Gaussian elimination with
+/// partial pivoting between adjacent rows, O(n²) per column of R (the rows of H − λ I are kept as
+/// the contiguous columns of its transpose). False when the elimination meets a zero pivot or a
+/// non-finite value.
+fn hessenberg_solve<T>(H: &DMatrix<T>, lambda: T, R: &mut DMatrix<T>) -> bool
+where
+    T: ComplexField<RealField = f64> + Copy,
+{
+    let n = H.nrows();
+    let mut Ut = H.transpose(); // column j of Ut is row j of H
+    for i in 0..n {
+        Ut[(i, i)] -= lambda;
     }
-    let N = U1.transpose() * (A - DMatrix::<f64>::identity(n, n) * lambda);
-    let mut padded = DMatrix::<f64>::zeros(n, n);
-    padded.view_mut((0, 0), (k, n)).copy_from(&N);
-    let svd =
-        padded.try_svd(false, true, f64::EPSILON, 10_000).ok_or(PlaceError::Inaccurate { max_error: f64::INFINITY })?;
-    let Vt = svd.v_t.ok_or(PlaceError::Inaccurate { max_error: f64::INFINITY })?;
-    Ok(Vt.rows(k, n - k).transpose())
-}
-
-/// Orthonormal basis (n × |skip|) of the orthogonal complement of the columns of `X` other
-/// than those in `skip`.
-fn complement(X: &DMatrix<f64>, skip: &[usize]) -> DMatrix<f64> {
-    let n = X.nrows();
-    let mut M = DMatrix::<f64>::zeros(n, n);
-    for (c, j) in (0..n).filter(|j| !skip.contains(j)).enumerate() {
-        M.set_column(c, &X.column(j));
+    for j in 0..n.saturating_sub(1) {
+        if Ut[(j, j + 1)].modulus() > Ut[(j, j)].modulus() {
+            Ut.swap_columns(j, j + 1);
+            R.swap_rows(j, j + 1);
+        }
+        let pivot = Ut[(j, j)];
+        if pivot.modulus() == 0.0 {
+            return false;
+        }
+        let f = Ut[(j, j + 1)] / pivot;
+        let (row_j, mut row_next) = Ut.columns_range_pair_mut(j, j + 1);
+        row_next.rows_range_mut(j..).axpy(-f, &row_j.rows_range(j..), T::one());
+        row_next[j] = T::zero();
+        for c in 0..R.ncols() {
+            let v = R[(j, c)];
+            R[(j + 1, c)] -= f * v;
+        }
     }
-    // M is square, so Q is complete; its last columns are orthogonal to the first n − |skip|.
-    M.qr().q().columns(n - skip.len(), skip.len()).into_owned()
+    // Ut is now lower triangular: (Ut)ᵀ Y = R.
+    Ut.tr_solve_lower_triangular_mut(R) && R.iter().all(|x| x.is_finite())
 }
 
 /// Admissible space of one slot.
 enum Space {
     Real(DMatrix<f64>),
     Pair(DMatrix<C64>),
+}
+
+/// The admissible space of every slot ([`admissible`]) and its column in X.
+fn spaces(
+    A: &DMatrix<f64>,
+    B: &DMatrix<f64>,
+    U0: &DMatrix<f64>,
+    U1: &DMatrix<f64>,
+    slots: &[Slot],
+) -> Result<Vec<(Space, usize)>, PlaceError> {
+    let real = Reduced::new(A, B, U0, U1);
+    let complex = slots.iter().any(|s| matches!(s, Slot::Pair(_))).then(|| real.complex());
+    let mut out = Vec::with_capacity(slots.len());
+    let mut c = 0;
+    for s in slots {
+        match (*s, &complex) {
+            (Slot::Pair(l), Some(cr)) => {
+                out.push((Space::Pair(admissible(cr, l)?), c));
+                c += 2;
+            }
+            (Slot::Real(l), _) | (Slot::Pair(C64 { re: l, .. }), None) => {
+                out.push((Space::Real(admissible(&real, l)?), c));
+                c += 1;
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The eigenvector matrix X of KNV0 (real form) with X⁻¹, kept by rank-k updates, and log |det X|.
+struct Basis {
+    X: DMatrix<f64>,
+    inv: DMatrix<f64>,
+    log_det: f64,
+}
+
+impl Basis {
+    fn new(X: DMatrix<f64>) -> Option<Basis> {
+        let lu = X.clone().lu();
+        let log_det = lu.u().diagonal().iter().map(|d| d.abs().ln()).sum();
+        let inv = lu.try_inverse()?;
+        Some(Basis { X, inv, log_det })
+    }
+
+    /// Orthonormal basis (n × k) of the complement of every column but c … c + k − 1: rows
+    /// c … c + k − 1 of X⁻¹ are orthogonal to the other columns (X⁻¹ X = I), orthonormalised.
+    fn normal(&self, c: usize, k: usize) -> DMatrix<f64> {
+        self.inv.rows(c, k).transpose().qr().q()
+    }
+
+    /// Columns c … c + k − 1 of X replaced by `new` (n × k) and X⁻¹ by the Sherman–Morrison–Woodbury
+    /// formula, O(n² k): with P = X⁻¹ new and S its rows c … c + k − 1 (det S = det X′ / det X),
+    /// X′⁻¹ = X⁻¹ − (P − E) S⁻¹ Eᵀ X⁻¹, E = [e_c … e_{c+k−1}]. Nothing changes when S is singular.
+    fn replace(&mut self, c: usize, new: &DMatrix<f64>) {
+        let k = new.ncols();
+        let mut P = &self.inv * new;
+        let S = P.rows(c, k).into_owned();
+        let det = S.determinant();
+        let Some(S_inv) = S.try_inverse().filter(|_| det != 0.0 && det.is_finite()) else {
+            return;
+        };
+        for j in 0..k {
+            P[(c + j, j)] -= 1.0;
+        }
+        let rows = self.inv.rows(c, k).into_owned();
+        self.inv.gemm(-1.0, &(P * S_inv), &rows, 1.0);
+        self.X.columns_mut(c, k).copy_from(new);
+        self.log_det += det.abs().ln();
+    }
 }
 
 /// KNV method 0 for B of full column rank m > 1.
@@ -390,99 +517,99 @@ enum Space {
 /// vector u + i v that maximises |det X| with the other columns fixed — a rank-2 update in the
 /// manner of Tits & Yang (1996): with W the 2-dimensional complement of the other columns and
 /// z = Wᵀ (u + i v), det Wᵀ[u v] = Im(z̄₁ z₂), a Hermitian quadratic form in the coefficients.
+/// The normals come from X⁻¹, updated with each replaced column ([`Basis`]), so a sweep costs
+/// O(n³) rather than one QR of X per column.
 fn knv0(A: &DMatrix<f64>, B: &DMatrix<f64>, slots: &[Slot]) -> Result<(DMatrix<f64>, DMatrix<f64>), PlaceError> {
-    let n = A.nrows();
-    let m = B.ncols();
+    let (n, m) = (A.nrows(), B.ncols());
     let fail = PlaceError::Inaccurate { max_error: f64::INFINITY };
     // Full QR of B: B = [U0 U1] [Zb; 0].
     let mut padded = DMatrix::<f64>::zeros(n, m + n);
     padded.view_mut((0, 0), (n, m)).copy_from(B);
     let qr = padded.qr();
     let Q = qr.q();
-    let R = qr.r();
     let U0 = Q.columns(0, m).into_owned();
     let U1 = Q.columns(m, n - m).into_owned();
-    let Zb = R.view((0, 0), (m, m)).into_owned();
+    let Zb = qr.r().view((0, 0), (m, m)).into_owned();
 
-    // Admissible spaces, column positions, and generic initial vectors.
-    let mut spaces = Vec::with_capacity(slots.len());
-    let mut cols = Vec::with_capacity(slots.len());
-    let mut X = DMatrix::<f64>::zeros(n, n);
-    let mut c = 0;
-    for (i, s) in slots.iter().enumerate() {
-        cols.push(c);
-        let re = DMatrix::from_vec(m, 1, generic_coeffs(2 * i, m));
-        match *s {
-            Slot::Real(l) => {
-                let S = admissible_real(A, &U1, l)?;
-                let x = &S * re;
-                X.set_column(c, &(&x / x.norm()).column(0));
-                spaces.push(Space::Real(S));
-                c += 1;
-            }
-            Slot::Pair(l) => {
-                let S = admissible_complex(A, &U1, l)?;
-                let im = DMatrix::from_vec(m, 1, generic_coeffs(2 * i + 1, m));
-                let coef = re.zip_map(&im, C64::new);
-                let x = (&S * coef).column(0).into_owned();
-                let x = &x / C64::new(x.norm(), 0.0);
-                set_pair(&mut X, c, &x);
-                spaces.push(Space::Pair(S));
-                c += 2;
-            }
+    let spaces = spaces(A, B, &U0, &U1, slots)?;
+    let mut basis = Basis::new(initial_vectors(n, m, &spaces)).ok_or(fail.clone())?;
+    for sweep in 0..KNV_MAX_SWEEPS {
+        crate::cancel::check().map_err(|_| PlaceError::Interrupted)?;
+        let old = basis.log_det;
+        for (space, c) in &spaces {
+            knv_step(&mut basis, space, *c);
         }
-    }
-
-    let mut det_old = X.determinant().abs();
-    for _ in 0..KNV_MAX_SWEEPS {
-        for (i, space) in spaces.iter().enumerate() {
-            let c = cols[i];
-            match space {
-                Space::Real(S) => {
-                    let w = complement(&X, &[c]);
-                    let x = S * (S.transpose() * w);
-                    let nrm = x.norm();
-                    if nrm > 1e-12 {
-                        X.set_column(c, &(x / nrm).column(0));
-                    }
-                }
-                Space::Pair(S) => {
-                    let W = complement(&X, &[c, c + 1]).map(|x| C64::new(x, 0.0));
-                    let G = W.transpose() * S; // 2 × m
-                    let H = G.row(0).adjoint() * G.row(1);
-                    let Hh = (&H - H.adjoint()) * C64::new(0.0, -0.5);
-                    let Some(eig) = Hh.try_symmetric_eigen(f64::EPSILON, 10_000) else {
-                        continue;
-                    };
-                    let (best, val) = eig
-                        .eigenvalues
-                        .iter()
-                        .enumerate()
-                        .map(|(j, v)| (j, v.abs()))
-                        .fold((0, -1.0), |acc, e| if e.1 > acc.1 { e } else { acc });
-                    if val > 1e-14 {
-                        let x = S * eig.eigenvectors.column(best);
-                        let x = &x / C64::new(x.norm(), 0.0);
-                        set_pair(&mut X, c, &x);
-                    }
-                }
-            }
+        if sweep % KNV_REFRESH == KNV_REFRESH - 1 {
+            // Rounding accumulates in the updated X⁻¹: start again from X.
+            basis = Basis::new(basis.X).ok_or(fail.clone())?;
         }
-        let det = X.determinant().abs();
-        let done = (det - det_old).abs() <= 1e-10 * det.max(f64::MIN_POSITIVE);
-        det_old = det;
-        if done {
+        if (basis.log_det - old).abs() <= 1e-10 {
             break;
         }
     }
-
-    let L = real_form(slots);
-    let XL = &X * &L;
+    let X = basis.X;
+    let XL = &X * real_form(slots);
     // M = XL X⁻¹  ⇔  Xᵀ Mᵀ = XLᵀ.
     let Mt = X.transpose().lu().solve(&XL.transpose()).ok_or(fail.clone())?;
     let rhs = U0.transpose() * (A - Mt.transpose());
     let K = Zb.solve_upper_triangular(&rhs).ok_or(fail)?;
     Ok((K, X))
+}
+
+/// Generic unit vectors from each admissible space, the starting X of [`knv0`].
+fn initial_vectors(n: usize, m: usize, spaces: &[(Space, usize)]) -> DMatrix<f64> {
+    let mut X = DMatrix::<f64>::zeros(n, n);
+    for (i, (space, c)) in spaces.iter().enumerate() {
+        let re = DMatrix::from_vec(m, 1, generic_coeffs(2 * i, m));
+        match space {
+            Space::Real(S) => {
+                let x = S * re;
+                X.set_column(*c, &(&x / x.norm()).column(0));
+            }
+            Space::Pair(S) => {
+                let im = DMatrix::from_vec(m, 1, generic_coeffs(2 * i + 1, m));
+                let x = (S * re.zip_map(&im, C64::new)).column(0).into_owned();
+                set_pair(&mut X, *c, &(&x / C64::new(x.norm(), 0.0)));
+            }
+        }
+    }
+    X
+}
+
+/// One KNV0 update of the vector(s) at column c (see [`knv0`]).
+fn knv_step(basis: &mut Basis, space: &Space, c: usize) {
+    match space {
+        Space::Real(S) => {
+            let w = basis.normal(c, 1);
+            let x = S * (S.transpose() * w);
+            let nrm = x.norm();
+            if nrm > 1e-12 {
+                basis.replace(c, &(x / nrm));
+            }
+        }
+        Space::Pair(S) => {
+            let W = basis.normal(c, 2).map(|x| C64::new(x, 0.0));
+            let G = W.transpose() * S; // 2 × m
+            let H = G.row(0).adjoint() * G.row(1);
+            let Hh = (&H - H.adjoint()) * C64::new(0.0, -0.5);
+            let Some(eig) = Hh.try_symmetric_eigen(f64::EPSILON, 10_000) else {
+                return;
+            };
+            let (best, val) = eig
+                .eigenvalues
+                .iter()
+                .enumerate()
+                .map(|(j, v)| (j, v.abs()))
+                .fold((0, -1.0), |acc, e| if e.1 > acc.1 { e } else { acc });
+            if val > 1e-14 {
+                let x = S * eig.eigenvectors.column(best);
+                let x = &x / C64::new(x.norm(), 0.0);
+                let mut new = DMatrix::<f64>::zeros(x.len(), 2);
+                set_pair(&mut new, 0, &x);
+                basis.replace(c, &new);
+            }
+        }
+    }
 }
 
 /// Λ in real block-diagonal form, in the column order of the slots: λ for a real pole,
@@ -517,20 +644,12 @@ fn eigenvectors_single_input(A: &DMatrix<f64>, b: &DMatrix<f64>, slots: &[Slot])
     let mut padded = DMatrix::<f64>::zeros(n, n + 1);
     padded.view_mut((0, 0), (n, 1)).copy_from(b);
     let Q = padded.qr().q();
-    let U1 = Q.columns(1, n - 1).into_owned();
+    let (U0, U1) = (Q.columns(0, 1).into_owned(), Q.columns(1, n - 1).into_owned());
     let mut X = DMatrix::<f64>::zeros(n, n);
-    let mut c = 0;
-    for s in slots {
-        match *s {
-            Slot::Real(l) => {
-                X.set_column(c, &admissible_real(A, &U1, l)?.column(0));
-                c += 1;
-            }
-            Slot::Pair(l) => {
-                let x = admissible_complex(A, &U1, l)?.column(0).into_owned();
-                set_pair(&mut X, c, &x);
-                c += 2;
-            }
+    for (space, c) in spaces(A, b, &U0, &U1, slots)? {
+        match space {
+            Space::Real(S) => X.set_column(c, &S.column(0)),
+            Space::Pair(S) => set_pair(&mut X, c, &S.column(0).into_owned()),
         }
     }
     Ok(X)
@@ -558,7 +677,8 @@ fn set_pair(X: &mut DMatrix<f64>, c: usize, x: &DVector<C64>) {
 ///   M defines it (where compared, to 16 digits of its 60-digit value; every one of the 111 such
 ///   cases the tests accept is within 1e-6 by 60-digit eigenvalues, `scripts/mp_eigenvalues.py`);
 ///   error = the larger of that and the characteristic-polynomial error below. A repeated pole
-///   in this class is judged by the characteristic polynomial alone, as a cluster.
+///   in this class is judged by the characteristic polynomial alone, as a cluster. Above
+///   n = [`REFINE_MAX_N`] the refinement (O(n⁴)) is not attempted and the first-order bound decides.
 /// * Defective (a Jordan design, X unknown; a k-fold eigenvalue is only computable to ≈ ε^(1/k)):
 ///   the characteristic polynomial of M (orthogonal Hessenberg reduction, then the Hessenberg
 ///   determinant recursion) against ∏(s − p), coefficient-wise relative to ∏(s + max(1, |p|)).
@@ -604,7 +724,8 @@ fn verified_error(
     let Ok(eigs) = crate::linalg::eigenvalues(&M) else {
         return f64::INFINITY;
     };
-    if well_conditioned {
+    if well_conditioned || M.nrows() > REFINE_MAX_N {
+        // Beyond REFINE_MAX_N the O(n⁴) refinement is not attempted: the first-order bound stands.
         matching_error(&eigs, poles) + floor
     } else {
         refined_error(&M, eigs, poles).max(coefficients())
@@ -646,8 +767,12 @@ fn refined_error(M: &DMatrix<f64>, mut free: Vec<C64>, poles: &[C64]) -> f64 {
 /// True when every eigenvalue of M (`eigs`, computed by [`crate::linalg::eigenvalues`]), refined
 /// as in [`refined_error`], converges to a distinct value λ with Re λ + |last step| < 0: M is
 /// Hurwitz to the accuracy with which the formed M defines its eigenvalues, whatever ‖M‖. False
-/// when a refinement does not converge (e.g. a Jordan block) or two end at the same eigenvalue.
+/// when a refinement does not converge (e.g. a Jordan block), two end at the same eigenvalue, or
+/// n > [`REFINE_MAX_N`].
 pub(crate) fn refined_left_half_plane(M: &DMatrix<f64>, eigs: &[C64]) -> bool {
+    if M.nrows() > REFINE_MAX_N {
+        return false;
+    }
     let Mb = crate::linalg::balance(M);
     let mut refined: Vec<(C64, f64)> = Vec::with_capacity(eigs.len());
     for &l in eigs {
@@ -805,8 +930,9 @@ fn hessenberg_char_poly(M: &DMatrix<f64>) -> Vec<f64> {
 /// eigenvalues (MATLAB's `place` reports the same kind of figure). ∞ when A − B K is defective
 /// (a Jordan block: no basis of eigenvectors exists) or not finite.
 ///
-/// X is built from the computed eigenvalues (`linalg::eigenvalues`) grouped by
-/// `linalg::clusters` (the copies of one repeated eigenvalue): for a cluster of k copies
+/// X is built from faer's eigendecomposition of A − B K, its eigenvalues grouped by
+/// `linalg::clusters` (the copies of one repeated eigenvalue): a simple eigenvalue's
+/// column is faer's eigenvector, to unit length; for a cluster of k copies
 /// around its mean μ, the k right singular vectors of M − μI for its k smallest singular values
 /// (an orthonormal basis of the eigenspace, the best-conditioned choice within it). The cluster is
 /// declared defective (result ∞) when the largest of those k singular values exceeds
@@ -828,15 +954,32 @@ pub(crate) fn closed_loop_condition(A: &DMatrix<f64>, B: &DMatrix<f64>, K: &DMat
         return 1.0;
     }
     let M = A - B * K;
-    let Ok(eigs) = crate::linalg::eigenvalues(&M) else {
+    let size = M.norm();
+    if !size.is_finite() {
+        return f64::INFINITY;
+    }
+    let F = faer::Mat::<f64>::from_fn(n, n, |r, c| M[(r, c)]);
+    let Ok(evd) = F.eigen() else {
         return f64::INFINITY;
     };
-    let size = M.norm();
+    let eigs: Vec<C64> = (0..n).map(|j| evd.S().column_vector()[j]).collect();
+    let U = evd.U();
     let Mc = M.map(|x| C64::new(x, 0.0));
     let mut X = DMatrix::<C64>::zeros(n, n);
     let mut c = 0;
     for cluster in crate::linalg::clusters(&eigs, size) {
         let k = cluster.len();
+        if k == 1 {
+            // A simple eigenvalue's eigenvector, from the same decomposition, to unit length.
+            let v = DVector::<C64>::from_fn(n, |r, _| U[(r, cluster[0])]);
+            let norm = v.norm();
+            if !(norm.is_finite() && norm > 0.0) {
+                return f64::INFINITY;
+            }
+            X.set_column(c, &(v / C64::new(norm, 0.0)));
+            c += 1;
+            continue;
+        }
         let mu = cluster.iter().map(|&j| eigs[j]).sum::<C64>() / k as f64;
         let shifted = &Mc - DMatrix::<C64>::identity(n, n) * mu;
         let Some(svd) = shifted.try_svd(false, true, f64::EPSILON, 10_000) else {
