@@ -8,6 +8,7 @@ mod auto;
 mod export;
 mod interrupt;
 mod output;
+mod pace;
 mod plot;
 mod report;
 mod run;
@@ -126,10 +127,12 @@ fn design(args: &auto::DesignArgs) -> Result<(), Failure> {
     interrupt::Interrupt::quit_with("interrupted during the design; nothing was printed");
     let (s, d) = load(Some(&args.scenario))?;
     let warnings = quell::design::warnings(&d, &s.design);
+    let estimates = pace::estimates(&s, &d);
     if args.json {
-        print_json(&report::with_warnings(report::design_json(&d), &warnings));
+        print_json(&pace::with_pace(report::with_warnings(report::design_json(&d), &warnings), &d, &estimates));
     } else {
-        print_stdout(&format!("{}{}", report::design_text(&d), report::warnings_text(&warnings)));
+        let pace = pace::pace_text(&d, &estimates, s.simulation.t_end);
+        print_stdout(&format!("{}{pace}{}", report::design_text(&d), report::warnings_text(&warnings)));
     }
     Ok(())
 }

@@ -165,7 +165,9 @@ fn write_data(
 ) -> std::io::Result<()> {
     output::write_signals(&dir.join("signals.csv"), r)?;
     let warnings = quell::design::warnings(design, &scenario.design);
-    output::write_json(&dir.join("design.json"), &report::with_warnings(report::design_json(design), &warnings))?;
+    let pace = crate::pace::estimates(scenario, design);
+    let json = crate::pace::with_pace(report::with_warnings(report::design_json(design), &warnings), design, &pace);
+    output::write_json(&dir.join("design.json"), &json)?;
     let summary = json!({
         "scenario": scenario.name,
         "truth_differs": scenario.truth_differs(),

@@ -175,6 +175,39 @@ fn design_json_on_paper_example() {
     }
 }
 
+/// The design report's pace of the adaptive law: the quadruple tank's filters at its own time scale
+/// in the paper's form make both channels stiff (μ λ_max ≈ 2.7e6/s against ρ = 0.2/s), the
+/// normalized form does not; the paper's example is not stiff. The figures themselves are checked
+/// against the simulated Ω_i in `quell::diagnostics::estimate`'s tests.
+#[test]
+fn design_reports_the_adaptation_pace() {
+    let tank = Path::new(env!("CARGO_MANIFEST_DIR")).join("../quell/tests/data/quadruple-tank.toml");
+    let text = std::fs::read_to_string(&tank).unwrap();
+    let dir = temp_dir("pace");
+    let normalized = dir.path().join("tank-normalized.toml");
+    std::fs::write(&normalized, text.replace("beta = 10.0", "beta = 10.0\nregressor_scaling = \"normalized\""))
+        .unwrap();
+    for (file, scaling, stiff) in [
+        (tank.to_str().unwrap(), "paper", true),
+        (normalized.to_str().unwrap(), "normalized", false),
+        (&paper(), "paper", false),
+    ] {
+        let o = quell(&["design", "--json", file]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let d: Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(d["regressor_scaling"], scaling);
+        assert!(d["mu_meaning"].as_str().unwrap().contains("μ"));
+        for (c, mu) in d["adaptation"].as_array().unwrap().iter().zip(d["mu"].as_array().unwrap()) {
+            assert_eq!(c["stiff"], stiff, "{file}: {c}");
+            let (rate, lambda) = (c["adaptation_rate"].as_f64().unwrap(), c["lambda_max_omega"].as_f64().unwrap());
+            assert!((rate - mu.as_f64().unwrap() * lambda).abs() <= 1e-12 * rate, "{c}");
+        }
+        let text = stdout(&quell(&["design", file]));
+        assert!(text.contains(&format!("regressor_scaling = \"{scaling}\"")), "{text}");
+        assert_eq!(text.contains("⚠ stiff"), stiff, "{text}");
+    }
+}
+
 #[test]
 fn design_missing_file_exits_2() {
     let err = input_error(&["design", "no/such/scenario.toml"]);

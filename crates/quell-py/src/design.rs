@@ -59,6 +59,7 @@ pub fn spec(
     observer_poles: Option<&Bound<'_, PyAny>>,
     observer_gain: Option<&Bound<'_, PyAny>>,
     relative_degrees: Option<&Bound<'_, PyAny>>,
+    regressor_scaling: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<DesignSpec> {
     let k = Kind::Design;
     // Both are read first, so that a wrong type is named before a wrong combination.
@@ -81,6 +82,16 @@ pub fn spec(
         mu: vector(mu, "mu", k)?,
         beta: number(beta, "beta")?,
         relative_degrees: relative_degrees.map(|s| integers(s, "relative_degrees", k)).transpose()?,
+        regressor_scaling: regressor_scaling
+            .map(|obj| {
+                let name: String = obj
+                    .extract()
+                    .map_err(|_| crate::errors::type_error("regressor_scaling", "\"paper\" or \"normalized\"", obj))?;
+                quell::design::RegressorScaling::from_name(&name)
+                    .map_err(|e| k.err(py, format!("regressor_scaling: {e}")))
+            })
+            .transpose()?
+            .unwrap_or_default(),
     })
 }
 
@@ -138,6 +149,9 @@ fn integers(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<usiz
 ///     The observer gain L (n×m), eq. (6).
 /// relative_degrees : list of int, optional
 ///     σ_i given instead of decided by eq. (7).
+/// regressor_scaling : str, optional
+///     "paper" (default: the paper's filters, l = e_q) or "normalized" (filters of unit DC gain at
+///     their own time scale, so ξ̂ has the signals' size).
 ///
 /// Returns
 /// -------
@@ -160,7 +174,7 @@ fn integers(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<usiz
 /// >>> np.sort(np.real(d.observer_eigenvalues))
 /// array([-4., -3., -2.])
 #[pyfunction]
-#[pyo3(signature = (plant, *, channel_poles, reference_filter_poles, mu, beta, disturbance_filter_poles=None, observer_poles=None, observer_gain=None, relative_degrees=None))]
+#[pyo3(signature = (plant, *, channel_poles, reference_filter_poles, mu, beta, disturbance_filter_poles=None, observer_poles=None, observer_gain=None, relative_degrees=None, regressor_scaling=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn design(
     py: Python<'_>,
@@ -173,6 +187,7 @@ pub fn design(
     observer_poles: Option<&Bound<'_, PyAny>>,
     observer_gain: Option<&Bound<'_, PyAny>>,
     relative_degrees: Option<&Bound<'_, PyAny>>,
+    regressor_scaling: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyDesign> {
     let plant = plant_arg(plant, "plant")?;
     let spec = spec(
@@ -185,6 +200,7 @@ pub fn design(
         observer_poles,
         observer_gain,
         relative_degrees,
+        regressor_scaling,
     )?;
     let d = quell::Design::new(&plant.inner, &spec).map_err(|e| Kind::Design.err(py, in_python(e.to_string())))?;
     crate::errors::warn_fragile(py, &d, &spec)?;
@@ -206,6 +222,7 @@ fn restore(py: Python<'_>, plant: &PyPlant, choices: &Bound<'_, PyDict>) -> PyRe
         get("observer_poles")?.as_ref(),
         get("observer_gain")?.as_ref(),
         get("relative_degrees")?.filter(|v| !v.is_none()).as_ref(),
+        get("regressor_scaling")?.as_ref(),
     )?;
     let d = crate::interrupt::interruptible(py, || quell::Design::new(&plant.inner, &spec))?
         .map_err(|e| raise(py, Kind::Design)(&e))?;
@@ -340,6 +357,12 @@ impl PyDesign {
     fn beta(&self) -> f64 {
         self.inner.beta()
     }
+    /// How the internal-model filters are realized: "paper" (l = e_q) or "normalized" (unit DC
+    /// gain, ξ̂ of the signals' size).
+    #[getter]
+    fn regressor_scaling(&self) -> &'static str {
+        self.inner.regressor_scaling().name()
+    }
     /// Regressor size q = q_g + q_ω (the length of each η̂_i).
     #[getter]
     fn q(&self) -> usize {
@@ -397,7 +420,7 @@ impl PyDesign {
     }
     /// The designer's choices, as `quell.design`'s keyword arguments: channel_poles,
     /// reference_filter_poles, disturbance_filter_poles, mu, beta, observer_gain or
-    /// observer_poles, and relative_degrees when given.
+    /// observer_poles, relative_degrees when given, and regressor_scaling.
     #[getter]
     fn choices<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let s = &self.spec;
@@ -414,6 +437,7 @@ impl PyDesign {
         if let Some(r) = &s.relative_degrees {
             d.set_item("relative_degrees", r.clone())?;
         }
+        d.set_item("regressor_scaling", s.regressor_scaling.name())?;
         Ok(d)
     }
     /// Rebuilds a pickled design.

@@ -437,6 +437,36 @@ impl PyScenario {
         Ok(PyDesign { inner: self.design_arc(py)?, spec: self.inner.design.clone(), labels: self.labels.clone() })
     }
 
+    /// The adaptive law's pace before a run, per channel (`quell design`'s "adaptation"), from the
+    /// averaged Ω̄_i over g and ω.
+    ///
+    /// Returns
+    /// -------
+    /// list of dict
+    ///     Per channel: `mu`, `lambda_max_omega`, `lambda_min_omega`, `excited_rank`,
+    ///     `lambda_min_excited_omega`, `adaptation_rate` (μ_i λ_max), `loop_rate` (the loop's fastest
+    ///     other rate ρ), `convergence_time` (1/(μ_i λ_min) over the excited directions, s), the
+    ///     flags `stiff` (rate > 100 ρ) and `weakly_excited`, and `advice`.
+    ///
+    /// Raises
+    /// ------
+    /// DesignError
+    ///     No design exists for these choices.
+    ///
+    /// Examples
+    /// --------
+    /// >>> [c["stiff"] for c in quell.paper_example().adaptation()]
+    /// [False, False]
+    fn adaptation<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let d = self.design_arc(py)?;
+        let s = &self.inner;
+        let e = py.detach(|| {
+            quell::diagnostics::estimate(&d, s.true_plant(), &s.reference, &s.disturbance, s.simulation.t_end)
+        });
+        let text = serde_json::to_string(&e).unwrap_or_default();
+        py.import("json")?.call_method1("loads", (text,))
+    }
+
     /// The plant (1).
     #[getter]
     fn plant(&self) -> PyPlant {

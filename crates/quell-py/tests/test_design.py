@@ -1,6 +1,8 @@
 """Design properties, each checked by numpy/SciPy on the returned matrices: eig(A − BK) holds the channel poles, the decoupled transfer matrix
 C (sI − A_f)⁻¹ B_f is diagonal with G_ii(s) = q_i0 / ∏(s − λ_ij), N D = L_ω, eig(A − LC) as asked."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -108,3 +110,43 @@ def test_relative_degrees_given():
     for bad in ([2, 1.0], [2, True]):
         with pytest.raises(TypeError, match=r"^relative_degrees\[1\]: expected an integer ≥ 1, found a (float|bool)"):
             quell.design(p, relative_degrees=bad, **kw)
+
+
+TANK = Path(__file__).resolve().parents[2] / "quell" / "tests" / "data" / "quadruple-tank.toml"
+
+
+def test_normalized_regressor_has_unit_dc_gain_and_unstiffens_the_quadruple_tank():
+    """The tank's filters at its own time scale (poles −0.05, −0.1, −0.15): the paper's form has DC
+    gain 1/∏|p_j| = 1/7.5e-4 from g to ξ̂'s first entry, the normalized form 1 (ξ̂ = −G⁻¹ L g for a
+    constant g, solved here by numpy). The pre-run estimate flags the first stiff, not the second,
+    and the normalized loop runs in a few hundred steps."""
+    text = TANK.read_text()
+    paper = quell.Scenario.from_toml(text)
+    normalized = quell.Scenario.from_toml(text.replace("beta = 10.0", 'beta = 10.0\nregressor_scaling = "normalized"'))
+    dp, dn = paper.design(), normalized.design()
+    assert (dp.regressor_scaling, dn.regressor_scaling) == ("paper", "normalized")
+    dc_paper = -np.linalg.solve(dp.G_g, dp.L_g)
+    dc_normalized = -np.linalg.solve(dn.G_g, dn.L_g)
+    expected = np.zeros((6, 2))
+    expected[0, 0] = expected[3, 1] = 1.0
+    # A 6×6 solve of a matrix with entries ≤ 0.3 in size: rounding far below 1e-12.
+    np.testing.assert_allclose(dc_normalized, expected, atol=1e-12)
+    np.testing.assert_allclose(dc_paper, expected / 7.5e-4, rtol=1e-12, atol=1e-9)
+    for scenario, stiff in [(paper, True), (normalized, False)]:
+        pace = scenario.adaptation()
+        assert [c["stiff"] for c in pace] == [stiff, stiff]
+        for c, mu in zip(pace, scenario.design().mu):
+            assert c["adaptation_rate"] == pytest.approx(mu * c["lambda_max_omega"], rel=1e-14)
+    r = quell.simulate(normalized)
+    assert r.outcome["status"] == "completed"
+    assert r.stats["steps"] < 1000
+
+
+def test_bad_regressor_scaling_names_the_key():
+    d = paper_design()
+    kwargs = dict(channel_poles=[[-6.0, -2.0], [-4.0]], reference_filter_poles=[[-1.0, -6.0], [-9.0]],
+                  disturbance_filter_poles=[[-1.0, -3.0], [-1.0, -2.0, -3.0]], mu=[20.0, 30.0], beta=1.0,
+                  observer_poles=[-2.0, -3.0, -4.0])
+    assert quell.design(d.plant, regressor_scaling="normalized", **kwargs).regressor_scaling == "normalized"
+    with pytest.raises(quell.DesignError, match=r'^regressor_scaling: expected "paper" .* found "unit_dc"'):
+        quell.design(d.plant, regressor_scaling="unit_dc", **kwargs)

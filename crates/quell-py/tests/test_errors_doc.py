@@ -135,6 +135,8 @@ CASES = [
     ("beta_out_of_span", edit((BETA, "beta = 1e-9 ")), "design.beta", None),
     ("channel_pole_count_vs_relative_degree", edit((CHANNEL, "channel_poles = [[-6.0], [-4.0]]")),
      "design.channel_poles[0]", None),
+    ("regressor_scaling_unknown", edit((BETA, "beta = 1.0\nregressor_scaling = \"unit_dc\"\n")),
+     "design.regressor_scaling", None),
     ("relative_degrees_count", edit((BETA, "beta = 1.0\nrelative_degrees = [2]\n")),
      "design.relative_degrees", None),
     ("relative_degree_not_an_integer", edit((BETA, "beta = 1.0\nrelative_degrees = [2, 1.5]\n")),

@@ -26,6 +26,7 @@ def _valid():
         "Plant": (quell.Plant, dict(A=A, B=B, C=C, D=D, Q=Q, delays=[1.0, 3.0], x0=[0, 0, 0], inputs=["a", "b"],
                                     outputs=["c", "d"], states=["x", "y", "z"])),
         "design": (quell.design, dict(plant=plant, observer_gain=L, observer_poles=None, relative_degrees=[2, 1],
+                                      regressor_scaling="paper",
                                       **PAPER_DESIGN)),
         "place": (quell.place, dict(A=A, B=B, poles=[-1, -2, -3])),
         "auto_design": (quell.auto_design, dict(text=s.to_toml(), convergence_time=10.0, u_limit=100.0)),

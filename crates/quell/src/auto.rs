@@ -320,6 +320,9 @@ fn choose(
             b
         }
     };
+    // The paper's form unless the file asks otherwise: μ is chosen below from Ω̄ in the design's
+    // own coordinates, which absorbs the regressor's scale either way.
+    let regressor_scaling = partial.regressor_scaling.unwrap_or_default();
     let mut spec = DesignSpec {
         observer: ObserverChoice::Poles(Vec::new()),
         channel_poles,
@@ -328,6 +331,7 @@ fn choose(
         mu: vec![1.0; m],
         beta,
         relative_degrees: partial.relative_degrees.clone(),
+        regressor_scaling,
     };
     let design = match partial.observer {
         Some(o) => {

@@ -349,6 +349,7 @@ fn error_not_decouplable_observable_plant() {
         mu: vec![1.0, 1.0],
         beta: 1.0,
         relative_degrees: None,
+        regressor_scaling: Default::default(),
     };
     match expect_err(&plant, &spec) {
         DesignError::NotDecouplable { smallest, .. } => assert!(smallest < 1e-12, "σ_min {smallest}"),
@@ -373,6 +374,7 @@ fn siso_spec() -> quell::DesignSpec {
         mu: vec![1.0],
         beta: 1.0,
         relative_degrees: None,
+        regressor_scaling: Default::default(),
     }
 }
 
@@ -551,6 +553,7 @@ fn triple_channel_pole_is_designed() {
         mu: vec![1.0; 3],
         beta: 1.0,
         relative_degrees: None,
+        regressor_scaling: Default::default(),
     };
     let d = Design::new(&plant, &spec).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(d.sigma(), &[2, 1, 1]);
@@ -603,6 +606,7 @@ fn chain_observer_with_a_large_gain_is_designed_and_reported_fragile() {
         mu: vec![1.0],
         beta: 1.0,
         relative_degrees: None,
+        regressor_scaling: Default::default(),
     };
     let d = Design::new(&plant, &spec).unwrap_or_else(|e| panic!("{e}"));
     assert!(multiset_mismatch(&poles, d.observer_eigenvalues()) <= 1e-6 * 9.7, "{:?}", d.observer_eigenvalues());
@@ -633,6 +637,7 @@ fn an_observer_that_cannot_be_confirmed_hurwitz_says_so_with_its_figures() {
         mu: vec![1.0],
         beta: 1e3,
         relative_degrees: None,
+        regressor_scaling: Default::default(),
     };
     let e = expect_err(&plant, &spec);
     let DesignError::ObserverUnconfirmed { key, eigenvalues, in_margin, margin, kappa } = &e else { panic!("{e}") };
@@ -658,6 +663,7 @@ fn a_plant_beyond_the_state_limit_is_refused_naming_the_key_and_the_limit() {
         mu: vec![1.0],
         beta: 1.0,
         relative_degrees: None,
+        regressor_scaling: Default::default(),
     };
     let e = expect_err(&chain_plant(n), &spec);
     assert_eq!(e, DesignError::TooManyStates { n });

@@ -181,6 +181,7 @@ fn case(rng: &mut Rng, unstable: bool) -> Case {
             mu: vec![1.0; m],
             beta: 1.0,
             relative_degrees: None,
+            regressor_scaling: Default::default(),
         };
         return Case { plant, sigma, zeros, spec };
     }

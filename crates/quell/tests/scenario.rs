@@ -697,6 +697,15 @@ fn channel_pole_count_vs_relative_degree() {
 }
 
 #[test]
+fn regressor_scaling_unknown() {
+    check(
+        &with(&[(BETA, "beta = 1.0\nregressor_scaling = \"unit_dc\"\n")]),
+        "design.regressor_scaling",
+        "found \"unit_dc\"",
+    );
+}
+
+#[test]
 fn relative_degrees_count() {
     check(
         &with(&[(BETA, "beta = 1.0\nrelative_degrees = [2]\n")]),
@@ -759,6 +768,30 @@ fn relative_degrees_given_round_trip_and_design_as_decided() {
     let given: Vec<_> = d.relative_degree_decisions().iter().map(|r| (r.decided, r.given)).collect();
     assert_eq!(given, vec![(Some(2), Some(2)), (Some(1), Some(1))]);
     assert!(decided.relative_degree_decisions().iter().all(|r| r.given.is_none()));
+}
+
+/// Without the key a file means the paper's form (G_g1 = [[0, 1], [−6, −7]], l = e_2, Section VIII);
+/// `"normalized"` runs the same filter at ω₀ = √6: G = [[0, √6], [−√6, −7]], l = [0, √6]ᵀ (closed
+/// form of `RegressorScaling::Normalized` for poles −1, −6). Both round-trip through the writer.
+#[test]
+fn regressor_scaling_round_trip_and_filters() {
+    use quell::design::RegressorScaling;
+    let (paper, d) = load_and_design(PAPER_EXAMPLE).unwrap();
+    assert_eq!(paper.design.regressor_scaling, RegressorScaling::Paper);
+    assert_eq!(d.G_g().view((0, 0), (2, 2)), m(&[&[0.0, 1.0], &[-6.0, -7.0]]));
+    assert_eq!(d.L_g().view((0, 0), (2, 1)), m(&[&[0.0], &[1.0]]));
+    let text = with(&[(BETA, "beta = 1.0\nregressor_scaling = \"normalized\"\n")]);
+    let (s, d) = load_and_design(&text).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.design.regressor_scaling, RegressorScaling::Normalized);
+    let r6 = 6f64.sqrt();
+    let (G, l) = (d.G_g().view((0, 0), (2, 2)).into_owned(), d.L_g().view((0, 0), (2, 1)).into_owned());
+    // Rounding of √6 and of the monic polynomial's coefficients: a few ulps of 7.
+    assert!((G - m(&[&[0.0, r6], &[-r6, -7.0]])).amax() <= 1e-14, "{}", d.G_g());
+    assert!((l - m(&[&[0.0], &[r6]])).amax() <= 1e-15, "{}", d.L_g());
+    for s in [paper, s] {
+        let back = Scenario::from_toml(&s.to_toml()).unwrap();
+        assert_eq!(back.design, s.design);
+    }
 }
 
 #[test]

@@ -76,6 +76,7 @@ pub fn synthetic(m: usize, q: usize) -> Design {
         mu: vec![10.0; m],
         beta: 1.0,
         relative_degrees: None,
+        regressor_scaling: Default::default(),
     };
     Design::new(&plant, &spec).unwrap()
 }

@@ -15,7 +15,7 @@ pub use decouple::{
     close, falb_wolovich, falb_wolovich_given, relative_degree_measures, relative_degrees, FalbWolovich,
     RelativeDegree, CLOSE_FACTOR, TOL,
 };
-pub use internal_model::{filter_pair, internal_model};
+pub use internal_model::{filter_pair, internal_model, RegressorScaling};
 pub use place::{place, PlaceError};
 pub use warnings::{warnings, DesignWarning};
 
@@ -52,6 +52,9 @@ pub struct DesignSpec {
     /// lets eq. (7) decide. Accepted unless the plant clearly contradicts it
     /// ([`decouple::falb_wolovich_given`]).
     pub relative_degrees: Option<Vec<usize>>,
+    /// How the internal-model filters are realized, and so the size of ξ̂ and the meaning of μ
+    /// (`design.regressor_scaling`; [`RegressorScaling::Paper`] by default).
+    pub regressor_scaling: RegressorScaling,
 }
 
 /// Channel i's decoupled transfer function G_ii(s) = q_i0 / ∏_j (s − λ_ij).
@@ -113,6 +116,7 @@ pub struct Design {
     cond_D: f64,
     mu: Vec<f64>,
     beta: f64,
+    regressor_scaling: RegressorScaling,
     controllability: RankTest,
     observability: RankTest,
     observer_eigenvalues: Vec<Complex<f64>>,
@@ -244,8 +248,8 @@ impl Design {
         let B_f = &plant.B * &fw.F;
         let decoupled_eigenvalues = eigenvalues(&A_f).map_err(|e| eigen_error("plant", "A − BK", e))?;
         check_zero_dynamics(plant, &fw.sigma(), &A_f)?;
-        let (G_g, L_g) = internal_model(&spec.reference_filter_poles);
-        let (G_w, L_w) = internal_model(&spec.disturbance_filter_poles);
+        let (G_g, L_g) = internal_model(&spec.reference_filter_poles, spec.regressor_scaling);
+        let (G_w, L_w) = internal_model(&spec.disturbance_filter_poles, spec.regressor_scaling);
         let (N, cond_D) = disturbance_observer_gain(&plant.D, &L_w)?;
         Ok(Design {
             plant: plant.clone(),
@@ -266,6 +270,7 @@ impl Design {
             cond_D,
             mu: spec.mu.clone(),
             beta: spec.beta,
+            regressor_scaling: spec.regressor_scaling,
             controllability,
             observability,
             observer_eigenvalues,
@@ -350,6 +355,10 @@ impl Design {
     /// β of H(s) = 1/(βs + 1).
     pub fn beta(&self) -> f64 {
         self.beta
+    }
+    /// How the internal-model filters are realized ([`RegressorScaling`]).
+    pub fn regressor_scaling(&self) -> RegressorScaling {
+        self.regressor_scaling
     }
     /// Assumption 1: the controllability rank test.
     pub fn controllability(&self) -> &RankTest {

@@ -4,13 +4,16 @@
 //! that Ω_i of eq. (33) settles to), the predicted convergence time 1/(μ_i λ_min), the adaptation
 //! rate μ_i λ_max, the excitation each frequency of g and ω gives Ω̄_i and, for the disturbance
 //! observer (20), how faithfully it passes each frequency of ω (T(jw) against N D = L_ω). From the
-//! run: whether the tail error is still shrinking. One line of advice per problem found.
+//! run: whether the tail error is still shrinking. One line of advice per problem found. Before a
+//! run, [`estimate()`] gives the adaptive law's pace from the same averages (the design report).
 
 pub mod averaged;
+pub mod estimate;
 
 use serde::Serialize;
 
 pub use averaged::{disturbance_observer_gain, Averaged, ChannelAverage, Excitation, Fidelity};
+pub use estimate::{estimate, RateEstimate, STIFF_RATIO};
 
 use nalgebra::{Complex, DMatrix};
 

@@ -20,7 +20,7 @@ use std::str::FromStr;
 use nalgebra::{Complex, DMatrix, DVector};
 use thiserror::Error;
 
-use crate::design::{Design, DesignError, DesignSpec, ObserverChoice};
+use crate::design::{Design, DesignError, DesignSpec, ObserverChoice, RegressorScaling};
 use crate::plant::{Plant, PlantError};
 use crate::settings::{self, KeyError};
 use crate::signal::{check_signals, Component, Harmonic, Signal};
@@ -123,6 +123,7 @@ const DESIGN_KEYS: &[&str] = &[
     "mu",
     "beta",
     "relative_degrees",
+    "regressor_scaling",
     "reference_filter_orders",
     "disturbance_filter_orders",
 ];
@@ -441,6 +442,8 @@ pub struct PartialDesign {
     pub mu: Option<Vec<f64>>,
     pub beta: Option<f64>,
     pub relative_degrees: Option<Vec<usize>>,
+    /// `None`: [`RegressorScaling::Paper`].
+    pub regressor_scaling: Option<RegressorScaling>,
     /// Filter orders per reference component, for an automatic design in place of the poles.
     pub reference_filter_orders: Option<Vec<usize>>,
     /// Filter orders per disturbance component, for an automatic design in place of the poles.
@@ -495,6 +498,7 @@ impl PartialDesign {
             mu: required(self.mu, "mu", "one adaptation gain μ_i ≥ 0 per channel")?,
             beta: required(self.beta, "beta", "β > 0 of H(s) = 1/(βs + 1)")?,
             relative_degrees: self.relative_degrees,
+            regressor_scaling: self.regressor_scaling.unwrap_or_default(),
         })
     }
 
@@ -508,6 +512,7 @@ impl PartialDesign {
             mu: Vec::new(),
             beta: 1.0,
             relative_degrees: None,
+            regressor_scaling: RegressorScaling::Paper,
         }
     }
 }
@@ -542,6 +547,9 @@ fn partial_design(v: Value) -> Result<PartialDesign, ScenarioError> {
         beta: t.get("beta", |v| v.number())?,
         relative_degrees: t.get("relative_degrees", |v| {
             v.array("one relative degree σ_i ≥ 1 per output, e.g. [2, 1]", |s| s.positive("a relative degree σ_i"))
+        })?,
+        regressor_scaling: t.get("regressor_scaling", |v| {
+            RegressorScaling::from_name(&v.string()?).map_err(|message| err(v.key, message))
         })?,
         reference_filter_orders: orders("reference_filter_orders", "reference component")?,
         disturbance_filter_orders: orders("disturbance_filter_orders", "disturbance component")?,

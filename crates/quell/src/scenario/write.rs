@@ -121,6 +121,7 @@ pub fn design_table(d: &DesignSpec) -> Table {
     }
     t.insert("mu".into(), numbers(&d.mu));
     t.insert("beta".into(), Value::Float(d.beta));
+    t.insert("regressor_scaling".into(), Value::String(d.regressor_scaling.name().into()));
     if let Some(sigma) = &d.relative_degrees {
         let sigma = sigma.iter().map(|&s| Value::Integer(i64::try_from(s).unwrap_or(i64::MAX))).collect();
         t.insert("relative_degrees".into(), Value::Array(sigma));

@@ -212,6 +212,12 @@ impl<'a> ContinuousLoop<'a> {
         Ok(s)
     }
 
+    /// Where Ω_i (packed, [`packed`]) sits in the loop's state.
+    #[cfg(test)]
+    pub(crate) fn omega_range(&self, i: usize) -> std::ops::Range<usize> {
+        self.layout.omega[i]..self.layout.omega[i] + packed::len(self.layout.q)
+    }
+
     /// The plant input u_f = −K x̂(t) + F u_d(t) (5) as the true plant receives it (at its delays,
     /// through its actuator), into `u_f`.
     fn plant_input(&mut self, t: f64, s: &[f64], past: &Past<'_>, u_f: &mut [f64]) {
@@ -641,14 +647,28 @@ pub const BUDGET_STEPS_PER_RATE: f64 = 100.0;
 pub const BUDGET_MIN_STEPS: usize = 10_000;
 
 /// The default step budget of a continuous run, from the problem's time scales:
-/// [`BUDGET_MIN_STEPS`] + [`BUDGET_STEPS_PER_RATE`]·(ρ·t_end + t_end/τ_min). ρ is the fastest rate
-/// the loop is built from: the largest |λ| of the true plant's A, of A − BK, A − LC, G_g, G_ω and
-/// the channels' G_ii(s), 1/β, and the signals' highest frequency; τ_min is the shortest positive
-/// delay (a step is at most τ_min long). A healthy run takes a few steps per unit of ρ·t (the
-/// paper's example about 2 at rtol = 1e-9), so the budget leaves a margin of tens; a loop that
-/// turns stiff as it blows up spends it in seconds. The adaptation's own rate μ_i·λ_max(Ω_i) is not
-/// known before the run and is not counted.
+/// [`BUDGET_MIN_STEPS`] + [`BUDGET_STEPS_PER_RATE`]·(ρ·t_end + t_end/τ_min), ρ = [`loop_rate`] and
+/// τ_min the shortest positive delay (a step is at most τ_min long). A healthy run takes a few steps
+/// per unit of ρ·t (the paper's example about 2 at rtol = 1e-9), so the budget leaves a margin of
+/// tens; a loop that turns stiff as it blows up spends it in seconds. The adaptation's own rate
+/// μ_i·λ_max(Ω_i) is not counted: the automatic method integrates it implicitly, at a cost in steps
+/// that does not grow with it.
 pub fn default_max_steps(design: &Design, truth: &Plant, signals: [&Signal; 2], t_end: f64) -> usize {
+    let delays = design.plant().delays.iter().chain(&truth.delays).filter(|&&d| d > 0.0);
+    let tau_min = delays.fold(f64::INFINITY, |a, &d| a.min(d));
+    let scale = loop_rate(design, truth, signals) * t_end + if tau_min.is_finite() { t_end / tau_min } else { 0.0 };
+    let steps = BUDGET_MIN_STEPS as f64 + BUDGET_STEPS_PER_RATE * scale;
+    if steps.is_finite() && steps < usize::MAX as f64 {
+        steps as usize
+    } else {
+        usize::MAX
+    }
+}
+
+/// ρ, the fastest rate the loop is built from besides the adaptive law: the largest |λ| of the true
+/// plant's A, of A − BK, A − LC, G_g, G_ω and the channels' G_ii(s), 1/β, and the signals' highest
+/// frequency (1/s).
+pub fn loop_rate(design: &Design, truth: &Plant, signals: [&Signal; 2]) -> f64 {
     let radius = |M: &DMatrix<f64>| {
         if M.is_empty() {
             0.0
@@ -662,7 +682,7 @@ pub fn default_max_steps(design: &Design, truth: &Plant, signals: [&Signal; 2], 
         .iter()
         .flat_map(|s| s.components.iter().flat_map(|c| c.harmonics.iter().map(|h| h.frequency.abs())))
         .fold(0.0, f64::max);
-    let rho = [
+    [
         radius(&truth.A),
         largest(design.decoupled_eigenvalues()),
         largest(design.observer_eigenvalues()),
@@ -674,16 +694,7 @@ pub fn default_max_steps(design: &Design, truth: &Plant, signals: [&Signal; 2], 
     ]
     .into_iter()
     .filter(|r| r.is_finite())
-    .fold(0.0, f64::max);
-    let delays = design.plant().delays.iter().chain(&truth.delays).filter(|&&d| d > 0.0);
-    let tau_min = delays.fold(f64::INFINITY, |a, &d| a.min(d));
-    let scale = rho * t_end + if tau_min.is_finite() { t_end / tau_min } else { 0.0 };
-    let steps = BUDGET_MIN_STEPS as f64 + BUDGET_STEPS_PER_RATE * scale;
-    if steps.is_finite() && steps < usize::MAX as f64 {
-        steps as usize
-    } else {
-        usize::MAX
-    }
+    .fold(0.0, f64::max)
 }
 
 /// Every check of a continuous run (the settings, the signals, the truth, the delays against the

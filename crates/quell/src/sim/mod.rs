@@ -22,7 +22,9 @@ use crate::settings::{self, Actuator, KeyError};
 use crate::signal::{check_signals, Signal};
 
 pub use crate::settings::MeasurementNoise;
-pub use closed_loop::{default_max_steps, ContinuousLoop, BUDGET_MIN_STEPS, BUDGET_STEPS_PER_RATE, MAX_HISTORY_BYTES};
+pub use closed_loop::{
+    default_max_steps, loop_rate, ContinuousLoop, BUDGET_MIN_STEPS, BUDGET_STEPS_PER_RATE, MAX_HISTORY_BYTES,
+};
 pub use dde::{Method, Stats};
 pub use divergence::{Peaks, Watched, DIVERGENCE_BOUND};
 pub use result::{ChannelSummary, Outcome, RunStats, Sample, SimResult};

@@ -44,6 +44,7 @@ pub fn paper_spec() -> DesignSpec {
         mu: vec![20.0, 30.0],
         beta: 1.0,
         relative_degrees: None,
+        regressor_scaling: Default::default(),
     }
 }
 

@@ -1,0 +1,58 @@
+//! The adaptive law's pace in the design report (`quell design`): what μ means under the regressor
+//! scaling, and per channel the estimate of [`quell::diagnostics::estimate`].
+
+use std::fmt::Write;
+
+use quell::diagnostics::{estimate, RateEstimate};
+use quell::{Design, Scenario};
+use serde_json::{json, Value};
+
+/// The estimates for a scenario's design, on its true plant and signals over its horizon.
+pub fn estimates(s: &Scenario, d: &Design) -> Vec<RateEstimate> {
+    estimate(d, s.true_plant(), &s.reference, &s.disturbance, s.simulation.t_end)
+}
+
+/// `regressor_scaling`, `mu_meaning` and `adaptation` (one object per channel) added to the
+/// design's JSON.
+pub fn with_pace(mut design: Value, d: &Design, estimates: &[RateEstimate]) -> Value {
+    if let Value::Object(map) = &mut design {
+        map.insert("regressor_scaling".into(), json!(d.regressor_scaling().name()));
+        map.insert("mu_meaning".into(), json!(d.regressor_scaling().mu_meaning()));
+        map.insert("adaptation".into(), json!(estimates));
+    }
+    design
+}
+
+/// The pace as lines of text.
+pub fn pace_text(d: &Design, estimates: &[RateEstimate], t_end: f64) -> String {
+    let scaling = d.regressor_scaling();
+    let mut s = format!(
+        "\nadaptation (averaged over g and ω, before the run; t_end = {t_end} s):\n  regressor_scaling = \"{scaling}\": {}\n",
+        scaling.mu_meaning()
+    );
+    for e in estimates {
+        let flag = match (e.stiff, e.weakly_excited) {
+            (true, true) => "  ⚠ stiff, weakly excited",
+            (true, false) => "  ⚠ stiff",
+            (false, true) => "  ⚠ weakly excited",
+            (false, false) => "",
+        };
+        let _ = writeln!(
+            s,
+            "  channel {}: μ λ_max(Ω̄) = {:.3e}/s ({:.2e}× ρ = {:.3e}/s), λ_max = {:.3e}, λ_min = {:.3e} (excited rank {} of {}), convergence 1/(μ λ_min) ≈ {}{flag}",
+            e.channel,
+            e.adaptation_rate,
+            e.adaptation_rate / e.loop_rate,
+            e.loop_rate,
+            e.lambda_max_omega,
+            e.lambda_min_excited_omega,
+            e.excited_rank,
+            d.q(),
+            if e.convergence_time.is_finite() { format!("{:.3e} s", e.convergence_time) } else { "∞".into() },
+        );
+        for a in &e.advice {
+            let _ = writeln!(s, "    → {a}");
+        }
+    }
+    s
+}
