@@ -117,16 +117,29 @@ fn auto_of(app: &App, auto: &[&str], targets: Targets) -> Scenario {
     a.scenario
 }
 
+/// The page's design is the automatic one: every key equal, μ to 1e-9 relative. μ is computed from
+/// the eigenvalues of the averaged Ω̄, which follow the placed gains; those move at rounding level
+/// (about 1e-12 relative) when the placement's floating-point operations change order.
+fn assert_same_design(auto: &quell::DesignSpec, page: &quell::DesignSpec) {
+    assert_eq!(auto.mu.len(), page.mu.len());
+    for (a, b) in auto.mu.iter().zip(&page.mu) {
+        assert!((a - b).abs() <= 1e-9 * b.abs(), "automatic μ {a} against the page's {b}");
+    }
+    let mut auto = auto.clone();
+    auto.mu.clone_from(&page.mu);
+    assert_eq!(&auto, page);
+}
+
 #[test]
 fn the_keys_each_page_says_are_automatic_are_what_quell_design_auto_chooses() {
     // dc-motor: every key, default targets.
     let keys = ["observer_poles", "channel_poles", "reference_filter_poles", "disturbance_filter_poles", "mu", "beta"];
     let auto = auto_of(&MOTOR, &keys, Targets::default());
-    assert_eq!(auto.design, Scenario::from_toml(&scenario_text(&MOTOR)).unwrap().design);
+    assert_same_design(&auto.design, &Scenario::from_toml(&scenario_text(&MOTOR)).unwrap().design);
     // active-suspension: the road filter, β and μ with --convergence-time 5.
     let keys = ["disturbance_filter_poles", "mu", "beta"];
     let auto = auto_of(&SUSPENSION, &keys, Targets { convergence_time: Some(5.0), u_limit: None });
-    assert_eq!(auto.design, Scenario::from_toml(&scenario_text(&SUSPENSION)).unwrap().design);
+    assert_same_design(&auto.design, &Scenario::from_toml(&scenario_text(&SUSPENSION)).unwrap().design);
     // supply-vessel: the filters and β; μ is the automatic choice for channels 1 and 2 divided by
     // 333 (README), within 1 % as the page rounds it.
     let keys = ["reference_filter_poles", "disturbance_filter_poles", "beta", "mu"];
@@ -139,9 +152,13 @@ fn the_keys_each_page_says_are_automatic_are_what_quell_design_auto_chooses() {
         assert!((a - b).abs() <= 1e-15 * b.abs(), "filter pole {a} against the page's {b}");
     }
     assert_eq!((poles(&auto).len(), auto.beta), (poles(&page).len(), page.beta));
+    // Within a factor 1.5 of 333, not the page's rounding: with three outputs the observer gain L
+    // that places the given poles is not unique, and the automatic μ (from Ω̄, which the
+    // disturbance observer's L shapes) moved to 354× and 253× the page's μ when the placement
+    // algorithm changed (README, "Figures and the placement").
     for i in 0..2 {
         let ratio = auto.mu[i] / page.mu[i];
-        assert!((ratio / 333.0 - 1.0).abs() < 0.01, "channel {}: automatic μ / page's μ = {ratio}", i + 1);
+        assert!(ratio > 333.0 / 1.5 && ratio < 333.0 * 1.5, "channel {}: automatic μ / page's μ = {ratio}", i + 1);
     }
 }
 
@@ -266,13 +283,22 @@ fn vessel_with_truth(extra: &str) -> Scenario {
 
 #[test]
 fn vessel_thrust_limits_clip_what_the_recorded_thrust_shows() {
-    let (free, _) = tail_errors(&vessel_with_truth(""));
-    let peaks: Vec<f64> = free.summary().iter().map(|c| c.max_abs_uf).collect();
     // Limits above every peak: the clip never acts, so the run is the unlimited one bit for bit.
+    // u_f is held over each 0.1 s controller sample and recorded every 0.5 s, so the peaks are
+    // taken from a run recorded at every sample (the held values themselves).
+    let every_sample = |extra: &str| {
+        let text = scenario_text(&VESSEL)
+            .replace("[truth]\n", &format!("[truth]\n{extra}\n"))
+            .replace("output_step = 0.5", "output_step = 0.1");
+        tail_errors(&Scenario::from_toml(&text).unwrap()).0
+    };
+    let free_every = every_sample("");
+    let peaks: Vec<f64> = free_every.summary().iter().map(|c| c.max_abs_uf).collect();
     let above = peaks.iter().map(|p| format!("{:e}", 1.01 * p)).collect::<Vec<_>>().join(", ");
-    let (r, _) = tail_errors(&vessel_with_truth(&format!("u_max = [{above}]")));
-    assert_eq!(r.y, free.y);
+    let r = every_sample(&format!("u_max = [{above}]"));
+    assert_eq!(r.y, free_every.y);
     assert_eq!(r.limited_fraction(), vec![0.0; 3]);
+    let (free, _) = tail_errors(&vessel_with_truth(""));
 
     // Limits at about 80 % of the peaks (README: 1.3 MN, 0.9 MN, 7 MN·m against 1.61 MN, 1.12 MN,
     // 8.6 MN·m): the loop completes with the page's tail bounds, the applied thrust never exceeds
@@ -288,17 +314,20 @@ fn vessel_thrust_limits_clip_what_the_recorded_thrust_shows() {
         assert!(column.iter().all(|v| v.abs() <= *lim), "input {}: thrust beyond its limit", i + 1);
         let at_limit = column.iter().filter(|v| v.abs() == *lim).count() as f64 / column.len() as f64;
         assert_eq!(fraction[i], at_limit, "input {}", i + 1);
-        // README: 2.2 %, 2.1 %, 1.7 % of the samples, all in the first 130 s.
-        assert!(fraction[i] > 0.005 && fraction[i] < 0.05, "input {}: {}", i + 1, fraction[i]);
+        // README: a few per mille to a few per cent of the samples, all in the move.
+        assert!(fraction[i] > 0.002 && fraction[i] < 0.05, "input {}: {}", i + 1, fraction[i]);
     }
-    // The limit slows the move: the overshoot grows from 13.8 m to 19.1 m (README).
+    // The limit slows the move: the overshoot grows (README: 13.1 m to 14.1 m with today's
+    // observer gain, 13.8 m to 19.1 m with the earlier one).
     let top = |r: &SimResult| r.column(&r.y, 3, 0).fold(f64::MIN, f64::max);
-    assert!(top(&r) > top(&free) + 3.0, "overshoot {} m against {} m unlimited", top(&r), top(&free));
+    assert!(top(&r) > top(&free) + 0.5, "overshoot {} m against {} m unlimited", top(&r), top(&free));
 
-    // At 75 % (1.2 MN, 0.8 MN, 6 MN·m) the observer, driven by the commanded u_f, winds up and the
-    // loop diverges (README: at t = 79.5 s).
-    let r = run(&vessel_with_truth("u_max = [1.2e6, 0.8e6, 6e6]"));
-    assert!(matches!(r.outcome, Some(Outcome::Diverged { .. })), "{:?}", r.outcome);
+    // At 75 % (1.2 MN, 0.8 MN, 6 MN·m): with the earlier observer gain the observer, driven by
+    // the commanded u_f, wound up and the loop diverged at t = 79.5 s; with today's gain it
+    // completes within the page's tail bounds (README, "Figures and the placement").
+    let (r, e) = tail_errors(&vessel_with_truth("u_max = [1.2e6, 0.8e6, 6e6]"));
+    assert_within(&VESSEL, &e);
+    assert!(r.limited_fraction().iter().all(|f| *f > 0.0));
 }
 
 #[test]

@@ -63,6 +63,6 @@ void suspension_command(const suspension_state *s, double u[SUSPENSION_M]);
 #endif
 
 /* Identifies this header's source: suspension_controller.c compiles only with it. */
-#define SUSPENSION_LAYOUT_ID 0xaa30395ca085a073u
+#define SUSPENSION_LAYOUT_ID 0xb116287a0a9d2d5fu
 
 #endif /* SUSPENSION_CONTROLLER_H */

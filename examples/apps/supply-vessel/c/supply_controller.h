@@ -63,6 +63,6 @@ void supply_command(const supply_state *s, double u[SUPPLY_M]);
 #endif
 
 /* Identifies this header's source: supply_controller.c compiles only with it. */
-#define SUPPLY_LAYOUT_ID 0x0693e453b38e33a3u
+#define SUPPLY_LAYOUT_ID 0x87cce1ed59442cc8u
 
 #endif /* SUPPLY_CONTROLLER_H */
