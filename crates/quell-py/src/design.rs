@@ -202,7 +202,9 @@ pub fn design(
         relative_degrees,
         regressor_scaling,
     )?;
-    let d = quell::Design::new(&plant.inner, &spec).map_err(|e| Kind::Design.err(py, in_python(e.to_string())))?;
+    let inner = &plant.inner;
+    let d = crate::interrupt::interruptible(py, || quell::Design::new(inner, &spec))?
+        .map_err(|e| Kind::Design.err(py, in_python(e.to_string())))?;
     crate::errors::warn_fragile(py, &d, &spec)?;
     Ok(PyDesign { inner: Arc::new(d), spec, labels: plant.labels.clone() })
 }

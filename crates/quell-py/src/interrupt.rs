@@ -15,12 +15,19 @@ const SIGNAL_CHECK: Duration = Duration::from_millis(50);
 
 /// `work()` with Ctrl-C raising KeyboardInterrupt during it (see the module docs).
 pub fn interruptible<R: Send>(py: Python<'_>, work: impl FnOnce() -> R + Send) -> PyResult<R> {
+    interruptible_with(py, |stop| quell::cancel::with_stop(stop, work))
+}
+
+/// `work(stop)` on a worker thread with the GIL released, while this thread runs Python's signal
+/// handlers every [`SIGNAL_CHECK`]; a KeyboardInterrupt sets `stop`, waits for `work` to notice it
+/// and is raised. For calls that take their stop flag as an argument (a sweep's `SweepOptions`).
+pub fn interruptible_with<R: Send>(py: Python<'_>, work: impl FnOnce(Arc<AtomicBool>) -> R + Send) -> PyResult<R> {
     let stop = Arc::new(AtomicBool::new(false));
     let mut interrupt = None;
     let result = py.detach(|| {
         std::thread::scope(|scope| {
             let flag = stop.clone();
-            let worker = scope.spawn(move || quell::cancel::with_stop(flag, work));
+            let worker = scope.spawn(move || work(flag));
             while !worker.is_finished() {
                 std::thread::sleep(SIGNAL_CHECK);
                 if interrupt.is_none() {
@@ -36,5 +43,5 @@ pub fn interruptible<R: Send>(py: Python<'_>, work: impl FnOnce() -> R + Send) -
     if let Some(e) = interrupt {
         return Err(e);
     }
-    result.map_err(|_| pyo3::exceptions::PyRuntimeError::new_err("the design's thread panicked"))
+    result.map_err(|_| pyo3::exceptions::PyRuntimeError::new_err("the call's worker thread panicked"))
 }

@@ -99,7 +99,7 @@ impl PyScenario {
         if let Some(d) = self.design.get() {
             return Ok(d.clone());
         }
-        let d = Arc::new(self.inner.design().map_err(|e| {
+        let d = Arc::new(crate::interrupt::interruptible(py, || self.inner.design())?.map_err(|e| {
             let message = e.to_string();
             Kind::Design.err(py, if self.from_values { in_python(message) } else { message })
         })?);
@@ -611,10 +611,11 @@ pub fn auto_design<'py>(
     }
     let doc = quell::scenario::parse_document(&text).map_err(|e| scenario_error(py, &e))?;
     let targets = quell::auto::Targets { convergence_time, u_limit };
-    let auto = py.detach(|| quell::auto::auto_design(&doc, &targets)).map_err(|e| match e {
-        quell::auto::AutoError::Scenario(e) => scenario_error(py, &e),
-        e => Kind::Design.err(py, e.to_string()),
-    })?;
+    let auto =
+        crate::interrupt::interruptible(py, || quell::auto::auto_design(&doc, &targets))?.map_err(|e| match e {
+            quell::auto::AutoError::Scenario(e) => scenario_error(py, &e),
+            e => Kind::Design.err(py, e.to_string()),
+        })?;
     let report = serde_json::json!({
         "choices": auto.choices,
         "verification": auto.verification,

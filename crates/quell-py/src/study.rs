@@ -4,9 +4,7 @@
 //! a cluster.
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use std::time::Duration;
 
 use pyo3::exceptions::{PyIndexError, PyTypeError};
 use pyo3::prelude::*;
@@ -819,27 +817,10 @@ fn sweep_frame(
         .num_threads(threads.min(runs).max(1))
         .build()
         .map_err(|e| Kind::Scenario.err(py, format!("jobs: cannot start the threads ({e})")))?;
-    let stop = AtomicBool::new(false);
-    let mut interrupt = None;
-    let swept = py.detach(|| {
-        std::thread::scope(|scope| {
-            let opts = SweepOptions { stop: Some(&stop), ..SweepOptions::default() };
-            let (pool, study) = (&pool, &study);
-            let worker = scope.spawn(move || pool.install(|| study::sweep(study, &opts)));
-            while !worker.is_finished() {
-                std::thread::sleep(Duration::from_millis(50));
-                if let Err(e) = Python::attach(|py| py.check_signals()) {
-                    stop.store(true, Ordering::Relaxed);
-                    interrupt = Some(e);
-                }
-            }
-            worker.join()
-        })
-    });
-    if let Some(e) = interrupt {
-        return Err(e);
-    }
-    let swept = swept.map_err(|_| pyo3::exceptions::PyRuntimeError::new_err("the sweep's threads panicked"))?;
+    let swept = crate::interrupt::interruptible_with(py, |stop| {
+        let opts = SweepOptions { stop: Some(&stop), ..SweepOptions::default() };
+        pool.install(|| study::sweep(study, &opts))
+    })?;
     let meta = StudyMeta::new(study, Shard::ALL);
     let mut text = Vec::new();
     study::write_runs_csv(&mut text, &meta, &swept.rows, swept.partial)

@@ -42,7 +42,7 @@ fn err(key: impl Into<String>, message: impl Into<String>) -> StudyError {
     StudyError { key: key.into(), message: message.into() }
 }
 
-/// The scenario reader's errors ([`crate::scenario::read`]) name study keys when it reads a study.
+/// The scenario reader's errors (`scenario::read`) name study keys when it reads a study.
 impl From<crate::ScenarioError> for StudyError {
     fn from(e: crate::ScenarioError) -> Self {
         StudyError { key: e.key, message: e.message }
