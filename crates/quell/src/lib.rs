@@ -187,8 +187,15 @@
 //! loops; a value out of range is a [`settings::KeyError`] naming its scenario key.
 //!
 //! ```
-//! let e = quell::settings::check_horizon(10.0, 0.0).unwrap_err();
+//! use quell::scenario::{Scenario, PAPER_EXAMPLE};
+//! use quell::sim::{Run, SimError};
+//!
+//! let mut s = Scenario::from_toml(PAPER_EXAMPLE)?;
+//! s.simulation.output_step = 0.0;
+//! let d = s.design()?;
+//! let Err(SimError::Input(e)) = Run::of(&s, &d).check() else { panic!("output_step = 0 accepted") };
 //! assert_eq!(e.key, "simulation.output_step");
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
 //! Equation numbers refer to C. V. Tu, N. Dudarenko, "Direct adaptive output-feedback control for

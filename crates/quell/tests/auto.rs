@@ -225,30 +225,6 @@ fn the_actuator_limit_bounds_the_recorded_plant_input() {
     assert!((tight.verification.max_u_f[0] - u_f).abs() <= 1e-12 * u_f && u_f > 1e-3 * free.verification.max_u_f[0]);
 }
 
-/// Exploration (not a check): AUTO_EXPLORE="shape index;scale;seeds;units index|…" prints each case.
-#[test]
-#[ignore]
-fn explore() {
-    let spec = std::env::var("AUTO_EXPLORE").unwrap_or_else(|_| "0;1;10;0".into());
-    for part in spec.split('|') {
-        let f: Vec<&str> = part.split(';').collect();
-        let (shape, scale, seeds, units): (usize, f64, u64, usize) =
-            (f[0].parse().unwrap(), f[1].parse().unwrap(), f[2].parse().unwrap(), f[3].parse().unwrap());
-        let mut fails = 0;
-        for seed in 0..seeds {
-            let t0 = std::time::Instant::now();
-            match case(1000 + seed, shape, scale, UNITS[units]) {
-                Ok(r) => println!("ok {r:.2?} {:.2}s", t0.elapsed().as_secs_f64()),
-                Err(e) => {
-                    fails += 1;
-                    println!("FAIL {e}");
-                }
-            }
-        }
-        println!("== {} scale {scale}: {fails}/{seeds} failed", shapes()[shape].0);
-    }
-}
-
 fn data(name: &str) -> String {
     std::fs::read_to_string(format!("{}/tests/data/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap()
 }
