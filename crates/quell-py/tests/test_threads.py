@@ -49,7 +49,10 @@ def test_ctrl_c_stops_a_running_simulation():
     child.send_signal(signal.SIGINT)
     _, err = child.communicate(timeout=30)
     assert "KeyboardInterrupt" in err, err
-    assert time.perf_counter() - sent < 5
+    # The design alone takes 15-25 s here; the stop flag is polled between KNV0's sweeps, and the
+    # phases before them (staircase, eigendecompositions) ran up to 3 s at load 3 on 2 cores: 10 s
+    # tells an interrupted design from a finished one with margin for a loaded CI machine.
+    assert time.perf_counter() - sent < 10
 
 
 def test_one_controller_shared_by_threads_serializes_its_steps():
@@ -112,4 +115,7 @@ def test_ctrl_c_stops_a_large_design():
     out, err = child.communicate(timeout=60)
     assert "KeyboardInterrupt" in err, err
     assert "finished" not in out
-    assert time.perf_counter() - sent < 5
+    # The design alone takes 15-25 s here; the stop flag is polled between KNV0's sweeps, and the
+    # phases before them (staircase, eigendecompositions) ran up to 3 s at load 3 on 2 cores: 10 s
+    # tells an interrupted design from a finished one with margin for a loaded CI machine.
+    assert time.perf_counter() - sent < 10
