@@ -115,7 +115,7 @@ def test_values_of_the_right_type_are_quell_errors():
         lambda: quell.Scenario(quell.paper_example().plant, REFERENCE, DISTURBANCE, observer_gain=L, **dict(PAPER_DESIGN, mu=[1.0])).design(),
     ]
     for i, call in enumerate(calls):
-        with pytest.raises(quell.QuellError, match="") as info:
+        with pytest.raises(quell.QuellError, match=r"\S") as info:  # a non-empty message
             try:
                 call()
             except quell.QuellError:
