@@ -461,7 +461,9 @@ impl PyRunSpec {
     #[pyo3(signature = (json, drawn=None))]
     fn new(py: Python<'_>, json: &Bound<'_, PyAny>, drawn: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
         let json = crate::convert::text(json, "json")?;
-        let drawn = drawn.filter(|d| !d.is_none()).map(|d| crate::convert::strings(d, "drawn", "a list of study keys (str)", "a str (a study key)"));
+        let drawn = drawn
+            .filter(|d| !d.is_none())
+            .map(|d| crate::convert::strings(d, "drawn", "a list of study keys (str)", "a str (a study key)"));
         let drawn = drawn.transpose()?.unwrap_or_default();
         serde_json::from_str(&json)
             .map(|inner| PyRunSpec { inner, drawn })
