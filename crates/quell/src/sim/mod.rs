@@ -26,7 +26,7 @@ pub use closed_loop::{default_max_steps, loop_rate, BUDGET_MIN_STEPS, BUDGET_STE
 pub use dde::{Method, Stats};
 pub use divergence::{Peaks, Watched, DIVERGENCE_BOUND};
 pub use noise::{band_limited, NOISE_SINES};
-pub use result::{ChannelSummary, Outcome, RunStats, Sample, SimResult};
+pub use result::{ChannelFigures, ChannelSummary, Outcome, RunStats, Sample, SimResult};
 pub use sampled::SampledController;
 pub use settle::{Settle, Settling};
 

@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{Nominal, Runaway, Settle, Study};
 use crate::scenario::Scenario;
-use crate::sim::{self, Loop, Peaks, Run, RunSettings, SimResult, DIVERGENCE_BOUND};
+use crate::sim::{self, ChannelFigures, Loop, Peaks, Run, RunSettings, SimResult, DIVERGENCE_BOUND};
 
 /// SplitMix64's finalizer: a bijection of u64 that scrambles every bit.
 fn mix(mut z: u64) -> u64 {
@@ -103,22 +103,6 @@ impl Outcome {
     }
 }
 
-/// Channel i's figures of a completed run.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct ChannelFigures {
-    /// max |e_i| over the last 10 % of the horizon.
-    pub tail_max_e: f64,
-    /// RMS of e_i over the last 10 % of the horizon.
-    pub tail_rms_e: f64,
-    /// max |u_i| over the run (the adaptive command (25)).
-    pub max_u: f64,
-    /// max |u_f,i| over the run (the plant input (5), what the actuator delivers).
-    pub max_uf: f64,
-    /// First recorded t after which |e_i| stays within the settling band ([`Settle`]); `None` when
-    /// the channel did not settle, or only in the last 5 % of the horizon ([`crate::sim::settle`]).
-    pub settle_t: Option<f64>,
-}
-
 /// One row of runs.csv.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Row {
@@ -137,21 +121,6 @@ pub struct Row {
     pub steps: u64,
     /// Wall time of the run in ms, to the microsecond.
     pub wall_ms: f64,
-}
-
-/// The figures of each channel of a completed run.
-pub(crate) fn figures(r: &SimResult, settle: &Settle) -> Vec<ChannelFigures> {
-    r.summary()
-        .iter()
-        .enumerate()
-        .map(|(i, c)| ChannelFigures {
-            tail_max_e: c.tail_max_abs_e,
-            tail_rms_e: c.tail_rms_e,
-            max_u: c.max_abs_u,
-            max_uf: c.max_abs_uf,
-            settle_t: r.settling(i, settle).time(),
-        })
-        .collect()
 }
 
 /// Simulates a scenario as its `[simulation]` says ([`Run::of`]), a continuous run
@@ -195,7 +164,7 @@ fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
             match r.outcome.as_ref().unwrap_or(&sim::Outcome::Completed) {
                 sim::Outcome::Completed => {
                     row.outcome = Outcome::Completed;
-                    row.channels = figures(&r, &spec.settle);
+                    row.channels = r.figures(&spec.settle);
                 }
                 sim::Outcome::Diverged { t, signal, value } => {
                     row.outcome = Outcome::Diverged;

@@ -5,10 +5,11 @@
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::sweep::{run_one, ChannelFigures, Outcome, Row, RunSpec};
+use super::sweep::{run_one, Outcome, Row, RunSpec};
 use super::{err, number, Study, StudyError};
 use crate::scenario::kind;
 use crate::scenario::Scenario;
+use crate::sim::ChannelFigures;
 
 /// What a search minimizes for channel i.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
