@@ -217,6 +217,7 @@ pub mod controller;
 pub mod design;
 pub mod diagnostics;
 pub mod export;
+mod hash;
 mod linalg;
 pub mod plant;
 pub mod scenario;

@@ -138,8 +138,8 @@ impl RunSettings {
                 return Err(KeyError::new(
                     "max_steps",
                     format!(
-                        "a step budget applies to the continuous loop; this sampled-data run takes t_end / sample_time = {:.0} controller steps, known before it starts: leave max_steps out",
-                        (self.t_end / *sample_time).floor() + 1.0
+                        "a step budget applies to the continuous loop; this sampled-data run takes t_end / sample_time = {} controller steps, known before it starts: leave max_steps out",
+                        crate::controller::discrete::whole_samples(self.t_end, *sample_time) + 1
                     ),
                 ))
             }
