@@ -5,7 +5,7 @@
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::run::{run_one, ChannelFigures, Outcome, Row, RunSpec};
+use super::sweep::{run_one, ChannelFigures, Outcome, Row, RunSpec};
 use super::{err, number, Study, StudyError};
 use crate::scenario::kind;
 use crate::scenario::Scenario;
