@@ -675,7 +675,10 @@ fn signal_names_label_the_channel_lines_and_change_no_file() {
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(0), "{err}");
         let first = if tag == "named" { "channel 1 (pitch): tail max|e|" } else { "channel 1: tail max|e|" };
-        assert!(err.contains(first) && err.contains(if tag == "named" { "channel 2 (roll): " } else { "channel 2: " }), "{err}");
+        assert!(
+            err.contains(first) && err.contains(if tag == "named" { "channel 2 (roll): " } else { "channel 2: " }),
+            "{err}"
+        );
         csv.push(fs::read(out.join("signals.csv")).unwrap());
     }
     assert!(csv[0] == csv[1], "signals.csv differs with names");

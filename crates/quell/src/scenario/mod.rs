@@ -26,9 +26,9 @@ use crate::plant::{Plant, PlantError};
 use crate::settings::{self, KeyError};
 use crate::signal::{check_signals, Component, Harmonic, Signal};
 use exosystem::Exosystem;
+pub use names::{check_names, SignalNames};
 pub(crate) use read::kind;
 use read::{err, line_col, Table, Value};
-pub use names::{check_names, SignalNames};
 pub use write::{design_table, plant_table, pole_list, signal_table};
 
 /// The paper's example (Section VIII) as a scenario file: `examples/paper.toml`.

@@ -70,7 +70,10 @@ impl SignalNames {
 pub fn check_names(key: &str, names: &[String], count: usize, per: &str) -> Result<(), ScenarioError> {
     for (i, name) in names.iter().enumerate() {
         if name.trim().is_empty() {
-            return Err(err(format!("{key}[{i}]"), format!("expected a name, found {name:?}; give every {per} a name")));
+            return Err(err(
+                format!("{key}[{i}]"),
+                format!("expected a name, found {name:?}; give every {per} a name"),
+            ));
         }
         if names[..i].contains(name) {
             return Err(err(
