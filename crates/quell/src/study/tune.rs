@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::run::{execute, ChannelFigures, Outcome, Row, RunSpec};
+use super::sweep::{execute, ChannelFigures, Outcome, Row, RunSpec};
 use super::{err, number, Study, StudyError};
 use crate::scenario::kind;
 use crate::scenario::Scenario;
