@@ -436,7 +436,9 @@ where
             M[(i, p)] = T::zero();
             rotations.push((p, t, g));
         }
-        if !(M[(i, t)].modulus() > f64::EPSILON * size) {
+        // A pivot at rounding level (or NaN) is a rank-deficient pencil.
+        let pivot = M[(i, t)].modulus();
+        if pivot.is_nan() || pivot <= f64::EPSILON * size {
             return None;
         }
     }
