@@ -239,7 +239,7 @@ impl Design {
     /// zero dynamics, the internal models (11), (16) and the disturbance observer gain (20).
     ///
     /// Inside [`crate::cancel::with_stop`] a plant of [`DETACHED_MIN_STATES`] states or more is
-    /// designed on a worker thread ([`crate::cancel::detached`]), so that a stop request returns
+    /// designed on a worker thread that the call leaves when the flag is set, so that a stop request returns
     /// [`DesignError::Interrupted`] within milliseconds even during an eigendecomposition.
     pub fn new(plant: &Plant, spec: &DesignSpec) -> Result<Design, DesignError> {
         match crate::cancel::current() {
