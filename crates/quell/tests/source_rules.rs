@@ -205,7 +205,6 @@ const BEING_SPLIT: &[(&str, &str, &str)] = &[
     ("crates/quell/src/sim/sampled.rs", "sampled_loop", "TODO(front)"),
     ("crates/quell/src/study/mod.rs", "from_table", "TODO(front)"),
     ("crates/quell/src/study/tune.rs", "tune", "TODO(front)"),
-    ("crates/quell-py/src/simulate.rs", "simulate", "TODO(python)"),
 ];
 
 #[test]
