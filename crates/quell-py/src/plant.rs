@@ -93,19 +93,9 @@ impl PyPlant {
 fn names(obj: Option<&Bound<'_, PyAny>>, name: &str, count: usize) -> PyResult<Option<Vec<String>>> {
     let Some(obj) = obj.filter(|o| !o.is_none()) else { return Ok(None) };
     let py = obj.py();
-    let expected = format!("a list of {count} names (str)");
-    if obj.is_instance_of::<pyo3::types::PyString>() {
-        return Err(PyTypeError::new_err(format!("{name}: expected {expected}, found a str")));
-    }
-    let items = obj
-        .try_iter()
-        .map_err(|_| PyTypeError::new_err(format!("{name}: expected {expected}, found a {}", type_name(obj))))?;
+    let given = crate::convert::strings(obj, name, &format!("a list of {count} names (str)"), "a str (a signal name)")?;
     let mut out: Vec<String> = Vec::new();
-    for (i, item) in items.enumerate() {
-        let item = item?;
-        let text: String = item.extract().map_err(|_| {
-            PyTypeError::new_err(format!("{name}[{i}]: expected a str (a signal name), found a {}", type_name(&item)))
-        })?;
+    for (i, text) in given.into_iter().enumerate() {
         if out.contains(&text) {
             return Err(Kind::Scenario
                 .err(py, format!("{name}[{i}]: {text:?} names another signal too; give each signal its own name")));

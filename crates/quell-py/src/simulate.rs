@@ -548,8 +548,8 @@ pub fn simulate(
     sample_time: Option<&Bound<'_, PyAny>>,
     method: Option<&Bound<'_, PyAny>>,
     max_steps: Option<&Bound<'_, PyAny>>,
-    states: bool,
-    check: bool,
+    #[pyo3(from_py_with = crate::convert::argument::states)] states: bool,
+    #[pyo3(from_py_with = crate::convert::argument::check)] check: bool,
 ) -> PyResult<Py<PySimResult>> {
     let s: PyRef<'_, PyScenario> =
         scenario.extract().map_err(|_| crate::errors::type_error("scenario", "a quell.Scenario", scenario))?;

@@ -263,7 +263,11 @@ impl PyStudy {
     /// >>> result.frame["outcome"].tolist()
     /// ['completed']
     #[pyo3(signature = (*, jobs=None, yes=false))]
-    fn sweep(slf: &Bound<'_, Self>, jobs: Option<&Bound<'_, PyAny>>, yes: bool) -> PyResult<Py<PyAny>> {
+    fn sweep(
+        slf: &Bound<'_, Self>,
+        jobs: Option<&Bound<'_, PyAny>>,
+        #[pyo3(from_py_with = crate::convert::argument::yes)] yes: bool,
+    ) -> PyResult<Py<PyAny>> {
         let py = slf.py();
         let frame = sweep_frame(py, &slf.get().inner, jobs, yes)?;
         Ok(py.import("quell._study")?.getattr("StudyResult")?.call1((slf, frame))?.unbind())
@@ -455,9 +459,14 @@ impl PyRunSpec {
     /// A run specification from its JSON form (`spec.to_json()`); this is how pickle rebuilds it.
     #[new]
     #[pyo3(signature = (json, drawn=None))]
-    fn new(py: Python<'_>, json: &Bound<'_, PyAny>, drawn: Option<Vec<String>>) -> PyResult<Self> {
-        serde_json::from_str(&crate::convert::text(json, "json")?)
-            .map(|inner| PyRunSpec { inner, drawn: drawn.unwrap_or_default() })
+    fn new(py: Python<'_>, json: &Bound<'_, PyAny>, drawn: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+        let json = crate::convert::text(json, "json")?;
+        let drawn = drawn
+            .filter(|d| !d.is_none())
+            .map(|d| crate::convert::strings(d, "drawn", "a list of study keys (str)", "a str (a study key)"));
+        let drawn = drawn.transpose()?.unwrap_or_default();
+        serde_json::from_str(&json)
+            .map(|inner| PyRunSpec { inner, drawn })
             .map_err(|e| Kind::Scenario.err(py, format!("json: not a quell run specification ({e})")))
     }
     /// The values the run's draw gave each perturbed key, flattened (`truth.A[0][1]`), as the
@@ -764,7 +773,7 @@ pub fn sweep(
     py: Python<'_>,
     study: &Bound<'_, PyAny>,
     jobs: Option<&Bound<'_, PyAny>>,
-    yes: bool,
+    #[pyo3(from_py_with = crate::convert::argument::yes)] yes: bool,
 ) -> PyResult<Py<PyAny>> {
     sweep_frame(py, &study_arg(py, study)?, jobs, yes)
 }

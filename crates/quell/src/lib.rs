@@ -201,6 +201,7 @@
 //! Equation numbers refer to C. V. Tu, N. Dudarenko, "Direct adaptive output-feedback control for
 //! unstable linear multidimensional systems with distinct input delays" (2026).
 #![allow(non_snake_case)]
+#![warn(unreachable_pub)]
 
 pub use nalgebra;
 

@@ -204,7 +204,6 @@ const BEING_SPLIT: &[(&str, &str, &str)] = &[
     ("crates/quell/src/design/place.rs", "knv0", "TODO(harden)"),
     ("crates/quell/src/sim/sampled.rs", "sampled_loop", "TODO(front)"),
     ("crates/quell/src/study/mod.rs", "from_table", "TODO(front)"),
-    ("crates/quell/src/study/tune.rs", "tune", "TODO(front)"),
 ];
 
 #[test]

@@ -39,14 +39,14 @@ pub fn band_limited(noise: &MeasurementNoise) -> Option<Signal> {
 
 /// A reproducible stream of standard normal samples.
 #[derive(Debug, Clone)]
-pub struct Gaussian {
+pub(crate) struct Gaussian {
     state: u64,
     spare: Option<f64>,
 }
 
 impl Gaussian {
     /// A stream from `seed`.
-    pub fn new(seed: u64) -> Self {
+    pub(crate) fn new(seed: u64) -> Self {
         Gaussian { state: seed, spare: None }
     }
 
@@ -60,12 +60,12 @@ impl Gaussian {
     }
 
     /// Uniform on (0, 1].
-    pub fn uniform(&mut self) -> f64 {
+    pub(crate) fn uniform(&mut self) -> f64 {
         ((self.next_u64() >> 11) + 1) as f64 * (1.0 / (1u64 << 53) as f64)
     }
 
     /// One N(0, 1) sample.
-    pub fn sample(&mut self) -> f64 {
+    pub(crate) fn sample(&mut self) -> f64 {
         if let Some(z) = self.spare.take() {
             return z;
         }

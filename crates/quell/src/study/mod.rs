@@ -10,8 +10,8 @@
 
 mod output;
 mod path;
-mod run;
 mod summary;
+mod sweep;
 mod tune;
 
 use std::path::{Path, PathBuf};
@@ -25,9 +25,9 @@ pub use crate::sim::settle::Settle;
 use crate::sim::Peaks;
 pub use output::{header, read_runs_csv, write_runs_csv, RunsFile};
 pub use path::{KeyPath, Shape};
-pub use run::{run_one, run_seed, sweep, ChannelFigures, Outcome, Row, RunSpec, Shard, Sweep, SweepOptions};
 pub use summary::{quantile, AxisMeta, ChannelQuantiles, PointSummary, Quantiles, StudyMeta, Summary, QUANTILES};
-pub use tune::{tune, Objective, TuneCurve, TunePoint, TuneResult, TuneSpec};
+pub use sweep::{run_one, run_seed, sweep, ChannelFigures, Outcome, Row, RunSpec, Shard, Sweep, SweepOptions};
+pub use tune::{tune, Objective, OnPoint, TuneCurve, TuneOptions, TunePoint, TuneResult, TuneSpec};
 
 /// A study-file error: the key path in the study file (`grid."design.mu[0]"[2]`) and what was
 /// expected and found.
@@ -426,7 +426,7 @@ impl Study {
             if s.simulation.sample_time.is_some() {
                 return None;
             }
-            let r = run::simulate(&s, self.max_steps, None, &|| false).ok()?;
+            let r = sweep::simulate(&s, self.max_steps, None, &|| false).ok()?;
             (r.outcome == Some(crate::sim::Outcome::Completed))
                 .then_some(Nominal { steps: r.stats.steps(), peaks: r.peaks })
         })

@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::run::{Outcome, Row, Shard};
+use super::sweep::{Outcome, Row, Shard};
 use super::Study;
 
 /// The quantile levels of summary.json and of the plots' bands.

@@ -174,7 +174,7 @@ pub(crate) fn simulate(
 }
 
 /// Carries out one run; `None` when `stop` interrupted it.
-fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
+pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
     let started = Instant::now();
     let mut row = Row {
         run: spec.run,
