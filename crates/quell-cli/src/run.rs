@@ -60,7 +60,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     let diagnostics = quell::diagnostics::diagnose(&design, &scenario.reference, &scenario.disturbance, &result);
     write_outputs(out, &scenario, &design, &result, &diagnostics, seconds, !args.no_plots)
         .map_err(|e| Failure::Run(format!("writing {}: {e}", out.display())))?;
-    report_outcome(&result, &diagnostics, out, seconds)
+    report_outcome(&result, &diagnostics, scenario.names.outputs.as_deref(), out, seconds)
 }
 
 /// The scenario's loop ([`RunSettings::of`]), or the sampled-data loop at `--sample-time`, checked
@@ -216,8 +216,15 @@ fn report_diagnostics(d: &ChannelDiagnostics) {
 }
 
 /// The per-channel figures and what was written (exit 0), or why the run did not reach t_end
-/// (exit 1; the files hold the samples up to then).
-fn report_outcome(result: &SimResult, diagnostics: &Diagnostics, out: &Path, seconds: f64) -> Result<(), Failure> {
+/// (exit 1; the files hold the samples up to then). A channel is named by its output where the
+/// scenario names them (`channel 1 (pitch): …`).
+fn report_outcome(
+    result: &SimResult,
+    diagnostics: &Diagnostics,
+    outputs: Option<&[String]>,
+    out: &Path,
+    seconds: f64,
+) -> Result<(), Failure> {
     let out = out.display();
     match result.outcome.as_ref().unwrap_or(&Outcome::Completed) {
         Outcome::Completed => {
@@ -227,8 +234,9 @@ fn report_outcome(result: &SimResult, diagnostics: &Diagnostics, out: &Path, sec
                     (None, Some(note)) => note.clone(),
                     (None, None) => "not settled".into(),
                 };
+                let name = outputs.and_then(|o| o.get(i)).map_or(String::new(), |n| format!(" ({n})"));
                 eprintln!(
-                    "channel {}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {:.3}, max|u_f| = {:.3}, ‖η̂‖ = {:.4e}, {settle}",
+                    "channel {}{name}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {:.3}, max|u_f| = {:.3}, ‖η̂‖ = {:.4e}, {settle}",
                     i + 1,
                     c.tail_max_abs_e,
                     c.tail_rms_e,

@@ -706,3 +706,29 @@ fn bad_method_flag_exits_2_naming_the_flag_and_the_names() {
     assert!(stderr(&o).contains("--method: the integrator applies to the continuous loop only"), "{}", stderr(&o));
     assert!(!out.exists(), "nothing is written before the input is checked");
 }
+
+/// `[plant]` signal names label the channel lines (`channel 1 (pitch): …`) and change no file:
+/// signals.csv is byte for byte that of the same scenario without names.
+#[test]
+fn signal_names_label_the_channel_lines_and_change_no_file() {
+    let dir = temp_dir("names");
+    let text = fs::read_to_string(paper()).unwrap().replace("t_end = 100.0", "t_end = 2.0");
+    let named_text = text.replacen("[plant]\n", "[plant]\noutputs = [\"pitch\", \"roll\"]\n", 1);
+    assert_ne!(named_text, text, "the example has a [plant] line");
+    let mut csv = Vec::new();
+    for (tag, body) in [("plain", &text), ("named", &named_text)] {
+        let file = dir.path().join(format!("{tag}.toml"));
+        fs::write(&file, body).unwrap();
+        let out = dir.path().join(tag);
+        let o = quell(&["run", file.to_str().unwrap(), "--out", out.to_str().unwrap(), "--no-plots"]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(0), "{err}");
+        let first = if tag == "named" { "channel 1 (pitch): tail max|e|" } else { "channel 1: tail max|e|" };
+        assert!(
+            err.contains(first) && err.contains(if tag == "named" { "channel 2 (roll): " } else { "channel 2: " }),
+            "{err}"
+        );
+        csv.push(fs::read(out.join("signals.csv")).unwrap());
+    }
+    assert!(csv[0] == csv[1], "signals.csv differs with names");
+}

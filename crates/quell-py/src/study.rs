@@ -504,7 +504,7 @@ impl PyRunSpec {
         let design = scenario.design().map_err(|e| crate::errors::raise(py, Kind::Design)(&e))?;
         let spec = &self.inner;
         let result = py.detach(|| spec.simulate()).map_err(|e| Kind::Scenario.err(py, e))?;
-        PySimResult::from_run(py, &scenario, &design, result, Default::default())
+        PySimResult::from_run(py, &scenario, &design, result, scenario.names.clone())
     }
     /// Equal specifications: the same run of the same study.
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
