@@ -203,7 +203,6 @@ const BEING_SPLIT: &[(&str, &str, &str)] = &[
     ("crates/quell/src/auto.rs", "choose", "TODO(guide)"),
     ("crates/quell/src/design/place.rs", "knv0", "TODO(harden)"),
     ("crates/quell/src/study/mod.rs", "from_table", "TODO(front)"),
-    ("crates/quell-py/src/simulate.rs", "simulate", "TODO(python)"),
 ];
 
 #[test]
