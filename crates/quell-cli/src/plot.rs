@@ -400,6 +400,12 @@ pub fn plot_sweep(dir: &Path, s: &quell::study::Summary) -> io::Result<()> {
 fn draw_tune<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &quell::study::TuneResult) -> Result<(), String> {
     let areas = root.split_evenly((1, r.channels.len()));
     for (c, area) in r.channels.iter().zip(areas.iter()) {
+        if c.curve.is_empty() {
+            // A tuning stopped before this channel's first evaluation.
+            let title = format!("Channel {}: not evaluated (tuning stopped)", c.channel + 1);
+            area.titled(&title, ("sans-serif", 18)).map_err(|e| e.to_string())?;
+            continue;
+        }
         let pts: Vec<(f64, f64)> = c.curve.iter().filter_map(|p| p.objective.map(|o| (p.mu, o))).collect();
         let (m0, m1) = c.curve.iter().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p.mu), b.max(p.mu)));
         let (m0, m1) = if m0 < m1 { (m0, m1) } else { (m0 / 2.0, m0 * 2.0) };

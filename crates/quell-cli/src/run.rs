@@ -55,7 +55,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     let diagnostics = quell::diagnostics::diagnose(&design, &scenario.reference, &scenario.disturbance, &result);
     write_outputs(out, &scenario, &design, &result, &diagnostics, seconds, !args.no_plots)
         .map_err(|e| Failure::Run(format!("writing {}: {e}", out.display())))?;
-    report_outcome(&result, &diagnostics, out, seconds)
+    report_outcome(&result, &diagnostics, scenario.names.outputs.as_deref(), out, seconds)
 }
 
 /// The scenario's loop ([`RunSettings::of`]), or the sampled-data loop at `--sample-time`, checked
@@ -199,24 +199,32 @@ fn report_diagnostics(d: &ChannelDiagnostics) {
 }
 
 /// The per-channel figures and what was written (exit 0), or why the run did not reach t_end
-/// (exit 1; the files hold the samples up to then).
-fn report_outcome(result: &SimResult, diagnostics: &Diagnostics, out: &Path, seconds: f64) -> Result<(), Failure> {
+/// (exit 1; the files hold the samples up to then). A channel is named by its output where the
+/// scenario names them (`channel 1 (pitch): …`).
+fn report_outcome(
+    result: &SimResult,
+    diagnostics: &Diagnostics,
+    outputs: Option<&[String]>,
+    out: &Path,
+    seconds: f64,
+) -> Result<(), Failure> {
     let out = out.display();
     match result.outcome.as_ref().unwrap_or(&Outcome::Completed) {
         Outcome::Completed => {
             for (i, c) in result.summary().iter().enumerate() {
-                let settle = match (c.settle_t, &c.settle_note) {
+                let settle = match (c.figures.settle_t, &c.settle_note) {
                     (Some(t), _) => format!("settled (2 % band) at t = {t:.6}"),
                     (None, Some(note)) => note.clone(),
                     (None, None) => "not settled".into(),
                 };
+                let name = outputs.and_then(|o| o.get(i)).map_or(String::new(), |n| format!(" ({n})"));
                 eprintln!(
-                    "channel {}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {:.3}, max|u_f| = {:.3}, ‖η̂‖ = {:.4e}, {settle}",
+                    "channel {}{name}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {:.3}, max|u_f| = {:.3}, ‖η̂‖ = {:.4e}, {settle}",
                     i + 1,
-                    c.tail_max_abs_e,
-                    c.tail_rms_e,
-                    c.max_abs_u,
-                    c.max_abs_uf,
+                    c.figures.tail_max_e,
+                    c.figures.tail_rms_e,
+                    c.figures.max_u,
+                    c.figures.max_uf,
                     c.final_eta_norm
                 );
                 if let Some(d) = diagnostics.channels.get(i) {

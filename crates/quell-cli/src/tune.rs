@@ -3,8 +3,9 @@
 
 use std::path::PathBuf;
 
-use quell::study::{self, Study, TuneResult};
+use quell::study::{self, Study, TuneOptions, TunePoint, TuneResult};
 
+use crate::interrupt::Interrupt;
 use crate::output::{prepare_out, write_atomic};
 use crate::Failure;
 
@@ -33,18 +34,37 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
         )));
     }
     let pool = crate::sweep::thread_pool(args.jobs, usize::MAX)?;
-    // The searches write nothing until every channel is done, so a signal quits at once.
-    crate::interrupt::Interrupt::quit_with("interrupted during tuning; nothing was written (tune.csv and tune.json are written once every channel's search is done)");
     prepare_out(&args.out, &["tune.json", "tune.csv"])?;
-    let result =
-        pool.install(|| study::tune(&study)).map_err(|e| Failure::Input(format!("{}: {e}", path.display())))?;
+    // Ctrl-C or SIGTERM: the first stops the searches (runs under way are abandoned) and the
+    // points evaluated so far are written, marked partial; a second before writing begins quits.
+    let interrupt = Interrupt::install("interrupted twice; stopped without writing files");
+    let spec = study.tune.as_ref().expect("checked above");
+    let bar = crate::progress_bar(
+        (spec.bounds.len() * (spec.points + if spec.refine == 0 { 0 } else { spec.refine.max(2) })) as u64,
+        "tuning {bar:40} {pos}/{len} evaluations, {elapsed_precise} elapsed",
+    );
+    let on_point = |_: usize, _: &TunePoint| bar.inc(1);
+    let options = TuneOptions { stop: Some(interrupt.stop_flag()), on_point: Some(&on_point) };
+    let result = pool.install(|| study::tune(&study, &options));
+    bar.finish_and_clear();
+    let result = result.map_err(|e| Failure::Input(format!("{}: {e}", path.display())))?;
+    interrupt.start_writing();
     let failed = |e: std::io::Error| Failure::Run(format!("writing {}: {e}", args.out.display()));
     crate::output::write_json(&args.out.join("tune.json"), &result).map_err(failed)?;
     write_atomic(&args.out.join("tune.csv"), |w| write_curves(w, &result)).map_err(failed)?;
+    // A figure of an earlier tuning must not stand beside the new curves.
+    crate::output::remove_figures(&args.out, |stem| stem == "tune").map_err(failed)?;
     if !args.no_plots {
         crate::plot::plot_tune(&args.out, &result).map_err(failed)?;
     }
     crate::print_stdout(&report(&result));
+    if result.partial {
+        let evaluations: usize = result.channels.iter().map(|c| c.curve.len()).sum();
+        return Err(Failure::Run(format!(
+            "interrupted after {evaluations} evaluations, before the joint run; they are in {} (marked partial), and the μ printed is the best of them",
+            args.out.join("tune.csv").display()
+        )));
+    }
     if let Some(c) = result.channels.iter().find(|c| c.chosen.is_none()) {
         return Err(Failure::Input(format!(
             "channel {}: no μ in tune.mu[{}] completed with max |u_{}| ≤ tune.max_u[{}], max |u_f,{}| ≤ tune.max_uf[{}] and a finite {}; widen the bounds, raise the limits or lengthen simulation.t_end (the curve is in {})",
@@ -84,6 +104,10 @@ fn write_curves(w: &mut dyn std::io::Write, r: &TuneResult) -> std::io::Result<(
             )?;
         }
     }
+    if r.partial {
+        let n: usize = r.channels.iter().map(|c| c.curve.len()).sum();
+        writeln!(w, "# partial: {n} evaluations were carried out before the tuning was interrupted (no joint run)")?;
+    }
     Ok(())
 }
 
@@ -98,12 +122,17 @@ fn report(r: &TuneResult) -> String {
                 p.mu,
                 c.curve.len(),
                 p.objective.unwrap_or(f64::NAN),
-                if *ok { "reproduces it" } else { "does NOT reproduce it" },
+                match (r.partial, *ok) {
+                    (true, _) => "not carried out (interrupted)",
+                    (false, true) => "reproduces it",
+                    (false, false) => "does NOT reproduce it",
+                },
                 d.map_or("n/a".to_string(), |d| format!("{d:.3e}")),
             )),
             None => s.push_str(&format!("channel {}: no feasible mu in the bounds\n", c.channel + 1)),
         }
     }
-    s.push_str(&format!("tuned mu = [{}]\n", r.mu.iter().map(|m| format!("{m:.6}")).collect::<Vec<_>>().join(", ")));
+    let tuned = if r.partial { "best mu so far (tuning interrupted)" } else { "tuned mu" };
+    s.push_str(&format!("{tuned} = [{}]\n", r.mu.iter().map(|m| format!("{m:.6}")).collect::<Vec<_>>().join(", ")));
     s
 }

@@ -161,5 +161,7 @@ fn ctrl_c_during_a_large_design_quits_at_once() {
     assert_eq!(output.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("interrupted during the design; nothing was printed"), "{stderr}");
     assert!(output.stdout.is_empty());
-    assert!(sent.elapsed() < Duration::from_secs(5), "quit {:?} after the signal", sent.elapsed());
+    // The handler quits at once; the bound is for a machine at load 12, where the process may
+    // wait seconds for a core.
+    assert!(sent.elapsed() < Duration::from_secs(10), "quit {:?} after the signal", sent.elapsed());
 }

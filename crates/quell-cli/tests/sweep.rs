@@ -211,3 +211,55 @@ fn tune_writes_the_chosen_mu_and_each_curve() {
         stderr(&o)
     );
 }
+
+#[test]
+fn ctrl_c_or_sigterm_during_tune_writes_the_points_evaluated_marked_partial() {
+    for signal in ["-INT", "-TERM"] {
+        let dir_tmp = scratch("tune-interrupt");
+        let dir = dir_tmp.path();
+        // 2 × 2000 evaluations of the paper's 100 s: minutes of work, interrupted after 1.5 s.
+        let text = "[simulation]\nrtol = 1e-6\natol = 1e-6\n[tune]\nobjective = \"tail_rms_e\"\nmu = [2.0, 200.0]\npoints = 2000\n";
+        let study = write_study(dir, "tune.toml", text);
+        let out = dir.join("out");
+        let child = Command::new(env!("CARGO_BIN_EXE_quell"))
+            .args(["tune", &study, "--out"])
+            .arg(&out)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start quell");
+        std::thread::sleep(Duration::from_millis(1500));
+        assert!(Command::new("kill").args([signal, &child.id().to_string()]).status().unwrap().success());
+        let sent = std::time::Instant::now();
+        let output = child.wait_with_output().unwrap();
+        // Runs under way are abandoned at their next recorded sample (milliseconds); the bound
+        // leaves room for the plots and a machine at load 12.
+        assert!(sent.elapsed() < Duration::from_secs(30), "{signal}: quit {:?} after the signal", sent.elapsed());
+        let err = stderr(&output);
+        assert_eq!(output.status.code(), Some(1), "{signal}: {err}");
+        assert!(err.contains("interrupted after") && err.contains("(marked partial)"), "{err}");
+        let csv = fs::read_to_string(out.join("tune.csv")).unwrap();
+        let lines: Vec<&str> = csv.lines().collect();
+        let last = lines.last().unwrap();
+        assert!(last.starts_with("# partial: "), "{last}");
+        let rows = &lines[1..lines.len() - 1];
+        assert!(rows.len() < 4000, "{} rows", rows.len());
+        assert!(last.starts_with(&format!("# partial: {} evaluations", rows.len())), "{last}");
+        let fields = lines[0].split(',').count();
+        assert!(rows.iter().all(|l| l.split(',').count() == fields), "every row is whole");
+        let json: serde_json::Value =
+            serde_json::from_str(&fs::read_to_string(out.join("tune.json")).unwrap()).unwrap();
+        assert_eq!(json["partial"], true);
+        assert!(json["joint"].is_null());
+        let evaluated: usize =
+            json["channels"].as_array().unwrap().iter().map(|c| c["curve"].as_array().unwrap().len()).sum();
+        assert_eq!(evaluated, rows.len());
+        assert!(out.join("tune.svg").is_file());
+        let leftovers: Vec<_> = fs::read_dir(&out)
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().starts_with('.'))
+            .collect();
+        assert!(leftovers.is_empty(), "temporaries left: {leftovers:?}");
+    }
+}

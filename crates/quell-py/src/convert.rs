@@ -114,6 +114,52 @@ pub fn text(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<String> {
     }
 }
 
+/// A bool argument (True, False or a numpy bool; not an int), or a TypeError naming it.
+pub fn flag(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<bool> {
+    obj.extract::<bool>().map_err(|_| type_error(name, "a bool (True or False)", obj))
+}
+
+/// Extractors for `#[pyo3(from_py_with = …)]` parameters that have a Python default (`states=False`,
+/// `prefix="quell"`): PyO3 would report their wrong type in its own words, the argument's name only
+/// in a note; these raise the project's TypeError naming it.
+pub mod argument {
+    use super::{flag, text};
+    use pyo3::prelude::*;
+    use std::borrow::Cow;
+
+    pub fn states(obj: &Bound<'_, PyAny>) -> PyResult<bool> {
+        flag(obj, "states")
+    }
+    pub fn check(obj: &Bound<'_, PyAny>) -> PyResult<bool> {
+        flag(obj, "check")
+    }
+    pub fn fmu(obj: &Bound<'_, PyAny>) -> PyResult<bool> {
+        flag(obj, "fmu")
+    }
+    pub fn yes(obj: &Bound<'_, PyAny>) -> PyResult<bool> {
+        flag(obj, "yes")
+    }
+    pub fn prefix(obj: &Bound<'_, PyAny>) -> PyResult<Cow<'static, str>> {
+        text(obj, "prefix").map(Cow::Owned)
+    }
+}
+
+/// A list (any iterable but a str) of str, or a TypeError naming the argument or the entry;
+/// `expected` describes the list ("a list of 3 names (str)"), `entry` an entry ("a str (a name)").
+pub fn strings(obj: &Bound<'_, PyAny>, name: &str, expected: &str, entry: &str) -> PyResult<Vec<String>> {
+    if obj.is_instance_of::<PyString>() {
+        return Err(type_error(name, expected, obj));
+    }
+    let items = obj.try_iter().map_err(|_| type_error(name, expected, obj))?;
+    items
+        .enumerate()
+        .map(|(i, item)| {
+            let item = item?;
+            item.extract().map_err(|_| type_error(&format!("{name}[{i}]"), entry, &item))
+        })
+        .collect()
+}
+
 /// A path argument (a str or an `os.PathLike`), or a TypeError naming it.
 pub fn path(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<std::path::PathBuf> {
     if obj.is_instance_of::<PyString>() || obj.hasattr("__fspath__")? {

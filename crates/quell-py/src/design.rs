@@ -7,7 +7,7 @@ use pyo3::types::{PyComplex, PyDict, PyList, PyTuple};
 use quell::design::{DesignSpec, ObserverChoice};
 
 use crate::convert::{complex_numpy, matrix, number, pole_lists, poles, to_numpy, type_name, vector};
-use crate::errors::{in_python, raise, type_error, Kind};
+use crate::errors::{in_python, type_error, Kind};
 use crate::plant::{plant_arg, Labels, PyPlant};
 
 /// Every gain of Sections III–V (K, F, L, N, the internal models, μ, β) and the assumption checks
@@ -202,10 +202,16 @@ pub fn design(
         relative_degrees,
         regressor_scaling,
     )?;
-    let inner = &plant.inner;
-    let d = crate::interrupt::interruptible(py, || quell::Design::new(inner, &spec))?
+    let d = designed(py, &plant, spec)?;
+    crate::errors::warn_fragile(py, &d.inner, &d.spec)?;
+    Ok(d)
+}
+
+/// The design of `plant` with `spec` (Ctrl-C interrupts it), its errors naming the Python
+/// arguments (`mu[1]`, not `design.mu[1]`): what `quell.design` and a pickle's rebuild share.
+fn designed(py: Python<'_>, plant: &PyPlant, spec: DesignSpec) -> PyResult<PyDesign> {
+    let d = crate::interrupt::interruptible(py, || quell::Design::new(&plant.inner, &spec))?
         .map_err(|e| Kind::Design.err(py, in_python(e.to_string())))?;
-    crate::errors::warn_fragile(py, &d, &spec)?;
     Ok(PyDesign { inner: Arc::new(d), spec, labels: plant.labels.clone() })
 }
 
@@ -226,9 +232,7 @@ fn restore(py: Python<'_>, plant: &PyPlant, choices: &Bound<'_, PyDict>) -> PyRe
         get("relative_degrees")?.filter(|v| !v.is_none()).as_ref(),
         get("regressor_scaling")?.as_ref(),
     )?;
-    let d = crate::interrupt::interruptible(py, || quell::Design::new(&plant.inner, &spec))?
-        .map_err(|e| raise(py, Kind::Design)(&e))?;
-    Ok(PyDesign { inner: Arc::new(d), spec, labels: plant.labels.clone() })
+    designed(py, plant, spec)
 }
 
 /// State feedback K with eig(A − BK) = poles (KNV / Tits–Yang for several inputs), as

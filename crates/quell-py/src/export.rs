@@ -1,5 +1,6 @@
 //! `quell.export`: the C controller and its FMU, as `quell export` writes them (`quell::export`).
 
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
 use pyo3::prelude::*;
@@ -68,16 +69,19 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 /// >>> [p.name for p in paths]
 /// ['loop_controller.h', 'loop_controller.c']
 #[pyfunction]
-#[pyo3(signature = (source, sample_time=None, *, out=None, prefix="quell", precision=None, fmu=false, compiler=None))]
+#[pyo3(
+    signature = (source, sample_time=None, *, out=None, prefix=Cow::Borrowed("quell"), precision=None, fmu=false, compiler=None),
+    text_signature = "(source, sample_time=None, *, out=None, prefix='quell', precision=None, fmu=False, compiler=None)"
+)]
 #[allow(clippy::too_many_arguments)]
 pub fn export(
     py: Python<'_>,
     source: &Bound<'_, PyAny>,
     sample_time: Option<&Bound<'_, PyAny>>,
     out: Option<&Bound<'_, PyAny>>,
-    prefix: &str,
+    #[pyo3(from_py_with = crate::convert::argument::prefix)] prefix: Cow<'static, str>,
     precision: Option<&Bound<'_, PyAny>>,
-    fmu: bool,
+    #[pyo3(from_py_with = crate::convert::argument::fmu)] fmu: bool,
     compiler: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Vec<PathBuf>> {
     let (design, scenario_name, scenario_T) = if let Ok(s) = source.cast::<PyScenario>() {
@@ -110,7 +114,7 @@ pub fn export(
             .parse()
             .map_err(|e: ExportError| Kind::Export.err(py, message(&e)))?,
     };
-    let options = ExportOptions { prefix: prefix.to_string(), precision, scenario_name };
+    let options = ExportOptions { prefix: prefix.into_owned(), precision, scenario_name };
     let raise = |e: ExportError| match e {
         ExportError::Controller(_) | ExportError::NotFinite { .. } => Kind::Scenario.err(py, message(&e)),
         _ => Kind::Export.err(py, message(&e)),

@@ -55,32 +55,10 @@ pub struct PyPlant {
     pub labels: Labels,
 }
 
-/// The names of a plant's signals (`inputs=`, `outputs=`, `states=`, or a `control.StateSpace`'s
-/// labels); `None` where none were given: `u_f[i]`, `y[i]`, `x[j]`, counting from 1.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Labels {
-    pub inputs: Option<Vec<String>>,
-    pub outputs: Option<Vec<String>>,
-    pub states: Option<Vec<String>>,
-}
-
-impl Labels {
-    fn or_default(given: &Option<Vec<String>>, prefix: &str, count: usize) -> Vec<String> {
-        given.clone().unwrap_or_else(|| (1..=count).map(|i| format!("{prefix}[{i}]")).collect())
-    }
-    /// The inputs' names (m).
-    pub fn inputs(&self, m: usize) -> Vec<String> {
-        Self::or_default(&self.inputs, "u_f", m)
-    }
-    /// The outputs' names (m).
-    pub fn outputs(&self, m: usize) -> Vec<String> {
-        Self::or_default(&self.outputs, "y", m)
-    }
-    /// The states' names (n).
-    pub fn states(&self, n: usize) -> Vec<String> {
-        Self::or_default(&self.states, "x", n)
-    }
-}
+/// The names of a plant's signals (`inputs=`, `outputs=`, `states=`, a `control.StateSpace`'s
+/// labels, or a scenario file's `[plant]` names); `None` where none were given: `u_f[i]`, `y[i]`,
+/// `x[j]`, counting from 1.
+pub use quell::scenario::SignalNames as Labels;
 
 impl PyPlant {
     /// A plant without signal names.
@@ -93,36 +71,10 @@ impl PyPlant {
 fn names(obj: Option<&Bound<'_, PyAny>>, name: &str, count: usize) -> PyResult<Option<Vec<String>>> {
     let Some(obj) = obj.filter(|o| !o.is_none()) else { return Ok(None) };
     let py = obj.py();
-    let expected = format!("a list of {count} names (str)");
-    if obj.is_instance_of::<pyo3::types::PyString>() {
-        return Err(PyTypeError::new_err(format!("{name}: expected {expected}, found a str")));
-    }
-    let items = obj
-        .try_iter()
-        .map_err(|_| PyTypeError::new_err(format!("{name}: expected {expected}, found a {}", type_name(obj))))?;
-    let mut out: Vec<String> = Vec::new();
-    for (i, item) in items.enumerate() {
-        let item = item?;
-        let text: String = item.extract().map_err(|_| {
-            PyTypeError::new_err(format!("{name}[{i}]: expected a str (a signal name), found a {}", type_name(&item)))
-        })?;
-        if out.contains(&text) {
-            return Err(Kind::Scenario
-                .err(py, format!("{name}[{i}]: {text:?} names another signal too; give each signal its own name")));
-        }
-        out.push(text);
-    }
-    if out.len() != count {
-        return Err(Kind::Scenario.err(
-            py,
-            format!(
-                "{name}: expected {count} names (one per {}), found {}",
-                if name == "states" { "state" } else { "channel" },
-                out.len()
-            ),
-        ));
-    }
-    Ok(Some(out))
+    let given = crate::convert::strings(obj, name, &format!("a list of {count} names (str)"), "a str (a signal name)")?;
+    let per = if name == "states" { "state" } else { "channel" };
+    quell::scenario::check_names(name, &given, count, per).map_err(|e| Kind::Scenario.err(py, e.to_string()))?;
+    Ok(Some(given))
 }
 
 /// A `control.StateSpace`'s labels of one kind, unless they are python-control's own

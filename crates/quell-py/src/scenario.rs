@@ -73,7 +73,7 @@ use crate::plant::{plant_arg, Labels, PyPlant};
 pub struct PyScenario {
     pub inner: quell::Scenario,
     design: OnceLock<Arc<quell::Design>>,
-    /// The plant's signal names (a scenario file has none).
+    /// The plant's signal names: `inner.names` (a file's `[plant]` names, or a Python plant's).
     pub labels: Labels,
     /// Built from Python values: messages name the arguments (`mu[0]`), not the file's keys.
     from_values: bool,
@@ -81,7 +81,7 @@ pub struct PyScenario {
 
 impl PyScenario {
     pub fn new(inner: quell::Scenario) -> Self {
-        PyScenario { inner, design: OnceLock::new(), labels: Labels::default(), from_values: false }
+        PyScenario { labels: inner.names.clone(), inner, design: OnceLock::new(), from_values: false }
     }
 
     /// Parses and validates `text`, or raises ScenarioError.
@@ -268,7 +268,9 @@ impl PyScenario {
             let text: String = name.extract().map_err(|_| type_error("name", "a str", name))?;
             doc.insert("name".into(), Value::String(text));
         }
-        doc.insert("plant".into(), Value::Table(plant_table(&plant.inner)));
+        let mut plant_doc = plant_table(&plant.inner);
+        plant.labels.write(&mut plant_doc);
+        doc.insert("plant".into(), Value::Table(plant_doc));
         doc.insert("design".into(), Value::Table(design_value(design)?));
         let signal = |v: &Bound<'_, PyAny>, key: &str| -> PyResult<Value> {
             let form = "a list of components, one dict {bias, harmonics} per signal";
@@ -305,19 +307,15 @@ impl PyScenario {
             doc.insert("truth".into(), Value::Table(plant_table(&plant_arg(t, "truth")?.inner)));
         }
         let inner = quell::Scenario::from_document(&doc).map_err(|e| argument_error(py, &e))?;
-        Ok(PyScenario { labels: plant.labels.clone(), from_values: true, ..Self::new(inner) })
+        Ok(PyScenario { from_values: true, ..Self::new(inner) })
     }
 
-    /// Rebuilds a pickled scenario: its TOML and its plant's signal names.
+    /// Rebuilds a pickled scenario: its TOML (with the plant's signal names), and whether it was
+    /// built from Python values (its messages then name the arguments).
     #[staticmethod]
-    fn _restore(
-        py: Python<'_>,
-        text: &str,
-        inputs: Option<Vec<String>>,
-        outputs: Option<Vec<String>>,
-        states: Option<Vec<String>>,
-    ) -> PyResult<Self> {
-        Ok(PyScenario { labels: Labels { inputs, outputs, states }, ..Self::parse(py, text)? })
+    #[pyo3(signature = (text, from_values=false))]
+    fn _restore(py: Python<'_>, text: &str, from_values: bool) -> PyResult<Self> {
+        Ok(PyScenario { from_values, ..Self::parse(py, text)? })
     }
 
     /// Parses and validates a scenario file's text (the format of `examples/paper.toml`).
@@ -385,7 +383,8 @@ impl PyScenario {
     /// Returns
     /// -------
     /// str
-    ///     The document; `Scenario.from_toml(s.to_toml())` is `s` again (signal names aside).
+    ///     The document; `Scenario.from_toml(s.to_toml())` is `s` again, signal names included
+    ///     (`[plant]` `inputs`, `outputs`, `states`).
     ///
     /// Raises
     /// ------
@@ -399,22 +398,16 @@ impl PyScenario {
         self.inner.to_toml()
     }
 
-    /// Equal scenarios: the same TOML document (`to_toml` writes every key the scenario holds) and
-    /// the same signal names.
+    /// Equal scenarios: the same TOML document (`to_toml` writes every key the scenario holds,
+    /// the signal names too).
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
-        other
-            .cast::<PyScenario>()
-            .is_ok_and(|o| o.get().inner.to_toml() == self.inner.to_toml() && o.get().labels == self.labels)
+        other.cast::<PyScenario>().is_ok_and(|o| o.get().inner.to_toml() == self.inner.to_toml())
     }
 
-    /// Pickles as its TOML and its plant's signal names.
-    #[allow(clippy::type_complexity)]
-    fn __reduce__<'py>(
-        slf: &Bound<'py, Self>,
-    ) -> PyResult<(Bound<'py, PyAny>, (String, Option<Vec<String>>, Option<Vec<String>>, Option<Vec<String>>))> {
-        let (me, l) = (slf.get(), &slf.get().labels);
-        let args = (me.inner.to_toml(), l.inputs.clone(), l.outputs.clone(), l.states.clone());
-        Ok((slf.get_type().getattr("_restore")?, args))
+    /// Pickles as its TOML and whether it was built from Python values.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String, bool))> {
+        let me = slf.get();
+        Ok((slf.get_type().getattr("_restore")?, (me.inner.to_toml(), me.from_values)))
     }
 
     /// The design of this scenario's plant and choices (computed once).

@@ -9,6 +9,7 @@ use std::sync::Arc;
 use pyo3::exceptions::{PyIndexError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyInt, PyList, PyString, PyTuple};
+use quell::sim::ChannelFigures;
 use quell::study::{self, KeyPath, RunSpec, Shard, StudyMeta, SweepOptions};
 use toml::{Table, Value};
 
@@ -263,7 +264,11 @@ impl PyStudy {
     /// >>> result.frame["outcome"].tolist()
     /// ['completed']
     #[pyo3(signature = (*, jobs=None, yes=false))]
-    fn sweep(slf: &Bound<'_, Self>, jobs: Option<&Bound<'_, PyAny>>, yes: bool) -> PyResult<Py<PyAny>> {
+    fn sweep(
+        slf: &Bound<'_, Self>,
+        jobs: Option<&Bound<'_, PyAny>>,
+        #[pyo3(from_py_with = crate::convert::argument::yes)] yes: bool,
+    ) -> PyResult<Py<PyAny>> {
         let py = slf.py();
         let frame = sweep_frame(py, &slf.get().inner, jobs, yes)?;
         Ok(py.import("quell._study")?.getattr("StudyResult")?.call1((slf, frame))?.unbind())
@@ -455,9 +460,14 @@ impl PyRunSpec {
     /// A run specification from its JSON form (`spec.to_json()`); this is how pickle rebuilds it.
     #[new]
     #[pyo3(signature = (json, drawn=None))]
-    fn new(py: Python<'_>, json: &Bound<'_, PyAny>, drawn: Option<Vec<String>>) -> PyResult<Self> {
-        serde_json::from_str(&crate::convert::text(json, "json")?)
-            .map(|inner| PyRunSpec { inner, drawn: drawn.unwrap_or_default() })
+    fn new(py: Python<'_>, json: &Bound<'_, PyAny>, drawn: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+        let json = crate::convert::text(json, "json")?;
+        let drawn = drawn
+            .filter(|d| !d.is_none())
+            .map(|d| crate::convert::strings(d, "drawn", "a list of study keys (str)", "a str (a study key)"));
+        let drawn = drawn.transpose()?.unwrap_or_default();
+        serde_json::from_str(&json)
+            .map(|inner| PyRunSpec { inner, drawn })
             .map_err(|e| Kind::Scenario.err(py, format!("json: not a quell run specification ({e})")))
     }
     /// The values the run's draw gave each perturbed key, flattened (`truth.A[0][1]`), as the
@@ -495,7 +505,7 @@ impl PyRunSpec {
         let design = scenario.design().map_err(|e| crate::errors::raise(py, Kind::Design)(&e))?;
         let spec = &self.inner;
         let result = py.detach(|| spec.simulate()).map_err(|e| Kind::Scenario.err(py, e))?;
-        PySimResult::from_run(py, &scenario, &design, result, Default::default())
+        PySimResult::from_run(py, &scenario, &design, result, scenario.names.clone())
     }
     /// Equal specifications: the same run of the same study.
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
@@ -607,16 +617,13 @@ fn row_dict<'py>(py: Python<'py>, spec: &RunSpec, row: &study::Row) -> PyResult<
     // As runs.csv reads back (pandas): an empty reason is a missing value.
     d.set_item("reason", Some(&row.reason).filter(|r| !r.is_empty()))?;
     let m = if row.channels.is_empty() { channels(spec) } else { row.channels.len() };
-    let get = |i: usize, f: &dyn Fn(&study::ChannelFigures) -> Option<f64>| row.channels.get(i).and_then(f);
+    let get = |i: usize, f: &dyn Fn(&ChannelFigures) -> Option<f64>| row.channels.get(i).and_then(f);
     for (name, f) in [
-        (
-            "tail_max_e",
-            &(|c: &study::ChannelFigures| Some(c.tail_max_e)) as &dyn Fn(&study::ChannelFigures) -> Option<f64>,
-        ),
-        ("tail_rms_e", &|c: &study::ChannelFigures| Some(c.tail_rms_e)),
-        ("max_u", &|c: &study::ChannelFigures| Some(c.max_u)),
-        ("max_uf", &|c: &study::ChannelFigures| Some(c.max_uf)),
-        ("settle_t", &|c: &study::ChannelFigures| c.settle_t),
+        ("tail_max_e", &(|c: &ChannelFigures| Some(c.tail_max_e)) as &dyn Fn(&ChannelFigures) -> Option<f64>),
+        ("tail_rms_e", &|c: &ChannelFigures| Some(c.tail_rms_e)),
+        ("max_u", &|c: &ChannelFigures| Some(c.max_u)),
+        ("max_uf", &|c: &ChannelFigures| Some(c.max_uf)),
+        ("settle_t", &|c: &ChannelFigures| c.settle_t),
     ] {
         for i in 0..m {
             d.set_item(format!("{name}{}", i + 1), get(i, f))?;
@@ -764,7 +771,7 @@ pub fn sweep(
     py: Python<'_>,
     study: &Bound<'_, PyAny>,
     jobs: Option<&Bound<'_, PyAny>>,
-    yes: bool,
+    #[pyo3(from_py_with = crate::convert::argument::yes)] yes: bool,
 ) -> PyResult<Py<PyAny>> {
     sweep_frame(py, &study_arg(py, study)?, jobs, yes)
 }

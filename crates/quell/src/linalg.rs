@@ -4,7 +4,7 @@ use nalgebra::{Complex, DMatrix};
 
 /// Coefficients `[a_0, …, a_{q−1}]` of the monic polynomial ∏(s − p_j) = s^q + a_{q−1}s^{q−1} + … + a_0.
 /// The poles must be closed under conjugation (callers check); imaginary round-off is dropped.
-pub fn poly_from_roots(poles: &[Complex<f64>]) -> Vec<f64> {
+pub(crate) fn poly_from_roots(poles: &[Complex<f64>]) -> Vec<f64> {
     // c holds the monic polynomial's coefficients, ascending, with the leading 1 last.
     let mut c = vec![Complex::new(1.0, 0.0)];
     for &p in poles {
@@ -21,7 +21,7 @@ pub fn poly_from_roots(poles: &[Complex<f64>]) -> Vec<f64> {
 /// Companion matrix of the monic polynomial with ascending coefficients `a` (length q): ones on the
 /// superdiagonal, last row −[a_0, …, a_{q−1}]. With input vector e_q, the transfer function to
 /// the first state is 1 / (s^q + a_{q−1}s^{q−1} + … + a_0).
-pub fn companion(a: &[f64]) -> DMatrix<f64> {
+pub(crate) fn companion(a: &[f64]) -> DMatrix<f64> {
     let q = a.len();
     DMatrix::from_fn(q, q, |r, c| {
         if r + 1 == q {
@@ -35,7 +35,7 @@ pub fn companion(a: &[f64]) -> DMatrix<f64> {
 }
 
 /// Block-diagonal matrix of the given blocks.
-pub fn blkdiag(blocks: &[DMatrix<f64>]) -> DMatrix<f64> {
+pub(crate) fn blkdiag(blocks: &[DMatrix<f64>]) -> DMatrix<f64> {
     let rows = blocks.iter().map(|b| b.nrows()).sum();
     let cols = blocks.iter().map(|b| b.ncols()).sum();
     let mut M = DMatrix::zeros(rows, cols);
@@ -50,7 +50,7 @@ pub fn blkdiag(blocks: &[DMatrix<f64>]) -> DMatrix<f64> {
 
 /// Why [`eigenvalues`] returned no eigenvalues.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum EigenError {
+pub(crate) enum EigenError {
     /// The matrix has a NaN or infinite entry (e.g. a gain that overflowed), or entries so large
     /// (≳ 1e154) that ‖M‖_F overflows: balancing and the QR iteration would overflow (or, near
     /// f64::MAX, never end).
@@ -66,7 +66,7 @@ pub enum EigenError {
 /// `dhseqr`, with exceptional shifts and aggressive early deflation, so tight clusters (repeated,
 /// defective eigenvalues) and cyclic matrices converge. A k-fold defective eigenvalue is computed
 /// only to ≈ (ε‖M‖)^(1/k): see [`clusters`].
-pub fn eigenvalues(M: &DMatrix<f64>) -> Result<Vec<Complex<f64>>, EigenError> {
+pub(crate) fn eigenvalues(M: &DMatrix<f64>) -> Result<Vec<Complex<f64>>, EigenError> {
     let n = M.nrows();
     // ‖M‖_F is NaN or ∞ for any non-finite entry, and ∞ when it overflows.
     if !M.norm().is_finite() {
@@ -127,7 +127,7 @@ fn backward_error(n: usize) -> f64 {
 /// How far the computed copies of a k-fold defective eigenvalue λ of a matrix of norm `size` can
 /// scatter: (δ‖M‖/s)^(1/k)·s with s = max(|λ|, δ‖M‖) (perturbation theory of a k×k Jordan block
 /// under a backward error δ‖M‖, made scale-free with |λ|).
-pub fn cluster_radius(k: usize, center: Complex<f64>, size: f64, n: usize) -> f64 {
+pub(crate) fn cluster_radius(k: usize, center: Complex<f64>, size: f64, n: usize) -> f64 {
     let d = backward_error(n) * size;
     let s = center.norm().max(d).max(f64::MIN_POSITIVE);
     (d / s).powf(1.0 / k as f64) * s
@@ -135,7 +135,7 @@ pub fn cluster_radius(k: usize, center: Complex<f64>, size: f64, n: usize) -> f6
 
 /// The most copies of one defective eigenvalue that [`clusters`] groups: a k-fold one is computable
 /// only to ≈ (ε‖M‖)^(1/k), a third of its size for k = 32, so larger groups would be meaningless.
-pub const MAX_CLUSTER: usize = 32;
+pub(crate) const MAX_CLUSTER: usize = 32;
 
 /// Computed eigenvalues grouped into clusters, each the computed copies of one (possibly
 /// defective) eigenvalue: greedily from the largest size k down, the k nearest eigenvalues around
@@ -146,7 +146,7 @@ pub const MAX_CLUSTER: usize = 32;
 /// distinct eigenvalues (a normal matrix of n ≳ 40) passed as one "cluster" whose mean could hide
 /// an unstable member. Clusters have at most [`MAX_CLUSTER`] members. Returns the indices of each
 /// cluster; singletons last.
-pub fn clusters(eigs: &[Complex<f64>], size: f64) -> Vec<Vec<usize>> {
+pub(crate) fn clusters(eigs: &[Complex<f64>], size: f64) -> Vec<Vec<usize>> {
     let n = eigs.len();
     // Each eigenvalue's neighbours, nearest first (itself first), computed once.
     let order: Vec<Vec<usize>> = (0..n)
@@ -209,7 +209,7 @@ fn jordan_shaped(eigs: &[Complex<f64>], members: &[usize], mean: Complex<f64>) -
 /// [`clusters`] (the k scattered copies of a k-fold eigenvalue) is judged by its mean, which is
 /// accurate to O(ε‖M‖) where its members are only accurate to ≈ (ε‖M‖)^(1/k), against the margin
 /// −√ε·max(1, `size`). Returns each failing cluster's mean, once per member (empty: Hurwitz).
-pub fn unstable(eigs: &[Complex<f64>], size: f64) -> Vec<Complex<f64>> {
+pub(crate) fn unstable(eigs: &[Complex<f64>], size: f64) -> Vec<Complex<f64>> {
     let margin = f64::EPSILON.sqrt() * size.max(1.0);
     let mut bad = Vec::new();
     for c in clusters(eigs, size) {
@@ -222,13 +222,13 @@ pub fn unstable(eigs: &[Complex<f64>], size: f64) -> Vec<Complex<f64>> {
 }
 
 /// Condition number σ_max/σ_min in the 2-norm (∞ for a singular or empty matrix).
-pub fn cond(M: &DMatrix<f64>) -> f64 {
+pub(crate) fn cond(M: &DMatrix<f64>) -> f64 {
     singular_extremes(M).1
 }
 
 /// The smallest singular value and the condition number of M from one SVD: (0, ∞) for an empty
 /// matrix (nalgebra's SVD panics on one), cond ∞ for a singular one.
-pub fn singular_extremes(M: &DMatrix<f64>) -> (f64, f64) {
+pub(crate) fn singular_extremes(M: &DMatrix<f64>) -> (f64, f64) {
     if M.is_empty() {
         return (0.0, f64::INFINITY);
     }
@@ -238,7 +238,7 @@ pub fn singular_extremes(M: &DMatrix<f64>) -> (f64, f64) {
 }
 
 /// Numerical rank: the number of singular values above `max(rows, cols)·eps·σ_max`.
-pub fn numerical_rank(M: &DMatrix<f64>) -> usize {
+pub(crate) fn numerical_rank(M: &DMatrix<f64>) -> usize {
     if M.is_empty() {
         return 0;
     }

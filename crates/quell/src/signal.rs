@@ -229,7 +229,7 @@ pub(crate) struct SignalBank {
 
 impl SignalBank {
     /// The components of `signals`, concatenated.
-    pub fn new(signals: &[&Signal]) -> SignalBank {
+    pub(crate) fn new(signals: &[&Signal]) -> SignalBank {
         let components = || signals.iter().flat_map(|s| &s.components);
         let harmonics = || components().enumerate().flat_map(|(e, c)| c.harmonics.iter().map(move |h| (e, h)));
         let h = harmonics().count();
@@ -245,7 +245,7 @@ impl SignalBank {
     }
 
     /// Number of output entries (the signals' components together).
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.bias.len()
     }
 

@@ -391,6 +391,27 @@ fn missing_disturbance_with_D() {
 }
 
 #[test]
+fn signal_name_count() {
+    check(&with(&[(X0, "x0 = [0.0, 0.0, 0.0]\noutputs = [\"a\", \"b\", \"c\"]")]), "plant.outputs", "(one per output)");
+}
+
+#[test]
+fn duplicate_signal_name() {
+    let names = "states = [\"level\", \"flow\", \"level\"]";
+    check(&with(&[(X0, &format!("{X0}\n{names}"))]), "plant.states[2]", "names another signal too");
+}
+
+#[test]
+fn empty_signal_name() {
+    check(&with(&[(X0, &format!("{X0}\ninputs = [\"valve\", \" \"]"))]), "plant.inputs[1]", "give every input a name");
+}
+
+#[test]
+fn signal_name_not_a_string() {
+    check(&with(&[(X0, &format!("{X0}\ninputs = [1, 2]"))]), "plant.inputs[0]", "expected a string");
+}
+
+#[test]
 fn disturbance_component_count() {
     check(
         &with(&[("components = [ { harmonics = [{ amplitude = 1.0, frequency = 1.0 }] },\n", "components = [\n")]),
@@ -768,6 +789,29 @@ fn relative_degrees_given_round_trip_and_design_as_decided() {
     let given: Vec<_> = d.relative_degree_decisions().iter().map(|r| (r.decided, r.given)).collect();
     assert_eq!(given, vec![(Some(2), Some(2)), (Some(1), Some(1))]);
     assert!(decided.relative_degree_decisions().iter().all(|r| r.given.is_none()));
+}
+
+/// `[plant]` `inputs`, `outputs`, `states`: read in order, written back, and nothing else changes
+/// (the same design, gain for gain); a file without them writes none and names its signals
+/// `u_f[i]`, `y[i]`, `x[j]`.
+#[test]
+fn signal_names_round_trip_and_change_no_number() {
+    let names = "inputs = [\"left\", \"right\"]\noutputs = [\"pitch\", \"roll\"]\nstates = [\"a\", \"b\", \"c\"]";
+    let (s, d) = load_and_design(&with(&[(X0, &format!("{X0}\n{names}"))])).unwrap_or_else(|e| panic!("{e}"));
+    let strings = |v: &[&str]| Some(v.iter().map(|x| x.to_string()).collect::<Vec<_>>());
+    assert_eq!(s.names.inputs, strings(&["left", "right"]));
+    assert_eq!(s.names.outputs, strings(&["pitch", "roll"]));
+    assert_eq!(s.names.states, strings(&["a", "b", "c"]));
+    let back = Scenario::from_toml(&s.to_toml()).unwrap();
+    assert_eq!(back.names, s.names);
+    let (paper, decided) = load_and_design(PAPER_EXAMPLE).unwrap();
+    assert_eq!((d.K(), d.L(), d.F()), (decided.K(), decided.L(), decided.F()));
+    assert!(paper.names.is_empty());
+    let written = paper.to_toml();
+    assert!(!["inputs", "outputs", "states"].iter().any(|k| written.contains(&format!("{k} ="))), "{written}");
+    assert_eq!(paper.names.outputs(2), ["y[1]", "y[2]"]);
+    assert_eq!(paper.names.inputs(2), ["u_f[1]", "u_f[2]"]);
+    assert_eq!(paper.names.states(3), ["x[1]", "x[2]", "x[3]"]);
 }
 
 /// Without the key a file means the paper's form (G_g1 = [[0, 1], [−6, −7]], l = e_2, Section VIII);

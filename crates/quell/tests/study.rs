@@ -102,7 +102,8 @@ fn a_stopped_sweep_is_partial() {
 fn tuned_channels_are_reproduced_by_the_joint_run() {
     let text = "[simulation]\nt_end = 60.0\nrtol = 1e-9\natol = 1e-9\n[tune]\nobjective = \"tail_rms_e\"\nmu = [[2.0, 200.0], [2.0, 200.0]]\nmax_u = [22.0, 1e3]\npoints = 7\nrefine = 4\n";
     let study = Study::from_toml(text, None).unwrap();
-    let r = quell::study::tune(&study).unwrap();
+    let r = quell::study::tune(&study, &Default::default()).unwrap();
+    assert!(!r.partial && r.joint.is_some());
     assert_eq!(r.channels.len(), 2);
     for c in &r.channels {
         let chosen = c.chosen.as_ref().expect("a feasible μ");
@@ -118,6 +119,38 @@ fn tuned_channels_are_reproduced_by_the_joint_run() {
     assert!(r.channels[0].curve.iter().any(|p| p.figures.is_some_and(|f| f.max_u > 22.0)));
     assert_eq!(r.mu, [r.channels[0].chosen.as_ref().unwrap().mu, r.channels[1].chosen.as_ref().unwrap().mu]);
     assert_eq!(r.reproduced, [true, true], "joint differences {:?}", r.joint_difference);
+}
+
+/// Stopping a tuning keeps the points evaluated so far: on one worker thread, a stop after the
+/// third evaluation leaves exactly those three (the run under way when the flag is set completes
+/// only if it finishes before its next recorded sample, and none is under way here), no joint
+/// run, and each channel's choice the best of its own points.
+#[test]
+fn a_stopped_tuning_keeps_the_points_evaluated() {
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    let text = "[simulation]\nt_end = 20.0\nrtol = 1e-6\natol = 1e-6\n[tune]\nobjective = \"tail_rms_e\"\nmu = [2.0, 200.0]\npoints = 5\nrefine = 4\n";
+    let study = Study::from_toml(text, None).unwrap();
+    let (stop, count) = (AtomicBool::new(false), AtomicUsize::new(0));
+    let on_point = |_: usize, _: &quell::study::TunePoint| {
+        if count.fetch_add(1, Ordering::SeqCst) + 1 == 3 {
+            stop.store(true, Ordering::SeqCst);
+        }
+    };
+    let opts = quell::study::TuneOptions { stop: Some(&stop), on_point: Some(&on_point) };
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let r = pool.install(|| quell::study::tune(&study, &opts)).unwrap();
+    assert!(r.partial && r.joint.is_none());
+    assert_eq!(r.channels.iter().map(|c| c.curve.len()).sum::<usize>(), 3);
+    assert_eq!(r.reproduced, [false, false]);
+    for c in &r.channels {
+        let best = c.curve.iter().filter_map(|p| p.objective).fold(f64::INFINITY, f64::min);
+        assert_eq!(c.chosen.as_ref().and_then(|p| p.objective).unwrap_or(f64::INFINITY), best);
+    }
+    // Stopped before it began: nothing evaluated, μ stays the scenario's.
+    let r = quell::study::tune(&study, &quell::study::TuneOptions { stop: Some(&stop), on_point: None }).unwrap();
+    assert!(r.partial && r.channels.iter().all(|c| c.curve.is_empty() && c.chosen.is_none()));
+    let base = quell::Scenario::from_document(&study.spec_with_nominal(0).unwrap().scenario).unwrap().design.mu;
+    assert_eq!(r.mu, base);
 }
 
 /// A grid over the true delay: the design keeps τ₂ = 3 at every point, the point where the truth

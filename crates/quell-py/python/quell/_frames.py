@@ -58,7 +58,10 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None):
     if ax is not None:
         axes = list(ax.flat) if hasattr(ax, "flat") else list(ax) if isinstance(ax, (list, tuple)) else [ax]
         if len(axes) not in (1, 4) or not all(hasattr(a, "plot") for a in axes):
-            raise TypeError(f"ax: expected one matplotlib Axes or four, found {ax!r}")
+            found = f"{len(axes)} entries" if len(axes) not in (1, 4) else "entries that are not Axes"
+            if not isinstance(ax, (list, tuple)) and not hasattr(ax, "flat"):
+                found = f"a {type(ax).__name__}"
+            raise TypeError(f"ax: expected one matplotlib Axes or four, found {found}")
         fig = axes[0].figure
     else:
         fig = fig if fig is not None else plt.figure(figsize=figsize if figsize is not None else (10, 11.5))

@@ -61,18 +61,18 @@ pub(crate) struct ChannelFilter {
 
 impl ChannelFilter {
     /// σ_i.
-    pub fn sigma(&self) -> usize {
+    pub(crate) fn sigma(&self) -> usize {
         self.tf.sigma()
     }
     /// q_i0.
-    pub fn q0(&self) -> f64 {
+    pub(crate) fn q0(&self) -> f64 {
         self.tf.q0()
     }
 }
 
 impl Equations {
     /// Assembles the controller's matrices from a design.
-    pub fn new(d: &Design) -> Equations {
+    pub(crate) fn new(d: &Design) -> Equations {
         let p = d.plant();
         let (n, m) = (p.n(), p.m());
         let (q_g, q_w) = (d.q_g(), d.q_w());

@@ -5,7 +5,7 @@
 
 /// Number of stored entries of a packed symmetric q×q matrix.
 #[inline(always)]
-pub const fn len(q: usize) -> usize {
+pub(crate) const fn len(q: usize) -> usize {
     q * (q + 1) / 2
 }
 
@@ -25,7 +25,7 @@ macro_rules! by_size {
 
 /// The continuous H filter's rate and the adaptive law's product (eq. (33)) over packed Ω:
 /// d_omega = (ΔΔᵀ − Ω)/β and out = Ω x.
-pub fn filter_rate_and_apply(
+pub(crate) fn filter_rate_and_apply(
     delta: &[f64],
     omega: &[f64],
     inv_beta: f64,
@@ -120,7 +120,7 @@ const fn at(q: usize, r: usize, c: usize) -> usize {
 }
 
 /// The largest absolute row sum of Ω, a bound of its spectral radius (Gershgorin).
-pub fn max_row_sum(omega: &[f64], q: usize) -> f64 {
+pub(crate) fn max_row_sum(omega: &[f64], q: usize) -> f64 {
     (0..q)
         .map(|i| (0..q).map(|j| omega[if i <= j { at(q, i, j) } else { at(q, j, i) }].abs()).sum::<f64>())
         .fold(0.0, f64::max)
@@ -130,7 +130,7 @@ pub fn max_row_sum(omega: &[f64], q: usize) -> f64 {
 /// `factor` (packed, q(q+1)/2 long): the implicit stage of the adaptive law η̂' = μ (Y − Ω η̂)
 /// (eq. (33)) with c = h γ μ. `false`, x unspecified, when I + c Ω is not numerically positive
 /// definite (Ω not positive semidefinite, or non-finite entries).
-pub fn solve_shifted(omega: &[f64], c: f64, x: &mut [f64], factor: &mut [f64]) -> bool {
+pub(crate) fn solve_shifted(omega: &[f64], c: f64, x: &mut [f64], factor: &mut [f64]) -> bool {
     let q = x.len();
     let (omega, r) = (&omega[..len(q)], &mut factor[..len(q)]);
     for i in 0..q {

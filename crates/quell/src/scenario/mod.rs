@@ -11,6 +11,7 @@
 //! both.
 
 pub mod exosystem;
+mod names;
 pub(crate) mod read;
 mod write;
 
@@ -25,6 +26,7 @@ use crate::plant::{Plant, PlantError};
 use crate::settings::{self, KeyError};
 use crate::signal::{check_signals, Component, Harmonic, Signal};
 use exosystem::Exosystem;
+pub use names::{check_names, SignalNames};
 pub(crate) use read::kind;
 use read::{err, line_col, Table, Value};
 pub use write::{design_table, plant_table, pole_list, signal_table};
@@ -47,6 +49,8 @@ pub struct ScenarioError {
 pub struct Scenario {
     pub name: Option<String>,
     pub plant: Plant,
+    /// `[plant]` `inputs`, `outputs`, `states`: the plant's signal names, where given.
+    pub names: SignalNames,
     pub design: DesignSpec,
     /// g(t), one component per output.
     pub reference: Signal,
@@ -118,7 +122,7 @@ pub fn load_and_design(text: &str) -> Result<(Scenario, Design), LoadError> {
 }
 
 const TOP_KEYS: &[&str] = &["name", "plant", "design", "reference", "disturbance", "simulation", "noise", "truth"];
-const PLANT_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0"];
+const PLANT_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0", "inputs", "outputs", "states"];
 const TRUTH_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0", "actuator_delays", "u_max"];
 const DESIGN_KEYS: &[&str] = &[
     "observer_gain",
@@ -177,7 +181,7 @@ impl Scenario {
         let name = root.get("name", |v| v.string())?;
         let reference = root.require("reference", "the [reference] table: g(t), one component per output", signal)?;
         let disturbance = root.get("disturbance", signal)?;
-        let plant =
+        let (plant, names) =
             root.require("plant", "the [plant] table (A, B, C, delays; D and Q with a [disturbance])", |v| {
                 plant(v, disturbance.as_ref())
             })?;
@@ -205,6 +209,7 @@ impl Scenario {
         let mut scenario = Scenario {
             name,
             plant,
+            names,
             design: PartialDesign::placeholder(),
             reference,
             disturbance,
@@ -281,8 +286,9 @@ pub fn read_document(path: &Path) -> Result<toml::Table, ScenarioError> {
     parse_document(&text)
 }
 
-/// `[plant]`: matrices and delays, shapes checked by [`Plant::new`] with errors mapped to keys.
-fn plant(v: Value, disturbance: Option<&Signal>) -> Result<Plant, ScenarioError> {
+/// `[plant]`: matrices and delays, shapes checked by [`Plant::new`] with errors mapped to keys, and
+/// the signals' names.
+fn plant(v: Value, disturbance: Option<&Signal>) -> Result<(Plant, SignalNames), ScenarioError> {
     let t = v.table(PLANT_KEYS)?;
     let A = t.require("A", "the n×n state matrix", |v| v.matrix())?;
     let B = t.require("B", "the n×m input matrix", |v| v.matrix())?;
@@ -317,7 +323,8 @@ fn plant(v: Value, disturbance: Option<&Signal>) -> Result<Plant, ScenarioError>
         }
         _ => DMatrix::zeros(m, 0),
     };
-    Plant::new(A, B, C, D, Q, delays, x0).map_err(|e| plant_error(e, n, m, k))
+    let plant = Plant::new(A, B, C, D, Q, delays, x0).map_err(|e| plant_error(e, n, m, k))?;
+    Ok((plant, SignalNames::read(&t, n, m)?))
 }
 
 /// `[truth]`: each given matrix has its `[plant]` counterpart's shape, the rest is `plant`'s; and the

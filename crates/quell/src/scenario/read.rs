@@ -46,7 +46,7 @@ pub(crate) struct Value<'a, 'k> {
 
 impl<'a> Table<'a> {
     /// Wraps `table` (found at `key`, "" for the document), rejecting any key not in `valid`.
-    pub fn new(key: &str, table: &'a toml::Table, valid: &[&str]) -> Result<Self, ScenarioError> {
+    pub(crate) fn new(key: &str, table: &'a toml::Table, valid: &[&str]) -> Result<Self, ScenarioError> {
         for name in table.keys() {
             if !valid.contains(&name.as_str()) {
                 let place = if key.is_empty() { "at the top level".to_string() } else { format!("in [{key}]") };
@@ -66,12 +66,12 @@ impl<'a> Table<'a> {
     }
 
     /// The full key path of `name` in this table.
-    pub fn key(&self, name: &str) -> String {
+    pub(crate) fn key(&self, name: &str) -> String {
         child(&self.key, name)
     }
 
     /// Calls `f` with the value of `name` and its key path, if present.
-    pub fn get<T>(
+    pub(crate) fn get<T>(
         &self,
         name: &str,
         f: impl FnOnce(Value<'a, '_>) -> Result<T, ScenarioError>,
@@ -86,7 +86,7 @@ impl<'a> Table<'a> {
     }
 
     /// Like [`Table::get`], but a missing key is an error; `what` says what the key holds.
-    pub fn require<T>(
+    pub(crate) fn require<T>(
         &self,
         name: &str,
         what: &str,
@@ -102,7 +102,7 @@ impl<'a> Value<'a, '_> {
     }
 
     /// A sub-table, checked against its valid keys.
-    pub fn table(&self, valid: &[&str]) -> Result<Table<'a>, ScenarioError> {
+    pub(crate) fn table(&self, valid: &[&str]) -> Result<Table<'a>, ScenarioError> {
         match self.value {
             toml::Value::Table(t) => Table::new(self.key, t, valid),
             _ => Err(self.found("a table")),
@@ -110,7 +110,7 @@ impl<'a> Value<'a, '_> {
     }
 
     /// A string.
-    pub fn string(&self) -> Result<String, ScenarioError> {
+    pub(crate) fn string(&self) -> Result<String, ScenarioError> {
         match self.value {
             toml::Value::String(s) => Ok(s.clone()),
             _ => Err(self.found("a string")),
@@ -118,7 +118,7 @@ impl<'a> Value<'a, '_> {
     }
 
     /// A finite number; integers are accepted.
-    pub fn number(&self) -> Result<f64, ScenarioError> {
+    pub(crate) fn number(&self) -> Result<f64, ScenarioError> {
         let x = match self.value {
             toml::Value::Float(x) => *x,
             toml::Value::Integer(i) => *i as f64,
@@ -132,7 +132,7 @@ impl<'a> Value<'a, '_> {
     }
 
     /// A non-negative integer.
-    pub fn unsigned(&self) -> Result<u64, ScenarioError> {
+    pub(crate) fn unsigned(&self) -> Result<u64, ScenarioError> {
         match self.value {
             toml::Value::Integer(i) => {
                 u64::try_from(*i).map_err(|_| err(self.key, format!("expected an integer ≥ 0, found {i}")))
@@ -142,7 +142,7 @@ impl<'a> Value<'a, '_> {
     }
 
     /// An integer ≥ 1; `what` names it.
-    pub fn positive(&self, what: &str) -> Result<usize, ScenarioError> {
+    pub(crate) fn positive(&self, what: &str) -> Result<usize, ScenarioError> {
         match self.value {
             toml::Value::Integer(i) if *i >= 1 => {
                 usize::try_from(*i).map_err(|_| err(self.key, format!("expected {what}, an integer ≥ 1, found {i}")))
@@ -153,7 +153,7 @@ impl<'a> Value<'a, '_> {
     }
 
     /// An array, with each element's key path `key[i]`; `what` describes the expected array.
-    pub fn array<T>(
+    pub(crate) fn array<T>(
         &self,
         what: &str,
         mut f: impl FnMut(Value<'a, '_>) -> Result<T, ScenarioError>,
@@ -172,12 +172,12 @@ impl<'a> Value<'a, '_> {
     }
 
     /// An array of finite numbers.
-    pub fn numbers(&self) -> Result<Vec<f64>, ScenarioError> {
+    pub(crate) fn numbers(&self) -> Result<Vec<f64>, ScenarioError> {
         self.array("an array of numbers", |v| v.number())
     }
 
     /// An array of numbers that may be `inf` (limits; NaN and −∞ are refused).
-    pub fn limits(&self) -> Result<Vec<f64>, ScenarioError> {
+    pub(crate) fn limits(&self) -> Result<Vec<f64>, ScenarioError> {
         self.array("an array of numbers (inf for no limit)", |v| match v.value {
             toml::Value::Float(x) if *x == f64::INFINITY => Ok(*x),
             _ => v.number(),
@@ -185,7 +185,7 @@ impl<'a> Value<'a, '_> {
     }
 
     /// A matrix written as an array of rows of equal length. `[]` is a matrix with no rows.
-    pub fn matrix(&self) -> Result<DMatrix<f64>, ScenarioError> {
+    pub(crate) fn matrix(&self) -> Result<DMatrix<f64>, ScenarioError> {
         const FORM: &str = "a matrix (an array of rows, e.g. [[1.0, 0.0], [0.0, 1.0]])";
         if let toml::Value::Array(items) = self.value {
             if items.first().is_some_and(|v| matches!(v, toml::Value::Integer(_) | toml::Value::Float(_))) {
@@ -246,14 +246,14 @@ impl<'a> Value<'a, '_> {
     }
 
     /// A list of poles, complex pairs expanded into both conjugates.
-    pub fn poles(&self) -> Result<Vec<Complex<f64>>, ScenarioError> {
+    pub(crate) fn poles(&self) -> Result<Vec<Complex<f64>>, ScenarioError> {
         let mut out = Vec::new();
         self.array("a list of poles (an array of numbers or [re, im] pairs)", |p| p.pole(&mut out))?;
         Ok(out)
     }
 
     /// One list of poles per channel or signal component.
-    pub fn pole_lists(&self, per: &str) -> Result<Vec<Vec<Complex<f64>>>, ScenarioError> {
+    pub(crate) fn pole_lists(&self, per: &str) -> Result<Vec<Vec<Complex<f64>>>, ScenarioError> {
         if let toml::Value::Array(items) = self.value {
             if items.first().is_some_and(|v| matches!(v, toml::Value::Integer(_) | toml::Value::Float(_))) {
                 return Err(err(

@@ -24,7 +24,9 @@ impl Scenario {
         if let Some(name) = &self.name {
             doc.insert("name".into(), Value::String(name.clone()));
         }
-        doc.insert("plant".into(), Value::Table(plant_table(&self.plant)));
+        let mut plant = plant_table(&self.plant);
+        self.names.write(&mut plant);
+        doc.insert("plant".into(), Value::Table(plant));
         doc.insert("design".into(), Value::Table(design_table(&self.design)));
         doc.insert("reference".into(), Value::Table(signal_table(&self.reference)));
         if !self.disturbance.components.is_empty() {

@@ -3,8 +3,9 @@
 
 use std::io::{self, Write};
 
-use super::run::{ChannelFigures, Outcome, Row};
 use super::summary::StudyMeta;
+use super::sweep::{Outcome, Row};
+use crate::sim::ChannelFigures;
 
 /// The header: `run,point,draw,seed,<grid keys>,outcome,reason,tail_max_e1..m,tail_rms_e1..m,
 /// max_u1..m,max_uf1..m,settle_t1..m,steps,wall_ms`.

@@ -57,7 +57,7 @@ impl fmt::Display for Shape {
 }
 
 /// The shape of `v` when it is a number or (nested) arrays of numbers, else `None`.
-pub fn shape(v: &toml::Value) -> Option<Shape> {
+pub(super) fn shape(v: &toml::Value) -> Option<Shape> {
     match v {
         toml::Value::Integer(_) | toml::Value::Float(_) => Some(Shape::Number),
         toml::Value::Array(items) => items.iter().map(shape).collect::<Option<Vec<_>>>().map(Shape::Array),
@@ -66,7 +66,7 @@ pub fn shape(v: &toml::Value) -> Option<Shape> {
 }
 
 /// Every number in `v`, in order, as a mutable reference (integers are turned into floats first).
-pub fn for_each_number(v: &mut toml::Value, f: &mut impl FnMut(&mut f64)) {
+pub(super) fn for_each_number(v: &mut toml::Value, f: &mut impl FnMut(&mut f64)) {
     match v {
         toml::Value::Integer(i) => {
             let mut x = *i as f64;
@@ -80,7 +80,7 @@ pub fn for_each_number(v: &mut toml::Value, f: &mut impl FnMut(&mut f64)) {
 }
 
 /// Whether two values hold the same numbers in the same nesting (an integer equals its float).
-pub fn same_numbers(a: &toml::Value, b: &toml::Value) -> bool {
+pub(super) fn same_numbers(a: &toml::Value, b: &toml::Value) -> bool {
     let num = |v: &toml::Value| match v {
         toml::Value::Integer(i) => Some(*i as f64),
         toml::Value::Float(x) => Some(*x),

@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::run::{Outcome, Row, Shard};
+use super::sweep::{Outcome, Row, Shard};
 use super::Study;
 
 /// The quantile levels of summary.json and of the plots' bands.
@@ -168,7 +168,7 @@ impl Summary {
                 let frac = |o: Outcome| rs.iter().filter(|r| r.outcome == o).count() as f64 / rs.len() as f64;
                 let channels = (0..study.m)
                     .map(|i| {
-                        let col = |f: &dyn Fn(&super::ChannelFigures) -> f64| {
+                        let col = |f: &dyn Fn(&crate::sim::ChannelFigures) -> f64| {
                             Quantiles::of(done.iter().map(|r| f(&r.channels[i])).collect())
                         };
                         let never = done.iter().filter(|r| r.channels[i].settle_t.is_none()).count();

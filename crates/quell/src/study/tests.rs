@@ -255,7 +255,7 @@ fn tune_refuses_a_grid_or_draws_it_would_ignore() {
         [("[grid]\n\"design.beta\" = [1.0, 2.0]\n", "grid"), ("[monte_carlo]\nruns = 2\n", "monte_carlo")]
     {
         let s = study(&format!("{table}{tune}")).unwrap();
-        let e = super::tune(&s).expect_err("refused").to_string();
+        let e = super::tune(&s, &Default::default()).expect_err("refused").to_string();
         assert!(
             e.starts_with(&format!("{key}: tuning runs the scenario alone, so [{key}] would be ignored; remove it")),
             "{e}"

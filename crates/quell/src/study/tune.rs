@@ -2,13 +2,16 @@
 //! tuned by m one-dimensional searches over μ_i, the others held at the scenario's values, and the
 //! joint run with every tuned μ_i is checked to reproduce each channel's figure.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::run::{run_one, ChannelFigures, Outcome, Row, RunSpec};
+use super::sweep::{execute, Outcome, Row, RunSpec};
 use super::{err, number, Study, StudyError};
 use crate::scenario::kind;
 use crate::scenario::Scenario;
+use crate::sim::ChannelFigures;
 
 /// What a search minimizes for channel i.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -169,21 +172,38 @@ pub struct TuneResult {
     pub channels: Vec<TuneCurve>,
     /// The tuned μ (the scenario's μ_i where a channel had no feasible point).
     pub mu: Vec<f64>,
-    /// The run with every μ_i tuned at once.
-    pub joint: Row,
+    /// The run with every μ_i tuned at once (`None` when the tuning was stopped before it).
+    pub joint: Option<Row>,
     /// Per channel: the joint run's objective minus the search's, and whether it is within the
-    /// reproduction tolerance ([`TuneResult::reproduced`]).
+    /// reproduction tolerance (see `tolerance` in the source).
     pub joint_difference: Vec<Option<f64>>,
     pub reproduced: Vec<bool>,
+    /// True when stopped ([`TuneOptions::stop`]) before every evaluation and the joint run were
+    /// carried out: the curves hold the points evaluated so far and `chosen` is the best of them.
+    #[serde(default)]
+    pub partial: bool,
 }
 
-/// The run of `study`'s scenario (no grid, no draws) with μ = `mu`.
-fn run_with(study: &Study, mu: &[f64]) -> Row {
+/// A callback on each evaluation: the channel and its point.
+pub type OnPoint<'a> = dyn Fn(usize, &TunePoint) + Sync + 'a;
+
+/// How [`tune`] runs.
+#[derive(Clone, Copy, Default)]
+pub struct TuneOptions<'a> {
+    /// Set (e.g. by Ctrl-C) to stop: evaluations under way are abandoned, no new one starts, and
+    /// the result keeps the points evaluated so far, marked [`TuneResult::partial`].
+    pub stop: Option<&'a AtomicBool>,
+    /// Called after each evaluation with its channel (from the worker threads).
+    pub on_point: Option<&'a OnPoint<'a>>,
+}
+
+/// The run of `study`'s scenario (no grid, no draws) with μ = `mu`; `None` when `stop` interrupted it.
+fn run_with(study: &Study, mu: &[f64], stop: &dyn Fn() -> bool) -> Option<Row> {
     let mut doc = study.base().clone();
     let mu_value = toml::Value::Array(mu.iter().map(|&x| toml::Value::Float(x)).collect());
     super::KeyPath::parse("design.mu").expect("a key path").set(&mut doc, mu_value).expect("a scenario has design.mu");
     let settle = study.settle;
-    run_one(&RunSpec {
+    let spec = RunSpec {
         run: 0,
         point: 0,
         draw: 0,
@@ -194,7 +214,8 @@ fn run_with(study: &Study, mu: &[f64]) -> Row {
         max_steps: study.max_steps,
         runaway: study.runaway,
         nominal: None,
-    })
+    };
+    execute(&spec, stop)
 }
 
 /// How close the joint run's objective must be to the search's: for error figures, relative 1e-3
@@ -213,8 +234,8 @@ fn tolerance(obj: Objective, value: f64, s: &Scenario, i: usize) -> f64 {
     }
 }
 
-/// Runs the m searches of `study.tune` (in parallel) and the joint check.
-pub fn tune(study: &Study) -> Result<TuneResult, StudyError> {
+/// The `[tune]` table of a study that tuning can run: present, and no grid or draws it would ignore.
+fn tune_spec(study: &Study) -> Result<&TuneSpec, StudyError> {
     let spec = study
         .tune
         .as_ref()
@@ -228,71 +249,117 @@ pub fn tune(study: &Study) -> Result<TuneResult, StudyError> {
             ));
         }
     }
-    let scenario = Scenario::from_document(study.base()).map_err(|e| err("scenario", e.to_string()))?;
-    let base_mu = scenario.design.mu.clone();
-    let m = base_mu.len();
-    let score = |i: usize, mu_i: f64| -> TunePoint {
-        let mut mu = base_mu.clone();
+    Ok(spec)
+}
+
+/// The ordering of points in a search: by objective, infeasible points (`None`) last.
+fn key(p: &TunePoint) -> f64 {
+    p.objective.unwrap_or(f64::INFINITY)
+}
+
+/// One channel's search at a time, over the scenario's μ with μ_i varied.
+struct Search<'a> {
+    study: &'a Study,
+    spec: &'a TuneSpec,
+    base_mu: &'a [f64],
+    opts: &'a TuneOptions<'a>,
+}
+
+impl Search<'_> {
+    fn stopped(&self) -> bool {
+        self.opts.stop.is_some_and(|s| s.load(Ordering::Relaxed))
+    }
+
+    /// Channel i's figures at μ_i = `mu_i`; `None` when stopped.
+    fn score(&self, i: usize, mu_i: f64) -> Option<TunePoint> {
+        if self.stopped() {
+            return None;
+        }
+        let mut mu = self.base_mu.to_vec();
         mu[i] = mu_i;
-        let row = run_with(study, &mu);
+        let row = run_with(self.study, &mu, &|| self.stopped())?;
         let figures = row.channels.get(i).copied();
+        let (spec, objective) = (self.spec, self.spec.objective);
         let objective = figures
             .filter(|c| c.max_u <= spec.max_u[i] && c.max_uf <= spec.max_uf[i])
-            .map(|c| spec.objective.of(&c))
+            .map(|c| objective.of(&c))
             .filter(|v| v.is_finite());
-        TunePoint { mu: mu_i, objective, outcome: row.outcome, figures }
-    };
-    let key = |p: &TunePoint| p.objective.unwrap_or(f64::INFINITY);
-    let log_grid = |i: usize| {
-        let [lo, hi] = spec.bounds[i];
-        (0..spec.points).map(move |k| lo * (hi / lo).powf(k as f64 / (spec.points - 1) as f64))
-    };
-    let jobs: Vec<(usize, f64)> = (0..m).flat_map(|i| log_grid(i).map(move |mu| (i, mu))).collect();
-    let coarse: Vec<(usize, TunePoint)> = jobs.into_par_iter().map(|(i, mu)| (i, score(i, mu))).collect();
-    let channels: Vec<TuneCurve> = (0..m)
-        .into_par_iter()
-        .map(|i| {
-            let mut curve: Vec<TunePoint> = coarse.iter().filter(|(c, _)| *c == i).map(|(_, p)| p.clone()).collect();
-            // Golden-section search on log μ over the best point's neighbours.
-            if let Some(best) = (0..curve.len()).min_by(|&a, &b| key(&curve[a]).total_cmp(&key(&curve[b]))) {
-                if curve[best].objective.is_some() && spec.refine > 0 {
-                    let (mut a, mut b) =
-                        (curve[best.saturating_sub(1)].mu.ln(), curve[(best + 1).min(curve.len() - 1)].mu.ln());
-                    let r = (5f64.sqrt() - 1.0) / 2.0;
-                    let (mut c, mut d) = (b - r * (b - a), a + r * (b - a));
-                    let (mut fc, mut fd) = (score(i, c.exp()), score(i, d.exp()));
-                    for _ in 2..spec.refine {
-                        if key(&fc) <= key(&fd) {
-                            b = d;
-                            d = c;
-                            curve.push(std::mem::replace(&mut fd, fc.clone()));
-                            c = b - r * (b - a);
-                            fc = score(i, c.exp());
-                        } else {
-                            a = c;
-                            c = d;
-                            curve.push(std::mem::replace(&mut fc, fd.clone()));
-                            d = a + r * (b - a);
-                            fd = score(i, d.exp());
-                        }
-                    }
-                    curve.push(fc);
-                    curve.push(fd);
-                }
+        let point = TunePoint { mu: mu_i, objective, outcome: row.outcome, figures };
+        if let Some(f) = self.opts.on_point {
+            f(i, &point);
+        }
+        Some(point)
+    }
+
+    /// Channel i's log-spaced starting points.
+    fn log_grid(&self, i: usize) -> impl Iterator<Item = f64> {
+        let ([lo, hi], points) = (self.spec.bounds[i], self.spec.points);
+        (0..points).map(move |k| lo * (hi / lo).powf(k as f64 / (points - 1) as f64))
+    }
+
+    /// Golden-section search on log μ_i over the neighbours of the best point of `curve`, each
+    /// evaluation appended to it; returns early when stopped.
+    fn refine(&self, i: usize, curve: &mut Vec<TunePoint>) {
+        let Some(best) = (0..curve.len()).min_by(|&a, &b| key(&curve[a]).total_cmp(&key(&curve[b]))) else { return };
+        if curve[best].objective.is_none() || self.spec.refine == 0 {
+            return;
+        }
+        let (mut a, mut b) = (curve[best.saturating_sub(1)].mu.ln(), curve[(best + 1).min(curve.len() - 1)].mu.ln());
+        let mut eval = |log_mu: f64| {
+            let p = self.score(i, log_mu.exp())?;
+            let k = key(&p);
+            curve.push(p);
+            Some(k)
+        };
+        let r = (5f64.sqrt() - 1.0) / 2.0;
+        let (mut c, mut d) = (b - r * (b - a), a + r * (b - a));
+        let Some(mut fc) = eval(c) else { return };
+        let Some(mut fd) = eval(d) else { return };
+        for _ in 2..self.spec.refine {
+            let next = if fc <= fd {
+                (b, d, fd) = (d, c, fc);
+                c = b - r * (b - a);
+                eval(c).map(|f| fc = f)
+            } else {
+                (a, c, fc) = (c, d, fd);
+                d = a + r * (b - a);
+                eval(d).map(|f| fd = f)
+            };
+            if next.is_none() {
+                return;
             }
-            curve.sort_by(|a, b| a.mu.total_cmp(&b.mu));
-            let chosen =
-                curve.iter().filter(|p| p.objective.is_some()).min_by(|a, b| key(a).total_cmp(&key(b))).cloned();
-            TuneCurve { channel: i, curve, chosen }
-        })
-        .collect();
+        }
+    }
+
+    /// Channel i's curve (its points of `coarse`, refined) in order of μ, and its best feasible point.
+    fn curve(&self, i: usize, coarse: &[(usize, TunePoint)]) -> TuneCurve {
+        let mut curve: Vec<TunePoint> = coarse.iter().filter(|(c, _)| *c == i).map(|(_, p)| p.clone()).collect();
+        self.refine(i, &mut curve);
+        curve.sort_by(|a, b| a.mu.total_cmp(&b.mu));
+        let chosen = curve.iter().filter(|p| p.objective.is_some()).min_by(|a, b| key(a).total_cmp(&key(b))).cloned();
+        TuneCurve { channel: i, curve, chosen }
+    }
+}
+
+/// Runs the m searches of `study.tune` (in parallel on rayon's current pool) and the joint check.
+/// When `opts.stop` is set the result holds what was evaluated by then, marked partial.
+pub fn tune(study: &Study, opts: &TuneOptions<'_>) -> Result<TuneResult, StudyError> {
+    let spec = tune_spec(study)?;
+    let scenario = Scenario::from_document(study.base()).map_err(|e| err("scenario", e.to_string()))?;
+    let base_mu = scenario.design.mu.clone();
+    let search = Search { study, spec, base_mu: &base_mu, opts };
+    let m = base_mu.len();
+    let jobs: Vec<(usize, f64)> = (0..m).flat_map(|i| search.log_grid(i).map(move |mu| (i, mu))).collect();
+    let coarse: Vec<(usize, TunePoint)> =
+        jobs.into_par_iter().filter_map(|(i, mu)| Some((i, search.score(i, mu)?))).collect();
+    let channels: Vec<TuneCurve> = (0..m).into_par_iter().map(|i| search.curve(i, &coarse)).collect();
     let mu: Vec<f64> = channels.iter().zip(&base_mu).map(|(c, &m0)| c.chosen.as_ref().map_or(m0, |p| p.mu)).collect();
-    let joint = run_with(study, &mu);
+    let joint = if search.stopped() { None } else { run_with(study, &mu, &|| search.stopped()) };
     let (joint_difference, reproduced) = channels
         .iter()
         .map(|c| {
             let search = c.chosen.as_ref().and_then(|p| p.figures).map(|f| spec.objective.of(&f));
-            let joint_value = joint.channels.get(c.channel).map(|f| spec.objective.of(f));
+            let joint_value = joint.as_ref().and_then(|j| j.channels.get(c.channel)).map(|f| spec.objective.of(f));
             match (search, joint_value) {
                 (Some(s), Some(j)) if s.is_finite() && j.is_finite() => {
                     (Some(j - s), (j - s).abs() <= tolerance(spec.objective, s, &scenario, c.channel))
@@ -301,5 +368,6 @@ pub fn tune(study: &Study) -> Result<TuneResult, StudyError> {
             }
         })
         .unzip();
-    Ok(TuneResult { objective: spec.objective, channels, mu, joint, joint_difference, reproduced })
+    let partial = joint.is_none();
+    Ok(TuneResult { objective: spec.objective, channels, mu, joint, joint_difference, reproduced, partial })
 }
