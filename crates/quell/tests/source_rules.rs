@@ -202,7 +202,6 @@ fn relative(path: &Path) -> String {
 const BEING_SPLIT: &[(&str, &str, &str)] = &[
     ("crates/quell/src/design/place.rs", "knv0", "TODO(harden)"),
     ("crates/quell/src/study/mod.rs", "from_table", "TODO(front)"),
-    ("crates/quell-py/src/simulate.rs", "simulate", "TODO(python)"),
 ];
 
 #[test]
