@@ -26,7 +26,7 @@ print("eig(A - BK) =", design.decoupled_eigenvalues)
 
 result = quell.simulate(scenario)
 for i, channel in enumerate(result.summary(), start=1):
-    print(f"channel {i}: tail max|e| = {channel['tail_max_abs_e']:.3e}, max|u| = {channel['max_abs_u']:.2f}")
+    print(f"channel {i}: tail max|e| = {channel['tail_max_e']:.3e}, max|u| = {channel['max_u']:.2f}")
 
 for channel in (1, 2):
     fig = result.plot(channel=channel)

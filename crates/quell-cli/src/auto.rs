@@ -74,7 +74,7 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
             "the automatic design did not pass its verifying simulation (tail max|e| {:?} against bounds {:?}{}); nothing written; see docs/tuning.md",
             v.tail_max_e,
             v.bound,
-            targets.u_limit.map_or(String::new(), |l| format!(", max|u_f| {:?} against the limit {l}", v.max_u_f))
+            targets.u_limit.map_or(String::new(), |l| format!(", max|u_f| {:?} against the limit {l}", v.max_uf))
         )));
     }
     if let Some(out) = &args.write {
@@ -111,7 +111,7 @@ fn report_text(a: &AutoDesign) -> String {
             v.tail_max_e[i],
             v.bound[i],
             if v.tail_max_e[i] <= v.bound[i] { "✓" } else { "✗" },
-            v.max_u_f[i]
+            v.max_uf[i]
         ));
     }
     s.push('\n');

@@ -212,7 +212,7 @@ fn report_outcome(
     match result.outcome.as_ref().unwrap_or(&Outcome::Completed) {
         Outcome::Completed => {
             for (i, c) in result.summary().iter().enumerate() {
-                let settle = match (c.settle_t, &c.settle_note) {
+                let settle = match (c.figures.settle_t, &c.settle_note) {
                     (Some(t), _) => format!("settled (2 % band) at t = {t:.6}"),
                     (None, Some(note)) => note.clone(),
                     (None, None) => "not settled".into(),
@@ -221,10 +221,10 @@ fn report_outcome(
                 eprintln!(
                     "channel {}{name}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {:.3}, max|u_f| = {:.3}, ‖η̂‖ = {:.4e}, {settle}",
                     i + 1,
-                    c.tail_max_abs_e,
-                    c.tail_rms_e,
-                    c.max_abs_u,
-                    c.max_abs_uf,
+                    c.figures.tail_max_e,
+                    c.figures.tail_rms_e,
+                    c.figures.max_u,
+                    c.figures.max_uf,
                     c.final_eta_norm
                 );
                 if let Some(d) = diagnostics.channels.get(i) {

@@ -305,7 +305,7 @@ fn run_paper_example_writes_every_file() {
     let channels = s["channels"].as_array().unwrap();
     assert_eq!(channels.len(), 2);
     for c in channels {
-        for key in ["tail_max_abs_e", "tail_rms_e", "max_abs_u", "max_abs_uf", "final_eta_norm"] {
+        for key in ["tail_max_e", "tail_rms_e", "max_u", "max_uf", "final_eta_norm"] {
             assert!(c[key].as_f64().is_some_and(f64::is_finite), "channels[].{key}: {c}");
         }
     }
@@ -315,8 +315,8 @@ fn run_paper_example_writes_every_file() {
     }
     let (steps, evals) = (s["stats"]["steps"].as_u64().unwrap(), s["stats"]["rhs_evaluations"].as_u64().unwrap());
     assert!(steps > 0 && evals >= 11 * steps, "DOP853 takes at least 11 evaluations a step: {s}");
-    let e1 = channels[0]["tail_max_abs_e"].as_f64().unwrap();
-    let e2 = channels[1]["tail_max_abs_e"].as_f64().unwrap();
+    let e1 = channels[0]["tail_max_e"].as_f64().unwrap();
+    let e2 = channels[1]["tail_max_e"].as_f64().unwrap();
     assert!(e1 < 0.05, "tail max|e1| = {e1}");
     assert!(e2 < 0.005, "tail max|e2| = {e2}");
 
@@ -470,7 +470,7 @@ fn sampled_summary_reports_controller_steps() {
     assert!(stderr(&o).contains("100001 controller steps"), "{}", stderr(&o));
 }
 
-/// The bound that example `name`'s tail error on channel `i` (summary.json's `tail_max_abs_e`: max |e_i|
+/// The bound that example `name`'s tail error on channel `i` (summary.json's `tail_max_e`: max |e_i|
 /// over the last 10 % of the horizon) must meet.
 fn tail_bound(name: &str, scenario: &Scenario, i: usize) -> f64 {
     // The paper's example (Section VIII) claims asymptotic tracking; an independent solution of it
@@ -518,7 +518,7 @@ fn every_example_runs() {
         let m = scenario.plant.m();
         assert_eq!(s["channels"].as_array().map(Vec::len), Some(m), "{name}: {s}");
         for i in 0..m {
-            let (e, bound) = (s["channels"][i]["tail_max_abs_e"].as_f64().unwrap(), tail_bound(&name, &scenario, i));
+            let (e, bound) = (s["channels"][i]["tail_max_e"].as_f64().unwrap(), tail_bound(&name, &scenario, i));
             assert!(e < bound, "{name}: tail max |e{}| = {e}, bound {bound}", i + 1);
         }
         for c in 1..=m {
@@ -611,7 +611,7 @@ fn design_auto_writes_a_complete_scenario_that_meets_the_tail_bound() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let summary = read_json(&run_dir.join("summary.json"));
     for (c, peak) in summary["channels"].as_array().unwrap().iter().zip([3.0, 2.0]) {
-        let tail = c["tail_max_abs_e"].as_f64().unwrap();
+        let tail = c["tail_max_e"].as_f64().unwrap();
         assert!(tail <= 0.01 * peak, "tail max|e| {tail} against 1 % of {peak}");
     }
     // Every channel has its diagnostics, with the keys scripts read.

@@ -248,7 +248,7 @@ impl PySimResult {
     /// -------
     /// list of dict
     ///     Per channel: tail max |e_i| and RMS e_i over the last 10 % of the horizon
-    ///     (`tail_max_abs_e`, `tail_rms_e`), `max_abs_u`, `max_abs_uf` (the plant input),
+    ///     (`tail_max_e`, `tail_rms_e`), `max_u`, `max_uf` (the plant input),
     ///     `final_eta_norm` (‖η̂_i‖ at the end), `settle_t` (2 % band; None when not settled, or only
     ///     in the last 5 % of the horizon) and `settle_note` (why settle_t is None).
     ///
@@ -260,19 +260,20 @@ impl PySimResult {
     /// --------
     /// >>> c = quell.simulate(quell.paper_example(), t_end=20.0).summary()[1]
     /// >>> sorted(c)
-    /// ['final_eta_norm', 'max_abs_u', 'max_abs_uf', 'settle_note', 'settle_t', 'tail_max_abs_e', 'tail_rms_e']
+    /// ['final_eta_norm', 'max_u', 'max_uf', 'settle_note', 'settle_t', 'tail_max_e', 'tail_rms_e']
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         self.inner
             .summary()
             .iter()
             .map(|c| {
                 let d = PyDict::new(py);
-                d.set_item("tail_max_abs_e", c.tail_max_abs_e)?;
-                d.set_item("tail_rms_e", c.tail_rms_e)?;
-                d.set_item("max_abs_u", c.max_abs_u)?;
-                d.set_item("max_abs_uf", c.max_abs_uf)?;
+                let f = &c.figures;
+                d.set_item("tail_max_e", f.tail_max_e)?;
+                d.set_item("tail_rms_e", f.tail_rms_e)?;
+                d.set_item("max_u", f.max_u)?;
+                d.set_item("max_uf", f.max_uf)?;
                 d.set_item("final_eta_norm", c.final_eta_norm)?;
-                d.set_item("settle_t", c.settle_t)?;
+                d.set_item("settle_t", f.settle_t)?;
                 d.set_item("settle_note", c.settle_note.as_deref())?;
                 Ok(d)
             })

@@ -10,6 +10,7 @@ use std::sync::Arc;
 use pyo3::exceptions::{PyIndexError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyInt, PyList, PyString, PyTuple};
+use quell::sim::ChannelFigures;
 use quell::study::{self, KeyPath, RunSpec, Shard, StudyMeta, SweepOptions};
 use toml::{Table, Value};
 
@@ -635,16 +636,13 @@ fn row_dict<'py>(py: Python<'py>, spec: &RunSpec, row: &study::Row) -> PyResult<
     // As runs.csv reads back (pandas): an empty reason is a missing value.
     d.set_item("reason", Some(&row.reason).filter(|r| !r.is_empty()))?;
     let m = if row.channels.is_empty() { channels(spec) } else { row.channels.len() };
-    let get = |i: usize, f: &dyn Fn(&study::ChannelFigures) -> Option<f64>| row.channels.get(i).and_then(f);
+    let get = |i: usize, f: &dyn Fn(&ChannelFigures) -> Option<f64>| row.channels.get(i).and_then(f);
     for (name, f) in [
-        (
-            "tail_max_e",
-            &(|c: &study::ChannelFigures| Some(c.tail_max_e)) as &dyn Fn(&study::ChannelFigures) -> Option<f64>,
-        ),
-        ("tail_rms_e", &|c: &study::ChannelFigures| Some(c.tail_rms_e)),
-        ("max_u", &|c: &study::ChannelFigures| Some(c.max_u)),
-        ("max_uf", &|c: &study::ChannelFigures| Some(c.max_uf)),
-        ("settle_t", &|c: &study::ChannelFigures| c.settle_t),
+        ("tail_max_e", &(|c: &ChannelFigures| Some(c.tail_max_e)) as &dyn Fn(&ChannelFigures) -> Option<f64>),
+        ("tail_rms_e", &|c: &ChannelFigures| Some(c.tail_rms_e)),
+        ("max_u", &|c: &ChannelFigures| Some(c.max_u)),
+        ("max_uf", &|c: &ChannelFigures| Some(c.max_uf)),
+        ("settle_t", &|c: &ChannelFigures| c.settle_t),
     ] {
         for i in 0..m {
             d.set_item(format!("{name}{}", i + 1), get(i, f))?;

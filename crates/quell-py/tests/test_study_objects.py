@@ -109,7 +109,7 @@ def test_the_worst_row_rerun_is_simulate_with_the_drawn_values(swept):
     expected = quell.simulate(scenario)
     np.testing.assert_array_equal(rerun.y, expected.y)  # bit for bit: the same run
     np.testing.assert_array_equal(rerun.u_f, expected.u_f)
-    assert [c["tail_max_abs_e"] for c in rerun.summary()] == [worst["tail_max_e1"], worst["tail_max_e2"]]
+    assert [c["tail_max_e"] for c in rerun.summary()] == [worst["tail_max_e1"], worst["tail_max_e2"]]
     # One channel's column, and the run index of rerun.
     assert swept.worst("max_u2")["run"] == frame["run"][frame["max_u2"].idxmax()]
     np.testing.assert_array_equal(swept.rerun(-1).y, swept.rerun(5).y)
@@ -122,8 +122,8 @@ def test_worst_counts_a_run_without_figures_as_worst():
     frame.loc[1, "tail_max_e1"] = np.nan  # as a diverged run's row
     doctored = quell.StudyResult(study, frame)
     assert result.worst("tail_max_e1")["run"] == frame["tail_max_e1"].idxmax() and doctored.worst("tail_max_e")["run"] == 1
-    with pytest.raises(quell.ScenarioError, match=r"metric: expected one of tail_max_e, .* found 'tail_max_abs_e'"):
-        result.worst("tail_max_abs_e")
+    with pytest.raises(quell.ScenarioError, match=r"metric: expected one of tail_max_e, .* found 'tail_max_err'"):
+        result.worst("tail_max_err")
     with pytest.raises(TypeError, match="metric: expected a str"):
         result.worst(1)
     with pytest.raises(IndexError, match=r"run: expected a run index from 0 to 1 \(the study has 2 runs\), found 2"):

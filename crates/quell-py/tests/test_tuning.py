@@ -75,7 +75,7 @@ def test_auto_design_meets_the_tail_bound():
     keys = {c["key"] for c in report["choices"]}
     assert {"design.observer_poles", "design.channel_poles", "design.mu", "design.beta"} <= keys
     r = quell.simulate(scenario)
-    tail = [c["tail_max_abs_e"] for c in r.summary()]
+    tail = [c["tail_max_e"] for c in r.summary()]
     assert tail[0] <= 0.01 * 3.0 and tail[1] <= 0.01 * 2.0, tail
     with pytest.raises(quell.DesignError, match="convergence_time: expected a finite number > 0, found -1"):
         quell.auto_design(without_design(PAPER), convergence_time=-1.0)

@@ -76,7 +76,7 @@ pub struct Verification {
     /// [`TAIL_BOUND`] times the reference's peak.
     pub bound: Vec<f64>,
     /// max |u_f,i| over the run: the plant input (5), what [`Targets::u_limit`] bounds.
-    pub max_u_f: Vec<f64>,
+    pub max_uf: Vec<f64>,
     /// Simulations run (1 + the retries).
     pub runs: usize,
     /// Every channel within its bound (and the actuator limit).
@@ -125,18 +125,17 @@ pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, A
             other => return Err(AutoError::Run(other)),
         }
         let tail_max_e: Vec<f64> = (0..m).map(|i| r.max_abs_error(i, 0.9 * t_end, t_end).unwrap_or(f64::NAN)).collect();
-        let max_u_f: Vec<f64> = r.summary().iter().map(|c| c.max_abs_uf).collect();
-        let retry =
-            !given_mu && runs <= 3 && adjust_mu(&mut scenario.design.mu, &tail_max_e, &bound, &max_u_f, targets);
+        let max_uf: Vec<f64> = r.summary().iter().map(|c| c.figures.max_uf).collect();
+        let retry = !given_mu && runs <= 3 && adjust_mu(&mut scenario.design.mu, &tail_max_e, &bound, &max_uf, targets);
         if !retry {
-            let within_u = targets.u_limit.is_none_or(|l| max_u_f.iter().all(|u| *u <= l));
+            let within_u = targets.u_limit.is_none_or(|l| max_uf.iter().all(|u| *u <= l));
             let passed = within_u && tail_max_e.iter().zip(&bound).all(|(e, b)| e <= b);
             note_verification(&mut choices, &scenario.design.mu, runs);
             return Ok(AutoDesign {
                 scenario,
                 design,
                 choices,
-                verification: Verification { tail_max_e, bound, max_u_f, runs, passed },
+                verification: Verification { tail_max_e, bound, max_uf, runs, passed },
             });
         }
         design = scenario.design()?;
@@ -145,10 +144,10 @@ pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, A
 
 /// Raises μ_i ×4 where the tail error is beyond its bound, halves it where |u_f,i| is beyond the
 /// actuator limit; whether anything changed.
-fn adjust_mu(mu: &mut [f64], tail: &[f64], bound: &[f64], max_u_f: &[f64], targets: &Targets) -> bool {
+fn adjust_mu(mu: &mut [f64], tail: &[f64], bound: &[f64], max_uf: &[f64], targets: &Targets) -> bool {
     let mut changed = false;
     for i in 0..mu.len() {
-        if targets.u_limit.is_some_and(|l| max_u_f[i] > l) {
+        if targets.u_limit.is_some_and(|l| max_uf[i] > l) {
             mu[i] *= 0.5;
             changed = true;
         } else if tail[i].is_nan() || tail[i] > bound[i] {

@@ -105,18 +105,21 @@
 //!
 //! **[`sim`]**: the one front door for a run, [`sim::Run`] with [`sim::RunSettings`]: the
 //! continuous loop (the delay equation) or the sampled-data loop, on the design's plant or a true
-//! one; one [`sim::SimResult`] whose [`sim::Outcome`] says how the run ended.
+//! one; one [`sim::SimResult`] whose [`sim::Outcome`] says how the run ended, and whose
+//! [`sim::ChannelFigures`] (tail error, peak inputs, settling time) every output reports.
 //!
 //! ```
 //! use std::ops::ControlFlow;
 //! use quell::scenario::{Scenario, PAPER_EXAMPLE};
-//! use quell::sim::{Outcome, Run, RunSettings};
+//! use quell::sim::{Outcome, Run, RunSettings, Settle};
 //!
 //! let s = Scenario::from_toml(PAPER_EXAMPLE)?;
 //! let design = s.design()?;
 //! let sampled = RunSettings::sampled(2.0, 0.1, 0.01);
 //! let r = Run::of(&s, &design).settings(sampled).simulate(|_| ControlFlow::Continue(()))?;
-//! assert_eq!((r.len(), r.outcome), (21, Some(Outcome::Completed)));
+//! assert_eq!((r.len(), r.outcome.clone()), (21, Some(Outcome::Completed)));
+//! let f = &r.figures(&Settle::default())[0];
+//! assert!(f.tail_rms_e <= f.tail_max_e && f.max_uf > 0.0); // an RMS never exceeds the max
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
@@ -214,6 +217,7 @@ pub mod controller;
 pub mod design;
 pub mod diagnostics;
 pub mod export;
+mod hash;
 mod linalg;
 pub mod plant;
 pub mod scenario;

@@ -56,7 +56,7 @@ fn run(s: &Scenario) -> SimResult {
 fn tail_errors(s: &Scenario) -> (SimResult, Vec<f64>) {
     let r = run(s);
     assert_eq!(r.outcome, Some(Outcome::Completed), "{:?}", s.name);
-    let e = r.summary().iter().map(|c| c.tail_max_abs_e).collect();
+    let e = r.summary().iter().map(|c| c.figures.tail_max_e).collect();
     (r, e)
 }
 
@@ -293,7 +293,7 @@ fn vessel_thrust_limits_clip_what_the_recorded_thrust_shows() {
         tail_errors(&Scenario::from_toml(&text).unwrap()).0
     };
     let free_every = every_sample("");
-    let peaks: Vec<f64> = free_every.summary().iter().map(|c| c.max_abs_uf).collect();
+    let peaks: Vec<f64> = free_every.summary().iter().map(|c| c.figures.max_uf).collect();
     let above = peaks.iter().map(|p| format!("{:e}", 1.01 * p)).collect::<Vec<_>>().join(", ");
     let r = every_sample(&format!("u_max = [{above}]"));
     assert_eq!(r.y, free_every.y);

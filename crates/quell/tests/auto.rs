@@ -215,14 +215,14 @@ fn the_actuator_limit_bounds_the_recorded_plant_input() {
     };
     let (u_f, u) = rerun(&free);
     // The same run, the same samples: equal to rounding.
-    assert!((free.verification.max_u_f[0] - u_f).abs() <= 1e-12 * u_f, "{:?} vs {u_f}", free.verification);
+    assert!((free.verification.max_uf[0] - u_f).abs() <= 1e-12 * u_f, "{:?} vs {u_f}", free.verification);
     assert!(u_f != u, "u_f {u_f} and u {u} must differ for this check to tell them apart");
     let loose = auto_design(&doc, &Targets { u_limit: Some(10.0 * u_f), ..Targets::default() }).unwrap();
     assert!(loose.verification.passed && loose.scenario.design.mu == free.scenario.design.mu);
     let tight = auto_design(&doc, &Targets { u_limit: Some(1e-3 * u_f), ..Targets::default() }).unwrap();
     assert!(!tight.verification.passed, "{:?}", tight.verification);
     let (u_f, _) = rerun(&tight);
-    assert!((tight.verification.max_u_f[0] - u_f).abs() <= 1e-12 * u_f && u_f > 1e-3 * free.verification.max_u_f[0]);
+    assert!((tight.verification.max_uf[0] - u_f).abs() <= 1e-12 * u_f && u_f > 1e-3 * free.verification.max_uf[0]);
 }
 
 fn data(name: &str) -> String {

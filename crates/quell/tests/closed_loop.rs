@@ -111,8 +111,8 @@ fn summary_reports_the_plant_input_peak_and_states_are_recorded_only_when_asked(
     let s = r.summary();
     for (i, c) in s.iter().enumerate() {
         let peak = r.column(&r.u_f, 2, i).fold(0.0, |a: f64, v| a.max(v.abs()));
-        assert_eq!(c.max_abs_uf, peak);
-        assert!(c.max_abs_uf != c.max_abs_u, "u_f is not the command u: {c:?}");
+        assert_eq!(c.figures.max_uf, peak);
+        assert!(c.figures.max_uf != c.figures.max_u, "u_f is not the command u: {c:?}");
     }
     assert!(r.x.is_empty() && r.x_hat.is_empty() && !r.has_states());
 }

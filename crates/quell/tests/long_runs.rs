@@ -115,7 +115,7 @@ fn sampled_with_measurement_noise_1000_s() {
     for i in 0..r.m {
         let early = r.max_abs_error(i, 90.0, 100.0).unwrap();
         let tail = r.max_abs_error(i, 900.0, 1_000.0).unwrap();
-        let rms = r.summary()[i].tail_rms_e;
+        let rms = r.summary()[i].figures.tail_rms_e;
         println!(
             "noise: e{}: max |e| on [90, 100] = {early:.3e}, on [900, 1000] = {tail:.3e}, RMS on [900, 1000] = {rms:.3e}",
             i + 1

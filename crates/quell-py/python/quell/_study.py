@@ -113,7 +113,7 @@ class StudyResult:
         >>> study = quell.Study(quell.paper_example(), simulation={"t_end": 2.0})
         >>> result = study.sweep(jobs=1)
         >>> r = result.rerun(0)
-        >>> bool(r.summary()[0]["tail_max_abs_e"] == result.frame["tail_max_e1"][0])
+        >>> bool(r.summary()[0]["tail_max_e"] == result.frame["tail_max_e1"][0])
         True
         """
         return self.study.spec(run).simulate()
@@ -183,7 +183,7 @@ class StudyResult:
         ...                     grid={"design.mu[0]": [1.0, 20.0]})
         >>> result = study.sweep(jobs=1)
         >>> r = result.rerun_worst("tail_max_e1")
-        >>> bool(r.summary()[0]["tail_max_abs_e"] == result.frame["tail_max_e1"].max())
+        >>> bool(r.summary()[0]["tail_max_e"] == result.frame["tail_max_e1"].max())
         True
         """
         return self.rerun(int(self.worst(metric)["run"]))

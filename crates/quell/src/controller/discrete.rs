@@ -172,6 +172,12 @@ pub(crate) fn whole_multiple(x: f64, T: f64) -> Option<usize> {
     whole_within(x, T, WHOLE_TOLERANCE)
 }
 
+/// The whole samples of T in x: ⌊x/T⌋, with x/T counted as the integer it is within
+/// [`WHOLE_TOLERANCE`] of (t_end = 100 s at T = 0.1 s is 1000 samples, though 100/0.1 rounds below).
+pub(crate) fn whole_samples(x: f64, T: f64) -> usize {
+    whole_multiple(x, T).unwrap_or((x / T).floor() as usize)
+}
+
 /// True when τ/T is a whole number (to [`WHOLE_TOLERANCE`]) of at most [`MAX_DELAY_SAMPLES`] samples.
 pub(crate) fn whole(tau: f64, T: f64) -> bool {
     delay_within(tau, T, WHOLE_TOLERANCE)
@@ -484,6 +490,18 @@ mod tests {
     /// Uniform on {0, …, n − 1}.
     fn below(rng: &mut Gaussian, n: usize) -> usize {
         ((rng.uniform() * n as f64) as usize).min(n - 1)
+    }
+
+    /// Whole samples counted to the relative tolerance, where ⌊x/T⌋ alone loses one: 0.3/0.1 is
+    /// 2.9999999999999996, and 8564884.1/0.1 is 85648840.99999999 (1e-8 below, beyond an absolute
+    /// 1e-9); a ratio that is not whole is floored.
+    #[test]
+    fn whole_samples_counts_a_ratio_rounded_below_an_integer_as_that_integer() {
+        assert_eq!(whole_samples(0.3, 0.1), 3);
+        assert_eq!(whole_samples(8564884.1, 0.1), 85_648_841);
+        assert_eq!(whole_samples(100.0, 0.1), 1000);
+        assert_eq!(whole_samples(1.05, 0.1), 10);
+        assert_eq!(whole_samples(0.0, 0.1), 0);
     }
 
     #[test]

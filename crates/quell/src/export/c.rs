@@ -363,7 +363,7 @@ fn comment_safe(text: &str) -> String {
 /// `<P>_LAYOUT_ID`, a hash of both texts, and the source declares an array of size −1 unless the
 /// header's id is its own, so a mismatched pair (a failed or partial update) does not compile.
 fn pair_layout_id(h: &mut String, c: &mut String, p: &str, P: &str) {
-    let id = crate::study::fnv1a(format!("{h}{c}").as_bytes());
+    let id = crate::hash::fnv1a_64(h.bytes().chain(c.bytes()));
     let guard = format!("#endif /* {P}_CONTROLLER_H */");
     *h = h.replacen(
         &guard,
@@ -583,5 +583,15 @@ mod tests {
         assert_eq!(text, "{P}_f(void) { return {x}; } /* Q */");
         assert_eq!(fill("{", &[("p", "a")]), "{");
         assert_eq!(fill("}{p}", &[("p", "a")]), "}a");
+    }
+
+    /// The layout id is FNV-1a (64 bits) of the header and the source as generated, here checked
+    /// against an independent (Python) FNV-1a of the two texts: 0x3316624e6667060c.
+    #[test]
+    fn the_layout_id_is_fnv1a_of_both_texts() {
+        let (mut h, mut c) = ("#endif /* P_CONTROLLER_H */\n".to_string(), "#include \"p_controller.h\"\n".to_string());
+        pair_layout_id(&mut h, &mut c, "p", "P");
+        assert!(h.contains("#define P_LAYOUT_ID 0x3316624e6667060cu\n"), "{h}");
+        assert!(c.contains("P_LAYOUT_ID == 0x3316624e6667060cu ? 1 : -1"), "{c}");
     }
 }

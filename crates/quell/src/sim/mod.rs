@@ -26,7 +26,7 @@ pub use closed_loop::{default_max_steps, loop_rate, BUDGET_MIN_STEPS, BUDGET_STE
 pub use dde::{Method, Stats};
 pub use divergence::{Peaks, Watched, DIVERGENCE_BOUND};
 pub use noise::{band_limited, NOISE_SINES};
-pub use result::{ChannelSummary, Outcome, RunStats, Sample, SimResult};
+pub use result::{ChannelFigures, ChannelSummary, Outcome, RunStats, Sample, SimResult};
 pub use sampled::SampledController;
 pub use settle::{Settle, Settling};
 
@@ -138,8 +138,8 @@ impl RunSettings {
                 return Err(KeyError::new(
                     "max_steps",
                     format!(
-                        "a step budget applies to the continuous loop; this sampled-data run takes t_end / sample_time = {:.0} controller steps, known before it starts: leave max_steps out",
-                        (self.t_end / *sample_time).floor() + 1.0
+                        "a step budget applies to the continuous loop; this sampled-data run takes t_end / sample_time = {} controller steps, known before it starts: leave max_steps out",
+                        crate::controller::discrete::whole_samples(self.t_end, *sample_time) + 1
                     ),
                 ))
             }

@@ -1,6 +1,6 @@
 //! The one result type every simulation returns and every writer reads.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::dde::Stats;
 use super::divergence::Peaks;
@@ -92,22 +92,32 @@ pub struct Sample<'a> {
     pub states: Option<(&'a [f64], &'a [f64])>,
 }
 
-/// Per-channel figures of merit.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ChannelSummary {
-    /// max |e_i| over the last 10 % of the horizon.
-    pub tail_max_abs_e: f64,
-    /// RMS of e_i over the last 10 % of the horizon.
+/// Channel i's figures of merit, under the names every output shares (`summary.json`, runs.csv,
+/// Python, a study's quantiles and tune objectives).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ChannelFigures {
+    /// max |e_i| over the last 10 % of the recorded horizon.
+    pub tail_max_e: f64,
+    /// RMS of e_i over the last 10 % of the recorded horizon.
     pub tail_rms_e: f64,
     /// max |u_i| over the run (the adaptive command (25)).
-    pub max_abs_u: f64,
+    pub max_u: f64,
     /// max |u_f,i| over the run: the plant input (5), what the actuator delivers.
-    pub max_abs_uf: f64,
+    pub max_uf: f64,
+    /// First recorded t after which |e_i| stays within the settling band ([`Settle`],
+    /// [`crate::sim::settle`]); `None` when the channel did not settle, or only in the last 5 % of
+    /// the horizon.
+    pub settle_t: Option<f64>,
+}
+
+/// A run's report on channel i: its [`ChannelFigures`] with the default band ([`Settle::default`],
+/// 2 % of the reference's peak), ‖η̂_i‖ at the end and why it did not settle.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ChannelSummary {
+    #[serde(flatten)]
+    pub figures: ChannelFigures,
     /// ‖η̂_i‖ at the last sample.
     pub final_eta_norm: f64,
-    /// When e_i settled into 2 % of the reference's peak ([`Settle::default`], [`crate::sim::settle`]);
-    /// `None` when it did not, or only in the last 5 % of the horizon.
-    pub settle_t: Option<f64>,
     /// Why `settle_t` is empty; `None` when settled.
     pub settle_note: Option<String>,
 }
@@ -205,35 +215,42 @@ impl SimResult {
         settling(&self.t, &e, settle.band(self.column(&self.g, self.m, i)))
     }
 
-    /// Figures of merit per channel; the tail is the last 10 % of the recorded horizon.
+    /// Figures of merit per channel, settled within the band `settle`; the tail is the last 10 %
+    /// of the recorded horizon.
+    pub fn figures(&self, settle: &Settle) -> Vec<ChannelFigures> {
+        (0..self.m).filter_map(|i| self.channel(i, settle)).map(|(f, _)| f).collect()
+    }
+
+    /// Figures of merit per channel with the default settling band, ‖η̂_i‖ at the end and why a
+    /// channel did not settle.
     pub fn summary(&self) -> Vec<ChannelSummary> {
-        let (Some(&t0), Some(&t1)) = (self.t.first(), self.t.last()) else {
-            return Vec::new();
-        };
-        let from = t1 - 0.1 * (t1 - t0);
         (0..self.m)
-            .map(|i| {
-                let tail: Vec<f64> = self
-                    .t
-                    .iter()
-                    .zip(self.column(&self.e, self.m, i))
-                    .filter(|(t, _)| **t >= from)
-                    .map(|(_, e)| e)
-                    .collect();
-                let rms = (tail.iter().map(|e| e * e).sum::<f64>() / tail.len().max(1) as f64).sqrt();
+            .filter_map(|i| {
+                let (figures, settling) = self.channel(i, &Settle::default())?;
                 let last = &self.eta[self.eta.len() - self.m * self.q..];
-                let settling = self.settling(i, &Settle::default());
-                ChannelSummary {
-                    tail_max_abs_e: tail.iter().fold(0.0, |a, e| max_or_nan(a, e.abs())),
-                    tail_rms_e: rms,
-                    max_abs_u: self.column(&self.u, self.m, i).fold(0.0, |a, u| max_or_nan(a, u.abs())),
-                    max_abs_uf: self.column(&self.u_f, self.m, i).fold(0.0, |a, u| max_or_nan(a, u.abs())),
-                    final_eta_norm: last[i * self.q..(i + 1) * self.q].iter().map(|v| v * v).sum::<f64>().sqrt(),
-                    settle_t: settling.time(),
-                    settle_note: settling.reason(),
-                }
+                let final_eta_norm = last[i * self.q..(i + 1) * self.q].iter().map(|v| v * v).sum::<f64>().sqrt();
+                Some(ChannelSummary { figures, final_eta_norm, settle_note: settling.reason() })
             })
             .collect()
+    }
+
+    /// Channel i's figures and how it settled; `None` without samples.
+    fn channel(&self, i: usize, settle: &Settle) -> Option<(ChannelFigures, Settling)> {
+        let (Some(&t0), Some(&t1)) = (self.t.first(), self.t.last()) else {
+            return None;
+        };
+        let from = t1 - 0.1 * (t1 - t0);
+        let tail: Vec<f64> =
+            self.t.iter().zip(self.column(&self.e, self.m, i)).filter(|(t, _)| **t >= from).map(|(_, e)| e).collect();
+        let settling = self.settling(i, settle);
+        let figures = ChannelFigures {
+            tail_max_e: tail.iter().fold(0.0, |a, e| max_or_nan(a, e.abs())),
+            tail_rms_e: (tail.iter().map(|e| e * e).sum::<f64>() / tail.len().max(1) as f64).sqrt(),
+            max_u: self.column(&self.u, self.m, i).fold(0.0, |a, u| max_or_nan(a, u.abs())),
+            max_uf: self.column(&self.u_f, self.m, i).fold(0.0, |a, u| max_or_nan(a, u.abs())),
+            settle_t: settling.time(),
+        };
+        Some((figures, settling))
     }
 }
 
@@ -282,12 +299,18 @@ mod tests {
             let (u, u_f) = ([3.0, u1], [-5.0, 2.0 * k as f64]);
             r.push(&Sample { t, y: &[y0, 2.0], g: &[1.0, 1.0], u: &u, u_f: &u_f, eta: &[0.0, 0.0], states: None });
         }
-        let s = r.summary();
-        assert!(s[0].tail_max_abs_e.is_nan() && s[0].tail_rms_e.is_nan(), "{:?}", s[0]);
-        assert_eq!(s[0].max_abs_u, 3.0);
-        assert_eq!((s[1].tail_max_abs_e, s[1].tail_rms_e), (1.0, 1.0));
-        assert!(s[1].max_abs_u.is_nan(), "{:?}", s[1]);
+        let s = r.figures(&Settle::default());
+        assert!(s[0].tail_max_e.is_nan() && s[0].tail_rms_e.is_nan(), "{:?}", s[0]);
+        assert_eq!(s[0].max_u, 3.0);
+        assert_eq!((s[1].tail_max_e, s[1].tail_rms_e), (1.0, 1.0));
+        assert!(s[1].max_u.is_nan(), "{:?}", s[1]);
         // max |u_f| is the plant input's, not the command's: 5 and 2·20.
-        assert_eq!((s[0].max_abs_uf, s[1].max_abs_uf), (5.0, 40.0));
+        assert_eq!((s[0].max_uf, s[1].max_uf), (5.0, 40.0));
+        let in_summary: Vec<ChannelFigures> = r.summary().iter().map(|c| c.figures).collect();
+        assert_eq!(
+            format!("{in_summary:?}"),
+            format!("{s:?}"),
+            "summary() holds figures() (NaN != NaN, so compared as text)"
+        );
     }
 }

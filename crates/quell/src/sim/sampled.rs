@@ -250,7 +250,7 @@ fn sampled_loop<C: SampledController + ?Sized>(
     let mut result = SimResult::new(m, design.q(), n, stats(0));
     // u_f(k) and, when states are recorded, x̂(k) (read before the step moves it to x̂(k + 1)).
     let (mut u_f, mut x_hat) = (vec![0.0; m], vec![0.0; n]);
-    let steps = (settings.t_end / T + 1e-9).floor() as usize;
+    let steps = discrete::whole_samples(settings.t_end, T);
     let bounds = settings.bounds();
     let mut outcome = Outcome::Completed;
     let mut taken = 0;

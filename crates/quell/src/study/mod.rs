@@ -26,9 +26,7 @@ use crate::sim::Peaks;
 pub use output::{header, read_runs_csv, write_runs_csv, RunsFile};
 pub use path::{KeyPath, Shape};
 pub use summary::{quantile, AxisMeta, ChannelQuantiles, PointSummary, Quantiles, StudyMeta, Summary, QUANTILES};
-pub use sweep::{
-    run_one, run_one_until, run_seed, sweep, ChannelFigures, Outcome, Row, RunSpec, Shard, Sweep, SweepOptions,
-};
+pub use sweep::{run_one, run_one_until, run_seed, sweep, Outcome, Row, RunSpec, Shard, Sweep, SweepOptions};
 pub use tune::{tune, Objective, OnPoint, TuneCurve, TuneOptions, TunePoint, TuneResult, TuneSpec};
 
 /// A study-file error: the key path in the study file (`grid."design.mu[0]"[2]`) and what was
@@ -221,12 +219,6 @@ fn table<'a>(key: &str, v: &'a toml::Value) -> Result<&'a toml::Table, StudyErro
 fn unknown_keys(at: &str, t: &toml::Table, valid: &[&str]) -> Result<(), StudyError> {
     crate::scenario::read::Table::new(at, t, valid)?;
     Ok(())
-}
-
-/// FNV-1a, 64 bits: the study's fingerprint (stable across platforms and releases, unlike
-/// `std::hash`), so merged shards can be checked to come from one study.
-pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
 }
 
 /// A plant key of `[truth]` that may be perturbed before the scenario gives it.
@@ -608,7 +600,8 @@ fn read_runaway(doc: &toml::Table) -> Result<Runaway, StudyError> {
 }
 
 /// The study's fingerprint: FNV-1a of its scenario (with the `[simulation]` overrides) and of the
-/// sections that decide its runs.
+/// sections that decide its runs, stable across platforms and releases, so merged shards can be
+/// checked to come from one study.
 fn fingerprint(doc: &toml::Table, base: &toml::Table) -> u64 {
     let mut canonical = toml::to_string(base).unwrap_or_default();
     for key in ["grid", "monte_carlo", "settle", "max_steps", "runaway"] {
@@ -616,7 +609,7 @@ fn fingerprint(doc: &toml::Table, base: &toml::Table) -> u64 {
             canonical.push_str(&format!("\n[{key}]\n{v}"));
         }
     }
-    fnv1a(canonical.as_bytes())
+    crate::hash::fnv1a_64(canonical.bytes())
 }
 
 /// The number of grid points, after checking that points × draws is at most [`MAX_RUNS`].

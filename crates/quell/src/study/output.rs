@@ -4,7 +4,8 @@
 use std::io::{self, Write};
 
 use super::summary::StudyMeta;
-use super::sweep::{ChannelFigures, Outcome, Row};
+use super::sweep::{Outcome, Row};
+use crate::sim::ChannelFigures;
 
 /// The header: `run,point,draw,seed,<grid keys>,outcome,reason,tail_max_e1..m,tail_rms_e1..m,
 /// max_u1..m,max_uf1..m,settle_t1..m,steps,wall_ms`.

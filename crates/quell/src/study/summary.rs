@@ -168,7 +168,7 @@ impl Summary {
                 let frac = |o: Outcome| rs.iter().filter(|r| r.outcome == o).count() as f64 / rs.len() as f64;
                 let channels = (0..study.m)
                     .map(|i| {
-                        let col = |f: &dyn Fn(&super::ChannelFigures) -> f64| {
+                        let col = |f: &dyn Fn(&crate::sim::ChannelFigures) -> f64| {
                             Quantiles::of(done.iter().map(|r| f(&r.channels[i])).collect())
                         };
                         let never = done.iter().filter(|r| r.channels[i].settle_t.is_none()).count();

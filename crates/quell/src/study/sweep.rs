@@ -8,22 +8,16 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::{Nominal, Runaway, Settle, Study};
+use crate::hash::{mix64, GOLDEN_GAMMA};
 use crate::scenario::Scenario;
-use crate::sim::{self, Loop, Peaks, Run, RunSettings, SimResult, DIVERGENCE_BOUND};
-
-/// SplitMix64's finalizer: a bijection of u64 that scrambles every bit.
-fn mix(mut z: u64) -> u64 {
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
+use crate::sim::{self, ChannelFigures, Loop, Peaks, Run, RunSettings, SimResult, DIVERGENCE_BOUND};
 
 /// The seed of Monte Carlo draw `draw` of a study with seed `study_seed`. It depends on nothing
 /// else, so a run can be carried out alone (on any machine, in any order), and draw d perturbs the
 /// plant the same way at every grid point (common random numbers: differences between grid points
 /// are the grid's, not the draws').
 pub fn run_seed(study_seed: u64, draw: usize) -> u64 {
-    mix(mix(study_seed).wrapping_add(0x9E37_79B9_7F4A_7C15u64.wrapping_mul(draw as u64 + 1)))
+    mix64(mix64(study_seed).wrapping_add(GOLDEN_GAMMA.wrapping_mul(draw as u64 + 1)))
 }
 
 /// Everything one run needs, self-contained and serializable (for `quell.sweep_runs` and a
@@ -105,22 +99,6 @@ impl Outcome {
     }
 }
 
-/// Channel i's figures of a completed run.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct ChannelFigures {
-    /// max |e_i| over the last 10 % of the horizon.
-    pub tail_max_e: f64,
-    /// RMS of e_i over the last 10 % of the horizon.
-    pub tail_rms_e: f64,
-    /// max |u_i| over the run (the adaptive command (25)).
-    pub max_u: f64,
-    /// max |u_f,i| over the run (the plant input (5), what the actuator delivers).
-    pub max_uf: f64,
-    /// First recorded t after which |e_i| stays within the settling band ([`Settle`]); `None` when
-    /// the channel did not settle, or only in the last 5 % of the horizon ([`crate::sim::settle`]).
-    pub settle_t: Option<f64>,
-}
-
 /// One row of runs.csv.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Row {
@@ -139,21 +117,6 @@ pub struct Row {
     pub steps: u64,
     /// Wall time of the run in ms, to the microsecond.
     pub wall_ms: f64,
-}
-
-/// The figures of each channel of a completed run.
-pub(crate) fn figures(r: &SimResult, settle: &Settle) -> Vec<ChannelFigures> {
-    r.summary()
-        .iter()
-        .enumerate()
-        .map(|(i, c)| ChannelFigures {
-            tail_max_e: c.tail_max_abs_e,
-            tail_rms_e: c.tail_rms_e,
-            max_u: c.max_abs_u,
-            max_uf: c.max_abs_uf,
-            settle_t: r.settling(i, settle).time(),
-        })
-        .collect()
 }
 
 /// Simulates a scenario as its `[simulation]` says ([`Run::of`]), a continuous run
@@ -197,7 +160,7 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
             match r.outcome.as_ref().unwrap_or(&sim::Outcome::Completed) {
                 sim::Outcome::Completed => {
                     row.outcome = Outcome::Completed;
-                    row.channels = figures(&r, &spec.settle);
+                    row.channels = r.figures(&spec.settle);
                 }
                 sim::Outcome::Diverged { t, signal, value } => {
                     row.outcome = Outcome::Diverged;
@@ -360,5 +323,16 @@ mod tests {
         assert_eq!(time([1.0, f64::NAN, 1.0, 1.0, 1.0], &s), None);
         let s = Settle { relative: 0.02, absolute: 0.05 };
         assert_eq!(time([1.0, f64::NAN, 1.0, 1.0, 1.0], &s), None);
+    }
+
+    /// A draw's seed is mix(mix(seed) + γ (d + 1)) (docs/studies.md), values from an independent
+    /// Python implementation of that formula; run_seed(0, 0) is SplitMix64's first output from
+    /// seed 0, the published e220a8397b1dcdaf. The seeds of existing studies stay the same.
+    #[test]
+    fn run_seeds_are_the_documented_splitmix64_formula() {
+        assert_eq!(run_seed(0, 0), 0xe220_a839_7b1d_cdaf);
+        assert_eq!(run_seed(7, 0), 0x863b_891f_4c0a_bd4f);
+        assert_eq!(run_seed(7, 1), 0x4d58_fbd2_82ea_f415);
+        assert_eq!(run_seed(u64::MAX, 12345), 0xe4a3_5de0_820f_043f);
     }
 }

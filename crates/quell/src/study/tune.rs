@@ -7,10 +7,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::sweep::{execute, ChannelFigures, Outcome, Row, RunSpec};
+use super::sweep::{execute, Outcome, Row, RunSpec};
 use super::{err, number, Study, StudyError};
 use crate::scenario::kind;
 use crate::scenario::Scenario;
+use crate::sim::ChannelFigures;
 
 /// What a search minimizes for channel i.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
