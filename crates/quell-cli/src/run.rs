@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use quell::diagnostics::{ChannelDiagnostics, Diagnostics};
 use quell::scenario::Scenario;
-use quell::sim::{Loop, Outcome, Run, RunSettings, RunStats, SimResult};
+use quell::sim::{Loop, Method, Outcome, Run, RunSettings, RunStats, SimResult};
 use quell::Design;
 use serde_json::json;
 
@@ -36,6 +36,11 @@ pub struct RunArgs {
     /// signals.csv).
     #[arg(long)]
     pub states: bool,
+    /// The continuous loop's integrator: auto (DOP853, implicit in η̂ while the adaptive law is
+    /// stiff), explicit (DOP853 throughout) or imex (implicit in η̂ throughout); overrides
+    /// simulation.method.
+    #[arg(long, value_name = "METHOD")]
+    pub method: Option<String>,
 }
 
 pub fn run(args: &RunArgs) -> Result<(), Failure> {
@@ -79,6 +84,18 @@ fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result
         })?;
     }
     settings.record_states = args.states;
+    if let Some(name) = &args.method {
+        let method = Method::from_name(name).map_err(|e| Failure::Input(format!("--method: {e}")))?;
+        match &mut settings.mode {
+            Loop::Continuous(integrator) => integrator.method = method,
+            Loop::Sampled { sample_time } => {
+                return Err(Failure::Input(format!(
+                    "--method: the integrator applies to the continuous loop only, and this run is the sampled-data loop at T_s = {} s (the plant is advanced exactly between samples); remove --method, or --sample-time and simulation.sample_time",
+                    short(*sample_time)
+                )))
+            }
+        }
+    }
     settings.set_max_steps(args.max_steps).map_err(|e| Failure::Input(format!("--max-steps: {}", e.message)))?;
     Ok(settings)
 }

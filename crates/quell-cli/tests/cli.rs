@@ -658,6 +658,55 @@ fn design_warns_of_a_pole_repeated_beyond_rank_c() {
     assert_eq!(v["warnings"], serde_json::json!([]));
 }
 
+/// `--method` chooses the continuous loop's integrator. The paper's example is not stiff, so
+/// `explicit` (DOP853 throughout) is what `auto` does: the same files bit for bit; `imex`
+/// (ARK4(3)6L[2]SA, order 4) takes other steps, and its outputs agree with DOP853's to 1e-6 of
+/// the peak output (both at rtol = atol = 1e-9, each within ~100·rtol of the exact solution).
+#[test]
+fn method_flag_chooses_the_integrator() {
+    let dir = temp_dir("method");
+    let scenario = dir.path().join("short.toml");
+    fs::write(&scenario, fs::read_to_string(paper()).unwrap().replace("t_end = 100.0", "t_end = 10.0")).unwrap();
+    let run = |method: Option<&str>| {
+        let out = dir.path().join(method.unwrap_or("default"));
+        let mut args = vec!["run", scenario.to_str().unwrap(), "--no-plots", "--out", out.to_str().unwrap()];
+        args.extend(method.map(|m| ["--method", m]).into_iter().flatten());
+        let o = quell(&args);
+        assert!(o.status.success(), "{method:?}: {}", stderr(&o));
+        let csv = fs::read_to_string(out.join("signals.csv")).unwrap();
+        let steps = read_json(&out.join("summary.json"))["stats"]["steps"].as_u64().unwrap();
+        (csv, steps)
+    };
+    let (auto, explicit, imex) = (run(None), run(Some("explicit")), run(Some("imex")));
+    assert_eq!(auto, explicit, "auto is DOP853 on a loop that is not stiff");
+    assert_ne!(imex.1, explicit.1, "imex takes its own steps");
+    let numbers = |csv: &str| -> Vec<Vec<f64>> {
+        csv.lines().skip(1).map(|l| l.split(',').map(|x| x.parse().unwrap()).collect()).collect()
+    };
+    let (a, b) = (numbers(&explicit.0), numbers(&imex.0));
+    // Columns t, y1, y2: the outputs.
+    let peak = a.iter().flat_map(|r| r[1..3].iter()).fold(0.0f64, |m, v| m.max(v.abs()));
+    let dev = a.iter().zip(&b).flat_map(|(r, s)| (1..3).map(move |j| (r[j] - s[j]).abs())).fold(0.0f64, f64::max);
+    assert!(a.len() == b.len() && dev < 1e-6 * peak, "explicit and imex differ by {dev:e}, peak {peak}");
+}
+
+#[test]
+fn bad_method_flag_exits_2_naming_the_flag_and_the_names() {
+    let dir = temp_dir("bad-method");
+    let out = dir.path().join("out");
+    let o = quell(&["run", "--no-plots", "--method", "implict", "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(
+        e.contains("error: --method: expected \"auto\"") && e.contains("found \"implict\" (did you mean \"imex\"?)"),
+        "{e}"
+    );
+    let o = quell(&["run", "--no-plots", "--sample-time", "0.01", "--method", "imex", "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--method: the integrator applies to the continuous loop only"), "{}", stderr(&o));
+    assert!(!out.exists(), "nothing is written before the input is checked");
+}
+
 /// `[plant]` signal names label the channel lines (`channel 1 (pitch): …`) and change no file:
 /// signals.csv is byte for byte that of the same scenario without names.
 #[test]

@@ -43,6 +43,10 @@ use crate::plant::{plant_arg, Labels, PyPlant};
 ///     The solver's tolerances (default 1e-9).
 /// sample_time : float, optional
 ///     T_s: the sampled-data loop with the real-time controller; None: the continuous loop.
+/// method : str, optional
+///     The continuous loop's integrator: "auto" (the default: DOP853, implicit in η̂ while the
+///     adaptive law is stiff), "explicit" (DOP853 throughout) or "imex" (ARK4(3)6L[2]SA
+///     throughout, implicit in η̂).
 /// noise : dict, optional
 ///     Measurement noise `{"std": [σ_i], "seed": 0, "bandwidth": None}`.
 /// truth : Plant, optional
@@ -121,6 +125,15 @@ pub fn argument_error(py: Python<'_>, e: &quell::ScenarioError) -> PyErr {
     let err = Kind::Scenario.err(py, in_python(e.to_string()));
     let _ = err.value(py).setattr("key", e.key.clone());
     err
+}
+
+/// `method=` (of `Scenario` and `simulate`) as the file's `simulation.method`: a str, whose name the
+/// scenario reader checks.
+pub fn method_value(obj: &Bound<'_, PyAny>) -> PyResult<Value> {
+    if !obj.is_instance_of::<PyString>() {
+        return Err(type_error("method", "a str: \"auto\", \"explicit\" or \"imex\"", obj));
+    }
+    Ok(Value::String(obj.extract()?))
 }
 
 /// A Python value (numbers, strings, lists, dicts, numpy arrays and scalars) as a TOML value;
@@ -245,7 +258,7 @@ fn signal_py<'py>(py: Python<'py>, s: &Signal) -> PyResult<Vec<Bound<'py, PyDict
 #[pymethods]
 impl PyScenario {
     #[new]
-    #[pyo3(signature = (plant, reference, disturbance=None, *, name=None, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, noise=None, truth=None, **design))]
+    #[pyo3(signature = (plant, reference, disturbance=None, *, name=None, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, method=None, noise=None, truth=None, **design))]
     #[allow(clippy::too_many_arguments)]
     fn py_new(
         py: Python<'_>,
@@ -258,6 +271,7 @@ impl PyScenario {
         rtol: Option<&Bound<'_, PyAny>>,
         atol: Option<&Bound<'_, PyAny>>,
         sample_time: Option<&Bound<'_, PyAny>>,
+        method: Option<&Bound<'_, PyAny>>,
         noise: Option<&Bound<'_, PyAny>>,
         truth: Option<&Bound<'_, PyAny>>,
         design: Option<&Bound<'_, PyDict>>,
@@ -295,6 +309,9 @@ impl PyScenario {
             if let Some(v) = v.filter(|v| !v.is_none()) {
                 sim.insert(key.into(), Value::Float(crate::convert::number(v, key)?));
             }
+        }
+        if let Some(m) = method.filter(|m| !m.is_none()) {
+            sim.insert("method".into(), method_value(m)?);
         }
         doc.insert("simulation".into(), Value::Table(sim));
         if let Some(n) = noise.filter(|n| !n.is_none()) {
@@ -486,7 +503,8 @@ impl PyScenario {
     fn disturbance<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         signal_py(py, &self.inner.disturbance)
     }
-    /// The `[simulation]` settings: t_end, output_step, rtol, atol, sample_time (None: continuous).
+    /// The `[simulation]` settings: t_end, output_step, rtol, atol, sample_time (None: continuous)
+    /// and method ("auto", "explicit" or "imex": the continuous loop's integrator).
     #[getter]
     fn simulation<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let s = &self.inner.simulation;
@@ -496,6 +514,7 @@ impl PyScenario {
         d.set_item("rtol", s.rtol)?;
         d.set_item("atol", s.atol)?;
         d.set_item("sample_time", s.sample_time)?;
+        d.set_item("method", s.method.name())?;
         Ok(d)
     }
     /// Measurement noise {std, seed, bandwidth} (bandwidth None: white per sample), or None.

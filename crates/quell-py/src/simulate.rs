@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
-use quell::sim::{Outcome, Peaks, Run, RunSettings, RunStats, SimResult, Stats};
+use quell::sim::{Loop, Outcome, Peaks, Run, RunSettings, RunStats, SimResult, Stats};
 use toml::Value;
 
 use crate::convert::number;
@@ -497,6 +497,11 @@ impl PySimResult {
 ///     The scenario.
 /// t_end, output_step, rtol, atol, sample_time : float, optional
 ///     Override the scenario's simulation settings.
+/// method : str, optional
+///     The continuous loop's integrator, overriding the scenario's: "auto" (DOP853, implicit in the
+///     adaptive parameters η̂ while their law is stiff; the default), "explicit" (DOP853
+///     throughout) or "imex" (the implicit–explicit ARK4(3)6L[2]SA throughout, implicit in η̂).
+///     Not for a sampled-data run.
 /// max_steps : int, optional
 ///     The continuous solver's step budget (default: derived from the problem).
 /// states : bool, optional
@@ -516,7 +521,7 @@ impl PySimResult {
 ///     An argument of the wrong type.
 /// ScenarioError
 ///     An override that is not valid (named as the argument: `sample_time`, not
-///     `simulation.sample_time`).
+///     `simulation.sample_time`; an unknown `method` with the nearest name).
 /// DesignError
 ///     No design exists for the scenario.
 /// SimulationError
@@ -527,8 +532,12 @@ impl PySimResult {
 /// >>> r = quell.simulate(quell.paper_example(), t_end=2.0, sample_time=1e-3)
 /// >>> r.stats
 /// {'controller_steps': 2001, 'sample_time': 0.001}
+/// >>> explicit = quell.simulate(quell.paper_example(), t_end=5.0, method="explicit")
+/// >>> imex = quell.simulate(quell.paper_example(), t_end=5.0, method="imex")
+/// >>> bool(np.abs(explicit.y - imex.y).max() < 1e-6)
+/// True
 #[pyfunction]
-#[pyo3(signature = (scenario, *, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, max_steps=None, states=false, check=true))]
+#[pyo3(signature = (scenario, *, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, method=None, max_steps=None, states=false, check=true))]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate(
     py: Python<'_>,
@@ -538,6 +547,7 @@ pub fn simulate(
     rtol: Option<&Bound<'_, PyAny>>,
     atol: Option<&Bound<'_, PyAny>>,
     sample_time: Option<&Bound<'_, PyAny>>,
+    method: Option<&Bound<'_, PyAny>>,
     max_steps: Option<&Bound<'_, PyAny>>,
     #[pyo3(from_py_with = crate::convert::argument::states)] states: bool,
     #[pyo3(from_py_with = crate::convert::argument::check)] check: bool,
@@ -545,41 +555,81 @@ pub fn simulate(
     let s: PyRef<'_, PyScenario> =
         scenario.extract().map_err(|_| crate::errors::type_error("scenario", "a quell.Scenario", scenario))?;
     let design = s.design_arc(py)?;
-    // Overrides go through the scenario's own checks of [simulation].
-    let overrides =
+    let method = method.filter(|v| !v.is_none()).map(crate::scenario::method_value).transpose()?;
+    let numbers =
         [("t_end", t_end), ("output_step", output_step), ("rtol", rtol), ("atol", atol), ("sample_time", sample_time)];
-    let edited;
-    let scn = if overrides.iter().any(|(_, v)| v.is_some()) {
-        let mut doc = s.inner.to_table();
-        if let Some(Value::Table(sim)) = doc.get_mut("simulation") {
-            for (key, v) in overrides {
-                if let Some(v) = v {
-                    sim.insert(key.into(), Value::Float(number(v, key)?));
-                }
-            }
-        }
-        edited = quell::Scenario::from_document(&doc).map_err(|e| crate::scenario::argument_error(py, &e))?;
-        &edited
-    } else {
-        &s.inner
-    };
+    let edited = with_overrides(py, &s.inner, &numbers, method.as_ref())?;
+    let scn = edited.as_ref().unwrap_or(&s.inner);
     let mut settings = RunSettings::of(scn);
     settings.record_states = states;
-    let max_steps = match max_steps.filter(|v| !v.is_none()) {
-        None => None,
+    if let (Some(_), Loop::Sampled { sample_time }) = (&method, &settings.mode) {
+        let msg = format!("method: the integrator applies to the continuous loop only, and this run is the sampled-data loop at sample_time = {sample_time} s; leave method out, or sample_time");
+        return Err(Kind::Scenario.err(py, msg));
+    }
+    settings
+        .set_max_steps(step_budget(py, max_steps)?)
+        .map_err(|e| Kind::Scenario.err(py, in_python(e.to_string())))?;
+    let result = run_released(py, scn, &design, settings)?;
+    let outcome = result.outcome.clone().unwrap_or(Outcome::Completed);
+    let result = Py::new(py, PySimResult::from_run(py, scn, &design, result, s.labels.clone())?)?;
+    match failure(outcome) {
+        Some((message, t, signal, value)) if check => {
+            Err(simulation_error(py, message, t, signal, value, result.into_any()))
+        }
+        _ => Ok(result),
+    }
+}
+
+/// The scenario with the given `[simulation]` overrides, read again through the scenario's own
+/// checks; `None` when nothing is overridden.
+fn with_overrides(
+    py: Python<'_>,
+    s: &quell::Scenario,
+    numbers: &[(&str, Option<&Bound<'_, PyAny>>)],
+    method: Option<&Value>,
+) -> PyResult<Option<quell::Scenario>> {
+    if method.is_none() && numbers.iter().all(|(_, v)| v.is_none()) {
+        return Ok(None);
+    }
+    let mut doc = s.to_table();
+    if let Some(Value::Table(sim)) = doc.get_mut("simulation") {
+        for (key, v) in numbers {
+            if let Some(v) = v {
+                sim.insert((*key).into(), Value::Float(number(v, key)?));
+            }
+        }
+        if let Some(m) = method {
+            sim.insert("method".into(), m.clone());
+        }
+    }
+    quell::Scenario::from_document(&doc).map(Some).map_err(|e| crate::scenario::argument_error(py, &e))
+}
+
+/// `max_steps=`: None, or an int ≥ 1.
+fn step_budget(py: Python<'_>, max_steps: Option<&Bound<'_, PyAny>>) -> PyResult<Option<usize>> {
+    match max_steps.filter(|v| !v.is_none()) {
+        None => Ok(None),
         Some(v) if v.is_instance_of::<pyo3::types::PyBool>() || !v.is_instance_of::<pyo3::types::PyInt>() => {
-            return Err(crate::errors::type_error("max_steps", "an int (a step budget) or None", v));
+            Err(crate::errors::type_error("max_steps", "an int (a step budget) or None", v))
         }
         Some(v) => match v.extract::<usize>() {
-            Ok(n) if n >= 1 => Some(n),
+            Ok(n) if n >= 1 => Ok(Some(n)),
             _ => {
                 let found = v.repr().map_or_else(|_| "?".to_string(), |r| r.to_string());
                 let msg = format!("max_steps: expected a step budget (an integer ≥ 1), found {found}");
-                return Err(Kind::Scenario.err(py, msg));
+                Err(Kind::Scenario.err(py, msg))
             }
         },
-    };
-    settings.set_max_steps(max_steps).map_err(|e| Kind::Scenario.err(py, in_python(e.to_string())))?;
+    }
+}
+
+/// The run with the GIL released, looking for Ctrl-C every [`SIGNAL_CHECK`].
+fn run_released(
+    py: Python<'_>,
+    scn: &quell::Scenario,
+    design: &quell::Design,
+    settings: RunSettings,
+) -> PyResult<SimResult> {
     let mut interrupt: Option<PyErr> = None;
     let result = py.detach(|| {
         let mut last = Instant::now();
@@ -596,19 +646,18 @@ pub fn simulate(
                 }
             }
         };
-        Run::of(scn, &design).settings(settings).simulate(progress)
+        Run::of(scn, design).settings(settings).simulate(progress)
     });
     if let Some(e) = interrupt {
         return Err(e);
     }
-    let result = result.map_err(|e| Kind::Scenario.err(py, in_python(e.to_string())))?;
-    let outcome = result.outcome.clone().unwrap_or(Outcome::Completed);
-    let result = Py::new(py, PySimResult::from_run(py, scn, &design, result, s.labels.clone())?)?;
-    if !check {
-        return Ok(result);
-    }
-    let failure = match outcome {
-        Outcome::Completed => return Ok(result),
+    result.map_err(|e| Kind::Scenario.err(py, in_python(e.to_string())))
+}
+
+/// Why a run that did not complete failed, for SimulationError: message, time, signal and value.
+fn failure(outcome: Outcome) -> Option<(String, f64, Option<String>, Option<f64>)> {
+    Some(match outcome {
+        Outcome::Completed => return None,
         Outcome::Diverged { t, signal, value } => (
             format!("the closed loop diverged at t = {t:.4}: {signal} = {value:e}; the samples up to then are in the exception's .result"),
             t,
@@ -634,7 +683,5 @@ pub fn simulate(
             None,
             None,
         ),
-    };
-    let (message, t, signal, value) = failure;
-    Err(simulation_error(py, message, t, signal, value, result.into_any()))
+    })
 }

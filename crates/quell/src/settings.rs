@@ -49,6 +49,59 @@ pub fn read_input(path: &std::path::Path) -> Result<String, String> {
         .map_err(|e| format!("not UTF-8 text (invalid byte at offset {})", e.utf8_error().valid_up_to()))
 }
 
+/// The integrator of the continuous loop's steps (`simulation.method`), named in scenario files,
+/// flags and Python by [`Method::name`]: `"auto"`, `"explicit"`, `"imex"`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Method {
+    /// `"auto"`: DOP853, switching to [`Method::Implicit`] while the adaptive law (33) limits
+    /// DOP853's step by stability, and back when it no longer would.
+    #[default]
+    Auto,
+    /// `"explicit"`: DOP853 throughout.
+    Explicit,
+    /// `"imex"`: the implicit–explicit pair ARK4(3)6L\[2\]SA throughout, implicit in η̂ (33) only,
+    /// explicit in every other component.
+    Implicit,
+}
+
+impl Method {
+    /// Every method with its name and what it does, as messages list them.
+    const ALL: [(Method, &'static str, &'static str); 3] = [
+        (Method::Auto, "auto", "DOP853, implicit in η̂ while the adaptive law is stiff; the default"),
+        (Method::Explicit, "explicit", "DOP853 throughout"),
+        (Method::Implicit, "imex", "ARK4(3)6L[2]SA throughout, implicit in η̂"),
+    ];
+
+    /// The name scenario files, the CLI and Python use.
+    pub fn name(self) -> &'static str {
+        Self::ALL.iter().find(|(m, ..)| *m == self).map_or("auto", |(_, n, _)| n)
+    }
+
+    /// The method named `name`, or the message (without a key) listing the names, with the
+    /// nearest one (also for the enum's own names, so `"implicit"` suggests `"imex"`).
+    pub fn from_name(name: &str) -> Result<Method, String> {
+        if let Some((m, ..)) = Self::ALL.iter().find(|(_, n, _)| *n == name) {
+            return Ok(*m);
+        }
+        let lower = name.to_lowercase();
+        let aliases = Self::ALL.iter().map(|(_, n, _)| (*n, *n)).chain([("implicit", "imex"), ("dop853", "explicit")]);
+        let hint = aliases
+            .map(|(alias, n)| (strsim::levenshtein(alias, &lower), n))
+            .filter(|(d, _)| *d <= 2)
+            .min_by_key(|(d, _)| *d)
+            .map(|(_, n)| format!(" (did you mean \"{n}\"?)"))
+            .unwrap_or_default();
+        let list: Vec<String> = Self::ALL.iter().map(|(_, n, what)| format!("\"{n}\" ({what})")).collect();
+        Err(format!("expected {} or {}, found \"{name}\"{hint}", list[..2].join(", "), list[2]))
+    }
+}
+
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// Most controller steps of a sampled-data run (t_end / sample_time).
 pub const MAX_SAMPLING_STEPS: f64 = 1e10;
 

@@ -116,3 +116,40 @@ fn summary_reports_the_plant_input_peak_and_states_are_recorded_only_when_asked(
     }
     assert!(r.x.is_empty() && r.x_hat.is_empty() && !r.has_states());
 }
+
+/// `simulation.method` reaches the integrator. The paper's example is not stiff at μ = [20, 30], so
+/// DOP853 (order 8) and the implicit–explicit ARK4(3)6L\[2\]SA (order 4, implicit in η̂) integrate
+/// the same loop with different error estimates: each must match the independent solver's points
+/// (1e-12; accurate to ~1e-8) to the reference bound 1e-6, and the two must agree with each other
+/// over every sample of y and u to 1e-6 of the output's peak (each is within about
+/// 100·rtol·peak of the exact solution at rtol = 1e-9, the bound the 1e-9 vs 1e-12 test above uses).
+#[test]
+fn the_scenario_method_chooses_the_integrator_and_explicit_and_imex_agree() {
+    use quell::scenario::{Scenario, PAPER_EXAMPLE};
+    use quell::sim::{Method, RunStats};
+    let run = |name: &str| {
+        let text = PAPER_EXAMPLE.replacen("atol = 1e-9\n", &format!("atol = 1e-9\nmethod = \"{name}\"\n"), 1);
+        let s = Scenario::from_toml(&text).unwrap();
+        assert_eq!(s.simulation.method.name(), name);
+        let r = Run::of(&s, &s.design().unwrap()).simulate(|_| ControlFlow::Continue(())).unwrap();
+        assert_eq!(r.outcome, Some(Outcome::Completed), "{name}");
+        assert_matches_reference_points(&r);
+        r
+    };
+    let (explicit, imex) = (run("explicit"), run("imex"));
+    let implicit_steps = |r: &SimResult| match r.stats {
+        RunStats::Continuous(s) => (s.implicit_steps, s.steps),
+        RunStats::Sampled { .. } => unreachable!(),
+    };
+    assert_eq!(implicit_steps(&explicit).0, 0);
+    let (implicit, steps) = implicit_steps(&imex);
+    assert!(implicit == steps && steps > 0, "imex: {implicit} of {steps} steps implicit");
+    let peak = explicit.y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for (what, a, b) in [("y", &explicit.y, &imex.y), ("u", &explicit.u, &imex.u)] {
+        let dev = a.iter().zip(b.iter()).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / peak;
+        assert!(dev < 1e-6, "{what}: explicit and imex differ by {dev:e} of the peak");
+    }
+    // Absent, the key means the automatic method, which on this loop never switches.
+    let auto = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+    assert_eq!(auto.simulation.method, Method::Auto);
+}

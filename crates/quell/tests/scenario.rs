@@ -9,6 +9,7 @@ use nalgebra::{Complex, DMatrix};
 use proptest::prelude::*;
 use quell::scenario::exosystem::Exosystem;
 use quell::scenario::{load_and_design, LoadError, Noise, Simulation, PAPER_EXAMPLE};
+use quell::sim::Method;
 use quell::{Component, Harmonic, ObserverChoice, Scenario};
 
 const DOCS: &str = include_str!("../../../docs/errors.md");
@@ -108,7 +109,10 @@ fn paper_example_parses_into_the_papers_numbers() {
         assert_eq!(g, [3.0 * (2.0 * t).sin(), 2.0]);
         assert_eq!(w, [t.sin(), 1.0 + 2.0 * (2.0 * t).sin()]);
     }
-    assert_eq!(s.simulation, Simulation { t_end: 100.0, output_step: 0.1, rtol: 1e-9, atol: 1e-9, sample_time: None });
+    assert_eq!(
+        s.simulation,
+        Simulation { t_end: 100.0, output_step: 0.1, rtol: 1e-9, atol: 1e-9, sample_time: None, method: Method::Auto }
+    );
     assert_eq!(s.noise, None);
 }
 
@@ -556,6 +560,25 @@ fn output_step_too_many_samples() {
 #[test]
 fn tolerance_not_positive() {
     check(&with(&[("rtol = 1e-9", "rtol = 0.0")]), "simulation.rtol", "expected a relative tolerance > 0");
+}
+
+#[test]
+fn method_unknown() {
+    check(
+        &with(&[("atol = 1e-9\n", "atol = 1e-9\nmethod = \"imx\"\n")]),
+        "simulation.method",
+        "or \"imex\" (ARK4(3)6L[2]SA throughout, implicit in η̂), found \"imx\" (did you mean \"imex\"?)",
+    );
+}
+
+#[test]
+fn method_named_as_the_enum() {
+    // The library's `Method::Implicit` is "imex" in files: the name says that only η̂ is implicit.
+    check(
+        &with(&[("atol = 1e-9\n", "atol = 1e-9\nmethod = \"Implicit\"\n")]),
+        "simulation.method",
+        "found \"Implicit\" (did you mean \"imex\"?)",
+    );
 }
 
 #[test]

@@ -202,9 +202,7 @@ fn relative(path: &Path) -> String {
 const BEING_SPLIT: &[(&str, &str, &str)] = &[
     ("crates/quell/src/auto.rs", "choose", "TODO(guide)"),
     ("crates/quell/src/design/place.rs", "knv0", "TODO(harden)"),
-    ("crates/quell/src/sim/sampled.rs", "sampled_loop", "TODO(front)"),
     ("crates/quell/src/study/mod.rs", "from_table", "TODO(front)"),
-    ("crates/quell-py/src/simulate.rs", "simulate", "TODO(python)"),
 ];
 
 #[test]

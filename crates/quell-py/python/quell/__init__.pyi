@@ -2,7 +2,7 @@
 
 from os import PathLike
 from pathlib import Path
-from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple, Union, final
+from typing import Any, Dict, Iterator, List, Literal, Optional, Sequence, Tuple, Union, final
 
 import numpy as np
 import numpy.typing as npt
@@ -174,6 +174,7 @@ class Scenario:
         rtol: Optional[float] = None,
         atol: Optional[float] = None,
         sample_time: Optional[float] = None,
+        method: Optional[Literal["auto", "explicit", "imex"]] = None,
         noise: Optional[Dict[str, Any]] = None,
         truth: Optional[Plant] = None,
         **design: Any,
@@ -196,7 +197,7 @@ class Scenario:
     @property
     def disturbance(self) -> List[Dict[str, Any]]: ...
     @property
-    def simulation(self) -> Dict[str, Optional[float]]: ...
+    def simulation(self) -> Dict[str, Union[float, str, None]]: ...
     @property
     def noise(self) -> Optional[Dict[str, Any]]: ...
 
@@ -288,6 +289,7 @@ def simulate(
     rtol: Optional[float] = None,
     atol: Optional[float] = None,
     sample_time: Optional[float] = None,
+    method: Optional[Literal["auto", "explicit", "imex"]] = None,
     max_steps: Optional[int] = None,
     states: bool = False,
     check: bool = True,

@@ -23,7 +23,7 @@ use thiserror::Error;
 
 use crate::design::{Design, DesignError, DesignSpec, ObserverChoice, RegressorScaling};
 use crate::plant::{Plant, PlantError};
-use crate::settings::{self, KeyError};
+use crate::settings::{self, KeyError, Method};
 use crate::signal::{check_signals, Component, Harmonic, Signal};
 use exosystem::Exosystem;
 pub use names::{check_names, SignalNames};
@@ -80,6 +80,8 @@ pub struct Simulation {
     pub atol: f64,
     /// Sampling period of the discrete controller; `None` for the continuous-time controller.
     pub sample_time: Option<f64>,
+    /// The continuous loop's integrator (`method = "auto" | "explicit" | "imex"`; absent: auto).
+    pub method: Method,
 }
 
 impl Default for Simulation {
@@ -90,6 +92,7 @@ impl Default for Simulation {
             rtol: settings::DEFAULT_TOLERANCE,
             atol: settings::DEFAULT_TOLERANCE,
             sample_time: None,
+            method: Method::Auto,
         }
     }
 }
@@ -140,7 +143,7 @@ const DESIGN_KEYS: &[&str] = &[
 const SIGNAL_KEYS: &[&str] = &["components"];
 const COMPONENT_KEYS: &[&str] = &["bias", "harmonics"];
 const HARMONIC_KEYS: &[&str] = &["amplitude", "frequency", "phase"];
-const SIMULATION_KEYS: &[&str] = &["t_end", "output_step", "rtol", "atol", "sample_time"];
+const SIMULATION_KEYS: &[&str] = &["t_end", "output_step", "rtol", "atol", "sample_time", "method"];
 const NOISE_KEYS: &[&str] = &["std", "seed", "bandwidth"];
 
 impl FromStr for Scenario {
@@ -618,7 +621,10 @@ fn simulation(v: Value) -> Result<Simulation, ScenarioError> {
     }
     let (rtol, atol) = (number("rtol")?.unwrap_or(default.rtol), number("atol")?.unwrap_or(default.atol));
     settings::check_tolerances(rtol, atol)?;
-    Ok(Simulation { t_end, output_step, rtol, atol, sample_time })
+    let method = t
+        .get("method", |v| Method::from_name(&v.string()?).map_err(|message| err(v.key, message)))?
+        .unwrap_or_default();
+    Ok(Simulation { t_end, output_step, rtol, atol, sample_time, method })
 }
 
 /// `[noise]`: per-output standard deviations and a seed.

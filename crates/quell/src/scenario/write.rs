@@ -9,6 +9,7 @@ use toml::{Table, Value};
 use super::{Noise, Scenario, Simulation};
 use crate::design::{DesignSpec, ObserverChoice};
 use crate::plant::Plant;
+use crate::settings::Method;
 use crate::signal::Signal;
 
 impl Scenario {
@@ -166,6 +167,10 @@ fn simulation_table(s: &Simulation) -> Table {
     if let Some(T) = s.sample_time {
         t.insert("sample_time".into(), Value::Float(T));
     }
+    // Absent means auto, so files that never chose a method are written as they were.
+    if s.method != Method::Auto {
+        t.insert("method".into(), Value::String(s.method.name().into()));
+    }
     t
 }
 
@@ -183,6 +188,24 @@ fn noise_table(n: &Noise) -> Table {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_method_round_trips_and_auto_is_written_as_no_key() {
+        let paper = Scenario::from_toml(super::super::PAPER_EXAMPLE).unwrap();
+        assert!(!paper.to_toml().contains("method"), "an absent method stays absent");
+        for method in [Method::Auto, Method::Explicit, Method::Implicit] {
+            let mut s = paper.clone();
+            s.simulation.method = method;
+            let text = s.to_toml();
+            let back = Scenario::from_toml(&text).unwrap();
+            assert_eq!(back.simulation, s.simulation, "{text}");
+            assert_eq!(back.to_toml(), text);
+            let written = format!("method = \"{}\"", method.name());
+            assert_eq!(text.contains(&written), method != Method::Auto, "{text}");
+        }
+        let explicit = super::super::PAPER_EXAMPLE.replacen("atol = 1e-9\n", "atol = 1e-9\nmethod = \"auto\"\n", 1);
+        assert_eq!(Scenario::from_toml(&explicit).unwrap().to_toml(), paper.to_toml(), "\"auto\" is the default");
+    }
 
     #[test]
     fn every_example_round_trips() {

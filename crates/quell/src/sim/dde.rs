@@ -166,18 +166,8 @@ pub fn record_bytes(n_delayed: usize) -> usize {
     (NCOEF * n_delayed + 2 + (NCOEF - 1)) * std::mem::size_of::<f64>()
 }
 
-/// The integrator of the steps.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Method {
-    /// DOP853, switching to [`Method::Implicit`] while the system's [`DelaySystem::implicit`] block
-    /// limits DOP853's step by stability, and back when it no longer would.
-    #[default]
-    Auto,
-    /// DOP853 throughout.
-    Explicit,
-    /// ARK4(3)6L\[2\]SA throughout: explicit in every component but [`DelaySystem::implicit`]'s.
-    Implicit,
-}
+/// The integrator of the steps: a run's `simulation.method` ([`crate::settings::Method`]).
+pub use crate::settings::Method;
 
 /// Solver statistics (as a run's summary.json writes them: the names after `rename`, the method's
 /// figures left out).

@@ -8,7 +8,7 @@ use std::ops::ControlFlow;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::divergence::Watched;
+use super::divergence::{Peaks, Watched};
 use super::noise::Gaussian;
 use super::result::{Outcome, RunStats, Sample, SimResult};
 use super::{check_run, Run, SimError};
@@ -105,7 +105,7 @@ struct ActuatorLine {
 
 impl ActuatorLine {
     fn new(actuator: &Actuator, T: f64) -> Result<Self, KeyError> {
-        let d = whole_samples("truth.actuator_delays", &actuator.delays, T)?;
+        let d = delay_samples("truth.actuator_delays", &actuator.delays, T)?;
         let m = d.len();
         let len = d.iter().max().map_or(1, |x| x + 1);
         Ok(ActuatorLine {
@@ -132,7 +132,7 @@ impl ActuatorLine {
 }
 
 /// Each delay as a whole number of samples of T, or an error on `key[i]`.
-fn whole_samples(key: &str, delays: &[f64], T: f64) -> Result<Vec<usize>, KeyError> {
+fn delay_samples(key: &str, delays: &[f64], T: f64) -> Result<Vec<usize>, KeyError> {
     let whole = |tau: f64| discrete::whole(tau, T).then(|| discrete::whole_multiple(tau, T)).flatten();
     (delays.iter().enumerate())
         .map(|(i, &tau)| {
@@ -167,7 +167,7 @@ impl TrueInput {
             return Ok(None);
         }
         let (d, d_true) =
-            (whole_samples("plant.delays", &p.delays, T)?, whole_samples("truth.delays", &truth.delays, T)?);
+            (delay_samples("plant.delays", &p.delays, T)?, delay_samples("truth.delays", &truth.delays, T)?);
         let m = d.len();
         let len = d.iter().chain(&d_true).max().map_or(1, |x| x + 1);
         Ok(Some(TrueInput {
@@ -227,6 +227,137 @@ impl ExactPlant {
     }
 }
 
+/// The plant's side of the sampled-data loop: the plant and the disturbance sampled exactly
+/// ([`ExactPlant`]), the true delays, the actuator and the measurement noise, with the signals of
+/// one sample.
+struct PlantSide {
+    /// The plant's order: [x; w] holds x first.
+    n: usize,
+    Phi: DMatrix<f64>,
+    Gamma: DMatrix<f64>,
+    Cy: DMatrix<f64>,
+    /// [x; w] at this sample, and at the next.
+    s: DVector<f64>,
+    s_next: DVector<f64>,
+    shift: Option<TrueInput>,
+    actuator: Option<ActuatorLine>,
+    noise: Option<Noise>,
+    /// y(k), its measurement y(k) + n(t), g(k) and the plant input u_f(k).
+    y: Vec<f64>,
+    y_meas: Vec<f64>,
+    g: Vec<f64>,
+    u_f: Vec<f64>,
+}
+
+impl PlantSide {
+    fn new(run: &Run<'_>, T: f64) -> Result<Self, KeyError> {
+        let (truth, settings) = (run.truth, &run.settings);
+        let shift = TrueInput::new(run.design, truth, T)?;
+        let actuator = match settings.actuator.as_ref().filter(|a| !a.is_ideal()) {
+            Some(a) => Some(ActuatorLine::new(a, T)?),
+            None => None,
+        };
+        let ExactPlant { Phi, Gamma, Cy, s0 } = ExactPlant::new(truth, run.disturbance, T);
+        let m = truth.m();
+        let noise = settings.noise.as_ref().map(|nz| Noise::new(nz, m));
+        let (y, y_meas, g, u_f) = (vec![0.0; m], vec![0.0; m], vec![0.0; m], vec![0.0; m]);
+        Ok(PlantSide {
+            n: truth.n(),
+            Phi,
+            Gamma,
+            Cy,
+            s_next: s0.clone(),
+            s: s0,
+            shift,
+            actuator,
+            noise,
+            y,
+            y_meas,
+            g,
+            u_f,
+        })
+    }
+
+    /// y(k), g(k) and the measurement y(k) + n(t) at t = kT.
+    fn measure(&mut self, t: f64, reference: &Signal) {
+        mat_vec(&self.Cy, self.s.as_slice(), &mut self.y, false);
+        reference.eval_into_unchecked(t, &mut self.g);
+        self.y_meas.copy_from_slice(&self.y);
+        if let Some(noise) = self.noise.as_mut() {
+            noise.add(t, &mut self.y_meas);
+        }
+    }
+
+    /// Takes the controller's output `v`: the plant input u_f(k) at the design's delays.
+    fn hold(&mut self, v: &[f64]) {
+        match self.shift.as_mut() {
+            None => self.u_f.copy_from_slice(v),
+            Some(sh) => sh.u_f.copy_from_slice(v),
+        }
+    }
+
+    /// The plant input u_f(k) from the held output and the step's command `u` (25): moved to the
+    /// true delays, then through the actuator.
+    fn input(&mut self, k: usize, u: &[f64]) {
+        if let Some(sh) = self.shift.as_mut() {
+            self.u_f.copy_from_slice(sh.apply(k, u));
+        }
+        if let Some(a) = self.actuator.as_mut() {
+            let applied = a.apply(k, &self.u_f);
+            self.u_f.copy_from_slice(applied);
+        }
+    }
+
+    /// Records sample k at t, unless the loop diverged there or is stopped: `Some` ends the run.
+    fn record<C: SampledController + ?Sized>(
+        &self,
+        t: f64,
+        ctrl: &C,
+        x_hat: Option<&[f64]>,
+        bounds: &Peaks,
+        result: &mut SimResult,
+        on_progress: &mut impl FnMut(f64) -> ControlFlow<()>,
+    ) -> Option<Outcome> {
+        let watched = Watched { x: &self.s.as_slice()[..self.n], ..ctrl.watched() };
+        if let Some(diverged) = watched.beyond(t, bounds) {
+            return Some(diverged);
+        }
+        result.peaks.record(&watched);
+        let states = x_hat.map(|x_hat| (watched.x, x_hat));
+        result.push(&Sample { t, y: &self.y, g: &self.g, u: ctrl.command(), u_f: &self.u_f, eta: watched.eta, states });
+        if let Some(a) = &self.actuator {
+            result.count_limited(a.limited.iter().copied());
+        }
+        on_progress(t).is_break().then_some(Outcome::Interrupted { t })
+    }
+
+    /// s ← Φ s + Γ u_f: the next sample's state.
+    fn advance(&mut self) {
+        mat_vec(&self.Phi, self.s.as_slice(), self.s_next.as_mut_slice(), false);
+        mat_vec(&self.Gamma, &self.u_f, self.s_next.as_mut_slice(), true);
+        std::mem::swap(&mut self.s, &mut self.s_next);
+    }
+}
+
+/// One controller step at t. A measurement beyond the controller's bound, or a state gone
+/// non-finite, ends the run as diverged (as the next record's check would have), not as an error.
+fn step_controller<'c, C: SampledController + ?Sized>(
+    ctrl: &'c mut C,
+    y: &[f64],
+    g: &[f64],
+    t: f64,
+) -> Result<Result<&'c [f64], Outcome>, SimError> {
+    match ctrl.step(y, g) {
+        Err(ControllerError::InputOutOfRange { name, index, value }) => {
+            Ok(Err(Outcome::Diverged { t, signal: format!("{name}[{}] (controller input)", index + 1), value }))
+        }
+        Err(ControllerError::StateNotFinite { value }) => {
+            Ok(Err(Outcome::Diverged { t, signal: "u_f (controller output)".to_string(), value }))
+        }
+        other => Ok(Ok(other?)),
+    }
+}
+
 /// The loop itself, on checked settings: `T` the sample time, `every` controller steps per
 /// recorded sample.
 fn sampled_loop<C: SampledController + ?Sized>(
@@ -235,84 +366,39 @@ fn sampled_loop<C: SampledController + ?Sized>(
     (T, every): (f64, usize),
     mut on_progress: impl FnMut(f64) -> ControlFlow<()>,
 ) -> Result<SimResult, SimError> {
-    let (design, truth, reference, settings) = (run.design, run.truth, run.reference, &run.settings);
-    let mut shift = TrueInput::new(design, truth, T)?;
-    let mut actuator = match settings.actuator.as_ref().filter(|a| !a.is_ideal()) {
-        Some(a) => Some(ActuatorLine::new(a, T)?),
-        None => None,
-    };
-    let (n, m) = (truth.n(), truth.m());
-    let ExactPlant { Phi, Gamma, Cy, s0: mut s } = ExactPlant::new(truth, run.disturbance, T);
-    let mut s_next = s.clone();
-    let (mut y, mut y_meas, mut g) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
-    let mut noise = settings.noise.as_ref().map(|nz| Noise::new(nz, m));
+    let settings = &run.settings;
+    let mut plant = PlantSide::new(run, T)?;
+    let n = run.truth.n();
     let stats = |controller_steps| RunStats::Sampled { controller_steps, sample_time: T };
-    let mut result = SimResult::new(m, design.q(), n, stats(0));
-    // u_f(k) and, when states are recorded, x̂(k) (read before the step moves it to x̂(k + 1)).
-    let (mut u_f, mut x_hat) = (vec![0.0; m], vec![0.0; n]);
-    let steps = discrete::whole_samples(settings.t_end, T);
+    let mut result = SimResult::new(run.truth.m(), run.design.q(), n, stats(0));
+    // x̂(k) when states are recorded (read before the step moves it to x̂(k + 1)).
+    let mut x_hat = vec![0.0; n];
     let bounds = settings.bounds();
     let mut outcome = Outcome::Completed;
     let mut taken = 0;
-    for k in 0..=steps {
+    for k in 0..=discrete::whole_samples(settings.t_end, T) {
         let t = k as f64 * T;
-        mat_vec(&Cy, s.as_slice(), &mut y, false);
-        reference.eval_into_unchecked(t, &mut g);
-        y_meas.copy_from_slice(&y);
-        if let Some(noise) = noise.as_mut() {
-            noise.add(t, &mut y_meas);
-        }
+        plant.measure(t, run.reference);
         if settings.record_states && k % every == 0 {
             x_hat.copy_from_slice(ctrl.watched().x_hat);
         }
-        // A measurement beyond the controller's bound, or a state gone non-finite, ends the run
-        // as diverged (as the next record's check would have), not as an error.
-        let stepped = match ctrl.step(&y_meas, &g) {
-            Err(ControllerError::InputOutOfRange { name, index, value }) => {
-                Err(Outcome::Diverged { t, signal: format!("{name}[{}] (controller input)", index + 1), value })
-            }
-            Err(ControllerError::StateNotFinite { value }) => {
-                Err(Outcome::Diverged { t, signal: "u_f (controller output)".to_string(), value })
-            }
-            other => Ok(other?),
-        };
-        match (stepped, shift.as_mut()) {
-            (Err(diverged), _) => {
+        match step_controller(ctrl, &plant.y_meas, &plant.g, t)? {
+            Ok(v) => plant.hold(v),
+            Err(diverged) => {
                 outcome = diverged;
                 break;
             }
-            (Ok(v), None) => u_f.copy_from_slice(v),
-            (Ok(v), Some(sh)) => {
-                sh.u_f.copy_from_slice(v);
-                u_f.copy_from_slice(sh.apply(k, ctrl.command()));
-            }
         }
-        if let Some(a) = actuator.as_mut() {
-            let applied = a.apply(k, &u_f);
-            u_f.copy_from_slice(applied);
-        }
+        plant.input(k, ctrl.command());
         taken += 1;
-        mat_vec(&Phi, s.as_slice(), s_next.as_mut_slice(), false);
-        mat_vec(&Gamma, &u_f, s_next.as_mut_slice(), true);
         if k % every == 0 {
-            let watched = Watched { x: &s.as_slice()[..n], ..ctrl.watched() };
-            if let Some(diverged) = watched.beyond(t, &bounds) {
-                outcome = diverged;
-                break;
-            }
-            result.peaks.record(&watched);
-            let states = settings.record_states.then_some((watched.x, &x_hat[..]));
-            let (u, eta) = (ctrl.command(), watched.eta);
-            result.push(&Sample { t, y: &y, g: &g, u, u_f: &u_f, eta, states });
-            if let Some(a) = &actuator {
-                result.count_limited(a.limited.iter().copied());
-            }
-            if on_progress(t).is_break() {
-                outcome = Outcome::Interrupted { t };
+            let x_hat = settings.record_states.then_some(&x_hat[..]);
+            if let Some(end) = plant.record(t, ctrl, x_hat, &bounds, &mut result, &mut on_progress) {
+                outcome = end;
                 break;
             }
         }
-        std::mem::swap(&mut s, &mut s_next);
+        plant.advance();
     }
     result.stats = stats(taken);
     result.outcome = Some(outcome);

@@ -15,7 +15,7 @@ impl RunSettings {
         let sim = &s.simulation;
         let mode = match sim.sample_time {
             Some(sample_time) => Loop::Sampled { sample_time },
-            None => Loop::Continuous(Integrator::new(sim.rtol, sim.atol)),
+            None => Loop::Continuous(Integrator { method: sim.method, ..Integrator::new(sim.rtol, sim.atol) }),
         };
         RunSettings {
             noise: s.noise.clone(),

@@ -537,6 +537,12 @@ fn read_grid(doc: &toml::Table, base: &toml::Table, source: &str) -> Result<Vec<
     for (key, values) in table("grid", g)? {
         let at = format!("grid.\"{key}\"");
         let path = KeyPath::parse(key).map_err(|m| err(&at, m))?;
+        if path.to_string() == "simulation.method" {
+            return Err(err(
+                &at,
+                "the integrator is not a grid key: grid values are numbers, and runs.csv compares designs and plants, not solvers; run the study once per method with [simulation] method = \"explicit\" or \"imex\"",
+            ));
+        }
         let values = match values {
             toml::Value::Array(v) if v.is_empty() => return Err(err(
                 &at,

@@ -68,6 +68,8 @@ fn study_mistakes_name_their_key() {
         ("[monte_carlo]\nruns = 2\n\"plant.E\" = { relative = 0.1 }", "monte_carlo.\"plant.E\": plant.E is not a value of the scenario (plant has no E)"),
         ("[simulation]\nt_end = -1.0", "simulation.t_end: expected a final time > 0, found -1"),
         ("[simulation]\nsteps = 3", "simulation.steps: unknown key; valid keys in [simulation]"),
+        ("[simulation]\nmethod = \"imx\"", "simulation.method: expected \"auto\" (DOP853"),
+        ("[grid]\n\"simulation.method\" = [\"auto\", \"imex\"]", "grid.\"simulation.method\": the integrator is not a grid key"),
         ("max_steps = 0", "max_steps: expected a step budget per run (an integer ≥ 1), found 0"),
         ("[runaway]\npeak = 0.5", "runaway.peak: expected a factor ≥ 1 (or inf to turn the rule off), found 0.5"),
         ("[runaway]\nsteps = 0", "runaway.steps: expected a factor ≥ 1 (or inf to turn the rule off), found 0"),
@@ -90,6 +92,18 @@ fn study_mistakes_name_their_key() {
         let got = error(text);
         assert!(got.starts_with(expected), "study:\n{text}\nexpected: {expected}\ngot:      {got}");
     }
+}
+
+/// A study's `[simulation]` method reaches every run (and its nominal run): the paper's example,
+/// not stiff, is integrated by the implicit–explicit pair in every step when it says "imex".
+#[test]
+fn the_study_simulation_method_applies_to_its_runs() {
+    let s = study("[simulation]\nt_end = 2.0\nmethod = \"imex\"\n[grid]\n\"design.beta\" = [1.0, 2.0]\n").unwrap();
+    let spec = s.spec_with_nominal(1).unwrap();
+    assert_eq!(spec.scenario["simulation"]["method"].as_str(), Some("imex"));
+    let r = spec.simulate().unwrap();
+    let crate::sim::RunStats::Continuous(stats) = r.stats else { panic!("{:?}", r.stats) };
+    assert!(stats.steps > 0 && stats.implicit_steps == stats.steps, "{stats:?}");
 }
 
 #[test]

@@ -1,0 +1,71 @@
+"""`method=`: the continuous loop's integrator from Python (`quell.simulate`, `quell.Scenario`,
+`quell.Study(simulation=)`), checked against the independent solver's points of the paper's example
+(crates/quell/tests/data/, accurate to about 1e-8) and against each other."""
+
+import numpy as np
+import pytest
+
+import quell
+
+
+@pytest.mark.parametrize("method", ["explicit", "imex"])
+def test_each_method_matches_the_independent_reference(method, reference_points):
+    # Both integrate to rtol = atol = 1e-9; the reference bound of the Rust tests is 1e-6.
+    r = quell.simulate(quell.paper_example(), method=method)
+    k = np.rint(reference_points[:, 0] / 0.1).astype(int)
+    np.testing.assert_allclose(r.y[k], reference_points[:, 1:3], rtol=0, atol=1e-6)
+    np.testing.assert_allclose(r.u[k], reference_points[:, 3:5], rtol=0, atol=1e-6)
+
+
+def test_explicit_and_imex_agree_and_take_their_own_steps():
+    # Not stiff at the paper's μ: DOP853 (order 8) and ARK4(3)6L[2]SA (order 4) at 1e-9 agree to
+    # 1e-6 of the peak output (each within ~100·rtol·peak of the exact solution).
+    s = quell.paper_example()
+    explicit, imex = quell.simulate(s, t_end=20.0, method="explicit"), quell.simulate(s, t_end=20.0, method="imex")
+    assert np.abs(explicit.y - imex.y).max() < 1e-6 * np.abs(explicit.y).max()
+    assert explicit.stats["steps"] != imex.stats["steps"]
+    # "auto" (the default) is DOP853 on a loop that is not stiff: the same result bit for bit.
+    assert quell.simulate(s, t_end=20.0) == explicit == quell.simulate(s, t_end=20.0, method="auto")
+
+
+def test_scenario_method_round_trips_through_toml():
+    p = quell.paper_example()
+    s = quell.Scenario(p.plant, p.reference, p.disturbance, t_end=2.0, method="imex", **p.design().choices)
+    assert s.simulation["method"] == "imex"
+    assert 'method = "imex"' in s.to_toml()
+    back = quell.Scenario.from_toml(s.to_toml())
+    assert back.simulation == s.simulation
+    assert quell.simulate(back) == quell.simulate(s, method="imex")
+    assert "method" not in p.to_toml() and p.simulation["method"] == "auto"
+
+
+def test_study_simulation_method_applies_to_every_run():
+    study = quell.Study(quell.paper_example(), simulation={"t_end": 2.0, "method": "imex"})
+    assert study.spec(0).simulate() == quell.simulate(quell.paper_example(), t_end=2.0, method="imex")
+    with pytest.raises(quell.ScenarioError, match=r'^simulation\["method"\]: expected "auto".* found "imx" '
+                                                   r'\(did you mean "imex"\?\)'):
+        quell.Study(quell.paper_example(), simulation={"method": "imx"})
+
+
+@pytest.mark.parametrize("where", ["simulate", "Scenario"])
+def test_bad_method_is_a_type_error_or_a_scenario_error_naming_the_argument(where):
+    p = quell.paper_example()
+
+    def call(method):
+        if where == "simulate":
+            return quell.simulate(p, t_end=1.0, method=method)
+        return quell.Scenario(p.plant, p.reference, p.disturbance, method=method, **p.design().choices)
+
+    with pytest.raises(TypeError, match=r'^method: expected a str: "auto", "explicit" or "imex", found a int'):
+        call(1)
+    with pytest.raises(quell.ScenarioError, match=r'^method: expected "auto" \(DOP853.*found "IMEX" '
+                                                   r'\(did you mean "imex"\?\)') as info:
+        call("IMEX")
+    assert isinstance(info.value, quell.QuellError) and info.value.key == "simulation.method"
+    with pytest.raises(quell.ScenarioError, match='found "implicit" \\(did you mean "imex"\\?\\)'):
+        call("implicit")
+
+
+def test_method_is_refused_for_a_sampled_data_run():
+    with pytest.raises(quell.ScenarioError, match=r"^method: the integrator applies to the continuous loop only"):
+        quell.simulate(quell.paper_example(), t_end=1.0, sample_time=1e-3, method="imex")
