@@ -1,6 +1,7 @@
 //! The continuous loop with a stiff adaptive law (33): the automatic switch to the implicit
 //! ARK4(3)6L[2]SA against DOP853 alone where both run, on the paper's example with μ scaled up and
-//! on the quadruple-tank process of Johansson (2000) in its own units (`tests/data/quadruple-tank.toml`).
+//! on the quadruple-tank process of Johansson (2000) in its own units (`tests/data/quadruple-tank.toml`)
+//! and on a supply vessel in SI units (`tests/data/supply-vessel.toml`).
 
 use std::ops::ControlFlow;
 
@@ -9,9 +10,15 @@ use quell::sim::{Integrator, Loop, Method, Outcome, Run, RunSettings, RunStats, 
 use quell::Design;
 
 const QUADRUPLE_TANK: &str = include_str!("data/quadruple-tank.toml");
+const SUPPLY_VESSEL: &str = include_str!("data/supply-vessel.toml");
 
 /// The run of `toml`'s scenario with every μ_i times `factor`, to its own t_end, at `tol`.
 fn run(toml: &str, factor: f64, tol: f64, method: Method) -> SimResult {
+    run_to(toml, factor, tol, method, Scenario::from_toml(toml).unwrap().simulation.t_end)
+}
+
+/// [`run`] to `t_end`, with outputs at the scenario's output step.
+fn run_to(toml: &str, factor: f64, tol: f64, method: Method, t_end: f64) -> SimResult {
     let s = Scenario::from_toml(toml).unwrap();
     let mut spec = s.design.clone();
     spec.mu.iter_mut().for_each(|mu| *mu *= factor);
@@ -19,7 +26,7 @@ fn run(toml: &str, factor: f64, tol: f64, method: Method) -> SimResult {
     // DOP853 alone at μ × 1000 needs about 144k steps, beyond the default budget (which leaves the
     // adaptation rate out): the reference runs get a budget of their own.
     let integrator = Integrator { method, max_steps: Some(2_000_000), ..Integrator::new(tol, tol) };
-    let settings = RunSettings::new(s.simulation.t_end, s.simulation.output_step, Loop::Continuous(integrator));
+    let settings = RunSettings::new(t_end, s.simulation.output_step, Loop::Continuous(integrator));
     let r = Run::new(&d, &s.reference, &s.disturbance, settings).simulate(|_| ControlFlow::Continue(())).unwrap();
     assert_eq!(r.outcome, Some(Outcome::Completed), "μ × {factor}, {method:?}");
     r
@@ -128,4 +135,54 @@ fn normalized_regressor_unstiffens_the_quadruple_tank() {
     assert!(xi_peak <= 2.0 * signal_peak, "max |ξ̂| = {xi_peak}");
     assert!(adaptive <= 2 * frozen, "{adaptive} steps with adaptation, {frozen} without");
     assert_eq!(s.design().unwrap().regressor_scaling(), quell::design::RegressorScaling::Normalized);
+}
+
+/// μ_s, the factor of the scenario's μ at which the loop turns stiff by the design report's pace
+/// estimate: the fastest channel's adaptation rate μ_i λ_max(Ω̄_i) reaches
+/// [`quell::diagnostics::STIFF_RATIO`] (100) times the loop's fastest other rate ρ.
+fn stiff_factor(toml: &str) -> f64 {
+    let s = Scenario::from_toml(toml).unwrap();
+    let d = s.design().unwrap();
+    let e = quell::diagnostics::estimate(&d, s.true_plant(), &s.reference, &s.disturbance, s.simulation.t_end);
+    let fastest = e.iter().map(|c| c.adaptation_rate).fold(0.0, f64::max);
+    quell::diagnostics::STIFF_RATIO * e[0].loop_rate / fastest
+}
+
+/// The target: as μ grows 1000× beyond μ_s ([`stiff_factor`]), the automatic method's steps
+/// grow at most 3×, on the paper's example (100 s at rtol = atol = 1e-9; μ_s = 105 × the paper's μ),
+/// the quadruple tank in the paper's regressor form (600 s at 1e-6; μ_s = 7.4e-6 × its μ = 1) and the
+/// supply vessel in SI units (600 s at 1e-7; μ_s = 1.6 × 1e-11). Measured: 13,507 → 36,809 steps
+/// (2.73×), 1,167 → 2,153 (1.84×), 7,815 → 9,059 (1.16×); DOP853 alone at 1000 μ_s would need
+/// about μλ_max t / 6 ≈ 1.5e7, 1.4e5 and 1.6e7 steps.
+///
+/// And the results are those of DOP853 alone at rtol = atol = 1e-11, an independent integrator of
+/// order 8 run far inside its stability bound: over each whole run at μ_s, over a short horizon at
+/// 1000 μ_s (where DOP853 needs a step of 6/(μλ_max): 2 s of the paper's example, 20 s of the vessel,
+/// 100 s of the tank, covering each loop's initial transient). Bound: 100 × the automatic run's
+/// tolerance of the peak output. A run's global error is its tolerance times the growth of local
+/// errors along the loop (measured: paper 6.9e-9 and 3.3e-10 at 1e-9, tank 1.4e-5 and 2.2e-6 at
+/// 1e-6, vessel 2.9e-7 and 2.7e-8 at 1e-7).
+#[test]
+fn steps_grow_at_most_3x_as_mu_grows_1000x_beyond_stiff() {
+    // (scenario, tolerance, short horizon at 1000 μ_s)
+    for (name, toml, tol, short) in [
+        ("paper", PAPER_EXAMPLE, 1e-9, 2.0),
+        ("quadruple tank", QUADRUPLE_TANK, 1e-6, 100.0),
+        ("supply vessel", SUPPLY_VESSEL, 1e-7, 20.0),
+    ] {
+        let mu_s = stiff_factor(toml);
+        let at_s = run(toml, mu_s, tol, Method::Auto);
+        let beyond = run(toml, 1e3 * mu_s, tol, Method::Auto);
+        let (s0, s3) = (at_s.stats.steps(), beyond.stats.steps());
+        println!("{name}: μ_s = {mu_s:.3e} × μ; steps {s0} at μ_s, {s3} at 1000 μ_s ({:.2}×)", s3 as f64 / s0 as f64);
+        assert!(s3 <= 3 * s0, "{name}: {s0} steps at μ_s, {s3} at 1000 μ_s");
+        let reference = run(toml, mu_s, 1e-11, Method::Explicit);
+        let dev = deviation(&at_s, &reference);
+        let t_end = Scenario::from_toml(toml).unwrap().simulation.t_end;
+        let short_auto = run_to(toml, 1e3 * mu_s, tol, Method::Auto, short);
+        let short_reference = run_to(toml, 1e3 * mu_s, 1e-11, Method::Explicit, short);
+        let dev_3 = deviation(&short_auto, &short_reference);
+        println!("{name}: {dev:.2e} of the peak at μ_s over {t_end} s, {dev_3:.2e} at 1000 μ_s over {short} s");
+        assert!(dev < 100.0 * tol && dev_3 < 100.0 * tol, "{name}: {dev:e}, {dev_3:e} of the peak");
+    }
 }
