@@ -18,8 +18,11 @@ fn hostile_export_flags_exit_0_or_2_naming_the_flag() {
         (state >> 33) as usize % n
     };
     for case in 0..40 {
-        let (t, p, q) =
-            (SAMPLE_TIMES[pick(SAMPLE_TIMES.len())], PREFIXES[pick(PREFIXES.len())], PRECISIONS[pick(PRECISIONS.len())]);
+        let (t, p, q) = (
+            SAMPLE_TIMES[pick(SAMPLE_TIMES.len())],
+            PREFIXES[pick(PREFIXES.len())],
+            PRECISIONS[pick(PRECISIONS.len())],
+        );
         let long = "p".repeat(250);
         let prefix = if pick(8) == 0 { long.as_str() } else { p };
         let out = dir.path().join(format!("out{case}"));
