@@ -22,6 +22,18 @@ pub fn interruptible<R: Send>(py: Python<'_>, work: impl FnOnce() -> R + Send) -
 /// handlers every [`SIGNAL_CHECK`]; a KeyboardInterrupt sets `stop`, waits for `work` to notice it
 /// and is raised. For calls that take their stop flag as an argument (a sweep's `SweepOptions`).
 pub fn interruptible_with<R: Send>(py: Python<'_>, work: impl FnOnce(Arc<AtomicBool>) -> R + Send) -> PyResult<R> {
+    match interruptible_keeping(py, work)? {
+        (_, Some(e)) => Err(e),
+        (result, None) => Ok(result),
+    }
+}
+
+/// [`interruptible_with`] that keeps what `work` returned when stopped (a tuning's points so far),
+/// beside the KeyboardInterrupt to raise.
+pub fn interruptible_keeping<R: Send>(
+    py: Python<'_>,
+    work: impl FnOnce(Arc<AtomicBool>) -> R + Send,
+) -> PyResult<(R, Option<PyErr>)> {
     let stop = Arc::new(AtomicBool::new(false));
     let mut interrupt = None;
     let result = py.detach(|| {
@@ -40,8 +52,11 @@ pub fn interruptible_with<R: Send>(py: Python<'_>, work: impl FnOnce(Arc<AtomicB
             worker.join()
         })
     });
-    if let Some(e) = interrupt {
-        return Err(e);
+    match result {
+        Ok(r) => Ok((r, interrupt)),
+        Err(_) => {
+            Err(interrupt
+                .unwrap_or_else(|| pyo3::exceptions::PyRuntimeError::new_err("the call's worker thread panicked")))
+        }
     }
-    result.map_err(|_| pyo3::exceptions::PyRuntimeError::new_err("the call's worker thread panicked"))
 }

@@ -16,6 +16,7 @@ mod plant;
 mod scenario;
 mod simulate;
 mod study;
+mod tune;
 
 use pyo3::prelude::*;
 
@@ -39,5 +40,6 @@ fn _quell(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(study::sweep_runs, m)?)?;
     m.add_function(wrap_pyfunction!(study::run_one, m)?)?;
     m.add_function(wrap_pyfunction!(export::export, m)?)?;
+    m.add_function(wrap_pyfunction!(tune::tune, m)?)?;
     Ok(())
 }

@@ -4,6 +4,7 @@
 //! a cluster.
 
 use std::path::PathBuf;
+use std::sync::atomic::Ordering::Relaxed;
 use std::sync::Arc;
 
 use pyo3::exceptions::{PyIndexError, PyTypeError};
@@ -70,8 +71,12 @@ fn study_error(py: Python<'_>, e: &study::StudyError) -> PyErr {
 const DICT_ARGUMENTS: [&str; 5] = ["grid", "monte_carlo", "settle", "runaway", "simulation"];
 
 /// A study key as the Python arguments spell it: `grid."design.mu[0]"[1]` is
-/// `grid["design.mu[0]"][1]`, `monte_carlo.runs` is `monte_carlo["runs"]`.
+/// `grid["design.mu[0]"][1]`, `monte_carlo.runs` is `monte_carlo["runs"]`, and `tune.mu[0]` is
+/// `mu[0]` (the keywords of `quell.tune`).
 pub fn python_key(key: &str) -> String {
+    if let Some(keyword) = key.strip_prefix("tune.") {
+        return keyword.to_string();
+    }
     match key.split_once('.').filter(|(s, _)| DICT_ARGUMENTS.contains(s)) {
         Some((section, rest)) => format!("{section}{}", subscripts(&format!(".{rest}"))),
         None => key.to_string(),
@@ -79,7 +84,7 @@ pub fn python_key(key: &str) -> String {
 }
 
 /// A study error of `quell.Study(...)`: the message names the Python argument, `.key` the study key.
-fn argument_error(py: Python<'_>, e: &study::StudyError) -> PyErr {
+pub fn argument_error(py: Python<'_>, e: &study::StudyError) -> PyErr {
     let err = Kind::Scenario.err(py, format!("{}: {}", python_key(&e.key), e.message));
     let _ = err.value(py).setattr("key", e.key.clone());
     err
@@ -131,6 +136,42 @@ fn drawn_keys(study: &study::Study) -> Vec<String> {
     study.monte_carlo.as_ref().map_or_else(Vec::new, |mc| mc.perturbations.iter().map(|p| p.key.clone()).collect())
 }
 
+/// A study document from a Scenario and the dict arguments of `quell.Study(...)` (grid,
+/// monte_carlo, settle, runaway, simulation, each None for none) and `max_steps`.
+pub fn study_document(
+    scenario: &Bound<'_, PyAny>,
+    dicts: [Option<&Bound<'_, PyAny>>; 5],
+    max_steps: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Table> {
+    let s = scenario.cast::<PyScenario>().map_err(|_| {
+        PyTypeError::new_err(format!("scenario: expected a quell.Scenario, found a {}", type_name(scenario)))
+    })?;
+    let mut doc = Table::new();
+    doc.insert("scenario".into(), Value::Table(s.get().inner.to_table()));
+    let what = [
+        "scenario key path: list of values",
+        "runs, seed, and scenario key path: {law: spread}",
+        "relative, absolute",
+        "peak, steps",
+        "overrides of the scenario's simulation settings",
+    ];
+    for ((name, v), what) in DICT_ARGUMENTS.iter().zip(dicts).zip(what) {
+        if let Some(v) = v.filter(|v| !v.is_none()) {
+            doc.insert(name.to_string(), Value::Table(dict_arg(v, name, what)?));
+        }
+    }
+    if let Some(n) = max_steps.filter(|v| !v.is_none()) {
+        if n.is_instance_of::<pyo3::types::PyBool>() || !n.is_instance_of::<PyInt>() {
+            return Err(PyTypeError::new_err(format!(
+                "max_steps: expected an int (a step budget per run), found a {}",
+                type_name(n)
+            )));
+        }
+        doc.insert("max_steps".into(), toml_value(n, "max_steps")?);
+    }
+    Ok(doc)
+}
+
 #[pymethods]
 impl PyStudy {
     #[new]
@@ -146,31 +187,7 @@ impl PyStudy {
         runaway: Option<&Bound<'_, PyAny>>,
         simulation: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let s = scenario.cast::<PyScenario>().map_err(|_| {
-            PyTypeError::new_err(format!("scenario: expected a quell.Scenario, found a {}", type_name(scenario)))
-        })?;
-        let mut doc = Table::new();
-        doc.insert("scenario".into(), Value::Table(s.get().inner.to_table()));
-        for (name, v, what) in [
-            ("grid", grid, "scenario key path: list of values"),
-            ("monte_carlo", monte_carlo, "runs, seed, and scenario key path: {law: spread}"),
-            ("settle", settle, "relative, absolute"),
-            ("runaway", runaway, "peak, steps"),
-            ("simulation", simulation, "overrides of the scenario's simulation settings"),
-        ] {
-            if let Some(v) = v.filter(|v| !v.is_none()) {
-                doc.insert(name.into(), Value::Table(dict_arg(v, name, what)?));
-            }
-        }
-        if let Some(n) = max_steps.filter(|v| !v.is_none()) {
-            if n.is_instance_of::<pyo3::types::PyBool>() || !n.is_instance_of::<PyInt>() {
-                return Err(PyTypeError::new_err(format!(
-                    "max_steps: expected an int (a step budget per run), found a {}",
-                    type_name(n)
-                )));
-            }
-            doc.insert("max_steps".into(), toml_value(n, "max_steps")?);
-        }
+        let doc = study_document(scenario, [grid, monte_carlo, settle, runaway, simulation], max_steps)?;
         let inner = py.detach(|| study::Study::from_table(&doc, None)).map_err(|e| argument_error(py, &e))?;
         Ok(PyStudy { inner: Arc::new(inner) })
     }
@@ -480,7 +497,8 @@ impl PyRunSpec {
         }
         Ok(d)
     }
-    /// Simulates the run as the sweep does (its scenario, step budget and runaway rules).
+    /// Simulates the run as the sweep does (its scenario, step budget and runaway rules); Ctrl-C
+    /// stops it.
     ///
     /// Returns
     /// -------
@@ -504,7 +522,8 @@ impl PyRunSpec {
             .map_err(|e| crate::scenario::scenario_error(py, &e))?;
         let design = scenario.design().map_err(|e| crate::errors::raise(py, Kind::Design)(&e))?;
         let spec = &self.inner;
-        let result = py.detach(|| spec.simulate()).map_err(|e| Kind::Scenario.err(py, e))?;
+        let result = crate::interrupt::interruptible_with(py, |stop| spec.simulate_until(&|| stop.load(Relaxed)))?
+            .map_err(|e| Kind::Scenario.err(py, e))?;
         PySimResult::from_run(py, &scenario, &design, result, scenario.names.clone())
     }
     /// Equal specifications: the same run of the same study.
@@ -634,7 +653,7 @@ fn row_dict<'py>(py: Python<'py>, spec: &RunSpec, row: &study::Row) -> PyResult<
     Ok(d)
 }
 
-/// Carries out one run (releasing the GIL) and returns its row of runs.csv.
+/// Carries out one run (releasing the GIL; Ctrl-C stops it) and returns its row of runs.csv.
 ///
 /// Parameters
 /// ----------
@@ -651,6 +670,8 @@ fn row_dict<'py>(py: Python<'py>, spec: &RunSpec, row: &study::Row) -> PyResult<
 /// ------
 /// TypeError
 ///     `spec` is not a RunSpec.
+/// KeyboardInterrupt
+///     Ctrl-C stopped the run.
 ///
 /// Examples
 /// --------
@@ -661,7 +682,8 @@ fn row_dict<'py>(py: Python<'py>, spec: &RunSpec, row: &study::Row) -> PyResult<
 pub fn run_one<'py>(py: Python<'py>, spec: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyDict>> {
     let spec = spec.cast::<PyRunSpec>().map_err(|_| crate::errors::type_error("spec", "a quell.RunSpec", spec))?.get();
     let s = &spec.inner;
-    let row = py.detach(|| study::run_one(s));
+    let row = crate::interrupt::interruptible_with(py, |stop| study::run_one_until(s, &|| stop.load(Relaxed)))?
+        .ok_or_else(|| pyo3::exceptions::PyKeyboardInterrupt::new_err("the run was stopped"))?;
     let d = row_dict(py, s, &row)?;
     for (k, v) in drawn_values(&spec.drawn, s) {
         d.set_item(k, v)?;
@@ -777,7 +799,7 @@ pub fn sweep(
 }
 
 /// `jobs=`: None, or a number of threads from 1 to [`study::MAX_JOBS`].
-fn jobs_arg(py: Python<'_>, jobs: Option<&Bound<'_, PyAny>>) -> PyResult<Option<usize>> {
+pub fn jobs_arg(py: Python<'_>, jobs: Option<&Bound<'_, PyAny>>) -> PyResult<Option<usize>> {
     let Some(j) = jobs.filter(|j| !j.is_none()) else { return Ok(None) };
     if j.is_instance_of::<pyo3::types::PyBool>() || !j.is_instance_of::<PyInt>() {
         return Err(PyTypeError::new_err(format!(
@@ -796,6 +818,15 @@ fn jobs_arg(py: Python<'_>, jobs: Option<&Bound<'_, PyAny>>) -> PyResult<Option<
             ),
         )),
     }
+}
+
+/// A pool of `jobs` threads (default one per core), never more than `tasks`.
+pub fn thread_pool(py: Python<'_>, jobs: Option<usize>, tasks: usize) -> PyResult<rayon::ThreadPool> {
+    let threads = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.min(tasks).max(1))
+        .build()
+        .map_err(|e| Kind::Scenario.err(py, format!("jobs: cannot start the threads ({e})")))
 }
 
 /// The sweep of `study` as a DataFrame: runs.csv's columns, then the drawn values.
@@ -818,12 +849,7 @@ fn sweep_frame(
             ),
         ));
     }
-    let runs = usize::try_from(study.len()).unwrap_or(usize::MAX);
-    let threads = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.min(runs).max(1))
-        .build()
-        .map_err(|e| Kind::Scenario.err(py, format!("jobs: cannot start the threads ({e})")))?;
+    let pool = thread_pool(py, jobs, usize::try_from(study.len()).unwrap_or(usize::MAX))?;
     let swept = crate::interrupt::interruptible_with(py, |stop| {
         let opts = SweepOptions { stop: Some(&stop), ..SweepOptions::default() };
         pool.install(|| study::sweep(study, &opts))

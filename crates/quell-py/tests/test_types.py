@@ -22,6 +22,9 @@ def _valid():
     result = quell.simulate(s, t_end=1.0)
     swept = study.sweep(jobs=1)
     plant = quell.Plant(A, B, C, D, Q, delays=[1.0, 3.0])
+    tuning = dict(scenario=s, mu=[5.0, 80.0], objective="tail_rms_e", max_u=100.0, max_uf=[1e6, 1e6], points=2,
+                  refine=0, settle={}, max_steps=1000, simulation={"t_end": 1.0}, jobs=1)
+    tuned = quell.tune(**tuning)
     return {
         "Plant": (quell.Plant, dict(A=A, B=B, C=C, D=D, Q=Q, delays=[1.0, 3.0], x0=[0, 0, 0], inputs=["a", "b"],
                                     outputs=["c", "d"], states=["x", "y", "z"])),
@@ -57,6 +60,8 @@ def _valid():
         "sweep": (quell.sweep, dict(study=study, jobs=1, yes=False)),
         "sweep_runs": (quell.sweep_runs, dict(study=study)),
         "run_one": (quell.run_one, dict(spec=study.spec(0))),
+        "tune": (quell.tune, tuning),
+        "TuneResult": (quell.TuneResult, dict(json=tuned.to_json())),
     }
 
 

@@ -1,25 +1,29 @@
 //! Design from targets: every `[design]` key a scenario leaves out (observer, channel and filter
-//! poles, μ, β) chosen from the plant's time scales, the signals' frequencies and the averaged
-//! adaptive law ([`crate::diagnostics::averaged`]), verified by simulation before it is returned.
-//! The CLI's `design` subcommand and Python's `quell.auto_design` call [`auto_design`];
-//! docs/tuning.md explains each rule.
+//! poles, μ, β, the regressor's scaling) chosen from the plant's time scales, the signals'
+//! frequencies and the averaged adaptive law ([`crate::diagnostics::averaged`]), verified by
+//! simulation before it is returned. The CLI's `design` subcommand and Python's
+//! `quell.auto_design` call [`auto_design`]; docs/tuning.md explains each rule.
 //!
 //! The rules, for a time scale r (rad/s) = the largest of the signals' frequencies, the plant's
 //! eigenvalue magnitudes and 20/t_end:
+//! * regressor scaling: the file's; else the paper's form when the file gives μ (whose meaning
+//!   depends on it); else normalized (each filter at its own time scale with unit DC gain), whose
+//!   Ω̄ keeps its conditioning at every time scale;
 //! * channel poles (G_ii, Proposition 1): σ_i distinct real poles from −2r down by factors 1.5;
 //! * observer poles (6): searched over speed, spread and the zeros of (A, D, C) for the disturbance
 //!   observer's fidelity (it is driven by x̂, not x, eq. (20)), the slowest good enough candidate;
 //! * filter orders: `reference_filter_orders` / `disturbance_filter_orders`, else two per harmonic
 //!   and one per bias (Assumptions 2, 3); their poles distinct real, spread by factors 1.5 around
-//!   the geometric mean of the component's frequencies (r for a bias alone);
+//!   the geometric mean of the component's frequencies (r for a bias alone), the slowest at least
+//!   20/t_end (its transient, which no η explains, must die out within the horizon);
 //! * β = 1/(smallest gap between the signals' frequencies, 0 included), at most t_end/10: H averages
 //!   over a beat of the two closest harmonics;
 //! * μ_i: the smallest gain for which the averaged law predicts an RMS error ≤ 0.2 % of the
 //!   reference's peak by the target convergence time (half the horizon by default), with μ_i λ_max
-//!   at most [`MAX_RATE_PER_SCALE`]·r;
+//!   at most [`MAX_RATE_PER_SCALE`]·r and a tenth of the pace estimate's stiffness threshold;
 //! * verification: the scenario is simulated; a channel whose tail error exceeds 1 % of its
-//!   reference's peak gets 4× its μ (up to three times); a channel whose plant input |u_f,i|
-//!   exceeds the actuator limit gets half its μ.
+//!   reference's peak gets 4× its μ (up to three times, never beyond the stiffness threshold); a
+//!   channel whose plant input |u_f,i| exceeds the actuator limit gets half its μ.
 
 use std::ops::ControlFlow;
 
@@ -27,21 +31,27 @@ use nalgebra::Complex;
 use serde::Serialize;
 use thiserror::Error;
 
-use crate::design::{relative_degrees, Design, DesignError, DesignSpec, ObserverChoice};
+use crate::design::{relative_degrees, Design, DesignError, DesignSpec, ObserverChoice, RegressorScaling};
 use crate::diagnostics::Averaged;
+use crate::diagnostics::STIFF_RATIO;
 use crate::linalg::eigenvalues;
 use crate::scenario::exosystem::Exosystem;
 use crate::scenario::{PartialDesign, Scenario, ScenarioError};
 use crate::signal::{Component, Signal};
-use crate::sim::{Outcome, Run, SimError};
+use crate::sim::{loop_rate, Outcome, Run, SimError};
 
 /// Fastest adaptation rate μ_i λ_max(Ω̄_i) the automatic design chooses, per unit of the time
 /// scale r: faster buys little (the error is then limited by the filters) and makes the loop stiff.
 pub const MAX_RATE_PER_SCALE: f64 = 200.0;
+/// The automatic μ keeps the adaptation rate this factor below the stiffness threshold.
+const STIFF_MARGIN: f64 = 10.0;
 /// The tail error the verification requires, relative to the reference's peak.
 pub const TAIL_BOUND: f64 = 0.01;
 /// The RMS error the choice of μ aims at by the convergence time (a margin of 5 on [`TAIL_BOUND`]).
 const AIM: f64 = 0.002;
+/// The filters' slowest pole is at least this over t_end: the transient of ξ̂ from its zero start,
+/// which no η explains, has decayed by e^(−10) at half the horizon.
+const FILTER_DECAY: f64 = 20.0;
 /// β is at most t_end / this: H's lag then leaves most of the horizon to converge.
 const BETA_HORIZON: f64 = 10.0;
 /// The disturbance observer's relative error (eq. (20) driven by x̂) the observer poles aim at.
@@ -108,10 +118,10 @@ pub enum AutoError {
 /// The automatic design of the scenario document `doc` (its `[design]` may leave out any key).
 pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, AutoError> {
     let mut choices = Vec::new();
-    let mut given_mu = false;
+    // The largest μ_i the retries may reach, when μ is chosen here.
+    let mut mu_caps: Option<Vec<f64>> = None;
     let mut scenario = Scenario::from_document_with(doc, |partial, s| -> Result<DesignSpec, AutoError> {
-        given_mu = partial.mu.is_some();
-        choose(partial, s, targets, &mut choices)
+        choose(partial, s, targets, &mut choices, &mut mu_caps)
     })?;
     let mut design = scenario.design()?;
     let (m, t_end) = (scenario.plant.m(), scenario.simulation.t_end);
@@ -126,7 +136,10 @@ pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, A
         }
         let tail_max_e: Vec<f64> = (0..m).map(|i| r.max_abs_error(i, 0.9 * t_end, t_end).unwrap_or(f64::NAN)).collect();
         let max_uf: Vec<f64> = r.summary().iter().map(|c| c.figures.max_uf).collect();
-        let retry = !given_mu && runs <= 3 && adjust_mu(&mut scenario.design.mu, &tail_max_e, &bound, &max_uf, targets);
+        let retry = runs <= 3
+            && mu_caps
+                .as_ref()
+                .is_some_and(|caps| adjust_mu(&mut scenario.design.mu, caps, (&tail_max_e, &bound, &max_uf), targets));
         if !retry {
             let within_u = targets.u_limit.is_none_or(|l| max_uf.iter().all(|u| *u <= l));
             let passed = within_u && tail_max_e.iter().zip(&bound).all(|(e, b)| e <= b);
@@ -142,16 +155,16 @@ pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, A
     }
 }
 
-/// Raises μ_i ×4 where the tail error is beyond its bound, halves it where |u_f,i| is beyond the
-/// actuator limit; whether anything changed.
-fn adjust_mu(mu: &mut [f64], tail: &[f64], bound: &[f64], max_uf: &[f64], targets: &Targets) -> bool {
+/// Raises μ_i ×4 (at most to `caps[i]`) where the tail error is beyond its bound, halves it where
+/// |u_f,i| is beyond the actuator limit; whether anything changed.
+fn adjust_mu(mu: &mut [f64], caps: &[f64], (tail, bound, max_uf): (&[f64], &[f64], &[f64]), targets: &Targets) -> bool {
     let mut changed = false;
     for i in 0..mu.len() {
         if targets.u_limit.is_some_and(|l| max_uf[i] > l) {
             mu[i] *= 0.5;
             changed = true;
-        } else if tail[i].is_nan() || tail[i] > bound[i] {
-            mu[i] *= 4.0;
+        } else if (tail[i].is_nan() || tail[i] > bound[i]) && mu[i] < caps[i] {
+            mu[i] = (4.0 * mu[i]).min(caps[i]);
             changed = true;
         }
     }
@@ -163,7 +176,7 @@ fn note_verification(choices: &mut [Choice], mu: &[f64], runs: usize) {
     if let Some(c) = choices.iter_mut().find(|c| c.key == "design.mu") {
         c.value = format!("{mu:?}");
         if runs > 1 {
-            c.why.push_str(&format!("; adjusted over {runs} verifying simulations (×4 where the tail error exceeded 1 % of the reference's peak, ×½ beyond the actuator limit)"));
+            c.why.push_str(&format!("; adjusted over {runs} verifying simulations (×4 where the tail error exceeded 1 % of the reference's peak, up to the stiffness threshold; ×½ beyond the actuator limit)"));
         }
     }
 }
@@ -214,7 +227,13 @@ fn smallest_gap(s: &Scenario) -> Option<f64> {
 }
 
 /// Filter orders and poles of one signal's components.
-fn filters(signal: &Signal, orders: Option<&[usize]>, r: f64, key: &str) -> Result<(PoleLists, String), ScenarioError> {
+fn filters(
+    signal: &Signal,
+    orders: Option<&[usize]>,
+    r: f64,
+    t_end: f64,
+    key: &str,
+) -> Result<(PoleLists, String), ScenarioError> {
     if let Some(o) = orders {
         if o.len() != signal.len() {
             return Err(ScenarioError {
@@ -239,15 +258,22 @@ fn filters(signal: &Signal, orders: Option<&[usize]>, r: f64, key: &str) -> Resu
         }
         let ws: Vec<f64> = frequencies(c).collect();
         let centre = if ws.is_empty() { r } else { (ws.iter().map(|w| w.ln()).sum::<f64>() / ws.len() as f64).exp() };
+        // The slowest pole at least FILTER_DECAY/t_end: its transient, which no η explains, has
+        // decayed by e^(−FILTER_DECAY/2) at half the horizon.
+        let slowest = FILTER_DECAY / t_end;
+        let centre = centre.max(slowest * 1.5f64.powf((order as f64 - 1.0) / 2.0));
         lists.push(spread(centre, order, 1.5, true));
     }
     let why = if orders.is_some() {
-        format!("orders from design.{key}_filter_orders; distinct real poles spread ×1.5 around each component's frequencies (geometric mean; r for a bias)")
+        format!("orders from design.{key}_filter_orders; distinct real poles spread ×1.5 around each component's frequencies (geometric mean; r for a bias), the slowest at least {FILTER_DECAY}/t_end")
     } else {
-        "two poles per harmonic, one per bias (the exosystem's order, Assumptions 2–3); distinct real poles spread ×1.5 around each component's frequencies (geometric mean; r for a bias)".to_string()
+        format!("two poles per harmonic, one per bias (the exosystem's order, Assumptions 2–3); distinct real poles spread ×1.5 around each component's frequencies (geometric mean; r for a bias), the slowest at least {FILTER_DECAY}/t_end")
     };
     Ok((lists, why))
 }
+
+/// Records one chosen key with its value and reason.
+type Note<'a> = dyn FnMut(&str, String, String) + 'a;
 
 /// Every key `partial` leaves out, chosen by the module's rules.
 fn choose(
@@ -255,79 +281,38 @@ fn choose(
     s: &Scenario,
     targets: &Targets,
     choices: &mut Vec<Choice>,
+    mu_caps: &mut Option<Vec<f64>>,
 ) -> Result<DesignSpec, AutoError> {
-    let p = &s.plant;
-    let (n, m) = (p.n(), p.m());
     let r = time_scale(s)?;
     let mut note = |key: &str, value: String, why: String| choices.push(Choice { key: key.into(), value, why });
-    let sigma: Vec<usize> = match &partial.relative_degrees {
-        Some(s) => s.clone(),
-        None => relative_degrees(&p.A, &p.B, &p.C)
-            .map_err(DesignError::Plant)?
-            .into_iter()
-            .map(|s| s.unwrap_or(1))
-            .collect(),
-    };
+    let regressor_scaling = choose_scaling(&partial, &mut note);
     let channel_poles = match partial.channel_poles {
         Some(c) => c,
-        None => {
-            let c: Vec<_> = sigma.iter().map(|&k| spread(2.0 * r, k, 1.5, false)).collect();
-            note("design.channel_poles", fmt_lists(&c), format!("σ = {sigma:?}; real poles from −2r (r = {r:.4e} rad/s: the fastest of the signals' frequencies, the plant's eigenvalue magnitudes and 20/t_end), ×1.5 apart"));
-            c
-        }
+        None => choose_channel_poles(s, partial.relative_degrees.as_deref(), r, &mut note)?,
     };
-    let (reference_filter_poles, disturbance_filter_poles) = {
-        let both = |given: Option<Vec<Vec<Complex<f64>>>>,
-                    signal: &Signal,
-                    orders: Option<&[usize]>,
-                    key: &str,
-                    note: &mut dyn FnMut(&str, String, String)|
-         -> Result<_, ScenarioError> {
-            match given {
-                Some(g) => Ok(g),
-                None if signal.is_empty() => Ok(Vec::new()),
-                None => {
-                    let (lists, why) = filters(signal, orders, r, key)?;
-                    note(&format!("design.{key}_filter_poles"), fmt_lists(&lists), why);
-                    Ok(lists)
-                }
-            }
-        };
-        (
-            both(
-                partial.reference_filter_poles,
-                &s.reference,
-                partial.reference_filter_orders.as_deref(),
-                "reference",
-                &mut note,
-            )?,
-            both(
-                partial.disturbance_filter_poles,
-                &s.disturbance,
-                partial.disturbance_filter_orders.as_deref(),
-                "disturbance",
-                &mut note,
-            )?,
-        )
-    };
-    let beta = match partial.beta {
-        Some(b) => b,
-        None => {
-            let gap = smallest_gap(s);
-            let b = (1.0 / gap.unwrap_or(r)).min(s.simulation.t_end / BETA_HORIZON);
-            note("design.beta", format!("{b:.4e}"), format!("1/(smallest gap between the signals' frequencies, 0 included) so that H averages over a beat of the two closest harmonics (1/r without harmonics), at most t_end/{BETA_HORIZON}"));
-            b
-        }
-    };
-    // The paper's form unless the file asks otherwise: μ is chosen below from Ω̄ in the design's
-    // own coordinates, which absorbs the regressor's scale either way.
-    let regressor_scaling = partial.regressor_scaling.unwrap_or_default();
+    let reference_filter_poles = choose_filters(
+        partial.reference_filter_poles,
+        &s.reference,
+        partial.reference_filter_orders.as_deref(),
+        (r, s.simulation.t_end),
+        "reference",
+        &mut note,
+    )?;
+    let disturbance_filter_poles = choose_filters(
+        partial.disturbance_filter_poles,
+        &s.disturbance,
+        partial.disturbance_filter_orders.as_deref(),
+        (r, s.simulation.t_end),
+        "disturbance",
+        &mut note,
+    )?;
+    let beta = partial.beta.unwrap_or_else(|| choose_beta(s, r, &mut note));
     let mut spec = DesignSpec {
         observer: ObserverChoice::Poles(Vec::new()),
         channel_poles,
         reference_filter_poles,
         disturbance_filter_poles,
-        mu: vec![1.0; m],
+        mu: vec![1.0; s.plant.m()],
         beta,
         relative_degrees: partial.relative_degrees.clone(),
         regressor_scaling,
@@ -335,10 +320,10 @@ fn choose(
     let design = match partial.observer {
         Some(o) => {
             spec.observer = o;
-            Design::new(p, &spec)?
+            Design::new(&s.plant, &spec)?
         }
         None => {
-            let (design, why) = observer(s, &mut spec, 6.0 * r, n)?;
+            let (design, why) = observer(s, &mut spec, 6.0 * r, s.plant.n())?;
             note("design.observer_poles", format!("{:?}", design_poles(&spec)), why);
             design
         }
@@ -346,12 +331,76 @@ fn choose(
     match partial.mu {
         Some(mu) => spec.mu = mu,
         None => {
-            let (mu, why) = choose_mu(s, &design, targets, r);
+            let (mu, caps, why) = choose_mu(s, &design, targets, r);
             note("design.mu", format!("{mu:?}"), why);
             spec.mu = mu;
+            *mu_caps = Some(caps);
         }
     }
     Ok(spec)
+}
+
+/// σ_i distinct real poles per channel from −2r, ×1.5 apart (σ given, else the plant's).
+fn choose_channel_poles(
+    s: &Scenario,
+    given: Option<&[usize]>,
+    r: f64,
+    note: &mut Note,
+) -> Result<PoleLists, AutoError> {
+    let p = &s.plant;
+    let sigma: Vec<usize> = match given {
+        Some(s) => s.to_vec(),
+        None => relative_degrees(&p.A, &p.B, &p.C)
+            .map_err(DesignError::Plant)?
+            .into_iter()
+            .map(|s| s.unwrap_or(1))
+            .collect(),
+    };
+    let c: PoleLists = sigma.iter().map(|&k| spread(2.0 * r, k, 1.5, false)).collect();
+    note("design.channel_poles", fmt_lists(&c), format!("σ = {sigma:?}; real poles from −2r (r = {r:.4e} rad/s: the fastest of the signals' frequencies, the plant's eigenvalue magnitudes and 20/t_end), ×1.5 apart"));
+    Ok(c)
+}
+
+/// The given filter poles of one signal, else [`filters`]' (none for an absent signal).
+fn choose_filters(
+    given: Option<PoleLists>,
+    signal: &Signal,
+    orders: Option<&[usize]>,
+    (r, t_end): (f64, f64),
+    key: &str,
+    note: &mut Note,
+) -> Result<PoleLists, ScenarioError> {
+    match given {
+        Some(g) => Ok(g),
+        None if signal.is_empty() => Ok(Vec::new()),
+        None => {
+            let (lists, why) = filters(signal, orders, r, t_end, key)?;
+            note(&format!("design.{key}_filter_poles"), fmt_lists(&lists), why);
+            Ok(lists)
+        }
+    }
+}
+
+/// β = 1/(smallest gap between the signals' frequencies), at most t_end/[`BETA_HORIZON`].
+fn choose_beta(s: &Scenario, r: f64, note: &mut Note) -> f64 {
+    let b = (1.0 / smallest_gap(s).unwrap_or(r)).min(s.simulation.t_end / BETA_HORIZON);
+    note("design.beta", format!("{b:.4e}"), format!("1/(smallest gap between the signals' frequencies, 0 included) so that H averages over a beat of the two closest harmonics (1/r without harmonics), at most t_end/{BETA_HORIZON}"));
+    b
+}
+
+/// The regressor's realization: the file's, else the paper's form when the file gives μ (μ's
+/// meaning depends on it), else the normalized form, whose Ω̄ keeps its conditioning at every time
+/// scale (the paper's form spreads its eigenvalues by about r^2(q−1) away from r = 1 rad/s).
+fn choose_scaling(partial: &PartialDesign, note: &mut Note) -> RegressorScaling {
+    match (partial.regressor_scaling, &partial.mu) {
+        (Some(g), _) => g,
+        (None, Some(_)) => RegressorScaling::Paper,
+        (None, None) => {
+            let n = RegressorScaling::Normalized;
+            note("design.regressor_scaling", format!("{:?}", n.name()), "each filter at its own time scale with unit DC gain (ξ̂ of the signals' size): Ω̄'s conditioning does not depend on the time scale, where the paper's form spreads its eigenvalues by about r^2(q−1) away from 1 rad/s; μ is chosen for it (the paper's form is kept when the file gives μ)".into());
+            n
+        }
+    }
 }
 
 fn design_poles(spec: &DesignSpec) -> Vec<f64> {
@@ -429,23 +478,34 @@ fn observer(s: &Scenario, spec: &mut DesignSpec, r_0: f64, n: usize) -> Result<(
     Ok((design, why))
 }
 
+/// The fastest rates μ_i λ_max(Ω̄_i) the automatic design allows: for the first choice the smaller
+/// of [`MAX_RATE_PER_SCALE`]·r and a [`STIFF_MARGIN`]th of the stiffness threshold [`STIFF_RATIO`]·ρ
+/// of the pace estimate ([`crate::diagnostics::estimate`]; ρ the loop's fastest other rate,
+/// [`loop_rate`]); for the verification's retries the threshold itself (the run is then not stiff
+/// by the estimate's own flag).
+fn rate_caps(s: &Scenario, design: &Design, r: f64) -> (f64, f64) {
+    let stiff = STIFF_RATIO * loop_rate(design, &s.plant, [&s.reference, &s.disturbance]);
+    ((MAX_RATE_PER_SCALE * r).min(stiff / STIFF_MARGIN), stiff)
+}
+
 /// μ_i from the averaged law: the smallest gain whose predicted RMS error by the convergence time
-/// is ≤ 0.2 % of the reference's peak, capped at μ_i λ_max ≤ MAX_RATE_PER_SCALE·r.
-fn choose_mu(s: &Scenario, design: &Design, targets: &Targets, r: f64) -> (Vec<f64>, String) {
+/// is ≤ 0.2 % of the reference's peak, capped by [`rate_caps`]; with the retries' cap on μ_i.
+fn choose_mu(s: &Scenario, design: &Design, targets: &Targets, r: f64) -> (Vec<f64>, Vec<f64>, String) {
     let avg = Averaged::new(design, &s.reference, &s.disturbance);
     let t_c = targets.convergence_time.unwrap_or(0.5 * s.simulation.t_end);
+    let (max_rate, retry_rate) = rate_caps(s, design, r);
     let mut notes = Vec::new();
-    let mu = avg
+    let (mu, caps) = avg
         .channels
         .iter()
         .enumerate()
         .map(|(i, c)| {
             let peak = s.reference.components[i].peak();
             let aim = AIM * if peak > 0.0 { peak } else { c.open_loop_rms };
-            let cap = MAX_RATE_PER_SCALE * r / c.lambda_max().max(f64::MIN_POSITIVE);
+            let cap = max_rate / c.lambda_max().max(f64::MIN_POSITIVE);
             if c.predicted_error(cap, t_c) > aim {
-                notes.push(format!("channel {}: even μ λ_max = {MAX_RATE_PER_SCALE}·r leaves a predicted RMS error {:.2e} at t = {t_c:.4e} (λ_min(Ω̄) = {:.2e}); see the run's diagnostics", i + 1, c.predicted_error(cap, t_c), c.lambda_min()));
-                return cap;
+                notes.push(format!("channel {}: even the fastest rate leaves a predicted RMS error {:.2e} at t = {t_c:.4e} (λ_min(Ω̄) = {:.2e}); see the run's diagnostics", i + 1, c.predicted_error(cap, t_c), c.lambda_min()));
+                return (cap, retry_rate / c.lambda_max().max(f64::MIN_POSITIVE));
             }
             // Bisection on log μ: predicted_error decreases with μ.
             let (mut lo, mut hi) = (cap * 1e-12, cap);
@@ -457,13 +517,13 @@ fn choose_mu(s: &Scenario, design: &Design, targets: &Targets, r: f64) -> (Vec<f
                     hi = mid;
                 }
             }
-            hi
+            (hi, retry_rate / c.lambda_max().max(f64::MIN_POSITIVE))
         })
-        .collect();
+        .unzip();
     let why = format!(
-        "the smallest μ_i for which the averaged adaptive law (η̃' = −μ Ω̄ η̃) predicts an RMS error ≤ 0.2 % of the reference's peak by t = {t_c:.4e} s ({}), with μ_i λ_max(Ω̄_i) ≤ {MAX_RATE_PER_SCALE}·r{}",
+        "the smallest μ_i for which the averaged adaptive law (η̃' = −μ Ω̄ η̃) predicts an RMS error ≤ 0.2 % of the reference's peak by t = {t_c:.4e} s ({}), with μ_i λ_max(Ω̄_i) ≤ {max_rate:.4e}/s (the smaller of {MAX_RATE_PER_SCALE}·r and a {STIFF_MARGIN}th of the stiffness threshold {STIFF_RATIO}·ρ){}",
         if targets.convergence_time.is_some() { "the target convergence time" } else { "half the horizon" },
         if notes.is_empty() { String::new() } else { format!("; {}", notes.join("; ")) }
     );
-    (mu, why)
+    (mu, caps, why)
 }

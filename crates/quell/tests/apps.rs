@@ -31,7 +31,7 @@ struct App {
 /// t ∈ [540, 600] s; the bounds are the page's, about 1.5× the measured values (a change in the
 /// sampled loop's arithmetic moves them by far less; a change in the physics or the design by more).
 const VESSEL: App = App { dir: "supply-vessel", prefix: "supply", tail_bounds: &[0.15, 0.07, 3e-3] };
-/// examples/apps/dc-motor/README.md: measured 8.4e-4 rad over t ∈ [54, 60] s; bound 1.5×.
+/// examples/apps/dc-motor/README.md: measured 8.3e-4 rad over t ∈ [54, 60] s; bound 1.5×.
 const MOTOR: App = App { dir: "dc-motor", prefix: "motor", tail_bounds: &[1.3e-3] };
 /// examples/apps/active-suspension/README.md: measured 1.5e-8 m over t ∈ [27, 30] s, still
 /// shrinking (the adaptive law converges exponentially on an exact internal model); the page
@@ -140,10 +140,15 @@ fn the_keys_each_page_says_are_automatic_are_what_quell_design_auto_chooses() {
     let keys = ["disturbance_filter_poles", "mu", "beta"];
     let auto = auto_of(&SUSPENSION, &keys, Targets { convergence_time: Some(5.0), u_limit: None });
     assert_same_design(&auto.design, &Scenario::from_toml(&scenario_text(&SUSPENSION)).unwrap().design);
-    // supply-vessel: the filters and β; μ is the automatic choice for channels 1 and 2 divided by
-    // 333 (README), within 1 % as the page rounds it.
-    let keys = ["reference_filter_poles", "disturbance_filter_poles", "beta", "mu"];
-    let (auto, page) = (auto_of(&VESSEL, &keys, Targets::default()).design, vessel_with_truth("").design);
+    // supply-vessel: the filters and β (μ stays the page's: the automatic μ would adapt beyond the
+    // stiffness threshold, where the automatic design no longer goes; README). The verification is
+    // not asserted: it judges the page's μ against 1 % of each reference, tighter than the page's bounds.
+    let mut doc: toml::Table = scenario_text(&VESSEL).parse().unwrap();
+    let design = doc.get_mut("design").and_then(|d| d.as_table_mut()).unwrap();
+    for key in ["reference_filter_poles", "disturbance_filter_poles", "beta"] {
+        assert!(design.remove(key).is_some(), "supply-vessel: design.{key}");
+    }
+    let (auto, page) = (auto_design(&doc, &Targets::default()).unwrap().scenario.design, vessel_with_truth("").design);
     // The page writes −1.2 for the computed −0.8 × 1.5 = −1.2000000000000002: equal to 1e-15.
     let poles = |d: &quell::DesignSpec| -> Vec<f64> {
         d.reference_filter_poles.iter().chain(&d.disturbance_filter_poles).flatten().map(|p| p.re).collect()
@@ -152,14 +157,6 @@ fn the_keys_each_page_says_are_automatic_are_what_quell_design_auto_chooses() {
         assert!((a - b).abs() <= 1e-15 * b.abs(), "filter pole {a} against the page's {b}");
     }
     assert_eq!((poles(&auto).len(), auto.beta), (poles(&page).len(), page.beta));
-    // Within a factor 1.5 of 333, not the page's rounding: with three outputs the observer gain L
-    // that places the given poles is not unique, and the automatic μ (from Ω̄, which the
-    // disturbance observer's L shapes) moved to 354× and 253× the page's μ when the placement
-    // algorithm changed (README, "Figures and the placement").
-    for i in 0..2 {
-        let ratio = auto.mu[i] / page.mu[i];
-        assert!(ratio > 333.0 / 1.5 && ratio < 333.0 * 1.5, "channel {}: automatic μ / page's μ = {ratio}", i + 1);
-    }
 }
 
 /// max_k |a(k) − b(k)| / max_k |b(k)| over two runs stored row after row.

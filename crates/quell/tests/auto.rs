@@ -1,5 +1,6 @@
 //! The automatic design (`quell::auto`) on seeded random plants of several shapes: stable and
-//! unstable, σ_i from 1 to 4, with and without zero dynamics, m = 1 and 2. Asserted: the design passes its verification, and the complete
+//! unstable, σ_i from 1 to 4, with and without zero dynamics, m = 1 to 3, at time scales from 1 ms
+//! to 1000 s and in three unit systems. Asserted: the design passes its verification, and the complete
 //! scenario it writes, read back from TOML and run again, keeps every channel's tail error
 //! (last 10 % of the horizon) within 1 % of its reference's peak.
 #![allow(non_snake_case)]
@@ -75,13 +76,14 @@ fn scenario(rng: &mut Rng, sigma: &[usize], zeros: &[Vec<f64>], scale: f64, unit
     }
     let T = DMatrix::<f64>::identity(n, n) + rng.matrix(n, n) * (0.2 / n as f64);
     let Ti = T.clone().try_inverse().unwrap();
-    // Time scaling: A → scale·A (and B → scale^σ·B keeps the outputs' size comparable).
+    // Time scaling t → t/scale: A, B and D × scale, so that every transfer function is
+    // G(s/scale), with the gains of the 1 s plant at the scaled frequencies.
     let A = &T * A * &Ti * scale;
-    let B = &T * B * scale.powi(sigma.iter().copied().max().unwrap() as i32);
+    let B = &T * B * scale;
     let C = C * &Ti * units.y;
     let B = B / units.u;
     // The disturbance measured in the outputs' units: ω × units.y, D / units.y.
-    let D = rng.matrix(n, 1) / units.y;
+    let D = rng.matrix(n, 1) * scale / units.y;
     let delays: Vec<String> = (0..m).map(|_| format!("{:e}", rng.uniform(0.0, 0.5) / scale)).collect();
     let frequencies = separated_frequencies(rng, m);
     let refs: Vec<String> = frequencies
@@ -137,13 +139,14 @@ fn shapes() -> Vec<Shape> {
 /// in km with inputs in mA.
 const UNITS: [Units; 3] = [BASE, Units { y: 1e3, u: 1e-3 }, Units { y: 1e-3, u: 1e3 }];
 
-/// The automatic design of one random plant: its verification must pass and the complete scenario
+/// The automatic design of one random plant (`design`: lines for its `[design]`, empty for none):
+/// its verification must pass and the complete scenario
 /// it writes, read back from TOML and run again, must keep every channel's tail error (last 10 %
 /// of the horizon) within 1 % of its reference's peak. Err: what failed.
-fn case(seed: u64, shape: usize, scale: f64, units: Units) -> Result<Vec<f64>, String> {
+fn case(seed: u64, shape: usize, scale: f64, units: Units, design: &str) -> Result<Vec<f64>, String> {
     let (name, sigma, zeros) = &shapes()[shape];
     let mut rng = Rng(seed);
-    let text = scenario(&mut rng, sigma, zeros, scale, units);
+    let text = scenario(&mut rng, sigma, zeros, scale, units).replace("[design]\n", &format!("[design]\n{design}"));
     let doc: toml::Table = text.parse().unwrap();
     let what = format!("{name}, scale {scale:e}, units y×{:e} u×{:e}, seed {seed}", units.y, units.u);
     let auto = auto_design(&doc, &Targets::default()).map_err(|e| format!("{what}: {e}"))?;
@@ -169,9 +172,12 @@ fn case(seed: u64, shape: usize, scale: f64, units: Units) -> Result<Vec<f64>, S
         .collect()
 }
 
-/// Runs `count` plants per time scale 1e-3…1e3 (shapes and units cycling with the seed) and
-/// asserts that every one meets the tail bound: the failure rate on this family is 0.
-fn family(scales: &[f64], count: u64, first_seed: u64) {
+/// The time scales of the family: 1 ms to 1000 s (signals, plant and horizon scaled together).
+const SCALES: [f64; 7] = [1e-3, 1e-2, 1e-1, 1.0, 1e1, 1e2, 1e3];
+
+/// Runs `count` plants per time scale (shapes and units cycling with the seed) with `design` as
+/// their `[design]` lines; the failures, each with what failed, and the worst tail ratio.
+fn family(scales: &[f64], count: u64, first_seed: u64, design: &str) -> (Vec<String>, f64) {
     let shapes = shapes().len() as u64;
     let mut failures = Vec::new();
     let mut worst: f64 = 0.0;
@@ -179,21 +185,43 @@ fn family(scales: &[f64], count: u64, first_seed: u64) {
         for j in 0..count {
             let seed = first_seed + 100 * k as u64 + j;
             let shape = ((j + k as u64) % shapes) as usize;
-            match case(seed, shape, scale, UNITS[(j % 3) as usize]) {
+            match case(seed, shape, scale, UNITS[(j % 3) as usize], design) {
                 Ok(ratios) => worst = ratios.into_iter().fold(worst, f64::max),
                 Err(e) => failures.push(e),
             }
         }
     }
-    let total = scales.len() as u64 * count;
-    assert!(failures.is_empty(), "{} of {total} plants failed:\n{}", failures.len(), failures.join("\n"));
-    println!("worst tail max|e| / bound over {total} plants: {worst:.3}");
+    (failures, worst)
 }
 
-/// 18 plants (every shape twice, units cycling) at the time scale 1 s.
+/// 63 plants: every shape once per time scale from 1 ms to 1000 s (units cycling), from an empty
+/// `[design]` (so the normalized regressor): every one meets the tail bound (1 % of the
+/// reference's peak over the last 10 % of the horizon), and so does the scenario it writes.
 #[test]
-fn random_plants_in_three_unit_systems_meet_the_tail_bound() {
-    family(&[1.0], 18, 1);
+fn random_plants_from_1_ms_to_1000_s_in_three_unit_systems_meet_the_tail_bound() {
+    let (failures, worst) = family(&SCALES, 9, 1, "");
+    assert!(failures.is_empty(), "{} of 63 plants failed:\n{}", failures.len(), failures.join("\n"));
+    println!("worst tail max|e| / bound over 63 plants: {worst:.3}");
+}
+
+/// The wider family (189 plants, other seeds): the failure rate stays at most 2 % (measured:
+/// 2 of 189, both σ = [1, 2, 1] with a zero, tails 2.2× and 8.8× the bound, docs/tuning.md).
+#[test]
+#[ignore = "about 2 minutes; the 63-plant test above runs in the normal suite"]
+fn the_wider_family_fails_at_most_2_percent() {
+    let (failures, _) = family(&SCALES, 27, 50, "");
+    assert!(failures.len() * 50 <= 189, "{} of 189 plants failed:\n{}", failures.len(), failures.join("\n"));
+}
+
+/// The paper's form of the regressor, given, is kept, and away from the 1 s scale it fails most
+/// plants of the same family (the reason the automatic design chooses the normalized one):
+/// measured 45 of 63, every plant at time scales 1 ms, 10 ms, 100 ms, 100 s and 1000 s (diverged
+/// regressor, step budget, or tail 3–100× the bound; docs/tuning.md); asserted: more than half.
+#[test]
+#[ignore = "about 4 minutes (stiff runs)"]
+fn the_papers_regressor_fails_away_from_1_s() {
+    let (failures, _) = family(&SCALES, 9, 1, "regressor_scaling = \"paper\"\n");
+    assert!(failures.len() * 2 > 63, "only {} of 63 plants failed", failures.len());
 }
 
 /// A Targets::u_limit bounds the plant input u_f (5), as the verifying run records it: an
@@ -284,4 +312,27 @@ fn the_batch_reactors_slow_channel_is_diagnosed_and_the_automatic_design_avoids_
     for (i, c) in auto.scenario.reference.components.iter().enumerate() {
         assert!(r.max_abs_error(i, 90.0, 100.0).unwrap() <= TAIL_BOUND * c.peak());
     }
+}
+
+/// A hard-disk head positioner in SI units at its own millisecond time scale: a voice-coil arm
+/// (position in m, velocity in m/s; viscous pole 200 /s, force constant over mass 4e3 m/s² per A),
+/// a 50 µs computation delay, following a track with 1 µm of repeatable runout at the 7200 rpm
+/// spindle's 120 Hz (754 rad/s) around a 2 µm offset, against a 60 Hz (377 rad/s) acceleration
+/// disturbance measured as the displacement it would cause (D = 377² /s², ω in m). From an empty
+/// `[design]` the automatic design must pass its verification within 0.5 s and the written
+/// scenario, run again, must keep the tail error within 1 % of the track's 3 µm peak (30 nm).
+#[test]
+fn a_disk_drive_servo_at_the_millisecond_scale_meets_the_tail_bound_from_an_empty_design() {
+    let text = "[plant]\nA = [[0.0, 1.0], [0.0, -200.0]]\nB = [[0.0], [4.0e3]]\nC = [[1.0, 0.0]]\n\
+        D = [[0.0], [1.42129e5]]\nQ = [[0.0]]\ndelays = [5e-5]\n[design]\n\
+        [reference]\ncomponents = [{ bias = 2e-6, harmonics = [{ amplitude = 1e-6, frequency = 754.0 }] }]\n\
+        [disturbance]\ncomponents = [{ bias = 5e-7, harmonics = [{ amplitude = 5e-7, frequency = 377.0 }] }]\n\
+        [simulation]\nt_end = 0.5\noutput_step = 1e-4\nrtol = 1e-7\natol = 1e-15\n";
+    let auto = auto_design(&text.parse().unwrap(), &Targets::default()).unwrap();
+    assert!(auto.verification.passed, "{:?}", auto.verification);
+    let s = Scenario::from_toml(&auto.scenario.to_toml()).unwrap();
+    let r = Run::of(&s, &s.design().unwrap()).simulate(|_| ControlFlow::Continue(())).unwrap();
+    let tail = r.max_abs_error(0, 0.45, 0.5).unwrap();
+    assert!(tail <= TAIL_BOUND * 3e-6, "tail max|e| = {tail:e} m against 30 nm");
+    println!("tail max|e| = {tail:e} m; {:?}", auto.choices.iter().map(|c| (&c.key, &c.value)).collect::<Vec<_>>());
 }

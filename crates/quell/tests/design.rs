@@ -687,3 +687,25 @@ fn a_row_of_distinct_eigenvalues_is_not_one_defective_cluster() {
     let kappa = quell::design::place::eigenvector_condition(&M, &zero, &DMatrix::zeros(1, 60)).unwrap();
     assert!((kappa - 1.0).abs() < 1e-12, "κ₂ = {kappa}");
 }
+
+#[test]
+fn a_stopped_design_of_a_large_plant_returns_interrupted() {
+    // Under a stop flag already set, a plant of DETACHED_MIN_STATES states is designed on a worker
+    // thread that the call leaves at once; below that size, on the caller's thread, which polls
+    // between phases. Either way the answer is Interrupted, not a design or another error.
+    for n in [quell::design::DETACHED_MIN_STATES, 12] {
+        let spec = quell::DesignSpec {
+            observer: ObserverChoice::Gain(DMatrix::zeros(n, 1)),
+            channel_poles: vec![vec![re(-1.0); n]],
+            reference_filter_poles: vec![vec![re(-1.0)]],
+            disturbance_filter_poles: vec![],
+            mu: vec![1.0],
+            beta: 1.0,
+            relative_degrees: None,
+            regressor_scaling: Default::default(),
+        };
+        let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(true));
+        let r = quell::cancel::with_stop(stop, || Design::new(&chain_plant(n), &spec));
+        assert_eq!(r.err(), Some(DesignError::Interrupted), "n = {n}");
+    }
+}

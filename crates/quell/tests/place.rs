@@ -726,3 +726,36 @@ fn nearly_uncontrollable_never_wrong() {
         "{accepted_well_posed} of {well_posed} well-posed cases placed"
     );
 }
+
+/// Poles exactly at eigenvalues of A (a common choice: keep the slow modes) on block upper
+/// triangular plants, whose eigenvalues are the diagonal and the 2 × 2 blocks a ± ib exactly:
+/// every admissible space is then at a singular A − λ I. Checked by the test's own eigenvalues to
+/// 1e-6 relative, the bound `place` promises (the spectra are well conditioned: distinct poles
+/// ≥ 0.25 apart, entries O(1)).
+#[test]
+fn poles_at_the_open_loop_eigenvalues_are_placed() {
+    for (seed, n, m) in [(1u64, 6, 2), (2, 17, 2), (3, 40, 3), (4, 90, 2)] {
+        let mut rng = Rng::new(seed);
+        let mut A = DMatrix::from_fn(n, n, |r, c| if r < c { 0.3 * rng.uniform(-1.0, 1.0) } else { 0.0 });
+        let mut eigs = Vec::with_capacity(n);
+        let mut i = 0;
+        while i < n {
+            let a = -0.5 - 0.25 * i as f64;
+            if i + 1 < n && i % 5 == 1 {
+                (A[(i, i)], A[(i, i + 1)], A[(i + 1, i)], A[(i + 1, i + 1)]) = (a, 1.5, -1.5, a);
+                eigs.extend([C64::new(a, 1.5), C64::new(a, -1.5)]);
+                i += 2;
+            } else {
+                A[(i, i)] = a;
+                eigs.push(re(a));
+                i += 1;
+            }
+        }
+        let B = rng.matrix(n, m);
+        // All poles at A's eigenvalues, then every other one moved between them.
+        assert_places(&A, &B, &eigs, 1e-6);
+        let mixed: Vec<C64> =
+            eigs.iter().enumerate().map(|(k, &p)| if k % 2 == 0 && p.im == 0.0 { p - 0.125 } else { p }).collect();
+        assert_places(&A, &B, &mixed, 1e-6);
+    }
+}

@@ -14,6 +14,7 @@ docstrings refer to that paper.
 
 from ._errors import ControllerError, DesignError, ExportError, QuellError, ScenarioError, SimulationError
 from ._study import StudyResult
+from ._tune import TuneResult
 from ._quell import (
     Controller,
     Design,
@@ -32,6 +33,7 @@ from ._quell import (
     simulate,
     sweep,
     sweep_runs,
+    tune,
 )
 
 __all__ = [
@@ -49,6 +51,7 @@ __all__ = [
     "SimulationError",
     "Study",
     "StudyResult",
+    "TuneResult",
     "__version__",
     "auto_design",
     "design",
@@ -59,4 +62,5 @@ __all__ = [
     "simulate",
     "sweep",
     "sweep_runs",
+    "tune",
 ]

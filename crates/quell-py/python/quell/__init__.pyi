@@ -29,6 +29,7 @@ __all__ = [
     "SimulationError",
     "Study",
     "StudyResult",
+    "TuneResult",
     "__version__",
     "auto_design",
     "design",
@@ -39,6 +40,7 @@ __all__ = [
     "simulate",
     "sweep",
     "sweep_runs",
+    "tune",
 ]
 
 class QuellError(Exception): ...
@@ -361,6 +363,38 @@ class RunSpec:
 def sweep(study: Union[Study, str, PathLike[str]], *, jobs: Optional[int] = None, yes: bool = False) -> Any: ...
 def sweep_runs(study: Union[Study, str, PathLike[str]]) -> Iterator[RunSpec]: ...
 def run_one(spec: RunSpec) -> Dict[str, Any]: ...
+
+class TuneResult:
+    """What `quell.tune` found: every evaluation, the tuned μ and the joint run's check."""
+
+    objective: str
+    mu: List[float]
+    reproduced: List[bool]
+    joint_difference: List[Optional[float]]
+    joint: Optional[Dict[str, Any]]
+    partial: bool
+    def __init__(self, json: str) -> None: ...
+    def __len__(self) -> int: ...
+    def to_json(self) -> str: ...
+    @property
+    def frame(self) -> Any: ...
+    @property
+    def best(self) -> Any: ...
+
+def tune(
+    scenario: Scenario,
+    *,
+    mu: Sequence[Any],
+    objective: Optional[str] = None,
+    max_u: Optional[Union[float, Sequence[float]]] = None,
+    max_uf: Optional[Union[float, Sequence[float]]] = None,
+    points: Optional[int] = None,
+    refine: Optional[int] = None,
+    settle: Optional[Dict[str, float]] = None,
+    max_steps: Optional[int] = None,
+    simulation: Optional[Dict[str, float]] = None,
+    jobs: Optional[int] = None,
+) -> TuneResult: ...
 
 def auto_design(
     text: str, *, convergence_time: Optional[float] = None, u_limit: Optional[float] = None

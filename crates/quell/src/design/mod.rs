@@ -208,6 +208,10 @@ pub const RATE_SPAN: f64 = 67_108_864.0; // 1/√ε = 2^26
 /// its fallback takes longest), so a larger model is refused at once rather than computed for minutes.
 pub const MAX_STATES: usize = 500;
 
+/// From this many states on, [`Design::new`] under a stop flag runs on a worker thread it can
+/// leave (a design of n = 100 takes about 0.1 s; below, the thread would cost more than it saves).
+pub const DETACHED_MIN_STATES: usize = 100;
+
 const SPAN_WHY: &str = "every pole's magnitude and 1/β may exceed every decay rate −Re p (and 1/β) by at \
                         most 1/√ε ≈ 6.7e7: a slower pole lies within the rounding margin of the imaginary axis \
                         that the stability checks use; bring the poles and β to a common time scale";
@@ -233,7 +237,24 @@ impl Design {
     /// Designs every gain in the paper's order and checks each condition on the way: the choices
     /// (Section VIII), Assumption 1, the observer (6), the decoupler of Proposition 1 with stable
     /// zero dynamics, the internal models (11), (16) and the disturbance observer gain (20).
+    ///
+    /// Inside [`crate::cancel::with_stop`] a plant of [`DETACHED_MIN_STATES`] states or more is
+    /// designed on a worker thread that the call leaves when the flag is set, so that a stop request returns
+    /// [`DesignError::Interrupted`] within milliseconds even during an eigendecomposition.
     pub fn new(plant: &Plant, spec: &DesignSpec) -> Result<Design, DesignError> {
+        match crate::cancel::current() {
+            Some(stop) if plant.n() >= DETACHED_MIN_STATES => {
+                let (plant, spec) = (plant.clone(), spec.clone());
+                crate::cancel::detached(stop, move || Design::build(&plant, &spec))
+                    .unwrap_or(Err(DesignError::Interrupted))
+            }
+            _ => Design::build(plant, spec),
+        }
+    }
+
+    /// [`Design::new`] on this thread, polling the stop flag between its phases.
+    fn build(plant: &Plant, spec: &DesignSpec) -> Result<Design, DesignError> {
+        let poll = || crate::cancel::check().map_err(|_| DesignError::Interrupted);
         // The fields of a plant are public: check it again (Plant::new did, but a literal does not).
         plant.validate()?;
         if plant.n() > MAX_STATES {
@@ -241,12 +262,16 @@ impl Design {
         }
         check_spec(plant, spec)?;
         let (controllability, observability) = assumption_1(plant)?;
+        poll()?;
         let (L, observer_eigenvalues) = observer(plant, &spec.observer)?;
+        poll()?;
         let fw =
             falb_wolovich_given(&plant.A, &plant.B, &plant.C, &spec.channel_poles, spec.relative_degrees.as_deref())?;
         let A_f = &plant.A - &plant.B * &fw.K;
         let B_f = &plant.B * &fw.F;
+        poll()?;
         let decoupled_eigenvalues = eigenvalues(&A_f).map_err(|e| eigen_error("plant", "A − BK", e))?;
+        poll()?;
         check_zero_dynamics(plant, &fw.sigma(), &A_f)?;
         let (G_g, L_g) = internal_model(&spec.reference_filter_poles, spec.regressor_scaling);
         let (G_w, L_w) = internal_model(&spec.disturbance_filter_poles, spec.regressor_scaling);

@@ -92,13 +92,43 @@ pub(super) fn simulate(
     }
 }
 
+/// The last samples of an m-channel signal v, enough to read channel i at any delay up to the
+/// longest given: v_i(k − d), 0 before k = 0.
+struct PastSamples {
+    /// Row k mod len: v(k).
+    past: Vec<f64>,
+    len: usize,
+    m: usize,
+}
+
+impl PastSamples {
+    fn new(m: usize, delays: &[&[usize]]) -> Self {
+        let len = delays.iter().flat_map(|d| d.iter()).max().map_or(1, |x| x + 1);
+        PastSamples { past: vec![0.0; len * m], len, m }
+    }
+
+    /// Records v(k).
+    fn push(&mut self, k: usize, v: &[f64]) {
+        let row = k % self.len;
+        self.past[row * self.m..(row + 1) * self.m].copy_from_slice(v);
+    }
+
+    /// v_i(k − d), 0 before k = 0.
+    fn at(&self, k: usize, d: usize, i: usize) -> f64 {
+        if k >= d {
+            self.past[((k - d) % self.len) * self.m + i]
+        } else {
+            0.0
+        }
+    }
+}
+
 /// The actuator in whole samples: u_p,i(k) = sat_i(u_f,i(k − d_a,i)), u_f = 0 before k = 0.
 struct ActuatorLine {
     d: Vec<usize>,
     actuator: Actuator,
-    /// Row k mod len: u_f(k).
-    past: Vec<f64>,
-    len: usize,
+    /// u_f's past.
+    past: PastSamples,
     u_p: Vec<f64>,
     limited: Vec<bool>,
 }
@@ -107,25 +137,15 @@ impl ActuatorLine {
     fn new(actuator: &Actuator, T: f64) -> Result<Self, KeyError> {
         let d = delay_samples("truth.actuator_delays", &actuator.delays, T)?;
         let m = d.len();
-        let len = d.iter().max().map_or(1, |x| x + 1);
-        Ok(ActuatorLine {
-            d,
-            actuator: actuator.clone(),
-            past: vec![0.0; len * m],
-            len,
-            u_p: vec![0.0; m],
-            limited: vec![false; m],
-        })
+        let past = PastSamples::new(m, &[&d]);
+        Ok(ActuatorLine { d, actuator: actuator.clone(), past, u_p: vec![0.0; m], limited: vec![false; m] })
     }
 
     /// Records u_f(k) and returns u_p(k).
     fn apply(&mut self, k: usize, u_f: &[f64]) -> &[f64] {
-        let m = u_f.len();
-        self.past[(k % self.len) * m..(k % self.len + 1) * m].copy_from_slice(u_f);
-        for i in 0..m {
-            let d = self.d[i];
-            let v = if k >= d { self.past[((k - d) % self.len) * m + i] } else { 0.0 };
-            (self.u_p[i], self.limited[i]) = self.actuator.clip(i, v);
+        self.past.push(k, u_f);
+        for (i, &d) in self.d.iter().enumerate() {
+            (self.u_p[i], self.limited[i]) = self.actuator.clip(i, self.past.at(k, d, i));
         }
         &self.u_p
     }
@@ -152,9 +172,8 @@ struct TrueInput {
     d: Vec<usize>,
     d_true: Vec<usize>,
     F: DMatrix<f64>,
-    /// Row k mod len: u(k).
-    past: Vec<f64>,
-    len: usize,
+    /// u's past.
+    past: PastSamples,
     du: Vec<f64>,
     u_f: Vec<f64>,
 }
@@ -169,25 +188,15 @@ impl TrueInput {
         let (d, d_true) =
             (delay_samples("plant.delays", &p.delays, T)?, delay_samples("truth.delays", &truth.delays, T)?);
         let m = d.len();
-        let len = d.iter().chain(&d_true).max().map_or(1, |x| x + 1);
-        Ok(Some(TrueInput {
-            d,
-            d_true,
-            F: design.F().clone(),
-            past: vec![0.0; len * m],
-            len,
-            du: vec![0.0; m],
-            u_f: vec![0.0; m],
-        }))
+        let past = PastSamples::new(m, &[&d, &d_true]);
+        Ok(Some(TrueInput { d, d_true, F: design.F().clone(), past, du: vec![0.0; m], u_f: vec![0.0; m] }))
     }
 
     /// Records u(k) and returns the true plant input from the controller's `u_f` (in `self.u_f`).
     fn apply(&mut self, k: usize, u: &[f64]) -> &[f64] {
-        let m = u.len();
-        self.past[(k % self.len) * m..(k % self.len + 1) * m].copy_from_slice(u);
-        let at = |d: usize, i: usize| if k >= d { self.past[((k - d) % self.len) * m + i] } else { 0.0 };
-        for i in 0..m {
-            self.du[i] = at(self.d_true[i], i) - at(self.d[i], i);
+        self.past.push(k, u);
+        for i in 0..u.len() {
+            self.du[i] = self.past.at(k, self.d_true[i], i) - self.past.at(k, self.d[i], i);
         }
         mat_vec(&self.F, &self.du, &mut self.u_f, true);
         &self.u_f

@@ -26,7 +26,7 @@ use crate::sim::Peaks;
 pub use output::{header, read_runs_csv, write_runs_csv, RunsFile};
 pub use path::{KeyPath, Shape};
 pub use summary::{quantile, AxisMeta, ChannelQuantiles, PointSummary, Quantiles, StudyMeta, Summary, QUANTILES};
-pub use sweep::{run_one, run_seed, sweep, Outcome, Row, RunSpec, Shard, Sweep, SweepOptions};
+pub use sweep::{run_one, run_one_until, run_seed, sweep, Outcome, Row, RunSpec, Shard, Sweep, SweepOptions};
 pub use tune::{tune, Objective, OnPoint, TuneCurve, TuneOptions, TunePoint, TuneResult, TuneSpec};
 
 /// A study-file error: the key path in the study file (`grid."design.mu[0]"[2]`) and what was

@@ -65,7 +65,9 @@ impl RunSpec {
         self.simulate_until(&|| false)
     }
 
-    fn simulate_until(&self, stop: &dyn Fn() -> bool) -> Result<SimResult, String> {
+    /// [`RunSpec::simulate`] that `stop` ends early (checked as the run goes; the result's outcome is
+    /// then [`crate::sim::Outcome::Interrupted`]): how a front end lets Ctrl-C stop one run.
+    pub fn simulate_until(&self, stop: &dyn Fn() -> bool) -> Result<SimResult, String> {
         let (budget, bounds) = self.limits();
         Scenario::from_document(&self.scenario)
             .map_err(|e| e.to_string())
@@ -204,6 +206,11 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
 /// Carries out one run: its row (a diverging or invalid run is a row too, never an error).
 pub fn run_one(spec: &RunSpec) -> Row {
     execute(spec, &|| false).expect("a run without a stop signal is never interrupted")
+}
+
+/// [`run_one`] that `stop` ends early (checked as the run goes): `None` when it did.
+pub fn run_one_until(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
+    execute(spec, stop)
 }
 
 /// Runs with index ≡ `index` (mod `count`): machine `index` of `count`.

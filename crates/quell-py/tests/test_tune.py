@@ -1,0 +1,158 @@
+"""quell.tune: the same searches as the CLI's `quell tune` on the same study (its tune.csv, read by
+pandas, is the independent side: another front end, through a file), closed forms (the coarse
+points are log-spaced between the bounds), the sweep (an evaluation's figures are those a sweep of
+the same μ gives), argument errors naming the Python argument, and Ctrl-C keeping the points so
+far; plus Ctrl-C during quell.run_one."""
+
+import pickle
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import numpy as np
+import pytest
+
+import quell
+from conftest import EXAMPLES
+
+pd = pytest.importorskip("pandas")
+
+
+def unstable_first_order():
+    """Not the paper's plant: x' = 0.5 x + u_f(t − 0.05), y = x, tracking 1 + 0.5 sin t."""
+    p = quell.Plant([[0.5]], [[1.0]], [[1.0]], delays=[0.05])
+    return quell.Scenario(p, [{"bias": 1.0, "harmonics": [{"amplitude": 0.5, "frequency": 1.0}]}], t_end=20.0,
+                          channel_poles=[[-2.0]], reference_filter_poles=[[-1.0, -2.0, -3.0]], mu=[10.0], beta=1.0,
+                          observer_poles=[-5.0])
+
+
+def test_tune_gives_the_clis_evaluations_and_choice(quell_bin, tmp_path):
+    study = tmp_path / "tune.toml"
+    study.write_text(textwrap.dedent(f"""\
+        scenario = "{EXAMPLES / 'paper.toml'}"
+        [simulation]
+        t_end = 10.0
+        [tune]
+        objective = "tail_rms_e"
+        mu = [2.0, 200.0]
+        max_u = 22.0
+        points = 3
+        refine = 2
+        """))
+    out = tmp_path / "out"
+    run = subprocess.run([str(quell_bin), "tune", str(study), "--out", str(out), "--no-plots", "--jobs", "1"],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    cli = pd.read_csv(out / "tune.csv")
+    r = quell.tune(quell.paper_example(), mu=[2.0, 200.0], objective="tail_rms_e", max_u=22.0, points=3, refine=2,
+                   simulation={"t_end": 10.0}, jobs=1)
+    ours = r.frame
+    assert list(ours.columns) == list(cli.columns)
+    # The CLI writes every number in shortest round-trip form: the same computation is equal exactly.
+    for column in ("channel", "mu", "objective", "tail_max_e", "tail_rms_e", "max_u", "max_uf", "chosen"):
+        np.testing.assert_array_equal(ours[column].astype(float).to_numpy(), cli[column].astype(float).to_numpy(),
+                                      err_msg=column)
+    assert list(ours["outcome"]) == list(cli["outcome"])
+    import json
+
+    assert r.mu == json.loads((out / "tune.json").read_text())["mu"]
+    assert r.objective == "tail_rms_e" and not r.partial and r.joint is not None
+
+
+def test_coarse_points_are_log_spaced_and_the_best_is_the_feasible_minimum():
+    s = unstable_first_order()
+    r = quell.tune(s, mu=[1.0, 100.0], objective="tail_rms_e", points=5, refine=0, jobs=1)
+    frame = r.frame
+    # Closed form of the log grid: μ_k = 1 · 100^(k/4); 1e-12 relative is a few ulps of powf.
+    np.testing.assert_allclose(frame["mu"], [100.0 ** (k / 4) for k in range(5)], rtol=1e-12)
+    feasible = frame.dropna(subset=["objective"])
+    assert len(r.best) == 1 and r.best["objective"][0] == feasible["objective"].min()
+    assert r.mu == [r.best["mu"][0]] and r.reproduced == [True]
+    # The figures of an evaluation are those a sweep of the same μ gives (another path: the
+    # study's grid); the same computation, so equal to the last bit.
+    mu = float(r.best["mu"][0])
+    row = quell.Study(s, grid={"design.mu[0]": [mu]}).sweep(jobs=1).frame.iloc[0]
+    for figure in ("tail_rms_e", "tail_max_e", "max_u", "max_uf"):
+        assert row[f"{figure}1"] == r.best[figure][0], figure
+
+
+def test_results_pickle_compare_and_rebuild_from_json():
+    r = quell.tune(unstable_first_order(), mu=[1.0, 10.0], points=2, refine=0, jobs=1)
+    assert pickle.loads(pickle.dumps(r)) == r and quell.TuneResult(r.to_json()) == r
+    assert repr(r).startswith("TuneResult(objective='settle_t', mu=[") and len(r) == 2
+    with pytest.raises(quell.ScenarioError, match="^json: not a quell tuning result"):
+        quell.TuneResult("{}")
+
+
+def test_bad_arguments_are_named_as_python_spells_them():
+    s = quell.paper_example()
+    cases = [
+        (dict(mu=[[1.0, 2.0]]), "mu: expected 2 entries (one per channel), found 1", "tune.mu"),
+        (dict(mu=[5.0, 1.0]), "mu[0]: expected 0 < μ_min ≤ μ_max", "tune.mu[0]"),
+        (dict(mu=[1.0, 2.0], objective="fast"), 'objective: expected "settle_t", "tail_rms_e" or "tail_max_e"',
+         "tune.objective"),
+        (dict(mu=[1.0, 2.0], max_u=[1.0, 0.0]), "max_u[1]: expected a limit on max |u_i| > 0, found 0",
+         "tune.max_u[1]"),
+        (dict(mu=[1.0, 2.0], points=1), "points: expected an integer in [2, 10000], found 1", "tune.points"),
+    ]
+    for kwargs, start, key in cases:
+        with pytest.raises(quell.ScenarioError) as info:
+            quell.tune(s, **kwargs)
+        assert str(info.value).startswith(start), str(info.value)
+        assert info.value.key == key
+    with pytest.raises(TypeError, match="^points: expected an int, found a bool"):
+        quell.tune(s, mu=[1.0, 2.0], points=True)
+    with pytest.raises(quell.ScenarioError, match=r"^jobs: "):
+        quell.tune(s, mu=[1.0, 2.0], jobs=0)
+
+
+def interrupt(code, wait):
+    """Runs `code` in a child Python, sends SIGINT `wait` seconds after it prints 'ready', and returns
+    its stdout, stderr and the seconds from the signal to its exit."""
+    child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert child.stdout.readline().strip() == "ready"
+    time.sleep(wait)
+    sent = time.perf_counter()
+    child.send_signal(signal.SIGINT)
+    out, err = child.communicate(timeout=120)
+    return out, err, time.perf_counter() - sent
+
+
+def test_ctrl_c_stops_a_tuning_keeping_the_points_so_far():
+    """Uninterrupted, this tuning takes minutes (2 × 400 runs of 200 s); interrupted after 3 s, the
+    KeyboardInterrupt carries the evaluations made (a paper-example run of 200 s takes well under
+    a second even at load 10) and arrives within the 10 s allowed for a loaded machine."""
+    code = textwrap.dedent("""\
+        import quell
+        print('ready', flush=True)
+        try:
+            quell.tune(quell.paper_example(), mu=[1.0, 100.0], points=400, refine=0,
+                       simulation={"t_end": 200.0}, jobs=1)
+            print('finished')
+        except KeyboardInterrupt as e:
+            print('partial', e.result.partial, len(e.result), e.result.joint is None, flush=True)
+        """)
+    out, err, seconds = interrupt(code, 3.0)
+    assert "finished" not in out, out
+    words = out.split()
+    assert words[:2] == ["partial", "True"] and int(words[2]) >= 1 and words[3] == "True", (out, err)
+    assert seconds < 10
+
+
+def test_ctrl_c_stops_run_one_and_a_specs_simulation():
+    """A run of 10⁵ s (tens of seconds) stopped after 1 s raises KeyboardInterrupt within 10 s."""
+    for call in ("quell.run_one(spec)", "spec.simulate()"):
+        code = textwrap.dedent(f"""\
+            import quell
+            study = quell.Study(quell.paper_example(), simulation={{"t_end": 1e5, "output_step": 10.0}},
+                                max_steps=10**9)
+            spec = study.spec(0)
+            print('ready', flush=True)
+            {call}
+            print('finished', flush=True)
+            """)
+        out, err, seconds = interrupt(code, 1.0)
+        assert "KeyboardInterrupt" in err and "finished" not in out, (call, out, err)
+        assert seconds < 10, call
