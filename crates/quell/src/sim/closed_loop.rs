@@ -274,6 +274,16 @@ impl DelaySystem for ContinuousLoop<'_> {
         self.layout.nz..self.layout.x
     }
 
+    /// The estimates η̂_i reach the command u_i = −η̂_iᵀ ξ̂ (25), which the filter banks and the
+    /// plant read, multiplied by the regressor: an error δ in one entry moves u_i by ξ̂_j δ. Their
+    /// absolute tolerance is `atol` / max(1, max_j |ξ̂_j|), so that the command is held to `atol`
+    /// whatever the regressor's units (ξ̂ ≈ 1e5 with forces in newtons, where η̂'s errors within
+    /// `atol` would be errors of 1e-2 in u).
+    fn absolute_tolerances(&self, s: &[f64], atol: f64, out: &mut [f64]) {
+        let xi = self.eq.regressor(s).iter().fold(1.0f64, |m, v| m.max(v.abs()));
+        out[self.layout.nz..self.layout.x].fill(atol / xi);
+    }
+
     /// max_i μ_i · (Gershgorin bound of λ_max(Ω_i)).
     fn implicit_rate(&self, s: &[f64]) -> f64 {
         let (l, q) = (&self.layout, self.layout.q);

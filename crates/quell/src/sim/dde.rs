@@ -68,6 +68,10 @@ pub trait DelaySystem {
     fn implicit(&self) -> std::ops::Range<usize> {
         0..0
     }
+    /// Writes into `out` (one entry per component, initially all `atol`) the absolute tolerance of
+    /// the components whose errors the system amplifies on the way to what it reads or outputs, at
+    /// the state `y`: `atol` or less. Called at every step point. Default: every component's is `atol`.
+    fn absolute_tolerances(&self, _y: &[f64], _atol: f64, _out: &mut [f64]) {}
     /// An upper bound of M(y)'s spectral radius, the rate of the fastest implicit mode.
     fn implicit_rate(&self, _y: &[f64]) -> f64 {
         0.0
@@ -424,6 +428,8 @@ struct Steps<'a, S: DelaySystem> {
     y_stage: Vec<f64>,
     err5: Vec<f64>,
     err3: Vec<f64>,
+    /// Each component's absolute tolerance at the step start ([`DelaySystem::absolute_tolerances`]).
+    atol: Vec<f64>,
     /// The step's dense output: Newton coefficients, coefficient-major over the `len` components it
     /// covers (the delayed prefix, or the interpolated prefix when an output falls in the step),
     /// and their nodes.
@@ -494,6 +500,7 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
             y_stage: vec![0.0; n],
             err5: vec![0.0; n],
             err3: vec![0.0; n],
+            atol: vec![opts.atol; n],
             dense: vec![0.0; NCOEF * n_i],
             nodes: DOP853_NODES,
             y_out: vec![0.0; n_o],
@@ -512,6 +519,7 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
             sys,
             opts,
         };
+        steps.sys.absolute_tolerances(&steps.y, opts.atol, &mut steps.atol);
         steps.restart();
         let (t, n) = (steps.t, steps.n);
         steps.h = initial_step(
@@ -592,7 +600,7 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
         lincomb(&mut self.err5, &self.k, n, &E5, 1.0, 0..n);
         self.err3.fill(0.0);
         lincomb(&mut self.err3, &self.k, n, &E3, 1.0, 0..n);
-        let (s5, s3) = error_sums(&self.err5, &self.err3, &self.y, &self.y_new, self.opts.rtol, self.opts.atol);
+        let (s5, s3) = error_sums(&self.err5, &self.err3, &self.y, &self.y_new, self.opts.rtol, &self.atol);
         let mut deno = s5 + 0.01 * s3;
         if deno <= 0.0 {
             deno = 1.0;
@@ -627,7 +635,7 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
         let len = if outputs { self.n_i } else { self.nd };
         let mut last = 13;
         if self.nd > 0 || outputs {
-            let tol = (self.opts.rtol, self.opts.atol);
+            let tol = (self.opts.rtol, &self.atol[..]);
             match self.stencil.interpolate(h, &self.y_new, &self.k[12 * n..13 * n], len, tol, &mut self.dense) {
                 Some(nodes) => self.nodes = nodes,
                 None => {
@@ -737,6 +745,7 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
         }
         self.t = step.t_new;
         std::mem::swap(&mut self.y, &mut self.y_new);
+        self.sys.absolute_tolerances(&self.y, self.opts.atol, &mut self.atol);
         if step.at_breakpoint {
             self.fresh_stencil = false;
             self.stats.breakpoints += 1;
@@ -826,14 +835,14 @@ fn lincomb_inline(out: &mut [f64], k: &[f64], n: usize, c: &[f64], scale: f64, r
 }
 
 with_avx2! {
-    /// dop853.f's error sums Σ (e5_i/sk_i)² and Σ (e3_i/sk_i)², sk_i = atol + rtol·max(|y_i|, |y_new_i|),
+    /// dop853.f's error sums Σ (e5_i/sk_i)² and Σ (e3_i/sk_i)², sk_i = atol_i + rtol·max(|y_i|, |y_new_i|),
     /// in four interleaved partial sums (which the compiler may keep in vector lanes).
-    fn error_sums(err5: &[f64], err3: &[f64], y: &[f64], y_new: &[f64], rtol: f64, atol: f64) -> (f64, f64) {
+    fn error_sums(err5: &[f64], err3: &[f64], y: &[f64], y_new: &[f64], rtol: f64, atol: &[f64]) -> (f64, f64) {
         let n = err5.len();
-        let (err3, y, y_new) = (&err3[..n], &y[..n], &y_new[..n]);
+        let (err3, y, y_new, atol) = (&err3[..n], &y[..n], &y_new[..n], &atol[..n]);
         let (mut s5, mut s3) = ([0.0; 4], [0.0; 4]);
         for i in 0..n {
-            let sk = 1.0 / (atol + rtol * y[i].abs().max(y_new[i].abs()));
+            let sk = 1.0 / (atol[i] + rtol * y[i].abs().max(y_new[i].abs()));
             let (e5, e3) = (err5[i] * sk, err3[i] * sk);
             s5[i % 4] += e5 * e5;
             s3[i % 4] += e3 * e3;

@@ -78,7 +78,7 @@ impl Stencil {
         y_new: &[f64],
         f_new: &[f64],
         len: usize,
-        (rtol, atol): (f64, f64),
+        (rtol, atol): (f64, &[f64]),
         out: &mut [f64],
     ) -> Option<Nodes> {
         if self.count < 3 || len > self.len {
@@ -135,7 +135,7 @@ impl Stencil {
             .fold(0.0, f64::max);
         let c7 = &rows[(NCOEF - 1) * len..];
         // (Written to decline NaN as well.)
-        if !c7.iter().zip(&y_new[..len]).all(|(c, y)| c.abs() * omega <= KAPPA * (atol + rtol * y.abs())) {
+        if !c7.iter().zip(&y_new[..len]).zip(atol).all(|((c, y), a)| c.abs() * omega <= KAPPA * (a + rtol * y.abs())) {
             return None;
         }
         Some(nodes)
@@ -164,7 +164,7 @@ mod tests {
         let (v, d) = pt(h);
         let mut out = vec![0.0; NCOEF * 2];
         // A loose tolerance: these tests are about the polynomial, not the acceptance test.
-        s.interpolate(h, &v, &d, 2, (1.0, 1.0), &mut out).map(|z| (out, z))
+        s.interpolate(h, &v, &d, 2, (1.0, &[1.0; 2]), &mut out).map(|z| (out, z))
     }
 
     fn max_error(y: impl Fn(f64) -> f64, (c, z): &(Vec<f64>, Nodes), h: f64) -> f64 {
@@ -208,23 +208,23 @@ mod tests {
         let mut s = Stencil::new(1);
         let mut out = vec![0.0; NCOEF];
         s.restart(0.0, &[1.0], &[1.0]);
-        assert!(s.interpolate(0.1, &[1.0], &[1.0], 1, (1.0, 1.0), &mut out).is_none(), "one point");
+        assert!(s.interpolate(0.1, &[1.0], &[1.0], 1, (1.0, &[1.0; 2]), &mut out).is_none(), "one point");
         s.push(0.1, &[1.0], &[1.0]);
-        assert!(s.interpolate(0.1, &[1.0], &[1.0], 1, (1.0, 1.0), &mut out).is_none(), "two points");
+        assert!(s.interpolate(0.1, &[1.0], &[1.0], 1, (1.0, &[1.0; 2]), &mut out).is_none(), "two points");
         s.push(0.2, &[1.0], &[1.0]);
-        assert!(s.interpolate(0.1, &[1.0], &[1.0], 1, (1.0, 1.0), &mut out).is_some(), "a constant");
+        assert!(s.interpolate(0.1, &[1.0], &[1.0], 1, (1.0, &[1.0; 2]), &mut out).is_some(), "a constant");
         // The two earlier steps span more than MAX_SPAN steps: declined.
-        assert!(s.interpolate(0.05, &[1.0], &[1.0], 1, (1.0, 1.0), &mut out).is_none(), "span 4");
+        assert!(s.interpolate(0.05, &[1.0], &[1.0], 1, (1.0, &[1.0; 2]), &mut out).is_none(), "span 4");
         // A point MIN_GAP/2 before the newest: declined.
         s.push(0.2 + 0.1 / 16.0, &[1.0], &[1.0]);
-        assert!(s.interpolate(0.1, &[1.0], &[1.0], 1, (1.0, 1.0), &mut out).is_none(), "gap 1/16");
+        assert!(s.interpolate(0.1, &[1.0], &[1.0], 1, (1.0, &[1.0; 2]), &mut out).is_none(), "gap 1/16");
         // e^(20 t) on steps of 0.1: the seventh divided difference is far above a 1e-9 tolerance.
         let mut s = Stencil::new(1);
         for t in [-0.2, -0.1, 0.0f64] {
             s.push(t, &[(20.0 * t).exp()], &[20.0 * (20.0 * t).exp()]);
         }
         let (y1, f1) = (2.0f64.exp(), 20.0 * 2.0f64.exp());
-        assert!(s.interpolate(0.1, &[y1], &[f1], 1, (1e-9, 1e-9), &mut out).is_none(), "stiff");
-        assert!(s.interpolate(0.1, &[y1], &[f1], 1, (1e3, 1e3), &mut out).is_some(), "loose");
+        assert!(s.interpolate(0.1, &[y1], &[f1], 1, (1e-9, &[1e-9]), &mut out).is_none(), "stiff");
+        assert!(s.interpolate(0.1, &[y1], &[f1], 1, (1e3, &[1e3]), &mut out).is_some(), "loose");
     }
 }
