@@ -23,7 +23,7 @@ pub struct DesignArgs {
     #[arg(long, value_name = "OUT.toml")]
     pub write: Option<PathBuf>,
     /// With --auto: when the error should be down to 0.2 % of the reference's peak (s; default
-    /// half of simulation.t_end).
+    /// simulation.t_end/20).
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     pub convergence_time: Option<f64>,
     /// With --auto: actuator limit on |u_f,i|, the plant input u_f = −K x̂ + F u_d.

@@ -603,8 +603,9 @@ pub fn paper_example(py: Python<'_>) -> PyResult<PyScenario> {
 /// >>> text = quell.paper_example().to_toml()
 /// >>> plant, rest = text.split("[design]")
 /// >>> s, report = quell.auto_design(plant + "[design]\n" + rest[rest.index("[[reference"):])
-/// >>> report["passed"], [c["key"] for c in report["choices"]][:2]
-/// (True, ['design.channel_poles', 'design.reference_filter_poles'])
+/// >>> keys = [c["key"] for c in report["choices"]]
+/// >>> report["passed"], "design.channel_poles" in keys, "design.mu" in keys
+/// (True, True, True)
 #[pyfunction]
 #[pyo3(signature = (text, *, convergence_time=None, u_limit=None))]
 pub fn auto_design<'py>(

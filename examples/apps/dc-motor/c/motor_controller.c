@@ -2,7 +2,7 @@
 #include "motor_controller.h"
 
 /* A header from another export fails here (size -1): regenerate both files together. */
-typedef char motor_header_matches_source[MOTOR_LAYOUT_ID == 0x5e7b56025e47c9fau ? 1 : -1];
+typedef char motor_header_matches_source[MOTOR_LAYOUT_ID == 0xdb2d449a1147c88au ? 1 : -1];
 
 /* Core (observers (6), (14), (20) with (5) substituted) at ZOH: z(k+1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
 static const double motor_PhiGamma_z[MOTOR_NZ][MOTOR_NZ + 3 * MOTOR_M] = {
@@ -33,7 +33,7 @@ static const double motor_gamma_1[3] = {1.6276028343005878e-10, 4.84424958253186
 /* Per channel: G_ii's numerator q_i0, the adaptive law's c_i = T_s mu_i (33). */
 static const double motor_q0[MOTOR_M] = {26979.748733161097};
 
-static const double motor_c[MOTOR_M] = {0.006756957374481157};
+static const double motor_c[MOTOR_M] = {0.06756957374481157};
 
 /* H(s) = 1/(beta s + 1) at ZOH: x <- a x + b v, a = exp(-T_s/beta), b = 1 - a (beta = 0.5). */
 static const double motor_a = 0.9980019986673331;

@@ -63,6 +63,6 @@ void motor_command(const motor_state *s, double u[MOTOR_M]);
 #endif
 
 /* Identifies this header's source: motor_controller.c compiles only with it. */
-#define MOTOR_LAYOUT_ID 0x5e7b56025e47c9fau
+#define MOTOR_LAYOUT_ID 0xdb2d449a1147c88au
 
 #endif /* MOTOR_CONTROLLER_H */
