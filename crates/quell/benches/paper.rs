@@ -33,5 +33,25 @@ fn paper(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, paper);
+/// The cost of a solver step at a loose and a tight tolerance (the Monte Carlo study's 1e-6, the
+/// examples' 1e-9): the run's time over its accepted steps, printed with the steps.
+fn per_step(c: &mut Criterion) {
+    let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+    let d = Design::new(&s.plant, &s.design).unwrap();
+    let mut g = c.benchmark_group("paper_per_step");
+    g.sample_size(20);
+    for tol in [1e-6, 1e-9] {
+        let settings = RunSettings::continuous(100.0, 0.1, tol, tol);
+        let run = || {
+            Run::new(&d, &s.reference, &s.disturbance, settings.clone())
+                .simulate(|_| ControlFlow::Continue(()))
+                .unwrap()
+        };
+        eprintln!("paper example at rtol = atol = {tol:e}: {:?}", run().stats);
+        g.bench_function(format!("continuous_100s_rtol{tol:e}"), |b| b.iter(run));
+    }
+    g.finish();
+}
+
+criterion_group!(benches, paper, per_step);
 criterion_main!(benches);

@@ -6,7 +6,7 @@
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::PathBuf;
 
-use quell::study::Study;
+mod fuzz_entry;
 
 /// A tiny LCG: the same cases on every run.
 struct Lcg(u64);
@@ -76,7 +76,7 @@ fn mutated_study_files_never_panic_and_errors_name_a_key() {
     let (mut refused, mut cases) = (0, 0);
     for case in 0..4000 {
         let text = mutate(&bases[case % bases.len()], &mut rng);
-        let result = catch_unwind(AssertUnwindSafe(|| Study::from_toml(&text, Some(&dir))));
+        let result = catch_unwind(AssertUnwindSafe(|| fuzz_entry::study(&text, Some(&dir))));
         let Ok(result) = result else { panic!("case {case} panicked on:\n{text}") };
         cases += 1;
         if let Err(e) = result {
