@@ -273,15 +273,28 @@ pub fn fmt_complex_list(z: &[Complex<f64>]) -> String {
     z.iter().map(fmt_complex).collect::<Vec<_>>().join(", ")
 }
 
+/// Largest ‖[A B]·T‖₁ [`zoh_unchecked`] discretizes: 10¹⁵ time constants of the fastest block in
+/// one sample, far past any meaningful sample time, and still about 50 squarings, whose norm
+/// estimates (up to the 13th power) stay finite.
+pub(crate) const MAX_EXP_NORM: f64 = 1e15;
+
 /// Exact zero-order-hold discretization of x' = A x + B v over a sample time T:
 /// x_{k+1} = Φ x_k + Γ v_k with Φ = e^{AT}, Γ = ∫_0^T e^{As} ds B, both read off
 /// exp([[A, B], [0, 0]]·T) (Van Loan's block method).
 /// A square and B with A's rows (the controller's and the sampled loop's own blocks).
+///
+/// Beyond ‖[A B]·T‖₁ = [`MAX_EXP_NORM`] both blocks come back NaN, for the callers' finiteness
+/// checks to refuse: the scaling-and-squaring's norm estimates of powers of such a matrix overflow
+/// to ∞ and its squaring count saturates (2⁶⁴ squarings, a hang).
 pub(crate) fn zoh_unchecked(A: &DMatrix<f64>, B: &DMatrix<f64>, T: f64) -> (DMatrix<f64>, DMatrix<f64>) {
     let (n, m) = (A.nrows(), B.ncols());
     let mut M = DMatrix::zeros(n + m, n + m);
     M.view_mut((0, 0), (n, n)).copy_from(&(A * T));
     M.view_mut((0, n), (n, m)).copy_from(&(B * T));
+    let norm = M.column_iter().map(|c| c.iter().map(|v| v.abs()).sum::<f64>()).fold(0.0, f64::max);
+    if !(norm <= MAX_EXP_NORM) {
+        return (DMatrix::from_element(n, n, f64::NAN), DMatrix::from_element(n, m, f64::NAN));
+    }
     let E = M.exp();
     (E.view((0, 0), (n, n)).into_owned(), E.view((0, n), (n, m)).into_owned())
 }
@@ -317,6 +330,19 @@ mod tests {
         let (P, G) = zoh_unchecked(&A, &B, T);
         assert!((&P - DMatrix::from_row_slice(2, 2, &[1.0, T, 0.0, 1.0])).norm() < 1e-15);
         assert!((&G - DMatrix::from_row_slice(2, 1, &[T * T / 2.0, T])).norm() < 1e-15);
+    }
+
+    #[test]
+    fn zoh_beyond_the_norm_bound_is_nan_and_returns() {
+        // x' = −x + v: Φ = e^{−T} = 0 and Γ = 1 − e^{−T} = 1 (closed form) at ‖[A B]T‖₁ = 2T = 1e15;
+        // past the bound both are NaN. Before, T = 1e40 ran for ever (2⁶⁴ squarings).
+        let (A, B) = (DMatrix::from_element(2, 2, 0.0) - DMatrix::identity(2, 2), DMatrix::identity(2, 2));
+        let (P, G) = zoh_unchecked(&A, &B, 0.5e15);
+        assert!(P.norm() < 1e-300 && (&G - DMatrix::identity(2, 2)).norm() < 1e-12, "{P} {G}");
+        for T in [1e16, 1e40, 1e300, f64::INFINITY] {
+            let (P, G) = zoh_unchecked(&A, &B, T);
+            assert!(P.iter().chain(G.iter()).all(|v| v.is_nan()), "T = {T}");
+        }
     }
 
     /// xorshift64*, seeded, so failures reproduce.

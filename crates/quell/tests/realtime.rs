@@ -10,7 +10,7 @@ use std::ops::ControlFlow;
 
 use common::*;
 use quell::sim::{Outcome, Run, RunSettings};
-use quell::{Controller, ControllerError, Design};
+use quell::{Controller, ControllerError, Design, Plant};
 
 /// Counts allocations made by the current thread while `COUNTING` is set.
 struct Counting;
@@ -139,16 +139,31 @@ fn step_refuses_inputs_of_the_wrong_length_and_keeps_its_state() {
 
 #[test]
 fn a_discretization_that_overflows_is_refused_naming_the_block() {
-    // T_s = 1e100 s passes the sample-time and whole-delay checks (1/1e100 rounds to 0 samples), but
-    // e^(A_z T_s) by scaling and squaring overflows to NaN; before, the controller was built and
-    // its second step returned NaN.
+    // A positive delay shorter than the tolerance of one sample was taken for 0 samples (τ = 1 s at
+    // T_s = 1e10 s: the controller dropped the delay); it is now not a whole number of samples.
     let d = paper_design();
-    match Controller::new(&d, 1e100) {
-        Err(ControllerError::NotFinite { what, sample_time }) => {
-            assert_eq!(sample_time, 1e100);
-            assert!(what.contains("[Φ_z Γ_z]"), "{what}");
+    for T in [1e10, 1e40, 1e100] {
+        match Controller::new(&d, T) {
+            Err(ControllerError::DelayNotMultiple { channel: 0, delay, sample_time, .. }) => {
+                assert_eq!((delay, sample_time), (1.0, T))
+            }
+            other => panic!("T_s = {T}: {other:?}"),
         }
-        other => panic!("{other:?}"),
+    }
+    // Without delays such sample times reach the exact discretization: e^(A_z T_s) overflowed to
+    // NaN at 1e100 and ran for ever at 1e40 (2⁶⁴ squarings); both are refused naming the block.
+    let p = paper_plant();
+    let undelayed = Plant::new(p.A.clone(), p.B.clone(), p.C.clone(), p.D.clone(), p.Q.clone(), vec![0.0, 0.0], None)
+        .expect("the paper's plant without delays is well formed");
+    let d = Design::new(&undelayed, &paper_spec()).expect("the undelayed paper plant is designed");
+    for T in [1e40, 1e100] {
+        match Controller::new(&d, T) {
+            Err(ControllerError::NotFinite { what, sample_time }) => {
+                assert_eq!(sample_time, T);
+                assert!(what.contains("[Φ_z Γ_z]"), "{what}");
+            }
+            other => panic!("T_s = {T}: {other:?}"),
+        }
     }
     let e = Controller::new(&d, 1e100).unwrap_err().to_string();
     assert!(e.starts_with("simulation.sample_time: the observers' [Φ_z Γ_z]"), "{e}");
@@ -174,11 +189,19 @@ fn a_discretization_that_overflows_is_refused_naming_the_block() {
     // At the limit, T_s μ_1 = 1e150 (T_s = 1 s, both delays whole), the controller is built.
     spec.mu = vec![1e150, 30.0];
     assert!(Controller::new(&Design::new(&paper_plant(), &spec).unwrap(), 1.0).is_ok());
-    let e = Controller::new(&big, 1e10).unwrap_err();
+    // T_s μ_1 = 1e310 overflows; at T_s = 1e10 s only the undelayed plant has whole delays.
+    let big_undelayed = Design::new(&undelayed, &spec_mu(1e300)).unwrap();
+    let e = Controller::new(&big_undelayed, 1e10).unwrap_err();
     assert!(
         matches!(&e, ControllerError::NotFinite { what, .. } if what == "channel 1's adaptation step T_s μ_i"),
         "{e:?}"
     );
+}
+
+fn spec_mu(mu_1: f64) -> quell::DesignSpec {
+    let mut spec = paper_spec();
+    spec.mu[0] = mu_1;
+    spec
 }
 
 #[test]
