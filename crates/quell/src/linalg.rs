@@ -292,7 +292,7 @@ pub(crate) fn zoh_unchecked(A: &DMatrix<f64>, B: &DMatrix<f64>, T: f64) -> (DMat
     M.view_mut((0, 0), (n, n)).copy_from(&(A * T));
     M.view_mut((0, n), (n, m)).copy_from(&(B * T));
     let norm = M.column_iter().map(|c| c.iter().map(|v| v.abs()).sum::<f64>()).fold(0.0, f64::max);
-    if !(norm <= MAX_EXP_NORM) {
+    if norm > MAX_EXP_NORM || M.iter().any(|v| !v.is_finite()) {
         return (DMatrix::from_element(n, n, f64::NAN), DMatrix::from_element(n, m, f64::NAN));
     }
     let E = M.exp();
