@@ -183,10 +183,8 @@ pub(crate) fn whole(tau: f64, T: f64) -> bool {
     delay_within(tau, T, WHOLE_TOLERANCE)
 }
 
-/// A positive delay must be at least one sample: τ/T within the tolerance of 0 (τ = 1 s at
-/// T = 1e10 s) would otherwise drop the delay from the controller.
 fn delay_within(tau: f64, T: f64, tol: f64) -> bool {
-    tau / T <= MAX_DELAY_SAMPLES && whole_within(tau, T, tol).is_some_and(|k| k > 0 || tau == 0.0)
+    tau / T <= MAX_DELAY_SAMPLES && whole_within(tau, T, tol).is_some()
 }
 
 fn whole_within(x: f64, T: f64, tol: f64) -> Option<usize> {
