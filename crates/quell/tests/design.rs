@@ -650,12 +650,10 @@ fn an_observer_that_cannot_be_confirmed_hurwitz_says_so_with_its_figures() {
     assert!(text.contains("could not be confirmed Hurwitz") && !text.contains("not Hurwitz ("), "{text}");
 }
 
-#[test]
-fn a_plant_beyond_the_state_limit_is_refused_naming_the_key_and_the_limit() {
-    // n = MAX_STATES + 1 integrators in a chain: refused before any O(n³) work (an n = 1000 design
-    // took more than a minute), with the key, the limit and what to do.
-    let n = quell::design::MAX_STATES + 1;
-    let spec = quell::DesignSpec {
+/// A design of the n-integrator chain with every pole at −1 (a zero observer gain: the checks
+/// under test come before the observer is used).
+fn chain_spec(n: usize) -> quell::DesignSpec {
+    quell::DesignSpec {
         observer: ObserverChoice::Gain(DMatrix::zeros(n, 1)),
         channel_poles: vec![vec![re(-1.0); n]],
         reference_filter_poles: vec![vec![re(-1.0)]],
@@ -664,8 +662,15 @@ fn a_plant_beyond_the_state_limit_is_refused_naming_the_key_and_the_limit() {
         beta: 1.0,
         relative_degrees: None,
         regressor_scaling: Default::default(),
-    };
-    let e = expect_err(&chain_plant(n), &spec);
+    }
+}
+
+#[test]
+fn a_plant_beyond_the_state_limit_is_refused_naming_the_key_and_the_limit() {
+    // n = MAX_STATES + 1 integrators in a chain: refused before any O(n³) work (an n = 1000 design
+    // took more than a minute), with the key, the limit and what to do.
+    let n = quell::design::MAX_STATES + 1;
+    let e = expect_err(&chain_plant(n), &chain_spec(n));
     assert_eq!(e, DesignError::TooManyStates { n });
     let text = e.to_string();
     assert!(text.starts_with("plant.A: n = 501 states; a design is limited to n ≤ 500"), "{text}");
@@ -694,18 +699,8 @@ fn a_stopped_design_of_a_large_plant_returns_interrupted() {
     // thread that the call leaves at once; below that size, on the caller's thread, which polls
     // between phases. Either way the answer is Interrupted, not a design or another error.
     for n in [quell::design::DETACHED_MIN_STATES, 12] {
-        let spec = quell::DesignSpec {
-            observer: ObserverChoice::Gain(DMatrix::zeros(n, 1)),
-            channel_poles: vec![vec![re(-1.0); n]],
-            reference_filter_poles: vec![vec![re(-1.0)]],
-            disturbance_filter_poles: vec![],
-            mu: vec![1.0],
-            beta: 1.0,
-            relative_degrees: None,
-            regressor_scaling: Default::default(),
-        };
         let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(true));
-        let r = quell::cancel::with_stop(stop, || Design::new(&chain_plant(n), &spec));
+        let r = quell::cancel::with_stop(stop, || Design::new(&chain_plant(n), &chain_spec(n)));
         assert_eq!(r.err(), Some(DesignError::Interrupted), "n = {n}");
     }
 }
