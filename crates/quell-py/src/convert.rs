@@ -6,7 +6,7 @@ use numpy::ndarray::Array2;
 use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyComplex, PyDict, PyString};
+use pyo3::types::{PyBool, PyComplex, PyDict, PyIterator, PyString};
 use quell::nalgebra::{Complex, DMatrix};
 
 use crate::errors::{type_error, Kind};
@@ -176,15 +176,21 @@ pub fn number(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<f64> {
     obj.extract::<f64>().map_err(|_| type_error(name, "a real number", obj))
 }
 
+/// The items of a list argument; a string or a dict (iterable, but never meant) is a TypeError
+/// naming `name` and the expected `form`, as is anything not iterable.
+fn items<'py>(obj: &Bound<'py, PyAny>, name: &str, form: &str) -> PyResult<Bound<'py, PyIterator>> {
+    if obj.is_instance_of::<PyString>() || obj.is_instance_of::<PyDict>() {
+        return Err(type_error(name, form, obj));
+    }
+    obj.try_iter().map_err(|_| type_error(name, form, obj))
+}
+
 /// A list of poles: real numbers, Python complex numbers (a conjugate pair both listed), or
 /// `[re, im]` with im > 0 meaning the pair re ± i·im (as in scenario files).
 pub fn poles(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<Complex<f64>>> {
     let py = obj.py();
     let form = "a list of poles (numbers, complex numbers, or [re, im] pairs meaning re ± i·im)";
-    if obj.is_instance_of::<PyString>() || obj.is_instance_of::<PyDict>() {
-        return Err(type_error(name, form, obj));
-    }
-    let items = obj.try_iter().map_err(|_| type_error(name, form, obj))?;
+    let items = items(obj, name, form)?;
     let mut out = Vec::new();
     for (i, item) in items.enumerate() {
         let item = item?;
@@ -232,10 +238,7 @@ pub fn poles(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<Com
 pub fn pole_lists(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<Vec<Complex<f64>>>> {
     let py = obj.py();
     let form = "one list of poles per channel or component, e.g. [[-6, -2], [-4]]";
-    if obj.is_instance_of::<PyString>() || obj.is_instance_of::<PyDict>() {
-        return Err(type_error(name, form, obj));
-    }
-    let items = obj.try_iter().map_err(|_| type_error(name, form, obj))?;
+    let items = items(obj, name, form)?;
     let mut out = Vec::new();
     for (i, item) in items.enumerate() {
         let item = item?;
