@@ -283,9 +283,10 @@ pub(crate) const MAX_EXP_NORM: f64 = 1e15;
 /// exp([[A, B], [0, 0]]·T) (Van Loan's block method).
 /// A square and B with A's rows (the controller's and the sampled loop's own blocks).
 ///
-/// Beyond ‖[A B]·T‖₁ = [`MAX_EXP_NORM`] both blocks come back NaN, for the callers' finiteness
-/// checks to refuse: the scaling-and-squaring's norm estimates of powers of such a matrix overflow
-/// to ∞ and its squaring count saturates (2⁶⁴ squarings, a hang).
+/// Beyond ‖[A B]·T‖₁ = [`MAX_EXP_NORM`] both blocks come back NaN (the scaling-and-squaring's
+/// norm estimates of powers of such a matrix overflow to ∞ and its squaring count saturates: 2⁶⁴
+/// squarings, a hang). `Controller::new` refuses them as not finite; a sampled loop's true plant
+/// so fast ends its run as diverged at the first NaN measurement.
 pub(crate) fn zoh_unchecked(A: &DMatrix<f64>, B: &DMatrix<f64>, T: f64) -> (DMatrix<f64>, DMatrix<f64>) {
     let (n, m) = (A.nrows(), B.ncols());
     let mut M = DMatrix::zeros(n + m, n + m);
@@ -336,7 +337,7 @@ mod tests {
     fn zoh_beyond_the_norm_bound_is_nan_and_returns() {
         // x' = −x + v: Φ = e^{−T} = 0 and Γ = 1 − e^{−T} = 1 (closed form) at ‖[A B]T‖₁ = 2T = 1e15;
         // past the bound both are NaN. Before, T = 1e40 ran for ever (2⁶⁴ squarings).
-        let (A, B) = (DMatrix::from_element(2, 2, 0.0) - DMatrix::identity(2, 2), DMatrix::identity(2, 2));
+        let (A, B) = (-DMatrix::<f64>::identity(2, 2), DMatrix::identity(2, 2));
         let (P, G) = zoh_unchecked(&A, &B, 0.5e15);
         assert!(P.norm() < 1e-300 && (&G - DMatrix::identity(2, 2)).norm() < 1e-12, "{P} {G}");
         for T in [1e16, 1e40, 1e300, f64::INFINITY] {
