@@ -218,7 +218,8 @@ mod tests {
         ];
         // Powers of two and ten over the whole range, and their neighbours (the ends of the
         // rounding intervals, where a shortest-digits algorithm errs first).
-        let powers = (-1074..=1023).map(|k| 2f64.powi(k)).chain((-323..=308).map(|k| format!("1e{k}").parse().unwrap()));
+        let powers =
+            (-1074..=1023).map(|k| 2f64.powi(k)).chain((-323..=308).map(|k| format!("1e{k}").parse().unwrap()));
         // The thresholds of the plain and scientific forms of signals.csv (1e-4, 1e15) and zmij's own.
         let thresholds = [1e-4, 1e15, 1e-5, 1e-6, 1e16, 1e12, 1e13];
         for v in powers.chain(thresholds) {

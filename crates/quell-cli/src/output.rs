@@ -186,7 +186,8 @@ mod tests {
         let mut st = quell::sim::RunSettings::of(&s);
         (st.t_end, st.record_states) = (5.0, true);
         let mut r = Run::of(&s, &d).settings(st).simulate(|_| ControlFlow::Continue(())).unwrap();
-        let edges = [5e-324, -0.0, 1e-4, 9.999999999999999e-5, 1e15, 999999999999999.9, 1e300, f64::NAN, -f64::INFINITY];
+        let edges =
+            [5e-324, -0.0, 1e-4, 9.999999999999999e-5, 1e15, 999999999999999.9, 1e300, f64::NAN, -f64::INFINITY];
         let (m, q, n) = (r.m, r.q, r.n);
         for (k, &v) in edges.iter().enumerate() {
             let (y, eta, x) = (vec![v; m], vec![-v; m * q], vec![v * 0.5; n]);
