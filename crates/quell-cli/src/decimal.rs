@@ -100,18 +100,28 @@ fn exact_is_short(v: f64) -> bool {
     e >= -25 && u128::from(odd) * 5u128.pow(e.unsigned_abs()) < 10u128.pow(18)
 }
 
-/// Appends `v` as `format!("{}", v)` writes it: plain decimal, no exponent, no ".0".
-pub fn push_display(out: &mut Vec<u8>, v: f64, buffer: &mut zmij::Buffer) {
-    if let Some(text) = special(v, false) {
-        return out.extend_from_slice(text);
+/// The common start of both layouts: NaN, ±∞, ±0 and the values [`exact_is_short`] are written
+/// whole (`None`); otherwise the sign is, and the digits are returned.
+fn start(out: &mut Vec<u8>, v: f64, exp_form: bool, buffer: &mut zmij::Buffer) -> Option<Digits> {
+    if let Some(text) = special(v, exp_form) {
+        out.extend_from_slice(text);
+        return None;
     }
     if exact_is_short(v) {
-        return write!(out, "{v}").expect("writing to a Vec cannot fail");
+        let written = if exp_form { write!(out, "{v:e}") } else { write!(out, "{v}") };
+        written.expect("writing to a Vec cannot fail");
+        return None;
     }
     let d = Digits::of(v, buffer);
     if d.negative {
         out.push(b'-');
     }
+    Some(d)
+}
+
+/// Appends `v` as `format!("{}", v)` writes it: plain decimal, no exponent, no ".0".
+pub fn push_display(out: &mut Vec<u8>, v: f64, buffer: &mut zmij::Buffer) {
+    let Some(d) = start(out, v, false, buffer) else { return };
     let (digits, exp) = (d.digits(), d.exp);
     if exp <= 0 {
         out.extend_from_slice(b"0.");
@@ -130,16 +140,7 @@ pub fn push_display(out: &mut Vec<u8>, v: f64, buffer: &mut zmij::Buffer) {
 
 /// Appends `v` as `format!("{:e}", v)` writes it: "d.ddde-N", "de20".
 pub fn push_exp(out: &mut Vec<u8>, v: f64, buffer: &mut zmij::Buffer) {
-    if let Some(text) = special(v, true) {
-        return out.extend_from_slice(text);
-    }
-    if exact_is_short(v) {
-        return write!(out, "{v:e}").expect("writing to a Vec cannot fail");
-    }
-    let d = Digits::of(v, buffer);
-    if d.negative {
-        out.push(b'-');
-    }
+    let Some(d) = start(out, v, true, buffer) else { return };
     let digits = d.digits();
     out.push(digits[0]);
     if digits.len() > 1 {
@@ -251,30 +252,28 @@ mod tests {
         }
     }
 
-    #[test]
-    fn random_values_match_core_fmt() {
+    /// `patterns` random bit patterns (exponents over the whole range), then `sized` values of the
+    /// size signals.csv holds (|v| between 1e-12 and 1e12, 17 significant digits, either sign),
+    /// each against `core::fmt`.
+    fn check_random(seed: u64, patterns: usize, sized: usize) {
         let (mut buffer, mut out) = (zmij::Buffer::new(), Vec::new());
-        // Every bit pattern equally likely (exponents over the whole range), then values of the
-        // size signals.csv holds (|v| between 1e-12 and 1e12, 17 significant digits).
-        for b in bits(1).take(300_000) {
+        for b in bits(seed).take(patterns) {
             check(f64::from_bits(b), &mut buffer, &mut out);
         }
-        for (b, e) in bits(2).zip(bits(3)).take(1_000_000) {
+        for (b, e) in bits(seed + 1).zip(bits(seed + 2)).take(sized) {
             let v = (b >> 11) as f64 / (1u64 << 53) as f64 * 10f64.powi((e % 25) as i32 - 12);
             check(if e & 1 == 0 { v } else { -v }, &mut buffer, &mut out);
         }
     }
 
     #[test]
+    fn random_values_match_core_fmt() {
+        check_random(1, 300_000, 1_000_000);
+    }
+
+    #[test]
     #[ignore = "about two minutes: 20 million random bit patterns and 20 million values of signal size"]
     fn many_more_random_values_match_core_fmt() {
-        let (mut buffer, mut out) = (zmij::Buffer::new(), Vec::new());
-        for b in bits(11).take(20_000_000) {
-            check(f64::from_bits(b), &mut buffer, &mut out);
-        }
-        for (b, e) in bits(12).zip(bits(13)).take(20_000_000) {
-            let v = (b >> 11) as f64 / (1u64 << 53) as f64 * 10f64.powi((e % 25) as i32 - 12);
-            check(if e & 1 == 0 { v } else { -v }, &mut buffer, &mut out);
-        }
+        check_random(11, 20_000_000, 20_000_000);
     }
 }
