@@ -124,7 +124,7 @@
 //! ```
 //!
 //! **[`export`]**: the same controller as dependency-free C99 ([`export::generate`]) and as an FMI
-//! 2.0 co-simulation FMU ([`export::generate_fmu`]).
+//! 2.0 or 3.0 co-simulation FMU ([`export::generate_fmu`]).
 //!
 //! ```
 //! use quell::export::{generate, ExportOptions};
