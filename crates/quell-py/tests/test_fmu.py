@@ -134,6 +134,12 @@ def test_bad_arguments(tmp_path):
         quell.export(scenario, 0.05, out=tmp_path, fmu=True, fmi_version=4)
     with pytest.raises(TypeError, match=r"^fmi_version: expected 2 or 3 \(an int\), found a str$"):
         quell.export(scenario, 0.05, out=tmp_path, fmu=True, fmi_version="3")
+    # As the CLI refuses --fmi-version and --compiler without --fmu: an FMU option alone writes no FMU.
+    for option in (dict(fmi_version=3), dict(compiler="gcc")):
+        name = next(iter(option))
+        with pytest.raises(quell.ExportError, match=rf"^{name}: applies to the FMU only; pass fmu=True as well"):
+            quell.export(scenario, 0.05, out=tmp_path / "none", **option)
+    assert not (tmp_path / "none").exists()
     with pytest.raises(quell.ExportError, match=r"^prefix: expected a C identifier.*found \"9lives\""):
         quell.export(scenario, 0.05, out=tmp_path, prefix="9lives")
     with pytest.raises(quell.ExportError, match=r"^precision: expected f64 or f32, found \"f16\""):
