@@ -566,34 +566,56 @@ impl Basis {
     }
 }
 
-/// KNV method 0 for B of full column rank m > 1.
-///
-/// The eigenvector matrix is kept in real form X = [… x … u v …] (a pair's eigenvector is
-/// u + i v). A real pole's vector is replaced by the admissible unit vector closest to the
-/// normal of the other columns (KNV0). A pair's vector is replaced by the admissible unit
-/// vector u + i v that maximises |det X| with the other columns fixed — a rank-2 update in the
-/// manner of Tits & Yang (1996): with W the 2-dimensional complement of the other columns and
+/// KNV method 0 for B of full column rank m > 1: the eigenvector matrix X from
+/// [`well_conditioned_eigenvectors`], then the gain that gives A − B K = X Λ X⁻¹ ([`gain`]).
+fn knv0(A: &DMatrix<f64>, B: &DMatrix<f64>, slots: &[Slot]) -> Result<(DMatrix<f64>, DMatrix<f64>), PlaceError> {
+    let inputs = InputSplit::new(B);
+    let spaces = spaces(A, B, &inputs.U0, &inputs.U1, slots)?;
+    let X = well_conditioned_eigenvectors(A.nrows(), B.ncols(), &spaces)?;
+    let K = gain(A, &inputs, &X, slots)?;
+    Ok((K, X))
+}
+
+/// The full QR decomposition of B (n × m, full column rank) that KNV's conditions are written in:
+/// B = [U0 U1] [Z; 0], U0 (n × m) spanning range B, U1 (n × (n − m)) its orthogonal complement,
+/// Z (m × m) upper triangular and invertible.
+struct InputSplit {
+    U0: DMatrix<f64>,
+    U1: DMatrix<f64>,
+    Z: DMatrix<f64>,
+}
+
+impl InputSplit {
+    fn new(B: &DMatrix<f64>) -> InputSplit {
+        let (n, m) = B.shape();
+        let mut padded = DMatrix::<f64>::zeros(n, m + n);
+        padded.view_mut((0, 0), (n, m)).copy_from(B);
+        let qr = padded.qr();
+        let Q = qr.q();
+        InputSplit {
+            U0: Q.columns(0, m).into_owned(),
+            U1: Q.columns(m, n - m).into_owned(),
+            Z: qr.r().view((0, 0), (m, m)).into_owned(),
+        }
+    }
+}
+
+/// The KNV0 sweeps: X = [… x … u v …] in real form (a pair's eigenvector is u + i v), each column
+/// in its slot's admissible space, made as well conditioned as possible by maximising |det X| over
+/// unit columns. A real pole's vector is replaced by the admissible unit vector closest to the
+/// normal of the other columns (KNV0). A pair's vector is replaced by the admissible unit vector
+/// u + i v that maximises |det X| with the other columns fixed — a rank-2 update in the manner of
+/// Tits & Yang (1996): with W the 2-dimensional complement of the other columns and
 /// z = Wᵀ (u + i v), det Wᵀ[u v] = Im(z̄₁ z₂), a Hermitian quadratic form in the coefficients.
 /// The normals come from X⁻¹, updated with each replaced column ([`Basis`]), so a sweep costs
-/// O(n³) rather than one QR of X per column.
-fn knv0(A: &DMatrix<f64>, B: &DMatrix<f64>, slots: &[Slot]) -> Result<(DMatrix<f64>, DMatrix<f64>), PlaceError> {
-    let (n, m) = (A.nrows(), B.ncols());
+/// O(n³) rather than one QR of X per column. At most [`KNV_MAX_SWEEPS`], until log |det X| settles.
+fn well_conditioned_eigenvectors(n: usize, m: usize, spaces: &[(Space, usize)]) -> Result<DMatrix<f64>, PlaceError> {
     let fail = PlaceError::Inaccurate { max_error: f64::INFINITY };
-    // Full QR of B: B = [U0 U1] [Zb; 0].
-    let mut padded = DMatrix::<f64>::zeros(n, m + n);
-    padded.view_mut((0, 0), (n, m)).copy_from(B);
-    let qr = padded.qr();
-    let Q = qr.q();
-    let U0 = Q.columns(0, m).into_owned();
-    let U1 = Q.columns(m, n - m).into_owned();
-    let Zb = qr.r().view((0, 0), (m, m)).into_owned();
-
-    let spaces = spaces(A, B, &U0, &U1, slots)?;
-    let mut basis = Basis::new(initial_vectors(n, m, &spaces)).ok_or(fail.clone())?;
+    let mut basis = Basis::new(initial_vectors(n, m, spaces)).ok_or(fail.clone())?;
     for sweep in 0..KNV_MAX_SWEEPS {
         crate::cancel::check().map_err(|_| PlaceError::Interrupted)?;
         let old = basis.log_det;
-        for (space, c) in &spaces {
+        for (space, c) in spaces {
             knv_step(&mut basis, space, *c);
         }
         if sweep % KNV_REFRESH == KNV_REFRESH - 1 {
@@ -604,16 +626,21 @@ fn knv0(A: &DMatrix<f64>, B: &DMatrix<f64>, slots: &[Slot]) -> Result<(DMatrix<f
             break;
         }
     }
-    let X = basis.X;
-    let XL = &X * real_form(slots);
-    // M = XL X⁻¹  ⇔  Xᵀ Mᵀ = XLᵀ.
-    let Mt = X.transpose().lu().solve(&XL.transpose()).ok_or(fail.clone())?;
-    let rhs = U0.transpose() * (A - Mt.transpose());
-    let K = Zb.solve_upper_triangular(&rhs).ok_or(fail)?;
-    Ok((K, X))
+    Ok(basis.X)
 }
 
-/// Generic unit vectors from each admissible space, the starting X of [`knv0`].
+/// The gain with A − B K = M = X Λ X⁻¹ (Λ in real form, [`real_form`]): since every column of X is
+/// admissible, U1ᵀ (A − M) = 0, so B K = A − M is solvable and K = Z⁻¹ U0ᵀ (A − M).
+fn gain(A: &DMatrix<f64>, inputs: &InputSplit, X: &DMatrix<f64>, slots: &[Slot]) -> Result<DMatrix<f64>, PlaceError> {
+    let fail = PlaceError::Inaccurate { max_error: f64::INFINITY };
+    let XL = X * real_form(slots);
+    // M = XL X⁻¹  ⇔  Xᵀ Mᵀ = XLᵀ.
+    let Mt = X.transpose().lu().solve(&XL.transpose()).ok_or(fail.clone())?;
+    let rhs = inputs.U0.transpose() * (A - Mt.transpose());
+    inputs.Z.solve_upper_triangular(&rhs).ok_or(fail)
+}
+
+/// Generic unit vectors from each admissible space, the starting X of [`well_conditioned_eigenvectors`].
 fn initial_vectors(n: usize, m: usize, spaces: &[(Space, usize)]) -> DMatrix<f64> {
     let mut X = DMatrix::<f64>::zeros(n, n);
     for (i, (space, c)) in spaces.iter().enumerate() {
@@ -633,7 +660,7 @@ fn initial_vectors(n: usize, m: usize, spaces: &[(Space, usize)]) -> DMatrix<f64
     X
 }
 
-/// One KNV0 update of the vector(s) at column c (see [`knv0`]).
+/// One KNV0 update of the vector(s) at column c (see [`well_conditioned_eigenvectors`]).
 fn knv_step(basis: &mut Basis, space: &Space, c: usize) {
     match space {
         Space::Real(S) => {
@@ -698,12 +725,9 @@ fn real_form(slots: &[Slot]) -> DMatrix<f64> {
 /// admissible space {x : U1ᵀ (A − λ I) x = 0} is one-dimensional.
 fn eigenvectors_single_input(A: &DMatrix<f64>, b: &DMatrix<f64>, slots: &[Slot]) -> Result<DMatrix<f64>, PlaceError> {
     let n = A.nrows();
-    let mut padded = DMatrix::<f64>::zeros(n, n + 1);
-    padded.view_mut((0, 0), (n, 1)).copy_from(b);
-    let Q = padded.qr().q();
-    let (U0, U1) = (Q.columns(0, 1).into_owned(), Q.columns(1, n - 1).into_owned());
+    let inputs = InputSplit::new(b);
     let mut X = DMatrix::<f64>::zeros(n, n);
-    for (space, c) in spaces(A, b, &U0, &U1, slots)? {
+    for (space, c) in spaces(A, b, &inputs.U0, &inputs.U1, slots)? {
         match space {
             Space::Real(S) => X.set_column(c, &S.column(0)),
             Space::Pair(S) => set_pair(&mut X, c, &S.column(0).into_owned()),
