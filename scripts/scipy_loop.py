@@ -84,6 +84,13 @@ class Loop:
         self.tau = np.array(P["delays"], dtype=float)
         self.g = Harmonics.of(scenario["reference"]["components"])
         self.w = Harmonics.of(scenario["disturbance"]["components"])
+        # [g; ω] = bias + S sin(frequency·t + phase), every harmonic in one call.
+        self.signal_bias = np.concatenate((self.g.bias, self.w.bias))
+        self.frequency = np.concatenate((self.g.frequency, self.w.frequency))
+        self.phase = np.concatenate((self.g.phase, self.w.phase))
+        rows = np.concatenate((self.g.component, len(self.g.bias) + self.w.component))
+        self.signal_sum = np.zeros((len(self.signal_bias), len(rows)))
+        self.signal_sum[rows, np.arange(len(rows))] = np.concatenate((self.g.amplitude, self.w.amplitude))
         self.K, self.F, self.L, self.N = (arr(design[k]) for k in ("K", "F", "L", "N"))
         self.G_g, self.L_g, self.G_w = arr(design["G_g"]), arr(design["L_g"]), arr(design["G_w"])
         self.mu = np.array(design["mu"], dtype=float)
@@ -92,9 +99,30 @@ class Loop:
         q_g, q_w = self.G_g.shape[0], self.G_w.shape[0]
         self.n, self.m, self.q_g, self.q = n, m, q_g, q_g + q_w
         A_f, B_f = self.A - self.B @ self.K, self.B @ self.F
-        # Disturbance observer (20): φ' = G_ω φ + (G_ω N − N A_f) x̂ − N B_f u_d.
-        self.phi_x = self.G_w @ self.N - self.N @ A_f
-        self.phi_u = -self.N @ B_f
+        # The linear part over core = [x, x̂, ξ̂_g, φ] and inputs v = [g; ω; u_d], with
+        # u_f = −K x̂ + F u_d (5) and y = C x + Q ω substituted: core' = M core + E v.
+        k, A_t, Z = self.D.shape[1], self.A_true, np.zeros
+        BK = self.B @ self.K
+        M = np.block(
+            [
+                [A_t, -BK, Z((n, q_g)), Z((n, q_w))],  # plant (1)
+                [self.L @ self.C, self.A - BK - self.L @ self.C, Z((n, q_g)), Z((n, q_w))],  # observer (6)
+                [Z((q_g, n)), Z((q_g, n)), self.G_g, Z((q_g, q_w))],  # reference observer (14)
+                # Disturbance observer (20): φ' = G_ω φ + (G_ω N − N A_f) x̂ − N B_f u_d.
+                [Z((q_w, n)), self.G_w @ self.N - self.N @ A_f, Z((q_w, q_g)), self.G_w],
+            ]
+        )
+        E = np.block(
+            [
+                [Z((n, m)), self.D, B_f],
+                [Z((n, m)), self.L @ self.Q, B_f],
+                [self.L_g, Z((q_g, k)), Z((q_g, m))],
+                [Z((q_w, m)), Z((q_w, k)), -self.N @ B_f],
+            ]
+        )
+        self.M, self.E, self.n_core = M, E, 2 * n + q_g + q_w
+        # ξ̂ = [ξ̂_g; φ + N x̂] = R core.
+        self.R = np.block([[Z((q_g, n)), Z((q_g, n)), np.eye(q_g), Z((q_g, q_w))], [Z((q_w, n)), self.N, Z((q_w, q_g)), np.eye(q_w)]])
         # G_ii(s) = q_i0 / den_i(s), realized by SciPy (den in decreasing powers of s).
         self.filters = []
         for ch in design["channels"]:
@@ -124,8 +152,7 @@ class Loop:
 
     def regressor(self, s: np.ndarray) -> np.ndarray:
         """ξ̂ = [ξ̂_g; φ + N x̂]."""
-        xh = s[slice(*self.at["xh"])]
-        return np.concatenate((s[slice(*self.at["xg"])], s[slice(*self.at["phi"])] + self.N @ xh))
+        return self.R @ s[: self.n_core]
 
     def commands(self, s: np.ndarray) -> np.ndarray:
         """u_i = −η̂_iᵀ ξ̂ (25)."""
@@ -151,30 +178,23 @@ class Loop:
         return -self.K @ s[slice(*self.at["xh"])] + self.F @ u_d
 
     def rhs(self, t: float, s: np.ndarray, past: Callable[[float], np.ndarray]) -> np.ndarray:
-        at = self.at
-        x, xh = s[slice(*at["x"])], s[slice(*at["xh"])]
-        g, w = self.g(t), self.w(t)
+        n, nc, q = self.n, self.n_core, self.q
+        gw = self.signal_bias + self.signal_sum @ np.sin(self.frequency * t + self.phase)  # [g; ω]
         u_d, xi_d = self.delayed(t, s, past)
-        u_f = self.plant_input(s, u_d)
-        y = self.C @ x + self.Q @ w
         ds = np.empty_like(s)
-        ds[slice(*at["x"])] = self.A_true @ x + self.B @ u_f + self.D @ w  # plant (1)
-        ds[slice(*at["xh"])] = self.A @ xh + self.B @ u_f + self.L @ (y - self.C @ xh)  # observer (6)
-        ds[slice(*at["xg"])] = self.G_g @ s[slice(*at["xg"])] + self.L_g @ g  # (14)
-        ds[slice(*at["phi"])] = self.G_w @ s[slice(*at["phi"])] + self.phi_x @ xh + self.phi_u @ u_d  # (20)
-        delta = y - g
+        ds[:nc] = self.M @ s[:nc] + self.E @ np.concatenate((gw, u_d))
+        delta = self.C @ s[:n] + self.Q @ gw[self.m :] - gw[: self.m]  # δ = y − g
         for i, (c, (a, b, cc)) in enumerate(zip(self.ch, self.filters)):
             # G_ii(s) on the row [u_i(t − τ_i), ξ̂ᵀ(t − τ_i)]: W' = a W + b ⊗ row, output cc W.
-            W = s[slice(*c["W"])].reshape(a.shape[0], 1 + self.q)
-            row = np.concatenate(([u_d[i]], xi_d[i]))
-            ds[slice(*c["W"])] = (a @ W + np.outer(b, row)).ravel()
+            W = s[c["W"][0] : c["W"][1]].reshape(a.shape[0], 1 + q)
+            row = np.concatenate(((u_d[i],), xi_d[i]))
+            ds[c["W"][0] : c["W"][1]] = (a @ W + np.outer(b, row)).ravel()
             out = cc @ W
             eps, Delta = delta[i] - out[0], out[1:]  # ε̂_i and Δ_i (33)
-            Y, Om = s[slice(*c["Y"])], s[slice(*c["Om"])].reshape(self.q, self.q)
-            eta = s[slice(*c["eta"])]
-            ds[slice(*c["Y"])] = (Delta * eps - Y) / self.beta
-            ds[slice(*c["Om"])] = (np.outer(Delta, Delta) - Om).ravel() / self.beta
-            ds[slice(*c["eta"])] = self.mu[i] * (Y - Om @ eta)
+            Y, Om = s[c["Y"][0] : c["Y"][1]], s[c["Om"][0] : c["Om"][1]].reshape(q, q)
+            ds[c["Y"][0] : c["Y"][1]] = (Delta * eps - Y) / self.beta
+            ds[c["Om"][0] : c["Om"][1]] = (np.outer(Delta, Delta) - Om).ravel() / self.beta
+            ds[c["eta"][0] : c["eta"][1]] = self.mu[i] * (Y - Om @ s[c["eta"][0] : c["eta"][1]])
         return ds
 
 

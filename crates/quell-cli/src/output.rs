@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use quell::sim::SimResult;
 use tempfile::NamedTempFile;
 
-use crate::Failure;
+use crate::{decimal, Failure};
 
 /// Writes a file atomically: `contents` fills a uniquely named temporary file beside `path`
 /// (`.stem.XXXXXX.tmp.ext`, so two runs sharing a directory never collide), which is then renamed
@@ -104,14 +104,19 @@ pub fn write_signals(path: &Path, r: &SimResult) -> io::Result<()> {
         if states {
             signals.extend([(&r.x[..], n), (&r.x_hat[..], n)]);
         }
+        // Each row is laid out in one buffer and written at once.
+        let (mut line, mut buffer) = (Vec::with_capacity(32 * header.len()), zmij::Buffer::new());
         for k in 0..r.len() {
-            write!(w, "{}", r.t[k])?;
+            line.clear();
+            decimal::push_display(&mut line, r.t[k], &mut buffer);
             for (sig, width) in &signals {
                 for &v in &sig[k * width..(k + 1) * width] {
-                    write!(w, ",{}", Num(v))?;
+                    line.push(b',');
+                    push_num(&mut line, v, &mut buffer);
                 }
             }
-            writeln!(w)?;
+            line.push(b'\n');
+            w.write_all(&line)?;
         }
         Ok(())
     })
@@ -125,23 +130,77 @@ pub fn write_json(path: &Path, value: &impl serde::Serialize) -> io::Result<()> 
     })
 }
 
-/// A number as plain decimal where that is short, scientific otherwise; always round-trips.
-struct Num(f64);
-
-impl std::fmt::Display for Num {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let a = self.0.abs();
-        if a == 0.0 || (1e-4..1e15).contains(&a) || !a.is_finite() {
-            write!(f, "{}", self.0)
-        } else {
-            write!(f, "{:e}", self.0)
-        }
+/// A number as plain decimal where that is short (`{}`), scientific otherwise (`{:e}`); always
+/// round-trips.
+fn push_num(out: &mut Vec<u8>, v: f64, buffer: &mut zmij::Buffer) {
+    let a = v.abs();
+    if a == 0.0 || (1e-4..1e15).contains(&a) || !a.is_finite() {
+        decimal::push_display(out, v, buffer)
+    } else {
+        decimal::push_exp(out, v, buffer)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// signals.csv as `core::fmt` lays it out: `{}` for t and for |v| = 0, in [1e-4, 1e15) or not
+    /// finite, `{:e}` otherwise.
+    fn signals_by_core_fmt(r: &SimResult) -> String {
+        let num = |v: f64| {
+            let a = v.abs();
+            if a == 0.0 || (1e-4..1e15).contains(&a) || !a.is_finite() {
+                format!("{v}")
+            } else {
+                format!("{v:e}")
+            }
+        };
+        let mut text = String::new();
+        for k in 0..r.len() {
+            text.push_str(&r.t[k].to_string());
+            let (m, q, n) = (r.m, r.q, r.n);
+            let mut signals = vec![(&r.y, m), (&r.g, m), (&r.e, m), (&r.u, m), (&r.u_f, m), (&r.eta, m * q)];
+            if r.has_states() {
+                signals.extend([(&r.x, n), (&r.x_hat, n)]);
+            }
+            for (sig, width) in signals {
+                for &v in &sig[k * width..(k + 1) * width] {
+                    text.push(',');
+                    text.push_str(&num(v));
+                }
+            }
+            text.push('\n');
+        }
+        text
+    }
+
+    #[test]
+    fn signals_csv_has_core_fmt_bytes() {
+        use quell::sim::{Run, Sample};
+        use std::ops::ControlFlow;
+        // A run of the paper's example with x and x̂ (values across many magnitudes, exact zeros,
+        // negative zeros of u = −η̂ᵀξ̂ at the start), then rows of edge values.
+        let s = quell::Scenario::from_toml(quell::scenario::PAPER_EXAMPLE).unwrap();
+        let d = s.design().unwrap();
+        let mut st = quell::sim::RunSettings::of(&s);
+        (st.t_end, st.record_states) = (5.0, true);
+        let mut r = Run::of(&s, &d).settings(st).simulate(|_| ControlFlow::Continue(())).unwrap();
+        let edges =
+            [5e-324, -0.0, 1e-4, 9.999999999999999e-5, 1e15, 999999999999999.9, 1e300, f64::NAN, -f64::INFINITY];
+        let (m, q, n) = (r.m, r.q, r.n);
+        for (k, &v) in edges.iter().enumerate() {
+            let (y, eta, x) = (vec![v; m], vec![-v; m * q], vec![v * 0.5; n]);
+            let t = [1e-7, 1e20, 0.1, 123.456, 5e-324, 1e15, 2.5, 1e-300, 7.0][k];
+            r.push(&Sample { t, y: &y, g: &y, u: &y, u_f: &y, eta: &eta, states: Some((&x, &x)) });
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("signals.csv");
+        write_signals(&path, &r).unwrap();
+        let written = fs::read_to_string(&path).unwrap();
+        let (_header, rows) = written.split_once('\n').unwrap();
+        assert_eq!(rows, signals_by_core_fmt(&r));
+    }
 
     #[test]
     fn two_writers_of_one_file_do_not_collide() {

@@ -4,7 +4,7 @@ use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
 use pyo3::prelude::*;
-use quell::export::{generate, generate_fmu, ExportError, ExportOptions};
+use quell::export::{generate, generate_fmu, ExportError, ExportOptions, FmiVersion};
 
 use crate::convert::{number, type_name};
 use crate::design::PyDesign;
@@ -26,8 +26,17 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     Ok(())
 }
 
+/// The FMI version an int names; `Err(None)` for another type (a bool is not an int here).
+fn fmi_version_of(v: &Bound<'_, PyAny>) -> Result<FmiVersion, Option<ExportError>> {
+    if v.is_instance_of::<pyo3::types::PyBool>() {
+        return Err(None);
+    }
+    let n: i64 = v.extract().map_err(|_| None)?;
+    n.to_string().parse().map_err(Some)
+}
+
 /// Writes the real-time controller of a design as C99 (`<prefix>_controller.h` and `.c`), and
-/// optionally as an FMI 2.0 co-simulation FMU, like `quell export`; files are written to a
+/// optionally as an FMI 2.0 or 3.0 co-simulation FMU, like `quell export`; files are written to a
 /// temporary name, then renamed.
 ///
 /// Parameters
@@ -44,6 +53,8 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 ///     "f64" (default) or "f32".
 /// fmu : bool, optional
 ///     Also write `<prefix>.fmu`.
+/// fmi_version : int, optional
+///     The FMU's FMI version: 2 (default, FMI 2.0) or 3 (FMI 3.0).
 /// compiler : str, optional
 ///     The C compiler for the FMU's binary (default $CC or cc; "none": sources only).
 ///
@@ -59,7 +70,7 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 /// ScenarioError
 ///     A sample time that is missing, not > 0 or does not divide the delays.
 /// ExportError
-///     A prefix, precision or compiler that is not valid.
+///     A prefix, precision, FMI version or compiler that is not valid.
 /// OSError
 ///     The directory cannot be written.
 ///
@@ -68,10 +79,13 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 /// >>> paths = quell.export(quell.paper_example().design(), 1e-3, out="c", prefix="loop")
 /// >>> [p.name for p in paths]
 /// ['loop_controller.h', 'loop_controller.c']
+/// >>> paths = quell.export(quell.paper_example(), 1e-3, out="fmu3", fmu=True, fmi_version=3, compiler="none")
+/// >>> [p.name for p in paths]
+/// ['quell_controller.h', 'quell_controller.c', 'quell.fmu']
 #[pyfunction]
 #[pyo3(
-    signature = (source, sample_time=None, *, out=None, prefix=Cow::Borrowed("quell"), precision=None, fmu=false, compiler=None),
-    text_signature = "(source, sample_time=None, *, out=None, prefix='quell', precision=None, fmu=False, compiler=None)"
+    signature = (source, sample_time=None, *, out=None, prefix=Cow::Borrowed("quell"), precision=None, fmu=false, fmi_version=None, compiler=None),
+    text_signature = "(source, sample_time=None, *, out=None, prefix='quell', precision=None, fmu=False, fmi_version=2, compiler=None)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub fn export(
@@ -82,6 +96,7 @@ pub fn export(
     #[pyo3(from_py_with = crate::convert::argument::prefix)] prefix: Cow<'static, str>,
     precision: Option<&Bound<'_, PyAny>>,
     #[pyo3(from_py_with = crate::convert::argument::fmu)] fmu: bool,
+    fmi_version: Option<&Bound<'_, PyAny>>,
     compiler: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Vec<PathBuf>> {
     let (design, scenario_name, scenario_T) = if let Ok(s) = source.cast::<PyScenario>() {
@@ -114,6 +129,13 @@ pub fn export(
             .parse()
             .map_err(|e: ExportError| Kind::Export.err(py, message(&e)))?,
     };
+    let version = match fmi_version {
+        None => FmiVersion::default(),
+        Some(v) => fmi_version_of(v).map_err(|e| match e {
+            None => crate::errors::type_error("fmi_version", "2 or 3 (an int)", v),
+            Some(e) => Kind::Export.err(py, message(&e)),
+        })?,
+    };
     let options = ExportOptions { prefix: prefix.into_owned(), precision, scenario_name };
     let raise = |e: ExportError| match e {
         ExportError::Controller(_) | ExportError::NotFinite { .. } => Kind::Scenario.err(py, message(&e)),
@@ -126,7 +148,7 @@ pub fn export(
     let (code, archive) = py
         .detach(|| -> Result<_, ExportError> {
             let code = generate(&design, T, &options)?;
-            let archive = if fmu { Some(generate_fmu(&design, T, &options, compiler)?) } else { None };
+            let archive = if fmu { Some(generate_fmu(&design, T, &options, compiler, version)?) } else { None };
             Ok((code, archive))
         })
         .map_err(raise)?;

@@ -124,7 +124,7 @@
 //! ```
 //!
 //! **[`export`]**: the same controller as dependency-free C99 ([`export::generate`]) and as an FMI
-//! 2.0 co-simulation FMU ([`export::generate_fmu`]).
+//! 2.0 or 3.0 co-simulation FMU ([`export::generate_fmu`]).
 //!
 //! ```
 //! use quell::export::{generate, ExportOptions};
@@ -212,6 +212,7 @@ pub use nalgebra;
 mod simd;
 
 pub mod auto;
+pub mod averaged;
 pub mod cancel;
 pub mod controller;
 pub mod design;
