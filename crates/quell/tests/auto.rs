@@ -318,7 +318,10 @@ fn the_batch_reactors_slow_channel_is_diagnosed_and_the_automatic_design_avoids_
     let at_3 = diag.observer_fidelity.iter().find(|f| f.frequency == 3.0).unwrap();
     assert!(at_3.relative_error > FIDELITY_LIMIT && !diag.advice.is_empty(), "{at_3:?}");
     for line in &diag.advice {
-        assert!(line.contains("already hold the zeros") && !line.contains("give design.observer_poles the zeros"), "{line}");
+        assert!(
+            line.contains("already hold the zeros") && !line.contains("give design.observer_poles the zeros"),
+            "{line}"
+        );
     }
 }
 
