@@ -1,4 +1,4 @@
-//! The studies' speed target (issue 12): 10,000 runs of the paper's example (t_end = 100 s,
+//! The studies' speed target: 10,000 runs of the paper's example (t_end = 100 s,
 //! rtol = atol = 1e-6, Monte Carlo on truth.A at 5 %) in at most 30 s on 2 cores. Criterion times
 //! the first 200 runs of that study (the same draws as examples/studies/monte-carlo-A.toml) on 1
 //! and on 2 worker threads; the per-run figure times 10,000 is the whole study's time.
