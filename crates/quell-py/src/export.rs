@@ -35,6 +35,36 @@ fn fmi_version_of(v: &Bound<'_, PyAny>) -> Result<FmiVersion, Option<ExportError
     n.to_string().parse().map_err(Some)
 }
 
+/// With `fmu`, the FMU's version and its compiler (`None`: sources only; default `$CC`, else `cc`).
+/// Without it, `fmi_version` and `compiler` are refused (after their types are checked), as the CLI
+/// refuses `--fmi-version` and `--compiler` without `--fmu`: an FMU option alone writes no FMU.
+fn fmu_arguments(
+    py: Python<'_>,
+    fmu: bool,
+    fmi_version: Option<&Bound<'_, PyAny>>,
+    compiler: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<(FmiVersion, Option<String>)>> {
+    let fmi_version = fmi_version.filter(|v| !v.is_none());
+    let version = match fmi_version {
+        None => FmiVersion::default(),
+        Some(v) => fmi_version_of(v).map_err(|e| match e {
+            None => crate::errors::type_error("fmi_version", "2 or 3 (an int)", v),
+            Some(e) => Kind::Export.err(py, message(&e)),
+        })?,
+    };
+    let compiler = compiler.filter(|c| !c.is_none()).map(|c| crate::convert::text(c, "compiler")).transpose()?;
+    if !fmu {
+        let stray = [("fmi_version", fmi_version.is_some()), ("compiler", compiler.is_some())];
+        return match stray.iter().find(|(_, given)| *given) {
+            Some((name, _)) => Err(Kind::Export
+                .err(py, format!("{name}: applies to the FMU only; pass fmu=True as well, or leave {name} out"))),
+            None => Ok(None),
+        };
+    }
+    let cc = compiler.or_else(|| std::env::var("CC").ok()).unwrap_or_else(|| "cc".into());
+    Ok(Some((version, (cc != "none").then_some(cc))))
+}
+
 /// Writes the real-time controller of a design as C99 (`<prefix>_controller.h` and `.c`), and
 /// optionally as an FMI 2.0 or 3.0 co-simulation FMU, like `quell export`; files are written to a
 /// temporary name, then renamed.
@@ -70,7 +100,8 @@ fn fmi_version_of(v: &Bound<'_, PyAny>) -> Result<FmiVersion, Option<ExportError
 /// ScenarioError
 ///     A sample time that is missing, not > 0 or does not divide the delays.
 /// ExportError
-///     A prefix, precision, FMI version or compiler that is not valid.
+///     A prefix, precision, FMI version or compiler that is not valid, or `fmi_version` or
+///     `compiler` without `fmu=True`.
 /// OSError
 ///     The directory cannot be written.
 ///
@@ -129,26 +160,18 @@ pub fn export(
             .parse()
             .map_err(|e: ExportError| Kind::Export.err(py, message(&e)))?,
     };
-    let version = match fmi_version {
-        None => FmiVersion::default(),
-        Some(v) => fmi_version_of(v).map_err(|e| match e {
-            None => crate::errors::type_error("fmi_version", "2 or 3 (an int)", v),
-            Some(e) => Kind::Export.err(py, message(&e)),
-        })?,
-    };
+    let fmu = fmu_arguments(py, fmu, fmi_version, compiler)?;
     let options = ExportOptions { prefix: prefix.into_owned(), precision, scenario_name };
     let raise = |e: ExportError| match e {
         ExportError::Controller(_) | ExportError::NotFinite { .. } => Kind::Scenario.err(py, message(&e)),
         _ => Kind::Export.err(py, message(&e)),
     };
     let out = out.filter(|o| !o.is_none()).map(|o| crate::convert::path(o, "out")).transpose()?;
-    let compiler = compiler.filter(|c| !c.is_none()).map(|c| crate::convert::text(c, "compiler")).transpose()?;
-    let cc = compiler.or_else(|| std::env::var("CC").ok()).unwrap_or_else(|| "cc".into());
-    let compiler = (cc != "none").then_some(cc.as_str());
     let (code, archive) = py
         .detach(|| -> Result<_, ExportError> {
             let code = generate(&design, T, &options)?;
-            let archive = if fmu { Some(generate_fmu(&design, T, &options, compiler, version)?) } else { None };
+            let archive =
+                fmu.as_ref().map(|(v, cc)| generate_fmu(&design, T, &options, cc.as_deref(), *v)).transpose()?;
             Ok((code, archive))
         })
         .map_err(raise)?;

@@ -134,6 +134,12 @@ def test_bad_arguments(tmp_path):
         quell.export(scenario, 0.05, out=tmp_path, fmu=True, fmi_version=4)
     with pytest.raises(TypeError, match=r"^fmi_version: expected 2 or 3 \(an int\), found a str$"):
         quell.export(scenario, 0.05, out=tmp_path, fmu=True, fmi_version="3")
+    # As the CLI refuses --fmi-version and --compiler without --fmu: an FMU option alone writes no FMU.
+    for option in (dict(fmi_version=3), dict(compiler="gcc")):
+        name = next(iter(option))
+        with pytest.raises(quell.ExportError, match=rf"^{name}: applies to the FMU only; pass fmu=True as well"):
+            quell.export(scenario, 0.05, out=tmp_path / "none", **option)
+    assert not (tmp_path / "none").exists()
     with pytest.raises(quell.ExportError, match=r"^prefix: expected a C identifier.*found \"9lives\""):
         quell.export(scenario, 0.05, out=tmp_path, prefix="9lives")
     with pytest.raises(quell.ExportError, match=r"^precision: expected f64 or f32, found \"f16\""):
@@ -146,3 +152,53 @@ def test_bad_arguments(tmp_path):
         quell.export(scenario.design(), 0.3, out=tmp_path)
     with pytest.raises(quell.ExportError, match=r"^compiler \"/nonexistent/cc\": cannot run it"):
         quell.export(scenario, 0.05, out=tmp_path, fmu=True, compiler="/nonexistent/cc")
+
+
+def test_fmi3_calls_one_by_one(tmp_path):
+    """FMPy's FMI 3.0 master driven call by call (its FMU3Slave), for what a whole simulation does
+    not reach: the independent variable `time` is the time of the next sample; setting it, an
+    output or a NaN input, or giving fewer values than value references, is fmi3Error with a
+    logged reason that leaves the FMU as it was; eventModeUsed is refused at instantiation."""
+    from fmpy import extract
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi3 import FMU3Slave
+
+    scenario = quell.Scenario.load(EXAMPLES / "three-channel.toml")
+    quell.export(scenario, 0.05, out=tmp_path, fmu=True, fmi_version=3, prefix="ctrl")
+    md = read_model_description(str(tmp_path / "ctrl.fmu"))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    assert vr["time"] == 12 and vr["y[1]"] == 0 and vr["u_f[1]"] == 6  # 4m, then as in FMI 2.0 (m = 3)
+    unzipped = extract(str(tmp_path / "ctrl.fmu"))
+    logged = []
+
+    def slave():
+        return FMU3Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier="ctrl", instanceName="c")
+
+    fmu = slave()
+    fmu.instantiate(logMessage=lambda env, status, category, message: logged.append(message.decode()))
+    fmu.enterInitializationMode(startTime=1.0)
+    fmu.exitInitializationMode()
+    assert fmu.getFloat64([vr["time"]]) == [1.0]
+    fmu.setFloat64([vr["y[1]"], vr["g[1]"]], [0.5, 2.0])
+    fmu.doStep(1.0, 0.1)  # two samples
+    assert fmu.getFloat64([vr["time"], vr["y[1]"], vr["g[1]"]]) == [1.1, 0.5, 2.0]
+    refusals = [
+        (lambda: fmu.setFloat64([vr["time"]], [0.0]), "fmi3SetFloat64: value reference 12 is not an input (y and g are 0 to 5)"),
+        (lambda: fmu.setFloat64([vr["u_f[1]"]], [0.0]), "fmi3SetFloat64: value reference 6 is not an input"),
+        (lambda: fmu.setFloat64([vr["y[2]"]], [float("nan")]), "fmi3SetFloat64: input 1 is nan; y and g must be finite"),
+        (lambda: fmu.getFloat64([vr["y[1]"], vr["y[2]"]], nValues=1), "fmi3GetFloat64: 1 values for 2 value references"),
+        (lambda: fmu.getFloat64([13]), "fmi3GetFloat64: no variable has value reference 13 (0 to 11)"),
+        (lambda: fmu.doStep(1.0, 0.05), "fmi3DoStep: at t = 1 s, but the controller's next sample is at 1.1 s"),
+    ]
+    for call, why in refusals:
+        with pytest.raises(FMICallException, match="status 3"):
+            call()
+        assert logged[-1].startswith(why), (logged[-1], why)
+    assert fmu.getFloat64([vr["time"], vr["y[2]"]]) == [1.1, 0.0]  # nothing was set or stepped
+    fmu.terminate()
+    fmu.freeInstance()
+
+    events = slave()
+    with pytest.raises(Exception, match="Failed to instantiate"):
+        events.instantiate(eventModeUsed=True, logMessage=lambda env, s, c, message: logged.append(message.decode()))
+    assert "this FMU has no event mode (hasEventMode is false)" in logged[-1]

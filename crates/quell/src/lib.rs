@@ -271,6 +271,7 @@ pub use nalgebra;
 mod simd;
 
 pub mod auto;
+pub mod averaged;
 pub mod cancel;
 pub mod controller;
 pub mod design;

@@ -7,7 +7,7 @@
 //! run: whether the tail error is still shrinking. One line of advice per problem found. Before a
 //! run, [`estimate()`] gives the adaptive law's pace from the same averages (the design report).
 
-pub mod averaged;
+pub use crate::averaged;
 pub mod estimate;
 
 use serde::Serialize;
