@@ -170,6 +170,25 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
+//! **[`averaged`]**: the adaptive loop in steady state from the design and the signals alone
+//! ([`averaged::Averaged`]): Ω̄_i and η*_i of the law (33) averaged over g and ω, and the RMS error
+//! the averaged law predicts at time t; [`diagnostics`] and [`auto`] stand on it.
+//!
+//! ```
+//! use quell::averaged::Averaged;
+//! use quell::scenario::{Scenario, PAPER_EXAMPLE};
+//!
+//! let s = Scenario::from_toml(PAPER_EXAMPLE)?;
+//! let design = s.design()?;
+//! let c = &Averaged::new(&design, &s.reference, &s.disturbance).channels[0];
+//! assert!(c.lambda_min() >= -1e-12 * c.lambda_max()); // Ω̄_1, a mean of squares, is PSD
+//! // At t = 0 (η̂ = 0) the averaged law's error is the loop's error without adaptive command.
+//! let start = c.predicted_error(20.0, 0.0);
+//! assert!((start - c.open_loop_rms).abs() <= 1e-9 * c.open_loop_rms, "{start} vs {}", c.open_loop_rms);
+//! assert!(c.predicted_error(20.0, 100.0) < start);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
 //! **[`auto`]**: every design key a scenario leaves out chosen from the plant's time scales and the
 //! signals' frequencies, verified by simulation ([`auto::auto_design`]).
 //!
