@@ -218,6 +218,7 @@ pub mod controller;
 pub mod design;
 pub mod diagnostics;
 pub mod export;
+pub mod files;
 mod hash;
 mod linalg;
 pub mod plant;
