@@ -579,7 +579,8 @@ fn relax_error(lambda: f64, layer: bool, method: Method) -> (f64, Stats) {
     (worst, stats)
 }
 
-/// The implicit path against the closed form at λ from mild to 1e9, and both paths where both run.
+/// The implicit path (automatic, and implicit throughout) against the closed form at λ from mild to
+/// 1e9, and both paths where both run.
 /// Solutions are O(1); at rtol = atol = 1e-8 over ~10² steps the global error stays below 1e-6
 /// (measured 1e-8…1e-7). Once stiff, the step count is set by the smooth solution, not by λ: from
 /// λ = 1e3 to 1e9 the automatic method's steps grow less than 1.5×, where DOP853 alone would need
@@ -598,6 +599,10 @@ fn stiff_closed_form() {
         let (err, stats) = relax_error(lambda, false, Method::Auto);
         assert!(err < 1e-6, "λ = {lambda:e}: error {err:e} ({stats:?})");
         assert!(stats.steps as f64 <= 1.5 * onset.steps as f64, "λ = {lambda:e}: {stats:?} vs {onset:?}");
+        // The implicit method throughout, from the first step (no DOP853 stretch before a switch).
+        let (err, stats) = relax_error(lambda, false, Method::Implicit);
+        assert!(err < 1e-6, "λ = {lambda:e}, Implicit: error {err:e} ({stats:?})");
+        assert!(stats.steps as f64 <= 1.5 * onset.steps as f64, "λ = {lambda:e}, Implicit: {stats:?} vs {onset:?}");
     }
 }
 
