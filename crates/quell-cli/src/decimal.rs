@@ -22,11 +22,10 @@ struct Digits {
 impl Digits {
     /// From zmij's text, which lays the same digits out its own way ("1.234e-7", "0.001234",
     /// "12340000000.0").
-    fn of(v: f64, buffer: &mut zmij::Buffer) -> Digits {
-        let text = buffer.format_finite(v).as_bytes();
+    fn of(text: &[u8]) -> Digits {
         let negative = text.first() == Some(&b'-');
         let text = &text[usize::from(negative)..];
-        let (mantissa, exponent) = match text.iter().position(|&b| b == b'e') {
+        let (mantissa, exponent) = match exponent_at(text) {
             Some(at) => (&text[..at], parse_exponent(&text[at + 1..])),
             None => (text, 0),
         };
@@ -52,6 +51,12 @@ impl Digits {
     fn digits(&self) -> &[u8] {
         &self.digits[..self.len]
     }
+}
+
+/// Where zmij's text has its 'e': among the last five bytes ("e-324", "e+20", "e-7"), if anywhere.
+fn exponent_at(text: &[u8]) -> Option<usize> {
+    let from = text.len().saturating_sub(5);
+    text[from..].iter().position(|&b| b == b'e').map(|at| from + at)
 }
 
 /// "+12", "-7" or "12" as an integer (zmij writes the exponent's sign).
@@ -100,9 +105,9 @@ fn exact_is_short(v: f64) -> bool {
     e >= -25 && u128::from(odd) * 5u128.pow(e.unsigned_abs()) < 10u128.pow(18)
 }
 
-/// The common start of both layouts: NaN, ±∞, ±0 and the values [`exact_is_short`] are written
-/// whole (`None`); otherwise the sign is, and the digits are returned.
-fn start(out: &mut Vec<u8>, v: f64, exp_form: bool, buffer: &mut zmij::Buffer) -> Option<Digits> {
+/// zmij's text of a finite, nonzero `v` that needs no tie-break; NaN, ±∞, ±0 and the values
+/// [`exact_is_short`] are written whole instead (`None`).
+fn start<'b>(out: &mut Vec<u8>, v: f64, exp_form: bool, buffer: &'b mut zmij::Buffer) -> Option<&'b [u8]> {
     if let Some(text) = special(v, exp_form) {
         out.extend_from_slice(text);
         return None;
@@ -112,16 +117,21 @@ fn start(out: &mut Vec<u8>, v: f64, exp_form: bool, buffer: &mut zmij::Buffer) -
         written.expect("writing to a Vec cannot fail");
         return None;
     }
-    let d = Digits::of(v, buffer);
-    if d.negative {
-        out.push(b'-');
-    }
-    Some(d)
+    Some(buffer.format_finite(v).as_bytes())
 }
 
 /// Appends `v` as `format!("{}", v)` writes it: plain decimal, no exponent, no ".0".
 pub fn push_display(out: &mut Vec<u8>, v: f64, buffer: &mut zmij::Buffer) {
-    let Some(d) = start(out, v, false, buffer) else { return };
+    let Some(text) = start(out, v, false, buffer) else { return };
+    // zmij writes 1e-5 ≤ |v| < 1e16 in plain decimal ("0.001234", "12.34", "1230.0"): the same
+    // text but for the ".0" of an integer (shortest digits never end in 0).
+    if exponent_at(text).is_none() {
+        return out.extend_from_slice(text.strip_suffix(b".0").unwrap_or(text));
+    }
+    let d = Digits::of(text);
+    if d.negative {
+        out.push(b'-');
+    }
     let (digits, exp) = (d.digits(), d.exp);
     if exp <= 0 {
         out.extend_from_slice(b"0.");
@@ -140,30 +150,24 @@ pub fn push_display(out: &mut Vec<u8>, v: f64, buffer: &mut zmij::Buffer) {
 
 /// Appends `v` as `format!("{:e}", v)` writes it: "d.ddde-N", "de20".
 pub fn push_exp(out: &mut Vec<u8>, v: f64, buffer: &mut zmij::Buffer) {
-    let Some(d) = start(out, v, true, buffer) else { return };
+    let Some(text) = start(out, v, true, buffer) else { return };
+    // zmij's scientific form ("1.234e-7", "5e+20") differs only by the exponent's "+".
+    if let Some(at) = exponent_at(text) {
+        let (mantissa, exponent) = text.split_at(at + 1);
+        out.extend_from_slice(mantissa);
+        return out.extend_from_slice(exponent.strip_prefix(b"+").unwrap_or(exponent));
+    }
+    let d = Digits::of(text);
+    if d.negative {
+        out.push(b'-');
+    }
     let digits = d.digits();
     out.push(digits[0]);
     if digits.len() > 1 {
         out.push(b'.');
         out.extend_from_slice(&digits[1..]);
     }
-    out.push(b'e');
-    let e = d.exp - 1;
-    if e < 0 {
-        out.push(b'-');
-    }
-    let mut text = [0u8; 4];
-    let mut at = text.len();
-    let mut rest = e.unsigned_abs();
-    loop {
-        at -= 1;
-        text[at] = b'0' + (rest % 10) as u8;
-        rest /= 10;
-        if rest == 0 {
-            break;
-        }
-    }
-    out.extend_from_slice(&text[at..]);
+    write!(out, "e{}", d.exp - 1).expect("writing to a Vec cannot fail");
 }
 
 #[cfg(test)]
