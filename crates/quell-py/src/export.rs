@@ -1,7 +1,7 @@
 //! `quell.export`: the C controller and its FMU, as `quell export` writes them (`quell::export`).
 
 use std::borrow::Cow;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use pyo3::prelude::*;
 use quell::export::{generate, generate_fmu, ExportError, ExportOptions, FmiVersion};
@@ -14,16 +14,6 @@ use crate::scenario::PyScenario;
 /// The library's message, its key named as this function's argument.
 fn message(e: &ExportError) -> String {
     in_python(e.to_string())
-}
-
-/// Writes `bytes` to `path` through a temporary file in the same directory, renamed into place.
-fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let mut tmp = tempfile::Builder::new().prefix(".quell-export.").suffix(".tmp").tempfile_in(dir)?;
-    std::io::Write::write_all(tmp.as_file_mut(), bytes)?;
-    tmp.as_file().sync_all()?;
-    tmp.persist(path).map_err(|e| e.error)?;
-    Ok(())
 }
 
 /// The FMI version an int names; `Err(None)` for another type (a bool is not an int here).
@@ -181,13 +171,10 @@ pub fn export(
     })?;
     let mut files = vec![(code.header_name, code.header.into_bytes()), (code.source_name, code.source.into_bytes())];
     files.extend(archive.map(|a| (a.file_name, a.bytes)));
-    let mut written = Vec::new();
-    for (name, bytes) in files {
-        let path = out.join(name);
-        write_atomic(&path, &bytes).map_err(|e| {
-            pyo3::exceptions::PyOSError::new_err(format!("out: writing {} failed ({e})", path.display()))
-        })?;
-        written.push(path);
-    }
-    Ok(written)
+    let files: Vec<(PathBuf, &[u8])> = files.iter().map(|(name, bytes)| (out.join(name), bytes.as_slice())).collect();
+    // All written before any is renamed, as `quell export` does: a failed write leaves the old
+    // files together, never a new header beside an old source.
+    quell::files::write_atomic_all(&files)
+        .map_err(|e| pyo3::exceptions::PyOSError::new_err(format!("out: writing in {} failed ({e})", out.display())))?;
+    Ok(files.into_iter().map(|(path, _)| path).collect())
 }

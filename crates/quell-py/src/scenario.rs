@@ -141,7 +141,8 @@ const SIMULATION_NUMBERS: [&str; 5] = ["t_end", "output_step", "rtol", "atol", "
 
 /// Writes the `[simulation]` values a call gave into `sim`: `numbers` (t_end, output_step, rtol,
 /// atol, sample_time) as floats, then `method` by name, each checked and named as its argument;
-/// what `quell.Scenario(...)` and `quell.simulate(...)` share.
+/// what `quell.Scenario(...)` and `quell.simulate(...)` share. Each still declares the arguments in
+/// its own signature: a PyO3 signature has no shared group of keyword arguments.
 pub fn write_simulation(
     sim: &mut Table,
     numbers: [Option<&Bound<'_, PyAny>>; 5],

@@ -122,10 +122,17 @@ def test_communication_step_must_be_whole_samples(tmp_path, capsys, version):
 @pytest.mark.parametrize("version", [2, 3])
 def test_source_only_fmu(tmp_path, version):
     scenario = quell.Scenario.load(EXAMPLES / "three-channel.toml")
-    quell.export(scenario, 0.05, out=tmp_path, fmu=True, fmi_version=version, compiler="none")
+    written = quell.export(scenario, 0.05, out=tmp_path, fmu=True, fmi_version=version, compiler="none")
     fmu = str(tmp_path / "quell.fmu")
     assert validate_fmu(fmu) == []
     assert not any(n.startswith("binaries/") for n in zipfile.ZipFile(fmu).namelist())
+    # The files get the mode a file Python creates gets (the umask applied), not a temporary
+    # file's 0600, and no temporary file is left.
+    created = tmp_path / "created"
+    created.touch()
+    mode = lambda p: p.stat().st_mode & 0o777  # noqa: E731
+    assert [mode(p) for p in written] == [mode(created)] * 3
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["created", "quell.fmu", "quell_controller.c", "quell_controller.h"]
 
 
 def test_bad_arguments(tmp_path):

@@ -80,7 +80,7 @@ def test_siso_plant_with_complex_poles_agrees_with_scipy(quell_bin, tmp_path):
     assert_agree(quell, scipy)
 
 
-@pytest.mark.skipif(not os.environ.get("QUELL_LONG_TESTS"), reason="about 6 s; set QUELL_LONG_TESTS=1")
+@pytest.mark.skipif(not os.environ.get("QUELL_LONG_TESTS"), reason="about 10 s; set QUELL_LONG_TESTS=1")
 def test_paper_example_whole_run_agrees_with_scipy(quell_bin, tmp_path, reference_points):
     quell, scipy = both(quell_bin, tmp_path, EXAMPLES / "paper.toml", 100.0)
     assert_agree(quell, scipy)

@@ -138,6 +138,23 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
+//! **[`files`]**: the atomic writes of every output file, the CLI's and `quell.export`'s
+//! ([`files::write_atomic`], [`files::write_atomic_all`]): a temporary name beside the file, then a
+//! rename, so that a reader never sees a half-written file nor a new file beside an old one.
+//!
+//! ```
+//! use quell::files::write_atomic_all;
+//!
+//! let dir = std::env::temp_dir().join(format!("quell-files-{}", std::process::id()));
+//! std::fs::create_dir_all(&dir)?;
+//! let (header, source) = (dir.join("a.h"), dir.join("a.c"));
+//! write_atomic_all(&[(header.clone(), b"/* h */".as_slice()), (source.clone(), b"/* c */".as_slice())])?;
+//! assert_eq!(std::fs::read(&source)?, b"/* c */");
+//! assert_eq!(std::fs::read_dir(&dir)?.count(), 2); // no temporary file left
+//! std::fs::remove_dir_all(&dir)?;
+//! # Ok::<(), std::io::Error>(())
+//! ```
+//!
 //! **[`study`]**: many runs of one scenario, a grid of values and Monte Carlo draws of the true
 //! plant ([`study::Study`], [`study::sweep`]), aggregated per grid point ([`study::Summary`]), and
 //! the per-channel tuning of μ_i ([`study::tune`]).
@@ -296,6 +313,7 @@ pub mod controller;
 pub mod design;
 pub mod diagnostics;
 pub mod export;
+pub mod files;
 mod hash;
 mod linalg;
 pub mod plant;
