@@ -367,8 +367,8 @@ fn vessel_measurement_noise_moves_the_tail_in_proportion_to_its_size() {
 /// 3e-4 of what they would be at unit gain and the verification misses the 1 % bound. With the
 /// channel poles automatic too (−1.6, −2.4: from 2r, r = 0.8 rad/s) it passes, in newtons, and
 /// the written scenario, run again, keeps every tail within 1 % of its reference; the cost is the
-/// thrust, more than 10× the page's peaks (1.6 MN, 1.1 MN, 8.6 MN·m), which is why the page keeps
-/// its slow poles.
+/// thrust, 18–26× the page's peaks (1.6 MN, 1.1 MN, 8.6 MN·m; asserted: more than 10×), which is
+/// why the page keeps its slow poles.
 #[test]
 fn the_vessels_automatic_design_fails_by_its_slow_channel_poles_not_its_units() {
     let gain = 0.012 / ((0.8f64.powi(2) + 0.1f64.powi(2)).sqrt() * (0.8f64.powi(2) + 0.12f64.powi(2)).sqrt());
