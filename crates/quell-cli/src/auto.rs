@@ -71,10 +71,11 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
     let v = &auto.verification;
     if !v.passed {
         return Err(Failure::Run(format!(
-            "the automatic design did not pass its verifying simulation (tail max|e| {:?} against bounds {:?}{}); nothing written; see docs/tuning.md",
+            "the automatic design did not pass its verifying simulation (tail max|e| {:?} against bounds {:?}{}){}; nothing written; see docs/tuning.md",
             v.tail_max_e,
             v.bound,
-            targets.u_limit.map_or(String::new(), |l| format!(", max|u_f| {:?} against the limit {l}", v.max_uf))
+            targets.u_limit.map_or(String::new(), |l| format!(", max|u_f| {:?} against the limit {l}", v.max_uf)),
+            v.advice.iter().map(|a| format!("; {a}")).collect::<String>()
         )));
     }
     if let Some(out) = &args.write {
@@ -113,6 +114,9 @@ fn report_text(a: &AutoDesign) -> String {
             if v.tail_max_e[i] <= v.bound[i] { "✓" } else { "✗" },
             v.max_uf[i]
         ));
+    }
+    for a in &v.advice {
+        s.push_str(&format!("  advice: {a}\n"));
     }
     s.push('\n');
     s.push_str(&crate::report::design_text(&a.design));

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use quell::export::{generate, generate_fmu, ExportError, ExportOptions};
+use quell::export::{generate, generate_fmu, ExportError, ExportOptions, FmiVersion};
 
 use crate::{load, output, Failure};
 
@@ -23,10 +23,13 @@ pub struct ExportArgs {
     /// Floating-point type of the generated code: f64 (double) or f32 (float, for single-precision FPUs).
     #[arg(long, default_value = "f64", value_parser = ["f64", "f32"])]
     precision: String,
-    /// Also write <PREFIX>.fmu: an FMI 2.0 co-simulation FMU of the same C (inputs y, g; outputs
-    /// u_f, u), with its sources and a binary for this machine built by --compiler.
+    /// Also write <PREFIX>.fmu: an FMI co-simulation FMU of the same C (inputs y, g; outputs u_f,
+    /// u), with its sources and a binary for this machine built by --compiler.
     #[arg(long)]
     fmu: bool,
+    /// The FMU's FMI version: 2 (FMI 2.0) or 3 (FMI 3.0).
+    #[arg(long, value_name = "VERSION", default_value = "2", value_parser = ["2", "3"], requires = "fmu")]
+    fmi_version: String,
     /// C compiler for the FMU's binary (gcc's flags); defaults to $CC, else cc. "none" writes a
     /// source-only FMU.
     #[arg(long, value_name = "COMPILER", requires = "fmu")]
@@ -50,7 +53,8 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
     let fmu = if args.fmu {
         let cc = args.compiler.clone().or_else(|| std::env::var("CC").ok()).unwrap_or_else(|| "cc".to_string());
         let compiler = (cc != "none").then_some(cc.as_str());
-        Some(generate_fmu(&design, sample_time, &options, compiler).map_err(export_failure)?)
+        let version: FmiVersion = args.fmi_version.parse().map_err(export_failure)?;
+        Some(generate_fmu(&design, sample_time, &options, compiler, version).map_err(export_failure)?)
     } else {
         None
     };
@@ -68,7 +72,7 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
         output::write_atomic(&path, |w| w.write_all(&fmu.bytes))
             .map_err(|e| Failure::Run(format!("writing {}: {e}", path.display())))?;
         let binary = fmu.platform.map(|p| format!("binary for {p}")).unwrap_or_else(|| "sources only".into());
-        eprintln!("wrote {} in {} (FMI 2.0 co-simulation, {binary})", fmu.file_name, out.display());
+        eprintln!("wrote {} in {} (FMI {} co-simulation, {binary})", fmu.file_name, out.display(), fmu.version.name());
     }
     eprintln!(
         "wrote {} and {} in {} (T_s = {sample_time} s, {}; {} bytes of constants, {} bytes of state)",

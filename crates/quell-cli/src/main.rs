@@ -5,6 +5,7 @@
 //! 2 bad input or an infeasible design.
 
 mod auto;
+mod decimal;
 mod export;
 mod interrupt;
 mod output;

@@ -2,54 +2,14 @@
 //! into place, so a reader never sees a half-written file.
 
 use std::fs;
-use std::io::{self, BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::io;
+use std::path::Path;
 
 use quell::sim::SimResult;
-use tempfile::NamedTempFile;
 
-use crate::Failure;
+use crate::{decimal, Failure};
 
-/// Writes a file atomically: `contents` fills a uniquely named temporary file beside `path`
-/// (`.stem.XXXXXX.tmp.ext`, so two runs sharing a directory never collide), which is then renamed
-/// to `path`. On error the temporary file is removed.
-pub fn write_atomic(path: &Path, contents: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> io::Result<()> {
-    stage(path, contents)?.persist(path).map_err(|e| e.error)?;
-    Ok(())
-}
-
-/// Writes several files so that none is renamed into place unless every one was written: each
-/// goes to its temporary name first, then all are renamed (a failed write leaves the old files
-/// together, never a new one beside an old one).
-pub fn write_atomic_all(files: &[(PathBuf, &[u8])]) -> io::Result<()> {
-    let staged =
-        files.iter().map(|(path, bytes)| stage(path, |w| w.write_all(bytes))).collect::<io::Result<Vec<_>>>()?;
-    for (tmp, (path, _)) in staged.into_iter().zip(files) {
-        tmp.persist(path).map_err(|e| e.error)?;
-    }
-    Ok(())
-}
-
-/// The temporary file of [`write_atomic`], written and synced, not yet renamed. Its name keeps at
-/// most 32 bytes of the stem, so a file name near the system's limit (255 bytes) still has one.
-fn stage(path: &Path, contents: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> io::Result<NamedTempFile> {
-    let mut stem = path.file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let cut = (0..=stem.len().min(32)).rev().find(|&k| stem.is_char_boundary(k)).unwrap_or(0);
-    stem.truncate(cut);
-    let ext = path.extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let (prefix, suffix) = (format!(".{stem}."), format!(".tmp{ext}"));
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(&prefix).suffix(&suffix);
-    // tempfile creates 0600; ask for 0666 less the umask, the mode `File::create` gives an output.
-    #[cfg(unix)]
-    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    let mut tmp = builder.tempfile_in(dir)?;
-    let mut w = BufWriter::new(tmp.as_file_mut());
-    contents(&mut w)?;
-    w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
-    Ok(tmp)
-}
+pub use quell::files::{write_atomic, write_atomic_all};
 
 /// Removes the figures (`<stem>.png`, `<stem>.svg`) in `dir` whose stem `ours` claims, before new
 /// ones are written: an earlier run's figures must not stand beside new data.
@@ -104,14 +64,19 @@ pub fn write_signals(path: &Path, r: &SimResult) -> io::Result<()> {
         if states {
             signals.extend([(&r.x[..], n), (&r.x_hat[..], n)]);
         }
+        // Each row is laid out in one buffer and written at once.
+        let (mut line, mut buffer) = (Vec::with_capacity(32 * header.len()), zmij::Buffer::new());
         for k in 0..r.len() {
-            write!(w, "{}", r.t[k])?;
+            line.clear();
+            decimal::push_display(&mut line, r.t[k], &mut buffer);
             for (sig, width) in &signals {
                 for &v in &sig[k * width..(k + 1) * width] {
-                    write!(w, ",{}", Num(v))?;
+                    line.push(b',');
+                    push_num(&mut line, v, &mut buffer);
                 }
             }
-            writeln!(w)?;
+            line.push(b'\n');
+            w.write_all(&line)?;
         }
         Ok(())
     })
@@ -125,17 +90,14 @@ pub fn write_json(path: &Path, value: &impl serde::Serialize) -> io::Result<()> 
     })
 }
 
-/// A number as plain decimal where that is short, scientific otherwise; always round-trips.
-struct Num(f64);
-
-impl std::fmt::Display for Num {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let a = self.0.abs();
-        if a == 0.0 || (1e-4..1e15).contains(&a) || !a.is_finite() {
-            write!(f, "{}", self.0)
-        } else {
-            write!(f, "{:e}", self.0)
-        }
+/// A number as plain decimal where that is short (`{}`), scientific otherwise (`{:e}`); always
+/// round-trips.
+fn push_num(out: &mut Vec<u8>, v: f64, buffer: &mut zmij::Buffer) {
+    let a = v.abs();
+    if a == 0.0 || (1e-4..1e15).contains(&a) || !a.is_finite() {
+        decimal::push_display(out, v, buffer)
+    } else {
+        decimal::push_exp(out, v, buffer)
     }
 }
 
@@ -143,47 +105,60 @@ impl std::fmt::Display for Num {
 mod tests {
     use super::*;
 
+    /// signals.csv as `core::fmt` lays it out: `{}` for t and for |v| = 0, in [1e-4, 1e15) or not
+    /// finite, `{:e}` otherwise.
+    fn signals_by_core_fmt(r: &SimResult) -> String {
+        let num = |v: f64| {
+            let a = v.abs();
+            if a == 0.0 || (1e-4..1e15).contains(&a) || !a.is_finite() {
+                format!("{v}")
+            } else {
+                format!("{v:e}")
+            }
+        };
+        let mut text = String::new();
+        for k in 0..r.len() {
+            text.push_str(&r.t[k].to_string());
+            let (m, q, n) = (r.m, r.q, r.n);
+            let mut signals = vec![(&r.y, m), (&r.g, m), (&r.e, m), (&r.u, m), (&r.u_f, m), (&r.eta, m * q)];
+            if r.has_states() {
+                signals.extend([(&r.x, n), (&r.x_hat, n)]);
+            }
+            for (sig, width) in signals {
+                for &v in &sig[k * width..(k + 1) * width] {
+                    text.push(',');
+                    text.push_str(&num(v));
+                }
+            }
+            text.push('\n');
+        }
+        text
+    }
+
     #[test]
-    fn two_writers_of_one_file_do_not_collide() {
-        // A second writer of the same path starts and finishes while the first is mid-write (two
-        // runs sharing an output directory). With one fixed temporary name the second truncated and
-        // renamed the first's file, and the first's rename then failed.
+    fn signals_csv_has_core_fmt_bytes() {
+        use quell::sim::{Run, Sample};
+        use std::ops::ControlFlow;
+        // A run of the paper's example with x and x̂ (values across many magnitudes, exact zeros,
+        // negative zeros of u = −η̂ᵀξ̂ at the start), then rows of edge values.
+        let s = quell::Scenario::from_toml(quell::scenario::PAPER_EXAMPLE).unwrap();
+        let d = s.design().unwrap();
+        let mut st = quell::sim::RunSettings::of(&s);
+        (st.t_end, st.record_states) = (5.0, true);
+        let mut r = Run::of(&s, &d).settings(st).simulate(|_| ControlFlow::Continue(())).unwrap();
+        let edges =
+            [5e-324, -0.0, 1e-4, 9.999999999999999e-5, 1e15, 999999999999999.9, 1e300, f64::NAN, -f64::INFINITY];
+        let (m, q, n) = (r.m, r.q, r.n);
+        for (k, &v) in edges.iter().enumerate() {
+            let (y, eta, x) = (vec![v; m], vec![-v; m * q], vec![v * 0.5; n]);
+            let t = [1e-7, 1e20, 0.1, 123.456, 5e-324, 1e15, 2.5, 1e-300, 7.0][k];
+            r.push(&Sample { t, y: &y, g: &y, u: &y, u_f: &y, eta: &eta, states: Some((&x, &x)) });
+        }
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("signals.csv");
-        write_atomic(&path, |w| {
-            w.write_all(b"first,")?;
-            write_atomic(&path, |w| w.write_all(b"second"))?;
-            assert_eq!(fs::read_to_string(&path)?, "second");
-            w.write_all(b"complete")
-        })
-        .unwrap();
-        assert_eq!(fs::read_to_string(&path).unwrap(), "first,complete");
-        let names: Vec<String> =
-            fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-        assert_eq!(names, ["signals.csv"], "temporary files left");
-    }
-
-    #[cfg(unix)]
-    #[test]
-    fn an_output_gets_the_mode_a_created_file_gets() {
-        use std::os::unix::fs::PermissionsExt;
-        let dir = tempfile::tempdir().unwrap();
-        let (written, created) = (dir.path().join("runs.csv"), dir.path().join("created.csv"));
-        write_atomic(&written, |w| w.write_all(b"run")).unwrap();
-        fs::File::create(&created).unwrap();
-        let mode = |p: &Path| fs::metadata(p).unwrap().permissions().mode() & 0o777;
-        assert_eq!(mode(&written), mode(&created), "umask applied as by File::create, not tempfile's 0600");
-    }
-
-    #[test]
-    fn a_failed_write_leaves_neither_file() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("summary.json");
-        let e = write_atomic(&path, |w| {
-            w.write_all(b"{")?;
-            Err(io::Error::other("disk full"))
-        });
-        assert_eq!(e.unwrap_err().to_string(), "disk full");
-        assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
+        write_signals(&path, &r).unwrap();
+        let written = fs::read_to_string(&path).unwrap();
+        let (_header, rows) = written.split_once('\n').unwrap();
+        assert_eq!(rows, signals_by_core_fmt(&r));
     }
 }

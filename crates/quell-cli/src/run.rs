@@ -58,9 +58,19 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     ctrl_c.start_writing();
     let seconds = started.elapsed().as_secs_f64();
     let diagnostics = quell::diagnostics::diagnose(&design, &scenario.reference, &scenario.disturbance, &result);
-    write_outputs(out, &scenario, &design, &result, &diagnostics, seconds, !args.no_plots)
-        .map_err(|e| Failure::Run(format!("writing {}: {e}", out.display())))?;
-    report_outcome(&result, &diagnostics, scenario.names.outputs.as_deref(), out, seconds)
+    let done = Finished { scenario: &scenario, design: &design, result: &result, diagnostics: &diagnostics, seconds };
+    write_outputs(out, &done, !args.no_plots).map_err(|e| Failure::Run(format!("writing {}: {e}", out.display())))?;
+    report_outcome(&done, out)
+}
+
+/// A run that ended (completed or not): what its files and its report are made of.
+struct Finished<'a> {
+    scenario: &'a Scenario,
+    design: &'a Design,
+    result: &'a SimResult,
+    diagnostics: &'a Diagnostics,
+    /// Wall time of the simulation.
+    seconds: f64,
 }
 
 /// The scenario's loop ([`RunSettings::of`]), or the sampled-data loop at `--sample-time`, checked
@@ -148,15 +158,8 @@ fn simulate(
     Ok(result)
 }
 
-fn write_outputs(
-    dir: &Path,
-    scenario: &Scenario,
-    design: &Design,
-    r: &SimResult,
-    diagnostics: &Diagnostics,
-    seconds: f64,
-    plots: bool,
-) -> std::io::Result<()> {
+fn write_outputs(dir: &Path, done: &Finished<'_>, plots: bool) -> std::io::Result<()> {
+    let r = done.result;
     // Figures of an earlier run (more channels, or plots now skipped) must not stand beside the new
     // data; removed first, so a failed write leaves figures missing rather than stale.
     output::remove_figures(dir, |stem| stem.strip_prefix("channel").is_some_and(|i| i.parse::<usize>().is_ok()))?;
@@ -164,7 +167,7 @@ fn write_outputs(
     std::thread::scope(|scope| {
         let figures: Vec<_> =
             (0..if plots { r.m } else { 0 }).map(|i| scope.spawn(move || plot::plot_channel(dir, r, i))).collect();
-        let data = write_data(dir, scenario, design, r, diagnostics, seconds);
+        let data = write_data(dir, done);
         for figure in figures {
             figure.join().map_err(|_| std::io::Error::other("plotting panicked"))??;
         }
@@ -172,14 +175,8 @@ fn write_outputs(
     })
 }
 
-fn write_data(
-    dir: &Path,
-    scenario: &Scenario,
-    design: &Design,
-    r: &SimResult,
-    diagnostics: &Diagnostics,
-    seconds: f64,
-) -> std::io::Result<()> {
+fn write_data(dir: &Path, done: &Finished<'_>) -> std::io::Result<()> {
+    let Finished { scenario, design, result: r, diagnostics, seconds } = *done;
     output::write_signals(&dir.join("signals.csv"), r)?;
     let warnings = quell::design::warnings(design, &scenario.design);
     let pace = crate::pace::estimates(scenario, design);
@@ -218,13 +215,9 @@ fn report_diagnostics(d: &ChannelDiagnostics) {
 /// The per-channel figures and what was written (exit 0), or why the run did not reach t_end
 /// (exit 1; the files hold the samples up to then). A channel is named by its output where the
 /// scenario names them (`channel 1 (pitch): …`).
-fn report_outcome(
-    result: &SimResult,
-    diagnostics: &Diagnostics,
-    outputs: Option<&[String]>,
-    out: &Path,
-    seconds: f64,
-) -> Result<(), Failure> {
+fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
+    let Finished { scenario, result, diagnostics, seconds, .. } = *done;
+    let outputs = scenario.names.outputs.as_deref();
     let out = out.display();
     match result.outcome.as_ref().unwrap_or(&Outcome::Completed) {
         Outcome::Completed => {

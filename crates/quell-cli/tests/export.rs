@@ -137,6 +137,31 @@ fn export_fmu_writes_one_archive_or_fails_with_1() {
     {
         assert!(text.contains(name), "{name} is missing from the archive");
     }
+    // --fmi-version 3: the FMI 3.0 layout (platform tuple, buildDescription.xml, no headers).
+    let o = quell(&[
+        "export",
+        &three,
+        "--sample-time",
+        "0.05",
+        "--out",
+        &out,
+        "--prefix",
+        "plant3",
+        "--fmu",
+        "--fmi-version",
+        "3",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("wrote plant3.fmu in"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("(FMI 3.0 co-simulation, binary for x86_64-linux)"), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&std::fs::read(dir.join("plant3.fmu")).unwrap()).into_owned();
+    for name in ["sources/buildDescription.xml", "sources/plant3_fmu.c", "binaries/x86_64-linux/plant3.so"] {
+        assert!(text.contains(name), "{name} is missing from the FMI 3.0 archive");
+    }
+    assert!(!text.contains("sources/fmi3Functions.h"), "FMI 3.0 has the importer supply the headers");
+    let o = quell(&["export", &three, "--sample-time", "0.05", "--out", &out, "--fmu", "--fmi-version", "4"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--fmi-version"), "{}", stderr(&o));
     let bad_tmp = temp_dir("fmu-bad");
     let bad = bad_tmp.path().join("out");
     let bad_out = bad.display().to_string();

@@ -1,10 +1,10 @@
 //! `quell.export`: the C controller and its FMU, as `quell export` writes them (`quell::export`).
 
 use std::borrow::Cow;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use pyo3::prelude::*;
-use quell::export::{generate, generate_fmu, ExportError, ExportOptions};
+use quell::export::{generate, generate_fmu, ExportError, ExportOptions, FmiVersion};
 
 use crate::convert::{number, type_name};
 use crate::design::PyDesign;
@@ -16,18 +16,47 @@ fn message(e: &ExportError) -> String {
     in_python(e.to_string())
 }
 
-/// Writes `bytes` to `path` through a temporary file in the same directory, renamed into place.
-fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let mut tmp = tempfile::Builder::new().prefix(".quell-export.").suffix(".tmp").tempfile_in(dir)?;
-    std::io::Write::write_all(tmp.as_file_mut(), bytes)?;
-    tmp.as_file().sync_all()?;
-    tmp.persist(path).map_err(|e| e.error)?;
-    Ok(())
+/// The FMI version an int names; `Err(None)` for another type (a bool is not an int here).
+fn fmi_version_of(v: &Bound<'_, PyAny>) -> Result<FmiVersion, Option<ExportError>> {
+    if v.is_instance_of::<pyo3::types::PyBool>() {
+        return Err(None);
+    }
+    let n: i64 = v.extract().map_err(|_| None)?;
+    n.to_string().parse().map_err(Some)
+}
+
+/// With `fmu`, the FMU's version and its compiler (`None`: sources only; default `$CC`, else `cc`).
+/// Without it, `fmi_version` and `compiler` are refused (after their types are checked), as the CLI
+/// refuses `--fmi-version` and `--compiler` without `--fmu`: an FMU option alone writes no FMU.
+fn fmu_arguments(
+    py: Python<'_>,
+    fmu: bool,
+    fmi_version: Option<&Bound<'_, PyAny>>,
+    compiler: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<(FmiVersion, Option<String>)>> {
+    let fmi_version = fmi_version.filter(|v| !v.is_none());
+    let version = match fmi_version {
+        None => FmiVersion::default(),
+        Some(v) => fmi_version_of(v).map_err(|e| match e {
+            None => crate::errors::type_error("fmi_version", "2 or 3 (an int)", v),
+            Some(e) => Kind::Export.err(py, message(&e)),
+        })?,
+    };
+    let compiler = compiler.filter(|c| !c.is_none()).map(|c| crate::convert::text(c, "compiler")).transpose()?;
+    if !fmu {
+        let stray = [("fmi_version", fmi_version.is_some()), ("compiler", compiler.is_some())];
+        return match stray.iter().find(|(_, given)| *given) {
+            Some((name, _)) => Err(Kind::Export
+                .err(py, format!("{name}: applies to the FMU only; pass fmu=True as well, or leave {name} out"))),
+            None => Ok(None),
+        };
+    }
+    let cc = compiler.or_else(|| std::env::var("CC").ok()).unwrap_or_else(|| "cc".into());
+    Ok(Some((version, (cc != "none").then_some(cc))))
 }
 
 /// Writes the real-time controller of a design as C99 (`<prefix>_controller.h` and `.c`), and
-/// optionally as an FMI 2.0 co-simulation FMU, like `quell export`; files are written to a
+/// optionally as an FMI 2.0 or 3.0 co-simulation FMU, like `quell export`; files are written to a
 /// temporary name, then renamed.
 ///
 /// Parameters
@@ -44,6 +73,8 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 ///     "f64" (default) or "f32".
 /// fmu : bool, optional
 ///     Also write `<prefix>.fmu`.
+/// fmi_version : int, optional
+///     The FMU's FMI version: 2 (default, FMI 2.0) or 3 (FMI 3.0).
 /// compiler : str, optional
 ///     The C compiler for the FMU's binary (default $CC or cc; "none": sources only).
 ///
@@ -59,7 +90,8 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 /// ScenarioError
 ///     A sample time that is missing, not > 0 or does not divide the delays.
 /// ExportError
-///     A prefix, precision or compiler that is not valid.
+///     A prefix, precision, FMI version or compiler that is not valid, or `fmi_version` or
+///     `compiler` without `fmu=True`.
 /// OSError
 ///     The directory cannot be written.
 ///
@@ -68,10 +100,13 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 /// >>> paths = quell.export(quell.paper_example().design(), 1e-3, out="c", prefix="loop")
 /// >>> [p.name for p in paths]
 /// ['loop_controller.h', 'loop_controller.c']
+/// >>> paths = quell.export(quell.paper_example(), 1e-3, out="fmu3", fmu=True, fmi_version=3, compiler="none")
+/// >>> [p.name for p in paths]
+/// ['quell_controller.h', 'quell_controller.c', 'quell.fmu']
 #[pyfunction]
 #[pyo3(
-    signature = (source, sample_time=None, *, out=None, prefix=Cow::Borrowed("quell"), precision=None, fmu=false, compiler=None),
-    text_signature = "(source, sample_time=None, *, out=None, prefix='quell', precision=None, fmu=False, compiler=None)"
+    signature = (source, sample_time=None, *, out=None, prefix=Cow::Borrowed("quell"), precision=None, fmu=false, fmi_version=None, compiler=None),
+    text_signature = "(source, sample_time=None, *, out=None, prefix='quell', precision=None, fmu=False, fmi_version=2, compiler=None)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub fn export(
@@ -82,6 +117,7 @@ pub fn export(
     #[pyo3(from_py_with = crate::convert::argument::prefix)] prefix: Cow<'static, str>,
     precision: Option<&Bound<'_, PyAny>>,
     #[pyo3(from_py_with = crate::convert::argument::fmu)] fmu: bool,
+    fmi_version: Option<&Bound<'_, PyAny>>,
     compiler: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Vec<PathBuf>> {
     let (design, scenario_name, scenario_T) = if let Ok(s) = source.cast::<PyScenario>() {
@@ -114,19 +150,18 @@ pub fn export(
             .parse()
             .map_err(|e: ExportError| Kind::Export.err(py, message(&e)))?,
     };
+    let fmu = fmu_arguments(py, fmu, fmi_version, compiler)?;
     let options = ExportOptions { prefix: prefix.into_owned(), precision, scenario_name };
     let raise = |e: ExportError| match e {
         ExportError::Controller(_) | ExportError::NotFinite { .. } => Kind::Scenario.err(py, message(&e)),
         _ => Kind::Export.err(py, message(&e)),
     };
     let out = out.filter(|o| !o.is_none()).map(|o| crate::convert::path(o, "out")).transpose()?;
-    let compiler = compiler.filter(|c| !c.is_none()).map(|c| crate::convert::text(c, "compiler")).transpose()?;
-    let cc = compiler.or_else(|| std::env::var("CC").ok()).unwrap_or_else(|| "cc".into());
-    let compiler = (cc != "none").then_some(cc.as_str());
     let (code, archive) = py
         .detach(|| -> Result<_, ExportError> {
             let code = generate(&design, T, &options)?;
-            let archive = if fmu { Some(generate_fmu(&design, T, &options, compiler)?) } else { None };
+            let archive =
+                fmu.as_ref().map(|(v, cc)| generate_fmu(&design, T, &options, cc.as_deref(), *v)).transpose()?;
             Ok((code, archive))
         })
         .map_err(raise)?;
@@ -136,13 +171,10 @@ pub fn export(
     })?;
     let mut files = vec![(code.header_name, code.header.into_bytes()), (code.source_name, code.source.into_bytes())];
     files.extend(archive.map(|a| (a.file_name, a.bytes)));
-    let mut written = Vec::new();
-    for (name, bytes) in files {
-        let path = out.join(name);
-        write_atomic(&path, &bytes).map_err(|e| {
-            pyo3::exceptions::PyOSError::new_err(format!("out: writing {} failed ({e})", path.display()))
-        })?;
-        written.push(path);
-    }
-    Ok(written)
+    let files: Vec<(PathBuf, &[u8])> = files.iter().map(|(name, bytes)| (out.join(name), bytes.as_slice())).collect();
+    // All written before any is renamed, as `quell export` does: a failed write leaves the old
+    // files together, never a new header beside an old source.
+    quell::files::write_atomic_all(&files)
+        .map_err(|e| pyo3::exceptions::PyOSError::new_err(format!("out: writing in {} failed ({e})", out.display())))?;
+    Ok(files.into_iter().map(|(path, _)| path).collect())
 }

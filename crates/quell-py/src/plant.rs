@@ -67,22 +67,46 @@ impl PyPlant {
     }
 }
 
+/// "state" for the states, "channel" for the inputs and outputs: what one name is for.
+fn per(name: &str) -> &'static str {
+    if name == "states" {
+        "state"
+    } else {
+        "channel"
+    }
+}
+
 /// `count` distinct names for `name` (a list of str), or None.
 fn names(obj: Option<&Bound<'_, PyAny>>, name: &str, count: usize) -> PyResult<Option<Vec<String>>> {
     let Some(obj) = obj.filter(|o| !o.is_none()) else { return Ok(None) };
     let py = obj.py();
     let given = crate::convert::strings(obj, name, &format!("a list of {count} names (str)"), "a str (a signal name)")?;
-    let per = if name == "states" { "state" } else { "channel" };
-    quell::scenario::check_names(name, &given, count, per).map_err(|e| Kind::Scenario.err(py, e.to_string()))?;
+    quell::scenario::check_names(name, &given, count, per(name)).map_err(|e| Kind::Scenario.err(py, e.to_string()))?;
     Ok(Some(given))
 }
 
-/// A `control.StateSpace`'s labels of one kind, unless they are python-control's own
-/// (`u[0]`, `u[1]`, …, counting from 0).
-fn system_labels(sys: &Bound<'_, PyAny>, attribute: &str, generic: &str) -> Option<Vec<String>> {
-    let labels: Vec<String> = sys.getattr(attribute).ok()?.extract().ok()?;
-    let default = (0..labels.len()).all(|i| labels[i] == format!("{generic}[{i}]"));
-    (!default).then_some(labels)
+/// A `control.StateSpace`'s labels of one kind (`<kind>_labels`, `count` of them) for the keyword
+/// `name`, unless they are python-control's own (`u[0]`, `u[1]`, …, counting from 0); checked as
+/// the keyword's names are (python-control keeps one of repeated labels, so a repeat shows as a
+/// missing name).
+fn system_labels(sys: &Bound<'_, PyAny>, kind: &str, name: &str, count: usize) -> PyResult<Option<Vec<String>>> {
+    let generic = match kind {
+        "input" => "u",
+        "output" => "y",
+        _ => "x",
+    };
+    let attribute = format!("{kind}_labels");
+    let Some(labels) = sys.getattr(attribute.as_str()).ok().and_then(|l| l.extract::<Vec<String>>().ok()) else {
+        return Ok(None);
+    };
+    if (0..labels.len()).all(|i| labels[i] == format!("{generic}[{i}]")) {
+        return Ok(None);
+    }
+    quell::scenario::check_names(&format!("sys.{attribute}"), &labels, count, per(name)).map_err(|e| {
+        let merged = if labels.len() < count { " (python-control keeps one of repeated labels)" } else { "" };
+        Kind::Scenario.err(sys.py(), format!("{e}{merged}; or name them with quell.Plant(sys, {name}=[...])"))
+    })?;
+    Ok(Some(labels))
 }
 
 /// Whether `obj` looks like a `control.StateSpace` (has A, B, C, D and nstates).
@@ -131,14 +155,8 @@ impl PyPlant {
         } else {
             A
         };
-        let mut labels = Labels::default();
-        let (A, B, C) = if is_state_space(A) {
-            let sys = A;
-            labels = Labels {
-                inputs: system_labels(sys, "input_labels", "u"),
-                outputs: system_labels(sys, "output_labels", "y"),
-                states: system_labels(sys, "state_labels", "x"),
-            };
+        let system = is_state_space(A).then_some(A);
+        let (A, B, C) = if let Some(sys) = system {
             if B.is_some() || C.is_some() {
                 return Err(k.err(py, "B, C: the first argument is a state-space system, which gives A, B and C; pass D and Q (the disturbance matrices) as keywords: Plant(sys, D=..., Q=..., delays=...)"));
             }
@@ -181,9 +199,17 @@ impl PyPlant {
         let x0 = x0.map(|x| vector(x, "x0", k)).transpose()?.map(quell::nalgebra::DVector::from_vec);
         let inner = quell::Plant::new(A, B, C, D, Q, delays, x0).map_err(|e| raise(py, k)(&e))?;
         let (n, m) = (inner.n(), inner.m());
-        labels.inputs = names(inputs, "inputs", m)?.or(labels.inputs);
-        labels.outputs = names(outputs, "outputs", m)?.or(labels.outputs);
-        labels.states = names(states, "states", n)?.or(labels.states);
+        // A keyword's names, else the system's labels (checked only where no keyword overrides them).
+        let label =
+            |given: Option<&Bound<'_, PyAny>>, name: &str, kind: &str, count: usize| match names(given, name, count)? {
+                Some(v) => Ok(Some(v)),
+                None => system.map_or(Ok(None), |sys| system_labels(sys, kind, name, count)),
+            };
+        let labels = Labels {
+            inputs: label(inputs, "inputs", "input", m)?,
+            outputs: label(outputs, "outputs", "output", m)?,
+            states: label(states, "states", "state", n)?,
+        };
         Ok(PyPlant { inner, labels })
     }
 

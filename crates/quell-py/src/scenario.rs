@@ -136,6 +136,29 @@ pub fn method_value(obj: &Bound<'_, PyAny>) -> PyResult<Value> {
     Ok(Value::String(obj.extract()?))
 }
 
+/// The `[simulation]` numbers a call may give, in the order of its arguments.
+const SIMULATION_NUMBERS: [&str; 5] = ["t_end", "output_step", "rtol", "atol", "sample_time"];
+
+/// Writes the `[simulation]` values a call gave into `sim`: `numbers` (t_end, output_step, rtol,
+/// atol, sample_time) as floats, then `method` by name, each checked and named as its argument;
+/// what `quell.Scenario(...)` and `quell.simulate(...)` share. Each still declares the arguments in
+/// its own signature: a PyO3 signature has no shared group of keyword arguments.
+pub fn write_simulation(
+    sim: &mut Table,
+    numbers: [Option<&Bound<'_, PyAny>>; 5],
+    method: Option<&Bound<'_, PyAny>>,
+) -> PyResult<()> {
+    for (key, v) in SIMULATION_NUMBERS.into_iter().zip(numbers) {
+        if let Some(v) = v.filter(|v| !v.is_none()) {
+            sim.insert(key.into(), Value::Float(number(v, key)?));
+        }
+    }
+    if let Some(m) = method.filter(|m| !m.is_none()) {
+        sim.insert("method".into(), method_value(m)?);
+    }
+    Ok(())
+}
+
 /// A Python value (numbers, strings, lists, dicts, numpy arrays and scalars) as a TOML value;
 /// `key` names it in messages, as Python spells it (`reference[0]["bias"]`).
 pub fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
@@ -299,20 +322,7 @@ impl PyScenario {
             doc.insert("disturbance".into(), signal(d, "disturbance")?);
         }
         let mut sim = Table::new();
-        for (key, v) in [
-            ("t_end", t_end),
-            ("output_step", output_step),
-            ("rtol", rtol),
-            ("atol", atol),
-            ("sample_time", sample_time),
-        ] {
-            if let Some(v) = v.filter(|v| !v.is_none()) {
-                sim.insert(key.into(), Value::Float(crate::convert::number(v, key)?));
-            }
-        }
-        if let Some(m) = method.filter(|m| !m.is_none()) {
-            sim.insert("method".into(), method_value(m)?);
-        }
+        write_simulation(&mut sim, [t_end, output_step, rtol, atol, sample_time], method)?;
         doc.insert("simulation".into(), Value::Table(sim));
         if let Some(n) = noise.filter(|n| !n.is_none()) {
             if !n.is_instance_of::<PyDict>() {

@@ -10,7 +10,6 @@ use pyo3::types::{PyBytes, PyDict};
 use quell::sim::{Loop, Outcome, Peaks, Run, RunSettings, RunStats, SimResult, Stats};
 use toml::Value;
 
-use crate::convert::number;
 use crate::errors::{in_python, simulation_error, Kind};
 use crate::plant::Labels;
 use crate::scenario::PyScenario;
@@ -555,10 +554,8 @@ pub fn simulate(
     let s: PyRef<'_, PyScenario> =
         scenario.extract().map_err(|_| crate::errors::type_error("scenario", "a quell.Scenario", scenario))?;
     let design = s.design_arc(py)?;
-    let method = method.filter(|v| !v.is_none()).map(crate::scenario::method_value).transpose()?;
-    let numbers =
-        [("t_end", t_end), ("output_step", output_step), ("rtol", rtol), ("atol", atol), ("sample_time", sample_time)];
-    let edited = with_overrides(py, &s.inner, &numbers, method.as_ref())?;
+    let method = method.filter(|v| !v.is_none());
+    let edited = with_overrides(py, &s.inner, [t_end, output_step, rtol, atol, sample_time], method)?;
     let scn = edited.as_ref().unwrap_or(&s.inner);
     let mut settings = RunSettings::of(scn);
     settings.record_states = states;
@@ -580,27 +577,20 @@ pub fn simulate(
     }
 }
 
-/// The scenario with the given `[simulation]` overrides, read again through the scenario's own
-/// checks; `None` when nothing is overridden.
+/// The scenario with the given `[simulation]` overrides ([`crate::scenario::write_simulation`]),
+/// read again through the scenario's own checks; `None` when nothing is overridden.
 fn with_overrides(
     py: Python<'_>,
     s: &quell::Scenario,
-    numbers: &[(&str, Option<&Bound<'_, PyAny>>)],
-    method: Option<&Value>,
+    numbers: [Option<&Bound<'_, PyAny>>; 5],
+    method: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Option<quell::Scenario>> {
-    if method.is_none() && numbers.iter().all(|(_, v)| v.is_none()) {
+    if method.is_none() && numbers.iter().all(Option::is_none) {
         return Ok(None);
     }
     let mut doc = s.to_table();
     if let Some(Value::Table(sim)) = doc.get_mut("simulation") {
-        for (key, v) in numbers {
-            if let Some(v) = v {
-                sim.insert((*key).into(), Value::Float(number(v, key)?));
-            }
-        }
-        if let Some(m) = method {
-            sim.insert("method".into(), m.clone());
-        }
+        crate::scenario::write_simulation(sim, numbers, method)?;
     }
     quell::Scenario::from_document(&doc).map(Some).map_err(|e| crate::scenario::argument_error(py, &e))
 }

@@ -148,6 +148,35 @@ def test_state_space_signal_names_are_kept_through_to_the_loops_and_results():
         quell.Plant(A, B, C, inputs="ab")
 
 
+def test_a_systems_labels_are_checked_as_names():
+    """A control.StateSpace's labels are checked at quell.Plant as the keywords' and a scenario
+    file's names are (one check, quell::scenario::check_names): python-control itself keeps one of
+    repeated labels (the independent side: its own input_labels) and accepts empty ones."""
+    A, B, C = -np.diag([1.0, 2.0, 3.0]), np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]), np.eye(2, 3)
+    repeated = control.ss(A, B, C, np.zeros((2, 2)), inputs=["a", "a"])
+    assert repeated.input_labels == ["a"]  # python-control merged them: 2 inputs, 1 label
+    with pytest.raises(quell.ScenarioError) as info:
+        quell.Plant(repeated, delays=[0.0, 0.0])
+    assert str(info.value) == (
+        "sys.input_labels: expected 2 names (one per channel), found 1 (python-control keeps one of "
+        "repeated labels); or name them with quell.Plant(sys, inputs=[...])"
+    )
+    empty = control.ss(A, B, C, np.zeros((2, 2)), outputs=["z", " "])
+    with pytest.raises(quell.ScenarioError) as info:
+        quell.Plant(empty, delays=[0.0, 0.0])
+    assert str(info.value) == (
+        'sys.output_labels[1]: expected a name, found " "; give every channel a name; '
+        "or name them with quell.Plant(sys, outputs=[...])"
+    )
+    states = control.ss(A, B, C, np.zeros((2, 2)), states=["p", "", "q"])
+    with pytest.raises(quell.ScenarioError, match=r'^sys.state_labels\[1\]: expected a name, found ""; give every state'):
+        quell.Plant(states, delays=[0.0, 0.0])
+    # The keyword that names a kind of signal overrides the system's labels, which are then not read.
+    fixed = quell.Plant(repeated, delays=[0.0, 0.0], inputs=["a", "b"])
+    assert fixed.inputs == ["a", "b"] and fixed.outputs == ["y[1]", "y[2]"]
+    assert quell.Plant(empty, delays=[0.0, 0.0], outputs=["z", "w"]).outputs == ["z", "w"]
+
+
 def test_transfer_function_names_are_kept():
     G = control.tf([1.0], [1.0, 2.0, 1.0], inputs="force", outputs="position")
     p = quell.Plant(G, delays=[0.1])

@@ -1,6 +1,7 @@
-"""The FMU of `quell.export(..., fmu=True)` against FMPy, the independent side: FMPy validates its
-model description (the FMI 2.0 schema and the standard's rules) and runs it with its own
-co-simulation master; the FMU's u_f and u must be the Controller's and the sampled loop's.
+"""The FMU of `quell.export(..., fmu=True)`, FMI 2.0 and 3.0, against FMPy, the independent side:
+FMPy validates its model description (the FMI 2.0 or 3.0 schema and the standard's rules; for 3.0
+also sources/buildDescription.xml) and runs it with its own co-simulation master; the FMU's u_f and
+u must be the Controller's and the sampled loop's.
 
 Tolerance 1e-12 (relative to the signal's size): the FMU's binary is the generated C compiled with
 -std=c99 -ffp-contract=off, which performs the Controller's operations in its order, so in f64 the
@@ -45,28 +46,46 @@ def _close(a, b):
     np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * scale)
 
 
+# What each version's archive holds besides the model description and the C: FMI 2.0 ships its
+# headers; FMI 3.0 (section 2.5) has the importer supply them and lists the sources in
+# buildDescription.xml.
+LAYOUT = {
+    2: ("binaries/linux64/ctrl.so", "sources/fmi2Functions.h"),
+    3: ("binaries/x86_64-linux/ctrl.so", "sources/buildDescription.xml"),
+}
+
+
 @pytest.mark.parametrize(
-    "example, T, t_end",
+    "example, T, t_end, version",
     [
-        ("paper-sampled.toml", 1e-3, 4.0),  # the paper's plant, m = 2, delays 1 s and 3 s
-        ("three-channel.toml", 0.05, 20.0),  # m = 3, n = 4, delays 10, 20 and 40 samples
+        ("paper-sampled.toml", 1e-3, 4.0, 2),  # the paper's plant, m = 2, delays 1 s and 3 s
+        ("three-channel.toml", 0.05, 20.0, 2),  # m = 3, n = 4, delays 10, 20 and 40 samples
+        ("paper-sampled.toml", 1e-3, 4.0, 3),
+        ("three-channel.toml", 0.05, 20.0, 3),
     ],
 )
-def test_fmu_is_the_controller(tmp_path, example, T, t_end):
+def test_fmu_is_the_controller(tmp_path, example, T, t_end, version):
     scenario, result = _closed_loop(EXAMPLES / example, T, t_end)
-    written = quell.export(scenario, T, out=tmp_path, fmu=True, prefix="ctrl")
+    written = quell.export(scenario, T, out=tmp_path, fmu=True, fmi_version=version, prefix="ctrl")
     fmu = tmp_path / "ctrl.fmu"
     assert fmu in written
     assert validate_fmu(str(fmu)) == []
     md = read_model_description(str(fmu))
     m = result.y.shape[1]
-    assert md.fmiVersion == "2.0" and md.coSimulation.modelIdentifier == "ctrl"
+    assert md.fmiVersion == f"{version}.0" and md.coSimulation.modelIdentifier == "ctrl"
     assert [v.name for v in md.modelVariables if v.causality == "input"] == [f"y[{i + 1}]" for i in range(m)] + [
         f"g[{i + 1}]" for i in range(m)
     ]
-    names = zipfile.ZipFile(fmu).namelist()
-    assert "binaries/linux64/ctrl.so" in names
-    assert {"sources/ctrl_controller.c", "sources/ctrl_fmu.c", "sources/fmi2Functions.h"} <= set(names)
+    if version == 3:
+        assert all(v.type == "Float64" for v in md.modelVariables)
+        assert [v.name for v in md.modelVariables if v.causality == "independent"] == ["time"]
+        assert [f for c in md.buildConfigurations for s in c.sourceFileSets for f in s.sourceFiles] == [
+            "ctrl_fmu.c",
+            "ctrl_controller.c",
+        ]
+    names = set(zipfile.ZipFile(fmu).namelist())
+    assert {"sources/ctrl_controller.c", "sources/ctrl_fmu.c", *LAYOUT[version]} <= names
+    assert version == 2 or not any(n.startswith("sources/fmi") for n in names)
 
     sim = _fmu_run(fmu, result, T)
     k = len(result.t)
@@ -87,20 +106,47 @@ def test_fmu_is_the_controller(tmp_path, example, T, t_end):
     assert np.max(np.abs(u_f)) > 0.1  # the controller acted: the comparison is not of zeros
 
 
-def test_communication_step_must_be_whole_samples(tmp_path):
-    """A master stepping at 1.5 T_s gets fmi2Error from fmi2DoStep, which FMPy raises."""
-    scenario, result = _closed_loop(EXAMPLES / "three-channel.toml", 0.05, 1.0)
-    quell.export(scenario, 0.05, out=tmp_path, fmu=True)
-    with pytest.raises(Exception, match="fmi2DoStep"):
-        simulate_fmu(str(tmp_path / "quell.fmu"), stop_time=1.0, step_size=0.075, output_interval=0.075)
-
-
-def test_source_only_fmu_and_bad_arguments(tmp_path):
+@pytest.mark.parametrize("version", [2, 3])
+def test_communication_step_must_be_whole_samples(tmp_path, capsys, version):
+    """A master stepping at 1.5 T_s gets fmiXError from fmiXDoStep, which FMPy raises, and the
+    FMU's log (which FMPy's default logger prints) says why."""
     scenario = quell.Scenario.load(EXAMPLES / "three-channel.toml")
-    quell.export(scenario, 0.05, out=tmp_path, fmu=True, compiler="none")
+    quell.export(scenario, 0.05, out=tmp_path, fmu=True, fmi_version=version)
+    with pytest.raises(Exception, match=f"fmi{version}DoStep"):
+        simulate_fmu(str(tmp_path / "quell.fmu"), stop_time=1.0, step_size=0.075, output_interval=0.075)
+    logged = capsys.readouterr().out
+    why = f"fmi{version}DoStep: communication step h = 0.075 s is not a whole number of samples of T_s = 0.05 s"
+    assert why in logged, logged
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_source_only_fmu(tmp_path, version):
+    scenario = quell.Scenario.load(EXAMPLES / "three-channel.toml")
+    written = quell.export(scenario, 0.05, out=tmp_path, fmu=True, fmi_version=version, compiler="none")
     fmu = str(tmp_path / "quell.fmu")
     assert validate_fmu(fmu) == []
     assert not any(n.startswith("binaries/") for n in zipfile.ZipFile(fmu).namelist())
+    # The files get the mode a file Python creates gets (the umask applied), not a temporary
+    # file's 0600, and no temporary file is left.
+    created = tmp_path / "created"
+    created.touch()
+    mode = lambda p: p.stat().st_mode & 0o777  # noqa: E731
+    assert [mode(p) for p in written] == [mode(created)] * 3
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["created", "quell.fmu", "quell_controller.c", "quell_controller.h"]
+
+
+def test_bad_arguments(tmp_path):
+    scenario = quell.Scenario.load(EXAMPLES / "three-channel.toml")
+    with pytest.raises(quell.ExportError, match=r'^fmi_version: expected 2 or 3, found "4"$'):
+        quell.export(scenario, 0.05, out=tmp_path, fmu=True, fmi_version=4)
+    with pytest.raises(TypeError, match=r"^fmi_version: expected 2 or 3 \(an int\), found a str$"):
+        quell.export(scenario, 0.05, out=tmp_path, fmu=True, fmi_version="3")
+    # As the CLI refuses --fmi-version and --compiler without --fmu: an FMU option alone writes no FMU.
+    for option in (dict(fmi_version=3), dict(compiler="gcc")):
+        name = next(iter(option))
+        with pytest.raises(quell.ExportError, match=rf"^{name}: applies to the FMU only; pass fmu=True as well"):
+            quell.export(scenario, 0.05, out=tmp_path / "none", **option)
+    assert not (tmp_path / "none").exists()
     with pytest.raises(quell.ExportError, match=r"^prefix: expected a C identifier.*found \"9lives\""):
         quell.export(scenario, 0.05, out=tmp_path, prefix="9lives")
     with pytest.raises(quell.ExportError, match=r"^precision: expected f64 or f32, found \"f16\""):
@@ -113,3 +159,53 @@ def test_source_only_fmu_and_bad_arguments(tmp_path):
         quell.export(scenario.design(), 0.3, out=tmp_path)
     with pytest.raises(quell.ExportError, match=r"^compiler \"/nonexistent/cc\": cannot run it"):
         quell.export(scenario, 0.05, out=tmp_path, fmu=True, compiler="/nonexistent/cc")
+
+
+def test_fmi3_calls_one_by_one(tmp_path):
+    """FMPy's FMI 3.0 master driven call by call (its FMU3Slave), for what a whole simulation does
+    not reach: the independent variable `time` is the time of the next sample; setting it, an
+    output or a NaN input, or giving fewer values than value references, is fmi3Error with a
+    logged reason that leaves the FMU as it was; eventModeUsed is refused at instantiation."""
+    from fmpy import extract
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi3 import FMU3Slave
+
+    scenario = quell.Scenario.load(EXAMPLES / "three-channel.toml")
+    quell.export(scenario, 0.05, out=tmp_path, fmu=True, fmi_version=3, prefix="ctrl")
+    md = read_model_description(str(tmp_path / "ctrl.fmu"))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    assert vr["time"] == 12 and vr["y[1]"] == 0 and vr["u_f[1]"] == 6  # 4m, then as in FMI 2.0 (m = 3)
+    unzipped = extract(str(tmp_path / "ctrl.fmu"))
+    logged = []
+
+    def slave():
+        return FMU3Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier="ctrl", instanceName="c")
+
+    fmu = slave()
+    fmu.instantiate(logMessage=lambda env, status, category, message: logged.append(message.decode()))
+    fmu.enterInitializationMode(startTime=1.0)
+    fmu.exitInitializationMode()
+    assert fmu.getFloat64([vr["time"]]) == [1.0]
+    fmu.setFloat64([vr["y[1]"], vr["g[1]"]], [0.5, 2.0])
+    fmu.doStep(1.0, 0.1)  # two samples
+    assert fmu.getFloat64([vr["time"], vr["y[1]"], vr["g[1]"]]) == [1.1, 0.5, 2.0]
+    refusals = [
+        (lambda: fmu.setFloat64([vr["time"]], [0.0]), "fmi3SetFloat64: value reference 12 is not an input (y and g are 0 to 5)"),
+        (lambda: fmu.setFloat64([vr["u_f[1]"]], [0.0]), "fmi3SetFloat64: value reference 6 is not an input"),
+        (lambda: fmu.setFloat64([vr["y[2]"]], [float("nan")]), "fmi3SetFloat64: input 1 is nan; y and g must be finite"),
+        (lambda: fmu.getFloat64([vr["y[1]"], vr["y[2]"]], nValues=1), "fmi3GetFloat64: 1 values for 2 value references"),
+        (lambda: fmu.getFloat64([13]), "fmi3GetFloat64: no variable has value reference 13 (0 to 11)"),
+        (lambda: fmu.doStep(1.0, 0.05), "fmi3DoStep: at t = 1 s, but the controller's next sample is at 1.1 s"),
+    ]
+    for call, why in refusals:
+        with pytest.raises(FMICallException, match="status 3"):
+            call()
+        assert logged[-1].startswith(why), (logged[-1], why)
+    assert fmu.getFloat64([vr["time"], vr["y[2]"]]) == [1.1, 0.0]  # nothing was set or stepped
+    fmu.terminate()
+    fmu.freeInstance()
+
+    events = slave()
+    with pytest.raises(Exception, match="Failed to instantiate"):
+        events.instantiate(eventModeUsed=True, logMessage=lambda env, s, c, message: logged.append(message.decode()))
+    assert "this FMU has no event mode (hasEventMode is false)" in logged[-1]

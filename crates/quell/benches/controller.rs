@@ -1,4 +1,4 @@
-//! `Controller::step` for the paper's example (n = 3, m = 2, q = 8; issue 4's target: under 300 ns)
+//! `Controller::step` for the paper's example (n = 3, m = 2, q = 8; target: under 300 ns a step)
 //! and its scaling in m ∈ {2, 4, 8} and q ∈ {8, 16, 32}.
 #![allow(non_snake_case)]
 

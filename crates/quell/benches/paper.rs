@@ -1,5 +1,5 @@
 //! The paper's example (Section VIII), 100 s of the continuous closed loop at rtol = atol = 1e-9
-//! (issue 3's speed target: under 10 ms on one core), and the sampled-data loop at T_s = 1 ms.
+//! (speed target: under 10 ms on one core), and the sampled-data loop at T_s = 1 ms.
 
 use std::ops::ControlFlow;
 

@@ -129,7 +129,7 @@ fn stiff(c: &mut Criterion) {
         for k in 0..4 {
             let factor = onset * 10f64.powi(k);
             let d = case.design(factor);
-            g.bench_with_input(BenchmarkId::new("auto_mu_factor", factor), &d, |b, d| {
+            g.bench_with_input(BenchmarkId::new("auto", format!("{}x_mu_s", 10u32.pow(k as u32))), &d, |b, d| {
                 b.iter(|| case.run(d, Method::Auto).unwrap())
             });
         }

@@ -15,7 +15,7 @@
 //! * filter orders: `reference_filter_orders` / `disturbance_filter_orders`, else two per harmonic
 //!   and one per bias (Assumptions 2, 3); their poles distinct real, spread by factors 1.5 around
 //!   the geometric mean of the component's frequencies (r for a bias alone), the slowest at least
-//!   20/t_end (its transient, which no η explains, must die out within the horizon);
+//!   30/t_end (its transient, which no η explains, must die out well within the horizon);
 //! * β = 1/(smallest gap between the signals' frequencies, 0 included), at most t_end/10: H averages
 //!   over a beat of the two closest harmonics;
 //! * μ_i: the smallest gain for which the averaged law predicts an RMS error ≤ 0.2 % of the
@@ -23,7 +23,10 @@
 //!   at most [`MAX_RATE_PER_SCALE`]·r and a tenth of the pace estimate's stiffness threshold;
 //! * verification: the scenario is simulated; a channel whose tail error exceeds 1 % of its
 //!   reference's peak gets 4× its μ (up to three times, never beyond the stiffness threshold); a
-//!   channel whose plant input |u_f,i| exceeds the actuator limit gets half its μ.
+//!   channel whose plant input |u_f,i| exceeds the actuator limit gets half its μ;
+//! * a failed verification says why when it can: a horizon shorter than [`SEPARATION_BEATS`] beats
+//!   of the two closest frequencies cannot tell them apart, and the advice proposes the t_end
+//!   that can.
 
 use std::ops::ControlFlow;
 
@@ -50,14 +53,22 @@ pub const TAIL_BOUND: f64 = 0.01;
 /// The RMS error the choice of μ aims at by the convergence time (a margin of 5 on [`TAIL_BOUND`]).
 const AIM: f64 = 0.002;
 /// The filters' slowest pole is at least this over t_end: the transient of ξ̂ from its zero start,
-/// which no η explains, has decayed by e^(−10) at half the horizon.
-const FILTER_DECAY: f64 = 20.0;
+/// which no η explains, has decayed by e^(−15) at half the horizon. With 20 it set siso-complex's
+/// tail (its error decayed at the slowest pole, 0.33/s, to 3.9e-6, 12× the hand design's); with 30
+/// the tail is 8.2e-9.
+const FILTER_DECAY: f64 = 30.0;
 /// Without a target, the averaged law should reach the aim by t_end / this: the law ignores H's
 /// lag, the delays and the swapping error and is optimistic (a factor 4 on the paper's example);
 /// aiming at half the horizon left tails 1e3–1e5 times those of μ ×10 on the shipped examples.
 const DEFAULT_CONVERGENCE: f64 = 20.0;
 /// β is at most t_end / this: H's lag then leaves most of the horizon to converge.
 const BETA_HORIZON: f64 = 10.0;
+/// The horizon the adaptive law needs to tell the two closest frequencies apart, in beats 2π/gap:
+/// Ω_i's directions that separate them are excited only as their phases drift apart, and with one
+/// beat or less the law has not converged (the quadruple tank: harmonics 0.01 rad/s apart fail
+/// at t_end = 600 s, 0.95 beats, and pass from 800 s on; two beats leave a margin of 4 or more on the
+/// tail bound there).
+pub const SEPARATION_BEATS: f64 = 2.0;
 /// The disturbance observer's relative error (eq. (20) driven by x̂) the observer poles aim at.
 const FIDELITY_AIM: f64 = 0.05;
 /// … or, when no candidate reaches it, this factor over the best candidate's error.
@@ -95,6 +106,8 @@ pub struct Verification {
     pub runs: usize,
     /// Every channel within its bound (and the actuator limit).
     pub passed: bool,
+    /// When the verification failed: one line per cause found, with the knob and the value to try.
+    pub advice: Vec<String>,
 }
 
 /// A complete scenario, its design, the choices made and their verification.
@@ -148,11 +161,12 @@ pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, A
             let within_u = targets.u_limit.is_none_or(|l| max_uf.iter().all(|u| *u <= l));
             let passed = within_u && tail_max_e.iter().zip(&bound).all(|(e, b)| e <= b);
             note_verification(&mut choices, &scenario.design.mu, runs);
+            let advice = if passed { Vec::new() } else { failure_advice(&scenario).into_iter().collect() };
             return Ok(AutoDesign {
                 scenario,
                 design,
                 choices,
-                verification: Verification { tail_max_e, bound, max_uf, runs, passed },
+                verification: Verification { tail_max_e, bound, max_uf, runs, passed, advice },
             });
         }
         design = scenario.design()?;
@@ -220,14 +234,41 @@ fn time_scale(s: &Scenario) -> Result<f64, AutoError> {
     Ok(r)
 }
 
-/// The smallest gap between distinct frequencies of g and ω, 0 (a bias, or the slowest harmonic's
-/// distance from DC) included; `None` without harmonics.
-fn smallest_gap(s: &Scenario) -> Option<f64> {
+/// The two closest distinct frequencies of g and ω, 0 (a bias, or the slowest harmonic's distance
+/// from DC) included, lower first; `None` without harmonics.
+fn closest_pair(s: &Scenario) -> Option<(f64, f64)> {
     let comps = s.reference.components.iter().chain(&s.disturbance.components);
     let mut ws: Vec<f64> = comps.flat_map(frequencies).collect();
     ws.push(0.0);
     ws.sort_by(f64::total_cmp);
-    ws.windows(2).map(|w| w[1] - w[0]).filter(|g| *g > 0.0).reduce(f64::min)
+    ws.windows(2).filter(|w| w[1] > w[0]).map(|w| (w[0], w[1])).min_by(|a, b| (a.1 - a.0).total_cmp(&(b.1 - b.0)))
+}
+
+/// The smallest gap between distinct frequencies of g and ω ([`closest_pair`]).
+fn smallest_gap(s: &Scenario) -> Option<f64> {
+    closest_pair(s).map(|(a, b)| b - a)
+}
+
+/// `x` rounded up to two significant digits (a horizon to propose).
+fn round_up_2(x: f64) -> f64 {
+    let unit = 10f64.powf(x.log10().floor() - 1.0);
+    (x / unit).ceil() * unit
+}
+
+/// Why a design failed its verification, when the scenario shows it: a horizon shorter than
+/// [`SEPARATION_BEATS`] beats of the two closest frequencies, with the t_end that has them.
+fn failure_advice(s: &Scenario) -> Option<String> {
+    let (a, b) = closest_pair(s)?;
+    let beat = 2.0 * std::f64::consts::PI / (b - a);
+    let t_end = s.simulation.t_end;
+    (t_end < SEPARATION_BEATS * beat).then(|| {
+        format!(
+            "the horizon is too short to tell the signals' two closest frequencies apart: {a} and {b} rad/s beat with period 2π/{:.4e} = {beat:.4e} s, and t_end = {t_end} s is {:.2} beats; the adaptive law needs about {SEPARATION_BEATS}: lengthen simulation.t_end to at least {} s (or move the frequencies apart)",
+            b - a,
+            t_end / beat,
+            round_up_2(SEPARATION_BEATS * beat)
+        )
+    })
 }
 
 /// Filter orders and poles of one signal's components.
@@ -262,8 +303,7 @@ fn filters(
         }
         let ws: Vec<f64> = frequencies(c).collect();
         let centre = if ws.is_empty() { r } else { (ws.iter().map(|w| w.ln()).sum::<f64>() / ws.len() as f64).exp() };
-        // The slowest pole at least FILTER_DECAY/t_end: its transient, which no η explains, has
-        // decayed by e^(−FILTER_DECAY/2) at half the horizon.
+        // The slowest pole at least FILTER_DECAY/t_end ([`FILTER_DECAY`]).
         let slowest = FILTER_DECAY / t_end;
         let centre = centre.max(slowest * 1.5f64.powf((order as f64 - 1.0) / 2.0));
         lists.push(spread(centre, order, 1.5, true));

@@ -48,7 +48,8 @@
 //! ```
 //!
 //! **[`plant`]** and **[`signal`]**: the plant (1) as [`Plant`] (A, B, C, D, Q, delays τ_i), the
-//! reference g(t) and disturbance ω(t) as a [`Signal`] of biases and harmonics.
+//! reference g(t) and disturbance ω(t) as a [`Signal`] of [`Component`]s (m for g, k for ω), each
+//! a bias and [`Harmonic`]s.
 //!
 //! ```
 //! use quell::nalgebra::dmatrix;
@@ -124,7 +125,7 @@
 //! ```
 //!
 //! **[`export`]**: the same controller as dependency-free C99 ([`export::generate`]) and as an FMI
-//! 2.0 co-simulation FMU ([`export::generate_fmu`]).
+//! 2.0 or 3.0 co-simulation FMU ([`export::generate_fmu`]).
 //!
 //! ```
 //! use quell::export::{generate, ExportOptions};
@@ -135,6 +136,23 @@
 //! assert_eq!(code.header_name, "quell_controller.h");
 //! assert!(code.header.contains("int quell_step(quell_state *s"));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! **[`files`]**: the atomic writes of every output file, the CLI's and `quell.export`'s
+//! ([`files::write_atomic`], [`files::write_atomic_all`]): a temporary name beside the file, then a
+//! rename, so that a reader never sees a half-written file nor a new file beside an old one.
+//!
+//! ```
+//! use quell::files::write_atomic_all;
+//!
+//! let dir = std::env::temp_dir().join(format!("quell-files-{}", std::process::id()));
+//! std::fs::create_dir_all(&dir)?;
+//! let (header, source) = (dir.join("a.h"), dir.join("a.c"));
+//! write_atomic_all(&[(header.clone(), b"/* h */".as_slice()), (source.clone(), b"/* c */".as_slice())])?;
+//! assert_eq!(std::fs::read(&source)?, b"/* c */");
+//! assert_eq!(std::fs::read_dir(&dir)?.count(), 2); // no temporary file left
+//! std::fs::remove_dir_all(&dir)?;
+//! # Ok::<(), std::io::Error>(())
 //! ```
 //!
 //! **[`study`]**: many runs of one scenario, a grid of values and Monte Carlo draws of the true
@@ -166,6 +184,25 @@
 //! let r = Run::of(&s, &design).settings(RunSettings::sampled(2.0, 0.1, 0.01)).simulate(|_| ControlFlow::Continue(()))?;
 //! let d = quell::diagnostics::diagnose(&design, &s.reference, &s.disturbance, &r);
 //! assert_eq!(d.channels.len(), 2);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! **[`averaged`]**: the adaptive loop in steady state from the design and the signals alone
+//! ([`averaged::Averaged`]): Ω̄_i and η*_i of the law (33) averaged over g and ω, and the RMS error
+//! the averaged law predicts at time t; [`diagnostics`] and [`auto`] stand on it.
+//!
+//! ```
+//! use quell::averaged::Averaged;
+//! use quell::scenario::{Scenario, PAPER_EXAMPLE};
+//!
+//! let s = Scenario::from_toml(PAPER_EXAMPLE)?;
+//! let design = s.design()?;
+//! let c = &Averaged::new(&design, &s.reference, &s.disturbance).channels[0];
+//! assert!(c.lambda_min() >= -1e-12 * c.lambda_max()); // Ω̄_1, a mean of squares, is PSD
+//! // At t = 0 (η̂ = 0) the averaged law's error is the loop's error without adaptive command.
+//! let start = c.predicted_error(20.0, 0.0);
+//! assert!((start - c.open_loop_rms).abs() <= 1e-9 * c.open_loop_rms, "{start} vs {}", c.open_loop_rms);
+//! assert!(c.predicted_error(20.0, 100.0) < start);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
@@ -201,6 +238,64 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
+//! **[`cancel`]**: a stop flag for a long library call that takes none of its own (the design of
+//! a large plant): [`Design::new`] inside [`cancel::with_stop`] returns
+//! [`DesignError::Interrupted`] once a front's Ctrl-C handler has set the flag.
+//!
+//! ```
+//! use std::sync::atomic::AtomicBool;
+//! use std::sync::Arc;
+//! use quell::scenario::{Scenario, PAPER_EXAMPLE};
+//! use quell::{cancel, Design, DesignError};
+//!
+//! let s = Scenario::from_toml(PAPER_EXAMPLE)?;
+//! let stop = Arc::new(AtomicBool::new(true)); // as the handler leaves it
+//! let r = cancel::with_stop(stop, || Design::new(&s.plant, &s.design));
+//! assert!(matches!(r, Err(DesignError::Interrupted)), "{r:?}");
+//! assert!(cancel::check().is_ok()); // outside `with_stop` nothing stops
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! **The crate root** re-exports what most callers name: the types above, the design's choices
+//! written in code ([`DesignSpec`], [`ObserverChoice`]) rather than read from a file, each
+//! module's error ([`PlantError`], [`DesignError`], [`ControllerError`], [`ScenarioError`]), pole
+//! placement ([`place()`], [`PlaceError`]), and how quell writes a number in its messages
+//! ([`fmt_number`], [`fmt_complex`], [`fmt_complex_list`]). Matrices and complex numbers are
+//! [`nalgebra`]'s, re-exported so that a caller's version always matches.
+//!
+//! ```
+//! use quell::nalgebra::{dmatrix, Complex};
+//! use quell::{fmt_complex_list, fmt_number, place, DesignSpec, Design, ObserverChoice, Plant, PlaceError};
+//!
+//! // The double integrator x1' = x2, x2' = u: K = [2, 3] puts eig(A − BK) at −1 and −2, the roots
+//! // of s² + 3s + 2 = s² + k₂s + k₁.
+//! let (A, B) = (dmatrix![0.0, 1.0; 0.0, 0.0], dmatrix![0.0; 1.0]);
+//! let K = place(&A, &B, &[Complex::new(-1.0, 0.0), Complex::new(-2.0, 0.0)])?;
+//! assert!((K[(0, 0)] - 2.0).abs() < 1e-9 && (K[(0, 1)] - 3.0).abs() < 1e-9, "{K}");
+//! let e = place(&A, &B, &[Complex::new(-1.0, 0.0)]).unwrap_err();
+//! assert_eq!(e, PlaceError::WrongCount { expected: 2, found: 1 });
+//!
+//! // x' = 0.5x + u(t − 0.1) + ω, y = x: every choice written in code (σ = 1, a bias reference,
+//! // a disturbance of one harmonic), the observer pole placed.
+//! let plant = Plant::new(dmatrix![0.5], dmatrix![1.0], dmatrix![1.0], dmatrix![1.0], dmatrix![0.0], vec![0.1], None)?;
+//! let real = |p: &[f64]| p.iter().map(|&x| Complex::new(x, 0.0)).collect::<Vec<_>>();
+//! let spec = DesignSpec {
+//!     observer: ObserverChoice::Poles(real(&[-5.0])),
+//!     channel_poles: vec![real(&[-2.0])],
+//!     reference_filter_poles: vec![real(&[-1.0])],
+//!     disturbance_filter_poles: vec![real(&[-1.0, -2.0])],
+//!     mu: vec![10.0],
+//!     beta: 1.0,
+//!     relative_degrees: None,
+//!     regressor_scaling: Default::default(),
+//! };
+//! let design = Design::new(&plant, &spec)?;
+//! assert_eq!(design.sigma(), vec![1]);
+//! assert_eq!(fmt_complex_list(design.observer_eigenvalues()), "-5.000000");
+//! assert_eq!((fmt_number(0.25), fmt_number(1e300)), ("0.250000".to_string(), "1.000000e300".to_string()));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
 //! Equation numbers refer to C. V. Tu, N. Dudarenko, "Direct adaptive output-feedback control for
 //! unstable linear multidimensional systems with distinct input delays" (2026).
 #![allow(non_snake_case)]
@@ -212,11 +307,13 @@ pub use nalgebra;
 mod simd;
 
 pub mod auto;
+pub mod averaged;
 pub mod cancel;
 pub mod controller;
 pub mod design;
 pub mod diagnostics;
 pub mod export;
+pub mod files;
 mod hash;
 mod linalg;
 pub mod plant;

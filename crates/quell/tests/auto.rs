@@ -312,6 +312,17 @@ fn the_batch_reactors_slow_channel_is_diagnosed_and_the_automatic_design_avoids_
     for (i, c) in auto.scenario.reference.components.iter().enumerate() {
         assert!(r.max_abs_error(i, 90.0, 100.0).unwrap() <= TAIL_BOUND * c.peak());
     }
+    // 3 rad/s (ω's first component) stays beyond the threshold with the zeros among the poles
+    // (0.57 at r_o = 52, 0.78 at 4000: the placed eigenvectors, not the speed): the advice on it
+    // must not tell the user to give the zeros the poles already hold (checked above).
+    let at_3 = diag.observer_fidelity.iter().find(|f| f.frequency == 3.0).unwrap();
+    assert!(at_3.relative_error > FIDELITY_LIMIT && !diag.advice.is_empty(), "{at_3:?}");
+    for line in &diag.advice {
+        assert!(
+            line.contains("already hold the zeros") && !line.contains("give design.observer_poles the zeros"),
+            "{line}"
+        );
+    }
 }
 
 /// A hard-disk head positioner in SI units at its own millisecond time scale: a voice-coil arm
@@ -335,4 +346,67 @@ fn a_disk_drive_servo_at_the_millisecond_scale_meets_the_tail_bound_from_an_empt
     let tail = r.max_abs_error(0, 0.45, 0.5).unwrap();
     assert!(tail <= TAIL_BOUND * 3e-6, "tail max|e| = {tail:e} m against 30 nm");
     println!("tail max|e| = {tail:e} m; {:?}", auto.choices.iter().map(|c| (&c.key, &c.value)).collect::<Vec<_>>());
+}
+
+/// The quadruple tank (tests/data/quadruple-tank.toml) from an empty `[design]`: its signals'
+/// closest frequencies are 0.01 rad/s apart (0, 0.01, 0.02 and 0.03 rad/s), one beat 2π/0.01 =
+/// 628 s, longer than the 600 s horizon. The automatic design must not pass such a horizon off as
+/// converged: its verification fails and says why, proposing a t_end of at least two beats
+/// (computed here from the frequencies, not read from the code). The proposal is then held to its
+/// word: with t_end set to the proposed value the automatic design passes, and the scenario it
+/// writes, read back and run again, keeps both channels' tails within 1 % of their references'
+/// peaks.
+#[test]
+fn the_quadruple_tanks_short_horizon_is_refused_with_the_t_end_that_works() {
+    let text = data("quadruple-tank.toml");
+    let doc = without_design(&text);
+    let short = auto_design(&doc, &Targets::default()).unwrap();
+    assert!(!short.verification.passed, "{:?}", short.verification);
+    let advice = short.verification.advice.join("\n");
+    let proposed: f64 = advice
+        .split_once("lengthen simulation.t_end to at least ")
+        .and_then(|(_, rest)| rest.split_once(" s"))
+        .map(|(v, _)| v.parse().unwrap())
+        .unwrap_or_else(|| panic!("no t_end proposed: {advice}"));
+    let two_beats = 2.0 * 2.0 * std::f64::consts::PI / 0.01;
+    // Rounded up to two significant digits: within 10 % above two beats.
+    assert!(proposed >= two_beats && proposed <= 1.1 * two_beats, "{proposed} against {two_beats}: {advice}");
+
+    let mut doc = doc;
+    doc["simulation"].as_table_mut().unwrap().insert("t_end".into(), toml::Value::Float(proposed));
+    let long = auto_design(&doc, &Targets::default()).unwrap();
+    assert!(long.verification.passed && long.verification.advice.is_empty(), "{:?}", long.verification);
+    let s = Scenario::from_toml(&long.scenario.to_toml()).unwrap();
+    let r = Run::of(&s, &s.design().unwrap()).simulate(|_| ControlFlow::Continue(())).unwrap();
+    for (i, c) in s.reference.components.iter().enumerate() {
+        let tail = r.max_abs_error(i, 0.9 * proposed, proposed).unwrap();
+        assert!(tail <= TAIL_BOUND * c.peak(), "channel {}: tail {tail:e} against {:e}", i + 1, TAIL_BOUND * c.peak());
+    }
+}
+
+/// The shipped examples with hand-tuned designs (examples/paper.toml, three-channel.toml,
+/// siso-complex.toml): the automatic design from their `[design]` emptied does at least as well
+/// on every channel, judged by the hand design's own run (tail max |e_i| over the last 10 % of the
+/// horizon), not by figures of an earlier automatic design. siso-complex was 12× worse while the
+/// filters' slowest pole was 20/t_end (ξ̂'s start-up transient decaying at 0.33/s, below the
+/// reference's 0.5 rad/s).
+#[test]
+fn the_automatic_design_does_at_least_as_well_as_the_hand_tuned_examples() {
+    for name in ["paper.toml", "three-channel.toml", "siso-complex.toml"] {
+        let text = std::fs::read_to_string(format!("{}/../../examples/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap();
+        let tails = |s: &Scenario, design: &quell::Design| -> Vec<f64> {
+            let r = Run::of(s, design).simulate(|_| ControlFlow::Continue(())).unwrap();
+            let t_end = s.simulation.t_end;
+            (0..s.plant.m()).map(|i| r.max_abs_error(i, 0.9 * t_end, t_end).unwrap()).collect()
+        };
+        let hand = Scenario::from_toml(&text).unwrap();
+        let hand_tails = tails(&hand, &hand.design().unwrap());
+        let auto = auto_design(&without_design(&text), &Targets::default()).unwrap();
+        assert!(auto.verification.passed, "{name}: {:?}", auto.verification);
+        let auto_tails = tails(&auto.scenario, &auto.design);
+        for (i, (a, h)) in auto_tails.iter().zip(&hand_tails).enumerate() {
+            assert!(a <= h, "{name} channel {}: automatic tail {a:e} against the hand design's {h:e}", i + 1);
+        }
+        println!("{name}: automatic {auto_tails:?}, hand {hand_tails:?}");
+    }
 }

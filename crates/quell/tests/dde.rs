@@ -410,6 +410,53 @@ fn plain_ode_dense_output() {
     assert_eq!(stats.max_history_len, 0);
 }
 
+/// y' = 0, no delays: only the output schedule is at work.
+struct Still;
+
+impl DelaySystem for Still {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn n_delayed(&self) -> usize {
+        0
+    }
+    fn delays(&self) -> &[f64] {
+        &[]
+    }
+    fn rhs(&mut self, _t: f64, _y: &[f64], _past: &Past<'_>, dy: &mut [f64]) {
+        dy[0] = 0.0;
+    }
+}
+
+/// The outputs of a run: how many, and the last time.
+fn output_grid(t_end: f64, dt: f64) -> (usize, f64) {
+    let opts = Options { rtol: 1e-6, atol: 1e-6, ..Options::default() };
+    let (mut count, mut last) = (0, f64::NAN);
+    solve(&mut Still, 0.0, &[1.0], &[], t_end, dt, &opts, |t, _| {
+        (count, last) = (count + 1, t);
+        ControlFlow::Continue(())
+    })
+    .expect("y' = 0 solves");
+    (count, last)
+}
+
+/// The output grid counts whole output steps to a relative tolerance, as the sampled loop counts
+/// samples. 8388898.2 s / 0.9 s is 9320998 exactly in decimal, but in binary it is
+/// 9320997.999999998: 2e-9 below, more than an absolute 1e-9 of a step, so the old rule ⌊(span +
+/// 1e-9·dt)/dt⌋ dropped the row at t_end (9.3e6 rows, within the 1e7 rows a run may write). The
+/// known answer is the decimal ratio; at the ms scale (0.3 s / 0.1 ms is 2999.9999999999995 in
+/// binary) both rules agree, and a span that is not whole (1.05 / 0.1) ends on the last whole step.
+#[test]
+fn output_grid_counts_whole_steps_to_a_relative_tolerance() {
+    let (t_end, dt): (f64, f64) = (8388898.2, 0.9);
+    assert!(t_end / dt < 9320998.0 && ((t_end + 1e-9 * dt) / dt).floor() == 9320997.0, "the case discriminates");
+    assert_eq!(output_grid(t_end, dt), (9320998 + 1, t_end));
+    assert_eq!(output_grid(0.3, 1e-4), (3000 + 1, 0.3));
+    let (count, last) = output_grid(1.05, 0.1);
+    assert_eq!(count, 10 + 1);
+    assert!((last - 1.0).abs() <= 1e-15, "{last}");
+}
+
 /// Only a prefix is delayed: x1' = −x1(t − 1), x2' = x1 (x1 = 1 for t ≤ 0, x2(0) = 0), so
 /// x2 = ∫ x1 = t − t²/2 + (t−1)³/6 − (t−2)⁴/24 on [0, 3] (terms active past 1 and 2).
 struct Prefix {
@@ -532,7 +579,8 @@ fn relax_error(lambda: f64, layer: bool, method: Method) -> (f64, Stats) {
     (worst, stats)
 }
 
-/// The implicit path against the closed form at λ from mild to 1e9, and both paths where both run.
+/// The implicit path (automatic, and implicit throughout) against the closed form at λ from mild to
+/// 1e9, and both paths where both run.
 /// Solutions are O(1); at rtol = atol = 1e-8 over ~10² steps the global error stays below 1e-6
 /// (measured 1e-8…1e-7). Once stiff, the step count is set by the smooth solution, not by λ: from
 /// λ = 1e3 to 1e9 the automatic method's steps grow less than 1.5×, where DOP853 alone would need
@@ -551,6 +599,10 @@ fn stiff_closed_form() {
         let (err, stats) = relax_error(lambda, false, Method::Auto);
         assert!(err < 1e-6, "λ = {lambda:e}: error {err:e} ({stats:?})");
         assert!(stats.steps as f64 <= 1.5 * onset.steps as f64, "λ = {lambda:e}: {stats:?} vs {onset:?}");
+        // The implicit method throughout, from the first step (no DOP853 stretch before a switch).
+        let (err, stats) = relax_error(lambda, false, Method::Implicit);
+        assert!(err < 1e-6, "λ = {lambda:e}, Implicit: error {err:e} ({stats:?})");
+        assert!(stats.steps as f64 <= 1.5 * onset.steps as f64, "λ = {lambda:e}, Implicit: {stats:?} vs {onset:?}");
     }
 }
 

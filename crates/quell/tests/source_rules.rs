@@ -1,9 +1,13 @@
-//! Rules on the sources themselves, checked by reading `crates/*/src`:
-//! - no function is longer than [`MAX_LINES`] lines unless its `fn` line says why (`// long: REASON`);
-//! - no comment points outside the repository (to an issue tracker, to notes or conversations that
-//!   are not in it, or to what the code used to be);
+//! Rules on the sources themselves, checked by reading them:
+//! - no function of `crates/*/src` is longer than [`MAX_LINES`] lines unless its `fn` line says why
+//!   (`// long: REASON`);
+//! - no comment of any source file (sources, tests, benchmarks, Python, fuzz targets, scripts)
+//!   points outside the repository (to an issue tracker, to notes or conversations that are not in
+//!   it, or to what the code used to be);
 //! - the library (`crates/quell/src`) names no command-line flag: its errors and docs speak of the
-//!   library's keys, and each front end maps those to its own words.
+//!   library's keys, and each front end maps those to its own words;
+//! - the crate docs of `lib.rs` name every public module and crate-root item in a section with an
+//!   example.
 
 use std::path::{Path, PathBuf};
 
@@ -265,7 +269,7 @@ fn outside_phrases() -> Vec<String> {
     .collect()
 }
 
-/// True when `line` cites an issue by number ("issue 12").
+/// True when `line` cites an issue by number (the word, a space, then digits).
 fn cites_an_issue(line: &str) -> bool {
     let lower = line.to_lowercase();
     lower.match_indices(&["iss", "ue "].concat()).any(|(k, m)| {
@@ -274,11 +278,40 @@ fn cites_an_issue(line: &str) -> bool {
     })
 }
 
+/// Every source file of the repository a reader meets: the crates' sources, tests, benchmarks and
+/// Python package, the fuzz targets and the scripts (not build outputs or test data).
+fn every_source_file() -> Vec<PathBuf> {
+    fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
+        for entry in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+            let path = entry.path();
+            let name = entry.file_name();
+            if path.is_dir() {
+                if !["target", "data", ".git", "__pycache__", ".venv"].contains(&name.to_str().unwrap_or("")) {
+                    walk(&path, out);
+                }
+            } else if path
+                .extension()
+                .is_some_and(|e| ["rs", "py", "pyi", "c", "h", "in", "sh"].contains(&e.to_str().unwrap_or("")))
+            {
+                out.push(path);
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for dir in ["crates", "fuzz", "scripts", ".ci"] {
+        walk(&root().join(dir), &mut out);
+    }
+    out.sort();
+    out
+}
+
 #[test]
 fn no_comment_points_outside_the_repository() {
     let phrases = outside_phrases();
     let mut offenders = Vec::new();
-    for path in sources() {
+    let files = every_source_file();
+    assert!(files.len() > sources().len() + 20, "found only {} files", files.len());
+    for path in files {
         let text = std::fs::read_to_string(&path).unwrap();
         for (l, line) in text.lines().enumerate() {
             let lower = line.to_lowercase();
@@ -326,4 +359,63 @@ fn the_library_names_no_command_line_flag() {
         "the library speaks of its keys, not of a front end's flags:\n{}",
         offenders.join("\n")
     );
+}
+
+/// The names `lib.rs` makes public at the crate root: its `pub mod NAME;` modules, and every name
+/// of its `pub use PATH::NAME;` and `pub use PATH::{A, B};` re-exports.
+fn public_root_names(lib: &str) -> (Vec<String>, Vec<String>) {
+    let (mut modules, mut items) = (Vec::new(), Vec::new());
+    for line in lib.lines().filter(|l| !l.starts_with(' ')) {
+        if let Some(m) = line.strip_prefix("pub mod ").and_then(|m| m.strip_suffix(';')) {
+            modules.push(m.to_string());
+        } else if let Some(path) = line.strip_prefix("pub use ").and_then(|p| p.strip_suffix(';')) {
+            let names = match path.split_once('{') {
+                Some((_, list)) => list.trim_end_matches('}').split(',').map(str::trim).collect(),
+                None => vec![path.rsplit("::").next().unwrap_or(path)],
+            };
+            items.extend(names.into_iter().filter(|n| !n.is_empty()).map(String::from));
+        }
+    }
+    (modules, items)
+}
+
+/// The crate docs (`//!` of `lib.rs`) cut into sections, each from a line that opens with a bold
+/// name (`**[`sim`]**: …`) to the next.
+fn doc_sections(lib: &str) -> Vec<String> {
+    let mut sections = vec![String::new()];
+    for line in lib.lines().filter_map(|l| l.strip_prefix("//!")) {
+        if line.trim_start().starts_with("**") {
+            sections.push(String::new());
+        }
+        let last = sections.last_mut().expect("one section at least");
+        last.push_str(line);
+        last.push('\n');
+    }
+    sections
+}
+
+#[test]
+fn the_crate_docs_list_every_public_module_and_root_item_with_an_example() {
+    let lib = std::fs::read_to_string(root().join("crates/quell/src/lib.rs")).unwrap();
+    let (modules, items) = public_root_names(&lib);
+    assert!(modules.len() >= 10 && items.len() >= 15, "lib.rs: modules {modules:?}, items {items:?}");
+    let sections = doc_sections(&lib);
+    let shown = |name: &str| {
+        let links = [format!("[`{name}`]"), format!("[`{name}()`]")];
+        sections.iter().any(|s| s.contains("```") && links.iter().any(|l| s.contains(l.as_str())))
+    };
+    let missing: Vec<_> = modules.iter().chain(&items).filter(|n| !shown(n)).collect();
+    assert!(
+        missing.is_empty(),
+        "name these in a section of lib.rs's crate docs that has an example (a ``` block): {missing:?}"
+    );
+}
+
+#[test]
+fn the_api_check_reads_modules_and_re_exports() {
+    let lib = "pub mod a;\nmod b;\npub use x::{C, d};\npub use y::E;\npub mod z {\n    pub use q::F;\n}\n";
+    assert_eq!(public_root_names(lib), (vec!["a".into()], vec!["C".into(), "d".into(), "E".into()]));
+    let sections = doc_sections("//! intro\n//! **[`a`]**: one\n//! ```\n//! ```\n//! **[`C`]**: two\n");
+    assert_eq!(sections.len(), 3);
+    assert!(sections[1].contains("```") && !sections[2].contains("```"));
 }

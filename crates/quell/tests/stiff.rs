@@ -186,3 +186,105 @@ fn steps_grow_at_most_3x_as_mu_grows_1000x_beyond_stiff() {
         assert!(dev < 100.0 * tol && dev_3 < 100.0 * tol, "{name}: {dev:e}, {dev_3:e} of the peak");
     }
 }
+
+/// The default step budget a run would have if it left out the adaptation rate and the method:
+/// 10,000 + 100·(ρ t_end + t_end/τ_min) (the budget at its own tolerance 1e-9 on a loop that is not
+/// stiff).
+fn rate_free_budget(s: &Scenario, d: &Design, t_end: f64) -> usize {
+    let rho = quell::sim::loop_rate(d, s.true_plant(), [&s.reference, &s.disturbance]);
+    let tau_min = s.plant.delays.iter().chain(&s.true_plant().delays).fold(f64::INFINITY, |a, &b| a.min(b));
+    quell::sim::BUDGET_MIN_STEPS + (quell::sim::BUDGET_STEPS_PER_RATE * (rho * t_end + t_end / tau_min)) as usize
+}
+
+/// `toml`'s scenario with every μ_i times `factor` to `t_end` at `tol` by `method`, under the
+/// DEFAULT step budget; the result and the budget it ran under.
+fn run_default_budget(toml: &str, factor: f64, tol: f64, method: Method, t_end: f64) -> (SimResult, usize) {
+    let s = Scenario::from_toml(toml).unwrap();
+    let mut spec = s.design.clone();
+    spec.mu.iter_mut().for_each(|mu| *mu *= factor);
+    let d = Design::new(&s.plant, &spec).unwrap();
+    let integrator = Integrator { method, ..Integrator::new(tol, tol) };
+    let budget = quell::sim::default_max_steps(&d, s.true_plant(), [&s.reference, &s.disturbance], t_end, &integrator);
+    let settings = RunSettings::new(t_end, s.simulation.output_step, Loop::Continuous(integrator));
+    let r = Run::of(&s, &d).settings(settings).simulate(|_| ControlFlow::Continue(())).unwrap();
+    assert_eq!(r.outcome, Some(Outcome::Completed), "μ × {factor}, {method:?} at {tol:e}: {:?}", r.stats);
+    assert!(r.stats.steps() > rate_free_budget(&s, &d, t_end), "μ × {factor}, {method:?}: {:?}", r.stats);
+    (r, budget)
+}
+
+/// Legitimate stiff runs complete under the default step budget, each needing more steps than a
+/// budget without the adaptation rate and the method would give ([`rate_free_budget`]), with at
+/// least twice the steps it used to spare (the budget's stated margin):
+/// * the quadruple tank at its nominal μ = 1 (1.4e5 times its stiffness onset, μλ_max = 2.7e6/s
+///   against ρ = 0.2/s) at rtol = atol = 1e-10, automatic and implicit (measured 82.8k and 81.4k
+///   steps; budget 333k, without rate and method 52k);
+/// * the paper's example with μ × 1000 forced to DOP853 (measured 143.8k steps, 1.03 × its
+///   stability bound μλ_max t / 6.1; budget 390k, without 110k);
+/// * the supply vessel in SI units (newtons, 6e6 kg) at 20 times its stiffness onset
+///   (μ = 3.2e-10, μλ_max = 2.4e3/s) forced to DOP853 over 300 s (its stability bound 118k steps;
+///   budget 312k, without 76k).
+///
+/// The automatic and the implicit runs of the tank agree to 1e-6 of the peak output: two methods
+/// (DOP853 and ARK4(3)6L\[2\]SA switching, against ARK throughout) at 1e-10, each about 1e-7 from
+/// the true solution (the global error at 1e-8 is under 1e-4, `quadruple_tank_converges`, and
+/// shrinks with the tolerance at order 3 or more).
+#[test]
+fn legitimate_stiff_runs_complete_under_the_default_budget() {
+    let vessel_onset = stiff_factor(SUPPLY_VESSEL);
+    let mut tank = Vec::new();
+    for (name, toml, factor, tol, method, t_end) in [
+        ("quadruple tank", QUADRUPLE_TANK, 1.0, 1e-10, Method::Auto, 600.0),
+        ("quadruple tank", QUADRUPLE_TANK, 1.0, 1e-10, Method::Implicit, 600.0),
+        ("paper", PAPER_EXAMPLE, 1000.0, 1e-9, Method::Explicit, 100.0),
+        ("supply vessel", SUPPLY_VESSEL, 20.0 * vessel_onset, 1e-7, Method::Explicit, 300.0),
+    ] {
+        let (r, budget) = run_default_budget(toml, factor, tol, method, t_end);
+        let steps = r.stats.steps();
+        println!("{name}, μ × {factor:.3e}, {method:?} at {tol:e}: {steps} steps of a default budget of {budget}");
+        assert!(2 * steps <= budget, "{name}, {method:?}: {steps} steps of {budget}");
+        if name == "quadruple tank" {
+            tank.push(r);
+        }
+    }
+    let dev = deviation(&tank[0], &tank[1]);
+    assert!(dev < 1e-6, "{dev:e} of the peak");
+}
+
+/// The paper's plant with A × 1.3 and τ_2 = 2.6 s as the true plant: the loop blows up and turns
+/// stiff without end.
+const DIVERGING_TRUTH: &str =
+    "\n[truth]\nA = [[-4.16, -2.21, -3.9], [3.64, 1.69, 5.2], [0.39, 0.39, -0.65]]\ndelays = [1.0, 2.6]\n";
+
+/// A runaway still ends within its default budget, in seconds, with its samples up to then and a
+/// bounded history, where the budget is larger than the plain loop's 110,000 steps: the design
+/// stiff (μ × 1000: μλ_max = 8.5e3/s, 9.5 times the stiffness onset 100 ρ; budget
+/// 10,000 + 100·1000·(1 + ½ log10 9.5) = 158,857) and the run forced to DOP853 (budget
+/// 110,000 + 2·8.54·100/6.1 = 110,279). Measured 4.5 s and 3.2 s at load 7; the bound of 60 s leaves
+/// a factor 13 for a more loaded machine and still fails without a budget (the run then held 15 GB
+/// by t = 35 s).
+#[test]
+fn runaways_end_within_their_default_budget_when_stiff_or_explicit() {
+    let toml = format!("{PAPER_EXAMPLE}{DIVERGING_TRUTH}");
+    let s = Scenario::from_toml(&toml).unwrap();
+    for (factor, method, expected) in [(1000.0, Method::Auto, 158_857), (1.0, Method::Explicit, 110_279)] {
+        let mut spec = s.design.clone();
+        spec.mu.iter_mut().for_each(|mu| *mu *= factor);
+        let d = Design::new(&s.plant, &spec).unwrap();
+        let mut settings = RunSettings::of(&s);
+        settings.mode = Loop::Continuous(Integrator { method, ..Integrator::new(1e-9, 1e-9) });
+        let started = std::time::Instant::now();
+        let r = Run::of(&s, &d).settings(settings).simulate(|_| ControlFlow::Continue(())).unwrap();
+        let elapsed = started.elapsed().as_secs_f64();
+        let Some(Outcome::TooManySteps { t, max_steps }) = r.outcome else { panic!("{:?}", r.outcome) };
+        assert_eq!((max_steps, r.stats.steps()), (expected, expected + 1), "μ × {factor}, {method:?}");
+        assert!(t > 10.0 && t < 100.0 && r.t.last().is_some_and(|&l| l <= t && l > t - 0.2), "t = {t}");
+        assert!(elapsed < 60.0, "μ × {factor}, {method:?}: {elapsed:.1} s");
+        // The history holds at most a record per step, well under its 1 GiB default.
+        let RunStats::Continuous(stats) = r.stats else { unreachable!("a continuous run") };
+        assert!(stats.max_history_len <= expected, "{stats:?}");
+        println!(
+            "μ × {factor}, {method:?}: ended at t = {t:.2} after {elapsed:.2} s, {} history records",
+            stats.max_history_len
+        );
+    }
+}

@@ -279,6 +279,7 @@ def export(
     prefix: str = "quell",
     precision: Optional[str] = None,
     fmu: bool = False,
+    fmi_version: Literal[2, 3] = 2,
     compiler: Optional[str] = None,
 ) -> List[Path]: ...
 def simulate(

@@ -5,18 +5,12 @@
 
 use serde::Serialize;
 
-use super::averaged::Averaged;
+use crate::averaged::Averaged;
 use crate::design::Design;
 use crate::plant::Plant;
 use crate::signal::Signal;
 use crate::sim::loop_rate;
-
-/// A channel whose adaptation rate μ_i λ_max(Ω̄_i) exceeds this many times the loop's fastest other
-/// rate ρ is flagged stiff: an explicit integrator's steps are then bounded by the adaptive law's
-/// stability (|h μ λ| ≲ 5 for DOP853), not by the accuracy the signals need, which takes steps of a
-/// fraction of 1/ρ; at 100 ρ the adaptive law sets the step and costs tens of times the steps the
-/// signals need.
-pub const STIFF_RATIO: f64 = 100.0;
+pub use crate::sim::STIFF_RATIO;
 
 /// One channel's pace (`quell design` → `adaptation`).
 #[derive(Debug, Clone, PartialEq, Serialize)]

@@ -7,7 +7,7 @@
 //! run: whether the tail error is still shrinking. One line of advice per problem found. Before a
 //! run, [`estimate()`] gives the adaptive law's pace from the same averages (the design report).
 
-pub mod averaged;
+pub use crate::averaged;
 pub mod estimate;
 
 use serde::Serialize;
@@ -127,9 +127,19 @@ pub fn disturbance_zeros(p: &Plant) -> Option<Vec<Complex<f64>>> {
     z.iter().all(|z| z.re < -1e-6 * scale).then_some(z)
 }
 
-/// Which observer poles to give when the disturbance observer passes ω badly.
+/// Which observer poles to give when the disturbance observer passes ω badly; when eig(A − LC)
+/// already holds the zeros of (A, D, C), why the error stays (placing the zeros as poles is not
+/// enough: an unknown-input observer also needs the eigenvectors there to be the zeros' state
+/// directions, which the placement does not impose when m > 1) and when it matters.
 fn observer_remedy(design: &Design) -> String {
-    match disturbance_zeros(design.plant()) {
+    let p = design.plant();
+    let observer = eigenvalues(&(&p.A - design.L() * &p.C)).unwrap_or_default();
+    let held = |z: &Complex<f64>| observer.iter().any(|o| (o - z).norm() <= 1e-9 * z.norm().max(1.0));
+    match disturbance_zeros(p) {
+        Some(z) if z.iter().all(held) => format!(
+            "design.observer_poles already hold the zeros of (A, D, C), [{}]; the error that stays comes from the placed eigenvectors (L is not unique for m > 1), not from the poles' speed, and costs convergence only where the frequency's excitation of Ω̄_i is weak (the channels' `excitation`); if it is, try other fast poles or a gain L by hand",
+            fmt_complex_list(&z)
+        ),
         Some(z) => format!(
             "give design.observer_poles the zeros of (A, D, C), [{}], and the other {} poles faster than the plant and the signals (e.g. 3× their rates); all-fast poles cannot remove this error",
             fmt_complex_list(&z),

@@ -1,15 +1,16 @@
-//! FMI 2.0 co-simulation FMU of the generated C controller (docs/deployment.md).
+//! FMI 2.0 and 3.0 co-simulation FMUs of the generated C controller (docs/deployment.md).
 //!
 //! The archive holds `modelDescription.xml`, the controller's C ([`super::generate`]) with a
-//! wrapper implementing the FMI functions and the FMI 2.0.1 headers under `sources/`, and, when a
-//! C compiler is given, the shared library under `binaries/<platform>/`. Inputs are `y[i]` and
-//! `g[i]`, outputs `u_f[i]` (the plant input (5)) and `u[i]` (the adaptive command (25)).
+//! wrapper implementing the FMI functions under `sources/`, and, when a C compiler is given, the
+//! shared library under `binaries/<platform>/`. Inputs are `y[i]` and `g[i]`, outputs `u_f[i]` (the
+//! plant input (5)) and `u[i]` (the adaptive command (25)); FMI 3.0 adds the independent variable
+//! `time`. Both versions share one wrapper core (`fmu_core.c.in`); each adds its API layer.
 //!
-//! Timing: the controller samples at `k T_s` from the start time. `fmi2DoStep(t, h)` takes the
-//! samples in `[t, t + h)` with the inputs last set (held over the step, so `h = T_s` gives exactly
-//! the sampled loop) and then reports the outputs of the next sample: `u_f(k)` does not depend on
-//! `y(k)` or `g(k)` (no direct feedthrough), so after `fmi2DoStep` to `t_k` the outputs are the
-//! `u_f(k)` and `u(k)` that the controller holds over `[t_k, t_k+1)`, the values
+//! Timing: the controller samples at `k T_s` from the start time. `fmi2DoStep(t, h)` (`fmi3DoStep`)
+//! takes the samples in `[t, t + h)` with the inputs last set (held over the step, so `h = T_s`
+//! gives exactly the sampled loop) and then reports the outputs of the next sample: `u_f(k)` does
+//! not depend on `y(k)` or `g(k)` (no direct feedthrough), so after the step to `t_k` the outputs
+//! are the `u_f(k)` and `u(k)` that the controller holds over `[t_k, t_k+1)`, the values
 //! [`Controller::step`](crate::controller::Controller::step) returns at sample `k`. `h` must be a
 //! whole number of samples.
 
@@ -23,12 +24,87 @@ use super::{generate, CCode, ExportError, ExportOptions};
 use crate::design::Design;
 
 /// The FMI 2.0.1 headers (2-clause BSD, Modelica Association), as packaged in FMPy 0.3.32's
-/// `fmpy/c-code/`; shipped in every FMU's `sources/` so the sources compile on their own.
+/// `fmpy/c-code/`; shipped in every FMI 2.0 FMU's `sources/` so the sources compile on their own.
 const FMI2_HEADERS: [(&str, &str); 3] = [
     ("fmi2Functions.h", include_str!("fmi2/fmi2Functions.h")),
     ("fmi2FunctionTypes.h", include_str!("fmi2/fmi2FunctionTypes.h")),
     ("fmi2TypesPlatform.h", include_str!("fmi2/fmi2TypesPlatform.h")),
 ];
+
+/// The FMI 3.0.2 headers (2-clause BSD, Modelica Association; the fmi-standard repository's tag
+/// v3.0.2). FMI 3.0 (section 2.5) has the importer supply them, so they build the binary but are
+/// not shipped in `sources/`.
+const FMI3_HEADERS: [(&str, &str); 3] = [
+    ("fmi3Functions.h", include_str!("fmi3/fmi3Functions.h")),
+    ("fmi3FunctionTypes.h", include_str!("fmi3/fmi3FunctionTypes.h")),
+    ("fmi3PlatformTypes.h", include_str!("fmi3/fmi3PlatformTypes.h")),
+];
+
+/// The wrapper's part common to both versions: the state between communication points, reading
+/// and setting variables, and the step over whole samples.
+const CORE: &str = include_str!("fmu_core.c.in");
+
+/// The FMI standard an FMU follows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FmiVersion {
+    /// FMI 2.0 (the widest support: Simulink, OpenModelica, Dymola, FMPy).
+    #[default]
+    V2,
+    /// FMI 3.0 (Float64 variables, the independent variable `time`, no clocks or event mode).
+    V3,
+}
+
+impl FmiVersion {
+    /// `"2.0"` or `"3.0"`, as `fmiVersion` in the model description.
+    pub fn name(self) -> &'static str {
+        match self {
+            FmiVersion::V2 => "2.0",
+            FmiVersion::V3 => "3.0",
+        }
+    }
+
+    /// The FMI platform of the machine running this code and its shared-library extension.
+    fn host_platform(self) -> Option<(&'static str, &'static str)> {
+        let ext = match std::env::consts::OS {
+            "linux" => "so",
+            "macos" => "dylib",
+            "windows" => "dll",
+            _ => return None,
+        };
+        let platform = match (self, std::env::consts::OS, std::env::consts::ARCH) {
+            (FmiVersion::V2, "linux", "x86_64") => "linux64",
+            (FmiVersion::V2, "macos", "x86_64") => "darwin64",
+            (FmiVersion::V2, "windows", "x86_64") => "win64",
+            (FmiVersion::V3, "linux", "x86_64") => "x86_64-linux",
+            (FmiVersion::V3, "linux", "aarch64") => "aarch64-linux",
+            (FmiVersion::V3, "macos", "x86_64") => "x86_64-darwin",
+            (FmiVersion::V3, "macos", "aarch64") => "aarch64-darwin",
+            (FmiVersion::V3, "windows", "x86_64") => "x86_64-windows",
+            _ => return None,
+        };
+        Some((platform, ext))
+    }
+
+    /// The headers the wrapper compiles against, the API layer over [`CORE`], and whether the
+    /// headers go into `sources/`.
+    fn wrapper_parts(self) -> (&'static [(&'static str, &'static str); 3], &'static str, bool) {
+        match self {
+            FmiVersion::V2 => (&FMI2_HEADERS, include_str!("fmi2/fmu2.c.in"), true),
+            FmiVersion::V3 => (&FMI3_HEADERS, include_str!("fmi3/fmu3.c.in"), false),
+        }
+    }
+}
+
+impl std::str::FromStr for FmiVersion {
+    type Err = ExportError;
+    fn from_str(s: &str) -> Result<FmiVersion, ExportError> {
+        match s {
+            "2" | "2.0" => Ok(FmiVersion::V2),
+            "3" | "3.0" => Ok(FmiVersion::V3),
+            _ => Err(ExportError::FmiVersion { found: s.to_string() }),
+        }
+    }
+}
 
 /// An FMU archive and what it holds.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -39,68 +115,75 @@ pub struct Fmu {
     pub bytes: Vec<u8>,
     /// `modelDescription.xml`.
     pub model_description: String,
-    /// FMI platform of the binary (`linux64`, `darwin64`, `win64`), or none for a source-only FMU.
+    /// FMI platform of the binary (`linux64`; FMI 3.0: `x86_64-linux`), or none for a source-only FMU.
     pub platform: Option<&'static str>,
     /// The controller's C inside it.
     pub code: CCode,
+    pub version: FmiVersion,
 }
 
-/// The FMI 2.0 platform of the machine running this code and its shared-library extension.
-fn host_platform() -> Option<(&'static str, &'static str)> {
-    match (std::env::consts::OS, std::env::consts::ARCH) {
-        ("linux", "x86_64") => Some(("linux64", "so")),
-        ("macos", "x86_64") => Some(("darwin64", "dylib")),
-        ("windows", "x86_64") => Some(("win64", "dll")),
-        _ => None,
-    }
-}
-
-/// Generates the FMU of `design` at `sample_time`: the controller of [`generate`], wrapped. With a
-/// `compiler` (a C99 compiler taking gcc's flags: `gcc`, `cc`, `clang`) the archive also holds the
-/// binary for this machine's platform, compiled with `-std=c99 -O2 -ffp-contract=off` so that in
-/// f64 it computes the bits of [`Controller::step`](crate::controller::Controller::step).
+/// Generates the FMI `version` FMU of `design` at `sample_time`: the controller of [`generate`],
+/// wrapped. With a `compiler` (a C99 compiler taking gcc's flags: `gcc`, `cc`, `clang`) the archive
+/// also holds the binary for this machine's platform, compiled with `-std=c99 -O2
+/// -ffp-contract=off` so that in f64 it computes the bits of
+/// [`Controller::step`](crate::controller::Controller::step).
 pub fn generate_fmu(
     design: &Design,
     sample_time: f64,
     options: &ExportOptions,
     compiler: Option<&str>,
+    version: FmiVersion,
 ) -> Result<Fmu, ExportError> {
     let code = generate(design, sample_time, options)?;
     let p = options.prefix.as_str();
     let m = design.plant().m();
     let wrapper_name = format!("{p}_fmu.c");
-    let mut sources: Vec<(String, String)> =
-        vec![(code.header_name.clone(), code.header.clone()), (code.source_name.clone(), code.source.clone())];
     let guid = guid(&[&code.header, &code.source]);
-    let wrapper = fill(
-        WRAPPER,
-        &[
-            ("guid", &guid),
-            ("version", env!("CARGO_PKG_VERSION")),
-            ("p", p),
-            ("P", &p.to_ascii_uppercase()),
-            ("R", options.precision.c_type()),
-        ],
-    );
-    sources.push((wrapper_name.clone(), wrapper));
-    sources.extend(FMI2_HEADERS.iter().map(|(n, t)| (n.to_string(), t.to_string())));
-    let model_description = model_description(options, m, sample_time, &guid, &[&wrapper_name, &code.source_name]);
+    let (headers, api, ship_headers) = version.wrapper_parts();
+    let values = [
+        ("guid", guid.as_str()),
+        ("version", env!("CARGO_PKG_VERSION")),
+        ("fmi", version.name()),
+        ("p", p),
+        ("P", &p.to_ascii_uppercase()),
+        ("R", options.precision.c_type()),
+    ];
+    let wrapper = fill(CORE, &values) + &fill(api, &values);
+    let mut sources: Vec<(String, String)> = vec![
+        (code.header_name.clone(), code.header.clone()),
+        (code.source_name.clone(), code.source.clone()),
+        (wrapper_name.clone(), wrapper),
+    ];
+    let units = [wrapper_name.as_str(), code.source_name.as_str()];
+    let model_description = match version {
+        FmiVersion::V2 => model_description_2(options, m, sample_time, &guid, &units),
+        FmiVersion::V3 => model_description_3(options, m, sample_time, &guid),
+    };
+    let header_files = headers.iter().map(|(n, t)| (n.to_string(), t.to_string()));
 
     let binary = match compiler {
         None => None,
         Some(cc) => {
-            let (platform, ext) = host_platform().ok_or_else(|| ExportError::Compiler {
+            let (platform, ext) = version.host_platform().ok_or_else(|| ExportError::Compiler {
                 compiler: cc.to_string(),
                 message: format!(
-                    "FMI 2.0 names no platform for {}-{}; export a source-only FMU (no compiler) and build it there",
+                    "FMI {} names no platform for {}-{}; export a source-only FMU (no compiler) and build it there",
+                    version.name(),
                     std::env::consts::OS,
                     std::env::consts::ARCH
                 ),
             })?;
-            let so = compile(cc, &sources, &[&wrapper_name, &code.source_name], &format!("{p}.{ext}"))?;
+            let mut all = sources.clone();
+            all.extend(header_files.clone());
+            let so = compile(cc, &all, &units, &format!("{p}.{ext}"))?;
             Some((platform, format!("binaries/{platform}/{p}.{ext}"), so))
         }
     };
+    if ship_headers {
+        sources.extend(header_files);
+    } else {
+        sources.push(("buildDescription.xml".into(), build_description(p, &units)));
+    }
 
     let mut files: Vec<(String, Vec<u8>)> =
         vec![("modelDescription.xml".into(), model_description.clone().into_bytes())];
@@ -108,7 +191,7 @@ pub fn generate_fmu(
     let platform = binary.as_ref().map(|b| b.0);
     files.extend(binary.map(|(_, path, so)| (path, so)));
     let bytes = zip(&files).map_err(|e| ExportError::Archive { message: e.to_string() })?;
-    Ok(Fmu { file_name: format!("{p}.fmu"), bytes, model_description, platform, code })
+    Ok(Fmu { file_name: format!("{p}.fmu"), bytes, model_description, platform, code, version })
 }
 
 /// A deterministic GUID from the generated text (FNV-1a, 128 bits), so that the same design at the
@@ -123,16 +206,38 @@ fn xml_escape(s: &str) -> String {
     s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
 }
 
-/// `modelDescription.xml`: value references 0..m-1 are y, m..2m-1 g, 2m..3m-1 u_f, 3m..4m-1 u.
-fn model_description(o: &ExportOptions, m: usize, sample_time: f64, guid: &str, source_files: &[&str]) -> String {
+/// The variables of both versions, by value reference: 0..m-1 are y, m..2m-1 g, 2m..3m-1 u_f,
+/// 3m..4m-1 u: (value reference, name, causality, variability, description).
+fn variables(m: usize) -> impl Iterator<Item = (usize, String, &'static str, &'static str, &'static str)> {
+    const SIGNALS: [(&str, &str, &str, &str); 4] = [
+        ("y", "input", "continuous", "measured output y_i, sampled at each sample instant"),
+        ("g", "input", "continuous", "reference g_i, sampled at each sample instant"),
+        ("u_f", "output", "discrete", "plant input u_f,i (5), held over a sample"),
+        ("u", "output", "discrete", "adaptive command u_i (25), undelayed"),
+    ];
+    SIGNALS.into_iter().enumerate().flat_map(move |(s, (var, causality, variability, what))| {
+        (0..m).map(move |i| (s * m + i, format!("{var}[{}]", i + 1), causality, variability, what))
+    })
+}
+
+/// The opening of `modelDescription.xml` up to the interface element's attributes.
+fn opening(o: &ExportOptions, version: FmiVersion, sample_time: f64, token: &str) -> String {
     let name = xml_escape(o.scenario_name.as_deref().unwrap_or(&o.prefix));
-    let mut x = String::new();
-    let _ = writeln!(x, r#"<?xml version="1.0" encoding="UTF-8"?>"#);
-    let _ = writeln!(
-        x,
-        r#"<fmiModelDescription fmiVersion="2.0" modelName="{name}" guid="{guid}" description="Direct adaptive output-feedback controller (quell), sampled at T_s = {sample_time:?} s" generationTool="quell {}" variableNamingConvention="structured" numberOfEventIndicators="0">"#,
+    let token = match version {
+        FmiVersion::V2 => format!(r#"guid="{token}""#),
+        FmiVersion::V3 => format!(r#"instantiationToken="{token}""#),
+    };
+    let events = if version == FmiVersion::V2 { r#" numberOfEventIndicators="0""# } else { "" };
+    format!(
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<fmiModelDescription fmiVersion=\"{}\" modelName=\"{name}\" {token} description=\"Direct adaptive output-feedback controller (quell), sampled at T_s = {sample_time:?} s\" generationTool=\"quell {}\" variableNamingConvention=\"structured\"{events}>\n",
+        version.name(),
         env!("CARGO_PKG_VERSION")
-    );
+    )
+}
+
+/// FMI 2.0 `modelDescription.xml` (value references of [`variables`]).
+fn model_description_2(o: &ExportOptions, m: usize, sample_time: f64, guid: &str, source_files: &[&str]) -> String {
+    let mut x = opening(o, FmiVersion::V2, sample_time, guid);
     let _ = writeln!(
         x,
         r#"  <CoSimulation modelIdentifier="{}" canHandleVariableCommunicationStepSize="true" canBeInstantiatedOnlyOncePerProcess="false" canNotUseMemoryManagementFunctions="false">"#,
@@ -145,22 +250,12 @@ fn model_description(o: &ExportOptions, m: usize, sample_time: f64, guid: &str, 
     let _ = writeln!(x, "    </SourceFiles>\n  </CoSimulation>");
     let _ = writeln!(x, r#"  <DefaultExperiment startTime="0" stepSize="{sample_time:?}"/>"#);
     let _ = writeln!(x, "  <ModelVariables>");
-    let signals = [
-        ("y", "input", "continuous", "measured output y_i, sampled at each sample instant"),
-        ("g", "input", "continuous", "reference g_i, sampled at each sample instant"),
-        ("u_f", "output", "discrete", "plant input u_f,i (5), held over a sample"),
-        ("u", "output", "discrete", "adaptive command u_i (25), undelayed"),
-    ];
-    for (s, (var, causality, variability, what)) in signals.iter().enumerate() {
-        for i in 0..m {
-            let start = if *causality == "input" { r#" start="0""# } else { "" };
-            let _ = writeln!(
-                x,
-                r#"    <ScalarVariable name="{var}[{}]" valueReference="{}" causality="{causality}" variability="{variability}" description="{what}"><Real{start}/></ScalarVariable>"#,
-                i + 1,
-                s * m + i
-            );
-        }
+    for (vr, name, causality, variability, what) in variables(m) {
+        let start = if causality == "input" { r#" start="0""# } else { "" };
+        let _ = writeln!(
+            x,
+            r#"    <ScalarVariable name="{name}" valueReference="{vr}" causality="{causality}" variability="{variability}" description="{what}"><Real{start}/></ScalarVariable>"#
+        );
     }
     let _ = writeln!(x, "  </ModelVariables>\n  <ModelStructure>");
     // Outputs depend on no input at the same instant (no direct feedthrough); indices are 1-based.
@@ -170,6 +265,48 @@ fn model_description(o: &ExportOptions, m: usize, sample_time: f64, guid: &str, 
     let _ = writeln!(x, "    <InitialUnknowns>\n{}\n    </InitialUnknowns>", unknowns.join("\n"));
     let _ = writeln!(x, "  </ModelStructure>\n</fmiModelDescription>");
     x
+}
+
+/// FMI 3.0 `modelDescription.xml`: the variables of [`variables`] as `Float64`, and the
+/// independent variable `time` at value reference 4m.
+fn model_description_3(o: &ExportOptions, m: usize, sample_time: f64, token: &str) -> String {
+    let mut x = opening(o, FmiVersion::V3, sample_time, token);
+    let _ = writeln!(
+        x,
+        r#"  <CoSimulation modelIdentifier="{}" canHandleVariableCommunicationStepSize="true" canBeInstantiatedOnlyOncePerProcess="false" hasEventMode="false"/>"#,
+        o.prefix
+    );
+    let _ = writeln!(x, r#"  <DefaultExperiment startTime="0" stepSize="{sample_time:?}"/>"#);
+    let _ = writeln!(x, "  <ModelVariables>");
+    let _ = writeln!(
+        x,
+        r#"    <Float64 name="time" valueReference="{}" causality="independent" variability="continuous" description="time"/>"#,
+        4 * m
+    );
+    for (vr, name, causality, variability, what) in variables(m) {
+        let start = if causality == "input" { r#" start="0""# } else { "" };
+        let _ = writeln!(
+            x,
+            r#"    <Float64 name="{name}" valueReference="{vr}" causality="{causality}" variability="{variability}" description="{what}"{start}/>"#
+        );
+    }
+    let _ = writeln!(x, "  </ModelVariables>\n  <ModelStructure>");
+    // Outputs depend on no input at the same instant (no direct feedthrough).
+    for element in ["Output", "InitialUnknown"] {
+        for vr in 2 * m..4 * m {
+            let _ = writeln!(x, r#"    <{element} valueReference="{vr}" dependencies=""/>"#);
+        }
+    }
+    let _ = writeln!(x, "  </ModelStructure>\n</fmiModelDescription>");
+    x
+}
+
+/// FMI 3.0 `sources/buildDescription.xml`: the C99 units of the binary.
+fn build_description(model_identifier: &str, units: &[&str]) -> String {
+    let files: String = units.iter().map(|u| format!("      <SourceFile name=\"{u}\"/>\n")).collect();
+    format!(
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<fmiBuildDescription fmiVersion=\"3.0\">\n  <BuildConfiguration modelIdentifier=\"{model_identifier}\">\n    <SourceFileSet language=\"C99\">\n{files}    </SourceFileSet>\n  </BuildConfiguration>\n</fmiBuildDescription>\n"
+    )
 }
 
 /// Compiles `units` of `sources` into the shared library `output` with `compiler`, in a temporary
@@ -203,259 +340,6 @@ fn zip(files: &[(String, Vec<u8>)]) -> zip::result::ZipResult<Vec<u8>> {
     }
     Ok(w.finish()?.into_inner())
 }
-
-/// The FMI 2.0 co-simulation functions over `{p}_controller.c`; `{p}`, `{P}`, `{R}`, `{guid}` and
-/// `{version}` are filled in.
-const WRAPPER: &str = r#"/* {p}_fmu.c: FMI 2.0 co-simulation interface of {p}_controller.c; generated by quell {version}.
- * Value references: y[i] = i - 1, g[i] = M + i - 1, u_f[i] = 2M + i - 1, u[i] = 3M + i - 1.
- * fmi2DoStep(t, h) takes the samples in [t, t + h) with the inputs last set, then reports the
- * outputs of the next sample (they do not depend on that sample's inputs). */
-#include <string.h>
-#include "fmi2Functions.h"
-#include "{p}_controller.h"
-
-#define {P}_FMU_GUID "{guid}"
-
-typedef struct {
-    {p}_state state;            /* the controller before sample k */
-    {p}_state ahead;            /* scratch: state stepped once, to read sample k's outputs */
-    fmi2Real input[2 * {P}_M];  /* y, then g: held from the last fmi2SetReal */
-    fmi2Real output[2 * {P}_M]; /* u_f(k), then u(k) */
-    fmi2Real start;             /* time of sample 0 */
-    double k;                   /* samples taken (a whole number, exact in double up to 2^53) */
-    fmi2CallbackFunctions functions;
-    char *name;
-} {p}_fmu;
-
-static void {p}_log({p}_fmu *f, fmi2String name, fmi2Status status, const char *message, double a, double b)
-{
-    if (f->functions.logger)
-        f->functions.logger(f->functions.componentEnvironment, name, status, "logStatusError", message, a, b);
-}
-
-/* Sample k's outputs: one step of a copy of the state (with any inputs: u_f(k) and u(k) do not
- * depend on y(k) or g(k)). */
-static void {p}_outputs({p}_fmu *f)
-{
-    {R} zero[{P}_M], u_f[{P}_M], u[{P}_M];
-    for (unsigned i = 0; i < {P}_M; i++)
-        zero[i] = 0;
-    f->ahead = f->state;
-    {p}_step(&f->ahead, zero, zero, u_f);
-    {p}_command(&f->ahead, u);
-    for (unsigned i = 0; i < {P}_M; i++) {
-        f->output[i] = u_f[i];
-        f->output[{P}_M + i] = u[i];
-    }
-}
-
-static void {p}_restart({p}_fmu *f)
-{
-    {p}_init(&f->state);
-    for (unsigned i = 0; i < 2 * {P}_M; i++)
-        f->input[i] = 0;
-    f->k = 0;
-    {p}_outputs(f);
-}
-
-static double {p}_abs(double x) { return x < 0 ? -x : x; }
-
-const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
-const char *fmi2GetVersion(void) { return fmi2Version; }
-
-fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories, const fmi2String categories[])
-{
-    (void)c; (void)loggingOn; (void)nCategories; (void)categories;
-    return fmi2OK;
-}
-
-fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
-                              fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
-                              fmi2Boolean visible, fmi2Boolean loggingOn)
-{
-    (void)fmuResourceLocation; (void)visible; (void)loggingOn;
-    if (!functions || !functions->allocateMemory || !functions->freeMemory)
-        return NULL;
-    fmi2String name = instanceName ? instanceName : "{p}";
-    if (fmuType != fmi2CoSimulation || !fmuGUID || strcmp(fmuGUID, {P}_FMU_GUID) != 0) {
-        if (functions->logger)
-            functions->logger(functions->componentEnvironment, name, fmi2Error, "logStatusError",
-                              fmuType != fmi2CoSimulation
-                                  ? "this FMU is co-simulation only; instantiate it as fmi2CoSimulation"
-                                  : "GUID %s does not match this FMU's " {P}_FMU_GUID "; its modelDescription.xml belongs to another build",
-                              fmuGUID ? fmuGUID : "(null)");
-        return NULL;
-    }
-    {p}_fmu *f = ({p}_fmu *)functions->allocateMemory(1, sizeof({p}_fmu));
-    if (!f)
-        return NULL;
-    f->functions = *functions;
-    size_t len = strlen(name);
-    f->name = (char *)functions->allocateMemory(len + 1, 1);
-    if (!f->name) {
-        functions->freeMemory(f);
-        return NULL;
-    }
-    memcpy(f->name, name, len + 1);
-    f->start = 0;
-    {p}_restart(f);
-    return f;
-}
-
-void fmi2FreeInstance(fmi2Component c)
-{
-    {p}_fmu *f = ({p}_fmu *)c;
-    if (!f)
-        return;
-    f->functions.freeMemory(f->name);
-    f->functions.freeMemory(f);
-}
-
-fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance, fmi2Real startTime,
-                               fmi2Boolean stopTimeDefined, fmi2Real stopTime)
-{
-    (void)toleranceDefined; (void)tolerance; (void)stopTimeDefined; (void)stopTime;
-    (({p}_fmu *)c)->start = startTime;
-    return fmi2OK;
-}
-
-fmi2Status fmi2EnterInitializationMode(fmi2Component c) { (void)c; return fmi2OK; }
-fmi2Status fmi2ExitInitializationMode(fmi2Component c) { {p}_outputs(({p}_fmu *)c); return fmi2OK; }
-fmi2Status fmi2Terminate(fmi2Component c) { (void)c; return fmi2OK; }
-fmi2Status fmi2Reset(fmi2Component c) { {p}_restart(({p}_fmu *)c); return fmi2OK; }
-
-fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[])
-{
-    {p}_fmu *f = ({p}_fmu *)c;
-    for (size_t j = 0; j < nvr; j++) {
-        if (vr[j] >= 4 * {P}_M) {
-            {p}_log(f, f->name, fmi2Error, "fmi2GetReal: no variable has value reference %g (0 to %g)", vr[j], 4 * {P}_M - 1);
-            return fmi2Error;
-        }
-        value[j] = vr[j] < 2 * {P}_M ? f->input[vr[j]] : f->output[vr[j] - 2 * {P}_M];
-    }
-    return fmi2OK;
-}
-
-fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[])
-{
-    {p}_fmu *f = ({p}_fmu *)c;
-    for (size_t j = 0; j < nvr; j++) {
-        if (vr[j] >= 2 * {P}_M) {
-            {p}_log(f, f->name, fmi2Error, "fmi2SetReal: value reference %g is not an input (y and g are 0 to %g)", vr[j], 2 * {P}_M - 1);
-            return fmi2Error;
-        }
-        if (!(value[j] - value[j] == 0)) {
-            {p}_log(f, f->name, fmi2Error, "fmi2SetReal: input %g is %g; y and g must be finite", vr[j], value[j]);
-            return fmi2Error;
-        }
-    }
-    for (size_t j = 0; j < nvr; j++)
-        f->input[vr[j]] = value[j];
-    return fmi2OK;
-}
-
-static fmi2Status {p}_none(fmi2Component c, const char *what)
-{
-    {p}_fmu *f = ({p}_fmu *)c;
-    if (f)
-        {p}_log(f, f->name, fmi2Error, what, 0, 0);
-    return fmi2Error;
-}
-
-fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[])
-{ (void)vr; (void)value; return nvr ? {p}_none(c, "fmi2GetInteger: this FMU has no Integer variables") : fmi2OK; }
-fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[])
-{ (void)vr; (void)value; return nvr ? {p}_none(c, "fmi2GetBoolean: this FMU has no Boolean variables") : fmi2OK; }
-fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[])
-{ (void)vr; (void)value; return nvr ? {p}_none(c, "fmi2GetString: this FMU has no String variables") : fmi2OK; }
-fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[])
-{ (void)vr; (void)value; return nvr ? {p}_none(c, "fmi2SetInteger: this FMU has no Integer variables") : fmi2OK; }
-fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[])
-{ (void)vr; (void)value; return nvr ? {p}_none(c, "fmi2SetBoolean: this FMU has no Boolean variables") : fmi2OK; }
-fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[])
-{ (void)vr; (void)value; return nvr ? {p}_none(c, "fmi2SetString: this FMU has no String variables") : fmi2OK; }
-
-fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *s)
-{ (void)s; return {p}_none(c, "fmi2GetFMUstate: not supported (canGetAndSetFMUstate is false)"); }
-fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate s)
-{ (void)s; return {p}_none(c, "fmi2SetFMUstate: not supported (canGetAndSetFMUstate is false)"); }
-fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *s)
-{ (void)s; return {p}_none(c, "fmi2FreeFMUstate: not supported (canGetAndSetFMUstate is false)"); }
-fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate s, size_t *size)
-{ (void)s; (void)size; return {p}_none(c, "fmi2SerializedFMUstateSize: not supported (canSerializeFMUstate is false)"); }
-fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate s, fmi2Byte bytes[], size_t size)
-{ (void)s; (void)bytes; (void)size; return {p}_none(c, "fmi2SerializeFMUstate: not supported (canSerializeFMUstate is false)"); }
-fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size_t size, fmi2FMUstate *s)
-{ (void)s; (void)bytes; (void)size; return {p}_none(c, "fmi2DeSerializeFMUstate: not supported (canSerializeFMUstate is false)"); }
-fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference u[], size_t nu, const fmi2ValueReference z[],
-                                        size_t nz, const fmi2Real dz[], fmi2Real du[])
-{ (void)u; (void)nu; (void)z; (void)nz; (void)dz; (void)du; return {p}_none(c, "fmi2GetDirectionalDerivative: not supported"); }
-fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer order[],
-                                       const fmi2Real value[])
-{ (void)vr; (void)order; (void)value; return nvr ? {p}_none(c, "fmi2SetRealInputDerivatives: not supported (the inputs are sampled)") : fmi2OK; }
-fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer order[],
-                                        fmi2Real value[])
-{ (void)vr; (void)order; (void)value; return nvr ? {p}_none(c, "fmi2GetRealOutputDerivatives: not supported") : fmi2OK; }
-
-fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSetFMUStatePriorToCurrentPoint)
-{
-    (void)noSetFMUStatePriorToCurrentPoint;
-    {p}_fmu *f = ({p}_fmu *)c;
-    const double T = {P}_SAMPLE_TIME, now = f->start + f->k * T;
-    /* The same relative tolerance as the library's whole-number-of-samples test. */
-    const double n = h / T, steps = n > 0 && n < 1e15 ? (double)(long long)(n + 0.5) : 0;
-    if (steps < 1 || {p}_abs(n - steps) > 1e-9 * steps) {
-        {p}_log(f, f->name, fmi2Error, "fmi2DoStep: communication step h = %g s is not a whole number of samples of T_s = %g s", h, T);
-        return fmi2Error;
-    }
-    if ({p}_abs(t - now) > 1e-9 * (T + {p}_abs(now))) {
-        {p}_log(f, f->name, fmi2Error, "fmi2DoStep: at t = %g s, but the controller's next sample is at %g s", t, now);
-        return fmi2Error;
-    }
-    {R} y[{P}_M], g[{P}_M], u_f[{P}_M];
-    for (unsigned i = 0; i < {P}_M; i++) {
-        y[i] = ({R})f->input[i];
-        g[i] = ({R})f->input[{P}_M + i];
-    }
-    for (double j = 0; j < steps; j++) {
-        /* Inputs are the same at every j, so a refused reading (1) is refused at j = 0. */
-        const int refused = {p}_step(&f->state, y, g, u_f);
-        if (refused == 1) {
-            {p}_log(f, f->name, fmi2Error, "fmi2DoStep: an input (y or g) is NaN or beyond +-%g; the step was refused", (double){P}_INPUT_BOUND, 0.0);
-            return fmi2Error;
-        }
-        if (refused) {
-            {p}_log(f, f->name, fmi2Error, "fmi2DoStep: the controller's state is no longer finite; call fmi2Reset", 0.0, 0.0);
-            return fmi2Error;
-        }
-    }
-    f->k += steps;
-    {p}_outputs(f);
-    return fmi2OK;
-}
-
-fmi2Status fmi2CancelStep(fmi2Component c) { return {p}_none(c, "fmi2CancelStep: fmi2DoStep never runs asynchronously"); }
-
-fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value)
-{ (void)s; (void)value; return {p}_none(c, "fmi2GetStatus: fmi2DoStep never returns fmi2Pending"); }
-fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value)
-{
-    if (s == fmi2LastSuccessfulTime) {
-        {p}_fmu *f = ({p}_fmu *)c;
-        *value = f->start + f->k * {P}_SAMPLE_TIME;
-        return fmi2OK;
-    }
-    (void)value;
-    return {p}_none(c, "fmi2GetRealStatus: only fmi2LastSuccessfulTime");
-}
-fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value)
-{ (void)s; (void)value; return {p}_none(c, "fmi2GetIntegerStatus: no integer status"); }
-fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value)
-{ (void)s; (void)value; return {p}_none(c, "fmi2GetBooleanStatus: no boolean status"); }
-fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value)
-{ (void)s; (void)value; return {p}_none(c, "fmi2GetStringStatus: no string status"); }
-"#;
 
 #[cfg(test)]
 mod tests {

@@ -12,7 +12,7 @@
 mod c;
 mod fmu;
 
-pub use fmu::{generate_fmu, Fmu};
+pub use fmu::{generate_fmu, FmiVersion, Fmu};
 
 use thiserror::Error;
 
@@ -125,6 +125,8 @@ pub enum ExportError {
     NotFinite { what: String, value: f64, sample_time: f64 },
     #[error("precision f32: {what} = {value:e} is beyond the range of float (±3.4e38); use f64")]
     F32Range { what: String, value: f64 },
+    #[error("fmi_version: expected 2 or 3, found {found:?}")]
+    FmiVersion { found: String },
     #[error("compiler {compiler:?}: {message}")]
     Compiler { compiler: String, message: String },
     #[error("writing the FMU archive failed: {message}")]

@@ -295,8 +295,9 @@ fn h_min(t: f64) -> f64 {
 
 /// Integrates from `t0` (state `y0`, constant history `history` for t < t0, length `n_delayed`)
 /// to `t_end`, calling `on_output(t, y)` at t = t0 + k·output_step, k = 0, 1, … (the last one at
-/// t_end when it is a whole multiple). `on_output` returning `Break` stops the run early
-/// (the stats so far are returned).
+/// t_end when the span is a whole number of output steps, to the relative tolerance of
+/// `controller::discrete::whole_samples`, the sampled loop's count). `on_output` returning `Break`
+/// stops the run early (the stats so far are returned).
 ///
 /// y(t0) = `y0` may differ from `history` (a jump at t0). A non-positive or non-finite
 /// `output_step` reports only t0 and t_end.
@@ -372,7 +373,8 @@ pub fn solve<S: DelaySystem>(
     Ok(steps.finish())
 }
 
-/// The output schedule t0 + k·dt, k = 1…n (the last one clamped to t_end when it lands there).
+/// The output schedule t0 + k·dt, k = 1…n, n the whole output steps in the span (the last one
+/// clamped to t_end when it lands there).
 struct Schedule {
     t0: f64,
     dt: f64,
@@ -382,14 +384,16 @@ struct Schedule {
 }
 
 impl Schedule {
-    /// The next output time if it lies in (·, t_new] (at t_end, within rounding of the last one).
+    /// The next output time if it lies in (·, t_new]. The last one is at most t_end once the run
+    /// lands there: the count n may round t0 + n·dt up past t_end by the tolerance of a whole
+    /// number of steps, and an earlier one lies a whole step before it.
     fn due(&self, t_new: f64, t_end: f64) -> Option<f64> {
         if self.next > self.n {
             return None;
         }
         let t_k = self.t0 + self.next as f64 * self.dt;
         let t_k = if self.next == self.n && t_new == t_end { t_k.min(t_end) } else { t_k };
-        (t_k <= t_new || (t_new == t_end && t_k <= t_end + 1e-9 * self.dt)).then_some(t_k)
+        (t_k <= t_new).then_some(t_k)
     }
 }
 
@@ -475,7 +479,7 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
         let tau_max = delays.iter().copied().fold(0.0, f64::max);
         let span = t_end - t0;
         let (dt, n_out) = if output_step > 0.0 && output_step.is_finite() {
-            (output_step, ((span + 1e-9 * output_step) / output_step).floor() as usize)
+            (output_step, crate::controller::discrete::whole_samples(span, output_step))
         } else {
             (span, 1)
         };

@@ -22,7 +22,10 @@ use crate::settings::{self, Actuator, KeyError};
 use crate::signal::{check_signals, Signal};
 
 pub use crate::settings::MeasurementNoise;
-pub use closed_loop::{default_max_steps, loop_rate, BUDGET_MIN_STEPS, BUDGET_STEPS_PER_RATE, MAX_HISTORY_BYTES};
+pub use closed_loop::{
+    adaptation_rate, default_max_steps, loop_rate, BUDGET_MIN_STEPS, BUDGET_STABILITY_MARGIN, BUDGET_STEPS_PER_RATE,
+    BUDGET_TOLERANCE, DOP853_STABLE_H_RATE, MAX_HISTORY_BYTES, STIFF_RATIO,
+};
 pub use dde::{Method, Stats};
 pub use divergence::{Peaks, Watched, DIVERGENCE_BOUND};
 pub use noise::{band_limited, NOISE_SINES};

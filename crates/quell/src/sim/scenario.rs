@@ -80,9 +80,11 @@ mod tests {
         let s = Scenario::from_toml(&format!("{PAPER_EXAMPLE}\n{DIVERGING_TRUTH}")).unwrap();
         let d = s.design().unwrap();
         // ρ = 9 (the reference filter pole −9 is the fastest rate; |eig(1.3 A)| ≤ 3.9, the channel
-        // poles 6, the observer's 4, ω ≤ 2 rad/s, 1/β = 1), τ_min = 1 s, t_end = 100 s:
+        // poles 6, the observer's 4, ω ≤ 2 rad/s, 1/β = 1), τ_min = 1 s, t_end = 100 s, at the
+        // budget's own tolerance 1e-9 and an adaptation rate of 8.5/s, under 100 ρ (not stiff):
         // 10,000 + 100·(9·100 + 100/1) = 110,000.
-        let budget = default_max_steps(&d, s.true_plant(), [&s.reference, &s.disturbance], 100.0);
+        let integrator = Integrator::new(1e-9, 1e-9);
+        let budget = default_max_steps(&d, s.true_plant(), [&s.reference, &s.disturbance], 100.0, &integrator);
         assert_eq!(budget, 110_000);
         let r = Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
         let Some(Outcome::TooManySteps { t, max_steps }) = r.outcome else { panic!("{:?}", r.outcome) };

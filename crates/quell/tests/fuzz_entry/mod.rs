@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use quell::export::{generate, generate_fmu, ExportOptions, Precision};
+use quell::export::{generate, generate_fmu, ExportOptions, FmiVersion, Precision};
 use quell::study::{Study, StudyError};
 use quell::{Design, Scenario};
 
@@ -90,7 +90,7 @@ impl ExportCase {
     }
 }
 
-/// `case` exported from `design` (the C pair, and the FMU without compiling when `case.fmu`). A
+/// `case` exported from `design` (the C pair, and the FMU, FMI 2.0 or 3.0, without compiling when `case.fmu`). A
 /// refusal is its message, which must name the option at fault: `prefix:`, `precision:`, or the
 /// sample time (`simulation.sample_time` or `sample_time`). On success the header's comments are
 /// well formed: every `/*` closes before the next one opens.
@@ -98,7 +98,9 @@ pub fn export(design: &Design, case: &ExportCase) -> Result<(), String> {
     let precision: Precision = case.precision.parse().map_err(|e: quell::export::ExportError| e.to_string())?;
     let options = ExportOptions { prefix: case.prefix.clone(), precision, scenario_name: case.scenario_name.clone() };
     let code = if case.fmu {
-        generate_fmu(design, case.sample_time, &options, None).map(|f| f.code)
+        // Both versions, chosen without another draw so that the seeded sequences stay as they were.
+        let version = if case.prefix.len().is_multiple_of(2) { FmiVersion::V2 } else { FmiVersion::V3 };
+        generate_fmu(design, case.sample_time, &options, None, version).map(|f| f.code)
     } else {
         generate(design, case.sample_time, &options)
     }
