@@ -122,7 +122,9 @@ class Loop:
         )
         self.M, self.E, self.n_core = M, E, 2 * n + q_g + q_w
         # ξ̂ = [ξ̂_g; φ + N x̂] = R core.
-        self.R = np.block([[Z((q_g, n)), Z((q_g, n)), np.eye(q_g), Z((q_g, q_w))], [Z((q_w, n)), self.N, Z((q_w, q_g)), np.eye(q_w)]])
+        self.R = np.block(
+            [[Z((q_g, n)), Z((q_g, n)), np.eye(q_g), Z((q_g, q_w))], [Z((q_w, n)), self.N, Z((q_w, q_g)), np.eye(q_w)]]
+        )
         # G_ii(s) = q_i0 / den_i(s), realized by SciPy (den in decreasing powers of s).
         self.filters = []
         for ch in design["channels"]:
@@ -281,18 +283,17 @@ def simulate(loop: Loop, t_end: float, output_step: float, rtol: float, atol: fl
 def signals(loop: Loop, res: Result) -> dict:
     """The columns of quell's signals.csv: y, g, e = y − g, u (25), u_f (5), η̂."""
     out = {"t": res.t}
-    y, g, u, uf = [], [], [], []
+    rows: dict = {"y": [], "g": [], "u": [], "uf": []}
     for t, s in zip(res.t, res.states):
-        w = loop.w(t)
-        y.append(loop.C @ s[slice(*loop.at["x"])] + loop.Q @ w)
-        g.append(loop.g(t))
-        u.append(loop.commands(s))
+        rows["y"].append(loop.C @ s[slice(*loop.at["x"])] + loop.Q @ loop.w(t))
+        rows["g"].append(loop.g(t))
+        rows["u"].append(loop.commands(s))
         u_d, _ = loop.delayed(t, s, res.history)
-        uf.append(loop.plant_input(s, u_d))
-    y, g, u, uf = (np.array(v) for v in (y, g, u, uf))
-    for i in range(loop.m):
-        out[f"y{i + 1}"], out[f"g{i + 1}"], out[f"e{i + 1}"] = y[:, i], g[:, i], y[:, i] - g[:, i]
-        out[f"u{i + 1}"], out[f"uf{i + 1}"] = u[:, i], uf[:, i]
+        rows["uf"].append(loop.plant_input(s, u_d))
+    y, g, u, uf = (np.array(rows[k]) for k in ("y", "g", "u", "uf"))
+    for name, v in (("y", y), ("g", g), ("e", y - g), ("u", u), ("uf", uf)):
+        for i in range(loop.m):
+            out[f"{name}{i + 1}"] = v[:, i]
     for i, c in enumerate(loop.ch):
         for j in range(loop.q):
             out[f"eta{i + 1}_{j + 1}"] = res.states[:, c["eta"][0] + j]

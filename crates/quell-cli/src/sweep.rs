@@ -38,6 +38,15 @@ pub struct SweepArgs {
 /// The files a sweep writes into --out (besides its figures).
 const OUTPUTS: &[&str] = &["runs.csv", "summary.json"];
 
+/// The study file at `path`; a refusal starts with the path once (a file that cannot be read is
+/// already named by the error's key).
+pub(crate) fn read_study(path: &Path) -> Result<Study, Failure> {
+    Study::from_path(path).map_err(|e| {
+        let shown = path.display().to_string();
+        Failure::Input(if e.key == shown { e.to_string() } else { format!("{shown}: {e}") })
+    })
+}
+
 pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     if !args.merge.is_empty() {
         if let Some(s) = &args.shard {
@@ -48,7 +57,7 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
         return merge(&args.merge, &args.out, !args.no_plots);
     }
     let path = args.study.as_deref().expect("clap requires a study without --merge");
-    let study = Study::from_path(path).map_err(|e| Failure::Input(format!("{}: {e}", path.display())))?;
+    let study = read_study(path)?;
     let shard = match &args.shard {
         None => Shard::ALL,
         Some(s) => Shard::parse(s).map_err(|e| Failure::Input(format!("--shard: {e}")))?,

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use quell::study::{self, Study, TuneOptions, TunePoint, TuneResult};
+use quell::study::{self, TuneOptions, TunePoint, TuneResult};
 
 use crate::interrupt::Interrupt;
 use crate::output::{prepare_out, write_atomic};
@@ -26,7 +26,7 @@ pub struct TuneArgs {
 
 pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
     let path = &args.study;
-    let study = Study::from_path(path).map_err(|e| Failure::Input(format!("{}: {e}", path.display())))?;
+    let study = crate::sweep::read_study(path)?;
     if study.tune.is_none() {
         return Err(Failure::Input(format!(
             "{}: tune: missing; `quell tune` needs a [tune] table, e.g. [tune] objective = \"settle_t\", mu = [1.0, 200.0], max_u = 50.0",

@@ -188,12 +188,14 @@ fn figures_of_an_earlier_run_do_not_stay_beside_new_data() {
 #[test]
 fn an_endless_input_file_is_refused_naming_its_path() {
     // /dev/zero as a scenario or study was read for ever (4 GB in 15 s).
-    for args in [&["run", "/dev/zero"][..], &["sweep", "/dev/zero"], &["design", "/dev/zero"], &["export", "/dev/zero"]]
-    {
+    for command in ["run", "sweep", "tune", "design", "export"] {
+        let args = [command, "/dev/zero"];
         let started = Instant::now();
-        let o = quell(args);
+        let o = quell(&args);
         refused(&o, "/dev/zero: cannot read the");
         assert!(stderr(&o).contains("longer than 64 MiB"), "{}", stderr(&o));
+        // The path once (a study's refusal used to read "/dev/zero: /dev/zero: cannot read …").
+        assert_eq!(stderr(&o).matches("/dev/zero:").count(), 1, "{}", stderr(&o));
         assert!(started.elapsed() < Duration::from_secs(20), "{args:?}: {:?}", started.elapsed());
     }
 }

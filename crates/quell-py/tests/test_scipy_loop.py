@@ -80,7 +80,7 @@ def test_siso_plant_with_complex_poles_agrees_with_scipy(quell_bin, tmp_path):
     assert_agree(quell, scipy)
 
 
-@pytest.mark.skipif(not os.environ.get("QUELL_LONG_TESTS"), reason="about 6 s; set QUELL_LONG_TESTS=1")
+@pytest.mark.skipif(not os.environ.get("QUELL_LONG_TESTS"), reason="about 10 s; set QUELL_LONG_TESTS=1")
 def test_paper_example_whole_run_agrees_with_scipy(quell_bin, tmp_path, reference_points):
     quell, scipy = both(quell_bin, tmp_path, EXAMPLES / "paper.toml", 100.0)
     assert_agree(quell, scipy)
@@ -96,3 +96,20 @@ def test_breakpoints_are_the_sums_of_the_delays():
     # τ = 0.7, 1.1 up to 2: multiples of 0.7, 1.1, 1.4 = 2·0.7, 1.8 = 0.7 + 1.1, and the end.
     got = scipy_loop.breakpoints(np.array([0.7, 1.1]), 2.0)
     assert np.allclose(got, [0.7, 1.1, 1.4, 1.8, 2.0])
+
+
+def test_the_script_writes_quells_columns(quell_bin, tmp_path):
+    # The command line: the design JSON from `quell design --json`, a short run, the CSV's header
+    # the same as signals.csv's (without x and x̂) and its first row the initial state (all zero
+    # but the reference g(0) = [0, 2] and e = −g).
+    design = tmp_path / "design.json"
+    printed = subprocess.run([quell_bin, "design", "--json", EXAMPLES / "paper.toml"], check=True, capture_output=True, text=True)
+    design.write_text(printed.stdout)
+    out = tmp_path / "scipy.csv"
+    assert scipy_loop.main([str(EXAMPLES / "paper.toml"), str(design), "--t-end", "0.5", "--out", str(out)]) == 0
+    quell = tmp_path / "run"
+    run = [quell_bin, "run", EXAMPLES / "paper.toml", "--no-plots", "--out", quell]
+    subprocess.run(run, check=True, capture_output=True)
+    assert out.read_text().splitlines()[0] == (quell / "signals.csv").read_text().splitlines()[0]
+    cols = read_signals(out)
+    assert len(cols["t"]) == 6 and cols["g2"][0] == 2.0 and cols["e2"][0] == -2.0 and cols["u1"][0] == 0.0

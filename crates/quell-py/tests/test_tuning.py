@@ -13,7 +13,7 @@ from scipy import signal
 
 import quell
 
-from conftest import EXAMPLES
+from conftest import EXAMPLES, REFERENCE
 
 PAPER = (EXAMPLES / "paper.toml").read_text()
 L_LINE = "observer_gain = [[-8.0988, 4.4574], [10.6506, -5.0619], [2.7762, -1.1783]]"
@@ -79,6 +79,23 @@ def test_auto_design_meets_the_tail_bound():
     assert tail[0] <= 0.01 * 3.0 and tail[1] <= 0.01 * 2.0, tail
     with pytest.raises(quell.DesignError, match="convergence_time: expected a finite number > 0, found -1"):
         quell.auto_design(without_design(PAPER), convergence_time=-1.0)
+
+
+def test_auto_design_refuses_a_short_horizon_with_the_t_end_that_works():
+    """The quadruple tank (harmonics 0.01 rad/s apart, 600 s = 0.95 beats): the report says why the
+    verification failed and proposes t_end ≥ two beats (computed here); at that t_end it passes."""
+    text = without_design((REFERENCE / "quadruple-tank.toml").read_text())
+    _, report = quell.auto_design(text)
+    assert not report["passed"]
+    advice = " ".join(report["verification"]["advice"])
+    proposed = float(advice.split("lengthen simulation.t_end to at least ")[1].split(" s")[0])
+    two_beats = 2 * 2 * np.pi / 0.01
+    # Rounded up to two significant digits: within 10 % above two beats.
+    assert two_beats <= proposed <= 1.1 * two_beats, advice
+    scenario, report = quell.auto_design(text.replace("t_end = 600.0", f"t_end = {proposed}"))
+    assert report["passed"] and report["verification"]["advice"] == [], report
+    tail = [c["tail_max_e"] for c in quell.simulate(scenario).summary()]
+    assert tail[0] <= 0.01 * 1.5 and tail[1] <= 0.01 * 0.8, tail
 
 
 def test_fragile_observer_gain_warns():

@@ -359,3 +359,42 @@ fn vessel_measurement_noise_moves_the_tail_in_proportion_to_its_size() {
         assert!(*e < b, "tail {e} with noise");
     }
 }
+
+/// Why the automatic design finds no passing μ for the vessel, measured on its design model (no
+/// `[truth]`, the continuous loop) with μ, the filters, β and the scaling left to `auto_design`.
+/// With the page's channel poles −0.1, −0.12 rad/s, G_ii(s) = 0.012/((s + 0.1)(s + 0.12)) passes the
+/// 0.8 rad/s wave to Δ_i with gain 0.018 (closed form below): the wave's directions of Ω̄ are
+/// 3e-4 of what they would be at unit gain and the verification misses the 1 % bound. With the
+/// channel poles automatic too (−1.6, −2.4: from 2r, r = 0.8 rad/s) it passes, in newtons, and
+/// the written scenario, run again, keeps every tail within 1 % of its reference; the cost is the
+/// thrust, 18–26× the page's peaks (1.6 MN, 1.1 MN, 8.6 MN·m; asserted: more than 10×), which is
+/// why the page keeps its slow poles.
+#[test]
+fn the_vessels_automatic_design_fails_by_its_slow_channel_poles_not_its_units() {
+    let gain = 0.012 / ((0.8f64.powi(2) + 0.1f64.powi(2)).sqrt() * (0.8f64.powi(2) + 0.12f64.powi(2)).sqrt());
+    assert!((gain - 0.0184).abs() < 1e-3, "{gain}");
+    let model = |keep_channel_poles: bool| -> toml::Table {
+        let mut doc: toml::Table = scenario_text(&VESSEL).parse().unwrap();
+        doc.remove("truth");
+        doc["simulation"].as_table_mut().unwrap().remove("sample_time");
+        let design = doc.get_mut("design").and_then(|d| d.as_table_mut()).unwrap();
+        design.retain(|k, _| k == "observer_poles" || (keep_channel_poles && k == "channel_poles"));
+        doc
+    };
+    let slow = auto_design(&model(true), &Targets::default()).unwrap();
+    assert!(!slow.verification.passed, "{:?}", slow.verification);
+    let fast = auto_design(&model(false), &Targets::default()).unwrap();
+    assert!(fast.verification.passed, "{:?}", fast.verification);
+    let s = Scenario::from_toml(&fast.scenario.to_toml()).unwrap();
+    let r = run(&s);
+    let t_end = s.simulation.t_end;
+    for (i, c) in s.reference.components.iter().enumerate() {
+        let tail = r.max_abs_error(i, 0.9 * t_end, t_end).unwrap();
+        assert!(tail <= 0.01 * c.peak(), "channel {}: {tail:e}", i + 1);
+    }
+    let page_peaks = [1.6e6, 1.1e6, 8.6e6];
+    for (i, p) in page_peaks.iter().enumerate() {
+        let peak = r.column(&r.u_f, 3, i).fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(peak > 10.0 * p, "input {}: peak {peak:e} against the page's {p:e}", i + 1);
+    }
+}

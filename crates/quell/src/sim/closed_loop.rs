@@ -691,7 +691,8 @@ pub const BUDGET_STABILITY_MARGIN: f64 = 2.0;
 /// A healthy run takes a few steps per unit of ρ·t (the paper's example about 2 at rtol = 1e-9,
 /// 41 on the implicit path at 1000 times its stiffness onset), so the budget leaves a margin of 2.5
 /// or more; a loop that turns stiff as it blows up spends it in seconds. The delay history holds at
-/// most one record per step, so it stays below 2·N records ([`MAX_HISTORY_BYTES`] at most).
+/// most one record per step, so at most N records (twice their bytes while its ring doubles), and
+/// never more than [`Integrator::max_history_bytes`].
 pub fn default_max_steps(
     design: &Design,
     truth: &Plant,

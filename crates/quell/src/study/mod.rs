@@ -206,6 +206,15 @@ fn unsigned(key: &str, v: &toml::Value, what: &str) -> Result<u64, StudyError> {
     match v {
         toml::Value::Integer(i) if *i >= 0 => Ok(*i as u64),
         toml::Value::Integer(i) => Err(err(key, format!("expected {what}, found {i}"))),
+        // `runs = 1e12` is a float in TOML: show the value, and the integer to write.
+        toml::Value::Float(f) if f.fract() == 0.0 && (0.0..9e18).contains(f) => {
+            let shown = if *f >= 1e6 { format!("{f:e}") } else { format!("{f:.1}") };
+            let message = format!(
+                "expected {what}, found {shown}, a floating-point number; write it as an integer, {}",
+                *f as u64
+            );
+            Err(err(key, message))
+        }
         _ => Err(err(key, format!("expected {what}, found {}", kind(v)))),
     }
 }

@@ -60,6 +60,8 @@ fn study_mistakes_name_their_key() {
         ("[monte_carlo]\nseed = 1", "monte_carlo.runs: missing"),
         ("[monte_carlo]\nruns = 0", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found 0"),
         ("[monte_carlo]\nruns = -3", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found -3"),
+        ("[monte_carlo]\nruns = 1e12", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found 1e12, a floating-point number; write it as an integer, 1000000000000"),
+        ("[monte_carlo]\nruns = 2.0", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found 2.0, a floating-point number; write it as an integer, 2"),
         ("[monte_carlo]\nruns = 2\nseed = 1.5", "monte_carlo.seed: expected a seed (an integer ≥ 0), found a floating-point number"),
         ("[monte_carlo]\nruns = 2\n\"plant.A\" = { gaussian = 0.1 }", "monte_carlo.\"plant.A\".gaussian: unknown distribution; expected one of { relative = r }"),
         ("[monte_carlo]\nruns = 2\n\"plant.A\" = { relative = -0.1 }", "monte_carlo.\"plant.A\".relative: expected a spread ≥ 0, found -0.1"),

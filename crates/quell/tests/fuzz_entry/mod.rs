@@ -121,3 +121,62 @@ pub fn export(design: &Design, case: &ExportCase) -> Result<(), String> {
 pub fn names_an_export_option(message: &str) -> bool {
     ["prefix:", "precision:", "sample_time", "sample time"].iter().any(|key| message.contains(key))
 }
+
+/// A tiny LCG: the same cases on every run of a seeded test.
+pub struct Lcg(pub u64);
+
+impl Lcg {
+    pub fn below(&mut self, n: usize) -> usize {
+        self.0 = self.0.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+        ((self.0 >> 33) as usize) % n.max(1)
+    }
+}
+
+/// Values that replace a right-hand side: edges of floating point, wrong types, unicode.
+const VALUES: [&str; 16] = [
+    "1e308",
+    "-1e308",
+    "-1",
+    "0",
+    "nan",
+    "inf",
+    "-inf",
+    "9223372036854775807",
+    "-9223372036854775808",
+    "1e-320",
+    "\"x\"",
+    "true",
+    "[]",
+    "{}",
+    "\"\u{202e}é☃\"",
+    "[[1.0, \"a\"], [true]]",
+];
+
+/// `text` with one to three lines changed: deleted, its value replaced by one of [`VALUES`], or a
+/// deeply nested array or a stray unicode key inserted before it.
+pub fn mutate(text: &str, rng: &mut Lcg) -> String {
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    for _ in 0..1 + rng.below(3) {
+        let i = rng.below(lines.len());
+        match rng.below(5) {
+            0 => {
+                lines.remove(i);
+            }
+            1 | 2 => {
+                if let Some(eq) = lines[i].find('=') {
+                    let value = VALUES[rng.below(VALUES.len())];
+                    lines[i] = format!("{} {value}", &lines[i][..=eq]);
+                }
+            }
+            3 => {
+                let depth = 1 + rng.below(200);
+                lines.insert(i, format!("deep = {}1.0{}", "[".repeat(depth), "]".repeat(depth)));
+            }
+            _ => lines.insert(i, format!("\"ключ.{}\" = {}", rng.below(9), VALUES[rng.below(VALUES.len())])),
+        }
+        if lines.is_empty() {
+            break;
+        }
+    }
+    lines.join("\n")
+}
