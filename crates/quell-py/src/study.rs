@@ -36,7 +36,8 @@ use crate::simulate::PySimResult;
 /// settle : dict, optional
 ///     The settling band `{"relative": 0.02, "absolute": 0.0}`.
 /// max_steps : int, optional
-///     The solver's step budget per run (default 10,000).
+///     The solver's step budget per run (default: each run's own, derived from its problem as
+///     for `quell.simulate`).
 /// runaway : dict, optional
 ///     `{"peak": 100, "steps": 3}`: early ends of draws relative to their nominal run.
 /// simulation : dict, optional

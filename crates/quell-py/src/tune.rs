@@ -57,7 +57,8 @@ fn numbers(obj: Option<&Bound<'_, PyAny>>, name: &str, expected: &str) -> PyResu
 /// settle : dict, optional
 ///     The settling band `{"relative": 0.02, "absolute": 0.0}`.
 /// max_steps : int, optional
-///     The solver's step budget per run (default 10,000).
+///     The solver's step budget per run (default: each run's own, derived from its problem as
+///     for `quell.simulate`).
 /// simulation : dict, optional
 ///     Overrides of the scenario's simulation settings (`{"t_end": 20.0}`).
 /// jobs : int, optional

@@ -251,3 +251,45 @@ fn a_runaway_draw_is_diverged_early_and_converging_draws_are_untouched() {
         r.reason
     );
 }
+
+/// A study of a stiff loop without `max_steps`: the quadruple-tank process of `tests/data` at its
+/// nominal μ (1.4e5 times its stiffness onset) at rtol = atol = 1e-9 over its 600 s, a grid over
+/// μ₁ and two draws of its true A per point (with their nominal runs, so the runaway rule's budget
+/// applies too). Each run needs 3 to 4 times the steps of the old fixed budget of 10,000 (measured
+/// 32k at μ₁ = 1, 40k to 43k at μ₁ = 2), and completes under its own default budget, the one
+/// `quell run` gives it (`sim::default_max_steps`: its adaptation rate and the tolerance raise it;
+/// 160k and 166k), with at least the budget's stated margin of 2 to spare. The same study with
+/// `max_steps = 10000`, the old default, fails every run as too many steps.
+#[test]
+fn a_stiff_study_completes_under_each_runs_default_budget() {
+    use std::ops::ControlFlow;
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let text = "scenario = \"quadruple-tank.toml\"\n[simulation]\nrtol = 1e-9\natol = 1e-9\n\
+                [grid]\n\"design.mu[0]\" = [1.0, 2.0]\n\
+                [monte_carlo]\nruns = 2\nseed = 3\n\"truth.A\" = { relative = 0.02 }\n";
+    let study = Study::from_toml(text, Some(&dir)).unwrap();
+    assert_eq!((study.max_steps, study.len()), (None, 4));
+    let rows = sweep(&study, &SweepOptions::default()).rows;
+    for (r, spec) in rows.iter().zip(study.specs_with_nominal()) {
+        assert_eq!(r.outcome, Outcome::Completed, "run {}: {}", r.run, r.reason);
+        assert!(r.steps > 10_000, "run {}: {} steps", r.run, r.steps);
+        assert_eq!(spec.max_steps, None);
+        assert!(spec.nominal.is_some_and(|n| n.steps > 10_000), "{:?}", spec.nominal);
+        // The run alone through the front door `quell run` and Python use, under its default budget:
+        // the same steps, well within that budget.
+        let s = quell::scenario::Scenario::from_document(&spec.scenario).unwrap();
+        let d = s.design().unwrap();
+        let alone = quell::sim::Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
+        assert_eq!((alone.outcome, alone.stats.steps() as u64), (Some(quell::sim::Outcome::Completed), r.steps));
+        let integrator = quell::sim::Integrator::new(1e-9, 1e-9);
+        let budget =
+            quell::sim::default_max_steps(&d, s.true_plant(), [&s.reference, &s.disturbance], 600.0, &integrator);
+        assert!(r.steps * 2 < budget as u64, "run {}: {} steps of {budget}", r.run, r.steps);
+    }
+
+    let old = Study::from_toml(&format!("max_steps = 10000\n{text}"), Some(&dir)).unwrap();
+    for r in sweep(&old, &SweepOptions::default()).rows {
+        assert_eq!(r.outcome, Outcome::Failed);
+        assert!(r.reason.starts_with("the solver needed more than 10000 steps by t = "), "{}", r.reason);
+    }
+}

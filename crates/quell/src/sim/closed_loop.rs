@@ -654,7 +654,7 @@ pub const MAX_HISTORY_BYTES: usize = 1 << 30;
 /// Steps of the default budget per unit of ρ·t_end at [`BUDGET_TOLERANCE`] ([`default_max_steps`]).
 pub const BUDGET_STEPS_PER_RATE: f64 = 100.0;
 
-/// The default budget's least number of steps (a study's default budget, `study::MAX_STEPS`).
+/// The default budget's least number of steps.
 pub const BUDGET_MIN_STEPS: usize = 10_000;
 
 /// The tolerance at which [`BUDGET_STEPS_PER_RATE`] holds; a tighter one scales it by

@@ -145,8 +145,9 @@ pub struct Study {
     pub monte_carlo: Option<MonteCarlo>,
     pub settle: Settle,
     pub tune: Option<TuneSpec>,
-    /// The solver's step budget per continuous run (`max_steps`, default [`MAX_STEPS`]).
-    pub max_steps: usize,
+    /// The solver's step budget per continuous run (`max_steps`); `None`: each run's own default,
+    /// derived from its problem ([`crate::sim::default_max_steps`]).
+    pub max_steps: Option<usize>,
     /// `[runaway]` (defaults: [`Runaway::default`]).
     pub runaway: Runaway,
     /// Channels m of the scenario.
@@ -162,10 +163,6 @@ pub struct Study {
 
 const TOP_KEYS: &[&str] = &["scenario", "max_steps", "runaway", "simulation", "grid", "monte_carlo", "settle", "tune"];
 
-/// Default step budget of a run: 10,000 steps, 15 times what the paper's example takes at
-/// rtol = 1e-6 and 5 times at 1e-9. A run that blows up reaches it within a few simulated seconds
-/// of turning stiff, at ~60 ms of CPU (13 healthy runs), with its dense history below ~25 MB.
-pub const MAX_STEPS: usize = crate::sim::BUDGET_MIN_STEPS;
 const SETTLE_KEYS: &[&str] = &["relative", "absolute"];
 
 fn number(key: &str, v: &toml::Value, what: &str) -> Result<f64, StudyError> {
@@ -592,14 +589,14 @@ fn read_settle(doc: &toml::Table) -> Result<Settle, StudyError> {
     Ok(s)
 }
 
-/// `max_steps`: a step budget ≥ 1 ([`MAX_STEPS`] by default).
-fn read_max_steps(doc: &toml::Table) -> Result<usize, StudyError> {
+/// `max_steps`: a step budget ≥ 1 (`None` when not given: each run's own default).
+fn read_max_steps(doc: &toml::Table) -> Result<Option<usize>, StudyError> {
     const WHAT: &str = "a step budget per run (an integer ≥ 1)";
     match doc.get("max_steps") {
-        None => Ok(MAX_STEPS),
+        None => Ok(None),
         Some(v) => match unsigned("max_steps", v, WHAT)? {
             0 => Err(err("max_steps", format!("expected {WHAT}, found 0"))),
-            n => Ok(usize::try_from(n).unwrap_or(usize::MAX)),
+            n => Ok(Some(usize::try_from(n).unwrap_or(usize::MAX))),
         },
     }
 }

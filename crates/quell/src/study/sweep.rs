@@ -35,8 +35,10 @@ pub struct RunSpec {
     /// The run's scenario document: grid values and the draw's perturbations applied.
     pub scenario: toml::Table,
     pub settle: Settle,
-    /// The solver's step budget of a continuous run ([`Study::max_steps`]).
-    pub max_steps: usize,
+    /// The solver's step budget of a continuous run ([`Study::max_steps`]); `None`: the run's own
+    /// default, derived from its problem ([`sim::default_max_steps`]).
+    #[serde(default)]
+    pub max_steps: Option<usize>,
     /// The runaway rules ([`Study::runaway`]) and the grid point's nominal run they compare with;
     /// without a nominal run the rules do not apply.
     #[serde(default)]
@@ -46,17 +48,18 @@ pub struct RunSpec {
 }
 
 impl RunSpec {
-    /// The step budget and the bounds per watched signal of this run: `max_steps` and none, or
-    /// with a nominal run min(max_steps, ⌈steps · its steps⌉) and peak · its peaks (no bound on a
-    /// signal that stayed 0 there).
-    fn limits(&self) -> (usize, Option<Peaks>) {
-        match self.nominal {
-            None => (self.max_steps, None),
-            Some(n) => {
-                let budget = (self.runaway.steps * n.steps as f64).ceil() as usize;
-                (self.max_steps.min(budget), Some(n.peaks.bounds(self.runaway.peak)))
-            }
-        }
+    /// The runaway rules' limits of this run, with a nominal run: at most ⌈steps · its steps⌉
+    /// solver steps, and peak · its peaks per watched signal (no bound on a signal that stayed 0
+    /// there); `None` without one.
+    fn runaway_limits(&self) -> Option<(usize, Peaks)> {
+        self.nominal.map(|n| ((self.runaway.steps * n.steps as f64).ceil() as usize, n.peaks.bounds(self.runaway.peak)))
+    }
+
+    /// Whether a run that needed more than `max_steps` steps met the runaway rule's budget (below
+    /// the study's `max_steps`), not its own.
+    fn ran_away(&self, max_steps: usize) -> bool {
+        self.runaway_limits().is_some_and(|(steps, _)| steps == max_steps)
+            && self.max_steps.is_none_or(|given| max_steps < given)
     }
 
     /// Simulates the run's scenario within its limits (step budget, [`Runaway`] rules): the
@@ -68,10 +71,9 @@ impl RunSpec {
     /// [`RunSpec::simulate`] that `stop` ends early (checked as the run goes; the result's outcome is
     /// then [`crate::sim::Outcome::Interrupted`]): how a front end lets Ctrl-C stop one run.
     pub fn simulate_until(&self, stop: &dyn Fn() -> bool) -> Result<SimResult, String> {
-        let (budget, bounds) = self.limits();
         Scenario::from_document(&self.scenario)
             .map_err(|e| e.to_string())
-            .and_then(|s| simulate(&s, budget, bounds, stop))
+            .and_then(|s| simulate(&s, self.max_steps, self.runaway_limits(), stop))
     }
 }
 
@@ -119,20 +121,25 @@ pub struct Row {
     pub wall_ms: f64,
 }
 
-/// Simulates a scenario as its `[simulation]` says ([`Run::of`]), a continuous run
-/// within the step budget `max_steps` and the bounds `runaway` per watched signal; `Err` when it
-/// cannot start.
+/// Simulates a scenario as its `[simulation]` says ([`Run::of`]), a continuous run within the
+/// step budget `max_steps` (`None`: the run's own, [`sim::default_max_steps`]) and, given
+/// `runaway` = (steps, peaks), within at most that many steps and those peaks per watched signal;
+/// `Err` when it cannot start.
 pub(crate) fn simulate(
     s: &Scenario,
-    max_steps: usize,
-    runaway: Option<Peaks>,
+    max_steps: Option<usize>,
+    runaway: Option<(usize, Peaks)>,
     stop: &dyn Fn() -> bool,
 ) -> Result<SimResult, String> {
     let design = s.design().map_err(|e| e.to_string())?;
     let mut settings = RunSettings::of(s);
+    let t_end = settings.t_end;
     if let Loop::Continuous(integrator) = &mut settings.mode {
-        integrator.max_steps = Some(max_steps);
-        settings.runaway = runaway;
+        let signals = [&s.reference, &s.disturbance];
+        let own =
+            max_steps.unwrap_or_else(|| sim::default_max_steps(&design, s.true_plant(), signals, t_end, integrator));
+        integrator.max_steps = Some(runaway.map_or(own, |(steps, _)| own.min(steps)));
+        settings.runaway = runaway.map(|(_, peaks)| peaks);
     }
     let progress = |_t: f64| if stop() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
     Run::of(s, &design).settings(settings).simulate(progress).map_err(|e| e.to_string())
@@ -176,7 +183,7 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                 sim::Outcome::StepSizeTooSmall { t } => {
                     row.reason = format!("the solver's step size underflowed at t = {t:.6}");
                 }
-                sim::Outcome::TooManySteps { t, max_steps } if *max_steps < spec.max_steps => {
+                sim::Outcome::TooManySteps { t, max_steps } if spec.ran_away(*max_steps) => {
                     let n = spec.nominal.map_or(0, |n| n.steps);
                     row.reason = format!(
                         "step budget: more than {} × the nominal run's {n} solver steps ({max_steps}) by t = {t:.4} (the loop turned stiff: its signals grew well beyond the nominal run's; raise runaway.steps in the study file if the run is sound)",
