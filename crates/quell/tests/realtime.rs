@@ -360,7 +360,8 @@ fn example_designs() -> Vec<(&'static str, Design, f64)> {
     [("paper.toml", 1e-2), ("three-channel.toml", 5e-3), ("siso-complex.toml", 2e-2)]
         .into_iter()
         .map(|(name, T)| {
-            let text = std::fs::read_to_string(format!("{}/../../examples/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap();
+            let text =
+                std::fs::read_to_string(format!("{}/../../examples/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap();
             (name, quell::scenario::load_and_design(&text).unwrap().1, T)
         })
         .collect()
@@ -428,14 +429,21 @@ fn a_bad_state_is_refused_naming_the_entry_and_the_state_is_kept() {
     let mut nan = before.clone();
     nan[41] = f64::NAN;
     let e = ctrl.set_state(&nan).unwrap_err();
-    assert!(matches!(&e, ControllerError::BadState { index: 41, part, .. } if part == "channel 1's H filter Ω_i (33)"), "{e:?}");
+    assert!(
+        matches!(&e, ControllerError::BadState { index: 41, part, .. } if part == "channel 1's H filter Ω_i (33)"),
+        "{e:?}"
+    );
     let message = e.to_string();
     assert_eq!(message, "Controller::set_state: state[41] (channel 1's H filter Ω_i (33)) = NaN: expected a finite number (the state was left as it was)");
     assert!(DOCS.contains(&message), "docs/errors.md does not show: {message}");
     let mut asymmetric = before.clone();
     asymmetric[41] += 1.0; // Ω_1[0][4], whose mirror Ω_1[4][0] is state[37 + 4·8] = state[69]
     let e = ctrl.set_state(&asymmetric).unwrap_err().to_string();
-    assert!(e.contains("state[41] (channel 1's H filter Ω_i (33))") && e.contains("expected Ω_i exactly symmetric, equal to state[69]"), "{e}");
+    assert!(
+        e.contains("state[41] (channel 1's H filter Ω_i (33))")
+            && e.contains("expected Ω_i exactly symmetric, equal to state[69]"),
+        "{e}"
+    );
     let mut inf = before.clone();
     inf[n - 1] = f64::INFINITY;
     let e = ctrl.set_state(&inf).unwrap_err().to_string();

@@ -386,10 +386,13 @@ impl Controller {
         (self.eq.m, self.eq.q)
     }
 
-    /// Back to the initial state: every controller state and delay line zero.
+    /// Back to the initial state: every controller state and delay line zero, and so the last
+    /// step's u and u_f (all of [`Controller::state`]).
     pub fn reset(&mut self) {
         self.zv.fill(0.0);
         self.eta.fill(0.0);
+        self.u.fill(0.0);
+        self.u_f.fill(0.0);
         for ch in &mut self.channels {
             ch.W.fill(0.0);
             ch.Y.fill(0.0);
