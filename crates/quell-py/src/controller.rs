@@ -13,7 +13,9 @@ use crate::errors::{in_python, raise, Kind};
 /// The discrete-time adaptive controller of a design at sample time T_s, discretized exactly for a
 /// zero-order hold (eqs. (5), (6), (14), (20), (25), (33)); `step` costs about 1 µs from Python. One
 /// controller may be shared between threads: its calls are serialized by a lock held only while
-/// Rust steps it. It does not pickle (it is the running state of one loop).
+/// Rust steps it. It pickles and copies with its state (a checkpoint: the copy continues bit for bit
+/// as the original would), and two controllers are equal when their designs, sample times and states
+/// are.
 ///
 /// Parameters
 /// ----------
@@ -37,10 +39,18 @@ use crate::errors::{in_python, raise, Kind};
 /// Controller(m=2, q=8, sample_time=0.001)
 /// >>> c.step([0.0, 0.0], [0.0, 2.0]).shape
 /// (2,)
+/// >>> import pickle
+/// >>> copy = pickle.loads(pickle.dumps(c))
+/// >>> copy == c
+/// True
+/// >>> bool(np.array_equal(copy.step([0.1, 0.0], [0.0, 2.0]), c.step([0.1, 0.0], [0.0, 2.0])))
+/// True
 #[pyclass(module = "quell", name = "Controller", frozen)]
 pub struct PyController {
     inner: Mutex<quell::Controller>,
     m: usize,
+    /// The design it was built from, for pickling and `==`.
+    design: Py<PyDesign>,
 }
 
 impl PyController {
@@ -95,18 +105,20 @@ fn read(obj: &Bound<'_, PyAny>, name: &str, out: &mut [f64]) -> PyResult<()> {
     check(&vector(obj, name, Kind::Controller)?, out)
 }
 
+/// What `Controller.__reduce__` returns: the class, its arguments (design, T_s) and the state.
+type Reduced<'py> = (Bound<'py, PyAny>, (Py<PyDesign>, f64), Bound<'py, PyArray1<f64>>);
+
 #[pymethods]
 impl PyController {
     #[new]
     fn new(design: &Bound<'_, PyAny>, sample_time: &Bound<'_, PyAny>) -> PyResult<Self> {
         let py = design.py();
-        let d: PyRef<'_, PyDesign> =
-            design.extract().map_err(|_| crate::errors::type_error("design", "a quell.Design", design))?;
+        let d = design.cast::<PyDesign>().map_err(|_| crate::errors::type_error("design", "a quell.Design", design))?;
         let T = number(sample_time, "sample_time")?;
         let inner =
-            quell::Controller::new(&d.inner, T).map_err(|e| Kind::Scenario.err(py, in_python(e.to_string())))?;
+            quell::Controller::new(&d.get().inner, T).map_err(|e| Kind::Scenario.err(py, in_python(e.to_string())))?;
         let (m, _) = inner.dims();
-        Ok(PyController { inner: Mutex::new(inner), m })
+        Ok(PyController { inner: Mutex::new(inner), m, design: d.clone().unbind() })
     }
 
     /// One sample: reads y(k) and g(k) and returns the plant input u_f(k) = −K x̂ + F u_d (5) to hold
@@ -252,11 +264,95 @@ impl PyController {
         self.lock().sample_time()
     }
 
-    /// A controller does not pickle: it is the running state of one real-time loop.
-    fn __reduce__(&self) -> PyResult<()> {
-        Err(pyo3::exceptions::PyTypeError::new_err(
-            "cannot pickle a quell.Controller: it is the running state of one real-time loop (x̂, ξ̂, η̂ and the delay lines of the commands), which a copy would fork; pickle its Design and build Controller(design, sample_time) where it runs (it starts from reset)",
-        ))
+    /// Everything that evolves from step to step (the layout of Rust's `Controller::state`): the
+    /// observers' state z (eqs. (6), (14), (20)); per channel its G_ii filter bank W_i, the H filters
+    /// Y_i and Ω_i of (33) and its delay line, oldest row first; u (25) and u_f (5) of the last step;
+    /// η̂ (33). What pickling saves with the design and the sample time.
+    ///
+    /// Returns
+    /// -------
+    /// numpy.ndarray
+    ///     The state, a float64 vector.
+    ///
+    /// Raises
+    /// ------
+    /// This method raises nothing.
+    ///
+    /// Examples
+    /// --------
+    /// >>> c = quell.Controller(quell.paper_example().design(), 1e-2)
+    /// >>> c.__getstate__().shape
+    /// (3820,)
+    fn __getstate__<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let state = self.lock().state();
+        PyArray1::from_vec(py, state)
+    }
+
+    /// Continues from a state of `__getstate__` taken from a controller of the same design and
+    /// sample time: the next steps equal that controller's to the last bit.
+    ///
+    /// Parameters
+    /// ----------
+    /// state : array_like
+    ///     The state, as `__getstate__` returned it.
+    ///
+    /// Returns
+    /// -------
+    /// None
+    ///
+    /// Raises
+    /// ------
+    /// TypeError
+    ///     A state that is not an array of real numbers.
+    /// ControllerError
+    ///     A state of the wrong length, with an entry that is not finite, or with an Ω_i that is not
+    ///     exactly symmetric (the message names the entry); the controller is left as it was.
+    ///
+    /// Examples
+    /// --------
+    /// >>> d = quell.paper_example().design()
+    /// >>> a, b = quell.Controller(d, 1e-2), quell.Controller(d, 1e-2)
+    /// >>> _ = a.step([0.5, 0.0], [1.0, 2.0])
+    /// >>> b.__setstate__(a.__getstate__())
+    /// >>> a == b
+    /// True
+    fn __setstate__(&self, state: &Bound<'_, PyAny>) -> PyResult<()> {
+        let py = state.py();
+        let values = match state.cast::<PyArray1<f64>>() {
+            Ok(a) => a.readonly().as_array().to_vec(),
+            Err(_) => state
+                .extract::<Vec<f64>>()
+                .map_err(|_| crate::errors::type_error("state", "an array of real numbers", state))?,
+        };
+        self.lock().set_state(&values).map_err(|e| raise(py, Kind::Controller)(&e))
+    }
+
+    /// Pickles as the design, the sample time and the state: the copy continues where this one is.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Reduced<'py>> {
+        let py = slf.py();
+        let me = slf.get();
+        let T = me.lock().sample_time();
+        Ok((slf.get_type().into_any(), (me.design.clone_ref(py), T), me.__getstate__(py)))
+    }
+
+    /// Equal controllers: equal designs and sample times, and the same state to the last bit (they
+    /// step alike from here on).
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> PyResult<bool> {
+        let Ok(o) = other.cast::<PyController>() else { return Ok(false) };
+        let o = o.get();
+        // Each lock is released before the next is taken (`c == c` takes the same one twice).
+        let (T, state) = {
+            let c = self.lock();
+            (c.sample_time(), c.state())
+        };
+        let (T_o, state_o) = {
+            let c = o.lock();
+            (c.sample_time(), c.state())
+        };
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        Ok(T.to_bits() == T_o.to_bits()
+            && bits(&state) == bits(&state_o)
+            && self.design.bind(other.py()).eq(o.design.bind(other.py()))?)
     }
 
     fn __repr__(&self) -> String {

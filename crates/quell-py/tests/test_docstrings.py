@@ -22,7 +22,8 @@ def _public():
         if inspect.isclass(obj):
             out.append((name, obj, "class"))
             for member, value in vars(obj).items():
-                if member.startswith("_"):
+                # A controller's state is public API (a checkpoint), under pickle's names.
+                if member.startswith("_") and member not in ("__getstate__", "__setstate__"):
                     continue
                 if isinstance(value, property) or inspect.isgetsetdescriptor(value) or inspect.isdatadescriptor(value):
                     out.append((f"{name}.{member}", value, "property"))

@@ -353,3 +353,102 @@ fn a_spike_beyond_the_measurement_bound_is_refused_and_one_within_it_stays_finit
         assert_eq!(ctrl.step(&y, &g).unwrap(), fresh.step(&y, &g).unwrap(), "step {k} after reset");
     }
 }
+
+/// The paper's example and two plants that are not it (three channels with delays of 1/2, 1 and 2 s;
+/// one channel with complex poles), with the sample time that makes every delay whole.
+fn example_designs() -> Vec<(&'static str, Design, f64)> {
+    [("paper.toml", 1e-2), ("three-channel.toml", 5e-3), ("siso-complex.toml", 2e-2)]
+        .into_iter()
+        .map(|(name, T)| {
+            let text =
+                std::fs::read_to_string(format!("{}/../../examples/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap();
+            (name, quell::scenario::load_and_design(&text).unwrap().1, T)
+        })
+        .collect()
+}
+
+/// Sinusoidal measurements and references for channel i at sample k (the loop is open: the
+/// controller's state only has to evolve through every part, η̂ and the delay lines included).
+fn signals(m: usize, k: usize) -> (Vec<f64>, Vec<f64>) {
+    let t = k as f64 * 1e-2;
+    ((0..m).map(|i| (t * (1.0 + i as f64)).sin()).collect(), (0..m).map(|i| 1.0 + (0.3 * t + i as f64).cos()).collect())
+}
+
+#[test]
+fn a_restored_controller_continues_bit_for_bit() {
+    // The uninterrupted controller is the independent side: a copy restored from its state in the
+    // middle of a run (delay lines part-way round, η̂ adapting) must then step to the same last bit,
+    // for longer than the longest delay line, so every restored row comes back out of it.
+    for (name, design, T) in example_designs() {
+        let mut ctrl = Controller::new(&design, T).unwrap();
+        let m = ctrl.dims().0;
+        let longest = design.plant().delays.iter().map(|d| (d / T).round() as usize).max().unwrap();
+        let checkpoint = longest + longest / 3 + 7;
+        for k in 0..checkpoint {
+            let (y, g) = signals(m, k);
+            ctrl.step(&y, &g).unwrap();
+        }
+        let state = ctrl.state();
+        assert_eq!(state.len(), ctrl.state_len(), "{name}");
+        assert!(ctrl.eta().iter().any(|&e| e != 0.0), "{name}: η̂ has not moved yet");
+        let mut copy = Controller::new(&design, T).unwrap();
+        copy.set_state(&state).unwrap();
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&copy.state()), bits(&state), "{name}: state() after set_state");
+        assert_eq!(bits(copy.command()), bits(ctrl.command()), "{name}: u");
+        assert_eq!(bits(copy.x_hat()), bits(ctrl.x_hat()), "{name}: x̂");
+        for k in checkpoint..checkpoint + 2 * longest + 5 {
+            let (y, g) = signals(m, k);
+            let u_f = bits(ctrl.step(&y, &g).unwrap());
+            assert_eq!(bits(copy.step(&y, &g).unwrap()), u_f, "{name}: u_f at sample {k}");
+        }
+        assert_eq!(bits(copy.eta()), bits(ctrl.eta()), "{name}: η̂");
+        assert_eq!(bits(&copy.state()), bits(&ctrl.state()), "{name}: state at the end");
+    }
+}
+
+#[test]
+fn a_bad_state_is_refused_naming_the_entry_and_the_state_is_kept() {
+    const DOCS: &str = include_str!("../../../docs/errors.md");
+    let d = paper_design();
+    let mut ctrl = Controller::new(&d, 1e-2).unwrap();
+    for k in 0..150 {
+        let (y, g) = signals(2, k);
+        ctrl.step(&y, &g).unwrap();
+    }
+    let before = ctrl.state();
+    // The paper's layout at T_s = 0.01: z (n_z = n + q = 3 + 8 = 11: x̂ and ξ̂), then channel 1's W_1
+    // (σ_1 × (1 + q) = 2 × 9) and Y_1 (8), so Ω_1 (8 × 8) starts at 11 + 18 + 8 = 37; then its delay
+    // line (101 × 9), and channel 2's W_2 (9), Y_2, Ω_2 and line (301 × 9), u, u_f and η̂: 3820 in all.
+    let n = before.len();
+    assert_eq!(n, 11 + (18 + 8 + 64 + 909) + (9 + 8 + 64 + 2709) + 2 + 2 + 16);
+    let mut long = before.clone();
+    long.push(0.0);
+    let e = ctrl.set_state(&long).unwrap_err();
+    assert_eq!(e, ControllerError::StateLength { expected: n, found: n + 1 });
+    let mut nan = before.clone();
+    nan[41] = f64::NAN;
+    let e = ctrl.set_state(&nan).unwrap_err();
+    assert!(
+        matches!(&e, ControllerError::BadState { index: 41, part, .. } if part == "channel 1's H filter Ω_i (33)"),
+        "{e:?}"
+    );
+    let message = e.to_string();
+    assert_eq!(message, "Controller::set_state: state[41] (channel 1's H filter Ω_i (33)) = NaN: expected a finite number (the state was left as it was)");
+    assert!(DOCS.contains(&message), "docs/errors.md does not show: {message}");
+    let mut asymmetric = before.clone();
+    asymmetric[41] += 1.0; // Ω_1[0][4], whose mirror Ω_1[4][0] is state[37 + 4·8] = state[69]
+    let e = ctrl.set_state(&asymmetric).unwrap_err().to_string();
+    assert!(
+        e.contains("state[41] (channel 1's H filter Ω_i (33))")
+            && e.contains("expected Ω_i exactly symmetric, equal to state[69]"),
+        "{e}"
+    );
+    let mut inf = before.clone();
+    inf[n - 1] = f64::INFINITY;
+    let e = ctrl.set_state(&inf).unwrap_err().to_string();
+    assert!(e.starts_with(&format!("Controller::set_state: state[{}] (η̂ (33)) = inf", n - 1)), "{e}");
+    assert_eq!(ctrl.state(), before, "a refused state changed the controller");
+    let e = ctrl.set_state(&before[..10]).unwrap_err().to_string();
+    assert!(DOCS.contains(&e), "docs/errors.md does not show: {e}");
+}

@@ -39,6 +39,13 @@ pub enum ControllerError {
     /// [`Controller::reset`].
     #[error("Controller::step: the controller's state is no longer finite (an output is {value}); the inputs grew beyond what the design can follow — hold a safe input and call reset()")]
     StateNotFinite { value: f64 },
+    /// [`Controller::set_state`] was given a state of other than [`Controller::state_len`] numbers.
+    #[error("Controller::set_state: the state needs {expected} numbers for this design and sample time (the layout of Controller::state), found {found}; take it from a controller of the same design and T_s (the state was left as it was)")]
+    StateLength { expected: usize, found: usize },
+    /// [`Controller::set_state`] was given an entry that is not finite, or an Ω_i that is not
+    /// exactly symmetric; `part` names where in the layout the entry is.
+    #[error("Controller::set_state: state[{index}] ({part}) = {value:e}: expected {expected} (the state was left as it was)")]
+    BadState { index: usize, part: String, value: f64, expected: String },
 }
 
 /// Largest |y_i| and |g_i| [`Controller::step`] takes (the generated C in double likewise; in float,
@@ -379,16 +386,130 @@ impl Controller {
         (self.eq.m, self.eq.q)
     }
 
-    /// Back to the initial state: every controller state and delay line zero.
+    /// Back to the initial state: every controller state and delay line zero, and so the last
+    /// step's u and u_f (all of [`Controller::state`]).
     pub fn reset(&mut self) {
         self.zv.fill(0.0);
         self.eta.fill(0.0);
+        self.u.fill(0.0);
+        self.u_f.fill(0.0);
         for ch in &mut self.channels {
             ch.W.fill(0.0);
             ch.Y.fill(0.0);
             ch.Omega.fill(0.0);
             ch.line.clear();
         }
+    }
+}
+
+/// A part of [`Controller::state`], named in [`ControllerError::BadState`].
+#[derive(Debug, Clone, Copy)]
+enum Part {
+    Z,
+    W(usize),
+    Y(usize),
+    Omega(usize),
+    Line(usize),
+    U,
+    UF,
+    Eta,
+}
+
+impl std::fmt::Display for Part {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Part::Z => write!(f, "z, the observers' state of eqs. (6), (14), (20)"),
+            Part::W(i) => write!(f, "channel {}'s G_ii filter bank W_i", i + 1),
+            Part::Y(i) => write!(f, "channel {}'s H filter Y_i (33)", i + 1),
+            Part::Omega(i) => write!(f, "channel {}'s H filter Ω_i (33)", i + 1),
+            Part::Line(i) => write!(f, "channel {}'s delay line of [u_i, ξ̂ᵀ]", i + 1),
+            Part::U => write!(f, "the command u (25)"),
+            Part::UF => write!(f, "the plant input u_f (5)"),
+            Part::Eta => write!(f, "η̂ (33)"),
+        }
+    }
+}
+
+impl Controller {
+    /// The parts of [`Controller::state`] in its order; a delay line from its oldest row, u_i(k − d_i).
+    fn state_parts(&self) -> Vec<(Part, &[f64])> {
+        let mut parts = vec![(Part::Z, &self.zv[..self.eq.nz])];
+        for (i, ch) in self.channels.iter().enumerate() {
+            let oldest = ch.line.head * ch.line.width;
+            parts.extend([
+                (Part::W(i), &ch.W[..]),
+                (Part::Y(i), &ch.Y[..]),
+                (Part::Omega(i), &ch.Omega[..]),
+                (Part::Line(i), &ch.line.data[oldest..]),
+                (Part::Line(i), &ch.line.data[..oldest]),
+            ]);
+        }
+        parts.extend([(Part::U, &self.u[..]), (Part::UF, &self.u_f[..]), (Part::Eta, &self.eta[..])]);
+        parts
+    }
+
+    /// Everything that evolves from step to step, a checkpoint for [`Controller::set_state`]:
+    /// z (the observers of eqs. (6), (14), (20), n_z); then per channel i the G_ii filter bank
+    /// W_i (σ_i × (1 + q), row-major), the H filters Y_i (q) and Ω_i (q × q, row-major) of (33) and
+    /// the delay line's d_i + 1 rows [u_i, ξ̂ᵀ], oldest first; then u (25) and u_f (5) of the last
+    /// step (m each) and η̂_1, …, η̂_m (33, m·q). Allocates the vector.
+    pub fn state(&self) -> Vec<f64> {
+        self.state_parts().into_iter().flat_map(|(_, p)| p).copied().collect()
+    }
+
+    /// The length of [`Controller::state`].
+    pub fn state_len(&self) -> usize {
+        self.state_parts().iter().map(|(_, p)| p.len()).sum()
+    }
+
+    /// Continues from a checkpoint: `state` from [`Controller::state`] of a controller of the same
+    /// design and sample time, after which this one steps bit for bit as that one would have. A state
+    /// of another length ([`ControllerError::StateLength`]), with an entry that is not finite, or
+    /// with an Ω_i that is not exactly symmetric ([`ControllerError::BadState`]) is an error, and
+    /// the state is left as it was.
+    pub fn set_state(&mut self, state: &[f64]) -> Result<(), ControllerError> {
+        let (q, parts) = (self.eq.q, self.state_parts());
+        let expected = parts.iter().map(|(_, p)| p.len()).sum();
+        if state.len() != expected {
+            return Err(ControllerError::StateLength { expected, found: state.len() });
+        }
+        let mut at = 0;
+        for (part, p) in parts {
+            let bad = |index: usize, expected: String| {
+                let part = part.to_string();
+                Err(ControllerError::BadState { index, part, value: state[index], expected })
+            };
+            let s = &state[at..at + p.len()];
+            if let Some(k) = s.iter().position(|v| !v.is_finite()) {
+                return bad(at + k, "a finite number".into());
+            }
+            let asymmetric = |&(r, c): &(usize, usize)| s[r * q + c].to_bits() != s[c * q + r].to_bits();
+            if let Part::Omega(_) = part {
+                if let Some((r, c)) = (0..q * q).map(|k| (k / q, k % q)).find(asymmetric) {
+                    return bad(at + r * q + c, format!("Ω_i exactly symmetric, equal to state[{}]", at + c * q + r));
+                }
+            }
+            at += p.len();
+        }
+        // The order of `state_parts`, with each delay line's oldest row moved to the front.
+        let mut rest = state;
+        let mut fill = |into: &mut [f64]| {
+            let (head, tail) = rest.split_at(into.len());
+            into.copy_from_slice(head);
+            rest = tail;
+        };
+        fill(&mut self.zv[..self.eq.nz]);
+        for ch in &mut self.channels {
+            fill(&mut ch.W);
+            fill(&mut ch.Y);
+            fill(&mut ch.Omega);
+            fill(&mut ch.line.data);
+            ch.line.head = 0;
+        }
+        fill(&mut self.u);
+        fill(&mut self.u_f);
+        fill(&mut self.eta);
+        Ok(())
     }
 }
 
