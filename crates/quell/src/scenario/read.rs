@@ -119,15 +119,23 @@ impl<'a> Value<'a, '_> {
 
     /// A finite number; integers are accepted.
     pub(crate) fn number(&self) -> Result<f64, ScenarioError> {
+        match self.value {
+            toml::Value::Float(_) | toml::Value::Integer(_) => self.finite("a finite number"),
+            _ => Err(self.found("a number")),
+        }
+    }
+
+    /// A finite number (integers accepted), refused as "expected `what`, found …".
+    pub(crate) fn finite(&self, what: &str) -> Result<f64, ScenarioError> {
         let x = match self.value {
             toml::Value::Float(x) => *x,
             toml::Value::Integer(i) => *i as f64,
-            _ => return Err(self.found("a number")),
+            _ => return Err(self.found(what)),
         };
         if x.is_finite() {
             Ok(x)
         } else {
-            Err(err(self.key, format!("expected a finite number, found {x}")))
+            Err(err(self.key, format!("expected {what}, found {x}")))
         }
     }
 

@@ -20,6 +20,7 @@ use std::sync::OnceLock;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+use crate::scenario::read::Value;
 use crate::scenario::{kind, Scenario, PAPER_EXAMPLE};
 pub use crate::sim::settle::Settle;
 use crate::sim::Peaks;
@@ -165,17 +166,9 @@ const TOP_KEYS: &[&str] = &["scenario", "max_steps", "runaway", "simulation", "g
 
 const SETTLE_KEYS: &[&str] = &["relative", "absolute"];
 
+/// A finite number at `key`: the scenario reader's check, with `what` in its refusal.
 fn number(key: &str, v: &toml::Value, what: &str) -> Result<f64, StudyError> {
-    let x = match v {
-        toml::Value::Float(x) => *x,
-        toml::Value::Integer(i) => *i as f64,
-        _ => return Err(err(key, format!("expected {what}, found {}", kind(v)))),
-    };
-    if x.is_finite() {
-        Ok(x)
-    } else {
-        Err(err(key, format!("expected {what}, found {x}")))
-    }
+    Ok(Value { key, value: v }.finite(what)?)
 }
 
 fn non_negative(key: &str, v: &toml::Value, what: &str) -> Result<f64, StudyError> {
