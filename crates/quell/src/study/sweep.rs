@@ -136,9 +136,16 @@ pub(crate) fn simulate(
     let t_end = settings.t_end;
     if let Loop::Continuous(integrator) = &mut settings.mode {
         let signals = [&s.reference, &s.disturbance];
+        let given = integrator.clone();
         let own =
-            max_steps.unwrap_or_else(|| sim::default_max_steps(&design, s.true_plant(), signals, t_end, integrator));
-        integrator.max_steps = Some(runaway.map_or(own, |(steps, _)| own.min(steps)));
+            || max_steps.unwrap_or_else(|| sim::default_max_steps(&design, s.true_plant(), signals, t_end, &given));
+        integrator.max_steps = Some(match runaway {
+            // The default is never below BUDGET_MIN_STEPS: a runaway budget within it decides alone
+            // (and a Monte Carlo draw skips the averaged law the default needs).
+            Some((steps, _)) if max_steps.is_none() && steps <= sim::BUDGET_MIN_STEPS => steps,
+            Some((steps, _)) => own().min(steps),
+            None => own(),
+        });
         settings.runaway = runaway.map(|(_, peaks)| peaks);
     }
     let progress = |_t: f64| if stop() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
