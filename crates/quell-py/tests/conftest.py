@@ -20,6 +20,29 @@ def quell_bin():
     return path
 
 
+@pytest.fixture
+def python_child():
+    """Starts `python -c code` and waits for its 'ready' line. The child's SIGINT is set to its default
+    first: a runner started in the background without job control (`cmd &` in a script) ignores SIGINT,
+    its children inherit that, and Python then installs no KeyboardInterrupt for a test to send."""
+    import signal
+    import subprocess
+    import sys
+
+    def start(code):
+        child = subprocess.Popen(
+            [sys.executable, "-c", code],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+        )
+        assert child.stdout.readline().strip() == "ready"
+        return child
+
+    return start
+
+
 @pytest.fixture(scope="session")
 def reference_points():
     """y and u of the paper's example from an independent solver (crates/quell/tests/data/, see its README)."""

@@ -35,15 +35,12 @@ def test_two_threads_run_four_simulations_in_parallel():
     assert all((r.y == first.y).all() for _, r in runs)
 
 
-def test_ctrl_c_stops_a_running_simulation():
+def test_ctrl_c_stops_a_running_simulation(python_child):
     """SIGINT during simulate (GIL released, in Rust) raises KeyboardInterrupt within ~0.1 s."""
     import signal
-    import subprocess
-    import sys
 
     code = "import quell; print('ready', flush=True); quell.simulate(quell.paper_example(), t_end=1e5, output_step=1.0)"
-    child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    assert child.stdout.readline().strip() == "ready"
+    child = python_child(code)
     time.sleep(0.5)  # into the run, which takes tens of seconds
     sent = time.perf_counter()
     child.send_signal(signal.SIGINT)
@@ -87,7 +84,7 @@ def test_one_controller_shared_by_threads_serializes_its_steps():
     np.testing.assert_array_equal(shared.x_hat(), alone.x_hat())
 
 
-def test_ctrl_c_stops_a_large_design():
+def test_ctrl_c_stops_a_large_design(python_child):
     """SIGINT during quell.design of a 500-state plant (seconds of pole placement: 2 outputs place
     500 observer poles, which KNV0 sweeps and then refuses) raises KeyboardInterrupt promptly, not
     when the design returns.
@@ -100,8 +97,6 @@ def test_ctrl_c_stops_a_large_design():
     code). 6 s tells an interrupted design from one that ran to its end with a wide margin on both
     sides; a design that ignored SIGINT would report its whole 15.9 s."""
     import signal
-    import subprocess
-    import sys
 
     code = (
         "import time, numpy as np, quell\n"
@@ -121,9 +116,8 @@ def test_ctrl_c_stops_a_large_design():
         "    raise\n"
         "print('finished', flush=True)\n"
     )
-    child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    child = python_child(code)
     try:
-        assert child.stdout.readline().strip() == "ready"
         time.sleep(1.0)  # into the design
         child.send_signal(signal.SIGINT)
         out, err = child.communicate(timeout=300)  # the uninterrupted design takes ~1 min at load 10

@@ -7,7 +7,6 @@ far; plus Ctrl-C during quell.run_one."""
 import pickle
 import signal
 import subprocess
-import sys
 import textwrap
 import time
 
@@ -108,11 +107,10 @@ def test_bad_arguments_are_named_as_python_spells_them():
         quell.tune(s, mu=[1.0, 2.0], jobs=0)
 
 
-def interrupt(code, wait):
-    """Runs `code` in a child Python, sends SIGINT `wait` seconds after it prints 'ready', and returns
-    its stdout, stderr and the seconds from the signal to its exit."""
-    child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    assert child.stdout.readline().strip() == "ready"
+def interrupt(python_child, code, wait):
+    """Runs `code` in a child Python (the `python_child` fixture), sends SIGINT `wait` seconds after it
+    prints 'ready', and returns its stdout, stderr and the seconds from the signal to its exit."""
+    child = python_child(code)
     time.sleep(wait)
     sent = time.perf_counter()
     child.send_signal(signal.SIGINT)
@@ -120,7 +118,7 @@ def interrupt(code, wait):
     return out, err, time.perf_counter() - sent
 
 
-def test_ctrl_c_stops_a_tuning_keeping_the_points_so_far():
+def test_ctrl_c_stops_a_tuning_keeping_the_points_so_far(python_child):
     """Uninterrupted, this tuning takes minutes (2 × 400 runs of 200 s); interrupted after 3 s, the
     KeyboardInterrupt carries the evaluations made (a paper-example run of 200 s takes well under
     a second even at load 10) and arrives within the 10 s allowed for a loaded machine."""
@@ -134,14 +132,14 @@ def test_ctrl_c_stops_a_tuning_keeping_the_points_so_far():
         except KeyboardInterrupt as e:
             print('partial', e.result.partial, len(e.result), e.result.joint is None, flush=True)
         """)
-    out, err, seconds = interrupt(code, 3.0)
+    out, err, seconds = interrupt(python_child, code, 3.0)
     assert "finished" not in out, out
     words = out.split()
     assert words[:2] == ["partial", "True"] and int(words[2]) >= 1 and words[3] == "True", (out, err)
     assert seconds < 10
 
 
-def test_ctrl_c_stops_run_one_and_a_specs_simulation():
+def test_ctrl_c_stops_run_one_and_a_specs_simulation(python_child):
     """A run of 10⁵ s (tens of seconds) stopped after 1 s raises KeyboardInterrupt within 10 s."""
     for call in ("quell.run_one(spec)", "spec.simulate()"):
         code = textwrap.dedent(f"""\
@@ -153,6 +151,6 @@ def test_ctrl_c_stops_run_one_and_a_specs_simulation():
             {call}
             print('finished', flush=True)
             """)
-        out, err, seconds = interrupt(code, 1.0)
+        out, err, seconds = interrupt(python_child, code, 1.0)
         assert "KeyboardInterrupt" in err and "finished" not in out, (call, out, err)
         assert seconds < 10, call
