@@ -131,7 +131,13 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &SimResult, i: usiz
         &[(format!("g{c} (reference)"), col(&r.g)), (format!("y{c}"), col(&r.y))],
     )?;
     panel(&areas[1], &format!("Channel {c}: tracking error"), "e = y − g", &[(format!("e{c}"), col(&r.e))])?;
-    panel(&areas[2], &format!("Channel {c}: adaptive command (25)"), "u", &[(format!("u{c}"), col(&r.u))])?;
+    // The plant input u_f (5) beside the adaptive command u (25): u_f is what the actuator must deliver.
+    panel(
+        &areas[2],
+        &format!("Channel {c}: adaptive command (25) and plant input (5)"),
+        "u, u_f",
+        &[(format!("u{c} (command)"), col(&r.u)), (format!("uf{c} (plant input)"), col(&r.u_f))],
+    )?;
     let etas: Vec<Series> = (0..r.q)
         .map(|j| {
             let pts = r.t.iter().copied().zip(r.eta.iter().skip(i * r.q + j).step_by(r.m * r.q).copied()).collect();

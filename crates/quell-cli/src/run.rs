@@ -203,9 +203,24 @@ const RUNAWAY_HINT: &str = "the loop turned stiff, as a loop blowing up does bef
 /// Channel i's convergence figures and advice, under its line of figures.
 fn report_diagnostics(d: &ChannelDiagnostics) {
     let trend = d.tail_trend.map_or(String::new(), |r| format!(", tail RMS ratio (last two tenths) {r:.2}"));
+    // A singular Ω̄ (fewer excited directions than q) gives 1/(μλ_min) = ∞; the error does not depend
+    // on the unexcited directions, so the excited ones' slowest time is the one that matters.
+    let convergence = if d.convergence_time.is_finite() {
+        format!("{:.3e} s", d.convergence_time)
+    } else {
+        "∞ (Ω̄ singular)".into()
+    };
+    let excited = if d.convergence_time_excited != d.convergence_time && d.convergence_time_excited.is_finite() {
+        format!(
+            "; the {} excited directions (the error depends on these alone) converge in 1/(μλ_min,excited) = {:.3e} s",
+            d.excited_rank, d.convergence_time_excited
+        )
+    } else {
+        String::new()
+    };
     eprintln!(
-        "  Ω̄: λ_min = {:.3e}, λ_max = {:.3e}; convergence time 1/(μλ_min) = {:.3e} s, adaptation rate μλ_max = {:.3e}/s{trend}",
-        d.lambda_min_omega, d.lambda_max_omega, d.convergence_time, d.adaptation_rate
+        "  Ω̄: λ_min = {:.3e}, λ_max = {:.3e}; convergence time 1/(μλ_min) = {convergence}, adaptation rate μλ_max = {:.3e}/s{excited}{trend}",
+        d.lambda_min_omega, d.lambda_max_omega, d.adaptation_rate
     );
     for line in &d.advice {
         eprintln!("  advice: {line}");

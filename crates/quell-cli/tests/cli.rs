@@ -276,6 +276,11 @@ fn run_paper_example_writes_every_file() {
     let dir = temp_dir("run-paper");
     let o = quell(&["run", "--out", dir.path().to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    // The report's convergence line: g and ω have the modes 0, ±1j and ±2j rad/s, five of the q = 8
+    // regressor directions, so Ω̄_i is singular and the excited directions' time is the one given.
+    let report = stderr(&o);
+    assert_eq!(report.matches("1/(μλ_min) = ∞ (Ω̄ singular)").count(), 2, "{report}");
+    assert_eq!(report.matches("the 5 excited directions").count(), 2, "{report}");
 
     // signals.csv: the header, and one row per t = k·0.1, k = 0..=1000.
     let csv = fs::read_to_string(dir.path().join("signals.csv")).unwrap();
@@ -329,6 +334,10 @@ fn run_paper_example_writes_every_file() {
         let head = svg.trim_start();
         assert!(head.starts_with("<svg") || head.starts_with("<?xml"), "channel{c}.svg starts with {:?}", &head[..20]);
         assert!(svg.len() > 10_000 && svg.trim_end().ends_with("</svg>"), "channel{c}.svg is truncated");
+        // The actuator signal u_f (5) is drawn beside the adaptive command u (25).
+        for label in [format!("u{c} (command)"), format!("uf{c} (plant input)")] {
+            assert!(svg.contains(&label), "channel{c}.svg has no series {label:?}");
+        }
     }
     assert!(leftovers(dir.path()).is_empty(), "temporary files left: {:?}", leftovers(dir.path()));
     assert!(!dir.path().join("channel3.png").exists());

@@ -144,6 +144,11 @@ def test_to_pandas_and_plot():
     fig = r.plot(channel=2)
     assert len(fig.axes) == 4
     assert fig.axes[0].get_title() == "Channel 2: output and reference"
+    # The actuator signal u_f (5) is drawn beside the command u (25): both of channel 2's columns.
+    command, plant_input = fig.axes[2].lines
+    np.testing.assert_array_equal(command.get_ydata(), r.u[:, 1])
+    np.testing.assert_array_equal(plant_input.get_ydata(), r.u_f[:, 1])
+    assert not np.array_equal(r.u[:, 1], r.u_f[:, 1])
     with pytest.raises(ValueError, match="channel"):
         r.plot(channel=3)
 

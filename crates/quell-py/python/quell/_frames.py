@@ -72,8 +72,9 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None):
     if len(axes) == 4:
         axes[1].plot(t, result.e[:, i], label=f"e{c}")
         axes[1].set(title=f"Channel {c}: tracking error", ylabel="e = y − g")
-        axes[2].plot(t, result.u[:, i], label=f"u{c}")
-        axes[2].set(title=f"Channel {c}: adaptive command (25)", ylabel="u")
+        axes[2].plot(t, result.u[:, i], label=f"u{c} (command)")
+        axes[2].plot(t, result.u_f[:, i], label=f"uf{c} (plant input)")
+        axes[2].set(title=f"Channel {c}: adaptive command (25) and plant input (5)", ylabel="u, u_f")
         for j in range(result.q):
             axes[3].plot(t, result.eta[:, i, j], label=f"η{c}_{j + 1}")
         axes[3].set(title=f"Channel {c}: adjustable parameters (33)", ylabel="η", xlabel="t")
