@@ -11,7 +11,7 @@ use quell::sim::SimResult;
 
 use crate::output::write_atomic;
 
-const SIZE: (u32, u32) = (1000, 1150);
+const SIZE: (u32, u32) = (1000, 1400);
 static FONT: Once = Once::new();
 
 fn register_font() {
@@ -123,7 +123,7 @@ fn panel<DB: DrawingBackend>(
 fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &SimResult, i: usize) -> Result<(), String> {
     let col = |sig: &[f64]| r.t.iter().copied().zip(r.column(sig, r.m, i)).collect::<Vec<_>>();
     let c = i + 1;
-    let areas = root.split_evenly((4, 1));
+    let areas = root.split_evenly((5, 1));
     panel(
         &areas[0],
         &format!("Channel {c}: output and reference"),
@@ -131,12 +131,14 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &SimResult, i: usiz
         &[(format!("g{c} (reference)"), col(&r.g)), (format!("y{c}"), col(&r.y))],
     )?;
     panel(&areas[1], &format!("Channel {c}: tracking error"), "e = y − g", &[(format!("e{c}"), col(&r.e))])?;
-    // The plant input u_f (5) beside the adaptive command u (25): u_f is what the actuator must deliver.
+    panel(&areas[2], &format!("Channel {c}: adaptive command (25)"), "u", &[(format!("u{c}"), col(&r.u))])?;
+    // The plant input u_f (5), what the actuator must deliver, in its own panel: in a plant's units
+    // (newtons, volts) it can be 1e5 times u.
     panel(
-        &areas[2],
-        &format!("Channel {c}: adaptive command (25) and plant input (5)"),
-        "u, u_f",
-        &[(format!("u{c} (command)"), col(&r.u)), (format!("uf{c} (plant input)"), col(&r.u_f))],
+        &areas[3],
+        &format!("Channel {c}: plant input u_f (5), what the actuator delivers"),
+        "u_f",
+        &[(format!("uf{c}"), col(&r.u_f))],
     )?;
     let etas: Vec<Series> = (0..r.q)
         .map(|j| {
@@ -144,7 +146,7 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &SimResult, i: usiz
             (format!("η{c}_{}", j + 1), pts)
         })
         .collect();
-    panel(&areas[3], &format!("Channel {c}: adjustable parameters (33)"), "η", &etas)?;
+    panel(&areas[4], &format!("Channel {c}: adjustable parameters (33)"), "η", &etas)?;
     root.present().map_err(|e| e.to_string())
 }
 

@@ -342,19 +342,20 @@ impl PySimResult {
     fn to_pandas(slf: &Bound<'_, Self>) -> PyResult<Py<PyAny>> {
         Ok(slf.py().import("quell._frames")?.call_method1("to_pandas", (slf,))?.unbind())
     }
-    /// The CLI's figure of one channel, like the paper's Figs. 1 and 2: y_i with g_i, e_i, u_i and η̂_i
-    /// against t, in four panels.
+    /// The CLI's figure of one channel, like the paper's Figs. 1 and 2: y_i with g_i, e_i, the command
+    /// u_i (25), the plant input u_f,i (5) and η̂_i against t, in five panels.
     ///
     /// Parameters
     /// ----------
     /// channel : int, optional
     ///     The channel, from 1 (default 1).
-    /// ax : matplotlib Axes or sequence of four, optional
-    ///     One Axes (y_i and g_i only are drawn on it) or four (every panel).
+    /// ax : matplotlib Axes or sequence of five or four, optional
+    ///     One Axes (y_i and g_i only are drawn on it), five (every panel) or four (u_f,i on a second
+    ///     y axis of the third).
     /// figsize : (float, float), optional
-    ///     Size of a new figure in inches (default (10, 11.5)).
+    ///     Size of a new figure in inches (default (10, 14)).
     /// fig : matplotlib Figure, optional
-    ///     A figure to add the four panels to.
+    ///     A figure to add the five panels to.
     ///
     /// Returns
     /// -------

@@ -142,10 +142,10 @@ def test_to_pandas_and_plot():
     assert list(df.columns[:9]) == ["t", "y1", "y2", "g1", "g2", "e1", "e2", "u1", "u2"]
     assert df.columns[-1] == "eta2_8" and len(df) == len(r)
     fig = r.plot(channel=2)
-    assert len(fig.axes) == 4
+    assert len(fig.axes) == 5
     assert fig.axes[0].get_title() == "Channel 2: output and reference"
-    # The actuator signal u_f (5) is drawn beside the command u (25): both of channel 2's columns.
-    command, plant_input = fig.axes[2].lines
+    # The actuator signal u_f (5) has its own panel after the command u's (25): channel 2's columns.
+    (command,), (plant_input,) = fig.axes[2].lines, fig.axes[3].lines
     np.testing.assert_array_equal(command.get_ydata(), r.u[:, 1])
     np.testing.assert_array_equal(plant_input.get_ydata(), r.u_f[:, 1])
     assert not np.array_equal(r.u[:, 1], r.u_f[:, 1])

@@ -49,15 +49,19 @@ def test_plot_takes_axes_and_figsize():
 
     r = quell.simulate(quell.paper_example(), t_end=1.0)
     fig = r.plot(channel=2, figsize=(4, 5))
-    assert tuple(fig.get_size_inches()) == (4.0, 5.0) and len(fig.axes) == 4
+    assert tuple(fig.get_size_inches()) == (4.0, 5.0) and len(fig.axes) == 5
     own, one = plt.subplots()
     assert r.plot(channel=1, ax=one) is own
     np.testing.assert_array_equal(one.lines[1].get_ydata(), r.y[:, 0])  # y1 drawn on the given axes
     own4, four = plt.subplots(2, 2)
     assert r.plot(ax=four) is own4 and four[1, 1].get_title().startswith("Channel 1: adjustable")
+    # On four axes u_f shares the third on a second y axis (its own scale), drawn from r.u_f.
+    twin = [a for a in own4.axes if a not in four.flat]
+    assert len(twin) == 1 and twin[0].get_ylabel() == "u_f"
+    np.testing.assert_array_equal(twin[0].lines[0].get_ydata(), r.u_f[:, 0])
     with pytest.raises(TypeError, match="channel: expected an int"):
         r.plot(channel="2")
-    with pytest.raises(TypeError, match="ax: expected one matplotlib Axes or four"):
+    with pytest.raises(TypeError, match="ax: expected one matplotlib Axes, four or five"):
         r.plot(ax=[one, one])
     plt.close("all")
 

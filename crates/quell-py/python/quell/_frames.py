@@ -31,12 +31,13 @@ def to_pandas(result):
 
 
 def plot(result, channel=1, fig=None, ax=None, figsize=None):
-    """Channel ``channel`` (1-based; None is 1) in the four panels of the CLI's figure, like the paper's
-    Figs. 1 and 2: y_i with g_i, e_i = y_i - g_i, u_i, and eta_i against t.
+    """Channel ``channel`` (1-based; None is 1) in the five panels of the CLI's figure, like the paper's
+    Figs. 1 and 2: y_i with g_i, e_i = y_i - g_i, the command u_i (25), the plant input u_f,i (5) and
+    eta_i against t.
 
-    ``ax``: one matplotlib Axes (then only y_i and g_i are drawn, on it) or four (the four panels);
-    otherwise a new figure of ``figsize`` (default (10, 11.5)), or the panels are added to ``fig``.
-    Returns the Figure."""
+    ``ax``: one matplotlib Axes (then only y_i and g_i are drawn, on it), five (the five panels) or
+    four (u_f,i then shares the third panel on a second y axis of its own scale); otherwise a new
+    figure of ``figsize`` (default (10, 14)), or the panels are added to ``fig``. Returns the Figure."""
     try:
         import matplotlib.pyplot as plt
     except ImportError as e:
@@ -57,30 +58,41 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None):
         raise TypeError(f"fig: expected a matplotlib Figure, found a {type(fig).__name__}")
     if ax is not None:
         axes = list(ax.flat) if hasattr(ax, "flat") else list(ax) if isinstance(ax, (list, tuple)) else [ax]
-        if len(axes) not in (1, 4) or not all(hasattr(a, "plot") for a in axes):
-            found = f"{len(axes)} entries" if len(axes) not in (1, 4) else "entries that are not Axes"
+        if len(axes) not in (1, 4, 5) or not all(hasattr(a, "plot") for a in axes):
+            found = f"{len(axes)} entries" if len(axes) not in (1, 4, 5) else "entries that are not Axes"
             if not isinstance(ax, (list, tuple)) and not hasattr(ax, "flat"):
                 found = f"a {type(ax).__name__}"
-            raise TypeError(f"ax: expected one matplotlib Axes or four, found {found}")
+            raise TypeError(f"ax: expected one matplotlib Axes, four or five, found {found}")
         fig = axes[0].figure
     else:
-        fig = fig if fig is not None else plt.figure(figsize=figsize if figsize is not None else (10, 11.5))
-        axes = fig.subplots(4, 1, sharex=True)
+        fig = fig if fig is not None else plt.figure(figsize=figsize if figsize is not None else (10, 14))
+        axes = fig.subplots(5, 1, sharex=True)
     axes[0].plot(t, result.g[:, i], "--", label=f"g{c} (reference)")
     axes[0].plot(t, result.y[:, i], label=f"y{c}")
     axes[0].set(title=f"Channel {c}: output and reference", ylabel="y, g")
-    if len(axes) == 4:
+    if len(axes) > 1:
         axes[1].plot(t, result.e[:, i], label=f"e{c}")
         axes[1].set(title=f"Channel {c}: tracking error", ylabel="e = y − g")
-        axes[2].plot(t, result.u[:, i], label=f"u{c} (command)")
-        axes[2].plot(t, result.u_f[:, i], label=f"uf{c} (plant input)")
-        axes[2].set(title=f"Channel {c}: adaptive command (25) and plant input (5)", ylabel="u, u_f")
+        axes[2].plot(t, result.u[:, i], label=f"u{c}")
+        axes[2].set(title=f"Channel {c}: adaptive command (25)", ylabel="u")
+        # u_f in a plant's units (newtons, volts) can be 1e5 times u: its own panel, or its own scale.
+        if len(axes) == 5:
+            uf_ax = axes[3]
+            uf_ax.set(title=f"Channel {c}: plant input u_f (5), what the actuator delivers")
+        else:
+            uf_ax = axes[2].twinx()
+            axes[2].set(title=f"Channel {c}: adaptive command (25) and plant input (5, right axis)")
+        uf_ax.plot(t, result.u_f[:, i], color="C1", label=f"uf{c}")
+        uf_ax.set(ylabel="u_f")
+        eta_ax = axes[-1]
         for j in range(result.q):
-            axes[3].plot(t, result.eta[:, i, j], label=f"η{c}_{j + 1}")
-        axes[3].set(title=f"Channel {c}: adjustable parameters (33)", ylabel="η", xlabel="t")
+            eta_ax.plot(t, result.eta[:, i, j], label=f"η{c}_{j + 1}")
+        eta_ax.set(title=f"Channel {c}: adjustable parameters (33)", ylabel="η", xlabel="t")
+        if len(axes) == 4:
+            uf_ax.legend(loc="lower right", fontsize="small")
     for a in axes:
         a.grid(True, alpha=0.3)
-        a.legend(loc="upper right", fontsize="small", ncol=1 + (len(axes) == 4 and a is axes[3]) * 2)
+        a.legend(loc="upper right", fontsize="small", ncol=1 + (len(axes) > 1 and a is axes[-1]) * 2)
     if ax is None:
         fig.tight_layout()
     return fig
