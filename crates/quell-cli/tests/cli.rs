@@ -335,9 +335,7 @@ fn run_paper_example_writes_every_file() {
         assert!(head.starts_with("<svg") || head.starts_with("<?xml"), "channel{c}.svg starts with {:?}", &head[..20]);
         assert!(svg.len() > 10_000 && svg.trim_end().ends_with("</svg>"), "channel{c}.svg is truncated");
         // The actuator signal u_f (5) has its panel beside the adaptive command u's (25).
-        for label in
-            ["adaptive command (25)".to_string(), "plant input u_f (5)".into(), format!("uf{c}")]
-        {
+        for label in ["adaptive command (25)".to_string(), "plant input u_f (5)".into(), format!("uf{c}")] {
             assert!(svg.contains(&label), "channel{c}.svg has no series {label:?}");
         }
     }
