@@ -109,15 +109,25 @@ fn panel<DB: DrawingBackend>(
             .label(name.clone())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
     }
+    // A panel's legend holds about eight entries at 14 px and fourteen at 10 px; beyond that (η̂ of
+    // a large regressor) it would spill out of the panel, and the colours are the only key.
+    let font = match series.len() {
+        0..=8 => 14,
+        9..=MAX_LEGEND => 10,
+        _ => return Ok(()),
+    };
     chart
         .configure_series_labels()
         .position(SeriesLabelPosition::UpperRight)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
-        .label_font(("sans-serif", 14))
+        .label_font(("sans-serif", font))
         .draw()
         .map_err(|e| e.to_string())
 }
+
+/// The most series a panel's legend lists ([`panel`]).
+const MAX_LEGEND: usize = 14;
 
 /// Draws channel i's figure (on a white background, see [`write_figure`]).
 fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &SimResult, i: usize) -> Result<(), String> {
@@ -146,7 +156,12 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &SimResult, i: usiz
             (format!("η{c}_{}", j + 1), pts)
         })
         .collect();
-    panel(&areas[4], &format!("Channel {c}: adjustable parameters (33)"), "η", &etas)?;
+    let title = if etas.len() > MAX_LEGEND {
+        format!("Channel {c}: adjustable parameters (33), η{c}_1 … η{c}_{} in the palette's order", etas.len())
+    } else {
+        format!("Channel {c}: adjustable parameters (33)")
+    };
+    panel(&areas[4], &title, "η", &etas)?;
     root.present().map_err(|e| e.to_string())
 }
 
