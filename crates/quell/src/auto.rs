@@ -22,8 +22,18 @@
 //!   reference's peak by the target convergence time (t_end/20 by default), with μ_i λ_max
 //!   at most [`MAX_RATE_PER_SCALE`]·r and a tenth of the pace estimate's stiffness threshold;
 //! * verification: the scenario is simulated; a channel whose tail error exceeds 1 % of its
-//!   reference's peak gets 4× its μ (up to three times, never beyond the stiffness threshold); a
-//!   channel whose plant input |u_f,i| exceeds the actuator limit gets half its μ;
+//!   reference's peak gets 4× its μ (up to three times, never beyond the stiffness threshold);
+//! * relaxation: the first proposal's poles and μ are the fastest the rules justify, not the
+//!   cheapest that converge. When it passes, slower candidates follow in three phases, each from the
+//!   candidate kept so far: the observer's own poles (not the plant's zeros it holds) × 2^−k, then
+//!   the channel poles with them, then μ, k ≤ [`RELAX_STEPS`], μ re-chosen by its rule, one run each;
+//!   a phase stops at a tail beyond [`TAIL_BOUND`] / [`TAIL_MARGIN`]. Kept: the least steps ×
+//!   max(tail/bound, [`TAIL_FLOOR`])^[`TAIL_EXPONENT`]. An observer that holds the zeros of (A, D, C)
+//!   keeps the frequencies it passes within [`crate::diagnostics::FIDELITY_LIMIT`] there. At most
+//!   4 + 3·[`RELAX_STEPS`] runs;
+//! * actuator limit ([`Targets::u_limit`]): candidates beyond it are not kept, and the phases go on
+//!   while none is within it; the first within it needs only the bound. None within: the
+//!   verification fails with the smallest max |u_f| reached;
 //! * a failed verification says why when it can: a horizon shorter than [`SEPARATION_BEATS`] beats
 //!   of the two closest frequencies cannot tell them apart, and the advice proposes the t_end
 //!   that can.
@@ -36,7 +46,7 @@ use thiserror::Error;
 
 use crate::design::{relative_degrees, Design, DesignError, DesignSpec, ObserverChoice, RegressorScaling};
 use crate::diagnostics::Averaged;
-use crate::diagnostics::STIFF_RATIO;
+use crate::diagnostics::{FIDELITY_LIMIT, STIFF_RATIO};
 use crate::linalg::eigenvalues;
 use crate::scenario::exosystem::Exosystem;
 use crate::scenario::{PartialDesign, Scenario, ScenarioError};
@@ -69,6 +79,20 @@ const BETA_HORIZON: f64 = 10.0;
 /// at t_end = 600 s, 0.95 beats, and pass from 800 s on; two beats leave a margin of 4 or more on the
 /// tail bound there).
 pub const SEPARATION_BEATS: f64 = 2.0;
+/// Slower candidates tried after the first proposal passes: poles × 2^−k, k = 1..this (down to
+/// 1/32 of the first proposal's speed; at most this many runs beyond the first proposal's four).
+pub const RELAX_STEPS: usize = 5;
+/// A slower candidate is kept only when every tail is within [`TAIL_BOUND`] over this: a decade
+/// left for what the verifying run does not model (sampling, a `[truth]` plant, noise).
+pub const TAIL_MARGIN: f64 = 100.0;
+/// The exchange rate between a candidate's solver steps and its tail: the kept candidate has the
+/// least steps × max(max_i tail_i / bound_i, [`TAIL_FLOOR`])^this; 10^0.3 ≈ 2, so halving the
+/// steps is worth one decade of tail (on three-channel, halving μ halves the steps for a tail 15×
+/// larger: not kept).
+pub const TAIL_EXPONENT: f64 = 0.3;
+/// Tails below this fraction of the bound count alike in the cost: there they are the integration's
+/// and the filters' residue (1e-9…1e-8 on the examples at rtol 1e-9), not the design's.
+pub const TAIL_FLOOR: f64 = 1e-6;
 /// The disturbance observer's relative error (eq. (20) driven by x̂) the observer poles aim at.
 const FIDELITY_AIM: f64 = 0.05;
 /// … or, when no candidate reaches it, this factor over the best candidate's error.
@@ -102,12 +126,31 @@ pub struct Verification {
     pub bound: Vec<f64>,
     /// max |u_f,i| over the run: the plant input (5), what [`Targets::u_limit`] bounds.
     pub max_uf: Vec<f64>,
-    /// Simulations run (1 + the retries).
+    /// Accepted solver steps (controller steps when sampled) of the kept design's run.
+    pub steps: usize,
+    /// Simulations run: the first proposal's (1 + its μ retries) and one per slower candidate.
     pub runs: usize,
     /// Every channel within its bound (and the actuator limit).
     pub passed: bool,
     /// When the verification failed: one line per cause found, with the knob and the value to try.
     pub advice: Vec<String>,
+    /// The candidates verified, fastest first: the first proposal (speed 1) and the relaxed ones.
+    pub candidates: Vec<Candidate>,
+}
+
+/// One verified candidate of the relaxation ([`auto_design`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Candidate {
+    /// Its chosen channel and observer poles' speeds over the first proposal's (powers of ½).
+    pub speed: Speed,
+    /// max |e_i| over the last 10 % of the horizon.
+    pub tail_max_e: Vec<f64>,
+    /// max |u_f,i| over the run.
+    pub max_uf: Vec<f64>,
+    /// Accepted solver steps of its run.
+    pub steps: usize,
+    /// The candidate returned.
+    pub chosen: bool,
 }
 
 /// A complete scenario, its design, the choices made and their verification.
@@ -132,56 +175,284 @@ pub enum AutoError {
     Run(Outcome),
 }
 
-/// The automatic design of the scenario document `doc` (its `[design]` may leave out any key).
-pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, AutoError> {
-    let mut choices = Vec::new();
-    // The largest μ_i the retries may reach, when μ is chosen here.
-    let mut mu_caps: Option<Vec<f64>> = None;
-    let mut scenario = Scenario::from_document_with(doc, |partial, s| -> Result<DesignSpec, AutoError> {
-        choose(partial, s, targets, &mut choices, &mut mu_caps)
-    })?;
-    let mut design = scenario.design()?;
-    let (m, t_end) = (scenario.plant.m(), scenario.simulation.t_end);
-    let bound: Vec<f64> = scenario.reference.components.iter().map(|c| TAIL_BOUND * c.peak()).collect();
-    let mut runs = 0;
-    loop {
-        runs += 1;
-        let r = Run::of(&scenario, &design).simulate(|_| ControlFlow::Continue(()))?;
-        match r.outcome.clone().unwrap_or(Outcome::Completed) {
-            Outcome::Completed => {}
-            other => return Err(AutoError::Run(other)),
-        }
-        let tail_max_e: Vec<f64> = (0..m).map(|i| r.max_abs_error(i, 0.9 * t_end, t_end).unwrap_or(f64::NAN)).collect();
-        let max_uf: Vec<f64> = r.summary().iter().map(|c| c.figures.max_uf).collect();
-        let retry = runs <= 3
-            && mu_caps
-                .as_ref()
-                .is_some_and(|caps| adjust_mu(&mut scenario.design.mu, caps, (&tail_max_e, &bound, &max_uf), targets));
-        if !retry {
-            let within_u = targets.u_limit.is_none_or(|l| max_uf.iter().all(|u| *u <= l));
-            let passed = within_u && tail_max_e.iter().zip(&bound).all(|(e, b)| e <= b);
-            note_verification(&mut choices, &scenario.design.mu, runs);
-            let advice = if passed { Vec::new() } else { failure_advice(&scenario).into_iter().collect() };
-            return Ok(AutoDesign {
-                scenario,
-                design,
-                choices,
-                verification: Verification { tail_max_e, bound, max_uf, runs, passed, advice },
-            });
-        }
-        design = scenario.design()?;
+/// One proposal of the rules at a pole speed: the complete scenario, the choices and the caps the
+/// μ retries may reach (when μ is chosen here).
+struct Proposal {
+    scenario: Scenario,
+    choices: Vec<Choice>,
+    mu_caps: Option<Vec<f64>>,
+    /// The channel poles, the observer poles, μ were chosen here (so slower proposals exist).
+    relaxable: [bool; 3],
+}
+
+/// A candidate's chosen channel poles, observer poles and μ over the first proposal's.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Speed {
+    pub channel: f64,
+    pub observer: f64,
+    /// μ over the averaged law's choice.
+    pub mu: f64,
+}
+
+impl Speed {
+    const FIRST: Speed = Speed { channel: 1.0, observer: 1.0, mu: 1.0 };
+}
+
+impl std::fmt::Display for Speed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "poles: channels ×{}, observer ×{}; μ ×{}", self.channel, self.observer, self.mu)
     }
 }
 
-/// Raises μ_i ×4 (at most to `caps[i]`) where the tail error is beyond its bound, halves it where
-/// |u_f,i| is beyond the actuator limit; whether anything changed.
-fn adjust_mu(mu: &mut [f64], caps: &[f64], (tail, bound, max_uf): (&[f64], &[f64], &[f64]), targets: &Targets) -> bool {
+/// The rules' proposal for `doc` with the chosen channel and observer poles at `speed` × the
+/// first proposal's.
+fn propose(doc: &toml::Table, targets: &Targets, speed: Speed) -> Result<Proposal, AutoError> {
+    let (mut choices, mut mu_caps, mut relaxable) = (Vec::new(), None, [false; 3]);
+    let scenario = Scenario::from_document_with(doc, |partial, s| -> Result<DesignSpec, AutoError> {
+        relaxable = [partial.channel_poles.is_none(), partial.observer.is_none(), partial.mu.is_none()];
+        choose(partial, s, targets, speed, &mut choices, &mut mu_caps)
+    })?;
+    Ok(Proposal { scenario, choices, mu_caps, relaxable })
+}
+
+/// What one verifying run showed.
+struct Check {
+    tail_max_e: Vec<f64>,
+    max_uf: Vec<f64>,
+    steps: usize,
+}
+
+/// One verifying simulation of `scenario` with `design`.
+fn check(scenario: &Scenario, design: &Design) -> Result<Check, AutoError> {
+    let r = Run::of(scenario, design).simulate(|_| ControlFlow::Continue(()))?;
+    match r.outcome.clone().unwrap_or(Outcome::Completed) {
+        Outcome::Completed => {}
+        other => return Err(AutoError::Run(other)),
+    }
+    let t_end = scenario.simulation.t_end;
+    let tail_max_e =
+        (0..scenario.plant.m()).map(|i| r.max_abs_error(i, 0.9 * t_end, t_end).unwrap_or(f64::NAN)).collect();
+    let max_uf = r.summary().iter().map(|c| c.figures.max_uf).collect();
+    Ok(Check { tail_max_e, max_uf, steps: r.stats.steps() })
+}
+
+impl Check {
+    /// Every tail within `bound` / `margin` (a NaN tail is not).
+    fn tail_within(&self, bound: &[f64], margin: f64) -> bool {
+        self.tail_max_e.iter().zip(bound).all(|(e, b)| *e <= b / margin)
+    }
+
+    /// Every max |u_f,i| within the limit (no limit: true).
+    fn within_limit(&self, targets: &Targets) -> bool {
+        targets.u_limit.is_none_or(|l| self.max_uf.iter().all(|u| *u <= l))
+    }
+
+    /// What the relaxation minimizes: steps × max(worst tail / bound, [`TAIL_FLOOR`])^[`TAIL_EXPONENT`].
+    fn cost(&self, bound: &[f64]) -> f64 {
+        let worst = self.tail_max_e.iter().zip(bound).map(|(e, b)| e / b).fold(TAIL_FLOOR, f64::max);
+        self.steps as f64 * worst.powf(TAIL_EXPONENT)
+    }
+
+    /// The largest max |u_f,i|.
+    fn worst_uf(&self) -> f64 {
+        self.max_uf.iter().copied().fold(0.0, f64::max)
+    }
+
+    fn candidate(&self, speed: Speed) -> Candidate {
+        Candidate {
+            speed,
+            tail_max_e: self.tail_max_e.clone(),
+            max_uf: self.max_uf.clone(),
+            steps: self.steps,
+            chosen: false,
+        }
+    }
+}
+
+/// A proposal with its design and verifying run.
+type Verified = (Proposal, Design, Check, Speed);
+
+/// The automatic design of the scenario document `doc` (its `[design]` may leave out any key).
+///
+/// The rules' first proposal is verified (with up to three μ retries); when it passes, slower
+/// candidates are verified in three phases and the cheapest kept (module docs: relaxation,
+/// actuator limit).
+pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, AutoError> {
+    let mut first = propose(doc, targets, Speed::FIRST)?;
+    let mut design = first.scenario.design()?;
+    let bound: Vec<f64> = first.scenario.reference.components.iter().map(|c| TAIL_BOUND * c.peak()).collect();
+    let mut runs = 0;
+    // The first proposal, μ raised where its tail misses the bound.
+    let first_check = loop {
+        runs += 1;
+        let c = check(&first.scenario, &design)?;
+        let retry = runs <= 3
+            && first
+                .mu_caps
+                .as_ref()
+                .is_some_and(|caps| raise_mu(&mut first.scenario.design.mu, caps, &c.tail_max_e, &bound));
+        if !retry {
+            break c;
+        }
+        design = first.scenario.design()?;
+    };
+    note_verification(&mut first.choices, &first.scenario.design.mu, runs);
+    let mut candidates = vec![first_check.candidate(Speed::FIRST)];
+    if !first_check.tail_within(&bound, 1.0) {
+        let advice = failure_advice(&first.scenario).into_iter().collect();
+        return Ok(finish(
+            (first, design, first_check, Speed::FIRST),
+            bound,
+            runs,
+            candidates,
+            (false, targets.u_limit.is_some()),
+            advice,
+        ));
+    }
+    let [relax_channels, relax_observer, relax_mu] = first.relaxable;
+    // The kept candidate: the cheapest within the limit so far (`within`), else the one closest to it.
+    let mut kept: Verified = (first, design, first_check, Speed::FIRST);
+    let mut within = kept.2.within_limit(targets);
+    // When the first observer holds the zeros of (A, D, C), it was chosen for the disturbance
+    // observer's fidelity: slower ones must keep it ([`keeps_fidelity`]).
+    let first_fidelity = holds_zeros(&kept.0.scenario).then(|| fidelity(&kept.0.scenario, &kept.1));
+    // Three phases, each from the candidate kept so far: the observer's own poles halved, then the
+    // channel poles with them, then μ.
+    let half = |j: usize| 0.5f64.powi(j as i32);
+    let phases: [(bool, &dyn Fn(Speed, usize) -> Speed); 3] = [
+        (relax_observer, &|s, j| Speed { observer: s.observer * half(j), ..s }),
+        (relax_channels, &|s, j| Speed {
+            channel: s.channel * half(j),
+            observer: if relax_observer { s.observer * half(j) } else { s.observer },
+            ..s
+        }),
+        (relax_mu, &|s, j| Speed { mu: s.mu * half(j), ..s }),
+    ];
+    for (enabled, step) in phases {
+        // Relax only from a candidate with a margin (or while none is within the limit).
+        let mut go_on = enabled && (!within || kept.2.tail_within(&bound, TAIL_MARGIN));
+        let base = kept.3;
+        for j in 1..=RELAX_STEPS {
+            if !go_on {
+                break;
+            }
+            go_on = false;
+            let speed = step(base, j);
+            let Ok(p) = propose(doc, targets, speed) else { break };
+            let Ok(d) = p.scenario.design() else { break };
+            if first_fidelity.as_ref().is_some_and(|f| !keeps_fidelity(&fidelity(&p.scenario, &d), f)) {
+                break;
+            }
+            runs += 1;
+            let Ok(c) = check(&p.scenario, &d) else { break };
+            candidates.push(c.candidate(speed));
+            if !c.tail_within(&bound, 1.0) {
+                break;
+            }
+            let margin = c.tail_within(&bound, TAIL_MARGIN);
+            if c.within_limit(targets) && (!within || (margin && c.cost(&bound) < kept.2.cost(&bound))) {
+                kept = (p, d, c, speed);
+                within = true;
+            } else if !within && c.worst_uf() < kept.2.worst_uf() {
+                kept = (p, d, c, speed);
+            }
+            go_on = margin || !within;
+        }
+    }
+    let speed = kept.3;
+    for c in &mut candidates {
+        c.chosen = c.speed == speed;
+    }
+    let advice = if within {
+        Vec::new()
+    } else {
+        vec![format!(
+            "no candidate keeps max|u_f,i| within the actuator limit {:e} while every tail stays within its bound: the smallest max|u_f| reached is {:e} (the candidate with {speed}); raise --u-limit to at least that, or ask less of the loop (smaller or slower references, a longer t_end)",
+            targets.u_limit.unwrap_or(f64::INFINITY),
+            kept.2.worst_uf(),
+        )]
+    };
+    Ok(finish(kept, bound, runs, candidates, (within, targets.u_limit.is_some()), advice))
+}
+
+/// The disturbance observer's relative error at each of ω's frequencies (eq. (20) driven by x̂).
+fn fidelity(s: &Scenario, design: &Design) -> Vec<f64> {
+    Averaged::new(design, &s.reference, &s.disturbance).fidelity.iter().map(|f| f.relative_error).collect()
+}
+
+/// The scenario's observer poles include every zero of (A, D, C).
+fn holds_zeros(s: &Scenario) -> bool {
+    let (Some(zeros), ObserverChoice::Poles(poles)) =
+        (crate::diagnostics::disturbance_zeros(&s.plant), &s.design.observer)
+    else {
+        return false;
+    };
+    zeros.iter().all(|z| poles.iter().any(|p| (p - z).norm() <= 1e-12 * z.norm()))
+}
+
+/// A slower observer keeps within [`FIDELITY_LIMIT`] every frequency of ω the first proposal's
+/// passes within it: the run's diagnostics would otherwise advise on it (the batch reactor's
+/// 5 rad/s: 0.07 with the first observer, 0.37 at half its speed).
+fn keeps_fidelity(candidate: &[f64], first: &[f64]) -> bool {
+    candidate.iter().zip(first).all(|(c, f)| *f > FIDELITY_LIMIT || *c <= FIDELITY_LIMIT)
+}
+
+/// The automatic design of a verified candidate, its relaxation noted in the choices.
+fn finish(
+    (mut p, design, c, speed): Verified,
+    bound: Vec<f64>,
+    runs: usize,
+    candidates: Vec<Candidate>,
+    (passed, targets_limited): (bool, bool),
+    advice: Vec<String>,
+) -> AutoDesign {
+    if candidates.len() > 1 {
+        let tried: Vec<String> = candidates
+            .iter()
+            .map(|c| {
+                let tail = c.tail_max_e.iter().zip(&bound).map(|(e, b)| e / b).fold(0.0, f64::max);
+                format!("{}: {tail:.1e}, {:.3e}, {}", c.speed, c.max_uf.iter().copied().fold(0.0, f64::max), c.steps)
+            })
+            .collect();
+        let why = format!(
+            "; then relaxed ({} verifying runs in all): from the first proposal, the observer's own poles halved (phase 1), then the channel poles with them (2), then μ (3), up to {RELAX_STEPS} times each, each phase from the candidate kept so far and stopped by a tail beyond the bound / {TAIL_MARGIN}; tried (speeds: worst tail/bound, max|u_f|, solver steps) {}; kept {speed}: {}",
+            runs,
+            tried.join("; "),
+            if targets_limited {
+                format!("within the actuator limit, the least steps × max(tail/bound, {TAIL_FLOOR:e})^{TAIL_EXPONENT} (halving the steps is worth a decade of tail); the first candidate within the limit needs only the bound")
+            } else {
+                format!("the least steps × max(tail/bound, {TAIL_FLOOR:e})^{TAIL_EXPONENT} (halving the steps is worth a decade of tail) among those within the bound / {TAIL_MARGIN}")
+            }
+        );
+        for ch in &mut p.choices {
+            if ["design.channel_poles", "design.observer_poles", "design.mu"].contains(&ch.key.as_str()) {
+                ch.why.push_str(&why);
+            }
+        }
+    }
+    AutoDesign {
+        scenario: p.scenario,
+        design,
+        choices: p.choices,
+        verification: Verification {
+            tail_max_e: c.tail_max_e,
+            bound,
+            max_uf: c.max_uf,
+            steps: c.steps,
+            runs,
+            passed,
+            advice,
+            candidates,
+        },
+    }
+}
+
+/// Raises μ_i ×4 (at most to `caps[i]`) where the tail error is beyond its bound; whether anything
+/// changed.
+fn raise_mu(mu: &mut [f64], caps: &[f64], tail: &[f64], bound: &[f64]) -> bool {
     let mut changed = false;
     for i in 0..mu.len() {
-        if targets.u_limit.is_some_and(|l| max_uf[i] > l) {
-            mu[i] *= 0.5;
-            changed = true;
-        } else if (tail[i].is_nan() || tail[i] > bound[i]) && mu[i] < caps[i] {
+        if (tail[i].is_nan() || tail[i] > bound[i]) && mu[i] < caps[i] {
             mu[i] = (4.0 * mu[i]).min(caps[i]);
             changed = true;
         }
@@ -194,7 +465,7 @@ fn note_verification(choices: &mut [Choice], mu: &[f64], runs: usize) {
     if let Some(c) = choices.iter_mut().find(|c| c.key == "design.mu") {
         c.value = format!("{mu:?}");
         if runs > 1 {
-            c.why.push_str(&format!("; adjusted over {runs} verifying simulations (×4 where the tail error exceeded 1 % of the reference's peak, up to the stiffness threshold; ×½ beyond the actuator limit)"));
+            c.why.push_str(&format!("; adjusted over {runs} verifying simulations (×4 where the tail error exceeded 1 % of the reference's peak, up to the stiffness threshold)"));
         }
     }
 }
@@ -324,6 +595,7 @@ fn choose(
     partial: PartialDesign,
     s: &Scenario,
     targets: &Targets,
+    speed: Speed,
     choices: &mut Vec<Choice>,
     mu_caps: &mut Option<Vec<f64>>,
 ) -> Result<DesignSpec, AutoError> {
@@ -332,7 +604,7 @@ fn choose(
     let regressor_scaling = choose_scaling(&partial, &mut note);
     let channel_poles = match partial.channel_poles {
         Some(c) => c,
-        None => choose_channel_poles(s, partial.relative_degrees.as_deref(), r, &mut note)?,
+        None => choose_channel_poles(s, partial.relative_degrees.as_deref(), r, speed.channel, &mut note)?,
     };
     let reference_filter_poles = choose_filters(
         partial.reference_filter_poles,
@@ -367,7 +639,7 @@ fn choose(
             Design::new(&s.plant, &spec)?
         }
         None => {
-            let (design, why) = observer(s, &mut spec, 6.0 * r, s.plant.n())?;
+            let (design, why) = observer(s, &mut spec, 6.0 * r, s.plant.n(), speed.observer)?;
             note("design.observer_poles", format!("{:?}", design_poles(&spec)), why);
             design
         }
@@ -375,7 +647,8 @@ fn choose(
     match partial.mu {
         Some(mu) => spec.mu = mu,
         None => {
-            let (mu, caps, why) = choose_mu(s, &design, targets, r);
+            let (mut mu, caps, why) = choose_mu(s, &design, targets, r);
+            mu.iter_mut().for_each(|m| *m *= speed.mu);
             note("design.mu", format!("{mu:?}"), why);
             spec.mu = mu;
             *mu_caps = Some(caps);
@@ -389,6 +662,7 @@ fn choose_channel_poles(
     s: &Scenario,
     given: Option<&[usize]>,
     r: f64,
+    speed: f64,
     note: &mut Note,
 ) -> Result<PoleLists, AutoError> {
     let p = &s.plant;
@@ -400,7 +674,7 @@ fn choose_channel_poles(
             .map(|s| s.unwrap_or(1))
             .collect(),
     };
-    let c: PoleLists = sigma.iter().map(|&k| spread(2.0 * r, k, 1.5, false)).collect();
+    let c: PoleLists = sigma.iter().map(|&k| spread(2.0 * r * speed, k, 1.5, false)).collect();
     note("design.channel_poles", fmt_lists(&c), format!("σ = {sigma:?}; real poles from −2r (r = {r:.4e} rad/s: the fastest of the signals' frequencies, the plant's eigenvalue magnitudes and 20/t_end), ×1.5 apart"));
     Ok(c)
 }
@@ -463,15 +737,22 @@ fn design_poles(spec: &DesignSpec) -> Vec<f64> {
 /// the error the zeros impose. The first candidate whose relative error is ≤ [`FIDELITY_AIM`] at
 /// every frequency of ω, or ≤ [`FIDELITY_SLACK`] times the best candidate's, is taken; candidates
 /// `place` rejects are skipped.
-fn observer(s: &Scenario, spec: &mut DesignSpec, r_0: f64, n: usize) -> Result<(Design, String), AutoError> {
+fn observer(
+    s: &Scenario,
+    spec: &mut DesignSpec,
+    r_0: f64,
+    n: usize,
+    speed: f64,
+) -> Result<(Design, String), AutoError> {
     let zeros = crate::diagnostics::disturbance_zeros(&s.plant);
-    let mut candidates: Vec<(Vec<Complex<f64>>, String)> = Vec::new();
+    let mut candidates: Vec<(Vec<Complex<f64>>, usize, String)> = Vec::new();
     for k in 0..4 {
         let rate = r_0 * 2f64.powi(k);
         for width in [2.0, 4.0] {
             let factor = if n > 1 { f64::powf(width, 1.0 / (n as f64 - 1.0)) } else { 1.0 };
             candidates.push((
                 spread(rate, n, factor, false),
+                0,
                 format!("n distinct real poles from −r_o to −{width}·r_o, r_o = {rate:.4e}"),
             ));
         }
@@ -482,6 +763,7 @@ fn observer(s: &Scenario, spec: &mut DesignSpec, r_0: f64, n: usize) -> Result<(
             poles.extend(spread(rate, fast, factor, false));
             candidates.push((
                 poles,
+                z.len(),
                 format!(
                     "the {} zeros of (A, D, C) and {fast} real poles from −r_o to −2·r_o, r_o = {rate:.4e}",
                     z.len()
@@ -490,16 +772,16 @@ fn observer(s: &Scenario, spec: &mut DesignSpec, r_0: f64, n: usize) -> Result<(
         }
     }
     /// A candidate's design, poles, worst fidelity error and description.
-    type Candidate = (Design, Vec<Complex<f64>>, f64, String);
+    type Candidate = (Design, Vec<Complex<f64>>, usize, f64, String);
     let mut tried: Vec<Candidate> = Vec::new();
     let mut first_error = None;
-    for (poles, what) in candidates {
+    for (poles, zeros, what) in candidates {
         spec.observer = ObserverChoice::Poles(poles.clone());
         match Design::new(&s.plant, spec) {
             Ok(design) => {
                 let fidelity = Averaged::new(&design, &s.reference, &s.disturbance).fidelity;
                 let error = fidelity.iter().map(|f| f.relative_error).fold(0.0, f64::max);
-                tried.push((design, poles, error, what));
+                tried.push((design, poles, zeros, error, what));
             }
             Err(e) => {
                 first_error.get_or_insert(e);
@@ -508,14 +790,22 @@ fn observer(s: &Scenario, spec: &mut DesignSpec, r_0: f64, n: usize) -> Result<(
     }
     // The slowest candidate within FIDELITY_SLACK of the best error (or within the aim): a faster
     // observer that barely improves the fidelity only stiffens the loop.
-    let best_error = tried.iter().map(|c| c.2).fold(f64::INFINITY, f64::min);
+    let best_error = tried.iter().map(|c| c.3).fold(f64::INFINITY, f64::min);
     let good_enough = FIDELITY_AIM.max(FIDELITY_SLACK * best_error);
-    let (design, poles, error, what) = match (tried.into_iter().find(|c| c.2 <= good_enough), first_error) {
+    let (design, mut poles, zeros, error, what) = match (tried.into_iter().find(|c| c.3 <= good_enough), first_error) {
         (Some(b), _) => b,
         (None, Some(e)) => return Err(e.into()),
         (None, None) => unreachable!("at least one candidate is tried"),
     };
-    spec.observer = ObserverChoice::Poles(poles);
+    // A relaxed proposal: the chosen candidate's own poles (not the plant's zeros) × speed.
+    let design = if speed == 1.0 {
+        spec.observer = ObserverChoice::Poles(poles);
+        design
+    } else {
+        poles[zeros..].iter_mut().for_each(|p| *p *= speed);
+        spec.observer = ObserverChoice::Poles(poles);
+        Design::new(&s.plant, spec)?
+    };
     let why = format!(
         "{what}: the first candidate (r_o = r_0·2^k, r_0 = 3× the fastest channel pole, k ≤ 3; spreads ×2, ×4; the zeros of (A, D, C) kept) whose disturbance observer (eq. (20), driven by x̂) passes every frequency of ω with relative error ≤ {FIDELITY_AIM}, or within {FIDELITY_SLACK}× the best candidate's; its error is {error:.2e} at worst"
     );
