@@ -196,8 +196,20 @@ fn rate_free_budget(s: &Scenario, d: &Design, t_end: f64) -> usize {
     quell::sim::BUDGET_MIN_STEPS + (quell::sim::BUDGET_STEPS_PER_RATE * (rho * t_end + t_end / tau_min)) as usize
 }
 
+/// The default bound on the delay history in records, written out from `docs/running.md`: the
+/// records within τ_max of a run that spends its step budget N evenly, N·τ_max/t_end, times the
+/// margin 8, at least 10,000 (the step budget's least number of steps).
+fn history_bound(budget: usize, tau_max: f64, t_end: f64) -> usize {
+    ((8.0 * budget as f64 * tau_max / t_end).ceil() as usize).max(10_000)
+}
+
+/// The longest delay of `s`'s loop: the design's and the true plant's.
+fn tau_max(s: &Scenario) -> f64 {
+    s.plant.delays.iter().chain(&s.true_plant().delays).fold(0.0, |a, &b| a.max(b))
+}
+
 /// `toml`'s scenario with every μ_i times `factor` to `t_end` at `tol` by `method`, under the
-/// DEFAULT step budget; the result and the budget it ran under.
+/// DEFAULT budgets of steps and memory; the result and the step budget it ran under.
 fn run_default_budget(toml: &str, factor: f64, tol: f64, method: Method, t_end: f64) -> (SimResult, usize) {
     let s = Scenario::from_toml(toml).unwrap();
     let mut spec = s.design.clone();
@@ -212,9 +224,12 @@ fn run_default_budget(toml: &str, factor: f64, tol: f64, method: Method, t_end: 
     (r, budget)
 }
 
-/// Legitimate stiff runs complete under the default step budget, each needing more steps than a
+/// Legitimate stiff runs complete under the default budgets, each needing more steps than a
 /// budget without the adaptation rate and the method would give ([`rate_free_budget`]), with at
-/// least twice the steps it used to spare (the budget's stated margin):
+/// least twice the steps it used to spare (the budget's stated margin), and holding at most half
+/// the default history bound's records ([`history_bound`]: measured at most 6,526 of 17,746, the
+/// tank's automatic run, whose stiff start before the switch crowds 2.9 times the even share of
+/// its budget into one delay):
 /// * the quadruple tank at its nominal μ = 1 (1.4e5 times its stiffness onset, μλ_max = 2.7e6/s
 ///   against ρ = 0.2/s) at rtol = atol = 1e-10, automatic and implicit (measured 82.8k and 81.4k
 ///   steps; budget 333k, without rate and method 52k);
@@ -240,8 +255,14 @@ fn legitimate_stiff_runs_complete_under_the_default_budget() {
     ] {
         let (r, budget) = run_default_budget(toml, factor, tol, method, t_end);
         let steps = r.stats.steps();
-        println!("{name}, μ × {factor:.3e}, {method:?} at {tol:e}: {steps} steps of a default budget of {budget}");
+        let RunStats::Continuous(stats) = r.stats else { unreachable!("a continuous run") };
+        let records = history_bound(budget, tau_max(&Scenario::from_toml(toml).unwrap()), t_end);
+        println!(
+            "{name}, μ × {factor:.3e}, {method:?} at {tol:e}: {steps} steps of a default budget of {budget}, {} history records of {records}",
+            stats.max_history_len
+        );
         assert!(2 * steps <= budget, "{name}, {method:?}: {steps} steps of {budget}");
+        assert!(2 * stats.max_history_len <= records, "{name}, {method:?}: {stats:?}, bound {records}");
         if name == "quadruple tank" {
             tank.push(r);
         }
@@ -255,36 +276,66 @@ fn legitimate_stiff_runs_complete_under_the_default_budget() {
 const DIVERGING_TRUTH: &str =
     "\n[truth]\nA = [[-4.16, -2.21, -3.9], [3.64, 1.69, 5.2], [0.39, 0.39, -0.65]]\ndelays = [1.0, 2.6]\n";
 
-/// A runaway still ends within its default budget, in seconds, with its samples up to then and a
-/// bounded history, where the budget is larger than the plain loop's 110,000 steps: the design
-/// stiff (μ × 1000: μλ_max = 8.5e3/s, 9.5 times the stiffness onset 100 ρ; budget
-/// 10,000 + 100·1000·(1 + ½ log10 9.5) = 158,857) and the run forced to DOP853 (budget
-/// 110,000 + 2·8.54·100/6.1 = 110,279). Measured 4.5 s and 3.2 s at load 7; the bound of 60 s leaves
-/// a factor 13 for a more loaded machine and still fails without a budget (the run then held 15 GB
-/// by t = 35 s).
+/// A runaway ends within its default budgets, in seconds, with its samples up to then and its delay
+/// history far below the 1 GiB cap: the default design (step budget 10,000 + 100·(9·100 + 100/1) =
+/// 110,000), the design stiff (μ × 1000: μλ_max = 8.5e3/s, 9.5 times the stiffness onset 100 ρ;
+/// 10,000 + 100·1000·(1 + ½ log10 9.5) = 158,857), and either forced to DOP853 (+ 2·μλ_max·100/6.1:
+/// 110,279 and 389,960 steps). The runaway crowds its steps into its last seconds, so the history
+/// bound ends it first ([`history_bound`]: 26,400 to 93,591 records of (8·27 + 9)·8 = 1,800 bytes,
+/// nd = 27 delayed states: ξ̂, x̂ 11 and η̂ 16); the paper at μ × 1000 forced to DOP853 used to fill
+/// the 1 GiB cap (298,261 records by t = 21.9 s), and now holds 93,591 (160 MiB). Measured: ends at
+/// t = 20.5 to 38.4 s after 0.4 to 1.9 s. The bound of 60 s leaves a factor 30 for a loaded machine
+/// and still fails without a budget (the run then held 15 GB by t = 35 s).
 #[test]
-fn runaways_end_within_their_default_budget_when_stiff_or_explicit() {
+fn runaways_end_within_their_default_budgets_with_a_bounded_history() {
     let toml = format!("{PAPER_EXAMPLE}{DIVERGING_TRUTH}");
     let s = Scenario::from_toml(&toml).unwrap();
-    for (factor, method, expected) in [(1000.0, Method::Auto, 158_857), (1.0, Method::Explicit, 110_279)] {
+    let record_bytes = (8 * 27 + 9) * 8;
+    for (factor, method, expected) in [
+        (1.0, Method::Auto, 110_000),
+        (1000.0, Method::Auto, 158_857),
+        (1.0, Method::Explicit, 110_279),
+        (1000.0, Method::Explicit, 389_960),
+    ] {
         let mut spec = s.design.clone();
         spec.mu.iter_mut().for_each(|mu| *mu *= factor);
         let d = Design::new(&s.plant, &spec).unwrap();
+        let integrator = Integrator { method, ..Integrator::new(1e-9, 1e-9) };
+        let budget =
+            quell::sim::default_max_steps(&d, s.true_plant(), [&s.reference, &s.disturbance], 100.0, &integrator);
+        assert_eq!(budget, expected, "μ × {factor}, {method:?}");
+        let records = history_bound(budget, tau_max(&s), 100.0);
         let mut settings = RunSettings::of(&s);
-        settings.mode = Loop::Continuous(Integrator { method, ..Integrator::new(1e-9, 1e-9) });
+        settings.mode = Loop::Continuous(integrator);
         let started = std::time::Instant::now();
         let r = Run::of(&s, &d).settings(settings).simulate(|_| ControlFlow::Continue(())).unwrap();
         let elapsed = started.elapsed().as_secs_f64();
-        let Some(Outcome::TooManySteps { t, max_steps }) = r.outcome else { panic!("{:?}", r.outcome) };
-        assert_eq!((max_steps, r.stats.steps()), (expected, expected + 1), "μ × {factor}, {method:?}");
+        let RunStats::Continuous(stats) = r.stats else { unreachable!("a continuous run") };
+        let t = match r.outcome {
+            Some(Outcome::TooManySteps { t, max_steps }) => {
+                assert_eq!((max_steps, stats.steps), (budget, budget + 1), "μ × {factor}, {method:?}");
+                t
+            }
+            Some(Outcome::HistoryTooLarge { t, max_bytes }) => {
+                // Twice the records' bytes: the ring may double.
+                assert_eq!(max_bytes, 2 * records * record_bytes, "μ × {factor}, {method:?}");
+                assert!(stats.steps <= budget, "{stats:?}");
+                t
+            }
+            other => panic!("μ × {factor}, {method:?}: {other:?}"),
+        };
         assert!(t > 10.0 && t < 100.0 && r.t.last().is_some_and(|&l| l <= t && l > t - 0.2), "t = {t}");
         assert!(elapsed < 60.0, "μ × {factor}, {method:?}: {elapsed:.1} s");
-        // The history holds at most a record per step, well under its 1 GiB default.
-        let RunStats::Continuous(stats) = r.stats else { unreachable!("a continuous run") };
-        assert!(stats.max_history_len <= expected, "{stats:?}");
+        // Peak history memory within the derived bound, and that bound far below the 1 GiB cap.
+        let peak = stats.max_history_len * record_bytes;
+        assert!(peak <= records * record_bytes, "μ × {factor}, {method:?}: {stats:?}, bound {records} records");
+        assert!(2 * records * record_bytes <= quell::sim::MAX_HISTORY_BYTES / 3, "{records} records");
         println!(
-            "μ × {factor}, {method:?}: ended at t = {t:.2} after {elapsed:.2} s, {} history records",
-            stats.max_history_len
+            "μ × {factor}, {method:?}: {:?} after {elapsed:.2} s, {} steps of {budget}, {} history records of {records} ({} MB)",
+            r.outcome,
+            stats.steps,
+            stats.max_history_len,
+            peak >> 20
         );
     }
 }

@@ -647,9 +647,16 @@ impl LinearPart {
     }
 }
 
-/// Default memory budget of a continuous run's delay history: 1 GiB. The recorded rows come on top;
-/// they are known before the run (at most [`crate::settings::MAX_OUTPUT_SAMPLES`]).
+/// The most memory a continuous run's delay history gets by default, whatever the problem: 1 GiB
+/// ([`default_max_history_bytes`]). The recorded rows come on top; they are known before the run (at
+/// most [`crate::settings::MAX_OUTPUT_SAMPLES`]).
 pub const MAX_HISTORY_BYTES: usize = 1 << 30;
+
+/// The default history bound's margin over the records within τ_max of a run that spends its step
+/// budget evenly ([`default_max_history_bytes`]): the legitimate runs of `tests/stiff.rs` hold at
+/// most 2.94 times that (the quadruple tank at rtol = 1e-10, its stiff start before the switch to
+/// the implicit law), a runaway 19 to 33 times.
+pub const HISTORY_MARGIN: f64 = 8.0;
 
 /// Steps of the default budget per unit of ρ·t_end at [`BUDGET_TOLERANCE`] ([`default_max_steps`]).
 pub const BUDGET_STEPS_PER_RATE: f64 = 100.0;
@@ -690,9 +697,8 @@ pub const BUDGET_STABILITY_MARGIN: f64 = 2.0;
 ///
 /// A healthy run takes a few steps per unit of ρ·t (the paper's example about 2 at rtol = 1e-9,
 /// 41 on the implicit path at 1000 times its stiffness onset), so the budget leaves a margin of 2.5
-/// or more; a loop that turns stiff as it blows up spends it in seconds. The delay history holds at
-/// most one record per step, so at most N records (twice their bytes while its ring doubles), and
-/// never more than [`Integrator::max_history_bytes`].
+/// or more; a loop that turns stiff as it blows up spends it in seconds. The delay history's own
+/// budget follows from N ([`default_max_history_bytes`]).
 pub fn default_max_steps(
     design: &Design,
     truth: &Plant,
@@ -719,6 +725,29 @@ pub fn default_max_steps(
         steps as usize
     } else {
         usize::MAX
+    }
+}
+
+/// The default memory budget of a continuous run's delay history, in bytes, from its step budget N
+/// (`max_steps`, the default [`default_max_steps`] or the one given), its longest delay τ_max, its
+/// horizon t_end and the bytes of one history record (8·(8·n_d + 9) for n_d delayed states: ξ̂, x̂
+/// and every η̂_i):
+///
+/// H = max([`BUDGET_MIN_STEPS`], ⌈[`HISTORY_MARGIN`]·N·τ_max/t_end⌉) records,
+/// bytes = min([`MAX_HISTORY_BYTES`], 2·H·`record_bytes`).
+///
+/// N·τ_max/t_end is what the history holds (the records of the last τ_max) when a run spends its
+/// whole budget evenly; the floor lets any run spend the budget's least number of steps within one
+/// delay, and the factor 2 is the ring's doubling. A runaway concentrates its steps where it blows
+/// up and ends with `history_too_large` at a fraction of the 1 GiB cap.
+pub fn default_max_history_bytes(max_steps: usize, tau_max: f64, t_end: f64, record_bytes: usize) -> usize {
+    let even = if tau_max > 0.0 { max_steps as f64 * tau_max / t_end } else { 0.0 };
+    let records = (HISTORY_MARGIN * even).ceil().max(BUDGET_MIN_STEPS as f64);
+    let bytes = 2.0 * records * record_bytes as f64;
+    if bytes < MAX_HISTORY_BYTES as f64 {
+        bytes as usize
+    } else {
+        MAX_HISTORY_BYTES
     }
 }
 
@@ -817,8 +846,12 @@ pub(super) fn simulate(
     });
     let signals = [run.reference, run.disturbance];
     let max_steps = max_steps.unwrap_or_else(|| default_max_steps(run.design, truth, signals, st.t_end, integrator));
+    let record = dde::record_bytes(sys.n_delayed());
+    let tau_max = sys.delays().iter().copied().fold(0.0, f64::max);
+    let max_history_bytes =
+        max_history_bytes.unwrap_or_else(|| default_max_history_bytes(max_steps, tau_max, st.t_end, record));
     // The history's ring may double past its length: half the budget in records.
-    let max_history_len = max_history_bytes / (2 * dde::record_bytes(sys.n_delayed()));
+    let max_history_len = max_history_bytes / (2 * record);
     let opts = Options { rtol, atol, max_steps, max_history_len, method, ..Options::default() };
     let mut outcome = Outcome::Completed;
     // The loop records each sample (observe); here only the progress and an interruption.

@@ -23,8 +23,9 @@ use crate::signal::{check_signals, Signal};
 
 pub use crate::settings::MeasurementNoise;
 pub use closed_loop::{
-    adaptation_rate, default_max_steps, loop_rate, BUDGET_MIN_STEPS, BUDGET_STABILITY_MARGIN, BUDGET_STEPS_PER_RATE,
-    BUDGET_TOLERANCE, DOP853_STABLE_H_RATE, MAX_HISTORY_BYTES, STIFF_RATIO,
+    adaptation_rate, default_max_history_bytes, default_max_steps, loop_rate, BUDGET_MIN_STEPS,
+    BUDGET_STABILITY_MARGIN, BUDGET_STEPS_PER_RATE, BUDGET_TOLERANCE, DOP853_STABLE_H_RATE, HISTORY_MARGIN,
+    MAX_HISTORY_BYTES, STIFF_RATIO,
 };
 pub use dde::{Method, Stats};
 pub use divergence::{Peaks, Watched, DIVERGENCE_BOUND};
@@ -68,15 +69,16 @@ pub struct Integrator {
     /// Most solver steps ([`Outcome::TooManySteps`] beyond); `None`: [`default_max_steps`], derived
     /// from the problem.
     pub max_steps: Option<usize>,
-    /// Most bytes the delay history may hold ([`Outcome::HistoryTooLarge`] beyond); default
-    /// [`MAX_HISTORY_BYTES`].
-    pub max_history_bytes: usize,
+    /// Most bytes the delay history may hold ([`Outcome::HistoryTooLarge`] beyond); `None`:
+    /// [`default_max_history_bytes`], derived from the step budget and the problem (at most
+    /// [`MAX_HISTORY_BYTES`]).
+    pub max_history_bytes: Option<usize>,
 }
 
 impl Integrator {
     /// Tolerances `rtol`, `atol`, the automatic method, the default budgets.
     pub fn new(rtol: f64, atol: f64) -> Self {
-        Integrator { rtol, atol, method: Method::Auto, max_steps: None, max_history_bytes: MAX_HISTORY_BYTES }
+        Integrator { rtol, atol, method: Method::Auto, max_steps: None, max_history_bytes: None }
     }
 }
 

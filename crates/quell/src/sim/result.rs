@@ -19,7 +19,8 @@ pub enum Outcome {
     /// The solver needed more than `max_steps` steps by time `t` (`RunSettings::max_steps`).
     TooManySteps { t: f64, max_steps: usize },
     /// The delay history would have held more than `max_bytes` at time `t`
-    /// (`RunSettings::max_history_bytes`): the solver's steps had become tiny.
+    /// (`Integrator::max_history_bytes`, by default derived from the step budget): the solver's
+    /// steps had become tiny, crowded into the last delay.
     HistoryTooLarge { t: f64, max_bytes: usize },
     /// Stopped from outside (e.g. Ctrl-C) at time `t`.
     Interrupted { t: f64 },

@@ -86,11 +86,21 @@ mod tests {
         let integrator = Integrator::new(1e-9, 1e-9);
         let budget = default_max_steps(&d, s.true_plant(), [&s.reference, &s.disturbance], 100.0, &integrator);
         assert_eq!(budget, 110_000);
-        let r = Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
+        // With the history's memory at the 1 GiB cap, the step budget ends it.
+        let capped = Integrator { max_history_bytes: Some(crate::sim::MAX_HISTORY_BYTES), ..integrator };
+        let st = RunSettings { mode: Loop::Continuous(capped), ..RunSettings::of(&s) };
+        let r = Run::of(&s, &d).settings(st).simulate(|_| ControlFlow::Continue(())).unwrap();
         let Some(Outcome::TooManySteps { t, max_steps }) = r.outcome else { panic!("{:?}", r.outcome) };
         assert_eq!((max_steps, r.stats.steps()), (budget, budget + 1));
         // It ends where it turned stiff, with its samples up to then.
         assert!(t > 10.0 && t < 100.0 && r.t.last().is_some_and(|&l| l <= t && l > t - 0.2), "t = {t}");
+        // By default the history's memory is bounded too, from the step budget: 8·110,000·τ_max/t_end
+        // = 26,400 records of (8·27 + 9)·8 bytes, twice that for the ring's doubling. The runaway
+        // crowds its steps into its last seconds and ends there, earlier.
+        let r = Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
+        let Some(Outcome::HistoryTooLarge { t: t_memory, max_bytes }) = r.outcome else { panic!("{:?}", r.outcome) };
+        assert_eq!(max_bytes, 2 * 26_400 * (8 * 27 + 9) * 8);
+        assert!(t_memory > 10.0 && t_memory <= t && r.stats.steps() < budget, "t = {t_memory}, {:?}", r.stats);
         // A budget given instead of the default; a sampled-data run has none.
         let mut st = RunSettings::of(&s);
         st.set_max_steps(Some(2_000)).unwrap();
@@ -106,7 +116,7 @@ mod tests {
         let d = s.design().unwrap();
         let bytes = 2 << 20;
         let sim = &s.simulation;
-        let integrator = Integrator { max_history_bytes: bytes, ..Integrator::new(sim.rtol, sim.atol) };
+        let integrator = Integrator { max_history_bytes: Some(bytes), ..Integrator::new(sim.rtol, sim.atol) };
         let st = RunSettings { mode: Loop::Continuous(integrator), ..RunSettings::of(&s) };
         let r = Run::of(&s, &d).settings(st).simulate(|_| ControlFlow::Continue(())).unwrap();
         let Some(Outcome::HistoryTooLarge { t, max_bytes }) = r.outcome else { panic!("{:?}", r.outcome) };
