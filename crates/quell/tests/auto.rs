@@ -205,11 +205,15 @@ fn random_plants_from_1_ms_to_1000_s_in_three_unit_systems_meet_the_tail_bound()
 }
 
 /// The wider family (189 plants, other seeds): the failure rate stays at most 2 % (measured:
-/// 2 of 189, both σ = [1, 2, 1] with a zero, tails 2.2× and 8.8× the bound, docs/tuning.md).
+/// 2 of 189, both σ = [1, 2, 1] with a zero, tails 2.2× and 8.8× the bound, each horizon 1.4 and
+/// 1.6 beats of its closest frequencies so that the failed verification proposes a longer t_end;
+/// the other 187 at most 0.94 of the bound; docs/tuning.md). Prints its count and figures.
 #[test]
 #[ignore = "about 2 minutes; the 63-plant test above runs in the normal suite"]
 fn the_wider_family_fails_at_most_2_percent() {
-    let (failures, _) = family(&SCALES, 27, 50, "");
+    let (failures, worst) = family(&SCALES, 27, 50, "");
+    println!("{} of 189 plants failed; worst tail max|e| / bound of the others: {worst:.3}", failures.len());
+    failures.iter().for_each(|f| println!("{f}"));
     assert!(failures.len() * 50 <= 189, "{} of 189 plants failed:\n{}", failures.len(), failures.join("\n"));
 }
 
@@ -477,4 +481,45 @@ fn the_actuator_limit_trades_pole_speed_for_thrust_on_the_supply_vessel() {
         .unwrap_or_else(|| panic!("no smallest max|u_f| named: {advice}"));
     assert!(advice.contains("actuator limit 1e7") && reached > 1e7 && reached < free_peak, "{advice}");
     println!("free peak {free_peak:e}; limited {:?}; impossible: {advice}", limited.verification.max_uf);
+}
+
+/// The two-beat rule on a plant other than the quadruple tank: a stable SISO plant (poles −1, −2,
+/// input delay 0.3 s) asked to track a bias plus two close harmonics, 1.0 and 1.2 rad/s (one beat
+/// 2π/0.2 = 31.4 s), against a disturbance at 2.5 rad/s, over 20 s: 0.64 of a beat (measured: tail
+/// max|e| 0.17 against the bound 0.03). The automatic design's verification fails and proposes a
+/// t_end between two beats (computed here from the frequencies) and 1.1× that; with t_end set to
+/// the proposal (63 s) the design passes, and the scenario it writes, read back and run again,
+/// keeps the tail within 1 % of the reference's peak (measured 1.1e-2 against 3e-2).
+#[test]
+fn close_harmonics_of_a_stable_siso_plant_are_refused_with_the_t_end_that_works() {
+    let text = "[plant]\nA = [[0.0, 1.0], [-2.0, -3.0]]\nB = [[0.0], [1.0]]\nC = [[1.0, 0.0]]\n\
+        D = [[0.0], [1.0]]\nQ = [[0.0]]\ndelays = [0.3]\n[design]\n\
+        [reference]\ncomponents = [{ bias = 1.0, harmonics = [{ amplitude = 1.0, frequency = 1.0 }, { amplitude = 1.0, frequency = 1.2 }] }]\n\
+        [disturbance]\ncomponents = [{ harmonics = [{ amplitude = 0.5, frequency = 2.5 }] }]\n\
+        [simulation]\nt_end = 20.0\noutput_step = 0.01\n";
+    let doc: toml::Table = text.parse().unwrap();
+    let short = auto_design(&doc, &Targets::default()).unwrap();
+    assert!(!short.verification.passed, "{:?}", short.verification);
+    let advice = short.verification.advice.join("\n");
+    let proposed: f64 = advice
+        .split_once("lengthen simulation.t_end to at least ")
+        .and_then(|(_, rest)| rest.split_once(" s"))
+        .map(|(v, _)| v.parse().unwrap())
+        .unwrap_or_else(|| panic!("no t_end proposed: {advice}"));
+    let two_beats = 2.0 * 2.0 * std::f64::consts::PI / (1.2 - 1.0);
+    assert!(proposed >= two_beats && proposed <= 1.1 * two_beats, "{proposed} against {two_beats}: {advice}");
+
+    let mut doc = doc;
+    doc["simulation"].as_table_mut().unwrap().insert("t_end".into(), toml::Value::Float(proposed));
+    let long = auto_design(&doc, &Targets::default()).unwrap();
+    assert!(long.verification.passed && long.verification.advice.is_empty(), "{:?}", long.verification);
+    let s = Scenario::from_toml(&long.scenario.to_toml()).unwrap();
+    let r = Run::of(&s, &s.design().unwrap()).simulate(|_| ControlFlow::Continue(())).unwrap();
+    let peak = s.reference.components[0].peak();
+    let tail = r.max_abs_error(0, 0.9 * proposed, proposed).unwrap();
+    println!(
+        "proposed t_end = {proposed} s (two beats {two_beats:.2} s): tail {tail:e} against {:e}",
+        TAIL_BOUND * peak
+    );
+    assert!(tail <= TAIL_BOUND * peak, "tail {tail:e} against {:e}", TAIL_BOUND * peak);
 }
