@@ -28,8 +28,9 @@ pub struct RunArgs {
     /// Skip the PNG/SVG plots.
     #[arg(long)]
     pub no_plots: bool,
-    /// Step budget of the continuous loop (default: derived from the problem's time scales; see
-    /// docs/running.md). A run that needs more ends as failed, its results up to then written.
+    /// Step budget of the continuous loop, and with it the delay history's memory budget (default:
+    /// derived from the problem's time scales; see docs/running.md). A run that needs more ends as
+    /// failed, its results up to then written.
     #[arg(long, value_name = "N")]
     pub max_steps: Option<usize>,
     /// Also record the plant state x and the observer state x̂ (columns x1..xn, xhat1..xhatn of

@@ -503,7 +503,8 @@ impl PySimResult {
 ///     throughout) or "imex" (the implicit–explicit ARK4(3)6L[2]SA throughout, implicit in η̂).
 ///     Not for a sampled-data run.
 /// max_steps : int, optional
-///     The continuous solver's step budget (default: derived from the problem).
+///     The continuous solver's step budget, and with it the delay history's memory budget
+///     (default: both derived from the problem; docs/running.md, "Every run is bounded").
 /// states : bool, optional
 ///     Record the plant and observer states x, x̂ too.
 /// check : bool, optional
