@@ -375,7 +375,7 @@ impl PySimResult {
     /// --------
     /// >>> fig = quell.simulate(quell.paper_example(), t_end=1.0).plot(channel=2, figsize=(6, 8))
     /// >>> len(fig.axes), fig.axes[0].get_title()
-    /// (4, 'Channel 2: output and reference')
+    /// (5, 'Channel 2: output and reference')
     #[pyo3(signature = (channel=None, *, ax=None, figsize=None, fig=None))]
     fn plot(
         slf: &Bound<'_, Self>,
