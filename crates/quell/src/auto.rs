@@ -200,7 +200,7 @@ impl Speed {
 
 impl std::fmt::Display for Speed {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "poles: channels ×{}, observer ×{}; μ ×{}", self.channel, self.observer, self.mu)
+        write!(f, "channels ×{}, observer ×{}, μ ×{}", self.channel, self.observer, self.mu)
     }
 }
 
@@ -318,17 +318,11 @@ pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, A
     let first_fidelity = holds_zeros(&kept.0.scenario).then(|| fidelity(&kept.0.scenario, &kept.1));
     // Three phases, each from the candidate kept so far: the observer's own poles halved, then the
     // channel poles with them, then μ.
-    let half = |j: usize| 0.5f64.powi(j as i32);
-    let phases: [(bool, &dyn Fn(Speed, usize) -> Speed); 3] = [
-        (relax_observer, &|s, j| Speed { observer: s.observer * half(j), ..s }),
-        (relax_channels, &|s, j| Speed {
-            channel: s.channel * half(j),
-            observer: if relax_observer { s.observer * half(j) } else { s.observer },
-            ..s
-        }),
-        (relax_mu, &|s, j| Speed { mu: s.mu * half(j), ..s }),
-    ];
-    for (enabled, step) in phases {
+    // Which phases apply: the observer's (phase 1), the channels' (2, the observer's scaled with
+    // them when chosen here), μ's (3).
+    let phases =
+        [(relax_observer, [0, 1, 0]), (relax_channels, [1, u8::from(relax_observer), 0]), (relax_mu, [0, 0, 1])];
+    for (enabled, halved) in phases {
         // Relax only from a candidate with a margin (or while none is within the limit).
         let mut go_on = enabled && (!within || kept.2.tail_within(&bound, TAIL_MARGIN));
         let base = kept.3;
@@ -337,7 +331,12 @@ pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, A
                 break;
             }
             go_on = false;
-            let speed = step(base, j);
+            let f = |h: u8| if h == 1 { 0.5f64.powi(j as i32) } else { 1.0 };
+            let speed = Speed {
+                channel: base.channel * f(halved[0]),
+                observer: base.observer * f(halved[1]),
+                mu: base.mu * f(halved[2]),
+            };
             let Ok(p) = propose(doc, targets, speed) else { break };
             let Ok(d) = p.scenario.design() else { break };
             if first_fidelity.as_ref().is_some_and(|f| !keeps_fidelity(&fidelity(&p.scenario, &d), f)) {
