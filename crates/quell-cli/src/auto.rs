@@ -104,7 +104,12 @@ fn report_text(a: &AutoDesign) -> String {
         s.push_str(&format!("  {} = {}\n    {}\n", c.key, c.value, c.why));
     }
     let v = &a.verification;
-    s.push_str(&format!("verification ({} simulation{}):\n", v.runs, if v.runs == 1 { "" } else { "s" }));
+    s.push_str(&format!(
+        "verification ({} simulation{}; the kept design's run: {} solver steps):\n",
+        v.runs,
+        if v.runs == 1 { "" } else { "s" },
+        v.steps
+    ));
     for i in 0..v.bound.len() {
         s.push_str(&format!(
             "  channel {}: tail max|e| = {:.3e} (bound {:.3e}: 1 % of the reference's peak) {}, max|u_f| = {:.4}\n",
@@ -114,6 +119,15 @@ fn report_text(a: &AutoDesign) -> String {
             if v.tail_max_e[i] <= v.bound[i] { "✓" } else { "✗" },
             v.max_uf[i]
         ));
+    }
+    if v.candidates.len() > 1 {
+        s.push_str("  candidates (poles and μ over the first proposal's: worst tail/bound, max|u_f|, solver steps):\n");
+        for c in &v.candidates {
+            let tail = c.tail_max_e.iter().zip(&v.bound).map(|(e, b)| e / b).fold(0.0, f64::max);
+            let uf = c.max_uf.iter().copied().fold(0.0, f64::max);
+            let kept = if c.chosen { "  ← kept" } else { "" };
+            s.push_str(&format!("    {}: {tail:.2e}, {uf:.4e}, {}{kept}\n", c.speed, c.steps));
+        }
     }
     for a in &v.advice {
         s.push_str(&format!("  advice: {a}\n"));
