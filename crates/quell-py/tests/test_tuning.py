@@ -105,3 +105,25 @@ def test_fragile_observer_gain_warns():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         quell.Scenario.from_toml(PAPER).design()
+
+
+def test_auto_design_trades_pole_speed_for_the_actuator_limit():
+    """The SI supply vessel with its [design] emptied (thrust in N and N·m): u_limit = 7e7, below
+    the unlimited design's peak, is met by a slower design whose run, simulated again here, keeps
+    every max |u_f,i| within the limit and every tail within 1 % of its reference's peak; 1e7 is
+    refused with advice naming the limit and the smallest max |u_f| reached (above the limit)."""
+    text = without_design((REFERENCE / "supply-vessel.toml").read_text())
+    _, free = quell.auto_design(text)
+    assert free["passed"], free
+    free_peak = max(free["verification"]["max_uf"])
+    assert free_peak > 7e7, free_peak
+    scenario, report = quell.auto_design(text, u_limit=7e7)
+    assert report["passed"], report
+    r = quell.simulate(scenario)
+    for c, peak in zip(r.summary(), [10.0, 5.0, 0.1]):
+        assert c["max_uf"] <= 7e7 and c["tail_max_e"] <= 0.01 * peak, c
+    _, refused = quell.auto_design(text, u_limit=1e7)
+    assert not refused["passed"], refused
+    advice = " ".join(refused["verification"]["advice"])
+    reached = float(advice.split("the smallest max|u_f| reached is ")[1].split(" ")[0])
+    assert "actuator limit 1e7" in advice and 1e7 < reached < free_peak, advice
