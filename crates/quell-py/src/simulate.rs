@@ -670,7 +670,7 @@ fn failure(outcome: Outcome) -> Option<(String, f64, Option<String>, Option<f64>
             None,
         ),
         Outcome::HistoryTooLarge { t, max_bytes } => (
-            format!("the delay history would have exceeded {} MB by t = {t:.6} (the memory budget: the solver's steps had become tiny); the samples up to then are in the exception's .result", max_bytes >> 20),
+            format!("the delay history would have exceeded {} MB by t = {t:.6} (the memory budget: the solver's steps had crowded into the last delay, as a loop blowing up does; it scales with max_steps=, raise that if the run is sound); the samples up to then are in the exception's .result", max_bytes >> 20),
             t,
             None,
             None,

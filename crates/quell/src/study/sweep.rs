@@ -199,7 +199,7 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                 }
                 sim::Outcome::HistoryTooLarge { t, max_bytes } => {
                     row.reason = format!(
-                        "the delay history would have exceeded {} MB by t = {t:.4} (the solver's steps had become tiny: a loop blowing up turns stiff)",
+                        "the delay history would have exceeded {} MB by t = {t:.4} (the solver's steps had crowded into the last delay: a loop blowing up turns stiff; the budget scales with max_steps, raise it in the study file if the run is sound)",
                         max_bytes >> 20
                     );
                 }
