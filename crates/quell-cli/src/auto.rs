@@ -121,6 +121,7 @@ fn report_text(a: &AutoDesign) -> String {
         ));
     }
     if v.candidates.len() > 1 {
+        s.push_str(&format!("  relaxation: {}\n", v.relaxation));
         s.push_str("  candidates (poles and μ over the first proposal's: worst tail/bound, max|u_f|, solver steps):\n");
         for c in &v.candidates {
             let tail = c.tail_max_e.iter().zip(&v.bound).map(|(e, b)| e / b).fold(0.0, f64::max);

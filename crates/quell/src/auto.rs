@@ -136,6 +136,8 @@ pub struct Verification {
     pub advice: Vec<String>,
     /// The candidates verified, fastest first: the first proposal (speed 1) and the relaxed ones.
     pub candidates: Vec<Candidate>,
+    /// How the relaxation went and why the kept candidate was kept (empty without one).
+    pub relaxation: String,
 }
 
 /// One verified candidate of the relaxation ([`auto_design`]).
@@ -309,22 +311,49 @@ pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, A
             advice,
         ));
     }
-    let [relax_channels, relax_observer, relax_mu] = first.relaxable;
+    let (kept, within) =
+        relax(doc, targets, (first, design, first_check, Speed::FIRST), &bound, &mut runs, &mut candidates);
+    let speed = kept.3;
+    for c in &mut candidates {
+        c.chosen = c.speed == speed;
+    }
+    let advice = if within {
+        Vec::new()
+    } else {
+        vec![format!(
+            "no candidate keeps max|u_f,i| within the actuator limit {:e} while every tail stays within its bound: the smallest max|u_f| reached is {:e} (the candidate with {speed}); raise the actuator limit (u_limit) to at least that, or ask less of the loop (smaller or slower references, a longer t_end)",
+            targets.u_limit.unwrap_or(f64::INFINITY),
+            kept.2.worst_uf(),
+        )]
+    };
+    Ok(finish(kept, bound, runs, candidates, (within, targets.u_limit.is_some()), advice))
+}
+
+/// The relaxation (module docs): from the verified first proposal, slower candidates in three
+/// phases, each from the candidate kept so far; returns the kept one and whether it is within the
+/// actuator limit. Each verifying run is counted in `runs` and listed in `candidates`.
+fn relax(
+    doc: &toml::Table,
+    targets: &Targets,
+    first: Verified,
+    bound: &[f64],
+    runs: &mut usize,
+    candidates: &mut Vec<Candidate>,
+) -> (Verified, bool) {
+    let [relax_channels, relax_observer, relax_mu] = first.0.relaxable;
     // The kept candidate: the cheapest within the limit so far (`within`), else the one closest to it.
-    let mut kept: Verified = (first, design, first_check, Speed::FIRST);
+    let mut kept = first;
     let mut within = kept.2.within_limit(targets);
     // When the first observer holds the zeros of (A, D, C), it was chosen for the disturbance
     // observer's fidelity: slower ones must keep it ([`keeps_fidelity`]).
     let first_fidelity = holds_zeros(&kept.0.scenario).then(|| fidelity(&kept.0.scenario, &kept.1));
-    // Three phases, each from the candidate kept so far: the observer's own poles halved, then the
-    // channel poles with them, then μ.
-    // Which phases apply: the observer's (phase 1), the channels' (2, the observer's scaled with
-    // them when chosen here), μ's (3).
+    // Three phases, each from the candidate kept so far: the observer's own poles halved (1), then
+    // the channel poles with them when the observer is chosen here (2), then μ (3).
     let phases =
         [(relax_observer, [0, 1, 0]), (relax_channels, [1, u8::from(relax_observer), 0]), (relax_mu, [0, 0, 1])];
     for (enabled, halved) in phases {
         // Relax only from a candidate with a margin (or while none is within the limit).
-        let mut go_on = enabled && (!within || kept.2.tail_within(&bound, TAIL_MARGIN));
+        let mut go_on = enabled && (!within || kept.2.tail_within(bound, TAIL_MARGIN));
         let base = kept.3;
         for j in 1..=RELAX_STEPS {
             if !go_on {
@@ -342,14 +371,14 @@ pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, A
             if first_fidelity.as_ref().is_some_and(|f| !keeps_fidelity(&fidelity(&p.scenario, &d), f)) {
                 break;
             }
-            runs += 1;
+            *runs += 1;
             let Ok(c) = check(&p.scenario, &d) else { break };
             candidates.push(c.candidate(speed));
-            if !c.tail_within(&bound, 1.0) {
+            if !c.tail_within(bound, 1.0) {
                 break;
             }
-            let margin = c.tail_within(&bound, TAIL_MARGIN);
-            if c.within_limit(targets) && (!within || (margin && c.cost(&bound) < kept.2.cost(&bound))) {
+            let margin = c.tail_within(bound, TAIL_MARGIN);
+            if c.within_limit(targets) && (!within || (margin && c.cost(bound) < kept.2.cost(bound))) {
                 kept = (p, d, c, speed);
                 within = true;
             } else if !within && c.worst_uf() < kept.2.worst_uf() {
@@ -358,20 +387,7 @@ pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, A
             go_on = margin || !within;
         }
     }
-    let speed = kept.3;
-    for c in &mut candidates {
-        c.chosen = c.speed == speed;
-    }
-    let advice = if within {
-        Vec::new()
-    } else {
-        vec![format!(
-            "no candidate keeps max|u_f,i| within the actuator limit {:e} while every tail stays within its bound: the smallest max|u_f| reached is {:e} (the candidate with {speed}); raise --u-limit to at least that, or ask less of the loop (smaller or slower references, a longer t_end)",
-            targets.u_limit.unwrap_or(f64::INFINITY),
-            kept.2.worst_uf(),
-        )]
-    };
-    Ok(finish(kept, bound, runs, candidates, (within, targets.u_limit.is_some()), advice))
+    (kept, within)
 }
 
 /// The disturbance observer's relative error at each of ω's frequencies (eq. (20) driven by x̂).
@@ -405,30 +421,30 @@ fn finish(
     (passed, targets_limited): (bool, bool),
     advice: Vec<String>,
 ) -> AutoDesign {
-    if candidates.len() > 1 {
-        let tried: Vec<String> = candidates
-            .iter()
-            .map(|c| {
-                let tail = c.tail_max_e.iter().zip(&bound).map(|(e, b)| e / b).fold(0.0, f64::max);
-                format!("{}: {tail:.1e}, {:.3e}, {}", c.speed, c.max_uf.iter().copied().fold(0.0, f64::max), c.steps)
-            })
-            .collect();
-        let why = format!(
-            "; then relaxed ({} verifying runs in all): from the first proposal, the observer's own poles halved (phase 1), then the channel poles with them (2), then μ (3), up to {RELAX_STEPS} times each, each phase from the candidate kept so far and stopped by a tail beyond the bound / {TAIL_MARGIN}; tried (speeds: worst tail/bound, max|u_f|, solver steps) {}; kept {speed}: {}",
+    let relaxation = if candidates.len() > 1 {
+        let own = |key: &str| match key {
+            "design.channel_poles" => Some(speed.channel),
+            "design.observer_poles" => Some(speed.observer),
+            "design.mu" => Some(speed.mu),
+            _ => None,
+        };
+        for ch in &mut p.choices {
+            if let Some(f) = own(&ch.key).filter(|&f| f != 1.0) {
+                ch.why.push_str(&format!("; then ×{f} of that in the relaxation (the verification says how)"));
+            }
+        }
+        format!(
+            "{} verifying runs: from the first proposal, the observer's own poles halved (phase 1), then the channel poles with them (2), then μ (3), up to {RELAX_STEPS} times each, each phase from the candidate kept so far and stopped by a tail beyond the bound / {TAIL_MARGIN}; kept {speed}: {}",
             runs,
-            tried.join("; "),
             if targets_limited {
                 format!("within the actuator limit, the least steps × max(tail/bound, {TAIL_FLOOR:e})^{TAIL_EXPONENT} (halving the steps is worth a decade of tail); the first candidate within the limit needs only the bound")
             } else {
                 format!("the least steps × max(tail/bound, {TAIL_FLOOR:e})^{TAIL_EXPONENT} (halving the steps is worth a decade of tail) among those within the bound / {TAIL_MARGIN}")
             }
-        );
-        for ch in &mut p.choices {
-            if ["design.channel_poles", "design.observer_poles", "design.mu"].contains(&ch.key.as_str()) {
-                ch.why.push_str(&why);
-            }
-        }
-    }
+        )
+    } else {
+        String::new()
+    };
     AutoDesign {
         scenario: p.scenario,
         design,
@@ -442,6 +458,7 @@ fn finish(
             passed,
             advice,
             candidates,
+            relaxation,
         },
     }
 }
