@@ -124,10 +124,14 @@ fn report_text(a: &AutoDesign) -> String {
         s.push_str(&format!("  relaxation: {}\n", v.relaxation));
         s.push_str("  candidates (poles and μ over the first proposal's: worst tail/bound, max|u_f|, solver steps):\n");
         for c in &v.candidates {
-            let tail = c.tail_max_e.iter().zip(&v.bound).map(|(e, b)| e / b).fold(0.0, f64::max);
-            let uf = c.max_uf.iter().copied().fold(0.0, f64::max);
             let kept = if c.chosen { "  ← kept" } else { "" };
-            s.push_str(&format!("    {}: {tail:.2e}, {uf:.4e}, {}{kept}\n", c.speed, c.steps));
+            s.push_str(&format!(
+                "    {}: {:.2e}, {:.4e}, {}{kept}\n",
+                c.speed,
+                c.worst_tail(&v.bound),
+                c.worst_uf(),
+                c.steps
+            ));
         }
     }
     for a in &v.advice {

@@ -217,15 +217,8 @@ fn propose(doc: &toml::Table, targets: &Targets, speed: Speed) -> Result<Proposa
     Ok(Proposal { scenario, choices, mu_caps, relaxable })
 }
 
-/// What one verifying run showed.
-struct Check {
-    tail_max_e: Vec<f64>,
-    max_uf: Vec<f64>,
-    steps: usize,
-}
-
-/// One verifying simulation of `scenario` with `design`.
-fn check(scenario: &Scenario, design: &Design) -> Result<Check, AutoError> {
+/// One verifying simulation of `scenario` with `design`, the candidate at `speed`.
+fn check(scenario: &Scenario, design: &Design, speed: Speed) -> Result<Candidate, AutoError> {
     let r = Run::of(scenario, design).simulate(|_| ControlFlow::Continue(()))?;
     match r.outcome.clone().unwrap_or(Outcome::Completed) {
         Outcome::Completed => {}
@@ -235,10 +228,10 @@ fn check(scenario: &Scenario, design: &Design) -> Result<Check, AutoError> {
     let tail_max_e =
         (0..scenario.plant.m()).map(|i| r.max_abs_error(i, 0.9 * t_end, t_end).unwrap_or(f64::NAN)).collect();
     let max_uf = r.summary().iter().map(|c| c.figures.max_uf).collect();
-    Ok(Check { tail_max_e, max_uf, steps: r.stats.steps() })
+    Ok(Candidate { speed, tail_max_e, max_uf, steps: r.stats.steps(), chosen: false })
 }
 
-impl Check {
+impl Candidate {
     /// Every tail within `bound` / `margin` (a NaN tail is not).
     fn tail_within(&self, bound: &[f64], margin: f64) -> bool {
         self.tail_max_e.iter().zip(bound).all(|(e, b)| *e <= b / margin)
@@ -251,28 +244,22 @@ impl Check {
 
     /// What the relaxation minimizes: steps × max(worst tail / bound, [`TAIL_FLOOR`])^[`TAIL_EXPONENT`].
     fn cost(&self, bound: &[f64]) -> f64 {
-        let worst = self.tail_max_e.iter().zip(bound).map(|(e, b)| e / b).fold(TAIL_FLOOR, f64::max);
-        self.steps as f64 * worst.powf(TAIL_EXPONENT)
+        self.steps as f64 * self.worst_tail(bound).max(TAIL_FLOOR).powf(TAIL_EXPONENT)
+    }
+
+    /// The largest max |e_i| / bound_i over the tail.
+    pub fn worst_tail(&self, bound: &[f64]) -> f64 {
+        self.tail_max_e.iter().zip(bound).map(|(e, b)| e / b).fold(0.0, f64::max)
     }
 
     /// The largest max |u_f,i|.
-    fn worst_uf(&self) -> f64 {
+    pub fn worst_uf(&self) -> f64 {
         self.max_uf.iter().copied().fold(0.0, f64::max)
-    }
-
-    fn candidate(&self, speed: Speed) -> Candidate {
-        Candidate {
-            speed,
-            tail_max_e: self.tail_max_e.clone(),
-            max_uf: self.max_uf.clone(),
-            steps: self.steps,
-            chosen: false,
-        }
     }
 }
 
 /// A proposal with its design and verifying run.
-type Verified = (Proposal, Design, Check, Speed);
+type Verified = (Proposal, Design, Candidate);
 
 /// The automatic design of the scenario document `doc` (its `[design]` may leave out any key).
 ///
@@ -287,7 +274,7 @@ pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, A
     // The first proposal, μ raised where its tail misses the bound.
     let first_check = loop {
         runs += 1;
-        let c = check(&first.scenario, &design)?;
+        let c = check(&first.scenario, &design, Speed::FIRST)?;
         let retry = runs <= 3
             && first
                 .mu_caps
@@ -299,11 +286,11 @@ pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, A
         design = first.scenario.design()?;
     };
     note_verification(&mut first.choices, &first.scenario.design.mu, runs);
-    let mut candidates = vec![first_check.candidate(Speed::FIRST)];
+    let mut candidates = vec![first_check.clone()];
     if !first_check.tail_within(&bound, 1.0) {
         let advice = failure_advice(&first.scenario).into_iter().collect();
         return Ok(finish(
-            (first, design, first_check, Speed::FIRST),
+            (first, design, first_check),
             bound,
             runs,
             candidates,
@@ -311,9 +298,8 @@ pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, A
             advice,
         ));
     }
-    let (kept, within) =
-        relax(doc, targets, (first, design, first_check, Speed::FIRST), &bound, &mut runs, &mut candidates);
-    let speed = kept.3;
+    let (kept, within) = relax(doc, targets, (first, design, first_check), &bound, &mut runs, &mut candidates);
+    let speed = kept.2.speed;
     for c in &mut candidates {
         c.chosen = c.speed == speed;
     }
@@ -354,7 +340,7 @@ fn relax(
     for (enabled, halved) in phases {
         // Relax only from a candidate with a margin (or while none is within the limit).
         let mut go_on = enabled && (!within || kept.2.tail_within(bound, TAIL_MARGIN));
-        let base = kept.3;
+        let base = kept.2.speed;
         for j in 1..=RELAX_STEPS {
             if !go_on {
                 break;
@@ -372,17 +358,17 @@ fn relax(
                 break;
             }
             *runs += 1;
-            let Ok(c) = check(&p.scenario, &d) else { break };
-            candidates.push(c.candidate(speed));
+            let Ok(c) = check(&p.scenario, &d, speed) else { break };
+            candidates.push(c.clone());
             if !c.tail_within(bound, 1.0) {
                 break;
             }
             let margin = c.tail_within(bound, TAIL_MARGIN);
             if c.within_limit(targets) && (!within || (margin && c.cost(bound) < kept.2.cost(bound))) {
-                kept = (p, d, c, speed);
+                kept = (p, d, c);
                 within = true;
             } else if !within && c.worst_uf() < kept.2.worst_uf() {
-                kept = (p, d, c, speed);
+                kept = (p, d, c);
             }
             go_on = margin || !within;
         }
@@ -414,13 +400,14 @@ fn keeps_fidelity(candidate: &[f64], first: &[f64]) -> bool {
 
 /// The automatic design of a verified candidate, its relaxation noted in the choices.
 fn finish(
-    (mut p, design, c, speed): Verified,
+    (mut p, design, c): Verified,
     bound: Vec<f64>,
     runs: usize,
     candidates: Vec<Candidate>,
     (passed, targets_limited): (bool, bool),
     advice: Vec<String>,
 ) -> AutoDesign {
+    let speed = c.speed;
     let relaxation = if candidates.len() > 1 {
         let own = |key: &str| match key {
             "design.channel_poles" => Some(speed.channel),

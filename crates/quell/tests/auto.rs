@@ -453,11 +453,7 @@ fn the_actuator_limit_trades_pole_speed_for_thrust_on_the_supply_vessel() {
     let impossible = auto_design(&doc, &Targets { u_limit: Some(1e7), ..Targets::default() }).unwrap();
     assert!(!impossible.verification.passed, "{:?}", impossible.verification);
     let advice = impossible.verification.advice.join("\n");
-    let reached: f64 = advice
-        .split_once("the smallest max|u_f| reached is ")
-        .and_then(|(_, rest)| rest.split_once(' '))
-        .map(|(v, _)| v.parse().unwrap())
-        .unwrap_or_else(|| panic!("no smallest max|u_f| named: {advice}"));
+    let reached = number_after(&advice, "the smallest max|u_f| reached is ", " ");
     assert!(advice.contains("actuator limit 1e7") && reached > 1e7 && reached < free_peak, "{advice}");
     println!("free peak {free_peak:e}; limited {:?}; impossible: {advice}", limited.verification.max_uf);
 }
@@ -487,11 +483,7 @@ fn refused_then_passes_at_the_proposed_t_end(doc: toml::Table, gap: f64) {
     let short = auto_design(&doc, &Targets::default()).unwrap();
     assert!(!short.verification.passed, "{:?}", short.verification);
     let advice = short.verification.advice.join("\n");
-    let proposed: f64 = advice
-        .split_once("lengthen simulation.t_end to at least ")
-        .and_then(|(_, rest)| rest.split_once(" s"))
-        .map(|(v, _)| v.parse().unwrap())
-        .unwrap_or_else(|| panic!("no t_end proposed: {advice}"));
+    let proposed = number_after(&advice, "lengthen simulation.t_end to at least ", " s");
     let two_beats = 2.0 * 2.0 * std::f64::consts::PI / gap;
     assert!(proposed >= two_beats && proposed <= 1.1 * two_beats, "{proposed} against {two_beats}: {advice}");
 
@@ -506,4 +498,12 @@ fn refused_then_passes_at_the_proposed_t_end(doc: toml::Table, gap: f64) {
         println!("channel {}: proposed t_end = {proposed} s (two beats {two_beats:.2} s), tail {tail:e}", i + 1);
         assert!(tail <= TAIL_BOUND * c.peak(), "channel {}: tail {tail:e} against {:e}", i + 1, TAIL_BOUND * c.peak());
     }
+}
+
+/// The number in `text` between `prefix` and the next `end`; panics naming what is missing.
+fn number_after(text: &str, prefix: &str, end: &str) -> f64 {
+    text.split_once(prefix)
+        .and_then(|(_, rest)| rest.split_once(end))
+        .and_then(|(v, _)| v.parse().ok())
+        .unwrap_or_else(|| panic!("no number after {prefix:?}: {text}"))
 }
