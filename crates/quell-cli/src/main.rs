@@ -114,7 +114,15 @@ pub(crate) fn load(path: Option<&Path>) -> Result<(Scenario, Design), Failure> {
         Some(p) => Scenario::from_path(p),
         None => Scenario::from_toml(PAPER_EXAMPLE),
     }
-    .map_err(|e| Failure::Input(e.to_string()))?;
+    .map_err(|e| match path {
+        // `scenario` is a study's first key: the file names the scenario it varies.
+        Some(p) if e.key == "scenario" => Failure::Input(format!(
+            "{e}\n{} is a study, not a scenario: run it with `quell sweep {} --out DIR`",
+            p.display(),
+            p.display()
+        )),
+        _ => Failure::Input(e.to_string()),
+    })?;
     let design = scenario.design().map_err(|e| Failure::Input(e.to_string()))?;
     Ok((scenario, design))
 }

@@ -227,6 +227,19 @@ fn design_unknown_key_exits_2() {
 }
 
 #[test]
+fn a_study_given_as_a_scenario_is_named_a_study_with_the_command_that_runs_it() {
+    let study = format!("{}/../../examples/studies/mismatch.toml", env!("CARGO_MANIFEST_DIR"));
+    for command in ["run", "design"] {
+        let err = input_error(&[command, &study]);
+        assert!(err.contains("scenario: unknown key"), "{err}");
+        assert!(
+            err.contains(&format!("is a study, not a scenario: run it with `quell sweep {study} --out DIR`")),
+            "{err}"
+        );
+    }
+}
+
+#[test]
 fn design_wrong_shape_exits_2() {
     let err = design_with_edit("shape", "C = [[2.0, 2.0, 0.0], [2.0, 1.0, 2.0]]", "C = [[2.0, 2.0], [2.0, 1.0]]");
     assert!(err.contains("plant.C: expected 2×3"), "{err}");

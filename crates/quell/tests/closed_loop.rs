@@ -153,3 +153,93 @@ fn the_scenario_method_chooses_the_integrator_and_explicit_and_imex_agree() {
     let auto = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
     assert_eq!(auto.simulation.method, Method::Auto);
 }
+
+/// The paper's example in other units of time: t → αt, so A, B, D, every pole and μ divide by α
+/// and the delays, β, t_end and the output step multiply by it (observer poles −2, −3, −4 and the
+/// normalized regressor, whose ξ̂ does not depend on the filters' time scale: the paper's l = e_q
+/// would scale ξ̂ by α^q). The loop is then the same one in other units: y, u, u_f and η̂ at αt are
+/// those at t.
+fn paper_in_time_units(alpha: f64, tol: f64) -> (Design, SimResult) {
+    let p = paper_plant();
+    let delays = p.delays.iter().map(|d| d * alpha).collect();
+    let p =
+        quell::Plant::new(&p.A / alpha, &p.B / alpha, p.C.clone(), &p.D / alpha, p.Q.clone(), delays, None).unwrap();
+    let poles = |v: &[f64]| v.iter().map(|&x| re(x / alpha)).collect::<Vec<_>>();
+    let spec = quell::DesignSpec {
+        observer: quell::ObserverChoice::Poles(poles(&[-2.0, -3.0, -4.0])),
+        channel_poles: vec![poles(&[-6.0, -2.0]), poles(&[-4.0])],
+        reference_filter_poles: vec![poles(&[-1.0, -6.0]), poles(&[-9.0])],
+        disturbance_filter_poles: vec![poles(&[-1.0, -3.0]), poles(&[-1.0, -2.0, -3.0])],
+        mu: vec![20.0 / alpha, 30.0 / alpha],
+        beta: alpha,
+        relative_degrees: None,
+        regressor_scaling: quell::design::RegressorScaling::Normalized,
+    };
+    let d = Design::new(&p, &spec).unwrap();
+    let (mut g, mut w) = paper_signals();
+    for h in g.components.iter_mut().chain(&mut w.components).flat_map(|c| &mut c.harmonics) {
+        h.frequency /= alpha;
+    }
+    let r = Run::new(&d, &g, &w, RunSettings::continuous(100.0 * alpha, 0.1 * alpha, tol, tol))
+        .simulate(|_| ControlFlow::Continue(()))
+        .unwrap();
+    assert_eq!(r.outcome, Some(Outcome::Completed), "α = {alpha}");
+    (d, r)
+}
+
+#[test]
+fn the_loop_in_milliseconds_or_hours_is_the_same_loop() {
+    let (d1, reference) = paper_in_time_units(1.0, 1e-12);
+    let (_, own) = paper_in_time_units(1.0, 1e-9);
+    let largest_gap = |r: &SimResult| {
+        let columns = [
+            (&r.y, &reference.y, 2),
+            (&r.u, &reference.u, 2),
+            (&r.u_f, &reference.u_f, 2),
+            (&r.eta, &reference.eta, 16),
+        ];
+        let mut worst: f64 = 0.0;
+        for (got, want, width) in columns {
+            for j in 0..width {
+                let peak = reference.column(want, width, j).fold(0.0f64, |p, v| p.max(v.abs())).max(1e-300);
+                let gap = r
+                    .column(got, width, j)
+                    .zip(reference.column(want, width, j))
+                    .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+                worst = worst.max(gap / peak);
+            }
+        }
+        worst
+    };
+    // The run at 1e-9 in seconds differs from the one at 1e-12 by 8.3e-6 of a column's peak (this
+    // adaptive loop amplifies the local errors): the bound is 4× that, far below what a unit slip
+    // (a forgotten α in a filter, β or a delay) would cause, an error of the signals' own size.
+    assert!(largest_gap(&own) < 3e-5, "{}", largest_gap(&own));
+    let diag1 = quell::diagnostics::diagnose(&d1, &paper_signals().0, &paper_signals().1, &own);
+    for alpha in [1e-3, 3600.0] {
+        let (d, r) = paper_in_time_units(alpha, 1e-9);
+        assert_eq!(r.len(), reference.len());
+        assert!(r.t.iter().zip(&reference.t).all(|(a, b)| (a / alpha - b).abs() <= 1e-12 * b.max(1.0)));
+        let gap = largest_gap(&r);
+        assert!(gap < 3e-5, "α = {alpha}: largest gap {gap:e} of a column's peak");
+        // The same steps (to the few that the initial step's absolute floors and the rounding of
+        // the breakpoints' times shift: 3,901 in seconds, 3,911 in ms, 3,976 in hours).
+        let (steps, steps1) = (r.stats.steps() as f64, own.stats.steps() as f64);
+        assert!((steps / steps1 - 1.0).abs() < 0.05, "α = {alpha}: {steps} steps against {steps1}");
+        // The report in the new units: rates ÷ α, times × α (settling to one output step).
+        let (mut g, mut w) = paper_signals();
+        for h in g.components.iter_mut().chain(&mut w.components).flat_map(|c| &mut c.harmonics) {
+            h.frequency /= alpha;
+        }
+        let diag = quell::diagnostics::diagnose(&d, &g, &w, &r);
+        for (c, c1) in diag.channels.iter().zip(&diag1.channels) {
+            assert!((c.adaptation_rate * alpha / c1.adaptation_rate - 1.0).abs() < 1e-9, "{c:?}");
+            assert_eq!(c.excited_rank, c1.excited_rank);
+            assert_eq!(c.advice.len(), c1.advice.len(), "{:?} against {:?}", c.advice, c1.advice);
+        }
+        for (s, s1) in r.summary().iter().zip(own.summary()) {
+            let (t, t1) = (s.figures.settle_t.unwrap(), s1.figures.settle_t.unwrap());
+            assert!((t / alpha - t1).abs() <= 0.1 + 1e-9, "α = {alpha}: settled at {t} against {t1}");
+        }
+    }
+}
