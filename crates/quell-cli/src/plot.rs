@@ -96,6 +96,7 @@ fn panel<DB: DrawingBackend>(
         .max_light_lines(2)
         .x_desc("t, s")
         .y_desc(ylabel)
+        .x_label_formatter(&|v| tick_label(*v, t0, t1))
         .y_label_formatter(&|v| tick_label(*v, y0, y1))
         .label_style(("sans-serif", 14))
         .draw()

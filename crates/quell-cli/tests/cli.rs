@@ -351,6 +351,9 @@ fn run_paper_example_writes_every_file() {
         for label in ["adaptive command (25)".to_string(), "plant input u_f (5)".into(), format!("uf{c}")] {
             assert!(svg.contains(&label), "channel{c}.svg has no series {label:?}");
         }
+        // The time axis's ticks read 0, 10, …, 100, like the value axes' (not "10.0").
+        let ticks: Vec<&str> = svg.split("</text>").filter_map(|t| t.rsplit('>').next()).map(str::trim).collect();
+        assert!(ticks.contains(&"50") && ticks.contains(&"100") && !ticks.contains(&"50.0"), "{ticks:?}");
     }
     assert!(leftovers(dir.path()).is_empty(), "temporary files left: {:?}", leftovers(dir.path()));
     assert!(!dir.path().join("channel3.png").exists());
