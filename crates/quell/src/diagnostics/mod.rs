@@ -29,8 +29,8 @@ pub const FIDELITY_LIMIT: f64 = 0.3;
 pub const SHRINKING: f64 = 0.8;
 /// … above this it grows.
 pub const GROWING: f64 = 1.25;
-/// A tail RMS of e_i below this share of the channel's scale (the larger peak of |g_i| and |e_i|
-/// over the run) gets no advice on its trend: it has converged for any practical purpose, and at
+/// A tail RMS of e_i below this share of the channel's scale (the peak of |g_i| over the run, or
+/// of |e_i| for a reference that is zero) gets no advice on its trend: it has converged for any practical purpose, and at
 /// that level the trend is the integrator's or the sampling's own error (the paper's example in the
 /// normalized form at rtol 1e-9 ends at 1.4e-9 with a "trend" of 0.19; at 1e-12, 1e-11).
 pub const NEGLIGIBLE: f64 = 1e-4;
@@ -180,7 +180,8 @@ fn tail_windows(result: &SimResult, i: usize) -> Option<(f64, f64)> {
 /// Whether channel i's tail error is below [`NEGLIGIBLE`] of its scale.
 fn negligible_tail(result: &SimResult, i: usize) -> bool {
     let peak = |signal: &[f64]| result.column(signal, result.m, i).fold(0.0f64, |p, v| p.max(v.abs()));
-    let scale = peak(&result.g).max(peak(&result.e));
+    let g = peak(&result.g);
+    let scale = if g > 0.0 { g } else { peak(&result.e) };
     tail_windows(result, i).is_some_and(|(last, _)| last < NEGLIGIBLE * scale)
 }
 
@@ -253,9 +254,9 @@ mod tests {
     use crate::sim::{RunStats, Sample};
 
     /// The paper's design with a made-up run of 100 s sampled every 0.1 s: g_1 = 3 sin 2t (the
-    /// paper's), g_2 = 2, and e_i(t) = `e(t)`. The RMS ratio of two windows ten seconds apart is
+    /// paper's), g_2 = 2, both times `size`, and e_i(t) = `e(t)`. The RMS ratio of two windows ten seconds apart is
     /// then exp(∓10/τ) exactly for e = a·exp(∓t/τ) (every sample scaled by the same factor).
-    fn advice_on(e: impl Fn(f64) -> f64) -> Vec<ChannelDiagnostics> {
+    fn advice_on(size: f64, e: impl Fn(f64) -> f64) -> Vec<ChannelDiagnostics> {
         let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
         let d = s.design().unwrap();
         let (m, q) = (2, d.q());
@@ -263,7 +264,7 @@ mod tests {
         let zeros = vec![0.0; m * q];
         for k in 0..=1000 {
             let t = k as f64 * 0.1;
-            let g = [3.0 * (2.0 * t).sin(), 2.0];
+            let g = [size * 3.0 * (2.0 * t).sin(), size * 2.0];
             let y = [g[0] + e(t), g[1] + e(t)];
             r.push(&Sample { t, y: &y, g: &g, u: &[0.0; 2], u_f: &[0.0; 2], eta: &zeros, states: None });
         }
@@ -276,25 +277,35 @@ mod tests {
 
     #[test]
     fn a_shrinking_or_growing_tail_gets_advice_unless_it_is_negligible() {
-        let shrinking = advice_on(|t| 0.5 * (-t / 20.0).exp());
+        let shrinking = advice_on(1.0, |t| 0.5 * (-t / 20.0).exp());
         for c in &shrinking {
             assert!((c.tail_trend.unwrap() - (-0.5f64).exp()).abs() < 1e-12, "{:?}", c.tail_trend);
             assert!(trend_advice(c)[0].contains("still shrinking"), "{:?}", c.advice);
         }
-        let growing = advice_on(|t| 1e-3 * (t / 20.0).exp());
+        let growing = advice_on(1.0, |t| 1e-3 * (t / 20.0).exp());
         for c in &growing {
             assert!((c.tail_trend.unwrap() - 0.5f64.exp()).abs() < 1e-12);
             assert!(trend_advice(c)[0].contains("grows over the tail"), "{:?}", c.advice);
         }
         // The same shrinking shape at 1e-6: the tail (≈ 7e-9) is below 1e-4 of the scale (3 and
-        // 2, the references' peaks): the trend is still reported (to 1e-6: e = y − g, recomputed
+        // 2, the references' peaks, not the errors'): the trend is still reported (to 1e-6: e = y − g, recomputed
         // from y, keeps |g|·ε/|e| ≈ 1e-7 of it), without advice.
-        for c in advice_on(|t| 1e-6 * (-t / 20.0).exp()) {
+        for c in advice_on(1.0, |t| 1e-6 * (-t / 20.0).exp()) {
             assert!((c.tail_trend.unwrap() - (-0.5f64).exp()).abs() < 1e-6, "{:?}", c.tail_trend);
             assert!(trend_advice(&c).is_empty(), "{:?}", c.advice);
         }
+        // A large transient does not raise the scale: a tail of 4e-4 (≥ 1e-4 of 3 and of 2) after
+        // an error of 20 still gets the advice.
+        for c in advice_on(1.0, |t| 20.0 * (-t).exp() + 0.05 * (-t / 20.0).exp()) {
+            assert!(trend_advice(&c)[0].contains("still shrinking"), "{:?}", c.advice);
+        }
+        // With g = 0 (regulation) the scale is the error's own peak: the same small tail is 7e-3
+        // of it and gets the advice.
+        for c in advice_on(0.0, |t| 1e-6 * (-t / 20.0).exp()) {
+            assert!(trend_advice(&c)[0].contains("still shrinking"), "{:?}", c.advice);
+        }
         // Flat: no advice either way.
-        for c in advice_on(|_| 0.01) {
+        for c in advice_on(1.0, |_| 0.01) {
             assert!((c.tail_trend.unwrap() - 1.0).abs() < 1e-12);
             assert!(trend_advice(&c).is_empty(), "{:?}", c.advice);
         }
