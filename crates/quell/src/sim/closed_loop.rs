@@ -13,7 +13,7 @@ use super::result::{Outcome, RunStats, Sample, SimResult};
 use super::{check_run, Integrator, Run, SimError};
 use crate::averaged::Averaged;
 use crate::controller::{command, mat_vec, packed, swapping_error, Equations};
-use crate::design::Design;
+use crate::design::{Design, RegressorScaling};
 use crate::plant::{Plant, PlantError};
 use crate::settings::{self, Actuator, KeyError, MeasurementNoise};
 use crate::signal::{Signal, SignalBank};
@@ -98,6 +98,9 @@ pub struct ContinuousLoop<'a> {
     u_d: Vec<f64>,
     /// What [`DelaySystem::observe`] records; `None` for a loop used as a bare [`DelaySystem`].
     record: Option<Record>,
+    /// Per row of a filter bank W_i, its place in the state and its scale ω_c^(r−σ_i) against its
+    /// input ([`DelaySystem::absolute_tolerances`]); empty for the paper's form of the regressor.
+    w_scales: Vec<(std::ops::Range<usize>, f64)>,
 }
 
 impl<'a> ContinuousLoop<'a> {
@@ -196,6 +199,7 @@ impl<'a> ContinuousLoop<'a> {
             factor: vec![0.0; packed::len(q)],
             u_d: vec![0.0; m],
             record: None,
+            w_scales: filter_bank_scales(design, &eq, &layout),
             layout,
             eq,
         })
@@ -280,9 +284,20 @@ impl DelaySystem for ContinuousLoop<'_> {
     /// absolute tolerance is `atol` / max(1, max_j |ξ̂_j|), so that the command is held to `atol`
     /// whatever the regressor's units (ξ̂ ≈ 1e5 with forces in newtons, where η̂'s errors within
     /// `atol` would be errors of 1e-2 in u).
+    ///
+    /// With the normalized regressor the filter banks' rows get `atol` in their own units too:
+    /// row r of W_i is s^r/den_i(s) of its input, about ω_c^(r−σ_i) times the input's size
+    /// (ω_c = |den_i(0)|^(1/σ_i), the geometric mean of G_ii's pole magnitudes), so its absolute
+    /// tolerance is `atol`·ω_c^(r−σ_i). The error norm then does not depend on the unit of time:
+    /// with `atol` alone, rows of size α^(σ−r) in a loop written in units α times longer are held
+    /// to a relative tolerance of `rtol` where a loop in seconds had `atol` (the paper's example
+    /// in hours took 12 % more steps at 1e-6).
     fn absolute_tolerances(&self, s: &[f64], atol: f64, out: &mut [f64]) {
         let xi = self.eq.regressor(s).iter().fold(1.0f64, |m, v| m.max(v.abs()));
         out[self.layout.nz..self.layout.x].fill(atol / xi);
+        for (row, scale) in &self.w_scales {
+            out[row.clone()].fill(atol * scale);
+        }
     }
 
     /// max_i μ_i · (Gershgorin bound of λ_max(Ω_i)).
@@ -420,6 +435,26 @@ impl DelaySystem for ContinuousLoop<'_> {
             }
         }
     }
+}
+
+/// The rows of the filter banks W_i with their scales ω_c^(r−σ_i) for the normalized regressor
+/// ([`DelaySystem::absolute_tolerances`]), none for the paper's form: its ξ̂ has a size that
+/// depends on the filters' time scale anyway, and its runs keep the tolerances they were made with.
+fn filter_bank_scales(design: &Design, eq: &Equations, l: &Layout) -> Vec<(std::ops::Range<usize>, f64)> {
+    if design.regressor_scaling() != RegressorScaling::Normalized {
+        return Vec::new();
+    }
+    let cols = 1 + eq.q;
+    let mut scales = Vec::new();
+    for (i, ch) in eq.channels.iter().enumerate() {
+        let sigma = ch.sigma() as i32;
+        let omega_c = ch.tf.den[0].abs().powf(1.0 / f64::from(sigma));
+        for r in 0..sigma {
+            let start = l.w[i] + r as usize * cols;
+            scales.push((start..start + cols, omega_c.powi(r - sigma)));
+        }
+    }
+    scales
 }
 
 /// u_j(t − lag), the command (25) of channel j, from the state (lag = 0) or the history; `at` is
