@@ -26,9 +26,10 @@ pub struct DesignArgs {
     /// simulation.t_end/20).
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     pub convergence_time: Option<f64>,
-    /// With --auto: actuator limit on |u_f,i|, the plant input u_f = −K x̂ + F u_d.
-    #[arg(long, value_name = "U", allow_negative_numbers = true)]
-    pub u_limit: Option<f64>,
+    /// With --auto: actuator limit on |u_f,i|, the plant input u_f = −K x̂ + F u_d: one for every
+    /// input, or one per input separated by commas (inputs in different units).
+    #[arg(long, value_name = "U[,U…]", value_delimiter = ',', allow_negative_numbers = true)]
+    pub u_limit: Vec<f64>,
 }
 
 impl DesignArgs {
@@ -37,7 +38,7 @@ impl DesignArgs {
         [
             ("--write", self.write.is_some()),
             ("--convergence-time", self.convergence_time.is_some()),
-            ("--u-limit", self.u_limit.is_some()),
+            ("--u-limit", !self.u_limit.is_empty()),
         ]
         .into_iter()
         .find_map(|(flag, given)| given.then_some(flag))
@@ -56,7 +57,7 @@ fn positive(flag: &str, v: Option<f64>) -> Result<Option<f64>, Failure> {
 pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
     let targets = Targets {
         convergence_time: positive("--convergence-time", args.convergence_time)?,
-        u_limit: positive("--u-limit", args.u_limit)?,
+        u_limit: args.u_limit.clone(),
     };
     let doc = quell::scenario::read_document(&args.scenario).map_err(|e| Failure::Input(e.to_string()))?;
     let auto = auto_design(&doc, &targets).map_err(|e| match e {
@@ -74,7 +75,11 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
             "the automatic design did not pass its verifying simulation (tail max|e| {:?} against bounds {:?}{}){}; nothing written; see docs/tuning.md",
             v.tail_max_e,
             v.bound,
-            targets.u_limit.map_or(String::new(), |l| format!(", max|u_f| {:?} against the limit {l}", v.max_uf)),
+            match targets.u_limit.as_slice() {
+                [] => String::new(),
+                [l] => format!(", max|u_f| {:?} against the limit {l}", v.max_uf),
+                each => format!(", max|u_f| {:?} against the limits {each:?}", v.max_uf),
+            },
             v.advice.iter().map(|a| format!("; {a}")).collect::<String>()
         )));
     }

@@ -87,8 +87,9 @@ fn main() -> ExitCode {
 }
 
 /// Library keys that a flag sets, as the CLI names them.
-const FLAGS: [(&str, &str); 4] = [
+const FLAGS: [(&str, &str); 5] = [
     ("simulation.sample_time", "simulation.sample_time (--sample-time)"),
+    ("u_limit", "--u-limit"),
     ("prefix", "--prefix"),
     ("precision", "--precision"),
     ("compiler", "--compiler"),

@@ -652,6 +652,19 @@ fn design_auto_writes_a_complete_scenario_that_meets_the_tail_bound() {
     let o = quell(&["design", input.to_str().unwrap(), "--auto", "--convergence-time", "-1"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("--convergence-time: expected a finite number > 0, found -1"), "{}", stderr(&o));
+    // --u-limit takes one limit or one per input (the paper's two), comma-separated.
+    for (limits, message) in [
+        ("1e3,1e3,1e3", "--u-limit: expected one actuator limit, or one per input (2), found 3"),
+        ("1e3,-1", "--u-limit: expected finite limits > 0, found -1"),
+    ] {
+        let o = quell(&["design", input.to_str().unwrap(), "--auto", "--u-limit", limits]);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(stderr(&o).contains(message), "{}", stderr(&o));
+    }
+    let o = quell(&["design", input.to_str().unwrap(), "--auto", "--u-limit", "1e3,1e3", "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v = &serde_json::from_str::<serde_json::Value>(&stdout(&o)).unwrap()["verification"];
+    assert!(v["max_uf"].as_array().unwrap().iter().all(|u| u.as_f64().unwrap() <= 1e3), "{v}");
 }
 
 #[test]

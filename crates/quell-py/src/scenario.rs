@@ -589,8 +589,9 @@ pub fn paper_example(py: Python<'_>) -> PyResult<PyScenario> {
 ///     A scenario file's text; its `[design]` keys are kept, the others chosen.
 /// convergence_time : float, optional
 ///     The time within which the adaptation should converge (s).
-/// u_limit : float, optional
-///     A limit on max |u_i|.
+/// u_limit : float or sequence of float, optional
+///     A limit on max |u_f,i|, the plant input (5): one for every input, or one per input
+///     (inputs in different units).
 ///
 /// Returns
 /// -------
@@ -625,10 +626,14 @@ pub fn auto_design<'py>(
     u_limit: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<(PyScenario, Bound<'py, PyAny>)> {
     let text = crate::convert::text(text, "text")?;
-    let target = |v: Option<&Bound<'py, PyAny>>, name| v.filter(|v| !v.is_none()).map(|v| number(v, name)).transpose();
-    let (convergence_time, u_limit) = (target(convergence_time, "convergence_time")?, target(u_limit, "u_limit")?);
-    for (name, v) in [("convergence_time", convergence_time), ("u_limit", u_limit)] {
-        if let Some(x) = v.filter(|x| !(x.is_finite() && *x > 0.0)) {
+    let given = |v: Option<&Bound<'py, PyAny>>| v.filter(|v| !v.is_none()).cloned();
+    let convergence_time = given(convergence_time).map(|v| number(&v, "convergence_time")).transpose()?;
+    let u_limit = given(u_limit).map(|v| crate::convert::vector(&v, "u_limit", Kind::Design)).transpose()?;
+    let u_limit = u_limit.unwrap_or_default();
+    let targets =
+        convergence_time.iter().map(|x| ("convergence_time", *x)).chain(u_limit.iter().map(|x| ("u_limit", *x)));
+    for (name, x) in targets {
+        if !(x.is_finite() && x > 0.0) {
             return Err(Kind::Design.err(py, format!("{name}: expected a finite number > 0, found {x}")));
         }
     }
@@ -636,6 +641,7 @@ pub fn auto_design<'py>(
     let targets = quell::auto::Targets { convergence_time, u_limit };
     let auto =
         crate::interrupt::interruptible(py, || quell::auto::auto_design(&doc, &targets))?.map_err(|e| match e {
+            quell::auto::AutoError::Scenario(e) if e.key == "u_limit" => Kind::Design.err(py, e.to_string()),
             quell::auto::AutoError::Scenario(e) => scenario_error(py, &e),
             e => Kind::Design.err(py, e.to_string()),
         })?;

@@ -5,6 +5,7 @@ simulated from g(t) and ω(t) by scipy.signal.lsim (ξ̂ does not depend on u: t
 e_x' = (A − LC) e_x + (D − LQ) ω, ξ̂_g' = G_g ξ̂_g + L_g g, ξ̂_ω' = G_ω ξ̂_ω + N L (C e_x + Q ω)),
 filtered through G_ii(s) with the channel's delay, and Ω̄_i the mean of Δ_iᵀ Δ_i over whole periods."""
 
+import re
 import warnings
 
 import numpy as np
@@ -127,3 +128,20 @@ def test_auto_design_trades_pole_speed_for_the_actuator_limit():
     advice = " ".join(refused["verification"]["advice"])
     reached = float(advice.split("the smallest max|u_f| reached is ")[1].split(" ")[0])
     assert "actuator limit 1e7" in advice and 1e7 < reached < free_peak, advice
+
+
+def test_auto_design_takes_one_actuator_limit_per_input():
+    """The same vessel with a limit per input in its own units (1.5e7 N, 1.5e7 N, 1e8 N·m): the
+    design's run, simulated again, keeps each max |u_f,i| within its own limit (one limit of 1e8
+    would allow 2.5e7 N on surge); two limits for three inputs, or a negative one, are DesignErrors
+    naming u_limit."""
+    text = without_design((REFERENCE / "supply-vessel.toml").read_text())
+    limits = [1.5e7, 1.5e7, 1e8]
+    scenario, report = quell.auto_design(text, u_limit=np.array(limits))
+    assert report["passed"], report
+    r = quell.simulate(scenario)
+    for c, limit, peak in zip(r.summary(), limits, [10.0, 5.0, 0.1]):
+        assert c["max_uf"] <= limit and c["tail_max_e"] <= 0.01 * peak, c
+    for bad, message in [([1e7, 1e7], "or one per input (3), found 2"), ([1e7, -1.0, 1e8], "found -1")]:
+        with pytest.raises(quell.DesignError, match=r"u_limit: expected .*" + re.escape(message)):
+            quell.auto_design(text, u_limit=bad)

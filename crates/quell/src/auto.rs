@@ -31,9 +31,10 @@
 //!   max(tail/bound, [`TAIL_FLOOR`])^[`TAIL_EXPONENT`]. An observer that holds the zeros of (A, D, C)
 //!   keeps the frequencies it passes within [`crate::diagnostics::FIDELITY_LIMIT`] there. At most
 //!   4 + 3·[`RELAX_STEPS`] runs;
-//! * actuator limit ([`Targets::u_limit`]): candidates beyond it are not kept, and the phases go on
-//!   while none is within it; the first within it needs only the bound. None within: the
-//!   verification fails with the smallest max |u_f| reached;
+//! * actuator limits ([`Targets::u_limit`]: one for every input, or one per input): candidates
+//!   beyond them are not kept, and the phases go on while none is within them; the first within
+//!   them needs only the bound. None within: the verification fails with the closest max |u_f,i|
+//!   reached;
 //! * a failed verification says why when it can: a horizon shorter than [`SEPARATION_BEATS`] beats
 //!   of the two closest frequencies cannot tell them apart, and the advice proposes the t_end
 //!   that can.
@@ -99,13 +100,39 @@ const FIDELITY_AIM: f64 = 0.05;
 const FIDELITY_SLACK: f64 = 1.5;
 
 /// Optional targets of an automatic design.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct Targets {
     /// When the averaged law should have brought the error to 0.2 % of the reference's peak (s);
     /// default: t_end/20.
     pub convergence_time: Option<f64>,
-    /// Actuator limit on |u_f,i|, the plant input u_f = −K x̂ + F u_d (5) the actuator delivers.
-    pub u_limit: Option<f64>,
+    /// Actuator limits on |u_f,i|, the plant input u_f = −K x̂ + F u_d (5) the actuator delivers:
+    /// none (empty), one for every input, or one per input (inputs in different units: a
+    /// vessel's thrusts in N and its yaw moment in N·m).
+    pub u_limit: Vec<f64>,
+}
+
+impl Targets {
+    /// The limit on input i (∞ without one).
+    fn limit(&self, i: usize) -> f64 {
+        match self.u_limit.as_slice() {
+            [] => f64::INFINITY,
+            [l] => *l,
+            each => each[i],
+        }
+    }
+
+    /// Limits that are positive, finite and one or m of them; an error naming `u_limit` otherwise.
+    fn check(&self, m: usize) -> Result<(), AutoError> {
+        let n = self.u_limit.len();
+        let message = if n > 1 && n != m {
+            format!("expected one actuator limit, or one per input ({m}), found {n}: {:?}", self.u_limit)
+        } else if let Some(l) = self.u_limit.iter().find(|l| !(l.is_finite() && **l > 0.0)) {
+            format!("expected finite limits > 0, found {l}")
+        } else {
+            return Ok(());
+        };
+        Err(AutoError::Scenario(ScenarioError { key: "u_limit".into(), message }))
+    }
 }
 
 /// One chosen key and why.
@@ -237,9 +264,14 @@ impl Candidate {
         self.tail_max_e.iter().zip(bound).all(|(e, b)| *e <= b / margin)
     }
 
-    /// Every max |u_f,i| within the limit (no limit: true).
+    /// Every max |u_f,i| within its limit (no limit: true).
     fn within_limit(&self, targets: &Targets) -> bool {
-        targets.u_limit.is_none_or(|l| self.max_uf.iter().all(|u| *u <= l))
+        self.max_uf.iter().enumerate().all(|(i, u)| *u <= targets.limit(i))
+    }
+
+    /// The largest max |u_f,i| / limit_i: at most 1 within the limits.
+    fn excess(&self, targets: &Targets) -> f64 {
+        self.max_uf.iter().enumerate().map(|(i, u)| u / targets.limit(i)).fold(0.0, f64::max)
     }
 
     /// What the relaxation minimizes: steps × max(worst tail / bound, [`TAIL_FLOOR`])^[`TAIL_EXPONENT`].
@@ -268,6 +300,7 @@ type Verified = (Proposal, Design, Candidate);
 /// actuator limit).
 pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, AutoError> {
     let mut first = propose(doc, targets, Speed::FIRST)?;
+    targets.check(first.scenario.plant.m())?;
     let mut design = first.scenario.design()?;
     let bound: Vec<f64> = first.scenario.reference.components.iter().map(|c| TAIL_BOUND * c.peak()).collect();
     let mut runs = 0;
@@ -294,7 +327,7 @@ pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, A
             bound,
             runs,
             candidates,
-            (false, targets.u_limit.is_some()),
+            (false, !targets.u_limit.is_empty()),
             advice,
         ));
     }
@@ -303,16 +336,8 @@ pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, A
     for c in &mut candidates {
         c.chosen = c.speed == speed;
     }
-    let advice = if within {
-        Vec::new()
-    } else {
-        vec![format!(
-            "no candidate keeps max|u_f,i| within the actuator limit {:e} while every tail stays within its bound: the smallest max|u_f| reached is {:e} (the candidate with {speed}); raise the actuator limit (u_limit) to at least that, or ask less of the loop (smaller or slower references, a longer t_end)",
-            targets.u_limit.unwrap_or(f64::INFINITY),
-            kept.2.worst_uf(),
-        )]
-    };
-    Ok(finish(kept, bound, runs, candidates, (within, targets.u_limit.is_some()), advice))
+    let advice = if within { Vec::new() } else { vec![limit_advice(targets, &kept.2)] };
+    Ok(finish(kept, bound, runs, candidates, (within, !targets.u_limit.is_empty()), advice))
 }
 
 /// The relaxation (module docs): from the verified first proposal, slower candidates in three
@@ -367,13 +392,31 @@ fn relax(
             if c.within_limit(targets) && (!within || (margin && c.cost(bound) < kept.2.cost(bound))) {
                 kept = (p, d, c);
                 within = true;
-            } else if !within && c.worst_uf() < kept.2.worst_uf() {
+            } else if !within && c.excess(targets) < kept.2.excess(targets) {
                 kept = (p, d, c);
             }
             go_on = margin || !within;
         }
     }
     (kept, within)
+}
+
+/// Why no candidate was kept within the actuator limits: `closest` is the one nearest to them.
+fn limit_advice(targets: &Targets, closest: &Candidate) -> String {
+    let ask_less = "or ask less of the loop (smaller or slower references, a longer t_end)";
+    match targets.u_limit.as_slice() {
+        [l] => format!(
+            "no candidate keeps max|u_f,i| within the actuator limit {l:e} while every tail stays within its bound: the smallest max|u_f| reached is {:e} (the candidate with {}); raise the actuator limit (u_limit) to at least that, {ask_less}",
+            closest.worst_uf(),
+            closest.speed,
+        ),
+        each => format!(
+            "no candidate keeps every max|u_f,i| within its actuator limit {each:?} while every tail stays within its bound: the closest (the candidate with {}) reaches max|u_f,i| = {:?}, {:.3}× its limit at worst; raise the limits (u_limit) to at least those, {ask_less}",
+            closest.speed,
+            closest.max_uf,
+            closest.excess(targets),
+        ),
+    }
 }
 
 /// The disturbance observer's relative error at each of ω's frequencies (eq. (20) driven by x̂).

@@ -249,9 +249,9 @@ fn the_actuator_limit_bounds_the_recorded_plant_input() {
     // The same run, the same samples: equal to rounding.
     assert!((free.verification.max_uf[0] - u_f).abs() <= 1e-12 * u_f, "{:?} vs {u_f}", free.verification);
     assert!(u_f != u, "u_f {u_f} and u {u} must differ for this check to tell them apart");
-    let loose = auto_design(&doc, &Targets { u_limit: Some(10.0 * u_f), ..Targets::default() }).unwrap();
+    let loose = auto_design(&doc, &Targets { u_limit: vec![10.0 * u_f], ..Targets::default() }).unwrap();
     assert!(loose.verification.passed && loose.scenario.design.mu == free.scenario.design.mu);
-    let tight = auto_design(&doc, &Targets { u_limit: Some(1e-3 * u_f), ..Targets::default() }).unwrap();
+    let tight = auto_design(&doc, &Targets { u_limit: vec![1e-3 * u_f], ..Targets::default() }).unwrap();
     assert!(!tight.verification.passed, "{:?}", tight.verification);
     let (u_f, _) = rerun(&tight);
     assert!((tight.verification.max_uf[0] - u_f).abs() <= 1e-12 * u_f && u_f > 1e-3 * free.verification.max_uf[0]);
@@ -438,7 +438,7 @@ fn the_actuator_limit_trades_pole_speed_for_thrust_on_the_supply_vessel() {
     let free_peak = free.verification.max_uf.iter().copied().fold(0.0, f64::max);
     let limit = 7e7;
     assert!(free_peak > limit, "the unlimited design's peak {free_peak:e} must exceed the limit for this test");
-    let limited = auto_design(&doc, &Targets { u_limit: Some(limit), ..Targets::default() }).unwrap();
+    let limited = auto_design(&doc, &Targets { u_limit: vec![limit], ..Targets::default() }).unwrap();
     assert!(limited.verification.passed, "{:?}", limited.verification);
     assert!(fastest(&limited) < fastest(&free), "{} against {}", fastest(&limited), fastest(&free));
     let s = Scenario::from_toml(&limited.scenario.to_toml()).unwrap();
@@ -450,12 +450,47 @@ fn the_actuator_limit_trades_pole_speed_for_thrust_on_the_supply_vessel() {
         let tail = r.max_abs_error(i, 0.9 * t_end, t_end).unwrap();
         assert!(tail <= TAIL_BOUND * c.peak(), "channel {}: tail {tail:e}", i + 1);
     }
-    let impossible = auto_design(&doc, &Targets { u_limit: Some(1e7), ..Targets::default() }).unwrap();
+    let impossible = auto_design(&doc, &Targets { u_limit: vec![1e7], ..Targets::default() }).unwrap();
     assert!(!impossible.verification.passed, "{:?}", impossible.verification);
     let advice = impossible.verification.advice.join("\n");
     let reached = number_after(&advice, "the smallest max|u_f| reached is ", " ");
     assert!(advice.contains("actuator limit 1e7") && reached > 1e7 && reached < free_peak, "{advice}");
     println!("free peak {free_peak:e}; limited {:?}; impossible: {advice}", limited.verification.max_uf);
+}
+
+/// Limits per input on the same vessel, in their own units: 1.5e7 N on surge and sway, 1e8 N·m on
+/// yaw. The design that meets one limit of 1e8 (docs/tuning.md: 2.5e7 N, 2.0e7 N, 9.3e7 N·m) is
+/// beyond the forces' limits, so the per-input design is a slower one; its written scenario, run
+/// again, keeps each max |u_f,i| within its own limit and each tail within 1 % of its reference's
+/// peak. Two limits for three inputs, or a limit that is not positive, are errors naming u_limit.
+#[test]
+fn per_input_actuator_limits_bind_each_input_in_its_own_units() {
+    let doc = without_design(&data("supply-vessel.toml"));
+    let limits = vec![1.5e7, 1.5e7, 1e8];
+    let one = auto_design(&doc, &Targets { u_limit: vec![1e8], ..Targets::default() }).unwrap();
+    assert!(one.verification.passed && one.verification.max_uf[0] > limits[0], "{:?}", one.verification);
+    let each = auto_design(&doc, &Targets { u_limit: limits.clone(), ..Targets::default() }).unwrap();
+    assert!(each.verification.passed, "{:?}", each.verification);
+    let s = Scenario::from_toml(&each.scenario.to_toml()).unwrap();
+    let r = Run::of(&s, &s.design().unwrap()).simulate(|_| ControlFlow::Continue(())).unwrap();
+    let t_end = s.simulation.t_end;
+    for (i, c) in s.reference.components.iter().enumerate() {
+        let peak = r.column(&r.u_f, 3, i).fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(peak <= limits[i], "input {}: max|u_f| {peak:e} against its limit {:e}", i + 1, limits[i]);
+        let tail = r.max_abs_error(i, 0.9 * t_end, t_end).unwrap();
+        assert!(tail <= TAIL_BOUND * c.peak(), "channel {}: tail {tail:e}", i + 1);
+    }
+    // Limits no candidate meets: the advice names the closest candidate's peaks and how far over.
+    let impossible = auto_design(&doc, &Targets { u_limit: vec![1e6, 1e6, 1e8], ..Targets::default() }).unwrap();
+    assert!(!impossible.verification.passed);
+    let advice = impossible.verification.advice.join("\n");
+    let over = number_after(&advice, "], ", "× its limit");
+    assert!(advice.contains("its actuator limit [1000000.0, 1000000.0, 100000000.0]") && over > 1.0, "{advice}");
+    for (bad, found) in [(vec![1e7, 1e7], "found 2"), (vec![1e7, -1.0, 1e8], "found -1")] {
+        let e = auto_design(&doc, &Targets { u_limit: bad, ..Targets::default() }).unwrap_err().to_string();
+        assert!(e.starts_with("u_limit: expected") && e.contains(found), "{e}");
+    }
+    println!("one limit: {:?}; per input: {:?}", one.verification.max_uf, each.verification.max_uf);
 }
 
 /// The two-beat rule on a plant other than the quadruple tank: a stable SISO plant (poles −1, −2,
