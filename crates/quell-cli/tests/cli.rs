@@ -240,6 +240,18 @@ fn a_study_given_as_a_scenario_is_named_a_study_with_the_command_that_runs_it() 
 }
 
 #[test]
+fn a_scenario_given_as_a_study_is_named_a_scenario_with_the_command_that_runs_it() {
+    for command in ["sweep", "tune"] {
+        let err = input_error(&[command, &paper(), "--out", "/nonexistent/never-written"]);
+        assert!(err.contains("name: unknown key"), "{err}");
+        assert!(
+            err.contains("is a scenario, not a study") && err.contains(&format!("`quell run {}`", paper())),
+            "{err}"
+        );
+    }
+}
+
+#[test]
 fn design_wrong_shape_exits_2() {
     let err = design_with_edit("shape", "C = [[2.0, 2.0, 0.0], [2.0, 1.0, 2.0]]", "C = [[2.0, 2.0], [2.0, 1.0]]");
     assert!(err.contains("plant.C: expected 2×3"), "{err}");
