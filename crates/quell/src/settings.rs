@@ -24,8 +24,15 @@ impl KeyError {
 /// The integrator's default relative and absolute tolerance (`simulation.rtol`, `atol`).
 pub const DEFAULT_TOLERANCE: f64 = 1e-9;
 
-/// Most rows a run records (t_end / output_step): every row is kept in memory, ~200 bytes each.
+/// Most rows a run records (t_end / output_step); their bytes are budgeted too
+/// ([`MAX_RECORD_BYTES`]).
 pub const MAX_OUTPUT_SAMPLES: f64 = 1e7;
+
+/// Most bytes of recorded signals a run keeps in memory (2 GiB): rows × 8·(1 + 5m + m·q, + 2n with
+/// the states). Rows of more than 27 numbers reach it before [`MAX_OUTPUT_SAMPLES`]: the SI supply
+/// vessel's 52 numbers a row held 837 MB at 2e6 rows, so 1e7 would have taken 4.2 GB (5.1 GB with
+/// the states) and written a 10.6 GB signals.csv.
+pub const MAX_RECORD_BYTES: f64 = 2.0 * 1024.0 * 1024.0 * 1024.0;
 
 /// Largest scenario or study file read (64 MiB): the paper's example is 2 kB and a plant of
 /// n = 1000 states about 20 MB, so anything longer is the wrong path (`/dev/zero`), which would
@@ -259,6 +266,25 @@ pub(crate) fn check_integrator_delays(key: &str, delays: &[f64], t_end: f64) -> 
 /// significant digits, raised in its third digit until it passes, written as Rust's shortest form
 /// (`{}` between 1e-4 and 1e6, otherwise `{:e}`), so that 1e293 does not print as 294 digits and
 /// the value typed back passes the check.
+/// The recorded signals' memory: (t_end / output_step) rows of `row_bytes` within
+/// [`MAX_RECORD_BYTES`]; `what` names a row's entries.
+pub(crate) fn check_record(t_end: f64, output_step: f64, row_bytes: usize, what: &str) -> Result<(), KeyError> {
+    let rows = t_end / output_step;
+    let limit = MAX_RECORD_BYTES / row_bytes as f64;
+    if rows <= limit {
+        return Ok(());
+    }
+    Err(KeyError::new(
+        "simulation.output_step",
+        format!(
+            "t_end / output_step = {rows:.3e} rows of {row_bytes} bytes ({what}) = {:.3} GiB of recorded signals; at most {} GiB are kept in memory; choose output_step ≥ {}",
+            rows * row_bytes as f64 / 1024f64.powi(3),
+            MAX_RECORD_BYTES / 1024f64.powi(3),
+            at_least(t_end, limit)
+        ),
+    ))
+}
+
 fn at_least(t_end: f64, limit: f64) -> String {
     let (x, passes) = (t_end / limit, |h: f64| t_end / h <= limit);
     let e = (x.log10().floor() as i32).saturating_sub(2);

@@ -90,6 +90,44 @@ fn horizons_and_tolerances_are_checked() {
     assert_eq!(samp(1.0, 0.15, 0.1), "simulation.output_step", "1.5 samples per output");
 }
 
+/// The recorded signals are budgeted in bytes, not only in rows: the SI supply vessel (m = 3,
+/// q = 12: 52 numbers a row, 416 bytes; 64 with x and x̂) at 1e7 rows would keep 3.9 GiB, beyond
+/// the 2 GiB budget, where the paper's example (27 numbers a row) keeps 1.8 GiB at 9e6 rows and
+/// passes (at 1e7, 2.01 GiB, it would not). The error names output_step with the bytes, and the output step it proposes fits
+/// (checked here from the row's width, not from the message's arithmetic); the states widen the
+/// row and lower the rows allowed. Both loops check it before they start.
+#[test]
+fn the_recorded_signals_are_budgeted_in_bytes() {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/supply-vessel.toml")).unwrap();
+    let s = Scenario::from_toml(&text).unwrap();
+    let d = s.design().unwrap();
+    let (t_end, rows) = (600.0, 1e7);
+    let check =
+        |d: &Design, s: &Scenario, settings: RunSettings| Run::new(d, &s.reference, &s.disturbance, settings).check();
+    let e = match check(&d, &s, RunSettings::continuous(t_end, t_end / rows, 1e-7, 1e-7)) {
+        Err(SimError::Input(e)) => e,
+        other => panic!("expected an input error, got {other:?}"),
+    };
+    assert_eq!(e.key, "simulation.output_step");
+    assert!(e.message.contains("rows of 416 bytes (t, y, g, e, u, u_f, η̂) = 3.874 GiB"), "{}", e.message);
+    let docs = include_str!("../../../docs/errors.md");
+    assert!(docs.contains(&format!("{}: {}", e.key, e.message)), "docs/errors.md does not show: {}", e.message);
+    let proposed: f64 = e.message.rsplit("≥ ").next().unwrap().parse().unwrap();
+    let budget = 2.0 * 1024f64.powi(3);
+    assert!(t_end / proposed * 416.0 <= budget && t_end / (0.99 * proposed) * 416.0 > budget, "{proposed}");
+    assert!(check(&d, &s, RunSettings::continuous(t_end, proposed, 1e-7, 1e-7)).is_ok());
+    let states = RunSettings { record_states: true, ..RunSettings::continuous(t_end, proposed, 1e-7, 1e-7) };
+    assert!(check(&d, &s, states).is_err(), "x and x̂ make a row 512 bytes");
+    // The sampled loop at T_s = output_step = 0.1 ms: 6e6 rows, 2.3 GiB.
+    match check(&d, &s, RunSettings::sampled(t_end, 1e-4, 1e-4)) {
+        Err(SimError::Input(e)) => assert!(e.message.contains("GiB of recorded signals"), "{}", e.message),
+        other => panic!("expected an input error, got {other:?}"),
+    }
+    let (p, pd) = paper();
+    assert!(check(&pd, &p, RunSettings::continuous(100.0, 100.0 / 9e6, 1e-9, 1e-9)).is_ok());
+    assert!(check(&pd, &p, RunSettings::continuous(100.0, 100.0 / rows, 1e-9, 1e-9)).is_err());
+}
+
 #[test]
 fn noise_and_divergence_bound_are_checked() {
     let (s, _) = paper();
