@@ -344,3 +344,26 @@ fn huge_delay_at_a_short_sample_time_is_an_error() {
     let d = Scenario::from_toml(PAPER_EXAMPLE).unwrap().design().unwrap();
     assert!(quell::Controller::new(&d, 1e-300).is_err());
 }
+
+/// The delay lines are budgeted together, in bytes: the SI supply vessel (three channels, q = 12:
+/// rows of 13 numbers) with its 1 s delays at T_s = 0.2 µs needs 5e6 + 1 rows a channel, each
+/// within the 1e7 a line may hold, but 1.45 GiB together; the error proposes a sample time at
+/// which they fit (checked here from the rows, not the message), and the controller is built
+/// there.
+#[test]
+fn the_delay_lines_are_budgeted_together_in_bytes() {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/supply-vessel.toml")).unwrap();
+    let d = Scenario::from_toml(&text).unwrap().design().unwrap();
+    let e = quell::Controller::new(&d, 2e-7).unwrap_err();
+    let quell::ControllerError::DelayLinesTooLarge { rows, width, at_least, .. } = e else { panic!("{e}") };
+    assert_eq!((rows, width), (3.0 * (5e6 + 1.0), 13));
+    assert!(e.to_string().contains("(1.453 GiB); at most 1 GiB are kept"), "{e}");
+    let docs = include_str!("../../../docs/errors.md");
+    assert!(docs.contains(&e.to_string()), "docs/errors.md does not show: {e}");
+    let budget = quell::controller::MAX_DELAY_LINE_BYTES;
+    let rows_at = |t: f64| 3.0 * (1.0 / t + 1.0);
+    assert!(rows_at(at_least) * 13.0 * 8.0 <= budget && rows_at(0.99 * at_least) * 13.0 * 8.0 > budget, "{at_least}");
+    // 1 s is a whole number of samples of 1 / round(1 / at_least).
+    let fits = 1.0 / (1.0 / at_least).floor();
+    assert!(quell::Controller::new(&d, fits).is_ok(), "{fits}");
+}

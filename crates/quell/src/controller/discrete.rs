@@ -20,6 +20,10 @@ pub enum ControllerError {
     DelayNotMultiple { channel: usize, delay: f64, sample_time: f64, ratio: f64, nearest: Option<f64> },
     #[error("simulation.sample_time: channel {}'s delay τ = {} s is {samples:e} samples of T_s = {} s; a delay line holds at most {max:e} samples; use a longer sample time", .channel + 1, crate::linalg::fmt_number(*.delay), crate::linalg::fmt_number(*.sample_time), max = MAX_DELAY_SAMPLES)]
     DelayTooLong { channel: usize, delay: f64, sample_time: f64, samples: f64 },
+    /// The delay lines together would hold more than [`MAX_DELAY_LINE_BYTES`]; `at_least` is a
+    /// sample time at which they would not.
+    #[error("simulation.sample_time: the delay lines of u_i(t − τ_i) and ξ̂(t − τ_i) would hold {rows:e} rows of {width} numbers at T_s = {} s ({:.3} GiB); at most {} GiB are kept; use a sample time ≥ {}", crate::linalg::fmt_number(*.sample_time), *.rows * (8 * *.width) as f64 / 1024f64.powi(3), MAX_DELAY_LINE_BYTES / 1024f64.powi(3), crate::linalg::fmt_number(*.at_least))]
+    DelayLinesTooLarge { rows: f64, width: usize, sample_time: f64, at_least: f64 },
     /// A discretized block is not finite at this sample time.
     #[error("simulation.sample_time: {what} is not finite after discretizing at T_s = {sample_time:e} s; the exact discretization overflowed (the design's eigenvalues or gains times T_s are beyond floating point); choose a shorter sample time or poles of smaller magnitude")]
     NotFinite { what: String, sample_time: f64 },
@@ -63,6 +67,11 @@ pub const MAX_ADAPTATION_STEP: f64 = crate::plant::MAX_ENTRY;
 
 /// Longest delay line, in samples (its memory is this many rows of 1 + q numbers per channel).
 pub const MAX_DELAY_SAMPLES: f64 = 1e7;
+
+/// Most bytes the delay lines of all channels hold together (1 GiB): each of its 1e7 samples, a
+/// line is 8·(1 + q) bytes a row, so three channels of the SI supply vessel (q = 12) at the rows'
+/// limit would have held 3.1 GB (and the generated C as many static bytes).
+pub const MAX_DELAY_LINE_BYTES: f64 = 1024.0 * 1024.0 * 1024.0;
 
 /// A ring buffer holding the last `d + 1` rows of width w, so that row k − d is available at k.
 #[derive(Debug, Clone)]
@@ -226,6 +235,19 @@ fn samples(delays: &[f64], T: f64) -> Result<Vec<usize>, ControllerError> {
     Ok(delays.iter().map(|d| (d / T).round() as usize).collect())
 }
 
+/// The delay lines' rows Σ (d_i + 1) of `width` numbers within [`MAX_DELAY_LINE_BYTES`].
+fn check_delay_lines(d: &[usize], width: usize, T: f64) -> Result<(), ControllerError> {
+    let rows: f64 = d.iter().map(|&d| d as f64 + 1.0).sum();
+    let limit = MAX_DELAY_LINE_BYTES / (8 * width) as f64;
+    if rows <= limit {
+        return Ok(());
+    }
+    // The rows scale as 1/T_s: three significant digits, rounded up.
+    let t = T * rows / limit;
+    let scale = 10f64.powf(t.log10().floor() - 2.0);
+    Err(ControllerError::DelayLinesTooLarge { rows, width, sample_time: T, at_least: (t / scale).ceil() * scale })
+}
+
 impl Controller {
     /// Discretizes every linear block exactly for ZOH inputs at `sample_time` (matrix exponentials,
     /// computed once here). Delays must be whole numbers of samples.
@@ -237,6 +259,7 @@ impl Controller {
         let d = samples(&design.plant().delays, T)?;
         let eq = Equations::new(design);
         let (m, q, nz) = (eq.m, eq.q, eq.nz);
+        check_delay_lines(&d, 1 + q, T)?;
         let (Phi_z, Gamma_z) = zoh_unchecked(&eq.A_z, &eq.B_z, T);
         let mut PhiGamma_z = DMatrix::zeros(nz, nz + 3 * m);
         PhiGamma_z.view_mut((0, 0), (nz, nz)).copy_from(&Phi_z);

@@ -16,7 +16,9 @@ pub(crate) mod discrete;
 pub(crate) mod packed;
 
 pub(crate) use discrete::Discretized;
-pub use discrete::{Controller, ControllerError, MAX_ADAPTATION_STEP, MAX_DELAY_SAMPLES, MAX_MEASUREMENT};
+pub use discrete::{
+    Controller, ControllerError, MAX_ADAPTATION_STEP, MAX_DELAY_LINE_BYTES, MAX_DELAY_SAMPLES, MAX_MEASUREMENT,
+};
 
 use nalgebra::DMatrix;
 
