@@ -262,10 +262,6 @@ pub(crate) fn check_integrator_delays(key: &str, delays: &[f64], t_end: f64) -> 
     }
 }
 
-/// A step h to suggest so that t_end / h ≤ `limit`: the number nearest x = t_end / limit with three
-/// significant digits, raised in its third digit until it passes, written as Rust's shortest form
-/// (`{}` between 1e-4 and 1e6, otherwise `{:e}`), so that 1e293 does not print as 294 digits and
-/// the value typed back passes the check.
 /// The recorded signals' memory: (t_end / output_step) rows of `row_bytes` within
 /// [`MAX_RECORD_BYTES`]; `what` names a row's entries.
 pub(crate) fn check_record(t_end: f64, output_step: f64, row_bytes: usize, what: &str) -> Result<(), KeyError> {
@@ -285,18 +281,36 @@ pub(crate) fn check_record(t_end: f64, output_step: f64, row_bytes: usize, what:
     ))
 }
 
+/// [`step_at_least`], written as Rust's shortest form ([`fmt_short`]).
 fn at_least(t_end: f64, limit: f64) -> String {
+    fmt_short(step_at_least(t_end, limit))
+}
+
+/// A step h to suggest so that t_end / h ≤ `limit`: the number nearest x = t_end / limit with three
+/// significant digits, raised in its third digit until it passes, so that the value typed back
+/// passes the check.
+pub(crate) fn step_at_least(t_end: f64, limit: f64) -> f64 {
     let (x, passes) = (t_end / limit, |h: f64| t_end / h <= limit);
     let e = (x.log10().floor() as i32).saturating_sub(2);
     let mut digits = (x / 10f64.powi(e)).round();
     for _ in 0..1000 {
         let v: f64 = format!("{digits}e{e}").parse().unwrap_or(f64::NAN);
         if v.is_finite() && passes(v) {
-            return if (1e-4..1e6).contains(&v) { format!("{v}") } else { format!("{v:e}") };
+            return v;
         }
         digits += 1.0;
     }
-    format!("{x:e}")
+    x
+}
+
+/// Rust's shortest form of `v`: `{}` between 1e-4 and 1e6, otherwise `{:e}`, so that 1e293 does not
+/// print as 294 digits.
+pub(crate) fn fmt_short(v: f64) -> String {
+    if (1e-4..1e6).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
 }
 
 /// The integrator's tolerances: finite and > 0.

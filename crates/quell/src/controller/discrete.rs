@@ -22,7 +22,7 @@ pub enum ControllerError {
     DelayTooLong { channel: usize, delay: f64, sample_time: f64, samples: f64 },
     /// The delay lines together would hold more than [`MAX_DELAY_LINE_BYTES`]; `at_least` is a
     /// sample time at which they would not.
-    #[error("simulation.sample_time: the delay lines of u_i(t − τ_i) and ξ̂(t − τ_i) would hold {rows:e} rows of {width} numbers at T_s = {} s ({:.3} GiB); at most {} GiB are kept; use a sample time ≥ {}", crate::linalg::fmt_number(*.sample_time), *.rows * (8 * *.width) as f64 / 1024f64.powi(3), MAX_DELAY_LINE_BYTES / 1024f64.powi(3), crate::linalg::fmt_number(*.at_least))]
+    #[error("simulation.sample_time: the delay lines of u_i(t − τ_i) and ξ̂(t − τ_i) would hold {rows:e} rows of {width} numbers at T_s = {} s ({:.3} GiB); at most {} GiB are kept; use a sample time ≥ {}", crate::linalg::fmt_number(*.sample_time), *.rows * (8 * *.width) as f64 / 1024f64.powi(3), MAX_DELAY_LINE_BYTES / 1024f64.powi(3), crate::settings::fmt_short(*.at_least))]
     DelayLinesTooLarge { rows: f64, width: usize, sample_time: f64, at_least: f64 },
     /// A discretized block is not finite at this sample time.
     #[error("simulation.sample_time: {what} is not finite after discretizing at T_s = {sample_time:e} s; the exact discretization overflowed (the design's eigenvalues or gains times T_s are beyond floating point); choose a shorter sample time or poles of smaller magnitude")]
@@ -235,17 +235,17 @@ fn samples(delays: &[f64], T: f64) -> Result<Vec<usize>, ControllerError> {
     Ok(delays.iter().map(|d| (d / T).round() as usize).collect())
 }
 
-/// The delay lines' rows Σ (d_i + 1) of `width` numbers within [`MAX_DELAY_LINE_BYTES`].
-fn check_delay_lines(d: &[usize], width: usize, T: f64) -> Result<(), ControllerError> {
+/// The delay lines' rows Σ (d_i + 1) = Σ τ_i/T_s + m of `width` numbers within
+/// [`MAX_DELAY_LINE_BYTES`]; `d` holds the delays τ_i in samples.
+fn check_delay_lines(delays: &[f64], d: &[usize], width: usize, T: f64) -> Result<(), ControllerError> {
     let rows: f64 = d.iter().map(|&d| d as f64 + 1.0).sum();
     let limit = MAX_DELAY_LINE_BYTES / (8 * width) as f64;
     if rows <= limit {
         return Ok(());
     }
-    // The rows scale as 1/T_s: three significant digits, rounded up.
-    let t = T * rows / limit;
-    let scale = 10f64.powf(t.log10().floor() - 2.0);
-    Err(ControllerError::DelayLinesTooLarge { rows, width, sample_time: T, at_least: (t / scale).ceil() * scale })
+    // Σ τ_i/T_s ≤ limit − m: the step suggestion of the recorded rows, on Σ τ_i.
+    let at_least = crate::settings::step_at_least(delays.iter().sum(), limit - d.len() as f64);
+    Err(ControllerError::DelayLinesTooLarge { rows, width, sample_time: T, at_least })
 }
 
 impl Controller {
@@ -259,7 +259,7 @@ impl Controller {
         let d = samples(&design.plant().delays, T)?;
         let eq = Equations::new(design);
         let (m, q, nz) = (eq.m, eq.q, eq.nz);
-        check_delay_lines(&d, 1 + q, T)?;
+        check_delay_lines(&design.plant().delays, &d, 1 + q, T)?;
         let (Phi_z, Gamma_z) = zoh_unchecked(&eq.A_z, &eq.B_z, T);
         let mut PhiGamma_z = DMatrix::zeros(nz, nz + 3 * m);
         PhiGamma_z.view_mut((0, 0), (nz, nz)).copy_from(&Phi_z);
