@@ -4,8 +4,9 @@
 //! that Ω_i of eq. (33) settles to), the predicted convergence time 1/(μ_i λ_min), the adaptation
 //! rate μ_i λ_max, the excitation each frequency of g and ω gives Ω̄_i and, for the disturbance
 //! observer (20), how faithfully it passes each frequency of ω (T(jw) against N D = L_ω). From the
-//! run: whether the tail error, unless already negligible, is still shrinking. One line of advice per problem found. Before a
-//! run, [`estimate()`] gives the adaptive law's pace from the same averages (the design report).
+//! run: whether the tail error, unless already negligible, is still shrinking. One line of advice
+//! per problem found. Before a run, [`estimate()`] gives the adaptive law's pace from the same
+//! averages (the design report).
 
 pub use crate::averaged;
 pub mod estimate;
@@ -30,9 +31,10 @@ pub const SHRINKING: f64 = 0.8;
 /// … above this it grows.
 pub const GROWING: f64 = 1.25;
 /// A tail RMS of e_i below this share of the channel's scale (the peak of |g_i| over the run, or
-/// of |e_i| for a reference that is zero) gets no advice on its trend: it has converged for any practical purpose, and at
-/// that level the trend is the integrator's or the sampling's own error (the paper's example in the
-/// normalized form at rtol 1e-9 ends at 1.4e-9 with a "trend" of 0.19; at 1e-12, 1e-11).
+/// of |e_i| for a reference that is zero) gets no advice on its trend: it has converged for any
+/// practical purpose, and at that level the trend is the integrator's or the sampling's own error
+/// (the paper's example in the normalized form at rtol 1e-9 ends at 1.4e-9 with a "trend" of 0.19;
+/// at 1e-12, 1e-11).
 pub const NEGLIGIBLE: f64 = 1e-4;
 /// A direction of η̂_i carrying at least this share of the initial error energy counts as relevant
 /// for the advice on μ.
@@ -157,7 +159,11 @@ fn observer_remedy(design: &Design) -> String {
 
 /// RMS of e_i over the last 10 % of the run against the 10 % before.
 pub fn tail_trend(result: &SimResult, i: usize) -> Option<f64> {
-    let (last, before) = tail_windows(result, i)?;
+    trend(tail_windows(result, i)?)
+}
+
+/// The ratio of the two windows' RMS ([`tail_windows`]); `None` when the earlier one is 0.
+fn trend((last, before): (f64, f64)) -> Option<f64> {
     (before > 0.0).then_some(last / before)
 }
 
@@ -177,12 +183,12 @@ fn tail_windows(result: &SimResult, i: usize) -> Option<(f64, f64)> {
     Some((rms(t1 - 0.1 * span, t1)?, rms(t1 - 0.2 * span, t1 - 0.1 * span)?))
 }
 
-/// Whether channel i's tail error is below [`NEGLIGIBLE`] of its scale.
-fn negligible_tail(result: &SimResult, i: usize) -> bool {
+/// Whether channel i's tail RMS `last` is below [`NEGLIGIBLE`] of its scale.
+fn negligible_tail(result: &SimResult, i: usize, last: f64) -> bool {
     let peak = |signal: &[f64]| result.column(signal, result.m, i).fold(0.0f64, |p, v| p.max(v.abs()));
     let g = peak(&result.g);
     let scale = if g > 0.0 { g } else { peak(&result.e) };
-    tail_windows(result, i).is_some_and(|(last, _)| last < NEGLIGIBLE * scale)
+    last < NEGLIGIBLE * scale
 }
 
 fn channel(
@@ -196,7 +202,8 @@ fn channel(
 ) -> ChannelDiagnostics {
     let mu = design.mu()[i];
     let key = format!("design.mu[{i}]");
-    let trend = tail_trend(result, i);
+    let windows = tail_windows(result, i);
+    let trend = windows.and_then(trend);
     let mut advice = Vec::new();
     let relevant = c.slowest_relevant(RELEVANT_SHARE);
     if relevant.is_finite() && mu * relevant * t_end < 5.0 {
@@ -214,7 +221,7 @@ fn channel(
             )),
         }
     }
-    match trend.filter(|_| !negligible_tail(result, i)) {
+    match trend.filter(|_| windows.is_some_and(|(last, _)| !negligible_tail(result, i, last))) {
         Some(r) if r < SHRINKING => advice.push(format!(
             "channel {}'s error is still shrinking over the tail (RMS ratio {r:.2} between the last two tenths of the run): lengthen simulation.t_end or raise {key}",
             i + 1
@@ -254,8 +261,9 @@ mod tests {
     use crate::sim::{RunStats, Sample};
 
     /// The paper's design with a made-up run of 100 s sampled every 0.1 s: g_1 = 3 sin 2t (the
-    /// paper's), g_2 = 2, both times `size`, and e_i(t) = `e(t)`. The RMS ratio of two windows ten seconds apart is
-    /// then exp(∓10/τ) exactly for e = a·exp(∓t/τ) (every sample scaled by the same factor).
+    /// paper's), g_2 = 2, both times `size`, and e_i(t) = `e(t)`. The RMS ratio of two windows ten
+    /// seconds apart is then exp(∓10/τ) exactly for e = a·exp(∓t/τ) (every sample scaled by the
+    /// same factor).
     fn advice_on(size: f64, e: impl Fn(f64) -> f64) -> Vec<ChannelDiagnostics> {
         let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
         let d = s.design().unwrap();
@@ -288,8 +296,8 @@ mod tests {
             assert!(trend_advice(c)[0].contains("grows over the tail"), "{:?}", c.advice);
         }
         // The same shrinking shape at 1e-6: the tail (≈ 7e-9) is below 1e-4 of the scale (3 and
-        // 2, the references' peaks, not the errors'): the trend is still reported (to 1e-6: e = y − g, recomputed
-        // from y, keeps |g|·ε/|e| ≈ 1e-7 of it), without advice.
+        // 2, the references' peaks, not the errors'): the trend is still reported (to 1e-6: e = y − g,
+        // recomputed from y, keeps |g|·ε/|e| ≈ 1e-7 of it), without advice.
         for c in advice_on(1.0, |t| 1e-6 * (-t / 20.0).exp()) {
             assert!((c.tail_trend.unwrap() - (-0.5f64).exp()).abs() < 1e-6, "{:?}", c.tail_trend);
             assert!(trend_advice(&c).is_empty(), "{:?}", c.advice);
