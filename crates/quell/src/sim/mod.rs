@@ -248,13 +248,8 @@ impl<'a> Run<'a> {
 fn check_run(run: &Run<'_>) -> Result<(), KeyError> {
     let st = &run.settings;
     settings::check_horizon(st.t_end, st.output_step)?;
-    let (p, q) = (run.design.plant(), run.design.q());
-    let (m, n) = (p.m(), p.n());
-    let (width, what) = if st.record_states {
-        (1 + 5 * m + m * q + 2 * n, "t, y, g, e, u, u_f, η̂, x, x̂")
-    } else {
-        (1 + 5 * m + m * q, "t, y, g, e, u, u_f, η̂")
-    };
+    let p = run.design.plant();
+    let (width, what) = SimResult::row_len(p.m(), run.design.q(), p.n(), st.record_states);
     settings::check_record(st.t_end, st.output_step, 8 * width, what)?;
     divergence::check_bound(st.divergence_bound)?;
     check_signals(run.design.plant(), run.reference, run.disturbance)
