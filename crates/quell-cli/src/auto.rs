@@ -45,20 +45,8 @@ impl DesignArgs {
     }
 }
 
-fn positive(flag: &str, v: Option<f64>) -> Result<Option<f64>, Failure> {
-    match v {
-        Some(x) if !(x.is_finite() && x > 0.0) => {
-            Err(Failure::Input(format!("{flag}: expected a finite number > 0, found {x}")))
-        }
-        _ => Ok(v),
-    }
-}
-
 pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
-    let targets = Targets {
-        convergence_time: positive("--convergence-time", args.convergence_time)?,
-        u_limit: args.u_limit.clone(),
-    };
+    let targets = Targets { convergence_time: args.convergence_time, u_limit: args.u_limit.clone() };
     let doc = quell::scenario::read_document(&args.scenario).map_err(|e| Failure::Input(e.to_string()))?;
     let auto = auto_design(&doc, &targets).map_err(|e| match e {
         AutoError::Run(_) => Failure::Run(e.to_string()),

@@ -87,9 +87,10 @@ fn main() -> ExitCode {
 }
 
 /// Library keys that a flag sets, as the CLI names them.
-const FLAGS: [(&str, &str); 5] = [
+const FLAGS: [(&str, &str); 6] = [
     ("simulation.sample_time", "simulation.sample_time (--sample-time)"),
     ("u_limit", "--u-limit"),
+    ("convergence_time", "--convergence-time"),
     ("prefix", "--prefix"),
     ("precision", "--precision"),
     ("compiler", "--compiler"),

@@ -630,15 +630,11 @@ pub fn auto_design<'py>(
     let convergence_time = given(convergence_time).map(|v| number(&v, "convergence_time")).transpose()?;
     let u_limit = given(u_limit).map(|v| crate::convert::vector(&v, "u_limit", Kind::Design)).transpose()?;
     let u_limit = u_limit.unwrap_or_default();
-    // The limits' count and sign are checked by auto_design (key u_limit: a DesignError below).
-    if let Some(x) = convergence_time.filter(|x| !(x.is_finite() && *x > 0.0)) {
-        return Err(Kind::Design.err(py, format!("convergence_time: expected a finite number > 0, found {x}")));
-    }
+    // Their ranges are checked by auto_design (AutoError::Target: a DesignError below).
     let doc = quell::scenario::parse_document(&text).map_err(|e| scenario_error(py, &e))?;
     let targets = quell::auto::Targets { convergence_time, u_limit };
     let auto =
         crate::interrupt::interruptible(py, || quell::auto::auto_design(&doc, &targets))?.map_err(|e| match e {
-            quell::auto::AutoError::Scenario(e) if e.key == "u_limit" => Kind::Design.err(py, e.to_string()),
             quell::auto::AutoError::Scenario(e) => scenario_error(py, &e),
             e => Kind::Design.err(py, e.to_string()),
         })?;

@@ -121,17 +121,22 @@ impl Targets {
         }
     }
 
-    /// Limits that are positive, finite and one or m of them; an error naming `u_limit` otherwise.
+    /// A convergence time that is positive and finite, and limits that are positive, finite and one
+    /// or m of them; otherwise an error naming `convergence_time` or `u_limit`.
     fn check(&self, m: usize) -> Result<(), AutoError> {
         let n = self.u_limit.len();
-        let message = if n > 1 && n != m {
-            format!("expected one actuator limit, or one per input ({m}), found {n}: {:?}", self.u_limit)
+        let (key, message): (&'static str, _) = if let Some(t) =
+            self.convergence_time.filter(|t| !(t.is_finite() && *t > 0.0))
+        {
+            ("convergence_time", format!("expected a finite number > 0, found {t}"))
+        } else if n > 1 && n != m {
+            ("u_limit", format!("expected one actuator limit, or one per input ({m}), found {n}: {:?}", self.u_limit))
         } else if let Some(l) = self.u_limit.iter().find(|l| !(l.is_finite() && **l > 0.0)) {
-            format!("expected finite limits > 0, found {l}")
+            ("u_limit", format!("expected finite limits > 0, found {l}"))
         } else {
             return Ok(());
         };
-        Err(AutoError::Scenario(ScenarioError { key: "u_limit".into(), message }))
+        Err(AutoError::Target { argument: key, message })
     }
 }
 
@@ -200,6 +205,9 @@ pub enum AutoError {
     Design(#[from] DesignError),
     #[error(transparent)]
     Sim(#[from] SimError),
+    /// A [`Targets`] field (`argument`: its name) out of range.
+    #[error("{argument}: {message}")]
+    Target { argument: &'static str, message: String },
     #[error("the verifying simulation did not reach t_end: {0:?}; the chosen design is unusable for this scenario, give some [design] keys by hand (docs/tuning.md)")]
     Run(Outcome),
 }
@@ -239,6 +247,7 @@ fn propose(doc: &toml::Table, targets: &Targets, speed: Speed) -> Result<Proposa
     let (mut choices, mut mu_caps, mut relaxable) = (Vec::new(), None, [false; 3]);
     let scenario = Scenario::from_document_with(doc, |partial, s| -> Result<DesignSpec, AutoError> {
         relaxable = [partial.channel_poles.is_none(), partial.observer.is_none(), partial.mu.is_none()];
+        targets.check(s.plant.m())?;
         choose(partial, s, targets, speed, &mut choices, &mut mu_caps)
     })?;
     Ok(Proposal { scenario, choices, mu_caps, relaxable })
@@ -300,7 +309,6 @@ type Verified = (Proposal, Design, Candidate);
 /// actuator limit).
 pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, AutoError> {
     let mut first = propose(doc, targets, Speed::FIRST)?;
-    targets.check(first.scenario.plant.m())?;
     let mut design = first.scenario.design()?;
     let bound: Vec<f64> = first.scenario.reference.components.iter().map(|c| TAIL_BOUND * c.peak()).collect();
     let mut runs = 0;

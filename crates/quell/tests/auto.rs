@@ -257,6 +257,23 @@ fn the_actuator_limit_bounds_the_recorded_plant_input() {
     assert!((tight.verification.max_uf[0] - u_f).abs() <= 1e-12 * u_f && u_f > 1e-3 * free.verification.max_uf[0]);
 }
 
+/// Targets out of range are refused before any choice or simulation, naming the field: a
+/// convergence time that is not a finite positive number, limits of another count than 1 or m, or
+/// not positive.
+#[test]
+fn targets_out_of_range_are_refused_naming_the_field() {
+    let doc = without_design(&data("batch-reactor.toml"));
+    let refused = |targets: Targets| auto_design(&doc, &targets).map(|_| ()).unwrap_err().to_string();
+    for t in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let e = refused(Targets { convergence_time: Some(t), ..Targets::default() });
+        assert_eq!(e, format!("convergence_time: expected a finite number > 0, found {t}"));
+    }
+    for (limits, found) in [(vec![1.0; 3], "found 3"), (vec![0.0], "found 0"), (vec![1.0, f64::NAN], "found NaN")] {
+        let e = refused(Targets { u_limit: limits, ..Targets::default() });
+        assert!(e.starts_with("u_limit: expected") && e.contains(found), "{e}");
+    }
+}
+
 fn data(name: &str) -> String {
     std::fs::read_to_string(format!("{}/tests/data/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap()
 }
