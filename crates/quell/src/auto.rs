@@ -59,8 +59,9 @@ use crate::sim::{loop_rate, Outcome, Run, SimError};
 pub const MAX_RATE_PER_SCALE: f64 = 200.0;
 /// The automatic μ keeps the adaptation rate this factor below the stiffness threshold.
 const STIFF_MARGIN: f64 = 10.0;
-/// The tail error the verification requires, relative to the reference's peak.
-pub const TAIL_BOUND: f64 = 0.01;
+/// The tail error the verification requires, relative to the reference's peak (the diagnostics'
+/// target too).
+pub use crate::diagnostics::TAIL_BOUND;
 /// The RMS error the choice of μ aims at by the convergence time (a margin of 5 on [`TAIL_BOUND`]).
 const AIM: f64 = 0.002;
 /// The filters' slowest pole is at least this over t_end: the transient of ξ̂ from its zero start,

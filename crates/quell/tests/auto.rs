@@ -334,16 +334,10 @@ fn the_batch_reactors_slow_channel_is_diagnosed_and_the_automatic_design_avoids_
         assert!(r.max_abs_error(i, 90.0, 100.0).unwrap() <= TAIL_BOUND * c.peak());
     }
     // 3 rad/s (ω's first component) stays beyond the threshold with the zeros among the poles
-    // (0.57 at r_o = 52, 0.78 at 4000: the placed eigenvectors, not the speed): the advice on it
-    // must not tell the user to give the zeros the poles already hold (checked above).
+    // (0.57 at r_o = 52, 0.78 at 4000: the placed eigenvectors, not the speed), and costs nothing:
+    // every tail meets the bound (checked above), so the run gets no advice on the observer.
     let at_3 = diag.observer_fidelity.iter().find(|f| f.frequency == 3.0).unwrap();
-    assert!(at_3.relative_error > FIDELITY_LIMIT && !diag.advice.is_empty(), "{at_3:?}");
-    for line in &diag.advice {
-        assert!(
-            line.contains("already hold the zeros") && !line.contains("give design.observer_poles the zeros"),
-            "{line}"
-        );
-    }
+    assert!(at_3.relative_error > FIDELITY_LIMIT && diag.advice.is_empty(), "{at_3:?} {:?}", diag.advice);
 }
 
 /// A hard-disk head positioner in SI units at its own millisecond time scale: a voice-coil arm

@@ -19,7 +19,7 @@ pub use estimate::{estimate, RateEstimate, STIFF_RATIO};
 use nalgebra::{Complex, DMatrix};
 
 use crate::design::Design;
-use crate::linalg::{eigenvalues, fmt_complex_list, numerical_rank};
+use crate::linalg::{eigenvalues, fmt_complex, fmt_complex_list, numerical_rank};
 use crate::plant::Plant;
 use crate::signal::Signal;
 use crate::sim::SimResult;
@@ -36,6 +36,12 @@ pub const GROWING: f64 = 1.25;
 /// (the paper's example in the normalized form at rtol 1e-9 ends at 1.4e-9 with a "trend" of 0.19;
 /// at 1e-12, 1e-11).
 pub const NEGLIGIBLE: f64 = 1e-4;
+/// A channel whose tail max |e_i| (the last 10 % of the run) stays within this share of its scale
+/// has met the target the automatic design verifies (1 % of the reference's peak): no run whose
+/// every channel does gets advice on the disturbance observer, whose relative error then costs
+/// nothing (the maglev, building and distillation plants of docs/tuning.md converge to 1e-14 … 1e-3
+/// of their scale with relative errors 0.3 … 11.6).
+pub const TAIL_BOUND: f64 = 0.01;
 /// A direction of η̂_i carrying at least this share of the initial error energy counts as relevant
 /// for the advice on μ.
 pub const RELEVANT_SHARE: f64 = 1e-4;
@@ -88,10 +94,11 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
     let avg = Averaged::new(design, reference, disturbance);
     let t_end = result.t.last().copied().unwrap_or(0.0);
     let remedy = observer_remedy(design);
+    let missed = (0..result.m).any(|i| !tail_within_bound(result, i));
     let advice = avg
         .fidelity
         .iter()
-        .filter(|f| f.relative_error > FIDELITY_LIMIT)
+        .filter(|f| missed && f.relative_error > FIDELITY_LIMIT)
         .map(|f| {
             format!(
                 "the disturbance observer passes ω at {} rad/s with relative error {:.2} (it is driven by x̂, not x, eq. (20)): {remedy}",
@@ -138,20 +145,28 @@ pub fn disturbance_zeros(p: &Plant) -> Option<Vec<Complex<f64>>> {
 /// Which observer poles to give when the disturbance observer passes ω badly; when eig(A − LC)
 /// already holds the zeros of (A, D, C), why the error stays (placing the zeros as poles is not
 /// enough: an unknown-input observer also needs the eigenvectors there to be the zeros' state
-/// directions, which the placement does not impose when m > 1) and when it matters.
+/// directions, which the placement does not impose when m > 1) and when it matters. A pole holds
+/// a zero within 1e-6 of it, or when both print the same (the zero copied from this advice).
 fn observer_remedy(design: &Design) -> String {
     let p = design.plant();
     let observer = eigenvalues(&(&p.A - design.L() * &p.C)).unwrap_or_default();
-    let held = |z: &Complex<f64>| observer.iter().any(|o| (o - z).norm() <= 1e-9 * z.norm().max(1.0));
+    let held = |z: &Complex<f64>| {
+        observer.iter().any(|o| (o - z).norm() <= 1e-6 * z.norm() || fmt_complex(o) == fmt_complex(z))
+    };
     match disturbance_zeros(p) {
         Some(z) if z.iter().all(held) => format!(
             "design.observer_poles already hold the zeros of (A, D, C), [{}]; the error that stays comes from the placed eigenvectors (L is not unique for m > 1), not from the poles' speed, and costs convergence only where the frequency's excitation of Ω̄_i is weak (the channels' `excitation`); if it is, try other fast poles or a gain L by hand",
             fmt_complex_list(&z)
         ),
         Some(z) => format!(
-            "give design.observer_poles the zeros of (A, D, C), [{}], and the other {} poles faster than the plant and the signals (e.g. 3× their rates); all-fast poles cannot remove this error",
+            "give design.observer_poles the zeros of (A, D, C), [{}], and the other {} poles faster than the plant and the signals (e.g. 3× their rates); all-fast poles cannot remove this error{}",
             fmt_complex_list(&z),
-            design.plant().k()
+            p.k(),
+            if p.m() > 1 {
+                " (with more than one output the placed eigenvectors decide as well: compare the relative error the next run reports)"
+            } else {
+                ""
+            }
         ),
         None => "give design.observer_poles faster than the plant and the signals (e.g. 3× their rates)".into(),
     }
@@ -183,12 +198,27 @@ fn tail_windows(result: &SimResult, i: usize) -> Option<(f64, f64)> {
     Some((rms(t1 - 0.1 * span, t1)?, rms(t1 - 0.2 * span, t1 - 0.1 * span)?))
 }
 
-/// Whether channel i's tail RMS `last` is below [`NEGLIGIBLE`] of its scale.
-fn negligible_tail(result: &SimResult, i: usize, last: f64) -> bool {
+/// Channel i's scale: the peak of |g_i| over the run, or of |e_i| for a reference that is zero.
+fn scale(result: &SimResult, i: usize) -> f64 {
     let peak = |signal: &[f64]| result.column(signal, result.m, i).fold(0.0f64, |p, v| p.max(v.abs()));
     let g = peak(&result.g);
-    let scale = if g > 0.0 { g } else { peak(&result.e) };
-    last < NEGLIGIBLE * scale
+    if g > 0.0 {
+        g
+    } else {
+        peak(&result.e)
+    }
+}
+
+/// Whether channel i's tail RMS `last` is below [`NEGLIGIBLE`] of its scale.
+fn negligible_tail(result: &SimResult, i: usize, last: f64) -> bool {
+    last < NEGLIGIBLE * scale(result, i)
+}
+
+/// Whether channel i's max |e_i| over the last 10 % of the run is within [`TAIL_BOUND`] of its
+/// scale (a run too short to tell is not).
+fn tail_within_bound(result: &SimResult, i: usize) -> bool {
+    let (Some(&t0), Some(&t1)) = (result.t.first(), result.t.last()) else { return false };
+    result.max_abs_error(i, t1 - 0.1 * (t1 - t0), t1).is_some_and(|e| e <= TAIL_BOUND * scale(result, i))
 }
 
 fn channel(
@@ -265,7 +295,12 @@ mod tests {
     /// seconds apart is then exp(∓10/τ) exactly for e = a·exp(∓t/τ) (every sample scaled by the
     /// same factor).
     fn advice_on(size: f64, e: impl Fn(f64) -> f64) -> Vec<ChannelDiagnostics> {
-        let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+        diagnosed(PAPER_EXAMPLE, size, e).channels
+    }
+
+    /// [`advice_on`] for the scenario `text` (two outputs), all of its diagnostics.
+    fn diagnosed(text: &str, size: f64, e: impl Fn(f64) -> f64) -> Diagnostics {
+        let s = Scenario::from_toml(text).unwrap();
         let d = s.design().unwrap();
         let (m, q) = (2, d.q());
         let mut r = SimResult::new(m, q, 3, RunStats::Sampled { controller_steps: 0, sample_time: 0.1 });
@@ -276,7 +311,7 @@ mod tests {
             let y = [g[0] + e(t), g[1] + e(t)];
             r.push(&Sample { t, y: &y, g: &g, u: &[0.0; 2], u_f: &[0.0; 2], eta: &zeros, states: None });
         }
-        diagnose(&d, &s.reference, &s.disturbance, &r).channels
+        diagnose(&d, &s.reference, &s.disturbance, &r)
     }
 
     fn trend_advice(c: &ChannelDiagnostics) -> Vec<&String> {
@@ -317,5 +352,34 @@ mod tests {
             assert!((c.tail_trend.unwrap() - 1.0).abs() < 1e-12);
             assert!(trend_advice(&c).is_empty(), "{:?}", c.advice);
         }
+    }
+
+    /// The batch reactor's hand design (tests/data/batch-reactor.toml) passes ω at 0, 3 and 5 rad/s
+    /// with relative errors 1.97, 5.05 and 1.31 (docs/tuning.md): one line each while a channel's
+    /// tail misses 1 % of its scale, none once every channel meets it; with the published zeros of
+    /// (A, D, C) among the observer poles as the advice prints them (six decimals) the advice says
+    /// the observer holds them, and without them it names them with the caveat for m = 2 outputs.
+    #[test]
+    fn observer_advice_only_while_a_tail_misses_the_bound_and_knows_the_zeros_it_holds() {
+        let text = include_str!("../../tests/data/batch-reactor.toml");
+        let lines = |d: &Diagnostics| d.advice.iter().filter(|a| a.contains("passes ω")).count();
+        let missed = diagnosed(text, 1.0, |t| 0.02 + 0.5 * (-t).exp());
+        assert_eq!(lines(&missed), 3, "{:?}", missed.advice);
+        assert!(missed
+            .advice
+            .iter()
+            .all(|a| a.contains("give design.observer_poles the zeros of (A, D, C), [-1.191594, -5.039429]")
+                && a.contains("with more than one output")));
+        let met = diagnosed(text, 1.0, |t| 0.005 + 0.5 * (-t).exp());
+        assert_eq!(lines(&met), 0, "{:?}", met.advice);
+        let mut doc: toml::Table = text.parse().unwrap();
+        let design = doc["design"].as_table_mut().unwrap();
+        design.insert("observer_poles".into(), toml::Value::try_from([-1.191594, -5.039429, -52.0, -104.0]).unwrap());
+        let held = diagnosed(&toml::to_string(&doc).unwrap(), 1.0, |t| 0.02 + 0.5 * (-t).exp());
+        assert!(
+            !held.advice.is_empty() && held.advice.iter().all(|a| a.contains("already hold the zeros")),
+            "{:?}",
+            held.advice
+        );
     }
 }
