@@ -278,7 +278,7 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
             "the closed loop diverged at t = {t:.4}: {signal} = {value:e}; results up to then are in {out}"
         ))),
         Outcome::StepSizeTooSmall { t } => Err(Failure::Run(format!(
-            "the solver's step size underflowed at t = {t:.6} (the loop is too stiff or blows up there, simulation.rtol/atol are tighter than floating point allows, or an input delay is shorter than a step can be); results up to then are in {out}"
+            "the solver's step size underflowed at t = {t:.6} (the loop is too stiff or blows up there, a signal is faster than any step can resolve, or an input delay is shorter than a step can be); results up to then are in {out}"
         ))),
         Outcome::Interrupted { t } => {
             Err(Failure::Run(format!("interrupted at t = {t:.3}; results up to then are in {out}")))

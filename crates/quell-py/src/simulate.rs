@@ -657,7 +657,7 @@ fn failure(outcome: Outcome) -> Option<(String, f64, Option<String>, Option<f64>
             Some(value),
         ),
         Outcome::StepSizeTooSmall { t } => (
-            format!("the solver's step size underflowed at t = {t:.6} (the loop is too stiff or blows up there, rtol/atol are tighter than floating point allows, or an input delay is shorter than a step can be); the samples up to then are in the exception's .result"),
+            format!("the solver's step size underflowed at t = {t:.6} (the loop is too stiff or blows up there, a signal is faster than any step can resolve, or an input delay is shorter than a step can be); the samples up to then are in the exception's .result"),
             t,
             None,
             None,

@@ -112,6 +112,7 @@ CASES = [
     ("output_step_beyond_t_end", edit((T_END, "t_end = 0.05")), "simulation.output_step", None),
     ("output_step_too_many_samples", edit((OUTPUT_STEP, "output_step = 1e-6 ")), "simulation.output_step", None),
     ("tolerance_not_positive", edit(("rtol = 1e-9", "rtol = 0.0")), "simulation.rtol", None),
+    ("tolerance_out_of_range", edit(("rtol = 1e-9", "rtol = 1e-30")), "simulation.rtol", None),
     ("method_unknown", edit(("atol = 1e-9\n", 'atol = 1e-9\nmethod = "imx"\n')), "simulation.method", None),
     ("method_named_as_the_enum", edit(("atol = 1e-9\n", 'atol = 1e-9\nmethod = "Implicit"\n')),
      "simulation.method", None),
@@ -206,11 +207,18 @@ def test_faults_during_a_run():
     assert "diverged" in str(e) and e.signal and e.t > 0
     assert not abs(e.value) <= 1e9  # beyond the divergence bound, or not finite
     assert e.result.outcome["status"] == "diverged" and len(e.result) > 0 and e.result.t[-1] <= e.t
+    # μ_1 = 1e300, an infinitely stiff adaptive law: the step size underflows at t = 1 s.
+    fast = quell.Scenario.from_toml(s.to_toml().replace("mu = [20.0, 30.0]", "mu = [1e300, 30.0]"))
+    assert fast.to_toml() != s.to_toml()
     with pytest.raises(quell.SimulationError) as info:
-        quell.simulate(s, rtol=1e-300, atol=1e-300, t_end=1.0)
+        quell.simulate(fast, t_end=2.0)
     assert "step size underflowed" in str(info.value) and info.value.signal is None
-    unchecked = quell.simulate(s, rtol=1e-300, atol=1e-300, t_end=1.0, check=False)
+    unchecked = quell.simulate(fast, t_end=2.0, check=False)
     assert unchecked.outcome["status"] == "step_size_too_small"
+    for rtol in [1e-300, 1e-15, 1.0]:
+        with pytest.raises(quell.ScenarioError, match="^rtol: expected a relative tolerance from 100 ε") as info:
+            quell.simulate(s, rtol=rtol, t_end=1.0)
+        assert info.value.key == "simulation.rtol"
     for T, fragment in [(1e-300, "controller steps"), (float("nan"), "expected a finite number")]:
         with pytest.raises(quell.ScenarioError, match=fragment):
             quell.simulate(s, sample_time=T)

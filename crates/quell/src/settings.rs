@@ -313,9 +313,25 @@ pub(crate) fn fmt_short(v: f64) -> String {
     }
 }
 
-/// The integrator's tolerances: finite and > 0.
+/// The tightest relative tolerance accepted: 100 ε ≈ 2.2e-14. Below it no step size meets the
+/// error test in double precision (SciPy raises a smaller rtol to this; Hairer's `dop853.f` refuses
+/// rtol ≤ 10 u): such a run crawls in ever smaller steps until a budget or the step size's
+/// underflow ends it, which says nothing of the loop.
+pub const MIN_RTOL: f64 = 100.0 * f64::EPSILON;
+
+/// The integrator's tolerances: atol finite and > 0, rtol in [[`MIN_RTOL`], 1) (from 1 on the error
+/// test allows errors as large as the signals).
 pub(crate) fn check_tolerances(rtol: f64, atol: f64) -> Result<(), KeyError> {
     positive("simulation.rtol", "a relative tolerance", rtol)?;
+    if !(MIN_RTOL..1.0).contains(&rtol) {
+        return Err(KeyError::new(
+            "simulation.rtol",
+            format!(
+                "expected a relative tolerance from 100 ε = {MIN_RTOL:.1e} (the tightest double precision can meet) to below 1 (errors as large as the signals), found {}; 1e-9 is the default, 1e-6 a quick look",
+                fmt_short(rtol)
+            ),
+        ));
+    }
     positive("simulation.atol", "an absolute tolerance", atol)?;
     Ok(())
 }

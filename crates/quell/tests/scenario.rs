@@ -563,6 +563,12 @@ fn tolerance_not_positive() {
 }
 
 #[test]
+fn tolerance_out_of_range() {
+    let expected = "expected a relative tolerance from 100 ε = 2.2e-14";
+    check(&with(&[("rtol = 1e-9", "rtol = 1e-30")]), "simulation.rtol", expected);
+}
+
+#[test]
 fn method_unknown() {
     check(
         &with(&[("atol = 1e-9\n", "atol = 1e-9\nmethod = \"imx\"\n")]),

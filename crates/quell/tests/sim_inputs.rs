@@ -82,6 +82,16 @@ fn horizons_and_tolerances_are_checked() {
         assert_eq!(cont(1.0, 0.1, tol, 1e-9), "simulation.rtol", "rtol = {tol}");
         assert_eq!(cont(1.0, 0.1, 1e-9, tol), "simulation.atol", "atol = {tol}");
     }
+    // rtol below 100 ε cannot be met in double precision, and from 1 on it allows errors as large
+    // as the signals; atol has no such floor (a tiny atol is pure relative control).
+    for rtol in [1e-300, 1e-30, 2.2e-14, 1.0, 10.0] {
+        assert_eq!(cont(1.0, 0.1, rtol, 1e-9), "simulation.rtol", "rtol = {rtol}");
+    }
+    assert_eq!(quell::settings::MIN_RTOL, 100.0 * f64::EPSILON);
+    for (rtol, atol) in [(quell::settings::MIN_RTOL, 1e-9), (0.5, 1e-9), (1e-9, 1e-300)] {
+        let r = Run::new(&paper().1, g, w, RunSettings::continuous(1e-3, 1e-3, rtol, atol)).simulate(go);
+        assert!(r.is_ok(), "rtol = {rtol}, atol = {atol}: {:?}", r.err());
+    }
     let samp = |t_end, h, ts| sampled_key(g, w, RunSettings::sampled(t_end, h, ts));
     assert_eq!(samp(f64::NAN, 0.1, 1e-3), "simulation.t_end");
     assert_eq!(samp(1.0, 2.0, 1e-3), "simulation.output_step");
@@ -198,8 +208,12 @@ fn each_loop_reports_its_own_statistics() {
     assert!(steps > 0 && rhs_evaluations >= 11 * steps, "{:?}", r.stats);
     // Delays 1 and 3 s: breakpoints at every whole second in (0, 10).
     assert_eq!(breakpoints, 9, "{:?}", r.stats);
-    // A run that stops early keeps the statistics up to then.
-    let r = Run::new(&d, g, w, RunSettings::continuous(10.0, 0.1, 1e-300, 1e-300)).simulate(go).unwrap();
+    // A run that stops early keeps the statistics up to then: μ_1 = 1e300 makes the adaptive law
+    // infinitely stiff from t = 1 s, where the step size underflows.
+    let fast = PAPER_EXAMPLE.replace("mu = [20.0, 30.0]", "mu = [1e300, 30.0]");
+    let fast = Scenario::from_toml(&fast).unwrap();
+    let settings = RunSettings::continuous(10.0, 0.1, 1e-9, 1e-9);
+    let r = Run::new(&d, &fast.reference, &fast.disturbance, settings).simulate(go).unwrap();
     assert!(matches!(r.outcome, Some(Outcome::StepSizeTooSmall { .. })));
     assert!(matches!(r.stats, RunStats::Continuous(stats) if stats.rhs_evals > 0), "{:?}", r.stats);
 }
