@@ -48,6 +48,9 @@ impl DesignArgs {
 pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
     let targets = Targets { convergence_time: args.convergence_time, u_limit: args.u_limit.clone() };
     let doc = quell::scenario::read_document(&args.scenario).map_err(|e| Failure::Input(e.to_string()))?;
+    if let Some(out) = &args.write {
+        output::prepare_file("--write", out)?;
+    }
     let auto = auto_design(&doc, &targets).map_err(|e| match e {
         AutoError::Run(_) => Failure::Run(e.to_string()),
         _ => Failure::Input(e.to_string()),

@@ -27,17 +27,39 @@ pub fn remove_figures(dir: &Path, ours: impl Fn(&str) -> bool) -> io::Result<()>
     Ok(())
 }
 
-/// Creates `--out` and proves it writable (with a uniquely named probe file), and that none of the
-/// `files` to be written there is a directory, before any work is done: every output-path problem
-/// is bad input (exit 2) naming the path.
+/// Proves `dir` writable by creating and removing a uniquely named probe file in it.
+fn probe(dir: &Path) -> io::Result<()> {
+    tempfile::Builder::new().prefix(".quell-write-test.").suffix(".tmp").tempfile_in(dir)?.close()
+}
+
+/// Creates `--out` and proves it writable ([`probe`]), and that none of the `files` to be written
+/// there is a directory, before any work is done: every output-path problem is bad input (exit 2)
+/// naming the path.
 pub fn prepare_out(dir: &Path, files: &[&str]) -> Result<(), Failure> {
     let bad = |e: String| Failure::Input(format!("--out {}: {e}; choose another output directory", dir.display()));
-    let probe = || tempfile::Builder::new().prefix(".quell-write-test.").suffix(".tmp").tempfile_in(dir)?.close();
-    fs::create_dir_all(dir).and_then(|()| probe()).map_err(|e| bad(format!("cannot write there ({e})")))?;
+    fs::create_dir_all(dir).and_then(|()| probe(dir)).map_err(|e| bad(format!("cannot write there ({e})")))?;
     match files.iter().map(|f| dir.join(f)).find(|p| p.is_dir()) {
         Some(p) => Err(bad(format!("{} is a directory, where the output file goes", p.display()))),
         None => Ok(()),
     }
+}
+
+/// Proves the output file given by `flag` writable before any work is done, as [`prepare_out`]
+/// does for a directory: `path` is not a directory and its directory exists and is writable
+/// ([`probe`]; it is not created). Each problem is bad input (exit 2) naming the flag and the path.
+pub fn prepare_file(flag: &str, path: &Path) -> Result<(), Failure> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let why = if path.is_dir() {
+        "it is a directory".to_string()
+    } else if let Err(e) = probe(dir) {
+        format!("cannot write in {} ({e})", dir.display())
+    } else {
+        return Ok(());
+    };
+    Err(Failure::Input(format!("{flag} {}: {why}; choose a file in an existing, writable directory", path.display())))
 }
 
 /// `signals.csv`: t, y1..ym, g1..gm, e1..em, u1..um, eta1_1..etam_q.

@@ -679,6 +679,31 @@ fn design_auto_writes_a_complete_scenario_that_meets_the_tail_bound() {
     assert!(v["max_uf"].as_array().unwrap().iter().all(|u| u.as_f64().unwrap() <= 1e3), "{v}");
 }
 
+/// `--write` to a file that cannot be written is refused before the automatic design runs, as
+/// `--out` is for the other commands: exit 2, nothing on stdout, one line naming the flag, the
+/// path, why and what to do.
+#[test]
+fn design_auto_write_unwritable_exits_2_before_work() {
+    let dir = temp_dir("auto-write");
+    let input = paper_without_design(&dir);
+    let file = dir.path().join("a-file");
+    fs::write(&file, b"not a directory").unwrap();
+    let cases = [
+        (dir.path().join("missing/x.toml"), "cannot write in"),
+        (file.join("x.toml"), "cannot write in"),
+        (PathBuf::from("/proc/x.toml"), "cannot write in /proc"),
+        (dir.path().to_path_buf(), "it is a directory"),
+    ];
+    for (out, why) in cases {
+        let err = input_error(&["design", input.to_str().unwrap(), "--auto", "--write", out.to_str().unwrap()]);
+        assert!(err.contains(&format!("--write {}: {why}", out.display())), "{err}");
+        assert!(err.contains("choose a file in an existing, writable directory"), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+    assert!(!dir.path().join("missing").exists(), "--write's directory was created");
+    assert_eq!(fs::read(&file).unwrap(), b"not a directory");
+}
+
 #[test]
 fn design_warns_of_a_pole_repeated_beyond_rank_c() {
     // Three copies of −5 for the observer of a plant with two outputs: A − LC needs a Jordan
