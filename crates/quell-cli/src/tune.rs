@@ -132,7 +132,22 @@ fn report(r: &TuneResult) -> String {
             None => s.push_str(&format!("channel {}: no feasible mu in the bounds\n", c.channel + 1)),
         }
     }
-    let tuned = if r.partial { "best mu so far (tuning interrupted)" } else { "tuned mu" };
-    s.push_str(&format!("{tuned} = [{}]\n", r.mu.iter().map(|m| format!("{m:.6}")).collect::<Vec<_>>().join(", ")));
+    // A channel without a feasible μ keeps the scenario's (TuneResult::mu): not a tuned value.
+    let untuned: Vec<String> =
+        r.channels.iter().filter(|c| c.chosen.is_none()).map(|c| (c.channel + 1).to_string()).collect();
+    let (label, note) = match (r.partial, untuned.len()) {
+        (true, _) => ("best mu so far (tuning interrupted)", String::new()),
+        (false, 0) => ("tuned mu", String::new()),
+        (false, k) => (
+            "mu",
+            format!(
+                " (channel{} {}: the scenario's mu, unchanged; no feasible mu)",
+                if k > 1 { "s" } else { "" },
+                untuned.join(", ")
+            ),
+        ),
+    };
+    let mu = r.mu.iter().map(|m| format!("{m:.6}")).collect::<Vec<_>>().join(", ");
+    s.push_str(&format!("{label} = [{mu}]{note}\n"));
     s
 }

@@ -210,6 +210,14 @@ fn tune_writes_the_chosen_mu_and_each_curve() {
         "{}",
         stderr(&o)
     );
+    // stdout does not present the scenario's μ, kept where nothing was feasible, as tuned.
+    let printed = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(!printed.contains("tuned mu"), "{printed}");
+    let last = printed.lines().last().unwrap_or_default();
+    assert!(
+        last.starts_with("mu = [20.000000, ") && last.ends_with("the scenario's mu, unchanged; no feasible mu)"),
+        "{printed}"
+    );
 }
 
 #[test]
