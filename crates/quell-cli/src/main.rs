@@ -117,8 +117,7 @@ pub(crate) fn load(path: Option<&Path>) -> Result<(Scenario, Design), Failure> {
         None => Scenario::from_toml(PAPER_EXAMPLE),
     }
     .map_err(|e| match path {
-        // `scenario` is a study's first key: the file names the scenario it varies.
-        Some(p) if e.key == "scenario" => Failure::Input(format!(
+        Some(p) if e.is_a_study() => Failure::Input(format!(
             "{e}\n{} is a study, not a scenario: run it with `quell sweep {} --out DIR`",
             p.display(),
             p.display()

@@ -240,6 +240,18 @@ fn a_study_given_as_a_scenario_is_named_a_study_with_the_command_that_runs_it() 
 }
 
 #[test]
+fn a_study_naming_itself_as_its_scenario_is_named_a_study() {
+    let dir = temp_dir("selfref");
+    let study = dir.path().join("selfref.toml");
+    fs::write(&study, "scenario = \"selfref.toml\"\n").unwrap();
+    for command in ["sweep", "tune"] {
+        let err = input_error(&[command, study.to_str().unwrap(), "--out", "/nonexistent/never-written"]);
+        assert!(err.contains("scenario: selfref.toml: scenario: unknown key"), "{err}");
+        assert!(err.contains("selfref.toml is a study, not a scenario: set `scenario` to a scenario file"), "{err}");
+    }
+}
+
+#[test]
 fn a_scenario_given_as_a_study_is_named_a_scenario_with_the_command_that_runs_it() {
     for command in ["sweep", "tune"] {
         let err = input_error(&[command, &paper(), "--out", "/nonexistent/never-written"]);

@@ -44,6 +44,14 @@ pub struct ScenarioError {
     pub message: String,
 }
 
+impl ScenarioError {
+    /// The document read as a scenario is a study: the error is on a study's top-level key
+    /// (`scenario`, `grid`, `tune`, …) that no scenario has.
+    pub fn is_a_study(&self) -> bool {
+        self.key != "simulation" && crate::study::TOP_KEYS.contains(&self.key.as_str())
+    }
+}
+
 /// A validated scenario.
 #[derive(Debug, Clone)]
 pub struct Scenario {

@@ -162,7 +162,9 @@ pub struct Study {
     nominal: Vec<OnceLock<Option<Nominal>>>,
 }
 
-const TOP_KEYS: &[&str] = &["scenario", "max_steps", "runaway", "simulation", "grid", "monte_carlo", "settle", "tune"];
+/// A study's top-level keys; every one but `simulation` is unknown to a scenario.
+pub(crate) const TOP_KEYS: &[&str] =
+    &["scenario", "max_steps", "runaway", "simulation", "grid", "monte_carlo", "settle", "tune"];
 
 const SETTLE_KEYS: &[&str] = &["relative", "absolute"];
 
@@ -521,6 +523,12 @@ fn apply_simulation(doc: &toml::Table, base: &mut toml::Table, source: &str) -> 
         let set_here = |key: &str| doc.get("simulation").and_then(|s| s.get(key)).is_some();
         match e.key.strip_prefix("simulation.") {
             Some(key) if set_here(key) => err(e.key.clone(), e.message),
+            _ if e.is_a_study() => err(
+                "scenario",
+                format!(
+                    "{source}: {e}; {source} is a study, not a scenario: set `scenario` to a scenario file (with [plant] and [design]) or a scenario table"
+                ),
+            ),
             _ => err("scenario", format!("{source}: {e}")),
         }
     })?;

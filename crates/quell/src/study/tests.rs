@@ -293,6 +293,25 @@ fn an_endless_input_file_is_refused_naming_its_path() {
     assert!(e.starts_with("scenario: cannot read the scenario file /dev/zero (longer than 64 MiB"), "{e}");
 }
 
+/// A study whose `scenario` names a study (itself, or another) says so, not only that
+/// `scenario` is an unknown key of a scenario.
+#[test]
+fn a_study_as_the_scenario_of_a_study_is_named_a_study() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("self.toml"), "scenario = \"self.toml\"\n").unwrap();
+    std::fs::write(dir.path().join("outer.toml"), "scenario = \"inner.toml\"\n").unwrap();
+    std::fs::write(dir.path().join("inner.toml"), "[monte_carlo]\nruns = 2\n").unwrap();
+    for (file, named, key) in [("self.toml", "self.toml", "scenario"), ("outer.toml", "inner.toml", "monte_carlo")] {
+        let e = Study::from_path(&dir.path().join(file)).expect_err("refused");
+        assert_eq!(e.key, "scenario");
+        assert!(e.message.starts_with(&format!("{named}: {key}: unknown key")), "{e}");
+        assert!(
+            e.message.ends_with(&format!("; {named} is a study, not a scenario: set `scenario` to a scenario file (with [plant] and [design]) or a scenario table")),
+            "{e}"
+        );
+    }
+}
+
 /// `relative_uniform = r` keeps a delay within ±r of its nominal: 4,000 draws of τ_2 = 3 s at
 /// r = 0.1 all lie in [2.7, 3.3], with the moments of 3·(1 + U(−0.1, 0.1)) (mean 3, variance
 /// 0.3²/3) within 5 standard errors (as in `draws_follow_their_laws`).
