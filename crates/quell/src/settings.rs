@@ -3,6 +3,7 @@
 //! loops ([`crate::sim`]) call these checks, so the boundary module does not know the simulator and
 //! the library refuses what the scenario file would.
 
+use crate::signal::Signal;
 use thiserror::Error;
 
 /// A value out of range, named by its scenario key path (`simulation.t_end`, `noise.std[1]`), with
@@ -262,6 +263,32 @@ pub(crate) fn check_integrator_delays(key: &str, delays: &[f64], t_end: f64) -> 
     }
 }
 
+/// The continuous loop's signals against its horizon: resolving a harmonic of ω rad/s takes at
+/// least two steps a period, so ω·t_end/π must not exceed [`MAX_SAMPLING_STEPS`] (a reference at
+/// 1e15 rad/s over 100 s ran 3.5 s into the history's memory budget). `key` names the signal
+/// (`reference`, `disturbance`).
+pub(crate) fn check_integrator_signal(key: &str, signal: &Signal, t_end: f64) -> Result<(), KeyError> {
+    let harmonics = signal
+        .components
+        .iter()
+        .enumerate()
+        .flat_map(|(c, comp)| comp.harmonics.iter().enumerate().map(move |(h, w)| (c, h, w)));
+    for (c, h, w) in harmonics {
+        let steps = w.frequency * t_end / std::f64::consts::PI;
+        if steps > MAX_SAMPLING_STEPS {
+            return Err(KeyError::new(
+                format!("{key}.components[{c}].harmonics[{h}].frequency"),
+                format!(
+                    "ω = {:e} rad/s needs at least ω·t_end/π = {steps:.3e} integrator steps over t_end = {t_end} s (two a period); at most {MAX_SAMPLING_STEPS:e} are run; expected ω ≤ {}: frequencies are in rad per unit of the plant's time (not Hz)",
+                    w.frequency,
+                    fmt_short(three_digits_down(std::f64::consts::PI * MAX_SAMPLING_STEPS / t_end))
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The recorded signals' memory: (t_end / output_step) rows of `row_bytes` within
 /// [`MAX_RECORD_BYTES`]; `what` names a row's entries.
 pub(crate) fn check_record(t_end: f64, output_step: f64, row_bytes: usize, what: &str) -> Result<(), KeyError> {
@@ -301,6 +328,13 @@ pub(crate) fn step_at_least(t_end: f64, limit: f64) -> f64 {
         digits += 1.0;
     }
     x
+}
+
+/// `x` > 0 rounded down to three significant digits, so that the value typed back is within a
+/// bound of x.
+fn three_digits_down(x: f64) -> f64 {
+    let e = x.log10().floor() as i32 - 2;
+    (x / 10f64.powi(e)).floor() * 10f64.powi(e)
 }
 
 /// Rust's shortest form of `v`: `{}` between 1e-4 and 1e6, otherwise `{:e}`, so that 1e293 does not

@@ -106,6 +106,38 @@ fn horizons_and_tolerances_are_checked() {
 /// passes (at 1e7, 2.01 GiB, it would not). The error names output_step with the bytes, and the output step it proposes fits
 /// (checked here from the row's width, not from the message's arithmetic); the states widen the
 /// row and lower the rows allowed. Both loops check it before they start.
+/// A harmonic needs at least two integrator steps a period: ω·t_end/π beyond 1e10 steps (a
+/// frequency typed in the wrong unit) is refused before the continuous loop starts, naming it, with
+/// the largest ω that passes; the sampled loop (which aliases it) accepts it.
+#[test]
+fn a_harmonic_faster_than_any_run_can_resolve_is_refused_naming_it() {
+    let (s, d) = paper();
+    let check = |w: &Signal, settings: RunSettings| Run::new(&d, &s.reference, w, settings).check();
+    let continuous = || RunSettings::continuous(100.0, 0.1, 1e-9, 1e-9);
+    let mut w = s.disturbance.clone();
+    w.components[1].harmonics[0].frequency = 1e15;
+    let e = match check(&w, continuous()) {
+        Err(SimError::Input(e)) => e,
+        other => panic!("expected an input error, got {other:?}"),
+    };
+    assert_eq!(e.key, "disturbance.components[1].harmonics[0].frequency");
+    assert!(
+        e.message.starts_with("ω = 1e15 rad/s needs at least ω·t_end/π = 3.183e16 integrator steps"),
+        "{}",
+        e.message
+    );
+    let docs = include_str!("../../../docs/errors.md");
+    assert!(docs.contains(&format!("{}: {}", e.key, e.message)), "docs/errors.md does not show: {}", e.message);
+    let largest: f64 =
+        e.message.split("expected ω ≤ ").nth(1).and_then(|r| r.split(':').next()).unwrap().parse().unwrap();
+    let bound = std::f64::consts::PI * 1e10 / 100.0;
+    assert!(largest <= bound && largest > 0.99 * bound, "{largest}");
+    w.components[1].harmonics[0].frequency = largest;
+    assert!(check(&w, continuous()).is_ok());
+    w.components[1].harmonics[0].frequency = 1e15;
+    assert!(check(&w, RunSettings::sampled(100.0, 0.1, 1e-3)).is_ok());
+}
+
 #[test]
 fn the_recorded_signals_are_budgeted_in_bytes() {
     let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/supply-vessel.toml")).unwrap();
@@ -211,9 +243,9 @@ fn each_loop_reports_its_own_statistics() {
     // A run that stops early keeps the statistics up to then: μ_1 = 1e300 makes the adaptive law
     // infinitely stiff from t = 1 s, where the step size underflows.
     let fast = PAPER_EXAMPLE.replace("mu = [20.0, 30.0]", "mu = [1e300, 30.0]");
-    let fast = Scenario::from_toml(&fast).unwrap();
-    let settings = RunSettings::continuous(10.0, 0.1, 1e-9, 1e-9);
-    let r = Run::new(&d, &fast.reference, &fast.disturbance, settings).simulate(go).unwrap();
+    assert_ne!(fast, PAPER_EXAMPLE);
+    let stiff = Scenario::from_toml(&fast).unwrap().design().unwrap();
+    let r = Run::new(&stiff, g, w, RunSettings::continuous(10.0, 0.1, 1e-9, 1e-9)).simulate(go).unwrap();
     assert!(matches!(r.outcome, Some(Outcome::StepSizeTooSmall { .. })));
     assert!(matches!(r.stats, RunStats::Continuous(stats) if stats.rhs_evals > 0), "{:?}", r.stats);
 }
