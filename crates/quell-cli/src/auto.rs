@@ -62,7 +62,10 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
     }
     let v = &auto.verification;
     if !v.passed {
-        return Err(Failure::Run(format!(
+        // Limits no candidate meets are an infeasible target (exit 2); a tail beyond its bound, a
+        // failed run (exit 1).
+        let failure = if v.tails_met() { Failure::Input } else { Failure::Run };
+        return Err(failure(format!(
             "the automatic design did not pass its verifying simulation (tail max|e| {:?} against bounds {:?}{}){}; nothing written; see docs/tuning.md",
             v.tail_max_e,
             v.bound,

@@ -689,6 +689,13 @@ fn design_auto_writes_a_complete_scenario_that_meets_the_tail_bound() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let v = &serde_json::from_str::<serde_json::Value>(&stdout(&o)).unwrap()["verification"];
     assert!(v["max_uf"].as_array().unwrap().iter().all(|u| u.as_f64().unwrap() <= 1e3), "{v}");
+    // A limit no candidate meets (the tails do) is an infeasible target: exit 2, nothing written.
+    let out = dir.path().join("limited.toml");
+    let o =
+        quell(&["design", input.to_str().unwrap(), "--auto", "--u-limit", "1e-3", "--write", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no candidate keeps max|u_f,i| within the actuator limit 1e-3"), "{}", stderr(&o));
+    assert!(!out.exists());
 }
 
 /// `--write` to a file that cannot be written is refused before the automatic design runs, as

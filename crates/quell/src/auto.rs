@@ -173,6 +173,14 @@ pub struct Verification {
     pub relaxation: String,
 }
 
+impl Verification {
+    /// Every tail within its bound: a verification that did not pass then failed on the actuator
+    /// limits alone (no candidate met them), an infeasible target rather than a failed run.
+    pub fn tails_met(&self) -> bool {
+        self.tail_max_e.iter().zip(&self.bound).all(|(e, b)| e <= b)
+    }
+}
+
 /// One verified candidate of the relaxation ([`auto_design`]).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Candidate {
@@ -475,7 +483,9 @@ fn finish(
         format!(
             "{} verifying runs: from the first proposal, the observer's own poles halved (phase 1), then the channel poles with them (2), then μ (3), up to {RELAX_STEPS} times each, each phase from the candidate kept so far and stopped by a tail beyond the bound / {TAIL_MARGIN}; kept {speed}: {}",
             runs,
-            if targets_limited {
+            if targets_limited && !passed {
+                "none within the actuator limits: the closest to them (the least max|u_f,i| / limit at worst)".to_string()
+            } else if targets_limited {
                 format!("within the actuator limit, the least steps × max(tail/bound, {TAIL_FLOOR:e})^{TAIL_EXPONENT} (halving the steps is worth a decade of tail); the first candidate within the limit needs only the bound")
             } else {
                 format!("the least steps × max(tail/bound, {TAIL_FLOOR:e})^{TAIL_EXPONENT} (halving the steps is worth a decade of tail) among those within the bound / {TAIL_MARGIN}")

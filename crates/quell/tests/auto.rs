@@ -497,6 +497,15 @@ fn per_input_actuator_limits_bind_each_input_in_its_own_units() {
     let advice = impossible.verification.advice.join("\n");
     let over = number_after(&advice, "], ", "× its limit");
     assert!(advice.contains("its actuator limit [1000000.0, 1000000.0, 100000000.0]") && over > 1.0, "{advice}");
+    // The relaxation's note does not call the kept candidate within the limits.
+    let note = &impossible.verification.relaxation;
+    assert!(
+        note.contains("kept")
+            && note.ends_with(
+                "none within the actuator limits: the closest to them (the least max|u_f,i| / limit at worst)"
+            ),
+        "{note}"
+    );
     for (bad, found) in [(vec![1e7, 1e7], "found 2"), (vec![1e7, -1.0, 1e8], "found -1")] {
         let e = auto_design(&doc, &Targets { u_limit: bad, ..Targets::default() }).unwrap_err().to_string();
         assert!(e.starts_with("u_limit: expected") && e.contains(found), "{e}");
