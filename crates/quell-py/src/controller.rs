@@ -8,7 +8,7 @@ use pyo3::types::{PyBool, PyList, PyTuple};
 
 use crate::convert::{number, vec_numpy, vector};
 use crate::design::PyDesign;
-use crate::errors::{in_python, raise, Kind};
+use crate::errors::{raise, Kind};
 
 /// The discrete-time adaptive controller of a design at sample time T_s, discretized exactly for a
 /// zero-order hold (eqs. (5), (6), (14), (20), (25), (33)); `step` costs about 1 µs from Python. One
@@ -115,8 +115,8 @@ impl PyController {
         let py = design.py();
         let d = design.cast::<PyDesign>().map_err(|_| crate::errors::type_error("design", "a quell.Design", design))?;
         let T = number(sample_time, "sample_time")?;
-        let inner =
-            quell::Controller::new(&d.get().inner, T).map_err(|e| Kind::Scenario.err(py, in_python(e.to_string())))?;
+        let inner = quell::Controller::new(&d.get().inner, T)
+            .map_err(|e| crate::errors::keyed(py, Kind::Scenario, e.to_string(), e.key()))?;
         let (m, _) = inner.dims();
         Ok(PyController { inner: Mutex::new(inner), m, design: d.clone().unbind() })
     }

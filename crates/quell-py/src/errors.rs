@@ -73,6 +73,14 @@ pub fn in_python(message: String) -> String {
     }
 }
 
+/// The exception of `kind` with a library `message` ([`in_python`]) and `.key`, the scenario key
+/// path it names (`None`: none).
+pub fn keyed(py: Python<'_>, kind: Kind, message: String, key: Option<String>) -> PyErr {
+    let err = kind.err(py, in_python(message));
+    let _ = err.value(py).setattr("key", key);
+    err
+}
+
 /// `TypeError: {name}: expected {expected}, found a {type of obj}`.
 pub fn type_error(name: &str, expected: &str, obj: &Bound<'_, PyAny>) -> PyErr {
     pyo3::exceptions::PyTypeError::new_err(format!(

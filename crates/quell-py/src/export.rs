@@ -153,7 +153,8 @@ pub fn export(
     let fmu = fmu_arguments(py, fmu, fmi_version, compiler)?;
     let options = ExportOptions { prefix: prefix.into_owned(), precision, scenario_name };
     let raise = |e: ExportError| match e {
-        ExportError::Controller(_) | ExportError::NotFinite { .. } => Kind::Scenario.err(py, message(&e)),
+        ExportError::Controller(c) => crate::errors::keyed(py, Kind::Scenario, c.to_string(), c.key()),
+        ExportError::NotFinite { .. } => Kind::Scenario.err(py, message(&e)),
         _ => Kind::Export.err(py, message(&e)),
     };
     let out = out.filter(|o| !o.is_none()).map(|o| crate::convert::path(o, "out")).transpose()?;

@@ -122,9 +122,7 @@ pub fn scenario_error(py: Python<'_>, e: &quell::ScenarioError) -> PyErr {
 /// A ScenarioError of a call with Python arguments: the message names the argument
 /// ([`in_python`]), `.key` the scenario key path.
 pub fn argument_error(py: Python<'_>, e: &quell::ScenarioError) -> PyErr {
-    let err = Kind::Scenario.err(py, in_python(e.to_string()));
-    let _ = err.value(py).setattr("key", e.key.clone());
-    err
+    crate::errors::keyed(py, Kind::Scenario, e.to_string(), Some(e.key.clone()))
 }
 
 /// `method=` (of `Scenario` and `simulate`) as the file's `simulation.method`: a str, whose name the

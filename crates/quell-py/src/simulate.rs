@@ -7,10 +7,10 @@ use std::time::{Duration, Instant};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
-use quell::sim::{Loop, Outcome, Peaks, Run, RunSettings, RunStats, SimResult, Stats};
+use quell::sim::{Loop, Outcome, Peaks, Run, RunSettings, RunStats, SimError, SimResult, Stats};
 use toml::Value;
 
-use crate::errors::{in_python, simulation_error, Kind};
+use crate::errors::{in_python, keyed, simulation_error, Kind};
 use crate::plant::Labels;
 use crate::scenario::PyScenario;
 
@@ -643,7 +643,14 @@ fn run_released(
     if let Some(e) = interrupt {
         return Err(e);
     }
-    result.map_err(|e| Kind::Scenario.err(py, in_python(e.to_string())))
+    result.map_err(|e| {
+        // `.key` as for the same setting refused when the scenario is read (argument_error).
+        let key = match &e {
+            SimError::Input(k) => Some(k.key.clone()),
+            SimError::Controller(c) => c.key(),
+        };
+        keyed(py, Kind::Scenario, e.to_string(), key)
+    })
 }
 
 /// Why a run that did not complete failed, for SimulationError: message, time, signal and value.

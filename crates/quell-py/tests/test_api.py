@@ -110,6 +110,22 @@ def test_simulate_shapes_and_overrides():
     assert e.value.key == "simulation.output_step"
 
 
+def test_sample_time_errors_carry_the_scenario_key():
+    """A refused sample_time= has .key "simulation.sample_time" whether the scenario's check
+    refuses it (simulate at 1e-300: too many controller steps; -1) or the controller's (0.7: the
+    delays 1 s and 3 s are not whole numbers of samples; Controller and export too), and the
+    message names the argument."""
+    s = quell.paper_example()
+    calls = [lambda T=T: quell.simulate(s, t_end=2.0, sample_time=T) for T in (0.7, 1e-300, -1.0)] + [
+        lambda: quell.Controller(s.design(), 0.7),
+        lambda: quell.export(s.design(), 0.7),
+    ]
+    for i, call in enumerate(calls):
+        with pytest.raises(quell.ScenarioError, match=r"^sample_time: ") as e:
+            call()
+        assert e.value.key == "simulation.sample_time", (i, str(e.value))
+
+
 def test_plant_from_python_control():
     control = pytest.importorskip("control")
     sys_ = control.ss(A, B, C, np.zeros((2, 2)))

@@ -185,6 +185,26 @@ fn a_discretization_that_overflows_is_refused_naming_the_block() {
     );
 }
 
+/// A controller that cannot be built names the scenario key its message starts with (Python's
+/// `.key`, as for the same setting refused when the scenario is read); a running controller's
+/// errors name none.
+#[test]
+fn construction_errors_name_their_scenario_key() {
+    let d = paper_design();
+    let key = |T: f64| Controller::new(&d, T).unwrap_err().key();
+    // The delays 1 s and 3 s are not whole numbers of samples of 0.7 s.
+    for T in [0.7, -1.0, f64::NAN] {
+        assert_eq!(key(T).as_deref(), Some("simulation.sample_time"), "T_s = {T}");
+    }
+    let mut spec = paper_spec();
+    spec.mu = vec![1e300, 30.0];
+    let big = Design::new(&paper_plant(), &spec).unwrap();
+    assert_eq!(Controller::new(&big, 1e-3).unwrap_err().key().as_deref(), Some("design.mu[0]"));
+    let mut ctrl = Controller::new(&d, 1e-3).unwrap();
+    assert_eq!(ctrl.step(&[0.0], &[0.0, 0.0]).unwrap_err().key(), None);
+    assert_eq!(ctrl.set_state(&[0.0]).unwrap_err().key(), None);
+}
+
 #[test]
 fn sampled_data_loop_converges_to_the_continuous_one_at_order_one() {
     // The ZOH-sampled loop deviates from the continuous one by O(T_s) (the held u lags by T_s/2 on

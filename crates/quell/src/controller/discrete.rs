@@ -52,6 +52,17 @@ pub enum ControllerError {
     BadState { index: usize, part: String, value: f64, expected: String },
 }
 
+impl ControllerError {
+    /// The scenario key the error names, the head of its message (`simulation.sample_time`,
+    /// `design.mu[i]`), for a controller that cannot be built; `None` for a running controller's
+    /// ([`Controller::step`], [`Controller::set_state`]).
+    pub fn key(&self) -> Option<String> {
+        let message = self.to_string();
+        let (key, _) = message.split_once(": ")?;
+        (!key.starts_with("Controller::")).then(|| key.to_string())
+    }
+}
+
 /// Largest |y_i| and |g_i| [`Controller::step`] takes (the generated C in double likewise; in float,
 /// 1e12). The adaptive law multiplies two signals (Δ ε̂, Δ Δᵀ, η̂ᵀ ξ̂), so one sample of 1e160
 /// overflowed them at once and made η̂, hence u_f, NaN for ever. Such a value is a sensor or wiring
