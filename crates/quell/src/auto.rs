@@ -69,6 +69,10 @@ const AIM: f64 = 0.002;
 /// tail (its error decayed at the slowest pole, 0.33/s, to 3.9e-6, 12× the hand design's); with 30
 /// the tail is 8.2e-9.
 const FILTER_DECAY: f64 = 30.0;
+/// Neighbouring filter poles are at most this ratio apart, and at least [`MIN_FILTER_SPREAD`]
+/// ([`filter_spread`]).
+const MAX_FILTER_SPREAD: f64 = 1.5;
+const MIN_FILTER_SPREAD: f64 = 1.1;
 /// Without a target, the averaged law should reach the aim by t_end / this: the law ignores H's
 /// lag, the delays and the swapping error and is optimistic (a factor 4 on the paper's example);
 /// aiming at half the horizon left tails 1e3–1e5 times those of μ ×10 on the shipped examples.
@@ -214,6 +218,9 @@ pub enum AutoError {
     Design(#[from] DesignError),
     #[error(transparent)]
     Sim(#[from] SimError),
+    /// The rules chose a value for `key` that the design refuses (`message`).
+    #[error("{message}; {key} was chosen by the automatic design, not given in the file: its rules have no usable value for this scenario (many harmonics or frequencies far apart call for filter poles by hand), so give {key} in [design] (docs/tuning.md)")]
+    Rules { key: String, message: String },
     /// A [`Targets`] field (`argument`: its name) out of range.
     #[error("{argument}: {message}")]
     Target { argument: &'static str, message: String },
@@ -317,6 +324,28 @@ type Verified = (Proposal, Design, Candidate);
 /// candidates are verified in three phases and the cheapest kept (module docs: relaxation,
 /// actuator limit).
 pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, AutoError> {
+    verified_design(doc, targets).map_err(|e| e.chosen_in(doc))
+}
+
+impl AutoError {
+    /// A scenario or design error on a `[design]` key that `doc` leaves out, so the rules chose it
+    /// (filter poles spread beyond the design's span of rates for hundreds of harmonics, μ = ∞
+    /// where Ω̄ vanishes), as [`AutoError::Rules`]; any other error unchanged.
+    fn chosen_in(self, doc: &toml::Table) -> AutoError {
+        let message = match &self {
+            AutoError::Scenario(_) | AutoError::Design(_) => self.to_string(),
+            _ => return self,
+        };
+        let given = |k: &str| doc.get("design").and_then(|d| d.as_table()).is_some_and(|d| d.contains_key(k));
+        let key = message.strip_prefix("design.").and_then(|r| r.split(['[', ':', ' ']).next());
+        match key {
+            Some(k) if !k.is_empty() && !given(k) => AutoError::Rules { key: format!("design.{k}"), message },
+            _ => self,
+        }
+    }
+}
+
+fn verified_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, AutoError> {
     let mut first = propose(doc, targets, Speed::FIRST)?;
     let mut design = first.scenario.design()?;
     let bound: Vec<f64> = first.scenario.reference.components.iter().map(|c| TAIL_BOUND * c.peak()).collect();
@@ -607,6 +636,25 @@ fn failure_advice(s: &Scenario) -> Option<String> {
     })
 }
 
+/// The ratio between a component's neighbouring filter poles: 1.5, or less when ×1.5 would spread
+/// them wider than its frequencies widened by 1.5 on each side (many harmonics), down to ×1.1;
+/// with the centre √(ω_min ω_max) of that span when it is narrowed. A ×1.5 spread for every pole
+/// put a square wave's 25 poles (12 harmonics, 0.02 … 0.46 rad/s) between 0.01 and 168 rad/s: the
+/// fast ones made the loop stiff (120,650 steps) for nothing, and 25 harmonics' 51 poles beyond
+/// the design's span of rates.
+fn filter_spread(frequencies: &[f64], order: usize) -> (f64, Option<f64>) {
+    let (lo, hi) = frequencies.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &w| (lo.min(w), hi.max(w)));
+    if order < 2 || hi <= lo {
+        return (MAX_FILTER_SPREAD, None);
+    }
+    let fitted = (hi / lo * MAX_FILTER_SPREAD.powi(2)).powf(1.0 / (order as f64 - 1.0));
+    if fitted >= MAX_FILTER_SPREAD {
+        (MAX_FILTER_SPREAD, None)
+    } else {
+        (fitted.max(MIN_FILTER_SPREAD), Some((lo * hi).sqrt()))
+    }
+}
+
 /// Filter orders and poles of one signal's components.
 fn filters(
     signal: &Signal,
@@ -638,16 +686,21 @@ fn filters(
             });
         }
         let ws: Vec<f64> = frequencies(c).collect();
-        let centre = if ws.is_empty() { r } else { (ws.iter().map(|w| w.ln()).sum::<f64>() / ws.len() as f64).exp() };
+        let (factor, span_centre) = filter_spread(&ws, order);
+        let centre = match span_centre {
+            Some(c) => c,
+            None if ws.is_empty() => r,
+            None => (ws.iter().map(|w| w.ln()).sum::<f64>() / ws.len() as f64).exp(),
+        };
         // The slowest pole at least FILTER_DECAY/t_end ([`FILTER_DECAY`]).
         let slowest = FILTER_DECAY / t_end;
-        let centre = centre.max(slowest * 1.5f64.powf((order as f64 - 1.0) / 2.0));
-        lists.push(spread(centre, order, 1.5, true));
+        let centre = centre.max(slowest * factor.powf((order as f64 - 1.0) / 2.0));
+        lists.push(spread(centre, order, factor, true));
     }
     let why = if orders.is_some() {
-        format!("orders from design.{key}_filter_orders; distinct real poles spread ×1.5 around each component's frequencies (geometric mean; r for a bias), the slowest at least {FILTER_DECAY}/t_end")
+        format!("orders from design.{key}_filter_orders; distinct real poles spread ×1.5 around each component's frequencies (geometric mean; r for a bias; less, down to ×1.1, not to spread far beyond a component's frequencies), the slowest at least {FILTER_DECAY}/t_end")
     } else {
-        format!("two poles per harmonic, one per bias (the exosystem's order, Assumptions 2–3); distinct real poles spread ×1.5 around each component's frequencies (geometric mean; r for a bias), the slowest at least {FILTER_DECAY}/t_end")
+        format!("two poles per harmonic, one per bias (the exosystem's order, Assumptions 2–3); distinct real poles spread ×1.5 around each component's frequencies (geometric mean; r for a bias; less, down to ×1.1, not to spread far beyond a component's frequencies), the slowest at least {FILTER_DECAY}/t_end")
     };
     Ok((lists, why))
 }
@@ -925,4 +978,42 @@ fn choose_mu(s: &Scenario, design: &Design, targets: &Targets, r: f64) -> (Vec<f
         if notes.is_empty() { String::new() } else { format!("; {}", notes.join("; ")) }
     );
     (mu, caps, why)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::signal::Harmonic;
+
+    /// One component: a square wave's first `n` odd harmonics of `w0` rad/s, amplitudes 1/k.
+    fn square(n: usize, w0: f64) -> Signal {
+        let harmonic = |k: usize| Harmonic { amplitude: 1.0 / k as f64, frequency: k as f64 * w0, phase: 0.0 };
+        Signal { components: vec![Component { bias: 0.0, harmonics: (0..n).map(|j| harmonic(2 * j + 1)).collect() }] }
+    }
+
+    /// The poles' extreme magnitudes and the largest ratio between neighbours.
+    fn span(poles: &[Complex<f64>]) -> (f64, f64, f64) {
+        let m: Vec<f64> = poles.iter().map(|p| p.norm()).collect();
+        let ratio = m.windows(2).map(|w| w[1] / w[0]).fold(0.0, f64::max);
+        (m[0], m[m.len() - 1], ratio)
+    }
+
+    /// Many harmonics: the filter poles span the frequencies widened by 1.5 on each side (not ×1.5
+    /// apart whatever their count: 25 harmonics put 51 poles over 1.5^50 = 6e8, beyond the design's
+    /// span of rates), no closer than ×1.1; one harmonic, or two far apart, keep ×1.5.
+    #[test]
+    fn filter_poles_span_a_components_frequencies() {
+        for (n, w0) in [(12, 0.02), (25, 1.0)] {
+            let (lists, _) = filters(&square(n, w0), None, 1.0, 1e5, "reference").unwrap();
+            let (lo, hi, ratio) = span(&lists[0]);
+            let (w_lo, w_hi) = (w0, (2 * n - 1) as f64 * w0);
+            assert_eq!(lists[0].len(), 2 * n);
+            assert!(lo >= w_lo / 1.5 * (1.0 - 1e-12) && hi <= w_hi * 1.5 * (1.0 + 1e-12), "{n}: {lo} … {hi}");
+            assert!((MIN_FILTER_SPREAD - 1e-12..MAX_FILTER_SPREAD).contains(&ratio), "{n}: ×{ratio}");
+        }
+        for (n, w0) in [(1, 2.0), (2, 10.0)] {
+            let (lists, _) = filters(&square(n, w0), None, 1.0, 1e5, "reference").unwrap();
+            assert!((span(&lists[0]).2 - MAX_FILTER_SPREAD).abs() < 1e-12, "{n}: {:?}", lists[0]);
+        }
+    }
 }

@@ -10,7 +10,7 @@ mod common;
 use std::ops::ControlFlow;
 
 use common::{companion, poly_from_roots, Rng};
-use quell::auto::{auto_design, Targets, TAIL_BOUND};
+use quell::auto::{auto_design, AutoError, Targets, TAIL_BOUND};
 use quell::diagnostics::{diagnose, disturbance_zeros, FIDELITY_LIMIT};
 use quell::nalgebra::{Complex, DMatrix};
 use quell::scenario::Scenario;
@@ -272,6 +272,35 @@ fn targets_out_of_range_are_refused_naming_the_field() {
         let e = refused(Targets { u_limit: limits, ..Targets::default() });
         assert!(e.starts_with("u_limit: expected") && e.contains(found), "{e}");
     }
+}
+
+/// A value the rules chose and the design refuses is said to be the rules' (with what to give by
+/// hand), unlike the same value given in the file: x' = −x + u tracking a square wave's first 200
+/// odd harmonics of 0.1 rad/s needs 400 filter poles, which even ×1.1 apart span 3e16, beyond the
+/// design's span of rates.
+#[test]
+fn a_value_the_rules_chose_and_the_design_refuses_is_named_as_theirs() {
+    let harmonics: Vec<String> = (0..200)
+        .map(|k| format!("{{ amplitude = {}, frequency = {} }}", 1.0 / (2 * k + 1) as f64, 0.1 * (2 * k + 1) as f64))
+        .collect();
+    let text = format!(
+        "[plant]\nA = [[-1.0]]\nB = [[1.0]]\nC = [[1.0]]\ndelays = [0.1]\n[design]\n[reference]\ncomponents = [ {{ harmonics = [{}] }} ]\n[simulation]\nt_end = 1000.0\n",
+        harmonics.join(", ")
+    );
+    let doc: toml::Table = text.parse().unwrap();
+    let e = auto_design(&doc, &Targets::default()).map(|_| ()).unwrap_err();
+    let message = e.to_string();
+    assert!(matches!(&e, AutoError::Rules { key, .. } if key == "design.reference_filter_poles"), "{e:?}");
+    assert!(
+        message.starts_with("design.reference_filter_poles[0]: pole")
+            && message.contains("out of the design's span of rates"),
+        "{message}"
+    );
+    assert!(message.ends_with("so give design.reference_filter_poles in [design] (docs/tuning.md)"), "{message}");
+    // A key the file gives is the file's error, as without --auto.
+    let given: toml::Table = text.replace("[design]\n", "[design]\nbeta = -1.0\n").parse().unwrap();
+    let e = auto_design(&given, &Targets::default()).map(|_| ()).unwrap_err();
+    assert!(!matches!(e, AutoError::Rules { .. }) && e.to_string().starts_with("design.beta"), "{e:?}");
 }
 
 fn data(name: &str) -> String {
