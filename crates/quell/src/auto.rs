@@ -14,7 +14,8 @@
 //!   observer's fidelity (it is driven by x̂, not x, eq. (20)), the slowest good enough candidate;
 //! * filter orders: `reference_filter_orders` / `disturbance_filter_orders`, else two per harmonic
 //!   and one per bias (Assumptions 2, 3); their poles distinct real, spread by factors 1.5 around
-//!   the geometric mean of the component's frequencies (r for a bias alone), the slowest at least
+//!   the geometric mean of the component's frequencies (r for a bias alone), or closer (down to
+//!   1.1) over the frequencies' span when ×1.5 would spread them wider (many harmonics), the slowest at least
 //!   30/t_end (its transient, which no η explains, must die out well within the horizon);
 //! * β = 1/(smallest gap between the signals' frequencies, 0 included), at most t_end/10: H averages
 //!   over a beat of the two closest harmonics;
