@@ -15,8 +15,9 @@
 //! * filter orders: `reference_filter_orders` / `disturbance_filter_orders`, else two per harmonic
 //!   and one per bias (Assumptions 2, 3); their poles distinct real, spread by factors 1.5 around
 //!   the geometric mean of the component's frequencies (r for a bias alone), or closer (down to
-//!   1.1) over the frequencies' span when ×1.5 would spread them wider (many harmonics), the slowest at least
-//!   30/t_end (its transient, which no η explains, must die out well within the horizon);
+//!   1.1) over the frequencies' span when ×1.5 would spread them wider (many harmonics), the
+//!   slowest at least 30/t_end (its transient, which no η explains, must die out well within the
+//!   horizon);
 //! * β = 1/(smallest gap between the signals' frequencies, 0 included), at most t_end/10: H averages
 //!   over a beat of the two closest harmonics;
 //! * μ_i: the smallest gain for which the averaged law predicts an RMS error ≤ 0.2 % of the
