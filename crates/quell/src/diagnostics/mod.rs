@@ -21,6 +21,7 @@ use nalgebra::{Complex, DMatrix};
 use crate::design::Design;
 use crate::linalg::{eigenvalues, fmt_complex, fmt_complex_list, numerical_rank};
 use crate::plant::Plant;
+use crate::settings::fmt_short;
 use crate::signal::Signal;
 use crate::sim::SimResult;
 
@@ -235,6 +236,15 @@ fn channel(
     let windows = tail_windows(result, i);
     let trend = windows.and_then(trend);
     let mut advice = Vec::new();
+    let tau = design.plant().delays[i];
+    if tau >= t_end {
+        advice.push(format!(
+            "channel {}'s input delay τ = {} s is not shorter than the run ({} s): its command never reaches the plant; lengthen simulation.t_end to several times τ (or check plant.delays[{i}]'s unit)",
+            i + 1,
+            fmt_short(tau),
+            fmt_short(t_end)
+        ));
+    }
     let relevant = c.slowest_relevant(RELEVANT_SHARE);
     if relevant.is_finite() && mu * relevant * t_end < 5.0 {
         let weakest = c.excitation.iter().min_by(|a, b| a.excitation.total_cmp(&b.excitation));
@@ -381,5 +391,16 @@ mod tests {
             "{:?}",
             held.advice
         );
+    }
+
+    /// A delay not shorter than the run: that channel's command never reached the plant.
+    #[test]
+    fn a_delay_beyond_the_run_is_named() {
+        let text = PAPER_EXAMPLE.replace("delays = [1.0, 3.0]", "delays = [1.0, 100.0]");
+        let d = diagnosed(&text, 1.0, |_| 0.5);
+        let beyond =
+            |c: &ChannelDiagnostics| c.advice.iter().any(|a| a.contains("is not shorter than the run (100 s)"));
+        assert!(!beyond(&d.channels[0]) && beyond(&d.channels[1]), "{:?}", d.channels[1].advice);
+        assert!(d.channels[1].advice[0].starts_with("channel 2's input delay τ = 100 s"), "{:?}", d.channels[1].advice);
     }
 }
