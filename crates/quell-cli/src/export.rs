@@ -50,6 +50,7 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
         scenario_name: scenario.name.clone(),
     };
     let code = generate(&design, sample_time, &options).map_err(export_failure)?;
+    eprint!("{}", crate::report::sample_time_text(&scenario, &design, sample_time));
     let fmu = if args.fmu {
         let cc = args.compiler.clone().or_else(|| std::env::var("CC").ok()).unwrap_or_else(|| "cc".to_string());
         let compiler = (cc != "none").then_some(cc.as_str());

@@ -97,7 +97,7 @@ const FLAGS: [(&str, &str); 6] = [
 ];
 
 /// A library message whose leading key a flag sets, with the flag named.
-fn in_flags(msg: String) -> String {
+pub(crate) fn in_flags(msg: String) -> String {
     let msg = msg.replace(quell::scenario::AUTO_DESIGN, "`quell design SCENARIO --auto --write OUT.toml`");
     for (key, flag) in FLAGS {
         if let Some(rest) = msg.strip_prefix(key).filter(|r| r.starts_with([':', ' '])) {

@@ -209,3 +209,11 @@ pub fn with_warnings(mut design: Value, warnings: &[quell::design::DesignWarning
 pub fn warnings_text(warnings: &[quell::design::DesignWarning]) -> String {
     warnings.iter().map(|w| format!("⚠ warning: {}\n", w.message)).collect()
 }
+
+/// The warning of a sample time coarse for the design ([`quell::sim::coarse_sample_warning`]),
+/// naming the flag that sets it; empty otherwise.
+pub fn sample_time_text(scenario: &quell::Scenario, design: &quell::Design, sample_time: f64) -> String {
+    quell::sim::coarse_sample_warning(design, &scenario.reference, &scenario.disturbance, sample_time)
+        .map(|w| format!("⚠ warning: {}\n", crate::in_flags(w)))
+        .unwrap_or_default()
+}

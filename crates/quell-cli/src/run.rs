@@ -49,6 +49,9 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     eprint!("{}", report::warnings_text(&quell::design::warnings(&design, &scenario.design)));
     // Every check that can fail on input happens before the output directory is touched.
     let settings = loop_settings(args, &scenario, &design)?;
+    if let Loop::Sampled { sample_time } = settings.mode {
+        eprint!("{}", report::sample_time_text(&scenario, &design, sample_time));
+    }
     let out = &args.out;
     output::prepare_out(out, &["signals.csv", "design.json", "summary.json"])?;
     // Ctrl-C or SIGTERM stops the run at its next recorded sample; a second one before that sample

@@ -826,3 +826,34 @@ fn signal_names_label_the_channel_lines_and_change_no_file() {
     }
     assert!(csv[0] == csv[1], "signals.csv differs with names");
 }
+
+/// A sampled-data run (or export) at a sample time coarse for the design is warned of, with the
+/// one that is not: the paper's fastest rate is its reference filter's pole −9, so T_s·9 > 0.2
+/// (T_s > 0.0222 s) warns and 0.02 s does not; the export warns alike.
+#[test]
+fn a_coarse_sample_time_is_warned_of() {
+    let dir = temp_dir("coarse");
+    let out = dir.path().join("out");
+    let warned = |args: &[&str]| {
+        let o = quell(args);
+        // A coarse sampled-data run may also fail (exit 1); the warning comes before it.
+        assert!(matches!(o.status.code(), Some(0 | 1)), "{}", stderr(&o));
+        stderr(&o).lines().find(|l| l.contains("simulation.sample_time (--sample-time): T_s")).map(str::to_owned)
+    };
+    let run = |t: &str| {
+        let args = ["run", "--no-plots", "--sample-time", t, "--out", out.to_str().unwrap()];
+        warned(&args)
+    };
+    let w = run("0.05").expect("T_s = 0.05 s warns");
+    assert!(
+        w.starts_with("⚠ warning: ") && w.contains("is 0.45 of the loop's fastest time constant 1/ρ (ρ = 9 /s"),
+        "{w}"
+    );
+    let suggested: f64 = w.split("choose T_s ≤ ").nth(1).and_then(|r| r.split(' ').next()).unwrap().parse().unwrap();
+    assert!(suggested <= 0.2 / 9.0 && suggested > 0.99 * 0.2 / 9.0, "{suggested}");
+    // (The suggestion is a bound; a sample time must also divide the delays: 0.02 s does.)
+    assert_eq!(run("0.02"), None);
+    let c = dir.path().join("c");
+    let export = ["export", &paper(), "--sample-time", "0.05", "--out", c.to_str().unwrap()];
+    assert!(warned(&export).is_some());
+}

@@ -139,8 +139,13 @@ pub fn simulation_error(
 /// `UserWarning`, with its message (figures and what to do).
 pub fn warn_fragile(py: Python<'_>, design: &quell::Design, spec: &quell::DesignSpec) -> PyResult<()> {
     for w in quell::design::warnings(design, spec) {
-        let message = std::ffi::CString::new(w.message.replace('\0', " ")).unwrap_or_default();
-        PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyUserWarning>(), &message, 1)?;
+        warn(py, &w.message)?;
     }
     Ok(())
+}
+
+/// Issues `message` as a Python `UserWarning`.
+pub fn warn(py: Python<'_>, message: &str) -> PyResult<()> {
+    let message = std::ffi::CString::new(message.replace('\0', " ")).unwrap_or_default();
+    PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyUserWarning>(), &message, 1)
 }

@@ -568,7 +568,16 @@ pub fn simulate(
     settings
         .set_max_steps(step_budget(py, max_steps)?)
         .map_err(|e| Kind::Scenario.err(py, in_python(e.to_string())))?;
+    let sampled = match settings.mode {
+        Loop::Sampled { sample_time } => Some(sample_time),
+        Loop::Continuous(_) => None,
+    };
     let result = run_released(py, scn, &design, settings)?;
+    // After the run's own checks (a sample time they refuse gets no warning).
+    let coarse = sampled.and_then(|t| quell::sim::coarse_sample_warning(&design, &scn.reference, &scn.disturbance, t));
+    if let Some(w) = coarse {
+        crate::errors::warn(py, &in_python(w))?;
+    }
     let outcome = result.outcome.clone().unwrap_or(Outcome::Completed);
     let result = Py::new(py, PySimResult::from_run(py, scn, &design, result, s.labels.clone())?)?;
     match failure(outcome) {

@@ -3,6 +3,7 @@
 import pathlib
 import subprocess
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -103,8 +104,14 @@ def test_simulate_shapes_and_overrides():
     np.testing.assert_array_equal(r.e, r.y - r.g)
     with pytest.raises(ValueError):
         r.y[0, 0] = 1.0  # results are read-only
-    sampled = quell.simulate(s, t_end=10.0, sample_time=1e-3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # 1 ms is fine for the paper (T_s·ρ = 0.009)
+        sampled = quell.simulate(s, t_end=10.0, sample_time=1e-3)
     assert sampled.stats == {"controller_steps": 10001, "sample_time": 1e-3}
+    # A sample time coarse for the design (the paper's fastest rate: its filter pole −9) is a
+    # UserWarning naming the argument, with the bound.
+    with pytest.warns(UserWarning, match=r"^sample_time: T_s = 0.05 s is 0.45 of .*choose T_s ≤ 0.0222 s"):
+        quell.simulate(s, t_end=2.0, sample_time=0.05)
     with pytest.raises(quell.ScenarioError, match=r"^output_step: expected an output step ≤ t_end = 0.05") as e:
         quell.simulate(s, t_end=0.05)  # the argument's name, not the file's key
     assert e.value.key == "simulation.output_step"

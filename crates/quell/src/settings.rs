@@ -332,9 +332,11 @@ pub(crate) fn step_at_least(t_end: f64, limit: f64) -> f64 {
 
 /// `x` > 0 rounded down to three significant digits, so that the value typed back is within a
 /// bound of x.
-fn three_digits_down(x: f64) -> f64 {
+pub(crate) fn three_digits_down(x: f64) -> f64 {
     let e = x.log10().floor() as i32 - 2;
-    (x / 10f64.powi(e)).floor() * 10f64.powi(e)
+    // Through the decimal text, so that 291e-6 is the double nearest 0.000291.
+    let digits = (x / 10f64.powi(e)).floor();
+    format!("{digits}e{e}").parse::<f64>().map_or(x, |v| if v <= x { v } else { (digits - 1.0) * 10f64.powi(e) })
 }
 
 /// Rust's shortest form of `v`: `{}` between 1e-4 and 1e6, otherwise `{:e}`, so that 1e293 does not
