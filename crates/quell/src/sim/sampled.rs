@@ -20,10 +20,10 @@ use crate::plant::Plant;
 use crate::settings::{self, Actuator, KeyError, MeasurementNoise};
 use crate::signal::{Signal, SignalBank};
 
-/// T_s·ρ beyond which a sampled-data run gets a warning, ρ the loop's fastest rate ([`super::loop_rate`]):
-/// the discrete controller then departs from the continuous design (Åström & Wittenmark's rule of
-/// thumb for zero-order-hold control is ω h ≈ 0.1 … 0.6; a maglev at T_s·ρ = 0.34 peaked at 1,186 V
-/// against 5.9 V in the continuous loop and did not settle).
+/// T_s·ρ beyond which a sampled-data run gets a warning, ρ the loop's fastest rate
+/// ([`super::loop_rate`]): the discrete controller then departs from the continuous design (Åström
+/// & Wittenmark's rule of thumb for zero-order-hold control is ω h ≈ 0.1 … 0.6; a maglev at
+/// T_s·ρ = 0.34 peaked at 1,186 V against 5.9 V in the continuous loop and did not settle).
 pub const COARSE_SAMPLE: f64 = 0.2;
 
 /// A warning when `sample_time` is coarse for `design` under g = `reference`, ω = `disturbance`
