@@ -91,6 +91,19 @@ def test_plant_from_a_transfer_function_is_its_minimal_realization():
     np.testing.assert_array_equal(quell.Plant(ss).A, ss.A)
 
 
+def test_a_mimo_transfer_function_without_slycot_is_a_scenario_error():
+    # Wood–Berry's 2×2 column: python-control realizes a MIMO transfer function only with slycot;
+    # without it its own exception (a NotImplementedError) must not leak past quell.Plant.
+    G = control.tf([[[12.8], [-18.9]], [[6.6], [-19.4]]], [[[16.7, 1.0], [21.0, 1.0]], [[10.9, 1.0], [14.4, 1.0]]])
+    try:
+        import slycot  # noqa: F401
+    except ImportError:
+        with pytest.raises(quell.ScenarioError, match="sys: python-control cannot realize this 2x2 transfer function"):
+            quell.Plant(G, delays=[1.0, 3.0])
+    else:
+        assert quell.Plant(G, delays=[1.0, 3.0]).m == 2
+
+
 def test_result_to_control_is_outputs_by_time_with_labels():
     result = quell.simulate(quell.paper_example(), t_end=2.0)
     resp = result.to_control()

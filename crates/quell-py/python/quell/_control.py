@@ -62,17 +62,18 @@ def state_space(sys):
 
     if not isinstance(sys, control.TransferFunction):
         return sys
-    reduced = control.minreal(sys, verbose=False)  # cancels pole-zero pairs (no slycot needed)
     try:
+        reduced = control.minreal(sys, verbose=False)  # cancels pole-zero pairs (SISO: no slycot)
         realized = control.ss(reduced)
         # minreal drops the signal names: the realization gets the transfer function's.
         return control.ss(realized.A, realized.B, realized.C, realized.D,
                           inputs=sys.input_labels, outputs=sys.output_labels)
-    except (ImportError, TypeError, ValueError) as e:
+    # python-control's ControlMIMONotImplemented (no slycot) is a NotImplementedError.
+    except (ImportError, TypeError, ValueError, NotImplementedError) as e:
         from ._errors import ScenarioError
 
         raise ScenarioError(
-            f"sys: python-control cannot realize this {reduced.noutputs}x{reduced.ninputs} transfer function "
+            f"sys: python-control cannot realize this {sys.noutputs}x{sys.ninputs} transfer function "
             f"as a state-space system ({e}); a MIMO realization needs slycot: install it, or pass a StateSpace"
         ) from e
 
