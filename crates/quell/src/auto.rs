@@ -54,7 +54,7 @@ use crate::linalg::eigenvalues;
 use crate::scenario::exosystem::Exosystem;
 use crate::scenario::{PartialDesign, Scenario, ScenarioError};
 use crate::signal::{Component, Signal};
-use crate::sim::{loop_rate, Outcome, Run, SimError};
+use crate::sim::{loop_rate, Outcome, Run, SimError, COARSE_SAMPLE};
 
 /// Fastest adaptation rate μ_i λ_max(Ω̄_i) the automatic design chooses, per unit of the time
 /// scale r: faster buys little (the error is then limited by the filters) and makes the loop stiff.
@@ -74,6 +74,9 @@ const FILTER_DECAY: f64 = 30.0;
 /// Neighbouring filter poles are at most this ratio apart, and at least [`MIN_FILTER_SPREAD`]
 /// ([`filter_spread`]).
 const MAX_FILTER_SPREAD: f64 = 1.5;
+/// A sampled-data scenario's first proposal halves its channel and observer poles at most this
+/// often ([`sampled_start`]).
+const MAX_SAMPLED_HALVINGS: usize = 10;
 const MIN_FILTER_SPREAD: f64 = 1.1;
 /// Without a target, the averaged law should reach the aim by t_end / this: the law ignores H's
 /// lag, the delays and the swapping error and is optimistic (a factor 4 on the paper's example);
@@ -348,14 +351,13 @@ impl AutoError {
 }
 
 fn verified_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, AutoError> {
-    let mut first = propose(doc, targets, Speed::FIRST)?;
-    let mut design = first.scenario.design()?;
+    let (mut first, mut design, start) = sampled_start(doc, targets)?;
     let bound: Vec<f64> = first.scenario.reference.components.iter().map(|c| TAIL_BOUND * c.peak()).collect();
     let mut runs = 0;
     // The first proposal, μ raised where its tail misses the bound.
     let first_check = loop {
         runs += 1;
-        let c = check(&first.scenario, &design, Speed::FIRST)?;
+        let c = check(&first.scenario, &design, start)?;
         let retry = runs <= 3
             && first
                 .mu_caps
@@ -386,6 +388,39 @@ fn verified_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, A
     }
     let advice = if within { Vec::new() } else { vec![limit_advice(targets, &kept.2)] };
     Ok(finish(kept, bound, runs, candidates, (within, !targets.u_limit.is_empty()), advice))
+}
+
+/// The first proposal and its design: the rules' own, or for a sampled-data scenario
+/// (`simulation.sample_time` = T_s) the channel and observer poles halved until the loop's fastest
+/// rate ρ ([`loop_rate`]) meets T_s·ρ ≤ [`COARSE_SAMPLE`], while halving lowers ρ (a rate the poles
+/// do not set, the plant's or a signal's, stays), noted in those keys' reasons. The rules chose a
+/// maglev's observer for 686 /s; sampled at 0.5 ms (T_s·ρ = 0.34) its verification failed.
+fn sampled_start(doc: &toml::Table, targets: &Targets) -> Result<(Proposal, Design, Speed), AutoError> {
+    let (mut p, mut speed) = (propose(doc, targets, Speed::FIRST)?, Speed::FIRST);
+    let mut design = p.scenario.design()?;
+    let Some(t_s) = p.scenario.simulation.sample_time else { return Ok((p, design, speed)) };
+    let rate = |p: &Proposal, d: &Design| loop_rate(d, d.plant(), [&p.scenario.reference, &p.scenario.disturbance]);
+    let mut rho = rate(&p, &design);
+    for _ in 0..MAX_SAMPLED_HALVINGS {
+        if t_s * rho <= COARSE_SAMPLE {
+            break;
+        }
+        let slower = Speed { channel: speed.channel / 2.0, observer: speed.observer / 2.0, mu: 1.0 };
+        let q = propose(doc, targets, slower)?;
+        let d = q.scenario.design()?;
+        let r = rate(&q, &d);
+        if r >= rho {
+            break;
+        }
+        (p, design, speed, rho) = (q, d, slower, r);
+    }
+    if speed != Speed::FIRST {
+        let why = format!("; ×{} of that for simulation.sample_time = {t_s} s (T_s·ρ = {:.2} ≤ {COARSE_SAMPLE}, ρ the loop's fastest rate: docs/running.md)", speed.channel, t_s * rho);
+        for c in p.choices.iter_mut().filter(|c| c.key == "design.channel_poles" || c.key == "design.observer_poles") {
+            c.why.push_str(&why);
+        }
+    }
+    Ok((p, design, speed))
 }
 
 /// The relaxation (module docs): from the verified first proposal, slower candidates in three
@@ -500,10 +535,12 @@ fn finish(
 ) -> AutoDesign {
     let speed = c.speed;
     let relaxation = if candidates.len() > 1 {
+        // Relative to the first candidate (the rules' proposal, or its sampled-data start).
+        let start = candidates[0].speed;
         let own = |key: &str| match key {
-            "design.channel_poles" => Some(speed.channel),
-            "design.observer_poles" => Some(speed.observer),
-            "design.mu" => Some(speed.mu),
+            "design.channel_poles" => Some(speed.channel / start.channel),
+            "design.observer_poles" => Some(speed.observer / start.observer),
+            "design.mu" => Some(speed.mu / start.mu),
             _ => None,
         };
         for ch in &mut p.choices {

@@ -303,6 +303,36 @@ fn a_value_the_rules_chose_and_the_design_refuses_is_named_as_theirs() {
     assert!(!matches!(e, AutoError::Rules { .. }) && e.to_string().starts_with("design.beta"), "{e:?}");
 }
 
+/// A sampled-data scenario starts the rules from channel and observer poles slow enough for its
+/// sample time: the maglev (tests/data/maglev.toml, ±57 /s, 1 ms delay) gets an observer for
+/// ρ = 686 /s in the continuous loop, too fast for 0.5 ms (T_s·ρ = 0.34; that design's sampled
+/// verification misses the bound, 2.7e-5 against 1.5e-5); with simulation.sample_time = 0.0005 the
+/// rules halve the poles to T_s·ρ ≤ 0.2 and the sampled verification passes.
+#[test]
+fn a_sampled_scenario_gets_poles_slow_enough_for_its_sample_time() {
+    let rho = |a: &quell::auto::AutoDesign| {
+        quell::sim::loop_rate(&a.design, a.design.plant(), [&a.scenario.reference, &a.scenario.disturbance])
+    };
+    let t_s = 5e-4;
+    let continuous = auto_design(&toml::from_str(&data("maglev.toml")).unwrap(), &Targets::default()).unwrap();
+    assert!(continuous.verification.passed, "{:?}", continuous.verification);
+    assert!(t_s * rho(&continuous) > quell::sim::COARSE_SAMPLE, "ρ = {}", rho(&continuous));
+    let text = data("maglev.toml").replace("[simulation]\n", &format!("[simulation]\nsample_time = {t_s}\n"));
+    let sampled = auto_design(&toml::from_str(&text).unwrap(), &Targets::default()).unwrap();
+    assert_eq!(sampled.scenario.simulation.sample_time, Some(t_s));
+    assert!(sampled.verification.passed, "{:?}", sampled.verification);
+    assert!(t_s * rho(&sampled) <= quell::sim::COARSE_SAMPLE, "ρ = {}", rho(&sampled));
+    let why = &sampled.choices.iter().find(|c| c.key == "design.channel_poles").unwrap().why;
+    assert!(why.contains("of that for simulation.sample_time = 0.0005 s"), "{why}");
+    assert!(quell::sim::coarse_sample_warning(
+        &sampled.design,
+        &sampled.scenario.reference,
+        &sampled.scenario.disturbance,
+        t_s
+    )
+    .is_none());
+}
+
 fn data(name: &str) -> String {
     std::fs::read_to_string(format!("{}/tests/data/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap()
 }
