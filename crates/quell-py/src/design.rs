@@ -257,7 +257,10 @@ fn restore(py: Python<'_>, plant: &PyPlant, choices: &Bound<'_, PyDict>) -> PyRe
 /// TypeError
 ///     An argument of the wrong type.
 /// DesignError
-///     (A, B) is not controllable, the poles are not conjugate-closed, or not n of them.
+///     (A, B) is not controllable, the poles are not conjugate-closed, or not n of them; a pole
+///     repeated more than rank(B) times (as `control.place` refuses it: the closed loop would need
+///     a Jordan block, whose eigenvalues no gain meets to 1e-6 — spread the poles); or the gain
+///     would miss the poles by more than 1e-6 (relative).
 ///
 /// Examples
 /// --------

@@ -45,9 +45,20 @@ CASES = {
     "scipy_one_column": (SCIPY_A, FULL_B[:, :1], [-2 + 1j, -2 - 1j, -3, -2]),
     # python-control testPlace
     "control_place": (SCIPY_A, SCIPY_B, [-0.5 + 1j, -0.5 - 1j, -5.0566, -8.6659]),
-    # python-control testPlace_varga_continuous (repeated pole, single input) and bug #177
-    "control_varga_repeated": (np.array([[1.0, -2.0], [3.0, -4.0]]), np.array([[5.0], [7.0]]), [-2.0, -2.0]),
+    # python-control bug #177
     "control_bug_177": (np.array([[0.0, 1.0], [100.0, 0.0]]), np.array([[0.0], [1.0]]), [-20 + 10j, -20 - 10j]),
+    # Poles repeated rank(B) = 2 times: both place them (a semisimple closed loop)
+    "repeated_at_rank_b": (SCIPY_A, SCIPY_B, [-1.0, -1.0, -2.0, -2.0]),
+}
+
+# A pole repeated more often than rank(B): the closed loop would need a Jordan block.
+BEYOND_RANK_B = {
+    # python-control testPlace_varga_continuous (a double pole, one input; control.place_varga's case)
+    "control_varga_repeated": (np.array([[1.0, -2.0], [3.0, -4.0]]), np.array([[5.0], [7.0]]), [-2.0, -2.0], 2, 1),
+    "double_integrator": (np.array([[0.0, 1.0], [0.0, 0.0]]), np.array([[0.0], [1.0]]), [-1.0, -1.0], 2, 1),
+    # Four copies with rank(B) = 2 (gains ≈ 5e3 with eigenvalues 7e-3 off were returned for such a case)
+    "scipy_four_fold": (SCIPY_A, SCIPY_B, [-1.0] * 4, 4, 2),
+    "car5_triple": (CAR5_A, CAR5_B, [-1.0, -1.0, -1.0, -2.0, -3.0], 3, 2),
 }
 
 
@@ -116,3 +127,24 @@ def test_triple_pole_with_two_inputs():
         assert str(e).startswith("poles: ")
     else:
         assert_same_multiset(np.linalg.eigvals(A - B @ K), P, 1e-4)
+
+
+@pytest.mark.parametrize("name", BEYOND_RANK_B)
+def test_a_pole_repeated_beyond_rank_b_is_refused_as_control_place_refuses_it(name):
+    """quell.place refuses what control.place refuses (a pole repeated more than rank(B) times),
+    with a DesignError (a ValueError, as control.place raises) naming the pole, its multiplicity
+    and rank(B), and telling to spread the poles."""
+    A, B, P, multiplicity, rank = BEYOND_RANK_B[name]
+    with pytest.raises(ValueError, match="repeated more than rank"):
+        control.place(A, B, P)
+    with pytest.raises(quell.DesignError) as e:
+        quell.place(A, B, P)
+    assert isinstance(e.value, ValueError)
+    text = str(e.value)
+    assert text.startswith(f"poles: pole {max(set(P), key=P.count):.6f} is requested {multiplicity} times, more than rank(B) = {rank}"), text
+    assert "spread the repeated poles" in text, text
+    # Spread by 10 % of their size, both place them.
+    spread = [p * (1 + 0.1 * P[:i].count(p)) for i, p in enumerate(P)]
+    K, K_ref = quell.place(A, B, spread), control.place(A, B, spread)
+    assert_same_multiset(np.linalg.eigvals(A - B @ K), spread, 1e-8)
+    assert_same_multiset(np.linalg.eigvals(A - B @ K_ref), spread, 1e-6)

@@ -520,11 +520,14 @@ fn repeated_poles_everywhere_do_not_hang() {
     // Eigenvalues of a defective triple root are only accurate to ~eps^(1/3) ≈ 6e-6.
     assert!(d.decoupled_eigenvalues().iter().all(|e| (e - re(-2.0)).norm() < 1e-4), "{:?}", d.decoupled_eigenvalues());
     assert!(d.observer_eigenvalues().iter().filter(|e| (*e - re(-3.0)).norm() < 1e-4).count() == 2);
-    // Observer poles with multiplicity 3 > rank C = 2: a Jordan block (place's cyclic path);
-    // A − LC's characteristic polynomial is (s + 3)³, so its eigenvalues are −3 to ~eps^(1/3).
+    // Observer poles with multiplicity 3 > rank C = 2 would need a Jordan block: refused by
+    // place, naming the pole, its multiplicity and the rank.
     spec.observer = ObserverChoice::Poles(vec![re(-3.0); 3]);
-    let d = Design::new(&paper_plant(), &spec).unwrap();
-    assert!(d.observer_eigenvalues().iter().all(|e| (e - re(-3.0)).norm() < 1e-4), "{:?}", d.observer_eigenvalues());
+    let e = Design::new(&paper_plant(), &spec).unwrap_err();
+    assert_eq!(
+        e,
+        DesignError::ObserverPoles(quell::PlaceError::Multiplicity { pole: re(-3.0), multiplicity: 3, rank: 2 })
+    );
 }
 
 /// A 4-state, 3-output plant with σ = [2, 1, 1] (c_1 ⟂ range B), so Σσ_i = n: no zero dynamics.

@@ -178,13 +178,14 @@ fn observer_poles_inside_the_rounding_margin_are_judged_by_their_refined_values(
 }
 
 #[test]
-fn a_triple_observer_pole_is_placed() {
-    let (_, d) = load(L_LINE, "observer_poles = [-2.0, -2.0, -2.0]").unwrap();
-    let eigs = d.observer_eigenvalues();
-    // A defective triple eigenvalue is computable to ≈ (ε‖A − LC‖)^(1/3) ≈ 1e-5; its mean to ε.
-    let mean: f64 = eigs.iter().map(|z| z.re).sum::<f64>() / 3.0;
-    assert!((mean + 2.0).abs() < 1e-9, "{eigs:?}");
-    assert!(eigs.iter().all(|z| (z - Complex::new(-2.0, 0.0)).norm() < 1e-4), "{eigs:?}");
+fn a_triple_observer_pole_is_refused() {
+    // Three copies of −2 with rank C = 2 would need a Jordan block (eigenvalues only accurate to
+    // ≈ (ε‖A − LC‖)^(1/2)): refused naming the pole, its multiplicity and the rank.
+    let e = design_error(L_LINE, "observer_poles = [-2.0, -2.0, -2.0]");
+    let want = quell::PlaceError::Multiplicity { pole: Complex::new(-2.0, 0.0), multiplicity: 3, rank: 2 };
+    assert_eq!(e, DesignError::ObserverPoles(want));
+    let docs = include_str!("../../../docs/errors.md");
+    assert!(docs.contains(&e.to_string()), "docs/errors.md does not show: {e}");
 }
 
 /// The continuous and the sampled-data (T_s = 1 ms) loop over 10 s; the continuous one with at most

@@ -9,20 +9,24 @@
 //!   |det X|-maximising rank-2 step, in the manner of Tits & Yang (1996), "Globally convergent
 //!   algorithms for robust pole assignment by state feedback", IEEE TAC 41(10). Repeated poles
 //!   (at most r copies) get independent eigenvectors from the same admissible space.
-//! * A pole repeated more than r times (the closed loop must have a Jordan block): a seeded
-//!   generic K₀ makes A − B K₀ cyclic, then single-input placement on (A − B K₀, B v) for a
-//!   generic combination v of the inputs; K = K₀ + v k (Wonham 1967; Kailath, *Linear Systems*, §7.2).
-//!   The same path is the fallback when KNV0's gain fails the check (observed for a pole repeated
-//!   exactly r times on block-structured plants, tests/properties.rs).
+//! * The fallback when KNV0's gain fails the check (seen for a pole repeated exactly r times on
+//!   block-structured plants, tests/properties.rs): a seeded generic K₀ makes A − B K₀ cyclic,
+//!   then single-input placement on (A − B K₀, B v) for a generic combination v of the inputs;
+//!   K = K₀ + v k (Wonham 1967; Kailath, *Linear Systems*, §7.2). A repeated pole then has one
+//!   Jordan block (of size ≤ r).
 //! * Single-input (r = 1): Ackermann's formula evaluated in the orthogonal controller-Hessenberg
 //!   (staircase) coordinates, where the controllability matrix is triangular and need not be
-//!   inverted; any multiplicity is allowed.
+//!   inverted.
+//!
+//! A pole requested more than r times is refused ([`PlaceError::Multiplicity`], as SciPy's
+//! `place_poles` and python-control's `place` refuse it): the closed loop would need a Jordan
+//! block, whose eigenvalues no gain in floating point can be verified to meet.
 //!
 //! Every gain is verified a posteriori against A − B K as actually formed, and an error is
 //! returned instead of an inaccurate K (see [`place`] for the rule): faer's eigenvalues where the
 //! spectrum is well conditioned; eigenvalues refined with residuals in twice the working
 //! precision (and the characteristic polynomial) where it is not, e.g. the observer of a
-//! 12-state chain; the characteristic polynomial for Jordan designs.
+//! 12-state chain; the characteristic polynomial and faer's eigenvalues for the fallback.
 
 use nalgebra::{Complex, ComplexField, DMatrix, DVector};
 use thiserror::Error;
@@ -60,6 +64,17 @@ pub enum PlaceError {
     Uncontrollable { rank: usize, n: usize },
     #[error("expected {expected} poles (one per state), got {found}; give exactly one pole per state")]
     WrongCount { expected: usize, found: usize },
+    /// A pole requested more than rank(B) times (see [`place`]).
+    #[error(
+        "pole {} is requested {multiplicity} times, more than rank(B) = {rank} (rank C for observer \
+         poles): A − BK would need a Jordan block of size ≥ {}, whose eigenvalues move by about \
+         δ^(1/size) under a change δ of A − BK, so no gain can be verified to 1e-6; spread the \
+         repeated poles (e.g. −1, −1.1, −1.2 for −1 three times) to at most {rank} copies of one pole, \
+         as control.place requires",
+        crate::linalg::fmt_complex(.pole),
+        .multiplicity.div_ceil(*.rank)
+    )]
+    Multiplicity { pole: Complex<f64>, multiplicity: usize, rank: usize },
     #[error(
         "pole {} has no complex-conjugate partner in the list; complex poles must come in \
          conjugate pairs so that K is real — add its conjugate",
@@ -94,21 +109,28 @@ enum Slot {
 /// Pole placement like MATLAB's and python-control's `place`: returns the real `m × n` gain `K`
 /// with eig(A − B K) = `poles` (as a multiset).
 ///
-/// `poles` must hold exactly n finite values, closed under complex conjugation; any
-/// multiplicity is allowed when (A, B) is controllable. With rank(B) = r > 1 and every pole
-/// repeated at most r times: KNV method 0 (Kautsky, Nichols & Van Dooren 1985), a
-/// diagonalisable closed loop with a well-conditioned eigenvector matrix. A pole repeated more
-/// than r times needs a Jordan block (its eigenvectors cannot be independent): a seeded cyclic
-/// feedback then single-input placement (module docs). For r = 1: Ackermann's formula in
-/// orthogonal Hessenberg coordinates (one Jordan block per repeated pole) — see the module docs.
+/// `poles` must hold exactly n finite values, closed under complex conjugation, each repeated at
+/// most r = rank(B) times, and (A, B) must be controllable. With r > 1: KNV method 0 (Kautsky,
+/// Nichols & Van Dooren 1985), a diagonalisable closed loop with a well-conditioned eigenvector
+/// matrix. For r = 1 (distinct poles): Ackermann's formula in orthogonal Hessenberg coordinates —
+/// see the module docs.
+///
+/// A pole repeated more than r times is [`PlaceError::Multiplicity`], as in SciPy's
+/// `place_poles` and python-control's `place`: its eigenvectors cannot be independent, so A − B K
+/// would need a Jordan block of size j ≥ ⌈k/r⌉, whose eigenvalues a change δ of A − B K moves by
+/// about δ^(1/j). The rounding of K alone is such a change (δ ≈ ε‖B‖‖K‖), so the closed loop
+/// actually formed misses the poles by far more than 1e-6 (a 4-fold −1 with r = 2 on the
+/// Wood–Berry column: gains ≈ 5e3, eigenvalues 7e-3 off), and the loop is fragile under any
+/// model error; distinct poles near the repeated one give a verifiable, diagonalisable loop.
+///
 /// The result is checked on A − B K as formed, else [`PlaceError::Inaccurate`] is returned rather
 /// than a wrong K. Verified error ≤ 1e-6, by the spectrum's conditioning:
 ///
 /// | closed loop | verified error |
 /// |---|---|
-/// | diagonalisable, κ₂(X)·nε‖A − BK‖_F ≤ 1e-7·max(1, min\|p\|) | faer's eigenvalues matched to the poles, max \|λ − p\|/max(1, \|p\|), plus that first-order bound on faer's own error |
-/// | diagonalisable, κ₂(X) larger (e.g. a 12-state chain observer) | the same, each eigenvalue first refined by Newton's method with residuals in twice the working precision; and the characteristic polynomial as below (alone, when a pole is repeated) |
-/// | Jordan blocks (eigenvalues only computable to ≈ ε^(1/k)) | characteristic polynomial vs ∏(s − p), coefficient-wise relative to ∏(s + max(1, \|p\|)) |
+/// | κ₂(X)·nε‖A − BK‖_F ≤ 1e-7·max(1, min\|p\|) | faer's eigenvalues matched to the poles, max \|λ − p\|/max(1, \|p\|), plus that first-order bound on faer's own error |
+/// | κ₂(X) larger (e.g. a 12-state chain observer) | the same, each eigenvalue first refined by Newton's method with residuals in twice the working precision; and the characteristic polynomial as below (alone, for a repeated pole: a semisimple cluster) |
+/// | the cyclic fallback (X unknown; a repeated pole is a Jordan block of size j ≤ r) | characteristic polynomial vs ∏(s − p), coefficient-wise relative to ∏(s + max(1, \|p\|)), and faer's eigenvalues matched to the poles: what an eigenvalue solver shows of the formed loop, (ε‖A − BK‖)^(1/j) off at best |
 ///
 /// How fragile the placed closed loop is: [`eigenvector_condition`].
 ///
@@ -145,6 +167,9 @@ pub fn place(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[Complex<f64>]) -> Resu
     let r = st.blocks[0]; // numerical rank of B, decided with the same tolerance
 
     let expanded = expand(&slots);
+    if let Some((pole, multiplicity)) = most_repeated(&expanded).filter(|&(_, k)| k > r) {
+        return Err(PlaceError::Multiplicity { pole, multiplicity, rank: r });
+    }
 
     // Reduce B to full column rank: B ≈ U_r Σ_r V_rᵀ, place with B_r = U_r Σ_r, K = V_r K_r.
     let svd = B
@@ -161,34 +186,30 @@ pub fn place(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[Complex<f64>]) -> Resu
     }
     let Vr = Vt.rows(0, r).transpose();
 
-    // Closed-loop eigenvectors in real form (columns u, v for a pair u ± i v), when they are
-    // determined: always for r > 1 (KNV0 chooses them), for r = 1 if the poles are distinct.
+    // Closed-loop eigenvectors in real form (columns u, v for a pair u ± i v): for r = 1 those of
+    // the distinct poles, for r > 1 KNV0's choice.
     if r == 1 {
         let Kr = single_input(A, &Br, &slots)?;
-        let distinct = max_multiplicity(&expanded) <= 1;
-        let X = if distinct { Some(eigenvectors_single_input(A, &Br, &slots)?) } else { None };
+        let X = eigenvectors_single_input(A, &Br, &slots)?;
         let K = Vr * Kr;
-        verify(A, B, &K, &expanded, X.as_ref())?;
+        verify(A, B, &K, &expanded, Some(&X))?;
         return Ok(K);
     }
-    let cyclic_gain = || -> Result<DMatrix<f64>, PlaceError> {
-        let K = &Vr * cyclic(A, &Br, &slots, &expanded)?;
-        verify(A, B, &K, &expanded, None)?;
-        Ok(K)
-    };
-    if max_multiplicity(&expanded) > r {
-        return cyclic_gain();
-    }
-    // KNV0, and if its gain fails the check (seen for a pole repeated exactly r times on
-    // block-structured plants), the cyclic single-input path; the better verified gain is kept.
+    // KNV0, and if its gain fails the check, the cyclic single-input path; the better verified
+    // gain is kept.
     let (Kr, X) = knv0(A, &Br, &slots)?;
     let K = &Vr * Kr;
     match verify(A, B, &K, &expanded, Some(&X)) {
         Ok(()) => Ok(K),
-        Err(knv_error) => cyclic_gain().map_err(|e| match (&e, &knv_error) {
-            (PlaceError::Inaccurate { max_error: a }, PlaceError::Inaccurate { max_error: b }) if b < a => knv_error,
-            _ => e,
-        }),
+        Err(knv_error) => {
+            let K = &Vr * cyclic(A, &Br, &slots, &expanded)?;
+            verify(A, B, &K, &expanded, None).map(|()| K).map_err(|e| match (&e, &knv_error) {
+                (PlaceError::Inaccurate { max_error: a }, PlaceError::Inaccurate { max_error: b }) if b < a => {
+                    knv_error
+                }
+                _ => e,
+            })
+        }
     }
 }
 
@@ -244,19 +265,19 @@ fn same_pole(a: C64, b: C64) -> bool {
     (a - b).norm() <= SAME_POLE_RTOL * a.norm().max(b.norm()).max(1.0)
 }
 
-/// The largest number of times one pole is requested.
-fn max_multiplicity(poles: &[C64]) -> usize {
-    poles.iter().map(|&p| poles.iter().filter(|&&q| same_pole(p, q)).count()).max().unwrap_or(0)
+/// The pole requested most often and how many times (`None` for no poles).
+pub(crate) fn most_repeated(poles: &[C64]) -> Option<(C64, usize)> {
+    // The first of equally repeated poles (λ before λ̄ of a pair): max_by_key keeps the last.
+    poles.iter().rev().map(|&p| (p, poles.iter().filter(|&&q| same_pole(p, q)).count())).max_by_key(|&(_, k)| k)
 }
 
-/// Placement for a pole requested more than r = rank(B) times (the closed loop then needs Jordan
-/// blocks, which KNV0's diagonalisable X cannot give). A generic feedback K₀ makes A − B K₀
-/// cyclic, and then (A − B K₀, B v) is controllable for a generic v, so the single-input
+/// The fallback placement when KNV0's gain fails the check. A generic feedback K₀ makes
+/// A − B K₀ cyclic, and then (A − B K₀, B v) is controllable for a generic v, so the single-input
 /// placement k of [`single_input`] on it gives A − B (K₀ + v k) with the requested characteristic
 /// polynomial (the classical proof of pole assignability, e.g. Wonham 1967; Kailath, *Linear
 /// Systems*, §7.2). K₀ and v come from fixed seeds (deterministic): [`CYCLIC_TRIES`] candidates,
-/// the first with K₀ = 0, and the one whose characteristic polynomial is closest to ∏(s − p)
-/// is returned (verified again by the caller).
+/// the first with K₀ = 0; the one whose characteristic polynomial is closest to ∏(s − p) is
+/// returned (verified by the caller).
 fn cyclic(A: &DMatrix<f64>, B: &DMatrix<f64>, slots: &[Slot], poles: &[C64]) -> Result<DMatrix<f64>, PlaceError> {
     let (n, r) = (A.nrows(), B.ncols());
     let pole_scale = poles.iter().map(|p| p.norm()).fold(1.0, f64::max);
@@ -746,8 +767,8 @@ fn set_pair(X: &mut DMatrix<f64>, c: usize, x: &DVector<C64>) {
 /// verified error must be ≤ [`VERIFY_RTOL`]; the test depends on how well conditioned the
 /// closed-loop spectrum is:
 ///
-/// * Well conditioned (a diagonalisable design with known eigenvectors X — KNV0, or single input
-///   with distinct poles — and floor = κ₂(X)·nε‖M‖_F / max(1, min|p|) ≤ [`VERIFY_RTOL`]/10):
+/// * Well conditioned (X the closed loop's eigenvectors — KNV0's, or single input with distinct
+///   poles — and floor = κ₂(X)·nε‖M‖_F / max(1, min|p|) ≤ [`VERIFY_RTOL`]/10):
 ///   the eigenvalues of M from faer ([`crate::linalg::eigenvalues`]) matched to the requested
 ///   multiset, error = the largest |λ − p| / max(1, |p|) + floor (the first-order Bauer–Fike
 ///   bound on faer's own error).
@@ -757,12 +778,15 @@ fn set_pair(X: &mut DMatrix<f64>, c: usize, x: &DVector<C64>) {
 ///   the working precision ([`refined_error`]), which recovers it to about the accuracy the formed
 ///   M defines it (where compared, to 16 digits of its 60-digit value; every one of the 111 such
 ///   cases the tests accept is within 1e-6 by 60-digit eigenvalues, `scripts/mp_eigenvalues.py`);
-///   error = the larger of that and the characteristic-polynomial error below. A repeated pole
-///   in this class is judged by the characteristic polynomial alone, as a cluster. Above
-///   n = [`REFINE_MAX_N`] the refinement (O(n⁴)) is not attempted and the first-order bound decides.
-/// * Defective (a Jordan design, X unknown; a k-fold eigenvalue is only computable to ≈ ε^(1/k)):
-///   the characteristic polynomial of M (orthogonal Hessenberg reduction, then the Hessenberg
-///   determinant recursion) against ∏(s − p), coefficient-wise relative to ∏(s + max(1, |p|)).
+///   error = the larger of that and the characteristic-polynomial error: that of M (orthogonal
+///   Hessenberg reduction, then the Hessenberg determinant recursion) against ∏(s − p),
+///   coefficient-wise relative to ∏(s + max(1, |p|)). A repeated pole (a semisimple cluster) in
+///   this class is judged by the characteristic polynomial alone. Above n = [`REFINE_MAX_N`] the
+///   refinement (O(n⁴)) is not attempted and the first-order bound decides.
+/// * The cyclic fallback (X unknown; a repeated pole is a Jordan block of size j ≤ r, whose
+///   eigenvalues are only computable to ≈ (ε‖M‖)^(1/j)): the larger of the characteristic-polynomial
+///   error and faer's eigenvalues matched to the poles (no bound added), so that no eigenvalue
+///   solver shows the formed loop farther than 1e-6 (relative) from the poles.
 fn verify(
     A: &DMatrix<f64>,
     B: &DMatrix<f64>,
@@ -792,14 +816,17 @@ fn verified_error(
     }
     let coefficients = || char_poly_error(&M, poles);
     let Some(X) = X else {
-        return coefficients();
+        let Ok(eigs) = crate::linalg::eigenvalues(&M) else {
+            return f64::INFINITY;
+        };
+        return coefficients().max(matching_error(&eigs, poles));
     };
     let scale = poles.iter().map(|p| p.norm()).fold(f64::INFINITY, f64::min).max(1.0);
     let floor = crate::linalg::cond(X) * M.nrows() as f64 * f64::EPSILON * M.norm() / scale;
     let well_conditioned = floor <= 0.1 * VERIFY_RTOL;
-    if !well_conditioned && max_multiplicity(poles) > 1 {
+    if !well_conditioned && most_repeated(poles).is_some_and(|(_, k)| k > 1) {
         // A repeated pole is an ill-conditioned (semisimple) multiple eigenvalue: judged as a
-        // cluster by the characteristic polynomial, as for a Jordan block.
+        // cluster by the characteristic polynomial.
         return coefficients();
     }
     let Ok(eigs) = crate::linalg::eigenvalues(&M) else {

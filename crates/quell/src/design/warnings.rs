@@ -1,13 +1,13 @@
 //! Fragile gains: a design that passed every check but whose closed-loop poles a small model error
-//! can move far (a placed pole repeated beyond the rank of C, a large eigenvector condition
-//! number, eigenvalues off the requested poles). Reported as warnings, with the figures and what
+//! can move far (a large eigenvector condition number, eigenvalues off the requested poles; a
+//! placed pole repeated beyond the rank of C is refused by [`super::place()`]). Reported as warnings, with the figures and what
 //! to do, by `quell design`, `design.json`, `quell run` and Python (`warnings.warn`).
 
 use nalgebra::Complex;
 use serde::Serialize;
 
 use super::{Design, DesignSpec, ObserverChoice};
-use crate::linalg::{fmt_complex, numerical_rank};
+use crate::linalg::numerical_rank;
 
 /// κ₂ of the eigenvector matrix above which a closed loop counts as fragile: a relative model error
 /// of 1e-8 could then move its poles by their own size.
@@ -20,7 +20,7 @@ pub const FRAGILE_ERROR: f64 = 1e-8;
 pub struct DesignWarning {
     /// The scenario key whose choice is fragile.
     pub key: &'static str,
-    /// Largest number of copies of one requested pole, and the rank it should not exceed.
+    /// Largest number of copies of one requested pole, and the rank C it cannot exceed.
     pub multiplicity: usize,
     pub rank: usize,
     /// max |λ − p| / max(1, |p|) over eig(A − LC) matched to the requested poles (`null`: not placed).
@@ -36,21 +36,14 @@ pub fn warnings(design: &Design, spec: &DesignSpec) -> Vec<DesignWarning> {
     let p = design.plant();
     let kappa = design.observer_eigenvector_condition();
     let rank = numerical_rank(&p.C);
-    let (multiplicity, repeated, error) = match &spec.observer {
-        ObserverChoice::Poles(poles) => {
-            let (k, pole) = most_repeated(poles);
-            (k, Some(pole), Some(matching_error(design.observer_eigenvalues(), poles)))
-        }
-        ObserverChoice::Gain(_) => (1, None, None),
+    let (multiplicity, error) = match &spec.observer {
+        ObserverChoice::Poles(poles) => (
+            super::place::most_repeated(poles).map_or(0, |(_, k)| k),
+            Some(matching_error(design.observer_eigenvalues(), poles)),
+        ),
+        ObserverChoice::Gain(_) => (1, None),
     };
-    if multiplicity > rank || fragile(kappa) || error.is_some_and(|e| e > FRAGILE_ERROR) {
-        let why = match repeated.filter(|_| multiplicity > rank) {
-            Some(pole) => format!(
-                "pole {} is requested {multiplicity} times, more than rank C = {rank}, so A − LC has a Jordan block; ",
-                fmt_complex(&pole)
-            ),
-            None => String::new(),
-        };
+    if fragile(kappa) || error.is_some_and(|e| e > FRAGILE_ERROR) {
         out.push(DesignWarning {
             key: "design.observer_poles",
             multiplicity,
@@ -58,7 +51,7 @@ pub fn warnings(design: &Design, spec: &DesignSpec) -> Vec<DesignWarning> {
             verified_error: error,
             eigenvector_condition: kappa,
             message: format!(
-                "design.observer_poles: fragile observer gain: {why}eig(A − LC) is off the requested poles by {} (relative) and its eigenvector condition number is κ₂ = {kappa:.2e}: a relative model error ε can move the observer poles by about κ₂·ε·‖A − LC‖; give distinct poles (at most {rank} copies of one; spread a repeated pole by ±10 %), not far faster than the plant",
+                "design.observer_poles: fragile observer gain: eig(A − LC) is off the requested poles by {} (relative) and its eigenvector condition number is κ₂ = {kappa:.2e}: a relative model error ε can move the observer poles by about κ₂·ε·‖A − LC‖; give distinct poles (at most {rank} copies of one; spread a repeated pole by ±10 %), not far faster than the plant",
                 error.map_or("?".to_string(), |e| format!("{e:.1e}")),
             ),
         });
@@ -82,16 +75,6 @@ pub fn warnings(design: &Design, spec: &DesignSpec) -> Vec<DesignWarning> {
 /// κ₂ above [`FRAGILE_CONDITION`], or NaN.
 fn fragile(kappa: f64) -> bool {
     kappa.is_nan() || kappa > FRAGILE_CONDITION
-}
-
-/// The pole requested most often and its count (relative tolerance 1e-8).
-fn most_repeated(poles: &[Complex<f64>]) -> (usize, Complex<f64>) {
-    let same = |a: Complex<f64>, b: Complex<f64>| (a - b).norm() <= 1e-8 * a.norm().max(b.norm()).max(1.0);
-    poles
-        .iter()
-        .map(|&p| (poles.iter().filter(|&&q| same(p, q)).count(), p))
-        .max_by_key(|(k, _)| *k)
-        .unwrap_or((0, Complex::new(0.0, 0.0)))
 }
 
 /// max |λ − p| / max(1, |p|) over a greedy nearest matching of eigenvalues to requested poles.
@@ -129,19 +112,30 @@ mod tests {
     }
 
     #[test]
-    fn a_pole_repeated_beyond_rank_c_is_reported_with_its_figures() {
-        // Three copies of −5 with rank C = 2: A − LC must have a Jordan block (at most 2
-        // independent eigenvectors for one eigenvalue with 2 outputs), so κ₂ is ∞ or huge and the
-        // computed eigenvalues scatter by ≈ ε^(1/2) or more around −5.
-        let (d, spec) = with_observer("[-5.0, -5.0, -5.0]");
-        let w = warnings(&d, &spec);
+    fn a_defective_observer_is_reported_with_its_figures() {
+        // A gain L with A − LC one 3 × 3 Jordan block at −5 (to rounding; rank C = 2, so no
+        // placement gives it, place refuses three copies of −5): κ₂ is ∞.
+        let text = PAPER_EXAMPLE.replace(
+            "observer_gain = [[-8.0988, 4.4574], [10.6506, -5.0619], [2.7762, -1.1783]]",
+            "observer_gain = [[-56.982899739126566, -6.529670548858569], [62.29597186698538, 7.78904549447498], [33.05238335010353, 3.622075673762282]]",
+        );
+        let s = Scenario::from_toml(&text).unwrap();
+        let w = warnings(&s.design().unwrap(), &s.design);
         let o = w.iter().find(|w| w.key == "design.observer_poles").expect("a warning on the observer");
-        assert_eq!((o.multiplicity, o.rank), (3, 2));
-        assert!(o.eigenvector_condition > FRAGILE_CONDITION, "{o:?}");
+        assert_eq!(o.eigenvector_condition, f64::INFINITY, "{o:?}");
+        assert!(o.message.contains("κ₂ = inf") && o.message.contains("give distinct poles"), "{}", o.message);
+    }
+
+    #[test]
+    fn three_observer_poles_at_one_value_with_rank_c_2_are_refused() {
+        let text = PAPER_EXAMPLE.replace(
+            "observer_gain = [[-8.0988, 4.4574], [10.6506, -5.0619], [2.7762, -1.1783]]",
+            "observer_poles = [-5.0, -5.0, -5.0]",
+        );
+        let e = Scenario::from_toml(&text).unwrap().design().unwrap_err().to_string();
         assert!(
-            o.message.contains("requested 3 times, more than rank C = 2") && o.message.contains("give distinct poles"),
-            "{}",
-            o.message
+            e.starts_with("design.observer_poles: pole -5.000000 is requested 3 times, more than rank(B) = 2"),
+            "{e}"
         );
     }
 }
