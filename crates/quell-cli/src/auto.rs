@@ -1,11 +1,13 @@
 //! `quell design SCENARIO --auto --write OUT.toml`: the automatic design ([`quell::auto`]), its
 //! choices explained, verified by simulation, written as a complete scenario.
 
+use std::ops::ControlFlow;
 use std::path::PathBuf;
 
-use quell::auto::{auto_design, AutoDesign, AutoError, Targets};
+use quell::auto::{auto_design_with, AutoDesign, AutoError, Progress, Targets};
 use serde_json::json;
 
+use crate::interrupt::Interrupt;
 use crate::{output, print_json, print_stdout, Failure};
 
 /// `quell design`'s arguments.
@@ -51,8 +53,8 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
     if let Some(out) = &args.write {
         output::prepare_file("--write", out)?;
     }
-    let auto = auto_design(&doc, &targets).map_err(|e| match e {
-        AutoError::Run(_) => Failure::Run(e.to_string()),
+    let auto = with_progress(|progress| auto_design_with(&doc, &targets, progress)).map_err(|e| match e {
+        AutoError::Run(_) | AutoError::Interrupted => Failure::Run(e.to_string()),
         _ => Failure::Input(e.to_string()),
     })?;
     if args.json {
@@ -84,6 +86,30 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
         eprintln!("wrote {}", out.display());
     }
     Ok(())
+}
+
+/// The automatic design `design` with a progress bar of each verifying simulation on a terminal;
+/// Ctrl-C stops it (nothing is written).
+fn with_progress(
+    design: impl FnOnce(&mut dyn FnMut(&Progress) -> ControlFlow<()>) -> Result<AutoDesign, AutoError>,
+) -> Result<AutoDesign, AutoError> {
+    let ctrl_c = Interrupt::install("interrupted twice; stopped without writing");
+    let bar = crate::progress_bar(0, "verifying run {msg}: {bar:30} {percent:>3}% of t_end, {elapsed_precise}");
+    let mut progress = |p: &Progress| {
+        if bar.length() != Some((p.t_end * 1000.0) as u64) || !bar.message().starts_with(&format!("{} ", p.run)) {
+            bar.set_length((p.t_end * 1000.0) as u64);
+            bar.set_message(format!("{} ({})", p.run, p.speed));
+        }
+        bar.set_position((p.t * 1000.0) as u64);
+        if ctrl_c.interrupted() {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    };
+    let auto = design(&mut progress);
+    bar.finish_and_clear();
+    auto
 }
 
 fn report_json(a: &AutoDesign) -> serde_json::Value {

@@ -165,3 +165,31 @@ fn ctrl_c_during_a_large_design_quits_at_once() {
     // wait seconds for a core.
     assert!(sent.elapsed() < Duration::from_secs(10), "quit {:?} after the signal", sent.elapsed());
 }
+
+#[test]
+fn ctrl_c_stops_the_automatic_designs_verification_and_writes_nothing() {
+    // The paper with an empty [design] over 2e5 s: each verifying simulation takes seconds. Ctrl-C
+    // stops it at once: status 1, the reason, and no --write file.
+    let dir_tmp = scratch_dir("interrupt-auto");
+    let dir = dir_tmp.path();
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/paper.toml")).unwrap();
+    let (start, end) = (text.find("[design]").unwrap(), text.find("[reference]").unwrap());
+    let text = format!("{}[design]\n{}", &text[..start], &text[end..]).replacen("t_end = 100.0", "t_end = 2e5", 1);
+    let (scenario, written) = (dir.join("empty.toml"), dir.join("auto.toml"));
+    std::fs::write(&scenario, text).unwrap();
+    let child = Command::new(env!("CARGO_BIN_EXE_quell"))
+        .args(["design", scenario.to_str().unwrap(), "--auto", "--write", written.to_str().unwrap()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start quell");
+    std::thread::sleep(Duration::from_millis(700));
+    sigint(child.id());
+    let started = std::time::Instant::now();
+    let output = child.wait_with_output().expect("wait");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(started.elapsed() < Duration::from_secs(5), "Ctrl-C took {:?}", started.elapsed());
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("interrupted during the automatic design's verifying simulations"), "{stderr}");
+    assert!(!written.exists());
+}

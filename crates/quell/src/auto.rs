@@ -226,6 +226,9 @@ pub enum AutoError {
     /// The rules chose a value for `key` that the design refuses (`message`).
     #[error("{message}; {key} was chosen by the automatic design, not given in the file: its rules have no usable value for this scenario (many harmonics or frequencies far apart call for filter poles by hand), so give {key} in [design] (docs/tuning.md)")]
     Rules { key: String, message: String },
+    /// The progress callback (or a stop flag) stopped a verifying simulation.
+    #[error("interrupted during the automatic design's verifying simulations; nothing was chosen")]
+    Interrupted,
     /// A [`Targets`] field (`argument`: its name) out of range.
     #[error("{argument}: {message}")]
     Target { argument: &'static str, message: String },
@@ -274,18 +277,50 @@ fn propose(doc: &toml::Table, targets: &Targets, speed: Speed) -> Result<Proposa
     Ok(Proposal { scenario, choices, mu_caps, relaxable })
 }
 
-/// One verifying simulation of `scenario` with `design`, the candidate at `speed`.
-fn check(scenario: &Scenario, design: &Design, speed: Speed) -> Result<Candidate, AutoError> {
-    let r = Run::of(scenario, design).simulate(|_| ControlFlow::Continue(()))?;
-    match r.outcome.clone().unwrap_or(Outcome::Completed) {
-        Outcome::Completed => {}
-        other => return Err(AutoError::Run(other)),
+/// Where a verifying simulation is: the `run`-th of the design (from 1), the candidate's `speed`,
+/// its time `t` of `t_end`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    pub run: usize,
+    pub speed: Speed,
+    pub t: f64,
+    pub t_end: f64,
+}
+
+/// The verifying simulations: counted, each reporting its progress to a callback that may stop it
+/// (as may the stop flag of an enclosing [`crate::cancel::with_stop`]).
+struct Verifier<'p> {
+    runs: usize,
+    progress: &'p mut dyn FnMut(&Progress) -> ControlFlow<()>,
+}
+
+impl Verifier<'_> {
+    /// One verifying simulation of `scenario` with `design`, the candidate at `speed`.
+    fn check(&mut self, scenario: &Scenario, design: &Design, speed: Speed) -> Result<Candidate, AutoError> {
+        self.runs += 1;
+        let (run, t_end) = (self.runs, scenario.simulation.t_end);
+        let progress = &mut *self.progress;
+        let r = Run::of(scenario, design).simulate(|t| {
+            if crate::cancel::check().is_err() {
+                return ControlFlow::Break(());
+            }
+            progress(&Progress { run, speed, t, t_end })
+        })?;
+        match r.outcome.clone().unwrap_or(Outcome::Completed) {
+            Outcome::Completed => Ok(candidate(scenario, &r, speed)),
+            Outcome::Interrupted { .. } => Err(AutoError::Interrupted),
+            other => Err(AutoError::Run(other)),
+        }
     }
+}
+
+/// The candidate at `speed` from its verifying run `r` of `scenario`.
+fn candidate(scenario: &Scenario, r: &crate::sim::SimResult, speed: Speed) -> Candidate {
     let t_end = scenario.simulation.t_end;
     let tail_max_e =
         (0..scenario.plant.m()).map(|i| r.max_abs_error(i, 0.9 * t_end, t_end).unwrap_or(f64::NAN)).collect();
     let max_uf = r.summary().iter().map(|c| c.figures.max_uf).collect();
-    Ok(Candidate { speed, tail_max_e, max_uf, steps: r.stats.steps(), chosen: false })
+    Candidate { speed, tail_max_e, max_uf, steps: r.stats.steps(), chosen: false }
 }
 
 impl Candidate {
@@ -329,7 +364,17 @@ type Verified = (Proposal, Design, Candidate);
 /// candidates are verified in three phases and the cheapest kept (module docs: relaxation,
 /// actuator limit).
 pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, AutoError> {
-    verified_design(doc, targets).map_err(|e| e.chosen_in(doc))
+    auto_design_with(doc, targets, &mut |_| ControlFlow::Continue(()))
+}
+
+/// [`auto_design`] reporting each verifying simulation's [`Progress`] to `progress`, which may
+/// stop it (then [`AutoError::Interrupted`]): a regressor of 120 filter states verifies for minutes.
+pub fn auto_design_with(
+    doc: &toml::Table,
+    targets: &Targets,
+    progress: &mut dyn FnMut(&Progress) -> ControlFlow<()>,
+) -> Result<AutoDesign, AutoError> {
+    verified_design(doc, targets, &mut Verifier { runs: 0, progress }).map_err(|e| e.chosen_in(doc))
 }
 
 impl AutoError {
@@ -350,15 +395,13 @@ impl AutoError {
     }
 }
 
-fn verified_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, AutoError> {
+fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier) -> Result<AutoDesign, AutoError> {
     let (mut first, mut design, start) = sampled_start(doc, targets)?;
     let bound: Vec<f64> = first.scenario.reference.components.iter().map(|c| TAIL_BOUND * c.peak()).collect();
-    let mut runs = 0;
     // The first proposal, μ raised where its tail misses the bound.
     let first_check = loop {
-        runs += 1;
-        let c = check(&first.scenario, &design, start)?;
-        let retry = runs <= 3
+        let c = verifier.check(&first.scenario, &design, start)?;
+        let retry = verifier.runs <= 3
             && first
                 .mu_caps
                 .as_ref()
@@ -368,26 +411,26 @@ fn verified_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, A
         }
         design = first.scenario.design()?;
     };
-    note_verification(&mut first.choices, &first.scenario.design.mu, runs);
+    note_verification(&mut first.choices, &first.scenario.design.mu, verifier.runs);
     let mut candidates = vec![first_check.clone()];
     if !first_check.tail_within(&bound, 1.0) {
         let advice = failure_advice(&first.scenario).into_iter().collect();
         return Ok(finish(
             (first, design, first_check),
             bound,
-            runs,
+            verifier.runs,
             candidates,
             (false, !targets.u_limit.is_empty()),
             advice,
         ));
     }
-    let (kept, within) = relax(doc, targets, (first, design, first_check), &bound, &mut runs, &mut candidates);
+    let (kept, within) = relax(doc, targets, (first, design, first_check), &bound, verifier, &mut candidates)?;
     let speed = kept.2.speed;
     for c in &mut candidates {
         c.chosen = c.speed == speed;
     }
     let advice = if within { Vec::new() } else { vec![limit_advice(targets, &kept.2)] };
-    Ok(finish(kept, bound, runs, candidates, (within, !targets.u_limit.is_empty()), advice))
+    Ok(finish(kept, bound, verifier.runs, candidates, (within, !targets.u_limit.is_empty()), advice))
 }
 
 /// The first proposal and its design: the rules' own, or for a sampled-data scenario
@@ -425,15 +468,15 @@ fn sampled_start(doc: &toml::Table, targets: &Targets) -> Result<(Proposal, Desi
 
 /// The relaxation (module docs): from the verified first proposal, slower candidates in three
 /// phases, each from the candidate kept so far; returns the kept one and whether it is within the
-/// actuator limit. Each verifying run is counted in `runs` and listed in `candidates`.
+/// actuator limit. Each verifying run is listed in `candidates`; an interruption ends it as an error.
 fn relax(
     doc: &toml::Table,
     targets: &Targets,
     first: Verified,
     bound: &[f64],
-    runs: &mut usize,
+    verifier: &mut Verifier,
     candidates: &mut Vec<Candidate>,
-) -> (Verified, bool) {
+) -> Result<(Verified, bool), AutoError> {
     let [relax_channels, relax_observer, relax_mu] = first.0.relaxable;
     // The kept candidate: the cheapest within the limit so far (`within`), else the one closest to it.
     let mut kept = first;
@@ -465,8 +508,11 @@ fn relax(
             if first_fidelity.as_ref().is_some_and(|f| !keeps_fidelity(&fidelity(&p.scenario, &d), f)) {
                 break;
             }
-            *runs += 1;
-            let Ok(c) = check(&p.scenario, &d, speed) else { break };
+            let c = match verifier.check(&p.scenario, &d, speed) {
+                Ok(c) => c,
+                Err(AutoError::Interrupted) => return Err(AutoError::Interrupted),
+                Err(_) => break,
+            };
             candidates.push(c.clone());
             if !c.tail_within(bound, 1.0) {
                 break;
@@ -481,7 +527,7 @@ fn relax(
             go_on = margin || !within;
         }
     }
-    (kept, within)
+    Ok((kept, within))
 }
 
 /// Why no candidate was kept within the actuator limits: `closest` is the one nearest to them.

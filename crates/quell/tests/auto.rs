@@ -333,6 +333,41 @@ fn a_sampled_scenario_gets_poles_slow_enough_for_its_sample_time() {
     .is_none());
 }
 
+/// Each verifying simulation reports its progress: run number, candidate speed, t rising to t_end;
+/// the callback can stop the design (AutoError::Interrupted), as can a stop flag around the call.
+#[test]
+fn the_verifying_simulations_report_progress_and_can_be_stopped() {
+    let doc = without_design(&data("batch-reactor.toml"));
+    let mut seen: Vec<quell::auto::Progress> = Vec::new();
+    let a = quell::auto::auto_design_with(&doc, &Targets::default(), &mut |p| {
+        seen.push(*p);
+        std::ops::ControlFlow::Continue(())
+    })
+    .unwrap();
+    let runs: std::collections::BTreeSet<usize> = seen.iter().map(|p| p.run).collect();
+    assert_eq!(runs, (1..=a.verification.runs).collect(), "{runs:?}");
+    for w in seen.windows(2).filter(|w| w[0].run == w[1].run) {
+        assert!(w[0].t <= w[1].t && w[1].t <= w[1].t_end && w[0].speed == w[1].speed, "{w:?}");
+    }
+    assert!(seen.iter().any(|p| p.run == 1 && p.t == p.t_end), "the first run reached t_end");
+    let mut calls = 0;
+    let stopped = quell::auto::auto_design_with(&doc, &Targets::default(), &mut |_| {
+        calls += 1;
+        if calls > 10 {
+            std::ops::ControlFlow::Break(())
+        } else {
+            std::ops::ControlFlow::Continue(())
+        }
+    });
+    assert!(matches!(stopped, Err(AutoError::Interrupted)), "{:?}", stopped.map(|_| ()));
+    let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(true));
+    let stopped = quell::cancel::with_stop(flag, || auto_design(&doc, &Targets::default()));
+    // (The first design's placement polls the same flag, and may be the one that stops.)
+    let interrupted =
+        matches!(stopped, Err(AutoError::Interrupted | AutoError::Design(quell::DesignError::Interrupted)));
+    assert!(interrupted, "{:?}", stopped.map(|_| ()));
+}
+
 fn data(name: &str) -> String {
     std::fs::read_to_string(format!("{}/tests/data/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap()
 }
