@@ -366,6 +366,23 @@ fn the_verifying_simulations_report_progress_and_can_be_stopped() {
     let interrupted =
         matches!(stopped, Err(AutoError::Interrupted | AutoError::Design(quell::DesignError::Interrupted)));
     assert!(interrupted, "{:?}", stopped.map(|_| ()));
+    // Set while a verifying simulation runs (the batch reactor over 1e5 s: seconds a run), the
+    // flag stops that simulation (Python's Ctrl-C).
+    let mut long = doc.clone();
+    long["simulation"].as_table_mut().unwrap().insert("t_end".into(), toml::Value::Float(1e5));
+    let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let setter = {
+        let flag = flag.clone();
+        std::thread::spawn(move || {
+            std::thread::sleep(std::time::Duration::from_millis(300));
+            flag.store(true, std::sync::atomic::Ordering::Relaxed);
+        })
+    };
+    let started = std::time::Instant::now();
+    let stopped = quell::cancel::with_stop(flag, || auto_design(&long, &Targets::default()));
+    setter.join().unwrap();
+    assert!(matches!(stopped, Err(AutoError::Interrupted)), "{:?}", stopped.map(|_| ()));
+    assert!(started.elapsed() < std::time::Duration::from_secs(3), "{:?}", started.elapsed());
 }
 
 fn data(name: &str) -> String {
