@@ -159,7 +159,7 @@ fn observer_remedy(design: &Design) -> String {
             "design.observer_poles already hold the zeros of (A, D, C), [{}]; the error that stays comes from the placed eigenvectors (L is not unique for m > 1), not from the poles' speed, and costs convergence only where the frequency's excitation of Ω̄_i is weak (the channels' `excitation`); if it is, try other fast poles or a gain L by hand",
             fmt_complex_list(&z)
         ),
-        Some(z) => format!(
+        Some(z) if p.m() == p.k() => format!(
             "give design.observer_poles the zeros of (A, D, C), [{}], and the other {} poles faster than the plant and the signals (e.g. 3× their rates); all-fast poles cannot remove this error{}",
             fmt_complex_list(&z),
             p.k(),
@@ -168,6 +168,15 @@ fn observer_remedy(design: &Design) -> String {
             } else {
                 ""
             }
+        ),
+        // More outputs than disturbances: (A, D, C) has no zeros of its own; these are those of
+        // (A, D, (CD)⁺C), one combination of the outputs, and may not help (Wood–Berry: worse).
+        Some(z) => format!(
+            "give design.observer_poles faster than the plant and the signals (e.g. 3× their rates), or try [{}] (the zeros of (A, D, (CD)⁺C): with more outputs ({}) than disturbances ({}) (A, D, C) itself has none, and these may not help) with the other {} poles fast, and compare the relative error the next run reports",
+            fmt_complex_list(&z),
+            p.m(),
+            p.k(),
+            p.k()
         ),
         None => "give design.observer_poles faster than the plant and the signals (e.g. 3× their rates)".into(),
     }
@@ -402,5 +411,22 @@ mod tests {
             |c: &ChannelDiagnostics| c.advice.iter().any(|a| a.contains("is not shorter than the run (100 s)"));
         assert!(!beyond(&d.channels[0]) && beyond(&d.channels[1]), "{:?}", d.channels[1].advice);
         assert!(d.channels[1].advice[0].starts_with("channel 2's input delay τ = 100 s"), "{:?}", d.channels[1].advice);
+    }
+
+    /// With more outputs than disturbances (the Wood–Berry column, tests/data/wood-berry.toml: m = 2, k = 1) the zeros are those
+    /// of one output combination and are offered as a try, after faster poles, never as the cure.
+    #[test]
+    fn zeros_of_a_non_square_plant_are_offered_as_a_try() {
+        let text = include_str!("../../tests/data/wood-berry.toml");
+        let s = Scenario::from_toml(text).unwrap();
+        assert!(disturbance_zeros(&s.plant).is_some());
+        let d = diagnosed(text, 1.0, |t| 0.02 + 0.5 * (-t).exp());
+        let remedy: Vec<&String> =
+            d.advice.iter().chain(d.channels.iter().flat_map(|c| &c.advice)).filter(|a| a.contains("zeros")).collect();
+        assert!(!remedy.is_empty(), "{:?}", d.advice);
+        for a in &remedy {
+            assert!(a.contains("(the zeros of (A, D, (CD)⁺C): with more outputs (2) than disturbances (1)"), "{a}");
+            assert!(!a.contains("cannot remove this error"), "{a}");
+        }
     }
 }
