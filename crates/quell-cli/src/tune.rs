@@ -65,6 +65,17 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
             args.out.join("tune.csv").display()
         )));
     }
+    if let Some(i) = result.within_limits.iter().position(|ok| !ok) {
+        let f = result.joint.as_ref().and_then(|j| j.channels.get(i));
+        return Err(Failure::Input(format!(
+            "channel {}: the tuned μ together break its limits in the joint run: max |u_{0}| = {:.4e} against tune.max_u[{i}] = {}, max |u_f,{0}| = {:.4e} against tune.max_uf[{i}] = {}; each search met them with the other channels' μ at the scenario's, but u_f = −K x̂ + F u_d mixes every channel's command: lower the broken limit by the excess and tune again, or tune with a grid over the μ together (docs/studies.md)",
+            i + 1,
+            f.map_or(f64::NAN, |f| f.max_u),
+            spec.max_u[i],
+            f.map_or(f64::NAN, |f| f.max_uf),
+            spec.max_uf[i],
+        )));
+    }
     if let Some(c) = result.channels.iter().find(|c| c.chosen.is_none()) {
         return Err(Failure::Input(format!(
             "channel {}: no μ in tune.mu[{}] completed with max |u_{}| ≤ tune.max_u[{}], max |u_f,{}| ≤ tune.max_uf[{}] and a finite {}; widen the bounds, raise the limits or lengthen simulation.t_end (the curve is in {})",
@@ -117,7 +128,7 @@ fn report(r: &TuneResult) -> String {
     for (c, (d, ok)) in r.channels.iter().zip(r.joint_difference.iter().zip(&r.reproduced)) {
         match &c.chosen {
             Some(p) => s.push_str(&format!(
-                "channel {}: mu = {:.6} ({} evaluations), objective {:.6e}; joint run {} (difference {})\n",
+                "channel {}: mu = {:.6} ({} evaluations), objective {:.6e}; joint run {} (difference {}){}\n",
                 c.channel + 1,
                 p.mu,
                 c.curve.len(),
@@ -128,6 +139,11 @@ fn report(r: &TuneResult) -> String {
                     (false, false) => "does NOT reproduce it",
                 },
                 d.map_or("n/a".to_string(), |d| format!("{d:.3e}")),
+                if r.partial || r.within_limits.get(c.channel).copied().unwrap_or(true) {
+                    ""
+                } else {
+                    ", but BREAKS the limits on max |u|, max |u_f| there"
+                },
             )),
             None => s.push_str(&format!("channel {}: no feasible mu in the bounds\n", c.channel + 1)),
         }

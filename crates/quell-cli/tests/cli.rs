@@ -861,3 +861,25 @@ fn a_coarse_sample_time_is_warned_of() {
     let export = ["export", &paper(), "--sample-time", "0.05", "--out", c.to_str().unwrap()];
     assert!(warned(&export).is_some());
 }
+
+/// `quell tune` whose tuned μ together break a limit each search met (the CSTR's u_f,1; the library
+/// test `a_limit_each_search_meets_can_be_broken_together`) says so and exits 2.
+#[test]
+fn tune_exits_2_when_the_joint_run_breaks_a_limit() {
+    let dir = temp_dir("tune-joint");
+    let cstr = Path::new(env!("CARGO_MANIFEST_DIR")).join("../quell/tests/data/cstr.toml");
+    let study = dir.path().join("tune.toml");
+    let text = format!(
+        "scenario = {:?}\n[tune]\nobjective = \"settle_t\"\nmu = [0.2, 100.0]\nmax_u = [1.0, 6.45]\nmax_uf = [10.6, 1.0]\npoints = 9\nrefine = 6\n",
+        cstr.canonicalize().unwrap().display().to_string()
+    );
+    fs::write(&study, text).unwrap();
+    let out = dir.path().join("out");
+    let o = quell(&["tune", study.to_str().unwrap(), "--out", out.to_str().unwrap(), "--no-plots"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stdout(&o).contains("channel 1: mu = ") && stdout(&o).contains("but BREAKS the limits"), "{}", stdout(&o));
+    assert!(stderr(&o).contains("channel 1: the tuned μ together break its limits in the joint run"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("against tune.max_uf[0] = 10.6"), "{}", stderr(&o));
+    let json = read_json(&out.join("tune.json"));
+    assert_eq!(json["within_limits"], serde_json::json!([false, true]));
+}

@@ -68,7 +68,7 @@ def test_coarse_points_are_log_spaced_and_the_best_is_the_feasible_minimum():
     np.testing.assert_allclose(frame["mu"], [100.0 ** (k / 4) for k in range(5)], rtol=1e-12)
     feasible = frame.dropna(subset=["objective"])
     assert len(r.best) == 1 and r.best["objective"][0] == feasible["objective"].min()
-    assert r.mu == [r.best["mu"][0]] and r.reproduced == [True]
+    assert r.mu == [r.best["mu"][0]] and r.reproduced == [True] and r.within_limits == [True]
     # The figures of an evaluation are those a sweep of the same μ gives (another path: the
     # study's grid); the same computation, so equal to the last bit.
     mu = float(r.best["mu"][0])

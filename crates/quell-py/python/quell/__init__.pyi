@@ -376,6 +376,7 @@ class TuneResult:
     objective: str
     mu: List[float]
     reproduced: List[bool]
+    within_limits: List[bool]
     joint_difference: List[Optional[float]]
     joint: Optional[Dict[str, Any]]
     partial: bool

@@ -35,6 +35,10 @@ class TuneResult:
     reproduced : list of bool
         Per channel, whether the joint run (every μ_i tuned at once) reproduced the search's
         objective within tolerance (Proposition 1's decoupling); all False when ``partial``.
+    within_limits : list of bool
+        Per channel, whether the joint run kept max |u_i| and max |u_f,i| within ``max_u`` and
+        ``max_uf`` (u_f mixes every channel's command, so limits met in each search can be broken
+        together); all False when ``partial``.
     joint_difference : list of float or None
         Per channel, the joint run's objective minus the search's.
     joint : dict or None
@@ -62,6 +66,7 @@ class TuneResult:
             self.joint = data["joint"]
             self.joint_difference = list(data["joint_difference"])
             self.reproduced = list(data["reproduced"])
+            self.within_limits = list(data.get("within_limits", []))
             self.partial = bool(data.get("partial", False))
         except (ValueError, KeyError, TypeError) as e:
             raise ScenarioError(f"json: not a quell tuning result ({e!r})") from None

@@ -178,6 +178,11 @@ pub struct TuneResult {
     /// reproduction tolerance (see `tolerance` in the source).
     pub joint_difference: Vec<Option<f64>>,
     pub reproduced: Vec<bool>,
+    /// Per channel, whether the joint run keeps max |u_i| and max |u_f,i| within `max_u`, `max_uf`:
+    /// the objective decouples (Proposition 1) but u_f = −K x̂ + F u_d (5) mixes every channel's
+    /// command, so limits met in each search can be broken together (false without a joint run).
+    #[serde(default)]
+    pub within_limits: Vec<bool>,
     /// True when stopped ([`TuneOptions::stop`]) before every evaluation and the joint run were
     /// carried out: the curves hold the points evaluated so far and `chosen` is the best of them.
     #[serde(default)]
@@ -368,6 +373,21 @@ pub fn tune(study: &Study, opts: &TuneOptions<'_>) -> Result<TuneResult, StudyEr
             }
         })
         .unzip();
+    let within_limits = (0..m)
+        .map(|i| {
+            let f = joint.as_ref().and_then(|j| j.channels.get(i));
+            f.is_some_and(|f| f.max_u <= spec.max_u[i] && f.max_uf <= spec.max_uf[i])
+        })
+        .collect();
     let partial = joint.is_none();
-    Ok(TuneResult { objective: spec.objective, channels, mu, joint, joint_difference, reproduced, partial })
+    Ok(TuneResult {
+        objective: spec.objective,
+        channels,
+        mu,
+        joint,
+        joint_difference,
+        reproduced,
+        within_limits,
+        partial,
+    })
 }
