@@ -232,7 +232,8 @@ pub enum AutoError {
     /// A [`Targets`] field (`argument`: its name) out of range.
     #[error("{argument}: {message}")]
     Target { argument: &'static str, message: String },
-    #[error("the verifying simulation did not reach t_end: {0:?}; the chosen design is unusable for this scenario, give some [design] keys by hand (docs/tuning.md)")]
+    /// A verifying simulation ended before t_end (`Outcome` says how).
+    #[error("the verifying simulation {0}")]
     Run(Outcome),
 }
 
@@ -324,6 +325,11 @@ fn candidate(scenario: &Scenario, r: &crate::sim::SimResult, speed: Speed) -> Ca
 }
 
 impl Candidate {
+    /// A candidate whose verifying run ended before t_end: no tail, no peak.
+    fn ended(speed: Speed, m: usize) -> Candidate {
+        Candidate { speed, tail_max_e: vec![f64::INFINITY; m], max_uf: vec![f64::NAN; m], steps: 0, chosen: true }
+    }
+
     /// Every tail within `bound` / `margin` (a NaN tail is not).
     fn tail_within(&self, bound: &[f64], margin: f64) -> bool {
         self.tail_max_e.iter().zip(bound).all(|(e, b)| *e <= b / margin)
@@ -400,7 +406,15 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
     let bound: Vec<f64> = first.scenario.reference.components.iter().map(|c| TAIL_BOUND * c.peak()).collect();
     // The first proposal, μ raised where its tail misses the bound.
     let first_check = loop {
-        let c = verifier.check(&first.scenario, &design, start)?;
+        let c = match verifier.check(&first.scenario, &design, start) {
+            Err(AutoError::Run(outcome)) => {
+                let advice = vec![ended_early(&first.scenario, &outcome)];
+                let c = Candidate::ended(start, first.scenario.plant.m());
+                let limited = !targets.u_limit.is_empty();
+                return Ok(finish((first, design, c.clone()), bound, verifier.runs, vec![c], (false, limited), advice));
+            }
+            c => c?,
+        };
         let retry = verifier.runs <= 3
             && first
                 .mu_caps
@@ -703,6 +717,17 @@ fn smallest_gap(s: &Scenario) -> Option<f64> {
 fn round_up_2(x: f64) -> f64 {
     let unit = 10f64.powf(x.log10().floor() - 1.0);
     (x / unit).ceil() * unit
+}
+
+/// Advice on a first proposal whose verifying run ended before t_end (`outcome`).
+fn ended_early(s: &Scenario, outcome: &Outcome) -> String {
+    let why = match s.simulation.sample_time {
+        Some(t_s) => format!(
+            "its poles may be too fast for the sample time {t_s} s even at the slowest start (docs/tuning.md, a sampled-data scenario): try a shorter simulation.sample_time, or give slower design.channel_poles and design.observer_poles by hand"
+        ),
+        None => "give some [design] keys by hand (slower channel or observer poles, a smaller mu; docs/tuning.md)".to_string(),
+    };
+    format!("the first proposal's verifying simulation {outcome}, before t_end = {}: {why}", s.simulation.t_end)
 }
 
 /// Why a design failed its verification, when the scenario shows it: a horizon shorter than

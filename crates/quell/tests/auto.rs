@@ -385,6 +385,21 @@ fn the_verifying_simulations_report_progress_and_can_be_stopped() {
     assert!(started.elapsed() < std::time::Duration::from_secs(3), "{:?}", started.elapsed());
 }
 
+/// A first proposal whose verifying run ends before t_end is a failed verification with its report
+/// and advice (it was an error in Rust's debug format, and the report was lost): the CSTR
+/// (tests/data/cstr.toml, unstable at +2.83 /min) sampled every 0.05 min diverges at t ≈ 37.
+#[test]
+fn a_first_proposal_that_diverges_is_a_failed_verification_with_advice() {
+    let text = data("cstr.toml").replace("[simulation]\n", "[simulation]\nsample_time = 0.05\n");
+    let a = auto_design(&without_design(&text), &Targets::default()).unwrap();
+    let v = &a.verification;
+    assert!(!v.passed && !v.tails_met() && v.tail_max_e.iter().all(|e| e.is_infinite()), "{v:?}");
+    assert_eq!(v.advice.len(), 1, "{:?}", v.advice);
+    let advice = &v.advice[0];
+    assert!(advice.starts_with("the first proposal's verifying simulation diverged at t = "), "{advice}");
+    assert!(advice.contains("the sample time 0.05 s") && !advice.contains("Diverged {"), "{advice}");
+}
+
 fn data(name: &str) -> String {
     std::fs::read_to_string(format!("{}/tests/data/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap()
 }

@@ -26,6 +26,25 @@ pub enum Outcome {
     Interrupted { t: f64 },
 }
 
+/// How a run ended, in a phrase: "reached t_end", "diverged at t = 36.75: x[2] (plant state) =
+/// 1.06e9", …
+impl std::fmt::Display for Outcome {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Outcome::Completed => write!(f, "reached t_end"),
+            Outcome::Diverged { t, signal, value } => write!(f, "diverged at t = {t:.4}: {signal} = {value:.3e}"),
+            Outcome::StepSizeTooSmall { t } => write!(f, "the solver's step size underflowed at t = {t:.6}"),
+            Outcome::TooManySteps { t, max_steps } => {
+                write!(f, "the solver needed more than {max_steps} steps by t = {t:.6} (the step budget)")
+            }
+            Outcome::HistoryTooLarge { t, max_bytes } => {
+                write!(f, "the delay history would have exceeded {} MB by t = {t:.6}", max_bytes >> 20)
+            }
+            Outcome::Interrupted { t } => write!(f, "interrupted at t = {t:.3}"),
+        }
+    }
+}
+
 /// What a run did, in the figures its loop has.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 #[serde(tag = "loop", rename_all = "snake_case")]
