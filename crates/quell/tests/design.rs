@@ -530,6 +530,23 @@ fn repeated_poles_everywhere_do_not_hang() {
     );
 }
 
+/// One output: an observer with every pole at one value is placed as `acker` places it (MATLAB's
+/// and python-control's), with the fragile-gain warning. examples/siso-complex.toml's plant
+/// A = [[0, 1], [2, −1]], C = [1, 0]: det(sI − A + LC) = s² + (l₁ + 1)s + l₁ + l₂ − 2, so the double
+/// pole −4, (s + 4)², needs L = [7, 11] (control.acker gives the same).
+#[test]
+fn a_single_output_observer_places_a_repeated_pole_as_acker_does() {
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/siso-complex.toml")).unwrap();
+    let line = text.lines().find(|l| l.starts_with("observer_poles")).unwrap();
+    let s = quell::Scenario::from_toml(&text.replacen(line, "observer_poles = [-4.0, -4.0]", 1)).unwrap();
+    let d = s.design().unwrap();
+    let L = d.L();
+    assert!((L[(0, 0)] - 7.0).abs() < 1e-12 && (L[(1, 0)] - 11.0).abs() < 1e-12, "L = {L}");
+    let w = quell::design::warnings(&d, &s.design);
+    assert!(w.iter().any(|w| w.key == "design.observer_poles" && w.multiplicity == 2 && w.rank == 1), "{w:?}");
+}
+
 /// A 4-state, 3-output plant with σ = [2, 1, 1] (c_1 ⟂ range B), so Σσ_i = n: no zero dynamics.
 fn four_state_three_output(seed: u64) -> Plant {
     let mut rng = Rng(seed);

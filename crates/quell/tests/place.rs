@@ -614,3 +614,16 @@ fn poles_at_the_open_loop_eigenvalues_are_placed() {
         assert_places(&A, &B, &mixed, 1e-6);
     }
 }
+
+/// `acker` places a repeated pole with one input, as MATLAB's and python-control's `acker`: the
+/// double integrator A = [[0, 1], [0, 0]], b = [0, 1] with (s + 1)² needs K = [1, 2], where
+/// `place` refuses (above); with two inputs it is a shape error naming B.
+#[test]
+fn acker_places_a_repeated_pole_with_one_input() {
+    let A = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]);
+    let b = DMatrix::from_row_slice(2, 1, &[0.0, 1.0]);
+    let K = quell::design::acker(&A, &b, &reals(&[-1.0, -1.0])).unwrap();
+    assert!((K[(0, 0)] - 1.0).abs() < 1e-12 && (K[(0, 1)] - 2.0).abs() < 1e-12, "K = {K}");
+    let B2 = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 1.0, 0.0]);
+    assert!(matches!(quell::design::acker(&A, &B2, &reals(&[-1.0, -1.0])), Err(PlaceError::Matrix(_))));
+}

@@ -16,7 +16,7 @@ pub use decouple::{
     RelativeDegree, CLOSE_FACTOR, TOL,
 };
 pub use internal_model::{filter_pair, internal_model, RegressorScaling};
-pub use place::{place, PlaceError};
+pub use place::{acker, place, PlaceError};
 pub use warnings::{warnings, DesignWarning};
 
 use crate::linalg::{
@@ -547,6 +547,12 @@ fn observer(plant: &Plant, choice: &ObserverChoice) -> Result<(DMatrix<f64>, Vec
         }
         ObserverChoice::Poles(p) => (
             place(&A.transpose(), &C.transpose(), p)
+                // One output: a repeated pole is placed as `acker` does (a fragile-gain warning
+                // follows), as a textbook observer with every pole at one value asks.
+                .or_else(|e| match e {
+                    PlaceError::Multiplicity { rank: 1, .. } => acker(&A.transpose(), &C.transpose(), p),
+                    e => Err(e),
+                })
                 .map_err(|e| match e {
                     PlaceError::Interrupted => DesignError::Interrupted,
                     e => DesignError::ObserverPoles(e),

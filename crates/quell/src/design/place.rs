@@ -308,6 +308,34 @@ fn cyclic(A: &DMatrix<f64>, B: &DMatrix<f64>, slots: &[Slot], poles: &[C64]) -> 
 /// Single-input placement for `b` (n × 1): Ackermann's formula k = e_nᵀ C⁻¹ p(A) evaluated in
 /// the orthogonal Hessenberg coordinates of the staircase (Zᵀ A Z = H, Zᵀ b = β e₁), where the
 /// controllability matrix C is upper triangular, so e_nᵀ C⁻¹ = e_nᵀ / (β ∏ h_{i+1,i}).
+/// Ackermann's placement for one input (`b` a single column), as MATLAB's and python-control's
+/// `acker`: any spectrum, repeated poles included (A − b K is then one Jordan block per repeated
+/// pole, fragile: [`eigenvector_condition`] is ∞). Checked on the characteristic polynomial,
+/// coefficient-wise relative to ∏(s + max(1, |p|)), to 1e-6; a textbook observer with every pole
+/// at one value is such a case, which [`place`] refuses as `control.place` does.
+pub fn acker(A: &DMatrix<f64>, b: &DMatrix<f64>, poles: &[Complex<f64>]) -> Result<DMatrix<f64>, PlaceError> {
+    let n = A.nrows();
+    check_shape("A", A, n, n).and_then(|()| check_shape("B", b, n, 1)).map_err(PlaceError::Matrix)?;
+    if poles.len() != n {
+        return Err(PlaceError::WrongCount { expected: n, found: poles.len() });
+    }
+    if let Some(&pole) = poles.iter().find(|p| !(p.re.is_finite() && p.im.is_finite())) {
+        return Err(PlaceError::NonFinite { pole });
+    }
+    let slots = classify(poles)?;
+    if A.iter().chain(b.iter()).any(|x| !x.is_finite()) {
+        return Err(PlaceError::NonFiniteSystem { which: "A or B" });
+    }
+    check_entries("A", A).and_then(|()| check_entries("B", b)).map_err(PlaceError::Matrix)?;
+    let K = single_input(A, b, &slots)?;
+    let error = char_poly_error(&(A - b * &K), &expand(&slots));
+    if error <= VERIFY_RTOL {
+        Ok(K)
+    } else {
+        Err(PlaceError::Inaccurate { max_error: if error.is_finite() { error } else { f64::INFINITY } })
+    }
+}
+
 fn single_input(A: &DMatrix<f64>, b: &DMatrix<f64>, slots: &[Slot]) -> Result<DMatrix<f64>, PlaceError> {
     let n = A.nrows();
     let st = staircase(A, b, staircase_tol(A, b));

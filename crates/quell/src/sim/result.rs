@@ -26,7 +26,7 @@ pub enum Outcome {
     Interrupted { t: f64 },
 }
 
-/// How a run ended, in a phrase: "reached t_end", "diverged at t = 36.75: x[2] (plant state) =
+/// How a run ended, in a phrase: "reached t_end", "diverged at t = 36.75: x\[2\] (plant state) =
 /// 1.06e9", …
 impl std::fmt::Display for Outcome {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
