@@ -363,7 +363,7 @@ pub(crate) fn check_tolerances(rtol: f64, atol: f64) -> Result<(), KeyError> {
         return Err(KeyError::new(
             "simulation.rtol",
             format!(
-                "expected a relative tolerance from 100 ε = {MIN_RTOL:.1e} (the tightest double precision can meet) to below 1 (errors as large as the signals), found {}; 1e-9 is the default, 1e-6 a quick look",
+                "expected a relative tolerance from 100 ε = {MIN_RTOL:.5e} (the tightest double precision can meet) to below 1 (errors as large as the signals), found {}; 1e-9 is the default, 1e-6 a quick look",
                 fmt_short(rtol)
             ),
         ));

@@ -564,7 +564,7 @@ fn tolerance_not_positive() {
 
 #[test]
 fn tolerance_out_of_range() {
-    let expected = "expected a relative tolerance from 100 ε = 2.2e-14";
+    let expected = "expected a relative tolerance from 100 ε = 2.22045e-14";
     check(&with(&[("rtol = 1e-9", "rtol = 1e-30")]), "simulation.rtol", expected);
 }
 
