@@ -118,6 +118,9 @@ impl PyController {
         let inner = quell::Controller::new(&d.get().inner, T)
             .map_err(|e| crate::errors::keyed(py, Kind::Scenario, e.to_string(), e.key()))?;
         let (m, _) = inner.dims();
+        // A design carries no signals: ρ from its poles alone.
+        let none = quell::Signal::default();
+        crate::errors::warn_coarse_sample(py, &d.get().inner, &none, &none, T)?;
         Ok(PyController { inner: Mutex::new(inner), m, design: d.clone().unbind() })
     }
 

@@ -144,6 +144,21 @@ pub fn warn_fragile(py: Python<'_>, design: &quell::Design, spec: &quell::Design
     Ok(())
 }
 
+/// The warning of a sample time coarse for `design` ([`quell::sim::coarse_sample_warning`]), as a
+/// `UserWarning` naming the argument.
+pub fn warn_coarse_sample(
+    py: Python<'_>,
+    design: &quell::Design,
+    reference: &quell::Signal,
+    disturbance: &quell::Signal,
+    sample_time: f64,
+) -> PyResult<()> {
+    match quell::sim::coarse_sample_warning(design, reference, disturbance, sample_time) {
+        Some(w) => warn(py, &in_python(w)),
+        None => Ok(()),
+    }
+}
+
 /// Issues `message` as a Python `UserWarning`.
 pub fn warn(py: Python<'_>, message: &str) -> PyResult<()> {
     let message = std::ffi::CString::new(message.replace('\0', " ")).unwrap_or_default();

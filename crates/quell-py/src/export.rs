@@ -120,11 +120,12 @@ pub fn export(
     fmi_version: Option<&Bound<'_, PyAny>>,
     compiler: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Vec<PathBuf>> {
-    let (design, scenario_name, scenario_T) = if let Ok(s) = source.cast::<PyScenario>() {
+    let (design, scenario_name, scenario_T, signals) = if let Ok(s) = source.cast::<PyScenario>() {
         let s = s.get();
-        (s.design_arc(py)?, s.inner.name.clone(), s.inner.simulation.sample_time)
+        let signals = (s.inner.reference.clone(), s.inner.disturbance.clone());
+        (s.design_arc(py)?, s.inner.name.clone(), s.inner.simulation.sample_time, signals)
     } else if let Ok(d) = source.cast::<PyDesign>() {
-        (d.get().inner.clone(), None, None)
+        (d.get().inner.clone(), None, None, Default::default())
     } else {
         return Err(pyo3::exceptions::PyTypeError::new_err(format!(
             "source: expected a quell.Scenario or quell.Design, found a {}",
@@ -166,6 +167,7 @@ pub fn export(
             Ok((code, archive))
         })
         .map_err(raise)?;
+    crate::errors::warn_coarse_sample(py, &design, &signals.0, &signals.1, T)?;
     let out = out.unwrap_or_else(|| PathBuf::from("."));
     std::fs::create_dir_all(&out).map_err(|e| {
         Kind::Export.err(py, format!("out: cannot create {} ({e}); choose a writable directory", out.display()))

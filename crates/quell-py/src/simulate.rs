@@ -574,9 +574,8 @@ pub fn simulate(
     };
     let result = run_released(py, scn, &design, settings)?;
     // After the run's own checks (a sample time they refuse gets no warning).
-    let coarse = sampled.and_then(|t| quell::sim::coarse_sample_warning(&design, &scn.reference, &scn.disturbance, t));
-    if let Some(w) = coarse {
-        crate::errors::warn(py, &in_python(w))?;
+    if let Some(t) = sampled {
+        crate::errors::warn_coarse_sample(py, &design, &scn.reference, &scn.disturbance, t)?;
     }
     let outcome = result.outcome.clone().unwrap_or(Outcome::Completed);
     let result = Py::new(py, PySimResult::from_run(py, scn, &design, result, s.labels.clone())?)?;

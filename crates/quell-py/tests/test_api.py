@@ -93,7 +93,7 @@ def test_complex_poles_in_scenarios():
         paper_from_values(channel_poles=[[-1 + 2j, -3], [-4]])
 
 
-def test_simulate_shapes_and_overrides():
+def test_simulate_shapes_and_overrides(tmp_path):
     s = quell.paper_example()
     r = quell.simulate(s, t_end=10.0)
     n = len(r)
@@ -112,6 +112,11 @@ def test_simulate_shapes_and_overrides():
     # UserWarning naming the argument, with the bound.
     with pytest.warns(UserWarning, match=r"^sample_time: T_s = 0.05 s is 0.45 of .*choose T_s ≤ 0.0222 s"):
         quell.simulate(s, t_end=2.0, sample_time=0.05)
+    # ... and so are the controller and its export at that sample time.
+    with pytest.warns(UserWarning, match=r"^sample_time: T_s = 0.05 s is 0.45 of"):
+        quell.Controller(s.design(), 0.05)
+    with pytest.warns(UserWarning, match=r"^sample_time: T_s = 0.05 s is 0.45 of"):
+        quell.export(s, 0.05, out=str(tmp_path))
     with pytest.raises(quell.ScenarioError, match=r"^output_step: expected an output step ≤ t_end = 0.05") as e:
         quell.simulate(s, t_end=0.05)  # the argument's name, not the file's key
     assert e.value.key == "simulation.output_step"
