@@ -203,7 +203,7 @@ fn write_data(dir: &Path, done: &Finished<'_>) -> std::io::Result<()> {
 }
 
 /// What a run that spent its budget means, and what to do.
-const RUNAWAY_HINT: &str = "the loop turned stiff, as a loop blowing up does before its states reach the divergence bound, or its adaptation is stiff from the start; raise --max-steps if the run is sound";
+const RUNAWAY_HINT: &str = "the loop turned stiff, as a loop blowing up does before its states reach the divergence bound, or its adaptation is stiff from the start, or a signal is faster than a step can follow; raise --max-steps if the run is sound";
 /// Channel i's convergence figures and advice, under its line of figures.
 fn report_diagnostics(d: &ChannelDiagnostics) {
     let trend = d.tail_trend.map_or(String::new(), |r| format!(", tail RMS ratio (last two tenths) {r:.2}"));

@@ -679,7 +679,7 @@ fn failure(outcome: Outcome) -> Option<(String, f64, Option<String>, Option<f64>
         ),
         Outcome::Interrupted { t } => (format!("interrupted at t = {t:.3}"), t, None, None),
         Outcome::TooManySteps { t, max_steps } => (
-            format!("the solver needed more than {max_steps} steps by t = {t:.6} (the step budget: the loop turned stiff, as a loop blowing up does, or its adaptation is stiff from the start; raise max_steps= if the run is sound); the samples up to then are in the exception's .result"),
+            format!("the solver needed more than {max_steps} steps by t = {t:.6} (the step budget: the loop turned stiff, as a loop blowing up does, or its adaptation is stiff from the start, or a signal is faster than a step can follow; raise max_steps= if the run is sound); the samples up to then are in the exception's .result"),
             t,
             None,
             None,
