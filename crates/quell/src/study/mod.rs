@@ -648,6 +648,21 @@ fn study_size(grid: &[GridAxis], mc: Option<&MonteCarlo>) -> Result<usize, Study
     ))
 }
 
+/// Optional scenario keys without a default: a study varies them only where the scenario gives them.
+const OPTIONAL_KEYS: &[&str] =
+    &["simulation.sample_time", "truth.u_max", "truth.actuator_delays", "noise.std", "noise.bandwidth"];
+
+/// Why `path` is not in the scenario (`why`), with what to do: for an [`OPTIONAL_KEYS`] key the
+/// scenario leaves out, give it there; otherwise `hint` on key paths.
+fn not_in_scenario(path: &KeyPath, why: &str, hint: &str) -> String {
+    let key = path.to_string();
+    let base = key.split('[').next().unwrap_or_default();
+    match OPTIONAL_KEYS.iter().find(|k| base == **k || base.starts_with(&format!("{k}."))) {
+        Some(k) => format!("{path} is not a value of the scenario ({why}): {k} is optional and the scenario leaves it out; give it a value in the scenario file (any, e.g. the first of the study's), which the study then varies"),
+        None => format!("{path} is not a value of the scenario ({why}); {hint}"),
+    }
+}
+
 /// Checks that each value, put at `path` in the scenario, has the scenario value's shape and gives
 /// a scenario that parses and designs. `at` is the study key of the list.
 fn check_values<'v>(
@@ -660,7 +675,7 @@ fn check_values<'v>(
     let mut doc = base.clone();
     fill_default(&mut doc, path);
     let current = path.get(&doc).map_err(|m| {
-        err(at, format!("{path} is not a value of the scenario ({m}); grid and Monte Carlo keys are scenario key paths as error messages write them, e.g. design.mu[0] or truth.A"))
+        err(at, not_in_scenario(path, &m, "grid and Monte Carlo keys are scenario key paths as error messages write them, e.g. design.mu[0] or truth.A"))
     })?;
     let Some(expected) = path::shape(current) else {
         return Err(err(at, format!("{path} in {source} is {}, not a number, vector or matrix", kind(current))));
@@ -734,7 +749,10 @@ fn monte_carlo(base: &toml::Table, t: &toml::Table, source: &str) -> Result<Mont
         let mut doc = base.clone();
         fill_default(&mut doc, &path);
         let current = path.get(&doc).map_err(|m| {
-            err(&at, format!("{path} is not a value of the scenario ({m}); Monte Carlo keys are scenario key paths, e.g. truth.A or truth.delays[1]"))
+            err(
+                &at,
+                not_in_scenario(&path, &m, "Monte Carlo keys are scenario key paths, e.g. truth.A or truth.delays[1]"),
+            )
         })?;
         if path::shape(current).is_none() {
             return Err(err(&at, format!("{path} in {source} is {}, not a number, vector or matrix", kind(current))));

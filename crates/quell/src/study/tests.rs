@@ -68,6 +68,9 @@ fn study_mistakes_name_their_key() {
         ("[monte_carlo]\nruns = 2\n\"plant.A\" = 0.1", "monte_carlo.\"plant.A\": expected a distribution"),
         ("[monte_carlo]\nruns = 2\n\"plant.A\" = { relative = 0.1, uniform = 0.1 }", "monte_carlo.\"plant.A\": expected exactly one distribution"),
         ("[monte_carlo]\nruns = 2\n\"plant.E\" = { relative = 0.1 }", "monte_carlo.\"plant.E\": plant.E is not a value of the scenario (plant has no E)"),
+        // An optional key the scenario leaves out: give it there first.
+        ("[grid]\n\"simulation.sample_time\" = [0.001, 0.01]", "grid.\"simulation.sample_time\": simulation.sample_time is not a value of the scenario (simulation has no sample_time): simulation.sample_time is optional and the scenario leaves it out; give it a value in the scenario file"),
+        ("[grid]\n\"truth.u_max[0]\" = [10.0]", "grid.\"truth.u_max[0]\": truth.u_max[0] is not a value of the scenario (the scenario has no truth): truth.u_max is optional and the scenario leaves it out"),
         ("[simulation]\nt_end = -1.0", "simulation.t_end: expected a final time > 0, found -1"),
         ("[simulation]\nsteps = 3", "simulation.steps: unknown key; valid keys in [simulation]"),
         ("[simulation]\nmethod = \"imx\"", "simulation.method: expected \"auto\" (DOP853"),
