@@ -65,17 +65,6 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
             args.out.join("tune.csv").display()
         )));
     }
-    if let Some(i) = result.within_limits.iter().position(|ok| !ok) {
-        let f = result.joint.as_ref().and_then(|j| j.channels.get(i));
-        return Err(Failure::Input(format!(
-            "channel {}: the tuned μ together break its limits in the joint run: max |u_{0}| = {:.4e} against tune.max_u[{i}] = {}, max |u_f,{0}| = {:.4e} against tune.max_uf[{i}] = {}; each search met them with the other channels' μ at the scenario's, but u_f = −K x̂ + F u_d mixes every channel's command: lower the broken limit by the excess and tune again, or tune with a grid over the μ together (docs/studies.md)",
-            i + 1,
-            f.map_or(f64::NAN, |f| f.max_u),
-            spec.max_u[i],
-            f.map_or(f64::NAN, |f| f.max_uf),
-            spec.max_uf[i],
-        )));
-    }
     if let Some(c) = result.channels.iter().find(|c| c.chosen.is_none()) {
         return Err(Failure::Input(format!(
             "channel {}: no μ in tune.mu[{}] completed with max |u_{}| ≤ tune.max_u[{}], max |u_f,{}| ≤ tune.max_uf[{}] and a finite {}; widen the bounds, raise the limits or lengthen simulation.t_end (the curve is in {})",
@@ -87,6 +76,18 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
             c.channel,
             result.objective.name(),
             args.out.join("tune.csv").display()
+        )));
+    }
+    // After the channels without a feasible μ: the joint run then holds the scenario's μ there.
+    if let Some(i) = result.within_limits.iter().position(|ok| !ok) {
+        let f = result.joint.as_ref().and_then(|j| j.channels.get(i));
+        return Err(Failure::Input(format!(
+            "channel {}: the tuned μ together break its limits in the joint run: max |u_{0}| = {:.4e} against tune.max_u[{i}] = {}, max |u_f,{0}| = {:.4e} against tune.max_uf[{i}] = {}; each search met them with the other channels' μ at the scenario's, but u_f = −K x̂ + F u_d mixes every channel's command: lower the broken limit by the excess and tune again, or tune with a grid over the μ together (docs/studies.md)",
+            i + 1,
+            f.map_or(f64::NAN, |f| f.max_u),
+            spec.max_u[i],
+            f.map_or(f64::NAN, |f| f.max_uf),
+            spec.max_uf[i],
         )));
     }
     Ok(())
