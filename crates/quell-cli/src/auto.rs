@@ -95,8 +95,10 @@ fn with_progress(
 ) -> Result<AutoDesign, AutoError> {
     let ctrl_c = Interrupt::install("interrupted twice; stopped without writing");
     let bar = crate::progress_bar(0, "verifying run {msg}: {bar:30} {percent:>3}% of t_end, {elapsed_precise}");
+    let mut shown = 0;
     let mut progress = |p: &Progress| {
-        if bar.length() != Some((p.t_end * 1000.0) as u64) || !bar.message().starts_with(&format!("{} ", p.run)) {
+        if p.run != shown {
+            shown = p.run;
             bar.set_length((p.t_end * 1000.0) as u64);
             bar.set_message(format!("{} ({})", p.run, p.speed));
         }

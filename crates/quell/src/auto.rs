@@ -74,10 +74,10 @@ const FILTER_DECAY: f64 = 30.0;
 /// Neighbouring filter poles are at most this ratio apart, and at least [`MIN_FILTER_SPREAD`]
 /// ([`filter_spread`]).
 const MAX_FILTER_SPREAD: f64 = 1.5;
+const MIN_FILTER_SPREAD: f64 = 1.1;
 /// A sampled-data scenario's first proposal halves its channel and observer poles at most this
 /// often ([`sampled_start`]).
 const MAX_SAMPLED_HALVINGS: usize = 10;
-const MIN_FILTER_SPREAD: f64 = 1.1;
 /// Without a target, the averaged law should reach the aim by t_end / this: the law ignores H's
 /// lag, the delays and the swapping error and is optimistic (a factor 4 on the paper's example);
 /// aiming at half the horizon left tails 1e3–1e5 times those of μ ×10 on the shipped examples.
