@@ -53,6 +53,7 @@ def edit(*edits, append=""):
 # (docs/errors.md test name, scenario text, key, where docs/errors.md's example may stop)
 CASES = [
     ("syntax_error", edit((C_LINE, "C = [[2.0, 2.0, 0.0], [2.0, 1.0, 2.0]")), "syntax", None),
+    ("duplicate_key", edit((DELAYS, "delays = [1.0, 3.0]\ndelays = [1.0, 2.0]")), "syntax", None),
     ("unknown_top_level_key", edit(("name = ", "nmae = ")), "nmae", None),
     ("unknown_key_in_table", edit((DELAYS, "delay = [1.0, 3.0]")), "plant.delay", None),
     ("unknown_key_nested", edit(("amplitude = 3.0, frequency", "amplitude = 3.0, freq")),

@@ -269,6 +269,15 @@ fn syntax_error() {
 }
 
 #[test]
+fn duplicate_key() {
+    check(
+        &with(&[(DELAYS, "delays = [1.0, 3.0]\ndelays = [1.0, 2.0]")]),
+        "syntax",
+        "duplicate key `delays`: a key may",
+    );
+}
+
+#[test]
 fn unknown_top_level_key() {
     check(
         &with(&[("name = ", "nmae = ")]),

@@ -28,7 +28,8 @@ use crate::signal::{check_signals, Component, Harmonic, Signal};
 use exosystem::Exosystem;
 pub use names::{check_names, SignalNames};
 pub(crate) use read::kind;
-use read::{err, line_col, Table, Value};
+pub(crate) use read::syntax_message;
+use read::{err, Table, Value};
 pub use write::{design_table, plant_table, pole_list, signal_table};
 
 /// The paper's example (Section VIII) as a scenario file: `examples/paper.toml`.
@@ -279,14 +280,7 @@ impl Scenario {
 /// Parses a scenario file's TOML (syntax only), errors with line and column under the key `syntax`.
 pub fn parse_document(text: &str) -> Result<toml::Table, ScenarioError> {
     text.parse().map_err(|e: toml::de::Error| {
-        let at = e
-            .span()
-            .map(|s| {
-                let (line, col) = line_col(text, s.start);
-                format!("line {line}, column {col}: ")
-            })
-            .unwrap_or_default();
-        err("syntax", format!("{at}{} (the file is not valid TOML)", e.message().trim_end()))
+        err("syntax", format!("{} (the file is not valid TOML)", syntax_message(text, &e)))
     })
 }
 

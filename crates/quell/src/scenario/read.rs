@@ -274,8 +274,23 @@ impl<'a> Value<'a, '_> {
     }
 }
 
+/// A TOML syntax error as "line L, column C: what" (the parser's message; a duplicate key is
+/// named, with what to do).
+pub(crate) fn syntax_message(text: &str, e: &toml::de::Error) -> String {
+    let message = e.message().trim_end();
+    let Some(span) = e.span() else { return message.to_string() };
+    let (line, col) = line_col(text, span.start);
+    let key = text.get(span.clone()).map(str::trim).filter(|k| !k.is_empty());
+    match key {
+        Some(key) if message.starts_with("duplicate key") => {
+            format!("line {line}, column {col}: duplicate key `{key}`: a key may be given once in a table, keep one")
+        }
+        _ => format!("line {line}, column {col}: {message}"),
+    }
+}
+
 /// Line and column (1-based) of byte `offset` in `text`.
-pub(super) fn line_col(text: &str, offset: usize) -> (usize, usize) {
+fn line_col(text: &str, offset: usize) -> (usize, usize) {
     let mut offset = offset.min(text.len());
     while !text.is_char_boundary(offset) {
         offset -= 1;
@@ -284,4 +299,30 @@ pub(super) fn line_col(text: &str, offset: usize) -> (usize, usize) {
     let line = before.matches('\n').count() + 1;
     let col = before.rfind('\n').map_or(before, |i| &before[i + 1..]).chars().count() + 1;
     (line, col)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn message(text: &str) -> String {
+        syntax_message(text, &text.parse::<toml::Table>().unwrap_err())
+    }
+
+    #[test]
+    fn a_duplicate_key_is_named_with_its_line() {
+        assert_eq!(
+            message("[plant]\nA = [[1.0]]\nA = [[2.0]]\n"),
+            "line 3, column 1: duplicate key `A`: a key may be given once in a table, keep one"
+        );
+        assert!(message("[plant]\n  mu = 1\n  mu = 2\n").starts_with("line 3, column 3: duplicate key `mu`: "));
+    }
+
+    #[test]
+    fn other_errors_keep_the_parsers_message_at_a_character_boundary() {
+        // The column counts characters: μ is two bytes.
+        let m = message("x = [1.0, \"μ\" 2]\n");
+        assert!(m.starts_with("line 1, column 15: "), "{m}");
+        assert!(m.contains("comma"), "{m}");
+    }
 }

@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::scenario::read::Value;
-use crate::scenario::{kind, Scenario, PAPER_EXAMPLE};
+use crate::scenario::{kind, syntax_message, Scenario, PAPER_EXAMPLE};
 pub use crate::sim::settle::Settle;
 use crate::sim::Peaks;
 pub use output::{header, read_runs_csv, write_runs_csv, RunsFile};
@@ -270,14 +270,7 @@ impl Study {
     /// scenario and checked (parse and design) before this returns.
     pub fn from_toml(text: &str, dir: Option<&Path>) -> Result<Study, StudyError> {
         let doc: toml::Table = text.parse().map_err(|e: toml::de::Error| {
-            let at = e.span().map(|s| {
-                let before = &text[..s.start.min(text.len())];
-                format!("line {}: ", before.matches('\n').count() + 1)
-            });
-            err(
-                "syntax",
-                format!("{}{} (the study file is not valid TOML)", at.unwrap_or_default(), e.message().trim_end()),
-            )
+            err("syntax", format!("{} (the study file is not valid TOML)", syntax_message(text, &e)))
         })?;
         Study::from_table(&doc, dir)
     }
@@ -495,7 +488,7 @@ fn base_scenario(doc: &toml::Table, dir: Option<&Path>) -> Result<(toml::Table, 
                 )
             })?;
             let base = text.parse().map_err(|e: toml::de::Error| {
-                err("scenario", format!("{s} is not valid TOML: {}", e.message().trim_end()))
+                err("scenario", format!("{s} is not valid TOML: {}", syntax_message(&text, &e)))
             })?;
             Ok((base, s.clone()))
         }

@@ -43,6 +43,7 @@ fn whole_vectors_and_matrices_are_grid_keys() {
 #[test]
 fn study_mistakes_name_their_key() {
     let cases: &[(&str, &str)] = &[
+        ("[grid]\n\"design.beta\" = [1.0]\n\"design.beta\" = [2.0]", "syntax: line 3, column 1: duplicate key `\"design.beta\"`: a key may be given once in a table, keep one (the study file is not valid TOML)"),
         ("sceanrio = \"x.toml\"", "sceanrio: unknown key (did you mean `scenario`?); valid keys at the top level"),
         ("[runaway]\npaek = 50", "runaway.paek: unknown key (did you mean `peak`?); valid keys in [runaway]: peak, steps"),
         ("scenario = 3", "scenario: expected the scenario file's path (a string) or a scenario table, found an integer"),
@@ -91,7 +92,7 @@ fn study_mistakes_name_their_key() {
         ("[tune]\nmu = [1.0, 10.0]\nobjective = \"fast\"", "tune.objective: expected \"settle_t\", \"tail_rms_e\" or \"tail_max_e\", found \"fast\""),
         ("[tune]\nmu = [1.0, 10.0]\nmax_u = [1.0, -2.0]", "tune.max_u[1]: expected a limit on max |u_i| > 0, found -2"),
         ("[tune]\nmu = [1.0, 10.0]\npoints = 1", "tune.points: expected an integer in [2, 10000], found 1"),
-        ("[grid", "syntax: line 1: "),
+        ("[grid", "syntax: line 1, column 6: unclosed table"),
     ];
     for (text, expected) in cases {
         let got = error(text);
