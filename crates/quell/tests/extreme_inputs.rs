@@ -363,7 +363,7 @@ fn the_delay_lines_are_budgeted_together_in_bytes() {
     let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/supply-vessel.toml")).unwrap();
     let d = Scenario::from_toml(&text).unwrap().design().unwrap();
     let e = quell::Controller::new(&d, 2e-7).unwrap_err();
-    let quell::ControllerError::DelayLinesTooLarge { rows, width, at_least, .. } = e else { panic!("{e}") };
+    let quell::ControllerError::DelayLinesTooLarge { rows, width, at_least, nearest, .. } = e else { panic!("{e}") };
     assert_eq!((rows, width), (3.0 * (5e6 + 1.0), 13));
     assert!(e.to_string().contains("(1.453 GiB); at most 1 GiB are kept"), "{e}");
     let docs = include_str!("../../../docs/errors.md");
@@ -371,7 +371,12 @@ fn the_delay_lines_are_budgeted_together_in_bytes() {
     let budget = quell::controller::MAX_DELAY_LINE_BYTES;
     let rows_at = |t: f64| 3.0 * (1.0 / t + 1.0);
     assert!(rows_at(at_least) * 13.0 * 8.0 <= budget && rows_at(0.99 * at_least) * 13.0 * 8.0 > budget, "{at_least}");
-    // 1 s is a whole number of samples of 1 / round(1 / at_least).
+    // 1 s is a whole number of samples of 1 / round(1 / at_least), and the one offered is such a
+    // sample time, no shorter than at_least, that works as printed.
     let fits = 1.0 / (1.0 / at_least).floor();
     assert!(quell::Controller::new(&d, fits).is_ok(), "{fits}");
+    let nearest = nearest.unwrap();
+    assert!(nearest >= at_least && (1.0 / nearest - (1.0 / nearest).round()).abs() < 1e-9 / nearest, "{nearest}");
+    let printed: f64 = e.to_string().rsplit("such as ").next().unwrap().trim_end_matches(" s").parse().unwrap();
+    assert!(quell::Controller::new(&d, printed).is_ok(), "{printed}");
 }

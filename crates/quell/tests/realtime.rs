@@ -82,6 +82,24 @@ fn suggested_sample_times_pass_the_check_or_none_is_offered() {
         }
     }
     assert_eq!(offered, 4);
+    // τ = [1, 3] at T_s below 3e-7: τ_2 would need more than the 1e7 samples a line holds. The
+    // suggestion is the nearest sample time that divides both delays *and* fits the lines, 1/k
+    // with k ≤ 3,333,333 (before, the search stayed near 1/T_s, found nothing and called the
+    // delays incommensurate; too long a line offered no value at all).
+    let d = design_with(&[1.0, 3.0]);
+    for T in [2.9e-7, 2e-7] {
+        let e = Controller::new(&d, T).unwrap_err();
+        let nearest = match &e {
+            ControllerError::DelayNotMultiple { nearest, .. } | ControllerError::DelayTooLong { nearest, .. } => {
+                *nearest
+            }
+            other => panic!("{T}: {other:?}"),
+        };
+        let nearest = nearest.unwrap_or_else(|| panic!("{T}: {e}"));
+        assert!(3.0 / nearest <= 1e7 && (1.0 / nearest - 3_333_333.0).abs() < 1e-3, "{T}: {nearest}");
+        let printed: f64 = e.to_string().rsplit(" is ").next().unwrap().trim_end_matches(" s").parse().unwrap();
+        assert!(Controller::new(&d, printed).is_ok(), "{T}: printed {printed} ({e})");
+    }
 }
 
 #[test]

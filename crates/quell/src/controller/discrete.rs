@@ -18,12 +18,14 @@ pub enum ControllerError {
     /// (so the printed value works when typed back), or `None` when no τ_c/k near T_s fits every delay.
     #[error("simulation.sample_time: channel {}'s delay τ = {delay} s is not a whole number of samples of T_s = {sample_time} s ({ratio:.6} samples); {}", .channel + 1, suggestion(*.nearest))]
     DelayNotMultiple { channel: usize, delay: f64, sample_time: f64, ratio: f64, nearest: Option<f64> },
-    #[error("simulation.sample_time: channel {}'s delay τ = {} s is {samples:e} samples of T_s = {} s; a delay line holds at most {max:e} samples; use a longer sample time", .channel + 1, crate::linalg::fmt_number(*.delay), crate::linalg::fmt_number(*.sample_time), max = MAX_DELAY_SAMPLES)]
-    DelayTooLong { channel: usize, delay: f64, sample_time: f64, samples: f64 },
-    /// The delay lines together would hold more than [`MAX_DELAY_LINE_BYTES`]; `at_least` is a
-    /// sample time at which they would not.
-    #[error("simulation.sample_time: the delay lines of u_i(t − τ_i) and ξ̂(t − τ_i) would hold {rows:e} rows of {width} numbers at T_s = {} s ({:.3} GiB); at most {} GiB are kept; use a sample time ≥ {}", crate::linalg::fmt_number(*.sample_time), *.rows * (8 * *.width) as f64 / 1024f64.powi(3), MAX_DELAY_LINE_BYTES / 1024f64.powi(3), crate::settings::fmt_short(*.at_least))]
-    DelayLinesTooLarge { rows: f64, width: usize, sample_time: f64, at_least: f64 },
+    /// `nearest` as in `DelayNotMultiple`: the sample time nearest T_s at which every line fits and
+    /// every delay is whole.
+    #[error("simulation.sample_time: channel {}'s delay τ = {} s is {samples:e} samples of T_s = {} s; a delay line holds at most {max:e} samples; {}", .channel + 1, crate::linalg::fmt_number(*.delay), crate::linalg::fmt_number(*.sample_time), longer(*.nearest), max = MAX_DELAY_SAMPLES)]
+    DelayTooLong { channel: usize, delay: f64, sample_time: f64, samples: f64, nearest: Option<f64> },
+    /// The delay lines together would hold more than [`MAX_DELAY_LINE_BYTES`]; `at_least` is the
+    /// shortest sample time at which they would not, `nearest` as in `DelayTooLong`.
+    #[error("simulation.sample_time: the delay lines of u_i(t − τ_i) and ξ̂(t − τ_i) would hold {rows:e} rows of {width} numbers at T_s = {} s ({:.3} GiB); at most {} GiB are kept; use a sample time ≥ {}{}", crate::linalg::fmt_number(*.sample_time), *.rows * (8 * *.width) as f64 / 1024f64.powi(3), MAX_DELAY_LINE_BYTES / 1024f64.powi(3), crate::settings::fmt_short(*.at_least), such_as(*.nearest))]
+    DelayLinesTooLarge { rows: f64, width: usize, sample_time: f64, at_least: f64, nearest: Option<f64> },
     /// A discretized block is not finite at this sample time.
     #[error("simulation.sample_time: {what} is not finite after discretizing at T_s = {sample_time:e} s; the exact discretization overflowed (the design's eigenvalues or gains times T_s are beyond floating point); choose a shorter sample time or poles of smaller magnitude")]
     NotFinite { what: String, sample_time: f64 },
@@ -188,6 +190,17 @@ fn suggestion(nearest: Option<f64>) -> String {
     }
 }
 
+fn longer(nearest: Option<f64>) -> String {
+    match nearest {
+        Some(t) => format!("use a longer sample time: the nearest valid one is {t} s"),
+        None => "use a longer sample time".into(),
+    }
+}
+
+fn such_as(nearest: Option<f64>) -> String {
+    nearest.map_or_else(String::new, |t| format!(" that makes every delay whole, such as {t} s"))
+}
+
 /// How many candidate sample counts k on either side of τ_c/T_s the suggestion tries.
 const SEARCHED: i64 = 10_000;
 
@@ -219,44 +232,60 @@ fn whole_within(x: f64, T: f64, tol: f64) -> Option<usize> {
     ((r - r.round()).abs() <= tol * r.max(1.0)).then(|| r.round() as usize)
 }
 
-/// Delay τ as a whole number of samples of T, or the nearest sample time that makes every delay whole.
-fn samples(delays: &[f64], T: f64) -> Result<Vec<usize>, ControllerError> {
+/// The delays τ_i in whole samples of T, each line within [`MAX_DELAY_SAMPLES`] and all of them,
+/// Σ (τ_i/T + 1) rows of `width` numbers, within [`MAX_DELAY_LINE_BYTES`]; else the error with the
+/// nearest sample time that passes every check ([`valid_sample_time`]).
+fn delay_samples(delays: &[f64], T: f64, width: usize) -> Result<Vec<usize>, ControllerError> {
+    let nearest = || valid_sample_time(delays, T, width);
     for (channel, &delay) in delays.iter().enumerate() {
-        if (delay / T).is_nan() || delay / T > MAX_DELAY_SAMPLES {
-            return Err(ControllerError::DelayTooLong { channel, delay, sample_time: T, samples: delay / T });
+        let samples = delay / T;
+        if samples.is_nan() || samples > MAX_DELAY_SAMPLES {
+            return Err(ControllerError::DelayTooLong { channel, delay, sample_time: T, samples, nearest: nearest() });
         }
         if !whole(delay, T) {
-            let ratio = delay / T;
-            // Nearest T' = τ/k (k ≥ 1 samples) that fits every channel, rounded to the fewest
-            // significant digits that fit 10× inside the tolerance, so that the printed value passes
-            // when typed back, and not by a hair.
-            let k0 = ratio.round().max(1.0) as i64;
-            let fits = |t: f64| delays.iter().all(|&d| delay_within(d, t, 1e-10));
-            let nearest = (0..SEARCHED)
-                .flat_map(|j| [k0 + j, k0 - j])
-                .filter(|&k| k >= 1)
-                .map(|k| delay / k as f64)
-                .find(|&t| fits(t))
-                .and_then(|t| {
-                    (1..17).map(|p| format!("{t:.p$e}").parse::<f64>().unwrap_or(t)).chain([t]).find(|&r| fits(r))
-                });
-            return Err(ControllerError::DelayNotMultiple { channel, delay, sample_time: T, ratio, nearest });
+            let nearest = nearest();
+            return Err(ControllerError::DelayNotMultiple { channel, delay, sample_time: T, ratio: samples, nearest });
         }
     }
-    Ok(delays.iter().map(|d| (d / T).round() as usize).collect())
+    let d: Vec<usize> = delays.iter().map(|d| (d / T).round() as usize).collect();
+    let rows: f64 = d.iter().map(|&d| d as f64 + 1.0).sum();
+    if rows > row_limit(width) {
+        let at_least = lines_at_least(delays, width);
+        return Err(ControllerError::DelayLinesTooLarge { rows, width, sample_time: T, at_least, nearest: nearest() });
+    }
+    Ok(d)
 }
 
-/// The delay lines' rows Σ (d_i + 1) = Σ τ_i/T_s + m of `width` numbers within
-/// [`MAX_DELAY_LINE_BYTES`]; `d` holds the delays τ_i in samples.
-fn check_delay_lines(delays: &[f64], d: &[usize], width: usize, T: f64) -> Result<(), ControllerError> {
-    let rows: f64 = d.iter().map(|&d| d as f64 + 1.0).sum();
-    let limit = MAX_DELAY_LINE_BYTES / (8 * width) as f64;
-    if rows <= limit {
-        return Ok(());
-    }
-    // Σ τ_i/T_s ≤ limit − m: the step suggestion of the recorded rows, on Σ τ_i.
-    let at_least = crate::settings::step_at_least(delays.iter().sum(), limit - d.len() as f64);
-    Err(ControllerError::DelayLinesTooLarge { rows, width, sample_time: T, at_least })
+/// Most rows of `width` numbers within [`MAX_DELAY_LINE_BYTES`].
+fn row_limit(width: usize) -> f64 {
+    MAX_DELAY_LINE_BYTES / (8 * width) as f64
+}
+
+/// The shortest sample time (three digits, rounded up) at which Σ τ_i/T_s ≤ limit − m.
+fn lines_at_least(delays: &[f64], width: usize) -> f64 {
+    crate::settings::step_at_least(delays.iter().sum(), row_limit(width) - delays.len() as f64)
+}
+
+/// The sample time τ_max/k nearest T (k within [`SEARCHED`] of τ_max/T, no shorter than the lines'
+/// limits allow) at which every delay is whole to a tenth of [`WHOLE_TOLERANCE`] (a nonzero one at
+/// least one sample) and the lines fit,
+/// written with the fewest significant digits that still pass, so that the printed value works
+/// when typed back, and not by a hair. `None` when no such k is near (incommensurate delays).
+fn valid_sample_time(delays: &[f64], T: f64, width: usize) -> Option<f64> {
+    let tau = delays.iter().copied().fold(0.0, f64::max);
+    let shortest = (tau / MAX_DELAY_SAMPLES).max(lines_at_least(delays, width));
+    let fits = |t: f64| {
+        let rows: f64 = delays.iter().map(|d| (d / t).round() + 1.0).sum();
+        rows <= row_limit(width) && delays.iter().all(|&d| delay_within(d, t, 1e-10) && (d == 0.0 || d / t >= 0.5))
+    };
+    let k_max = (tau / shortest).floor();
+    let k0 = (tau / T.max(shortest)).round().clamp(1.0, k_max.max(1.0)) as i64;
+    (0..SEARCHED)
+        .flat_map(|j| [k0 + j, k0 - j])
+        .filter(|&k| k >= 1 && k as f64 <= k_max)
+        .map(|k| tau / k as f64)
+        .find(|&t| fits(t))
+        .and_then(|t| (1..17).map(|p| format!("{t:.p$e}").parse::<f64>().unwrap_or(t)).chain([t]).find(|&r| fits(r)))
 }
 
 impl Controller {
@@ -267,10 +296,9 @@ impl Controller {
         if !(T.is_finite() && T > 0.0) {
             return Err(ControllerError::BadSampleTime { value: T });
         }
-        let d = samples(&design.plant().delays, T)?;
         let eq = Equations::new(design);
         let (m, q, nz) = (eq.m, eq.q, eq.nz);
-        check_delay_lines(&design.plant().delays, &d, 1 + q, T)?;
+        let d = delay_samples(&design.plant().delays, T, 1 + q)?;
         let (Phi_z, Gamma_z) = zoh_unchecked(&eq.A_z, &eq.B_z, T);
         let mut PhiGamma_z = DMatrix::zeros(nz, nz + 3 * m);
         PhiGamma_z.view_mut((0, 0), (nz, nz)).copy_from(&Phi_z);
