@@ -36,6 +36,16 @@ fn value_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     }
 }
 
+/// [lo, hi] widened about its middle to at least `relative` × its largest magnitude.
+fn widened(lo: f64, hi: f64, relative: f64) -> (f64, f64) {
+    let (mid, half) = (0.5 * (lo + hi), 0.5 * relative * lo.abs().max(hi.abs()));
+    if hi - lo >= 2.0 * half {
+        (lo, hi)
+    } else {
+        (mid - half, mid + half)
+    }
+}
+
 /// The label of tick value `v` on an axis spanning [lo, hi]: scientific notation when the axis's
 /// largest magnitude is below 1e-3 or at least 1e5 (plotters' default prints 1e-6 as "0.0"), plain
 /// decimals otherwise; either with the digits that tell ticks about (hi − lo)/10 apart from each
@@ -259,6 +269,9 @@ fn draw_sweep_1d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
                     .collect()
             };
             let (lo, hi) = value_range([Q[0], Q[2], Q[4]].iter().flat_map(|&p| at(p)).map(|(_, v)| v));
+            let empty = at(0.5).is_empty();
+            // Differences below 0.1 % of the values are the solver's, not the grid's: drawn flat.
+            let (lo, hi) = widened(lo, hi, 1e-3);
             let (x0, x1) = x.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
             let (x0, x1) = if x0 < x1 { (x0, x1) } else { (x0 - 1.0, x0 + 1.0) };
             let pad = 0.05 * (hi - lo);
@@ -290,6 +303,7 @@ fn draw_sweep_1d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
                 .x_labels(if numeric { 6 } else { axis.values.len().min(12) })
                 .x_desc(axis.key.as_str())
                 .y_desc(*label)
+                .y_labels(if empty { 0 } else { 10 })
                 .x_label_formatter(&fmt)
                 .y_label_formatter(&|v| tick_label(*v, y0, y1))
                 .label_style(("sans-serif", 13))
@@ -310,9 +324,37 @@ fn draw_sweep_1d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
                 .draw_series(LineSeries::new(median.iter().copied(), color.stroke_width(2)))
                 .map_err(|e| e.to_string())?;
             chart.draw_series(median.iter().map(|&p| Circle::new(p, 3, color.filled()))).map_err(|e| e.to_string())?;
+            if median.len() < s.points.len() {
+                // Say why points are missing rather than leave an empty or gappy panel: at the top
+                // left, or in the middle of an empty one.
+                let (x, y) = match empty {
+                    true => (x0 + 0.1 * (x1 - x0), 0.5 * (y0 + y1)),
+                    false => (x0 + 0.02 * (x1 - x0), y1 - 0.03 * (y1 - y0)),
+                };
+                let font = ("sans-serif", 13).into_font().color(&RGBColor(90, 90, 90));
+                let lines = missing_median(name, empty);
+                for (k, line) in lines.iter().enumerate() {
+                    let at = (x, y - k as f64 * 0.07 * (y1 - y0));
+                    chart
+                        .draw_series(std::iter::once(Text::new(line.clone(), at, font.clone())))
+                        .map_err(|e| e.to_string())?;
+                }
+            }
         }
     }
     root.present().map_err(|e| e.to_string())
+}
+
+/// Why a sweep panel lacks the median at some (`all`: every) grid point, in two short lines: no
+/// completed run there, or, for the settling time, half its runs or more never settled
+/// (summary.json's `never_settled`).
+fn missing_median(figure: &str, all: bool) -> [String; 2] {
+    let head = if all { "no grid point has a median:" } else { "some grid points have no median:" };
+    let why = match figure {
+        "settle_t" => "half the runs or more never settled (never_settled)",
+        _ => "no completed run there (completed)",
+    };
+    [head.into(), why.into()]
 }
 
 /// A colour from dark blue (t = 0) through green to yellow (t = 1), roughly viridis.
@@ -472,7 +514,18 @@ pub fn plot_tune(dir: &Path, r: &quell::study::TuneResult) -> io::Result<()> {
 
 #[cfg(test)]
 mod tests {
-    use super::tick_label;
+    use super::{tick_label, widened};
+
+    #[test]
+    fn sweep_axes_do_not_magnify_differences_below_a_thousandth() {
+        // Channel 2's tail RMS e across μ_1 (paper's example): 0.90294628…0.90294634 filled the
+        // panel as if μ_1 mattered; now the axis spans 0.1 % of the value about its middle.
+        let (lo, hi) = widened(0.90294628, 0.90294634, 1e-3);
+        assert!((hi - lo - 0.90294634e-3).abs() < 1e-12 && lo < 0.90294628 && hi > 0.90294634, "{lo} {hi}");
+        // A real spread is kept as it is, negative values too.
+        assert_eq!(widened(0.2, 3.6, 1e-3), (0.2, 3.6));
+        assert_eq!(widened(-5.0, -4.0, 1e-3), (-5.0, -4.0));
+    }
 
     #[test]
     fn tick_labels_tell_small_and_large_ticks_apart() {
