@@ -202,8 +202,6 @@ fn write_data(dir: &Path, done: &Finished<'_>) -> std::io::Result<()> {
     output::write_json(&dir.join("summary.json"), &summary)
 }
 
-/// What a run that spent its budget means, and what to do.
-const RUNAWAY_HINT: &str = "the loop turned stiff, as a loop blowing up does before its states reach the divergence bound, or its adaptation is stiff from the start, or a signal is faster than a step can follow; raise --max-steps if the run is sound";
 /// Channel i's convergence figures and advice, under its line of figures.
 fn report_diagnostics(d: &ChannelDiagnostics) {
     let trend = d.tail_trend.map_or(String::new(), |r| format!(", tail RMS ratio (last two tenths) {r:.2}"));
@@ -264,11 +262,7 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
                 eprintln!("  advice: {line}");
             }
             for (i, f) in result.limited_fraction().iter().enumerate().filter(|(_, &f)| f > 0.0) {
-                eprintln!(
-                    "input {}: clipped by truth.u_max[{i}] at {:.1} % of the recorded samples",
-                    i + 1,
-                    100.0 * f
-                );
+                eprintln!("input {}: clipped by truth.u_max[{i}] at {:.1} % of the recorded samples", i + 1, 100.0 * f);
             }
             let steps = match result.stats {
                 RunStats::Continuous(stats) => format!("{} solver steps", stats.steps),
@@ -277,23 +271,9 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
             eprintln!("wrote {out} ({} samples, {steps}, {seconds:.3} s)", result.len());
             Ok(())
         }
-        Outcome::Diverged { t, signal, value } => Err(Failure::Run(format!(
-            "the closed loop diverged at t = {t:.4}: {signal} = {value:e}; results up to then are in {out}"
-        ))),
-        Outcome::StepSizeTooSmall { t } => Err(Failure::Run(format!(
-            "the solver's step size underflowed at t = {t:.6} (the loop is too stiff or blows up there, a signal is faster than any step can resolve, or an input delay is shorter than a step can be); results up to then are in {out}"
-        ))),
-        Outcome::Interrupted { t } => {
-            Err(Failure::Run(format!("interrupted at t = {t:.3}; results up to then are in {out}")))
+        outcome => {
+            let why = outcome.explain("--max-steps").unwrap_or_default();
+            Err(Failure::Run(format!("{why}; results up to then are in {out}")))
         }
-        Outcome::TooManySteps { t, max_steps } => Err(Failure::Run(format!(
-            "the solver needed more than {max_steps} steps by t = {t:.6} (the step budget; {}); results up to then are in {out}",
-            RUNAWAY_HINT
-        ))),
-        Outcome::HistoryTooLarge { t, max_bytes } => Err(Failure::Run(format!(
-            "the delay history would have exceeded {} MB by t = {t:.6} (the memory budget; {}); results up to then are in {out}",
-            max_bytes >> 20,
-            RUNAWAY_HINT
-        ))),
     }
 }

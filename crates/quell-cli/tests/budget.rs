@@ -20,6 +20,15 @@ fn children_max_rss() -> u64 {
     ru.ru_maxrss as u64 * 1024
 }
 
+/// docs/errors.md shows the message of stderr's `error:` line exactly, with `out` written as the
+/// default `quell-out` (the run is deterministic, so its times are the same on every machine).
+fn shown_in_errors_md(stderr: &str, out: &std::path::Path) {
+    let line = stderr.lines().find_map(|l| l.strip_prefix("error: ")).unwrap_or_else(|| panic!("{stderr}"));
+    let message = line.replace(&out.display().to_string(), "quell-out");
+    let docs = include_str!("../../../docs/errors.md");
+    assert!(docs.contains(&format!("`{message}`")), "docs/errors.md does not show: {message}");
+}
+
 #[test]
 fn a_diverging_continuous_run_ends_within_its_default_budget() {
     let dir_tmp = scratch_dir("budget");
@@ -46,6 +55,7 @@ fn a_diverging_continuous_run_ends_within_its_default_budget() {
         stderr.contains("the delay history would have exceeded 90 MB by t = ") && stderr.contains("--max-steps"),
         "{stderr}"
     );
+    shown_in_errors_md(&stderr, &out);
     let t = time_in(&stderr, "exceeded 90 MB by t = ").unwrap_or_else(|| panic!("no time on stderr: {stderr}"));
     assert!(t > 10.0 && t < 100.0, "t = {t}");
     let summary = check_outputs(&out);
@@ -69,6 +79,7 @@ fn a_diverging_continuous_run_ends_within_its_default_budget() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(1), "stderr: {stderr}");
     assert!(stderr.contains("more than 3000 steps by t = "), "{stderr}");
+    shown_in_errors_md(&stderr, &out);
     assert!(time_in(&stderr, "steps by t = ").is_some_and(|t2| t2 < t), "{stderr}");
 }
 

@@ -663,32 +663,17 @@ fn run_released(
 
 /// Why a run that did not complete failed, for SimulationError: message, time, signal and value.
 fn failure(outcome: Outcome) -> Option<(String, f64, Option<String>, Option<f64>)> {
+    let why = outcome.explain("max_steps=")?;
     Some(match outcome {
+        Outcome::Interrupted { t } => (why, t, None, None),
+        Outcome::Diverged { t, signal, value } => (with_result(why), t, Some(signal), Some(value)),
+        Outcome::StepSizeTooSmall { t } | Outcome::TooManySteps { t, .. } | Outcome::HistoryTooLarge { t, .. } => {
+            (with_result(why), t, None, None)
+        }
         Outcome::Completed => return None,
-        Outcome::Diverged { t, signal, value } => (
-            format!("the closed loop diverged at t = {t:.4}: {signal} = {value:e}; the samples up to then are in the exception's .result"),
-            t,
-            Some(signal),
-            Some(value),
-        ),
-        Outcome::StepSizeTooSmall { t } => (
-            format!("the solver's step size underflowed at t = {t:.6} (the loop is too stiff or blows up there, a signal is faster than any step can resolve, or an input delay is shorter than a step can be); the samples up to then are in the exception's .result"),
-            t,
-            None,
-            None,
-        ),
-        Outcome::Interrupted { t } => (format!("interrupted at t = {t:.3}"), t, None, None),
-        Outcome::TooManySteps { t, max_steps } => (
-            format!("the solver needed more than {max_steps} steps by t = {t:.6} (the step budget: the loop turned stiff, as a loop blowing up does, or its adaptation is stiff from the start, or a signal is faster than a step can follow; raise max_steps= if the run is sound); the samples up to then are in the exception's .result"),
-            t,
-            None,
-            None,
-        ),
-        Outcome::HistoryTooLarge { t, max_bytes } => (
-            format!("the delay history would have exceeded {} MB by t = {t:.6} (the memory budget: the solver's steps had crowded into the last delay, as a loop blowing up does; it scales with max_steps=, raise that if the run is sound); the samples up to then are in the exception's .result", max_bytes >> 20),
-            t,
-            None,
-            None,
-        ),
     })
+}
+
+fn with_result(why: String) -> String {
+    why + "; the samples up to then are in the exception's .result"
 }

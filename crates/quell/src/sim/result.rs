@@ -45,6 +45,34 @@ impl std::fmt::Display for Outcome {
     }
 }
 
+impl Outcome {
+    /// Why a run that did not complete ended, with its likely causes; `raise` names how the step
+    /// budget is raised where the run was started (`--max-steps`, `max_steps=`, …). `None` for a
+    /// completed run. Each front end adds where the results up to then are.
+    pub fn explain(&self, raise: &str) -> Option<String> {
+        Some(match self {
+            Outcome::Completed => return None,
+            Outcome::Diverged { t, signal, value } => format!("the closed loop diverged at t = {t:.4}: {signal} = {value:e}"),
+            Outcome::StepSizeTooSmall { t } => format!(
+                "the solver's step size underflowed at t = {t:.6} (the loop is too stiff or blows up there, a signal is \
+                 faster than any step can resolve, or an input delay is shorter than a step can be)"
+            ),
+            Outcome::TooManySteps { t, max_steps } => format!(
+                "the solver needed more than {max_steps} steps by t = {t:.6} (the step budget: the loop turned stiff, as a \
+                 loop blowing up does before its states reach the divergence bound, or its adaptation is stiff from the \
+                 start, or a signal is faster than a step can follow; raise {raise} if the run is sound)"
+            ),
+            Outcome::HistoryTooLarge { t, max_bytes } => format!(
+                "the delay history would have exceeded {} MB by t = {t:.6} (the memory budget: the solver's steps had \
+                 crowded into the last delay, as a loop blowing up does; it scales with {raise}, raise that if the run is \
+                 sound)",
+                max_bytes >> 20
+            ),
+            Outcome::Interrupted { t } => format!("interrupted at t = {t:.3}"),
+        })
+    }
+}
+
 /// What a run did, in the figures its loop has.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 #[serde(tag = "loop", rename_all = "snake_case")]

@@ -187,9 +187,6 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                         );
                     }
                 }
-                sim::Outcome::StepSizeTooSmall { t } => {
-                    row.reason = format!("the solver's step size underflowed at t = {t:.6}");
-                }
                 sim::Outcome::TooManySteps { t, max_steps } if spec.ran_away(*max_steps) => {
                     let n = spec.nominal.map_or(0, |n| n.steps);
                     row.reason = format!(
@@ -197,18 +194,8 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                         spec.runaway.steps
                     );
                 }
-                sim::Outcome::HistoryTooLarge { t, max_bytes } => {
-                    row.reason = format!(
-                        "the delay history would have exceeded {} MB by t = {t:.4} (the solver's steps had crowded into the last delay: a loop blowing up turns stiff; the budget scales with max_steps, raise it in the study file if the run is sound)",
-                        max_bytes >> 20
-                    );
-                }
-                sim::Outcome::TooManySteps { t, max_steps } => {
-                    row.reason = format!(
-                        "the solver needed more than {max_steps} steps by t = {t:.4} (a loop blowing up turns stiff before its states reach the divergence bound; raise max_steps in the study file if the run is sound)"
-                    );
-                }
                 sim::Outcome::Interrupted { .. } => return None,
+                other => row.reason = other.explain("max_steps in the study file").unwrap_or_default(),
             }
         }
     }
