@@ -195,6 +195,11 @@ fn tune_writes_the_chosen_mu_and_each_curve() {
     let json: serde_json::Value =
         serde_json::from_str(&fs::read_to_string(dir.join("out/tune.json")).unwrap()).unwrap();
     assert_eq!(json["mu"].as_array().unwrap().len(), 2);
+    // Channels are numbered from 1 in tune.json as in tune.csv (tune.json counted from 0).
+    let numbers: Vec<u64> =
+        json["channels"].as_array().unwrap().iter().map(|c| c["channel"].as_u64().unwrap()).collect();
+    assert_eq!(numbers, [1, 2]);
+    assert!(csv.lines().nth(1).unwrap().starts_with("1,") && csv.lines().last().unwrap().starts_with("2,"), "{csv}");
     assert!(dir.join("out/tune.png").is_file() && dir.join("out/tune.svg").is_file());
 
     // No [tune], and a limit no μ meets: exit code 2, naming the key.

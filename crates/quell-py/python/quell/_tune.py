@@ -98,7 +98,7 @@ class TuneResult:
             chosen = c.get("chosen")
             for p in c["curve"]:
                 figures = p.get("figures") or {}
-                row = {"channel": c["channel"] + 1, "mu": p["mu"], "objective": p["objective"],
+                row = {"channel": c["channel"], "mu": p["mu"], "objective": p["objective"],
                        "outcome": p["outcome"]}
                 row.update({f: figures.get(f) for f in FIGURES})
                 row["chosen"] = chosen is not None and chosen["mu"] == p["mu"]

@@ -159,10 +159,28 @@ pub struct TunePoint {
 /// Channel i's search: every evaluation in order of μ, and the chosen one.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TuneCurve {
+    /// 0-based here; 1-based in tune.json, as in tune.csv and `quell run`'s summary.json.
+    #[serde(with = "one_based")]
     pub channel: usize,
     pub curve: Vec<TunePoint>,
     /// The best feasible point, `None` if no μ in the bounds was feasible.
     pub chosen: Option<TunePoint>,
+}
+
+/// A 0-based index written 1-based.
+mod one_based {
+    use serde::{de::Error, Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(i: &usize, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_u64(*i as u64 + 1)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
+        match usize::deserialize(d)? {
+            0 => Err(D::Error::custom("channel: expected a 1-based channel number, found 0")),
+            n => Ok(n - 1),
+        }
+    }
 }
 
 /// The tuned μ, each channel's curve, and the joint run's check.
