@@ -171,11 +171,11 @@ pub struct TuneCurve {
 mod one_based {
     use serde::{de::Error, Deserialize, Deserializer, Serializer};
 
-    pub fn serialize<S: Serializer>(i: &usize, s: S) -> Result<S::Ok, S::Error> {
+    pub(super) fn serialize<S: Serializer>(i: &usize, s: S) -> Result<S::Ok, S::Error> {
         s.serialize_u64(*i as u64 + 1)
     }
 
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
         match usize::deserialize(d)? {
             0 => Err(D::Error::custom("channel: expected a 1-based channel number, found 0")),
             n => Ok(n - 1),
