@@ -256,93 +256,110 @@ fn figure_of<'a>(c: &'a quell::study::ChannelQuantiles, name: &str) -> &'a quell
 
 /// 1-D grid: rows = figures, columns = channels; the median with 25–75 % and 5–95 % bands.
 fn draw_sweep_1d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::study::Summary) -> Result<(), String> {
-    let axis = &s.study.grid[0];
-    let (x, numeric) = axis_coords(&axis.values);
+    let (x, numeric) = axis_coords(&s.study.grid[0].values);
     let areas = root.split_evenly((SWEEP_FIGURES.len(), s.study.m));
-    for (f, (label, name)) in SWEEP_FIGURES.iter().enumerate() {
+    for (f, &figure) in SWEEP_FIGURES.iter().enumerate() {
         for i in 0..s.study.m {
-            let area = &areas[f * s.study.m + i];
-            let at = |p: f64| -> Vec<(f64, f64)> {
-                s.points
-                    .iter()
-                    .filter_map(|pt| figure_of(&pt.channels[i], name).at(p).map(|v| (x[pt.point], v)))
-                    .collect()
-            };
-            let (lo, hi) = value_range([Q[0], Q[2], Q[4]].iter().flat_map(|&p| at(p)).map(|(_, v)| v));
-            let empty = at(0.5).is_empty();
-            // Differences below 0.1 % of the values are the solver's, not the grid's: drawn flat.
-            let (lo, hi) = widened(lo, hi, 1e-3);
-            let (x0, x1) = x.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
-            let (x0, x1) = if x0 < x1 { (x0, x1) } else { (x0 - 1.0, x0 + 1.0) };
-            let pad = 0.05 * (hi - lo);
-            let (y0, y1) = (lo - pad, hi + pad);
-            let mut chart = ChartBuilder::on(area)
-                .caption(format!("Channel {}: {label}", i + 1), ("sans-serif", 18))
-                .margin(8)
-                .margin_right(if numeric { 20 } else { 56 })
-                .x_label_area_size(36)
-                .y_label_area_size(80)
-                .build_cartesian_2d(x0..x1, y0..y1)
-                .map_err(|e| e.to_string())?;
-            let values: Vec<String> = axis.values.iter().map(|v| short_value(v)).collect();
-            let fmt = move |v: &f64| {
-                if numeric {
-                    // Tick values like 2.8000000000000003 read as 2.8.
-                    let short = format!("{v:.6}");
-                    short.trim_end_matches('0').trim_end_matches('.').to_string()
-                } else if (v - v.round()).abs() < 1e-6 {
-                    // A value's label only at its own position, not at the ticks between.
-                    values.get(v.round() as usize).cloned().unwrap_or_default()
-                } else {
-                    String::new()
-                }
-            };
-            chart
-                .configure_mesh()
-                .max_light_lines(2)
-                .x_labels(if numeric { 6 } else { axis.values.len().min(12) })
-                .x_desc(axis.key.as_str())
-                .y_desc(*label)
-                .y_labels(if empty { 0 } else { 10 })
-                .x_label_formatter(&fmt)
-                .y_label_formatter(&|v| tick_label(*v, y0, y1))
-                .label_style(("sans-serif", 13))
-                .draw()
-                .map_err(|e| e.to_string())?;
-            let color = Palette99::pick(i).to_rgba();
-            for (a, b, alpha) in [(Q[0], Q[4], 0.15), (Q[1], Q[3], 0.3)] {
-                let (low, high) = (at(a), at(b));
-                if low.len() >= 2 && low.len() == high.len() {
-                    let ring: Vec<(f64, f64)> = low.iter().copied().chain(high.iter().rev().copied()).collect();
-                    chart
-                        .draw_series(std::iter::once(Polygon::new(ring, color.mix(alpha).filled())))
-                        .map_err(|e| e.to_string())?;
-                }
-            }
-            let median = at(0.5);
-            chart
-                .draw_series(LineSeries::new(median.iter().copied(), color.stroke_width(2)))
-                .map_err(|e| e.to_string())?;
-            chart.draw_series(median.iter().map(|&p| Circle::new(p, 3, color.filled()))).map_err(|e| e.to_string())?;
-            if median.len() < s.points.len() {
-                // Say why points are missing rather than leave an empty or gappy panel: at the top
-                // left, or in the middle of an empty one.
-                let (x, y) = match empty {
-                    true => (x0 + 0.1 * (x1 - x0), 0.5 * (y0 + y1)),
-                    false => (x0 + 0.02 * (x1 - x0), y1 - 0.03 * (y1 - y0)),
-                };
-                let font = ("sans-serif", 13).into_font().color(&RGBColor(90, 90, 90));
-                let lines = missing_median(name, empty);
-                for (k, line) in lines.iter().enumerate() {
-                    let at = (x, y - k as f64 * 0.07 * (y1 - y0));
-                    chart
-                        .draw_series(std::iter::once(Text::new(line.clone(), at, font.clone())))
-                        .map_err(|e| e.to_string())?;
-                }
-            }
+            draw_sweep_panel(&areas[f * s.study.m + i], s, (&x, numeric), figure, i)?;
         }
     }
     root.present().map_err(|e| e.to_string())
+}
+
+/// One panel of [`draw_sweep_1d`]: channel i's `figure` against the grid's values `x` (their
+/// positions; `numeric`: the values themselves).
+fn draw_sweep_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    s: &quell::study::Summary,
+    (x, numeric): (&[f64], bool),
+    (label, name): (&str, &str),
+    i: usize,
+) -> Result<(), String> {
+    let axis = &s.study.grid[0];
+    let at = |p: f64| -> Vec<(f64, f64)> {
+        s.points.iter().filter_map(|pt| figure_of(&pt.channels[i], name).at(p).map(|v| (x[pt.point], v))).collect()
+    };
+    let (lo, hi) = value_range([Q[0], Q[2], Q[4]].iter().flat_map(|&p| at(p)).map(|(_, v)| v));
+    let empty = at(0.5).is_empty();
+    // Differences below 0.1 % of the values are the solver's, not the grid's: drawn flat.
+    let (lo, hi) = widened(lo, hi, 1e-3);
+    let (x0, x1) = x.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+    let (x0, x1) = if x0 < x1 { (x0, x1) } else { (x0 - 1.0, x0 + 1.0) };
+    let pad = 0.05 * (hi - lo);
+    let (y0, y1) = (lo - pad, hi + pad);
+    let mut chart = ChartBuilder::on(area)
+        .caption(format!("Channel {}: {label}", i + 1), ("sans-serif", 18))
+        .margin(8)
+        .margin_right(if numeric { 20 } else { 56 })
+        .x_label_area_size(36)
+        .y_label_area_size(80)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(|e| e.to_string())?;
+    let values: Vec<String> = axis.values.iter().map(|v| short_value(v)).collect();
+    let fmt = move |v: &f64| {
+        if numeric {
+            // Tick values like 2.8000000000000003 read as 2.8.
+            let short = format!("{v:.6}");
+            short.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else if (v - v.round()).abs() < 1e-6 {
+            // A value's label only at its own position, not at the ticks between.
+            values.get(v.round() as usize).cloned().unwrap_or_default()
+        } else {
+            String::new()
+        }
+    };
+    chart
+        .configure_mesh()
+        .max_light_lines(2)
+        .x_labels(if numeric { 6 } else { axis.values.len().min(12) })
+        .x_desc(axis.key.as_str())
+        .y_desc(label)
+        .y_labels(if empty { 0 } else { 10 })
+        .x_label_formatter(&fmt)
+        .y_label_formatter(&|v| tick_label(*v, y0, y1))
+        .label_style(("sans-serif", 13))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    let color = Palette99::pick(i).to_rgba();
+    for (a, b, alpha) in [(Q[0], Q[4], 0.15), (Q[1], Q[3], 0.3)] {
+        let (low, high) = (at(a), at(b));
+        if low.len() >= 2 && low.len() == high.len() {
+            let ring: Vec<(f64, f64)> = low.iter().copied().chain(high.iter().rev().copied()).collect();
+            chart
+                .draw_series(std::iter::once(Polygon::new(ring, color.mix(alpha).filled())))
+                .map_err(|e| e.to_string())?;
+        }
+    }
+    let median = at(0.5);
+    chart.draw_series(LineSeries::new(median.iter().copied(), color.stroke_width(2))).map_err(|e| e.to_string())?;
+    chart.draw_series(median.iter().map(|&p| Circle::new(p, 3, color.filled()))).map_err(|e| e.to_string())?;
+    if median.len() < s.points.len() {
+        missing_median_note(&mut chart, missing_median(name, empty), empty, (x0, x1), (y0, y1))?;
+    }
+    Ok(())
+}
+
+/// Writes `lines` at the top left of a panel spanning `xs` × `ys`, or in the middle of an `empty` one.
+fn missing_median_note<DB: DrawingBackend>(
+    chart: &mut ChartContext<
+        DB,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+    lines: [String; 2],
+    empty: bool,
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+) -> Result<(), String> {
+    let (x, y) = match empty {
+        true => (x0 + 0.1 * (x1 - x0), 0.5 * (y0 + y1)),
+        false => (x0 + 0.02 * (x1 - x0), y1 - 0.03 * (y1 - y0)),
+    };
+    let font = ("sans-serif", 13).into_font().color(&RGBColor(90, 90, 90));
+    let ats = [(x, y), (x, y - 0.07 * (y1 - y0))];
+    chart
+        .draw_series(lines.into_iter().zip(ats).map(|(line, at)| Text::new(line, at, font.clone())))
+        .map_err(|e| e.to_string())?;
+    Ok(())
 }
 
 /// Why a sweep panel lacks the median at some (`all`: every) grid point, in two short lines: no

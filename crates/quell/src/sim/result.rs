@@ -47,7 +47,7 @@ impl std::fmt::Display for Outcome {
 
 impl Outcome {
     /// Why a run that did not complete ended, with its likely causes; `raise` names how the step
-    /// budget is raised where the run was started (`--max-steps`, `max_steps=`, …). `None` for a
+    /// budget is raised in the front end that started the run. `None` for a
     /// completed run. Each front end adds where the results up to then are.
     pub fn explain(&self, raise: &str) -> Option<String> {
         Some(match self {

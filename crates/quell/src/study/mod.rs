@@ -267,7 +267,8 @@ impl Study {
 
     /// Parses and checks a study; `dir` is where a relative `scenario` path is looked up
     /// (`None`: the working directory). Every grid value and perturbation is applied to the
-    /// scenario and checked (parse and design) before this returns.
+    /// scenario and checked (parse, design and the checks its run makes before it starts) before
+    /// this returns.
     pub fn from_toml(text: &str, dir: Option<&Path>) -> Result<Study, StudyError> {
         let doc: toml::Table = text.parse().map_err(|e: toml::de::Error| {
             err("syntax", format!("{} (the study file is not valid TOML)", syntax_message(text, &e)))
@@ -684,11 +685,20 @@ fn check_values<'v>(
         }
         let mut trial = doc.clone();
         path.set(&mut trial, v.clone()).expect("found above");
-        let checked = Scenario::from_document(&trial)
-            .map_err(|e| e.to_string())
-            .and_then(|s| s.design().map(|_| ()).map_err(|e| e.to_string()));
+        // Parsed, designed and every check its run makes before it starts (a harmonic too fast to
+        // resolve over t_end, a sample time the controller cannot take), so that a grid value
+        // that cannot run is refused here rather than as failed rows.
+        let checked = Scenario::from_document(&trial).map_err(|e| e.to_string()).and_then(|s| {
+            let design = s.design().map_err(|e| e.to_string())?;
+            crate::sim::Run::of(&s, &design).check().map_err(|e| e.to_string())
+        });
         if let Err(e) = checked {
-            return Err(err(key, format!("with {path} = {v} the scenario is not valid: {e}")));
+            // As written, but 1e15 not as TOML's 1000000000000000.0.
+            let shown = match v {
+                toml::Value::Float(x) if x.abs() >= 1e6 || (*x != 0.0 && x.abs() < 1e-4) => format!("{x:e}"),
+                v => v.to_string(),
+            };
+            return Err(err(key, format!("with {path} = {shown} the scenario is not valid: {e}")));
         }
     }
     Ok(())

@@ -44,6 +44,8 @@ fn whole_vectors_and_matrices_are_grid_keys() {
 fn study_mistakes_name_their_key() {
     let cases: &[(&str, &str)] = &[
         ("[grid]\n\"design.beta\" = [1.0]\n\"design.beta\" = [2.0]", "syntax: line 3, column 1: duplicate key `\"design.beta\"`: a key may be given once in a table, keep one (the study file is not valid TOML)"),
+        ("[grid]\n\"reference.components[0].harmonics[0].frequency\" = [2.0, 1e15]", "grid.\"reference.components[0].harmonics[0].frequency\"[1]: with reference.components[0].harmonics[0].frequency = 1e15 the scenario is not valid: reference.components[0].harmonics[0].frequency: ω = 1e15 rad/s needs at least"),
+        ("[simulation]\nsample_time = 0.001\n[grid]\n\"plant.delays[0]\" = [1.0, 1.0005]", "grid.\"plant.delays[0]\"[1]: with plant.delays[0] = 1.0005 the scenario is not valid: simulation.sample_time: channel 1's delay τ = 1.0005 s is not a whole number of samples"),
         ("sceanrio = \"x.toml\"", "sceanrio: unknown key (did you mean `scenario`?); valid keys at the top level"),
         ("[runaway]\npaek = 50", "runaway.paek: unknown key (did you mean `peak`?); valid keys in [runaway]: peak, steps"),
         ("scenario = 3", "scenario: expected the scenario file's path (a string) or a scenario table, found an integer"),
