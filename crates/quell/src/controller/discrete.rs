@@ -182,7 +182,7 @@ pub struct Controller {
 
 fn suggestion(nearest: Option<f64>) -> String {
     match nearest {
-        Some(t) => format!("the nearest valid sample time is {t} s"),
+        Some(t) => format!("the nearest valid sample time is {} s", crate::settings::fmt_short(t)),
         None => format!(
             "no sample time τ_c/k within {SEARCHED} samples of it makes every delay whole (the delays are not commensurate); \
              change the delays to whole multiples of one sample time"
@@ -192,13 +192,15 @@ fn suggestion(nearest: Option<f64>) -> String {
 
 fn longer(nearest: Option<f64>) -> String {
     match nearest {
-        Some(t) => format!("use a longer sample time: the nearest valid one is {t} s"),
+        Some(t) => format!("use a longer sample time: the nearest valid one is {} s", crate::settings::fmt_short(t)),
         None => "use a longer sample time".into(),
     }
 }
 
 fn such_as(nearest: Option<f64>) -> String {
-    nearest.map_or_else(String::new, |t| format!(" that makes every delay whole, such as {t} s"))
+    nearest.map_or_else(String::new, |t| {
+        format!(" that makes every delay whole, such as {} s", crate::settings::fmt_short(t))
+    })
 }
 
 /// How many candidate sample counts k on either side of τ_c/T_s the suggestion tries.
