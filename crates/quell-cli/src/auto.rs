@@ -52,6 +52,14 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
     let doc = quell::scenario::read_document(&args.scenario).map_err(|e| Failure::Input(e.to_string()))?;
     if let Some(out) = &args.write {
         output::prepare_file("--write", out)?;
+        // The written scenario is the design's TOML, without the input's comments (its sources,
+        // units): refuse to replace the input with it.
+        if out.canonicalize().ok().is_some_and(|o| args.scenario.canonicalize().is_ok_and(|s| s == o)) {
+            return Err(Failure::Input(format!(
+                "--write {}: it is the scenario being designed, which the written file (without the input's comments) would replace; write to another file",
+                out.display()
+            )));
+        }
     }
     let auto = with_progress(|progress| auto_design_with(&doc, &targets, progress)).map_err(|e| match e {
         AutoError::Run(_) | AutoError::Interrupted => Failure::Run(e.to_string()),

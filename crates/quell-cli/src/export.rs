@@ -41,7 +41,7 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
     let (scenario, design) = load(Some(&args.scenario))?;
     let sample_time = args.sample_time.or(scenario.simulation.sample_time).ok_or_else(|| {
         Failure::Input(
-            "--sample-time: missing; the controller runs at a sample time T_s in seconds (or set simulation.sample_time in the scenario)".into(),
+            "--sample-time: missing; the controller runs at a sample time T_s, in the plant model's unit of time (or set simulation.sample_time in the scenario)".into(),
         )
     })?;
     let options = ExportOptions {

@@ -31,7 +31,7 @@ pub struct RunArgs {
     /// Step budget of the continuous loop, and with it the delay history's memory budget (default:
     /// derived from the problem's time scales; see docs/running.md). A run that needs more ends as
     /// failed, its results up to then written.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_max_steps)]
     pub max_steps: Option<usize>,
     /// Also record the plant state x and the observer state x̂ (columns x1..xn, xhat1..xhatn of
     /// signals.csv).
@@ -275,5 +275,16 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
             let why = outcome.explain("--max-steps").unwrap_or_default();
             Err(Failure::Run(format!("{why}; results up to then are in {out}")))
         }
+    }
+}
+
+/// `--max-steps N`: a step budget, N ≥ 1 (as `max_steps` in a study and `max_steps=` in Python); clap
+/// prints the message after the flag's name.
+fn parse_max_steps(text: &str) -> Result<usize, String> {
+    match text.trim().parse::<i128>() {
+        Ok(n) if n >= 1 && n <= usize::MAX as i128 => Ok(n as usize),
+        _ => Err(format!(
+            "expected a step budget (an integer ≥ 1), found {text}; omit --max-steps for the run's own budget"
+        )),
     }
 }

@@ -98,3 +98,25 @@ fn max_steps_is_refused_for_a_sampled_data_run() {
     assert_eq!(output.status.code(), Some(2), "stderr: {stderr}");
     assert!(stderr.contains("--max-steps: a step budget applies to the continuous loop"), "{stderr}");
 }
+
+#[test]
+fn a_step_budget_below_one_is_refused_as_elsewhere() {
+    // --max-steps 0 ran and "needed more than 0 steps" (exit 1); -5 got clap's "unexpected
+    // argument". Both are input errors naming the flag, as max_steps = 0 in a study and
+    // max_steps=0 in Python are.
+    let dir_tmp = scratch_dir("budget-zero");
+    let dir = dir_tmp.path();
+    let scenario = paper_with(dir, &[]);
+    for bad in ["0", "-5", "1.5"] {
+        let output = Command::new(env!("CARGO_BIN_EXE_quell"))
+            .args(["run", "--no-plots", "--max-steps", bad, "--out"])
+            .arg(dir.join("out"))
+            .arg(&scenario)
+            .output()
+            .expect("run quell");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{bad}: {stderr}");
+        assert!(stderr.contains(&format!("expected a step budget (an integer ≥ 1), found {bad}")), "{stderr}");
+        assert!(!dir.join("out").exists(), "{bad}: a run started");
+    }
+}

@@ -723,6 +723,13 @@ fn design_auto_write_unwritable_exits_2_before_work() {
     }
     assert!(!dir.path().join("missing").exists(), "--write's directory was created");
     assert_eq!(fs::read(&file).unwrap(), b"not a directory");
+    // --write naming the input itself (here through another path to it) would replace the file
+    // and its comments with the design's TOML: refused, the input untouched.
+    let before = fs::read(&input).unwrap();
+    let same = input.parent().unwrap().join(".").join(input.file_name().unwrap());
+    let err = input_error(&["design", input.to_str().unwrap(), "--auto", "--write", same.to_str().unwrap()]);
+    assert!(err.contains("it is the scenario being designed") && err.contains("write to another file"), "{err}");
+    assert_eq!(fs::read(&input).unwrap(), before);
 }
 
 #[test]

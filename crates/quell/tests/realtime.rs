@@ -82,6 +82,13 @@ fn suggested_sample_times_pass_the_check_or_none_is_offered() {
         }
     }
     assert_eq!(offered, 4);
+    // The nearest in time, not in samples: τ = [0.05, 0.12] at 7 ms has 0.01 s (τ_max/12) and
+    // 5 ms (τ_max/24) on either side; 5 ms is the nearer (0.01 s was offered before).
+    let d = design_with(&[0.05, 0.12]);
+    match Controller::new(&d, 0.007) {
+        Err(ControllerError::DelayNotMultiple { nearest: Some(t), .. }) => assert_eq!(t, 0.005),
+        other => panic!("{other:?}"),
+    }
     // τ = [1, 3] at T_s below 3e-7: τ_2 would need more than the 1e7 samples a line holds. The
     // suggestion is the nearest sample time that divides both delays *and* fits the lines, 1/k
     // with k ≤ 3,333,333 (before, the search stayed near 1/T_s, found nothing and called the

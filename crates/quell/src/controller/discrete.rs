@@ -280,14 +280,20 @@ fn valid_sample_time(delays: &[f64], T: f64, width: usize) -> Option<f64> {
         let rows: f64 = delays.iter().map(|d| (d / t).round() + 1.0).sum();
         rows <= row_limit(width) && delays.iter().all(|&d| delay_within(d, t, 1e-10) && (d == 0.0 || d / t >= 0.5))
     };
-    let k_max = (tau / shortest).floor();
-    let k0 = (tau / T.max(shortest)).round().clamp(1.0, k_max.max(1.0)) as i64;
-    (0..SEARCHED)
-        .flat_map(|j| [k0 + j, k0 - j])
-        .filter(|&k| k >= 1 && k as f64 <= k_max)
-        .map(|k| tau / k as f64)
-        .find(|&t| fits(t))
-        .and_then(|t| (1..17).map(|p| format!("{t:.p$e}").parse::<f64>().unwrap_or(t)).chain([t]).find(|&r| fits(r)))
+    let (target, k_max) = (T.max(shortest), (tau / shortest).floor());
+    let k0 = (tau / target).round().clamp(1.0, k_max.max(1.0)) as i64;
+    // The first fit on either side of k0, then the one nearer T (not nearer in k: with τ = 0.12
+    // and 0.05 at T = 0.007, k = 12 is nearer k0 = 17 than k = 24, but 0.005 is nearer T than 0.01).
+    let first = |ks: &mut dyn Iterator<Item = i64>| {
+        ks.filter(|&k| k >= 1 && k as f64 <= k_max).map(|k| tau / k as f64).find(|&t| fits(t))
+    };
+    let shorter = first(&mut (k0..k0 + SEARCHED));
+    let longer = first(&mut (k0 - SEARCHED..k0).rev());
+    let nearest = match (shorter, longer) {
+        (Some(a), Some(b)) => Some(if (a - target).abs() <= (b - target).abs() { a } else { b }),
+        (a, b) => a.or(b),
+    };
+    nearest.and_then(|t| (1..17).map(|p| format!("{t:.p$e}").parse::<f64>().unwrap_or(t)).chain([t]).find(|&r| fits(r)))
 }
 
 impl Controller {

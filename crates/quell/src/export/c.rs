@@ -255,7 +255,7 @@ fn header(
     let (p, P, R) = (o.prefix.as_str(), o.prefix.to_ascii_uppercase(), o.precision.c_type());
     let num = |x: f64| number(x, o.precision);
     let delay_text = (0..layout.m)
-        .map(|i| format!("channel {}: {} s = {} samples", i + 1, design.plant().delays[i], layout.delays[i]))
+        .map(|i| format!("channel {}: tau = {} = {} samples", i + 1, design.plant().delays[i], layout.delays[i]))
         .collect::<Vec<_>>()
         .join("; ");
     // The sizes, one aligned block.
@@ -263,7 +263,7 @@ fn header(
         ("N", layout.n.to_string(), "plant states"),
         ("M", layout.m.to_string(), "channels: outputs y, references g, inputs u_f"),
         ("Q", layout.q.to_string(), "regressor xi_hat = [xi_g; xi_w] and each eta_i"),
-        ("SAMPLE_TIME", num(T), "T_s in seconds"),
+        ("SAMPLE_TIME", num(T), "T_s, in the plant model's unit of time (that of its A and delays)"),
         ("NZ", layout.nz.to_string(), "state sizes: core [xi_g; xi_w; x_hat]"),
         ("SIGMA_SUM", layout.sigma_sum().to_string(), "filter-bank rows, sigma_1 + ... + sigma_m"),
         ("SIGMA_MAX", layout.sigma_max().to_string(), "largest relative degree"),

@@ -229,7 +229,7 @@ fn opening(o: &ExportOptions, version: FmiVersion, sample_time: f64, token: &str
     };
     let events = if version == FmiVersion::V2 { r#" numberOfEventIndicators="0""# } else { "" };
     format!(
-        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<fmiModelDescription fmiVersion=\"{}\" modelName=\"{name}\" {token} description=\"Direct adaptive output-feedback controller (quell), sampled at T_s = {sample_time:?} s\" generationTool=\"quell {}\" variableNamingConvention=\"structured\"{events}>\n",
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<fmiModelDescription fmiVersion=\"{}\" modelName=\"{name}\" {token} description=\"Direct adaptive output-feedback controller (quell), sampled at T_s = {sample_time:?} (the plant model's unit of time)\" generationTool=\"quell {}\" variableNamingConvention=\"structured\"{events}>\n",
         version.name(),
         env!("CARGO_PKG_VERSION")
     )
