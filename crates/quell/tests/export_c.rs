@@ -139,9 +139,9 @@ fn output_is_deterministic_and_records_the_design() {
     let h = &a.header.split_whitespace().collect::<Vec<_>>().join(" ");
     for text in [
         "scenario \"paper-example\"",
-        "Sample time T_s = 0.001 s",
+        "Sample time T_s = 0.001 (in the plant model's unit of time)",
         concat!("quell ", env!("CARGO_PKG_VERSION")),
-        "channel 1: 1 s = 1000 samples; channel 2: 3 s = 3000 samples",
+        "channel 1: tau = 1 = 1000 samples; channel 2: tau = 3 = 3000 samples",
         "Memory: 1696 bytes of constants (static const), 241240 bytes of state",
         "#define QUELL_M 2",
         "#define QUELL_N 3",

@@ -387,7 +387,8 @@ const HEADER: &str = r#"/* {p}_controller.h: direct adaptive output-feedback con
  * change, regenerate with
  *     quell export SCENARIO --sample-time {T} --prefix {p} --precision {prec}
  *
- * Sample time T_s = {T} s: call {p}_step once per sample (docs/deployment.md).
+ * Sample time T_s = {T} (in the plant model's unit of time): call {p}_step once per sample
+ * (docs/deployment.md).
  * Plant: n = {n} states, m = {m} channels; regressor q = {q} (q_g = {qg}, q_w = {qw}).
  * Input delays: {delay_text}.
  * Eigenvalues of the design (continuous time):
