@@ -107,6 +107,25 @@ def test_fmu_is_the_controller(tmp_path, example, T, t_end, version):
 
 
 @pytest.mark.parametrize("version", [2, 3])
+def test_a_float_fmu_steps_at_a_sample_time_float_cannot_hold(tmp_path, version):
+    """T_s = 0.05 is not a float: the f32 FMU held T_s as 0.05f, so a master stepping at 0.05 was
+    refused at every step ("h = 0.05 s is not a whole number of samples of T_s = 0.05 s"). T_s is a
+    double in every build; the float controller follows the double one to float accuracy."""
+    T = 0.05
+    scenario, result = _closed_loop(EXAMPLES / "three-channel.toml", T, 5.0)
+    quell.export(scenario, T, out=tmp_path, fmu=True, fmi_version=version, prefix="ctrl", precision="f32")
+    sim = _fmu_run(tmp_path / "ctrl.fmu", result, T)
+    m = result.y.shape[1]
+    fmu_u_f = np.column_stack([sim[f"u_f[{i + 1}]"] for i in range(m)])
+    assert len(sim) == len(result.t)
+    ctrl = quell.Controller(scenario.design(), sample_time=T)
+    u_f = np.array([ctrl.step(y, g) for y, g in zip(result.y, result.g)])
+    # float's 6e-8 relative rounding, grown over 100 steps of a stable loop: within 1e-3 of the peak.
+    np.testing.assert_allclose(fmu_u_f, u_f, rtol=0, atol=1e-3 * np.max(np.abs(u_f)))
+    assert np.max(np.abs(u_f)) > 0.1
+
+
+@pytest.mark.parametrize("version", [2, 3])
 def test_communication_step_must_be_whole_samples(tmp_path, capsys, version):
     """A master stepping at 1.5 T_s gets fmiXError from fmiXDoStep, which FMPy raises, and the
     FMU's log (which FMPy's default logger prints) says why."""

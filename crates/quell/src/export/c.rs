@@ -263,7 +263,8 @@ fn header(
         ("N", layout.n.to_string(), "plant states"),
         ("M", layout.m.to_string(), "channels: outputs y, references g, inputs u_f"),
         ("Q", layout.q.to_string(), "regressor xi_hat = [xi_g; xi_w] and each eta_i"),
-        ("SAMPLE_TIME", num(T), "T_s, in the plant model's unit of time (that of its A and delays)"),
+        // A double in float builds too: the FMU counts time with it, and 0.1f is not 0.1.
+        ("SAMPLE_TIME", number(T, Precision::F64), "T_s, in the plant model's unit of time (that of its A and delays)"),
         ("NZ", layout.nz.to_string(), "state sizes: core [xi_g; xi_w; x_hat]"),
         ("SIGMA_SUM", layout.sigma_sum().to_string(), "filter-bank rows, sigma_1 + ... + sigma_m"),
         ("SIGMA_MAX", layout.sigma_max().to_string(), "largest relative degree"),
@@ -417,8 +418,8 @@ typedef struct {
 /* The Controller's zero state (also to restart it). */
 void {p}_init({p}_state *s);
 /* One sample: reads y(k) and g(k), writes the plant input u_f(k) = -K x_hat + F u_d (5), to hold
- * until the next sample, and returns 0. An entry of y or g that is NaN or beyond +-{P}_INPUT_BOUND
- * (a sensor fault) is refused: it returns 1 and leaves the state and u_f untouched; hold the
+ * until the next sample, and returns 0; u_f may be the array y or g (both are read first). An
+ * entry of y or g that is NaN or beyond +-{P}_INPUT_BOUND (a sensor fault) is refused: it returns 1 and leaves the state and u_f untouched; hold the
  * previous input. It returns 2 when u_f or u is no longer finite (inputs the design cannot follow
  * overflowed the state), and keeps returning 2: hold a safe input and call {p}_init
  * (docs/deployment.md). Needs IEEE arithmetic (no -ffast-math). */
@@ -532,6 +533,11 @@ int {p}_step({p}_state *s, const {R} y[{P}_M], const {R} g[{P}_M], {R} u_f[{P}_M
     for (unsigned i = 0; i < {P}_M; i++)
         if (!(y[i] >= -{P}_INPUT_BOUND && y[i] <= {P}_INPUT_BOUND && g[i] >= -{P}_INPUT_BOUND && g[i] <= {P}_INPUT_BOUND))
             return 1;
+    /* y(k) and g(k) into [z; y; g; u_d] before u_f is written: u_f may be the array y or g. */
+    for (unsigned i = 0; i < {P}_M; i++) {
+        zv[{P}_NZ + i] = y[i];
+        zv[{P}_NZ + {P}_M + i] = g[i];
+    }
 
     /* Control law (25) with eta_i(k): u_i(k) = -eta_i^T xi_hat(k), xi_hat = the first q core states;
      * the delay line records [u(k), xi_hat^T(k)]. */
@@ -552,10 +558,6 @@ int {p}_step({p}_state *s, const {R} y[{P}_M], const {R} g[{P}_M], {R} u_f[{P}_M
     /* Core at ZOH: z(k + 1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
     for (unsigned i = 0; i < {P}_NZ; i++)
         zv[i] = s->z[i];
-    for (unsigned i = 0; i < {P}_M; i++) {
-        zv[{P}_NZ + i] = y[i];
-        zv[{P}_NZ + {P}_M + i] = g[i];
-    }
     for (unsigned i = 0; i < {P}_NZ; i++)
         s->z[i] = {p}_dot({p}_PhiGamma_z[i], zv, {P}_NZ + 3 * {P}_M, 0);
     s->head = s->head == {P}_DELAY_MAX ? 0 : s->head + 1;
