@@ -136,6 +136,9 @@ fn design(args: &auto::DesignArgs) -> Result<(), Failure> {
     }
     interrupt::Interrupt::quit_with("interrupted during the design; nothing was printed");
     let (s, d) = load(Some(&args.scenario))?;
+    // The scenario's run must be able to start (its sample time against the delays, its signals
+    // against t_end), or `quell run` and `quell export` would refuse what the design accepted.
+    quell::sim::Run::of(&s, &d).check().map_err(|e| Failure::Input(e.to_string()))?;
     let warnings = quell::design::warnings(&d, &s.design);
     let estimates = pace::estimates(&s, &d);
     if args.json {

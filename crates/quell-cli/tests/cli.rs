@@ -890,3 +890,13 @@ fn tune_exits_2_when_the_joint_run_breaks_a_limit() {
     let json = read_json(&out.join("tune.json"));
     assert_eq!(json["within_limits"], serde_json::json!([false, true]));
 }
+
+#[test]
+fn design_refuses_a_scenario_whose_run_cannot_start() {
+    // The scenario's own sample time does not divide τ_1 = 1 s: `quell run` and `quell export`
+    // refuse it (exit 2), so `quell design` does too instead of reporting a design that cannot run.
+    let err = design_with_edit("design-sample-time", "# sample_time = 0.001", "sample_time = 0.3");
+    assert!(err.starts_with("error: simulation.sample_time"), "{err}");
+    assert!(err.contains("channel 1's delay τ = 1 s is not a whole number of samples"), "{err}");
+    assert!(err.contains("the nearest valid sample time is 0.333"), "{err}");
+}

@@ -136,6 +136,19 @@ pub fn tune(
         pool.install(|| study::tune(&study, &TuneOptions { stop: Some(&stop), on_point: None }))
     })?;
     let result = result.map_err(|e| argument_error(py, &e))?;
+    // As `quell tune`'s exit status 2: a channel without a feasible μ keeps the scenario's.
+    for c in result.channels.iter().filter(|c| c.chosen.is_none() && !result.partial) {
+        let i = c.channel;
+        crate::errors::warn(
+            py,
+            &format!(
+                "channel {}: no μ in mu[{i}] completed within max_u and max_uf with a finite {}; mu[{i}] is the scenario's, {} (feasible[{i}] is False): widen the bounds, raise the limits or lengthen t_end (the curve is in .frame)",
+                i + 1,
+                result.objective.name(),
+                result.mu[i]
+            ),
+        )?;
+    }
     let json = serde_json::to_string(&result).map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
     let result = py.import("quell._tune")?.getattr("TuneResult")?.call1((json,))?;
     match interrupt {

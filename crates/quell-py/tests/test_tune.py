@@ -154,3 +154,17 @@ def test_ctrl_c_stops_run_one_and_a_specs_simulation(python_child):
         out, err, seconds = interrupt(python_child, code, 1.0)
         assert "KeyboardInterrupt" in err and "finished" not in out, (call, out, err)
         assert seconds < 10, call
+
+
+def test_a_channel_without_a_feasible_mu_is_warned_of_and_flagged():
+    """`quell tune` exits 2 when a channel has no feasible μ; quell.tune returned the scenario's μ
+    in silence. It now warns, naming the channel, and `feasible` says which channels had one."""
+    s = unstable_first_order()
+    with pytest.warns(UserWarning, match=r"^channel 1: no μ in mu\[0\] completed within max_u and max_uf") as caught:
+        r = quell.tune(s, mu=[1.0, 100.0], objective="tail_rms_e", max_u=1e-6, points=3, refine=0, jobs=1)
+    assert len(caught) == 1 and "is the scenario's" in str(caught[0].message)
+    assert r.feasible == [False] and len(r.best) == 0
+    assert r.mu == [10.0]  # the scenario's μ
+    ok = quell.tune(s, mu=[1.0, 100.0], objective="tail_rms_e", points=3, refine=0, jobs=1)
+    assert ok.feasible == [True]
+    assert quell.TuneResult(r.to_json()).feasible == [False]

@@ -32,6 +32,9 @@ class TuneResult:
         What the searches minimized: "settle_t", "tail_rms_e" or "tail_max_e".
     mu : list of float
         The tuned μ (the scenario's μ_i where a channel had no feasible point).
+    feasible : list of bool
+        Per channel, whether some μ in its bounds was feasible (``quell.tune`` warns of each that
+        was not, as ``quell tune`` exits 2).
     reproduced : list of bool
         Per channel, whether the joint run (every μ_i tuned at once) reproduced the search's
         objective within tolerance (Proposition 1's decoupling); all False when ``partial``.
@@ -68,6 +71,7 @@ class TuneResult:
             self.reproduced = list(data["reproduced"])
             self.within_limits = list(data.get("within_limits", []))
             self.partial = bool(data.get("partial", False))
+            self.feasible = [c.get("chosen") is not None for c in self._channels]
         except (ValueError, KeyError, TypeError) as e:
             raise ScenarioError(f"json: not a quell tuning result ({e!r})") from None
         self._json = json
