@@ -87,8 +87,8 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// An export error as the CLI reports it: a compiler that fails or an archive that cannot be built
-/// is a failed run (1), the rest bad input (2).
+/// An export error as the CLI reports it: a compiler that runs and fails or an archive that cannot
+/// be built is a failed run (1), the rest bad input (2), a compiler that cannot be started included.
 fn export_failure(e: ExportError) -> Failure {
     match e {
         ExportError::Compiler { .. } | ExportError::Archive { .. } => Failure::Run(e.to_string()),

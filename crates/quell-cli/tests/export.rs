@@ -176,8 +176,14 @@ fn export_fmu_writes_one_archive_or_fails_with_1() {
         "--compiler",
         "/nonexistent/cc",
     ]);
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    // A compiler that cannot be started is a bad --compiler (2); one that runs and fails, a failed
+    // build (1), saying so when it printed nothing (`false` is no compiler).
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("error: --compiler \"/nonexistent/cc\": cannot run it"), "{}", stderr(&o));
+    assert!(!bad.exists(), "the output directory was touched");
+    let o = quell(&["export", &three, "--sample-time", "0.05", "--out", &bad_out, "--fmu", "--compiler", "false"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("it printed nothing: is it a C compiler?"), "{}", stderr(&o));
     assert!(!bad.exists(), "the output directory was touched");
 }
 

@@ -321,11 +321,15 @@ fn compile(compiler: &str, sources: &[(String, String)], units: &[&str], output:
     let mut cmd = Command::new(compiler);
     cmd.args(["-std=c99", "-O2", "-ffp-contract=off", "-shared", "-fPIC", "-fvisibility=hidden", "-o"]).arg(&out);
     cmd.args(units.iter().map(|u| dir.path().join(u))).current_dir(dir.path());
-    let result = cmd.output().map_err(|e| fail(format!("cannot run it ({e}); install a C compiler or name one")))?;
+    let result = cmd
+        .output()
+        .map_err(|e| ExportError::CompilerNotFound { compiler: compiler.to_string(), message: e.to_string() })?;
     if !result.status.success() {
         let stderr = String::from_utf8_lossy(&result.stderr);
         let first: Vec<&str> = stderr.lines().take(12).collect();
-        return Err(fail(format!("compiling the FMU failed ({}):\n{}", result.status, first.join("\n"))));
+        let said =
+            if first.is_empty() { "it printed nothing: is it a C compiler?".to_string() } else { first.join("\n") };
+        return Err(fail(format!("compiling the FMU failed ({}):\n{said}", result.status)));
     }
     std::fs::read(&out).map_err(|e| fail(format!("cannot read {} ({e})", Path::new(output).display())))
 }

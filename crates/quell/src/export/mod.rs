@@ -129,6 +129,10 @@ pub enum ExportError {
     FmiVersion { found: String },
     #[error("compiler {compiler:?}: {message}")]
     Compiler { compiler: String, message: String },
+    /// The compiler named cannot be started (not found, not executable): bad input, where
+    /// `Compiler` is a compiler that ran and failed.
+    #[error("compiler {compiler:?}: cannot run it ({message}); install a C compiler or name one (\"none\" writes the FMU with its sources only)")]
+    CompilerNotFound { compiler: String, message: String },
     #[error("writing the FMU archive failed: {message}")]
     Archive { message: String },
 }

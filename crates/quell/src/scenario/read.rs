@@ -285,6 +285,14 @@ pub(crate) fn syntax_message(text: &str, e: &toml::de::Error) -> String {
         Some(key) if message.starts_with("duplicate key") => {
             format!("line {line}, column {col}: duplicate key `{key}`: a key may be given once in a table, keep one")
         }
+        // An integer beyond i64 (the parser says "invalid type: integer `…` as i128").
+        Some(number) if message.contains("as i128") => {
+            let name = text[..span.start].rsplit('\n').next().and_then(|l| l.split('=').next()).map(str::trim);
+            let name = name.filter(|n| !n.is_empty()).map_or(String::new(), |n| format!(" ({n})"));
+            format!(
+                "line {line}, column {col}{name}: the integer {number} is beyond TOML's integers (±9223372036854775807); write it as a float, e.g. {number}.0"
+            )
+        }
         _ => format!("line {line}, column {col}: {message}"),
     }
 }
@@ -316,6 +324,17 @@ mod tests {
             "line 3, column 1: duplicate key `A`: a key may be given once in a table, keep one"
         );
         assert!(message("[plant]\n  mu = 1\n  mu = 2\n").starts_with("line 3, column 3: duplicate key `mu`: "));
+    }
+
+    #[test]
+    fn an_integer_beyond_i64_is_named_with_its_key_and_a_fix() {
+        // Was "invalid type: integer `99999999999999999999` as i128, expected any valid TOML value".
+        assert_eq!(
+            message("[simulation]\nt_end = 99999999999999999999\n"),
+            "line 2, column 9 (t_end): the integer 99999999999999999999 is beyond TOML's integers (±9223372036854775807); write it as a float, e.g. 99999999999999999999.0"
+        );
+        let fixed: toml::Table = "t_end = 99999999999999999999.0".parse().unwrap();
+        assert_eq!(fixed["t_end"].as_float(), Some(1e20));
     }
 
     #[test]
