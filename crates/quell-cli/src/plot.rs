@@ -195,12 +195,42 @@ fn write_png(path: &Path, rgb: &[u8], size: (u32, u32)) -> io::Result<()> {
     })
 }
 
-/// A grid axis's values as plot coordinates: the numbers themselves when every value is one,
-/// else their positions 0, 1, … (labelled by the values).
-fn axis_coords(values: &[String]) -> (Vec<f64>, bool) {
+/// How a sweep's grid axis is drawn.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum AxisScale {
+    /// The numbers themselves.
+    Linear,
+    /// log10 of the numbers: positive values spanning two decades or more (μ from 1 to 1000 piled
+    /// its low points at the left edge of a linear axis).
+    Log,
+    /// Positions 0, 1, … labelled by the values (vectors, matrices).
+    Positions,
+}
+
+/// A grid axis's values as plot coordinates and how they are drawn ([`AxisScale`]).
+fn axis_coords(values: &[String]) -> (Vec<f64>, AxisScale) {
     match values.iter().map(|v| v.parse::<f64>()).collect::<Result<Vec<f64>, _>>() {
-        Ok(x) if x.iter().all(|v| v.is_finite()) => (x, true),
-        _ => ((0..values.len()).map(|k| k as f64).collect(), false),
+        Ok(x)
+            if x.iter().all(|v| v.is_finite() && *v > 0.0)
+                && x.iter().fold(0.0f64, |m, v| m.max(*v)) >= 100.0 * x.iter().fold(f64::MAX, |m, v| m.min(*v)) =>
+        {
+            (x.iter().map(|v| v.log10()).collect(), AxisScale::Log)
+        }
+        Ok(x) if x.iter().all(|v| v.is_finite()) => (x, AxisScale::Linear),
+        _ => ((0..values.len()).map(|k| k as f64).collect(), AxisScale::Positions),
+    }
+}
+
+/// A decade's label on a log axis at log10 position `v` ("0.01", "1", "1000", "1e5"); none between.
+fn decade_label(v: f64) -> String {
+    if (v - v.round()).abs() > 1e-6 {
+        return String::new();
+    }
+    let k = v.round() as i32;
+    if (-3..=4).contains(&k) {
+        format!("{}", 10f64.powi(k))
+    } else {
+        format!("1e{k}")
     }
 }
 
@@ -256,22 +286,22 @@ fn figure_of<'a>(c: &'a quell::study::ChannelQuantiles, name: &str) -> &'a quell
 
 /// 1-D grid: rows = figures, columns = channels; the median with 25–75 % and 5–95 % bands.
 fn draw_sweep_1d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::study::Summary) -> Result<(), String> {
-    let (x, numeric) = axis_coords(&s.study.grid[0].values);
+    let (x, scale) = axis_coords(&s.study.grid[0].values);
     let areas = root.split_evenly((SWEEP_FIGURES.len(), s.study.m));
     for (f, &figure) in SWEEP_FIGURES.iter().enumerate() {
         for i in 0..s.study.m {
-            draw_sweep_panel(&areas[f * s.study.m + i], s, (&x, numeric), figure, i)?;
+            draw_sweep_panel(&areas[f * s.study.m + i], s, (&x, scale), figure, i)?;
         }
     }
     root.present().map_err(|e| e.to_string())
 }
 
-/// One panel of [`draw_sweep_1d`]: channel i's `figure` against the grid's values `x` (their
-/// positions; `numeric`: the values themselves).
+/// One panel of [`draw_sweep_1d`]: channel i's `figure` against the grid's values at `x`, drawn
+/// as `scale` says.
 fn draw_sweep_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     s: &quell::study::Summary,
-    (x, numeric): (&[f64], bool),
+    (x, scale): (&[f64], AxisScale),
     (label, name): (&str, &str),
     i: usize,
 ) -> Result<(), String> {
@@ -290,29 +320,38 @@ fn draw_sweep_panel<DB: DrawingBackend>(
     let mut chart = ChartBuilder::on(area)
         .caption(format!("Channel {}: {label}", i + 1), ("sans-serif", 18))
         .margin(8)
-        .margin_right(if numeric { 20 } else { 56 })
+        .margin_right(if scale == AxisScale::Positions { 56 } else { 28 })
         .x_label_area_size(36)
         .y_label_area_size(80)
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(|e| e.to_string())?;
     let values: Vec<String> = axis.values.iter().map(|v| short_value(v)).collect();
-    let fmt = move |v: &f64| {
-        if numeric {
-            // Tick values like 2.8000000000000003 read as 2.8.
-            let short = format!("{v:.6}");
-            short.trim_end_matches('0').trim_end_matches('.').to_string()
-        } else if (v - v.round()).abs() < 1e-6 {
-            // A value's label only at its own position, not at the ticks between.
+    let fmt = move |v: &f64| match scale {
+        // Tick values like 2.8000000000000003 read as 2.8.
+        AxisScale::Linear => format!("{v:.6}").trim_end_matches('0').trim_end_matches('.').to_string(),
+        AxisScale::Log => decade_label(*v),
+        // A value's label only at its own position, not at the ticks between.
+        AxisScale::Positions if (v - v.round()).abs() < 1e-6 => {
             values.get(v.round() as usize).cloned().unwrap_or_default()
-        } else {
-            String::new()
         }
+        AxisScale::Positions => String::new(),
     };
+    let mut x_desc = axis.key.clone();
+    if scale == AxisScale::Log {
+        x_desc += " (log scale)";
+    }
+    if s.study.draws > 1 {
+        x_desc += &format!("; line: median, bands: 25–75 % and 5–95 % of {} draws", s.study.draws);
+    }
     chart
         .configure_mesh()
         .max_light_lines(2)
-        .x_labels(if numeric { 6 } else { axis.values.len().min(12) })
-        .x_desc(axis.key.as_str())
+        .x_labels(match scale {
+            AxisScale::Linear => 6,
+            AxisScale::Log => 12,
+            AxisScale::Positions => axis.values.len().min(12),
+        })
+        .x_desc(x_desc)
         .y_desc(label)
         .y_labels(if empty { 0 } else { 10 })
         .x_label_formatter(&fmt)
@@ -508,12 +547,29 @@ fn draw_tune<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &quell::study:
         chart
             .configure_mesh()
             .x_desc(format!("μ{} (others at the scenario's)", c.channel + 1))
+            .y_desc(r.objective.name())
+            .y_label_formatter(&|v| tick_label(*v, lo - pad, hi + pad))
             .label_style(("sans-serif", 13))
             .draw()
             .map_err(|e| e.to_string())?;
         let color = Palette99::pick(c.channel).to_rgba();
         chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2))).map_err(|e| e.to_string())?;
         chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled()))).map_err(|e| e.to_string())?;
+        // Evaluations without an objective (not completed, beyond a limit, never settled): marked
+        // along the bottom rather than left out without a sign.
+        let none: Vec<f64> = c.curve.iter().filter(|p| p.objective.is_none()).map(|p| p.mu).collect();
+        if !none.is_empty() {
+            let y = lo - 0.6 * pad;
+            let grey = RGBColor(120, 120, 120);
+            chart
+                .draw_series(none.iter().map(|&mu| Cross::new((mu, y), 5, grey.stroke_width(2))))
+                .map_err(|e| e.to_string())?;
+            let note = format!("× {} without an objective: not completed, beyond a limit or never settled", none.len());
+            let font = ("sans-serif", 12).into_font().color(&grey);
+            chart
+                .draw_series(std::iter::once(Text::new(note, (m0, hi + 0.9 * pad), font)))
+                .map_err(|e| e.to_string())?;
+        }
         if let Some(best) = c.chosen.as_ref().and_then(|p| p.objective.map(|o| (p.mu, o))) {
             chart
                 .draw_series(std::iter::once(Circle::new(best, 7, BLACK.stroke_width(2))))
@@ -531,7 +587,20 @@ pub fn plot_tune(dir: &Path, r: &quell::study::TuneResult) -> io::Result<()> {
 
 #[cfg(test)]
 mod tests {
-    use super::{tick_label, widened};
+    use super::{axis_coords, decade_label, tick_label, widened, AxisScale};
+
+    #[test]
+    fn grids_over_two_decades_are_drawn_on_a_log_axis() {
+        let strings = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let (x, scale) = axis_coords(&strings(&["1.0", "10.0", "100.0", "1000.0"]));
+        assert_eq!((x, scale), (vec![0.0, 1.0, 2.0, 3.0], AxisScale::Log));
+        assert_eq!(axis_coords(&strings(&["2.0", "20.0", "200.0"])).1, AxisScale::Log);
+        assert_eq!(axis_coords(&strings(&["2.0", "20.0", "199.0"])).1, AxisScale::Linear);
+        assert_eq!(axis_coords(&strings(&["0.0", "10.0", "1000.0"])).1, AxisScale::Linear);
+        assert_eq!(axis_coords(&strings(&["[1.0, 2.0]", "[3.0, 4.0]"])).1, AxisScale::Positions);
+        let labels: Vec<String> = [-4.0, -2.0, 0.0, 0.5, 3.0, 7.0].iter().map(|&v| decade_label(v)).collect();
+        assert_eq!(labels, ["1e-4", "0.01", "1", "", "1000", "1e7"]);
+    }
 
     #[test]
     fn sweep_axes_do_not_magnify_differences_below_a_thousandth() {
