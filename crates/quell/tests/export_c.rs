@@ -605,10 +605,14 @@ int main(void)
     y[1] = 0;
     int failed = 0;
     for (int k = 0; k < 6000; k++) {{
+        const {R} kept[QUELL_M] = {{ua[0], ua[1]}};
         int r = quell_step(&a, y, g, ua);
         if (r == 0 && failed)
             return 7;
         failed |= r == 2;
+        /* A state no longer finite leaves u_f as it was (it wrote NaN into it). */
+        if (r == 2 && (ua[0] != kept[0] || ua[1] != kept[1]))
+            return 10;
         for (int i = 0; i < QUELL_M; i++)
             if (r == 0 && !(ua[i] - ua[i] == 0)) /* NaN or infinite */
                 return 8;

@@ -421,7 +421,7 @@ void {p}_init({p}_state *s);
  * until the next sample, and returns 0; u_f may be the array y or g (both are read first). An
  * entry of y or g that is NaN or beyond +-{P}_INPUT_BOUND (a sensor fault) is refused: it returns 1 and leaves the state and u_f untouched; hold the
  * previous input. It returns 2 when u_f or u is no longer finite (inputs the design cannot follow
- * overflowed the state), and keeps returning 2: hold a safe input and call {p}_init
+ * overflowed the state), leaving u_f untouched, and keeps returning 2: hold a safe input and call {p}_init
  * (docs/deployment.md). Needs IEEE arithmetic (no -ffast-math). */
 int {p}_step({p}_state *s, const {R} y[{P}_M], const {R} g[{P}_M], {R} u_f[{P}_M]);
 /* The adaptive command u(k) (25) of the last step, undelayed. */
@@ -527,6 +527,7 @@ int {p}_step({p}_state *s, const {R} y[{P}_M], const {R} g[{P}_M], {R} u_f[{P}_M
 {
     {R} *now = s->line[s->head];
     {R} zv[{P}_NZ + 3 * {P}_M]; /* [z(k); y(k); g(k); u_d(k)], u_d(k) = [u_1(k - d_1), ...] */
+    {R} out[{P}_M];                /* u_f(k), copied to u_f once known to be finite */
     {R} *u_d = zv + {P}_NZ + 2 * {P}_M;
 
     /* Refuse a NaN or a spike beyond the bound before anything changes (false for NaN). */
@@ -554,7 +555,7 @@ int {p}_step({p}_state *s, const {R} y[{P}_M], const {R} g[{P}_M], {R} u_f[{P}_M
 {calls}
     /* Plant input (5): u_f = -K x_hat + F u_d, x_hat = the last n core states. */
     for (unsigned i = 0; i < {P}_M; i++)
-        u_f[i] = {p}_dot({p}_F[i], u_d, {P}_M, {p}_dot({p}_K_neg[i], s->z + {P}_Q, {P}_N, 0));
+        out[i] = {p}_dot({p}_F[i], u_d, {P}_M, {p}_dot({p}_K_neg[i], s->z + {P}_Q, {P}_N, 0));
     /* Core at ZOH: z(k + 1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
     for (unsigned i = 0; i < {P}_NZ; i++)
         zv[i] = s->z[i];
@@ -563,8 +564,10 @@ int {p}_step({p}_state *s, const {R} y[{P}_M], const {R} g[{P}_M], {R} u_f[{P}_M
     s->head = s->head == {P}_DELAY_MAX ? 0 : s->head + 1;
     /* x - x is 0 unless x is infinite or NaN. */
     for (unsigned i = 0; i < {P}_M; i++)
-        if (!(u_f[i] - u_f[i] == 0 && s->u[i] - s->u[i] == 0))
+        if (!(out[i] - out[i] == 0 && s->u[i] - s->u[i] == 0))
             return 2;
+    for (unsigned i = 0; i < {P}_M; i++)
+        u_f[i] = out[i];
     return 0;
 }
 
