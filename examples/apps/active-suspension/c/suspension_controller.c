@@ -2,7 +2,7 @@
 #include "suspension_controller.h"
 
 /* A header from another export fails here (size -1): regenerate both files together. */
-typedef char suspension_header_matches_source[SUSPENSION_LAYOUT_ID == 0xb116287a0a9d2d5fu ? 1 : -1];
+typedef char suspension_header_matches_source[SUSPENSION_LAYOUT_ID == 0x11697cf8203e742fu ? 1 : -1];
 
 /* Core (observers (6), (14), (20) with (5) substituted) at ZOH: z(k+1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
 static const double suspension_PhiGamma_z[SUSPENSION_NZ][SUSPENSION_NZ + 3 * SUSPENSION_M] = {
@@ -133,12 +133,18 @@ int suspension_step(suspension_state *s, const double y[SUSPENSION_M], const dou
 {
     double *now = s->line[s->head];
     double zv[SUSPENSION_NZ + 3 * SUSPENSION_M]; /* [z(k); y(k); g(k); u_d(k)], u_d(k) = [u_1(k - d_1), ...] */
+    double out[SUSPENSION_M];                /* u_f(k), copied to u_f once known to be finite */
     double *u_d = zv + SUSPENSION_NZ + 2 * SUSPENSION_M;
 
     /* Refuse a NaN or a spike beyond the bound before anything changes (false for NaN). */
     for (unsigned i = 0; i < SUSPENSION_M; i++)
         if (!(y[i] >= -SUSPENSION_INPUT_BOUND && y[i] <= SUSPENSION_INPUT_BOUND && g[i] >= -SUSPENSION_INPUT_BOUND && g[i] <= SUSPENSION_INPUT_BOUND))
             return 1;
+    /* y(k) and g(k) into [z; y; g; u_d] before u_f is written: u_f may be the array y or g. */
+    for (unsigned i = 0; i < SUSPENSION_M; i++) {
+        zv[SUSPENSION_NZ + i] = y[i];
+        zv[SUSPENSION_NZ + SUSPENSION_M + i] = g[i];
+    }
 
     /* Control law (25) with eta_i(k): u_i(k) = -eta_i^T xi_hat(k), xi_hat = the first q core states;
      * the delay line records [u(k), xi_hat^T(k)]. */
@@ -155,21 +161,19 @@ int suspension_step(suspension_state *s, const double y[SUSPENSION_M], const dou
     u_d[0] = suspension_channel(s, 0u, 2u, suspension_Phi_1, suspension_gamma_1, 0u, y[0] - g[0]);
     /* Plant input (5): u_f = -K x_hat + F u_d, x_hat = the last n core states. */
     for (unsigned i = 0; i < SUSPENSION_M; i++)
-        u_f[i] = suspension_dot(suspension_F[i], u_d, SUSPENSION_M, suspension_dot(suspension_K_neg[i], s->z + SUSPENSION_Q, SUSPENSION_N, 0));
+        out[i] = suspension_dot(suspension_F[i], u_d, SUSPENSION_M, suspension_dot(suspension_K_neg[i], s->z + SUSPENSION_Q, SUSPENSION_N, 0));
     /* Core at ZOH: z(k + 1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
     for (unsigned i = 0; i < SUSPENSION_NZ; i++)
         zv[i] = s->z[i];
-    for (unsigned i = 0; i < SUSPENSION_M; i++) {
-        zv[SUSPENSION_NZ + i] = y[i];
-        zv[SUSPENSION_NZ + SUSPENSION_M + i] = g[i];
-    }
     for (unsigned i = 0; i < SUSPENSION_NZ; i++)
         s->z[i] = suspension_dot(suspension_PhiGamma_z[i], zv, SUSPENSION_NZ + 3 * SUSPENSION_M, 0);
     s->head = s->head == SUSPENSION_DELAY_MAX ? 0 : s->head + 1;
     /* x - x is 0 unless x is infinite or NaN. */
     for (unsigned i = 0; i < SUSPENSION_M; i++)
-        if (!(u_f[i] - u_f[i] == 0 && s->u[i] - s->u[i] == 0))
+        if (!(out[i] - out[i] == 0 && s->u[i] - s->u[i] == 0))
             return 2;
+    for (unsigned i = 0; i < SUSPENSION_M; i++)
+        u_f[i] = out[i];
     return 0;
 }
 

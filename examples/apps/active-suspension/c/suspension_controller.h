@@ -5,9 +5,10 @@
  * change, regenerate with
  *     quell export SCENARIO --sample-time 0.001 --prefix suspension --precision f64
  *
- * Sample time T_s = 0.001 s: call suspension_step once per sample (docs/deployment.md).
+ * Sample time T_s = 0.001 (in the plant model's unit of time): call suspension_step once per sample
+ * (docs/deployment.md).
  * Plant: n = 4 states, m = 1 channels; regressor q = 3 (q_g = 1, q_w = 2).
- * Input delays: channel 1: 0.005 s = 5 samples.
+ * Input delays: channel 1: tau = 0.005 = 5 samples.
  * Eigenvalues of the design (continuous time):
  *   observer A - L C:  -150.000000, -125.000000, -100.000000, -80.000000
  *   decoupled A - B K: -23.468750-31.807511i, -23.468750+31.807511i, -9.000000, -6.000000
@@ -27,7 +28,7 @@ extern "C" {
 #define SUSPENSION_N           4            /* plant states */
 #define SUSPENSION_M           1            /* channels: outputs y, references g, inputs u_f */
 #define SUSPENSION_Q           3            /* regressor xi_hat = [xi_g; xi_w] and each eta_i */
-#define SUSPENSION_SAMPLE_TIME 0.001        /* T_s in seconds */
+#define SUSPENSION_SAMPLE_TIME 0.001        /* T_s, in the plant model's unit of time (that of its A and delays) */
 #define SUSPENSION_NZ          7            /* state sizes: core [xi_g; xi_w; x_hat] */
 #define SUSPENSION_SIGMA_SUM   2            /* filter-bank rows, sigma_1 + ... + sigma_m */
 #define SUSPENSION_SIGMA_MAX   2            /* largest relative degree */
@@ -49,10 +50,10 @@ typedef struct {
 /* The Controller's zero state (also to restart it). */
 void suspension_init(suspension_state *s);
 /* One sample: reads y(k) and g(k), writes the plant input u_f(k) = -K x_hat + F u_d (5), to hold
- * until the next sample, and returns 0. An entry of y or g that is NaN or beyond +-SUSPENSION_INPUT_BOUND
- * (a sensor fault) is refused: it returns 1 and leaves the state and u_f untouched; hold the
+ * until the next sample, and returns 0; u_f may be the array y or g (both are read first). An
+ * entry of y or g that is NaN or beyond +-SUSPENSION_INPUT_BOUND (a sensor fault) is refused: it returns 1 and leaves the state and u_f untouched; hold the
  * previous input. It returns 2 when u_f or u is no longer finite (inputs the design cannot follow
- * overflowed the state), and keeps returning 2: hold a safe input and call suspension_init
+ * overflowed the state), leaving u_f untouched, and keeps returning 2: hold a safe input and call suspension_init
  * (docs/deployment.md). Needs IEEE arithmetic (no -ffast-math). */
 int suspension_step(suspension_state *s, const double y[SUSPENSION_M], const double g[SUSPENSION_M], double u_f[SUSPENSION_M]);
 /* The adaptive command u(k) (25) of the last step, undelayed. */
@@ -63,6 +64,6 @@ void suspension_command(const suspension_state *s, double u[SUSPENSION_M]);
 #endif
 
 /* Identifies this header's source: suspension_controller.c compiles only with it. */
-#define SUSPENSION_LAYOUT_ID 0xb116287a0a9d2d5fu
+#define SUSPENSION_LAYOUT_ID 0x11697cf8203e742fu
 
 #endif /* SUSPENSION_CONTROLLER_H */

@@ -2,7 +2,7 @@
 #include "motor_controller.h"
 
 /* A header from another export fails here (size -1): regenerate both files together. */
-typedef char motor_header_matches_source[MOTOR_LAYOUT_ID == 0xdb2d449a1147c88au ? 1 : -1];
+typedef char motor_header_matches_source[MOTOR_LAYOUT_ID == 0x0edb45e904e9ac2eu ? 1 : -1];
 
 /* Core (observers (6), (14), (20) with (5) substituted) at ZOH: z(k+1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
 static const double motor_PhiGamma_z[MOTOR_NZ][MOTOR_NZ + 3 * MOTOR_M] = {
@@ -134,12 +134,18 @@ int motor_step(motor_state *s, const double y[MOTOR_M], const double g[MOTOR_M],
 {
     double *now = s->line[s->head];
     double zv[MOTOR_NZ + 3 * MOTOR_M]; /* [z(k); y(k); g(k); u_d(k)], u_d(k) = [u_1(k - d_1), ...] */
+    double out[MOTOR_M];                /* u_f(k), copied to u_f once known to be finite */
     double *u_d = zv + MOTOR_NZ + 2 * MOTOR_M;
 
     /* Refuse a NaN or a spike beyond the bound before anything changes (false for NaN). */
     for (unsigned i = 0; i < MOTOR_M; i++)
         if (!(y[i] >= -MOTOR_INPUT_BOUND && y[i] <= MOTOR_INPUT_BOUND && g[i] >= -MOTOR_INPUT_BOUND && g[i] <= MOTOR_INPUT_BOUND))
             return 1;
+    /* y(k) and g(k) into [z; y; g; u_d] before u_f is written: u_f may be the array y or g. */
+    for (unsigned i = 0; i < MOTOR_M; i++) {
+        zv[MOTOR_NZ + i] = y[i];
+        zv[MOTOR_NZ + MOTOR_M + i] = g[i];
+    }
 
     /* Control law (25) with eta_i(k): u_i(k) = -eta_i^T xi_hat(k), xi_hat = the first q core states;
      * the delay line records [u(k), xi_hat^T(k)]. */
@@ -156,21 +162,19 @@ int motor_step(motor_state *s, const double y[MOTOR_M], const double g[MOTOR_M],
     u_d[0] = motor_channel(s, 0u, 3u, motor_Phi_1, motor_gamma_1, 0u, y[0] - g[0]);
     /* Plant input (5): u_f = -K x_hat + F u_d, x_hat = the last n core states. */
     for (unsigned i = 0; i < MOTOR_M; i++)
-        u_f[i] = motor_dot(motor_F[i], u_d, MOTOR_M, motor_dot(motor_K_neg[i], s->z + MOTOR_Q, MOTOR_N, 0));
+        out[i] = motor_dot(motor_F[i], u_d, MOTOR_M, motor_dot(motor_K_neg[i], s->z + MOTOR_Q, MOTOR_N, 0));
     /* Core at ZOH: z(k + 1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
     for (unsigned i = 0; i < MOTOR_NZ; i++)
         zv[i] = s->z[i];
-    for (unsigned i = 0; i < MOTOR_M; i++) {
-        zv[MOTOR_NZ + i] = y[i];
-        zv[MOTOR_NZ + MOTOR_M + i] = g[i];
-    }
     for (unsigned i = 0; i < MOTOR_NZ; i++)
         s->z[i] = motor_dot(motor_PhiGamma_z[i], zv, MOTOR_NZ + 3 * MOTOR_M, 0);
     s->head = s->head == MOTOR_DELAY_MAX ? 0 : s->head + 1;
     /* x - x is 0 unless x is infinite or NaN. */
     for (unsigned i = 0; i < MOTOR_M; i++)
-        if (!(u_f[i] - u_f[i] == 0 && s->u[i] - s->u[i] == 0))
+        if (!(out[i] - out[i] == 0 && s->u[i] - s->u[i] == 0))
             return 2;
+    for (unsigned i = 0; i < MOTOR_M; i++)
+        u_f[i] = out[i];
     return 0;
 }
 

@@ -5,9 +5,10 @@
  * change, regenerate with
  *     quell export SCENARIO --sample-time 0.001 --prefix motor --precision f64
  *
- * Sample time T_s = 0.001 s: call motor_step once per sample (docs/deployment.md).
+ * Sample time T_s = 0.001 (in the plant model's unit of time): call motor_step once per sample
+ * (docs/deployment.md).
  * Plant: n = 3 states, m = 1 channels; regressor q = 5 (q_g = 2, q_w = 3).
- * Input delays: channel 1: 0.001 s = 1 samples.
+ * Input delays: channel 1: tau = 0.001 = 1 samples.
  * Eigenvalues of the design (continuous time):
  *   observer A - L C:  -119.969991, -84.831594, -59.984995
  *   decoupled A - B K: -44.988746, -29.992498, -19.994998
@@ -27,7 +28,7 @@ extern "C" {
 #define MOTOR_N           3            /* plant states */
 #define MOTOR_M           1            /* channels: outputs y, references g, inputs u_f */
 #define MOTOR_Q           5            /* regressor xi_hat = [xi_g; xi_w] and each eta_i */
-#define MOTOR_SAMPLE_TIME 0.001        /* T_s in seconds */
+#define MOTOR_SAMPLE_TIME 0.001        /* T_s, in the plant model's unit of time (that of its A and delays) */
 #define MOTOR_NZ          8            /* state sizes: core [xi_g; xi_w; x_hat] */
 #define MOTOR_SIGMA_SUM   3            /* filter-bank rows, sigma_1 + ... + sigma_m */
 #define MOTOR_SIGMA_MAX   3            /* largest relative degree */
@@ -49,10 +50,10 @@ typedef struct {
 /* The Controller's zero state (also to restart it). */
 void motor_init(motor_state *s);
 /* One sample: reads y(k) and g(k), writes the plant input u_f(k) = -K x_hat + F u_d (5), to hold
- * until the next sample, and returns 0. An entry of y or g that is NaN or beyond +-MOTOR_INPUT_BOUND
- * (a sensor fault) is refused: it returns 1 and leaves the state and u_f untouched; hold the
+ * until the next sample, and returns 0; u_f may be the array y or g (both are read first). An
+ * entry of y or g that is NaN or beyond +-MOTOR_INPUT_BOUND (a sensor fault) is refused: it returns 1 and leaves the state and u_f untouched; hold the
  * previous input. It returns 2 when u_f or u is no longer finite (inputs the design cannot follow
- * overflowed the state), and keeps returning 2: hold a safe input and call motor_init
+ * overflowed the state), leaving u_f untouched, and keeps returning 2: hold a safe input and call motor_init
  * (docs/deployment.md). Needs IEEE arithmetic (no -ffast-math). */
 int motor_step(motor_state *s, const double y[MOTOR_M], const double g[MOTOR_M], double u_f[MOTOR_M]);
 /* The adaptive command u(k) (25) of the last step, undelayed. */
@@ -63,6 +64,6 @@ void motor_command(const motor_state *s, double u[MOTOR_M]);
 #endif
 
 /* Identifies this header's source: motor_controller.c compiles only with it. */
-#define MOTOR_LAYOUT_ID 0xdb2d449a1147c88au
+#define MOTOR_LAYOUT_ID 0x0edb45e904e9ac2eu
 
 #endif /* MOTOR_CONTROLLER_H */

@@ -2,7 +2,7 @@
 #include "supply_controller.h"
 
 /* A header from another export fails here (size -1): regenerate both files together. */
-typedef char supply_header_matches_source[SUPPLY_LAYOUT_ID == 0x87cce1ed59442cc8u ? 1 : -1];
+typedef char supply_header_matches_source[SUPPLY_LAYOUT_ID == 0x59223170088ad82eu ? 1 : -1];
 
 /* Core (observers (6), (14), (20) with (5) substituted) at ZOH: z(k+1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
 static const double supply_PhiGamma_z[SUPPLY_NZ][SUPPLY_NZ + 3 * SUPPLY_M] = {
@@ -158,12 +158,18 @@ int supply_step(supply_state *s, const double y[SUPPLY_M], const double g[SUPPLY
 {
     double *now = s->line[s->head];
     double zv[SUPPLY_NZ + 3 * SUPPLY_M]; /* [z(k); y(k); g(k); u_d(k)], u_d(k) = [u_1(k - d_1), ...] */
+    double out[SUPPLY_M];                /* u_f(k), copied to u_f once known to be finite */
     double *u_d = zv + SUPPLY_NZ + 2 * SUPPLY_M;
 
     /* Refuse a NaN or a spike beyond the bound before anything changes (false for NaN). */
     for (unsigned i = 0; i < SUPPLY_M; i++)
         if (!(y[i] >= -SUPPLY_INPUT_BOUND && y[i] <= SUPPLY_INPUT_BOUND && g[i] >= -SUPPLY_INPUT_BOUND && g[i] <= SUPPLY_INPUT_BOUND))
             return 1;
+    /* y(k) and g(k) into [z; y; g; u_d] before u_f is written: u_f may be the array y or g. */
+    for (unsigned i = 0; i < SUPPLY_M; i++) {
+        zv[SUPPLY_NZ + i] = y[i];
+        zv[SUPPLY_NZ + SUPPLY_M + i] = g[i];
+    }
 
     /* Control law (25) with eta_i(k): u_i(k) = -eta_i^T xi_hat(k), xi_hat = the first q core states;
      * the delay line records [u(k), xi_hat^T(k)]. */
@@ -182,21 +188,19 @@ int supply_step(supply_state *s, const double y[SUPPLY_M], const double g[SUPPLY
     u_d[2] = supply_channel(s, 2u, 2u, supply_Phi_3, supply_gamma_3, 4u, y[2] - g[2]);
     /* Plant input (5): u_f = -K x_hat + F u_d, x_hat = the last n core states. */
     for (unsigned i = 0; i < SUPPLY_M; i++)
-        u_f[i] = supply_dot(supply_F[i], u_d, SUPPLY_M, supply_dot(supply_K_neg[i], s->z + SUPPLY_Q, SUPPLY_N, 0));
+        out[i] = supply_dot(supply_F[i], u_d, SUPPLY_M, supply_dot(supply_K_neg[i], s->z + SUPPLY_Q, SUPPLY_N, 0));
     /* Core at ZOH: z(k + 1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
     for (unsigned i = 0; i < SUPPLY_NZ; i++)
         zv[i] = s->z[i];
-    for (unsigned i = 0; i < SUPPLY_M; i++) {
-        zv[SUPPLY_NZ + i] = y[i];
-        zv[SUPPLY_NZ + SUPPLY_M + i] = g[i];
-    }
     for (unsigned i = 0; i < SUPPLY_NZ; i++)
         s->z[i] = supply_dot(supply_PhiGamma_z[i], zv, SUPPLY_NZ + 3 * SUPPLY_M, 0);
     s->head = s->head == SUPPLY_DELAY_MAX ? 0 : s->head + 1;
     /* x - x is 0 unless x is infinite or NaN. */
     for (unsigned i = 0; i < SUPPLY_M; i++)
-        if (!(u_f[i] - u_f[i] == 0 && s->u[i] - s->u[i] == 0))
+        if (!(out[i] - out[i] == 0 && s->u[i] - s->u[i] == 0))
             return 2;
+    for (unsigned i = 0; i < SUPPLY_M; i++)
+        u_f[i] = out[i];
     return 0;
 }
 

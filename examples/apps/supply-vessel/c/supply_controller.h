@@ -5,9 +5,10 @@
  * change, regenerate with
  *     quell export SCENARIO --sample-time 0.1 --prefix supply --precision f64
  *
- * Sample time T_s = 0.1 s: call supply_step once per sample (docs/deployment.md).
+ * Sample time T_s = 0.1 (in the plant model's unit of time): call supply_step once per sample
+ * (docs/deployment.md).
  * Plant: n = 6 states, m = 3 channels; regressor q = 12 (q_g = 3, q_w = 9).
- * Input delays: channel 1: 1 s = 10 samples; channel 2: 1 s = 10 samples; channel 3: 1 s = 10 samples.
+ * Input delays: channel 1: tau = 1 = 10 samples; channel 2: tau = 1 = 10 samples; channel 3: tau = 1 = 10 samples.
  * Eigenvalues of the design (continuous time):
  *   observer A - L C:  -0.650000, -0.600000, -0.550000, -0.500000, -0.450000, -0.400000
  *   decoupled A - B K: -0.120000-5.835482e-16i, -0.120000+5.835482e-16i, -0.120000, -0.100000, -0.100000-4.761113e-16i, -0.100000+4.761113e-16i
@@ -27,7 +28,7 @@ extern "C" {
 #define SUPPLY_N           6            /* plant states */
 #define SUPPLY_M           3            /* channels: outputs y, references g, inputs u_f */
 #define SUPPLY_Q           12           /* regressor xi_hat = [xi_g; xi_w] and each eta_i */
-#define SUPPLY_SAMPLE_TIME 0.1          /* T_s in seconds */
+#define SUPPLY_SAMPLE_TIME 0.1          /* T_s, in the plant model's unit of time (that of its A and delays) */
 #define SUPPLY_NZ          18           /* state sizes: core [xi_g; xi_w; x_hat] */
 #define SUPPLY_SIGMA_SUM   6            /* filter-bank rows, sigma_1 + ... + sigma_m */
 #define SUPPLY_SIGMA_MAX   2            /* largest relative degree */
@@ -49,10 +50,10 @@ typedef struct {
 /* The Controller's zero state (also to restart it). */
 void supply_init(supply_state *s);
 /* One sample: reads y(k) and g(k), writes the plant input u_f(k) = -K x_hat + F u_d (5), to hold
- * until the next sample, and returns 0. An entry of y or g that is NaN or beyond +-SUPPLY_INPUT_BOUND
- * (a sensor fault) is refused: it returns 1 and leaves the state and u_f untouched; hold the
+ * until the next sample, and returns 0; u_f may be the array y or g (both are read first). An
+ * entry of y or g that is NaN or beyond +-SUPPLY_INPUT_BOUND (a sensor fault) is refused: it returns 1 and leaves the state and u_f untouched; hold the
  * previous input. It returns 2 when u_f or u is no longer finite (inputs the design cannot follow
- * overflowed the state), and keeps returning 2: hold a safe input and call supply_init
+ * overflowed the state), leaving u_f untouched, and keeps returning 2: hold a safe input and call supply_init
  * (docs/deployment.md). Needs IEEE arithmetic (no -ffast-math). */
 int supply_step(supply_state *s, const double y[SUPPLY_M], const double g[SUPPLY_M], double u_f[SUPPLY_M]);
 /* The adaptive command u(k) (25) of the last step, undelayed. */
@@ -63,6 +64,6 @@ void supply_command(const supply_state *s, double u[SUPPLY_M]);
 #endif
 
 /* Identifies this header's source: supply_controller.c compiles only with it. */
-#define SUPPLY_LAYOUT_ID 0x87cce1ed59442cc8u
+#define SUPPLY_LAYOUT_ID 0x59223170088ad82eu
 
 #endif /* SUPPLY_CONTROLLER_H */
