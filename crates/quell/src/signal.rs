@@ -99,7 +99,11 @@ impl Signal {
         if self.len() != expected {
             return Err(KeyError::new(
                 format!("{key}.components"),
-                format!("expected {expected} components ({per}), found {}", self.len()),
+                format!(
+                    "expected {expected} component{} ({per}), found {}",
+                    if expected == 1 { "" } else { "s" },
+                    self.len()
+                ),
             ));
         }
         let finite = |field: String, v: f64| match v.is_finite() {

@@ -314,7 +314,7 @@ fn error_wrong_channel_pole_count_names_sigma() {
     spec.channel_poles[1] = vec![re(-4.0), re(-5.0)];
     let e = expect_err(&paper_plant(), &spec);
     assert_eq!(e, DesignError::ChannelPoleCount { channel: 1, sigma: 1, got: 2 });
-    assert_eq!(e.to_string(), "design.channel_poles[1]: channel 2 has relative degree 1, so it needs 1 pole; got 2");
+    assert_eq!(e.to_string(), "design.channel_poles[1]: channel 2 has relative degree 1, so it needs 1 pole; found 2");
 }
 
 #[test]

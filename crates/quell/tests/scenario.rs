@@ -666,7 +666,7 @@ fn channel_pole_list_count() {
     check(
         &with(&[(CHANNEL, "channel_poles = [[-6.0, -2.0]]")]),
         "design.channel_poles",
-        "expected 2 entries (one per output), got 1",
+        "expected 2 entries (one per output), found 1",
     );
 }
 
@@ -686,12 +686,12 @@ fn disturbance_filter_list_count() {
 
 #[test]
 fn mu_count() {
-    check(&with(&[(MU, "mu = [20.0]")]), "design.mu", "expected 2 entries (one per channel), got 1");
+    check(&with(&[(MU, "mu = [20.0]")]), "design.mu", "expected 2 entries (one per channel), found 1");
 }
 
 #[test]
 fn negative_mu() {
-    check(&with(&[(MU, "mu = [20.0, -1.0]")]), "design.mu[1]", "expected a finite adaptation gain ≥ 0, got -1");
+    check(&with(&[(MU, "mu = [20.0, -1.0]")]), "design.mu[1]", "expected a finite adaptation gain ≥ 0, found -1");
 }
 
 #[test]
@@ -751,7 +751,7 @@ fn channel_pole_count_vs_relative_degree() {
     check(
         &with(&[(CHANNEL, "channel_poles = [[-6.0], [-4.0]]")]),
         "design.channel_poles[0]",
-        "channel 1 has relative degree 2, so it needs 2 poles; got 1",
+        "channel 1 has relative degree 2, so it needs 2 poles; found 1",
     );
 }
 
@@ -769,7 +769,7 @@ fn relative_degrees_count() {
     check(
         &with(&[(BETA, "beta = 1.0\nrelative_degrees = [2]\n")]),
         "design.relative_degrees",
-        "expected 2 entries (one per output), got 1",
+        "expected 2 entries (one per output), found 1",
     );
 }
 
@@ -908,7 +908,7 @@ fn observer_pole_count() {
     check(
         &with(&[(L_LINE, "observer_poles = [-2.0, -3.0]")]),
         "design.observer_poles",
-        "expected 3 poles (one per state), got 2",
+        "expected 3 poles (one per state), found 2",
     );
 }
 

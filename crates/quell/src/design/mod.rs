@@ -154,7 +154,7 @@ pub enum DesignError {
     },
     #[error("plant.C: output {} is reached by no input: c_i A^(l-1) B = 0 for every l ≤ n (largest cosine between c_i A^(l-1) and a column of B: {largest:.1e}, below τ = {tol:.0e}), so the plant cannot be decoupled; check row {channel} of plant.C", .channel + 1, tol = TOL)]
     NoRelativeDegree { channel: usize, largest: f64 },
-    #[error("design.channel_poles[{channel}]: channel {} has relative degree {sigma}, so it needs {sigma} pole{}; got {got}", .channel + 1, if *.sigma == 1 { "" } else { "s" })]
+    #[error("design.channel_poles[{channel}]: channel {} has relative degree {sigma}, so it needs {sigma} pole{}; found {got}", .channel + 1, if *.sigma == 1 { "" } else { "s" })]
     ChannelPoleCount { channel: usize, sigma: usize, got: usize },
     #[error("plant: not decouplable (Proposition 1): B* is singular: with rows c_i A^(σ_i-1) and the columns of B scaled to unit norm its smallest singular value is {smallest:.3e}, below τ = {tol:.0e} (condition number {cond:.3e}); the outputs' leading responses to the inputs are (nearly) dependent", tol = TOL)]
     NotDecouplable { smallest: f64, cond: f64 },
@@ -168,7 +168,7 @@ pub enum DesignError {
     RelativeDegreeTooLow { channel: usize, given: usize, measure: f64 },
     #[error("design.relative_degrees: Σσ_i = {sum} exceeds n = {n}; for a decouplable plant the Σσ_i rows c_i A^j (j < σ_i) are independent, so Σσ_i ≤ n; give smaller relative degrees, or remove design.relative_degrees to let eq. (7) decide")]
     RelativeDegreeSum { sum: usize, n: usize },
-    #[error("{key}: expected {expected} entries (one per {per}), got {got}")]
+    #[error("{key}: expected {expected} entries (one per {per}), found {got}")]
     Count { key: &'static str, per: &'static str, expected: usize, got: usize },
     #[error("{key}: pole {} is not in the open left half-plane; {what} poles must be Hurwitz (real part < 0)", fmt_complex(.pole))]
     NotHurwitz { key: String, what: &'static str, pole: Complex<f64> },
@@ -178,9 +178,9 @@ pub enum DesignError {
     NoPoles { key: String },
     #[error("plant.A: n = {n} states; a design is limited to n ≤ {MAX_STATES} (quell::design::MAX_STATES): its eigen-decompositions and pole placement grow as n³ (seconds at n = {MAX_STATES}, minutes beyond 1000); reduce the model first (e.g. balanced truncation to the modes that matter)")]
     TooManyStates { n: usize },
-    #[error("design.mu[{index}]: expected a finite adaptation gain ≥ 0, got {value}")]
+    #[error("design.mu[{index}]: expected a finite adaptation gain ≥ 0, found {value}")]
     BadMu { index: usize, value: f64 },
-    #[error("design.beta: expected a finite β > 0 (H(s) = 1/(βs + 1)), got {value}")]
+    #[error("design.beta: expected a finite β > 0 (H(s) = 1/(βs + 1)), found {value}")]
     BadBeta { value: f64 },
     #[error("{key}: pole {} is out of the design's span of rates: given the other pole lists and 1/β, expected decay rate −Re p ≥ {} and magnitude ≤ {}; {SPAN_WHY}", fmt_complex(.pole), fmt_number(*.min_decay), fmt_number(*.max_magnitude))]
     PoleOutOfSpan { key: String, pole: Complex<f64>, min_decay: f64, max_magnitude: f64 },

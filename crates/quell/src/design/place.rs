@@ -62,7 +62,7 @@ pub enum PlaceError {
          need {n}; uncontrollable modes cannot be moved by feedback — check B or remove them"
     )]
     Uncontrollable { rank: usize, n: usize },
-    #[error("expected {expected} poles (one per state), got {found}; give exactly one pole per state")]
+    #[error("expected {expected} poles (one per state), found {found}; give exactly one pole per state")]
     WrongCount { expected: usize, found: usize },
     /// A pole requested more than rank(B) times (see [`place`]).
     #[error(
