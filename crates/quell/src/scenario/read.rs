@@ -287,7 +287,8 @@ pub(crate) fn syntax_message(text: &str, e: &toml::de::Error) -> String {
         }
         // An integer beyond i64 (the parser says "invalid type: integer `…` as i128").
         Some(number) if message.contains("as i128") => {
-            let name = text[..span.start].rsplit('\n').next().and_then(|l| l.split('=').next()).map(str::trim);
+            let before = text.get(..span.start).unwrap_or_default();
+            let name = before.rsplit('\n').next().and_then(|l| l.split('=').next()).map(str::trim);
             let name = name.filter(|n| !n.is_empty()).map_or(String::new(), |n| format!(" ({n})"));
             format!(
                 "line {line}, column {col}{name}: the integer {number} is beyond TOML's integers (±9223372036854775807); write it as a float, e.g. {number}.0"
