@@ -10,7 +10,7 @@ use crate::{load, output, Failure};
 pub struct ExportArgs {
     /// Scenario file (TOML).
     scenario: PathBuf,
-    /// Sample time T_s in seconds; every input delay must be a whole number of samples.
+    /// Sample time T_s, in the plant model's unit of time; every input delay must be a whole number of samples.
     /// Defaults to the scenario's simulation.sample_time.
     #[arg(long, value_name = "T_S", allow_hyphen_values = true)]
     sample_time: Option<f64>,
@@ -76,10 +76,11 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
         eprintln!("wrote {} in {} (FMI {} co-simulation, {binary})", fmu.file_name, out.display(), fmu.version.name());
     }
     eprintln!(
-        "wrote {} and {} in {} (T_s = {sample_time} s, {}; {} bytes of constants, {} bytes of state)",
+        "wrote {} and {} in {} (T_s = {sample_time} {}, {}; {} bytes of constants, {} bytes of state)",
         code.header_name,
         code.source_name,
         out.display(),
+        scenario.plant.time_unit,
         options.precision.c_type(),
         code.constant_bytes,
         code.state_bytes

@@ -144,7 +144,7 @@ fn design(args: &auto::DesignArgs) -> Result<(), Failure> {
     if args.json {
         print_json(&pace::with_pace(report::with_warnings(report::design_json(&d), &warnings), &d, &estimates));
     } else {
-        let pace = pace::pace_text(&d, &estimates, s.simulation.t_end);
+        let pace = pace::pace_text(&d, &estimates, s.simulation.t_end, s.plant.time_unit);
         print_stdout(&format!("{}{pace}{}", report::design_text(&d), report::warnings_text(&warnings)));
     }
     Ok(())

@@ -4,6 +4,7 @@
 use std::fmt::Write;
 
 use quell::diagnostics::{estimate, RateEstimate};
+use quell::TimeUnit;
 use quell::{Design, Scenario};
 use serde_json::{json, Value};
 
@@ -24,10 +25,10 @@ pub fn with_pace(mut design: Value, d: &Design, estimates: &[RateEstimate]) -> V
 }
 
 /// The pace as lines of text.
-pub fn pace_text(d: &Design, estimates: &[RateEstimate], t_end: f64) -> String {
+pub fn pace_text(d: &Design, estimates: &[RateEstimate], t_end: f64, time: TimeUnit) -> String {
     let scaling = d.regressor_scaling();
     let mut s = format!(
-        "\nadaptation (averaged over g and ω, before the run; t_end = {t_end} s):\n  regressor_scaling = \"{scaling}\": {}\n",
+        "\nadaptation (averaged over g and ω, before the run; t_end = {t_end} {time}):\n  regressor_scaling = \"{scaling}\": {}\n",
         scaling.mu_meaning()
     );
     for e in estimates {
@@ -39,7 +40,7 @@ pub fn pace_text(d: &Design, estimates: &[RateEstimate], t_end: f64) -> String {
         };
         let _ = writeln!(
             s,
-            "  channel {}: μ λ_max(Ω̄) = {:.3e}/s ({:.2e}× ρ = {:.3e}/s), λ_max = {:.3e}, λ_min = {:.3e} (excited rank {} of {}), convergence 1/(μ λ_min) ≈ {}{flag}",
+            "  channel {}: μ λ_max(Ω̄) = {:.3e}/{time} ({:.2e}× ρ = {:.3e}/{time}), λ_max = {:.3e}, λ_min = {:.3e} (excited rank {} of {}), convergence 1/(μ λ_min) ≈ {}{flag}",
             e.channel,
             e.adaptation_rate,
             e.adaptation_rate / e.loop_rate,
@@ -48,7 +49,7 @@ pub fn pace_text(d: &Design, estimates: &[RateEstimate], t_end: f64) -> String {
             e.lambda_min_excited_omega,
             e.excited_rank,
             d.q(),
-            if e.convergence_time.is_finite() { format!("{:.3e} s", e.convergence_time) } else { "∞".into() },
+            if e.convergence_time.is_finite() { format!("{:.3e} {time}", e.convergence_time) } else { "∞".into() },
         );
         for a in &e.advice {
             let _ = writeln!(s, "    → {a}");

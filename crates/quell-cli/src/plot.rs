@@ -8,6 +8,7 @@ use std::sync::Once;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use quell::sim::SimResult;
+use quell::TimeUnit;
 
 use crate::output::write_atomic;
 
@@ -79,11 +80,12 @@ fn tick_label(v: f64, lo: f64, hi: f64) -> String {
     }
 }
 
+/// One panel of a run's figure: `series` against t (in `time`, the plant's unit of time).
 fn panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
-    title: &str,
-    ylabel: &str,
+    (title, ylabel): (&str, &str),
     series: &[Series],
+    time: TimeUnit,
 ) -> Result<(), String> {
     let (t0, t1) = series
         .iter()
@@ -104,7 +106,7 @@ fn panel<DB: DrawingBackend>(
     chart
         .configure_mesh()
         .max_light_lines(2)
-        .x_desc("t, s")
+        .x_desc(format!("t, {time}"))
         .y_desc(ylabel)
         .x_label_formatter(&|v| tick_label(*v, t0, t1))
         .y_label_formatter(&|v| tick_label(*v, y0, y1))
@@ -141,25 +143,30 @@ fn panel<DB: DrawingBackend>(
 const MAX_LEGEND: usize = 14;
 
 /// Draws channel i's figure (on a white background, see [`write_figure`]).
-fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &SimResult, i: usize) -> Result<(), String> {
+fn draw<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    r: &SimResult,
+    i: usize,
+    time: TimeUnit,
+) -> Result<(), String> {
     let col = |sig: &[f64]| r.t.iter().copied().zip(r.column(sig, r.m, i)).collect::<Vec<_>>();
     let c = i + 1;
     let areas = root.split_evenly((5, 1));
     panel(
         &areas[0],
-        &format!("Channel {c}: output and reference"),
-        "y, g",
+        (&format!("Channel {c}: output and reference"), "y, g"),
         &[(format!("g{c} (reference)"), col(&r.g)), (format!("y{c}"), col(&r.y))],
+        time,
     )?;
-    panel(&areas[1], &format!("Channel {c}: tracking error"), "e = y − g", &[(format!("e{c}"), col(&r.e))])?;
-    panel(&areas[2], &format!("Channel {c}: adaptive command (25)"), "u", &[(format!("u{c}"), col(&r.u))])?;
+    panel(&areas[1], (&format!("Channel {c}: tracking error"), "e = y − g"), &[(format!("e{c}"), col(&r.e))], time)?;
+    panel(&areas[2], (&format!("Channel {c}: adaptive command (25)"), "u"), &[(format!("u{c}"), col(&r.u))], time)?;
     // The plant input u_f (5), what the actuator must deliver, in its own panel: in a plant's units
     // (newtons, volts) it can be 1e5 times u.
     panel(
         &areas[3],
-        &format!("Channel {c}: plant input u_f (5), what the actuator delivers"),
-        "u_f",
+        (&format!("Channel {c}: plant input u_f (5), what the actuator delivers"), "u_f"),
         &[(format!("uf{c}"), col(&r.u_f))],
+        time,
     )?;
     let etas: Vec<Series> = (0..r.q)
         .map(|j| {
@@ -172,13 +179,14 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &SimResult, i: usiz
     } else {
         format!("Channel {c}: adjustable parameters (33)")
     };
-    panel(&areas[4], &title, "η", &etas)?;
+    panel(&areas[4], (&title, "η"), &etas, time)?;
     root.present().map_err(|e| e.to_string())
 }
 
-/// Writes `channel{i+1}.png` and `.svg` into `dir`, each atomically.
-pub fn plot_channel(dir: &Path, r: &SimResult, i: usize) -> io::Result<()> {
-    write_figure(dir, &format!("channel{}", i + 1), SIZE, |root| draw(root, r, i), |root| draw(root, r, i))
+/// Writes `channel{i+1}.png` and `.svg` into `dir`, each atomically; t in `time`.
+pub fn plot_channel(dir: &Path, r: &SimResult, i: usize, time: TimeUnit) -> io::Result<()> {
+    let name = format!("channel{}", i + 1);
+    write_figure(dir, &name, SIZE, |root| draw(root, r, i, time), |root| draw(root, r, i, time))
 }
 
 /// Writes an RGB buffer of `size` as a PNG, atomically.
@@ -272,9 +280,10 @@ fn short_value(value: &str) -> String {
     out
 }
 
-/// The figures a sweep plots, with their axis labels.
+/// The figures a sweep plots, with their axis labels (the settling time's unit added from the
+/// study's scenario).
 const SWEEP_FIGURES: [(&str, &str); 3] =
-    [("tail RMS e", "tail_rms_e"), ("max |u|", "max_u"), ("settling time, s", "settle_t")];
+    [("tail RMS e", "tail_rms_e"), ("max |u|", "max_u"), ("settling time", "settle_t")];
 
 fn figure_of<'a>(c: &'a quell::study::ChannelQuantiles, name: &str) -> &'a quell::study::Quantiles {
     match name {
@@ -290,7 +299,9 @@ fn draw_sweep_1d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
     let areas = root.split_evenly((SWEEP_FIGURES.len(), s.study.m));
     for (f, &figure) in SWEEP_FIGURES.iter().enumerate() {
         for i in 0..s.study.m {
-            draw_sweep_panel(&areas[f * s.study.m + i], s, (&x, scale), figure, i)?;
+            let label =
+                if figure.1 == "settle_t" { format!("{}, {}", figure.0, s.study.time_unit) } else { figure.0.into() };
+            draw_sweep_panel(&areas[f * s.study.m + i], s, (&x, scale), (&label, figure.1), i)?;
         }
     }
     root.present().map_err(|e| e.to_string())

@@ -9,6 +9,7 @@ use quell::diagnostics::{ChannelDiagnostics, Diagnostics};
 use quell::scenario::Scenario;
 use quell::sim::{Loop, Method, Outcome, Run, RunSettings, RunStats, SimResult};
 use quell::Design;
+use quell::TimeUnit;
 use serde_json::json;
 
 use crate::interrupt::Interrupt;
@@ -82,7 +83,9 @@ struct Finished<'a> {
 fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result<RunSettings, Failure> {
     let mut settings = match args.sample_time {
         Some(t) if !(t.is_finite() && t > 0.0) => {
-            return Err(Failure::Input(format!("--sample-time: expected a sample time > 0 in seconds, found {t}")))
+            return Err(Failure::Input(format!(
+                "--sample-time: expected a sample time > 0 (in the plant model's unit of time), found {t}"
+            )))
         }
         Some(sample_time) => RunSettings { mode: Loop::Sampled { sample_time }, ..RunSettings::of(scenario) },
         None => RunSettings::of(scenario),
@@ -169,8 +172,9 @@ fn write_outputs(dir: &Path, done: &Finished<'_>, plots: bool) -> std::io::Resul
     output::remove_figures(dir, |stem| stem.strip_prefix("channel").is_some_and(|i| i.parse::<usize>().is_ok()))?;
     // Figures render on their own threads (one per channel) while the data files are written.
     std::thread::scope(|scope| {
-        let figures: Vec<_> =
-            (0..if plots { r.m } else { 0 }).map(|i| scope.spawn(move || plot::plot_channel(dir, r, i))).collect();
+        let figures: Vec<_> = (0..if plots { r.m } else { 0 })
+            .map(|i| scope.spawn(move || plot::plot_channel(dir, r, i, done.scenario.plant.time_unit)))
+            .collect();
         let data = write_data(dir, done);
         for figure in figures {
             figure.join().map_err(|_| std::io::Error::other("plotting panicked"))??;
@@ -188,6 +192,7 @@ fn write_data(dir: &Path, done: &Finished<'_>) -> std::io::Result<()> {
     output::write_json(&dir.join("design.json"), &json)?;
     let summary = json!({
         "scenario": scenario.name,
+        "time_unit": scenario.plant.time_unit.symbol(),
         "truth_differs": scenario.truth_differs(),
         "limited_fraction": (!r.limited.is_empty()).then(|| r.limited_fraction()),
         "outcome": r.outcome,
@@ -203,25 +208,25 @@ fn write_data(dir: &Path, done: &Finished<'_>) -> std::io::Result<()> {
 }
 
 /// Channel i's convergence figures and advice, under its line of figures.
-fn report_diagnostics(d: &ChannelDiagnostics) {
+fn report_diagnostics(d: &ChannelDiagnostics, time: TimeUnit) {
     let trend = d.tail_trend.map_or(String::new(), |r| format!(", tail RMS ratio (last two tenths) {r:.2}"));
     // A singular Ω̄ (fewer excited directions than q) gives 1/(μλ_min) = ∞; the error does not depend
     // on the unexcited directions, so the excited ones' slowest time is the one that matters.
     let convergence = if d.convergence_time.is_finite() {
-        format!("{:.3e} s", d.convergence_time)
+        format!("{:.3e} {time}", d.convergence_time)
     } else {
         "∞ (Ω̄ singular)".into()
     };
     let excited = if d.convergence_time_excited != d.convergence_time && d.convergence_time_excited.is_finite() {
         format!(
-            "; the {} excited directions (the error depends on these alone) converge in 1/(μλ_min,excited) = {:.3e} s",
+            "; the {} excited directions (the error depends on these alone) converge in 1/(μλ_min,excited) = {:.3e} {time}",
             d.excited_rank, d.convergence_time_excited
         )
     } else {
         String::new()
     };
     eprintln!(
-        "  Ω̄: λ_min = {:.3e}, λ_max = {:.3e}; convergence time 1/(μλ_min) = {convergence}, adaptation rate μλ_max = {:.3e}/s{excited}{trend}",
+        "  Ω̄: λ_min = {:.3e}, λ_max = {:.3e}; convergence time 1/(μλ_min) = {convergence}, adaptation rate μλ_max = {:.3e}/{time}{excited}{trend}",
         d.lambda_min_omega, d.lambda_max_omega, d.adaptation_rate
     );
     for line in &d.advice {
@@ -255,7 +260,7 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
                     c.final_eta_norm
                 );
                 if let Some(d) = diagnostics.channels.get(i) {
-                    report_diagnostics(d);
+                    report_diagnostics(d, scenario.plant.time_unit);
                 }
             }
             for line in &diagnostics.advice {

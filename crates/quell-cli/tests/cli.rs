@@ -900,3 +900,42 @@ fn design_refuses_a_scenario_whose_run_cannot_start() {
     assert!(err.contains("channel 1's delay τ = 1 s is not a whole number of samples"), "{err}");
     assert!(err.contains("the nearest valid sample time is 0.333"), "{err}");
 }
+
+/// `[plant] time_unit` labels what states a time: the figures' t axis, the reports' rates and
+/// times, summary.json, and the generated header's T_s; the numbers are those of the same plant
+/// without the key (Wood–Berry's column, written in minutes).
+#[test]
+fn the_plant_time_unit_labels_figures_reports_and_the_header() {
+    let dir = temp_dir("time-unit");
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../quell/tests/data/wood-berry.toml");
+    let minutes = fs::read_to_string(&data).unwrap().replace("t_end = 600.0", "t_end = 30.0");
+    assert!(minutes.contains("time_unit = \"min\"") && minutes.contains("t_end = 30.0"));
+    let seconds = minutes.replace("time_unit = \"min\"\n", "");
+    let mut csv = Vec::new();
+    for (tag, body) in [("min", &minutes), ("s", &seconds)] {
+        let file = dir.path().join(format!("{tag}.toml"));
+        fs::write(&file, body).unwrap();
+        let out = dir.path().join(tag);
+        let o = quell(&["run", file.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(0), "{err}");
+        let svg = fs::read_to_string(out.join("channel1.svg")).unwrap();
+        assert!(svg.contains(&format!("\nt, {tag}\n</text>")), "the t axis is labelled in {tag}");
+        assert_eq!(read_json(&out.join("summary.json"))["time_unit"], tag);
+        assert!(err.contains("adaptation rate μλ_max = ") && err.contains(&format!("/{tag}")), "{err}");
+        csv.push(fs::read(out.join("signals.csv")).unwrap());
+        let design = quell(&["design", file.to_str().unwrap()]);
+        assert!(stdout(&design).contains(&format!("t_end = 30 {tag})")), "{}", stdout(&design));
+    }
+    assert!(csv[0] == csv[1], "signals.csv differs with the unit");
+    let c = dir.path().join("c");
+    let file = dir.path().join("min.toml");
+    let o = quell(&["export", file.to_str().unwrap(), "--sample-time", "0.5", "--out", c.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stderr(&o).contains("(T_s = 0.5 min, double;"), "{}", stderr(&o));
+    let header = fs::read_to_string(c.join("quell_controller.h")).unwrap();
+    assert!(header.contains("Sample time T_s = 0.5, in minutes, the plant model's unit of time."), "{header}");
+    let e = quell(&["run", file.to_str().unwrap(), "--sample-time", "0.7", "--out", c.to_str().unwrap()]);
+    assert_eq!(e.status.code(), Some(2));
+    assert!(stderr(&e).contains("τ = 1 min is not a whole number of samples of T_s = 0.7 min"), "{}", stderr(&e));
+}

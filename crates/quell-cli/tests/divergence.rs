@@ -17,7 +17,7 @@ fn run_quell(args: &[&str], out: &std::path::Path, scenario: &std::path::Path) -
 
 #[test]
 fn diverging_sampled_run_exits_1_and_keeps_the_files() {
-    // The paper's example sampled at T_s = 0.5 s is unstable: x[2] passes 1e9 at t ≈ 14.5 s.
+    // The paper's example sampled at T_s = 0.5 s is unstable: x[1] passes 1e9 at t = 15 s.
     let dir_tmp = scratch_dir("diverge");
     let dir = dir_tmp.path();
     let scenario = paper_with(dir, &[("output_step = 0.1 ", "output_step = 0.5 ")]);
@@ -26,11 +26,11 @@ fn diverging_sampled_run_exits_1_and_keeps_the_files() {
     assert_eq!(output.status.code(), Some(1), "stderr: {stderr}");
     let t = time_in(&stderr, "diverged at t = ").unwrap_or_else(|| panic!("no time on stderr: {stderr}"));
     assert!((5.0..50.0).contains(&t), "t = {t}");
-    assert!(stderr.contains("x[2] (plant state)"), "the signal is not named: {stderr}");
+    assert!(stderr.contains("x[1] (plant state)"), "the signal is not named: {stderr}");
 
     let summary = check_outputs(&out);
     assert_eq!(summary["outcome"]["status"], "diverged", "{summary}");
-    assert_eq!(summary["outcome"]["signal"], "x[2] (plant state)");
+    assert_eq!(summary["outcome"]["signal"], "x[1] (plant state)");
     // The rows stop before the divergent sample.
     let csv = std::fs::read_to_string(out.join("signals.csv")).unwrap_or_default();
     let last: f64 = csv.lines().last().and_then(|l| l.split(',').next()).and_then(|s| s.parse().ok()).unwrap_or(-1.0);

@@ -276,3 +276,24 @@ fn ctrl_c_or_sigterm_during_tune_writes_the_points_evaluated_marked_partial() {
         assert!(leftovers.is_empty(), "temporaries left: {leftovers:?}");
     }
 }
+
+/// The settling-time panels of sweep.png/.svg are labelled in the scenario's unit of time
+/// (`[plant] time_unit`), also after a merge of shards (the unit travels in their summaries).
+#[test]
+fn the_settling_time_axis_is_in_the_plants_unit_of_time() {
+    let dir_tmp = scratch("time-unit");
+    let dir = dir_tmp.path();
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../quell/tests/data/wood-berry.toml");
+    fs::copy(data, dir.join("wood-berry.toml")).unwrap();
+    let study = "scenario = \"wood-berry.toml\"\n[simulation]\nt_end = 60.0\n[grid]\n\"design.mu[0]\" = [10.0, 30.0]\n";
+    let study = write_study(dir, "study.toml", study);
+    let out = |name: &str| dir.join(name).display().to_string();
+    for shard in ["0/2", "1/2"] {
+        let o = quell(&["sweep", &study, "--out", &out(&format!("part{}", &shard[..1])), "--shard", shard]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let o = quell(&["sweep", "--merge", &out("part0"), &out("part1"), "--out", &out("merged")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let svg = fs::read_to_string(dir.join("merged/sweep.svg")).unwrap();
+    assert!(svg.contains("settling time, min") && !svg.contains("settling time, s"), "the panels' titles");
+}

@@ -22,7 +22,7 @@ use crate::errors::{raise, Kind};
 /// design : Design
 ///     The design.
 /// sample_time : float
-///     T_s in seconds; every delay must be a whole number of samples.
+///     T_s, in the plant's unit of time; every delay must be a whole number of samples.
 ///
 /// Raises
 /// ------

@@ -64,7 +64,7 @@ fn fmu_arguments(
 /// source : Scenario or Design
 ///     What to export (a scenario gives its design, name and sample time).
 /// sample_time : float, optional
-///     T_s in seconds; default the scenario's.
+///     T_s, in the plant's unit of time; default the scenario's.
 /// out : str or os.PathLike, optional
 ///     The directory (created; default the working directory).
 /// prefix : str, optional
@@ -135,7 +135,7 @@ pub fn export(
     let T = match sample_time {
         Some(v) => number(v, "sample_time")?,
         None => scenario_T.ok_or_else(|| {
-            Kind::Scenario.err(py, "sample_time: missing; pass the controller's sample time T_s in seconds (or set simulation.sample_time in the scenario)")
+            Kind::Scenario.err(py, "sample_time: missing; pass the controller's sample time T_s, in the plant model's unit of time (or set simulation.sample_time in the scenario)")
         })?,
     };
     let precision = match precision {

@@ -5,6 +5,7 @@ use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use quell::nalgebra::DMatrix;
+use quell::TimeUnit;
 
 use crate::convert::{matrix, to_numpy, type_name, vec_numpy, vector};
 use crate::errors::{raise, Kind};
@@ -28,12 +29,16 @@ use crate::errors::{raise, Kind};
 /// Q : array_like, optional
 ///     The disturbance-to-output matrix (m×k); default zeros.
 /// delays : array_like, optional
-///     The input delays τ_i ≥ 0 in seconds (m); default zeros.
+///     The input delays τ_i ≥ 0 (m), in the plant's unit of time; default zeros.
 /// x0 : array_like, optional
 ///     The initial state x(0) (n); default zeros.
 /// inputs, outputs, states : list of str, optional
 ///     The signals' names (m, m and n distinct names); default a system's labels, else
 ///     `u_f[i]`, `y[i]`, `x[j]`.
+/// time_unit : str, optional
+///     The unit of time the matrices and delays are written in: "µs" (or "us"), "ms", "s",
+///     "min", "h" or "d", or its name ("minutes", …); it labels results and figures (quell
+///     computes in whatever unit A is written in). Default None: seconds.
 ///
 /// Raises
 /// ------
@@ -131,7 +136,7 @@ fn required<'a, 'py>(
 #[pymethods]
 impl PyPlant {
     #[new]
-    #[pyo3(signature = (A, B=None, C=None, D=None, Q=None, delays=None, x0=None, inputs=None, outputs=None, states=None))]
+    #[pyo3(signature = (A, B=None, C=None, D=None, Q=None, delays=None, x0=None, inputs=None, outputs=None, states=None, time_unit=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         A: &Bound<'_, PyAny>,
@@ -144,6 +149,7 @@ impl PyPlant {
         inputs: Option<&Bound<'_, PyAny>>,
         outputs: Option<&Bound<'_, PyAny>>,
         states: Option<&Bound<'_, PyAny>>,
+        time_unit: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let py = A.py();
         let k = Kind::Scenario;
@@ -210,7 +216,7 @@ impl PyPlant {
             outputs: label(outputs, "outputs", "output", m)?,
             states: label(states, "states", "state", n)?,
         };
-        Ok(PyPlant { inner, labels })
+        Ok(PyPlant { inner: inner.with_time_unit(time_unit_arg(time_unit)?), labels })
     }
 
     /// State matrix A (n×n).
@@ -279,6 +285,11 @@ impl PyPlant {
     fn states(&self) -> Vec<String> {
         self.labels.states(self.inner.n())
     }
+    /// The unit of time of A and the delays: `time_unit=`, or "s".
+    #[getter]
+    fn time_unit(&self) -> &'static str {
+        self.inner.time_unit.symbol()
+    }
 
     fn __repr__(&self) -> String {
         let p = &self.inner;
@@ -288,8 +299,8 @@ impl PyPlant {
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
         other.cast::<PyPlant>().is_ok_and(|o| o.get().inner == self.inner && o.get().labels == self.labels)
     }
-    /// Pickles as `Plant(A, B, C, D, Q, delays, x0, inputs, outputs, states)` (D and Q omitted
-    /// without a disturbance, names without names).
+    /// Pickles as `Plant(A, B, C, D, Q, delays, x0, inputs, outputs, states, time_unit)` (D and
+    /// Q omitted without a disturbance, names and unit without them).
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
         let py = slf.py();
         let (p, me) = (&slf.get().inner, slf.get());
@@ -308,10 +319,20 @@ impl PyPlant {
                 l.inputs.clone().into_pyobject(py)?,
                 l.outputs.clone().into_pyobject(py)?,
                 l.states.clone().into_pyobject(py)?,
+                p.time_unit.symbol().into_pyobject(py)?.into_any(),
             ],
         )?;
         Ok((slf.get_type().into_any(), args))
     }
+}
+
+/// `time_unit=`: a unit's symbol or name, or None.
+fn time_unit_arg(obj: Option<&Bound<'_, PyAny>>) -> PyResult<TimeUnit> {
+    let Some(obj) = obj.filter(|o| !o.is_none()) else { return Ok(TimeUnit::Seconds) };
+    let given: String = obj.extract().map_err(|_| {
+        PyTypeError::new_err(format!("time_unit: expected a str such as \"min\", found a {}", type_name(obj)))
+    })?;
+    TimeUnit::from_name(&given).map_err(|e| Kind::Scenario.err(obj.py(), format!("time_unit: {e}")))
 }
 
 /// `obj` as a Plant, or a ScenarioError naming `name`.

@@ -10,7 +10,7 @@ use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyComplex, PyDict, PyFloat, PyInt, PyString};
 use quell::design::DesignError;
-use quell::scenario::{plant_table, pole_list, PAPER_EXAMPLE};
+use quell::scenario::{plant_table, pole_list, truth_table, PAPER_EXAMPLE};
 use quell::signal::Signal;
 use toml::{Table, Value};
 
@@ -36,7 +36,7 @@ use crate::plant::{plant_arg, Labels, PyPlant};
 /// name : str, optional
 ///     The scenario's name.
 /// t_end : float, optional
-///     Final time in seconds (default 100).
+///     Final time, in the plant's unit of time (default 100).
 /// output_step : float, optional
 ///     Interval of the recorded samples (default 0.1 s).
 /// rtol, atol : float, optional
@@ -329,7 +329,7 @@ impl PyScenario {
             doc.insert("noise".into(), toml_value(n, "noise")?);
         }
         if let Some(t) = truth.filter(|t| !t.is_none()) {
-            doc.insert("truth".into(), Value::Table(plant_table(&plant_arg(t, "truth")?.inner)));
+            doc.insert("truth".into(), Value::Table(truth_table(&plant_arg(t, "truth")?.inner)));
         }
         let inner = quell::Scenario::from_document(&doc).map_err(|e| argument_error(py, &e))?;
         Ok(PyScenario { from_values: true, ..Self::new(inner) })

@@ -8,6 +8,7 @@ use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 use quell::sim::{Loop, Outcome, Peaks, Run, RunSettings, RunStats, SimError, SimResult, Stats};
+use quell::TimeUnit;
 use toml::Value;
 
 use crate::errors::{in_python, keyed, simulation_error, Kind};
@@ -40,6 +41,8 @@ pub struct PySimResult {
     diagnostics: String,
     /// The plant's signal names.
     labels: Labels,
+    /// The plant's unit of time.
+    time_unit: TimeUnit,
 }
 
 fn frozen_array(py: Python<'_>, data: &[f64], shape: &[usize]) -> PyResult<Py<PyAny>> {
@@ -60,10 +63,12 @@ impl PySimResult {
         labels: Labels,
     ) -> PyResult<Self> {
         let diagnostics = quell::diagnostics::diagnose(design, &scenario.reference, &scenario.disturbance, &r);
+        let labels = (labels, design.plant().time_unit);
         PySimResult::new(py, r, serde_json::to_string(&diagnostics).unwrap_or_default(), labels)
     }
 
-    fn new(py: Python<'_>, r: SimResult, diagnostics: String, labels: Labels) -> PyResult<Self> {
+    fn new(py: Python<'_>, r: SimResult, diagnostics: String, labels: (Labels, TimeUnit)) -> PyResult<Self> {
+        let (labels, time_unit) = labels;
         let (k, m, q, n) = (r.len(), r.m, r.q, r.n);
         let arrays = [
             frozen_array(py, &r.t, &[k])?,
@@ -78,7 +83,7 @@ impl PySimResult {
             true => Some([frozen_array(py, &r.x, &[k, n])?, frozen_array(py, &r.x_hat, &[k, n])?]),
             false => None,
         };
-        Ok(PySimResult { inner: r, arrays, states, diagnostics, labels })
+        Ok(PySimResult { inner: r, arrays, states, diagnostics, labels, time_unit })
     }
 }
 
@@ -213,6 +218,11 @@ impl PySimResult {
     #[getter]
     fn q(&self) -> usize {
         self.inner.q
+    }
+    /// The unit of t: the plant's `time_unit` ("s" unless the plant gives another).
+    #[getter]
+    fn time_unit(&self) -> &'static str {
+        self.time_unit.symbol()
     }
     /// How the run ended, as in summary.json: {"status": "completed"}, or "diverged" with t,
     /// signal and value, or "step_size_too_small" / "interrupted" with t.
@@ -406,6 +416,7 @@ impl PySimResult {
             && same(&a.peaks.0, &b.peaks.0)
             && a.limited == b.limited
             && self.labels == o.get().labels
+            && self.time_unit == o.get().time_unit
     }
     /// Pickles as its samples (raw float64 bytes), outcome, statistics and diagnostics.
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyDict>,))> {
@@ -441,7 +452,9 @@ impl PySimResult {
         d.set_item("peaks", r.peaks.0.to_vec())?;
         d.set_item("limited", r.limited.clone())?;
         d.set_item("diagnostics", &me.diagnostics)?;
-        d.set_item("labels", (me.labels.inputs.clone(), me.labels.outputs.clone(), me.labels.states.clone()))?;
+        let l = &me.labels;
+        let unit = me.time_unit.symbol();
+        d.set_item("labels", (l.inputs.clone(), l.outputs.clone(), l.states.clone(), unit))?;
         Ok((slf.get_type().getattr("_restore")?, (d,)))
     }
     /// Rebuilds a pickled result.
@@ -453,7 +466,11 @@ impl PySimResult {
             let b: Vec<u8> = item(k)?.extract()?;
             Ok(b.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8]))).collect())
         };
-        let (inputs, outputs, states) = item("labels")?.extract()?;
+        // Results pickled before `time_unit` hold three labels.
+        let labels = item("labels")?;
+        let (inputs, outputs, states, unit): (_, _, _, String) =
+            labels.extract().or_else(|_| labels.extract().map(|(i, o, s)| (i, o, s, "s".to_string())))?;
+        let time_unit = TimeUnit::from_name(&unit).map_err(|_| bad("time_unit"))?;
         let peaks: Vec<f64> = item("peaks")?.extract()?;
         let r = SimResult {
             m: item("m")?.extract()?,
@@ -473,7 +490,7 @@ impl PySimResult {
             peaks: Peaks(peaks.try_into().map_err(|_| bad("peaks"))?),
             limited: item("limited")?.extract()?,
         };
-        PySimResult::new(py, r, item("diagnostics")?.extract()?, Labels { inputs, outputs, states })
+        PySimResult::new(py, r, item("diagnostics")?.extract()?, (Labels { inputs, outputs, states }, time_unit))
     }
     /// Python's repr, the outcome as the `outcome` property's dict.
     fn __repr__(&self, py: Python<'_>) -> PyResult<String> {

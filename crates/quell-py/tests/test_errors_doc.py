@@ -81,6 +81,7 @@ CASES = [
     ("duplicate_signal_name", edit((X0, X0 + '\nstates = ["level", "flow", "level"]')), "plant.states[2]", None),
     ("empty_signal_name", edit((X0, X0 + '\ninputs = ["valve", " "]')), "plant.inputs[1]", None),
     ("signal_name_not_a_string", edit((X0, X0 + "\ninputs = [1, 2]")), "plant.inputs[0]", None),
+    ("unknown_time_unit", edit((X0, X0 + '\ntime_unit = "mins"')), "plant.time_unit", None),
     ("reference_component_count", edit((", { bias = 2.0 } ]", " ]")), "reference.components", None),
     ("disturbance_component_count",
      edit(("components = [ { harmonics = [{ amplitude = 1.0, frequency = 1.0 }] },\n", "components = [\n")),

@@ -472,7 +472,8 @@ fn sampled_start(doc: &toml::Table, targets: &Targets) -> Result<(Proposal, Desi
         (p, design, speed, rho) = (q, d, slower, r);
     }
     if speed != Speed::FIRST {
-        let why = format!("; ×{} of that for simulation.sample_time = {t_s} s (T_s·ρ = {:.2} ≤ {COARSE_SAMPLE}, ρ the loop's fastest rate: docs/running.md)", speed.channel, t_s * rho);
+        let unit = design.plant().time_unit;
+        let why = format!("; ×{} of that for simulation.sample_time = {t_s} {unit} (T_s·ρ = {:.2} ≤ {COARSE_SAMPLE}, ρ the loop's fastest rate: docs/running.md)", speed.channel, t_s * rho);
         for c in p.choices.iter_mut().filter(|c| c.key == "design.channel_poles" || c.key == "design.observer_poles") {
             c.why.push_str(&why);
         }
@@ -723,7 +724,8 @@ fn round_up_2(x: f64) -> f64 {
 fn ended_early(s: &Scenario, outcome: &Outcome) -> String {
     let why = match s.simulation.sample_time {
         Some(t_s) => format!(
-            "its poles may be too fast for the sample time {t_s} s even at the slowest start (docs/tuning.md, a sampled-data scenario): try a shorter simulation.sample_time, or give slower design.channel_poles and design.observer_poles by hand"
+            "its poles may be too fast for the sample time {t_s} {} even at the slowest start (docs/tuning.md, a sampled-data scenario): try a shorter simulation.sample_time, or give slower design.channel_poles and design.observer_poles by hand",
+            s.plant.time_unit
         ),
         None => "give some [design] keys by hand (slower channel or observer poles, a smaller mu; docs/tuning.md)".to_string(),
     };
@@ -735,10 +737,10 @@ fn ended_early(s: &Scenario, outcome: &Outcome) -> String {
 fn failure_advice(s: &Scenario) -> Option<String> {
     let (a, b) = closest_pair(s)?;
     let beat = 2.0 * std::f64::consts::PI / (b - a);
-    let t_end = s.simulation.t_end;
+    let (t_end, unit) = (s.simulation.t_end, s.plant.time_unit);
     (t_end < SEPARATION_BEATS * beat).then(|| {
         format!(
-            "the horizon is too short to tell the signals' two closest frequencies apart: {a} and {b} rad/s beat with period 2π/{:.4e} = {beat:.4e} s, and t_end = {t_end} s is {:.2} beats; the adaptive law needs about {SEPARATION_BEATS}: lengthen simulation.t_end to at least {} s (or move the frequencies apart)",
+            "the horizon is too short to tell the signals' two closest frequencies apart: {a} and {b} rad/{unit} beat with period 2π/{:.4e} = {beat:.4e} {unit}, and t_end = {t_end} {unit} is {:.2} beats; the adaptive law needs about {SEPARATION_BEATS}: lengthen simulation.t_end to at least {} {unit} (or move the frequencies apart)",
             b - a,
             t_end / beat,
             round_up_2(SEPARATION_BEATS * beat)
@@ -903,7 +905,7 @@ fn choose_channel_poles(
             .collect(),
     };
     let c: PoleLists = sigma.iter().map(|&k| spread(2.0 * r * speed, k, 1.5, false)).collect();
-    note("design.channel_poles", fmt_lists(&c), format!("σ = {sigma:?}; real poles from −2r (r = {r:.4e} rad/s: the fastest of the signals' frequencies, the plant's eigenvalue magnitudes and 20/t_end), ×1.5 apart"));
+    note("design.channel_poles", fmt_lists(&c), format!("σ = {sigma:?}; real poles from −2r (r = {r:.4e} rad/{}: the fastest of the signals' frequencies, the plant's eigenvalue magnitudes and 20/t_end), ×1.5 apart", p.time_unit));
     Ok(c)
 }
 
@@ -943,7 +945,7 @@ fn choose_scaling(partial: &PartialDesign, note: &mut Note) -> RegressorScaling 
         (None, Some(_)) => RegressorScaling::Paper,
         (None, None) => {
             let n = RegressorScaling::Normalized;
-            note("design.regressor_scaling", format!("{:?}", n.name()), "each filter at its own time scale with unit DC gain (ξ̂ of the signals' size): Ω̄'s conditioning does not depend on the time scale, where the paper's form spreads its eigenvalues by about r^2(q−1) away from 1 rad/s; μ is chosen for it (the paper's form is kept when the file gives μ)".into());
+            note("design.regressor_scaling", format!("{:?}", n.name()), "each filter at its own time scale with unit DC gain (ξ̂ of the signals' size): Ω̄'s conditioning does not depend on the time scale, where the paper's form spreads its eigenvalues by about r^2(q−1) away from 1 rad per unit of time; μ is chosen for it (the paper's form is kept when the file gives μ)".into());
             n
         }
     }
@@ -1056,6 +1058,7 @@ fn choose_mu(s: &Scenario, design: &Design, targets: &Targets, r: f64) -> (Vec<f
     let avg = Averaged::new(design, &s.reference, &s.disturbance);
     let t_c = targets.convergence_time.unwrap_or(s.simulation.t_end / DEFAULT_CONVERGENCE);
     let (max_rate, retry_rate) = rate_caps(s, design, r);
+    let unit = s.plant.time_unit;
     let mut notes = Vec::new();
     let (mu, caps) = avg
         .channels
@@ -1083,7 +1086,7 @@ fn choose_mu(s: &Scenario, design: &Design, targets: &Targets, r: f64) -> (Vec<f
         })
         .unzip();
     let why = format!(
-        "the smallest μ_i for which the averaged adaptive law (η̃' = −μ Ω̄ η̃) predicts an RMS error ≤ 0.2 % of the reference's peak by t = {t_c:.4e} s ({}), with μ_i λ_max(Ω̄_i) ≤ {max_rate:.4e}/s (the smaller of {MAX_RATE_PER_SCALE}·r and a {STIFF_MARGIN}th of the stiffness threshold {STIFF_RATIO}·ρ){}",
+        "the smallest μ_i for which the averaged adaptive law (η̃' = −μ Ω̄ η̃) predicts an RMS error ≤ 0.2 % of the reference's peak by t = {t_c:.4e} {unit} ({}), with μ_i λ_max(Ω̄_i) ≤ {max_rate:.4e}/{unit} (the smaller of {MAX_RATE_PER_SCALE}·r and a {STIFF_MARGIN}th of the stiffness threshold {STIFF_RATIO}·ρ){}",
         if targets.convergence_time.is_some() { "the target convergence time" } else { "t_end/20" },
         if notes.is_empty() { String::new() } else { format!("; {}", notes.join("; ")) }
     );

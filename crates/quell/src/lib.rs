@@ -47,17 +47,18 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
-//! **[`plant`]** and **[`signal`]**: the plant (1) as [`Plant`] (A, B, C, D, Q, delays τ_i), the
-//! reference g(t) and disturbance ω(t) as a [`Signal`] of [`Component`]s (m for g, k for ω), each
-//! a bias and [`Harmonic`]s.
+//! **[`plant`]** and **[`signal`]**: the plant (1) as [`Plant`] (A, B, C, D, Q, delays τ_i, and
+//! the [`TimeUnit`] they are written in, a label), the reference g(t) and disturbance ω(t) as a
+//! [`Signal`] of [`Component`]s (m for g, k for ω), each a bias and [`Harmonic`]s.
 //!
 //! ```
 //! use quell::nalgebra::dmatrix;
-//! use quell::{Component, Harmonic, Plant, Signal};
+//! use quell::{Component, Harmonic, Plant, Signal, TimeUnit};
 //!
-//! // x' = −x + u(t − 0.2) + ω, y = x.
-//! let plant = Plant::new(dmatrix![-1.0], dmatrix![1.0], dmatrix![1.0], dmatrix![1.0], dmatrix![0.0], vec![0.2], None)?;
-//! assert_eq!(plant.n(), 1);
+//! // x' = −x + u(t − 0.2) + ω, y = x, in minutes.
+//! let plant = Plant::new(dmatrix![-1.0], dmatrix![1.0], dmatrix![1.0], dmatrix![1.0], dmatrix![0.0], vec![0.2], None)?
+//!     .with_time_unit(TimeUnit::from_name("min")?);
+//! assert_eq!((plant.n(), plant.time_unit.symbol()), (1, "min"));
 //! let g = Signal { components: vec![Component { bias: 1.0, harmonics: vec![Harmonic { amplitude: 0.5, frequency: 2.0, phase: 0.0 }] }] };
 //! assert_eq!(g.components[0].eval(0.0), 1.0);
 //! assert_eq!(g.components[0].peak(), 1.5);
@@ -342,4 +343,5 @@ pub use design::{place, Design, DesignError, DesignSpec, ObserverChoice, PlaceEr
 pub use linalg::{fmt_complex, fmt_complex_list, fmt_number};
 pub use plant::{Plant, PlantError};
 pub use scenario::{Scenario, ScenarioError};
+pub use settings::TimeUnit;
 pub use signal::{Component, Harmonic, Signal};

@@ -6,6 +6,8 @@
 use nalgebra::{DMatrix, DVector};
 use thiserror::Error;
 
+use crate::settings::TimeUnit;
+
 /// Largest magnitude of a plant entry. The design forms products of two entries summed over n
 /// terms (A², c_i A B, A − BK) and squared Frobenius norms (the rank tests' tolerances); with every
 /// entry at most 1e150 these stay below n·1e300, finite for any n < 1e8 (f64::MAX ≈ 1.8e308).
@@ -29,6 +31,9 @@ pub struct Plant {
     pub delays: Vec<f64>,
     /// Initial state x(0).
     pub x0: DVector<f64>,
+    /// The unit of time A, the delays and every time and frequency of a run are in: a label
+    /// ([`TimeUnit`]); seconds unless given.
+    pub time_unit: TimeUnit,
 }
 
 /// Why a set of matrices is not a plant. `name` is the matrix's name (`"A"`, `"B"`, …).
@@ -102,9 +107,15 @@ impl Plant {
         x0: Option<DVector<f64>>,
     ) -> Result<Self, PlantError> {
         let x0 = x0.unwrap_or_else(|| DVector::zeros(A.nrows()));
-        let plant = Plant { A, B, C, D, Q, delays, x0 };
+        let plant = Plant { A, B, C, D, Q, delays, x0, time_unit: TimeUnit::default() };
         plant.validate()?;
         Ok(plant)
+    }
+
+    /// The plant with its unit of time `unit` (a label: nothing is rescaled).
+    pub fn with_time_unit(mut self, unit: TimeUnit) -> Self {
+        self.time_unit = unit;
+        self
     }
 
     /// The checks of [`Plant::new`], for a plant built field by field (the fields are public).

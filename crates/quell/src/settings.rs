@@ -57,6 +57,18 @@ pub fn read_input(path: &std::path::Path) -> Result<String, String> {
         .map_err(|e| format!("not UTF-8 text (invalid byte at offset {})", e.utf8_error().valid_up_to()))
 }
 
+/// The candidate nearest to `name` (at most two edits apart, ignoring case): what a message
+/// suggests for a misspelt key or name.
+pub(crate) fn nearest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    let lower = name.to_lowercase();
+    candidates
+        .into_iter()
+        .map(|c| (strsim::levenshtein(&c.to_lowercase(), &lower), c))
+        .filter(|(d, _)| *d <= 2)
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, c)| c)
+}
+
 /// The integrator of the continuous loop's steps (`simulation.method`), named in scenario files,
 /// flags and Python by [`Method::name`]: `"auto"`, `"explicit"`, `"imex"`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -91,13 +103,14 @@ impl Method {
         if let Some((m, ..)) = Self::ALL.iter().find(|(_, n, _)| *n == name) {
             return Ok(*m);
         }
-        let lower = name.to_lowercase();
-        let aliases = Self::ALL.iter().map(|(_, n, _)| (*n, *n)).chain([("implicit", "imex"), ("dop853", "explicit")]);
-        let hint = aliases
-            .map(|(alias, n)| (strsim::levenshtein(alias, &lower), n))
-            .filter(|(d, _)| *d <= 2)
-            .min_by_key(|(d, _)| *d)
-            .map(|(_, n)| format!(" (did you mean \"{n}\"?)"))
+        let aliases = Self::ALL.iter().map(|(_, n, _)| *n).chain(["implicit", "dop853"]);
+        let hint = nearest(name, aliases)
+            .map(|n| match n {
+                "implicit" => "imex",
+                "dop853" => "explicit",
+                n => n,
+            })
+            .map(|n| format!(" (did you mean \"{n}\"?)"))
             .unwrap_or_default();
         let list: Vec<String> = Self::ALL.iter().map(|(_, n, what)| format!("\"{n}\" ({what})")).collect();
         Err(format!("expected {} or {}, found \"{name}\"{hint}", list[..2].join(", "), list[2]))
@@ -107,6 +120,61 @@ impl Method {
 impl std::fmt::Display for Method {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.name())
+    }
+}
+
+/// The unit of time of a plant model (`[plant] time_unit`), as MATLAB's `TimeUnit`: the unit of
+/// t, of the delays τ_i, of 1/λ for every pole and of 2π/ω for every frequency. quell computes in
+/// whatever unit the matrices are written in; this only labels the results.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum TimeUnit {
+    Microseconds,
+    Milliseconds,
+    #[default]
+    Seconds,
+    Minutes,
+    Hours,
+    Days,
+}
+
+impl TimeUnit {
+    /// Every unit with its symbol (what files hold and labels show) and its name.
+    const ALL: [(TimeUnit, &'static str, &'static str); 6] = [
+        (TimeUnit::Microseconds, "µs", "microseconds"),
+        (TimeUnit::Milliseconds, "ms", "milliseconds"),
+        (TimeUnit::Seconds, "s", "seconds"),
+        (TimeUnit::Minutes, "min", "minutes"),
+        (TimeUnit::Hours, "h", "hours"),
+        (TimeUnit::Days, "d", "days"),
+    ];
+
+    /// The symbol: `"µs"`, `"ms"`, `"s"`, `"min"`, `"h"`, `"d"`.
+    pub fn symbol(self) -> &'static str {
+        Self::ALL.iter().find(|(u, ..)| *u == self).map_or("s", |(_, s, _)| s)
+    }
+
+    /// The name: `"seconds"`, `"minutes"`, ….
+    pub fn name(self) -> &'static str {
+        Self::ALL.iter().find(|(u, ..)| *u == self).map_or("seconds", |(.., n)| n)
+    }
+
+    /// The unit given by its symbol or its name (`"us"` for µs too), or the message (without a
+    /// key) listing the symbols, with the nearest one.
+    pub fn from_name(given: &str) -> Result<TimeUnit, String> {
+        let found = Self::ALL.iter().find(|(_, s, n)| given == *s || given == *n || (*s == "µs" && given == "us"));
+        if let Some((u, ..)) = found {
+            return Ok(*u);
+        }
+        let names = Self::ALL.iter().flat_map(|(_, s, n)| [*s, *n]);
+        let hint = nearest(given, names).map(|n| format!(" (did you mean \"{n}\"?)")).unwrap_or_default();
+        let list: Vec<String> = Self::ALL.iter().map(|(_, s, n)| format!("\"{s}\" ({n})")).collect();
+        Err(format!("expected one of {}, found \"{given}\"{hint}", list.join(", ")))
+    }
+}
+
+impl std::fmt::Display for TimeUnit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.symbol())
     }
 }
 
@@ -191,7 +259,7 @@ impl Actuator {
         if let Some((i, d)) = self.delays.iter().enumerate().find(|(_, d)| !(d.is_finite() && **d >= 0.0)) {
             return Err(KeyError::new(
                 format!("truth.actuator_delays[{i}]"),
-                format!("expected a finite delay ≥ 0 in seconds, found {d}"),
+                format!("expected a finite delay ≥ 0 (in the plant model's unit of time), found {d}"),
             ));
         }
         if let Some((i, u)) = self.limits.iter().enumerate().find(|(_, u)| u.is_nan() || **u <= 0.0) {
@@ -249,13 +317,17 @@ pub(crate) fn check_horizon(t_end: f64, output_step: f64) -> Result<(), KeyError
 /// The continuous loop's delays against its horizon: the integrator's steps are at most min τ long
 /// (over the nonzero delays), so t_end / τ must not exceed [`MAX_SAMPLING_STEPS`], the limit of a
 /// sampled-data run. `key` names the delays (`plant.delays`, `truth.delays`).
-pub(crate) fn check_integrator_delays(key: &str, delays: &[f64], t_end: f64) -> Result<(), KeyError> {
+pub(crate) fn check_integrator_delays(
+    key: &str,
+    delays: &[f64],
+    (t_end, unit): (f64, TimeUnit),
+) -> Result<(), KeyError> {
     match delays.iter().enumerate().find(|(_, &tau)| tau > 0.0 && t_end / tau > MAX_SAMPLING_STEPS) {
         None => Ok(()),
         Some((i, &tau)) => Err(KeyError::new(
             format!("{key}[{i}]"),
             format!(
-                "τ = {tau:e} s caps the integrator's steps at τ, so t_end = {t_end} s needs more than {:.3e} steps; at most {MAX_SAMPLING_STEPS:e} are run (as in a sampled-data run); expected 0 (no delay) or τ ≥ {}",
+                "τ = {tau:e} {unit} caps the integrator's steps at τ, so t_end = {t_end} {unit} needs more than {:.3e} steps; at most {MAX_SAMPLING_STEPS:e} are run (as in a sampled-data run); expected 0 (no delay) or τ ≥ {}",
                 t_end / tau,
                 at_least(t_end, MAX_SAMPLING_STEPS)
             ),
@@ -267,7 +339,11 @@ pub(crate) fn check_integrator_delays(key: &str, delays: &[f64], t_end: f64) -> 
 /// least two steps a period, so ω·t_end/π must not exceed [`MAX_SAMPLING_STEPS`] (a reference at
 /// 1e15 rad/s over 100 s ran 3.5 s into the history's memory budget). `key` names the signal
 /// (`reference`, `disturbance`).
-pub(crate) fn check_integrator_signal(key: &str, signal: &Signal, t_end: f64) -> Result<(), KeyError> {
+pub(crate) fn check_integrator_signal(
+    key: &str,
+    signal: &Signal,
+    (t_end, unit): (f64, TimeUnit),
+) -> Result<(), KeyError> {
     let harmonics = signal
         .components
         .iter()
@@ -279,7 +355,7 @@ pub(crate) fn check_integrator_signal(key: &str, signal: &Signal, t_end: f64) ->
             return Err(KeyError::new(
                 format!("{key}.components[{c}].harmonics[{h}].frequency"),
                 format!(
-                    "ω = {:e} rad/s needs at least ω·t_end/π = {steps:.3e} integrator steps over t_end = {t_end} s (two a period); at most {MAX_SAMPLING_STEPS:e} are run; expected ω ≤ {}: frequencies are in rad per unit of the plant's time (not Hz)",
+                    "ω = {:e} rad/{unit} needs at least ω·t_end/π = {steps:.3e} integrator steps over t_end = {t_end} {unit} (two a period); at most {MAX_SAMPLING_STEPS:e} are run; expected ω ≤ {}: frequencies are in rad per unit of the plant's time (not Hz)",
                     w.frequency,
                     fmt_short(three_digits_down(std::f64::consts::PI * MAX_SAMPLING_STEPS / t_end))
                 ),

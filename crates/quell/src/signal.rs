@@ -203,7 +203,7 @@ fn check_out(out: &[f64], len: usize) -> Result<(), KeyError> {
 
 /// The message for a negative frequency ω (the scenario reader's and [`Signal::check`]'s).
 pub(crate) fn negative_frequency(w: f64) -> String {
-    format!("expected a frequency ≥ 0 (rad/s), found {w}; write a·sin(−ωt + φ) as a·sin(ωt + π − φ)")
+    format!("expected a frequency ≥ 0 (rad per unit of the plant's time), found {w}; write a·sin(−ωt + φ) as a·sin(ωt + π − φ)")
 }
 
 /// Checks the reference g (one component per output) and the disturbance ω (one per column of D)

@@ -397,7 +397,7 @@ fn a_first_proposal_that_diverges_is_a_failed_verification_with_advice() {
     assert_eq!(v.advice.len(), 1, "{:?}", v.advice);
     let advice = &v.advice[0];
     assert!(advice.starts_with("the first proposal's verifying simulation diverged at t = "), "{advice}");
-    assert!(advice.contains("the sample time 0.05 s") && !advice.contains("Diverged {"), "{advice}");
+    assert!(advice.contains("the sample time 0.05 min") && !advice.contains("Diverged {"), "{advice}");
 }
 
 fn data(name: &str) -> String {

@@ -131,7 +131,7 @@ fn fmu_sources_are_warning_free_c99() {
 #[test]
 fn output_is_deterministic_and_records_the_design() {
     let (s, d) = example("paper");
-    let o = ExportOptions { prefix: "quell".into(), precision: Precision::F64, scenario_name: s.name.clone() };
+    let o = ExportOptions { scenario_name: s.name.clone(), ..ExportOptions::default() };
     let a = generate(&d, 1e-3, &o).unwrap();
     let b = generate(&s.design().unwrap(), 1e-3, &o).unwrap();
     assert_eq!(a, b);
@@ -139,7 +139,7 @@ fn output_is_deterministic_and_records_the_design() {
     let h = &a.header.split_whitespace().collect::<Vec<_>>().join(" ");
     for text in [
         "scenario \"paper-example\"",
-        "Sample time T_s = 0.001 (in the plant model's unit of time)",
+        "Sample time T_s = 0.001, in the plant model's unit of time.",
         concat!("quell ", env!("CARGO_PKG_VERSION")),
         "channel 1: tau = 1 = 1000 samples; channel 2: tau = 3 = 3000 samples",
         "Memory: 1696 bytes of constants (static const), 241240 bytes of state",
@@ -241,7 +241,8 @@ fn random_inputs(m: usize, steps: usize, seed: u64) -> impl Iterator<Item = (Vec
 #[test]
 fn same_controller_as_rust_on_random_sequences() {
     // 100,000 steps of random y, g, at -O0 and -O2; and the other examples' shapes (σ up to 2, m = 3,
-    // complex filter poles, one channel). Bound: 1e-12 relative to the run's peak.
+    // complex filter poles, one channel). Bound: 1e-12 relative to the run's peak (and the same
+    // bits on x86-64).
     let (_, paper) = example("paper");
     for opt in ["-O0", "-O2"] {
         let code = export(&paper, 1e-3, "quell", Precision::F64);
@@ -259,11 +260,14 @@ fn same_controller_as_rust_on_random_sequences() {
         let again = compare(&paper, 1e-3, &mut c, random_inputs(2, 5_000, 2));
         assert!(again.iter().all(|&e| e <= 1e-12), "after init: {again:?}");
     }
-    for (name, T) in [("three-channel", 0.01), ("siso-complex", 0.005)] {
+    // Random y is no plant's answer: these two controllers, adapting to it at their full rate, grow
+    // without bound after about 20,000 and 15,000 steps (NaN at 68,931 and 14,849), so they run
+    // for fewer steps.
+    for (name, T, steps) in [("three-channel", 0.01, 20_000), ("siso-complex", 0.005, 10_000)] {
         let (_, d) = example(name);
         let (m, q, n) = (d.plant().m(), d.q(), d.plant().n());
         let mut c = CController::build(&export(&d, T, "ex", Precision::F64), "ex", Precision::F64, (m, q, n), "-O2");
-        let dev = compare(&d, T, &mut c, random_inputs(m, 100_000, 3));
+        let dev = compare(&d, T, &mut c, random_inputs(m, steps, 3));
         println!("{name}: u_f {:.1e}, u {:.1e}, eta {:.1e}", dev[0], dev[1], dev[2]);
         assert!(dev.iter().all(|&e| e <= 1e-12), "{name}: {dev:?}");
     }
@@ -539,11 +543,7 @@ fn a_header_and_source_of_different_exports_do_not_compile_together() {
 fn a_scenario_name_with_comment_delimiters_stays_inside_the_comment() {
     // `/*` inside the header's comment is a nested comment (-Werror=comment), and `*/` ended it.
     let (_, d) = example("paper");
-    let o = ExportOptions {
-        prefix: "quell".into(),
-        precision: Precision::F64,
-        scenario_name: Some("a /* b */ c */ /*/".into()),
-    };
+    let o = ExportOptions { scenario_name: Some("a /* b */ c */ /*/".into()), ..ExportOptions::default() };
     let code = generate(&d, 1e-3, &o).unwrap();
     let h = &code.header;
     let comment = &h[..h.find("*/\n#ifndef").expect("the header comment ends before the guard")];

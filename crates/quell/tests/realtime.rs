@@ -172,7 +172,7 @@ fn a_discretization_that_overflows_is_refused_naming_the_block() {
     let d = paper_design();
     for T in [1e40, 1e100] {
         match Controller::new(&d, T) {
-            Err(ControllerError::NotFinite { what, sample_time }) => {
+            Err(ControllerError::NotFinite { what, sample_time, .. }) => {
                 assert_eq!(sample_time, T);
                 assert!(what.contains("[Φ_z Γ_z]"), "{what}");
             }
@@ -189,14 +189,22 @@ fn a_discretization_that_overflows_is_refused_naming_the_block() {
     let mut spec = paper_spec();
     spec.mu = vec![1e300, 30.0];
     let big = Design::new(&paper_plant(), &spec).unwrap();
-    // T_s μ_1 = 1e297 at T_s = 1 ms is finite, but c·tr Ω overflows as soon as tr Ω > 2e11, and the
-    // gain c/(1 + c tr Ω) becomes 0: adaptation would stop without a sign (was accepted).
+    // T_s μ_1 = 1e297 at T_s = 1 ms is finite, but c·Ω overflows as soon as Ω > 2e11, and the
+    // implicit step's I + cΩ with it: adaptation would stop (was accepted).
     let e = Controller::new(&big, 1e-3).unwrap_err();
-    assert_eq!(e, ControllerError::AdaptationStepTooLarge { channel: 0, mu: 1e300, sample_time: 1e-3 });
+    assert_eq!(
+        e,
+        ControllerError::AdaptationStepTooLarge {
+            channel: 0,
+            mu: 1e300,
+            sample_time: 1e-3,
+            unit: quell::TimeUnit::Seconds
+        }
+    );
     assert!(
         e.to_string().starts_with(
             "design.mu[0]: expected T_s μ_i ≤ 1e150 (μ_i ≤ 1e153 at T_s = 0.001 s), found μ_i = 1e300; the sampled \
-             adaptation gain"
+             adaptation step's I + T_s μ_i Ω_i overflows"
         ),
         "{e}"
     );
@@ -496,4 +504,32 @@ fn a_bad_state_is_refused_naming_the_entry_and_the_state_is_kept() {
     assert_eq!(ctrl.state(), before, "a refused state changed the controller");
     let e = ctrl.set_state(&before[..10]).unwrap_err().to_string();
     assert!(DOCS.contains(&e), "docs/errors.md does not show: {e}");
+}
+
+/// A stiff adaptation (μλ_max·T_s ≫ 1) sampled: the quadruple tank (tests/data/quadruple-tank.toml,
+/// μλ_max ≈ 2.7e6 /s) at T_s = 10 ms and the three-channel example at 50 ms (μλ_max = 522 /s) end
+/// with tail errors within 1.5× and 10× of the continuous loop's, the answer the sampled law must
+/// approach (measured: 1.16×, 0.94× and 1.6×, 8.2×, 0.18×, the sample time's own first-order error;
+/// the step normalized by 1 + T_s μ tr Ω gave 174×, 111× and up to 2.3e4×, docs/sampled-data.md).
+#[test]
+fn the_sampled_loop_approaches_the_continuous_one_on_a_stiff_adaptation() {
+    use quell::sim::Loop;
+    let tank =
+        std::fs::read_to_string(format!("{}/tests/data/quadruple-tank.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let three =
+        std::fs::read_to_string(format!("{}/../../examples/three-channel.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    for (name, text, T, factor) in [("quadruple tank", tank, 0.01, 1.5), ("three-channel", three, 0.05, 10.0)] {
+        let s = quell::Scenario::from_toml(&text).unwrap();
+        let d = s.design().unwrap();
+        let tails = |settings: RunSettings| -> Vec<f64> {
+            let r = Run::of(&s, &d).settings(settings).simulate(|_| ControlFlow::Continue(())).unwrap();
+            assert_eq!(r.outcome, Some(Outcome::Completed), "{name}");
+            r.summary().iter().map(|c| c.figures.tail_max_e).collect()
+        };
+        let continuous = tails(RunSettings::of(&s));
+        let sampled = tails(RunSettings { mode: Loop::Sampled { sample_time: T }, ..RunSettings::of(&s) });
+        for (i, (c, z)) in continuous.iter().zip(&sampled).enumerate() {
+            assert!(*z <= factor * c.max(1e-6), "{name}, channel {}: sampled tail {z:.3e}, continuous {c:.3e}", i + 1);
+        }
+    }
 }

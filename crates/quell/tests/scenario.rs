@@ -425,6 +425,11 @@ fn signal_name_not_a_string() {
 }
 
 #[test]
+fn unknown_time_unit() {
+    check(&with(&[(X0, &format!("{X0}\ntime_unit = \"mins\""))]), "plant.time_unit", "(did you mean \"min\"?)");
+}
+
+#[test]
 fn disturbance_component_count() {
     check(
         &with(&[("components = [ { harmonics = [{ amplitude = 1.0, frequency = 1.0 }] },\n", "components = [\n")]),
@@ -850,6 +855,40 @@ fn signal_names_round_trip_and_change_no_number() {
     assert_eq!(paper.names.outputs(2), ["y[1]", "y[2]"]);
     assert_eq!(paper.names.inputs(2), ["u_f[1]", "u_f[2]"]);
     assert_eq!(paper.names.states(3), ["x[1]", "x[2]", "x[3]"]);
+}
+
+/// `[plant] time_unit` labels the model: by symbol or name, written back by symbol (seconds, the
+/// default, not at all), shared by `[truth]`, and no number of the design changes; the messages
+/// that state times use it.
+#[test]
+fn time_unit_labels_the_model_and_changes_no_number() {
+    use quell::TimeUnit;
+    let minutes = with(&[(X0, &format!("{X0}\ntime_unit = \"minutes\""))]);
+    let (s, d) =
+        load_and_design(&format!("{minutes}\n[truth]\ndelays = [1.0, 3.5]\n")).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!((s.plant.time_unit, s.true_plant().time_unit), (TimeUnit::Minutes, TimeUnit::Minutes));
+    let written = s.to_toml();
+    assert_eq!(written.matches("time_unit = \"min\"").count(), 1, "in [plant] only:\n{written}");
+    let back = Scenario::from_toml(&written).unwrap();
+    assert_eq!((back.plant, back.truth), (s.plant.clone(), s.truth.clone()));
+    let (paper, decided) = load_and_design(PAPER_EXAMPLE).unwrap();
+    assert_eq!(paper.plant.time_unit, TimeUnit::Seconds);
+    assert!(!paper.to_toml().contains("time_unit"));
+    assert_eq!((d.K(), d.L(), d.F(), d.mu()), (decided.K(), decided.L(), decided.F(), decided.mu()));
+    for (given, unit) in [
+        ("us", TimeUnit::Microseconds),
+        ("µs", TimeUnit::Microseconds),
+        ("ms", TimeUnit::Milliseconds),
+        ("s", TimeUnit::Seconds),
+        ("seconds", TimeUnit::Seconds),
+        ("h", TimeUnit::Hours),
+        ("hours", TimeUnit::Hours),
+        ("d", TimeUnit::Days),
+    ] {
+        assert_eq!(TimeUnit::from_name(given), Ok(unit), "{given}");
+    }
+    let e = quell::Controller::new(&d, 0.3).unwrap_err().to_string();
+    assert!(e.contains("τ = 1 min is not a whole number of samples of T_s = 0.3 min"), "{e}");
 }
 
 /// Without the key a file means the paper's form (G_g1 = [[0, 1], [−6, −7]], l = e_2, Section VIII);

@@ -151,7 +151,7 @@ fn truth_mistakes_name_their_key() {
         ("u_max = [1.0]", "truth.u_max: expected 2 entries (one per input), found 1"),
         (
             "actuator_delays = [-0.1, 0.0]",
-            "truth.actuator_delays[0]: expected a finite delay ≥ 0 in seconds, found -0.1",
+            "truth.actuator_delays[0]: expected a finite delay ≥ 0 (in the plant model's unit of time), found -0.1",
         ),
         ("u_max = [1.0, 0.0]", "truth.u_max[1]: expected a limit > 0 (inf for none), found 0"),
     ];

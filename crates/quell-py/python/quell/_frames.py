@@ -87,9 +87,10 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None):
         eta_ax = axes[-1]
         for j in range(result.q):
             eta_ax.plot(t, result.eta[:, i, j], label=f"η{c}_{j + 1}")
-        eta_ax.set(title=f"Channel {c}: adjustable parameters (33)", ylabel="η", xlabel="t")
+        eta_ax.set(title=f"Channel {c}: adjustable parameters (33)", ylabel="η")
         if len(axes) == 4:
             uf_ax.legend(loc="lower right", fontsize="small")
+    axes[-1].set(xlabel=f"t, {result.time_unit}")
     for a in axes:
         a.grid(True, alpha=0.3)
         a.legend(loc="upper right", fontsize="small", ncol=1 + (len(axes) > 1 and a is axes[-1]) * 2)

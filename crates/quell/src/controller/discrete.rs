@@ -8,6 +8,7 @@ use thiserror::Error;
 use super::{command, mat_vec, swapping_error, Equations};
 use crate::design::Design;
 use crate::linalg::zoh_unchecked;
+use crate::settings::TimeUnit;
 
 /// Why a controller cannot run at the requested sample time.
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -16,23 +17,30 @@ pub enum ControllerError {
     BadSampleTime { value: f64 },
     /// `nearest` is a sample time that passes this same check, written with the fewest digits that do
     /// (so the printed value works when typed back), or `None` when no τ_c/k near T_s fits every delay.
-    #[error("simulation.sample_time: channel {}'s delay τ = {delay} s is not a whole number of samples of T_s = {sample_time} s ({ratio:.6} samples); {}", .channel + 1, suggestion(*.nearest))]
-    DelayNotMultiple { channel: usize, delay: f64, sample_time: f64, ratio: f64, nearest: Option<f64> },
+    #[error("simulation.sample_time: channel {}'s delay τ = {delay} {unit} is not a whole number of samples of T_s = {sample_time} {unit} ({ratio:.6} samples); {}", .channel + 1, suggestion(*.nearest, *.unit))]
+    DelayNotMultiple { channel: usize, delay: f64, sample_time: f64, ratio: f64, nearest: Option<f64>, unit: TimeUnit },
     /// `nearest` as in `DelayNotMultiple`: the sample time nearest T_s at which every line fits and
     /// every delay is whole.
-    #[error("simulation.sample_time: channel {}'s delay τ = {} s is {samples:e} samples of T_s = {} s; a delay line holds at most {max:e} samples; {}", .channel + 1, crate::linalg::fmt_number(*.delay), crate::linalg::fmt_number(*.sample_time), longer(*.nearest), max = MAX_DELAY_SAMPLES)]
-    DelayTooLong { channel: usize, delay: f64, sample_time: f64, samples: f64, nearest: Option<f64> },
+    #[error("simulation.sample_time: channel {}'s delay τ = {} {unit} is {samples:e} samples of T_s = {} {unit}; a delay line holds at most {max:e} samples; {}", .channel + 1, crate::linalg::fmt_number(*.delay), crate::linalg::fmt_number(*.sample_time), longer(*.nearest, *.unit), max = MAX_DELAY_SAMPLES)]
+    DelayTooLong { channel: usize, delay: f64, sample_time: f64, samples: f64, nearest: Option<f64>, unit: TimeUnit },
     /// The delay lines together would hold more than [`MAX_DELAY_LINE_BYTES`]; `at_least` is the
     /// shortest sample time at which they would not, `nearest` as in `DelayTooLong`.
-    #[error("simulation.sample_time: the delay lines of u_i(t − τ_i) and ξ̂(t − τ_i) would hold {rows:e} rows of {width} numbers at T_s = {} s ({:.3} GiB); at most {} GiB are kept; use a sample time ≥ {}{}", crate::linalg::fmt_number(*.sample_time), *.rows * (8 * *.width) as f64 / 1024f64.powi(3), MAX_DELAY_LINE_BYTES / 1024f64.powi(3), crate::settings::fmt_short(*.at_least), such_as(*.nearest))]
-    DelayLinesTooLarge { rows: f64, width: usize, sample_time: f64, at_least: f64, nearest: Option<f64> },
+    #[error("simulation.sample_time: the delay lines of u_i(t − τ_i) and ξ̂(t − τ_i) would hold {rows:e} rows of {width} numbers at T_s = {} {unit} ({:.3} GiB); at most {} GiB are kept; use a sample time ≥ {} {unit}{}", crate::linalg::fmt_number(*.sample_time), *.rows * (8 * *.width) as f64 / 1024f64.powi(3), MAX_DELAY_LINE_BYTES / 1024f64.powi(3), crate::settings::fmt_short(*.at_least), such_as(*.nearest, *.unit))]
+    DelayLinesTooLarge {
+        rows: f64,
+        width: usize,
+        sample_time: f64,
+        at_least: f64,
+        nearest: Option<f64>,
+        unit: TimeUnit,
+    },
     /// A discretized block is not finite at this sample time.
-    #[error("simulation.sample_time: {what} is not finite after discretizing at T_s = {sample_time:e} s; the exact discretization overflowed (the design's eigenvalues or gains times T_s are beyond floating point); choose a shorter sample time or poles of smaller magnitude")]
-    NotFinite { what: String, sample_time: f64 },
-    /// T_s μ_i is beyond [`MAX_ADAPTATION_STEP`]: the gain c/(1 + c tr Ω) of the adaptive step would overflow to
-    /// 0 once c·tr Ω overflows, turning adaptation off without a sign.
-    #[error("design.mu[{channel}]: expected T_s μ_i ≤ {max:e} (μ_i ≤ {limit:e} at T_s = {sample_time} s), found μ_i = {mu:e}; the sampled adaptation gain T_s μ_i / (1 + T_s μ_i tr Ω_i) overflows to 0 and adaptation stops — choose a smaller μ_i", max = MAX_ADAPTATION_STEP, limit = MAX_ADAPTATION_STEP / .sample_time)]
-    AdaptationStepTooLarge { channel: usize, mu: f64, sample_time: f64 },
+    #[error("simulation.sample_time: {what} is not finite after discretizing at T_s = {sample_time:e} {unit}; the exact discretization overflowed (the design's eigenvalues or gains times T_s are beyond floating point); choose a shorter sample time or poles of smaller magnitude")]
+    NotFinite { what: String, sample_time: f64, unit: TimeUnit },
+    /// T_s μ_i is beyond [`MAX_ADAPTATION_STEP`]: I + cΩ of the adaptive step would overflow once
+    /// c·Ω does, turning adaptation off.
+    #[error("design.mu[{channel}]: expected T_s μ_i ≤ {max:e} (μ_i ≤ {limit:e} at T_s = {sample_time} {unit}), found μ_i = {mu:e}; the sampled adaptation step's I + T_s μ_i Ω_i overflows (Ω_i reaches 1e150) and adaptation stops — choose a smaller μ_i", max = MAX_ADAPTATION_STEP, limit = MAX_ADAPTATION_STEP / .sample_time)]
+    AdaptationStepTooLarge { channel: usize, mu: f64, sample_time: f64, unit: TimeUnit },
     /// [`Controller::step`] was given y or g of the wrong length.
     #[error("Controller::step: {name} needs {expected} entries (one per channel), found {found}")]
     InputLength { name: &'static str, expected: usize, found: usize },
@@ -74,8 +82,8 @@ impl ControllerError {
 /// ([`ControllerError::StateNotFinite`]) until [`Controller::reset`].
 pub const MAX_MEASUREMENT: f64 = 1e100;
 
-/// Largest adaptation step c = T_s μ_i: with c and tr Ω_i both ≤ 1e150 (the plant's and signals'
-/// [`crate::plant::MAX_ENTRY`]), c·tr Ω_i ≤ 1e300 stays finite.
+/// Largest adaptation step c = T_s μ_i: with c and Ω_i both ≤ 1e150 (the plant's and signals'
+/// [`crate::plant::MAX_ENTRY`]), I + cΩ_i stays finite.
 pub const MAX_ADAPTATION_STEP: f64 = crate::plant::MAX_ENTRY;
 
 /// Longest delay line, in samples (its memory is this many rows of 1 + q numbers per channel).
@@ -174,15 +182,17 @@ pub struct Controller {
     Delta: Vec<f64>,
     /// Ω η̂ of [`adapt`].
     Omega_eta: Aligned,
+    /// The Uᵀ D U factors of I + cΩ_i in [`adapt`] (q×q).
+    ldl: Vec<f64>,
     u: Vec<f64>,
     u_f: Vec<f64>,
     /// η̂_1, …, η̂_m, concatenated.
     eta: Vec<f64>,
 }
 
-fn suggestion(nearest: Option<f64>) -> String {
+fn suggestion(nearest: Option<f64>, unit: TimeUnit) -> String {
     match nearest {
-        Some(t) => format!("the nearest valid sample time is {} s", crate::settings::fmt_short(t)),
+        Some(t) => format!("the nearest valid sample time is {} {unit}", crate::settings::fmt_short(t)),
         None => format!(
             "no sample time τ_c/k within {SEARCHED} samples of it makes every delay whole (the delays are not commensurate); \
              change the delays to whole multiples of one sample time"
@@ -190,16 +200,18 @@ fn suggestion(nearest: Option<f64>) -> String {
     }
 }
 
-fn longer(nearest: Option<f64>) -> String {
+fn longer(nearest: Option<f64>, unit: TimeUnit) -> String {
     match nearest {
-        Some(t) => format!("use a longer sample time: the nearest valid one is {} s", crate::settings::fmt_short(t)),
+        Some(t) => {
+            format!("use a longer sample time: the nearest valid one is {} {unit}", crate::settings::fmt_short(t))
+        }
         None => "use a longer sample time".into(),
     }
 }
 
-fn such_as(nearest: Option<f64>) -> String {
+fn such_as(nearest: Option<f64>, unit: TimeUnit) -> String {
     nearest.map_or_else(String::new, |t| {
-        format!(" that makes every delay whole, such as {} s", crate::settings::fmt_short(t))
+        format!(" that makes every delay whole, such as {} {unit}", crate::settings::fmt_short(t))
     })
 }
 
@@ -237,23 +249,44 @@ fn whole_within(x: f64, T: f64, tol: f64) -> Option<usize> {
 /// The delays τ_i in whole samples of T, each line within [`MAX_DELAY_SAMPLES`] and all of them,
 /// Σ (τ_i/T + 1) rows of `width` numbers, within [`MAX_DELAY_LINE_BYTES`]; else the error with the
 /// nearest sample time that passes every check ([`valid_sample_time`]).
-fn delay_samples(delays: &[f64], T: f64, width: usize) -> Result<Vec<usize>, ControllerError> {
+fn delay_samples(delays: &[f64], T: f64, width: usize, unit: TimeUnit) -> Result<Vec<usize>, ControllerError> {
     let nearest = || valid_sample_time(delays, T, width);
     for (channel, &delay) in delays.iter().enumerate() {
         let samples = delay / T;
         if samples.is_nan() || samples > MAX_DELAY_SAMPLES {
-            return Err(ControllerError::DelayTooLong { channel, delay, sample_time: T, samples, nearest: nearest() });
+            return Err(ControllerError::DelayTooLong {
+                channel,
+                delay,
+                sample_time: T,
+                samples,
+                nearest: nearest(),
+                unit,
+            });
         }
         if !whole(delay, T) {
             let nearest = nearest();
-            return Err(ControllerError::DelayNotMultiple { channel, delay, sample_time: T, ratio: samples, nearest });
+            return Err(ControllerError::DelayNotMultiple {
+                channel,
+                delay,
+                sample_time: T,
+                ratio: samples,
+                nearest,
+                unit,
+            });
         }
     }
     let d: Vec<usize> = delays.iter().map(|d| (d / T).round() as usize).collect();
     let rows: f64 = d.iter().map(|&d| d as f64 + 1.0).sum();
     if rows > row_limit(width) {
         let at_least = lines_at_least(delays, width);
-        return Err(ControllerError::DelayLinesTooLarge { rows, width, sample_time: T, at_least, nearest: nearest() });
+        return Err(ControllerError::DelayLinesTooLarge {
+            rows,
+            width,
+            sample_time: T,
+            at_least,
+            nearest: nearest(),
+            unit,
+        });
     }
     Ok(d)
 }
@@ -306,14 +339,15 @@ impl Controller {
         }
         let eq = Equations::new(design);
         let (m, q, nz) = (eq.m, eq.q, eq.nz);
-        let d = delay_samples(&design.plant().delays, T, 1 + q)?;
+        let unit = design.plant().time_unit;
+        let d = delay_samples(&design.plant().delays, T, 1 + q, unit)?;
         let (Phi_z, Gamma_z) = zoh_unchecked(&eq.A_z, &eq.B_z, T);
         let mut PhiGamma_z = DMatrix::zeros(nz, nz + 3 * m);
         PhiGamma_z.view_mut((0, 0), (nz, nz)).copy_from(&Phi_z);
         PhiGamma_z.view_mut((0, nz), (nz, 3 * m)).copy_from(&Gamma_z);
         let finite = |values: &[f64], what: &dyn Fn() -> String| match values.iter().all(|v| v.is_finite()) {
             true => Ok(()),
-            false => Err(ControllerError::NotFinite { what: what(), sample_time: T }),
+            false => Err(ControllerError::NotFinite { what: what(), sample_time: T, unit }),
         };
         finite(PhiGamma_z.as_slice(), &|| "the observers' [Φ_z Γ_z] (eqs. (6), (14), (20))".into())?;
         let channels = eq
@@ -330,7 +364,12 @@ impl Controller {
                 finite(gamma.as_slice(), &|| channel("G_ii filter γ_i"))?;
                 finite(&[T * ch.mu], &|| channel("adaptation step T_s μ_i"))?;
                 if T * ch.mu > MAX_ADAPTATION_STEP {
-                    return Err(ControllerError::AdaptationStepTooLarge { channel: i, mu: ch.mu, sample_time: T });
+                    return Err(ControllerError::AdaptationStepTooLarge {
+                        channel: i,
+                        mu: ch.mu,
+                        sample_time: T,
+                        unit,
+                    });
                 }
                 let len = ch.sigma() * (1 + q);
                 Ok(Channel {
@@ -355,6 +394,7 @@ impl Controller {
             xi: vec![0.0; q],
             Delta: vec![0.0; q],
             Omega_eta: Aligned::new(q),
+            ldl: vec![0.0; q * q],
             u: vec![0.0; m],
             u_f: vec![0.0; m],
             eta: vec![0.0; m * q],
@@ -393,8 +433,9 @@ impl Controller {
             for (Yj, dj) in ch.Y.iter_mut().zip(&self.Delta) {
                 *Yj = a * *Yj + one_minus_a * dj * eps;
             }
-            // Adaptive law (33), implicit in ρI with ρ ≥ λ_max(Ω) (see `adapt`), in the same pass.
-            adapt(ch.c, &mut ch.Omega, (a, one_minus_a), &self.Delta, &ch.Y, eta, self.Omega_eta.get());
+            // Adaptive law (33), one implicit Euler step (see `adapt`).
+            let scratch = (self.Omega_eta.get(), &mut self.ldl[..]);
+            adapt(ch.c, &mut ch.Omega, (a, one_minus_a), (&self.Delta, &ch.Y), eta, scratch);
 
             // G_ii filter bank: W ← Φ W + γ [u_i(k − d_i), ξ̂ᵀ(k − d_i)].
             let sigma = self.eq.channels[i].sigma();
@@ -623,47 +664,97 @@ impl Controller {
 }
 
 with_avx2! {
-    /// The H filter Ω ← aΩ + bΔΔᵀ (ZOH of H(s)), then one step of η̂' = μ (Y − Ω η̂) (33) with c = T_s μ,
-    /// implicit in ρI and explicit in the rest (Ω = ρI − (ρI − Ω)):
-    /// η̂ ← η̂ + c (Y − Ω η̂) / (1 + c ρ),  with ρ = tr Ω ≥ λ_max(Ω).
-    /// For PSD Ω the map η̂ ↦ (I − cΩ/(1 + cρ)) η̂ has eigenvalues in [1/(1 + cρ), 1]: nonexpansive for
-    /// every μ ≥ 0 and T_s, with the fixed points of (33), at O(q²) cost.
+    /// The H filter Ω ← aΩ + bΔΔᵀ (ZOH of H(s)), then one implicit Euler step of η̂' = μ (Y − Ω η̂)
+    /// (33) with c = T_s μ and Y, Ω held over the sample:
+    /// (I + cΩ) δ = c (Y − Ω η̂),  η̂ ← η̂ + δ,
+    /// solved by I + cΩ = Uᵀ D U (U unit upper triangular; no square root, so the generated C needs no
+    /// libm). For PSD Ω each eigendirection of Ω with eigenvalue λ contracts by 1/(1 + cλ) (the
+    /// continuous law: e^(−cλ)), so the step is nonexpansive for every μ ≥ 0 and T_s, its fixed
+    /// points are those of (33), and a direction the sample time resolves (cλ ≪ 1) adapts at the
+    /// continuous rate however stiff the others are. The pivots of I + cΩ are ≥ λ_min(I + cΩ) ≥ 1;
+    /// one rounded below 1 is taken as 1, and one lost to rounding (below 64 q ε of its diagonal,
+    /// where cΩ exceeds 1/ε along a null direction of Ω, whose exact right-hand side is below the
+    /// rounding too) leaves that direction still, as the continuous law does along null(Ω).
     ///
     /// `Omega` is the full q×q matrix (row-major), kept exactly symmetric: b (Δ_i Δ_j) rounds as
-    /// b (Δ_j Δ_i). One pass over its rows updates it and sums
-    /// (Ω η̂)_j = Σ_i Ω_ij η̂_i over i in order (the order of the generated C, [`crate::export`], which keeps
-    /// the triangle only) and tr Ω. The continuous loop keeps Ω packed (`controller/packed.rs`), because there it
-    /// is integrated state; here full rows make the pass contiguous (`docs/performance.md`).
+    /// b (Δ_j Δ_i). One pass over its rows updates it and sums (Ω η̂)_j = Σ_i Ω_ij η̂_i over i in order;
+    /// the factorization reads its upper triangle and writes `ldl` (q×q: d_j on the diagonal, U_jt
+    /// above it), each sum over k in order, as the generated C does ([`crate::export`], which keeps
+    /// the triangle only). The continuous loop keeps Ω packed (`controller/packed.rs`), because there
+    /// it is integrated state; here full rows make the pass contiguous (`docs/performance.md`).
     ///
-    /// The buffers must fit q = eta.len() (Omega q·q, Delta, Y and tmp q): the controller builds them
-    /// to size.
+    /// `signals` are (Δ, Y), `scratch` (tmp, ldl); the buffers must fit q = eta.len() (Omega and ldl
+    /// q·q, Δ, Y and tmp q): the controller builds them to size.
     pub(crate) fn adapt(
         c: f64,
         Omega: &mut [f64],
         ab: (f64, f64),
-        Delta: &[f64],
-        Y: &[f64],
+        signals: (&[f64], &[f64]),
         eta: &mut [f64],
-        tmp: &mut [f64],
+        scratch: (&mut [f64], &mut [f64]),
     ) {
-        let ((a, b), q) = (ab, eta.len());
+        let ((a, b), q, (Delta, Y), (tmp, ldl)) = (ab, eta.len(), signals, scratch);
         assert!(
-            Omega.len() == q * q && Delta.len() == q && Y.len() == q && tmp.len() == q,
+            Omega.len() == q * q && ldl.len() == q * q && Delta.len() == q && Y.len() == q && tmp.len() == q,
             "adapt: dimension mismatch"
         );
         tmp.fill(0.0);
-        let mut trace = 0.0;
         for (i, (row, &eta_i)) in Omega.chunks_exact_mut(q).zip(eta.iter()).enumerate() {
             let d_i = Delta[i];
             for ((o, d_j), t) in row.iter_mut().zip(Delta).zip(tmp.iter_mut()) {
                 *o = a * *o + b * (d_i * d_j);
                 *t += *o * eta_i;
             }
-            trace += row[i];
         }
-        let gain = c / (1.0 + c * trace);
-        for ((e, y), w) in eta.iter_mut().zip(Y).zip(tmp.iter()) {
-            *e += gain * (y - w);
+        // r = c (Y − Ω η̂) in tmp.
+        for (t, y) in tmp.iter_mut().zip(Y) {
+            *t = c * (y - *t);
+        }
+        // I + cΩ = Uᵀ D U, row j of U after rows 0 … j − 1: s = (I + cΩ)_jt − Σ_k (U_kj d_k) U_kt.
+        // A pivot within rounding of 0 against its diagonal (cΩ beyond 1/ε along a null direction of
+        // Ω, where the exact pivot 1 and right-hand side are below the rounding of cΩ) is stored as
+        // 0 with its row of U: that direction does not move.
+        let negligible = 64.0 * q as f64 * f64::EPSILON;
+        for j in 0..q {
+            let mut kept = true;
+            for t in j..q {
+                let mut s = c * Omega[j * q + t];
+                let scale = s + 1.0;
+                if t == j {
+                    s = scale;
+                }
+                for k in 0..j {
+                    s -= (ldl[k * q + j] * ldl[k * q + k]) * ldl[k * q + t];
+                }
+                ldl[j * q + t] = if t != j {
+                    if kept { s / ldl[j * q + j] } else { 0.0 }
+                } else {
+                    kept = s > negligible * scale;
+                    match (kept, s >= 1.0) {
+                        (false, _) => 0.0,
+                        (true, true) => s,
+                        (true, false) => 1.0,
+                    }
+                };
+            }
+        }
+        // Uᵀ z = r, then D w = z, then U δ = w, in place; η̂ ← η̂ + δ.
+        for j in 0..q {
+            for k in 0..j {
+                tmp[j] -= ldl[k * q + j] * tmp[k];
+            }
+        }
+        for j in 0..q {
+            let d = ldl[j * q + j];
+            tmp[j] = if d == 0.0 { 0.0 } else { tmp[j] / d };
+        }
+        for j in (0..q).rev() {
+            for t in j + 1..q {
+                tmp[j] -= ldl[j * q + t] * tmp[t];
+            }
+        }
+        for (e, d) in eta.iter_mut().zip(tmp.iter()) {
+            *e += d;
         }
     }
 }
@@ -697,8 +788,8 @@ mod tests {
 
     #[test]
     fn adaptive_step_is_nonexpansive_for_any_gain() {
-        // With Y = 0, η ↦ (I − cΩ/(1 + c tr Ω)) η must not grow for any PSD Ω and any c = T_s μ ≥ 0,
-        // including huge ones where explicit Euler (factor 1 − cλ) would blow up.
+        // With Y = 0, η ↦ (I + cΩ)⁻¹ η must not grow for any PSD Ω and any c = T_s μ ≥ 0, including
+        // huge ones where explicit Euler (factor 1 − cλ) would blow up.
         let mut rng = Gaussian::new(11);
         for _ in 0..2000 {
             let q = 1 + below(&mut rng, 12);
@@ -709,36 +800,53 @@ mod tests {
             let c = 10f64.powf(between(&mut rng, -4.0, 8.0));
             let mut eta: Vec<f64> = (0..q).map(|_| between(&mut rng, -1.0, 1.0)).collect();
             let before: f64 = eta.iter().map(|v| v * v).sum::<f64>().sqrt();
-            let mut tmp = vec![0.0; q];
-            adapt(c, &mut omega, (1.0, 0.0), &vec![0.0; q], &vec![0.0; q], &mut eta, &mut tmp);
+            let (mut tmp, mut ldl) = (vec![0.0; q], vec![0.0; q * q]);
+            adapt(c, &mut omega, (1.0, 0.0), (&vec![0.0; q], &vec![0.0; q]), &mut eta, (&mut tmp, &mut ldl));
             let after: f64 = eta.iter().map(|v| v * v).sum::<f64>().sqrt();
             assert!(after <= before * (1.0 + 1e-12), "grew from {before} to {after} (c = {c})");
         }
     }
 
     #[test]
-    fn adaptive_step_keeps_omega_exactly_symmetric_and_sums_in_order() {
-        // The C export keeps Ω's triangle only and sums (Ω η̂)_j over i in order; the Controller's full Ω
-        // must therefore stay symmetric to the last bit and give that same sum, for every q and step.
+    fn adaptive_step_keeps_omega_exactly_symmetric_and_solves_the_implicit_step() {
+        // The C export keeps Ω's triangle only, so the Controller's full Ω must stay symmetric to the
+        // last bit; and the step is (I + cΩ) δ = c (Y − Ω η̂), checked against nalgebra's LU solve of
+        // the same system to 1e-12 of |δ| (the factors' rounding, cond(I + cΩ) ≤ 1 + c tr Ω ≈ 1e3 here).
         let mut rng = Gaussian::new(5);
         for q in [1, 2, 3, 5, 8, 13, 16, 32] {
             let mut omega = vec![0.0; q * q];
-            let (mut eta, mut tmp) = (vec![0.0; q], vec![0.0; q]);
+            let (mut eta, mut tmp, mut ldl) = (vec![0.0; q], vec![0.0; q], vec![0.0; q * q]);
             let a = between(&mut rng, 0.5, 1.0);
             for _ in 0..50 {
                 let Delta: Vec<f64> = (0..q).map(|_| between(&mut rng, -3.0, 3.0)).collect();
                 let Y: Vec<f64> = (0..q).map(|_| between(&mut rng, -1.0, 1.0)).collect();
                 let eta_before = eta.clone();
-                adapt(0.7, &mut omega, (a, 1.0 - a), &Delta, &Y, &mut eta, &mut tmp);
+                adapt(0.7, &mut omega, (a, 1.0 - a), (&Delta, &Y), &mut eta, (&mut tmp, &mut ldl));
                 for i in 0..q {
                     for j in 0..i {
                         assert_eq!(omega[i * q + j].to_bits(), omega[j * q + i].to_bits(), "q {q}: Ω[{i}][{j}]");
                     }
-                    let natural = (0..q).fold(0.0, |acc, j| acc + omega[i * q + j] * eta_before[j]);
-                    assert_eq!(tmp[i].to_bits(), natural.to_bits(), "q {q}: (Ω η̂)_{i}");
                 }
+                let Om = DMatrix::from_row_slice(q, q, &omega);
+                let before = nalgebra::DVector::from_row_slice(&eta_before);
+                let rhs = (nalgebra::DVector::from_row_slice(&Y) - &Om * &before) * 0.7;
+                let want = (DMatrix::identity(q, q) + Om * 0.7).lu().solve(&rhs).unwrap();
+                let got = nalgebra::DVector::from_row_slice(&eta) - before;
+                assert!((&got - &want).norm() <= 1e-12 * want.norm().max(1e-300), "q {q}: {got} vs {want}");
             }
         }
+    }
+
+    #[test]
+    fn the_implicit_step_adapts_a_resolved_direction_at_the_continuous_rate() {
+        // Ω = diag(1e6, 1e-2), Y = 0, c = 1e-3: the stiff direction contracts by 1/(1 + 1e3), the slow
+        // one by 1/(1 + 1e-5) ≈ e^(−1e-5), the continuous law's factor to 5e-11; a step normalized
+        // by 1 + c tr Ω would slow the latter a thousandfold (1 − 1e-5/1001).
+        let mut omega = [1e6, 0.0, 0.0, 1e-2];
+        let (mut eta, mut tmp, mut ldl) = ([1.0, 1.0], [0.0; 2], [0.0; 4]);
+        adapt(1e-3, &mut omega, (1.0, 0.0), (&[0.0; 2], &[0.0; 2]), &mut eta, (&mut tmp, &mut ldl));
+        assert!((eta[0] - 1.0 / 1001.0).abs() < 1e-15, "{eta:?}");
+        assert!((eta[1] - (-1e-5f64).exp()).abs() < 5e-11, "{eta:?}");
     }
 
     #[test]
@@ -748,9 +856,9 @@ mod tests {
         let mut omega = [2.0, 0.5, 0.5, 1.0];
         let Y = [1.0, -1.0];
         let want = Om.try_inverse().unwrap() * nalgebra::DVector::from_row_slice(&Y);
-        let (mut eta, mut tmp) = (vec![0.0; 2], vec![0.0; 2]);
+        let (mut eta, mut tmp, mut ldl) = (vec![0.0; 2], vec![0.0; 2], vec![0.0; 4]);
         for _ in 0..2000 {
-            adapt(0.1, &mut omega, (1.0, 0.0), &[0.0; 2], &Y, &mut eta, &mut tmp);
+            adapt(0.1, &mut omega, (1.0, 0.0), (&[0.0; 2], &Y), &mut eta, (&mut tmp, &mut ldl));
         }
         assert!((eta[0] - want[0]).abs() < 1e-12 && (eta[1] - want[1]).abs() < 1e-12, "{eta:?} vs {want}");
     }
@@ -760,8 +868,8 @@ mod tests {
         // Ω ← aΩ + bΔΔᵀ with Ω = I, a = 0.5, b = 0.25, Δ = [1, 2]: [[0.75, 0.5], [0.5, 1.5]] (by hand);
         // with c = 0 the parameters do not move.
         let mut omega = [1.0, 0.0, 0.0, 1.0];
-        let (mut eta, mut tmp) = ([0.3, -0.7], [0.0; 2]);
-        adapt(0.0, &mut omega, (0.5, 0.25), &[1.0, 2.0], &[1.0, 1.0], &mut eta, &mut tmp);
+        let (mut eta, mut tmp, mut ldl) = ([0.3, -0.7], [0.0; 2], [0.0; 4]);
+        adapt(0.0, &mut omega, (0.5, 0.25), (&[1.0, 2.0], &[1.0, 1.0]), &mut eta, (&mut tmp, &mut ldl));
         assert_eq!(omega, [0.75, 0.5, 0.5, 1.5]);
         assert_eq!(eta, [0.3, -0.7]);
     }

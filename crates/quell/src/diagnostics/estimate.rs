@@ -51,6 +51,7 @@ pub fn estimate(
 ) -> Vec<RateEstimate> {
     let rho = loop_rate(design, truth, [reference, disturbance]);
     let avg = Averaged::new(design, reference, disturbance);
+    let unit = design.plant().time_unit;
     let scaling_hint = match design.regressor_scaling() {
         crate::design::RegressorScaling::Paper => {
             " or set design.regressor_scaling = \"normalized\" (ξ̂ of the signals' size) and choose μ anew"
@@ -73,7 +74,7 @@ pub fn estimate(
             let mut advice = Vec::new();
             if stiff {
                 advice.push(format!(
-                    "channel {} adapts at μ λ_max = {rate:.3e}/s, {:.1e}× the loop's fastest other rate ({rho:.3e}/s): the loop is stiff (the automatic integrator handles it, an explicit one crawls); lower {key} to about {:.3e}{scaling_hint}",
+                    "channel {} adapts at μ λ_max = {rate:.3e}/{unit}, {:.1e}× the loop's fastest other rate ({rho:.3e}/{unit}): the loop is stiff (the automatic integrator handles it, an explicit one crawls); lower {key} to about {:.3e}{scaling_hint}",
                     i + 1,
                     rate / rho,
                     STIFF_RATIO * rho / lambda_max,
@@ -81,7 +82,7 @@ pub fn estimate(
             }
             if weakly_excited {
                 advice.push(format!(
-                    "channel {}'s slowest excited direction converges in 1/(μ λ_min) = {:.3e} s, beyond t_end = {t_end}: λ_min(Ω̄) = {lambda_min_excited:.3e} against λ_max = {lambda_max:.3e}; the signals excite it weakly: raise {key}{}, lengthen simulation.t_end, or put the filter poles at the signals' frequencies",
+                    "channel {}'s slowest excited direction converges in 1/(μ λ_min) = {:.3e} {unit}, beyond t_end = {t_end}: λ_min(Ω̄) = {lambda_min_excited:.3e} against λ_max = {lambda_max:.3e}; the signals excite it weakly: raise {key}{}, lengthen simulation.t_end, or put the filter poles at the signals' frequencies",
                     i + 1,
                     1.0 / slowest,
                     if stiff { " (not here: it is stiff already)" } else { "" },

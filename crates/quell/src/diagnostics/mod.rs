@@ -94,7 +94,7 @@ pub struct Diagnostics {
 pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, result: &SimResult) -> Diagnostics {
     let avg = Averaged::new(design, reference, disturbance);
     let t_end = result.t.last().copied().unwrap_or(0.0);
-    let remedy = observer_remedy(design);
+    let (remedy, unit) = (observer_remedy(design), design.plant().time_unit);
     let missed = (0..result.m).any(|i| !tail_within_bound(result, i));
     let advice = avg
         .fidelity
@@ -102,7 +102,7 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
         .filter(|f| missed && f.relative_error > FIDELITY_LIMIT)
         .map(|f| {
             format!(
-                "the disturbance observer passes ω at {} rad/s with relative error {:.2} (it is driven by x̂, not x, eq. (20)): {remedy}",
+                "the disturbance observer passes ω at {} rad/{unit} with relative error {:.2} (it is driven by x̂, not x, eq. (20)): {remedy}",
                 f.frequency, f.relative_error
             )
         })
@@ -245,10 +245,10 @@ fn channel(
     let windows = tail_windows(result, i);
     let trend = windows.and_then(trend);
     let mut advice = Vec::new();
-    let tau = design.plant().delays[i];
+    let (tau, unit) = (design.plant().delays[i], design.plant().time_unit);
     if tau >= t_end {
         advice.push(format!(
-            "channel {}'s input delay τ = {} s is not shorter than the run ({} s): its command never reaches the plant; lengthen simulation.t_end to several times τ (or check plant.delays[{i}]'s unit)",
+            "channel {}'s input delay τ = {} {unit} is not shorter than the run ({} {unit}): its command never reaches the plant; lengthen simulation.t_end to several times τ (or check plant.delays[{i}]'s unit)",
             i + 1,
             fmt_short(tau),
             fmt_short(t_end)
@@ -261,11 +261,11 @@ fn channel(
             .and_then(|w| fidelity.iter().find(|f| f.frequency == w.frequency && f.relative_error > FIDELITY_LIMIT));
         match (weakest, poor) {
             (Some(w), Some(f)) => advice.push(format!(
-                "Ω̄_{} is weakly excited at {} rad/s ({:.1e}), where the disturbance observer's relative error is {:.2}: {remedy} (raising μ would only make the loop stiff)",
+                "Ω̄_{} is weakly excited at {} rad/{unit} ({:.1e}), where the disturbance observer's relative error is {:.2}: {remedy} (raising μ would only make the loop stiff)",
                 i + 1, w.frequency, w.excitation, f.relative_error
             )),
             _ => advice.push(format!(
-                "{key} = {mu} is too small for the horizon: the error's slowest relevant direction decays at μ λ = {:.2e}/s; raise {key} to about {:.3e} (5/(λ t_end)) or lengthen simulation.t_end",
+                "{key} = {mu} is too small for the horizon: the error's slowest relevant direction decays at μ λ = {:.2e}/{unit}; raise {key} to about {:.3e} (5/(λ t_end)) or lengthen simulation.t_end",
                 mu * relevant, 5.0 / (relevant * t_end)
             )),
         }

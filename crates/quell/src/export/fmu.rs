@@ -155,9 +155,10 @@ pub fn generate_fmu(
         (wrapper_name.clone(), wrapper),
     ];
     let units = [wrapper_name.as_str(), code.source_name.as_str()];
+    let unit = super::time_unit_text(design);
     let model_description = match version {
-        FmiVersion::V2 => model_description_2(options, m, sample_time, &guid, &units),
-        FmiVersion::V3 => model_description_3(options, m, sample_time, &guid),
+        FmiVersion::V2 => model_description_2(options, m, (sample_time, &unit), &guid, &units),
+        FmiVersion::V3 => model_description_3(options, m, (sample_time, &unit), &guid),
     };
     let header_files = headers.iter().map(|(n, t)| (n.to_string(), t.to_string()));
 
@@ -221,7 +222,8 @@ fn variables(m: usize) -> impl Iterator<Item = (usize, String, &'static str, &'s
 }
 
 /// The opening of `modelDescription.xml` up to the interface element's attributes.
-fn opening(o: &ExportOptions, version: FmiVersion, sample_time: f64, token: &str) -> String {
+/// `sample` is T_s and what it is measured in.
+fn opening(o: &ExportOptions, version: FmiVersion, (sample_time, unit): (f64, &str), token: &str) -> String {
     let name = xml_escape(o.scenario_name.as_deref().unwrap_or(&o.prefix));
     let token = match version {
         FmiVersion::V2 => format!(r#"guid="{token}""#),
@@ -229,15 +231,16 @@ fn opening(o: &ExportOptions, version: FmiVersion, sample_time: f64, token: &str
     };
     let events = if version == FmiVersion::V2 { r#" numberOfEventIndicators="0""# } else { "" };
     format!(
-        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<fmiModelDescription fmiVersion=\"{}\" modelName=\"{name}\" {token} description=\"Direct adaptive output-feedback controller (quell), sampled at T_s = {sample_time:?} (the plant model's unit of time)\" generationTool=\"quell {}\" variableNamingConvention=\"structured\"{events}>\n",
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<fmiModelDescription fmiVersion=\"{}\" modelName=\"{name}\" {token} description=\"Direct adaptive output-feedback controller (quell), sampled at T_s = {sample_time:?} ({})\" generationTool=\"quell {}\" variableNamingConvention=\"structured\"{events}>\n",
         version.name(),
+        xml_escape(unit),
         env!("CARGO_PKG_VERSION")
     )
 }
 
 /// FMI 2.0 `modelDescription.xml` (value references of [`variables`]).
-fn model_description_2(o: &ExportOptions, m: usize, sample_time: f64, guid: &str, source_files: &[&str]) -> String {
-    let mut x = opening(o, FmiVersion::V2, sample_time, guid);
+fn model_description_2(o: &ExportOptions, m: usize, sample: (f64, &str), guid: &str, source_files: &[&str]) -> String {
+    let (mut x, sample_time) = (opening(o, FmiVersion::V2, sample, guid), sample.0);
     let _ = writeln!(
         x,
         r#"  <CoSimulation modelIdentifier="{}" canHandleVariableCommunicationStepSize="true" canBeInstantiatedOnlyOncePerProcess="false" canNotUseMemoryManagementFunctions="false">"#,
@@ -269,8 +272,8 @@ fn model_description_2(o: &ExportOptions, m: usize, sample_time: f64, guid: &str
 
 /// FMI 3.0 `modelDescription.xml`: the variables of [`variables`] as `Float64`, and the
 /// independent variable `time` at value reference 4m.
-fn model_description_3(o: &ExportOptions, m: usize, sample_time: f64, token: &str) -> String {
-    let mut x = opening(o, FmiVersion::V3, sample_time, token);
+fn model_description_3(o: &ExportOptions, m: usize, sample: (f64, &str), token: &str) -> String {
+    let (mut x, sample_time) = (opening(o, FmiVersion::V3, sample, token), sample.0);
     let _ = writeln!(
         x,
         r#"  <CoSimulation modelIdentifier="{}" canHandleVariableCommunicationStepSize="true" canBeInstantiatedOnlyOncePerProcess="false" hasEventMode="false"/>"#,

@@ -18,6 +18,7 @@ use thiserror::Error;
 
 use crate::controller::{Controller, ControllerError};
 use crate::design::Design;
+use crate::settings::TimeUnit;
 
 /// Floating-point type of the generated code.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -82,6 +83,15 @@ pub struct ExportOptions {
     pub precision: Precision,
     /// The scenario's name, for the header comment.
     pub scenario_name: Option<String>,
+}
+
+/// What T_s is measured in, as the generated comments say it: "the plant model's unit of time",
+/// with the unit's name first when the plant gives one other than seconds.
+fn time_unit_text(design: &Design) -> String {
+    match design.plant().time_unit {
+        TimeUnit::Seconds => "the plant model's unit of time".into(),
+        u => format!("{}, the plant model's unit of time", u.name()),
+    }
 }
 
 impl Default for ExportOptions {

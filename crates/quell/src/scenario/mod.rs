@@ -23,6 +23,7 @@ use thiserror::Error;
 
 use crate::design::{Design, DesignError, DesignSpec, ObserverChoice, RegressorScaling};
 use crate::plant::{Plant, PlantError};
+use crate::settings::TimeUnit;
 use crate::settings::{self, KeyError, Method};
 use crate::signal::{check_signals, Component, Harmonic, Signal};
 use exosystem::Exosystem;
@@ -30,7 +31,7 @@ pub use names::{check_names, SignalNames};
 pub(crate) use read::kind;
 pub(crate) use read::syntax_message;
 use read::{err, Table, Value};
-pub use write::{design_table, plant_table, pole_list, signal_table};
+pub use write::{design_table, plant_table, pole_list, signal_table, truth_table};
 
 /// The paper's example (Section VIII) as a scenario file: `examples/paper.toml`.
 pub const PAPER_EXAMPLE: &str = include_str!("../../../../examples/paper.toml");
@@ -134,7 +135,7 @@ pub fn load_and_design(text: &str) -> Result<(Scenario, Design), LoadError> {
 }
 
 const TOP_KEYS: &[&str] = &["name", "plant", "design", "reference", "disturbance", "simulation", "noise", "truth"];
-const PLANT_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0", "inputs", "outputs", "states"];
+const PLANT_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0", "inputs", "outputs", "states", "time_unit"];
 const TRUTH_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0", "actuator_delays", "u_max"];
 const DESIGN_KEYS: &[&str] = &[
     "observer_gain",
@@ -328,8 +329,9 @@ fn plant(v: Value, disturbance: Option<&Signal>) -> Result<(Plant, SignalNames),
         }
         _ => DMatrix::zeros(m, 0),
     };
+    let time_unit = t.get("time_unit", |v| TimeUnit::from_name(&v.string()?).map_err(|message| err(v.key, message)))?;
     let plant = Plant::new(A, B, C, D, Q, delays, x0).map_err(|e| plant_error(e, n, m, k))?;
-    Ok((plant, SignalNames::read(&t, n, m)?))
+    Ok((plant.with_time_unit(time_unit.unwrap_or_default()), SignalNames::read(&t, n, m)?))
 }
 
 /// `[truth]`: each given matrix has its `[plant]` counterpart's shape, the rest is `plant`'s; and the
@@ -388,7 +390,7 @@ fn truth(v: Value, plant: &Plant) -> Result<(Plant, Option<Actuator>), ScenarioE
         let e = plant_error(e, n, m, k);
         err(e.key.replacen("plant.", "truth.", 1), e.message)
     })?;
-    Ok((truth, actuator))
+    Ok((truth.with_time_unit(plant.time_unit), actuator))
 }
 
 /// The key of entry (row, col) of plant matrix `name` (x0 is a vector: one index).
@@ -598,13 +600,14 @@ fn component(v: Value) -> Result<Component, ScenarioError> {
 fn harmonic(v: Value) -> Result<Harmonic, ScenarioError> {
     let t = v.table(HARMONIC_KEYS)?;
     let amplitude = t.require("amplitude", "the amplitude a of a·sin(ωt + φ)", |v| v.number())?;
-    let frequency = t.require("frequency", "the frequency ω ≥ 0 (rad/s) of a·sin(ωt + φ)", |v| {
-        let w = v.number()?;
-        if w < 0.0 {
-            return Err(err(v.key, crate::signal::negative_frequency(w)));
-        }
-        Ok(w)
-    })?;
+    let frequency =
+        t.require("frequency", "the frequency ω ≥ 0 (rad per unit of the plant's time) of a·sin(ωt + φ)", |v| {
+            let w = v.number()?;
+            if w < 0.0 {
+                return Err(err(v.key, crate::signal::negative_frequency(w)));
+            }
+            Ok(w)
+        })?;
     let phase = t.get("phase", |v| v.number())?.unwrap_or(0.0);
     Ok(Harmonic { amplitude, frequency, phase })
 }

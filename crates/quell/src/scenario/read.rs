@@ -50,10 +50,7 @@ impl<'a> Table<'a> {
         for name in table.keys() {
             if !valid.contains(&name.as_str()) {
                 let place = if key.is_empty() { "at the top level".to_string() } else { format!("in [{key}]") };
-                let hint = valid
-                    .iter()
-                    .filter(|v| strsim::levenshtein(&v.to_lowercase(), &name.to_lowercase()) <= 2)
-                    .min_by_key(|v| strsim::levenshtein(v, name))
+                let hint = crate::settings::nearest(name, valid.iter().copied())
                     .map(|v| format!(" (did you mean `{v}`?)"))
                     .unwrap_or_default();
                 return Err(err(

@@ -10,6 +10,7 @@ use super::{Noise, Scenario, Simulation};
 use crate::design::{DesignSpec, ObserverChoice};
 use crate::plant::Plant;
 use crate::settings::Method;
+use crate::settings::TimeUnit;
 use crate::signal::Signal;
 
 impl Scenario {
@@ -38,7 +39,7 @@ impl Scenario {
             doc.insert("noise".into(), Value::Table(noise_table(noise)));
         }
         if let Some(truth) = &self.truth {
-            let mut t = plant_table(truth);
+            let mut t = truth_table(truth);
             if let Some(a) = &self.actuator {
                 t.insert("actuator_delays".into(), numbers(&a.delays));
                 t.insert("u_max".into(), numbers(&a.limits));
@@ -69,6 +70,17 @@ pub fn plant_table(p: &Plant) -> Table {
     }
     t.insert("delays".into(), numbers(&p.delays));
     t.insert("x0".into(), numbers(p.x0.as_slice()));
+    if p.time_unit != TimeUnit::Seconds {
+        t.insert("time_unit".into(), Value::String(p.time_unit.symbol().into()));
+    }
+    t
+}
+
+/// `[truth]`'s table of a true plant: [`plant_table`] without `time_unit` (the truth is in the
+/// design model's unit).
+pub fn truth_table(p: &Plant) -> Table {
+    let mut t = plant_table(p);
+    t.remove("time_unit");
     t
 }
 

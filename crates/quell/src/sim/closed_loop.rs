@@ -845,12 +845,13 @@ pub(super) fn check<'a>(run: &Run<'a>, integrator: &Integrator) -> Result<Contin
     settings::check_tolerances(integrator.rtol, integrator.atol)?;
     let (actuator, noise) = (st.actuator.as_ref(), st.noise.as_ref());
     let sys = ContinuousLoop::with_physics(run.design, truth, run.reference, run.disturbance, actuator, noise)?;
-    settings::check_integrator_signal("reference", run.reference, st.t_end)?;
-    settings::check_integrator_signal("disturbance", run.disturbance, st.t_end)?;
-    settings::check_integrator_delays("plant.delays", &run.design.plant().delays, st.t_end)?;
-    settings::check_integrator_delays("truth.delays", &truth.delays, st.t_end)?;
+    let horizon = (st.t_end, run.design.plant().time_unit);
+    settings::check_integrator_signal("reference", run.reference, horizon)?;
+    settings::check_integrator_signal("disturbance", run.disturbance, horizon)?;
+    settings::check_integrator_delays("plant.delays", &run.design.plant().delays, horizon)?;
+    settings::check_integrator_delays("truth.delays", &truth.delays, horizon)?;
     if let Some(a) = actuator {
-        settings::check_integrator_delays("truth.actuator_delays", &a.delays, st.t_end)?;
+        settings::check_integrator_delays("truth.actuator_delays", &a.delays, horizon)?;
     }
     Ok(sys)
 }

@@ -17,6 +17,7 @@ use crate::controller::{mat_vec, Controller, ControllerError};
 use crate::design::Design;
 use crate::linalg::zoh_unchecked;
 use crate::plant::Plant;
+use crate::settings::TimeUnit;
 use crate::settings::{self, Actuator, KeyError, MeasurementNoise};
 use crate::signal::{Signal, SignalBank};
 
@@ -35,9 +36,10 @@ pub fn coarse_sample_warning(
     sample_time: f64,
 ) -> Option<String> {
     let rate = super::loop_rate(design, design.plant(), [reference, disturbance]);
+    let unit = design.plant().time_unit;
     (sample_time * rate > COARSE_SAMPLE).then(|| {
         format!(
-            "simulation.sample_time: T_s = {} s is {:.2} of the loop's fastest time constant 1/ρ (ρ = {} /s: the plant, observer, channel and filter poles, 1/β and the signals' frequencies): the discrete controller may depart from the continuous design; choose T_s ≤ {} s (T_s·ρ ≤ {COARSE_SAMPLE}) or slower poles",
+            "simulation.sample_time: T_s = {} {unit} is {:.2} of the loop's fastest time constant 1/ρ (ρ = {} /{unit}: the plant, observer, channel and filter poles, 1/β and the signals' frequencies): the discrete controller may depart from the continuous design; choose T_s ≤ {} {unit} (T_s·ρ ≤ {COARSE_SAMPLE}) or slower poles",
             settings::fmt_short(sample_time),
             sample_time * rate,
             settings::fmt_short(settings::three_digits_down(rate)),
@@ -91,11 +93,11 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
         Some(_) => None,
         None => Some(Controller::new(run.design, sample_time)?),
     };
-    let (T, h) = (sample_time, st.output_step);
+    let (T, h, unit) = (sample_time, st.output_step, run.design.plant().time_unit);
     let every = discrete::whole_multiple(h, T).filter(|&k| k >= 1).ok_or_else(|| {
         KeyError::new(
             "simulation.output_step",
-            format!("expected a whole multiple of sample_time = {T} s, found {h} s ({:.6} samples)", h / T),
+            format!("expected a whole multiple of sample_time = {T} {unit}, found {h} {unit} ({:.6} samples)", h / T),
         )
     })?;
     super::check_truth(run.design, run.truth)?;
@@ -160,7 +162,7 @@ struct ActuatorLine {
 }
 
 impl ActuatorLine {
-    fn new(actuator: &Actuator, T: f64) -> Result<Self, KeyError> {
+    fn new(actuator: &Actuator, T: (f64, TimeUnit)) -> Result<Self, KeyError> {
         let d = delay_samples("truth.actuator_delays", &actuator.delays, T)?;
         let m = d.len();
         let past = PastSamples::new(m, &[&d]);
@@ -178,14 +180,14 @@ impl ActuatorLine {
 }
 
 /// Each delay as a whole number of samples of T, or an error on `key[i]`.
-fn delay_samples(key: &str, delays: &[f64], T: f64) -> Result<Vec<usize>, KeyError> {
+fn delay_samples(key: &str, delays: &[f64], (T, unit): (f64, TimeUnit)) -> Result<Vec<usize>, KeyError> {
     let whole = |tau: f64| discrete::whole(tau, T).then(|| discrete::whole_multiple(tau, T)).flatten();
     (delays.iter().enumerate())
         .map(|(i, &tau)| {
             whole(tau).ok_or_else(|| {
                 KeyError::new(
                     format!("{key}[{i}]"),
-                    format!("τ = {tau} s is {:.6} samples of T_s = {T} s; a sampled-data run needs whole numbers of samples (at most {MAX_DELAY_SAMPLES:e})", tau / T),
+                    format!("τ = {tau} {unit} is {:.6} samples of T_s = {T} {unit}; a sampled-data run needs whole numbers of samples (at most {MAX_DELAY_SAMPLES:e})", tau / T),
                 )
             })
         })
@@ -211,6 +213,7 @@ impl TrueInput {
         if truth.delays == p.delays {
             return Ok(None);
         }
+        let T = (T, p.time_unit);
         let (d, d_true) =
             (delay_samples("plant.delays", &p.delays, T)?, delay_samples("truth.delays", &truth.delays, T)?);
         let m = d.len();
@@ -289,7 +292,7 @@ impl PlantSide {
         let (truth, settings) = (run.truth, &run.settings);
         let shift = TrueInput::new(run.design, truth, T)?;
         let actuator = match settings.actuator.as_ref().filter(|a| !a.is_ideal()) {
-            Some(a) => Some(ActuatorLine::new(a, T)?),
+            Some(a) => Some(ActuatorLine::new(a, (T, run.design.plant().time_unit))?),
             None => None,
         };
         let ExactPlant { Phi, Gamma, Cy, s0 } = ExactPlant::new(truth, run.disturbance, T);

@@ -427,6 +427,12 @@ impl Study {
         (0..self.len() as usize).map_while(|i| self.spec_with_nominal(i))
     }
 
+    /// The scenario's unit of time (`[plant] time_unit`, checked when the study was read).
+    pub fn time_unit(&self) -> crate::settings::TimeUnit {
+        let given = self.base.get("plant").and_then(|p| p.get("time_unit")).and_then(toml::Value::as_str);
+        given.and_then(|u| crate::settings::TimeUnit::from_name(u).ok()).unwrap_or_default()
+    }
+
     /// Whether some run's true plant differs from the design model: the scenario's `[truth]`
     /// differs from `[plant]`, a grid value of a `truth.` key differs from the plant's, or a draw
     /// perturbs a `truth.` key with a spread > 0.

@@ -111,6 +111,13 @@ pub struct StudyMeta {
     #[serde(default)]
     pub runaway: super::Runaway,
     pub shard: Shard,
+    /// The symbol of the scenario's unit of time (`[plant] time_unit`; "s" when not given).
+    #[serde(default = "seconds")]
+    pub time_unit: String,
+}
+
+fn seconds() -> String {
+    "s".into()
 }
 
 impl StudyMeta {
@@ -131,6 +138,7 @@ impl StudyMeta {
             truth_differs: study.truth_differs(),
             runaway: study.runaway,
             shard,
+            time_unit: study.time_unit().symbol().into(),
         }
     }
 

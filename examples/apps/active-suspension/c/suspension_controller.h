@@ -5,8 +5,8 @@
  * change, regenerate with
  *     quell export SCENARIO --sample-time 0.001 --prefix suspension --precision f64
  *
- * Sample time T_s = 0.001 (in the plant model's unit of time): call suspension_step once per sample
- * (docs/deployment.md).
+ * Sample time T_s = 0.001, in the plant model's unit of time.
+ * Call suspension_step once per sample (docs/deployment.md).
  * Plant: n = 4 states, m = 1 channels; regressor q = 3 (q_g = 1, q_w = 2).
  * Input delays: channel 1: tau = 0.005 = 5 samples.
  * Eigenvalues of the design (continuous time):
@@ -64,6 +64,6 @@ void suspension_command(const suspension_state *s, double u[SUSPENSION_M]);
 #endif
 
 /* Identifies this header's source: suspension_controller.c compiles only with it. */
-#define SUSPENSION_LAYOUT_ID 0x11697cf8203e742fu
+#define SUSPENSION_LAYOUT_ID 0x5583c602d811695bu
 
 #endif /* SUSPENSION_CONTROLLER_H */

@@ -2,7 +2,8 @@
 #include "motor_controller.h"
 
 /* A header from another export fails here (size -1): regenerate both files together. */
-typedef char motor_header_matches_source[MOTOR_LAYOUT_ID == 0x0edb45e904e9ac2eu ? 1 : -1];
+typedef char motor_header_matches_source[MOTOR_LAYOUT_ID == 0x1907793bab36644eu ? 1 : -1];
+#include <float.h>
 
 /* Core (observers (6), (14), (20) with (5) substituted) at ZOH: z(k+1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
 static const double motor_PhiGamma_z[MOTOR_NZ][MOTOR_NZ + 3 * MOTOR_M] = {
@@ -74,6 +75,12 @@ void motor_init(motor_state *s)
     s->head = 0;
 }
 
+/* Entry (j, t), j <= t, of a symmetric Q x Q matrix kept as its upper triangle row by row. */
+static unsigned motor_tri(unsigned j, unsigned t)
+{
+    return j * (2u * MOTOR_Q + 1u - j) / 2u + (t - j);
+}
+
 /* Channel i of the adaptive law (33) at sample k, from the row [u_i, xi_hat^T] of sample k - d_i:
  * the swapping error and regressor from W_i(k), the H filters Y_i and Omega_i, one step of eta_i,
  * then the G_ii filter bank W_i(k + 1). Returns u_i(k - d_i). */
@@ -86,7 +93,7 @@ static double motor_channel(motor_state *s, unsigned i, unsigned sigma, const do
     const double *past = s->line[s->head >= d ? s->head - d : s->head + ((uint32_t)MOTOR_DELAY_MAX + 1u) - d];
     const double q0 = motor_q0[i], c = motor_c[i];
     double Delta[MOTOR_Q], Omega_eta[MOTOR_Q], next[MOTOR_SIGMA_MAX];
-    double trace = 0;
+    double F[MOTOR_Q * (MOTOR_Q + 1) / 2]; /* U^T D U of I + c Omega, packed as Omega: d_j on the diagonal */
 
     /* Swapping error eps = (y_i - g_i) - q_i0 W[0][0] and regressor Delta = q_i0 W[0][1..q]. */
     const double eps = delta - q0 * W[0][0];
@@ -96,12 +103,11 @@ static double motor_channel(motor_state *s, unsigned i, unsigned sigma, const do
     }
     /* H filters at ZOH: Y <- a Y + b Delta eps, Omega <- a Omega + b (Delta Delta^T) (symmetric, kept
      * as its upper triangle row by row: row j is Omega[j][j], then Omega[j][t] for t > j), and in
-     * the same pass tr Omega and Omega eta, each entry summed over the column index in order. */
+     * the same pass Omega eta, each entry summed over the column index in order. */
     for (unsigned j = 0; j < MOTOR_Q; j++)
         Y[j] = motor_a * Y[j] + motor_b * Delta[j] * eps;
     for (unsigned j = 0, k = 0; j < MOTOR_Q; j++) {
         Omega[k] = motor_a * Omega[k] + motor_b * (Delta[j] * Delta[j]);
-        trace += Omega[k];
         Omega_eta[j] += Omega[k] * eta[j];
         k++;
         for (unsigned t = j + 1; t < MOTOR_Q; t++, k++) {
@@ -110,11 +116,44 @@ static double motor_channel(motor_state *s, unsigned i, unsigned sigma, const do
             Omega_eta[t] += Omega[k] * eta[j];
         }
     }
-    /* Adaptive step (33), implicit in rho I with rho = tr Omega >= lambda_max(Omega), explicit in
-     * the rest: eta <- eta + c (Y - Omega eta) / (1 + c rho), c = T_s mu_i; nonexpansive for any c. */
-    const double gain = c / (1 + c * trace);
+    /* Adaptive step (33), implicit Euler with c = T_s mu_i: (I + c Omega) delta = c (Y - Omega eta),
+     * eta <- eta + delta; nonexpansive for any c. I + c Omega = U^T D U (U unit upper triangular, no
+     * square root); a pivot rounded below its bound 1 is taken as 1, one lost to rounding (below
+     * 64 Q eps of its diagonal) is stored as 0 with its row of U, and that direction does not
+     * move. rhs = Omega_eta becomes delta. */
+    double *rhs = Omega_eta;
     for (unsigned j = 0; j < MOTOR_Q; j++)
-        eta[j] += gain * (Y[j] - Omega_eta[j]);
+        rhs[j] = c * (Y[j] - Omega_eta[j]);
+    const double negligible = 64 * MOTOR_Q * DBL_EPSILON;
+    for (unsigned j = 0; j < MOTOR_Q; j++) {
+        int kept = 1;
+        for (unsigned t = j; t < MOTOR_Q; t++) {
+            double v = c * Omega[motor_tri(j, t)];
+            const double scale = v + 1;
+            if (t == j)
+                v = scale;
+            for (unsigned k = 0; k < j; k++)
+                v -= (F[motor_tri(k, j)] * F[motor_tri(k, k)]) * F[motor_tri(k, t)];
+            if (t != j) {
+                F[motor_tri(j, t)] = kept ? v / F[motor_tri(j, j)] : 0;
+            } else {
+                kept = v > negligible * scale;
+                F[motor_tri(j, j)] = !kept ? 0 : v >= 1 ? v : 1;
+            }
+        }
+    }
+    for (unsigned j = 0; j < MOTOR_Q; j++)
+        for (unsigned k = 0; k < j; k++)
+            rhs[j] -= F[motor_tri(k, j)] * rhs[k];
+    for (unsigned j = 0; j < MOTOR_Q; j++) {
+        const double pivot = F[motor_tri(j, j)];
+        rhs[j] = pivot == 0 ? 0 : rhs[j] / pivot;
+    }
+    for (unsigned j = MOTOR_Q; j-- > 0;)
+        for (unsigned t = j + 1; t < MOTOR_Q; t++)
+            rhs[j] -= F[motor_tri(j, t)] * rhs[t];
+    for (unsigned j = 0; j < MOTOR_Q; j++)
+        eta[j] += rhs[j];
     /* G_ii filter bank at ZOH, column by column: W <- Phi W + gamma [u_i(k - d_i), xi_hat^T(k - d_i)]. */
     for (unsigned col = 0; col < MOTOR_Q + 1; col++) {
         const double x = col == 0 ? past[i] : past[MOTOR_M + col - 1];

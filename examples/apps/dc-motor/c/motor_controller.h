@@ -5,8 +5,8 @@
  * change, regenerate with
  *     quell export SCENARIO --sample-time 0.001 --prefix motor --precision f64
  *
- * Sample time T_s = 0.001 (in the plant model's unit of time): call motor_step once per sample
- * (docs/deployment.md).
+ * Sample time T_s = 0.001, in the plant model's unit of time.
+ * Call motor_step once per sample (docs/deployment.md).
  * Plant: n = 3 states, m = 1 channels; regressor q = 5 (q_g = 2, q_w = 3).
  * Input delays: channel 1: tau = 0.001 = 1 samples.
  * Eigenvalues of the design (continuous time):
@@ -64,6 +64,6 @@ void motor_command(const motor_state *s, double u[MOTOR_M]);
 #endif
 
 /* Identifies this header's source: motor_controller.c compiles only with it. */
-#define MOTOR_LAYOUT_ID 0x0edb45e904e9ac2eu
+#define MOTOR_LAYOUT_ID 0x1907793bab36644eu
 
 #endif /* MOTOR_CONTROLLER_H */

@@ -5,8 +5,8 @@
  * change, regenerate with
  *     quell export SCENARIO --sample-time 0.1 --prefix supply --precision f64
  *
- * Sample time T_s = 0.1 (in the plant model's unit of time): call supply_step once per sample
- * (docs/deployment.md).
+ * Sample time T_s = 0.1, in the plant model's unit of time.
+ * Call supply_step once per sample (docs/deployment.md).
  * Plant: n = 6 states, m = 3 channels; regressor q = 12 (q_g = 3, q_w = 9).
  * Input delays: channel 1: tau = 1 = 10 samples; channel 2: tau = 1 = 10 samples; channel 3: tau = 1 = 10 samples.
  * Eigenvalues of the design (continuous time):
@@ -64,6 +64,6 @@ void supply_command(const supply_state *s, double u[SUPPLY_M]);
 #endif
 
 /* Identifies this header's source: supply_controller.c compiles only with it. */
-#define SUPPLY_LAYOUT_ID 0x59223170088ad82eu
+#define SUPPLY_LAYOUT_ID 0x267bab7f84c5910au
 
 #endif /* SUPPLY_CONTROLLER_H */
