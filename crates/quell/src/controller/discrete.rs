@@ -663,28 +663,34 @@ impl Controller {
     }
 }
 
+/// c·tr Ω up to which [`adapt`] takes the O(q²) step η̂ ← η̂ + c (Y − Ω η̂)/(1 + c tr Ω): its rates
+/// are those of the implicit step to 5 % (both are first order in T_s), and it costs a tenth of the
+/// factorization at q = 8 (the paper's example at T_s = 1 ms peaks at c·tr Ω = 0.021).
+pub(crate) const IMPLICIT_FROM: f64 = 0.05;
+
 with_avx2! {
-    /// The H filter Ω ← aΩ + bΔΔᵀ (ZOH of H(s)), then one implicit Euler step of η̂' = μ (Y − Ω η̂)
-    /// (33) with c = T_s μ and Y, Ω held over the sample:
-    /// (I + cΩ) δ = c (Y − Ω η̂),  η̂ ← η̂ + δ,
-    /// solved by I + cΩ = Uᵀ D U (U unit upper triangular; no square root, so the generated C needs no
-    /// libm). For PSD Ω each eigendirection of Ω with eigenvalue λ contracts by 1/(1 + cλ) (the
-    /// continuous law: e^(−cλ)), so the step is nonexpansive for every μ ≥ 0 and T_s, its fixed
-    /// points are those of (33), and a direction the sample time resolves (cλ ≪ 1) adapts at the
-    /// continuous rate however stiff the others are. The pivots of I + cΩ are ≥ λ_min(I + cΩ) ≥ 1;
-    /// one rounded below 1 is taken as 1, and one lost to rounding (below 64 q ε of its diagonal,
-    /// where cΩ exceeds 1/ε along a null direction of Ω, whose exact right-hand side is below the
-    /// rounding too) leaves that direction still, as the continuous law does along null(Ω).
+    /// The H filter Ω ← aΩ + bΔΔᵀ (ZOH of H(s)), then one step of η̂' = μ (Y − Ω η̂) (33) with
+    /// c = T_s μ and Y, Ω held over the sample. Beyond c·tr Ω = [`IMPLICIT_FROM`] the implicit Euler
+    /// step (I + cΩ) δ = c (Y − Ω η̂), η̂ ← η̂ + δ, solved by I + cΩ = Uᵀ D U (U unit upper
+    /// triangular; no square root, so the generated C needs no libm): along an eigendirection of Ω
+    /// with eigenvalue λ it contracts by 1/(1 + cλ) (the continuous law: e^(−cλ)), so it is
+    /// nonexpansive for every μ ≥ 0 and T_s, its fixed points are those of (33), and a direction the
+    /// sample time resolves (cλ ≪ 1) adapts at the continuous rate however stiff the others are.
+    /// Up to it, the step implicit in ρI = (tr Ω) I only, η̂ ← η̂ + c (Y − Ω η̂)/(1 + cρ), with the
+    /// same properties at O(q²) but every rate divided by 1 + cρ ≤ 1.05 (which beyond it made a
+    /// stiff adaptation crawl in its slow directions, docs/sampled-data.md). The pivots of I + cΩ
+    /// are ≥ λ_min(I + cΩ) ≥ 1; one rounded below 1 is taken as 1, and one lost to rounding (below
+    /// 64 q ε of its diagonal, where cΩ exceeds 1/ε along a null direction of Ω, whose exact
+    /// right-hand side is below the rounding too) leaves that direction still, as the continuous law
+    /// does along null(Ω).
     ///
     /// `Omega` is the full q×q matrix (row-major), kept exactly symmetric: b (Δ_i Δ_j) rounds as
-    /// b (Δ_j Δ_i). One pass over its rows updates it and sums (Ω η̂)_j = Σ_i Ω_ij η̂_i over i in order;
-    /// the factorization reads its upper triangle and writes `ldl` (q×q: d_j on the diagonal, U_jt
-    /// above it), each sum over k in order, as the generated C does ([`crate::export`], which keeps
-    /// the triangle only). The continuous loop keeps Ω packed (`controller/packed.rs`), because there
-    /// it is integrated state; here full rows make the pass contiguous (`docs/performance.md`).
+    /// b (Δ_j Δ_i). One pass over its rows updates it and sums (Ω η̂)_j = Σ_i Ω_ij η̂_i over i in order
+    /// and tr Ω, as the generated C does ([`crate::export`], which keeps the triangle only); [`solve_implicit`]
+    /// then solves the step. The continuous loop keeps Ω packed (`controller/packed.rs`), because
+    /// there it is integrated state; here full rows make the pass contiguous (`docs/performance.md`).
     ///
-    /// `signals` are (Δ, Y), `scratch` (tmp, ldl); the buffers must fit q = eta.len() (Omega and ldl
-    /// q·q, Δ, Y and tmp q): the controller builds them to size.
+    /// `signals` are (Δ, Y), `scratch` (tmp, ldl); the buffers must fit q = eta.len() (Omega and ldl q·q, Δ, Y and tmp q): the controller builds them to size.
     pub(crate) fn adapt(
         c: f64,
         Omega: &mut [f64],
@@ -699,63 +705,84 @@ with_avx2! {
             "adapt: dimension mismatch"
         );
         tmp.fill(0.0);
+        let mut trace = 0.0;
         for (i, (row, &eta_i)) in Omega.chunks_exact_mut(q).zip(eta.iter()).enumerate() {
             let d_i = Delta[i];
             for ((o, d_j), t) in row.iter_mut().zip(Delta).zip(tmp.iter_mut()) {
                 *o = a * *o + b * (d_i * d_j);
                 *t += *o * eta_i;
             }
+            trace += row[i];
+        }
+        if c * trace <= IMPLICIT_FROM {
+            let gain = c / (1.0 + c * trace);
+            for ((e, y), w) in eta.iter_mut().zip(Y).zip(tmp.iter()) {
+                *e += gain * (y - w);
+            }
+            return;
         }
         // r = c (Y − Ω η̂) in tmp.
         for (t, y) in tmp.iter_mut().zip(Y) {
             *t = c * (y - *t);
         }
-        // I + cΩ = Uᵀ D U, row j of U after rows 0 … j − 1: s = (I + cΩ)_jt − Σ_k (U_kj d_k) U_kt.
-        // A pivot within rounding of 0 against its diagonal (cΩ beyond 1/ε along a null direction of
-        // Ω, where the exact pivot 1 and right-hand side are below the rounding of cΩ) is stored as
-        // 0 with its row of U: that direction does not move.
-        let negligible = 64.0 * q as f64 * f64::EPSILON;
-        for j in 0..q {
-            let mut kept = true;
-            for t in j..q {
-                let mut s = c * Omega[j * q + t];
-                let scale = s + 1.0;
-                if t == j {
-                    s = scale;
-                }
-                for k in 0..j {
-                    s -= (ldl[k * q + j] * ldl[k * q + k]) * ldl[k * q + t];
-                }
-                ldl[j * q + t] = if t != j {
-                    if kept { s / ldl[j * q + j] } else { 0.0 }
-                } else {
-                    kept = s > negligible * scale;
-                    match (kept, s >= 1.0) {
-                        (false, _) => 0.0,
-                        (true, true) => s,
-                        (true, false) => 1.0,
-                    }
-                };
-            }
-        }
-        // Uᵀ z = r, then D w = z, then U δ = w, in place; η̂ ← η̂ + δ.
-        for j in 0..q {
-            for k in 0..j {
-                tmp[j] -= ldl[k * q + j] * tmp[k];
-            }
-        }
-        for j in 0..q {
-            let d = ldl[j * q + j];
-            tmp[j] = if d == 0.0 { 0.0 } else { tmp[j] / d };
-        }
-        for j in (0..q).rev() {
-            for t in j + 1..q {
-                tmp[j] -= ldl[j * q + t] * tmp[t];
-            }
-        }
+        solve_implicit(c, Omega, (tmp, ldl));
         for (e, d) in eta.iter_mut().zip(tmp.iter()) {
             *e += d;
         }
+    }
+}
+
+/// Solves (I + cΩ) δ = r in place (`r` becomes δ) by I + cΩ = Uᵀ D U, U unit upper triangular, in
+/// `factor` (q×q by rows, the upper triangle used: d_j on the diagonal, U_jt after it). Row j is
+/// final once rows 0 … j − 1 are eliminated from it; U_jt = s_jt·(1/d_j), and row j is eliminated
+/// from each later row l by s_lt −= (U_jl d_j) U_jt (t ≥ l). A pivot within rounding of 0 against
+/// its diagonal (cΩ beyond 1/ε along a null direction of Ω, where the exact pivot 1 and
+/// right-hand side are below the rounding of cΩ) is stored as 0 with its row of U: that direction
+/// does not move. The generated C does the same operations in the same order ([`crate::export`]).
+#[inline(always)]
+fn solve_implicit(c: f64, Omega: &[f64], (r, factor): (&mut [f64], &mut [f64])) {
+    let q = r.len();
+    for (i, (f, o)) in factor.chunks_exact_mut(q).zip(Omega.chunks_exact(q)).enumerate() {
+        for (f, o) in f[i..].iter_mut().zip(&o[i..]) {
+            *f = c * o;
+        }
+        f[i] += 1.0;
+    }
+    let negligible = 64.0 * q as f64 * f64::EPSILON;
+    for j in 0..q {
+        let (head, later) = factor.split_at_mut((j + 1) * q);
+        let u = &mut head[j * q..];
+        let scale = c * Omega[j * q + j] + 1.0;
+        let kept = u[j] > negligible * scale;
+        let d = match (kept, u[j] >= 1.0) {
+            (false, _) => 0.0,
+            (true, true) => u[j],
+            (true, false) => 1.0,
+        };
+        let inverse = if kept { 1.0 / d } else { 0.0 };
+        u[j] = d;
+        for x in &mut u[j + 1..] {
+            *x = if kept { *x * inverse } else { 0.0 };
+        }
+        for (l, row) in (j + 1..q).zip(later.chunks_exact_mut(q)) {
+            let wl = u[l] * d;
+            for (x, ut) in row[l..].iter_mut().zip(&u[l..]) {
+                *x -= wl * ut;
+            }
+        }
+    }
+    // Uᵀ z = r (by rows of U), then D w = z, then U δ = w, in place.
+    for (k, u) in factor.chunks_exact(q).enumerate() {
+        let zk = r[k];
+        for (x, ukj) in r[k + 1..].iter_mut().zip(&u[k + 1..]) {
+            *x -= ukj * zk;
+        }
+    }
+    for (j, u) in factor.chunks_exact(q).enumerate() {
+        r[j] = if u[j] == 0.0 { 0.0 } else { r[j] / u[j] };
+    }
+    for (j, u) in factor.chunks_exact(q).enumerate().rev() {
+        r[j] = u[j + 1..].iter().zip(&r[j + 1..]).fold(r[j], |s, (ujt, x)| s - ujt * x);
     }
 }
 
@@ -811,7 +838,8 @@ mod tests {
     fn adaptive_step_keeps_omega_exactly_symmetric_and_solves_the_implicit_step() {
         // The C export keeps Ω's triangle only, so the Controller's full Ω must stay symmetric to the
         // last bit; and the step is (I + cΩ) δ = c (Y − Ω η̂), checked against nalgebra's LU solve of
-        // the same system to 1e-12 of |δ| (the factors' rounding, cond(I + cΩ) ≤ 1 + c tr Ω ≈ 1e3 here).
+        // the same system to 1e-12 of |δ| (the factors' rounding, cond(I + cΩ) ≤ 1 + c tr Ω ≈ 1e3 here),
+        // or c (Y − Ω η̂)/(1 + c tr Ω) while c tr Ω ≤ IMPLICIT_FROM (the first few steps).
         let mut rng = Gaussian::new(5);
         for q in [1, 2, 3, 5, 8, 13, 16, 32] {
             let mut omega = vec![0.0; q * q];
@@ -830,7 +858,11 @@ mod tests {
                 let Om = DMatrix::from_row_slice(q, q, &omega);
                 let before = nalgebra::DVector::from_row_slice(&eta_before);
                 let rhs = (nalgebra::DVector::from_row_slice(&Y) - &Om * &before) * 0.7;
-                let want = (DMatrix::identity(q, q) + Om * 0.7).lu().solve(&rhs).unwrap();
+                let trace = 0.7 * Om.trace();
+                let want = match trace <= IMPLICIT_FROM {
+                    true => rhs / (1.0 + trace),
+                    false => (DMatrix::identity(q, q) + Om * 0.7).lu().solve(&rhs).unwrap(),
+                };
                 let got = nalgebra::DVector::from_row_slice(&eta) - before;
                 assert!((&got - &want).norm() <= 1e-12 * want.norm().max(1e-300), "q {q}: {got} vs {want}");
             }

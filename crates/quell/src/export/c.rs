@@ -358,7 +358,10 @@ fn source(constants: &[Constant], layout: &Layout, o: &ExportOptions) -> String 
         Precision::F64 => "DBL_EPSILON",
         Precision::F32 => "FLT_EPSILON",
     };
-    c.push_str(&fill(FUNCTIONS, &[("calls", calls.trim_end()), ("p", p), ("P", &P), ("R", R), ("eps", eps)]));
+    let implicit_from = number(crate::controller::discrete::IMPLICIT_FROM, o.precision);
+    let values =
+        [("calls", calls.trim_end()), ("p", p), ("P", &P), ("R", R), ("eps", eps), ("implicit_from", &implicit_from)];
+    c.push_str(&fill(FUNCTIONS, &values));
     c
 }
 
@@ -481,6 +484,61 @@ static unsigned {p}_tri(unsigned j, unsigned t)
     return j * (2u * {P}_Q + 1u - j) / 2u + (t - j);
 }
 
+/* The implicit Euler step of the adaptive law (33): (I + c Omega) delta = c (Y - Omega eta), with
+ * Omega_eta = Omega eta on entry, eta <- eta + delta. I + c Omega = U^T D U (U unit upper
+ * triangular, no square root) in F, packed as Omega (d_j on the diagonal, U[j][t] after it): row j
+ * is final once the rows before it are eliminated from it; U[j][t] = s (1/d_j), and row j is
+ * eliminated from each later row l by s[l][t] -= (U[j][l] d_j) U[j][t]. A pivot rounded below its
+ * bound 1 is taken as 1; one lost to rounding (below 64 Q eps of its diagonal) is stored as 0 with
+ * its row of U, and that direction does not move. rhs = Omega_eta becomes delta. */
+static void {p}_implicit_step(const {R} *Omega, {R} c, const {R} *Y, {R} *Omega_eta, {R} *eta)
+{
+    {R} F[{P}_Q * ({P}_Q + 1) / 2]; /* U^T D U of I + c Omega, packed as Omega */
+    {R} *rhs = Omega_eta;
+    for (unsigned j = 0; j < {P}_Q; j++)
+        rhs[j] = c * (Y[j] - Omega_eta[j]);
+    for (unsigned j = 0, k = 0; j < {P}_Q; j++)
+        for (unsigned t = j; t < {P}_Q; t++, k++) {
+            F[k] = c * Omega[k];
+            if (t == j)
+                F[k] += 1;
+        }
+    const {R} negligible = 64 * {P}_Q * {eps};
+    for (unsigned j = 0; j < {P}_Q; j++) {
+        const unsigned rj = {p}_tri(j, j);
+        const {R} scale = c * Omega[rj] + 1;
+        const int kept = F[rj] > negligible * scale;
+        const {R} pivot = !kept ? 0 : F[rj] >= 1 ? F[rj] : 1;
+        const {R} inverse = kept ? 1 / pivot : 0;
+        F[rj] = pivot;
+        for (unsigned t = j + 1u; t < {P}_Q; t++)
+            F[rj + t - j] = kept ? F[rj + t - j] * inverse : 0;
+        for (unsigned l = j + 1u; l < {P}_Q; l++) {
+            const {R} wl = F[rj + l - j] * pivot;
+            const unsigned rl = {p}_tri(l, l);
+            for (unsigned t = l; t < {P}_Q; t++)
+                F[rl + t - l] -= wl * F[rj + t - j];
+        }
+    }
+    for (unsigned k = 0; k < {P}_Q; k++) {
+        const unsigned rk = {p}_tri(k, k);
+        const {R} zk = rhs[k];
+        for (unsigned j = k + 1u; j < {P}_Q; j++)
+            rhs[j] -= F[rk + j - k] * zk;
+    }
+    for (unsigned j = 0; j < {P}_Q; j++) {
+        const {R} pivot = F[{p}_tri(j, j)];
+        rhs[j] = pivot == 0 ? 0 : rhs[j] / pivot;
+    }
+    for (unsigned j = {P}_Q; j-- > 0;) {
+        const unsigned rj = {p}_tri(j, j);
+        for (unsigned t = j + 1u; t < {P}_Q; t++)
+            rhs[j] -= F[rj + t - j] * rhs[t];
+    }
+    for (unsigned j = 0; j < {P}_Q; j++)
+        eta[j] += rhs[j];
+}
+
 /* Channel i of the adaptive law (33) at sample k, from the row [u_i, xi_hat^T] of sample k - d_i:
  * the swapping error and regressor from W_i(k), the H filters Y_i and Omega_i, one step of eta_i,
  * then the G_ii filter bank W_i(k + 1). Returns u_i(k - d_i). */
@@ -493,7 +551,7 @@ static {R} {p}_channel({p}_state *s, unsigned i, unsigned sigma, const {R} *Phi,
     const {R} *past = s->line[s->head >= d ? s->head - d : s->head + ((uint32_t){P}_DELAY_MAX + 1u) - d];
     const {R} q0 = {p}_q0[i], c = {p}_c[i];
     {R} Delta[{P}_Q], Omega_eta[{P}_Q], next[{P}_SIGMA_MAX];
-    {R} F[{P}_Q * ({P}_Q + 1) / 2]; /* U^T D U of I + c Omega, packed as Omega: d_j on the diagonal */
+    {R} trace = 0;
 
     /* Swapping error eps = (y_i - g_i) - q_i0 W[0][0] and regressor Delta = q_i0 W[0][1..q]. */
     const {R} eps = delta - q0 * W[0][0];
@@ -503,11 +561,12 @@ static {R} {p}_channel({p}_state *s, unsigned i, unsigned sigma, const {R} *Phi,
     }
     /* H filters at ZOH: Y <- a Y + b Delta eps, Omega <- a Omega + b (Delta Delta^T) (symmetric, kept
      * as its upper triangle row by row: row j is Omega[j][j], then Omega[j][t] for t > j), and in
-     * the same pass Omega eta, each entry summed over the column index in order. */
+     * the same pass tr Omega and Omega eta, each entry summed over the column index in order. */
     for (unsigned j = 0; j < {P}_Q; j++)
         Y[j] = {p}_a * Y[j] + {p}_b * Delta[j] * eps;
     for (unsigned j = 0, k = 0; j < {P}_Q; j++) {
         Omega[k] = {p}_a * Omega[k] + {p}_b * (Delta[j] * Delta[j]);
+        trace += Omega[k];
         Omega_eta[j] += Omega[k] * eta[j];
         k++;
         for (unsigned t = j + 1; t < {P}_Q; t++, k++) {
@@ -516,44 +575,16 @@ static {R} {p}_channel({p}_state *s, unsigned i, unsigned sigma, const {R} *Phi,
             Omega_eta[t] += Omega[k] * eta[j];
         }
     }
-    /* Adaptive step (33), implicit Euler with c = T_s mu_i: (I + c Omega) delta = c (Y - Omega eta),
-     * eta <- eta + delta; nonexpansive for any c. I + c Omega = U^T D U (U unit upper triangular, no
-     * square root); a pivot rounded below its bound 1 is taken as 1, one lost to rounding (below
-     * 64 Q eps of its diagonal) is stored as 0 with its row of U, and that direction does not
-     * move. rhs = Omega_eta becomes delta. */
-    {R} *rhs = Omega_eta;
-    for (unsigned j = 0; j < {P}_Q; j++)
-        rhs[j] = c * (Y[j] - Omega_eta[j]);
-    const {R} negligible = 64 * {P}_Q * {eps};
-    for (unsigned j = 0; j < {P}_Q; j++) {
-        int kept = 1;
-        for (unsigned t = j; t < {P}_Q; t++) {
-            {R} v = c * Omega[{p}_tri(j, t)];
-            const {R} scale = v + 1;
-            if (t == j)
-                v = scale;
-            for (unsigned k = 0; k < j; k++)
-                v -= (F[{p}_tri(k, j)] * F[{p}_tri(k, k)]) * F[{p}_tri(k, t)];
-            if (t != j) {
-                F[{p}_tri(j, t)] = kept ? v / F[{p}_tri(j, j)] : 0;
-            } else {
-                kept = v > negligible * scale;
-                F[{p}_tri(j, j)] = !kept ? 0 : v >= 1 ? v : 1;
-            }
-        }
+    /* Adaptive step (33) with c = T_s mu_i, nonexpansive for any c: up to c tr Omega = {implicit_from},
+     * implicit in rho I with rho = tr Omega, eta <- eta + c (Y - Omega eta) / (1 + c rho); beyond,
+     * the implicit Euler step. */
+    if (c * trace <= {implicit_from}) {
+        const {R} gain = c / (1 + c * trace);
+        for (unsigned j = 0; j < {P}_Q; j++)
+            eta[j] += gain * (Y[j] - Omega_eta[j]);
+    } else {
+        {p}_implicit_step(Omega, c, Y, Omega_eta, eta);
     }
-    for (unsigned j = 0; j < {P}_Q; j++)
-        for (unsigned k = 0; k < j; k++)
-            rhs[j] -= F[{p}_tri(k, j)] * rhs[k];
-    for (unsigned j = 0; j < {P}_Q; j++) {
-        const {R} pivot = F[{p}_tri(j, j)];
-        rhs[j] = pivot == 0 ? 0 : rhs[j] / pivot;
-    }
-    for (unsigned j = {P}_Q; j-- > 0;)
-        for (unsigned t = j + 1; t < {P}_Q; t++)
-            rhs[j] -= F[{p}_tri(j, t)] * rhs[t];
-    for (unsigned j = 0; j < {P}_Q; j++)
-        eta[j] += rhs[j];
     /* G_ii filter bank at ZOH, column by column: W <- Phi W + gamma [u_i(k - d_i), xi_hat^T(k - d_i)]. */
     for (unsigned col = 0; col < {P}_Q + 1; col++) {
         const {R} x = col == 0 ? past[i] : past[{P}_M + col - 1];

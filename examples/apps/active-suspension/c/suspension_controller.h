@@ -64,6 +64,6 @@ void suspension_command(const suspension_state *s, double u[SUSPENSION_M]);
 #endif
 
 /* Identifies this header's source: suspension_controller.c compiles only with it. */
-#define SUSPENSION_LAYOUT_ID 0x5583c602d811695bu
+#define SUSPENSION_LAYOUT_ID 0xad773d0df844b81eu
 
 #endif /* SUSPENSION_CONTROLLER_H */

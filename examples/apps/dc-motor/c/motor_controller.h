@@ -64,6 +64,6 @@ void motor_command(const motor_state *s, double u[MOTOR_M]);
 #endif
 
 /* Identifies this header's source: motor_controller.c compiles only with it. */
-#define MOTOR_LAYOUT_ID 0x1907793bab36644eu
+#define MOTOR_LAYOUT_ID 0x07f15f51720e2f69u
 
 #endif /* MOTOR_CONTROLLER_H */

@@ -2,7 +2,7 @@
 #include "supply_controller.h"
 
 /* A header from another export fails here (size -1): regenerate both files together. */
-typedef char supply_header_matches_source[SUPPLY_LAYOUT_ID == 0x267bab7f84c5910au ? 1 : -1];
+typedef char supply_header_matches_source[SUPPLY_LAYOUT_ID == 0x95745406b0077233u ? 1 : -1];
 #include <float.h>
 
 /* Core (observers (6), (14), (20) with (5) substituted) at ZOH: z(k+1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
@@ -105,6 +105,61 @@ static unsigned supply_tri(unsigned j, unsigned t)
     return j * (2u * SUPPLY_Q + 1u - j) / 2u + (t - j);
 }
 
+/* The implicit Euler step of the adaptive law (33): (I + c Omega) delta = c (Y - Omega eta), with
+ * Omega_eta = Omega eta on entry, eta <- eta + delta. I + c Omega = U^T D U (U unit upper
+ * triangular, no square root) in F, packed as Omega (d_j on the diagonal, U[j][t] after it): row j
+ * is final once the rows before it are eliminated from it; U[j][t] = s (1/d_j), and row j is
+ * eliminated from each later row l by s[l][t] -= (U[j][l] d_j) U[j][t]. A pivot rounded below its
+ * bound 1 is taken as 1; one lost to rounding (below 64 Q eps of its diagonal) is stored as 0 with
+ * its row of U, and that direction does not move. rhs = Omega_eta becomes delta. */
+static void supply_implicit_step(const double *Omega, double c, const double *Y, double *Omega_eta, double *eta)
+{
+    double F[SUPPLY_Q * (SUPPLY_Q + 1) / 2]; /* U^T D U of I + c Omega, packed as Omega */
+    double *rhs = Omega_eta;
+    for (unsigned j = 0; j < SUPPLY_Q; j++)
+        rhs[j] = c * (Y[j] - Omega_eta[j]);
+    for (unsigned j = 0, k = 0; j < SUPPLY_Q; j++)
+        for (unsigned t = j; t < SUPPLY_Q; t++, k++) {
+            F[k] = c * Omega[k];
+            if (t == j)
+                F[k] += 1;
+        }
+    const double negligible = 64 * SUPPLY_Q * DBL_EPSILON;
+    for (unsigned j = 0; j < SUPPLY_Q; j++) {
+        const unsigned rj = supply_tri(j, j);
+        const double scale = c * Omega[rj] + 1;
+        const int kept = F[rj] > negligible * scale;
+        const double pivot = !kept ? 0 : F[rj] >= 1 ? F[rj] : 1;
+        const double inverse = kept ? 1 / pivot : 0;
+        F[rj] = pivot;
+        for (unsigned t = j + 1u; t < SUPPLY_Q; t++)
+            F[rj + t - j] = kept ? F[rj + t - j] * inverse : 0;
+        for (unsigned l = j + 1u; l < SUPPLY_Q; l++) {
+            const double wl = F[rj + l - j] * pivot;
+            const unsigned rl = supply_tri(l, l);
+            for (unsigned t = l; t < SUPPLY_Q; t++)
+                F[rl + t - l] -= wl * F[rj + t - j];
+        }
+    }
+    for (unsigned k = 0; k < SUPPLY_Q; k++) {
+        const unsigned rk = supply_tri(k, k);
+        const double zk = rhs[k];
+        for (unsigned j = k + 1u; j < SUPPLY_Q; j++)
+            rhs[j] -= F[rk + j - k] * zk;
+    }
+    for (unsigned j = 0; j < SUPPLY_Q; j++) {
+        const double pivot = F[supply_tri(j, j)];
+        rhs[j] = pivot == 0 ? 0 : rhs[j] / pivot;
+    }
+    for (unsigned j = SUPPLY_Q; j-- > 0;) {
+        const unsigned rj = supply_tri(j, j);
+        for (unsigned t = j + 1u; t < SUPPLY_Q; t++)
+            rhs[j] -= F[rj + t - j] * rhs[t];
+    }
+    for (unsigned j = 0; j < SUPPLY_Q; j++)
+        eta[j] += rhs[j];
+}
+
 /* Channel i of the adaptive law (33) at sample k, from the row [u_i, xi_hat^T] of sample k - d_i:
  * the swapping error and regressor from W_i(k), the H filters Y_i and Omega_i, one step of eta_i,
  * then the G_ii filter bank W_i(k + 1). Returns u_i(k - d_i). */
@@ -117,7 +172,7 @@ static double supply_channel(supply_state *s, unsigned i, unsigned sigma, const 
     const double *past = s->line[s->head >= d ? s->head - d : s->head + ((uint32_t)SUPPLY_DELAY_MAX + 1u) - d];
     const double q0 = supply_q0[i], c = supply_c[i];
     double Delta[SUPPLY_Q], Omega_eta[SUPPLY_Q], next[SUPPLY_SIGMA_MAX];
-    double F[SUPPLY_Q * (SUPPLY_Q + 1) / 2]; /* U^T D U of I + c Omega, packed as Omega: d_j on the diagonal */
+    double trace = 0;
 
     /* Swapping error eps = (y_i - g_i) - q_i0 W[0][0] and regressor Delta = q_i0 W[0][1..q]. */
     const double eps = delta - q0 * W[0][0];
@@ -127,11 +182,12 @@ static double supply_channel(supply_state *s, unsigned i, unsigned sigma, const 
     }
     /* H filters at ZOH: Y <- a Y + b Delta eps, Omega <- a Omega + b (Delta Delta^T) (symmetric, kept
      * as its upper triangle row by row: row j is Omega[j][j], then Omega[j][t] for t > j), and in
-     * the same pass Omega eta, each entry summed over the column index in order. */
+     * the same pass tr Omega and Omega eta, each entry summed over the column index in order. */
     for (unsigned j = 0; j < SUPPLY_Q; j++)
         Y[j] = supply_a * Y[j] + supply_b * Delta[j] * eps;
     for (unsigned j = 0, k = 0; j < SUPPLY_Q; j++) {
         Omega[k] = supply_a * Omega[k] + supply_b * (Delta[j] * Delta[j]);
+        trace += Omega[k];
         Omega_eta[j] += Omega[k] * eta[j];
         k++;
         for (unsigned t = j + 1; t < SUPPLY_Q; t++, k++) {
@@ -140,44 +196,16 @@ static double supply_channel(supply_state *s, unsigned i, unsigned sigma, const 
             Omega_eta[t] += Omega[k] * eta[j];
         }
     }
-    /* Adaptive step (33), implicit Euler with c = T_s mu_i: (I + c Omega) delta = c (Y - Omega eta),
-     * eta <- eta + delta; nonexpansive for any c. I + c Omega = U^T D U (U unit upper triangular, no
-     * square root); a pivot rounded below its bound 1 is taken as 1, one lost to rounding (below
-     * 64 Q eps of its diagonal) is stored as 0 with its row of U, and that direction does not
-     * move. rhs = Omega_eta becomes delta. */
-    double *rhs = Omega_eta;
-    for (unsigned j = 0; j < SUPPLY_Q; j++)
-        rhs[j] = c * (Y[j] - Omega_eta[j]);
-    const double negligible = 64 * SUPPLY_Q * DBL_EPSILON;
-    for (unsigned j = 0; j < SUPPLY_Q; j++) {
-        int kept = 1;
-        for (unsigned t = j; t < SUPPLY_Q; t++) {
-            double v = c * Omega[supply_tri(j, t)];
-            const double scale = v + 1;
-            if (t == j)
-                v = scale;
-            for (unsigned k = 0; k < j; k++)
-                v -= (F[supply_tri(k, j)] * F[supply_tri(k, k)]) * F[supply_tri(k, t)];
-            if (t != j) {
-                F[supply_tri(j, t)] = kept ? v / F[supply_tri(j, j)] : 0;
-            } else {
-                kept = v > negligible * scale;
-                F[supply_tri(j, j)] = !kept ? 0 : v >= 1 ? v : 1;
-            }
-        }
+    /* Adaptive step (33) with c = T_s mu_i, nonexpansive for any c: up to c tr Omega = 0.05,
+     * implicit in rho I with rho = tr Omega, eta <- eta + c (Y - Omega eta) / (1 + c rho); beyond,
+     * the implicit Euler step. */
+    if (c * trace <= 0.05) {
+        const double gain = c / (1 + c * trace);
+        for (unsigned j = 0; j < SUPPLY_Q; j++)
+            eta[j] += gain * (Y[j] - Omega_eta[j]);
+    } else {
+        supply_implicit_step(Omega, c, Y, Omega_eta, eta);
     }
-    for (unsigned j = 0; j < SUPPLY_Q; j++)
-        for (unsigned k = 0; k < j; k++)
-            rhs[j] -= F[supply_tri(k, j)] * rhs[k];
-    for (unsigned j = 0; j < SUPPLY_Q; j++) {
-        const double pivot = F[supply_tri(j, j)];
-        rhs[j] = pivot == 0 ? 0 : rhs[j] / pivot;
-    }
-    for (unsigned j = SUPPLY_Q; j-- > 0;)
-        for (unsigned t = j + 1; t < SUPPLY_Q; t++)
-            rhs[j] -= F[supply_tri(j, t)] * rhs[t];
-    for (unsigned j = 0; j < SUPPLY_Q; j++)
-        eta[j] += rhs[j];
     /* G_ii filter bank at ZOH, column by column: W <- Phi W + gamma [u_i(k - d_i), xi_hat^T(k - d_i)]. */
     for (unsigned col = 0; col < SUPPLY_Q + 1; col++) {
         const double x = col == 0 ? past[i] : past[SUPPLY_M + col - 1];

@@ -64,6 +64,6 @@ void supply_command(const supply_state *s, double u[SUPPLY_M]);
 #endif
 
 /* Identifies this header's source: supply_controller.c compiles only with it. */
-#define SUPPLY_LAYOUT_ID 0x267bab7f84c5910au
+#define SUPPLY_LAYOUT_ID 0x95745406b0077233u
 
 #endif /* SUPPLY_CONTROLLER_H */
