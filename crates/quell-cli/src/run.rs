@@ -54,7 +54,12 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
         eprint!("{}", report::sample_time_text(&scenario, &design, sample_time));
     }
     let out = &args.out;
-    output::prepare_out(out, &["signals.csv", "design.json", "summary.json"])?;
+    // The figures' names too: one taken by a directory would fail only after the run.
+    let figures: Vec<String> =
+        (1..=design.plant().m()).flat_map(|i| ["png", "svg"].map(|e| format!("channel{i}.{e}"))).collect();
+    let files: Vec<&str> =
+        ["signals.csv", "design.json", "summary.json"].into_iter().chain(figures.iter().map(String::as_str)).collect();
+    output::prepare_out(out, &files)?;
     // Ctrl-C or SIGTERM stops the run at its next recorded sample; a second one before that sample
     // (a very stiff run can take long to reach it) quits with no files.
     let ctrl_c = Interrupt::install("interrupted twice before the next sample; stopped without writing files");

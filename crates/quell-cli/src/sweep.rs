@@ -36,7 +36,7 @@ pub struct SweepArgs {
 }
 
 /// The files a sweep writes into --out (besides its figures).
-const OUTPUTS: &[&str] = &["runs.csv", "summary.json"];
+const OUTPUTS: &[&str] = &["runs.csv", "summary.json", "sweep.png", "sweep.svg"];
 
 /// The study file at `path`; a refusal starts with the path once (a file that cannot be read is
 /// already named by the error's key).

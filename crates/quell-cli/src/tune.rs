@@ -34,7 +34,7 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
         )));
     }
     let pool = crate::sweep::thread_pool(args.jobs, usize::MAX)?;
-    prepare_out(&args.out, &["tune.json", "tune.csv"])?;
+    prepare_out(&args.out, &["tune.json", "tune.csv", "tune.png", "tune.svg"])?;
     // Ctrl-C or SIGTERM: the first stops the searches (runs under way are abandoned) and the
     // points evaluated so far are written, marked partial; a second before writing begins quits.
     let interrupt = Interrupt::install("interrupted twice; stopped without writing files");
@@ -129,7 +129,7 @@ fn report(r: &TuneResult) -> String {
     for (c, (d, ok)) in r.channels.iter().zip(r.joint_difference.iter().zip(&r.reproduced)) {
         match &c.chosen {
             Some(p) => s.push_str(&format!(
-                "channel {}: mu = {:.6} ({} evaluations), objective {:.6e}; joint run {} (difference {}){}\n",
+                "channel {}: mu = {:.6} ({} evaluations), objective {:.6e}; joint run {} (difference {}){}{}\n",
                 c.channel + 1,
                 p.mu,
                 c.curve.len(),
@@ -145,6 +145,10 @@ fn report(r: &TuneResult) -> String {
                 } else {
                     ", but BREAKS the limits on max |u|, max |u_f| there"
                 },
+                c.at_bound().map_or(String::new(), |end| format!(
+                    "; at the {end} end of tune.mu[{}]: the best may lie beyond, widen the range",
+                    c.channel
+                )),
             )),
             None => s.push_str(&format!("channel {}: no feasible mu in the bounds\n", c.channel + 1)),
         }

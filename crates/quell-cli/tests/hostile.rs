@@ -153,6 +153,13 @@ fn output_path_problems_are_all_exit_2_naming_the_path() {
     );
     fs::create_dir_all(out.join("signals.csv")).unwrap();
     refused(&quell(&["run", &paper(), "--out", &out.display().to_string()]), "signals.csv is a directory");
+    // A directory where a figure goes: was exit 1 after the run (or the sweep), its results lost.
+    for (command, figure) in [("run", "channel2.svg"), ("sweep", "sweep.png")] {
+        let out = dir.join(format!("figure-{command}"));
+        fs::create_dir_all(out.join(figure)).unwrap();
+        let input = if command == "run" { paper() } else { s.clone() };
+        refused(&quell(&[command, &input, "--out", &out.display().to_string()]), &format!("{figure} is a directory"));
+    }
 }
 
 #[test]

@@ -149,6 +149,17 @@ pub fn tune(
             ),
         )?;
     }
+    for c in result.channels.iter().filter(|_| !result.partial) {
+        if let Some(end) = c.at_bound() {
+            let i = c.channel;
+            let message = format!(
+                "channel {}: the best μ, {}, is at the {end} end of mu[{i}]: the best may lie beyond, widen the range",
+                i + 1,
+                result.mu[i]
+            );
+            crate::errors::warn(py, &message)?;
+        }
+    }
     let json = serde_json::to_string(&result).map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
     let result = py.import("quell._tune")?.getattr("TuneResult")?.call1((json,))?;
     match interrupt {

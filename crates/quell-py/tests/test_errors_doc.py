@@ -82,6 +82,7 @@ CASES = [
     ("empty_signal_name", edit((X0, X0 + '\ninputs = ["valve", " "]')), "plant.inputs[1]", None),
     ("signal_name_not_a_string", edit((X0, X0 + "\ninputs = [1, 2]")), "plant.inputs[0]", None),
     ("unknown_time_unit", edit((X0, X0 + '\ntime_unit = "mins"')), "plant.time_unit", None),
+    ("control_character_in_a_name", edit((X0, X0 + '\noutputs = ["gap\\n#error", "b"]')), "plant.outputs[0]", None),
     ("reference_component_count", edit((", { bias = 2.0 } ]", " ]")), "reference.components", None),
     ("disturbance_component_count",
      edit(("components = [ { harmonics = [{ amplitude = 1.0, frequency = 1.0 }] },\n", "components = [\n")),

@@ -168,3 +168,13 @@ def test_a_channel_without_a_feasible_mu_is_warned_of_and_flagged():
     ok = quell.tune(s, mu=[1.0, 100.0], objective="tail_rms_e", points=3, refine=0, jobs=1)
     assert ok.feasible == [True]
     assert quell.TuneResult(r.to_json()).feasible == [False]
+
+
+def test_a_choice_at_an_end_of_the_bounds_is_warned_of():
+    """A μ chosen at an end of its bounds may not be the best: the best may lie beyond (the CLI
+    says so on the channel's line). The tail error of this loop falls as μ grows over [1, 3], so
+    the best is the upper end."""
+    s = unstable_first_order()
+    with pytest.warns(UserWarning, match=r"^channel 1: the best μ, 3(\.0)?, is at the upper end of mu\[0\]") as caught:
+        r = quell.tune(s, mu=[1.0, 3.0], objective="tail_rms_e", points=3, refine=0, jobs=1)
+    assert len(caught) == 1 and r.mu == [3.0]

@@ -131,14 +131,18 @@ impl Targets {
         }
     }
 
-    /// A convergence time that is positive and finite, and limits that are positive, finite and one
-    /// or m of them; otherwise an error naming `convergence_time` or `u_limit`.
-    fn check(&self, m: usize) -> Result<(), AutoError> {
+    /// A convergence time that is positive, finite and within the horizon t_end (the verifying run
+    /// must reach it), and limits that are positive, finite and one or m of them; otherwise an
+    /// error naming `convergence_time` or `u_limit`.
+    fn check(&self, m: usize, (t_end, unit): (f64, crate::TimeUnit)) -> Result<(), AutoError> {
         let n = self.u_limit.len();
         let (key, message): (&'static str, _) = if let Some(t) =
             self.convergence_time.filter(|t| !(t.is_finite() && *t > 0.0))
         {
             ("convergence_time", format!("expected a finite number > 0, found {t}"))
+        } else if let Some(t) = self.convergence_time.filter(|t| *t > t_end) {
+            let message = format!("expected a time within simulation.t_end = {t_end} {unit} (the verifying run must reach it), found {}; ask for an earlier convergence or lengthen simulation.t_end", crate::settings::fmt_short(t));
+            ("convergence_time", message)
         } else if n > 1 && n != m {
             ("u_limit", format!("expected one actuator limit, or one per input ({m}), found {n}: {:?}", self.u_limit))
         } else if let Some(l) = self.u_limit.iter().find(|l| !(l.is_finite() && **l > 0.0)) {
@@ -272,7 +276,7 @@ fn propose(doc: &toml::Table, targets: &Targets, speed: Speed) -> Result<Proposa
     let (mut choices, mut mu_caps, mut relaxable) = (Vec::new(), None, [false; 3]);
     let scenario = Scenario::from_document_with(doc, |partial, s| -> Result<DesignSpec, AutoError> {
         relaxable = [partial.channel_poles.is_none(), partial.observer.is_none(), partial.mu.is_none()];
-        targets.check(s.plant.m())?;
+        targets.check(s.plant.m(), (s.simulation.t_end, s.plant.time_unit))?;
         choose(partial, s, targets, speed, &mut choices, &mut mu_caps)
     })?;
     Ok(Proposal { scenario, choices, mu_caps, relaxable })

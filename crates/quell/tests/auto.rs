@@ -258,8 +258,8 @@ fn the_actuator_limit_bounds_the_recorded_plant_input() {
 }
 
 /// Targets out of range are refused before any choice or simulation, naming the field: a
-/// convergence time that is not a finite positive number, limits of another count than 1 or m, or
-/// not positive.
+/// convergence time that is not a finite positive number or beyond t_end, limits of another count
+/// than 1 or m, or not positive.
 #[test]
 fn targets_out_of_range_are_refused_naming_the_field() {
     let doc = without_design(&data("batch-reactor.toml"));
@@ -268,6 +268,13 @@ fn targets_out_of_range_are_refused_naming_the_field() {
         let e = refused(Targets { convergence_time: Some(t), ..Targets::default() });
         assert_eq!(e, format!("convergence_time: expected a finite number > 0, found {t}"));
     }
+    // Beyond the horizon: the report explained μ by a time the verifying run never reached.
+    let e = refused(Targets { convergence_time: Some(1e300), ..Targets::default() });
+    assert!(
+        e.starts_with("convergence_time: expected a time within simulation.t_end = ")
+            && e.ends_with("found 1e300; ask for an earlier convergence or lengthen simulation.t_end"),
+        "{e}"
+    );
     for (limits, found) in [(vec![1.0; 3], "found 3"), (vec![0.0], "found 0"), (vec![1.0, f64::NAN], "found NaN")] {
         let e = refused(Targets { u_limit: limits, ..Targets::default() });
         assert!(e.starts_with("u_limit: expected") && e.contains(found), "{e}");

@@ -425,6 +425,18 @@ fn signal_name_not_a_string() {
 }
 
 #[test]
+fn control_character_in_a_name() {
+    check(
+        &with(&[(X0, &format!("{X0}\noutputs = [\"gap\\n#error\", \"b\"]"))]),
+        "plant.outputs[0]",
+        "remove the control character",
+    );
+    let named = PAPER_EXAMPLE.replacen("name = \"paper-example\"", "name = \"a\\u0000b\"", 1);
+    let e = Scenario::from_toml(&named).unwrap_err();
+    assert_eq!(e.key, "name", "{e}");
+}
+
+#[test]
 fn unknown_time_unit() {
     check(&with(&[(X0, &format!("{X0}\ntime_unit = \"mins\""))]), "plant.time_unit", "(did you mean \"min\"?)");
 }

@@ -191,7 +191,10 @@ impl Scenario {
     ) -> Result<Scenario, E> {
         let root = Table::new("", doc, TOP_KEYS)?;
 
-        let name = root.get("name", |v| v.string())?;
+        let name = root.get("name", |v| {
+            let name = v.string()?;
+            names::control_character(&name).map_or(Ok(name), |message| Err(err(v.key, message)))
+        })?;
         let reference = root.require("reference", "the [reference] table: g(t), one component per output", signal)?;
         let disturbance = root.get("disturbance", signal)?;
         let (plant, names) =

@@ -65,6 +65,14 @@ impl SignalNames {
     }
 }
 
+/// The message for a name holding a control character (a line break, a tab, NUL), which would break
+/// the lines and columns it labels; `None` for a printable name.
+pub(crate) fn control_character(name: &str) -> Option<String> {
+    name.chars().find(|c| c.is_control()).map(|c| {
+        format!("expected printable characters, found {name:?} (with {c:?}); a name labels lines, columns and files: remove the control character")
+    })
+}
+
 /// Checks the names of `count` signals (`per`: "input", "output", "state") at `key`: one per
 /// signal, none empty, no two alike.
 pub fn check_names(key: &str, names: &[String], count: usize, per: &str) -> Result<(), ScenarioError> {
@@ -74,6 +82,9 @@ pub fn check_names(key: &str, names: &[String], count: usize, per: &str) -> Resu
                 format!("{key}[{i}]"),
                 format!("expected a name, found {name:?}; give every {per} a name"),
             ));
+        }
+        if let Some(message) = control_character(name) {
+            return Err(err(format!("{key}[{i}]"), message));
         }
         if names[..i].contains(name) {
             return Err(err(

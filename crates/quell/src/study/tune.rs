@@ -167,6 +167,21 @@ pub struct TuneCurve {
     pub chosen: Option<TunePoint>,
 }
 
+impl TuneCurve {
+    /// "upper" or "lower" when the chosen μ is the largest or the smallest evaluated (an end of
+    /// the bounds): the best may lie beyond it, and a wider range would tell.
+    pub fn at_bound(&self) -> Option<&'static str> {
+        let chosen = self.chosen.as_ref()?.mu;
+        let (lo, hi) =
+            self.curve.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.mu), b.max(p.mu)));
+        match self.curve.len() > 1 {
+            true if chosen >= hi => Some("upper"),
+            true if chosen <= lo => Some("lower"),
+            _ => None,
+        }
+    }
+}
+
 /// A 0-based index written 1-based.
 mod one_based {
     use serde::{de::Error, Deserialize, Deserializer, Serializer};
@@ -408,4 +423,26 @@ pub fn tune(study: &Study, opts: &TuneOptions<'_>) -> Result<TuneResult, StudyEr
         within_limits,
         partial,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The chosen μ at the largest or smallest evaluation is said to be at that end of the bounds;
+    /// inside them, or with one evaluation only, it is not.
+    #[test]
+    fn a_choice_at_an_end_of_the_bounds_is_named() {
+        let point = |mu: f64| TunePoint { mu, objective: Some(1.0), outcome: Outcome::Completed, figures: None };
+        let curve = |chosen: f64, mus: &[f64]| TuneCurve {
+            channel: 0,
+            curve: mus.iter().map(|&m| point(m)).collect(),
+            chosen: Some(point(chosen)),
+        };
+        assert_eq!(curve(100.0, &[1.0, 10.0, 100.0]).at_bound(), Some("upper"));
+        assert_eq!(curve(1.0, &[10.0, 1.0, 100.0]).at_bound(), Some("lower"));
+        assert_eq!(curve(10.0, &[1.0, 10.0, 100.0]).at_bound(), None);
+        assert_eq!(curve(5.0, &[5.0]).at_bound(), None);
+        assert_eq!(TuneCurve { channel: 0, curve: vec![point(1.0), point(2.0)], chosen: None }.at_bound(), None);
+    }
 }
