@@ -686,24 +686,24 @@ with_avx2! {
     ///
     /// `Omega` is the full q×q matrix (row-major), kept exactly symmetric: b (Δ_i Δ_j) rounds as
     /// b (Δ_j Δ_i). One pass over its rows updates it and sums (Ω η̂)_j = Σ_i Ω_ij η̂_i over i in order
-    /// and tr Ω, as the generated C does ([`crate::export`], which keeps the triangle only); [`solve_implicit`]
-    /// then solves the step. The continuous loop keeps Ω packed (`controller/packed.rs`), because
-    /// there it is integrated state; here full rows make the pass contiguous (`docs/performance.md`).
+    /// and tr Ω into `tmp`, as the generated C does ([`crate::export`], which keeps the triangle
+    /// only); false, with the step not taken, beyond [`IMPLICIT_FROM`] ([`adapt`] takes it then, out
+    /// of line, so that this loop stays as lean as before). The continuous loop keeps Ω packed
+    /// (`controller/packed.rs`), because there it is integrated state; here full rows make the pass
+    /// contiguous (`docs/performance.md`).
     ///
-    /// `signals` are (Δ, Y), `scratch` (tmp, ldl); the buffers must fit q = eta.len() (Omega and ldl q·q, Δ, Y and tmp q): the controller builds them to size.
-    pub(crate) fn adapt(
+    /// `signals` are (Δ, Y); the buffers must fit q = eta.len() (Omega q·q, Δ, Y and tmp q; `ldl`
+    /// of [`adapt`] q·q): the controller builds them to size.
+    fn filter_and_step(
         c: f64,
         Omega: &mut [f64],
         ab: (f64, f64),
         signals: (&[f64], &[f64]),
         eta: &mut [f64],
-        scratch: (&mut [f64], &mut [f64]),
-    ) {
-        let ((a, b), q, (Delta, Y), (tmp, ldl)) = (ab, eta.len(), signals, scratch);
-        assert!(
-            Omega.len() == q * q && ldl.len() == q * q && Delta.len() == q && Y.len() == q && tmp.len() == q,
-            "adapt: dimension mismatch"
-        );
+        tmp: &mut [f64],
+    ) -> bool {
+        let ((a, b), q, (Delta, Y)) = (ab, eta.len(), signals);
+        assert!(Omega.len() == q * q && Delta.len() == q && Y.len() == q && tmp.len() == q, "adapt: dimension mismatch");
         tmp.fill(0.0);
         let mut trace = 0.0;
         for (i, (row, &eta_i)) in Omega.chunks_exact_mut(q).zip(eta.iter()).enumerate() {
@@ -714,21 +714,41 @@ with_avx2! {
             }
             trace += row[i];
         }
-        if c * trace <= IMPLICIT_FROM {
-            let gain = c / (1.0 + c * trace);
-            for ((e, y), w) in eta.iter_mut().zip(Y).zip(tmp.iter()) {
-                *e += gain * (y - w);
-            }
-            return;
+        if c * trace > IMPLICIT_FROM {
+            return false;
         }
-        // r = c (Y − Ω η̂) in tmp.
-        for (t, y) in tmp.iter_mut().zip(Y) {
-            *t = c * (y - *t);
+        let gain = c / (1.0 + c * trace);
+        for ((e, y), w) in eta.iter_mut().zip(Y).zip(tmp.iter()) {
+            *e += gain * (y - w);
         }
-        solve_implicit(c, Omega, (tmp, ldl));
-        for (e, d) in eta.iter_mut().zip(tmp.iter()) {
-            *e += d;
-        }
+        true
+    }
+}
+
+/// [`filter_and_step`], then the implicit step where it declined (`tmp` holds Ω η̂ then).
+pub(crate) fn adapt(
+    c: f64,
+    Omega: &mut [f64],
+    ab: (f64, f64),
+    signals: (&[f64], &[f64]),
+    eta: &mut [f64],
+    (tmp, ldl): (&mut [f64], &mut [f64]),
+) {
+    if !filter_and_step(c, Omega, ab, signals, eta, tmp) {
+        implicit_step(c, Omega, signals.1, eta, (tmp, ldl));
+    }
+}
+
+/// η̂ ← η̂ + δ with (I + cΩ) δ = c (Y − Ω η̂), `tmp` holding Ω η̂ on entry.
+#[inline(never)]
+fn implicit_step(c: f64, Omega: &[f64], Y: &[f64], eta: &mut [f64], (tmp, ldl): (&mut [f64], &mut [f64])) {
+    assert!(ldl.len() == eta.len() * eta.len(), "adapt: dimension mismatch");
+    for (t, y) in tmp.iter_mut().zip(Y) {
+        *t = c * (y - *t);
+    }
+    solve_implicit(c, Omega, (tmp, ldl));
+    for (e, d) in eta.iter_mut().zip(tmp.iter()) {
+        *e += d;
     }
 }
 
