@@ -433,7 +433,7 @@ impl Controller {
             for (Yj, dj) in ch.Y.iter_mut().zip(&self.Delta) {
                 *Yj = a * *Yj + one_minus_a * dj * eps;
             }
-            // Adaptive law (33), one implicit Euler step (see `adapt`).
+            // Adaptive law (33): one step, implicit where it is stiff (see `adapt`).
             let scratch = (self.Omega_eta.get(), &mut self.ldl[..]);
             adapt(ch.c, &mut ch.Omega, (a, one_minus_a), (&self.Delta, &ch.Y), eta, scratch);
 
@@ -739,29 +739,21 @@ pub(crate) fn adapt(
     }
 }
 
-/// η̂ ← η̂ + δ with (I + cΩ) δ = c (Y − Ω η̂), `tmp` holding Ω η̂ on entry.
+/// η̂ ← η̂ + δ with (I + cΩ) δ = c (Y − Ω η̂), `tmp` holding Ω η̂ on entry and δ on return, by
+/// I + cΩ = Uᵀ D U, U unit upper triangular, in `ldl` (q×q by rows, the upper triangle used: d_j on
+/// the diagonal, U_jt after it). Row j is final once rows 0 … j − 1 are eliminated from it;
+/// U_jt = s_jt·(1/d_j), and row j is eliminated from each later row l by s_lt −= (U_jl d_j) U_jt
+/// (t ≥ l). A pivot within rounding of 0 against its diagonal (cΩ beyond 1/ε along a null direction
+/// of Ω, where the exact pivot 1 and right-hand side are below the rounding of cΩ) is stored as 0
+/// with its row of U: that direction does not move. Out of line, so that [`filter_and_step`] stays
+/// lean; the generated C does the same operations in the same order ([`crate::export`]).
 #[inline(never)]
-fn implicit_step(c: f64, Omega: &[f64], Y: &[f64], eta: &mut [f64], (tmp, ldl): (&mut [f64], &mut [f64])) {
-    assert!(ldl.len() == eta.len() * eta.len(), "adapt: dimension mismatch");
-    for (t, y) in tmp.iter_mut().zip(Y) {
+fn implicit_step(c: f64, Omega: &[f64], Y: &[f64], eta: &mut [f64], (r, factor): (&mut [f64], &mut [f64])) {
+    let q = eta.len();
+    assert!(factor.len() == q * q, "adapt: dimension mismatch");
+    for (t, y) in r.iter_mut().zip(Y) {
         *t = c * (y - *t);
     }
-    solve_implicit(c, Omega, (tmp, ldl));
-    for (e, d) in eta.iter_mut().zip(tmp.iter()) {
-        *e += d;
-    }
-}
-
-/// Solves (I + cΩ) δ = r in place (`r` becomes δ) by I + cΩ = Uᵀ D U, U unit upper triangular, in
-/// `factor` (q×q by rows, the upper triangle used: d_j on the diagonal, U_jt after it). Row j is
-/// final once rows 0 … j − 1 are eliminated from it; U_jt = s_jt·(1/d_j), and row j is eliminated
-/// from each later row l by s_lt −= (U_jl d_j) U_jt (t ≥ l). A pivot within rounding of 0 against
-/// its diagonal (cΩ beyond 1/ε along a null direction of Ω, where the exact pivot 1 and
-/// right-hand side are below the rounding of cΩ) is stored as 0 with its row of U: that direction
-/// does not move. The generated C does the same operations in the same order ([`crate::export`]).
-#[inline(always)]
-fn solve_implicit(c: f64, Omega: &[f64], (r, factor): (&mut [f64], &mut [f64])) {
-    let q = r.len();
     for (i, (f, o)) in factor.chunks_exact_mut(q).zip(Omega.chunks_exact(q)).enumerate() {
         for (f, o) in f[i..].iter_mut().zip(&o[i..]) {
             *f = c * o;
@@ -791,7 +783,7 @@ fn solve_implicit(c: f64, Omega: &[f64], (r, factor): (&mut [f64], &mut [f64])) 
             }
         }
     }
-    // Uᵀ z = r (by rows of U), then D w = z, then U δ = w, in place.
+    // Uᵀ z = r (by rows of U), then D w = z, then U δ = w, in place; η̂ ← η̂ + δ.
     for (k, u) in factor.chunks_exact(q).enumerate() {
         let zk = r[k];
         for (x, ukj) in r[k + 1..].iter_mut().zip(&u[k + 1..]) {
@@ -803,6 +795,9 @@ fn solve_implicit(c: f64, Omega: &[f64], (r, factor): (&mut [f64], &mut [f64])) 
     }
     for (j, u) in factor.chunks_exact(q).enumerate().rev() {
         r[j] = u[j + 1..].iter().zip(&r[j + 1..]).fold(r[j], |s, (ujt, x)| s - ujt * x);
+    }
+    for (e, d) in eta.iter_mut().zip(r.iter()) {
+        *e += d;
     }
 }
 
