@@ -284,14 +284,20 @@ fn short_value(value: &str) -> String {
 }
 
 /// The figures a sweep plots, with their axis labels (the settling time's unit added from the
-/// study's scenario).
-const SWEEP_FIGURES: [(&str, &str); 3] =
-    [("tail RMS e", "tail_rms_e"), ("max |u|", "max_u"), ("settling time", "settle_t")];
+/// study's scenario): the error, the adaptive command u (25), the plant input u_f (5) that the
+/// actuator must deliver, and the settling time.
+const SWEEP_FIGURES: [(&str, &str); 4] = [
+    ("tail RMS e", "tail_rms_e"),
+    ("max |u|", "max_u"),
+    ("max |u_f| (plant input)", "max_uf"),
+    ("settling time", "settle_t"),
+];
 
 fn figure_of<'a>(c: &'a quell::study::ChannelQuantiles, name: &str) -> &'a quell::study::Quantiles {
     match name {
         "tail_rms_e" => &c.tail_rms_e,
         "max_u" => &c.max_u,
+        "max_uf" => &c.max_uf,
         _ => &c.settle_t,
     }
 }
@@ -525,8 +531,9 @@ fn write_figure(
 /// Writes sweep.png and sweep.svg for a 1-D or 2-D grid (other grids have no figure).
 pub fn plot_sweep(dir: &Path, s: &quell::study::Summary) -> io::Result<()> {
     let size = |rows| (520 * s.study.m as u32, rows);
+    let rows_1d = 300 * SWEEP_FIGURES.len() as u32;
     match s.study.grid.len() {
-        1 => write_figure(dir, "sweep", size(900), |r| draw_sweep_1d(r, s), |r| draw_sweep_1d(r, s)),
+        1 => write_figure(dir, "sweep", size(rows_1d), |r| draw_sweep_1d(r, s), |r| draw_sweep_1d(r, s)),
         2 => write_figure(dir, "sweep", size(520), |r| draw_sweep_2d(r, s), |r| draw_sweep_2d(r, s)),
         _ => Ok(()),
     }

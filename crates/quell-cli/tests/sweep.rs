@@ -296,4 +296,6 @@ fn the_settling_time_axis_is_in_the_plants_unit_of_time() {
     assert!(o.status.success(), "{}", stderr(&o));
     let svg = fs::read_to_string(dir.join("merged/sweep.svg")).unwrap();
     assert!(svg.contains("settling time, min") && !svg.contains("settling time, s"), "the panels' titles");
+    // Each channel has a panel of the plant input's peak (5), what the actuator must deliver.
+    assert_eq!(svg.matches("max |u_f| (plant input)").count(), 2 * 2, "title and y label, two channels");
 }
