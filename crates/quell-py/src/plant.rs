@@ -8,7 +8,7 @@ use quell::nalgebra::DMatrix;
 use quell::TimeUnit;
 
 use crate::convert::{matrix, to_numpy, type_name, vec_numpy, vector};
-use crate::errors::{raise, Kind};
+use crate::errors::Kind;
 
 /// The plant (1) of the paper: ẋ = A x + B u_f(t) + D ω(t), y = C x + Q ω(t), driven by the
 /// decoupling law u_f = −K x̂ + F u_d, where u_d,i(t) = u_i(t − τ_i) is adaptive command i delayed
@@ -203,7 +203,11 @@ impl PyPlant {
             None => vec![0.0; m],
         };
         let x0 = x0.map(|x| vector(x, "x0", k)).transpose()?.map(quell::nalgebra::DVector::from_vec);
-        let inner = quell::Plant::new(A, B, C, D, Q, delays, x0).map_err(|e| raise(py, k)(&e))?;
+        let dims = (n, m, D.ncols());
+        let inner = quell::Plant::new(A, B, C, D, Q, delays, x0).map_err(|e| {
+            let (key, message) = e.explained(dims, "");
+            k.err(py, format!("{key}: {message}"))
+        })?;
         let (n, m) = (inner.n(), inner.m());
         // A keyword's names, else the system's labels (checked only where no keyword overrides them).
         let label =

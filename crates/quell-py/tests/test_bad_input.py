@@ -17,7 +17,7 @@ C = [[2.0, 2.0, 0.0], [2.0, 1.0, 2.0]]
 @pytest.mark.parametrize(
     "kwargs,exc,fragment",
     [
-        (dict(A=[[1, 2]], B=[[1]], C=[[1]]), quell.ScenarioError, r"^A: expected a 1×1 matrix, found 1×2"),
+        (dict(A=[[1, 2]], B=[[1]], C=[[1]]), quell.ScenarioError, r"^A: expected 1×1 \(n×n\), found 1×2; A must be square$"),
         (dict(A=[[np.nan]], B=[[1]], C=[[1]]), quell.ScenarioError, r"^A\[0\]\[0\]: expected a finite number, found NaN"),
         (dict(A=A, B=B, C=C, delays=[1.0, np.inf]), quell.ScenarioError, r"^delays\[1\]: expected a finite number"),
         (dict(A="abc", B=B, C=C), TypeError, r"^A: expected real numbers, found strings"),
@@ -26,9 +26,10 @@ C = [[2.0, 2.0, 0.0], [2.0, 1.0, 2.0]]
         (dict(A=A, B=[1, 2, 3], C=C), quell.ScenarioError, r"^B: expected a matrix \(2-D array"),
         (dict(A=A, B=B, C=C, delays=[1.0]), quell.ScenarioError, r"^delays: expected 2 entries"),
         (dict(A=A, B=B, C=C, delays=[1.0, -3.0]), quell.ScenarioError, r"^delays\[1\]: expected a finite delay ≥ 0"),
-        (dict(A=A, B=B, C=C, x0=[0, 0]), quell.ScenarioError, r"^x0: expected 3 entries"),
         (dict(A=A, B=B), TypeError, r"^C: missing"),
-        (dict(A=A, B=B, C=C, D=[[1], [1], [1]], Q=[[1, 2], [1, 2]]), quell.ScenarioError, r"^Q: expected a 2×1 matrix"),
+        (dict(A=A, B=B, C=C, D=[[1], [1], [1]], Q=[[1, 2], [1, 2]]), quell.ScenarioError, r"^Q: expected 2×1 \(m×k\), found 2×2; m = 2 \(columns of B\), k = 1 \(columns of D\)$"),
+        (dict(A=A, B=B, C=[[2.0, 2.0]]), quell.ScenarioError, r"^C: expected 2×3 \(m×n\), found 1×2; m = 2 \(columns of B\), n = 3 \(rows of A\)$"),
+        (dict(A=A, B=B, C=C, x0=[0, 0]), quell.ScenarioError, r"^x0: expected 3 entries \(one per state, n = 3 rows of A\), found 2$"),
         (dict(A=object(), B=B, C=C), TypeError, r"^A: expected real numbers, found a object"),
         (dict(A=[[None]], B=[[1]], C=[[1]]), TypeError, r"^A: expected real numbers, found entries that are not all numbers"),
     ],

@@ -57,6 +57,69 @@ pub enum PlantError {
     Empty { n: usize, m: usize },
 }
 
+impl PlantError {
+    /// The error as (key, message) for a plant of `n` states, `m` channels and `k` disturbance
+    /// components, its matrices named with `prefix` (`"plant."` in a scenario, `""` for a
+    /// program's arguments): a wrong shape names what n, m and k were taken from.
+    pub fn explained(&self, (n, m, k): (usize, usize, usize), prefix: &str) -> (String, String) {
+        let entry = |name: &str, row: usize, col: usize| {
+            if name == "x0" {
+                format!("{prefix}x0[{row}]")
+            } else {
+                format!("{prefix}{name}[{row}][{col}]")
+            }
+        };
+        match *self {
+            PlantError::Shape { name, expected_rows, expected_cols, rows, cols } => {
+                let (dims, symbols): (&str, &[char]) = match name {
+                    "A" => ("n×n", &[]),
+                    "B" => ("n×m", &['n']),
+                    "C" => ("m×n", &['m', 'n']),
+                    "D" => ("n×k", &['n']),
+                    "Q" => ("m×k", &['m', 'k']),
+                    _ => ("", &[]),
+                };
+                let defs: Vec<String> = symbols
+                    .iter()
+                    .map(|s| match s {
+                        'n' => format!("n = {n} (rows of {prefix}A)"),
+                        'm' => format!("m = {m} (columns of {prefix}B)"),
+                        _ => format!("k = {k} (columns of {prefix}D)"),
+                    })
+                    .collect();
+                let hint =
+                    if name == "A" { "; A must be square".to_string() } else { format!("; {}", defs.join(", ")) };
+                (
+                    format!("{prefix}{name}"),
+                    format!("expected {expected_rows}×{expected_cols} ({dims}), found {rows}×{cols}{hint}"),
+                )
+            }
+            PlantError::NonFinite { name, row, col, value } => {
+                (entry(name, row, col), format!("expected a finite number, found {value}"))
+            }
+            PlantError::TooLarge { name, row, col, .. } => {
+                let full = self.to_string();
+                (entry(name, row, col), full.split_once(": ").map_or(full.as_str(), |(_, m)| m).to_string())
+            }
+            PlantError::BadDelay { index, value } => {
+                (format!("{prefix}delays[{index}]"), format!("expected a finite delay ≥ 0, found {value}"))
+            }
+            PlantError::Length { name, per, expected, found } => {
+                let of = if name == "x0" {
+                    format!("n = {n} rows of {prefix}A")
+                } else {
+                    format!("m = {m} columns of {prefix}B")
+                };
+                (format!("{prefix}{name}"), format!("expected {expected} entries (one per {per}, {of}), found {found}"))
+            }
+            PlantError::Empty { n, m } => (
+                format!("{prefix}{}", if n == 0 { "A" } else { "B" }),
+                format!("the plant needs at least one state, input and output (n, m ≥ 1); found n = {n}, m = {m}"),
+            ),
+        }
+    }
+}
+
 /// `M` is `rows × cols`.
 pub(crate) fn check_shape(name: &'static str, M: &DMatrix<f64>, rows: usize, cols: usize) -> Result<(), PlantError> {
     if M.nrows() != rows || M.ncols() != cols {

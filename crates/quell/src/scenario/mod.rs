@@ -396,62 +396,10 @@ fn truth(v: Value, plant: &Plant) -> Result<(Plant, Option<Actuator>), ScenarioE
     Ok((truth.with_time_unit(plant.time_unit), actuator))
 }
 
-/// The key of entry (row, col) of plant matrix `name` (x0 is a vector: one index).
-fn entry_key(name: &str, row: usize, col: usize) -> String {
-    if name == "x0" {
-        format!("plant.x0[{row}]")
-    } else {
-        format!("plant.{name}[{row}][{col}]")
-    }
-}
-
-/// A [`PlantError`] as a scenario error on key `plant.<name>`.
+/// A [`PlantError`] as a scenario error on key `plant.<name>` ([`PlantError::explained`]).
 fn plant_error(e: PlantError, n: usize, m: usize, k: usize) -> ScenarioError {
-    match e {
-        PlantError::Shape { name, expected_rows, expected_cols, rows, cols } => {
-            let (dims, symbols): (&str, &[char]) = match name {
-                "A" => ("n×n", &[]),
-                "B" => ("n×m", &['n']),
-                "C" => ("m×n", &['m', 'n']),
-                "D" => ("n×k", &['n']),
-                "Q" => ("m×k", &['m', 'k']),
-                _ => ("", &[]),
-            };
-            let defs: Vec<String> = symbols
-                .iter()
-                .map(|s| match s {
-                    'n' => format!("n = {n} (rows of plant.A)"),
-                    'm' => format!("m = {m} (columns of plant.B)"),
-                    _ => format!("k = {k} (columns of plant.D)"),
-                })
-                .collect();
-            let hint = if name == "A" { "; A must be square".to_string() } else { format!("; {}", defs.join(", ")) };
-            err(
-                format!("plant.{name}"),
-                format!("expected {expected_rows}×{expected_cols} ({dims}), found {rows}×{cols}{hint}"),
-            )
-        }
-        PlantError::NonFinite { name, row, col, value } => {
-            err(entry_key(name, row, col), format!("expected a finite number, found {value}"))
-        }
-        too_large @ PlantError::TooLarge { name, row, col, .. } => {
-            let full = too_large.to_string();
-            let message = full.split_once(": ").map_or(full.as_str(), |(_, m)| m);
-            err(entry_key(name, row, col), message)
-        }
-        PlantError::BadDelay { index, value } => {
-            err(format!("plant.delays[{index}]"), format!("expected a finite delay ≥ 0, found {value}"))
-        }
-        PlantError::Length { name, per, expected, found } => {
-            let of =
-                if name == "x0" { format!("n = {n} rows of plant.A") } else { format!("m = {m} columns of plant.B") };
-            err(format!("plant.{name}"), format!("expected {expected} entries (one per {per}, {of}), found {found}"))
-        }
-        PlantError::Empty { n, m } => err(
-            if n == 0 { "plant.A" } else { "plant.B" },
-            format!("the plant needs at least one state, input and output (n, m ≥ 1); found n = {n}, m = {m}"),
-        ),
-    }
+    let (key, message) = e.explained((n, m, k), "plant.");
+    err(key, message)
 }
 
 /// `[design]` as written, every key optional: [`PartialDesign::complete`] requires the keys of a
