@@ -326,8 +326,18 @@ fn draw_sweep_panel<DB: DrawingBackend>(
     i: usize,
 ) -> Result<(), String> {
     let axis = &s.study.grid[0];
+    let raw = |p: f64| s.points.iter().filter_map(move |pt| figure_of(&pt.channels[i], name).at(p));
+    // Positive values spanning two decades or more (an error falling from 1e-2 to 1e-5 along
+    // the grid) are drawn on a log axis; on a linear one all but the largest lay flat.
+    let (lo, hi) = value_range([Q[0], Q[4]].iter().flat_map(|&p| raw(p)));
+    let log = lo > 0.0 && hi >= 100.0 * lo;
     let at = |p: f64| -> Vec<(f64, f64)> {
-        s.points.iter().filter_map(|pt| figure_of(&pt.channels[i], name).at(p).map(|v| (x[pt.point], v))).collect()
+        s.points
+            .iter()
+            .filter_map(|pt| {
+                figure_of(&pt.channels[i], name).at(p).map(|v| (x[pt.point], if log { v.log10() } else { v }))
+            })
+            .collect()
     };
     let (lo, hi) = value_range([Q[0], Q[2], Q[4]].iter().flat_map(|&p| at(p)).map(|(_, v)| v));
     let empty = at(0.5).is_empty();
@@ -372,10 +382,10 @@ fn draw_sweep_panel<DB: DrawingBackend>(
             AxisScale::Positions => axis.values.len().min(12),
         })
         .x_desc(x_desc)
-        .y_desc(label)
+        .y_desc(if log { format!("{label} (log scale)") } else { label.to_string() })
         .y_labels(if empty { 0 } else { 10 })
         .x_label_formatter(&fmt)
-        .y_label_formatter(&|v| tick_label(*v, y0, y1))
+        .y_label_formatter(&|v| if log { decade_label(*v) } else { tick_label(*v, y0, y1) })
         .label_style(("sans-serif", 13))
         .draw()
         .map_err(|e| e.to_string())?;
@@ -528,15 +538,104 @@ fn write_figure(
     write_atomic(&dir.join(format!("{name}.svg")), |w| w.write_all(text.as_bytes()))
 }
 
-/// Writes sweep.png and sweep.svg for a 1-D or 2-D grid (other grids have no figure).
-pub fn plot_sweep(dir: &Path, s: &quell::study::Summary) -> io::Result<()> {
-    let size = |rows| (520 * s.study.m as u32, rows);
-    let rows_1d = 300 * SWEEP_FIGURES.len() as u32;
-    match s.study.grid.len() {
-        1 => write_figure(dir, "sweep", size(rows_1d), |r| draw_sweep_1d(r, s), |r| draw_sweep_1d(r, s)),
-        2 => write_figure(dir, "sweep", size(520), |r| draw_sweep_2d(r, s), |r| draw_sweep_2d(r, s)),
-        _ => Ok(()),
+/// Channel figure `name` of one run ([`SWEEP_FIGURES`]): `None` for a settling time never reached.
+fn run_figure(c: &quell::sim::ChannelFigures, name: &str) -> Option<f64> {
+    match name {
+        "tail_rms_e" => Some(c.tail_rms_e),
+        "max_u" => Some(c.max_u),
+        "max_uf" => Some(c.max_uf),
+        _ => c.settle_t,
     }
+}
+
+/// The empirical distribution function of sorted `x` among `draws` draws (those without a value
+/// lie above every x) as the corners of its staircase: up by 1/draws at each value.
+fn ecdf(x: &[f64], draws: usize) -> Vec<(f64, f64)> {
+    let n = draws.max(1) as f64;
+    x.iter().enumerate().flat_map(|(k, &v)| [(v, k as f64 / n), (v, (k + 1) as f64 / n)]).collect()
+}
+
+/// No grid, only draws (a Monte Carlo study): per channel and figure, the empirical distribution
+/// function over the draws, the fraction of all draws at or below a value. Diverged, failed and
+/// never-settled draws lie above every value, so a curve ends at the share of draws that have one.
+fn draw_distributions<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    s: &quell::study::Summary,
+    rows: &[quell::study::Row],
+) -> Result<(), String> {
+    let areas = root.split_evenly((SWEEP_FIGURES.len(), s.study.m));
+    let draws = rows.len();
+    for (f, &(title, name)) in SWEEP_FIGURES.iter().enumerate() {
+        let label = if name == "settle_t" { format!("{title}, {}", s.study.time_unit) } else { title.into() };
+        for i in 0..s.study.m {
+            let mut values: Vec<f64> = rows
+                .iter()
+                .filter_map(|r| r.channels.get(i).and_then(|c| run_figure(c, name)))
+                .filter(|v| v.is_finite())
+                .collect();
+            values.sort_by(f64::total_cmp);
+            let (lo, hi) = value_range(values.iter().copied());
+            let log = values.first().is_some_and(|&v| v > 0.0) && hi >= 100.0 * lo;
+            let x: Vec<f64> = if log { values.iter().map(|v| v.log10()).collect() } else { values.clone() };
+            let (x0, x1) = value_range(x.iter().copied());
+            let (x0, x1) = if log { (x0.floor(), x1.ceil()) } else { widened(x0, x1, 1e-3) };
+            let pad = if log { 0.0 } else { 0.05 * (x1 - x0) };
+            let (x0, x1) = (x0 - pad, x1 + pad);
+            let mut chart = ChartBuilder::on(&areas[f * s.study.m + i])
+                .caption(format!("Channel {}: {label}", i + 1), ("sans-serif", 18))
+                .margin(8)
+                .margin_right(28)
+                .x_label_area_size(36)
+                .y_label_area_size(60)
+                .build_cartesian_2d(x0..x1, 0.0..1.02)
+                .map_err(|e| e.to_string())?;
+            let x_desc = format!(
+                "{label}{}; {} of {} draws have a value",
+                if log { " (log scale)" } else { "" },
+                values.len(),
+                rows.len()
+            );
+            chart
+                .configure_mesh()
+                .max_light_lines(2)
+                .x_labels(if log { 12 } else { 6 })
+                .x_desc(x_desc)
+                .y_desc("fraction of draws ≤ value")
+                .x_label_formatter(&|v| if log { decade_label(*v) } else { tick_label(*v, x0, x1) })
+                .y_label_formatter(&|v| tick_label(*v, 0.0, 1.0))
+                .label_style(("sans-serif", 13))
+                .draw()
+                .map_err(|e| e.to_string())?;
+            if x.is_empty() {
+                let why = if name == "settle_t" { "no draw settled" } else { "no draw completed" };
+                missing_median_note(&mut chart, [why.into(), String::new()], true, (x0, x1), (0.0, 1.02))?;
+                continue;
+            }
+            let color = Palette99::pick(i).to_rgba();
+            chart.draw_series(LineSeries::new(ecdf(&x, draws), color.stroke_width(2))).map_err(|e| e.to_string())?;
+        }
+    }
+    root.present().map_err(|e| e.to_string())
+}
+
+/// Writes sweep.png and sweep.svg: for a 1-D or 2-D grid, the figures against the grid; without
+/// a grid, their distributions over the draws. A grid of three keys or more has no figure (`false`).
+pub fn plot_sweep(dir: &Path, s: &quell::study::Summary, rows: &[quell::study::Row]) -> io::Result<bool> {
+    let size = |height| (520 * s.study.m as u32, height);
+    let height = 300 * SWEEP_FIGURES.len() as u32;
+    match s.study.grid.len() {
+        0 => write_figure(
+            dir,
+            "sweep",
+            size(height),
+            |r| draw_distributions(r, s, rows),
+            |r| draw_distributions(r, s, rows),
+        ),
+        1 => write_figure(dir, "sweep", size(height), |r| draw_sweep_1d(r, s), |r| draw_sweep_1d(r, s)),
+        2 => write_figure(dir, "sweep", size(520), |r| draw_sweep_2d(r, s), |r| draw_sweep_2d(r, s)),
+        _ => return Ok(false),
+    }?;
+    Ok(true)
 }
 
 /// tune.png/.svg: per channel, the objective against μ_i (log scale), the chosen μ_i marked.
@@ -621,6 +720,17 @@ mod tests {
         assert_eq!(axis_coords(&strings(&["[1.0, 2.0]", "[3.0, 4.0]"])).1, AxisScale::Positions);
         let labels: Vec<String> = [-4.0, -2.0, 0.0, 0.5, 3.0, 7.0].iter().map(|&v| decade_label(v)).collect();
         assert_eq!(labels, ["1e-4", "0.01", "1", "", "1000", "1e7"]);
+    }
+
+    #[test]
+    fn the_distribution_rises_by_one_draw_at_each_value_to_the_share_with_a_value() {
+        // Four of five draws have a value (one diverged): the staircase ends at 4/5.
+        let corners = super::ecdf(&[0.5, 1.0, 1.0, 3.0], 5);
+        assert_eq!(
+            corners,
+            [(0.5, 0.0), (0.5, 0.2), (1.0, 0.2), (1.0, 0.4), (1.0, 0.4), (1.0, 0.6), (3.0, 0.6), (3.0, 0.8)]
+        );
+        assert!(super::ecdf(&[], 0).is_empty());
     }
 
     #[test]

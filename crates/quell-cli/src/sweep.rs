@@ -149,8 +149,11 @@ fn write_all(dir: &Path, meta: &StudyMeta, rows: &[Row], partial: bool, plots: b
     // A figure of an earlier sweep (plots now skipped, or a grid that has none) must not stand
     // beside the new rows.
     crate::output::remove_figures(dir, |stem| stem == "sweep").map_err(failed)?;
-    if plots {
-        crate::plot::plot_sweep(dir, &summary).map_err(failed)?;
+    if plots && !crate::plot::plot_sweep(dir, &summary, rows).map_err(failed)? {
+        eprintln!(
+            "no sweep.png: a grid of {} keys has no figure (one is drawn for none, one or two); runs.csv has every run",
+            meta.grid.len()
+        );
     }
     Ok(())
 }

@@ -189,6 +189,7 @@ fn figures_of_an_earlier_run_do_not_stay_beside_new_data() {
     let o = quell(&["sweep", &s, "--out", &out.display().to_string()]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!names(&out).contains(&"sweep.png".to_string()), "{:?}", names(&out));
+    assert!(stderr(&o).contains("no sweep.png: a grid of 3 keys has no figure"), "{}", stderr(&o));
 }
 
 #[cfg(unix)]
