@@ -5,6 +5,7 @@ use std::io;
 use std::path::Path;
 use std::sync::Once;
 
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use quell::sim::SimResult;
@@ -24,6 +25,9 @@ fn register_font() {
 }
 
 type Series = (String, Vec<(f64, f64)>);
+
+/// A panel's chart with two linear f64 axes.
+type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
 /// The finite values' range, widened to a non-empty one (±1 around a single value, [−1, 1] for none).
 fn value_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
@@ -389,7 +393,20 @@ fn draw_sweep_panel<DB: DrawingBackend>(
         .label_style(("sans-serif", 13))
         .draw()
         .map_err(|e| e.to_string())?;
-    let color = Palette99::pick(i).to_rgba();
+    let medians = draw_quantile_bands(&mut chart, &at, Palette99::pick(i).to_rgba())?;
+    if medians < s.points.len() {
+        missing_median_note(&mut chart, missing_median(name, empty), empty, (x0, x1), (y0, y1))?;
+    }
+    Ok(())
+}
+
+/// The 5–95 % and 25–75 % bands and the median line of the quantile curves `at(p)`, in `color`;
+/// returns the number of points that have a median.
+fn draw_quantile_bands<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    at: &dyn Fn(f64) -> Vec<(f64, f64)>,
+    color: RGBAColor,
+) -> Result<usize, String> {
     for (a, b, alpha) in [(Q[0], Q[4], 0.15), (Q[1], Q[3], 0.3)] {
         let (low, high) = (at(a), at(b));
         if low.len() >= 2 && low.len() == high.len() {
@@ -402,18 +419,12 @@ fn draw_sweep_panel<DB: DrawingBackend>(
     let median = at(0.5);
     chart.draw_series(LineSeries::new(median.iter().copied(), color.stroke_width(2))).map_err(|e| e.to_string())?;
     chart.draw_series(median.iter().map(|&p| Circle::new(p, 3, color.filled()))).map_err(|e| e.to_string())?;
-    if median.len() < s.points.len() {
-        missing_median_note(&mut chart, missing_median(name, empty), empty, (x0, x1), (y0, y1))?;
-    }
-    Ok(())
+    Ok(median.len())
 }
 
 /// Writes `lines` at the top left of a panel spanning `xs` × `ys`, or in the middle of an `empty` one.
 fn missing_median_note<DB: DrawingBackend>(
-    chart: &mut ChartContext<
-        DB,
-        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
-    >,
+    chart: &mut Chart<'_, DB>,
     lines: [String; 2],
     empty: bool,
     (x0, x1): (f64, f64),

@@ -133,6 +133,26 @@ fn required<'a, 'py>(
     })
 }
 
+/// A, B and C of a python-control state-space system `sys` (continuous, no feedthrough); `given_bc`
+/// when B or C were passed besides it.
+fn system_matrices(sys: &Bound<'_, PyAny>, given_bc: bool) -> PyResult<(DMatrix<f64>, DMatrix<f64>, DMatrix<f64>)> {
+    let (py, k) = (sys.py(), Kind::Scenario);
+    if given_bc {
+        return Err(k.err(py, "B, C: the first argument is a state-space system, which gives A, B and C; pass D and Q (the disturbance matrices) as keywords: Plant(sys, D=..., Q=..., delays=...)"));
+    }
+    let dt = sys.getattr("dt").ok().filter(|d| !d.is_none());
+    if let Some(dt) = dt {
+        if dt.extract::<f64>().map_or(true, |v| v != 0.0) {
+            return Err(k.err(py, format!("sys: expected a continuous-time system (dt = 0), found dt = {}; quell designs for continuous plants (sample the controller with Controller(design, sample_time))", dt.str()?)));
+        }
+    }
+    let feedthrough = matrix(&sys.getattr("D")?, "sys.D", k)?;
+    if let Some(v) = feedthrough.iter().find(|v| **v != 0.0) {
+        return Err(k.err(py, format!("sys.D: python-control's D is the feedthrough from u to y, which the plant (1) does not have; found a nonzero entry {v}; give the disturbance matrices as Plant(sys, D=..., Q=...)")));
+    }
+    Ok((matrix(&sys.getattr("A")?, "A", k)?, matrix(&sys.getattr("B")?, "B", k)?, matrix(&sys.getattr("C")?, "C", k)?))
+}
+
 #[pymethods]
 impl PyPlant {
     #[new]
@@ -163,24 +183,7 @@ impl PyPlant {
         };
         let system = is_state_space(A).then_some(A);
         let (A, B, C) = if let Some(sys) = system {
-            if B.is_some() || C.is_some() {
-                return Err(k.err(py, "B, C: the first argument is a state-space system, which gives A, B and C; pass D and Q (the disturbance matrices) as keywords: Plant(sys, D=..., Q=..., delays=...)"));
-            }
-            let dt = sys.getattr("dt").ok().filter(|d| !d.is_none());
-            if let Some(dt) = dt {
-                if dt.extract::<f64>().map_or(true, |v| v != 0.0) {
-                    return Err(k.err(py, format!("sys: expected a continuous-time system (dt = 0), found dt = {}; quell designs for continuous plants (sample the controller with Controller(design, sample_time))", dt.str()?)));
-                }
-            }
-            let feedthrough = matrix(&sys.getattr("D")?, "sys.D", k)?;
-            if let Some(v) = feedthrough.iter().find(|v| **v != 0.0) {
-                return Err(k.err(py, format!("sys.D: python-control's D is the feedthrough from u to y, which the plant (1) does not have; found a nonzero entry {v}; give the disturbance matrices as Plant(sys, D=..., Q=...)")));
-            }
-            (
-                matrix(&sys.getattr("A")?, "A", k)?,
-                matrix(&sys.getattr("B")?, "B", k)?,
-                matrix(&sys.getattr("C")?, "C", k)?,
-            )
+            system_matrices(sys, B.is_some() || C.is_some())?
         } else {
             (
                 matrix(A, "A", k)?,

@@ -193,10 +193,20 @@ pub(crate) fn clusters(eigs: &[Complex<f64>], size: f64) -> Vec<Vec<usize>> {
 
 /// True when the members z_j = λ_j − mean of a group of k ≥ 3 look like the k-th roots of one
 /// number, as the computed copies of a k-fold defective eigenvalue do (to first order in their
-/// radius over |λ|): the power sums Σ z_j^p, p = 2, 3 (below k), vanish for those roots; each must be
-/// at most half of Σ |z_j|^p. Two members are always symmetric about their mean (true for k = 2).
+/// radius over |λ|): those roots have one modulus, so the largest |z_j| must be at most twice the
+/// smallest; and the power sums Σ z_j^p, p = 2, 3 (below k), vanish for them, so each must be at
+/// most half of Σ |z_j|^p. The power sums alone passed k ≳ 10 distinct eigenvalues scattered over a
+/// disc (their sums shrink as 1/√k): a design of 20 states with poles 0.05 apart was called
+/// defective. Two members are always symmetric about their mean (true for k = 2).
 fn jordan_shaped(eigs: &[Complex<f64>], members: &[usize], mean: Complex<f64>) -> bool {
     let k = members.len();
+    let (low, high) = members
+        .iter()
+        .map(|&j| (eigs[j] - mean).norm())
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(r), hi.max(r)));
+    if k >= 3 && high > 2.0 * low {
+        return false;
+    }
     (2..k.min(4)).all(|p| {
         let z = members.iter().map(|&j| eigs[j] - mean);
         let sum: Complex<f64> = z.clone().map(|z| z.powi(p as i32)).sum();

@@ -714,6 +714,38 @@ fn a_row_of_distinct_eigenvalues_is_not_one_defective_cluster() {
 }
 
 #[test]
+fn distinct_eigenvalues_scattered_over_a_disc_are_not_one_defective_cluster() {
+    // 17 distinct eigenvalues within 0.35 of −2 (three real, seven conjugate pairs, as the plant
+    // zeros an automatic design keeps in a 20-state plant: tryout, 2026-12-03) plus three far
+    // ones, in a normal matrix: an orthogonal similarity of the real block-diagonal form. Their
+    // power sums are small, as for the copies of a 17-fold defective eigenvalue, and κ₂ came out
+    // ∞ ("defective: a Jordan block"). Known answer: a normal matrix has κ₂ = 1.
+    let pairs = [
+        (-2.33, 0.054),
+        (-2.25, 0.215),
+        (-2.09, 0.195),
+        (-1.99, 0.118),
+        (-1.94, 0.245),
+        (-1.79, 0.183),
+        (-1.71, 0.288),
+    ];
+    let reals = [-2.06, -1.96, -1.83, -27.2, -19.2, -13.6];
+    let n = 2 * pairs.len() + reals.len();
+    let mut D = DMatrix::zeros(n, n);
+    for (j, &(a, b)) in pairs.iter().enumerate() {
+        D.view_mut((2 * j, 2 * j), (2, 2)).copy_from(&DMatrix::from_row_slice(2, 2, &[a, b, -b, a]));
+    }
+    for (j, &r) in reals.iter().enumerate() {
+        D[(2 * pairs.len() + j, 2 * pairs.len() + j)] = r;
+    }
+    // An orthogonal Q from the QR factorization of a fixed, dense matrix.
+    let Q = DMatrix::from_fn(n, n, |r, c| ((7 * r + 3 * c * c + 1) % 11) as f64 - 5.0 + 0.1 * (r * c) as f64).qr().q();
+    let M = &Q * D * Q.transpose();
+    let kappa = quell::design::place::eigenvector_condition(&M, &DMatrix::zeros(n, 1), &DMatrix::zeros(1, n)).unwrap();
+    assert!((kappa - 1.0).abs() < 1e-10, "κ₂ = {kappa}");
+}
+
+#[test]
 fn a_stopped_design_of_a_large_plant_returns_interrupted() {
     // Under a stop flag already set, a plant of DETACHED_MIN_STATES states is designed on a worker
     // thread that the call leaves at once; below that size, on the caller's thread, which polls
