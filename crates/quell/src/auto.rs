@@ -52,7 +52,7 @@ use crate::diagnostics::Averaged;
 use crate::diagnostics::{FIDELITY_LIMIT, STIFF_RATIO};
 use crate::linalg::eigenvalues;
 use crate::scenario::exosystem::Exosystem;
-use crate::scenario::{PartialDesign, Scenario, ScenarioError};
+use crate::scenario::{pole_lists, poles_value, PartialDesign, Scenario, ScenarioError};
 use crate::signal::{Component, Signal};
 use crate::sim::{loop_rate, Outcome, Run, SimError, COARSE_SAMPLE};
 
@@ -677,14 +677,6 @@ fn spread(r: f64, count: usize, factor: f64, centred: bool) -> Vec<Complex<f64>>
     (0..count).map(|j| Complex::new(-r * factor.powf(j as f64 - shift), 0.0)).collect()
 }
 
-fn fmt_lists(lists: &[Vec<Complex<f64>>]) -> String {
-    let inner: Vec<String> = lists
-        .iter()
-        .map(|l| format!("[{}]", l.iter().map(|p| format!("{:.4e}", p.re)).collect::<Vec<_>>().join(", ")))
-        .collect();
-    format!("[{}]", inner.join(", "))
-}
-
 /// Nonzero frequencies of a component.
 fn frequencies(c: &Component) -> impl Iterator<Item = f64> + '_ {
     c.harmonics.iter().filter(|h| h.frequency > 0.0 && h.amplitude != 0.0).map(|h| h.frequency)
@@ -874,7 +866,9 @@ fn choose(
         }
         None => {
             let (design, why) = observer(s, &mut spec, 6.0 * r, s.plant.n(), speed.observer)?;
-            note("design.observer_poles", format!("{:?}", design_poles(&spec)), why);
+            if let ObserverChoice::Poles(poles) = &spec.observer {
+                note("design.observer_poles", poles_value(poles).to_string(), why);
+            }
             design
         }
     };
@@ -909,7 +903,7 @@ fn choose_channel_poles(
             .collect(),
     };
     let c: PoleLists = sigma.iter().map(|&k| spread(2.0 * r * speed, k, 1.5, false)).collect();
-    note("design.channel_poles", fmt_lists(&c), format!("σ = {sigma:?}; real poles from −2r (r = {r:.4e} rad/{}: the fastest of the signals' frequencies, the plant's eigenvalue magnitudes and 20/t_end), ×1.5 apart", p.time_unit));
+    note("design.channel_poles", pole_lists(&c).to_string(), format!("σ = {sigma:?}; real poles from −2r (r = {r:.4e} rad/{}: the fastest of the signals' frequencies, the plant's eigenvalue magnitudes and 20/t_end), ×1.5 apart", p.time_unit));
     Ok(c)
 }
 
@@ -927,7 +921,7 @@ fn choose_filters(
         None if signal.is_empty() => Ok(Vec::new()),
         None => {
             let (lists, why) = filters(signal, orders, r, t_end, key)?;
-            note(&format!("design.{key}_filter_poles"), fmt_lists(&lists), why);
+            note(&format!("design.{key}_filter_poles"), pole_lists(&lists).to_string(), why);
             Ok(lists)
         }
     }
@@ -936,7 +930,7 @@ fn choose_filters(
 /// β = 1/(smallest gap between the signals' frequencies), at most t_end/[`BETA_HORIZON`].
 fn choose_beta(s: &Scenario, r: f64, note: &mut Note) -> f64 {
     let b = (1.0 / smallest_gap(s).unwrap_or(r)).min(s.simulation.t_end / BETA_HORIZON);
-    note("design.beta", format!("{b:.4e}"), format!("1/(smallest gap between the signals' frequencies, 0 included) so that H averages over a beat of the two closest harmonics (1/r without harmonics), at most t_end/{BETA_HORIZON}"));
+    note("design.beta", format!("{b:?}"), format!("1/(smallest gap between the signals' frequencies, 0 included) so that H averages over a beat of the two closest harmonics (1/r without harmonics), at most t_end/{BETA_HORIZON}"));
     b
 }
 
@@ -952,13 +946,6 @@ fn choose_scaling(partial: &PartialDesign, note: &mut Note) -> RegressorScaling 
             note("design.regressor_scaling", format!("{:?}", n.name()), "each filter at its own time scale with unit DC gain (ξ̂ of the signals' size): Ω̄'s conditioning does not depend on the time scale, where the paper's form spreads its eigenvalues by about r^2(q−1) away from 1 rad per unit of time; μ is chosen for it (the paper's form is kept when the file gives μ)".into());
             n
         }
-    }
-}
-
-fn design_poles(spec: &DesignSpec) -> Vec<f64> {
-    match &spec.observer {
-        ObserverChoice::Poles(p) => p.iter().map(|z| z.re).collect(),
-        ObserverChoice::Gain(_) => Vec::new(),
     }
 }
 

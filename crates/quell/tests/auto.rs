@@ -695,3 +695,24 @@ fn number_after(text: &str, prefix: &str, end: &str) -> f64 {
         .and_then(|(v, _)| v.parse().ok())
         .unwrap_or_else(|| panic!("no number after {prefix:?}: {text}"))
 }
+
+/// Each choice's value is the key's value as the written scenario holds it (the report printed
+/// complex observer poles by their real parts alone: random15.toml keeps plant zeros such as
+/// −1.886 ± 0.073i, reported as −1.886 twice).
+#[test]
+fn each_choice_is_reported_as_the_written_scenario_holds_it() {
+    for name in ["random15.toml", "maglev.toml", "wood-berry.toml"] {
+        let doc = without_design(&data(name));
+        let a = auto_design(&doc, &Targets::default()).unwrap();
+        let written: toml::Table = a.scenario.to_toml().parse().unwrap();
+        for c in &a.choices {
+            let key = c.key.strip_prefix("design.").unwrap();
+            let reported: toml::Table = format!("v = {}", c.value).parse().unwrap();
+            assert_eq!(Some(&reported["v"]), written["design"].get(key), "{name}: {}", c.key);
+        }
+        if name == "random15.toml" {
+            let poles = &written["design"]["observer_poles"];
+            assert!(poles.as_array().unwrap().iter().any(|p| p.is_array()), "complex poles as [re, im] pairs: {poles}");
+        }
+    }
+}

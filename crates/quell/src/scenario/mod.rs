@@ -32,6 +32,7 @@ pub(crate) use read::kind;
 pub(crate) use read::syntax_message;
 use read::{err, Table, Value};
 pub use write::{design_table, plant_table, pole_list, signal_table, truth_table};
+pub(crate) use write::{pole_lists, poles_value};
 
 /// The paper's example (Section VIII) as a scenario file: `examples/paper.toml`.
 pub const PAPER_EXAMPLE: &str = include_str!("../../../../examples/paper.toml");

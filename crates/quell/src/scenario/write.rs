@@ -107,7 +107,7 @@ pub fn pole_list(poles: &[Complex<f64>]) -> Result<Value, Complex<f64>> {
 }
 
 /// [`pole_list`], with a pole that lacks its conjugate written as the pair `[re, |im|]`.
-fn poles_value(poles: &[Complex<f64>]) -> Value {
+pub(crate) fn poles_value(poles: &[Complex<f64>]) -> Value {
     let mut closed = poles.to_vec();
     loop {
         match pole_list(&closed) {
@@ -117,7 +117,7 @@ fn poles_value(poles: &[Complex<f64>]) -> Value {
     }
 }
 
-fn pole_lists(lists: &[Vec<Complex<f64>>]) -> Value {
+pub(crate) fn pole_lists(lists: &[Vec<Complex<f64>>]) -> Value {
     Value::Array(lists.iter().map(|p| poles_value(p)).collect())
 }
 
