@@ -112,8 +112,9 @@ fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result
             Loop::Continuous(integrator) => integrator.method = method,
             Loop::Sampled { sample_time } => {
                 return Err(Failure::Input(format!(
-                    "--method: the integrator applies to the continuous loop only, and this run is the sampled-data loop at T_s = {} s (the plant is advanced exactly between samples); remove --method, or --sample-time and simulation.sample_time",
-                    short(*sample_time)
+                    "--method: the integrator applies to the continuous loop only, and this run is the sampled-data loop at T_s = {} {} (the plant is advanced exactly between samples); remove --method, or --sample-time and simulation.sample_time",
+                    short(*sample_time),
+                    scenario.plant.time_unit
                 )))
             }
         }
@@ -250,7 +251,7 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
         Outcome::Completed => {
             for (i, c) in result.summary().iter().enumerate() {
                 let settle = match (c.figures.settle_t, &c.settle_note) {
-                    (Some(t), _) => format!("settled (2 % band) at t = {t:.6}"),
+                    (Some(t), _) => format!("settled (2 % band) at t = {t:.6} {}", result.time_unit),
                     (None, Some(note)) => note.clone(),
                     (None, None) => "not settled".into(),
                 };
@@ -282,7 +283,7 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
             Ok(())
         }
         outcome => {
-            let why = outcome.explain("--max-steps").unwrap_or_default();
+            let why = outcome.explain("--max-steps", result.time_unit).unwrap_or_default();
             Err(Failure::Run(format!("{why}; results up to then are in {out}")))
         }
     }

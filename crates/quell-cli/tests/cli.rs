@@ -923,6 +923,7 @@ fn the_plant_time_unit_labels_figures_reports_and_the_header() {
         assert!(svg.contains(&format!("\nt, {tag}\n</text>")), "the t axis is labelled in {tag}");
         assert_eq!(read_json(&out.join("summary.json"))["time_unit"], tag);
         assert!(err.contains("adaptation rate μλ_max = ") && err.contains(&format!("/{tag}")), "{err}");
+        assert!(err.contains(&format!("enters the band at t = 29 {tag} only in the last 5 %")), "{err}");
         csv.push(fs::read(out.join("signals.csv")).unwrap());
         let design = quell(&["design", file.to_str().unwrap()]);
         assert!(stdout(&design).contains(&format!("t_end = 30 {tag})")), "{}", stdout(&design));
@@ -938,4 +939,15 @@ fn the_plant_time_unit_labels_figures_reports_and_the_header() {
     let e = quell(&["run", file.to_str().unwrap(), "--sample-time", "0.7", "--out", c.to_str().unwrap()]);
     assert_eq!(e.status.code(), Some(2));
     assert!(stderr(&e).contains("τ = 1 min is not a whole number of samples of T_s = 0.7 min"), "{}", stderr(&e));
+    let e = quell(&[
+        "run",
+        file.to_str().unwrap(),
+        "--sample-time",
+        "0.5",
+        "--method",
+        "imex",
+        "--out",
+        c.to_str().unwrap(),
+    ]);
+    assert!(stderr(&e).contains("the sampled-data loop at T_s = 0.5 min"), "{}", stderr(&e));
 }

@@ -579,7 +579,7 @@ pub fn simulate(
     let mut settings = RunSettings::of(scn);
     settings.record_states = states;
     if let (Some(_), Loop::Sampled { sample_time }) = (&method, &settings.mode) {
-        let msg = format!("method: the integrator applies to the continuous loop only, and this run is the sampled-data loop at sample_time = {sample_time} s; leave method out, or sample_time");
+        let msg = format!("method: the integrator applies to the continuous loop only, and this run is the sampled-data loop at sample_time = {sample_time} {}; leave method out, or sample_time", scn.plant.time_unit);
         return Err(Kind::Scenario.err(py, msg));
     }
     settings
@@ -594,9 +594,9 @@ pub fn simulate(
     if let Some(t) = sampled {
         crate::errors::warn_coarse_sample(py, &design, &scn.reference, &scn.disturbance, t)?;
     }
-    let outcome = result.outcome.clone().unwrap_or(Outcome::Completed);
+    let (outcome, unit) = (result.outcome.clone().unwrap_or(Outcome::Completed), result.time_unit);
     let result = Py::new(py, PySimResult::from_run(py, scn, &design, result, s.labels.clone())?)?;
-    match failure(outcome) {
+    match failure(outcome, unit) {
         Some((message, t, signal, value)) if check => {
             Err(simulation_error(py, message, t, signal, value, result.into_any()))
         }
@@ -679,8 +679,8 @@ fn run_released(
 }
 
 /// Why a run that did not complete failed, for SimulationError: message, time, signal and value.
-fn failure(outcome: Outcome) -> Option<(String, f64, Option<String>, Option<f64>)> {
-    let why = outcome.explain("max_steps=")?;
+fn failure(outcome: Outcome, unit: quell::TimeUnit) -> Option<(String, f64, Option<String>, Option<f64>)> {
+    let why = outcome.explain("max_steps=", unit)?;
     Some(match outcome {
         Outcome::Interrupted { t } => (why, t, None, None),
         Outcome::Diverged { t, signal, value } => (with_result(why), t, Some(signal), Some(value)),

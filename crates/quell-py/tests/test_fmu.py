@@ -215,6 +215,8 @@ def test_fmi3_calls_one_by_one(tmp_path):
         (lambda: fmu.getFloat64([vr["y[1]"], vr["y[2]"]], nValues=1), "fmi3GetFloat64: 1 values for 2 value references"),
         (lambda: fmu.getFloat64([13]), "fmi3GetFloat64: no variable has value reference 13 (0 to 11)"),
         (lambda: fmu.doStep(1.0, 0.05), "fmi3DoStep: at t = 1 s, but the controller's next sample is at 1.1 s"),
+        # A NaN time passed the test |t − now| > tol (false for NaN) and stepped the controller.
+        (lambda: fmu.doStep(float("nan"), 0.1), "fmi3DoStep: at t = nan s, but the controller's next sample is at 1.1 s"),
     ]
     for call, why in refusals:
         with pytest.raises(FMICallException, match="status 3"):

@@ -183,12 +183,13 @@ pub const MAX_SAMPLING_STEPS: f64 = 1e10;
 
 /// Gaussian measurement noise on y: standard deviation per output and a seed. Without a
 /// `bandwidth` it is white at the sample rate (sampled-data runs only); with one it is band-limited
-/// to `bandwidth` Hz ([`crate::sim::noise::band_limited`]), the same n(t) in both loops.
+/// to `bandwidth` cycles per unit of the plant's time (Hz for a plant in seconds;
+/// [`crate::sim::noise::band_limited`]), the same n(t) in both loops.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeasurementNoise {
     pub std: Vec<f64>,
     pub seed: u64,
-    /// Highest frequency of the band-limited noise, Hz; `None`: white at the sample rate.
+    /// Highest frequency of the band-limited noise, in cycles per unit of time; `None`: white at the sample rate.
     pub bandwidth: Option<f64>,
 }
 
@@ -207,7 +208,7 @@ impl MeasurementNoise {
             ));
         }
         if let Some(b) = self.bandwidth {
-            positive("noise.bandwidth", "a bandwidth in Hz", b)?;
+            positive("noise.bandwidth", "a bandwidth in cycles per unit of time (Hz for a plant in seconds)", b)?;
         }
         match self.std.iter().enumerate().find(|(_, s)| !(**s >= 0.0 && s.is_finite())) {
             Some((i, s)) => {
@@ -227,8 +228,8 @@ impl MeasurementNoise {
             Some(_) => Ok(()),
             None => Err(KeyError::new(
                 "noise.bandwidth",
-                "missing; noise in the continuous loop is band-limited: set noise.bandwidth (Hz, e.g. 10 times the \
-                 loop's bandwidth), or set simulation.sample_time for white noise at the sample rate",
+                "missing; noise in the continuous loop is band-limited: set noise.bandwidth (cycles per unit \
+                 of time, e.g. 10 times the loop's bandwidth), or set simulation.sample_time for white noise at the sample rate",
             )),
         }
     }

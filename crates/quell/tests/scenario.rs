@@ -637,7 +637,7 @@ fn noise_bandwidth_not_positive() {
     check(
         &(PAPER_EXAMPLE.to_string() + "[noise]\nstd = [0.03, 0.02]\nbandwidth = 0\n"),
         "noise.bandwidth",
-        "expected a bandwidth in Hz > 0, found 0",
+        "expected a bandwidth in cycles per unit of time (Hz for a plant in seconds) > 0, found 0",
     );
 }
 
@@ -901,6 +901,15 @@ fn time_unit_labels_the_model_and_changes_no_number() {
     }
     let e = quell::Controller::new(&d, 0.3).unwrap_err().to_string();
     assert!(e.contains("τ = 1 min is not a whole number of samples of T_s = 0.3 min"), "{e}");
+    // The FMU's logged refusals state times in the model's unit too (they said "s").
+    use quell::export::{generate_fmu, ExportOptions, FmiVersion};
+    let fmu = generate_fmu(&d, 0.5, &ExportOptions::default(), None, FmiVersion::V2).unwrap();
+    let mut archive = zip::ZipArchive::new(std::io::Cursor::new(&fmu.bytes)).unwrap();
+    let wrapper = std::io::read_to_string(archive.by_name("sources/quell_fmu.c").unwrap()).unwrap();
+    assert!(wrapper.contains("communication step h = %g min is not a whole number of samples of T_s = %g min"));
+    assert!(
+        wrapper.contains("at t = %g min, but the controller's next sample is at %g min") && !wrapper.contains("%g s")
+    );
 }
 
 /// Without the key a file means the paper's form (G_g1 = [[0, 1], [−6, −7]], l = e_2, Section VIII);

@@ -8,6 +8,7 @@ use super::{CCode, ExportError, ExportOptions, Precision};
 use crate::controller::{Controller, Discretized};
 use crate::design::Design;
 use crate::linalg::fmt_complex_list;
+use crate::settings::TimeUnit;
 
 /// One `static const` array (or scalar, with no `dims`) of the generated source.
 struct Constant {
@@ -141,7 +142,7 @@ pub(super) fn write(design: &Design, ctrl: &Controller, o: &ExportOptions) -> Re
     let view = ctrl.discretized();
     let layout = Layout::new(&view);
     let constants = constants(&view, &layout, &o.prefix.to_ascii_uppercase());
-    check(&constants, o, ctrl.sample_time())?;
+    check(&constants, o, (ctrl.sample_time(), design.plant().time_unit))?;
     let w = o.precision.bytes();
     let constant_bytes = w * constants.iter().map(|c| c.values.len()).sum::<usize>() + 4 * layout.m;
     let state_bytes = struct_bytes(&layout.state_fields(), w);
@@ -197,11 +198,11 @@ fn constants(view: &Discretized, layout: &Layout, P: &str) -> Vec<Constant> {
 }
 
 /// Every constant finite, and in float's range for f32.
-fn check(constants: &[Constant], o: &ExportOptions, sample_time: f64) -> Result<(), ExportError> {
+fn check(constants: &[Constant], o: &ExportOptions, (sample_time, unit): (f64, TimeUnit)) -> Result<(), ExportError> {
     for c in constants {
         for (k, &x) in c.values.iter().enumerate() {
             if !x.is_finite() {
-                return Err(ExportError::NotFinite { what: c.entry(&o.prefix, k), value: x, sample_time });
+                return Err(ExportError::NotFinite { what: c.entry(&o.prefix, k), value: x, sample_time, unit });
             }
             if o.precision == Precision::F32 && x.abs() > f32::MAX as f64 {
                 return Err(ExportError::F32Range { what: c.entry(&o.prefix, k), value: x });

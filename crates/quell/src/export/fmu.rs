@@ -140,6 +140,8 @@ pub fn generate_fmu(
     let wrapper_name = format!("{p}_fmu.c");
     let guid = guid(&[&code.header, &code.source]);
     let (headers, api, ship_headers) = version.wrapper_parts();
+    // The messages' unit of time, in ASCII as the rest of the C ("us" for µs).
+    let symbol = design.plant().time_unit.symbol().replace('µ', "u");
     let values = [
         ("guid", guid.as_str()),
         ("version", env!("CARGO_PKG_VERSION")),
@@ -147,6 +149,7 @@ pub fn generate_fmu(
         ("p", p),
         ("P", &p.to_ascii_uppercase()),
         ("R", options.precision.c_type()),
+        ("unit", &symbol),
     ];
     let wrapper = fill(CORE, &values) + &fill(api, &values);
     let mut sources: Vec<(String, String)> = vec![

@@ -131,8 +131,8 @@ pub enum ExportError {
     PrefixLength { length: usize },
     #[error("precision: expected f64 or f32, found {found:?}")]
     Precision { found: String },
-    #[error("simulation.sample_time: {what} is {value} after discretizing at T_s = {sample_time} s; the exact discretization overflowed (the design's eigenvalues times T_s are beyond floating point); choose a shorter sample time or poles of smaller magnitude")]
-    NotFinite { what: String, value: f64, sample_time: f64 },
+    #[error("simulation.sample_time: {what} is {value} after discretizing at T_s = {sample_time} {unit}; the exact discretization overflowed (the design's eigenvalues times T_s are beyond floating point); choose a shorter sample time or poles of smaller magnitude")]
+    NotFinite { what: String, value: f64, sample_time: f64, unit: TimeUnit },
     #[error("precision f32: {what} = {value:e} is beyond the range of float (±3.4e38); use f64")]
     F32Range { what: String, value: f64 },
     #[error("fmi_version: expected 2 or 3, found {found:?}")]

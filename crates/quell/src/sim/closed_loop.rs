@@ -873,7 +873,10 @@ pub(super) fn simulate(
     let history = vec![0.0; sys.n_delayed()];
     let (m, q, n) = (sys.eq.m, sys.eq.q, sys.eq.n);
     sys.record = Some(Record {
-        result: SimResult::new(m, q, n, RunStats::Continuous(dde::Stats::default())),
+        result: SimResult {
+            time_unit: run.design.plant().time_unit,
+            ..SimResult::new(m, q, n, RunStats::Continuous(dde::Stats::default()))
+        },
         bounds: st.bounds(),
         diverged: None,
         states: st.record_states,

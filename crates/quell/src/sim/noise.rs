@@ -11,7 +11,8 @@ use crate::signal::{Component, Harmonic, Signal};
 pub const NOISE_SINES: usize = 64;
 
 /// Band-limited noise n(t) with the standard deviations of `noise`, `None` without a bandwidth:
-/// per output, [`NOISE_SINES`] sines with frequencies uniform on (0, bandwidth] Hz and phases uniform
+/// per output, [`NOISE_SINES`] sines with frequencies uniform on (0, bandwidth] cycles per unit of
+/// time (Hz for a plant in seconds) and phases uniform
 /// on [0, 2π) drawn from the seed, each of amplitude std·√(2/N), so the mean square over time is
 /// std² and the spectrum is empty above the bandwidth (random-phase multisine; Pintelon &
 /// Schoukens, *System Identification*, 2nd ed., Sec. 2.4). Output i draws from seed + i.

@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 use super::dde::Stats;
 use super::divergence::Peaks;
 use super::settle::{settling, Settle, Settling};
+use crate::settings::TimeUnit;
 
 /// How a run ended.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -47,28 +48,28 @@ impl std::fmt::Display for Outcome {
 
 impl Outcome {
     /// Why a run that did not complete ended, with its likely causes; `raise` names how the step
-    /// budget is raised in the front end that started the run. `None` for a
-    /// completed run. Each front end adds where the results up to then are.
-    pub fn explain(&self, raise: &str) -> Option<String> {
+    /// budget is raised in the front end that started the run; times are in `unit`, the plant's.
+    /// `None` for a completed run. Each front end adds where the results up to then are.
+    pub fn explain(&self, raise: &str, unit: TimeUnit) -> Option<String> {
         Some(match self {
             Outcome::Completed => return None,
-            Outcome::Diverged { t, signal, value } => format!("the closed loop diverged at t = {t:.4}: {signal} = {value:e}"),
+            Outcome::Diverged { t, signal, value } => format!("the closed loop diverged at t = {t:.4} {unit}: {signal} = {value:e}"),
             Outcome::StepSizeTooSmall { t } => format!(
-                "the solver's step size underflowed at t = {t:.6} (the loop is too stiff or blows up there, a signal is \
+                "the solver's step size underflowed at t = {t:.6} {unit} (the loop is too stiff or blows up there, a signal is \
                  faster than any step can resolve, or an input delay is shorter than a step can be)"
             ),
             Outcome::TooManySteps { t, max_steps } => format!(
-                "the solver needed more than {max_steps} steps by t = {t:.6} (the step budget: the loop turned stiff, as a \
+                "the solver needed more than {max_steps} steps by t = {t:.6} {unit} (the step budget: the loop turned stiff, as a \
                  loop blowing up does before its states reach the divergence bound, or its adaptation is stiff from the \
                  start, or a signal is faster than a step can follow; raise {raise} if the run is sound)"
             ),
             Outcome::HistoryTooLarge { t, max_bytes } => format!(
-                "the delay history would have exceeded {} MB by t = {t:.6} (the memory budget: the solver's steps had \
+                "the delay history would have exceeded {} MB by t = {t:.6} {unit} (the memory budget: the solver's steps had \
                  crowded into the last delay, as a loop blowing up does; it scales with {raise}, raise that if the run is \
                  sound)",
                 max_bytes >> 20
             ),
-            Outcome::Interrupted { t } => format!("interrupted at t = {t:.3}"),
+            Outcome::Interrupted { t } => format!("interrupted at t = {t:.3} {unit}"),
         })
     }
 }
@@ -125,6 +126,8 @@ pub struct SimResult {
     /// clipped it; empty without an actuator. The continuous loop reads the clipping at the
     /// integrator's latest evaluation of the derivative (within one step of the sample).
     pub limited: Vec<usize>,
+    /// The plant's unit of time, in which `t` and every time of the run are (a label).
+    pub time_unit: TimeUnit,
 }
 
 /// One recorded instant, as the loops hand it to [`SimResult::push`]: y, g, u, u_f (m each), η̂
@@ -202,6 +205,7 @@ impl SimResult {
             outcome: None,
             peaks: Peaks::default(),
             limited: Vec::new(),
+            time_unit: TimeUnit::default(),
         }
     }
 
@@ -287,7 +291,7 @@ impl SimResult {
                 let (figures, settling) = self.channel(i, &Settle::default())?;
                 let last = &self.eta[self.eta.len() - self.m * self.q..];
                 let final_eta_norm = last[i * self.q..(i + 1) * self.q].iter().map(|v| v * v).sum::<f64>().sqrt();
-                Some(ChannelSummary { figures, final_eta_norm, settle_note: settling.reason() })
+                Some(ChannelSummary { figures, final_eta_norm, settle_note: settling.reason(self.time_unit) })
             })
             .collect()
     }

@@ -409,6 +409,7 @@ fn sampled_loop<C: SampledController + ?Sized>(
     let n = run.truth.n();
     let stats = |controller_steps| RunStats::Sampled { controller_steps, sample_time: T };
     let mut result = SimResult::new(run.truth.m(), run.design.q(), n, stats(0));
+    result.time_unit = run.design.plant().time_unit;
     // x̂(k) when states are recorded (read before the step moves it to x̂(k + 1)).
     let mut x_hat = vec![0.0; n];
     let bounds = settings.bounds();

@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use super::divergence::beyond;
 use super::result::max_or_nan;
+use crate::settings::TimeUnit;
 
 /// The part of the horizon at the end of a run where entering the band does not count as settling.
 pub const LATE_FRACTION: f64 = 0.05;
@@ -57,13 +58,13 @@ impl Settling {
         }
     }
 
-    /// Why there is no settling time; `None` when settled.
-    pub fn reason(&self) -> Option<String> {
+    /// Why there is no settling time, times in `unit`; `None` when settled.
+    pub fn reason(&self, unit: TimeUnit) -> Option<String> {
         match *self {
             Settling::Settled { .. } => None,
             Settling::NotSettled => Some("not settled: outside the band at the end of the run".into()),
             Settling::Late { t } => Some(format!(
-                "not settled: enters the band at t = {t} only in the last {:.0} % of the horizon",
+                "not settled: enters the band at t = {t} {unit} only in the last {:.0} % of the horizon",
                 100.0 * LATE_FRACTION
             )),
         }
@@ -107,7 +108,7 @@ mod tests {
         assert_eq!(band, 0.02);
         let s = settling(&t, &e, band);
         assert!(matches!(s, Settling::Settled { t } if (t - 7.9).abs() < 1e-12), "{s:?}");
-        assert_eq!(s.reason(), None);
+        assert_eq!(s.reason(TimeUnit::Seconds), None);
     }
 
     #[test]
@@ -119,7 +120,7 @@ mod tests {
         let e: Vec<f64> = t.iter().map(|t| 0.035 * (3.0 * (t - 60.0)).sin()).collect();
         let s = settling(&t, &e, 0.02);
         assert!(matches!(s, Settling::Late { t } if (t - 59.8).abs() < 1e-9), "{s:?}");
-        assert!(s.time().is_none() && s.reason().unwrap().contains("last 5 %"), "{s:?}");
+        assert!(s.time().is_none() && s.reason(TimeUnit::Seconds).unwrap().contains("last 5 %"), "{s:?}");
         // Outside the band at the end: not settled.
         let outside: Vec<f64> = e.iter().map(|v| v + 1.0).collect();
         assert_eq!(settling(&t, &outside, 0.02), Settling::NotSettled);

@@ -178,7 +178,7 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                 }
                 sim::Outcome::Diverged { t, signal, value } => {
                     row.outcome = Outcome::Diverged;
-                    row.reason = format!("{signal} = {value:e} at t = {t:.4}");
+                    row.reason = format!("{signal} = {value:e} at t = {t:.4} {}", r.time_unit);
                     if let (Some(n), true) = (spec.nominal, value.abs() <= DIVERGENCE_BOUND) {
                         let peak = n.peaks.0[Peaks::index_of(signal)];
                         row.reason += &format!(
@@ -190,12 +190,13 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                 sim::Outcome::TooManySteps { t, max_steps } if spec.ran_away(*max_steps) => {
                     let n = spec.nominal.map_or(0, |n| n.steps);
                     row.reason = format!(
-                        "step budget: more than {} × the nominal run's {n} solver steps ({max_steps}) by t = {t:.4} (the loop turned stiff: its signals grew well beyond the nominal run's; raise runaway.steps in the study file if the run is sound)",
-                        spec.runaway.steps
+                        "step budget: more than {} × the nominal run's {n} solver steps ({max_steps}) by t = {t:.4} {} (the loop turned stiff: its signals grew well beyond the nominal run's; raise runaway.steps in the study file if the run is sound)",
+                        spec.runaway.steps,
+                        r.time_unit
                     );
                 }
                 sim::Outcome::Interrupted { .. } => return None,
-                other => row.reason = other.explain("max_steps in the study file").unwrap_or_default(),
+                other => row.reason = other.explain("max_steps in the study file", r.time_unit).unwrap_or_default(),
             }
         }
     }
