@@ -41,8 +41,6 @@ pub struct PySimResult {
     diagnostics: String,
     /// The plant's signal names.
     labels: Labels,
-    /// The plant's unit of time.
-    time_unit: TimeUnit,
 }
 
 fn frozen_array(py: Python<'_>, data: &[f64], shape: &[usize]) -> PyResult<Py<PyAny>> {
@@ -63,12 +61,10 @@ impl PySimResult {
         labels: Labels,
     ) -> PyResult<Self> {
         let diagnostics = quell::diagnostics::diagnose(design, &scenario.reference, &scenario.disturbance, &r);
-        let labels = (labels, design.plant().time_unit);
         PySimResult::new(py, r, serde_json::to_string(&diagnostics).unwrap_or_default(), labels)
     }
 
-    fn new(py: Python<'_>, r: SimResult, diagnostics: String, labels: (Labels, TimeUnit)) -> PyResult<Self> {
-        let (labels, time_unit) = labels;
+    fn new(py: Python<'_>, r: SimResult, diagnostics: String, labels: Labels) -> PyResult<Self> {
         let (k, m, q, n) = (r.len(), r.m, r.q, r.n);
         let arrays = [
             frozen_array(py, &r.t, &[k])?,
@@ -83,7 +79,7 @@ impl PySimResult {
             true => Some([frozen_array(py, &r.x, &[k, n])?, frozen_array(py, &r.x_hat, &[k, n])?]),
             false => None,
         };
-        Ok(PySimResult { inner: r, arrays, states, diagnostics, labels, time_unit })
+        Ok(PySimResult { inner: r, arrays, states, diagnostics, labels })
     }
 }
 
@@ -222,7 +218,7 @@ impl PySimResult {
     /// The unit of t: the plant's `time_unit` ("s" unless the plant gives another).
     #[getter]
     fn time_unit(&self) -> &'static str {
-        self.time_unit.symbol()
+        self.inner.time_unit.symbol()
     }
     /// How the run ended, as in summary.json: {"status": "completed"}, or "diverged" with t,
     /// signal and value, or "step_size_too_small" / "interrupted" with t.
@@ -416,7 +412,7 @@ impl PySimResult {
             && same(&a.peaks.0, &b.peaks.0)
             && a.limited == b.limited
             && self.labels == o.get().labels
-            && self.time_unit == o.get().time_unit
+            && a.time_unit == b.time_unit
     }
     /// Pickles as its samples (raw float64 bytes), outcome, statistics and diagnostics.
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyDict>,))> {
@@ -453,7 +449,7 @@ impl PySimResult {
         d.set_item("limited", r.limited.clone())?;
         d.set_item("diagnostics", &me.diagnostics)?;
         let l = &me.labels;
-        let unit = me.time_unit.symbol();
+        let unit = me.inner.time_unit.symbol();
         d.set_item("labels", (l.inputs.clone(), l.outputs.clone(), l.states.clone(), unit))?;
         Ok((slf.get_type().getattr("_restore")?, (d,)))
     }
@@ -489,8 +485,9 @@ impl PySimResult {
             outcome: Some(outcome_from(&item("outcome")?.cast_into::<PyDict>()?).ok_or_else(|| bad("outcome"))?),
             peaks: Peaks(peaks.try_into().map_err(|_| bad("peaks"))?),
             limited: item("limited")?.extract()?,
+            time_unit,
         };
-        PySimResult::new(py, r, item("diagnostics")?.extract()?, (Labels { inputs, outputs, states }, time_unit))
+        PySimResult::new(py, r, item("diagnostics")?.extract()?, Labels { inputs, outputs, states })
     }
     /// Python's repr, the outcome as the `outcome` property's dict.
     fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
