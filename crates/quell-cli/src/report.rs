@@ -60,10 +60,16 @@ pub fn design_json(d: &Design) -> Value {
     })
 }
 
+/// `M` row by row, each entry right-aligned in one column width with a space before it: with five
+/// decimals, or in scientific notation when an entry would lose its digits there (a magnitude
+/// from 1e5, or a nonzero one below 1e-3: SI-scale plants).
 fn fmt_matrix(out: &mut String, name: &str, M: &DMatrix<f64>) {
     let _ = writeln!(out, "{name} ({}×{}):", M.nrows(), M.ncols());
+    let scientific = M.iter().any(|v| v.abs() >= 1e5 || (*v != 0.0 && v.abs() < 1e-3));
+    let cell = |v: &f64| if scientific { format!("{v:.4e}") } else { format!("{v:.5}") };
+    let width = M.iter().map(|v| cell(v).chars().count() + 1).max().unwrap_or(0).max(11);
     for r in M.row_iter() {
-        let row: Vec<String> = r.iter().map(|v| format!("{v:>11.5}")).collect();
+        let row: Vec<String> = r.iter().map(|v| format!("{:>width$}", cell(v))).collect();
         let _ = writeln!(out, "  [{} ]", row.join(""));
     }
 }
@@ -216,4 +222,22 @@ pub fn sample_time_text(scenario: &quell::Scenario, design: &quell::Design, samp
     quell::sim::coarse_sample_warning(design, &scenario.reference, &scenario.disturbance, sample_time)
         .map(|w| format!("⚠ warning: {}\n", crate::in_flags(w)))
         .unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn matrix_entries_keep_their_digits_and_a_space_between_them() {
+        // The paper's K as before; an SI-scale matrix (a maglev's A − LC, a ship's B*) in
+        // scientific notation: fixed decimals ran −80.83741 and −1475.00000 together and showed
+        // 2.5e-6 as 0.00000.
+        let mut out = String::new();
+        fmt_matrix(&mut out, "K", &DMatrix::from_row_slice(1, 3, &[9.26, 9.26, 7.1]));
+        assert_eq!(out, "K (1×3):\n  [    9.26000    9.26000    7.10000 ]\n");
+        let mut out = String::new();
+        fmt_matrix(&mut out, "M", &DMatrix::from_row_slice(2, 2, &[-80.83741, -1475.0, 2.5e-6, 0.0]));
+        assert_eq!(out, "M (2×2):\n  [  -8.0837e1  -1.4750e3 ]\n  [  2.5000e-6   0.0000e0 ]\n");
+    }
 }

@@ -32,7 +32,7 @@ class ScenarioError(QuellError, ValueError):
     ...     quell.Plant([[1.0, 2.0]], [[1.0]], [[1.0]])
     ... except quell.ScenarioError as e:
     ...     print(e)
-    A: expected a 1×1 matrix, found 1×2
+    A: expected 1×1 (n×n), found 1×2; A must be square
     """
 
     key = None
