@@ -8,6 +8,7 @@ use std::sync::Once;
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use quell::scenario::SignalNames;
 use quell::sim::SimResult;
 use quell::TimeUnit;
 
@@ -149,29 +150,35 @@ fn panel<DB: DrawingBackend>(
 /// The most series a panel's legend lists ([`panel`]).
 const MAX_LEGEND: usize = 14;
 
-/// Draws channel i's figure (on a white background, see [`write_figure`]).
+/// Draws channel i's figure (on a white background, see [`write_figure`]); the titles name the
+/// channel's output and input where the scenario names them.
 fn draw<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     r: &SimResult,
     i: usize,
-    time: TimeUnit,
+    names: &SignalNames,
 ) -> Result<(), String> {
     let col = |sig: &[f64]| r.t.iter().copied().zip(r.column(sig, r.m, i)).collect::<Vec<_>>();
-    let c = i + 1;
+    let (c, time) = (i + 1, r.time_unit);
+    let named = |given: &Option<Vec<String>>| {
+        given.as_ref().and_then(|v| v.get(i)).map_or(String::new(), |n| format!(" ({n})"))
+    };
+    let (channel, input) =
+        (format!("Channel {c}{}", named(&names.outputs)), format!("Input {c}{}", named(&names.inputs)));
     let areas = root.split_evenly((5, 1));
     panel(
         &areas[0],
-        (&format!("Channel {c}: output and reference"), "y, g"),
+        (&format!("{channel}: output and reference"), "y, g"),
         &[(format!("g{c} (reference)"), col(&r.g)), (format!("y{c}"), col(&r.y))],
         time,
     )?;
-    panel(&areas[1], (&format!("Channel {c}: tracking error"), "e = y − g"), &[(format!("e{c}"), col(&r.e))], time)?;
-    panel(&areas[2], (&format!("Channel {c}: adaptive command (25)"), "u"), &[(format!("u{c}"), col(&r.u))], time)?;
+    panel(&areas[1], (&format!("{channel}: tracking error"), "e = y − g"), &[(format!("e{c}"), col(&r.e))], time)?;
+    panel(&areas[2], (&format!("{channel}: adaptive command (25)"), "u"), &[(format!("u{c}"), col(&r.u))], time)?;
     // The plant input u_f (5), what the actuator must deliver, in its own panel: in a plant's units
     // (newtons, volts) it can be 1e5 times u.
     panel(
         &areas[3],
-        (&format!("Channel {c}: plant input u_f (5), what the actuator delivers"), "u_f"),
+        (&format!("{input}: plant input u_f (5), what the actuator delivers"), "u_f"),
         &[(format!("uf{c}"), col(&r.u_f))],
         time,
     )?;
@@ -182,18 +189,18 @@ fn draw<DB: DrawingBackend>(
         })
         .collect();
     let title = if etas.len() > MAX_LEGEND {
-        format!("Channel {c}: adjustable parameters (33), η{c}_1 … η{c}_{} in the palette's order", etas.len())
+        format!("{channel}: adjustable parameters (33), η{c}_1 … η{c}_{} in the palette's order", etas.len())
     } else {
-        format!("Channel {c}: adjustable parameters (33)")
+        format!("{channel}: adjustable parameters (33)")
     };
     panel(&areas[4], (&title, "η"), &etas, time)?;
     root.present().map_err(|e| e.to_string())
 }
 
-/// Writes `channel{i+1}.png` and `.svg` into `dir`, each atomically; t in `time`.
-pub fn plot_channel(dir: &Path, r: &SimResult, i: usize, time: TimeUnit) -> io::Result<()> {
+/// Writes `channel{i+1}.png` and `.svg` into `dir`, each atomically; t in the run's unit of time.
+pub fn plot_channel(dir: &Path, r: &SimResult, i: usize, names: &SignalNames) -> io::Result<()> {
     let name = format!("channel{}", i + 1);
-    write_figure(dir, &name, SIZE, |root| draw(root, r, i, time), |root| draw(root, r, i, time))
+    write_figure(dir, &name, SIZE, |root| draw(root, r, i, names), |root| draw(root, r, i, names))
 }
 
 /// Writes an RGB buffer of `size` as a PNG, atomically.

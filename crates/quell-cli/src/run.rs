@@ -179,7 +179,7 @@ fn write_outputs(dir: &Path, done: &Finished<'_>, plots: bool) -> std::io::Resul
     // Figures render on their own threads (one per channel) while the data files are written.
     std::thread::scope(|scope| {
         let figures: Vec<_> = (0..if plots { r.m } else { 0 })
-            .map(|i| scope.spawn(move || plot::plot_channel(dir, r, i, done.scenario.plant.time_unit)))
+            .map(|i| scope.spawn(move || plot::plot_channel(dir, r, i, &done.scenario.names)))
             .collect();
         let data = write_data(dir, done);
         for figure in figures {

@@ -11,6 +11,7 @@ use crate::output::{prepare_out, write_atomic};
 use crate::Failure;
 
 #[derive(clap::Args)]
+#[command(override_usage = "quell sweep [OPTIONS] <STUDY>\n       quell sweep --merge <DIR>... [--out <OUT>]")]
 pub struct SweepArgs {
     /// Study file (TOML): scenario, [simulation], [grid], [monte_carlo], [settle].
     #[arg(required_unless_present = "merge", conflicts_with = "merge")]

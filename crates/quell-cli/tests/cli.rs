@@ -921,6 +921,10 @@ fn the_plant_time_unit_labels_figures_reports_and_the_header() {
         assert_eq!(o.status.code(), Some(0), "{err}");
         let svg = fs::read_to_string(out.join("channel1.svg")).unwrap();
         assert!(svg.contains(&format!("\nt, {tag}\n</text>")), "the t axis is labelled in {tag}");
+        // The titles name the output and the input where the scenario does.
+        assert!(
+            svg.contains("Channel 1 (x_D): output and reference") && svg.contains("Input 1 (reflux): plant input u_f")
+        );
         assert_eq!(read_json(&out.join("summary.json"))["time_unit"], tag);
         assert!(err.contains("adaptation rate μλ_max = ") && err.contains(&format!("/{tag}")), "{err}");
         assert!(err.contains(&format!("enters the band at t = 29 {tag} only in the last 5 %")), "{err}");

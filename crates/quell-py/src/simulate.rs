@@ -391,7 +391,8 @@ impl PySimResult {
         fig: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Py<PyAny>> {
         let f = slf.py().import("quell._frames")?.getattr("plot")?;
-        Ok(f.call1((slf, channel, fig, ax, figsize))?.unbind())
+        let names = (slf.get().labels.inputs.clone(), slf.get().labels.outputs.clone());
+        Ok(f.call1((slf, channel, fig, ax, figsize, names))?.unbind())
     }
     fn __len__(&self) -> usize {
         self.inner.len()

@@ -179,6 +179,11 @@ def test_to_pandas_and_plot():
     assert not np.array_equal(r.u[:, 1], r.u_f[:, 1])
     with pytest.raises(ValueError, match="channel"):
         r.plot(channel=3)
+    # The titles name the output and the input where the plant does (Wood–Berry's column).
+    wood_berry = quell.Scenario.load(pathlib.Path(__file__).parents[2] / "quell" / "tests" / "data" / "wood-berry.toml")
+    fig = quell.simulate(wood_berry, t_end=5.0).plot(channel=1)
+    assert fig.axes[0].get_title() == "Channel 1 (x_D): output and reference"
+    assert fig.axes[3].get_title() == "Input 1 (reflux): plant input u_f (5), what the actuator delivers"
 
 
 def test_optional_dependencies_are_imported_only_when_used():

@@ -30,14 +30,15 @@ def to_pandas(result):
     return pd.DataFrame(data, columns=columns(m, q, result.n if states else 0))
 
 
-def plot(result, channel=1, fig=None, ax=None, figsize=None):
+def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None)):
     """Channel ``channel`` (1-based; None is 1) in the five panels of the CLI's figure, like the paper's
     Figs. 1 and 2: y_i with g_i, e_i = y_i - g_i, the command u_i (25), the plant input u_f,i (5) and
     eta_i against t.
 
     ``ax``: one matplotlib Axes (then only y_i and g_i are drawn, on it), five (the five panels) or
     four (u_f,i then shares the third panel on a second y axis of its own scale); otherwise a new
-    figure of ``figsize`` (default (10, 14)), or the panels are added to ``fig``. Returns the Figure."""
+    figure of ``figsize`` (default (10, 14)), or the panels are added to ``fig``. ``names``: the
+    plant's (inputs, outputs) names or None, shown in the titles. Returns the Figure."""
     try:
         import matplotlib.pyplot as plt
     except ImportError as e:
@@ -49,6 +50,8 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None):
     if not 1 <= channel <= m:
         raise ValueError(f"channel: expected a channel number from 1 to {m}, found {channel!r}")
     i, c, t = channel - 1, channel, result.t
+    named = lambda given: f" ({given[i]})" if given else ""  # noqa: E731
+    channel_title, input_title = f"Channel {c}{named(names[1])}", f"Input {c}{named(names[0])}"
     if figsize is not None and not (
         isinstance(figsize, (tuple, list)) and len(figsize) == 2
         and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in figsize)
@@ -69,25 +72,25 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None):
         axes = fig.subplots(5, 1, sharex=True)
     axes[0].plot(t, result.g[:, i], "--", label=f"g{c} (reference)")
     axes[0].plot(t, result.y[:, i], label=f"y{c}")
-    axes[0].set(title=f"Channel {c}: output and reference", ylabel="y, g")
+    axes[0].set(title=f"{channel_title}: output and reference", ylabel="y, g")
     if len(axes) > 1:
         axes[1].plot(t, result.e[:, i], label=f"e{c}")
-        axes[1].set(title=f"Channel {c}: tracking error", ylabel="e = y − g")
+        axes[1].set(title=f"{channel_title}: tracking error", ylabel="e = y − g")
         axes[2].plot(t, result.u[:, i], label=f"u{c}")
-        axes[2].set(title=f"Channel {c}: adaptive command (25)", ylabel="u")
+        axes[2].set(title=f"{channel_title}: adaptive command (25)", ylabel="u")
         # u_f in a plant's units (newtons, volts) can be 1e5 times u: its own panel, or its own scale.
         if len(axes) == 5:
             uf_ax = axes[3]
-            uf_ax.set(title=f"Channel {c}: plant input u_f (5), what the actuator delivers")
+            uf_ax.set(title=f"{input_title}: plant input u_f (5), what the actuator delivers")
         else:
             uf_ax = axes[2].twinx()
-            axes[2].set(title=f"Channel {c}: adaptive command (25) and plant input (5, right axis)")
+            axes[2].set(title=f"{channel_title}: adaptive command (25) and plant input (5, right axis)")
         uf_ax.plot(t, result.u_f[:, i], color="C1", label=f"uf{c}")
         uf_ax.set(ylabel="u_f")
         eta_ax = axes[-1]
         for j in range(result.q):
             eta_ax.plot(t, result.eta[:, i, j], label=f"η{c}_{j + 1}")
-        eta_ax.set(title=f"Channel {c}: adjustable parameters (33)", ylabel="η")
+        eta_ax.set(title=f"{channel_title}: adjustable parameters (33)", ylabel="η")
         if len(axes) == 4:
             uf_ax.legend(loc="lower right", fontsize="small")
     axes[-1].set(xlabel=f"t, {result.time_unit}")
