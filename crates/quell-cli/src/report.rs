@@ -148,12 +148,17 @@ fn assumption_checks(s: &mut String, d: &Design) {
         max_re(d.decoupled_eigenvalues())
     );
     let _ = writeln!(s, "  ✓ observer A − LC Hurwitz: max Re λ = {:.5}", max_re(d.observer_eigenvalues()));
-    let _ = writeln!(
-        s,
-        "  ✓ rank D = k = {} (N D = L_ω solvable), D with unit columns has condition number {:.3e}",
-        p.k(),
-        d.cond_D()
-    );
+    if p.k() == 0 {
+        let _ =
+            writeln!(s, "  ✓ no disturbance input (k = 0): the disturbance observer (20) has nothing to reconstruct");
+    } else {
+        let _ = writeln!(
+            s,
+            "  ✓ rank D = k = {} (N D = L_ω solvable), D with unit columns has condition number {:.3e}",
+            p.k(),
+            d.cond_D()
+        );
+    }
 }
 
 /// σ, and for each channel a σ_i given by the designer or decided close to τ.

@@ -955,3 +955,22 @@ fn the_plant_time_unit_labels_figures_reports_and_the_header() {
     ]);
     assert!(stderr(&e).contains("the sampled-data loop at T_s = 0.5 min"), "{}", stderr(&e));
 }
+
+/// A plant without a disturbance input (k = 0): the report says so instead of checking rank D = 0
+/// with condition number 1, and the automatic observer is the slowest candidate for that reason
+/// (it said "the zeros of (A, D, C) kept … its error is 0.00e0").
+#[test]
+fn a_plant_without_a_disturbance_is_reported_as_such() {
+    let dir = temp_dir("no-disturbance");
+    let file = dir.path().join("k0.toml");
+    let scenario = "[plant]\nA = [[-1.0]]\nB = [[1.0]]\nC = [[1.0]]\ndelays = [0.1]\n[design]\n[reference]\ncomponents = [ { bias = 1.0, harmonics = [{ amplitude = 0.5, frequency = 1.0 }] } ]\n[simulation]\nt_end = 40.0\nrtol = 1e-6\natol = 1e-6\n";
+    fs::write(&file, scenario).unwrap();
+    let o = quell(&["design", "--auto", file.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(text.contains("✓ no disturbance input (k = 0)") && !text.contains("rank D"), "{text}");
+    assert!(
+        text.contains("the plant has no disturbance input (k = 0)") && !text.contains("zeros of (A, D, C) kept"),
+        "{text}"
+    );
+}
