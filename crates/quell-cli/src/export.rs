@@ -85,6 +85,9 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
         code.constant_bytes,
         code.state_bytes
     );
+    if let Some(w) = code.size_warning() {
+        eprintln!("⚠ warning: {w}");
+    }
     Ok(())
 }
 

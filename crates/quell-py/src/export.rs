@@ -168,6 +168,9 @@ pub fn export(
         })
         .map_err(raise)?;
     crate::errors::warn_coarse_sample(py, &design, &signals.0, &signals.1, T)?;
+    if let Some(w) = code.size_warning() {
+        crate::errors::warn(py, &w)?;
+    }
     let out = out.unwrap_or_else(|| PathBuf::from("."));
     std::fs::create_dir_all(&out).map_err(|e| {
         Kind::Export.err(py, format!("out: cannot create {} ({e}); choose a writable directory", out.display()))

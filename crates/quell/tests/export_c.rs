@@ -672,3 +672,20 @@ int main(void)
     tool("gcc", &args, &dir.0);
     tool(&dir.0.join("alias").display().to_string(), &[], &dir.0);
 }
+
+/// A controller too large for an embedded target is warned about: the paper's delays τ = 1 and 3 s
+/// hold 1,000 and 3,000 samples at T_s = 1 ms (within 1 MiB), 100 times as many at 10 µs.
+#[test]
+fn a_controller_beyond_a_mebibyte_is_warned_about() {
+    let (_, d) = example("paper");
+    let small = export(&d, 1e-3, "quell", Precision::F64);
+    assert!(small.state_bytes < quell::export::LARGE_EXPORT_BYTES && small.size_warning().is_none());
+    let large = export(&d, 1e-5, "quell", Precision::F64);
+    // The delay lines grow with 1/T_s: 100 times the samples, nearly 100 times the state.
+    assert!(large.state_bytes > 90 * small.state_bytes, "{} vs {}", large.state_bytes, small.state_bytes);
+    let w = large.size_warning().expect("a warning");
+    assert!(
+        w.starts_with(&format!("the controller needs {:.1} MiB of RAM", large.state_bytes as f64 / 1048576.0)),
+        "{w}"
+    );
+}

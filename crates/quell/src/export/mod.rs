@@ -115,6 +115,26 @@ pub struct CCode {
     pub state_bytes: usize,
 }
 
+/// Above this many bytes of state (RAM) or constants (flash) an export is warned about
+/// ([`CCode::size_warning`]): 1 MiB, more than most microcontrollers have.
+pub const LARGE_EXPORT_BYTES: usize = 1 << 20;
+
+impl CCode {
+    /// A warning when the controller needs more than [`LARGE_EXPORT_BYTES`] of RAM or of flash:
+    /// its state is mostly the delay lines, τ_i/T_s past samples each, so a delay given in the
+    /// wrong unit or a very short sample time shows here first.
+    pub fn size_warning(&self) -> Option<String> {
+        let mb = |bytes: usize| bytes as f64 / (1u64 << 20) as f64;
+        (self.state_bytes > LARGE_EXPORT_BYTES || self.constant_bytes > LARGE_EXPORT_BYTES).then(|| {
+            format!(
+                "the controller needs {:.1} MiB of RAM (its state, mostly the delay lines of τ_i/T_s past samples each) and {:.1} MiB of flash (its constants), more than most embedded targets have; a longer sample time shrinks the delay lines in proportion (or check the unit of plant.delays)",
+                mb(self.state_bytes),
+                mb(self.constant_bytes)
+            )
+        })
+    }
+}
+
 /// Longest `prefix`: `<prefix>_controller.h` must fit a file name (255 bytes on common file
 /// systems) with room for its temporary name while it is written.
 pub const MAX_PREFIX: usize = 200;
