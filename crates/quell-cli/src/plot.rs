@@ -294,6 +294,19 @@ fn short_value(value: &str) -> String {
     out
 }
 
+/// A grid key as an axis label, with the plant's unit of time `unit` where its values are times
+/// (delays, β, the simulation's times).
+fn key_label(key: &str, unit: &str) -> String {
+    const TIMES: [&str; 4] = ["simulation.t_end", "simulation.sample_time", "simulation.output_step", "design.beta"];
+    let delays =
+        key.strip_suffix(']').map_or(key, |k| k.rsplit_once('[').map_or(k, |(head, _)| head)).ends_with("delays");
+    if delays || TIMES.contains(&key) {
+        format!("{key}, {unit}")
+    } else {
+        key.to_string()
+    }
+}
+
 /// The figures a sweep plots, with their axis labels (the settling time's unit added from the
 /// study's scenario): the error, the adaptive command u (25), the plant input u_f (5) that the
 /// actuator must deliver, and the settling time.
@@ -377,7 +390,7 @@ fn draw_sweep_panel<DB: DrawingBackend>(
         }
         AxisScale::Positions => String::new(),
     };
-    let mut x_desc = axis.key.clone();
+    let mut x_desc = key_label(&axis.key, &s.study.time_unit);
     if scale == AxisScale::Log {
         x_desc += " (log scale)";
     }
@@ -499,8 +512,8 @@ fn draw_sweep_2d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
             .disable_mesh()
             .x_labels(nx.min(12))
             .y_labels(ny.min(12))
-            .x_desc(ax.key.as_str())
-            .y_desc(ay.key.as_str())
+            .x_desc(key_label(&ax.key, &s.study.time_unit))
+            .y_desc(key_label(&ay.key, &s.study.time_unit))
             .x_label_formatter(&fx)
             .y_label_formatter(&fy)
             .label_style(("sans-serif", 13))
@@ -657,8 +670,16 @@ pub fn plot_sweep(dir: &Path, s: &quell::study::Summary, rows: &[quell::study::R
 }
 
 /// tune.png/.svg: per channel, the objective against μ_i (log scale), the chosen μ_i marked.
-fn draw_tune<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &quell::study::TuneResult) -> Result<(), String> {
+fn draw_tune<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    r: &quell::study::TuneResult,
+    unit: TimeUnit,
+) -> Result<(), String> {
     let areas = root.split_evenly((1, r.channels.len()));
+    let objective = match r.objective {
+        quell::study::Objective::SettleT => format!("settle_t, {unit}"),
+        other => other.name().to_string(),
+    };
     for (c, area) in r.channels.iter().zip(areas.iter()) {
         if c.curve.is_empty() {
             // A tuning stopped before this channel's first evaluation.
@@ -685,7 +706,7 @@ fn draw_tune<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &quell::study:
         chart
             .configure_mesh()
             .x_desc(format!("μ{} (others at the scenario's)", c.channel + 1))
-            .y_desc(r.objective.name())
+            .y_desc(objective.as_str())
             .y_label_formatter(&|v| tick_label(*v, lo - pad, hi + pad))
             .label_style(("sans-serif", 13))
             .draw()
@@ -718,9 +739,9 @@ fn draw_tune<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &quell::study:
 }
 
 /// Writes tune.png and tune.svg.
-pub fn plot_tune(dir: &Path, r: &quell::study::TuneResult) -> io::Result<()> {
+pub fn plot_tune(dir: &Path, r: &quell::study::TuneResult, unit: TimeUnit) -> io::Result<()> {
     let size = (560 * r.channels.len().max(1) as u32, 460);
-    write_figure(dir, "tune", size, |root| draw_tune(root, r), |root| draw_tune(root, r))
+    write_figure(dir, "tune", size, |root| draw_tune(root, r, unit), |root| draw_tune(root, r, unit))
 }
 
 #[cfg(test)]
@@ -738,6 +759,20 @@ mod tests {
         assert_eq!(axis_coords(&strings(&["[1.0, 2.0]", "[3.0, 4.0]"])).1, AxisScale::Positions);
         let labels: Vec<String> = [-4.0, -2.0, 0.0, 0.5, 3.0, 7.0].iter().map(|&v| decade_label(v)).collect();
         assert_eq!(labels, ["1e-4", "0.01", "1", "", "1000", "1e7"]);
+    }
+
+    #[test]
+    fn grid_keys_that_are_times_carry_the_unit() {
+        for (key, label) in [
+            ("truth.delays[1]", "truth.delays[1], min"),
+            ("plant.delays", "plant.delays, min"),
+            ("design.beta", "design.beta, min"),
+            ("simulation.sample_time", "simulation.sample_time, min"),
+            ("design.mu[0]", "design.mu[0]"),
+            ("truth.A[1][2]", "truth.A[1][2]"),
+        ] {
+            assert_eq!(super::key_label(key, "min"), label);
+        }
     }
 
     #[test]
