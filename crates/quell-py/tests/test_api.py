@@ -117,6 +117,9 @@ def test_simulate_shapes_and_overrides(tmp_path):
         quell.Controller(s.design(), 0.05)
     with pytest.warns(UserWarning, match=r"^sample_time: T_s = 0.05 s is 0.45 of"):
         quell.export(s, 0.05, out=str(tmp_path))
+    # A controller beyond 1 MiB of RAM (the delay lines: 3 s at 10 µs) is a UserWarning too.
+    with pytest.warns(UserWarning, match=r"^the controller needs [0-9.]+ MiB of RAM"):
+        quell.export(s, 1e-5, out=str(tmp_path))
     with pytest.raises(quell.ScenarioError, match=r"^output_step: expected an output step ≤ t_end = 0.05") as e:
         quell.simulate(s, t_end=0.05)  # the argument's name, not the file's key
     assert e.value.key == "simulation.output_step"
