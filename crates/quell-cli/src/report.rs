@@ -62,10 +62,12 @@ pub fn design_json(d: &Design) -> Value {
 
 /// `M` row by row, each entry right-aligned in one column width with a space before it: with five
 /// decimals, or in scientific notation when an entry would lose its digits there (a magnitude
-/// from 1e5, or a nonzero one below 1e-3: SI-scale plants).
+/// from 1e5, or one below 1e-3 that is not rounding next to the largest, |v| > 1e-9·max: SI-scale
+/// plants).
 fn fmt_matrix(out: &mut String, name: &str, M: &DMatrix<f64>) {
     let _ = writeln!(out, "{name} ({}×{}):", M.nrows(), M.ncols());
-    let scientific = M.iter().any(|v| v.abs() >= 1e5 || (*v != 0.0 && v.abs() < 1e-3));
+    let largest = M.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let scientific = M.iter().any(|v| v.abs() >= 1e5 || (v.abs() > 1e-9 * largest && v.abs() < 1e-3));
     let cell = |v: &f64| if scientific { format!("{v:.4e}") } else { format!("{v:.5}") };
     let width = M.iter().map(|v| cell(v).chars().count() + 1).max().unwrap_or(0).max(11);
     for r in M.row_iter() {
@@ -241,6 +243,10 @@ mod tests {
         let mut out = String::new();
         fmt_matrix(&mut out, "K", &DMatrix::from_row_slice(1, 3, &[9.26, 9.26, 7.1]));
         assert_eq!(out, "K (1×3):\n  [    9.26000    9.26000    7.10000 ]\n");
+        // Rounding next to the largest entry (the paper's F) stays fixed: 1.8e-15 reads 0.00000.
+        let mut out = String::new();
+        fmt_matrix(&mut out, "F", &DMatrix::from_row_slice(1, 2, &[6.0, 1.7763568394002505e-15]));
+        assert_eq!(out, "F (1×2):\n  [    6.00000    0.00000 ]\n");
         let mut out = String::new();
         fmt_matrix(&mut out, "M", &DMatrix::from_row_slice(2, 2, &[-80.83741, -1475.0, 2.5e-6, 0.0]));
         assert_eq!(out, "M (2×2):\n  [  -8.0837e1  -1.4750e3 ]\n  [  2.5000e-6   0.0000e0 ]\n");

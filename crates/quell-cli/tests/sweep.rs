@@ -277,35 +277,35 @@ fn ctrl_c_or_sigterm_during_tune_writes_the_points_evaluated_marked_partial() {
     }
 }
 
+/// Sweeps `study` (on the paper's example) into `out` of a new directory; that directory and
+/// sweep.svg's text.
+fn sweep_figure(tag: &str, study: &str) -> (tempfile::TempDir, String) {
+    let dir = scratch(tag);
+    let study = write_study(dir.path(), "study.toml", study);
+    let out = dir.path().join("out");
+    let o = quell(&["sweep", &study, "--out", &out.display().to_string()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let svg = fs::read_to_string(out.join("sweep.svg")).unwrap();
+    (dir, svg)
+}
+
 /// A study of draws without a grid (Monte Carlo) plots each figure's distribution over the draws,
 /// ending at the share of draws that have a value.
 #[test]
 fn a_study_without_a_grid_plots_the_distribution_over_its_draws() {
-    let dir_tmp = scratch("draws");
-    let dir = dir_tmp.path();
     let study = "[simulation]\nt_end = 20.0\nrtol = 1e-6\natol = 1e-6\n[monte_carlo]\nruns = 6\nseed = 3\n\"truth.A\" = { relative = 0.02 }\n";
-    let study = write_study(dir, "mc.toml", study);
-    let out = dir.join("out");
-    let o = quell(&["sweep", &study, "--out", &out.display().to_string()]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let svg = fs::read_to_string(out.join("sweep.svg")).unwrap();
+    let (dir, svg) = sweep_figure("draws", study);
     assert_eq!(svg.matches("fraction of draws ≤ value").count(), 4 * 2, "four figures, two channels");
     assert!(svg.contains("max |u_f| (plant input)") && svg.contains("of 6 draws have a value"), "the panels' labels");
-    assert!(out.join("sweep.png").is_file());
+    assert!(dir.path().join("out/sweep.png").is_file());
 }
 
 /// A figure whose values span two decades along the grid is drawn on a log axis (the paper's
 /// channel 1: tail RMS e 2.6 at μ_1 = 1, 7e-7 at 100).
 #[test]
 fn values_spanning_decades_are_drawn_on_a_log_axis() {
-    let dir_tmp = scratch("log-axis");
-    let dir = dir_tmp.path();
     let study = "[simulation]\nrtol = 1e-6\natol = 1e-6\n[grid]\n\"design.mu[0]\" = [1.0, 100.0]\n";
-    let study = write_study(dir, "mu.toml", study);
-    let out = dir.join("out");
-    let o = quell(&["sweep", &study, "--out", &out.display().to_string()]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let svg = fs::read_to_string(out.join("sweep.svg")).unwrap();
+    let (_dir, svg) = sweep_figure("log-axis", study);
     assert_eq!(svg.matches("tail RMS e (log scale)").count(), 1, "channel 1's panel only");
 }
 
