@@ -312,3 +312,28 @@ fn a_stiff_study_completes_under_each_runs_default_budget() {
         assert!(r.reason.starts_with("the solver needed more than 10000 steps by t = "), "{}", r.reason);
     }
 }
+
+/// Drawn true delays land the loop on more breakpoints t = Σ k_i τ_i than the nominal run's (the
+/// paper's loop over 40 s with both delays 2 % off: 559 instead of 29, and 752 steps instead of
+/// 268), each a step the nominal run did not take. The runaway step rule counts them: every such
+/// draw completes (each failed as "step budget" when the rule compared with the nominal steps
+/// alone: tryout, 2026-12-03), with rows equal to the rules-off study's.
+#[test]
+fn drawn_delays_are_not_taken_for_a_runaway() {
+    let text = "[simulation]\nt_end = 40.0\nrtol = 1e-6\natol = 1e-6\n[monte_carlo]\nruns = 6\nseed = 3\n\"truth.delays\" = { relative_uniform = 0.02 }\n";
+    let on = sweep(&Study::from_toml(text, None).unwrap(), &SweepOptions::default()).rows;
+    let off = Study::from_toml(&format!("{text}[runaway]\npeak = inf\nsteps = inf\n"), None).unwrap();
+    let off = sweep(&off, &SweepOptions::default()).rows;
+    assert!(
+        on.iter().all(|r| r.outcome == Outcome::Completed),
+        "{:?}",
+        on.iter().map(|r| &r.reason).collect::<Vec<_>>()
+    );
+    assert_eq!(timeless(&on), timeless(&off));
+    let nominal = Study::from_toml(text, None).unwrap().nominal(0).unwrap();
+    assert!(
+        on.iter().all(|r| r.steps > 2 * nominal.steps as u64),
+        "the breakpoints' steps: {:?}",
+        on.iter().map(|r| r.steps).collect::<Vec<_>>()
+    );
+}

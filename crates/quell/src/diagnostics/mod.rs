@@ -95,6 +95,8 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
     let avg = Averaged::new(design, reference, disturbance);
     let t_end = result.t.last().copied().unwrap_or(0.0);
     let (remedy, unit) = (observer_remedy(design), design.plant().time_unit);
+    // The adaptation rate beyond which the loop is stiff (the pace estimate's threshold).
+    let stiff = STIFF_RATIO * crate::sim::loop_rate(design, design.plant(), [reference, disturbance]);
     let missed = (0..result.m).any(|i| !tail_within_bound(result, i));
     let advice = avg
         .fidelity
@@ -111,7 +113,7 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
         .channels
         .iter()
         .enumerate()
-        .map(|(i, c)| channel(design, i, c, &avg.fidelity, result, t_end, &remedy))
+        .map(|(i, c)| channel(design, i, c, &avg.fidelity, result, (t_end, stiff), &remedy))
         .collect();
     Diagnostics { channels, observer_fidelity: avg.fidelity, advice }
 }
@@ -237,7 +239,7 @@ fn channel(
     c: &ChannelAverage,
     fidelity: &[Fidelity],
     result: &SimResult,
-    t_end: f64,
+    (t_end, stiff): (f64, f64),
     remedy: &str,
 ) -> ChannelDiagnostics {
     let mu = design.mu()[i];
@@ -264,10 +266,23 @@ fn channel(
                 "Ω̄_{} is weakly excited at {} rad/{unit} ({:.1e}), where the disturbance observer's relative error is {:.2}: {remedy} (raising μ would only make the loop stiff)",
                 i + 1, w.frequency, w.excitation, f.relative_error
             )),
-            _ => advice.push(format!(
-                "{key} = {mu} is too small for the horizon: the error's slowest relevant direction decays at μ λ = {:.2e}/{unit}; raise {key} to about {:.3e} (5/(λ t_end)) or lengthen simulation.t_end",
-                mu * relevant, 5.0 / (relevant * t_end)
-            )),
+            _ => {
+                let (wanted, fastest) = (5.0 / (relevant * t_end), stiff / c.lambda_max());
+                advice.push(if wanted > fastest {
+                    // That μ would make the loop stiff: only a longer run (or more excitation) helps.
+                    format!(
+                        "{key} = {mu} is too small for the horizon: the error's slowest relevant direction decays at μ λ = {:.2e}/{unit}; 5/(λ t_end) = {wanted:.3e} would put the adaptation rate μ λ_max at {:.2e}/{unit}, beyond the stiffness threshold {stiff:.2e}/{unit} ({STIFF_RATIO}·ρ), so keep {key} at most {fastest:.3e} and lengthen simulation.t_end to about {:.3e} {unit}, or excite that direction more",
+                        mu * relevant,
+                        wanted * c.lambda_max(),
+                        5.0 / (fastest.max(mu) * relevant)
+                    )
+                } else {
+                    format!(
+                        "{key} = {mu} is too small for the horizon: the error's slowest relevant direction decays at μ λ = {:.2e}/{unit}; raise {key} to about {wanted:.3e} (5/(λ t_end)) or lengthen simulation.t_end",
+                        mu * relevant
+                    )
+                })
+            }
         }
     }
     match trend.filter(|_| windows.is_some_and(|(last, _)| !negligible_tail(result, i, last))) {

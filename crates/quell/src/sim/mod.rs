@@ -216,6 +216,18 @@ impl<'a> Run<'a> {
         Run { controller: Some(controller), ..self }
     }
 
+    /// How many breakpoints t = Σ k_i τ_i up to t_end ([`dde::breakpoints`]) the continuous loop
+    /// lands on: the design's, the true plant's and its actuator's delays together. 0 for a
+    /// sampled-data loop, or a run its checks refuse.
+    pub fn breakpoints(&self) -> usize {
+        use dde::DelaySystem as _;
+        match &self.settings.mode {
+            Loop::Continuous(integrator) => closed_loop::check(self, integrator)
+                .map_or(0, |sys| dde::breakpoints(0.0, sys.delays(), self.settings.t_end).len()),
+            Loop::Sampled { .. } => 0,
+        }
+    }
+
     /// Every check the run makes before it starts (settings, signals, truth; in the sampled-data
     /// loop also that the controller can run at the sample time), without running it.
     pub fn check(&self) -> Result<(), SimError> {

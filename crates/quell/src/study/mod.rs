@@ -131,6 +131,10 @@ pub struct Nominal {
     pub steps: usize,
     /// The peaks of its watched signals.
     pub peaks: Peaks,
+    /// The breakpoints t = Σ k_i τ_i its loop lands on ([`crate::sim::Run::breakpoints`]): a draw
+    /// whose delays differ lands on more, each a step the nominal run did not take.
+    #[serde(default)]
+    pub breakpoints: usize,
 }
 
 /// A parsed and checked study.
@@ -415,9 +419,13 @@ impl Study {
             if s.simulation.sample_time.is_some() {
                 return None;
             }
-            let r = sweep::simulate(&s, self.max_steps, None, &|| false).ok()?;
-            (r.outcome == Some(crate::sim::Outcome::Completed))
-                .then_some(Nominal { steps: r.stats.steps(), peaks: r.peaks })
+            let run = sweep::simulate(&s, self.max_steps, &|_| None, &|| false).ok()?;
+            let r = run.result;
+            (r.outcome == Some(crate::sim::Outcome::Completed)).then_some(Nominal {
+                steps: r.stats.steps(),
+                peaks: r.peaks,
+                breakpoints: run.breakpoints,
+            })
         })
     }
 

@@ -48,18 +48,17 @@ pub struct RunSpec {
 }
 
 impl RunSpec {
-    /// The runaway rules' limits of this run, with a nominal run: at most ⌈steps · its steps⌉
-    /// solver steps, and peak · its peaks per watched signal (no bound on a signal that stayed 0
-    /// there); `None` without one.
-    fn runaway_limits(&self) -> Option<(usize, Peaks)> {
-        self.nominal.map(|n| ((self.runaway.steps * n.steps as f64).ceil() as usize, n.peaks.bounds(self.runaway.peak)))
-    }
-
-    /// Whether a run that needed more than `max_steps` steps met the runaway rule's budget (below
-    /// the study's `max_steps`), not its own.
-    fn ran_away(&self, max_steps: usize) -> bool {
-        self.runaway_limits().is_some_and(|(steps, _)| steps == max_steps)
-            && self.max_steps.is_none_or(|given| max_steps < given)
+    /// The runaway rules' limits of this run, with a nominal run, for a run landing on
+    /// `breakpoints` breakpoints: at most ⌈steps · (its steps + the breakpoints beyond its)⌉ solver
+    /// steps (drawn delays add breakpoints t = Σ k_i τ_i, each a step the nominal run did not
+    /// take: the paper's loop at t_end = 40 with both delays 2 % off lands on 559 instead of 29
+    /// and takes 752 steps instead of 268), and peak · its peaks per watched signal (no bound on a
+    /// signal that stayed 0 there); `None` without one.
+    fn runaway_limits(&self, breakpoints: usize) -> Option<(usize, Peaks)> {
+        self.nominal.map(|n| {
+            let steps = n.steps + breakpoints.saturating_sub(n.breakpoints);
+            ((self.runaway.steps * steps as f64).ceil() as usize, n.peaks.bounds(self.runaway.peak))
+        })
     }
 
     /// Simulates the run's scenario within its limits (step budget, [`Runaway`] rules): the
@@ -71,9 +70,13 @@ impl RunSpec {
     /// [`RunSpec::simulate`] that `stop` ends early (checked as the run goes; the result's outcome is
     /// then [`crate::sim::Outcome::Interrupted`]): how a front end lets Ctrl-C stop one run.
     pub fn simulate_until(&self, stop: &dyn Fn() -> bool) -> Result<SimResult, String> {
-        Scenario::from_document(&self.scenario)
-            .map_err(|e| e.to_string())
-            .and_then(|s| simulate(&s, self.max_steps, self.runaway_limits(), stop))
+        self.simulate_within_limits(stop).map(|run| run.result)
+    }
+
+    /// [`RunSpec::simulate_until`], with what decided its step budget.
+    fn simulate_within_limits(&self, stop: &dyn Fn() -> bool) -> Result<Simulated, String> {
+        let s = Scenario::from_document(&self.scenario).map_err(|e| e.to_string())?;
+        simulate(&s, self.max_steps, &|breakpoints| self.runaway_limits(breakpoints), stop)
     }
 }
 
@@ -121,35 +124,49 @@ pub struct Row {
     pub wall_ms: f64,
 }
 
+/// A study run's result, the breakpoints t = Σ k_i τ_i its loop lands on (0 for a sampled-data
+/// loop) and the runaway rules' step budget when that was the run's budget.
+pub(crate) struct Simulated {
+    pub result: SimResult,
+    pub breakpoints: usize,
+    pub runaway_steps: Option<usize>,
+}
+
 /// Simulates a scenario as its `[simulation]` says ([`Run::of`]), a continuous run within the
-/// step budget `max_steps` (`None`: the run's own, [`sim::default_max_steps`]) and, given
-/// `runaway` = (steps, peaks), within at most that many steps and those peaks per watched signal;
-/// `Err` when it cannot start.
+/// step budget `max_steps` (`None`: the run's own, [`sim::default_max_steps`]) and, given its
+/// breakpoints, `runaway` = (steps, peaks): within at most that many steps and those peaks per
+/// watched signal; `Err` when it cannot start.
 pub(crate) fn simulate(
     s: &Scenario,
     max_steps: Option<usize>,
-    runaway: Option<(usize, Peaks)>,
+    runaway: &dyn Fn(usize) -> Option<(usize, Peaks)>,
     stop: &dyn Fn() -> bool,
-) -> Result<SimResult, String> {
+) -> Result<Simulated, String> {
     let design = s.design().map_err(|e| e.to_string())?;
     let mut settings = RunSettings::of(s);
     let t_end = settings.t_end;
+    let breakpoints = Run::of(s, &design).breakpoints();
+    let mut runaway_steps = None;
     if let Loop::Continuous(integrator) = &mut settings.mode {
         let signals = [&s.reference, &s.disturbance];
         let given = integrator.clone();
         let own =
             || max_steps.unwrap_or_else(|| sim::default_max_steps(&design, s.true_plant(), signals, t_end, &given));
-        integrator.max_steps = Some(match runaway {
+        let limits = runaway(breakpoints);
+        let budget = match limits {
             // The default is never below BUDGET_MIN_STEPS: a runaway budget within it decides alone
             // (and a Monte Carlo draw skips the averaged law the default needs).
             Some((steps, _)) if max_steps.is_none() && steps <= sim::BUDGET_MIN_STEPS => steps,
             Some((steps, _)) => own().min(steps),
             None => own(),
-        });
-        settings.runaway = runaway.map(|(_, peaks)| peaks);
+        };
+        integrator.max_steps = Some(budget);
+        runaway_steps = limits.map(|l| l.0).filter(|&l| l == budget && max_steps.is_none_or(|given| l < given));
+        settings.runaway = limits.map(|(_, peaks)| peaks);
     }
     let progress = |_t: f64| if stop() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
-    Run::of(s, &design).settings(settings).simulate(progress).map_err(|e| e.to_string())
+    let result = Run::of(s, &design).settings(settings).simulate(progress).map_err(|e| e.to_string())?;
+    Ok(Simulated { result, breakpoints, runaway_steps })
 }
 
 /// Carries out one run; `None` when `stop` interrupted it.
@@ -167,9 +184,9 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
         steps: 0,
         wall_ms: 0.0,
     };
-    match spec.simulate_until(stop) {
+    match spec.simulate_within_limits(stop) {
         Err(reason) => row.reason = reason,
-        Ok(r) => {
+        Ok(Simulated { result: r, runaway_steps, breakpoints }) => {
             row.steps = r.stats.steps() as u64;
             match r.outcome.as_ref().unwrap_or(&sim::Outcome::Completed) {
                 sim::Outcome::Completed => {
@@ -187,10 +204,17 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                         );
                     }
                 }
-                sim::Outcome::TooManySteps { t, max_steps } if spec.ran_away(*max_steps) => {
-                    let n = spec.nominal.map_or(0, |n| n.steps);
+                sim::Outcome::TooManySteps { t, max_steps } if runaway_steps == Some(*max_steps) => {
+                    let (n, extra) =
+                        spec.nominal.map_or((0, 0), |n| (n.steps, breakpoints.saturating_sub(n.breakpoints)));
+                    let scale = match extra {
+                        0 => format!("the nominal run's {n} solver steps"),
+                        _ => format!(
+                            "(the nominal run's {n} solver steps + the {extra} breakpoints this draw's delays add)"
+                        ),
+                    };
                     row.reason = format!(
-                        "step budget: more than {} × the nominal run's {n} solver steps ({max_steps}) by t = {t:.4} {} (the loop turned stiff: its signals grew well beyond the nominal run's; raise runaway.steps in the study file if the run is sound)",
+                        "step budget: more than {} × {scale} ({max_steps}) by t = {t:.4} {} (the loop turned stiff: its signals grew well beyond the nominal run's; raise runaway.steps in the study file if the run is sound)",
                         spec.runaway.steps,
                         r.time_unit
                     );
