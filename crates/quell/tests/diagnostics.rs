@@ -117,3 +117,45 @@ fn omega_bar_matches_the_mean_of_delta_delta_from_a_simulated_run() {
         assert_eq!(c.excited_rank, 5, "{c:?}");
     }
 }
+
+/// A channel whose slowest relevant direction needs a μ that would make the loop stiff is not
+/// told to raise μ there: a heading loop in SI units (a Nomoto-like ship from a tryout: the
+/// reference's 0.02 rad/s harmonic over 2000 s) whose automatic μ_1 already sits at the
+/// stiffness cap. The advice said "raise design.mu[0] to about 18", 7.5 times the rate 100·ρ at
+/// which the pace estimate calls the loop stiff; it now keeps μ_1 and asks for a longer run, the
+/// length 5/(μ λ) that the averaged law gives.
+#[test]
+fn advice_to_raise_mu_stops_at_the_stiffness_threshold() {
+    let text = r#"
+[plant]
+A = [[0.0, 1.0, 0.0], [0.0, -0.0262, 0.0], [0.0, 0.0, -0.05]]
+B = [[0.0, 0.0], [0.00124, 0.0], [0.0, 2.0e-6]]
+C = [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
+delays = [0.5, 1.0]
+[design]
+regressor_scaling = "normalized"
+channel_poles = [[-0.1, -0.15], [-0.1]]
+reference_filter_poles = [[-0.015, -0.0225, -0.03375], [-0.05]]
+beta = 50.0
+observer_poles = [-0.3, -0.4242640687119286, -0.6]
+mu = [2.3990403771050666, 0.0024849922666526723]
+[reference]
+components = [ { bias = 0.1, harmonics = [{ amplitude = 0.05, frequency = 0.02 }] }, { bias = 5.0 } ]
+[simulation]
+t_end = 2000.0
+output_step = 1.0
+rtol = 1e-8
+atol = 1e-8
+"#;
+    let s = Scenario::from_toml(text).unwrap();
+    let d = s.design().unwrap();
+    let r = Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
+    let diagnostics = diagnose(&d, &s.reference, &s.disturbance, &r);
+    let advice = &diagnostics.channels[0].advice;
+    let stiff = quell::diagnostics::STIFF_RATIO * quell::sim::loop_rate(&d, d.plant(), [&s.reference, &s.disturbance]);
+    let cap = stiff / diagnostics.channels[0].lambda_max_omega;
+    let line = advice.iter().find(|a| a.contains("is too small for the horizon")).expect("the horizon advice");
+    assert!(line.contains("beyond the stiffness threshold") && line.contains("lengthen simulation.t_end"), "{line}");
+    assert!(line.contains(&format!("keep design.mu[0] at most {cap:.3e}")), "{line}");
+    assert!(!line.contains("raise design.mu[0]"), "{line}");
+}
