@@ -275,6 +275,9 @@ impl PyStudy {
     ///     An argument of the wrong type.
     /// ScenarioError
     ///     `jobs` out of range, or more than 10⁷ runs without `yes`.
+    /// KeyboardInterrupt
+    ///     Ctrl-C; its `.result` is the StudyResult of the runs carried out (the frame's
+    ///     `attrs["partial"]` True).
     ///
     /// Examples
     /// --------
@@ -288,8 +291,9 @@ impl PyStudy {
         #[pyo3(from_py_with = crate::convert::argument::yes)] yes: bool,
     ) -> PyResult<Py<PyAny>> {
         let py = slf.py();
-        let frame = sweep_frame(py, &slf.get().inner, jobs, yes)?;
-        Ok(py.import("quell._study")?.getattr("StudyResult")?.call1((slf, frame))?.unbind())
+        let (frame, interrupt) = sweep_frame(py, &slf.get().inner, jobs, yes)?;
+        let result = py.import("quell._study")?.getattr("StudyResult")?.call1((slf, frame))?;
+        with_result(py, result, interrupt)
     }
 
     /// Channels m of the study's scenario.
@@ -782,6 +786,8 @@ pub fn sweep_runs(py: Python<'_>, study: &Bound<'_, PyAny>) -> PyResult<PyRunSpe
 ///     An argument of the wrong type.
 /// ScenarioError
 ///     The study is not valid, `jobs` is out of range, or more than 10⁷ runs without `yes`.
+/// KeyboardInterrupt
+///     Ctrl-C; its `.result` is the DataFrame of the runs carried out (`attrs["partial"]` True).
 ///
 /// Examples
 /// --------
@@ -796,7 +802,19 @@ pub fn sweep(
     jobs: Option<&Bound<'_, PyAny>>,
     #[pyo3(from_py_with = crate::convert::argument::yes)] yes: bool,
 ) -> PyResult<Py<PyAny>> {
-    sweep_frame(py, &study_arg(py, study)?, jobs, yes)
+    let (frame, interrupt) = sweep_frame(py, &study_arg(py, study)?, jobs, yes)?;
+    with_result(py, frame.into_bound(py), interrupt)
+}
+
+/// `result`, or the KeyboardInterrupt `interrupt` carrying it as `.result` (the rows carried out).
+fn with_result(py: Python<'_>, result: Bound<'_, PyAny>, interrupt: Option<PyErr>) -> PyResult<Py<PyAny>> {
+    match interrupt {
+        None => Ok(result.unbind()),
+        Some(e) => {
+            e.value(py).setattr("result", result)?;
+            Err(e)
+        }
+    }
 }
 
 /// `jobs=`: None, or a number of threads from 1 to [`study::MAX_JOBS`].
@@ -830,13 +848,14 @@ pub fn thread_pool(py: Python<'_>, jobs: Option<usize>, tasks: usize) -> PyResul
         .map_err(|e| Kind::Scenario.err(py, format!("jobs: cannot start the threads ({e})")))
 }
 
-/// The sweep of `study` as a DataFrame: runs.csv's columns, then the drawn values.
+/// The sweep of `study` as a DataFrame: runs.csv's columns, then the drawn values; with the
+/// KeyboardInterrupt that stopped it (the frame then holds the runs carried out).
 fn sweep_frame(
     py: Python<'_>,
     study: &Arc<study::Study>,
     jobs: Option<&Bound<'_, PyAny>>,
     yes: bool,
-) -> PyResult<Py<PyAny>> {
+) -> PyResult<(Py<PyAny>, Option<PyErr>)> {
     let jobs = jobs_arg(py, jobs)?;
     if study.len() > study::CONFIRM_RUNS && !yes {
         return Err(Kind::Scenario.err(
@@ -851,7 +870,7 @@ fn sweep_frame(
         ));
     }
     let pool = thread_pool(py, jobs, usize::try_from(study.len()).unwrap_or(usize::MAX))?;
-    let swept = crate::interrupt::interruptible_with(py, |stop| {
+    let (swept, interrupt) = crate::interrupt::interruptible_keeping(py, |stop| {
         let opts = SweepOptions { stop: Some(&stop), ..SweepOptions::default() };
         pool.install(|| study::sweep(study, &opts))
     })?;
@@ -878,5 +897,7 @@ fn sweep_frame(
             drawn.set_item(name, values)?;
         }
     }
-    Ok(py.import("quell._frames")?.call_method1("runs_frame", (text, drawn))?.unbind())
+    let frame = py.import("quell._frames")?.call_method1("runs_frame", (text, drawn))?;
+    frame.getattr("attrs")?.set_item("partial", swept.partial)?;
+    Ok((frame.unbind(), interrupt))
 }
