@@ -51,6 +51,10 @@ use crate::plant::{plant_arg, Labels, PyPlant};
 ///     Measurement noise `{"std": [σ_i], "seed": 0, "bandwidth": None}`.
 /// truth : Plant, optional
 ///     The plant that is simulated, when it differs from the design model.
+/// actuator : dict, optional
+///     The true plant's actuator between u_f and the plant, `{"u_max": [..], "delays": [..]}`
+///     (either key; one entry per input): `[truth] u_max` (|u_f,i| clipped, inf for none) and
+///     `actuator_delays` (u_f,i delayed as a whole).
 /// **design
 ///     The `[design]` keys: channel_poles, reference_filter_poles, disturbance_filter_poles, mu,
 ///     beta, and observer_poles or observer_gain (as `quell.design` takes them).
@@ -276,10 +280,30 @@ fn signal_py<'py>(py: Python<'py>, s: &Signal) -> PyResult<Vec<Bound<'py, PyDict
         .collect()
 }
 
+/// The `actuator` argument `{"u_max": [..], "delays": [..]}` as `[truth]`'s keys u_max and
+/// actuator_delays.
+fn actuator_keys(py: Python<'_>, a: &Bound<'_, PyAny>) -> PyResult<Vec<(String, Value)>> {
+    let a = a.cast::<PyDict>().map_err(|_| type_error("actuator", "a dict {u_max, delays}", a))?;
+    let mut keys = Vec::new();
+    for (k, v) in a.iter() {
+        let k: String = k.extract().map_err(|_| type_error("actuator", "a dict with str keys", &k))?;
+        let key = match k.as_str() {
+            "u_max" => "u_max",
+            "delays" => "actuator_delays",
+            _ => {
+                let message = format!("actuator: unknown key {k:?}; expected u_max (the limits on |u_f,i|) or delays (u_f's delays), one entry per input");
+                return Err(Kind::Scenario.err(py, message));
+            }
+        };
+        keys.push((key.to_string(), toml_value(&v, &format!("actuator[{k:?}]"))?));
+    }
+    Ok(keys)
+}
+
 #[pymethods]
 impl PyScenario {
     #[new]
-    #[pyo3(signature = (plant, reference, disturbance=None, *, name=None, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, method=None, noise=None, truth=None, **design))]
+    #[pyo3(signature = (plant, reference, disturbance=None, *, name=None, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, method=None, noise=None, truth=None, actuator=None, **design))]
     #[allow(clippy::too_many_arguments)]
     fn py_new(
         py: Python<'_>,
@@ -295,6 +319,7 @@ impl PyScenario {
         method: Option<&Bound<'_, PyAny>>,
         noise: Option<&Bound<'_, PyAny>>,
         truth: Option<&Bound<'_, PyAny>>,
+        actuator: Option<&Bound<'_, PyAny>>,
         design: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let plant = plant_arg(plant, "plant")?;
@@ -330,6 +355,12 @@ impl PyScenario {
         }
         if let Some(t) = truth.filter(|t| !t.is_none()) {
             doc.insert("truth".into(), Value::Table(truth_table(&plant_arg(t, "truth")?.inner)));
+        }
+        if let Some(a) = actuator.filter(|a| !a.is_none()) {
+            let truth = doc.entry("truth").or_insert_with(|| Value::Table(Table::new()));
+            if let Value::Table(truth) = truth {
+                truth.extend(actuator_keys(py, a)?);
+            }
         }
         let inner = quell::Scenario::from_document(&doc).map_err(|e| argument_error(py, &e))?;
         Ok(PyScenario { from_values: true, ..Self::new(inner) })

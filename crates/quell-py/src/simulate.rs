@@ -220,6 +220,12 @@ impl PySimResult {
     fn time_unit(&self) -> &'static str {
         self.inner.time_unit.symbol()
     }
+    /// Per input, the fraction of the recorded samples at which the true plant's actuator limit
+    /// (`[truth] u_max`) clipped it, as summary.json's `limited_fraction`; None without limits.
+    #[getter]
+    fn limited_fraction(&self) -> Option<Vec<f64>> {
+        (!self.inner.limited.is_empty()).then(|| self.inner.limited_fraction())
+    }
     /// How the run ended, as in summary.json: {"status": "completed"}, or "diverged" with t,
     /// signal and value, or "step_size_too_small" / "interrupted" with t.
     #[getter]

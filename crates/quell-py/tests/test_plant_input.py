@@ -39,3 +39,28 @@ def test_states_are_recorded_only_when_asked():
     r = quell.simulate(quell.paper_example(), t_end=1.0)
     assert r.x is None and r.x_hat is None and r.u_f.shape == (len(r), 2)
     assert "x1" not in r.to_pandas().columns
+
+
+def test_an_actuator_limit_clips_u_f_and_is_counted():
+    """Scenario(actuator={"u_max": ...}) is [truth]'s u_max: the recorded plant input is u_f clipped
+    to ±u_max (computed here from the unclipped design run's formula), and
+    result.limited_fraction is the share of samples at the limit (summary.json's key; None without
+    a limit)."""
+    from test_api import DISTURBANCE, L, PAPER_DESIGN, REFERENCE
+
+    p = quell.paper_example().plant
+    u_max = [5.0, 8.0]
+    free = quell.Scenario(p, REFERENCE, DISTURBANCE, t_end=20.0, observer_gain=L, **PAPER_DESIGN)
+    limited = quell.Scenario(p, REFERENCE, DISTURBANCE, t_end=20.0, observer_gain=L, actuator={"u_max": u_max},
+                             **PAPER_DESIGN)
+    assert quell.simulate(free).limited_fraction is None
+    r = quell.simulate(limited, states=True)
+    d = limited.design()
+    u_d = np.column_stack([delayed(r.t, r.u[:, i], tau) for i, tau in enumerate(p.delays)])
+    want = np.clip(u_d @ d.F.T - r.x_hat @ d.K.T, -np.array(u_max), np.array(u_max))
+    np.testing.assert_allclose(r.u_f, want, rtol=0, atol=1e-9 * max(u_max))
+    at_limit = (np.abs(r.u_f) >= np.array(u_max) * (1 - 1e-12)).mean(axis=0)
+    assert r.limited_fraction == pytest.approx(list(at_limit), abs=2.0 / len(r))
+    assert 0.0 < min(r.limited_fraction) and max(r.limited_fraction) < 1.0
+    with pytest.raises(quell.ScenarioError, match=r'^actuator: unknown key "umax"'):
+        quell.Scenario(p, REFERENCE, DISTURBANCE, observer_gain=L, actuator={"umax": u_max}, **PAPER_DESIGN)

@@ -180,6 +180,7 @@ class Scenario:
         method: Optional[Literal["auto", "explicit", "imex"]] = None,
         noise: Optional[Dict[str, Any]] = None,
         truth: Optional[Plant] = None,
+        actuator: Optional[Dict[str, Sequence[float]]] = None,
         **design: Any,
     ) -> Self: ...
     @staticmethod
@@ -234,6 +235,8 @@ class SimResult:
     def q(self) -> int: ...
     @property
     def time_unit(self) -> str: ...
+    @property
+    def limited_fraction(self) -> Optional[List[float]]: ...
     @property
     def outcome(self) -> Dict[str, Any]: ...
     @property
