@@ -159,3 +159,21 @@ atol = 1e-8
     assert!(line.contains(&format!("keep design.mu[0] at most {cap:.3e}")), "{line}");
     assert!(!line.contains("raise design.mu[0]"), "{line}");
 }
+
+/// A sampled-data run coarse for its design (the paper's at T_s = 0.1 s, T_s·ρ = 0.9) that misses
+/// its tail bound is told so, besides the channels' advice on μ and t_end (which alone sent the
+/// user to tune μ); at 1 ms (T_s·ρ = 0.009) there is no such line.
+#[test]
+fn a_coarse_sampled_run_is_told_the_sampling_may_be_the_cause() {
+    let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+    let d = s.design().unwrap();
+    let coarse = |t_s: f64| {
+        let r = Run::of(&s, &d)
+            .settings(RunSettings::sampled(20.0, 0.1, t_s))
+            .simulate(|_| ControlFlow::Continue(()))
+            .unwrap();
+        diagnose(&d, &s.reference, &s.disturbance, &r).advice.iter().any(|a| a.contains("is coarse for this design"))
+    };
+    assert!(coarse(0.1));
+    assert!(!coarse(1e-3));
+}

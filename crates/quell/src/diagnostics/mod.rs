@@ -96,9 +96,10 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
     let t_end = result.t.last().copied().unwrap_or(0.0);
     let (remedy, unit) = (observer_remedy(design), design.plant().time_unit);
     // The adaptation rate beyond which the loop is stiff (the pace estimate's threshold).
-    let stiff = STIFF_RATIO * crate::sim::loop_rate(design, design.plant(), [reference, disturbance]);
+    let rho = crate::sim::loop_rate(design, design.plant(), [reference, disturbance]);
+    let stiff = STIFF_RATIO * rho;
     let missed = (0..result.m).any(|i| !tail_within_bound(result, i));
-    let advice = avg
+    let mut advice: Vec<String> = avg
         .fidelity
         .iter()
         .filter(|f| missed && f.relative_error > FIDELITY_LIMIT)
@@ -109,6 +110,18 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
             )
         })
         .collect();
+    // A sampled-data run coarse for the design: its errors are the sampling's as much as the
+    // adaptation's, which the channels' advice (μ, t_end) does not see.
+    if let crate::sim::RunStats::Sampled { sample_time, .. } = result.stats {
+        if missed && sample_time * rho > crate::sim::COARSE_SAMPLE {
+            advice.push(format!(
+                "the sampled-data loop at T_s = {} {unit} is coarse for this design (T_s·ρ = {:.2} > {}): its errors are the sampling's as much as the adaptation's; compare with the continuous loop, and shorten the sample time or slow the poles before tuning μ or t_end",
+                fmt_short(sample_time),
+                sample_time * rho,
+                crate::sim::COARSE_SAMPLE
+            ));
+        }
+    }
     let channels = avg
         .channels
         .iter()
