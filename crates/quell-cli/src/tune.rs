@@ -57,7 +57,7 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
     if !args.no_plots {
         crate::plot::plot_tune(&args.out, &result, study.time_unit()).map_err(failed)?;
     }
-    crate::print_stdout(&report(&result));
+    crate::print_stdout(&report(&result, study.time_unit()));
     if result.partial {
         let evaluations: usize = result.channels.iter().map(|c| c.curve.len()).sum();
         return Err(Failure::Run(format!(
@@ -123,9 +123,12 @@ fn write_curves(w: &mut dyn std::io::Write, r: &TuneResult) -> std::io::Result<(
     Ok(())
 }
 
-/// The chosen μ and the joint check, one line per channel.
-fn report(r: &TuneResult) -> String {
-    let mut s = format!("objective: {}\n", r.objective.name());
+/// The chosen μ and the joint check, one line per channel; a settling time in `unit`.
+fn report(r: &TuneResult, unit: quell::TimeUnit) -> String {
+    let mut s = match r.objective {
+        quell::study::Objective::SettleT => format!("objective: settle_t, in {}\n", unit.name()),
+        other => format!("objective: {}\n", other.name()),
+    };
     for (c, (d, ok)) in r.channels.iter().zip(r.joint_difference.iter().zip(&r.reproduced)) {
         match &c.chosen {
             Some(p) => s.push_str(&format!(

@@ -885,6 +885,7 @@ fn tune_exits_2_when_the_joint_run_breaks_a_limit() {
     let o = quell(&["tune", study.to_str().unwrap(), "--out", out.to_str().unwrap(), "--no-plots"]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stdout(&o).contains("channel 1: mu = ") && stdout(&o).contains("but BREAKS the limits"), "{}", stdout(&o));
+    assert!(stdout(&o).starts_with("objective: settle_t, in minutes\n"), "the CSTR's unit: {}", stdout(&o));
     assert!(stderr(&o).contains("channel 1: the tuned μ together break its limits in the joint run"), "{}", stderr(&o));
     assert!(stderr(&o).contains("against tune.max_uf[0] = 10.6"), "{}", stderr(&o));
     let json = read_json(&out.join("tune.json"));
