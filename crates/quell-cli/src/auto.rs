@@ -24,9 +24,10 @@ pub struct DesignArgs {
     /// With --auto: write the complete scenario here (only when the verification passes).
     #[arg(long, value_name = "OUT.toml")]
     pub write: Option<PathBuf>,
-    /// With --auto: when the error should be down to 0.2 % of the reference's peak (s; default
-    /// simulation.t_end/20).
-    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    /// With --auto: when the error should be down to 0.2 % of the reference's peak, the target μ is
+    /// chosen for by the averaged law (in the plant's unit of time; default simulation.t_end/20);
+    /// the verification reports the run's error there.
+    #[arg(long, value_name = "TIME", allow_negative_numbers = true)]
     pub convergence_time: Option<f64>,
     /// With --auto: actuator limit on |u_f,i|, the plant input u_f = −K x̂ + F u_d: one for every
     /// input, or one per input separated by commas (inputs in different units).
@@ -139,13 +140,21 @@ fn report_text(a: &AutoDesign) -> String {
         s.push_str(&format!("  {} = {}\n    {}\n", c.key, c.value, c.why));
     }
     let v = &a.verification;
-    s.push_str(&format!(
-        "verification ({} simulation{}; the kept design's run: {} solver steps):\n",
-        v.runs,
-        if v.runs == 1 { "" } else { "s" },
-        v.steps
-    ));
+    let kept = match v.steps {
+        0 => "no run reached t_end".to_string(),
+        steps => format!("the kept design's run: {steps} solver steps"),
+    };
+    s.push_str(&format!("verification ({} simulation{}; {kept}):\n", v.runs, if v.runs == 1 { "" } else { "s" }));
     for i in 0..v.bound.len() {
+        if v.steps == 0 && !v.tail_max_e[i].is_finite() {
+            // The run ended before t_end: no tail or peak to show (the advice says why).
+            s.push_str(&format!(
+                "  channel {}: no tail (bound {:.3e}): the run ended before t_end ✗\n",
+                i + 1,
+                v.bound[i]
+            ));
+            continue;
+        }
         s.push_str(&format!(
             "  channel {}: tail max|e| = {:.3e} (bound {:.3e}: 1 % of the reference's peak) {}, max|u_f| = {:.4}\n",
             i + 1,
@@ -154,6 +163,21 @@ fn report_text(a: &AutoDesign) -> String {
             if v.tail_max_e[i] <= v.bound[i] { "✓" } else { "✗" },
             v.max_uf[i]
         ));
+    }
+    let unit = a.scenario.plant.time_unit;
+    for (i, (rms, aim)) in v.rms_at_convergence.iter().zip(&v.aim_at_convergence).enumerate() {
+        if rms.is_finite() && aim.is_finite() {
+            let verdict = if rms <= aim {
+                "✓".to_string()
+            } else {
+                format!("later than the averaged law that chose μ predicts ({:.0}× the aim)", rms / aim)
+            };
+            s.push_str(&format!(
+                "  channel {}: RMS e about the convergence time t = {} {unit} = {rms:.3e} (μ's aim {aim:.3e}: 0.2 % of the reference's peak) {verdict}\n",
+                i + 1,
+                crate::run::short(v.convergence_time)
+            ));
+        }
     }
     if v.candidates.len() > 1 {
         s.push_str(&format!("  relaxation: {}\n", v.relaxation));

@@ -141,7 +141,7 @@ fn output_step_error(T: f64, h: f64) -> Failure {
 }
 
 /// A time for a message, to 12 significant digits and without trailing zeros.
-fn short(x: f64) -> String {
+pub(crate) fn short(x: f64) -> String {
     let s = format!("{:.12e}", x);
     s.parse::<f64>().map_or(s, |v| v.to_string())
 }

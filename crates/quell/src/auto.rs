@@ -172,6 +172,14 @@ pub struct Verification {
     pub bound: Vec<f64>,
     /// max |u_f,i| over the run: the plant input (5), what [`Targets::u_limit`] bounds.
     pub max_uf: Vec<f64>,
+    /// The convergence time t_c μ was chosen for ([`Targets::convergence_time`], default t_end/20).
+    pub convergence_time: f64,
+    /// The RMS error μ_i aims at by t_c (0.2 % of the reference's peak; NaN for a reference of
+    /// peak 0, where the aim is the open loop's) and what the kept run had over [0.9, 1.1]·t_c: the
+    /// averaged law that chose μ is optimistic where Ω̄ is poorly excited, so the run may miss it
+    /// (reported, not a failure of the verification).
+    pub aim_at_convergence: Vec<f64>,
+    pub rms_at_convergence: Vec<f64>,
     /// Accepted solver steps (controller steps when sampled) of the kept design's run.
     pub steps: usize,
     /// Simulations run: the first proposal's (1 + its μ retries) and one per slower candidate.
@@ -201,6 +209,8 @@ pub struct Candidate {
     pub speed: Speed,
     /// max |e_i| over the last 10 % of the horizon.
     pub tail_max_e: Vec<f64>,
+    /// RMS of e_i over [0.9, 1.1]·t_c about the convergence time t_c μ was chosen for.
+    pub rms_at_convergence: Vec<f64>,
     /// max |u_f,i| over the run.
     pub max_uf: Vec<f64>,
     /// Accepted solver steps of its run.
@@ -297,6 +307,8 @@ pub struct Progress {
 struct Verifier<'p> {
     runs: usize,
     progress: &'p mut dyn FnMut(&Progress) -> ControlFlow<()>,
+    /// The convergence time μ is chosen for ([`Targets::convergence_time`], or t_end/20).
+    convergence_time: Option<f64>,
 }
 
 impl Verifier<'_> {
@@ -312,26 +324,38 @@ impl Verifier<'_> {
             progress(&Progress { run, speed, t, t_end })
         })?;
         match r.outcome.clone().unwrap_or(Outcome::Completed) {
-            Outcome::Completed => Ok(candidate(scenario, &r, speed)),
+            Outcome::Completed => Ok(candidate(scenario, &r, speed, self.convergence_time)),
             Outcome::Interrupted { .. } => Err(AutoError::Interrupted),
             other => Err(AutoError::Run(other)),
         }
     }
 }
 
-/// The candidate at `speed` from its verifying run `r` of `scenario`.
-fn candidate(scenario: &Scenario, r: &crate::sim::SimResult, speed: Speed) -> Candidate {
+/// The candidate at `speed` from its verifying run `r` of `scenario`; its RMS errors over
+/// [0.9, 1.1]·t_c about the convergence time t_c (`convergence_time`, default t_end/20).
+fn candidate(scenario: &Scenario, r: &crate::sim::SimResult, speed: Speed, convergence_time: Option<f64>) -> Candidate {
     let t_end = scenario.simulation.t_end;
-    let tail_max_e =
-        (0..scenario.plant.m()).map(|i| r.max_abs_error(i, 0.9 * t_end, t_end).unwrap_or(f64::NAN)).collect();
+    let t_c = convergence_time.unwrap_or(t_end / DEFAULT_CONVERGENCE);
+    let m = scenario.plant.m();
+    let tail_max_e = (0..m).map(|i| r.max_abs_error(i, 0.9 * t_end, t_end).unwrap_or(f64::NAN)).collect();
+    let rms_at_convergence =
+        (0..m).map(|i| r.rms_error(i, 0.9 * t_c, (1.1 * t_c).min(t_end)).unwrap_or(f64::NAN)).collect();
     let max_uf = r.summary().iter().map(|c| c.figures.max_uf).collect();
-    Candidate { speed, tail_max_e, max_uf, steps: r.stats.steps(), chosen: false }
+    Candidate { speed, tail_max_e, rms_at_convergence, max_uf, steps: r.stats.steps(), chosen: false }
 }
 
 impl Candidate {
     /// A candidate whose verifying run ended before t_end: no tail, no peak.
     fn ended(speed: Speed, m: usize) -> Candidate {
-        Candidate { speed, tail_max_e: vec![f64::INFINITY; m], max_uf: vec![f64::NAN; m], steps: 0, chosen: true }
+        let none = vec![f64::NAN; m];
+        Candidate {
+            speed,
+            tail_max_e: vec![f64::INFINITY; m],
+            rms_at_convergence: none.clone(),
+            max_uf: none,
+            steps: 0,
+            chosen: true,
+        }
     }
 
     /// Every tail within `bound` / `margin` (a NaN tail is not).
@@ -384,7 +408,8 @@ pub fn auto_design_with(
     targets: &Targets,
     progress: &mut dyn FnMut(&Progress) -> ControlFlow<()>,
 ) -> Result<AutoDesign, AutoError> {
-    verified_design(doc, targets, &mut Verifier { runs: 0, progress }).map_err(|e| e.chosen_in(doc))
+    let mut verifier = Verifier { runs: 0, progress, convergence_time: targets.convergence_time };
+    verified_design(doc, targets, &mut verifier).map_err(|e| e.chosen_in(doc))
 }
 
 impl AutoError {
@@ -415,7 +440,14 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
                 let advice = vec![ended_early(&first.scenario, &outcome)];
                 let c = Candidate::ended(start, first.scenario.plant.m());
                 let limited = !targets.u_limit.is_empty();
-                return Ok(finish((first, design, c.clone()), bound, verifier.runs, vec![c], (false, limited), advice));
+                return Ok(finish(
+                    (first, design, c.clone()),
+                    bound,
+                    (verifier.runs, verifier.convergence_time),
+                    vec![c],
+                    (false, limited),
+                    advice,
+                ));
             }
             c => c?,
         };
@@ -436,7 +468,7 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
         return Ok(finish(
             (first, design, first_check),
             bound,
-            verifier.runs,
+            (verifier.runs, verifier.convergence_time),
             candidates,
             (false, !targets.u_limit.is_empty()),
             advice,
@@ -448,7 +480,14 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
         c.chosen = c.speed == speed;
     }
     let advice = if within { Vec::new() } else { vec![limit_advice(targets, &kept.2)] };
-    Ok(finish(kept, bound, verifier.runs, candidates, (within, !targets.u_limit.is_empty()), advice))
+    Ok(finish(
+        kept,
+        bound,
+        (verifier.runs, verifier.convergence_time),
+        candidates,
+        (within, !targets.u_limit.is_empty()),
+        advice,
+    ))
 }
 
 /// The first proposal and its design: the rules' own, or for a sampled-data scenario
@@ -593,12 +632,18 @@ fn keeps_fidelity(candidate: &[f64], first: &[f64]) -> bool {
 fn finish(
     (mut p, design, c): Verified,
     bound: Vec<f64>,
-    runs: usize,
+    (runs, convergence_time): (usize, Option<f64>),
     candidates: Vec<Candidate>,
     (passed, targets_limited): (bool, bool),
     advice: Vec<String>,
 ) -> AutoDesign {
     let speed = c.speed;
+    let convergence_time = convergence_time.unwrap_or(p.scenario.simulation.t_end / DEFAULT_CONVERGENCE);
+    let aim_at_convergence = p.scenario.reference.components.iter().map(|g| match g.peak() {
+        peak if peak > 0.0 => AIM * peak,
+        _ => f64::NAN,
+    });
+    let aim_at_convergence = aim_at_convergence.collect();
     let relaxation = if candidates.len() > 1 {
         // Relative to the first candidate (the rules' proposal, or its sampled-data start).
         let start = candidates[0].speed;
@@ -635,6 +680,9 @@ fn finish(
             tail_max_e: c.tail_max_e,
             bound,
             max_uf: c.max_uf,
+            convergence_time,
+            aim_at_convergence,
+            rms_at_convergence: c.rms_at_convergence,
             steps: c.steps,
             runs,
             passed,
@@ -725,7 +773,11 @@ fn ended_early(s: &Scenario, outcome: &Outcome) -> String {
         ),
         None => "give some [design] keys by hand (slower channel or observer poles, a smaller mu; docs/tuning.md)".to_string(),
     };
-    format!("the first proposal's verifying simulation {outcome}, before t_end = {}: {why}", s.simulation.t_end)
+    let unit = s.plant.time_unit;
+    format!(
+        "the first proposal's verifying simulation ended before t_end = {} {unit}: {outcome}; {why}",
+        s.simulation.t_end
+    )
 }
 
 /// Why a design failed its verification, when the scenario shows it: a horizon shorter than

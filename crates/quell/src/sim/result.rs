@@ -270,6 +270,17 @@ impl SimResult {
             .reduce(max_or_nan)
     }
 
+    /// RMS of e_i over the recorded samples in [from, to]; `None` when there are none.
+    pub fn rms_error(&self, i: usize, from: f64, to: f64) -> Option<f64> {
+        let (n, sum) = self
+            .t
+            .iter()
+            .zip(self.column(&self.e, self.m, i))
+            .filter(|(t, _)| **t >= from && **t <= to)
+            .fold((0usize, 0.0), |(n, s), (_, e)| (n + 1, s + e * e));
+        (n > 0).then(|| (sum / n as f64).sqrt())
+    }
+
     /// How channel i's error met the band `settle` (of its reference's recorded peak): the one
     /// definition of [`crate::sim::settle`].
     pub fn settling(&self, i: usize, settle: &Settle) -> Settling {
