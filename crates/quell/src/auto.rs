@@ -433,21 +433,27 @@ impl AutoError {
 fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier) -> Result<AutoDesign, AutoError> {
     let (mut first, mut design, start) = sampled_start(doc, targets)?;
     let bound: Vec<f64> = first.scenario.reference.components.iter().map(|c| TAIL_BOUND * c.peak()).collect();
+    let unverified = |first: Proposal, design: Design, advice: String, runs: usize| {
+        let c = Candidate::ended(start, first.scenario.plant.m());
+        let limited = !targets.u_limit.is_empty();
+        finish(
+            (first, design, c.clone()),
+            bound.clone(),
+            (runs, targets.convergence_time),
+            vec![c],
+            (false, limited),
+            vec![advice],
+        )
+    };
+    if let Some(advice) = too_fast_for_its_horizon(&first.scenario, &design) {
+        return Ok(unverified(first, design, advice, 0));
+    }
     // The first proposal, μ raised where its tail misses the bound.
     let first_check = loop {
         let c = match verifier.check(&first.scenario, &design, start) {
             Err(AutoError::Run(outcome)) => {
-                let advice = vec![ended_early(&first.scenario, &outcome)];
-                let c = Candidate::ended(start, first.scenario.plant.m());
-                let limited = !targets.u_limit.is_empty();
-                return Ok(finish(
-                    (first, design, c.clone()),
-                    bound,
-                    (verifier.runs, verifier.convergence_time),
-                    vec![c],
-                    (false, limited),
-                    advice,
-                ));
+                let advice = ended_early(&first.scenario, &outcome);
+                return Ok(unverified(first, design, advice, verifier.runs));
             }
             c => c?,
         };
@@ -762,6 +768,28 @@ fn smallest_gap(s: &Scenario) -> Option<f64> {
 fn round_up_2(x: f64) -> f64 {
     let unit = 10f64.powf(x.log10().floor() - 1.0);
     (x / unit).ceil() * unit
+}
+
+/// The most time constants 1/ρ a continuous verifying run may span, ρ·t_end: beyond it the run
+/// takes ten million steps or more (DOP853 needs about one per 3/ρ where ρ bounds its step),
+/// minutes each, and the relaxation runs several. The batch reactor over 1e5 s spans 1.04e7 and is
+/// verified; the CTMS motor over 2000 ms spans 3.5e7 (its run ended on the memory budget after two
+/// minutes).
+const MAX_RATE_HORIZON: f64 = 3e7;
+
+/// Advice when the first proposal's continuous loop is far faster than its horizon (ρ·t_end beyond
+/// [`MAX_RATE_HORIZON`]): a fast stable plant eigenvalue (a motor's electrical pole at 1454 /ms
+/// under a 2000 ms run) sets the time scale r and with it every pole the rules place.
+fn too_fast_for_its_horizon(s: &Scenario, design: &Design) -> Option<String> {
+    let rho = loop_rate(design, s.true_plant(), [&s.reference, &s.disturbance]);
+    let (t_end, unit) = (s.simulation.t_end, s.plant.time_unit);
+    (s.simulation.sample_time.is_none() && rho * t_end > MAX_RATE_HORIZON).then(|| {
+        format!(
+            "the first proposal's loop runs at rates up to ρ = {rho:.3e}/{unit} over t_end = {t_end} {unit}, ρ·t_end = {:.1e} time constants: its verifying run would take ten million solver steps or more, so it was not started; the rules' time scale follows the plant's fastest eigenvalue ({:.3e}/{unit}), so give design.channel_poles and design.observer_poles near the signals' rates by hand, shorten simulation.t_end, or leave a fast stable mode out of the model (docs/tuning.md)",
+            rho * t_end,
+            eigenvalues(&s.plant.A).unwrap_or_default().iter().map(|z| z.norm()).fold(0.0, f64::max)
+        )
+    })
 }
 
 /// Advice on a first proposal whose verifying run ended before t_end (`outcome`).

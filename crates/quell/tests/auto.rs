@@ -746,3 +746,43 @@ fn the_error_at_the_convergence_time_is_reported_against_the_aim() {
         "the miss this test was written for"
     );
 }
+
+/// A first proposal far faster than its horizon is not verified: a DC motor in milliseconds (the
+/// CTMS model: electrical pole at −1454 /ms) over 2000 ms. The plant's fastest eigenvalue sets the
+/// time scale, the loop runs at ρ ≈ 1.7e4 /ms, ρ·t_end ≈ 3.5e7: the verifying run took two minutes
+/// and ended on its 1 GiB memory budget (tryout, 2026-12-03). Now no simulation is started and the
+/// advice names the rate, the eigenvalue and the keys to give.
+#[test]
+fn a_proposal_far_faster_than_its_horizon_is_not_simulated() {
+    let text = r#"
+[plant]
+A = [[0.0, 1.0, 0.0], [0.0, -0.0010865, 0.0084872], [0.0, -9963.6, -1454.5]]
+B = [[0.0], [0.0], [363.64]]
+C = [[1.0, 0.0, 0.0]]
+D = [[0.0], [0.30975], [0.0]]
+Q = [[0.0]]
+delays = [0.2]
+time_unit = "ms"
+[design]
+[reference]
+components = [ { bias = 1.0, harmonics = [{ amplitude = 0.5, frequency = 0.01 }] } ]
+[disturbance]
+components = [ { bias = 0.001 } ]
+[simulation]
+t_end = 2000.0
+output_step = 1.0
+"#;
+    let a = auto_design(&toml::from_str(text).unwrap(), &Targets::default()).unwrap();
+    let v = &a.verification;
+    assert!(!v.passed && v.runs == 0 && v.steps == 0, "{v:?}");
+    let advice = &v.advice[0];
+    assert!(
+        advice.contains("ρ·t_end = 3.5e7 time constants") && advice.contains("fastest eigenvalue (1.454e3/ms)"),
+        "{advice}"
+    );
+    // The paper's loop (ρ = 9 /s over 100 s) is far from it, and verified as before.
+    assert!(
+        auto_design(&without_design(quell::scenario::PAPER_EXAMPLE), &Targets::default()).unwrap().verification.runs
+            >= 1
+    );
+}
