@@ -652,7 +652,8 @@ fn draw_distributions<DB: DrawingBackend>(
 /// Writes sweep.png and sweep.svg: for a 1-D or 2-D grid, the figures against the grid; without
 /// a grid, their distributions over the draws. A grid of three keys or more has no figure (`false`).
 pub fn plot_sweep(dir: &Path, s: &quell::study::Summary, rows: &[quell::study::Row]) -> io::Result<bool> {
-    let size = |height| (520 * s.study.m as u32, height);
+    // One channel gets 700 px: the grid axis's description (key, unit, bands) fits on one line.
+    let size = |height| ((520 * s.study.m as u32).max(700), height);
     let height = 300 * SWEEP_FIGURES.len() as u32;
     match s.study.grid.len() {
         0 => write_figure(
