@@ -192,3 +192,22 @@ fn an_actuator_without_delay_or_clipping_reproduces_the_design_input() {
         assert_eq!(explicit.limited, vec![0, 0]);
     }
 }
+
+#[test]
+fn the_breakpoints_counted_before_a_run_are_the_ones_it_lands_on() {
+    // Run::breakpoints counts t = Σ k_i τ_i from the delays alone (the study's runaway budget needs
+    // it before the run): the design's, the true plant's and the actuator's, which the solver then
+    // lands on one by one.
+    let text = format!("{PAPER_EXAMPLE}\n[truth]\ndelays = [1.1, 2.9]\n").replace("t_end = 100.0", "t_end = 20.0");
+    let s = Scenario::from_toml(&text).unwrap();
+    let d = s.design().unwrap();
+    for actuator in [None, Some(Actuator { delays: vec![0.1, 0.05], limits: vec![f64::INFINITY, 8.0] })] {
+        let settings = RunSettings { actuator, ..RunSettings::continuous(20.0, 0.1, 1e-8, 1e-8) };
+        let run = || Run::new(&d, &s.reference, &s.disturbance, settings.clone()).truth(s.true_plant());
+        let counted = run().breakpoints();
+        let r = run().simulate(go).unwrap();
+        let quell::sim::RunStats::Continuous(stats) = &r.stats else { panic!("a continuous run") };
+        assert_eq!(counted, stats.breakpoints, "{:?}", settings.actuator);
+        assert!(counted > 20, "{counted} breakpoints: the delays add few");
+    }
+}

@@ -141,10 +141,8 @@ impl<'a> ContinuousLoop<'a> {
         let eq = &lp.eq;
         let n_signals = lp.signals.len() + noise.as_ref().map_or(0, Signal::len);
         let path = actuator.map(|a| ActuatorPath::new(truth, a));
-        if let Some(path) = &path {
-            lp.delays.extend(path.delays().filter(|&d| d > 0.0));
-            lp.delays.sort_by(f64::total_cmp);
-            lp.delays.dedup();
+        if path.is_some() {
+            lp.delays = loop_delays(design.plant(), truth, actuator);
             lp.true_delays.clear();
         }
         let input = match (&path, lp.true_delays.is_empty()) {
@@ -177,9 +175,7 @@ impl<'a> ContinuousLoop<'a> {
         let layout = Layout::new(&eq);
         let p = design.plant();
         let true_delays = if truth.delays == p.delays { Vec::new() } else { truth.delays.clone() };
-        let mut delays: Vec<f64> = p.delays.iter().chain(&true_delays).copied().filter(|&d| d > 0.0).collect();
-        delays.sort_by(f64::total_cmp);
-        delays.dedup();
+        let delays = loop_delays(p, truth, None);
         let (m, q, k) = (eq.m, eq.q, p.k());
         let input = if true_delays.is_empty() { PlantInput::Design } else { PlantInput::TrueDelays };
         Ok(ContinuousLoop {
@@ -477,6 +473,20 @@ fn command_at(
     }
 }
 
+/// The delays the continuous loop reads, positive, sorted and without repeats: the design's τ_i,
+/// the true plant's τ_i^true where they differ, and through a non-ideal `actuator` its τ_a,i and
+/// τ_a,i + τ_j^true. Their sums are the loop's breakpoints ([`dde::breakpoints`]).
+pub(super) fn loop_delays(design: &Plant, truth: &Plant, actuator: Option<&Actuator>) -> Vec<f64> {
+    let true_delays = if truth.delays == design.delays { &[][..] } else { &truth.delays[..] };
+    let a = actuator.filter(|a| !a.is_ideal()).map_or(&[][..], |a| &a.delays[..]);
+    let through_actuator = a.iter().copied().chain(a.iter().flat_map(|ta| truth.delays.iter().map(move |tj| ta + tj)));
+    let mut delays: Vec<f64> =
+        design.delays.iter().chain(true_delays).copied().chain(through_actuator).filter(|&d| d > 0.0).collect();
+    delays.sort_by(f64::total_cmp);
+    delays.dedup();
+    delays
+}
+
 /// The true plant's input through its actuator ([`Actuator`]):
 /// u_p,i(t) = sat_i(−K_i x̂(t − τ_a,i) + Σ_j F_ij u_j(t − τ_a,i − τ_j^true)), i.e. input (5) delayed
 /// by τ_a,i and clipped to ±u_max,i.
@@ -501,12 +511,6 @@ impl ActuatorPath {
             u: vec![0.0; m],
             limited: (0..m).map(|_| Cell::new(false)).collect(),
         }
-    }
-
-    /// Every delay the input reads: τ_a,i and τ_a,i + τ_j^true.
-    fn delays(&self) -> impl Iterator<Item = f64> + '_ {
-        let a = &self.actuator.delays;
-        a.iter().copied().chain(a.iter().flat_map(|ta| self.command_delays.iter().map(move |tj| ta + tj)))
     }
 
     /// u_p at time t.

@@ -217,13 +217,14 @@ impl<'a> Run<'a> {
     }
 
     /// How many breakpoints t = Σ k_i τ_i up to t_end ([`dde::breakpoints`]) the continuous loop
-    /// lands on: the design's, the true plant's and its actuator's delays together. 0 for a
-    /// sampled-data loop, or a run its checks refuse.
+    /// lands on: the design's, the true plant's and its actuator's delays together
+    /// ([`closed_loop::loop_delays`]), counted without building the loop. 0 for a sampled-data loop.
     pub fn breakpoints(&self) -> usize {
-        use dde::DelaySystem as _;
         match &self.settings.mode {
-            Loop::Continuous(integrator) => closed_loop::check(self, integrator)
-                .map_or(0, |sys| dde::breakpoints(0.0, sys.delays(), self.settings.t_end).len()),
+            Loop::Continuous(_) => {
+                let delays = closed_loop::loop_delays(self.design.plant(), self.truth, self.settings.actuator.as_ref());
+                dde::breakpoints(0.0, &delays, self.settings.t_end).len()
+            }
             Loop::Sampled { .. } => 0,
         }
     }
