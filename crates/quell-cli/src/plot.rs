@@ -307,34 +307,57 @@ fn key_label(key: &str, unit: &str) -> String {
     }
 }
 
-/// The figures a sweep plots, with their axis labels (the settling time's unit added from the
-/// study's scenario): the error, the adaptive command u (25), the plant input u_f (5) that the
-/// actuator must deliver, and the settling time.
-const SWEEP_FIGURES: [(&str, &str); 4] = [
-    ("tail RMS e", "tail_rms_e"),
-    ("max |u|", "max_u"),
-    ("max |u_f| (plant input)", "max_uf"),
-    ("settling time", "settle_t"),
-];
+/// The figures a sweep plots, one row each: the error, the adaptive command u (25), the plant
+/// input u_f (5) that the actuator must deliver, and the settling time.
+#[derive(Clone, Copy, PartialEq)]
+enum SweepFigure {
+    TailRmsE,
+    MaxU,
+    MaxUf,
+    SettleT,
+}
 
-fn figure_of<'a>(c: &'a quell::study::ChannelQuantiles, name: &str) -> &'a quell::study::Quantiles {
-    match name {
-        "tail_rms_e" => &c.tail_rms_e,
-        "max_u" => &c.max_u,
-        "max_uf" => &c.max_uf,
-        _ => &c.settle_t,
+impl SweepFigure {
+    const ALL: [SweepFigure; 4] = [SweepFigure::TailRmsE, SweepFigure::MaxU, SweepFigure::MaxUf, SweepFigure::SettleT];
+
+    /// The axis label; the settling time's carries the study's unit of time.
+    fn label(self, unit: &str) -> String {
+        match self {
+            SweepFigure::TailRmsE => "tail RMS e".into(),
+            SweepFigure::MaxU => "max |u|".into(),
+            SweepFigure::MaxUf => "max |u_f| (plant input)".into(),
+            SweepFigure::SettleT => format!("settling time, {unit}"),
+        }
+    }
+
+    /// Its quantiles over a grid point's runs.
+    fn quantiles(self, c: &quell::study::ChannelQuantiles) -> &quell::study::Quantiles {
+        match self {
+            SweepFigure::TailRmsE => &c.tail_rms_e,
+            SweepFigure::MaxU => &c.max_u,
+            SweepFigure::MaxUf => &c.max_uf,
+            SweepFigure::SettleT => &c.settle_t,
+        }
+    }
+
+    /// Its value in one run: `None` for a settling time never reached.
+    fn of_run(self, c: &quell::sim::ChannelFigures) -> Option<f64> {
+        match self {
+            SweepFigure::TailRmsE => Some(c.tail_rms_e),
+            SweepFigure::MaxU => Some(c.max_u),
+            SweepFigure::MaxUf => Some(c.max_uf),
+            SweepFigure::SettleT => c.settle_t,
+        }
     }
 }
 
 /// 1-D grid: rows = figures, columns = channels; the median with 25–75 % and 5–95 % bands.
 fn draw_sweep_1d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::study::Summary) -> Result<(), String> {
     let (x, scale) = axis_coords(&s.study.grid[0].values);
-    let areas = root.split_evenly((SWEEP_FIGURES.len(), s.study.m));
-    for (f, &figure) in SWEEP_FIGURES.iter().enumerate() {
+    let areas = root.split_evenly((SweepFigure::ALL.len(), s.study.m));
+    for (f, figure) in SweepFigure::ALL.into_iter().enumerate() {
         for i in 0..s.study.m {
-            let label =
-                if figure.1 == "settle_t" { format!("{}, {}", figure.0, s.study.time_unit) } else { figure.0.into() };
-            draw_sweep_panel(&areas[f * s.study.m + i], s, (&x, scale), (&label, figure.1), i)?;
+            draw_sweep_panel(&areas[f * s.study.m + i], s, (&x, scale), figure, i)?;
         }
     }
     root.present().map_err(|e| e.to_string())
@@ -346,11 +369,12 @@ fn draw_sweep_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     s: &quell::study::Summary,
     (x, scale): (&[f64], AxisScale),
-    (label, name): (&str, &str),
+    figure: SweepFigure,
     i: usize,
 ) -> Result<(), String> {
     let axis = &s.study.grid[0];
-    let raw = |p: f64| s.points.iter().filter_map(move |pt| figure_of(&pt.channels[i], name).at(p));
+    let label = figure.label(&s.study.time_unit);
+    let raw = |p: f64| s.points.iter().filter_map(move |pt| figure.quantiles(&pt.channels[i]).at(p));
     // Positive values spanning two decades or more (an error falling from 1e-2 to 1e-5 along
     // the grid) are drawn on a log axis; on a linear one all but the largest lay flat.
     let (lo, hi) = value_range([Q[0], Q[4]].iter().flat_map(|&p| raw(p)));
@@ -359,7 +383,7 @@ fn draw_sweep_panel<DB: DrawingBackend>(
         s.points
             .iter()
             .filter_map(|pt| {
-                figure_of(&pt.channels[i], name).at(p).map(|v| (x[pt.point], if log { v.log10() } else { v }))
+                figure.quantiles(&pt.channels[i]).at(p).map(|v| (x[pt.point], if log { v.log10() } else { v }))
             })
             .collect()
     };
@@ -415,7 +439,7 @@ fn draw_sweep_panel<DB: DrawingBackend>(
         .map_err(|e| e.to_string())?;
     let medians = draw_quantile_bands(&mut chart, &at, Palette99::pick(i).to_rgba())?;
     if medians < s.points.len() {
-        missing_median_note(&mut chart, missing_median(name, empty), empty, (x0, x1), (y0, y1))?;
+        missing_median_note(&mut chart, missing_median(figure, empty), empty, (x0, x1), (y0, y1))?;
     }
     Ok(())
 }
@@ -465,10 +489,10 @@ fn missing_median_note<DB: DrawingBackend>(
 /// Why a sweep panel lacks the median at some (`all`: every) grid point, in two short lines: no
 /// completed run there, or, for the settling time, half its runs or more never settled
 /// (summary.json's `never_settled`).
-fn missing_median(figure: &str, all: bool) -> [String; 2] {
+fn missing_median(figure: SweepFigure, all: bool) -> [String; 2] {
     let head = if all { "no grid point has a median:" } else { "some grid points have no median:" };
     let why = match figure {
-        "settle_t" => "half the runs or more never settled (never_settled)",
+        SweepFigure::SettleT => "half the runs or more never settled (never_settled)",
         _ => "no completed run there (completed)",
     };
     [head.into(), why.into()]
@@ -569,16 +593,6 @@ fn write_figure(
     write_atomic(&dir.join(format!("{name}.svg")), |w| w.write_all(text.as_bytes()))
 }
 
-/// Channel figure `name` of one run ([`SWEEP_FIGURES`]): `None` for a settling time never reached.
-fn run_figure(c: &quell::sim::ChannelFigures, name: &str) -> Option<f64> {
-    match name {
-        "tail_rms_e" => Some(c.tail_rms_e),
-        "max_u" => Some(c.max_u),
-        "max_uf" => Some(c.max_uf),
-        _ => c.settle_t,
-    }
-}
-
 /// The empirical distribution function of sorted `x` among `draws` draws (those without a value
 /// lie above every x) as the corners of its staircase: up by 1/draws at each value.
 fn ecdf(x: &[f64], draws: usize) -> Vec<(f64, f64)> {
@@ -594,14 +608,14 @@ fn draw_distributions<DB: DrawingBackend>(
     s: &quell::study::Summary,
     rows: &[quell::study::Row],
 ) -> Result<(), String> {
-    let areas = root.split_evenly((SWEEP_FIGURES.len(), s.study.m));
+    let areas = root.split_evenly((SweepFigure::ALL.len(), s.study.m));
     let draws = rows.len();
-    for (f, &(title, name)) in SWEEP_FIGURES.iter().enumerate() {
-        let label = if name == "settle_t" { format!("{title}, {}", s.study.time_unit) } else { title.into() };
+    for (f, figure) in SweepFigure::ALL.into_iter().enumerate() {
+        let label = figure.label(&s.study.time_unit);
         for i in 0..s.study.m {
             let mut values: Vec<f64> = rows
                 .iter()
-                .filter_map(|r| r.channels.get(i).and_then(|c| run_figure(c, name)))
+                .filter_map(|r| r.channels.get(i).and_then(|c| figure.of_run(c)))
                 .filter(|v| v.is_finite())
                 .collect();
             values.sort_by(f64::total_cmp);
@@ -638,7 +652,7 @@ fn draw_distributions<DB: DrawingBackend>(
                 .draw()
                 .map_err(|e| e.to_string())?;
             if x.is_empty() {
-                let why = if name == "settle_t" { "no draw settled" } else { "no draw completed" };
+                let why = if figure == SweepFigure::SettleT { "no draw settled" } else { "no draw completed" };
                 missing_median_note(&mut chart, [why.into(), String::new()], true, (x0, x1), (0.0, 1.02))?;
                 continue;
             }
@@ -654,7 +668,7 @@ fn draw_distributions<DB: DrawingBackend>(
 pub fn plot_sweep(dir: &Path, s: &quell::study::Summary, rows: &[quell::study::Row]) -> io::Result<bool> {
     // One channel gets 700 px: the grid axis's description (key, unit, bands) fits on one line.
     let size = |height| ((520 * s.study.m as u32).max(700), height);
-    let height = 300 * SWEEP_FIGURES.len() as u32;
+    let height = 300 * SweepFigure::ALL.len() as u32;
     match s.study.grid.len() {
         0 => write_figure(
             dir,
