@@ -22,8 +22,8 @@ pub struct RunArgs {
     /// Output directory.
     #[arg(long, default_value = "quell-out")]
     pub out: PathBuf,
-    /// Sampled-data run with the discrete controller at this sample time (s); overrides
-    /// simulation.sample_time.
+    /// Sampled-data run with the discrete controller at this sample time, in the plant's unit of
+    /// time (plant.time_unit); overrides simulation.sample_time.
     #[arg(long, value_name = "T_S", allow_negative_numbers = true)]
     pub sample_time: Option<f64>,
     /// Skip the PNG/SVG plots.

@@ -314,14 +314,13 @@ fn vessel_thrust_limits_clip_what_the_recorded_thrust_shows() {
         // README: a few per mille to a few per cent of the samples, all in the move.
         assert!(fraction[i] > 0.002 && fraction[i] < 0.05, "input {}: {}", i + 1, fraction[i]);
     }
-    // The limit slows the move: the overshoot grows (README: 13.1 m to 14.1 m with today's
-    // observer gain, 13.8 m to 19.1 m with the earlier one).
+    // The limit slows the move: the overshoot grows (README, "Thrust limits": 13.1 m to 14.1 m).
     let top = |r: &SimResult| r.column(&r.y, 3, 0).fold(f64::MIN, f64::max);
     assert!(top(&r) > top(&free) + 0.5, "overshoot {} m against {} m unlimited", top(&r), top(&free));
 
     // At 75 % (1.2 MN, 0.8 MN, 6 MN·m): with the earlier observer gain the observer, driven by
     // the commanded u_f, wound up and the loop diverged at t = 79.5 s; with today's gain it
-    // completes within the page's tail bounds (README, "Figures and the placement").
+    // completes within the page's tail bounds (README, "Thrust limits").
     let (r, e) = tail_errors(&vessel_with_truth("u_max = [1.2e6, 0.8e6, 6e6]"));
     assert_within(&VESSEL, &e);
     assert!(r.limited_fraction().iter().all(|f| *f > 0.0));
