@@ -170,7 +170,10 @@ fn report_text(a: &AutoDesign) -> String {
             let verdict = if rms <= aim {
                 "✓".to_string()
             } else {
-                format!("later than the averaged law that chose μ predicts ({:.0}× the aim)", rms / aim)
+                format!(
+                    "✗ {:.0}× the aim: the loop converges later than the averaged law that chose μ predicts",
+                    rms / aim
+                )
             };
             s.push_str(&format!(
                 "  channel {}: RMS e about the convergence time t = {} {unit} = {rms:.3e} (μ's aim {aim:.3e}: 0.2 % of the reference's peak) {verdict}\n",

@@ -251,7 +251,7 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
         Outcome::Completed => {
             for (i, c) in result.summary().iter().enumerate() {
                 let settle = match (c.figures.settle_t, &c.settle_note) {
-                    (Some(t), _) => format!("settled (2 % band) at t = {t:.6} {}", result.time_unit),
+                    (Some(t), _) => format!("settled (2 % band) at t = {} {}", short(t), result.time_unit),
                     (None, Some(note)) => note.clone(),
                     (None, None) => "not settled".into(),
                 };
