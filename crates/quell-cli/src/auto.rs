@@ -91,7 +91,7 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
     if let Some(out) = &args.write {
         let text = auto.scenario.to_toml();
         output::write_atomic(out, |w| w.write_all(text.as_bytes()))
-            .map_err(|e| Failure::Run(format!("--write {}: cannot write there ({e})", out.display())))?;
+            .map_err(|e| output::write_failure(format!("--write {}: cannot write there ({e})", out.display()), &e))?;
         eprintln!("wrote {}", out.display());
     }
     Ok(())
@@ -156,12 +156,12 @@ fn report_text(a: &AutoDesign) -> String {
             continue;
         }
         s.push_str(&format!(
-            "  channel {}: tail max|e| = {:.3e} (bound {:.3e}: 1 % of the reference's peak) {}, max|u_f| = {:.4}\n",
+            "  channel {}: tail max|e| = {:.3e} (bound {:.3e}: 1 % of the reference's peak) {}, max|u_f| = {}\n",
             i + 1,
             v.tail_max_e[i],
             v.bound[i],
             if v.tail_max_e[i] <= v.bound[i] { "✓" } else { "✗" },
-            v.max_uf[i]
+            crate::run::fixed_or_sci(v.max_uf[i], 4)
         ));
     }
     let unit = a.scenario.plant.time_unit;

@@ -66,12 +66,13 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
     let files =
         [(out.join(&code.header_name), code.header.as_bytes()), (out.join(&code.source_name), code.source.as_bytes())];
     output::write_atomic_all(&files).map_err(|e| {
-        Failure::Run(format!("writing {} and {} in {}: {e}", code.header_name, code.source_name, out.display()))
+        let what = format!("writing {} and {} in {}: {e}", code.header_name, code.source_name, out.display());
+        output::write_failure(what, &e)
     })?;
     if let Some(fmu) = &fmu {
         let path = out.join(&fmu.file_name);
         output::write_atomic(&path, |w| w.write_all(&fmu.bytes))
-            .map_err(|e| Failure::Run(format!("writing {}: {e}", path.display())))?;
+            .map_err(|e| output::write_failure(format!("writing {}: {e}", path.display()), &e))?;
         let binary = fmu.platform.map(|p| format!("binary for {p}")).unwrap_or_else(|| "sources only".into());
         eprintln!("wrote {} in {} (FMI {} co-simulation, {binary})", fmu.file_name, out.display(), fmu.version.name());
     }

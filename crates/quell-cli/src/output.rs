@@ -11,6 +11,16 @@ use crate::{decimal, Failure};
 
 pub use quell::files::{write_atomic, write_atomic_all};
 
+/// A failed write as exit 2 when the target is not a regular file (the user named the wrong path:
+/// [`write_atomic`] leaves devices, FIFOs and links alone), otherwise exit 1.
+pub fn write_failure(message: String, e: &io::Error) -> Failure {
+    if e.kind() == io::ErrorKind::InvalidInput {
+        Failure::Input(message)
+    } else {
+        Failure::Run(message)
+    }
+}
+
 /// Removes the figures (`<stem>.png`, `<stem>.svg`) in `dir` whose stem `ours` claims, before new
 /// ones are written: an earlier run's figures must not stand beside new data.
 pub fn remove_figures(dir: &Path, ours: impl Fn(&str) -> bool) -> io::Result<()> {

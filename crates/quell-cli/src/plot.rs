@@ -702,11 +702,19 @@ fn draw_tune<DB: DrawingBackend>(
             area.titled(&title, ("sans-serif", 18)).map_err(|e| e.to_string())?;
             continue;
         }
-        let pts: Vec<(f64, f64)> = c.curve.iter().filter_map(|p| p.objective.map(|o| (p.mu, o))).collect();
-        let (m0, m1) = c.curve.iter().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p.mu), b.max(p.mu)));
-        let (m0, m1) = if m0 < m1 { (m0, m1) } else { (m0 / 2.0, m0 * 2.0) };
-        let (lo, hi) = value_range(pts.iter().map(|&(_, v)| v));
-        let pad = 0.05 * (hi - lo);
+        // Coordinates by hand: log10 μ on x (plotters' own log axis spun for minutes over a
+        // 600-decade range), and log10 of the objective where it spans two decades (an error
+        // falling from 1e-3 to 1e-10 along μ: linear, all but the largest lay flat).
+        let (lo, hi) = value_range(c.curve.iter().filter_map(|p| p.objective));
+        let log_y = lo > 0.0 && hi >= 100.0 * lo;
+        let y_of = |v: f64| if log_y { v.log10() } else { v };
+        let at = |p: &quell::study::TunePoint| p.objective.map(|o| (p.mu.log10(), y_of(o)));
+        let pts: Vec<(f64, f64)> = c.curve.iter().filter_map(at).collect();
+        let (m0, m1) = value_range(c.curve.iter().map(|p| p.mu.log10()));
+        let (m0, m1) = if m0 < m1 { (m0 - 0.05 * (m1 - m0), m1 + 0.05 * (m1 - m0)) } else { (m0 - 0.3, m0 + 0.3) };
+        let (lo, hi) = if log_y { (lo.log10().floor(), hi.log10().ceil()) } else { widened(lo, hi, 1e-3) };
+        let pad = if log_y { 0.0 } else { 0.05 * (hi - lo) };
+        let (y0, y1) = (lo - pad - if log_y { 0.3 } else { 0.0 }, hi + pad + if log_y { 0.3 } else { 0.0 });
         let mut chart = ChartBuilder::on(area)
             .caption(
                 format!("Channel {}: {} against μ{}", c.channel + 1, r.objective.name(), c.channel + 1),
@@ -716,13 +724,17 @@ fn draw_tune<DB: DrawingBackend>(
             .margin_right(24)
             .x_label_area_size(40)
             .y_label_area_size(80)
-            .build_cartesian_2d((m0..m1).log_scale(), (lo - pad)..(hi + pad))
+            .build_cartesian_2d(m0..m1, y0..y1)
             .map_err(|e| e.to_string())?;
+        let y_desc = if log_y { format!("{objective} (log scale)") } else { objective.clone() };
         chart
             .configure_mesh()
-            .x_desc(format!("μ{} (others at the scenario's)", c.channel + 1))
-            .y_desc(objective.as_str())
-            .y_label_formatter(&|v| tick_label(*v, lo - pad, hi + pad))
+            .x_desc(format!("μ{} (others at the scenario's; log scale)", c.channel + 1))
+            .y_desc(y_desc)
+            .x_labels(12)
+            // Decades over a wide range; over less than two, each tick's μ to three digits.
+            .x_label_formatter(&|v| if m1 - m0 >= 2.0 { decade_label(*v) } else { format!("{:.3}", 10f64.powf(*v)) })
+            .y_label_formatter(&|v| if log_y { decade_label(*v) } else { tick_label(*v, y0, y1) })
             .label_style(("sans-serif", 13))
             .draw()
             .map_err(|e| e.to_string())?;
@@ -731,9 +743,9 @@ fn draw_tune<DB: DrawingBackend>(
         chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled()))).map_err(|e| e.to_string())?;
         // Evaluations without an objective (not completed, beyond a limit, never settled): marked
         // along the bottom rather than left out without a sign.
-        let none: Vec<f64> = c.curve.iter().filter(|p| p.objective.is_none()).map(|p| p.mu).collect();
+        let none: Vec<f64> = c.curve.iter().filter(|p| p.objective.is_none()).map(|p| p.mu.log10()).collect();
         if !none.is_empty() {
-            let y = lo - 0.6 * pad;
+            let y = y0 + 0.04 * (y1 - y0);
             let grey = RGBColor(120, 120, 120);
             chart
                 .draw_series(none.iter().map(|&mu| Cross::new((mu, y), 5, grey.stroke_width(2))))
@@ -741,10 +753,10 @@ fn draw_tune<DB: DrawingBackend>(
             let note = format!("× {} without an objective: not completed, beyond a limit or never settled", none.len());
             let font = ("sans-serif", 12).into_font().color(&grey);
             chart
-                .draw_series(std::iter::once(Text::new(note, (m0, hi + 0.9 * pad), font)))
+                .draw_series(std::iter::once(Text::new(note, (m0, y1 - 0.02 * (y1 - y0)), font)))
                 .map_err(|e| e.to_string())?;
         }
-        if let Some(best) = c.chosen.as_ref().and_then(|p| p.objective.map(|o| (p.mu, o))) {
+        if let Some(best) = c.chosen.as_ref().and_then(at) {
             chart
                 .draw_series(std::iter::once(Circle::new(best, 7, BLACK.stroke_width(2))))
                 .map_err(|e| e.to_string())?;

@@ -100,7 +100,7 @@ fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result
         run.check().map_err(|e| match args.sample_time {
             // The flag, not the file's key, made the output step invalid: name both.
             Some(t) if e.to_string().starts_with("simulation.output_step:") => {
-                output_step_error(t, scenario.simulation.output_step)
+                output_step_error(t, scenario.simulation.output_step, scenario.plant.time_unit)
             }
             _ => Failure::Input(e.to_string()),
         })?;
@@ -126,18 +126,28 @@ fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result
 /// `--sample-time T` against the file's `simulation.output_step` h, which is not a whole number ≥ 1
 /// of samples (every recorded row is a controller step): the error names the flag and the key,
 /// with the nearest fix on either side.
-fn output_step_error(T: f64, h: f64) -> Failure {
+fn output_step_error(T: f64, h: f64, s: TimeUnit) -> Failure {
     let ratio = h / T;
     let divisor = h / ratio.ceil().max(1.0);
     let multiple = T * ratio.round().max(1.0);
     Failure::Input(format!(
-        "--sample-time {}: simulation.output_step = {} s (from the scenario file) is not a whole number of samples of {} s ({ratio:.6} samples; each recorded row is a controller step); give a --sample-time that divides it, e.g. {} s, or set simulation.output_step to a multiple of the sample time, e.g. {} s",
+        "--sample-time {}: simulation.output_step = {} {s} (from the scenario file) is not a whole number of samples of {} {s} ({ratio:.6} samples; each recorded row is a controller step); give a --sample-time that divides it, e.g. {} {s}, or set simulation.output_step to a multiple of the sample time, e.g. {} {s}",
         short(T),
         short(h),
         short(T),
         short(divisor),
         short(multiple)
     ))
+}
+
+/// A magnitude with `decimals` fixed decimals where that shows its digits (0, or 0.01 to 1e6), in
+/// scientific notation otherwise: an input of 3.7e-5 mA printed as "0.000".
+pub(crate) fn fixed_or_sci(x: f64, decimals: usize) -> String {
+    if x == 0.0 || (1e-2..1e6).contains(&x.abs()) {
+        format!("{x:.decimals$}")
+    } else {
+        format!("{x:.decimals$e}")
+    }
 }
 
 /// A time for a message, to 12 significant digits and without trailing zeros.
@@ -257,12 +267,12 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
                 };
                 let name = outputs.and_then(|o| o.get(i)).map_or(String::new(), |n| format!(" ({n})"));
                 eprintln!(
-                    "channel {}{name}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {:.3}, max|u_f| = {:.3}, ‖η̂‖ = {:.4e}, {settle}",
+                    "channel {}{name}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {}, max|u_f| = {}, ‖η̂‖ = {:.4e}, {settle}",
                     i + 1,
                     c.figures.tail_max_e,
                     c.figures.tail_rms_e,
-                    c.figures.max_u,
-                    c.figures.max_uf,
+                    fixed_or_sci(c.figures.max_u, 3),
+                    fixed_or_sci(c.figures.max_uf, 3),
                     c.final_eta_norm
                 );
                 if let Some(d) = diagnostics.channels.get(i) {

@@ -96,7 +96,10 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
 /// tune.csv: every evaluation of every channel's search.
 fn write_curves(w: &mut dyn std::io::Write, r: &TuneResult) -> std::io::Result<()> {
     writeln!(w, "channel,mu,objective,outcome,tail_max_e,tail_rms_e,max_u,max_uf,settle_t,chosen")?;
-    let opt = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
+    // Shortest round-trip digits; in exponent form outside 1e-5..1e16, where `{}` writes every
+    // zero (μ = 1e-300 took 300 characters).
+    let num = |v: f64| if v == 0.0 || (1e-5..1e16).contains(&v.abs()) { v.to_string() } else { format!("{v:e}") };
+    let opt = |v: Option<f64>| v.map_or(String::new(), num);
     for c in &r.channels {
         for p in &c.curve {
             let f = p.figures;
@@ -105,7 +108,7 @@ fn write_curves(w: &mut dyn std::io::Write, r: &TuneResult) -> std::io::Result<(
                 w,
                 "{},{},{},{},{},{},{},{},{},{chosen}",
                 c.channel + 1,
-                p.mu,
+                num(p.mu),
                 opt(p.objective),
                 p.outcome.as_str(),
                 opt(f.map(|f| f.tail_max_e)),

@@ -16,6 +16,16 @@ pub fn type_name(obj: &Bound<'_, PyAny>) -> String {
     obj.get_type().name().map(|n| n.to_string()).unwrap_or_else(|_| "object".into())
 }
 
+/// `obj` as a Python int: an int, or anything with `__index__` (numpy's integer scalars, which
+/// quell's own frames return), but not a bool; `None` otherwise (the caller's `TypeError`).
+pub fn as_int<'py>(obj: &Bound<'py, PyAny>) -> Option<Bound<'py, pyo3::types::PyInt>> {
+    if obj.is_instance_of::<pyo3::types::PyBool>() {
+        return None;
+    }
+    let index = obj.py().import("operator").ok()?.call_method1("index", (obj,)).ok()?;
+    index.cast_into::<pyo3::types::PyInt>().ok()
+}
+
 /// `obj` as a float64 numpy array: any array-like of real numbers (ints, floats, numpy arrays).
 /// Something that is not an array-like of numbers is a `TypeError`; rows of unequal length are
 /// `kind`'s error.

@@ -115,10 +115,10 @@ fn integers(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<usiz
                     ),
                 )
             };
-            if v.is_instance_of::<pyo3::types::PyBool>() || !v.is_instance_of::<pyo3::types::PyInt>() {
+            let Some(int) = crate::convert::as_int(&v) else {
                 return Err(type_error(&format!("{name}[{i}]"), "an integer ≥ 1", &v));
-            }
-            match v.extract::<usize>() {
+            };
+            match int.extract::<usize>() {
                 Ok(s) if s >= 1 => Ok(s),
                 _ => Err(bad()),
             }

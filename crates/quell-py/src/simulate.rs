@@ -630,11 +630,9 @@ fn with_overrides(
 fn step_budget(py: Python<'_>, max_steps: Option<&Bound<'_, PyAny>>) -> PyResult<Option<usize>> {
     match max_steps.filter(|v| !v.is_none()) {
         None => Ok(None),
-        Some(v) if v.is_instance_of::<pyo3::types::PyBool>() || !v.is_instance_of::<pyo3::types::PyInt>() => {
-            Err(crate::errors::type_error("max_steps", "an int (a step budget) or None", v))
-        }
-        Some(v) => match v.extract::<usize>() {
-            Ok(n) if n >= 1 => Ok(Some(n)),
+        Some(v) => match crate::convert::as_int(v).map(|n| n.extract::<usize>()) {
+            None => Err(crate::errors::type_error("max_steps", "an int (a step budget) or None", v)),
+            Some(Ok(n)) if n >= 1 => Ok(Some(n)),
             _ => {
                 let found = v.repr().map_or_else(|_| "?".to_string(), |r| r.to_string());
                 let msg = format!("max_steps: expected a step budget (an integer ≥ 1), found {found}");

@@ -9,12 +9,12 @@ use std::sync::Arc;
 
 use pyo3::exceptions::{PyIndexError, PyTypeError};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyInt, PyList, PyString, PyTuple};
+use pyo3::types::{PyDict, PyList, PyString, PyTuple};
 use quell::sim::ChannelFigures;
 use quell::study::{self, KeyPath, RunSpec, Shard, StudyMeta, SweepOptions};
 use toml::{Table, Value};
 
-use crate::convert::type_name;
+use crate::convert::{as_int, type_name};
 use crate::errors::{subscripts, Kind};
 use crate::scenario::{toml_value, PyScenario};
 use crate::simulate::PySimResult;
@@ -162,13 +162,13 @@ pub fn study_document(
         }
     }
     if let Some(n) = max_steps.filter(|v| !v.is_none()) {
-        if n.is_instance_of::<pyo3::types::PyBool>() || !n.is_instance_of::<PyInt>() {
+        let Some(int) = as_int(n) else {
             return Err(PyTypeError::new_err(format!(
                 "max_steps: expected an int (a step budget per run), found a {}",
                 type_name(n)
             )));
-        }
-        doc.insert("max_steps".into(), toml_value(n, "max_steps")?);
+        };
+        doc.insert("max_steps".into(), toml_value(int.as_any(), "max_steps")?);
     }
     Ok(doc)
 }
@@ -429,9 +429,9 @@ pub struct PyRunSpec {
 
 /// `run` as an index below `len` (an int; negative counts from the end, as in a list).
 fn run_index(run: &Bound<'_, PyAny>, len: u64) -> PyResult<usize> {
-    if run.is_instance_of::<pyo3::types::PyBool>() || !run.is_instance_of::<PyInt>() {
+    let Some(run) = as_int(run) else {
         return Err(PyTypeError::new_err(format!("run: expected an int (a run index), found a {}", type_name(run))));
-    }
+    };
     let i: i128 = run.extract().map_err(|_| out_of_range(i128::MAX, len))?;
     let index = if i < 0 { i + len as i128 } else { i };
     if (0..len as i128).contains(&index) {
@@ -820,12 +820,12 @@ fn with_result(py: Python<'_>, result: Bound<'_, PyAny>, interrupt: Option<PyErr
 /// `jobs=`: None, or a number of threads from 1 to [`study::MAX_JOBS`].
 pub fn jobs_arg(py: Python<'_>, jobs: Option<&Bound<'_, PyAny>>) -> PyResult<Option<usize>> {
     let Some(j) = jobs.filter(|j| !j.is_none()) else { return Ok(None) };
-    if j.is_instance_of::<pyo3::types::PyBool>() || !j.is_instance_of::<PyInt>() {
+    let Some(j) = as_int(j) else {
         return Err(PyTypeError::new_err(format!(
             "jobs: expected an int (a number of threads) or None, found a {}",
             type_name(j)
         )));
-    }
+    };
     match j.extract::<i128>() {
         Ok(n) if (1..=study::MAX_JOBS as i128).contains(&n) => Ok(Some(n as usize)),
         _ => Err(Kind::Scenario.err(

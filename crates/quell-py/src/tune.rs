@@ -2,7 +2,7 @@
 //! (`quell::study::tune`), with the GIL released and Ctrl-C keeping the points evaluated so far.
 
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyInt};
+use pyo3::types::PyBool;
 use quell::study::{self, TuneOptions};
 use toml::{Table, Value};
 
@@ -14,8 +14,10 @@ use crate::study::{argument_error, jobs_arg, study_document, thread_pool};
 fn count(obj: Option<&Bound<'_, PyAny>>, name: &str) -> PyResult<Option<Value>> {
     match obj.filter(|v| !v.is_none()) {
         None => Ok(None),
-        Some(v) if v.is_instance_of::<PyBool>() || !v.is_instance_of::<PyInt>() => Err(type_error(name, "an int", v)),
-        Some(v) => toml_value(v, name).map(Some),
+        Some(v) => match crate::convert::as_int(v) {
+            Some(int) => toml_value(int.as_any(), name).map(Some),
+            None => Err(type_error(name, "an int", v)),
+        },
     }
 }
 

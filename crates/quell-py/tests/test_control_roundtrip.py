@@ -91,6 +91,27 @@ def test_plant_from_a_transfer_function_is_its_minimal_realization():
     np.testing.assert_array_equal(quell.Plant(ss).A, ss.A)
 
 
+def test_a_transfer_function_that_cancels_an_unstable_pole_is_refused():
+    # (s − 1.00001) / ((s − 1)(s + 2)(s + 3)): python-control's minreal cancels the pole at +1
+    # against the zero 1e-5 away (its default tolerance), which would leave a stable,
+    # minimum-phase model; the same plant as a StateSpace is refused by the design's zero dynamics.
+    # The unstable pole and its zero are named; an exact unstable cancellation is refused too.
+    for num, pole, zero in [([1.0, -1.00001], "1", "1.00001"), ([1.0, -1.0], "1", "1")]:
+        G = control.tf(num, np.poly([1.0, -2.0, -3.0]))
+        with pytest.raises(quell.ScenarioError, match=f"the pole {pole} in the closed right half-plane and the zero {zero} "):
+            quell.Plant(G, delays=[0.1])
+    # A stable cancelled pair stays cancelled (the realization above).
+    assert quell.Plant(control.tf([1.0, 2.0], np.poly([1.0, -2.0, -3.0])), delays=[0.1]).n == 2
+
+
+def test_a_discrete_or_improper_transfer_function_is_refused_by_name():
+    # A discrete-time tf kept its poles as continuous ones (z = −0.5 became s = −0.5).
+    with pytest.raises(quell.ScenarioError, match=r"expected a continuous-time system \(dt = 0\), found dt = 0.1"):
+        quell.Plant(control.tf([1.0], [1.0, 0.5], 0.1))
+    with pytest.raises(quell.ScenarioError, match="numerator's degree must be below the denominator's"):
+        quell.Plant(control.tf([1.0, 2.0, 3.0], [1.0, 3.0]))
+
+
 def test_a_mimo_transfer_function_without_slycot_is_a_scenario_error():
     # Wood–Berry's 2×2 column: python-control realizes a MIMO transfer function only with slycot;
     # without it its own exception (a NotImplementedError) must not leak past quell.Plant.

@@ -5,6 +5,8 @@ case here fails `test_every_parameter_has_a_case`."""
 
 import inspect
 
+import numpy as np
+
 import pytest
 
 import quell
@@ -163,3 +165,21 @@ def test_messages_name_the_python_argument():
         text = str(info.value)
         assert text.startswith(start), (start, text)
         assert "--" not in text and not text.split(":")[0].startswith(("simulation.", "design.")), text
+
+
+def test_numpy_integers_are_ints():
+    # quell's own frames return numpy integers (a run's index); every int argument takes them
+    # (anything with __index__), and a numpy bool or float stays a TypeError.
+    ex = quell.paper_example()
+    st = quell.Study(ex, grid={"design.mu[0]": [10.0, 40.0]}, simulation={"t_end": 2.0}, max_steps=np.int64(10**6))
+    res = st.sweep(jobs=np.int32(1))
+    worst = res.worst("tail_max_e")["run"]
+    assert isinstance(worst, np.integer)
+    assert res.rerun(worst).outcome["status"] == "completed"
+    r = quell.simulate(ex, t_end=1.0, max_steps=np.uint16(5000))
+    r.plot(channel=np.int64(2))
+    choices = {k: v for k, v in ex.design().choices.items() if k != "relative_degrees"}
+    assert quell.design(ex.plant, relative_degrees=np.array([2, 1]), **choices).plant.m == 2
+    for bad in (np.True_, np.float64(1.0)):
+        with pytest.raises(TypeError, match="max_steps: expected an int"):
+            quell.simulate(ex, t_end=1.0, max_steps=bad)

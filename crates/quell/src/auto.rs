@@ -139,14 +139,14 @@ impl Targets {
         let (key, message): (&'static str, _) = if let Some(t) =
             self.convergence_time.filter(|t| !(t.is_finite() && *t > 0.0))
         {
-            ("convergence_time", format!("expected a finite number > 0, found {t}"))
+            ("convergence_time", format!("expected a finite number > 0, found {}", crate::settings::fmt_short(t)))
         } else if let Some(t) = self.convergence_time.filter(|t| *t > t_end) {
             let message = format!("expected a time within simulation.t_end = {t_end} {unit} (the verifying run must reach it), found {}; ask for an earlier convergence or lengthen simulation.t_end", crate::settings::fmt_short(t));
             ("convergence_time", message)
         } else if n > 1 && n != m {
             ("u_limit", format!("expected one actuator limit, or one per input ({m}), found {n}: {:?}", self.u_limit))
         } else if let Some(l) = self.u_limit.iter().find(|l| !(l.is_finite() && **l > 0.0)) {
-            ("u_limit", format!("expected finite limits > 0, found {l}"))
+            ("u_limit", format!("expected finite limits > 0, found {}", crate::settings::fmt_short(*l)))
         } else {
             return Ok(());
         };

@@ -30,6 +30,7 @@ pub fn write_atomic_all(files: &[(PathBuf, &[u8])]) -> io::Result<()> {
 /// The temporary file of [`write_atomic`], written and synced, not yet renamed. Its name keeps at
 /// most 32 bytes of the stem, so a file name near the system's limit (255 bytes) still has one.
 fn stage(path: &Path, contents: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> io::Result<NamedTempFile> {
+    check_target(path)?;
     let mut stem = path.file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let cut = (0..=stem.len().min(32)).rev().find(|&k| stem.is_char_boundary(k)).unwrap_or(0);
     stem.truncate(cut);
@@ -48,10 +49,57 @@ fn stage(path: &Path, contents: impl FnOnce(&mut dyn Write) -> io::Result<()>) -
     Ok(tmp)
 }
 
+/// The renaming replaces whatever `path` names: refused (`InvalidInput`) unless that is a regular
+/// file or nothing, so that a device (`/dev/full`), a FIFO, a socket, a symbolic link or a
+/// directory is never replaced by a file.
+fn check_target(path: &Path) -> io::Result<()> {
+    let Ok(meta) = std::fs::symlink_metadata(path) else { return Ok(()) };
+    let kind = meta.file_type();
+    let what = if kind.is_file() {
+        return Ok(());
+    } else if kind.is_dir() {
+        "directory"
+    } else if kind.is_symlink() {
+        "symbolic link"
+    } else {
+        "device, FIFO or socket"
+    };
+    Err(io::Error::new(
+        io::ErrorKind::InvalidInput,
+        format!(
+            "{} is a {what}, not a regular file: the result would replace it; give the path of a regular file or a new one",
+            path.display()
+        ),
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use std::fs;
+
+    #[test]
+    #[cfg(unix)]
+    fn a_target_that_is_not_a_regular_file_is_left_alone() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("real.toml");
+        fs::write(&file, "old").unwrap();
+        let link = dir.path().join("link.toml");
+        std::os::unix::fs::symlink(&file, &link).unwrap();
+        let sub = dir.path().join("sub");
+        fs::create_dir(&sub).unwrap();
+        for (path, what) in [(&link, "symbolic link"), (&sub, "directory"), (&PathBuf::from("/dev/null"), "device")] {
+            let e = write_atomic(path, |w| w.write_all(b"new")).unwrap_err();
+            assert_eq!(e.kind(), io::ErrorKind::InvalidInput);
+            assert!(e.to_string().contains(what), "{e}");
+        }
+        // The link and what it points to are as they were; /dev/null is still a device.
+        assert!(fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+        assert_eq!(fs::read_to_string(&file).unwrap(), "old");
+        assert!(!fs::symlink_metadata("/dev/null").unwrap().file_type().is_file());
+        write_atomic(&file, |w| w.write_all(b"new")).unwrap();
+        assert_eq!(fs::read_to_string(&file).unwrap(), "new");
+    }
 
     #[test]
     fn two_writers_of_one_file_do_not_collide() {

@@ -41,7 +41,7 @@ pub struct Plant {
 pub enum PlantError {
     #[error("{name}: expected a {expected_rows}×{expected_cols} matrix, found {rows}×{cols}")]
     Shape { name: &'static str, expected_rows: usize, expected_cols: usize, rows: usize, cols: usize },
-    #[error("{name}[{row}][{col}]: expected a finite number, found {value}")]
+    #[error("{name}[{row}][{col}]: expected a finite number, found {}", crate::settings::fmt_short(*.value))]
     NonFinite { name: &'static str, row: usize, col: usize, value: f64 },
     #[error(
         "{name}[{row}][{col}]: expected a magnitude ≤ {max:e}, found {value:e}; products and norms of such \
@@ -49,7 +49,7 @@ pub enum PlantError {
         max = MAX_ENTRY
     )]
     TooLarge { name: &'static str, row: usize, col: usize, value: f64 },
-    #[error("delays[{index}]: expected a finite delay ≥ 0, found {value}")]
+    #[error("delays[{index}]: expected a finite delay ≥ 0, found {}", crate::settings::fmt_short(*.value))]
     BadDelay { index: usize, value: f64 },
     #[error("{name}: expected {expected} entries (one per {per}), found {found}")]
     Length { name: &'static str, per: &'static str, expected: usize, found: usize },
@@ -94,16 +94,18 @@ impl PlantError {
                     format!("expected {expected_rows}×{expected_cols} ({dims}), found {rows}×{cols}{hint}"),
                 )
             }
-            PlantError::NonFinite { name, row, col, value } => {
-                (entry(name, row, col), format!("expected a finite number, found {value}"))
-            }
+            PlantError::NonFinite { name, row, col, value } => (
+                entry(name, row, col),
+                format!("expected a finite number, found {}", crate::settings::fmt_short(value)),
+            ),
             PlantError::TooLarge { name, row, col, .. } => {
                 let full = self.to_string();
                 (entry(name, row, col), full.split_once(": ").map_or(full.as_str(), |(_, m)| m).to_string())
             }
-            PlantError::BadDelay { index, value } => {
-                (format!("{prefix}delays[{index}]"), format!("expected a finite delay ≥ 0, found {value}"))
-            }
+            PlantError::BadDelay { index, value } => (
+                format!("{prefix}delays[{index}]"),
+                format!("expected a finite delay ≥ 0, found {}", crate::settings::fmt_short(value)),
+            ),
             PlantError::Length { name, per, expected, found } => {
                 let of = if name == "x0" {
                     format!("n = {n} rows of {prefix}A")

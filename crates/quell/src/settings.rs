@@ -215,7 +215,7 @@ impl MeasurementNoise {
                 let finite = if *s >= 0.0 { "finite " } else { "" };
                 Err(KeyError::new(
                     format!("noise.std[{i}]"),
-                    format!("expected a {finite}standard deviation ≥ 0, found {s}"),
+                    format!("expected a {finite}standard deviation ≥ 0, found {}", fmt_short(*s)),
                 ))
             }
             None => Ok(()),
@@ -260,13 +260,13 @@ impl Actuator {
         if let Some((i, d)) = self.delays.iter().enumerate().find(|(_, d)| !(d.is_finite() && **d >= 0.0)) {
             return Err(KeyError::new(
                 format!("truth.actuator_delays[{i}]"),
-                format!("expected a finite delay ≥ 0 (in the plant model's unit of time), found {d}"),
+                format!("expected a finite delay ≥ 0 (in the plant model's unit of time), found {}", fmt_short(*d)),
             ));
         }
         if let Some((i, u)) = self.limits.iter().enumerate().find(|(_, u)| u.is_nan() || **u <= 0.0) {
             return Err(KeyError::new(
                 format!("truth.u_max[{i}]"),
-                format!("expected a limit > 0 (inf for none), found {u}"),
+                format!("expected a limit > 0 (inf for none), found {}", fmt_short(*u)),
             ));
         }
         Ok(())
@@ -290,7 +290,7 @@ pub(crate) fn positive(key: &str, what: &str, x: f64) -> Result<f64, KeyError> {
         Ok(x)
     } else {
         let finite = if x.is_infinite() { " and finite" } else { "" };
-        Err(KeyError::new(key, format!("expected {what} > 0{finite}, found {x}")))
+        Err(KeyError::new(key, format!("expected {what} > 0{finite}, found {}", fmt_short(x))))
     }
 }
 
@@ -302,7 +302,7 @@ pub(crate) fn check_horizon(t_end: f64, output_step: f64) -> Result<(), KeyError
     if output_step > t_end {
         return Err(KeyError::new(
             "simulation.output_step",
-            format!("expected an output step ≤ t_end = {t_end}, found {output_step}"),
+            format!("expected an output step ≤ t_end = {}, found {}", fmt_short(t_end), fmt_short(output_step)),
         ));
     }
     let samples = t_end / output_step;
@@ -416,10 +416,10 @@ pub(crate) fn three_digits_down(x: f64) -> f64 {
     format!("{digits}e{e}").parse::<f64>().map_or(x, |v| if v <= x { v } else { (digits - 1.0) * 10f64.powi(e) })
 }
 
-/// Rust's shortest form of `v`: `{}` between 1e-4 and 1e6, otherwise `{:e}`, so that 1e293 does not
-/// print as 294 digits.
+/// Rust's shortest form of `v`: `{}` for 0 and between 1e-4 and 1e6, otherwise `{:e}`, so that
+/// 1e293 does not print as 294 digits (nor 1e-300 as 300 zeros).
 pub(crate) fn fmt_short(v: f64) -> String {
-    if (1e-4..1e6).contains(&v.abs()) {
+    if v == 0.0 || (1e-4..1e6).contains(&v.abs()) {
         format!("{v}")
     } else {
         format!("{v:e}")

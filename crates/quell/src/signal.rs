@@ -108,9 +108,10 @@ impl Signal {
         }
         let finite = |field: String, v: f64| match v.is_finite() {
             true => Ok(()),
-            false => {
-                Err(KeyError::new(format!("{key}.components{field}"), format!("expected a finite number, found {v}")))
-            }
+            false => Err(KeyError::new(
+                format!("{key}.components{field}"),
+                format!("expected a finite number, found {}", crate::settings::fmt_short(v)),
+            )),
         };
         // Amplitudes and biases scale the loop's states like plant entries do (the sum of a channel's,
         // their products with D, Q and the gains): bounded by the same MAX_ENTRY.
@@ -203,7 +204,7 @@ fn check_out(out: &[f64], len: usize) -> Result<(), KeyError> {
 
 /// The message for a negative frequency ω (the scenario reader's and [`Signal::check`]'s).
 pub(crate) fn negative_frequency(w: f64) -> String {
-    format!("expected a frequency ≥ 0 (rad per unit of the plant's time), found {w}; write a·sin(−ωt + φ) as a·sin(ωt + π − φ)")
+    format!("expected a frequency ≥ 0 (rad per unit of the plant's time), found {}; write a·sin(−ωt + φ) as a·sin(ωt + π − φ)", crate::settings::fmt_short(w))
 }
 
 /// Checks the reference g (one component per output) and the disturbance ω (one per column of D)

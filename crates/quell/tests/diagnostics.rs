@@ -177,3 +177,66 @@ fn a_coarse_sampled_run_is_told_the_sampling_may_be_the_cause() {
     assert!(coarse(0.1));
     assert!(!coarse(1e-3));
 }
+
+/// The Navion's lateral–directional dynamics (Nelson 1998, as linearized in the helper tryout of
+/// 2026-12-03: states β, p, r, φ; inputs rudder, aileron; outputs φ and β) with a fast adaptation
+/// at rtol = atol = 1e-6: DOP853 sits at its stability bound, rejecting about a third of its
+/// attempts, and its error estimate misses η̂'s errors there.
+const NAVION: &str = r#"
+[plant]
+A = [[-0.25977,0.0,-1.0,0.18295],[-15.98,-8.4,2.19,0.0],[4.49,-0.35,-0.76,0.0],[0.0,1.0,0.0,0.0]]
+B = [[0.0,0.06875],[-28.9,2.548],[-0.222,-4.597],[0.0,0.0]]
+C = [[0.0,0.0,0.0,1.0],[1.0,0.0,0.0,0.0]]
+D = [[-0.25977],[-15.98],[4.49],[0.0]]
+Q = [[0.0],[0.0]]
+delays = [0.05, 0.08]
+[design]
+observer_poles = [-25.3,-31.87,-40.16,-50.6]
+channel_poles = [[-16.87,-25.3],[-16.87]]
+reference_filter_poles = [[-0.25,-0.375,-0.5625],[-8.43]]
+disturbance_filter_poles = [[-1.0,-1.5,-2.25]]
+mu = [8000.0, 15000.0]
+beta = 3.333
+regressor_scaling = "normalized"
+[reference]
+components = [{bias=0.1, harmonics=[{amplitude=0.2, frequency=0.3}]}, {bias=0.02}]
+[disturbance]
+components = [{bias=0.01, harmonics=[{amplitude=0.02, frequency=1.5}]}]
+[simulation]
+t_end = 30.0
+output_step = 0.02
+rtol = 1e-6
+atol = 1e-6
+"#;
+
+#[test]
+fn a_run_thrashing_at_the_stability_bound_is_flagged_and_off() {
+    let s = Scenario::from_toml(NAVION).unwrap();
+    let d = s.design().unwrap();
+    let run = |method: quell::sim::Method, tol: f64| {
+        let mut settings = RunSettings::continuous(30.0, 0.02, tol, tol);
+        if let quell::sim::Loop::Continuous(integrator) = &mut settings.mode {
+            integrator.method = method;
+        }
+        let r = Run::new(&d, &s.reference, &s.disturbance, settings).simulate(|_| ControlFlow::Continue(())).unwrap();
+        let advice = diagnose(&d, &s.reference, &s.disturbance, &r).advice;
+        let peak = r.column(&r.u_f, 2, 1).fold(0.0f64, |m, v| m.max(v.abs()));
+        (peak, advice.iter().any(|a| a.contains("DOP853 rejected")))
+    };
+    let (loose, flagged) = run(quell::sim::Method::Explicit, 1e-6);
+    let (imex, imex_flagged) = run(quell::sim::Method::Implicit, 1e-6);
+    let (tight, _) = run(quell::sim::Method::Explicit, 1e-11);
+    // The flag is warranted: the explicit run's peak of u_f,2 is off by more than 10 % of it, where
+    // the implicit run at the same tolerance is within 1 % of the explicit one at 1e-11 (it is
+    // 0.3 % off).
+    assert!((imex - tight).abs() < 1e-2 * tight, "imex {imex} against rtol 1e-11 {tight}");
+    assert!((loose - tight).abs() > 0.1 * tight, "the explicit run at 1e-6 is right ({loose} against {tight})");
+    assert!(flagged && !imex_flagged);
+    // The paper's example at the same tolerance is not flagged.
+    let p = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+    let pd = p.design().unwrap();
+    let r = Run::new(&pd, &p.reference, &p.disturbance, RunSettings::continuous(100.0, 0.1, 1e-6, 1e-6))
+        .simulate(|_| ControlFlow::Continue(()))
+        .unwrap();
+    assert!(!diagnose(&pd, &p.reference, &p.disturbance, &r).advice.iter().any(|a| a.contains("DOP853 rejected")));
+}

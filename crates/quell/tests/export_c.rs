@@ -556,7 +556,7 @@ fn a_scenario_name_with_comment_delimiters_stays_inside_the_comment() {
 
 #[test]
 fn the_c_step_refuses_a_spike_and_keeps_its_state_in_double_and_float() {
-    // A finite spike (1e160 in double, 1e22 in float) made u_f NaN for ever. The generated step now
+    // (Also: a state whose delay-line row is out of range returns 3, check 11.) A finite spike (1e160 in double, 1e22 in float) made u_f NaN for ever. The generated step now
     // returns 1 for any entry beyond QUELL_INPUT_BOUND (1e100; 1e12 in float) or NaN, leaving the
     // state and u_f as they were: after it, u_f equals that of a controller that never saw it.
     let (_, d) = example("paper");
@@ -622,6 +622,13 @@ int main(void)
     for (int k = 0; k < 100; k++)
         if (quell_step(&a, g, y, ua) != 0 || quell_step(&b, g, y, ub) != 0 || ua[0] != ub[0] || ua[1] != ub[1])
             return 9;
+    /* A state quell_init did not make (its delay-line row out of range, as in a stack variable
+     * never initialized) is refused with 3 before it is read or written: no write out of bounds,
+     * u_f untouched. */
+    a.head = QUELL_DELAY_MAX + 1u;
+    ua[0] = 7;
+    if (quell_step(&a, y, g, ua) != 3 || ua[0] != 7)
+        return 11;
     return 0;
 }}
 "#

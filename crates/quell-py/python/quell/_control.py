@@ -57,25 +57,63 @@ def _hat(state):
 
 def state_space(sys):
     """A ``control.TransferFunction`` as a minimal ``control.StateSpace`` (pole-zero pairs cancelled
-    by ``control.minreal``, then ``control.ss``); anything else unchanged."""
+    by ``control.minreal``, then ``control.ss``, keeping ``dt``); anything else unchanged. A pair
+    whose pole has Re p ≥ 0 is refused: cancelling it hides an unstable mode (no controller can
+    stabilize it through this input and output), and python-control's default tolerance also
+    cancels pairs as far apart as 1e-5 relative."""
     import control
 
     if not isinstance(sys, control.TransferFunction):
         return sys
+    for i, j, p, z in _cancelled_pairs(sys):
+        if p.real >= 0.0:
+            from ._errors import ScenarioError
+
+            where = f" (output {i + 1}, input {j + 1})" if sys.noutputs * sys.ninputs > 1 else ""
+            raise ScenarioError(
+                f"sys: the transfer function{where} has the pole {_num(p)} in the closed right half-plane "
+                f"and the zero {_num(z)} (|p - z| = {abs(p - z):.3g}), which a minimal realization "
+                "cancels: the unstable mode would be hidden, not gone; give the plant as a StateSpace "
+                "(control.ss of a realization that keeps the mode) so that the design's checks see it"
+            )
     try:
         reduced = control.minreal(sys, verbose=False)  # cancels pole-zero pairs (SISO: no slycot)
         realized = control.ss(reduced)
         # minreal drops the signal names: the realization gets the transfer function's.
-        return control.ss(realized.A, realized.B, realized.C, realized.D,
+        return control.ss(realized.A, realized.B, realized.C, realized.D, sys.dt,
                           inputs=sys.input_labels, outputs=sys.output_labels)
     # python-control's ControlMIMONotImplemented (no slycot) is a NotImplementedError.
     except (ImportError, TypeError, ValueError, NotImplementedError) as e:
         from ._errors import ScenarioError
 
+        need = ("a MIMO realization needs slycot: install it, or pass a StateSpace"
+                if sys.noutputs * sys.ninputs > 1 else
+                "a plant (1) is strictly proper: the numerator's degree must be below the denominator's")
         raise ScenarioError(
             f"sys: python-control cannot realize this {sys.noutputs}x{sys.ninputs} transfer function "
-            f"as a state-space system ({e}); a MIMO realization needs slycot: install it, or pass a StateSpace"
+            f"as a state-space system ({e}); {need}"
         ) from e
+
+
+def _cancelled_pairs(sys):
+    """The (output, input, pole, zero) pairs that ``control.minreal`` cancels, found with its own
+    default tolerance (1000·max(ε, |z|·√ε))."""
+    eps = np.finfo(float).eps
+    pairs = []
+    for i in range(sys.noutputs):
+        for j in range(sys.ninputs):
+            poles = list(np.roots(np.atleast_1d(sys.den[i][j])))
+            for z in np.roots(np.atleast_1d(sys.num[i][j])):
+                tol = 1000 * max(eps, abs(z) * np.sqrt(eps))
+                near = [k for k, p in enumerate(poles) if abs(z - p) < tol]
+                if near:
+                    pairs.append((i, j, poles.pop(near[0]), z))
+    return pairs
+
+
+def _num(x):
+    """A root as 1.00001 or 1 ± 2j."""
+    return f"{x.real:.6g}" if x.imag == 0 else f"{x.real:.6g}{x.imag:+.6g}j"
 
 
 def to_control(result, outputs):

@@ -1,5 +1,7 @@
 """SimResult.to_pandas and SimResult.plot: pandas and matplotlib are imported only here, when used."""
 
+import operator
+
 
 def columns(m, q, n=0):
     """The header of signals.csv: t, y1..ym, g1..gm, e1..em, u1..um, uf1..ufm, eta1_1..etam_q, and
@@ -44,9 +46,14 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None))
     except ImportError as e:
         raise ImportError("SimResult.plot needs matplotlib: pip install matplotlib") from e
     m = result.m
-    channel = 1 if channel is None else channel
-    if isinstance(channel, bool) or not isinstance(channel, int):
-        raise TypeError(f"channel: expected an int from 1 to {m}, found a {type(channel).__name__}")
+    given = 1 if channel is None else channel
+    try:
+        # An int or numpy's integers, not a bool or a float.
+        channel = None if isinstance(given, bool) else operator.index(given)
+    except TypeError:
+        channel = None
+    if channel is None:
+        raise TypeError(f"channel: expected an int from 1 to {m}, found a {type(given).__name__}")
     if not 1 <= channel <= m:
         raise ValueError(f"channel: expected a channel number from 1 to {m}, found {channel!r}")
     i, c, t = channel - 1, channel, result.t

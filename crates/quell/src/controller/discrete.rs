@@ -13,7 +13,7 @@ use crate::settings::TimeUnit;
 /// Why a controller cannot run at the requested sample time.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum ControllerError {
-    #[error("simulation.sample_time: expected a finite T_s > 0, found {value}")]
+    #[error("simulation.sample_time: expected a finite T_s > 0, found {}", crate::settings::fmt_short(*.value))]
     BadSampleTime { value: f64 },
     /// `nearest` is a sample time that passes this same check, written with the fewest digits that do
     /// (so the printed value works when typed back), or `None` when no τ_c/k near T_s fits every delay.

@@ -53,7 +53,7 @@ impl RegressorScaling {
                 "ξ̂ is the paper's companion form (l = e_q): its size is the signals' divided by ∏|p_j| of each filter, so μ_i's effect depends on the filter poles; μ_i λ_max(Ω̄_i) below is the rate it gives"
             }
             RegressorScaling::Normalized => {
-                "ξ̂ is normalized (unit DC gain, every entry at its filter's time scale): it has the size of the signals, so μ_i is a rate per squared signal unit (μ_i·|g|²·|G_ii|² ≈ μ_i λ_max(Ω̄_i) 1/s)"
+                "ξ̂ is normalized (unit DC gain, every entry at its filter's time scale): it has the size of the signals, so μ_i is a rate per squared signal unit (μ_i·|g|²·|G_ii|² ≈ μ_i λ_max(Ω̄_i), per unit of the plant's time)"
             }
         }
     }

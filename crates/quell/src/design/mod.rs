@@ -138,7 +138,7 @@ pub enum DesignError {
     ObserverPoles(PlaceError),
     #[error("plant.{0}")]
     Plant(#[from] PlantError),
-    #[error("design.observer_gain[{row}][{col}]: expected a finite number, found {value}")]
+    #[error("design.observer_gain[{row}][{col}]: expected a finite number, found {}", crate::settings::fmt_short(*.value))]
     ObserverGainNonFinite { row: usize, col: usize, value: f64 },
     #[error("design.observer_gain: expected a {n}×{m} matrix, found {rows}×{cols}")]
     ObserverGainShape { n: usize, m: usize, rows: usize, cols: usize },
@@ -178,9 +178,9 @@ pub enum DesignError {
     NoPoles { key: String },
     #[error("plant.A: n = {n} states; a design is limited to n ≤ {MAX_STATES} (quell::design::MAX_STATES): its eigen-decompositions and pole placement grow as n³ (seconds at n = {MAX_STATES}, minutes beyond 1000); reduce the model first (e.g. balanced truncation to the modes that matter)")]
     TooManyStates { n: usize },
-    #[error("design.mu[{index}]: expected a finite adaptation gain ≥ 0, found {value}")]
+    #[error("design.mu[{index}]: expected a finite adaptation gain ≥ 0, found {}", crate::settings::fmt_short(*.value))]
     BadMu { index: usize, value: f64 },
-    #[error("design.beta: expected a finite β > 0 (H(s) = 1/(βs + 1)), found {value}")]
+    #[error("design.beta: expected a finite β > 0 (H(s) = 1/(βs + 1)), found {}", crate::settings::fmt_short(*.value))]
     BadBeta { value: f64 },
     #[error("{key}: pole {} is out of the design's span of rates: given the other pole lists and 1/β, expected decay rate −Re p ≥ {} and magnitude ≤ {}; {SPAN_WHY}", fmt_complex(.pole), fmt_number(*.min_decay), fmt_number(*.max_magnitude))]
     PoleOutOfSpan { key: String, pole: Complex<f64>, min_decay: f64, max_magnitude: f64 },

@@ -80,6 +80,10 @@ pub struct ChannelDiagnostics {
     pub advice: Vec<String>,
 }
 
+/// The share of rejected attempts above which an explicit run is taken to have thrashed at its
+/// stability bound.
+const THRASHING: f64 = 0.25;
+
 /// The diagnostics of one run.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Diagnostics {
@@ -119,6 +123,19 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
                 fmt_short(sample_time),
                 sample_time * rho,
                 crate::sim::COARSE_SAMPLE
+            ));
+        }
+    }
+    // DOP853 rejecting this many attempts sat at its stability bound (accuracy-limited runs reject
+    // 5–15 %): its error estimate then misses the stiff block's errors (a loop at rtol 1e-6 whose u_f
+    // peaked 8× too high with 31 % rejected, right with `imex` or at 1e-11).
+    if let crate::sim::RunStats::Continuous(st) = &result.stats {
+        let attempts = (st.steps + st.rejected).max(1) as f64;
+        let explicit = st.steps - st.implicit_steps.min(st.steps);
+        if st.rejected as f64 > THRASHING * attempts && explicit > st.steps / 2 {
+            advice.push(format!(
+                "DOP853 rejected {:.0} % of its attempts: its steps sat at their stability bound, where its error estimate misses the stiff part's errors (η̂ and u_f may be off by more than the tolerance); check with simulation.method = \"imex\" or a tighter simulation.rtol",
+                100.0 * st.rejected as f64 / attempts
             ));
         }
     }

@@ -434,7 +434,8 @@ void {p}_init({p}_state *s);
  * entry of y or g that is NaN or beyond +-{P}_INPUT_BOUND (a sensor fault) is refused: it returns 1 and leaves the state and u_f untouched; hold the
  * previous input. It returns 2 when u_f or u is no longer finite (inputs the design cannot follow
  * overflowed the state), leaving u_f untouched, and keeps returning 2: hold a safe input and call {p}_init
- * (docs/deployment.md). Needs IEEE arithmetic (no -ffast-math). */
+ * (docs/deployment.md). It returns 3, touching nothing, for a state {p}_init did not make (its
+ * delay-line row out of range: never initialized, or corrupted). Needs IEEE arithmetic (no -ffast-math). */
 int {p}_step({p}_state *s, const {R} y[{P}_M], const {R} g[{P}_M], {R} u_f[{P}_M]);
 /* The adaptive command u(k) (25) of the last step, undelayed. */
 void {p}_command(const {p}_state *s, {R} u[{P}_M]);
@@ -603,6 +604,9 @@ static {R} {p}_channel({p}_state *s, unsigned i, unsigned sigma, const {R} *Phi,
 
 int {p}_step({p}_state *s, const {R} y[{P}_M], const {R} g[{P}_M], {R} u_f[{P}_M])
 {
+    /* A state {p}_init did not make: its row would index past the delay line. */
+    if (s->head > {P}_DELAY_MAX)
+        return 3;
     {R} *now = s->line[s->head];
     {R} zv[{P}_NZ + 3 * {P}_M]; /* [z(k); y(k); g(k); u_d(k)], u_d(k) = [u_1(k - d_1), ...] */
     {R} out[{P}_M];                /* u_f(k), copied to u_f once known to be finite */

@@ -132,7 +132,7 @@ impl<'a> Value<'a, '_> {
         if x.is_finite() {
             Ok(x)
         } else {
-            Err(err(self.key, format!("expected {what}, found {x}")))
+            Err(err(self.key, format!("expected {what}, found {}", crate::settings::fmt_short(x))))
         }
     }
 

@@ -86,7 +86,10 @@ pub(crate) fn check_bound(bound: f64) -> Result<(), crate::settings::KeyError> {
     } else {
         Err(crate::settings::KeyError::new(
             "divergence_bound",
-            format!("expected a bound > 0 (or +inf for none; default {DIVERGENCE_BOUND:e}), found {bound}"),
+            format!(
+                "expected a bound > 0 (or +inf for none; default {DIVERGENCE_BOUND:e}), found {}",
+                crate::settings::fmt_short(bound)
+            ),
         ))
     }
 }

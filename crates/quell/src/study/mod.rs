@@ -182,7 +182,7 @@ fn non_negative(key: &str, v: &toml::Value, what: &str) -> Result<f64, StudyErro
     if x >= 0.0 {
         Ok(x)
     } else {
-        Err(err(key, format!("expected {what}, found {x}")))
+        Err(err(key, format!("expected {what}, found {}", crate::settings::fmt_short(x))))
     }
 }
 
@@ -192,7 +192,7 @@ fn factor(key: &str, v: &toml::Value) -> Result<f64, StudyError> {
     match v {
         toml::Value::Float(x) if *x >= 1.0 => Ok(*x),
         toml::Value::Integer(i) if *i >= 1 => Ok(*i as f64),
-        toml::Value::Float(x) => Err(err(key, format!("expected {WHAT}, found {x}"))),
+        toml::Value::Float(x) => Err(err(key, format!("expected {WHAT}, found {}", crate::settings::fmt_short(*x)))),
         toml::Value::Integer(i) => Err(err(key, format!("expected {WHAT}, found {i}"))),
         _ => Err(err(key, format!("expected {WHAT}, found {}", kind(v)))),
     }

@@ -103,7 +103,7 @@ impl TuneSpec {
                         })?;
                         let (lo, hi) = (number(&key, &pair[0], "a number")?, number(&key, &pair[1], "a number")?);
                         if !(lo > 0.0 && lo <= hi) {
-                            return Err(err(key, format!("expected 0 < μ_min ≤ μ_max (the search is on a log scale), found [{lo}, {hi}]")));
+                            return Err(err(key, format!("expected 0 < μ_min ≤ μ_max (the search is on a log scale), found [{}, {}]", crate::settings::fmt_short(lo), crate::settings::fmt_short(hi))));
                         }
                         Ok([lo, hi])
                     })
@@ -120,7 +120,7 @@ impl TuneSpec {
                         let (key, what) = (format!("tune.{name}[{i}]"), format!("a limit on {what} > 0"));
                         match number(&key, x, &what)? {
                             x if x > 0.0 => Ok(x),
-                            x => Err(err(key, format!("expected {what}, found {x}"))),
+                            x => Err(err(key, format!("expected {what}, found {}", crate::settings::fmt_short(x)))),
                         }
                     })
                     .collect(),
@@ -329,10 +329,25 @@ impl Search<'_> {
         Some(point)
     }
 
-    /// Channel i's log-spaced starting points.
+    /// Channel i's log-spaced starting points; through the logarithms where μ_max/μ_min overflows
+    /// (a range such as [1e-300, 1e300] gave μ = inf past its first point).
     fn log_grid(&self, i: usize) -> impl Iterator<Item = f64> {
         let ([lo, hi], points) = (self.spec.bounds[i], self.spec.points);
-        (0..points).map(move |k| lo * (hi / lo).powf(k as f64 / (points - 1) as f64))
+        let ratio = hi / lo;
+        (0..points).map(move |k| {
+            let x = k as f64 / (points - 1) as f64;
+            if ratio.is_finite() {
+                lo * ratio.powf(x)
+            } else if k == 0 || k + 1 == points {
+                if k == 0 {
+                    lo
+                } else {
+                    hi
+                }
+            } else {
+                (lo.ln() + x * (hi.ln() - lo.ln())).exp().clamp(lo, hi)
+            }
+        })
     }
 
     /// Golden-section search on log μ_i over the neighbours of the best point of `curve`, each

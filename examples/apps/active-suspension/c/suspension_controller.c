@@ -2,7 +2,7 @@
 #include "suspension_controller.h"
 
 /* A header from another export fails here (size -1): regenerate both files together. */
-typedef char suspension_header_matches_source[SUSPENSION_LAYOUT_ID == 0xad773d0df844b81eu ? 1 : -1];
+typedef char suspension_header_matches_source[SUSPENSION_LAYOUT_ID == 0x4bd5750fb372bd7bu ? 1 : -1];
 #include <float.h>
 
 /* Core (observers (6), (14), (20) with (5) substituted) at ZOH: z(k+1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
@@ -198,6 +198,9 @@ static double suspension_channel(suspension_state *s, unsigned i, unsigned sigma
 
 int suspension_step(suspension_state *s, const double y[SUSPENSION_M], const double g[SUSPENSION_M], double u_f[SUSPENSION_M])
 {
+    /* A state suspension_init did not make: its row would index past the delay line. */
+    if (s->head > SUSPENSION_DELAY_MAX)
+        return 3;
     double *now = s->line[s->head];
     double zv[SUSPENSION_NZ + 3 * SUSPENSION_M]; /* [z(k); y(k); g(k); u_d(k)], u_d(k) = [u_1(k - d_1), ...] */
     double out[SUSPENSION_M];                /* u_f(k), copied to u_f once known to be finite */

@@ -54,7 +54,8 @@ void suspension_init(suspension_state *s);
  * entry of y or g that is NaN or beyond +-SUSPENSION_INPUT_BOUND (a sensor fault) is refused: it returns 1 and leaves the state and u_f untouched; hold the
  * previous input. It returns 2 when u_f or u is no longer finite (inputs the design cannot follow
  * overflowed the state), leaving u_f untouched, and keeps returning 2: hold a safe input and call suspension_init
- * (docs/deployment.md). Needs IEEE arithmetic (no -ffast-math). */
+ * (docs/deployment.md). It returns 3, touching nothing, for a state suspension_init did not make (its
+ * delay-line row out of range: never initialized, or corrupted). Needs IEEE arithmetic (no -ffast-math). */
 int suspension_step(suspension_state *s, const double y[SUSPENSION_M], const double g[SUSPENSION_M], double u_f[SUSPENSION_M]);
 /* The adaptive command u(k) (25) of the last step, undelayed. */
 void suspension_command(const suspension_state *s, double u[SUSPENSION_M]);
@@ -64,6 +65,6 @@ void suspension_command(const suspension_state *s, double u[SUSPENSION_M]);
 #endif
 
 /* Identifies this header's source: suspension_controller.c compiles only with it. */
-#define SUSPENSION_LAYOUT_ID 0xad773d0df844b81eu
+#define SUSPENSION_LAYOUT_ID 0x4bd5750fb372bd7bu
 
 #endif /* SUSPENSION_CONTROLLER_H */

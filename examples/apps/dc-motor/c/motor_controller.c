@@ -2,7 +2,7 @@
 #include "motor_controller.h"
 
 /* A header from another export fails here (size -1): regenerate both files together. */
-typedef char motor_header_matches_source[MOTOR_LAYOUT_ID == 0x07f15f51720e2f69u ? 1 : -1];
+typedef char motor_header_matches_source[MOTOR_LAYOUT_ID == 0xba887be1438e569cu ? 1 : -1];
 #include <float.h>
 
 /* Core (observers (6), (14), (20) with (5) substituted) at ZOH: z(k+1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
@@ -199,6 +199,9 @@ static double motor_channel(motor_state *s, unsigned i, unsigned sigma, const do
 
 int motor_step(motor_state *s, const double y[MOTOR_M], const double g[MOTOR_M], double u_f[MOTOR_M])
 {
+    /* A state motor_init did not make: its row would index past the delay line. */
+    if (s->head > MOTOR_DELAY_MAX)
+        return 3;
     double *now = s->line[s->head];
     double zv[MOTOR_NZ + 3 * MOTOR_M]; /* [z(k); y(k); g(k); u_d(k)], u_d(k) = [u_1(k - d_1), ...] */
     double out[MOTOR_M];                /* u_f(k), copied to u_f once known to be finite */

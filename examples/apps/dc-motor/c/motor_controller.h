@@ -54,7 +54,8 @@ void motor_init(motor_state *s);
  * entry of y or g that is NaN or beyond +-MOTOR_INPUT_BOUND (a sensor fault) is refused: it returns 1 and leaves the state and u_f untouched; hold the
  * previous input. It returns 2 when u_f or u is no longer finite (inputs the design cannot follow
  * overflowed the state), leaving u_f untouched, and keeps returning 2: hold a safe input and call motor_init
- * (docs/deployment.md). Needs IEEE arithmetic (no -ffast-math). */
+ * (docs/deployment.md). It returns 3, touching nothing, for a state motor_init did not make (its
+ * delay-line row out of range: never initialized, or corrupted). Needs IEEE arithmetic (no -ffast-math). */
 int motor_step(motor_state *s, const double y[MOTOR_M], const double g[MOTOR_M], double u_f[MOTOR_M]);
 /* The adaptive command u(k) (25) of the last step, undelayed. */
 void motor_command(const motor_state *s, double u[MOTOR_M]);
@@ -64,6 +65,6 @@ void motor_command(const motor_state *s, double u[MOTOR_M]);
 #endif
 
 /* Identifies this header's source: motor_controller.c compiles only with it. */
-#define MOTOR_LAYOUT_ID 0x07f15f51720e2f69u
+#define MOTOR_LAYOUT_ID 0xba887be1438e569cu
 
 #endif /* MOTOR_CONTROLLER_H */

@@ -2,7 +2,7 @@
 #include "supply_controller.h"
 
 /* A header from another export fails here (size -1): regenerate both files together. */
-typedef char supply_header_matches_source[SUPPLY_LAYOUT_ID == 0x95745406b0077233u ? 1 : -1];
+typedef char supply_header_matches_source[SUPPLY_LAYOUT_ID == 0xaf38959ff01ca376u ? 1 : -1];
 #include <float.h>
 
 /* Core (observers (6), (14), (20) with (5) substituted) at ZOH: z(k+1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
@@ -223,6 +223,9 @@ static double supply_channel(supply_state *s, unsigned i, unsigned sigma, const 
 
 int supply_step(supply_state *s, const double y[SUPPLY_M], const double g[SUPPLY_M], double u_f[SUPPLY_M])
 {
+    /* A state supply_init did not make: its row would index past the delay line. */
+    if (s->head > SUPPLY_DELAY_MAX)
+        return 3;
     double *now = s->line[s->head];
     double zv[SUPPLY_NZ + 3 * SUPPLY_M]; /* [z(k); y(k); g(k); u_d(k)], u_d(k) = [u_1(k - d_1), ...] */
     double out[SUPPLY_M];                /* u_f(k), copied to u_f once known to be finite */

@@ -54,7 +54,8 @@ void supply_init(supply_state *s);
  * entry of y or g that is NaN or beyond +-SUPPLY_INPUT_BOUND (a sensor fault) is refused: it returns 1 and leaves the state and u_f untouched; hold the
  * previous input. It returns 2 when u_f or u is no longer finite (inputs the design cannot follow
  * overflowed the state), leaving u_f untouched, and keeps returning 2: hold a safe input and call supply_init
- * (docs/deployment.md). Needs IEEE arithmetic (no -ffast-math). */
+ * (docs/deployment.md). It returns 3, touching nothing, for a state supply_init did not make (its
+ * delay-line row out of range: never initialized, or corrupted). Needs IEEE arithmetic (no -ffast-math). */
 int supply_step(supply_state *s, const double y[SUPPLY_M], const double g[SUPPLY_M], double u_f[SUPPLY_M]);
 /* The adaptive command u(k) (25) of the last step, undelayed. */
 void supply_command(const supply_state *s, double u[SUPPLY_M]);
@@ -64,6 +65,6 @@ void supply_command(const supply_state *s, double u[SUPPLY_M]);
 #endif
 
 /* Identifies this header's source: supply_controller.c compiles only with it. */
-#define SUPPLY_LAYOUT_ID 0x95745406b0077233u
+#define SUPPLY_LAYOUT_ID 0xaf38959ff01ca376u
 
 #endif /* SUPPLY_CONTROLLER_H */
