@@ -218,7 +218,7 @@ impl<'a> Run<'a> {
 
     /// How many breakpoints t = Σ k_i τ_i up to t_end ([`dde::breakpoints`]) the continuous loop
     /// lands on: the design's, the true plant's and its actuator's delays together
-    /// ([`closed_loop::loop_delays`]), counted without building the loop. 0 for a sampled-data loop.
+    /// (`closed_loop::loop_delays`), counted without building the loop. 0 for a sampled-data loop.
     pub fn breakpoints(&self) -> usize {
         match &self.settings.mode {
             Loop::Continuous(_) => {
