@@ -111,19 +111,35 @@ pub(crate) fn print_json(value: &serde_json::Value) {
     print_stdout(&format!("{}\n", serde_json::to_string_pretty(value).unwrap_or_default()));
 }
 
-pub(crate) fn load(path: Option<&Path>) -> Result<(Scenario, Design), Failure> {
-    let scenario = match path {
-        Some(p) => Scenario::from_path(p),
-        None => Scenario::from_toml(PAPER_EXAMPLE),
+/// The scenario at `path` (the paper's example without one) and its design; with `sample_time`
+/// (a `--sample-time` > 0) as its `simulation.sample_time`, so that the file is checked as the
+/// sampled-data scenario the flag makes of it (white noise needs no bandwidth there).
+pub(crate) fn load(path: Option<&Path>, sample_time: Option<f64>) -> Result<(Scenario, Design), Failure> {
+    let parsed = match path {
+        Some(p) => quell::settings::read_input(p).map_err(|e| quell::scenario::ScenarioError {
+            key: p.display().to_string(),
+            message: format!("cannot read the file: {e}"),
+        }),
+        None => Ok(PAPER_EXAMPLE.to_string()),
     }
-    .map_err(|e| match path {
-        Some(p) if e.is_a_study() => Failure::Input(format!(
-            "{e}\n{} is a study, not a scenario: run it with `quell sweep {} --out DIR`",
-            p.display(),
-            p.display()
-        )),
-        _ => Failure::Input(e.to_string()),
-    })?;
+    .and_then(|text| quell::scenario::parse_document(&text));
+    let scenario = parsed
+        .and_then(|mut doc| {
+            if let Some(t) = sample_time.filter(|t| t.is_finite() && *t > 0.0) {
+                if let Some(sim) = doc.entry("simulation").or_insert(toml::Table::new().into()).as_table_mut() {
+                    sim.insert("sample_time".into(), toml::Value::Float(t));
+                }
+            }
+            Scenario::from_document(&doc)
+        })
+        .map_err(|e| match path {
+            Some(p) if e.is_a_study() => Failure::Input(format!(
+                "{e}\n{} is a study, not a scenario: run it with `quell sweep {} --out DIR`",
+                p.display(),
+                p.display()
+            )),
+            _ => Failure::Input(e.to_string()),
+        })?;
     let design = scenario.design().map_err(|e| Failure::Input(e.to_string()))?;
     Ok((scenario, design))
 }
@@ -135,7 +151,7 @@ fn design(args: &auto::DesignArgs) -> Result<(), Failure> {
         )));
     }
     interrupt::Interrupt::quit_with("interrupted during the design; nothing was printed");
-    let (s, d) = load(Some(&args.scenario))?;
+    let (s, d) = load(Some(&args.scenario), None)?;
     // The scenario's run must be able to start (its sample time against the delays, its signals
     // against t_end), or `quell run` and `quell export` would refuse what the design accepted.
     quell::sim::Run::of(&s, &d).check().map_err(|e| Failure::Input(e.to_string()))?;

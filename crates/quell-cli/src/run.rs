@@ -46,7 +46,7 @@ pub struct RunArgs {
 }
 
 pub fn run(args: &RunArgs) -> Result<(), Failure> {
-    let (scenario, design) = load(args.scenario.as_deref())?;
+    let (scenario, design) = load(args.scenario.as_deref(), args.sample_time)?;
     eprint!("{}", report::warnings_text(&quell::design::warnings(&design, &scenario.design)));
     // Every check that can fail on input happens before the output directory is touched.
     let settings = loop_settings(args, &scenario, &design)?;

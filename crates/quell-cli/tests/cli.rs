@@ -975,3 +975,33 @@ fn a_plant_without_a_disturbance_is_reported_as_such() {
         "{text}"
     );
 }
+
+#[test]
+fn sample_time_flag_makes_the_scenario_a_sampled_one_for_white_noise() {
+    // White noise (no bandwidth) is valid only in a sampled-data scenario. The flag "overrides
+    // simulation.sample_time", so a file without the key but with the flag is one: it was refused
+    // with "noise.bandwidth: missing … or set simulation.sample_time".
+    let dir = temp_dir("noise-flag");
+    let text = fs::read_to_string(examples_dir().join("paper-noise.toml")).unwrap();
+    let without: String = text.lines().filter(|l| !l.starts_with("sample_time")).map(|l| format!("{l}\n")).collect();
+    let file = dir.path().join("pn.toml");
+    fs::write(&file, without.replace("t_end = 100.0", "t_end = 2.0")).unwrap();
+    let file = file.display().to_string();
+    let refused = quell(&["run", &file, "--no-plots", "--out", &dir.path().join("a").display().to_string()]);
+    assert_eq!(refused.status.code(), Some(2), "{}", stderr(&refused));
+    assert!(stderr(&refused).contains("noise.bandwidth: missing"), "{}", stderr(&refused));
+    let out = dir.path().join("b");
+    let ran = quell(&["run", &file, "--sample-time", "0.001", "--no-plots", "--out", &out.display().to_string()]);
+    assert_eq!(ran.status.code(), Some(0), "{}", stderr(&ran));
+    // The same samples as the file with the key: the flag and the key are one setting.
+    let keyed = dir.path().join("keyed.toml");
+    fs::write(&keyed, text.replace("t_end = 100.0", "t_end = 2.0")).unwrap();
+    let out_keyed = dir.path().join("c");
+    let ran_keyed =
+        quell(&["run", &keyed.display().to_string(), "--no-plots", "--out", &out_keyed.display().to_string()]);
+    assert_eq!(ran_keyed.status.code(), Some(0), "{}", stderr(&ran_keyed));
+    assert_eq!(fs::read(out.join("signals.csv")).unwrap(), fs::read(out_keyed.join("signals.csv")).unwrap());
+    let c = dir.path().join("code");
+    let exported = quell(&["export", &file, "--sample-time", "0.001", "--out", &c.display().to_string()]);
+    assert_eq!(exported.status.code(), Some(0), "{}", stderr(&exported));
+}
