@@ -151,10 +151,19 @@ fn report(r: &TuneResult, unit: quell::TimeUnit) -> String {
                 } else {
                     ", but BREAKS the limits on max |u|, max |u_f| there"
                 },
-                c.at_bound().map_or(String::new(), |end| format!(
+                // Interrupted, the largest μ evaluated is not the range's end.
+                c.at_bound().filter(|_| !r.partial).map_or(String::new(), |end| format!(
                     "; at the {end} end of tune.mu[{}]: the best may lie beyond, widen the range",
                     c.channel
                 )),
+            )),
+            None if r.partial && c.curve.is_empty() => {
+                s.push_str(&format!("channel {}: not evaluated (tuning interrupted)\n", c.channel + 1))
+            }
+            None if r.partial => s.push_str(&format!(
+                "channel {}: no feasible mu among the {} evaluated before the interruption\n",
+                c.channel + 1,
+                c.curve.len()
             )),
             None => s.push_str(&format!("channel {}: no feasible mu in the bounds\n", c.channel + 1)),
         }
@@ -177,4 +186,41 @@ fn report(r: &TuneResult, unit: quell::TimeUnit) -> String {
     let mu = r.mu.iter().map(|m| format!("{m:.6}")).collect::<Vec<_>>().join(", ");
     s.push_str(&format!("{label} = [{mu}]{note}\n"));
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::report;
+    use quell::study::{Objective, Outcome, TuneCurve, TunePoint, TuneResult};
+
+    #[test]
+    fn an_interrupted_report_says_what_was_not_evaluated() {
+        // Stopped during channel 1's search: its best so far is its largest μ evaluated, not the
+        // upper end of tune.mu[0], and channel 2 was never evaluated (it read "no feasible mu in
+        // the bounds").
+        let point = |mu: f64, objective: f64| TunePoint {
+            mu,
+            objective: Some(objective),
+            outcome: Outcome::Completed,
+            figures: None,
+        };
+        let curve = vec![point(1000.0, 3.0), point(37275.9, 1.0)];
+        let result = TuneResult {
+            objective: Objective::TailRmsE,
+            channels: vec![
+                TuneCurve { channel: 0, chosen: Some(curve[1].clone()), curve },
+                TuneCurve { channel: 1, curve: vec![], chosen: None },
+            ],
+            mu: vec![37275.9, 1.0],
+            joint: None,
+            joint_difference: vec![None, None],
+            reproduced: vec![false, false],
+            within_limits: vec![false, false],
+            partial: true,
+        };
+        let text = report(&result, quell::TimeUnit::default());
+        assert!(text.contains("channel 2: not evaluated (tuning interrupted)"), "{text}");
+        assert!(!text.contains("end of tune.mu"), "{text}");
+        assert!(!text.contains("no feasible"), "{text}");
+    }
 }

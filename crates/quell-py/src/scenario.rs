@@ -49,8 +49,10 @@ use crate::plant::{plant_arg, Labels, PyPlant};
 ///     throughout, implicit in η̂).
 /// noise : dict, optional
 ///     Measurement noise `{"std": [σ_i], "seed": 0, "bandwidth": None}`.
-/// truth : Plant, optional
-///     The plant that is simulated, when it differs from the design model.
+/// truth : Plant or dict, optional
+///     The plant that is simulated, when it differs from the design model: a Plant, the whole true
+///     plant (its delays and x0 as it holds them: 0 unless given), or a dict of `[truth]`'s keys
+///     (`{"A": A_true}`), the others from `plant` as in a file.
 /// actuator : dict, optional
 ///     The true plant's actuator between u_f and the plant, `{"u_max": [..], "delays": [..]}`
 ///     (either key; one entry per input): `[truth] u_max` (|u_f,i| clipped, inf for none) and
@@ -280,6 +282,30 @@ fn signal_py<'py>(py: Python<'py>, s: &Signal) -> PyResult<Vec<Bound<'py, PyDict
         .collect()
 }
 
+/// `truth=`: a `quell.Plant`, the whole true plant (every field as the Plant holds it, its delays
+/// and x0 too, which default to 0 there), or a dict of `[truth]`'s keys, the others taken from
+/// `plant` as in a file. A Plant without the design plant's disturbance inputs or unit of time is
+/// refused: its D would silently come from `plant` (the file's rule), or its times be misread.
+fn truth_arg(py: Python<'_>, t: &Bound<'_, PyAny>, plant: &quell::Plant) -> PyResult<Table> {
+    if t.is_instance_of::<PyDict>() {
+        return match toml_value(t, "truth")? {
+            Value::Table(table) => Ok(table),
+            _ => Err(type_error("truth", "a quell.Plant or a dict of [truth]'s keys", t)),
+        };
+    }
+    let truth = plant_arg(t, "truth")?;
+    let (k_true, k) = (truth.inner.k(), plant.k());
+    if k_true != k {
+        let msg = format!("truth: the Plant has k = {k_true} disturbance inputs (D with {k_true} columns) where plant has k = {k}: give the true D and Q (zeros where ω does not act), or pass truth as a dict of the keys that differ, e.g. truth={{\"A\": A_true}} (the others from plant)");
+        return Err(Kind::Scenario.err(py, msg));
+    }
+    if truth.inner.time_unit != plant.time_unit {
+        let msg = format!("truth: the Plant's time_unit is {} where plant's is {}: the true plant is read in plant's unit of time; build both in one unit", truth.inner.time_unit, plant.time_unit);
+        return Err(Kind::Scenario.err(py, msg));
+    }
+    Ok(truth_table(&truth.inner))
+}
+
 /// The `actuator` argument `{"u_max": [..], "delays": [..]}` as `[truth]`'s keys u_max and
 /// actuator_delays.
 fn actuator_keys(py: Python<'_>, a: &Bound<'_, PyAny>) -> PyResult<Vec<(String, Value)>> {
@@ -354,7 +380,7 @@ impl PyScenario {
             doc.insert("noise".into(), toml_value(n, "noise")?);
         }
         if let Some(t) = truth.filter(|t| !t.is_none()) {
-            doc.insert("truth".into(), Value::Table(truth_table(&plant_arg(t, "truth")?.inner)));
+            doc.insert("truth".into(), Value::Table(truth_arg(py, t, &plant.inner)?));
         }
         if let Some(a) = actuator.filter(|a| !a.is_none()) {
             let truth = doc.entry("truth").or_insert_with(|| Value::Table(Table::new()));

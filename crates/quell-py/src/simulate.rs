@@ -548,6 +548,8 @@ impl PySimResult {
 ///     No design exists for the scenario.
 /// SimulationError
 ///     With check, a run that diverged or failed; its `.result` holds the samples up to then.
+/// KeyboardInterrupt
+///     Ctrl-C; its `.result` holds the samples up to then (outcome "interrupted").
 ///
 /// Examples
 /// --------
@@ -593,13 +595,18 @@ pub fn simulate(
         Loop::Sampled { sample_time } => Some(sample_time),
         Loop::Continuous(_) => None,
     };
-    let result = run_released(py, scn, &design, settings)?;
+    let (result, interrupt) = run_released(py, scn, &design, settings)?;
     // After the run's own checks (a sample time they refuse gets no warning).
     if let Some(t) = sampled {
         crate::errors::warn_coarse_sample(py, &design, &scn.reference, &scn.disturbance, t)?;
     }
     let (outcome, unit) = (result.outcome.clone().unwrap_or(Outcome::Completed), result.time_unit);
     let result = Py::new(py, PySimResult::from_run(py, scn, &design, result, s.labels.clone())?)?;
+    if let Some(e) = interrupt {
+        // Ctrl-C keeps the samples up to it, as sweeps and tunings keep their rows.
+        e.value(py).setattr("result", result)?;
+        return Err(e);
+    }
     match failure(outcome, unit) {
         Some((message, t, signal, value)) if check => {
             Err(simulation_error(py, message, t, signal, value, result.into_any()))
@@ -642,13 +649,14 @@ fn step_budget(py: Python<'_>, max_steps: Option<&Bound<'_, PyAny>>) -> PyResult
     }
 }
 
-/// The run with the GIL released, looking for Ctrl-C every [`SIGNAL_CHECK`].
+/// The run with the GIL released, looking for Ctrl-C every [`SIGNAL_CHECK`]: its result, and the
+/// KeyboardInterrupt that stopped it (the result then holds the samples up to it).
 fn run_released(
     py: Python<'_>,
     scn: &quell::Scenario,
     design: &quell::Design,
     settings: RunSettings,
-) -> PyResult<SimResult> {
+) -> PyResult<(SimResult, Option<PyErr>)> {
     let mut interrupt: Option<PyErr> = None;
     let result = py.detach(|| {
         let mut last = Instant::now();
@@ -667,17 +675,18 @@ fn run_released(
         };
         Run::of(scn, design).settings(settings).simulate(progress)
     });
-    if let Some(e) = interrupt {
-        return Err(e);
-    }
-    result.map_err(|e| {
+    let result = result.map_err(|e| {
         // `.key` as for the same setting refused when the scenario is read (argument_error).
         let key = match &e {
             SimError::Input(k) => Some(k.key.clone()),
             SimError::Controller(c) => c.key(),
         };
         keyed(py, Kind::Scenario, e.to_string(), key)
-    })
+    });
+    match (result, interrupt) {
+        (Ok(r), interrupt) => Ok((r, interrupt)),
+        (Err(_), Some(e)) | (Err(e), None) => Err(e),
+    }
 }
 
 /// Why a run that did not complete failed, for SimulationError: message, time, signal and value.

@@ -67,6 +67,24 @@ def test_truth_differs_from_the_design_model():
     assert quell.paper_example().truth is None
 
 
+def test_truth_as_a_dict_takes_the_rest_from_the_plant_and_a_plant_must_match_it():
+    """truth={"A": ...} is `[truth] A = ...`: delays, D, Q and x0 from [plant], as the TOML file
+    does. A Plant is the whole true plant: one built without D (k = 0) would have taken the
+    design's D silently, and its delays (default 0) removed the loop's delays; it is refused by
+    name when its D or its unit of time differs from the plant's."""
+    A_true = (1.01 * np.array(A)).tolist()
+    s = paper_from_values(truth={"A": A_true}, t_end=20.0)
+    text = quell.paper_example().to_toml().replace("t_end = 100.0", "t_end = 20.0") + f"\n[truth]\nA = {A_true}\n"
+    from_file = quell.Scenario.from_toml(text)
+    assert list(s.truth.delays) == [1.0, 3.0]
+    np.testing.assert_array_equal(s.truth.D, D)
+    np.testing.assert_array_equal(quell.simulate(s).y, quell.simulate(from_file).y)
+    with pytest.raises(quell.ScenarioError, match=r"truth: the Plant has k = 0 disturbance inputs .* where plant has k = 2"):
+        paper_from_values(truth=quell.Plant(A_true, B, C))
+    with pytest.raises(quell.ScenarioError, match="truth: the Plant's time_unit is min where plant's is s"):
+        paper_from_values(truth=quell.Plant(A_true, B, C, D, Q=Q, delays=[1.0, 3.0], time_unit="min"))
+
+
 def test_scenario_accessors():
     s = quell.paper_example()
     assert s.name == "paper-example"

@@ -39,13 +39,22 @@ def test_ctrl_c_stops_a_running_simulation(python_child):
     """SIGINT during simulate (GIL released, in Rust) raises KeyboardInterrupt within ~0.1 s."""
     import signal
 
-    code = "import quell; print('ready', flush=True); quell.simulate(quell.paper_example(), t_end=1e5, output_step=1.0)"
+    # The exception carries the samples up to the interruption, as a sweep's carries its rows.
+    code = (
+        "import quell\nprint('ready', flush=True)\n"
+        "try:\n    quell.simulate(quell.paper_example(), t_end=1e5, output_step=1.0)\n"
+        "except KeyboardInterrupt as e:\n"
+        "    r = e.result\n    print('kept', len(r.t), r.outcome['status'], r.t[-1] == r.outcome['t'] or r.t[-1] <= r.outcome['t'], flush=True)\n"
+        "    raise\n"
+    )
     child = python_child(code)
     time.sleep(0.5)  # into the run, which takes tens of seconds
     sent = time.perf_counter()
     child.send_signal(signal.SIGINT)
-    _, err = child.communicate(timeout=30)
+    out, err = child.communicate(timeout=30)
     assert "KeyboardInterrupt" in err, err
+    kept = out.split("kept ")[1].split()
+    assert int(kept[0]) > 1 and kept[1:] == ["interrupted", "True"], out
     # The design alone takes 15-25 s here; the stop flag is polled between KNV0's sweeps, and the
     # phases before them (staircase, eigendecompositions) ran up to 3 s at load 3 on 2 cores: 10 s
     # tells an interrupted design from a finished one with margin for a loaded CI machine.

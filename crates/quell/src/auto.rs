@@ -168,7 +168,8 @@ pub struct Choice {
 pub struct Verification {
     /// max |e_i| over the last 10 % of the horizon.
     pub tail_max_e: Vec<f64>,
-    /// [`TAIL_BOUND`] times the reference's peak.
+    /// [`TAIL_BOUND`] times the reference's peak (the error's peak in the first verifying run for
+    /// a reference that is 0 throughout).
     pub bound: Vec<f64>,
     /// max |u_f,i| over the run: the plant input (5), what [`Targets::u_limit`] bounds.
     pub max_uf: Vec<f64>,
@@ -217,6 +218,9 @@ pub struct Candidate {
     pub steps: usize,
     /// The candidate returned.
     pub chosen: bool,
+    /// max |e_i| over the run: the scale of a channel whose reference is 0 (regulation).
+    #[serde(skip)]
+    peak_e: Vec<f64>,
 }
 
 /// A complete scenario, its design, the choices made and their verification.
@@ -341,7 +345,8 @@ fn candidate(scenario: &Scenario, r: &crate::sim::SimResult, speed: Speed, conve
     let rms_at_convergence =
         (0..m).map(|i| r.rms_error(i, 0.9 * t_c, (1.1 * t_c).min(t_end)).unwrap_or(f64::NAN)).collect();
     let max_uf = r.summary().iter().map(|c| c.figures.max_uf).collect();
-    Candidate { speed, tail_max_e, rms_at_convergence, max_uf, steps: r.stats.steps(), chosen: false }
+    let peak_e = (0..m).map(|i| r.max_abs_error(i, 0.0, t_end).unwrap_or(f64::NAN)).collect();
+    Candidate { speed, tail_max_e, rms_at_convergence, max_uf, steps: r.stats.steps(), chosen: false, peak_e }
 }
 
 impl Candidate {
@@ -352,9 +357,10 @@ impl Candidate {
             speed,
             tail_max_e: vec![f64::INFINITY; m],
             rms_at_convergence: none.clone(),
-            max_uf: none,
+            max_uf: none.clone(),
             steps: 0,
             chosen: true,
+            peak_e: none,
         }
     }
 
@@ -432,13 +438,13 @@ impl AutoError {
 
 fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier) -> Result<AutoDesign, AutoError> {
     let (mut first, mut design, start) = sampled_start(doc, targets)?;
-    let bound: Vec<f64> = first.scenario.reference.components.iter().map(|c| TAIL_BOUND * c.peak()).collect();
-    let unverified = |first: Proposal, design: Design, advice: String, runs: usize| {
+    let mut bound: Vec<f64> = first.scenario.reference.components.iter().map(|c| TAIL_BOUND * c.peak()).collect();
+    let unverified = |first: Proposal, design: Design, advice: String, runs: usize, bound: &[f64]| {
         let c = Candidate::ended(start, first.scenario.plant.m());
         let limited = !targets.u_limit.is_empty();
         finish(
             (first, design, c.clone()),
-            bound.clone(),
+            bound.to_vec(),
             (runs, targets.convergence_time),
             vec![c],
             (false, limited),
@@ -446,17 +452,18 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
         )
     };
     if let Some(advice) = too_fast_for_its_horizon(&first.scenario, &design) {
-        return Ok(unverified(first, design, advice, 0));
+        return Ok(unverified(first, design, advice, 0, &bound));
     }
     // The first proposal, μ raised where its tail misses the bound.
     let first_check = loop {
         let c = match verifier.check(&first.scenario, &design, start) {
             Err(AutoError::Run(outcome)) => {
                 let advice = ended_early(&first.scenario, &outcome);
-                return Ok(unverified(first, design, advice, verifier.runs));
+                return Ok(unverified(first, design, advice, verifier.runs, &bound));
             }
             c => c?,
         };
+        regulated_bounds(&mut bound, &c);
         let retry = verifier.runs <= 3
             && first
                 .mu_caps
@@ -696,6 +703,17 @@ fn finish(
             candidates,
             relaxation,
         },
+    }
+}
+
+/// A channel whose reference is 0 throughout (a regulated output) has a bound of 0, which no tail
+/// meets: [`TAIL_BOUND`] times its error's peak in the first verifying run instead, the scale the
+/// run's diagnostics use.
+fn regulated_bounds(bound: &mut [f64], first: &Candidate) {
+    for (b, peak) in bound.iter_mut().zip(&first.peak_e) {
+        if *b == 0.0 && peak.is_finite() {
+            *b = TAIL_BOUND * peak;
+        }
     }
 }
 

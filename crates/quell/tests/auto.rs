@@ -786,3 +786,19 @@ output_step = 1.0
             >= 1
     );
 }
+
+/// A regulated output (its reference 0 throughout: the paper's second component made 0) had a
+/// tail bound of 1 % of 0, which no run meets, and the verification failed with a tail of 1e-8.
+/// The bound is now 1 % of that channel's error peak in the first verifying run (the first
+/// proposal's), the scale the run's diagnostics use, and the run settles (2 % of the error's peak).
+#[test]
+fn a_regulated_output_gets_a_bound_and_a_settling_time() {
+    let text = quell::scenario::PAPER_EXAMPLE.replace("{ bias = 2.0 }", "{ bias = 0.0 }");
+    assert!(text.contains("{ bias = 0.0 }"));
+    let auto = auto_design(&without_design(&text), &Targets::default()).unwrap();
+    let v = &auto.verification;
+    assert!(v.bound[1] > 0.0 && v.tail_max_e[1] <= v.bound[1], "{:?} against {:?}", v.tail_max_e, v.bound);
+    assert!(v.passed, "{v:?}");
+    let r = Run::of(&auto.scenario, &auto.design).simulate(|_| ControlFlow::Continue(())).unwrap();
+    assert!(r.summary()[1].figures.settle_t.is_some(), "{:?}", r.summary()[1]);
+}

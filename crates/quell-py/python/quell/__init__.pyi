@@ -179,7 +179,7 @@ class Scenario:
         sample_time: Optional[float] = None,
         method: Optional[Literal["auto", "explicit", "imex"]] = None,
         noise: Optional[Dict[str, Any]] = None,
-        truth: Optional[Plant] = None,
+        truth: Optional[Union[Plant, Dict[str, Any]]] = None,
         actuator: Optional[Dict[str, Sequence[float]]] = None,
         **design: Any,
     ) -> Self: ...

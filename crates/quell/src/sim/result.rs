@@ -285,7 +285,7 @@ impl SimResult {
     /// definition of [`crate::sim::settle`].
     pub fn settling(&self, i: usize, settle: &Settle) -> Settling {
         let e: Vec<f64> = self.column(&self.e, self.m, i).collect();
-        settling(&self.t, &e, settle.band(self.column(&self.g, self.m, i)))
+        settling(&self.t, &e, settle.band(self.column(&self.g, self.m, i), e.iter().copied()))
     }
 
     /// Figures of merit per channel, settled within the band `settle`; the tail is the last 10 %

@@ -342,7 +342,7 @@ mod tests {
         let s = Settle { relative: 0.02, absolute: 0.0 };
         let t = [0.0, 1.0, 2.0, 3.0, 4.0];
         let e = [1.0, 0.5, 0.01, 0.01, 0.01];
-        let time = |g: [f64; 5], s: &Settle| settling(&t, &e, s.band(g)).time();
+        let time = |g: [f64; 5], s: &Settle| settling(&t, &e, s.band(g, e)).time();
         // Band 0.02 · 1 = 0.02: settled from t = 2.
         assert_eq!(time([1.0; 5], &s), Some(2.0));
         // Was Some(2.0): the NaN sample was dropped by f64::max.
