@@ -398,7 +398,8 @@ impl Candidate {
 /// A proposal with its design and verifying run.
 type Verified = (Proposal, Design, Candidate);
 
-/// The automatic design of the scenario document `doc` (its `[design]` may leave out any key).
+/// The automatic design of the scenario document `doc` (its `[design]` may leave out any key, or
+/// be missing: every key is then chosen).
 ///
 /// The rules' first proposal is verified (with up to three μ retries); when it passes, slower
 /// candidates are verified in three phases and the cheapest kept (module docs: relaxation,
@@ -415,7 +416,15 @@ pub fn auto_design_with(
     progress: &mut dyn FnMut(&Progress) -> ControlFlow<()>,
 ) -> Result<AutoDesign, AutoError> {
     let mut verifier = Verifier { runs: 0, progress, convergence_time: targets.convergence_time };
+    let doc = &with_design_table(doc);
     verified_design(doc, targets, &mut verifier).map_err(|e| e.chosen_in(doc))
+}
+
+/// `doc` with an empty `[design]` where it has none: the automatic design chooses every key.
+fn with_design_table(doc: &toml::Table) -> toml::Table {
+    let mut doc = doc.clone();
+    doc.entry("design").or_insert_with(|| toml::Value::Table(toml::Table::new()));
+    doc
 }
 
 impl AutoError {

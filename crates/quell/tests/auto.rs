@@ -802,3 +802,16 @@ fn a_regulated_output_gets_a_bound_and_a_settling_time() {
     let r = Run::of(&auto.scenario, &auto.design).simulate(|_| ControlFlow::Continue(())).unwrap();
     assert!(r.summary()[1].figures.settle_t.is_some(), "{:?}", r.summary()[1]);
 }
+
+/// A scenario without a `[design]` table is an empty one to the automatic design (it refused it
+/// with "design: missing"), and the table it writes is complete.
+#[test]
+fn a_scenario_without_a_design_table_is_designed_whole() {
+    let mut doc: toml::Table = quell::scenario::PAPER_EXAMPLE.parse().unwrap();
+    doc.remove("design");
+    assert!(Scenario::from_document(&doc).unwrap_err().to_string().starts_with("design: missing"));
+    let auto = auto_design(&doc, &Targets::default()).unwrap();
+    assert!(auto.verification.passed);
+    let written: toml::Table = auto.scenario.to_toml().parse().unwrap();
+    assert!(Scenario::from_document(&written).is_ok());
+}

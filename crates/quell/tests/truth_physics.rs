@@ -211,3 +211,17 @@ fn the_breakpoints_counted_before_a_run_are_the_ones_it_lands_on() {
         assert!(counted > 20, "{counted} breakpoints: the delays add few");
     }
 }
+
+#[test]
+fn noise_far_beyond_the_loops_rate_is_refused_by_name() {
+    // A bandwidth of 1e6 cycles/s on the paper's loop (ρ = 9 rad/s) ran until the history's memory
+    // budget and ended "failed" as a blow-up does; it is an input error naming the key.
+    let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+    let d = s.design().unwrap();
+    let noise = |bandwidth: f64| Noise { std: vec![0.01, 0.01], seed: 1, bandwidth: Some(bandwidth) };
+    let settings = |b| RunSettings { noise: Some(noise(b)), ..RunSettings::continuous(2.0, 0.1, 1e-6, 1e-6) };
+    let e = Run::new(&d, &s.reference, &s.disturbance, settings(1e6)).simulate(go).unwrap_err();
+    assert!(e.to_string().starts_with("noise.bandwidth: expected at most 1430 cycles per s"), "{e}");
+    let r = Run::new(&d, &s.reference, &s.disturbance, settings(50.0)).simulate(go).unwrap();
+    assert_eq!(r.outcome, Some(Outcome::Completed));
+}

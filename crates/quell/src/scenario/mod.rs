@@ -206,7 +206,7 @@ impl Scenario {
         let actuator = actuator.flatten();
         let partial = root.require(
             "design",
-            "the [design] table (observer, channel poles, filter poles, mu, beta)",
+            &format!("the [design] table (observer, channel poles, filter poles, mu, beta), or {AUTO_DESIGN} to choose them all"),
             partial_design,
         )?;
         let simulation = root.get("simulation", simulation)?.unwrap_or_default();

@@ -857,7 +857,32 @@ pub(super) fn check<'a>(run: &Run<'a>, integrator: &Integrator) -> Result<Contin
     if let Some(a) = actuator {
         settings::check_integrator_delays("truth.actuator_delays", &a.delays, horizon)?;
     }
+    if let Some(b) = noise.and_then(|n| n.bandwidth) {
+        check_noise_bandwidth(b, loop_rate(run.design, truth, [run.reference, run.disturbance]), horizon.1)?;
+    }
     Ok(sys)
+}
+
+/// Band-limited noise beyond this many times the loop's fastest rate ρ (in cycles, ρ/2π) is refused:
+/// the loop filters it out, and the integrator resolves it at several steps a cycle (a bandwidth of
+/// 1e6 on a loop at 1e2 ran out of memory as a blow-up does).
+const MAX_NOISE_OVER_RATE: f64 = 1e3;
+
+/// `noise.bandwidth` (cycles per unit of time) within [`MAX_NOISE_OVER_RATE`] × ρ/2π.
+fn check_noise_bandwidth(bandwidth: f64, rho: f64, unit: crate::settings::TimeUnit) -> Result<(), KeyError> {
+    let max = MAX_NOISE_OVER_RATE * rho / std::f64::consts::TAU;
+    if bandwidth <= max || !max.is_finite() {
+        return Ok(());
+    }
+    Err(KeyError::new(
+        "noise.bandwidth",
+        format!(
+            "expected at most {} cycles per {unit} ({MAX_NOISE_OVER_RATE:e}× the loop's fastest rate ρ = {} rad/{unit}: the loop filters out noise beyond its bandwidth, and the integrator would resolve it at several steps a cycle), found {}; about 10× the loop's bandwidth is the usual choice",
+            settings::fmt_short(crate::settings::three_digits_down(max)),
+            settings::fmt_short(rho),
+            settings::fmt_short(bandwidth)
+        ),
+    ))
 }
 
 /// The continuous loop of `run` ([`Run::simulate`]), integrated as `integrator` says: the plant
