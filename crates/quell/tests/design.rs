@@ -634,6 +634,8 @@ fn chain_observer_with_a_large_gain_is_designed_and_reported_fragile() {
     let w = warnings.iter().find(|w| w.key == "design.observer_poles").expect("a fragility warning");
     assert!(w.eigenvector_condition > 1e8, "{w:?}");
     assert!(w.message.contains("κ₂"), "{}", w.message);
+    // The poles are distinct: the advice is not to make them so (it said "give distinct poles").
+    assert!(w.message.contains("the poles are distinct") && !w.message.contains("give distinct"), "{}", w.message);
 }
 
 #[test]
