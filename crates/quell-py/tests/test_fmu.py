@@ -202,6 +202,11 @@ def test_fmi3_calls_one_by_one(tmp_path):
 
     fmu = slave()
     fmu.instantiate(logMessage=lambda env, status, category, message: logged.append(message.decode()))
+    # A step outside step mode (before initialization, after terminate) was accepted and stepped.
+    not_stepping = "fmi3DoStep: the FMU is not in step mode; call it between ExitInitializationMode and Terminate"
+    with pytest.raises(FMICallException, match="status 3"):
+        fmu.doStep(0.0, 0.05)
+    assert logged[-1].startswith(not_stepping), logged[-1]
     fmu.enterInitializationMode(startTime=1.0)
     fmu.exitInitializationMode()
     assert fmu.getFloat64([vr["time"]]) == [1.0]
@@ -224,6 +229,10 @@ def test_fmi3_calls_one_by_one(tmp_path):
         assert logged[-1].startswith(why), (logged[-1], why)
     assert fmu.getFloat64([vr["time"], vr["y[2]"]]) == [1.1, 0.0]  # nothing was set or stepped
     fmu.terminate()
+    with pytest.raises(FMICallException, match="status 3"):
+        fmu.doStep(1.1, 0.05)
+    assert logged[-1].startswith(not_stepping), logged[-1]
+    assert fmu.getFloat64([vr["time"]]) == [1.1]
     fmu.freeInstance()
 
     events = slave()
