@@ -116,13 +116,9 @@ pub(crate) fn print_json(value: &serde_json::Value) {
 /// sampled-data scenario the flag makes of it (white noise needs no bandwidth there).
 pub(crate) fn load(path: Option<&Path>, sample_time: Option<f64>) -> Result<(Scenario, Design), Failure> {
     let parsed = match path {
-        Some(p) => quell::settings::read_input(p).map_err(|e| quell::scenario::ScenarioError {
-            key: p.display().to_string(),
-            message: format!("cannot read the file: {e}"),
-        }),
-        None => Ok(PAPER_EXAMPLE.to_string()),
-    }
-    .and_then(|text| quell::scenario::parse_document(&text));
+        Some(p) => quell::scenario::read_document(p),
+        None => quell::scenario::parse_document(PAPER_EXAMPLE),
+    };
     let scenario = parsed
         .and_then(|mut doc| {
             if let Some(t) = sample_time.filter(|t| t.is_finite() && *t > 0.0) {

@@ -167,9 +167,7 @@ impl FromStr for Scenario {
 impl Scenario {
     /// Reads and validates a scenario file; I/O errors carry the path as key.
     pub fn from_path(path: &Path) -> Result<Scenario, ScenarioError> {
-        let text = crate::settings::read_input(path)
-            .map_err(|e| err(path.display().to_string(), format!("cannot read the file: {e}")))?;
-        Scenario::from_toml(&text)
+        Scenario::from_document(&read_document(path)?)
     }
 
     /// Parses and validates a scenario.
@@ -289,9 +287,10 @@ pub fn parse_document(text: &str) -> Result<toml::Table, ScenarioError> {
     })
 }
 
-/// Reads a scenario file's TOML document; I/O errors carry the path as key.
+/// Reads a scenario file's TOML document, at most [`crate::settings::MAX_INPUT_BYTES`] of it; I/O
+/// errors carry the path as key.
 pub fn read_document(path: &Path) -> Result<toml::Table, ScenarioError> {
-    let text = std::fs::read_to_string(path)
+    let text = crate::settings::read_input(path)
         .map_err(|e| err(path.display().to_string(), format!("cannot read the file: {e}")))?;
     parse_document(&text)
 }

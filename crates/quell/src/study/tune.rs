@@ -338,12 +338,10 @@ impl Search<'_> {
             let x = k as f64 / (points - 1) as f64;
             if ratio.is_finite() {
                 lo * ratio.powf(x)
-            } else if k == 0 || k + 1 == points {
-                if k == 0 {
-                    lo
-                } else {
-                    hi
-                }
+            } else if k == 0 {
+                lo
+            } else if k + 1 == points {
+                hi
             } else {
                 (lo.ln() + x * (hi.ln() - lo.ln())).exp().clamp(lo, hi)
             }
