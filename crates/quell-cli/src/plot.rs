@@ -119,7 +119,7 @@ fn panel<DB: DrawingBackend>(
         .draw()
         .map_err(|e| e.to_string())?;
     for (k, (name, points)) in series.iter().enumerate() {
-        let color = Palette99::pick(k).to_rgba();
+        let color = pick(k);
         let finite = || points.iter().copied().filter(|(_, v)| v.is_finite());
         // A 2 px line is drawn as a polygon per segment, which breaks up on steep segments (a
         // transient of ±300 V in 1 ms drew as detached slivers); a 1 px line beneath keeps it whole.
@@ -137,14 +137,69 @@ fn panel<DB: DrawingBackend>(
         9..=MAX_LEGEND => 10,
         _ => return Ok(()),
     };
+    let entries = series.len() as f64;
+    let longest = series.iter().map(|(name, _)| name.chars().count()).max().unwrap_or(0) as f64;
+    let (w, h) = chart.plotting_area().dim_in_pixel();
+    // The legend's box: a 20 px line, the label at ~0.6 em a character, a row per entry.
+    let size = (
+        (36.0 + 0.6 * font as f64 * longest) / w.max(1) as f64,
+        (8.0 + entries * (font as f64 + 6.0)) / h.max(1) as f64,
+    );
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
+        .position(legend_corner(series, ((t0, t1), (y0, y1)), size))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .label_font(("sans-serif", font))
         .draw()
         .map_err(|e| e.to_string())
+}
+
+/// The corner of a panel whose legend box (`size`, as fractions of the plotting area) covers the
+/// fewest samples of `series` in the view `((t0, t1), (y0, y1))`: the upper right unless it hides
+/// more than another corner does.
+fn legend_corner(
+    series: &[Series],
+    ((t0, t1), (y0, y1)): ((f64, f64), (f64, f64)),
+    size: (f64, f64),
+) -> SeriesLabelPosition {
+    let corners = [
+        (SeriesLabelPosition::UpperRight, true, true),
+        (SeriesLabelPosition::UpperLeft, false, true),
+        (SeriesLabelPosition::LowerRight, true, false),
+        (SeriesLabelPosition::LowerLeft, false, false),
+    ];
+    let inside = |&(right, upper): &(bool, bool), (t, v): (f64, f64)| {
+        let (x, y) = ((t - t0) / (t1 - t0), (v - y0) / (y1 - y0));
+        (if right { x >= 1.0 - size.0 } else { x <= size.0 }) && (if upper { y >= 1.0 - size.1 } else { y <= size.1 })
+    };
+    let hidden = |corner: &(bool, bool)| {
+        series.iter().flat_map(|(_, p)| p.iter()).filter(|&&point| inside(corner, point)).count()
+    };
+    let counts: Vec<usize> = corners.iter().map(|&(_, right, upper)| hidden(&(right, upper))).collect();
+    let best = (0..corners.len()).min_by_key(|&k| counts[k]).unwrap_or(0);
+    corners[best].0.clone()
+}
+
+/// The k-th series' colour: matplotlib's ten ("tab10", told apart in print and by most colour
+/// vision), then plotters' 99.
+fn pick(k: usize) -> RGBAColor {
+    const TAB10: [(u8, u8, u8); 10] = [
+        (31, 119, 180),
+        (255, 127, 14),
+        (44, 160, 44),
+        (214, 39, 40),
+        (148, 103, 189),
+        (140, 86, 75),
+        (227, 119, 194),
+        (127, 127, 127),
+        (188, 189, 34),
+        (23, 190, 207),
+    ];
+    match TAB10.get(k) {
+        Some(&(r, g, b)) => RGBColor(r, g, b).to_rgba(),
+        None => Palette99::pick(k).to_rgba(),
+    }
 }
 
 /// The most series a panel's legend lists ([`panel`]).
@@ -173,13 +228,15 @@ fn draw<DB: DrawingBackend>(
         time,
     )?;
     panel(&areas[1], (&format!("{channel}: tracking error"), "e = y − g"), &[(format!("e{c}"), col(&r.e))], time)?;
-    panel(&areas[2], (&format!("{channel}: adaptive command (25)"), "u"), &[(format!("u{c}"), col(&r.u))], time)?;
+    // A sampled run's commands are held between samples ([`SimResult::commands_held`]).
+    let held = |sig: &[f64]| if r.commands_held() { staircase(&col(sig)) } else { col(sig) };
+    panel(&areas[2], (&format!("{channel}: adaptive command (25)"), "u"), &[(format!("u{c}"), held(&r.u))], time)?;
     // The plant input u_f (5), what the actuator must deliver, in its own panel: in a plant's units
     // (newtons, volts) it can be 1e5 times u.
     panel(
         &areas[3],
         (&format!("{input}: plant input u_f (5), what the actuator delivers"), "u_f"),
-        &[(format!("uf{c}"), col(&r.u_f))],
+        &[(format!("uf{c}"), held(&r.u_f))],
         time,
     )?;
     let etas: Vec<Series> = (0..r.q)
@@ -195,6 +252,18 @@ fn draw<DB: DrawingBackend>(
     };
     panel(&areas[4], (&title, "η"), &etas, time)?;
     root.present().map_err(|e| e.to_string())
+}
+
+/// The corners of a zero-order hold through `points`: each value kept until the next point's t.
+fn staircase(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let mut corners = Vec::with_capacity(2 * points.len());
+    for (k, &(t, v)) in points.iter().enumerate() {
+        if k > 0 {
+            corners.push((t, points[k - 1].1));
+        }
+        corners.push((t, v));
+    }
+    corners
 }
 
 /// Writes `channel{i+1}.png` and `.svg` into `dir`, each atomically; t in the run's unit of time.
@@ -437,7 +506,7 @@ fn draw_sweep_panel<DB: DrawingBackend>(
         .label_style(("sans-serif", 13))
         .draw()
         .map_err(|e| e.to_string())?;
-    let medians = draw_quantile_bands(&mut chart, &at, Palette99::pick(i).to_rgba())?;
+    let medians = draw_quantile_bands(&mut chart, &at, pick(i))?;
     if medians < s.points.len() {
         missing_median_note(&mut chart, missing_median(figure, empty), empty, (x0, x1), (y0, y1))?;
     }
@@ -656,7 +725,7 @@ fn draw_distributions<DB: DrawingBackend>(
                 missing_median_note(&mut chart, [why.into(), String::new()], true, (x0, x1), (0.0, 1.02))?;
                 continue;
             }
-            let color = Palette99::pick(i).to_rgba();
+            let color = pick(i);
             chart.draw_series(LineSeries::new(ecdf(&x, draws), color.stroke_width(2))).map_err(|e| e.to_string())?;
         }
     }
@@ -738,7 +807,7 @@ fn draw_tune<DB: DrawingBackend>(
             .label_style(("sans-serif", 13))
             .draw()
             .map_err(|e| e.to_string())?;
-        let color = Palette99::pick(c.channel).to_rgba();
+        let color = pick(c.channel);
         chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2))).map_err(|e| e.to_string())?;
         chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled()))).map_err(|e| e.to_string())?;
         // Evaluations without an objective (not completed, beyond a limit, never settled): marked
@@ -773,7 +842,28 @@ pub fn plot_tune(dir: &Path, r: &quell::study::TuneResult, unit: TimeUnit) -> io
 
 #[cfg(test)]
 mod tests {
-    use super::{axis_coords, decade_label, tick_label, widened, AxisScale};
+    use super::{axis_coords, decade_label, legend_corner, staircase, tick_label, widened, AxisScale};
+    use plotters::prelude::SeriesLabelPosition;
+
+    #[test]
+    fn the_legend_goes_to_the_corner_that_hides_the_fewest_samples() {
+        let view = ((0.0, 10.0), (-1.0, 1.0));
+        let series = |points: Vec<(f64, f64)>| vec![("y".to_string(), points)];
+        // A curve rising from the lower left to the upper right: the legend leaves the upper right.
+        let rising = series((0..=100).map(|k| (0.1 * k as f64, -1.0 + 0.02 * k as f64)).collect());
+        let corner = legend_corner(&rising, view, (0.2, 0.2));
+        assert!(matches!(corner, SeriesLabelPosition::UpperLeft), "{corner:?}");
+        // A flat line at zero hides nothing in any corner: the upper right.
+        let flat = series((0..=100).map(|k| (0.1 * k as f64, 0.0)).collect());
+        assert!(matches!(legend_corner(&flat, view, (0.2, 0.2)), SeriesLabelPosition::UpperRight));
+    }
+
+    #[test]
+    fn a_held_signal_keeps_each_value_until_the_next_sample() {
+        let corners = staircase(&[(0.0, 1.0), (0.5, 3.0), (1.0, -2.0)]);
+        assert_eq!(corners, [(0.0, 1.0), (0.5, 1.0), (0.5, 3.0), (1.0, 3.0), (1.0, -2.0)]);
+        assert!(staircase(&[]).is_empty());
+    }
 
     #[test]
     fn grids_over_two_decades_are_drawn_on_a_log_axis() {

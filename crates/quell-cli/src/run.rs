@@ -1,6 +1,7 @@
 //! `quell run`: load the scenario and design, check every input, simulate (Ctrl-C stops at the next
 //! recorded sample), write the files, report how the run ended.
 
+use std::fmt::Write as _;
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -224,7 +225,7 @@ fn write_data(dir: &Path, done: &Finished<'_>) -> std::io::Result<()> {
 }
 
 /// Channel i's convergence figures and advice, under its line of figures.
-fn report_diagnostics(d: &ChannelDiagnostics, time: TimeUnit) {
+fn report_diagnostics(d: &ChannelDiagnostics, time: TimeUnit, text: &mut String) {
     let trend = d.tail_trend.map_or(String::new(), |r| format!(", tail RMS ratio (last two tenths) {r:.2}"));
     // A singular Ω̄ (fewer excited directions than q) gives 1/(μλ_min) = ∞; the error does not depend
     // on the unexcited directions, so the excited ones' slowest time is the one that matters.
@@ -241,16 +242,17 @@ fn report_diagnostics(d: &ChannelDiagnostics, time: TimeUnit) {
     } else {
         String::new()
     };
-    eprintln!(
+    let _ = writeln!(
+        text,
         "  Ω̄: λ_min = {:.3e}, λ_max = {:.3e}; convergence time 1/(μλ_min) = {convergence}, adaptation rate μλ_max = {:.3e}/{time}{excited}{trend}",
         d.lambda_min_omega, d.lambda_max_omega, d.adaptation_rate
     );
     for line in &d.advice {
-        eprintln!("  advice: {line}");
+        let _ = writeln!(text, "  advice: {line}");
     }
 }
 
-/// The per-channel figures and what was written (exit 0), or why the run did not reach t_end
+/// The per-channel figures on stdout and what was written on stderr (exit 0), or why the run did not reach t_end
 /// (exit 1; the files hold the samples up to then). A channel is named by its output where the
 /// scenario names them (`channel 1 (pitch): …`).
 fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
@@ -259,6 +261,7 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
     let out = out.display();
     match result.outcome.as_ref().unwrap_or(&Outcome::Completed) {
         Outcome::Completed => {
+            let mut text = String::new();
             for (i, c) in result.summary().iter().enumerate() {
                 let settle = match (c.figures.settle_t, &c.settle_note) {
                     (Some(t), _) => format!("settled (2 % band) at t = {} {}", short(t), result.time_unit),
@@ -266,7 +269,8 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
                     (None, None) => "not settled".into(),
                 };
                 let name = outputs.and_then(|o| o.get(i)).map_or(String::new(), |n| format!(" ({n})"));
-                eprintln!(
+                let _ = writeln!(
+                    text,
                     "channel {}{name}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {}, max|u_f| = {}, ‖η̂‖ = {:.4e}, {settle}",
                     i + 1,
                     c.figures.tail_max_e,
@@ -276,15 +280,21 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
                     c.final_eta_norm
                 );
                 if let Some(d) = diagnostics.channels.get(i) {
-                    report_diagnostics(d, scenario.plant.time_unit);
+                    report_diagnostics(d, scenario.plant.time_unit, &mut text);
                 }
             }
             for line in &diagnostics.advice {
-                eprintln!("  advice: {line}");
+                let _ = writeln!(text, "  advice: {line}");
             }
             for (i, f) in result.limited_fraction().iter().enumerate().filter(|(_, &f)| f > 0.0) {
-                eprintln!("input {}: clipped by truth.u_max[{i}] at {:.1} % of the recorded samples", i + 1, 100.0 * f);
+                let _ = writeln!(
+                    text,
+                    "input {}: clipped by truth.u_max[{i}] at {:.1} % of the recorded samples",
+                    i + 1,
+                    100.0 * f
+                );
             }
+            crate::print_stdout(&text);
             let steps = match result.stats {
                 RunStats::Continuous(stats) => format!("{} solver steps", stats.steps),
                 RunStats::Sampled { controller_steps, .. } => format!("{controller_steps} controller steps"),

@@ -315,7 +315,7 @@ fn run_paper_example_writes_every_file() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     // The report's convergence line: g and ω have the modes 0, ±1j and ±2j rad/s, five of the q = 8
     // regressor directions, so Ω̄_i is singular and the excited directions' time is the one given.
-    let report = stderr(&o);
+    let report = stdout(&o);
     assert_eq!(report.matches("1/(μλ_min) = ∞ (Ω̄ singular)").count(), 2, "{report}");
     assert_eq!(report.matches("the 5 excited directions").count(), 2, "{report}");
 
@@ -406,8 +406,8 @@ fn run_out_unwritable_exits_2_before_work() {
         assert_eq!(o.status.code(), Some(2), "--out {}: {err}", out.display());
         assert!(err.contains("--out"), "--out {}: {err}", out.display());
         assert_eq!(err.trim().lines().count(), 1, "{err}");
-        // Before any work: no simulation summary on stderr.
-        assert!(!err.contains("channel 1:") && !err.contains("wrote"), "{err}");
+        // Before any work: no simulation summary.
+        assert!(!stdout(&o).contains("channel 1:") && !err.contains("wrote"), "{err}");
     }
     assert_eq!(fs::read(&file).unwrap(), b"not a directory", "the file used as --out was changed");
 }
@@ -826,12 +826,13 @@ fn signal_names_label_the_channel_lines_and_change_no_file() {
         fs::write(&file, body).unwrap();
         let out = dir.path().join(tag);
         let o = quell(&["run", file.to_str().unwrap(), "--out", out.to_str().unwrap(), "--no-plots"]);
-        let err = stderr(&o);
-        assert_eq!(o.status.code(), Some(0), "{err}");
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let summary = stdout(&o);
         let first = if tag == "named" { "channel 1 (pitch): tail max|e|" } else { "channel 1: tail max|e|" };
         assert!(
-            err.contains(first) && err.contains(if tag == "named" { "channel 2 (roll): " } else { "channel 2: " }),
-            "{err}"
+            summary.contains(first)
+                && summary.contains(if tag == "named" { "channel 2 (roll): " } else { "channel 2: " }),
+            "{summary}"
         );
         csv.push(fs::read(out.join("signals.csv")).unwrap());
     }
@@ -927,8 +928,9 @@ fn the_plant_time_unit_labels_figures_reports_and_the_header() {
             svg.contains("Channel 1 (x_D): output and reference") && svg.contains("Input 1 (reflux): plant input u_f")
         );
         assert_eq!(read_json(&out.join("summary.json"))["time_unit"], tag);
-        assert!(err.contains("adaptation rate μλ_max = ") && err.contains(&format!("/{tag}")), "{err}");
-        assert!(err.contains(&format!("enters the band at t = 29 {tag} only in the last 5 %")), "{err}");
+        let report = stdout(&o);
+        assert!(report.contains("adaptation rate μλ_max = ") && report.contains(&format!("/{tag}")), "{report}");
+        assert!(report.contains(&format!("enters the band at t = 29 {tag} only in the last 5 %")), "{report}");
         csv.push(fs::read(out.join("signals.csv")).unwrap());
         let design = quell(&["design", file.to_str().unwrap()]);
         assert!(stdout(&design).contains(&format!("t_end = 30 {tag})")), "{}", stdout(&design));

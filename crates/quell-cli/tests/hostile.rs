@@ -253,7 +253,7 @@ fn the_report_prints_eta_with_significant_digits() {
         &tmp.path().join("o").display().to_string(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let line = stderr(&o).lines().find(|l| l.starts_with("channel 1:")).unwrap().to_string();
+    let line = String::from_utf8_lossy(&o.stdout).lines().find(|l| l.starts_with("channel 1:")).unwrap().to_string();
     let eta = line.split("‖η̂‖ = ").nth(1).unwrap().split(',').next().unwrap();
     assert!(eta.contains('e'), "{line}");
     let value: f64 = eta.trim().parse().unwrap();

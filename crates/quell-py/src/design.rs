@@ -277,7 +277,7 @@ pub fn place<'py>(
     let k = Kind::Design;
     let (A, B) = (matrix(A, "A", k)?, matrix(B, "B", k)?);
     let p = crate::convert::poles(poles, "poles", k)?;
-    let K = py.detach(|| quell::place(&A, &B, &p)).map_err(|e| match e {
+    let K = crate::interrupt::interruptible(py, || quell::place(&A, &B, &p))?.map_err(|e| match e {
         quell::PlaceError::Matrix(e) => k.err(py, e.to_string()),
         e => k.err(py, format!("poles: {e}")),
     })?;

@@ -220,6 +220,12 @@ impl PySimResult {
     fn time_unit(&self) -> &'static str {
         self.inner.time_unit.symbol()
     }
+    /// Whether u and u_f hold their value from one row to the next: a sampled-data run whose
+    /// sample time is at least the row spacing (`plot` then draws them as staircases).
+    #[getter]
+    fn commands_held(&self) -> bool {
+        self.inner.commands_held()
+    }
     /// Per input, the fraction of the recorded samples at which the true plant's actuator limit
     /// (`[truth] u_max`) clipped it, as summary.json's `limited_fraction`; None without limits.
     #[getter]

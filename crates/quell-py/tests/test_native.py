@@ -63,6 +63,32 @@ def test_plot_takes_axes_and_figsize():
         r.plot(channel="2")
     with pytest.raises(TypeError, match="ax: expected one matplotlib Axes, four or five"):
         r.plot(ax=[one, one])
+    with pytest.raises(TypeError, match="fig and ax: expected one of them or neither"):
+        r.plot(fig=own, ax=one)
+    plt.close("all")
+
+
+def test_a_sampled_runs_held_commands_are_drawn_as_staircases():
+    """u and u_f hold between samples when the sample time spans a row (T_s = 0.1 = the row
+    spacing, the paper's delays 1 s and 3 s being whole numbers of samples); at T_s = 1 ms a row
+    is a point sample of a finer staircase, and the continuous loop's u is not held."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    import pytest
+
+    s = quell.paper_example()
+    with pytest.warns(UserWarning, match="sample_time: T_s = 0.1 s"):  # coarse for the design, and said so
+        coarse = quell.simulate(s, t_end=1.0, sample_time=0.1)
+    fine, continuous = (quell.simulate(s, t_end=1.0, sample_time=T) for T in (1e-3, None))
+    assert coarse.commands_held and not fine.commands_held and not continuous.commands_held
+    for r, style in ((coarse, "steps-post"), (continuous, "default")):
+        fig = r.plot(channel=2)
+        u_line, uf_line = fig.axes[2].lines[0], fig.axes[3].lines[0]
+        assert u_line.get_drawstyle() == uf_line.get_drawstyle() == style
+        np.testing.assert_array_equal(uf_line.get_ydata(), r.u_f[:, 1])
     plt.close("all")
 
 

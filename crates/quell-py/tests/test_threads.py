@@ -93,33 +93,29 @@ def test_one_controller_shared_by_threads_serializes_its_steps():
     np.testing.assert_array_equal(shared.x_hat(), alone.x_hat())
 
 
-def test_ctrl_c_stops_a_large_design(python_child):
-    """SIGINT during quell.design of a 500-state plant (seconds of pole placement: 2 outputs place
-    500 observer poles, which KNV0 sweeps and then refuses) raises KeyboardInterrupt promptly, not
-    when the design returns.
+# A 500-state plant with two inputs and outputs, and 500 observer poles near its own.
+LARGE_PLANT = (
+    "import time, numpy as np, quell\n"
+    "n = 500; rng = np.random.default_rng(1)\n"
+    "G = rng.normal(size=(n, n)) * 0.3 / np.sqrt(n)\n"
+    "A = -np.diag(1.0 + 0.05 * np.arange(n)) + (G + G.T) / 2\n"
+    "B = rng.normal(size=(n, 2))\n"
+    "p = quell.Plant(A, B, B.T.copy(), delays=[0.0, 0.0])\n"
+    "poles = list(np.linalg.eigvalsh(A) - 0.3)\n"
+)
 
-    Measured in CPU time, not wall time, so that load on the machine does not move the bound: the
-    child reports the CPU its process spent inside quell.design until KeyboardInterrupt reached it.
-    The whole design takes 15.9 s of CPU (50 s of wall time at load 10); interrupted 0.2 s to 3 s
-    into it, the child had spent 1.1-1.8 s (the phases before KNV0's first poll of the stop flag,
-    staircase and eigendecompositions, are the most of it; measured at load 10 with this test's
-    code). 6 s tells an interrupted design from one that ran to its end with a wide margin on both
-    sides; a design that ignored SIGINT would report its whole 15.9 s."""
+
+def interrupted_cpu(python_child, call):
+    """Starts `call` on LARGE_PLANT in a child, sends SIGINT 1 s into it, and returns the CPU time
+    the child spent in the call until KeyboardInterrupt reached it (CPU time, not wall time, so
+    that load on the machine does not move the bound)."""
     import signal
 
     code = (
-        "import time, numpy as np, quell\n"
-        "n = 500; rng = np.random.default_rng(1)\n"
-        "G = rng.normal(size=(n, n)) * 0.3 / np.sqrt(n)\n"
-        "A = -np.diag(1.0 + 0.05 * np.arange(n)) + (G + G.T) / 2\n"
-        "B = rng.normal(size=(n, 2))\n"
-        "p = quell.Plant(A, B, B.T.copy(), delays=[0.0, 0.0])\n"
-        "poles = list(np.linalg.eigvalsh(A) - 0.3)\n"
-        "print('ready', flush=True)\n"
+        LARGE_PLANT + "print('ready', flush=True)\n"
         "start = time.process_time()\n"
         "try:\n"
-        "    quell.design(p, observer_poles=poles, channel_poles=[[-2.0], [-3.0]],\n"
-        "                 reference_filter_poles=[[-1.0], [-1.0]], mu=[1.0, 1.0], beta=1.0)\n"
+        f"    {call}\n"
         "except KeyboardInterrupt:\n"
         "    print('cpu', time.process_time() - start, flush=True)\n"
         "    raise\n"
@@ -127,13 +123,38 @@ def test_ctrl_c_stops_a_large_design(python_child):
     )
     child = python_child(code)
     try:
-        time.sleep(1.0)  # into the design
+        time.sleep(1.0)  # into the call
         child.send_signal(signal.SIGINT)
-        out, err = child.communicate(timeout=300)  # the uninterrupted design takes ~1 min at load 10
+        out, err = child.communicate(timeout=300)  # the uninterrupted call takes ~1 min at load 10
     finally:
         child.kill()
     assert "KeyboardInterrupt" in err, err
     assert "finished" not in out
-    assert "cpu" in out, f"KeyboardInterrupt did not come from the call to quell.design: {out!r} {err[-400:]!r}"
-    cpu = float(out.split("cpu", 1)[1].split()[0])
+    assert "cpu" in out, f"KeyboardInterrupt did not come from the call: {out!r} {err[-400:]!r}"
+    return float(out.split("cpu", 1)[1].split()[0])
+
+
+def test_ctrl_c_stops_a_large_design(python_child):
+    """SIGINT during quell.design of a 500-state plant (seconds of pole placement: 2 outputs place
+    500 observer poles, which KNV0 sweeps and then refuses) raises KeyboardInterrupt promptly, not
+    when the design returns.
+
+    The whole design takes 15.9 s of CPU (50 s of wall time at load 10); interrupted 0.2 s to 3 s
+    into it, the child had spent 1.1-1.8 s (the phases before KNV0's first poll of the stop flag,
+    staircase and eigendecompositions, are the most of it; measured at load 10 with this test's
+    code). 6 s tells an interrupted design from one that ran to its end with a wide margin on both
+    sides; a design that ignored SIGINT would report its whole 15.9 s."""
+    call = (
+        "quell.design(p, observer_poles=poles, channel_poles=[[-2.0], [-3.0]], "
+        "reference_filter_poles=[[-1.0], [-1.0]], mu=[1.0, 1.0], beta=1.0)"
+    )
+    cpu = interrupted_cpu(python_child, call)
     assert cpu < 6.0, f"KeyboardInterrupt came after {cpu:.1f} s of CPU in quell.design (the whole design: 15.9 s)"
+
+
+def test_ctrl_c_stops_a_large_placement(python_child):
+    """SIGINT during quell.place of the same 500 observer poles (A', C' = B') raises
+    KeyboardInterrupt promptly. The whole placement takes about 20 s of CPU (refused at its end: the poles are too close)
+    (measured with this test's code); it had ignored SIGINT until it returned."""
+    cpu = interrupted_cpu(python_child, "quell.place(A.T, B, poles)")
+    assert cpu < 6.0, f"KeyboardInterrupt came after {cpu:.1f} s of CPU in quell.place"

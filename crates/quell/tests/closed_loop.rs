@@ -160,10 +160,16 @@ fn the_scenario_method_chooses_the_integrator_and_explicit_and_imex_agree() {
 /// would scale ξ̂ by α^q). The loop is then the same one in other units: y, u, u_f and η̂ at αt are
 /// those at t.
 fn paper_in_time_units(alpha: f64, tol: f64) -> (Design, SimResult) {
+    paper_in_units(alpha, 1.0, tol)
+}
+
+/// [`paper_in_time_units`] with the state also in other units: x → s x, so B, D and x(0) multiply
+/// by s and C divides by it; y, u, u_f and η̂ are unchanged.
+fn paper_in_units(alpha: f64, s: f64, tol: f64) -> (Design, SimResult) {
     let p = paper_plant();
     let delays = p.delays.iter().map(|d| d * alpha).collect();
-    let p =
-        quell::Plant::new(&p.A / alpha, &p.B / alpha, p.C.clone(), &p.D / alpha, p.Q.clone(), delays, None).unwrap();
+    let (B, C, D, x0) = (&p.B * (s / alpha), &p.C / s, &p.D * (s / alpha), &p.x0 * s);
+    let p = quell::Plant::new(&p.A / alpha, B, C, D, p.Q.clone(), delays, Some(x0)).unwrap();
     let poles = |v: &[f64]| v.iter().map(|&x| re(x / alpha)).collect::<Vec<_>>();
     let spec = quell::DesignSpec {
         observer: quell::ObserverChoice::Poles(poles(&[-2.0, -3.0, -4.0])),
@@ -183,8 +189,33 @@ fn paper_in_time_units(alpha: f64, tol: f64) -> (Design, SimResult) {
     let r = Run::new(&d, &g, &w, RunSettings::continuous(100.0 * alpha, 0.1 * alpha, tol, tol))
         .simulate(|_| ControlFlow::Continue(()))
         .unwrap();
-    assert_eq!(r.outcome, Some(Outcome::Completed), "α = {alpha}");
+    assert_eq!(r.outcome, Some(Outcome::Completed), "α = {alpha}, state × {s}");
     (d, r)
+}
+
+/// The divergence bound is set in the state's own scale: the paper's loop with its states in 1e9
+/// and 1e-9 times their units completes (with a bound of 1e9 in the state's coordinates the first
+/// stopped as "diverged" at t = 0.1 s, x̂_2 = 1.3e9) and is the same loop: y, u_f and η̂ agree with the unscaled run to 3e-5
+/// of each column's peak, the bound of the units-of-time test below (each run's own error at 1e-9
+/// is up to 3.1e-6 of a peak there; the scaled states change the error test's weights, so the
+/// two runs' errors differ: measured up to 2.5e-6).
+#[test]
+fn the_loop_with_states_in_other_units_is_the_same_loop() {
+    let (_, reference) = paper_in_units(1.0, 1.0, 1e-9);
+    for s in [1e9, 1e-9] {
+        let (_, r) = paper_in_units(1.0, s, 1e-9);
+        for (got, want, width) in [(&r.y, &reference.y, 2), (&r.u_f, &reference.u_f, 2), (&r.eta, &reference.eta, 16)] {
+            for j in 0..width {
+                let peak = reference.column(want, width, j).fold(0.0f64, |p, v| p.max(v.abs()));
+                let gap = r
+                    .column(got, width, j)
+                    .zip(reference.column(want, width, j))
+                    .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+                println!("state × {s:e}: column {j} of {width}: gap {:.1e} of its peak", gap / peak);
+                assert!(gap <= 3e-5 * peak, "state × {s:e}: column {j}: {gap:e} against the peak {peak:e}");
+            }
+        }
+    }
 }
 
 #[test]

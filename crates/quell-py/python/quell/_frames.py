@@ -64,6 +64,8 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None))
         and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in figsize)
     ):
         raise TypeError(f"figsize: expected (width, height) in inches, found a {type(figsize).__name__}")
+    if fig is not None and ax is not None:
+        raise TypeError("fig and ax: expected one of them or neither (ax's panels belong to a figure already), found both")
     if fig is not None and not hasattr(fig, "subplots"):
         raise TypeError(f"fig: expected a matplotlib Figure, found a {type(fig).__name__}")
     if ax is not None:
@@ -83,7 +85,9 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None))
     if len(axes) > 1:
         axes[1].plot(t, result.e[:, i], label=f"e{c}")
         axes[1].set(title=f"{channel_title}: tracking error", ylabel="e = y − g")
-        axes[2].plot(t, result.u[:, i], label=f"u{c}")
+        # A sampled run's u and u_f are held between samples (when the hold spans a row).
+        held = {"drawstyle": "steps-post"} if result.commands_held else {}
+        axes[2].plot(t, result.u[:, i], label=f"u{c}", **held)
         axes[2].set(title=f"{channel_title}: adaptive command (25)", ylabel="u")
         # u_f in a plant's units (newtons, volts) can be 1e5 times u: its own panel, or its own scale.
         if len(axes) == 5:
@@ -92,7 +96,7 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None))
         else:
             uf_ax = axes[2].twinx()
             axes[2].set(title=f"{channel_title}: adaptive command (25) and plant input (5, right axis)")
-        uf_ax.plot(t, result.u_f[:, i], color="C1", label=f"uf{c}")
+        uf_ax.plot(t, result.u_f[:, i], color="C1", label=f"uf{c}", **held)
         uf_ax.set(ylabel="u_f")
         eta_ax = axes[-1]
         for j in range(result.q):

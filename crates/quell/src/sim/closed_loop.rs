@@ -906,7 +906,7 @@ pub(super) fn simulate(
             time_unit: run.design.plant().time_unit,
             ..SimResult::new(m, q, n, RunStats::Continuous(dde::Stats::default()))
         },
-        bounds: st.bounds(),
+        bounds: run.bounds(),
         diverged: None,
         states: st.record_states,
         gw: vec![0.0; sys.signals.len()],

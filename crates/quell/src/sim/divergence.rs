@@ -3,6 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::result::Outcome;
+use crate::plant::Plant;
 
 /// The default divergence bound: a watched signal above this magnitude ends the run.
 pub const DIVERGENCE_BOUND: f64 = 1e9;
@@ -74,6 +75,18 @@ impl Peaks {
     }
 }
 
+/// The plant state's scale in its own coordinates, by which the divergence bound on x and x̂ is
+/// multiplied: max(1, |x(0)|∞, 1/σ_min(C)), σ_min(C) C's smallest nonzero singular value. An output
+/// of size 1 needs a state of at least 1/σ_min(C), so the bound is one on the outputs' scale:
+/// states in 1e9 times the outputs' units (C = 1e-9 I) are judged as states in those units are,
+/// and a plant whose outputs read its states with gains of 1 or more (the paper's) keeps 1.
+pub(crate) fn state_scale(plant: &Plant) -> f64 {
+    let sv = plant.C.singular_values();
+    let largest = sv.max();
+    let smallest = sv.iter().copied().filter(|&s| s > largest * 1e-12).fold(f64::INFINITY, f64::min);
+    [1.0 / smallest, plant.x0.amax()].into_iter().filter(|v| v.is_finite()).fold(1.0, f64::max)
+}
+
 /// Whether v is outside [−bound, bound] or not finite (so NaN is always beyond).
 pub(crate) fn beyond(v: f64, bound: f64) -> bool {
     !(v.is_finite() && v.abs() <= bound)
@@ -97,6 +110,21 @@ pub(crate) fn check_bound(bound: f64) -> Result<(), crate::settings::KeyError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::{dmatrix, dvector, DMatrix};
+
+    #[test]
+    fn the_state_scale_is_the_state_a_unit_output_needs() {
+        let plant = |c: f64, x0: f64| {
+            let C = dmatrix![c, 0.0, 0.0; 0.0, 2.0 * c, 0.0];
+            let (A, B, D, Q) = (DMatrix::zeros(3, 3), DMatrix::zeros(3, 2), DMatrix::zeros(3, 1), DMatrix::zeros(2, 1));
+            Plant::new(A, B, C, D, Q, vec![0.0, 0.0], Some(dvector![x0, 0.0, 0.0])).unwrap()
+        };
+        // σ_min(C) = c.
+        assert!((state_scale(&plant(1e-9, 0.0)) / 1e9 - 1.0).abs() < 1e-12);
+        assert!((state_scale(&plant(0.25, 0.0)) - 4.0).abs() < 1e-12);
+        assert_eq!(state_scale(&plant(1e3, 0.0)), 1.0, "never below 1");
+        assert_eq!(state_scale(&plant(1.0, -7.0)), 7.0, "nor below |x(0)|");
+    }
 
     #[test]
     fn peaks_record_the_largest_magnitudes_and_bound_each_signal() {

@@ -151,12 +151,6 @@ impl RunSettings {
         }
         Ok(())
     }
-
-    /// The bound per watched signal: `runaway`'s, at most `divergence_bound`.
-    fn bounds(&self) -> Peaks {
-        let bound = self.divergence_bound;
-        Peaks(self.runaway.map_or([bound; 4], |r| r.0.map(|b| b.min(bound))))
-    }
 }
 
 /// One run of the closed loop: a design, the plant simulated (its model unless [`Run::truth`]
@@ -227,6 +221,20 @@ impl<'a> Run<'a> {
             }
             Loop::Sampled { .. } => 0,
         }
+    }
+
+    /// The bound per watched signal (x, x̂, ξ̂, η̂): `divergence_bound`, times the state's scale in
+    /// its coordinates for x and x̂ ([`divergence::state_scale`]), and at most `runaway`'s.
+    fn bounds(&self) -> Peaks {
+        let b = self.settings.divergence_bound;
+        let scale = divergence::state_scale;
+        let mut bounds = [b * scale(self.truth), b * scale(self.design.plant()), b, b];
+        if let Some(r) = self.settings.runaway {
+            for (bound, runaway) in bounds.iter_mut().zip(r.0) {
+                *bound = bound.min(runaway);
+            }
+        }
+        Peaks(bounds)
     }
 
     /// Every check the run makes before it starts (settings, signals, truth; in the sampled-data

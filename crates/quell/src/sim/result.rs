@@ -243,6 +243,16 @@ impl SimResult {
         !self.x.is_empty()
     }
 
+    /// Whether u and u_f hold their value from one row to the next: a sampled-data run whose
+    /// zero-order hold (T_s) lasts at least the row spacing. Figures then draw them as staircases;
+    /// with rows sparser than T_s, a row is a point sample of a finer staircase.
+    pub fn commands_held(&self) -> bool {
+        match (self.stats, self.t.as_slice()) {
+            (RunStats::Sampled { sample_time, .. }, [t0, t1, ..]) => sample_time >= (t1 - t0) * (1.0 - 1e-9),
+            _ => false,
+        }
+    }
+
     /// Number of samples.
     pub fn len(&self) -> usize {
         self.t.len()
@@ -358,6 +368,30 @@ mod tests {
         assert_eq!(r.max_abs_error(0, 90.0, 100.0), None, "window past the horizon (a run that stopped early)");
         push(&mut r, 3.0, f64::NAN);
         assert!(r.max_abs_error(0, 0.0, 3.0).unwrap().is_nan(), "a NaN error is not hidden by max");
+    }
+
+    #[test]
+    fn commands_are_held_when_the_sample_time_spans_a_row() {
+        let rows = |stats: RunStats, dt: f64| {
+            let mut r = SimResult::new(1, 1, 1, stats);
+            for k in 0..3 {
+                r.push(&Sample {
+                    t: k as f64 * dt,
+                    y: &[0.0],
+                    g: &[0.0],
+                    u: &[0.0],
+                    u_f: &[0.0],
+                    eta: &[0.0],
+                    states: None,
+                });
+            }
+            r.commands_held()
+        };
+        let sampled = |sample_time| RunStats::Sampled { controller_steps: 0, sample_time };
+        assert!(rows(sampled(0.1), 0.1), "a row per sample");
+        assert!(rows(sampled(0.5), 0.1), "five rows per sample");
+        assert!(!rows(sampled(0.001), 0.1), "a hundred samples per row: a row is a point sample");
+        assert!(!rows(RunStats::Continuous(Default::default()), 0.1), "the continuous loop's u is not held");
     }
 
     #[test]

@@ -412,7 +412,7 @@ fn sampled_loop<C: SampledController + ?Sized>(
     result.time_unit = run.design.plant().time_unit;
     // x̂(k) when states are recorded (read before the step moves it to x̂(k + 1)).
     let mut x_hat = vec![0.0; n];
-    let bounds = settings.bounds();
+    let bounds = run.bounds();
     let mut outcome = Outcome::Completed;
     let mut taken = 0;
     for k in 0..=discrete::whole_samples(settings.t_end, T) {
