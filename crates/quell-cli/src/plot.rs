@@ -432,6 +432,27 @@ fn draw_sweep_1d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
     root.present().map_err(|e| e.to_string())
 }
 
+/// The grid axis's description under a sweep panel: the key and its unit, the scale, and with
+/// draws what the bands are over (the completed draws, counted where some did not complete).
+fn grid_axis_desc(s: &quell::study::Summary, scale: AxisScale) -> String {
+    let mut x_desc = key_label(&s.study.grid[0].key, &s.study.time_unit);
+    if scale == AxisScale::Log {
+        x_desc += " (log scale)";
+    }
+    if s.study.draws > 1 {
+        // Over the completed draws only: say how many those are where some did not complete.
+        let done = s.points.iter().map(|p| p.completed);
+        let (fewest, most) = done.fold((usize::MAX, 0), |(a, b), c| (a.min(c), b.max(c)));
+        let of = match (fewest, most) {
+            _ if fewest >= s.study.draws => format!("{} draws", s.study.draws),
+            (f, m) if f == m => format!("the completed draws ({f} of {})", s.study.draws),
+            (f, m) => format!("the completed draws ({f}–{m} of {})", s.study.draws),
+        };
+        x_desc += &format!("; median and 25–75, 5–95 % bands of {of}");
+    }
+    x_desc
+}
+
 /// One panel of [`draw_sweep_1d`]: channel i's `figure` against the grid's values at `x`, drawn
 /// as `scale` says.
 fn draw_sweep_panel<DB: DrawingBackend>(
@@ -483,13 +504,7 @@ fn draw_sweep_panel<DB: DrawingBackend>(
         }
         AxisScale::Positions => String::new(),
     };
-    let mut x_desc = key_label(&axis.key, &s.study.time_unit);
-    if scale == AxisScale::Log {
-        x_desc += " (log scale)";
-    }
-    if s.study.draws > 1 {
-        x_desc += &format!("; line: median, bands: 25–75 % and 5–95 % of {} draws", s.study.draws);
-    }
+    let x_desc = grid_axis_desc(s, scale);
     chart
         .configure_mesh()
         .max_light_lines(2)
@@ -561,7 +576,7 @@ fn missing_median_note<DB: DrawingBackend>(
 fn missing_median(figure: SweepFigure, all: bool) -> [String; 2] {
     let head = if all { "no grid point has a median:" } else { "some grid points have no median:" };
     let why = match figure {
-        SweepFigure::SettleT => "half the runs or more never settled (never_settled)",
+        SweepFigure::SettleT => "no completed run, or half or more never settled (never_settled)",
         _ => "no completed run there (completed)",
     };
     [head.into(), why.into()]
@@ -735,8 +750,9 @@ fn draw_distributions<DB: DrawingBackend>(
 /// Writes sweep.png and sweep.svg: for a 1-D or 2-D grid, the figures against the grid; without
 /// a grid, their distributions over the draws. A grid of three keys or more has no figure (`false`).
 pub fn plot_sweep(dir: &Path, s: &quell::study::Summary, rows: &[quell::study::Row]) -> io::Result<bool> {
-    // One channel gets 700 px: the grid axis's description (key, unit, bands) fits on one line.
-    let size = |height| ((520 * s.study.m as u32).max(700), height);
+    // A channel gets 640 px: the grid axis's description (key, unit, bands, completed draws) fits
+    // on one line.
+    let size = |height| ((640 * s.study.m as u32).max(700), height);
     let height = 300 * SweepFigure::ALL.len() as u32;
     match s.study.grid.len() {
         0 => write_figure(

@@ -67,14 +67,9 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
     }
     if let Some(c) = result.channels.iter().find(|c| c.chosen.is_none()) {
         return Err(Failure::Input(format!(
-            "channel {}: no μ in tune.mu[{}] completed with max |u_{}| ≤ tune.max_u[{}], max |u_f,{}| ≤ tune.max_uf[{}] and a finite {}; widen the bounds, raise the limits or lengthen simulation.t_end (the curve is in {})",
+            "channel {}: {} (the curve is in {})",
             c.channel + 1,
-            c.channel,
-            c.channel + 1,
-            c.channel,
-            c.channel + 1,
-            c.channel,
-            result.objective.name(),
+            c.why_none(spec, "tune."),
             args.out.join("tune.csv").display()
         )));
     }
@@ -95,7 +90,7 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
 
 /// tune.csv: every evaluation of every channel's search.
 fn write_curves(w: &mut dyn std::io::Write, r: &TuneResult) -> std::io::Result<()> {
-    writeln!(w, "channel,mu,objective,outcome,tail_max_e,tail_rms_e,max_u,max_uf,settle_t,chosen")?;
+    writeln!(w, "channel,mu,objective,outcome,reason,tail_max_e,tail_rms_e,max_u,max_uf,settle_t,chosen")?;
     // Shortest round-trip digits; in exponent form outside 1e-5..1e16, where `{}` writes every
     // zero (μ = 1e-300 took 300 characters).
     let num = |v: f64| if v == 0.0 || (1e-5..1e16).contains(&v.abs()) { v.to_string() } else { format!("{v:e}") };
@@ -106,11 +101,12 @@ fn write_curves(w: &mut dyn std::io::Write, r: &TuneResult) -> std::io::Result<(
             let chosen = c.chosen.as_ref().is_some_and(|q| q.mu == p.mu);
             writeln!(
                 w,
-                "{},{},{},{},{},{},{},{},{},{chosen}",
+                "{},{},{},{},{},{},{},{},{},{},{chosen}",
                 c.channel + 1,
                 num(p.mu),
                 opt(p.objective),
                 p.outcome.as_str(),
+                quell::study::csv_field(&p.reason),
                 opt(f.map(|f| f.tail_max_e)),
                 opt(f.map(|f| f.tail_rms_e)),
                 opt(f.map(|f| f.max_u)),
@@ -202,6 +198,7 @@ mod tests {
             mu,
             objective: Some(objective),
             outcome: Outcome::Completed,
+            reason: String::new(),
             figures: None,
         };
         let curve = vec![point(1000.0, 3.0), point(37275.9, 1.0)];

@@ -265,7 +265,7 @@ impl PySimResult {
     /// -------
     /// list of dict
     ///     Per channel: tail max |e_i| and RMS e_i over the last 10 % of the horizon
-    ///     (`tail_max_e`, `tail_rms_e`), `max_u`, `max_uf` (the plant input),
+    ///     (`tail_max_e`, `tail_rms_e`; None for a run that stopped before t_end), `max_u`, `max_uf` (the plant input),
     ///     `final_eta_norm` (‖η̂_i‖ at the end), `settle_t` (2 % band; None when not settled, or only
     ///     in the last 5 % of the horizon) and `settle_note` (why settle_t is None).
     ///
@@ -285,8 +285,10 @@ impl PySimResult {
             .map(|c| {
                 let d = PyDict::new(py);
                 let f = &c.figures;
-                d.set_item("tail_max_e", f.tail_max_e)?;
-                d.set_item("tail_rms_e", f.tail_rms_e)?;
+                // NaN (a run stopped before its tail, or a NaN in it) is None, as summary.json's null.
+                let number = |v: f64| (!v.is_nan()).then_some(v);
+                d.set_item("tail_max_e", number(f.tail_max_e))?;
+                d.set_item("tail_rms_e", number(f.tail_rms_e))?;
                 d.set_item("max_u", f.max_u)?;
                 d.set_item("max_uf", f.max_uf)?;
                 d.set_item("final_eta_norm", c.final_eta_norm)?;

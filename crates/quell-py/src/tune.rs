@@ -141,12 +141,13 @@ pub fn tune(
     // As `quell tune`'s exit status 2: a channel without a feasible μ keeps the scenario's.
     for c in result.channels.iter().filter(|c| c.chosen.is_none() && !result.partial) {
         let i = c.channel;
+        let spec = study.tune.as_ref().expect("a tuning study has its [tune]");
         crate::errors::warn(
             py,
             &format!(
-                "channel {}: no μ in mu[{i}] completed within max_u and max_uf with a finite {}; mu[{i}] is the scenario's, {} (feasible[{i}] is False): widen the bounds, raise the limits or lengthen t_end (the curve is in .frame)",
+                "channel {}: {}; mu[{i}] is the scenario's, {} (feasible[{i}] is False; the curve is in .frame)",
                 i + 1,
-                result.objective.name(),
+                c.why_none(spec, ""),
                 result.mu[i]
             ),
         )?;

@@ -219,3 +219,17 @@ def test_a_bad_state_is_refused_naming_the_entry():
     # A checkpoint of another sample time does not fit.
     with pytest.raises(quell.ControllerError, match="the state needs"):
         quell.Controller(quell.paper_example().design(), 5e-3).__setstate__(state)
+
+
+def test_a_diverged_runs_summary_has_no_tail():
+    """The paper's loop sampled at T_s = 0.2 s diverges at t ≈ 36 s of 100: the last 10 % of the
+    horizon was never reached, so the tail figures are None (summary.json's null), not the error
+    over the last tenth of what ran (2.8e8 before); the peaks of what ran are kept."""
+    import pytest
+
+    with pytest.warns(UserWarning, match="sample_time"):
+        r = quell.simulate(quell.paper_example(), sample_time=0.2, output_step=0.2, t_end=100.0, check=False)
+    assert r.outcome["status"] == "diverged" and r.outcome["t"] < 90
+    for c in r.summary():
+        assert c["tail_max_e"] is None and c["tail_rms_e"] is None and c["settle_t"] is None, c
+        assert c["settle_note"].startswith("no tail: the run stopped at t = ") and c["max_uf"] > 0

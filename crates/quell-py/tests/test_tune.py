@@ -184,11 +184,16 @@ def test_a_channel_without_a_feasible_mu_is_warned_of_and_flagged():
     """`quell tune` exits 2 when a channel has no feasible μ; quell.tune returned the scenario's μ
     in silence. It now warns, naming the channel, and `feasible` says which channels had one."""
     s = unstable_first_order()
-    with pytest.warns(UserWarning, match=r"^channel 1: no μ in mu\[0\] completed within max_u and max_uf") as caught:
+    # The limit given is named, not max_uf, which was not.
+    with pytest.warns(UserWarning, match=r"^channel 1: no μ in mu\[0\] completed with max \|u_1\| ≤ max_u\[0\] and a finite tail_rms_e; widen the bounds, raise the limits or lengthen t_end;") as caught:
         r = quell.tune(s, mu=[1.0, 100.0], objective="tail_rms_e", max_u=1e-6, points=3, refine=0, jobs=1)
     assert len(caught) == 1 and "is the scenario's" in str(caught[0].message)
     assert r.feasible == [False] and len(r.best) == 0
     assert r.mu == [10.0]  # the scenario's μ
+    # No run completing (a step budget of 3): the reason, per evaluation too.
+    with pytest.warns(UserWarning, match=r"^channel 1: no μ in mu\[0\] completed: none of the 3 runs did \(at μ = 1: failed, the solver needed more than 3 steps"):
+        budget = quell.tune(s, mu=[1.0, 100.0], objective="tail_rms_e", max_steps=3, points=3, refine=0, jobs=1)
+    assert (budget.frame["outcome"] == "failed").all() and budget.frame["reason"].str.contains("max_steps").all()
     ok = quell.tune(s, mu=[1.0, 100.0], objective="tail_rms_e", points=3, refine=0, jobs=1)
     assert ok.feasible == [True]
     assert quell.TuneResult(r.to_json()).feasible == [False]

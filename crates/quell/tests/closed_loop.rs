@@ -284,3 +284,38 @@ fn the_loop_in_milliseconds_or_hours_is_the_same_loop() {
         }
     }
 }
+
+/// Between recorded rows a run reports its progress every `PROGRESS_EVERY` solver or controller
+/// steps, so a caller can stop a run whose only rows are t = 0 and t_end (Ctrl-C had waited for
+/// the end of such a run). Stopped at the first report after t = 0, each loop has taken exactly
+/// that many steps.
+#[test]
+fn a_run_reports_progress_between_rows() {
+    use quell::scenario::{Scenario, PAPER_EXAMPLE};
+    use quell::sim::PROGRESS_EVERY;
+    let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+    let d = s.design().unwrap();
+    let every = PROGRESS_EVERY;
+    for (settings, steps) in [
+        (RunSettings::continuous(100.0, 100.0, 1e-9, 1e-9), every),
+        // The sampled loop counts its steps from k = 0, which is a row.
+        (RunSettings::sampled(100.0, 100.0, 1e-3), every + 1),
+    ] {
+        let mut calls = Vec::new();
+        let r = Run::of(&s, &d)
+            .settings(settings)
+            .simulate(|t| {
+                calls.push(t);
+                if t > 0.0 {
+                    ControlFlow::Break(())
+                } else {
+                    ControlFlow::Continue(())
+                }
+            })
+            .unwrap();
+        assert_eq!(calls.len(), 2, "t = 0, then the first report between rows: {calls:?}");
+        assert!(matches!(r.outcome, Some(Outcome::Interrupted { t }) if t == calls[1] && t < 100.0), "{:?}", r.outcome);
+        assert_eq!(r.stats.steps(), steps);
+        assert_eq!(r.len(), 1, "only the row at t = 0 was recorded");
+    }
+}

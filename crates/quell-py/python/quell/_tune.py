@@ -6,8 +6,8 @@ import json as _json
 from ._errors import ScenarioError
 
 #: The columns of ``TuneResult.frame``, those of tune.csv.
-COLUMNS = ("channel", "mu", "objective", "outcome", "tail_max_e", "tail_rms_e", "max_u", "max_uf", "settle_t",
-           "chosen")
+COLUMNS = ("channel", "mu", "objective", "outcome", "reason", "tail_max_e", "tail_rms_e", "max_u", "max_uf",
+           "settle_t", "chosen")
 FIGURES = ("tail_max_e", "tail_rms_e", "max_u", "max_uf", "settle_t")
 
 
@@ -103,7 +103,7 @@ class TuneResult:
             for p in c["curve"]:
                 figures = p.get("figures") or {}
                 row = {"channel": c["channel"], "mu": p["mu"], "objective": p["objective"],
-                       "outcome": p["outcome"]}
+                       "outcome": p["outcome"], "reason": p.get("reason", "")}
                 row.update({f: figures.get(f) for f in FIGURES})
                 row["chosen"] = chosen is not None and chosen["mu"] == p["mu"]
                 yield row
@@ -111,8 +111,8 @@ class TuneResult:
     @property
     def frame(self):
         """Every evaluation, one row each, by channel and μ: tune.csv's columns ``channel`` (from 1),
-        ``mu``, ``objective`` (None where infeasible), ``outcome``, the channel's figures and
-        ``chosen``."""
+        ``mu``, ``objective`` (None where infeasible), ``outcome``, ``reason`` (why a run did not
+        complete, as runs.csv's), the channel's figures and ``chosen``."""
         import pandas as pd
 
         return pd.DataFrame(list(self._rows()), columns=list(COLUMNS))

@@ -10,7 +10,7 @@ use nalgebra::{DMatrix, DVector};
 use super::dde::{self, DelaySystem, Options, Past};
 use super::divergence::{Peaks, Watched};
 use super::result::{Outcome, RunStats, Sample, SimResult};
-use super::{check_run, Integrator, Run, SimError};
+use super::{check_run, Integrator, Run, SimError, PROGRESS_EVERY};
 use crate::averaged::Averaged;
 use crate::controller::{command, mat_vec, packed, swapping_error, Equations};
 use crate::design::{Design, RegressorScaling};
@@ -924,8 +924,21 @@ pub(super) fn simulate(
     let max_history_len = max_history_bytes / (2 * record);
     let opts = Options { rtol, atol, max_steps, max_history_len, method, ..Options::default() };
     let mut outcome = Outcome::Completed;
-    // The loop records each sample (observe); here only the progress and an interruption.
-    let solved = dde::solve(&mut sys, 0.0, &s0, &history, st.t_end, st.output_step, &opts, |t, _| {
+    // The loop records each sample (observe); here only the progress and an interruption, at each
+    // sample and every PROGRESS_EVERY steps between them.
+    let mut since = 0;
+    let solved = dde::solve_events(&mut sys, 0.0, &s0, &history, st.t_end, st.output_step, &opts, |event| {
+        let t = match event {
+            dde::Event::Output(t, _) => t,
+            dde::Event::Step(t) => {
+                since += 1;
+                if since < PROGRESS_EVERY {
+                    return ControlFlow::Continue(());
+                }
+                t
+            }
+        };
+        since = 0;
         if on_progress(t).is_break() {
             outcome = Outcome::Interrupted { t };
             return ControlFlow::Break(());

@@ -319,6 +319,34 @@ pub fn solve<S: DelaySystem>(
     opts: &Options,
     mut on_output: impl FnMut(f64, &[f64]) -> ControlFlow<()>,
 ) -> Result<Stats, SolveError> {
+    solve_events(sys, t0, y0, history, t_end, output_step, opts, |event| match event {
+        Event::Output(t, y) => on_output(t, y),
+        Event::Step(_) => ControlFlow::Continue(()),
+    })
+}
+
+/// What [`solve_events`] reports as it goes.
+#[derive(Debug, Clone, Copy)]
+pub enum Event<'y> {
+    /// An output time and the output prefix of the state there, as [`solve`]'s `on_output` takes them.
+    Output(f64, &'y [f64]),
+    /// An accepted step ended at this time (after its outputs): a point to stop at between outputs.
+    Step(f64),
+}
+
+/// [`solve`] reporting each accepted step as well as the outputs ([`Event`]); `Break` on either
+/// stops the run. For a caller that must be able to stop between outputs an hour of run apart.
+#[allow(clippy::too_many_arguments)]
+pub fn solve_events<S: DelaySystem>(
+    sys: &mut S,
+    t0: f64,
+    y0: &[f64],
+    history: &[f64],
+    t_end: f64,
+    output_step: f64,
+    opts: &Options,
+    mut on_event: impl FnMut(Event<'_>) -> ControlFlow<()>,
+) -> Result<Stats, SolveError> {
     let n = sys.dim();
     let nd = sys.n_delayed();
     let input = |argument, expected: String, found: String| Err(SolveError::Input { argument, expected, found });
@@ -344,7 +372,7 @@ pub fn solve<S: DelaySystem>(
 
     let y_out0 = &y0[..sys.n_output().min(n)];
     let past0 = Past { hist: &History::new(nd, 0), initial: history, y0: &y0[..nd], t0, lead: 0.0, tol: tiny(t_end) };
-    if sys.observe(t0, y_out0, &past0).is_break() || on_output(t0, y_out0).is_break() || t_end <= t0 {
+    if sys.observe(t0, y_out0, &past0).is_break() || on_event(Event::Output(t0, y_out0)).is_break() || t_end <= t0 {
         return Ok(Stats::default());
     }
     let h_cap = opts.h_max.min(tau_min).min(t_end - t0);
@@ -365,7 +393,9 @@ pub fn solve<S: DelaySystem>(
             continue;
         };
         steps.accept(&step)?;
-        if steps.record_and_emit(&step, len, &mut on_output).is_break() {
+        if steps.record_and_emit(&step, len, &mut |t, y| on_event(Event::Output(t, y))).is_break()
+            || on_event(Event::Step(step.t_new)).is_break()
+        {
             return Ok(steps.finish());
         }
         steps.advance(&step);

@@ -153,6 +153,11 @@ impl RunSettings {
     }
 }
 
+/// Between recorded samples, a run reports its progress (and can be interrupted) every this many
+/// solver or controller steps ([`Run::simulate`]): about 2 ms of the paper's loop, so an output step
+/// as long as the run still leaves Ctrl-C prompt.
+pub const PROGRESS_EVERY: usize = 256;
+
 /// One run of the closed loop: a design, the plant simulated (its model unless [`Run::truth`]
 /// gives the true one), the reference g and disturbance ω, and the settings; [`Run::simulate`]
 /// carries it out. Built by [`Run::new`], or from a scenario by [`Run::of`].
@@ -251,7 +256,8 @@ impl<'a> Run<'a> {
     }
 
     /// Simulates the loop from t = 0 to t_end, recording every output step; `on_progress(t)` is
-    /// called at each recorded sample, and returning `Break` interrupts the run. The result always
+    /// called at each recorded sample and every [`PROGRESS_EVERY`] solver or controller steps
+    /// between them, and returning `Break` interrupts the run. The result always
     /// holds what was computed; [`SimResult::outcome`] says how the run ended. The settings and
     /// signals are checked first (horizon, tolerances or sample time, divergence bound, noise,
     /// actuator, m reference and k disturbance components with finite parameters, the truth's

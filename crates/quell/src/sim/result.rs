@@ -147,9 +147,10 @@ pub struct Sample<'a> {
 /// Python, a study's quantiles and tune objectives).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ChannelFigures {
-    /// max |e_i| over the last 10 % of the recorded horizon.
+    /// max |e_i| over the last 10 % of the recorded horizon; NaN (`null` in JSON) when the run
+    /// stopped before t_end (diverged, failed, interrupted): the tail was never reached.
     pub tail_max_e: f64,
-    /// RMS of e_i over the last 10 % of the recorded horizon.
+    /// RMS of e_i over the last 10 % of the recorded horizon; NaN like `tail_max_e`.
     pub tail_rms_e: f64,
     /// max |u_i| over the run (the adaptive command (25)).
     pub max_u: f64,
@@ -312,9 +313,22 @@ impl SimResult {
                 let (figures, settling) = self.channel(i, &Settle::default())?;
                 let last = &self.eta[self.eta.len() - self.m * self.q..];
                 let final_eta_norm = last[i * self.q..(i + 1) * self.q].iter().map(|v| v * v).sum::<f64>().sqrt();
-                Some(ChannelSummary { figures, final_eta_norm, settle_note: settling.reason(self.time_unit) })
+                let settle_note = match self.t.last() {
+                    Some(&t) if !self.reached_end() => Some(format!(
+                        "no tail: the run stopped at t = {} {} (see its outcome)",
+                        crate::settings::fmt_short(t),
+                        self.time_unit
+                    )),
+                    _ => settling.reason(self.time_unit),
+                };
+                Some(ChannelSummary { figures, final_eta_norm, settle_note })
             })
             .collect()
+    }
+
+    /// Whether the run reached t_end (its outcome is completed, or not set yet).
+    fn reached_end(&self) -> bool {
+        matches!(self.outcome, None | Some(Outcome::Completed))
     }
 
     /// Channel i's figures and how it settled; `None` without samples.
@@ -326,12 +340,18 @@ impl SimResult {
         let tail: Vec<f64> =
             self.t.iter().zip(self.column(&self.e, self.m, i)).filter(|(t, _)| **t >= from).map(|(_, e)| e).collect();
         let settling = self.settling(i, settle);
+        // A run stopped early has no tail of its horizon, and settled in none of it.
+        let reached = self.reached_end();
         let figures = ChannelFigures {
-            tail_max_e: tail.iter().fold(0.0, |a, e| max_or_nan(a, e.abs())),
-            tail_rms_e: (tail.iter().map(|e| e * e).sum::<f64>() / tail.len().max(1) as f64).sqrt(),
+            tail_max_e: if reached { tail.iter().fold(0.0, |a, e| max_or_nan(a, e.abs())) } else { f64::NAN },
+            tail_rms_e: if reached {
+                (tail.iter().map(|e| e * e).sum::<f64>() / tail.len().max(1) as f64).sqrt()
+            } else {
+                f64::NAN
+            },
             max_u: self.column(&self.u, self.m, i).fold(0.0, |a, u| max_or_nan(a, u.abs())),
             max_uf: self.column(&self.u_f, self.m, i).fold(0.0, |a, u| max_or_nan(a, u.abs())),
-            settle_t: settling.time(),
+            settle_t: settling.time().filter(|_| reached),
         };
         Some((figures, settling))
     }
@@ -368,6 +388,24 @@ mod tests {
         assert_eq!(r.max_abs_error(0, 90.0, 100.0), None, "window past the horizon (a run that stopped early)");
         push(&mut r, 3.0, f64::NAN);
         assert!(r.max_abs_error(0, 0.0, 3.0).unwrap().is_nan(), "a NaN error is not hidden by max");
+    }
+
+    #[test]
+    fn a_run_stopped_early_has_no_tail_and_no_settling_time() {
+        let mut r = SimResult::new(1, 1, 1, RunStats::Sampled { controller_steps: 0, sample_time: 1.0 });
+        for k in 0..=10 {
+            // e = 0 from t = 0 on: settled at once, with a tail of zeros.
+            r.push(&Sample { t: k as f64, y: &[1.0], g: &[1.0], u: &[2.0], u_f: &[-3.0], eta: &[0.0], states: None });
+        }
+        let completed = r.summary()[0].figures;
+        assert_eq!((completed.tail_max_e, completed.tail_rms_e, completed.settle_t), (0.0, 0.0, Some(0.0)));
+        r.outcome = Some(Outcome::Diverged { t: 10.5, signal: "x[1] (plant state)".into(), value: 2e9 });
+        let stopped = r.summary()[0].figures;
+        assert!(
+            stopped.tail_max_e.is_nan() && stopped.tail_rms_e.is_nan() && stopped.settle_t.is_none(),
+            "{stopped:?}"
+        );
+        assert_eq!((stopped.max_u, stopped.max_uf), (2.0, 3.0), "the peaks of what ran are kept");
     }
 
     #[test]

@@ -11,7 +11,7 @@ use nalgebra::{DMatrix, DVector};
 use super::divergence::{Peaks, Watched};
 use super::noise::Gaussian;
 use super::result::{Outcome, RunStats, Sample, SimResult};
-use super::{check_run, Run, SimError};
+use super::{check_run, Run, SimError, PROGRESS_EVERY};
 use crate::controller::discrete::{self, MAX_DELAY_SAMPLES};
 use crate::controller::{mat_vec, Controller, ControllerError};
 use crate::design::Design;
@@ -436,6 +436,9 @@ fn sampled_loop<C: SampledController + ?Sized>(
                 outcome = end;
                 break;
             }
+        } else if k % PROGRESS_EVERY == 0 && on_progress(t).is_break() {
+            outcome = Outcome::Interrupted { t };
+            break;
         }
         plant.advance();
     }

@@ -21,7 +21,7 @@ pub fn header(meta: &StudyMeta) -> Vec<String> {
 }
 
 /// A CSV field, quoted when it holds a comma, quote or line break (RFC 4180).
-fn field(s: &str) -> String {
+pub fn csv_field(s: &str) -> String {
     if s.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {
@@ -35,13 +35,13 @@ const PARTIAL: &str = "# partial:";
 /// Writes runs.csv: the header, `rows` in the order given, and for a partial sweep a last line
 /// `# partial: …` (read it with `pandas.read_csv(…, comment="#")`).
 pub fn write_runs_csv(w: &mut dyn Write, meta: &StudyMeta, rows: &[Row], partial: bool) -> io::Result<()> {
-    writeln!(w, "{}", header(meta).iter().map(|h| field(h)).collect::<Vec<_>>().join(","))?;
+    writeln!(w, "{}", header(meta).iter().map(|h| csv_field(h)).collect::<Vec<_>>().join(","))?;
     let opt = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
     for r in rows {
         let mut f: Vec<String> = vec![r.run.to_string(), r.point.to_string(), r.draw.to_string(), r.seed.to_string()];
-        f.extend(r.grid.iter().map(|g| field(g)));
+        f.extend(r.grid.iter().map(|g| csv_field(g)));
         f.push(r.outcome.as_str().to_string());
-        f.push(field(&r.reason));
+        f.push(csv_field(&r.reason));
         let per = |get: &dyn Fn(&ChannelFigures) -> Option<f64>| {
             (0..meta.m).map(|i| opt(r.channels.get(i).and_then(get))).collect::<Vec<_>>()
         };

@@ -65,8 +65,8 @@ pub struct ChannelQuantiles {
     pub max_u: Quantiles,
     pub max_uf: Quantiles,
     pub settle_t: Quantiles,
-    /// Of the completed runs, the fraction that never settled.
-    pub never_settled: f64,
+    /// Of the completed runs, the fraction that never settled; `None` (`null`) when none completed.
+    pub never_settled: Option<f64>,
 }
 
 /// One grid point of summary.json.
@@ -186,7 +186,7 @@ impl Summary {
                             max_u: col(&|c| c.max_u),
                             max_uf: col(&|c| c.max_uf),
                             settle_t: col(&|c| c.settle_t.unwrap_or(f64::INFINITY)),
-                            never_settled: if done.is_empty() { 0.0 } else { never as f64 / done.len() as f64 },
+                            never_settled: (!done.is_empty()).then(|| never as f64 / done.len() as f64),
                         }
                     })
                     .collect();

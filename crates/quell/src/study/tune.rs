@@ -152,6 +152,9 @@ pub struct TunePoint {
     /// The objective, `None` when the run did not complete, never settled, or broke the limit.
     pub objective: Option<f64>,
     pub outcome: Outcome,
+    /// Why the run did not complete, as runs.csv's `reason` (empty when it completed).
+    #[serde(default)]
+    pub reason: String,
     /// Channel i's figures (when completed).
     pub figures: Option<ChannelFigures>,
 }
@@ -168,6 +171,37 @@ pub struct TuneCurve {
 }
 
 impl TuneCurve {
+    /// Why no μ was chosen, the keys named after `prefix` (`"tune."` in a study file, `""` for
+    /// Python's arguments): the limits the tuning was given and the objective, and when no run
+    /// completed, the first run's reason (a step budget, a divergence) in place of the limits.
+    pub fn why_none(&self, spec: &TuneSpec, prefix: &str) -> String {
+        let (i, c) = (self.channel, self.channel + 1);
+        let failed = self.curve.iter().find(|p| p.outcome != Outcome::Completed);
+        if let (Some(first), false) = (failed, self.curve.iter().any(|p| p.outcome == Outcome::Completed)) {
+            let n = self.curve.len();
+            return format!(
+                "no μ in {prefix}mu[{i}] completed: none of the {n} runs did (at μ = {}: {}, {})",
+                crate::settings::fmt_short(first.mu),
+                first.outcome.as_str(),
+                first.reason
+            );
+        }
+        let mut wanted: Vec<String> = vec![];
+        if spec.max_u[i].is_finite() {
+            wanted.push(format!("max |u_{c}| ≤ {prefix}max_u[{i}]"));
+        }
+        if spec.max_uf[i].is_finite() {
+            wanted.push(format!("max |u_f,{c}| ≤ {prefix}max_uf[{i}]"));
+        }
+        wanted.push(format!("a finite {}", spec.objective.name()));
+        let limits = if wanted.len() > 1 { ", raise the limits" } else { "" };
+        format!(
+            "no μ in {prefix}mu[{i}] completed with {}; widen the bounds{limits} or lengthen {}t_end",
+            wanted.join(" and "),
+            if prefix.is_empty() { "" } else { "simulation." }
+        )
+    }
+
     /// "upper" or "lower" when the chosen μ is the largest or the smallest evaluated (an end of
     /// the bounds): the best may lie beyond it, and a wider range would tell.
     pub fn at_bound(&self) -> Option<&'static str> {
@@ -322,7 +356,7 @@ impl Search<'_> {
             .filter(|c| c.max_u <= spec.max_u[i] && c.max_uf <= spec.max_uf[i])
             .map(|c| objective.of(&c))
             .filter(|v| v.is_finite());
-        let point = TunePoint { mu: mu_i, objective, outcome: row.outcome, figures };
+        let point = TunePoint { mu: mu_i, objective, outcome: row.outcome, reason: row.reason, figures };
         if let Some(f) = self.opts.on_point {
             f(i, &point);
         }
@@ -446,7 +480,13 @@ mod tests {
     /// inside them, or with one evaluation only, it is not.
     #[test]
     fn a_choice_at_an_end_of_the_bounds_is_named() {
-        let point = |mu: f64| TunePoint { mu, objective: Some(1.0), outcome: Outcome::Completed, figures: None };
+        let point = |mu: f64| TunePoint {
+            mu,
+            objective: Some(1.0),
+            outcome: Outcome::Completed,
+            reason: String::new(),
+            figures: None,
+        };
         let curve = |chosen: f64, mus: &[f64]| TuneCurve {
             channel: 0,
             curve: mus.iter().map(|&m| point(m)).collect(),
