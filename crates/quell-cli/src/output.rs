@@ -123,7 +123,7 @@ pub fn write_json(path: &Path, value: &impl serde::Serialize) -> io::Result<()> 
 }
 
 /// A number as plain decimal where that is short (`{}`), scientific otherwise (`{:e}`); always
-/// round-trips.
+/// round-trips. The thresholds of `quell::study::csv_number`, written faster ([`decimal`]).
 fn push_num(out: &mut Vec<u8>, v: f64, buffer: &mut zmij::Buffer) {
     let a = v.abs();
     if a == 0.0 || (1e-4..1e15).contains(&a) || !a.is_finite() {

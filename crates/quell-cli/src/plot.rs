@@ -221,9 +221,19 @@ fn draw<DB: DrawingBackend>(
     let (channel, input) =
         (format!("Channel {c}{}", named(&names.outputs)), format!("Input {c}{}", named(&names.inputs)));
     let areas = root.split_evenly((5, 1));
+    // A run that stopped early says so where its curves end.
+    use quell::sim::Outcome;
+    let ended = match &r.outcome {
+        None | Some(Outcome::Completed) => String::new(),
+        Some(Outcome::Diverged { t, signal, .. }) => format!(" (diverged at t = {t:.4} {time}: {signal})"),
+        Some(Outcome::Interrupted { t }) => format!(" (interrupted at t = {t:.4} {time})"),
+        Some(
+            Outcome::StepSizeTooSmall { t } | Outcome::TooManySteps { t, .. } | Outcome::HistoryTooLarge { t, .. },
+        ) => format!(" (failed at t = {t:.4} {time}: summary.json's outcome says why)"),
+    };
     panel(
         &areas[0],
-        (&format!("{channel}: output and reference"), "y, g"),
+        (&format!("{channel}: output and reference{ended}"), "y, g"),
         &[(format!("g{c} (reference)"), col(&r.g)), (format!("y{c}"), col(&r.y))],
         time,
     )?;

@@ -76,6 +76,14 @@ fn fmt_matrix(out: &mut String, name: &str, M: &DMatrix<f64>) {
     }
 }
 
+/// Computed eigenvalues as [`fmt_complex_list`] writes them, an imaginary part below 1e-9 of the
+/// eigenvalue's size (rounding: a double real pole comes out as −3.875268 ± 4.6e-15i) left out.
+fn fmt_eigenvalues(e: &[Complex<f64>]) -> String {
+    let shown: Vec<Complex<f64>> =
+        e.iter().map(|z| if z.im.abs() <= 1e-9 * z.norm() { Complex::new(z.re, 0.0) } else { *z }).collect();
+    fmt_complex_list(&shown)
+}
+
 fn tf(c: &quell::design::ChannelTf) -> String {
     let poly: Vec<String> = c
         .poles
@@ -119,8 +127,8 @@ pub fn design_text(d: &Design) -> String {
     ] {
         fmt_matrix(&mut s, name, M);
     }
-    let _ = writeln!(s, "\neig(A − LC) = {}", fmt_complex_list(d.observer_eigenvalues()));
-    let _ = writeln!(s, "eig(A − BK) = {}", fmt_complex_list(d.decoupled_eigenvalues()));
+    let _ = writeln!(s, "\neig(A − LC) = {}", fmt_eigenvalues(d.observer_eigenvalues()));
+    let _ = writeln!(s, "eig(A − BK) = {}", fmt_eigenvalues(d.decoupled_eigenvalues()));
     let _ = writeln!(
         s,
         "eigenvector condition numbers κ₂(X): A − LC {}, A − BK {}",
@@ -234,6 +242,14 @@ pub fn sample_time_text(scenario: &quell::Scenario, design: &quell::Design, samp
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rounding_in_a_double_real_eigenvalue_is_not_printed() {
+        let e = [Complex::new(-3.875268, 4.55e-15), Complex::new(-3.875268, -4.55e-15), Complex::new(-1.0, 2.0)];
+        assert_eq!(fmt_eigenvalues(&e), "-3.875268, -3.875268, -1.000000+2.000000i");
+        // A small imaginary part that is not rounding stays.
+        assert_eq!(fmt_eigenvalues(&[Complex::new(-1.0, 1e-6)]), "-1.000000+1.000000e-6i");
+    }
 
     #[test]
     fn matrix_entries_keep_their_digits_and_a_space_between_them() {

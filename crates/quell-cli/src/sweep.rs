@@ -73,10 +73,10 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     let runs = study.len();
     if runs > study::CONFIRM_RUNS && !args.yes {
         return Err(Failure::Input(format!(
-            "{}: the study has {runs} runs ({} grid points × {} draws), more than {:e}; check the grid, or pass --yes to run it (rows take ~200 bytes of memory each)",
+            "{}: the study has {runs} runs ({} × {}), more than {:e}; check the grid, or pass --yes to run it (rows take ~200 bytes of memory each)",
             path.display(),
-            study.points(),
-            study.draws(),
+            quell::study::count(study.points(), "grid point"),
+            quell::study::count(study.draws(), "draw"),
             study::CONFIRM_RUNS as f64
         )));
     }
@@ -130,13 +130,16 @@ pub(crate) fn thread_pool(jobs: Option<usize>, runs: usize) -> Result<rayon::Thr
 fn report(rows: &[Row], n: usize, seconds: f64, jobs: usize, out: &Path) {
     let count = |o: Outcome| rows.iter().filter(|r| r.outcome == o).count();
     eprintln!(
-        "{} of {n} runs: {} completed, {} diverged, {} failed; {seconds:.2} s on {jobs} thread{} ({:.2} ms per run); wrote {}",
+        "{} of {n} runs: {} completed, {} diverged, {} failed; {seconds:.2} s on {jobs} thread{}{}; wrote {}",
         rows.len(),
         count(Outcome::Completed),
         count(Outcome::Diverged),
         count(Outcome::Failed),
         if jobs == 1 { "" } else { "s" },
-        1e3 * seconds / rows.len().max(1) as f64,
+        match rows.len() {
+            0 => String::new(),
+            k => format!(" ({:.2} ms per run)", 1e3 * seconds / k as f64),
+        },
         out.display()
     );
 }
@@ -145,6 +148,10 @@ fn report(rows: &[Row], n: usize, seconds: f64, jobs: usize, out: &Path) {
 fn write_all(dir: &Path, meta: &StudyMeta, rows: &[Row], partial: bool, plots: bool) -> Result<(), Failure> {
     let failed = |e: std::io::Error| Failure::Run(format!("writing {}: {e}", dir.display()));
     write_atomic(&dir.join("runs.csv"), |w| study::write_runs_csv(w, meta, rows, partial)).map_err(failed)?;
+    // From here on runs.csv holds every run: a failure says so.
+    let failed = |e: std::io::Error| {
+        Failure::Run(format!("writing {}: {e}; runs.csv, written before it, holds every run", dir.display()))
+    };
     let summary = Summary::new(meta.clone(), rows, partial);
     crate::output::write_json(&dir.join("summary.json"), &summary).map_err(failed)?;
     // A figure of an earlier sweep (plots now skipped, or a grid that has none) must not stand

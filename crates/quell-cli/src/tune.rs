@@ -91,9 +91,7 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
 /// tune.csv: every evaluation of every channel's search.
 fn write_curves(w: &mut dyn std::io::Write, r: &TuneResult) -> std::io::Result<()> {
     writeln!(w, "channel,mu,objective,outcome,reason,tail_max_e,tail_rms_e,max_u,max_uf,settle_t,chosen")?;
-    // Shortest round-trip digits; in exponent form outside 1e-5..1e16, where `{}` writes every
-    // zero (μ = 1e-300 took 300 characters).
-    let num = |v: f64| if v == 0.0 || (1e-5..1e16).contains(&v.abs()) { v.to_string() } else { format!("{v:e}") };
+    let num = quell::study::csv_number;
     let opt = |v: Option<f64>| v.map_or(String::new(), num);
     for c in &r.channels {
         for p in &c.curve {

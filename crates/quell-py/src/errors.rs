@@ -110,9 +110,21 @@ impl Kind {
     }
 }
 
-/// A library error as the exception of `kind`.
+/// A library error as the exception of `kind`, the real-time controller's methods named as Python
+/// calls them (the library's messages name `Controller::step`, `Controller::set_state` and
+/// `Controller::state`).
 pub fn raise(py: Python<'_>, kind: Kind) -> impl Fn(&dyn std::fmt::Display) -> PyErr + '_ {
-    move |e| kind.err(py, e.to_string())
+    move |e| {
+        let message = e.to_string();
+        let message = match kind {
+            Kind::Controller => message
+                .replace("Controller::step", "Controller.step")
+                .replace("Controller::set_state", "Controller.__setstate__")
+                .replace("Controller::state", "Controller.__getstate__()"),
+            _ => message,
+        };
+        kind.err(py, message)
+    }
 }
 
 /// `quell.SimulationError(message)` with `.t`, `.signal`, `.value` and `.result`.

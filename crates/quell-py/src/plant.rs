@@ -173,6 +173,9 @@ impl PyPlant {
     ) -> PyResult<Self> {
         let py = A.py();
         let k = Kind::Scenario;
+        if type_name(A) == "FrequencyResponseData" {
+            return Err(PyTypeError::new_err("A: expected a matrix, a control.StateSpace or a control.TransferFunction, found a FrequencyResponseData (a frequency response holds no state-space model: fit one to it first, e.g. a transfer function)"));
+        }
         // A control.TransferFunction becomes its minimal state-space realization.
         let realized;
         let A = if type_name(A) == "TransferFunction" {

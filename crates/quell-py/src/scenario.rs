@@ -131,6 +131,28 @@ pub fn argument_error(py: Python<'_>, e: &quell::ScenarioError) -> PyErr {
     crate::errors::keyed(py, Kind::Scenario, e.to_string(), Some(e.key.clone()))
 }
 
+/// [`argument_error`] for a scenario built from Python values: the reader's TOML words in
+/// Python's (a table is a dict, an array a list), and a value of the wrong type (a str for a
+/// number) a `TypeError`, with `.key` as well.
+fn values_error(py: Python<'_>, e: &quell::ScenarioError) -> PyErr {
+    const WORDS: [(&str, &str); 7] = [
+        ("(inline tables)", "(dicts)"),
+        ("a table", "a dict"),
+        ("an empty array", "an empty list"),
+        ("an array", "a list"),
+        ("a string", "a str"),
+        ("a floating-point number", "a float"),
+        ("a boolean", "a bool"),
+    ];
+    let message = WORDS.iter().fold(e.to_string(), |m, (toml, python)| m.replace(toml, python));
+    if !e.wrong_type {
+        return crate::errors::keyed(py, Kind::Scenario, message, Some(e.key.clone()));
+    }
+    let err = PyTypeError::new_err(in_python(message));
+    let _ = err.value(py).setattr("key", e.key.clone());
+    err
+}
+
 /// `method=` (of `Scenario` and `simulate`) as the file's `simulation.method`: a str, whose name the
 /// scenario reader checks.
 pub fn method_value(obj: &Bound<'_, PyAny>) -> PyResult<Value> {
@@ -388,7 +410,7 @@ impl PyScenario {
                 truth.extend(actuator_keys(py, a)?);
             }
         }
-        let inner = quell::Scenario::from_document(&doc).map_err(|e| argument_error(py, &e))?;
+        let inner = quell::Scenario::from_document(&doc).map_err(|e| values_error(py, &e))?;
         Ok(PyScenario { from_values: true, ..Self::new(inner) })
     }
 

@@ -108,8 +108,15 @@ def test_a_discrete_or_improper_transfer_function_is_refused_by_name():
     # A discrete-time tf kept its poles as continuous ones (z = −0.5 became s = −0.5).
     with pytest.raises(quell.ScenarioError, match=r"expected a continuous-time system \(dt = 0\), found dt = 0.1"):
         quell.Plant(control.tf([1.0], [1.0, 0.5], 0.1))
-    with pytest.raises(quell.ScenarioError, match="numerator's degree must be below the denominator's"):
-        quell.Plant(control.tf([1.0, 2.0, 3.0], [1.0, 3.0]))
+    # Improper, biproper and static: each is named as not strictly proper (a biproper one had been
+    # told to pass disturbance matrices, from the realization's feedthrough D).
+    for num, den in (([1.0, 2.0, 3.0], [1.0, 3.0]), ([1.0, 2.0], [1.0, 1.0]), ([2.0], [1.0])):
+        degrees = f"a numerator of degree {len(num) - 1} and a denominator of degree {len(den) - 1}"
+        with pytest.raises(quell.ScenarioError, match=f"{degrees}: a plant \\(1\\) is strictly proper .*numerator's degree must be below the denominator's"):
+            quell.Plant(control.tf(num, den))
+    # A frequency response is not a model of the plant's state.
+    with pytest.raises(TypeError, match="A: expected a matrix, a control.StateSpace or a control.TransferFunction, found a FrequencyResponseData"):
+        quell.Plant(control.frd(control.tf([1.0], [1.0, 1.0]), [1.0, 2.0, 3.0]))
 
 
 def test_a_mimo_transfer_function_without_slycot_is_a_scenario_error():

@@ -207,14 +207,18 @@ def test_a_bad_state_is_refused_naming_the_entry():
     c = quell.Controller(quell.paper_example().design(), 1e-2)
     _steps(c, range(150))
     state = c.__getstate__()
-    with pytest.raises(quell.ControllerError, match=r"^Controller::set_state: the state needs 3820 numbers for this design and sample time .*found 10"):
+    with pytest.raises(quell.ControllerError, match=r"^Controller.__setstate__: the state needs 3820 numbers for this design and sample time \(the layout of Controller.__getstate__\(\)\), found 10"):
         c.__setstate__(state[:10])
     bad = state.copy()
     bad[41] = np.nan
-    with pytest.raises(quell.ControllerError, match=r"^Controller::set_state: state\[41\] \(channel 1's H filter Ω_i \(33\)\) = NaN: expected a finite number"):
+    with pytest.raises(quell.ControllerError, match=r"^Controller.__setstate__: state\[41\] \(channel 1's H filter Ω_i \(33\)\) = NaN: expected a finite number"):
         c.__setstate__(bad)
     with pytest.raises(TypeError, match="state: expected an array of real numbers, found a str"):
         c.__setstate__("state")
+    assert np.array_equal(c.__getstate__(), state)
+    # The methods are named as Python calls them, not as the Rust library's paths.
+    with pytest.raises(quell.ControllerError, match=r"^Controller.step: y\[0\] = 1e200 is beyond ±1e100"):
+        c.step([1e200, 0.0], [1.0, 2.0])
     assert np.array_equal(c.__getstate__(), state)
     # A checkpoint of another sample time does not fit.
     with pytest.raises(quell.ControllerError, match="the state needs"):
@@ -233,3 +237,12 @@ def test_a_diverged_runs_summary_has_no_tail():
     for c in r.summary():
         assert c["tail_max_e"] is None and c["tail_rms_e"] is None and c["settle_t"] is None, c
         assert c["settle_note"].startswith("no tail: the run stopped at t = ") and c["max_uf"] > 0
+    # Its figure says where and why its curves end.
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    title = r.plot(channel=1).axes[0].get_title()
+    assert title.endswith(f"(run diverged at t = {r.outcome['t']:.4g} s)"), title
+    plt.close("all")

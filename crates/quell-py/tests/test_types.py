@@ -183,3 +183,20 @@ def test_numpy_integers_are_ints():
     for bad in (np.True_, np.float64(1.0)):
         with pytest.raises(TypeError, match="max_steps: expected an int"):
             quell.simulate(ex, t_end=1.0, max_steps=bad)
+
+
+def test_a_wrong_type_inside_a_signal_is_a_type_error_in_pythons_words():
+    """A str amplitude or a dict where the list of harmonics goes: TypeError (a ScenarioError
+    before, worded in TOML's terms: "an array of harmonics (inline tables), found a table"), with
+    the argument's path and `.key`, the scenario key."""
+    plant = quell.paper_example().plant
+    bad_amplitude = [{"harmonics": [{"amplitude": "1", "frequency": 1.0}]}, {"bias": 2.0}]
+    with pytest.raises(TypeError, match=r'^reference\[0\]\["harmonics"\]\[0\]\["amplitude"\]: expected a number, found a str$') as info:
+        quell.Scenario(plant, bad_amplitude, DISTURBANCE, observer_gain=L, **PAPER_DESIGN)
+    assert info.value.key == "reference.components[0].harmonics[0].amplitude"
+    not_a_list = [{"harmonics": {"amplitude": 1.0, "frequency": 1.0}}, {"bias": 2.0}]
+    with pytest.raises(TypeError, match=r'^reference\[0\]\["harmonics"\]: expected a list of harmonics \(dicts\), found a dict$'):
+        quell.Scenario(plant, not_a_list, DISTURBANCE, observer_gain=L, **PAPER_DESIGN)
+    # A value of the right type stays a ScenarioError.
+    with pytest.raises(quell.ScenarioError, match=r'frequency'):
+        quell.Scenario(plant, [{"harmonics": [{"amplitude": 1.0, "frequency": -1.0}]}, {"bias": 2.0}], DISTURBANCE, observer_gain=L, **PAPER_DESIGN)

@@ -768,7 +768,7 @@ fn time_scale(s: &Scenario) -> Result<f64, AutoError> {
     let comps = || s.reference.components.iter().chain(&s.disturbance.components);
     let w_max = comps().flat_map(frequencies).fold(0.0, f64::max);
     let plant = eigenvalues(&s.plant.A)
-        .map_err(|_| ScenarioError { key: "plant.A".into(), message: "its eigenvalues could not be computed".into() })?
+        .map_err(|_| ScenarioError::new("plant.A", "its eigenvalues could not be computed"))?
         .iter()
         .map(|z| z.norm())
         .fold(0.0, f64::max);
@@ -880,10 +880,10 @@ fn filters(
 ) -> Result<(PoleLists, String), ScenarioError> {
     if let Some(o) = orders {
         if o.len() != signal.len() {
-            return Err(ScenarioError {
-                key: format!("design.{key}_filter_orders"),
-                message: format!("expected {} entries (one per {key} component), found {}", signal.len(), o.len()),
-            });
+            return Err(ScenarioError::new(
+                format!("design.{key}_filter_orders"),
+                format!("expected {} entries (one per {key} component), found {}", signal.len(), o.len()),
+            ));
         }
     }
     let mut lists = Vec::new();
@@ -891,14 +891,14 @@ fn filters(
         let need = Exosystem::of(c).dim().max(1);
         let order = orders.map_or(need, |o| o[i]);
         if order < need {
-            return Err(ScenarioError {
-                key: format!("design.{key}_filter_orders[{i}]"),
-                message: format!(
+            return Err(ScenarioError::new(
+                format!("design.{key}_filter_orders[{i}]"),
+                format!(
                     "{key} component {} ({}) needs at least {need} filter poles; got {order}",
                     i + 1,
                     Exosystem::of(c).describe()
                 ),
-            });
+            ));
         }
         let ws: Vec<f64> = frequencies(c).collect();
         let (factor, span_centre) = filter_spread(&ws, order);

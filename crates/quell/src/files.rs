@@ -11,8 +11,15 @@ use tempfile::NamedTempFile;
 /// (`.stem.XXXXXX.tmp.ext`, so two runs sharing a directory never collide), which is then renamed
 /// to `path`. On error the temporary file is removed.
 pub fn write_atomic(path: &Path, contents: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> io::Result<()> {
-    stage(path, contents)?.persist(path).map_err(|e| e.error)?;
+    stage(path, contents)?.persist(path).map_err(|e| naming(path, e.error))?;
     Ok(())
+}
+
+/// `e` with the name of the file it happened on (`summary.json: No space left on device`), so a
+/// message about a directory of outputs says which one failed; its kind is kept.
+fn naming(path: &Path, e: io::Error) -> io::Error {
+    let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
+    io::Error::new(e.kind(), format!("{name}: {e}"))
 }
 
 /// Writes several files so that none is renamed into place unless every one was written: each
@@ -22,7 +29,7 @@ pub fn write_atomic_all(files: &[(PathBuf, &[u8])]) -> io::Result<()> {
     let staged =
         files.iter().map(|(path, bytes)| stage(path, |w| w.write_all(bytes))).collect::<io::Result<Vec<_>>>()?;
     for (tmp, (path, _)) in staged.into_iter().zip(files) {
-        tmp.persist(path).map_err(|e| e.error)?;
+        tmp.persist(path).map_err(|e| naming(path, e.error))?;
     }
     Ok(())
 }
@@ -42,10 +49,10 @@ fn stage(path: &Path, contents: impl FnOnce(&mut dyn Write) -> io::Result<()>) -
     // tempfile creates 0600; ask for 0666 less the umask, the mode `File::create` gives an output.
     #[cfg(unix)]
     builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    let mut tmp = builder.tempfile_in(dir)?;
+    let mut tmp = builder.tempfile_in(dir).map_err(|e| naming(path, e))?;
     let mut w = BufWriter::new(tmp.as_file_mut());
-    contents(&mut w)?;
-    w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+    contents(&mut w).map_err(|e| naming(path, e))?;
+    w.into_inner().map_err(|e| e.into_error()).and_then(|f| f.sync_all()).map_err(|e| naming(path, e))?;
     Ok(tmp)
 }
 
@@ -133,6 +140,8 @@ mod tests {
         assert_eq!(mode(&written), mode(&created), "umask applied as by File::create, not tempfile's 0600");
     }
 
+    /// The error names its file (a full disk while writing summary.json read "writing DIR: No space
+    /// left on device") and keeps its kind.
     #[test]
     fn a_failed_write_leaves_neither_file() {
         let dir = tempfile::tempdir().unwrap();
@@ -141,7 +150,8 @@ mod tests {
             w.write_all(b"{")?;
             Err(io::Error::other("disk full"))
         });
-        assert_eq!(e.unwrap_err().to_string(), "disk full");
+        let e = e.unwrap_err();
+        assert_eq!((e.kind(), e.to_string()), (io::ErrorKind::Other, "summary.json: disk full".into()));
         assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
     }
 }

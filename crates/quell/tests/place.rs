@@ -276,9 +276,9 @@ fn a_pole_repeated_beyond_rank_b_is_refused() {
     let (A, B) = (rng.matrix(4, 4), rng.matrix(4, 2));
     assert_eq!(
         place(&A, &B, &reals(&[-1.0; 4])).unwrap_err().to_string(),
-        "pole -1.000000 is requested 4 times, more than rank(B) = 2 (rank C for observer poles): A − BK would \
-         need a Jordan block of size ≥ 2, whose eigenvalues move by about δ^(1/size) under a change δ of A − BK, \
-         so no gain can be verified to 1e-6; spread the repeated poles (e.g. −1, −1.1, −1.2 for −1 three times) \
+        "pole -1.000000 is requested 4 times, more than rank(B) = 2 (rank C for observer poles): the closed loop \
+         (A − BK; A − LC for observer poles) would need a Jordan block of size ≥ 2, whose eigenvalues move by about \
+         δ^(1/size) under a change δ of that matrix, so no gain can be verified to 1e-6; spread the repeated poles (e.g. −1, −1.1, −1.2 for −1 three times) \
          to at most 2 copies of one pole, as control.place requires"
     );
     // Spread, or at most rank(B) copies (KNV0: `repeated_poles_mimo`), they place.

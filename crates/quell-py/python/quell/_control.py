@@ -65,6 +65,18 @@ def state_space(sys):
 
     if not isinstance(sys, control.TransferFunction):
         return sys
+    for i in range(sys.noutputs):
+        for j in range(sys.ninputs):
+            num, den = (np.trim_zeros(np.atleast_1d(np.asarray(v, dtype=float)), "f") for v in (sys.num[i][j], sys.den[i][j]))
+            if len(num) and len(num) >= len(den):
+                from ._errors import ScenarioError
+
+                where = f" (output {i + 1}, input {j + 1})" if sys.noutputs * sys.ninputs > 1 else ""
+                raise ScenarioError(
+                    f"sys: the transfer function{where} has a numerator of degree {len(num) - 1} and a "
+                    f"denominator of degree {len(den) - 1}: a plant (1) is strictly proper (no "
+                    "feedthrough from u to y), so the numerator's degree must be below the denominator's"
+                )
     for i, j, p, z in _cancelled_pairs(sys):
         if p.real >= 0.0:
             from ._errors import ScenarioError

@@ -63,7 +63,10 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None))
         isinstance(figsize, (tuple, list)) and len(figsize) == 2
         and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in figsize)
     ):
-        raise TypeError(f"figsize: expected (width, height) in inches, found a {type(figsize).__name__}")
+        found = f"a {type(figsize).__name__}"
+        if isinstance(figsize, (tuple, list)) and len(figsize) != 2:
+            found += f" of {len(figsize)} entries"
+        raise TypeError(f"figsize: expected (width, height) in inches, found {found}")
     if fig is not None and ax is not None:
         raise TypeError("fig and ax: expected one of them or neither (ax's panels belong to a figure already), found both")
     if fig is not None and not hasattr(fig, "subplots"):
@@ -81,7 +84,10 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None))
         axes = fig.subplots(5, 1, sharex=True)
     axes[0].plot(t, result.g[:, i], "--", label=f"g{c} (reference)")
     axes[0].plot(t, result.y[:, i], label=f"y{c}")
-    axes[0].set(title=f"{channel_title}: output and reference", ylabel="y, g")
+    # A run that stopped early says so where its curves end.
+    status = result.outcome.get("status", "completed")
+    ended = "" if status == "completed" else f" (run {status} at t = {result.outcome['t']:.4g} {result.time_unit})"
+    axes[0].set(title=f"{channel_title}: output and reference{ended}", ylabel="y, g")
     if len(axes) > 1:
         axes[1].plot(t, result.e[:, i], label=f"e{c}")
         axes[1].set(title=f"{channel_title}: tracking error", ylabel="e = y − g")

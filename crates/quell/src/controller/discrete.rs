@@ -307,12 +307,39 @@ fn lines_at_least(delays: &[f64], width: usize) -> f64 {
 /// written with the fewest significant digits that still pass, so that the printed value works
 /// when typed back, and not by a hair. `None` when no such k is near (incommensurate delays).
 fn valid_sample_time(delays: &[f64], T: f64, width: usize) -> Option<f64> {
+    sample_time_near(delays, T, width, false)
+}
+
+/// A sample time at most `T` (what a bound on T_s asks for, as the coarse-sample advice gives
+/// one) that makes every delay whole: the longest round one (1, 2, 2.5 or 5 times a power of ten,
+/// down to a thousandth of T), else the longest τ_max/k of [`valid_sample_time`]'s kind; `None`
+/// when neither exists.
+pub(crate) fn valid_sample_time_at_most(design: &Design, T: f64) -> Option<f64> {
+    sample_time_at_most(&design.plant().delays, 1 + design.q(), T)
+}
+
+/// [`valid_sample_time_at_most`] for `delays` and delay-line rows of `width`.
+fn sample_time_at_most(delays: &[f64], width: usize, T: f64) -> Option<f64> {
+    let top = T.log10().floor() as i32;
+    let round = (top - 3..=top)
+        .rev()
+        .flat_map(|e| [5.0, 2.5, 2.0, 1.0].map(|d| format!("{d}e{e}").parse::<f64>().unwrap_or(f64::NAN)))
+        .find(|&t| t <= T && fits(delays, width, t));
+    round.or_else(|| sample_time_near(delays, T, width, true))
+}
+
+/// Whether every delay is a whole number of samples of `t` to a tenth of [`WHOLE_TOLERANCE`] (a
+/// nonzero one at least half a sample) and the delay lines of rows of `width` fit.
+fn fits(delays: &[f64], width: usize, t: f64) -> bool {
+    let rows: f64 = delays.iter().map(|d| (d / t).round() + 1.0).sum();
+    rows <= row_limit(width) && delays.iter().all(|&d| delay_within(d, t, 1e-10) && (d == 0.0 || d / t >= 0.5))
+}
+
+/// [`valid_sample_time`]; with `at_most`, only sample times ≤ T.
+fn sample_time_near(delays: &[f64], T: f64, width: usize, at_most: bool) -> Option<f64> {
     let tau = delays.iter().copied().fold(0.0, f64::max);
     let shortest = (tau / MAX_DELAY_SAMPLES).max(lines_at_least(delays, width));
-    let fits = |t: f64| {
-        let rows: f64 = delays.iter().map(|d| (d / t).round() + 1.0).sum();
-        rows <= row_limit(width) && delays.iter().all(|&d| delay_within(d, t, 1e-10) && (d == 0.0 || d / t >= 0.5))
-    };
+    let fits = |t: f64| fits(delays, width, t);
     let (target, k_max) = (T.max(shortest), (tau / shortest).floor());
     let k0 = (tau / target).round().clamp(1.0, k_max.max(1.0)) as i64;
     // The first fit on either side of k0, then the one nearer T (not nearer in k: with τ = 0.12
@@ -320,13 +347,15 @@ fn valid_sample_time(delays: &[f64], T: f64, width: usize) -> Option<f64> {
     let first = |ks: &mut dyn Iterator<Item = i64>| {
         ks.filter(|&k| k >= 1 && k as f64 <= k_max).map(|k| tau / k as f64).find(|&t| fits(t))
     };
-    let shorter = first(&mut (k0..k0 + SEARCHED));
-    let longer = first(&mut (k0 - SEARCHED..k0).rev());
+    let shorter = first(&mut (k0..k0 + SEARCHED).filter(|&k| !at_most || tau / k as f64 <= T));
+    let longer = first(&mut (k0 - SEARCHED..k0).rev().filter(|&k| !at_most || tau / k as f64 <= T));
     let nearest = match (shorter, longer) {
         (Some(a), Some(b)) => Some(if (a - target).abs() <= (b - target).abs() { a } else { b }),
         (a, b) => a.or(b),
     };
-    nearest.and_then(|t| (1..17).map(|p| format!("{t:.p$e}").parse::<f64>().unwrap_or(t)).chain([t]).find(|&r| fits(r)))
+    let within = |r: f64| fits(r) && (!at_most || r <= T);
+    nearest
+        .and_then(|t| (1..17).map(|p| format!("{t:.p$e}").parse::<f64>().unwrap_or(t)).chain([t]).find(|&r| within(r)))
 }
 
 impl Controller {
@@ -805,6 +834,17 @@ fn implicit_step(c: f64, Omega: &[f64], Y: &[f64], eta: &mut [f64], (r, factor):
 mod tests {
     use super::*;
     use crate::sim::noise::Gaussian;
+
+    #[test]
+    fn the_sample_time_within_a_bound_is_round_where_one_divides_the_delays() {
+        // The paper's delays 1 and 3 under 0.0222: 0.02 (not 1/46 = 0.0217…, the longest τ/k).
+        assert_eq!(sample_time_at_most(&[1.0, 3.0], 9, 0.0222), Some(0.02));
+        // 0.05 ms under 0.00265: 0.0025 (20 samples).
+        assert_eq!(sample_time_at_most(&[0.05], 9, 0.00265), Some(0.0025));
+        // No round value divides 1/3: the longest τ/k below the bound, 1/3/16 = 0.0208…, is whole.
+        let t = sample_time_at_most(&[1.0 / 3.0], 9, 0.0222).unwrap();
+        assert!(t <= 0.0222 && whole(1.0 / 3.0, t) && (t - 1.0 / 48.0).abs() < 1e-9, "{t}");
+    }
 
     /// Uniform on (lo, hi].
     fn between(rng: &mut Gaussian, lo: f64, hi: f64) -> f64 {

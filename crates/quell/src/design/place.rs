@@ -67,8 +67,9 @@ pub enum PlaceError {
     /// A pole requested more than rank(B) times (see [`place`]).
     #[error(
         "pole {} is requested {multiplicity} times, more than rank(B) = {rank} (rank C for observer \
-         poles): A − BK would need a Jordan block of size ≥ {}, whose eigenvalues move by about \
-         δ^(1/size) under a change δ of A − BK, so no gain can be verified to 1e-6; spread the \
+         poles): the closed loop (A − BK; A − LC for observer poles) would need a Jordan block of \
+         size ≥ {}, whose eigenvalues move by about δ^(1/size) under a change δ of that matrix, so \
+         no gain can be verified to 1e-6; spread the \
          repeated poles (e.g. −1, −1.1, −1.2 for −1 three times) to at most {rank} copies of one pole, \
          as control.place requires",
         crate::linalg::fmt_complex(.pole),

@@ -45,9 +45,17 @@ pub struct ScenarioError {
     /// errors, or the file's path for I/O errors.
     pub key: String,
     pub message: String,
+    /// The value has the wrong type (a string where a number goes, a table where an array does):
+    /// Python raises these as `TypeError`.
+    pub wrong_type: bool,
 }
 
 impl ScenarioError {
+    /// The error on `key`, of a value (not of its type).
+    pub fn new(key: impl Into<String>, message: impl Into<String>) -> Self {
+        ScenarioError { key: key.into(), message: message.into(), wrong_type: false }
+    }
+
     /// The document read as a scenario is a study: the error is on a study's top-level key
     /// (`scenario`, `grid`, `tune`, …) that no scenario has.
     pub fn is_a_study(&self) -> bool {
@@ -115,7 +123,7 @@ pub use crate::settings::{MAX_OUTPUT_SAMPLES, MAX_SAMPLING_STEPS};
 
 impl From<KeyError> for ScenarioError {
     fn from(e: KeyError) -> Self {
-        ScenarioError { key: e.key, message: e.message }
+        ScenarioError::new(e.key, e.message)
     }
 }
 

@@ -6,7 +6,7 @@ use nalgebra::{Complex, DMatrix};
 use super::ScenarioError;
 
 pub(super) fn err(key: impl Into<String>, message: impl Into<String>) -> ScenarioError {
-    ScenarioError { key: key.into(), message: message.into() }
+    ScenarioError::new(key, message)
 }
 
 /// "a string", "an integer", … for "found …" in messages.
@@ -95,7 +95,7 @@ impl<'a> Table<'a> {
 
 impl<'a> Value<'a, '_> {
     fn found(&self, expected: &str) -> ScenarioError {
-        err(self.key, format!("expected {expected}, found {}", kind(self.value)))
+        ScenarioError { wrong_type: true, ..err(self.key, format!("expected {expected}, found {}", kind(self.value))) }
     }
 
     /// A sub-table, checked against its valid keys.

@@ -38,12 +38,18 @@ pub fn coarse_sample_warning(
     let rate = super::loop_rate(design, design.plant(), [reference, disturbance]);
     let unit = design.plant().time_unit;
     (sample_time * rate > COARSE_SAMPLE).then(|| {
+        let bound = settings::three_digits_down(COARSE_SAMPLE / rate);
+        // The longest T_s within the bound that makes every delay whole, which a run accepts.
+        let whole = match crate::controller::discrete::valid_sample_time_at_most(design, bound) {
+            Some(t) if t != bound => format!(", e.g. {} {unit}, which makes every delay whole", settings::fmt_short(t)),
+            _ => String::new(),
+        };
         format!(
-            "simulation.sample_time: T_s = {} {unit} is {:.2} of the loop's fastest time constant 1/ρ (ρ = {} /{unit}: the plant, observer, channel and filter poles, 1/β and the signals' frequencies): the discrete controller may depart from the continuous design; choose T_s ≤ {} {unit} (T_s·ρ ≤ {COARSE_SAMPLE}) or slower poles",
+            "simulation.sample_time: T_s = {} {unit} is {:.2} of the loop's fastest time constant 1/ρ (ρ = {} /{unit}: the plant, observer, channel and filter poles, 1/β and the signals' frequencies): the discrete controller may depart from the continuous design; choose T_s ≤ {} {unit} (T_s·ρ ≤ {COARSE_SAMPLE}){whole}, or slower poles",
             settings::fmt_short(sample_time),
             sample_time * rate,
             settings::fmt_short(settings::three_digits_down(rate)),
-            settings::fmt_short(settings::three_digits_down(COARSE_SAMPLE / rate))
+            settings::fmt_short(bound)
         )
     })
 }

@@ -24,7 +24,7 @@ use crate::scenario::read::Value;
 use crate::scenario::{kind, syntax_message, Scenario, PAPER_EXAMPLE};
 pub use crate::sim::settle::Settle;
 use crate::sim::Peaks;
-pub use output::{csv_field, header, read_runs_csv, write_runs_csv, RunsFile};
+pub use output::{csv_field, csv_number, header, read_runs_csv, write_runs_csv, RunsFile};
 pub use path::{KeyPath, Shape};
 pub use summary::{quantile, AxisMeta, ChannelQuantiles, PointSummary, Quantiles, StudyMeta, Summary, QUANTILES};
 pub use sweep::{run_one, run_one_until, run_seed, sweep, Outcome, Row, RunSpec, Shard, Sweep, SweepOptions};
@@ -633,6 +633,11 @@ fn fingerprint(doc: &toml::Table, base: &toml::Table) -> u64 {
     crate::hash::fnv1a_64(canonical.bytes())
 }
 
+/// `n` and `noun`, plural unless n is 1 ("1 draw", "20 draws").
+pub fn count(n: usize, noun: &str) -> String {
+    format!("{n} {noun}{}", if n == 1 { "" } else { "s" })
+}
+
 /// The number of grid points, after checking that points × draws is at most [`MAX_RUNS`].
 fn study_size(grid: &[GridAxis], mc: Option<&MonteCarlo>) -> Result<usize, StudyError> {
     let draws = mc.map_or(1, |mc| mc.runs as u128);
@@ -647,11 +652,13 @@ fn study_size(grid: &[GridAxis], mc: Option<&MonteCarlo>) -> Result<usize, Study
     Err(err(
         if mc.is_some() { "monte_carlo.runs" } else { "grid" },
         format!(
-            "the study has {}{} runs ({} grid points ({}) × {draws} draws), more than the {MAX_RUNS:.0e} a study may have; reduce the grid values or draws, or split the study into several files",
+            "the study has {}{} runs ({} grid point{} ({}) × {}), more than the {MAX_RUNS:.0e} a study may have; reduce the grid values or draws, or split the study into several files",
             if runs == u128::MAX { "at least " } else { "" },
             count(runs),
             count(points),
+            if points == 1 { "" } else { "s" },
             lengths.join(" × "),
+            self::count(draws as usize, "draw"),
         ),
     ))
 }

@@ -20,6 +20,18 @@ pub fn header(meta: &StudyMeta) -> Vec<String> {
     h
 }
 
+/// A number in a CSV output (runs.csv, tune.csv), as signals.csv writes its numbers: the shortest
+/// digits that read back to it, in plain decimal from 1e-4 to below 1e15 (and 0, inf, NaN), in
+/// exponent form outside (`{}` alone wrote μ = 1e20 as 21 digits and 1e-300 as 300 zeros).
+pub fn csv_number(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 || (1e-4..1e15).contains(&a) || !a.is_finite() {
+        v.to_string()
+    } else {
+        format!("{v:e}")
+    }
+}
+
 /// A CSV field, quoted when it holds a comma, quote or line break (RFC 4180).
 pub fn csv_field(s: &str) -> String {
     if s.contains([',', '"', '\n', '\r']) {
@@ -36,7 +48,7 @@ const PARTIAL: &str = "# partial:";
 /// `# partial: …` (read it with `pandas.read_csv(…, comment="#")`).
 pub fn write_runs_csv(w: &mut dyn Write, meta: &StudyMeta, rows: &[Row], partial: bool) -> io::Result<()> {
     writeln!(w, "{}", header(meta).iter().map(|h| csv_field(h)).collect::<Vec<_>>().join(","))?;
-    let opt = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
+    let opt = |v: Option<f64>| v.map_or(String::new(), csv_number);
     for r in rows {
         let mut f: Vec<String> = vec![r.run.to_string(), r.point.to_string(), r.draw.to_string(), r.seed.to_string()];
         f.extend(r.grid.iter().map(|g| csv_field(g)));
@@ -156,4 +168,32 @@ pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
         });
     }
     Ok(RunsFile { rows, partial })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::csv_number;
+
+    #[test]
+    fn csv_numbers_are_short_and_read_back() {
+        for (v, text) in [
+            (0.0, "0"),
+            (0.5, "0.5"),
+            (1e-4, "0.0001"),
+            (9.9e-5, "9.9e-5"),
+            (1e14, "100000000000000"),
+            (1e15, "1e15"),
+            (1e20, "1e20"),
+            (-1e-300, "-1e-300"),
+            (f64::INFINITY, "inf"),
+        ] {
+            assert_eq!(csv_number(v), text);
+            assert_eq!(text.parse::<f64>().unwrap(), v, "{text} reads back");
+        }
+        assert_eq!(csv_number(f64::NAN), "NaN");
+        // The shortest digits that read back, in either form.
+        for v in [0.1 + 0.2, 1.0 / 3.0, 2.0f64.powi(-60), 6.02214076e23] {
+            assert_eq!(csv_number(v).parse::<f64>().unwrap(), v);
+        }
+    }
 }

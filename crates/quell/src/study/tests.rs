@@ -248,7 +248,7 @@ fn studies_beyond_max_runs_are_refused_when_read_with_their_true_size() {
     })
     .collect();
     let e = error(&format!("[grid]\n{axes}"));
-    assert!(e.starts_with("grid: the study has 10000000000 runs (10000000000 grid points (10 × 10 × 10 × 10 × 10 × 10 × 10 × 10 × 10 × 10) × 1 draws)"), "{e}");
+    assert!(e.starts_with("grid: the study has 10000000000 runs (10000000000 grid points (10 × 10 × 10 × 10 × 10 × 10 × 10 × 10 × 10 × 10) × 1 draw)"), "{e}");
     // At the limit: read, and its length is exact.
     let s = study("[grid]\n\"design.beta\" = [1.0, 2.0]\n[monte_carlo]\nruns = 500000000").unwrap();
     assert_eq!(s.len(), MAX_RUNS);

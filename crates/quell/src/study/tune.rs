@@ -101,7 +101,7 @@ impl TuneSpec {
                         let pair = b.as_array().filter(|a| a.len() == 2).ok_or_else(|| {
                             err(&key, format!("expected [μ_min, μ_max], found {}", kind(b)))
                         })?;
-                        let (lo, hi) = (number(&key, &pair[0], "a number")?, number(&key, &pair[1], "a number")?);
+                        let (lo, hi) = (number(&key, &pair[0], "a finite number")?, number(&key, &pair[1], "a finite number")?);
                         if !(lo > 0.0 && lo <= hi) {
                             return Err(err(key, format!("expected 0 < μ_min ≤ μ_max (the search is on a log scale), found [{}, {}]", crate::settings::fmt_short(lo), crate::settings::fmt_short(hi))));
                         }
