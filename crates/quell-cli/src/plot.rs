@@ -615,7 +615,12 @@ fn draw_sweep_2d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
         let logs: Vec<f64> = s.points.iter().filter_map(cell).map(f64::log10).collect();
         let (lo, hi) = logs.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
         let span = if hi > lo { hi - lo } else { 1.0 };
-        let mut chart = ChartBuilder::on(area)
+        // The colours' scale beside the cells: each channel has its own.
+        let (cells, scale) = area.split_horizontally(area.dim_in_pixel().0.saturating_sub(COLOUR_BAR) as i32);
+        if !logs.is_empty() {
+            colour_bar(&scale, lo, span)?;
+        }
+        let mut chart = ChartBuilder::on(&cells)
             .caption(format!("Channel {}: median tail RMS e", i + 1), ("sans-serif", 18))
             .margin(10)
             .x_label_area_size(40)
@@ -661,6 +666,39 @@ fn draw_sweep_2d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
         }
     }
     root.present().map_err(|e| e.to_string())
+}
+
+/// The width of a heat map's colour bar, its labels included (px).
+const COLOUR_BAR: u32 = 110;
+
+/// A heat map's colour bar: [`ramp`] over log10 of the values from `lo` to `lo + span`, labelled
+/// with the values.
+fn colour_bar<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, lo: f64, span: f64) -> Result<(), String> {
+    let mut bar = ChartBuilder::on(area)
+        .margin_top(40)
+        .margin_bottom(48)
+        .margin_left(14)
+        .margin_right(4)
+        .right_y_label_area_size(62)
+        .build_cartesian_2d(0.0..1.0, lo..lo + span)
+        .map_err(|e| e.to_string())?;
+    bar.configure_mesh()
+        .disable_mesh()
+        .disable_x_axis()
+        .y_labels(6)
+        .y_label_formatter(&|v| format!("{:.1e}", 10f64.powf(*v)))
+        .label_style(("sans-serif", 12))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    const STEPS: usize = 64;
+    let band = |k: usize| lo + span * k as f64 / STEPS as f64;
+    bar.draw_series(
+        (0..STEPS).map(|k| {
+            Rectangle::new([(0.0, band(k)), (1.0, band(k + 1))], ramp((k as f64 + 0.5) / STEPS as f64).filled())
+        }),
+    )
+    .map_err(|e| e.to_string())?;
+    Ok(())
 }
 
 /// Writes `<name>.png` and `<name>.svg` of `size` into `dir`, each atomically, drawn by `png` and

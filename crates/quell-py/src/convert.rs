@@ -52,6 +52,15 @@ fn real_array<'py>(obj: &Bound<'py, PyAny>, name: &str, kind: Kind) -> PyResult<
             "b" => "booleans".to_string(),
             "U" | "S" => "strings".to_string(),
             "O" if arr.getattr("ndim")?.extract::<usize>()? == 0 => format!("a {}", type_name(obj)),
+            // Python ints beyond a float64's range make an object array too.
+            "O" if arr
+                .call_method0("ravel")?
+                .try_iter()?
+                .flatten()
+                .any(|x| x.is_instance_of::<pyo3::types::PyInt>() && x.extract::<f64>().is_err()) =>
+            {
+                "an integer beyond a float64's range (±1.8e308)".to_string()
+            }
             "O" => "entries that are not all numbers".to_string(),
             _ => format!("an array of dtype {}", dtype.str()?),
         };

@@ -200,3 +200,12 @@ def test_a_wrong_type_inside_a_signal_is_a_type_error_in_pythons_words():
     # A value of the right type stays a ScenarioError.
     with pytest.raises(quell.ScenarioError, match=r'frequency'):
         quell.Scenario(plant, [{"harmonics": [{"amplitude": 1.0, "frequency": -1.0}]}, {"bias": 2.0}], DISTURBANCE, observer_gain=L, **PAPER_DESIGN)
+
+
+def test_an_integer_beyond_a_float_is_named_as_such():
+    """mu=[10**400, 1] read "found entries that are not all numbers": the entry is a number, too
+    large for a float64."""
+    with pytest.raises(TypeError, match=r"^mu: expected real numbers, found an integer beyond a float64's range"):
+        quell.design(quell.paper_example().plant, observer_gain=L, **dict(PAPER_DESIGN, mu=[10**400, 1]))
+    with pytest.raises(TypeError, match="found entries that are not all numbers"):
+        quell.design(quell.paper_example().plant, observer_gain=L, **dict(PAPER_DESIGN, mu=[None, 1]))

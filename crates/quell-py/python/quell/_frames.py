@@ -71,6 +71,11 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None))
         raise TypeError("fig and ax: expected one of them or neither (ax's panels belong to a figure already), found both")
     if fig is not None and not hasattr(fig, "subplots"):
         raise TypeError(f"fig: expected a matplotlib Figure, found a {type(fig).__name__}")
+    if fig is not None and fig.axes:
+        raise ValueError(
+            f"fig: expected an empty Figure (the five panels fill it), found one with {len(fig.axes)} Axes; "
+            "pass its Axes as ax= (one, four or five) or an empty figure"
+        )
     if ax is not None:
         axes = list(ax.flat) if hasattr(ax, "flat") else list(ax) if isinstance(ax, (list, tuple)) else [ax]
         if len(axes) not in (1, 4, 5) or not all(hasattr(a, "plot") for a in axes):
