@@ -533,7 +533,8 @@ fn draw_sweep_panel<DB: DrawingBackend>(
         .map_err(|e| e.to_string())?;
     let medians = draw_quantile_bands(&mut chart, &at, pick(i))?;
     if medians < s.points.len() {
-        missing_median_note(&mut chart, missing_median(figure, empty), empty, (x0, x1), (y0, y1))?;
+        let note = missing_median(figure, empty);
+        missing_median_note(&mut chart, note, (empty, &at(0.5)), (x0, x1), (y0, y1))?;
     }
     Ok(())
 }
@@ -560,17 +561,20 @@ fn draw_quantile_bands<DB: DrawingBackend>(
     Ok(median.len())
 }
 
-/// Writes `lines` at the top left of a panel spanning `xs` × `ys`, or in the middle of an `empty` one.
+/// Writes `lines` at the top left of a panel spanning `xs` × `ys` (the bottom left where a point
+/// of `curve` lies under the top left), or in the middle of an `empty` one.
 fn missing_median_note<DB: DrawingBackend>(
     chart: &mut Chart<'_, DB>,
     lines: [String; 2],
-    empty: bool,
+    (empty, curve): (bool, &[(f64, f64)]),
     (x0, x1): (f64, f64),
     (y0, y1): (f64, f64),
 ) -> Result<(), String> {
-    let (x, y) = match empty {
-        true => (x0 + 0.1 * (x1 - x0), 0.5 * (y0 + y1)),
-        false => (x0 + 0.02 * (x1 - x0), y1 - 0.03 * (y1 - y0)),
+    let covered = curve.iter().any(|&(x, y)| (x - x0) / (x1 - x0) < 0.65 && (y - y0) / (y1 - y0) > 0.8);
+    let (x, y) = match (empty, covered) {
+        (true, _) => (x0 + 0.1 * (x1 - x0), 0.5 * (y0 + y1)),
+        (false, false) => (x0 + 0.02 * (x1 - x0), y1 - 0.03 * (y1 - y0)),
+        (false, true) => (x0 + 0.02 * (x1 - x0), y0 + 0.12 * (y1 - y0)),
     };
     let font = ("sans-serif", 13).into_font().color(&RGBColor(90, 90, 90));
     let ats = [(x, y), (x, y - 0.07 * (y1 - y0))];
@@ -785,7 +789,7 @@ fn draw_distributions<DB: DrawingBackend>(
                 .map_err(|e| e.to_string())?;
             if x.is_empty() {
                 let why = if figure == SweepFigure::SettleT { "no draw settled" } else { "no draw completed" };
-                missing_median_note(&mut chart, [why.into(), String::new()], true, (x0, x1), (0.0, 1.02))?;
+                missing_median_note(&mut chart, [why.into(), String::new()], (true, &[]), (x0, x1), (0.0, 1.02))?;
                 continue;
             }
             let color = pick(i);

@@ -63,7 +63,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     output::prepare_out(out, &files)?;
     // Ctrl-C or SIGTERM stops the run at its next recorded sample; a second one before that sample
     // (a very stiff run can take long to reach it) quits with no files.
-    let ctrl_c = Interrupt::install("interrupted twice before the next sample; stopped without writing files");
+    let ctrl_c = Interrupt::install("interrupted twice; stopped without writing files");
     let started = Instant::now();
     let result = simulate(&scenario, &design, settings, &ctrl_c)?;
     ctrl_c.start_writing();
