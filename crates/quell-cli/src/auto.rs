@@ -165,6 +165,13 @@ fn report_text(a: &AutoDesign) -> String {
             if v.tail_max_e[i] <= v.bound[i] { "✓" } else { "✗" },
             crate::run::fixed_or_sci(v.max_uf[i], 4)
         ));
+        if let Some(f) = v.limited_fraction.get(i).filter(|f| **f > 0.0) {
+            s.push_str(&format!(
+                "  input {}: clipped by truth.u_max[{i}] at {:.1} % of the recorded samples (the design was verified through the saturating actuator)\n",
+                i + 1,
+                100.0 * f
+            ));
+        }
     }
     let unit = a.scenario.plant.time_unit;
     for (i, (rms, aim)) in v.rms_at_convergence.iter().zip(&v.aim_at_convergence).enumerate() {
@@ -173,7 +180,7 @@ fn report_text(a: &AutoDesign) -> String {
                 "✓".to_string()
             } else {
                 format!(
-                    "✗ {:.0}× the aim: the loop converges later than the averaged law that chose μ predicts",
+                    "✗ {:.0}× the aim: the loop converges later than the averaged law predicts for this μ",
                     rms / aim
                 )
             };

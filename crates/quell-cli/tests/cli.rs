@@ -1008,3 +1008,49 @@ fn sample_time_flag_makes_the_scenario_a_sampled_one_for_white_noise() {
     let exported = quell(&["export", &file, "--sample-time", "0.001", "--out", &c.display().to_string()]);
     assert_eq!(exported.status.code(), Some(0), "{}", stderr(&exported));
 }
+
+/// `--auto` verifies its candidates on the true plant, through its actuator: where the limit clips,
+/// the report says so per input, as `quell run` does (it had printed max|u_f| = 150 and nothing
+/// more). A two-zone thermal plant in hours, heaters limited to 150 kW.
+#[test]
+fn design_auto_says_when_the_true_actuator_clipped() {
+    let dir = temp_dir("auto-clipped");
+    let file = dir.path().join("thermal.toml");
+    fs::write(
+        &file,
+        r#"name = "two-zone-thermal"
+[plant]
+time_unit = "h"
+A = [[-0.5, 0.2], [0.2, -0.4]]
+B = [[0.1, 0.0], [0.0, 0.08]]
+C = [[1.0, 0.0], [0.0, 1.0]]
+D = [[0.3], [0.2]]
+Q = [[0.0], [0.0]]
+delays = [0.1, 0.25]
+[design]
+[reference]
+components = [ { bias = 20.0 }, { bias = 18.0 } ]
+[disturbance]
+components = [ { bias = 5.0, harmonics = [{ amplitude = 8.0, frequency = 0.2617993877991494 }] } ]
+[simulation]
+t_end = 240.0
+output_step = 0.05
+rtol = 1e-8
+atol = 1e-8
+[truth]
+A = [[-0.55, 0.22], [0.18, -0.42]]
+delays = [0.15, 0.3]
+u_max = [150.0, 150.0]
+"#,
+    )
+    .unwrap();
+    let o = quell(&["design", file.to_str().unwrap(), "--auto"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let report = stdout(&o);
+    for i in [1, 2] {
+        let line =
+            report.lines().find(|l| l.starts_with(&format!("  input {i}: clipped by truth.u_max[{}] at ", i - 1)));
+        let share: f64 = line.expect(&report).split(" at ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+        assert!(share > 0.0 && share < 5.0, "{share}");
+    }
+}

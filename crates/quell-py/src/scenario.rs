@@ -317,6 +317,13 @@ fn truth_arg(py: Python<'_>, t: &Bound<'_, PyAny>, plant: &quell::Plant) -> PyRe
     }
     let truth = plant_arg(t, "truth")?;
     let (k_true, k) = (truth.inner.k(), plant.k());
+    // The state and input sizes first: a Plant of another size differs in k too, the lesser matter.
+    let sizes = |p: &quell::Plant| (p.n(), p.m());
+    if sizes(&truth.inner) != sizes(plant) {
+        let ((n_true, m_true), (n, m)) = (sizes(&truth.inner), sizes(plant));
+        let msg = format!("truth: the Plant has n = {n_true} states and m = {m_true} inputs where plant has n = {n} and m = {m}: the true plant must have the model's dimensions (its matrices may differ)");
+        return Err(Kind::Scenario.err(py, msg));
+    }
     if k_true != k {
         let msg = format!("truth: the Plant has k = {k_true} disturbance inputs (D with {k_true} columns) where plant has k = {k}: give the true D and Q (zeros where ω does not act), or pass truth as a dict of the keys that differ, e.g. truth={{\"A\": A_true}} (the others from plant)");
         return Err(Kind::Scenario.err(py, msg));
@@ -407,7 +414,16 @@ impl PyScenario {
         if let Some(a) = actuator.filter(|a| !a.is_none()) {
             let truth = doc.entry("truth").or_insert_with(|| Value::Table(Table::new()));
             if let Value::Table(truth) = truth {
-                truth.extend(actuator_keys(py, a)?);
+                for (key, value) in actuator_keys(py, a)? {
+                    // One value per key: truth={"u_max": ...} and actuator={"u_max": ...} together
+                    // had the actuator's win in silence.
+                    if truth.contains_key(&key) {
+                        let name = if key == "u_max" { "u_max" } else { "delays" };
+                        let message = format!("actuator[{name:?}] and truth[{key:?}]: both given; give the actuator's {name} in one of them");
+                        return Err(Kind::Scenario.err(py, message));
+                    }
+                    truth.insert(key, value);
+                }
             }
         }
         let inner = quell::Scenario::from_document(&doc).map_err(|e| values_error(py, &e))?;

@@ -83,6 +83,12 @@ def test_truth_as_a_dict_takes_the_rest_from_the_plant_and_a_plant_must_match_it
         paper_from_values(truth=quell.Plant(A_true, B, C))
     with pytest.raises(quell.ScenarioError, match="truth: the Plant's time_unit is min where plant's is s"):
         paper_from_values(truth=quell.Plant(A_true, B, C, D, Q=Q, delays=[1.0, 3.0], time_unit="min"))
+    # Another size is named as such (it had been reported as k = 0 against k = 2).
+    with pytest.raises(quell.ScenarioError, match=r"truth: the Plant has n = 2 states and m = 2 inputs where plant has n = 3 and m = 2"):
+        paper_from_values(truth=quell.Plant(np.eye(2), np.eye(2), np.eye(2)))
+    # One actuator limit, given once: truth's and actuator's together had the actuator's win.
+    with pytest.raises(quell.ScenarioError, match=r'actuator\["u_max"\] and truth\["u_max"\]: both given'):
+        paper_from_values(truth={"u_max": [12.0, 18.0]}, actuator={"u_max": [5.0, 5.0]})
 
 
 def test_scenario_accessors():

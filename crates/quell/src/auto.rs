@@ -173,6 +173,9 @@ pub struct Verification {
     pub bound: Vec<f64>,
     /// max |u_f,i| over the run: the plant input (5), what [`Targets::u_limit`] bounds.
     pub max_uf: Vec<f64>,
+    /// Per input, the share of the kept run's samples that the true actuator's limit clipped
+    /// (`[truth] u_max`; empty without one): a design verified through a saturating actuator.
+    pub limited_fraction: Vec<f64>,
     /// The convergence time t_c μ was chosen for ([`Targets::convergence_time`], default t_end/20).
     pub convergence_time: f64,
     /// The RMS error μ_i aims at by t_c (0.2 % of the reference's peak; NaN for a reference of
@@ -214,6 +217,9 @@ pub struct Candidate {
     pub rms_at_convergence: Vec<f64>,
     /// max |u_f,i| over the run.
     pub max_uf: Vec<f64>,
+    /// Per input, the share of the run's samples that the true plant's actuator limit
+    /// (`[truth] u_max`) clipped; empty without a limit.
+    pub limited_fraction: Vec<f64>,
     /// Accepted solver steps of its run.
     pub steps: usize,
     /// The candidate returned.
@@ -346,7 +352,17 @@ fn candidate(scenario: &Scenario, r: &crate::sim::SimResult, speed: Speed, conve
         (0..m).map(|i| r.rms_error(i, 0.9 * t_c, (1.1 * t_c).min(t_end)).unwrap_or(f64::NAN)).collect();
     let max_uf = r.summary().iter().map(|c| c.figures.max_uf).collect();
     let peak_e = (0..m).map(|i| r.max_abs_error(i, 0.0, t_end).unwrap_or(f64::NAN)).collect();
-    Candidate { speed, tail_max_e, rms_at_convergence, max_uf, steps: r.stats.steps(), chosen: false, peak_e }
+    let limited_fraction = if r.limited.is_empty() { vec![] } else { r.limited_fraction() };
+    Candidate {
+        speed,
+        tail_max_e,
+        rms_at_convergence,
+        max_uf,
+        limited_fraction,
+        steps: r.stats.steps(),
+        chosen: false,
+        peak_e,
+    }
 }
 
 impl Candidate {
@@ -358,6 +374,7 @@ impl Candidate {
             tail_max_e: vec![f64::INFINITY; m],
             rms_at_convergence: none.clone(),
             max_uf: none.clone(),
+            limited_fraction: vec![],
             steps: 0,
             chosen: true,
             peak_e: none,
@@ -702,6 +719,7 @@ fn finish(
             tail_max_e: c.tail_max_e,
             bound,
             max_uf: c.max_uf,
+            limited_fraction: c.limited_fraction,
             convergence_time,
             aim_at_convergence,
             rms_at_convergence: c.rms_at_convergence,

@@ -218,7 +218,19 @@ impl MeasurementNoise {
                     format!("expected a {finite}standard deviation ≥ 0, found {}", fmt_short(*s)),
                 ))
             }
-            None => Ok(()),
+            // The noise enters y as a signal does: bounded by the signals' MAX_ENTRY.
+            None => match self.std.iter().position(|&s| s > crate::plant::MAX_ENTRY) {
+                Some(i) => Err(KeyError::new(
+                    format!("noise.std[{i}]"),
+                    format!(
+                        "expected a standard deviation ≤ {:e}, found {:e}; the loop's states scale with it and their \
+                         products overflow double precision — rescale the outputs' units",
+                        crate::plant::MAX_ENTRY,
+                        self.std[i]
+                    ),
+                )),
+                None => Ok(()),
+            },
         }
     }
 

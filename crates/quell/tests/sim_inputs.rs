@@ -182,6 +182,8 @@ fn noise_and_divergence_bound_are_checked() {
     assert_eq!(sampled_key(g, w, noisy(vec![0.1])), "noise.std");
     assert_eq!(sampled_key(g, w, noisy(vec![0.1, -0.1])), "noise.std[1]");
     assert_eq!(sampled_key(g, w, noisy(vec![f64::NAN, 0.1])), "noise.std[0]");
+    // Beyond the signals' 1e150, as an amplitude is: the run had started and diverged at t = 0.1.
+    assert_eq!(sampled_key(g, w, noisy(vec![1e200, 0.0])), "noise.std[0]");
     for bound in [f64::NAN, 0.0, -1.0] {
         let cont = RunSettings { divergence_bound: bound, ..RunSettings::continuous(1.0, 0.1, 1e-9, 1e-9) };
         assert_eq!(continuous_key(g, w, cont), "divergence_bound");
