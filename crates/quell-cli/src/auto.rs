@@ -166,11 +166,8 @@ fn report_text(a: &AutoDesign) -> String {
             crate::run::fixed_or_sci(v.max_uf[i], 4)
         ));
         if let Some(f) = v.limited_fraction.get(i).filter(|f| **f > 0.0) {
-            s.push_str(&format!(
-                "  input {}: clipped by truth.u_max[{i}] at {:.1} % of the recorded samples (the design was verified through the saturating actuator)\n",
-                i + 1,
-                100.0 * f
-            ));
+            let line = crate::run::clipped(i, *f);
+            s.push_str(&format!("  {line} (the design was verified through the saturating actuator)\n"));
         }
     }
     let unit = a.scenario.plant.time_unit;

@@ -176,9 +176,9 @@ fn legend_corner(
     let hidden = |corner: &(bool, bool)| {
         series.iter().flat_map(|(_, p)| p.iter()).filter(|&&point| inside(corner, point)).count()
     };
-    let counts: Vec<usize> = corners.iter().map(|&(_, right, upper)| hidden(&(right, upper))).collect();
-    let best = (0..corners.len()).min_by_key(|&k| counts[k]).unwrap_or(0);
-    corners[best].0.clone()
+    // The first of the corners hiding the fewest: the upper right on a tie.
+    let best = corners.into_iter().min_by_key(|&(_, right, upper)| hidden(&(right, upper)));
+    best.map_or(SeriesLabelPosition::UpperRight, |(corner, ..)| corner)
 }
 
 /// The k-th series' colour: matplotlib's ten ("tab10", told apart in print and by most colour

@@ -151,6 +151,11 @@ pub(crate) fn fixed_or_sci(x: f64, decimals: usize) -> String {
     }
 }
 
+/// Input i's share `f` of the recorded samples that the true actuator's limit clipped, as a line.
+pub(crate) fn clipped(i: usize, f: f64) -> String {
+    format!("input {}: clipped by truth.u_max[{i}] at {:.1} % of the recorded samples", i + 1, 100.0 * f)
+}
+
 /// A time for a message, to 12 significant digits and without trailing zeros.
 pub(crate) fn short(x: f64) -> String {
     let s = format!("{:.12e}", x);
@@ -287,12 +292,7 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
                 let _ = writeln!(text, "  advice: {line}");
             }
             for (i, f) in result.limited_fraction().iter().enumerate().filter(|(_, &f)| f > 0.0) {
-                let _ = writeln!(
-                    text,
-                    "input {}: clipped by truth.u_max[{i}] at {:.1} % of the recorded samples",
-                    i + 1,
-                    100.0 * f
-                );
+                let _ = writeln!(text, "{}", clipped(i, *f));
             }
             crate::print_stdout(&text);
             let steps = match result.stats {

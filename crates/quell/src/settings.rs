@@ -210,28 +210,18 @@ impl MeasurementNoise {
         if let Some(b) = self.bandwidth {
             positive("noise.bandwidth", "a bandwidth in cycles per unit of time (Hz for a plant in seconds)", b)?;
         }
-        match self.std.iter().enumerate().find(|(_, s)| !(**s >= 0.0 && s.is_finite())) {
-            Some((i, s)) => {
-                let finite = if *s >= 0.0 { "finite " } else { "" };
-                Err(KeyError::new(
-                    format!("noise.std[{i}]"),
-                    format!("expected a {finite}standard deviation ≥ 0, found {}", fmt_short(*s)),
-                ))
-            }
-            // The noise enters y as a signal does: bounded by the signals' MAX_ENTRY.
-            None => match self.std.iter().position(|&s| s > crate::plant::MAX_ENTRY) {
-                Some(i) => Err(KeyError::new(
-                    format!("noise.std[{i}]"),
-                    format!(
-                        "expected a standard deviation ≤ {:e}, found {:e}; the loop's states scale with it and their \
-                         products overflow double precision — rescale the outputs' units",
-                        crate::plant::MAX_ENTRY,
-                        self.std[i]
-                    ),
-                )),
-                None => Ok(()),
-            },
+        if let Some((i, s)) = self.std.iter().enumerate().find(|(_, s)| !(**s >= 0.0 && s.is_finite())) {
+            let finite = if *s >= 0.0 { "finite " } else { "" };
+            return Err(KeyError::new(
+                format!("noise.std[{i}]"),
+                format!("expected a {finite}standard deviation ≥ 0, found {}", fmt_short(*s)),
+            ));
         }
+        // The noise enters y as a signal does: bounded as a signal's amplitudes are.
+        for (i, &s) in self.std.iter().enumerate() {
+            crate::signal::moderate(&format!("noise.std[{i}]"), "a standard deviation", s, "the outputs' units")?;
+        }
+        Ok(())
     }
 
     /// The continuous loop needs band-limited noise (white noise has no value at a time t).

@@ -27,6 +27,22 @@ pub struct Signal {
     pub components: Vec<Component>,
 }
 
+/// `v` within ±[`MAX_ENTRY`], as a signal's amplitudes and biases and the noise's standard deviations
+/// must be (the loop's states scale with them); else the error on `key`, expecting `what` ≤ the
+/// bound and asking to rescale `units`.
+pub(crate) fn moderate(key: &str, what: &str, v: f64, units: &str) -> Result<(), KeyError> {
+    if v.abs() <= MAX_ENTRY {
+        return Ok(());
+    }
+    Err(KeyError::new(
+        key,
+        format!(
+            "expected {what} ≤ {MAX_ENTRY:e}, found {v:e}; the loop's states scale with it and their products \
+             overflow double precision — rescale {units}"
+        ),
+    ))
+}
+
 /// sin x, within a few ulps of `f64::sin` and inlinable (the signals are evaluated at every stage of
 /// the integrator): [`sin_kernel`] for |x| ≤ 1e6, `f64::sin` beyond and for NaN and ±∞.
 #[inline]
@@ -115,15 +131,8 @@ impl Signal {
         };
         // Amplitudes and biases scale the loop's states like plant entries do (the sum of a channel's,
         // their products with D, Q and the gains): bounded by the same MAX_ENTRY.
-        let moderate = |field: String, v: f64| match v.abs() <= MAX_ENTRY {
-            true => Ok(()),
-            false => Err(KeyError::new(
-                format!("{key}.components{field}"),
-                format!(
-                    "expected a magnitude ≤ {MAX_ENTRY:e}, found {v:e}; the loop's states scale with it and their \
-                     products overflow double precision — rescale the signal's units"
-                ),
-            )),
+        let moderate = |field: String, v: f64| {
+            moderate(&format!("{key}.components{field}"), "a magnitude", v, "the signal's units")
         };
         for (i, c) in self.components.iter().enumerate() {
             finite(format!("[{i}].bias"), c.bias)?;

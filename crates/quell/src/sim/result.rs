@@ -342,13 +342,16 @@ impl SimResult {
         let settling = self.settling(i, settle);
         // A run stopped early has no tail of its horizon, and settled in none of it.
         let reached = self.reached_end();
+        let (tail_max_e, tail_rms_e) = match reached {
+            true => (
+                tail.iter().fold(0.0, |a, e| max_or_nan(a, e.abs())),
+                (tail.iter().map(|e| e * e).sum::<f64>() / tail.len().max(1) as f64).sqrt(),
+            ),
+            false => (f64::NAN, f64::NAN),
+        };
         let figures = ChannelFigures {
-            tail_max_e: if reached { tail.iter().fold(0.0, |a, e| max_or_nan(a, e.abs())) } else { f64::NAN },
-            tail_rms_e: if reached {
-                (tail.iter().map(|e| e * e).sum::<f64>() / tail.len().max(1) as f64).sqrt()
-            } else {
-                f64::NAN
-            },
+            tail_max_e,
+            tail_rms_e,
             max_u: self.column(&self.u, self.m, i).fold(0.0, |a, u| max_or_nan(a, u.abs())),
             max_uf: self.column(&self.u_f, self.m, i).fold(0.0, |a, u| max_or_nan(a, u.abs())),
             settle_t: settling.time().filter(|_| reached),

@@ -635,7 +635,16 @@ fn fingerprint(doc: &toml::Table, base: &toml::Table) -> u64 {
 
 /// `n` and `noun`, plural unless n is 1 ("1 draw", "20 draws").
 pub fn count(n: usize, noun: &str) -> String {
-    format!("{n} {noun}{}", if n == 1 { "" } else { "s" })
+    format!("{n} {noun}{}", plural(n as u128))
+}
+
+/// The plural ending for a count of `n`.
+fn plural(n: u128) -> &'static str {
+    if n == 1 {
+        ""
+    } else {
+        "s"
+    }
 }
 
 /// The number of grid points, after checking that points × draws is at most [`MAX_RUNS`].
@@ -647,18 +656,18 @@ fn study_size(grid: &[GridAxis], mc: Option<&MonteCarlo>) -> Result<usize, Study
         return Ok(points as usize);
     }
     // Exact below 2¹²⁸, else the float of the saturated count says "at least".
-    let count = |x: u128| if x < 1_000_000_000_000 { x.to_string() } else { format!("{:.3e}", x as f64) };
+    let figure = |x: u128| if x < 1_000_000_000_000 { x.to_string() } else { format!("{:.3e}", x as f64) };
     let lengths: Vec<String> = grid.iter().map(|a| a.values.len().to_string()).collect();
     Err(err(
         if mc.is_some() { "monte_carlo.runs" } else { "grid" },
         format!(
-            "the study has {}{} runs ({} grid point{} ({}) × {}), more than the {MAX_RUNS:.0e} a study may have; reduce the grid values or draws, or split the study into several files",
+            "the study has {}{} runs ({} grid point{} ({}) × {draws} draw{}), more than the {MAX_RUNS:.0e} a study may have; reduce the grid values or draws, or split the study into several files",
             if runs == u128::MAX { "at least " } else { "" },
-            count(runs),
-            count(points),
-            if points == 1 { "" } else { "s" },
+            figure(runs),
+            figure(points),
+            plural(points),
             lengths.join(" × "),
-            self::count(draws as usize, "draw"),
+            plural(draws),
         ),
     ))
 }
