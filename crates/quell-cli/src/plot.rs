@@ -1,6 +1,7 @@
 //! One figure per channel, like the paper's Figs. 1 and 2: y_i with g_i, e_i, u_i and η̂_i against t.
 
 use quell::study::QUANTILES as Q;
+use std::fmt::Write as _;
 use std::io;
 use std::path::Path;
 use std::sync::Once;
@@ -88,8 +89,19 @@ fn tick_label(v: f64, lo: f64, hi: f64) -> String {
 /// One panel of a run's figure: `series` against t (in `time`, the plant's unit of time).
 fn panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
+    titles: (&str, &str),
+    series: &[Series],
+    time: TimeUnit,
+) -> Result<(), String> {
+    panel_with_limit(area, titles, series, None, time)
+}
+
+/// [`panel`], with dashed lines at ±`limit` (its label, its value) and the view widened to show them.
+fn panel_with_limit<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
     (title, ylabel): (&str, &str),
     series: &[Series],
+    limit: Option<(&str, f64)>,
     time: TimeUnit,
 ) -> Result<(), String> {
     let (t0, t1) = series
@@ -97,7 +109,8 @@ fn panel<DB: DrawingBackend>(
         .flat_map(|(_, p)| p.iter().map(|(t, _)| *t))
         .fold((f64::MAX, f64::MIN), |(a, b), t| (a.min(t), b.max(t)));
     let (t0, t1) = if t0 < t1 { (t0, t1) } else { (0.0, 1.0) };
-    let (lo, hi) = value_range(series.iter().flat_map(|(_, p)| p.iter().map(|(_, v)| *v)));
+    let levels = limit.map_or(vec![], |(_, u)| vec![-u, u]);
+    let (lo, hi) = value_range(series.iter().flat_map(|(_, p)| p.iter().map(|(_, v)| *v)).chain(levels.clone()));
     let pad = 0.05 * (hi - lo);
     let (y0, y1) = (lo - pad, hi + pad);
     let mut chart = ChartBuilder::on(area)
@@ -130,6 +143,9 @@ fn panel<DB: DrawingBackend>(
             .label(name.clone())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
     }
+    if let Some((label, _)) = limit {
+        limit_lines(&mut chart, label, &levels, (t0, t1))?;
+    }
     // A panel's legend holds about eight entries at 14 px and fourteen at 10 px; beyond that (η̂ of
     // a large regressor) it would spill out of the panel, and the colours are the only key.
     let font = match series.len() {
@@ -137,8 +153,9 @@ fn panel<DB: DrawingBackend>(
         9..=MAX_LEGEND => 10,
         _ => return Ok(()),
     };
-    let entries = series.len() as f64;
-    let longest = series.iter().map(|(name, _)| name.chars().count()).max().unwrap_or(0) as f64;
+    let entries = (series.len() + usize::from(limit.is_some())) as f64;
+    let names = series.iter().map(|(name, _)| name.as_str()).chain(limit.map(|(label, _)| label));
+    let longest = names.map(|name| name.chars().count()).max().unwrap_or(0) as f64;
     let (w, h) = chart.plotting_area().dim_in_pixel();
     // The legend's box: a 20 px line, the label at ~0.6 em a character, a row per entry.
     let size = (
@@ -153,6 +170,24 @@ fn panel<DB: DrawingBackend>(
         .label_font(("sans-serif", font))
         .draw()
         .map_err(|e| e.to_string())
+}
+
+/// Dashed grey lines at `levels` across `(t0, t1)`, one legend entry `label` for them.
+fn limit_lines<DB: DrawingBackend>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    label: &str,
+    levels: &[f64],
+    (t0, t1): (f64, f64),
+) -> Result<(), String> {
+    let grey = RGBColor(90, 90, 90);
+    for (k, &level) in levels.iter().enumerate() {
+        let line = DashedLineSeries::new([(t0, level), (t1, level)], 6, 4, grey.stroke_width(1));
+        let drawn = chart.draw_series(line).map_err(|e| e.to_string())?;
+        if k == 0 {
+            drawn.label(label).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], grey));
+        }
+    }
+    Ok(())
 }
 
 /// The corner of a panel whose legend box (`size`, as fractions of the plotting area) covers the
@@ -242,13 +277,18 @@ fn draw<DB: DrawingBackend>(
     let held = |sig: &[f64]| if r.commands_held() { staircase(&col(sig)) } else { col(sig) };
     panel(&areas[2], (&format!("{channel}: adaptive command (25)"), "u"), &[(format!("u{c}"), held(&r.u))], time)?;
     // The plant input u_f (5), what the actuator must deliver, in its own panel: in a plant's units
-    // (newtons, volts) it can be 1e5 times u.
-    panel(
-        &areas[3],
-        (&format!("{input}: plant input u_f (5), what the actuator delivers"), "u_f"),
-        &[(format!("uf{c}"), held(&r.u_f))],
-        time,
-    )?;
+    // (newtons, volts) it can be 1e5 times u. The true actuator's limit is drawn where u_f comes
+    // within a tenth of it, and its distance told otherwise (the lines would flatten the curve).
+    let uf = held(&r.u_f);
+    let u_max = r.u_max.get(i).copied().filter(|u| u.is_finite());
+    let peak = uf.iter().map(|(_, v)| v.abs()).filter(|v| v.is_finite()).fold(0.0, f64::max);
+    let mut uf_title = format!("{input}: plant input u_f (5), what the actuator delivers");
+    let label = u_max.map(|u| format!("±truth.u_max[{i}] = {}", crate::run::short(u)));
+    let limit = label.as_deref().zip(u_max).filter(|&(_, u)| peak >= 0.1 * u);
+    if let (None, Some(u)) = (limit, u_max) {
+        write!(uf_title, "; peak {:.1} % of truth.u_max", 100.0 * peak / u).map_err(|e| e.to_string())?;
+    }
+    panel_with_limit(&areas[3], (&uf_title, "u_f"), &[(format!("uf{c}"), uf)], limit, time)?;
     let etas: Vec<Series> = (0..r.q)
         .map(|j| {
             let pts = r.t.iter().copied().zip(r.eta.iter().skip(i * r.q + j).step_by(r.m * r.q).copied()).collect();

@@ -1054,3 +1054,24 @@ u_max = [150.0, 150.0]
         assert!(share > 0.0 && share < 5.0, "{share}");
     }
 }
+
+/// The true actuator's limit is on the u_f panel: dashed at ±u_max where u_f comes within a tenth
+/// of it, and as the peak's share of it in the title where it does not (summary.json's max|u_f|).
+#[test]
+fn run_figures_show_the_actuator_limit_or_how_far_u_f_stays_from_it() {
+    let dir = temp_dir("u-max-figure");
+    let body = fs::read_to_string(paper()).unwrap().replace("t_end = 100.0", "t_end = 20.0");
+    let file = dir.path().join("limited.toml");
+    fs::write(&file, format!("{body}\n[truth]\nu_max = [1e4, 10.0]\n")).unwrap();
+    let out = dir.path().join("out");
+    let o = quell(&["run", file.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let summary = read_json(&out.join("summary.json"));
+    let peak = summary["channels"][0]["max_uf"].as_f64().unwrap();
+    assert!(peak > 0.0 && peak < 1e3, "{peak}");
+    let svg1 = fs::read_to_string(out.join("channel1.svg")).unwrap();
+    let share = format!("what the actuator delivers; peak {:.1} % of truth.u_max", 100.0 * peak / 1e4);
+    assert!(svg1.contains(&share) && !svg1.contains("±truth.u_max"), "{share}");
+    let svg2 = fs::read_to_string(out.join("channel2.svg")).unwrap();
+    assert!(svg2.contains("±truth.u_max[1] = 10") && !svg2.contains("% of truth.u_max"));
+}

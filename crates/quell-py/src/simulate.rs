@@ -405,8 +405,9 @@ impl PySimResult {
         fig: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Py<PyAny>> {
         let f = slf.py().import("quell._frames")?.getattr("plot")?;
-        let names = (slf.get().labels.inputs.clone(), slf.get().labels.outputs.clone());
-        Ok(f.call1((slf, channel, fig, ax, figsize, names))?.unbind())
+        let me = slf.get();
+        let names = (me.labels.inputs.clone(), me.labels.outputs.clone());
+        Ok(f.call1((slf, channel, fig, ax, figsize, names, me.inner.u_max.clone()))?.unbind())
     }
     fn __len__(&self) -> usize {
         self.inner.len()
@@ -426,6 +427,7 @@ impl PySimResult {
             && a.stats == b.stats
             && same(&a.peaks.0, &b.peaks.0)
             && a.limited == b.limited
+            && a.u_max == b.u_max
             && self.labels == o.get().labels
             && a.time_unit == b.time_unit
     }
@@ -462,6 +464,7 @@ impl PySimResult {
         d.set_item("stats", stats)?;
         d.set_item("peaks", r.peaks.0.to_vec())?;
         d.set_item("limited", r.limited.clone())?;
+        d.set_item("u_max", r.u_max.clone())?;
         d.set_item("diagnostics", &me.diagnostics)?;
         let l = &me.labels;
         let unit = me.inner.time_unit.symbol();
@@ -500,6 +503,8 @@ impl PySimResult {
             outcome: Some(outcome_from(&item("outcome")?.cast_into::<PyDict>()?).ok_or_else(|| bad("outcome"))?),
             peaks: Peaks(peaks.try_into().map_err(|_| bad("peaks"))?),
             limited: item("limited")?.extract()?,
+            // Results pickled before `u_max` have none.
+            u_max: state.get_item("u_max")?.map_or(Ok(vec![]), |v| v.extract())?,
             time_unit,
         };
         PySimResult::new(py, r, item("diagnostics")?.extract()?, Labels { inputs, outputs, states })

@@ -64,3 +64,27 @@ def test_an_actuator_limit_clips_u_f_and_is_counted():
     assert 0.0 < min(r.limited_fraction) and max(r.limited_fraction) < 1.0
     with pytest.raises(quell.ScenarioError, match=r'^actuator: unknown key "umax"'):
         quell.Scenario(p, REFERENCE, DISTURBANCE, observer_gain=L, actuator={"umax": u_max}, **PAPER_DESIGN)
+
+
+def test_the_plot_shows_the_actuator_limit_or_how_far_u_f_stays_from_it():
+    """u_f's panel draws ±u_max where u_f comes within a tenth of the limit, and gives the peak's share
+    of it in the title otherwise (a pickled result keeps its limits)."""
+    import pickle
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from test_api import DISTURBANCE, L, PAPER_DESIGN, REFERENCE
+
+    p = quell.paper_example().plant
+    s = quell.Scenario(p, REFERENCE, DISTURBANCE, t_end=5.0, observer_gain=L, actuator={"u_max": [5.0, 1e4]},
+                       **PAPER_DESIGN)
+    r = pickle.loads(pickle.dumps(quell.simulate(s)))
+    near = r.plot(channel=1).axes[3]
+    levels = sorted(line.get_ydata()[0] for line in near.get_lines() if line.get_linestyle() == "--")
+    assert levels == [-5.0, 5.0]
+    assert "±truth.u_max[0] = 5" in [t.get_text() for t in near.get_legend().get_texts()]
+    far = r.plot(channel=2).axes[3]
+    share = 100 * np.abs(r.u_f[:, 1]).max() / 1e4
+    assert far.get_title().endswith(f"; peak {share:.1f} % of truth.u_max")
+    assert not [line for line in far.get_lines() if line.get_linestyle() == "--"]

@@ -32,7 +32,7 @@ def to_pandas(result):
     return pd.DataFrame(data, columns=columns(m, q, result.n if states else 0))
 
 
-def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None)):
+def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None), u_max=()):
     """Channel ``channel`` (1-based; None is 1) in the five panels of the CLI's figure, like the paper's
     Figs. 1 and 2: y_i with g_i, e_i = y_i - g_i, the command u_i (25), the plant input u_f,i (5) and
     eta_i against t.
@@ -40,11 +40,15 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None))
     ``ax``: one matplotlib Axes (then only y_i and g_i are drawn, on it), five (the five panels) or
     four (u_f,i then shares the third panel on a second y axis of its own scale); otherwise a new
     figure of ``figsize`` (default (10, 14)), or the panels are added to ``fig``. ``names``: the
-    plant's (inputs, outputs) names or None, shown in the titles. Returns the Figure."""
+    plant's (inputs, outputs) names or None, shown in the titles. ``u_max``: the true actuator's
+    limits per input (empty without one), drawn on u_f,i's panel where u_f,i comes within a tenth of
+    its limit and told in the title otherwise. Returns the Figure."""
     try:
         import matplotlib.pyplot as plt
     except ImportError as e:
         raise ImportError("SimResult.plot needs matplotlib: pip install matplotlib") from e
+    import numpy as np
+
     m = result.m
     given = 1 if channel is None else channel
     try:
@@ -109,6 +113,17 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None))
             axes[2].set(title=f"{channel_title}: adaptive command (25) and plant input (5, right axis)")
         uf_ax.plot(t, result.u_f[:, i], color="C1", label=f"uf{c}", **held)
         uf_ax.set(ylabel="u_f")
+        limit = u_max[i] if i < len(u_max) and np.isfinite(u_max[i]) else None
+        if limit is not None:
+            finite = np.abs(result.u_f[:, i][np.isfinite(result.u_f[:, i])])
+            peak = finite.max() if finite.size else 0.0
+            if peak >= 0.1 * limit:
+                for level in (limit, -limit):
+                    uf_ax.axhline(level, color="0.35", linestyle="--", linewidth=1,
+                                  label=f"±truth.u_max[{i}] = {limit:.6g}" if level > 0 else None)
+            else:
+                title_ax = uf_ax if len(axes) == 5 else axes[2]
+                title_ax.set_title(f"{title_ax.get_title()}; peak {100 * peak / limit:.1f} % of truth.u_max")
         eta_ax = axes[-1]
         for j in range(result.q):
             eta_ax.plot(t, result.eta[:, i, j], label=f"η{c}_{j + 1}")

@@ -263,10 +263,13 @@ impl<'a> Run<'a> {
     /// actuator, m reference and k disturbance components with finite parameters, the truth's
     /// dimensions).
     pub fn simulate(self, on_progress: impl FnMut(f64) -> ControlFlow<()>) -> Result<SimResult, SimError> {
-        match self.settings.mode.clone() {
+        let u_max = self.settings.actuator.as_ref().map_or(vec![], |a| a.limits.clone());
+        let mut result = match self.settings.mode.clone() {
             Loop::Continuous(integrator) => closed_loop::simulate(&self, &integrator, on_progress),
             Loop::Sampled { sample_time } => sampled::simulate(self, sample_time, on_progress),
-        }
+        }?;
+        result.u_max = u_max;
+        Ok(result)
     }
 }
 

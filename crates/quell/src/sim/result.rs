@@ -126,6 +126,9 @@ pub struct SimResult {
     /// clipped it; empty without an actuator. The continuous loop reads the clipping at the
     /// integrator's latest evaluation of the derivative (within one step of the sample).
     pub limited: Vec<usize>,
+    /// Per input, the true plant's actuator limit (`[truth]` u_max, ∞ for none); empty without an
+    /// actuator.
+    pub u_max: Vec<f64>,
     /// The plant's unit of time, in which `t` and every time of the run are (a label).
     pub time_unit: TimeUnit,
 }
@@ -206,6 +209,7 @@ impl SimResult {
             outcome: None,
             peaks: Peaks::default(),
             limited: Vec::new(),
+            u_max: Vec::new(),
             time_unit: TimeUnit::default(),
         }
     }
