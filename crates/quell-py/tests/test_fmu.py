@@ -216,12 +216,15 @@ def test_fmi3_calls_one_by_one(tmp_path):
     refusals = [
         (lambda: fmu.setFloat64([vr["time"]], [0.0]), "fmi3SetFloat64: value reference 12 is not an input (y and g are 0 to 5)"),
         (lambda: fmu.setFloat64([vr["u_f[1]"]], [0.0]), "fmi3SetFloat64: value reference 6 is not an input"),
-        (lambda: fmu.setFloat64([vr["y[2]"]], [float("nan")]), "fmi3SetFloat64: input 1 is nan; y and g must be finite"),
+        (lambda: fmu.setFloat64([vr["y[2]"]], [float("nan")]), "fmi3SetFloat64: input y[2] (value reference 1) is nan; y and g must be finite"),
         (lambda: fmu.getFloat64([vr["y[1]"], vr["y[2]"]], nValues=1), "fmi3GetFloat64: 1 values for 2 value references"),
         (lambda: fmu.getFloat64([13]), "fmi3GetFloat64: no variable has value reference 13 (0 to 11)"),
         (lambda: fmu.doStep(1.0, 0.05), "fmi3DoStep: at t = 1 s, but the controller's next sample is at 1.1 s"),
         # A NaN time passed the test |t − now| > tol (false for NaN) and stepped the controller.
         (lambda: fmu.doStep(float("nan"), 0.1), "fmi3DoStep: at t = nan s, but the controller's next sample is at 1.1 s"),
+        # A finite input beyond the controller's bound is refused by the step, which names it.
+        (lambda: fmu.setFloat64([vr["g[3]"]], [1e101]) or fmu.doStep(1.1, 0.05),
+         "fmi3DoStep: input g[3] = 1e+101 is NaN or beyond +-1e+100; the step was refused"),
     ]
     for call, why in refusals:
         with pytest.raises(FMICallException, match="status 3"):
