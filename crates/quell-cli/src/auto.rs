@@ -27,11 +27,11 @@ pub struct DesignArgs {
     /// With --auto: when the error should be down to 0.2 % of the reference's peak, the target μ is
     /// chosen for by the averaged law (in the plant's unit of time; default simulation.t_end/20);
     /// the verification reports the run's error there.
-    #[arg(long, value_name = "TIME", allow_negative_numbers = true)]
+    #[arg(long, value_name = "TIME", allow_hyphen_values = true, value_parser = crate::parse_real)]
     pub convergence_time: Option<f64>,
     /// With --auto: actuator limit on |u_f,i|, the plant input u_f = −K x̂ + F u_d: one for every
     /// input, or one per input separated by commas (inputs in different units).
-    #[arg(long, value_name = "U[,U…]", value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(long, value_name = "U[,U…]", value_delimiter = ',', allow_hyphen_values = true, value_parser = crate::parse_real)]
     pub u_limit: Vec<f64>,
 }
 

@@ -111,6 +111,12 @@ pub(crate) fn print_json(value: &serde_json::Value) {
     print_stdout(&format!("{}\n", serde_json::to_string_pretty(value).unwrap_or_default()));
 }
 
+/// A real-valued flag's value as Rust reads a float ("0.001", "1e-3", "-inf", "nan"); clap names
+/// the flag around the message.
+pub(crate) fn parse_real(text: &str) -> Result<f64, String> {
+    text.parse::<f64>().map_err(|_| format!("expected a decimal number such as 0.001 or 1e-3, found {text:?}"))
+}
+
 /// The scenario at `path` (the paper's example without one) and its design; with `sample_time`
 /// (a `--sample-time` > 0) as its `simulation.sample_time`, so that the file is checked as the
 /// sampled-data scenario the flag makes of it (white noise needs no bandwidth there).

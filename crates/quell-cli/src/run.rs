@@ -25,7 +25,7 @@ pub struct RunArgs {
     pub out: PathBuf,
     /// Sampled-data run with the discrete controller at this sample time, in the plant's unit of
     /// time (plant.time_unit); overrides simulation.sample_time.
-    #[arg(long, value_name = "T_S", allow_negative_numbers = true)]
+    #[arg(long, value_name = "T_S", allow_hyphen_values = true, value_parser = crate::parse_real)]
     pub sample_time: Option<f64>,
     /// Skip the PNG/SVG plots.
     #[arg(long)]
@@ -33,7 +33,7 @@ pub struct RunArgs {
     /// Step budget of the continuous loop, and with it the delay history's memory budget (default:
     /// derived from the problem's time scales; see docs/running.md). A run that needs more ends as
     /// failed, its results up to then written.
-    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_max_steps)]
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_max_steps)]
     pub max_steps: Option<usize>,
     /// Also record the plant state x and the observer state x̂ (columns x1..xn, xhat1..xhatn of
     /// signals.csv).

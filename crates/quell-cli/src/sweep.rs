@@ -26,7 +26,7 @@ pub struct SweepArgs {
     #[arg(long, num_args = 1.., value_name = "DIR")]
     merge: Vec<PathBuf>,
     /// Worker threads (default: one per core).
-    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_jobs)]
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_jobs)]
     jobs: Option<usize>,
     /// Skip sweep.png/.svg.
     #[arg(long)]

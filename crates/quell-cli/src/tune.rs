@@ -17,7 +17,7 @@ pub struct TuneArgs {
     #[arg(long, default_value = "quell-tune")]
     out: PathBuf,
     /// Worker threads (default: one per core).
-    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = crate::sweep::parse_jobs)]
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = crate::sweep::parse_jobs)]
     jobs: Option<usize>,
     /// Skip tune.png/.svg.
     #[arg(long)]
@@ -57,7 +57,7 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
     if !args.no_plots {
         crate::plot::plot_tune(&args.out, &result, study.time_unit()).map_err(failed)?;
     }
-    crate::print_stdout(&report(&result, study.time_unit()));
+    crate::print_stdout(&report(&result, spec, study.time_unit()));
     if result.partial {
         let evaluations: usize = result.channels.iter().map(|c| c.curve.len()).sum();
         return Err(Failure::Run(format!(
@@ -74,15 +74,19 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
         )));
     }
     // After the channels without a feasible μ: the joint run then holds the scenario's μ there.
-    if let Some(i) = result.within_limits.iter().position(|ok| !ok) {
-        let f = result.joint.as_ref().and_then(|j| j.channels.get(i));
+    let broken: Vec<String> = (0..result.within_limits.len())
+        .filter(|&i| !result.within_limits[i])
+        .map(|i| {
+            let f = result.joint.as_ref().and_then(|j| j.channels.get(i));
+            let what = f.map_or(vec![], |f| spec.broken_limits(i, f, "tune."));
+            let what = if what.is_empty() { "its run has no figures".to_string() } else { what.join(", ") };
+            format!("channel {}: {what}", i + 1)
+        })
+        .collect();
+    if !broken.is_empty() {
         return Err(Failure::Input(format!(
-            "channel {}: the tuned μ together break its limits in the joint run: max |u_{0}| = {:.4e} against tune.max_u[{i}] = {}, max |u_f,{0}| = {:.4e} against tune.max_uf[{i}] = {}; each search met them with the other channels' μ at the scenario's, but u_f = −K x̂ + F u_d mixes every channel's command: lower the broken limit by the excess and tune again, or tune with a grid over the μ together (docs/studies.md)",
-            i + 1,
-            f.map_or(f64::NAN, |f| f.max_u),
-            spec.max_u[i],
-            f.map_or(f64::NAN, |f| f.max_uf),
-            spec.max_uf[i],
+            "the tuned μ together break limits in the joint run ({}); each search met them with the other channels' μ at the scenario's, but u_f = −K x̂ + F u_d mixes every channel's command: lower the broken limit by the excess and tune again, or tune with a grid over the μ together (docs/studies.md)",
+            broken.join("; ")
         )));
     }
     Ok(())
@@ -121,7 +125,7 @@ fn write_curves(w: &mut dyn std::io::Write, r: &TuneResult) -> std::io::Result<(
 }
 
 /// The chosen μ and the joint check, one line per channel; a settling time in `unit`.
-fn report(r: &TuneResult, unit: quell::TimeUnit) -> String {
+fn report(r: &TuneResult, spec: &quell::study::TuneSpec, unit: quell::TimeUnit) -> String {
     let mut s = match r.objective {
         quell::study::Objective::SettleT => format!("objective: settle_t, in {}\n", unit.name()),
         other => format!("objective: {}\n", other.name()),
@@ -141,9 +145,13 @@ fn report(r: &TuneResult, unit: quell::TimeUnit) -> String {
                 },
                 d.map_or("n/a".to_string(), |d| format!("{d:.3e}")),
                 if r.partial || r.within_limits.get(c.channel).copied().unwrap_or(true) {
-                    ""
+                    String::new()
                 } else {
-                    ", but BREAKS the limits on max |u|, max |u_f| there"
+                    let f = r.joint.as_ref().and_then(|j| j.channels.get(c.channel));
+                    format!(
+                        ", but BREAKS {} there",
+                        f.map_or(vec![], |f| spec.broken_limits(c.channel, f, "tune.")).join(", ")
+                    )
                 },
                 // Interrupted, the largest μ evaluated is not the range's end.
                 c.at_bound().filter(|_| !r.partial).map_or(String::new(), |end| format!(

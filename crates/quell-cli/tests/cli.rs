@@ -886,11 +886,28 @@ fn tune_exits_2_when_the_joint_run_breaks_a_limit() {
     let out = dir.path().join("out");
     let o = quell(&["tune", study.to_str().unwrap(), "--out", out.to_str().unwrap(), "--no-plots"]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(stdout(&o).contains("channel 1: mu = ") && stdout(&o).contains("but BREAKS the limits"), "{}", stdout(&o));
-    assert!(stdout(&o).starts_with("objective: settle_t, in minutes\n"), "the CSTR's unit: {}", stdout(&o));
-    assert!(stderr(&o).contains("channel 1: the tuned μ together break its limits in the joint run"), "{}", stderr(&o));
-    assert!(stderr(&o).contains("against tune.max_uf[0] = 10.6"), "{}", stderr(&o));
+    // Only the limit broken is named (max_u[0] = 1 is met), with the joint run's figure.
+    let report = stdout(&o);
+    let line = report.lines().find(|l| l.starts_with("channel 1: mu = ")).unwrap_or_else(|| panic!("{report}"));
+    assert!(
+        line.contains(", but BREAKS max |u_f,1| = ") && line.ends_with(" beyond tune.max_uf[0] = 10.6 there"),
+        "{line}"
+    );
+    assert!(!line.contains("max |u_1|"), "{line}");
+    assert!(report.starts_with("objective: settle_t, in minutes\n"), "the CSTR's unit: {report}");
+    let err = stderr(&o);
+    assert!(err.contains("the tuned μ together break limits in the joint run (channel 1: max |u_f,1| = "), "{err}");
+    assert!(err.contains(" beyond tune.max_uf[0] = 10.6)"), "{err}");
+    // The joint figure is the one the error names: tune.json's joint run.
     let json = read_json(&out.join("tune.json"));
+    let joint = json["joint"]["channels"][0]["max_uf"].as_f64().unwrap();
+    assert!(joint > 10.6 && err.contains(&format!("max |u_f,1| = {joint:.4e} beyond")), "{joint} {err}");
+    // tune.csv says why a completed evaluation has no objective: the limit it broke.
+    let csv = fs::read_to_string(out.join("tune.csv")).unwrap();
+    assert!(
+        csv.lines().any(|l| l.contains(",completed,max |u_f,1| = ") && l.contains("beyond tune.max_uf[0] = 10.6,")),
+        "{csv}"
+    );
     assert_eq!(json["within_limits"], serde_json::json!([false, true]));
 }
 

@@ -259,3 +259,33 @@ fn the_report_prints_eta_with_significant_digits() {
     let value: f64 = eta.trim().parse().unwrap();
     assert!(value > 0.0, "{line}");
 }
+
+/// A numeric flag's value that starts with '-' and a letter ("-inf") reaches the flag's own check,
+/// which names it, instead of clap's "unexpected argument '-i'"; a value that is no number says
+/// what a number looks like.
+#[test]
+fn negative_and_malformed_numbers_are_named_by_their_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out").display().to_string();
+    let s = study(dir.path(), "s.toml", "[grid]\n\"design.mu[0]\" = [20.0]\n");
+    let p = paper();
+    for (args, fragment) in [
+        (vec!["run", &p, "--sample-time", "-inf", "--out", &out], "--sample-time: expected a sample time > 0"),
+        (vec!["run", &p, "--max-steps", "-inf", "--out", &out], "'--max-steps <N>': expected a step budget"),
+        (vec!["export", &p, "--sample-time", "-inf", "--out", &out], "--sample-time"),
+        (
+            vec!["design", &p, "--auto", "--convergence-time", "-inf"],
+            "--convergence-time: expected a finite number > 0, found -inf",
+        ),
+        (vec!["design", &p, "--auto", "--u-limit", "-inf"], "--u-limit: expected finite limits > 0, found -inf"),
+        (vec!["sweep", &s, "--jobs", "-inf", "--out", &out], "'--jobs <N>': expected a number of worker threads"),
+        (
+            vec!["run", &p, "--sample-time", " 0.001", "--out", &out],
+            "expected a decimal number such as 0.001 or 1e-3, found \" 0.001\"",
+        ),
+    ] {
+        let o = quell(&args);
+        refused(&o, fragment);
+        assert!(!stderr(&o).contains("unexpected argument"), "{args:?}: {}", stderr(&o));
+    }
+}

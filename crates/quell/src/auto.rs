@@ -540,6 +540,8 @@ fn sampled_start(doc: &toml::Table, targets: &Targets) -> Result<(Proposal, Desi
     let Some(t_s) = p.scenario.simulation.sample_time else { return Ok((p, design, speed)) };
     let rate = |p: &Proposal, d: &Design| loop_rate(d, d.plant(), [&p.scenario.reference, &p.scenario.disturbance]);
     let mut rho = rate(&p, &design);
+    let worst = |p: &Proposal, d: &Design| fidelity(&p.scenario, d).into_iter().fold(0.0, f64::max);
+    let first_error = worst(&p, &design);
     for _ in 0..MAX_SAMPLED_HALVINGS {
         if t_s * rho <= COARSE_SAMPLE {
             break;
@@ -556,8 +558,19 @@ fn sampled_start(doc: &toml::Table, targets: &Targets) -> Result<(Proposal, Desi
     if speed != Speed::FIRST {
         let unit = design.plant().time_unit;
         let why = format!("; ×{} of that for simulation.sample_time = {t_s} {unit} (T_s·ρ = {:.2} ≤ {COARSE_SAMPLE}, ρ the loop's fastest rate: docs/running.md)", speed.channel, t_s * rho);
-        for c in p.choices.iter_mut().filter(|c| c.key == "design.channel_poles" || c.key == "design.observer_poles") {
-            c.why.push_str(&why);
+        // The observer's error quoted above is the candidate's before the halving: the kept one's.
+        let error = worst(&p, &design);
+        let observer_why = match error {
+            _ if p.scenario.plant.k() == 0 => why.clone(),
+            e if e > FIDELITY_LIMIT && e > first_error => format!("{why}; its error is then {e:.2e} at worst: the sample time costs the disturbance observer's fidelity (the run's diagnostics will say so), which a shorter simulation.sample_time would keep"),
+            e => format!("{why}; its error is then {e:.2e} at worst"),
+        };
+        for c in p.choices.iter_mut() {
+            match c.key.as_str() {
+                "design.channel_poles" => c.why.push_str(&why),
+                "design.observer_poles" => c.why.push_str(&observer_why),
+                _ => {}
+            }
         }
     }
     Ok((p, design, speed))
@@ -809,12 +822,6 @@ fn smallest_gap(s: &Scenario) -> Option<f64> {
     closest_pair(s).map(|(a, b)| b - a)
 }
 
-/// `x` rounded up to two significant digits (a horizon to propose).
-fn round_up_2(x: f64) -> f64 {
-    let unit = 10f64.powf(x.log10().floor() - 1.0);
-    (x / unit).ceil() * unit
-}
-
 /// The most time constants 1/ρ a continuous verifying run may span, ρ·t_end: beyond it the run
 /// takes ten million steps or more (DOP853 needs about one per 3/ρ where ρ bounds its step),
 /// minutes each, and the relaxation runs several. The batch reactor over 1e5 s spans 1.04e7 and is
@@ -864,7 +871,7 @@ fn failure_advice(s: &Scenario) -> Option<String> {
             "the horizon is too short to tell the signals' two closest frequencies apart: {a} and {b} rad/{unit} beat with period 2π/{:.4e} = {beat:.4e} {unit}, and t_end = {t_end} {unit} is {:.2} beats; the adaptive law needs about {SEPARATION_BEATS}: lengthen simulation.t_end to at least {} {unit} (or move the frequencies apart)",
             b - a,
             t_end / beat,
-            round_up_2(SEPARATION_BEATS * beat)
+            crate::settings::round_up_2(SEPARATION_BEATS * beat)
         )
     })
 }

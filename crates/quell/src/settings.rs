@@ -418,6 +418,13 @@ pub(crate) fn three_digits_down(x: f64) -> f64 {
     format!("{digits}e{e}").parse::<f64>().map_or(x, |v| if v <= x { v } else { (digits - 1.0) * 10f64.powi(e) })
 }
 
+/// `x` > 0 rounded up to two significant digits (a value to propose: a horizon, a gain).
+pub(crate) fn round_up_2(x: f64) -> f64 {
+    let unit = 10f64.powf(x.log10().floor() - 1.0);
+    // Through the shortest decimal, so that 0.1·unit·ceil prints as 0.11, not 0.11000000000000001.
+    format!("{:.1e}", (x / unit).ceil() * unit).parse().unwrap_or(x)
+}
+
 /// Rust's shortest form of `v`: `{}` for 0 and between 1e-4 and 1e6, otherwise `{:e}`, so that
 /// 1e293 does not print as 294 digits (nor 1e-300 as 300 zeros).
 pub(crate) fn fmt_short(v: f64) -> String {
@@ -468,6 +475,26 @@ pub(crate) fn check_sample_time(t_end: f64, sample_time: f64) -> Result<(), KeyE
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A proposed value is at least the value asked for, at most 10 % above it (one unit of its
+    /// second digit), and prints short; a value already of two digits stays.
+    #[test]
+    fn values_round_up_to_two_significant_digits() {
+        for (x, want) in [
+            (9.949, "10"),
+            (11290.3, "12000"),
+            (5.304, "5.4"),
+            (0.1, "0.1"),
+            (0.10000001, "0.11"),
+            (99.0, "99"),
+            (3.7e-7, "3.7e-7"),
+            (1.2e12, "1.2e12"),
+        ] {
+            let r = round_up_2(x);
+            assert_eq!(fmt_short(r), want, "{x}");
+            assert!(r >= x && r <= 1.1 * x, "{x} → {r}");
+        }
+    }
 
     #[test]
     fn suggested_output_step_and_sample_time_are_short_and_pass() {

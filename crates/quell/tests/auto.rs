@@ -331,6 +331,18 @@ fn a_sampled_scenario_gets_poles_slow_enough_for_its_sample_time() {
     assert!(t_s * rho(&sampled) <= quell::sim::COARSE_SAMPLE, "ρ = {}", rho(&sampled));
     let why = &sampled.choices.iter().find(|c| c.key == "design.channel_poles").unwrap().why;
     assert!(why.contains("of that for simulation.sample_time = 0.0005 s"), "{why}");
+    // The observer's reason quotes the disturbance observer's error of the poles kept, not of the
+    // candidate before the halving.
+    let why = &sampled.choices.iter().find(|c| c.key == "design.observer_poles").unwrap().why;
+    let kept =
+        quell::diagnostics::Averaged::new(&sampled.design, &sampled.scenario.reference, &sampled.scenario.disturbance)
+            .fidelity
+            .iter()
+            .map(|f| f.relative_error)
+            .fold(0.0, f64::max);
+    assert!(why.contains("of that for simulation.sample_time = 0.0005 s (T_s·ρ = "), "{why}");
+    // (The maglev's best observer passes ω badly at any speed, 0.84; the halved one does better.)
+    assert!(why.ends_with(&format!("; its error is then {kept:.2e} at worst")) && kept > 0.3, "{why}");
     assert!(quell::sim::coarse_sample_warning(
         &sampled.design,
         &sampled.scenario.reference,
@@ -814,4 +826,28 @@ fn a_scenario_without_a_design_table_is_designed_whole() {
     assert!(auto.verification.passed);
     let written: toml::Table = auto.scenario.to_toml().parse().unwrap();
     assert!(Scenario::from_document(&written).is_ok());
+}
+
+/// Where the halving for the sample time costs the disturbance observer its fidelity (the Quanser
+/// helicopter, tests/data/quanser-heli.toml, at 2 ms: the rules' observer passes ω within 0.033,
+/// the one 16× slower with 0.49), the observer's reason says so and what would keep it.
+#[test]
+fn the_sampled_halving_says_when_it_costs_the_disturbance_observer() {
+    let text = data("quanser-heli.toml").replace("[simulation]\n", "[simulation]\nsample_time = 0.002\n");
+    let a = auto_design(&without_design(&text), &Targets::default()).unwrap();
+    let why = &a.choices.iter().find(|c| c.key == "design.observer_poles").unwrap().why;
+    let kept = quell::diagnostics::Averaged::new(&a.design, &a.scenario.reference, &a.scenario.disturbance)
+        .fidelity
+        .iter()
+        .map(|f| f.relative_error)
+        .fold(0.0, f64::max);
+    assert!(kept > 0.3, "{kept}");
+    assert!(
+        why.contains("its error is 3.31e-2 at worst; ×0.0625 of that for simulation.sample_time = 0.002 s"),
+        "{why}"
+    );
+    assert!(
+        why.ends_with(&format!("; its error is then {kept:.2e} at worst: the sample time costs the disturbance observer's fidelity (the run's diagnostics will say so), which a shorter simulation.sample_time would keep")),
+        "{why}"
+    );
 }

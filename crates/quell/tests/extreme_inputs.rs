@@ -388,3 +388,36 @@ fn the_delay_lines_are_budgeted_together_in_bytes() {
     let printed: f64 = e.to_string().rsplit("such as ").next().unwrap().trim_end_matches(" s").parse().unwrap();
     assert!(quell::Controller::new(&d, printed).is_ok(), "{printed}");
 }
+
+/// An internal-model filter whose polynomial ∏(s − p_j) has a coefficient beyond 1e150 is refused
+/// naming the list: 44 poles near −1e7 overflowed it to ∞, and the design report and every run
+/// then hung in an eigenvalue iteration on the non-finite companion matrix, deaf to Ctrl-C. With
+/// 22 such poles the largest coefficient is the constant term ∏|p_j| (each |p_j| ≫ the binomials),
+/// here computed by hand.
+#[test]
+fn a_filter_polynomial_beyond_1e150_is_refused() {
+    let poles = |count: usize| (0..count).map(|i| -1e7 * (1.0 + 0.01 * i as f64)).collect::<Vec<f64>>();
+    let list = |p: &[f64]| p.iter().map(|v| format!("{v:?}")).collect::<Vec<_>>().join(", ");
+    for count in [22, 44] {
+        let p = poles(count);
+        let e = design_error(REF_FILTER, &format!("reference_filter_poles = [[-1.0, -6.0], [{}]]", list(&p)));
+        assert!(
+            matches!(&e, DesignError::FilterTooLarge { key, count: c, .. } if key == "design.reference_filter_poles[1]" && *c == count),
+            "{e:?}"
+        );
+        let constant: f64 = p.iter().map(|v| v.abs()).product();
+        let DesignError::FilterTooLarge { coefficient, .. } = e else { unreachable!() };
+        if count == 22 {
+            assert!(
+                constant > 1e150 && constant.is_finite() && (coefficient / constant - 1.0).abs() < 1e-12,
+                "{coefficient} {constant}"
+            );
+        } else {
+            assert!(coefficient.is_infinite() && constant.is_infinite());
+            assert!(
+                e.to_string().contains("over its 44 poles has a coefficient of magnitude inf, beyond 1e150"),
+                "{e}"
+            );
+        }
+    }
+}

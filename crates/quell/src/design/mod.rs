@@ -176,6 +176,8 @@ pub enum DesignError {
     NotConjugateClosed { key: String, pole: Complex<f64> },
     #[error("{key}: the list is empty; give at least one pole")]
     NoPoles { key: String },
+    #[error("{key}: the filter's polynomial ∏(s − p_j) over its {count} poles has a coefficient of magnitude {}, beyond {}: too large for the internal model's matrices (11), (16) in double precision; give fewer poles (two per harmonic, one per bias) or slower ones", crate::settings::fmt_short(*.coefficient), crate::settings::fmt_short(crate::plant::MAX_ENTRY))]
+    FilterTooLarge { key: String, count: usize, coefficient: f64 },
     #[error("plant.A: n = {n} states; a design is limited to n ≤ {MAX_STATES} (quell::design::MAX_STATES): its eigen-decompositions and pole placement grow as n³ (seconds at n = {MAX_STATES}, minutes beyond 1000); reduce the model first (e.g. balanced truncation to the modes that matter)")]
     TooManyStates { n: usize },
     #[error("design.mu[{index}]: expected a finite adaptation gain ≥ 0, found {}", crate::settings::fmt_short(*.value))]
@@ -228,6 +230,15 @@ fn check_poles(key: String, what: &'static str, poles: &[Complex<f64>], nonempty
         let partners = |z: Complex<f64>| poles.iter().filter(|&&x| (x - z).norm() <= 1e-12 * (1.0 + z.norm())).count();
         if p.im != 0.0 && partners(p.conj()) != partners(p) {
             return Err(DesignError::NotConjugateClosed { key, pole: p });
+        }
+    }
+    // An internal-model filter's companion form holds the polynomial's coefficients: 44 poles at
+    // −1e7 overflowed them to ∞, and every later eigenvalue computation ran on a non-finite matrix.
+    if nonempty {
+        let magnitude = |a: f64| if a.is_nan() { f64::INFINITY } else { a.abs() };
+        let coefficient = poly_from_roots(poles).into_iter().fold(0.0, |m: f64, a| m.max(magnitude(a)));
+        if coefficient > crate::plant::MAX_ENTRY {
+            return Err(DesignError::FilterTooLarge { key, count: poles.len(), coefficient });
         }
     }
     Ok(())
@@ -303,6 +314,13 @@ impl Design {
             observer_kappa: std::sync::OnceLock::new(),
             decoupled_kappa: std::sync::OnceLock::new(),
         })
+    }
+
+    /// This design with the observer (6) placed at `poles` instead: L and eig(A − LC) anew, every
+    /// other gain kept (the observer is designed apart from K, F and the internal models).
+    pub fn with_observer_poles(&self, poles: &[Complex<f64>]) -> Result<Design, DesignError> {
+        let (L, observer_eigenvalues) = observer(&self.plant, &ObserverChoice::Poles(poles.to_vec()))?;
+        Ok(Design { L, observer_eigenvalues, observer_kappa: std::sync::OnceLock::new(), ..self.clone() })
     }
 
     /// The plant the design is for.

@@ -813,12 +813,10 @@ pub const STIFF_RATIO: f64 = 100.0;
 /// plant's A, of A − BK, A − LC, G_g, G_ω and the channels' G_ii(s), 1/β, and the signals' highest
 /// frequency (1/s).
 pub fn loop_rate(design: &Design, truth: &Plant, signals: [&Signal; 2]) -> f64 {
+    // The balanced QR of `linalg` (nalgebra's Schur iterates forever on a non-finite matrix);
+    // a matrix it refuses gives NaN, left out below.
     let radius = |M: &DMatrix<f64>| {
-        if M.is_empty() {
-            0.0
-        } else {
-            M.complex_eigenvalues().iter().fold(0.0, |r: f64, z| r.max(z.norm()))
-        }
+        crate::linalg::eigenvalues(M).map_or(f64::NAN, |e| e.iter().fold(0.0, |r: f64, z| r.max(z.norm())))
     };
     let largest = |e: &[nalgebra::Complex<f64>]| e.iter().fold(0.0, |r: f64, z| r.max(z.norm()));
     let channels = design.channels().iter().fold(0.0, |r: f64, c| r.max(largest(&c.poles)));

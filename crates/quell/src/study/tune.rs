@@ -64,6 +64,22 @@ const TUNE_KEYS: &[&str] = &["objective", "mu", "max_u", "max_uf", "points", "re
 const OBJECTIVES: &str = "\"settle_t\", \"tail_rms_e\" or \"tail_max_e\"";
 
 impl TuneSpec {
+    /// The limits on channel i that a run's figures `f` break, one phrase each (`max |u_f,1| =
+    /// 4.0706e0 beyond tune.max_uf[0] = 4`): only limits that are set (finite) and exceeded.
+    pub fn broken_limits(&self, i: usize, f: &ChannelFigures, prefix: &str) -> Vec<String> {
+        let c = i + 1;
+        [
+            ("max_u", format!("max |u_{c}|"), f.max_u, self.max_u[i]),
+            ("max_uf", format!("max |u_f,{c}|"), f.max_uf, self.max_uf[i]),
+        ]
+        .into_iter()
+        .filter(|&(_, _, value, limit)| value > limit)
+        .map(|(key, what, value, limit)| {
+            format!("{what} = {value:.4e} beyond {prefix}{key}[{i}] = {}", crate::settings::fmt_short(limit))
+        })
+        .collect()
+    }
+
     pub(super) fn parse(t: &toml::Table, s: &Scenario) -> Result<TuneSpec, StudyError> {
         super::unknown_keys("tune", t, TUNE_KEYS)?;
         let m = s.plant.m();
@@ -356,7 +372,12 @@ impl Search<'_> {
             .filter(|c| c.max_u <= spec.max_u[i] && c.max_uf <= spec.max_uf[i])
             .map(|c| objective.of(&c))
             .filter(|v| v.is_finite());
-        let point = TunePoint { mu: mu_i, objective, outcome: row.outcome, reason: row.reason, figures };
+        // A completed run beyond a limit: the limit is why it has no objective.
+        let mut reason = row.reason;
+        if let (true, Some(f)) = (reason.is_empty(), &figures) {
+            reason = spec.broken_limits(i, f, "tune.").join("; ");
+        }
+        let point = TunePoint { mu: mu_i, objective, outcome: row.outcome, reason, figures };
         if let Some(f) = self.opts.on_point {
             f(i, &point);
         }
