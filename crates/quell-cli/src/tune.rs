@@ -221,7 +221,15 @@ mod tests {
             within_limits: vec![false, false],
             partial: true,
         };
-        let text = report(&result, quell::TimeUnit::default());
+        let spec = quell::study::TuneSpec {
+            objective: Objective::TailRmsE,
+            bounds: vec![[1.0, 1e5]; 2],
+            max_u: vec![f64::INFINITY; 2],
+            max_uf: vec![f64::INFINITY; 2],
+            points: 2,
+            refine: 0,
+        };
+        let text = report(&result, &spec, quell::TimeUnit::default());
         assert!(text.contains("channel 2: not evaluated (tuning interrupted)"), "{text}");
         assert!(!text.contains("end of tune.mu"), "{text}");
         assert!(!text.contains("no feasible"), "{text}");
