@@ -905,7 +905,7 @@ fn tune_exits_2_when_the_joint_run_breaks_a_limit() {
     // tune.csv says why a completed evaluation has no objective: the limit it broke.
     let csv = fs::read_to_string(out.join("tune.csv")).unwrap();
     assert!(
-        csv.lines().any(|l| l.contains(",completed,max |u_f,1| = ") && l.contains("beyond tune.max_uf[0] = 10.6,")),
+        csv.lines().any(|l| l.contains(",completed,\"max |u_f,1| = ") && l.contains("beyond tune.max_uf[0] = 10.6\",")),
         "{csv}"
     );
     assert_eq!(json["within_limits"], serde_json::json!([false, true]));

@@ -232,13 +232,29 @@ fn check_poles(key: String, what: &'static str, poles: &[Complex<f64>], nonempty
             return Err(DesignError::NotConjugateClosed { key, pole: p });
         }
     }
-    // An internal-model filter's companion form holds the polynomial's coefficients: 44 poles at
-    // −1e7 overflowed them to ∞, and every later eigenvalue computation ran on a non-finite matrix.
-    if nonempty {
-        let magnitude = |a: f64| if a.is_nan() { f64::INFINITY } else { a.abs() };
-        let coefficient = poly_from_roots(poles).into_iter().fold(0.0, |m: f64, a| m.max(magnitude(a)));
-        if coefficient > crate::plant::MAX_ENTRY {
-            return Err(DesignError::FilterTooLarge { key, count: poles.len(), coefficient });
+    Ok(())
+}
+
+/// An internal-model filter's companion form holds its polynomial ∏(s − p_j)'s coefficients, at
+/// most [`crate::plant::MAX_ENTRY`]: 44 poles at −1e7 overflowed them to ∞, and every later
+/// eigenvalue computation ran on a non-finite matrix. Checked after the span of rates, which
+/// names a single absurd pole better.
+fn check_filter_size(spec: &DesignSpec) -> Result<(), DesignError> {
+    let lists = [
+        ("reference_filter_poles", &spec.reference_filter_poles),
+        ("disturbance_filter_poles", &spec.disturbance_filter_poles),
+    ];
+    for (name, list) in lists {
+        for (i, poles) in list.iter().enumerate() {
+            let magnitude = |a: f64| if a.is_nan() { f64::INFINITY } else { a.abs() };
+            let coefficient = poly_from_roots(poles).into_iter().fold(0.0, |m: f64, a| m.max(magnitude(a)));
+            if coefficient > crate::plant::MAX_ENTRY {
+                return Err(DesignError::FilterTooLarge {
+                    key: format!("design.{name}[{i}]"),
+                    count: poles.len(),
+                    coefficient,
+                });
+            }
         }
     }
     Ok(())
@@ -488,7 +504,8 @@ fn check_spec(plant: &Plant, spec: &DesignSpec) -> Result<(), DesignError> {
     if let ObserverChoice::Poles(p) = &spec.observer {
         check_poles("design.observer_poles".into(), "observer", p, false)?;
     }
-    check_rate_span(spec)
+    check_rate_span(spec)?;
+    check_filter_size(spec)
 }
 
 /// The choices' rates (every requested pole, and 1/β) span at most [`RATE_SPAN`]: the fastest
