@@ -157,10 +157,7 @@ pub(crate) fn clipped(i: usize, f: f64) -> String {
 }
 
 /// A time for a message, to 12 significant digits and without trailing zeros.
-pub(crate) fn short(x: f64) -> String {
-    let s = format!("{:.12e}", x);
-    s.parse::<f64>().map_or(s, |v| v.to_string())
-}
+pub(crate) use quell::settings::fmt_time as short;
 
 /// The continuous or the sampled-data loop on the scenario's true plant, with a progress bar.
 fn simulate(

@@ -73,9 +73,10 @@ fn read(obj: &Bound<'_, PyAny>, name: &str, out: &mut [f64]) -> PyResult<()> {
     let m = out.len();
     let check = |v: &[f64], out: &mut [f64]| -> PyResult<()> {
         if v.len() != m {
-            return Err(
-                Kind::Controller.err(py, format!("{name}: expected {m} entries (one per output), found {}", v.len()))
-            );
+            return Err(Kind::Controller.err(
+                py,
+                format!("{name}: expected {} (one per output), found {}", quell::settings::entries(m), v.len()),
+            ));
         }
         if let Some(i) = v.iter().position(|x| !x.is_finite()) {
             return Err(Kind::Controller.err(py, format!("{name}[{i}]: expected a finite number, found {}", v[i])));

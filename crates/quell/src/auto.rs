@@ -907,7 +907,11 @@ fn filters(
         if o.len() != signal.len() {
             return Err(ScenarioError::new(
                 format!("design.{key}_filter_orders"),
-                format!("expected {} entries (one per {key} component), found {}", signal.len(), o.len()),
+                format!(
+                    "expected {} (one per {key} component), found {}",
+                    crate::settings::entries(signal.len()),
+                    o.len()
+                ),
             ));
         }
     }

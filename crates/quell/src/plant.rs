@@ -51,7 +51,7 @@ pub enum PlantError {
     TooLarge { name: &'static str, row: usize, col: usize, value: f64 },
     #[error("delays[{index}]: expected a finite delay ≥ 0, found {}", crate::settings::fmt_short(*.value))]
     BadDelay { index: usize, value: f64 },
-    #[error("{name}: expected {expected} entries (one per {per}), found {found}")]
+    #[error("{name}: expected {} (one per {per}), found {found}", crate::settings::entries(*.expected))]
     Length { name: &'static str, per: &'static str, expected: usize, found: usize },
     #[error("A: the plant needs at least one state, input and output (n, m ≥ 1); found n = {n}, m = {m}")]
     Empty { n: usize, m: usize },
@@ -112,7 +112,10 @@ impl PlantError {
                 } else {
                     format!("m = {m} columns of {prefix}B")
                 };
-                (format!("{prefix}{name}"), format!("expected {expected} entries (one per {per}, {of}), found {found}"))
+                (
+                    format!("{prefix}{name}"),
+                    format!("expected {} (one per {per}, {of}), found {found}", crate::settings::entries(expected)),
+                )
             }
             PlantError::Empty { n, m } => (
                 format!("{prefix}{}", if n == 0 { "A" } else { "B" }),

@@ -204,7 +204,7 @@ impl MeasurementNoise {
         if self.std.len() != m {
             return Err(KeyError::new(
                 "noise.std",
-                format!("expected {m} entries (one per output), found {}", self.std.len()),
+                format!("expected {} (one per output), found {}", entries(m), self.std.len()),
             ));
         }
         if let Some(b) = self.bandwidth {
@@ -255,7 +255,7 @@ impl Actuator {
             if v.len() != m {
                 return Err(KeyError::new(
                     format!("truth.{name}"),
-                    format!("expected {m} entries (one per input), found {}", v.len()),
+                    format!("expected {} (one per input), found {}", entries(m), v.len()),
                 ));
             }
         }
@@ -418,6 +418,22 @@ pub(crate) fn three_digits_down(x: f64) -> f64 {
     format!("{digits}e{e}").parse::<f64>().map_or(x, |v| if v <= x { v } else { (digits - 1.0) * 10f64.powi(e) })
 }
 
+/// A time for a message, to 12 significant digits and without trailing zeros: 119.57, not the
+/// 119.57000000000001 of k·output_step.
+pub fn fmt_time(x: f64) -> String {
+    let s = format!("{x:.12e}");
+    s.parse::<f64>().map_or(s, fmt_short)
+}
+
+/// "1 entry" or "n entries", for the messages that count a list's entries.
+pub fn entries(n: usize) -> String {
+    if n == 1 {
+        "1 entry".into()
+    } else {
+        format!("{n} entries")
+    }
+}
+
 /// `x` > 0 rounded up to two significant digits (a value to propose: a horizon, a gain).
 pub(crate) fn round_up_2(x: f64) -> f64 {
     let unit = 10f64.powf(x.log10().floor() - 1.0);
@@ -494,6 +510,17 @@ mod tests {
             assert_eq!(fmt_short(r), want, "{x}");
             assert!(r >= x && r <= 1.1 * x, "{x} → {r}");
         }
+    }
+
+    /// A time prints without the rounding error of k·h (11,957 steps of 0.01 is 119.57000000000001),
+    /// and a count of entries agrees in number.
+    #[test]
+    fn times_print_to_twelve_digits_and_counts_agree() {
+        assert_eq!(11957.0 * 0.01, 119.57000000000001);
+        assert_eq!(fmt_time(11957.0 * 0.01), "119.57");
+        assert_eq!(fmt_time(1e-300), "1e-300");
+        assert_eq!(fmt_time(2.5), "2.5");
+        assert_eq!((entries(1), entries(0), entries(3)), ("1 entry".into(), "0 entries".into(), "3 entries".into()));
     }
 
     #[test]

@@ -207,7 +207,10 @@ impl Signal {
 fn check_out(out: &[f64], len: usize) -> Result<(), KeyError> {
     match out.len() == len {
         true => Ok(()),
-        false => Err(KeyError::new("out", format!("expected {len} entries (one per component), found {}", out.len()))),
+        false => Err(KeyError::new(
+            "out",
+            format!("expected {} (one per component), found {}", crate::settings::entries(len), out.len()),
+        )),
     }
 }
 

@@ -654,7 +654,7 @@ fn the_dde_solver_refuses_inconsistent_arguments() {
     );
     assert_eq!(input(solve(&mut Lag(vec![-1.0]), 0.0, &[1.0], &[1.0], 1.0, 0.5, &opts, go)), ("delays()", "-1".into()));
     let e = solve(&mut Lag(vec![1.0]), 0.0, &[1.0, 2.0], &[1.0], 1.0, 0.5, &opts, go).unwrap_err();
-    assert_eq!(e.to_string(), "dde::solve: y0: expected 1 entries (the system's dim()), found 2");
+    assert_eq!(e.to_string(), "dde::solve: y0: expected 1 entry (the system's dim()), found 2");
     // The right arguments: on [0, 1] with history 1, y(t) = 1 − t exactly (the method's order ≥ 1).
     let mut last = 0.0;
     solve(&mut Lag(vec![1.0]), 0.0, &[1.0], &[1.0], 1.0, 0.5, &opts, |_, y| {

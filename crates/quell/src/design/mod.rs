@@ -168,7 +168,7 @@ pub enum DesignError {
     RelativeDegreeTooLow { channel: usize, given: usize, measure: f64 },
     #[error("design.relative_degrees: Σσ_i = {sum} exceeds n = {n}; for a decouplable plant the Σσ_i rows c_i A^j (j < σ_i) are independent, so Σσ_i ≤ n; give smaller relative degrees, or remove design.relative_degrees to let eq. (7) decide")]
     RelativeDegreeSum { sum: usize, n: usize },
-    #[error("{key}: expected {expected} entries (one per {per}), found {got}")]
+    #[error("{key}: expected {} (one per {per}), found {got}", crate::settings::entries(*.expected))]
     Count { key: &'static str, per: &'static str, expected: usize, got: usize },
     #[error("{key}: pole {} is not in the open left half-plane; {what} poles must be Hurwitz (real part < 0)", fmt_complex(.pole))]
     NotHurwitz { key: String, what: &'static str, pole: Complex<f64> },

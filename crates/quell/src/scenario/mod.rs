@@ -382,7 +382,7 @@ fn truth(v: Value, plant: &Plant) -> Result<(Plant, Option<Actuator>), ScenarioE
         if x.len() != like.len() {
             return Err(err(
                 t.key(name),
-                format!("expected {} entries (as plant.{name}), found {}", like.len(), x.len()),
+                format!("expected {} (as plant.{name}), found {}", crate::settings::entries(like.len()), x.len()),
             ));
         }
         Ok(x)

@@ -351,7 +351,7 @@ pub fn solve_events<S: DelaySystem>(
     let nd = sys.n_delayed();
     let input = |argument, expected: String, found: String| Err(SolveError::Input { argument, expected, found });
     if y0.len() != n {
-        return input("y0", format!("{n} entries (the system's dim())"), y0.len().to_string());
+        return input("y0", format!("{} (the system's dim())", crate::settings::entries(n)), y0.len().to_string());
     }
     for (argument, t) in [("t0", t0), ("t_end", t_end)] {
         if !t.is_finite() {
@@ -362,7 +362,11 @@ pub fn solve_events<S: DelaySystem>(
         return input("n_delayed()", format!("at most dim() = {n}"), nd.to_string());
     }
     if history.len() != nd {
-        return input("history", format!("{nd} entries (the system's n_delayed())"), history.len().to_string());
+        return input(
+            "history",
+            format!("{} (the system's n_delayed())", crate::settings::entries(nd)),
+            history.len().to_string(),
+        );
     }
     let delays: Vec<f64> = sys.delays().to_vec();
     if let Some(d) = delays.iter().find(|&&d| !(d > 0.0 && d.is_finite())) {

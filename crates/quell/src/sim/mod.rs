@@ -316,7 +316,7 @@ pub(crate) fn check_truth(design: &Design, truth: &Plant) -> Result<(), KeyError
         };
         return Err(KeyError::new(
             format!("truth.{name}"),
-            format!("expected {b} entries (as plant.{name}), found {a}"),
+            format!("expected {} (as plant.{name}), found {a}", crate::settings::entries(b)),
         ));
     }
     truth.validate().map_err(|e| KeyError::new("truth", e.to_string()))

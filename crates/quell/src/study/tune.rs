@@ -96,9 +96,10 @@ impl TuneSpec {
         let per_channel = |key: &str, v: &toml::Value| -> Result<Vec<toml::Value>, StudyError> {
             match v {
                 toml::Value::Array(a) if a.len() == m => Ok(a.clone()),
-                toml::Value::Array(a) => {
-                    Err(err(key, format!("expected {m} entries (one per channel), found {}", a.len())))
-                }
+                toml::Value::Array(a) => Err(err(
+                    key,
+                    format!("expected {} (one per channel), found {}", crate::settings::entries(m), a.len()),
+                )),
                 v => Ok(vec![v.clone(); m]),
             }
         };
