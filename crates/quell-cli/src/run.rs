@@ -261,6 +261,13 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
     let Finished { scenario, result, diagnostics, seconds, .. } = *done;
     let outputs = scenario.names.outputs.as_deref();
     let out = out.display();
+    let clipping: String = result
+        .limited_fraction()
+        .iter()
+        .enumerate()
+        .filter(|(_, &f)| f > 0.0)
+        .map(|(i, &f)| clipped(i, f) + "\n")
+        .collect();
     match result.outcome.as_ref().unwrap_or(&Outcome::Completed) {
         Outcome::Completed => {
             let mut text = String::new();
@@ -288,9 +295,7 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
             for line in &diagnostics.advice {
                 let _ = writeln!(text, "  advice: {line}");
             }
-            for (i, f) in result.limited_fraction().iter().enumerate().filter(|(_, &f)| f > 0.0) {
-                let _ = writeln!(text, "{}", clipped(i, *f));
-            }
+            text.push_str(&clipping);
             crate::print_stdout(&text);
             let steps = match result.stats {
                 RunStats::Continuous(stats) => format!("{} solver steps", stats.steps),
@@ -301,6 +306,8 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
         }
         outcome => {
             let why = outcome.explain("--max-steps", result.time_unit).unwrap_or_default();
+            // A true actuator that clipped may be why: the clipping is said before the failure.
+            crate::print_stdout(&clipping);
             Err(Failure::Run(format!("{why}; results up to then are in {out}")))
         }
     }

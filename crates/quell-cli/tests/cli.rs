@@ -1092,3 +1092,22 @@ fn run_figures_show_the_actuator_limit_or_how_far_u_f_stays_from_it() {
     let svg2 = fs::read_to_string(out.join("channel2.svg")).unwrap();
     assert!(svg2.contains("±truth.u_max[1] = 10") && !svg2.contains("% of truth.u_max"));
 }
+
+/// A run that fails under the true actuator's limits says how much they clipped before the failure
+/// (the clipping is likely why): the paper's loop with |u_f| ≤ 2 on both inputs.
+#[test]
+fn a_failed_run_says_how_much_the_actuator_clipped() {
+    let dir = temp_dir("clip-fail");
+    let file = dir.path().join("clipped.toml");
+    fs::write(&file, format!("{}\n[truth]\nu_max = [2.0, 2.0]\n", fs::read_to_string(paper()).unwrap())).unwrap();
+    let out = dir.path().join("out");
+    let o = quell(&["run", file.to_str().unwrap(), "--out", out.to_str().unwrap(), "--no-plots"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let report = stdout(&o);
+    let summary = read_json(&out.join("summary.json"));
+    for i in [1, 2] {
+        let share = 100.0 * summary["limited_fraction"][i - 1].as_f64().unwrap();
+        let line = format!("input {i}: clipped by truth.u_max[{}] at {share:.1} % of the recorded samples", i - 1);
+        assert!(share > 0.0 && report.contains(&line), "{line}\n{report}");
+    }
+}

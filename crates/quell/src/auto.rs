@@ -1200,7 +1200,9 @@ fn choose_mu(s: &Scenario, design: &Design, targets: &Targets, r: f64) -> (Vec<f
             let aim = AIM * if peak > 0.0 { peak } else { c.open_loop_rms };
             let cap = max_rate / c.lambda_max().max(f64::MIN_POSITIVE);
             if c.predicted_error(cap, t_c) > aim {
-                notes.push(format!("channel {}: even the fastest rate leaves a predicted RMS error {:.2e} at t = {t_c:.4e} (λ_min(Ω̄) = {:.2e}); see the run's diagnostics", i + 1, c.predicted_error(cap, t_c), c.lambda_min()));
+                // The excited directions' smallest eigenvalue: a zero one (a direction no signal excites) is harmless.
+                let excited = c.excited().fold(f64::INFINITY, f64::min);
+                notes.push(format!("channel {}: even the fastest rate leaves a predicted RMS error {:.2e} at t = {t_c:.4e} (the smallest eigenvalue of Ω̄ over its {} excited directions is {:.2e}); see the run's diagnostics", i + 1, c.predicted_error(cap, t_c), c.excited().count(), excited));
                 return (cap, retry_rate / c.lambda_max().max(f64::MIN_POSITIVE));
             }
             // Bisection on log μ: predicted_error decreases with μ.

@@ -17,7 +17,7 @@ pub use decouple::{
 };
 pub use internal_model::{filter_pair, internal_model, RegressorScaling};
 pub use place::{acker, place, PlaceError};
-pub use warnings::{warnings, DesignWarning};
+pub use warnings::{warnings, DesignWarning, ILL_CONDITIONED_DECOUPLER};
 
 use crate::linalg::{
     eigenvalues, fmt_complex, fmt_complex_list, fmt_number, numerical_rank, poly_from_roots, singular_extremes,
