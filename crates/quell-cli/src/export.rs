@@ -52,10 +52,13 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
     let code = generate(&design, sample_time, &options).map_err(export_failure)?;
     eprint!("{}", crate::report::sample_time_text(&scenario, &design, sample_time));
     let fmu = if args.fmu {
-        let cc = args.compiler.clone().or_else(|| std::env::var("CC").ok()).unwrap_or_else(|| "cc".to_string());
-        let compiler = (cc != "none").then_some(cc.as_str());
+        let (compiler, from_env) = quell::export::compiler_choice(args.compiler.clone());
         let version: FmiVersion = args.fmi_version.parse().map_err(export_failure)?;
-        Some(generate_fmu(&design, sample_time, &options, compiler, version).map_err(export_failure)?)
+        let fmu = generate_fmu(&design, sample_time, &options, compiler.as_deref(), version);
+        Some(fmu.map_err(|e| match export_failure(e.clone()) {
+            Failure::Run(_) => Failure::Run(quell::export::compiler_message(&e, from_env)),
+            Failure::Input(_) => Failure::Input(quell::export::compiler_message(&e, from_env)),
+        })?)
     } else {
         None
     };

@@ -289,3 +289,34 @@ fn negative_and_malformed_numbers_are_named_by_their_flag() {
         assert!(!stderr(&o).contains("unexpected argument"), "{args:?}: {}", stderr(&o));
     }
 }
+
+/// The FMU's compiler as a user names it: a relative path (from the caller's directory, not the
+/// temporary one the build runs in), `$CC` with flags as make reads it, a blank `$CC` as unset; a
+/// `$CC` that cannot run is named as `$CC`, not as a flag the user never gave.
+#[test]
+fn the_fmu_compiler_is_found_as_a_shell_would() {
+    let cc = ["/usr/bin/cc", "/usr/bin/gcc"].into_iter().find(|p| Path::new(p).exists()).expect("a C compiler");
+    let dir = tempfile::tempdir().unwrap();
+    std::os::unix::fs::symlink(cc, dir.path().join("mycc")).unwrap();
+    let export = |out: &str, compiler: Option<&str>, env_cc: Option<&str>| {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_quell"));
+        cmd.current_dir(dir.path()).args(["export", &paper(), "--sample-time", "0.01", "--fmu", "--out", out]);
+        if let Some(c) = compiler {
+            cmd.args(["--compiler", c]);
+        }
+        match env_cc {
+            Some(v) => cmd.env("CC", v),
+            None => cmd.env_remove("CC"),
+        };
+        cmd.output().unwrap()
+    };
+    for (out, compiler, env_cc) in
+        [("a", Some("./mycc"), None), ("b", None, Some("./mycc -O1")), ("c", None, Some("  "))]
+    {
+        let o = export(out, compiler, env_cc);
+        assert_eq!(o.status.code(), Some(0), "{compiler:?} {env_cc:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains("(FMI 2.0 co-simulation, binary for"), "{}", stderr(&o));
+    }
+    refused(&export("d", None, Some("./no-such-cc")), "error: $CC = \"./no-such-cc\": cannot run it");
+    refused(&export("e", Some("./no-such-cc"), None), "error: --compiler \"./no-such-cc\": cannot run it");
+}

@@ -51,8 +51,7 @@ fn fmu_arguments(
             None => Ok(None),
         };
     }
-    let cc = compiler.or_else(|| std::env::var("CC").ok()).unwrap_or_else(|| "cc".into());
-    Ok(Some((version, (cc != "none").then_some(cc))))
+    Ok(Some((version, quell::export::compiler_choice(compiler).0)))
 }
 
 /// Writes the real-time controller of a design as C99 (`<prefix>_controller.h` and `.c`), and

@@ -324,7 +324,20 @@ fn compile(compiler: &str, sources: &[(String, String)], units: &[&str], output:
         std::fs::write(dir.path().join(name), text).map_err(|e| fail(format!("cannot write {name} ({e})")))?;
     }
     let out = dir.path().join(output);
-    let mut cmd = Command::new(compiler);
+    // A compiler with flags ("gcc -m64", as make reads $CC) unless the whole text names a file; a
+    // relative path names a file from the caller's directory, not the temporary one it runs in.
+    let (program, flags): (&str, Vec<&str>) = if Path::new(compiler).is_file() {
+        (compiler, vec![])
+    } else {
+        let mut words = compiler.split_whitespace();
+        (words.next().unwrap_or(compiler), words.collect())
+    };
+    let program = match Path::new(program) {
+        p if p.components().count() > 1 || p.starts_with(".") => std::path::absolute(p).unwrap_or_else(|_| p.into()),
+        p => p.into(),
+    };
+    let mut cmd = Command::new(program);
+    cmd.args(flags);
     cmd.args(["-std=c99", "-O2", "-ffp-contract=off", "-shared", "-fPIC", "-fvisibility=hidden", "-o"]).arg(&out);
     cmd.args(units.iter().map(|u| dir.path().join(u))).current_dir(dir.path());
     let result = cmd

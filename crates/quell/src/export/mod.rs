@@ -167,6 +167,27 @@ pub enum ExportError {
     Archive { message: String },
 }
 
+/// The compiler an FMU build runs: `given` (the front end's choice), else `$CC` when set and not
+/// blank, else `cc`; `None` for "none" (the FMU with its sources only). The second value says
+/// whether it came from `$CC`, for messages that name where it came from.
+pub fn compiler_choice(given: Option<String>) -> (Option<String>, bool) {
+    let env = std::env::var("CC").ok().filter(|c| !c.trim().is_empty());
+    let from_env = given.is_none() && env.is_some();
+    let cc = given.or(env).unwrap_or_else(|| "cc".into());
+    ((cc != "none").then_some(cc), from_env)
+}
+
+/// An export error's message, naming `$CC` where the compiler came from it (`compiler_choice`).
+pub fn compiler_message(e: &ExportError, from_env: bool) -> String {
+    let text = e.to_string();
+    match e {
+        ExportError::Compiler { .. } | ExportError::CompilerNotFound { .. } if from_env => {
+            text.replacen("compiler ", "$CC = ", 1)
+        }
+        _ => text,
+    }
+}
+
 /// Generates the C controller for `design` at `sample_time`: the same controller as
 /// `Controller::new(design, sample_time)`, with the same errors.
 pub fn generate(design: &Design, sample_time: f64, options: &ExportOptions) -> Result<CCode, ExportError> {
