@@ -16,6 +16,13 @@ pub fn type_name(obj: &Bound<'_, PyAny>) -> String {
     obj.get_type().name().map(|n| n.to_string()).unwrap_or_else(|_| "object".into())
 }
 
+/// [`type_name`] with its article, for "found an int", "found a list".
+pub fn a_type(obj: &Bound<'_, PyAny>) -> String {
+    let name = type_name(obj);
+    let article = if name.starts_with(['a', 'e', 'i', 'o', 'u', 'A', 'E', 'I', 'O', 'U']) { "an" } else { "a" };
+    format!("{article} {name}")
+}
+
 /// `obj` as a Python int: an int, or anything with `__index__` (numpy's integer scalars, which
 /// quell's own frames return), but not a bool; `None` otherwise (the caller's `TypeError`).
 pub fn as_int<'py>(obj: &Bound<'py, PyAny>) -> Option<Bound<'py, pyo3::types::PyInt>> {
@@ -39,8 +46,8 @@ fn real_array<'py>(obj: &Bound<'py, PyAny>, name: &str, kind: Kind) -> PyResult<
         kind.err(
             py,
             format!(
-                "{name}: expected an array-like of real numbers, found a {} that numpy cannot read as an array ({e})",
-                type_name(obj)
+                "{name}: expected an array-like of real numbers, found {} that numpy cannot read as an array ({e})",
+                a_type(obj)
             ),
         )
     })?;
@@ -51,7 +58,7 @@ fn real_array<'py>(obj: &Bound<'py, PyAny>, name: &str, kind: Kind) -> PyResult<
             "c" => "complex numbers".to_string(),
             "b" => "booleans".to_string(),
             "U" | "S" => "strings".to_string(),
-            "O" if arr.getattr("ndim")?.extract::<usize>()? == 0 => format!("a {}", type_name(obj)),
+            "O" if arr.getattr("ndim")?.extract::<usize>()? == 0 => a_type(obj),
             // Python ints beyond a float64's range make an object array too.
             "O" if arr
                 .call_method0("ravel")?
@@ -192,7 +199,17 @@ pub fn number(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<f64> {
     if obj.is_instance_of::<PyString>() || obj.is_instance_of::<PyComplex>() || obj.is_instance_of::<PyBool>() {
         return Err(type_error(name, "a real number", obj));
     }
-    obj.extract::<f64>().map_err(|_| type_error(name, "a real number", obj))
+    obj.extract::<f64>().map_err(|_| {
+        // An int is a real number: one beyond a float64's range is a value error, not a type's.
+        if obj.is_instance_of::<pyo3::types::PyInt>() {
+            pyo3::exceptions::PyValueError::new_err(format!(
+                "{name}: expected a real number within a float64's range (±1.8e308), found an integer of {} digits",
+                obj.str().map_or(0, |s| s.len().unwrap_or(0))
+            ))
+        } else {
+            type_error(name, "a real number", obj)
+        }
+    })
 }
 
 /// The items of a list argument; a string or a dict (iterable, but never meant) is a TypeError

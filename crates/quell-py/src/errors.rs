@@ -81,11 +81,11 @@ pub fn keyed(py: Python<'_>, kind: Kind, message: String, key: Option<String>) -
     err
 }
 
-/// `TypeError: {name}: expected {expected}, found a {type of obj}`.
+/// `TypeError: {name}: expected {expected}, found a {type of obj}` ("an int").
 pub fn type_error(name: &str, expected: &str, obj: &Bound<'_, PyAny>) -> PyErr {
     pyo3::exceptions::PyTypeError::new_err(format!(
-        "{name}: expected {expected}, found a {}",
-        crate::convert::type_name(obj)
+        "{name}: expected {expected}, found {}",
+        crate::convert::a_type(obj)
     ))
 }
 

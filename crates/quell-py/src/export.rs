@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use pyo3::prelude::*;
 use quell::export::{generate, generate_fmu, ExportError, ExportOptions, FmiVersion};
 
-use crate::convert::{number, type_name};
+use crate::convert::{a_type, number};
 use crate::design::PyDesign;
 use crate::errors::{in_python, Kind};
 use crate::scenario::PyScenario;
@@ -127,8 +127,8 @@ pub fn export(
         (d.get().inner.clone(), None, None, Default::default())
     } else {
         return Err(pyo3::exceptions::PyTypeError::new_err(format!(
-            "source: expected a quell.Scenario or quell.Design, found a {}",
-            type_name(source)
+            "source: expected a quell.Scenario or quell.Design, found {}",
+            a_type(source)
         )));
     };
     let T = match sample_time {
@@ -143,8 +143,8 @@ pub fn export(
             .extract::<String>()
             .map_err(|_| {
                 pyo3::exceptions::PyTypeError::new_err(format!(
-                    "precision: expected \"f64\" or \"f32\", found a {}",
-                    type_name(p)
+                    "precision: expected \"f64\" or \"f32\", found {}",
+                    a_type(p)
                 ))
             })?
             .parse()

@@ -7,7 +7,7 @@ use pyo3::types::PyTuple;
 use quell::nalgebra::DMatrix;
 use quell::TimeUnit;
 
-use crate::convert::{matrix, to_numpy, type_name, vec_numpy, vector};
+use crate::convert::{a_type, matrix, to_numpy, type_name, vec_numpy, vector};
 use crate::errors::Kind;
 
 /// The plant (1) of the paper: ẋ = A x + B u_f(t) + D ω(t), y = C x + Q ω(t), driven by the
@@ -340,7 +340,7 @@ impl PyPlant {
 fn time_unit_arg(obj: Option<&Bound<'_, PyAny>>) -> PyResult<TimeUnit> {
     let Some(obj) = obj.filter(|o| !o.is_none()) else { return Ok(TimeUnit::Seconds) };
     let given: String = obj.extract().map_err(|_| {
-        PyTypeError::new_err(format!("time_unit: expected a str such as \"min\", found a {}", type_name(obj)))
+        PyTypeError::new_err(format!("time_unit: expected a str such as \"min\", found {}", a_type(obj)))
     })?;
     TimeUnit::from_name(&given).map_err(|e| Kind::Scenario.err(obj.py(), format!("time_unit: {e}")))
 }
@@ -349,8 +349,8 @@ fn time_unit_arg(obj: Option<&Bound<'_, PyAny>>) -> PyResult<TimeUnit> {
 pub fn plant_arg<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<PyRef<'py, PyPlant>> {
     obj.extract::<PyRef<'py, PyPlant>>().map_err(|_| {
         PyTypeError::new_err(format!(
-            "{name}: expected a quell.Plant, found a {}; build one with quell.Plant(A, B, C, D, Q, delays=...)",
-            type_name(obj)
+            "{name}: expected a quell.Plant, found {}; build one with quell.Plant(A, B, C, D, Q, delays=...)",
+            a_type(obj)
         ))
     })
 }

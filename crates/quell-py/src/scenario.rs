@@ -14,7 +14,7 @@ use quell::scenario::{plant_table, pole_list, truth_table, PAPER_EXAMPLE};
 use quell::signal::Signal;
 use toml::{Table, Value};
 
-use crate::convert::{number, pole_lists, poles, type_name};
+use crate::convert::{a_type, number, pole_lists, poles, type_name};
 use crate::design::PyDesign;
 use crate::errors::{in_python, raise, type_error, Kind};
 use crate::plant::{plant_arg, Labels, PyPlant};
@@ -244,7 +244,7 @@ pub fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
             .map(|(i, v)| toml_value(&v?, &format!("{key}[{i}]")))
             .collect::<PyResult<Vec<_>>>()
             .map(Value::Array),
-        Err(_) => Err(bad(&format!("a {}", type_name(obj)))),
+        Err(_) => Err(bad(&a_type(obj))),
     }
 }
 

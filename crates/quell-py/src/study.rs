@@ -14,7 +14,7 @@ use quell::sim::ChannelFigures;
 use quell::study::{self, KeyPath, RunSpec, Shard, StudyMeta, SweepOptions};
 use toml::{Table, Value};
 
-use crate::convert::{as_int, type_name};
+use crate::convert::{a_type, as_int, type_name};
 use crate::errors::{subscripts, Kind};
 use crate::scenario::{toml_value, PyScenario};
 use crate::simulate::PySimResult;
@@ -95,7 +95,7 @@ pub fn argument_error(py: Python<'_>, e: &study::StudyError) -> PyErr {
 fn dict_arg(obj: &Bound<'_, PyAny>, name: &str, what: &str) -> PyResult<Table> {
     let d = obj
         .cast::<PyDict>()
-        .map_err(|_| PyTypeError::new_err(format!("{name}: expected a dict ({what}), found a {}", type_name(obj))))?;
+        .map_err(|_| PyTypeError::new_err(format!("{name}: expected a dict ({what}), found {}", a_type(obj))))?;
     let mut t = Table::new();
     for (k, v) in d.iter() {
         let key: String = k.extract().map_err(|_| {
@@ -145,7 +145,7 @@ pub fn study_document(
     max_steps: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Table> {
     let s = scenario.cast::<PyScenario>().map_err(|_| {
-        PyTypeError::new_err(format!("scenario: expected a quell.Scenario, found a {}", type_name(scenario)))
+        PyTypeError::new_err(format!("scenario: expected a quell.Scenario, found {}", a_type(scenario)))
     })?;
     let mut doc = Table::new();
     doc.insert("scenario".into(), Value::Table(s.get().inner.to_table()));
@@ -164,8 +164,8 @@ pub fn study_document(
     if let Some(n) = max_steps.filter(|v| !v.is_none()) {
         let Some(int) = as_int(n) else {
             return Err(PyTypeError::new_err(format!(
-                "max_steps: expected an int (a step budget per run), found a {}",
-                type_name(n)
+                "max_steps: expected an int (a step budget per run), found {}",
+                a_type(n)
             )));
         };
         doc.insert("max_steps".into(), toml_value(int.as_any(), "max_steps")?);
@@ -430,7 +430,7 @@ pub struct PyRunSpec {
 /// `run` as an index below `len` (an int; negative counts from the end, as in a list).
 fn run_index(run: &Bound<'_, PyAny>, len: u64) -> PyResult<usize> {
     let Some(run) = as_int(run) else {
-        return Err(PyTypeError::new_err(format!("run: expected an int (a run index), found a {}", type_name(run))));
+        return Err(PyTypeError::new_err(format!("run: expected an int (a run index), found {}", a_type(run))));
     };
     let i: i128 = run.extract().map_err(|_| out_of_range(i128::MAX, len))?;
     let index = if i < 0 { i + len as i128 } else { i };
@@ -729,8 +729,8 @@ fn study_arg(py: Python<'_>, study: &Bound<'_, PyAny>) -> PyResult<Arc<study::St
         return study::Study::from_path(&path).map(Arc::new).map_err(|e| study_error(py, &e));
     }
     Err(PyTypeError::new_err(format!(
-        "study: expected a quell.Study or the path of a study file, found a {}",
-        type_name(study)
+        "study: expected a quell.Study or the path of a study file, found {}",
+        a_type(study)
     )))
 }
 
@@ -822,8 +822,8 @@ pub fn jobs_arg(py: Python<'_>, jobs: Option<&Bound<'_, PyAny>>) -> PyResult<Opt
     let Some(j) = jobs.filter(|j| !j.is_none()) else { return Ok(None) };
     let Some(j) = as_int(j) else {
         return Err(PyTypeError::new_err(format!(
-            "jobs: expected an int (a number of threads) or None, found a {}",
-            type_name(j)
+            "jobs: expected an int (a number of threads) or None, found {}",
+            a_type(j)
         )));
     };
     match j.extract::<i128>() {

@@ -30,7 +30,7 @@ C = [[2.0, 2.0, 0.0], [2.0, 1.0, 2.0]]
         (dict(A=A, B=B, C=C, D=[[1], [1], [1]], Q=[[1, 2], [1, 2]]), quell.ScenarioError, r"^Q: expected 2×1 \(m×k\), found 2×2; m = 2 \(columns of B\), k = 1 \(columns of D\)$"),
         (dict(A=A, B=B, C=[[2.0, 2.0]]), quell.ScenarioError, r"^C: expected 2×3 \(m×n\), found 1×2; m = 2 \(columns of B\), n = 3 \(rows of A\)$"),
         (dict(A=A, B=B, C=C, x0=[0, 0]), quell.ScenarioError, r"^x0: expected 3 entries \(one per state, n = 3 rows of A\), found 2$"),
-        (dict(A=object(), B=B, C=C), TypeError, r"^A: expected real numbers, found a object"),
+        (dict(A=object(), B=B, C=C), TypeError, r"^A: expected real numbers, found an object"),
         (dict(A=[[None]], B=[[1]], C=[[1]]), TypeError, r"^A: expected real numbers, found entries that are not all numbers"),
     ],
 )
@@ -128,3 +128,13 @@ def test_no_panic_on_junk():
             call(a, b)
         except (ValueError, TypeError, quell.QuellError):
             pass
+
+
+def test_types_are_named_with_their_article_and_a_huge_int_is_a_value_error():
+    """"found an int", not "a int"; an int is a real number, so one beyond a float64's range is a
+    ValueError that says so, not a TypeError."""
+    s = quell.paper_example()
+    with pytest.raises(TypeError, match=r"^study: expected a quell.Study or the path of a study file, found an int$"):
+        quell.sweep(3)
+    with pytest.raises(ValueError, match=r"^sample_time: expected a real number within a float64's range \(±1.8e308\), found an integer of 401 digits"):
+        quell.Controller(s.design(), 10**400)

@@ -183,7 +183,7 @@ def test_state_space_signal_names_are_kept_through_to_the_loops_and_results():
         quell.Plant(A, B, C, outputs=["a", "b", "c"])
     with pytest.raises(quell.ScenarioError, match=r'states\[2\]: "a" names another signal too'):
         quell.Plant(A, B, C, states=["a", "b", "a"])
-    with pytest.raises(TypeError, match=r"inputs\[1\]: expected a str \(a signal name\), found a int"):
+    with pytest.raises(TypeError, match=r"inputs\[1\]: expected a str \(a signal name\), found an int"):
         quell.Plant(A, B, C, inputs=["a", 2])
     with pytest.raises(TypeError, match=r"inputs: expected a list of 2 names \(str\), found a str"):
         quell.Plant(A, B, C, inputs="ab")

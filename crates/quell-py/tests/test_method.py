@@ -56,7 +56,7 @@ def test_bad_method_is_a_type_error_or_a_scenario_error_naming_the_argument(wher
             return quell.simulate(p, t_end=1.0, method=method)
         return quell.Scenario(p.plant, p.reference, p.disturbance, method=method, **p.design().choices)
 
-    with pytest.raises(TypeError, match=r'^method: expected a str: "auto", "explicit" or "imex", found a int'):
+    with pytest.raises(TypeError, match=r'^method: expected a str: "auto", "explicit" or "imex", found an int'):
         call(1)
     with pytest.raises(quell.ScenarioError, match=r'^method: expected "auto" \(DOP853.*found "IMEX" '
                                                    r'\(did you mean "imex"\?\)') as info:

@@ -94,10 +94,10 @@ def test_a_wrong_type_is_a_type_error_naming_the_parameter(name, param, tmp_path
         pytest.importorskip("matplotlib").use("Agg")
     with pytest.raises(TypeError) as info:
         f(**dict(kwargs, **{param: WRONG}))
-    # "param: expected …, found a object", in the exception's own message (not only in a note, as
+    # "param: expected …, found an object", in the exception's own message (not only in a note, as
     # PyO3's reports of the parameters it extracts itself had it).
     text = str(info.value)
-    assert param in text and "expected" in text and "found a object" in text, text
+    assert param in text and "expected" in text and "found an object" in text, text
     message = text
     if name == "Scenario" and param in DESIGN_KEYS:
         assert message.startswith(param), message

@@ -3,6 +3,12 @@ expected and what was found. A wrong type is Python's ``TypeError``; these are f
 and failed runs."""
 
 
+def a_type(obj):
+    """The type of ``obj`` with its article, for messages: "an int", "a list"."""
+    name = type(obj).__name__
+    return ("an " if name[:1].lower() in "aeiou" else "a ") + name
+
+
 class QuellError(Exception):
     """Base of every error quell raises on purpose (a wrong type is a ``TypeError`` instead).
 

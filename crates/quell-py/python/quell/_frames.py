@@ -2,6 +2,8 @@
 
 import operator
 
+from ._errors import a_type
+
 
 def columns(m, q, n=0):
     """The header of signals.csv: t, y1..ym, g1..gm, e1..em, u1..um, uf1..ufm, eta1_1..etam_q, and
@@ -57,7 +59,7 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
     except TypeError:
         channel = None
     if channel is None:
-        raise TypeError(f"channel: expected an int from 1 to {m}, found a {type(given).__name__}")
+        raise TypeError(f"channel: expected an int from 1 to {m}, found {a_type(given)}")
     if not 1 <= channel <= m:
         raise ValueError(f"channel: expected a channel number from 1 to {m}, found {channel!r}")
     i, c, t = channel - 1, channel, result.t
@@ -67,14 +69,14 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
         isinstance(figsize, (tuple, list)) and len(figsize) == 2
         and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in figsize)
     ):
-        found = f"a {type(figsize).__name__}"
+        found = a_type(figsize)
         if isinstance(figsize, (tuple, list)) and len(figsize) != 2:
             found += f" of {len(figsize)} entries"
         raise TypeError(f"figsize: expected (width, height) in inches, found {found}")
     if fig is not None and ax is not None:
         raise TypeError("fig and ax: expected one of them or neither (ax's panels belong to a figure already), found both")
     if fig is not None and not hasattr(fig, "subplots"):
-        raise TypeError(f"fig: expected a matplotlib Figure, found a {type(fig).__name__}")
+        raise TypeError(f"fig: expected a matplotlib Figure, found {a_type(fig)}")
     if fig is not None and fig.axes:
         raise ValueError(
             f"fig: expected an empty Figure (the five panels fill it), found one with {len(fig.axes)} Axes; "
@@ -85,7 +87,7 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
         if len(axes) not in (1, 4, 5) or not all(hasattr(a, "plot") for a in axes):
             found = f"{len(axes)} entries" if len(axes) not in (1, 4, 5) else "entries that are not Axes"
             if not isinstance(ax, (list, tuple)) and not hasattr(ax, "flat"):
-                found = f"a {type(ax).__name__}"
+                found = a_type(ax)
             raise TypeError(f"ax: expected one matplotlib Axes, four or five, found {found}")
         fig = axes[0].figure
     else:

@@ -3,7 +3,7 @@ can be simulated again in one call."""
 
 import re
 
-from ._errors import ScenarioError
+from ._errors import ScenarioError, a_type
 
 #: The figures of a row, one column per channel (``tail_max_e1``, ``tail_max_e2``, …).
 METRICS = ("tail_max_e", "tail_rms_e", "max_u", "max_uf", "settle_t")
@@ -46,9 +46,9 @@ class StudyResult:
         from ._quell import Study
 
         if not isinstance(study, Study):
-            raise TypeError(f"study: expected a quell.Study, found a {type(study).__name__}")
+            raise TypeError(f"study: expected a quell.Study, found {a_type(study)}")
         if not all(hasattr(frame, a) for a in ("columns", "iloc", "to_numpy")):
-            raise TypeError(f"frame: expected a pandas DataFrame, found a {type(frame).__name__}")
+            raise TypeError(f"frame: expected a pandas DataFrame, found {a_type(frame)}")
         self.study = study
         self.frame = frame
 
@@ -193,7 +193,7 @@ class StudyResult:
         import numpy as np
 
         if not isinstance(metric, str):
-            raise TypeError(f"metric: expected a str (a figure such as 'tail_max_e'), found a {type(metric).__name__}")
+            raise TypeError(f"metric: expected a str (a figure such as 'tail_max_e'), found {a_type(metric)}")
         m = self.study.m
         if metric in METRICS:
             columns = [f"{metric}{i}" for i in range(1, m + 1)]

@@ -3,7 +3,7 @@
 
 import json as _json
 
-from ._errors import ScenarioError
+from ._errors import ScenarioError, a_type
 
 #: The columns of ``TuneResult.frame``, those of tune.csv.
 COLUMNS = ("channel", "mu", "objective", "outcome", "reason", "tail_max_e", "tail_rms_e", "max_u", "max_uf",
@@ -60,7 +60,7 @@ class TuneResult:
 
     def __init__(self, json):
         if not isinstance(json, str):
-            raise TypeError(f"json: expected a str (a tuning result as JSON), found a {type(json).__name__}")
+            raise TypeError(f"json: expected a str (a tuning result as JSON), found {a_type(json)}")
         try:
             data = _json.loads(json)
             self.objective = data["objective"]
