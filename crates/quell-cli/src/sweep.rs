@@ -25,14 +25,14 @@ pub struct SweepArgs {
     /// Join the output directories of every shard of one study into --out.
     #[arg(long, num_args = 1.., value_name = "DIR")]
     merge: Vec<PathBuf>,
-    /// Worker threads (default: one per core).
-    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_jobs)]
+    /// Worker threads (default: one per core). A merge runs nothing, so it takes none.
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_jobs, conflicts_with = "merge")]
     jobs: Option<usize>,
     /// Skip sweep.png/.svg.
     #[arg(long)]
     no_plots: bool,
-    /// Run a study of more than 10⁷ runs.
-    #[arg(long)]
+    /// Run a study of more than 10⁷ runs (not with --merge, which runs nothing).
+    #[arg(long, conflicts_with = "merge")]
     yes: bool,
 }
 

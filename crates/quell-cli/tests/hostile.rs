@@ -320,3 +320,17 @@ fn the_fmu_compiler_is_found_as_a_shell_would() {
     refused(&export("d", None, Some("./no-such-cc")), "error: $CC = \"./no-such-cc\": cannot run it");
     refused(&export("e", Some("./no-such-cc"), None), "error: --compiler \"./no-such-cc\": cannot run it");
 }
+
+/// `--merge` runs nothing: `--jobs` and `--yes` with it are refused (exit 2) rather than ignored.
+#[test]
+fn merge_refuses_the_flags_of_a_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let shard = dir.path().display().to_string();
+    for flag in [vec!["--jobs", "3"], vec!["--yes"]] {
+        let mut args = vec!["sweep", "--merge", &shard];
+        args.extend(flag.iter());
+        let o = quell(&args);
+        refused(&o, "cannot be used with");
+        assert!(stderr(&o).contains(flag[0]) && stderr(&o).contains("--merge"), "{}", stderr(&o));
+    }
+}

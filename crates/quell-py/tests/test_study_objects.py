@@ -126,7 +126,7 @@ def test_worst_counts_a_run_without_figures_as_worst():
         result.worst("tail_max_err")
     with pytest.raises(TypeError, match="metric: expected a str"):
         result.worst(1)
-    with pytest.raises(IndexError, match=r"run: expected a run index from 0 to 1 \(the study has 2 runs\), found 2"):
+    with pytest.raises(IndexError, match=r"run: expected a run index from 0 to 1 \(the study has 2 runs; from −2 to −1 counting from the end, as in a list\), found 2"):
         result.rerun(2)
     with pytest.raises(TypeError, match=r"run: expected an int \(a run index\), found a float"):
         result.rerun(1.0)

@@ -991,3 +991,14 @@ fn paper_example_designs() {
     let (_, design) = load_and_design(PAPER_EXAMPLE).unwrap();
     assert_eq!(design.sigma(), vec![2, 1]);
 }
+
+/// An empty file, or one without its plant, is told the plant is missing first (it had been told
+/// the reference, read first because the plant's D depends on the disturbance).
+#[test]
+fn a_file_without_a_plant_is_told_so_first() {
+    for text in ["", "name = \"x\"\n", "[reference]\ncomponents = [{ bias = 1.0 }]\n"] {
+        let e = Scenario::from_toml(text).unwrap_err();
+        assert_eq!(e.key, "plant", "{text:?}: {e}");
+        assert!(e.to_string().starts_with("plant: missing; required: the [plant] table (A, B, C, delays"), "{e}");
+    }
+}

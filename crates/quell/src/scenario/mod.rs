@@ -202,12 +202,13 @@ impl Scenario {
             let name = v.string()?;
             names::control_character(&name).map_or(Ok(name), |message| Err(err(v.key, message)))
         })?;
+        const PLANT: &str = "the [plant] table (A, B, C, delays; D and Q with a [disturbance])";
+        // The plant is read after the signals (D's columns are the disturbance's components), but
+        // a file without it (an empty one) is told so first.
+        root.require("plant", PLANT, |_| Ok(()))?;
         let reference = root.require("reference", "the [reference] table: g(t), one component per output", signal)?;
         let disturbance = root.get("disturbance", signal)?;
-        let (plant, names) =
-            root.require("plant", "the [plant] table (A, B, C, delays; D and Q with a [disturbance])", |v| {
-                plant(v, disturbance.as_ref())
-            })?;
+        let (plant, names) = root.require("plant", PLANT, |v| plant(v, disturbance.as_ref()))?;
         let (truth, actuator) = root.get("truth", |v| truth(v, &plant))?.unzip();
         let actuator = actuator.flatten();
         let partial = root.require(

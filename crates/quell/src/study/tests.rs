@@ -359,5 +359,5 @@ fn a_study_document_is_self_contained() {
     assert_eq!(from_file.to_table()["scenario"]["simulation"]["t_end"].as_float(), Some(5.0));
     assert!(!from_file.to_table().contains_key("simulation"));
     let e = error("[scenario]\nname = \"x\"");
-    assert!(e.starts_with("scenario: the study's scenario: reference: missing"), "{e}");
+    assert!(e.starts_with("scenario: the study's scenario: plant: missing"), "{e}");
 }
