@@ -55,10 +55,7 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
         let (compiler, from_env) = quell::export::compiler_choice(args.compiler.clone());
         let version: FmiVersion = args.fmi_version.parse().map_err(export_failure)?;
         let fmu = generate_fmu(&design, sample_time, &options, compiler.as_deref(), version);
-        Some(fmu.map_err(|e| match export_failure(e.clone()) {
-            Failure::Run(_) => Failure::Run(quell::export::compiler_message(&e, from_env)),
-            Failure::Input(_) => Failure::Input(quell::export::compiler_message(&e, from_env)),
-        })?)
+        Some(fmu.map_err(|e| failure_naming(e, from_env))?)
     } else {
         None
     };
@@ -98,8 +95,14 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
 /// An export error as the CLI reports it: a compiler that runs and fails or an archive that cannot
 /// be built is a failed run (1), the rest bad input (2), a compiler that cannot be started included.
 fn export_failure(e: ExportError) -> Failure {
+    failure_naming(e, false)
+}
+
+/// [`export_failure`], the compiler named `$CC` where it came from there.
+fn failure_naming(e: ExportError, from_env: bool) -> Failure {
+    let message = quell::export::compiler_message(&e, from_env);
     match e {
-        ExportError::Compiler { .. } | ExportError::Archive { .. } => Failure::Run(e.to_string()),
-        _ => Failure::Input(e.to_string()),
+        ExportError::Compiler { .. } | ExportError::Archive { .. } => Failure::Run(message),
+        _ => Failure::Input(message),
     }
 }

@@ -77,8 +77,7 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
     let broken: Vec<String> = (0..result.within_limits.len())
         .filter(|&i| !result.within_limits[i])
         .map(|i| {
-            let f = result.joint.as_ref().and_then(|j| j.channels.get(i));
-            let what = f.map_or(vec![], |f| spec.broken_limits(i, f, "tune."));
+            let what = joint_broken(&result, spec, i);
             let what = if what.is_empty() { "its run has no figures".to_string() } else { what.join(", ") };
             format!("channel {}: {what}", i + 1)
         })
@@ -124,6 +123,11 @@ fn write_curves(w: &mut dyn std::io::Write, r: &TuneResult) -> std::io::Result<(
     Ok(())
 }
 
+/// Channel i's limits that the joint run broke (none without a joint run).
+fn joint_broken(r: &TuneResult, spec: &quell::study::TuneSpec, i: usize) -> Vec<String> {
+    r.joint.as_ref().and_then(|j| j.channels.get(i)).map_or(vec![], |f| spec.broken_limits(i, f, "tune."))
+}
+
 /// The chosen μ and the joint check, one line per channel; a settling time in `unit`.
 fn report(r: &TuneResult, spec: &quell::study::TuneSpec, unit: quell::TimeUnit) -> String {
     let mut s = match r.objective {
@@ -147,11 +151,7 @@ fn report(r: &TuneResult, spec: &quell::study::TuneSpec, unit: quell::TimeUnit) 
                 if r.partial || r.within_limits.get(c.channel).copied().unwrap_or(true) {
                     String::new()
                 } else {
-                    let f = r.joint.as_ref().and_then(|j| j.channels.get(c.channel));
-                    format!(
-                        ", but BREAKS {} there",
-                        f.map_or(vec![], |f| spec.broken_limits(c.channel, f, "tune.")).join(", ")
-                    )
+                    format!(", but BREAKS {} there", joint_broken(r, spec, c.channel).join(", "))
                 },
                 // Interrupted, the largest μ evaluated is not the range's end.
                 c.at_bound().filter(|_| !r.partial).map_or(String::new(), |end| format!(

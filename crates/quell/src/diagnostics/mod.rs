@@ -103,7 +103,10 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
         _ => None,
     };
     let signals = [reference, disturbance];
-    let (remedy, unit) = (observer_remedy(design, signals, sample_time), design.plant().time_unit);
+    // The remedy redesigns the observer at several speeds: only when some advice quotes it.
+    let remedy_text = std::cell::OnceCell::new();
+    let remedy = || remedy_text.get_or_init(|| observer_remedy(design, signals, sample_time)).as_str();
+    let unit = design.plant().time_unit;
     // The adaptation rate beyond which the loop is stiff (the pace estimate's threshold).
     let rho = crate::sim::loop_rate(design, design.plant(), [reference, disturbance]);
     let stiff = STIFF_RATIO * rho;
@@ -119,7 +122,8 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
             list(&|f| format!("{:.2}", f.relative_error)),
         );
         advice.push(format!(
-            "the disturbance observer passes ω at {freqs} rad/{unit} with relative error{plural} {errors} (it is driven by x̂, not x, eq. (20)): {remedy}"
+            "the disturbance observer passes ω at {freqs} rad/{unit} with relative error{plural} {errors} (it is driven by x̂, not x, eq. (20)): {}",
+            remedy()
         ));
     }
     // A sampled-data run coarse for the design: its errors are the sampling's as much as the
@@ -315,6 +319,12 @@ fn tail_within_bound(result: &SimResult, i: usize) -> bool {
     result.max_abs_error(i, t1 - 0.1 * (t1 - t0), t1).is_some_and(|e| e <= TAIL_BOUND * scale(result, i))
 }
 
+/// The μ that decays a direction of Ω̄ at rate μ λ to e^-5 by t_end, 5/(λ t_end), and the largest
+/// μ that keeps the adaptation rate μ λ_max below the stiffness threshold `stiff`.
+fn horizon_mu(relevant: f64, lambda_max: f64, (t_end, stiff): (f64, f64)) -> (f64, f64) {
+    (5.0 / (relevant * t_end), stiff / lambda_max)
+}
+
 /// `key` = μ too small for the horizon t_end, its slowest relevant direction of Ω̄ at rate
 /// μ λ: raise μ to 5/(λ t_end), unless that would put μ λ_max beyond the stiffness threshold
 /// `stiff` (then only a longer run, or more excitation, helps).
@@ -325,7 +335,7 @@ fn horizon_advice(
     (t_end, stiff): (f64, f64),
     unit: TimeUnit,
 ) -> String {
-    let (wanted, fastest) = (5.0 / (relevant * t_end), stiff / lambda_max);
+    let (wanted, fastest) = horizon_mu(relevant, lambda_max, (t_end, stiff));
     let mu_text = fmt_short(mu);
     if wanted > fastest {
         format!(
@@ -343,14 +353,14 @@ fn horizon_advice(
     }
 }
 
-fn channel(
+fn channel<'r>(
     design: &Design,
     i: usize,
     c: &ChannelAverage,
     fidelity: &[Fidelity],
     result: &SimResult,
     (t_end, stiff): (f64, f64),
-    remedy: &str,
+    remedy: &dyn Fn() -> &'r str,
 ) -> ChannelDiagnostics {
     let mu = design.mu()[i];
     let key = format!("design.mu[{i}]");
@@ -376,15 +386,15 @@ fn channel(
         match (weakest, poor) {
             (Some(w), Some(f)) => {
                 // Raising μ speeds that direction up too, unless the μ it needs stiffens the loop.
-                let (wanted, fastest) = (5.0 / (relevant * t_end), stiff / c.lambda_max());
+                let (wanted, fastest) = horizon_mu(relevant, c.lambda_max(), (t_end, stiff));
                 let mu_too = if wanted > fastest {
                     format!("raising {key} to 5/(λ t_end) = {wanted:.3e} would put the adaptation rate beyond the stiffness threshold {stiff:.2e}/{unit}")
                 } else {
                     format!("raising {key} to {} also speeds that direction up", fmt_short(round_up_2(wanted)))
                 };
                 advice.push(format!(
-                    "Ω̄_{} is weakly excited at {} rad/{unit} ({:.1e}), where the disturbance observer's relative error is {:.2}: {remedy} ({mu_too})",
-                    i + 1, w.frequency, w.excitation, f.relative_error
+                    "Ω̄_{} is weakly excited at {} rad/{unit} ({:.1e}), where the disturbance observer's relative error is {:.2}: {} ({mu_too})",
+                    i + 1, w.frequency, w.excitation, f.relative_error, remedy()
                 ));
             }
             _ => advice.push(horizon_advice(&key, mu, (relevant, c.lambda_max()), (t_end, stiff), unit)),
