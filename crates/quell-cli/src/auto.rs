@@ -188,8 +188,10 @@ fn report_text(a: &AutoDesign) -> String {
             ));
         }
     }
-    if v.candidates.len() > 1 {
+    if !v.relaxation.is_empty() {
         s.push_str(&format!("  relaxation: {}\n", v.relaxation));
+    }
+    if v.candidates.len() > 1 {
         s.push_str("  candidates (poles and μ over the first proposal's: worst tail/bound, max|u_f|, solver steps):\n");
         for c in &v.candidates {
             let kept = if c.chosen { "  ← kept" } else { "" };

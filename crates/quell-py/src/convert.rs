@@ -6,7 +6,7 @@ use numpy::ndarray::Array2;
 use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyComplex, PyDict, PyIterator, PyString};
+use pyo3::types::{PyBool, PyComplex, PyDict, PyIterator, PyList, PyString, PyTuple};
 use quell::nalgebra::{Complex, DMatrix};
 
 use crate::errors::{type_error, Kind};
@@ -73,7 +73,30 @@ fn real_array<'py>(obj: &Bound<'py, PyAny>, name: &str, kind: Kind) -> PyResult<
         };
         return Err(PyTypeError::new_err(format!("{name}: expected real numbers, found {found}")));
     }
+    if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
+        no_bools(obj, &arr, name)?;
+    }
     Ok(arr.call_method1("astype", ("float64",))?.cast_into::<PyArrayDyn<f64>>()?)
+}
+
+/// A bool among a list's numbers (numpy reads `[True, 1.5]` as `[1.0, 1.5]`) is a TypeError naming
+/// its index, as a bool given for a number is.
+fn no_bools(obj: &Bound<'_, PyAny>, arr: &Bound<'_, PyAny>, name: &str) -> PyResult<()> {
+    let np = obj.py().import("numpy")?;
+    let entries = np.call_method1("asarray", (obj, "object"))?.call_method0("ravel")?;
+    let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
+    for (flat, x) in entries.try_iter()?.enumerate() {
+        let x = x?;
+        if x.is_instance_of::<PyBool>() || x.get_type().name().is_ok_and(|n| n == "bool" || n == "bool_") {
+            let (mut rest, mut at) = (flat, vec![0; shape.len()]);
+            for (i, d) in shape.iter().enumerate().rev() {
+                (at[i], rest) = (rest % d.max(&1), rest / d.max(&1));
+            }
+            let index: String = at.iter().map(|i| format!("[{i}]")).collect();
+            return Err(type_error(&format!("{name}{index}"), "a real number", &x));
+        }
+    }
+    Ok(())
 }
 
 fn shape_text(shape: &[usize]) -> String {
@@ -204,12 +227,23 @@ pub fn number(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<f64> {
         if obj.is_instance_of::<pyo3::types::PyInt>() {
             pyo3::exceptions::PyValueError::new_err(format!(
                 "{name}: expected a real number within a float64's range (±1.8e308), found an integer of {} digits",
-                obj.str().map_or(0, |s| s.len().unwrap_or(0))
+                decimal_digits(obj)
             ))
         } else {
             type_error(name, "a real number", obj)
         }
     })
+}
+
+/// The number of decimal digits of a Python int, also beyond the 4,300 that `str()` refuses to
+/// write (from its bit length: ⌊(b − 1)·log10 2⌋ + 1 is exact but at powers of ten's edges, where it
+/// may be one short; "about" covers it there).
+fn decimal_digits(obj: &Bound<'_, PyAny>) -> String {
+    if let Ok(n) = obj.str().and_then(|s| s.len()) {
+        return (n - usize::from(obj.lt(0).unwrap_or(false))).to_string();
+    }
+    let bits: u64 = obj.call_method0("bit_length").and_then(|b| b.extract()).unwrap_or(0);
+    format!("about {}", ((bits.max(1) - 1) as f64 * std::f64::consts::LOG10_2).floor() as u64 + 1)
 }
 
 /// The items of a list argument; a string or a dict (iterable, but never meant) is a TypeError
@@ -244,15 +278,21 @@ pub fn poles(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<Com
             out.push(Complex::new(finite(&key, &[], re, kind, py)?, finite(&key, &[], im, kind, py)?));
         } else if let Ok(re) = item.extract::<f64>() {
             out.push(Complex::new(finite(&key, &[], re, kind, py)?, 0.0));
+        } else if item.is_instance_of::<pyo3::types::PyInt>() {
+            // An int beyond a float64's range: the ValueError that says so.
+            out.push(Complex::new(number(&item, &key)?, 0.0));
         } else {
             if item.try_iter().is_err() {
                 return Err(type_error(&key, pole, &item));
             }
+            // An error naming an entry of the pair stands ("poles[3][1]: expected a finite number");
+            // a pair of the wrong type is not a pole.
             let pair = vector(&item, &key, kind).map_err(|e| {
-                if e.is_instance_of::<PyTypeError>(py) {
+                let names_entry = e.value(py).str().is_ok_and(|m| m.to_string().starts_with(&format!("{key}[")));
+                if e.is_instance_of::<PyTypeError>(py) && !names_entry {
                     type_error(&key, pole, &item)
                 } else {
-                    bad(type_name(&item))
+                    e
                 }
             })?;
             let [re, im] = pair[..] else {

@@ -278,7 +278,7 @@ pub fn place<'py>(
     let (A, B) = (matrix(A, "A", k)?, matrix(B, "B", k)?);
     let p = crate::convert::poles(poles, "poles", k)?;
     let K = crate::interrupt::interruptible(py, || quell::place(&A, &B, &p))?.map_err(|e| match e {
-        quell::PlaceError::Matrix(e) => k.err(py, e.to_string()),
+        e @ (quell::PlaceError::Matrix(_) | quell::PlaceError::InputRows { .. }) => k.err(py, e.to_string()),
         e => k.err(py, format!("poles: {e}")),
     })?;
     Ok(to_numpy(py, &K).into_any())

@@ -138,3 +138,22 @@ def test_types_are_named_with_their_article_and_a_huge_int_is_a_value_error():
         quell.sweep(3)
     with pytest.raises(ValueError, match=r"^sample_time: expected a real number within a float64's range \(±1.8e308\), found an integer of 401 digits"):
         quell.Controller(s.design(), 10**400)
+
+
+def test_huge_ints_bools_and_bad_pairs_in_lists_are_named():
+    """An int too long for str() (over 4,300 digits) still gets its digit count; in a pole list it
+    is the same ValueError; a bool among a list's numbers (numpy would read True as 1.0) is a
+    TypeError naming its index; a NaN inside a [re, im] pair names the pair's entry."""
+    s = quell.paper_example()
+    with pytest.raises(ValueError, match=r"found an integer of about 5001 digits$"):
+        quell.Controller(s.design(), 7 * 10**5000)
+    with pytest.raises(ValueError, match=r"^poles\[1\]: expected a real number within a float64's range"):
+        quell.place([[0.0, 1.0], [0.0, 0.0]], [[0.0], [1.0]], [-1, 10**400])
+    with pytest.raises(TypeError, match=r"^A\[0\]\[0\]: expected a real number, found a bool$"):
+        quell.place([[True, 1.0], [0.0, 0.0]], [[0.0], [1.0]], [-1, -2])
+    with pytest.raises(TypeError, match=r"^poles\[2\]\[0\]: expected a real number, found a bool$"):
+        quell.place(np.eye(3), np.eye(3)[:, :1] + 1, [-1, -2, [True, 1.0]])
+    with pytest.raises(quell.DesignError, match=r"^poles\[2\]\[1\]: expected a finite number, found NaN$"):
+        quell.place(np.eye(3), np.eye(3)[:, :1] + 1, [-1, -2, [-1.0, float("nan")]])
+    with pytest.raises(quell.DesignError, match=r"^B: expected n = 3 rows \(one per state of A\).*found 1×3; .*place\(Aᵀ, Cᵀ, poles\)ᵀ$"):
+        quell.place(np.eye(3), [[1.0, 0.0, 0.0]], [-1, -2, -3])

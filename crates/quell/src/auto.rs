@@ -190,11 +190,14 @@ pub struct Verification {
     pub runs: usize,
     /// Every channel within its bound (and the actuator limit).
     pub passed: bool,
-    /// When the verification failed: one line per cause found, with the knob and the value to try.
+    /// When the verification failed: one line per cause found, with the knob and the value to try;
+    /// and, failed or passed, the kept run's caution when DOP853 thrashed at its stability bound
+    /// ([`crate::diagnostics::thrashing`]).
     pub advice: Vec<String>,
     /// The candidates verified, fastest first: the first proposal (speed 1) and the relaxed ones.
     pub candidates: Vec<Candidate>,
-    /// How the relaxation went and why the kept candidate was kept (empty without one).
+    /// How the relaxation went and why the kept candidate was kept; for a passing first proposal
+    /// not relaxed, why not (empty when the verification failed first).
     pub relaxation: String,
 }
 
@@ -227,6 +230,9 @@ pub struct Candidate {
     /// max |e_i| over the run: the scale of a channel whose reference is 0 (regulation).
     #[serde(skip)]
     peak_e: Vec<f64>,
+    /// The run's caution that DOP853 thrashed at its stability bound ([`crate::diagnostics::thrashing`]).
+    #[serde(skip)]
+    thrashing: Option<String>,
 }
 
 /// A complete scenario, its design, the choices made and their verification.
@@ -362,6 +368,7 @@ fn candidate(scenario: &Scenario, r: &crate::sim::SimResult, speed: Speed, conve
         steps: r.stats.steps(),
         chosen: false,
         peak_e,
+        thrashing: crate::diagnostics::thrashing(&r.stats),
     }
 }
 
@@ -378,6 +385,7 @@ impl Candidate {
             steps: 0,
             chosen: true,
             peak_e: none,
+            thrashing: None,
         }
     }
 
@@ -642,18 +650,26 @@ fn relax(
 
 /// Why no candidate was kept within the actuator limits: `closest` is the one nearest to them.
 fn limit_advice(targets: &Targets, closest: &Candidate) -> String {
+    use crate::settings::{fmt_short, round_up_2};
     let ask_less = "or ask less of the loop (smaller or slower references, a longer t_end)";
+    // Four significant digits, shortest form.
+    let four = |x: f64| format!("{x:.3e}").parse().map_or_else(|_| x.to_string(), fmt_short);
+    let short = |v: &[f64]| v.iter().map(|&x| four(x)).collect::<Vec<_>>().join(", ");
     match targets.u_limit.as_slice() {
         [l] => format!(
-            "no candidate keeps max|u_f,i| within the actuator limit {l:e} while every tail stays within its bound: the smallest max|u_f| reached is {:e} (the candidate with {}); raise the actuator limit (u_limit) to at least that, {ask_less}",
-            closest.worst_uf(),
+            "no candidate keeps max|u_f,i| within the actuator limit {} while every tail stays within its bound: the smallest max|u_f| reached is {} (the candidate with {}); raise the actuator limit (u_limit) to at least {}, {ask_less}",
+            fmt_short(*l),
+            four(closest.worst_uf()),
             closest.speed,
+            fmt_short(round_up_2(closest.worst_uf())),
         ),
         each => format!(
-            "no candidate keeps every max|u_f,i| within its actuator limit {each:?} while every tail stays within its bound: the closest (the candidate with {}) reaches max|u_f,i| = {:?}, {:.3}× its limit at worst; raise the limits (u_limit) to at least those, {ask_less}",
+            "no candidate keeps every max|u_f,i| within its actuator limit [{}] while every tail stays within its bound: the closest (the candidate with {}) reaches max|u_f,i| = [{}], {:.3}× its limit at worst; raise the limits (u_limit) to at least [{}], {ask_less}",
+            short(each),
             closest.speed,
-            closest.max_uf,
+            short(&closest.max_uf),
             closest.excess(targets),
+            short(&closest.max_uf.iter().map(|&u| round_up_2(u)).collect::<Vec<_>>()),
         ),
     }
 }
@@ -721,9 +737,17 @@ fn finish(
                 format!("the least steps × max(tail/bound, {TAIL_FLOOR:e})^{TAIL_EXPONENT} (halving the steps is worth a decade of tail) among those within the bound / {TAIL_MARGIN}")
             }
         )
-    } else {
+    } else if !passed {
         String::new()
+    } else if !p.relaxable.contains(&true) {
+        "none: the scenario gives the channel poles, the observer poles and μ, so there is nothing to relax".to_string()
+    } else if !c.tail_within(&bound, TAIL_MARGIN) {
+        format!("none: the first proposal's worst tail is {:.1e} of its bound, above 1/{TAIL_MARGIN}, so no slower candidate was tried (slower poles or μ would leave a larger tail)", c.worst_tail(&bound))
+    } else {
+        "none: no slower candidate could be designed".to_string()
     };
+    // A passing run may still have thrashed at DOP853's stability bound: the caution `quell run` gives.
+    let advice = advice.into_iter().chain(c.thrashing.clone()).collect();
     AutoDesign {
         scenario: p.scenario,
         design,

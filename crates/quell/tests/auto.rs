@@ -642,7 +642,12 @@ fn per_input_actuator_limits_bind_each_input_in_its_own_units() {
     assert!(!impossible.verification.passed);
     let advice = impossible.verification.advice.join("\n");
     let over = number_after(&advice, "], ", "× its limit");
-    assert!(advice.contains("its actuator limit [1000000.0, 1000000.0, 100000000.0]") && over > 1.0, "{advice}");
+    assert!(advice.contains("its actuator limit [1e6, 1e6, 1e8]") && over > 1.0, "{advice}");
+    // The limits it proposes, rounded up, are at least the peaks reached.
+    let proposed = advice.split("to at least [").nth(1).and_then(|r| r.split(']').next()).unwrap_or_default();
+    let proposed: Vec<f64> = proposed.split(", ").map(|v| v.parse().unwrap()).collect();
+    let reached = &impossible.verification.max_uf;
+    assert!(proposed.iter().zip(reached).all(|(p, r)| p >= r && *p <= 1.1 * r), "{proposed:?} for {reached:?}");
     // The relaxation's note does not call the kept candidate within the limits.
     let note = &impossible.verification.relaxation;
     assert!(

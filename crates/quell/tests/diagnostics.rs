@@ -240,3 +240,17 @@ fn a_run_thrashing_at_the_stability_bound_is_flagged_and_off() {
         .unwrap();
     assert!(!diagnose(&pd, &p.reference, &p.disturbance, &r).advice.iter().any(|a| a.contains("DOP853 rejected")));
 }
+
+/// The automatic design verifies with the run `quell run` makes, and passes on its caution: the
+/// Navion, every key given, passes its verification with DOP853 thrashing, and says so; nothing is
+/// relaxed, and the report says why. The paper's example, also given whole, has no caution.
+#[test]
+fn the_automatic_designs_verification_keeps_the_thrashing_caution() {
+    let auto = |text: &str| quell::auto::auto_design(&text.parse().unwrap(), &quell::auto::Targets::default()).unwrap();
+    let navion = auto(NAVION).verification;
+    assert!(navion.passed, "{navion:?}");
+    assert!(navion.advice.iter().any(|a| a.starts_with("DOP853 rejected")), "{:?}", navion.advice);
+    assert!(navion.relaxation.starts_with("none: the scenario gives the channel poles"), "{}", navion.relaxation);
+    let paper = auto(PAPER_EXAMPLE).verification;
+    assert!(paper.passed && paper.advice.is_empty(), "{paper:?}");
+}

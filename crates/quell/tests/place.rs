@@ -336,6 +336,28 @@ fn eigenvector_condition_of_placed_gains() {
 
 // ---------------------------------------------------------------- errors
 
+/// C passed where B goes (an observer placed without the dual): the message names B's rows against
+/// A's states and the dual form, not a square shape that B never needs.
+#[test]
+fn a_b_without_a_row_per_state_is_named_with_the_dual_form() {
+    let A = DMatrix::from_row_slice(3, 3, &[0.0, 1.0, 0.0, 0.0, 0.0, 1.0, -1.0, -2.0, -3.0]);
+    let C = DMatrix::from_row_slice(1, 3, &[1.0, 0.0, 0.0]);
+    let err = place(&A, &C, &reals(&[-1.0, -2.0, -3.0])).unwrap_err();
+    assert_eq!(err, PlaceError::InputRows { n: 3, rows: 1, cols: 3 });
+    let text = err.to_string();
+    assert!(
+        text.starts_with("B: expected n = 3 rows")
+            && text.contains("found 1×3")
+            && text.contains("place(Aᵀ, Cᵀ, poles)ᵀ"),
+        "{text}"
+    );
+    // The dual it points to works: L = place(Aᵀ, Cᵀ)ᵀ puts eig(A − LC) at the poles.
+    let L = place(&A.transpose(), &C.transpose(), &reals(&[-1.0, -2.0, -3.0])).unwrap().transpose();
+    let mut eig: Vec<f64> = (&A - &L * &C).complex_eigenvalues().iter().map(|z| z.re).collect();
+    eig.sort_by(f64::total_cmp);
+    assert!(eig.iter().zip([-3.0, -2.0, -1.0]).all(|(a, b)| (a - b).abs() < 1e-8), "{eig:?}");
+}
+
 #[test]
 fn error_uncontrollable_reports_rank() {
     let A = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 2.0]);

@@ -62,6 +62,12 @@ pub enum PlaceError {
          need {n}; uncontrollable modes cannot be moved by feedback — check B or remove them"
     )]
     Uncontrollable { rank: usize, n: usize },
+    /// B without one row per state of A (C given for B, say).
+    #[error(
+        "B: expected n = {n} rows (one per state of A) and a column per input, found {rows}×{cols}; \
+         for an observer gain L, place the dual: L = place(Aᵀ, Cᵀ, poles)ᵀ"
+    )]
+    InputRows { n: usize, rows: usize, cols: usize },
     #[error("expected {expected} poles (one per state), found {found}; give exactly one pole per state")]
     WrongCount { expected: usize, found: usize },
     /// A pole requested more than rank(B) times (see [`place`]).
@@ -141,7 +147,10 @@ enum Slot {
 pub fn place(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[Complex<f64>]) -> Result<DMatrix<f64>, PlaceError> {
     let n = A.nrows();
     let m = B.ncols();
-    check_shape("A", A, n, n).and_then(|()| check_shape("B", B, n, m)).map_err(PlaceError::Matrix)?;
+    check_shape("A", A, n, n).map_err(PlaceError::Matrix)?;
+    if B.nrows() != n {
+        return Err(PlaceError::InputRows { n, rows: B.nrows(), cols: m });
+    }
     if poles.len() != n {
         return Err(PlaceError::WrongCount { expected: n, found: poles.len() });
     }

@@ -84,6 +84,22 @@ pub struct ChannelDiagnostics {
 /// stability bound.
 const THRASHING: f64 = 0.25;
 
+/// A caution when DOP853 rejected more than [`THRASHING`] of its attempts on a run taken mostly by
+/// it: its steps sat at their stability bound, where its error estimate misses the stiff block's
+/// errors (accuracy-limited runs reject 5–15 %; a loop at rtol 1e-6 whose u_f peaked 8× too high
+/// with 31 % rejected was right with `imex` or at 1e-11). `None` for a sampled run.
+pub fn thrashing(stats: &crate::sim::RunStats) -> Option<String> {
+    let crate::sim::RunStats::Continuous(st) = stats else { return None };
+    let attempts = (st.steps + st.rejected).max(1) as f64;
+    let explicit = st.steps - st.implicit_steps.min(st.steps);
+    (st.rejected as f64 > THRASHING * attempts && explicit > st.steps / 2).then(|| {
+        format!(
+            "DOP853 rejected {:.0} % of its attempts: its steps sat at their stability bound, where its error estimate misses the stiff part's errors (η̂ and u_f may be off by more than the tolerance); check with simulation.method = \"imex\" or a tighter simulation.rtol",
+            100.0 * st.rejected as f64 / attempts
+        )
+    })
+}
+
 /// The diagnostics of one run.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Diagnostics {
@@ -138,19 +154,7 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
             ));
         }
     }
-    // DOP853 rejecting this many attempts sat at its stability bound (accuracy-limited runs reject
-    // 5–15 %): its error estimate then misses the stiff block's errors (a loop at rtol 1e-6 whose u_f
-    // peaked 8× too high with 31 % rejected, right with `imex` or at 1e-11).
-    if let crate::sim::RunStats::Continuous(st) = &result.stats {
-        let attempts = (st.steps + st.rejected).max(1) as f64;
-        let explicit = st.steps - st.implicit_steps.min(st.steps);
-        if st.rejected as f64 > THRASHING * attempts && explicit > st.steps / 2 {
-            advice.push(format!(
-                "DOP853 rejected {:.0} % of its attempts: its steps sat at their stability bound, where its error estimate misses the stiff part's errors (η̂ and u_f may be off by more than the tolerance); check with simulation.method = \"imex\" or a tighter simulation.rtol",
-                100.0 * st.rejected as f64 / attempts
-            ));
-        }
-    }
+    advice.extend(thrashing(&result.stats));
     let channels = avg
         .channels
         .iter()
