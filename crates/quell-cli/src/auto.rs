@@ -76,14 +76,16 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
         // Limits no candidate meets are an infeasible target (exit 2); a tail beyond its bound, a
         // failed run (exit 1).
         let failure = if v.tails_met() { Failure::Input } else { Failure::Run };
+        // Four significant digits: the figures say how far off, not what to type.
+        let list = |v: &[f64]| format!("[{}]", v.iter().map(|x| format!("{x:.3e}")).collect::<Vec<_>>().join(", "));
         return Err(failure(format!(
-            "the automatic design did not pass its verifying simulation (tail max|e| {:?} against bounds {:?}{}){}; nothing written; see docs/tuning.md",
-            v.tail_max_e,
-            v.bound,
+            "the automatic design did not pass its verifying simulation (tail max|e| {} against bounds {}{}){}; nothing written; see docs/tuning.md",
+            list(&v.tail_max_e),
+            list(&v.bound),
             match targets.u_limit.as_slice() {
                 [] => String::new(),
-                [l] => format!(", max|u_f| {:?} against the limit {l}", v.max_uf),
-                each => format!(", max|u_f| {:?} against the limits {each:?}", v.max_uf),
+                [l] => format!(", max|u_f| {} against the limit {l}", list(&v.max_uf)),
+                each => format!(", max|u_f| {} against the limits {each:?}", list(&v.max_uf)),
             },
             v.advice.iter().map(|a| format!("; {a}")).collect::<String>()
         )));

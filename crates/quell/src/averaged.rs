@@ -167,6 +167,15 @@ impl ChannelAverage {
         })
     }
 
+    /// η*_i = Ω̄_i⁺ Ȳ_i over the excited directions: what η̂_i settles to (module docs).
+    pub fn eta_star(&self) -> DVector<f64> {
+        let floor = 1e-13 * self.lambda_max();
+        self.lambda.iter().enumerate().filter(|(_, &l)| l > floor).fold(DVector::zeros(self.y.len()), |eta, (k, &l)| {
+            let v = self.vectors.column(k);
+            eta + v * (v.dot(&self.y) / l)
+        })
+    }
+
     /// The averaged law's RMS tracking error at time t for adaptation gain μ:
     /// √(Σ_k e_k exp(−2μλ_k t) + r²) (`ChannelAverage::modes`).
     pub fn predicted_error(&self, mu: f64, t: f64) -> f64 {
@@ -188,6 +197,9 @@ pub struct Averaged {
     pub channels: Vec<ChannelAverage>,
     /// Per nonzero-energy frequency of ω.
     pub fidelity: Vec<Fidelity>,
+    /// max_j Σ_tones |ξ̂_j|: a bound of the steady-state regressor's entries, the size ξ̂ has in its
+    /// own units (1e9 for forces in newtons in the paper's form).
+    pub xi_peak: f64,
 }
 
 impl Averaged {
@@ -226,7 +238,8 @@ impl Averaged {
             })
             .collect();
         let channels = (0..m).map(|i| channel(design, i, &per_tone)).collect();
-        Averaged { channels, fidelity }
+        let xi_peak = (0..q).map(|j| per_tone.iter().map(|(_, xi, _)| xi[j].norm()).sum::<f64>()).fold(0.0, f64::max);
+        Averaged { channels, fidelity, xi_peak }
     }
 }
 

@@ -30,7 +30,7 @@ fn place_refuses_wrong_shapes() {
     let A32 = A.rows(0, 2).into_owned().transpose(); // 3×2
     assert_eq!(place(&A32, &B, &p), Err(PlaceError::Matrix(shape("A", (3, 3), (3, 2)))));
     let B2 = B.rows(0, 2).into_owned();
-    assert_eq!(place(&A, &B2, &p), Err(PlaceError::Matrix(shape("B", (3, 1), (2, 1)))));
+    assert_eq!(place(&A, &B2, &p), Err(PlaceError::InputRows { n: 3, rows: 2, cols: 1 }));
     // The shapes are checked before the pole count, which depends on them.
     assert_eq!(place(&A32, &B, &p[..2]), Err(PlaceError::Matrix(shape("A", (3, 3), (3, 2)))));
     // Still placed with the right shapes.

@@ -255,15 +255,16 @@ fn a_runaway_draw_is_diverged_early_and_converging_draws_are_untouched() {
     assert!(matches!(off[7].outcome, Outcome::Failed | Outcome::Diverged), "{:?}", off[7].outcome);
     assert!(r.steps <= 3 * nominal.steps as u64 && r.steps < off[7].steps, "{} vs {}", r.steps, off[7].steps);
 
-    // With the peak rule off, the relative step budget ends it: failed, at 3 × the nominal steps.
-    let budget = Study::from_toml(&format!("{MC8}[runaway]\npeak = inf\n"), None).unwrap();
+    // With the peak rule off, the relative step budget ends it: failed, at 1.5 × the nominal steps
+    // (at 3 × it reaches the divergence bound first, which the watch at every step end now sees).
+    let budget = Study::from_toml(&format!("{MC8}[runaway]\npeak = inf\nsteps = 1.5\n"), None).unwrap();
     let r = run_one(&budget.spec_with_nominal(7).unwrap());
-    let limit = 3 * nominal.steps;
-    assert_eq!(r.outcome, Outcome::Failed);
+    let limit = (1.5 * nominal.steps as f64).ceil() as usize;
+    assert_eq!(r.outcome, Outcome::Failed, "{}", r.reason);
     assert_eq!(r.steps, limit as u64 + 1, "the step after the budget ends it");
     assert!(
         r.reason.starts_with(&format!(
-            "step budget: more than 3 × the nominal run's {} solver steps ({limit}) by t = ",
+            "step budget: more than 1.5 × the nominal run's {} solver steps ({limit}) by t = ",
             nominal.steps
         )),
         "{}",
@@ -311,6 +312,30 @@ fn a_stiff_study_completes_under_each_runs_default_budget() {
         assert_eq!(r.outcome, Outcome::Failed);
         assert!(r.reason.starts_with("the solver needed more than 10000 steps by t = "), "{}", r.reason);
     }
+}
+
+/// A drawn true delay 90 % shorter than the design's caps the step at that delay: the three-zone
+/// building over 240 h (tests/data/three-zone-building.toml, heater delays 0.25 h and 0.5 h) needs
+/// 240/0.033 ≈ 7,240 steps for such a draw, beyond 3 × the nominal run's 968 (+ its breakpoints):
+/// run 29 of this study failed as a "step budget" runaway whose signals had not grown (peak |y| 1.50
+/// against the nominal 1.55, no rejected step; helper tryout, 2026-12-03). The rule now counts the
+/// floor ⌈t_end/τ_min⌉ of each draw (`Run::delay_floor`): every draw completes, with the rows of
+/// the same study with the rules off.
+#[test]
+fn a_drawn_delay_that_caps_the_step_is_not_taken_for_a_runaway() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let text = "scenario = \"three-zone-building.toml\"\n[simulation]\nrtol = 1e-7\natol = 1e-9\n\
+                [monte_carlo]\nruns = 40\nseed = 3\n\"truth.A\" = { relative = 0.3 }\n\"truth.delays\" = { relative_uniform = 0.9 }\n";
+    let study = Study::from_toml(text, Some(&dir)).unwrap();
+    let on = sweep(&study, &SweepOptions::default()).rows;
+    let off = Study::from_toml(&format!("{text}[runaway]\npeak = inf\nsteps = inf\n"), Some(&dir)).unwrap();
+    let off = sweep(&off, &SweepOptions::default()).rows;
+    let failed: Vec<_> = on.iter().filter(|r| r.outcome != Outcome::Completed).map(|r| (r.run, &r.reason)).collect();
+    assert!(failed.is_empty(), "{failed:?}");
+    assert_eq!(timeless(&on), timeless(&off));
+    let nominal = study.nominal(0).unwrap().steps as u64;
+    let most = on.iter().map(|r| r.steps).max().unwrap_or(0);
+    assert!(most > 3 * nominal, "the delay floor must exceed the rule's 3 × {nominal} steps somewhere: {most}");
 }
 
 /// Drawn true delays land the loop on more breakpoints t = Σ k_i τ_i than the nominal run's (the

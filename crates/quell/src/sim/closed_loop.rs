@@ -322,6 +322,36 @@ impl DelaySystem for ContinuousLoop<'_> {
         true
     }
 
+    /// Per channel err_η̂i ← (I + c μ_i Ω_i)⁻¹ err_η̂i, Ω_i at `y`, by Cholesky.
+    fn filter_implicit_error(&mut self, c: f64, y: &[f64], err: &mut [f64]) -> bool {
+        let (l, q) = (&self.layout, self.layout.q);
+        self.eq.channels.iter().enumerate().all(|(i, ch)| {
+            let omega = &y[l.omega[i]..l.omega[i] + packed::len(q)];
+            packed::solve_shifted(omega, c * ch.mu, &mut err[l.eta(i)..l.eta(i) + q], &mut self.factor)
+        })
+    }
+
+    /// Between output times the watch of [`DelaySystem::observe`]: a watched signal beyond its
+    /// bound at a step's end ends the run as diverged there, and the peaks ([`SimResult::peaks`])
+    /// count the step ends too. With a coarse output step a loop would otherwise blow up between
+    /// two rows until a budget ended it, naming no signal.
+    fn accepted(&mut self, t: f64, s: &[f64]) -> ControlFlow<()> {
+        let Some(rec) = &mut self.record else { return ControlFlow::Continue(()) };
+        let (eq, l) = (&self.eq, &self.layout);
+        let watched =
+            Watched { xi_hat: eq.regressor(s), x_hat: eq.x_hat(s), eta: &s[l.nz..l.x], x: &s[l.x..l.x + eq.n] };
+        match watched.beyond(t, &rec.bounds) {
+            Some(diverged) => {
+                rec.diverged = Some(diverged);
+                ControlFlow::Break(())
+            }
+            None => {
+                rec.result.peaks.record(&watched);
+                ControlFlow::Continue(())
+            }
+        }
+    }
+
     /// Records y, g, u (25), u_f (5) and η̂ (and x, x̂) at t, unless a watched signal is beyond its
     /// bound: then the run ends as diverged.
     fn observe(&mut self, t: f64, s: &[f64], past: &Past<'_>) -> ControlFlow<()> {

@@ -62,6 +62,12 @@ pub trait DelaySystem {
     fn observe(&mut self, _t: f64, _y: &[f64], _past: &Past<'_>) -> ControlFlow<()> {
         ControlFlow::Continue(())
     }
+    /// Called at the end t of each accepted step with the whole state `y` there, after the outputs
+    /// in the step: for a watch between outputs. `Break` stops the run as `on_output`'s does.
+    /// Default: nothing.
+    fn accepted(&mut self, _t: f64, _y: &[f64]) -> ControlFlow<()> {
+        ControlFlow::Continue(())
+    }
     /// The components (default: none) whose rate is linear in themselves and may be stiff:
     /// f_I(y) = c(y) − M(y) y_I on this range, with M positive semidefinite and c, M depending
     /// on the other components only. The stiff method integrates them implicitly (see `dde/ark.rs`).
@@ -81,6 +87,14 @@ pub trait DelaySystem {
     /// which must not read the past. `false` when the solve fails (the step is then rejected and
     /// retried shorter). Must not allocate.
     fn solve_implicit(&mut self, _t: f64, _c: f64, _z: &mut [f64]) -> bool {
+        true
+    }
+    /// The implicit block of an error estimate `err`, filtered: err_I ← (I + c M(y))⁻¹ err_I with M
+    /// at the state `y` (the filter of Hairer & Wanner's RADAU5, IV.8 (8.19)). The embedded
+    /// solution's errors in a stiff block are its rounding and solve residues times h·M, which the
+    /// filter returns to their own size. `false` when the solve fails. Must not allocate. Default:
+    /// unchanged.
+    fn filter_implicit_error(&mut self, _c: f64, _y: &[f64], _err: &mut [f64]) -> bool {
         true
     }
 }
@@ -398,6 +412,7 @@ pub fn solve_events<S: DelaySystem>(
         };
         steps.accept(&step)?;
         if steps.record_and_emit(&step, len, &mut |t, y| on_event(Event::Output(t, y))).is_break()
+            || steps.sys.accepted(step.t_new, &steps.y_new).is_break()
             || on_event(Event::Step(step.t_new)).is_break()
         {
             return Ok(steps.finish());

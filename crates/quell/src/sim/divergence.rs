@@ -87,6 +87,19 @@ pub(crate) fn state_scale(plant: &Plant) -> f64 {
     [1.0 / smallest, plant.x0.amax()].into_iter().filter(|v| v.is_finite()).fold(1.0, f64::max)
 }
 
+/// The regressor's and the adaptive parameters' scales in their own units, by which the divergence
+/// bound on ξ̂ and η̂ is multiplied: max(1, the steady-state regressor's bound
+/// [`Averaged::xi_peak`](crate::averaged::Averaged)) and max(1, max_i |η*_i|∞), η*_i = Ω̄_i⁺ Ȳ_i what
+/// η̂_i settles to. The paper's form of ξ̂ carries the signals' units divided by the filters'
+/// ∏|p_j|: a vessel's disturbance of 2e7 N·m makes |ξ̂| ≈ 1.6e9 in steady state, and η̂ = u/ξ̂ grows
+/// as ξ̂ shrinks. A scale that is not finite counts as 1.
+pub(crate) fn regressor_scales(design: &crate::Design, signals: [&crate::signal::Signal; 2]) -> (f64, f64) {
+    let avg = crate::averaged::Averaged::new(design, signals[0], signals[1]);
+    let eta = avg.channels.iter().map(|c| c.eta_star().amax()).fold(0.0, f64::max);
+    let at_least_1 = |v: f64| if v.is_finite() { v.max(1.0) } else { 1.0 };
+    (at_least_1(avg.xi_peak), at_least_1(eta))
+}
+
 /// Whether v is outside [−bound, bound] or not finite (so NaN is always beyond).
 pub(crate) fn beyond(v: f64, bound: f64) -> bool {
     !(v.is_finite() && v.abs() <= bound)

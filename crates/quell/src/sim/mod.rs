@@ -220,20 +220,39 @@ impl<'a> Run<'a> {
     /// (`closed_loop::loop_delays`), counted without building the loop. 0 for a sampled-data loop.
     pub fn breakpoints(&self) -> usize {
         match &self.settings.mode {
-            Loop::Continuous(_) => {
-                let delays = closed_loop::loop_delays(self.design.plant(), self.truth, self.settings.actuator.as_ref());
-                dde::breakpoints(0.0, &delays, self.settings.t_end).len()
-            }
+            Loop::Continuous(_) => dde::breakpoints(0.0, &self.loop_delays(), self.settings.t_end).len(),
             Loop::Sampled { .. } => 0,
         }
     }
 
+    /// The least number of steps the continuous loop takes whatever its tolerance: a step is at
+    /// most the shortest delay τ_min long (the method of steps), so ⌈t_end/τ_min⌉; 0 for a loop
+    /// without delays and for a sampled-data loop.
+    pub fn delay_floor(&self) -> usize {
+        let tau_min = self.loop_delays().first().copied().unwrap_or(f64::INFINITY);
+        match &self.settings.mode {
+            Loop::Continuous(_) if tau_min.is_finite() => (self.settings.t_end / tau_min).ceil() as usize,
+            _ => 0,
+        }
+    }
+
+    /// The delays the continuous loop reads, ascending (`closed_loop::loop_delays`).
+    fn loop_delays(&self) -> Vec<f64> {
+        closed_loop::loop_delays(self.design.plant(), self.truth, self.settings.actuator.as_ref())
+    }
+
     /// The bound per watched signal (x, x̂, ξ̂, η̂): `divergence_bound`, times the state's scale in
-    /// its coordinates for x and x̂ ([`divergence::state_scale`]), and at most `runaway`'s.
+    /// its coordinates for x and x̂ ([`divergence::state_scale`]) and the regressor's and the
+    /// parameters' nominal sizes for ξ̂ and η̂ ([`divergence::regressor_scales`]; not computed where
+    /// `runaway` bounds both below `divergence_bound`), and at most `runaway`'s.
     fn bounds(&self) -> Peaks {
         let b = self.settings.divergence_bound;
         let scale = divergence::state_scale;
         let mut bounds = [b * scale(self.truth), b * scale(self.design.plant()), b, b];
+        if self.settings.runaway.is_none_or(|r| r.0[2] > b || r.0[3] > b) {
+            let (xi, eta) = divergence::regressor_scales(self.design, [self.reference, self.disturbance]);
+            (bounds[2], bounds[3]) = (b * xi, b * eta);
+        }
         if let Some(r) = self.settings.runaway {
             for (bound, runaway) in bounds.iter_mut().zip(r.0) {
                 *bound = bound.min(runaway);

@@ -120,7 +120,8 @@ pub struct SimResult {
     /// What the loop did (so far, when it stopped early).
     pub stats: RunStats,
     pub outcome: Option<Outcome>,
-    /// The largest magnitude of each watched signal (x, x̂, ξ̂, η̂) at the recorded samples.
+    /// The largest magnitude of each watched signal (x, x̂, ξ̂, η̂) at the recorded samples and, in the
+    /// continuous loop, at the solver's step ends.
     pub peaks: Peaks,
     /// Per input, at how many recorded samples the true plant's actuator limit (`[truth]` u_max)
     /// clipped it; empty without an actuator. The continuous loop reads the clipping at the

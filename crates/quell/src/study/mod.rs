@@ -419,7 +419,7 @@ impl Study {
             if s.simulation.sample_time.is_some() {
                 return None;
             }
-            let run = sweep::simulate(&s, self.max_steps, &|_| None, &|| false).ok()?;
+            let run = sweep::simulate(&s, self.max_steps, &|_, _| None, &|| false).ok()?;
             let r = run.result;
             (r.outcome == Some(crate::sim::Outcome::Completed)).then_some(Nominal {
                 steps: r.stats.steps(),

@@ -54,9 +54,12 @@ impl RunSpec {
     /// take: the paper's loop at t_end = 40 with both delays 2 % off lands on 559 instead of 29
     /// and takes 752 steps instead of 268), and peak · its peaks per watched signal (no bound on a
     /// signal that stayed 0 there); `None` without one.
-    fn runaway_limits(&self, breakpoints: usize) -> Option<(usize, Peaks)> {
+    /// The runaway rules' step budget and peaks for a run with `breakpoints` and `delay_floor`
+    /// ([`Run::delay_floor`]): runaway.steps × (the nominal run's steps, or the floor this run's
+    /// shortest delay sets when that is more, + the breakpoints its delays add).
+    fn runaway_limits(&self, breakpoints: usize, delay_floor: usize) -> Option<(usize, Peaks)> {
         self.nominal.map(|n| {
-            let steps = n.steps + breakpoints.saturating_sub(n.breakpoints);
+            let steps = n.steps.max(delay_floor) + breakpoints.saturating_sub(n.breakpoints);
             ((self.runaway.steps * steps as f64).ceil() as usize, n.peaks.bounds(self.runaway.peak))
         })
     }
@@ -76,7 +79,7 @@ impl RunSpec {
     /// [`RunSpec::simulate_until`], with what decided its step budget.
     fn simulate_within_limits(&self, stop: &dyn Fn() -> bool) -> Result<Simulated, String> {
         let s = Scenario::from_document(&self.scenario).map_err(|e| e.to_string())?;
-        simulate(&s, self.max_steps, &|breakpoints| self.runaway_limits(breakpoints), stop)
+        simulate(&s, self.max_steps, &|breakpoints, floor| self.runaway_limits(breakpoints, floor), stop)
     }
 }
 
@@ -129,30 +132,35 @@ pub struct Row {
 pub(crate) struct Simulated {
     pub result: SimResult,
     pub breakpoints: usize,
+    /// [`Run::delay_floor`] of the run.
+    pub delay_floor: usize,
     pub runaway_steps: Option<usize>,
 }
 
 /// Simulates a scenario as its `[simulation]` says ([`Run::of`]), a continuous run within the
 /// step budget `max_steps` (`None`: the run's own, [`sim::default_max_steps`]) and, given its
-/// breakpoints, `runaway` = (steps, peaks): within at most that many steps and those peaks per
-/// watched signal; `Err` when it cannot start.
+/// breakpoints and [`Run::delay_floor`], `runaway` = (steps, peaks): within at most that many steps
+/// and those peaks per watched signal; `Err` when it cannot start.
 pub(crate) fn simulate(
     s: &Scenario,
     max_steps: Option<usize>,
-    runaway: &dyn Fn(usize) -> Option<(usize, Peaks)>,
+    runaway: &dyn Fn(usize, usize) -> Option<(usize, Peaks)>,
     stop: &dyn Fn() -> bool,
 ) -> Result<Simulated, String> {
     let design = s.design().map_err(|e| e.to_string())?;
     let mut settings = RunSettings::of(s);
     let t_end = settings.t_end;
-    let breakpoints = Run::of(s, &design).breakpoints();
+    let (breakpoints, delay_floor) = {
+        let run = Run::of(s, &design);
+        (run.breakpoints(), run.delay_floor())
+    };
     let mut runaway_steps = None;
     if let Loop::Continuous(integrator) = &mut settings.mode {
         let signals = [&s.reference, &s.disturbance];
         let given = integrator.clone();
         let own =
             || max_steps.unwrap_or_else(|| sim::default_max_steps(&design, s.true_plant(), signals, t_end, &given));
-        let limits = runaway(breakpoints);
+        let limits = runaway(breakpoints, delay_floor);
         let budget = match limits {
             // The default is never below BUDGET_MIN_STEPS: a runaway budget within it decides alone
             // (and a Monte Carlo draw skips the averaged law the default needs).
@@ -166,7 +174,7 @@ pub(crate) fn simulate(
     }
     let progress = |_t: f64| if stop() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
     let result = Run::of(s, &design).settings(settings).simulate(progress).map_err(|e| e.to_string())?;
-    Ok(Simulated { result, breakpoints, runaway_steps })
+    Ok(Simulated { result, breakpoints, delay_floor, runaway_steps })
 }
 
 /// Carries out one run; `None` when `stop` interrupted it.
@@ -186,7 +194,7 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
     };
     match spec.simulate_within_limits(stop) {
         Err(reason) => row.reason = reason,
-        Ok(Simulated { result: r, runaway_steps, breakpoints }) => {
+        Ok(Simulated { result: r, runaway_steps, breakpoints, delay_floor }) => {
             row.steps = r.stats.steps() as u64;
             match r.outcome.as_ref().unwrap_or(&sim::Outcome::Completed) {
                 sim::Outcome::Completed => {
@@ -207,11 +215,14 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                 sim::Outcome::TooManySteps { t, max_steps } if runaway_steps == Some(*max_steps) => {
                     let (n, extra) =
                         spec.nominal.map_or((0, 0), |n| (n.steps, breakpoints.saturating_sub(n.breakpoints)));
+                    let base = if delay_floor > n {
+                        format!("the {delay_floor} steps this draw's shortest delay needs at least (a step is at most that delay)")
+                    } else {
+                        format!("the nominal run's {n} solver steps")
+                    };
                     let scale = match extra {
-                        0 => format!("the nominal run's {n} solver steps"),
-                        _ => format!(
-                            "(the nominal run's {n} solver steps + the {extra} breakpoints this draw's delays add)"
-                        ),
+                        0 => base,
+                        _ => format!("({base} + the {extra} breakpoints this draw's delays add)"),
                     };
                     row.reason = format!(
                         "step budget: more than {} × {scale} ({max_steps}) by t = {t:.4} {} (the loop turned stiff: its signals grew well beyond the nominal run's; raise runaway.steps in the study file if the run is sound)",

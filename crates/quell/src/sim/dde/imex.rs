@@ -162,6 +162,10 @@ impl<S: DelaySystem> Steps<'_, S> {
         combine(&self.y, &self.k, &B, h, n, &mut self.y_new);
         self.err5.fill(0.0);
         lincomb(&mut self.err5, &self.k, n, &E, h, 0..n);
+        if !self.sys.filter_implicit_error(h * GAMMA, &self.y_new, &mut self.err5) {
+            self.err = f64::INFINITY;
+            return None;
+        }
         let (s2, _) = error_sums(&self.err5, &self.err5, &self.y, &self.y_new, self.opts.rtol, &self.atol);
         self.err = (s2 / n.max(1) as f64).sqrt();
         if !self.err.is_finite() || !all_finite(&self.y_new) {
