@@ -59,6 +59,8 @@ pub(crate) enum Failure {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let has_sample_time = matches!(cli.command, Some(Command::Run(_) | Command::Export(_)) | None);
+    SAMPLE_TIME_FLAG.store(has_sample_time, std::sync::atomic::Ordering::Relaxed);
     let result = match cli.command {
         Some(Command::Design(args)) if args.auto => auto::auto(&args),
         Some(Command::Design(args)) => design(&args),
@@ -96,10 +98,15 @@ const FLAGS: [(&str, &str); 6] = [
     ("compiler", "--compiler"),
 ];
 
-/// A library message whose leading key a flag sets, with the flag named.
+/// Whether the command has `--sample-time` (`run` and `export`): only then does a message on
+/// `simulation.sample_time` name the flag too.
+static SAMPLE_TIME_FLAG: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(true);
+
+/// A library message whose leading key a flag of the command sets, with the flag named.
 pub(crate) fn in_flags(msg: String) -> String {
     let msg = msg.replace(quell::scenario::AUTO_DESIGN, "`quell design SCENARIO --auto --write OUT.toml`");
-    for (key, flag) in FLAGS {
+    let sample_time_flag = SAMPLE_TIME_FLAG.load(std::sync::atomic::Ordering::Relaxed);
+    for (key, flag) in FLAGS.iter().filter(|(key, _)| sample_time_flag || *key != "simulation.sample_time") {
         if let Some(rest) = msg.strip_prefix(key).filter(|r| r.starts_with([':', ' '])) {
             return format!("{flag}{rest}");
         }
@@ -135,11 +142,16 @@ pub(crate) fn load(path: Option<&Path>, sample_time: Option<f64>) -> Result<(Sce
             Scenario::from_document(&doc)
         })
         .map_err(|e| match path {
-            Some(p) if e.is_a_study() => Failure::Input(format!(
-                "{e}\n{} is a study, not a scenario: run it with `quell sweep {} --out DIR`",
-                p.display(),
-                p.display()
-            )),
+            Some(p) if e.is_a_study() => {
+                // A study with [tune] is tuned, not swept.
+                let tuned = quell::scenario::read_document(p).is_ok_and(|doc| doc.contains_key("tune"));
+                let command = if tuned { "tune" } else { "sweep" };
+                Failure::Input(format!(
+                    "{e}\n{} is a study, not a scenario: run it with `quell {command} {} --out DIR`",
+                    p.display(),
+                    p.display()
+                ))
+            }
             _ => Failure::Input(e.to_string()),
         })?;
     let design = scenario.design().map_err(|e| Failure::Input(e.to_string()))?;

@@ -66,6 +66,7 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     }
     let path = args.study.as_deref().expect("clap requires a study without --merge");
     let study = read_study(path)?;
+    quell::study::check_sweep(&study).map_err(|e| Failure::Input(format!("{}: {e}", path.display())))?;
     let shard = match &args.shard {
         None => Shard::ALL,
         Some(s) => Shard::parse(s).map_err(|e| Failure::Input(format!("--shard: {e}")))?,

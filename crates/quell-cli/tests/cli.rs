@@ -214,6 +214,14 @@ fn design_missing_file_exits_2() {
     assert!(err.contains("no/such/scenario.toml") && err.contains("cannot read"), "{err}");
 }
 
+/// `quell design` has no `--sample-time`: its message names the key alone (`quell run`'s names the
+/// flag that overrides it as well).
+#[test]
+fn design_names_the_sample_time_key_without_a_flag_it_lacks() {
+    let err = design_with_edit("sample-time", "[simulation]\n", "[simulation]\nsample_time = -0.001\n");
+    assert!(err.starts_with("error: simulation.sample_time: expected"), "{err}");
+}
+
 #[test]
 fn design_syntax_error_exits_2() {
     let err = design_with_edit("syntax", "delays = [1.0, 3.0]", "delays = [1.0 3.0]");
@@ -237,6 +245,13 @@ fn a_study_given_as_a_scenario_is_named_a_study_with_the_command_that_runs_it() 
             "{err}"
         );
     }
+    // A study with [tune] is pointed to `quell tune`, and `quell sweep` refuses the [tune] it would
+    // ignore.
+    let tune = format!("{}/../../examples/studies/tune.toml", env!("CARGO_MANIFEST_DIR"));
+    let err = input_error(&["run", &tune]);
+    assert!(err.contains(&format!("is a study, not a scenario: run it with `quell tune {tune} --out DIR`")), "{err}");
+    let err = input_error(&["sweep", &tune, "--out", "/nonexistent/never-written"]);
+    assert!(err.contains(&format!("{tune}: tune: read by tuning only")), "{err}");
 }
 
 #[test]

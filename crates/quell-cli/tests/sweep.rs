@@ -89,6 +89,16 @@ fn sharded_and_merged_equals_unsharded() {
     assert_eq!(summary("all"), 4);
     assert_eq!(summary("merged"), 4);
 
+    // With the runaway rules off (+∞, which summary.json writes as null) the shards merge too.
+    let off = write_study(dir, "off.toml", &format!("{STUDY}[runaway]\npeak = inf\nsteps = inf\n"));
+    for i in 0..2 {
+        let o = quell(&["sweep", &off, "--shard", &format!("{i}/2"), "--out", &out(&format!("off{i}")), "--no-plots"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let o = quell(&["sweep", "--merge", &out("off0"), &out("off1"), "--out", &out("off-merged")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(rows_without_wall_time(&dir.join("off-merged")), all);
+
     // Merging a shard twice, leaving one out, or mixing studies is refused with exit code 2.
     let o = quell(&["sweep", "--merge", &out("s0"), &out("s0"), &out("s1"), "--out", &out("bad")]);
     assert_eq!(o.status.code(), Some(2));

@@ -201,9 +201,11 @@ pub fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
         // A seed is an integer, never rounded to a float (which the reader would then refuse as
         // "a floating-point number"); any other key takes a huge integer as the float it is.
         if key.ends_with("[\"seed\"]") {
-            return Err(
-                Kind::Scenario.err(py, format!("{key}: expected a seed, an integer from 0 to 2**63 - 1, found {obj}"))
-            );
+            let err =
+                Kind::Scenario.err(py, format!("{key}: expected a seed, an integer from 0 to 2**63 - 1, found {obj}"));
+            // `.key` in the file's form: noise["seed"] is noise.seed.
+            let _ = err.value(py).setattr("key", key.replace("[\"", ".").replace("\"]", ""));
+            return Err(err);
         }
         return Ok(Value::Float(obj.extract::<f64>()?));
     }

@@ -11,7 +11,7 @@ use quell::sim::{Loop, Outcome, Peaks, Run, RunSettings, RunStats, SimError, Sim
 use quell::TimeUnit;
 use toml::Value;
 
-use crate::errors::{in_python, keyed, simulation_error, Kind};
+use crate::errors::{keyed, simulation_error, Kind};
 use crate::plant::Labels;
 use crate::scenario::PyScenario;
 
@@ -599,11 +599,11 @@ pub fn simulate(
     settings.record_states = states;
     if let (Some(_), Loop::Sampled { sample_time }) = (&method, &settings.mode) {
         let msg = format!("method: the integrator applies to the continuous loop only, and this run is the sampled-data loop at sample_time = {sample_time} {}; leave method out, or sample_time", scn.plant.time_unit);
-        return Err(Kind::Scenario.err(py, msg));
+        return Err(keyed(py, Kind::Scenario, msg, Some("simulation.method".into())));
     }
     settings
         .set_max_steps(step_budget(py, max_steps)?)
-        .map_err(|e| Kind::Scenario.err(py, in_python(e.to_string())))?;
+        .map_err(|e| keyed(py, Kind::Scenario, e.to_string(), Some(e.key.clone())))?;
     let sampled = match settings.mode {
         Loop::Sampled { sample_time } => Some(sample_time),
         Loop::Continuous(_) => None,
@@ -656,7 +656,7 @@ fn step_budget(py: Python<'_>, max_steps: Option<&Bound<'_, PyAny>>) -> PyResult
             _ => {
                 let found = v.repr().map_or_else(|_| "?".to_string(), |r| r.to_string());
                 let msg = format!("max_steps: expected a step budget (an integer ≥ 1), found {found}");
-                Err(Kind::Scenario.err(py, msg))
+                Err(keyed(py, Kind::Scenario, msg, Some("max_steps".into())))
             }
         },
     }

@@ -857,6 +857,7 @@ fn sweep_frame(
     yes: bool,
 ) -> PyResult<(Py<PyAny>, Option<PyErr>)> {
     let jobs = jobs_arg(py, jobs)?;
+    study::check_sweep(study).map_err(|e| study_error(py, &e))?;
     if study.len() > study::CONFIRM_RUNS && !yes {
         return Err(Kind::Scenario.err(
             py,

@@ -136,5 +136,30 @@ def test_a_seed_beyond_64_bits_is_named_as_a_seed():
     # 2**70 was rounded to a float and refused as "a floating-point number".
     from test_api import paper_from_values
 
-    with pytest.raises(quell.ScenarioError, match=r"noise\[\"seed\"\]: expected a seed, an integer from 0 to 2\*\*63 - 1, found 1180591620717411303424"):
+    with pytest.raises(quell.ScenarioError, match=r"noise\[\"seed\"\]: expected a seed, an integer from 0 to 2\*\*63 - 1, found 1180591620717411303424") as e:
         paper_from_values(sample_time=1e-3, noise={"std": [0.01, 0.01], "seed": 2**70})
+    assert e.value.key == "noise.seed"
+
+
+def test_method_and_max_steps_refusals_carry_their_key():
+    """docs/python.md: `.key` keeps the file's key, for simulate's own keywords too."""
+    s = quell.paper_example()
+    with pytest.raises(quell.ScenarioError, match=r"^method: the integrator applies to the continuous loop only") as e:
+        quell.simulate(s, sample_time=0.01, method="imex")
+    assert e.value.key == "simulation.method"
+    with pytest.raises(quell.ScenarioError, match=r"^max_steps: a step budget applies to the continuous loop") as e:
+        quell.simulate(s, sample_time=0.01, max_steps=100)
+    assert e.value.key == "max_steps"
+    with pytest.raises(quell.ScenarioError, match=r"^max_steps: expected a step budget") as e:
+        quell.simulate(s, max_steps=0)
+    assert e.value.key == "max_steps"
+
+
+def test_a_study_with_tune_is_not_swept(tmp_path):
+    """A sweep would ignore [tune]: it is refused, naming the key, as `quell sweep` refuses it."""
+    study = tmp_path / "t.toml"
+    (tmp_path / "paper.toml").write_text(quell.paper_example().to_toml())
+    study.write_text('scenario = "paper.toml"\n[tune]\nobjective = "settle_t"\nmu = [1.0, 100.0]\n')
+    with pytest.raises(quell.ScenarioError, match=r"^tune: read by tuning only") as e:
+        quell.sweep(study)
+    assert e.value.key == "tune"

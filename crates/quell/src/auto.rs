@@ -650,10 +650,8 @@ fn relax(
 
 /// Why no candidate was kept within the actuator limits: `closest` is the one nearest to them.
 fn limit_advice(targets: &Targets, closest: &Candidate) -> String {
-    use crate::settings::{fmt_short, round_up_2};
+    use crate::settings::{fmt_4 as four, fmt_short, round_up_2};
     let ask_less = "or ask less of the loop (smaller or slower references, a longer t_end)";
-    // Four significant digits, shortest form.
-    let four = |x: f64| format!("{x:.3e}").parse().map_or_else(|_| x.to_string(), fmt_short);
     let short = |v: &[f64]| v.iter().map(|&x| four(x)).collect::<Vec<_>>().join(", ");
     match targets.u_limit.as_slice() {
         [l] => format!(
@@ -892,7 +890,9 @@ fn failure_advice(s: &Scenario) -> Option<String> {
     let (t_end, unit) = (s.simulation.t_end, s.plant.time_unit);
     (t_end < SEPARATION_BEATS * beat).then(|| {
         format!(
-            "the horizon is too short to tell the signals' two closest frequencies apart: {a} and {b} rad/{unit} beat with period 2π/{:.4e} = {beat:.4e} {unit}, and t_end = {t_end} {unit} is {:.2} beats; the adaptive law needs about {SEPARATION_BEATS}: lengthen simulation.t_end to at least {} {unit} (or move the frequencies apart)",
+            "the horizon is too short to tell the signals' two closest frequencies apart: {} and {} rad/{unit} beat with period 2π/{:.4e} = {beat:.4e} {unit}, and t_end = {t_end} {unit} is {:.2} beats; the adaptive law needs about {SEPARATION_BEATS}: lengthen simulation.t_end to at least {} {unit} (or move the frequencies apart)",
+            crate::settings::fmt_4(a),
+            crate::settings::fmt_4(b),
             b - a,
             t_end / beat,
             crate::settings::round_up_2(SEPARATION_BEATS * beat)

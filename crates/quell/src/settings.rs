@@ -425,12 +425,23 @@ pub fn fmt_time(x: f64) -> String {
     s.parse::<f64>().map_or(s, fmt_short)
 }
 
+/// `v` to four significant digits in [`fmt_short`]'s form: a figure in advice (6.283 rad/s, not
+/// 6.283185307179586), where the digits say how much, not what to type.
+pub(crate) fn fmt_4(v: f64) -> String {
+    format!("{v:.3e}").parse().map_or_else(|_| v.to_string(), fmt_short)
+}
+
 /// "1 entry" or "n entries", for the messages that count a list's entries.
 pub fn entries(n: usize) -> String {
+    count(n, "entry", "entries")
+}
+
+/// "1 copy" or "n copies": `n` with the noun's singular or plural.
+pub(crate) fn count(n: usize, one: &str, many: &str) -> String {
     if n == 1 {
-        "1 entry".into()
+        format!("1 {one}")
     } else {
-        format!("{n} entries")
+        format!("{n} {many}")
     }
 }
 
@@ -521,6 +532,11 @@ mod tests {
         assert_eq!(fmt_time(1e-300), "1e-300");
         assert_eq!(fmt_time(2.5), "2.5");
         assert_eq!((entries(1), entries(0), entries(3)), ("1 entry".into(), "0 entries".into(), "3 entries".into()));
+        assert_eq!((count(1, "copy", "copies"), count(2, "copy", "copies")), ("1 copy".into(), "2 copies".into()));
+        assert_eq!(
+            (fmt_4(std::f64::consts::TAU), fmt_4(2.16701e7), fmt_4(0.0), fmt_4(f64::NAN)),
+            ("6.283".into(), "2.167e7".into(), "0".into(), "NaN".into())
+        );
     }
 
     #[test]

@@ -76,10 +76,11 @@ pub enum PlaceError {
          poles): the closed loop (A − BK; A − LC for observer poles) would need a Jordan block of \
          size ≥ {}, whose eigenvalues move by about δ^(1/size) under a change δ of that matrix, so \
          no gain can be verified to 1e-6; spread the \
-         repeated poles (e.g. −1, −1.1, −1.2 for −1 three times) to at most {rank} copies of one pole, \
+         repeated poles (e.g. −1, −1.1, −1.2 for −1 three times) to at most {} of one pole, \
          as control.place requires",
         crate::linalg::fmt_complex(.pole),
-        .multiplicity.div_ceil(*.rank)
+        .multiplicity.div_ceil(*.rank),
+        crate::settings::count(*.rank, "copy", "copies")
     )]
     Multiplicity { pole: Complex<f64>, multiplicity: usize, rank: usize },
     #[error(

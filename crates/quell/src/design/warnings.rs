@@ -60,7 +60,7 @@ pub fn warnings(design: &Design, spec: &DesignSpec) -> Vec<DesignWarning> {
                 "design.observer_poles: fragile observer gain: eig(A − LC) is off the requested poles by {} (relative) and its eigenvector condition number is κ₂ = {kappa:.2e}: a relative model error ε can move the observer poles by about κ₂·ε·‖A − LC‖; {}",
                 error.map_or("?".to_string(), |e| format!("{e:.1e}")),
                 if multiplicity > 1 || !kappa.is_finite() {
-                    format!("give distinct poles (at most {rank} copies of one; spread a repeated pole by ±10 %), not far faster than the plant")
+                    format!("give distinct poles (at most {} of one; spread a repeated pole by ±10 %), not far faster than the plant", crate::settings::count(rank, "copy", "copies"))
                 } else {
                     // Distinct poles already (a finite κ₂): what is left is their speed against the plant's.
                     "the poles are distinct, so move them nearer the plant's own eigenvalues (slower, or less spread): a gain far faster than the plant needs large entries".to_string()

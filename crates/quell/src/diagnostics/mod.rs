@@ -84,7 +84,7 @@ pub struct ChannelDiagnostics {
 /// stability bound.
 const THRASHING: f64 = 0.25;
 
-/// A caution when DOP853 rejected more than [`THRASHING`] of its attempts on a run taken mostly by
+/// A caution when DOP853 rejected more than a quarter (`THRASHING`) of its attempts on a run taken mostly by
 /// it: its steps sat at their stability bound, where its error estimate misses the stiff block's
 /// errors (accuracy-limited runs reject 5–15 %; a loop at rtol 1e-6 whose u_f peaked 8× too high
 /// with 31 % rejected was right with `imex` or at 1e-11). `None` for a sampled run.
@@ -134,7 +134,7 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
         let list = |part: &dyn Fn(&Fidelity) -> String| poor.iter().map(|f| part(f)).collect::<Vec<_>>().join(", ");
         let (plural, freqs, errors) = (
             if poor.len() > 1 { "s" } else { "" },
-            list(&|f| fmt_short(f.frequency)),
+            list(&|f| crate::settings::fmt_4(f.frequency)),
             list(&|f| format!("{:.2}", f.relative_error)),
         );
         advice.push(format!(
@@ -398,7 +398,7 @@ fn channel<'r>(
                 };
                 advice.push(format!(
                     "Ω̄_{} is weakly excited at {} rad/{unit} ({:.1e}), where the disturbance observer's relative error is {:.2}: {} ({mu_too})",
-                    i + 1, w.frequency, w.excitation, f.relative_error, remedy()
+                    i + 1, crate::settings::fmt_4(w.frequency), w.excitation, f.relative_error, remedy()
                 ));
             }
             _ => advice.push(horizon_advice(&key, mu, (relevant, c.lambda_max()), (t_end, stiff), unit)),

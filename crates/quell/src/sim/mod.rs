@@ -140,13 +140,13 @@ impl RunSettings {
             (Loop::Continuous(integrator), _) => integrator.max_steps = max_steps,
             (Loop::Sampled { .. }, None) => {}
             (Loop::Sampled { sample_time }, Some(_)) => {
-                return Err(KeyError::new(
-                    "max_steps",
+                return Err(KeyError::new("max_steps", {
+                    let after = crate::controller::discrete::whole_samples(self.t_end, *sample_time);
                     format!(
-                        "a step budget applies to the continuous loop; this sampled-data run takes t_end / sample_time = {} controller steps, known before it starts: leave max_steps out",
-                        crate::controller::discrete::whole_samples(self.t_end, *sample_time) + 1
-                    ),
-                ))
+                            "a step budget applies to the continuous loop; this sampled-data run takes {} controller steps (one at t = 0, then t_end / sample_time = {after}), known before it starts: leave max_steps out",
+                            after + 1
+                        )
+                }))
             }
         }
         Ok(())

@@ -39,6 +39,18 @@ pub struct StudyError {
     pub message: String,
 }
 
+/// A study a sweep can run: one without `[tune]`, which only tuning reads (`quell tune`, Python's
+/// `quell.tune`); a sweep would carry out its grid and draws and ignore it.
+pub fn check_sweep(study: &Study) -> Result<(), StudyError> {
+    match study.tune {
+        Some(_) => Err(err(
+            "tune",
+            "read by tuning only (quell tune, or quell.tune from Python), which a sweep would ignore: tune the file, or remove [tune] to sweep its grid and draws",
+        )),
+        None => Ok(()),
+    }
+}
+
 fn err(key: impl Into<String>, message: impl Into<String>) -> StudyError {
     StudyError { key: key.into(), message: message.into() }
 }
@@ -111,9 +123,17 @@ pub struct MonteCarlo {
 pub struct Runaway {
     /// A watched signal (x, x̂, ξ̂ or η̂) beyond `peak` times its peak in the nominal run: the run
     /// is `diverged`.
+    #[serde(deserialize_with = "off_from_null")]
     pub peak: f64,
     /// More than `steps` times the nominal run's solver steps: the run is `failed` ("step budget").
+    #[serde(deserialize_with = "off_from_null")]
     pub steps: f64,
+}
+
+/// A rule turned off (+∞) is written `null` in summary.json (JSON has no infinity): read back as +∞,
+/// so that the shards of such a study merge.
+fn off_from_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::INFINITY))
 }
 
 impl Default for Runaway {
