@@ -79,6 +79,11 @@ fn real_array<'py>(obj: &Bound<'py, PyAny>, name: &str, kind: Kind) -> PyResult<
     Ok(arr.call_method1("astype", ("float64",))?.cast_into::<PyArrayDyn<f64>>()?)
 }
 
+/// A numpy bool scalar (`np.True_`), which converts to a float as 1.0.
+fn is_numpy_bool(obj: &Bound<'_, PyAny>) -> bool {
+    obj.getattr("dtype").and_then(|d| d.getattr("kind")).is_ok_and(|k| k.eq("b").unwrap_or(false))
+}
+
 /// A bool among a list's numbers (numpy reads `[True, 1.5]` as `[1.0, 1.5]`) is a TypeError naming
 /// its index, as a bool given for a number is.
 fn no_bools(obj: &Bound<'_, PyAny>, arr: &Bound<'_, PyAny>, name: &str) -> PyResult<()> {
@@ -87,7 +92,7 @@ fn no_bools(obj: &Bound<'_, PyAny>, arr: &Bound<'_, PyAny>, name: &str) -> PyRes
     let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
     for (flat, x) in entries.try_iter()?.enumerate() {
         let x = x?;
-        if x.is_instance_of::<PyBool>() || x.get_type().name().is_ok_and(|n| n == "bool" || n == "bool_") {
+        if x.is_instance_of::<PyBool>() || is_numpy_bool(&x) {
             let (mut rest, mut at) = (flat, vec![0; shape.len()]);
             for (i, d) in shape.iter().enumerate().rev() {
                 (at[i], rest) = (rest % d.max(&1), rest / d.max(&1));
@@ -267,7 +272,11 @@ pub fn poles(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<Com
         let key = format!("{name}[{i}]");
         let pole = "a pole: a number, a complex number or [re, im] with im > 0";
         let bad = |what: String| kind.err(py, format!("{key}: expected {pole}, found {what}"));
-        if item.is_instance_of::<PyString>() || item.is_instance_of::<PyBool>() || item.is_none() {
+        if item.is_instance_of::<PyString>()
+            || item.is_instance_of::<PyBool>()
+            || is_numpy_bool(&item)
+            || item.is_none()
+        {
             return Err(type_error(&key, pole, &item));
         }
         let numpy_complex =

@@ -655,7 +655,8 @@ fn step_budget(py: Python<'_>, max_steps: Option<&Bound<'_, PyAny>>) -> PyResult
             Some(Ok(n)) if n >= 1 => Ok(Some(n)),
             _ => {
                 let found = v.repr().map_or_else(|_| "?".to_string(), |r| r.to_string());
-                let msg = format!("max_steps: expected a step budget (an integer ≥ 1), found {found}");
+                let msg =
+                    format!("max_steps: expected a step budget, an integer from 1 to {}, found {found}", usize::MAX);
                 Err(keyed(py, Kind::Scenario, msg, Some("max_steps".into())))
             }
         },

@@ -760,7 +760,9 @@ fn study_arg(py: Python<'_>, study: &Bound<'_, PyAny>) -> PyResult<Arc<study::St
 /// [0, 1]
 #[pyfunction]
 pub fn sweep_runs(py: Python<'_>, study: &Bound<'_, PyAny>) -> PyResult<PyRunSpecs> {
-    Ok(PyRunSpecs { study: study_arg(py, study)?, next: 0 })
+    let study = study_arg(py, study)?;
+    study::check_sweep(&study).map_err(|e| study_error(py, &e))?;
+    Ok(PyRunSpecs { study, next: 0 })
 }
 
 /// Every run of a study, in parallel on `jobs` threads (default: every core), with the GIL

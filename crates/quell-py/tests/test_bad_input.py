@@ -157,3 +157,8 @@ def test_huge_ints_bools_and_bad_pairs_in_lists_are_named():
         quell.place(np.eye(3), np.eye(3)[:, :1] + 1, [-1, -2, [-1.0, float("nan")]])
     with pytest.raises(quell.DesignError, match=r"^B: expected n = 3 rows \(one per state of A\).*found 1×3; .*place\(Aᵀ, Cᵀ, poles\)ᵀ$"):
         quell.place(np.eye(3), [[1.0, 0.0, 0.0]], [-1, -2, -3])
+    # numpy's bools too: np.True_ would be a pole at +1.
+    with pytest.raises(TypeError, match=r"^poles\[0\]: expected a pole.*found a bool"):
+        quell.place(np.eye(2), [[0.0], [1.0]], [np.True_, -2.0])
+    with pytest.raises(TypeError, match=r"^poles\[0\]: expected a pole"):
+        quell.place(np.eye(2), [[0.0], [1.0]], np.array([True, False]))

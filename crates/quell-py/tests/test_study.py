@@ -163,3 +163,5 @@ def test_a_study_with_tune_is_not_swept(tmp_path):
     with pytest.raises(quell.ScenarioError, match=r"^tune: read by tuning only") as e:
         quell.sweep(study)
     assert e.value.key == "tune"
+    with pytest.raises(quell.ScenarioError, match=r"^tune: read by tuning only"):
+        quell.sweep_runs(study)

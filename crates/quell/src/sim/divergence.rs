@@ -87,17 +87,23 @@ pub(crate) fn state_scale(plant: &Plant) -> f64 {
     [1.0 / smallest, plant.x0.amax()].into_iter().filter(|v| v.is_finite()).fold(1.0, f64::max)
 }
 
-/// The regressor's and the adaptive parameters' scales in their own units, by which the divergence
-/// bound on ξ̂ and η̂ is multiplied: max(1, the steady-state regressor's bound
-/// [`Averaged::xi_peak`](crate::averaged::Averaged)) and max(1, max_i |η*_i|∞), η*_i = Ω̄_i⁺ Ȳ_i what
-/// η̂_i settles to. The paper's form of ξ̂ carries the signals' units divided by the filters'
-/// ∏|p_j|: a vessel's disturbance of 2e7 N·m makes |ξ̂| ≈ 1.6e9 in steady state, and η̂ = u/ξ̂ grows
-/// as ξ̂ shrinks. A scale that is not finite counts as 1.
+/// How far above its nominal size a regressor or parameter vector may go before it counts as
+/// diverged, where that size raises its bound ([`regressor_scales`]).
+pub(crate) const NOMINAL_MARGIN: f64 = 1e3;
+
+/// The factors by which the divergence bound on ξ̂ and η̂ is multiplied, from their nominal sizes
+/// in their own units: max(1, [`NOMINAL_MARGIN`]·s/[`DIVERGENCE_BOUND`]) with s the steady-state
+/// regressor's bound [`Averaged::xi_peak`](crate::averaged::Averaged), and with s = max_i |η*_i|∞,
+/// η*_i = Ω̄_i⁺ Ȳ_i what η̂_i settles to. A vector of nominal size up to 1e6 keeps the bound 1e9;
+/// a larger one (the paper's form of ξ̂ carries the signals' units divided by the filters' ∏|p_j|:
+/// a vessel's yaw disturbance of 2e7 N·m makes |ξ̂| ≈ 1.6e9) may grow a thousandfold before it
+/// counts as diverged, not a billionfold (a blow-up of that vessel reached |ξ̂| = 1e18 within a
+/// bound of 1e9 times its size). A size that is not finite counts as 0.
 pub(crate) fn regressor_scales(design: &crate::Design, signals: [&crate::signal::Signal; 2]) -> (f64, f64) {
     let avg = crate::averaged::Averaged::new(design, signals[0], signals[1]);
     let eta = avg.channels.iter().map(|c| c.eta_star().amax()).fold(0.0, f64::max);
-    let at_least_1 = |v: f64| if v.is_finite() { v.max(1.0) } else { 1.0 };
-    (at_least_1(avg.xi_peak), at_least_1(eta))
+    let factor = |size: f64| if size.is_finite() { (NOMINAL_MARGIN * size / DIVERGENCE_BOUND).max(1.0) } else { 1.0 };
+    (factor(avg.xi_peak), factor(eta))
 }
 
 /// Whether v is outside [−bound, bound] or not finite (so NaN is always beyond).

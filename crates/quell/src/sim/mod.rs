@@ -242,8 +242,8 @@ impl<'a> Run<'a> {
     }
 
     /// The bound per watched signal (x, x̂, ξ̂, η̂): `divergence_bound`, times the state's scale in
-    /// its coordinates for x and x̂ ([`divergence::state_scale`]) and the regressor's and the
-    /// parameters' nominal sizes for ξ̂ and η̂ ([`divergence::regressor_scales`]; not computed where
+    /// its coordinates for x and x̂ ([`divergence::state_scale`]) and by the regressor's and the
+    /// parameters' nominal sizes beyond 1e6 for ξ̂ and η̂ ([`divergence::regressor_scales`]; not computed where
     /// `runaway` bounds both below `divergence_bound`), and at most `runaway`'s.
     fn bounds(&self) -> Peaks {
         let b = self.settings.divergence_bound;
