@@ -131,26 +131,7 @@ fn panel_with_limit<DB: DrawingBackend>(
         .label_style(("sans-serif", 14))
         .draw()
         .map_err(|e| e.to_string())?;
-    // A reference ("… (reference)") is drawn last and dashed: an output that tracks it would hide a
-    // solid line beneath.
-    let reference = |name: &str| name.ends_with("(reference)");
-    let order = series.iter().enumerate().filter(|(_, (n, _))| !reference(n));
-    for (k, (name, points)) in order.chain(series.iter().enumerate().filter(|(_, (n, _))| reference(n))) {
-        let color = pick(k);
-        let finite = || points.iter().copied().filter(|(_, v)| v.is_finite());
-        let drawn = if reference(name) {
-            chart.draw_series(DashedLineSeries::new(finite(), 8, 5, color.stroke_width(2)))
-        } else {
-            // A 2 px line is drawn as a polygon per segment, which breaks up on steep segments (a
-            // transient of ±300 V in 1 ms drew as detached slivers); a 1 px line beneath keeps it whole.
-            chart.draw_series(LineSeries::new(finite(), color.stroke_width(1))).map_err(|e| e.to_string())?;
-            chart.draw_series(LineSeries::new(finite(), color.stroke_width(2)))
-        };
-        drawn
-            .map_err(|e| e.to_string())?
-            .label(name.clone())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
-    }
+    lines(&mut chart, series)?;
     if let Some((label, _)) = limit {
         limit_lines(&mut chart, label, &levels, (t0, t1))?;
     }
@@ -181,6 +162,33 @@ fn panel_with_limit<DB: DrawingBackend>(
 }
 
 /// Dashed grey lines at `levels` across `(t0, t1)`, one legend entry `label` for them.
+/// Each series as a line of its own colour, with its legend entry. A reference ("… (reference)")
+/// is drawn last and dashed: an output that tracks it would hide a solid line beneath.
+fn lines<DB: DrawingBackend>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    series: &[Series],
+) -> Result<(), String> {
+    let reference = |name: &str| name.ends_with("(reference)");
+    let order = series.iter().enumerate().filter(|(_, (n, _))| !reference(n));
+    for (k, (name, points)) in order.chain(series.iter().enumerate().filter(|(_, (n, _))| reference(n))) {
+        let color = pick(k);
+        let finite = || points.iter().copied().filter(|(_, v)| v.is_finite());
+        let drawn = if reference(name) {
+            chart.draw_series(DashedLineSeries::new(finite(), 8, 5, color.stroke_width(2)))
+        } else {
+            // A 2 px line is drawn as a polygon per segment, which breaks up on steep segments (a
+            // transient of ±300 V in 1 ms drew as detached slivers); a 1 px line beneath keeps it whole.
+            chart.draw_series(LineSeries::new(finite(), color.stroke_width(1))).map_err(|e| e.to_string())?;
+            chart.draw_series(LineSeries::new(finite(), color.stroke_width(2)))
+        };
+        drawn
+            .map_err(|e| e.to_string())?
+            .label(name.clone())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+    }
+    Ok(())
+}
+
 fn limit_lines<DB: DrawingBackend>(
     chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
     label: &str,
