@@ -13,14 +13,11 @@ fn budget(c: &mut Criterion) {
     let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
     let d = Design::new(&s.plant, &s.design).unwrap();
     let integrator = Integrator::new(1e-9, 1e-9);
-    let signals = [&s.reference, &s.disturbance];
     let mut g = c.benchmark_group("default_budget");
     g.sample_size(20);
-    g.bench_function("default_max_steps_paper", |b| {
-        b.iter(|| default_max_steps(&d, s.true_plant(), signals, 100.0, &integrator))
-    });
+    g.bench_function("default_max_steps_paper", |b| b.iter(|| default_max_steps(&Run::of(&s, &d), &integrator)));
     let mut given = RunSettings::continuous(100.0, 0.1, 1e-9, 1e-9);
-    given.set_max_steps(Some(default_max_steps(&d, s.true_plant(), signals, 100.0, &integrator))).unwrap();
+    given.set_max_steps(Some(default_max_steps(&Run::of(&s, &d), &integrator))).unwrap();
     g.bench_function("run_paper_100s_budget_given", |b| {
         b.iter(|| Run::of(&s, &d).settings(given.clone()).simulate(|_| ControlFlow::Continue(())).unwrap())
     });

@@ -150,18 +150,22 @@ impl ChannelAverage {
         self.lambda.last().copied().unwrap_or(0.0)
     }
 
-    /// The eigenvalues above 1e-13·λ_max (the directions the signals excite, to Ω̄'s rounding).
-    pub fn excited(&self) -> impl Iterator<Item = f64> + '_ {
+    /// The excited directions: (k, λ_k) for the eigenvalues above 1e-13·λ_max (the directions the
+    /// signals excite, to Ω̄'s rounding; no error lies along the others that the rounding can tell).
+    fn excited_modes(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
         let floor = 1e-13 * self.lambda_max();
-        self.lambda.iter().copied().filter(move |&l| l > floor)
+        self.lambda.iter().copied().enumerate().filter(move |&(_, l)| l > floor)
     }
 
-    /// The directions that matter: eigenvalues λ_k with the energy (v_kᵀ Ȳ)²/λ_k that the error
-    /// carries along them at t = 0 (η̃(0) = η*); eigenvalues below 1e-13·λ_max are left out (no
-    /// error lies along them that Ω̄'s rounding can tell).
+    /// The eigenvalues of the excited directions.
+    pub fn excited(&self) -> impl Iterator<Item = f64> + '_ {
+        self.excited_modes().map(|(_, l)| l)
+    }
+
+    /// The directions that matter: the excited eigenvalues λ_k with the energy (v_kᵀ Ȳ)²/λ_k that
+    /// the error carries along them at t = 0 (η̃(0) = η*).
     fn modes(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
-        let floor = 1e-13 * self.lambda_max();
-        self.lambda.iter().enumerate().filter(move |(_, &l)| l > floor).map(move |(k, &l)| {
+        self.excited_modes().map(move |(k, l)| {
             let c = self.vectors.column(k).dot(&self.y);
             (l, c * c / l)
         })
@@ -169,8 +173,7 @@ impl ChannelAverage {
 
     /// η*_i = Ω̄_i⁺ Ȳ_i over the excited directions: what η̂_i settles to (module docs).
     pub fn eta_star(&self) -> DVector<f64> {
-        let floor = 1e-13 * self.lambda_max();
-        self.lambda.iter().enumerate().filter(|(_, &l)| l > floor).fold(DVector::zeros(self.y.len()), |eta, (k, &l)| {
+        self.excited_modes().fold(DVector::zeros(self.y.len()), |eta, (k, l)| {
             let v = self.vectors.column(k);
             eta + v * (v.dot(&self.y) / l)
         })

@@ -217,9 +217,10 @@ fn run_default_budget(toml: &str, factor: f64, tol: f64, method: Method, t_end: 
     spec.mu.iter_mut().for_each(|mu| *mu *= factor);
     let d = Design::new(&s.plant, &spec).unwrap();
     let integrator = Integrator { method, ..Integrator::new(tol, tol) };
-    let budget = quell::sim::default_max_steps(&d, s.true_plant(), [&s.reference, &s.disturbance], t_end, &integrator);
-    let settings = RunSettings::new(t_end, s.simulation.output_step, Loop::Continuous(integrator));
-    let r = Run::of(&s, &d).settings(settings).simulate(|_| ControlFlow::Continue(())).unwrap();
+    let settings = RunSettings::new(t_end, s.simulation.output_step, Loop::Continuous(integrator.clone()));
+    let run = Run::of(&s, &d).settings(settings);
+    let budget = quell::sim::default_max_steps(&run, &integrator);
+    let r = run.simulate(|_| ControlFlow::Continue(())).unwrap();
     assert_eq!(r.outcome, Some(Outcome::Completed), "μ × {factor}, {method:?} at {tol:e}: {:?}", r.stats);
     if method == Method::Explicit {
         assert!(r.stats.steps() > rate_free_budget(&s, &d, t_end), "μ × {factor}, {method:?}: {:?}", r.stats);
@@ -365,8 +366,8 @@ fn runaways_end_within_their_default_budgets_with_a_bounded_history() {
         spec.mu.iter_mut().for_each(|mu| *mu *= factor);
         let d = Design::new(&s.plant, &spec).unwrap();
         let integrator = Integrator { method, ..Integrator::new(1e-9, 1e-9) };
-        let budget =
-            quell::sim::default_max_steps(&d, s.true_plant(), [&s.reference, &s.disturbance], 100.0, &integrator);
+        assert_eq!(s.simulation.t_end, 100.0);
+        let budget = quell::sim::default_max_steps(&Run::of(&s, &d), &integrator);
         assert_eq!(budget, expected, "μ × {factor}, {method:?}");
         let records = history_bound(budget, tau_max(&s), 100.0);
         let mut settings = RunSettings::of(&s);

@@ -302,8 +302,8 @@ fn a_stiff_study_completes_under_each_runs_default_budget() {
         let alone = quell::sim::Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
         assert_eq!((alone.outcome, alone.stats.steps() as u64), (Some(quell::sim::Outcome::Completed), r.steps));
         let integrator = quell::sim::Integrator::new(1e-9, 1e-9);
-        let budget =
-            quell::sim::default_max_steps(&d, s.true_plant(), [&s.reference, &s.disturbance], 600.0, &integrator);
+        assert_eq!(s.simulation.t_end, 600.0);
+        let budget = quell::sim::default_max_steps(&quell::sim::Run::of(&s, &d), &integrator);
         assert!(r.steps * 2 < budget as u64, "run {}: {} steps of {budget}", r.run, r.steps);
     }
 

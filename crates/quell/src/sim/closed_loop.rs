@@ -221,6 +221,12 @@ impl<'a> ContinuousLoop<'a> {
 
     /// The plant input u_f = −K x̂(t) + F u_d(t) (5) as the true plant receives it (at its delays,
     /// through its actuator), into `u_f`.
+    /// The signals watched for divergence in the state s: ξ̂, x̂, η̂ and x.
+    fn watched<'s>(&self, s: &'s [f64]) -> Watched<'s> {
+        let (eq, l) = (&self.eq, &self.layout);
+        Watched { xi_hat: eq.regressor(s), x_hat: eq.x_hat(s), eta: &s[l.nz..l.x], x: &s[l.x..l.x + eq.n] }
+    }
+
     fn plant_input(&mut self, t: f64, s: &[f64], past: &Past<'_>, u_f: &mut [f64]) {
         let (eq, l) = (&self.eq, &self.layout);
         if let Some(act) = &mut self.actuator {
@@ -250,6 +256,19 @@ struct Record {
     y: Vec<f64>,
     u: Vec<f64>,
     u_f: Vec<f64>,
+}
+
+impl Record {
+    /// Ends the run as diverged when a watched signal is beyond its bound at t, otherwise counts
+    /// the signals into the peaks.
+    fn watch(&mut self, t: f64, watched: Watched<'_>) -> ControlFlow<()> {
+        if let Some(diverged) = watched.beyond(t, &self.bounds) {
+            self.diverged = Some(diverged);
+            return ControlFlow::Break(());
+        }
+        self.result.peaks.record(&watched);
+        ControlFlow::Continue(())
+    }
 }
 
 impl DelaySystem for ContinuousLoop<'_> {
@@ -336,19 +355,10 @@ impl DelaySystem for ContinuousLoop<'_> {
     /// count the step ends too. With a coarse output step a loop would otherwise blow up between
     /// two rows until a budget ended it, naming no signal.
     fn accepted(&mut self, t: f64, s: &[f64]) -> ControlFlow<()> {
-        let Some(rec) = &mut self.record else { return ControlFlow::Continue(()) };
-        let (eq, l) = (&self.eq, &self.layout);
-        let watched =
-            Watched { xi_hat: eq.regressor(s), x_hat: eq.x_hat(s), eta: &s[l.nz..l.x], x: &s[l.x..l.x + eq.n] };
-        match watched.beyond(t, &rec.bounds) {
-            Some(diverged) => {
-                rec.diverged = Some(diverged);
-                ControlFlow::Break(())
-            }
-            None => {
-                rec.result.peaks.record(&watched);
-                ControlFlow::Continue(())
-            }
+        let watched = self.watched(s);
+        match &mut self.record {
+            Some(rec) => rec.watch(t, watched),
+            None => ControlFlow::Continue(()),
         }
     }
 
@@ -357,13 +367,10 @@ impl DelaySystem for ContinuousLoop<'_> {
     fn observe(&mut self, t: f64, s: &[f64], past: &Past<'_>) -> ControlFlow<()> {
         let Some(mut rec) = self.record.take() else { return ControlFlow::Continue(()) };
         let (eq, l) = (&self.eq, &self.layout);
-        let (xi, x_hat, eta, x) = (eq.regressor(s), eq.x_hat(s), &s[l.nz..l.x], &s[l.x..l.x + eq.n]);
-        let watched = Watched { xi_hat: xi, x_hat, eta, x };
-        let flow = if let Some(diverged) = watched.beyond(t, &rec.bounds) {
-            rec.diverged = Some(diverged);
-            ControlFlow::Break(())
-        } else {
-            rec.result.peaks.record(&watched);
+        let watched = self.watched(s);
+        let (xi, x_hat, eta, x) = (watched.xi_hat, watched.x_hat, watched.eta, watched.x);
+        let flow = rec.watch(t, watched);
+        if flow.is_continue() {
             self.signals.eval_into_unchecked(t, &mut rec.gw);
             let (g, w) = rec.gw.split_at(eq.m);
             mat_vec(self.C, x, &mut rec.y, false);
@@ -378,8 +385,7 @@ impl DelaySystem for ContinuousLoop<'_> {
             if let Some(act) = &self.actuator {
                 rec.result.count_limited(act.limited.iter().map(Cell::get));
             }
-            ControlFlow::Continue(())
-        };
+        }
         self.record = Some(rec);
         flow
     }
@@ -768,18 +774,14 @@ pub const BUDGET_STABILITY_MARGIN: f64 = 2.0;
 /// 41 on the implicit path at 1000 times its stiffness onset), so the budget leaves a margin of 2.5
 /// or more; a loop that turns stiff as it blows up spends it in seconds. The delay history's own
 /// budget follows from N ([`default_max_history_bytes`]).
-pub fn default_max_steps(
-    design: &Design,
-    truth: &Plant,
-    signals: [&Signal; 2],
-    t_end: f64,
-    integrator: &Integrator,
-) -> usize {
+pub fn default_max_steps(run: &Run<'_>, integrator: &Integrator) -> usize {
+    let (design, truth, t_end) = (run.design, run.truth, run.settings.t_end);
+    let signals = [run.reference, run.disturbance];
     let delays = design.plant().delays.iter().chain(&truth.delays).filter(|&&d| d > 0.0);
     let tau_min = delays.fold(f64::INFINITY, |a, &d| a.min(d));
     let rho = loop_rate(design, truth, signals);
     let scale = rho * t_end + if tau_min.is_finite() { t_end / tau_min } else { 0.0 };
-    let rate = adaptation_rate(design, signals);
+    let rate = adaptation_rate(design, run.averaged());
     let tol = integrator.rtol.min(integrator.atol).max(BUDGET_TOLERANCE_FLOOR);
     let (order, g, stability) = match integrator.method {
         dde::Method::Explicit => (8.0, 1.0, BUDGET_STABILITY_MARGIN * rate * t_end / DOP853_STABLE_H_RATE),
@@ -821,9 +823,8 @@ pub fn default_max_history_bytes(max_steps: usize, tau_max: f64, t_end: f64, rec
 }
 
 /// The adaptive law's fastest rate max_i μ_i λ_max(Ω̄_i) in 1/s, Ω̄_i the mean that Ω_i of (33)
-/// settles to under the signals ([`crate::averaged`]); 0 where that is not finite.
-pub fn adaptation_rate(design: &Design, signals: [&Signal; 2]) -> f64 {
-    let averaged = Averaged::new(design, signals[0], signals[1]);
+/// settles to under the signals (`averaged`, [`crate::averaged`]); 0 where that is not finite.
+pub fn adaptation_rate(design: &Design, averaged: &Averaged) -> f64 {
     let rate = averaged.channels.iter().zip(design.mu()).fold(0.0, |r: f64, (c, mu)| r.max(mu * c.lambda_max()));
     if rate.is_finite() {
         rate
@@ -942,8 +943,7 @@ pub(super) fn simulate(
         u: vec![0.0; m],
         u_f: vec![0.0; m],
     });
-    let signals = [run.reference, run.disturbance];
-    let max_steps = max_steps.unwrap_or_else(|| default_max_steps(run.design, truth, signals, st.t_end, integrator));
+    let max_steps = max_steps.unwrap_or_else(|| default_max_steps(run, integrator));
     let record = dde::record_bytes(sys.n_delayed());
     let tau_max = sys.delays().iter().copied().fold(0.0, f64::max);
     let max_history_bytes =

@@ -99,8 +99,7 @@ pub(crate) const NOMINAL_MARGIN: f64 = 1e3;
 /// a vessel's yaw disturbance of 2e7 N·m makes |ξ̂| ≈ 1.6e9) may grow a thousandfold before it
 /// counts as diverged, not a billionfold (a blow-up of that vessel reached |ξ̂| = 1e18 within a
 /// bound of 1e9 times its size). A size that is not finite counts as 0.
-pub(crate) fn regressor_scales(design: &crate::Design, signals: [&crate::signal::Signal; 2]) -> (f64, f64) {
-    let avg = crate::averaged::Averaged::new(design, signals[0], signals[1]);
+pub(crate) fn regressor_scales(avg: &crate::averaged::Averaged) -> (f64, f64) {
     let eta = avg.channels.iter().map(|c| c.eta_star().amax()).fold(0.0, f64::max);
     let factor = |size: f64| if size.is_finite() { (NOMINAL_MARGIN * size / DIVERGENCE_BOUND).max(1.0) } else { 1.0 };
     (factor(avg.xi_peak), factor(eta))

@@ -15,6 +15,7 @@ pub mod settle;
 
 use std::ops::ControlFlow;
 
+use crate::averaged::Averaged;
 use crate::controller::ControllerError;
 use crate::design::Design;
 use crate::plant::Plant;
@@ -185,12 +186,23 @@ pub struct Run<'a> {
     disturbance: &'a Signal,
     settings: RunSettings,
     controller: Option<&'a mut dyn SampledController>,
+    /// The adaptive law's steady state under the signals, computed once when first needed (by the
+    /// step budget and the divergence bounds).
+    averaged: std::cell::OnceCell<Averaged>,
 }
 
 impl<'a> Run<'a> {
     /// A run of `design` on its own plant model.
     pub fn new(design: &'a Design, reference: &'a Signal, disturbance: &'a Signal, settings: RunSettings) -> Self {
-        Run { design, truth: design.plant(), reference, disturbance, settings, controller: None }
+        Run {
+            design,
+            truth: design.plant(),
+            reference,
+            disturbance,
+            settings,
+            controller: None,
+            averaged: Default::default(),
+        }
     }
 
     /// The simulated plant `truth` in place of the design model (`[truth]`): the plant is
@@ -250,7 +262,7 @@ impl<'a> Run<'a> {
         let scale = divergence::state_scale;
         let mut bounds = [b * scale(self.truth), b * scale(self.design.plant()), b, b];
         if self.settings.runaway.is_none_or(|r| r.0[2] > b || r.0[3] > b) {
-            let (xi, eta) = divergence::regressor_scales(self.design, [self.reference, self.disturbance]);
+            let (xi, eta) = divergence::regressor_scales(self.averaged());
             (bounds[2], bounds[3]) = (b * xi, b * eta);
         }
         if let Some(r) = self.settings.runaway {
@@ -259,6 +271,11 @@ impl<'a> Run<'a> {
             }
         }
         Peaks(bounds)
+    }
+
+    /// The averaged law of the design under the run's signals ([`crate::averaged`]).
+    fn averaged(&self) -> &Averaged {
+        self.averaged.get_or_init(|| Averaged::new(self.design, self.reference, self.disturbance))
     }
 
     /// Every check the run makes before it starts (settings, signals, truth; in the sampled-data

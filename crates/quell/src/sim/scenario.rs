@@ -84,7 +84,7 @@ mod tests {
         // budget's own tolerance 1e-9 and an adaptation rate of 8.5/s, under 100 ρ (not stiff):
         // 10,000 + 100·(9·100 + 100/1) = 110,000.
         let integrator = Integrator::new(1e-9, 1e-9);
-        let budget = default_max_steps(&d, s.true_plant(), [&s.reference, &s.disturbance], 100.0, &integrator);
+        let budget = default_max_steps(&Run::of(&s, &d), &integrator);
         assert_eq!(budget, 110_000);
         // With the history's memory at the 1 GiB cap, the step budget or the step size's underflow
         // ends it (since the implicit steps' filtered error estimate, the underflow at t = 40.3 s:

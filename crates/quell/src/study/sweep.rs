@@ -149,17 +149,12 @@ pub(crate) fn simulate(
 ) -> Result<Simulated, String> {
     let design = s.design().map_err(|e| e.to_string())?;
     let mut settings = RunSettings::of(s);
-    let t_end = settings.t_end;
-    let (breakpoints, delay_floor) = {
-        let run = Run::of(s, &design);
-        (run.breakpoints(), run.delay_floor())
-    };
+    let run = Run::of(s, &design);
+    let (breakpoints, delay_floor) = (run.breakpoints(), run.delay_floor());
     let mut runaway_steps = None;
     if let Loop::Continuous(integrator) = &mut settings.mode {
-        let signals = [&s.reference, &s.disturbance];
         let given = integrator.clone();
-        let own =
-            || max_steps.unwrap_or_else(|| sim::default_max_steps(&design, s.true_plant(), signals, t_end, &given));
+        let own = || max_steps.unwrap_or_else(|| sim::default_max_steps(&run, &given));
         let limits = runaway(breakpoints, delay_floor);
         let budget = match limits {
             // The default is never below BUDGET_MIN_STEPS: a runaway budget within it decides alone
@@ -173,7 +168,7 @@ pub(crate) fn simulate(
         settings.runaway = limits.map(|(_, peaks)| peaks);
     }
     let progress = |_t: f64| if stop() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
-    let result = Run::of(s, &design).settings(settings).simulate(progress).map_err(|e| e.to_string())?;
+    let result = run.settings(settings).simulate(progress).map_err(|e| e.to_string())?;
     Ok(Simulated { result, breakpoints, delay_floor, runaway_steps })
 }
 
