@@ -53,11 +53,11 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
     let doc = quell::scenario::read_document(&args.scenario).map_err(|e| Failure::Input(e.to_string()))?;
     if let Some(out) = &args.write {
         output::prepare_file("--write", out)?;
-        // The written scenario is the design's TOML, without the input's comments (its sources,
-        // units): refuse to replace the input with it.
+        // The written scenario is the input with its [design] replaced: refuse to replace the input
+        // (and the design it holds) with it.
         if out.canonicalize().ok().is_some_and(|o| args.scenario.canonicalize().is_ok_and(|s| s == o)) {
             return Err(Failure::Input(format!(
-                "--write {}: it is the scenario being designed, which the written file (without the input's comments) would replace; write to another file",
+                "--write {}: it is the scenario being designed, whose [design] the written file would replace; write to another file",
                 out.display()
             )));
         }
@@ -91,7 +91,11 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
         )));
     }
     if let Some(out) = &args.write {
-        let text = auto.scenario.to_toml();
+        // The input as it is, comments included, with the chosen [design].
+        let input = quell::settings::read_input(&args.scenario)
+            .map_err(|e| Failure::Input(format!("{}: cannot read the file: {e}", args.scenario.display())))?;
+        let text = quell::scenario::with_design(&input, &auto.scenario.design)
+            .map_err(|e| Failure::Input(format!("{}: {e}", args.scenario.display())))?;
         output::write_atomic(out, |w| w.write_all(text.as_bytes()))
             .map_err(|e| output::write_failure(format!("--write {}: cannot write there ({e})", out.display()), &e))?;
         eprintln!("wrote {}", out.display());

@@ -672,6 +672,12 @@ fn design_auto_writes_a_complete_scenario_that_meets_the_tail_bound() {
     // the bound the verification promised: tail max |e_i| ≤ 1 % of the reference's peak (3 and 2).
     let s = Scenario::from_path(&out).unwrap();
     assert_eq!(s.plant, Scenario::from_path(&examples_dir().join("paper.toml")).unwrap().plant);
+    // It is the input, comments included, with the [design] filled in.
+    let (given, written) = (fs::read_to_string(&input).unwrap(), fs::read_to_string(&out).unwrap());
+    assert!(given.contains("# g(t), m components"), "{given}");
+    for line in given.lines().filter(|l| *l != "[design]") {
+        assert!(written.contains(line), "the input's line {line:?} is kept:\n{written}");
+    }
     let run_dir = dir.path().join("run");
     let o = quell(&["run", out.to_str().unwrap(), "--out", run_dir.to_str().unwrap(), "--no-plots"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
@@ -742,7 +748,7 @@ fn design_auto_write_unwritable_exits_2_before_work() {
     assert!(!dir.path().join("missing").exists(), "--write's directory was created");
     assert_eq!(fs::read(&file).unwrap(), b"not a directory");
     // --write naming the input itself (here through another path to it) would replace the file
-    // and its comments with the design's TOML: refused, the input untouched.
+    // and the design it holds: refused, the input untouched.
     let before = fs::read(&input).unwrap();
     let same = input.parent().unwrap().join(".").join(input.file_name().unwrap());
     let err = input_error(&["design", input.to_str().unwrap(), "--auto", "--write", same.to_str().unwrap()]);

@@ -31,7 +31,7 @@ pub use names::{check_names, SignalNames};
 pub(crate) use read::kind;
 pub(crate) use read::syntax_message;
 use read::{err, Table, Value};
-pub use write::{design_table, plant_table, pole_list, signal_table, truth_table};
+pub use write::{design_table, plant_table, pole_list, signal_table, truth_table, with_design};
 pub(crate) use write::{pole_lists, poles_value};
 
 /// The paper's example (Section VIII) as a scenario file: `examples/paper.toml`.

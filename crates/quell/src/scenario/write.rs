@@ -1,12 +1,13 @@
 //! Scenarios back to TOML: the inverse of [`Scenario::from_toml`], in the format of
 //! `examples/paper.toml`, so that `Scenario::from_toml(&s.to_toml())` gives `s` again.
 //!
-//! Numbers are written in Rust's shortest round-trip form, so every value survives exactly.
+//! Numbers are written in Rust's shortest round-trip form, so every value survives exactly; in
+//! exponent form below 1e-4 and from 1e15 on (`mu = 1e-11`, not `0.00000000001`).
 
 use nalgebra::{Complex, DMatrix};
 use toml::{Table, Value};
 
-use super::{Noise, Scenario, Simulation};
+use super::{Noise, Scenario, ScenarioError, Simulation};
 use crate::design::{DesignSpec, ObserverChoice};
 use crate::plant::Plant;
 use crate::settings::Method;
@@ -16,7 +17,7 @@ use crate::signal::Signal;
 impl Scenario {
     /// The scenario as a TOML document that [`Scenario::from_toml`] reads back to the same values.
     pub fn to_toml(&self) -> String {
-        toml::to_string(&self.to_table()).unwrap_or_default()
+        tidy(&toml::to_string(&self.to_table()).unwrap_or_default())
     }
 
     /// The scenario as a TOML table: `name`, `[plant]`, `[design]`, `[reference]`, `[disturbance]`
@@ -47,6 +48,65 @@ impl Scenario {
             doc.insert("truth".into(), Value::Table(t));
         }
         doc
+    }
+}
+
+/// `text`, a scenario's TOML, with its `[design]` replaced by `design`'s ([`design_table`]) and
+/// every other line as it was, comments included: what the automatic design writes. A `[design]`
+/// that `text` leaves out is added. `Err` names the line `text` fails to parse at.
+pub fn with_design(text: &str, design: &DesignSpec) -> Result<String, ScenarioError> {
+    let mut doc: toml_edit::DocumentMut =
+        text.parse().map_err(|e: toml_edit::TomlError| ScenarioError::new("", format!("not valid TOML: {e}")))?;
+    let mut new = Table::new();
+    new.insert("design".into(), Value::Table(design_table(design)));
+    let new: toml_edit::DocumentMut = tidy(&toml::to_string(&new).unwrap_or_default())
+        .parse()
+        .map_err(|e: toml_edit::TomlError| ScenarioError::new("design", e.to_string()))?;
+    let Some(toml_edit::Item::Table(mut table)) = new.as_table().get("design").cloned() else {
+        return Err(ScenarioError::new("design", "the design did not render as a table"));
+    };
+    if let Some(old) = doc.get("design").and_then(toml_edit::Item::as_table) {
+        // The comment above the old header, and its place among the tables.
+        *table.decor_mut() = old.decor().clone();
+        if let Some(position) = old.position() {
+            table.set_position(Some(position));
+        }
+    }
+    doc.insert("design", toml_edit::Item::Table(table));
+    Ok(doc.to_string())
+}
+
+/// `text` (TOML from [`toml::to_string`]) with every finite float in [`short_float`]'s form.
+fn tidy(text: &str) -> String {
+    struct Floats;
+    impl toml_edit::visit_mut::VisitMut for Floats {
+        fn visit_value_mut(&mut self, node: &mut toml_edit::Value) {
+            if let toml_edit::Value::Float(f) = node {
+                let x = *f.value();
+                if let (true, Ok(mut short)) = (x.is_finite(), short_float(x).parse::<toml_edit::Value>()) {
+                    *short.decor_mut() = f.decor().clone();
+                    *node = short;
+                }
+            }
+            toml_edit::visit_mut::visit_value_mut(self, node);
+        }
+    }
+    match text.parse::<toml_edit::DocumentMut>() {
+        Ok(mut doc) => {
+            toml_edit::visit_mut::VisitMut::visit_document_mut(&mut Floats, &mut doc);
+            doc.to_string()
+        }
+        Err(_) => text.to_owned(),
+    }
+}
+
+/// x in its shortest round-trip digits: `0.05`, `100.0`, and in exponent form below 1e-4 and from
+/// 1e15 on (`1e-8`, `2.5e20`), all valid TOML floats.
+pub(crate) fn short_float(x: f64) -> String {
+    if x == 0.0 || (1e-4..1e15).contains(&x.abs()) {
+        format!("{x:?}")
+    } else {
+        format!("{x:e}")
     }
 }
 
@@ -200,6 +260,63 @@ fn noise_table(n: &Noise) -> Table {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn short_floats_round_trip_in_the_form_a_person_writes() {
+        for (x, text) in [
+            (0.05, "0.05"),
+            (100.0, "100.0"),
+            (-2.5, "-2.5"),
+            (0.0, "0.0"),
+            (1e-4, "0.0001"),
+            (1e-8, "1e-8"),
+            (-1.5e-11, "-1.5e-11"),
+            (1e15, "1e15"),
+            (6.02e23, "6.02e23"),
+            (5e-324, "5e-324"),
+            (f64::MAX, "1.7976931348623157e308"),
+        ] {
+            assert_eq!(short_float(x), text);
+            let doc: toml::Table = toml::from_str(&format!("x = {text}")).unwrap();
+            assert_eq!(doc["x"].as_float().unwrap().to_bits(), x.to_bits(), "{text}");
+        }
+        let mut s = Scenario::from_toml(super::super::PAPER_EXAMPLE).unwrap();
+        s.simulation.rtol = 1e-8;
+        s.design.mu = vec![1e-11, 3.0];
+        let text = s.to_toml();
+        assert!(text.contains("rtol = 1e-8\n") && text.contains("mu = [1e-11, 3.0]"), "{text}");
+        assert_eq!(Scenario::from_toml(&text).unwrap().to_table(), s.to_table());
+    }
+
+    #[test]
+    fn a_design_replaces_the_old_one_and_every_other_line_stays() {
+        let text = super::super::PAPER_EXAMPLE;
+        let paper = Scenario::from_toml(text).unwrap();
+        let mut design = paper.design.clone();
+        design.mu = vec![2e-9, 0.25];
+        design.beta = 0.5;
+        let written = with_design(text, &design).unwrap();
+        let back = Scenario::from_toml(&written).unwrap();
+        assert_eq!(back.design, design);
+        assert_eq!(Scenario { design: paper.design.clone(), ..back }.to_table(), paper.to_table());
+        // The lines outside [design] (comments included) are the input's, in its order.
+        let outside = |t: &str| {
+            let (start, end) = (t.find("[design]").unwrap(), t.find("[reference]").unwrap());
+            format!("{}{}", &t[..start], &t[end..])
+        };
+        assert_eq!(outside(&written), outside(text));
+        assert!(written.contains("mu = [2e-9, 0.25]"), "{written}");
+        // Without a [design], one is added (toml_edit places a table without a position after the
+        // one before it: here [plant]); a file that is not TOML is an error.
+        let start = text.find("[design]").unwrap();
+        let end = text.find("[reference]").unwrap();
+        let bare = format!("{}{}", &text[..start], &text[end..]);
+        let added = with_design(&bare, &design).unwrap();
+        assert_eq!(outside(&added), bare, "[design] goes after [plant]");
+        assert_eq!(Scenario::from_toml(&added).unwrap().design, design);
+        let e = with_design("A = [", &design).unwrap_err();
+        assert!(e.to_string().contains("not valid TOML"), "{e}");
+    }
 
     #[test]
     fn the_method_round_trips_and_auto_is_written_as_no_key() {
