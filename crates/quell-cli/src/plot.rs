@@ -732,10 +732,11 @@ fn draw_sweep_2d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
 const COLOUR_BAR: u32 = 110;
 
 /// A heat map's colour bar: [`ramp`] over log10 of the values from `lo` to `lo + span`, labelled
-/// with the values.
+/// with the values and titled with what they are.
 fn colour_bar<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, lo: f64, span: f64) -> Result<(), String> {
     let mut bar = ChartBuilder::on(area)
-        .margin_top(40)
+        .caption("tail RMS e", ("sans-serif", 13))
+        .margin_top(22)
         .margin_bottom(48)
         .margin_left(14)
         .margin_right(4)

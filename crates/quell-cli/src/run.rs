@@ -141,10 +141,11 @@ fn output_step_error(T: f64, h: f64, s: TimeUnit) -> Failure {
     ))
 }
 
-/// A magnitude with `decimals` fixed decimals where that shows its digits (0, or 0.01 to 1e6), in
-/// scientific notation otherwise: an input of 3.7e-5 mA printed as "0.000".
+/// A magnitude with `decimals` fixed decimals where that shows its digits without a long tail of
+/// them (0, or 0.01 to 1e4), in scientific notation otherwise: not an input of 3.7e-5 mA printed as
+/// "0.000", nor 790840.023 beside 2.784e6.
 pub(crate) fn fixed_or_sci(x: f64, decimals: usize) -> String {
-    if x == 0.0 || (1e-2..1e6).contains(&x.abs()) {
+    if x == 0.0 || (1e-2..1e4).contains(&x.abs()) {
         format!("{x:.decimals$}")
     } else {
         format!("{x:.decimals$e}")
@@ -321,5 +322,23 @@ fn parse_max_steps(text: &str) -> Result<usize, String> {
         _ => Err(format!(
             "expected a step budget (an integer ≥ 1), found {text}; omit --max-steps for the run's own budget"
         )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn magnitudes_print_fixed_between_a_hundredth_and_ten_thousand() {
+        for (x, text) in [
+            (0.0, "0.000"),
+            (21.674, "21.674"),
+            (9999.1234, "9999.123"),
+            (790840.023, "7.908e5"),
+            (2.784e6, "2.784e6"),
+            (3.7e-5, "3.700e-5"),
+            (-0.5, "-0.500"),
+        ] {
+            assert_eq!(super::fixed_or_sci(x, 3), text);
+        }
     }
 }
