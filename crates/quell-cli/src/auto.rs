@@ -182,9 +182,11 @@ fn report_text(a: &AutoDesign) -> String {
             let verdict = if rms <= aim {
                 "✓".to_string()
             } else {
+                // Three significant digits: 1.06×, 15.2×, 164×.
+                let ratio = format!("{:.2e}", rms / aim).parse().unwrap_or(rms / aim);
                 format!(
-                    "✗ {:.0}× the aim: the loop converges later than the averaged law predicts for this μ",
-                    rms / aim
+                    "✗ {}× the aim: the loop converges later than the averaged law predicts for this μ",
+                    crate::run::short(ratio)
                 )
             };
             s.push_str(&format!(

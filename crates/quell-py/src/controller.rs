@@ -115,7 +115,7 @@ impl PyController {
     fn new(design: &Bound<'_, PyAny>, sample_time: &Bound<'_, PyAny>) -> PyResult<Self> {
         let py = design.py();
         let d = design.cast::<PyDesign>().map_err(|_| crate::errors::type_error("design", "a quell.Design", design))?;
-        let T = number(sample_time, "sample_time")?;
+        let T = number(sample_time, "sample_time", Kind::Scenario, "sample_time")?;
         let inner = quell::Controller::new(&d.get().inner, T)
             .map_err(|e| crate::errors::keyed(py, Kind::Scenario, e.to_string(), e.key()))?;
         let (m, _) = inner.dims();

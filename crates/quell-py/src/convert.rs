@@ -51,8 +51,17 @@ fn real_array<'py>(obj: &Bound<'py, PyAny>, name: &str, kind: Kind) -> PyResult<
             ),
         )
     })?;
-    let dtype = arr.getattr("dtype")?;
-    let code: String = dtype.getattr("kind")?.extract()?;
+    let mut dtype = arr.getattr("dtype")?;
+    let mut code: String = dtype.getattr("kind")?.extract()?;
+    // Python ints beyond int64 (10**30) make an object array; within a float64's range they are
+    // the numbers they are, as numpy reads them into float64.
+    let arr = match np.call_method1("asarray", (obj, "float64")) {
+        Ok(floats) if code == "O" && all_ints_or_floats(&arr)? => {
+            (dtype, code) = (floats.getattr("dtype")?, "f".to_string());
+            floats
+        }
+        _ => arr,
+    };
     if !matches!(code.as_str(), "i" | "u" | "f") {
         let found = match code.as_str() {
             "c" => "complex numbers".to_string(),
@@ -77,6 +86,18 @@ fn real_array<'py>(obj: &Bound<'py, PyAny>, name: &str, kind: Kind) -> PyResult<
         no_bools(obj, &arr, name)?;
     }
     Ok(arr.call_method1("astype", ("float64",))?.cast_into::<PyArrayDyn<f64>>()?)
+}
+
+/// Whether every entry of the object array `arr` is a Python int or float (bools are ints here;
+/// [`no_bools`] refuses them afterwards).
+fn all_ints_or_floats(arr: &Bound<'_, PyAny>) -> PyResult<bool> {
+    for x in arr.call_method0("ravel")?.try_iter()? {
+        let x = x?;
+        if !(x.is_instance_of::<pyo3::types::PyInt>() || x.is_instance_of::<pyo3::types::PyFloat>()) {
+            return Ok(false);
+        }
+    }
+    Ok(true)
 }
 
 /// A numpy bool scalar (`np.True_`), which converts to a float as 1.0.
@@ -222,18 +243,20 @@ pub fn path(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<std::path::PathBuf> 
     Err(type_error(name, "a path (str or os.PathLike)", obj))
 }
 
-/// A real number (an int, a float or a numpy scalar; not a bool).
-pub fn number(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<f64> {
+/// A real number (an int, a float or a numpy scalar; not a bool). An int beyond a float64's range
+/// is `kind`'s error (a `ValueError` and a `QuellError`) with `.key` = `key`.
+pub fn number(obj: &Bound<'_, PyAny>, name: &str, kind: Kind, key: &str) -> PyResult<f64> {
     if obj.is_instance_of::<PyString>() || obj.is_instance_of::<PyComplex>() || obj.is_instance_of::<PyBool>() {
         return Err(type_error(name, "a real number", obj));
     }
     obj.extract::<f64>().map_err(|_| {
         // An int is a real number: one beyond a float64's range is a value error, not a type's.
         if obj.is_instance_of::<pyo3::types::PyInt>() {
-            pyo3::exceptions::PyValueError::new_err(format!(
+            let message = format!(
                 "{name}: expected a real number within a float64's range (±1.8e308), found an integer of {} digits",
                 decimal_digits(obj)
-            ))
+            );
+            crate::errors::keyed(obj.py(), kind, message, Some(key.to_owned()))
         } else {
             type_error(name, "a real number", obj)
         }
@@ -289,7 +312,7 @@ pub fn poles(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<Com
             out.push(Complex::new(finite(&key, &[], re, kind, py)?, 0.0));
         } else if item.is_instance_of::<pyo3::types::PyInt>() {
             // An int beyond a float64's range: the ValueError that says so.
-            out.push(Complex::new(number(&item, &key)?, 0.0));
+            out.push(Complex::new(number(&item, &key, kind, &key)?, 0.0));
         } else {
             if item.try_iter().is_err() {
                 return Err(type_error(&key, pole, &item));

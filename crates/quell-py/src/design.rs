@@ -80,7 +80,7 @@ pub fn spec(
             .transpose()?
             .unwrap_or_default(),
         mu: vector(mu, "mu", k)?,
-        beta: number(beta, "beta")?,
+        beta: number(beta, "beta", Kind::Design, "design.beta")?,
         relative_degrees: relative_degrees.map(|s| integers(s, "relative_degrees", k)).transpose()?,
         regressor_scaling: regressor_scaling
             .map(|obj| {

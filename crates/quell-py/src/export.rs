@@ -132,7 +132,7 @@ pub fn export(
         )));
     };
     let T = match sample_time {
-        Some(v) => number(v, "sample_time")?,
+        Some(v) => number(v, "sample_time", Kind::Scenario, "simulation.sample_time")?,
         None => scenario_T.ok_or_else(|| {
             Kind::Scenario.err(py, "sample_time: missing; pass the controller's sample time T_s, in the plant model's unit of time (or set simulation.sample_time in the scenario)")
         })?,

@@ -176,13 +176,42 @@ pub fn write_simulation(
 ) -> PyResult<()> {
     for (key, v) in SIMULATION_NUMBERS.into_iter().zip(numbers) {
         if let Some(v) = v.filter(|v| !v.is_none()) {
-            sim.insert(key.into(), Value::Float(number(v, key)?));
+            sim.insert(key.into(), Value::Float(number(v, key, Kind::Scenario, &format!("simulation.{key}"))?));
         }
     }
     if let Some(m) = method.filter(|m| !m.is_none()) {
         sim.insert("method".into(), method_value(m)?);
     }
     Ok(())
+}
+
+/// What a key that holds an integer expects (`monte_carlo["runs"]`, `points`, `design["relative_degrees"][1]`),
+/// by its last name; `None` for a key that holds a real number.
+fn integer_key(key: &str) -> Option<&'static str> {
+    // The last name: indices dropped, then the last ["name"] or .name.
+    let mut k = key;
+    while let Some((rest, _)) = k
+        .strip_suffix(']')
+        .and_then(|r| r.rsplit_once('['))
+        .filter(|(_, i)| !i.is_empty() && i.chars().all(|c| c.is_ascii_digit()))
+    {
+        k = rest;
+    }
+    let name = match k.strip_suffix("\"]") {
+        Some(inner) => inner.rsplit_once("[\"").map_or(inner, |(_, n)| n),
+        None => k.rsplit('.').next().unwrap_or(k),
+    };
+    match name {
+        "seed" => Some("a seed, an integer from 0 to 2**63 - 1"),
+        "runs"
+        | "points"
+        | "refine"
+        | "max_steps"
+        | "relative_degrees"
+        | "reference_filter_orders"
+        | "disturbance_filter_orders" => Some("an integer within 2**63 - 1"),
+        _ => None,
+    }
 }
 
 /// A Python value (numbers, strings, lists, dicts, numpy arrays and scalars) as a TOML value;
@@ -198,11 +227,11 @@ pub fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
         if let Ok(i) = obj.extract::<i64>() {
             return Ok(Value::Integer(i));
         }
-        // A seed is an integer, never rounded to a float (which the reader would then refuse as
-        // "a floating-point number"); any other key takes a huge integer as the float it is.
-        if key.ends_with("[\"seed\"]") {
-            let err =
-                Kind::Scenario.err(py, format!("{key}: expected a seed, an integer from 0 to 2**63 - 1, found {obj}"));
+        // A count or a seed is an integer, never rounded to a float (which the reader would refuse
+        // as "a float", or print rounded); any other key takes a huge integer as the float it is.
+        if let Some(expected) = integer_key(key) {
+            let digits = obj.str().map_or_else(|_| "an integer beyond 2**63 - 1".to_string(), |s| s.to_string());
+            let err = Kind::Scenario.err(py, format!("{key}: expected {expected}, found {digits}"));
             // `.key` in the file's form: noise["seed"] is noise.seed.
             let _ = err.value(py).setattr("key", key.replace("[\"", ".").replace("\"]", ""));
             return Err(err);
@@ -560,7 +589,7 @@ impl PyScenario {
     /// list of dict
     ///     Per channel: `mu`, `lambda_max_omega`, `lambda_min_omega`, `excited_rank`,
     ///     `lambda_min_excited_omega`, `adaptation_rate` (μ_i λ_max), `loop_rate` (the loop's fastest
-    ///     other rate ρ), `convergence_time` (1/(μ_i λ_min) over the excited directions, s), the
+    ///     other rate ρ), `convergence_time` (1/(μ_i λ_min) over the excited directions, in the plant's unit of time), the
     ///     flags `stiff` (rate > 100 ρ) and `weakly_excited`, and `advice`.
     ///
     /// Raises
@@ -683,7 +712,8 @@ pub fn paper_example(py: Python<'_>) -> PyResult<PyScenario> {
 /// text : str
 ///     A scenario file's text; its `[design]` keys are kept, the others chosen.
 /// convergence_time : float, optional
-///     The time within which the adaptation should converge (s).
+///     The time within which the adaptation should converge, in the plant model's unit of time
+///     (`plant.time_unit`; seconds by default).
 /// u_limit : float or sequence of float, optional
 ///     A limit on max |u_f,i|, the plant input (5): one for every input, or one per input
 ///     (inputs in different units).
@@ -722,7 +752,9 @@ pub fn auto_design<'py>(
 ) -> PyResult<(PyScenario, Bound<'py, PyAny>)> {
     let text = crate::convert::text(text, "text")?;
     let given = |v: Option<&Bound<'py, PyAny>>| v.filter(|v| !v.is_none()).cloned();
-    let convergence_time = given(convergence_time).map(|v| number(&v, "convergence_time")).transpose()?;
+    let convergence_time = given(convergence_time)
+        .map(|v| number(&v, "convergence_time", Kind::Design, "convergence_time"))
+        .transpose()?;
     let u_limit = given(u_limit).map(|v| crate::convert::vector(&v, "u_limit", Kind::Design)).transpose()?;
     let u_limit = u_limit.unwrap_or_default();
     // Their ranges are checked by auto_design (AutoError::Target: a DesignError below).

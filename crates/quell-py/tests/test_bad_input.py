@@ -138,6 +138,10 @@ def test_types_are_named_with_their_article_and_a_huge_int_is_a_value_error():
         quell.sweep(3)
     with pytest.raises(ValueError, match=r"^sample_time: expected a real number within a float64's range \(±1.8e308\), found an integer of 401 digits"):
         quell.Controller(s.design(), 10**400)
+    # A QuellError with the file's key (a plain ValueError before, which `except QuellError` missed).
+    with pytest.raises(quell.ScenarioError, match=r"^t_end: expected a real number within a float64's range") as e:
+        quell.simulate(s, t_end=10**400)
+    assert e.value.key == "simulation.t_end"
 
 
 def test_huge_ints_bools_and_bad_pairs_in_lists_are_named():

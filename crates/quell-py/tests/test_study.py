@@ -141,6 +141,16 @@ def test_a_seed_beyond_64_bits_is_named_as_a_seed():
     assert e.value.key == "noise.seed"
 
 
+def test_a_count_beyond_64_bits_is_named_with_its_digits():
+    """runs= and points= of 2**70 were rounded to a float: "found a floating-point number" and
+    "found 1180591620717411300000.0"."""
+    with pytest.raises(quell.ScenarioError, match=r'^monte_carlo\["runs"\]: expected an integer within 2\*\*63 - 1, found 1180591620717411303424$') as e:
+        quell.Study(quell.paper_example(), monte_carlo={"runs": 2**70, "seed": 1, "truth.A": {"relative": 0.1}})
+    assert e.value.key == "monte_carlo.runs"
+    with pytest.raises(quell.ScenarioError, match=r"^points: expected an integer within 2\*\*63 - 1, found 1180591620717411303424$"):
+        quell.tune(quell.paper_example(), mu=[1.0, 10.0], points=2**70)
+
+
 def test_method_and_max_steps_refusals_carry_their_key():
     """docs/python.md: `.key` keeps the file's key, for simulate's own keywords too."""
     s = quell.paper_example()

@@ -209,3 +209,8 @@ def test_an_integer_beyond_a_float_is_named_as_such():
         quell.design(quell.paper_example().plant, observer_gain=L, **dict(PAPER_DESIGN, mu=[10**400, 1]))
     with pytest.raises(TypeError, match="found entries that are not all numbers"):
         quell.design(quell.paper_example().plant, observer_gain=L, **dict(PAPER_DESIGN, mu=[None, 1]))
+    # Beyond int64 but within a float64's range, an int is the number it is (numpy makes an
+    # object array of it): "found entries that are not all numbers" before.
+    d = quell.design(quell.paper_example().plant, observer_gain=L, **dict(PAPER_DESIGN, mu=[10**30, 1]))
+    assert list(d.mu) == [1e30, 1.0]
+    assert quell.Plant([[10**30, 0], [0, 1]], [[1.0], [0.0]], [[1.0, 0.0]]).A[0, 0] == 1e30
