@@ -96,35 +96,203 @@ fn generated_code_is_warning_free_c99_without_malloc_libm_or_writable_globals() 
 /// importer supplies (3.0: the FMI 3.0.2 headers quell builds its binaries with).
 #[test]
 fn fmu_sources_are_warning_free_c99() {
+    let (_, d) = example("three-channel");
+    for version in [FmiVersion::V2, FmiVersion::V3] {
+        for precision in [Precision::F64, Precision::F32] {
+            let dir = TempDir::new("fmu-strict");
+            fmu_sources(&d, precision, version, &dir);
+            let mut args: Vec<&str> = STRICT.to_vec();
+            args.extend(["-O2", "-c", "ctrl_fmu.c", "-o", "fmu.o"]);
+            tool("gcc", &args, &dir.0);
+        }
+    }
+}
+
+/// Writes into `dir` the sources of `d`'s FMU at T_s = 0.05 with the prefix `ctrl` (those the
+/// archive holds, and for 3.0 the FMI 3.0.2 headers the importer supplies); returns its GUID.
+fn fmu_sources(d: &Design, precision: Precision, version: FmiVersion, dir: &TempDir) -> String {
     use std::io::Read as _;
     const FMI3: [(&str, &str); 3] = [
         ("fmi3Functions.h", include_str!("../src/export/fmi3/fmi3Functions.h")),
         ("fmi3FunctionTypes.h", include_str!("../src/export/fmi3/fmi3FunctionTypes.h")),
         ("fmi3PlatformTypes.h", include_str!("../src/export/fmi3/fmi3PlatformTypes.h")),
     ];
-    let (_, d) = example("three-channel");
-    for version in [FmiVersion::V2, FmiVersion::V3] {
-        for precision in [Precision::F64, Precision::F32] {
-            let fmu = generate_fmu(&d, 0.05, &options("ctrl", precision), None, version).unwrap();
-            let dir = TempDir::new("fmu-strict");
-            let mut archive = zip::ZipArchive::new(std::io::Cursor::new(&fmu.bytes)).unwrap();
-            for i in 0..archive.len() {
-                let mut file = archive.by_index(i).unwrap();
-                if let Some(name) = file.name().unwrap().strip_prefix("sources/").map(str::to_string) {
-                    let mut text = String::new();
-                    file.read_to_string(&mut text).unwrap();
-                    std::fs::write(dir.0.join(name), text).unwrap();
-                }
-            }
-            if version == FmiVersion::V3 {
-                for (name, text) in FMI3 {
-                    std::fs::write(dir.0.join(name), text).unwrap();
-                }
-            }
-            let mut args: Vec<&str> = STRICT.to_vec();
-            args.extend(["-O2", "-c", "ctrl_fmu.c", "-o", "fmu.o"]);
-            tool("gcc", &args, &dir.0);
+    let fmu = generate_fmu(d, 0.05, &options("ctrl", precision), None, version).unwrap();
+    let mut archive = zip::ZipArchive::new(std::io::Cursor::new(&fmu.bytes)).unwrap();
+    for i in 0..archive.len() {
+        let mut file = archive.by_index(i).unwrap();
+        if let Some(name) = file.name().unwrap().strip_prefix("sources/").map(str::to_string) {
+            let mut text = String::new();
+            file.read_to_string(&mut text).unwrap();
+            std::fs::write(dir.0.join(name), text).unwrap();
         }
+    }
+    if version == FmiVersion::V3 {
+        for (name, text) in FMI3 {
+            std::fs::write(dir.0.join(name), text).unwrap();
+        }
+    }
+    let md = &fmu.model_description;
+    let key = if version == FmiVersion::V3 { "instantiationToken=\"" } else { "guid=\"" };
+    let start = md.find(key).unwrap() + key.len();
+    md[start..start + md[start..].find('"').unwrap()].to_string()
+}
+
+/// The C API and both FMUs given NULL pointers, and the FMUs called out of their life cycle (a
+/// step after Terminate, the start time changed while stepping, a NaN start time): each call is
+/// refused with its status and, where there is an instance to log through, a reason; nothing
+/// crashes. They had segfaulted on NULL, and accepted Exit after Terminate, a start time moved
+/// from 2 s to 1002 s while stepping, and a NaN start time.
+#[test]
+fn null_arguments_and_calls_out_of_order_are_refused() {
+    let (_, d) = example("three-channel");
+    let checks = r#"
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+static char last[512];
+static int fails;
+#define EXPECT(call, status, text)                                                                 \
+    do {                                                                                           \
+        last[0] = 0;                                                                               \
+        int got_ = (int)(call);                                                                    \
+        if (got_ != (int)(status) || !strstr(last, text)) {                                        \
+            printf("line %d: %s gave %d, logged \"%s\"; expected %d, \"%s\"\n", __LINE__, #call, got_, \
+                   last, (int)(status), text);                                                     \
+            fails++;                                                                               \
+        }                                                                                          \
+    } while (0)
+"#;
+    let fmi2 = r#"
+#include "fmi2Functions.h"
+#include "ctrl_controller.h"
+static void logger(fmi2ComponentEnvironment e, fmi2String n, fmi2Status s, fmi2String c, fmi2String f, ...)
+{
+    va_list ap;
+    (void)e; (void)n; (void)s; (void)c;
+    va_start(ap, f);
+    vsnprintf(last, sizeof last, f, ap);
+    va_end(ap);
+}
+int main(void)
+{
+    const fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
+    fmi2ValueReference vr[1] = {0};
+    fmi2Real value[1] = {0}, nan = strtod("nan", NULL);
+    ctrl_state s;
+    double y[CTRL_M] = {0}, u[CTRL_M];
+    /* The C API. */
+    ctrl_init(NULL);
+    ctrl_command(NULL, u);
+    ctrl_init(&s);
+    ctrl_command(&s, NULL);
+    EXPECT(ctrl_step(NULL, y, y, u), 4, "");
+    EXPECT(ctrl_step(&s, NULL, y, u), 4, "");
+    EXPECT(ctrl_step(&s, y, NULL, u), 4, "");
+    EXPECT(ctrl_step(&s, y, y, NULL), 4, "");
+    EXPECT(ctrl_step(&s, y, y, u), 0, "");
+    /* No instance. */
+    EXPECT(fmi2SetupExperiment(NULL, 0, 0, 0, 0, 0), fmi2Error, "");
+    EXPECT(fmi2EnterInitializationMode(NULL), fmi2Error, "");
+    EXPECT(fmi2ExitInitializationMode(NULL), fmi2Error, "");
+    EXPECT(fmi2Terminate(NULL), fmi2Error, "");
+    EXPECT(fmi2Reset(NULL), fmi2Error, "");
+    EXPECT(fmi2GetReal(NULL, vr, 1, value), fmi2Error, "");
+    EXPECT(fmi2SetReal(NULL, vr, 1, value), fmi2Error, "");
+    EXPECT(fmi2DoStep(NULL, 0, 0.05, fmi2True), fmi2Error, "");
+    EXPECT(fmi2GetRealStatus(NULL, fmi2LastSuccessfulTime, value), fmi2Error, "");
+    fmi2FreeInstance(NULL);
+    fmi2Component c = fmi2Instantiate("c", fmi2CoSimulation, GUID, "", &cb, fmi2False, fmi2False);
+    if (!c)
+        return 2;
+    EXPECT(fmi2GetReal(c, NULL, 1, value), fmi2Error, "fmi2GetReal: a NULL array for 1 values");
+    EXPECT(fmi2SetReal(c, vr, 1, NULL), fmi2Error, "fmi2SetReal: a NULL array for 1 values");
+    EXPECT(fmi2GetReal(c, NULL, 0, NULL), fmi2OK, "");
+    EXPECT(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, NULL), fmi2Error, "a NULL value pointer");
+    EXPECT(fmi2SetupExperiment(c, 0, 0, nan, 0, 0), fmi2Error, "fmi2SetupExperiment: startTime = nan; the start time must be finite");
+    EXPECT(fmi2ExitInitializationMode(c), fmi2Error, "fmi2ExitInitializationMode: called when instantiated (after Instantiate or Reset); it is allowed only when initialization mode");
+    EXPECT(fmi2SetupExperiment(c, 0, 0, 2, 0, 0), fmi2OK, "");
+    EXPECT(fmi2EnterInitializationMode(c), fmi2OK, "");
+    EXPECT(fmi2SetupExperiment(c, 0, 0, 0, 0, 0), fmi2Error, "the start time is set before initialization only");
+    EXPECT(fmi2ExitInitializationMode(c), fmi2OK, "");
+    EXPECT(fmi2DoStep(c, 2, 0.1, fmi2True), fmi2OK, "");
+    EXPECT(fmi2SetupExperiment(c, 0, 0, 1000, 0, 0), fmi2Error, "the start time is set before initialization only");
+    EXPECT(fmi2EnterInitializationMode(c), fmi2Error, "fmi2EnterInitializationMode: called when step mode");
+    EXPECT(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, value), fmi2OK, "");
+    if (value[0] != 2.1)
+        printf("time %g after a step from 2 s, not 2.1\n", value[0]), fails++;
+    EXPECT(fmi2Terminate(c), fmi2OK, "");
+    EXPECT(fmi2Terminate(c), fmi2Error, "fmi2Terminate: called when terminated");
+    EXPECT(fmi2ExitInitializationMode(c), fmi2Error, "called when terminated (Reset, then initialize again)");
+    EXPECT(fmi2DoStep(c, 2.1, 0.05, fmi2True), fmi2Error, "fmi2DoStep: the FMU is not in step mode");
+    EXPECT(fmi2Reset(c), fmi2OK, "");
+    EXPECT(fmi2EnterInitializationMode(c), fmi2OK, "");
+    EXPECT(fmi2ExitInitializationMode(c), fmi2OK, "");
+    EXPECT(fmi2DoStep(c, 0, 0.05, fmi2True), fmi2OK, "");
+    fmi2FreeInstance(c);
+    return fails;
+}
+"#;
+    let fmi3 = r#"
+#include "fmi3Functions.h"
+static void logger(fmi3InstanceEnvironment e, fmi3Status s, fmi3String c, fmi3String message)
+{
+    (void)e; (void)s; (void)c;
+    snprintf(last, sizeof last, "%s", message);
+}
+int main(void)
+{
+    fmi3ValueReference vr[1] = {0};
+    fmi3Float64 value[1] = {0}, t, nan = strtod("nan", NULL);
+    fmi3Boolean event, terminate, early;
+    EXPECT(fmi3EnterInitializationMode(NULL, 0, 0, 0, 0, 0), fmi3Error, "");
+    EXPECT(fmi3ExitInitializationMode(NULL), fmi3Error, "");
+    EXPECT(fmi3Terminate(NULL), fmi3Error, "");
+    EXPECT(fmi3Reset(NULL), fmi3Error, "");
+    EXPECT(fmi3GetFloat64(NULL, vr, 1, value, 1), fmi3Error, "");
+    EXPECT(fmi3SetFloat64(NULL, vr, 1, value, 1), fmi3Error, "");
+    EXPECT(fmi3DoStep(NULL, 0, 0.05, fmi3True, &event, &terminate, &early, &t), fmi3Error, "");
+    fmi3FreeInstance(NULL);
+    fmi3Instance c = fmi3InstantiateCoSimulation("c", GUID, "", 0, 0, 0, 0, NULL, 0, NULL, logger, NULL);
+    if (!c)
+        return 2;
+    EXPECT(fmi3GetFloat64(c, NULL, 1, value, 1), fmi3Error, "fmi3GetFloat64: a NULL array for 1 values");
+    EXPECT(fmi3SetFloat64(c, vr, 1, NULL, 1), fmi3Error, "fmi3SetFloat64: a NULL array for 1 values");
+    EXPECT(fmi3EnterInitializationMode(c, 0, 0, nan, 0, 0), fmi3Error, "startTime = nan; the start time must be finite");
+    EXPECT(fmi3ExitInitializationMode(c), fmi3Error, "it is allowed only when initialization mode");
+    EXPECT(fmi3EnterInitializationMode(c, 0, 0, 2, 0, 0), fmi3OK, "");
+    EXPECT(fmi3ExitInitializationMode(c), fmi3OK, "");
+    EXPECT(fmi3DoStep(c, 2, 0.05, fmi3True, NULL, &terminate, &early, &t), fmi3Error, "fmi3DoStep: a NULL output pointer");
+    EXPECT(fmi3DoStep(c, 2, 0.05, fmi3True, &event, &terminate, &early, &t), fmi3OK, "");
+    EXPECT(fmi3EnterInitializationMode(c, 0, 0, 50, 0, 0), fmi3Error, "the start time is set before initialization only");
+    EXPECT(fmi3Terminate(c), fmi3OK, "");
+    EXPECT(fmi3ExitInitializationMode(c), fmi3Error, "called when terminated");
+    EXPECT(fmi3DoStep(c, 2.05, 0.05, fmi3True, &event, &terminate, &early, &t), fmi3Error, "not in step mode");
+    if (t != 2.05)
+        printf("lastSuccessfulTime %g, not 2.05\n", t), fails++;
+    fmi3FreeInstance(c);
+    return fails;
+}
+"#;
+    for (version, driver) in [(FmiVersion::V2, fmi2), (FmiVersion::V3, fmi3)] {
+        let dir = TempDir::new("fmu-hostile");
+        let guid = fmu_sources(&d, Precision::F64, version, &dir);
+        let main = format!("#define GUID \"{guid}\"\n{checks}{driver}");
+        std::fs::write(dir.0.join("main.c"), main).unwrap();
+        let args = [
+            "-std=c99",
+            "-O1",
+            "-D_POSIX_C_SOURCE=200809L",
+            "main.c",
+            "ctrl_fmu.c",
+            "ctrl_controller.c",
+            "-o",
+            "hostile",
+        ];
+        tool("gcc", &args, &dir.0);
+        // tool() fails the test with the driver's report when a check failed or it crashed.
+        tool(&dir.0.join("hostile").display().to_string(), &[], &dir.0);
     }
 }
 
@@ -139,7 +307,7 @@ fn output_is_deterministic_and_records_the_design() {
     let h = &a.header.split_whitespace().collect::<Vec<_>>().join(" ");
     for text in [
         "scenario \"paper-example\"",
-        "Sample time T_s = 0.001, in the plant model's unit of time.",
+        "Sample time T_s = 0.001, in seconds, the plant model's unit of time.",
         concat!("quell ", env!("CARGO_PKG_VERSION")),
         "channel 1: tau = 1 = 1000 samples; channel 2: tau = 3 = 3000 samples",
         "Memory: 1696 bytes of constants (static const), 241240 bytes of state",

@@ -427,7 +427,7 @@ typedef struct {
 {fields}
 } {p}_state;
 
-/* The Controller's zero state (also to restart it). */
+/* The Controller's zero state (also to restart it); nothing when s is NULL. */
 void {p}_init({p}_state *s);
 /* One sample: reads y(k) and g(k), writes the plant input u_f(k) = -K x_hat + F u_d (5), to hold
  * until the next sample, and returns 0; u_f may be the array y or g (both are read first). An
@@ -435,9 +435,10 @@ void {p}_init({p}_state *s);
  * previous input. It returns 2 when u_f or u is no longer finite (inputs the design cannot follow
  * overflowed the state), leaving u_f untouched, and keeps returning 2: hold a safe input and call {p}_init
  * (docs/deployment.md). It returns 3, touching nothing, for a state {p}_init did not make (its
- * delay-line row out of range: never initialized, or corrupted). Needs IEEE arithmetic (no -ffast-math). */
+ * delay-line row out of range: never initialized, or corrupted), and 4, touching nothing, when s,
+ * y, g or u_f is NULL. Needs IEEE arithmetic (no -ffast-math). */
 int {p}_step({p}_state *s, const {R} y[{P}_M], const {R} g[{P}_M], {R} u_f[{P}_M]);
-/* The adaptive command u(k) (25) of the last step, undelayed. */
+/* The adaptive command u(k) (25) of the last step, undelayed (nothing when s or u is NULL). */
 void {p}_command(const {p}_state *s, {R} u[{P}_M]);
 
 #ifdef __cplusplus
@@ -460,6 +461,8 @@ static {R} {p}_dot(const {R} *M, const {R} *x, unsigned len, {R} acc)
 
 void {p}_init({p}_state *s)
 {
+    if (!s)
+        return;
     for (unsigned i = 0; i < {P}_NZ; i++)
         s->z[i] = 0;
     for (unsigned r = 0; r < {P}_SIGMA_SUM; r++)
@@ -604,6 +607,8 @@ static {R} {p}_channel({p}_state *s, unsigned i, unsigned sigma, const {R} *Phi,
 
 int {p}_step({p}_state *s, const {R} y[{P}_M], const {R} g[{P}_M], {R} u_f[{P}_M])
 {
+    if (!s || !y || !g || !u_f)
+        return 4;
     /* A state {p}_init did not make: its row would index past the delay line. */
     if (s->head > {P}_DELAY_MAX)
         return 3;
@@ -655,6 +660,8 @@ int {p}_step({p}_state *s, const {R} y[{P}_M], const {R} g[{P}_M], {R} u_f[{P}_M
 
 void {p}_command(const {p}_state *s, {R} u[{P}_M])
 {
+    if (!s || !u)
+        return;
     for (unsigned i = 0; i < {P}_M; i++)
         u[i] = s->u[i];
 }

@@ -350,7 +350,12 @@ fn compile(compiler: &str, sources: &[(String, String)], units: &[&str], output:
             if first.is_empty() { "it printed nothing: is it a C compiler?".to_string() } else { first.join("\n") };
         return Err(fail(format!("compiling the FMU failed ({}):\n{said}", result.status)));
     }
-    std::fs::read(&out).map_err(|e| fail(format!("cannot read {} ({e})", Path::new(output).display())))
+    std::fs::read(&out).map_err(|e| {
+        fail(format!(
+            "it succeeded but wrote no {} ({e}): is it a C compiler that takes gcc's flags (-shared -fPIC -o)? Name one such as gcc or clang",
+            Path::new(output).display()
+        ))
+    })
 }
 
 /// The zip archive of `files` (deflated).

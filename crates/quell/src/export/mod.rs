@@ -88,10 +88,7 @@ pub struct ExportOptions {
 /// What T_s is measured in, as the generated comments say it: "the plant model's unit of time",
 /// with the unit's name first when the plant gives one other than seconds.
 fn time_unit_text(design: &Design) -> String {
-    match design.plant().time_unit {
-        TimeUnit::Seconds => "the plant model's unit of time".into(),
-        u => format!("{}, the plant model's unit of time", u.name()),
-    }
+    format!("{}, the plant model's unit of time", design.plant().time_unit.name())
 }
 
 impl Default for ExportOptions {
