@@ -38,7 +38,8 @@ pub struct ExportArgs {
 
 /// Generates, then writes both files (each to a temporary name, then renamed).
 pub fn run(args: &ExportArgs) -> Result<(), Failure> {
-    let (scenario, design) = load(Some(&args.scenario), args.sample_time)?;
+    // The sample time is the controller's, not a run's: a run's step budget does not apply to it.
+    let (scenario, design) = load(Some(&args.scenario), None)?;
     let sample_time = args.sample_time.or(scenario.simulation.sample_time).ok_or_else(|| {
         Failure::Input(
             "--sample-time: missing; the controller runs at a sample time T_s, in the plant model's unit of time (or set simulation.sample_time in the scenario)".into(),

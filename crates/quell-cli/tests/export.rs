@@ -107,6 +107,9 @@ fn bad_export_input_exits_2_naming_the_flag() {
         (vec![], "error: --sample-time: missing;"),
         (vec!["--sample-time", "0.001", "--prefix", "9lives"], "error: --prefix: expected a C identifier"),
         (vec!["--sample-time", "0.001", "--precision", "f16"], "invalid value 'f16' for '--precision <PRECISION>'"),
+        // The controller's own limit, not a run's step budget (t_end / T_s = 1e11 steps, which
+        // export does not run): its delay line.
+        (vec!["--sample-time", "1e-9"], "a delay line holds at most 1e7 samples"),
     ] {
         let mut all = vec!["export", paper.as_str(), "--out", out.as_str()];
         all.extend(args.iter().copied());
@@ -115,6 +118,23 @@ fn bad_export_input_exits_2_naming_the_flag() {
         assert!(stderr(&o).contains(message), "{args:?}: {}", stderr(&o));
         assert!(!dir.exists(), "{args:?}: the output directory was touched");
     }
+}
+
+/// A sample time at which the scenario's run would exceed the 1e10 steps a run may take exports:
+/// export runs nothing (it had been refused with the run's step budget).
+#[test]
+fn a_sample_time_beyond_a_runs_step_budget_still_exports() {
+    let dir_tmp = temp_dir("long");
+    let text = std::fs::read_to_string(example("paper.toml")).unwrap().replace("t_end = 100.0", "t_end = 1e6");
+    let scenario = dir_tmp.path().join("long.toml");
+    std::fs::write(&scenario, text).unwrap();
+    let out = dir_tmp.path().join("out").display().to_string();
+    let o = quell(&["export", scenario.to_str().unwrap(), "--sample-time", "1e-5", "--out", &out]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(Path::new(&out).join("quell_controller.c").exists());
+    let o = quell(&["run", scenario.to_str().unwrap(), "--sample-time", "1e-5", "--out", &out]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("controller steps; at most 1e10 are run"), "{}", stderr(&o));
 }
 
 #[test]
