@@ -511,7 +511,10 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
     note_verification(&mut first.choices, &first.scenario.design.mu, verifier.runs);
     let mut candidates = vec![first_check.clone()];
     if !first_check.tail_within(&bound, 1.0) {
-        let advice = failure_advice(&first.scenario).into_iter().collect();
+        let advice = failure_advice(&first.scenario)
+            .into_iter()
+            .chain(slow_convergence_advice(&first.scenario, &design, &first_check.tail_max_e, &bound))
+            .collect();
         return Ok(finish(
             (first, design, first_check),
             bound,
@@ -899,6 +902,66 @@ fn failure_advice(s: &Scenario) -> Option<String> {
         )
     })
 }
+
+/// Why channels missed their tail bound when the averaged law (η̃' = −μ Ω̄ η̃) says so at the
+/// chosen μ: its predicted RMS error reaches half the bound only after the tail has begun (the last
+/// tenth of t_end), because an excited direction of Ω̄ is weakly excited (1/(μ λ) long) and μ may
+/// not rise (the stiffness cap). Proposes a t_end whose tail starts [`SLOW_MARGIN`] times later
+/// than the predicted time: the averaged law is optimistic where Ω̄ is poorly excited.
+fn slow_convergence_advice(s: &Scenario, design: &Design, tail_max_e: &[f64], bound: &[f64]) -> Option<String> {
+    let avg = Averaged::new(design, &s.reference, &s.disturbance);
+    let (t_end, unit) = (s.simulation.t_end, s.plant.time_unit);
+    let mut needed = 0.0f64;
+    let mut why = Vec::new();
+    for (i, (c, &mu)) in avg.channels.iter().zip(design.mu()).enumerate() {
+        let (aim, slowest) = (0.5 * bound[i], c.excited().fold(f64::INFINITY, f64::min));
+        let rate = mu * slowest;
+        if tail_max_e[i] <= bound[i] || c.residual_rms >= aim || rate <= 0.0 || !rate.is_finite() {
+            continue;
+        }
+        // The first time the predicted error is within the aim, by doubling then bisection.
+        let (mut lo, mut hi) = (0.0, t_end);
+        while c.predicted_error(mu, hi) > aim {
+            (lo, hi) = (hi, 2.0 * hi);
+            if hi > 1e6 * t_end {
+                return None;
+            }
+        }
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if c.predicted_error(mu, mid) > aim {
+                lo = mid
+            } else {
+                hi = mid
+            }
+        }
+        if hi > (1.0 - TAIL_FRACTION) * t_end / SLOW_MARGIN {
+            needed = needed.max(SLOW_MARGIN * hi / (1.0 - TAIL_FRACTION));
+            why.push(format!(
+                "channel {}: its slowest excited direction of Ω̄ converges in 1/(μλ) = {} {unit} (λ = {:.3e}, μ = {}), and the averaged law predicts its RMS error within half the tail bound only at t = {} {unit}",
+                i + 1,
+                crate::settings::fmt_4(1.0 / (mu * slowest)),
+                slowest,
+                crate::settings::fmt_4(mu),
+                crate::settings::fmt_4(hi)
+            ));
+        }
+    }
+    (needed > t_end).then(|| {
+        format!(
+            "{}; the horizon is too short for the adaptation to converge: lengthen simulation.t_end to at least {} {unit} (the tail, its last tenth, {SLOW_MARGIN}× later than predicted: the averaged law is optimistic for weakly excited directions), or excite them better (references of several frequencies)",
+            why.join("; "),
+            crate::settings::round_up_2(needed)
+        )
+    })
+}
+
+/// How much later than the averaged law predicts the tail of a proposed horizon starts
+/// ([`slow_convergence_advice`]).
+const SLOW_MARGIN: f64 = 3.0;
+
+/// The tail of a run: its last tenth ([`crate::sim::SimResult::summary`]'s tail figures).
+const TAIL_FRACTION: f64 = 0.1;
 
 /// The ratio between a component's neighbouring filter poles: 1.5, or less when ×1.5 would spread
 /// them wider than its frequencies widened by 1.5 on each side (many harmonics), down to ×1.1;

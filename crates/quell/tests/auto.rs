@@ -856,3 +856,28 @@ fn the_sampled_halving_says_when_it_costs_the_disturbance_observer() {
         "{why}"
     );
 }
+
+/// A design that fails because the horizon is shorter than its adaptation needs (a servo in ms,
+/// tests/data/servo-ms.toml: its slowest excited direction converges in 1/(μλ) ≈ 1.4 s, the
+/// stiffness cap keeps μ, and 2 s leave a tail error of 54 % of the reference's peak) gets advice
+/// with the horizon the averaged law calls for; with that horizon the same rules pass.
+#[test]
+fn a_horizon_too_short_for_the_adaptation_gets_the_one_it_needs() {
+    let text = data("servo-ms.toml");
+    let a = auto_design(&without_design(&text), &Targets::default()).unwrap();
+    assert!(!a.verification.passed);
+    let advice = a.verification.advice.join("\n");
+    let proposed = advice
+        .split("lengthen simulation.t_end to at least ")
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|t| t.parse::<f64>().ok())
+        .unwrap_or_else(|| panic!("no horizon proposed: {advice}"));
+    assert!(advice.contains("channel 1: its slowest excited direction of Ω̄ converges in 1/(μλ) = "), "{advice}");
+    // 3 × the predicted time over 0.9, well beyond the 2 s given.
+    assert!((10_000.0..100_000.0).contains(&proposed), "{proposed}");
+    let longer = text.replace("t_end = 2000.0", &format!("t_end = {proposed:?}"));
+    let b = auto_design(&without_design(&longer), &Targets::default()).unwrap();
+    assert!(b.verification.passed, "{:?}", b.verification);
+    assert!(b.verification.advice.is_empty(), "{:?}", b.verification.advice);
+}

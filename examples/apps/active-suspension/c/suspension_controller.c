@@ -2,7 +2,7 @@
 #include "suspension_controller.h"
 
 /* A header from another export fails here (size -1): regenerate both files together. */
-typedef char suspension_header_matches_source[SUSPENSION_LAYOUT_ID == 0x4bd5750fb372bd7bu ? 1 : -1];
+typedef char suspension_header_matches_source[SUSPENSION_LAYOUT_ID == 0xb916607248b40c21u ? 1 : -1];
 #include <float.h>
 
 /* Core (observers (6), (14), (20) with (5) substituted) at ZOH: z(k+1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
@@ -54,6 +54,8 @@ static double suspension_dot(const double *M, const double *x, unsigned len, dou
 
 void suspension_init(suspension_state *s)
 {
+    if (!s)
+        return;
     for (unsigned i = 0; i < SUSPENSION_NZ; i++)
         s->z[i] = 0;
     for (unsigned r = 0; r < SUSPENSION_SIGMA_SUM; r++)
@@ -198,6 +200,8 @@ static double suspension_channel(suspension_state *s, unsigned i, unsigned sigma
 
 int suspension_step(suspension_state *s, const double y[SUSPENSION_M], const double g[SUSPENSION_M], double u_f[SUSPENSION_M])
 {
+    if (!s || !y || !g || !u_f)
+        return 4;
     /* A state suspension_init did not make: its row would index past the delay line. */
     if (s->head > SUSPENSION_DELAY_MAX)
         return 3;
@@ -249,6 +253,8 @@ int suspension_step(suspension_state *s, const double y[SUSPENSION_M], const dou
 
 void suspension_command(const suspension_state *s, double u[SUSPENSION_M])
 {
+    if (!s || !u)
+        return;
     for (unsigned i = 0; i < SUSPENSION_M; i++)
         u[i] = s->u[i];
 }

@@ -5,7 +5,7 @@
  * change, regenerate with
  *     quell export SCENARIO --sample-time 0.001 --prefix suspension --precision f64
  *
- * Sample time T_s = 0.001, in the plant model's unit of time.
+ * Sample time T_s = 0.001, in seconds, the plant model's unit of time.
  * Call suspension_step once per sample (docs/deployment.md).
  * Plant: n = 4 states, m = 1 channels; regressor q = 3 (q_g = 1, q_w = 2).
  * Input delays: channel 1: tau = 0.005 = 5 samples.
@@ -28,7 +28,7 @@ extern "C" {
 #define SUSPENSION_N           4            /* plant states */
 #define SUSPENSION_M           1            /* channels: outputs y, references g, inputs u_f */
 #define SUSPENSION_Q           3            /* regressor xi_hat = [xi_g; xi_w] and each eta_i */
-#define SUSPENSION_SAMPLE_TIME 0.001        /* T_s, in the plant model's unit of time (that of its A and delays) */
+#define SUSPENSION_SAMPLE_TIME 0.001        /* T_s, in seconds, the plant model's unit of time (that of its A and delays) */
 #define SUSPENSION_NZ          7            /* state sizes: core [xi_g; xi_w; x_hat] */
 #define SUSPENSION_SIGMA_SUM   2            /* filter-bank rows, sigma_1 + ... + sigma_m */
 #define SUSPENSION_SIGMA_MAX   2            /* largest relative degree */
@@ -47,7 +47,7 @@ typedef struct {
     uint32_t head;                                                      /* row of line holding sample k */
 } suspension_state;
 
-/* The Controller's zero state (also to restart it). */
+/* The Controller's zero state (also to restart it); nothing when s is NULL. */
 void suspension_init(suspension_state *s);
 /* One sample: reads y(k) and g(k), writes the plant input u_f(k) = -K x_hat + F u_d (5), to hold
  * until the next sample, and returns 0; u_f may be the array y or g (both are read first). An
@@ -55,9 +55,10 @@ void suspension_init(suspension_state *s);
  * previous input. It returns 2 when u_f or u is no longer finite (inputs the design cannot follow
  * overflowed the state), leaving u_f untouched, and keeps returning 2: hold a safe input and call suspension_init
  * (docs/deployment.md). It returns 3, touching nothing, for a state suspension_init did not make (its
- * delay-line row out of range: never initialized, or corrupted). Needs IEEE arithmetic (no -ffast-math). */
+ * delay-line row out of range: never initialized, or corrupted), and 4, touching nothing, when s,
+ * y, g or u_f is NULL. Needs IEEE arithmetic (no -ffast-math). */
 int suspension_step(suspension_state *s, const double y[SUSPENSION_M], const double g[SUSPENSION_M], double u_f[SUSPENSION_M]);
-/* The adaptive command u(k) (25) of the last step, undelayed. */
+/* The adaptive command u(k) (25) of the last step, undelayed (nothing when s or u is NULL). */
 void suspension_command(const suspension_state *s, double u[SUSPENSION_M]);
 
 #ifdef __cplusplus
@@ -65,6 +66,6 @@ void suspension_command(const suspension_state *s, double u[SUSPENSION_M]);
 #endif
 
 /* Identifies this header's source: suspension_controller.c compiles only with it. */
-#define SUSPENSION_LAYOUT_ID 0x4bd5750fb372bd7bu
+#define SUSPENSION_LAYOUT_ID 0xb916607248b40c21u
 
 #endif /* SUSPENSION_CONTROLLER_H */

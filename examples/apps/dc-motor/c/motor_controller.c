@@ -2,7 +2,7 @@
 #include "motor_controller.h"
 
 /* A header from another export fails here (size -1): regenerate both files together. */
-typedef char motor_header_matches_source[MOTOR_LAYOUT_ID == 0xba887be1438e569cu ? 1 : -1];
+typedef char motor_header_matches_source[MOTOR_LAYOUT_ID == 0xdebc3af58c7537c2u ? 1 : -1];
 #include <float.h>
 
 /* Core (observers (6), (14), (20) with (5) substituted) at ZOH: z(k+1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
@@ -55,6 +55,8 @@ static double motor_dot(const double *M, const double *x, unsigned len, double a
 
 void motor_init(motor_state *s)
 {
+    if (!s)
+        return;
     for (unsigned i = 0; i < MOTOR_NZ; i++)
         s->z[i] = 0;
     for (unsigned r = 0; r < MOTOR_SIGMA_SUM; r++)
@@ -199,6 +201,8 @@ static double motor_channel(motor_state *s, unsigned i, unsigned sigma, const do
 
 int motor_step(motor_state *s, const double y[MOTOR_M], const double g[MOTOR_M], double u_f[MOTOR_M])
 {
+    if (!s || !y || !g || !u_f)
+        return 4;
     /* A state motor_init did not make: its row would index past the delay line. */
     if (s->head > MOTOR_DELAY_MAX)
         return 3;
@@ -250,6 +254,8 @@ int motor_step(motor_state *s, const double y[MOTOR_M], const double g[MOTOR_M],
 
 void motor_command(const motor_state *s, double u[MOTOR_M])
 {
+    if (!s || !u)
+        return;
     for (unsigned i = 0; i < MOTOR_M; i++)
         u[i] = s->u[i];
 }

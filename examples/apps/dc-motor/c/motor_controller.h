@@ -5,7 +5,7 @@
  * change, regenerate with
  *     quell export SCENARIO --sample-time 0.001 --prefix motor --precision f64
  *
- * Sample time T_s = 0.001, in the plant model's unit of time.
+ * Sample time T_s = 0.001, in seconds, the plant model's unit of time.
  * Call motor_step once per sample (docs/deployment.md).
  * Plant: n = 3 states, m = 1 channels; regressor q = 5 (q_g = 2, q_w = 3).
  * Input delays: channel 1: tau = 0.001 = 1 samples.
@@ -28,7 +28,7 @@ extern "C" {
 #define MOTOR_N           3            /* plant states */
 #define MOTOR_M           1            /* channels: outputs y, references g, inputs u_f */
 #define MOTOR_Q           5            /* regressor xi_hat = [xi_g; xi_w] and each eta_i */
-#define MOTOR_SAMPLE_TIME 0.001        /* T_s, in the plant model's unit of time (that of its A and delays) */
+#define MOTOR_SAMPLE_TIME 0.001        /* T_s, in seconds, the plant model's unit of time (that of its A and delays) */
 #define MOTOR_NZ          8            /* state sizes: core [xi_g; xi_w; x_hat] */
 #define MOTOR_SIGMA_SUM   3            /* filter-bank rows, sigma_1 + ... + sigma_m */
 #define MOTOR_SIGMA_MAX   3            /* largest relative degree */
@@ -47,7 +47,7 @@ typedef struct {
     uint32_t head;                                       /* row of line holding sample k */
 } motor_state;
 
-/* The Controller's zero state (also to restart it). */
+/* The Controller's zero state (also to restart it); nothing when s is NULL. */
 void motor_init(motor_state *s);
 /* One sample: reads y(k) and g(k), writes the plant input u_f(k) = -K x_hat + F u_d (5), to hold
  * until the next sample, and returns 0; u_f may be the array y or g (both are read first). An
@@ -55,9 +55,10 @@ void motor_init(motor_state *s);
  * previous input. It returns 2 when u_f or u is no longer finite (inputs the design cannot follow
  * overflowed the state), leaving u_f untouched, and keeps returning 2: hold a safe input and call motor_init
  * (docs/deployment.md). It returns 3, touching nothing, for a state motor_init did not make (its
- * delay-line row out of range: never initialized, or corrupted). Needs IEEE arithmetic (no -ffast-math). */
+ * delay-line row out of range: never initialized, or corrupted), and 4, touching nothing, when s,
+ * y, g or u_f is NULL. Needs IEEE arithmetic (no -ffast-math). */
 int motor_step(motor_state *s, const double y[MOTOR_M], const double g[MOTOR_M], double u_f[MOTOR_M]);
-/* The adaptive command u(k) (25) of the last step, undelayed. */
+/* The adaptive command u(k) (25) of the last step, undelayed (nothing when s or u is NULL). */
 void motor_command(const motor_state *s, double u[MOTOR_M]);
 
 #ifdef __cplusplus
@@ -65,6 +66,6 @@ void motor_command(const motor_state *s, double u[MOTOR_M]);
 #endif
 
 /* Identifies this header's source: motor_controller.c compiles only with it. */
-#define MOTOR_LAYOUT_ID 0xba887be1438e569cu
+#define MOTOR_LAYOUT_ID 0xdebc3af58c7537c2u
 
 #endif /* MOTOR_CONTROLLER_H */

@@ -2,7 +2,7 @@
 #include "supply_controller.h"
 
 /* A header from another export fails here (size -1): regenerate both files together. */
-typedef char supply_header_matches_source[SUPPLY_LAYOUT_ID == 0xaf38959ff01ca376u ? 1 : -1];
+typedef char supply_header_matches_source[SUPPLY_LAYOUT_ID == 0xb2b240e897f94d8eu ? 1 : -1];
 #include <float.h>
 
 /* Core (observers (6), (14), (20) with (5) substituted) at ZOH: z(k+1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
@@ -79,6 +79,8 @@ static double supply_dot(const double *M, const double *x, unsigned len, double 
 
 void supply_init(supply_state *s)
 {
+    if (!s)
+        return;
     for (unsigned i = 0; i < SUPPLY_NZ; i++)
         s->z[i] = 0;
     for (unsigned r = 0; r < SUPPLY_SIGMA_SUM; r++)
@@ -223,6 +225,8 @@ static double supply_channel(supply_state *s, unsigned i, unsigned sigma, const 
 
 int supply_step(supply_state *s, const double y[SUPPLY_M], const double g[SUPPLY_M], double u_f[SUPPLY_M])
 {
+    if (!s || !y || !g || !u_f)
+        return 4;
     /* A state supply_init did not make: its row would index past the delay line. */
     if (s->head > SUPPLY_DELAY_MAX)
         return 3;
@@ -276,6 +280,8 @@ int supply_step(supply_state *s, const double y[SUPPLY_M], const double g[SUPPLY
 
 void supply_command(const supply_state *s, double u[SUPPLY_M])
 {
+    if (!s || !u)
+        return;
     for (unsigned i = 0; i < SUPPLY_M; i++)
         u[i] = s->u[i];
 }

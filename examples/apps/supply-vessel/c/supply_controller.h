@@ -5,7 +5,7 @@
  * change, regenerate with
  *     quell export SCENARIO --sample-time 0.1 --prefix supply --precision f64
  *
- * Sample time T_s = 0.1, in the plant model's unit of time.
+ * Sample time T_s = 0.1, in seconds, the plant model's unit of time.
  * Call supply_step once per sample (docs/deployment.md).
  * Plant: n = 6 states, m = 3 channels; regressor q = 12 (q_g = 3, q_w = 9).
  * Input delays: channel 1: tau = 1 = 10 samples; channel 2: tau = 1 = 10 samples; channel 3: tau = 1 = 10 samples.
@@ -28,7 +28,7 @@ extern "C" {
 #define SUPPLY_N           6            /* plant states */
 #define SUPPLY_M           3            /* channels: outputs y, references g, inputs u_f */
 #define SUPPLY_Q           12           /* regressor xi_hat = [xi_g; xi_w] and each eta_i */
-#define SUPPLY_SAMPLE_TIME 0.1          /* T_s, in the plant model's unit of time (that of its A and delays) */
+#define SUPPLY_SAMPLE_TIME 0.1          /* T_s, in seconds, the plant model's unit of time (that of its A and delays) */
 #define SUPPLY_NZ          18           /* state sizes: core [xi_g; xi_w; x_hat] */
 #define SUPPLY_SIGMA_SUM   6            /* filter-bank rows, sigma_1 + ... + sigma_m */
 #define SUPPLY_SIGMA_MAX   2            /* largest relative degree */
@@ -47,7 +47,7 @@ typedef struct {
     uint32_t head;                                          /* row of line holding sample k */
 } supply_state;
 
-/* The Controller's zero state (also to restart it). */
+/* The Controller's zero state (also to restart it); nothing when s is NULL. */
 void supply_init(supply_state *s);
 /* One sample: reads y(k) and g(k), writes the plant input u_f(k) = -K x_hat + F u_d (5), to hold
  * until the next sample, and returns 0; u_f may be the array y or g (both are read first). An
@@ -55,9 +55,10 @@ void supply_init(supply_state *s);
  * previous input. It returns 2 when u_f or u is no longer finite (inputs the design cannot follow
  * overflowed the state), leaving u_f untouched, and keeps returning 2: hold a safe input and call supply_init
  * (docs/deployment.md). It returns 3, touching nothing, for a state supply_init did not make (its
- * delay-line row out of range: never initialized, or corrupted). Needs IEEE arithmetic (no -ffast-math). */
+ * delay-line row out of range: never initialized, or corrupted), and 4, touching nothing, when s,
+ * y, g or u_f is NULL. Needs IEEE arithmetic (no -ffast-math). */
 int supply_step(supply_state *s, const double y[SUPPLY_M], const double g[SUPPLY_M], double u_f[SUPPLY_M]);
-/* The adaptive command u(k) (25) of the last step, undelayed. */
+/* The adaptive command u(k) (25) of the last step, undelayed (nothing when s or u is NULL). */
 void supply_command(const supply_state *s, double u[SUPPLY_M]);
 
 #ifdef __cplusplus
@@ -65,6 +66,6 @@ void supply_command(const supply_state *s, double u[SUPPLY_M]);
 #endif
 
 /* Identifies this header's source: supply_controller.c compiles only with it. */
-#define SUPPLY_LAYOUT_ID 0xaf38959ff01ca376u
+#define SUPPLY_LAYOUT_ID 0xb2b240e897f94d8eu
 
 #endif /* SUPPLY_CONTROLLER_H */
