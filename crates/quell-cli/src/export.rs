@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use quell::export::{generate, generate_fmu, ExportError, ExportOptions, FmiVersion};
 
-use crate::{load, output, Failure};
+use crate::{load_with, output, Failure};
 
 #[derive(clap::Args)]
 pub struct ExportArgs {
@@ -38,8 +38,23 @@ pub struct ExportArgs {
 
 /// Generates, then writes both files (each to a temporary name, then renamed).
 pub fn run(args: &ExportArgs) -> Result<(), Failure> {
-    // The sample time is the controller's, not a run's: a run's step budget does not apply to it.
-    let (scenario, design) = load(Some(&args.scenario), None)?;
+    // The sample time is the controller's, not a run's: export runs nothing, so the horizon is
+    // capped where a run's step budget would refuse the sample time.
+    let (scenario, design) = load_with(Some(&args.scenario), |sim| {
+        if let Some(t) = args.sample_time.filter(|t| t.is_finite() && *t > 0.0) {
+            sim.insert("sample_time".into(), toml::Value::Float(t));
+            let t_end = match sim.get("t_end") {
+                None => Some(quell::scenario::Simulation::default().t_end),
+                Some(v) => v.as_float().or_else(|| v.as_integer().map(|i| i as f64)),
+            };
+            // A t_end that is not a number stays, for the reader to name; the output step stays within it.
+            let cap = t * quell::settings::MAX_SAMPLING_STEPS;
+            if t_end.is_some_and(|t_end| t_end > cap) {
+                sim.insert("t_end".into(), toml::Value::Float(cap));
+                sim.insert("output_step".into(), toml::Value::Float(cap));
+            }
+        }
+    })?;
     let sample_time = args.sample_time.or(scenario.simulation.sample_time).ok_or_else(|| {
         Failure::Input(
             "--sample-time: missing; the controller runs at a sample time T_s, in the plant model's unit of time (or set simulation.sample_time in the scenario)".into(),

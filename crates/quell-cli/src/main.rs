@@ -128,16 +128,26 @@ pub(crate) fn parse_real(text: &str) -> Result<f64, String> {
 /// (a `--sample-time` > 0) as its `simulation.sample_time`, so that the file is checked as the
 /// sampled-data scenario the flag makes of it (white noise needs no bandwidth there).
 pub(crate) fn load(path: Option<&Path>, sample_time: Option<f64>) -> Result<(Scenario, Design), Failure> {
+    load_with(path, |sim| {
+        if let Some(t) = sample_time.filter(|t| t.is_finite() && *t > 0.0) {
+            sim.insert("sample_time".into(), toml::Value::Float(t));
+        }
+    })
+}
+
+/// [`load`] with `[simulation]` changed by `adjust` first (a table, empty where the file has none).
+pub(crate) fn load_with(
+    path: Option<&Path>,
+    adjust: impl FnOnce(&mut toml::Table),
+) -> Result<(Scenario, Design), Failure> {
     let parsed = match path {
         Some(p) => quell::scenario::read_document(p),
         None => quell::scenario::parse_document(PAPER_EXAMPLE),
     };
     let scenario = parsed
         .and_then(|mut doc| {
-            if let Some(t) = sample_time.filter(|t| t.is_finite() && *t > 0.0) {
-                if let Some(sim) = doc.entry("simulation").or_insert(toml::Table::new().into()).as_table_mut() {
-                    sim.insert("sample_time".into(), toml::Value::Float(t));
-                }
+            if let Some(sim) = doc.entry("simulation").or_insert(toml::Table::new().into()).as_table_mut() {
+                adjust(sim);
             }
             Scenario::from_document(&doc)
         })
