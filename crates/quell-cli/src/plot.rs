@@ -293,8 +293,8 @@ fn draw<DB: DrawingBackend>(
     let held = |sig: &[f64]| if r.commands_held() { staircase(&col(sig)) } else { col(sig) };
     panel(&areas[2], (&format!("{channel}: adaptive command (25)"), "u"), &[(format!("u{c}"), held(&r.u))], time)?;
     // The plant input u_f (5), what the actuator must deliver, in its own panel: in a plant's units
-    // (newtons, volts) it can be 1e5 times u. The true actuator's limit is drawn where u_f comes
-    // within a tenth of it, and its distance told otherwise (the lines would flatten the curve).
+    // (newtons, volts) it can be 1e5 times u. The true actuator's limit is drawn where u_f's peak
+    // reaches a tenth of it, and its distance told otherwise (the lines would flatten the curve).
     let uf = held(&r.u_f);
     let u_max = r.u_max.get(i).copied().filter(|u| u.is_finite());
     let peak = uf.iter().map(|(_, v)| v.abs()).filter(|v| v.is_finite()).fold(0.0, f64::max);

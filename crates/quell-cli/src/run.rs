@@ -307,8 +307,10 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
         }
         outcome => {
             let why = outcome.explain("--max-steps", result.time_unit).unwrap_or_default();
-            // A true actuator that clipped may be why: the clipping is said before the failure.
-            crate::print_stdout(&clipping);
+            // A true actuator that clipped may be why: the clipping, and the advice on the whole
+            // loop (which names it as the likely cause), are said before the failure.
+            let advice: String = diagnostics.advice.iter().map(|a| format!("advice: {a}\n")).collect();
+            crate::print_stdout(&(clipping + &advice));
             Err(Failure::Run(format!("{why}; results up to then are in {out}")))
         }
     }

@@ -212,8 +212,26 @@ fn read_shard(dir: &Path) -> Result<(StudyMeta, Vec<Row>, bool), Failure> {
     let summary: Summary = serde_json::from_str(&text)
         .map_err(|e| bad("summary.json", format!("not a summary written by `quell sweep` ({e})")))?;
     let csv = std::fs::read_to_string(dir.join("runs.csv")).map_err(|e| bad("runs.csv", e.to_string()))?;
+    let shard = summary.study.shard;
+    if shard.index >= shard.count {
+        return Err(bad(
+            "summary.json",
+            format!(
+                "study.shard is {}/{}: expected an index from 0 to count − 1; the file was not written by `quell sweep --shard`, or was edited",
+                shard.index, shard.count
+            ),
+        ));
+    }
     let runs = study::read_runs_csv(&csv, &summary.study).map_err(|e| bad("runs.csv", e))?;
     Ok((summary.study, runs.rows, runs.partial || summary.partial))
+}
+
+/// The first key of `study` in summary.json, its shard aside (checked on its own), where `a` and
+/// `b` differ.
+fn differing_key(a: &StudyMeta, b: &StudyMeta) -> Option<String> {
+    let (a, b) = (serde_json::to_value(a).ok()?, serde_json::to_value(b).ok()?);
+    let (a, b) = (a.as_object()?, b.as_object()?);
+    a.iter().find(|(key, value)| *key != "shard" && b.get(*key) != Some(*value)).map(|(key, _)| key.clone())
 }
 
 /// `--merge DIR…`: the shards of one study (same fingerprint, every shard I/N once, none
@@ -242,6 +260,12 @@ fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
                 first_dir.display(),
                 meta.fingerprint,
                 first.fingerprint
+            )));
+        }
+        if let Some(key) = differing_key(meta, &first) {
+            return Err(Failure::Input(format!(
+                "{here}: its summary.json's study.{key} differs from {}'s; merge only the shards of one study, as `quell sweep --shard` wrote them",
+                first_dir.display()
             )));
         }
         if meta.shard.count != count {

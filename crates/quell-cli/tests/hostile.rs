@@ -117,6 +117,40 @@ fn merge_checks_every_shards_run_indices_and_its_output_folder() {
         &format!("--merge {}: runs.csv holds 1 rows, but shard 1/2 has 2 runs (is runs.csv truncated?)", at("s1")),
     );
     fs::write(dir.join("s1/runs.csv"), &good).unwrap();
+    // An edited summary.json: a shard index beyond the count panicked (index out of bounds); a
+    // study field that differs from the first shard's passed when that shard came second.
+    let summary = fs::read_to_string(dir.join("s1/summary.json")).unwrap();
+    let edit = |from: &str, to: &str| {
+        assert!(summary.contains(from), "{from} in {summary}");
+        fs::write(dir.join("s1/summary.json"), summary.replacen(from, to, 1)).unwrap();
+    };
+    edit("\"index\": 1", "\"index\": 7");
+    refused(
+        &quell(&["sweep", "--merge", &at("s0"), &at("s1"), "--out", &at("m")]),
+        &format!("--merge {}: summary.json: study.shard is 7/2: expected an index from 0 to count − 1", at("s1")),
+    );
+    edit("\"time_unit\": \"s\"", "\"time_unit\": \"min\"");
+    for order in [[at("s0"), at("s1")], [at("s1"), at("s0")]] {
+        let o = quell(&["sweep", "--merge", &order[0], &order[1], "--out", &at("m")]);
+        refused(&o, "'s study.time_unit differs from ");
+    }
+    fs::write(dir.join("s1/summary.json"), &summary).unwrap();
+    // A NaN among a completed run's figures (it merged, and the summary's quantiles shifted).
+    let header_and_rows: Vec<String> = good.lines().map(str::to_string).collect();
+    let mut fields: Vec<String> = header_and_rows[1].split(',').map(str::to_string).collect();
+    let column = header_and_rows[0].split(',').position(|h| h == "max_uf1").unwrap();
+    assert_eq!(fields[5], "completed");
+    fields[column] = "NaN".into();
+    fs::write(
+        dir.join("s1/runs.csv"),
+        format!("{}\n{}\n{}\n", header_and_rows[0], fields.join(","), header_and_rows[2..].join("\n")),
+    )
+    .unwrap();
+    refused(
+        &quell(&["sweep", "--merge", &at("s0"), &at("s1"), "--out", &at("m")]),
+        "runs.csv: line 2: max_uf1: expected a finite number in a completed run's row, found `NaN`",
+    );
+    fs::write(dir.join("s1/runs.csv"), &good).unwrap();
     // Merging into one of the shards replaced it.
     let before = fs::read_to_string(dir.join("s0/runs.csv")).unwrap();
     refused(

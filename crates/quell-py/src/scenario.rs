@@ -201,17 +201,7 @@ fn integer_key(key: &str) -> Option<&'static str> {
         Some(inner) => inner.rsplit_once("[\"").map_or(inner, |(_, n)| n),
         None => k.rsplit('.').next().unwrap_or(k),
     };
-    match name {
-        "seed" => Some("a seed, an integer from 0 to 2**63 - 1"),
-        "runs"
-        | "points"
-        | "refine"
-        | "max_steps"
-        | "relative_degrees"
-        | "reference_filter_orders"
-        | "disturbance_filter_orders" => Some("an integer within 2**63 - 1"),
-        _ => None,
-    }
+    quell::settings::integer_key(name)
 }
 
 /// A Python value (numbers, strings, lists, dicts, numpy arrays and scalars) as a TOML value;

@@ -431,6 +431,22 @@ pub(crate) fn fmt_4(v: f64) -> String {
     format!("{v:.3e}").parse().map_or_else(|_| v.to_string(), fmt_short)
 }
 
+/// What a key that holds an integer expects, by its last name (`seed`, `runs`, `points`, …);
+/// `None` for a key that holds a real number, which may be written as a float.
+pub fn integer_key(name: &str) -> Option<&'static str> {
+    match name {
+        "seed" => Some("a seed, an integer from 0 to 2**63 - 1"),
+        "runs"
+        | "points"
+        | "refine"
+        | "max_steps"
+        | "relative_degrees"
+        | "reference_filter_orders"
+        | "disturbance_filter_orders" => Some("an integer within 2**63 - 1"),
+        _ => None,
+    }
+}
+
 /// "1 entry" or "n entries", for the messages that count a list's entries.
 pub fn entries(n: usize) -> String {
     count(n, "entry", "entries")

@@ -129,7 +129,7 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
     let missed = (0..result.m).any(|i| !tail_within_bound(result, i));
     // One line for every frequency it passes badly: they share the remedy.
     let poor: Vec<&Fidelity> = avg.fidelity.iter().filter(|f| missed && f.relative_error > FIDELITY_LIMIT).collect();
-    let mut advice = Vec::new();
+    let mut advice: Vec<String> = clipping_advice(result, missed).into_iter().collect();
     if !poor.is_empty() {
         let list = |part: &dyn Fn(&Fidelity) -> String| poor.iter().map(|f| part(f)).collect::<Vec<_>>().join(", ");
         let (plural, freqs, errors) = (
@@ -163,6 +163,26 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
         .collect();
     Diagnostics { channels, observer_fidelity: avg.fidelity, advice }
 }
+
+/// A run that missed its tail bound (or ended early) while the true actuator's limits clipped u_f at
+/// more than [`CLIPPED_SHARE`] of the samples: the likely cause, which no design key's advice sees
+/// (the method has no anti-windup: a clipped u_f drives the observer (6) wrong).
+fn clipping_advice(result: &SimResult, missed: bool) -> Option<String> {
+    let clipped: Vec<String> = (result.limited_fraction().iter().enumerate())
+        .filter(|(_, f)| **f > CLIPPED_SHARE)
+        .map(|(i, f)| format!("input {} at {:.1} % of the samples (truth.u_max[{i}])", i + 1, 100.0 * f))
+        .collect();
+    (missed && !clipped.is_empty()).then(|| {
+        format!(
+            "the true actuator's limits clipped u_f: {}; the method assumes the plant receives u_f (eq. (5)) and has no anti-windup, so while clipped the observer is driven by the commanded input, not the applied one: raise the limits, or ask for less input (a slower or smaller reference, slower channel poles, a smaller μ) before tuning anything else (docs/applications.md)",
+            clipped.join(", ")
+        )
+    })
+}
+
+/// The share of the recorded samples above which clipping by the true actuator is named as a
+/// failed run's likely cause ([`clipping_advice`]).
+const CLIPPED_SHARE: f64 = 0.01;
 
 /// The zeros of (A, D, C) that an unknown-input observer keeps among its poles: when C D has full
 /// column rank k, the n − k eigenvalues of (I − D (CD)⁺ C) A other than its k zeros (that

@@ -286,9 +286,14 @@ pub(crate) fn syntax_message(text: &str, e: &toml::de::Error) -> String {
         Some(number) if message.contains("as i128") => {
             let before = text.get(..span.start).unwrap_or_default();
             let name = before.rsplit('\n').next().and_then(|l| l.split('=').next()).map(str::trim);
-            let name = name.filter(|n| !n.is_empty()).map_or(String::new(), |n| format!(" ({n})"));
+            let name = name.filter(|n| !n.is_empty()).map(|n| n.trim_matches('"'));
+            let what = match name.and_then(crate::settings::integer_key) {
+                Some(expected) => format!("expected {expected}; give a smaller one"),
+                None => format!("write it as a float, e.g. {number}.0"),
+            };
+            let name = name.map_or(String::new(), |n| format!(" ({n})"));
             format!(
-                "line {line}, column {col}{name}: the integer {number} is beyond TOML's integers (±9223372036854775807); write it as a float, e.g. {number}.0"
+                "line {line}, column {col}{name}: the integer {number} is beyond TOML's integers (±9223372036854775807); {what}"
             )
         }
         _ => format!("line {line}, column {col}: {message}"),
@@ -330,6 +335,11 @@ mod tests {
         assert_eq!(
             message("[simulation]\nt_end = 99999999999999999999\n"),
             "line 2, column 9 (t_end): the integer 99999999999999999999 is beyond TOML's integers (±9223372036854775807); write it as a float, e.g. 99999999999999999999.0"
+        );
+        // A count or a seed is an integer: no float advice for it (a float seed is refused).
+        assert_eq!(
+            message("[noise]\nseed = 99999999999999999999\n"),
+            "line 2, column 8 (seed): the integer 99999999999999999999 is beyond TOML's integers (±9223372036854775807); expected a seed, an integer from 0 to 2**63 - 1; give a smaller one"
         );
         let fixed: toml::Table = "t_end = 99999999999999999999.0".parse().unwrap();
         assert_eq!(fixed["t_end"].as_float(), Some(1e20));

@@ -132,6 +132,19 @@ pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
             f[i].parse::<u64>().map_err(|_| at(format!("{}: expected an integer, found `{}`", expected[i], f[i])))
         };
         let opt = |i: usize| if f[i].is_empty() { Ok(None) } else { num(i).map(Some) };
+        // A completed run's figures are finite (NaN marks a run that stopped).
+        let finite = |i: usize| {
+            num(i).and_then(|x| {
+                if x.is_finite() {
+                    Ok(x)
+                } else {
+                    Err(at(format!(
+                        "{}: expected a finite number in a completed run's row, found `{}`",
+                        expected[i], f[i]
+                    )))
+                }
+            })
+        };
         let outcome = match f[4 + g].as_str() {
             "completed" => Outcome::Completed,
             "diverged" => Outcome::Diverged,
@@ -143,10 +156,10 @@ pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
             (0..m)
                 .map(|i| {
                     Ok(ChannelFigures {
-                        tail_max_e: num(first + i)?,
-                        tail_rms_e: num(first + m + i)?,
-                        max_u: num(first + 2 * m + i)?,
-                        max_uf: num(first + 3 * m + i)?,
+                        tail_max_e: finite(first + i)?,
+                        tail_rms_e: finite(first + m + i)?,
+                        max_u: finite(first + 2 * m + i)?,
+                        max_uf: finite(first + 3 * m + i)?,
                         settle_t: opt(first + 4 * m + i)?,
                     })
                 })

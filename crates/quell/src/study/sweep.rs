@@ -200,10 +200,12 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                     row.outcome = Outcome::Diverged;
                     row.reason = format!("{signal} = {value:e} at t = {t:.4} {}", r.time_unit);
                     if let (Some(n), true) = (spec.nominal, value.abs() <= DIVERGENCE_BOUND) {
-                        let peak = n.peaks.0[Peaks::index_of(signal)];
+                        let group = Peaks::index_of(signal);
                         row.reason += &format!(
-                            ": beyond {} × its peak {peak:.4e} in the nominal run (runaway.peak)",
-                            spec.runaway.peak
+                            ": beyond {} × the peak of {} in the nominal run, {:.4e} (over its entries; runaway.peak)",
+                            spec.runaway.peak,
+                            ["x", "x_hat", "xi_hat", "eta"][group],
+                            n.peaks.0[group]
                         );
                     }
                 }
