@@ -552,7 +552,7 @@ fn draw_sweep_panel<DB: DrawingBackend>(
     let pad = 0.05 * (hi - lo);
     let (y0, y1) = (lo - pad, hi + pad);
     let mut chart = ChartBuilder::on(area)
-        .caption(format!("Channel {}: {label}", i + 1), ("sans-serif", 18))
+        .caption(format!("{}: {label}", s.study.channel(i)), ("sans-serif", 18))
         .margin(8)
         .margin_right(if scale == AxisScale::Positions { 56 } else { 28 })
         .x_label_area_size(36)
@@ -681,7 +681,7 @@ fn draw_sweep_2d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
             colour_bar(&scale, lo, span)?;
         }
         let mut chart = ChartBuilder::on(&cells)
-            .caption(format!("Channel {}: median tail RMS e", i + 1), ("sans-serif", 18))
+            .caption(format!("{}: median tail RMS e", s.study.channel(i)), ("sans-serif", 18))
             .margin(10)
             .x_label_area_size(40)
             .y_label_area_size(70)
@@ -820,7 +820,7 @@ fn draw_distributions<DB: DrawingBackend>(
             let pad = if log { 0.0 } else { 0.05 * (x1 - x0) };
             let (x0, x1) = (x0 - pad, x1 + pad);
             let mut chart = ChartBuilder::on(&areas[f * s.study.m + i])
-                .caption(format!("Channel {}: {label}", i + 1), ("sans-serif", 18))
+                .caption(format!("{}: {label}", s.study.channel(i)), ("sans-serif", 18))
                 .margin(8)
                 .margin_right(28)
                 .x_label_area_size(36)

@@ -353,3 +353,34 @@ fn the_settling_time_axis_is_in_the_plants_unit_of_time() {
     // Each channel has a panel of the plant input's peak (5), what the actuator must deliver.
     assert_eq!(svg.matches("max |u_f| (plant input)").count(), 2 * 2, "title and y label, two channels");
 }
+
+/// The sweep's figures title each channel with its output's name, as `quell run`'s do ("Channel 1
+/// (pitch)"; they said "Channel 1"), from `[plant] outputs`, which summary.json now carries.
+#[test]
+fn sweep_figures_name_the_outputs() {
+    let tmp = scratch("names");
+    let dir = tmp.path();
+    let heli = Path::new(env!("CARGO_MANIFEST_DIR")).join("../quell/tests/data/quanser-heli.toml");
+    fs::copy(heli, dir.join("heli.toml")).unwrap();
+    for (name, grid) in [
+        ("one.toml", "\"design.beta\" = [1.0, 2.0]\n"),
+        ("two.toml", "\"design.beta\" = [1.0, 2.0]\n\"design.mu[0]\" = [1.0, 2.0]\n"),
+    ] {
+        let study = write_study(
+            dir,
+            name,
+            &format!("scenario = \"heli.toml\"\n[simulation]\nt_end = 2.0\nrtol = 1e-6\natol = 1e-6\n[grid]\n{grid}"),
+        );
+        let out = dir.join(format!("out-{name}"));
+        let o = quell(&["sweep", &study, "--out", out.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let svg = fs::read_to_string(out.join("sweep.svg")).unwrap();
+        assert!(
+            svg.contains("Channel 1 (pitch)") && svg.contains("Channel 2 (yaw)"),
+            "{name}: no output names in sweep.svg"
+        );
+        let summary: serde_json::Value =
+            serde_json::from_str(&fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+        assert_eq!(summary["study"]["outputs"], serde_json::json!(["pitch", "yaw"]));
+    }
+}

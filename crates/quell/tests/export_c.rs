@@ -211,20 +211,20 @@ int main(void)
     EXPECT(fmi2GetReal(c, NULL, 0, NULL), fmi2OK, "");
     EXPECT(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, NULL), fmi2Error, "a NULL value pointer");
     EXPECT(fmi2SetupExperiment(c, 0, 0, nan, 0, 0), fmi2Error, "fmi2SetupExperiment: startTime = nan; the start time must be finite");
-    EXPECT(fmi2ExitInitializationMode(c), fmi2Error, "fmi2ExitInitializationMode: called when instantiated (after Instantiate or Reset); it is allowed only when initialization mode");
+    EXPECT(fmi2ExitInitializationMode(c), fmi2Error, "fmi2ExitInitializationMode: not allowed when the FMU is instantiated (after Instantiate or Reset); only when it is in initialization mode");
     EXPECT(fmi2SetupExperiment(c, 0, 0, 2, 0, 0), fmi2OK, "");
     EXPECT(fmi2EnterInitializationMode(c), fmi2OK, "");
     EXPECT(fmi2SetupExperiment(c, 0, 0, 0, 0, 0), fmi2Error, "the start time is set before initialization only");
     EXPECT(fmi2ExitInitializationMode(c), fmi2OK, "");
     EXPECT(fmi2DoStep(c, 2, 0.1, fmi2True), fmi2OK, "");
     EXPECT(fmi2SetupExperiment(c, 0, 0, 1000, 0, 0), fmi2Error, "the start time is set before initialization only");
-    EXPECT(fmi2EnterInitializationMode(c), fmi2Error, "fmi2EnterInitializationMode: called when step mode");
+    EXPECT(fmi2EnterInitializationMode(c), fmi2Error, "fmi2EnterInitializationMode: not allowed when the FMU is in step mode");
     EXPECT(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, value), fmi2OK, "");
     if (value[0] != 2.1)
         printf("time %g after a step from 2 s, not 2.1\n", value[0]), fails++;
     EXPECT(fmi2Terminate(c), fmi2OK, "");
-    EXPECT(fmi2Terminate(c), fmi2Error, "fmi2Terminate: called when terminated");
-    EXPECT(fmi2ExitInitializationMode(c), fmi2Error, "called when terminated (Reset, then initialize again)");
+    EXPECT(fmi2Terminate(c), fmi2Error, "fmi2Terminate: not allowed when the FMU is terminated");
+    EXPECT(fmi2ExitInitializationMode(c), fmi2Error, "not allowed when the FMU is terminated (Reset, then initialize again)");
     EXPECT(fmi2DoStep(c, 2.1, 0.05, fmi2True), fmi2Error, "fmi2DoStep: the FMU is not in step mode");
     EXPECT(fmi2Reset(c), fmi2OK, "");
     EXPECT(fmi2EnterInitializationMode(c), fmi2OK, "");
@@ -260,14 +260,14 @@ int main(void)
     EXPECT(fmi3GetFloat64(c, NULL, 1, value, 1), fmi3Error, "fmi3GetFloat64: a NULL array for 1 values");
     EXPECT(fmi3SetFloat64(c, vr, 1, NULL, 1), fmi3Error, "fmi3SetFloat64: a NULL array for 1 values");
     EXPECT(fmi3EnterInitializationMode(c, 0, 0, nan, 0, 0), fmi3Error, "startTime = nan; the start time must be finite");
-    EXPECT(fmi3ExitInitializationMode(c), fmi3Error, "it is allowed only when initialization mode");
+    EXPECT(fmi3ExitInitializationMode(c), fmi3Error, "only when it is in initialization mode");
     EXPECT(fmi3EnterInitializationMode(c, 0, 0, 2, 0, 0), fmi3OK, "");
     EXPECT(fmi3ExitInitializationMode(c), fmi3OK, "");
     EXPECT(fmi3DoStep(c, 2, 0.05, fmi3True, NULL, &terminate, &early, &t), fmi3Error, "fmi3DoStep: a NULL output pointer");
     EXPECT(fmi3DoStep(c, 2, 0.05, fmi3True, &event, &terminate, &early, &t), fmi3OK, "");
     EXPECT(fmi3EnterInitializationMode(c, 0, 0, 50, 0, 0), fmi3Error, "the start time is set before initialization only");
     EXPECT(fmi3Terminate(c), fmi3OK, "");
-    EXPECT(fmi3ExitInitializationMode(c), fmi3Error, "called when terminated");
+    EXPECT(fmi3ExitInitializationMode(c), fmi3Error, "not allowed when the FMU is terminated");
     EXPECT(fmi3DoStep(c, 2.05, 0.05, fmi3True, &event, &terminate, &early, &t), fmi3Error, "not in step mode");
     if (t != 2.05)
         printf("lastSuccessfulTime %g, not 2.05\n", t), fails++;

@@ -461,6 +461,12 @@ impl Study {
         given.and_then(|u| crate::settings::TimeUnit::from_name(u).ok()).unwrap_or_default()
     }
 
+    /// The outputs' names the scenario gives (`[plant] outputs`); empty without them.
+    pub fn outputs(&self) -> Vec<String> {
+        let names = self.base.get("plant").and_then(|p| p.get("outputs")).and_then(toml::Value::as_array);
+        names.map_or_else(Vec::new, |a| a.iter().filter_map(|n| n.as_str().map(str::to_string)).collect())
+    }
+
     /// Whether some run's true plant differs from the design model: the scenario's `[truth]`
     /// differs from `[plant]`, a grid value of a `truth.` key differs from the plant's, or a draw
     /// perturbs a `truth.` key with a spread > 0.

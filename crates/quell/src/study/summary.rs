@@ -114,6 +114,9 @@ pub struct StudyMeta {
     /// The symbol of the scenario's unit of time (`[plant] time_unit`; "s" when not given).
     #[serde(default = "seconds")]
     pub time_unit: String,
+    /// The outputs' names (`[plant] outputs`), for the figures' titles; empty when not given.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub outputs: Vec<String>,
 }
 
 fn seconds() -> String {
@@ -139,6 +142,15 @@ impl StudyMeta {
             runaway: study.runaway,
             shard,
             time_unit: study.time_unit().symbol().into(),
+            outputs: study.outputs(),
+        }
+    }
+
+    /// "Channel i" (from 1), with the output's name when the scenario gives one: "Channel 1 (xD)".
+    pub fn channel(&self, i: usize) -> String {
+        match self.outputs.get(i) {
+            Some(name) => format!("Channel {} ({name})", i + 1),
+            None => format!("Channel {}", i + 1),
         }
     }
 
