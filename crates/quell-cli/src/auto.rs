@@ -50,7 +50,9 @@ impl DesignArgs {
 
 pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
     let targets = Targets { convergence_time: args.convergence_time, u_limit: args.u_limit.clone() };
-    let doc = quell::scenario::read_document(&args.scenario).map_err(|e| Failure::Input(e.to_string()))?;
+    // The text is kept: --write writes it back with the chosen [design].
+    let input = quell::scenario::read_text(&args.scenario).map_err(|e| Failure::Input(e.to_string()))?;
+    let doc = quell::scenario::parse_document(&input).map_err(|e| Failure::Input(e.to_string()))?;
     if let Some(out) = &args.write {
         output::prepare_file("--write", out)?;
         // The written scenario is the input with its [design] replaced: refuse to replace the input
@@ -92,8 +94,6 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
     }
     if let Some(out) = &args.write {
         // The input as it is, comments included, with the chosen [design].
-        let input = quell::settings::read_input(&args.scenario)
-            .map_err(|e| Failure::Input(format!("{}: cannot read the file: {e}", args.scenario.display())))?;
         let text = quell::scenario::with_design(&input, &auto.scenario.design)
             .map_err(|e| Failure::Input(format!("{}: {e}", args.scenario.display())))?;
         output::write_atomic(out, |w| w.write_all(text.as_bytes()))

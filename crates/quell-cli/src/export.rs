@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use quell::export::{generate, generate_fmu, ExportError, ExportOptions, FmiVersion};
 
-use crate::{load_with, output, Failure};
+use crate::{load_with, output, set_sample_time, Failure};
 
 #[derive(clap::Args)]
 pub struct ExportArgs {
@@ -41,8 +41,7 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
     // The sample time is the controller's, not a run's: export runs nothing, so the horizon is
     // capped where a run's step budget would refuse the sample time.
     let (scenario, design) = load_with(Some(&args.scenario), |sim| {
-        if let Some(t) = args.sample_time.filter(|t| t.is_finite() && *t > 0.0) {
-            sim.insert("sample_time".into(), toml::Value::Float(t));
+        if let Some(t) = set_sample_time(sim, args.sample_time) {
             let t_end = match sim.get("t_end") {
                 None => Some(quell::scenario::Simulation::default().t_end),
                 Some(v) => v.as_float().or_else(|| v.as_integer().map(|i| i as f64)),

@@ -129,10 +129,16 @@ pub(crate) fn parse_real(text: &str) -> Result<f64, String> {
 /// sampled-data scenario the flag makes of it (white noise needs no bandwidth there).
 pub(crate) fn load(path: Option<&Path>, sample_time: Option<f64>) -> Result<(Scenario, Design), Failure> {
     load_with(path, |sim| {
-        if let Some(t) = sample_time.filter(|t| t.is_finite() && *t > 0.0) {
-            sim.insert("sample_time".into(), toml::Value::Float(t));
-        }
+        set_sample_time(sim, sample_time);
     })
+}
+
+/// `[simulation]` `sim` with `sample_time` (a `--sample-time` > 0) as its `sample_time`; the value
+/// set, if any (a bad one is left to the controller's check).
+pub(crate) fn set_sample_time(sim: &mut toml::Table, sample_time: Option<f64>) -> Option<f64> {
+    let t = sample_time.filter(|t| t.is_finite() && *t > 0.0)?;
+    sim.insert("sample_time".into(), toml::Value::Float(t));
+    Some(t)
 }
 
 /// [`load`] with `[simulation]` changed by `adjust` first (a table, empty where the file has none).

@@ -55,12 +55,14 @@ fn real_array<'py>(obj: &Bound<'py, PyAny>, name: &str, kind: Kind) -> PyResult<
     let mut code: String = dtype.getattr("kind")?.extract()?;
     // Python ints beyond int64 (10**30) make an object array; within a float64's range they are
     // the numbers they are, as numpy reads them into float64.
-    let arr = match np.call_method1("asarray", (obj, "float64")) {
-        Ok(floats) if code == "O" && all_ints_or_floats(&arr)? => {
+    let floats =
+        if code == "O" && all_ints_or_floats(&arr)? { np.call_method1("asarray", (obj, "float64")).ok() } else { None };
+    let arr = match floats {
+        Some(floats) => {
             (dtype, code) = (floats.getattr("dtype")?, "f".to_string());
             floats
         }
-        _ => arr,
+        None => arr,
     };
     if !matches!(code.as_str(), "i" | "u" | "f") {
         let found = match code.as_str() {

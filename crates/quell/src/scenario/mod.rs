@@ -299,9 +299,12 @@ pub fn parse_document(text: &str) -> Result<toml::Table, ScenarioError> {
 /// Reads a scenario file's TOML document, at most [`crate::settings::MAX_INPUT_BYTES`] of it; I/O
 /// errors carry the path as key.
 pub fn read_document(path: &Path) -> Result<toml::Table, ScenarioError> {
-    let text = crate::settings::read_input(path)
-        .map_err(|e| err(path.display().to_string(), format!("cannot read the file: {e}")))?;
-    parse_document(&text)
+    parse_document(&read_text(path)?)
+}
+
+/// A scenario file's text, the error naming the file when it cannot be read.
+pub fn read_text(path: &Path) -> Result<String, ScenarioError> {
+    crate::settings::read_input(path).map_err(|e| err(path.display().to_string(), format!("cannot read the file: {e}")))
 }
 
 /// `[plant]`: matrices and delays, shapes checked by [`Plant::new`] with errors mapped to keys, and

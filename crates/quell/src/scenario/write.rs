@@ -59,9 +59,11 @@ pub fn with_design(text: &str, design: &DesignSpec) -> Result<String, ScenarioEr
         text.parse().map_err(|e: toml_edit::TomlError| ScenarioError::new("", format!("not valid TOML: {e}")))?;
     let mut new = Table::new();
     new.insert("design".into(), Value::Table(design_table(design)));
-    let new: toml_edit::DocumentMut = tidy(&toml::to_string(&new).unwrap_or_default())
+    let mut new: toml_edit::DocumentMut = toml::to_string(&new)
+        .unwrap_or_default()
         .parse()
         .map_err(|e: toml_edit::TomlError| ScenarioError::new("design", e.to_string()))?;
+    short_floats(&mut new);
     let Some(toml_edit::Item::Table(mut table)) = new.as_table().get("design").cloned() else {
         return Err(ScenarioError::new("design", "the design did not render as a table"));
     };
@@ -78,6 +80,17 @@ pub fn with_design(text: &str, design: &DesignSpec) -> Result<String, ScenarioEr
 
 /// `text` (TOML from [`toml::to_string`]) with every finite float in [`short_float`]'s form.
 fn tidy(text: &str) -> String {
+    match text.parse::<toml_edit::DocumentMut>() {
+        Ok(mut doc) => {
+            short_floats(&mut doc);
+            doc.to_string()
+        }
+        Err(_) => text.to_owned(),
+    }
+}
+
+/// Every finite float of `doc` in [`short_float`]'s form, its decor kept.
+fn short_floats(doc: &mut toml_edit::DocumentMut) {
     struct Floats;
     impl toml_edit::visit_mut::VisitMut for Floats {
         fn visit_value_mut(&mut self, node: &mut toml_edit::Value) {
@@ -91,13 +104,7 @@ fn tidy(text: &str) -> String {
             toml_edit::visit_mut::visit_value_mut(self, node);
         }
     }
-    match text.parse::<toml_edit::DocumentMut>() {
-        Ok(mut doc) => {
-            toml_edit::visit_mut::VisitMut::visit_document_mut(&mut Floats, &mut doc);
-            doc.to_string()
-        }
-        Err(_) => text.to_owned(),
-    }
+    toml_edit::visit_mut::VisitMut::visit_document_mut(&mut Floats, doc);
 }
 
 /// x in its shortest round-trip digits: `0.05`, `100.0`, and in exponent form below 1e-4 and from
