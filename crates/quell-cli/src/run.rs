@@ -129,8 +129,7 @@ fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result
 /// with the nearest fix on either side.
 fn output_step_error(T: f64, h: f64, s: TimeUnit) -> Failure {
     let ratio = h / T;
-    let divisor = h / ratio.ceil().max(1.0);
-    let multiple = T * ratio.round().max(1.0);
+    let (divisor, multiple) = quell::sim::output_step_fixes(T, h);
     Failure::Input(format!(
         "--sample-time {}: simulation.output_step = {} {s} (from the scenario file) is not a whole number of samples of {} {s} ({ratio:.6} samples; each recorded row is a controller step); give a --sample-time that divides it, e.g. {} {s}, or set simulation.output_step to a multiple of the sample time, e.g. {} {s}",
         short(T),

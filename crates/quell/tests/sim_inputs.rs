@@ -101,6 +101,24 @@ fn horizons_and_tolerances_are_checked() {
     assert_eq!(samp(1.0, 0.15, 0.1), "simulation.output_step", "1.5 samples per output");
 }
 
+/// An output step that is not a whole number of samples names both ways out, and each of them runs:
+/// the paper's delays (1 s, 3 s) are whole at T = 0.04 s, where 0.1 s is 2.5 samples; the multiple
+/// offered is 0.12 s (3 samples) and the sample time 0.1/3 s (whole in 1 s and 3 s as well).
+#[test]
+fn an_output_step_between_samples_gets_fixes_that_run() {
+    let (s, d) = paper();
+    let (g, w) = (&s.reference, &s.disturbance);
+    let err = Run::new(&d, g, w, RunSettings::sampled(1.0, 0.1, 0.04)).simulate(go).expect_err("2.5 samples");
+    let message = err.to_string();
+    assert!(message.contains("e.g. 0.12 s") && message.contains("e.g. 0.0333333333"), "{message}");
+    let (divisor, multiple) = quell::sim::output_step_fixes(0.04, 0.1);
+    assert!((multiple - 0.12).abs() < 1e-15 && (divisor - 0.1 / 3.0).abs() < 1e-15, "{multiple} {divisor}");
+    for (h, ts) in [(multiple, 0.04), (0.1, divisor)] {
+        let r = Run::new(&d, g, w, RunSettings::sampled(1.0, h, ts)).simulate(go);
+        assert!(r.is_ok(), "output_step {h}, sample_time {ts}: {:?}", r.err());
+    }
+}
+
 /// The recorded signals are budgeted in bytes, not only in rows: the SI supply vessel (m = 3,
 /// q = 12: 52 numbers a row, 416 bytes; 64 with x and x̂) at 1e7 rows would keep 3.9 GiB, beyond
 /// the 2 GiB budget, where the paper's example (27 numbers a row) keeps 1.8 GiB at 9e6 rows and

@@ -32,7 +32,7 @@ pub use dde::{Method, Stats};
 pub use divergence::{Peaks, Watched, DIVERGENCE_BOUND};
 pub use noise::{band_limited, NOISE_SINES};
 pub use result::{ChannelFigures, ChannelSummary, Outcome, RunStats, Sample, SimResult};
-pub use sampled::{coarse_sample_warning, SampledController, COARSE_SAMPLE};
+pub use sampled::{coarse_sample_warning, output_step_fixes, SampledController, COARSE_SAMPLE};
 pub use settle::{Settle, Settling};
 
 /// The front door as `docs/running.md` shows it, compiled and run as a doc test.

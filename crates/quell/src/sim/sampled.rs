@@ -101,13 +101,28 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
     };
     let (T, h, unit) = (sample_time, st.output_step, run.design.plant().time_unit);
     let every = discrete::whole_multiple(h, T).filter(|&k| k >= 1).ok_or_else(|| {
+        let (divisor, multiple) = output_step_fixes(T, h);
+        let short = crate::settings::fmt_time;
         KeyError::new(
             "simulation.output_step",
-            format!("expected a whole multiple of sample_time = {T} {unit}, found {h} {unit} ({:.6} samples)", h / T),
+            format!(
+                "expected a whole multiple of sample_time = {T} {unit}, found {h} {unit} ({:.6} samples; each recorded row is a controller step); set output_step to a multiple of the sample time, e.g. {} {unit}, or sample_time to one that divides it, e.g. {} {unit}",
+                h / T,
+                short(multiple),
+                short(divisor)
+            ),
         )
     })?;
     super::check_truth(run.design, run.truth)?;
     Ok((own, every))
+}
+
+/// The nearest fixes of an output step h that is not a whole number ≥ 1 of samples of T: the
+/// largest sample time ≤ T that divides h, h/⌈h/T⌉, and the multiple of T nearest h, T·round(h/T)
+/// (at least T).
+pub fn output_step_fixes(T: f64, h: f64) -> (f64, f64) {
+    let ratio = h / T;
+    (h / ratio.ceil().max(1.0), T * ratio.round().max(1.0))
 }
 
 /// The sampled-data loop of `run` ([`Run::simulate`]) at `sample_time`, with the run's controller
