@@ -136,6 +136,21 @@ impl FalbWolovich {
     pub fn sigma(&self) -> Vec<usize> {
         self.channels.iter().map(ChannelTf::sigma).collect()
     }
+
+    /// K_0 = B*⁻¹ [c_i A^σ_i]: Proposition 1's K with every channel pole at 0. On the zero
+    /// dynamics' subspace, ker [c_i A^j]_{j<σ_i}, it acts as every K of Proposition 1 does, without
+    /// the size fast channel poles give K. (B* was inverted for K; its inverse is formed again.)
+    pub fn zero_pole_gain(&self, A: &DMatrix<f64>, C: &DMatrix<f64>) -> DMatrix<f64> {
+        let mut rows = DMatrix::zeros(self.channels.len(), A.nrows());
+        for (i, tf) in self.channels.iter().enumerate() {
+            let mut row: RowDVector<f64> = C.row(i).clone_owned();
+            for _ in 0..tf.sigma() {
+                row = &row * A;
+            }
+            rows.set_row(i, &row);
+        }
+        self.B_star.clone().try_inverse().map_or_else(|| self.K.clone(), |inv| inv * rows)
+    }
 }
 
 /// Falb–Wolovich decoupler (Proposition 1) for per-channel poles `channel_poles[i]` (σ_i each, closed
