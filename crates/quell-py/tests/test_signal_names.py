@@ -90,3 +90,14 @@ def test_a_pickled_scenario_from_python_values_still_names_the_arguments():
             quell.simulate(scenario, t_end=1.0)
     with pytest.raises(quell.DesignError, match=r"^design\.mu\[1\]: "):
         quell.Scenario.from_toml(s.to_toml()).design()
+
+
+def test_an_output_named_as_an_input_is_refused_by_the_observer_system():
+    # The observer's inputs are u_f and y: python-control would merge a shared name into one
+    # signal (2 inputs, 1 label), and wiring by name would leave y unconnected.
+    text = named_paper().replace('outputs = ["pitch", "roll"]', 'outputs = ["left", "roll"]')
+    d = quell.Scenario.from_toml(text).design()
+    with pytest.raises(quell.ScenarioError, match="output 'left' is also an input's name") as e:
+        d.observer_system()
+    assert e.value.key == "plant.outputs"
+    assert d.decoupled_system().output_labels == ["left", "roll"]  # the other systems are unaffected

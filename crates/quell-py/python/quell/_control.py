@@ -38,6 +38,18 @@ def observer_system(design):
     n, m = plant.n, plant.m
     A, B, C, L = plant.A, plant.B, plant.C, design.L
     estimates = [_hat(name) for name in plant.states]
+    shared = [name for name in plant.outputs if name in plant.inputs]
+    if shared:
+        from ._errors import ScenarioError
+
+        error = ScenarioError(
+            f"plant.outputs: output {shared[0]!r} is also an input's name; the observer takes the "
+            "inputs u_f and the outputs y as its inputs, and python-control would merge the two into "
+            "one signal (leaving y unconnected), so rename one of them (plant.inputs or "
+            "plant.outputs, or the inputs=/outputs= keywords)"
+        )
+        error.key = "plant.outputs"
+        raise error
     return control.ss(
         A - L @ C,
         np.hstack([B, L]),
