@@ -282,3 +282,28 @@ fn a_run_that_fails_while_clipped_names_the_actuator_limit() {
         }
     }
 }
+
+/// A run that diverges is advised nothing about its horizon: the unstable VTOL model
+/// (`tests/data/vtol.toml`) with true delays of 0.6 s and 0.8 s against the design's 0.10 s and
+/// 0.15 s diverges near t = 1.8 s of its 200 s, and advice that μ is too small "for the horizon", to
+/// lengthen t_end, or on the tail's trend would have taken 1.8 s for the horizon.
+#[test]
+fn a_run_that_ended_early_gets_no_advice_about_its_horizon() {
+    let path = format!("{}/tests/data/vtol.toml", env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(path).unwrap() + "\n[truth]\ndelays = [0.6, 0.8]\n";
+    let s = Scenario::from_toml(&text).unwrap();
+    let d = s.design().unwrap();
+    let r = Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
+    let t_stop = *r.t.last().unwrap();
+    assert!(matches!(r.outcome, Some(quell::sim::Outcome::Diverged { .. })) && t_stop < 10.0, "{:?}", r.outcome);
+    let diagnostics = diagnose(&d, &s.reference, &s.disturbance, &r);
+    for (i, c) in diagnostics.channels.iter().enumerate() {
+        for line in &c.advice {
+            assert!(!line.contains("t_end") && !line.contains("tail"), "channel {}: {line}", i + 1);
+        }
+    }
+    // The same design over its whole horizon without the mismatch completes.
+    let s = Scenario::from_toml(&text.replace("[truth]\ndelays = [0.6, 0.8]\n", "")).unwrap();
+    let r = Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
+    assert!(r.outcome.is_none() || r.outcome == Some(quell::sim::Outcome::Completed), "{:?}", r.outcome);
+}

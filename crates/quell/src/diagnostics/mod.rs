@@ -23,7 +23,7 @@ use crate::linalg::{eigenvalues, fmt_complex, fmt_complex_list, numerical_rank};
 use crate::plant::Plant;
 use crate::settings::{fmt_short, round_up_2, TimeUnit};
 use crate::signal::Signal;
-use crate::sim::SimResult;
+use crate::sim::{Outcome, SimResult};
 
 /// A disturbance frequency reaching ξ̂_ω with a larger relative error than this gets advice.
 pub const FIDELITY_LIMIT: f64 = 0.3;
@@ -392,7 +392,10 @@ fn channel<'r>(
     let trend = windows.and_then(trend);
     let mut advice = Vec::new();
     let (tau, unit) = (design.plant().delays[i], design.plant().time_unit);
-    if tau >= t_end {
+    // A run that ended early (diverged, failed, interrupted) says nothing of its horizon: advice
+    // on t_end and on μ against it would take the time it ended at for the horizon.
+    let horizon = matches!(result.outcome, None | Some(Outcome::Completed));
+    if horizon && tau >= t_end {
         advice.push(format!(
             "channel {}'s input delay τ = {} {unit} is not shorter than the run ({} {unit}): its command never reaches the plant; lengthen simulation.t_end to several times τ (or check plant.delays[{i}]'s unit)",
             i + 1,
@@ -403,7 +406,7 @@ fn channel<'r>(
     let relevant = c.slowest_relevant(RELEVANT_SHARE);
     // A tail already within the bound needs no faster adaptation (an automatic design's μ is chosen
     // for that bound, not for the averaged law's e^-5 over the horizon).
-    if relevant.is_finite() && mu * relevant * t_end < 5.0 && !tail_within_bound(result, i) {
+    if horizon && relevant.is_finite() && mu * relevant * t_end < 5.0 && !tail_within_bound(result, i) {
         let weakest = c.excitation.iter().min_by(|a, b| a.excitation.total_cmp(&b.excitation));
         let poor = weakest
             .and_then(|w| fidelity.iter().find(|f| f.frequency == w.frequency && f.relative_error > FIDELITY_LIMIT));
@@ -424,7 +427,7 @@ fn channel<'r>(
             _ => advice.push(horizon_advice(&key, mu, (relevant, c.lambda_max()), (t_end, stiff), unit)),
         }
     }
-    match trend.filter(|_| windows.is_some_and(|(last, _)| !negligible_tail(result, i, last))) {
+    match trend.filter(|_| horizon && windows.is_some_and(|(last, _)| !negligible_tail(result, i, last))) {
         Some(r) if r < SHRINKING => advice.push(format!(
             "channel {}'s error is still shrinking over the tail (RMS ratio {r:.2} between the last two tenths of the run): lengthen simulation.t_end or raise {key}",
             i + 1
