@@ -702,7 +702,7 @@ fn design_auto_writes_a_complete_scenario_that_meets_the_tail_bound() {
     // --u-limit takes one limit or one per input (the paper's two), comma-separated.
     for (limits, message) in [
         ("1e3,1e3,1e3", "--u-limit: expected one actuator limit, or one per input (2), found 3"),
-        ("1e3,-1", "--u-limit: expected finite limits > 0, found -1"),
+        ("1e3,-1", "--u-limit: expected limits > 0 (inf for none on an input), found -1"),
     ] {
         let o = quell(&["design", input.to_str().unwrap(), "--auto", "--u-limit", limits]);
         assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));

@@ -311,7 +311,10 @@ fn negative_and_malformed_numbers_are_named_by_their_flag() {
             vec!["design", &p, "--auto", "--convergence-time", "-inf"],
             "--convergence-time: expected a finite number > 0, found -inf",
         ),
-        (vec!["design", &p, "--auto", "--u-limit", "-inf"], "--u-limit: expected finite limits > 0, found -inf"),
+        (
+            vec!["design", &p, "--auto", "--u-limit", "-inf"],
+            "--u-limit: expected limits > 0 (inf for none on an input), found -inf",
+        ),
         (vec!["sweep", &s, "--jobs", "-inf", "--out", &out], "'--jobs <N>': expected a number of worker threads"),
         (
             vec!["run", &p, "--sample-time", " 0.001", "--out", &out],

@@ -92,7 +92,7 @@ def test_bad_arguments_are_named_as_python_spells_them():
         (dict(mu=[5.0, 1.0]), "mu[0]: expected 0 < μ_min ≤ μ_max", "tune.mu[0]"),
         (dict(mu=[1.0, 2.0], objective="fast"), 'objective: expected "settle_t", "tail_rms_e" or "tail_max_e"',
          "tune.objective"),
-        (dict(mu=[1.0, 2.0], max_u=[1.0, 0.0]), "max_u[1]: expected a limit on max |u_i| > 0, found 0",
+        (dict(mu=[1.0, 2.0], max_u=[1.0, 0.0]), "max_u[1]: expected a limit on max |u_i| > 0 (inf for none), found 0",
          "tune.max_u[1]"),
         (dict(mu=[1.0, 2.0], points=1), "points: expected an integer in [2, 10000], found 1", "tune.points"),
     ]

@@ -132,7 +132,7 @@ impl Targets {
     }
 
     /// A convergence time that is positive, finite and within the horizon t_end (the verifying run
-    /// must reach it), and limits that are positive, finite and one or m of them; otherwise an
+    /// must reach it), and limits that are positive (+∞: none on that input) and one or m of them; otherwise an
     /// error naming `convergence_time` or `u_limit`.
     fn check(&self, m: usize, (t_end, unit): (f64, crate::TimeUnit)) -> Result<(), AutoError> {
         let n = self.u_limit.len();
@@ -145,8 +145,11 @@ impl Targets {
             ("convergence_time", message)
         } else if n > 1 && n != m {
             ("u_limit", format!("expected one actuator limit, or one per input ({m}), found {n}: {:?}", self.u_limit))
-        } else if let Some(l) = self.u_limit.iter().find(|l| !(l.is_finite() && **l > 0.0)) {
-            ("u_limit", format!("expected finite limits > 0, found {}", crate::settings::fmt_short(*l)))
+        } else if let Some(l) = self.u_limit.iter().find(|l| !(**l > 0.0)) {
+            (
+                "u_limit",
+                format!("expected limits > 0 (inf for none on an input), found {}", crate::settings::fmt_short(*l)),
+            )
         } else {
             return Ok(());
         };
@@ -1289,7 +1292,7 @@ fn choose_mu(s: &Scenario, design: &Design, targets: &Targets, r: f64) -> (Vec<f
             if c.predicted_error(cap, t_c) > aim {
                 // The excited directions' smallest eigenvalue: a zero one (a direction no signal excites) is harmless.
                 let excited = c.excited().fold(f64::INFINITY, f64::min);
-                notes.push(format!("channel {}: even the fastest rate leaves a predicted RMS error {:.2e} at t = {t_c:.4e} (the smallest eigenvalue of Ω̄ over its {} excited directions is {:.2e}); see the run's diagnostics", i + 1, c.predicted_error(cap, t_c), c.excited().count(), excited));
+                notes.push(format!("channel {}: even the fastest rate leaves a predicted RMS error {:.2e} at t = {} {unit} (the smallest eigenvalue of Ω̄ over its {} excited directions is {:.2e}); see the run's diagnostics", i + 1, c.predicted_error(cap, t_c), crate::settings::fmt_4(t_c), c.excited().count(), excited));
                 return (cap, retry_rate / c.lambda_max().max(f64::MIN_POSITIVE));
             }
             // Bisection on log μ: predicted_error decreases with μ.

@@ -251,6 +251,9 @@ fn the_actuator_limit_bounds_the_recorded_plant_input() {
     assert!(u_f != u, "u_f {u_f} and u {u} must differ for this check to tell them apart");
     let loose = auto_design(&doc, &Targets { u_limit: vec![10.0 * u_f], ..Targets::default() }).unwrap();
     assert!(loose.verification.passed && loose.scenario.design.mu == free.scenario.design.mu);
+    // inf is no limit on that input (as truth.u_max's inf is): the free design.
+    let none = auto_design(&doc, &Targets { u_limit: vec![f64::INFINITY], ..Targets::default() }).unwrap();
+    assert!(none.verification.passed && none.scenario.design.mu == free.scenario.design.mu);
     let tight = auto_design(&doc, &Targets { u_limit: vec![1e-3 * u_f], ..Targets::default() }).unwrap();
     assert!(!tight.verification.passed, "{:?}", tight.verification);
     let (u_f, _) = rerun(&tight);

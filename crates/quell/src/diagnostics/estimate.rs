@@ -82,9 +82,10 @@ pub fn estimate(
             }
             if weakly_excited {
                 advice.push(format!(
-                    "channel {}'s slowest excited direction converges in 1/(μ λ_min) = {:.3e} {unit}, beyond t_end = {t_end}: λ_min(Ω̄) = {lambda_min_excited:.3e} against λ_max = {lambda_max:.3e}; the signals excite it weakly: raise {key}{}, lengthen simulation.t_end, or put the filter poles at the signals' frequencies",
+                    "channel {}'s slowest excited direction converges in 1/(μ λ_min) = {:.3e} {unit}, beyond t_end = {} {unit}: λ_min(Ω̄) = {lambda_min_excited:.3e} against λ_max = {lambda_max:.3e}; the signals excite it weakly: raise {key}{}, lengthen simulation.t_end, or put the filter poles at the signals' frequencies",
                     i + 1,
                     1.0 / slowest,
+                    crate::settings::fmt_short(t_end),
                     if stiff { " (not here: it is stiff already)" } else { "" },
                 ));
             }

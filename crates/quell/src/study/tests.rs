@@ -92,7 +92,7 @@ fn study_mistakes_name_their_key() {
         ("[tune]\nmu = [[1.0, 2.0]]", "tune.mu: expected 2 entries (one per channel), found 1"),
         ("[tune]\nmu = [0.0, 10.0]", "tune.mu[0]: expected 0 < μ_min ≤ μ_max (the search is on a log scale), found [0, 10]"),
         ("[tune]\nmu = [1.0, 10.0]\nobjective = \"fast\"", "tune.objective: expected \"settle_t\", \"tail_rms_e\" or \"tail_max_e\", found \"fast\""),
-        ("[tune]\nmu = [1.0, 10.0]\nmax_u = [1.0, -2.0]", "tune.max_u[1]: expected a limit on max |u_i| > 0, found -2"),
+        ("[tune]\nmu = [1.0, 10.0]\nmax_u = [1.0, -2.0]", "tune.max_u[1]: expected a limit on max |u_i| > 0 (inf for none), found -2"),
         ("[tune]\nmu = [1.0, 10.0]\npoints = 1", "tune.points: expected an integer in [2, 10000], found 1"),
         ("[grid", "syntax: line 1, column 6: unclosed table"),
     ];
@@ -283,6 +283,15 @@ fn tune_refuses_a_grid_or_draws_it_would_ignore() {
             "{e}"
         );
     }
+}
+
+/// A limit of inf is none on that channel, as an absent key is (truth.u_max's inf reads the same).
+#[test]
+fn an_infinite_tune_limit_is_no_limit_on_its_channel() {
+    let s = study("[tune]\nmu = [1.0, 100.0]\nmax_uf = [8.0, inf]\nmax_u = inf\n").unwrap();
+    let t = s.tune.expect("[tune]");
+    assert_eq!((t.max_uf, t.max_u), (vec![8.0, f64::INFINITY], vec![f64::INFINITY; 2]));
+    assert!(error("[tune]\nmu = [1.0, 100.0]\nmax_uf = [8.0, -inf]\n").starts_with("tune.max_uf[1]: expected a limit"));
 }
 
 #[cfg(unix)]

@@ -134,7 +134,11 @@ impl TuneSpec {
                     .iter()
                     .enumerate()
                     .map(|(i, x)| {
-                        let (key, what) = (format!("tune.{name}[{i}]"), format!("a limit on {what} > 0"));
+                        let (key, what) =
+                            (format!("tune.{name}[{i}]"), format!("a limit on {what} > 0 (inf for none)"));
+                        if x.as_float() == Some(f64::INFINITY) {
+                            return Ok(f64::INFINITY);
+                        }
                         match number(&key, x, &what)? {
                             x if x > 0.0 => Ok(x),
                             x => Err(err(key, format!("expected {what}, found {}", crate::settings::fmt_short(x)))),
