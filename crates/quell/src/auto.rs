@@ -145,7 +145,7 @@ impl Targets {
             ("convergence_time", message)
         } else if n > 1 && n != m {
             ("u_limit", format!("expected one actuator limit, or one per input ({m}), found {n}: {:?}", self.u_limit))
-        } else if let Some(l) = self.u_limit.iter().find(|l| !(**l > 0.0)) {
+        } else if let Some(l) = self.u_limit.iter().find(|l| l.is_nan() || **l <= 0.0) {
             (
                 "u_limit",
                 format!("expected limits > 0 (inf for none on an input), found {}", crate::settings::fmt_short(*l)),

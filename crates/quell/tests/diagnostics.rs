@@ -307,3 +307,33 @@ fn a_run_that_ended_early_gets_no_advice_about_its_horizon() {
     let r = Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
     assert!(r.outcome.is_none() || r.outcome == Some(quell::sim::Outcome::Completed), "{:?}", r.outcome);
 }
+
+/// A disk drive's disturbance enters with its input (D = B) through a rigid body of relative degree
+/// 2, so CD = 0: the zeros of (A, D, C) come from its own relative degrees. In closed form they
+/// solve 64 (s² + 0.754 s + 355.3) + 19.2 s² = 0, −0.29 ± 16.5295i (rad/ms). With them among the
+/// observer poles the averaged disturbance observer passes ω within 0.1; with every pole 10× faster
+/// it does not, so the advice names the zeros (`tests/data/hdd-servo.toml`).
+#[test]
+fn the_zeros_of_a_relative_degree_two_disturbance_path_are_the_observer_advice() {
+    let path = format!("{}/tests/data/hdd-servo.toml", env!("CARGO_MANIFEST_DIR"));
+    let s = Scenario::from_toml(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let d = s.design().unwrap();
+    let zeros = quell::diagnostics::singular_disturbance_zeros(d.plant()).expect("zeros of (A, D, C)");
+    let (re, im) = (-48.256 / 83.2 / 2.0, (22739.2 / 83.2 - (48.256f64 / 83.2 / 2.0).powi(2)).sqrt());
+    assert_eq!(zeros.len(), 2, "{zeros:?}");
+    assert!(quell::diagnostics::disturbance_zeros(d.plant()).is_none(), "CD = 0: not the full-rank case");
+    for z in &zeros {
+        assert!((z.re - re).abs() < 1e-9 && (z.im.abs() - im).abs() < 1e-9, "{z} against {re} ± {im}i");
+    }
+    let worst = |d: &quell::Design| {
+        Averaged::new(d, &s.reference, &s.disturbance).fidelity.iter().map(|f| f.relative_error).fold(0.0, f64::max)
+    };
+    let fast: Vec<_> = d.observer_eigenvalues().iter().map(|p| p * 10.0).collect();
+    let held = [zeros.clone(), vec![(-113.1).into(), (-142.5).into()]].concat();
+    let (with_fast, with_zeros) =
+        (worst(&d.with_observer_poles(&fast).unwrap()), worst(&d.with_observer_poles(&held).unwrap()));
+    assert!(with_fast > 0.3 && with_zeros < 0.1, "10× faster: {with_fast}, the zeros held: {with_zeros}");
+    let r = Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
+    let advice = diagnose(&d, &s.reference, &s.disturbance, &r).advice.join("\n");
+    assert!(advice.contains("give design.observer_poles the zeros of (A, D, C), [-0.290000-16.529476i, -0.290000+16.529476i], and the other 2 poles faster"), "{advice}");
+}

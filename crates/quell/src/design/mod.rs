@@ -644,11 +644,10 @@ fn check_zero_dynamics(plant: &Plant, fw: &FalbWolovich) -> Result<(), DesignErr
     let n = plant.n();
     let sigma = fw.sigma();
     let placed: usize = sigma.iter().sum();
-    let W = zero_dynamics_basis(&plant.A, &plant.C, &sigma);
-    if W.ncols() == 0 {
+    let Z = zero_dynamics_matrix((&plant.A, &plant.B, &plant.C), fw);
+    if Z.ncols() == 0 {
         return Ok(());
     }
-    let Z = W.transpose() * (&plant.A - &plant.B * fw.zero_pole_gain(&plant.A, &plant.C)) * &W;
     let zeros = eigenvalues(&Z).map_err(|e| eigen_error("plant", "the zero dynamics of A − BK", e))?;
     let bad = unstable(&zeros, Z.norm());
     let settled = || zeros.iter().all(|z| z.re < 0.0) && place::refined_left_half_plane(&Z, &zeros);
@@ -658,6 +657,24 @@ fn check_zero_dynamics(plant: &Plant, fw: &FalbWolovich) -> Result<(), DesignErr
         debug_assert_eq!(zeros.len(), n - placed);
         Err(DesignError::UnstableZeroDynamics { placed, zeros, unstable: bad })
     }
+}
+
+/// Wᵀ (A − B K_0) W on the zero dynamics' subspace (W its orthonormal basis, [`zero_dynamics_basis`];
+/// K_0 [`FalbWolovich::zero_pole_gain`]): its eigenvalues are the zeros of the square (A, B, C).
+fn zero_dynamics_matrix((A, B, C): (&DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>), fw: &FalbWolovich) -> DMatrix<f64> {
+    let W = zero_dynamics_basis(A, C, &fw.sigma());
+    W.transpose() * (A - B * fw.zero_pole_gain(A, C)) * &W
+}
+
+/// The zeros of a square (A, B, C) that Proposition 1 decouples (every output reached, B*
+/// invertible), as the eigenvalues of its zero dynamics; `None` otherwise. For (A, D, C) when CD is
+/// singular (a disturbance entering with the input of a relative-degree-2 plant), the zeros the
+/// disturbance observer's poles can hold.
+pub fn decoupling_zeros(A: &DMatrix<f64>, B: &DMatrix<f64>, C: &DMatrix<f64>) -> Option<Vec<Complex<f64>>> {
+    let sigma: Vec<usize> = relative_degrees(A, B, C).ok()?.into_iter().collect::<Option<_>>()?;
+    let at_zero: Vec<Vec<Complex<f64>>> = sigma.iter().map(|&s| vec![Complex::new(0.0, 0.0); s]).collect();
+    let fw = falb_wolovich(A, B, C, &at_zero).ok()?;
+    eigenvalues(&zero_dynamics_matrix((A, B, C), &fw)).ok()
 }
 
 /// Orthonormal basis (n × (n − Σσ_i)) of the kernel of the rows c_i A^j, j < σ_i, each row scaled

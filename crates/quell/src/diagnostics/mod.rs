@@ -187,7 +187,7 @@ const CLIPPED_SHARE: f64 = 0.01;
 /// The zeros of (A, D, C) that an unknown-input observer keeps among its poles: when C D has full
 /// column rank k, the n − k eigenvalues of (I − D (CD)⁺ C) A other than its k zeros (that
 /// projection annihilates D's columns), ascending in magnitude; `None` unless 1 ≤ k < n and all of
-/// them lie in the open left half-plane. With these among the observer poles and the others fast,
+/// them lie in the open left half-plane (for a singular C D, [`singular_disturbance_zeros`]). With these among the observer poles and the others fast,
 /// L C (x − x̂) reconstructs D ω and the disturbance observer (20) passes ω faithfully; with all
 /// poles fast the zeros keep an error whatever the speed.
 pub fn disturbance_zeros(p: &Plant) -> Option<Vec<Complex<f64>>> {
@@ -208,7 +208,25 @@ pub fn disturbance_zeros(p: &Plant) -> Option<Vec<Complex<f64>>> {
         .map(|z| if z.im.abs() <= 1e-9 * z.norm() { Complex::new(z.re, 0.0) } else { z })
         .collect();
     let scale = p.A.norm().max(f64::MIN_POSITIVE);
-    z.iter().all(|z| z.re < -1e-6 * scale).then_some(z)
+    stable_zeros(z, scale)
+}
+
+/// `z` when it is not empty and all of it lies left of −1e-6·`scale`.
+fn stable_zeros(z: Vec<Complex<f64>>, scale: f64) -> Option<Vec<Complex<f64>>> {
+    (!z.is_empty() && z.iter().all(|z| z.re < -1e-6 * scale)).then_some(z)
+}
+
+/// The zeros of (A, D, C) when C D is singular (ω enters where the input of a plant of relative
+/// degree 2 or more does, as a disk drive's torque disturbance) and there are as many outputs as
+/// disturbances: those of its zero dynamics by its own relative degrees
+/// ([`crate::design::decoupling_zeros`]), when all are stable. Only the run's advice offers them;
+/// the automatic design's candidates keep [`disturbance_zeros`].
+pub fn singular_disturbance_zeros(p: &Plant) -> Option<Vec<Complex<f64>>> {
+    let k = p.k();
+    if k == 0 || p.m() != k || numerical_rank(&(&p.C * &p.D)) == k {
+        return None;
+    }
+    stable_zeros(crate::design::decoupling_zeros(&p.A, &p.D, &p.C)?, p.A.norm().max(f64::MIN_POSITIVE))
 }
 
 /// Which observer poles to give when the disturbance observer passes ω badly; when eig(A − LC)
@@ -219,20 +237,27 @@ pub fn disturbance_zeros(p: &Plant) -> Option<Vec<Complex<f64>>> {
 fn observer_remedy(design: &Design, signals: [&Signal; 2], sample_time: Option<f64>) -> String {
     let p = design.plant();
     let faster = faster_observer(design, signals, sample_time);
-    let faster = faster.as_deref().unwrap_or("give design.observer_poles faster than the plant and the signals");
+    let none = format!(
+        "no speed-up of design.observer_poles up to {}× brings the averaged loop's error below {FIDELITY_TARGET:.2}: faster poles alone will not remove it; try poles nearer the plant's zeros, or a gain by hand (design.observer_gain)",
+        OBSERVER_SPEEDUPS[OBSERVER_SPEEDUPS.len() - 1]
+    );
+    let faster = faster.as_deref().unwrap_or(&none);
     let observer = eigenvalues(&(&p.A - design.L() * &p.C)).unwrap_or_default();
     let held = |z: &Complex<f64>| {
         observer.iter().any(|o| (o - z).norm() <= 1e-6 * z.norm() || fmt_complex(o) == fmt_complex(z))
     };
-    match disturbance_zeros(p) {
+    match disturbance_zeros(p).or_else(|| singular_disturbance_zeros(p)) {
         Some(z) if z.iter().all(held) => format!(
             "design.observer_poles already hold the zeros of (A, D, C), [{}]; the error that stays comes from the placed eigenvectors (L is not unique for m > 1), not from the poles' speed, and costs convergence only where the frequency's excitation of Ω̄_i is weak (the channels' `excitation`); if it is, try other fast poles or a gain L by hand",
             fmt_complex_list(&z)
         ),
         Some(z) if p.m() == p.k() => format!(
-            "give design.observer_poles the zeros of (A, D, C), [{}], and the other {} poles faster than the plant and the signals (e.g. 3× their rates); all-fast poles cannot remove this error{}",
+            "give design.observer_poles the zeros of (A, D, C), [{}], and the other {} faster than the plant and the signals (e.g. 3× their rates); all-fast poles cannot remove this error{}",
             fmt_complex_list(&z),
-            p.k(),
+            match p.n() - z.len() {
+                1 => "pole".to_string(),
+                others => format!("{others} poles"),
+            },
             if p.m() > 1 {
                 " (with more than one output the placed eigenvectors decide as well: compare the relative error the next run reports)"
             } else {
