@@ -337,3 +337,29 @@ fn the_zeros_of_a_relative_degree_two_disturbance_path_are_the_observer_advice()
     let advice = diagnose(&d, &s.reference, &s.disturbance, &r).advice.join("\n");
     assert!(advice.contains("give design.observer_poles the zeros of (A, D, C), [-0.290000-16.529476i, -0.290000+16.529476i], and the other 2 poles faster"), "{advice}");
 }
+
+/// Filter poles given at the wrong time scale (the disk drive's, 1000× too fast: rad/s typed for
+/// rad/ms) are named as the cause, with both banks' ratios to their signals' frequencies; the
+/// design at the right scale gets no such advice.
+#[test]
+fn filter_poles_far_from_the_signals_frequencies_are_named() {
+    let path = format!("{}/tests/data/hdd-servo.toml", env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(path).unwrap();
+    let advice = |text: &str| {
+        let s = Scenario::from_toml(text).unwrap();
+        let d = s.design().unwrap();
+        let r = Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
+        diagnose(&d, &s.reference, &s.disturbance, &r).advice.join("\n")
+    };
+    assert!(!advice(&text).contains("filter_poles ("), "{}", advice(&text));
+    let fast = text
+        .replace(
+            "reference_filter_poles = [[-0.5804294706253038, -0.8706442059379557, -1.3059663089069335, -1.9589494633604003, -2.9384241950406005]]",
+            "reference_filter_poles = [[-580.4, -870.6, -1305.9, -1958.9, -2938.4]]",
+        )
+        .replace("disturbance_filter_poles = [[-1.0053333333333332, -1.508, -2.262]]", "disturbance_filter_poles = [[-1005.3, -1508.0, -2262.0]]");
+    let a = advice(&fast);
+    // 580.4 / 2.262 = 256.6 and 1005.3 / 1.508 = 666.6.
+    assert!(a.contains("design.reference_filter_poles (|p| from 580.4 to 2938 rad/ms) are 257× faster than the reference's frequencies (0.754 to 2.262 rad/ms)"), "{a}");
+    assert!(a.contains("design.disturbance_filter_poles (|p| from 1005 to 2262 rad/ms) are 667× faster"), "{a}");
+}

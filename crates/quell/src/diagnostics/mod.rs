@@ -130,6 +130,7 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
     // One line for every frequency it passes badly: they share the remedy.
     let poor: Vec<&Fidelity> = avg.fidelity.iter().filter(|f| missed && f.relative_error > FIDELITY_LIMIT).collect();
     let mut advice: Vec<String> = clipping_advice(result, missed).into_iter().collect();
+    advice.extend(filter_scale_advice(design, signals).filter(|_| missed));
     if !poor.is_empty() {
         let list = |part: &dyn Fn(&Fidelity) -> String| poor.iter().map(|f| part(f)).collect::<Vec<_>>().join(", ");
         let (plural, freqs, errors) = (
@@ -162,6 +163,51 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
         .map(|(i, c)| channel(design, i, c, &avg.fidelity, result, (t_end, stiff), &remedy))
         .collect();
     Diagnostics { channels, observer_fidelity: avg.fidelity, advice }
+}
+
+/// How far (a factor) a bank of internal-model filter poles may sit from its signal's frequencies
+/// before [`filter_scale_advice`] names it.
+const FILTER_SCALE_FACTOR: f64 = 30.0;
+
+/// Internal-model filter poles far from the frequencies of the signal they model (all faster than
+/// [`FILTER_SCALE_FACTOR`] times its fastest harmonic, or all slower than its slowest one over that
+/// factor): ξ̂ then sees every harmonic through the same flat part (or the same roll-off) of the
+/// filters, Ω̄ tells them apart only weakly, and the error's slow directions look like a weak
+/// observer or a short horizon. Poles given in the wrong unit of time do this.
+fn filter_scale_advice(design: &Design, [reference, disturbance]: [&Signal; 2]) -> Option<String> {
+    let unit = design.plant().time_unit;
+    let parts: Vec<String> = [("reference", design.G_g(), reference), ("disturbance", design.G_w(), disturbance)]
+        .into_iter()
+        .filter_map(|(name, G, signal)| {
+            let freqs = signal.components.iter().flat_map(|c| &c.harmonics).filter(|h| h.amplitude != 0.0);
+            let (w_lo, w_hi) = freqs.map(|h| h.frequency.abs()).filter(|&w| w > 0.0).fold((f64::INFINITY, 0.0f64), |(lo, hi), w| (lo.min(w), hi.max(w)));
+            let poles = eigenvalues(G).ok()?;
+            let (p_lo, p_hi) = poles.iter().map(|p| p.norm()).fold((f64::INFINITY, 0.0f64), |(lo, hi), p| (lo.min(p), hi.max(p)));
+            if !(w_hi > 0.0 && p_hi > 0.0) {
+                return None;
+            }
+            let (ratio, side) = if p_lo > FILTER_SCALE_FACTOR * w_hi {
+                (p_lo / w_hi, "faster")
+            } else if p_hi * FILTER_SCALE_FACTOR < w_lo {
+                (w_lo / p_hi, "slower")
+            } else {
+                return None;
+            };
+            Some(format!(
+                "design.{name}_filter_poles (|p| from {} to {} rad/{unit}) are {ratio:.0}× {side} than the {name}'s frequencies ({} to {} rad/{unit})",
+                crate::settings::fmt_4(p_lo),
+                crate::settings::fmt_4(p_hi),
+                crate::settings::fmt_4(w_lo),
+                crate::settings::fmt_4(w_hi)
+            ))
+        })
+        .collect();
+    (!parts.is_empty()).then(|| {
+        format!(
+            "{}: ξ̂ sees every harmonic through the same part of the filters, so Ω̄ tells them apart only weakly and the adaptation crawls whatever μ and the observer; put the poles near the frequencies (an automatic design does; check their unit of time)",
+            parts.join("; ")
+        )
+    })
 }
 
 /// A run that missed its tail bound (or ended early) while the true actuator's limits clipped u_f at
