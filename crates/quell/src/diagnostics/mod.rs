@@ -469,9 +469,7 @@ fn channel<'r>(
     if horizon && tau >= t_end {
         advice.push(format!(
             "channel {}'s input delay τ = {} {unit} is not shorter than the run (its last sample is at {} {unit}): its command never reaches the plant; lengthen simulation.t_end to several times τ (or check plant.delays[{i}]'s unit)",
-            i + 1,
-            fmt_short(tau),
-            fmt_short(t_end)
+            i + 1, fmt_short(tau), fmt_short(t_end)
         ));
     }
     let relevant = c.slowest_relevant(RELEVANT_SHARE);

@@ -60,6 +60,18 @@ pub struct TuneSpec {
     pub refine: usize,
 }
 
+/// A limit on `what` > 0 at `key`; inf is none.
+fn limit(key: String, x: &toml::Value, what: &str) -> Result<f64, StudyError> {
+    let what = format!("a limit on {what} > 0 (inf for none)");
+    if x.as_float() == Some(f64::INFINITY) {
+        return Ok(f64::INFINITY);
+    }
+    match number(&key, x, &what)? {
+        x if x > 0.0 => Ok(x),
+        x => Err(err(key, format!("expected {what}, found {}", crate::settings::fmt_short(x)))),
+    }
+}
+
 const TUNE_KEYS: &[&str] = &["objective", "mu", "max_u", "max_uf", "points", "refine"];
 const OBJECTIVES: &str = "\"settle_t\", \"tail_rms_e\" or \"tail_max_e\"";
 
@@ -133,17 +145,7 @@ impl TuneSpec {
                 Some(v) => per_channel(&format!("tune.{name}"), v)?
                     .iter()
                     .enumerate()
-                    .map(|(i, x)| {
-                        let (key, what) =
-                            (format!("tune.{name}[{i}]"), format!("a limit on {what} > 0 (inf for none)"));
-                        if x.as_float() == Some(f64::INFINITY) {
-                            return Ok(f64::INFINITY);
-                        }
-                        match number(&key, x, &what)? {
-                            x if x > 0.0 => Ok(x),
-                            x => Err(err(key, format!("expected {what}, found {}", crate::settings::fmt_short(x)))),
-                        }
-                    })
+                    .map(|(i, x)| limit(format!("tune.{name}[{i}]"), x, what))
                     .collect(),
             }
         };
