@@ -571,7 +571,14 @@ fn sampled_start(doc: &toml::Table, targets: &Targets) -> Result<(Proposal, Desi
     }
     if speed != Speed::FIRST {
         let unit = design.plant().time_unit;
-        let why = format!("; ×{} of that for simulation.sample_time = {t_s} {unit} (T_s·ρ = {:.2} ≤ {COARSE_SAMPLE}, ρ the loop's fastest rate: docs/running.md)", speed.channel, t_s * rho);
+        let met = if t_s * rho <= COARSE_SAMPLE {
+            format!("T_s·ρ = {:.2} ≤ {COARSE_SAMPLE}", t_s * rho)
+        } else {
+            // Halving stopped lowering ρ: a rate the poles do not set (the plant's or a signal's).
+            let shorter = crate::settings::three_digits_down(COARSE_SAMPLE / rho);
+            format!("T_s·ρ = {:.2}, still above {COARSE_SAMPLE}: ρ = {rho:.3e}/{unit} is now the plant's or a signal's own rate, which slower poles do not lower; a simulation.sample_time ≤ {} {unit} would meet it", t_s * rho, crate::settings::fmt_short(shorter))
+        };
+        let why = format!("; ×{} of that for simulation.sample_time = {t_s} {unit} ({met}, ρ the loop's fastest rate: docs/running.md)", speed.channel);
         // The observer's error quoted above is the candidate's before the halving: the kept one's.
         let error = worst(&p, &design);
         let observer_why = match error {
