@@ -40,7 +40,7 @@ pub fn pace_text(d: &Design, estimates: &[RateEstimate], t_end: f64, time: TimeU
         };
         let _ = writeln!(
             s,
-            "  channel {}: μ λ_max(Ω̄) = {:.3e}/{time} ({:.2e}× ρ = {:.3e}/{time}), λ_max = {:.3e}, λ_min = {:.3e} (excited rank {} of {}), convergence 1/(μ λ_min) ≈ {}{flag}",
+            "  channel {}: μ λ_max(Ω̄) = {:.3e}/{time} ({:.2e}× ρ = {:.3e}/{time}), λ_max = {:.3e}, λ_min,excited = {:.3e} (excited rank {} of {}), convergence 1/(μ λ_min,excited) ≈ {}{flag}",
             e.channel,
             e.adaptation_rate,
             e.adaptation_rate / e.loop_rate,

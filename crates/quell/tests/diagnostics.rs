@@ -306,6 +306,12 @@ fn a_run_that_ended_early_gets_no_advice_about_its_horizon() {
     let s = Scenario::from_toml(&text.replace("[truth]\ndelays = [0.6, 0.8]\n", "")).unwrap();
     let r = Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
     assert!(r.outcome.is_none() || r.outcome == Some(quell::sim::Outcome::Completed), "{:?}", r.outcome);
+    // Both channels' Ω̄ are singular (9 of 11 directions excited); channel 2's λ_min is 1.3e-17,
+    // rounding of a zero, and its 1/(μ λ_min) is ∞ as channel 1's exact 0 gives, not 2e16 s.
+    for c in diagnose(&d, &s.reference, &s.disturbance, &r).channels {
+        assert!(c.excited_rank < d.q() && c.convergence_time == f64::INFINITY, "{c:?}");
+        assert!(c.convergence_time_excited.is_finite(), "{c:?}");
+    }
 }
 
 /// A disk drive's disturbance enters with its input (D = B) through a rigid body of relative degree

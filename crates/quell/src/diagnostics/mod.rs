@@ -517,7 +517,12 @@ fn channel<'r>(
         channel: i + 1,
         lambda_min_omega: c.lambda_min(),
         lambda_max_omega: c.lambda_max(),
-        convergence_time: 1.0 / (mu * c.lambda_min()),
+        // λ_min below the excited floor is Ω̄'s rounding of a singular direction: ∞, as for 0.
+        convergence_time: if c.excited().count() < c.lambda.len() {
+            f64::INFINITY
+        } else {
+            1.0 / (mu * c.lambda_min())
+        },
         adaptation_rate: mu * c.lambda_max(),
         excited_rank: c.excited().count(),
         lambda_min_excited_omega: c.excited().fold(f64::INFINITY, f64::min),
