@@ -448,6 +448,19 @@ fn horizon_advice(
     }
 }
 
+/// Channel i's input delay when it is not shorter than the run: its command never reached the plant.
+fn delay_advice(design: &Design, i: usize, t_end: f64) -> Option<String> {
+    let (tau, unit) = (design.plant().delays[i], design.plant().time_unit);
+    (tau >= t_end).then(|| {
+        format!(
+            "channel {}'s input delay τ = {} {unit} is not shorter than the run (its last sample is at {} {unit}): its command never reaches the plant; lengthen simulation.t_end to several times τ (or check plant.delays[{i}]'s unit)",
+            i + 1,
+            fmt_short(tau),
+            fmt_short(t_end)
+        )
+    })
+}
+
 fn channel<'r>(
     design: &Design,
     i: usize,
@@ -461,17 +474,11 @@ fn channel<'r>(
     let key = format!("design.mu[{i}]");
     let windows = tail_windows(result, i);
     let trend = windows.and_then(trend);
-    let mut advice = Vec::new();
-    let (tau, unit) = (design.plant().delays[i], design.plant().time_unit);
+    let unit = design.plant().time_unit;
     // A run that ended early (diverged, failed, interrupted) says nothing of its horizon: advice
     // on t_end and on μ against it would take the time it ended at for the horizon.
     let horizon = matches!(result.outcome, None | Some(Outcome::Completed));
-    if horizon && tau >= t_end {
-        advice.push(format!(
-            "channel {}'s input delay τ = {} {unit} is not shorter than the run (its last sample is at {} {unit}): its command never reaches the plant; lengthen simulation.t_end to several times τ (or check plant.delays[{i}]'s unit)",
-            i + 1, fmt_short(tau), fmt_short(t_end)
-        ));
-    }
+    let mut advice: Vec<String> = delay_advice(design, i, t_end).filter(|_| horizon).into_iter().collect();
     let relevant = c.slowest_relevant(RELEVANT_SHARE);
     // A tail already within the bound needs no faster adaptation (an automatic design's μ is chosen
     // for that bound, not for the averaged law's e^-5 over the horizon).
@@ -707,8 +714,9 @@ mod tests {
     fn a_delay_beyond_the_run_is_named() {
         let text = PAPER_EXAMPLE.replace("delays = [1.0, 3.0]", "delays = [1.0, 100.0]");
         let d = diagnosed(&text, 1.0, |_| 0.5);
-        let beyond =
-            |c: &ChannelDiagnostics| c.advice.iter().any(|a| a.contains("is not shorter than the run (100 s)"));
+        let beyond = |c: &ChannelDiagnostics| {
+            c.advice.iter().any(|a| a.contains("is not shorter than the run (its last sample is at 100 s)"))
+        };
         assert!(!beyond(&d.channels[0]) && beyond(&d.channels[1]), "{:?}", d.channels[1].advice);
         assert!(d.channels[1].advice[0].starts_with("channel 2's input delay τ = 100 s"), "{:?}", d.channels[1].advice);
     }
