@@ -251,6 +251,17 @@ fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
     }
     let (first_dir, first) = (shards[0].0, shards[0].1 .0.clone());
     let count = first.shard.count;
+    // Checked before the table of shards is allocated: a count from an edited file may be huge.
+    if count > shards.len() {
+        return Err(Failure::Input(format!(
+            "--merge: {} is shard {}/{count}, but {} director{} given; give the output directory of every shard 0/{count} … {}/{count}",
+            first_dir.display(),
+            first.shard.index,
+            shards.len(),
+            if shards.len() == 1 { "y is" } else { "ies are" },
+            count - 1
+        )));
+    }
     let mut seen = vec![None; count];
     for (dir, (meta, _, partial)) in &shards {
         let here = format!("--merge {}", dir.display());

@@ -135,6 +135,19 @@ fn merge_checks_every_shards_run_indices_and_its_output_folder() {
         refused(&o, "'s study.time_unit differs from ");
     }
     fs::write(dir.join("s1/summary.json"), &summary).unwrap();
+    // A shard of a huge split: merging it allocated a table of 2^64 − 1 shards (capacity overflow,
+    // exit 101; 2^32 aborted on the allocation).
+    for n in ["18446744073709551615", "4294967296"] {
+        let o = quell(&["sweep", &s, "--shard", &format!("0/{n}"), "--no-plots", "--out", &at("huge")]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        refused(
+            &quell(&["sweep", "--merge", &at("huge"), "--out", &at("m")]),
+            &format!(
+                "--merge: {} is shard 0/{n}, but 1 directory is given; give the output directory of every shard",
+                at("huge")
+            ),
+        );
+    }
     // A NaN among a completed run's figures (it merged, and the summary's quantiles shifted).
     let header_and_rows: Vec<String> = good.lines().map(str::to_string).collect();
     let mut fields: Vec<String> = header_and_rows[1].split(',').map(str::to_string).collect();
