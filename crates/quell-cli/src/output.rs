@@ -43,13 +43,14 @@ fn probe(dir: &Path) -> io::Result<()> {
 }
 
 /// Creates `--out` and proves it writable ([`probe`]), and that none of the `files` to be written
-/// there is a directory, before any work is done: every output-path problem is bad input (exit 2)
-/// naming the path.
+/// there is anything but a regular file or nothing (a directory, a symbolic link, a FIFO, a device:
+/// [`quell::files::check_target`]), before any work is done: every output-path problem is bad input
+/// (exit 2) naming the path.
 pub fn prepare_out(dir: &Path, files: &[&str]) -> Result<(), Failure> {
     let bad = |e: String| Failure::Input(format!("--out {}: {e}; choose another output directory", dir.display()));
     fs::create_dir_all(dir).and_then(|()| probe(dir)).map_err(|e| bad(format!("cannot write there ({e})")))?;
-    match files.iter().map(|f| dir.join(f)).find(|p| p.is_dir()) {
-        Some(p) => Err(bad(format!("{} is a directory, where the output file goes", p.display()))),
+    match files.iter().map(|f| quell::files::check_target(&dir.join(f))).find_map(Result::err) {
+        Some(e) => Err(bad(e.to_string())),
         None => Ok(()),
     }
 }
@@ -62,8 +63,8 @@ pub fn prepare_file(flag: &str, path: &Path) -> Result<(), Failure> {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    let why = if path.is_dir() {
-        "it is a directory".to_string()
+    let why = if let Err(e) = quell::files::check_target(path) {
+        e.to_string()
     } else if let Err(e) = probe(dir) {
         format!("cannot write in {} ({e})", dir.display())
     } else {

@@ -251,16 +251,17 @@ fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
     }
     let (first_dir, first) = (shards[0].0, shards[0].1 .0.clone());
     let count = first.shard.count;
-    // Checked before the table of shards is allocated: a count from an edited file may be huge.
-    if count > shards.len() {
-        return Err(Failure::Input(format!(
-            "--merge: {} is shard {}/{count}, but {} director{} given; give the output directory of every shard 0/{count} … {}/{count}",
-            first_dir.display(),
-            first.shard.index,
-            shards.len(),
-            if shards.len() == 1 { "y is" } else { "ies are" },
+    let missing = |index: usize| {
+        Failure::Input(format!(
+            "--merge: shard {index}/{count} is missing; give the output directory of every shard 0/{count} … {}/{count}",
             count - 1
-        )));
+        ))
+    };
+    // More shards than directories: one of the first len + 1 is missing. Named before the table of
+    // shards is allocated, as a count from an edited file or a huge split may be beyond memory.
+    if count > shards.len() {
+        let given = |i: usize| shards.iter().any(|(_, (m, ..))| m.shard.index == i);
+        return Err(missing((0..=shards.len()).find(|&i| !given(i)).unwrap_or(0)));
     }
     let mut seen = vec![None; count];
     for (dir, (meta, _, partial)) in &shards {
@@ -301,11 +302,8 @@ fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
             )));
         }
     }
-    if let Some(missing) = seen.iter().position(Option::is_none) {
-        return Err(Failure::Input(format!(
-            "--merge: shard {missing}/{count} is missing; give the output directory of every shard 0/{count} … {}/{count}",
-            count - 1
-        )));
+    if let Some(index) = seen.iter().position(Option::is_none) {
+        return Err(missing(index));
     }
     let total = usize::try_from(first.runs).unwrap_or(usize::MAX);
     for (dir, (meta, rows, _)) in &shards {

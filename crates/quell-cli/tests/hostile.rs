@@ -142,10 +142,7 @@ fn merge_checks_every_shards_run_indices_and_its_output_folder() {
         assert!(o.status.success(), "{}", stderr(&o));
         refused(
             &quell(&["sweep", "--merge", &at("huge"), "--out", &at("m")]),
-            &format!(
-                "--merge: {} is shard 0/{n}, but 1 directory is given; give the output directory of every shard",
-                at("huge")
-            ),
+            &format!("--merge: shard 1/{n} is missing; give the output directory of every shard 0/{n} … "),
         );
     }
     // A NaN among a completed run's figures (it merged, and the summary's quantiles shifted).
@@ -192,12 +189,20 @@ fn output_path_problems_are_all_exit_2_naming_the_path() {
     fs::create_dir_all(out.join("runs.csv")).unwrap();
     refused(
         &quell(&["sweep", &s, "--out", &out.display().to_string()]),
-        &format!(
-            "--out {}: {} is a directory, where the output file goes",
-            out.display(),
-            out.join("runs.csv").display()
-        ),
+        &format!("--out {}: {} is a directory, not a regular file", out.display(), out.join("runs.csv").display()),
     );
+    // A dangling symbolic link where runs.csv goes: was exit 1 after every run, all work lost.
+    #[cfg(unix)]
+    {
+        let linked = dir.join("linked");
+        fs::create_dir_all(&linked).unwrap();
+        std::os::unix::fs::symlink(dir.join("nowhere.csv"), linked.join("runs.csv")).unwrap();
+        refused(
+            &quell(&["sweep", &s, "--out", &linked.display().to_string()]),
+            &format!("{} is a symbolic link, not a regular file", linked.join("runs.csv").display()),
+        );
+        assert!(!linked.join("summary.json").exists(), "nothing was written");
+    }
     fs::create_dir_all(out.join("signals.csv")).unwrap();
     refused(&quell(&["run", &paper(), "--out", &out.display().to_string()]), "signals.csv is a directory");
     // A directory where a figure goes: was exit 1 after the run (or the sweep), its results lost.

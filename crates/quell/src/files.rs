@@ -58,8 +58,9 @@ fn stage(path: &Path, contents: impl FnOnce(&mut dyn Write) -> io::Result<()>) -
 
 /// The renaming replaces whatever `path` names: refused (`InvalidInput`) unless that is a regular
 /// file or nothing, so that a device (`/dev/full`), a FIFO, a socket, a symbolic link or a
-/// directory is never replaced by a file.
-fn check_target(path: &Path) -> io::Result<()> {
+/// directory is never replaced by a file. Public so that a caller can check its targets before
+/// the work that produces them.
+pub fn check_target(path: &Path) -> io::Result<()> {
     let Ok(meta) = std::fs::symlink_metadata(path) else { return Ok(()) };
     let kind = meta.file_type();
     let what = if kind.is_file() {
