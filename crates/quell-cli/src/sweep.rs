@@ -234,6 +234,14 @@ fn differing_key(a: &StudyMeta, b: &StudyMeta) -> Option<String> {
     a.iter().find(|(key, value)| *key != "shard" && b.get(*key) != Some(*value)).map(|(key, _)| key.clone())
 }
 
+/// Shard `index` of a split into `count` was not given to `--merge`.
+fn missing_shard(index: usize, count: usize) -> Failure {
+    Failure::Input(format!(
+        "--merge: shard {index}/{count} is missing; give the output directory of every shard 0/{count} … {}/{count}",
+        count - 1
+    ))
+}
+
 /// `--merge DIR…`: the shards of one study (same fingerprint, every shard I/N once, none
 /// partial) into one directory whose rows are those of an unsharded sweep.
 fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
@@ -251,17 +259,11 @@ fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
     }
     let (first_dir, first) = (shards[0].0, shards[0].1 .0.clone());
     let count = first.shard.count;
-    let missing = |index: usize| {
-        Failure::Input(format!(
-            "--merge: shard {index}/{count} is missing; give the output directory of every shard 0/{count} … {}/{count}",
-            count - 1
-        ))
-    };
     // More shards than directories: one of the first len + 1 is missing. Named before the table of
     // shards is allocated, as a count from an edited file or a huge split may be beyond memory.
     if count > shards.len() {
         let given = |i: usize| shards.iter().any(|(_, (m, ..))| m.shard.index == i);
-        return Err(missing((0..=shards.len()).find(|&i| !given(i)).unwrap_or(0)));
+        return Err(missing_shard((0..=shards.len()).find(|&i| !given(i)).unwrap_or(0), count));
     }
     let mut seen = vec![None; count];
     for (dir, (meta, _, partial)) in &shards {
@@ -303,7 +305,7 @@ fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
         }
     }
     if let Some(index) = seen.iter().position(Option::is_none) {
-        return Err(missing(index));
+        return Err(missing_shard(index, count));
     }
     let total = usize::try_from(first.runs).unwrap_or(usize::MAX);
     for (dir, (meta, rows, _)) in &shards {
