@@ -226,7 +226,9 @@ pub fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
             let _ = err.value(py).setattr("key", key.replace("[\"", ".").replace("\"]", ""));
             return Err(err);
         }
-        return Ok(Value::Float(obj.extract::<f64>()?));
+        // Beyond a float64 (10**400): a ScenarioError naming the key, not Python's bare OverflowError.
+        let file_key = key.replace("[\"", ".").replace("\"]", "");
+        return crate::convert::number(obj, key, Kind::Scenario, &file_key).map(Value::Float);
     }
     if obj.is_instance_of::<PyFloat>() {
         return Ok(Value::Float(obj.extract()?));

@@ -166,3 +166,18 @@ def test_huge_ints_bools_and_bad_pairs_in_lists_are_named():
         quell.place(np.eye(2), [[0.0], [1.0]], [np.True_, -2.0])
     with pytest.raises(TypeError, match=r"^poles\[0\]: expected a pole"):
         quell.place(np.eye(2), [[0.0], [1.0]], np.array([True, False]))
+
+
+def test_a_huge_int_inside_a_dict_argument_is_a_keyed_scenario_error():
+    """10**400 in a grid, a simulation dict or a signal dict was Python's bare OverflowError ("int
+    too large to convert to float"), naming nothing: it is a ScenarioError naming the entry."""
+    s = quell.paper_example()
+    cases = [
+        (lambda: quell.Study(s, grid={"design.mu[0]": [10**400]}), 'grid["design.mu[0]"][0]'),
+        (lambda: quell.Study(s, simulation={"t_end": 10**400}, grid={"design.beta": [1.0]}), 'simulation["t_end"]'),
+    ]
+    for make, name in cases:
+        with pytest.raises(quell.ScenarioError) as e:
+            make()
+        assert str(e.value).startswith(name + ": expected a real number within a float64's range"), str(e.value)
+        assert "401 digits" in str(e.value)
