@@ -217,17 +217,17 @@ pub fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
         if let Ok(i) = obj.extract::<i64>() {
             return Ok(Value::Integer(i));
         }
+        // `.key` in the file's form: noise["seed"] is noise.seed.
+        let file_key = key.replace("[\"", ".").replace("\"]", "");
         // A count or a seed is an integer, never rounded to a float (which the reader would refuse
         // as "a float", or print rounded); any other key takes a huge integer as the float it is.
         if let Some(expected) = integer_key(key) {
             let digits = obj.str().map_or_else(|_| "an integer beyond 2**63 - 1".to_string(), |s| s.to_string());
             let err = Kind::Scenario.err(py, format!("{key}: expected {expected}, found {digits}"));
-            // `.key` in the file's form: noise["seed"] is noise.seed.
-            let _ = err.value(py).setattr("key", key.replace("[\"", ".").replace("\"]", ""));
+            let _ = err.value(py).setattr("key", file_key);
             return Err(err);
         }
         // Beyond a float64 (10**400): a ScenarioError naming the key, not Python's bare OverflowError.
-        let file_key = key.replace("[\"", ".").replace("\"]", "");
         return crate::convert::number(obj, key, Kind::Scenario, &file_key).map(Value::Float);
     }
     if obj.is_instance_of::<PyFloat>() {

@@ -132,8 +132,8 @@ impl Targets {
     }
 
     /// A convergence time that is positive, finite and within the horizon t_end (the verifying run
-    /// must reach it), and limits that are positive (+∞: none on that input) and one or m of them; otherwise an
-    /// error naming `convergence_time` or `u_limit`.
+    /// must reach it), and limits that are positive (+∞: none on that input) and one or m of them;
+    /// otherwise an error naming `convergence_time` or `u_limit`.
     fn check(&self, m: usize, (t_end, unit): (f64, crate::TimeUnit)) -> Result<(), AutoError> {
         let n = self.u_limit.len();
         let (key, message): (&'static str, _) = if let Some(t) =

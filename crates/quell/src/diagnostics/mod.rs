@@ -130,7 +130,9 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
     // One line for every frequency it passes badly: they share the remedy.
     let poor: Vec<&Fidelity> = avg.fidelity.iter().filter(|f| missed && f.relative_error > FIDELITY_LIMIT).collect();
     let mut advice: Vec<String> = clipping_advice(result, missed).into_iter().collect();
-    advice.extend(filter_scale_advice(design, signals).filter(|_| missed));
+    if missed {
+        advice.extend(filter_scale_advice(design, signals));
+    }
     if !poor.is_empty() {
         let list = |part: &dyn Fn(&Fidelity) -> String| poor.iter().map(|f| part(f)).collect::<Vec<_>>().join(", ");
         let (plural, freqs, errors) = (
@@ -233,8 +235,8 @@ const CLIPPED_SHARE: f64 = 0.01;
 /// The zeros of (A, D, C) that an unknown-input observer keeps among its poles: when C D has full
 /// column rank k, the n − k eigenvalues of (I − D (CD)⁺ C) A other than its k zeros (that
 /// projection annihilates D's columns), ascending in magnitude; `None` unless 1 ≤ k < n and all of
-/// them lie in the open left half-plane (for a singular C D, [`singular_disturbance_zeros`]). With these among the observer poles and the others fast,
-/// L C (x − x̂) reconstructs D ω and the disturbance observer (20) passes ω faithfully; with all
+/// them lie in the open left half-plane (for a singular C D, [`singular_disturbance_zeros`]). With
+/// these among the observer poles and the others fast, L C (x − x̂) reconstructs D ω and the disturbance observer (20) passes ω faithfully; with all
 /// poles fast the zeros keep an error whatever the speed.
 pub fn disturbance_zeros(p: &Plant) -> Option<Vec<Complex<f64>>> {
     let (n, k) = (p.n(), p.k());
