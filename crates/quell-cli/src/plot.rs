@@ -264,7 +264,8 @@ fn draw<DB: DrawingBackend>(
     i: usize,
     names: &SignalNames,
 ) -> Result<(), String> {
-    let col = |sig: &[f64]| r.t.iter().copied().zip(r.column(sig, r.m, i)).collect::<Vec<_>>();
+    let span = (r.t.first().copied().unwrap_or(0.0), r.t.last().copied().unwrap_or(0.0));
+    let col = |sig: &[f64]| decimated(samples(r, sig, i), span);
     let (c, time) = (i + 1, r.time_unit);
     let named = |given: &Option<Vec<String>>| {
         given.as_ref().and_then(|v| v.get(i)).map_or(String::new(), |n| format!(" ({n})"))
@@ -290,7 +291,7 @@ fn draw<DB: DrawingBackend>(
     )?;
     panel(&areas[1], (&format!("{channel}: tracking error"), "e = y − g"), &[(format!("e{c}"), col(&r.e))], time)?;
     // A sampled run's commands are held between samples ([`SimResult::commands_held`]).
-    let held = |sig: &[f64]| if r.commands_held() { staircase(&col(sig)) } else { col(sig) };
+    let held = |sig: &[f64]| if r.commands_held() { decimated(staircase(samples(r, sig, i)), span) } else { col(sig) };
     panel(&areas[2], (&format!("{channel}: adaptive command (25)"), "u"), &[(format!("u{c}"), held(&r.u))], time)?;
     // The plant input u_f (5), what the actuator must deliver, in its own panel: in a plant's units
     // (newtons, volts) it can be 1e5 times u. The true actuator's limit is drawn where u_f's peak
@@ -307,7 +308,8 @@ fn draw<DB: DrawingBackend>(
     panel_with_limit(&areas[3], (&uf_title, "u_f"), &[(format!("uf{c}"), uf)], limit, time)?;
     let etas: Vec<Series> = (0..r.q)
         .map(|j| {
-            let pts = r.t.iter().copied().zip(r.eta.iter().skip(i * r.q + j).step_by(r.m * r.q).copied()).collect();
+            let eta = r.eta.iter().skip(i * r.q + j).step_by(r.m * r.q).copied();
+            let pts = decimated(r.t.iter().copied().zip(eta), span);
             (format!("η{c}_{}", j + 1), pts)
         })
         .collect();
@@ -320,16 +322,64 @@ fn draw<DB: DrawingBackend>(
     root.present().map_err(|e| e.to_string())
 }
 
+/// Channel i's samples (t, value) of `signal`, a signal of m columns.
+fn samples<'a>(r: &'a SimResult, signal: &'a [f64], i: usize) -> impl Iterator<Item = (f64, f64)> + 'a {
+    r.t.iter().copied().zip(r.column(signal, r.m, i))
+}
+
 /// The corners of a zero-order hold through `points`: each value kept until the next point's t.
-fn staircase(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
-    let mut corners = Vec::with_capacity(2 * points.len());
-    for (k, &(t, v)) in points.iter().enumerate() {
-        if k > 0 {
-            corners.push((t, points[k - 1].1));
+fn staircase(points: impl Iterator<Item = (f64, f64)>) -> impl Iterator<Item = (f64, f64)> {
+    let mut held = None;
+    points.flat_map(move |(t, v)| held.replace(v).map(|u| (t, u)).into_iter().chain([(t, v)]))
+}
+
+/// How many equal slices of a run's time span [`decimated`] keeps points of: two per pixel column.
+const SLICES: usize = 2 * SIZE.0 as usize;
+
+/// The points of a series a figure draws: in each of [`SLICES`] equal slices of `(t0, t1)`, the
+/// first, lowest, highest and last finite points there, in their order (M4 aggregation, Jugel et
+/// al., VLDB 2014). The line through them covers each pixel column as the whole series would, so a
+/// run of 10⁷ rows draws as fast and as small as one of 10⁴ (its SVG was 200 MB a channel at 10⁶),
+/// and a series of at most one point a slice is kept whole.
+fn decimated(points: impl Iterator<Item = (f64, f64)>, (t0, t1): (f64, f64)) -> Vec<(f64, f64)> {
+    let scale = if t1 > t0 { SLICES as f64 / (t1 - t0) } else { 0.0 };
+    let slice = |t: f64| (((t - t0) * scale).max(0.0) as usize).min(SLICES - 1);
+    let mut kept = Vec::new();
+    // The slice under way and its first, lowest, highest and last points, each with its index.
+    type Four = [(usize, (f64, f64)); 4];
+    let mut open: Option<(usize, Four)> = None;
+    let flush = |kept: &mut Vec<(f64, f64)>, mut four: Four| {
+        four.sort_by_key(|&(k, _)| k);
+        let mut last = None;
+        for (k, point) in four {
+            if last.replace(k) != Some(k) {
+                kept.push(point);
+            }
         }
-        corners.push((t, v));
+    };
+    for (k, (t, v)) in points.enumerate().filter(|(_, (_, v))| v.is_finite()) {
+        let s = slice(t);
+        match &mut open {
+            Some((current, [_, low, high, last])) if *current == s => {
+                if v < low.1 .1 {
+                    *low = (k, (t, v));
+                }
+                if v > high.1 .1 {
+                    *high = (k, (t, v));
+                }
+                *last = (k, (t, v));
+            }
+            _ => {
+                if let Some((_, four)) = open.replace((s, [(k, (t, v)); 4])) {
+                    flush(&mut kept, four);
+                }
+            }
+        }
     }
-    corners
+    if let Some((_, four)) = open {
+        flush(&mut kept, four);
+    }
+    kept
 }
 
 /// Writes `channel{i+1}.png` and `.svg` into `dir`, each atomically; t in the run's unit of time.
@@ -967,7 +1017,9 @@ pub fn plot_tune(dir: &Path, r: &quell::study::TuneResult, unit: TimeUnit) -> io
 
 #[cfg(test)]
 mod tests {
-    use super::{axis_coords, decade_label, legend_corner, staircase, tick_label, widened, AxisScale};
+    use super::{
+        axis_coords, decade_label, decimated, legend_corner, staircase, tick_label, widened, AxisScale, SLICES,
+    };
     use plotters::prelude::SeriesLabelPosition;
 
     #[test]
@@ -985,9 +1037,47 @@ mod tests {
 
     #[test]
     fn a_held_signal_keeps_each_value_until_the_next_sample() {
-        let corners = staircase(&[(0.0, 1.0), (0.5, 3.0), (1.0, -2.0)]);
+        let corners: Vec<_> = staircase([(0.0, 1.0), (0.5, 3.0), (1.0, -2.0)].into_iter()).collect();
         assert_eq!(corners, [(0.0, 1.0), (0.5, 1.0), (0.5, 3.0), (1.0, 3.0), (1.0, -2.0)]);
-        assert!(staircase(&[]).is_empty());
+        assert_eq!(staircase(std::iter::empty()).count(), 0);
+    }
+
+    #[test]
+    fn a_long_series_is_drawn_from_each_slices_extremes_and_a_short_one_whole() {
+        // 10⁶ samples of a 50 Hz sine over 10 s with one spike of 7 and one NaN: at most four
+        // points a slice, and every slice's first, lowest, highest and last sample among them.
+        let n = 1_000_000;
+        let t = |k: usize| 10.0 * k as f64 / (n - 1) as f64;
+        let value = |k: usize| match k {
+            123_457 => 7.0,
+            654_321 => f64::NAN,
+            _ => (2.0 * std::f64::consts::PI * 50.0 * t(k)).sin(),
+        };
+        let kept = decimated((0..n).map(|k| (t(k), value(k))), (0.0, 10.0));
+        assert!(kept.len() <= 4 * SLICES, "{} points", kept.len());
+        assert!(kept.windows(2).all(|w| w[0].0 < w[1].0), "in the order of t");
+        assert!(kept.iter().all(|p| p.1.is_finite()));
+        assert!(kept.contains(&(t(123_457), 7.0)), "the spike is kept");
+        // Slice by slice, against a direct pass: its extremes and ends are among the kept points.
+        let width = 10.0 / SLICES as f64;
+        for s in (0..SLICES).step_by(97) {
+            let inside: Vec<(f64, f64)> = (0..n)
+                .map(|k| (t(k), value(k)))
+                .filter(|&(tk, v)| ((tk / width) as usize).min(SLICES - 1) == s && v.is_finite())
+                .collect();
+            let low = inside.iter().copied().min_by(|a, b| a.1.total_cmp(&b.1)).unwrap();
+            let high = inside.iter().copied().max_by(|a, b| a.1.total_cmp(&b.1)).unwrap();
+            for point in [inside[0], low, high, inside[inside.len() - 1]] {
+                assert!(kept.contains(&point), "slice {s}: {point:?}");
+            }
+        }
+        // The paper's 1,001 rows fall one to a slice: kept whole, NaN aside.
+        let short: Vec<(f64, f64)> = (0..=1000).map(|k| (0.1 * k as f64, (0.3 * k as f64).cos())).collect();
+        assert_eq!(decimated(short.iter().copied(), (0.0, 100.0)), short);
+        assert_eq!(
+            decimated([(1.0, 2.0), (1.0, f64::NAN), (1.0, 3.0)].into_iter(), (1.0, 1.0)),
+            [(1.0, 2.0), (1.0, 3.0)]
+        );
     }
 
     #[test]
