@@ -270,3 +270,23 @@ fn each_loop_reports_its_own_statistics() {
     assert!(matches!(r.outcome, Some(Outcome::StepSizeTooSmall { .. })));
     assert!(matches!(r.stats, RunStats::Continuous(stats) if stats.rhs_evals > 0), "{:?}", r.stats);
 }
+
+#[test]
+fn a_runs_memory_bound_is_its_record_and_its_history_or_delay_lines() {
+    // The paper's example over 100 s, a row each 0.1 s: 1,001 rows of 27 numbers (t, y, g, e, u,
+    // u_f and 2 × 8 η̂) = 216,216 bytes. Continuous: the default step budget 110,000 (running.md:
+    // 10,000 + 100·(ρ t_end + t_end/τ_min), ρ = 9, τ_min = 1) gives H = 8·110,000·3/100 = 26,400
+    // history records of (8·27 + 9)·8 = 1,800 bytes (27 delayed states: n + q + m·q = 3 + 8 + 16),
+    // twice for the ring: 95,040,000 bytes. Sampled at 1 ms: 3/0.001 + 2 = 3,002 samples of
+    // 8·m·(q + 3) = 176 bytes = 528,352 bytes.
+    let (s, d) = paper();
+    let (g, w) = (&s.reference, &s.disturbance);
+    let continuous = Run::new(&d, g, w, RunSettings::continuous(100.0, 0.1, 1e-9, 1e-9));
+    assert_eq!(continuous.memory_bound(), 216_216 + 95_040_000);
+    let sampled = Run::new(&d, g, w, RunSettings::sampled(100.0, 0.1, 1e-3));
+    assert_eq!(sampled.memory_bound(), 216_216 + 528_352);
+    // With the states x and x̂ a row holds 2n = 6 numbers more.
+    let mut states = RunSettings::continuous(100.0, 0.1, 1e-9, 1e-9);
+    states.record_states = true;
+    assert_eq!(Run::new(&d, g, w, states).memory_bound(), 1_001 * 33 * 8 + 95_040_000);
+}

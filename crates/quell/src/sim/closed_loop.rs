@@ -914,6 +914,26 @@ fn check_noise_bandwidth(bandwidth: f64, rho: f64, unit: crate::settings::TimeUn
     ))
 }
 
+/// The step budget and the delay history's byte budget of `run`, with history records of `record`
+/// bytes and the loop's `delays`: the integrator's, or [`default_max_steps`] and
+/// [`default_max_history_bytes`].
+fn budgets(run: &Run<'_>, integrator: &Integrator, record: usize, delays: &[f64]) -> (usize, usize) {
+    let max_steps = integrator.max_steps.unwrap_or_else(|| default_max_steps(run, integrator));
+    let tau_max = delays.iter().copied().fold(0.0, f64::max);
+    let history = integrator
+        .max_history_bytes
+        .unwrap_or_else(|| default_max_history_bytes(max_steps, tau_max, run.settings.t_end, record));
+    (max_steps, history)
+}
+
+/// The most bytes the continuous loop of `run` holds beyond its record: its delay history's budget
+/// ([`budgets`]); the history's records carry the n_d = n + q + m·q delayed states z = (ξ̂, x̂) and η̂.
+pub(super) fn history_bound(run: &Run<'_>, integrator: &Integrator) -> usize {
+    let (p, q) = (run.design.plant(), run.design.q());
+    let record = dde::record_bytes(p.n() + q + p.m() * q);
+    budgets(run, integrator, record, &loop_delays(p, run.truth, run.settings.actuator.as_ref())).1
+}
+
 /// The continuous loop of `run` ([`Run::simulate`]), integrated as `integrator` says: the plant
 /// (the truth) with input u_f (5) delayed by τ_i^true, or through the settings' actuator, and the
 /// controller's observers and filters reading y plus the settings' noise. [`SimResult::limited`]
@@ -925,7 +945,7 @@ pub(super) fn simulate(
 ) -> Result<SimResult, SimError> {
     let mut sys = check(run, integrator)?;
     let (st, truth) = (&run.settings, run.truth);
-    let Integrator { rtol, atol, method, max_steps, max_history_bytes } = *integrator;
+    let Integrator { rtol, atol, method, .. } = *integrator;
     // with_truth has checked x0's length (check_truth).
     let s0 = sys.initial_state(&truth.x0).map_err(|e| KeyError::new("truth.x0", e.to_string()))?;
     let history = vec![0.0; sys.n_delayed()];
@@ -943,11 +963,8 @@ pub(super) fn simulate(
         u: vec![0.0; m],
         u_f: vec![0.0; m],
     });
-    let max_steps = max_steps.unwrap_or_else(|| default_max_steps(run, integrator));
     let record = dde::record_bytes(sys.n_delayed());
-    let tau_max = sys.delays().iter().copied().fold(0.0, f64::max);
-    let max_history_bytes =
-        max_history_bytes.unwrap_or_else(|| default_max_history_bytes(max_steps, tau_max, st.t_end, record));
+    let (max_steps, max_history_bytes) = budgets(run, integrator, record, sys.delays());
     // The history's ring may double past its length: half the budget in records.
     let max_history_len = max_history_bytes / (2 * record);
     let opts = Options { rtol, atol, max_steps, max_history_len, method, ..Options::default() };

@@ -7,6 +7,7 @@
 pub(crate) mod closed_loop;
 pub(crate) mod dde;
 mod divergence;
+pub(crate) mod memory;
 pub(crate) mod noise;
 mod result;
 mod sampled;
@@ -30,6 +31,7 @@ pub use closed_loop::{
 };
 pub use dde::{Method, Stats};
 pub use divergence::{Peaks, Watched, DIVERGENCE_BOUND};
+pub use memory::RUNS_MEMORY_BYTES;
 pub use noise::{band_limited, NOISE_SINES};
 pub use result::{ChannelFigures, ChannelSummary, Outcome, RunStats, Sample, SimResult};
 pub use sampled::{coarse_sample_warning, output_step_fixes, SampledController, COARSE_SAMPLE};
@@ -298,6 +300,27 @@ impl<'a> Run<'a> {
     /// signals are checked first (horizon, tolerances or sample time, divergence bound, noise,
     /// actuator, m reference and k disturbance components with finite parameters, the truth's
     /// dimensions).
+    /// The most bytes this run holds, known before it starts: its record (rows × the numbers of a
+    /// row) and the continuous loop's delay history budget, or the sampled loop's delay lines. A
+    /// study reserves it before each run ([`RUNS_MEMORY_BYTES`]).
+    pub fn memory_bound(&self) -> usize {
+        let st = &self.settings;
+        let (row_bytes, _) = self.record_row();
+        let record = (st.t_end / st.output_step + 1.0) * row_bytes as f64;
+        let rest = match &st.mode {
+            Loop::Continuous(integrator) => closed_loop::history_bound(self, integrator),
+            Loop::Sampled { sample_time } => sampled::delay_line_bound(self, *sample_time),
+        };
+        (record + rest as f64).min(usize::MAX as f64) as usize
+    }
+
+    /// The bytes of one recorded row and what it holds ([`SimResult::row_len`]).
+    fn record_row(&self) -> (usize, &'static str) {
+        let p = self.design.plant();
+        let (width, what) = SimResult::row_len(p.m(), self.design.q(), p.n(), self.settings.record_states);
+        (8 * width, what)
+    }
+
     pub fn simulate(self, on_progress: impl FnMut(f64) -> ControlFlow<()>) -> Result<SimResult, SimError> {
         let u_max = self.settings.actuator.as_ref().map_or(vec![], |a| a.limits.clone());
         let mut result = match self.settings.mode.clone() {
@@ -314,9 +337,8 @@ impl<'a> Run<'a> {
 fn check_run(run: &Run<'_>) -> Result<(), KeyError> {
     let st = &run.settings;
     settings::check_horizon(st.t_end, st.output_step)?;
-    let p = run.design.plant();
-    let (width, what) = SimResult::row_len(p.m(), run.design.q(), p.n(), st.record_states);
-    settings::check_record(st.t_end, st.output_step, 8 * width, what)?;
+    let (row_bytes, what) = run.record_row();
+    settings::check_record(st.t_end, st.output_step, row_bytes, what)?;
     divergence::check_bound(st.divergence_bound)?;
     check_signals(run.design.plant(), run.reference, run.disturbance)
 }

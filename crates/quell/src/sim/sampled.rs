@@ -141,6 +141,16 @@ pub(super) fn simulate(
     }
 }
 
+/// An upper estimate of the sampled loop's memory beyond its record ([`Run::memory_bound`]): over
+/// the longest delay in samples, the controller's delay lines (1 + q numbers a channel) and the
+/// plant's past commands (2 a channel).
+pub(super) fn delay_line_bound(run: &Run<'_>, sample_time: f64) -> usize {
+    let (p, q) = (run.design.plant(), run.design.q());
+    let delays = super::closed_loop::loop_delays(p, run.truth, run.settings.actuator.as_ref());
+    let samples = delays.iter().copied().fold(0.0, f64::max) / sample_time + 2.0;
+    (samples * (8 * p.m() * (q + 3)) as f64).min(usize::MAX as f64) as usize
+}
+
 /// The last samples of an m-channel signal v, enough to read channel i at any delay up to the
 /// longest given: v_i(k − d), 0 before k = 0.
 struct PastSamples {

@@ -131,6 +131,8 @@ pub struct Row {
 /// loop) and the runaway rules' step budget when that was the run's budget.
 pub(crate) struct Simulated {
     pub result: SimResult,
+    /// The run's memory bound, reserved from [`sim::memory::RUNS`] until its row is made.
+    pub memory: Option<sim::memory::Held<'static>>,
     pub breakpoints: usize,
     /// [`Run::delay_floor`] of the run.
     pub delay_floor: usize,
@@ -168,8 +170,11 @@ pub(crate) fn simulate(
         settings.runaway = limits.map(|(_, peaks)| peaks);
     }
     let progress = |_t: f64| if stop() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
-    let result = run.settings(settings).simulate(progress).map_err(|e| e.to_string())?;
-    Ok(Simulated { result, breakpoints, delay_floor, runaway_steps })
+    let run = run.settings(settings);
+    // A stop while waiting for memory lets the run start and end at its first progress check.
+    let memory = sim::memory::RUNS.hold(run.memory_bound(), stop);
+    let result = run.simulate(progress).map_err(|e| e.to_string())?;
+    Ok(Simulated { result, memory, breakpoints, delay_floor, runaway_steps })
 }
 
 /// Carries out one run; `None` when `stop` interrupted it.
@@ -189,7 +194,8 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
     };
     match spec.simulate_within_limits(stop) {
         Err(reason) => row.reason = reason,
-        Ok(Simulated { result: r, runaway_steps, breakpoints, delay_floor }) => {
+        // `_memory` stays held until the row is made.
+        Ok(Simulated { result: r, runaway_steps, breakpoints, delay_floor, memory: _memory }) => {
             row.steps = r.stats.steps() as u64;
             match r.outcome.as_ref().unwrap_or(&sim::Outcome::Completed) {
                 sim::Outcome::Completed => {

@@ -370,3 +370,27 @@ fn a_study_document_is_self_contained() {
     let e = error("[scenario]\nname = \"x\"");
     assert!(e.starts_with("scenario: the study's scenario: plant: missing"), "{e}");
 }
+
+#[test]
+fn study_runs_wait_for_the_memory_that_other_runs_hold() {
+    // This test holds all of the study runs' budget but 1 MiB; a run of the paper's example needs
+    // ~95 MB (its delay history's budget, Run::memory_bound): it must wait, and run once the
+    // memory is given back.
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let s = study("[grid]\n\"simulation.t_end\" = [5.0]\n").unwrap();
+    let gate = &crate::sim::memory::RUNS;
+    let held = gate.hold(crate::sim::RUNS_MEMORY_BYTES - (1 << 20), &|| false).expect("no stop");
+    let rows = AtomicUsize::new(0);
+    let on_row = |_: &Row| {
+        rows.fetch_add(1, Ordering::SeqCst);
+    };
+    std::thread::scope(|scope| {
+        let worker = scope.spawn(|| sweep(&s, &SweepOptions { on_row: Some(&on_row), ..Default::default() }));
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        assert_eq!(rows.load(Ordering::SeqCst), 0, "a run started without its memory");
+        drop(held);
+        let done = worker.join().expect("the sweep");
+        assert_eq!(done.rows.len(), 1);
+        assert_eq!(done.rows[0].outcome, Outcome::Completed, "{:?}", done.rows[0]);
+    });
+}
