@@ -86,7 +86,7 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
             list(&v.bound),
             match targets.u_limit.as_slice() {
                 [] => String::new(),
-                [l] => format!(", max|u_f| {} against the limit {l}", list(&v.max_uf)),
+                [l] => format!(", max|u_f| {} against the limit {}", list(&v.max_uf), crate::run::short(*l)),
                 each => format!(", max|u_f| {} against the limits {each:?}", list(&v.max_uf)),
             },
             v.advice.iter().map(|a| format!("; {a}")).collect::<String>()

@@ -715,11 +715,12 @@ fn design_auto_writes_a_complete_scenario_that_meets_the_tail_bound() {
     // A limit no candidate meets (the tails do) is an infeasible target: exit 2, nothing written.
     let out = dir.path().join("limited.toml");
     let o =
-        quell(&["design", input.to_str().unwrap(), "--auto", "--u-limit", "1e-3", "--write", out.to_str().unwrap()]);
+        quell(&["design", input.to_str().unwrap(), "--auto", "--u-limit", "1e-300", "--write", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(stderr(&o).contains("no candidate keeps max|u_f,i| within the actuator limit 0.001"), "{}", stderr(&o));
-    // Its figures in four digits, and a limit to ask for that admits the peak.
-    assert!(stderr(&o).contains(", max|u_f| [1.457e1, 2.167e1] against the limit 0.001)"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no candidate keeps max|u_f,i| within the actuator limit 1e-300"), "{}", stderr(&o));
+    // Its figures in four digits, the limit as written (it printed as 300 digits), and a limit to
+    // ask for that admits the peak.
+    assert!(stderr(&o).contains(", max|u_f| [1.457e1, 2.167e1] against the limit 1e-300)"), "{}", stderr(&o));
     assert!(stderr(&o).contains("raise the actuator limit (u_limit) to at least 22,"), "{}", stderr(&o));
     assert!(!out.exists());
 }
