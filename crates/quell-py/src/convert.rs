@@ -69,7 +69,6 @@ fn real_array<'py>(obj: &Bound<'py, PyAny>, name: &str, kind: Kind) -> PyResult<
             "c" => "complex numbers".to_string(),
             "b" => "booleans".to_string(),
             "U" | "S" => "strings".to_string(),
-            "O" if arr.getattr("ndim")?.extract::<usize>()? == 0 => a_type(obj),
             // Python ints beyond a float64's range make an object array too.
             "O" if arr
                 .call_method0("ravel")?
@@ -79,6 +78,7 @@ fn real_array<'py>(obj: &Bound<'py, PyAny>, name: &str, kind: Kind) -> PyResult<
             {
                 "an integer beyond a float64's range (±1.8e308)".to_string()
             }
+            "O" if arr.getattr("ndim")?.extract::<usize>()? == 0 => a_type(obj),
             "O" => "entries that are not all numbers".to_string(),
             _ => format!("an array of dtype {}", dtype.str()?),
         };
@@ -268,7 +268,7 @@ pub fn number(obj: &Bound<'_, PyAny>, name: &str, kind: Kind, key: &str) -> PyRe
 /// The number of decimal digits of a Python int, also beyond the 4,300 that `str()` refuses to
 /// write (from its bit length: ⌊(b − 1)·log10 2⌋ + 1 is exact but at powers of ten's edges, where it
 /// may be one short; "about" covers it there).
-fn decimal_digits(obj: &Bound<'_, PyAny>) -> String {
+pub fn decimal_digits(obj: &Bound<'_, PyAny>) -> String {
     if let Ok(n) = obj.str().and_then(|s| s.len()) {
         return (n - usize::from(obj.lt(0).unwrap_or(false))).to_string();
     }

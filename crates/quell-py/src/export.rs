@@ -38,6 +38,11 @@ fn fmu_arguments(
     let version = match fmi_version {
         None => FmiVersion::default(),
         Some(v) => fmi_version_of(v).map_err(|e| match e {
+            // An int beyond i64 is an int still: a wrong value, not a wrong type.
+            None if crate::convert::as_int(v).is_some() => Kind::Export.err(
+                py,
+                format!("fmi_version: expected 2 or 3, found an integer of {} digits", crate::convert::decimal_digits(v)),
+            ),
             None => crate::errors::type_error("fmi_version", "2 or 3 (an int)", v),
             Some(e) => Kind::Export.err(py, message(&e)),
         })?,

@@ -214,3 +214,15 @@ def test_an_integer_beyond_a_float_is_named_as_such():
     d = quell.design(quell.paper_example().plant, observer_gain=L, **dict(PAPER_DESIGN, mu=[10**30, 1]))
     assert list(d.mu) == [1e30, 1.0]
     assert quell.Plant([[10**30, 0], [0, 1]], [[1.0], [0.0]], [[1.0, 0.0]]).A[0, 0] == 1e30
+
+
+def test_a_huge_int_is_named_as_such_where_one_number_or_an_int_is_expected(tmp_path):
+    """u_limit=10**400 read "found an int" (an int is what a limit may be) and fmi_version=10**400
+    "expected 2 or 3 (an int), found an int": both now say the integer is out of range."""
+    text = quell.paper_example().to_toml()
+    with pytest.raises(TypeError, match=r"^u_limit: expected real numbers, found an integer beyond a float64's range"):
+        quell.auto_design(text, u_limit=10**400)
+    scenario = quell.paper_example()
+    with pytest.raises(quell.ExportError, match=r"^fmi_version: expected 2 or 3, found an integer of 401 digits$"):
+        quell.export(scenario, 0.05, out=tmp_path, fmu=True, fmi_version=10**400)
+    assert not any(tmp_path.iterdir())
