@@ -41,7 +41,10 @@ fn fmu_arguments(
             // An int beyond i64 is an int still: a wrong value, not a wrong type.
             None if crate::convert::as_int(v).is_some() => Kind::Export.err(
                 py,
-                format!("fmi_version: expected 2 or 3, found an integer of {} digits", crate::convert::decimal_digits(v)),
+                format!(
+                    "fmi_version: expected 2 or 3, found an integer of {} digits",
+                    crate::convert::decimal_digits(v)
+                ),
             ),
             None => crate::errors::type_error("fmi_version", "2 or 3 (an int)", v),
             Some(e) => Kind::Export.err(py, message(&e)),

@@ -383,7 +383,10 @@ fn the_delay_lines_are_budgeted_together_in_bytes() {
     // sample time, no shorter than at_least, that works as printed.
     let fits = 1.0 / (1.0 / at_least).floor();
     assert!(quell::Controller::new(&d, fits).is_ok(), "{fits}");
+    // The shortest round sample time (1, 2, 2.5 or 5 × 10^e) from at_least = 2.91e-7 on that divides
+    // 1 s: 5e-7 (it was 1/3436426 = 2.910000099e-7).
     let nearest = nearest.unwrap();
+    assert_eq!(nearest, 5e-7);
     assert!(nearest >= at_least && (1.0 / nearest - (1.0 / nearest).round()).abs() < 1e-9 / nearest, "{nearest}");
     let printed: f64 = e.to_string().rsplit("such as ").next().unwrap().trim_end_matches(" s").parse().unwrap();
     assert!(quell::Controller::new(&d, printed).is_ok(), "{printed}");

@@ -17,15 +17,16 @@ pub enum ControllerError {
     BadSampleTime { value: f64 },
     /// `nearest` is a sample time that passes this same check, written with the fewest digits that do
     /// (so the printed value works when typed back), or `None` when no τ_c/k near T_s fits every delay.
-    #[error("simulation.sample_time: channel {}'s delay τ = {delay} {unit} is not a whole number of samples of T_s = {sample_time} {unit} ({ratio:.6} samples); {}", .channel + 1, suggestion(*.nearest, *.unit))]
+    #[error("simulation.sample_time: channel {}'s delay τ = {} {unit} is not a whole number of samples of T_s = {} {unit} ({ratio:.6} samples); {}", .channel + 1, crate::settings::fmt_short(*.delay), crate::settings::fmt_short(*.sample_time), suggestion(*.nearest, *.unit))]
     DelayNotMultiple { channel: usize, delay: f64, sample_time: f64, ratio: f64, nearest: Option<f64>, unit: TimeUnit },
     /// `nearest` as in `DelayNotMultiple`: the sample time nearest T_s at which every line fits and
     /// every delay is whole.
     #[error("simulation.sample_time: channel {}'s delay τ = {} {unit} is {samples:e} samples of T_s = {} {unit}; a delay line holds at most {max:e} samples; {}", .channel + 1, crate::linalg::fmt_number(*.delay), crate::linalg::fmt_number(*.sample_time), longer(*.nearest, *.unit), max = MAX_DELAY_SAMPLES)]
     DelayTooLong { channel: usize, delay: f64, sample_time: f64, samples: f64, nearest: Option<f64>, unit: TimeUnit },
     /// The delay lines together would hold more than [`MAX_DELAY_LINE_BYTES`]; `at_least` is the
-    /// shortest sample time at which they would not, `nearest` as in `DelayTooLong`.
-    #[error("simulation.sample_time: the delay lines of u_i(t − τ_i) and ξ̂(t − τ_i) would hold {rows:e} rows of {width} numbers at T_s = {} {unit} ({:.3} GiB); at most {} GiB are kept; use a sample time ≥ {} {unit}{}", crate::linalg::fmt_number(*.sample_time), *.rows * (8 * *.width) as f64 / 1024f64.powi(3), MAX_DELAY_LINE_BYTES / 1024f64.powi(3), crate::settings::fmt_short(*.at_least), such_as(*.nearest, *.unit))]
+    /// shortest sample time at which they would not, `nearest` the shortest round one from there on
+    /// that passes, else as in `DelayTooLong`.
+    #[error("simulation.sample_time: the delay lines of u_i(t − τ_i) and ξ̂(t − τ_i) would hold {rows:e} rows of {width} numbers at T_s = {} {unit} ({:.3} GiB); at most {} GiB are kept; use a sample time ≥ {} {unit}{}", crate::settings::fmt_short(*.sample_time), *.rows * (8 * *.width) as f64 / 1024f64.powi(3), MAX_DELAY_LINE_BYTES / 1024f64.powi(3), crate::settings::fmt_short(*.at_least), such_as(*.nearest, *.unit))]
     DelayLinesTooLarge {
         rows: f64,
         width: usize,
@@ -284,7 +285,7 @@ fn delay_samples(delays: &[f64], T: f64, width: usize, unit: TimeUnit) -> Result
             width,
             sample_time: T,
             at_least,
-            nearest: nearest(),
+            nearest: round_at_least(delays, width, at_least).or_else(nearest),
             unit,
         });
     }
@@ -323,9 +324,22 @@ fn sample_time_at_most(delays: &[f64], width: usize, T: f64) -> Option<f64> {
     let top = T.log10().floor() as i32;
     let round = (top - 3..=top)
         .rev()
-        .flat_map(|e| [5.0, 2.5, 2.0, 1.0].map(|d| format!("{d}e{e}").parse::<f64>().unwrap_or(f64::NAN)))
+        .flat_map(|e| round_times(e).into_iter().rev())
         .find(|&t| t <= T && fits(delays, width, t));
     round.or_else(|| sample_time_near(delays, T, width, true))
+}
+
+/// The shortest round sample time (as [`round_times`], up to three decades above `at_least`) from
+/// `at_least` on at which every delay is whole and the lines fit: what a message offers where any
+/// sample time from `at_least` on will do (5e-7 rather than τ/k = 2.910000099e-7).
+fn round_at_least(delays: &[f64], width: usize, at_least: f64) -> Option<f64> {
+    let bottom = at_least.log10().floor() as i32;
+    (bottom..=bottom + 3).flat_map(round_times).find(|&t| t >= at_least && fits(delays, width, t))
+}
+
+/// 1, 2, 2.5 and 5 times 10^e, parsed from their decimal form (so 2.5e-7 is the double nearest it).
+fn round_times(e: i32) -> [f64; 4] {
+    [1.0, 2.0, 2.5, 5.0].map(|d| format!("{d}e{e}").parse::<f64>().unwrap_or(f64::NAN))
 }
 
 /// Whether every delay is a whole number of samples of `t` to a tenth of [`WHOLE_TOLERANCE`] (a
