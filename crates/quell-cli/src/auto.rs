@@ -141,7 +141,11 @@ fn report_json(a: &AutoDesign) -> serde_json::Value {
 }
 
 fn report_text(a: &AutoDesign) -> String {
-    let mut s = String::from("automatic design: the keys chosen, and why\n");
+    let mut s = String::from(if a.choices.is_empty() {
+        "automatic design: the scenario gives every key, so none was chosen\n"
+    } else {
+        "automatic design: the keys chosen, and why\n"
+    });
     for c in &a.choices {
         s.push_str(&format!("  {} = {}\n    {}\n", c.key, c.value, c.why));
     }

@@ -1139,3 +1139,15 @@ fn a_failed_run_says_how_much_the_actuator_clipped() {
         assert!(share > 0.0 && report.contains(&line), "{line}\n{report}");
     }
 }
+
+#[test]
+fn design_auto_on_a_fully_specified_scenario_says_nothing_was_chosen() {
+    // The heading "the keys chosen, and why" stood over an empty list.
+    let o = quell(&["design", &paper(), "--auto"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(
+        text.starts_with("automatic design: the scenario gives every key, so none was chosen\nverification"),
+        "{text}"
+    );
+}
