@@ -1151,3 +1151,15 @@ fn design_auto_on_a_fully_specified_scenario_says_nothing_was_chosen() {
         "{text}"
     );
 }
+
+#[test]
+fn design_report_prints_channel_numbers_in_short_form() {
+    // The SI supply vessel: q_i0 = 0.1 · 0.12 printed as 0.012 (a product that rounds, as
+    // 2131.7999999999997 did elsewhere, is cut at 12 digits) and μ = 1e-11 (it printed as
+    // 0.00000000001).
+    let vessel = concat!(env!("CARGO_MANIFEST_DIR"), "/../quell/tests/data/supply-vessel.toml");
+    let o = quell(&["design", vessel]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stdout(&o).contains("  G_11(s) = 0.012 / (s+0.1)(s+0.12)   (μ_1 = 1e-11)\n"), "{}", stdout(&o));
+    assert!(stdout(&o).contains("  H(s) = 1/(1.25 s + 1)\n"), "{}", stdout(&o));
+}
