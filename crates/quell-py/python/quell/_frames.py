@@ -131,11 +131,12 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
             eta_ax.plot(t, result.eta[:, i, j], label=f"η{c}_{j + 1}")
         eta_ax.set(title=f"{channel_title}: adjustable parameters (33)", ylabel="η")
         if len(axes) == 4:
-            uf_ax.legend(loc="lower right", fontsize="small")
+            uf_ax.legend(loc="best", fontsize="small")
     axes[-1].set(xlabel=f"t, {result.time_unit}")
     for a in axes:
         a.grid(True, alpha=0.3)
-        a.legend(loc="upper right", fontsize="small", ncol=1 + (len(axes) > 1 and a is axes[-1]) * 2)
+        # Where it hides the least of the curves (a fixed corner covered the η̂ traces).
+        a.legend(loc="best", fontsize="small", ncol=1 + (len(axes) > 1 and a is axes[-1]) * 2)
     if ax is None:
         fig.tight_layout()
     return fig
