@@ -82,6 +82,12 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
         )));
     }
     let n = shard.len(usize::try_from(runs).unwrap_or(usize::MAX));
+    if n == 0 {
+        eprintln!(
+            "⚠ warning: shard {}/{} has no runs: the study has {runs}, fewer than the shards; its files are written empty, as --merge needs every shard",
+            shard.index, shard.count
+        );
+    }
     let pool = thread_pool(args.jobs, n)?;
     prepare_out(&args.out, OUTPUTS)?;
 

@@ -384,3 +384,29 @@ fn sweep_figures_name_the_outputs() {
         assert_eq!(summary["study"]["outputs"], serde_json::json!(["pitch", "yaw"]));
     }
 }
+
+#[test]
+fn a_shard_without_runs_says_so_and_still_merges() {
+    // Eight runs in twelve shards: shard 10/12 has none. It was written empty without a word.
+    let dir = scratch("empty-shard");
+    paper_into(dir.path());
+    let study = write_study(dir.path(), "study.toml", STUDY);
+    let mut dirs = Vec::new();
+    for i in 0..12 {
+        let out = dir.path().join(format!("s{i}")).display().to_string();
+        let o = quell(&["sweep", &study, "--shard", &format!("{i}/12"), "--out", &out, "--no-plots"]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let warned = stderr(&o).contains(&format!(
+            "⚠ warning: shard {i}/12 has no runs: the study has 8, fewer than the shards; its files are written empty, as --merge needs every shard"
+        ));
+        assert_eq!(warned, i >= 8, "shard {i}: {}", stderr(&o));
+        dirs.push(out);
+    }
+    let merged = dir.path().join("merged").display().to_string();
+    let mut args = vec!["sweep", "--merge"];
+    args.extend(dirs.iter().map(String::as_str));
+    args.extend(["--out", &merged, "--no-plots"]);
+    let o = quell(&args);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(rows_without_wall_time(Path::new(&merged)).len(), 1 + 8);
+}
