@@ -290,3 +290,16 @@ fn a_runs_memory_bound_is_its_record_and_its_history_or_delay_lines() {
     states.record_states = true;
     assert_eq!(Run::new(&d, g, w, states).memory_bound(), 1_001 * 33 * 8 + 95_040_000);
 }
+
+#[test]
+fn a_history_at_its_cap_is_not_told_to_raise_the_step_budget() {
+    // The quadruple tank forced to `explicit` ends at the 1 GiB cap (t = 55.8 s, 755k steps): raising
+    // the step budget, which the message advised, cannot raise a cap; the stiff loop wants `auto`.
+    let cap = quell::sim::MAX_HISTORY_BYTES;
+    let at_cap = Outcome::HistoryTooLarge { t: 55.8, max_bytes: cap }.explain("max_steps", quell::TimeUnit::default());
+    let at_cap = at_cap.expect("a run that did not complete");
+    assert!(at_cap.starts_with("the delay history would have exceeded 1024 MB by t = 55.800000 s (the memory budget's cap"));
+    assert!(at_cap.contains("simulation.method = \"auto\"") && !at_cap.contains("max_steps"), "{at_cap}");
+    let below = Outcome::HistoryTooLarge { t: 39.4, max_bytes: 90 << 20 }.explain("max_steps", quell::TimeUnit::default());
+    assert!(below.expect("not completed").contains("it scales with max_steps, raise that if the run is sound"));
+}

@@ -64,6 +64,13 @@ impl Outcome {
                  loop blowing up does before its states reach the divergence bound, or its adaptation is stiff from the \
                  start, or a signal is faster than a step can follow; raise {raise} if the run is sound)"
             ),
+            // At the cap no step budget raises it; a stiff loop integrated explicitly lands there.
+            Outcome::HistoryTooLarge { t, max_bytes } if *max_bytes >= super::MAX_HISTORY_BYTES => format!(
+                "the delay history would have exceeded {} MB by t = {t:.6} {unit} (the memory budget's cap: the solver's steps \
+                 had crowded into the last delay, as a loop blowing up does, or a stiff loop integrated explicitly: \
+                 simulation.method = \"auto\" takes a stiff adaptive law implicitly)",
+                max_bytes >> 20
+            ),
             Outcome::HistoryTooLarge { t, max_bytes } => format!(
                 "the delay history would have exceeded {} MB by t = {t:.6} {unit} (the memory budget: the solver's steps had \
                  crowded into the last delay, as a loop blowing up does; it scales with {raise}, raise that if the run is \
