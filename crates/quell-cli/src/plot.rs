@@ -146,10 +146,12 @@ fn panel_with_limit<DB: DrawingBackend>(
     let names = series.iter().map(|(name, _)| name.as_str()).chain(limit.map(|(label, _)| label));
     let longest = names.map(|name| name.chars().count()).max().unwrap_or(0) as f64;
     let (w, h) = chart.plotting_area().dim_in_pixel();
-    // The legend's box: a 20 px line, the label at ~0.6 em a character, a row per entry.
+    // The legend's box: a 20 px line, the label at ~0.6 em a character, a row per entry, and the
+    // ~12 px between the box and the corner (without them a flat e = 0 just below the estimate was
+    // hidden by the box drawn).
     let size = (
-        (36.0 + 0.6 * font as f64 * longest) / w.max(1) as f64,
-        (8.0 + entries * (font as f64 + 6.0)) / h.max(1) as f64,
+        (48.0 + 0.6 * font as f64 * longest) / w.max(1) as f64,
+        (20.0 + entries * (font as f64 + 6.0)) / h.max(1) as f64,
     );
     chart
         .configure_series_labels()

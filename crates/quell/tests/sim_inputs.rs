@@ -298,8 +298,11 @@ fn a_history_at_its_cap_is_not_told_to_raise_the_step_budget() {
     let cap = quell::sim::MAX_HISTORY_BYTES;
     let at_cap = Outcome::HistoryTooLarge { t: 55.8, max_bytes: cap }.explain("max_steps", quell::TimeUnit::default());
     let at_cap = at_cap.expect("a run that did not complete");
-    assert!(at_cap.starts_with("the delay history would have exceeded 1024 MB by t = 55.800000 s (the memory budget's cap"));
+    assert!(
+        at_cap.starts_with("the delay history would have exceeded 1024 MB by t = 55.800000 s (the memory budget's cap")
+    );
     assert!(at_cap.contains("simulation.method = \"auto\"") && !at_cap.contains("max_steps"), "{at_cap}");
-    let below = Outcome::HistoryTooLarge { t: 39.4, max_bytes: 90 << 20 }.explain("max_steps", quell::TimeUnit::default());
+    let below =
+        Outcome::HistoryTooLarge { t: 39.4, max_bytes: 90 << 20 }.explain("max_steps", quell::TimeUnit::default());
     assert!(below.expect("not completed").contains("it scales with max_steps, raise that if the run is sound"));
 }
