@@ -87,7 +87,7 @@ fn tick_label(v: f64, lo: f64, hi: f64) -> String {
 }
 
 /// One panel of a run's figure: `series` against t (in `time`, the plant's unit of time).
-fn panel<DB: DrawingBackend>(
+fn panel<DB: DrawingBackend + Strokes>(
     area: &DrawingArea<DB, Shift>,
     titles: (&str, &str),
     series: &[Series],
@@ -97,7 +97,7 @@ fn panel<DB: DrawingBackend>(
 }
 
 /// [`panel`], with dashed lines at ±`limit` (its label, its value) and the view widened to show them.
-fn panel_with_limit<DB: DrawingBackend>(
+fn panel_with_limit<DB: DrawingBackend + Strokes>(
     area: &DrawingArea<DB, Shift>,
     (title, ylabel): (&str, &str),
     series: &[Series],
@@ -163,34 +163,66 @@ fn panel_with_limit<DB: DrawingBackend>(
         .map_err(|e| e.to_string())
 }
 
-/// Dashed grey lines at `levels` across `(t0, t1)`, one legend entry `label` for them.
+/// How a backend draws a curve's 2 px line.
+trait Strokes {
+    /// Whether its wide lines are polygons whose joins spike at sharp turns: plotters' bitmap draws
+    /// each segment of a 2 px line as a polygon with an unlimited miter, so a nearly reversing turn
+    /// (a decimated slice's lowest-to-highest zigzag, a staircase) drew a spike far past the data and
+    /// the axes. SVG viewers limit miters themselves.
+    const SPIKES: bool;
+}
+
+impl Strokes for BitMapBackend<'_> {
+    const SPIKES: bool = true;
+}
+
+impl Strokes for SVGBackend<'_> {
+    const SPIKES: bool = false;
+}
+
 /// Each series as a line of its own colour, with its legend entry. A reference ("… (reference)")
-/// is drawn last and dashed: an output that tracks it would hide a solid line beneath.
-fn lines<DB: DrawingBackend>(
+/// is drawn last and dashed: an output that tracks it would hide a solid line beneath. Where the
+/// backend's wide lines spike ([`Strokes`]), 2 px is three 1 px lines a pixel apart in t and in the
+/// value.
+fn lines<DB: DrawingBackend + Strokes>(
     chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
     series: &[Series],
 ) -> Result<(), String> {
     let reference = |name: &str| name.ends_with("(reference)");
+    let (w, h) = chart.plotting_area().dim_in_pixel();
+    let (x, y) = (chart.x_range(), chart.y_range());
+    let pixel = ((x.end - x.start) / w.max(1) as f64, (y.end - y.start) / h.max(1) as f64);
+    let offsets: &[(f64, f64)] = if DB::SPIKES { &[(0.0, 0.0), (pixel.0, 0.0), (0.0, pixel.1)] } else { &[(0.0, 0.0)] };
+    let width = if DB::SPIKES { 1 } else { 2 };
     let order = series.iter().enumerate().filter(|(_, (n, _))| !reference(n));
     for (k, (name, points)) in order.chain(series.iter().enumerate().filter(|(_, (n, _))| reference(n))) {
         let color = pick(k);
-        let finite = || points.iter().copied().filter(|(_, v)| v.is_finite());
-        let drawn = if reference(name) {
-            chart.draw_series(DashedLineSeries::new(finite(), 8, 5, color.stroke_width(2)))
-        } else {
-            // A 2 px line is drawn as a polygon per segment, which breaks up on steep segments (a
-            // transient of ±300 V in 1 ms drew as detached slivers); a 1 px line beneath keeps it whole.
-            chart.draw_series(LineSeries::new(finite(), color.stroke_width(1))).map_err(|e| e.to_string())?;
-            chart.draw_series(LineSeries::new(finite(), color.stroke_width(2)))
-        };
-        drawn
-            .map_err(|e| e.to_string())?
-            .label(name.clone())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+        let shifted = |(dt, dv): (f64, f64)| points.iter().map(move |&(t, v)| (t + dt, v + dv));
+        for (j, &offset) in offsets.iter().enumerate() {
+            let drawn = if reference(name) {
+                chart.draw_series(DashedLineSeries::new(shifted(offset), 8, 5, color.stroke_width(width)))
+            } else {
+                // A 2 px SVG line over a 1 px one: on steep segments the wide line's polygons broke
+                // up (a transient of ±300 V in 1 ms drew as detached slivers).
+                if !DB::SPIKES {
+                    chart
+                        .draw_series(LineSeries::new(shifted(offset), color.stroke_width(1)))
+                        .map_err(|e| e.to_string())?;
+                }
+                chart.draw_series(LineSeries::new(shifted(offset), color.stroke_width(width)))
+            }
+            .map_err(|e| e.to_string())?;
+            if j + 1 == offsets.len() {
+                drawn
+                    .label(name.clone())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+            }
+        }
     }
     Ok(())
 }
 
+/// Dashed grey lines at `levels` across `(t0, t1)`, one legend entry `label` for them.
 fn limit_lines<DB: DrawingBackend>(
     chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
     label: &str,
@@ -260,7 +292,7 @@ const MAX_LEGEND: usize = 14;
 
 /// Draws channel i's figure (on a white background, see [`write_figure`]); the titles name the
 /// channel's output and input where the scenario names them.
-fn draw<DB: DrawingBackend>(
+fn draw<DB: DrawingBackend + Strokes>(
     root: DrawingArea<DB, Shift>,
     r: &SimResult,
     i: usize,
@@ -1019,9 +1051,7 @@ pub fn plot_tune(dir: &Path, r: &quell::study::TuneResult, unit: TimeUnit) -> io
 
 #[cfg(test)]
 mod tests {
-    use super::{
-        axis_coords, decade_label, decimated, legend_corner, staircase, tick_label, widened, AxisScale, SLICES,
-    };
+    use super::*;
     use plotters::prelude::SeriesLabelPosition;
 
     #[test]
@@ -1035,6 +1065,34 @@ mod tests {
         // A flat line at zero hides nothing in any corner: the upper right.
         let flat = series((0..=100).map(|k| (0.1 * k as f64, 0.0)).collect());
         assert!(matches!(legend_corner(&flat, view, (0.2, 0.2)), SeriesLabelPosition::UpperRight));
+    }
+
+    #[test]
+    fn a_zigzag_is_drawn_within_its_panel() {
+        // A sampled command reversing at every step (what a decimated slice or a staircase draws):
+        // plotters' 2 px polygons put spikes past the data and below the x axis (53 px on a servo's
+        // u_f); three 1 px lines keep every pixel of the curve's colour inside the plotting area.
+        register_font();
+        let points: Vec<(f64, f64)> =
+            (0..4000).map(|k| (k as f64 * 1e-3, if k % 2 == 0 { 0.3 } else { -0.3 } + 1e-3 * k as f64)).collect();
+        let (w, h) = (600u32, 300u32);
+        let mut rgb = vec![255u8; (w * h * 3) as usize];
+        {
+            let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
+            panel(&root, ("zigzag", "u"), &[("u1".into(), points)], TimeUnit::default()).unwrap();
+            root.present().unwrap();
+        }
+        let pixel = |x: u32, y: u32| {
+            let i = ((y * w + x) * 3) as usize;
+            (rgb[i], rgb[i + 1], rgb[i + 2])
+        };
+        // The x axis: the lowest row that is mostly black.
+        let axis = (0..h).rev().find(|&y| (0..w).filter(|&x| pixel(x, y) == (0, 0, 0)).count() > w as usize / 2);
+        let axis = axis.expect("an x axis");
+        let blue =
+            |(r, g, b): (u8, u8, u8)| (r as i32 - 31).abs() + (g as i32 - 119).abs() + (b as i32 - 180).abs() < 60;
+        let below = (axis + 2..h).flat_map(|y| (0..w).map(move |x| (x, y))).filter(|&(x, y)| blue(pixel(x, y))).count();
+        assert_eq!(below, 0, "{below} pixels of the curve below the x axis at row {axis}");
     }
 
     #[test]
