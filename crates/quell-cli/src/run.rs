@@ -101,7 +101,7 @@ fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result
         run.check().map_err(|e| match args.sample_time {
             // The flag, not the file's key, made the output step invalid: name both.
             Some(t) if e.to_string().starts_with("simulation.output_step:") => {
-                output_step_error(t, scenario.simulation.output_step, scenario.plant.time_unit)
+                output_step_error(design, t, scenario.simulation.output_step)
             }
             _ => Failure::Input(e.to_string()),
         })?;
@@ -127,9 +127,9 @@ fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result
 /// `--sample-time T` against the file's `simulation.output_step` h, which is not a whole number ≥ 1
 /// of samples (every recorded row is a controller step): the error names the flag and the key,
 /// with the nearest fix on either side.
-fn output_step_error(T: f64, h: f64, s: TimeUnit) -> Failure {
-    let ratio = h / T;
-    let (divisor, multiple) = quell::sim::output_step_fixes(T, h);
+fn output_step_error(design: &Design, T: f64, h: f64) -> Failure {
+    let (ratio, s) = (h / T, design.plant().time_unit);
+    let (divisor, multiple) = quell::sim::output_step_fixes(design, T, h);
     Failure::Input(format!(
         "--sample-time {}: simulation.output_step = {} {s} (from the scenario file) is not a whole number of samples of {} {s} ({ratio:.6} samples; each recorded row is a controller step); give a --sample-time that divides it, e.g. {} {s}, or set simulation.output_step to a multiple of the sample time, e.g. {} {s}",
         short(T),

@@ -111,10 +111,19 @@ fn an_output_step_between_samples_gets_fixes_that_run() {
     let err = Run::new(&d, g, w, RunSettings::sampled(1.0, 0.1, 0.04)).simulate(go).expect_err("2.5 samples");
     let message = err.to_string();
     assert!(message.contains("e.g. 0.12 s") && message.contains("e.g. 0.0333333333"), "{message}");
-    let (divisor, multiple) = quell::sim::output_step_fixes(0.04, 0.1);
+    let (divisor, multiple) = quell::sim::output_step_fixes(&d, 0.04, 0.1);
     assert!((multiple - 0.12).abs() < 1e-15 && (divisor - 0.1 / 3.0).abs() < 1e-15, "{multiple} {divisor}");
     for (h, ts) in [(multiple, 0.04), (0.1, divisor)] {
         let r = Run::new(&d, g, w, RunSettings::sampled(1.0, h, ts)).simulate(go);
+        assert!(r.is_ok(), "output_step {h}, sample_time {ts}: {:?}", r.err());
+    }
+    // At T = 3.0000003e-7 (whole in both delays, 3 s at 9,999,999 samples) 0.1 s is 333333.3 samples;
+    // the longest sample time below that divides 0.1, 0.1/333334, puts 3 s at 10,000,020 samples,
+    // beyond a delay line's 1e7: the offer was refused by the delays' check, whose own offer was
+    // 3.0000003e-7 again. Both fixes now pass every check.
+    let (divisor, multiple) = quell::sim::output_step_fixes(&d, 3.0000003e-7, 0.1);
+    for (h, ts) in [(multiple, 3.0000003e-7), (0.1, divisor)] {
+        let r = Run::new(&d, g, w, RunSettings::sampled(0.3, h, ts)).check();
         assert!(r.is_ok(), "output_step {h}, sample_time {ts}: {:?}", r.err());
     }
 }

@@ -329,6 +329,20 @@ fn sample_time_at_most(delays: &[f64], width: usize, T: f64) -> Option<f64> {
     round.or_else(|| sample_time_near(delays, T, width, true))
 }
 
+/// A sample time near `T` at which the output step `h` and every delay of `design` are whole and
+/// the delay lines fit: h/⌈h/T⌉, the longest ≤ T that divides h, when it passes, else the one
+/// [`valid_sample_time`] finds with h among the delays (counting h as a line too: a little
+/// conservative); `None` when neither passes.
+pub(crate) fn sample_time_dividing(design: &Design, T: f64, h: f64) -> Option<f64> {
+    let (delays, width) = (&design.plant().delays, 1 + design.q());
+    let below = h / (h / T).ceil().max(1.0);
+    if fits(delays, width, below) {
+        return Some(below);
+    }
+    let with_h: Vec<f64> = delays.iter().copied().chain([h]).collect();
+    valid_sample_time(&with_h, T, width)
+}
+
 /// The shortest round sample time (as [`round_times`], up to three decades above `at_least`) from
 /// `at_least` on at which every delay is whole and the lines fit: what a message offers where any
 /// sample time from `at_least` on will do (5e-7 rather than τ/k = 2.910000099e-7).

@@ -101,7 +101,7 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
     };
     let (T, h, unit) = (sample_time, st.output_step, run.design.plant().time_unit);
     let every = discrete::whole_multiple(h, T).filter(|&k| k >= 1).ok_or_else(|| {
-        let (divisor, multiple) = output_step_fixes(T, h);
+        let (divisor, multiple) = output_step_fixes(run.design, T, h);
         let short = crate::settings::fmt_time;
         KeyError::new(
             "simulation.output_step",
@@ -117,12 +117,14 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
     Ok((own, every))
 }
 
-/// The nearest fixes of an output step h that is not a whole number ≥ 1 of samples of T: the
-/// largest sample time ≤ T that divides h, h/⌈h/T⌉, and the multiple of T nearest h, T·round(h/T)
-/// (at least T).
-pub fn output_step_fixes(T: f64, h: f64) -> (f64, f64) {
+/// The nearest fixes of an output step h that is not a whole number ≥ 1 of samples of T: a sample
+/// time that divides h and at which `design`'s delays are whole and fit (the largest ≤ T that
+/// divides h, h/⌈h/T⌉, where it passes; an offer that failed the delays' check sent a user back
+/// and forth), and the multiple of T nearest h, T·round(h/T) (at least T).
+pub fn output_step_fixes(design: &Design, T: f64, h: f64) -> (f64, f64) {
     let ratio = h / T;
-    (h / ratio.ceil().max(1.0), T * ratio.round().max(1.0))
+    let divisor = discrete::sample_time_dividing(design, T, h).unwrap_or(h / ratio.ceil().max(1.0));
+    (divisor, T * ratio.round().max(1.0))
 }
 
 /// The sampled-data loop of `run` ([`Run::simulate`]) at `sample_time`, with the run's controller
