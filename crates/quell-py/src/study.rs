@@ -251,7 +251,7 @@ impl PyStudy {
         let len = self.inner.len();
         let index = run_index(run, len)?;
         let study = &self.inner;
-        let inner = py.detach(|| study.spec_with_nominal(index)).ok_or_else(|| out_of_range(index as i128, len))?;
+        let inner = spec_interruptibly(py, study, index)?.ok_or_else(|| out_of_range(index as i128, len))?;
         Ok(PyRunSpec { inner, drawn: drawn_keys(study) })
     }
 
@@ -703,17 +703,22 @@ pub struct PyRunSpecs {
     next: usize,
 }
 
+/// Run `index`'s spec: the first of a grid point carries out that point's nominal run, without the
+/// GIL and stopped by Ctrl-C (a KeyboardInterrupt; nothing of the run is kept). `None` past the end.
+fn spec_interruptibly(py: Python<'_>, study: &study::Study, index: usize) -> PyResult<Option<study::RunSpec>> {
+    crate::interrupt::interruptible_with(py, |stop| study.spec_with_nominal_until(index, &|| stop.load(Relaxed)))
+}
+
 #[pymethods]
 impl PyRunSpecs {
     fn __iter__(slf: PyRef<'_, Self>) -> PyRef<'_, Self> {
         slf
     }
-    fn __next__(&mut self, py: Python<'_>) -> Option<PyRunSpec> {
-        // The first spec of a grid point carries out that point's nominal run: without the GIL.
+    fn __next__(&mut self, py: Python<'_>) -> PyResult<Option<PyRunSpec>> {
         let (study, index) = (&self.study, self.next);
-        let inner = py.detach(|| study.spec_with_nominal(index))?;
+        let Some(inner) = spec_interruptibly(py, study, index)? else { return Ok(None) };
         self.next += 1;
-        Some(PyRunSpec { inner, drawn: drawn_keys(study) })
+        Ok(Some(PyRunSpec { inner, drawn: drawn_keys(study) }))
     }
     fn __len__(&self) -> usize {
         usize::try_from(self.study.len()).unwrap_or(usize::MAX).saturating_sub(self.next)

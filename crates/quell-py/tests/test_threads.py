@@ -166,3 +166,34 @@ def test_ctrl_c_stops_a_large_placement(python_child):
     (measured with this test's code); it had ignored SIGINT until it returned."""
     cpu = interrupted_cpu(python_child, "quell.place(A.T, B, poles)")
     assert cpu < 6.0, f"KeyboardInterrupt came after {cpu:.1f} s of CPU in quell.place"
+
+
+def test_ctrl_c_stops_a_studys_nominal_run(python_child):
+    """SIGINT while quell.sweep_runs builds the first spec of a study with draws, which carries out
+    the grid point's nominal run (t_end = 1e5 s: ~10 s of CPU), raises KeyboardInterrupt promptly:
+    the nominal run took no stop signal and ran to its end (12.4 s measured)."""
+    import signal
+
+    code = (
+        "import time, quell\n"
+        "study = quell.Study(quell.paper_example(), simulation={'t_end': 1e5, 'output_step': 10.0},\n"
+        "                    monte_carlo={'runs': 2, 'plant.x0': {'normal': 0.1}})\n"
+        "print('ready', flush=True)\n"
+        "start = time.process_time()\n"
+        "try:\n"
+        "    list(quell.sweep_runs(study))\n"
+        "except KeyboardInterrupt:\n"
+        "    print('cpu', time.process_time() - start, flush=True)\n"
+        "    raise\n"
+        "print('finished', flush=True)\n"
+    )
+    child = python_child(code)
+    try:
+        time.sleep(0.5)
+        child.send_signal(signal.SIGINT)
+        out, err = child.communicate(timeout=120)
+    finally:
+        child.kill()
+    assert "KeyboardInterrupt" in err and "finished" not in out, (out, err[-400:])
+    cpu = float(out.split("cpu", 1)[1].split()[0])
+    assert cpu < 4.0, f"KeyboardInterrupt came after {cpu:.1f} s of CPU (the nominal run alone: ~10 s)"

@@ -409,6 +409,13 @@ impl Study {
     /// grid point's nominal run: the first call for a point of a study with draws *simulates* that
     /// run ([`Study::nominal`], once per point), so it costs a whole run; later calls are cheap.
     pub fn spec_with_nominal(&self, index: usize) -> Option<RunSpec> {
+        self.spec_with_nominal_until(index, &|| false)
+    }
+
+    /// [`Study::spec_with_nominal`] whose nominal run `stop` ends early (checked as it goes, and
+    /// while it waits for memory): `None` then as well, and nothing of that run is kept, so a later
+    /// call carries it out again.
+    pub fn spec_with_nominal_until(&self, index: usize, stop: &dyn Fn() -> bool) -> Option<RunSpec> {
         if index as u64 >= self.len() {
             return None;
         }
@@ -426,7 +433,7 @@ impl Study {
             settle: self.settle,
             max_steps: self.max_steps,
             runaway: self.runaway,
-            nominal: self.nominal(point),
+            nominal: self.nominal_until(point, stop).ok()?,
         })
     }
 
@@ -434,19 +441,34 @@ impl Study {
     /// the study has draws and the point's loop is continuous; `None` when it has not, or when the
     /// nominal run does not complete (its draws then have no [`Runaway`] rules).
     pub fn nominal(&self, point: usize) -> Option<Nominal> {
-        *self.nominal.get(point)?.get_or_init(|| {
-            let s = Scenario::from_document(&self.document(point, None)).ok()?;
-            if s.simulation.sample_time.is_some() {
-                return None;
-            }
-            let run = sweep::simulate(&s, self.max_steps, &|_, _| None, &|| false).ok()?;
-            let r = run.result;
-            (r.outcome == Some(crate::sim::Outcome::Completed)).then_some(Nominal {
-                steps: r.stats.steps(),
-                peaks: r.peaks,
-                breakpoints: run.breakpoints,
-            })
-        })
+        self.nominal_until(point, &|| false).unwrap_or(None)
+    }
+
+    /// [`Study::nominal`] that `stop` ends early: `Err(())` then, and nothing is kept. Threads
+    /// that reach a point at once may each carry out its nominal run (the same run: the first kept),
+    /// rather than wait on one they could not interrupt.
+    fn nominal_until(&self, point: usize, stop: &dyn Fn() -> bool) -> Result<Option<Nominal>, ()> {
+        let Some(cell) = self.nominal.get(point) else { return Ok(None) };
+        if let Some(kept) = cell.get() {
+            return Ok(*kept);
+        }
+        let Ok(s) = Scenario::from_document(&self.document(point, None)) else { return Ok(*cell.get_or_init(|| None)) };
+        if s.simulation.sample_time.is_some() {
+            return Ok(*cell.get_or_init(|| None));
+        }
+        let nominal = match sweep::simulate(&s, self.max_steps, &|_, _| None, stop) {
+            Ok(run) => match run.result.outcome {
+                Some(crate::sim::Outcome::Interrupted { .. }) => return Err(()),
+                Some(crate::sim::Outcome::Completed) => Some(Nominal {
+                    steps: run.result.stats.steps(),
+                    peaks: run.result.peaks,
+                    breakpoints: run.breakpoints,
+                }),
+                _ => None,
+            },
+            Err(_) => None,
+        };
+        Ok(*cell.get_or_init(|| nominal))
     }
 
     /// Every run's specification, in index order (what `quell.sweep_runs` yields), each with its

@@ -133,6 +133,8 @@ pub(crate) struct Simulated {
     pub result: SimResult,
     /// The run's memory bound, reserved from [`sim::memory::RUNS`] until its row is made.
     pub memory: Option<sim::memory::Held<'static>>,
+    /// How long the run waited for that memory (not part of its `wall_ms`).
+    pub waited: std::time::Duration,
     pub breakpoints: usize,
     /// [`Run::delay_floor`] of the run.
     pub delay_floor: usize,
@@ -172,14 +174,16 @@ pub(crate) fn simulate(
     let progress = |_t: f64| if stop() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
     let run = run.settings(settings);
     // A stop while waiting for memory lets the run start and end at its first progress check.
+    let waiting = Instant::now();
     let memory = sim::memory::RUNS.hold(run.memory_bound(), stop);
+    let waited = waiting.elapsed();
     let result = run.simulate(progress).map_err(|e| e.to_string())?;
-    Ok(Simulated { result, memory, breakpoints, delay_floor, runaway_steps })
+    Ok(Simulated { result, memory, waited, breakpoints, delay_floor, runaway_steps })
 }
 
 /// Carries out one run; `None` when `stop` interrupted it.
 pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
-    let started = Instant::now();
+    let mut started = Instant::now();
     let mut row = Row {
         run: spec.run,
         point: spec.point,
@@ -195,7 +199,9 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
     match spec.simulate_within_limits(stop) {
         Err(reason) => row.reason = reason,
         // `_memory` stays held until the row is made.
-        Ok(Simulated { result: r, runaway_steps, breakpoints, delay_floor, memory: _memory }) => {
+        Ok(Simulated { result: r, runaway_steps, breakpoints, delay_floor, memory: _memory, waited }) => {
+            // The wait for memory is not the run's time.
+            started += waited;
             row.steps = r.stats.steps() as u64;
             match r.outcome.as_ref().unwrap_or(&sim::Outcome::Completed) {
                 sim::Outcome::Completed => {
@@ -335,7 +341,7 @@ pub fn sweep(study: &Study, opts: &SweepOptions<'_>) -> Sweep {
             if stopped() {
                 return None;
             }
-            let row = execute(&study.spec_with_nominal(i)?, &stopped)?;
+            let row = execute(&study.spec_with_nominal_until(i, &stopped)?, &stopped)?;
             if let Some(f) = opts.on_row {
                 f(&row);
             }

@@ -392,5 +392,28 @@ fn study_runs_wait_for_the_memory_that_other_runs_hold() {
         let done = worker.join().expect("the sweep");
         assert_eq!(done.rows.len(), 1);
         assert_eq!(done.rows[0].outcome, Outcome::Completed, "{:?}", done.rows[0]);
+        // Its wall_ms is the run's own time, not the 300 ms it waited (a 5 s run: ~1 ms).
+        assert!(done.rows[0].wall_ms < 250.0, "wall_ms {}", done.rows[0].wall_ms);
     });
+}
+
+#[test]
+fn a_stop_ends_a_nominal_run_under_way() {
+    // Draws need their point's nominal run first; at t_end = 1e5 s it takes ~10 s. Ctrl-C 0.1 s in
+    // waited for it to finish (11.8 s measured): it now ends within the run's next progress check,
+    // the sweep is partial, and nothing of the nominal run is kept.
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let s = study("[grid]\n\"simulation.t_end\" = [1e5]\n\"simulation.output_step\" = [10.0]\n[monte_carlo]\nruns = 2\n\"plant.x0\" = { normal = 0.1 }\n").unwrap();
+    let stop = AtomicBool::new(false);
+    let started = std::time::Instant::now();
+    let done = std::thread::scope(|scope| {
+        let worker = scope.spawn(|| sweep(&s, &SweepOptions { stop: Some(&stop), ..Default::default() }));
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        stop.store(true, Ordering::Relaxed);
+        worker.join().expect("the sweep")
+    });
+    let took = started.elapsed().as_secs_f64();
+    assert!(done.partial && done.rows.is_empty(), "{done:?}");
+    assert!(took < 3.0, "the sweep took {took:.1} s after its stop");
+    assert!(s.nominal.first().is_some_and(|cell| cell.get().is_none()), "an interrupted nominal run was kept");
 }
