@@ -32,7 +32,10 @@ const SIGNAL_CHECK: Duration = Duration::from_millis(100);
 /// True
 #[pyclass(module = "quell", name = "SimResult", frozen)]
 pub struct PySimResult {
+    /// The run without its samples: those were handed to `arrays` and `states` (one copy of a
+    /// record in memory, not two), with what is computed from them kept in `of_samples`.
     inner: SimResult,
+    of_samples: OfSamples,
     /// t, y, g, e, u, u_f, eta.
     arrays: [Py<PyAny>; 7],
     /// x, x̂ when the run recorded them.
@@ -43,8 +46,17 @@ pub struct PySimResult {
     labels: Labels,
 }
 
-fn frozen_array(py: Python<'_>, data: &[f64], shape: &[usize]) -> PyResult<Py<PyAny>> {
-    let a = PyArray1::from_slice(py, data).reshape(shape.to_vec())?.into_any();
+/// What the result's methods compute from its samples, computed before the samples move to numpy.
+struct OfSamples {
+    len: usize,
+    commands_held: bool,
+    limited_fraction: Vec<f64>,
+    summary: Vec<quell::sim::ChannelSummary>,
+}
+
+/// `data` as a read-only numpy array of `shape`, owning the vector (no copy).
+fn frozen_array(py: Python<'_>, data: Vec<f64>, shape: &[usize]) -> PyResult<Py<PyAny>> {
+    let a = PyArray1::from_vec(py, data).reshape(shape.to_vec())?.into_any();
     let kwargs = PyDict::new(py);
     kwargs.set_item("write", false)?;
     a.call_method("setflags", (), Some(&kwargs))?;
@@ -64,22 +76,40 @@ impl PySimResult {
         PySimResult::new(py, r, serde_json::to_string(&diagnostics).unwrap_or_default(), labels)
     }
 
-    fn new(py: Python<'_>, r: SimResult, diagnostics: String, labels: Labels) -> PyResult<Self> {
+    fn new(py: Python<'_>, mut r: SimResult, diagnostics: String, labels: Labels) -> PyResult<Self> {
         let (k, m, q, n) = (r.len(), r.m, r.q, r.n);
+        let of_samples = OfSamples {
+            len: k,
+            commands_held: r.commands_held(),
+            limited_fraction: r.limited_fraction(),
+            summary: r.summary(),
+        };
+        let take = |v: &mut Vec<f64>, shape: &[usize]| frozen_array(py, std::mem::take(v), shape);
         let arrays = [
-            frozen_array(py, &r.t, &[k])?,
-            frozen_array(py, &r.y, &[k, m])?,
-            frozen_array(py, &r.g, &[k, m])?,
-            frozen_array(py, &r.e, &[k, m])?,
-            frozen_array(py, &r.u, &[k, m])?,
-            frozen_array(py, &r.u_f, &[k, m])?,
-            frozen_array(py, &r.eta, &[k, m, q])?,
+            take(&mut r.t, &[k])?,
+            take(&mut r.y, &[k, m])?,
+            take(&mut r.g, &[k, m])?,
+            take(&mut r.e, &[k, m])?,
+            take(&mut r.u, &[k, m])?,
+            take(&mut r.u_f, &[k, m])?,
+            take(&mut r.eta, &[k, m, q])?,
         ];
         let states = match r.has_states() {
-            true => Some([frozen_array(py, &r.x, &[k, n])?, frozen_array(py, &r.x_hat, &[k, n])?]),
+            true => Some([take(&mut r.x, &[k, n])?, take(&mut r.x_hat, &[k, n])?]),
             false => None,
         };
-        Ok(PySimResult { inner: r, arrays, states, diagnostics, labels })
+        Ok(PySimResult { inner: r, of_samples, arrays, states, diagnostics, labels })
+    }
+
+    /// The samples t, y, g, e, u, u_f, η̂ and, when recorded, x and x̂ (else empty), as slices of
+    /// their numpy arrays.
+    fn samples<'py>(&self, py: Python<'py>) -> PyResult<Vec<numpy::PyReadonlyArrayDyn<'py, f64>>> {
+        let none: [Py<PyAny>; 2] = [
+            PyArray1::<f64>::zeros(py, 0, false).into_any().unbind(),
+            PyArray1::<f64>::zeros(py, 0, false).into_any().unbind(),
+        ];
+        let states = self.states.as_ref().unwrap_or(&none);
+        self.arrays.iter().chain(states).map(|a| Ok(a.bind(py).cast::<numpy::PyArrayDyn<f64>>()?.readonly())).collect()
     }
 }
 
@@ -224,13 +254,13 @@ impl PySimResult {
     /// sample time is at least the row spacing (`plot` then draws them as staircases).
     #[getter]
     fn commands_held(&self) -> bool {
-        self.inner.commands_held()
+        self.of_samples.commands_held
     }
     /// Per input, the fraction of the recorded samples at which the true plant's actuator limit
     /// (`[truth] u_max`) clipped it, as summary.json's `limited_fraction`; None without limits.
     #[getter]
     fn limited_fraction(&self) -> Option<Vec<f64>> {
-        (!self.inner.limited.is_empty()).then(|| self.inner.limited_fraction())
+        (!self.inner.limited.is_empty()).then(|| self.of_samples.limited_fraction.clone())
     }
     /// How the run ended, as in summary.json: {"status": "completed"}, or "diverged" with t,
     /// signal and value, or "step_size_too_small" / "interrupted" with t.
@@ -279,8 +309,8 @@ impl PySimResult {
     /// >>> sorted(c)
     /// ['final_eta_norm', 'max_u', 'max_uf', 'settle_note', 'settle_t', 'tail_max_e', 'tail_rms_e']
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
-        self.inner
-            .summary()
+        self.of_samples
+            .summary
             .iter()
             .map(|c| {
                 let d = PyDict::new(py);
@@ -410,26 +440,24 @@ impl PySimResult {
         Ok(f.call1((slf, channel, fig, ax, figsize, names, me.inner.u_max.clone()))?.unbind())
     }
     fn __len__(&self) -> usize {
-        self.inner.len()
+        self.of_samples.len
     }
     /// Equal results: the same samples (bit for bit), outcome, statistics, peaks and signal names.
-    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
-        let Ok(o) = other.cast::<PySimResult>() else { return false };
+    fn __eq__(&self, py: Python<'_>, other: &Bound<'_, PyAny>) -> PyResult<bool> {
+        let Ok(o) = other.cast::<PySimResult>() else { return Ok(false) };
         let (a, b) = (&self.inner, &o.get().inner);
         let same =
             |x: &[f64], y: &[f64]| x.len() == y.len() && x.iter().zip(y).all(|(u, v)| u.to_bits() == v.to_bits());
-        (a.m, a.q, a.n) == (b.m, b.q, b.n)
-            && [(&a.t, &b.t), (&a.y, &b.y), (&a.g, &b.g), (&a.e, &b.e), (&a.u, &b.u), (&a.u_f, &b.u_f)]
-                .iter()
-                .chain([(&a.eta, &b.eta), (&a.x, &b.x), (&a.x_hat, &b.x_hat)].iter())
-                .all(|(x, y)| same(x, y))
+        let (ours, theirs) = (self.samples(py)?, o.get().samples(py)?);
+        Ok((a.m, a.q, a.n) == (b.m, b.q, b.n)
+            && ours.iter().zip(&theirs).all(|(x, y)| same(x.as_slice().unwrap_or(&[]), y.as_slice().unwrap_or(&[])))
             && a.outcome.as_ref().unwrap_or(&Outcome::Completed) == b.outcome.as_ref().unwrap_or(&Outcome::Completed)
             && a.stats == b.stats
             && same(&a.peaks.0, &b.peaks.0)
             && a.limited == b.limited
             && a.u_max == b.u_max
             && self.labels == o.get().labels
-            && a.time_unit == b.time_unit
+            && a.time_unit == b.time_unit)
     }
     /// Pickles as its samples (raw float64 bytes), outcome, statistics and diagnostics.
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyDict>,))> {
@@ -440,18 +468,9 @@ impl PySimResult {
         d.set_item("m", r.m)?;
         d.set_item("q", r.q)?;
         d.set_item("n", r.n)?;
-        for (name, v) in [
-            ("t", &r.t),
-            ("y", &r.y),
-            ("g", &r.g),
-            ("e", &r.e),
-            ("u", &r.u),
-            ("u_f", &r.u_f),
-            ("eta", &r.eta),
-            ("x", &r.x),
-            ("x_hat", &r.x_hat),
-        ] {
-            let bytes: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
+        let names = ["t", "y", "g", "e", "u", "u_f", "eta", "x", "x_hat"];
+        for (name, v) in names.into_iter().zip(me.samples(py)?) {
+            let bytes: Vec<u8> = v.as_slice()?.iter().flat_map(|x| x.to_le_bytes()).collect();
             d.set_item(name, PyBytes::new(py, &bytes))?;
         }
         d.set_item("outcome", me.outcome(py)?)?;
@@ -513,7 +532,7 @@ impl PySimResult {
     fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
         Ok(format!(
             "SimResult(samples={}, m={}, q={}, outcome={})",
-            self.inner.len(),
+            self.of_samples.len,
             self.inner.m,
             self.inner.q,
             self.outcome(py)?.repr()?
