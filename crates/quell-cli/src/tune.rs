@@ -60,8 +60,10 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
     crate::print_stdout(&report(&result, spec, study.time_unit()));
     if result.partial {
         let evaluations: usize = result.channels.iter().map(|c| c.curve.len()).sum();
+        let best =
+            if evaluations == 0 { "the μ printed is the scenario's" } else { "the μ printed is the best of them" };
         return Err(Failure::Run(format!(
-            "interrupted after {evaluations} evaluations, before the joint run; they are in {} (marked partial), and the μ printed is the best of them",
+            "interrupted after {evaluations} evaluations, before the joint run; they are in {} (marked partial), and {best}",
             args.out.join("tune.csv").display()
         )));
     }
@@ -174,7 +176,15 @@ fn report(r: &TuneResult, spec: &quell::study::TuneSpec, unit: quell::TimeUnit) 
     let untuned: Vec<String> =
         r.channels.iter().filter(|c| c.chosen.is_none()).map(|c| (c.channel + 1).to_string()).collect();
     let (label, note) = match (r.partial, untuned.len()) {
-        (true, _) => ("best mu so far (tuning interrupted)", String::new()),
+        (true, 0) => ("best mu so far (tuning interrupted)", String::new()),
+        (true, k) => (
+            "best mu so far (tuning interrupted)",
+            format!(
+                " (channel{} {}: the scenario's mu; no feasible mu evaluated yet)",
+                if k > 1 { "s" } else { "" },
+                untuned.join(", ")
+            ),
+        ),
         (false, 0) => ("tuned mu", String::new()),
         (false, k) => (
             "mu",
@@ -231,6 +241,11 @@ mod tests {
         };
         let text = report(&result, &spec, quell::TimeUnit::default());
         assert!(text.contains("channel 2: not evaluated (tuning interrupted)"), "{text}");
+        // Channel 2's μ is the scenario's, not a result of the search.
+        assert!(
+            text.contains("best mu so far (tuning interrupted) = [37275.900000, 1.000000] (channel 2: the scenario's mu; no feasible mu evaluated yet)"),
+            "{text}"
+        );
         assert!(!text.contains("end of tune.mu"), "{text}");
         assert!(!text.contains("no feasible"), "{text}");
     }
