@@ -180,7 +180,7 @@ fn report(r: &TuneResult, spec: &quell::study::TuneSpec, unit: quell::TimeUnit) 
         (true, k) => (
             "best mu so far (tuning interrupted)",
             format!(
-                " (channel{} {}: the scenario's mu; no feasible mu evaluated yet)",
+                " (channel{} {}: the scenario's mu, not yet tuned)",
                 if k > 1 { "s" } else { "" },
                 untuned.join(", ")
             ),
@@ -243,7 +243,7 @@ mod tests {
         assert!(text.contains("channel 2: not evaluated (tuning interrupted)"), "{text}");
         // Channel 2's μ is the scenario's, not a result of the search.
         assert!(
-            text.contains("best mu so far (tuning interrupted) = [37275.900000, 1.000000] (channel 2: the scenario's mu; no feasible mu evaluated yet)"),
+            text.contains("best mu so far (tuning interrupted) = [37275.900000, 1.000000] (channel 2: the scenario's mu, not yet tuned)"),
             "{text}"
         );
         assert!(!text.contains("end of tune.mu"), "{text}");
