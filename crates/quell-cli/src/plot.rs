@@ -337,7 +337,10 @@ fn draw<DB: DrawingBackend + Strokes>(
     let label = u_max.map(|u| format!("±truth.u_max[{i}] = {}", crate::run::short(u)));
     let limit = label.as_deref().zip(u_max).filter(|&(_, u)| peak >= 0.1 * u);
     if let (None, Some(u)) = (limit, u_max) {
-        write!(uf_title, "; peak {:.1} % of truth.u_max", 100.0 * peak / u).map_err(|e| e.to_string())?;
+        // Two significant digits below 0.1 % ("0.0 %" hid a peak of 0.0018 %).
+        let share = 100.0 * peak / u;
+        let share = if share < 0.1 && share > 0.0 { format!("{share:.1e}") } else { format!("{share:.1}") };
+        write!(uf_title, "; peak {share} % of truth.u_max").map_err(|e| e.to_string())?;
     }
     panel_with_limit(&areas[3], (&uf_title, "u_f"), &[(format!("uf{c}"), uf)], limit, time)?;
     let etas: Vec<Series> = (0..r.q)

@@ -1107,7 +1107,8 @@ fn run_figures_show_the_actuator_limit_or_how_far_u_f_stays_from_it() {
     let dir = temp_dir("u-max-figure");
     let body = fs::read_to_string(paper()).unwrap().replace("t_end = 100.0", "t_end = 20.0");
     let file = dir.path().join("limited.toml");
-    fs::write(&file, format!("{body}\n[truth]\nu_max = [1e4, 10.0]\n")).unwrap();
+    // 1e7 puts the peak at 1.5e-4 % of the limit, which read "0.0 %" at one decimal.
+    fs::write(&file, format!("{body}\n[truth]\nu_max = [1e7, 10.0]\n")).unwrap();
     let out = dir.path().join("out");
     let o = quell(&["run", file.to_str().unwrap(), "--out", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
@@ -1115,7 +1116,7 @@ fn run_figures_show_the_actuator_limit_or_how_far_u_f_stays_from_it() {
     let peak = summary["channels"][0]["max_uf"].as_f64().unwrap();
     assert!(peak > 0.0 && peak < 1e3, "{peak}");
     let svg1 = fs::read_to_string(out.join("channel1.svg")).unwrap();
-    let share = format!("what the actuator delivers; peak {:.1} % of truth.u_max", 100.0 * peak / 1e4);
+    let share = format!("what the actuator delivers; peak {:.1e} % of truth.u_max", 100.0 * peak / 1e7);
     assert!(svg1.contains(&share) && !svg1.contains("±truth.u_max"), "{share}");
     let svg2 = fs::read_to_string(out.join("channel2.svg")).unwrap();
     assert!(svg2.contains("±truth.u_max[1] = 10") && !svg2.contains("% of truth.u_max"));

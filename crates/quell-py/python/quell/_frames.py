@@ -125,7 +125,9 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
                                   label=f"±truth.u_max[{i}] = {limit:.6g}" if level > 0 else None)
             else:
                 title_ax = uf_ax if len(axes) == 5 else axes[2]
-                title_ax.set_title(f"{title_ax.get_title()}; peak {100 * peak / limit:.1f} % of truth.u_max")
+                share = 100 * peak / limit
+                share = f"{share:.1e}" if 0 < share < 0.1 else f"{share:.1f}"  # "0.0 %" hid a peak of 0.0018 %
+                title_ax.set_title(f"{title_ax.get_title()}; peak {share} % of truth.u_max")
         eta_ax = axes[-1]
         for j in range(result.q):
             eta_ax.plot(t, result.eta[:, i, j], label=f"η{c}_{j + 1}")
