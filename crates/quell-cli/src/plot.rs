@@ -266,10 +266,11 @@ fn legend_corner(
     best.map_or(SeriesLabelPosition::UpperRight, |(corner, ..)| corner)
 }
 
-/// The k-th series' colour: matplotlib's ten ("tab10", told apart in print and by most colour
-/// vision), then plotters' 99.
+/// The k-th series' colour: matplotlib's "tab20" order, its ten strong colours first (told apart in
+/// print and by most colour vision), then their light companions, then again (plotters' Palette99,
+/// used before past ten, drew black and yellow lines, a black one looking like a grid line).
 fn pick(k: usize) -> RGBAColor {
-    const TAB10: [(u8, u8, u8); 10] = [
+    const TAB20: [(u8, u8, u8); 20] = [
         (31, 119, 180),
         (255, 127, 14),
         (44, 160, 44),
@@ -280,11 +281,19 @@ fn pick(k: usize) -> RGBAColor {
         (127, 127, 127),
         (188, 189, 34),
         (23, 190, 207),
+        (174, 199, 232),
+        (255, 187, 120),
+        (152, 223, 138),
+        (255, 152, 150),
+        (197, 176, 213),
+        (196, 156, 148),
+        (247, 182, 210),
+        (199, 199, 199),
+        (219, 219, 141),
+        (158, 218, 229),
     ];
-    match TAB10.get(k) {
-        Some(&(r, g, b)) => RGBColor(r, g, b).to_rgba(),
-        None => Palette99::pick(k).to_rgba(),
-    }
+    let (r, g, b) = TAB20[k % TAB20.len()];
+    RGBColor(r, g, b).to_rgba()
 }
 
 /// The most series a panel's legend lists ([`panel`]).
