@@ -146,12 +146,16 @@ fn flagged(advice: &str) -> String {
     advice.replace("(u_limit)", "(--u-limit)")
 }
 
+/// The report's first line: the keys chosen, or that the scenario gave them all.
+fn heading(a: &AutoDesign) -> &'static str {
+    match a.choices.is_empty() {
+        true => "automatic design: the scenario gives every key, so none was chosen\n",
+        false => "automatic design: the keys chosen, and why\n",
+    }
+}
+
 fn report_text(a: &AutoDesign) -> String {
-    let mut s = String::from(if a.choices.is_empty() {
-        "automatic design: the scenario gives every key, so none was chosen\n"
-    } else {
-        "automatic design: the keys chosen, and why\n"
-    });
+    let mut s = String::from(heading(a));
     for c in &a.choices {
         s.push_str(&format!("  {} = {}\n    {}\n", c.key, c.value, c.why));
     }
