@@ -175,25 +175,15 @@ fn report(r: &TuneResult, spec: &quell::study::TuneSpec, unit: quell::TimeUnit) 
     // A channel without a feasible μ keeps the scenario's (TuneResult::mu): not a tuned value.
     let untuned: Vec<String> =
         r.channels.iter().filter(|c| c.chosen.is_none()).map(|c| (c.channel + 1).to_string()).collect();
-    let (label, note) = match (r.partial, untuned.len()) {
-        (true, 0) => ("best mu so far (tuning interrupted)", String::new()),
-        (true, k) => (
-            "best mu so far (tuning interrupted)",
-            format!(
-                " (channel{} {}: the scenario's mu, not yet tuned)",
-                if k > 1 { "s" } else { "" },
-                untuned.join(", ")
-            ),
-        ),
-        (false, 0) => ("tuned mu", String::new()),
-        (false, k) => (
-            "mu",
-            format!(
-                " (channel{} {}: the scenario's mu, unchanged; no feasible mu)",
-                if k > 1 { "s" } else { "" },
-                untuned.join(", ")
-            ),
-        ),
+    let plural = if untuned.len() > 1 { "s" } else { "" };
+    let note = |why: &str| match untuned.is_empty() {
+        true => String::new(),
+        false => format!(" (channel{plural} {}: the scenario's mu, {why})", untuned.join(", ")),
+    };
+    let (label, note) = match (r.partial, untuned.is_empty()) {
+        (true, _) => ("best mu so far (tuning interrupted)", note("not yet tuned")),
+        (false, true) => ("tuned mu", String::new()),
+        (false, false) => ("mu", note("unchanged; no feasible mu")),
     };
     let mu = r.mu.iter().map(|m| format!("{m:.6}")).collect::<Vec<_>>().join(", ");
     s.push_str(&format!("{label} = [{mu}]{note}\n"));

@@ -113,14 +113,14 @@ LARGE_PLANT = (
 )
 
 
-def interrupted_cpu(python_child, call):
-    """Starts `call` on LARGE_PLANT in a child, sends SIGINT 1 s into it, and returns the CPU time
-    the child spent in the call until KeyboardInterrupt reached it (CPU time, not wall time, so
-    that load on the machine does not move the bound)."""
+def interrupted_cpu(python_child, call, setup=LARGE_PLANT, after=1.0):
+    """Starts `call` after `setup` (LARGE_PLANT by default) in a child, sends SIGINT `after` seconds
+    into it, and returns the CPU time the child spent in the call until KeyboardInterrupt reached it
+    (CPU time, not wall time, so that load on the machine does not move the bound)."""
     import signal
 
     code = (
-        LARGE_PLANT + "print('ready', flush=True)\n"
+        setup + "print('ready', flush=True)\n"
         "start = time.process_time()\n"
         "try:\n"
         f"    {call}\n"
@@ -131,7 +131,7 @@ def interrupted_cpu(python_child, call):
     )
     child = python_child(code)
     try:
-        time.sleep(1.0)  # into the call
+        time.sleep(after)  # into the call
         child.send_signal(signal.SIGINT)
         out, err = child.communicate(timeout=300)  # the uninterrupted call takes ~1 min at load 10
     finally:
@@ -172,28 +172,10 @@ def test_ctrl_c_stops_a_studys_nominal_run(python_child):
     """SIGINT while quell.sweep_runs builds the first spec of a study with draws, which carries out
     the grid point's nominal run (t_end = 1e5 s: ~10 s of CPU), raises KeyboardInterrupt promptly:
     the nominal run took no stop signal and ran to its end (12.4 s measured)."""
-    import signal
-
-    code = (
+    setup = (
         "import time, quell\n"
         "study = quell.Study(quell.paper_example(), simulation={'t_end': 1e5, 'output_step': 10.0},\n"
         "                    monte_carlo={'runs': 2, 'plant.x0': {'normal': 0.1}})\n"
-        "print('ready', flush=True)\n"
-        "start = time.process_time()\n"
-        "try:\n"
-        "    list(quell.sweep_runs(study))\n"
-        "except KeyboardInterrupt:\n"
-        "    print('cpu', time.process_time() - start, flush=True)\n"
-        "    raise\n"
-        "print('finished', flush=True)\n"
     )
-    child = python_child(code)
-    try:
-        time.sleep(0.5)
-        child.send_signal(signal.SIGINT)
-        out, err = child.communicate(timeout=120)
-    finally:
-        child.kill()
-    assert "KeyboardInterrupt" in err and "finished" not in out, (out, err[-400:])
-    cpu = float(out.split("cpu", 1)[1].split()[0])
+    cpu = interrupted_cpu(python_child, "list(quell.sweep_runs(study))", setup=setup, after=0.5)
     assert cpu < 4.0, f"KeyboardInterrupt came after {cpu:.1f} s of CPU (the nominal run alone: ~10 s)"
