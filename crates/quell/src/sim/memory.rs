@@ -4,12 +4,29 @@
 //! from [`RUNS`] before it starts and gives it back when its row is made: runs wait for memory
 //! rather than take the machine's, and a run's outcome never depends on how many ran beside it.
 
-use std::sync::{Condvar, Mutex, PoisonError};
+use std::sync::{Condvar, LazyLock, Mutex, PoisonError};
 use std::time::Duration;
 
-/// Most bytes the study runs of a process reserve together (4 GiB): one run at both of its own
-/// limits (3 GiB) fits, and the paper's Monte Carlo runs (~37 MB each) run a hundred at once.
-pub const RUNS_MEMORY_BYTES: usize = 4 << 30;
+/// The least the study runs of a process may reserve together (4 GiB), whatever the machine: one
+/// run at both of its own limits (3 GiB) fits.
+pub const MIN_RUNS_MEMORY_BYTES: usize = 4 << 30;
+
+/// Most bytes the study runs of a process reserve together: half the machine's memory
+/// (`/proc/meminfo`'s MemTotal), at least [`MIN_RUNS_MEMORY_BYTES`] (also where the memory is not
+/// known). 12 GiB on a 24 GiB machine: 130 runs of the paper's example at once (95 MB each, the
+/// bound of its delay history), 350 Monte Carlo draws (37 MB); a fixed 4 GiB would have held a
+/// machine of many cores to 45 and 116.
+pub fn runs_memory_bytes() -> usize {
+    RUNS.capacity
+}
+
+/// Half of MemTotal in bytes, from `/proc/meminfo` (Linux); `None` elsewhere.
+fn half_the_machine() -> Option<usize> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemTotal:"))?;
+    let kib: usize = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib.saturating_mul(1024) / 2)
+}
 
 /// How often a run waiting for memory checks its stop signal.
 const STOP_CHECK: Duration = Duration::from_millis(50);
@@ -21,8 +38,9 @@ pub(crate) struct Gate {
     freed: Condvar,
 }
 
-/// The study runs' budget ([`RUNS_MEMORY_BYTES`]).
-pub(crate) static RUNS: Gate = Gate::new(RUNS_MEMORY_BYTES);
+/// The study runs' budget ([`runs_memory_bytes`]).
+pub(crate) static RUNS: LazyLock<Gate> =
+    LazyLock::new(|| Gate::new(half_the_machine().unwrap_or(0).max(MIN_RUNS_MEMORY_BYTES)));
 
 /// Bytes reserved from a [`Gate`], given back when dropped.
 pub(crate) struct Held<'a> {
@@ -95,6 +113,17 @@ mod tests {
         assert!(most.load(Ordering::Relaxed) <= 100, "held {}", most.load(Ordering::Relaxed));
         assert!(alone.load(Ordering::Relaxed), "the oversized holder shared the gate");
         assert_eq!(gate.held(), 0, "everything given back");
+    }
+
+    #[test]
+    fn the_budget_is_half_the_machine_and_at_least_the_floor() {
+        // On Linux MemTotal is known: half of it, within what machines have (256 MiB to 64 TiB).
+        if cfg!(target_os = "linux") {
+            let half = half_the_machine().expect("/proc/meminfo's MemTotal");
+            assert!((128 << 20..32usize << 40).contains(&half), "{half}");
+            assert_eq!(runs_memory_bytes(), half.max(MIN_RUNS_MEMORY_BYTES));
+        }
+        assert!(runs_memory_bytes() >= MIN_RUNS_MEMORY_BYTES);
     }
 
     #[test]

@@ -31,7 +31,7 @@ pub use closed_loop::{
 };
 pub use dde::{Method, Stats};
 pub use divergence::{Peaks, Watched, DIVERGENCE_BOUND};
-pub use memory::RUNS_MEMORY_BYTES;
+pub use memory::{runs_memory_bytes, MIN_RUNS_MEMORY_BYTES};
 pub use noise::{band_limited, NOISE_SINES};
 pub use result::{ChannelFigures, ChannelSummary, Outcome, RunStats, Sample, SimResult};
 pub use sampled::{coarse_sample_warning, output_step_fixes, SampledController, COARSE_SAMPLE};
@@ -302,7 +302,7 @@ impl<'a> Run<'a> {
     /// dimensions).
     /// The most bytes this run holds, known before it starts: its record (rows × the numbers of a
     /// row) and the continuous loop's delay history budget, or the sampled loop's delay lines. A
-    /// study reserves it before each run ([`RUNS_MEMORY_BYTES`]).
+    /// study reserves it before each run ([`runs_memory_bytes`]).
     pub fn memory_bound(&self) -> usize {
         let st = &self.settings;
         let (row_bytes, _) = self.record_row();

@@ -379,7 +379,7 @@ fn study_runs_wait_for_the_memory_that_other_runs_hold() {
     use std::sync::atomic::{AtomicUsize, Ordering};
     let s = study("[grid]\n\"simulation.t_end\" = [5.0]\n").unwrap();
     let gate = &crate::sim::memory::RUNS;
-    let held = gate.hold(crate::sim::RUNS_MEMORY_BYTES - (1 << 20), &|| false).expect("no stop");
+    let held = gate.hold(crate::sim::runs_memory_bytes() - (1 << 20), &|| false).expect("no stop");
     let rows = AtomicUsize::new(0);
     let on_row = |_: &Row| {
         rows.fetch_add(1, Ordering::SeqCst);
