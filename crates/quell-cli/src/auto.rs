@@ -89,7 +89,7 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
                 [l] => format!(", max|u_f| {} against the limit {}", list(&v.max_uf), crate::run::short(*l)),
                 each => format!(", max|u_f| {} against the limits {each:?}", list(&v.max_uf)),
             },
-            v.advice.iter().map(|a| format!("; {}", flagged(a))).collect::<String>()
+            v.advice.iter().map(|a| format!("; {a}")).collect::<String>()
         )));
     }
     if let Some(out) = &args.write {
@@ -138,12 +138,6 @@ fn report_json(a: &AutoDesign) -> serde_json::Value {
             &quell::design::warnings(&a.design, &a.scenario.design)
         ),
     })
-}
-
-/// The automatic design's advice with the flag that sets the actuator limit (the library names
-/// the argument, `u_limit`, as Python takes it).
-fn flagged(advice: &str) -> String {
-    advice.replace("(u_limit)", "(--u-limit)")
 }
 
 /// The report's first line: the keys chosen, or that the scenario gave them all.
@@ -227,7 +221,7 @@ fn report_text(a: &AutoDesign) -> String {
         }
     }
     for a in &v.advice {
-        s.push_str(&format!("  advice: {}\n", flagged(a)));
+        s.push_str(&format!("  advice: {}\n", crate::in_flags(a.clone()))); // u_limit is --u-limit here
     }
     s.push('\n');
     s.push_str(&crate::report::design_text(&a.design));

@@ -102,9 +102,13 @@ const FLAGS: [(&str, &str); 6] = [
 /// `simulation.sample_time` name the flag too.
 static SAMPLE_TIME_FLAG: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(true);
 
-/// A library message whose leading key a flag of the command sets, with the flag named.
+/// A library message whose leading key a flag of the command sets, with the flag named; an
+/// argument named in parentheses within it ("raise the limits (u_limit)") is its flag there too.
 pub(crate) fn in_flags(msg: String) -> String {
-    let msg = msg.replace(quell::scenario::AUTO_DESIGN, "`quell design SCENARIO --auto --write OUT.toml`");
+    let mut msg = msg.replace(quell::scenario::AUTO_DESIGN, "`quell design SCENARIO --auto --write OUT.toml`");
+    for (key, flag) in FLAGS.iter().filter(|(_, flag)| flag.starts_with("--")) {
+        msg = msg.replace(&format!("({key})"), &format!("({flag})"));
+    }
     let sample_time_flag = SAMPLE_TIME_FLAG.load(std::sync::atomic::Ordering::Relaxed);
     for (key, flag) in FLAGS.iter().filter(|(key, _)| sample_time_flag || *key != "simulation.sample_time") {
         if let Some(rest) = msg.strip_prefix(key).filter(|r| r.starts_with([':', ' '])) {

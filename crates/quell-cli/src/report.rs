@@ -87,7 +87,7 @@ fn fmt_eigenvalues(e: &[Complex<f64>]) -> String {
 /// G_ii(s) as `q0 / (s+a)(s+b)…`, its real numbers to 12 significant digits (a product of poles
 /// −1.1 … printed as 2131.7999999999997).
 fn tf(c: &quell::design::ChannelTf) -> String {
-    let short = quell::settings::fmt_time;
+    let short = crate::run::short;
     let poly: Vec<String> = c
         .poles
         .iter()
@@ -118,9 +118,9 @@ pub fn design_text(d: &Design) -> String {
     assumption_checks(&mut s, d);
     relative_degrees(&mut s, d);
     for (i, c) in d.channels().iter().enumerate() {
-        let _ = writeln!(s, "  G_{0}{0}(s) = {1}   (μ_{0} = {2})", i + 1, tf(c), quell::settings::fmt_time(d.mu()[i]));
+        let _ = writeln!(s, "  G_{0}{0}(s) = {1}   (μ_{0} = {2})", i + 1, tf(c), crate::run::short(d.mu()[i]));
     }
-    let _ = writeln!(s, "  H(s) = 1/({} s + 1)\n", quell::settings::fmt_time(d.beta()));
+    let _ = writeln!(s, "  H(s) = 1/({} s + 1)\n", crate::run::short(d.beta()));
     for (name, M) in [
         ("K", d.K()),
         ("F", d.F()),

@@ -329,18 +329,18 @@ fn sample_time_at_most(delays: &[f64], width: usize, T: f64) -> Option<f64> {
     round.or_else(|| sample_time_near(delays, T, width, true))
 }
 
-/// A sample time near `T` at which the output step `h` and every delay of `design` are whole and
-/// the delay lines fit: h/⌈h/T⌉, the longest ≤ T that divides h, when it passes, else the one
+/// A sample time near `T` that divides the output step `h`: h/⌈h/T⌉, the longest ≤ T that does,
+/// when every delay of `design` is whole there and the delay lines fit, else the one
 /// [`valid_sample_time`] finds with h among the delays (counting h as a line too: a little
-/// conservative); `None` when neither passes.
-pub(crate) fn sample_time_dividing(design: &Design, T: f64, h: f64) -> Option<f64> {
+/// conservative), else h/⌈h/T⌉ still (no sample time near T passes the delays' checks).
+pub(crate) fn sample_time_dividing(design: &Design, T: f64, h: f64) -> f64 {
     let (delays, width) = (&design.plant().delays, 1 + design.q());
     let below = h / (h / T).ceil().max(1.0);
     if fits(delays, width, below) {
-        return Some(below);
+        return below;
     }
     let with_h: Vec<f64> = delays.iter().copied().chain([h]).collect();
-    valid_sample_time(&with_h, T, width)
+    valid_sample_time(&with_h, T, width).unwrap_or(below)
 }
 
 /// The shortest round sample time (as [`round_times`], up to three decades above `at_least`) from

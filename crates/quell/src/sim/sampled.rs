@@ -122,9 +122,7 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
 /// divides h, h/⌈h/T⌉, where it passes; an offer that failed the delays' check sent a user back
 /// and forth), and the multiple of T nearest h, T·round(h/T) (at least T).
 pub fn output_step_fixes(design: &Design, T: f64, h: f64) -> (f64, f64) {
-    let ratio = h / T;
-    let divisor = discrete::sample_time_dividing(design, T, h).unwrap_or(h / ratio.ceil().max(1.0));
-    (divisor, T * ratio.round().max(1.0))
+    (discrete::sample_time_dividing(design, T, h), T * (h / T).round().max(1.0))
 }
 
 /// The sampled-data loop of `run` ([`Run::simulate`]) at `sample_time`, with the run's controller
