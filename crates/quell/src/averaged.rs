@@ -128,8 +128,10 @@ pub struct Excitation {
 pub struct ChannelAverage {
     /// Ω̄_i (q × q, symmetric positive semidefinite).
     pub omega: DMatrix<f64>,
-    /// Eigenvalues of Ω̄_i, ascending, and their eigenvectors (columns).
+    /// Eigenvalues of Ω̄_i, ascending: 0 for the q − r directions the signals leave unexcited,
+    /// then the r excited ones ([`spectrum`]).
     pub lambda: Vec<f64>,
+    /// The excited eigenvalues' eigenvectors (q × r), in the order of `lambda`'s last r.
     vectors: DMatrix<f64>,
     /// Ȳ_i.
     pub y: DVector<f64>,
@@ -150,11 +152,10 @@ impl ChannelAverage {
         self.lambda.last().copied().unwrap_or(0.0)
     }
 
-    /// The excited directions: (k, λ_k) for the eigenvalues above 1e-13·λ_max (the directions the
-    /// signals excite, to Ω̄'s rounding; no error lies along the others that the rounding can tell).
+    /// The excited directions: (k, λ_k), column k of `vectors` with its eigenvalue ([`spectrum`]
+    /// decides which they are, whatever the units of ξ̂'s entries).
     fn excited_modes(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
-        let floor = 1e-13 * self.lambda_max();
-        self.lambda.iter().copied().enumerate().filter(move |&(_, l)| l > floor)
+        self.lambda[self.lambda.len() - self.vectors.ncols()..].iter().copied().enumerate()
     }
 
     /// The eigenvalues of the excited directions.
@@ -279,16 +280,88 @@ fn channel(design: &Design, i: usize, tones: &[(f64, DVector<C64>, DVector<C64>)
         let lambda = if *w == 0.0 { mean + half } else { mean - half };
         excitation.push(Excitation { frequency: *w, excitation: c * lambda.max(0.0) });
     }
-    let eig = SymmetricEigen::new(omega.clone());
-    let mut order: Vec<usize> = (0..q).collect();
-    order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
-    let lambda: Vec<f64> = order.iter().map(|&k| eig.eigenvalues[k].max(0.0)).collect();
-    let vectors = DMatrix::from_fn(q, q, |r, c| eig.eigenvectors[(r, order[c])]);
+    let (lambda, vectors) = spectrum(&omega);
     let mut avg =
         ChannelAverage { omega, lambda, vectors, y, open_loop_rms: open_loop.sqrt(), residual_rms: 0.0, excitation };
     let explained: f64 = avg.modes().map(|(_, e)| e).sum();
     avg.residual_rms = (open_loop - explained).max(0.0).sqrt();
     avg
+}
+
+/// The eigenvalues of Ω̄ = S A S (S = diag(√Ω̄_jj)), ascending, with the eigenvectors of its r
+/// excited ones (q × r), both independent of the units of ξ̂'s entries, which scale S alone:
+///
+/// * r is the rank of the unit-free A: its eigenvalues above 1e-13·λ_max(A) (A's rounding);
+/// * the excited eigenpairs are those of B Bᵀ, B = S U_r Λ_r^½ from A's r leading eigenpairs:
+///   B's rows sorted by norm, B = Q R (Householder), then R Rᵀ by one-sided Jacobi on Rᵀ, which
+///   keeps small eigenvalues to their relative accuracy where Ω̄'s entries span many orders
+///   (Demmel & Veselić, "Jacobi's method is more accurate than QR", SIAM J. Matrix Anal. Appl. 13,
+///   1992). A symmetric QR eigensolver on Ω̄ itself loses every eigenvalue below ε·λ_max: forces in
+///   newtons beside positions in metres put half the excited directions there.
+fn spectrum(omega: &DMatrix<f64>) -> (Vec<f64>, DMatrix<f64>) {
+    let q = omega.nrows();
+    let s: Vec<f64> = (0..q).map(|j| omega[(j, j)].max(0.0).sqrt()).collect();
+    let inv = |j: usize| if s[j] > 0.0 { 1.0 / s[j] } else { 0.0 };
+    let scaled = DMatrix::from_fn(q, q, |a, b| omega[(a, b)] * inv(a) * inv(b));
+    let eig = SymmetricEigen::new(scaled);
+    let top = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
+    let excited: Vec<usize> = (0..q).filter(|&k| eig.eigenvalues[k] > 1e-13 * top).collect();
+    let r = excited.len();
+    let mut lambda = vec![0.0; q];
+    if r == 0 {
+        return (lambda, DMatrix::zeros(q, 0));
+    }
+    let mut rows: Vec<usize> = (0..q).collect();
+    let B =
+        DMatrix::from_fn(q, r, |a, c| s[a] * eig.eigenvectors[(a, excited[c])] * eig.eigenvalues[excited[c]].sqrt());
+    rows.sort_by(|&a, &b| B.row(b).norm().total_cmp(&B.row(a).norm()));
+    let qr = B.select_rows(&rows).qr();
+    let mut G = qr.r().transpose();
+    let mut V = DMatrix::identity(r, r);
+    one_sided_jacobi(&mut G, &mut V);
+    let mut order: Vec<(f64, usize)> = (0..r).map(|c| (G.column(c).norm_squared(), c)).collect();
+    order.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let QV = qr.q() * V;
+    let mut vectors = DMatrix::zeros(q, r);
+    for (k, &(l, c)) in order.iter().enumerate() {
+        lambda[q - r + k] = l;
+        for (at, &row) in rows.iter().enumerate() {
+            vectors[(row, k)] = QV[(at, c)];
+        }
+    }
+    (lambda, vectors)
+}
+
+/// Hestenes' one-sided Jacobi: plane rotations from the right until G's columns are orthogonal to
+/// working precision, accumulated in V (G V stays the input's G V). Then GᵀG = V diag(‖g_k‖²) Vᵀ.
+fn one_sided_jacobi(G: &mut DMatrix<f64>, V: &mut DMatrix<f64>) {
+    let n = G.ncols();
+    for _sweep in 0..64 {
+        let mut rotated = false;
+        for p in 0..n {
+            for k in p + 1..n {
+                let (a, b, c) = (G.column(p).norm_squared(), G.column(k).norm_squared(), G.column(p).dot(&G.column(k)));
+                if c.abs() <= f64::EPSILON * (a * b).sqrt() {
+                    continue;
+                }
+                rotated = true;
+                let zeta = (b - a) / (2.0 * c);
+                let t = zeta.signum() / (zeta.abs() + zeta.hypot(1.0));
+                let cs = 1.0 / t.hypot(1.0);
+                let sn = cs * t;
+                for M in [&mut *G, &mut *V] {
+                    for i in 0..M.nrows() {
+                        let (x, y) = (M[(i, p)], M[(i, k)]);
+                        M[(i, p)] = cs * x - sn * y;
+                        M[(i, k)] = sn * x + cs * y;
+                    }
+                }
+            }
+        }
+        if !rotated {
+            return;
+        }
+    }
 }
 
 #[cfg(test)]
@@ -332,5 +405,49 @@ mod tests {
         // A delay turns a by e^{−2jτ}: Ω̄ is unchanged.
         let d = Averaged::new(&siso(0.7).design().unwrap(), &s.reference, &s.disturbance);
         assert!((&d.channels[0].omega - &c.omega).norm() <= 1e-15);
+    }
+    /// Ω̄ = F Fᵀ with the rows of F scaled by `s`.
+    fn gram(F: &[[f64; 3]], s: &[f64]) -> DMatrix<f64> {
+        let F = DMatrix::from_fn(F.len(), 3, |r, c| s[r] * F[r][c]);
+        &F * F.transpose()
+    }
+
+    #[test]
+    fn a_graded_omega_keeps_its_small_eigenvalue_to_relative_accuracy() {
+        // F = diag(1e8, 1e-5)·[[1, 2, 0], [3, 1, 5]]: λ_1 λ_2 = det Ω̄ = (1e8·1e-5)²·Σ minors² (Cauchy–Binet,
+        // minors −5, 5, 10: 150) = 1.5e8 and λ_1 + λ_2 = tr Ω̄ = 5e16 + 3.5e-9, so λ_small = det/λ_large
+        // = 3.0e-9 (λ_large = tr − λ_small, exact in f64 beside 5e16). A QR eigensolver on Ω̄ has an
+        // absolute error near ε·5e16 ≈ 10 there and took it for unexcited. Jacobi on the graded
+        // factor: a few ε relative (Demmel & Veselić); 1e-13 allows for Ω̄'s rounding of 5e3.
+        let omega = gram(&[[1.0, 2.0, 0.0], [3.0, 1.0, 5.0]], &[1e8, 1e-5]);
+        let (lambda, vectors) = spectrum(&omega);
+        let large = 5e16 + 3.5e-9;
+        let small = 1.5e8 / large;
+        assert_eq!(vectors.ncols(), 2);
+        assert!((lambda[0] - small).abs() <= 1e-13 * small, "{lambda:?} against {small:e}");
+        assert!((lambda[1] - large).abs() <= 1e-15 * large, "{lambda:?}");
+        // Each vector: Ω̄ v = λ v in the graded norm (row a relative to its own scale s_a·‖Ω̄ row‖).
+        for (v, l) in vectors.column_iter().zip(&lambda) {
+            let res = &omega * v - v * *l;
+            assert!(res[0].abs() <= 1e-14 * 5e16 * v.amax() && res[1].abs() <= 1e-13 * 5e3, "{res}");
+        }
+    }
+
+    #[test]
+    fn the_excited_rank_does_not_depend_on_the_units_of_the_entries() {
+        // F = S·[[1, 0], [0, 1], [1, 1]] (padded): rank 2 for any positive S. The nonzero eigenvalues
+        // are those of FᵀF = [[a, b], [b, c]], a = s1² + s3², b = s3², c = s2² + s3², in closed form
+        // without cancellation: det = s1²s2² + s1²s3² + s2²s3², λ_large = (a + c)/2 + √(((s1² − s2²)/2)²
+        // + s3⁴), λ_small = det/λ_large.
+        for s in [[1.0, 1.0, 1.0], [1e9, 1.0, 1e-6], [1e-6, 1e3, 1e9], [1.0, 1e-12, 1.0]] {
+            let omega = gram(&[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]], &s);
+            let (lambda, vectors) = spectrum(&omega);
+            let [s1, s2, s3] = s.map(|x| x * x);
+            let large = 0.5 * (s1 + s2) + s3 + ((0.5 * (s1 - s2)).powi(2) + s3 * s3).sqrt();
+            let small = (s1 * s2 + s1 * s3 + s2 * s3) / large;
+            assert_eq!((vectors.ncols(), lambda[0]), (2, 0.0), "{s:?}: {lambda:?}");
+            assert!((lambda[1] - small).abs() <= 1e-13 * small, "{s:?}: {lambda:?} against {small:e}");
+            assert!((lambda[2] - large).abs() <= 1e-14 * large, "{s:?}: {lambda:?} against {large:e}");
+        }
     }
 }

@@ -369,3 +369,33 @@ fn filter_poles_far_from_the_signals_frequencies_are_named() {
     assert!(a.contains("design.reference_filter_poles (|p| from 580.4 to 2938 rad/ms) are 257× faster than the reference's frequencies (0.754 to 2.262 rad/ms)"), "{a}");
     assert!(a.contains("design.disturbance_filter_poles (|p| from 1005 to 2262 rad/ms) are 667× faster"), "{a}");
 }
+
+/// The excited rank counts the signals' independent directions whatever the units: the SI vessel
+/// (`tests/data/vessel-si.toml`, ξ̂'s disturbance entries near 1e9, its reference entries near 1)
+/// has a bias and four frequencies (0.01, 0.02, 0.05, 0.08 rad/s) in g and ω, so 1 + 2·4 = 9 of
+/// its q = 11 directions are excited, with ω in N and in kN (1e3× smaller). The rank once came
+/// from a threshold of 1e-13·λ_max on Ω̄ itself: 6 in N, 9 in kN.
+#[test]
+fn the_excited_rank_is_the_same_in_newtons_and_kilonewtons() {
+    let s = Scenario::from_toml(include_str!("data/vessel-si.toml")).unwrap();
+    let d = s.design().unwrap();
+    let mut kn = s.disturbance.clone();
+    kn.components.iter_mut().for_each(|c| {
+        c.bias /= 1e3;
+        c.harmonics.iter_mut().for_each(|h| h.amplitude /= 1e3);
+    });
+    let newtons = Averaged::new(&d, &s.reference, &s.disturbance);
+    let kilonewtons = Averaged::new(&d, &s.reference, &kn);
+    for (n, k) in newtons.channels.iter().zip(&kilonewtons.channels) {
+        assert_eq!((n.excited().count(), k.excited().count(), d.q()), (9, 9, 11));
+        // The slowest excited direction lies in the reference's entries, which the disturbance's
+        // units do not scale: the same λ to the eigensolver's relative accuracy (measured 1e-16;
+        // the bound allows for Ω̄'s entries spanning 18 orders).
+        let (ln, lk) = (n.excited().fold(f64::INFINITY, f64::min), k.excited().fold(f64::INFINITY, f64::min));
+        assert!((ln - lk).abs() <= 1e-9 * ln && ln > 0.0, "{ln:e} in N against {lk:e} in kN");
+        // Ω̄'s largest eigenvalue is the disturbance's, about 1e6× smaller in kN (within 2 %: the
+        // reference's entries, up to 5.5e9 on Ω̄'s diagonal, add to the 7.5e11 it has in kN).
+        let ratio = n.lambda_max() / k.lambda_max();
+        assert!((ratio / 1e6 - 1.0).abs() <= 2e-2, "{ratio:e}");
+    }
+}
