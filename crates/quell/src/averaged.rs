@@ -129,7 +129,7 @@ pub struct ChannelAverage {
     /// Ω̄_i (q × q, symmetric positive semidefinite).
     pub omega: DMatrix<f64>,
     /// Eigenvalues of Ω̄_i, ascending: 0 for the q − r directions the signals leave unexcited,
-    /// then the r excited ones ([`spectrum`]).
+    /// then the r excited ones (counted on Ω̄_i scaled to a unit diagonal, so whatever ξ̂'s units).
     pub lambda: Vec<f64>,
     /// The excited eigenvalues' eigenvectors (q × r), in the order of `lambda`'s last r.
     vectors: DMatrix<f64>,

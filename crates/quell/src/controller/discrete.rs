@@ -222,6 +222,38 @@ const SEARCHED: i64 = 10_000;
 /// Relative tolerance of a whole number of samples: x/T within 1e-9·max(x/T, 1) of an integer.
 const WHOLE_TOLERANCE: f64 = 1e-9;
 
+/// The times k·T of a uniform grid (samples, output rows), each the double nearest the decimal
+/// k·T when T is a decimal of at most 15 digits: with T = 0.1, t_3 = 3/10 reads 0.3, where the
+/// product 3 × 0.1 reads 0.30000000000000004. Any other T, or k·M past 2⁵³, gives k·T.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Grid {
+    T: f64,
+    /// T = M/10^d: (M, 10^d), or (0, 0) when T has no such form.
+    mantissa: f64,
+    scale: f64,
+}
+
+impl Grid {
+    pub(crate) fn new(T: f64) -> Grid {
+        let decimal = (1..=15).map(|d| 10f64.powi(d)).find_map(|scale| {
+            let mantissa = (T * scale).round();
+            (mantissa < 2f64.powi(53) && mantissa / scale == T).then_some((mantissa, scale))
+        });
+        let (mantissa, scale) = decimal.unwrap_or((0.0, 0.0));
+        Grid { T, mantissa, scale }
+    }
+
+    /// t_k: k·M/10^d, one rounding of the exact decimal (k·M exact below 2⁵³), or k·T.
+    pub(crate) fn at(&self, k: usize) -> f64 {
+        let km = k as f64 * self.mantissa;
+        if self.scale > 0.0 && km < 2f64.powi(53) {
+            km / self.scale
+        } else {
+            k as f64 * self.T
+        }
+    }
+}
+
 /// x/T rounded, when it is a whole number of samples of T (to [`WHOLE_TOLERANCE`] relative).
 pub(crate) fn whole_multiple(x: f64, T: f64) -> Option<usize> {
     whole_within(x, T, WHOLE_TOLERANCE)
@@ -887,6 +919,24 @@ mod tests {
     /// Whole samples counted to the relative tolerance, where ⌊x/T⌋ alone loses one: 0.3/0.1 is
     /// 2.9999999999999996, and 8564884.1/0.1 is 85648840.99999999 (1e-8 below, beyond an absolute
     /// 1e-9); a ratio that is not whole is floored.
+    #[test]
+    fn grid_times_are_the_nearest_doubles_to_the_decimals() {
+        // Against Rust's own decimal parser (correctly rounded): t_k is "k·T" written in decimal.
+        let grid = Grid::new(0.1);
+        for k in 0..100_000usize {
+            let decimal = format!("{}.{}", k / 10, k % 10);
+            assert_eq!(grid.at(k), decimal.parse::<f64>().unwrap(), "k = {k}");
+        }
+        assert_eq!(format!("{}", Grid::new(0.1).at(3)), "0.3");
+        assert_eq!(format!("{}", Grid::new(1e-4).at(7)), "0.0007");
+        assert_eq!(format!("{}", Grid::new(0.05).at(2_000_001)), "100000.05");
+        // A step of no short decimal form, and integers, keep k·T.
+        let third = 1.0 / 3.0;
+        assert_eq!(Grid::new(third).at(1000), 1000.0 * third);
+        assert_eq!(Grid::new(2.0).at(7), 14.0);
+        assert_eq!(Grid::new(0.1).at(0), 0.0);
+    }
+
     #[test]
     fn whole_samples_counts_a_ratio_rounded_below_an_integer_as_that_integer() {
         assert_eq!(whole_samples(0.3, 0.1), 3);

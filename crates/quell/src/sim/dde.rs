@@ -24,6 +24,7 @@ mod history;
 mod imex;
 mod tableau;
 
+use crate::controller::discrete::Grid;
 use hermite::Stencil;
 use history::{newton, History, Nodes, NCOEF};
 use std::ops::ControlFlow;
@@ -422,11 +423,11 @@ pub fn solve_events<S: DelaySystem>(
     Ok(steps.finish())
 }
 
-/// The output schedule t0 + k·dt, k = 1…n, n the whole output steps in the span (the last one
+/// The output schedule t0 + t_k (t_k = k·dt as [`Grid`] reads it), k = 1…n, n the whole output steps in the span (the last one
 /// clamped to t_end when it lands there).
 struct Schedule {
     t0: f64,
-    dt: f64,
+    dt: Grid,
     n: usize,
     /// The next k to emit.
     next: usize,
@@ -440,7 +441,7 @@ impl Schedule {
         if self.next > self.n {
             return None;
         }
-        let t_k = self.t0 + self.next as f64 * self.dt;
+        let t_k = self.t0 + self.dt.at(self.next);
         let t_k = if self.next == self.n && t_new == t_end { t_k.min(t_end) } else { t_k };
         (t_k <= t_new).then_some(t_k)
     }
@@ -562,7 +563,7 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
             last_rejected: false,
             breakpoints: breakpoints(t0, delays, t_end),
             next_breakpoint: 0,
-            schedule: Schedule { t0, dt, n: n_out, next: 1 },
+            schedule: Schedule { t0, dt: Grid::new(dt), n: n_out, next: 1 },
             err: 0.0,
             implicit: sys.implicit(),
             stiff: opts.method == Method::Implicit,

@@ -446,8 +446,9 @@ fn sampled_loop<C: SampledController + ?Sized>(
     let bounds = run.bounds();
     let mut outcome = Outcome::Completed;
     let mut taken = 0;
+    let grid = discrete::Grid::new(T);
     for k in 0..=discrete::whole_samples(settings.t_end, T) {
-        let t = k as f64 * T;
+        let t = grid.at(k);
         plant.measure(t, run.reference);
         if settings.record_states && k % every == 0 {
             x_hat.copy_from_slice(ctrl.watched().x_hat);
