@@ -683,31 +683,45 @@ fn step_budget(py: Python<'_>, max_steps: Option<&Bound<'_, PyAny>>) -> PyResult
 }
 
 /// The run with the GIL released, looking for Ctrl-C every [`SIGNAL_CHECK`]: its result, and the
-/// KeyboardInterrupt that stopped it (the result then holds the samples up to it).
+/// KeyboardInterrupt that stopped it (the result then holds the samples up to it). The run first
+/// reserves its memory bound from the budget that runs under way share ([`Run::reserve_memory`]),
+/// so that threads calling `quell.simulate` at once wait rather than take the machine's memory; a
+/// Ctrl-C while it waits ends the run at its first progress check.
 fn run_released(
     py: Python<'_>,
     scn: &quell::Scenario,
     design: &quell::Design,
     settings: RunSettings,
 ) -> PyResult<(SimResult, Option<PyErr>)> {
-    let mut interrupt: Option<PyErr> = None;
+    // A Mutex, not a RefCell: the closures run with the GIL released, so must be Send.
+    let interrupt: std::sync::Mutex<Option<PyErr>> = std::sync::Mutex::new(None);
+    let seen = || interrupt.lock().unwrap_or_else(std::sync::PoisonError::into_inner).is_some();
+    let interrupted = || {
+        if !seen() {
+            if let Err(e) = Python::attach(|py| py.check_signals()) {
+                *interrupt.lock().unwrap_or_else(std::sync::PoisonError::into_inner) = Some(e);
+            }
+        }
+        seen()
+    };
     let result = py.detach(|| {
+        let run = Run::of(scn, design).settings(settings);
+        let _memory = run.reserve_memory(&interrupted);
         let mut last = Instant::now();
         let progress = |_t: f64| {
-            if last.elapsed() < SIGNAL_CHECK {
+            if !seen() && last.elapsed() < SIGNAL_CHECK {
                 return ControlFlow::Continue(());
             }
             last = Instant::now();
-            match Python::attach(|py| py.check_signals()) {
-                Ok(()) => ControlFlow::Continue(()),
-                Err(e) => {
-                    interrupt = Some(e);
-                    ControlFlow::Break(())
-                }
+            if interrupted() {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
             }
         };
-        Run::of(scn, design).settings(settings).simulate(progress)
+        run.simulate(progress)
     });
+    let interrupt = interrupt.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
     let result = result.map_err(|e| {
         // `.key` as for the same setting refused when the scenario is read (argument_error).
         let key = match &e {

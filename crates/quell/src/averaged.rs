@@ -274,11 +274,7 @@ fn channel(design: &Design, i: usize, tones: &[(f64, DVector<C64>, DVector<C64>)
         omega += &part;
         y += (&u * delta[i].re + &v * delta[i].im) * c;
         open_loop += c * delta[i].norm_sqr();
-        // The nonzero eigenvalues of c (u uᵀ + v vᵀ) are those of c·[[u·u, u·v], [u·v, v·v]].
-        let (uu, uv, vv) = (u.dot(&u), u.dot(&v), v.dot(&v));
-        let (mean, half) = (0.5 * (uu + vv), (0.25 * (uu - vv).powi(2) + uv * uv).sqrt());
-        let lambda = if *w == 0.0 { mean + half } else { mean - half };
-        excitation.push(Excitation { frequency: *w, excitation: c * lambda.max(0.0) });
+        excitation.push(Excitation { frequency: *w, excitation: c * tone_excitation(&u, &v, *w == 0.0) });
     }
     let (lambda, vectors) = spectrum(&omega);
     let mut avg =
@@ -286,6 +282,23 @@ fn channel(design: &Design, i: usize, tones: &[(f64, DVector<C64>, DVector<C64>)
     let explained: f64 = avg.modes().map(|(_, e)| e).sum();
     avg.residual_rms = (open_loop - explained).max(0.0).sqrt();
     avg
+}
+
+/// The nonzero eigenvalue that a tone's part u uᵀ + v vᵀ of Ω̄ adds (the larger one at w = 0, where
+/// v = 0; else the smaller): those of [[u·u, u·v], [u·v, v·v]], the larger mean + half, the smaller
+/// its determinant over the larger, the determinant a sum of squares of 2×2 minors
+/// (Cauchy–Binet), where mean − half would cancel to rounding once u's entries span many orders.
+fn tone_excitation(u: &DVector<f64>, v: &DVector<f64>, at_zero: bool) -> f64 {
+    let (uu, uv, vv) = (u.dot(u), u.dot(v), v.dot(v));
+    let large = 0.5 * (uu + vv) + (0.25 * (uu - vv).powi(2) + uv * uv).sqrt();
+    let q = u.len();
+    let minors = (0..q).flat_map(|a| (a + 1..q).map(move |b| (a, b)));
+    let det: f64 = minors.map(|(a, b)| (u[a] * v[b] - u[b] * v[a]).powi(2)).sum();
+    match (at_zero, large > 0.0) {
+        (true, _) => large,
+        (false, true) => det / large,
+        (false, false) => 0.0,
+    }
 }
 
 /// The eigenvalues of Ω̄ = S A S (S = diag(√Ω̄_jj)), ascending, with the eigenvectors of its r
@@ -431,6 +444,18 @@ mod tests {
             let res = &omega * v - v * *l;
             assert!(res[0].abs() <= 1e-14 * 5e16 * v.amax() && res[1].abs() <= 1e-13 * 5e3, "{res}");
         }
+    }
+
+    #[test]
+    fn a_tones_excitation_keeps_its_size_across_units() {
+        // u = (1e8, 3e-5), v = (2e8, 1e-5): the one minor 1e8·1e-5 − 2e8·3e-5 = −5e3, so det = 2.5e7,
+        // and λ_large = 5e16 + 1e-9 (the trace; λ_small is 1e-26 of it), λ_small = 5e-10. mean − half
+        // gave rounding of 5e16 there, about ±8.
+        let (u, v) = (DVector::from_vec(vec![1e8, 3e-5]), DVector::from_vec(vec![2e8, 1e-5]));
+        let small = tone_excitation(&u, &v, false);
+        assert!((small - 2.5e7 / 5e16).abs() <= 1e-14 * 5e-10, "{small:e}");
+        assert!((tone_excitation(&u, &v, true) - 5e16).abs() <= 1e-15 * 5e16);
+        assert_eq!(tone_excitation(&DVector::zeros(2), &DVector::zeros(2), false), 0.0);
     }
 
     #[test]

@@ -42,8 +42,8 @@ pub(crate) struct Gate {
 pub(crate) static RUNS: LazyLock<Gate> =
     LazyLock::new(|| Gate::new(half_the_machine().unwrap_or(0).max(MIN_RUNS_MEMORY_BYTES)));
 
-/// Bytes reserved from a [`Gate`], given back when dropped.
-pub(crate) struct Held<'a> {
+/// Bytes reserved from the runs' budget ([`super::Run::reserve_memory`]), given back when dropped.
+pub struct Held<'a> {
     gate: &'a Gate,
     bytes: usize,
 }

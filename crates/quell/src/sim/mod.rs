@@ -31,7 +31,7 @@ pub use closed_loop::{
 };
 pub use dde::{Method, Stats};
 pub use divergence::{Peaks, Watched, DIVERGENCE_BOUND};
-pub use memory::{runs_memory_bytes, MIN_RUNS_MEMORY_BYTES};
+pub use memory::{runs_memory_bytes, Held, MIN_RUNS_MEMORY_BYTES};
 pub use noise::{band_limited, NOISE_SINES};
 pub use result::{ChannelFigures, ChannelSummary, Outcome, RunStats, Sample, SimResult};
 pub use sampled::{coarse_sample_warning, output_step_fixes, SampledController, COARSE_SAMPLE};
@@ -312,6 +312,14 @@ impl<'a> Run<'a> {
             Loop::Sampled { sample_time } => sampled::delay_line_bound(self, *sample_time),
         };
         (record + rest as f64).min(usize::MAX as f64) as usize
+    }
+
+    /// Reserves [`Run::memory_bound`] from the budget that runs under way share
+    /// ([`runs_memory_bytes`]), waiting while other runs hold it, until the [`Held`] is dropped;
+    /// `None` when `stop` returns true while waiting. Study runs hold it, and so does Python's
+    /// `quell.simulate`, which threads may call at once.
+    pub fn reserve_memory(&self, stop: &dyn Fn() -> bool) -> Option<Held<'static>> {
+        memory::RUNS.hold(self.memory_bound(), stop)
     }
 
     /// The bytes of one recorded row and what it holds ([`SimResult::row_len`]).

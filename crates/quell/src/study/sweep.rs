@@ -131,8 +131,8 @@ pub struct Row {
 /// loop) and the runaway rules' step budget when that was the run's budget.
 pub(crate) struct Simulated {
     pub result: SimResult,
-    /// The run's memory bound, reserved from [`sim::memory::RUNS`] until its row is made.
-    pub memory: Option<sim::memory::Held<'static>>,
+    /// The run's memory bound, reserved ([`sim::Run::reserve_memory`]) until its row is made.
+    pub memory: Option<sim::Held<'static>>,
     /// How long the run waited for that memory (not part of its `wall_ms`).
     pub waited: std::time::Duration,
     pub breakpoints: usize,
@@ -175,7 +175,7 @@ pub(crate) fn simulate(
     let run = run.settings(settings);
     // A stop while waiting for memory lets the run start and end at its first progress check.
     let waiting = Instant::now();
-    let memory = sim::memory::RUNS.hold(run.memory_bound(), stop);
+    let memory = run.reserve_memory(stop);
     let waited = waiting.elapsed();
     let result = run.simulate(progress).map_err(|e| e.to_string())?;
     Ok(Simulated { result, memory, waited, breakpoints, delay_floor, runaway_steps })
