@@ -138,6 +138,24 @@ def test_communication_step_must_be_whole_samples(tmp_path, capsys, version):
     assert why in logged, logged
 
 
+@pytest.mark.parametrize("unit, symbol, factor", [("ms", "ms", 1e-3), ("s", "s", 1.0), ("h", "h", 3600.0), ("µs", "us", 1e-6)])
+def test_fmi3_time_is_declared_in_the_plants_unit(tmp_path, unit, symbol, factor):
+    """FMI 3.0's independent variable carries the plant model's unit of time, defined as a multiple
+    of the SI second (FMPy validates the unit definitions and reads them back)."""
+    text = (EXAMPLES / "three-channel.toml").read_text().replace("[plant]\n", f'[plant]\ntime_unit = "{unit}"\n', 1)
+    path = tmp_path / "three-channel.toml"
+    path.write_text(text)
+    assert quell.Scenario.load(path).plant.time_unit == unit
+    quell.export(quell.Scenario.load(path), 0.05, out=tmp_path, fmu=True, fmi_version=3, compiler="none")
+    fmu = str(tmp_path / "quell.fmu")
+    assert validate_fmu(fmu) == []
+    md = read_model_description(fmu)
+    (time,) = [v for v in md.modelVariables if v.causality == "independent"]
+    assert time.name == "time" and time.declaredType is None and time.unit == symbol
+    (declared,) = md.unitDefinitions
+    assert declared.name == symbol and declared.baseUnit.s == 1 and declared.baseUnit.factor == factor
+
+
 @pytest.mark.parametrize("version", [2, 3])
 def test_source_only_fmu(tmp_path, version):
     scenario = quell.Scenario.load(EXAMPLES / "three-channel.toml")

@@ -148,6 +148,18 @@ impl TimeUnit {
         (TimeUnit::Days, "d", "days"),
     ];
 
+    /// One unit in seconds: 1e-6 … 86400.
+    pub fn seconds(self) -> f64 {
+        match self {
+            TimeUnit::Microseconds => 1e-6,
+            TimeUnit::Milliseconds => 1e-3,
+            TimeUnit::Seconds => 1.0,
+            TimeUnit::Minutes => 60.0,
+            TimeUnit::Hours => 3600.0,
+            TimeUnit::Days => 86400.0,
+        }
+    }
+
     /// The symbol: `"µs"`, `"ms"`, `"s"`, `"min"`, `"h"`, `"d"`.
     pub fn symbol(self) -> &'static str {
         Self::ALL.iter().find(|(u, ..)| *u == self).map_or("s", |(_, s, _)| s)

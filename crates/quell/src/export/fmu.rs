@@ -22,6 +22,7 @@ use std::process::Command;
 use super::c::fill;
 use super::{generate, CCode, ExportError, ExportOptions};
 use crate::design::Design;
+use crate::settings::TimeUnit;
 
 /// The FMI 2.0.1 headers (2-clause BSD, Modelica Association), as packaged in FMPy 0.3.32's
 /// `fmpy/c-code/`; shipped in every FMI 2.0 FMU's `sources/` so the sources compile on their own.
@@ -161,7 +162,7 @@ pub fn generate_fmu(
     let unit = super::time_unit_text(design);
     let model_description = match version {
         FmiVersion::V2 => model_description_2(options, m, (sample_time, &unit), &guid, &units),
-        FmiVersion::V3 => model_description_3(options, m, (sample_time, &unit), &guid),
+        FmiVersion::V3 => model_description_3(options, m, (sample_time, &unit), &guid, design.plant().time_unit),
     };
     let header_files = headers.iter().map(|(n, t)| (n.to_string(), t.to_string()));
 
@@ -274,19 +275,24 @@ fn model_description_2(o: &ExportOptions, m: usize, sample: (f64, &str), guid: &
 }
 
 /// FMI 3.0 `modelDescription.xml`: the variables of [`variables`] as `Float64`, and the
-/// independent variable `time` at value reference 4m.
-fn model_description_3(o: &ExportOptions, m: usize, sample: (f64, &str), token: &str) -> String {
+/// independent variable `time` at value reference 4m, in the plant model's unit of time (declared
+/// among the unit definitions as a multiple of the SI second, so an importer can convert).
+fn model_description_3(o: &ExportOptions, m: usize, sample: (f64, &str), token: &str, time: TimeUnit) -> String {
     let (mut x, sample_time) = (opening(o, FmiVersion::V3, sample, token), sample.0);
     let _ = writeln!(
         x,
         r#"  <CoSimulation modelIdentifier="{}" canHandleVariableCommunicationStepSize="true" canBeInstantiatedOnlyOncePerProcess="false" hasEventMode="false"/>"#,
         o.prefix
     );
+    // ASCII, as the generated C's messages ("us" for µs).
+    let unit = time.symbol().replace('µ', "u");
+    let factor = if time.seconds() == 1.0 { String::new() } else { format!(r#" factor="{:?}""#, time.seconds()) };
+    let _ = writeln!(x, r#"  <UnitDefinitions><Unit name="{unit}"><BaseUnit s="1"{factor}/></Unit></UnitDefinitions>"#);
     let _ = writeln!(x, r#"  <DefaultExperiment startTime="0" stepSize="{sample_time:?}"/>"#);
     let _ = writeln!(x, "  <ModelVariables>");
     let _ = writeln!(
         x,
-        r#"    <Float64 name="time" valueReference="{}" causality="independent" variability="continuous" description="time"/>"#,
+        r#"    <Float64 name="time" valueReference="{}" causality="independent" variability="continuous" description="time" unit="{unit}"/>"#,
         4 * m
     );
     for (vr, name, causality, variability, what) in variables(m) {
