@@ -236,7 +236,9 @@ fn report_diagnostics(d: &ChannelDiagnostics, time: TimeUnit, text: &mut String)
     } else {
         "∞ (Ω̄ singular)".into()
     };
-    let excited = if d.convergence_time_excited != d.convergence_time && d.convergence_time_excited.is_finite() {
+    let excited = if d.excited_rank == 0 {
+        "; no direction is excited (g and ω are zero): nothing to adapt to".to_string()
+    } else if d.convergence_time_excited != d.convergence_time && d.convergence_time_excited.is_finite() {
         format!(
             "; the {} excited directions (the error depends on these alone) converge in 1/(μλ_min,excited) = {:.3e} {time}",
             d.excited_rank, d.convergence_time_excited

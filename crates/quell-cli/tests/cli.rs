@@ -208,6 +208,46 @@ fn design_reports_the_adaptation_pace() {
     }
 }
 
+/// The adaptation report's causes: signals that excite nothing (no flag, no "raise μ", and once
+/// an empty factor of Ω̄ panicked), a horizon too short for μ (raise μ: the fix is the figure
+/// given), and a spread of Ω̄'s eigenvalues no μ can span without stiffness (the SI vessel: λ_max/λ_min
+/// ≈ 1e19; it used to be told to raise μ).
+#[test]
+fn design_advice_names_the_cause_of_slow_adaptation() {
+    let dir = temp_dir("slow");
+    let text = fs::read_to_string(paper()).unwrap();
+    let (start, end) = (text.find("[reference]").unwrap(), text.find("[simulation]").unwrap());
+    let zero = format!(
+        "{}[reference]\ncomponents = [{{ bias = 0.0 }}, {{ bias = 0.0 }}]\n[disturbance]\ncomponents = [{{ bias = 0.0 }}, {{ bias = 0.0 }}]\n{}",
+        &text[..start],
+        &text[end..]
+    );
+    let short = text.replace("t_end = 100.0", "t_end = 0.1");
+    let vessel = Path::new(env!("CARGO_MANIFEST_DIR")).join("../quell/tests/data/vessel-si.toml");
+    let (zero_path, short_path) = (dir.path().join("zero.toml"), dir.path().join("short.toml"));
+    fs::write(&zero_path, zero).unwrap();
+    fs::write(&short_path, short).unwrap();
+    let report = |path: &Path| {
+        let o = quell(&["design", path.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        stdout(&o)
+    };
+    let zero = report(&zero_path);
+    assert!(zero.contains("there is nothing to adapt to") && !zero.contains("weakly excited"), "{zero}");
+    assert!(!zero.contains("raise design.mu") && !zero.contains("inf"), "{zero}");
+    let run =
+        quell(&["run", zero_path.to_str().unwrap(), "--no-plots", "--out", dir.path().join("run").to_str().unwrap()]);
+    assert_eq!(run.status.code(), Some(0), "{}", stderr(&run));
+    assert!(stdout(&run).contains("no direction is excited") && !stdout(&run).contains("0 excited directions"));
+    // μ λ_min t_end = 1 at μ = 1/(5.407e-3 · 0.1) = 1849.5 → 1900, μ λ_max = 316 < 100 ρ = 900.
+    let short = report(&short_path);
+    assert!(short.contains("raise design.mu[0] to about 1900 (μ λ_min t_end = 1)"), "{short}");
+    assert!(!short.contains("put the filter poles"), "{short}");
+    let vessel = report(&vessel);
+    assert!(vessel.contains("no μ helps") && !vessel.contains("raise design.mu"), "{vessel}");
+    assert!(vessel.contains("regressor_scaling = \"normalized\""), "{vessel}");
+}
+
 #[test]
 fn design_missing_file_exits_2() {
     let err = input_error(&["design", "no/such/scenario.toml"]);

@@ -188,6 +188,21 @@ def test_plant_defaults():
     np.testing.assert_array_equal(p.Q, np.zeros((2, 2)))  # Q defaults to 0
 
 
+def test_a_reference_too_fast_for_a_line_is_drawn_under_y_as_the_cli_draws_it():
+    """Over 5 s the paper's 2 rad/s reference is a line, dashed over y; over 2000 s (636 periods on
+    the panel) its path runs hundreds of panel widths, and it is drawn first, solid and faint, so
+    that y shows over it (the CLI's figure, docs/running.md)."""
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    for t_end, band in [(5.0, False), (2000.0, True)]:
+        r = quell.simulate(quell.paper_example(), t_end=t_end)
+        fig = r.plot(channel=1)
+        lines = {line.get_label(): (k, line) for k, line in enumerate(fig.axes[0].get_lines())}
+        (g_at, g), (y_at, _) = lines["g1 (reference)"], lines["y1"]
+        assert (g_at < y_at, g.get_linestyle(), g.get_alpha()) == ((True, "-", 0.35) if band else (False, "--", None))
+        matplotlib.pyplot.close(fig)
+
+
 def test_to_pandas_and_plot():
     pytest.importorskip("pandas")
     matplotlib = pytest.importorskip("matplotlib")

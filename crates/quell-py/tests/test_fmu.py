@@ -198,6 +198,32 @@ def test_bad_arguments(tmp_path):
         quell.export(scenario, 0.05, out=tmp_path, fmu=True, compiler="/nonexistent/cc")
 
 
+@pytest.mark.parametrize("T", [0.05, 0.1, 0.2])
+def test_fmi3_time_is_the_decimal_sample_time(tmp_path, T):
+    """fmi3GetFloat64 of `time` after k samples is the double nearest the decimal k·T_s, as the
+    library's sample times (k * 0.1 gave 0.30000000000000004, 0.6000000000000001, …)."""
+    from decimal import Decimal
+
+    from fmpy import extract
+    from fmpy.fmi3 import FMU3Slave
+
+    scenario = quell.Scenario.load(EXAMPLES / "paper.toml")
+    quell.export(scenario, T, out=tmp_path, fmu=True, fmi_version=3, prefix="ctrl")
+    md = read_model_description(str(tmp_path / "ctrl.fmu"))
+    fmu = FMU3Slave(guid=md.guid, unzipDirectory=extract(str(tmp_path / "ctrl.fmu")), modelIdentifier="ctrl", instanceName="t")
+    fmu.instantiate()
+    fmu.enterInitializationMode(startTime=0.0)
+    fmu.exitInitializationMode()
+    decimal = lambda k: float(Decimal(repr(T)) * k)  # noqa: E731  (Python's float() rounds correctly)
+    times = []
+    for k in range(300):
+        fmu.doStep(decimal(k), T)
+        times.append(fmu.getFloat64([8])[0])
+    fmu.terminate()
+    fmu.freeInstance()
+    assert times == [decimal(k + 1) for k in range(300)]
+
+
 def test_fmi3_calls_one_by_one(tmp_path):
     """FMPy's FMI 3.0 master driven call by call (its FMU3Slave), for what a whole simulation does
     not reach: the independent variable `time` is the time of the next sample; setting it, an

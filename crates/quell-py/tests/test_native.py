@@ -52,7 +52,8 @@ def test_plot_takes_axes_and_figsize():
     assert tuple(fig.get_size_inches()) == (4.0, 5.0) and len(fig.axes) == 5
     own, one = plt.subplots()
     assert r.plot(channel=1, ax=one) is own
-    np.testing.assert_array_equal(one.lines[1].get_ydata(), r.y[:, 0])  # y1 drawn on the given axes
+    (y1,) = [line for line in one.lines if line.get_label() == "y1"]
+    np.testing.assert_array_equal(y1.get_ydata(), r.y[:, 0])  # y1 drawn on the given axes
     own4, four = plt.subplots(2, 2)
     assert r.plot(ax=four) is own4 and four[1, 1].get_title().startswith("Channel 1: adjustable")
     # On four axes u_f shares the third on a second y axis (its own scale), drawn from r.u_f.

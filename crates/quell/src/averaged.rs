@@ -13,7 +13,7 @@
 //! * the averaged law η̃' = −μ_i Ω̄_i η̃ with η̃(0) = η*_i (η̂(0) = 0) and e_i ≈ Δ_i η̃ give the RMS
 //!   tracking error at time t: √(η̃(t)ᵀ Ω̄_i η̃(t) + r_i²), r_i the part of δ_i no η explains.
 
-use nalgebra::{Complex, DMatrix, DVector, SymmetricEigen};
+use nalgebra::{Complex, DMatrix, DVector};
 
 use crate::design::Design;
 use crate::signal::Signal;
@@ -266,6 +266,8 @@ fn channel(design: &Design, i: usize, tones: &[(f64, DVector<C64>, DVector<C64>)
     let G = &design.channels()[i];
     let (mut omega, mut y) = (DMatrix::zeros(q, q), DVector::zeros(q));
     let (mut open_loop, mut excitation) = (0.0, Vec::new());
+    // Ω̄ = F Fᵀ, F's columns √c·u and √c·v of each tone (a bias's v is 0 and left out).
+    let mut factor: Vec<DVector<f64>> = Vec::new();
     for (w, xi, delta) in tones {
         let a = xi * (G.eval(C64::new(0.0, *w)) * C64::from_polar(1.0, -w * tau));
         let (u, v) = (a.map(|z| z.re), a.map(|z| z.im));
@@ -275,8 +277,9 @@ fn channel(design: &Design, i: usize, tones: &[(f64, DVector<C64>, DVector<C64>)
         y += (&u * delta[i].re + &v * delta[i].im) * c;
         open_loop += c * delta[i].norm_sqr();
         excitation.push(Excitation { frequency: *w, excitation: c * tone_excitation(&u, &v, *w == 0.0) });
+        factor.extend([&u, &v].into_iter().filter(|x| x.iter().any(|&e| e != 0.0)).map(|x| x * c.sqrt()));
     }
-    let (lambda, vectors) = spectrum(&omega);
+    let (lambda, vectors) = spectrum(&DMatrix::from_fn(q, factor.len(), |r, k| factor[k][r]));
     let mut avg =
         ChannelAverage { omega, lambda, vectors, y, open_loop_rms: open_loop.sqrt(), residual_rms: 0.0, excitation };
     let explained: f64 = avg.modes().map(|(_, e)| e).sum();
@@ -301,48 +304,65 @@ fn tone_excitation(u: &DVector<f64>, v: &DVector<f64>, at_zero: bool) -> f64 {
     }
 }
 
-/// The eigenvalues of Ω̄ = S A S (S = diag(√Ω̄_jj)), ascending, with the eigenvectors of its r
-/// excited ones (q × r), both independent of the units of ξ̂'s entries, which scale S alone:
+/// The eigenvalues of Ω̄ = F Fᵀ, ascending, with the eigenvectors of its r excited ones (q × r),
+/// from the factor F (q × c: a column for each tone's real and imaginary part). The units of ξ̂'s
+/// entries scale F's rows, and the signals' amplitudes its columns (one tone's, when one component
+/// has energy there), so both are taken out:
 ///
-/// * r is the rank of the unit-free A: its eigenvalues above 1e-13·λ_max(A) (A's rounding);
-/// * the excited eigenpairs are those of B Bᵀ, B = S U_r Λ_r^½ from A's r leading eigenpairs:
-///   B's rows sorted by norm, B = Q R (Householder), then R Rᵀ by one-sided Jacobi on Rᵀ, which
-///   keeps small eigenvalues to their relative accuracy where Ω̄'s entries span many orders
-///   (Demmel & Veselić, "Jacobi's method is more accurate than QR", SIAM J. Matrix Anal. Appl. 13,
-///   1992). A symmetric QR eigensolver on Ω̄ itself loses every eigenvalue below ε·λ_max: forces in
-///   newtons beside positions in metres put half the excited directions there.
-fn spectrum(omega: &DMatrix<f64>) -> (Vec<f64>, DMatrix<f64>) {
-    let q = omega.nrows();
-    let s: Vec<f64> = (0..q).map(|j| omega[(j, j)].max(0.0).sqrt()).collect();
-    let inv = |j: usize| if s[j] > 0.0 { 1.0 / s[j] } else { 0.0 };
-    let scaled = DMatrix::from_fn(q, q, |a, b| omega[(a, b)] * inv(a) * inv(b));
-    let eig = SymmetricEigen::new(scaled);
-    let top = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
-    let excited: Vec<usize> = (0..q).filter(|&k| eig.eigenvalues[k] > 1e-13 * top).collect();
-    let r = excited.len();
+/// * r is the rank of G = D_r⁻¹ F D_c⁻¹ (D_r F's row norms, D_c the column norms of D_r⁻¹F): its
+///   singular values above 10^(−6.5) of the largest (eigenvalues of G Gᵀ above 1e-13 of the
+///   largest: the phasors' rounding);
+/// * the eigenpairs are those of R Rᵀ, F's rows sorted by norm and F = Q R (Householder), by
+///   one-sided Jacobi on Rᵀ, the r largest: this keeps small eigenvalues to their relative accuracy
+///   where F's rows or columns span many orders (Demmel & Veselić, "Jacobi's method is more
+///   accurate than QR", SIAM J. Matrix Anal. Appl. 13, 1992). A symmetric QR eigensolver on Ω̄
+///   itself loses every eigenvalue below ε·λ_max: forces in newtons beside positions in metres put
+///   half the excited directions there.
+fn spectrum(F: &DMatrix<f64>) -> (Vec<f64>, DMatrix<f64>) {
+    let q = F.nrows();
     let mut lambda = vec![0.0; q];
+    let r = unit_free_rank(F);
     if r == 0 {
         return (lambda, DMatrix::zeros(q, 0));
     }
-    let mut rows: Vec<usize> = (0..q).collect();
-    let B =
-        DMatrix::from_fn(q, r, |a, c| s[a] * eig.eigenvectors[(a, excited[c])] * eig.eigenvalues[excited[c]].sqrt());
-    rows.sort_by(|&a, &b| B.row(b).norm().total_cmp(&B.row(a).norm()));
-    let qr = B.select_rows(&rows).qr();
-    let mut G = qr.r().transpose();
-    let mut V = DMatrix::identity(r, r);
-    one_sided_jacobi(&mut G, &mut V);
-    let mut order: Vec<(f64, usize)> = (0..r).map(|c| (G.column(c).norm_squared(), c)).collect();
+    let (R, Q, rows) = sorted_qr(F);
+    let mut J = R.transpose();
+    let mut V = DMatrix::identity(J.ncols(), J.ncols());
+    one_sided_jacobi(&mut J, &mut V);
+    let mut order: Vec<(f64, usize)> = (0..J.ncols()).map(|c| (J.column(c).norm_squared(), c)).collect();
     order.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let QV = qr.q() * V;
+    let QV = Q * V;
     let mut vectors = DMatrix::zeros(q, r);
-    for (k, &(l, c)) in order.iter().enumerate() {
+    for (k, &(l, c)) in order[order.len() - r..].iter().enumerate() {
         lambda[q - r + k] = l;
         for (at, &row) in rows.iter().enumerate() {
             vectors[(row, k)] = QV[(at, c)];
         }
     }
     (lambda, vectors)
+}
+
+/// The rank of F with its rows, then its columns, scaled to unit norm ([`spectrum`]).
+fn unit_free_rank(F: &DMatrix<f64>) -> usize {
+    if F.is_empty() {
+        return 0;
+    }
+    let inverse = |x: f64| if x > 0.0 { 1.0 / x } else { 0.0 };
+    let mut G = F.clone();
+    G.row_iter_mut().for_each(|mut r| r *= inverse(r.norm()));
+    G.column_iter_mut().for_each(|mut c| c *= inverse(c.norm()));
+    let sigma = G.singular_values();
+    let top = sigma.iter().copied().fold(0.0, f64::max);
+    sigma.iter().filter(|&&s| s > 10f64.powf(-6.5) * top).count()
+}
+
+/// Householder QR of M with its rows sorted by norm, largest first (row-wise stable for graded
+/// rows, Powell & Reid): R, the thin Q of the sorted rows, and the sort.
+fn sorted_qr(M: &DMatrix<f64>) -> (DMatrix<f64>, DMatrix<f64>, Vec<usize>) {
+    let mut rows: Vec<usize> = (0..M.nrows()).collect();
+    rows.sort_by(|&a, &b| M.row(b).norm().total_cmp(&M.row(a).norm()));
+    let qr = M.select_rows(&rows).qr();
+    (qr.r(), qr.q(), rows)
 }
 
 /// Hestenes' one-sided Jacobi: plane rotations from the right until G's columns are orthogonal to
@@ -419,10 +439,11 @@ mod tests {
         let d = Averaged::new(&siso(0.7).design().unwrap(), &s.reference, &s.disturbance);
         assert!((&d.channels[0].omega - &c.omega).norm() <= 1e-15);
     }
-    /// Ω̄ = F Fᵀ with the rows of F scaled by `s`.
-    fn gram(F: &[[f64; 3]], s: &[f64]) -> DMatrix<f64> {
+    /// F with its rows scaled by `s`, and Ω̄ = F Fᵀ.
+    fn gram(F: &[[f64; 3]], s: &[f64]) -> (DMatrix<f64>, DMatrix<f64>) {
         let F = DMatrix::from_fn(F.len(), 3, |r, c| s[r] * F[r][c]);
-        &F * F.transpose()
+        let omega = &F * F.transpose();
+        (F, omega)
     }
 
     #[test]
@@ -432,8 +453,8 @@ mod tests {
         // = 3.0e-9 (λ_large = tr − λ_small, exact in f64 beside 5e16). A QR eigensolver on Ω̄ has an
         // absolute error near ε·5e16 ≈ 10 there and took it for unexcited. Jacobi on the graded
         // factor: a few ε relative (Demmel & Veselić); 1e-13 allows for Ω̄'s rounding of 5e3.
-        let omega = gram(&[[1.0, 2.0, 0.0], [3.0, 1.0, 5.0]], &[1e8, 1e-5]);
-        let (lambda, vectors) = spectrum(&omega);
+        let (F, omega) = gram(&[[1.0, 2.0, 0.0], [3.0, 1.0, 5.0]], &[1e8, 1e-5]);
+        let (lambda, vectors) = spectrum(&F);
         let large = 5e16 + 3.5e-9;
         let small = 1.5e8 / large;
         assert_eq!(vectors.ncols(), 2);
@@ -447,6 +468,24 @@ mod tests {
     }
 
     #[test]
+    fn the_excited_rank_does_not_depend_on_a_tones_amplitude() {
+        // Two tones with orthogonal columns c1 = (1, 1, 0) and c2 = a·(1, −1, 1): λ = 2 and 3a², rank
+        // 2 for any amplitude a > 0 (a threshold of 1e-13·λ_max on Ω̄ dropped c2 below a ≈ 2.6e-7).
+        // a = 1e-160 leaves Ω̄'s entries below the smallest normal double; F keeps them.
+        for a in [1.0, 1e-3, 1e-7, 1e-30, 1e-100, 1e-160] {
+            let F = DMatrix::from_column_slice(3, 2, &[1.0, 1.0, 0.0, a, -a, a]);
+            let (lambda, vectors) = spectrum(&F);
+            let mut expected = [2.0, 3.0 * a * a];
+            expected.sort_by(f64::total_cmp);
+            assert_eq!((vectors.ncols(), lambda[0]), (2, 0.0), "a = {a:e}: {lambda:?}");
+            // Relative accuracy while 3a² is a normal double (to 1e-200); 3e-320 is subnormal.
+            for (got, want) in lambda[1..].iter().zip(expected).filter(|(_, want)| *want > 1e-300) {
+                assert!((got - want).abs() <= 1e-14 * want, "a = {a:e}: {lambda:?}");
+            }
+        }
+    }
+
+    #[test]
     fn a_tones_excitation_keeps_its_size_across_units() {
         // u = (1e8, 3e-5), v = (2e8, 1e-5): the one minor 1e8·1e-5 − 2e8·3e-5 = −5e3, so det = 2.5e7,
         // and λ_large = 5e16 + 1e-9 (the trace; λ_small is 1e-26 of it), λ_small = 5e-10. mean − half
@@ -456,6 +495,9 @@ mod tests {
         assert!((small - 2.5e7 / 5e16).abs() <= 1e-14 * 5e-10, "{small:e}");
         assert!((tone_excitation(&u, &v, true) - 5e16).abs() <= 1e-15 * 5e16);
         assert_eq!(tone_excitation(&DVector::zeros(2), &DVector::zeros(2), false), 0.0);
+        // Signals that are all zero leave F without a column.
+        let (lambda, vectors) = spectrum(&DMatrix::zeros(3, 0));
+        assert_eq!((lambda, vectors.shape()), (vec![0.0; 3], (3, 0)));
     }
 
     #[test]
@@ -465,8 +507,8 @@ mod tests {
         // without cancellation: det = s1²s2² + s1²s3² + s2²s3², λ_large = (a + c)/2 + √(((s1² − s2²)/2)²
         // + s3⁴), λ_small = det/λ_large.
         for s in [[1.0, 1.0, 1.0], [1e9, 1.0, 1e-6], [1e-6, 1e3, 1e9], [1.0, 1e-12, 1.0]] {
-            let omega = gram(&[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]], &s);
-            let (lambda, vectors) = spectrum(&omega);
+            let (F, _) = gram(&[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]], &s);
+            let (lambda, vectors) = spectrum(&F);
             let [s1, s2, s3] = s.map(|x| x * x);
             let large = 0.5 * (s1 + s2) + s3 + ((0.5 * (s1 - s2)).powi(2) + s3 * s3).sqrt();
             let small = (s1 * s2 + s1 * s3 + s2 * s3) / large;

@@ -399,3 +399,22 @@ fn the_excited_rank_is_the_same_in_newtons_and_kilonewtons() {
         assert!((ratio / 1e6 - 1.0).abs() <= 2e-2, "{ratio:e}");
     }
 }
+
+/// Nor on the size of one component: the paper's example has a bias and the tones 1 and 2 rad/s,
+/// 5 excited directions of 8, whatever one disturbance component's amplitude (a count on Ω̄
+/// scaled to a unit diagonal gave 4 at ω_1 × 1e-6: the disturbance observer mixes components in
+/// one entry, and the 1 rad/s pair straddled the cut at 2.8e-13 and 7.3e-14).
+#[test]
+fn the_excited_rank_does_not_depend_on_one_components_amplitude() {
+    let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+    let d = s.design().unwrap();
+    for (component, factor) in [(0, 1e-6), (0, 1e6), (1, 1e-6), (1, 1e6), (0, 1e-160)] {
+        let mut w = s.disturbance.clone();
+        let c = &mut w.components[component];
+        c.bias *= factor;
+        c.harmonics.iter_mut().for_each(|h| h.amplitude *= factor);
+        for c in Averaged::new(&d, &s.reference, &w).channels {
+            assert_eq!(c.excited().count(), 5, "ω_{component} × {factor:e}: {:?}", c.lambda);
+        }
+    }
+}

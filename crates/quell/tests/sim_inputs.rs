@@ -315,3 +315,27 @@ fn a_history_at_its_cap_is_not_told_to_raise_the_step_budget() {
         Outcome::HistoryTooLarge { t: 39.4, max_bytes: 90 << 20 }.explain("max_steps", quell::TimeUnit::default());
     assert!(below.expect("not completed").contains("it scales with max_steps, raise that if the run is sound"));
 }
+
+/// Rows are at the decimal k·output_step (3 × 0.1 reads 0.3, the product 0.30000000000000004), and
+/// both loops end on the same last row, t_end itself, when t_end lies within the whole-number
+/// tolerance below a multiple (99.99999999 at 0.1: the sampled loop ended at 100.0, past t_end).
+#[test]
+fn both_loops_record_the_same_decimal_times_and_end_at_t_end() {
+    let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+    let d = s.design().unwrap();
+    for t_end in [2.0, 1.99999999999] {
+        let runs = [RunSettings::continuous(t_end, 0.1, 1e-6, 1e-6), RunSettings::sampled(t_end, 0.1, 0.001)];
+        let times: Vec<Vec<f64>> = runs
+            .into_iter()
+            .map(|st| Run::of(&s, &d).settings(st).simulate(|_| ControlFlow::Continue(())).unwrap().t)
+            .collect();
+        assert_eq!(times[0], times[1], "t_end = {t_end}");
+        let t = &times[0];
+        assert_eq!(t.len(), 21);
+        for (k, &tk) in t[..20].iter().enumerate() {
+            // Rust's parser rounds the decimal string correctly: an independent k·0.1.
+            assert_eq!(tk, format!("{}.{}", k / 10, k % 10).parse::<f64>().unwrap(), "row {k}");
+        }
+        assert_eq!(t[20], t_end);
+    }
+}

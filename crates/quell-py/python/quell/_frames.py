@@ -34,6 +34,24 @@ def to_pandas(result):
     return pd.DataFrame(data, columns=columns(m, q, result.n if states else 0))
 
 
+# A reference whose path runs more than this many times its panel's width is drawn as a band.
+BAND = 6.0
+
+
+def _path_widths(ax, t, v, shown):
+    """The length of the path (t, v) in widths of ``ax``, its value axis spanning ``shown``'s range."""
+    import numpy as np
+
+    finite = np.isfinite(t) & np.isfinite(v)
+    t, v, shown = t[finite], v[finite], shown[np.isfinite(shown)]
+    if t.size < 2:
+        return 0.0
+    w, h = ax.bbox.width, ax.bbox.height
+    dt = np.diff(t) * (w / (np.ptp(t) or 1.0))
+    dv = np.diff(v) * (h / (np.ptp(shown) or 1.0))
+    return float(np.hypot(dt, dv).sum() / w)
+
+
 def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None), u_max=()):
     """Channel ``channel`` (1-based; None is 1) in the five panels of the CLI's figure, like the paper's
     Figs. 1 and 2: y_i with g_i, e_i = y_i - g_i, the command u_i (25), the plant input u_f,i (5) and
@@ -93,8 +111,15 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
     else:
         fig = fig if fig is not None else plt.figure(figsize=figsize if figsize is not None else (10, 14))
         axes = fig.subplots(5, 1, sharex=True)
-    axes[0].plot(t, result.g[:, i], "--", label=f"g{c} (reference)")
-    axes[0].plot(t, result.y[:, i], label=f"y{c}")
+    # As the CLI's figure: the reference dashed over y, or, when it runs more than BAND times the
+    # panel's width (a band, not a line: dashes over it hid the y tracking it), first and faint.
+    g, y = result.g[:, i], result.y[:, i]
+    if _path_widths(axes[0], t, g, np.concatenate([g, y])) > BAND:
+        axes[0].plot(t, g, color="C0", alpha=0.35, linewidth=1, label=f"g{c} (reference)")
+        axes[0].plot(t, y, color="C1", label=f"y{c}")
+    else:
+        axes[0].plot(t, y, color="C1", label=f"y{c}")
+        axes[0].plot(t, g, "--", color="C0", label=f"g{c} (reference)")
     # A run that stopped early says so where its curves end.
     status = result.outcome.get("status", "completed")
     ended = "" if status == "completed" else f" (run {status} at t = {result.outcome['t']:.4g} {result.time_unit})"

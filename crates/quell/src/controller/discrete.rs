@@ -243,6 +243,12 @@ impl Grid {
         Grid { T, mantissa, scale }
     }
 
+    /// (M, 10^d) with T = M/10^d, or (0, 0) when T has no such form: for generated code that
+    /// computes the same t_k.
+    pub(crate) fn decimal(&self) -> (f64, f64) {
+        (self.mantissa, self.scale)
+    }
+
     /// t_k: k·M/10^d, one rounding of the exact decimal (k·M exact below 2⁵³), or k·T.
     pub(crate) fn at(&self, k: usize) -> f64 {
         let km = k as f64 * self.mantissa;

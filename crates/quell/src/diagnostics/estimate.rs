@@ -69,7 +69,8 @@ pub fn estimate(
             let rate = mu * lambda_max;
             let slowest = mu * lambda_min_excited;
             let stiff = rate > STIFF_RATIO * rho;
-            let weakly_excited = mu > 0.0 && slowest * t_end < 1.0;
+            let rank = c.excited().count();
+            let weakly_excited = rank > 0 && mu > 0.0 && slowest * t_end < 1.0;
             let key = format!("design.mu[{i}]");
             let mut advice = Vec::new();
             if stiff {
@@ -80,21 +81,23 @@ pub fn estimate(
                     STIFF_RATIO * rho / lambda_max,
                 ));
             }
-            if weakly_excited {
+            if rank == 0 {
                 advice.push(format!(
-                    "channel {}'s slowest excited direction converges in 1/(μ λ_min) = {:.3e} {unit}, beyond t_end = {} {unit}: λ_min(Ω̄) = {lambda_min_excited:.3e} against λ_max = {lambda_max:.3e}; the signals excite it weakly: raise {key}{}, lengthen simulation.t_end, or put the filter poles at the signals' frequencies",
+                    "channel {}: the signals excite no direction of the regressor (g and ω are zero): η̂_{} stays at 0, there is nothing to adapt to",
                     i + 1,
-                    1.0 / slowest,
-                    crate::settings::fmt_short(t_end),
-                    if stiff { " (not here: it is stiff already)" } else { "" },
+                    i + 1
                 ));
+            }
+            if weakly_excited {
+                let spread = (lambda_max / lambda_min_excited, scaling_hint);
+                advice.push(slow_advice(i, (mu, slowest), (lambda_max, lambda_min_excited), (t_end, rho), spread, unit));
             }
             RateEstimate {
                 channel: i + 1,
                 mu,
                 lambda_max_omega: lambda_max,
                 lambda_min_omega: c.lambda_min(),
-                excited_rank: c.excited().count(),
+                excited_rank: rank,
                 lambda_min_excited_omega: lambda_min_excited,
                 adaptation_rate: rate,
                 loop_rate: rho,
@@ -105,6 +108,45 @@ pub fn estimate(
             }
         })
         .collect()
+}
+
+/// Advice for channel i, whose slowest excited direction converges at μ λ_min (`slowest`) beyond
+/// t_end: raise μ to 1/(λ_min t_end) where that keeps μ λ_max within [`STIFF_RATIO`]·ρ; else the
+/// spread λ_max/λ_min is the cause, which no μ helps: the regressor's scaling or filter poles, or a
+/// longer run at the fastest μ that is not stiff.
+fn slow_advice(
+    i: usize,
+    (mu, slowest): (f64, f64),
+    (lambda_max, lambda_min): (f64, f64),
+    (t_end, rho): (f64, f64),
+    (spread, scaling_hint): (f64, &str),
+    unit: crate::TimeUnit,
+) -> String {
+    let key = format!("design.mu[{i}]");
+    let converges = if slowest > 0.0 {
+        format!("converges in 1/(μ λ_min) = {:.3e} {unit}", 1.0 / slowest)
+    } else {
+        format!("does not converge (μ λ_min = {mu:e} × {lambda_min:.3e} rounds to 0)")
+    };
+    let (wanted, fastest) = (1.0 / (lambda_min * t_end), STIFF_RATIO * rho / lambda_max);
+    let remedy = if wanted <= fastest {
+        format!(
+            "raise {key} to about {} (μ λ_min t_end = 1) or lengthen simulation.t_end",
+            crate::settings::fmt_short(crate::settings::round_up_2(wanted))
+        )
+    } else {
+        format!(
+            "no μ helps: {key} = {wanted:.3e} would make the loop stiff (μ λ_max = {:.1e}× ρ), as λ_max/λ_min = {spread:.1e}; put the filter poles at the signals' frequencies{}, or lengthen simulation.t_end to about {:.3e} {unit} with {key} at most {fastest:.3e}",
+            wanted * lambda_max / rho,
+            if scaling_hint.is_empty() { String::new() } else { format!(",{}", scaling_hint.trim_start_matches(" or")) },
+            1.0 / (fastest.max(mu) * lambda_min),
+        )
+    };
+    format!(
+        "channel {}'s slowest excited direction {converges}, beyond t_end = {} {unit} (λ_min(Ω̄) = {lambda_min:.3e} against λ_max = {lambda_max:.3e}): {remedy}",
+        i + 1,
+        crate::settings::fmt_short(t_end),
+    )
 }
 
 #[cfg(test)]

@@ -143,6 +143,8 @@ pub fn generate_fmu(
     let (headers, api, ship_headers) = version.wrapper_parts();
     // The messages' unit of time, in ASCII as the rest of the C ("us" for µs).
     let symbol = design.plant().time_unit.symbol().replace('µ', "u");
+    let (mantissa, scale) = crate::controller::discrete::Grid::new(sample_time).decimal();
+    let (mantissa, scale) = (format!("{mantissa:?}"), format!("{scale:?}"));
     let values = [
         ("guid", guid.as_str()),
         ("version", env!("CARGO_PKG_VERSION")),
@@ -151,6 +153,8 @@ pub fn generate_fmu(
         ("P", &p.to_ascii_uppercase()),
         ("R", options.precision.c_type()),
         ("unit", &symbol),
+        ("t_mantissa", &mantissa),
+        ("t_scale", &scale),
     ];
     let wrapper = fill(CORE, &values) + &fill(api, &values);
     let mut sources: Vec<(String, String)> = vec![

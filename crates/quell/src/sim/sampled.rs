@@ -448,7 +448,9 @@ fn sampled_loop<C: SampledController + ?Sized>(
     let mut taken = 0;
     let grid = discrete::Grid::new(T);
     for k in 0..=discrete::whole_samples(settings.t_end, T) {
-        let t = grid.at(k);
+        // The last sample at t_end when t_end is within the whole-number tolerance below k·T, as
+        // the continuous loop's last row (t_end = 99.99999999 at T = 0.1 ended at 100).
+        let t = grid.at(k).min(settings.t_end);
         plant.measure(t, run.reference);
         if settings.record_states && k % every == 0 {
             x_hat.copy_from_slice(ctrl.watched().x_hat);
