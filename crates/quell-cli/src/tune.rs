@@ -139,9 +139,9 @@ fn report(r: &TuneResult, spec: &quell::study::TuneSpec, unit: quell::TimeUnit) 
     for (c, (d, ok)) in r.channels.iter().zip(r.joint_difference.iter().zip(&r.reproduced)) {
         match &c.chosen {
             Some(p) => s.push_str(&format!(
-                "channel {}: mu = {:.6} ({} evaluations), objective {:.6e}; joint run {} (difference {}){}{}\n",
+                "channel {}: mu = {} ({} evaluations), objective {:.6e}; joint run {} (difference {}){}{}\n",
                 c.channel + 1,
-                p.mu,
+                mu_6(p.mu),
                 c.curve.len(),
                 p.objective.unwrap_or(f64::NAN),
                 match (r.partial, *ok) {
@@ -185,14 +185,31 @@ fn report(r: &TuneResult, spec: &quell::study::TuneSpec, unit: quell::TimeUnit) 
         (false, true) => ("tuned mu", String::new()),
         (false, false) => ("mu", note("unchanged; no feasible mu")),
     };
-    let mu = r.mu.iter().map(|m| format!("{m:.6}")).collect::<Vec<_>>().join(", ");
+    let mu = r.mu.iter().map(|&m| mu_6(m)).collect::<Vec<_>>().join(", ");
     s.push_str(&format!("{label} = [{mu}]{note}\n"));
     s
 }
 
+/// μ to six decimals, or six significant digits where that would hide it (1e-15 read 0.000000).
+fn mu_6(mu: f64) -> String {
+    if mu == 0.0 || (1e-3..1e6).contains(&mu.abs()) {
+        format!("{mu:.6}")
+    } else {
+        format!("{mu:.5e}")
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::report;
+    use super::{mu_6, report};
+
+    #[test]
+    fn a_small_mu_is_printed_in_significant_digits() {
+        assert_eq!(
+            [mu_6(3.16227766016838), mu_6(1e-15), mu_6(2.5e7), mu_6(0.0)],
+            ["3.162278", "1.00000e-15", "2.50000e7", "0.000000"]
+        );
+    }
     use quell::study::{Objective, Outcome, TuneCurve, TunePoint, TuneResult};
 
     #[test]

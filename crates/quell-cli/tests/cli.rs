@@ -208,30 +208,41 @@ fn design_reports_the_adaptation_pace() {
     }
 }
 
-/// The adaptation report's causes: signals that excite nothing (no flag, no "raise μ", and once
-/// an empty factor of Ω̄ panicked), a horizon too short for μ (raise μ: the fix is the figure
-/// given), and a spread of Ω̄'s eigenvalues no μ can span without stiffness (the SI vessel: λ_max/λ_min
-/// ≈ 1e19; it used to be told to raise μ).
+/// The adaptation report's advice, which the run's diagnostics share: signals that excite nothing
+/// (no flag, no "raise μ"; once a panic on an empty factor of Ω̄), a horizon too short for μ (raise
+/// μ: following it clears the flag), a direction that no horizon within 1000× t_end converges
+/// (the SI vessel: it was told to lengthen t_end to 2e17 s), and a direction that carries no error
+/// (the paper with one disturbance component 1e-6 of its size: no flag).
 #[test]
 fn design_advice_names_the_cause_of_slow_adaptation() {
     let dir = temp_dir("slow");
     let text = fs::read_to_string(paper()).unwrap();
     let (start, end) = (text.find("[reference]").unwrap(), text.find("[simulation]").unwrap());
-    let zero = format!(
-        "{}[reference]\ncomponents = [{{ bias = 0.0 }}, {{ bias = 0.0 }}]\n[disturbance]\ncomponents = [{{ bias = 0.0 }}, {{ bias = 0.0 }}]\n{}",
-        &text[..start],
-        &text[end..]
+    let signals = |reference: &str, disturbance: &str| {
+        format!(
+            "{}[reference]\ncomponents = {reference}\n[disturbance]\ncomponents = {disturbance}\n{}",
+            &text[..start],
+            &text[end..]
+        )
+    };
+    let zero = signals("[{ bias = 0.0 }, { bias = 0.0 }]", "[{ bias = 0.0 }, { bias = 0.0 }]");
+    let sine = "[{ harmonics = [{ amplitude = 3.0, frequency = 2.0 }] }, { bias = 2.0 }]";
+    let short = signals(sine, "[{ bias = 0.0 }, { bias = 0.0 }]").replace("t_end = 100.0", "t_end = 1.0");
+    let faint = text.replace(
+        "harmonics = [{ amplitude = 1.0, frequency = 1.0 }]",
+        "harmonics = [{ amplitude = 1.0e-6, frequency = 1.0 }]",
     );
-    let short = text.replace("t_end = 100.0", "t_end = 0.1");
-    let vessel = Path::new(env!("CARGO_MANIFEST_DIR")).join("../quell/tests/data/vessel-si.toml");
-    let (zero_path, short_path) = (dir.path().join("zero.toml"), dir.path().join("short.toml"));
-    fs::write(&zero_path, zero).unwrap();
-    fs::write(&short_path, short).unwrap();
+    let write = |name: &str, body: &str| {
+        let path = dir.path().join(name);
+        fs::write(&path, body).unwrap();
+        path
+    };
     let report = |path: &Path| {
         let o = quell(&["design", path.to_str().unwrap()]);
         assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
         stdout(&o)
     };
+    let zero_path = write("zero.toml", &zero);
     let zero = report(&zero_path);
     assert!(zero.contains("there is nothing to adapt to") && !zero.contains("weakly excited"), "{zero}");
     assert!(!zero.contains("raise design.mu") && !zero.contains("inf"), "{zero}");
@@ -239,13 +250,19 @@ fn design_advice_names_the_cause_of_slow_adaptation() {
         quell(&["run", zero_path.to_str().unwrap(), "--no-plots", "--out", dir.path().join("run").to_str().unwrap()]);
     assert_eq!(run.status.code(), Some(0), "{}", stderr(&run));
     assert!(stdout(&run).contains("no direction is excited") && !stdout(&run).contains("0 excited directions"));
-    // μ λ_min t_end = 1 at μ = 1/(5.407e-3 · 0.1) = 1849.5 → 1900, μ λ_max = 316 < 100 ρ = 900.
-    let short = report(&short_path);
-    assert!(short.contains("raise design.mu[0] to about 1900 (μ λ_min t_end = 1)"), "{short}");
-    assert!(!short.contains("put the filter poles"), "{short}");
-    let vessel = report(&vessel);
-    assert!(vessel.contains("no μ helps") && !vessel.contains("raise design.mu"), "{vessel}");
-    assert!(vessel.contains("regressor_scaling = \"normalized\""), "{vessel}");
+    let short_report = report(&write("short.toml", &short));
+    let advice =
+        short_report.lines().find(|l| l.contains("→ design.mu[0]")).unwrap_or_else(|| panic!("{short_report}"));
+    let raised: f64 =
+        advice.split("raise design.mu[0] to ").nth(1).and_then(|r| r.split(' ').next()).unwrap().parse().unwrap();
+    let followed =
+        report(&write("followed.toml", &short.replace("mu = [20.0, 30.0]", &format!("mu = [{raised}, 30.0]"))));
+    let channel_1 = followed.lines().find(|l| l.contains("channel 1: μ")).unwrap();
+    assert!(!channel_1.contains("weakly excited"), "μ = {raised}: {followed}");
+    let vessel = report(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../quell/tests/data/vessel-si.toml"));
+    assert!(vessel.contains("past 1000× t_end: excite that direction more") && !vessel.contains("e17 s"), "{vessel}");
+    let faint = report(&write("faint.toml", &faint));
+    assert!(faint.contains("(excited rank 5 of 8)") && !faint.contains("weakly excited"), "{faint}");
 }
 
 #[test]

@@ -52,6 +52,9 @@ pub fn estimate(
     let rho = loop_rate(design, truth, [reference, disturbance]);
     let avg = Averaged::new(design, reference, disturbance);
     let unit = design.plant().time_unit;
+    // The observer's remedy redesigns it at several speeds: only when some advice quotes it.
+    let remedy_text = std::cell::OnceCell::new();
+    let remedy = || remedy_text.get_or_init(|| super::observer_remedy(design, [reference, disturbance], None)).as_str();
     let scaling_hint = match design.regressor_scaling() {
         crate::design::RegressorScaling::Paper => {
             " or set design.regressor_scaling = \"normalized\" (ξ̂ of the signals' size) and choose μ anew"
@@ -70,7 +73,12 @@ pub fn estimate(
             let slowest = mu * lambda_min_excited;
             let stiff = rate > STIFF_RATIO * rho;
             let rank = c.excited().count();
-            let weakly_excited = rank > 0 && mu > 0.0 && slowest * t_end < 1.0;
+            // The run's own criterion ([`super::slow_direction_advice`]): a relevant direction of
+            // Ω̄ that has not converged by t_end (μλ t_end < 5).
+            let slow = (rank > 0 && mu > 0.0)
+                .then(|| super::slow_direction_advice(c, (i, mu), &avg.fidelity, (t_end, STIFF_RATIO * rho), unit, &remedy))
+                .flatten();
+            let weakly_excited = slow.is_some();
             let key = format!("design.mu[{i}]");
             let mut advice = Vec::new();
             if stiff {
@@ -88,10 +96,7 @@ pub fn estimate(
                     i + 1
                 ));
             }
-            if weakly_excited {
-                let spread = (lambda_max / lambda_min_excited, scaling_hint);
-                advice.push(slow_advice(i, (mu, slowest), (lambda_max, lambda_min_excited), (t_end, rho), spread, unit));
-            }
+            advice.extend(slow);
             RateEstimate {
                 channel: i + 1,
                 mu,
@@ -108,45 +113,6 @@ pub fn estimate(
             }
         })
         .collect()
-}
-
-/// Advice for channel i, whose slowest excited direction converges at μ λ_min (`slowest`) beyond
-/// t_end: raise μ to 1/(λ_min t_end) where that keeps μ λ_max within [`STIFF_RATIO`]·ρ; else the
-/// spread λ_max/λ_min is the cause, which no μ helps: the regressor's scaling or filter poles, or a
-/// longer run at the fastest μ that is not stiff.
-fn slow_advice(
-    i: usize,
-    (mu, slowest): (f64, f64),
-    (lambda_max, lambda_min): (f64, f64),
-    (t_end, rho): (f64, f64),
-    (spread, scaling_hint): (f64, &str),
-    unit: crate::TimeUnit,
-) -> String {
-    let key = format!("design.mu[{i}]");
-    let converges = if slowest > 0.0 {
-        format!("converges in 1/(μ λ_min) = {:.3e} {unit}", 1.0 / slowest)
-    } else {
-        format!("does not converge (μ λ_min = {mu:e} × {lambda_min:.3e} rounds to 0)")
-    };
-    let (wanted, fastest) = (1.0 / (lambda_min * t_end), STIFF_RATIO * rho / lambda_max);
-    let remedy = if wanted <= fastest {
-        format!(
-            "raise {key} to about {} (μ λ_min t_end = 1) or lengthen simulation.t_end",
-            crate::settings::fmt_short(crate::settings::round_up_2(wanted))
-        )
-    } else {
-        format!(
-            "no μ helps: {key} = {wanted:.3e} would make the loop stiff (μ λ_max = {:.1e}× ρ), as λ_max/λ_min = {spread:.1e}; put the filter poles at the signals' frequencies{}, or lengthen simulation.t_end to about {:.3e} {unit} with {key} at most {fastest:.3e}",
-            wanted * lambda_max / rho,
-            if scaling_hint.is_empty() { String::new() } else { format!(",{}", scaling_hint.trim_start_matches(" or")) },
-            1.0 / (fastest.max(mu) * lambda_min),
-        )
-    };
-    format!(
-        "channel {}'s slowest excited direction {converges}, beyond t_end = {} {unit} (λ_min(Ω̄) = {lambda_min:.3e} against λ_max = {lambda_max:.3e}): {remedy}",
-        i + 1,
-        crate::settings::fmt_short(t_end),
-    )
 }
 
 #[cfg(test)]

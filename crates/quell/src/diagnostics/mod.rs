@@ -47,6 +47,9 @@ pub const TAIL_BOUND: f64 = 0.01;
 /// for the advice on μ.
 pub const RELEVANT_SHARE: f64 = 1e-4;
 
+/// The longest horizon, in multiples of t_end, that advice asks for.
+const MAX_HORIZON_RATIO: f64 = 1e3;
+
 /// One channel's diagnostics (`summary.json` → `diagnostics[i]`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ChannelDiagnostics {
@@ -422,6 +425,49 @@ fn horizon_mu(relevant: f64, lambda_max: f64, (t_end, stiff): (f64, f64)) -> (f6
     (5.0 / (relevant * t_end), stiff / lambda_max)
 }
 
+/// Advice for channel i (gain μ) when its slowest relevant direction of Ω̄ (one that carries at
+/// least [`RELEVANT_SHARE`] of the initial error's energy) decays at μλ with μλ t_end < 5, so that
+/// it has not converged by t_end; `None` otherwise. Where the weakest frequency is one the
+/// disturbance observer passes badly, the observer is the cause ([`FIDELITY_LIMIT`]); else
+/// [`horizon_advice`]. The pace estimate before a run and the diagnostics after it share it.
+pub(crate) fn slow_direction_advice<'r>(
+    c: &ChannelAverage,
+    (i, mu): (usize, f64),
+    fidelity: &[Fidelity],
+    (t_end, stiff): (f64, f64),
+    unit: TimeUnit,
+    remedy: &dyn Fn() -> &'r str,
+) -> Option<String> {
+    let key = format!("design.mu[{i}]");
+    let relevant = c.slowest_relevant(RELEVANT_SHARE);
+    if !(relevant.is_finite() && mu * relevant * t_end < 5.0) {
+        return None;
+    }
+    let weakest = c.excitation.iter().min_by(|a, b| a.excitation.total_cmp(&b.excitation));
+    let poor =
+        weakest.and_then(|w| fidelity.iter().find(|f| f.frequency == w.frequency && f.relative_error > FIDELITY_LIMIT));
+    Some(match (weakest, poor) {
+        (Some(w), Some(f)) => {
+            // Raising μ speeds that direction up too, unless the μ it needs stiffens the loop.
+            let (wanted, fastest) = horizon_mu(relevant, c.lambda_max(), (t_end, stiff));
+            let mu_too = if wanted > fastest {
+                format!("raising {key} to 5/(λ t_end) = {wanted:.3e} would put the adaptation rate beyond the stiffness threshold {stiff:.2e}/{unit}")
+            } else {
+                format!("raising {key} to {} also speeds that direction up", fmt_short(round_up_2(wanted)))
+            };
+            format!(
+                "Ω̄_{} is weakly excited at {} rad/{unit} ({:.1e}), where the disturbance observer's relative error is {:.2}: {} ({mu_too})",
+                i + 1,
+                crate::settings::fmt_4(w.frequency),
+                w.excitation,
+                f.relative_error,
+                remedy()
+            )
+        }
+        _ => horizon_advice(&key, mu, (relevant, c.lambda_max()), (t_end, stiff), unit),
+    })
+}
+
 /// `key` = μ too small for the horizon t_end, its slowest relevant direction of Ω̄ at rate
 /// μ λ: raise μ to 5/(λ t_end), unless that would put μ λ_max beyond the stiffness threshold
 /// `stiff` (then only a longer run, or more excitation, helps).
@@ -435,11 +481,17 @@ fn horizon_advice(
     let (wanted, fastest) = horizon_mu(relevant, lambda_max, (t_end, stiff));
     let mu_text = fmt_short(mu);
     if wanted > fastest {
+        let needed = 5.0 / (fastest.max(mu) * relevant);
+        // A horizon past a thousand times the run's is no remedy (1e18 s on an SI vessel).
+        let longer = if needed <= MAX_HORIZON_RATIO * t_end {
+            format!("lengthen simulation.t_end to about {needed:.3e} {unit}, or excite that direction more")
+        } else {
+            format!("even then it needs {needed:.1e} {unit}, past {MAX_HORIZON_RATIO:.0}× t_end: excite that direction more (a larger amplitude at its frequency, filter poles near it) or accept its error")
+        };
         format!(
-            "{key} = {mu_text} is too small for the horizon: the error's slowest relevant direction decays at μ λ = {:.2e}/{unit}; 5/(λ t_end) = {wanted:.3e} would put the adaptation rate μ λ_max at {:.2e}/{unit}, beyond the stiffness threshold {stiff:.2e}/{unit} ({STIFF_RATIO}·ρ), so keep {key} at most {fastest:.3e} and lengthen simulation.t_end to about {:.3e} {unit}, or excite that direction more",
+            "{key} = {mu_text} is too small for the horizon: the error's slowest relevant direction decays at μ λ = {:.2e}/{unit}; 5/(λ t_end) = {wanted:.3e} would put the adaptation rate μ λ_max at {:.2e}/{unit}, beyond the stiffness threshold {stiff:.2e}/{unit} ({STIFF_RATIO}·ρ), so keep {key} at most {fastest:.3e} and {longer}",
             mu * relevant,
             wanted * lambda_max,
-            5.0 / (fastest.max(mu) * relevant)
         )
     } else {
         format!(
@@ -481,29 +533,10 @@ fn channel<'r>(
     // on t_end and on μ against it would take the time it ended at for the horizon.
     let horizon = matches!(result.outcome, None | Some(Outcome::Completed));
     let mut advice: Vec<String> = delay_advice(design, i, t_end).filter(|_| horizon).into_iter().collect();
-    let relevant = c.slowest_relevant(RELEVANT_SHARE);
     // A tail already within the bound needs no faster adaptation (an automatic design's μ is chosen
     // for that bound, not for the averaged law's e^-5 over the horizon).
-    if horizon && relevant.is_finite() && mu * relevant * t_end < 5.0 && !tail_within_bound(result, i) {
-        let weakest = c.excitation.iter().min_by(|a, b| a.excitation.total_cmp(&b.excitation));
-        let poor = weakest
-            .and_then(|w| fidelity.iter().find(|f| f.frequency == w.frequency && f.relative_error > FIDELITY_LIMIT));
-        match (weakest, poor) {
-            (Some(w), Some(f)) => {
-                // Raising μ speeds that direction up too, unless the μ it needs stiffens the loop.
-                let (wanted, fastest) = horizon_mu(relevant, c.lambda_max(), (t_end, stiff));
-                let mu_too = if wanted > fastest {
-                    format!("raising {key} to 5/(λ t_end) = {wanted:.3e} would put the adaptation rate beyond the stiffness threshold {stiff:.2e}/{unit}")
-                } else {
-                    format!("raising {key} to {} also speeds that direction up", fmt_short(round_up_2(wanted)))
-                };
-                advice.push(format!(
-                    "Ω̄_{} is weakly excited at {} rad/{unit} ({:.1e}), where the disturbance observer's relative error is {:.2}: {} ({mu_too})",
-                    i + 1, crate::settings::fmt_4(w.frequency), w.excitation, f.relative_error, remedy()
-                ));
-            }
-            _ => advice.push(horizon_advice(&key, mu, (relevant, c.lambda_max()), (t_end, stiff), unit)),
-        }
+    if horizon && !tail_within_bound(result, i) {
+        advice.extend(slow_direction_advice(c, (i, mu), fidelity, (t_end, stiff), unit, remedy));
     }
     match trend.filter(|_| horizon && windows.is_some_and(|(last, _)| !negligible_tail(result, i, last))) {
         Some(r) if r < SHRINKING => advice.push(format!(
