@@ -1293,6 +1293,10 @@ fn choose_mu(s: &Scenario, design: &Design, targets: &Targets, r: f64) -> (Vec<f
         .iter()
         .enumerate()
         .map(|(i, c)| {
+            if c.excited().count() == 0 {
+                notes.push(format!("channel {}: the signals excite no direction of the regressor (g and ω are zero): μ does not matter, and 1 is written", i + 1));
+                return (1.0, 1.0);
+            }
             let peak = s.reference.components[i].peak();
             let aim = AIM * if peak > 0.0 { peak } else { c.open_loop_rms };
             let cap = max_rate / c.lambda_max().max(f64::MIN_POSITIVE);

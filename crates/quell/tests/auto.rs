@@ -899,3 +899,16 @@ fn a_sample_time_the_poles_cannot_meet_is_said_to_be_missed() {
         "{why}"
     );
 }
+
+/// Signals that excite nothing (every component zero) leave μ free: the design writes 1 and
+/// passes (it was μ = inf, refused as a design key with a note on filter poles).
+#[test]
+fn signals_that_excite_nothing_leave_mu_at_one() {
+    let paper = quell::scenario::PAPER_EXAMPLE;
+    let (start, end) = (paper.find("[design]").unwrap(), paper.find("[simulation]").unwrap());
+    let zero = "[design]\n[reference]\ncomponents = [{ bias = 0.0 }, { bias = 0.0 }]\n[disturbance]\ncomponents = [{ bias = 0.0 }, { bias = 0.0 }]\n";
+    let doc: toml::Table = format!("{}{zero}{}", &paper[..start], &paper[end..]).parse().unwrap();
+    let auto = auto_design(&doc, &Targets::default()).unwrap();
+    assert_eq!(auto.scenario.design.mu, [1.0, 1.0]);
+    assert!(auto.verification.passed, "{:?}", auto.verification);
+}
