@@ -475,9 +475,18 @@ pub(crate) fn count(n: usize, one: &str, many: &str) -> String {
 
 /// `x` > 0 rounded up to two significant digits (a value to propose: a horizon, a gain).
 pub(crate) fn round_up_2(x: f64) -> f64 {
+    round_2(x, f64::ceil)
+}
+
+/// `x` > 0 rounded down to two significant digits (a bound to propose: "at most").
+pub(crate) fn round_down_2(x: f64) -> f64 {
+    round_2(x, f64::floor)
+}
+
+fn round_2(x: f64, direction: fn(f64) -> f64) -> f64 {
     let unit = 10f64.powf(x.log10().floor() - 1.0);
     // Through the shortest decimal, so that 0.1·unit·ceil prints as 0.11, not 0.11000000000000001.
-    format!("{:.1e}", (x / unit).ceil() * unit).parse().unwrap_or(x)
+    format!("{:.1e}", direction(x / unit) * unit).parse().unwrap_or(x)
 }
 
 /// Rust's shortest form of `v`: `{}` for 0 and between 1e-4 and 1e6, otherwise `{:e}`, so that

@@ -83,10 +83,10 @@ pub fn estimate(
             let mut advice = Vec::new();
             if stiff {
                 advice.push(format!(
-                    "channel {} adapts at μ λ_max = {rate:.3e}/{unit}, {:.1e}× the loop's fastest other rate ({rho:.3e}/{unit}): the loop is stiff (the automatic integrator handles it, an explicit one crawls); lower {key} to about {:.3e}{scaling_hint}",
+                    "channel {} adapts at μ λ_max = {rate:.3e}/{unit}, {:.1e}× the loop's fastest other rate ({rho:.3e}/{unit}): the loop is stiff (the automatic integrator handles it, an explicit one crawls); lower {key} to about {}{scaling_hint}",
                     i + 1,
                     rate / rho,
-                    STIFF_RATIO * rho / lambda_max,
+                    crate::settings::fmt_short(crate::settings::round_down_2(STIFF_RATIO * rho / lambda_max)),
                 ));
             }
             if rank == 0 {

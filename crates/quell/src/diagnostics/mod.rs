@@ -481,17 +481,19 @@ fn horizon_advice(
     let (wanted, fastest) = horizon_mu(relevant, lambda_max, (t_end, stiff));
     let mu_text = fmt_short(mu);
     if wanted > fastest {
-        let needed = 5.0 / (fastest.max(mu) * relevant);
+        let needed = round_up_2(5.0 / (fastest.max(mu) * relevant));
+        let fastest = crate::settings::round_down_2(fastest);
         // A horizon past a thousand times the run's is no remedy (1e18 s on an SI vessel).
         let longer = if needed <= MAX_HORIZON_RATIO * t_end {
-            format!("lengthen simulation.t_end to about {needed:.3e} {unit}, or excite that direction more")
+            format!("lengthen simulation.t_end to about {} {unit}, or excite that direction more", fmt_short(needed))
         } else {
             format!("even then it needs {needed:.1e} {unit}, past {MAX_HORIZON_RATIO:.0}× t_end: excite that direction more (a larger amplitude at its frequency, filter poles near it) or accept its error")
         };
         format!(
-            "{key} = {mu_text} is too small for the horizon: the error's slowest relevant direction decays at μ λ = {:.2e}/{unit}; 5/(λ t_end) = {wanted:.3e} would put the adaptation rate μ λ_max at {:.2e}/{unit}, beyond the stiffness threshold {stiff:.2e}/{unit} ({STIFF_RATIO}·ρ), so keep {key} at most {fastest:.3e} and {longer}",
+            "{key} = {mu_text} is too small for the horizon: the error's slowest relevant direction decays at μ λ = {:.2e}/{unit}; 5/(λ t_end) = {wanted:.3e} would put the adaptation rate μ λ_max at {:.2e}/{unit}, beyond the stiffness threshold {stiff:.2e}/{unit} ({STIFF_RATIO}·ρ), so keep {key} at most {} and {longer}",
             mu * relevant,
             wanted * lambda_max,
+            fmt_short(fastest),
         )
     } else {
         format!(
