@@ -917,12 +917,15 @@ fn failure_advice(s: &Scenario) -> Option<String> {
 /// chosen μ: its predicted RMS error reaches half the bound only after the tail has begun (the last
 /// tenth of t_end), because an excited direction of Ω̄ is weakly excited (1/(μ λ) long) and μ may
 /// not rise (the stiffness cap). Proposes a t_end whose tail starts [`SLOW_MARGIN`] times later
+/// The longest horizon, in multiples of t_end, that the slow-convergence advice proposes.
+const MAX_HORIZON: f64 = 1e6;
+
 /// than the predicted time: the averaged law is optimistic where Ω̄ is poorly excited.
 fn slow_convergence_advice(s: &Scenario, design: &Design, tail_max_e: &[f64], bound: &[f64]) -> Option<String> {
     let avg = Averaged::new(design, &s.reference, &s.disturbance);
     let (t_end, unit) = (s.simulation.t_end, s.plant.time_unit);
     let mut needed = 0.0f64;
-    let mut why = Vec::new();
+    let (mut why, mut hopeless) = (Vec::new(), Vec::new());
     for (i, (c, &mu)) in avg.channels.iter().zip(design.mu()).enumerate() {
         let (aim, slowest) = (0.5 * bound[i], c.excited().fold(f64::INFINITY, f64::min));
         let rate = mu * slowest;
@@ -931,11 +934,18 @@ fn slow_convergence_advice(s: &Scenario, design: &Design, tail_max_e: &[f64], bo
         }
         // The first time the predicted error is within the aim, by doubling then bisection.
         let (mut lo, mut hi) = (0.0, t_end);
-        while c.predicted_error(mu, hi) > aim {
+        while c.predicted_error(mu, hi) > aim && hi <= MAX_HORIZON * t_end {
             (lo, hi) = (hi, 2.0 * hi);
-            if hi > 1e6 * t_end {
-                return None;
-            }
+        }
+        if hi > MAX_HORIZON * t_end {
+            // No horizon is advice here (the SI vessel's reference directions: 1e18 s); this
+            // channel's line must not silence the others'.
+            hopeless.push(format!(
+                "channel {}: the averaged law predicts its RMS error within half the tail bound only past {MAX_HORIZON:.0e}× t_end (its slowest excited direction of Ω̄ converges in 1/(μλ) = {:.3e} {unit})",
+                i + 1,
+                1.0 / (mu * slowest)
+            ));
+            continue;
         }
         for _ in 0..60 {
             let mid = 0.5 * (lo + hi);
@@ -957,13 +967,29 @@ fn slow_convergence_advice(s: &Scenario, design: &Design, tail_max_e: &[f64], bo
             ));
         }
     }
-    (needed > t_end).then(|| {
+    let longer = (needed > t_end).then(|| {
         format!(
             "{}; the horizon is too short for the adaptation to converge: lengthen simulation.t_end to at least {} {unit} (the tail, its last tenth, {SLOW_MARGIN}× later than predicted: the averaged law is optimistic for weakly excited directions), or excite them better (references of several frequencies)",
             why.join("; "),
             crate::settings::round_up_2(needed)
         )
-    })
+    });
+    let scaling = match design.regressor_scaling() {
+        crate::design::RegressorScaling::Paper => {
+            ", or design.regressor_scaling = \"normalized\" (ξ̂ of the signals' size)"
+        }
+        crate::design::RegressorScaling::Normalized => "",
+    };
+    let excite = (!hopeless.is_empty()).then(|| {
+        format!(
+            "{}: no horizon helps; excite those directions better (references of several frequencies; a disturbance in units far from the outputs' spreads Ω̄ by their ratio squared{scaling}) or ask less of the loop",
+            hopeless.join("; ")
+        )
+    });
+    match (excite, longer) {
+        (Some(a), Some(b)) => Some(format!("{a}; {b}")),
+        (a, b) => a.or(b),
+    }
 }
 
 /// How much later than the averaged law predicts the tail of a proposed horizon starts

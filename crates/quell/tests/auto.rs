@@ -912,3 +912,18 @@ fn signals_that_excite_nothing_leave_mu_at_one() {
     assert_eq!(auto.scenario.design.mu, [1.0, 1.0]);
     assert!(auto.verification.passed, "{:?}", auto.verification);
 }
+
+/// A channel whose slowest direction no horizon converges (the SI vessel's, from an empty design:
+/// 1/(μλ) ≈ 6e15 s) is advised to excite it, and no longer silences the advice on the others (the
+/// verification failed with no advice at all).
+#[test]
+fn a_channel_no_horizon_converges_is_told_to_excite_it() {
+    let text = include_str!("data/vessel-si.toml");
+    let (start, end) = (text.find("[design]").unwrap(), text.find("[reference]").unwrap());
+    let doc: toml::Table = format!("{}[design]\n{}", &text[..start], &text[end..]).parse().unwrap();
+    let auto = auto_design(&doc, &Targets::default()).unwrap();
+    assert!(!auto.verification.passed, "{:?}", auto.verification);
+    let advice = auto.verification.advice.join("\n");
+    assert!(advice.contains("channel 1: the averaged law predicts") && advice.contains("no horizon helps"), "{advice}");
+    assert!(advice.contains("lengthen simulation.t_end to at least"), "channel 2's line: {advice}");
+}
