@@ -202,6 +202,7 @@ fn mu_6(mu: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::{mu_6, report};
+    use quell::study::{Objective, Outcome, TuneCurve, TunePoint, TuneResult};
 
     #[test]
     fn a_small_mu_is_printed_in_significant_digits() {
@@ -210,7 +211,6 @@ mod tests {
             ["3.162278", "1.00000e-15", "2.50000e7", "0.000000"]
         );
     }
-    use quell::study::{Objective, Outcome, TuneCurve, TunePoint, TuneResult};
 
     #[test]
     fn an_interrupted_report_says_what_was_not_evaluated() {

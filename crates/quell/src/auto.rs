@@ -913,14 +913,15 @@ fn failure_advice(s: &Scenario) -> Option<String> {
     })
 }
 
+/// The longest horizon, in multiples of t_end, that the slow-convergence advice proposes.
+const MAX_HORIZON: f64 = 1e6;
+
 /// Why channels missed their tail bound when the averaged law (η̃' = −μ Ω̄ η̃) says so at the
 /// chosen μ: its predicted RMS error reaches half the bound only after the tail has begun (the last
 /// tenth of t_end), because an excited direction of Ω̄ is weakly excited (1/(μ λ) long) and μ may
 /// not rise (the stiffness cap). Proposes a t_end whose tail starts [`SLOW_MARGIN`] times later
-/// The longest horizon, in multiples of t_end, that the slow-convergence advice proposes.
-const MAX_HORIZON: f64 = 1e6;
-
-/// than the predicted time: the averaged law is optimistic where Ω̄ is poorly excited.
+/// than the predicted time: the averaged law is optimistic where Ω̄ is poorly excited. A channel
+/// that no horizon within [`MAX_HORIZON`]·t_end converges is told to excite it better instead.
 fn slow_convergence_advice(s: &Scenario, design: &Design, tail_max_e: &[f64], bound: &[f64]) -> Option<String> {
     let avg = Averaged::new(design, &s.reference, &s.disturbance);
     let (t_end, unit) = (s.simulation.t_end, s.plant.time_unit);

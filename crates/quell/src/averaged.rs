@@ -129,7 +129,7 @@ pub struct ChannelAverage {
     /// Ω̄_i (q × q, symmetric positive semidefinite).
     pub omega: DMatrix<f64>,
     /// Eigenvalues of Ω̄_i, ascending: 0 for the q − r directions the signals leave unexcited,
-    /// then the r excited ones (counted on Ω̄_i scaled to a unit diagonal, so whatever ξ̂'s units).
+    /// then the r excited ones (counted whatever ξ̂'s units and the signals' amplitudes).
     pub lambda: Vec<f64>,
     /// The excited eigenvalues' eigenvectors (q × r), in the order of `lambda`'s last r.
     vectors: DMatrix<f64>,
@@ -264,7 +264,7 @@ fn channel(design: &Design, i: usize, tones: &[(f64, DVector<C64>, DVector<C64>)
     let q = design.q();
     let tau = design.plant().delays[i];
     let G = &design.channels()[i];
-    let (mut omega, mut y) = (DMatrix::zeros(q, q), DVector::zeros(q));
+    let mut y = DVector::zeros(q);
     let (mut open_loop, mut excitation) = (0.0, Vec::new());
     // Ω̄ = F Fᵀ, F's columns √c·u and √c·v of each tone (a bias's v is 0 and left out).
     let mut factor: Vec<DVector<f64>> = Vec::new();
@@ -272,14 +272,14 @@ fn channel(design: &Design, i: usize, tones: &[(f64, DVector<C64>, DVector<C64>)
         let a = xi * (G.eval(C64::new(0.0, *w)) * C64::from_polar(1.0, -w * tau));
         let (u, v) = (a.map(|z| z.re), a.map(|z| z.im));
         let c = weight(*w);
-        let part = (&u * u.transpose() + &v * v.transpose()) * c;
-        omega += &part;
         y += (&u * delta[i].re + &v * delta[i].im) * c;
         open_loop += c * delta[i].norm_sqr();
         excitation.push(Excitation { frequency: *w, excitation: c * tone_excitation(&u, &v, *w == 0.0) });
         factor.extend([&u, &v].into_iter().filter(|x| x.iter().any(|&e| e != 0.0)).map(|x| x * c.sqrt()));
     }
-    let (lambda, vectors) = spectrum(&DMatrix::from_fn(q, factor.len(), |r, k| factor[k][r]));
+    let F = DMatrix::from_fn(q, factor.len(), |r, k| factor[k][r]);
+    let omega = &F * F.transpose();
+    let (lambda, vectors) = spectrum(&F);
     let mut avg =
         ChannelAverage { omega, lambda, vectors, y, open_loop_rms: open_loop.sqrt(), residual_rms: 0.0, excitation };
     let explained: f64 = avg.modes().map(|(_, e)| e).sum();

@@ -141,8 +141,7 @@ pub fn generate_fmu(
     let wrapper_name = format!("{p}_fmu.c");
     let guid = guid(&[&code.header, &code.source]);
     let (headers, api, ship_headers) = version.wrapper_parts();
-    // The messages' unit of time, in ASCII as the rest of the C ("us" for µs).
-    let symbol = design.plant().time_unit.symbol().replace('µ', "u");
+    let symbol = ascii_symbol(design.plant().time_unit);
     let (mantissa, scale) = crate::controller::discrete::Grid::new(sample_time).decimal();
     let (mantissa, scale) = (format!("{mantissa:?}"), format!("{scale:?}"));
     let values = [
@@ -278,6 +277,12 @@ fn model_description_2(o: &ExportOptions, m: usize, sample: (f64, &str), guid: &
     x
 }
 
+/// The unit of time's symbol in ASCII, as the generated C's messages and the model description
+/// carry it ("us" for µs).
+fn ascii_symbol(time: TimeUnit) -> String {
+    time.symbol().replace('µ', "u")
+}
+
 /// FMI 3.0 `modelDescription.xml`: the variables of [`variables`] as `Float64`, and the
 /// independent variable `time` at value reference 4m, in the plant model's unit of time (declared
 /// among the unit definitions as a multiple of the SI second, so an importer can convert).
@@ -288,8 +293,7 @@ fn model_description_3(o: &ExportOptions, m: usize, sample: (f64, &str), token: 
         r#"  <CoSimulation modelIdentifier="{}" canHandleVariableCommunicationStepSize="true" canBeInstantiatedOnlyOncePerProcess="false" hasEventMode="false"/>"#,
         o.prefix
     );
-    // ASCII, as the generated C's messages ("us" for µs).
-    let unit = time.symbol().replace('µ', "u");
+    let unit = ascii_symbol(time);
     let factor = if time.seconds() == 1.0 { String::new() } else { format!(r#" factor="{:?}""#, time.seconds()) };
     let _ = writeln!(x, r#"  <UnitDefinitions><Unit name="{unit}"><BaseUnit s="1"{factor}/></Unit></UnitDefinitions>"#);
     let _ = writeln!(x, r#"  <DefaultExperiment startTime="0" stepSize="{sample_time:?}"/>"#);
