@@ -65,7 +65,7 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
         scenario_name: scenario.name.clone(),
     };
     let code = generate(&design, sample_time, &options).map_err(export_failure)?;
-    eprint!("{}", crate::report::sample_time_text(&scenario, &design, sample_time));
+    eprint!("{}", crate::report::sample_time_text(&scenario, &design, sample_time, None));
     let fmu = if args.fmu {
         let (compiler, from_env) = quell::export::compiler_choice(args.compiler.clone());
         let version: FmiVersion = args.fmi_version.parse().map_err(export_failure)?;

@@ -239,9 +239,15 @@ pub fn warnings_text(warnings: &[quell::design::DesignWarning]) -> String {
 }
 
 /// The warning of a sample time coarse for the design ([`quell::sim::coarse_sample_warning`]),
-/// naming the flag that sets it; empty otherwise.
-pub fn sample_time_text(scenario: &quell::Scenario, design: &quell::Design, sample_time: f64) -> String {
-    quell::sim::coarse_sample_warning(design, &scenario.reference, &scenario.disturbance, sample_time)
+/// naming the flag that sets it, and a sample time that divides `output_step` when the loop records
+/// at one; empty otherwise.
+pub fn sample_time_text(
+    scenario: &quell::Scenario,
+    design: &quell::Design,
+    sample_time: f64,
+    output_step: Option<f64>,
+) -> String {
+    quell::sim::coarse_sample_warning(design, [&scenario.reference, &scenario.disturbance], sample_time, output_step)
         .map(|w| format!("⚠ warning: {}\n", crate::in_flags(w)))
         .unwrap_or_default()
 }

@@ -52,7 +52,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     // Every check that can fail on input happens before the output directory is touched.
     let settings = loop_settings(args, &scenario, &design)?;
     if let Loop::Sampled { sample_time } = settings.mode {
-        eprint!("{}", report::sample_time_text(&scenario, &design, sample_time));
+        eprint!("{}", report::sample_time_text(&scenario, &design, sample_time, Some(settings.output_step)));
     }
     let out = &args.out;
     // The figures' names too: one taken by a directory would fail only after the run.

@@ -501,11 +501,12 @@ fn run_sample_time_flag_the_output_step_is_not_a_multiple_of_names_both() {
     let dir = temp_dir("ts-output-step");
     let out = dir.path().join("out");
     for (flag, ratio, divisor, multiple) in
-        [("0.2", "0.500000", "0.1 s", "0.2 s"), ("0.04", "2.500000", "0.03333333333333 s", "0.12 s")]
+        [("0.2", "0.500000", "0.1 s", "0.2 s"), ("0.04", "2.500000", "0.025 s", "0.12 s")]
     {
         let err = input_error(&["run", "--sample-time", flag, "--no-plots", "--out", out.to_str().unwrap()]);
         assert!(err.starts_with(&format!("error: --sample-time {flag}: simulation.output_step = 0.1 s")), "{err}");
-        // The nearest fixes, by hand: 0.1 / ceil(0.1 / T) divides 0.1; T·round(0.1 / T) is a multiple.
+        // The nearest fixes, by hand: 0.1 / ceil(0.1 / T) divides 0.1 (0.1/3 has no short decimal
+        // form, so the longest round divisor below 0.04, 0.025); T·round(0.1 / T) is a multiple.
         assert!(err.contains(&format!("({ratio} samples")) && err.contains(&format!("e.g. {divisor}")), "{err}");
         assert!(err.contains(&format!("multiple of the sample time, e.g. {multiple}")), "{err}");
         assert!(!out.exists(), "--out was touched");

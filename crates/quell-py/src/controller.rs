@@ -121,7 +121,7 @@ impl PyController {
         let (m, _) = inner.dims();
         // A design carries no signals: ρ from its poles alone.
         let none = quell::Signal::default();
-        crate::errors::warn_coarse_sample(py, &d.get().inner, &none, &none, T)?;
+        crate::errors::warn_coarse_sample(py, &d.get().inner, &none, &none, T, None)?;
         Ok(PyController { inner: Mutex::new(inner), m, design: d.clone().unbind() })
     }
 

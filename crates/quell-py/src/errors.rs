@@ -164,8 +164,9 @@ pub fn warn_coarse_sample(
     reference: &quell::Signal,
     disturbance: &quell::Signal,
     sample_time: f64,
+    output_step: Option<f64>,
 ) -> PyResult<()> {
-    match quell::sim::coarse_sample_warning(design, reference, disturbance, sample_time) {
+    match quell::sim::coarse_sample_warning(design, [reference, disturbance], sample_time, output_step) {
         Some(w) => warn(py, &in_python(w)),
         None => Ok(()),
     }

@@ -174,7 +174,7 @@ pub fn export(
             Ok((code, archive))
         })
         .map_err(raise)?;
-    crate::errors::warn_coarse_sample(py, &design, &signals.0, &signals.1, T)?;
+    crate::errors::warn_coarse_sample(py, &design, &signals.0, &signals.1, T, None)?;
     if let Some(w) = code.size_warning() {
         crate::errors::warn(py, &w)?;
     }

@@ -624,13 +624,13 @@ pub fn simulate(
         .set_max_steps(step_budget(py, max_steps)?)
         .map_err(|e| keyed(py, Kind::Scenario, e.to_string(), Some(e.key.clone())))?;
     let sampled = match settings.mode {
-        Loop::Sampled { sample_time } => Some(sample_time),
+        Loop::Sampled { sample_time } => Some((sample_time, settings.output_step)),
         Loop::Continuous(_) => None,
     };
     let (result, interrupt) = run_released(py, scn, &design, settings)?;
     // After the run's own checks (a sample time they refuse gets no warning).
-    if let Some(t) = sampled {
-        crate::errors::warn_coarse_sample(py, &design, &scn.reference, &scn.disturbance, t)?;
+    if let Some((t, h)) = sampled {
+        crate::errors::warn_coarse_sample(py, &design, &scn.reference, &scn.disturbance, t, Some(h))?;
     }
     let (outcome, unit) = (result.outcome.clone().unwrap_or(Outcome::Completed), result.time_unit);
     let result = Py::new(py, PySimResult::from_run(py, scn, &design, result, s.labels.clone())?)?;

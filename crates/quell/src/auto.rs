@@ -37,9 +37,12 @@
 //!   beyond them are not kept, and the phases go on while none is within them; the first within
 //!   them needs only the bound. None within: the verification fails with the closest max |u_f,i|
 //!   reached;
-//! * a failed verification says why when it can: a horizon shorter than [`SEPARATION_BEATS`] beats
-//!   of the two closest frequencies cannot tell them apart, and the advice proposes the t_end
-//!   that can.
+//! * a first proposal whose verifying run ends early is retried with the chosen channel and
+//!   observer poles halved, up to three times;
+//! * a failed verification says why when it can (a horizon shorter than [`SEPARATION_BEATS`]
+//!   beats of the two closest frequencies, slow adaptation by the averaged law, an error still
+//!   decaying), and a horizon it proposes is one the automatic design repeated with it passes
+//!   (`horizon_advice`).
 
 use std::ops::ControlFlow;
 
@@ -233,6 +236,9 @@ pub struct Candidate {
     /// max |e_i| over the run: the scale of a channel whose reference is 0 (regulation).
     #[serde(skip)]
     peak_e: Vec<f64>,
+    /// max |e_i| over [0.5, 0.6]·t_end: with the tail's, whether the error still decays.
+    #[serde(skip)]
+    mid_max_e: Vec<f64>,
     /// The run's caution that DOP853 thrashed at its stability bound ([`crate::diagnostics::thrashing`]).
     #[serde(skip)]
     thrashing: Option<String>,
@@ -325,6 +331,8 @@ pub struct Progress {
 /// (as may the stop flag of an enclosing [`crate::cancel::with_stop`]).
 struct Verifier<'p> {
     runs: usize,
+    /// Accepted solver steps (controller steps when sampled) of every run so far.
+    steps: usize,
     progress: &'p mut dyn FnMut(&Progress) -> ControlFlow<()>,
     /// The convergence time μ is chosen for ([`Targets::convergence_time`], or t_end/20).
     convergence_time: Option<f64>,
@@ -342,6 +350,7 @@ impl Verifier<'_> {
             }
             progress(&Progress { run, speed, t, t_end })
         })?;
+        self.steps += r.stats.steps();
         match r.outcome.clone().unwrap_or(Outcome::Completed) {
             Outcome::Completed => Ok(candidate(scenario, &r, speed, self.convergence_time)),
             Outcome::Interrupted { .. } => Err(AutoError::Interrupted),
@@ -361,6 +370,7 @@ fn candidate(scenario: &Scenario, r: &crate::sim::SimResult, speed: Speed, conve
         (0..m).map(|i| r.rms_error(i, 0.9 * t_c, (1.1 * t_c).min(t_end)).unwrap_or(f64::NAN)).collect();
     let max_uf = r.summary().iter().map(|c| c.figures.max_uf).collect();
     let peak_e = (0..m).map(|i| r.max_abs_error(i, 0.0, t_end).unwrap_or(f64::NAN)).collect();
+    let mid_max_e = (0..m).map(|i| r.max_abs_error(i, 0.5 * t_end, 0.6 * t_end).unwrap_or(f64::NAN)).collect();
     let limited_fraction = if r.limited.is_empty() { vec![] } else { r.limited_fraction() };
     Candidate {
         speed,
@@ -371,6 +381,7 @@ fn candidate(scenario: &Scenario, r: &crate::sim::SimResult, speed: Speed, conve
         steps: r.stats.steps(),
         chosen: false,
         peak_e,
+        mid_max_e,
         thrashing: crate::diagnostics::thrashing(&r.stats),
     }
 }
@@ -387,9 +398,34 @@ impl Candidate {
             limited_fraction: vec![],
             steps: 0,
             chosen: true,
-            peak_e: none,
+            peak_e: none.clone(),
+            mid_max_e: none,
             thrashing: None,
         }
+    }
+
+    /// When every channel beyond its bound still decays at the end of the run (its tail's max |e|
+    /// below [`DECAYING`] × its max over [0.5, 0.6]·t_end): the horizon at which that decay,
+    /// extrapolated as an exponential, brings the worst tail within half its bound; with what the
+    /// estimate rests on.
+    fn decay_horizon(&self, bound: &[f64], t_end: f64) -> Option<(f64, String)> {
+        let (mut needed, mut fell) = (0.0f64, f64::INFINITY);
+        for ((&tail, &mid), &b) in self.tail_max_e.iter().zip(&self.mid_max_e).zip(bound) {
+            if tail <= b {
+                continue;
+            }
+            let decays = tail < DECAYING * mid && b > 0.0;
+            if !decays {
+                return None;
+            }
+            // The windows' ends are 0.4·t_end apart; the tail starts at 0.9·t_end.
+            let rate = (mid / tail).ln() / (0.4 * t_end);
+            needed = needed.max(t_end + (2.0 * tail / b).ln() / (rate * (1.0 - TAIL_FRACTION)));
+            fell = fell.min(mid / tail);
+        }
+        (needed > t_end && needed.is_finite()).then(|| {
+            (needed, format!("the error's decay over the run, extrapolated: its max |e| fell {fell:.2}× from [0.5, 0.6]·t_end to the tail"))
+        })
     }
 
     /// Every tail within `bound` / `margin` (a NaN tail is not).
@@ -443,7 +479,7 @@ pub fn auto_design_with(
     targets: &Targets,
     progress: &mut dyn FnMut(&Progress) -> ControlFlow<()>,
 ) -> Result<AutoDesign, AutoError> {
-    let mut verifier = Verifier { runs: 0, progress, convergence_time: targets.convergence_time };
+    let mut verifier = Verifier { runs: 0, steps: 0, progress, convergence_time: targets.convergence_time };
     let doc = &with_design_table(doc);
     verified_design(doc, targets, &mut verifier).map_err(|e| e.chosen_in(doc))
 }
@@ -473,35 +509,52 @@ impl AutoError {
     }
 }
 
-fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier) -> Result<AutoDesign, AutoError> {
-    let (mut first, mut design, start) = sampled_start(doc, targets)?;
+/// The first proposal verified, with μ raised where its tail misses the bound (up to three
+/// retries) and the channels' bounds; or, when no run could verify it, the design returned
+/// unverified with the reason.
+enum FirstCheck {
+    Verified(Box<Verified>, Vec<f64>),
+    Unverified(Box<AutoDesign>),
+}
+
+fn check_first(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier) -> Result<FirstCheck, AutoError> {
+    let (mut first, mut design, mut start) = sampled_start(doc, targets)?;
     let mut bound: Vec<f64> = first.scenario.reference.components.iter().map(|c| TAIL_BOUND * c.peak()).collect();
-    let unverified = |first: Proposal, design: Design, advice: String, runs: usize, bound: &[f64]| {
+    let runs_before = verifier.runs;
+    let unverified = |(first, design, start): (Proposal, Design, Speed), advice: String, runs: usize, bound: &[f64]| {
         let c = Candidate::ended(start, first.scenario.plant.m());
         let limited = !targets.u_limit.is_empty();
-        finish(
+        let d = finish(
             (first, design, c.clone()),
             bound.to_vec(),
             (runs, targets.convergence_time),
             vec![c],
             (false, limited),
             vec![advice],
-        )
+        );
+        Ok(FirstCheck::Unverified(Box::new(d)))
     };
     if let Some(advice) = too_fast_for_its_horizon(&first.scenario, &design) {
-        return Ok(unverified(first, design, advice, 0, &bound));
+        return unverified((first, design, start), advice, 0, &bound);
     }
-    // The first proposal, μ raised where its tail misses the bound.
-    let first_check = loop {
+    let (mut retries, mut slowed) = (0, 0);
+    let check = loop {
         let c = match verifier.check(&first.scenario, &design, start) {
-            Err(AutoError::Run(outcome)) => {
-                let advice = ended_early(&first.scenario, &outcome);
-                return Ok(unverified(first, design, advice, verifier.runs, &bound));
-            }
+            Err(AutoError::Run(outcome)) => match slower_start(doc, targets, &first, start, slowed, &outcome) {
+                Some((p, d, speed)) => {
+                    (first, design, start, slowed) = (p, d, speed, slowed + 1);
+                    continue;
+                }
+                None => {
+                    let advice = ended_early(&first.scenario, &outcome);
+                    return unverified((first, design, start), advice, verifier.runs - runs_before, &bound);
+                }
+            },
             c => c?,
         };
         regulated_bounds(&mut bound, &c);
-        let retry = verifier.runs <= 3
+        retries += 1;
+        let retry = retries <= 3
             && first
                 .mu_caps
                 .as_ref()
@@ -511,13 +564,58 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
         }
         design = first.scenario.design()?;
     };
-    note_verification(&mut first.choices, &first.scenario.design.mu, verifier.runs);
+    note_verification(&mut first.choices, &first.scenario.design.mu, retries);
+    Ok(FirstCheck::Verified(Box::new((first, design, check)), bound))
+}
+
+/// How many times a first proposal whose verifying run ended early is slowed ([`slower_start`]).
+const MAX_SLOWER_STARTS: i32 = 3;
+
+/// After the first proposal's verifying run ended early (`outcome`), the proposal with the
+/// channel and observer poles the rules chose halved (the relaxation's first steps, taken before
+/// a run passes), at most [`MAX_SLOWER_STARTS`] times (`slowed` so far), the reason noted in their
+/// choices; `None` when the file gives both or the budget is spent. The active suspension's first
+/// continuous proposal (observer poles to −511 /s, κ₂ = 1.3e8) blew up on its heavier true bus
+/// within 0.08 s; a quarter as fast, it converges.
+fn slower_start(
+    doc: &toml::Table,
+    targets: &Targets,
+    first: &Proposal,
+    start: Speed,
+    slowed: i32,
+    outcome: &Outcome,
+) -> Option<(Proposal, Design, Speed)> {
+    let [channels, observer, _] = first.relaxable;
+    if slowed >= MAX_SLOWER_STARTS || !(channels || observer) {
+        return None;
+    }
+    let half = |chosen: bool, v: f64| if chosen { 0.5 * v } else { v };
+    let speed =
+        Speed { channel: half(channels, start.channel), observer: half(observer, start.observer), mu: start.mu };
+    let mut p = propose(doc, targets, speed).ok()?;
+    let d = p.scenario.design().ok()?;
+    let unit = p.scenario.plant.time_unit;
+    let factor = 0.5f64.powi(slowed + 1);
+    for c in p
+        .choices
+        .iter_mut()
+        .filter(|c| (channels && c.key == "design.channel_poles") || (observer && c.key == "design.observer_poles"))
+    {
+        c.why.push_str(&format!(
+            "; ×{factor} of that: the verifying runs of the faster proposals ended early (the last: {outcome}, t in {unit})"
+        ));
+    }
+    Some((p, d, speed))
+}
+
+fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier) -> Result<AutoDesign, AutoError> {
+    let ((first, design, first_check), bound) = match check_first(doc, targets, verifier)? {
+        FirstCheck::Verified(v, bound) => (*v, bound),
+        FirstCheck::Unverified(d) => return Ok(*d),
+    };
     let mut candidates = vec![first_check.clone()];
     if !first_check.tail_within(&bound, 1.0) {
-        let advice = failure_advice(&first.scenario)
-            .into_iter()
-            .chain(slow_convergence_advice(&first.scenario, &design, &first_check.tail_max_e, &bound))
-            .collect();
+        let advice = horizon_advice(doc, targets, verifier, (&first.scenario, &design, &first_check), &bound)?;
         return Ok(finish(
             (first, design, first_check),
             bound,
@@ -895,38 +993,44 @@ fn ended_early(s: &Scenario, outcome: &Outcome) -> String {
     )
 }
 
-/// Why a design failed its verification, when the scenario shows it: a horizon shorter than
-/// [`SEPARATION_BEATS`] beats of the two closest frequencies, with the t_end that has them.
-fn failure_advice(s: &Scenario) -> Option<String> {
+/// A horizon shorter than [`SEPARATION_BEATS`] beats of the two closest frequencies cannot tell
+/// them apart: why, and the t_end that has them.
+fn beat_horizon(s: &Scenario) -> Option<(String, f64)> {
     let (a, b) = closest_pair(s)?;
     let beat = 2.0 * std::f64::consts::PI / (b - a);
     let (t_end, unit) = (s.simulation.t_end, s.plant.time_unit);
     (t_end < SEPARATION_BEATS * beat).then(|| {
-        format!(
-            "the horizon is too short to tell the signals' two closest frequencies apart: {} and {} rad/{unit} beat with period 2π/{:.4e} = {beat:.4e} {unit}, and t_end = {t_end} {unit} is {:.2} beats; the adaptive law needs about {SEPARATION_BEATS}: lengthen simulation.t_end to at least {} {unit} (or move the frequencies apart)",
+        let why = format!(
+            "the horizon is too short to tell the signals' two closest frequencies apart: {} and {} rad/{unit} beat with period 2π/{:.4e} = {beat:.4e} {unit}, and t_end = {t_end} {unit} is {:.2} beats; the adaptive law needs about {SEPARATION_BEATS} (or move the frequencies apart)",
             crate::settings::fmt_4(a),
             crate::settings::fmt_4(b),
             b - a,
             t_end / beat,
-            crate::settings::round_up_2(SEPARATION_BEATS * beat)
-        )
+        );
+        (why, SEPARATION_BEATS * beat)
     })
 }
 
 /// The longest horizon, in multiples of t_end, that the slow-convergence advice proposes.
 const MAX_HORIZON: f64 = 1e6;
 
-/// Why channels missed their tail bound when the averaged law (η̃' = −μ Ω̄ η̃) says so at the
-/// chosen μ: its predicted RMS error reaches half the bound only after the tail has begun (the last
-/// tenth of t_end), because an excited direction of Ω̄ is weakly excited (1/(μ λ) long) and μ may
-/// not rise (the stiffness cap). Proposes a t_end whose tail starts [`SLOW_MARGIN`] times later
-/// than the predicted time: the averaged law is optimistic where Ω̄ is poorly excited. A channel
-/// that no horizon within [`MAX_HORIZON`]·t_end converges is told to excite it better instead.
-fn slow_convergence_advice(s: &Scenario, design: &Design, tail_max_e: &[f64], bound: &[f64]) -> Option<String> {
+/// Why channels missed their tail bound, by the averaged law (η̃' = −μ Ω̄ η̃) at the chosen μ.
+struct SlowConvergence {
+    /// Channels whose predicted RMS error reaches half the bound only after the tail has begun
+    /// (the last tenth of t_end), because an excited direction of Ω̄ is weakly excited (1/(μλ)
+    /// long) and μ may not rise (the stiffness cap).
+    why: Vec<String>,
+    /// A t_end whose tail starts [`SLOW_MARGIN`] times later than the latest predicted time (the
+    /// averaged law is optimistic where Ω̄ is poorly excited); 0 when `why` is empty.
+    needed: f64,
+    /// Channels that no horizon within [`MAX_HORIZON`]·t_end converges, told to excite them better.
+    hopeless: Vec<String>,
+}
+
+fn slow_convergence(s: &Scenario, design: &Design, tail_max_e: &[f64], bound: &[f64]) -> SlowConvergence {
     let avg = Averaged::new(design, &s.reference, &s.disturbance);
     let (t_end, unit) = (s.simulation.t_end, s.plant.time_unit);
-    let mut needed = 0.0f64;
-    let (mut why, mut hopeless) = (Vec::new(), Vec::new());
+    let mut slow = SlowConvergence { why: Vec::new(), needed: 0.0, hopeless: Vec::new() };
     for (i, (c, &mu)) in avg.channels.iter().zip(design.mu()).enumerate() {
         let (aim, slowest) = (0.5 * bound[i], c.excited().fold(f64::INFINITY, f64::min));
         let rate = mu * slowest;
@@ -941,7 +1045,7 @@ fn slow_convergence_advice(s: &Scenario, design: &Design, tail_max_e: &[f64], bo
         if hi > MAX_HORIZON * t_end {
             // No horizon is advice here (the SI vessel's reference directions: 1e18 s); this
             // channel's line must not silence the others'.
-            hopeless.push(format!(
+            slow.hopeless.push(format!(
                 "channel {}: the averaged law predicts its RMS error within half the tail bound only past {MAX_HORIZON:.0e}× t_end (its slowest excited direction of Ω̄ converges in 1/(μλ) = {:.3e} {unit})",
                 i + 1,
                 1.0 / (mu * slowest)
@@ -957,8 +1061,8 @@ fn slow_convergence_advice(s: &Scenario, design: &Design, tail_max_e: &[f64], bo
             }
         }
         if hi > (1.0 - TAIL_FRACTION) * t_end / SLOW_MARGIN {
-            needed = needed.max(SLOW_MARGIN * hi / (1.0 - TAIL_FRACTION));
-            why.push(format!(
+            slow.needed = slow.needed.max(SLOW_MARGIN * hi / (1.0 - TAIL_FRACTION));
+            slow.why.push(format!(
                 "channel {}: its slowest excited direction of Ω̄ converges in 1/(μλ) = {} {unit} (λ = {:.3e}, μ = {}), and the averaged law predicts its RMS error within half the tail bound only at t = {} {unit}",
                 i + 1,
                 crate::settings::fmt_4(1.0 / (mu * slowest)),
@@ -968,37 +1072,174 @@ fn slow_convergence_advice(s: &Scenario, design: &Design, tail_max_e: &[f64], bo
             ));
         }
     }
-    let longer = (needed > t_end).then(|| {
-        format!(
-            "{}; the horizon is too short for the adaptation to converge: lengthen simulation.t_end to at least {} {unit} (the tail, its last tenth, {SLOW_MARGIN}× later than predicted: the averaged law is optimistic for weakly excited directions), or excite them better (references of several frequencies)",
-            why.join("; "),
-            crate::settings::round_up_2(needed)
-        )
-    });
-    let scaling = match design.regressor_scaling() {
-        crate::design::RegressorScaling::Paper => {
-            ", or design.regressor_scaling = \"normalized\" (ξ̂ of the signals' size)"
-        }
-        crate::design::RegressorScaling::Normalized => "",
-    };
-    let excite = (!hopeless.is_empty()).then(|| {
-        format!(
-            "{}: no horizon helps; excite those directions better (references of several frequencies; a disturbance in units far from the outputs' spreads Ω̄ by their ratio squared{scaling}) or ask less of the loop",
-            hopeless.join("; ")
-        )
-    });
-    match (excite, longer) {
-        (Some(a), Some(b)) => Some(format!("{a}; {b}")),
-        (a, b) => a.or(b),
-    }
+    slow
 }
 
 /// How much later than the averaged law predicts the tail of a proposed horizon starts
-/// ([`slow_convergence_advice`]).
+/// ([`slow_convergence`]).
 const SLOW_MARGIN: f64 = 3.0;
 
 /// The tail of a run: its last tenth ([`crate::sim::SimResult::summary`]'s tail figures).
 const TAIL_FRACTION: f64 = 0.1;
+
+/// A channel's error still decays at the end of its run when its tail's max |e| is below this
+/// fraction of the max |e| over [0.5, 0.6]·t_end.
+const DECAYING: f64 = 0.5;
+
+/// The longest horizon the automatic design verifies, in multiples of t_end.
+const MAX_VERIFIED_HORIZON: f64 = 100.0;
+
+/// The solver steps the verifying runs at longer horizons may take together ([`horizon_advice`]):
+/// seconds to a minute.
+const HORIZON_STEPS: f64 = 2e7;
+
+/// Longer horizons tried, each twice the one before ([`horizon_advice`]).
+const HORIZONS_TRIED: usize = 3;
+
+/// The advice on a first proposal whose verifying run missed its tail bound (`first`: its
+/// scenario, design and run): the causes found (too few beats of the closest frequencies, slow
+/// adaptation by the averaged law, an error still decaying at the end of the run), then a horizon
+/// that the automatic design itself verifies: the design repeated on `doc` with
+/// simulation.t_end = T for T = the causes' estimate × 1, 2, 4 (at most
+/// [`MAX_VERIFIED_HORIZON`]·t_end and [`HORIZON_STEPS`] steps in all), the first that passes
+/// named. The averaged law's estimate alone was optimistic: the active suspension's
+/// "at least 1500 s" failed, its design passes at 3000 s.
+fn horizon_advice(
+    doc: &toml::Table,
+    targets: &Targets,
+    verifier: &mut Verifier,
+    (s, design, first): (&Scenario, &Design, &Candidate),
+    bound: &[f64],
+) -> Result<Vec<String>, AutoError> {
+    let (t_end, unit) = (s.simulation.t_end, s.plant.time_unit);
+    let beats = beat_horizon(s);
+    let slow = slow_convergence(s, design, &first.tail_max_e, bound);
+    let decay = first.decay_horizon(bound, t_end);
+    let mut advice: Vec<String> = beats.iter().map(|(why, _)| why.clone()).collect();
+    if !slow.why.is_empty() {
+        advice.push(format!("{}; the horizon is too short for the adaptation to converge", slow.why.join("; ")));
+    }
+    let scaling = match design.regressor_scaling() {
+        RegressorScaling::Paper => ", or design.regressor_scaling = \"normalized\" (ξ̂ of the signals' size)",
+        RegressorScaling::Normalized => "",
+    };
+    if !slow.hopeless.is_empty() {
+        advice.push(format!(
+            "{}: no horizon helps; excite those directions better (references of several frequencies; a disturbance in units far from the outputs' spreads Ω̄ by their ratio squared{scaling}) or ask less of the loop",
+            slow.hopeless.join("; ")
+        ));
+    }
+    // The estimates, largest first wins: (horizon, what it rests on).
+    let estimates = [
+        beats.map(|(_, t)| (t, format!("{SEPARATION_BEATS} beats of the closest frequencies"))),
+        (slow.needed > t_end).then(|| {
+            (slow.needed, format!("the tail, its last tenth, {SLOW_MARGIN}× later than the averaged law predicts"))
+        }),
+        decay,
+    ];
+    let Some(estimate) = estimates.into_iter().flatten().max_by(|a, b| a.0.total_cmp(&b.0)) else {
+        return Ok(advice);
+    };
+    advice.push(if slow.hopeless.is_empty() {
+        verified_horizon(doc, targets, verifier, estimate, (s, first.steps))?
+    } else {
+        unverified_horizon(&estimate, unit, "no horizon passes while a channel above cannot converge")
+    });
+    Ok(advice)
+}
+
+/// What to do besides lengthening t_end, in the horizon advice.
+const EXCITE_SLOW: &str =
+    "excite the slow directions better (references of several frequencies) or ask less of the loop";
+
+/// The horizon advice for `(estimate, basis)` (the horizon and what it rests on), not verified
+/// because of `why`.
+fn unverified_horizon((estimate, basis): &(f64, String), unit: crate::TimeUnit, why: &str) -> String {
+    format!(
+        "lengthen simulation.t_end to at least {} {unit} ({basis}; not verified: {why}), or {EXCITE_SLOW}",
+        crate::settings::round_up_2(*estimate)
+    )
+}
+
+/// The horizon advice after the automatic design is repeated on `doc` with simulation.t_end at
+/// the estimate (rounded up), then doubled while it misses ([`HORIZONS_TRIED`] in all, within
+/// [`MAX_VERIFIED_HORIZON`]·t_end and [`HORIZON_STEPS`] steps, the first run of scenario `s` having
+/// taken `steps`): the first horizon that passes, or those tried.
+fn verified_horizon(
+    doc: &toml::Table,
+    targets: &Targets,
+    verifier: &mut Verifier,
+    estimate: (f64, String),
+    (s, steps): (&Scenario, usize),
+) -> Result<String, AutoError> {
+    let (t_end, unit, basis) = (s.simulation.t_end, s.plant.time_unit, &estimate.1);
+    let four = crate::settings::fmt_4;
+    let (mut tried, mut spent) = (Vec::new(), 0.0);
+    let mut horizon = crate::settings::round_up_2(estimate.0);
+    for _ in 0..HORIZONS_TRIED {
+        let predicted = steps.max(1) as f64 / t_end * horizon;
+        let beyond = if horizon > MAX_VERIFIED_HORIZON * t_end {
+            Some(format!(
+                "{} {unit} is beyond {MAX_VERIFIED_HORIZON}× t_end, the longest the automatic design verifies",
+                four(horizon)
+            ))
+        } else {
+            (spent + predicted > HORIZON_STEPS).then(|| format!("a run to {} {unit} would take about {predicted:.1e} solver steps, beyond the {HORIZON_STEPS:.0e} the automatic design spends on longer horizons", four(horizon)))
+        };
+        if let Some(why) = beyond {
+            if tried.is_empty() {
+                return Ok(unverified_horizon(&estimate, unit, &why));
+            }
+            tried.push(format!("longer not tried: {why}"));
+            break;
+        }
+        let before = verifier.steps;
+        let check = check_first(&with_t_end(doc, horizon), targets, verifier)?;
+        spent += (verifier.steps - before) as f64;
+        match check {
+            FirstCheck::Verified(v, b) if v.2.tail_within(&b, 1.0) => {
+                let earlier = if tried.is_empty() {
+                    String::new()
+                } else {
+                    format!("; the shorter ones tried missed ({})", tried.join("; "))
+                };
+                return Ok(format!(
+                    "lengthen simulation.t_end to at least {} {unit}: the automatic design repeated with that horizon passes its verification (tail max|e| [{}] against bounds [{}]; the horizon estimated from {basis}{earlier})",
+                    four(horizon),
+                    list(&v.2.tail_max_e),
+                    list(&b)
+                ));
+            }
+            FirstCheck::Verified(v, b) => {
+                tried.push(format!("{} {unit}: worst tail {:.2}× its bound", four(horizon), v.2.worst_tail(&b)))
+            }
+            FirstCheck::Unverified(d) => tried.push(format!(
+                "{} {unit}: {}",
+                four(horizon),
+                d.verification.advice.first().map_or("not verified", String::as_str)
+            )),
+        }
+        horizon *= 2.0;
+    }
+    Ok(format!(
+        "the automatic design repeated with longer horizons still fails ({}; the first estimated from {basis}): the error decays slower than predicted; {EXCITE_SLOW}",
+        tried.join("; ")
+    ))
+}
+
+/// `doc` with simulation.t_end = `t_end`.
+fn with_t_end(doc: &toml::Table, t_end: f64) -> toml::Table {
+    let mut doc = doc.clone();
+    if let Some(sim) = doc.get_mut("simulation").and_then(toml::Value::as_table_mut) {
+        sim.insert("t_end".into(), toml::Value::Float(t_end));
+    }
+    doc
+}
+
+/// Numbers to four significant digits, comma-separated.
+fn list(v: &[f64]) -> String {
+    v.iter().map(|&x| format!("{x:.3e}")).collect::<Vec<_>>().join(", ")
+}
 
 /// The ratio between a component's neighbouring filter poles: 1.5, or less when ×1.5 would spread
 /// them wider than its frequencies widened by 1.5 on each side (many harmonics), down to ×1.1;

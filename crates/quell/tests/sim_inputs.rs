@@ -103,16 +103,20 @@ fn horizons_and_tolerances_are_checked() {
 
 /// An output step that is not a whole number of samples names both ways out, and each of them runs:
 /// the paper's delays (1 s, 3 s) are whole at T = 0.04 s, where 0.1 s is 2.5 samples; the multiple
-/// offered is 0.12 s (3 samples) and the sample time 0.1/3 s (whole in 1 s and 3 s as well).
+/// offered is 0.12 s (3 samples) and the sample time 0.025 s (whole in 1 s and 3 s as well; the
+/// longest divisor below 0.04 s, 0.1/3 s, has no short decimal form and its rows would not print
+/// as 0.1, 0.2, …).
 #[test]
 fn an_output_step_between_samples_gets_fixes_that_run() {
     let (s, d) = paper();
     let (g, w) = (&s.reference, &s.disturbance);
     let err = Run::new(&d, g, w, RunSettings::sampled(1.0, 0.1, 0.04)).simulate(go).expect_err("2.5 samples");
     let message = err.to_string();
-    assert!(message.contains("e.g. 0.12 s") && message.contains("e.g. 0.0333333333"), "{message}");
+    assert!(message.contains("e.g. 0.12 s") && message.contains("e.g. 0.025 s"), "{message}");
     let (divisor, multiple) = quell::sim::output_step_fixes(&d, 0.04, 0.1);
-    assert!((multiple - 0.12).abs() < 1e-15 && (divisor - 0.1 / 3.0).abs() < 1e-15, "{multiple} {divisor}");
+    assert!((multiple - 0.12).abs() < 1e-15 && divisor == 0.025, "{multiple} {divisor}");
+    // Where the longest divisor is short, it is the one offered: 1 s / 8 below 0.13 s, not a round 0.1 s.
+    assert_eq!(quell::sim::output_step_fixes(&d, 0.13, 1.0).0, 0.125);
     for (h, ts) in [(multiple, 0.04), (0.1, divisor)] {
         let r = Run::new(&d, g, w, RunSettings::sampled(1.0, h, ts)).simulate(go);
         assert!(r.is_ok(), "output_step {h}, sample_time {ts}: {:?}", r.err());
@@ -338,4 +342,21 @@ fn both_loops_record_the_same_decimal_times_and_end_at_t_end() {
         }
         assert_eq!(t[20], t_end);
     }
+}
+
+/// The coarse-sample warning's example sample time is one a run accepts with the file's output
+/// step: the paper's loop (ρ = 9/s) asks T_s ≤ 0.0222 s; 0.02 s makes both delays whole but is
+/// 2.5 samples of an output step of 0.05 s (the run then refused it), 0.01 s is both.
+#[test]
+fn the_coarse_sample_warning_offers_a_sample_time_that_divides_the_output_step() {
+    let (s, d) = paper();
+    let signals = [&s.reference, &s.disturbance];
+    let alone = quell::sim::coarse_sample_warning(&d, signals, 0.05, None).unwrap();
+    assert!(alone.contains("e.g. 0.02 s, which makes every delay whole, or"), "{alone}");
+    let w = quell::sim::coarse_sample_warning(&d, signals, 0.05, Some(0.05)).unwrap();
+    assert!(w.contains("e.g. 0.01 s, which makes every delay whole and divides simulation.output_step"), "{w}");
+    let (g, o) = (&s.reference, &s.disturbance);
+    assert!(Run::new(&d, g, o, RunSettings::sampled(1.0, 0.05, 0.02)).check().is_err());
+    let r = Run::new(&d, g, o, RunSettings::sampled(1.0, 0.05, 0.01)).check();
+    assert!(r.is_ok(), "{:?}", r.err());
 }

@@ -359,26 +359,32 @@ pub(crate) fn valid_sample_time_at_most(design: &Design, T: f64) -> Option<f64> 
 
 /// [`valid_sample_time_at_most`] for `delays` and delay-line rows of `width`.
 fn sample_time_at_most(delays: &[f64], width: usize, T: f64) -> Option<f64> {
-    let top = T.log10().floor() as i32;
-    let round = (top - 3..=top)
-        .rev()
-        .flat_map(|e| round_times(e).into_iter().rev())
-        .find(|&t| t <= T && fits(delays, width, t));
-    round.or_else(|| sample_time_near(delays, T, width, true))
+    round_at_most(delays, width, T).or_else(|| sample_time_near(delays, T, width, true))
 }
 
-/// A sample time near `T` that divides the output step `h`: h/⌈h/T⌉, the longest ≤ T that does,
-/// when every delay of `design` is whole there and the delay lines fit, else the one
-/// [`valid_sample_time`] finds with h among the delays (counting h as a line too: a little
-/// conservative), else h/⌈h/T⌉ still (no sample time near T passes the delays' checks).
-pub(crate) fn sample_time_dividing(design: &Design, T: f64, h: f64) -> f64 {
+/// The longest round sample time (as [`round_times`], down to three decades below `T`) at most `T`
+/// at which every delay is whole and the lines fit.
+fn round_at_most(delays: &[f64], width: usize, T: f64) -> Option<f64> {
+    let top = T.log10().floor() as i32;
+    (top - 3..=top).rev().flat_map(|e| round_times(e).into_iter().rev()).find(|&t| t <= T && fits(delays, width, t))
+}
+
+/// A sample time at most `T` that divides the output step `h` and at which every delay of
+/// `design` is whole and the lines fit: h/⌈h/T⌉, the longest that divides h, where it has at most
+/// six significant digits (0.9, not 0.5/3 = 0.16666…, whose rows print as 0.5000000000001);
+/// else the longest round one; else the one [`valid_sample_time`] finds with h among the delays
+/// (counting h as a line too: a little conservative). `None` when none exists.
+pub(crate) fn sample_time_dividing(design: &Design, T: f64, h: f64) -> Option<f64> {
     let (delays, width) = (&design.plant().delays, 1 + design.q());
     let below = h / (h / T).ceil().max(1.0);
-    if fits(delays, width, below) {
-        return below;
+    let short = format!("{below:.5e}").parse::<f64>() == Ok(below);
+    if short && fits(delays, width, below) {
+        return Some(below);
     }
     let with_h: Vec<f64> = delays.iter().copied().chain([h]).collect();
-    valid_sample_time(&with_h, T, width).unwrap_or(below)
+    round_at_most(&with_h, width, T)
+        .or_else(|| fits(delays, width, below).then_some(below))
+        .or_else(|| valid_sample_time(&with_h, T, width))
 }
 
 /// The shortest round sample time (as [`round_times`], up to three decades above `at_least`) from

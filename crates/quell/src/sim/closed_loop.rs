@@ -34,10 +34,15 @@ struct Layout {
     dim: usize,
 }
 
+/// The length of [z, η̂] = [ξ̂, x̂, η̂_1, …, η̂_m], the prefix the delayed terms read: n + q + m·q.
+fn delayed_prefix(n: usize, q: usize, m: usize) -> usize {
+    n + q + m * q
+}
+
 impl Layout {
     fn new(eq: &Equations) -> Layout {
         let q = eq.q;
-        let x = eq.nz + eq.m * q;
+        let x = delayed_prefix(eq.n, q, eq.m);
         let mut at = x + eq.n;
         let (mut w, mut y, mut omega) = (vec![], vec![], vec![]);
         for i in 0..eq.m {
@@ -930,7 +935,7 @@ fn budgets(run: &Run<'_>, integrator: &Integrator, record: usize, delays: &[f64]
 /// ([`budgets`]); the history's records carry the n_d = n + q + m·q delayed states z = (ξ̂, x̂) and η̂.
 pub(super) fn history_bound(run: &Run<'_>, integrator: &Integrator) -> usize {
     let (p, q) = (run.design.plant(), run.design.q());
-    let record = dde::record_bytes(p.n() + q + p.m() * q);
+    let record = dde::record_bytes(delayed_prefix(p.n(), q, p.m()));
     budgets(run, integrator, record, &loop_delays(p, run.truth, run.settings.actuator.as_ref())).1
 }
 

@@ -28,20 +28,29 @@ use crate::signal::{Signal, SignalBank};
 pub const COARSE_SAMPLE: f64 = 0.2;
 
 /// A warning when `sample_time` is coarse for `design` under g = `reference`, ω = `disturbance`
-/// (T_s·ρ > [`COARSE_SAMPLE`]), with the sample time that is not.
+/// (T_s·ρ > [`COARSE_SAMPLE`]), with the sample time that is not and that a run accepts: every
+/// delay whole and, given the `output_step`, dividing it (0.2 s beside an output step of 0.5 s sent
+/// the user to a second error).
 pub fn coarse_sample_warning(
     design: &Design,
-    reference: &Signal,
-    disturbance: &Signal,
+    [reference, disturbance]: [&Signal; 2],
     sample_time: f64,
+    output_step: Option<f64>,
 ) -> Option<String> {
     let rate = super::loop_rate(design, design.plant(), [reference, disturbance]);
     let unit = design.plant().time_unit;
     (sample_time * rate > COARSE_SAMPLE).then(|| {
         let bound = settings::three_digits_down(COARSE_SAMPLE / rate);
-        // The longest T_s within the bound that makes every delay whole, which a run accepts.
-        let whole = match crate::controller::discrete::valid_sample_time_at_most(design, bound) {
-            Some(t) if t != bound => format!(", e.g. {} {unit}, which makes every delay whole", settings::fmt_short(t)),
+        let valid = match output_step {
+            Some(h) => discrete::sample_time_dividing(design, bound, h),
+            None => discrete::valid_sample_time_at_most(design, bound),
+        };
+        let whole = match valid {
+            Some(t) if t != bound => format!(
+                ", e.g. {} {unit}, which makes every delay whole{}",
+                settings::fmt_short(t),
+                if output_step.is_some() { " and divides simulation.output_step" } else { "" }
+            ),
             _ => String::new(),
         };
         format!(
@@ -122,7 +131,8 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
 /// divides h, h/⌈h/T⌉, where it passes; an offer that failed the delays' check sent a user back
 /// and forth), and the multiple of T nearest h, T·round(h/T) (at least T).
 pub fn output_step_fixes(design: &Design, T: f64, h: f64) -> (f64, f64) {
-    (discrete::sample_time_dividing(design, T, h), T * (h / T).round().max(1.0))
+    let divisor = discrete::sample_time_dividing(design, T, h).unwrap_or(h / (h / T).ceil().max(1.0));
+    (divisor, T * (h / T).round().max(1.0))
 }
 
 /// The sampled-data loop of `run` ([`Run::simulate`]) at `sample_time`, with the run's controller
