@@ -68,7 +68,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     let result = simulate(&scenario, &design, settings, &ctrl_c)?;
     ctrl_c.start_writing();
     let seconds = started.elapsed().as_secs_f64();
-    let diagnostics = quell::diagnostics::diagnose(&design, &scenario.reference, &scenario.disturbance, &result);
+    let diagnostics = quell::diagnostics::diagnose_run(&scenario, &design, &result);
     let done = Finished { scenario: &scenario, design: &design, result: &result, diagnostics: &diagnostics, seconds };
     write_outputs(out, &done, !args.no_plots).map_err(|e| Failure::Run(format!("writing {}: {e}", out.display())))?;
     report_outcome(&done, out)

@@ -72,7 +72,7 @@ impl PySimResult {
         r: SimResult,
         labels: Labels,
     ) -> PyResult<Self> {
-        let diagnostics = quell::diagnostics::diagnose(design, &scenario.reference, &scenario.disturbance, &r);
+        let diagnostics = quell::diagnostics::diagnose_run(scenario, design, &r);
         PySimResult::new(py, r, serde_json::to_string(&diagnostics).unwrap_or_default(), labels)
     }
 

@@ -187,3 +187,23 @@ fn truth_mistakes_name_their_key() {
         .to_string();
     assert!(e.starts_with("truth.A: expected 3×3 (the shape of plant.A)"), "{e}");
 }
+
+/// A run that ends early on a true plant far from the model (the paper's with τ₂ = 9 s against
+/// 3 s: its step size underflows at t = 43 s as it blows up) is told so first, with the keys that differ, before the model's own advice; the same scenario
+/// without the mismatch completes with no such line.
+#[test]
+fn a_run_that_diverges_on_a_mismatched_truth_names_the_mismatch_first() {
+    let s = scenario("delays = [1.0, 9.0]");
+    let d = s.design().unwrap();
+    let r = Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
+    assert!(!matches!(r.outcome, Some(Outcome::Completed) | None), "{:?}", r.outcome);
+    let advice = quell::diagnostics::diagnose_run(&s, &d, &r).advice;
+    assert!(
+        advice[0].starts_with("the run ended early (")
+            && advice[0].contains("on a true plant that differs from the design model: truth.delays [1, 9] s against plant.delays [1, 3]; the advice below is for the model"),
+        "{advice:?}"
+    );
+    let nominal = scenario("");
+    let r = Run::of(&nominal, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
+    assert!(quell::diagnostics::diagnose_run(&nominal, &d, &r).advice.iter().all(|a| !a.contains("true plant")));
+}

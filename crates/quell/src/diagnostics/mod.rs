@@ -113,6 +113,65 @@ pub struct Diagnostics {
     pub advice: Vec<String>,
 }
 
+/// The diagnostics of `result`, a run of scenario `s` with `design` ([`diagnose`]), led by
+/// [`model_error_advice`] when the run ended early on a true plant that differs from the model.
+pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) -> Diagnostics {
+    let mut d = diagnose(design, &s.reference, &s.disturbance, result);
+    if let Some(line) = model_error_advice(s, result) {
+        d.advice.insert(0, line);
+    }
+    d
+}
+
+/// A run that ended early (diverged, or out of its step or memory budget) on a true plant
+/// (`[truth]`) that differs from the design model: which keys differ and by how much, and that
+/// the advice after it is for the model. The observer advice of a chemostat whose true delays are
+/// 20× the model's named the model's observer speed-ups and nothing of the mismatch.
+pub fn model_error_advice(s: &crate::Scenario, result: &SimResult) -> Option<String> {
+    let outcome = result.outcome.as_ref()?;
+    if matches!(outcome, Outcome::Completed | Outcome::Interrupted { .. }) {
+        return None;
+    }
+    let (model, unit) = (&s.plant, s.plant.time_unit);
+    let mut diffs = Vec::new();
+    if let Some(truth) = &s.truth {
+        for (key, t, m) in
+            [("A", &truth.A, &model.A), ("B", &truth.B, &model.B), ("C", &truth.C, &model.C), ("D", &truth.D, &model.D)]
+        {
+            if t != m {
+                let relative = (t - m).norm() / m.norm().max(f64::MIN_POSITIVE);
+                diffs.push(format!(
+                    "truth.{key} is {} % off plant.{key} (‖Δ{key}‖/‖{key}‖)",
+                    crate::settings::fmt_4(100.0 * relative)
+                ));
+            }
+        }
+        if truth.delays != model.delays {
+            diffs.push(format!(
+                "truth.delays [{}] {unit} against plant.delays [{}]",
+                short_list(&truth.delays),
+                short_list(&model.delays)
+            ));
+        }
+    }
+    if let Some(a) = &s.actuator {
+        if a.delays.iter().any(|&d| d > 0.0) {
+            diffs.push(format!("truth.actuator_delays [{}] {unit} on the whole u_f", short_list(&a.delays)));
+        }
+    }
+    (!diffs.is_empty()).then(|| {
+        format!(
+            "the run ended early ({outcome}, t in {unit}) on a true plant that differs from the design model: {}; the advice below is for the model, which the run did not simulate: first check that the design holds on its own model (the scenario without [truth]), then how much mismatch it tolerates (a study over the truth keys, docs/studies.md)",
+            diffs.join(", ")
+        )
+    })
+}
+
+/// Numbers in their short form, comma-separated.
+fn short_list(v: &[f64]) -> String {
+    v.iter().map(|&x| fmt_short(x)).collect::<Vec<_>>().join(", ")
+}
+
 /// The diagnostics of `result`, a run of `design` under g = `reference`, ω = `disturbance`.
 pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, result: &SimResult) -> Diagnostics {
     let avg = Averaged::new(design, reference, disturbance);
