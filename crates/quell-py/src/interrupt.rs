@@ -3,12 +3,48 @@
 //! ([`quell::cancel::with_stop`]) while this thread checks Python's signals every
 //! [`SIGNAL_CHECK`]; a KeyboardInterrupt sets the flag, waits for the call to notice it (at its next
 //! poll, within a fraction of a second) and is raised.
+//!
+//! Python runs signal handlers in the main thread only, so a call made from a worker thread (a
+//! `ThreadPoolExecutor` of simulations) never saw Ctrl-C and ran to its end. The package hooks
+//! SIGINT on import (`quell/__init__.py`: it counts the Ctrl-C through [`note_interrupt`], then
+//! calls Python's own handler), and every call watches that count as well ([`CtrlC`]).
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
 use pyo3::prelude::*;
+
+/// Ctrl-Cs the package's SIGINT hook has seen.
+static INTERRUPTS: AtomicU64 = AtomicU64::new(0);
+
+/// Counts a Ctrl-C: every call under way, in any thread, raises KeyboardInterrupt at its next check.
+#[pyfunction]
+#[pyo3(name = "_note_interrupt")]
+pub fn note_interrupt() {
+    INTERRUPTS.fetch_add(1, Ordering::Relaxed);
+}
+
+/// A call's watch for Ctrl-C: Python's pending signals (in the main thread) and the Ctrl-Cs the
+/// package's hook counted since the call began (in any thread).
+pub struct CtrlC {
+    since: u64,
+}
+
+impl CtrlC {
+    pub fn new() -> CtrlC {
+        CtrlC { since: INTERRUPTS.load(Ordering::Relaxed) }
+    }
+
+    /// The KeyboardInterrupt to raise, if Ctrl-C came.
+    pub fn check(&self) -> PyResult<()> {
+        Python::attach(|py| py.check_signals())?;
+        if INTERRUPTS.load(Ordering::Relaxed) != self.since {
+            return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err("Ctrl-C (in another thread)"));
+        }
+        Ok(())
+    }
+}
 
 /// How often the waiting thread runs Python's signal handlers.
 const SIGNAL_CHECK: Duration = Duration::from_millis(50);
@@ -34,7 +70,7 @@ pub fn interruptible_keeping<R: Send>(
     py: Python<'_>,
     work: impl FnOnce(Arc<AtomicBool>) -> R + Send,
 ) -> PyResult<(R, Option<PyErr>)> {
-    let stop = Arc::new(AtomicBool::new(false));
+    let (stop, ctrl_c) = (Arc::new(AtomicBool::new(false)), CtrlC::new());
     let mut interrupt = None;
     let result = py.detach(|| {
         std::thread::scope(|scope| {
@@ -43,7 +79,7 @@ pub fn interruptible_keeping<R: Send>(
             while !worker.is_finished() {
                 std::thread::sleep(SIGNAL_CHECK);
                 if interrupt.is_none() {
-                    if let Err(e) = Python::attach(|py| py.check_signals()) {
+                    if let Err(e) = ctrl_c.check() {
                         stop.store(true, Ordering::Relaxed);
                         interrupt = Some(e);
                     }

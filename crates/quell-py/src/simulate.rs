@@ -695,10 +695,11 @@ fn run_released(
 ) -> PyResult<(SimResult, Option<PyErr>)> {
     // A Mutex, not a RefCell: the closures run with the GIL released, so must be Send.
     let interrupt: std::sync::Mutex<Option<PyErr>> = std::sync::Mutex::new(None);
+    let ctrl_c = crate::interrupt::CtrlC::new();
     let seen = || interrupt.lock().unwrap_or_else(std::sync::PoisonError::into_inner).is_some();
     let interrupted = || {
         if !seen() {
-            if let Err(e) = Python::attach(|py| py.check_signals()) {
+            if let Err(e) = ctrl_c.check() {
                 *interrupt.lock().unwrap_or_else(std::sync::PoisonError::into_inner) = Some(e);
             }
         }

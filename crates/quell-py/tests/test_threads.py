@@ -69,6 +69,42 @@ def test_ctrl_c_stops_a_running_simulation(python_child, output_step, sample_tim
     assert time.perf_counter() - sent < 10
 
 
+def test_ctrl_c_stops_simulations_in_worker_threads(python_child):
+    """Python runs signal handlers in the main thread only: simulations in a ThreadPoolExecutor
+    never saw Ctrl-C, and leaving the pool's `with` waited for them to run to their end. The package
+    counts Ctrl-C for its calls in every thread: the workers' runs raise KeyboardInterrupt too, and
+    the pool is left within seconds of SIGINT (each run alone takes about 35 s). A run started
+    after the Ctrl-C is not affected."""
+    import signal
+
+    code = (
+        "import time, quell\nfrom concurrent.futures import ThreadPoolExecutor\n"
+        "s = quell.paper_example(); s.design()\n"
+        "run = lambda _: quell.simulate(s, t_end=3e5, output_step=10.0)\n"
+        "pool = ThreadPoolExecutor(max_workers=2)\n"
+        "futures = [pool.submit(run, i) for i in range(2)]\n"
+        "print('ready', flush=True)\n"
+        "try:\n"
+        "    while True:\n        time.sleep(0.01)\n"
+        "except KeyboardInterrupt:\n"
+        "    start = time.perf_counter()\n"
+        "    pool.shutdown(wait=True)\n"
+        "    kinds = sorted(type(f.exception()).__name__ for f in futures)\n"
+        "    print('left', time.perf_counter() - start, *kinds, flush=True)\n"
+        "    after = quell.simulate(s, t_end=1.0)\n"
+        "    print('after', after.outcome['status'], flush=True)\n"
+    )
+    child = python_child(code)
+    time.sleep(0.5)  # into the runs
+    child.send_signal(signal.SIGINT)
+    out, err = child.communicate(timeout=120)
+    left = out.split("left ")[1].splitlines()[0].split()
+    assert left[1:] == ["KeyboardInterrupt", "KeyboardInterrupt"], out + err
+    # Noticed within 50 ms of a check; 10 s leaves room for a loaded CI machine.
+    assert float(left[0]) < 10, out
+    assert "after completed" in out, out + err
+
+
 def test_one_controller_shared_by_threads_serializes_its_steps():
     """Eight threads step one Controller 500 times each with the same y and g (as tuples of numpy
     scalars, the slow reading path, and with a tiny switch interval to interleave them): no error

@@ -34,7 +34,32 @@ from ._quell import (
     sweep,
     sweep_runs,
     tune,
+    _note_interrupt,
 )
+
+
+
+def _hook_ctrl_c():
+    """Python runs signal handlers in the main thread only: a simulation, sweep or design called
+    from a worker thread never saw Ctrl-C and ran to its end. Count each Ctrl-C for quell's calls
+    in every thread, then do what Python does. A handler of the application's own is left alone."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return
+    previous = signal.getsignal(signal.SIGINT)
+    if previous is not signal.default_int_handler:
+        return
+
+    def on_ctrl_c(signum, frame):
+        _note_interrupt()
+        previous(signum, frame)
+
+    signal.signal(signal.SIGINT, on_ctrl_c)
+
+
+_hook_ctrl_c()
 
 __all__ = [
     "Controller",
