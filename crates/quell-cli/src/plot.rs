@@ -191,6 +191,48 @@ fn path_pixels(points: &[(f64, f64)], (w, h): (u32, u32), x: &std::ops::Range<f6
     finite.clone().zip(finite.skip(1)).map(|(a, b)| (sx * (b.0 - a.0)).hypot(sy * (b.1 - a.1))).sum()
 }
 
+/// M4 decimation (Jugel et al., "M4: A Visualization-Oriented Time Series Data Aggregation", VLDB
+/// 2014): per pixel column of a plot `w` pixels wide over t in `x`, the column's first, lowest,
+/// highest and last points, in time order. A line through them rasterizes as through all of them;
+/// 20,001 rows of a 2000 s run drew 1.2 MB SVGs. A non-finite point is kept and ends its column.
+fn m4(points: &[(f64, f64)], x: &std::ops::Range<f64>, w: u32) -> Vec<(f64, f64)> {
+    if points.len() <= 4 * w as usize {
+        return points.to_vec();
+    }
+    let scale = w as f64 / (x.end - x.start);
+    let finite = |k: usize| points[k].0.is_finite() && points[k].1.is_finite();
+    let column = |k: usize| ((points[k].0 - x.start) * scale).floor();
+    let mut out = Vec::with_capacity(4 * w as usize + 8);
+    let mut i = 0;
+    while i < points.len() {
+        if !finite(i) {
+            out.push(points[i]);
+            i += 1;
+            continue;
+        }
+        let (first, c) = (i, column(i));
+        let (mut lo, mut hi) = (i, i);
+        i += 1;
+        while i < points.len() && finite(i) && column(i) == c {
+            if points[i].1 < points[lo].1 {
+                lo = i;
+            }
+            if points[i].1 > points[hi].1 {
+                hi = i;
+            }
+            i += 1;
+        }
+        let mut keep = [first, lo, hi, i - 1];
+        keep.sort_unstable();
+        for (j, &k) in keep.iter().enumerate() {
+            if j == 0 || k != keep[j - 1] {
+                out.push(points[k]);
+            }
+        }
+    }
+    out
+}
+
 /// Each series as a line of its own colour, with its legend entry. A reference ("… (reference)")
 /// is drawn last and dashed: an output that tracks it would hide a solid line beneath. A reference
 /// fast enough to fill a band ([`BAND`]) is drawn first instead, solid and faint, for the outputs to
@@ -212,6 +254,7 @@ fn lines<DB: DrawingBackend + Strokes>(
     let width = if DB::SPIKES { 1 } else { 2 };
     let faint = under.iter().map(|&(k, _)| k).collect::<Vec<_>>();
     for (k, (name, points)) in under.into_iter().chain(outputs).chain(over) {
+        let points = m4(points, &x, w);
         let color = if faint.contains(&k) { pick(k).mix(0.35) } else { pick(k) };
         let shifted = |(dt, dv): (f64, f64)| points.iter().map(move |&(t, v)| (t + dt, v + dv));
         for (j, &offset) in offsets.iter().enumerate() {
@@ -1083,6 +1126,33 @@ pub fn plot_tune(dir: &Path, r: &quell::study::TuneResult, unit: TimeUnit) -> io
 mod tests {
     use super::*;
     use plotters::prelude::SeriesLabelPosition;
+
+    #[test]
+    fn m4_keeps_each_pixel_columns_first_last_lowest_and_highest_points() {
+        // A sine of 50 periods in 100,001 points, in a plot 500 px wide (200 points a column).
+        let points: Vec<(f64, f64)> =
+            (0..=100_000).map(|k| k as f64 * 1e-3).map(|t| (t, (t * 3.14159).sin())).collect();
+        let x = 0.0..100.0;
+        let thin = m4(&points, &x, 500);
+        assert!(thin.len() <= 4 * 500 + 4 && thin.len() > 1000, "{}", thin.len());
+        assert!(thin.windows(2).all(|p| p[0].0 < p[1].0), "in time order");
+        assert!(thin.iter().all(|p| points.contains(p)), "a subset");
+        assert_eq!((thin[0], thin[thin.len() - 1]), (points[0], points[points.len() - 1]));
+        // Each column's extremes, by hand from the input.
+        for c in 0..500 {
+            let in_column = |p: &&(f64, f64)| (p.0 * 5.0).floor() == c as f64;
+            let extremes = |v: &[(f64, f64)]| {
+                let vs: Vec<f64> = v.iter().filter(in_column).map(|p| p.1).collect();
+                (vs.iter().copied().fold(f64::MAX, f64::min), vs.iter().copied().fold(f64::MIN, f64::max))
+            };
+            assert_eq!(extremes(&thin), extremes(&points), "column {c}");
+        }
+        // A NaN is kept where it was; few points are left as they are.
+        let mut gap = points.clone();
+        gap[50_000].1 = f64::NAN;
+        assert_eq!(m4(&gap, &x, 500).iter().filter(|p| p.1.is_nan()).count(), 1);
+        assert_eq!(m4(&points[..1000], &x, 500), points[..1000].to_vec());
+    }
 
     #[test]
     fn the_legend_goes_to_the_corner_that_hides_the_fewest_samples() {
