@@ -1131,7 +1131,7 @@ mod tests {
     fn m4_keeps_each_pixel_columns_first_last_lowest_and_highest_points() {
         // A sine of 50 periods in 100,001 points, in a plot 500 px wide (200 points a column).
         let points: Vec<(f64, f64)> =
-            (0..=100_000).map(|k| k as f64 * 1e-3).map(|t| (t, (t * 3.14159).sin())).collect();
+            (0..=100_000).map(|k| k as f64 * 1e-3).map(|t| (t, (t * std::f64::consts::PI).sin())).collect();
         let x = 0.0..100.0;
         let thin = m4(&points, &x, 500);
         assert!(thin.len() <= 4 * 500 + 4 && thin.len() > 1000, "{}", thin.len());

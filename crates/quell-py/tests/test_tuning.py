@@ -84,15 +84,17 @@ def test_auto_design_meets_the_tail_bound():
 
 def test_auto_design_refuses_a_short_horizon_with_the_t_end_that_works():
     """The quadruple tank (harmonics 0.01 rad/s apart, 600 s = 0.95 beats): the report says why the
-    verification failed and proposes t_end ≥ two beats (computed here); at that t_end it passes."""
+    verification failed, names the beats and proposes a t_end the design verified, at most two beats
+    (computed here, rounded up); at that t_end it passes."""
     text = without_design((REFERENCE / "quadruple-tank.toml").read_text())
     _, report = quell.auto_design(text)
     assert not report["passed"]
     advice = " ".join(report["verification"]["advice"])
     proposed = float(advice.split("lengthen simulation.t_end to at least ")[1].split(" s")[0])
     two_beats = 2 * 2 * np.pi / 0.01
-    # Rounded up to two significant digits: within 10 % above two beats.
-    assert two_beats <= proposed <= 1.1 * two_beats, advice
+    assert "the horizon is too short to tell the signals' two closest frequencies apart" in advice, advice
+    # The shortest estimate that verifies; two beats rounded up to two significant digits at most.
+    assert proposed <= 1.1 * two_beats, advice
     scenario, report = quell.auto_design(text.replace("t_end = 600.0", f"t_end = {proposed}"))
     assert report["passed"] and report["verification"]["advice"] == [], report
     tail = [c["tail_max_e"] for c in quell.simulate(scenario).summary()]

@@ -476,8 +476,8 @@ fn negligible_tail(result: &SimResult, i: usize, last: f64) -> bool {
 /// Whether channel i's max |e_i| over the last 10 % of the run is within [`TAIL_BOUND`] of its
 /// scale (a run too short to tell is not).
 fn tail_within_bound(result: &SimResult, i: usize) -> bool {
-    let (Some(&t0), Some(&t1)) = (result.t.first(), result.t.last()) else { return false };
-    result.max_abs_error(i, t1 - 0.1 * (t1 - t0), t1).is_some_and(|e| e <= TAIL_BOUND * scale(result, i))
+    let (Some(from), Some(&t1)) = (result.tail_from(), result.t.last()) else { return false };
+    result.max_abs_error(i, from, t1).is_some_and(|e| e <= TAIL_BOUND * scale(result, i))
 }
 
 /// The μ that decays a direction of Ω̄ at rate μ λ to e^-5 by t_end, 5/(λ t_end), and the largest
