@@ -109,13 +109,14 @@ fn with_progress(
     design: impl FnOnce(&mut dyn FnMut(&Progress) -> ControlFlow<()>) -> Result<AutoDesign, AutoError>,
 ) -> Result<AutoDesign, AutoError> {
     let ctrl_c = Interrupt::install("interrupted twice; stopped without writing");
-    let bar = crate::progress_bar(0, "verifying run {msg}: {bar:30} {percent:>3}% of t_end, {elapsed_precise}");
+    let bar = crate::progress_bar(0, "verifying run {msg}: {bar:30} {percent:>3}%, {elapsed_precise}");
     let mut shown = 0;
     let mut progress = |p: &Progress| {
         if p.run != shown {
             shown = p.run;
             bar.set_length((p.t_end * 1000.0) as u64);
-            bar.set_message(format!("{} ({})", p.run, p.speed));
+            // The horizon too: the failure advice repeats the design at longer ones.
+            bar.set_message(format!("{} ({}) to t_end = {}", p.run, p.speed, p.t_end));
         }
         bar.set_position((p.t * 1000.0) as u64);
         if ctrl_c.interrupted() {

@@ -684,6 +684,12 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
     ))
 }
 
+/// How much a halving of the channel and observer poles must lower the loop's rate ρ to go on
+/// ([`sampled_start`]): less, and ρ is set by what halving leaves as it is. Halving while ρ fell at
+/// all took siso-complex's channel poles at T_s = 0.05 s to ×1/64, −0.0625 against a 2 rad/s
+/// reference (it then failed; the hand design at that T_s passes).
+const SAMPLED_HALVING_GAIN: f64 = 1.5;
+
 /// The first proposal and its design: the rules' own, or for a sampled-data scenario
 /// (`simulation.sample_time` = T_s) the channel and observer poles halved until the loop's fastest
 /// rate ρ ([`loop_rate`]) meets T_s·ρ ≤ [`COARSE_SAMPLE`], while halving lowers ρ (a rate the poles
@@ -701,14 +707,22 @@ fn sampled_start(doc: &toml::Table, targets: &Targets) -> Result<(Proposal, Desi
         if t_s * rho <= COARSE_SAMPLE {
             break;
         }
-        let slower = Speed { channel: speed.channel / 2.0, observer: speed.observer / 2.0, mu: 1.0 };
-        let q = propose(doc, targets, slower)?;
-        let d = q.scenario.design()?;
-        let r = rate(&q, &d);
-        if r >= rho {
-            break;
+        // The observer's poles alone first (they are the fastest the rules place), then the
+        // channel poles with them: the first halving that lowers ρ enough is kept.
+        let observer = Speed { observer: speed.observer / 2.0, mu: 1.0, ..speed };
+        let both = Speed { channel: speed.channel / 2.0, ..observer };
+        let mut kept = None;
+        for slower in [observer, both] {
+            let q = propose(doc, targets, slower)?;
+            let d = q.scenario.design()?;
+            let r = rate(&q, &d);
+            if r <= rho / SAMPLED_HALVING_GAIN {
+                kept = Some((q, d, slower, r));
+                break;
+            }
         }
-        (p, design, speed, rho) = (q, d, slower, r);
+        let Some(k) = kept else { break };
+        (p, design, speed, rho) = k;
     }
     if speed != Speed::FIRST {
         let unit = design.plant().time_unit;
@@ -719,17 +733,20 @@ fn sampled_start(doc: &toml::Table, targets: &Targets) -> Result<(Proposal, Desi
             let shorter = crate::settings::three_digits_down(COARSE_SAMPLE / rho);
             format!("T_s·ρ = {:.2}, still above {COARSE_SAMPLE}: ρ = {rho:.3e}/{unit} is now set by what halving leaves as it is (the plant's eigenvalues, the signals' frequencies, the filter poles placed around them, 1/β), which slower channel and observer poles do not lower; a simulation.sample_time ≤ {} {unit} would meet it", t_s * rho, crate::settings::fmt_short(shorter))
         };
-        let why = format!("; ×{} of that for simulation.sample_time = {t_s} {unit} ({met}, ρ the loop's fastest rate: docs/running.md)", speed.channel);
+        let note = |f: f64| {
+            format!("; ×{f} of that for simulation.sample_time = {t_s} {unit} ({met}, ρ the loop's fastest rate: docs/running.md)")
+        };
+        let (why, observer) = (note(speed.channel), note(speed.observer));
         // The observer's error quoted above is the candidate's before the halving: the kept one's.
         let error = worst(&p, &design);
         let observer_why = match error {
-            _ if p.scenario.plant.k() == 0 => why.clone(),
-            e if e > FIDELITY_LIMIT && e > first_error => format!("{why}; its error is then {e:.2e} at worst: the sample time costs the disturbance observer's fidelity (the run's diagnostics will say so), which a shorter simulation.sample_time would keep"),
-            e => format!("{why}; its error is then {e:.2e} at worst"),
+            _ if p.scenario.plant.k() == 0 => observer,
+            e if e > FIDELITY_LIMIT && e > first_error => format!("{observer}; its error is then {e:.2e} at worst: the sample time costs the disturbance observer's fidelity (the run's diagnostics will say so), which a shorter simulation.sample_time would keep"),
+            e => format!("{observer}; its error is then {e:.2e} at worst"),
         };
         for c in p.choices.iter_mut() {
             match c.key.as_str() {
-                "design.channel_poles" => c.why.push_str(&why),
+                "design.channel_poles" if speed.channel != 1.0 => c.why.push_str(&why),
                 "design.observer_poles" => c.why.push_str(&observer_why),
                 _ => {}
             }
@@ -956,15 +973,19 @@ fn note_verification(choices: &mut [Choice], mu: &[f64], runs: usize) {
     }
 }
 
+/// `x` to ten significant digits: a chosen value written as 100, not 100.00000000000001.
+fn ten_digits(x: f64) -> f64 {
+    format!("{x:.9e}").parse().unwrap_or(x)
+}
+
 /// One pole list per component or channel.
 type PoleLists = Vec<Vec<Complex<f64>>>;
 
 /// Distinct real poles −r·f^j, j = 0..count, centred (in ratio) on r when `centred`; to ten
-/// significant digits, so that a written design reads −0.05625, not −0.056249999999999994 (the
-/// choice is verified as written).
+/// significant digits ([`ten_digits`]), so that a written design reads −0.05625, not
+/// −0.056249999999999994 (the choice is verified as written).
 fn spread(r: f64, count: usize, factor: f64, centred: bool) -> Vec<Complex<f64>> {
     let shift = if centred { (count as f64 - 1.0) / 2.0 } else { 0.0 };
-    let ten_digits = |x: f64| format!("{x:.9e}").parse().unwrap_or(x);
     (0..count).map(|j| Complex::new(-ten_digits(r * factor.powf(j as f64 - shift)), 0.0)).collect()
 }
 
@@ -1519,7 +1540,7 @@ fn choose_filters(
 
 /// β = 1/(smallest gap between the signals' frequencies), at most t_end/[`BETA_HORIZON`].
 fn choose_beta(s: &Scenario, r: f64, note: &mut Note) -> f64 {
-    let b = (1.0 / smallest_gap(s).unwrap_or(r)).min(s.simulation.t_end / BETA_HORIZON);
+    let b = ten_digits((1.0 / smallest_gap(s).unwrap_or(r)).min(s.simulation.t_end / BETA_HORIZON));
     note("design.beta", format!("{b:?}"), format!("1/(smallest gap between the signals' frequencies, 0 included) so that H averages over a beat of the two closest harmonics (1/r without harmonics), at most t_end/{BETA_HORIZON}"));
     b
 }
