@@ -360,3 +360,28 @@ fn the_coarse_sample_warning_offers_a_sample_time_that_divides_the_output_step()
     let r = Run::new(&d, g, o, RunSettings::sampled(1.0, 0.05, 0.01)).check();
     assert!(r.is_ok(), "{:?}", r.err());
 }
+
+/// A true plant with delays of its own: a sample time that makes the model's delays whole but not
+/// the truth's is refused on simulation.sample_time with one that makes them all whole, which runs
+/// (the model's error offered 1/60 min for a CSTR, which the truth's delays then refused with no
+/// offer). The paper's delays 1 s and 3 s with true ones of 1.2 s and 3.6 s: T_s = 0.5 s fits
+/// the model only.
+#[test]
+fn a_sample_time_is_offered_for_the_truths_delays_too() {
+    let text = format!("{PAPER_EXAMPLE}\n[truth]\ndelays = [1.2, 3.6]\n");
+    let s = Scenario::from_toml(&text).unwrap();
+    let d = s.design().unwrap();
+    let run = |T: f64| Run::of(&s, &d).settings(RunSettings::sampled(5.0, 0.6, T)).check();
+    let e = run(0.5).unwrap_err().to_string();
+    assert!(
+        e.starts_with("simulation.sample_time: T_s = 0.5 s does not make every delay of the run a whole number of samples (plant.delays [1, 3], truth.delays [1.2, 3.6] s): the nearest that makes them all whole is "),
+        "{e}"
+    );
+    let offered: f64 = e.rsplit("is ").next().unwrap().trim_end_matches(" s").parse().unwrap();
+    for tau in [1.0, 3.0, 1.2, 3.6] {
+        assert!(((tau / offered) - (tau / offered).round()).abs() < 1e-9, "{tau} / {offered}");
+    }
+    let h = offered * (0.6 / offered).round().max(1.0);
+    let ok = Run::of(&s, &d).settings(RunSettings::sampled(5.0, h, offered)).check();
+    assert!(ok.is_ok(), "{offered}: {:?}", ok.err());
+}

@@ -349,6 +349,12 @@ fn valid_sample_time(delays: &[f64], T: f64, width: usize) -> Option<f64> {
     sample_time_near(delays, T, width, false)
 }
 
+/// [`valid_sample_time`] for every delay of a run (the model's, the truth's, the actuator's).
+pub(crate) fn valid_sample_time_near(delays: &[f64], T: f64, width: usize) -> Option<f64> {
+    let nonzero: Vec<f64> = delays.iter().copied().filter(|&d| d > 0.0).collect();
+    valid_sample_time(&nonzero, T, width)
+}
+
 /// A sample time at most `T` (what a bound on T_s asks for, as the coarse-sample advice gives
 /// one) that makes every delay whole: the longest round one (1, 2, 2.5 or 5 times a power of ten,
 /// down to a thousandth of T), else the longest τ_max/k of [`valid_sample_time`]'s kind; `None`

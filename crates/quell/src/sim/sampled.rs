@@ -104,6 +104,7 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
     if let Some(a) = &st.actuator {
         a.check(m)?;
     }
+    true_delays_whole(run, sample_time)?;
     let own = match run.controller {
         Some(_) => None,
         None => Some(Controller::new(run.design, sample_time)?),
@@ -124,6 +125,41 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
     })?;
     super::check_truth(run.design, run.truth)?;
     Ok((own, every))
+}
+
+/// Where the truth adds delays (its own, or the actuator's), every delay of the run whole numbers
+/// of samples of T, or an error on simulation.sample_time with the nearest sample time that makes
+/// them all whole: the model's delays alone were checked first, and the sample time offered for
+/// them (0.016666666667 min for a CSTR) was then refused by the truth's, with no offer.
+fn true_delays_whole(run: &Run<'_>, T: f64) -> Result<(), KeyError> {
+    let model = &run.design.plant().delays;
+    let truth: &[f64] = if &run.truth.delays == model { &[] } else { &run.truth.delays };
+    let actuator: &[f64] = run.settings.actuator.as_ref().map_or(&[], |a| &a.delays);
+    let all: Vec<f64> = model.iter().chain(truth).chain(actuator).copied().collect();
+    if (truth.is_empty() && actuator.iter().all(|&d| d == 0.0)) || all.iter().all(|&tau| discrete::whole(tau, T)) {
+        return Ok(());
+    }
+    let unit = run.design.plant().time_unit;
+    let list = |v: &[f64]| v.iter().map(|&x| settings::fmt_short(x)).collect::<Vec<_>>().join(", ");
+    let mut sets = vec![format!("plant.delays [{}]", list(model))];
+    if !truth.is_empty() {
+        sets.push(format!("truth.delays [{}]", list(truth)));
+    }
+    if actuator.iter().any(|&d| d > 0.0) {
+        sets.push(format!("truth.actuator_delays [{}]", list(actuator)));
+    }
+    let offer = match discrete::valid_sample_time_near(&all, T, 1 + run.design.q()) {
+        Some(t) => format!(": the nearest that makes them all whole is {} {unit}", settings::fmt_short(t)),
+        None => ": no sample time near it makes them all whole; choose one that divides each".into(),
+    };
+    Err(KeyError::new(
+        "simulation.sample_time",
+        format!(
+            "T_s = {} {unit} does not make every delay of the run a whole number of samples ({} {unit}){offer}",
+            settings::fmt_short(T),
+            sets.join(", ")
+        ),
+    ))
 }
 
 /// The nearest fixes of an output step h that is not a whole number ≥ 1 of samples of T: a sample
