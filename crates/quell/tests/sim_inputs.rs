@@ -371,7 +371,7 @@ fn a_sample_time_is_offered_for_the_truths_delays_too() {
     let text = format!("{PAPER_EXAMPLE}\n[truth]\ndelays = [1.2, 3.6]\n");
     let s = Scenario::from_toml(&text).unwrap();
     let d = s.design().unwrap();
-    let run = |T: f64| Run::of(&s, &d).settings(RunSettings::sampled(5.0, 0.6, T)).check();
+    let run = |t_s: f64| Run::of(&s, &d).settings(RunSettings::sampled(5.0, 0.6, t_s)).check();
     let e = run(0.5).unwrap_err().to_string();
     assert!(
         e.starts_with("simulation.sample_time: T_s = 0.5 s does not make every delay of the run a whole number of samples (plant.delays [1, 3], truth.delays [1.2, 3.6] s): the nearest that makes them all whole is "),
