@@ -159,7 +159,7 @@ fn truth_mistakes_name_their_key() {
         let e = Scenario::from_toml(&format!("{PAPER_EXAMPLE}\n[truth]\n{truth}\n")).unwrap_err().to_string();
         assert!(e.starts_with(expected), "{truth}\nexpected: {expected}\ngot:      {e}");
     }
-    // A sampled-data run needs the true delays in whole samples.
+    // A sampled-data run needs the true delays in whole samples: named with every delay of the run.
     let s = scenario("delays = [1.0005, 3.0]");
     let d = s.design().unwrap();
     let e = Run::new(&d, &s.reference, &s.disturbance, RunSettings::sampled(1.0, 0.1, 1e-3))
@@ -167,7 +167,7 @@ fn truth_mistakes_name_their_key() {
         .simulate(|_| ControlFlow::Continue(()))
         .unwrap_err()
         .to_string();
-    assert!(e.starts_with("truth.delays[0]: τ = 1.0005 s is 1000.500000 samples of T_s = 0.001 s"), "{e}");
+    assert!(e.starts_with("simulation.sample_time: T_s = 0.001 s does not make every delay of the run a whole number of samples (plant.delays [1, 3], truth.delays [1.0005, 3] s)"), "{e}");
     let s = scenario("actuator_delays = [0.0005, 0.0]");
     let settings = RunSettings { actuator: s.actuator.clone(), ..RunSettings::sampled(1.0, 0.1, 1e-3) };
     let e = Run::new(&d, &s.reference, &s.disturbance, settings)
@@ -175,7 +175,7 @@ fn truth_mistakes_name_their_key() {
         .simulate(|_| ControlFlow::Continue(()))
         .unwrap_err()
         .to_string();
-    assert!(e.starts_with("truth.actuator_delays[0]: τ = 0.0005 s is 0.500000 samples of T_s = 0.001 s"), "{e}");
+    assert!(e.starts_with("simulation.sample_time: T_s = 0.001 s does not make every delay of the run a whole number of samples (plant.delays [1, 3], truth.actuator_delays [0.0005, 0] s)"), "{e}");
     // Called directly with a plant of other dimensions.
     let text =
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/siso-complex.toml")).unwrap();

@@ -89,9 +89,10 @@ impl SampledController for Controller {
 }
 
 /// Every check of a sampled-data run, in this order: the settings (horizon, sample time, signals
-/// for the design's plant, noise, actuator, divergence bound), the controller (a new [`Controller`]
-/// at `sample_time` when the run brings none: delays whole numbers of samples), the output step (a
-/// whole multiple of `sample_time`), the truth. Returns that controller and the controller steps
+/// for the design's plant, noise, actuator, divergence bound), the truth, every delay of the run
+/// whole numbers of samples where the truth adds its own ([`true_delays_whole`]), the controller (a
+/// new [`Controller`] at `sample_time` when the run brings none: delays whole numbers of samples),
+/// the output step (a whole multiple of `sample_time`). Returns that controller and the controller steps
 /// per recorded sample.
 pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controller>, usize), SimError> {
     let st = &run.settings;
@@ -104,6 +105,7 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
     if let Some(a) = &st.actuator {
         a.check(m)?;
     }
+    super::check_truth(run.design, run.truth)?;
     true_delays_whole(run, sample_time)?;
     let own = match run.controller {
         Some(_) => None,
@@ -123,7 +125,6 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
             ),
         )
     })?;
-    super::check_truth(run.design, run.truth)?;
     Ok((own, every))
 }
 
