@@ -1269,7 +1269,17 @@ fn verified_horizon(
             break;
         }
         let before = verifier.steps;
-        let passed = repeated_at(doc, targets, verifier, horizon)?;
+        // Ctrl-C here keeps the failed verification's report, with the search so far.
+        let passed = match repeated_at(doc, targets, verifier, horizon) {
+            Err(AutoError::Interrupted) => {
+                let so_far = if tried.is_empty() { String::new() } else { format!(" ({})", tried.join("; ")) };
+                return Ok(format!(
+                    "the search for a horizon that passes was interrupted at {} {unit}{so_far}",
+                    four(horizon)
+                ));
+            }
+            other => other?,
+        };
         spent += (verifier.steps - before) as f64;
         match passed {
             Ok(tails) => {
@@ -1293,8 +1303,8 @@ fn verified_horizon(
 }
 
 /// The automatic design of `doc` repeated with simulation.t_end = `horizon`, nested (no horizon
-/// search of its own): `Ok` with its tails when it passes, `Err` with why not. An interruption
-/// ends the design.
+/// search of its own): `Ok` with its tails when it passes, `Err` with why not; an interruption is
+/// the error [`AutoError::Interrupted`].
 fn repeated_at(
     doc: &toml::Table,
     targets: &Targets,

@@ -1025,3 +1025,22 @@ fn a_verified_horizon_holds_under_the_actuator_limit() {
     assert!(long.verification.passed, "{proposed} s: {:?}", long.verification);
     assert!(long.verification.max_uf.iter().all(|&u| u <= 25.0), "{:?}", long.verification.max_uf);
 }
+
+/// Stopped during the search for a longer horizon (the servo in ms fails at 2000 ms), the design
+/// still returns its failed verification, with the search so far, not only "interrupted".
+#[test]
+fn a_stop_during_the_horizon_search_keeps_the_failed_verification() {
+    let doc = without_design(&data("servo-ms.toml"));
+    let mut stop_longer = |p: &quell::auto::Progress| {
+        if p.t_end > 2000.0 {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    };
+    let a = quell::auto::auto_design_with(&doc, &Targets::default(), &mut stop_longer).unwrap();
+    assert!(!a.verification.passed);
+    let advice = a.verification.advice.join("\n");
+    assert!(advice.contains("the search for a horizon that passes was interrupted at "), "{advice}");
+    assert!(advice.contains("channel 1: its slowest excited direction of Ω̄ converges in"), "{advice}");
+}
