@@ -658,7 +658,7 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
     };
     let mut candidates = vec![first_check.clone()];
     if !first_check.tail_within(&bound, 1.0) {
-        let advice = horizon_advice(doc, targets, verifier, (&first.scenario, &design, &first_check), &bound)?;
+        let advice = horizon_advice(doc, targets, verifier, (&first, &design, &first_check), &bound)?;
         return Ok(finish(
             (first, design, first_check),
             bound,
@@ -729,7 +729,7 @@ fn sampled_start(doc: &toml::Table, targets: &Targets) -> Result<(Proposal, Desi
         let met = if t_s * rho <= COARSE_SAMPLE {
             format!("T_s·ρ = {:.2} ≤ {COARSE_SAMPLE}", t_s * rho)
         } else {
-            // Halving stopped lowering ρ: a rate the poles do not set (the plant's or a signal's).
+            // Halving stopped lowering ρ 1.5×: a rate the halved poles do not set.
             let shorter = crate::settings::three_digits_down(COARSE_SAMPLE / rho);
             format!("T_s·ρ = {:.2}, still above {COARSE_SAMPLE}: ρ = {rho:.3e}/{unit} is now set by what halving leaves as it is (the plant's eigenvalues, the signals' frequencies, the filter poles placed around them, 1/β), which slower channel and observer poles do not lower; a simulation.sample_time ≤ {} {unit} would meet it", t_s * rho, crate::settings::fmt_short(shorter))
         };
@@ -975,7 +975,7 @@ fn note_verification(choices: &mut [Choice], mu: &[f64], runs: usize) {
 
 /// `x` to ten significant digits: a chosen value written as 100, not 100.00000000000001.
 fn ten_digits(x: f64) -> f64 {
-    format!("{x:.9e}").parse().unwrap_or(x)
+    crate::settings::significant(x, 10)
 }
 
 /// One pole list per component or channel.
@@ -1169,8 +1169,8 @@ const HORIZON_STEPS: f64 = 2e7;
 /// ([`horizon_advice`]).
 const DOUBLINGS: usize = 2;
 
-/// The advice on a first proposal whose verifying run missed its tail bound (`first`: its
-/// scenario, design and run): the causes found, then a horizon that the automatic design itself
+/// The advice on a first proposal whose verifying run missed its tail bound (`proposal`, its
+/// design and its run `first`): the causes found, then a horizon that the automatic design itself
 /// verifies (`verified_horizon`). An error that grows over the run gets no horizon: the loop
 /// diverges slowly (a diverging [truth] was told "the horizon is too short"); nor does one that
 /// the averaged law says no horizon converges.
@@ -1178,9 +1178,10 @@ fn horizon_advice(
     doc: &toml::Table,
     targets: &Targets,
     verifier: &mut Verifier,
-    (s, design, first): (&Scenario, &Design, &Candidate),
+    (proposal, design, first): (&Proposal, &Design, &Candidate),
     bound: &[f64],
 ) -> Result<Vec<String>, AutoError> {
+    let s = &proposal.scenario;
     let t_end = s.simulation.t_end;
     let beats = beat_horizon(s);
     let mut advice: Vec<String> = beats.iter().map(|(why, _)| why.clone()).collect();
@@ -1190,7 +1191,7 @@ fn horizon_advice(
     }
     let slow = slow_convergence(s, design, &first.tail_max_e, bound);
     if !slow.why.is_empty() {
-        let given = doc.get("design").and_then(|d| d.get("mu")).is_some();
+        let given = !proposal.relaxable[2];
         advice.push(format!(
             "{}; the averaged law is optimistic for weakly excited directions, so a horizon whose tail starts {SLOW_MARGIN}× later is needed{}",
             slow.why.join("; "),
@@ -1236,8 +1237,8 @@ const EXCITE_SLOW: &str =
 /// took `steps`): the first horizon that passes, or those tried and why no longer one was. Without
 /// actuator limits the repeat verifies the first proposal, whose pass the relaxation keeps; with
 /// them it is the whole design, limits included. The averaged law's estimate alone was
-/// optimistic (the active suspension's 1500 s failed; 3000 s passes), and an estimate beyond
-/// the cap is not advice (91,000 s for a VTOL that passes at 130 s, two beats).
+/// optimistic (the active suspension's 1500 s failed), and an estimate beyond the cap is not
+/// advice (91,000 s for a VTOL that passes at 126 s, two beats doubled).
 fn verified_horizon(
     doc: &toml::Table,
     targets: &Targets,

@@ -163,6 +163,16 @@ pub(crate) fn check(name: &'static str, M: &DMatrix<f64>, rows: usize, cols: usi
 }
 
 impl Plant {
+    /// This true plant's delays where they differ from the design `model`'s; none where they are
+    /// the same (the delays a run adds to the model's).
+    pub(crate) fn delays_beside(&self, model: &Plant) -> &[f64] {
+        if self.delays == model.delays {
+            &[]
+        } else {
+            &self.delays
+        }
+    }
+
     /// Builds a plant, checking every shape against n = rows(A), m = cols(B), k = cols(D).
     /// `x0 = None` means x(0) = 0.
     pub fn new(

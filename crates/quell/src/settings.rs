@@ -437,10 +437,20 @@ pub fn fmt_time(x: f64) -> String {
     s.parse::<f64>().map_or(s, fmt_short)
 }
 
+/// `x` rounded to `digits` significant digits (≥ 1), through its decimal form.
+pub(crate) fn significant(x: f64, digits: usize) -> f64 {
+    format!("{x:.*e}", digits.max(1) - 1).parse().unwrap_or(x)
+}
+
 /// `v` to four significant digits in [`fmt_short`]'s form: a figure in advice (6.283 rad/s, not
 /// 6.283185307179586), where the digits say how much, not what to type.
 pub(crate) fn fmt_4(v: f64) -> String {
-    format!("{v:.3e}").parse().map_or_else(|_| v.to_string(), fmt_short)
+    fmt_short(significant(v, 4))
+}
+
+/// Numbers in [`fmt_short`]'s form, comma-separated.
+pub(crate) fn fmt_short_list(v: &[f64]) -> String {
+    v.iter().map(|&x| fmt_short(x)).collect::<Vec<_>>().join(", ")
 }
 
 /// What a key that holds an integer expects, by its last name (`seed`, `runs`, `points`, …);

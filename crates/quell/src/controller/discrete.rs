@@ -383,7 +383,7 @@ fn round_at_most(delays: &[f64], width: usize, T: f64) -> Option<f64> {
 pub(crate) fn sample_time_dividing(design: &Design, T: f64, h: f64) -> Option<f64> {
     let (delays, width) = (&design.plant().delays, 1 + design.q());
     let below = h / (h / T).ceil().max(1.0);
-    let short = format!("{below:.5e}").parse::<f64>() == Ok(below);
+    let short = crate::settings::significant(below, 6) == below;
     if short && fits(delays, width, below) {
         return Some(below);
     }

@@ -21,7 +21,7 @@ use nalgebra::{Complex, DMatrix};
 use crate::design::Design;
 use crate::linalg::{eigenvalues, fmt_complex, fmt_complex_list, numerical_rank};
 use crate::plant::Plant;
-use crate::settings::{fmt_short, round_up_2, TimeUnit};
+use crate::settings::{fmt_short, fmt_short_list, round_up_2, TimeUnit};
 use crate::signal::Signal;
 use crate::sim::{Outcome, SimResult};
 
@@ -150,17 +150,18 @@ pub fn model_error_advice(s: &crate::Scenario, result: &SimResult) -> Option<Str
                 ));
             }
         }
-        if truth.delays != model.delays {
+        let own = truth.delays_beside(model);
+        if !own.is_empty() {
             diffs.push(format!(
                 "truth.delays [{}] {unit} against plant.delays [{}]",
-                short_list(&truth.delays),
-                short_list(&model.delays)
+                fmt_short_list(own),
+                fmt_short_list(&model.delays)
             ));
         }
     }
     if let Some(a) = &s.actuator {
         if a.delays.iter().any(|&d| d > 0.0) {
-            diffs.push(format!("truth.actuator_delays [{}] {unit} on the whole u_f", short_list(&a.delays)));
+            diffs.push(format!("truth.actuator_delays [{}] {unit} on the whole u_f", fmt_short_list(&a.delays)));
         }
     }
     (!diffs.is_empty()).then(|| {
@@ -169,11 +170,6 @@ pub fn model_error_advice(s: &crate::Scenario, result: &SimResult) -> Option<Str
             diffs.join(", ")
         )
     })
-}
-
-/// Numbers in their short form, comma-separated.
-fn short_list(v: &[f64]) -> String {
-    v.iter().map(|&x| fmt_short(x)).collect::<Vec<_>>().join(", ")
 }
 
 /// The diagnostics of `result`, a run of `design` under g = `reference`, ω = `disturbance`.

@@ -518,7 +518,7 @@ fn command_at(
 /// the true plant's τ_i^true where they differ, and through a non-ideal `actuator` its τ_a,i and
 /// τ_a,i + τ_j^true. Their sums are the loop's breakpoints ([`dde::breakpoints`]).
 pub(super) fn loop_delays(design: &Plant, truth: &Plant, actuator: Option<&Actuator>) -> Vec<f64> {
-    let true_delays = if truth.delays == design.delays { &[][..] } else { &truth.delays[..] };
+    let true_delays = truth.delays_beside(design);
     let a = actuator.filter(|a| !a.is_ideal()).map_or(&[][..], |a| &a.delays[..]);
     let through_actuator = a.iter().copied().chain(a.iter().flat_map(|ta| truth.delays.iter().map(move |tj| ta + tj)));
     let mut delays: Vec<f64> =

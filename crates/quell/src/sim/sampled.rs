@@ -134,14 +134,14 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
 /// them (0.016666666667 min for a CSTR) was then refused by the truth's, with no offer.
 fn true_delays_whole(run: &Run<'_>, T: f64) -> Result<(), KeyError> {
     let model = &run.design.plant().delays;
-    let truth: &[f64] = if &run.truth.delays == model { &[] } else { &run.truth.delays };
+    let truth = run.truth.delays_beside(run.design.plant());
     let actuator: &[f64] = run.settings.actuator.as_ref().map_or(&[], |a| &a.delays);
     let all: Vec<f64> = model.iter().chain(truth).chain(actuator).copied().collect();
     if (truth.is_empty() && actuator.iter().all(|&d| d == 0.0)) || all.iter().all(|&tau| discrete::whole(tau, T)) {
         return Ok(());
     }
     let unit = run.design.plant().time_unit;
-    let list = |v: &[f64]| v.iter().map(|&x| settings::fmt_short(x)).collect::<Vec<_>>().join(", ");
+    let list = settings::fmt_short_list;
     let mut sets = vec![format!("plant.delays [{}]", list(model))];
     if !truth.is_empty() {
         sets.push(format!("truth.delays [{}]", list(truth)));
