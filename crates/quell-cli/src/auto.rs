@@ -80,6 +80,13 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
         let failure = if v.tails_met() { Failure::Input } else { Failure::Run };
         // Four significant digits: the figures say how far off, not what to type.
         let list = |v: &[f64]| format!("[{}]", v.iter().map(|x| format!("{x:.3e}")).collect::<Vec<_>>().join(", "));
+        if v.runs == 0 {
+            // Not simulated (too fast for its horizon, or too large a regressor): no tails to quote.
+            return Err(failure(format!(
+                "the automatic design was not verified: {}; nothing written; see docs/tuning.md",
+                v.advice.join("; ")
+            )));
+        }
         return Err(failure(format!(
             "the automatic design did not pass its verifying simulation (tail max|e| {} against bounds {}{}){}; nothing written; see docs/tuning.md",
             list(&v.tail_max_e),

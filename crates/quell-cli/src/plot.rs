@@ -108,11 +108,16 @@ fn panel_with_limit<DB: DrawingBackend + Strokes>(
         .iter()
         .flat_map(|(_, p)| p.iter().map(|(t, _)| *t))
         .fold((f64::MAX, f64::MIN), |(a, b), t| (a.min(t), b.max(t)));
-    let (t0, t1) = if t0 < t1 { (t0, t1) } else { (0.0, 1.0) };
+    let (t0, mut t1) = if t0 < t1 { (t0, t1) } else { (0.0, 1.0) };
     let levels = limit.map_or(vec![], |(_, u)| vec![-u, u]);
     let (lo, hi) = value_range(series.iter().flat_map(|(_, p)| p.iter().map(|(_, v)| *v)).chain(levels.clone()));
     let pad = 0.05 * (hi - lo);
-    let (y0, y1) = (lo - pad, hi + pad);
+    let (y0, mut y1) = (lo - pad, hi + pad);
+    // The legend's font and box (`legend_box`), in the plotting area this chart will have.
+    let legend = legend_box(series, limit.map(|(label, _)| label), plotting_size(area));
+    if let Some((_, size)) = legend {
+        (t1, y1) = with_headroom(series, ((t0, t1), (y0, y1)), size);
+    }
     let mut chart = ChartBuilder::on(area)
         .caption(title, ("sans-serif", 20))
         .margin(8)
@@ -135,32 +140,41 @@ fn panel_with_limit<DB: DrawingBackend + Strokes>(
     if let Some((label, _)) = limit {
         limit_lines(&mut chart, label, &levels, (t0, t1))?;
     }
-    // A panel's legend holds about eight entries at 14 px and fourteen at 10 px; beyond that (η̂ of
-    // a large regressor) it would spill out of the panel, and the colours are the only key.
-    let font = match series.len() {
-        0..=8 => 14,
-        9..=MAX_LEGEND => 10,
-        _ => return Ok(()),
-    };
-    let entries = (series.len() + usize::from(limit.is_some())) as f64;
-    let names = series.iter().map(|(name, _)| name.as_str()).chain(limit.map(|(label, _)| label));
-    let longest = names.map(|name| name.chars().count()).max().unwrap_or(0) as f64;
-    let (w, h) = chart.plotting_area().dim_in_pixel();
-    // The legend's box: a 20 px line, the label at ~0.6 em a character, a row per entry, and the
-    // ~12 px between the box and the corner (without them a flat e = 0 just below the estimate was
-    // hidden by the box drawn).
-    let size = (
-        (48.0 + 0.6 * font as f64 * longest) / w.max(1) as f64,
-        (20.0 + entries * (font as f64 + 6.0)) / h.max(1) as f64,
-    );
+    let Some((font, size)) = legend else { return Ok(()) };
     chart
         .configure_series_labels()
-        .position(legend_corner(series, ((t0, t1), (y0, y1)), size))
+        .position(legend_corner(series, ((t0, t1), (y0, y1)), size).0)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .label_font(("sans-serif", font))
         .draw()
         .map_err(|e| e.to_string())
+}
+
+/// The plotting area's size in pixels of a panel drawn on `area`: the area less the margins (8 px,
+/// 24 on the right), the axis label areas (72 px left, 36 below) and the 20 px caption's ~30 px.
+fn plotting_size<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>) -> (f64, f64) {
+    let (w, h) = area.dim_in_pixel();
+    ((f64::from(w) - 104.0).max(1.0), (f64::from(h) - 82.0).max(1.0))
+}
+
+/// A panel's legend: its font (px) and its box as fractions `size` of the plotting area
+/// `(w, h)`, or `None` without one. It holds about eight entries at 14 px and fourteen at 10 px;
+/// beyond that (η̂ of a large regressor) it would spill out of the panel, and the colours are the
+/// only key.
+fn legend_box(series: &[Series], limit: Option<&str>, (w, h): (f64, f64)) -> Option<(u32, (f64, f64))> {
+    let font: u32 = match series.len() {
+        0..=8 => 14,
+        9..=MAX_LEGEND => 10,
+        _ => return None,
+    };
+    let entries = (series.len() + usize::from(limit.is_some())) as f64;
+    let names = series.iter().map(|(name, _)| name.as_str()).chain(limit);
+    let longest = names.map(|name| name.chars().count()).max().unwrap_or(0) as f64;
+    // A 20 px line, the label at ~0.6 em a character, a row per entry, and the ~12 px between the
+    // box and the corner (without them a flat e = 0 just below the estimate was hidden by the box).
+    let f = f64::from(font);
+    Some((font, ((48.0 + 0.6 * f * longest) / w, (20.0 + entries * (f + 6.0)) / h)))
 }
 
 /// How a backend draws a curve's 2 px line.
@@ -301,14 +315,34 @@ fn limit_lines<DB: DrawingBackend>(
     Ok(())
 }
 
+/// The view's right and top ends `(t1, y1)`; where the legend box (`size`) would hide samples in
+/// every corner, one of them moved out by the box's size so that it sits beside the data: the top
+/// raised where the box is flatter than wide (a few entries), else the time axis extended right
+/// (η̂'s eight or twelve entries, a box taller than most of the panel, covered its transients).
+fn with_headroom(
+    series: &[Series],
+    ((t0, t1), (y0, y1)): ((f64, f64), (f64, f64)),
+    (width, height): (f64, f64),
+) -> (f64, f64) {
+    let (_, hidden) = legend_corner(series, ((t0, t1), (y0, y1)), (width, height));
+    // 2 % of the axis between the data and the box.
+    let gap = 0.02;
+    match hidden {
+        0 => (t1, y1),
+        _ if height <= width && height < 0.6 => (t1, y0 + (y1 - y0) / (1.0 - height - gap)),
+        _ if width < 0.4 => (t0 + (t1 - t0) / (1.0 - width - gap), y1),
+        _ => (t1, y1),
+    }
+}
+
 /// The corner of a panel whose legend box (`size`, as fractions of the plotting area) covers the
-/// fewest samples of `series` in the view `((t0, t1), (y0, y1))`: the upper right unless it hides
-/// more than another corner does.
+/// fewest samples of `series` in the view `((t0, t1), (y0, y1))`, with how many it covers: the
+/// upper right unless it hides more than another corner does.
 fn legend_corner(
     series: &[Series],
     ((t0, t1), (y0, y1)): ((f64, f64), (f64, f64)),
     size: (f64, f64),
-) -> SeriesLabelPosition {
+) -> (SeriesLabelPosition, usize) {
     let corners = [
         (SeriesLabelPosition::UpperRight, true, true),
         (SeriesLabelPosition::UpperLeft, false, true),
@@ -323,8 +357,8 @@ fn legend_corner(
         series.iter().flat_map(|(_, p)| p.iter()).filter(|&&point| inside(corner, point)).count()
     };
     // The first of the corners hiding the fewest: the upper right on a tie.
-    let best = corners.into_iter().min_by_key(|&(_, right, upper)| hidden(&(right, upper)));
-    best.map_or(SeriesLabelPosition::UpperRight, |(corner, ..)| corner)
+    let best = corners.into_iter().map(|(corner, right, upper)| (corner, hidden(&(right, upper)))).min_by_key(|c| c.1);
+    best.unwrap_or((SeriesLabelPosition::UpperRight, 0))
 }
 
 /// The k-th series' colour: matplotlib's "tab20" order, its ten strong colours first (told apart in
@@ -1160,11 +1194,29 @@ mod tests {
         let series = |points: Vec<(f64, f64)>| vec![("y".to_string(), points)];
         // A curve rising from the lower left to the upper right: the legend leaves the upper right.
         let rising = series((0..=100).map(|k| (0.1 * k as f64, -1.0 + 0.02 * k as f64)).collect());
-        let corner = legend_corner(&rising, view, (0.2, 0.2));
+        let (corner, _) = legend_corner(&rising, view, (0.2, 0.2));
         assert!(matches!(corner, SeriesLabelPosition::UpperLeft), "{corner:?}");
         // A flat line at zero hides nothing in any corner: the upper right.
         let flat = series((0..=100).map(|k| (0.1 * k as f64, 0.0)).collect());
-        assert!(matches!(legend_corner(&flat, view, (0.2, 0.2)), SeriesLabelPosition::UpperRight));
+        assert!(matches!(legend_corner(&flat, view, (0.2, 0.2)).0, SeriesLabelPosition::UpperRight));
+        // Eight sines filling the panel hide samples in every corner: the axis is raised by the
+        // box's height, and then the upper right hides none (the legend over the η̂ transients).
+        let sines: Vec<Series> = (0..8)
+            .map(|j| {
+                (
+                    format!("η1_{j}"),
+                    (0..=400).map(|k| (0.025 * k as f64, (0.025 * k as f64 * (j + 1) as f64).sin())).collect(),
+                )
+            })
+            .collect();
+        let (t1, y1) = with_headroom(&sines, ((0.0, 10.0), (-1.0, 1.0)), (0.3, 0.25));
+        assert!(t1 == 10.0 && (y1 - (-1.0 + 2.0 / 0.73)).abs() < 1e-12, "{t1} {y1}");
+        assert_eq!(legend_corner(&sines, ((0.0, 10.0), (-1.0, y1)), (0.3, 0.25)).1, 0);
+        // A tall box (twelve entries over most of the panel's height): the time axis is extended.
+        let (t1, y1) = with_headroom(&sines, ((0.0, 10.0), (-1.0, 1.0)), (0.1, 0.9));
+        assert!((t1 - 10.0 / 0.88).abs() < 1e-12 && y1 == 1.0, "{t1} {y1}");
+        assert_eq!(legend_corner(&sines, ((0.0, t1), (-1.0, 1.0)), (0.1, 0.9)).1, 0);
+        assert_eq!(with_headroom(&flat, view, (0.2, 0.2)), (10.0, 1.0));
     }
 
     #[test]
@@ -1207,10 +1259,10 @@ mod tests {
                 .map(|k| k as f64 / 4000.0)
                 .map(|t| (t, (std::f64::consts::TAU * periods * t).sin()))
                 .collect();
-            let mut series = vec![("y1".to_string(), points.clone())];
-            if with_reference {
-                series.push(("g1 (reference)".to_string(), points));
-            }
+            // Without the reference, an empty series of that name: the same legend, so the same
+            // headroom above the data (`with_headroom`) and the same scale.
+            let reference = if with_reference { points.clone() } else { Vec::new() };
+            let series = vec![("y1".to_string(), points), ("g1 (reference)".to_string(), reference)];
             let mut rgb = vec![255u8; (w * h * 3) as usize];
             {
                 let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();

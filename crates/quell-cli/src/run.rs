@@ -27,6 +27,10 @@ pub struct RunArgs {
     /// time (plant.time_unit); overrides simulation.sample_time.
     #[arg(long, value_name = "T_S", allow_hyphen_values = true, value_parser = crate::parse_real)]
     pub sample_time: Option<f64>,
+    /// The continuous loop even where the scenario sets simulation.sample_time: to compare the
+    /// sampled-data loop with the one it approximates.
+    #[arg(long, conflicts_with = "sample_time")]
+    pub continuous: bool,
     /// Skip the PNG/SVG plots.
     #[arg(long)]
     pub no_plots: bool,
@@ -47,7 +51,10 @@ pub struct RunArgs {
 }
 
 pub fn run(args: &RunArgs) -> Result<(), Failure> {
-    let (scenario, design) = load(args.scenario.as_deref(), args.sample_time)?;
+    let (mut scenario, design) = load(args.scenario.as_deref(), args.sample_time)?;
+    if args.continuous {
+        scenario.simulation.sample_time = None;
+    }
     eprint!("{}", report::warnings_text(&quell::design::warnings(&design, &scenario.design)));
     // Every check that can fail on input happens before the output directory is touched.
     let settings = loop_settings(args, &scenario, &design)?;
@@ -113,7 +120,7 @@ fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result
             Loop::Continuous(integrator) => integrator.method = method,
             Loop::Sampled { sample_time } => {
                 return Err(Failure::Input(format!(
-                    "--method: the integrator applies to the continuous loop only, and this run is the sampled-data loop at T_s = {} {} (the plant is advanced exactly between samples); remove --method, or --sample-time and simulation.sample_time",
+                    "--method: the integrator applies to the continuous loop only, and this run is the sampled-data loop at T_s = {} {} (the plant is advanced exactly between samples); remove --method, or run the continuous loop with --continuous (in place of any --sample-time)",
                     short(*sample_time),
                     scenario.plant.time_unit
                 )))
@@ -323,7 +330,8 @@ fn parse_max_steps(text: &str) -> Result<usize, String> {
     match text.trim().parse::<i128>() {
         Ok(n) if n >= 1 && n <= usize::MAX as i128 => Ok(n as usize),
         _ => Err(format!(
-            "expected a step budget (an integer ≥ 1), found {text}; omit --max-steps for the run's own budget"
+            "expected a step budget, an integer from 1 to {}, found {text}; omit --max-steps for the run's own budget",
+            usize::MAX
         )),
     }
 }

@@ -214,10 +214,17 @@ fn check_shard_rows(dir: &Path, shard: Shard, rows: &[Row], total: usize) -> Res
 /// Reads one shard's directory: its summary's study identity and its rows.
 fn read_shard(dir: &Path) -> Result<(StudyMeta, Vec<Row>, bool), Failure> {
     let bad = |what: &str, e: String| Failure::Input(format!("--merge {}: {what}: {e}", dir.display()));
-    let text = std::fs::read_to_string(dir.join("summary.json")).map_err(|e| bad("summary.json", e.to_string()))?;
+    // Not text: damaged, not edited; the shard's own run writes it anew.
+    let unreadable = |what: &str, e: std::io::Error| match e.kind() {
+        std::io::ErrorKind::InvalidData => {
+            bad(what, format!("{e}: the file is damaged; run that shard again (its quell sweep --shard command)"))
+        }
+        _ => bad(what, e.to_string()),
+    };
+    let text = std::fs::read_to_string(dir.join("summary.json")).map_err(|e| unreadable("summary.json", e))?;
     let summary: Summary = serde_json::from_str(&text)
         .map_err(|e| bad("summary.json", format!("not a summary written by `quell sweep` ({e})")))?;
-    let csv = std::fs::read_to_string(dir.join("runs.csv")).map_err(|e| bad("runs.csv", e.to_string()))?;
+    let csv = std::fs::read_to_string(dir.join("runs.csv")).map_err(|e| unreadable("runs.csv", e))?;
     let shard = summary.study.shard;
     if shard.index >= shard.count {
         return Err(bad(

@@ -490,7 +490,9 @@ fn run_sample_time_not_dividing_a_delay_exits_2() {
     let out = dir.path().join("out");
     let err = input_error(&["run", "--sample-time", "0.3", "--out", out.to_str().unwrap()]);
     assert!(err.contains("channel 1"), "{err}");
-    assert!(err.contains("nearest valid sample time is 0.333"), "{err}");
+    // 1/3 s makes the delays (1 s, 3 s) whole but not the output step (0.1 s), whose check then
+    // refused it; 0.1 s makes both whole.
+    assert!(err.contains("nearest valid sample time is 0.1 s"), "{err}");
     assert!(!out.join("signals.csv").exists());
 }
 
@@ -898,6 +900,48 @@ fn bad_method_flag_exits_2_naming_the_flag_and_the_names() {
     assert!(!out.exists(), "nothing is written before the input is checked");
 }
 
+/// `--continuous` runs the continuous loop of a file that sets simulation.sample_time: signals.csv
+/// byte for byte that of the same file without the key, where the plain run is the sampled loop;
+/// with `--sample-time` it is refused (exit 2); and the `--method` error's advice, followed,
+/// runs (the apps and servo-ms set a sample time, so their continuous loop had no flag).
+#[test]
+fn continuous_flag_runs_the_continuous_loop_of_a_sampled_file() {
+    let dir = temp_dir("continuous");
+    let text = fs::read_to_string(paper()).unwrap().replace("t_end = 100.0", "t_end = 2.0");
+    let sampled_text = text.replacen("[simulation]\n", "[simulation]\nsample_time = 0.01\n", 1);
+    assert_ne!(sampled_text, text);
+    let (plain, sampled) = (dir.path().join("plain.toml"), dir.path().join("sampled.toml"));
+    fs::write(&plain, &text).unwrap();
+    fs::write(&sampled, &sampled_text).unwrap();
+    let run = |file: &Path, extra: &[&str], name: &str| {
+        let out = dir.path().join(name);
+        let mut args = vec!["run", file.to_str().unwrap(), "--no-plots", "--out", out.to_str().unwrap()];
+        args.extend(extra);
+        let o = quell(&args);
+        (o, out)
+    };
+    let (o, reference) = run(&plain, &[], "reference");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (o, sampled_out) = run(&sampled, &[], "sampled");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(read_json(&sampled_out.join("summary.json"))["stats"]["controller_steps"].is_u64());
+    let (o, continuous) = run(&sampled, &["--continuous"], "continuous");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = |d: &Path| fs::read_to_string(d.join("signals.csv")).unwrap();
+    assert_eq!(csv(&continuous), csv(&reference));
+    assert_ne!(csv(&sampled_out), csv(&reference));
+    let (o, both) = run(&sampled, &["--continuous", "--sample-time", "0.01"], "both");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--continuous") && stderr(&o).contains("--sample-time"), "{}", stderr(&o));
+    assert!(!both.exists());
+    let (o, _) = run(&sampled, &["--method", "imex"], "method");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("run the continuous loop with --continuous"), "{}", stderr(&o));
+    let (o, followed) = run(&sampled, &["--method", "imex", "--continuous"], "followed");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(read_json(&followed.join("summary.json"))["stats"]["steps"].is_u64());
+}
+
 /// `[plant]` signal names label the channel lines (`channel 1 (pitch): …`) and change no file:
 /// signals.csv is byte for byte that of the same scenario without names.
 #[test]
@@ -1004,7 +1048,7 @@ fn design_refuses_a_scenario_whose_run_cannot_start() {
     let err = design_with_edit("design-sample-time", "# sample_time = 0.001", "sample_time = 0.3");
     assert!(err.starts_with("error: simulation.sample_time"), "{err}");
     assert!(err.contains("channel 1's delay τ = 1 s is not a whole number of samples"), "{err}");
-    assert!(err.contains("the nearest valid sample time is 0.333"), "{err}");
+    assert!(err.contains("the nearest valid sample time is 0.1 s"), "{err}");
 }
 
 /// `[plant] time_unit` labels what states a time: the figures' t axis, the reports' rates and

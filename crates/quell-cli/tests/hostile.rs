@@ -244,6 +244,34 @@ fn figures_of_an_earlier_run_do_not_stay_beside_new_data() {
     assert!(stderr(&o).contains("no sweep.png: a grid of 3 keys has no figure"), "{}", stderr(&o));
 }
 
+/// A FIFO with no writer as the scenario blocked `quell design` for ever; it is refused at once.
+/// A 17 MB scenario (an array of twelve million ones in design.mu) is refused before the TOML
+/// parser takes its 95 bytes a byte (a 24 MB one aborted at 2 GB, with a backtrace).
+#[cfg(unix)]
+#[test]
+fn a_pipe_or_an_oversized_file_is_refused_at_once() {
+    let dir = TempDir::new().unwrap();
+    let fifo = dir.path().join("scenario.toml");
+    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    // Should the check regress, a writer ends the wait after 10 s, so the test fails, not hangs.
+    let writer = fifo.clone();
+    std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_secs(10));
+        let _ = fs::OpenOptions::new().write(true).open(writer);
+    });
+    let started = Instant::now();
+    let o = quell(&["design", fifo.to_str().unwrap()]);
+    refused(&o, "a pipe or socket, not a file");
+    assert!(started.elapsed() < Duration::from_secs(10), "{:?}", started.elapsed());
+    let big = dir.path().join("big.toml");
+    let ones = vec!["1"; 8_500_000].join(",");
+    fs::write(&big, fs::read_to_string(paper()).unwrap().replace("mu = [20.0, 30.0]", &format!("mu = [{ones}]")))
+        .unwrap();
+    assert!(fs::metadata(&big).unwrap().len() > 16 << 20);
+    let o = quell(&["design", big.to_str().unwrap()]);
+    refused(&o, "longer than 16 MiB");
+}
+
 #[cfg(unix)]
 #[test]
 fn an_endless_input_file_is_refused_naming_its_path() {
@@ -253,7 +281,7 @@ fn an_endless_input_file_is_refused_naming_its_path() {
         let started = Instant::now();
         let o = quell(&args);
         refused(&o, "/dev/zero: cannot read the");
-        assert!(stderr(&o).contains("longer than 64 MiB"), "{}", stderr(&o));
+        assert!(stderr(&o).contains("longer than 16 MiB"), "{}", stderr(&o));
         // The path once (a study's refusal used to read "/dev/zero: /dev/zero: cannot read …").
         assert_eq!(stderr(&o).matches("/dev/zero:").count(), 1, "{}", stderr(&o));
         assert!(started.elapsed() < Duration::from_secs(20), "{args:?}: {:?}", started.elapsed());

@@ -115,7 +115,10 @@ fn no_bools(obj: &Bound<'_, PyAny>, arr: &Bound<'_, PyAny>, name: &str) -> PyRes
     let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
     for (flat, x) in entries.try_iter()?.enumerate() {
         let x = x?;
-        if x.is_instance_of::<PyBool>() || is_numpy_bool(&x) {
+        // A Python float or int is no numpy bool: asking it for `dtype` raised an AttributeError
+        // per entry (11 s for ten million delays before their count was refused).
+        let plain = x.is_instance_of::<pyo3::types::PyFloat>() || x.is_instance_of::<pyo3::types::PyInt>();
+        if x.is_instance_of::<PyBool>() || (!plain && is_numpy_bool(&x)) {
             let (mut rest, mut at) = (flat, vec![0; shape.len()]);
             for (i, d) in shape.iter().enumerate().rev() {
                 (at[i], rest) = (rest % d.max(&1), rest / d.max(&1));
@@ -183,12 +186,22 @@ pub fn vector(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<f6
     view.as_array().iter().enumerate().map(|(i, &v)| finite(name, &[i], v, kind, py)).collect()
 }
 
-/// A str argument, or a TypeError naming it.
+/// A str argument, or a TypeError naming it; a str with a lone surrogate (`"\ud800"`, which UTF-8 cannot hold) is a ScenarioError naming
+/// it, not Python's UnicodeEncodeError.
 pub fn text(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<String> {
-    match obj.is_instance_of::<PyString>() {
-        true => obj.extract(),
-        false => Err(type_error(name, "a str", obj)),
+    if !obj.is_instance_of::<PyString>() {
+        return Err(type_error(name, "a str", obj));
     }
+    obj.extract().map_err(|_| {
+        let s: String = obj.str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let at = s.chars().position(|c| c == char::REPLACEMENT_CHARACTER).unwrap_or(0);
+        crate::errors::keyed(
+            obj.py(),
+            crate::errors::Kind::Scenario,
+            format!("{name}: expected text that UTF-8 can hold, found a lone surrogate (a half of a UTF-16 pair) at character {at}; remove it, or decode the file with errors=\"replace\""),
+            None,
+        )
+    })
 }
 
 /// A bool argument (True, False or a numpy bool; not an int), or a TypeError naming it.
@@ -209,6 +222,9 @@ pub mod argument {
     }
     pub fn check(obj: &Bound<'_, PyAny>) -> PyResult<bool> {
         flag(obj, "check")
+    }
+    pub fn continuous(obj: &Bound<'_, PyAny>) -> PyResult<bool> {
+        flag(obj, "continuous")
     }
     pub fn fmu(obj: &Bound<'_, PyAny>) -> PyResult<bool> {
         flag(obj, "fmu")

@@ -84,9 +84,9 @@ pub fn spec(
         relative_degrees: relative_degrees.map(|s| integers(s, "relative_degrees", k)).transpose()?,
         regressor_scaling: regressor_scaling
             .map(|obj| {
-                let name: String = obj
-                    .extract()
-                    .map_err(|_| crate::errors::type_error("regressor_scaling", "\"paper\" or \"normalized\"", obj))?;
+                let name: String = obj.extract().map_err(|_| {
+                    crate::errors::type_error("regressor_scaling", "\"paper\", \"normalized\" or \"modal\"", obj)
+                })?;
                 quell::design::RegressorScaling::from_name(&name)
                     .map_err(|e| k.err(py, format!("regressor_scaling: {e}")))
             })
@@ -150,8 +150,9 @@ fn integers(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<usiz
 /// relative_degrees : list of int, optional
 ///     σ_i given instead of decided by eq. (7).
 /// regressor_scaling : str, optional
-///     "paper" (default: the paper's filters, l = e_q) or "normalized" (filters of unit DC gain at
-///     their own time scale, so ξ̂ has the signals' size).
+///     "paper" (default: the paper's filters, l = e_q), "normalized" (filters of unit DC gain at
+///     their own time scale, so ξ̂ has the signals' size) or "modal" (a block per real pole or
+///     complex pair, each of unit gain at its own frequency: resonators for many harmonics).
 ///
 /// Returns
 /// -------
@@ -366,8 +367,8 @@ impl PyDesign {
     fn beta(&self) -> f64 {
         self.inner.beta()
     }
-    /// How the internal-model filters are realized: "paper" (l = e_q) or "normalized" (unit DC
-    /// gain, ξ̂ of the signals' size).
+    /// How the internal-model filters are realized: "paper" (l = e_q), "normalized" (unit DC
+    /// gain, ξ̂ of the signals' size) or "modal" (a block per pole or pair).
     #[getter]
     fn regressor_scaling(&self) -> &'static str {
         self.inner.regressor_scaling().name()

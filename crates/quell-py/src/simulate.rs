@@ -550,6 +550,9 @@ impl PySimResult {
 ///     The scenario.
 /// t_end, output_step, rtol, atol, sample_time : float, optional
 ///     Override the scenario's simulation settings.
+/// continuous : bool, optional
+///     Run the continuous loop even where the scenario sets simulation.sample_time (to compare the
+///     sampled-data loop with the one it approximates); not with sample_time.
 /// method : str, optional
 ///     The continuous loop's integrator, overriding the scenario's: "auto" (DOP853, implicit in the
 ///     adaptive parameters η̂ while their law is stiff; the default), "explicit" (DOP853
@@ -593,7 +596,7 @@ impl PySimResult {
 /// >>> bool(np.abs(explicit.y - imex.y).max() < 1e-6)
 /// True
 #[pyfunction]
-#[pyo3(signature = (scenario, *, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, method=None, max_steps=None, states=false, check=true))]
+#[pyo3(signature = (scenario, *, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, continuous=false, method=None, max_steps=None, states=false, check=true))]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate(
     py: Python<'_>,
@@ -603,6 +606,7 @@ pub fn simulate(
     rtol: Option<&Bound<'_, PyAny>>,
     atol: Option<&Bound<'_, PyAny>>,
     sample_time: Option<&Bound<'_, PyAny>>,
+    #[pyo3(from_py_with = crate::convert::argument::continuous)] continuous: bool,
     method: Option<&Bound<'_, PyAny>>,
     max_steps: Option<&Bound<'_, PyAny>>,
     #[pyo3(from_py_with = crate::convert::argument::states)] states: bool,
@@ -612,12 +616,22 @@ pub fn simulate(
         scenario.extract().map_err(|_| crate::errors::type_error("scenario", "a quell.Scenario", scenario))?;
     let design = s.design_arc(py)?;
     let method = method.filter(|v| !v.is_none());
-    let edited = with_overrides(py, &s.inner, [t_end, output_step, rtol, atol, sample_time], method)?;
+    let sample_time = sample_time.filter(|v| !v.is_none());
+    if continuous && sample_time.is_some() {
+        let msg =
+            "continuous: True asks for the continuous loop and sample_time for the sampled-data loop; give one of them";
+        return Err(keyed(py, Kind::Scenario, msg.into(), Some("continuous".into())));
+    }
+    let mut edited = with_overrides(py, &s.inner, [t_end, output_step, rtol, atol, sample_time], method)?;
+    if continuous && s.inner.simulation.sample_time.is_some() {
+        let scn = edited.get_or_insert_with(|| s.inner.clone());
+        scn.simulation.sample_time = None;
+    }
     let scn = edited.as_ref().unwrap_or(&s.inner);
     let mut settings = RunSettings::of(scn);
     settings.record_states = states;
     if let (Some(_), Loop::Sampled { sample_time }) = (&method, &settings.mode) {
-        let msg = format!("method: the integrator applies to the continuous loop only, and this run is the sampled-data loop at sample_time = {sample_time} {}; leave method out, or sample_time", scn.plant.time_unit);
+        let msg = format!("method: the integrator applies to the continuous loop only, and this run is the sampled-data loop at sample_time = {sample_time} {}; leave method out, or pass continuous=True (in place of any sample_time)", scn.plant.time_unit);
         return Err(keyed(py, Kind::Scenario, msg, Some("simulation.method".into())));
     }
     settings

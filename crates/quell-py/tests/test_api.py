@@ -219,8 +219,12 @@ def test_to_pandas_and_plot():
     np.testing.assert_array_equal(command.get_ydata(), r.u[:, 1])
     np.testing.assert_array_equal(plant_input.get_ydata(), r.u_f[:, 1])
     assert not np.array_equal(r.u[:, 1], r.u_f[:, 1])
-    with pytest.raises(ValueError, match="channel"):
-        r.plot(channel=3)
+    for bad in (3, 0, -1):
+        with pytest.raises(quell.ScenarioError, match=rf"^channel: expected a channel number from 1 to 2, found {bad}$"):
+            r.plot(channel=bad)
+    for size in ((-1, 2), (4, 0), (float("nan"), 3)):
+        with pytest.raises(quell.ScenarioError, match=r"^figsize: expected \(width, height\) in inches, both finite and > 0"):
+            r.plot(figsize=size)
     # The titles name the output and the input where the plant does (Wood–Berry's column).
     wood_berry = quell.Scenario.load(pathlib.Path(__file__).parents[2] / "quell" / "tests" / "data" / "wood-berry.toml")
     fig = quell.simulate(wood_berry, t_end=5.0).plot(channel=1)

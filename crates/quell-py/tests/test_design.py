@@ -150,3 +150,44 @@ def test_bad_regressor_scaling_names_the_key():
     assert quell.design(d.plant, regressor_scaling="normalized", **kwargs).regressor_scaling == "normalized"
     with pytest.raises(quell.DesignError, match=r'^regressor_scaling: expected "paper" .* found "unit_dc"'):
         quell.design(d.plant, regressor_scaling="unit_dc", **kwargs)
+
+
+def test_modal_regressor_is_a_resonator_per_harmonic_and_conditions_omega():
+    """regressor_scaling="modal": G_g block diagonal, one 2×2 block [[−a, b], [−b, −a]] per pair
+    −a ± jb with l = [0, 2a] (gains ≈ 1 at b when a ≪ b), checked with numpy's solves; and the
+    regressor's time-averaged Gram Σ (a_k²/2) Re(v vᴴ), v = (jω_k I − G)⁻¹ l, for a square wave's
+    five odd harmonics of 0.1 rad/s is far better conditioned with resonators at the harmonics
+    than with the normalized companion form of real poles spread over them (as the automatic design
+    spread them before: λ_min/λ_max about 3e-9)."""
+    d = paper_design()
+    ws = np.array([0.1, 0.3, 0.5, 0.7, 0.9])
+    amps = 1.0 / np.array([1, 3, 5, 7, 9])
+    b = 0.03
+    resonators = [p for w in ws for p in (complex(-b, w), complex(-b, -w))]
+    spread = list(-0.0667 * 1.37 ** np.arange(10))
+    kwargs = dict(channel_poles=[[-6.0, -2.0], [-4.0]], disturbance_filter_poles=[[-1.0, -3.0], [-1.0, -2.0, -3.0]],
+                  mu=[20.0, 30.0], beta=10.0, observer_poles=[-2.0, -3.0, -4.0])
+    modal = quell.design(d.plant, reference_filter_poles=[resonators, [-9.0]], regressor_scaling="modal", **kwargs)
+    normalized = quell.design(d.plant, reference_filter_poles=[spread, [-9.0]], regressor_scaling="normalized", **kwargs)
+    assert modal.regressor_scaling == "modal"
+    G, L = modal.G_g[:10, :10], modal.L_g[:10, 0]
+    for k, w in enumerate(ws):
+        block = G[2 * k:2 * k + 2, 2 * k:2 * k + 2]
+        np.testing.assert_array_equal(block, [[-b, w], [-w, -b]])
+        np.testing.assert_array_equal(L[2 * k:2 * k + 2], [0.0, 2 * b])
+        # Its own resonance: gains 2w/√(b² + 4w²) and 2|p|/√(b² + 4w²), within b/w of 1.
+        v = np.linalg.solve(1j * w * np.eye(2) - block, L[2 * k:2 * k + 2])
+        np.testing.assert_allclose(np.abs(v), [2 * w / np.hypot(b, 2 * w), 2 * np.hypot(b, w) / np.hypot(b, 2 * w)],
+                                   rtol=1e-12)
+    assert np.count_nonzero(G - np.diag(np.diag(G))) == 10
+
+    def spread_of(design):
+        G, L = design.G_g[:10, :10], design.L_g[:10, 0]
+        gram = sum(a * a / 2 * np.real(np.outer(v, v.conj()))
+                   for a, w in zip(amps, ws) for v in [np.linalg.solve(1j * w * np.eye(10) - G, L)])
+        e = np.linalg.eigvalsh(gram)
+        return e[0] / e[-1]
+
+    assert spread_of(modal) > 1e-3 > 1e-7 > spread_of(normalized)
+    with pytest.raises(quell.DesignError, match=r"^reference_filter_poles\[0\]: pole .* is repeated"):
+        quell.design(d.plant, reference_filter_poles=[[-1.0, -1.0], [-9.0]], regressor_scaling="modal", **kwargs)

@@ -69,3 +69,25 @@ def test_bad_method_is_a_type_error_or_a_scenario_error_naming_the_argument(wher
 def test_method_is_refused_for_a_sampled_data_run():
     with pytest.raises(quell.ScenarioError, match=r"^method: the integrator applies to the continuous loop only"):
         quell.simulate(quell.paper_example(), t_end=1.0, sample_time=1e-3, method="imex")
+    with pytest.raises(quell.ScenarioError, match=r"pass continuous=True"):
+        quell.simulate(quell.paper_example(), t_end=1.0, sample_time=1e-3, method="imex")
+
+
+def test_continuous_runs_the_continuous_loop_of_a_sampled_scenario():
+    """continuous=True on a scenario that sets simulation.sample_time: the same samples as the same
+    scenario without it (bit for bit), where the plain call runs the sampled-data loop; with
+    sample_time it is refused naming the argument, and a non-bool is a TypeError."""
+    text = quell.paper_example().to_toml().replace("t_end = 100.0", "t_end = 2.0")
+    sampled = quell.Scenario.from_toml(text.replace("[simulation]\n", "[simulation]\nsample_time = 0.01\n", 1))
+    plain = quell.Scenario.from_toml(text)
+    assert sampled.simulation["sample_time"] == 0.01
+    reference = quell.simulate(plain)
+    assert "controller_steps" in quell.simulate(sampled).stats
+    continuous = quell.simulate(sampled, continuous=True, method="imex")
+    assert "steps" in continuous.stats
+    np.testing.assert_array_equal(quell.simulate(sampled, continuous=True).y, reference.y)
+    with pytest.raises(quell.ScenarioError, match=r"^continuous: True asks for the continuous loop") as info:
+        quell.simulate(sampled, continuous=True, sample_time=0.01)
+    assert info.value.key == "continuous"
+    with pytest.raises(TypeError, match=r"^continuous: expected a bool"):
+        quell.simulate(sampled, continuous="yes")

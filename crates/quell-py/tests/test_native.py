@@ -66,7 +66,7 @@ def test_plot_takes_axes_and_figsize():
         r.plot(ax=[one, one])
     with pytest.raises(TypeError, match="fig and ax: expected one of them or neither"):
         r.plot(fig=own, ax=one)
-    with pytest.raises(ValueError, match="fig: expected an empty Figure .* found one with 1 Axes"):
+    with pytest.raises(quell.ScenarioError, match="fig: expected an empty Figure .* found one with 1 Axes"):
         r.plot(fig=own)  # drawn over its Axes before
     plt.close("all")
 

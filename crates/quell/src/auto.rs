@@ -78,6 +78,11 @@ const FILTER_DECAY: f64 = 30.0;
 /// ([`filter_spread`]).
 const MAX_FILTER_SPREAD: f64 = 1.5;
 const MIN_FILTER_SPREAD: f64 = 1.1;
+/// From this many harmonics in one component on, the rules realize the filters modally with a
+/// resonator per harmonic ([`RegressorScaling::Modal`], [`resonators`]): five harmonics of a square
+/// wave, spread as real poles in the normalized companion form, left Ω̄'s smallest eigenvalue at
+/// 6.9e-11 and the design failing; three harmonics pass either way.
+const MODAL_HARMONICS: usize = 4;
 /// A sampled-data scenario's first proposal halves its channel and observer poles at most this
 /// often ([`sampled_start`]).
 const MAX_SAMPLED_HALVINGS: usize = 10;
@@ -577,7 +582,7 @@ fn check_first(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier) ->
         );
         Ok(FirstCheck::Unverified(Box::new(d)))
     };
-    if let Some(advice) = too_fast_for_its_horizon(&first.scenario, &design) {
+    if let Some(advice) = too_fast_for_its_horizon(&first.scenario, &design).or_else(|| too_large_to_verify(&design)) {
         return unverified((first, design, start), advice, 0, &bound);
     }
     let (mut retries, mut slowed) = (0, 0);
@@ -1029,6 +1034,25 @@ fn smallest_gap(s: &Scenario) -> Option<f64> {
 /// minutes).
 const MAX_RATE_HORIZON: f64 = 3e7;
 
+/// The largest regressor the automatic design verifies by simulation: each channel's Ω_i has
+/// q(q + 1)/2 entries and its law costs O(q²) a right-hand side, so 100 harmonics of the CSTR
+/// (q = 203, two channels: 41,412 entries of Ω) had not finished its verification in seven minutes,
+/// where 30 (q = 61) verify in a minute.
+pub const MAX_VERIFIED_REGRESSOR: usize = 100;
+
+/// Advice when the regressor is too large to verify ([`MAX_VERIFIED_REGRESSOR`]).
+fn too_large_to_verify(design: &Design) -> Option<String> {
+    let (q, m) = (design.q(), design.plant().m());
+    (q > MAX_VERIFIED_REGRESSOR).then(|| {
+        format!(
+            "the regressor has q = {q} states (q_g = {}, q_ω = {}: two per harmonic and one per bias of every component), beyond the {MAX_VERIFIED_REGRESSOR} the automatic design verifies by simulation: the adaptive laws carry {} entries of Ω, and each verifying run would take many minutes; track fewer harmonics per component (those within the plant's bandwidth; a square wave's first few odd ones), or give [design] by hand and check it with quell run (docs/tuning.md)",
+            design.q_g(),
+            design.q_w(),
+            m * q * (q + 1) / 2
+        )
+    })
+}
+
 /// Advice when the first proposal's continuous loop is far faster than its horizon (ρ·t_end beyond
 /// [`MAX_RATE_HORIZON`]): a fast stable plant eigenvalue (a motor's electrical pole at 1454 /ms
 /// under a 2000 ms run) sets the time scale r and with it every pole the rules place.
@@ -1201,7 +1225,7 @@ fn horizon_advice(
     if !slow.hopeless.is_empty() {
         let scaling = match design.regressor_scaling() {
             RegressorScaling::Paper => ", or design.regressor_scaling = \"normalized\" (ξ̂ of the signals' size)",
-            RegressorScaling::Normalized => "",
+            RegressorScaling::Normalized | RegressorScaling::Modal => "",
         };
         advice.push(format!(
             "{}: no horizon helps; excite those directions better (references of several frequencies; a disturbance in units far from the outputs' spreads Ω̄ by their ratio squared{scaling}) or ask less of the loop",
@@ -1385,8 +1409,7 @@ fn filter_spread(frequencies: &[f64], order: usize) -> (f64, Option<f64>) {
 fn filters(
     signal: &Signal,
     orders: Option<&[usize]>,
-    r: f64,
-    t_end: f64,
+    (r, t_end, scaling): (f64, f64, RegressorScaling),
     key: &str,
 ) -> Result<(PoleLists, String), ScenarioError> {
     if let Some(o) = orders {
@@ -1416,6 +1439,10 @@ fn filters(
             ));
         }
         let ws: Vec<f64> = frequencies(c).collect();
+        if scaling == RegressorScaling::Modal && !ws.is_empty() {
+            lists.push(resonators(&ws, order, t_end));
+            continue;
+        }
         let (factor, span_centre) = filter_spread(&ws, order);
         let centre = match span_centre {
             Some(c) => c,
@@ -1427,12 +1454,36 @@ fn filters(
         let centre = centre.max(slowest * factor.powf((order as f64 - 1.0) / 2.0));
         lists.push(spread(centre, order, factor, true));
     }
-    let why = if orders.is_some() {
-        format!("orders from design.{key}_filter_orders; distinct real poles spread ×1.5 around each component's frequencies (geometric mean; r for a bias; less, down to ×1.1, not to spread far beyond a component's frequencies), the slowest at least {FILTER_DECAY}/t_end")
+    let resonant = if scaling == RegressorScaling::Modal {
+        format!("; with the modal form a component with harmonics gets instead a resonator −b ± jω per harmonic ω and a real pole −b (bias, and any poles beyond the order needed, ×1.5 apart from it), b = {FILTER_DECAY}/t_end kept between a quarter and half of the smallest distance between its frequencies (0 included)")
     } else {
-        format!("two poles per harmonic, one per bias (the exosystem's order, Assumptions 2–3); distinct real poles spread ×1.5 around each component's frequencies (geometric mean; r for a bias; less, down to ×1.1, not to spread far beyond a component's frequencies), the slowest at least {FILTER_DECAY}/t_end")
+        String::new()
+    };
+    let why = if orders.is_some() {
+        format!("orders from design.{key}_filter_orders; distinct real poles spread ×1.5 around each component's frequencies (geometric mean; r for a bias; less, down to ×1.1, not to spread far beyond a component's frequencies), the slowest at least {FILTER_DECAY}/t_end{resonant}")
+    } else {
+        format!("two poles per harmonic, one per bias (the exosystem's order, Assumptions 2–3); distinct real poles spread ×1.5 around each component's frequencies (geometric mean; r for a bias; less, down to ×1.1, not to spread far beyond a component's frequencies), the slowest at least {FILTER_DECAY}/t_end{resonant}")
     };
     Ok((lists, why))
+}
+
+/// The modal filter of a component with harmonics `ws` (nonzero) and `order` poles: a pair
+/// −b ± jω per harmonic, then real poles −b, −1.5b, … up to the order (a bias's pole and any
+/// extra). b = [`FILTER_DECAY`]/t_end clamped to [gap/4, gap/2], gap the smallest distance between
+/// the frequencies, 0 included: each resonator then answers mostly its own harmonic (b = gap/4 put
+/// Ω̄'s condition number for ten harmonics of 0.1 … 1 rad/s, amplitudes 1/k, at 840; gap/2 at
+/// 7.8e3), and its transient from the zero start decays within the horizon where that allows.
+fn resonators(ws: &[f64], order: usize, t_end: f64) -> Vec<Complex<f64>> {
+    let mut sorted = ws.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    sorted.dedup();
+    let gap = sorted.windows(2).map(|w| w[1] - w[0]).fold(sorted[0], f64::min);
+    let b = ten_digits((FILTER_DECAY / t_end).clamp(gap / 4.0, gap / 2.0));
+    let mut poles: Vec<Complex<f64>> =
+        sorted.iter().flat_map(|&w| [Complex::new(-b, ten_digits(w)), Complex::new(-b, -ten_digits(w))]).collect();
+    let reals = order.saturating_sub(poles.len());
+    poles.extend(spread(b, reals, 1.5, false));
+    poles
 }
 
 /// Records one chosen key with its value and reason.
@@ -1449,7 +1500,7 @@ fn choose(
 ) -> Result<DesignSpec, AutoError> {
     let r = time_scale(s)?;
     let mut note = |key: &str, value: String, why: String| choices.push(Choice { key: key.into(), value, why });
-    let regressor_scaling = choose_scaling(&partial, &mut note);
+    let regressor_scaling = choose_scaling(&partial, s, &mut note);
     let channel_poles = match partial.channel_poles {
         Some(c) => c,
         None => choose_channel_poles(s, partial.relative_degrees.as_deref(), r, speed.channel, &mut note)?,
@@ -1458,7 +1509,7 @@ fn choose(
         partial.reference_filter_poles,
         &s.reference,
         partial.reference_filter_orders.as_deref(),
-        (r, s.simulation.t_end),
+        (r, s.simulation.t_end, regressor_scaling),
         "reference",
         &mut note,
     )?;
@@ -1466,7 +1517,7 @@ fn choose(
         partial.disturbance_filter_poles,
         &s.disturbance,
         partial.disturbance_filter_orders.as_deref(),
-        (r, s.simulation.t_end),
+        (r, s.simulation.t_end, regressor_scaling),
         "disturbance",
         &mut note,
     )?;
@@ -1534,7 +1585,7 @@ fn choose_filters(
     given: Option<PoleLists>,
     signal: &Signal,
     orders: Option<&[usize]>,
-    (r, t_end): (f64, f64),
+    (r, t_end, scaling): (f64, f64, RegressorScaling),
     key: &str,
     note: &mut Note,
 ) -> Result<PoleLists, ScenarioError> {
@@ -1542,7 +1593,7 @@ fn choose_filters(
         Some(g) => Ok(g),
         None if signal.is_empty() => Ok(Vec::new()),
         None => {
-            let (lists, why) = filters(signal, orders, r, t_end, key)?;
+            let (lists, why) = filters(signal, orders, (r, t_end, scaling), key)?;
             note(&format!("design.{key}_filter_poles"), pole_lists(&lists).to_string(), why);
             Ok(lists)
         }
@@ -1557,12 +1608,19 @@ fn choose_beta(s: &Scenario, r: f64, note: &mut Note) -> f64 {
 }
 
 /// The regressor's realization: the file's, else the paper's form when the file gives μ (μ's
-/// meaning depends on it), else the normalized form, whose Ω̄ keeps its conditioning at every time
-/// scale (the paper's form spreads its eigenvalues by about r^2(q−1) away from r = 1 rad/s).
-fn choose_scaling(partial: &PartialDesign, note: &mut Note) -> RegressorScaling {
+/// meaning depends on it), else the modal form when a component has [`MODAL_HARMONICS`] harmonics
+/// or more, else the normalized form, whose Ω̄ keeps its conditioning at every time scale (the
+/// paper's form spreads its eigenvalues by about r^2(q−1) away from r = 1 rad/s).
+fn choose_scaling(partial: &PartialDesign, s: &Scenario, note: &mut Note) -> RegressorScaling {
+    let most = s.reference.components.iter().chain(&s.disturbance.components).map(|c| frequencies(c).count()).max();
     match (partial.regressor_scaling, &partial.mu) {
         (Some(g), _) => g,
         (None, Some(_)) => RegressorScaling::Paper,
+        (None, None) if most.unwrap_or(0) >= MODAL_HARMONICS => {
+            let m = RegressorScaling::Modal;
+            note("design.regressor_scaling", format!("{:?}", m.name()), format!("a component has {} harmonics ({MODAL_HARMONICS} or more): a resonator per harmonic, each block of unit gain at its own frequency, keeps Ω̄ well conditioned where the companion forms' entries s^(k−1)/∏(s − p_j) differ by powers of the frequencies' spread; μ is chosen for it (the paper's form is kept when the file gives μ)", most.unwrap_or(0)));
+            m
+        }
         (None, None) => {
             let n = RegressorScaling::Normalized;
             note("design.regressor_scaling", format!("{:?}", n.name()), "each filter at its own time scale with unit DC gain (ξ̂ of the signals' size): Ω̄'s conditioning does not depend on the time scale, where the paper's form spreads its eigenvalues by about r^2(q−1) away from 1 rad per unit of time; μ is chosen for it (the paper's form is kept when the file gives μ)".into());
@@ -1663,10 +1721,13 @@ fn observer(
 /// of [`MAX_RATE_PER_SCALE`]·r and a [`STIFF_MARGIN`]th of the stiffness threshold [`STIFF_RATIO`]·ρ
 /// of the pace estimate ([`crate::diagnostics::estimate`]; ρ the loop's fastest other rate,
 /// [`loop_rate`]); for the verification's retries the threshold itself (the run is then not stiff
-/// by the estimate's own flag).
+/// by the estimate's own flag). A sampled-data scenario caps both at [`COARSE_SAMPLE`]/T_s, the
+/// rate its sample time resolves (the maglev's automatic μ adapted at 4,111/s, 0.82 of 1/T_s at
+/// 0.2 ms, and the sampled loop peaked at 85× the continuous loop's actuator signal).
 fn rate_caps(s: &Scenario, design: &Design, r: f64) -> (f64, f64) {
     let stiff = STIFF_RATIO * loop_rate(design, &s.plant, [&s.reference, &s.disturbance]);
-    ((MAX_RATE_PER_SCALE * r).min(stiff / STIFF_MARGIN), stiff)
+    let sampled = s.simulation.sample_time.map_or(f64::INFINITY, |t| COARSE_SAMPLE / t);
+    ((MAX_RATE_PER_SCALE * r).min(stiff / STIFF_MARGIN).min(sampled), stiff.min(sampled))
 }
 
 /// μ_i from the averaged law: the smallest gain whose predicted RMS error by the convergence time
@@ -1709,8 +1770,9 @@ fn choose_mu(s: &Scenario, design: &Design, targets: &Targets, r: f64) -> (Vec<f
         })
         .unzip();
     let why = format!(
-        "the smallest μ_i for which the averaged adaptive law (η̃' = −μ Ω̄ η̃) predicts an RMS error ≤ 0.2 % of the reference's peak by t = {t_c:.4e} {unit} ({}), with μ_i λ_max(Ω̄_i) ≤ {max_rate:.4e}/{unit} (the smaller of {MAX_RATE_PER_SCALE}·r and a {STIFF_MARGIN}th of the stiffness threshold {STIFF_RATIO}·ρ){}",
+        "the smallest μ_i for which the averaged adaptive law (η̃' = −μ Ω̄ η̃) predicts an RMS error ≤ 0.2 % of the reference's peak by t = {t_c:.4e} {unit} ({}), with μ_i λ_max(Ω̄_i) ≤ {max_rate:.4e}/{unit} (the smaller of {MAX_RATE_PER_SCALE}·r and a {STIFF_MARGIN}th of the stiffness threshold {STIFF_RATIO}·ρ{}){}",
         if targets.convergence_time.is_some() { "the target convergence time" } else { "t_end/20" },
+        if s.simulation.sample_time.is_some() { format!(", and {COARSE_SAMPLE}/T_s") } else { String::new() },
         if notes.is_empty() { String::new() } else { format!("; {}", notes.join("; ")) }
     );
     (mu, caps, why)
@@ -1740,7 +1802,8 @@ mod tests {
     #[test]
     fn filter_poles_span_a_components_frequencies() {
         for (n, w0) in [(12, 0.02), (25, 1.0)] {
-            let (lists, _) = filters(&square(n, w0), None, 1.0, 1e5, "reference").unwrap();
+            let (lists, _) =
+                filters(&square(n, w0), None, (1.0, 1e5, RegressorScaling::Normalized), "reference").unwrap();
             let (lo, hi, ratio) = span(&lists[0]);
             let (w_lo, w_hi) = (w0, (2 * n - 1) as f64 * w0);
             assert_eq!(lists[0].len(), 2 * n);
@@ -1749,8 +1812,33 @@ mod tests {
             assert!((MIN_FILTER_SPREAD - 1e-9..MAX_FILTER_SPREAD + 1e-9).contains(&ratio), "{n}: ×{ratio}");
         }
         for (n, w0) in [(1, 2.0), (2, 10.0)] {
-            let (lists, _) = filters(&square(n, w0), None, 1.0, 1e5, "reference").unwrap();
+            let (lists, _) =
+                filters(&square(n, w0), None, (1.0, 1e5, RegressorScaling::Normalized), "reference").unwrap();
             assert!((span(&lists[0]).2 - MAX_FILTER_SPREAD).abs() < 1e-9, "{n}: {:?}", lists[0]);
         }
+    }
+
+    /// The modal form: a pair −b ± jω at each harmonic, b = 30/t_end within [gap/4, gap/2] (gap
+    /// the smallest distance between the frequencies, 0 included), then real poles from −b ×1.5
+    /// apart for a bias and any order beyond the exosystem's.
+    #[test]
+    fn resonators_sit_at_the_harmonics() {
+        let signal = square(5, 0.1);
+        let ws = [0.1, 0.3, 0.5, 0.7, 0.9];
+        for (t_end, b) in [(1000.0, 0.03), (100.0, 0.05), (1500.0, 0.025)] {
+            let (lists, _) = filters(&signal, None, (1.0, t_end, RegressorScaling::Modal), "reference").unwrap();
+            let expected: Vec<Complex<f64>> =
+                ws.iter().flat_map(|&w| [Complex::new(-b, w), Complex::new(-b, -w)]).collect();
+            assert_eq!(lists[0].len(), 10);
+            for (p, e) in lists[0].iter().zip(&expected) {
+                assert!((p - e).norm() <= 1e-12, "t_end {t_end}: {p} against {e}");
+            }
+        }
+        // gap = 0.1 (the first harmonic's distance from DC): b = 30/t_end where within [0.025, 0.05].
+        let (lists, _) = filters(&signal, Some(&[12]), (1.0, 1000.0, RegressorScaling::Modal), "reference").unwrap();
+        assert_eq!(lists[0].len(), 12);
+        assert!((lists[0][0] - Complex::new(-0.03, 0.1)).norm() < 1e-12, "{:?}", lists[0]);
+        assert!((lists[0][10] - Complex::new(-0.03, 0.0)).norm() < 1e-12, "{:?}", lists[0]);
+        assert!((lists[0][11] - Complex::new(-0.045, 0.0)).norm() < 1e-12, "{:?}", lists[0]);
     }
 }

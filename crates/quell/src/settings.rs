@@ -35,23 +35,42 @@ pub const MAX_OUTPUT_SAMPLES: f64 = 1e7;
 /// the states) and written a 10.6 GB signals.csv.
 pub const MAX_RECORD_BYTES: f64 = 2.0 * 1024.0 * 1024.0 * 1024.0;
 
-/// Largest scenario or study file read (64 MiB): the paper's example is 2 kB and a plant of
-/// n = 1000 states about 20 MB, so anything longer is the wrong path (`/dev/zero`), which would
-/// otherwise be read until memory runs out.
-pub const MAX_INPUT_BYTES: u64 = 64 << 20;
+/// Largest scenario or study text read (16 MiB). Parsing TOML takes about 95 bytes of memory per
+/// byte of text (a 24 MB array of small numbers took 2 GB before its length was checked), so this
+/// bounds the parse at about 1.6 GB. The paper's example is 2 kB, and a plant of n = 500 states
+/// (the most a design takes) about 6 MB with every number at full precision; anything longer is
+/// the wrong path (`/dev/zero`) or a generated mistake.
+pub const MAX_INPUT_BYTES: u64 = 16 << 20;
+
+/// Why a text of `len` bytes is too long to parse ([`MAX_INPUT_BYTES`]), or `None`.
+pub fn input_too_long(len: usize) -> Option<String> {
+    (len as u64 > MAX_INPUT_BYTES).then(|| {
+        format!(
+            "longer than {} MiB, the most a scenario or study file may be (is it the right path? a device such as /dev/zero never ends; parsing takes about 100 bytes of memory per byte)",
+            MAX_INPUT_BYTES >> 20
+        )
+    })
+}
 
 /// Reads a scenario or study file as text, at most [`MAX_INPUT_BYTES`] of it; the message (without
-/// the path, which the caller names) says what is wrong.
+/// the path, which the caller names) says what is wrong. Only a regular file is read: a FIFO
+/// without a writer would block for ever.
 pub fn read_input(path: &std::path::Path) -> Result<String, String> {
     use std::io::Read;
+    // Before opening: opening a FIFO for reading waits for a writer.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let kind = std::fs::metadata(path).map_err(|e| e.to_string())?.file_type();
+        if kind.is_fifo() || kind.is_socket() {
+            return Err("a pipe or socket, not a file; give the path of a scenario or study file".into());
+        }
+    }
     let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
     let mut bytes = Vec::new();
     file.take(MAX_INPUT_BYTES + 1).read_to_end(&mut bytes).map_err(|e| e.to_string())?;
-    if bytes.len() as u64 > MAX_INPUT_BYTES {
-        return Err(format!(
-            "longer than {} MiB, the most a scenario or study file may be (is it the right path? a device such as /dev/zero never ends)",
-            MAX_INPUT_BYTES >> 20
-        ));
+    if let Some(e) = input_too_long(bytes.len()) {
+        return Err(e);
     }
     String::from_utf8(bytes)
         .map_err(|e| format!("not UTF-8 text (invalid byte at offset {})", e.utf8_error().valid_up_to()))
@@ -370,8 +389,9 @@ pub(crate) fn check_integrator_signal(
             return Err(KeyError::new(
                 format!("{key}.components[{c}].harmonics[{h}].frequency"),
                 format!(
-                    "ω = {:e} rad/{unit} needs at least ω·t_end/π = {steps:.3e} integrator steps over t_end = {t_end} {unit} (two a period); at most {MAX_SAMPLING_STEPS:e} are run; expected ω ≤ {}: frequencies are in rad per unit of the plant's time (not Hz)",
-                    w.frequency,
+                    "ω = {} rad/{unit} needs at least ω·t_end/π = {steps:.3e} integrator steps over t_end = {} {unit} (two a period); at most {MAX_SAMPLING_STEPS:e} are run; expected ω ≤ {}: frequencies are in rad per unit of the plant's time (not Hz)",
+                    fmt_short(w.frequency),
+                    fmt_short(t_end),
                     fmt_short(three_digits_down(std::f64::consts::PI * MAX_SAMPLING_STEPS / t_end))
                 ),
             ));
@@ -529,13 +549,37 @@ pub(crate) fn check_tolerances(rtol: f64, atol: f64) -> Result<(), KeyError> {
         ));
     }
     positive("simulation.atol", "an absolute tolerance", atol)?;
+    if atol < MIN_ATOL {
+        return Err(KeyError::new(
+            "simulation.atol",
+            format!(
+                "expected an absolute tolerance ≥ {MIN_ATOL:e}, found {}: where a component leaves zero (every state at the start, the delayed commands at each delay) the error test then asks for steps below rounding, and the step size underflows (the paper's example at 1e-100); give the size of the smallest signal that matters times rtol",
+                fmt_short(atol)
+            ),
+        ));
+    }
     Ok(())
 }
+
+/// The smallest absolute tolerance accepted. The paper's example runs at 1e-60 (212 steps for 2 s
+/// against 61 at 1e-20) and its step size underflows at 1e-100 at the first delay's breakpoint;
+/// 1e-30 leaves signals of 1e-20 (in any unit) their 1e-10 relative accuracy.
+pub const MIN_ATOL: f64 = 1e-30;
 
 /// A sampling period: finite, > 0, and at most [`MAX_SAMPLING_STEPS`] controller steps to t_end.
 pub(crate) fn check_sample_time(t_end: f64, sample_time: f64) -> Result<(), KeyError> {
     const KEY: &str = "simulation.sample_time";
     positive(KEY, "a sampling period", sample_time)?;
+    if sample_time > t_end {
+        return Err(KeyError::new(
+            KEY,
+            format!(
+                "expected a sample time ≤ t_end = {}, found {}: the run would end before the controller's first step; choose a shorter sample time or a longer simulation.t_end",
+                fmt_short(t_end),
+                fmt_short(sample_time)
+            ),
+        ));
+    }
     let steps = t_end / sample_time;
     if steps > MAX_SAMPLING_STEPS {
         return Err(KeyError::new(

@@ -297,6 +297,9 @@ fn a_value_the_rules_chose_and_the_design_refuses_is_named_as_theirs() {
         "[plant]\nA = [[-1.0]]\nB = [[1.0]]\nC = [[1.0]]\ndelays = [0.1]\n[design]\n[reference]\ncomponents = [ {{ harmonics = [{}] }} ]\n[simulation]\nt_end = 1000.0\n",
         harmonics.join(", ")
     );
+    // The normalized form given (the rules would realize so many harmonics modally, and refuse to
+    // verify a regressor of q = 400: `a_regressor_too_large_to_verify_is_not_simulated`).
+    let text = text.replace("[design]\n", "[design]\nregressor_scaling = \"normalized\"\n");
     let doc: toml::Table = text.parse().unwrap();
     let e = auto_design(&doc, &Targets::default()).map(|_| ()).unwrap_err();
     let message = e.to_string();
@@ -1043,4 +1046,77 @@ fn a_stop_during_the_horizon_search_keeps_the_failed_verification() {
     let advice = a.verification.advice.join("\n");
     assert!(advice.contains("the search for a horizon that passes was interrupted at "), "{advice}");
     assert!(advice.contains("channel 1: its slowest excited direction of Ω̄ converges in"), "{advice}");
+}
+
+/// A square wave's first `count` odd harmonics of `w0` (amplitudes 1/k) as one reference of
+/// x' = −x + u (0.1 s delay) over `t_end`, from an empty design.
+fn square_wave(count: usize, w0: f64, t_end: f64) -> toml::Table {
+    let harmonics: Vec<String> = (0..count)
+        .map(|k| format!("{{ amplitude = {}, frequency = {} }}", 1.0 / (2 * k + 1) as f64, w0 * (2 * k + 1) as f64))
+        .collect();
+    format!(
+        "[plant]\nA = [[-1.0]]\nB = [[1.0]]\nC = [[1.0]]\ndelays = [0.1]\n[design]\n[reference]\ncomponents = [ {{ harmonics = [{}] }} ]\n[simulation]\nt_end = {t_end:?}\n",
+        harmonics.join(", ")
+    )
+    .parse()
+    .unwrap()
+}
+
+/// Ω̄'s eigenvalue spread for the reference filter (G_g, L_g) of one component driven by its
+/// harmonics: Σ_k (a_k²/2) Re(v_k v_kᴴ), v_k = (jω_k I − G_g)⁻¹ L_g (the time average of ξ̂ξ̂ᵀ
+/// in closed form), as λ_min/λ_max.
+fn regressor_spread(design: &quell::Design, harmonics: &[(f64, f64)]) -> f64 {
+    let (G, L) = (design.G_g(), design.L_g());
+    let q = G.nrows();
+    let mut gram = DMatrix::<f64>::zeros(q, q);
+    for &(a, w) in harmonics {
+        let mut M = G.map(|x| Complex::new(-x, 0.0));
+        for i in 0..q {
+            M[(i, i)] += Complex::new(0.0, w);
+        }
+        let v = M.lu().solve(&L.map(|x| Complex::new(x, 0.0))).unwrap();
+        gram += (&v * v.adjoint()).map(|z| z.re) * (a * a / 2.0);
+    }
+    let e = gram.symmetric_eigen().eigenvalues;
+    e.min() / e.max()
+}
+
+/// Many harmonics in one component (docs/tuning.md): five odd harmonics of 0.1 rad/s over 1000 s.
+/// As distinct real poles in the normalized companion form the regressor's λ_min/λ_max is 3.1e-9
+/// and the design fails (tail 0.17 against 0.018); with a resonator −b ± jω per harmonic (the
+/// modal form, which the rules choose from four harmonics in a component on) it is 6.8e-3 and the
+/// design passes. The spread is computed here in closed form from the designs' (G_g, L_g).
+#[test]
+fn many_harmonics_are_tracked_with_a_resonator_each() {
+    let doc = square_wave(5, 0.1, 1000.0);
+    let harmonics: Vec<(f64, f64)> = (0..5).map(|k| (1.0 / (2 * k + 1) as f64, 0.1 * (2 * k + 1) as f64)).collect();
+    let modal = auto_design(&doc, &Targets::default()).unwrap();
+    assert_eq!(modal.scenario.design.regressor_scaling, quell::design::RegressorScaling::Modal);
+    assert!(modal.verification.passed, "{:?}", modal.verification);
+    let poles = &modal.scenario.design.reference_filter_poles[0];
+    for &(_, w) in &harmonics {
+        assert!(poles.iter().any(|p| (p.im - w).abs() < 1e-12 && p.re < 0.0), "{w}: {poles:?}");
+    }
+    let mut normalized_doc = doc.clone();
+    normalized_doc["design"].as_table_mut().unwrap().insert("regressor_scaling".into(), "normalized".into());
+    let normalized = auto_design(&normalized_doc, &Targets::default()).unwrap();
+    assert!(!normalized.verification.passed, "{:?}", normalized.verification);
+    let (m, n) = (regressor_spread(&modal.design, &harmonics), regressor_spread(&normalized.design, &harmonics));
+    assert!(m > 1e-3 && n < 1e-7, "λ_min/λ_max: modal {m:.3e}, normalized {n:.3e}");
+}
+
+/// A regressor beyond 100 states is not simulated (a hundred harmonics of the CSTR, q = 203,
+/// had not finished its verification in seven minutes): the design fails at once, with no run,
+/// naming q and what to do.
+#[test]
+fn a_regressor_too_large_to_verify_is_not_simulated() {
+    let auto = auto_design(&square_wave(60, 0.01, 10_000.0), &Targets::default()).unwrap();
+    let v = &auto.verification;
+    assert!(!v.passed && v.runs == 0 && v.steps == 0, "{v:?}");
+    assert_eq!(auto.design.q(), 120);
+    let advice = v.advice.join("\n");
+    assert!(
+        advice.contains("the regressor has q = 120 states") && advice.contains("track fewer harmonics"),
+        "{advice}"
+    );
 }

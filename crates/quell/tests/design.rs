@@ -783,3 +783,39 @@ fn a_stopped_design_of_a_large_plant_returns_interrupted() {
         assert_eq!(r.err(), Some(DesignError::Interrupted), "n = {n}");
     }
 }
+
+/// The modal form designs the paper's plant with its distinct real filter poles (G_g diagonal,
+/// each entry of unit DC gain: −G_g⁻¹ L_g has ones, one per pole in its component's column), and a
+/// repeated pole, which leaves two equal blocks that one input cannot steer apart, is refused
+/// naming the list and the pole.
+#[test]
+fn the_modal_form_needs_distinct_filter_poles() {
+    let mut spec = siso_spec();
+    spec.regressor_scaling = quell::design::RegressorScaling::Modal;
+    spec.reference_filter_poles = vec![vec![re(-1.0), Complex::new(-0.1, 2.0), Complex::new(-0.1, -2.0)]];
+    let plant = Plant::new(
+        mat(2, 2, &[0.0, 1.0, -2.0, -3.0]),
+        mat(2, 1, &[0.0, 1.0]),
+        mat(1, 2, &[3.0, 1.0]),
+        mat(2, 1, &[1.0, 0.0]),
+        mat(1, 1, &[0.0]),
+        vec![0.5],
+        None,
+    )
+    .unwrap();
+    let d = Design::new(&plant, &spec).unwrap();
+    let G = d.G_g();
+    assert_eq!((G[(0, 0)], G[(1, 1)], G[(1, 2)], G[(2, 1)], G[(2, 2)]), (-1.0, -0.1, 2.0, -2.0, -0.1));
+    assert_eq!((G[(0, 1)], G[(0, 2)], G[(1, 0)], G[(2, 0)]), (0.0, 0.0, 0.0, 0.0));
+    // DC gains: 1 for the real pole; 2ab/(a² + b²) and 2a·a/(a² + b²) for the pair (closed form).
+    let dc = -(G.clone().lu().solve(d.L_g()).unwrap());
+    let (a, b) = (0.1, 2.0);
+    for (k, expected) in [(0, 1.0), (1, 2.0 * a * b / (a * a + b * b)), (2, 2.0 * a * a / (a * a + b * b))] {
+        assert!((dc[(k, 0)] - expected).abs() <= 1e-14, "entry {k}: {}", dc[(k, 0)]);
+    }
+    spec.reference_filter_poles = vec![vec![re(-1.0), re(-2.0), re(-1.0)]];
+    let e = expect_err(&plant, &spec).to_string();
+    assert!(e.starts_with("design.reference_filter_poles[0]: pole -1") && e.contains("is repeated"), "{e}");
+    spec.regressor_scaling = quell::design::RegressorScaling::Normalized;
+    assert!(Design::new(&plant, &spec).is_ok(), "the companion forms take repeated poles");
+}

@@ -1002,3 +1002,19 @@ fn a_file_without_a_plant_is_told_so_first() {
         assert!(e.to_string().starts_with("plant: missing; required: the [plant] table (A, B, C, delays"), "{e}");
     }
 }
+
+/// A[0][0] = 1e15 in the paper's plant: the rank test's tolerance (6.7, from ‖A‖) exceeds every
+/// entry of B, so "rank 0 of 3" is a scaling verdict (B alone has rank 2; every mode is reachable
+/// by the PBH test in numpy): said so, with the fix; a plant really uncontrollable keeps the plain
+/// message.
+#[test]
+fn a_badly_scaled_plant_is_not_just_called_uncontrollable() {
+    let text = with(&[(A_LINE, "A = [[1e15, -1.7, -3.0], [2.8, 1.3, 4.0], [0.3, 0.3, -0.5]]")]);
+    let e = load_and_design(&text).map(|_| ()).unwrap_err().to_string();
+    assert!(e.starts_with("plant: (A, B) is not controllable (Assumption 1): numerical rank 0 of 3"), "{e}");
+    assert!(e.contains("the plant's numbers span too many decades for a rank test in double precision"), "{e}");
+    let A = "A = [[-1.0, 0.0, 0.0], [0.0, -2.0, 0.0], [0.0, 0.0, -3.0]]";
+    let B = "B = [[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]]\n";
+    let e = load_and_design(&with(&[(A_LINE, A), (B_LINE, B)])).map(|_| ()).unwrap_err().to_string();
+    assert!(e.contains("not controllable") && !e.contains("decades"), "{e}");
+}

@@ -83,15 +83,27 @@ fn horizons_and_tolerances_are_checked() {
         assert_eq!(cont(1.0, 0.1, 1e-9, tol), "simulation.atol", "atol = {tol}");
     }
     // rtol below 100 ε cannot be met in double precision, and from 1 on it allows errors as large
-    // as the signals; atol has no such floor (a tiny atol is pure relative control).
+    // as the signals; atol below 1e-30 asks components leaving zero for steps below rounding (the
+    // paper's run underflowed its step at the first delay with 1e-100 and 5e-324, and the advice
+    // blamed rtol).
     for rtol in [1e-300, 1e-30, 2.2e-14, 1.0, 10.0] {
         assert_eq!(cont(1.0, 0.1, rtol, 1e-9), "simulation.rtol", "rtol = {rtol}");
     }
+    for atol in [5e-324, 1e-300, 1e-100, 9.9e-31] {
+        assert_eq!(cont(1.0, 0.1, 1e-9, atol), "simulation.atol", "atol = {atol}");
+    }
     assert_eq!(quell::settings::MIN_RTOL, 100.0 * f64::EPSILON);
-    // The bound as the message prints it (2.22045e-14, rounded up) is accepted.
-    for (rtol, atol) in [(quell::settings::MIN_RTOL, 1e-9), (2.22045e-14, 1e-9), (0.5, 1e-9), (1e-9, 1e-300)] {
-        let r = Run::new(&paper().1, g, w, RunSettings::continuous(1e-3, 1e-3, rtol, atol)).simulate(go);
-        assert!(r.is_ok(), "rtol = {rtol}, atol = {atol}: {:?}", r.err());
+    // The bounds as the messages print them (2.22045e-14, rounded up) are accepted; the smallest
+    // atol runs past the first delay (1 s).
+    for (rtol, atol, t_end) in
+        [(quell::settings::MIN_RTOL, 1e-9, 1e-3), (2.22045e-14, 1e-9, 1e-3), (0.5, 1e-9, 1e-3), (1e-9, 1e-30, 1.5)]
+    {
+        let r = Run::new(&paper().1, g, w, RunSettings::continuous(t_end, 1e-3, rtol, atol)).simulate(go);
+        assert!(
+            r.as_ref().is_ok_and(|r| matches!(r.outcome, None | Some(quell::sim::Outcome::Completed))),
+            "rtol = {rtol}, atol = {atol}: {:?}",
+            r.err()
+        );
     }
     let samp = |t_end, h, ts| sampled_key(g, w, RunSettings::sampled(t_end, h, ts));
     assert_eq!(samp(f64::NAN, 0.1, 1e-3), "simulation.t_end");
@@ -359,6 +371,21 @@ fn the_coarse_sample_warning_offers_a_sample_time_that_divides_the_output_step()
     assert!(Run::new(&d, g, o, RunSettings::sampled(1.0, 0.05, 0.02)).check().is_err());
     let r = Run::new(&d, g, o, RunSettings::sampled(1.0, 0.05, 0.01)).check();
     assert!(r.is_ok(), "{:?}", r.err());
+}
+
+/// The coarse-sample warning weighs the adaptation's rate μ_i λ_max(Ω̄_i) too: the paper's loop
+/// with μ × 100 adapts at 100 × 8.539 = 853.9/s against ρ = 9/s (the rate is linear in μ), so
+/// T_s = 5 ms (T_s·ρ = 0.045, no warning before) is flagged, naming the adaptation, with the bound
+/// 0.2/853.9 = 2.34e-4 s and μ as the lever; at the paper's own μ it is not.
+#[test]
+fn the_coarse_sample_warning_weighs_the_adaptations_rate() {
+    let (s, d) = paper();
+    let signals = [&s.reference, &s.disturbance];
+    assert!(quell::sim::coarse_sample_warning(&d, signals, 0.005, None).is_none());
+    let fast = Scenario::from_toml(&PAPER_EXAMPLE.replace("mu = [20.0, 30.0]", "mu = [2000.0, 3000.0]")).unwrap();
+    let w = quell::sim::coarse_sample_warning(&fast.design().unwrap(), signals, 0.005, None).unwrap();
+    assert!(w.contains("is 4.27 of the adaptation's time constant 1/(μ_i λ_max(Ω̄_i)) (μ_i λ_max(Ω̄_i) = 853 /s"), "{w}");
+    assert!(w.contains("choose T_s ≤ 0.000234 s (T_s·μλ ≤ 0.2)") && w.ends_with("or a smaller design.mu"), "{w}");
 }
 
 /// A true plant with delays of its own: a sample time that makes the model's delays whole but not

@@ -2,7 +2,7 @@
 
 import operator
 
-from ._errors import a_type
+from ._errors import ScenarioError, a_type
 
 
 def columns(m, q, n=0):
@@ -79,7 +79,7 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
     if channel is None:
         raise TypeError(f"channel: expected an int from 1 to {m}, found {a_type(given)}")
     if not 1 <= channel <= m:
-        raise ValueError(f"channel: expected a channel number from 1 to {m}, found {channel!r}")
+        raise ScenarioError(f"channel: expected a channel number from 1 to {m}, found {channel!r}")
     i, c, t = channel - 1, channel, result.t
     named = lambda given: f" ({given[i]})" if given else ""  # noqa: E731
     channel_title, input_title = f"Channel {c}{named(names[1])}", f"Input {c}{named(names[0])}"
@@ -91,12 +91,14 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
         if isinstance(figsize, (tuple, list)) and len(figsize) != 2:
             found += f" of {len(figsize)} entries"
         raise TypeError(f"figsize: expected (width, height) in inches, found {found}")
+    if figsize is not None and not all(np.isfinite(v) and v > 0 for v in figsize):
+        raise ScenarioError(f"figsize: expected (width, height) in inches, both finite and > 0, found {tuple(figsize)!r}")
     if fig is not None and ax is not None:
         raise TypeError("fig and ax: expected one of them or neither (ax's panels belong to a figure already), found both")
     if fig is not None and not hasattr(fig, "subplots"):
         raise TypeError(f"fig: expected a matplotlib Figure, found {a_type(fig)}")
     if fig is not None and fig.axes:
-        raise ValueError(
+        raise ScenarioError(
             f"fig: expected an empty Figure (the five panels fill it), found one with {len(fig.axes)} Axes; "
             "pass its Axes as ax= (one, four or five) or an empty figure"
         )

@@ -25,12 +25,24 @@ pub enum RegressorScaling {
     /// is entry 1 times (s/ω₀)^(k−1), so near the poles' time scale (where the signals' frequencies
     /// are) every entry has the size of the signal, whatever the poles.
     Normalized,
+    /// Block-diagonal: a real pole p gives G = \[p\], l = \[−p\] (unit DC gain); a pair −a ± jb
+    /// (b > 0) gives G = \[\[−a, b\], \[−b, −a\]\], l = \[0, 2a\], a resonator whose two entries have gains
+    /// 2b/√(a² + 4b²) and 2|p|/√(a² + 4b²), both about 1 at its own frequency b when a ≪ b. With
+    /// a lightly damped pair at each harmonic, each pair of ξ̂'s entries answers mostly its own
+    /// harmonic, so Ω̄ stays well conditioned for many harmonics, where the companion forms' entries
+    /// s^(k−1)/∏(s − p_j) of one component differ by (ω/ω₀)^(k−1) (ten harmonics of 0.1 … 1 rad/s:
+    /// Ω̄'s condition number 840 against 1e22). The poles must be distinct (a repeated pole's
+    /// blocks are not jointly controllable).
+    Modal,
 }
 
 impl RegressorScaling {
     /// Every scaling with its name in `design.regressor_scaling`.
-    pub const ALL: [(RegressorScaling, &'static str); 2] =
-        [(RegressorScaling::Paper, "paper"), (RegressorScaling::Normalized, "normalized")];
+    pub const ALL: [(RegressorScaling, &'static str); 3] = [
+        (RegressorScaling::Paper, "paper"),
+        (RegressorScaling::Normalized, "normalized"),
+        (RegressorScaling::Modal, "modal"),
+    ];
 
     /// The scenario key's value.
     pub fn name(self) -> &'static str {
@@ -41,7 +53,7 @@ impl RegressorScaling {
     pub fn from_name(name: &str) -> Result<RegressorScaling, String> {
         Self::ALL.iter().find(|(_, n)| *n == name).map(|(s, _)| *s).ok_or_else(|| {
             format!(
-                "expected \"paper\" (the paper's companion form, l = e_q) or \"normalized\" (unit DC gain, every entry at the filter's time scale), found \"{name}\""
+                "expected \"paper\" (the paper's companion form, l = e_q), \"normalized\" (unit DC gain, every entry at the filter's time scale) or \"modal\" (a block per real pole or complex pair, each of unit gain at its own frequency), found \"{name}\""
             )
         })
     }
@@ -54,6 +66,9 @@ impl RegressorScaling {
             }
             RegressorScaling::Normalized => {
                 "ξ̂ is normalized (unit DC gain, every entry at its filter's time scale): it has the size of the signals, so μ_i is a rate per squared signal unit (μ_i·|g|²·|G_ii|² ≈ μ_i λ_max(Ω̄_i), per unit of the plant's time)"
+            }
+            RegressorScaling::Modal => {
+                "ξ̂ is modal (a block per filter pole or pair, each of unit gain at its own frequency): it has the size of the signals, so μ_i is a rate per squared signal unit (μ_i·|g|²·|G_ii|² ≈ μ_i λ_max(Ω̄_i), per unit of the plant's time)"
             }
         }
     }
@@ -69,6 +84,8 @@ impl fmt::Display for RegressorScaling {
 /// (ones on the superdiagonal, last row −[a_0, …, a_{q−1}]) and l = e_q, the form of G_g and G_ω
 /// printed in Section VIII. [`RegressorScaling::Normalized`]: that pair in the coordinates ξ̃_k = a_0 ξ_k / ω₀^(k−1)
 /// with ω₀ = a_0^(1/q), i.e. G = ω₀·companion of the polynomial with roots p_j/ω₀ and l = ω₀ e_q.
+/// [`RegressorScaling::Modal`]: one block per real pole and per pair, in the list's order (the
+/// pole of positive imaginary part stands for its pair).
 pub fn filter_pair(poles: &[Complex<f64>], scaling: RegressorScaling) -> (DMatrix<f64>, DMatrix<f64>) {
     let q = poles.len();
     let mut l = DMatrix::zeros(q, 1);
@@ -86,7 +103,31 @@ pub fn filter_pair(poles: &[Complex<f64>], scaling: RegressorScaling) -> (DMatri
             l[(q - 1, 0)] = w0;
             companion(&poly_from_roots(&unit)) * w0
         }
+        RegressorScaling::Modal => return modal_pair(poles),
     };
+    (G, l)
+}
+
+/// The block-diagonal (G, l) of [`RegressorScaling::Modal`].
+fn modal_pair(poles: &[Complex<f64>]) -> (DMatrix<f64>, DMatrix<f64>) {
+    let q = poles.len();
+    let (mut G, mut l) = (DMatrix::zeros(q, q), DMatrix::zeros(q, 1));
+    let mut at = 0;
+    for p in poles.iter().filter(|p| p.im >= 0.0) {
+        if p.im == 0.0 {
+            G[(at, at)] = p.re;
+            l[(at, 0)] = -p.re;
+            at += 1;
+        } else if at + 1 < q {
+            let (a, b) = (-p.re, p.im);
+            G[(at, at)] = -a;
+            G[(at, at + 1)] = b;
+            G[(at + 1, at)] = -b;
+            G[(at + 1, at + 1)] = -a;
+            l[(at + 1, 0)] = 2.0 * a;
+            at += 2;
+        }
+    }
     (G, l)
 }
 
@@ -128,6 +169,7 @@ mod tests {
                     let scale = match scaling {
                         RegressorScaling::Paper => 1.0,
                         RegressorScaling::Normalized => w0.powi(3 - k as i32),
+                        RegressorScaling::Modal => unreachable!(),
                     };
                     let expected = s.powi(k as i32) * scale / den;
                     // A 3×3 complex solve on entries of size ≤ 0.3: a few ulps of the largest.
@@ -144,6 +186,37 @@ mod tests {
         assert!((dc(RegressorScaling::Normalized) - 1.0).abs() <= 1e-13);
     }
 
+    /// Each block of the modal form against its closed form: −p/(s − p) for a real pole, and
+    /// [2ab, 2a(s + a)]/((s + a)² + b²) for a pair −a ± jb, at DC, at each pair's frequency and
+    /// between; at a lightly damped pair's own frequency both entries are within a ≪ b of 1.
+    #[test]
+    fn modal_blocks_have_their_closed_form_gains() {
+        let c = |re: f64, im: f64| Complex::new(re, im);
+        let poles = [c(-0.5, 0.0), c(-0.01, 1.0), c(-0.01, -1.0), c(-0.2, -0.3), c(-0.2, 0.3)];
+        let (G, l) = filter_pair(&poles, RegressorScaling::Modal);
+        assert_eq!((G.nrows(), l.nrows()), (5, 5));
+        for s in [c(0.0, 0.0), c(0.0, 1.0), c(0.0, 0.3), c(0.0, 0.7)] {
+            let mut M = -G.map(|x| Complex::new(x, 0.0));
+            for i in 0..5 {
+                M[(i, i)] += s;
+            }
+            let x = M.lu().solve(&l.map(|x| Complex::new(x, 0.0))).unwrap();
+            let pair = |a: f64, b: f64| {
+                let den = (s + a) * (s + a) + b * b;
+                [Complex::new(2.0 * a * b, 0.0) / den, (s + a) * 2.0 * a / den]
+            };
+            let [p1, p2] = pair(0.01, 1.0);
+            let [p3, p4] = pair(0.2, 0.3);
+            let expected = [Complex::new(0.5, 0.0) / (s + 0.5), p1, p2, p3, p4];
+            for k in 0..5 {
+                assert!((x[k] - expected[k]).norm() <= 1e-13 * expected[k].norm().max(1.0), "s={s} k={k}");
+            }
+            if s.im == 1.0 {
+                assert!((x[1].norm() - 1.0).abs() < 0.01 && (x[2].norm() - 1.0).abs() < 0.01, "{x}");
+            }
+        }
+    }
+
     #[test]
     fn names_round_trip_and_a_bad_name_lists_the_choices() {
         for (s, n) in RegressorScaling::ALL {
@@ -151,6 +224,12 @@ mod tests {
             assert_eq!(s.name(), n);
         }
         let e = RegressorScaling::from_name("unit").unwrap_err();
-        assert!(e.contains("\"paper\"") && e.contains("\"normalized\"") && e.contains("\"unit\""), "{e}");
+        assert!(
+            e.contains("\"paper\"")
+                && e.contains("\"normalized\"")
+                && e.contains("\"modal\"")
+                && e.contains("\"unit\""),
+            "{e}"
+        );
     }
 }

@@ -130,10 +130,10 @@ pub struct Design {
 /// Why no design exists for a plant and a set of choices. Messages name the scenario key.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum DesignError {
-    #[error("plant: (A, B) is not controllable (Assumption 1): numerical rank {rank} of {n} (tolerance {tol:.1e}); every mode must be reachable from the inputs")]
-    Uncontrollable { rank: usize, n: usize, tol: f64 },
-    #[error("plant: (A, C) is not observable (Assumption 1): numerical rank {rank} of {n} (tolerance {tol:.1e}); every mode must show in the outputs")]
-    Unobservable { rank: usize, n: usize, tol: f64 },
+    #[error("plant: (A, B) is not controllable (Assumption 1): numerical rank {rank} of {n} (tolerance {tol:.1e}); every mode must be reachable from the inputs{scaling}")]
+    Uncontrollable { rank: usize, n: usize, tol: f64, scaling: String },
+    #[error("plant: (A, C) is not observable (Assumption 1): numerical rank {rank} of {n} (tolerance {tol:.1e}); every mode must show in the outputs{scaling}")]
+    Unobservable { rank: usize, n: usize, tol: f64, scaling: String },
     #[error("design.observer_poles: {0}")]
     ObserverPoles(PlaceError),
     #[error("plant.{0}")]
@@ -178,6 +178,8 @@ pub enum DesignError {
     NoPoles { key: String },
     #[error("{key}: the filter's polynomial ∏(s − p_j) over its {count} poles has a coefficient of magnitude {}, beyond {}: too large for the internal model's matrices (11), (16) in double precision; give fewer poles (two per harmonic, one per bias) or slower ones", crate::settings::fmt_short(*.coefficient), crate::settings::fmt_short(crate::plant::MAX_ENTRY))]
     FilterTooLarge { key: String, count: usize, coefficient: f64 },
+    #[error("{key}: pole {} is repeated; design.regressor_scaling = \"modal\" realizes each pole or pair as its own block, and equal blocks driven alike are not controllable; give distinct poles (e.g. one resonator −a ± jω per harmonic), or choose \"normalized\"", fmt_complex(.pole))]
+    RepeatedModalPole { key: String, pole: Complex<f64> },
     #[error("plant.A: n = {n} states; a design is limited to n ≤ {MAX_STATES} (quell::design::MAX_STATES): its eigen-decompositions and pole placement grow as n³ (seconds at n = {MAX_STATES}, minutes beyond 1000); reduce the model first (e.g. balanced truncation to the modes that matter)")]
     TooManyStates { n: usize },
     #[error("design.mu[{index}]: expected a finite adaptation gain ≥ 0, found {}", crate::settings::fmt_short(*.value))]
@@ -505,7 +507,29 @@ fn check_spec(plant: &Plant, spec: &DesignSpec) -> Result<(), DesignError> {
         check_poles("design.observer_poles".into(), "observer", p, false)?;
     }
     check_rate_span(spec)?;
-    check_filter_size(spec)
+    match spec.regressor_scaling {
+        RegressorScaling::Modal => check_modal_distinct(spec),
+        _ => check_filter_size(spec),
+    }
+}
+
+/// The modal form (`design.regressor_scaling = "modal"`) needs each filter's poles distinct: two
+/// equal blocks driven alike are not controllable. Poles closer than 1e-8 of their size count as equal.
+fn check_modal_distinct(spec: &DesignSpec) -> Result<(), DesignError> {
+    let lists = [
+        ("reference_filter_poles", &spec.reference_filter_poles),
+        ("disturbance_filter_poles", &spec.disturbance_filter_poles),
+    ];
+    for (name, list) in lists {
+        for (i, poles) in list.iter().enumerate() {
+            for (j, p) in poles.iter().enumerate() {
+                if poles[..j].iter().any(|z| (z - p).norm() <= 1e-8 * z.norm().max(p.norm())) {
+                    return Err(DesignError::RepeatedModalPole { key: format!("design.{name}[{i}]"), pole: *p });
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The choices' rates (every requested pole, and 1/β) span at most [`RATE_SPAN`]: the fastest
@@ -556,13 +580,31 @@ fn assumption_1(plant: &Plant) -> Result<(RankTest, RankTest), DesignError> {
     let n = plant.n();
     let ctrb = controllability(&plant.A, &plant.B)?;
     if !ctrb.full() {
-        return Err(DesignError::Uncontrollable { rank: ctrb.rank, n, tol: ctrb.tol });
+        let scaling = badly_scaled(&plant.A, &plant.B, "B", ctrb.tol);
+        return Err(DesignError::Uncontrollable { rank: ctrb.rank, n, tol: ctrb.tol, scaling });
     }
     let obsv = observability(&plant.A, &plant.C)?;
     if !obsv.full() {
-        return Err(DesignError::Unobservable { rank: obsv.rank, n, tol: obsv.tol });
+        let scaling = badly_scaled(&plant.A, &plant.C, "C", obsv.tol);
+        return Err(DesignError::Unobservable { rank: obsv.rank, n, tol: obsv.tol, scaling });
     }
     Ok((ctrb, obsv))
+}
+
+/// Where the rank test's tolerance (set by ‖A‖) exceeds every entry of `M` (B or C), the verdict
+/// says more about the plant's scaling than its structure: A[0][0] = 1e15 in the paper's plant
+/// gave "rank 0 of 3" although B alone has rank 2. The text appended to the error, or "".
+fn badly_scaled(A: &DMatrix<f64>, M: &DMatrix<f64>, name: &str, tol: f64) -> String {
+    let largest = |X: &DMatrix<f64>| X.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let (a, m) = (largest(A), largest(M));
+    if m > tol || m == 0.0 {
+        return String::new();
+    }
+    format!(
+        "; but the tolerance follows A, whose entries reach {}, while {name}'s reach only {}: the plant's numbers span too many decades for a rank test in double precision, so rescale its states or units (e.g. a balanced realization) before concluding",
+        fmt_number(a),
+        fmt_number(m)
+    )
 }
 
 /// The observer gain L of eq. (6), given or placed by duality (L = place(Aᵀ, Cᵀ, p)ᵀ), and

@@ -59,7 +59,7 @@ pub fn estimate(
         crate::design::RegressorScaling::Paper => {
             " or set design.regressor_scaling = \"normalized\" (ξ̂ of the signals' size) and choose μ anew"
         }
-        crate::design::RegressorScaling::Normalized => "",
+        crate::design::RegressorScaling::Normalized | crate::design::RegressorScaling::Modal => "",
     };
     avg.channels
         .iter()

@@ -291,6 +291,9 @@ impl Scenario {
 
 /// Parses a scenario file's TOML (syntax only), errors with line and column under the key `syntax`.
 pub fn parse_document(text: &str) -> Result<toml::Table, ScenarioError> {
+    if let Some(e) = crate::settings::input_too_long(text.len()) {
+        return Err(err("syntax", format!("the text is {e}")));
+    }
     text.parse().map_err(|e: toml::de::Error| {
         err("syntax", format!("{} (the file is not valid TOML)", syntax_message(text, &e)))
     })

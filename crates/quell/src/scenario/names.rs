@@ -76,6 +76,10 @@ pub(crate) fn control_character(name: &str) -> Option<String> {
 /// Checks the names of `count` signals (`per`: "input", "output", "state") at `key`: one per
 /// signal, none empty, no two alike.
 pub fn check_names(key: &str, names: &[String], count: usize, per: &str) -> Result<(), ScenarioError> {
+    // The count first: a million copies of one name were reported as a duplicate.
+    if names.len() != count {
+        return Err(err(key, format!("expected {count} names (one per {per}), found {}", names.len())));
+    }
     for (i, name) in names.iter().enumerate() {
         if name.trim().is_empty() {
             return Err(err(
@@ -92,9 +96,6 @@ pub fn check_names(key: &str, names: &[String], count: usize, per: &str) -> Resu
                 format!("{name:?} names another signal too; give each signal its own name"),
             ));
         }
-    }
-    if names.len() != count {
-        return Err(err(key, format!("expected {count} names (one per {per}), found {}", names.len())));
     }
     Ok(())
 }

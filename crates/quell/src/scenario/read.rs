@@ -31,6 +31,17 @@ fn child(parent: &str, name: &str) -> String {
     }
 }
 
+/// Where a run option that is not a scenario key is given instead (a user writing
+/// `max_steps = …` under `[simulation]` was shown only the valid keys).
+fn not_a_scenario_key(name: &str) -> Option<&'static str> {
+    match name {
+        "max_steps" => Some("the step budget is a run option, not a scenario key: the max-steps option of quell run, max_steps= of quell.simulate, or max_steps at a study file's top level"),
+        "states" => Some("recording x and x̂ is a run option, not a scenario key: the states option of quell run, states=True of quell.simulate"),
+        "continuous" => Some("a run option, not a scenario key: the continuous option of quell run, continuous=True of quell.simulate; or leave simulation.sample_time out"),
+        _ => None,
+    }
+}
+
 /// A table whose keys have all been checked against the valid ones.
 pub(crate) struct Table<'a> {
     key: String,
@@ -52,6 +63,7 @@ impl<'a> Table<'a> {
                 let place = if key.is_empty() { "at the top level".to_string() } else { format!("in [{key}]") };
                 let hint = crate::settings::nearest(name, valid.iter().copied())
                     .map(|v| format!(" (did you mean `{v}`?)"))
+                    .or_else(|| not_a_scenario_key(name).map(|w| format!(" ({w})")))
                     .unwrap_or_default();
                 return Err(err(
                     child(key, name),

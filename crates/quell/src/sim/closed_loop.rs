@@ -474,11 +474,11 @@ impl DelaySystem for ContinuousLoop<'_> {
     }
 }
 
-/// The rows of the filter banks W_i with their scales ω_c^(r−σ_i) for the normalized regressor
-/// ([`DelaySystem::absolute_tolerances`]), none for the paper's form: its ξ̂ has a size that
+/// The rows of the filter banks W_i with their scales ω_c^(r−σ_i) for the normalized or modal
+/// regressor ([`DelaySystem::absolute_tolerances`]), none for the paper's form: its ξ̂ has a size that
 /// depends on the filters' time scale anyway, and its runs keep the tolerances they were made with.
 fn filter_bank_scales(design: &Design, eq: &Equations, l: &Layout) -> Vec<(std::ops::Range<usize>, f64)> {
-    if design.regressor_scaling() != RegressorScaling::Normalized {
+    if design.regressor_scaling() == RegressorScaling::Paper {
         return Vec::new();
     }
     let cols = 1 + eq.q;

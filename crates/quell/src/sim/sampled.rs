@@ -22,9 +22,11 @@ use crate::settings::{self, Actuator, KeyError, MeasurementNoise};
 use crate::signal::{Signal, SignalBank};
 
 /// T_s·ρ beyond which a sampled-data run gets a warning, ρ the loop's fastest rate
-/// ([`super::loop_rate`]): the discrete controller then departs from the continuous design (Åström
-/// & Wittenmark's rule of thumb for zero-order-hold control is ω h ≈ 0.1 … 0.6; a maglev at
-/// T_s·ρ = 0.34 peaked at 1,186 V against 5.9 V in the continuous loop and did not settle).
+/// ([`super::loop_rate`]), or the adaptation's μ_i λ_max(Ω̄_i) where that is faster: the discrete
+/// controller then departs from the continuous design (Åström & Wittenmark's rule of thumb for
+/// zero-order-hold control is ω h ≈ 0.1 … 0.6; a maglev at T_s·ρ = 0.34 peaked at 1,186 V against
+/// 5.9 V in the continuous loop and did not settle; its automatic design at T_s·ρ = 0.14, with
+/// adaptation at 4,111/s = 6ρ, peaked at 504 V, and at 0.01 ms, 0.04 of the adaptation's rate, at 7 V).
 pub const COARSE_SAMPLE: f64 = 0.2;
 
 /// A warning when `sample_time` is coarse for `design` under g = `reference`, ω = `disturbance`
@@ -37,9 +39,21 @@ pub fn coarse_sample_warning(
     sample_time: f64,
     output_step: Option<f64>,
 ) -> Option<String> {
-    let rate = super::loop_rate(design, design.plant(), [reference, disturbance]);
+    let rho = super::loop_rate(design, design.plant(), [reference, disturbance]);
     let unit = design.plant().time_unit;
-    (sample_time * rate > COARSE_SAMPLE).then(|| {
+    let adaptation = adaptation_rate(design, [reference, disturbance]);
+    if sample_time * rho.max(adaptation) <= COARSE_SAMPLE {
+        return None;
+    }
+    let short = |r: f64| settings::fmt_short(settings::three_digits_down(r));
+    let (rate, what, symbol) = if adaptation > rho {
+        let what = format!("the adaptation's time constant 1/(μ_i λ_max(Ω̄_i)) (μ_i λ_max(Ω̄_i) = {} /{unit}, faster than the loop's other rates, ρ = {} /{unit})", short(adaptation), short(rho));
+        (adaptation, what, "T_s·μλ")
+    } else {
+        let what = format!("the loop's fastest time constant 1/ρ (ρ = {} /{unit}: the plant, observer, channel and filter poles, 1/β and the signals' frequencies)", short(rho));
+        (rho, what, "T_s·ρ")
+    };
+    Some({
         let bound = settings::three_digits_down(COARSE_SAMPLE / rate);
         let valid = match output_step {
             Some(h) => discrete::sample_time_dividing(design, bound, h),
@@ -53,14 +67,26 @@ pub fn coarse_sample_warning(
             ),
             _ => String::new(),
         };
+        let slower = if adaptation > rho { "or a smaller design.mu" } else { "or slower poles" };
         format!(
-            "simulation.sample_time: T_s = {} {unit} is {:.2} of the loop's fastest time constant 1/ρ (ρ = {} /{unit}: the plant, observer, channel and filter poles, 1/β and the signals' frequencies): the discrete controller may depart from the continuous design; choose T_s ≤ {} {unit} (T_s·ρ ≤ {COARSE_SAMPLE}){whole}, or slower poles",
+            "simulation.sample_time: T_s = {} {unit} is {:.2} of {what}: the discrete controller may depart from the continuous design; choose T_s ≤ {} {unit} ({symbol} ≤ {COARSE_SAMPLE}){whole}, {slower}",
             settings::fmt_short(sample_time),
             sample_time * rate,
-            settings::fmt_short(settings::three_digits_down(rate)),
             settings::fmt_short(bound)
         )
     })
+}
+
+/// The fastest adaptation rate μ_i λ_max(Ω̄_i) of `design` under g and ω (the averaged law's Ω̄).
+fn adaptation_rate(design: &Design, [reference, disturbance]: [&Signal; 2]) -> f64 {
+    let averaged = crate::averaged::Averaged::new(design, reference, disturbance);
+    averaged
+        .channels
+        .iter()
+        .zip(design.mu())
+        .map(|(c, mu)| mu * c.lambda_max())
+        .filter(|r| r.is_finite())
+        .fold(0.0, f64::max)
 }
 
 /// What the sampled-data loop needs of a discrete controller. [`Controller`] is one; another
@@ -109,7 +135,10 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
     true_delays_whole(run, sample_time)?;
     let own = match run.controller {
         Some(_) => None,
-        None => Some(Controller::new(run.design, sample_time)?),
+        None => Some(
+            Controller::new(run.design, sample_time)
+                .map_err(|e| dividing_output_step(e, run.design, st.output_step))?,
+        ),
     };
     let (T, h, unit) = (sample_time, st.output_step, run.design.plant().time_unit);
     let every = discrete::whole_multiple(h, T).filter(|&k| k >= 1).ok_or_else(|| {
@@ -126,6 +155,22 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
         )
     })?;
     Ok((own, every))
+}
+
+/// The delay check's offer ([`ControllerError::DelayNotMultiple`]) made to divide the output step
+/// `h` too, where one near T_s does: the paper's example at 0.0007 s was offered 0.000699790063 s
+/// for its delays, which the output step's check (0.1 s) then refused.
+fn dividing_output_step(e: ControllerError, design: &Design, h: f64) -> ControllerError {
+    match e {
+        ControllerError::DelayNotMultiple { channel, delay, sample_time, ratio, nearest: Some(t), unit }
+            if discrete::whole_multiple(h, t).is_none() =>
+        {
+            let with_h: Vec<f64> = design.plant().delays.iter().copied().chain([h]).collect();
+            let nearest = discrete::valid_sample_time_near(&with_h, sample_time, 1 + design.q()).or(Some(t));
+            ControllerError::DelayNotMultiple { channel, delay, sample_time, ratio, nearest, unit }
+        }
+        e => e,
+    }
 }
 
 /// Where the truth adds delays (its own, or the actuator's), every delay of the run whole numbers
@@ -149,7 +194,11 @@ fn true_delays_whole(run: &Run<'_>, T: f64) -> Result<(), KeyError> {
     if actuator.iter().any(|&d| d > 0.0) {
         sets.push(format!("truth.actuator_delays [{}]", list(actuator)));
     }
-    let offer = match discrete::valid_sample_time_near(&all, T, 1 + run.design.q()) {
+    let width = 1 + run.design.q();
+    let with_h: Vec<f64> = all.iter().copied().chain([run.settings.output_step]).collect();
+    let nearest = discrete::valid_sample_time_near(&with_h, T, width)
+        .or_else(|| discrete::valid_sample_time_near(&all, T, width));
+    let offer = match nearest {
         Some(t) => format!(": the nearest that makes them all whole is {} {unit}", settings::fmt_short(t)),
         None => ": no sample time near it makes them all whole; choose one that divides each".into(),
     };

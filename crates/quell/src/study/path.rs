@@ -115,6 +115,13 @@ impl KeyPath {
                         steps.push(Step::Index(i));
                         rest = &rest[c + 1..];
                     }
+                    // Digits too many for any index (a list holds fewer than 2⁶⁴ entries).
+                    (Some(c), None) if rest[1..c].bytes().all(|b| b.is_ascii_digit()) && c > 1 => {
+                        return Err(format!(
+                        "`{text}`: the index [{}] is beyond any list's length; give the index of an entry that exists",
+                        &rest[1..c]
+                    ))
+                    }
                     _ => {
                         return Err(format!(
                             "`{text}` is not a key path: `{rest}` should be an index in brackets, e.g. [0]"

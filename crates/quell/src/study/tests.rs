@@ -209,6 +209,37 @@ fn shards_partition_the_runs() {
     }
 }
 
+/// A top-level key written below a table header lands in that table: said so, with the fix; and
+/// `max_steps` under a scenario's `[simulation]` names where the step budget goes.
+#[test]
+fn a_top_level_key_below_a_table_header_is_named_as_misplaced() {
+    for (table, body) in
+        [("monte_carlo", "runs = 2\n"), ("grid", "\"design.beta\" = [1.0]\n"), ("settle", "relative = 0.1\n")]
+    {
+        let e = error(&format!("[{table}]\n{body}max_steps = 5\n"));
+        assert_eq!(
+            e,
+            format!("{table}.max_steps: `max_steps` is a key of the study file's top level, but written below the [{table}] header TOML puts it in that table; move it above the file's first [table] header")
+        );
+    }
+    let e = error("[simulation]\nmax_steps = 5\n");
+    assert!(e.contains("simulation.max_steps: unknown key (the step budget is a run option, not a scenario key: the max-steps option of quell run, max_steps= of quell.simulate, or max_steps at a study file's top level)"), "{e}");
+}
+
+/// Two axes of 200,000 values each (4e10 runs) are refused by their size before any value is
+/// designed: checking every value first (about 0.1 ms each) took 40 s before the size refused them,
+/// and 300,000 each ran past a minute.
+#[test]
+fn a_grid_too_large_is_refused_before_its_values_are_checked() {
+    let values: Vec<String> = (0..200_000).map(|i| format!("{}", 1.0 + i as f64 * 1e-6)).collect();
+    let values = values.join(", ");
+    let started = std::time::Instant::now();
+    let e = error(&format!("[grid]\n\"design.mu[0]\" = [{values}]\n\"design.mu[1]\" = [{values}]\n"));
+    assert!(e.starts_with("grid: the study has 40000000000 runs (40000000000 grid points (200000 × 200000)"), "{e}");
+    // Reading 5 MB of TOML and forming the axes: well under a second; 10 s leaves room for load.
+    assert!(started.elapsed() < std::time::Duration::from_secs(10), "{:?}", started.elapsed());
+}
+
 #[test]
 fn studies_beyond_max_runs_are_refused_when_read_with_their_true_size() {
     // 1e12 draws aborted allocating 8 TB, and 2⁶³ − 1 panicked ("capacity overflow"); both are
@@ -297,15 +328,15 @@ fn an_infinite_tune_limit_is_no_limit_on_its_channel() {
 #[cfg(unix)]
 #[test]
 fn an_endless_input_file_is_refused_naming_its_path() {
-    // /dev/zero was read for ever (4 GB in 15 s); now 64 MiB of it, then the error. 64 MiB of zeros
+    // /dev/zero was read for ever (4 GB in 15 s); now 16 MiB of it, then the error. 16 MiB of zeros
     // is read in well under a second.
     let zero = Path::new("/dev/zero");
     let e = Study::from_path(zero).expect_err("refused").to_string();
-    assert_eq!(e, "/dev/zero: cannot read the study file: longer than 64 MiB, the most a scenario or study file may be (is it the right path? a device such as /dev/zero never ends)");
+    assert_eq!(e, "/dev/zero: cannot read the study file: longer than 16 MiB, the most a scenario or study file may be (is it the right path? a device such as /dev/zero never ends; parsing takes about 100 bytes of memory per byte)");
     let e = crate::Scenario::from_path(zero).expect_err("refused").to_string();
-    assert!(e.starts_with("/dev/zero: cannot read the file: longer than 64 MiB"), "{e}");
+    assert!(e.starts_with("/dev/zero: cannot read the file: longer than 16 MiB"), "{e}");
     let e = error("scenario = \"/dev/zero\"");
-    assert!(e.starts_with("scenario: cannot read the scenario file /dev/zero (longer than 64 MiB"), "{e}");
+    assert!(e.starts_with("scenario: cannot read the scenario file /dev/zero (longer than 16 MiB"), "{e}");
 }
 
 /// A study whose `scenario` names a study (itself, or another) says so, not only that
