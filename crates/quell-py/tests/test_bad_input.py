@@ -181,3 +181,23 @@ def test_a_huge_int_inside_a_dict_argument_is_a_keyed_scenario_error():
             make()
         assert str(e.value).startswith(name + ": expected a real number within a float64's range"), str(e.value)
         assert "401 digits" in str(e.value)
+
+
+def test_oversized_texts_surrogates_and_long_lists_are_refused_by_what_is_wrong():
+    """A lone surrogate in a scenario text is a ScenarioError naming `text` (it was Python's
+    UnicodeEncodeError); a text beyond 16 MiB is refused before it is parsed (TOML parsing took
+    ~95 bytes a byte: 24 MB aborted the interpreter at 2 GB); ten million delays are refused by
+    their count (each float was asked for a numpy dtype, 11 s); a million names by their count, not
+    as a duplicate; a bool entry among numbers is still named."""
+    with pytest.raises(quell.ScenarioError, match=r"^text: expected text that UTF-8 can hold, found a lone surrogate"):
+        quell.Scenario.from_toml('name = "\ud800"')
+    big = quell.paper_example().to_toml().replace("mu = [20.0, 30.0]", "mu = [" + ",".join(["1"] * 8_500_000) + "]")
+    assert len(big) > 16 << 20
+    with pytest.raises(quell.ScenarioError, match=r"longer than 16 MiB"):
+        quell.Scenario.from_toml(big)
+    with pytest.raises(quell.ScenarioError, match=r"^delays: expected 2 entries .* found 10000000"):
+        quell.Plant(A, B, C, delays=[1.0] * 10_000_000)
+    with pytest.raises(quell.ScenarioError, match=r"^inputs: expected 2 names \(one per \w+\), found 1000000"):
+        quell.Plant(A, B, C, inputs=["a"] * 1_000_000)
+    with pytest.raises(TypeError, match=r"^delays\[1\]: expected a real number, found a bool"):
+        quell.Plant(A, B, C, delays=[1.0, True])

@@ -1721,13 +1721,10 @@ fn observer(
 /// of [`MAX_RATE_PER_SCALE`]·r and a [`STIFF_MARGIN`]th of the stiffness threshold [`STIFF_RATIO`]·ρ
 /// of the pace estimate ([`crate::diagnostics::estimate`]; ρ the loop's fastest other rate,
 /// [`loop_rate`]); for the verification's retries the threshold itself (the run is then not stiff
-/// by the estimate's own flag). A sampled-data scenario caps both at [`COARSE_SAMPLE`]/T_s, the
-/// rate its sample time resolves (the maglev's automatic μ adapted at 4,111/s, 0.82 of 1/T_s at
-/// 0.2 ms, and the sampled loop peaked at 85× the continuous loop's actuator signal).
+/// by the estimate's own flag).
 fn rate_caps(s: &Scenario, design: &Design, r: f64) -> (f64, f64) {
     let stiff = STIFF_RATIO * loop_rate(design, &s.plant, [&s.reference, &s.disturbance]);
-    let sampled = s.simulation.sample_time.map_or(f64::INFINITY, |t| COARSE_SAMPLE / t);
-    ((MAX_RATE_PER_SCALE * r).min(stiff / STIFF_MARGIN).min(sampled), stiff.min(sampled))
+    ((MAX_RATE_PER_SCALE * r).min(stiff / STIFF_MARGIN), stiff)
 }
 
 /// μ_i from the averaged law: the smallest gain whose predicted RMS error by the convergence time
@@ -1770,9 +1767,8 @@ fn choose_mu(s: &Scenario, design: &Design, targets: &Targets, r: f64) -> (Vec<f
         })
         .unzip();
     let why = format!(
-        "the smallest μ_i for which the averaged adaptive law (η̃' = −μ Ω̄ η̃) predicts an RMS error ≤ 0.2 % of the reference's peak by t = {t_c:.4e} {unit} ({}), with μ_i λ_max(Ω̄_i) ≤ {max_rate:.4e}/{unit} (the smaller of {MAX_RATE_PER_SCALE}·r and a {STIFF_MARGIN}th of the stiffness threshold {STIFF_RATIO}·ρ{}){}",
+        "the smallest μ_i for which the averaged adaptive law (η̃' = −μ Ω̄ η̃) predicts an RMS error ≤ 0.2 % of the reference's peak by t = {t_c:.4e} {unit} ({}), with μ_i λ_max(Ω̄_i) ≤ {max_rate:.4e}/{unit} (the smaller of {MAX_RATE_PER_SCALE}·r and a {STIFF_MARGIN}th of the stiffness threshold {STIFF_RATIO}·ρ){}",
         if targets.convergence_time.is_some() { "the target convergence time" } else { "t_end/20" },
-        if s.simulation.sample_time.is_some() { format!(", and {COARSE_SAMPLE}/T_s") } else { String::new() },
         if notes.is_empty() { String::new() } else { format!("; {}", notes.join("; ")) }
     );
     (mu, caps, why)

@@ -549,22 +549,8 @@ pub(crate) fn check_tolerances(rtol: f64, atol: f64) -> Result<(), KeyError> {
         ));
     }
     positive("simulation.atol", "an absolute tolerance", atol)?;
-    if atol < MIN_ATOL {
-        return Err(KeyError::new(
-            "simulation.atol",
-            format!(
-                "expected an absolute tolerance ≥ {MIN_ATOL:e}, found {}: where a component leaves zero (every state at the start, the delayed commands at each delay) the error test then asks for steps below rounding, and the step size underflows (the paper's example at 1e-100); give the size of the smallest signal that matters times rtol",
-                fmt_short(atol)
-            ),
-        ));
-    }
     Ok(())
 }
-
-/// The smallest absolute tolerance accepted. The paper's example runs at 1e-60 (212 steps for 2 s
-/// against 61 at 1e-20) and its step size underflows at 1e-100 at the first delay's breakpoint;
-/// 1e-30 leaves signals of 1e-20 (in any unit) their 1e-10 relative accuracy.
-pub const MIN_ATOL: f64 = 1e-30;
 
 /// A sampling period: finite, > 0, and at most [`MAX_SAMPLING_STEPS`] controller steps to t_end.
 pub(crate) fn check_sample_time(t_end: f64, sample_time: f64) -> Result<(), KeyError> {

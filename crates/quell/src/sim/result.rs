@@ -56,8 +56,9 @@ impl Outcome {
             Outcome::Diverged { t, signal, value } => format!("the closed loop diverged at t = {t:.4} {unit}: {signal} = {value:e}"),
             Outcome::StepSizeTooSmall { t } => format!(
                 "the solver's step size underflowed at t = {t:.6} {unit} (the loop is too stiff or blows up there, a signal is \
-                 faster than any step can resolve, an input delay is shorter than a step can be, or simulation.rtol is tighter \
-                 than rounding allows at the loop's stiffness: try it 10× looser)"
+                 faster than any step can resolve, an input delay is shorter than a step can be, simulation.rtol is tighter \
+                 than rounding allows at the loop's stiffness: try it 10× looser, or simulation.atol is too small for a signal \
+                 that leaves zero, as the delayed commands do at each delay: give it the smallest size that matters times rtol)"
             ),
             Outcome::TooManySteps { t, max_steps } => format!(
                 "the solver needed more than {max_steps} steps by t = {t:.6} {unit} (the step budget: the loop turned stiff, as a \
