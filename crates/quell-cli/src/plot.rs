@@ -86,38 +86,18 @@ fn tick_label(v: f64, lo: f64, hi: f64) -> String {
     }
 }
 
-/// One panel of a run's figure: `series` against t (in `time`, the plant's unit of time).
+/// One panel of a run's figure: `series` against t (in `time`, the plant's unit of time), with
+/// dashed lines at ±`limit` (its label, its value) and the view widened to show them, and the time
+/// axis to `t_right` where that is later (a figure's panels share one).
 fn panel<DB: DrawingBackend + Strokes>(
-    area: &DrawingArea<DB, Shift>,
-    titles: (&str, &str),
-    series: &[Series],
-    time: TimeUnit,
-) -> Result<(), String> {
-    panel_with_limit(area, titles, series, None, time)
-}
-
-/// [`panel`], with dashed lines at ±`limit` (its label, its value) and the view widened to show them.
-fn panel_with_limit<DB: DrawingBackend + Strokes>(
     area: &DrawingArea<DB, Shift>,
     (title, ylabel): (&str, &str),
     series: &[Series],
-    limit: Option<(&str, f64)>,
+    (limit, t_right): (Option<(&str, f64)>, Option<f64>),
     time: TimeUnit,
 ) -> Result<(), String> {
-    let (t0, t1) = series
-        .iter()
-        .flat_map(|(_, p)| p.iter().map(|(t, _)| *t))
-        .fold((f64::MAX, f64::MIN), |(a, b), t| (a.min(t), b.max(t)));
-    let (t0, mut t1) = if t0 < t1 { (t0, t1) } else { (0.0, 1.0) };
     let levels = limit.map_or(vec![], |(_, u)| vec![-u, u]);
-    let (lo, hi) = value_range(series.iter().flat_map(|(_, p)| p.iter().map(|(_, v)| *v)).chain(levels.clone()));
-    let pad = 0.05 * (hi - lo);
-    let (y0, mut y1) = (lo - pad, hi + pad);
-    // The legend's font and box (`legend_box`), in the plotting area this chart will have.
-    let legend = legend_box(series, limit.map(|(label, _)| label), plotting_size(area));
-    if let Some((_, size)) = legend {
-        (t1, y1) = with_headroom(series, ((t0, t1), (y0, y1)), size);
-    }
+    let (((t0, t1), (y0, y1)), legend) = panel_view(area, series, limit, t_right);
     let mut chart = ChartBuilder::on(area)
         .caption(title, ("sans-serif", 20))
         .margin(8)
@@ -175,6 +155,36 @@ fn legend_box(series: &[Series], limit: Option<&str>, (w, h): (f64, f64)) -> Opt
     // box and the corner (without them a flat e = 0 just below the estimate was hidden by the box).
     let f = f64::from(font);
     Some((font, ((48.0 + 0.6 * f * longest) / w, (20.0 + entries * (f + 6.0)) / h)))
+}
+
+/// A panel's view ((t0, t1), (y0, y1)) over `series` (and ±`limit`'s value), its time axis
+/// reaching `t_right` at least, with room beside the data for its legend ([`with_headroom`]),
+/// and the legend's font and box ([`legend_box`]).
+#[allow(clippy::type_complexity)]
+fn panel_view<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    series: &[Series],
+    limit: Option<(&str, f64)>,
+    t_right: Option<f64>,
+) -> (((f64, f64), (f64, f64)), Option<(u32, (f64, f64))>) {
+    let (t0, t1) = series
+        .iter()
+        .flat_map(|(_, p)| p.iter().map(|(t, _)| *t))
+        .fold((f64::MAX, f64::MIN), |(a, b), t| (a.min(t), b.max(t)));
+    let (t0, t1) = if t0 < t1 { (t0, t1) } else { (0.0, 1.0) };
+    let t1 = t_right.map_or(t1, |t| t1.max(t));
+    let levels = limit.map_or(vec![], |(_, u)| vec![-u, u]);
+    let (lo, hi) = value_range(series.iter().flat_map(|(_, p)| p.iter().map(|(_, v)| *v)).chain(levels));
+    let pad = 0.05 * (hi - lo);
+    let view = ((t0, t1), (lo - pad, hi + pad));
+    let legend = legend_box(series, limit.map(|(label, _)| label), plotting_size(area));
+    match legend {
+        Some((_, size)) => {
+            let (t1, y1) = with_headroom(series, view, size);
+            (((t0, t1), (view.1 .0, y1)), legend)
+        }
+        None => (view, legend),
+    }
 }
 
 /// How a backend draws a curve's 2 px line.
@@ -421,16 +431,11 @@ fn draw<DB: DrawingBackend + Strokes>(
             Outcome::StepSizeTooSmall { t } | Outcome::TooManySteps { t, .. } | Outcome::HistoryTooLarge { t, .. },
         ) => format!(" (failed at t = {t:.4} {time}: summary.json's outcome says why)"),
     };
-    panel(
-        &areas[0],
-        (&format!("{channel}: output and reference{ended}"), "y, g"),
-        &[(format!("g{c} (reference)"), col(&r.g)), (format!("y{c}"), col(&r.y))],
-        time,
-    )?;
-    panel(&areas[1], (&format!("{channel}: tracking error"), "e = y − g"), &[(format!("e{c}"), col(&r.e))], time)?;
+    let tracking = [(format!("g{c} (reference)"), col(&r.g)), (format!("y{c}"), col(&r.y))];
+    let error = [(format!("e{c}"), col(&r.e))];
     // A sampled run's commands are held between samples ([`SimResult::commands_held`]).
     let held = |sig: &[f64]| if r.commands_held() { decimated(staircase(samples(r, sig, i)), span) } else { col(sig) };
-    panel(&areas[2], (&format!("{channel}: adaptive command (25)"), "u"), &[(format!("u{c}"), held(&r.u))], time)?;
+    let command = [(format!("u{c}"), held(&r.u))];
     // The plant input u_f (5), what the actuator must deliver, in its own panel: in a plant's units
     // (newtons, volts) it can be 1e5 times u. The true actuator's limit is drawn where u_f's peak
     // reaches a tenth of it, and its distance told otherwise (the lines would flatten the curve).
@@ -446,7 +451,7 @@ fn draw<DB: DrawingBackend + Strokes>(
         let share = if share < 0.1 && share > 0.0 { format!("{share:.1e}") } else { format!("{share:.1}") };
         write!(uf_title, "; peak {share} % of truth.u_max").map_err(|e| e.to_string())?;
     }
-    panel_with_limit(&areas[3], (&uf_title, "u_f"), &[(format!("uf{c}"), uf)], limit, time)?;
+    let plant_input = [(format!("uf{c}"), uf)];
     let etas: Vec<Series> = (0..r.q)
         .map(|j| {
             let eta = r.eta.iter().skip(i * r.q + j).step_by(r.m * r.q).copied();
@@ -454,14 +459,33 @@ fn draw<DB: DrawingBackend + Strokes>(
             (format!("η{c}_{}", j + 1), pts)
         })
         .collect();
-    let title = if etas.len() > MAX_LEGEND {
+    let eta_title = if etas.len() > MAX_LEGEND {
         format!("{channel}: adjustable parameters (33), η{c}_1 … η{c}_{} in the palette's order", etas.len())
     } else {
         format!("{channel}: adjustable parameters (33)")
     };
-    panel(&areas[4], (&title, "η"), &etas, time)?;
+    let panels: [PanelSpec; 5] = [
+        (format!("{channel}: output and reference{ended}"), "y, g", &tracking, None),
+        (format!("{channel}: tracking error"), "e = y − g", &error, None),
+        (format!("{channel}: adaptive command (25)"), "u", &command, None),
+        (uf_title, "u_f", &plant_input, limit),
+        (eta_title, "η", &etas, None),
+    ];
+    // One time axis for the five: as far right as the panel whose legend needs room beside its
+    // data (η̂'s) takes it, so that the panels line up.
+    let t_right = panels
+        .iter()
+        .zip(areas.iter())
+        .map(|((_, _, series, limit), area)| panel_view(area, series, *limit, None).0 .0 .1)
+        .fold(f64::MIN, f64::max);
+    for ((title, ylabel, series, limit), area) in panels.iter().zip(areas.iter()) {
+        panel(area, (title, ylabel), series, (*limit, Some(t_right)), time)?;
+    }
     root.present().map_err(|e| e.to_string())
 }
+
+/// A panel of a channel's figure: its title, value axis label, series and actuator limit.
+type PanelSpec<'a> = (String, &'a str, &'a [Series], Option<(&'a str, f64)>);
 
 /// Channel i's samples (t, value) of `signal`, a signal of m columns.
 fn samples<'a>(r: &'a SimResult, signal: &'a [f64], i: usize) -> impl Iterator<Item = (f64, f64)> + 'a {
@@ -1231,7 +1255,7 @@ mod tests {
         let mut rgb = vec![255u8; (w * h * 3) as usize];
         {
             let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
-            panel(&root, ("zigzag", "u"), &[("u1".into(), points)], TimeUnit::default()).unwrap();
+            panel(&root, ("zigzag", "u"), &[("u1".into(), points)], (None, None), TimeUnit::default()).unwrap();
             root.present().unwrap();
         }
         let pixel = |x: u32, y: u32| {
@@ -1266,7 +1290,7 @@ mod tests {
             let mut rgb = vec![255u8; (w * h * 3) as usize];
             {
                 let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
-                panel(&root, ("tracking", "y"), &series, TimeUnit::default()).unwrap();
+                panel(&root, ("tracking", "y"), &series, (None, None), TimeUnit::default()).unwrap();
                 root.present().unwrap();
             }
             rgb.chunks(3).filter(|p| (p[0], p[1], p[2]) == (31, 119, 180)).count()

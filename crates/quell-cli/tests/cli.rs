@@ -831,7 +831,7 @@ fn design_refuses_a_pole_repeated_beyond_rank_c_and_warns_of_a_defective_gain() 
     fs::write(&file, text.replacen(gain, "observer_poles = [-5.0, -5.0, -5.0]", 1)).unwrap();
     let err = input_error(&["design", file.to_str().unwrap()]);
     assert!(
-        err.contains("design.observer_poles: pole -5.000000 is requested 3 times, more than rank(B) = 2 (rank C for observer poles)")
+        err.contains("design.observer_poles: pole -5.000000 is requested 3 times, more than rank(C) = 2: the observer A − LC would need")
             && err.contains("spread the repeated poles"),
         "{err}"
     );

@@ -104,7 +104,7 @@ def test_auto_design_refuses_a_short_horizon_with_the_t_end_that_works():
 def test_fragile_observer_gain_warns():
     """Three observer poles at −5 with rank C = 2 would need a Jordan block: refused. The gain such
     a placement gave (A − LC one Jordan block, to rounding), given as L, designs with a warning."""
-    with pytest.raises(quell.DesignError, match=r"pole -5.000000 is requested 3 times, more than rank\(B\) = 2"):
+    with pytest.raises(quell.DesignError, match=r"pole -5.000000 is requested 3 times, more than rank\(C\) = 2"):
         quell.Scenario.from_toml(PAPER.replace(L_LINE, "observer_poles = [-5.0, -5.0, -5.0]")).design()
     defective = ("observer_gain = [[-56.982899739126566, -6.529670548858569], [62.29597186698538, 7.78904549447498], "
                  "[33.05238335010353, 3.622075673762282]]")

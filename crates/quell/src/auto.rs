@@ -1034,21 +1034,22 @@ fn smallest_gap(s: &Scenario) -> Option<f64> {
 /// minutes).
 const MAX_RATE_HORIZON: f64 = 3e7;
 
-/// The largest regressor the automatic design verifies by simulation: each channel's Ω_i has
-/// q(q + 1)/2 entries and its law costs O(q²) a right-hand side, so 100 harmonics of the CSTR
-/// (q = 203, two channels: 41,412 entries of Ω) had not finished its verification in seven minutes,
-/// where 30 (q = 61) verify in a minute.
-pub const MAX_VERIFIED_REGRESSOR: usize = 100;
+/// The most entries of Ω, m·q(q + 1)/2 over the channels, the automatic design verifies by
+/// simulation: each Ω_i's law costs O(q²) a right-hand side, so a hundred harmonics of the CSTR
+/// (q = 203, two channels: 41,412 entries) had not finished its verification in seven minutes,
+/// where a motor's 44 harmonics (q = 100, one channel: 5,050) verified in 15 s.
+pub const MAX_VERIFIED_OMEGA: usize = 10_000;
 
-/// Advice when the regressor is too large to verify ([`MAX_VERIFIED_REGRESSOR`]).
+/// Advice when the regressor is too large to verify ([`MAX_VERIFIED_OMEGA`]).
 fn too_large_to_verify(design: &Design) -> Option<String> {
     let (q, m) = (design.q(), design.plant().m());
-    (q > MAX_VERIFIED_REGRESSOR).then(|| {
+    let entries = m * q * (q + 1) / 2;
+    (entries > MAX_VERIFIED_OMEGA).then(|| {
         format!(
-            "the regressor has q = {q} states (q_g = {}, q_ω = {}: two per harmonic and one per bias of every component), beyond the {MAX_VERIFIED_REGRESSOR} the automatic design verifies by simulation: the adaptive laws carry {} entries of Ω, and each verifying run would take many minutes; track fewer harmonics per component (those within the plant's bandwidth; a square wave's first few odd ones), or give [design] by hand and check it with quell run (docs/tuning.md)",
+            "the regressor has q = {q} states (q_g = {}, q_ω = {}: two per harmonic and one per bias of every component), so the {m} adaptive law{} carry {entries} entries of Ω, beyond the {MAX_VERIFIED_OMEGA} the automatic design verifies by simulation (each entry is integrated at every step: 41,412 had not finished in seven minutes); track fewer harmonics per component (those within the plant's bandwidth; a square wave's first few odd ones), or give [design] by hand and check it with quell run (docs/tuning.md)",
             design.q_g(),
             design.q_w(),
-            m * q * (q + 1) / 2
+            if m == 1 { "" } else { "s" }
         )
     })
 }
@@ -1222,8 +1223,12 @@ fn horizon_advice(
             if given { "; design.mu is the file's, which the automatic design keeps: a larger μ speeds those directions up (or leave it out for the rules to choose)" } else { "" }
         ));
     }
+    if many_harmonics(s, design) {
+        advice.push(format!("a component has {} harmonics, and the companion forms' Ω̄ is singular to rounding with many: design.regressor_scaling = \"modal\" with a resonator −b ± jω per harmonic as filter poles keeps it well conditioned (what the automatic design chooses where the file gives neither the key nor μ; μ then anew)", most_harmonics(s)));
+    }
     if !slow.hopeless.is_empty() {
         let scaling = match design.regressor_scaling() {
+            _ if many_harmonics(s, design) => ", or design.regressor_scaling = \"modal\" (below)",
             RegressorScaling::Paper => ", or design.regressor_scaling = \"normalized\" (ξ̂ of the signals' size)",
             RegressorScaling::Normalized | RegressorScaling::Modal => "",
         };
@@ -1467,6 +1472,18 @@ fn filters(
     Ok((lists, why))
 }
 
+/// Whether `design`'s regressor is a companion form while a component of g or ω has
+/// [`MODAL_HARMONICS`] harmonics or more (a file that gives μ keeps the paper's form: four square
+/// harmonics failed at 1.45 against 0.041, and passed at 1.2e-10 with the modal form and that μ).
+fn many_harmonics(s: &Scenario, design: &Design) -> bool {
+    design.regressor_scaling() != RegressorScaling::Modal && most_harmonics(s) >= MODAL_HARMONICS
+}
+
+/// The most harmonics of one component of g or ω.
+fn most_harmonics(s: &Scenario) -> usize {
+    s.reference.components.iter().chain(&s.disturbance.components).map(|c| frequencies(c).count()).max().unwrap_or(0)
+}
+
 /// The modal filter of a component with harmonics `ws` (nonzero) and `order` poles: a pair
 /// −b ± jω per harmonic, then real poles −b, −1.5b, … up to the order (a bias's pole and any
 /// extra). b = [`FILTER_DECAY`]/t_end clamped to [gap/4, gap/2], gap the smallest distance between
@@ -1612,13 +1629,17 @@ fn choose_beta(s: &Scenario, r: f64, note: &mut Note) -> f64 {
 /// or more, else the normalized form, whose Ω̄ keeps its conditioning at every time scale (the
 /// paper's form spreads its eigenvalues by about r^2(q−1) away from r = 1 rad/s).
 fn choose_scaling(partial: &PartialDesign, s: &Scenario, note: &mut Note) -> RegressorScaling {
-    let most = s.reference.components.iter().chain(&s.disturbance.components).map(|c| frequencies(c).count()).max();
+    let most = most_harmonics(s);
     match (partial.regressor_scaling, &partial.mu) {
         (Some(g), _) => g,
-        (None, Some(_)) => RegressorScaling::Paper,
-        (None, None) if most.unwrap_or(0) >= MODAL_HARMONICS => {
+        (None, Some(_)) => {
+            let p = RegressorScaling::Paper;
+            note("design.regressor_scaling", format!("{:?}", p.name()), "the file gives μ, whose meaning depends on the regressor's form: the paper's form, which a file without the key means, is kept (give the key to choose another, and μ anew)".into());
+            p
+        }
+        (None, None) if most >= MODAL_HARMONICS => {
             let m = RegressorScaling::Modal;
-            note("design.regressor_scaling", format!("{:?}", m.name()), format!("a component has {} harmonics ({MODAL_HARMONICS} or more): a resonator per harmonic, each block of unit gain at its own frequency, keeps Ω̄ well conditioned where the companion forms' entries s^(k−1)/∏(s − p_j) differ by powers of the frequencies' spread; μ is chosen for it (the paper's form is kept when the file gives μ)", most.unwrap_or(0)));
+            note("design.regressor_scaling", format!("{:?}", m.name()), format!("a component has {most} harmonics ({MODAL_HARMONICS} or more): a resonator per harmonic, each block of unit gain at its own frequency, keeps Ω̄ well conditioned where the companion forms' entries s^(k−1)/∏(s − p_j) differ by powers of the frequencies' spread; μ is chosen for it (the paper's form is kept when the file gives μ)"));
             m
         }
         (None, None) => {

@@ -305,6 +305,7 @@ def simulate(
     rtol: Optional[float] = None,
     atol: Optional[float] = None,
     sample_time: Optional[float] = None,
+    continuous: bool = False,
     method: Optional[Literal["auto", "explicit", "imex"]] = None,
     max_steps: Optional[int] = None,
     states: bool = False,

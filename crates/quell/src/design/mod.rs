@@ -134,7 +134,7 @@ pub enum DesignError {
     Uncontrollable { rank: usize, n: usize, tol: f64, scaling: String },
     #[error("plant: (A, C) is not observable (Assumption 1): numerical rank {rank} of {n} (tolerance {tol:.1e}); every mode must show in the outputs{scaling}")]
     Unobservable { rank: usize, n: usize, tol: f64, scaling: String },
-    #[error("design.observer_poles: {0}")]
+    #[error("design.observer_poles: {}", as_observer(.0))]
     ObserverPoles(PlaceError),
     #[error("plant.{0}")]
     Plant(#[from] PlantError),
@@ -201,6 +201,19 @@ pub enum DesignError {
     Interrupted,
 }
 
+/// A pole placement's message as the observer's dual placement meets it: rank(C) and A − LC where
+/// the message for either speaks of rank(B) and A − BK ("more than rank(B) = 2 (rank C for
+/// observer poles)" for repeated observer poles).
+fn as_observer(e: &PlaceError) -> String {
+    match e {
+        PlaceError::Multiplicity { rank, .. } => e
+            .to_string()
+            .replace(&format!("rank(B) = {rank} (rank C for observer poles)"), &format!("rank(C) = {rank}"))
+            .replace("the closed loop (A − BK; A − LC for observer poles)", "the observer A − LC"),
+        _ => e.to_string(),
+    }
+}
+
 /// Largest ratio between two rates of one design: a pole's magnitude |p| (or 1/β, the pole of H)
 /// against a decay rate |Re p| (or 1/β). A pole slower than √ε times the fastest lies inside the
 /// margin √ε·‖M‖ within which the Hurwitz checks (`linalg::unstable`) cannot tell it from the imaginary
@@ -232,31 +245,6 @@ fn check_poles(key: String, what: &'static str, poles: &[Complex<f64>], nonempty
         let partners = |z: Complex<f64>| poles.iter().filter(|&&x| (x - z).norm() <= 1e-12 * (1.0 + z.norm())).count();
         if p.im != 0.0 && partners(p.conj()) != partners(p) {
             return Err(DesignError::NotConjugateClosed { key, pole: p });
-        }
-    }
-    Ok(())
-}
-
-/// An internal-model filter's companion form holds its polynomial ∏(s − p_j)'s coefficients, at
-/// most [`crate::plant::MAX_ENTRY`]: 44 poles at −1e7 overflowed them to ∞, and every later
-/// eigenvalue computation ran on a non-finite matrix. Checked after the span of rates, which
-/// names a single absurd pole better.
-fn check_filter_size(spec: &DesignSpec) -> Result<(), DesignError> {
-    let lists = [
-        ("reference_filter_poles", &spec.reference_filter_poles),
-        ("disturbance_filter_poles", &spec.disturbance_filter_poles),
-    ];
-    for (name, list) in lists {
-        for (i, poles) in list.iter().enumerate() {
-            let magnitude = |a: f64| if a.is_nan() { f64::INFINITY } else { a.abs() };
-            let coefficient = poly_from_roots(poles).into_iter().fold(0.0, |m: f64, a| m.max(magnitude(a)));
-            if coefficient > crate::plant::MAX_ENTRY {
-                return Err(DesignError::FilterTooLarge {
-                    key: format!("design.{name}[{i}]"),
-                    count: poles.len(),
-                    coefficient,
-                });
-            }
         }
     }
     Ok(())
@@ -507,25 +495,36 @@ fn check_spec(plant: &Plant, spec: &DesignSpec) -> Result<(), DesignError> {
         check_poles("design.observer_poles".into(), "observer", p, false)?;
     }
     check_rate_span(spec)?;
-    match spec.regressor_scaling {
-        RegressorScaling::Modal => check_modal_distinct(spec),
-        _ => check_filter_size(spec),
-    }
+    check_filters(spec)
 }
 
-/// The modal form (`design.regressor_scaling = "modal"`) needs each filter's poles distinct: two
-/// equal blocks driven alike are not controllable. Poles closer than 1e-8 of their size count as equal.
-fn check_modal_distinct(spec: &DesignSpec) -> Result<(), DesignError> {
+/// Each internal-model filter's poles as its realization needs them. The companion forms hold
+/// ∏(s − p_j)'s coefficients, at most [`crate::plant::MAX_ENTRY`]: 44 poles at −1e7 overflowed
+/// them to ∞, and every later eigenvalue computation ran on a non-finite matrix (checked after the
+/// span of rates, which names a single absurd pole better). The modal form
+/// (`design.regressor_scaling = "modal"`) needs them distinct: two equal blocks driven alike are
+/// not controllable (poles closer than 1e-8 of their size count as equal).
+fn check_filters(spec: &DesignSpec) -> Result<(), DesignError> {
     let lists = [
         ("reference_filter_poles", &spec.reference_filter_poles),
         ("disturbance_filter_poles", &spec.disturbance_filter_poles),
     ];
     for (name, list) in lists {
         for (i, poles) in list.iter().enumerate() {
-            for (j, p) in poles.iter().enumerate() {
-                if poles[..j].iter().any(|z| (z - p).norm() <= 1e-8 * z.norm().max(p.norm())) {
-                    return Err(DesignError::RepeatedModalPole { key: format!("design.{name}[{i}]"), pole: *p });
+            let key = format!("design.{name}[{i}]");
+            if spec.regressor_scaling == RegressorScaling::Modal {
+                let repeated = |(j, p): &(usize, &Complex<f64>)| {
+                    poles[..*j].iter().any(|z| (z - *p).norm() <= 1e-8 * z.norm().max(p.norm()))
+                };
+                if let Some((_, &pole)) = poles.iter().enumerate().find(repeated) {
+                    return Err(DesignError::RepeatedModalPole { key, pole });
                 }
+                continue;
+            }
+            let magnitude = |a: f64| if a.is_nan() { f64::INFINITY } else { a.abs() };
+            let coefficient = poly_from_roots(poles).into_iter().fold(0.0, |m: f64, a| m.max(magnitude(a)));
+            if coefficient > crate::plant::MAX_ENTRY {
+                return Err(DesignError::FilterTooLarge { key, count: poles.len(), coefficient });
             }
         }
     }
