@@ -102,11 +102,54 @@ impl Component {
         self.harmonics.iter().fold(self.bias, |acc, h| acc + h.amplitude * sin(h.frequency * t + h.phase))
     }
 
-    /// Largest possible |value|: |bias| + Σ|amplitude|.
+    /// Largest |value| over all t: |bias| + Σ|amplitude| (the supremum, approached when the
+    /// frequencies are incommensurate, exact with one harmonic), or, where every frequency is a
+    /// whole multiple of one base frequency ([`Component::period_peak`]), the maximum over that
+    /// period: a square wave's first five odd harmonics (4/(πk) each) peak at 1.18, where the sum
+    /// says 2.28, and a tail bound of 1 % of the sum passed tails of up to 1.9 % of the real peak.
     pub fn peak(&self) -> f64 {
-        self.harmonics.iter().fold(self.bias.abs(), |acc, h| acc + h.amplitude.abs())
+        let sum = self.harmonics.iter().fold(self.bias.abs(), |acc, h| acc + h.amplitude.abs());
+        let active: Vec<&Harmonic> =
+            self.harmonics.iter().filter(|h| h.amplitude != 0.0 && h.frequency > 0.0).collect();
+        match active.len() {
+            0 | 1 => sum,
+            _ => self.period_peak(&active).map_or(sum, |p| p.min(sum)),
+        }
+    }
+
+    /// The maximum of |value| over one period 2π/ω₀ where every frequency of `active` is k·ω₀ for
+    /// a whole k ≤ [`PEAK_MAX_INDEX`] (ω₀ = ω_min/d, d ≤ 16, each ratio whole to 1e-9), found on
+    /// 64 samples per period of the highest harmonic and refined by golden section around the
+    /// largest; `None` otherwise.
+    fn period_peak(&self, active: &[&Harmonic]) -> Option<f64> {
+        let lowest = active.iter().map(|h| h.frequency).fold(f64::INFINITY, f64::min);
+        let whole = |x: f64| (x - x.round()).abs() <= 1e-9 * x.max(1.0);
+        let base = (1..=16)
+            .map(|d| lowest / f64::from(d))
+            .find(|&w| active.iter().all(|h| whole(h.frequency / w) && h.frequency / w <= PEAK_MAX_INDEX))?;
+        let top = active.iter().map(|h| (h.frequency / base).round()).fold(1.0, f64::max);
+        let samples = (64.0 * top) as usize;
+        let step = std::f64::consts::TAU / base / samples as f64;
+        let at = |t: f64| self.eval(t).abs();
+        let best = (0..samples).map(|k| k as f64 * step).max_by(|a, b| at(*a).total_cmp(&at(*b)))?;
+        // Golden section on the bracket around the best sample, where |value| is unimodal.
+        let (mut lo, mut hi) = (best - step, best + step);
+        let r = 0.5 * (5f64.sqrt() - 1.0);
+        for _ in 0..60 {
+            let (a, b) = (hi - r * (hi - lo), lo + r * (hi - lo));
+            if at(a) < at(b) {
+                lo = a;
+            } else {
+                hi = b;
+            }
+        }
+        Some(at(best).max(at(0.5 * (lo + hi))))
     }
 }
+
+/// The highest harmonic index [`Component::peak`] samples a common period for (a component of
+/// commensurate frequencies beyond it keeps the sum of amplitudes).
+const PEAK_MAX_INDEX: f64 = 4096.0;
 
 impl Signal {
     /// Checks that the signal has `expected` components (`per` says why, for the message), finite
@@ -363,5 +406,33 @@ mod tests {
         let mut gw = [0.0; 4];
         bank.eval_into_unchecked(0.5, &mut gw);
         assert_eq!(gw, [3.0 * 1f64.sin(), 2.0, 0.5f64.sin(), 1.0 + 2.0 * 1f64.sin()]);
+    }
+
+    /// The peak against closed forms: sin t + sin 2t peaks where cos t + 2 cos 2t = 0, cos t =
+    /// (√33 − 1)/8, at sin t (1 + 2 cos t) = 1.76017…; a square wave's first five odd harmonics
+    /// 4/(πk) sin(kt) peak at 1.18233 (the Gibbs overshoot; the series summed on 2e6 points of a
+    /// period in numpy); incommensurate frequencies (1 and √2) keep the sum, as
+    /// does one harmonic with a bias.
+    #[test]
+    fn the_peak_is_the_largest_value_over_all_t() {
+        let h = |amplitude: f64, frequency: f64| Harmonic { amplitude, frequency, phase: 0.0 };
+        let c = (33f64.sqrt() - 1.0) / 8.0;
+        let exact = (1.0 - c * c).sqrt() * (1.0 + 2.0 * c);
+        let two = Component { bias: 0.0, harmonics: vec![h(1.0, 1.0), h(1.0, 2.0)] };
+        assert!((two.peak() - exact).abs() < 1e-12, "{} against {exact}", two.peak());
+        // The same scaled in time (0.02 and 0.04 rad/min): the same peak.
+        let slow = Component { bias: 0.0, harmonics: vec![h(1.0, 0.02), h(1.0, 0.04)] };
+        assert!((slow.peak() - exact).abs() < 1e-12, "{}", slow.peak());
+        let square = Component {
+            bias: 0.0,
+            harmonics: (0..5)
+                .map(|k| h(4.0 / (std::f64::consts::PI * (2 * k + 1) as f64), (2 * k + 1) as f64))
+                .collect(),
+        };
+        assert!((square.peak() - 1.18233).abs() < 1e-5, "{}", square.peak());
+        let apart = Component { bias: 0.0, harmonics: vec![h(1.0, 1.0), h(1.0, 2f64.sqrt())] };
+        assert_eq!(apart.peak(), 2.0);
+        let one = Component { bias: -1.0, harmonics: vec![h(0.5, 3.0)] };
+        assert_eq!(one.peak(), 1.5);
     }
 }
