@@ -1633,9 +1633,11 @@ fn choose_scaling(partial: &PartialDesign, s: &Scenario, note: &mut Note) -> Reg
     match (partial.regressor_scaling, &partial.mu) {
         (Some(g), _) => g,
         (None, Some(_)) => {
-            let p = RegressorScaling::Paper;
-            note("design.regressor_scaling", format!("{:?}", p.name()), "the file gives μ, whose meaning depends on the regressor's form: the paper's form, which a file without the key means, is kept (give the key to choose another, and μ anew)".into());
-            p
+            // Said where it matters: with many harmonics the paper's form fails.
+            if most >= MODAL_HARMONICS {
+                note("design.regressor_scaling", "\"paper\"".into(), format!("the file gives μ, whose meaning depends on the regressor's form: the paper's form, which a file without the key means, is kept, though a component has {most} harmonics and the modal form suits them (give the key, and μ anew)"));
+            }
+            RegressorScaling::Paper
         }
         (None, None) if most >= MODAL_HARMONICS => {
             let m = RegressorScaling::Modal;

@@ -183,7 +183,7 @@ mod tests {
         );
         let e = Scenario::from_toml(&text).unwrap().design().unwrap_err().to_string();
         assert!(
-            e.starts_with("design.observer_poles: pole -5.000000 is requested 3 times, more than rank(B) = 2"),
+            e.starts_with("design.observer_poles: pole -5.000000 is requested 3 times, more than rank(C) = 2"),
             "{e}"
         );
     }
