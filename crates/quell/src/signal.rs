@@ -104,7 +104,7 @@ impl Component {
 
     /// Largest |value| over all t: |bias| + Σ|amplitude| (the supremum, approached when the
     /// frequencies are incommensurate, exact with one harmonic), or, where every frequency is a
-    /// whole multiple of one base frequency ([`Component::period_peak`]), the maximum over that
+    /// whole multiple of one base frequency, the maximum over that
     /// period: a square wave's first five odd harmonics (4/(πk) each) peak at 1.18, where the sum
     /// says 2.28, and a tail bound of 1 % of the sum passed tails of up to 1.9 % of the real peak.
     pub fn peak(&self) -> f64 {
