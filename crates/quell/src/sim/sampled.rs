@@ -134,15 +134,15 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
 }
 
 /// The delay check's offer ([`ControllerError::DelayNotMultiple`]) made to divide the output step
-/// `h` too, where one near T_s does: the paper's example at 0.0007 s was offered 0.000699790063 s
-/// for its delays, which the output step's check (0.1 s) then refused.
+/// `h` too, where one near T_s does ([`discrete::valid_sample_time_near`]): the controller's own
+/// check knows no output step.
 fn dividing_output_step(e: ControllerError, design: &Design, h: f64) -> ControllerError {
     match e {
         ControllerError::DelayNotMultiple { channel, delay, sample_time, ratio, nearest: Some(t), unit }
             if discrete::whole_multiple(h, t).is_none() =>
         {
-            let with_h: Vec<f64> = design.plant().delays.iter().copied().chain([h]).collect();
-            let nearest = discrete::valid_sample_time_near(&with_h, sample_time, 1 + design.q()).or(Some(t));
+            let width = 1 + design.q();
+            let nearest = discrete::valid_sample_time_near(&design.plant().delays, h, sample_time, width).or(Some(t));
             ControllerError::DelayNotMultiple { channel, delay, sample_time, ratio, nearest, unit }
         }
         e => e,
@@ -170,11 +170,7 @@ fn true_delays_whole(run: &Run<'_>, T: f64) -> Result<(), KeyError> {
     if actuator.iter().any(|&d| d > 0.0) {
         sets.push(format!("truth.actuator_delays [{}]", list(actuator)));
     }
-    let width = 1 + run.design.q();
-    let with_h: Vec<f64> = all.iter().copied().chain([run.settings.output_step]).collect();
-    let nearest = discrete::valid_sample_time_near(&with_h, T, width)
-        .or_else(|| discrete::valid_sample_time_near(&all, T, width));
-    let offer = match nearest {
+    let offer = match discrete::valid_sample_time_near(&all, run.settings.output_step, T, 1 + run.design.q()) {
         Some(t) => format!(": the nearest that makes them all whole is {} {unit}", settings::fmt_short(t)),
         None => ": no sample time near it makes them all whole; choose one that divides each".into(),
     };
