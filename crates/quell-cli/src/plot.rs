@@ -895,8 +895,10 @@ fn draw_sweep_2d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
         if !logs.is_empty() {
             colour_bar(&scale, lo, span)?;
         }
+        // Grey cells, "—", have no median: say so where there are any.
+        let grey = if s.points.iter().any(|pt| cell(pt).is_none()) { " (—: no completed run)" } else { "" };
         let mut chart = ChartBuilder::on(&cells)
-            .caption(format!("{}: median tail RMS e", s.study.channel(i)), ("sans-serif", 18))
+            .caption(format!("{}: median tail RMS e{grey}", s.study.channel(i)), ("sans-serif", 18))
             .margin(10)
             .x_label_area_size(40)
             .y_label_area_size(70)
@@ -962,7 +964,8 @@ fn colour_bar<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, lo: f64, span: 
         .disable_mesh()
         .disable_x_axis()
         .y_labels(6)
-        .y_label_formatter(&|v| format!("{:.1e}", 10f64.powf(*v)))
+        // A space between the tick and the label: "-1.0e-5" read as a negative value.
+        .y_label_formatter(&|v| format!(" {:.1e}", 10f64.powf(*v)))
         .label_style(("sans-serif", 12))
         .draw()
         .map_err(|e| e.to_string())?;

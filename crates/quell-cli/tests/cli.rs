@@ -493,7 +493,10 @@ fn run_sample_time_not_dividing_a_delay_exits_2() {
     assert!(err.contains("channel 1"), "{err}");
     // 1/3 s makes the delays (1 s, 3 s) whole but not the output step (0.1 s), whose check then
     // refused it; 0.1 s makes both whole.
-    assert!(err.contains("nearest valid sample time is 0.1 s"), "{err}");
+    assert!(
+        err.contains("nearest valid sample time that also divides simulation.output_step = 0.1 s (a run's rows fall on samples) is 0.1 s"),
+        "{err}"
+    );
     assert!(!out.join("signals.csv").exists());
 }
 
@@ -1049,7 +1052,12 @@ fn design_refuses_a_scenario_whose_run_cannot_start() {
     let err = design_with_edit("design-sample-time", "# sample_time = 0.001", "sample_time = 0.3");
     assert!(err.starts_with("error: simulation.sample_time"), "{err}");
     assert!(err.contains("channel 1's delay τ = 1 s is not a whole number of samples"), "{err}");
-    assert!(err.contains("the nearest valid sample time is 0.1 s"), "{err}");
+    // The delays' offer, 0.33333333333 s (the controller's alone, `quell export`'s), does not divide
+    // the output step 0.1 s; the run's does, and says so.
+    assert!(
+        err.contains("the nearest valid sample time that also divides simulation.output_step = 0.1 s (a run's rows fall on samples) is 0.1 s"),
+        "{err}"
+    );
 }
 
 /// `[plant] time_unit` labels what states a time: the figures' t axis, the reports' rates and

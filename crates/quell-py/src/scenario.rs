@@ -277,7 +277,12 @@ fn poles_value(list: Vec<quell::nalgebra::Complex<f64>>, key: &str, py: Python<'
         .map_err(|pole| raise(py, Kind::Design)(&DesignError::NotConjugateClosed { key: key.to_string(), pole }))
 }
 
-/// The `[design]` table from keyword arguments: pole lists in the file's form, the rest as values.
+/// `Scenario`'s own keywords besides the design's.
+const SCENARIO_KEYWORDS: &[&str] =
+    &["name", "t_end", "output_step", "rtol", "atol", "sample_time", "method", "noise", "truth", "actuator"];
+
+/// The `[design]` table from keyword arguments: pole lists in the file's form, the rest as values;
+/// a keyword that is no design key is refused naming the nearest keyword.
 fn design_value(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Table> {
     let mut t = Table::new();
     let Some(kwargs) = kwargs else { return Ok(t) };
@@ -285,6 +290,18 @@ fn design_value(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Table> {
         let name: String = k.extract()?;
         let key = name.clone();
         let py = v.py();
+        if !quell::scenario::DESIGN_KEYS.contains(&name.as_str()) {
+            // A misspelt keyword lands here with the design's keys (t_ned was "unknown in [design]").
+            let all = SCENARIO_KEYWORDS.iter().chain(quell::scenario::DESIGN_KEYS).copied();
+            let hint =
+                quell::settings::nearest(&name, all).map(|n| format!(" (did you mean `{n}`?)")).unwrap_or_default();
+            let message = format!(
+                "{name}: unknown keyword{hint}; quell.Scenario takes plant, reference, disturbance, the keywords {} and the [design] keys {}",
+                SCENARIO_KEYWORDS.join(", "),
+                quell::scenario::DESIGN_KEYS.join(", ")
+            );
+            return Err(crate::errors::keyed(py, Kind::Scenario, message, Some(name)));
+        }
         if v.is_none() {
             continue;
         }

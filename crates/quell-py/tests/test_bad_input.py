@@ -98,8 +98,13 @@ def test_scenario_arguments():
         quell.Scenario(PLANT, ref, quell.paper_example().disturbance, rtol="tight", **kw)
     with pytest.raises(TypeError, match=r'^reference\[0\]\["bias"\]: expected a real number, found a complex'):
         quell.Scenario(PLANT, [{"bias": 1j}, {"bias": 2.0}], quell.paper_example().disturbance, **kw)
-    with pytest.raises(quell.ScenarioError, match=r"^mue: unknown key \(did you mean `mu`\?\)"):
+    with pytest.raises(quell.ScenarioError, match=r"^mue: unknown keyword \(did you mean `mu`\?\)") as caught:
         quell.Scenario(PLANT, ref, quell.paper_example().disturbance, mue=[1, 2], **kw)
+    assert caught.value.key == "mue"
+    # A misspelt simulation keyword was called an unknown [design] key, with no hint.
+    with pytest.raises(quell.ScenarioError, match=r"^t_ned: unknown keyword \(did you mean `t_end`\?\); quell.Scenario takes plant, reference, disturbance, the keywords name, t_end") as caught:
+        quell.Scenario(PLANT, ref, quell.paper_example().disturbance, t_ned=5, **kw)
+    assert caught.value.key == "t_ned"
     with pytest.raises(TypeError, match="scenario: expected a quell.Scenario"):
         quell.simulate("paper.toml")
 

@@ -1169,7 +1169,7 @@ fn slow_convergence(s: &Scenario, design: &Design, tail_max_e: &[f64], bound: &[
 
 /// How much later than the averaged law predicts the tail of a proposed horizon starts
 /// ([`slow_convergence`]).
-const SLOW_MARGIN: f64 = 3.0;
+const SLOW_MARGIN: f64 = crate::diagnostics::AVERAGED_MARGIN;
 
 /// The tail of a run: its last tenth ([`crate::sim::SimResult::summary`]'s tail figures).
 const TAIL_FRACTION: f64 = 0.1;

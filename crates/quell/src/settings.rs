@@ -78,7 +78,7 @@ pub fn read_input(path: &std::path::Path) -> Result<String, String> {
 
 /// The candidate nearest to `name` (at most two edits apart, ignoring case): what a message
 /// suggests for a misspelt key or name.
-pub(crate) fn nearest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+pub fn nearest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
     let lower = name.to_lowercase();
     candidates
         .into_iter()

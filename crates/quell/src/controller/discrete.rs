@@ -17,8 +17,17 @@ pub enum ControllerError {
     BadSampleTime { value: f64 },
     /// `nearest` is a sample time that passes this same check, written with the fewest digits that do
     /// (so the printed value works when typed back), or `None` when no τ_c/k near T_s fits every delay.
-    #[error("simulation.sample_time: channel {}'s delay τ = {} {unit} is not a whole number of samples of T_s = {} {unit} ({ratio:.6} samples); {}", .channel + 1, crate::settings::fmt_short(*.delay), crate::settings::fmt_short(*.sample_time), suggestion(*.nearest, *.unit))]
-    DelayNotMultiple { channel: usize, delay: f64, sample_time: f64, ratio: f64, nearest: Option<f64>, unit: TimeUnit },
+    /// In a run it also divides the output step, `output_step` then (`None` for a controller alone).
+    #[error("simulation.sample_time: channel {}'s delay τ = {} {unit} is not a whole number of samples of T_s = {} {unit} ({ratio:.6} samples); {}", .channel + 1, crate::settings::fmt_short(*.delay), crate::settings::fmt_short(*.sample_time), suggestion(*.nearest, *.output_step, *.unit))]
+    DelayNotMultiple {
+        channel: usize,
+        delay: f64,
+        sample_time: f64,
+        ratio: f64,
+        nearest: Option<f64>,
+        output_step: Option<f64>,
+        unit: TimeUnit,
+    },
     /// `nearest` as in `DelayNotMultiple`: the sample time nearest T_s at which every line fits and
     /// every delay is whole.
     #[error("simulation.sample_time: channel {}'s delay τ = {} {unit} is {samples:e} samples of T_s = {} {unit}; a delay line holds at most {max:e} samples; {}", .channel + 1, crate::linalg::fmt_number(*.delay), crate::linalg::fmt_number(*.sample_time), longer(*.nearest, *.unit), max = MAX_DELAY_SAMPLES)]
@@ -191,10 +200,16 @@ pub struct Controller {
     eta: Vec<f64>,
 }
 
-fn suggestion(nearest: Option<f64>, unit: TimeUnit) -> String {
-    match nearest {
-        Some(t) => format!("the nearest valid sample time is {} {unit}", crate::settings::fmt_short(t)),
-        None => format!(
+fn suggestion(nearest: Option<f64>, output_step: Option<f64>, unit: TimeUnit) -> String {
+    let fmt = crate::settings::fmt_short;
+    match (nearest, output_step) {
+        (Some(t), Some(h)) => format!(
+            "the nearest valid sample time that also divides simulation.output_step = {} {unit} (a run's rows fall on samples) is {} {unit}",
+            fmt(h),
+            fmt(t)
+        ),
+        (Some(t), None) => format!("the nearest valid sample time is {} {unit}", fmt(t)),
+        (None, _) => format!(
             "no sample time τ_c/k within {SEARCHED} samples of it makes every delay whole (the delays are not commensurate); \
              change the delays to whole multiples of one sample time"
         ),
@@ -310,6 +325,7 @@ fn delay_samples(delays: &[f64], T: f64, width: usize, unit: TimeUnit) -> Result
                 sample_time: T,
                 ratio: samples,
                 nearest,
+                output_step: None,
                 unit,
             });
         }

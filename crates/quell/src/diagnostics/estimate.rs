@@ -55,12 +55,7 @@ pub fn estimate(
     // The observer's remedy redesigns it at several speeds: only when some advice quotes it.
     let remedy_text = std::cell::OnceCell::new();
     let remedy = || remedy_text.get_or_init(|| super::observer_remedy(design, [reference, disturbance], None)).as_str();
-    let scaling_hint = match design.regressor_scaling() {
-        crate::design::RegressorScaling::Paper => {
-            " or set design.regressor_scaling = \"normalized\" (ξ̂ of the signals' size) and choose μ anew"
-        }
-        crate::design::RegressorScaling::Normalized | crate::design::RegressorScaling::Modal => "",
-    };
+    let transient = super::slow_transient_advice(design, t_end);
     avg.channels
         .iter()
         .enumerate()
@@ -79,15 +74,9 @@ pub fn estimate(
                 .then(|| super::slow_direction_advice(c, (i, mu), &avg.fidelity, (t_end, STIFF_RATIO * rho), unit, &remedy))
                 .flatten();
             let weakly_excited = slow.is_some();
-            let key = format!("design.mu[{i}]");
             let mut advice = Vec::new();
             if stiff {
-                advice.push(format!(
-                    "channel {} adapts at μ λ_max = {rate:.3e}/{unit}, {:.1e}× the loop's fastest other rate ({rho:.3e}/{unit}): the loop is stiff (the automatic integrator handles it, an explicit one crawls); lower {key} to about {}{scaling_hint}",
-                    i + 1,
-                    rate / rho,
-                    crate::settings::fmt_short(crate::settings::round_down_2(STIFF_RATIO * rho / lambda_max)),
-                ));
+                advice.push(stiff_advice(design, i, (mu, lambda_max), rho));
             }
             if rank == 0 {
                 advice.push(format!(
@@ -97,6 +86,7 @@ pub fn estimate(
                 ));
             }
             advice.extend(slow);
+            advice.extend(transient.clone());
             RateEstimate {
                 channel: i + 1,
                 mu,
@@ -113,6 +103,24 @@ pub fn estimate(
             }
         })
         .collect()
+}
+
+/// Channel i adapting at μ λ_max beyond [`STIFF_RATIO`] times the loop's rate ρ: what it means and
+/// the μ at the threshold. The design report and the run's diagnostics share it.
+pub(crate) fn stiff_advice(design: &Design, i: usize, (mu, lambda_max): (f64, f64), rho: f64) -> String {
+    let (rate, unit) = (mu * lambda_max, design.plant().time_unit);
+    let scaling_hint = match design.regressor_scaling() {
+        crate::design::RegressorScaling::Paper => {
+            " or set design.regressor_scaling = \"normalized\" (ξ̂ of the signals' size) and choose μ anew"
+        }
+        crate::design::RegressorScaling::Normalized | crate::design::RegressorScaling::Modal => "",
+    };
+    format!(
+        "channel {} adapts at μ λ_max = {rate:.3e}/{unit}, {:.1e}× the loop's fastest other rate ({rho:.3e}/{unit}): the loop is stiff (the automatic integrator handles it, an explicit one crawls), and a gain this high can drive u_f hard (check max|u_f|); lower design.mu[{i}] to about {}{scaling_hint}",
+        i + 1,
+        rate / rho,
+        crate::settings::fmt_short(crate::settings::round_down_2(STIFF_RATIO * rho / lambda_max)),
+    )
 }
 
 #[cfg(test)]

@@ -146,7 +146,8 @@ pub fn load_and_design(text: &str) -> Result<(Scenario, Design), LoadError> {
 const TOP_KEYS: &[&str] = &["name", "plant", "design", "reference", "disturbance", "simulation", "noise", "truth"];
 const PLANT_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0", "inputs", "outputs", "states", "time_unit"];
 const TRUTH_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0", "actuator_delays", "u_max"];
-const DESIGN_KEYS: &[&str] = &[
+/// The keys of `[design]`.
+pub const DESIGN_KEYS: &[&str] = &[
     "observer_gain",
     "observer_poles",
     "channel_poles",
@@ -164,6 +165,20 @@ const COMPONENT_KEYS: &[&str] = &["bias", "harmonics"];
 const HARMONIC_KEYS: &[&str] = &["amplitude", "frequency", "phase"];
 const SIMULATION_KEYS: &[&str] = &["t_end", "output_step", "rtol", "atol", "sample_time", "method"];
 const NOISE_KEYS: &[&str] = &["std", "seed", "bandwidth"];
+
+/// The keys a scenario's table `section` takes (`"design"`, `"truth"`, …; `""` for the top level),
+/// or `None` for a name that is no table of the scenario.
+pub(crate) fn section_keys(section: &str) -> Option<&'static [&'static str]> {
+    Some(match section {
+        "" => TOP_KEYS,
+        "plant" => PLANT_KEYS,
+        "truth" => TRUTH_KEYS,
+        "design" => DESIGN_KEYS,
+        "simulation" => SIMULATION_KEYS,
+        "noise" => NOISE_KEYS,
+        _ => return None,
+    })
+}
 
 impl FromStr for Scenario {
     type Err = ScenarioError;

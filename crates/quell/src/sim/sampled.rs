@@ -138,12 +138,22 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
 /// check knows no output step.
 fn dividing_output_step(e: ControllerError, design: &Design, h: f64) -> ControllerError {
     match e {
-        ControllerError::DelayNotMultiple { channel, delay, sample_time, ratio, nearest: Some(t), unit }
+        ControllerError::DelayNotMultiple { channel, delay, sample_time, ratio, nearest: Some(t), unit, .. }
             if discrete::whole_multiple(h, t).is_none() =>
         {
             let width = 1 + design.q();
-            let nearest = discrete::valid_sample_time_near(&design.plant().delays, h, sample_time, width).or(Some(t));
-            ControllerError::DelayNotMultiple { channel, delay, sample_time, ratio, nearest, unit }
+            let offer = discrete::valid_sample_time_near(&design.plant().delays, h, sample_time, width);
+            // Named only when the offer divides h (else it is the delays' alone, as the controller's).
+            let output_step = offer.filter(|&o| discrete::whole_multiple(h, o).is_some()).map(|_| h);
+            ControllerError::DelayNotMultiple {
+                channel,
+                delay,
+                sample_time,
+                ratio,
+                nearest: offer.or(Some(t)),
+                output_step,
+                unit,
+            }
         }
         e => e,
     }

@@ -761,9 +761,23 @@ const OPTIONAL_KEYS: &[&str] =
 fn not_in_scenario(path: &KeyPath, why: &str, hint: &str) -> String {
     let key = path.to_string();
     let base = key.split('[').next().unwrap_or_default();
+    // A misspelt key of a known table: the nearest valid one (truth.delay for truth.delays).
+    let (section, name) =
+        base.split_once('.').map_or(("", base), |(s, rest)| (s, rest.split('.').next().unwrap_or(rest)));
+    let nearest = crate::scenario::section_keys(section)
+        .filter(|keys| name.chars().count() > 2 && !keys.contains(&name))
+        .and_then(|keys| crate::settings::nearest(name, keys.iter().copied()))
+        .map(|n| {
+            if section.is_empty() {
+                format!(" (did you mean {n}?)")
+            } else {
+                format!(" (did you mean {section}.{n}?)")
+            }
+        })
+        .unwrap_or_default();
     match OPTIONAL_KEYS.iter().find(|k| base == **k || base.starts_with(&format!("{k}."))) {
         Some(k) => format!("{path} is not a value of the scenario ({why}): {k} is optional and the scenario leaves it out; give it a value in the scenario file (any, e.g. the first of the study's), which the study then varies"),
-        None => format!("{path} is not a value of the scenario ({why}); {hint}"),
+        None => format!("{path} is not a value of the scenario ({why}){nearest}; {hint}"),
     }
 }
 

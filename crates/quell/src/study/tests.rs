@@ -51,6 +51,9 @@ fn study_mistakes_name_their_key() {
         ("scenario = 3", "scenario: expected the scenario file's path (a string) or a scenario table, found an integer"),
         ("scenario = \"/nonexistent/x.toml\"", "scenario: cannot read the scenario file /nonexistent/x.toml"),
         ("[grid]\n\"design.nu\" = [1.0]", "grid.\"design.nu\": design.nu is not a value of the scenario (design has no nu)"),
+        // A misspelt key of a known table names the nearest (names of three letters or more).
+        ("[grid]\n\"truth.delay[0]\" = [0.2]", "grid.\"truth.delay[0]\": truth.delay[0] is not a value of the scenario (the scenario has no truth) (did you mean truth.delays?); grid and Monte Carlo keys"),
+        ("[grid]\n\"design.betta\" = [1.0]", "grid.\"design.betta\": design.betta is not a value of the scenario (design has no betta) (did you mean design.beta?)"),
         ("[grid]\n\"design.mu[2]\" = [1.0]", "grid.\"design.mu[2]\": design.mu[2] is not a value of the scenario (design.mu has no [2] (it has 2 entries))"),
         ("[grid]\n\"design.mu\" = [[1.0, 2.0, 3.0]]", "grid.\"design.mu\"[0]: expected a vector of 2 numbers (the shape of design.mu in the paper's example), found a vector of 3 numbers"),
         ("[grid]\n\"plant.A\" = [[[1.0]]]", "grid.\"plant.A\"[0]: expected a 3×3 matrix"),

@@ -210,16 +210,39 @@ impl TuneCurve {
             );
         }
         let mut wanted: Vec<String> = vec![];
-        if spec.max_u[i].is_finite() {
-            wanted.push(format!("max |u_{c}| ≤ {prefix}max_u[{i}]"));
-        }
-        if spec.max_uf[i].is_finite() {
-            wanted.push(format!("max |u_f,{c}| ≤ {prefix}max_uf[{i}]"));
+        // Per limit set, the least the completed runs reached: a limit below it binds at every μ
+        // tried, and raising it to that figure admits one.
+        let mut reached: Vec<String> = vec![];
+        let completed: Vec<(f64, ChannelFigures)> =
+            self.curve.iter().filter_map(|p| Some((p.mu, p.figures?))).collect();
+        for (key, what, limit, value) in [
+            (
+                "max_u",
+                format!("max |u_{c}|"),
+                spec.max_u[i],
+                (|f: &ChannelFigures| f.max_u) as fn(&ChannelFigures) -> f64,
+            ),
+            ("max_uf", format!("max |u_f,{c}|"), spec.max_uf[i], |f: &ChannelFigures| f.max_uf),
+        ] {
+            if !limit.is_finite() {
+                continue;
+            }
+            wanted.push(format!("{what} ≤ {prefix}{key}[{i}]"));
+            let least = completed.iter().map(|(mu, f)| (value(f), *mu)).min_by(|a, b| a.0.total_cmp(&b.0));
+            if let Some((v, mu)) = least.filter(|(v, _)| *v > limit) {
+                reached.push(format!(
+                    "the least {what} of the completed runs is {} (at μ = {}), above {prefix}{key}[{i}] = {}",
+                    crate::settings::fmt_4(v),
+                    crate::settings::fmt_short(mu),
+                    crate::settings::fmt_short(limit)
+                ));
+            }
         }
         wanted.push(format!("a finite {}", spec.objective.name()));
         let limits = if wanted.len() > 1 { ", raise the limits" } else { "" };
+        let reached = if reached.is_empty() { String::new() } else { format!(" ({})", reached.join("; ")) };
         format!(
-            "no μ in {prefix}mu[{i}] completed with {}; widen the bounds{limits} or lengthen {}t_end",
+            "no μ in {prefix}mu[{i}] completed with {}{reached}; widen the bounds{limits} or lengthen {}t_end",
             wanted.join(" and "),
             if prefix.is_empty() { "" } else { "simulation." }
         )
@@ -383,6 +406,10 @@ impl Search<'_> {
         let mut reason = row.reason;
         if let (true, Some(f)) = (reason.is_empty(), &figures) {
             reason = spec.broken_limits(i, f, "tune.").join("; ");
+        }
+        // Within the limits but with no objective: say so (the row's reason was empty).
+        if reason.is_empty() && figures.is_some() && objective.is_none() {
+            reason = format!("no finite {} (never settled within the run)", spec.objective.name());
         }
         let point = TunePoint { mu: mu_i, objective, outcome: row.outcome, reason, figures };
         if let Some(f) = self.opts.on_point {
