@@ -23,14 +23,16 @@ impl Interrupt {
     pub fn install(twice: &'static str) -> Self {
         let (phase, stop) = (Arc::new(AtomicU8::new(RUNNING)), Arc::new(AtomicBool::new(false)));
         let (handler_phase, handler_stop) = (phase.clone(), stop.clone());
-        let _ = ctrlc::set_handler(move || {
-            handler_stop.store(true, Ordering::SeqCst);
-            if handler_phase.compare_exchange(RUNNING, INTERRUPTED, Ordering::SeqCst, Ordering::SeqCst).is_err()
-                && handler_phase.compare_exchange(INTERRUPTED, QUITTING, Ordering::SeqCst, Ordering::SeqCst).is_ok()
-            {
-                eprintln!("error: {twice}");
-                std::process::exit(1);
-            }
+        let _ = keeping_ignored_sigint(|| {
+            ctrlc::set_handler(move || {
+                handler_stop.store(true, Ordering::SeqCst);
+                if handler_phase.compare_exchange(RUNNING, INTERRUPTED, Ordering::SeqCst, Ordering::SeqCst).is_err()
+                    && handler_phase.compare_exchange(INTERRUPTED, QUITTING, Ordering::SeqCst, Ordering::SeqCst).is_ok()
+                {
+                    eprintln!("error: {twice}");
+                    std::process::exit(1);
+                }
+            })
         });
         Interrupt { phase, stop }
     }
@@ -38,9 +40,11 @@ impl Interrupt {
     /// Installs a handler for a command with nothing to write: the first signal quits with
     /// `message` and exit status 1 (a result that is not complete), not the shell's 130.
     pub fn quit_with(message: &'static str) {
-        let _ = ctrlc::set_handler(move || {
-            eprintln!("error: {message}");
-            std::process::exit(1);
+        let _ = keeping_ignored_sigint(|| {
+            ctrlc::set_handler(move || {
+                eprintln!("error: {message}");
+                std::process::exit(1);
+            })
         });
     }
 
@@ -63,4 +67,29 @@ impl Interrupt {
             }
         }
     }
+}
+
+/// Runs `install` (which handles SIGINT, SIGTERM and SIGHUP) and, where SIGINT was ignored when it
+/// ran, ignores it again: a shell without job control starts `quell sweep … &` with SIGINT ignored,
+/// so that Ctrl-C at the terminal spares background work, and the handler took that back (POSIX
+/// keeps an ignored signal ignored across exec for that reason). SIGTERM and SIGHUP stay handled.
+fn keeping_ignored_sigint<T>(install: impl FnOnce() -> T) -> T {
+    #[cfg(unix)]
+    {
+        // SAFETY: sigaction with a null new action only reads the disposition into `old`, a
+        // zeroed plain C struct; signal(SIGINT, SIG_IGN) sets a disposition, no handler code.
+        let ignored = unsafe {
+            let mut old: libc::sigaction = std::mem::zeroed();
+            libc::sigaction(libc::SIGINT, std::ptr::null(), &mut old) == 0 && old.sa_sigaction == libc::SIG_IGN
+        };
+        let installed = install();
+        if ignored {
+            unsafe {
+                libc::signal(libc::SIGINT, libc::SIG_IGN);
+            }
+        }
+        installed
+    }
+    #[cfg(not(unix))]
+    install()
 }

@@ -45,11 +45,9 @@ pub(crate) fn read_study(path: &Path) -> Result<Study, Failure> {
     Study::from_path(path).map_err(|e| {
         let shown = path.display().to_string();
         let mut message = if e.key == shown { e.to_string() } else { format!("{shown}: {e}") };
-        // A scenario's own sections, where a study expected its keys: the file is a scenario.
-        if ["name", "plant", "design", "reference", "disturbance", "noise", "truth"].contains(&e.key.as_str()) {
-            message.push_str(&format!(
-                "\n{shown} is a scenario, not a study: a study names it (scenario = \"{shown}\") and what to vary ([grid], [monte_carlo]; docs/studies.md); run the scenario itself with `quell run {shown}`"
-            ));
+        // The library says the file is a scenario; here, the command that runs it.
+        if quell::study::is_scenario_section(&e.key) {
+            message.push_str(&format!("\nrun the scenario itself with `quell run {shown}`"));
         }
         Failure::Input(message)
     })

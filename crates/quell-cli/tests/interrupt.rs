@@ -193,3 +193,35 @@ fn ctrl_c_stops_the_automatic_designs_verification_and_writes_nothing() {
     assert!(stderr.contains("interrupted during the automatic design's verifying simulations"), "{stderr}");
     assert!(!written.exists());
 }
+
+/// A run started with SIGINT ignored (a shell without job control starts `quell … &` so, that
+/// Ctrl-C at the terminal spares background work) keeps ignoring it, and SIGTERM still stops it
+/// with its files written. The handler took SIGINT back, and such a sweep stopped.
+#[test]
+fn an_ignored_sigint_stays_ignored_and_sigterm_still_stops_the_run() {
+    use std::os::unix::process::CommandExt;
+    let dir_tmp = scratch_dir("ignored-sigint");
+    let dir = dir_tmp.path();
+    let scenario = paper_with(dir, &[("t_end = 100.0", "t_end = 100000.0")]);
+    let out = dir.join("out");
+    let mut command = Command::new(env!("CARGO_BIN_EXE_quell"));
+    command.arg("run").arg(&scenario).arg("--out").arg(&out).stdout(Stdio::piped()).stderr(Stdio::piped());
+    // SAFETY: between fork and exec only signal(2), which is async-signal-safe.
+    unsafe {
+        command.pre_exec(|| {
+            libc::signal(libc::SIGINT, libc::SIG_IGN);
+            Ok(())
+        });
+    }
+    let mut child = command.spawn().expect("start quell");
+    std::thread::sleep(Duration::from_millis(1500));
+    sigint(child.id());
+    std::thread::sleep(Duration::from_millis(1500));
+    assert!(child.try_wait().expect("poll quell").is_none(), "SIGINT, ignored at start, stopped the run");
+    let _ = Command::new("kill").args(["-TERM", &child.id().to_string()]).status();
+    let output = child.wait_with_output().expect("wait for quell");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "stderr: {stderr}");
+    assert!(stderr.contains("interrupted at t = "), "{stderr}");
+    assert_eq!(check_outputs(&out)["outcome"]["status"], "interrupted");
+}

@@ -103,8 +103,17 @@ impl Kind {
             Kind::Export => "ExportError",
             Kind::Controller => "ControllerError",
         };
+        // A ScenarioError's `.key`: the key or argument its message starts with, unless the caller
+        // sets the file's key ([`keyed`]); it was None for `Plant(A)` with a NaN and `jobs=0`.
+        let head = message.split_once(": ").map(|(k, _)| k.to_string()).filter(|k| !k.contains(' '));
         match class(py, name) {
-            Ok(cls) => PyErr::from_type(cls, message),
+            Ok(cls) => {
+                let err = PyErr::from_type(cls, message);
+                if let (Kind::Scenario, Some(key)) = (self, head) {
+                    let _ = err.value(py).setattr("key", key);
+                }
+                err
+            }
             Err(e) => e,
         }
     }

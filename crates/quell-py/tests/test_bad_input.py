@@ -206,3 +206,14 @@ def test_oversized_texts_surrogates_and_long_lists_are_refused_by_what_is_wrong(
         quell.Plant(A, B, C, inputs=["a"] * 1_000_000)
     with pytest.raises(TypeError, match=r"^delays\[1\]: expected a real number, found a bool"):
         quell.Plant(A, B, C, delays=[1.0, True])
+
+
+def test_every_scenario_error_has_the_key_or_argument_it_names():
+    """`.key` was None where the message named an argument (a NaN in Plant's A, jobs=0)."""
+    with pytest.raises(quell.ScenarioError, match=r"^A\[0\]\[0\]: expected a finite number, found NaN") as caught:
+        quell.Plant([[np.nan, 1.0], [2.0, -1.0]], [[1.0], [0.0]], [[1.0, 0.0]])
+    assert caught.value.key == "A[0][0]"
+    study = quell.Study(quell.paper_example(), grid={"design.mu[0]": [1.0]})
+    with pytest.raises(quell.ScenarioError, match=r"^jobs: expected a number of threads") as caught:
+        study.sweep(jobs=0)
+    assert caught.value.key == "jobs"

@@ -97,6 +97,10 @@ def test_study_errors_name_the_key(tmp_path):
     assert "design.nu[0]" in str(info.value)
     with pytest.raises(quell.ScenarioError, match="cannot read the study file"):
         quell.sweep(bad.with_name("missing.toml"))
+    # A scenario file where a study belongs is said to be one (the CLI alone said so).
+    for call in (quell.Study.load, lambda p: list(quell.sweep_runs(p))):
+        with pytest.raises(quell.ScenarioError, match=r"^name: unknown key.*; this is a scenario, not a study: a study names a scenario"):
+            call(EXAMPLES / "paper.toml")
 
 
 def test_jobs_must_be_positive(study_file):

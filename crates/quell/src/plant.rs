@@ -87,8 +87,17 @@ impl PlantError {
                         _ => format!("k = {k} (columns of {prefix}D)"),
                     })
                     .collect();
-                let hint =
-                    if name == "A" { "; A must be square".to_string() } else { format!("; {}", defs.join(", ")) };
+                // C with a different number of outputs than B has inputs: the method pairs them.
+                let square = if name == "C" && rows != expected_rows {
+                    "; the method decouples the plant into one channel per input, so it needs as many outputs as inputs (a square plant): choose m outputs to track, or add inputs"
+                } else {
+                    ""
+                };
+                let hint = if name == "A" {
+                    "; A must be square".to_string()
+                } else {
+                    format!("; {}{square}", defs.join(", "))
+                };
                 (
                     format!("{prefix}{name}"),
                     format!("expected {expected_rows}×{expected_cols} ({dims}), found {rows}×{cols}{hint}"),

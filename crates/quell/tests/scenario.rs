@@ -289,6 +289,8 @@ fn unknown_top_level_key() {
 #[test]
 fn unknown_key_in_table() {
     check(&with(&[(DELAYS, "delay = [1.0, 3.0]")]), "plant.delay", "did you mean `delays`?");
+    // A discrete-time model's sample time is no misspelt D: the plant is continuous-time.
+    check(&with(&[(DELAYS, "delays = [1.0, 3.0]\ndt = 0.01")]), "plant.dt", "a plant here is continuous-time");
 }
 
 #[test]
@@ -342,6 +344,12 @@ fn non_square_A() {
 #[test]
 fn wrong_shape() {
     check(&with(&[(C_LINE, "C = [[2.0, 2.0], [2.0, 1.0]]")]), "plant.C", "expected 2×3 (m×n), found 2×2");
+    // Three outputs for two inputs: the square plant the method needs is named.
+    check(
+        &with(&[(C_LINE, "C = [[2.0, 2.0, 0.0], [2.0, 1.0, 2.0], [1.0, 0.0, 0.0]]")]),
+        "plant.C",
+        "found 3×3; m = 2 (columns of plant.B), n = 3 (rows of plant.A); the method decouples the plant into one channel per input, so it needs as many outputs as inputs",
+    );
 }
 
 #[test]

@@ -38,6 +38,7 @@ fn not_a_scenario_key(name: &str) -> Option<&'static str> {
         "max_steps" => Some("the step budget is a run option, not a scenario key: the max-steps option of quell run, max_steps= of quell.simulate, or max_steps at a study file's top level"),
         "states" => Some("recording x and x̂ is a run option, not a scenario key: the states option of quell run, states=True of quell.simulate"),
         "continuous" => Some("a run option, not a scenario key: the continuous option of quell run, continuous=True of quell.simulate; or leave simulation.sample_time out"),
+        "dt" | "Ts" | "ts" | "sample_period" => Some("a plant here is continuous-time, x' = Ax + Bu: convert a discrete-time model (python-control's dt, MATLAB's Ts) first, e.g. with MATLAB's d2c (the inverse of the zero-order hold); the controller's sample time is simulation.sample_time"),
         _ => None,
     }
 }
@@ -61,9 +62,12 @@ impl<'a> Table<'a> {
         for name in table.keys() {
             if !valid.contains(&name.as_str()) {
                 let place = if key.is_empty() { "at the top level".to_string() } else { format!("in [{key}]") };
-                let hint = crate::settings::nearest(name, valid.iter().copied())
-                    .map(|v| format!(" (did you mean `{v}`?)"))
-                    .or_else(|| not_a_scenario_key(name).map(|w| format!(" ({w})")))
+                // A known non-key first: `dt` is not a misspelt `D`.
+                let hint = not_a_scenario_key(name)
+                    .map(|w| format!(" ({w})"))
+                    .or_else(|| {
+                        crate::settings::nearest(name, valid.iter().copied()).map(|v| format!(" (did you mean `{v}`?)"))
+                    })
                     .unwrap_or_default();
                 return Err(err(
                     child(key, name),

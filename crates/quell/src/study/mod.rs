@@ -249,6 +249,11 @@ fn unknown_keys(at: &str, t: &toml::Table, valid: &[&str]) -> Result<(), StudyEr
     Ok(())
 }
 
+/// Whether `key` is a top-level key of a scenario that a study does not take.
+pub fn is_scenario_section(key: &str) -> bool {
+    !TOP_KEYS.contains(&key) && crate::scenario::section_keys("").is_some_and(|keys| keys.contains(&key))
+}
+
 /// A top-level key of the study (`scenario`, `max_steps`) found in table `at`: written below a
 /// `[table]` header, TOML puts it in that table (`max_steps = 5` after `[monte_carlo]` was read
 /// as a perturbation and refused as "expected a distribution").
@@ -321,7 +326,13 @@ impl Study {
     /// Checks a parsed study document (what [`Study::from_toml`] does after parsing). Its
     /// `scenario` is a file's path (looked up in `dir`) or the scenario document itself, a table.
     pub fn from_table(doc: &toml::Table, dir: Option<&Path>) -> Result<Study, StudyError> {
-        unknown_keys("", doc, TOP_KEYS)?;
+        unknown_keys("", doc, TOP_KEYS).map_err(|mut e| {
+            // A scenario's own sections where a study's keys belong: the file is a scenario.
+            if is_scenario_section(&e.key) {
+                e.message.push_str("; this is a scenario, not a study: a study names a scenario (scenario = \"paper.toml\") and what to vary ([grid], [monte_carlo]; docs/studies.md)");
+            }
+            e
+        })?;
         let (mut base, scenario_source) = base_scenario(doc, dir)?;
         let scenario = apply_simulation(doc, &mut base, &scenario_source)?;
         let grid = read_grid(doc)?;
@@ -832,10 +843,15 @@ fn check_values<'v>(
 fn monte_carlo(base: &toml::Table, t: &toml::Table, source: &str) -> Result<MonteCarlo, StudyError> {
     let runs = match t.get("runs") {
         None => {
+            // A misspelt `runs` ([monte_carlo] run = 5) is a key too, no key path: name it.
+            let misspelt = t.keys().find(|k| k.as_str() != "seed" && crate::settings::nearest(k, ["runs"]).is_some());
+            let hint = misspelt
+                .map(|k| format!(" (`{k}` is no key of [monte_carlo]: did you mean `runs`?)"))
+                .unwrap_or_default();
             return Err(err(
                 "monte_carlo.runs",
-                "missing; required: the number of draws per grid point (an integer ≥ 1)",
-            ))
+                format!("missing{hint}; required: the number of draws per grid point (an integer ≥ 1)"),
+            ));
         }
         Some(v) => unsigned("monte_carlo.runs", v, "the number of draws per grid point (an integer ≥ 1)")?,
     };

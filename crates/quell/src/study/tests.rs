@@ -64,6 +64,7 @@ fn study_mistakes_name_their_key() {
         ("[grid]\n\"name\" = [1.0]", "grid.\"name\": name in the paper's example is a string, not a number, vector or matrix"),
         ("[grid]\n\"design.mu[x]\" = [1.0]", "grid.\"design.mu[x]\": `design.mu[x]` is not a key path"),
         ("[monte_carlo]\nseed = 1", "monte_carlo.runs: missing"),
+        ("[monte_carlo]\nrun = 5", "monte_carlo.runs: missing (`run` is no key of [monte_carlo]: did you mean `runs`?); required"),
         ("[monte_carlo]\nruns = 0", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found 0"),
         ("[monte_carlo]\nruns = -3", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found -3"),
         ("[monte_carlo]\nruns = 1e12", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found 1e12, a floating-point number; write it as an integer, 1000000000000"),
