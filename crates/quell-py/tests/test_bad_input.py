@@ -28,7 +28,7 @@ C = [[2.0, 2.0, 0.0], [2.0, 1.0, 2.0]]
         (dict(A=A, B=B, C=C, delays=[1.0, -3.0]), quell.ScenarioError, r"^delays\[1\]: expected a finite delay ≥ 0"),
         (dict(A=A, B=B), TypeError, r"^C: missing"),
         (dict(A=A, B=B, C=C, D=[[1], [1], [1]], Q=[[1, 2], [1, 2]]), quell.ScenarioError, r"^Q: expected 2×1 \(m×k\), found 2×2; m = 2 \(columns of B\), k = 1 \(columns of D\)$"),
-        (dict(A=A, B=B, C=[[2.0, 2.0]]), quell.ScenarioError, r"^C: expected 2×3 \(m×n\), found 1×2; m = 2 \(columns of B\), n = 3 \(rows of A\)$"),
+        (dict(A=A, B=B, C=[[2.0, 2.0]]), quell.ScenarioError, r"^C: expected 2×3 \(m×n\), found 1×2; m = 2 \(columns of B\), n = 3 \(rows of A\); the method decouples the plant into one channel per input, so it needs as many outputs as inputs \(a square plant\): choose m outputs to track, or add inputs$"),
         (dict(A=A, B=B, C=C, x0=[0, 0]), quell.ScenarioError, r"^x0: expected 3 entries \(one per state, n = 3 rows of A\), found 2$"),
         (dict(A=object(), B=B, C=C), TypeError, r"^A: expected real numbers, found an object"),
         (dict(A=[[None]], B=[[1]], C=[[1]]), TypeError, r"^A: expected real numbers, found entries that are not all numbers"),
