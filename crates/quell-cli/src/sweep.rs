@@ -34,6 +34,10 @@ pub struct SweepArgs {
     /// Run a study of more than 10⁷ runs (not with --merge, which runs nothing).
     #[arg(long, conflicts_with = "merge")]
     yes: bool,
+    /// Resume the interrupted sweep in --out: keep its rows and run the others (the same study
+    /// file and --shard).
+    #[arg(long, conflicts_with = "merge")]
+    resume: bool,
 }
 
 /// The files a sweep writes into --out (besides its figures).
@@ -86,27 +90,39 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
             shard.index, shard.count
         );
     }
-    let pool = thread_pool(args.jobs, n)?;
+    let meta = StudyMeta::new(&study, shard);
+    let (kept, done) = if args.resume { resumed(&args.out, &meta, n)? } else { (Vec::new(), Vec::new()) };
+    if args.resume && kept.len() == n {
+        eprintln!("nothing to resume: {} holds every run of the study ({n})", args.out.display());
+        return Ok(());
+    }
+    let pool = thread_pool(args.jobs, n - kept.len())?;
     prepare_out(&args.out, OUTPUTS)?;
 
     // Ctrl-C or SIGTERM: the first stops the sweep (runs under way are abandoned) and the rows done
     // are written; a second before writing begins quits at once.
     let interrupt = Interrupt::install("interrupted twice; stopped without writing files");
     let bar = crate::progress_bar(n as u64, "sweeping {bar:40} {pos}/{len} runs, {elapsed_precise} elapsed, ETA {eta}");
+    bar.inc(kept.len() as u64);
     let on_row = |_: &Row| bar.inc(1);
     let started = Instant::now();
-    let options = SweepOptions { shard, stop: Some(interrupt.stop_flag()), on_row: Some(&on_row) };
+    let options = SweepOptions { shard, stop: Some(interrupt.stop_flag()), on_row: Some(&on_row), done: &done };
     let result = pool.install(|| study::sweep(&study, &options));
     bar.finish_and_clear();
     interrupt.start_writing();
     let seconds = started.elapsed().as_secs_f64();
-    let meta = StudyMeta::new(&study, shard);
-    write_all(&args.out, &meta, &result.rows, result.partial, !args.no_plots)?;
-    report(&result.rows, n, seconds, pool.current_num_threads(), &args.out);
+    let (ran, mut rows) = (result.rows.len(), kept);
+    rows.extend(result.rows);
+    rows.sort_by_key(|r| r.run);
+    write_all(&args.out, &meta, &rows, result.partial, !args.no_plots)?;
+    report(&rows, ran, n, seconds, pool.current_num_threads(), &args.out);
+    if args.resume {
+        eprintln!("resumed: {} rows kept, {ran} runs run", rows.len() - ran);
+    }
     if result.partial {
         return Err(Failure::Run(format!(
-            "interrupted after {} of {n} runs; those rows are in {} (marked partial)",
-            result.rows.len(),
+            "interrupted after {} of {n} runs; those rows are in {} (marked partial; `--resume` runs the others)",
+            rows.len(),
             args.out.join("runs.csv").display()
         )));
     }
@@ -132,7 +148,7 @@ pub(crate) fn thread_pool(jobs: Option<usize>, runs: usize) -> Result<rayon::Thr
 }
 
 /// One line per outcome and the rate, to stderr.
-fn report(rows: &[Row], n: usize, seconds: f64, jobs: usize, out: &Path) {
+fn report(rows: &[Row], ran: usize, n: usize, seconds: f64, jobs: usize, out: &Path) {
     let count = |o: Outcome| rows.iter().filter(|r| r.outcome == o).count();
     eprintln!(
         "{} of {n} runs: {} completed, {} diverged, {} failed; {seconds:.2} s on {jobs} thread{}{}; wrote {}",
@@ -141,7 +157,8 @@ fn report(rows: &[Row], n: usize, seconds: f64, jobs: usize, out: &Path) {
         count(Outcome::Diverged),
         count(Outcome::Failed),
         if jobs == 1 { "" } else { "s" },
-        match rows.len() {
+        // Per run of this process (a resumed sweep's kept rows took no time here).
+        match ran {
             0 => String::new(),
             k => format!(" ({:.2} ms per run)", 1e3 * seconds / k as f64),
         },
@@ -209,9 +226,42 @@ fn check_shard_rows(dir: &Path, shard: Shard, rows: &[Row], total: usize) -> Res
     Ok(())
 }
 
-/// Reads one shard's directory: its summary's study identity and its rows.
-fn read_shard(dir: &Path) -> Result<(StudyMeta, Vec<Row>, bool), Failure> {
-    let bad = |what: &str, e: String| Failure::Input(format!("--merge {}: {what}: {e}", dir.display()));
+/// `--resume`: the rows the interrupted sweep of this study and shard (`meta`, of `n` runs) wrote
+/// into `dir`, and which runs of the shard they are (by place k: run index + k·count).
+fn resumed(dir: &Path, meta: &StudyMeta, n: usize) -> Result<(Vec<Row>, Vec<bool>), Failure> {
+    let here = format!("--resume {}", dir.display());
+    if !dir.join("summary.json").exists() {
+        return Err(Failure::Input(format!(
+            "{here}: holds no summary.json of an earlier sweep; resume into the --out of the interrupted sweep, or leave --resume out"
+        )));
+    }
+    let (old, rows, _) = read_sweep_dir(dir, "--resume")?;
+    if old.fingerprint != meta.fingerprint || old.shard != meta.shard || differing_key(&old, meta).is_some() {
+        return Err(Failure::Input(format!(
+            "{here}: its rows come from another study or shard (fingerprint {}, shard {}/{}; this one: {}, {}/{}); resume with the same study file and --shard, or choose another --out",
+            old.fingerprint, old.shard.index, old.shard.count, meta.fingerprint, meta.shard.index, meta.shard.count
+        )));
+    }
+    let (shard, mut done) = (meta.shard, vec![false; n]);
+    for row in &rows {
+        let k = (row.run % shard.count == shard.index).then(|| row.run / shard.count).filter(|&k| k < n);
+        match k {
+            Some(k) if !done[k] => done[k] = true,
+            _ => {
+                return Err(Failure::Input(format!(
+                    "{here}: runs.csv's run {} is not a run of shard {}/{} or is there twice (the file was edited?); run the sweep again without --resume",
+                    row.run, shard.index, shard.count
+                )))
+            }
+        }
+    }
+    Ok((rows, done))
+}
+
+/// Reads one sweep's directory (a shard for `--merge`, an interrupted sweep for `--resume`, the
+/// `flag` its messages name): its summary's study identity, its rows and whether it is partial.
+fn read_sweep_dir(dir: &Path, flag: &str) -> Result<(StudyMeta, Vec<Row>, bool), Failure> {
+    let bad = |what: &str, e: String| Failure::Input(format!("{flag} {}: {what}: {e}", dir.display()));
     // Not text: damaged, not edited; the shard's own run writes it anew.
     let unreadable = |what: &str, e: std::io::Error| match e.kind() {
         std::io::ErrorKind::InvalidData => {
@@ -266,7 +316,7 @@ fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
     }
     let mut shards = Vec::new();
     for dir in dirs {
-        shards.push((dir, read_shard(dir)?));
+        shards.push((dir, read_sweep_dir(dir, "--merge")?));
     }
     let (first_dir, first) = (shards[0].0, shards[0].1 .0.clone());
     let count = first.shard.count;

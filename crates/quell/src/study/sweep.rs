@@ -312,11 +312,14 @@ pub struct SweepOptions<'a> {
     pub stop: Option<&'a AtomicBool>,
     /// Called after each run (from the worker threads).
     pub on_row: Option<&'a (dyn Fn(&Row) + Sync)>,
+    /// Runs of the shard already done, by their place k in it (run index + k·count): skipped, as
+    /// when an interrupted sweep is resumed. Empty: none.
+    pub done: &'a [bool],
 }
 
 impl Default for SweepOptions<'_> {
     fn default() -> Self {
-        SweepOptions { shard: Shard::ALL, stop: None, on_row: None }
+        SweepOptions { shard: Shard::ALL, stop: None, on_row: None, done: &[] }
     }
 }
 
@@ -334,8 +337,10 @@ pub fn sweep(study: &Study, opts: &SweepOptions<'_>) -> Sweep {
     let runs = usize::try_from(study.len()).unwrap_or(usize::MAX);
     let stopped = || opts.stop.is_some_and(|s| s.load(Ordering::Relaxed));
     let shard = opts.shard;
+    let done = |k: usize| opts.done.get(k).copied().unwrap_or(false);
     let rows: Vec<Row> = (0..shard.len(runs))
         .into_par_iter()
+        .filter(|&k| !done(k))
         .map(|k| shard.index + k * shard.count)
         .filter_map(|i| {
             if stopped() {
@@ -348,7 +353,7 @@ pub fn sweep(study: &Study, opts: &SweepOptions<'_>) -> Sweep {
             Some(row)
         })
         .collect();
-    let partial = rows.len() < opts.shard.len(runs);
+    let partial = rows.len() < (0..shard.len(runs)).filter(|&k| !done(k)).count();
     Sweep { rows, partial }
 }
 
