@@ -56,6 +56,11 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
         scenario.simulation.sample_time = None;
     }
     eprint!("{}", report::warnings_text(&quell::design::warnings(&design, &scenario.design)));
+    // A run on [truth] says so up front: its figures are not the design model's.
+    let truth = quell::diagnostics::truth_differences(&scenario);
+    if !truth.is_empty() {
+        eprintln!("simulating the true plant ([truth]), not the design model: {}", truth.join(", "));
+    }
     // Every check that can fail on input happens before the output directory is touched.
     let settings = loop_settings(args, &scenario, &design)?;
     if let Loop::Sampled { sample_time } = settings.mode {

@@ -1275,3 +1275,27 @@ fn design_report_prints_channel_numbers_in_short_form() {
     assert!(stdout(&o).contains("  G_11(s) = 0.012 / (s+0.1)(s+0.12)   (μ_1 = 1e-11)\n"), "{}", stdout(&o));
     assert!(stdout(&o).contains("  H(s) = 1/(1.25 s + 1)\n"), "{}", stdout(&o));
 }
+
+/// A run on `[truth]` says so before its figures (a completed run on a mismatched plant did not
+/// mention the truth at all); a run on the model does not.
+#[test]
+fn a_run_on_the_truth_says_so_first() {
+    let dir = temp_dir("truth-note");
+    let text = fs::read_to_string(paper()).unwrap();
+    let truth = format!(
+        "{text}\n[truth]\nA = [[-3.52, -1.87, -3.3], [3.08, 1.43, 4.4], [0.33, 0.33, -0.55]]\nu_max = [50.0, 50.0]\n"
+    );
+    let path = dir.path().join("truth.toml");
+    fs::write(&path, truth.replace("t_end = 100.0", "t_end = 5.0")).unwrap();
+    let o = quell(&["run", path.to_str().unwrap(), "--no-plots", "--out", dir.path().join("o").to_str().unwrap()]);
+    let err = stderr(&o);
+    // A × 1.1 entry by entry: ‖ΔA‖/‖A‖ = 0.1.
+    assert!(
+        err.starts_with("simulating the true plant ([truth]), not the design model: truth.A is 10 % off plant.A (‖ΔA‖/‖A‖), truth.u_max [50, 50] clipping u_f\n"),
+        "{err}"
+    );
+    let model = dir.path().join("model.toml");
+    fs::write(&model, text.replace("t_end = 100.0", "t_end = 5.0")).unwrap();
+    let o = quell(&["run", model.to_str().unwrap(), "--no-plots", "--out", dir.path().join("m").to_str().unwrap()]);
+    assert!(!stderr(&o).contains("[truth]"), "{}", stderr(&o));
+}

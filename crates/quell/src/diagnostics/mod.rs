@@ -136,6 +136,19 @@ pub fn model_error_advice(s: &crate::Scenario, result: &SimResult) -> Option<Str
     {
         return None;
     }
+    let (diffs, unit) = (truth_differences(s), s.plant.time_unit);
+    (!diffs.is_empty()).then(|| {
+        format!(
+            "the run ended early ({outcome}, t in {unit}) on a true plant that differs from the design model: {}; the advice below is for the model, which the run did not simulate: first check that the design holds on its own model (the scenario without [truth]), then how much mismatch it tolerates (a study over the truth keys, docs/studies.md)",
+            diffs.join(", ")
+        )
+    })
+}
+
+/// How the simulated plant differs from the design model, one phrase per key: each matrix of
+/// `[truth]` by its relative change, the truth's own delays, the actuator's delays and limits.
+/// Empty when the run simulates the model.
+pub fn truth_differences(s: &crate::Scenario) -> Vec<String> {
     let (model, unit) = (&s.plant, s.plant.time_unit);
     let mut diffs = Vec::new();
     if let Some(truth) = &s.truth {
@@ -163,13 +176,11 @@ pub fn model_error_advice(s: &crate::Scenario, result: &SimResult) -> Option<Str
         if a.delays.iter().any(|&d| d > 0.0) {
             diffs.push(format!("truth.actuator_delays [{}] {unit} on the whole u_f", fmt_short_list(&a.delays)));
         }
+        if a.limits.iter().any(|l| l.is_finite()) {
+            diffs.push(format!("truth.u_max [{}] clipping u_f", fmt_short_list(&a.limits)));
+        }
     }
-    (!diffs.is_empty()).then(|| {
-        format!(
-            "the run ended early ({outcome}, t in {unit}) on a true plant that differs from the design model: {}; the advice below is for the model, which the run did not simulate: first check that the design holds on its own model (the scenario without [truth]), then how much mismatch it tolerates (a study over the truth keys, docs/studies.md)",
-            diffs.join(", ")
-        )
-    })
+    diffs
 }
 
 /// The diagnostics of `result`, a run of `design` under g = `reference`, ω = `disturbance`.
