@@ -67,11 +67,17 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
             args.out.join("tune.csv").display()
         )));
     }
-    if let Some(c) = result.channels.iter().find(|c| c.chosen.is_none()) {
+    // Every channel without a feasible μ, not the first alone (each would cost another round).
+    let none: Vec<String> = result
+        .channels
+        .iter()
+        .filter(|c| c.chosen.is_none())
+        .map(|c| format!("channel {}: {}", c.channel + 1, c.why_none(spec, "tune.")))
+        .collect();
+    if !none.is_empty() {
         return Err(Failure::Input(format!(
-            "channel {}: {} (the curve is in {})",
-            c.channel + 1,
-            c.why_none(spec, "tune."),
+            "{} (the curves are in {})",
+            none.join("\n"),
             args.out.join("tune.csv").display()
         )));
     }

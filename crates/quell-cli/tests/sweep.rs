@@ -264,13 +264,14 @@ fn tune_writes_the_chosen_mu_and_each_curve() {
     // Only the limits the file gives are named (it has no max_uf).
     let err = stderr(&o);
     assert!(
-        err.contains("channel 1: no μ in tune.mu[0] completed with max |u_1| ≤ tune.max_u[0] and a finite tail_rms_e (the least max |u_1| of the completed runs is "),
+        err.contains("channel 1: no μ in tune.mu[0] completed with max |u_1| ≤ tune.max_u[0] and a finite tail_rms_e (the least max |u_1| of the runs with a finite tail_rms_e is "),
         "{err}"
     );
     assert!(err.contains("above tune.max_u[0] = 1); widen the bounds, raise the limits"), "{err}");
     assert!(!err.contains("max_uf"), "{err}");
     // The least peak named, taken as the limit (1.001× for its four digits), admits a μ.
-    let least: f64 = err.split("completed runs is ").nth(1).and_then(|r| r.split(' ').next()).unwrap().parse().unwrap();
+    let least: f64 =
+        err.split("a finite tail_rms_e is ").nth(1).and_then(|r| r.split(' ').next()).unwrap().parse().unwrap();
     assert!(least > 1.0 && least < 22.0, "{err}");
     let admitted = text.replace("max_u = 22.0", &format!("max_u = {}", 1.001 * least));
     let a = quell(&[

@@ -435,9 +435,9 @@ fn filter_poles_too_slow_for_the_horizon_are_named_and_the_remedy_converges() {
 
 /// A tail still shrinking gets numbers, and they work when followed. The paper's channel 1 ends
 /// at an RMS of 9.0e-3 (3e-3 of its scale, the reference's peak 3), shrinking 0.47× a tenth of the
-/// run. The advice names the time at which that pace reaches 1e-4 of the scale (3e-4) and a μ_1:
-/// with that μ_1 the same 100 s end below 3e-4; with that t_end within 2× of it (the pace itself
-/// quickens as the transient fades: measured 1.4×).
+/// run. The advice names the time at which that pace reaches a third of 1e-4 of the scale (1e-4)
+/// and a μ_1: with either the tail RMS ends below 3e-4, where the line stops (measured: 170 s,
+/// 2.2e-4; μ_1 = 62, 6.7e-5), so following it does not bring it back.
 #[test]
 fn a_shrinking_tail_is_told_the_horizon_and_the_mu_that_converge_it() {
     let run = |text: &str| {
@@ -458,7 +458,7 @@ fn a_shrinking_tail_is_told_the_horizon_and_the_mu_that_converge_it() {
     let (_, raised) = run(&PAPER_EXAMPLE.replace("mu = [20.0, 30.0]", &format!("mu = [{mu}, 30.0]")));
     assert!(raised < 3e-4, "μ_1 = {mu}: tail RMS {raised:e}");
     let (_, longer) = run(&PAPER_EXAMPLE.replace("t_end = 100.0", &format!("t_end = {t:.1}")));
-    assert!(longer < 6e-4, "t_end = {t_end}: tail RMS {longer:e}");
+    assert!(longer < 3e-4, "t_end = {t_end}: tail RMS {longer:e}");
 }
 
 /// A μ far past the stiffness threshold is named after the run as in the design report (a

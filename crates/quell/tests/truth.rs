@@ -206,4 +206,14 @@ fn a_run_that_diverges_on_a_mismatched_truth_names_the_mismatch_first() {
     let nominal = scenario("");
     let r = Run::of(&nominal, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
     assert!(quell::diagnostics::diagnose_run(&nominal, &d, &r).advice.iter().all(|a| !a.contains("true plant")));
+    // τ₂ = 3.3 s: the run completes, its tails (7e-2, 8e-2) miss the 1 % bounds (3e-2, 2e-2), and
+    // the mismatch is named as a possible floor beside the model's advice.
+    let near = scenario("delays = [1.0, 3.3]");
+    let r = Run::of(&near, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
+    assert!(matches!(r.outcome, Some(Outcome::Completed) | None), "{:?}", r.outcome);
+    let advice = quell::diagnostics::diagnose_run(&near, &d, &r).advice;
+    assert!(
+        advice[0].starts_with("the run simulates a true plant that differs from the design model (truth.delays [1, 3.3] s against plant.delays [1, 3]): part of the tail may be the mismatch's"),
+        "{advice:?}"
+    );
 }

@@ -128,21 +128,32 @@ pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) ->
 /// may have set low) on a true plant
 /// (`[truth]`) that differs from the design model: which keys differ and by how much, and that
 /// the advice after it is for the model. The observer advice of a chemostat whose true delays are
-/// 20× the model's named the model's observer speed-ups and nothing of the mismatch.
+/// 20× the model's named the model's observer speed-ups and nothing of the mismatch. A completed
+/// run on such a plant that missed its tail bound gets a shorter line: the mismatch may set the
+/// tail.
 pub fn model_error_advice(s: &crate::Scenario, result: &SimResult) -> Option<String> {
+    let (diffs, unit) = (truth_differences(s), s.plant.time_unit);
+    if diffs.is_empty() {
+        return None;
+    }
+    // A completed run that missed its tail bound: the mismatch may set the floor (a vessel's
+    // actuator delay left a tail 1.3× its bound that no advice on the model's keys explained).
+    let Some(outcome) = result.outcome.as_ref().filter(|o| !matches!(o, Outcome::Completed)) else {
+        let missed = (0..result.m).any(|i| !tail_within_bound(result, i));
+        return missed.then(|| format!(
+            "the run simulates a true plant that differs from the design model ({}): part of the tail may be the mismatch's, which the other advice (for the model) does not see; run the scenario without [truth] to tell the two apart",
+            diffs.join(", ")
+        ));
+    };
     // Not a run that the caller's step budget or a stop ended: the mismatch need not be why.
-    let outcome = result.outcome.as_ref()?;
     if !matches!(outcome, Outcome::Diverged { .. } | Outcome::StepSizeTooSmall { .. } | Outcome::HistoryTooLarge { .. })
     {
         return None;
     }
-    let (diffs, unit) = (truth_differences(s), s.plant.time_unit);
-    (!diffs.is_empty()).then(|| {
-        format!(
-            "the run ended early ({outcome}, t in {unit}) on a true plant that differs from the design model: {}; the advice below is for the model, which the run did not simulate: first check that the design holds on its own model (the scenario without [truth]), then how much mismatch it tolerates (a study over the truth keys, docs/studies.md)",
-            diffs.join(", ")
-        )
-    })
+    Some(format!(
+        "the run ended early ({outcome}, t in {unit}) on a true plant that differs from the design model: {}; the advice below is for the model, which the run did not simulate: first check that the design holds on its own model (the scenario without [truth]), then how much mismatch it tolerates (a study over the truth keys, docs/studies.md)",
+        diffs.join(", ")
+    ))
 }
 
 /// How the simulated plant differs from the design model, one phrase per key: each matrix of
@@ -207,11 +218,20 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
     let poor: Vec<&Fidelity> =
         avg.fidelity.iter().filter(|f| missed && completed && f.relative_error > FIDELITY_LIMIT).collect();
     let mut advice: Vec<String> = clipping_advice(result, missed).into_iter().collect();
+    // A sampled run coarse for the design first: its errors are the sampling's as much as the
+    // adaptation's, and advice on μ, t_end or a faster observer (which needs a shorter T_s still)
+    // would be tuned to them.
+    let coarse = coarse_advice(design, result, rho, missed);
+    let tunable = coarse.is_none();
+    advice.extend(coarse);
     if missed {
         advice.extend(filter_scale_advice(design, signals));
+    }
+    // Not from a run that ended early: its last sample is no t_end (a diverged ship's 25.5 s).
+    if missed && completed {
         advice.extend(slow_transient_advice(design, t_end));
     }
-    if !poor.is_empty() {
+    if !poor.is_empty() && tunable {
         let list = |part: &dyn Fn(&Fidelity) -> String| poor.iter().map(|f| part(f)).collect::<Vec<_>>().join(", ");
         let (plural, freqs, errors) = (
             if poor.len() > 1 { "s" } else { "" },
@@ -223,28 +243,31 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
             remedy()
         ));
     }
-    // A sampled-data run coarse for the design: its errors are the sampling's as much as the
-    // adaptation's, which the channels' advice (μ, t_end) does not see.
-    let mut coarse = false;
-    if let crate::sim::RunStats::Sampled { sample_time, .. } = result.stats {
-        if missed && sample_time * rho > crate::sim::COARSE_SAMPLE {
-            coarse = true;
-            advice.push(format!(
-                "the sampled-data loop at T_s = {} {unit} is coarse for this design (T_s·ρ = {:.2} > {}): its errors are the sampling's as much as the adaptation's; compare with the continuous loop, and shorten the sample time or slow the poles before tuning μ or t_end",
-                fmt_short(sample_time),
-                sample_time * rho,
-                crate::sim::COARSE_SAMPLE
-            ));
-        }
-    }
     advice.extend(thrashing(&result.stats));
     let channels = avg
         .channels
         .iter()
         .enumerate()
-        .map(|(i, c)| channel(design, i, c, &avg.fidelity, result, (t_end, stiff, !coarse), &remedy))
+        .map(|(i, c)| channel(design, i, c, &avg.fidelity, result, (t_end, stiff, tunable), &remedy))
         .collect();
     Diagnostics { channels, observer_fidelity: avg.fidelity, advice }
+}
+
+/// A sampled-data run that missed its tail bound at a sample time coarse for the design (T_s·ρ >
+/// [`crate::sim::COARSE_SAMPLE`]), with the sample times that are not; `None` otherwise.
+fn coarse_advice(design: &Design, result: &SimResult, rho: f64, missed: bool) -> Option<String> {
+    let crate::sim::RunStats::Sampled { sample_time, .. } = result.stats else { return None };
+    let output_step = (result.t.len() > 1).then(|| result.t[1] - result.t[0]).filter(|h| *h > 0.0);
+    (missed && sample_time * rho > crate::sim::COARSE_SAMPLE).then(|| {
+        format!(
+            "the sampled-data loop at T_s = {} {} is coarse for this design (T_s·ρ = {:.2} > {}): its errors are the sampling's as much as the adaptation's; compare with the continuous loop, and choose {}, or slower poles, before tuning μ, t_end or the observer",
+            fmt_short(sample_time),
+            design.plant().time_unit,
+            sample_time * rho,
+            crate::sim::COARSE_SAMPLE,
+            crate::sim::fine_sample_time(design, rho, output_step)
+        )
+    })
 }
 
 /// How far (a factor) a bank of internal-model filter poles may sit from its signal's frequencies
@@ -598,10 +621,9 @@ pub(crate) fn slow_direction_advice<'r>(
     );
     let (wanted, fastest) = horizon_mu(relevant, c.lambda_max(), (t_end, stiff));
     Some(if wanted > fastest {
-        format!(
-            "{observer}: {} (raising {key} to {AVERAGED_MARGIN:.0}·{CONVERGED_EFOLDS:.0}/(λ t_end) = {wanted:.3e} would put the adaptation rate beyond the stiffness threshold {stiff:.2e}/{unit})",
-            remedy()
-        )
+        // The observer as the cause, then μ's own limit and the horizon it leaves (Wood–Berry's
+        // line named the observer alone, where a μ at the limit passed).
+        format!("{observer}: {}; besides, {mu_advice}", remedy())
     } else {
         format!("{mu_advice}; {observer}: if the raised μ leaves the tail above its bound, {}", remedy())
     })
@@ -644,12 +666,13 @@ fn horizon_advice(
 }
 
 /// Channel i's error still shrinking over the tail (the RMS ratio `r` < [`SHRINKING`] of the last
-/// two tenths of the run): at that pace, the time its tail RMS reaches [`NEGLIGIBLE`] of its scale,
+/// two tenths of the run): at that pace, the time its tail RMS reaches a third of [`NEGLIGIBLE`] of
+/// its scale,
 /// and a μ that gets there by t_end, unless it would make the loop stiff: the missing e-folds over
 /// the run at a rate raised with μ, with the [`AVERAGED_MARGIN`] since the loop's own transient
-/// before the decay does not speed up with μ (the paper's example: asked for 160 s or μ_1 = 32
-/// without the margin, 160 s reached 1.4e-4 of its scale and μ_1 = 32 9e-4; with it μ_1 = 56,
-/// where 60 reaches 3e-5). Wood–Berry's automatic design (tail 8e-3 of its scale) was told only
+/// before the decay does not speed up with μ (the paper's example, aiming at 1e-4: asked for 160 s
+/// or μ_1 = 32 without the margin, 160 s reached 1.4e-4 of its scale and μ_1 = 32 9e-4; with it
+/// μ_1 = 56, where 60 reaches 3e-5). Wood–Berry's automatic design (tail 8e-3 of its scale) was told only
 /// "raise μ"; twice its μ gave 2.5e-4, four times 2.3e-7.
 fn shrinking_advice(result: &SimResult, i: usize, r: f64, (mu, lambda_max, stiff): (f64, f64, f64)) -> String {
     let key = format!("design.mu[{i}]");
@@ -658,7 +681,9 @@ fn shrinking_advice(result: &SimResult, i: usize, r: f64, (mu, lambda_max, stiff
     let last = tail_windows(result, i).map_or(0.0, |w| w.0);
     // e-folds per unit of time between the windows' centres, a tenth of the run apart.
     let rate = -r.ln() / (0.1 * (t1 - t0));
-    let needed = (last / (NEGLIGIBLE * scale(result, i))).ln().max(0.0) / rate;
+    // A third of the level at which the advice stops, so that following it does not land on the
+    // threshold and bring the line back with a slightly longer t_end.
+    let needed = (3.0 * last / (NEGLIGIBLE * scale(result, i))).ln().max(0.0) / rate;
     let t_needed = round_up_2(t1 + needed);
     let head = format!(
         "channel {}'s error is still shrinking over the tail (RMS ratio {r:.2} between the last two tenths of the run)",
@@ -674,7 +699,8 @@ fn shrinking_advice(result: &SimResult, i: usize, r: f64, (mu, lambda_max, stiff
         String::new()
     };
     format!(
-        "{head}: at that pace it reaches {NEGLIGIBLE:e} of its scale (converged) by about t = {} {unit}; lengthen simulation.t_end to that{or_mu}",
+        "{head}: at that pace it reaches {:.1e} of its scale (a third of the {NEGLIGIBLE:e} at which it counts as converged) by about t = {} {unit}; lengthen simulation.t_end to that{or_mu}",
+        NEGLIGIBLE / 3.0,
         fmt_short(t_needed)
     )
 }
@@ -715,11 +741,17 @@ fn channel<'r>(
     let mut advice: Vec<String> = delay_advice(design, i, t_end).filter(|_| horizon).into_iter().collect();
     // A tail already within the bound needs no faster adaptation (an automatic design's μ is chosen
     // for that bound, not for the averaged law's e^-5 over the horizon).
-    if horizon_advice && !tail_within_bound(result, i) {
-        advice.extend(slow_direction_advice(c, (i, mu), fidelity, (t_end, stiff), unit, remedy));
-    }
+    let slow = (horizon_advice && !tail_within_bound(result, i))
+        .then(|| slow_direction_advice(c, (i, mu), fidelity, (t_end, stiff), unit, remedy))
+        .flatten();
+    // The slow direction's μ, where given, is the one to follow: the tail's extrapolated μ beside
+    // it named another (a ship: 3.6 and 0.36).
+    let extrapolate = slow.is_none();
+    advice.extend(slow);
     match trend.filter(|_| horizon_advice && windows.is_some_and(|(last, _)| !negligible_tail(result, i, last))) {
-        Some(r) if r < SHRINKING => advice.push(shrinking_advice(result, i, r, (mu, c.lambda_max(), stiff))),
+        Some(r) if r < SHRINKING && extrapolate => {
+            advice.push(shrinking_advice(result, i, r, (mu, c.lambda_max(), stiff)))
+        }
         Some(r) if r > GROWING => advice.push(format!(
             "channel {}'s error grows over the tail (RMS ratio {r:.2}): check the run for divergence; a model error ([truth]) or a too large {key} can do this",
             i + 1

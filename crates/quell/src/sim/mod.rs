@@ -34,6 +34,7 @@ pub use divergence::{Peaks, Watched, DIVERGENCE_BOUND};
 pub use memory::{runs_memory_bytes, Held, MIN_RUNS_MEMORY_BYTES};
 pub use noise::{band_limited, NOISE_SINES};
 pub use result::{ChannelFigures, ChannelSummary, Outcome, RunStats, Sample, SimResult};
+pub(crate) use sampled::fine_sample_time;
 pub use sampled::{coarse_sample_warning, output_step_fixes, SampledController, COARSE_SAMPLE};
 pub use settle::{Settle, Settling};
 

@@ -42,27 +42,34 @@ pub fn coarse_sample_warning(
     let rate = super::loop_rate(design, design.plant(), [reference, disturbance]);
     let unit = design.plant().time_unit;
     (sample_time * rate > COARSE_SAMPLE).then(|| {
-        let bound = settings::three_digits_down(COARSE_SAMPLE / rate);
-        let valid = match output_step {
-            Some(h) => discrete::sample_time_dividing(design, bound, h),
-            None => discrete::valid_sample_time_at_most(design, bound),
-        };
-        let whole = match valid {
-            Some(t) if t != bound => format!(
-                ", e.g. {} {unit}, which makes every delay whole{}",
-                settings::fmt_short(t),
-                if output_step.is_some() { " and divides simulation.output_step" } else { "" }
-            ),
-            _ => String::new(),
-        };
         format!(
-            "simulation.sample_time: T_s = {} {unit} is {:.2} of the loop's fastest time constant 1/ρ (ρ = {} /{unit}: the plant, observer, channel and filter poles, 1/β and the signals' frequencies): the discrete controller may depart from the continuous design; choose T_s ≤ {} {unit} (T_s·ρ ≤ {COARSE_SAMPLE}){whole}, or slower poles",
+            "simulation.sample_time: T_s = {} {unit} is {:.2} of the loop's fastest time constant 1/ρ (ρ = {} /{unit}: the plant, observer, channel and filter poles, 1/β and the signals' frequencies): the discrete controller may depart from the continuous design; choose {}, or slower poles",
             settings::fmt_short(sample_time),
             sample_time * rate,
             settings::fmt_short(settings::three_digits_down(rate)),
-            settings::fmt_short(bound)
+            fine_sample_time(design, rate, output_step)
         )
     })
+}
+
+/// "T_s ≤ bound (T_s·ρ ≤ [`COARSE_SAMPLE`]), e.g. t …": the sample times fine for a loop of rate
+/// `rate`, with one that makes every delay whole (and divides `output_step`, when given).
+pub(crate) fn fine_sample_time(design: &Design, rate: f64, output_step: Option<f64>) -> String {
+    let unit = design.plant().time_unit;
+    let bound = settings::three_digits_down(COARSE_SAMPLE / rate);
+    let valid = match output_step {
+        Some(h) => discrete::sample_time_dividing(design, bound, h),
+        None => discrete::valid_sample_time_at_most(design, bound),
+    };
+    let whole = match valid {
+        Some(t) if t != bound => format!(
+            ", e.g. {} {unit}, which makes every delay whole{}",
+            settings::fmt_short(t),
+            if output_step.is_some() { " and divides simulation.output_step" } else { "" }
+        ),
+        _ => String::new(),
+    };
+    format!("T_s ≤ {} {unit} (T_s·ρ ≤ {COARSE_SAMPLE}){whole}", settings::fmt_short(bound))
 }
 
 /// What the sampled-data loop needs of a discrete controller. [`Controller`] is one; another

@@ -210,11 +210,16 @@ impl TuneCurve {
             );
         }
         let mut wanted: Vec<String> = vec![];
-        // Per limit set, the least the completed runs reached: a limit below it binds at every μ
-        // tried, and raising it to that figure admits one.
+        // Per limit set, the least reached by the runs the limit alone rejected (completed, with a
+        // finite objective): raising the limit to that figure admits one. Runs that never settled
+        // do not count (their peak admitted none: a servo's 2.559 where 3.226 was needed).
         let mut reached: Vec<String> = vec![];
-        let completed: Vec<(f64, ChannelFigures)> =
-            self.curve.iter().filter_map(|p| Some((p.mu, p.figures?))).collect();
+        let completed: Vec<(f64, ChannelFigures)> = self
+            .curve
+            .iter()
+            .filter_map(|p| Some((p.mu, p.figures?)))
+            .filter(|(_, f)| spec.objective.of(f).is_finite())
+            .collect();
         for (key, what, limit, value) in [
             (
                 "max_u",
@@ -231,9 +236,10 @@ impl TuneCurve {
             let least = completed.iter().map(|(mu, f)| (value(f), *mu)).min_by(|a, b| a.0.total_cmp(&b.0));
             if let Some((v, mu)) = least.filter(|(v, _)| *v > limit) {
                 reached.push(format!(
-                    "the least {what} of the completed runs is {} (at μ = {}), above {prefix}{key}[{i}] = {}",
+                    "the least {what} of the runs with a finite {} is {} (at μ = {}), above {prefix}{key}[{i}] = {}",
+                    spec.objective.name(),
                     crate::settings::fmt_4(v),
-                    crate::settings::fmt_short(mu),
+                    crate::settings::fmt_4(mu),
                     crate::settings::fmt_short(limit)
                 ));
             }
@@ -552,5 +558,44 @@ mod tests {
         assert_eq!(curve(10.0, &[1.0, 10.0, 100.0]).at_bound(), None);
         assert_eq!(curve(5.0, &[5.0]).at_bound(), None);
         assert_eq!(TuneCurve { channel: 0, curve: vec![point(1.0), point(2.0)], chosen: None }.at_bound(), None);
+    }
+
+    /// The least peak a limit blocks is taken over the runs with a finite objective: a run that never
+    /// settled (its max |u_f| 2.559, below the settled one's 3.226) would name a limit that admits
+    /// nothing (a servo's tuning, from a tryout).
+    #[test]
+    fn the_least_peak_named_is_that_of_a_run_the_limit_alone_rejected() {
+        let figures = |max_uf: f64, settle_t: Option<f64>| ChannelFigures {
+            tail_max_e: 1e-3,
+            tail_rms_e: 1e-3,
+            max_u: 1.0,
+            max_uf,
+            settle_t,
+        };
+        let point = |mu: f64, f: ChannelFigures| TunePoint {
+            mu,
+            objective: None,
+            outcome: Outcome::Completed,
+            reason: String::new(),
+            figures: Some(f),
+        };
+        let curve = TuneCurve {
+            channel: 0,
+            curve: vec![point(1.0, figures(2.559, None)), point(10.0, figures(3.226, Some(80.0)))],
+            chosen: None,
+        };
+        let spec = TuneSpec {
+            objective: Objective::SettleT,
+            bounds: vec![[1.0, 10.0]],
+            max_u: vec![f64::INFINITY],
+            max_uf: vec![1.0],
+            points: 2,
+            refine: 0,
+        };
+        let why = curve.why_none(&spec, "tune.");
+        assert!(
+            why.contains("(the least max |u_f,1| of the runs with a finite settle_t is 3.226 (at μ = 10), above tune.max_uf[0] = 1)"),
+            "{why}"
+        );
     }
 }
