@@ -147,7 +147,7 @@ pub fn tune(
             &format!(
                 "channel {}: {}; mu[{i}] is the scenario's, {} (feasible[{i}] is False; the curve is in .frame)",
                 i + 1,
-                c.why_none(spec, ""),
+                c.why_none(spec, "", study.clips_u_f()),
                 result.mu[i]
             ),
         )?;

@@ -519,6 +519,14 @@ impl Study {
         names.map_or_else(Vec::new, |a| a.iter().filter_map(|n| n.as_str().map(str::to_string)).collect())
     }
 
+    /// Whether the scenario's true actuator limits u_f (a finite `truth.u_max`).
+    pub fn clips_u_f(&self) -> bool {
+        let limits = self.base.get("truth").and_then(|t| t.get("u_max")).and_then(|u| u.as_array());
+        limits.is_some_and(|l| {
+            l.iter().any(|v| v.as_float().or(v.as_integer().map(|i| i as f64)).is_some_and(f64::is_finite))
+        })
+    }
+
     /// Whether some run's true plant differs from the design model: the scenario's `[truth]`
     /// differs from `[plant]`, a grid value of a `truth.` key differs from the plant's, or a draw
     /// perturbs a `truth.` key with a spread > 0.

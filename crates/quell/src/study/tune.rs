@@ -197,7 +197,9 @@ impl TuneCurve {
     /// Why no μ was chosen, the keys named after `prefix` (`"tune."` in a study file, `""` for
     /// Python's arguments): the limits the tuning was given and the objective, and when no run
     /// completed, the first run's reason (a step budget, a divergence) in place of the limits.
-    pub fn why_none(&self, spec: &TuneSpec, prefix: &str) -> String {
+    /// `clips`: the scenario's true actuator limits u_f ([`Study::clips_u_f`]), which the message
+    /// then names as a likely cause (its runs may never settle while clipped).
+    pub fn why_none(&self, spec: &TuneSpec, prefix: &str, clips: bool) -> String {
         let (i, c) = (self.channel, self.channel + 1);
         let failed = self.curve.iter().find(|p| p.outcome != Outcome::Completed);
         if let (Some(first), false) = (failed, self.curve.iter().any(|p| p.outcome == Outcome::Completed)) {
@@ -247,8 +249,13 @@ impl TuneCurve {
         wanted.push(format!("a finite {}", spec.objective.name()));
         let limits = if wanted.len() > 1 { ", raise the limits" } else { "" };
         let reached = if reached.is_empty() { String::new() } else { format!(" ({})", reached.join("; ")) };
+        let clipping = if clips {
+            "; the scenario's truth.u_max clips u_f and the method has no anti-windup, so a clipped loop may never settle: a run of the scenario reports how often it clips"
+        } else {
+            ""
+        };
         format!(
-            "no μ in {prefix}mu[{i}] completed with {}{reached}; widen the bounds{limits} or lengthen {}t_end",
+            "no μ in {prefix}mu[{i}] completed with {}{reached}; widen the bounds{limits} or lengthen {}t_end{clipping}",
             wanted.join(" and "),
             if prefix.is_empty() { "" } else { "simulation." }
         )
@@ -592,10 +599,13 @@ mod tests {
             points: 2,
             refine: 0,
         };
-        let why = curve.why_none(&spec, "tune.");
+        let why = curve.why_none(&spec, "tune.", false);
         assert!(
             why.contains("(the least max |u_f,1| of the runs with a finite settle_t is 3.226 (at μ = 10), above tune.max_uf[0] = 1)"),
             "{why}"
         );
+        assert!(!why.contains("truth.u_max"), "{why}");
+        // Through a clipping actuator the clipping is named too (tune.csv had only "never settled").
+        assert!(curve.why_none(&spec, "tune.", true).ends_with("a run of the scenario reports how often it clips"));
     }
 }
