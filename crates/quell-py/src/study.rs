@@ -649,8 +649,10 @@ fn row_dict<'py>(py: Python<'py>, spec: &RunSpec, row: &study::Row) -> PyResult<
         ("max_uf", &|c: &ChannelFigures| Some(c.max_uf)),
         ("settle_t", &|c: &ChannelFigures| c.settle_t),
     ] {
+        // A missing figure is NaN, as runs.csv's empty cell reads back: None made a column of
+        // them object-typed in a DataFrame of rows (a Dask map's).
         for i in 0..m {
-            d.set_item(format!("{name}{}", i + 1), get(i, f))?;
+            d.set_item(format!("{name}{}", i + 1), get(i, f).unwrap_or(f64::NAN))?;
         }
     }
     d.set_item("steps", row.steps)?;
@@ -669,7 +671,8 @@ fn row_dict<'py>(py: Python<'py>, spec: &RunSpec, row: &study::Row) -> PyResult<
 /// -------
 /// dict
 ///     The row, keyed by runs.csv's columns, then the drawn values; a run that diverged or
-///     failed is a row too, never an error.
+///     failed is a row too, never an error. A missing figure (no tail, never settled) is NaN, as
+///     runs.csv's empty cell reads back.
 ///
 /// Raises
 /// ------

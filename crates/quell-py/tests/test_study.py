@@ -74,6 +74,15 @@ def test_run_specs_are_picklable(study_file):
     assert s.truth is not None and not np.array_equal(s.truth.A, s.plant.A)
 
 
+def test_a_missing_figure_of_run_one_is_nan_as_in_runs_csv():
+    """A run too short to settle: its settle_t is NaN (runs.csv's empty cell read back), so a
+    DataFrame of such rows has a float column; None made it object-typed."""
+    spec = quell.Study(quell.paper_example(), simulation={"t_end": 2.0}).spec(0)
+    row = quell.run_one(spec)
+    assert isinstance(row["settle_t1"], float) and np.isnan(row["settle_t1"]), row
+    assert pd.DataFrame([row, row])["settle_t1"].dtype == np.float64
+
+
 def test_dask_local_cluster_of_two_processes(study_file, cli_rows):
     distributed = pytest.importorskip("distributed")
     specs = list(quell.sweep_runs(study_file))
