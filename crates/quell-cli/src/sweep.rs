@@ -236,7 +236,8 @@ fn resumed(dir: &Path, meta: &StudyMeta, n: usize) -> Result<(Vec<Row>, Vec<bool
         )));
     }
     let (old, rows, _) = read_sweep_dir(dir, "--resume")?;
-    if old.fingerprint != meta.fingerprint || old.shard != meta.shard || differing_key(&old, meta).is_some() {
+    // differing_key compares every key but the shard, the fingerprint included.
+    if old.shard != meta.shard || differing_key(&old, meta).is_some() {
         return Err(Failure::Input(format!(
             "{here}: its rows come from another study or shard (fingerprint {}, shard {}/{}; this one: {}, {}/{}); resume with the same study file and --shard, or choose another --out",
             old.fingerprint, old.shard.index, old.shard.count, meta.fingerprint, meta.shard.index, meta.shard.count

@@ -667,8 +667,7 @@ fn horizon_advice(
 
 /// Channel i's error still shrinking over the tail (the RMS ratio `r` < [`SHRINKING`] of the last
 /// two tenths of the run): at that pace, the time its tail RMS reaches a third of [`NEGLIGIBLE`] of
-/// its scale,
-/// and a μ that gets there by t_end, unless it would make the loop stiff: the missing e-folds over
+/// its scale, and a μ that gets there by t_end, unless it would make the loop stiff: the missing e-folds over
 /// the run at a rate raised with μ, with the [`AVERAGED_MARGIN`] since the loop's own transient
 /// before the decay does not speed up with μ (the paper's example, aiming at 1e-4: asked for 160 s
 /// or μ_1 = 32 without the margin, 160 s reached 1.4e-4 of its scale and μ_1 = 32 9e-4; with it
@@ -683,7 +682,8 @@ fn shrinking_advice(result: &SimResult, i: usize, r: f64, (mu, lambda_max, stiff
     let rate = -r.ln() / (0.1 * (t1 - t0));
     // A third of the level at which the advice stops, so that following it does not land on the
     // threshold and bring the line back with a slightly longer t_end.
-    let needed = (3.0 * last / (NEGLIGIBLE * scale(result, i))).ln().max(0.0) / rate;
+    let aim = NEGLIGIBLE / 3.0;
+    let needed = (last / (aim * scale(result, i))).ln().max(0.0) / rate;
     let t_needed = round_up_2(t1 + needed);
     let head = format!(
         "channel {}'s error is still shrinking over the tail (RMS ratio {r:.2} between the last two tenths of the run)",
@@ -699,8 +699,7 @@ fn shrinking_advice(result: &SimResult, i: usize, r: f64, (mu, lambda_max, stiff
         String::new()
     };
     format!(
-        "{head}: at that pace it reaches {:.1e} of its scale (a third of the {NEGLIGIBLE:e} at which it counts as converged) by about t = {} {unit}; lengthen simulation.t_end to that{or_mu}",
-        NEGLIGIBLE / 3.0,
+        "{head}: at that pace it reaches {aim:.1e} of its scale (a third of the {NEGLIGIBLE:e} at which it counts as converged) by about t = {} {unit}; lengthen simulation.t_end to that{or_mu}",
         fmt_short(t_needed)
     )
 }
@@ -796,8 +795,8 @@ mod tests {
 
     /// The paper's design with a made-up run of 100 s recorded every 0.1 s (sampled at 1 ms, not
     /// coarse for these designs): g_1 = 3 sin 2t (the paper's), g_2 = 2, both times `size`, and
-    /// e_i(t) = `e(t)`. The RMS ratio of two windows ten seconds apart is then exp(∓10/τ) exactly for e = a·exp(∓t/τ) (every sample scaled by the
-    /// same factor).
+    /// e_i(t) = `e(t)`. The RMS ratio of two windows ten seconds apart is then exp(∓10/τ) exactly
+    /// for e = a·exp(∓t/τ) (every sample scaled by the same factor).
     fn advice_on(size: f64, e: impl Fn(f64) -> f64) -> Vec<ChannelDiagnostics> {
         diagnosed(PAPER_EXAMPLE, size, e).channels
     }

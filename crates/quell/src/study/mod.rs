@@ -177,6 +177,8 @@ pub struct Study {
     pub runaway: Runaway,
     /// Channels m of the scenario.
     pub m: usize,
+    /// Whether the scenario's true actuator limits u_f (a finite `truth.u_max`), as it parsed it.
+    clips: bool,
     fingerprint: u64,
     /// The study as one self-contained document: `scenario` the scenario table, `[simulation]`'s
     /// overrides applied to it.
@@ -362,6 +364,7 @@ impl Study {
             max_steps: read_max_steps(doc)?,
             runaway: read_runaway(doc)?,
             m: scenario.plant.m(),
+            clips: scenario.actuator.as_ref().is_some_and(|a| a.limits.iter().any(|l| l.is_finite())),
             document,
             nominal,
         })
@@ -521,10 +524,7 @@ impl Study {
 
     /// Whether the scenario's true actuator limits u_f (a finite `truth.u_max`).
     pub fn clips_u_f(&self) -> bool {
-        let limits = self.base.get("truth").and_then(|t| t.get("u_max")).and_then(|u| u.as_array());
-        limits.is_some_and(|l| {
-            l.iter().any(|v| v.as_float().or(v.as_integer().map(|i| i as f64)).is_some_and(f64::is_finite))
-        })
+        self.clips
     }
 
     /// Whether some run's true plant differs from the design model: the scenario's `[truth]`
