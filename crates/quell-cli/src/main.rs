@@ -191,11 +191,18 @@ fn design(args: &auto::DesignArgs) -> Result<(), Failure> {
     quell::sim::Run::of(&s, &d).check().map_err(|e| Failure::Input(e.to_string()))?;
     let warnings = quell::design::warnings(&d, &s.design);
     let estimates = pace::estimates(&s, &d);
+    let steady = s.steady_input();
     if args.json {
-        print_json(&pace::with_pace(report::with_warnings(report::design_json(&d), &warnings), &d, &estimates));
+        print_json(&pace::with_pace(
+            report::with_warnings(report::design_json(&d), &warnings),
+            &d,
+            &estimates,
+            &steady,
+        ));
     } else {
         let pace = pace::pace_text(&d, &estimates, s.simulation.t_end, s.plant.time_unit);
-        print_stdout(&format!("{}{pace}{}", report::design_text(&d), report::warnings_text(&warnings)));
+        let effort = pace::steady_text(&steady, &s.names.inputs(s.plant.B.ncols()), s.plant.time_unit);
+        print_stdout(&format!("{}{pace}{effort}{}", report::design_text(&d), report::warnings_text(&warnings)));
     }
     Ok(())
 }

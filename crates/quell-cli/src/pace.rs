@@ -3,7 +3,8 @@
 
 use std::fmt::Write;
 
-use quell::diagnostics::{estimate, RateEstimate};
+use quell::diagnostics::{estimate, RateEstimate, SteadyInput};
+use quell::settings::fmt_4;
 use quell::TimeUnit;
 use quell::{Design, Scenario};
 use serde_json::{json, Value};
@@ -13,15 +14,48 @@ pub fn estimates(s: &Scenario, d: &Design) -> Vec<RateEstimate> {
     estimate(d, s.true_plant(), &s.reference, &s.disturbance, s.simulation.t_end)
 }
 
-/// `regressor_scaling`, `mu_meaning` and `adaptation` (one object per channel) added to the
-/// design's JSON.
-pub fn with_pace(mut design: Value, d: &Design, estimates: &[RateEstimate]) -> Value {
+/// `regressor_scaling`, `mu_meaning`, `adaptation` (one object per channel) and `steady_input`
+/// added to the design's JSON.
+pub fn with_pace(mut design: Value, d: &Design, estimates: &[RateEstimate], steady: &SteadyInput) -> Value {
     if let Value::Object(map) = &mut design {
         map.insert("regressor_scaling".into(), json!(d.regressor_scaling().name()));
         map.insert("mu_meaning".into(), json!(d.regressor_scaling().mu_meaning()));
         map.insert("adaptation".into(), json!(estimates));
+        map.insert("steady_input".into(), json!(steady));
     }
     design
+}
+
+/// The steady-state input as lines of text: per input its bound and each frequency's share, split
+/// between g and ω, then the advice.
+pub fn steady_text(steady: &SteadyInput, inputs: &[String], time: TimeUnit) -> String {
+    if steady.tones.is_empty() {
+        return String::new();
+    }
+    let mut s = format!(
+        "\nsteady-state plant input u_f (y = g exactly: the plant alone sets it, whatever the controller; per frequency in rad/{time}, the amplitude for g + ω):\n"
+    );
+    for (i, name) in inputs.iter().enumerate() {
+        let parts: Vec<String> = steady
+            .tones
+            .iter()
+            .map(|t| {
+                let (a, g, w) = (t.amplitude[i], t.for_reference[i], t.for_disturbance[i]);
+                format!("{}: {} ({} + {})", fmt_4(t.frequency), fmt_4(a), fmt_4(g), fmt_4(w))
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "  {name}: |u_f| up to {} (RMS {}); {}",
+            fmt_4(steady.bound[i]),
+            fmt_4(steady.rms[i]),
+            parts.join(", ")
+        );
+    }
+    for a in &steady.advice {
+        let _ = writeln!(s, "    → {a}");
+    }
+    s
 }
 
 /// The pace as lines of text.

@@ -219,7 +219,12 @@ fn write_data(dir: &Path, done: &Finished<'_>) -> std::io::Result<()> {
     output::write_signals(&dir.join("signals.csv"), r)?;
     let warnings = quell::design::warnings(design, &scenario.design);
     let pace = crate::pace::estimates(scenario, design);
-    let json = crate::pace::with_pace(report::with_warnings(report::design_json(design), &warnings), design, &pace);
+    let json = crate::pace::with_pace(
+        report::with_warnings(report::design_json(design), &warnings),
+        design,
+        &pace,
+        &scenario.steady_input(),
+    );
     output::write_json(&dir.join("design.json"), &json)?;
     let summary = json!({
         "scenario": scenario.name,

@@ -620,6 +620,28 @@ impl PyScenario {
         py.import("json")?.call_method1("loads", (text,))
     }
 
+    /// The plant input u_f that exact tracking of g and rejection of ω cost in steady state, set by
+    /// the simulated plant alone whatever the controller (`quell design`'s "steady_input").
+    ///
+    /// Returns
+    /// -------
+    /// dict
+    ///     `tones`: per frequency of g and ω (0 for the biases, ascending) its `frequency` and, per
+    ///     input, the `amplitude` of u_f and the parts `for_reference` and `for_disturbance`, with
+    ///     `disturbance_output`, per output the amplitude ω's part moves y by with the input held at
+    ///     0 (None where the frequency is an eigenvalue of A); per input `bound` (Σ of the
+    ///     amplitudes: max |u_f,i| in steady state for incommensurate frequencies) and `rms`; and
+    ///     `advice`.
+    ///
+    /// Examples
+    /// --------
+    /// >>> [round(b, 2) for b in quell.paper_example().steady_input()["bound"]]
+    /// [12.73, 23.54]
+    fn steady_input<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let text = serde_json::to_string(&self.inner.steady_input()).unwrap_or_default();
+        py.import("json")?.call_method1("loads", (text,))
+    }
+
     /// The plant (1).
     #[getter]
     fn plant(&self) -> PyPlant {

@@ -23,14 +23,14 @@ type C64 = Complex<f64>;
 /// One frequency of the signals (0 for the biases) and the phasors of g and ω there:
 /// a·sin(wt + φ) = Re(−j a e^{jφ} e^{jwt}); a constant b is the real phasor b at w = 0.
 #[derive(Debug, Clone)]
-struct Tone {
-    w: f64,
-    g: DVector<C64>,
-    omega: DVector<C64>,
+pub(crate) struct Tone {
+    pub(crate) w: f64,
+    pub(crate) g: DVector<C64>,
+    pub(crate) omega: DVector<C64>,
 }
 
 /// Every distinct frequency of g and ω with their phasors, ascending.
-fn tones(reference: &Signal, disturbance: &Signal) -> Vec<Tone> {
+pub(crate) fn tones(reference: &Signal, disturbance: &Signal) -> Vec<Tone> {
     let (m, k) = (reference.len(), disturbance.len());
     let mut tones: Vec<Tone> = Vec::new();
     let mut add = |w: f64, which: usize, index: usize, phasor: C64| {
@@ -63,12 +63,12 @@ fn tones(reference: &Signal, disturbance: &Signal) -> Vec<Tone> {
     tones
 }
 
-fn complex(M: &DMatrix<f64>) -> DMatrix<C64> {
+pub(crate) fn complex(M: &DMatrix<f64>) -> DMatrix<C64> {
     M.map(|x| C64::new(x, 0.0))
 }
 
 /// (jwI − M)⁻¹ B; M must have no eigenvalue at jw (Hurwitz matrices here).
-fn resolvent(M: &DMatrix<f64>, w: f64, B: &DMatrix<C64>) -> DMatrix<C64> {
+pub(crate) fn resolvent(M: &DMatrix<f64>, w: f64, B: &DMatrix<C64>) -> DMatrix<C64> {
     if M.nrows() == 0 || B.ncols() == 0 {
         return DMatrix::zeros(M.nrows(), B.ncols());
     }

@@ -462,9 +462,9 @@ pub(crate) fn significant(x: f64, digits: usize) -> f64 {
     format!("{x:.*e}", digits.max(1) - 1).parse().unwrap_or(x)
 }
 
-/// `v` to four significant digits in [`fmt_short`]'s form: a figure in advice (6.283 rad/s, not
-/// 6.283185307179586), where the digits say how much, not what to type.
-pub(crate) fn fmt_4(v: f64) -> String {
+/// `v` to four significant digits, `{}` between 1e-4 and 1e6 and `{:e}` beyond: a figure in
+/// advice (6.283 rad/s, not 6.283185307179586), where the digits say how much, not what to type.
+pub fn fmt_4(v: f64) -> String {
     fmt_short(significant(v, 4))
 }
 

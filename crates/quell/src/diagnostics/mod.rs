@@ -9,11 +9,13 @@
 //! averages (the design report).
 
 pub use crate::averaged;
+pub mod effort;
 pub mod estimate;
 
 use serde::Serialize;
 
 pub use averaged::{disturbance_observer_gain, Averaged, ChannelAverage, Excitation, Fidelity};
+pub use effort::{steady_input, InputTone, SteadyInput};
 pub use estimate::{estimate, RateEstimate, STIFF_RATIO};
 
 use nalgebra::{Complex, DMatrix};

@@ -292,6 +292,15 @@ impl Scenario {
         self.truth.as_ref().unwrap_or(&self.plant)
     }
 
+    /// The plant input that exact tracking and rejection cost in steady state on the simulated
+    /// plant, against its actuator limits ([`crate::diagnostics::steady_input`]).
+    pub fn steady_input(&self) -> crate::diagnostics::SteadyInput {
+        let m = self.plant.B.ncols();
+        let limits = self.actuator.as_ref().map(|a| a.limits.as_slice());
+        let names = (&self.names.inputs(m)[..], &self.names.outputs(m)[..]);
+        crate::diagnostics::steady_input(self.true_plant(), (&self.reference, &self.disturbance), limits, names)
+    }
+
     /// Whether the simulated plant differs from the design model (its matrices, delays, x0 or
     /// its actuator).
     pub fn truth_differs(&self) -> bool {

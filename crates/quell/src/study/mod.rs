@@ -347,7 +347,13 @@ impl Study {
             Some(t) => Some(TuneSpec::parse(table("tune", t)?, &scenario)?),
         };
         let points = study_size(&grid, monte_carlo.as_ref())?;
-        check_grid(&grid, &base, &scenario_source)?;
+        // Refused before any run: without a grid nothing changes the scenario's checks, and a grid
+        // value that fails as the scenario does is not to blame.
+        let base_error = base_run_error(doc, &scenario, &scenario_source);
+        match &base_error {
+            Some((_, e)) if grid.is_empty() => return Err(e.clone()),
+            _ => check_grid(&grid, &base, &scenario_source, base_error.as_ref())?,
+        }
         let nominal = (0..if monte_carlo.is_some() { points } else { 0 }).map(|_| OnceLock::new()).collect();
         let mut document = doc.clone();
         document.remove("simulation");
@@ -630,6 +636,20 @@ fn apply_simulation(doc: &toml::Table, base: &mut toml::Table, source: &str) -> 
     Ok(scenario)
 }
 
+/// What every check a run of the study's own scenario makes before it starts refuses (a sample
+/// time the delays refuse, a harmonic too fast for t_end), as the run's message and the study's
+/// error: the study's `[simulation]` when it set the key, else its scenario.
+fn base_run_error(doc: &toml::Table, scenario: &Scenario, source: &str) -> Option<(String, StudyError)> {
+    let design = scenario.design().ok()?;
+    let e = crate::sim::Run::of(scenario, &design).check().err()?.to_string();
+    // The message leads with its key (the controller's as well as the settings').
+    let error = match e.split_once(": ") {
+        Some((key, message)) if key.starts_with("simulation.") && doc.get("simulation").is_some() => err(key, message),
+        _ => err("scenario", format!("{source}: {e}")),
+    };
+    Some((e, error))
+}
+
 /// `[grid]`: each key a scenario path, each value a non-empty list of values of its shape, no two
 /// keys naming the same value.
 fn read_grid(doc: &toml::Table) -> Result<Vec<GridAxis>, StudyError> {
@@ -672,10 +692,15 @@ fn read_grid(doc: &toml::Table) -> Result<Vec<GridAxis>, StudyError> {
 /// Every grid value applied to the scenario and checked ([`check_values`]): after the study's
 /// size, which costs nothing, where these cost a design each (about 0.1 ms: two axes of 300,000
 /// values, 9e10 runs, were still being checked a minute later before the size refused them).
-fn check_grid(grid: &[GridAxis], base: &toml::Table, source: &str) -> Result<(), StudyError> {
+fn check_grid(
+    grid: &[GridAxis],
+    base: &toml::Table,
+    source: &str,
+    base_error: Option<&(String, StudyError)>,
+) -> Result<(), StudyError> {
     for axis in grid {
         let at = format!("grid.\"{}\"", axis.key);
-        check_values(base, &axis.path, &at, axis.values.iter().enumerate(), source)?;
+        check_values(base, (&axis.path, &at), axis.values.iter().enumerate(), source, base_error)?;
     }
     Ok(())
 }
@@ -801,13 +826,14 @@ fn not_in_scenario(path: &KeyPath, why: &str, hint: &str) -> String {
 }
 
 /// Checks that each value, put at `path` in the scenario, has the scenario value's shape and gives
-/// a scenario that parses and designs. `at` is the study key of the list.
+/// a scenario that parses and designs. `at` is the study key of the list. A value whose run fails
+/// the check exactly as the study's own scenario does (`base_error`) gets that error.
 fn check_values<'v>(
     base: &toml::Table,
-    path: &KeyPath,
-    at: &str,
+    (path, at): (&KeyPath, &str),
     values: impl Iterator<Item = (usize, &'v toml::Value)>,
     source: &str,
+    base_error: Option<&(String, StudyError)>,
 ) -> Result<(), StudyError> {
     let mut doc = base.clone();
     fill_default(&mut doc, path);
@@ -836,6 +862,9 @@ fn check_values<'v>(
             crate::sim::Run::of(&s, &design).check().map_err(|e| e.to_string())
         });
         if let Err(e) = checked {
+            if let Some((_, error)) = base_error.filter(|(message, _)| *message == e) {
+                return Err(error.clone());
+            }
             // As written, but 1e15 not as TOML's 1000000000000000.0.
             let shown = match v {
                 toml::Value::Float(x) if x.abs() >= 1e6 || (*x != 0.0 && x.abs() < 1e-4) => format!("{x:e}"),

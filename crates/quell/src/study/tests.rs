@@ -466,3 +466,29 @@ fn a_scenario_with_finite_actuator_limits_clips() {
     assert!(with("[30.0, inf]") && with("[30, inf]"));
     assert!(!with("[inf, inf]"));
 }
+
+#[test]
+fn a_run_check_the_scenario_fails_is_refused_before_any_run_and_named_as_its_own() {
+    // T_s = 0.7 ms does not divide the paper's delays (1 s, 2 s): without a grid the study had run
+    // every draw to a failed row and exited 0; with a grid over μ the error named μ's value.
+    let bad = "[simulation]\nt_end = 10.0\nsample_time = 0.0007\n";
+    for text in [
+        bad.to_string(),
+        format!("{bad}[grid]\n\"design.mu[0]\" = [10.0, 20.0]\n"),
+        format!("{bad}[monte_carlo]\nruns = 2\n\"truth.A\" = {{ relative = 0.01 }}\n"),
+    ] {
+        let e = study(&text).expect_err("refused");
+        assert_eq!(e.key, "simulation.sample_time", "{e}");
+        assert!(e.message.contains("nearest valid sample time"), "{e}");
+    }
+    // A scenario of its own whose sample time the grid replaces by valid ones is a valid study.
+    let s = study(
+        "[simulation]\nt_end = 10.0\nsample_time = 0.0007\n[grid]\n\"simulation.sample_time\" = [0.001, 0.002]\n",
+    );
+    assert_eq!(s.map(|s| s.points()), Ok(2));
+    // A grid value that fails on its own still names itself.
+    let e = error(
+        "[simulation]\nt_end = 10.0\nsample_time = 0.001\n[grid]\n\"simulation.sample_time\" = [0.001, 0.0007]\n",
+    );
+    assert!(e.starts_with("grid.\"simulation.sample_time\"[1]: with simulation.sample_time = 0.0007"), "{e}");
+}

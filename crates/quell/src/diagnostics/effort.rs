@@ -1,0 +1,309 @@
+//! The plant input that exact tracking and rejection cost (the design report): in steady state
+//! y = C x + Q ω equals g, and at each frequency w of g and ω the plant (1) then fixes the input
+//! u_f = −K x̂ + F u_d (5) whatever the controller:
+//!
+//! ```text
+//! [ jwI − A   −B ] [X]   [ D W     ]
+//! [    C       0 ] [U] = [ G − Q W ]
+//! ```
+//!
+//! (G, W the phasors of g and ω at w; the delays τ_i act on u_d inside the controller, not on u_f).
+//! Every design that converges ends with this u_f, so it is a floor on the actuator effort, and it
+//! tells which harmonic of ω costs the effort: one that moves y by less than the tail bound yet
+//! takes a large share of the input is better traded for effort (`u_limit` of the automatic design).
+
+use nalgebra::{Complex, DMatrix, DVector};
+use serde::Serialize;
+
+use crate::averaged::{complex, resolvent, tones};
+use crate::linalg::eigenvalues;
+use crate::plant::Plant;
+use crate::settings::{fmt_4, fmt_short, TimeUnit};
+use crate::signal::Signal;
+
+use super::TAIL_BOUND;
+
+type C64 = Complex<f64>;
+
+/// A harmonic of ω whose cancellation costs at least this share of an input's steady-state bound
+/// while it moves no output by more than the tail bound gets advice.
+pub const COSTLY_SHARE: f64 = 0.25;
+
+/// One frequency's share of the steady-state input.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct InputTone {
+    /// rad per unit of time (0: the biases).
+    pub frequency: f64,
+    /// Per input: the amplitude of u_f,i at this frequency (|value| for the biases).
+    pub amplitude: Vec<f64>,
+    /// Per input: the amplitude g alone asks for, and ω alone.
+    pub for_reference: Vec<f64>,
+    pub for_disturbance: Vec<f64>,
+    /// Per output: the amplitude ω's part moves y by with the input held at 0 (the forced
+    /// response C (jwI − A)⁻¹ D W + Q W); `None` where jw is an eigenvalue of A (unbounded).
+    pub disturbance_output: Option<Vec<f64>>,
+}
+
+/// The steady-state plant input u_f of exact tracking and rejection ([module docs](self)).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SteadyInput {
+    /// Ascending in frequency; empty when g and ω are zero.
+    pub tones: Vec<InputTone>,
+    /// Per input: Σ over the tones of the amplitudes, the least upper bound of |u_f,i| in steady
+    /// state when the frequencies are incommensurate (an upper bound otherwise). ∞ where a
+    /// frequency is a transmission zero of (A, B, C): y = g is then not reachable at it.
+    pub bound: Vec<f64>,
+    /// Per input: the RMS of u_f,i in steady state, √(b² + Σ a²/2): a lower bound of max |u_f,i|.
+    pub rms: Vec<f64>,
+    /// One line per costly harmonic of ω ([`COSTLY_SHARE`]) and per input whose actuator limit
+    /// the steady state exceeds or may exceed.
+    pub advice: Vec<String>,
+}
+
+/// The steady-state input of `plant` under g = `reference`, ω = `disturbance`, against the
+/// actuator's `limits` (`truth.u_max`) where given. `names` labels the inputs and outputs in the
+/// advice.
+pub fn steady_input(
+    plant: &Plant,
+    (reference, disturbance): (&Signal, &Signal),
+    limits: Option<&[f64]>,
+    names: (&[String], &[String]),
+) -> SteadyInput {
+    let m = plant.B.ncols();
+    // Without A's eigenvalues (their iteration failed), no forced response either.
+    let eigs = eigenvalues(&plant.A).ok();
+    let tones: Vec<InputTone> = tones(reference, disturbance)
+        .iter()
+        .map(|t| {
+            let for_reference = input_phasor(plant, t.w, &t.g, &DVector::zeros(t.omega.len()));
+            let for_disturbance = input_phasor(plant, t.w, &DVector::zeros(t.g.len()), &t.omega);
+            let both = &for_reference + &for_disturbance;
+            // Round-off of an exact cancellation (1e-16 of the other part) reads as 0.
+            let size = both.iter().chain(&for_reference).chain(&for_disturbance).map(|u| u.norm()).fold(0.0, f64::max);
+            let amplitude =
+                |v: &DVector<C64>| v.iter().map(|u| if u.norm() <= 1e-12 * size { 0.0 } else { u.norm() }).collect();
+            InputTone {
+                frequency: t.w,
+                amplitude: amplitude(&both),
+                for_reference: amplitude(&for_reference),
+                for_disturbance: amplitude(&for_disturbance),
+                disturbance_output: eigs.as_deref().and_then(|e| forced_output(plant, e, t.w, &t.omega)),
+            }
+        })
+        .collect();
+    let bound = (0..m).map(|i| tones.iter().map(|t| t.amplitude[i]).sum()).collect();
+    let rms = (0..m)
+        .map(|i| {
+            tones
+                .iter()
+                .map(|t| t.amplitude[i].powi(2) * if t.frequency == 0.0 { 1.0 } else { 0.5 })
+                .sum::<f64>()
+                .sqrt()
+        })
+        .collect();
+    let mut steady = SteadyInput { tones, bound, rms, advice: vec![] };
+    let mut advice = costly_harmonics(&steady, reference, names, plant.time_unit);
+    advice.extend(limits.into_iter().flat_map(|l| beyond_limits(&steady, l, names.0)));
+    steady.advice = advice;
+    steady
+}
+
+/// U at frequency w for the phasors G and W; NaN where the system matrix is singular (a
+/// transmission zero at jw, or an input without effect).
+fn input_phasor(plant: &Plant, w: f64, g: &DVector<C64>, omega: &DVector<C64>) -> DVector<C64> {
+    let (n, m) = (plant.A.nrows(), plant.B.ncols());
+    if g.iter().chain(omega.iter()).all(|z| *z == C64::new(0.0, 0.0)) {
+        return DVector::zeros(m);
+    }
+    let mut S = DMatrix::<C64>::zeros(n + m, n + m);
+    S.view_mut((0, 0), (n, n)).copy_from(&-complex(&plant.A));
+    for i in 0..n {
+        S[(i, i)] += C64::new(0.0, w);
+    }
+    S.view_mut((0, n), (n, m)).copy_from(&-complex(&plant.B));
+    S.view_mut((n, 0), (m, n)).copy_from(&complex(&plant.C));
+    let mut rhs = DVector::<C64>::zeros(n + m);
+    rhs.rows_mut(0, n).copy_from(&(complex(&plant.D) * omega));
+    rhs.rows_mut(n, m).copy_from(&(g - complex(&plant.Q) * omega));
+    let solved = S.lu().solve(&rhs).filter(|x| x.iter().all(|z| z.re.is_finite() && z.im.is_finite()));
+    solved.map_or_else(|| DVector::from_element(m, C64::new(f64::INFINITY, 0.0)), |x| x.rows(n, m).into_owned())
+}
+
+/// |C (jwI − A)⁻¹ D W + Q W| per output; `None` where jw is within 1e-9 (‖A‖ + w) of an
+/// eigenvalue of A, `eigs`.
+fn forced_output(plant: &Plant, eigs: &[C64], w: f64, omega: &DVector<C64>) -> Option<Vec<f64>> {
+    let jw = C64::new(0.0, w);
+    if eigs.iter().any(|l| (jw - l).norm() <= 1e-9 * (plant.A.norm() + w)) {
+        return None;
+    }
+    let DW = complex(&plant.D) * omega;
+    let X = resolvent(&plant.A, w, &DMatrix::from_column_slice(DW.len(), 1, DW.as_slice()));
+    let Y = complex(&plant.C) * X.column(0) + complex(&plant.Q) * omega;
+    Some(Y.iter().map(|y| y.norm()).collect())
+}
+
+/// Advice for each input whose steady state exceeds (RMS above the limit) or may exceed (bound
+/// above it) its actuator limit: y = g then cannot be held, or only where the harmonics' phases
+/// keep clear of the limit.
+fn beyond_limits(steady: &SteadyInput, limits: &[f64], inputs: &[String]) -> Vec<String> {
+    let mut advice = Vec::new();
+    for (i, &limit) in limits.iter().enumerate() {
+        let (rms, bound) = (steady.rms[i], steady.bound[i]);
+        let what = if rms > limit {
+            "exceeds it: tracking g and rejecting ω exactly is impossible with this actuator, whatever the design; ask less of the loop (fewer harmonics, smaller references) or a stronger actuator"
+        } else if bound > limit {
+            "may exceed it where the harmonics add up: the loop then saturates at times in steady state"
+        } else {
+            continue;
+        };
+        advice.push(format!(
+            "{}: the steady-state input (RMS {}, up to {}) against the actuator limit truth.u_max = {} {what}",
+            inputs[i],
+            fmt_4(rms),
+            fmt_4(bound),
+            fmt_short(limit)
+        ));
+    }
+    advice
+}
+
+/// Advice for each harmonic of ω that moves every output by at most [`TAIL_BOUND`] of its
+/// reference's peak yet costs an input at least [`COSTLY_SHARE`] of its steady-state bound.
+fn costly_harmonics(
+    steady: &SteadyInput,
+    reference: &Signal,
+    (inputs, outputs): (&[String], &[String]),
+    unit: TimeUnit,
+) -> Vec<String> {
+    let bounds: Vec<f64> = reference.components.iter().map(|c| TAIL_BOUND * c.peak()).collect();
+    let mut advice = Vec::new();
+    for t in steady.tones.iter().filter(|t| t.frequency > 0.0) {
+        let Some(moved) = &t.disturbance_output else { continue };
+        if !moved.iter().zip(&bounds).all(|(y, b)| y <= b) {
+            continue;
+        }
+        let costly: Vec<String> = (0..steady.bound.len())
+            .filter(|&i| steady.bound[i].is_finite() && t.for_disturbance[i] > 0.0)
+            .filter(|&i| t.for_disturbance[i] >= COSTLY_SHARE * steady.bound[i])
+            .map(|i| {
+                let share = 100.0 * t.for_disturbance[i] / steady.bound[i];
+                format!(
+                    "±{} of {} ({share:.0} % of its steady-state bound {})",
+                    fmt_4(t.for_disturbance[i]),
+                    inputs[i],
+                    fmt_4(steady.bound[i])
+                )
+            })
+            .collect();
+        if costly.is_empty() {
+            continue;
+        }
+        let (j, y) = moved.iter().enumerate().fold((0, 0.0), |best, (j, &y)| {
+            if y / bounds[j] > best.1 / bounds[best.0] {
+                (j, y)
+            } else {
+                best
+            }
+        });
+        advice.push(format!(
+            "ω's harmonic at {} rad/{unit} moves {} by at most {} with the input held at 0 (within the tail bound {}: 1 % of the reference's peak), yet cancelling it takes {}: an actuator limit (u_limit of the automatic design) trades that rejection for effort",
+            fmt_4(t.frequency),
+            outputs[j],
+            fmt_4(y),
+            fmt_4(bounds[j]),
+            costly.join(", "),
+        ));
+    }
+    advice
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::scenario::Scenario;
+
+    /// Nomoto's ship (Fossen 2011, Mariner: T = 107.3 s, K = 0.185 /s) with a rudder servo of
+    /// 2.5 s: ψ' = r, r' = −a r + b δ + d, δ' = −c δ + c u_f; a wave yaw moment d at 0.6 and
+    /// 0.9 rad/s (amplitudes `waves`) and a course reference 0.1 + 0.2 sin(0.005 t).
+    fn ship(waves: (f64, f64), u_max: Option<f64>) -> Scenario {
+        let truth = u_max.map_or(String::new(), |u| format!("[truth]\nu_max = [{u}]\n"));
+        Scenario::from_toml(&format!(
+            "[plant]\nA = [[0.0, 1.0, 0.0], [0.0, -0.0093197, 0.0017241], [0.0, 0.0, -0.4]]\nB = [[0.0], [0.0], [0.4]]\n\
+             C = [[1.0, 0.0, 0.0]]\nD = [[0.0], [1.0], [0.0]]\nQ = [[0.0]]\ndelays = [1.0]\ninputs = [\"delta_c\"]\noutputs = [\"psi\"]\n\
+             [design]\nobserver_poles = [-1.0, -1.5, -2.0]\nchannel_poles = [[-0.5, -0.6, -0.7]]\n\
+             reference_filter_poles = [[-0.005, -0.0075, -0.01]]\ndisturbance_filter_poles = [[-0.4, -0.5, -0.7, -1.0, -1.3]]\nmu = [1.0]\nbeta = 200.0\n\
+             [reference]\ncomponents = [{{ bias = 0.1, harmonics = [{{ amplitude = 0.2, frequency = 0.005 }}] }}]\n\
+             [disturbance]\ncomponents = [{{ bias = 5e-5, harmonics = [{{ amplitude = {}, frequency = 0.6 }}, {{ amplitude = {}, frequency = 0.9 }}] }}]\n{truth}",
+            waves.0, waves.1
+        ))
+        .unwrap()
+    }
+
+    #[test]
+    fn the_ships_steady_rudder_is_the_closed_form() {
+        // y = ψ = g forces r = ψ', then δ = (r' + a r − d)/b and u_f = (δ' + c δ)/c, so at a
+        // frequency w: |U| = |jw + c|/c · |(jw + a) R − W|/b with R = jw G. Biases: r = 0, so
+        // δ = −d/b = u_f (the course's bias needs no rudder: ψ integrates r).
+        let (a, b, c) = (0.0093197, 0.0017241, 0.4);
+        let s = ship((2e-4, 1e-4), None);
+        let st = s.steady_input();
+        let servo = |w: f64| (w * w + c * c).sqrt() / c;
+        let expected = [
+            (0.0, 5e-5 / b, 0.0),
+            (0.005, servo(0.005) * 0.005 * (0.005f64.powi(2) + a * a).sqrt() * 0.2 / b, 0.0),
+            (0.6, servo(0.6) * 2e-4 / b, 2e-4),
+            (0.9, servo(0.9) * 1e-4 / b, 1e-4),
+        ];
+        assert_eq!(st.tones.len(), 4);
+        for (t, (w, u, d)) in st.tones.iter().zip(expected) {
+            assert_eq!(t.frequency, w);
+            // A 4×4 complex LU of entries ≤ 1: 1e-12 relative.
+            assert!((t.amplitude[0] - u).abs() <= 1e-12 * u, "{w}: {} against {u}", t.amplitude[0]);
+            // With the input held at 0 a wave turns ψ by d/(w |jw + a|); at w = 0 the integrator
+            // makes it unbounded.
+            match &t.disturbance_output {
+                None => assert_eq!(w, 0.0),
+                Some(y) if d > 0.0 => {
+                    let want = d / (w * (w * w + a * a).sqrt());
+                    assert!((y[0] - want).abs() <= 1e-12 * want, "{w}: {} against {want}", y[0]);
+                }
+                Some(y) => assert_eq!(y[0], 0.0),
+            }
+        }
+        let sum: f64 = expected.iter().map(|e| e.1).sum();
+        assert!((st.bound[0] - sum).abs() <= 1e-12 * sum);
+        let rms = (expected[0].1.powi(2) + expected[1..].iter().map(|e| e.1 * e.1 / 2.0).sum::<f64>()).sqrt();
+        assert!((st.rms[0] - rms).abs() <= 1e-12 * rms);
+    }
+
+    #[test]
+    fn a_wave_that_barely_turns_the_ship_but_works_the_rudder_is_named() {
+        // Each wave turns ψ by 5.6e-4 and 1.2e-4 rad, within 1 % of the course's peak 0.3, and
+        // takes 54 % and 37 % of the rudder's steady-state bound.
+        let advice = ship((2e-4, 1e-4), None).steady_input().advice;
+        assert_eq!(advice.len(), 2, "{advice:?}");
+        assert!(
+            advice[0].contains("at 0.6 rad/s moves psi by at most 0.0005555")
+                && advice[0].contains("±0.2091 of delta_c (54 %"),
+            "{}",
+            advice[0]
+        );
+        assert!(advice[1].contains("at 0.9 rad/s") && advice[1].contains("u_limit"), "{}", advice[1]);
+        // Ten times the 0.6 rad/s wave turns ψ by 5.6e-3, beyond the bound 3e-3: worth its rudder;
+        // the 0.9 rad/s wave's share then falls to 7 %, below the quarter.
+        let advice = ship((2e-3, 1e-4), None).steady_input().advice;
+        assert!(advice.is_empty(), "{advice:?}");
+    }
+
+    #[test]
+    fn a_steady_input_beyond_the_actuator_limit_is_named() {
+        // RMS 0.1815, bound 0.3871 (the closed form above).
+        for (limit, says) in [(0.1, Some("exceeds it")), (0.3, Some("may exceed it")), (0.4, None)] {
+            let advice = ship((2e-4, 1e-4), Some(limit)).steady_input().advice;
+            let on_limit: Vec<_> = advice.iter().filter(|a| a.contains("truth.u_max")).collect();
+            match says {
+                Some(text) => assert!(on_limit.len() == 1 && on_limit[0].contains(text), "{limit}: {advice:?}"),
+                None => assert!(on_limit.is_empty(), "{limit}: {advice:?}"),
+            }
+        }
+    }
+}
