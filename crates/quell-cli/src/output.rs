@@ -48,6 +48,7 @@ fn probe(dir: &Path) -> io::Result<()> {
 /// (exit 2) naming the path.
 pub fn prepare_out(dir: &Path, files: &[&str]) -> Result<(), Failure> {
     let bad = |e: String| Failure::Input(format!("--out {}: {e}; choose another output directory", dir.display()));
+    quell::files::check_dir(dir).map_err(|e| bad(e.to_string()))?;
     fs::create_dir_all(dir).and_then(|()| probe(dir)).map_err(|e| bad(format!("cannot write there ({e})")))?;
     match files.iter().map(|f| quell::files::check_target(&dir.join(f))).find_map(Result::err) {
         Some(e) => Err(bad(e.to_string())),

@@ -1096,11 +1096,16 @@ pub fn plot_sweep(dir: &Path, s: &quell::study::Summary, rows: &[quell::study::R
     Ok(true)
 }
 
+/// "Channel 1 (heading)" where the scenario names its outputs, else "Channel 1" (0-based `i`).
+fn channel_title(i: usize, outputs: &[String]) -> String {
+    outputs.get(i).map_or(format!("Channel {}", i + 1), |n| format!("Channel {} ({n})", i + 1))
+}
+
 /// tune.png/.svg: per channel, the objective against μ_i (log scale), the chosen μ_i marked.
 fn draw_tune<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     r: &quell::study::TuneResult,
-    unit: TimeUnit,
+    (unit, outputs): (TimeUnit, &[String]),
 ) -> Result<(), String> {
     let areas = root.split_evenly((1, r.channels.len()));
     let objective = match r.objective {
@@ -1110,7 +1115,7 @@ fn draw_tune<DB: DrawingBackend>(
     for (c, area) in r.channels.iter().zip(areas.iter()) {
         if c.curve.is_empty() {
             // A tuning stopped before this channel's first evaluation.
-            let title = format!("Channel {}: not evaluated (tuning stopped)", c.channel + 1);
+            let title = format!("{}: not evaluated (tuning stopped)", channel_title(c.channel, outputs));
             area.titled(&title, ("sans-serif", 18)).map_err(|e| e.to_string())?;
             continue;
         }
@@ -1129,7 +1134,7 @@ fn draw_tune<DB: DrawingBackend>(
         let (y0, y1) = (lo - pad - if log_y { 0.3 } else { 0.0 }, hi + pad + if log_y { 0.3 } else { 0.0 });
         let mut chart = ChartBuilder::on(area)
             .caption(
-                format!("Channel {}: {} against μ{}", c.channel + 1, r.objective.name(), c.channel + 1),
+                format!("{}: {} against μ{}", channel_title(c.channel, outputs), r.objective.name(), c.channel + 1),
                 ("sans-serif", 18),
             )
             .margin(10)
@@ -1178,9 +1183,10 @@ fn draw_tune<DB: DrawingBackend>(
 }
 
 /// Writes tune.png and tune.svg.
-pub fn plot_tune(dir: &Path, r: &quell::study::TuneResult, unit: TimeUnit) -> io::Result<()> {
+pub fn plot_tune(dir: &Path, r: &quell::study::TuneResult, unit: TimeUnit, outputs: &[String]) -> io::Result<()> {
     let size = (560 * r.channels.len().max(1) as u32, 460);
-    write_figure(dir, "tune", size, |root| draw_tune(root, r, unit), |root| draw_tune(root, r, unit))
+    let labels = (unit, outputs);
+    write_figure(dir, "tune", size, |root| draw_tune(root, r, labels), |root| draw_tune(root, r, labels))
 }
 
 #[cfg(test)]
@@ -1360,6 +1366,27 @@ mod tests {
         assert_eq!(axis_coords(&strings(&["[1.0, 2.0]", "[3.0, 4.0]"])).1, AxisScale::Positions);
         let labels: Vec<String> = [-4.0, -2.0, 0.0, 0.5, 3.0, 7.0].iter().map(|&v| decade_label(v)).collect();
         assert_eq!(labels, ["1e-4", "0.01", "1", "", "1000", "1e7"]);
+    }
+
+    #[test]
+    fn tune_panels_name_the_output_where_the_scenario_does() {
+        // Two channels stopped before their first evaluation: the titles only.
+        let r: quell::study::TuneResult = serde_json::from_str(
+            r#"{"objective": "settle_t", "channels": [{"channel": 1, "curve": [], "chosen": null}, {"channel": 2, "curve": [], "chosen": null}],
+                "mu": [1.0, 1.0], "joint": null, "joint_difference": [null, null], "reproduced": [false, false]}"#,
+        )
+        .unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        for (outputs, titles) in [
+            (vec!["heading".to_string(), "speed".into()], ["Channel 1 (heading)", "Channel 2 (speed)"]),
+            (vec![], ["Channel 1:", "Channel 2:"]),
+        ] {
+            plot_tune(dir.path(), &r, TimeUnit::default(), &outputs).unwrap();
+            let svg = std::fs::read_to_string(dir.path().join("tune.svg")).unwrap();
+            for title in titles {
+                assert!(svg.contains(title), "{title} missing");
+            }
+        }
     }
 
     #[test]

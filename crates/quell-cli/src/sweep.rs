@@ -230,6 +230,9 @@ fn check_shard_rows(dir: &Path, shard: Shard, rows: &[Row], total: usize) -> Res
 /// into `dir`, and which runs of the shard they are (by place k: run index + k·count).
 fn resumed(dir: &Path, meta: &StudyMeta, n: usize) -> Result<(Vec<Row>, Vec<bool>), Failure> {
     let here = format!("--resume {}", dir.display());
+    quell::files::check_dir(dir).map_err(|e| {
+        Failure::Input(format!("{here}: {e}; resume into the --out directory of the interrupted sweep"))
+    })?;
     if !dir.join("summary.json").exists() {
         return Err(Failure::Input(format!(
             "{here}: holds no summary.json of an earlier sweep; resume into the --out of the interrupted sweep, or leave --resume out"

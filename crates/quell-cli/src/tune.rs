@@ -55,7 +55,7 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
     // A figure of an earlier tuning must not stand beside the new curves.
     crate::output::remove_figures(&args.out, |stem| stem == "tune").map_err(failed)?;
     if !args.no_plots {
-        crate::plot::plot_tune(&args.out, &result, study.time_unit()).map_err(failed)?;
+        crate::plot::plot_tune(&args.out, &result, study.time_unit(), &study.outputs()).map_err(failed)?;
     }
     crate::print_stdout(&report(&result, spec, study.time_unit()));
     if result.partial {

@@ -182,7 +182,7 @@ fn output_path_problems_are_all_exit_2_naming_the_path() {
     fs::write(&file, "x").unwrap();
     refused(
         &quell(&["sweep", &s, "--out", &file.display().to_string()]),
-        &format!("--out {}: cannot write there", file.display()),
+        &format!("--out {}: {} is a regular file, not a directory", file.display(), file.display()),
     );
     // A directory where runs.csv goes: was exit 1 after every run was done.
     let out = dir.join("out");

@@ -322,6 +322,13 @@ impl PyController {
     /// True
     fn __setstate__(&self, state: &Bound<'_, PyAny>) -> PyResult<()> {
         let py = state.py();
+        // bytes iterate as ints: b"garbage" was read as 7 numbers, bytes(n) as n zeros.
+        if state.is_instance_of::<pyo3::types::PyBytes>()
+            || state.is_instance_of::<pyo3::types::PyByteArray>()
+            || state.is_instance_of::<pyo3::types::PyString>()
+        {
+            return Err(crate::errors::type_error("state", "an array of real numbers", state));
+        }
         let values = match state.cast::<PyArray1<f64>>() {
             Ok(a) => a.readonly().as_array().to_vec(),
             Err(_) => state

@@ -248,7 +248,15 @@ pub fn strings(obj: &Bound<'_, PyAny>, name: &str, expected: &str, entry: &str) 
         .enumerate()
         .map(|(i, item)| {
             let item = item?;
-            item.extract().map_err(|_| type_error(&format!("{name}[{i}]"), entry, &item))
+            let at = format!("{name}[{i}]");
+            item.extract().map_err(|_| match item.is_instance_of::<PyString>() {
+                // A str that is not valid Unicode (a lone surrogate): the right type, a bad value.
+                true => Kind::Scenario.err(
+                    item.py(),
+                    format!("{at}: expected {entry} of valid Unicode, found a str with a lone surrogate ({}); names are written to UTF-8 files", item.repr().map_or_else(|_| "?".into(), |r| r.to_string())),
+                ),
+                false => type_error(&at, entry, &item),
+            })
         })
         .collect()
 }

@@ -179,7 +179,7 @@ pub fn export(
         crate::errors::warn(py, &w)?;
     }
     let out = out.unwrap_or_else(|| PathBuf::from("."));
-    std::fs::create_dir_all(&out).map_err(|e| {
+    quell::files::check_dir(&out).and_then(|()| std::fs::create_dir_all(&out)).map_err(|e| {
         Kind::Export.err(py, format!("out: cannot create {} ({e}); choose a writable directory", out.display()))
     })?;
     let mut files = vec![(code.header_name, code.header.into_bytes()), (code.source_name, code.source.into_bytes())];

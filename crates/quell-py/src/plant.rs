@@ -147,8 +147,11 @@ fn system_matrices(sys: &Bound<'_, PyAny>, given_bc: bool) -> PyResult<(DMatrix<
         }
     }
     let feedthrough = matrix(&sys.getattr("D")?, "sys.D", k)?;
-    if let Some(v) = feedthrough.iter().find(|v| **v != 0.0) {
-        return Err(k.err(py, format!("sys.D: python-control's D is the feedthrough from u to y, which the plant (1) does not have; found a nonzero entry {v}; give the disturbance matrices as Plant(sys, D=..., Q=...)")));
+    let nonzero = (0..feedthrough.nrows())
+        .flat_map(|r| (0..feedthrough.ncols()).map(move |c| (r, c)))
+        .find(|&at| feedthrough[at] != 0.0);
+    if let Some((r, c)) = nonzero {
+        return Err(k.err(py, format!("sys.D[{r}][{c}]: python-control's D is the feedthrough from u to y, which the plant (1) does not have; expected 0, found {}; give the disturbance matrices as Plant(sys, D=..., Q=...)", quell::fmt_number(feedthrough[(r, c)]))));
     }
     Ok((matrix(&sys.getattr("A")?, "A", k)?, matrix(&sys.getattr("B")?, "B", k)?, matrix(&sys.getattr("C")?, "C", k)?))
 }

@@ -633,6 +633,10 @@ impl PyScenario {
     ///     amplitudes: max |u_f,i| in steady state for incommensurate frequencies) and `rms`; and
     ///     `advice`.
     ///
+    /// Raises
+    /// ------
+    /// This method raises nothing: the plant and the signals were checked with the scenario.
+    ///
     /// Examples
     /// --------
     /// >>> [round(b, 2) for b in quell.paper_example().steady_input()["bound"]]

@@ -217,3 +217,17 @@ def test_every_scenario_error_has_the_key_or_argument_it_names():
     with pytest.raises(quell.ScenarioError, match=r"^jobs: expected a number of threads") as caught:
         study.sweep(jobs=0)
     assert caught.value.key == "jobs"
+
+
+def test_a_name_that_is_not_valid_unicode_and_a_feedthrough_are_named_with_their_entry():
+    """A lone surrogate is a str that cannot be written to UTF-8 files: a ScenarioError saying so
+    (it was "expected a str (a signal name), found a str"). python-control's nonzero feedthrough is
+    named by its entry with a short number (1e-300 had printed 300 digits)."""
+    A, B, C = [[0.0, 1.0], [-2.0, -3.0]], [[1.0, 0.0], [0.0, 1.0]], [[1.0, 0.0], [0.0, 1.0]]
+    with pytest.raises(quell.ScenarioError, match=r"^inputs\[0\]: expected a str \(a signal name\) of valid Unicode, found a str with a lone surrogate"):
+        quell.Plant(A, B, C, inputs=["\ud800", "b"])
+    control = pytest.importorskip("control")
+    D = [[0.0, 0.0], [0.0, 1e-300]]
+    with pytest.raises(quell.ScenarioError, match=r"^sys\.D\[1\]\[1\]: .*expected 0, found 1\.000000e-300; ") as e:
+        quell.Plant(control.ss(A, B, C, D))
+    assert len(str(e.value)) < 300

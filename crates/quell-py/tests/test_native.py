@@ -218,6 +218,10 @@ def test_a_bad_state_is_refused_naming_the_entry():
         c.__setstate__(bad)
     with pytest.raises(TypeError, match="state: expected an array of real numbers, found a str"):
         c.__setstate__("state")
+    # bytes iterate as ints: bytes(3820) had been taken as an all-zero state.
+    for raw in (bytes(len(state)), bytearray(len(state))):
+        with pytest.raises(TypeError, match=f"state: expected an array of real numbers, found a {type(raw).__name__}"):
+            c.__setstate__(raw)
     assert np.array_equal(c.__getstate__(), state)
     # The methods are named as Python calls them, not as the Rust library's paths.
     with pytest.raises(quell.ControllerError, match=r"^Controller.step: y\[0\] = 1e200 is beyond ±1e100"):

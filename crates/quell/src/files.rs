@@ -44,16 +44,43 @@ fn stage(path: &Path, contents: impl FnOnce(&mut dyn Write) -> io::Result<()>) -
     let ext = path.extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let (prefix, suffix) = (format!(".{stem}."), format!(".tmp{ext}"));
+    remove_stale(dir, &prefix, &suffix);
     let mut builder = tempfile::Builder::new();
     builder.prefix(&prefix).suffix(&suffix);
     // tempfile creates 0600; ask for 0666 less the umask, the mode `File::create` gives an output.
     #[cfg(unix)]
     builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
     let mut tmp = builder.tempfile_in(dir).map_err(|e| naming(path, e))?;
+    // Held until the file is renamed or removed: a temporary file nobody holds is stale.
+    tmp.as_file().lock().map_err(|e| naming(path, e))?;
     let mut w = BufWriter::new(tmp.as_file_mut());
     contents(&mut w).map_err(|e| naming(path, e))?;
     w.into_inner().map_err(|e| e.into_error()).and_then(|f| f.sync_all()).map_err(|e| naming(path, e))?;
     Ok(tmp)
+}
+
+/// A temporary file older than this and not locked was left by a process that was killed.
+const STALE_AFTER: std::time::Duration = std::time::Duration::from_secs(2);
+
+/// Removes the temporary files of [`stage`] (`prefix` + six characters + `suffix`) in `dir` that a
+/// killed process left: older than [`STALE_AFTER`] and locked by no one. A run killed while writing
+/// a 460 MB signals.csv left it behind, and every later kill added one. Best effort: what cannot
+/// be read or removed stays.
+fn remove_stale(dir: &Path, prefix: &str, suffix: &str) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(name) = name.to_str() else { continue };
+        let ours = name.len() == prefix.len() + 6 + suffix.len() && name.starts_with(prefix) && name.ends_with(suffix);
+        let old =
+            || entry.metadata().and_then(|m| m.modified()).is_ok_and(|t| t.elapsed().is_ok_and(|a| a > STALE_AFTER));
+        if ours && old() {
+            // Unlocked: its writer is gone (a live writer holds the lock until the rename).
+            if std::fs::File::open(entry.path()).is_ok_and(|f| f.try_lock().is_ok()) {
+                let _ = std::fs::remove_file(entry.path());
+            }
+        }
+    }
 }
 
 /// The renaming replaces whatever `path` names: refused (`InvalidInput`) unless that is a regular
@@ -79,6 +106,19 @@ pub fn check_target(path: &Path) -> io::Result<()> {
             path.display()
         ),
     ))
+}
+
+/// An output directory must be a directory or nothing yet (created then): refused
+/// (`InvalidInput`) when `dir` names a regular file, a device, a FIFO or a socket, so that the
+/// message says so rather than the system's "File exists". A symbolic link to a directory is one.
+pub fn check_dir(dir: &Path) -> io::Result<()> {
+    match std::fs::metadata(dir) {
+        Ok(meta) if !meta.is_dir() => {
+            let what = if meta.is_file() { "regular file" } else { "device, FIFO or socket" };
+            Err(io::Error::new(io::ErrorKind::InvalidInput, format!("{} is a {what}, not a directory", dir.display())))
+        }
+        _ => Ok(()),
+    }
 }
 
 #[cfg(test)]
@@ -107,6 +147,42 @@ mod tests {
         assert!(!fs::symlink_metadata("/dev/null").unwrap().file_type().is_file());
         write_atomic(&file, |w| w.write_all(b"new")).unwrap();
         assert_eq!(fs::read_to_string(&file).unwrap(), "new");
+    }
+
+    #[test]
+    fn a_killed_writers_temporary_file_is_removed_by_the_next_write() {
+        // A run killed mid-write leaves its temporary file; the next write of that name removes it
+        // when it is older than STALE_AFTER and unlocked, and leaves a live writer's (locked), a
+        // fresh one's and other files.
+        let dir = tempfile::tempdir().unwrap();
+        let at = |name: &str| dir.path().join(name);
+        let old = std::time::SystemTime::now() - 2 * STALE_AFTER;
+        for name in [
+            ".signals.AbC123.tmp.csv",
+            ".signals.live00.tmp.csv",
+            ".signals.toolong7.tmp.csv",
+            ".design.AbC123.tmp.json",
+        ] {
+            fs::write(at(name), "partial").unwrap();
+            fs::File::options().write(true).open(at(name)).unwrap().set_modified(old).unwrap();
+        }
+        fs::write(at(".signals.fresh0.tmp.csv"), "partial").unwrap();
+        let live = fs::File::open(at(".signals.live00.tmp.csv")).unwrap();
+        live.lock().unwrap();
+        write_atomic(&at("signals.csv"), |w| w.write_all(b"t,y1")).unwrap();
+        let mut left: Vec<String> =
+            fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+        left.sort();
+        assert_eq!(
+            left,
+            [
+                ".design.AbC123.tmp.json",
+                ".signals.fresh0.tmp.csv",
+                ".signals.live00.tmp.csv",
+                ".signals.toolong7.tmp.csv",
+                "signals.csv"
+            ]
+        );
     }
 
     #[test]

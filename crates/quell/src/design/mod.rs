@@ -24,6 +24,7 @@ use crate::linalg::{
     unstable, EigenError,
 };
 use crate::plant::{Plant, PlantError};
+use crate::settings::TimeUnit;
 
 /// How the Luenberger observer gain L of eq. (6) is chosen.
 #[derive(Debug, Clone, PartialEq)]
@@ -158,8 +159,8 @@ pub enum DesignError {
     ChannelPoleCount { channel: usize, sigma: usize, got: usize },
     #[error("plant: not decouplable (Proposition 1): B* is singular: with rows c_i A^(σ_i-1) and the columns of B scaled to unit norm its smallest singular value is {smallest:.3e}, below τ = {tol:.0e} (condition number {cond:.3e}); the outputs' leading responses to the inputs are (nearly) dependent", tol = TOL)]
     NotDecouplable { smallest: f64, cond: f64 },
-    #[error("plant: unstable zero dynamics: A − BK keeps the plant's {} zero{} (its eigenvalues besides the {placed} channel poles that Proposition 1 places), and {} not in the open left half-plane: {}; this plant cannot be decoupled stably", .zeros.len(), if .zeros.len() == 1 { "" } else { "s" }, if .unstable.len() == 1 { "this one is" } else { "these are" }, fmt_complex_list(.unstable))]
-    UnstableZeroDynamics { placed: usize, zeros: Vec<Complex<f64>>, unstable: Vec<Complex<f64>> },
+    #[error("plant: unstable zero dynamics: A − BK keeps the plant's {} zero{} (its eigenvalues besides the {placed} channel poles that Proposition 1 places), and {} not in the open left half-plane: {} (per {unit}); the plant is non-minimum-phase with these outputs (a transmission zero of (A, B, C) in the closed right half-plane) and decoupling cancels its zeros, so it cannot be decoupled stably; measure outputs whose zeros lie in the left half-plane (a boost converter's inductor current in place of its output voltage; another sensor placement), or control this plant by another method", .zeros.len(), if .zeros.len() == 1 { "" } else { "s" }, if .unstable.len() == 1 { "this one is" } else { "these are" }, fmt_complex_list(.unstable))]
+    UnstableZeroDynamics { placed: usize, zeros: Vec<Complex<f64>>, unstable: Vec<Complex<f64>>, unit: TimeUnit },
     #[error("design.relative_degrees[{index}]: expected a relative degree 1 ≤ σ_i ≤ n = {n}, found {value}")]
     RelativeDegreeRange { index: usize, value: usize, n: usize },
     #[error("design.relative_degrees[{channel}]: σ_{} = {given} contradicts the plant: c_{0} A^({}) B is clearly non-zero (largest cosine between c_{0} A^({1}) and a column of B: {measure:.2e}, above {cf}·τ = {bound:.0e}), so channel {0} has relative degree at most {l}; give σ_{0} ≤ {l}, or remove design.relative_degrees to let eq. (7) decide", .channel + 1, .l - 1, cf = CLOSE_FACTOR, bound = TOL * CLOSE_FACTOR)]
@@ -696,7 +697,7 @@ fn check_zero_dynamics(plant: &Plant, fw: &FalbWolovich) -> Result<(), DesignErr
         Ok(())
     } else {
         debug_assert_eq!(zeros.len(), n - placed);
-        Err(DesignError::UnstableZeroDynamics { placed, zeros, unstable: bad })
+        Err(DesignError::UnstableZeroDynamics { placed, zeros, unstable: bad, unit: plant.time_unit })
     }
 }
 

@@ -298,8 +298,9 @@ pub(crate) fn syntax_message(text: &str, e: &toml::de::Error) -> String {
         Some(key) if message.starts_with("duplicate key") => {
             format!("line {line}, column {col}: duplicate key `{key}`: a key may be given once in a table, keep one")
         }
-        // An integer beyond i64 (the parser says "invalid type: integer `…` as i128").
-        Some(number) if message.contains("as i128") => {
+        // An integer beyond i64 (the parser says "invalid type: integer `…` as i128", or "u64
+        // value was too large" up to u64::MAX).
+        Some(number) if message.contains("as i128") || message.contains("value was too large") => {
             let before = text.get(..span.start).unwrap_or_default();
             let name = before.rsplit('\n').next().and_then(|l| l.split('=').next()).map(str::trim);
             let name = name.filter(|n| !n.is_empty()).map(|n| n.trim_matches('"'));
@@ -357,6 +358,13 @@ mod tests {
             message("[noise]\nseed = 99999999999999999999\n"),
             "line 2, column 8 (seed): the integer 99999999999999999999 is beyond TOML's integers (±9223372036854775807); expected a seed, an integer from 0 to 2**63 - 1; give a smaller one"
         );
+        // From i64::MAX + 1 to u64::MAX the parser said "u64 value was too large".
+        for n in ["9223372036854775808", "18446744073709551615"] {
+            assert_eq!(
+                message(&format!("[noise]\nseed = {n}\n")),
+                format!("line 2, column 8 (seed): the integer {n} is beyond TOML's integers (±9223372036854775807); expected a seed, an integer from 0 to 2**63 - 1; give a smaller one")
+            );
+        }
         let fixed: toml::Table = "t_end = 99999999999999999999.0".parse().unwrap();
         assert_eq!(fixed["t_end"].as_float(), Some(1e20));
     }
