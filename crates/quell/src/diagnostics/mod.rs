@@ -331,8 +331,16 @@ const WANTED_TRANSIENT: f64 = 30.0;
 pub fn slow_transient_advice(design: &Design, t_end: f64) -> Option<String> {
     let unit = design.plant().time_unit;
     let channel_poles: Vec<_> = design.channels().iter().flat_map(|c| c.poles.iter().copied()).collect();
+    // Observer poles at the zeros of (A, D, C) are the plant's, there for the disturbance
+    // observer's fidelity (the advice that proposes them): not to be moved, only outlasted.
+    let zeros = disturbance_zeros(design.plant()).unwrap_or_default();
+    let (held, observer): (Vec<_>, Vec<_>) =
+        design.observer_eigenvalues().iter().copied().partition(|o: &Complex<f64>| {
+            zeros.iter().any(|z| (o - z).norm() <= 1e-6 * z.norm().max(f64::MIN_POSITIVE))
+        });
+    let held_advice = held_zeros_advice(&held, t_end, unit);
     let groups = [
-        ("design.observer_poles (eig(A − LC))", design.observer_eigenvalues().to_vec()),
+        ("design.observer_poles (eig(A − LC))", observer),
         ("design.channel_poles", channel_poles),
         ("design.reference_filter_poles", eigenvalues(design.G_g()).unwrap_or_default()),
         ("design.disturbance_filter_poles", eigenvalues(design.G_w()).unwrap_or_default()),
@@ -347,7 +355,7 @@ pub fn slow_transient_advice(design: &Design, t_end: f64) -> Option<String> {
         .collect();
     let slowest = slow.iter().map(|s| s.1).fold(f64::INFINITY, f64::min);
     if slow.is_empty() || t_end.is_nan() || t_end <= 0.0 {
-        return None;
+        return held_advice;
     }
     let parts: Vec<String> = slow
         .iter()
@@ -359,13 +367,31 @@ pub fn slow_transient_advice(design: &Design, t_end: f64) -> Option<String> {
     } else {
         String::new()
     };
-    Some(format!(
+    let moved = format!(
         "{}: over t_end = {} {unit} a transient from the zero start decays by only |Re p|·t_end = {} e-folds (fewer than {SLOW_TRANSIENT:.0}): ξ̂, x̂ or the channels are still settling at the end, and the averaged pace (its convergence times assume the steady state) does not hold; move those real parts to −{}/{unit} or further left ({WANTED_TRANSIENT:.0}/t_end, as an automatic design does; keep the imaginary parts){or_longer}",
         parts.join("; "),
         fmt_short(t_end),
         fmt_short(round_up_2(slowest * t_end)),
         fmt_short(round_up_2(WANTED_TRANSIENT / t_end)),
-    ))
+    );
+    Some(held_advice.map_or(moved.clone(), |h| format!("{moved}; {h}")))
+}
+
+/// The observer poles `held` at the zeros of (A, D, C) that decay by fewer than [`SLOW_TRANSIENT`]
+/// e-folds over `t_end`: kept (moving them costs the disturbance observer its fidelity), so the
+/// horizon must outlast them. A boost converter told to place its zero −0.177/ms was then told to
+/// move it to −0.6/ms.
+fn held_zeros_advice(held: &[Complex<f64>], t_end: f64, unit: TimeUnit) -> Option<String> {
+    let slowest = held.iter().map(|p| -p.re).fold(f64::INFINITY, f64::min);
+    (slowest.is_finite() && slowest > 0.0 && slowest * t_end < SLOW_TRANSIENT * (1.0 - 1e-9)).then(|| {
+        format!(
+            "design.observer_poles hold the zeros of (A, D, C), [{}], which decay by only {} e-folds over t_end = {} {unit}: they are the plant's, there for the disturbance observer's fidelity, so keep them and lengthen simulation.t_end to {} {unit} ({WANTED_TRANSIENT:.0}/|Re z|)",
+            fmt_complex_list(held),
+            fmt_short(round_up_2(slowest * t_end)),
+            fmt_short(t_end),
+            fmt_short(round_up_2(WANTED_TRANSIENT / slowest)),
+        )
+    })
 }
 
 /// A run that missed its tail bound (or ended early) while the true actuator's limits clipped u_f at
@@ -624,8 +650,13 @@ pub(crate) fn slow_direction_advice<'r>(
     let (wanted, fastest) = horizon_mu(relevant, c.lambda_max(), (t_end, stiff));
     Some(if wanted > fastest {
         // The observer as the cause, then μ's own limit and the horizon it leaves (Wood–Berry's
-        // line named the observer alone, where a μ at the limit passed).
-        format!("{observer}: {}; besides, {mu_advice}", remedy())
+        // line named the observer alone, where a μ at the limit passed). Those figures are the
+        // present observer's: a faster one changes Ω̄ and ρ (an aircraft that took the 20× faster
+        // observer with μ ≤ 16 and the 23,000 s they implied ran 72 s; its next run's advice, 0.7 s).
+        format!(
+            "{observer}: {}; with the present observer, {mu_advice}; a new observer changes Ω̄ and ρ, so after changing it take μ and t_end from its own run's advice",
+            remedy()
+        )
     } else {
         format!("{mu_advice}; {observer}: if the raised μ leaves the tail above its bound, {}", remedy())
     })
@@ -987,5 +1018,37 @@ mod tests {
             assert!(a.contains("(the zeros of (A, D, (CD)⁺C): with more outputs (2) than disturbances (1)"), "{a}");
             assert!(!a.contains("cannot remove this error"), "{a}");
         }
+    }
+}
+
+#[cfg(test)]
+mod held_zeros {
+    use crate::scenario::Scenario;
+
+    /// A boost converter's inductor current (Erickson & Maksimović 2001, time in ms): the zero of
+    /// (A, D, C) is −0.177305/ms, the observer's advice puts a pole on it, and the slow-transient
+    /// advice had then told the run to move it to −0.6/ms. Now it is kept and the horizon outlasts
+    /// it: 30/0.177305 = 169.2, rounded up to 170 ms, after which nothing is slow.
+    #[test]
+    fn an_observer_pole_at_a_zero_of_a_d_c_is_outlasted_not_moved() {
+        let at = |t_end: f64| {
+            Scenario::from_toml(&format!(
+                "[plant]\nA = [[0.0, -10.0], [1.06383, -0.177305]]\nB = [[480.0], [-8.51064]]\nC = [[1.0, 0.0]]\nD = [[20.0], [0.0]]\nQ = [[0.0]]\n\
+                 delays = [0.05]\ntime_unit = \"ms\"\n[design]\nobserver_poles = [-0.177305, -10.0]\nchannel_poles = [[-2.0]]\n\
+                 reference_filter_poles = [[-0.2, -0.3, -0.45]]\ndisturbance_filter_poles = [[-0.4, -0.6, -0.9]]\nmu = [10.0]\nbeta = 2.0\n\
+                 [reference]\ncomponents = [{{ bias = 0.3, harmonics = [{{ amplitude = 0.2, frequency = 0.3 }}] }}]\n\
+                 [disturbance]\ncomponents = [{{ bias = -1.0, harmonics = [{{ amplitude = 0.5, frequency = 0.6283 }}] }}]\n\
+                 [simulation]\nt_end = {t_end}\n"
+            ))
+            .unwrap()
+        };
+        let s = at(50.0);
+        assert_eq!(crate::diagnostics::disturbance_zeros(&s.plant).map(|z| z.len()), Some(1));
+        let advice = super::slow_transient_advice(&s.design().unwrap(), 50.0).expect("the zero is slow over 50 ms");
+        assert!(advice.starts_with("design.observer_poles hold the zeros of (A, D, C), [-0.177305]"), "{advice}");
+        assert!(advice.contains("keep them and lengthen simulation.t_end to 170 ms"), "{advice}");
+        assert!(!advice.contains("move those real parts"), "{advice}");
+        let s = at(170.0);
+        assert_eq!(super::slow_transient_advice(&s.design().unwrap(), 170.0), None);
     }
 }

@@ -72,7 +72,7 @@ impl Settling {
             Settling::Settled { .. } => None,
             Settling::NotSettled => Some("not settled: outside the band at the end of the run".into()),
             Settling::Late { t } => Some(format!(
-                "not settled: enters the band at t = {} {unit} only in the last {:.0} % of the horizon",
+                "not settled: enters the band at t = {} {unit} only in the last {:.0} % of the horizon (too late to tell an error that settles from one passing through)",
                 crate::settings::fmt_time(t),
                 100.0 * LATE_FRACTION
             )),
