@@ -646,6 +646,23 @@ fn the_relaxation_does_not_buy_solver_steps_with_actuator_effort() {
     assert!(a.verification.relaxation.contains("beyond 2× the first proposal's"), "{}", a.verification.relaxation);
 }
 
+/// The Shell heavy-oil fractionator (Prett & Morari 1987, minutes; 3 outputs, 2 disturbances):
+/// with more outputs than disturbances the observer's candidate "zeros" are those of
+/// (A, D, (CD)⁺C), and where no candidate's disturbance observer comes near the diagnostics'
+/// limit they are a guess. Holding them (error 3.99) the design missed every bound at 3,000 min and
+/// asked for 180,000; with all-fast poles it meets them at 3,000 min.
+#[test]
+fn with_more_outputs_than_disturbances_a_hopeless_fidelity_takes_all_fast_observer_poles() {
+    let doc: toml::Table = data("shell-fractionator.toml").parse().unwrap();
+    let a = auto_design(&doc, &Targets::default()).unwrap();
+    assert!(a.verification.passed, "{:?}", a.verification);
+    let s = &a.scenario;
+    let zeros = disturbance_zeros(&s.plant).expect("(A, D, (CD)⁺C) has zeros here");
+    let poles = a.design.observer_eigenvalues();
+    assert!(zeros.iter().all(|z| poles.iter().all(|p| (p - z).norm() > 1e-3 * z.norm())), "{poles:?} hold {zeros:?}");
+    assert!(poles.iter().all(|p| p.im == 0.0 && p.re < -0.3), "{poles:?}");
+}
+
 /// Limits per input on the same vessel, in their own units: 1.5e7 N on surge and sway, 1e8 N·m on
 /// yaw. The design that meets one limit of 1e8 (docs/tuning.md: 2.5e7 N, 2.0e7 N, 9.3e7 N·m) is
 /// beyond the forces' limits, so the per-input design is a slower one; its written scenario, run
