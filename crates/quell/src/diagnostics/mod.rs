@@ -732,7 +732,7 @@ fn shrinking_advice(result: &SimResult, i: usize, r: f64, (mu, lambda_max, stiff
         String::new()
     };
     format!(
-        "{head}: at that pace it reaches {aim:.1e} of its scale (a third of the {NEGLIGIBLE:e} at which it counts as converged) by about t = {} {unit}; lengthen simulation.t_end to that{or_mu}",
+        "{head}: at that pace it reaches {aim:.1e} of its scale (a third of the {NEGLIGIBLE:e} at which it counts as converged) by about t = {} {unit}, a lower estimate where the pace slows as the slowest mode takes over (a run followed this far then asks for more); lengthen simulation.t_end to that{or_mu}",
         fmt_short(t_needed)
     )
 }
