@@ -201,7 +201,8 @@ fn design(args: &auto::DesignArgs) -> Result<(), Failure> {
         ));
     } else {
         let pace = pace::pace_text(&d, &estimates, s.simulation.t_end, s.plant.time_unit);
-        let effort = pace::steady_text(&steady, &s.names.inputs(s.plant.B.ncols()), s.plant.time_unit);
+        let effort =
+            pace::steady_text(&steady, &s.names.inputs(s.plant.B.ncols()), s.plant.time_unit, s.truth.is_some());
         print_stdout(&format!("{}{pace}{effort}{}", report::design_text(&d), report::warnings_text(&warnings)));
     }
     Ok(())

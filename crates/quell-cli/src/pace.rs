@@ -26,31 +26,35 @@ pub fn with_pace(mut design: Value, d: &Design, estimates: &[RateEstimate], stea
     design
 }
 
-/// The steady-state input as lines of text: per input its bound and each frequency's share, split
-/// between g and ω, then the advice.
-pub fn steady_text(steady: &SteadyInput, inputs: &[String], time: TimeUnit) -> String {
+/// The steady-state input as lines of text: per input its peak and RMS and each frequency's
+/// amplitude with the parts g alone and ω alone ask for, then the advice. `truth`: the simulated
+/// plant is `[truth]`, not the design model.
+pub fn steady_text(steady: &SteadyInput, inputs: &[String], time: TimeUnit, truth: bool) -> String {
     if steady.tones.is_empty() {
         return String::new();
     }
+    let plant = if truth { "the simulated plant [truth]" } else { "the plant" };
     let mut s = format!(
-        "\nsteady-state plant input u_f (y = g exactly: the plant alone sets it, whatever the controller; per frequency in rad/{time}, the amplitude for g + ω):\n"
+        "\nsteady-state plant input u_f (y = g exactly: {plant} alone sets it, whatever the controller; per frequency in rad/{time}, the amplitude, and in brackets those g alone and ω alone ask for, which add as phasors):\n"
     );
+    let four = |v: f64| if v.is_finite() { fmt_4(v) } else { "∞".to_string() };
     for (i, name) in inputs.iter().enumerate() {
         let parts: Vec<String> = steady
             .tones
             .iter()
-            .map(|t| {
-                let (a, g, w) = (t.amplitude[i], t.for_reference[i], t.for_disturbance[i]);
-                format!("{}: {} ({} + {})", fmt_4(t.frequency), fmt_4(a), fmt_4(g), fmt_4(w))
+            .map(|t| match t.transmission_zero {
+                true => format!("{}: ∞ (a transmission zero)", fmt_4(t.frequency)),
+                false => format!(
+                    "{}: {} (g {}, ω {})",
+                    fmt_4(t.frequency),
+                    four(t.amplitude[i]),
+                    four(t.for_reference[i]),
+                    four(t.for_disturbance[i])
+                ),
             })
             .collect();
-        let _ = writeln!(
-            s,
-            "  {name}: |u_f| up to {} (RMS {}); {}",
-            fmt_4(steady.bound[i]),
-            fmt_4(steady.rms[i]),
-            parts.join(", ")
-        );
+        let _ =
+            writeln!(s, "  {name}: peak {} (RMS {}); {}", four(steady.peak[i]), four(steady.rms[i]), parts.join(", "));
     }
     for a in &steady.advice {
         let _ = writeln!(s, "    → {a}");

@@ -629,9 +629,10 @@ impl PyScenario {
     ///     `tones`: per frequency of g and ω (0 for the biases, ascending) its `frequency` and, per
     ///     input, the `amplitude` of u_f and the parts `for_reference` and `for_disturbance`, with
     ///     `disturbance_output`, per output the amplitude ω's part moves y by with the input held at
-    ///     0 (None where the frequency is an eigenvalue of A); per input `bound` (Σ of the
-    ///     amplitudes: max |u_f,i| in steady state for incommensurate frequencies) and `rms`; and
-    ///     `advice`.
+    ///     0 (None where the frequency is an eigenvalue of A), and `transmission_zero`; per input
+    ///     `peak` (max |u_f,i| in steady state: over the common period where the frequencies are
+    ///     whole multiples of one, else the sum of the amplitudes it approaches; None at a
+    ///     transmission zero) and `rms`; and `advice`.
     ///
     /// Raises
     /// ------
@@ -639,8 +640,8 @@ impl PyScenario {
     ///
     /// Examples
     /// --------
-    /// >>> [round(b, 2) for b in quell.paper_example().steady_input()["bound"]]
-    /// [12.73, 23.54]
+    /// >>> [round(p, 2) for p in quell.paper_example().steady_input()["peak"]]
+    /// [11.63, 21.68]
     fn steady_input<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let text = serde_json::to_string(&self.inner.steady_input()).unwrap_or_default();
         py.import("json")?.call_method1("loads", (text,))

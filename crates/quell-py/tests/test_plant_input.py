@@ -138,7 +138,7 @@ def test_the_steady_state_input_is_the_plants_inverse_and_what_the_converged_run
     """steady_input() against numpy's transfer matrices P(jw) = C (jwI - A)^-1 B and
     P_d(jw) = C (jwI - A)^-1 D + Q: U = P^-1 (G - P_d W) per frequency (the paper's plant has no
     eigenvalue at 0, 1 or 2 rad/s); and against the paper's run, whose u_f over the last two common
-    periods (4 pi s) of 100 s has that RMS and stays within the bound."""
+    periods (4 pi s) of 100 s has that RMS and that peak."""
     s = quell.paper_example()
     p = s.plant
     A, B, C, D, Q = (np.asarray(M) for M in (p.A, p.B, p.C, p.D, p.Q))
@@ -154,12 +154,15 @@ def test_the_steady_state_input_is_the_plants_inverse_and_what_the_converged_run
         np.testing.assert_allclose(t["amplitude"], np.abs(U), rtol=0, atol=1e-12 * np.abs(U).max())
         np.testing.assert_allclose(t["for_reference"], np.abs(np.linalg.solve(P, G)), rtol=0, atol=1e-12 * np.abs(U).max())
         np.testing.assert_allclose(t["disturbance_output"], np.abs(Pd @ W), rtol=1e-12)
-    np.testing.assert_allclose(steady["bound"], [sum(t["amplitude"][i] for t in steady["tones"]) for i in range(2)], rtol=1e-15)
+    # 1 and 2 rad/s are commensurate: the peak is the maximum over the common period 2 pi, below
+    # the sum of the amplitudes.
+    sums = [sum(t["amplitude"][i] for t in steady["tones"]) for i in range(2)]
+    assert all(p < 0.95 * total for p, total in zip(steady["peak"], sums)), (steady["peak"], sums)
     r = quell.simulate(s, output_step=0.01)
     tail = r.t >= r.t[-1] - 4 * np.pi
     rms = np.sqrt(np.mean(r.u_f[tail] ** 2, axis=0))
-    # The run's tail error is ~1e-6 of the references and the 4 pi window holds whole periods up
-    # to one output step: the RMS agrees to 0.5 %.
+    # At 100 s the run's u_f is within about 0.3 % of its steady state, and the 4 pi window holds
+    # two common periods up to one output step: RMS and peak agree to 0.5 %.
     np.testing.assert_allclose(rms, steady["rms"], rtol=5e-3)
-    assert np.all(np.abs(r.u_f[tail]).max(axis=0) <= np.array(steady["bound"]) * (1 + 1e-3))
+    np.testing.assert_allclose(np.abs(r.u_f[tail]).max(axis=0), steady["peak"], rtol=5e-3)
     assert steady["advice"] == []

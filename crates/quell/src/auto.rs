@@ -1662,23 +1662,14 @@ fn choose_scaling(partial: &PartialDesign, s: &Scenario, note: &mut Note) -> Reg
     }
 }
 
-/// Observer poles, searched for the disturbance observer's fidelity (eq. (20) is driven by x̂, so
-/// it receives ω through T(s) = N L C (sI − A + LC)⁻¹ D, [`crate::diagnostics::averaged`]). For
-/// r_o = r_0·2^k (k = 0..3) the candidates are n distinct real poles from −r_o to −2r_o and to
-/// −4r_o and, when C D has full column rank k_ω, the n − k_ω zeros of (A, D, C) (the nonzero
-/// eigenvalues of (I − D (CD)⁺ C) A, when all stable) with k_ω poles from −r_o: then L C x̃
-/// reconstructs D ω as r_o grows, as the unknown-input observers do, where all-fast poles leave
-/// the error the zeros impose. The first candidate whose relative error is ≤ [`FIDELITY_AIM`] at
-/// every frequency of ω, or ≤ [`FIDELITY_SLACK`] times the best candidate's, is taken; candidates
-/// `place` rejects are skipped.
-fn observer(
-    s: &Scenario,
-    spec: &mut DesignSpec,
+/// The observer candidates of [`observer`]: per r_o = r_0·2^k (k = 0..3) n real poles spread ×2
+/// and ×4 and, with `zeros`, those zeros and the other poles from −r_o; each with how many of its
+/// poles are zeros and its description.
+fn observer_candidates(
+    zeros: Option<Vec<Complex<f64>>>,
     r_0: f64,
     n: usize,
-    speed: f64,
-) -> Result<(Design, String), AutoError> {
-    let zeros = crate::diagnostics::disturbance_zeros(&s.plant);
+) -> Vec<(Vec<Complex<f64>>, usize, String)> {
     let mut candidates: Vec<(Vec<Complex<f64>>, usize, String)> = Vec::new();
     for k in 0..4 {
         let rate = r_0 * 2f64.powi(k);
@@ -1705,6 +1696,26 @@ fn observer(
             ));
         }
     }
+    candidates
+}
+
+/// Observer poles, searched for the disturbance observer's fidelity (eq. (20) is driven by x̂, so
+/// it receives ω through T(s) = N L C (sI − A + LC)⁻¹ D, [`crate::diagnostics::averaged`]). For
+/// r_o = r_0·2^k (k = 0..3) the candidates are n distinct real poles from −r_o to −2r_o and to
+/// −4r_o and, when C D has full column rank k_ω, the n − k_ω zeros of (A, D, C) (the nonzero
+/// eigenvalues of (I − D (CD)⁺ C) A, when all stable) with k_ω poles from −r_o: then L C x̃
+/// reconstructs D ω as r_o grows, as the unknown-input observers do, where all-fast poles leave
+/// the error the zeros impose. The first candidate whose relative error is ≤ [`FIDELITY_AIM`] at
+/// every frequency of ω, or ≤ [`FIDELITY_SLACK`] times the best candidate's, is taken; candidates
+/// `place` rejects are skipped.
+fn observer(
+    s: &Scenario,
+    spec: &mut DesignSpec,
+    r_0: f64,
+    n: usize,
+    speed: f64,
+) -> Result<(Design, String), AutoError> {
+    let candidates = observer_candidates(crate::diagnostics::disturbance_zeros(&s.plant), r_0, n);
     /// A candidate's design, poles, worst fidelity error and description.
     type Candidate = (Design, Vec<Complex<f64>>, usize, f64, String);
     let mut tried: Vec<Candidate> = Vec::new();

@@ -34,7 +34,9 @@ pub(crate) fn tones(reference: &Signal, disturbance: &Signal) -> Vec<Tone> {
     let (m, k) = (reference.len(), disturbance.len());
     let mut tones: Vec<Tone> = Vec::new();
     let mut add = |w: f64, which: usize, index: usize, phasor: C64| {
-        let at = match tones.iter().position(|t| t.w == w) {
+        // Frequencies a few ulps apart (0.2617993877991494 and 0.26179938779914946) are one tone:
+        // over any horizon they stay in phase.
+        let at = match tones.iter().position(|t| (t.w - w).abs() <= 1e-12 * t.w.max(w)) {
             Some(at) => at,
             None => {
                 tones.push(Tone { w, g: DVector::zeros(m), omega: DVector::zeros(k) });
@@ -404,6 +406,7 @@ fn one_sided_jacobi(G: &mut DMatrix<f64>, V: &mut DMatrix<f64>) {
 mod tests {
     use super::*;
     use crate::scenario::Scenario;
+    use crate::signal::{Component, Harmonic};
 
     /// A first-order plant with one sine reference: x' = −x + u_f, y = x, σ = 1, channel pole −2,
     /// reference filter poles −1, −3 for g = sin(2t), no disturbance, no delay.
@@ -414,6 +417,19 @@ mod tests {
              mu = [10.0]\nbeta = 1.0\n[reference]\ncomponents = [{{ harmonics = [{{ amplitude = 1.0, frequency = 2.0 }}] }}]\n"
         ))
         .unwrap()
+    }
+
+    #[test]
+    fn frequencies_a_few_ulps_apart_are_one_tone() {
+        // 2π/24 written two ways (a daily cycle in hours) and a distinct neighbour 1e-6 away.
+        let h = |amplitude, frequency| Harmonic { amplitude, frequency, phase: 0.0 };
+        let g = Signal { components: vec![Component { bias: 0.0, harmonics: vec![h(1.0, 0.2617993877991494)] }] };
+        let w = Signal {
+            components: vec![Component { bias: 0.0, harmonics: vec![h(1.0, 0.26179938779914946), h(1.0, 0.261799)] }],
+        };
+        let t = tones(&g, &w);
+        assert_eq!(t.len(), 2, "{:?}", t.iter().map(|t| t.w).collect::<Vec<_>>());
+        assert!(t[1].g[0].norm() == 1.0 && t[1].omega[0].norm() == 1.0);
     }
 
     #[test]

@@ -416,5 +416,8 @@ def tune(
 ) -> TuneResult: ...
 
 def auto_design(
-    text: str, *, convergence_time: Optional[float] = None, u_limit: Optional[float] = None
+    text: str,
+    *,
+    convergence_time: Optional[float] = None,
+    u_limit: Optional[Union[float, Sequence[float]]] = None,
 ) -> Tuple[Scenario, Dict[str, Any]]: ...

@@ -15,32 +15,41 @@
 use nalgebra::{Complex, DMatrix, DVector};
 use serde::Serialize;
 
-use crate::averaged::{complex, resolvent, tones};
+use crate::averaged::{complex, resolvent};
 use crate::linalg::eigenvalues;
 use crate::plant::Plant;
 use crate::settings::{fmt_4, fmt_short, TimeUnit};
-use crate::signal::Signal;
+use crate::signal::{Component, Harmonic, Signal};
 
 use super::TAIL_BOUND;
 
 type C64 = Complex<f64>;
 
-/// A harmonic of ω whose cancellation costs at least this share of an input's steady-state bound
+/// A harmonic of ω whose cancellation costs at least this share of an input's steady-state peak
 /// while it moves no output by more than the tail bound gets advice.
 pub const COSTLY_SHARE: f64 = 0.25;
+
+/// The system matrix [jwI − A, −B; C, 0], rows and columns scaled to unit largest entry, counts as
+/// singular (w a transmission zero of (A, B, C)) below this σ_min/σ_max.
+const ZERO_RCOND: f64 = 1e-11;
 
 /// One frequency's share of the steady-state input.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct InputTone {
     /// rad per unit of time (0: the biases).
     pub frequency: f64,
+    /// w is a transmission zero of (A, B, C): y = g cannot be held at it, whatever the input (the
+    /// amplitudes are then ∞, null in JSON).
+    pub transmission_zero: bool,
     /// Per input: the amplitude of u_f,i at this frequency (|value| for the biases).
     pub amplitude: Vec<f64>,
-    /// Per input: the amplitude g alone asks for, and ω alone.
+    /// Per input: the amplitude g alone asks for, and ω alone (phasors: the two need not add up
+    /// to `amplitude`).
     pub for_reference: Vec<f64>,
     pub for_disturbance: Vec<f64>,
-    /// Per output: the amplitude ω's part moves y by with the input held at 0 (the forced
-    /// response C (jwI − A)⁻¹ D W + Q W); `None` where jw is an eigenvalue of A (unbounded).
+    /// Per output: the amplitude of ω's forced response at y with the input held at 0,
+    /// C (jwI − A)⁻¹ D W + Q W (for an unstable plant, the particular solution); `None` where jw
+    /// is an eigenvalue of A (unbounded).
     pub disturbance_output: Option<Vec<f64>>,
 }
 
@@ -49,14 +58,14 @@ pub struct InputTone {
 pub struct SteadyInput {
     /// Ascending in frequency; empty when g and ω are zero.
     pub tones: Vec<InputTone>,
-    /// Per input: Σ over the tones of the amplitudes, the least upper bound of |u_f,i| in steady
-    /// state when the frequencies are incommensurate (an upper bound otherwise). ∞ where a
-    /// frequency is a transmission zero of (A, B, C): y = g is then not reachable at it.
-    pub bound: Vec<f64>,
-    /// Per input: the RMS of u_f,i in steady state, √(b² + Σ a²/2): a lower bound of max |u_f,i|.
+    /// Per input: max |u_f,i| in steady state, the sum of the amplitudes (approached when the
+    /// frequencies are incommensurate) or, where they are whole multiples of one, the maximum
+    /// over that period ([`Component::peak`]); ∞ at a transmission zero.
+    pub peak: Vec<f64>,
+    /// Per input: the RMS of u_f,i in steady state, √(b² + Σ a²/2): a lower bound of the peak.
     pub rms: Vec<f64>,
-    /// One line per costly harmonic of ω ([`COSTLY_SHARE`]) and per input whose actuator limit
-    /// the steady state exceeds or may exceed.
+    /// One line per transmission zero among the frequencies, per costly harmonic of ω
+    /// ([`COSTLY_SHARE`]) and per input whose actuator limit the steady state exceeds.
     pub advice: Vec<String>,
 }
 
@@ -72,49 +81,95 @@ pub fn steady_input(
     let m = plant.B.ncols();
     // Without A's eigenvalues (their iteration failed), no forced response either.
     let eigs = eigenvalues(&plant.A).ok();
-    let tones: Vec<InputTone> = tones(reference, disturbance)
-        .iter()
-        .map(|t| {
-            let for_reference = input_phasor(plant, t.w, &t.g, &DVector::zeros(t.omega.len()));
-            let for_disturbance = input_phasor(plant, t.w, &DVector::zeros(t.g.len()), &t.omega);
-            let both = &for_reference + &for_disturbance;
-            // Round-off of an exact cancellation (1e-16 of the other part) reads as 0.
-            let size = both.iter().chain(&for_reference).chain(&for_disturbance).map(|u| u.norm()).fold(0.0, f64::max);
-            let amplitude =
-                |v: &DVector<C64>| v.iter().map(|u| if u.norm() <= 1e-12 * size { 0.0 } else { u.norm() }).collect();
-            InputTone {
-                frequency: t.w,
-                amplitude: amplitude(&both),
-                for_reference: amplitude(&for_reference),
-                for_disturbance: amplitude(&for_disturbance),
-                disturbance_output: eigs.as_deref().and_then(|e| forced_output(plant, e, t.w, &t.omega)),
+    let mut signals: Vec<Component> = vec![Component::default(); m];
+    let mut tones = Vec::new();
+    for t in crate::averaged::tones(reference, disturbance) {
+        let zero = transmission_zero(plant, t.w);
+        let for_reference = input_phasor(plant, t.w, &t.g, &DVector::zeros(t.omega.len()));
+        let for_disturbance = input_phasor(plant, t.w, &DVector::zeros(t.g.len()), &t.omega);
+        let both = &for_reference + &for_disturbance;
+        for (u, c) in both.iter().zip(&mut signals) {
+            // a sin(wt + φ) has the phasor a e^{j(φ − π/2)} (crate::averaged's convention).
+            let phase = u.arg() + std::f64::consts::FRAC_PI_2;
+            match t.w {
+                0.0 => c.bias += u.re,
+                w => c.harmonics.push(Harmonic { amplitude: u.norm(), frequency: w, phase }),
             }
-        })
-        .collect();
-    let bound = (0..m).map(|i| tones.iter().map(|t| t.amplitude[i]).sum()).collect();
+        }
+        // Round-off of an exact cancellation (1e-16 of the other part) reads as 0.
+        let size = both.iter().chain(&for_reference).chain(&for_disturbance).map(|u| u.norm()).fold(0.0, f64::max);
+        let amplitude = |v: &DVector<C64>| -> Vec<f64> {
+            v.iter()
+                .map(|u| {
+                    if zero {
+                        f64::INFINITY
+                    } else if u.norm() <= 1e-12 * size {
+                        0.0
+                    } else {
+                        u.norm()
+                    }
+                })
+                .collect()
+        };
+        tones.push(InputTone {
+            frequency: t.w,
+            transmission_zero: zero,
+            amplitude: amplitude(&both),
+            for_reference: amplitude(&for_reference),
+            for_disturbance: amplitude(&for_disturbance),
+            disturbance_output: eigs.as_deref().and_then(|e| forced_output(plant, e, t.w, &t.omega)),
+        });
+    }
+    let any_zero = tones.iter().any(|t| t.transmission_zero);
+    let peak = signals.iter().map(|c| if any_zero { f64::INFINITY } else { c.peak() }).collect();
     let rms = (0..m)
         .map(|i| {
-            tones
-                .iter()
-                .map(|t| t.amplitude[i].powi(2) * if t.frequency == 0.0 { 1.0 } else { 0.5 })
-                .sum::<f64>()
-                .sqrt()
+            let power = |t: &InputTone| t.amplitude[i].powi(2) * if t.frequency == 0.0 { 1.0 } else { 0.5 };
+            tones.iter().map(power).fold(0.0, |a, p| a + p).sqrt()
         })
         .collect();
-    let mut steady = SteadyInput { tones, bound, rms, advice: vec![] };
-    let mut advice = costly_harmonics(&steady, reference, names, plant.time_unit);
+    let mut steady = SteadyInput { tones, peak, rms, advice: vec![] };
+    let unit = plant.time_unit;
+    let mut advice: Vec<String> =
+        steady.tones.iter().filter(|t| t.transmission_zero).map(|t| zero_advice(t.frequency, unit)).collect();
+    advice.extend(costly_harmonics(&steady, reference, names, unit));
     advice.extend(limits.into_iter().flat_map(|l| beyond_limits(&steady, l, names.0)));
     steady.advice = advice;
     steady
 }
 
-/// U at frequency w for the phasors G and W; NaN where the system matrix is singular (a
-/// transmission zero at jw, or an input without effect).
-fn input_phasor(plant: &Plant, w: f64, g: &DVector<C64>, omega: &DVector<C64>) -> DVector<C64> {
-    let (n, m) = (plant.A.nrows(), plant.B.ncols());
-    if g.iter().chain(omega.iter()).all(|z| *z == C64::new(0.0, 0.0)) {
-        return DVector::zeros(m);
+/// Whether w is a transmission zero of (A, B, C): the system matrix of [module docs](self),
+/// equilibrated, is singular to [`ZERO_RCOND`]. (Its LU solve would return a finite 1e16.)
+fn transmission_zero(plant: &Plant, w: f64) -> bool {
+    let mut S = system_matrix(plant, w);
+    for mut row in S.row_iter_mut() {
+        let top = row.iter().map(|z| z.norm()).fold(0.0, f64::max);
+        if top > 0.0 {
+            row /= C64::new(top, 0.0);
+        }
     }
+    for mut col in S.column_iter_mut() {
+        let top = col.iter().map(|z| z.norm()).fold(0.0, f64::max);
+        if top > 0.0 {
+            col /= C64::new(top, 0.0);
+        }
+    }
+    let sv = S.svd(false, false).singular_values;
+    let (lo, hi) = sv.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+    lo.is_nan() || lo <= ZERO_RCOND * hi
+}
+
+/// A frequency of g or ω at a transmission zero: what it means and what to change.
+fn zero_advice(w: f64, unit: TimeUnit) -> String {
+    format!(
+        "{} rad/{unit} is a transmission zero of (A, B, C): no input holds y = g there, so tracking g or rejecting ω at that frequency is impossible whatever the design or the actuator (the adaptive command grows without converging); take that frequency out of the reference, or measure other outputs",
+        fmt_4(w)
+    )
+}
+
+/// [jwI − A, −B; C, 0] ([module docs](self)).
+fn system_matrix(plant: &Plant, w: f64) -> DMatrix<C64> {
+    let (n, m) = (plant.A.nrows(), plant.B.ncols());
     let mut S = DMatrix::<C64>::zeros(n + m, n + m);
     S.view_mut((0, 0), (n, n)).copy_from(&-complex(&plant.A));
     for i in 0..n {
@@ -122,10 +177,20 @@ fn input_phasor(plant: &Plant, w: f64, g: &DVector<C64>, omega: &DVector<C64>) -
     }
     S.view_mut((0, n), (n, m)).copy_from(&-complex(&plant.B));
     S.view_mut((n, 0), (m, n)).copy_from(&complex(&plant.C));
+    S
+}
+
+/// U at frequency w for the phasors G and W; ∞ where the system matrix is exactly singular.
+fn input_phasor(plant: &Plant, w: f64, g: &DVector<C64>, omega: &DVector<C64>) -> DVector<C64> {
+    let (n, m) = (plant.A.nrows(), plant.B.ncols());
+    if g.iter().chain(omega.iter()).all(|z| *z == C64::new(0.0, 0.0)) {
+        return DVector::zeros(m);
+    }
     let mut rhs = DVector::<C64>::zeros(n + m);
     rhs.rows_mut(0, n).copy_from(&(complex(&plant.D) * omega));
     rhs.rows_mut(n, m).copy_from(&(g - complex(&plant.Q) * omega));
-    let solved = S.lu().solve(&rhs).filter(|x| x.iter().all(|z| z.re.is_finite() && z.im.is_finite()));
+    let solved =
+        system_matrix(plant, w).lu().solve(&rhs).filter(|x| x.iter().all(|z| z.re.is_finite() && z.im.is_finite()));
     solved.map_or_else(|| DVector::from_element(m, C64::new(f64::INFINITY, 0.0)), |x| x.rows(n, m).into_owned())
 }
 
@@ -142,33 +207,32 @@ fn forced_output(plant: &Plant, eigs: &[C64], w: f64, omega: &DVector<C64>) -> O
     Some(Y.iter().map(|y| y.norm()).collect())
 }
 
-/// Advice for each input whose steady state exceeds (RMS above the limit) or may exceed (bound
-/// above it) its actuator limit: y = g then cannot be held, or only where the harmonics' phases
-/// keep clear of the limit.
+/// Advice for each input whose steady state exceeds its actuator limit: its RMS (y = g cannot be
+/// held) or its peak (the loop saturates at times in steady state).
 fn beyond_limits(steady: &SteadyInput, limits: &[f64], inputs: &[String]) -> Vec<String> {
     let mut advice = Vec::new();
     for (i, &limit) in limits.iter().enumerate() {
-        let (rms, bound) = (steady.rms[i], steady.bound[i]);
+        let (rms, peak) = (steady.rms[i], steady.peak[i]);
         let what = if rms > limit {
             "exceeds it: tracking g and rejecting ω exactly is impossible with this actuator, whatever the design; ask less of the loop (fewer harmonics, smaller references) or a stronger actuator"
-        } else if bound > limit {
-            "may exceed it where the harmonics add up: the loop then saturates at times in steady state"
+        } else if peak > limit {
+            "exceeds it at its peaks: the loop saturates at times in steady state"
         } else {
             continue;
         };
         advice.push(format!(
-            "{}: the steady-state input (RMS {}, up to {}) against the actuator limit truth.u_max = {} {what}",
+            "{}: the steady-state input (RMS {}, peak {}) against the actuator limit truth.u_max = {} {what}",
             inputs[i],
             fmt_4(rms),
-            fmt_4(bound),
+            fmt_4(peak),
             fmt_short(limit)
         ));
     }
     advice
 }
 
-/// Advice for each harmonic of ω that moves every output by at most [`TAIL_BOUND`] of its
-/// reference's peak yet costs an input at least [`COSTLY_SHARE`] of its steady-state bound.
+/// Advice for each harmonic of ω whose forced response stays within [`TAIL_BOUND`] of every
+/// output's reference peak yet costs an input at least [`COSTLY_SHARE`] of its steady-state peak.
 fn costly_harmonics(
     steady: &SteadyInput,
     reference: &Signal,
@@ -177,21 +241,21 @@ fn costly_harmonics(
 ) -> Vec<String> {
     let bounds: Vec<f64> = reference.components.iter().map(|c| TAIL_BOUND * c.peak()).collect();
     let mut advice = Vec::new();
-    for t in steady.tones.iter().filter(|t| t.frequency > 0.0) {
+    for t in steady.tones.iter().filter(|t| t.frequency > 0.0 && !t.transmission_zero) {
         let Some(moved) = &t.disturbance_output else { continue };
         if !moved.iter().zip(&bounds).all(|(y, b)| y <= b) {
             continue;
         }
-        let costly: Vec<String> = (0..steady.bound.len())
-            .filter(|&i| steady.bound[i].is_finite() && t.for_disturbance[i] > 0.0)
-            .filter(|&i| t.for_disturbance[i] >= COSTLY_SHARE * steady.bound[i])
+        let costly: Vec<String> = (0..steady.peak.len())
+            .filter(|&i| steady.peak[i].is_finite() && t.for_disturbance[i] > 0.0)
+            .filter(|&i| t.for_disturbance[i] >= COSTLY_SHARE * steady.peak[i])
             .map(|i| {
-                let share = 100.0 * t.for_disturbance[i] / steady.bound[i];
+                let share = 100.0 * t.for_disturbance[i] / steady.peak[i];
                 format!(
-                    "±{} of {} ({share:.0} % of its steady-state bound {})",
+                    "±{} of {} ({share:.0} % of its steady-state peak {})",
                     fmt_4(t.for_disturbance[i]),
                     inputs[i],
-                    fmt_4(steady.bound[i])
+                    fmt_4(steady.peak[i])
                 )
             })
             .collect();
@@ -206,10 +270,10 @@ fn costly_harmonics(
             }
         });
         advice.push(format!(
-            "ω's harmonic at {} rad/{unit} moves {} by at most {} with the input held at 0 (within the tail bound {}: 1 % of the reference's peak), yet cancelling it takes {}: an actuator limit (u_limit of the automatic design) trades that rejection for effort",
+            "ω's harmonic at {} rad/{unit} has a forced response (input held at 0) of at most {} at {} (within the tail bound {}: 1 % of the reference's peak), yet cancelling it takes {}; if the actuator should not follow it, let it pass: an actuator limit below that (u_limit of the automatic design) does so where the limit binds in steady state rather than in the transient, as do observer poles slow enough that the disturbance observer does not see it",
             fmt_4(t.frequency),
-            outputs[j],
             fmt_4(y),
+            outputs[j],
             fmt_4(bounds[j]),
             costly.join(", "),
         ));
@@ -219,6 +283,7 @@ fn costly_harmonics(
 
 #[cfg(test)]
 mod tests {
+    use super::C64;
     use crate::scenario::Scenario;
 
     /// Nomoto's ship (Fossen 2011, Mariner: T = 107.3 s, K = 0.185 /s) with a rudder servo of
@@ -269,25 +334,42 @@ mod tests {
                 Some(y) => assert_eq!(y[0], 0.0),
             }
         }
-        let sum: f64 = expected.iter().map(|e| e.1).sum();
-        assert!((st.bound[0] - sum).abs() <= 1e-12 * sum);
         let rms = (expected[0].1.powi(2) + expected[1..].iter().map(|e| e.1 * e.1 / 2.0).sum::<f64>()).sqrt();
         assert!((st.rms[0] - rms).abs() <= 1e-12 * rms);
+        // The peak: u_f(t) from the closed-form phasors (a sin(wt) is Re(−j a e^{jwt})), sampled
+        // over the common period 2π/0.005 (0.6 and 0.9 are its 120th and 180th harmonics) every
+        // 1e-3 rad of the fastest phase, the maximum then within 1.3e-7 relative of the true one;
+        // below the sum of the amplitudes, which the phases never line up to.
+        let j = C64::new(0.0, 1.0);
+        let phasor = |w: f64, g: C64, d: C64| ((j * w + a) * j * w * g - d) / b * (j * w + c) / c;
+        let waves = [
+            (0.005, phasor(0.005, -j * 0.2, C64::new(0.0, 0.0))),
+            (0.6, phasor(0.6, C64::new(0.0, 0.0), -j * 2e-4)),
+            (0.9, phasor(0.9, C64::new(0.0, 0.0), -j * 1e-4)),
+        ];
+        let u = |t: f64| -5e-5 / b + waves.iter().map(|(w, p)| (p * (j * w * t).exp()).re).sum::<f64>();
+        let period = std::f64::consts::TAU / 0.005;
+        let samples = (period * 0.9 / 1e-3) as usize;
+        let peak = (0..samples).map(|k| u(k as f64 * period / samples as f64).abs()).fold(0.0, f64::max);
+        assert!((st.peak[0] - peak).abs() <= 2e-7 * peak, "{} against {peak}", st.peak[0]);
+        let sum: f64 = expected.iter().map(|e| e.1).sum();
+        assert!(peak < 0.99 * sum, "{peak} against the sum {sum}");
     }
 
     #[test]
     fn a_wave_that_barely_turns_the_ship_but_works_the_rudder_is_named() {
         // Each wave turns ψ by 5.6e-4 and 1.2e-4 rad, within 1 % of the course's peak 0.3, and
-        // takes 54 % and 37 % of the rudder's steady-state bound.
+        // takes 55 % and 37 % of the rudder's steady-state peak.
         let advice = ship((2e-4, 1e-4), None).steady_input().advice;
         assert_eq!(advice.len(), 2, "{advice:?}");
         assert!(
-            advice[0].contains("at 0.6 rad/s moves psi by at most 0.0005555")
-                && advice[0].contains("±0.2091 of delta_c (54 %"),
+            advice[0].contains("at 0.6 rad/s has a forced response (input held at 0) of at most 0.0005555 at psi")
+                && advice[0].contains("±0.2091 of delta_c (55 %"),
             "{}",
             advice[0]
         );
         assert!(advice[1].contains("at 0.9 rad/s") && advice[1].contains("u_limit"), "{}", advice[1]);
+        // A transmission zero at a frequency of g gets no such line (nor a finite peak): below.
         // Ten times the 0.6 rad/s wave turns ψ by 5.6e-3, beyond the bound 3e-3: worth its rudder;
         // the 0.9 rad/s wave's share then falls to 7 %, below the quarter.
         let advice = ship((2e-3, 1e-4), None).steady_input().advice;
@@ -296,8 +378,8 @@ mod tests {
 
     #[test]
     fn a_steady_input_beyond_the_actuator_limit_is_named() {
-        // RMS 0.1815, bound 0.3871 (the closed form above).
-        for (limit, says) in [(0.1, Some("exceeds it")), (0.3, Some("may exceed it")), (0.4, None)] {
+        // RMS 0.1815, peak 0.381 (the closed form above).
+        for (limit, says) in [(0.1, Some("exceeds it")), (0.3, Some("exceeds it at its peaks")), (0.4, None)] {
             let advice = ship((2e-4, 1e-4), Some(limit)).steady_input().advice;
             let on_limit: Vec<_> = advice.iter().filter(|a| a.contains("truth.u_max")).collect();
             match says {
@@ -305,5 +387,38 @@ mod tests {
                 None => assert!(on_limit.is_empty(), "{limit}: {advice:?}"),
             }
         }
+    }
+
+    #[test]
+    fn a_frequency_at_a_transmission_zero_is_named_impossible() {
+        // G(s) = (s² + 1.69)/((s + 1)(s + 2)(s + 3)): zeros ±1.3j. A reference at 1.3 rad/s cannot
+        // be tracked by any input; the LU solve had returned a finite 1.2e16. At 1.2 rad/s it can.
+        let at = |w: f64| {
+            Scenario::from_toml(&format!(
+                "[plant]\nA = [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [-6.0, -11.0, -6.0]]\nB = [[0.0], [0.0], [1.0]]\nC = [[1.69, 0.0, 1.0]]\n\
+                 delays = [0.0]\n[design]\nobserver_poles = [-5.0, -6.0, -7.0]\nchannel_poles = [[-2.0]]\nreference_filter_poles = [[-1.0, -2.0]]\n\
+                 mu = [1.0]\nbeta = 1.0\n[reference]\ncomponents = [{{ harmonics = [{{ amplitude = 1.0, frequency = {w} }}] }}]\n"
+            ))
+            .unwrap()
+            .steady_input()
+        };
+        let st = at(1.3);
+        assert!(
+            st.tones[0].transmission_zero && st.peak[0] == f64::INFINITY && st.tones[0].amplitude[0] == f64::INFINITY
+        );
+        assert!(
+            st.advice.len() == 1 && st.advice[0].starts_with("1.3 rad/s is a transmission zero of (A, B, C)"),
+            "{:?}",
+            st.advice
+        );
+        // |U| = |G(j1.2)|⁻¹ = |(j1.2 + 1)(j1.2 + 2)(j1.2 + 3)| / |1.69 − 1.44| (closed form).
+        let st = at(1.2);
+        let want = (1.0f64 + 1.44).sqrt() * (4.0f64 + 1.44).sqrt() * (9.0f64 + 1.44).sqrt() / 0.25;
+        assert!(
+            !st.tones[0].transmission_zero && (st.peak[0] - want).abs() <= 1e-12 * want,
+            "{} against {want}",
+            st.peak[0]
+        );
+        assert!(st.advice.is_empty(), "{:?}", st.advice);
     }
 }
