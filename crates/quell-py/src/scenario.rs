@@ -395,6 +395,81 @@ fn actuator_keys(py: Python<'_>, a: &Bound<'_, PyAny>) -> PyResult<Vec<(String, 
     Ok(keys)
 }
 
+/// `quell.Scenario`'s keywords besides the plant, the signals and the design keys.
+struct Options<'a, 'py> {
+    name: Option<&'a Bound<'py, PyAny>>,
+    /// t_end, output_step, rtol, atol, sample_time.
+    numbers: [Option<&'a Bound<'py, PyAny>>; 5],
+    method: Option<&'a Bound<'py, PyAny>>,
+    noise: Option<&'a Bound<'py, PyAny>>,
+    truth: Option<&'a Bound<'py, PyAny>>,
+    actuator: Option<&'a Bound<'py, PyAny>>,
+}
+
+/// The scenario document `quell.Scenario(plant, reference, disturbance, **options, **design)`
+/// validates (and `auto_design` completes): every argument converted and checked for its type.
+fn scenario_document(
+    py: Python<'_>,
+    plant: &Bound<'_, PyAny>,
+    (reference, disturbance): (&Bound<'_, PyAny>, Option<&Bound<'_, PyAny>>),
+    options: &Options<'_, '_>,
+    design: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Table> {
+    let plant = plant_arg(plant, "plant")?;
+    let Options { name, numbers, method, noise, truth, actuator } = options;
+    let mut doc = Table::new();
+    if let Some(name) = name.filter(|n| !n.is_none()) {
+        let text: String = name.extract().map_err(|_| type_error("name", "a str", name))?;
+        doc.insert("name".into(), Value::String(text));
+    }
+    let mut plant_doc = plant_table(&plant.inner);
+    plant.labels.write(&mut plant_doc);
+    doc.insert("plant".into(), Value::Table(plant_doc));
+    doc.insert("design".into(), Value::Table(design_value(design)?));
+    let signal = |v: &Bound<'_, PyAny>, key: &str| -> PyResult<Value> {
+        let form = "a list of components, one dict {bias, harmonics} per signal";
+        if v.is_instance_of::<PyString>() || v.is_instance_of::<PyDict>() || v.try_iter().is_err() {
+            return Err(type_error(key, form, v));
+        }
+        let components = toml_value(v, key)?;
+        Ok(Value::Table(Table::from_iter([("components".to_string(), components)])))
+    };
+    doc.insert("reference".into(), signal(reference, "reference")?);
+    if let Some(d) = disturbance.filter(|d| !d.is_none()) {
+        doc.insert("disturbance".into(), signal(d, "disturbance")?);
+    }
+    let mut sim = Table::new();
+    write_simulation(&mut sim, *numbers, *method)?;
+    doc.insert("simulation".into(), Value::Table(sim));
+    if let Some(n) = noise.filter(|n| !n.is_none()) {
+        if !n.is_instance_of::<PyDict>() {
+            return Err(type_error("noise", "a dict {std, seed, bandwidth}", n));
+        }
+        doc.insert("noise".into(), toml_value(n, "noise")?);
+    }
+    if let Some(t) = truth.filter(|t| !t.is_none()) {
+        doc.insert("truth".into(), Value::Table(truth_arg(py, t, &plant.inner)?));
+    }
+    if let Some(a) = actuator.filter(|a| !a.is_none()) {
+        let truth = doc.entry("truth").or_insert_with(|| Value::Table(Table::new()));
+        if let Value::Table(truth) = truth {
+            for (key, value) in actuator_keys(py, a)? {
+                // One value per key: truth={"u_max": ...} and actuator={"u_max": ...} together
+                // had the actuator's win in silence.
+                if truth.contains_key(&key) {
+                    let name = if key == "u_max" { "u_max" } else { "delays" };
+                    let message = format!(
+                        "actuator[{name:?}] and truth[{key:?}]: both given; give the actuator's {name} in one of them"
+                    );
+                    return Err(Kind::Scenario.err(py, message));
+                }
+                truth.insert(key, value);
+            }
+        }
+    }
+    Ok(doc)
+}
+
 #[pymethods]
 impl PyScenario {
     #[new]
@@ -417,55 +492,9 @@ impl PyScenario {
         actuator: Option<&Bound<'_, PyAny>>,
         design: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
-        let plant = plant_arg(plant, "plant")?;
-        let mut doc = Table::new();
-        if let Some(name) = name.filter(|n| !n.is_none()) {
-            let text: String = name.extract().map_err(|_| type_error("name", "a str", name))?;
-            doc.insert("name".into(), Value::String(text));
-        }
-        let mut plant_doc = plant_table(&plant.inner);
-        plant.labels.write(&mut plant_doc);
-        doc.insert("plant".into(), Value::Table(plant_doc));
-        doc.insert("design".into(), Value::Table(design_value(design)?));
-        let signal = |v: &Bound<'_, PyAny>, key: &str| -> PyResult<Value> {
-            let form = "a list of components, one dict {bias, harmonics} per signal";
-            if v.is_instance_of::<PyString>() || v.is_instance_of::<PyDict>() || v.try_iter().is_err() {
-                return Err(type_error(key, form, v));
-            }
-            let components = toml_value(v, key)?;
-            Ok(Value::Table(Table::from_iter([("components".to_string(), components)])))
-        };
-        doc.insert("reference".into(), signal(reference, "reference")?);
-        if let Some(d) = disturbance.filter(|d| !d.is_none()) {
-            doc.insert("disturbance".into(), signal(d, "disturbance")?);
-        }
-        let mut sim = Table::new();
-        write_simulation(&mut sim, [t_end, output_step, rtol, atol, sample_time], method)?;
-        doc.insert("simulation".into(), Value::Table(sim));
-        if let Some(n) = noise.filter(|n| !n.is_none()) {
-            if !n.is_instance_of::<PyDict>() {
-                return Err(type_error("noise", "a dict {std, seed, bandwidth}", n));
-            }
-            doc.insert("noise".into(), toml_value(n, "noise")?);
-        }
-        if let Some(t) = truth.filter(|t| !t.is_none()) {
-            doc.insert("truth".into(), Value::Table(truth_arg(py, t, &plant.inner)?));
-        }
-        if let Some(a) = actuator.filter(|a| !a.is_none()) {
-            let truth = doc.entry("truth").or_insert_with(|| Value::Table(Table::new()));
-            if let Value::Table(truth) = truth {
-                for (key, value) in actuator_keys(py, a)? {
-                    // One value per key: truth={"u_max": ...} and actuator={"u_max": ...} together
-                    // had the actuator's win in silence.
-                    if truth.contains_key(&key) {
-                        let name = if key == "u_max" { "u_max" } else { "delays" };
-                        let message = format!("actuator[{name:?}] and truth[{key:?}]: both given; give the actuator's {name} in one of them");
-                        return Err(Kind::Scenario.err(py, message));
-                    }
-                    truth.insert(key, value);
-                }
-            }
-        }
+        let options =
+            Options { name, numbers: [t_end, output_step, rtol, atol, sample_time], method, noise, truth, actuator };
+        let doc = scenario_document(py, plant, (reference, disturbance), &options, design)?;
         let inner = quell::Scenario::from_document(&doc).map_err(|e| values_error(py, &e))?;
         Ok(PyScenario { from_values: true, ..Self::new(inner) })
     }
@@ -739,14 +768,74 @@ pub fn paper_example(py: Python<'_>) -> PyResult<PyScenario> {
     PyScenario::parse(py, PAPER_EXAMPLE)
 }
 
+/// The document `auto_design` completes: the TOML `text`, or a `quell.Plant` with the signals and
+/// `quell.Scenario`'s keywords (its design keys those the rules are not to choose).
+fn auto_document<'py>(
+    py: Python<'py>,
+    text: &Bound<'py, PyAny>,
+    (reference, disturbance): (Option<&Bound<'py, PyAny>>, Option<&Bound<'py, PyAny>>),
+    scenario: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Table> {
+    if text.is_instance_of::<PyString>() {
+        // The text holds the signals and every setting: arguments beside it would be ignored.
+        let with_text =
+            "None with TOML text (the text holds the signals and settings; pass a quell.Plant to give them here)";
+        for (name, v) in [("reference", reference), ("disturbance", disturbance)] {
+            if let Some(v) = v.filter(|v| !v.is_none()) {
+                return Err(type_error(name, with_text, v));
+            }
+        }
+        if let Some((k, v)) = scenario.and_then(|d| d.iter().next()) {
+            return Err(type_error(&k.to_string(), with_text, &v));
+        }
+        let text = crate::convert::text(text, "text")?;
+        return quell::scenario::parse_document(&text).map_err(|e| scenario_error(py, &e));
+    }
+    if text.extract::<PyRef<'py, PyPlant>>().is_err() {
+        return Err(type_error("text", "a str (a scenario's TOML text) or a quell.Plant", text));
+    }
+    let Some(reference) = reference.filter(|r| !r.is_none()) else {
+        let message = "reference: missing; with a quell.Plant give the reference g as Scenario takes it, a list of components, one dict {bias, harmonics} per output";
+        return Err(crate::errors::keyed(py, Kind::Scenario, message.to_string(), Some("reference".into())));
+    };
+    // Scenario's own keywords out of **scenario; the rest are [design] keys.
+    let design = PyDict::new(py);
+    let mut own: Vec<Option<Bound<'py, PyAny>>> = vec![None; SCENARIO_KEYWORDS.len()];
+    for (k, v) in scenario.into_iter().flat_map(|d| d.iter()) {
+        let key: String = k.extract()?;
+        match SCENARIO_KEYWORDS.iter().position(|n| *n == key) {
+            Some(at) => own[at] = Some(v),
+            None => design.set_item(k, v)?,
+        }
+    }
+    let at = |k: &str| own[SCENARIO_KEYWORDS.iter().position(|n| *n == k).expect("a Scenario keyword")].as_ref();
+    let numbers = [at("t_end"), at("output_step"), at("rtol"), at("atol"), at("sample_time")];
+    let options = Options {
+        name: at("name"),
+        numbers,
+        method: at("method"),
+        noise: at("noise"),
+        truth: at("truth"),
+        actuator: at("actuator"),
+    };
+    scenario_document(py, text, (reference, disturbance), &options, Some(&design))
+}
+
 /// The automatic design (`quell design --auto`): chooses every `[design]` key the scenario file's
 /// text leaves out (observer, channel and filter poles, μ, β) and verifies it by simulation
 /// (tail max |e_i| ≤ 1 % of the reference's peak). The GIL is released meanwhile.
 ///
 /// Parameters
 /// ----------
-/// text : str
-///     A scenario file's text; its `[design]` keys are kept, the others chosen.
+/// text : str or Plant
+///     A scenario file's text, its `[design]` keys kept and the others chosen; or a `quell.Plant`
+///     (from python-control too: `quell.Plant(sys, D=..., Q=...)`), with the signals and
+///     settings below.
+/// reference, disturbance : list of dict, optional
+///     With a Plant: g (required) and ω as `quell.Scenario` takes them.
+/// **scenario
+///     With a Plant: `quell.Scenario`'s keywords (`t_end`, `output_step`, `sample_time`, `truth`,
+///     …) and any `[design]` keys to keep (the others are chosen).
 /// convergence_time : float, optional
 ///     The time within which the adaptation should converge, in the plant model's unit of time
 ///     (`plant.time_unit`; seconds by default).
@@ -766,7 +855,7 @@ pub fn paper_example(py: Python<'_>) -> PyResult<PyScenario> {
 /// TypeError
 ///     An argument of the wrong type.
 /// ScenarioError
-///     The text is not a valid scenario.
+///     The text or the values are not a valid scenario (with a Plant: no reference).
 /// DesignError
 ///     A target that is not a finite number > 0, or no design was found.
 ///
@@ -778,15 +867,22 @@ pub fn paper_example(py: Python<'_>) -> PyResult<PyScenario> {
 /// >>> keys = [c["key"] for c in report["choices"]]
 /// >>> report["passed"], "design.channel_poles" in keys, "design.mu" in keys
 /// (True, True, True)
+/// >>> p = quell.paper_example()
+/// >>> s, report = quell.auto_design(p.plant, p.reference, p.disturbance, t_end=60.0)
+/// >>> report["passed"], s.simulation["t_end"]
+/// (True, 60.0)
 #[pyfunction]
-#[pyo3(signature = (text, *, convergence_time=None, u_limit=None))]
+#[pyo3(signature = (text, reference=None, disturbance=None, *, convergence_time=None, u_limit=None, **scenario))]
 pub fn auto_design<'py>(
     py: Python<'py>,
     text: &Bound<'py, PyAny>,
+    reference: Option<&Bound<'py, PyAny>>,
+    disturbance: Option<&Bound<'py, PyAny>>,
     convergence_time: Option<&Bound<'py, PyAny>>,
     u_limit: Option<&Bound<'py, PyAny>>,
+    scenario: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<(PyScenario, Bound<'py, PyAny>)> {
-    let text = crate::convert::text(text, "text")?;
+    let doc = auto_document(py, text, (reference, disturbance), scenario)?;
     let given = |v: Option<&Bound<'py, PyAny>>| v.filter(|v| !v.is_none()).cloned();
     let convergence_time = given(convergence_time)
         .map(|v| number(&v, "convergence_time", Kind::Design, "convergence_time"))
@@ -794,7 +890,6 @@ pub fn auto_design<'py>(
     let u_limit = given(u_limit).map(|v| crate::convert::vector(&v, "u_limit", Kind::Design)).transpose()?;
     let u_limit = u_limit.unwrap_or_default();
     // Their ranges are checked by auto_design (AutoError::Target: a DesignError below).
-    let doc = quell::scenario::parse_document(&text).map_err(|e| scenario_error(py, &e))?;
     let targets = quell::auto::Targets { convergence_time, u_limit };
     let auto =
         crate::interrupt::interruptible(py, || quell::auto::auto_design(&doc, &targets))?.map_err(|e| match e {

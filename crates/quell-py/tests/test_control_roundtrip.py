@@ -222,3 +222,33 @@ def test_transfer_function_names_are_kept():
     G = control.tf([1.0], [1.0, 2.0, 1.0], inputs="force", outputs="position")
     p = quell.Plant(G, delays=[0.1])
     assert p.inputs == ["force"] and p.outputs == ["position"]
+
+
+def test_a_python_control_plant_is_designed_automatically_without_toml():
+    """auto_design takes a quell.Plant (here from control.ss) with the signals and Scenario's
+    keywords: the same choices as the same scenario written as TOML text without [design], and a
+    run within the tail bound. Text with signals beside it, or a Plant without a reference, is
+    refused naming the argument."""
+    paper = quell.paper_example()
+    p = paper.plant
+    sys = control.ss(p.A, p.B, p.C, np.zeros((2, 2)))
+    plant = quell.Plant(sys, D=p.D, Q=p.Q, delays=p.delays)
+    settings = {k: paper.simulation[k] for k in ("t_end", "output_step", "rtol", "atol")}
+    s, report = quell.auto_design(plant, paper.reference, paper.disturbance, mu=[20.0, 30.0], **settings)
+    assert report["passed"], report
+    text = paper.to_toml()
+    head, rest = text.split("[design]")
+    _, from_text = quell.auto_design(head + "[design]\nmu = [20.0, 30.0]\n" + rest[rest.index("[[reference"):])
+    assert [(c["key"], c["value"]) for c in report["choices"]] == [(c["key"], c["value"]) for c in from_text["choices"]]
+    assert s.design().mu == [20.0, 30.0]
+    tail = [c["tail_max_e"] for c in quell.simulate(s).summary()]
+    assert tail[0] <= 0.01 * 3.0 and tail[1] <= 0.01 * 2.0, tail
+    with pytest.raises(TypeError, match=r"^reference: expected None with TOML text"):
+        quell.auto_design(text, paper.reference)
+    with pytest.raises(TypeError, match=r"^t_end: expected None with TOML text"):
+        quell.auto_design(text, t_end=5.0)
+    with pytest.raises(quell.ScenarioError, match=r"^reference: missing; with a quell.Plant") as e:
+        quell.auto_design(plant)
+    assert e.value.key == "reference"
+    with pytest.raises(quell.ScenarioError, match=r"t_ned: unknown keyword \(did you mean `t_end`\?\)"):
+        quell.auto_design(plant, paper.reference, t_ned=5.0)

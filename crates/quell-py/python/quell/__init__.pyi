@@ -416,8 +416,11 @@ def tune(
 ) -> TuneResult: ...
 
 def auto_design(
-    text: str,
+    text: Union[str, Plant],
+    reference: Optional[Sequence[Dict[str, Any]]] = None,
+    disturbance: Optional[Sequence[Dict[str, Any]]] = None,
     *,
     convergence_time: Optional[float] = None,
     u_limit: Optional[Union[float, Sequence[float]]] = None,
+    **scenario: Any,
 ) -> Tuple[Scenario, Dict[str, Any]]: ...
