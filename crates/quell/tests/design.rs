@@ -400,6 +400,35 @@ fn error_unstable_zero_dynamics_names_the_zeros() {
 }
 
 #[test]
+fn zeros_on_the_imaginary_axis_are_refused() {
+    // G(s) = (s² + 1.69)/((s + 1)(s + 2)(s + 3)): zeros ±1.3j (closed form), marginal zero
+    // dynamics. Computed at Re ≈ −1e-17 they had passed as stable, and a run with g at 1.3 rad/s
+    // grew without bound.
+    let A = companion(&poly_from_roots(&[re(-1.0), re(-2.0), re(-3.0)]));
+    let plant = Plant::new(
+        A,
+        mat(3, 1, &[0.0, 0.0, 1.0]),
+        mat(1, 3, &[1.69, 0.0, 1.0]),
+        mat(3, 1, &[1.0, 0.0, 0.0]),
+        mat(1, 1, &[0.0]),
+        vec![0.0],
+        None,
+    )
+    .unwrap();
+    let mut spec = siso_spec();
+    spec.observer = ObserverChoice::Poles(vec![re(-5.0), re(-6.0), re(-7.0)]);
+    spec.channel_poles = vec![vec![re(-2.0)]];
+    match expect_err(&plant, &spec) {
+        DesignError::UnstableZeroDynamics { zeros, unstable, .. } => {
+            assert_eq!(zeros.len(), 2);
+            assert_eq!(unstable.len(), 2);
+            assert!(unstable.iter().all(|z| (z.im.abs() - 1.3).abs() < 1e-9 && z.re.abs() < 1e-9), "{unstable:?}");
+        }
+        e => panic!("unexpected {e}"),
+    }
+}
+
+#[test]
 fn zero_dynamics_set_the_channel_poles_aside() {
     // G(s) = (s + 1)(s − 3)/((s + 2)(s + 4)(s + 5)) in controllable canonical form: σ = 1, zeros −1
     // and 3 (closed form). The channel pole is placed at −1, on top of the stable zero: only the
