@@ -52,9 +52,7 @@ pub fn estimate(
     let rho = loop_rate(design, truth, [reference, disturbance]);
     let avg = Averaged::new(design, reference, disturbance);
     let unit = design.plant().time_unit;
-    // The observer's remedy redesigns it at several speeds: only when some advice quotes it.
-    let remedy_text = std::cell::OnceCell::new();
-    let remedy = || remedy_text.get_or_init(|| super::observer_remedy(design, [reference, disturbance], None)).as_str();
+    let remedy = super::ObserverRemedy::new(design, [reference, disturbance], None);
     let transient = super::slow_transient_advice(design, t_end);
     avg.channels
         .iter()

@@ -205,9 +205,7 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
         _ => None,
     };
     let signals = [reference, disturbance];
-    // The remedy redesigns the observer at several speeds: only when some advice quotes it.
-    let remedy_text = std::cell::OnceCell::new();
-    let remedy = || remedy_text.get_or_init(|| observer_remedy(design, signals, sample_time)).as_str();
+    let remedy = ObserverRemedy::new(design, signals, sample_time);
     let unit = design.plant().time_unit;
     // The adaptation rate beyond which the loop is stiff (the pace estimate's threshold).
     let rho = crate::sim::loop_rate(design, design.plant(), [reference, disturbance]);
@@ -242,7 +240,7 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
         );
         advice.push(format!(
             "the disturbance observer passes ω at {freqs} rad/{unit} with relative error{plural} {errors} (it is driven by x̂, not x, eq. (20)): {}",
-            remedy()
+            remedy.text()
         ));
     }
     advice.extend(thrashing(&result.stats));
@@ -464,6 +462,40 @@ pub fn singular_disturbance_zeros(p: &Plant) -> Option<Vec<Complex<f64>>> {
 /// enough: an unknown-input observer also needs the eigenvectors there to be the zeros' state
 /// directions, which the placement does not impose when m > 1) and when it matters. A pole holds
 /// a zero within 1e-6 of it, or when both print the same (the zero copied from this advice).
+/// The observer's remedy for a run or a design, computed once and only when some advice quotes it
+/// (it redesigns the observer at several speeds): its text ([`observer_remedy`]) and, where it is a
+/// faster observer, that observer's averaged loop and rate ρ, from which the advice beside it
+/// takes μ and t_end (the present observer's figures were stale once it changed).
+pub(crate) struct ObserverRemedy<'a> {
+    design: &'a Design,
+    signals: [&'a Signal; 2],
+    sample_time: Option<f64>,
+    text: std::cell::OnceCell<String>,
+    faster: std::cell::OnceCell<Option<(Averaged, f64)>>,
+}
+
+impl<'a> ObserverRemedy<'a> {
+    pub(crate) fn new(design: &'a Design, signals: [&'a Signal; 2], sample_time: Option<f64>) -> Self {
+        ObserverRemedy { design, signals, sample_time, text: Default::default(), faster: Default::default() }
+    }
+
+    fn text(&self) -> &str {
+        self.text.get_or_init(|| observer_remedy(self.design, self.signals, self.sample_time))
+    }
+
+    /// The faster observer's averaged loop and ρ, where the remedy is one.
+    fn faster(&self) -> Option<&(Averaged, f64)> {
+        self.faster
+            .get_or_init(|| {
+                let [reference, disturbance] = self.signals;
+                let (.., faster) = faster_observer_design(self.design, self.signals)?;
+                let rho = crate::sim::loop_rate(&faster, faster.plant(), self.signals);
+                Some((Averaged::new(&faster, reference, disturbance), rho))
+            })
+            .as_ref()
+    }
+}
+
 fn observer_remedy(design: &Design, signals: [&Signal; 2], sample_time: Option<f64>) -> String {
     let p = design.plant();
     let faster = faster_observer(design, signals, sample_time);
@@ -515,29 +547,17 @@ const OBSERVER_SPEEDUPS: [f64; 12] = [2.0, 3.0, 5.0, 10.0, 20.0, 30.0, 50.0, 100
 /// The disturbance observer's error that a faster observer aims at: a third of [`FIDELITY_LIMIT`].
 const FIDELITY_TARGET: f64 = FIDELITY_LIMIT / 3.0;
 
-/// The observer poles × the first of [`OBSERVER_SPEEDUPS`] whose disturbance observer (20) passes
-/// every frequency of ω within [`FIDELITY_TARGET`] (the averaged loop's T(jw) against L_ω), as
-/// advice; with the sample time that observer needs when the run's is coarse for it. `None` when
-/// no speed-up reaches it.
-fn faster_observer(
-    design: &Design,
-    [reference, disturbance]: [&Signal; 2],
-    sample_time: Option<f64>,
-) -> Option<String> {
-    let now = design.observer_eigenvalues();
-    let (factor, poles, error, faster) = OBSERVER_SPEEDUPS.iter().find_map(|&f| {
-        let poles: Vec<Complex<f64>> = now.iter().map(|p| p * f).collect();
-        let faster = design.with_observer_poles(&poles).ok()?;
-        let fidelity = crate::averaged::Averaged::new(&faster, reference, disturbance).fidelity;
-        let error = fidelity.iter().map(|f| f.relative_error).fold(0.0, f64::max);
-        (error <= FIDELITY_TARGET).then_some((f, poles, error, faster))
-    })?;
+/// [`faster_observer_design`]'s observer as advice (the averaged loop's T(jw) against L_ω); with
+/// the sample time that observer needs when the run's is coarse for it. `None` when no speed-up
+/// reaches [`FIDELITY_TARGET`].
+fn faster_observer(design: &Design, signals: [&Signal; 2], sample_time: Option<f64>) -> Option<String> {
+    let (factor, poles, error, faster) = faster_observer_design(design, signals)?;
     let mut advice = format!(
         "give design.observer_poles {factor}× faster, [{}] (the averaged loop then passes every frequency of ω with relative error {error:.2} at worst)",
         fmt_complex_list(&poles)
     );
     if let Some(t_s) = sample_time {
-        let rho = crate::sim::loop_rate(&faster, faster.plant(), [reference, disturbance]);
+        let rho = crate::sim::loop_rate(&faster, faster.plant(), signals);
         if t_s * rho > crate::sim::COARSE_SAMPLE {
             let unit = design.plant().time_unit;
             advice += &format!(
@@ -549,6 +569,23 @@ fn faster_observer(
         }
     }
     Some(advice)
+}
+
+/// The observer poles × the first of [`OBSERVER_SPEEDUPS`] whose disturbance observer (20) passes
+/// every frequency of ω within [`FIDELITY_TARGET`]: the factor, the poles, the worst relative
+/// error and the design with them; `None` when no speed-up reaches it.
+fn faster_observer_design(
+    design: &Design,
+    [reference, disturbance]: [&Signal; 2],
+) -> Option<(f64, Vec<Complex<f64>>, f64, Design)> {
+    let now = design.observer_eigenvalues();
+    OBSERVER_SPEEDUPS.iter().find_map(|&f| {
+        let poles: Vec<Complex<f64>> = now.iter().map(|p| p * f).collect();
+        let faster = design.with_observer_poles(&poles).ok()?;
+        let fidelity = crate::averaged::Averaged::new(&faster, reference, disturbance).fidelity;
+        let error = fidelity.iter().map(|f| f.relative_error).fold(0.0, f64::max);
+        (error <= FIDELITY_TARGET).then_some((f, poles, error, faster))
+    })
 }
 
 /// RMS of e_i over the last 10 % of the run against the 10 % before.
@@ -622,13 +659,13 @@ fn horizon_mu(relevant: f64, lambda_max: f64, (t_end, stiff): (f64, f64)) -> (f6
 /// after μ where the μ needed keeps the loop non-stiff (the observer alone left a servo whose μ was
 /// 1000× too small where it was), as the cause where it does not. The pace estimate before a run
 /// and the diagnostics after it share it.
-pub(crate) fn slow_direction_advice<'r>(
+pub(crate) fn slow_direction_advice(
     c: &ChannelAverage,
     (i, mu): (usize, f64),
     fidelity: &[Fidelity],
     (t_end, stiff): (f64, f64),
     unit: TimeUnit,
-    remedy: &dyn Fn() -> &'r str,
+    remedy: &ObserverRemedy<'_>,
 ) -> Option<String> {
     let key = format!("design.mu[{i}]");
     let relevant = c.slowest_relevant(RELEVANT_SHARE);
@@ -650,15 +687,30 @@ pub(crate) fn slow_direction_advice<'r>(
     let (wanted, fastest) = horizon_mu(relevant, c.lambda_max(), (t_end, stiff));
     Some(if wanted > fastest {
         // The observer as the cause, then μ's own limit and the horizon it leaves (Wood–Berry's
-        // line named the observer alone, where a μ at the limit passed). Those figures are the
-        // present observer's: a faster one changes Ω̄ and ρ (an aircraft that took the 20× faster
-        // observer with μ ≤ 16 and the 23,000 s they implied ran 72 s; its next run's advice, 0.7 s).
-        format!(
-            "{observer}: {}; with the present observer, {mu_advice}; a new observer changes Ω̄ and ρ, so after changing it take μ and t_end from its own run's advice",
-            remedy()
-        )
+        // line named the observer alone, where a μ at the limit passed), for the faster observer
+        // where the remedy is one: it changes Ω̄ and ρ (an aircraft that took the 20× faster
+        // observer with the present one's μ ≤ 16 and 23,000 s ran 72 s).
+        let after = remedy.faster().map(|(avg, rho)| {
+            let c = &avg.channels[i];
+            let relevant = c.slowest_relevant(RELEVANT_SHARE);
+            if relevant.is_finite() && mu * relevant * t_end < CONVERGED_EFOLDS {
+                format!(
+                    "with that observer, {}",
+                    horizon_advice(&key, mu, (relevant, c.lambda_max()), (t_end, STIFF_RATIO * rho), unit)
+                )
+            } else {
+                format!("with that observer {key} = {} converges by t_end", fmt_short(mu))
+            }
+        });
+        match after {
+            Some(after) => format!("{observer}: {}; {after}", remedy.text()),
+            None => format!(
+                "{observer}: {}; with the present observer, {mu_advice}; a new observer changes Ω̄ and ρ, so after changing it take μ and t_end from its own run's advice",
+                remedy.text()
+            ),
+        }
     } else {
-        format!("{mu_advice}; {observer}: if the raised μ leaves the tail above its bound, {}", remedy())
+        format!("{mu_advice}; {observer}: if the raised μ leaves the tail above its bound, {}", remedy.text())
     })
 }
 
@@ -750,14 +802,14 @@ fn delay_advice(design: &Design, i: usize, t_end: f64) -> Option<String> {
     })
 }
 
-fn channel<'r>(
+fn channel(
     design: &Design,
     i: usize,
     c: &ChannelAverage,
     fidelity: &[Fidelity],
     result: &SimResult,
     (t_end, stiff, tunable): (f64, f64, bool),
-    remedy: &dyn Fn() -> &'r str,
+    remedy: &ObserverRemedy<'_>,
 ) -> ChannelDiagnostics {
     let mu = design.mu()[i];
     let key = format!("design.mu[{i}]");
@@ -952,9 +1004,13 @@ mod tests {
                 .collect::<Vec<_>>()
         };
         // (Channel 1's made-up tail, 0.02 against |g_1| = 3, is within the bound: no μ advice there.)
+        // μ is given for the faster observer (its ρ = 360/s puts the threshold at 36,000/s), not
+        // for the present one, whose threshold the raised μ would exceed.
         assert!(
             weak(&d).len() == 1
-                && weak(&d).iter().all(|a| a.contains(faster) && a.contains("beyond the stiffness threshold")),
+                && weak(&d)
+                    .iter()
+                    .all(|a| a.contains(faster) && a.contains("; with that observer, design.mu[1] = 10 is too small")),
             "{:?}",
             weak(&d)
         );
