@@ -732,6 +732,20 @@ fn design_auto_writes_a_complete_scenario_that_meets_the_tail_bound() {
     for key in ["design.observer_poles", "design.channel_poles", "design.mu", "design.beta", "verification"] {
         assert!(stdout(&o).contains(key), "the report explains {key}:\n{}", stdout(&o));
     }
+    // Two inputs: each candidate's peaks input by input, as the relaxation's effort rule judges
+    // them (the first proposal's line holds one peak per input).
+    let report = stdout(&o);
+    let first = report.lines().skip_while(|l| !l.contains("candidates (")).nth(1).unwrap_or_else(|| panic!("{report}"));
+    assert!(report.contains("worst tail/bound, max|u_f,i|, solver steps"), "{report}");
+    let peaks: Vec<f64> = first
+        .split('[')
+        .nth(1)
+        .and_then(|r| r.split(']').next())
+        .unwrap_or_else(|| panic!("{first}"))
+        .split(", ")
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert_eq!(peaks.len(), 2, "{first}");
     // The written scenario is complete, and running it (an independent run of the file) meets
     // the bound the verification promised: tail max |e_i| ≤ 1 % of the reference's peak (3 and 2).
     let s = Scenario::from_path(&out).unwrap();
