@@ -278,8 +278,8 @@ fn poles_value(list: Vec<quell::nalgebra::Complex<f64>>, key: &str, py: Python<'
 }
 
 /// `Scenario`'s own keywords besides the design's.
-const SCENARIO_KEYWORDS: &[&str] =
-    &["name", "t_end", "output_step", "rtol", "atol", "sample_time", "method", "noise", "truth", "actuator"];
+const SCENARIO_KEYWORDS: [&str; 10] =
+    ["name", "t_end", "output_step", "rtol", "atol", "sample_time", "method", "noise", "truth", "actuator"];
 
 /// The `[design]` table from keyword arguments: pole lists in the file's form, the rest as values;
 /// a keyword that is no design key is refused naming the nearest keyword.
@@ -800,23 +800,21 @@ fn auto_document<'py>(
     };
     // Scenario's own keywords out of **scenario; the rest are [design] keys.
     let design = PyDict::new(py);
-    let mut own: Vec<Option<Bound<'py, PyAny>>> = vec![None; SCENARIO_KEYWORDS.len()];
     for (k, v) in scenario.into_iter().flat_map(|d| d.iter()) {
-        let key: String = k.extract()?;
-        match SCENARIO_KEYWORDS.iter().position(|n| *n == key) {
-            Some(at) => own[at] = Some(v),
-            None => design.set_item(k, v)?,
+        if !SCENARIO_KEYWORDS.contains(&k.extract::<String>()?.as_str()) {
+            design.set_item(k, v)?;
         }
     }
-    let at = |k: &str| own[SCENARIO_KEYWORDS.iter().position(|n| *n == k).expect("a Scenario keyword")].as_ref();
-    let numbers = [at("t_end"), at("output_step"), at("rtol"), at("atol"), at("sample_time")];
+    let get = |k: &str| scenario.and_then(|d| d.get_item(k).ok().flatten());
+    let [name, t_end, output_step, rtol, atol, sample_time, method, noise, truth, actuator] =
+        SCENARIO_KEYWORDS.map(get);
     let options = Options {
-        name: at("name"),
-        numbers,
-        method: at("method"),
-        noise: at("noise"),
-        truth: at("truth"),
-        actuator: at("actuator"),
+        name: name.as_ref(),
+        numbers: [t_end.as_ref(), output_step.as_ref(), rtol.as_ref(), atol.as_ref(), sample_time.as_ref()],
+        method: method.as_ref(),
+        noise: noise.as_ref(),
+        truth: truth.as_ref(),
+        actuator: actuator.as_ref(),
     };
     scenario_document(py, text, (reference, disturbance), &options, Some(&design))
 }

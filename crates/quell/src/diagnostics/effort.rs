@@ -84,9 +84,9 @@ pub fn steady_input(
     let mut signals: Vec<Component> = vec![Component::default(); m];
     let mut tones = Vec::new();
     for t in crate::averaged::tones(reference, disturbance) {
-        let zero = transmission_zero(plant, t.w);
-        let for_reference = input_phasor(plant, t.w, &t.g, &DVector::zeros(t.omega.len()));
-        let for_disturbance = input_phasor(plant, t.w, &DVector::zeros(t.g.len()), &t.omega);
+        let S = system_matrix(plant, t.w);
+        let zero = transmission_zero(&S);
+        let [for_reference, for_disturbance] = input_phasors(plant, S, &t.g, &t.omega);
         let both = &for_reference + &for_disturbance;
         for (u, c) in both.iter().zip(&mut signals) {
             // a sin(wt + φ) has the phasor a e^{j(φ − π/2)} (crate::averaged's convention).
@@ -140,8 +140,8 @@ pub fn steady_input(
 
 /// Whether w is a transmission zero of (A, B, C): the system matrix of [module docs](self),
 /// equilibrated, is singular to [`ZERO_RCOND`]. (Its LU solve would return a finite 1e16.)
-fn transmission_zero(plant: &Plant, w: f64) -> bool {
-    let mut S = system_matrix(plant, w);
+fn transmission_zero(S: &DMatrix<C64>) -> bool {
+    let mut S = S.clone();
     for mut row in S.row_iter_mut() {
         let top = row.iter().map(|z| z.norm()).fold(0.0, f64::max);
         if top > 0.0 {
@@ -180,18 +180,21 @@ fn system_matrix(plant: &Plant, w: f64) -> DMatrix<C64> {
     S
 }
 
-/// U at frequency w for the phasors G and W; ∞ where the system matrix is exactly singular.
-fn input_phasor(plant: &Plant, w: f64, g: &DVector<C64>, omega: &DVector<C64>) -> DVector<C64> {
+/// U for g alone and for ω alone at one frequency, their phasors G and W, `S` the system matrix
+/// there: one LU, two right-hand sides [0; G] and [D W; −Q W]. A zero signal asks for nothing; an
+/// exactly singular S gives ∞.
+fn input_phasors(plant: &Plant, S: DMatrix<C64>, g: &DVector<C64>, omega: &DVector<C64>) -> [DVector<C64>; 2] {
     let (n, m) = (plant.A.nrows(), plant.B.ncols());
-    if g.iter().chain(omega.iter()).all(|z| *z == C64::new(0.0, 0.0)) {
-        return DVector::zeros(m);
-    }
-    let mut rhs = DVector::<C64>::zeros(n + m);
-    rhs.rows_mut(0, n).copy_from(&(complex(&plant.D) * omega));
-    rhs.rows_mut(n, m).copy_from(&(g - complex(&plant.Q) * omega));
-    let solved =
-        system_matrix(plant, w).lu().solve(&rhs).filter(|x| x.iter().all(|z| z.re.is_finite() && z.im.is_finite()));
-    solved.map_or_else(|| DVector::from_element(m, C64::new(f64::INFINITY, 0.0)), |x| x.rows(n, m).into_owned())
+    let mut rhs = DMatrix::<C64>::zeros(n + m, 2);
+    rhs.view_mut((n, 0), (m, 1)).copy_from(g);
+    rhs.view_mut((0, 1), (n, 1)).copy_from(&(complex(&plant.D) * omega));
+    rhs.view_mut((n, 1), (m, 1)).copy_from(&-(complex(&plant.Q) * omega));
+    let solved = S.lu().solve(&rhs).filter(|x| x.iter().all(|z| z.re.is_finite() && z.im.is_finite()));
+    [0, 1].map(|k| match &solved {
+        _ if rhs.column(k).iter().all(|z| *z == C64::new(0.0, 0.0)) => DVector::zeros(m),
+        Some(x) => x.column(k).rows(n, m).into_owned(),
+        None => DVector::from_element(m, C64::new(f64::INFINITY, 0.0)),
+    })
 }
 
 /// |C (jwI − A)⁻¹ D W + Q W| per output; `None` where jw is within 1e-9 (‖A‖ + w) of an

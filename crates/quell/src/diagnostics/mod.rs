@@ -332,10 +332,11 @@ pub fn slow_transient_advice(design: &Design, t_end: f64) -> Option<String> {
     // Observer poles at the zeros of (A, D, C) are the plant's, there for the disturbance
     // observer's fidelity (the advice that proposes them): not to be moved, only outlasted.
     let zeros = disturbance_zeros(design.plant()).unwrap_or_default();
-    let (held, observer): (Vec<_>, Vec<_>) =
-        design.observer_eigenvalues().iter().copied().partition(|o: &Complex<f64>| {
-            zeros.iter().any(|z| (o - z).norm() <= 1e-6 * z.norm().max(f64::MIN_POSITIVE))
-        });
+    let (held, observer): (Vec<_>, Vec<_>) = design
+        .observer_eigenvalues()
+        .iter()
+        .copied()
+        .partition(|o: &Complex<f64>| zeros.iter().any(|z| holds_zero(std::slice::from_ref(o), z)));
     let held_advice = held_zeros_advice(&held, t_end, unit);
     let groups = [
         ("design.observer_poles (eig(A − LC))", observer),
@@ -372,7 +373,10 @@ pub fn slow_transient_advice(design: &Design, t_end: f64) -> Option<String> {
         fmt_short(round_up_2(slowest * t_end)),
         fmt_short(round_up_2(WANTED_TRANSIENT / t_end)),
     );
-    Some(held_advice.map_or(moved.clone(), |h| format!("{moved}; {h}")))
+    Some(match held_advice {
+        Some(h) => format!("{moved}; {h}"),
+        None => moved,
+    })
 }
 
 /// The observer poles `held` at the zeros of (A, D, C) that decay by fewer than [`SLOW_TRANSIENT`]
@@ -457,11 +461,6 @@ pub fn singular_disturbance_zeros(p: &Plant) -> Option<Vec<Complex<f64>>> {
     stable_zeros(crate::design::decoupling_zeros(&p.A, &p.D, &p.C)?, p.A.norm().max(f64::MIN_POSITIVE))
 }
 
-/// Which observer poles to give when the disturbance observer passes ω badly; when eig(A − LC)
-/// already holds the zeros of (A, D, C), why the error stays (placing the zeros as poles is not
-/// enough: an unknown-input observer also needs the eigenvectors there to be the zeros' state
-/// directions, which the placement does not impose when m > 1) and when it matters. A pole holds
-/// a zero within 1e-6 of it, or when both print the same (the zero copied from this advice).
 /// The observer's remedy for a run or a design, computed once and only when some advice quotes it
 /// (it redesigns the observer at several speeds): its text ([`observer_remedy`]) and, where it is a
 /// faster observer, that observer's averaged loop and rate ρ, from which the advice beside it
@@ -471,7 +470,7 @@ pub(crate) struct ObserverRemedy<'a> {
     signals: [&'a Signal; 2],
     sample_time: Option<f64>,
     text: std::cell::OnceCell<String>,
-    faster: std::cell::OnceCell<Option<(Averaged, f64)>>,
+    faster: std::cell::OnceCell<Option<FasterObserver>>,
 }
 
 impl<'a> ObserverRemedy<'a> {
@@ -480,34 +479,37 @@ impl<'a> ObserverRemedy<'a> {
     }
 
     fn text(&self) -> &str {
-        self.text.get_or_init(|| observer_remedy(self.design, self.signals, self.sample_time))
+        self.text.get_or_init(|| observer_remedy(self.design, self.faster(), self.sample_time))
     }
 
-    /// The faster observer's averaged loop and ρ, where the remedy is one.
-    fn faster(&self) -> Option<&(Averaged, f64)> {
-        self.faster
-            .get_or_init(|| {
-                let [reference, disturbance] = self.signals;
-                let (.., faster) = faster_observer_design(self.design, self.signals)?;
-                let rho = crate::sim::loop_rate(&faster, faster.plant(), self.signals);
-                Some((Averaged::new(&faster, reference, disturbance), rho))
-            })
-            .as_ref()
+    /// The speed-up the remedy offers ([`faster_observer_design`]), searched once for the text and
+    /// for the pace beside it.
+    fn faster(&self) -> Option<&FasterObserver> {
+        self.faster.get_or_init(|| faster_observer_design(self.design, self.signals)).as_ref()
     }
 }
 
-fn observer_remedy(design: &Design, signals: [&Signal; 2], sample_time: Option<f64>) -> String {
+/// Whether eig(A − LC), `observer`, holds the zero z: a pole within 1e-6 of it, or one that prints
+/// the same (the zero copied from the advice, which prints six decimals).
+fn holds_zero(observer: &[Complex<f64>], z: &Complex<f64>) -> bool {
+    observer.iter().any(|o| (o - z).norm() <= 1e-6 * z.norm() || fmt_complex(o) == fmt_complex(z))
+}
+
+/// Which observer poles to give when the disturbance observer passes ω badly (`faster`: the
+/// speed-up that passes it, if any); when eig(A − LC) already holds the zeros of (A, D, C), why
+/// the error stays (placing the zeros as poles is not enough: an unknown-input observer also needs
+/// the eigenvectors there to be the zeros' state directions, which the placement does not impose
+/// when m > 1) and when it matters ([`holds_zero`]).
+fn observer_remedy(design: &Design, faster: Option<&FasterObserver>, sample_time: Option<f64>) -> String {
     let p = design.plant();
-    let faster = faster_observer(design, signals, sample_time);
+    let faster = faster.map(|f| faster_observer(design, f, sample_time));
     let none = format!(
         "no speed-up of design.observer_poles up to {}× brings the averaged loop's error below {FIDELITY_TARGET:.2}; give a gain by hand (design.observer_gain), or accept the error, which costs convergence only where the frequency's excitation of Ω̄_i is weak (the channels' `excitation`)",
         OBSERVER_SPEEDUPS[OBSERVER_SPEEDUPS.len() - 1]
     );
     let faster = faster.as_deref().unwrap_or(&none);
     let observer = eigenvalues(&(&p.A - design.L() * &p.C)).unwrap_or_default();
-    let held = |z: &Complex<f64>| {
-        observer.iter().any(|o| (o - z).norm() <= 1e-6 * z.norm() || fmt_complex(o) == fmt_complex(z))
-    };
+    let held = |z: &Complex<f64>| holds_zero(&observer, z);
     match disturbance_zeros(p).or_else(|| singular_disturbance_zeros(p)) {
         Some(z) if z.iter().all(held) => format!(
             "design.observer_poles already hold the zeros of (A, D, C), [{}]; the error that stays comes from the placed eigenvectors (L is not unique for m > 1), not from the poles' speed, and costs convergence only where the frequency's excitation of Ω̄_i is weak (the channels' `excitation`); if it is, try other fast poles or a gain L by hand",
@@ -547,44 +549,51 @@ const OBSERVER_SPEEDUPS: [f64; 12] = [2.0, 3.0, 5.0, 10.0, 20.0, 30.0, 50.0, 100
 /// The disturbance observer's error that a faster observer aims at: a third of [`FIDELITY_LIMIT`].
 const FIDELITY_TARGET: f64 = FIDELITY_LIMIT / 3.0;
 
-/// [`faster_observer_design`]'s observer as advice (the averaged loop's T(jw) against L_ω); with
-/// the sample time that observer needs when the run's is coarse for it. `None` when no speed-up
-/// reaches [`FIDELITY_TARGET`].
-fn faster_observer(design: &Design, signals: [&Signal; 2], sample_time: Option<f64>) -> Option<String> {
-    let (factor, poles, error, faster) = faster_observer_design(design, signals)?;
+/// A faster observer that passes ω ([`faster_observer_design`]).
+pub(crate) struct FasterObserver {
+    /// The speed-up of [`OBSERVER_SPEEDUPS`], the poles × it, and the worst relative error.
+    factor: f64,
+    poles: Vec<Complex<f64>>,
+    error: f64,
+    /// The averaged loop with that observer, and its rate ρ ([`crate::sim::loop_rate`]).
+    averaged: Averaged,
+    rho: f64,
+}
+
+/// `faster` as advice (the averaged loop's T(jw) against L_ω), with the sample time that observer
+/// needs when the run's is coarse for it.
+fn faster_observer(design: &Design, faster: &FasterObserver, sample_time: Option<f64>) -> String {
+    let FasterObserver { factor, error, rho, .. } = *faster;
     let mut advice = format!(
         "give design.observer_poles {factor}× faster, [{}] (the averaged loop then passes every frequency of ω with relative error {error:.2} at worst)",
-        fmt_complex_list(&poles)
+        fmt_complex_list(&faster.poles)
     );
-    if let Some(t_s) = sample_time {
-        let rho = crate::sim::loop_rate(&faster, faster.plant(), signals);
-        if t_s * rho > crate::sim::COARSE_SAMPLE {
-            let unit = design.plant().time_unit;
-            advice += &format!(
-                ", which needs simulation.sample_time ≤ {} {unit} (T_s·ρ ≤ {}, ρ = {:.3e}/{unit})",
-                fmt_short(crate::settings::three_digits_down(crate::sim::COARSE_SAMPLE / rho)),
-                crate::sim::COARSE_SAMPLE,
-                rho
-            );
-        }
+    if sample_time.is_some_and(|t_s| t_s * rho > crate::sim::COARSE_SAMPLE) {
+        let unit = design.plant().time_unit;
+        advice += &format!(
+            ", which needs simulation.sample_time ≤ {} {unit} (T_s·ρ ≤ {}, ρ = {:.3e}/{unit})",
+            fmt_short(crate::settings::three_digits_down(crate::sim::COARSE_SAMPLE / rho)),
+            crate::sim::COARSE_SAMPLE,
+            rho
+        );
     }
-    Some(advice)
+    advice
 }
 
 /// The observer poles × the first of [`OBSERVER_SPEEDUPS`] whose disturbance observer (20) passes
-/// every frequency of ω within [`FIDELITY_TARGET`]: the factor, the poles, the worst relative
-/// error and the design with them; `None` when no speed-up reaches it.
-fn faster_observer_design(
-    design: &Design,
-    [reference, disturbance]: [&Signal; 2],
-) -> Option<(f64, Vec<Complex<f64>>, f64, Design)> {
+/// every frequency of ω within [`FIDELITY_TARGET`]; `None` when no speed-up reaches it.
+fn faster_observer_design(design: &Design, signals: [&Signal; 2]) -> Option<FasterObserver> {
+    let [reference, disturbance] = signals;
     let now = design.observer_eigenvalues();
-    OBSERVER_SPEEDUPS.iter().find_map(|&f| {
-        let poles: Vec<Complex<f64>> = now.iter().map(|p| p * f).collect();
+    OBSERVER_SPEEDUPS.iter().find_map(|&factor| {
+        let poles: Vec<Complex<f64>> = now.iter().map(|p| p * factor).collect();
         let faster = design.with_observer_poles(&poles).ok()?;
-        let fidelity = crate::averaged::Averaged::new(&faster, reference, disturbance).fidelity;
-        let error = fidelity.iter().map(|f| f.relative_error).fold(0.0, f64::max);
-        (error <= FIDELITY_TARGET).then_some((f, poles, error, faster))
+        let averaged = Averaged::new(&faster, reference, disturbance);
+        let error = averaged.fidelity.iter().map(|f| f.relative_error).fold(0.0, f64::max);
+        (error <= FIDELITY_TARGET).then(|| {
+            let rho = crate::sim::loop_rate(&faster, faster.plant(), signals);
+            FasterObserver { factor, poles, error, averaged, rho }
+        })
     })
 }
 
@@ -690,8 +699,8 @@ pub(crate) fn slow_direction_advice(
         // line named the observer alone, where a μ at the limit passed), for the faster observer
         // where the remedy is one: it changes Ω̄ and ρ (an aircraft that took the 20× faster
         // observer with the present one's μ ≤ 16 and 23,000 s ran 72 s).
-        let after = remedy.faster().map(|(avg, rho)| {
-            let c = &avg.channels[i];
+        let after = remedy.faster().map(|f| {
+            let (c, rho) = (&f.averaged.channels[i], f.rho);
             let relevant = c.slowest_relevant(RELEVANT_SHARE);
             if relevant.is_finite() && mu * relevant * t_end < CONVERGED_EFOLDS {
                 format!(
