@@ -36,8 +36,8 @@ fn numbers(obj: Option<&Bound<'_, PyAny>>, name: &str, expected: &str) -> PyResu
 
 /// Per-channel searches over μ_i, as `quell tune`: the channels are decoupled (Proposition 1), so
 /// μ is tuned by m one-dimensional searches (log-spaced points, then golden-section steps around
-/// the best), the other μ_j held at the scenario's values, and the joint run with every tuned μ_i
-/// is checked to reproduce each channel's figure (docs/tuning.md). The GIL is released; Ctrl-C
+/// the best; the least μ within the solver's error of the best is chosen), the other μ_j held at
+/// the scenario's values, and the joint run with every tuned μ_i is checked to reproduce each channel's figure (docs/tuning.md). The GIL is released; Ctrl-C
 /// stops the searches and raises KeyboardInterrupt whose `.result` holds the points so far.
 ///
 /// Parameters
@@ -156,7 +156,7 @@ pub fn tune(
         if let Some(end) = c.at_bound() {
             let i = c.channel;
             let message = format!(
-                "channel {}: the best μ, {}, is at the {end} end of mu[{i}]: the best may lie beyond, widen the range",
+                "channel {}: the chosen μ, {}, is at the {end} end of mu[{i}]: the best may lie beyond, widen the range",
                 i + 1,
                 result.mu[i]
             );

@@ -48,7 +48,7 @@ class TuneResult:
         The joint run's row (runs.csv's fields), None when the tuning was interrupted before it.
     partial : bool
         True when Ctrl-C stopped the tuning: the curves hold the points evaluated so far and
-        ``mu`` is the best of them.
+        ``mu`` is chosen from them (the least μ within the solver's error of the best).
 
     Examples
     --------

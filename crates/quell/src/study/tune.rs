@@ -189,7 +189,9 @@ pub struct TuneCurve {
     #[serde(with = "one_based")]
     pub channel: usize,
     pub curve: Vec<TunePoint>,
-    /// The best feasible point, `None` if no μ in the bounds was feasible.
+    /// The feasible point with the smallest μ among those whose objective the solver cannot tell
+    /// from the best (within the tolerance of the joint run's check); `None` if no μ in the bounds
+    /// was feasible.
     pub chosen: Option<TunePoint>,
 }
 
@@ -383,6 +385,22 @@ fn tune_spec(study: &Study) -> Result<&TuneSpec, StudyError> {
     Ok(spec)
 }
 
+/// The point a search chooses from `curve` (sorted by μ): the smallest μ whose objective is within
+/// [`tolerance`] of the least, the solver's own error scale. A flat objective (tail errors at the
+/// 1e-8 level, differing by rounding) had chosen μ = 50 over 3.16 for nothing; among figures the
+/// solver cannot tell apart, the slowest adaptation is the least stiff and the least sensitive to
+/// noise.
+fn least_mu_within_tolerance<'c>(
+    curve: &'c [TunePoint],
+    objective: Objective,
+    scenario: &Scenario,
+    i: usize,
+) -> Option<&'c TunePoint> {
+    let best = curve.iter().filter_map(|p| p.objective).min_by(f64::total_cmp)?;
+    let bound = best + tolerance(objective, best, scenario, i);
+    curve.iter().find(|p| p.objective.is_some_and(|v| v <= bound))
+}
+
 /// The ordering of points in a search: by objective, infeasible points (`None`) last.
 fn key(p: &TunePoint) -> f64 {
     p.objective.unwrap_or(f64::INFINITY)
@@ -391,6 +409,7 @@ fn key(p: &TunePoint) -> f64 {
 /// One channel's search at a time, over the scenario's μ with μ_i varied.
 struct Search<'a> {
     study: &'a Study,
+    scenario: &'a Scenario,
     spec: &'a TuneSpec,
     base_mu: &'a [f64],
     opts: &'a TuneOptions<'a>,
@@ -484,12 +503,12 @@ impl Search<'_> {
         }
     }
 
-    /// Channel i's curve (its points of `coarse`, refined) in order of μ, and its best feasible point.
+    /// Channel i's curve (its points of `coarse`, refined) in order of μ, and its chosen point ([`least_mu_within_tolerance`]).
     fn curve(&self, i: usize, coarse: &[(usize, TunePoint)]) -> TuneCurve {
         let mut curve: Vec<TunePoint> = coarse.iter().filter(|(c, _)| *c == i).map(|(_, p)| p.clone()).collect();
         self.refine(i, &mut curve);
         curve.sort_by(|a, b| a.mu.total_cmp(&b.mu));
-        let chosen = curve.iter().filter(|p| p.objective.is_some()).min_by(|a, b| key(a).total_cmp(&key(b))).cloned();
+        let chosen = least_mu_within_tolerance(&curve, self.spec.objective, self.scenario, i).cloned();
         TuneCurve { channel: i, curve, chosen }
     }
 }
@@ -500,7 +519,7 @@ pub fn tune(study: &Study, opts: &TuneOptions<'_>) -> Result<TuneResult, StudyEr
     let spec = tune_spec(study)?;
     let scenario = Scenario::from_document(study.base()).map_err(|e| err("scenario", e.to_string()))?;
     let base_mu = scenario.design.mu.clone();
-    let search = Search { study, spec, base_mu: &base_mu, opts };
+    let search = Search { study, scenario: &scenario, spec, base_mu: &base_mu, opts };
     let m = base_mu.len();
     let jobs: Vec<(usize, f64)> = (0..m).flat_map(|i| search.log_grid(i).map(move |mu| (i, mu))).collect();
     let coarse: Vec<(usize, TunePoint)> =
