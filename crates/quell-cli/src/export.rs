@@ -63,6 +63,7 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
         prefix: args.prefix.clone(),
         precision: args.precision.parse().map_err(export_failure)?,
         scenario_name: scenario.name.clone(),
+        names: scenario.names.clone(),
     };
     let code = generate(&design, sample_time, &options).map_err(export_failure)?;
     eprint!("{}", crate::report::sample_time_text(&scenario, &design, sample_time, None));

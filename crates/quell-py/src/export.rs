@@ -127,12 +127,13 @@ pub fn export(
     fmi_version: Option<&Bound<'_, PyAny>>,
     compiler: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Vec<PathBuf>> {
-    let (design, scenario_name, scenario_T, signals) = if let Ok(s) = source.cast::<PyScenario>() {
+    let (design, (scenario_name, names), scenario_T, signals) = if let Ok(s) = source.cast::<PyScenario>() {
         let s = s.get();
         let signals = (s.inner.reference.clone(), s.inner.disturbance.clone());
-        (s.design_arc(py)?, s.inner.name.clone(), s.inner.simulation.sample_time, signals)
+        let labels = (s.inner.name.clone(), s.inner.names.clone());
+        (s.design_arc(py)?, labels, s.inner.simulation.sample_time, signals)
     } else if let Ok(d) = source.cast::<PyDesign>() {
-        (d.get().inner.clone(), None, None, Default::default())
+        (d.get().inner.clone(), Default::default(), None, Default::default())
     } else {
         return Err(pyo3::exceptions::PyTypeError::new_err(format!(
             "source: expected a quell.Scenario or quell.Design, found {}",
@@ -159,7 +160,7 @@ pub fn export(
             .map_err(|e: ExportError| Kind::Export.err(py, message(&e)))?,
     };
     let fmu = fmu_arguments(py, fmu, fmi_version, compiler)?;
-    let options = ExportOptions { prefix: prefix.into_owned(), precision, scenario_name };
+    let options = ExportOptions { prefix: prefix.into_owned(), precision, scenario_name, names };
     let raise = |e: ExportError| match e {
         ExportError::Controller(c) => crate::errors::keyed(py, Kind::Scenario, c.to_string(), c.key()),
         ExportError::NotFinite { .. } => Kind::Scenario.err(py, message(&e)),

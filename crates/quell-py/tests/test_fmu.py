@@ -157,6 +157,29 @@ def test_fmi3_time_is_declared_in_the_plants_unit(tmp_path, unit, symbol, factor
 
 
 @pytest.mark.parametrize("version", [2, 3])
+def test_variable_descriptions_name_the_plants_signals(tmp_path, version):
+    """The plant's `outputs` and `inputs` names go into the variables' descriptions (y_i, g_i and u_i
+    the output i, u_f,i the input i), escaped for XML; the variable names stay y[i], u_f[i], …"""
+    outputs, inputs = ['level <1> & "A"', "temp"], ["valve", "heater"]
+    text = (EXAMPLES / "paper-sampled.toml").read_text()
+    quoted = lambda names: "[" + ", ".join('"' + n.replace('"', '\\"') + '"' for n in names) + "]"  # noqa: E731
+    text = text.replace("[plant]\n", f"[plant]\noutputs = {quoted(outputs)}\ninputs = {quoted(inputs)}\n", 1)
+    scenario = quell.Scenario.from_toml(text)
+    quell.export(scenario, 1e-3, out=tmp_path, fmu=True, fmi_version=version, compiler="none")
+    fmu = str(tmp_path / "quell.fmu")
+    assert validate_fmu(fmu) == []
+    described = {v.name: v.description for v in read_model_description(fmu).modelVariables}
+    for i in range(2):
+        for var, name in (("y", outputs[i]), ("g", outputs[i]), ("u", outputs[i]), ("u_f", inputs[i])):
+            assert described[f"{var}[{i + 1}]"].startswith(f"{name}: "), (var, i, described[f"{var}[{i + 1}]"])
+    # Without names the descriptions are the symbols' alone.
+    quell.export(quell.Scenario.load(EXAMPLES / "paper-sampled.toml"), 1e-3, out=tmp_path / "plain", fmu=True,
+                 fmi_version=version, compiler="none")
+    plain = read_model_description(str(tmp_path / "plain" / "quell.fmu"))
+    assert {v.name: v.description for v in plain.modelVariables}["y[1]"].startswith("measured output y_i")
+
+
+@pytest.mark.parametrize("version", [2, 3])
 def test_source_only_fmu(tmp_path, version):
     scenario = quell.Scenario.load(EXAMPLES / "three-channel.toml")
     written = quell.export(scenario, 0.05, out=tmp_path, fmu=True, fmi_version=version, compiler="none")

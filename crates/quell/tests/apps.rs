@@ -198,8 +198,12 @@ fn every_apps_exported_c_is_current_compiles_and_is_the_rust_controller() {
         let d = s.design().unwrap();
         let T = s.simulation.sample_time.unwrap();
         // The committed files are what `quell export scenario.toml --prefix P` writes today.
-        let options =
-            ExportOptions { prefix: app.prefix.into(), precision: Precision::F64, scenario_name: s.name.clone() };
+        let options = ExportOptions {
+            prefix: app.prefix.into(),
+            precision: Precision::F64,
+            scenario_name: s.name.clone(),
+            names: s.names.clone(),
+        };
         let code = generate(&d, T, &options).unwrap();
         let dir = folder(app).join("c");
         let committed = |name: &str| std::fs::read_to_string(dir.join(name)).unwrap();

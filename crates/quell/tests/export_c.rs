@@ -21,7 +21,7 @@ fn example(name: &str) -> (Scenario, Design) {
 }
 
 fn options(prefix: &str, precision: Precision) -> ExportOptions {
-    ExportOptions { prefix: prefix.into(), precision, scenario_name: Some("test".into()) }
+    ExportOptions { prefix: prefix.into(), precision, scenario_name: Some("test".into()), ..ExportOptions::default() }
 }
 
 fn export(d: &Design, T: f64, prefix: &str, precision: Precision) -> CCode {

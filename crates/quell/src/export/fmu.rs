@@ -215,16 +215,28 @@ fn xml_escape(s: &str) -> String {
 }
 
 /// The variables of both versions, by value reference: 0..m-1 are y, m..2m-1 g, 2m..3m-1 u_f,
-/// 3m..4m-1 u: (value reference, name, causality, variability, description).
-fn variables(m: usize) -> impl Iterator<Item = (usize, String, &'static str, &'static str, &'static str)> {
+/// 3m..4m-1 u: (value reference, name, causality, variability, description). A description
+/// names the plant's signal where `names` gives it: y_i, g_i and u_i the output i, u_f,i the input i.
+fn variables(
+    m: usize,
+    names: &crate::scenario::SignalNames,
+) -> impl Iterator<Item = (usize, String, &'static str, &'static str, String)> {
     const SIGNALS: [(&str, &str, &str, &str); 4] = [
         ("y", "input", "continuous", "measured output y_i, sampled at each sample instant"),
         ("g", "input", "continuous", "reference g_i, sampled at each sample instant"),
         ("u_f", "output", "discrete", "plant input u_f,i (5), held over a sample"),
         ("u", "output", "discrete", "adaptive command u_i (25), undelayed"),
     ];
+    let (outputs, inputs) = (names.outputs.clone(), names.inputs.clone());
     SIGNALS.into_iter().enumerate().flat_map(move |(s, (var, causality, variability, what))| {
-        (0..m).map(move |i| (s * m + i, format!("{var}[{}]", i + 1), causality, variability, what))
+        let given = if var == "u_f" { inputs.clone() } else { outputs.clone() };
+        (0..m).map(move |i| {
+            let what = match given.as_ref().map(|g| &g[i]) {
+                Some(name) => format!("{}: {what}", xml_escape(name)),
+                None => what.to_string(),
+            };
+            (s * m + i, format!("{var}[{}]", i + 1), causality, variability, what)
+        })
     })
 }
 
@@ -260,7 +272,7 @@ fn model_description_2(o: &ExportOptions, m: usize, sample: (f64, &str), guid: &
     let _ = writeln!(x, "    </SourceFiles>\n  </CoSimulation>");
     let _ = writeln!(x, r#"  <DefaultExperiment startTime="0" stepSize="{sample_time:?}"/>"#);
     let _ = writeln!(x, "  <ModelVariables>");
-    for (vr, name, causality, variability, what) in variables(m) {
+    for (vr, name, causality, variability, what) in variables(m, &o.names) {
         let start = if causality == "input" { r#" start="0""# } else { "" };
         let _ = writeln!(
             x,
@@ -303,7 +315,7 @@ fn model_description_3(o: &ExportOptions, m: usize, sample: (f64, &str), token: 
         r#"    <Float64 name="time" valueReference="{}" causality="independent" variability="continuous" description="time" unit="{unit}"/>"#,
         4 * m
     );
-    for (vr, name, causality, variability, what) in variables(m) {
+    for (vr, name, causality, variability, what) in variables(m, &o.names) {
         let start = if causality == "input" { r#" start="0""# } else { "" };
         let _ = writeln!(
             x,

@@ -83,6 +83,9 @@ pub struct ExportOptions {
     pub precision: Precision,
     /// The scenario's name, for the header comment.
     pub scenario_name: Option<String>,
+    /// The plant's signal names (`[plant]` `inputs`, `outputs`), for the FMU variables'
+    /// descriptions; the variables keep their names `y[i]`, `u_f[i]`, … whatever they are.
+    pub names: crate::scenario::SignalNames,
 }
 
 /// What T_s is measured in, as the generated comments say it: "the plant model's unit of time",
@@ -93,7 +96,12 @@ fn time_unit_text(design: &Design) -> String {
 
 impl Default for ExportOptions {
     fn default() -> Self {
-        ExportOptions { prefix: "quell".to_string(), precision: Precision::F64, scenario_name: None }
+        ExportOptions {
+            prefix: "quell".to_string(),
+            precision: Precision::F64,
+            scenario_name: None,
+            names: Default::default(),
+        }
     }
 }
 

@@ -96,7 +96,12 @@ impl ExportCase {
 /// well formed: every `/*` closes before the next one opens.
 pub fn export(design: &Design, case: &ExportCase) -> Result<(), String> {
     let precision: Precision = case.precision.parse().map_err(|e: quell::export::ExportError| e.to_string())?;
-    let options = ExportOptions { prefix: case.prefix.clone(), precision, scenario_name: case.scenario_name.clone() };
+    let options = ExportOptions {
+        prefix: case.prefix.clone(),
+        precision,
+        scenario_name: case.scenario_name.clone(),
+        ..ExportOptions::default()
+    };
     let code = if case.fmu {
         // Both versions, chosen without another draw so that the seeded sequences stay as they were.
         let version = if case.prefix.len().is_multiple_of(2) { FmiVersion::V2 } else { FmiVersion::V3 };
