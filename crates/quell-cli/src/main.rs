@@ -8,6 +8,7 @@ mod auto;
 mod decimal;
 mod export;
 mod interrupt;
+mod journal;
 mod output;
 mod pace;
 mod plot;

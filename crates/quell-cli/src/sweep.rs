@@ -7,6 +7,7 @@ use std::time::Instant;
 use quell::study::{self, Outcome, Row, Shard, Study, StudyMeta, Summary, SweepOptions, MAX_JOBS};
 
 use crate::interrupt::Interrupt;
+use crate::journal::{self, Journal, JOURNAL};
 use crate::output::{prepare_out, write_atomic};
 use crate::Failure;
 
@@ -41,7 +42,7 @@ pub struct SweepArgs {
 }
 
 /// The files a sweep writes into --out (besides its figures).
-const OUTPUTS: &[&str] = &["runs.csv", "summary.json", "sweep.png", "sweep.svg"];
+const OUTPUTS: &[&str] = &["runs.csv", "summary.json", "sweep.png", "sweep.svg", JOURNAL];
 
 /// The study file at `path`; a refusal starts with the path once (a file that cannot be read is
 /// already named by the error's key).
@@ -98,13 +99,20 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     }
     let pool = thread_pool(args.jobs, n - kept.len())?;
     prepare_out(&args.out, OUTPUTS)?;
+    let journal = Journal::create(&args.out, &meta, &kept)
+        .map_err(|e| Failure::Input(format!("--out {}: {e}; choose another output directory", args.out.display())))?;
 
     // Ctrl-C or SIGTERM: the first stops the sweep (runs under way are abandoned) and the rows done
     // are written; a second before writing begins quits at once.
-    let interrupt = Interrupt::install("interrupted twice; stopped without writing files");
+    let interrupt = Interrupt::install(
+        "interrupted twice; stopped without writing runs.csv: the rows done are in runs.partial.csv, which --resume reads",
+    );
     let bar = crate::progress_bar(n as u64, "sweeping {bar:40} {pos}/{len} runs, {elapsed_precise} elapsed, ETA {eta}");
     bar.inc(kept.len() as u64);
-    let on_row = |_: &Row| bar.inc(1);
+    let on_row = |row: &Row| {
+        journal.append(row);
+        bar.inc(1);
+    };
     let started = Instant::now();
     let options = SweepOptions { shard, stop: Some(interrupt.stop_flag()), on_row: Some(&on_row), done: &done };
     let result = pool.install(|| study::sweep(&study, &options));
@@ -115,6 +123,12 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     rows.extend(result.rows);
     rows.sort_by_key(|r| r.run);
     write_all(&args.out, &meta, &rows, result.partial, !args.no_plots)?;
+    if let Err(e) = journal.remove() {
+        eprintln!(
+            "⚠ warning: {}: {e}; runs.csv holds its rows, so it may be removed",
+            args.out.join(JOURNAL).display()
+        );
+    }
     report(&rows, ran, n, seconds, pool.current_num_threads(), &args.out);
     if args.resume {
         eprintln!("resumed: {} rows kept, {ran} runs run", rows.len() - ran);
@@ -233,12 +247,20 @@ fn resumed(dir: &Path, meta: &StudyMeta, n: usize) -> Result<(Vec<Row>, Vec<bool
     quell::files::check_dir(dir).map_err(|e| {
         Failure::Input(format!("{here}: {e}; resume into the --out directory of the interrupted sweep"))
     })?;
-    if !dir.join("summary.json").exists() {
-        return Err(Failure::Input(format!(
-            "{here}: holds no summary.json of an earlier sweep; resume into the --out of the interrupted sweep, or leave --resume out"
-        )));
-    }
-    let (old, rows, _) = read_sweep_dir(dir, "--resume")?;
+    // The journal, where there is one, is newer than runs.csv: it is removed once runs.csv is written.
+    let (old, rows) = match journal::read(dir) {
+        Err(e) => return Err(Failure::Input(format!("{here}: {JOURNAL}: {e}; run the sweep again without --resume"))),
+        Ok(Some(journal)) => journal,
+        Ok(None) if dir.join("summary.json").exists() => {
+            let (old, rows, _) = read_sweep_dir(dir, "--resume")?;
+            (old, rows)
+        }
+        Ok(None) => {
+            return Err(Failure::Input(format!(
+                "{here}: holds neither the summary.json nor the {JOURNAL} of an earlier sweep (a sweep killed before its first run finished leaves none); resume into the --out of the interrupted sweep, or leave --resume out"
+            )))
+        }
+    };
     // differing_key compares every key but the shard, the fingerprint included.
     if old.shard != meta.shard || differing_key(&old, meta).is_some() {
         return Err(Failure::Input(format!(

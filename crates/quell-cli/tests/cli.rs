@@ -798,7 +798,7 @@ fn design_auto_writes_a_complete_scenario_that_meets_the_tail_bound() {
     assert!(stderr(&o).contains("no candidate keeps max|u_f,i| within the actuator limit 1e-300"), "{}", stderr(&o));
     // Its figures in four digits, the limit as written (it printed as 300 digits), and a limit to
     // ask for that admits the peak.
-    assert!(stderr(&o).contains(", max|u_f| [1.161e1, 2.167e1] against the limit 1e-300)"), "{}", stderr(&o));
+    assert!(stderr(&o).contains(", max|u_f| [1.457e1, 2.167e1] against the limit 1e-300)"), "{}", stderr(&o));
     assert!(stderr(&o).contains("raise the actuator limit (--u-limit) to at least 22,"), "{}", stderr(&o));
     assert!(!out.exists());
 }

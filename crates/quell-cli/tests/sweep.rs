@@ -230,6 +230,52 @@ fn an_interrupted_sweep_resumed_equals_an_uninterrupted_one() {
     assert!(stderr(&refused).contains("its rows come from another study or shard"), "{}", stderr(&refused));
 }
 
+/// A sweep killed outright (SIGKILL: the out-of-memory killer, a batch system past its grace
+/// period) writes neither runs.csv nor summary.json, but its journal holds every run that finished:
+/// `--resume` keeps those and ends with the rows of an uninterrupted sweep. A last line cut by the
+/// kill is dropped (its run is run again); the journal is removed once runs.csv is written. Before
+/// the journal, such a directory was empty and `--resume` refused it.
+#[test]
+fn a_killed_sweep_resumes_from_its_journal() {
+    let dir_tmp = scratch("kill");
+    let dir = dir_tmp.path();
+    let text = "[simulation]\nt_end = 20.0\nrtol = 1e-6\natol = 1e-6\n[monte_carlo]\nruns = 3000\nseed = 5\n\"plant.x0\" = { normal = 0.1 }\n";
+    let study = write_study(dir, "study.toml", text);
+    let out = |name: &str| dir.join(name).display().to_string();
+    let full = quell(&["sweep", &study, "--no-plots", "--out", &out("full")]);
+    assert!(full.status.success(), "{}", stderr(&full));
+    assert!(!dir.join("full/runs.partial.csv").exists());
+    let mut child = Command::new(env!("CARGO_BIN_EXE_quell"))
+        .args(["sweep", &study, "--no-plots", "--out", &out("killed")])
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("start quell");
+    std::thread::sleep(Duration::from_millis(700));
+    child.kill().unwrap();
+    let killed = !child.wait().unwrap().success();
+    let journal = dir.join("killed/runs.partial.csv");
+    if killed {
+        assert!(!dir.join("killed/runs.csv").exists() && !dir.join("killed/summary.json").exists());
+        let text = fs::read_to_string(&journal).unwrap();
+        assert!(text.starts_with("# quell sweep journal: {"), "{}", &text[..80.min(text.len())]);
+        // A row cut short by the kill.
+        fs::write(&journal, format!("{text}12,0,12,")).unwrap();
+    }
+    let resumed = quell(&["sweep", &study, "--no-plots", "--out", &out("killed"), "--resume"]);
+    assert!(resumed.status.success(), "{}", stderr(&resumed));
+    assert_eq!(rows_without_wall_time(&dir.join("killed")), rows_without_wall_time(&dir.join("full")));
+    assert!(!journal.exists());
+    // A journal that is not one is named, not taken.
+    fs::write(&journal, "run,point\n").unwrap();
+    let refused = quell(&["sweep", &study, "--no-plots", "--out", &out("killed"), "--resume"]);
+    assert_eq!(refused.status.code(), Some(2), "{}", stderr(&refused));
+    assert!(
+        stderr(&refused).contains("runs.partial.csv: line 1: expected `# quell sweep journal: `"),
+        "{}",
+        stderr(&refused)
+    );
+}
+
 #[test]
 fn tune_writes_the_chosen_mu_and_each_curve() {
     let dir_tmp = scratch("tune");

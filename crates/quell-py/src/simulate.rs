@@ -179,6 +179,7 @@ fn stats_from(d: &Bound<'_, PyDict>) -> Option<RunStats> {
             max_history_len: int("max_history_len")?,
             implicit_steps: int("implicit_steps").unwrap_or(0),
             switches: int("switches").unwrap_or(0),
+            thrashed: d.get_item("thrashed").ok().flatten().and_then(|v| v.extract().ok()),
         }),
     })
 }
@@ -479,6 +480,7 @@ impl PySimResult {
             // Beyond summary.json's figures, so that a result compares equal to its pickle.
             stats.set_item("implicit_steps", s.implicit_steps)?;
             stats.set_item("switches", s.switches)?;
+            stats.set_item("thrashed", s.thrashed)?;
         }
         d.set_item("stats", stats)?;
         d.set_item("peaks", r.peaks.0.to_vec())?;

@@ -395,7 +395,7 @@ fn candidate(scenario: &Scenario, r: &crate::sim::SimResult, speed: Speed, conve
         chosen: false,
         peak_e,
         mid_max_e,
-        thrashing: crate::diagnostics::thrashing(&r.stats),
+        thrashing: crate::diagnostics::thrashing(&r.stats, scenario.plant.time_unit),
     }
 }
 

@@ -1,7 +1,8 @@
 //! The continuous loop with a stiff adaptive law (33): the automatic switch to the implicit
 //! ARK4(3)6L[2]SA against DOP853 alone where both run, on the paper's example with μ scaled up and
 //! on the quadruple-tank process of Johansson (2000) in its own units (`tests/data/quadruple-tank.toml`)
-//! and on a supply vessel in SI units (`tests/data/supply-vessel.toml`).
+//! on a supply vessel in SI units (`tests/data/supply-vessel.toml`) and on a magnetic bearing
+//! (`tests/data/magnetic-bearing.toml`, milliseconds).
 
 use std::ops::ControlFlow;
 
@@ -86,6 +87,34 @@ fn stiff_paths_match_dop853_where_both_run() {
             assert!(dev < 1e-6, "μ × {factor}, {method:?}: {dev:e} of the peak");
         }
     }
+}
+
+/// A loop at DOP853's stability bound for the whole run: the magnetic bearing of
+/// `tests/data/magnetic-bearing.toml` (μλ_max(Ω̄) = 10 ρ, rtol = 1e-8, atol = 1e-12 m). DOP853's
+/// step size oscillates there (h times the rate bound from 1 to 13, half the steps below the
+/// implicit switch's 4) and it rejects 37 % of its attempts, where its error estimate misses the
+/// adaptive law's errors: the automatic run, which never switched, had u_f off by 1.0e-2 of its
+/// peak (0.65 % still in the tail). It now switches once the stretch thrashes (a quarter of the
+/// attempts rejected over 100 steps) and stays. Reference: DOP853 alone at rtol = 1e-12, atol =
+/// 1e-16, which agrees with the implicit method at 1e-11 to 1.5e-8 of u_f's peak; the automatic
+/// run is within 1.4e-5 (the thrashing steps before the switch), so 1e-4 bounds it with a margin
+/// of 7 and fails the old run by 100.
+#[test]
+fn a_loop_thrashing_at_dop853s_bound_switches_to_the_implicit_method() {
+    let s = Scenario::from_toml(include_str!("data/magnetic-bearing.toml")).unwrap();
+    let d = Design::new(&s.plant, &s.design).unwrap();
+    let run = |rtol: f64, atol: f64, method: Method| {
+        let integrator = Integrator { method, max_steps: Some(1_000_000), ..Integrator::new(rtol, atol) };
+        let settings = RunSettings::new(s.simulation.t_end, s.simulation.output_step, Loop::Continuous(integrator));
+        Run::new(&d, &s.reference, &s.disturbance, settings).simulate(|_| ControlFlow::Continue(())).unwrap()
+    };
+    let auto = run(s.simulation.rtol, s.simulation.atol, Method::Auto);
+    let reference = run(1e-12, 1e-16, Method::Explicit);
+    let peak = reference.u_f.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let dev = auto.u_f.iter().zip(&reference.u_f).fold(0.0f64, |m, (a, b)| m.max((a - b).abs())) / peak;
+    assert!(dev < 1e-4, "u_f off by {dev:e} of its peak");
+    let RunStats::Continuous(stats) = auto.stats else { unreachable!("a continuous run") };
+    assert!(stats.rejected * 10 < stats.steps, "{stats:?}");
 }
 
 /// The quadruple tank is stiff at its nominal μ = 1 already (DOP853 alone takes over a million steps

@@ -12,6 +12,7 @@ pub use crate::averaged;
 pub mod effort;
 pub mod estimate;
 
+use crate::sim::dde::THRASHING;
 use serde::Serialize;
 
 pub use averaged::{disturbance_observer_gain, Averaged, ChannelAverage, Excitation, Fidelity};
@@ -85,22 +86,27 @@ pub struct ChannelDiagnostics {
     pub advice: Vec<String>,
 }
 
-/// The share of rejected attempts above which an explicit run is taken to have thrashed at its
-/// stability bound.
-const THRASHING: f64 = 0.25;
-
-/// A caution when DOP853 rejected more than a quarter (`THRASHING`) of its attempts on a run taken mostly by
-/// it: its steps sat at their stability bound, where its error estimate misses the stiff block's
-/// errors (accuracy-limited runs reject 5–15 %; a loop at rtol 1e-6 whose u_f peaked 8× too high
-/// with 31 % rejected was right with `imex` or at 1e-11). `None` for a sampled run.
-pub fn thrashing(stats: &crate::sim::RunStats) -> Option<String> {
+/// A caution when DOP853 rejected more than a quarter ([`THRASHING`]) of its attempts on a run taken
+/// mostly by it, or thrashed over a stretch before the automatic method switched to the implicit
+/// one: its steps sat at their stability bound, where its error estimate misses the stiff block's
+/// errors. `None` for a sampled run.
+pub fn thrashing(stats: &crate::sim::RunStats, unit: TimeUnit) -> Option<String> {
     let crate::sim::RunStats::Continuous(st) = stats else { return None };
     let attempts = (st.steps + st.rejected).max(1) as f64;
     let explicit = st.steps - st.implicit_steps.min(st.steps);
-    (st.rejected as f64 > THRASHING * attempts && explicit > st.steps / 2).then(|| {
+    let why = "where its error estimate misses the stiff part's errors (η̂ and u_f may be off by more than the tolerance); check with simulation.method = \"imex\" or a tighter simulation.rtol";
+    if st.rejected as f64 > THRASHING * attempts && explicit > st.steps / 2 {
+        let share = 100.0 * st.rejected as f64 / attempts;
+        return Some(format!(
+            "DOP853 rejected {share:.0} % of its attempts: its steps sat at their stability bound, {why}"
+        ));
+    }
+    st.thrashed.map(|(from, to)| {
+        let t = |t: f64| crate::settings::fmt_4(t);
         format!(
-            "DOP853 rejected {:.0} % of its attempts: its steps sat at their stability bound, where its error estimate misses the stiff part's errors (η̂ and u_f may be off by more than the tolerance); check with simulation.method = \"imex\" or a tighter simulation.rtol",
-            100.0 * st.rejected as f64 / attempts
+            "DOP853 thrashed at its stability bound from t = {} to {} {unit} (a quarter or more of its attempts rejected) before the switch to the implicit method, {why}",
+            t(from),
+            t(to)
         )
     })
 }
@@ -243,7 +249,7 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
             remedy.text()
         ));
     }
-    advice.extend(thrashing(&result.stats));
+    advice.extend(thrashing(&result.stats, unit));
     let channels = avg
         .channels
         .iter()

@@ -27,6 +27,7 @@ mod tableau;
 use crate::controller::discrete::Grid;
 use hermite::Stencil;
 use history::{newton, History, Nodes, NCOEF};
+pub(crate) use imex::THRASHING;
 use std::ops::ControlFlow;
 use tableau::{A, C, D, E3, E5, STAGES, STAGES_DENSE};
 use thiserror::Error;
@@ -190,7 +191,7 @@ pub use crate::settings::Method;
 
 /// Solver statistics (as a run's summary.json writes them: the names after `rename`, the method's
 /// figures left out).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct Stats {
     /// Accepted steps.
     pub steps: usize,
@@ -210,6 +211,11 @@ pub struct Stats {
     /// Switches between the explicit and the implicit method.
     #[serde(skip)]
     pub switches: usize,
+    /// The first stretch [start, end] over which DOP853 thrashed at its stability bound before
+    /// [`Method::Auto`] switched to the implicit method: its error estimate misses the stiff block's
+    /// errors there, and they may exceed the tolerance.
+    #[serde(skip)]
+    pub thrashed: Option<(f64, f64)>,
 }
 
 /// Why the integration stopped early.

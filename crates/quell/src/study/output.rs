@@ -47,29 +47,39 @@ const PARTIAL: &str = "# partial:";
 /// Writes runs.csv: the header, `rows` in the order given, and for a partial sweep a last line
 /// `# partial: …` (read it with `pandas.read_csv(…, comment="#")`).
 pub fn write_runs_csv(w: &mut dyn Write, meta: &StudyMeta, rows: &[Row], partial: bool) -> io::Result<()> {
-    writeln!(w, "{}", header(meta).iter().map(|h| csv_field(h)).collect::<Vec<_>>().join(","))?;
-    let opt = |v: Option<f64>| v.map_or(String::new(), csv_number);
+    write_runs_header(w, meta)?;
     for r in rows {
-        let mut f: Vec<String> = vec![r.run.to_string(), r.point.to_string(), r.draw.to_string(), r.seed.to_string()];
-        f.extend(r.grid.iter().map(|g| csv_field(g)));
-        f.push(r.outcome.as_str().to_string());
-        f.push(csv_field(&r.reason));
-        let per = |get: &dyn Fn(&ChannelFigures) -> Option<f64>| {
-            (0..meta.m).map(|i| opt(r.channels.get(i).and_then(get))).collect::<Vec<_>>()
-        };
-        f.extend(per(&|c| Some(c.tail_max_e)));
-        f.extend(per(&|c| Some(c.tail_rms_e)));
-        f.extend(per(&|c| Some(c.max_u)));
-        f.extend(per(&|c| Some(c.max_uf)));
-        f.extend(per(&|c| c.settle_t));
-        f.push(r.steps.to_string());
-        f.push(format!("{:.3}", r.wall_ms));
-        writeln!(w, "{}", f.join(","))?;
+        write_run_row(w, meta, r)?;
     }
     if partial {
         writeln!(w, "{PARTIAL} {} of the shard's runs were carried out before the sweep was interrupted", rows.len())?;
     }
     Ok(())
+}
+
+/// runs.csv's header line.
+pub fn write_runs_header(w: &mut dyn Write, meta: &StudyMeta) -> io::Result<()> {
+    writeln!(w, "{}", header(meta).iter().map(|h| csv_field(h)).collect::<Vec<_>>().join(","))
+}
+
+/// One row of runs.csv, its line ended.
+pub fn write_run_row(w: &mut dyn Write, meta: &StudyMeta, r: &Row) -> io::Result<()> {
+    let opt = |v: Option<f64>| v.map_or(String::new(), csv_number);
+    let mut f: Vec<String> = vec![r.run.to_string(), r.point.to_string(), r.draw.to_string(), r.seed.to_string()];
+    f.extend(r.grid.iter().map(|g| csv_field(g)));
+    f.push(r.outcome.as_str().to_string());
+    f.push(csv_field(&r.reason));
+    let per = |get: &dyn Fn(&ChannelFigures) -> Option<f64>| {
+        (0..meta.m).map(|i| opt(r.channels.get(i).and_then(get))).collect::<Vec<_>>()
+    };
+    f.extend(per(&|c| Some(c.tail_max_e)));
+    f.extend(per(&|c| Some(c.tail_rms_e)));
+    f.extend(per(&|c| Some(c.max_u)));
+    f.extend(per(&|c| Some(c.max_uf)));
+    f.extend(per(&|c| c.settle_t));
+    f.push(r.steps.to_string());
+    f.push(format!("{:.3}", r.wall_ms));
+    writeln!(w, "{}", f.join(","))
 }
 
 /// Splits one CSV line into fields (RFC 4180 quoting; no line breaks inside fields).

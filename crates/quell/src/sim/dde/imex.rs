@@ -27,7 +27,24 @@ const STIFF_H_RATE: f64 = 4.0;
 /// then take steps eight times longer before meeting its stability bound, which outweighs its
 /// higher cost per step (12–13 right-hand sides against 6 and the block solves).
 const NONSTIFF_H_RATE: f64 = STIFF_H_RATE / 8.0;
-/// Stability-limited DOP853 steps (no six in a row off the bound between them) before the first switch. `dop853.f` warns after 15;
+/// DOP853's steps count as off its stability bound when h times the rate bound is below this: six
+/// in a row end a stability-limited stretch ([`Switching`]).
+const OFF_H_RATE: f64 = STIFF_H_RATE / 2.0;
+/// A stretch is stability-limited when at least this share of its steps exceed [`STIFF_H_RATE`]. At
+/// the bound, the step-size controller oscillates: h·rate ran from 1 to 13 on a magnetic bearing
+/// whose DOP853 rejected 37 % of its attempts, half of its steps below [`STIFF_H_RATE`]; counting
+/// only steps above it, six in a row below reset the count and the run never switched, leaving u_f
+/// off by 1 % of its peak at rtol = 1e-8 (the implicit method: 2e-7).
+const LIMITED_SHARE: f64 = 1.0 / 3.0;
+/// The share of rejected attempts above which DOP853 is taken to thrash at its stability bound
+/// (accuracy-limited runs reject 5–15 %): its error estimate then misses the stiff block's errors
+/// (a loop at rtol 1e-6 whose u_f peaked 8× too high with 31 % rejected was right on the implicit
+/// method). A stability-limited stretch that thrashes over [`THRASH_AFTER`] steps switches at once,
+/// and the implicit method is then kept while the loop stays stiff, whatever it costs.
+pub(crate) const THRASHING: f64 = 0.25;
+/// Steps of a stability-limited stretch over which its rejected share is judged ([`THRASHING`]).
+const THRASH_AFTER: usize = 100;
+/// Steps of a stability-limited stretch before the first switch. `dop853.f` warns after 15;
 /// the switch waits longer, because it pays only on a long stiff stretch: a loop that sits at
 /// DOP853's stability bound for a while at a tight tolerance (`examples/three-channel.toml`, up to
 /// ~1000 steps) costs about as much on the 4th-order implicit method, and stays on DOP853 with its
@@ -108,10 +125,17 @@ fn slope_weights(nodes: &[f64]) -> ([f64; 4], [f64; 4]) {
 /// limited four times as long before the next one.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Switching {
-    /// Steps counted towards the next decision.
+    /// Steps counted towards the next decision: on DOP853, the steps of the present stretch.
     run: usize,
-    /// DOP853 steps in a row off its stability bound.
+    /// Of DOP853's stretch, the steps beyond [`STIFF_H_RATE`].
+    limited: usize,
+    /// DOP853 steps in a row below [`OFF_H_RATE`].
     off: usize,
+    /// Rejected attempts when the present stretch began.
+    rejected_since: usize,
+    /// DOP853 thrashed before the switch ([`THRASHING`]): the implicit method is not measured
+    /// against its cost.
+    thrashed: bool,
     /// Time and right-hand-side evaluations at the start of the measured window.
     since: (f64, usize),
     /// DOP853's time per evaluation over its last stability-limited steps.
@@ -124,7 +148,17 @@ pub(super) struct Switching {
 
 impl Default for Switching {
     fn default() -> Self {
-        Switching { run: 0, off: 0, since: (0.0, 0), explicit_rate: 0.0, patience: SWITCH_AFTER, settle: 0.0 }
+        Switching {
+            run: 0,
+            limited: 0,
+            off: 0,
+            rejected_since: 0,
+            thrashed: false,
+            since: (0.0, 0),
+            explicit_rate: 0.0,
+            patience: SWITCH_AFTER,
+            settle: 0.0,
+        }
     }
 }
 
@@ -242,10 +276,13 @@ impl<S: DelaySystem> Steps<'_, S> {
         }
     }
 
-    /// After an accepted step under [`Method::Auto`]: counts DOP853's stability-limited steps and
-    /// switches to the implicit method after `patience` in a row; on the implicit method, one largest
-    /// delay after the switch and then after each [`TRIAL`] steps, switches back when it advanced more slowly per evaluation than DOP853 had, or
-    /// when its steps sit far inside DOP853's stability bound ([`Switching`]).
+    /// After an accepted step under [`Method::Auto`]: on DOP853, counts the steps of a stretch that no
+    /// six in a row below [`OFF_H_RATE`] interrupt, and switches to the implicit method after
+    /// `patience` of them when [`LIMITED_SHARE`] of them exceed [`STIFF_H_RATE`], or after
+    /// [`THRASH_AFTER`] when it thrashes ([`THRASHING`]); on the implicit method, one largest
+    /// delay after the switch and then after each [`TRIAL`] steps, switches back when it advanced
+    /// more slowly per evaluation than a DOP853 that did not thrash had, or when its steps sit far
+    /// inside DOP853's stability bound ([`Switching`]).
     pub(super) fn watch_stiffness(&mut self, step: &Step) {
         if self.implicit.is_empty() || self.opts.method != Method::Auto {
             return;
@@ -255,20 +292,23 @@ impl<S: DelaySystem> Steps<'_, S> {
         let sw = &mut self.switching;
         let rate = |since: (f64, usize)| (now.0 - since.0) / (now.1 - since.1).max(1) as f64;
         if !self.stiff {
-            // As `dop853.f` counts: six steps in a row off the bound reset the count.
-            if h_rate > STIFF_H_RATE {
-                sw.off = 0;
-                sw.run += 1;
-            } else {
-                sw.off += 1;
-                if sw.off == 6 {
-                    sw.run = 0;
-                }
+            // As `dop853.f` counts: six steps in a row off the bound end a stretch.
+            sw.off = if h_rate > OFF_H_RATE { 0 } else { sw.off + 1 };
+            if sw.off >= 6 {
+                (sw.run, sw.limited) = (0, 0);
+                return;
             }
+            sw.run += 1;
+            sw.limited += usize::from(h_rate > STIFF_H_RATE);
             if sw.run == 1 {
-                sw.since = now;
+                (sw.since, sw.rejected_since) = (now, self.stats.rejected);
             }
-            if sw.run < sw.patience {
+            if (sw.limited as f64) < LIMITED_SHARE * sw.run as f64 {
+                return;
+            }
+            let rejected = (self.stats.rejected - sw.rejected_since) as f64;
+            sw.thrashed = sw.run >= THRASH_AFTER && rejected > THRASHING * (rejected + sw.run as f64);
+            if sw.run < sw.patience && !sw.thrashed {
                 return;
             }
             sw.explicit_rate = rate(sw.since);
@@ -281,14 +321,17 @@ impl<S: DelaySystem> Steps<'_, S> {
             if sw.run < TRIAL {
                 return;
             }
-            let slower = rate(sw.since) < sw.explicit_rate;
+            let slower = !sw.thrashed && rate(sw.since) < sw.explicit_rate;
             if !slower && h_rate >= NONSTIFF_H_RATE {
                 *sw = Switching { run: 0, since: now, ..*sw };
                 return;
             }
             sw.patience = if slower { 4 * sw.patience } else { SWITCH_AFTER };
         }
-        sw.run = 0;
+        if sw.thrashed && !self.stiff {
+            self.stats.thrashed.get_or_insert((sw.since.0, step.t_new));
+        }
+        (sw.run, sw.limited) = (0, 0);
         sw.since = now;
         sw.settle = step.t_new + self.tau_max;
         self.stiff = !self.stiff;
