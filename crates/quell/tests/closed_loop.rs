@@ -105,6 +105,23 @@ fn plant_input_is_recorded_as_minus_K_x_hat_plus_F_delayed_u() {
     assert!(peak > 1.0 && dev <= 1e-12 * peak, "sampled: max deviation {dev:e}, peak {peak}");
 }
 
+/// A sample time that divides the output step to the whole-number tolerance but not exactly (1/30 s
+/// to ten digits: the delays' nearest valid sample time as a message prints it) records its rows at
+/// k·output_step, the last at t_end, as the continuous loop does: they had fallen at k·T, 0.0999999999,
+/// 0.1999999999, …, 9.999999999, and settling times read off them printed so.
+#[test]
+fn sampled_rows_fall_on_the_output_grid() {
+    let d = Design::new(&paper_plant(), &paper_spec()).unwrap();
+    let (g, w) = paper_signals();
+    let r = Run::new(&d, &g, &w, RunSettings::sampled(10.0, 0.1, 0.03333333333))
+        .simulate(|_| ControlFlow::Continue(()))
+        .unwrap();
+    assert_eq!(r.outcome, Some(Outcome::Completed));
+    // Each row's time is the decimal k/10, as it parses.
+    let expected: Vec<f64> = (0..=100).map(|k| format!("{}.{}", k / 10, k % 10).parse().unwrap()).collect();
+    assert_eq!(r.t, expected);
+}
+
 #[test]
 fn summary_reports_the_plant_input_peak_and_states_are_recorded_only_when_asked() {
     let r = run_paper(paper_spec(), 20.0, 0.1, 1e-9);

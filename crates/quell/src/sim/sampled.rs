@@ -531,7 +531,7 @@ fn sampled_loop<C: SampledController + ?Sized>(
     let bounds = run.bounds();
     let mut outcome = Outcome::Completed;
     let mut taken = 0;
-    let grid = discrete::Grid::new(T);
+    let (grid, rows) = (discrete::Grid::new(T), discrete::Grid::new(settings.output_step));
     for k in 0..=discrete::whole_samples(settings.t_end, T) {
         // The last sample at t_end when t_end is within the whole-number tolerance below k·T, as
         // the continuous loop's last row (t_end = 99.99999999 at T = 0.1 ended at 100).
@@ -550,8 +550,12 @@ fn sampled_loop<C: SampledController + ?Sized>(
         plant.input(k, ctrl.command());
         taken += 1;
         if k % every == 0 {
+            // Rows at k·output_step, which every sample time accepted as dividing it meets to the
+            // whole-number tolerance: T = 0.008333333333 h (τ/2 to ten digits) at an output step of
+            // 0.05 h had put rows at 0.049999999998, …, 399.999999984.
+            let t_row = rows.at(k / every).min(settings.t_end);
             let x_hat = settings.record_states.then_some(&x_hat[..]);
-            if let Some(end) = plant.record(t, ctrl, x_hat, &bounds, &mut result, &mut on_progress) {
+            if let Some(end) = plant.record(t_row, ctrl, x_hat, &bounds, &mut result, &mut on_progress) {
                 outcome = end;
                 break;
             }
