@@ -379,7 +379,7 @@ fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
         }
         if *partial {
             return Err(Failure::Input(format!(
-                "{here}: is partial (its sweep was interrupted); run `quell sweep STUDY --shard {}/{count}` again into it",
+                "{here}: is partial (its sweep was interrupted); run `quell sweep STUDY --shard {}/{count} --resume` into it (it keeps the rows done and runs the others)",
                 meta.shard.index
             )));
         }

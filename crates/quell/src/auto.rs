@@ -852,7 +852,8 @@ fn limit_advice(targets: &Targets, closest: &Candidate) -> String {
             closest.speed,
             short(&closest.max_uf),
             closest.excess(targets),
-            short(&closest.max_uf.iter().map(|&u| round_up_2(u)).collect::<Vec<_>>()),
+            // Only the inputs beyond their limits are raised (input 2's 0.3 had been offered 0.16).
+            short(&closest.max_uf.iter().zip(each).map(|(&u, &l)| if u > l { round_up_2(u) } else { l }).collect::<Vec<_>>()),
         ),
     }
 }

@@ -742,7 +742,9 @@ fn horizon_advice(
     let (wanted, fastest) = horizon_mu(relevant, lambda_max, (t_end, stiff));
     let (mu_text, rule) = (fmt_short(mu), format!("{AVERAGED_MARGIN:.0}·{CONVERGED_EFOLDS:.0}/(λ t_end)"));
     if wanted > fastest {
-        let needed = round_up_2(AVERAGED_MARGIN * CONVERGED_EFOLDS / (fastest.max(mu) * relevant));
+        // At the cap, which a μ beyond it is also told to come down to (the stiff-loop advice).
+        let needed = round_up_2(AVERAGED_MARGIN * CONVERGED_EFOLDS / (fastest * relevant));
+        let beyond = mu > fastest;
         let fastest = crate::settings::round_down_2(fastest);
         // A horizon past a thousand times the run's is no remedy (1e18 s on an SI vessel).
         let longer = if needed <= MAX_HORIZON_RATIO * t_end {
@@ -750,11 +752,22 @@ fn horizon_advice(
         } else {
             format!("even then it needs {needed:.1e} {unit}, past {MAX_HORIZON_RATIO:.0}× t_end: excite that direction more (a larger amplitude at its frequency, filter poles near it) or accept its error")
         };
+        // A μ already past the threshold is not "too small": the horizon is short at any μ it allows.
+        let decays = format!("the error's slowest relevant direction decays at μ λ = {:.2e}/{unit}", mu * relevant);
+        let (head, keep) = if beyond {
+            (
+                format!("the horizon is too short even at {key} = {mu_text}, beyond the stiffness threshold: {decays}"),
+                format!("lower {key} to {}", fmt_short(fastest)),
+            )
+        } else {
+            (
+                format!("{key} = {mu_text} is too small for the horizon: {decays}"),
+                format!("keep {key} at most {}", fmt_short(fastest)),
+            )
+        };
         format!(
-            "{key} = {mu_text} is too small for the horizon: the error's slowest relevant direction decays at μ λ = {:.2e}/{unit}; {rule} = {wanted:.3e} would put the adaptation rate μ λ_max at {:.2e}/{unit}, beyond the stiffness threshold {stiff:.2e}/{unit} ({STIFF_RATIO}·ρ), so keep {key} at most {} and {longer}",
-            mu * relevant,
+            "{head}; {rule} = {wanted:.3e} would put the adaptation rate μ λ_max at {:.2e}/{unit}, beyond the stiffness threshold {stiff:.2e}/{unit} ({STIFF_RATIO}·ρ), so {keep} and {longer}",
             wanted * lambda_max,
-            fmt_short(fastest),
         )
     } else {
         format!(
@@ -892,6 +905,24 @@ mod tests {
     use super::*;
     use crate::scenario::{Scenario, PAPER_EXAMPLE};
     use crate::sim::{RunStats, Sample};
+
+    /// A μ already beyond the stiffness threshold is not told it is too small for the horizon: it is
+    /// told to come down to the threshold, and the horizon it then needs is the threshold's (a
+    /// magnetic bearing at 1000× the threshold had read "6.46e8 is too small … keep it at most
+    /// 640000 and even then it needs 2.0e3 s", the time at 6.46e8, beside "lower it to 640000").
+    /// λ = 1.2e-11 relevant, λ_max = 2.25, t_end = 0.5 s, threshold 1.45e6/s: the cap is
+    /// 1.45e6/2.25 = 644,444 (written 640000), the horizon 15/(644,444 · 1.2e-11) = 1.94e6 s (2.0e6,
+    /// rounded up to two digits).
+    #[test]
+    fn a_mu_beyond_the_stiffness_threshold_is_not_too_small_for_the_horizon() {
+        let unit = TimeUnit::default();
+        let beyond = horizon_advice("design.mu[0]", 6.46e8, (1.2e-11, 2.25), (0.5, 1.45e6), unit);
+        assert!(beyond.starts_with("the horizon is too short even at design.mu[0] = 6.46e8, beyond"), "{beyond}");
+        assert!(beyond.contains("so lower design.mu[0] to 640000 and even then it needs 2.0e6 s"), "{beyond}");
+        let below = horizon_advice("design.mu[0]", 1e3, (1.2e-11, 2.25), (0.5, 1.45e6), unit);
+        assert!(below.starts_with("design.mu[0] = 1000 is too small for the horizon"), "{below}");
+        assert!(below.contains("so keep design.mu[0] at most 640000 and even then it needs 2.0e6 s"), "{below}");
+    }
 
     /// The paper's design with a made-up run of 100 s recorded every 0.1 s (sampled at 1 ms, not
     /// coarse for these designs): g_1 = 3 sin 2t (the paper's), g_2 = 2, both times `size`, and

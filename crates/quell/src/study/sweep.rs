@@ -181,6 +181,16 @@ pub(crate) fn simulate(
     Ok(Simulated { result, memory, waited, breakpoints, delay_floor, runaway_steps })
 }
 
+/// A grid value as runs.csv writes it: numbers in [`super::csv_number`]'s shortest round-trip form
+/// (a grid value of 1e300 was written as its 301 digits), lists of them in brackets.
+pub(super) fn grid_text(v: &toml::Value) -> String {
+    match v {
+        toml::Value::Float(x) => super::csv_number(*x),
+        toml::Value::Array(a) => format!("[{}]", a.iter().map(grid_text).collect::<Vec<_>>().join(", ")),
+        other => other.to_string(),
+    }
+}
+
 /// Carries out one run; `None` when `stop` interrupted it.
 pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
     let mut started = Instant::now();
@@ -189,7 +199,7 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
         point: spec.point,
         draw: spec.draw,
         seed: spec.seed,
-        grid: spec.grid.iter().map(|(_, v)| v.to_string()).collect(),
+        grid: spec.grid.iter().map(|(_, v)| grid_text(v)).collect(),
         outcome: Outcome::Failed,
         reason: String::new(),
         channels: Vec::new(),

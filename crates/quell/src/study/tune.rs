@@ -454,9 +454,11 @@ impl Search<'_> {
     /// (a range such as [1e-300, 1e300] gave μ = inf past its first point).
     fn log_grid(&self, i: usize) -> impl Iterator<Item = f64> {
         let ([lo, hi], points) = (self.spec.bounds[i], self.spec.points);
+        // A fixed μ_i (μ_min = μ_max) is one evaluation, not `points` identical ones.
+        let points = if lo == hi { 1 } else { points };
         let ratio = hi / lo;
         (0..points).map(move |k| {
-            let x = k as f64 / (points - 1) as f64;
+            let x = k as f64 / (points - 1).max(1) as f64;
             if ratio.is_finite() {
                 lo * ratio.powf(x)
             } else if k == 0 {
@@ -473,7 +475,8 @@ impl Search<'_> {
     /// evaluation appended to it; returns early when stopped.
     fn refine(&self, i: usize, curve: &mut Vec<TunePoint>) {
         let Some(best) = (0..curve.len()).min_by(|&a, &b| key(&curve[a]).total_cmp(&key(&curve[b]))) else { return };
-        if curve[best].objective.is_none() || self.spec.refine == 0 {
+        let [lo, hi] = self.spec.bounds[i];
+        if curve[best].objective.is_none() || self.spec.refine == 0 || lo == hi {
             return;
         }
         let (mut a, mut b) = (curve[best.saturating_sub(1)].mu.ln(), curve[(best + 1).min(curve.len() - 1)].mu.ln());
@@ -565,6 +568,19 @@ mod tests {
 
     /// The chosen μ at the largest or smallest evaluation is said to be at that end of the bounds;
     /// inside them, or with one evaluation only, it is not.
+    /// μ_min = μ_max fixes μ_i: one evaluation, chosen, at no end of a range (a fixed μ had been run
+    /// 15 times, then called at the lower end of its range, which might be widened).
+    #[test]
+    fn a_fixed_mu_is_evaluated_once() {
+        let text = "[simulation]\nt_end = 5.0\nrtol = 1e-6\natol = 1e-6\n[tune]\nobjective = \"tail_rms_e\"\nmu = [[5.0, 5.0], [2.0, 20.0]]\npoints = 3\nrefine = 2\n";
+        let study = Study::from_toml(text, None).unwrap();
+        let r = tune(&study, &Default::default()).unwrap();
+        assert_eq!(r.channels[0].curve.iter().map(|p| p.mu).collect::<Vec<_>>(), [5.0]);
+        assert_eq!(r.channels[0].chosen.as_ref().map(|p| p.mu), Some(5.0));
+        assert_eq!(r.channels[0].at_bound(), None);
+        assert_eq!(r.channels[1].curve.len(), 3 + 2);
+    }
+
     #[test]
     fn a_choice_at_an_end_of_the_bounds_is_named() {
         let point = |mu: f64| TunePoint {
