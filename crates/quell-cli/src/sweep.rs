@@ -67,30 +67,7 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
         }
         return merge(&args.merge, &args.out, !args.no_plots);
     }
-    let path = args.study.as_deref().expect("clap requires a study without --merge");
-    let study = read_study(path)?;
-    quell::study::check_sweep(&study).map_err(|e| Failure::Input(format!("{}: {e}", path.display())))?;
-    let shard = match &args.shard {
-        None => Shard::ALL,
-        Some(s) => Shard::parse(s).map_err(|e| Failure::Input(format!("--shard: {e}")))?,
-    };
-    let runs = study.len();
-    if runs > study::CONFIRM_RUNS && !args.yes {
-        return Err(Failure::Input(format!(
-            "{}: the study has {runs} runs ({} × {}), more than {:e}; check the grid, or pass --yes to run it (rows take ~200 bytes of memory each)",
-            path.display(),
-            quell::study::count(study.points(), "grid point"),
-            quell::study::count(study.draws(), "draw"),
-            study::CONFIRM_RUNS as f64
-        )));
-    }
-    let n = shard.len(usize::try_from(runs).unwrap_or(usize::MAX));
-    if n == 0 {
-        eprintln!(
-            "⚠ warning: shard {}/{} has no runs: the study has {runs}, fewer than the shards; its files are written empty, as --merge needs every shard",
-            shard.index, shard.count
-        );
-    }
+    let (study, shard, n) = planned(args)?;
     let meta = StudyMeta::new(&study, shard);
     let (kept, done) = if args.resume { resumed(&args.out, &meta, n)? } else { (Vec::new(), Vec::new()) };
     if args.resume && kept.len() == n {
@@ -141,6 +118,36 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
         )));
     }
     Ok(())
+}
+
+/// The study of `args`, checked, with its shard and that shard's number of runs: refused when the
+/// study cannot be swept or is over [`study::CONFIRM_RUNS`] runs without `--yes`.
+fn planned(args: &SweepArgs) -> Result<(Study, Shard, usize), Failure> {
+    let path = args.study.as_deref().expect("clap requires a study without --merge");
+    let study = read_study(path)?;
+    quell::study::check_sweep(&study).map_err(|e| Failure::Input(format!("{}: {e}", path.display())))?;
+    let shard = match &args.shard {
+        None => Shard::ALL,
+        Some(s) => Shard::parse(s).map_err(|e| Failure::Input(format!("--shard: {e}")))?,
+    };
+    let runs = study.len();
+    if runs > study::CONFIRM_RUNS && !args.yes {
+        return Err(Failure::Input(format!(
+            "{}: the study has {runs} runs ({} × {}), more than {:e}; check the grid, or pass --yes to run it (rows take ~200 bytes of memory each)",
+            path.display(),
+            quell::study::count(study.points(), "grid point"),
+            quell::study::count(study.draws(), "draw"),
+            study::CONFIRM_RUNS as f64
+        )));
+    }
+    let n = shard.len(usize::try_from(runs).unwrap_or(usize::MAX));
+    if n == 0 {
+        eprintln!(
+            "⚠ warning: shard {}/{} has no runs: the study has {runs}, fewer than the shards; its files are written empty, as --merge needs every shard",
+            shard.index, shard.count
+        );
+    }
+    Ok((study, shard, n))
 }
 
 /// `--jobs N`: 1 ≤ N ≤ [`MAX_JOBS`]; clap prints the message after the flag's name.
