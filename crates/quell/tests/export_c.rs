@@ -218,6 +218,7 @@ int main(void)
     EXPECT(fmi2ExitInitializationMode(c), fmi2OK, "");
     /* A step of 1e12 samples ran for days: more than 1e8 samples are refused. */
     EXPECT(fmi2DoStep(c, 2, 5e10, fmi2True), fmi2Error, "fmi2DoStep: communication step h = 5e+10 s is 1000000000000 samples of T_s = 0.05 s; at most 1e+08 are taken in one step: take several shorter steps");
+    EXPECT(fmi2DoStep(c, 2, 0, fmi2True), fmi2Error, "fmi2DoStep: communication step h = 0 s: expected h > 0, a whole number of samples of T_s = 0.05 s");
     EXPECT(fmi2DoStep(c, 2, 0.1, fmi2True), fmi2OK, "");
     EXPECT(fmi2SetupExperiment(c, 0, 0, 1000, 0, 0), fmi2Error, "the start time is set before initialization only");
     EXPECT(fmi2EnterInitializationMode(c), fmi2Error, "fmi2EnterInitializationMode: not allowed when the FMU is in step mode");
@@ -267,6 +268,7 @@ int main(void)
     EXPECT(fmi3ExitInitializationMode(c), fmi3OK, "");
     EXPECT(fmi3DoStep(c, 2, 0.05, fmi3True, NULL, &terminate, &early, &t), fmi3Error, "fmi3DoStep: a NULL output pointer");
     EXPECT(fmi3DoStep(c, 2, 5e10, fmi3True, &event, &terminate, &early, &t), fmi3Error, "at most 1e+08 are taken in one step");
+    EXPECT(fmi3DoStep(c, 2, 0, fmi3True, &event, &terminate, &early, &t), fmi3Error, "expected h > 0, a whole number of samples");
     EXPECT(fmi3DoStep(c, 2, 0.05, fmi3True, &event, &terminate, &early, &t), fmi3OK, "");
     EXPECT(fmi3EnterInitializationMode(c, 0, 0, 50, 0, 0), fmi3Error, "the start time is set before initialization only");
     EXPECT(fmi3Terminate(c), fmi3OK, "");

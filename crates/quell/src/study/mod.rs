@@ -344,6 +344,9 @@ impl Study {
             None => None,
             Some(mc) => Some(monte_carlo(&base, table("monte_carlo", mc)?, &scenario_source)?),
         };
+        if let (Some(mc), Some(t_s)) = (&monte_carlo, scenario.simulation.sample_time) {
+            check_drawn_delays(mc, t_s, scenario.plant.time_unit)?;
+        }
         let tune = match doc.get("tune") {
             None => None,
             Some(t) => Some(TuneSpec::parse(table("tune", t)?, &scenario)?),
@@ -650,6 +653,25 @@ fn base_run_error(doc: &toml::Table, scenario: &Scenario, source: &str) -> Optio
         _ => err("scenario", format!("{source}: {e}")),
     };
     Some((e, error))
+}
+
+/// A sampled-data study draws no delay: a delay drawn from a continuous law is a whole number of
+/// samples with probability zero, so every draw would fail its run's check (15 failed rows and exit
+/// 0, where a grid value that is not whole samples is refused before any run).
+fn check_drawn_delays(mc: &MonteCarlo, sample_time: f64, unit: crate::settings::TimeUnit) -> Result<(), StudyError> {
+    let delays = ["plant.delays", "truth.delays", "truth.actuator_delays"];
+    let Some(p) =
+        mc.perturbations.iter().find(|p| delays.iter().any(|d| p.key == *d || p.key.starts_with(&format!("{d}["))))
+    else {
+        return Ok(());
+    };
+    Err(err(
+        format!("monte_carlo.\"{}\"", p.key),
+        format!(
+            "a delay drawn from a continuous law is almost never a whole number of samples of simulation.sample_time = {} {unit}, so every sampled run would fail; draw it in the continuous loop (leave simulation.sample_time out of the study) or give whole-sample delays as [grid] values",
+            crate::settings::fmt_short(sample_time)
+        ),
+    ))
 }
 
 /// `[grid]`: each key a scenario path, each value a non-empty list of values of its shape, no two

@@ -505,3 +505,20 @@ fn grid_values_are_written_in_their_shortest_form() {
     assert_eq!(text("v = 7"), "7");
     assert_eq!(text("v = 1e300").parse::<f64>(), Ok(1e300));
 }
+
+/// A sampled-data study that draws a delay is refused before any run, naming the draw: every draw
+/// had failed its run's check (not whole samples) and the sweep exited 0. The same draw in the
+/// continuous loop is a study.
+#[test]
+fn a_sampled_study_draws_no_delay() {
+    for key in ["truth.delays", "truth.delays[1]", "plant.delays"] {
+        let text = format!(
+            "[simulation]\nt_end = 5.0\nsample_time = 0.01\n[monte_carlo]\nruns = 3\n\"{key}\" = {{ uniform = 0.2 }}\n"
+        );
+        let e = error(&text);
+        assert!(e.starts_with(&format!("monte_carlo.\"{key}\": a delay drawn from a continuous law")), "{e}");
+        assert!(e.contains("simulation.sample_time = 0.01 s"), "{e}");
+    }
+    let continuous = "[simulation]\nt_end = 5.0\n[monte_carlo]\nruns = 3\n\"truth.delays\" = { uniform = 0.2 }\n";
+    assert!(Study::from_toml(continuous, None).is_ok());
+}
