@@ -104,6 +104,18 @@ impl PyScenario {
         quell::Scenario::from_document(doc).map(Self::new).map_err(|e| scenario_error(py, &e))
     }
 
+    /// `doc` with `sample_time` as its `simulation.sample_time` (a bad value is the scenario's
+    /// check's to name), validated.
+    fn sampled(py: Python<'_>, mut doc: Table, t: f64) -> PyResult<Self> {
+        let sim = doc.entry("simulation").or_insert(Table::new().into());
+        match sim.as_table_mut() {
+            Some(sim) => sim.insert("sample_time".into(), Value::Float(t)),
+            // Not a table: the scenario's check names simulation.
+            None => None,
+        };
+        Self::from_document(py, &doc)
+    }
+
     /// The design of this scenario, computed once.
     pub fn design_arc(&self, py: Python<'_>) -> PyResult<Arc<quell::Design>> {
         if let Some(d) = self.design.get() {
@@ -470,6 +482,11 @@ fn scenario_document(
     Ok(doc)
 }
 
+/// `sample_time=` of `Scenario.load` and `Scenario.from_toml`, read before the file or the text.
+fn sample_time_arg(sample_time: Option<&Bound<'_, PyAny>>) -> PyResult<Option<f64>> {
+    sample_time.map(|t| number(t, "sample_time", Kind::Scenario, "simulation.sample_time")).transpose()
+}
+
 #[pymethods]
 impl PyScenario {
     #[new]
@@ -513,6 +530,10 @@ impl PyScenario {
     /// ----------
     /// text : str
     ///     The TOML text.
+    /// sample_time : float, optional
+    ///     T_s in the plant's unit of time: the scenario is read as the sampled-data one this
+    ///     makes of it (it replaces `simulation.sample_time`, as `quell run --sample-time` does), so
+    ///     that white noise (no `noise.bandwidth`) is valid.
     ///
     /// Returns
     /// -------
@@ -522,7 +543,7 @@ impl PyScenario {
     /// Raises
     /// ------
     /// TypeError
-    ///     `text` is not a str.
+    ///     `text` is not a str, or `sample_time` not a real number.
     /// ScenarioError
     ///     The text is not valid TOML or not a valid scenario (the message names the key).
     ///
@@ -532,8 +553,16 @@ impl PyScenario {
     /// >>> s == quell.paper_example()
     /// True
     #[staticmethod]
-    fn from_toml(py: Python<'_>, text: &Bound<'_, PyAny>) -> PyResult<Self> {
-        Self::parse(py, &crate::convert::text(text, "text")?)
+    #[pyo3(signature = (text, *, sample_time=None))]
+    fn from_toml(py: Python<'_>, text: &Bound<'_, PyAny>, sample_time: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+        let (text, sample_time) = (crate::convert::text(text, "text")?, sample_time_arg(sample_time)?);
+        match sample_time {
+            None => Self::parse(py, &text),
+            Some(t) => {
+                let doc = quell::scenario::parse_document(&text).map_err(|e| scenario_error(py, &e))?;
+                Self::sampled(py, doc, t)
+            }
+        }
     }
 
     /// Reads and validates a scenario file.
@@ -542,6 +571,9 @@ impl PyScenario {
     /// ----------
     /// path : str or os.PathLike
     ///     The file's path.
+    /// sample_time : float, optional
+    ///     As for `Scenario.from_toml`: the file read as the sampled-data scenario this T_s makes
+    ///     of it.
     ///
     /// Returns
     /// -------
@@ -551,7 +583,7 @@ impl PyScenario {
     /// Raises
     /// ------
     /// TypeError
-    ///     `path` is not a path.
+    ///     `path` is not a path, or `sample_time` not a real number.
     /// ScenarioError
     ///     The file cannot be read or is not a valid scenario.
     ///
@@ -562,9 +594,16 @@ impl PyScenario {
     /// >>> quell.Scenario.load("mine.toml").name
     /// 'paper-example'
     #[staticmethod]
-    fn load(py: Python<'_>, path: &Bound<'_, PyAny>) -> PyResult<Self> {
-        let path = crate::convert::path(path, "path")?;
-        quell::Scenario::from_path(&path).map(Self::new).map_err(|e| scenario_error(py, &e))
+    #[pyo3(signature = (path, *, sample_time=None))]
+    fn load(py: Python<'_>, path: &Bound<'_, PyAny>, sample_time: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+        let (path, sample_time) = (crate::convert::path(path, "path")?, sample_time_arg(sample_time)?);
+        match sample_time {
+            None => quell::Scenario::from_path(&path).map(Self::new).map_err(|e| scenario_error(py, &e)),
+            Some(t) => {
+                let doc = quell::scenario::read_document(&path).map_err(|e| scenario_error(py, &e))?;
+                Self::sampled(py, doc, t)
+            }
+        }
     }
 
     /// The scenario as a TOML document, every key written.

@@ -244,3 +244,26 @@ def test_stub_matches_the_module():
     run = subprocess.run([sys.executable, "-m", "mypy.stubtest", "quell", "--mypy-config-file", str(config)],
                          capture_output=True, text=True)
     assert run.returncode == 0, run.stdout + run.stderr
+
+
+def test_a_sample_time_given_to_load_reads_the_file_as_its_sampled_scenario(tmp_path):
+    """White noise (no bandwidth) is valid only in a sampled-data scenario. `quell run
+    --sample-time` made such a file without the key one; Python could not load it at all
+    (`noise.bandwidth: missing`), so could not simulate it sampled. `sample_time=` of `load` and
+    `from_toml` is the flag: the same samples as the file that sets the key."""
+    keyed = (EXAMPLES / "paper-noise.toml").read_text().replace("t_end = 100.0", "t_end = 2.0")
+    assert "\nsample_time = 0.001 " in keyed
+    without = "\n".join(line for line in keyed.splitlines() if not line.startswith("sample_time"))
+    path = tmp_path / "white.toml"
+    path.write_text(without)
+    with pytest.raises(quell.ScenarioError, match="noise.bandwidth: missing"):
+        quell.Scenario.load(path)
+    loaded = quell.Scenario.load(path, sample_time=0.001)
+    parsed = quell.Scenario.from_toml(without, sample_time=0.001)
+    reference = quell.Scenario.from_toml(keyed)
+    assert loaded.simulation["sample_time"] == parsed.simulation["sample_time"] == 0.001
+    a, b = quell.simulate(loaded), quell.simulate(reference)
+    assert np.array_equal(a.y, b.y) and np.array_equal(a.u_f, b.u_f) and np.abs(a.y).max() > 0
+    # A bad sample time is the scenario's check's, naming the key.
+    with pytest.raises(quell.ScenarioError, match="simulation.sample_time"):
+        quell.Scenario.from_toml(without, sample_time=-1.0)
