@@ -66,6 +66,9 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     if let Loop::Sampled { sample_time } = settings.mode {
         eprint!("{}", report::sample_time_text(&scenario, &design, sample_time, Some(settings.output_step)));
     }
+    if let Some(w) = quell::sim::explicit_stiff_warning(&Run::of(&scenario, &design).settings(settings.clone())) {
+        eprintln!("⚠ warning: {w}");
+    }
     let out = &args.out;
     // The figures' names too: one taken by a directory would fail only after the run.
     let figures: Vec<String> =

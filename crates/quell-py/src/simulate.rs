@@ -643,6 +643,11 @@ pub fn simulate(
         Loop::Sampled { sample_time } => Some((sample_time, settings.output_step)),
         Loop::Continuous(_) => None,
     };
+    let explicit_stiff =
+        quell::sim::explicit_stiff_warning(&quell::sim::Run::of(scn, &design).settings(settings.clone()));
+    if let Some(w) = explicit_stiff {
+        crate::errors::warn(py, &crate::errors::in_python(w))?;
+    }
     let (result, interrupt) = run_released(py, scn, &design, settings)?;
     // After the run's own checks (a sample time they refuse gets no warning).
     if let Some((t, h)) = sampled {

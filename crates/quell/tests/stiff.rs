@@ -89,6 +89,38 @@ fn stiff_paths_match_dop853_where_both_run() {
     }
 }
 
+/// A run forced onto DOP853 whose adaptive law is stiff is cautioned before it starts, with the steps
+/// DOP853's stability takes at the rate Ω settles to (rate·t_end/6.1): the paper's example at μ ×
+/// 1000 over 20 s announces 28,000 and takes 22,660 (Ω builds up over the first seconds, the rate
+/// with it); the bounds ×0.5 and ×3 leave room for a start slower or a controller further from the
+/// bound. At its own μ, or on the automatic method, nothing is said.
+#[test]
+fn an_explicit_run_of_a_stiff_law_is_cautioned_with_its_steps() {
+    let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+    let design = |factor: f64| {
+        let mut spec = s.design.clone();
+        spec.mu.iter_mut().for_each(|mu| *mu *= factor);
+        Design::new(&s.plant, &spec).unwrap()
+    };
+    let settings = |method: Method| {
+        let integrator = Integrator { method, max_steps: Some(2_000_000), ..Integrator::new(1e-6, 1e-6) };
+        RunSettings::new(20.0, 0.1, Loop::Continuous(integrator))
+    };
+    let warning = |d: &Design, method: Method| {
+        quell::sim::explicit_stiff_warning(&Run::new(d, &s.reference, &s.disturbance, settings(method)))
+    };
+    let stiff = design(1000.0);
+    let w = warning(&stiff, Method::Explicit).expect("a caution");
+    assert!(w.starts_with("simulation.method = \"explicit\" on a stiff adaptive law"), "{w}");
+    let about: f64 = w.split("takes about ").nth(1).and_then(|r| r.split(' ').next()).unwrap().parse().unwrap();
+    let r = Run::new(&stiff, &s.reference, &s.disturbance, settings(Method::Explicit))
+        .simulate(|_| ControlFlow::Continue(()))
+        .unwrap();
+    let steps = r.stats.steps() as f64;
+    assert!(steps >= 0.5 * about && steps <= 3.0 * about, "{steps} steps against about {about}");
+    assert!(warning(&design(1.0), Method::Explicit).is_none() && warning(&stiff, Method::Auto).is_none());
+}
+
 /// A loop at DOP853's stability bound for the whole run: the magnetic bearing of
 /// `tests/data/magnetic-bearing.toml` (μλ_max(Ω̄) = 10 ρ, rtol = 1e-8, atol = 1e-12 m). DOP853's
 /// step size oscillates there (h times the rate bound from 1 to 13, half the steps below the

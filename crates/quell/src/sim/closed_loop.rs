@@ -10,7 +10,7 @@ use nalgebra::{DMatrix, DVector};
 use super::dde::{self, DelaySystem, Options, Past};
 use super::divergence::{Peaks, Watched};
 use super::result::{Outcome, RunStats, Sample, SimResult};
-use super::{check_run, Integrator, Run, SimError, PROGRESS_EVERY};
+use super::{check_run, Integrator, Loop, Run, SimError, PROGRESS_EVERY};
 use crate::averaged::Averaged;
 use crate::controller::{command, mat_vec, packed, swapping_error, Equations};
 use crate::design::{Design, RegressorScaling};
@@ -759,6 +759,30 @@ pub const DOP853_STABLE_H_RATE: f64 = 6.1;
 /// DOP853's stability bound sets on the adaptive law's rate (measured 0.9 to 1.03 times on the
 /// paper's example, the quadruple tank and the supply vessel of `tests/data`).
 pub const BUDGET_STABILITY_MARGIN: f64 = 2.0;
+
+/// The caution before a continuous run forced onto DOP853 ([`Method::Explicit`](dde::Method::Explicit))
+/// whose adaptive law is stiff (μλ_max beyond [`STIFF_RATIO`]·ρ): its steps are bounded by
+/// DOP853's stability, h·μλ_max ≤ [`DOP853_STABLE_H_RATE`], whatever the accuracy needs. A magnetic
+/// bearing at 1e5 times its stiffness threshold advanced 1.3 ms a second with nothing said, its
+/// budget allowing ~45 minutes. `None` otherwise.
+pub fn explicit_stiff_warning(run: &Run<'_>) -> Option<String> {
+    let Loop::Continuous(integrator) = &run.settings.mode else { return None };
+    if integrator.method != dde::Method::Explicit {
+        return None;
+    }
+    let rate = adaptation_rate(run.design, run.averaged());
+    let rho = loop_rate(run.design, run.truth, [run.reference, run.disturbance]);
+    let unit = run.design.plant().time_unit;
+    (rate > STIFF_RATIO * rho).then(|| {
+        format!(
+            "simulation.method = \"explicit\" on a stiff adaptive law: μλ_max = {:.3e}/{unit} is {:.1e}× the loop's fastest other rate ρ = {:.3e}/{unit}, and DOP853 is stable only for h·μλ_max ≤ {DOP853_STABLE_H_RATE}, so the run takes about {:.1e} steps (at the rate Ω settles to); the default method, \"auto\", takes the adaptive law implicitly",
+            rate,
+            rate / rho,
+            rho,
+            rate * run.settings.t_end / DOP853_STABLE_H_RATE
+        )
+    })
+}
 
 /// The default step budget of a continuous run, from the problem's time scales, its adaptation
 /// rate, the method and the tolerance tol = min(rtol, atol):

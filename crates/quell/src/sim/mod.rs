@@ -25,7 +25,7 @@ use crate::signal::{check_signals, Signal};
 
 pub use crate::settings::MeasurementNoise;
 pub use closed_loop::{
-    adaptation_rate, default_max_history_bytes, default_max_steps, loop_rate, BUDGET_MIN_STEPS,
+    adaptation_rate, default_max_history_bytes, default_max_steps, explicit_stiff_warning, loop_rate, BUDGET_MIN_STEPS,
     BUDGET_STABILITY_MARGIN, BUDGET_STEPS_PER_RATE, BUDGET_TOLERANCE, DOP853_STABLE_H_RATE, HISTORY_MARGIN,
     MAX_HISTORY_BYTES, STIFF_RATIO,
 };
