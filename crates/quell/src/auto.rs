@@ -273,7 +273,7 @@ pub enum AutoError {
     #[error(transparent)]
     Sim(#[from] SimError),
     /// The rules chose a value for `key` that the design refuses (`message`).
-    #[error("{message}; {key} was chosen by the automatic design, not given in the file: its rules have no usable value for this scenario (many harmonics or frequencies far apart call for filter poles by hand), so give {key} in [design] (docs/tuning.md)")]
+    #[error("{message}; {key} was chosen by the automatic design, not given in the file, and its rules have no usable value here: {}; give {key} in [design] (docs/tuning.md)", rules_why(key))]
     Rules { key: String, message: String },
     /// The progress callback (or a stop flag) stopped a verifying simulation.
     #[error("interrupted during the automatic design's verifying simulations; nothing was chosen")]
@@ -542,6 +542,17 @@ fn with_design_table(doc: &toml::Table) -> toml::Table {
     let mut doc = doc.clone();
     doc.entry("design").or_insert_with(|| toml::Value::Table(toml::Table::new()));
     doc
+}
+
+/// Why the rules can miss for `key` (a `design.` key): the filter poles' spread, or the placement
+/// of observer and channel poles from the plant's fastest eigenvalue.
+fn rules_why(key: &str) -> &'static str {
+    match key {
+        "design.observer_poles" | "design.channel_poles" | "design.observer_gain" => {
+            "they are placed from the plant's fastest eigenvalue, and a plant whose eigenvalues span many decades, or a badly scaled realization (a companion form from a transfer function), makes that placement ill-conditioned: place them by hand near the signals' rates, realize the plant in physical states, or leave a fast stable mode out of the model"
+        }
+        _ => "many harmonics or frequencies far apart call for filter poles by hand",
+    }
 }
 
 impl AutoError {
