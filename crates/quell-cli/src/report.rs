@@ -23,6 +23,10 @@ pub fn design_json(d: &Design) -> Value {
         "k": d.plant().k(),
         "q": d.q(),
         "sigma": d.sigma(),
+        // The design model's input delays τ_i (the controller's u_d(t) = u(t − τ)) in its unit of
+        // time: with K, F and a run's x̂ and u they give u_f (5) again.
+        "delays": d.plant().delays,
+        "time_unit": d.plant().time_unit.symbol(),
         "K": matrix(d.K()),
         "F": matrix(d.F()),
         "L": matrix(d.L()),

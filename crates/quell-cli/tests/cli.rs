@@ -1313,3 +1313,53 @@ fn a_run_on_the_truth_says_so_first() {
     let o = quell(&["run", model.to_str().unwrap(), "--no-plots", "--out", dir.path().join("m").to_str().unwrap()]);
     assert!(!stderr(&o).contains("[truth]"), "{}", stderr(&o));
 }
+
+/// design.json carries what u_f (5) is made of: K, F and the design model's delays τ_i, so that
+/// u_f(t) = −K x̂(t) + F u(t − τ) is recomputed from it and a `--states` run's signals.csv alone
+/// (a tryout could not: the delays were missing). On the paper's example (τ = 1 s and 3 s, rows
+/// every 0.1 s, so every delayed command is a row), to 1e-12 of u_f's peak: the same products in
+/// another order, over numbers written to round-trip.
+#[test]
+fn design_json_and_signals_give_the_plant_input_again() {
+    let dir = temp_dir("uf-again");
+    let out = dir.path().join("out");
+    let o = quell(&["run", "--states", "--no-plots", "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let d = read_json(&out.join("design.json"));
+    assert_eq!(d["delays"], serde_json::json!([1.0, 3.0]));
+    assert_eq!(d["time_unit"], "s");
+    let rows = |m: &Value| -> Vec<Vec<f64>> {
+        m.as_array()
+            .unwrap()
+            .iter()
+            .map(|r| r.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect())
+            .collect()
+    };
+    let (K, F, tau) = (
+        rows(&d["K"]),
+        rows(&d["F"]),
+        d["delays"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect::<Vec<_>>(),
+    );
+    let text = fs::read_to_string(out.join("signals.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let table: Vec<Vec<f64>> = lines.map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+    let step = table[1][0] - table[0][0];
+    let (mut worst, mut peak) = (0.0f64, 0.0f64);
+    for (k, row) in table.iter().enumerate() {
+        for i in 0..2 {
+            let x_hat: f64 = (0..3).map(|j| K[i][j] * row[col(&format!("xhat{}", j + 1))]).sum();
+            let u_d: f64 = (0..2)
+                .map(|j| {
+                    let back = (tau[j] / step).round() as usize;
+                    F[i][j] * if k >= back { table[k - back][col(&format!("u{}", j + 1))] } else { 0.0 }
+                })
+                .sum();
+            let u_f = row[col(&format!("uf{}", i + 1))];
+            worst = worst.max((u_f - (u_d - x_hat)).abs());
+            peak = peak.max(u_f.abs());
+        }
+    }
+    assert!(peak > 1.0 && worst <= 1e-12 * peak, "u_f recomputed off by {worst:e} of a peak {peak}");
+}
