@@ -15,7 +15,9 @@ use quell::TimeUnit;
 
 use crate::output::write_atomic;
 
-const SIZE: (u32, u32) = (1000, 1400);
+mod envelope;
+
+const SIZE: (u32, u32) = (1000, 1650);
 static FONT: Once = Once::new();
 
 fn register_font() {
@@ -420,7 +422,7 @@ fn draw<DB: DrawingBackend + Strokes>(
     };
     let (channel, input) =
         (format!("Channel {c}{}", named(&names.outputs)), format!("Input {c}{}", named(&names.inputs)));
-    let areas = root.split_evenly((5, 1));
+    let areas = root.split_evenly((6, 1));
     // A run that stopped early says so where its curves end.
     use quell::sim::Outcome;
     let ended = match &r.outcome {
@@ -471,7 +473,7 @@ fn draw<DB: DrawingBackend + Strokes>(
         (uf_title, "u_f", &plant_input, limit),
         (eta_title, "η", &etas, None),
     ];
-    // One time axis for the five: as far right as the panel whose legend needs room beside its
+    // One time axis for the six: as far right as the panel whose legend needs room beside its
     // data (η̂'s) takes it, so that the panels line up.
     let t_right = panels
         .iter()
@@ -481,6 +483,11 @@ fn draw<DB: DrawingBackend + Strokes>(
     for ((title, ylabel, series, limit), area) in panels.iter().zip(areas.iter()) {
         panel(area, (title, ylabel), series, (*limit, Some(t_right)), time)?;
     }
+    // The error from each time on, on a log axis, last: convergence over decades.
+    let e: Vec<(f64, f64)> = samples(r, &r.e, i).collect();
+    let tail = [(format!("max |e{c}(s)|, s ≥ t"), envelope::from_t_on(&e, span))];
+    let title = format!("{channel}: largest tracking error from t on, log scale");
+    envelope::log_panel(&areas[5], (&title, "|e|"), &tail, (span.0, t_right), time)?;
     root.present().map_err(|e| e.to_string())
 }
 

@@ -394,19 +394,20 @@ impl PySimResult {
         Ok(slf.py().import("quell._frames")?.call_method1("to_pandas", (slf,))?.unbind())
     }
     /// The CLI's figure of one channel, like the paper's Figs. 1 and 2: y_i with g_i, e_i, the command
-    /// u_i (25), the plant input u_f,i (5) and η̂_i against t, in five panels.
+    /// u_i (25), the plant input u_f,i (5), η̂_i and the largest |e_i| from each t on (log scale)
+    /// against t, in six panels.
     ///
     /// Parameters
     /// ----------
     /// channel : int, optional
     ///     The channel, from 1 (default 1).
-    /// ax : matplotlib Axes or sequence of five or four, optional
-    ///     One Axes (y_i and g_i only are drawn on it), five (every panel) or four (u_f,i on a second
-    ///     y axis of the third).
+    /// ax : matplotlib Axes or sequence of six, five or four, optional
+    ///     One Axes (y_i and g_i only are drawn on it), six (every panel), five (all but the last) or
+    ///     four (u_f,i on a second y axis of the third).
     /// figsize : (float, float), optional
-    ///     Size of a new figure in inches (default (10, 14)).
+    ///     Size of a new figure in inches (default (10, 16.5)).
     /// fig : matplotlib Figure, optional
-    ///     A figure to add the five panels to.
+    ///     A figure to add the six panels to.
     ///
     /// Returns
     /// -------
@@ -426,7 +427,7 @@ impl PySimResult {
     /// --------
     /// >>> fig = quell.simulate(quell.paper_example(), t_end=1.0).plot(channel=2, figsize=(6, 8))
     /// >>> len(fig.axes), fig.axes[0].get_title()
-    /// (5, 'Channel 2: output and reference')
+    /// (6, 'Channel 2: output and reference')
     #[pyo3(signature = (channel=None, *, ax=None, figsize=None, fig=None))]
     fn plot(
         slf: &Bound<'_, Self>,

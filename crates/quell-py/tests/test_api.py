@@ -212,7 +212,12 @@ def test_to_pandas_and_plot():
     assert list(df.columns[:9]) == ["t", "y1", "y2", "g1", "g2", "e1", "e2", "u1", "u2"]
     assert df.columns[-1] == "eta2_8" and len(df) == len(r)
     fig = r.plot(channel=2)
-    assert len(fig.axes) == 5
+    assert len(fig.axes) == 6
+    # The last panel: max |e_2(s)| over s >= t, recomputed here, on a log axis.
+    (tail,) = fig.axes[5].lines
+    e = np.abs(r.e[:, 1])
+    np.testing.assert_array_equal(tail.get_ydata(), [e[k:].max() for k in range(len(e))])
+    assert fig.axes[5].get_yscale() == "log"
     assert fig.axes[0].get_title() == "Channel 2: output and reference"
     # The actuator signal u_f (5) has its own panel after the command u's (25): channel 2's columns.
     (command,), (plant_input,) = fig.axes[2].lines, fig.axes[3].lines

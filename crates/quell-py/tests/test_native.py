@@ -49,7 +49,7 @@ def test_plot_takes_axes_and_figsize():
 
     r = quell.simulate(quell.paper_example(), t_end=1.0)
     fig = r.plot(channel=2, figsize=(4, 5))
-    assert tuple(fig.get_size_inches()) == (4.0, 5.0) and len(fig.axes) == 5
+    assert tuple(fig.get_size_inches()) == (4.0, 5.0) and len(fig.axes) == 6
     own, one = plt.subplots()
     assert r.plot(channel=1, ax=one) is own
     (y1,) = [line for line in one.lines if line.get_label() == "y1"]
@@ -62,7 +62,7 @@ def test_plot_takes_axes_and_figsize():
     np.testing.assert_array_equal(twin[0].lines[0].get_ydata(), r.u_f[:, 0])
     with pytest.raises(TypeError, match="channel: expected an int"):
         r.plot(channel="2")
-    with pytest.raises(TypeError, match="ax: expected one matplotlib Axes, four or five"):
+    with pytest.raises(TypeError, match="ax: expected one matplotlib Axes, four, five or six"):
         r.plot(ax=[one, one])
     with pytest.raises(TypeError, match="fig and ax: expected one of them or neither"):
         r.plot(fig=own, ax=one)

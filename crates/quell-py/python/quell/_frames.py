@@ -53,13 +53,14 @@ def _path_widths(ax, t, v, shown):
 
 
 def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None), u_max=()):
-    """Channel ``channel`` (1-based; None is 1) in the five panels of the CLI's figure, like the paper's
-    Figs. 1 and 2: y_i with g_i, e_i = y_i - g_i, the command u_i (25), the plant input u_f,i (5) and
-    eta_i against t.
+    """Channel ``channel`` (1-based; None is 1) in the six panels of the CLI's figure, like the paper's
+    Figs. 1 and 2: y_i with g_i, e_i = y_i - g_i, the command u_i (25), the plant input u_f,i (5),
+    eta_i, and the largest |e_i| from each t on (log scale: convergence over decades) against t.
 
-    ``ax``: one matplotlib Axes (then only y_i and g_i are drawn, on it), five (the five panels) or
-    four (u_f,i then shares the third panel on a second y axis of its own scale); otherwise a new
-    figure of ``figsize`` (default (10, 14)), or the panels are added to ``fig``. ``names``: the
+    ``ax``: one matplotlib Axes (then only y_i and g_i are drawn, on it), six (the six panels), five
+    (all but the last) or four (u_f,i then shares the third panel on a second y axis of its own
+    scale); otherwise a new figure of ``figsize`` (default (10, 16.5)), or the panels are added to
+    ``fig``. ``names``: the
     plant's (inputs, outputs) names or None, shown in the titles. ``u_max``: the true actuator's
     limits per input (empty without one), drawn on u_f,i's panel where u_f,i comes within a tenth of
     its limit and told in the title otherwise. Returns the Figure."""
@@ -99,20 +100,20 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
         raise TypeError(f"fig: expected a matplotlib Figure, found {a_type(fig)}")
     if fig is not None and fig.axes:
         raise ScenarioError(
-            f"fig: expected an empty Figure (the five panels fill it), found one with {len(fig.axes)} Axes; "
-            "pass its Axes as ax= (one, four or five) or an empty figure"
+            f"fig: expected an empty Figure (the six panels fill it), found one with {len(fig.axes)} Axes; "
+            "pass its Axes as ax= (one, four, five or six) or an empty figure"
         )
     if ax is not None:
         axes = list(ax.flat) if hasattr(ax, "flat") else list(ax) if isinstance(ax, (list, tuple)) else [ax]
-        if len(axes) not in (1, 4, 5) or not all(hasattr(a, "plot") for a in axes):
-            found = f"{len(axes)} entries" if len(axes) not in (1, 4, 5) else "entries that are not Axes"
+        if len(axes) not in (1, 4, 5, 6) or not all(hasattr(a, "plot") for a in axes):
+            found = f"{len(axes)} entries" if len(axes) not in (1, 4, 5, 6) else "entries that are not Axes"
             if not isinstance(ax, (list, tuple)) and not hasattr(ax, "flat"):
                 found = a_type(ax)
-            raise TypeError(f"ax: expected one matplotlib Axes, four or five, found {found}")
+            raise TypeError(f"ax: expected one matplotlib Axes, four, five or six, found {found}")
         fig = axes[0].figure
     else:
-        fig = fig if fig is not None else plt.figure(figsize=figsize if figsize is not None else (10, 14))
-        axes = fig.subplots(5, 1, sharex=True)
+        fig = fig if fig is not None else plt.figure(figsize=figsize if figsize is not None else (10, 16.5))
+        axes = fig.subplots(6, 1, sharex=True)
     # As the CLI's figure: the reference dashed over y, or, when it runs more than BAND times the
     # panel's width (a band, not a line: dashes over it hid the y tracking it), first and faint.
     g, y = result.g[:, i], result.y[:, i]
@@ -134,7 +135,7 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
         axes[2].plot(t, result.u[:, i], label=f"u{c}", **held)
         axes[2].set(title=f"{channel_title}: adaptive command (25)", ylabel="u")
         # u_f in a plant's units (newtons, volts) can be 1e5 times u: its own panel, or its own scale.
-        if len(axes) == 5:
+        if len(axes) >= 5:
             uf_ax = axes[3]
             uf_ax.set(title=f"{input_title}: plant input u_f (5), what the actuator delivers")
         else:
@@ -151,21 +152,29 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
                     uf_ax.axhline(level, color="0.35", linestyle="--", linewidth=1,
                                   label=f"±truth.u_max[{i}] = {limit:.6g}" if level > 0 else None)
             else:
-                title_ax = uf_ax if len(axes) == 5 else axes[2]
+                title_ax = uf_ax if len(axes) >= 5 else axes[2]
                 share = 100 * peak / limit
                 share = f"{share:.1e}" if 0 < share < 0.1 else f"{share:.1f}"  # "0.0 %" hid a peak of 0.0018 %
                 title_ax.set_title(f"{title_ax.get_title()}; peak {share} % of truth.u_max")
-        eta_ax = axes[-1]
+        eta_ax = axes[4] if len(axes) == 6 else axes[-1]
         for j in range(result.q):
             eta_ax.plot(t, result.eta[:, i, j], label=f"η{c}_{j + 1}")
         eta_ax.set(title=f"{channel_title}: adjustable parameters (33)", ylabel="η")
         if len(axes) == 4:
             uf_ax.legend(loc="best", fontsize="small")
+        if len(axes) == 6:
+            # max |e_i(s)| over s >= t: the summary's tail figure read from every t on.
+            magnitude = np.where(np.isfinite(result.e[:, i]), np.abs(result.e[:, i]), 0.0)
+            tail = np.maximum.accumulate(magnitude[::-1])[::-1]
+            shown = tail > 0
+            axes[5].semilogy(t[shown], tail[shown], label=f"max |e{c}(s)|, s ≥ t")
+            axes[5].set(title=f"{channel_title}: largest tracking error from t on, log scale", ylabel="|e|")
     axes[-1].set(xlabel=f"t, {result.time_unit}")
+    eta_panel = axes[4] if len(axes) == 6 else axes[-1]
     for a in axes:
         a.grid(True, alpha=0.3)
         # Where it hides the least of the curves (a fixed corner covered the η̂ traces).
-        a.legend(loc="best", fontsize="small", ncol=1 + (len(axes) > 1 and a is axes[-1]) * 2)
+        a.legend(loc="best", fontsize="small", ncol=1 + (len(axes) > 1 and a is eta_panel) * 2)
     if ax is None:
         fig.tight_layout()
     return fig

@@ -182,10 +182,18 @@ pub(crate) fn simulate(
 }
 
 /// A grid value as runs.csv writes it: numbers in [`super::csv_number`]'s shortest round-trip form
-/// (a grid value of 1e300 was written as its 301 digits), lists of them in brackets.
+/// (a grid value of 1e300 was written as its 301 digits), a whole float with its `.0` (so that
+/// pandas reads 1.0 as the float it is, not the integer 1), lists of them in brackets.
 pub(super) fn grid_text(v: &toml::Value) -> String {
     match v {
-        toml::Value::Float(x) => super::csv_number(*x),
+        toml::Value::Float(x) => {
+            let text = super::csv_number(*x);
+            if text.contains(['.', 'e', 'i', 'N']) {
+                text
+            } else {
+                text + ".0"
+            }
+        }
         toml::Value::Array(a) => format!("[{}]", a.iter().map(grid_text).collect::<Vec<_>>().join(", ")),
         other => other.to_string(),
     }

@@ -494,14 +494,16 @@ fn a_run_check_the_scenario_fails_is_refused_before_any_run_and_named_as_its_own
 }
 
 /// runs.csv writes grid values in their shortest round-trip form (studies.md), as its figures: 1e300
-/// had been written as 301 digits, 10.0 keeps no trailing zero, and lists keep their brackets.
+/// had been written as 301 digits, 10.0 keeps its `.0` (a float, as pandas reads it), and lists keep
+/// their brackets.
 #[test]
 fn grid_values_are_written_in_their_shortest_form() {
     let text = |toml: &str| super::sweep::grid_text(&toml.parse::<toml::Table>().unwrap()["v"]);
     assert_eq!(text("v = 1e300"), "1e300");
-    assert_eq!(text("v = 10.0"), "10");
+    assert_eq!(text("v = 10.0"), "10.0");
     assert_eq!(text("v = 0.00001"), "1e-5");
-    assert_eq!(text("v = [1.5, 3.0]"), "[1.5, 3]");
+    assert_eq!(text("v = [1.5, 3.0]"), "[1.5, 3.0]");
+    assert_eq!(text("v = -inf"), "-inf");
     assert_eq!(text("v = 7"), "7");
     assert_eq!(text("v = 1e300").parse::<f64>(), Ok(1e300));
 }

@@ -1,0 +1,111 @@
+//! The tracking error from each time on, on a logarithmic axis: the panel that shows an adaptive
+//! loop converging over decades, which the linear panel of e flattens under its transient (a
+//! distillation column's 0.42 excursion against a tail of 1e-5), and reads as the summary's tail
+//! figure: at t, the largest |e| the run has from t on.
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use quell::TimeUnit;
+
+use super::{pick, Series, Strokes, SLICES};
+
+/// m(t) = max over s ≥ t of |v(s)|, at the first sample of each slice of [t0, t1] (as many as
+/// [`super::decimated`] keeps) and at the last; non-increasing. Non-finite values are skipped, and
+/// points where m is 0 left out (no logarithm).
+pub(super) fn from_t_on(points: &[(f64, f64)], (t0, t1): (f64, f64)) -> Vec<(f64, f64)> {
+    let mut suffix = vec![0.0f64; points.len()];
+    let mut running = 0.0f64;
+    for (k, &(_, v)) in points.iter().enumerate().rev() {
+        if v.is_finite() {
+            running = running.max(v.abs());
+        }
+        suffix[k] = running;
+    }
+    let scale = if t1 > t0 { SLICES as f64 / (t1 - t0) } else { 0.0 };
+    let slice = |t: f64| (((t - t0) * scale).max(0.0) as usize).min(SLICES - 1);
+    let mut kept: Vec<(f64, f64)> = Vec::new();
+    let mut last_slice = None;
+    for (k, &(t, _)) in points.iter().enumerate() {
+        let first = last_slice.replace(slice(t)) != Some(slice(t));
+        if (first || k + 1 == points.len()) && t.is_finite() && suffix[k] > 0.0 {
+            kept.push((t, suffix[k]));
+        }
+    }
+    kept
+}
+
+/// Decades below the largest value that the axis shows at most: below that the envelope is the
+/// integrator's rounding, not the loop.
+const DECADES: f64 = 14.0;
+
+/// A panel of `series` (positive values) against t on a logarithmic value axis, from `t0` to
+/// `t_right`.
+pub(super) fn log_panel<DB: DrawingBackend + Strokes>(
+    area: &DrawingArea<DB, Shift>,
+    (title, ylabel): (&str, &str),
+    series: &[Series],
+    (t0, t_right): (f64, f64),
+    time: TimeUnit,
+) -> Result<(), String> {
+    let points = series.iter().flat_map(|(_, p)| p.iter());
+    let (lo, hi) = points.fold((f64::INFINITY, 0.0f64), |(lo, hi), &(_, v)| (lo.min(v), hi.max(v)));
+    let (t0, t1) = if t0 < t_right { (t0, t_right) } else { (t0, t0 + 1.0) };
+    // Half a decade of room above and below; an axis of one decade where the values are all equal.
+    let (lo, hi) = if hi > 0.0 { ((lo / 3.0).max(hi * 10f64.powf(-DECADES)), hi * 3.0) } else { (0.1, 10.0) };
+    let mut chart = ChartBuilder::on(area)
+        .caption(title, ("sans-serif", 20))
+        .margin(8)
+        .margin_right(24)
+        .x_label_area_size(36)
+        .y_label_area_size(72)
+        .build_cartesian_2d(t0..t1, (lo..hi).log_scale())
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .max_light_lines(2)
+        .x_desc(format!("t, {time}"))
+        .y_desc(ylabel)
+        .x_label_formatter(&|v| super::tick_label(*v, t0, t1))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .label_style(("sans-serif", 14))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    for (k, (name, points)) in series.iter().enumerate() {
+        let style = pick(k).stroke_width(if DB::SPIKES { 1 } else { 2 });
+        chart
+            .draw_series(LineSeries::new(points.iter().copied(), style))
+            .map_err(|e| e.to_string())?
+            .label(name.as_str())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], pick(k).stroke_width(2)));
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 14))
+        .draw()
+        .map_err(|e| e.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// m(t) of e = e^{−t} sin 40t over 10 s: non-increasing, never above e^{−t} nor below the
+    /// largest crest after t, e^{−(t + T/2)} sin(…) ≥ 0.99 e^{−t − 0.079} (a half period T/2 =
+    /// 0.079 s holds a crest, sampled 5e-5 s apart); zeros are left out.
+    #[test]
+    fn the_curve_is_the_largest_magnitude_from_each_time_on() {
+        let points: Vec<(f64, f64)> =
+            (0..=200_000).map(|k| k as f64 * 5e-5).map(|t| (t, (-t).exp() * (40.0 * t).sin())).collect();
+        let m = from_t_on(&points, (0.0, 10.0));
+        assert!(m.len() > SLICES / 2 && m.len() <= SLICES + 1, "{}", m.len());
+        assert!(m.windows(2).all(|w| w[0].0 < w[1].0 && w[0].1 >= w[1].1));
+        let half = std::f64::consts::PI / 40.0;
+        for &(t, a) in m.iter().filter(|&&(t, _)| t < 10.0 - half) {
+            assert!(a <= (-t).exp() * (1.0 + 1e-12) && a >= 0.99 * (-t - half).exp(), "m({t}) = {a}");
+        }
+        assert!(from_t_on(&[(0.0, 0.0), (1.0, 0.0)], (0.0, 1.0)).is_empty());
+    }
+}
