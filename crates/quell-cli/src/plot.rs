@@ -454,18 +454,7 @@ fn draw<DB: DrawingBackend + Strokes>(
         write!(uf_title, "; peak {share} % of truth.u_max").map_err(|e| e.to_string())?;
     }
     let plant_input = [(format!("uf{c}"), uf)];
-    let etas: Vec<Series> = (0..r.q)
-        .map(|j| {
-            let eta = r.eta.iter().skip(i * r.q + j).step_by(r.m * r.q).copied();
-            let pts = decimated(r.t.iter().copied().zip(eta), span);
-            (format!("η{c}_{}", j + 1), pts)
-        })
-        .collect();
-    let eta_title = if etas.len() > MAX_LEGEND {
-        format!("{channel}: adjustable parameters (33), η{c}_1 … η{c}_{} in the palette's order", etas.len())
-    } else {
-        format!("{channel}: adjustable parameters (33)")
-    };
+    let (etas, eta_title) = eta_panel(r, i, span, &channel);
     let panels: [PanelSpec; 5] = [
         (format!("{channel}: output and reference{ended}"), "y, g", &tracking, None),
         (format!("{channel}: tracking error"), "e = y − g", &error, None),
@@ -489,6 +478,24 @@ fn draw<DB: DrawingBackend + Strokes>(
     let title = format!("{channel}: largest tracking error from t on, log scale");
     envelope::log_panel(&areas[5], (&title, "|e|"), &tail, (span.0, t_right), time)?;
     root.present().map_err(|e| e.to_string())
+}
+
+/// Channel i's η̂_i (33), one series per entry, and the panel's title (`channel` names it).
+fn eta_panel(r: &SimResult, i: usize, span: (f64, f64), channel: &str) -> (Vec<Series>, String) {
+    let c = i + 1;
+    let etas: Vec<Series> = (0..r.q)
+        .map(|j| {
+            let eta = r.eta.iter().skip(i * r.q + j).step_by(r.m * r.q).copied();
+            let pts = decimated(r.t.iter().copied().zip(eta), span);
+            (format!("η{c}_{}", j + 1), pts)
+        })
+        .collect();
+    let title = if etas.len() > MAX_LEGEND {
+        format!("{channel}: adjustable parameters (33), η{c}_1 … η{c}_{} in the palette's order", etas.len())
+    } else {
+        format!("{channel}: adjustable parameters (33)")
+    };
+    (etas, title)
 }
 
 /// A panel of a channel's figure: its title, value axis label, series and actuator limit.

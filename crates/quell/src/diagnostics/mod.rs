@@ -86,7 +86,7 @@ pub struct ChannelDiagnostics {
     pub advice: Vec<String>,
 }
 
-/// A caution when DOP853 rejected more than a quarter ([`THRASHING`]) of its attempts on a run taken
+/// A caution when DOP853 rejected more than a quarter (`THRASHING`, 0.25) of its attempts on a run taken
 /// mostly by it, or thrashed over a stretch before the automatic method switched to the implicit
 /// one: its steps sat at their stability bound, where its error estimate misses the stiff block's
 /// errors. `None` for a sampled run.
