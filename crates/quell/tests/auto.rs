@@ -1225,3 +1225,46 @@ t_end = 10.0
     assert!(e.contains("a badly scaled realization (a companion form from a transfer function)"), "{e}");
     assert!(e.contains("realize the plant in physical states") && !e.contains("many harmonics"), "{e}");
 }
+
+/// g and ω in units of very different sizes: the magnetic bearing's gaps of 1e-5 m against forces of
+/// 20 N (tests/data/magnetic-bearing.toml, its [design] left to the rules). In Ω̄ the reference's
+/// directions are excited 1.5e-11 of the disturbance's, so no μ below the stiffness threshold
+/// converges them and no horizon passes. The advice had asked for "more excitation"; it now says to
+/// express ω in larger units, by a factor s, and the same plant with D and Q times s and ω over s,
+/// designed again, passes.
+#[test]
+fn units_of_very_different_sizes_are_named_and_rescaling_passes() {
+    let doc = without_design(&data("magnetic-bearing.toml"));
+    let failed = auto_design(&doc, &Targets::default()).unwrap();
+    assert!(!failed.verification.passed);
+    let advice = failed.verification.advice.join("\n");
+    assert!(
+        advice.contains("express the disturbance in larger units: Ω̄'s directions at the reference's frequencies"),
+        "{advice}"
+    );
+    assert!(!advice.contains("excite the slow directions better"), "{advice}");
+    let s = number_after(&advice, "with s about ", " (the two parts");
+    assert!((1e5..1e6).contains(&s), "{s}");
+    // The advice followed: D and Q times s, every amplitude and bias of ω over s.
+    let mut scaled = doc.clone();
+    let plant = scaled["plant"].as_table_mut().unwrap();
+    for key in ["D", "Q"] {
+        for row in plant[key].as_array_mut().unwrap() {
+            for v in row.as_array_mut().unwrap() {
+                *v = toml::Value::Float(v.as_float().unwrap() * s);
+            }
+        }
+    }
+    for c in scaled["disturbance"]["components"].as_array_mut().unwrap() {
+        let c = c.as_table_mut().unwrap();
+        if let Some(b) = c.get_mut("bias") {
+            *b = toml::Value::Float(b.as_float().unwrap() / s);
+        }
+        for h in c.get_mut("harmonics").and_then(|h| h.as_array_mut()).into_iter().flatten() {
+            let a = &mut h.as_table_mut().unwrap()["amplitude"];
+            *a = toml::Value::Float(a.as_float().unwrap() / s);
+        }
+    }
+    let passed = auto_design(&scaled, &Targets::default()).unwrap();
+    assert!(passed.verification.passed, "{:?}", passed.verification);
+}
