@@ -52,7 +52,7 @@ use thiserror::Error;
 
 use crate::design::{relative_degrees, Design, DesignError, DesignSpec, ObserverChoice, RegressorScaling};
 use crate::diagnostics::Averaged;
-use crate::diagnostics::{FIDELITY_LIMIT, STIFF_RATIO};
+use crate::diagnostics::{unit_mismatch, FIDELITY_LIMIT, STIFF_RATIO};
 use crate::linalg::eigenvalues;
 use crate::scenario::exosystem::Exosystem;
 use crate::scenario::{pole_lists, poles_value, PartialDesign, Scenario, ScenarioError};
@@ -1254,7 +1254,7 @@ fn horizon_advice(
             RegressorScaling::Paper => ", or design.regressor_scaling = \"normalized\" (ξ̂ of the signals' size)",
             RegressorScaling::Normalized | RegressorScaling::Modal => "",
         };
-        let remedy = unit_mismatch(s, design).unwrap_or_else(|| format!("excite those directions better (references of several frequencies; a disturbance in units far from the outputs' spreads Ω̄ by their ratio squared{scaling}) or ask less of the loop"));
+        let remedy = unit_mismatch(design, [&s.reference, &s.disturbance]).unwrap_or_else(|| format!("excite those directions better (references of several frequencies; a disturbance in units far from the outputs' spreads Ω̄ by their ratio squared{scaling}) or ask less of the loop"));
         advice.push(format!("{}: no horizon helps; {remedy}", slow.hopeless.join("; ")));
         return Ok(advice);
     }
@@ -1346,64 +1346,12 @@ fn verified_horizon(
             Err(why) => tried.push(format!("{} {unit} ({basis}): {why}", four(horizon))),
         }
     }
-    let what = s.design().ok().and_then(|d| unit_mismatch(s, &d)).unwrap_or_else(|| EXCITE_SLOW.to_string());
+    let signals = [&s.reference, &s.disturbance];
+    let what = s.design().ok().and_then(|d| unit_mismatch(&d, signals)).unwrap_or_else(|| EXCITE_SLOW.to_string());
     Ok(format!(
         "no horizon the automatic design could verify passes ({}): rather than a longer t_end, {what}",
         [tried, beyond].concat().join("; ")
     ))
-}
-
-/// Below this share of the excitation at the other signal's frequencies, the excitation at one
-/// signal's frequencies is taken to be a matter of units ([`unit_mismatch`]).
-const UNIT_MISMATCH: f64 = 1e-6;
-
-/// The remedy where the slow directions are one signal's because g and ω are in units of very
-/// different sizes (a magnetic bearing's gap of 1e-5 m against forces of 20 N; a quadrotor's
-/// torques of 1e-5 N·m against angles of 0.1 rad): in Ω̄ the directions at the frequencies only one
-/// of them has are excited below [`UNIT_MISMATCH`] of those at the frequencies only the other has,
-/// so no μ below the stiffness threshold converges them. Dividing ω's numbers by s (D and Q times s,
-/// the same plant) scales ω's part of Ω̄ by 1/s², and s = 1/√r or √r (r the ratio) brings the two
-/// to one size. `None` where the frequencies do not tell the two apart or no ratio is that small.
-fn unit_mismatch(s: &Scenario, design: &Design) -> Option<String> {
-    let freqs = |sig: &Signal| -> Vec<f64> {
-        sig.components
-            .iter()
-            .flat_map(|c| c.harmonics.iter().map(|h| h.frequency).chain((c.bias != 0.0).then_some(0.0)))
-            .collect()
-    };
-    let (g, w) = (freqs(&s.reference), freqs(&s.disturbance));
-    let among = |f: f64, set: &[f64]| set.iter().any(|&x| (x - f).abs() <= 1e-12 * f.abs().max(x.abs()));
-    let avg = Averaged::new(design, &s.reference, &s.disturbance);
-    // Per channel, the weakest excitation at frequencies only `weak` has over the strongest at those
-    // only `strong` has; the smallest over the channels.
-    let ratio = |weak: &[f64], strong: &[f64]| {
-        let only = |c: &crate::averaged::ChannelAverage, mine: &[f64], other: &[f64]| -> Vec<f64> {
-            c.excitation
-                .iter()
-                .filter(|e| among(e.frequency, mine) && !among(e.frequency, other))
-                .map(|e| e.excitation)
-                .collect()
-        };
-        avg.channels
-            .iter()
-            .filter_map(|c| {
-                let weakest = only(c, weak, strong).into_iter().fold(f64::INFINITY, f64::min);
-                let strongest = only(c, strong, weak).into_iter().fold(0.0, f64::max);
-                (weakest.is_finite() && strongest > 0.0).then(|| weakest / strongest)
-            })
-            .fold(f64::INFINITY, f64::min)
-    };
-    let (g_weak, w_weak) = (ratio(&g, &w), ratio(&w, &g));
-    let (r, larger) = if g_weak <= w_weak { (g_weak, true) } else { (w_weak, false) };
-    (r < UNIT_MISMATCH).then(|| {
-        let scale = crate::settings::fmt_short(crate::settings::round_up_2(1.0 / r.max(f64::MIN_POSITIVE).sqrt()));
-        let (weak, strong) = if larger { ("reference's", "disturbance's") } else { ("disturbance's", "reference's") };
-        let (units, d_q, omega) =
-            if larger { ("larger", "multiply", "divide") } else { ("smaller", "divide", "multiply") };
-        format!(
-            "express the disturbance in {units} units: Ω̄'s directions at the {weak} frequencies are excited {r:.1e} of those at the {strong}, since g is in the outputs' units and ω in its own, and no μ below the stiffness threshold converges them; {d_q} plant.D and plant.Q by s and {omega} ω's amplitudes and biases by s (the same plant), with s about {scale} (the two parts then of one size), and design again"
-        )
-    })
 }
 
 /// The automatic design of `doc` repeated with simulation.t_end = `horizon`, nested (no horizon

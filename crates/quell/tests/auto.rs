@@ -1231,7 +1231,7 @@ t_end = 10.0
 /// directions are excited 1.5e-11 of the disturbance's, so no μ below the stiffness threshold
 /// converges them and no horizon passes. The advice had asked for "more excitation"; it now says to
 /// express ω in larger units, by a factor s, and the same plant with D and Q times s and ω over s,
-/// designed again, passes.
+/// designed again, passes; a run of the file's design says the same.
 #[test]
 fn units_of_very_different_sizes_are_named_and_rescaling_passes() {
     let doc = without_design(&data("magnetic-bearing.toml"));
@@ -1267,4 +1267,10 @@ fn units_of_very_different_sizes_are_named_and_rescaling_passes() {
     }
     let passed = auto_design(&scaled, &Targets::default()).unwrap();
     assert!(passed.verification.passed, "{:?}", passed.verification);
+    // A run of the file's own design is told the same after its horizon advice.
+    let s = Scenario::from_toml(&data("magnetic-bearing.toml")).unwrap();
+    let d = s.design().unwrap();
+    let r = Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
+    let run_advice = quell::diagnostics::diagnose_run(&s, &d, &r).advice;
+    assert!(run_advice.iter().any(|a| a.starts_with("express the disturbance in larger units")), "{run_advice:?}");
 }
