@@ -100,14 +100,7 @@ fn panel<DB: DrawingBackend + Strokes>(
 ) -> Result<(), String> {
     let levels = limit.map_or(vec![], |(_, u)| vec![-u, u]);
     let (((t0, t1), (y0, y1)), legend) = panel_view(area, series, limit, t_right);
-    let mut chart = ChartBuilder::on(area)
-        .caption(title, ("sans-serif", 20))
-        .margin(8)
-        .margin_right(24)
-        .x_label_area_size(36)
-        .y_label_area_size(72)
-        .build_cartesian_2d(t0..t1, y0..y1)
-        .map_err(|e| e.to_string())?;
+    let mut chart = run_panel(area, title).build_cartesian_2d(t0..t1, y0..y1).map_err(|e| e.to_string())?;
     chart
         .configure_mesh()
         .max_light_lines(2)
@@ -187,6 +180,13 @@ fn panel_view<DB: DrawingBackend>(
         }
         None => (view, legend),
     }
+}
+
+/// A run figure's panel before its coordinates: the title and the room for the axes' labels.
+fn run_panel<'a, 'b, DB: DrawingBackend>(area: &'a DrawingArea<DB, Shift>, title: &'b str) -> ChartBuilder<'a, 'b, DB> {
+    let mut builder = ChartBuilder::on(area);
+    builder.caption(title, ("sans-serif", 20)).margin(8).margin_right(24).x_label_area_size(36).y_label_area_size(72);
+    builder
 }
 
 /// How a backend draws a curve's 2 px line.

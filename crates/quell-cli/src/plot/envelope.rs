@@ -52,14 +52,8 @@ pub(super) fn log_panel<DB: DrawingBackend + Strokes>(
     let (t0, t1) = if t0 < t_right { (t0, t_right) } else { (t0, t0 + 1.0) };
     // Half a decade of room above and below; an axis of one decade where the values are all equal.
     let (lo, hi) = if hi > 0.0 { ((lo / 3.0).max(hi * 10f64.powf(-DECADES)), hi * 3.0) } else { (0.1, 10.0) };
-    let mut chart = ChartBuilder::on(area)
-        .caption(title, ("sans-serif", 20))
-        .margin(8)
-        .margin_right(24)
-        .x_label_area_size(36)
-        .y_label_area_size(72)
-        .build_cartesian_2d(t0..t1, (lo..hi).log_scale())
-        .map_err(|e| e.to_string())?;
+    let mut chart =
+        super::run_panel(area, title).build_cartesian_2d(t0..t1, (lo..hi).log_scale()).map_err(|e| e.to_string())?;
     chart
         .configure_mesh()
         .max_light_lines(2)
