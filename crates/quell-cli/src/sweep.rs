@@ -71,7 +71,14 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     let meta = StudyMeta::new(&study, shard);
     let (kept, done) = if args.resume { resumed(&args.out, &meta, n)? } else { (Vec::new(), Vec::new()) };
     if args.resume && kept.len() == n {
-        eprintln!("nothing to resume: {} holds every run of the study ({n})", args.out.display());
+        // Killed while it wrote its files: the journal holds every row, the files may not.
+        if args.out.join(JOURNAL).exists() {
+            write_all(&args.out, &meta, &kept, false, !args.no_plots)?;
+            std::fs::remove_file(args.out.join(JOURNAL)).map_err(|e| Failure::Run(format!("{}: {e}", JOURNAL)))?;
+            eprintln!("resumed: the journal held every run of the study ({n}); wrote {}", args.out.display());
+        } else {
+            eprintln!("nothing to resume: {} holds every run of the study ({n})", args.out.display());
+        }
         return Ok(());
     }
     let pool = thread_pool(args.jobs, n - kept.len())?;
@@ -349,6 +356,13 @@ fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
     }
     let mut shards = Vec::new();
     for dir in dirs {
+        // A shard killed outright left its journal and no summary: it is resumed, not merged.
+        if dir.join(JOURNAL).exists() {
+            return Err(Failure::Input(format!(
+                "--merge {}: holds the journal {JOURNAL} of a sweep that did not finish; run `quell sweep STUDY --shard I/N --resume` into it (it keeps the rows done and runs the others), then merge",
+                dir.display()
+            )));
+        }
         shards.push((dir, read_sweep_dir(dir, "--merge")?));
     }
     let (first_dir, first) = (shards[0].0, shards[0].1 .0.clone());

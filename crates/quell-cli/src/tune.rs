@@ -145,10 +145,10 @@ fn report(r: &TuneResult, spec: &quell::study::TuneSpec, unit: quell::TimeUnit) 
     for (c, (d, ok)) in r.channels.iter().zip(r.joint_difference.iter().zip(&r.reproduced)) {
         match &c.chosen {
             Some(p) => s.push_str(&format!(
-                "channel {}: mu = {} ({} evaluations), objective {:.6e}; joint run {} (difference {}){}{}\n",
+                "channel {}: mu = {} ({}), objective {:.6e}; joint run {} (difference {}){}{}\n",
                 c.channel + 1,
                 mu_6(p.mu),
-                c.curve.len(),
+                if c.curve.len() == 1 { "1 evaluation".to_string() } else { format!("{} evaluations", c.curve.len()) },
                 p.objective.unwrap_or(f64::NAN),
                 match (r.partial, *ok) {
                     (true, _) => "not carried out (interrupted)",

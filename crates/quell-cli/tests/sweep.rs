@@ -260,11 +260,33 @@ fn a_killed_sweep_resumes_from_its_journal() {
         assert!(text.starts_with("# quell sweep journal: {"), "{}", &text[..80.min(text.len())]);
         // A row cut short by the kill.
         fs::write(&journal, format!("{text}12,0,12,")).unwrap();
+        // Merging it is refused, naming the resume (it had said "summary.json: No such file").
+        let merged = quell(&["sweep", "--merge", &out("killed"), "--out", &out("merged"), "--no-plots"]);
+        assert_eq!(merged.status.code(), Some(2), "{}", stderr(&merged));
+        assert!(
+            stderr(&merged).contains("holds the journal runs.partial.csv of a sweep that did not finish"),
+            "{}",
+            stderr(&merged)
+        );
     }
     let resumed = quell(&["sweep", &study, "--no-plots", "--out", &out("killed"), "--resume"]);
     assert!(resumed.status.success(), "{}", stderr(&resumed));
     assert_eq!(rows_without_wall_time(&dir.join("killed")), rows_without_wall_time(&dir.join("full")));
     assert!(!journal.exists());
+    // Killed while writing its files, after the journal had every row (runs.csv or summary.json
+    // missing, a temporary file left): the resume writes them from the journal. It had said
+    // "nothing to resume" and left the directory without them.
+    let late = dir.join("late");
+    fs::create_dir(&late).unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(dir.join("full/summary.json")).unwrap()).unwrap();
+    let rows = fs::read_to_string(dir.join("full/runs.csv")).unwrap();
+    fs::write(late.join("runs.partial.csv"), format!("# quell sweep journal: {}\n{rows}", summary["study"])).unwrap();
+    let resumed = quell(&["sweep", &study, "--no-plots", "--out", &out("late"), "--resume"]);
+    assert!(resumed.status.success(), "{}", stderr(&resumed));
+    assert!(stderr(&resumed).contains("the journal held every run of the study (3000)"), "{}", stderr(&resumed));
+    assert_eq!(rows_without_wall_time(&late), rows_without_wall_time(&dir.join("full")));
+    assert!(late.join("summary.json").exists() && !late.join("runs.partial.csv").exists());
     // A journal that is not one is named, not taken.
     fs::write(&journal, "run,point\n").unwrap();
     let refused = quell(&["sweep", &study, "--no-plots", "--out", &out("killed"), "--resume"]);

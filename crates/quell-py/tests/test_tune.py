@@ -67,11 +67,11 @@ def test_coarse_points_are_log_spaced_and_the_best_is_the_least_mu_within_the_so
     # Closed form of the log grid: μ_k = 1 · 100^(k/4); 1e-12 relative is a few ulps of powf.
     np.testing.assert_allclose(frame["mu"], [100.0 ** (k / 4) for k in range(5)], rtol=1e-12)
     feasible = frame.dropna(subset=["objective"])
-    # docs/studies.md: the least μ whose objective is within 1e-3 relative plus 100·(rtol·ĝ + atol)
-    # of the least objective, ĝ = 1 + 0.5 the reference's bound.
+    # docs/studies.md: the least μ whose objective ties with the least, within 5 % of it or at most
+    # rtol·ĝ + atol, ĝ = 1 + 0.5 the reference's bound.
     sim = s.simulation
     least = feasible["objective"].min()
-    within = feasible[feasible["objective"] <= least + 1e-3 * least + 100 * (sim["rtol"] * 1.5 + sim["atol"])]
+    within = feasible[feasible["objective"] <= max(1.05 * least, sim["rtol"] * 1.5 + sim["atol"])]
     assert len(r.best) == 1 and r.best["mu"][0] == within["mu"].min()
     assert r.mu == [r.best["mu"][0]] and r.reproduced == [True] and r.within_limits == [True]
     # The figures of an evaluation are those a sweep of the same μ gives (another path: the

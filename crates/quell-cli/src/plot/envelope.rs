@@ -48,12 +48,21 @@ pub(super) fn log_panel<DB: DrawingBackend + Strokes>(
     time: TimeUnit,
 ) -> Result<(), String> {
     let points = series.iter().flat_map(|(_, p)| p.iter());
-    let (lo, hi) = points.fold((f64::INFINITY, 0.0f64), |(lo, hi), &(_, v)| (lo.min(v), hi.max(v)));
+    let (lo, hi) = points.clone().fold((f64::INFINITY, 0.0f64), |(lo, hi), &(_, v)| (lo.min(v), hi.max(v)));
     let (t0, t1) = if t0 < t_right { (t0, t_right) } else { (t0, t0 + 1.0) };
-    // Half a decade of room above and below; an axis of one decade where the values are all equal.
-    let (lo, hi) = if hi > 0.0 { ((lo / 3.0).max(hi * 10f64.powf(-DECADES)), hi * 3.0) } else { (0.1, 10.0) };
+    // Half a decade of room above and below, at most DECADES; one decade where the values are all
+    // equal. Below the axis the curve ends, and the title says from when (drawn at the axis, its
+    // run at 1e-90 looked like a floor at 1e-14).
+    let floor = hi * 10f64.powf(-DECADES);
+    let (lo, hi) = if hi > 0.0 { ((lo / 3.0).max(floor), hi * 3.0) } else { (0.1, 10.0) };
+    let below = points.clone().find(|&&(_, v)| v < lo).map(|&(t, _)| t);
+    let title = match (below, points.clone().next()) {
+        (Some(t), _) => format!("{title}; below 1e-{DECADES} of its peak from t = {} {time} on", crate::run::short(t)),
+        (None, None) => format!("{title}: e ≡ 0"),
+        (None, Some(_)) => title.to_string(),
+    };
     let mut chart =
-        super::run_panel(area, title).build_cartesian_2d(t0..t1, (lo..hi).log_scale()).map_err(|e| e.to_string())?;
+        super::run_panel(area, &title).build_cartesian_2d(t0..t1, (lo..hi).log_scale()).map_err(|e| e.to_string())?;
     chart
         .configure_mesh()
         .max_light_lines(2)
@@ -64,13 +73,16 @@ pub(super) fn log_panel<DB: DrawingBackend + Strokes>(
         .label_style(("sans-serif", 14))
         .draw()
         .map_err(|e| e.to_string())?;
-    for (k, (name, points)) in series.iter().enumerate() {
+    for (k, (name, points)) in series.iter().enumerate().filter(|(_, (_, p))| !p.is_empty()) {
         let style = pick(k).stroke_width(if DB::SPIKES { 1 } else { 2 });
         chart
-            .draw_series(LineSeries::new(points.iter().copied(), style))
+            .draw_series(LineSeries::new(points.iter().copied().take_while(|&(_, v)| v >= lo), style))
             .map_err(|e| e.to_string())?
             .label(name.as_str())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], pick(k).stroke_width(2)));
+    }
+    if series.iter().all(|(_, p)| p.is_empty()) {
+        return Ok(());
     }
     chart
         .configure_series_labels()

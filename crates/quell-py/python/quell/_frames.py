@@ -167,14 +167,26 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
             magnitude = np.where(np.isfinite(result.e[:, i]), np.abs(result.e[:, i]), 0.0)
             tail = np.maximum.accumulate(magnitude[::-1])[::-1]
             shown = tail > 0
-            axes[5].semilogy(t[shown], tail[shown], label=f"max |e{c}(s)|, s ≥ t")
-            axes[5].set(title=f"{channel_title}: largest tracking error from t on, log scale", ylabel="|e|")
+            title = f"{channel_title}: largest tracking error from t on, log scale"
+            if shown.any():
+                axes[5].semilogy(t[shown], tail[shown], label=f"max |e{c}(s)|, s ≥ t")
+                # As the CLI's panel: at most 14 decades, and from when the curve is below them.
+                floor = tail.max() * 1e-14
+                low = np.nonzero(shown & (tail < floor))[0]
+                if low.size:
+                    axes[5].set_ylim(bottom=floor)
+                    title += f"; below 1e-14 of its peak from t = {t[low[0]]:.6g} {result.time_unit} on"
+            else:
+                axes[5].set_yscale("log")
+                title += ": e ≡ 0"
+            axes[5].set(title=title, ylabel="|e|")
     axes[-1].set(xlabel=f"t, {result.time_unit}")
     eta_panel = axes[4] if len(axes) == 6 else axes[-1]
     for a in axes:
         a.grid(True, alpha=0.3)
         # Where it hides the least of the curves (a fixed corner covered the η̂ traces).
-        a.legend(loc="best", fontsize="small", ncol=1 + (len(axes) > 1 and a is eta_panel) * 2)
+        if a.get_legend_handles_labels()[0]:
+            a.legend(loc="best", fontsize="small", ncol=1 + (len(axes) > 1 and a is eta_panel) * 2)
     if ax is None:
         fig.tight_layout()
     return fig

@@ -189,9 +189,9 @@ pub struct TuneCurve {
     #[serde(with = "one_based")]
     pub channel: usize,
     pub curve: Vec<TunePoint>,
-    /// The feasible point with the smallest μ among those whose objective the solver cannot tell
-    /// from the best (within the tolerance of the joint run's check); `None` if no μ in the bounds
-    /// was feasible.
+    /// The feasible point with the smallest μ among those whose objective ties with the best
+    /// (within 5 %, or at the integrator's tolerance; `least_mu_within_tolerance`); `None` if no μ in
+    /// the bounds was feasible.
     pub chosen: Option<TunePoint>,
 }
 
@@ -359,12 +359,15 @@ fn tolerance(obj: Objective, value: f64, s: &Scenario, i: usize) -> f64 {
     let sim = &s.simulation;
     match obj {
         Objective::SettleT => sim.output_step * (1.0 + 1e-9),
-        _ => {
-            let c = &s.reference.components[i];
-            let g = c.bias.abs() + c.harmonics.iter().map(|h| h.amplitude.abs()).sum::<f64>();
-            1e-3 * value.abs() + 100.0 * (sim.rtol * g + sim.atol)
-        }
+        _ => 1e-3 * value.abs() + 100.0 * tolerance_scale(s, i),
     }
+}
+
+/// rtol·ĝ + atol, the integrator's tolerance on e_i (ĝ = |bias| + Σ|amplitude| bounds |g_i|).
+fn tolerance_scale(s: &Scenario, i: usize) -> f64 {
+    let (sim, c) = (&s.simulation, &s.reference.components[i]);
+    let g = c.bias.abs() + c.harmonics.iter().map(|h| h.amplitude.abs()).sum::<f64>();
+    sim.rtol * g + sim.atol
 }
 
 /// The `[tune]` table of a study that tuning can run: present, and no grid or draws it would ignore.
@@ -385,11 +388,17 @@ fn tune_spec(study: &Study) -> Result<&TuneSpec, StudyError> {
     Ok(spec)
 }
 
-/// The point a search chooses from `curve` (sorted by μ): the smallest μ whose objective is within
-/// [`tolerance`] of the least, the solver's own error scale. A flat objective (tail errors at the
-/// 1e-8 level, differing by rounding) had chosen μ = 50 over 3.16 for nothing; among figures the
-/// solver cannot tell apart, the slowest adaptation is the least stiff and the least sensitive to
-/// noise.
+/// Objectives within this share of the least are a tie ([`least_mu_within_tolerance`]).
+const TIE_SHARE: f64 = 0.05;
+
+/// The point a search chooses from `curve` (sorted by μ): the smallest μ whose objective is a tie
+/// with the least, v ≤ max((1 + [`TIE_SHARE`])·v_min, s), s the scale of the integrator's tolerance
+/// on e_i, rtol·ĝ + atol (ĝ = |bias| + Σ|amplitude|); for settling times, within one output step of
+/// the least. Among figures the integrator cannot tell apart (a converged tail at its tolerance, or
+/// within a few per cent), the slowest adaptation is the least stiff and the least sensitive to
+/// noise. A flat objective (examples/siso-complex.toml over 200 s: tails of 1.5e-9 and 1.53e-9 at
+/// μ = 1000 and 316, rtol = 1e-9) had been decided by rounding. The joint check's own tolerance,
+/// 100 times that scale, is too wide for a tie: it took a tail 160 times the least's.
 fn least_mu_within_tolerance<'c>(
     curve: &'c [TunePoint],
     objective: Objective,
@@ -397,7 +406,10 @@ fn least_mu_within_tolerance<'c>(
     i: usize,
 ) -> Option<&'c TunePoint> {
     let best = curve.iter().filter_map(|p| p.objective).min_by(f64::total_cmp)?;
-    let bound = best + tolerance(objective, best, scenario, i);
+    let bound = match objective {
+        Objective::SettleT => best + tolerance(objective, best, scenario, i),
+        _ => ((1.0 + TIE_SHARE) * best).max(tolerance_scale(scenario, i)),
+    };
     curve.iter().find(|p| p.objective.is_some_and(|v| v <= bound))
 }
 
