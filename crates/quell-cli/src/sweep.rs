@@ -298,6 +298,18 @@ fn resumed(dir: &Path, meta: &StudyMeta, n: usize) -> Result<(Vec<Row>, Vec<bool
     Ok((rows, done))
 }
 
+/// A shard's directory for `--merge`: refused while it holds a journal (a shard killed outright, to
+/// be resumed, not merged), else [`read_sweep_dir`].
+fn shard_to_merge(dir: &Path) -> Result<(StudyMeta, Vec<Row>, bool), Failure> {
+    if dir.join(JOURNAL).exists() {
+        return Err(Failure::Input(format!(
+            "--merge {}: holds the journal {JOURNAL} of a sweep that did not finish; run `quell sweep STUDY --shard I/N --resume` into it (it keeps the rows done and runs the others), then merge",
+            dir.display()
+        )));
+    }
+    read_sweep_dir(dir, "--merge")
+}
+
 /// Reads one sweep's directory (a shard for `--merge`, an interrupted sweep for `--resume`, the
 /// `flag` its messages name): its summary's study identity, its rows and whether it is partial.
 fn read_sweep_dir(dir: &Path, flag: &str) -> Result<(StudyMeta, Vec<Row>, bool), Failure> {
@@ -356,14 +368,7 @@ fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
     }
     let mut shards = Vec::new();
     for dir in dirs {
-        // A shard killed outright left its journal and no summary: it is resumed, not merged.
-        if dir.join(JOURNAL).exists() {
-            return Err(Failure::Input(format!(
-                "--merge {}: holds the journal {JOURNAL} of a sweep that did not finish; run `quell sweep STUDY --shard I/N --resume` into it (it keeps the rows done and runs the others), then merge",
-                dir.display()
-            )));
-        }
-        shards.push((dir, read_sweep_dir(dir, "--merge")?));
+        shards.push((dir, shard_to_merge(dir)?));
     }
     let (first_dir, first) = (shards[0].0, shards[0].1 .0.clone());
     let count = first.shard.count;
