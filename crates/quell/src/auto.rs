@@ -1254,7 +1254,8 @@ fn horizon_advice(
             RegressorScaling::Paper => ", or design.regressor_scaling = \"normalized\" (ξ̂ of the signals' size)",
             RegressorScaling::Normalized | RegressorScaling::Modal => "",
         };
-        let remedy = unit_mismatch(design, [&s.reference, &s.disturbance]).unwrap_or_else(|| format!("excite those directions better (references of several frequencies; a disturbance in units far from the outputs' spreads Ω̄ by their ratio squared{scaling}) or ask less of the loop"));
+        let signals = [&s.reference, &s.disturbance];
+        let remedy = unit_mismatch(&Averaged::new(design, signals[0], signals[1]), signals).unwrap_or_else(|| format!("excite those directions better (references of several frequencies; a disturbance in units far from the outputs' spreads Ω̄ by their ratio squared{scaling}) or ask less of the loop"));
         advice.push(format!("{}: no horizon helps; {remedy}", slow.hopeless.join("; ")));
         return Ok(advice);
     }
@@ -1268,7 +1269,7 @@ fn horizon_advice(
     .flatten()
     .collect();
     if !estimates.is_empty() && !verifier.nested {
-        advice.push(verified_horizon(doc, targets, verifier, estimates, (s, first.steps))?);
+        advice.push(verified_horizon(doc, targets, verifier, estimates, (s, design, first.steps))?);
     }
     Ok(advice)
 }
@@ -1282,7 +1283,7 @@ const EXCITE_SLOW: &str =
 
 /// The horizon advice after the automatic design is repeated on `doc` with simulation.t_end at
 /// each estimate (rounded up, shortest first), then at the largest doubled ([`DOUBLINGS`] times),
-/// within [`MAX_VERIFIED_HORIZON`]·t_end and [`HORIZON_STEPS`] steps (the first run of scenario `s`
+/// within [`MAX_VERIFIED_HORIZON`]·t_end and [`HORIZON_STEPS`] steps (the first run of scenario `s`, of design `design`,
 /// took `steps`): the first horizon that passes, or those tried and why no longer one was. Without
 /// actuator limits the repeat verifies the first proposal, whose pass the relaxation keeps; with
 /// them it is the whole design, limits included. The averaged law's estimate alone was
@@ -1293,7 +1294,7 @@ fn verified_horizon(
     targets: &Targets,
     verifier: &mut Verifier,
     mut estimates: Vec<Estimate>,
-    (s, steps): (&Scenario, usize),
+    (s, design, steps): (&Scenario, &Design, usize),
 ) -> Result<String, AutoError> {
     let (t_end, unit) = (s.simulation.t_end, s.plant.time_unit);
     let four = crate::settings::fmt_4;
@@ -1347,7 +1348,8 @@ fn verified_horizon(
         }
     }
     let signals = [&s.reference, &s.disturbance];
-    let what = s.design().ok().and_then(|d| unit_mismatch(&d, signals)).unwrap_or_else(|| EXCITE_SLOW.to_string());
+    let avg = Averaged::new(design, &s.reference, &s.disturbance);
+    let what = unit_mismatch(&avg, signals).unwrap_or_else(|| EXCITE_SLOW.to_string());
     Ok(format!(
         "no horizon the automatic design could verify passes ({}): rather than a longer t_end, {what}",
         [tried, beyond].concat().join("; ")

@@ -19,7 +19,7 @@ pub use averaged::{disturbance_observer_gain, Averaged, ChannelAverage, Excitati
 pub use effort::{steady_input, InputTone, SteadyInput};
 pub use estimate::{estimate, RateEstimate, STIFF_RATIO};
 
-use nalgebra::{Complex, DMatrix};
+use nalgebra::{Complex, DMatrix, DVector};
 
 use crate::design::Design;
 use crate::linalg::{eigenvalues, fmt_complex, fmt_complex_list, numerical_rank};
@@ -258,7 +258,7 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
         .collect();
     // A direction no μ converges, where the cause is g's and ω's units: the way out is a rescaling.
     if channels.iter().flat_map(|c| &c.advice).any(|a| a.contains("excite that direction more")) {
-        advice.extend(unit_mismatch(design, signals));
+        advice.extend(unit_mismatch(&avg, signals));
     }
     Diagnostics { channels, observer_fidelity: avg.fidelity, advice }
 }
@@ -274,36 +274,29 @@ const UNIT_MISMATCH: f64 = 1e-6;
 /// so no μ below the stiffness threshold converges them. Dividing ω's numbers by s (D and Q times s,
 /// the same plant) scales ω's part of Ω̄ by 1/s², and s = 1/√r or √r (r the ratio) brings the two
 /// to one size. `None` where the frequencies do not tell the two apart or no ratio is that small.
-pub(crate) fn unit_mismatch(design: &Design, [reference, disturbance]: [&Signal; 2]) -> Option<String> {
-    let freqs = |sig: &Signal| -> Vec<f64> {
-        sig.components
-            .iter()
-            .flat_map(|c| c.harmonics.iter().map(|h| h.frequency).chain((c.bias != 0.0).then_some(0.0)))
-            .collect()
-    };
-    let (g, w) = (freqs(reference), freqs(disturbance));
-    let among = |f: f64, set: &[f64]| set.iter().any(|&x| (x - f).abs() <= 1e-12 * f.abs().max(x.abs()));
-    let avg = Averaged::new(design, reference, disturbance);
-    // Per channel, the weakest excitation at frequencies only `weak` has over the strongest at those
-    // only `strong` has; the smallest over the channels.
-    let ratio = |weak: &[f64], strong: &[f64]| {
-        let only = |c: &ChannelAverage, mine: &[f64], other: &[f64]| -> Vec<f64> {
-            c.excitation
-                .iter()
-                .filter(|e| among(e.frequency, mine) && !among(e.frequency, other))
-                .map(|e| e.excitation)
-                .collect()
+pub(crate) fn unit_mismatch(avg: &Averaged, [reference, disturbance]: [&Signal; 2]) -> Option<String> {
+    // `avg`'s excitations are per tone of `tones`, in its order: a tone is one signal's alone where
+    // the other has no phasor there.
+    let tones = crate::averaged::tones(reference, disturbance);
+    let has = |v: &DVector<Complex<f64>>| v.iter().any(|a| a.norm() > 0.0);
+    let alone =
+        |t: &crate::averaged::Tone, g: bool| if g { has(&t.g) && !has(&t.omega) } else { has(&t.omega) && !has(&t.g) };
+    // Per channel, the weakest excitation at the tones g (`g_weak`) or ω has alone over the
+    // strongest at those the other has alone; the smallest over the channels.
+    let ratio = |g_weak: bool| {
+        let at = |c: &ChannelAverage, g: bool| -> Vec<f64> {
+            c.excitation.iter().zip(&tones).filter(|(_, t)| alone(t, g)).map(|(e, _)| e.excitation).collect()
         };
         avg.channels
             .iter()
             .filter_map(|c| {
-                let weakest = only(c, weak, strong).into_iter().fold(f64::INFINITY, f64::min);
-                let strongest = only(c, strong, weak).into_iter().fold(0.0, f64::max);
+                let weakest = at(c, g_weak).into_iter().fold(f64::INFINITY, f64::min);
+                let strongest = at(c, !g_weak).into_iter().fold(0.0, f64::max);
                 (weakest.is_finite() && strongest > 0.0).then(|| weakest / strongest)
             })
             .fold(f64::INFINITY, f64::min)
     };
-    let (g_weak, w_weak) = (ratio(&g, &w), ratio(&w, &g));
+    let (g_weak, w_weak) = (ratio(true), ratio(false));
     let (r, larger) = if g_weak <= w_weak { (g_weak, true) } else { (w_weak, false) };
     (r < UNIT_MISMATCH).then(|| {
         let scale = crate::settings::fmt_short(crate::settings::round_up_2(1.0 / r.max(f64::MIN_POSITIVE).sqrt()));
