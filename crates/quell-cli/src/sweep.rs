@@ -69,6 +69,13 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     }
     let (study, shard, n) = planned(args)?;
     let meta = StudyMeta::new(&study, shard);
+    if !args.resume && args.out.join(JOURNAL).exists() {
+        // A sweep killed outright: its rows are only in the journal, which a new sweep would replace.
+        return Err(Failure::Input(format!(
+            "--out {}: holds the journal {JOURNAL} of a sweep that did not finish; add --resume to finish it (it keeps the rows done), or remove {JOURNAL} to start over",
+            args.out.display()
+        )));
+    }
     let (kept, done) = if args.resume { resumed(&args.out, &meta, n)? } else { (Vec::new(), Vec::new()) };
     if args.resume && kept.len() == n {
         // Killed while it wrote its files: the journal holds every row, the files may not.

@@ -268,6 +268,16 @@ fn a_killed_sweep_resumes_from_its_journal() {
             "{}",
             stderr(&merged)
         );
+        // A new sweep into it without --resume is refused, the journal kept (it had replaced it).
+        let before = fs::read(&journal).unwrap();
+        let again = quell(&["sweep", &study, "--no-plots", "--out", &out("killed")]);
+        assert_eq!(again.status.code(), Some(2), "{}", stderr(&again));
+        assert!(
+            stderr(&again).contains("of a sweep that did not finish; add --resume to finish it"),
+            "{}",
+            stderr(&again)
+        );
+        assert_eq!(fs::read(&journal).unwrap(), before);
     }
     let resumed = quell(&["sweep", &study, "--no-plots", "--out", &out("killed"), "--resume"]);
     assert!(resumed.status.success(), "{}", stderr(&resumed));

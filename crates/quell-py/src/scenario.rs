@@ -113,7 +113,25 @@ impl PyScenario {
             // Not a table: the scenario's check names simulation.
             None => None,
         };
-        Self::from_document(py, &doc)
+        let scenario = Self::from_document(py, &doc)?;
+        scenario.check_sample_time(py, t)?;
+        Ok(scenario)
+    }
+
+    /// The refusals of the sample time `t` given as the argument `sample_time`, named as it at once
+    /// (as `quell run --sample-time` does) rather than as `simulation.sample_time` at `simulate` or
+    /// `export`: every delay a whole number of samples, the controller's delay lines within bounds.
+    /// They need the design; a design that fails is left for `simulate` or `design` to report. An
+    /// output step that is no multiple of `t` is not refused here: `simulate(output_step=…)` may
+    /// still set one.
+    fn check_sample_time(&self, py: Python<'_>, t: f64) -> PyResult<()> {
+        let Ok(design) = self.design_arc(py) else { return Ok(()) };
+        let Err(e) = quell::sim::Run::of(&self.inner, &design).check() else { return Ok(()) };
+        let message = e.to_string();
+        let Some(rest) = message.strip_prefix("simulation.sample_time: ") else { return Ok(()) };
+        let err = Kind::Scenario.err(py, format!("sample_time={t}: {rest}"));
+        err.value(py).setattr("key", "sample_time")?;
+        Err(err)
     }
 
     /// The design of this scenario, computed once.
@@ -545,7 +563,8 @@ impl PyScenario {
     /// TypeError
     ///     `text` is not a str, or `sample_time` not a real number.
     /// ScenarioError
-    ///     The text is not valid TOML or not a valid scenario (the message names the key).
+    ///     The text is not valid TOML or not a valid scenario (the message names the key), or
+    ///     `sample_time` makes a delay no whole number of samples (`key` is ``"sample_time"``).
     ///
     /// Examples
     /// --------
@@ -585,7 +604,8 @@ impl PyScenario {
     /// TypeError
     ///     `path` is not a path, or `sample_time` not a real number.
     /// ScenarioError
-    ///     The file cannot be read or is not a valid scenario.
+    ///     The file cannot be read or is not a valid scenario, or `sample_time` is refused (as for
+    ///     `Scenario.from_toml`).
     ///
     /// Examples
     /// --------

@@ -275,6 +275,17 @@ def test_a_sample_time_given_to_load_reads_the_file_as_its_sampled_scenario(tmp_
     assert loaded.simulation["sample_time"] == parsed.simulation["sample_time"] == 0.001
     a, b = quell.simulate(loaded), quell.simulate(reference)
     assert np.array_equal(a.y, b.y) and np.array_equal(a.u_f, b.u_f) and np.abs(a.y).max() > 0
+    # A sample time the delays refuse is named as the argument at once (as `quell run
+    # --sample-time` does); it had passed here and been refused at simulate as
+    # simulation.sample_time. The paper's delays, 1 and 3 s, are 3.33 and 10 samples of 0.3 s.
+    with pytest.raises(quell.ScenarioError, match=r"^sample_time=0.3: channel 1's delay τ = 1 s is not a whole number of samples") as caught:
+        quell.Scenario.load(EXAMPLES / "paper.toml", sample_time=0.3)
+    assert caught.value.key == "sample_time"
+    # 0.25 s fits the delays; the file's output step (0.1 s) does not, and simulate may set another.
+    quarter = quell.Scenario.load(EXAMPLES / "paper.toml", sample_time=0.25)
+    assert quarter.simulation["sample_time"] == 0.25
+    with pytest.warns(UserWarning, match="T_s = 0.25 s is 2.25 of the loop's fastest time constant"):
+        assert quell.simulate(quarter, t_end=2.0, output_step=0.5).t[-1] == 2.0
     # A bad sample time is the scenario's check's, naming the key.
     with pytest.raises(quell.ScenarioError, match="simulation.sample_time"):
         quell.Scenario.from_toml(without, sample_time=-1.0)
