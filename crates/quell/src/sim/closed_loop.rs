@@ -761,10 +761,12 @@ pub const DOP853_STABLE_H_RATE: f64 = 6.1;
 pub const BUDGET_STABILITY_MARGIN: f64 = 2.0;
 
 /// The caution before a continuous run forced onto DOP853 ([`Method::Explicit`](dde::Method::Explicit))
-/// whose adaptive law is stiff (μλ_max beyond [`STIFF_RATIO`]·ρ): its steps are bounded by
-/// DOP853's stability, h·μλ_max ≤ [`DOP853_STABLE_H_RATE`], whatever the accuracy needs. A magnetic
-/// bearing at 1e5 times its stiffness threshold advanced 1.3 ms a second with nothing said, its
-/// budget allowing ~45 minutes. `None` otherwise.
+/// whose adaptive law is stiff: beyond [`STIFF_RATIO`]·ρ its steps are bounded by DOP853's
+/// stability, h·μλ_max ≤ [`DOP853_STABLE_H_RATE`], whatever the accuracy needs (a magnetic bearing
+/// at 1e5 times that threshold advanced 1.3 ms a second with nothing said, its budget allowing ~45
+/// minutes); from [`EXPECT_STIFF_RATIO`]·ρ its steps sit at that bound, where it is far less
+/// accurate than its tolerance (a column at 6ρ was 7.6e-4 of u's peak off at rtol 1e-6). `None`
+/// otherwise.
 pub fn explicit_stiff_warning(run: &Run<'_>) -> Option<String> {
     let Loop::Continuous(integrator) = &run.settings.mode else { return None };
     if integrator.method != dde::Method::Explicit {
@@ -773,15 +775,19 @@ pub fn explicit_stiff_warning(run: &Run<'_>) -> Option<String> {
     let rate = adaptation_rate(run.design, run.averaged());
     let rho = loop_rate(run.design, run.truth, [run.reference, run.disturbance]);
     let unit = run.design.plant().time_unit;
-    (rate > STIFF_RATIO * rho).then(|| {
-        format!(
-            "simulation.method = \"explicit\" on a stiff adaptive law: μλ_max = {:.3e}/{unit} is {:.1e}× the loop's fastest other rate ρ = {:.3e}/{unit}, and DOP853 is stable only for h·μλ_max ≤ {DOP853_STABLE_H_RATE}, so the run takes about {:.1e} steps (at the rate Ω settles to); the default method, \"auto\", takes the adaptive law implicitly",
-            rate,
-            rate / rho,
-            rho,
-            rate * run.settings.t_end / DOP853_STABLE_H_RATE
-        )
-    })
+    let head = format!(
+        "simulation.method = \"explicit\" on a stiff adaptive law: μλ_max = {rate:.3e}/{unit} is {:.1e}× the loop's fastest other rate ρ = {rho:.3e}/{unit}, and DOP853 is stable only for h·μλ_max ≤ {DOP853_STABLE_H_RATE}",
+        rate / rho
+    );
+    let auto = "the default method, \"auto\", takes the adaptive law implicitly";
+    if rate > STIFF_RATIO * rho {
+        let steps = rate * run.settings.t_end / DOP853_STABLE_H_RATE;
+        Some(format!("{head}, so the run takes about {steps:.1e} steps (at the rate Ω settles to); {auto}"))
+    } else if rate >= EXPECT_STIFF_RATIO * rho {
+        Some(format!("{head}, where its steps will sit once Ω has filled and its error estimate misses η̂'s errors: on published loops 10–1000× the tolerance; {auto} there"))
+    } else {
+        None
+    }
 }
 
 /// The default step budget of a continuous run, from the problem's time scales, its adaptation
@@ -861,6 +867,17 @@ pub fn adaptation_rate(design: &Design, averaged: &Averaged) -> f64 {
         0.0
     }
 }
+
+/// Where the adaptation rate max_i μ_i λ_max(Ω̄_i) is at least this many times ρ, the automatic
+/// method hands η̂ to the implicit method at DOP853's first step beyond its stability bound
+/// ([`dde::Options::expect_stiff`]). DOP853's accuracy-limited steps resolve ρ (h·ρ ≈ 1), so such a
+/// loop sits at the bound once Ω has filled, where DOP853 is 10–1000× less accurate than its
+/// tolerance (docs/performance.md, "DOP853 at its stability bound"). Measured on the plants of
+/// `examples/` and `crates/quell/tests/data`: every loop at 5.8ρ or more reached h·rate 4, none at
+/// 0.95ρ or less went past 2.6 (the paper's example: 0.37ρ and 0.95ρ); and loops at 3–5ρ that
+/// reached it were as far off (a servo in ms at 3ρ 270× its implicit run's error, a 747's lateral
+/// loop at 4.99ρ 50×).
+pub const EXPECT_STIFF_RATIO: f64 = 3.0;
 
 /// A channel whose adaptation rate μ_i λ_max(Ω̄_i) exceeds this many times the loop's fastest other
 /// rate ρ is flagged stiff: an explicit integrator's steps are then bounded by the adaptive law's
@@ -996,7 +1013,9 @@ pub(super) fn simulate(
     let (max_steps, max_history_bytes) = budgets(run, integrator, record, sys.delays());
     // The history's ring may double past its length: half the budget in records.
     let max_history_len = max_history_bytes / (2 * record);
-    let opts = Options { rtol, atol, max_steps, max_history_len, method, ..Options::default() };
+    let rho = loop_rate(run.design, truth, [run.reference, run.disturbance]);
+    let expect_stiff = rho > 0.0 && adaptation_rate(run.design, run.averaged()) >= EXPECT_STIFF_RATIO * rho;
+    let opts = Options { rtol, atol, max_steps, max_history_len, method, expect_stiff, ..Options::default() };
     let mut outcome = Outcome::Completed;
     // The loop records each sample (observe); here only the progress and an interruption, at each
     // sample and every PROGRESS_EVERY steps between them.

@@ -165,6 +165,11 @@ pub struct Options {
     pub max_history_len: usize,
     /// Which method integrates the steps.
     pub method: Method,
+    /// Under [`Method::Auto`], the implicit block is expected to hold DOP853 at its stability bound
+    /// (the closed loop sets it where μλ_max(Ω̄) ≥ [`crate::sim::EXPECT_STIFF_RATIO`]·ρ): the first DOP853 step
+    /// beyond it hands over to the implicit method at once, which then keeps the loop while it is
+    /// stiff, instead of after a stability-limited stretch and a comparison of costs.
+    pub expect_stiff: bool,
 }
 
 impl Default for Options {
@@ -176,6 +181,7 @@ impl Default for Options {
             max_steps: usize::MAX,
             max_history_len: usize::MAX,
             method: Method::Auto,
+            expect_stiff: false,
         }
     }
 }
@@ -573,7 +579,7 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
             err: 0.0,
             implicit: sys.implicit(),
             stiff: opts.method == Method::Implicit,
-            switching: imex::Switching::default(),
+            switching: imex::Switching::new(opts.expect_stiff),
             earlier: imex::Earlier::new(sys.implicit().len()),
             fresh_stencil: false,
             sys,

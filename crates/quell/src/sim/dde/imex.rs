@@ -144,10 +144,12 @@ pub(super) struct Switching {
     /// Until this time (one largest delay after a switch) the implicit method reads delayed values
     /// DOP853 computed, and is not measured.
     settle: f64,
+    /// The loop is expected to reach DOP853's bound ([`super::Options::expect_stiff`]).
+    expected: bool,
 }
 
-impl Default for Switching {
-    fn default() -> Self {
+impl Switching {
+    pub(super) fn new(expected: bool) -> Self {
         Switching {
             run: 0,
             limited: 0,
@@ -158,6 +160,7 @@ impl Default for Switching {
             explicit_rate: 0.0,
             patience: SWITCH_AFTER,
             settle: 0.0,
+            expected,
         }
     }
 }
@@ -303,12 +306,13 @@ impl<S: DelaySystem> Steps<'_, S> {
             if sw.run == 1 {
                 (sw.since, sw.rejected_since) = (now, self.stats.rejected);
             }
-            if (sw.limited as f64) < LIMITED_SHARE * sw.run as f64 {
+            let expected = sw.expected && h_rate > STIFF_H_RATE;
+            if (sw.limited as f64) < LIMITED_SHARE * sw.run as f64 && !expected {
                 return;
             }
             let rejected = (self.stats.rejected - sw.rejected_since) as f64;
             sw.thrashed = sw.run >= THRASH_AFTER && rejected > THRASHING * (rejected + sw.run as f64);
-            if sw.run < sw.patience && !sw.thrashed {
+            if sw.run < sw.patience && !sw.thrashed && !expected {
                 return;
             }
             sw.explicit_rate = rate(sw.since);
@@ -321,7 +325,7 @@ impl<S: DelaySystem> Steps<'_, S> {
             if sw.run < TRIAL {
                 return;
             }
-            let slower = !sw.thrashed && rate(sw.since) < sw.explicit_rate;
+            let slower = !sw.thrashed && !sw.expected && rate(sw.since) < sw.explicit_rate;
             if !slower && h_rate >= NONSTIFF_H_RATE {
                 *sw = Switching { run: 0, since: now, ..*sw };
                 return;
