@@ -123,7 +123,7 @@ fn tuned_channels_are_reproduced_by_the_joint_run() {
         assert!(c.curve.iter().filter(|p| p.objective.is_some()).count() == feasible.len());
         // rtol·ĝ + atol: ĝ = 3 (channel 1's sine), 2 (channel 2's bias).
         let g = [3.0, 2.0][c.channel];
-        assert_eq!(Some(chosen.mu), least_mu_within(c, 1e-9 * g + 1e-9));
+        assert_eq!(Some(chosen.mu), least_mu_within(c, 3.0 * (1e-9 * g + 1e-9)));
         assert!(chosen.figures.unwrap().max_u <= limit);
         assert_eq!(c.curve.len(), 7 + 4);
         assert!(c.curve.windows(2).all(|w| w[0].mu <= w[1].mu));
@@ -139,7 +139,9 @@ fn tuned_channels_are_reproduced_by_the_joint_run() {
 /// from 316 to 1e5 leaves a tail RMS error of 1.5e-9 to 8e-9, about the integrator's tolerance
 /// there (rtol·ĝ + atol = 3e-9), and the least of those lay at μ = 1000 (1.51e-9 against 316's
 /// 1.53e-9), which the search chose. It now takes the least μ that ties with the least: 316,
-/// where μ = 100 leaves 1.2e-5.
+/// where μ = 100 leaves 1.2e-5. (Since μ = 316 puts the loop at 3ρ, it runs on the implicit method
+/// from DOP853's bound and its tail reads 4.6e-9: the true tail, at rtol 1e-12, is 4.5e-13, so a tie
+/// spans three times the tolerance.)
 #[test]
 fn a_flat_objective_takes_the_least_mu_the_solver_cannot_tell_from_the_best() {
     let text = "scenario = \"siso-complex.toml\"\n[simulation]\nt_end = 200.0\n[tune]\nobjective = \"tail_rms_e\"\nmu = [10.0, 100000.0]\npoints = 9\nrefine = 0\n";
@@ -152,7 +154,7 @@ fn a_flat_objective_takes_the_least_mu_the_solver_cannot_tell_from_the_best() {
     assert!(c.curve.iter().filter(|p| p.mu > 300.0).all(|p| p.objective.is_some_and(|v| v < 1e-7)));
     assert!(objective(100.0).is_some_and(|v| v > 1e-6));
     // ĝ = 1 + 1 (bias and sine), rtol = atol = 1e-9 (the file's).
-    let within = least_mu_within(c, 1e-9 * 2.0 + 1e-9);
+    let within = least_mu_within(c, 3.0 * (1e-9 * 2.0 + 1e-9));
     assert_eq!(r.mu, [within.unwrap()]);
     assert!((r.mu[0] / 10f64.powf(2.5) - 1.0).abs() < 1e-12, "{:?}", r.mu);
     assert_eq!(r.channels[0].at_bound(), None);
@@ -200,7 +202,7 @@ fn a_stopped_tuning_keeps_the_points_evaluated() {
     assert_eq!(r.reproduced, [false, false]);
     for c in &r.channels {
         let g = [3.0, 2.0][c.channel];
-        let within = least_mu_within(c, 1e-6 * g + 1e-6);
+        let within = least_mu_within(c, 3.0 * (1e-6 * g + 1e-6));
         assert_eq!(c.chosen.as_ref().map(|p| p.mu), within);
     }
     // Stopped before it began: nothing evaluated, μ stays the scenario's.
