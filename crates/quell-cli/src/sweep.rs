@@ -70,11 +70,7 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     let (study, shard, n) = planned(args)?;
     let meta = StudyMeta::new(&study, shard);
     if !args.resume && args.out.join(JOURNAL).exists() {
-        // A sweep killed outright: its rows are only in the journal, which a new sweep would replace.
-        return Err(Failure::Input(format!(
-            "--out {}: holds the journal {JOURNAL} of a sweep that did not finish; add --resume to finish it (it keeps the rows done), or remove {JOURNAL} to start over",
-            args.out.display()
-        )));
+        return Err(journal_in_the_way(&args.out, &meta));
     }
     let (kept, done) = if args.resume { resumed(&args.out, &meta, n)? } else { (Vec::new(), Vec::new()) };
     if args.resume && kept.len() == n {
@@ -261,6 +257,22 @@ fn check_shard_rows(dir: &Path, shard: Shard, rows: &[Row], total: usize) -> Res
     Ok(())
 }
 
+/// The refusal of a new sweep into `dir`, which holds a journal: the rows of a sweep killed outright
+/// are only there, and the new sweep would replace it. It names the way on for this study's
+/// journal (`--resume`), another study's or shard's, and a file that is not a journal.
+fn journal_in_the_way(dir: &Path, meta: &StudyMeta) -> Failure {
+    let here = format!("--out {}", dir.display());
+    Failure::Input(match journal::read(dir) {
+        Ok(Some((old, _))) if old.shard == meta.shard && differing_key(&old, meta).is_none() => format!(
+            "{here}: holds the journal {JOURNAL} of a sweep of this study that did not finish; add --resume to finish it (it keeps the rows done), or remove {JOURNAL} to start over"
+        ),
+        Ok(_) => format!(
+            "{here}: holds the journal {JOURNAL} of an unfinished sweep of another study or shard; finish it with that study file and --shard (--resume), or remove {JOURNAL} to start over here, or choose another --out"
+        ),
+        Err(e) => format!("{here}: {JOURNAL}: {e}; remove it to start over here, or choose another --out"),
+    })
+}
+
 /// `--resume`: the rows the interrupted sweep of this study and shard (`meta`, of `n` runs) wrote
 /// into `dir`, and which runs of the shard they are (by place k: run index + k·count).
 fn resumed(dir: &Path, meta: &StudyMeta, n: usize) -> Result<(Vec<Row>, Vec<bool>), Failure> {
@@ -270,7 +282,9 @@ fn resumed(dir: &Path, meta: &StudyMeta, n: usize) -> Result<(Vec<Row>, Vec<bool
     })?;
     // The journal, where there is one, is newer than runs.csv: it is removed once runs.csv is written.
     let (old, rows) = match journal::read(dir) {
-        Err(e) => return Err(Failure::Input(format!("{here}: {JOURNAL}: {e}; run the sweep again without --resume"))),
+        Err(e) => {
+            return Err(Failure::Input(format!("{here}: {JOURNAL}: {e}; remove it and run the sweep again without --resume")))
+        }
         Ok(Some(journal)) => journal,
         Ok(None) if dir.join("summary.json").exists() => {
             let (old, rows, _) = read_sweep_dir(dir, "--resume")?;

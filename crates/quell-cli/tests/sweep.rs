@@ -273,11 +273,21 @@ fn a_killed_sweep_resumes_from_its_journal() {
         let again = quell(&["sweep", &study, "--no-plots", "--out", &out("killed")]);
         assert_eq!(again.status.code(), Some(2), "{}", stderr(&again));
         assert!(
-            stderr(&again).contains("of a sweep that did not finish; add --resume to finish it"),
+            stderr(&again).contains("of a sweep of this study that did not finish; add --resume to finish it"),
             "{}",
             stderr(&again)
         );
         assert_eq!(fs::read(&journal).unwrap(), before);
+        // Another study's journal: --resume would refuse it too, so the message does not offer it.
+        let other =
+            write_study(dir, "other.toml", &fs::read_to_string(&study).unwrap().replace("seed = 5", "seed = 6"));
+        let again = quell(&["sweep", &other, "--no-plots", "--out", &out("killed")]);
+        assert_eq!(again.status.code(), Some(2), "{}", stderr(&again));
+        assert!(
+            stderr(&again).contains("of another study or shard; finish it with that study file"),
+            "{}",
+            stderr(&again)
+        );
     }
     let resumed = quell(&["sweep", &study, "--no-plots", "--out", &out("killed"), "--resume"]);
     assert!(resumed.status.success(), "{}", stderr(&resumed));
@@ -297,8 +307,11 @@ fn a_killed_sweep_resumes_from_its_journal() {
     assert!(stderr(&resumed).contains("the journal held every run of the study (3000)"), "{}", stderr(&resumed));
     assert_eq!(rows_without_wall_time(&late), rows_without_wall_time(&dir.join("full")));
     assert!(late.join("summary.json").exists() && !late.join("runs.partial.csv").exists());
-    // A journal that is not one is named, not taken.
+    // A journal that is not one is named, not taken, with or without --resume.
     fs::write(&journal, "run,point\n").unwrap();
+    let plain = quell(&["sweep", &study, "--no-plots", "--out", &out("killed")]);
+    assert_eq!(plain.status.code(), Some(2), "{}", stderr(&plain));
+    assert!(stderr(&plain).contains("; remove it to start over here, or choose another --out"), "{}", stderr(&plain));
     let refused = quell(&["sweep", &study, "--no-plots", "--out", &out("killed"), "--resume"]);
     assert_eq!(refused.status.code(), Some(2), "{}", stderr(&refused));
     assert!(

@@ -104,8 +104,9 @@ impl PyScenario {
         quell::Scenario::from_document(doc).map(Self::new).map_err(|e| scenario_error(py, &e))
     }
 
-    /// `doc` with `sample_time` as its `simulation.sample_time` (a bad value is the scenario's
-    /// check's to name), validated.
+    /// `doc` with `sample_time` as its `simulation.sample_time`, validated; the refusals of the value
+    /// itself (not finite, not positive, beyond t_end, a delay no whole number of samples) name the
+    /// argument, `sample_time=…` with key `"sample_time"`, as `quell run --sample-time` names its flag.
     fn sampled(py: Python<'_>, mut doc: Table, t: f64) -> PyResult<Self> {
         let sim = doc.entry("simulation").or_insert(Table::new().into());
         match sim.as_table_mut() {
@@ -113,25 +114,27 @@ impl PyScenario {
             // Not a table: the scenario's check names simulation.
             None => None,
         };
-        let scenario = Self::from_document(py, &doc)?;
+        let scenario = match quell::Scenario::from_document(&doc) {
+            Ok(s) => Self::new(s),
+            Err(e) if e.key == "simulation.sample_time" => return Err(sample_time_error(py, t, &e.to_string())),
+            Err(e) => return Err(scenario_error(py, &e)),
+        };
         scenario.check_sample_time(py, t)?;
         Ok(scenario)
     }
 
-    /// The refusals of the sample time `t` given as the argument `sample_time`, named as it at once
-    /// (as `quell run --sample-time` does) rather than as `simulation.sample_time` at `simulate` or
-    /// `export`: every delay a whole number of samples, the controller's delay lines within bounds.
-    /// They need the design; a design that fails is left for `simulate` or `design` to report. An
-    /// output step that is no multiple of `t` is not refused here: `simulate(output_step=…)` may
-    /// still set one.
+    /// The refusals of the sample time `t` that need the design: every delay a whole number of
+    /// samples, the controller's delay lines within bounds. A design that fails is left for
+    /// `simulate` or `design` to report. An output step that is no multiple of `t` is not refused
+    /// here: `simulate(output_step=…)` may still set one.
     fn check_sample_time(&self, py: Python<'_>, t: f64) -> PyResult<()> {
         let Ok(design) = self.design_arc(py) else { return Ok(()) };
-        let Err(e) = quell::sim::Run::of(&self.inner, &design).check() else { return Ok(()) };
-        let message = e.to_string();
-        let Some(rest) = message.strip_prefix("simulation.sample_time: ") else { return Ok(()) };
-        let err = Kind::Scenario.err(py, format!("sample_time={t}: {rest}"));
-        err.value(py).setattr("key", "sample_time")?;
-        Err(err)
+        match quell::sim::Run::of(&self.inner, &design).check() {
+            Err(e) if e.to_string().starts_with("simulation.sample_time: ") => {
+                Err(sample_time_error(py, t, &e.to_string()))
+            }
+            _ => Ok(()),
+        }
     }
 
     /// The design of this scenario, computed once.
@@ -146,6 +149,15 @@ impl PyScenario {
         crate::errors::warn_fragile(py, &d, &self.inner.design)?;
         Ok(self.design.get_or_init(|| d).clone())
     }
+}
+
+/// The ScenarioError of a refused `sample_time` argument: `message` (which names
+/// `simulation.sample_time`, the key the argument sets) as `sample_time=t: …`, key `"sample_time"`.
+fn sample_time_error(py: Python<'_>, t: f64, message: &str) -> PyErr {
+    let rest = message.strip_prefix("simulation.sample_time: ").unwrap_or(message);
+    let err = Kind::Scenario.err(py, format!("sample_time={t}: {rest}"));
+    let _ = err.value(py).setattr("key", "sample_time");
+    err
 }
 
 /// A ScenarioError with `.key` set to the offending key path.

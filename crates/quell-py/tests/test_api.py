@@ -286,6 +286,8 @@ def test_a_sample_time_given_to_load_reads_the_file_as_its_sampled_scenario(tmp_
     assert quarter.simulation["sample_time"] == 0.25
     with pytest.warns(UserWarning, match="T_s = 0.25 s is 2.25 of the loop's fastest time constant"):
         assert quell.simulate(quarter, t_end=2.0, output_step=0.5).t[-1] == 2.0
-    # A bad sample time is the scenario's check's, naming the key.
-    with pytest.raises(quell.ScenarioError, match="simulation.sample_time"):
-        quell.Scenario.from_toml(without, sample_time=-1.0)
+    # A bad sample time is the scenario's check's, naming the argument (it had named the file's key).
+    for bad in (-1.0, 0.0, float("nan"), float("inf")):
+        with pytest.raises(quell.ScenarioError, match=r"^sample_time=(-1|0|NaN|inf): ") as caught:
+            quell.Scenario.from_toml(without, sample_time=bad)
+        assert caught.value.key == "sample_time"

@@ -784,7 +784,7 @@ pub fn explicit_stiff_warning(run: &Run<'_>) -> Option<String> {
         let steps = rate * run.settings.t_end / DOP853_STABLE_H_RATE;
         Some(format!("{head}, so the run takes about {steps:.1e} steps (at the rate Ω settles to); {auto}"))
     } else if rate >= EXPECT_STIFF_RATIO * rho {
-        Some(format!("{head}, where its steps will sit once Ω has filled and its error estimate misses η̂'s errors: on published loops 10–1000× the tolerance; {auto} there"))
+        Some(format!("{head}, where its steps may sit once Ω has filled, and there its error estimate misses η̂'s errors (on published loops by 10–1000× the tolerance); {auto} from there"))
     } else {
         None
     }
@@ -869,8 +869,8 @@ pub fn adaptation_rate(design: &Design, averaged: &Averaged) -> f64 {
 }
 
 /// Where the adaptation rate max_i μ_i λ_max(Ω̄_i) is at least this many times ρ, the automatic
-/// method hands η̂ to the implicit method at DOP853's first step beyond its stability bound
-/// ([`dde::Options::expect_stiff`]). DOP853's accuracy-limited steps resolve ρ (h·ρ ≈ 1), so such a
+/// method hands η̂ to the implicit method at DOP853's first step beyond its stability bound, for the
+/// rest of the run ([`dde::Options::expect_stiff`]). DOP853's accuracy-limited steps resolve ρ (h·ρ ≈ 1), so such a
 /// loop sits at the bound once Ω has filled, where DOP853 is 10–1000× less accurate than its
 /// tolerance (docs/performance.md, "DOP853 at its stability bound"). Measured on the plants of
 /// `examples/` and `crates/quell/tests/data`: every loop at 5.8ρ or more reached h·rate 4, none at

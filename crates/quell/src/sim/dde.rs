@@ -167,8 +167,8 @@ pub struct Options {
     pub method: Method,
     /// Under [`Method::Auto`], the implicit block is expected to hold DOP853 at its stability bound
     /// (the closed loop sets it where μλ_max(Ω̄) ≥ [`crate::sim::EXPECT_STIFF_RATIO`]·ρ): the first DOP853 step
-    /// beyond it hands over to the implicit method at once, which then keeps the loop while it is
-    /// stiff, instead of after a stability-limited stretch and a comparison of costs.
+    /// beyond it hands over to the implicit method at once, which then keeps the loop to the end,
+    /// instead of after a stability-limited stretch and a comparison of costs.
     pub expect_stiff: bool,
 }
 
