@@ -263,7 +263,7 @@ fn check_shard_rows(dir: &Path, shard: Shard, rows: &[Row], total: usize) -> Res
 fn journal_in_the_way(dir: &Path, meta: &StudyMeta) -> Failure {
     let here = format!("--out {}", dir.display());
     Failure::Input(match journal::read(dir) {
-        Ok(Some((old, _))) if old.shard == meta.shard && differing_key(&old, meta).is_none() => format!(
+        Ok(Some((old, _))) if same_sweep(&old, meta) => format!(
             "{here}: holds the journal {JOURNAL} of a sweep of this study that did not finish; add --resume to finish it (it keeps the rows done), or remove {JOURNAL} to start over"
         ),
         Ok(_) => format!(
@@ -297,7 +297,7 @@ fn resumed(dir: &Path, meta: &StudyMeta, n: usize) -> Result<(Vec<Row>, Vec<bool
         }
     };
     // differing_key compares every key but the shard, the fingerprint included.
-    if old.shard != meta.shard || differing_key(&old, meta).is_some() {
+    if !same_sweep(&old, meta) {
         return Err(Failure::Input(format!(
             "{here}: its rows come from another study or shard (fingerprint {}, shard {}/{}; this one: {}, {}/{}); resume with the same study file and --shard, or choose another --out",
             old.fingerprint, old.shard.index, old.shard.count, meta.fingerprint, meta.shard.index, meta.shard.count
@@ -358,6 +358,11 @@ fn read_sweep_dir(dir: &Path, flag: &str) -> Result<(StudyMeta, Vec<Row>, bool),
     }
     let runs = study::read_runs_csv(&csv, &summary.study).map_err(|e| bad("runs.csv", e))?;
     Ok((summary.study, runs.rows, runs.partial || summary.partial))
+}
+
+/// Whether rows written for `old` belong to the sweep of `meta`: the same study and shard.
+fn same_sweep(old: &StudyMeta, meta: &StudyMeta) -> bool {
+    old.shard == meta.shard && differing_key(old, meta).is_none()
 }
 
 /// The first key of `study` in summary.json, its shard aside (checked on its own), where `a` and

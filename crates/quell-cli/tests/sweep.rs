@@ -242,6 +242,12 @@ fn a_killed_sweep_resumes_from_its_journal() {
     let text = "[simulation]\nt_end = 20.0\nrtol = 1e-6\natol = 1e-6\n[monte_carlo]\nruns = 3000\nseed = 5\n\"plant.x0\" = { normal = 0.1 }\n";
     let study = write_study(dir, "study.toml", text);
     let out = |name: &str| dir.join(name).display().to_string();
+    // A new sweep of `study` into `killed` without --resume: refused (exit 2) with `message`.
+    let refused_plainly = |study: &str, message: &str| {
+        let o = quell(&["sweep", study, "--no-plots", "--out", &out("killed")]);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(stderr(&o).contains(message), "{}", stderr(&o));
+    };
     let full = quell(&["sweep", &study, "--no-plots", "--out", &out("full")]);
     assert!(full.status.success(), "{}", stderr(&full));
     assert!(!dir.join("full/runs.partial.csv").exists());
@@ -270,24 +276,12 @@ fn a_killed_sweep_resumes_from_its_journal() {
         );
         // A new sweep into it without --resume is refused, the journal kept (it had replaced it).
         let before = fs::read(&journal).unwrap();
-        let again = quell(&["sweep", &study, "--no-plots", "--out", &out("killed")]);
-        assert_eq!(again.status.code(), Some(2), "{}", stderr(&again));
-        assert!(
-            stderr(&again).contains("of a sweep of this study that did not finish; add --resume to finish it"),
-            "{}",
-            stderr(&again)
-        );
+        refused_plainly(&study, "of a sweep of this study that did not finish; add --resume to finish it");
         assert_eq!(fs::read(&journal).unwrap(), before);
         // Another study's journal: --resume would refuse it too, so the message does not offer it.
         let other =
             write_study(dir, "other.toml", &fs::read_to_string(&study).unwrap().replace("seed = 5", "seed = 6"));
-        let again = quell(&["sweep", &other, "--no-plots", "--out", &out("killed")]);
-        assert_eq!(again.status.code(), Some(2), "{}", stderr(&again));
-        assert!(
-            stderr(&again).contains("of another study or shard; finish it with that study file"),
-            "{}",
-            stderr(&again)
-        );
+        refused_plainly(&other, "of another study or shard; finish it with that study file");
     }
     let resumed = quell(&["sweep", &study, "--no-plots", "--out", &out("killed"), "--resume"]);
     assert!(resumed.status.success(), "{}", stderr(&resumed));
@@ -309,9 +303,7 @@ fn a_killed_sweep_resumes_from_its_journal() {
     assert!(late.join("summary.json").exists() && !late.join("runs.partial.csv").exists());
     // A journal that is not one is named, not taken, with or without --resume.
     fs::write(&journal, "run,point\n").unwrap();
-    let plain = quell(&["sweep", &study, "--no-plots", "--out", &out("killed")]);
-    assert_eq!(plain.status.code(), Some(2), "{}", stderr(&plain));
-    assert!(stderr(&plain).contains("; remove it to start over here, or choose another --out"), "{}", stderr(&plain));
+    refused_plainly(&study, "; remove it to start over here, or choose another --out");
     let refused = quell(&["sweep", &study, "--no-plots", "--out", &out("killed"), "--resume"]);
     assert_eq!(refused.status.code(), Some(2), "{}", stderr(&refused));
     assert!(

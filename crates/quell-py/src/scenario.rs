@@ -129,11 +129,12 @@ impl PyScenario {
     /// here: `simulate(output_step=…)` may still set one.
     fn check_sample_time(&self, py: Python<'_>, t: f64) -> PyResult<()> {
         let Ok(design) = self.design_arc(py) else { return Ok(()) };
-        match quell::sim::Run::of(&self.inner, &design).check() {
-            Err(e) if e.to_string().starts_with("simulation.sample_time: ") => {
-                Err(sample_time_error(py, t, &e.to_string()))
-            }
-            _ => Ok(()),
+        let Err(e) = quell::sim::Run::of(&self.inner, &design).check() else { return Ok(()) };
+        let message = e.to_string();
+        if message.starts_with("simulation.sample_time: ") {
+            Err(sample_time_error(py, t, &message))
+        } else {
+            Ok(())
         }
     }
 

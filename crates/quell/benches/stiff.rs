@@ -13,10 +13,10 @@ use std::ops::ControlFlow;
 use std::time::Instant;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use quell::averaged::Averaged;
 use quell::bench_api::dde::{self, Method, Options};
 use quell::bench_api::ContinuousLoop;
 use quell::scenario::{Scenario, PAPER_EXAMPLE};
+use quell::sim::{Run, RunSettings};
 use quell::Design;
 
 const QUADRUPLE_TANK: &str = include_str!("../tests/data/quadruple-tank.toml");
@@ -50,11 +50,10 @@ impl Case {
         let mut sys = ContinuousLoop::new(design, &s.reference, &s.disturbance).unwrap();
         let y0 = sys.initial_state(&s.plant.x0).unwrap();
         let history = vec![0.0; dde::DelaySystem::n_delayed(&sys)];
-        // As the closed loop sets it (`closed_loop::simulate`): the automatic method keeps an adaptive
-        // law at 3ρ or more on the implicit method from DOP853's first step beyond its bound.
-        let rate = quell::sim::adaptation_rate(design, &Averaged::new(design, &s.reference, &s.disturbance));
-        let rho = quell::sim::loop_rate(design, design.plant(), [&s.reference, &s.disturbance]);
-        let expect_stiff = rho > 0.0 && rate >= quell::sim::EXPECT_STIFF_RATIO * rho;
+        // As the closed loop sets it: the automatic method keeps an adaptive law at 3ρ or more on the
+        // implicit method from DOP853's first step beyond its bound.
+        let settings = RunSettings::continuous(self.t_end, self.t_end / 100.0, self.tol, self.tol);
+        let expect_stiff = Run::new(design, &s.reference, &s.disturbance, settings).expects_stiff();
         let opts = Options {
             rtol: self.tol,
             atol: self.tol,

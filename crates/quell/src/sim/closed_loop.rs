@@ -772,8 +772,7 @@ pub fn explicit_stiff_warning(run: &Run<'_>) -> Option<String> {
     if integrator.method != dde::Method::Explicit {
         return None;
     }
-    let rate = adaptation_rate(run.design, run.averaged());
-    let rho = loop_rate(run.design, run.truth, [run.reference, run.disturbance]);
+    let (rate, rho) = run.rates();
     let unit = run.design.plant().time_unit;
     let head = format!(
         "simulation.method = \"explicit\" on a stiff adaptive law: μλ_max = {rate:.3e}/{unit} is {:.1e}× the loop's fastest other rate ρ = {rho:.3e}/{unit}, and DOP853 is stable only for h·μλ_max ≤ {DOP853_STABLE_H_RATE}",
@@ -783,7 +782,7 @@ pub fn explicit_stiff_warning(run: &Run<'_>) -> Option<String> {
     if rate > STIFF_RATIO * rho {
         let steps = rate * run.settings.t_end / DOP853_STABLE_H_RATE;
         Some(format!("{head}, so the run takes about {steps:.1e} steps (at the rate Ω settles to); {auto}"))
-    } else if rate >= EXPECT_STIFF_RATIO * rho {
+    } else if run.expects_stiff() {
         Some(format!("{head}, where its steps may sit once Ω has filled, and there its error estimate misses η̂'s errors (on published loops by 10–1000× the tolerance); {auto} from there"))
     } else {
         None
@@ -811,12 +810,10 @@ pub fn explicit_stiff_warning(run: &Run<'_>) -> Option<String> {
 /// budget follows from N ([`default_max_history_bytes`]).
 pub fn default_max_steps(run: &Run<'_>, integrator: &Integrator) -> usize {
     let (design, truth, t_end) = (run.design, run.truth, run.settings.t_end);
-    let signals = [run.reference, run.disturbance];
     let delays = design.plant().delays.iter().chain(&truth.delays).filter(|&&d| d > 0.0);
     let tau_min = delays.fold(f64::INFINITY, |a, &d| a.min(d));
-    let rho = loop_rate(design, truth, signals);
+    let (rate, rho) = run.rates();
     let scale = rho * t_end + if tau_min.is_finite() { t_end / tau_min } else { 0.0 };
-    let rate = adaptation_rate(design, run.averaged());
     let tol = integrator.rtol.min(integrator.atol).max(BUDGET_TOLERANCE_FLOOR);
     let (order, g, stability) = match integrator.method {
         dde::Method::Explicit => (8.0, 1.0, BUDGET_STABILITY_MARGIN * rate * t_end / DOP853_STABLE_H_RATE),
@@ -933,7 +930,7 @@ pub(super) fn check<'a>(run: &Run<'a>, integrator: &Integrator) -> Result<Contin
         settings::check_integrator_delays("truth.actuator_delays", &a.delays, horizon)?;
     }
     if let Some(b) = noise.and_then(|n| n.bandwidth) {
-        check_noise_bandwidth(b, loop_rate(run.design, truth, [run.reference, run.disturbance]), horizon.1)?;
+        check_noise_bandwidth(b, run.loop_rate(), horizon.1)?;
     }
     Ok(sys)
 }
@@ -1013,9 +1010,15 @@ pub(super) fn simulate(
     let (max_steps, max_history_bytes) = budgets(run, integrator, record, sys.delays());
     // The history's ring may double past its length: half the budget in records.
     let max_history_len = max_history_bytes / (2 * record);
-    let rho = loop_rate(run.design, truth, [run.reference, run.disturbance]);
-    let expect_stiff = rho > 0.0 && adaptation_rate(run.design, run.averaged()) >= EXPECT_STIFF_RATIO * rho;
-    let opts = Options { rtol, atol, max_steps, max_history_len, method, expect_stiff, ..Options::default() };
+    let opts = Options {
+        rtol,
+        atol,
+        max_steps,
+        max_history_len,
+        method,
+        expect_stiff: run.expects_stiff(),
+        ..Options::default()
+    };
     let mut outcome = Outcome::Completed;
     // The loop records each sample (observe); here only the progress and an interruption, at each
     // sample and every PROGRESS_EVERY steps between them.

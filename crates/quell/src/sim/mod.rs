@@ -192,6 +192,9 @@ pub struct Run<'a> {
     /// The adaptive law's steady state under the signals, computed once when first needed (by the
     /// step budget and the divergence bounds).
     averaged: std::cell::OnceCell<Averaged>,
+    /// ρ ([`loop_rate`]), computed once when first needed (by the step budget, the method and the
+    /// noise check).
+    rho: std::cell::OnceCell<f64>,
 }
 
 impl<'a> Run<'a> {
@@ -205,6 +208,7 @@ impl<'a> Run<'a> {
             settings,
             controller: None,
             averaged: Default::default(),
+            rho: Default::default(),
         }
     }
 
@@ -279,6 +283,23 @@ impl<'a> Run<'a> {
     /// The averaged law of the design under the run's signals ([`crate::averaged`]).
     fn averaged(&self) -> &Averaged {
         self.averaged.get_or_init(|| Averaged::new(self.design, self.reference, self.disturbance))
+    }
+
+    /// ρ, the loop's fastest rate besides the adaptive law, with the true plant ([`loop_rate`]).
+    fn loop_rate(&self) -> f64 {
+        *self.rho.get_or_init(|| loop_rate(self.design, self.truth, [self.reference, self.disturbance]))
+    }
+
+    /// The adaptation rate max_i μ_i λ_max(Ω̄_i) ([`adaptation_rate`]) and ρ ([`loop_rate`]).
+    pub fn rates(&self) -> (f64, f64) {
+        (adaptation_rate(self.design, self.averaged()), self.loop_rate())
+    }
+
+    /// Whether the adaptive law is expected to hold DOP853 at its stability bound: an adaptation
+    /// rate of [`EXPECT_STIFF_RATIO`]·ρ or more (`dde::Options::expect_stiff`).
+    pub fn expects_stiff(&self) -> bool {
+        let (rate, rho) = self.rates();
+        rho > 0.0 && rate >= EXPECT_STIFF_RATIO * rho
     }
 
     /// Every check the run makes before it starts (settings, signals, truth; in the sampled-data
