@@ -66,7 +66,9 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     if let Loop::Sampled { sample_time } = settings.mode {
         eprint!("{}", report::sample_time_text(&scenario, &design, sample_time, Some(settings.output_step)));
     }
-    if let Some(w) = quell::sim::explicit_stiff_warning(&Run::of(&scenario, &design).settings(settings.clone())) {
+    let set_by = if args.method.is_some() { "--method explicit" } else { "simulation.method = \"explicit\"" };
+    if let Some(w) = quell::sim::explicit_stiff_warning(&Run::of(&scenario, &design).settings(settings.clone()), set_by)
+    {
         eprintln!("⚠ warning: {w}");
     }
     let out = &args.out;

@@ -68,6 +68,9 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
         return merge(&args.merge, &args.out, !args.no_plots);
     }
     let (study, shard, n) = planned(args)?;
+    if let Some(w) = study.explicit_stiff_warning() {
+        eprintln!("⚠ warning: {w}");
+    }
     let meta = StudyMeta::new(&study, shard);
     if !args.resume && args.out.join(JOURNAL).exists() {
         return Err(journal_in_the_way(&args.out, &meta));

@@ -145,11 +145,16 @@ fn report(r: &TuneResult, spec: &quell::study::TuneSpec, unit: quell::TimeUnit) 
     for (c, (d, ok)) in r.channels.iter().zip(r.joint_difference.iter().zip(&r.reproduced)) {
         match &c.chosen {
             Some(p) => s.push_str(&format!(
-                "channel {}: mu = {} ({}), objective {:.6e}; joint run {} (difference {}){}{}\n",
+                "channel {}: mu = {} ({}), objective {:.6e}{}; joint run {} (difference {}){}{}\n",
                 c.channel + 1,
                 mu_6(p.mu),
                 if c.curve.len() == 1 { "1 evaluation".to_string() } else { format!("{} evaluations", c.curve.len()) },
                 p.objective.unwrap_or(f64::NAN),
+                // A smaller μ whose objective is not the least: what it ties with.
+                c.tie.filter(|t| p.objective.is_some_and(|v| v > t.least)).map_or(String::new(), |t| format!(
+                    ", a tie with the least, {:.6e} (ties up to {:.3e}; docs/studies.md)",
+                    t.least, t.bound
+                )),
                 match (r.partial, *ok) {
                     (true, _) => "not carried out (interrupted)",
                     (false, true) => "reproduces it",
@@ -234,8 +239,8 @@ mod tests {
         let result = TuneResult {
             objective: Objective::TailRmsE,
             channels: vec![
-                TuneCurve { channel: 0, chosen: Some(curve[1].clone()), curve },
-                TuneCurve { channel: 1, curve: vec![], chosen: None },
+                TuneCurve { channel: 0, chosen: Some(curve[1].clone()), curve, tie: None },
+                TuneCurve { channel: 1, curve: vec![], chosen: None, tie: None },
             ],
             mu: vec![37275.9, 1.0],
             joint: None,

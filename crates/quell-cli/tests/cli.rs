@@ -429,6 +429,9 @@ fn run_paper_example_writes_every_file() {
     }
     let (steps, evals) = (s["stats"]["steps"].as_u64().unwrap(), s["stats"]["rhs_evaluations"].as_u64().unwrap());
     assert!(steps > 0 && evals >= 11 * steps, "DOP853 takes at least 11 evaluations a step: {s}");
+    // Not stiff: DOP853 throughout, and no stretch at its bound.
+    assert!(s["stats"]["implicit_steps"] == 0 && s["stats"]["switches"] == 0, "{s}");
+    assert!(s["stats"].get("thrashed").is_none(), "{s}");
     let e1 = channels[0]["tail_max_e"].as_f64().unwrap();
     let e2 = channels[1]["tail_max_e"].as_f64().unwrap();
     assert!(e1 < 0.05, "tail max|e1| = {e1}");
@@ -889,8 +892,11 @@ fn method_flag_chooses_the_integrator() {
         let o = quell(&args);
         assert!(o.status.success(), "{method:?}: {}", stderr(&o));
         let csv = fs::read_to_string(out.join("signals.csv")).unwrap();
-        let steps = read_json(&out.join("summary.json"))["stats"]["steps"].as_u64().unwrap();
-        (csv, steps)
+        let stats = &read_json(&out.join("summary.json"))["stats"];
+        // summary.json says which method took the steps: imex all of them, DOP853 none.
+        let implicit = if method == Some("imex") { stats["steps"].clone() } else { 0.into() };
+        assert!(stats["implicit_steps"] == implicit && stats["switches"] == 0, "{method:?}: {stats}");
+        (csv, stats["steps"].as_u64().unwrap())
     };
     let (auto, explicit, imex) = (run(None), run(Some("explicit")), run(Some("imex")));
     assert_eq!(auto, explicit, "auto is DOP853 on a loop that is not stiff");
@@ -903,6 +909,32 @@ fn method_flag_chooses_the_integrator() {
     let peak = a.iter().flat_map(|r| r[1..3].iter()).fold(0.0f64, |m, v| m.max(v.abs()));
     let dev = a.iter().zip(&b).flat_map(|(r, s)| (1..3).map(move |j| (r[j] - s[j]).abs())).fold(0.0f64, f64::max);
     assert!(a.len() == b.len() && dev < 1e-6 * peak, "explicit and imex differ by {dev:e}, peak {peak}");
+}
+
+/// DOP853 forced on a stiff adaptive law (μ × 5: channel 2 at 4.7ρ) is cautioned before the run,
+/// naming the setting as it was given: the flag, or the file's key.
+#[test]
+fn an_explicit_run_on_a_stiff_law_is_cautioned_naming_where_explicit_was_set() {
+    let dir = temp_dir("explicit-stiff");
+    let stiff = fs::read_to_string(paper()).unwrap().replace("t_end = 100.0", "t_end = 0.5");
+    let stiff = stiff.replace("mu = [20.0, 30.0]", "mu = [100.0, 150.0]");
+    let (flag, key) = (dir.path().join("flag.toml"), dir.path().join("key.toml"));
+    fs::write(&flag, &stiff).unwrap();
+    fs::write(&key, stiff.replace("[simulation]\n", "[simulation]\nmethod = \"explicit\"\n")).unwrap();
+    for (file, extra, set_by) in [
+        (&flag, &["--method", "explicit"][..], "--method explicit"),
+        (&key, &[][..], "simulation.method = \"explicit\""),
+    ] {
+        let out = dir.path().join("out");
+        let mut args = vec!["run", file.to_str().unwrap(), "--no-plots", "--out", out.to_str().unwrap()];
+        args.extend(extra);
+        let o = quell(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let caution = format!("⚠ warning: {set_by} on a stiff adaptive law: μλ_max = ");
+        assert!(stderr(&o).contains(&caution), "{set_by}: {}", stderr(&o));
+    }
+    let o = quell(&["run", flag.to_str().unwrap(), "--no-plots", "--out", dir.path().join("auto").to_str().unwrap()]);
+    assert!(o.status.success() && !stderr(&o).contains("stiff adaptive law"), "{}", stderr(&o));
 }
 
 #[test]

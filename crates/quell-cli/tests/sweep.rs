@@ -334,6 +334,13 @@ fn tune_writes_the_chosen_mu_and_each_curve() {
     let numbers: Vec<u64> =
         json["channels"].as_array().unwrap().iter().map(|c| c["channel"].as_u64().unwrap()).collect();
     assert_eq!(numbers, [1, 2]);
+    // Each channel's tie: the least objective of its curve, and a bound the chosen one is within.
+    for c in json["channels"].as_array().unwrap() {
+        let least =
+            c["curve"].as_array().unwrap().iter().filter_map(|p| p["objective"].as_f64()).fold(f64::INFINITY, f64::min);
+        let (tie, chosen) = (&c["tie"], c["chosen"]["objective"].as_f64().unwrap());
+        assert!(tie["least"].as_f64() == Some(least) && chosen <= tie["bound"].as_f64().unwrap(), "{c}");
+    }
     assert!(csv.lines().nth(1).unwrap().starts_with("1,") && csv.lines().last().unwrap().starts_with("2,"), "{csv}");
     assert!(dir.join("out/tune.png").is_file() && dir.join("out/tune.svg").is_file());
 
@@ -548,4 +555,32 @@ fn a_shard_without_runs_says_so_and_still_merges() {
     let o = quell(&args);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert_eq!(rows_without_wall_time(Path::new(&merged)).len(), 1 + 8);
+}
+
+/// A study forced onto DOP853 is cautioned before its runs where a grid point's adaptive law is
+/// stiff, as `quell run --method explicit` is: here μ × 5 puts channel 2 at 4.7ρ (the paper's μ at
+/// 0.95ρ). The same study on the default method, or at the paper's μ alone, is not.
+#[test]
+fn a_study_forced_onto_dop853_with_a_stiff_point_is_cautioned() {
+    let dir_tmp = scratch("explicit-stiff");
+    let dir = dir_tmp.path();
+    paper_into(dir);
+    let study = |method: &str, mus: &str| {
+        let text =
+            format!("scenario = \"paper.toml\"\n[simulation]\nt_end = 0.5\n{method}\n[grid]\n\"design.mu\" = {mus}\n");
+        let path = write_study(dir, "study.toml", &text);
+        let out = tempfile::tempdir_in(dir).unwrap();
+        let o = quell(&["sweep", &path, "--out", &out.path().display().to_string(), "--no-plots"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stderr(&o)
+    };
+    let cautioned = study("method = \"explicit\"", "[[20.0, 30.0], [100.0, 150.0]]");
+    assert!(
+        cautioned.contains("⚠ warning: grid point 1 (design.mu = [100.0, 150.0]), and 1 of 2 grid points in all: the study's simulation.method = \"explicit\" on a stiff adaptive law"),
+        "{cautioned}"
+    );
+    for (method, mus) in [("", "[[20.0, 30.0], [100.0, 150.0]]"), ("method = \"explicit\"", "[[20.0, 30.0]]")] {
+        let quiet = study(method, mus);
+        assert!(!quiet.contains("stiff adaptive law"), "{method} {mus}: {quiet}");
+    }
 }

@@ -270,7 +270,9 @@ impl PySimResult {
         outcome_dict(py, self.inner.outcome.as_ref().unwrap_or(&Outcome::Completed))
     }
     /// The loop's statistics, as summary.json's `stats`: for the continuous loop the delay-equation
-    /// solver's steps, rejected_steps, rhs_evaluations, breakpoints and max_history_len; for the
+    /// solver's steps, rejected_steps, rhs_evaluations, breakpoints, max_history_len,
+    /// implicit_steps (accepted on the implicit method), switches (between the methods) and
+    /// thrashed ((start, end) of DOP853 thrashing before `auto` switched, else None); for the
     /// sampled-data loop controller_steps and sample_time.
     #[getter]
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
@@ -282,6 +284,9 @@ impl PySimResult {
                 d.set_item("rhs_evaluations", s.rhs_evals)?;
                 d.set_item("breakpoints", s.breakpoints)?;
                 d.set_item("max_history_len", s.max_history_len)?;
+                d.set_item("implicit_steps", s.implicit_steps)?;
+                d.set_item("switches", s.switches)?;
+                d.set_item("thrashed", s.thrashed)?;
             }
             RunStats::Sampled { controller_steps, sample_time } => {
                 d.set_item("controller_steps", controller_steps)?;
@@ -476,14 +481,7 @@ impl PySimResult {
             d.set_item(name, PyBytes::new(py, &bytes))?;
         }
         d.set_item("outcome", me.outcome(py)?)?;
-        let stats = me.stats(py)?;
-        if let RunStats::Continuous(s) = r.stats {
-            // Beyond summary.json's figures, so that a result compares equal to its pickle.
-            stats.set_item("implicit_steps", s.implicit_steps)?;
-            stats.set_item("switches", s.switches)?;
-            stats.set_item("thrashed", s.thrashed)?;
-        }
-        d.set_item("stats", stats)?;
+        d.set_item("stats", me.stats(py)?)?;
         d.set_item("peaks", r.peaks.0.to_vec())?;
         d.set_item("limited", r.limited.clone())?;
         d.set_item("u_max", r.u_max.clone())?;
@@ -644,8 +642,9 @@ pub fn simulate(
         Loop::Sampled { sample_time } => Some((sample_time, settings.output_step)),
         Loop::Continuous(_) => None,
     };
+    let set_by = if method.is_some() { "method=\"explicit\"" } else { "simulation.method = \"explicit\"" };
     let explicit_stiff =
-        quell::sim::explicit_stiff_warning(&quell::sim::Run::of(scn, &design).settings(settings.clone()));
+        quell::sim::explicit_stiff_warning(&quell::sim::Run::of(scn, &design).settings(settings.clone()), set_by);
     if let Some(w) = explicit_stiff {
         crate::errors::warn(py, &crate::errors::in_python(w))?;
     }

@@ -880,6 +880,9 @@ fn sweep_frame(
             ),
         ));
     }
+    if let Some(w) = study.explicit_stiff_warning() {
+        crate::errors::warn(py, &crate::errors::in_python(w))?;
+    }
     let pool = thread_pool(py, jobs, usize::try_from(study.len()).unwrap_or(usize::MAX))?;
     let (swept, interrupt) = crate::interrupt::interruptible_keeping(py, |stop| {
         let opts = SweepOptions { stop: Some(&stop), ..SweepOptions::default() };

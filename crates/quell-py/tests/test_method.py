@@ -24,6 +24,9 @@ def test_explicit_and_imex_agree_and_take_their_own_steps():
     explicit, imex = quell.simulate(s, t_end=20.0, method="explicit"), quell.simulate(s, t_end=20.0, method="imex")
     assert np.abs(explicit.y - imex.y).max() < 1e-6 * np.abs(explicit.y).max()
     assert explicit.stats["steps"] != imex.stats["steps"]
+    # The stats say which method took the steps: all of imex's, none of DOP853's, no switch.
+    assert imex.stats["implicit_steps"] == imex.stats["steps"] and explicit.stats["implicit_steps"] == 0
+    assert imex.stats["switches"] == explicit.stats["switches"] == 0 and explicit.stats["thrashed"] is None
     # "auto" (the default) is DOP853 on a loop that is not stiff: the same result bit for bit.
     assert quell.simulate(s, t_end=20.0) == explicit == quell.simulate(s, t_end=20.0, method="auto")
 
@@ -91,3 +94,27 @@ def test_continuous_runs_the_continuous_loop_of_a_sampled_scenario():
     assert info.value.key == "continuous"
     with pytest.raises(TypeError, match=r"^continuous: expected a bool"):
         quell.simulate(sampled, continuous="yes")
+
+
+def test_dop853_forced_on_a_stiff_law_is_cautioned_naming_where_it_was_set():
+    # μ × 5 puts channel 2 at 4.7ρ: DOP853's steps may sit at its stability bound there.
+    p = quell.paper_example()
+    choices = dict(p.design().choices, mu=[100.0, 150.0])
+    stiff = quell.Scenario(p.plant, p.reference, p.disturbance, t_end=0.5, **choices)
+    with pytest.warns(UserWarning, match=r'^method="explicit" on a stiff adaptive law: μλ_max = '):
+        quell.simulate(stiff, method="explicit")
+    in_file = quell.Scenario(p.plant, p.reference, p.disturbance, t_end=0.5, method="explicit", **choices)
+    with pytest.warns(UserWarning, match=r'^simulation.method = "explicit" on a stiff adaptive law'):
+        quell.simulate(in_file)
+    # A study: the first stiff grid point, its values and how many points are stiff.
+    study = quell.Study(p, grid={"design.mu": [[20.0, 30.0], [100.0, 150.0]]},
+                        simulation={"t_end": 0.5, "method": "explicit"})
+    with pytest.warns(UserWarning, match=r'^grid point 1 \(design.mu = \[100.0, 150.0\]\), and 1 of 2 grid points '
+                                         r'in all: the study\'s simulation.method = "explicit" on a stiff'):
+        quell.sweep(study, jobs=1)
+    # Nothing is said on the default method, nor at the paper's μ.
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        quell.simulate(stiff)
+        quell.sweep(quell.Study(p, simulation={"t_end": 0.5, "method": "explicit"}), jobs=1)

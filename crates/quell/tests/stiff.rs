@@ -106,8 +106,12 @@ fn a_loop_expected_stiff_is_as_accurate_as_the_implicit_method() {
                 a.iter().zip(b.iter()).fold(e, |e, (x, y)| e.max((x - y).abs() / peak))
             })
         };
+        let automatic = at(Method::Auto, tol);
+        // The statistics tell the hand-over: one switch, then the implicit method to the end.
+        let RunStats::Continuous(stats) = automatic.stats else { unreachable!("a continuous run") };
+        assert!(stats.switches == 1 && 0 < stats.implicit_steps && stats.implicit_steps < stats.steps, "{stats:?}");
         let (auto, imex, explicit) =
-            (error(&at(Method::Auto, tol)), error(&at(Method::Implicit, tol)), error(&at(Method::Explicit, tol)));
+            (error(&automatic), error(&at(Method::Implicit, tol)), error(&at(Method::Explicit, tol)));
         println!("{}: auto {auto:.1e}, imex {imex:.1e}, explicit {explicit:.1e}", s.name.as_deref().unwrap_or("?"));
         assert!(auto <= 2.0 * imex && 5.0 * auto < explicit, "auto {auto:e}, imex {imex:e}, explicit {explicit:e}");
     }
@@ -148,11 +152,14 @@ fn an_explicit_run_of_a_stiff_law_is_cautioned_with_its_steps() {
         RunSettings::new(20.0, 0.1, Loop::Continuous(integrator))
     };
     let warning = |d: &Design, method: Method| {
-        quell::sim::explicit_stiff_warning(&Run::new(d, &s.reference, &s.disturbance, settings(method)))
+        quell::sim::explicit_stiff_warning(
+            &Run::new(d, &s.reference, &s.disturbance, settings(method)),
+            "--method explicit",
+        )
     };
     let stiff = design(1000.0);
     let w = warning(&stiff, Method::Explicit).expect("a caution");
-    assert!(w.starts_with("simulation.method = \"explicit\" on a stiff adaptive law"), "{w}");
+    assert!(w.starts_with("--method explicit on a stiff adaptive law"), "{w}");
     let about: f64 = w.split("takes about ").nth(1).and_then(|r| r.split(' ').next()).unwrap().parse().unwrap();
     let r = Run::new(&stiff, &s.reference, &s.disturbance, settings(Method::Explicit))
         .simulate(|_| ControlFlow::Continue(()))

@@ -140,7 +140,8 @@ fn tuned_channels_are_reproduced_by_the_joint_run() {
 /// there (rtol·ĝ + atol = 3e-9), and the least of those lay at μ = 1000 (1.51e-9 against 316's
 /// 1.53e-9), which the search chose. It now takes the least μ that ties with the least: 316,
 /// where μ = 100 leaves 1.2e-5. (Since μ = 316 puts the loop at 3ρ, it runs on the implicit method
-/// from DOP853's bound and its tail reads 4.6e-9: the true tail, at rtol 1e-12, is 4.5e-13, so a tie
+/// from DOP853's bound, and its tail read 4.6e-9 before the switch came at the first step there
+/// (now 3.0e-9, the least, with 1000 at 4.1e-9): the true tail, at rtol 1e-12, is 4.5e-13, so a tie
 /// spans three times the tolerance.)
 #[test]
 fn a_flat_objective_takes_the_least_mu_the_solver_cannot_tell_from_the_best() {
@@ -156,6 +157,11 @@ fn a_flat_objective_takes_the_least_mu_the_solver_cannot_tell_from_the_best() {
     // ĝ = 1 + 1 (bias and sine), rtol = atol = 1e-9 (the file's).
     let within = least_mu_within(c, 3.0 * (1e-9 * 2.0 + 1e-9));
     assert_eq!(r.mu, [within.unwrap()]);
+    // The result says what the chosen μ ties with: the least objective, and the bound 9e-9.
+    let least = c.curve.iter().filter_map(|p| p.objective).fold(f64::INFINITY, f64::min);
+    let tie = c.tie.expect("a tie");
+    assert!(tie.least == least && (tie.bound / 9e-9 - 1.0).abs() < 1e-12, "{tie:?}");
+    assert!(objective(r.mu[0]).is_some_and(|v| v >= least && v <= tie.bound), "{:?} {tie:?}", r.mu);
     assert!((r.mu[0] / 10f64.powf(2.5) - 1.0).abs() < 1e-12, "{:?}", r.mu);
     assert_eq!(r.channels[0].at_bound(), None);
 }

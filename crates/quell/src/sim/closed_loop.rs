@@ -766,8 +766,9 @@ pub const BUDGET_STABILITY_MARGIN: f64 = 2.0;
 /// at 1e5 times that threshold advanced 1.3 ms a second with nothing said, its budget allowing ~45
 /// minutes); from [`EXPECT_STIFF_RATIO`]·ρ its steps sit at that bound, where it is far less
 /// accurate than its tolerance (a column at 6ρ was 7.6e-4 of u's peak off at rtol 1e-6). `None`
-/// otherwise.
-pub fn explicit_stiff_warning(run: &Run<'_>) -> Option<String> {
+/// otherwise. `set_by` names the setting as the user gave it (`simulation.method = "explicit"`, or
+/// a front end's own flag or argument), which the caution starts with.
+pub fn explicit_stiff_warning(run: &Run<'_>, set_by: &str) -> Option<String> {
     let Loop::Continuous(integrator) = &run.settings.mode else { return None };
     if integrator.method != dde::Method::Explicit {
         return None;
@@ -775,7 +776,7 @@ pub fn explicit_stiff_warning(run: &Run<'_>) -> Option<String> {
     let (rate, rho) = run.rates();
     let unit = run.design.plant().time_unit;
     let head = format!(
-        "simulation.method = \"explicit\" on a stiff adaptive law: μλ_max = {rate:.3e}/{unit} is {:.1e}× the loop's fastest other rate ρ = {rho:.3e}/{unit}, and DOP853 is stable only for h·μλ_max ≤ {DOP853_STABLE_H_RATE}",
+        "{set_by} on a stiff adaptive law: μλ_max = {rate:.3e}/{unit} is {:.1e}× the loop's fastest other rate ρ = {rho:.3e}/{unit}, and DOP853 is stable only for h·μλ_max ≤ {DOP853_STABLE_H_RATE}",
         rate / rho
     );
     let auto = "the default method, \"auto\", takes the adaptive law implicitly";

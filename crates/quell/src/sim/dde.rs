@@ -195,8 +195,8 @@ pub fn record_bytes(n_delayed: usize) -> usize {
 /// The integrator of the steps: a run's `simulation.method` ([`crate::settings::Method`]).
 pub use crate::settings::Method;
 
-/// Solver statistics (as a run's summary.json writes them: the names after `rename`, the method's
-/// figures left out).
+/// Solver statistics, as a run's summary.json writes them (the names after `rename`; `thrashed`
+/// only when there was such a stretch).
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct Stats {
     /// Accepted steps.
@@ -212,15 +212,13 @@ pub struct Stats {
     /// Largest number of step records the dense history held at once.
     pub max_history_len: usize,
     /// Accepted steps taken by the implicit method (ARK4(3)6L\[2\]SA).
-    #[serde(skip)]
     pub implicit_steps: usize,
     /// Switches between the explicit and the implicit method.
-    #[serde(skip)]
     pub switches: usize,
     /// The first stretch [start, end] over which DOP853 thrashed at its stability bound before
     /// [`Method::Auto`] switched to the implicit method: its error estimate misses the stiff block's
     /// errors there, and they may exceed the tolerance.
-    #[serde(skip)]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub thrashed: Option<(f64, f64)>,
 }
 

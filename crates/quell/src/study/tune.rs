@@ -193,6 +193,20 @@ pub struct TuneCurve {
     /// (within 5 %, or at the integrator's tolerance; `least_mu_within_tolerance`); `None` if no μ in
     /// the bounds was feasible.
     pub chosen: Option<TunePoint>,
+    /// The least objective of the curve and the bound up to which an objective ties with it, which
+    /// `chosen` is within; `None` with no feasible point.
+    #[serde(default)]
+    pub tie: Option<Tie>,
+}
+
+/// What ties with the best of a curve: within 5 % of it or three times the integrator's tolerance
+/// on e_i (error objectives), within one output step (settling times).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Tie {
+    /// The least objective among the curve's feasible points.
+    pub least: f64,
+    /// Objectives up to this tie with it.
+    pub bound: f64,
 }
 
 impl TuneCurve {
@@ -409,13 +423,14 @@ fn least_mu_within_tolerance<'c>(
     objective: Objective,
     scenario: &Scenario,
     i: usize,
-) -> Option<&'c TunePoint> {
-    let best = curve.iter().filter_map(|p| p.objective).min_by(f64::total_cmp)?;
+) -> Option<(&'c TunePoint, Tie)> {
+    let least = curve.iter().filter_map(|p| p.objective).min_by(f64::total_cmp)?;
     let bound = match objective {
-        Objective::SettleT => best + tolerance(objective, best, scenario, i),
-        _ => ((1.0 + TIE_SHARE) * best).max(TIE_TOLERANCES * tolerance_scale(scenario, i)),
+        Objective::SettleT => least + tolerance(objective, least, scenario, i),
+        _ => ((1.0 + TIE_SHARE) * least).max(TIE_TOLERANCES * tolerance_scale(scenario, i)),
     };
-    curve.iter().find(|p| p.objective.is_some_and(|v| v <= bound))
+    let chosen = curve.iter().find(|p| p.objective.is_some_and(|v| v <= bound))?;
+    Some((chosen, Tie { least, bound }))
 }
 
 /// The ordering of points in a search: by objective, infeasible points (`None`) last.
@@ -528,8 +543,9 @@ impl Search<'_> {
         let mut curve: Vec<TunePoint> = coarse.iter().filter(|(c, _)| *c == i).map(|(_, p)| p.clone()).collect();
         self.refine(i, &mut curve);
         curve.sort_by(|a, b| a.mu.total_cmp(&b.mu));
-        let chosen = least_mu_within_tolerance(&curve, self.spec.objective, self.scenario, i).cloned();
-        TuneCurve { channel: i, curve, chosen }
+        let found = least_mu_within_tolerance(&curve, self.spec.objective, self.scenario, i);
+        let (chosen, tie) = found.map_or((None, None), |(p, tie)| (Some(p.clone()), Some(tie)));
+        TuneCurve { channel: i, curve, chosen, tie }
     }
 }
 
@@ -611,12 +627,16 @@ mod tests {
             channel: 0,
             curve: mus.iter().map(|&m| point(m)).collect(),
             chosen: Some(point(chosen)),
+            tie: None,
         };
         assert_eq!(curve(100.0, &[1.0, 10.0, 100.0]).at_bound(), Some("upper"));
         assert_eq!(curve(1.0, &[10.0, 1.0, 100.0]).at_bound(), Some("lower"));
         assert_eq!(curve(10.0, &[1.0, 10.0, 100.0]).at_bound(), None);
         assert_eq!(curve(5.0, &[5.0]).at_bound(), None);
-        assert_eq!(TuneCurve { channel: 0, curve: vec![point(1.0), point(2.0)], chosen: None }.at_bound(), None);
+        assert_eq!(
+            TuneCurve { channel: 0, curve: vec![point(1.0), point(2.0)], chosen: None, tie: None }.at_bound(),
+            None
+        );
     }
 
     /// The least peak a limit blocks is taken over the runs with a finite objective: a run that never
@@ -642,6 +662,7 @@ mod tests {
             channel: 0,
             curve: vec![point(1.0, figures(2.559, None)), point(10.0, figures(3.226, Some(80.0)))],
             chosen: None,
+            tie: None,
         };
         let spec = TuneSpec {
             objective: Objective::SettleT,
