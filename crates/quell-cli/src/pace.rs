@@ -70,12 +70,21 @@ pub fn pace_text(d: &Design, estimates: &[RateEstimate], t_end: f64, time: TimeU
         scaling.mu_meaning()
     );
     for e in estimates {
-        let flag = match (e.stiff, e.weakly_excited) {
+        let mut flag = match (e.stiff, e.weakly_excited) {
             (true, true) => "  ⚠ stiff, weakly excited",
             (true, false) => "  ⚠ stiff",
             (false, true) => "  ⚠ weakly excited",
             (false, false) => "",
-        };
+        }
+        .to_string();
+        // From 3ρ (below the cost threshold of ⚠ stiff) the run is accurate only on the implicit
+        // method, which `auto` then takes; say so, as the ratio is rounded.
+        if !e.stiff && e.adaptation_rate >= quell::sim::EXPECT_STIFF_RATIO * e.loop_rate {
+            flag.push_str(&format!(
+                "  (≥ {}ρ: the automatic method takes η̂ implicitly from DOP853's stability bound)",
+                quell::sim::EXPECT_STIFF_RATIO
+            ));
+        }
         let _ = writeln!(
             s,
             "  channel {}: μ λ_max(Ω̄) = {:.3e}/{time} ({:.2e}× ρ = {:.3e}/{time}), λ_max = {:.3e}, λ_min,excited = {:.3e} (excited rank {} of {}), convergence 1/(μ λ_min,excited) ≈ {}{flag}",

@@ -1141,6 +1141,11 @@ fn the_plant_time_unit_labels_figures_reports_and_the_header() {
         csv.push(fs::read(out.join("signals.csv")).unwrap());
         let design = quell(&["design", file.to_str().unwrap()]);
         assert!(stdout(&design).contains(&format!("t_end = 30 {tag})")), "{}", stdout(&design));
+        // The column adapts at 10ρ: the report says `auto` will take η̂ implicitly (the paper's
+        // example, at 0.37ρ and 0.95ρ, is not flagged).
+        let flag = "(≥ 3ρ: the automatic method takes η̂ implicitly from DOP853's stability bound)";
+        assert_eq!(stdout(&design).matches(flag).count(), 2, "{}", stdout(&design));
+        assert!(!stdout(&quell(&["design", &paper()])).contains(flag));
     }
     assert!(csv[0] == csv[1], "signals.csv differs with the unit");
     let c = dir.path().join("c");
