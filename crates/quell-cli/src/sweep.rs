@@ -68,9 +68,6 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
         return merge(&args.merge, &args.out, !args.no_plots);
     }
     let (study, shard, n) = planned(args)?;
-    if let Some(w) = study.explicit_stiff_warning() {
-        eprintln!("⚠ warning: {w}");
-    }
     let meta = StudyMeta::new(&study, shard);
     if !args.resume && args.out.join(JOURNAL).exists() {
         return Err(journal_in_the_way(&args.out, &meta));
@@ -91,6 +88,9 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     prepare_out(&args.out, OUTPUTS)?;
     let journal = Journal::create(&args.out, &meta, &kept)
         .map_err(|e| Failure::Input(format!("--out {}: {e}; choose another output directory", args.out.display())))?;
+    if let Some(w) = pool.install(|| study.explicit_stiff_warning(shard)) {
+        eprintln!("⚠ warning: {w}");
+    }
 
     // Ctrl-C or SIGTERM: the first stops the sweep (runs under way are abandoned) and the rows done
     // are written; a second before writing begins quits at once.

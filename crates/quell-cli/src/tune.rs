@@ -35,6 +35,9 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
     }
     let pool = crate::sweep::thread_pool(args.jobs, usize::MAX)?;
     prepare_out(&args.out, &["tune.json", "tune.csv", "tune.png", "tune.svg"])?;
+    if let Some(w) = study::tune_stiff_warning(&study) {
+        eprintln!("⚠ warning: {w}");
+    }
     // Ctrl-C or SIGTERM: the first stops the searches (runs under way are abandoned) and the
     // points evaluated so far are written, marked partial; a second before writing begins quits.
     let interrupt = Interrupt::install("interrupted twice; stopped without writing files");
@@ -152,8 +155,10 @@ fn report(r: &TuneResult, spec: &quell::study::TuneSpec, unit: quell::TimeUnit) 
                 p.objective.unwrap_or(f64::NAN),
                 // A smaller μ whose objective is not the least: what it ties with.
                 c.tie.filter(|t| p.objective.is_some_and(|v| v > t.least)).map_or(String::new(), |t| format!(
-                    ", a tie with the least, {:.6e} (ties up to {:.3e}; docs/studies.md)",
-                    t.least, t.bound
+                    ", a tie with the least, {:.6e} at mu = {} (ties up to {:.6e}; docs/studies.md)",
+                    t.least,
+                    mu_6(t.mu),
+                    t.bound
                 )),
                 match (r.partial, *ok) {
                     (true, _) => "not carried out (interrupted)",

@@ -340,6 +340,8 @@ fn tune_writes_the_chosen_mu_and_each_curve() {
             c["curve"].as_array().unwrap().iter().filter_map(|p| p["objective"].as_f64()).fold(f64::INFINITY, f64::min);
         let (tie, chosen) = (&c["tie"], c["chosen"]["objective"].as_f64().unwrap());
         assert!(tie["least"].as_f64() == Some(least) && chosen <= tie["bound"].as_f64().unwrap(), "{c}");
+        let at = c["curve"].as_array().unwrap().iter().find(|p| p["mu"] == tie["mu"]).expect("the least's μ");
+        assert_eq!(at["objective"], tie["least"], "{c}");
     }
     assert!(csv.lines().nth(1).unwrap().starts_with("1,") && csv.lines().last().unwrap().starts_with("2,"), "{csv}");
     assert!(dir.join("out/tune.png").is_file() && dir.join("out/tune.svg").is_file());
@@ -576,11 +578,32 @@ fn a_study_forced_onto_dop853_with_a_stiff_point_is_cautioned() {
     };
     let cautioned = study("method = \"explicit\"", "[[20.0, 30.0], [100.0, 150.0]]");
     assert!(
-        cautioned.contains("⚠ warning: grid point 1 (design.mu = [100.0, 150.0]), and 1 of 2 grid points in all: the study's simulation.method = \"explicit\" on a stiff adaptive law"),
+        cautioned.contains("⚠ warning: grid point 1 (design.mu = [100.0, 150.0]; stiff at 1 of the 2 grid points): simulation.method = \"explicit\" on a stiff adaptive law"),
         "{cautioned}"
     );
     for (method, mus) in [("", "[[20.0, 30.0], [100.0, 150.0]]"), ("method = \"explicit\"", "[[20.0, 30.0]]")] {
         let quiet = study(method, mus);
         assert!(!quiet.contains("stiff adaptive law"), "{method} {mus}: {quiet}");
     }
+}
+
+/// A tuning forced onto DOP853 whose upper bounds of μ make the adaptive law stiff is cautioned
+/// before its searches (μ = 2000 on both channels: 63ρ); up to the paper's μ it is not.
+#[test]
+fn a_tuning_on_dop853_reaching_a_stiff_mu_is_cautioned() {
+    let dir_tmp = scratch("tune-explicit");
+    let dir = dir_tmp.path();
+    let text = "[simulation]\nt_end = 0.5\nmethod = \"explicit\"\n[tune]\nobjective = \"tail_rms_e\"\nmu = [2.0, 2000.0]\npoints = 2\nrefine = 0\n";
+    let tune = |text: &str| {
+        let study = write_study(dir, "tune.toml", text);
+        let o = quell(&["tune", &study, "--out", &dir.join("out").display().to_string(), "--no-plots"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stderr(&o)
+    };
+    let err = tune(text);
+    assert!(
+        err.contains("⚠ warning: the searches reach μ = [2000, 2000] (the upper bounds): simulation.method = \"explicit\" on a stiff adaptive law"),
+        "{err}"
+    );
+    assert!(!tune(&text.replace("2000.0", "20.0")).contains("stiff adaptive law"));
 }

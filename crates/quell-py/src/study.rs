@@ -526,6 +526,10 @@ impl PyRunSpec {
         let scenario = quell::Scenario::from_document(&self.inner.scenario)
             .map_err(|e| crate::scenario::scenario_error(py, &e))?;
         let design = scenario.design().map_err(|e| crate::errors::raise(py, Kind::Design)(&e))?;
+        let run = quell::sim::Run::of(&scenario, &design);
+        if let Some(w) = quell::sim::explicit_stiff_warning(&run, "simulation.method = \"explicit\"") {
+            crate::errors::warn(py, &crate::errors::in_python(w))?;
+        }
         let spec = &self.inner;
         let result = crate::interrupt::interruptible_with(py, |stop| spec.simulate_until(&|| stop.load(Relaxed)))?
             .map_err(|e| Kind::Scenario.err(py, e))?;
@@ -880,10 +884,10 @@ fn sweep_frame(
             ),
         ));
     }
-    if let Some(w) = study.explicit_stiff_warning() {
+    let pool = thread_pool(py, jobs, usize::try_from(study.len()).unwrap_or(usize::MAX))?;
+    if let Some(w) = py.detach(|| pool.install(|| study.explicit_stiff_warning(Shard::ALL))) {
         crate::errors::warn(py, &crate::errors::in_python(w))?;
     }
-    let pool = thread_pool(py, jobs, usize::try_from(study.len()).unwrap_or(usize::MAX))?;
     let (swept, interrupt) = crate::interrupt::interruptible_keeping(py, |stop| {
         let opts = SweepOptions { stop: Some(&stop), ..SweepOptions::default() };
         pool.install(|| study::sweep(study, &opts))

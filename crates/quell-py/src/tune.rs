@@ -134,6 +134,9 @@ pub fn tune(
     let study = py.detach(|| study::Study::from_table(&doc, None)).map_err(|e| argument_error(py, &e))?;
     let channels = study.m;
     let pool = thread_pool(py, jobs, channels * study.tune.as_ref().map_or(1, |t| t.points))?;
+    if let Some(w) = py.detach(|| study::tune_stiff_warning(&study)) {
+        crate::errors::warn(py, &crate::errors::in_python(w))?;
+    }
     let (result, interrupt) = crate::interrupt::interruptible_keeping(py, |stop| {
         pool.install(|| study::tune(&study, &TuneOptions { stop: Some(&stop), on_point: None }))
     })?;

@@ -109,12 +109,16 @@ def test_dop853_forced_on_a_stiff_law_is_cautioned_naming_where_it_was_set():
     # A study: the first stiff grid point, its values and how many points are stiff.
     study = quell.Study(p, grid={"design.mu": [[20.0, 30.0], [100.0, 150.0]]},
                         simulation={"t_end": 0.5, "method": "explicit"})
-    with pytest.warns(UserWarning, match=r'^grid point 1 \(design.mu = \[100.0, 150.0\]\), and 1 of 2 grid points '
-                                         r'in all: the study\'s simulation.method = "explicit" on a stiff'):
+    with pytest.warns(UserWarning, match=r'^grid point 1 \(design.mu = \[100.0, 150.0\]; stiff at 1 of the 2 grid '
+                                         r'points\): simulation.method = "explicit" on a stiff'):
         quell.sweep(study, jobs=1)
+    # A run of the study simulated again is cautioned as quell.simulate is.
+    with pytest.warns(UserWarning, match=r'^simulation.method = "explicit" on a stiff adaptive law'):
+        study.spec(1).simulate()
     # Nothing is said on the default method, nor at the paper's μ.
     import warnings
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         quell.simulate(stiff)
         quell.sweep(quell.Study(p, simulation={"t_end": 0.5, "method": "explicit"}), jobs=1)
+        study.spec(0).simulate()

@@ -161,6 +161,7 @@ fn a_flat_objective_takes_the_least_mu_the_solver_cannot_tell_from_the_best() {
     let least = c.curve.iter().filter_map(|p| p.objective).fold(f64::INFINITY, f64::min);
     let tie = c.tie.expect("a tie");
     assert!(tie.least == least && (tie.bound / 9e-9 - 1.0).abs() < 1e-12, "{tie:?}");
+    assert_eq!(objective(tie.mu), Some(least));
     assert!(objective(r.mu[0]).is_some_and(|v| v >= least && v <= tie.bound), "{:?} {tie:?}", r.mu);
     assert!((r.mu[0] / 10f64.powf(2.5) - 1.0).abs() < 1e-12, "{:?}", r.mu);
     assert_eq!(r.channels[0].at_bound(), None);
@@ -408,4 +409,39 @@ fn drawn_delays_are_not_taken_for_a_runaway() {
         "the breakpoints' steps: {:?}",
         on.iter().map(|r| r.steps).collect::<Vec<_>>()
     );
+}
+
+/// A study forced onto DOP853 is cautioned at its first stiff grid point however late it comes:
+/// 1,500 points of μ₁ from 20 to 169.9 (channel 1 of the paper's example reaches 3ρ, 27/s, at
+/// μ₁ = 162.55), so only the last 74 are stiff; a shard is told about its own points.
+#[test]
+fn a_study_on_dop853_is_cautioned_at_its_first_stiff_point_however_late() {
+    let mus: Vec<String> = (0..1500).map(|k| format!("{:.1}", 20.0 + 0.1 * k as f64)).collect();
+    let text =
+        format!("[simulation]\nt_end = 1.0\nmethod = \"explicit\"\n[grid]\n\"design.mu[0]\" = [{}]\n", mus.join(", "));
+    let study = Study::from_toml(&text, None).unwrap();
+    // The threshold from the design report's own figures: μ₁ λ_max(Ω̄₁) ≥ 3ρ.
+    let s = quell::Scenario::from_toml(quell::scenario::PAPER_EXAMPLE).unwrap();
+    let d = s.design().unwrap();
+    let channel1 = &quell::diagnostics::estimate(&d, &s.plant, &s.reference, &s.disturbance, 1.0)[0];
+    let onset = 3.0 * channel1.loop_rate / channel1.lambda_max_omega;
+    assert!((onset / 162.55 - 1.0).abs() < 1e-3, "μ₁ at 3ρ: {onset}");
+    let first = (0..1500).find(|&k| 20.0 + 0.1 * k as f64 >= onset).unwrap();
+    let w = study.explicit_stiff_warning(quell::study::Shard::ALL).expect("a caution");
+    let head = format!(
+        "grid point {first} (design.mu[0] = {}; stiff at {} of the 1500 grid points): ",
+        mus[first],
+        1500 - first
+    );
+    assert!(w.starts_with(&head), "{w}\nexpected {head}");
+    // Shard 499/500 runs points 499, 999 and 1499; shard 1/500 none stiff.
+    let shard = |index: usize| quell::study::Shard { index, count: 500 };
+    let w = study.explicit_stiff_warning(shard(499)).expect("a caution");
+    assert!(
+        w.starts_with("grid point 1499 (design.mu[0] = 169.9; stiff at 1 of the 3 grid points of this shard): "),
+        "{w}"
+    );
+    assert_eq!(study.explicit_stiff_warning(shard(1)), None);
+    let auto = Study::from_toml(&text.replace("method = \"explicit\"\n", ""), None).unwrap();
+    assert_eq!(auto.explicit_stiff_warning(quell::study::Shard::ALL), None);
 }

@@ -391,6 +391,7 @@ class TuneResult:
     within_limits: List[bool]
     joint_difference: List[Optional[float]]
     joint: Optional[Dict[str, Any]]
+    ties: List[Optional[Dict[str, float]]]
     partial: bool
     def __init__(self, json: str) -> None: ...
     def __len__(self) -> int: ...

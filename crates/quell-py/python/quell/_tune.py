@@ -46,6 +46,9 @@ class TuneResult:
         Per channel, the joint run's objective minus the search's.
     joint : dict or None
         The joint run's row (runs.csv's fields), None when the tuning was interrupted before it.
+    ties : list of dict or None
+        Per channel, what its chosen μ ties with: ``least`` (the least objective of its curve),
+        ``mu`` (where) and ``bound`` (objectives up to it tie); None where no μ was feasible.
     partial : bool
         True when Ctrl-C stopped the tuning: the curves hold the points evaluated so far and
         ``mu`` is chosen from them (the least μ within the solver's error of the best).
@@ -72,6 +75,7 @@ class TuneResult:
             self.within_limits = list(data.get("within_limits", []))
             self.partial = bool(data.get("partial", False))
             self.feasible = [c.get("chosen") is not None for c in self._channels]
+            self.ties = [c.get("tie") for c in self._channels]
         except (ValueError, KeyError, TypeError) as e:
             raise ScenarioError(f"json: not a quell tuning result ({e!r})") from None
         self._json = json

@@ -229,7 +229,7 @@ pub enum SolveError {
     #[error("step size underflow at t = {t}: the step shrank to {h:e} without meeting the tolerance")]
     StepSizeTooSmall { t: f64, h: f64, stats: Stats },
     /// More than [`Options::max_steps`] accepted steps were needed by time `t`.
-    #[error("more than {} steps by t = {t}", .stats.steps - 1)]
+    #[error("more than {} steps by t = {t}", .stats.steps)]
     TooManySteps { t: f64, stats: Stats },
     /// The history would have held more than [`Options::max_history_len`] step records at time `t`.
     #[error("more than {} step records in the delay history at t = {t}", .stats.max_history_len)]
@@ -735,13 +735,14 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
     /// An accepted step: the next step size (`dop853.f`'s controller, no growth right after a
     /// rejection, and not shrunk by a landing); the end of the run beyond `max_steps`.
     fn accept(&mut self, step: &Step) -> Result<(), SolveError> {
-        self.stats.steps += 1;
-        if self.stats.steps > self.opts.max_steps {
+        // A step beyond a budget is not taken: the statistics count the steps the run kept.
+        if self.stats.steps >= self.opts.max_steps {
             return Err(SolveError::TooManySteps { t: self.t, stats: self.finish() });
         }
         if self.nd > 0 && self.hist.len() >= self.opts.max_history_len {
             return Err(SolveError::HistoryTooLong { t: self.t, stats: self.finish() });
         }
+        self.stats.steps += 1;
         let fac = (self.err.powf(self.exponent()) / SAFE).clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
         let mut h_next = step.h / fac;
         if self.last_rejected {

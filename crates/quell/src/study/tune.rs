@@ -205,6 +205,8 @@ pub struct TuneCurve {
 pub struct Tie {
     /// The least objective among the curve's feasible points.
     pub least: f64,
+    /// The μ_i of that point.
+    pub mu: f64,
     /// Objectives up to this tie with it.
     pub bound: f64,
 }
@@ -385,6 +387,23 @@ fn tolerance_scale(s: &Scenario, i: usize) -> f64 {
 }
 
 /// The `[tune]` table of a study that tuning can run: present, and no grid or draws it would ignore.
+/// For a tuning forced onto DOP853 (`simulation.method = "explicit"`), the caution of
+/// [`crate::sim::explicit_stiff_warning`] at the μ its searches reach, every μ_i at its upper bound;
+/// `None` otherwise, or without a valid `[tune]` (which [`tune`] then refuses). One design.
+pub fn tune_stiff_warning(study: &Study) -> Option<String> {
+    let spec = study.tune.as_ref()?;
+    let mut s = Scenario::from_document(study.base()).ok()?;
+    if s.simulation.method != crate::sim::Method::Explicit || spec.bounds.len() != s.design.mu.len() {
+        return None;
+    }
+    let top: Vec<f64> = spec.bounds.iter().map(|b| b[1]).collect();
+    s.design.mu = top.clone();
+    let design = s.design().ok()?;
+    let w = crate::sim::explicit_stiff_warning(&crate::sim::Run::of(&s, &design), "simulation.method = \"explicit\"")?;
+    let mu: Vec<String> = top.iter().map(|&v| crate::settings::fmt_short(v)).collect();
+    Some(format!("the searches reach μ = [{}] (the upper bounds): {w}", mu.join(", ")))
+}
+
 fn tune_spec(study: &Study) -> Result<&TuneSpec, StudyError> {
     let spec = study
         .tune
@@ -424,13 +443,14 @@ fn least_mu_within_tolerance<'c>(
     scenario: &Scenario,
     i: usize,
 ) -> Option<(&'c TunePoint, Tie)> {
-    let least = curve.iter().filter_map(|p| p.objective).min_by(f64::total_cmp)?;
+    let best = curve.iter().filter(|p| p.objective.is_some()).min_by(|a, b| key(a).total_cmp(&key(b)))?;
+    let least = key(best);
     let bound = match objective {
         Objective::SettleT => least + tolerance(objective, least, scenario, i),
         _ => ((1.0 + TIE_SHARE) * least).max(TIE_TOLERANCES * tolerance_scale(scenario, i)),
     };
     let chosen = curve.iter().find(|p| p.objective.is_some_and(|v| v <= bound))?;
-    Some((chosen, Tie { least, bound }))
+    Some((chosen, Tie { least, mu: best.mu, bound }))
 }
 
 /// The ordering of points in a search: by objective, infeasible points (`None`) last.
