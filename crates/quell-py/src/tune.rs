@@ -141,6 +141,21 @@ pub fn tune(
         pool.install(|| study::tune(&study, &TuneOptions { stop: Some(&stop), on_point: None }))
     })?;
     let result = result.map_err(|e| argument_error(py, &e))?;
+    warn_choices(py, &study, &result)?;
+    let json = serde_json::to_string(&result).map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
+    let result = py.import("quell._tune")?.getattr("TuneResult")?.call1((json,))?;
+    match interrupt {
+        None => Ok(result.unbind()),
+        Some(e) => {
+            e.value(py).setattr("result", result)?;
+            Err(e)
+        }
+    }
+}
+
+/// The warnings of `quell tune`'s report: a channel without a feasible μ (which keeps the
+/// scenario's; the CLI exits 2), and a choice at an end of the bounds.
+fn warn_choices(py: Python<'_>, study: &study::Study, result: &study::TuneResult) -> PyResult<()> {
     // As `quell tune`'s exit status 2: a channel without a feasible μ keeps the scenario's.
     for c in result.channels.iter().filter(|c| c.chosen.is_none() && !result.partial) {
         let i = c.channel;
@@ -166,13 +181,5 @@ pub fn tune(
             crate::errors::warn(py, &message)?;
         }
     }
-    let json = serde_json::to_string(&result).map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
-    let result = py.import("quell._tune")?.getattr("TuneResult")?.call1((json,))?;
-    match interrupt {
-        None => Ok(result.unbind()),
-        Some(e) => {
-            e.value(py).setattr("result", result)?;
-            Err(e)
-        }
-    }
+    Ok(())
 }
