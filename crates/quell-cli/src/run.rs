@@ -67,7 +67,9 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
         eprint!("{}", report::sample_time_text(&scenario, &design, sample_time, Some(settings.output_step)));
     }
     let set_by = if args.method.is_some() { "--method explicit" } else { "simulation.method = \"explicit\"" };
-    if let Some(w) = quell::sim::explicit_stiff_warning(&Run::of(&scenario, &design).settings(settings.clone()), set_by)
+    let run = Run::of(&scenario, &design).settings(settings.clone());
+    for w in
+        [quell::sim::explicit_stiff_warning(&run, set_by), quell::sim::fast_rate_warning(&run)].into_iter().flatten()
     {
         eprintln!("⚠ warning: {w}");
     }

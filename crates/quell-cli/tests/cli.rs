@@ -912,9 +912,10 @@ fn method_flag_chooses_the_integrator() {
 }
 
 /// DOP853 forced on a stiff adaptive law (μ × 5: channel 2 at 4.7ρ) is cautioned before the run,
-/// naming the setting as it was given: the flag, or the file's key.
+/// naming the setting as it was given: the flag, or the file's key; so is a rate far faster than
+/// the loop (β = 1e-7), by its key.
 #[test]
-fn an_explicit_run_on_a_stiff_law_is_cautioned_naming_where_explicit_was_set() {
+fn costly_runs_are_cautioned_before_they_start_naming_the_setting() {
     let dir = temp_dir("explicit-stiff");
     let stiff = fs::read_to_string(paper()).unwrap().replace("t_end = 100.0", "t_end = 0.5");
     let stiff = stiff.replace("mu = [20.0, 30.0]", "mu = [100.0, 150.0]");
@@ -935,6 +936,18 @@ fn an_explicit_run_on_a_stiff_law_is_cautioned_naming_where_explicit_was_set() {
     }
     let o = quell(&["run", flag.to_str().unwrap(), "--no-plots", "--out", dir.path().join("auto").to_str().unwrap()]);
     assert!(o.status.success() && !stderr(&o).contains("stiff adaptive law"), "{}", stderr(&o));
+    // β = 1e-7: 1/β sets every method's steps, which the caution says before the run (here ended
+    // by a budget of 10 steps).
+    let fast = dir.path().join("fast.toml");
+    fs::write(&fast, fs::read_to_string(paper()).unwrap().replace("beta = 1.0 ", "beta = 1e-7 ")).unwrap();
+    let out = dir.path().join("fast");
+    let o = quell(&["run", fast.to_str().unwrap(), "--no-plots", "--max-steps", "10", "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("⚠ warning: 1/design.beta sets the loop's fastest rate, ρ = 1.000e7/s"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 #[test]

@@ -643,9 +643,10 @@ pub fn simulate(
         Loop::Continuous(_) => None,
     };
     let set_by = if method.is_some() { "method=\"explicit\"" } else { "simulation.method = \"explicit\"" };
-    let explicit_stiff =
-        quell::sim::explicit_stiff_warning(&quell::sim::Run::of(scn, &design).settings(settings.clone()), set_by);
-    if let Some(w) = explicit_stiff {
+    let run = quell::sim::Run::of(scn, &design).settings(settings.clone());
+    for w in
+        [quell::sim::explicit_stiff_warning(&run, set_by), quell::sim::fast_rate_warning(&run)].into_iter().flatten()
+    {
         crate::errors::warn(py, &crate::errors::in_python(w))?;
     }
     let (result, interrupt) = run_released(py, scn, &design, settings)?;

@@ -539,3 +539,25 @@ fn runaways_end_within_their_default_budgets_with_a_bounded_history() {
         );
     }
 }
+
+/// A loop whose fastest rate takes a run past a million steps on any method is cautioned before
+/// it starts, naming the rate's source: β = 1e-7 on the paper's example puts 1/β at 1e7/s, 1.1e6
+/// times the next fastest rate (the reference filter's pole at −9), and 2 s take 1e7·2/6.1 = 3.3e6
+/// steps; the paper's own β is not cautioned, and over 1e6 s its 9/s are, without a culprit.
+#[test]
+fn a_rate_far_faster_than_the_loop_is_cautioned_by_its_source() {
+    let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+    let warning = |beta: f64, t_end: f64| {
+        let mut spec = s.design.clone();
+        spec.beta = beta;
+        let d = Design::new(&s.plant, &spec).unwrap();
+        let settings = RunSettings { t_end, ..RunSettings::of(&s) };
+        quell::sim::fast_rate_warning(&Run::of(&s, &d).settings(settings))
+    };
+    let w = warning(1e-7, 2.0).expect("a caution");
+    assert!(w.starts_with("1/design.beta sets the loop's fastest rate, ρ = 1.000e7/s: "), "{w}");
+    assert!(w.contains("t_end = 2 s takes at least 3.3e6 steps, 1.1e6× the next fastest (design.reference_filter_poles, 9.000e0/s)"), "{w}");
+    assert_eq!(warning(1.0, 100.0), None);
+    let long = warning(1.0, 1e6).expect("a caution over 1e6 s");
+    assert!(long.contains("ρ = 9.000e0/s") && long.contains("1.5e6 steps") && !long.contains("next fastest"), "{long}");
+}

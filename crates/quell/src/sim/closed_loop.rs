@@ -884,10 +884,16 @@ pub const EXPECT_STIFF_RATIO: f64 = 3.0;
 /// signals need.
 pub const STIFF_RATIO: f64 = 100.0;
 
-/// ρ, the fastest rate the loop is built from besides the adaptive law: the largest |λ| of the true
-/// plant's A, of A − BK, A − LC, G_g, G_ω and the channels' G_ii(s), 1/β, and the signals' highest
-/// frequency (1/s).
+/// ρ, the fastest rate the loop is built from besides the adaptive law: the largest of
+/// [`loop_rates`].
 pub fn loop_rate(design: &Design, truth: &Plant, signals: [&Signal; 2]) -> f64 {
+    loop_rates(design, truth, signals).iter().map(|&(_, r)| r).filter(|r| r.is_finite()).fold(0.0, f64::max)
+}
+
+/// The rates the loop is built from besides the adaptive law, each with what sets it: the largest
+/// |λ| of the true plant's A, of A − BK, A − LC, G_g, G_ω and the channels' G_ii(s), 1/β, and the
+/// signals' highest frequency (1/s). NaN where an eigenvalue solver refuses the matrix.
+pub fn loop_rates(design: &Design, truth: &Plant, signals: [&Signal; 2]) -> [(&'static str, f64); 8] {
     // The balanced QR of `linalg` (nalgebra's Schur iterates forever on a non-finite matrix);
     // a matrix it refuses gives NaN, left out below.
     let radius = |M: &DMatrix<f64>| {
@@ -900,18 +906,45 @@ pub fn loop_rate(design: &Design, truth: &Plant, signals: [&Signal; 2]) -> f64 {
         .flat_map(|s| s.components.iter().flat_map(|c| c.harmonics.iter().map(|h| h.frequency.abs())))
         .fold(0.0, f64::max);
     [
-        radius(&truth.A),
-        largest(design.decoupled_eigenvalues()),
-        largest(design.observer_eigenvalues()),
-        radius(design.G_g()),
-        radius(design.G_w()),
-        channels,
-        1.0 / design.beta(),
-        frequency,
+        ("the plant (truth.A)", radius(&truth.A)),
+        ("A − BK (design.channel_poles)", largest(design.decoupled_eigenvalues())),
+        ("the observer A − LC", largest(design.observer_eigenvalues())),
+        ("design.reference_filter_poles", radius(design.G_g())),
+        ("design.disturbance_filter_poles", radius(design.G_w())),
+        ("the channels G_ii (design.channel_poles)", channels),
+        ("1/design.beta", 1.0 / design.beta()),
+        ("the signals' highest frequency", frequency),
     ]
-    .into_iter()
-    .filter(|r| r.is_finite())
-    .fold(0.0, f64::max)
+}
+
+/// Steps beyond which [`fast_rate_warning`] cautions: about ten seconds of a run.
+pub const FAST_RATE_STEPS: f64 = 1e6;
+
+/// A caution before a continuous run whose fastest rate ρ ([`loop_rates`], the adaptive law aside)
+/// makes it take more than [`FAST_RATE_STEPS`] steps on any method: DOP853's stable steps are at
+/// most [`DOP853_STABLE_H_RATE`]/ρ, and the implicit method takes only η̂ implicitly. Names the
+/// rate's source and, where it is a hundred times the next, says to bring it to the loop's time
+/// scale (β = 1e-7 on the paper's example: 1/β = 1e7/s against 9/s, 2 s took 3.7 s and 646 MB
+/// before the history's cap ended it, with nothing said of β). `None` otherwise.
+pub fn fast_rate_warning(run: &Run<'_>) -> Option<String> {
+    let Loop::Continuous(_) = &run.settings.mode else { return None };
+    let mut rates = loop_rates(run.design, run.truth, [run.reference, run.disturbance]);
+    rates.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let mut finite = rates.iter().filter(|r| r.1.is_finite());
+    let (name, rho) = *finite.next()?;
+    let steps = rho * run.settings.t_end / DOP853_STABLE_H_RATE;
+    if steps <= FAST_RATE_STEPS {
+        return None;
+    }
+    let unit = run.design.plant().time_unit;
+    let next = finite.find(|r| r.0 != name).copied().filter(|r| r.1 > 0.0);
+    let outlier = next.filter(|&(_, r)| rho > 100.0 * r).map_or(String::new(), |(next_name, r)| {
+        format!(", {:.1e}× the next fastest ({next_name}, {r:.3e}/{unit}); bring it to the loop's time scale", rho / r)
+    });
+    Some(format!(
+        "{name} sets the loop's fastest rate, ρ = {rho:.3e}/{unit}: every method's steps follow it (DOP853 is stable for h ≤ {DOP853_STABLE_H_RATE}/ρ, and the implicit method takes only η̂ implicitly), so t_end = {} {unit} takes at least {steps:.1e} steps{outlier}",
+        crate::settings::fmt_short(run.settings.t_end)
+    ))
 }
 
 /// Every check of a continuous run (the settings, the signals, the truth, the delays against the

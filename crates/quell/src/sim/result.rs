@@ -68,8 +68,9 @@ impl Outcome {
             // At the cap no step budget raises it; a stiff loop integrated explicitly lands there.
             Outcome::HistoryTooLarge { t, max_bytes } if *max_bytes >= super::MAX_HISTORY_BYTES => format!(
                 "the delay history would have exceeded {} MB by t = {t:.6} {unit} (the memory budget's cap: the solver's steps \
-                 had crowded into the last delay, as a loop blowing up does, or a stiff loop integrated explicitly: \
-                 simulation.method = \"auto\" takes a stiff adaptive law implicitly)",
+                 had crowded into the last delay, as a loop blowing up does, a stiff loop integrated explicitly \
+                 (simulation.method = \"auto\" takes a stiff adaptive law implicitly), or one with a rate far faster \
+                 than the rest, such as a small design.beta, which every method's steps follow)",
                 max_bytes >> 20
             ),
             Outcome::HistoryTooLarge { t, max_bytes } => format!(
