@@ -73,6 +73,11 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
     } else {
         print_stdout(&report_text(&auto));
     }
+    // The file's method verified the design: on DOP853 a stiff law's run is less accurate.
+    let run = quell::sim::Run::of(&auto.scenario, &auto.design);
+    if let Some(w) = quell::sim::explicit_stiff_warning(&run, "simulation.method = \"explicit\"") {
+        eprintln!("⚠ warning: the chosen design was verified on DOP853: {w}");
+    }
     let v = &auto.verification;
     if !v.passed {
         // Limits no candidate meets are an infeasible target (exit 2); a tail beyond its bound, a

@@ -1417,3 +1417,26 @@ fn design_json_and_signals_give_the_plant_input_again() {
     }
     assert!(peak > 1.0 && worst <= 1e-12 * peak, "u_f recomputed off by {worst:e} of a peak {peak}");
 }
+
+/// `quell design --auto` verifies on the file's method; on DOP853 (`method = "explicit"`) a design
+/// whose law it makes stiff (Wood–Berry's column: μ at 10ρ) is cautioned, as `quell run` of the
+/// written file would be.
+#[test]
+fn an_automatic_design_verified_on_dop853_at_a_stiff_mu_is_cautioned() {
+    let dir = temp_dir("auto-explicit");
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../quell/tests/data/wood-berry.toml");
+    let text = fs::read_to_string(data).unwrap();
+    let (head, rest) = text.split_once("\n[design]\n").unwrap();
+    let rest = &rest[rest.find("[[reference.components]]").unwrap()..];
+    let file = dir.path().join("column.toml");
+    let body = format!("{head}\n[design]\n\n{rest}");
+    fs::write(&file, body.replace("\n[simulation]\n", "\n[simulation]\nmethod = \"explicit\"\n")).unwrap();
+    let o = quell(&["design", file.to_str().unwrap(), "--auto"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let caution =
+        "⚠ warning: the chosen design was verified on DOP853: simulation.method = \"explicit\" on a stiff adaptive law";
+    assert!(stderr(&o).contains(caution), "{}", stderr(&o));
+    fs::write(&file, body).unwrap();
+    let o = quell(&["design", file.to_str().unwrap(), "--auto"]);
+    assert!(o.status.success() && !stderr(&o).contains("stiff adaptive law"), "{}", stderr(&o));
+}
