@@ -269,7 +269,7 @@ impl PySimResult {
     fn outcome<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         outcome_dict(py, self.inner.outcome.as_ref().unwrap_or(&Outcome::Completed))
     }
-    /// The loop's statistics, as summary.json's `stats`: for the continuous loop the delay-equation
+    /// The loop's statistics, as summary.json's `stats`: `loop` ("continuous" or "sampled"); for the continuous loop the delay-equation
     /// solver's steps, rejected_steps, rhs_evaluations, breakpoints, max_history_len,
     /// implicit_steps (accepted on the implicit method), switches (between the methods) and
     /// thrashed ((start, end) of DOP853 thrashing before `auto` switched, else None); for the
@@ -279,6 +279,7 @@ impl PySimResult {
         let d = PyDict::new(py);
         match self.inner.stats {
             RunStats::Continuous(s) => {
+                d.set_item("loop", "continuous")?;
                 d.set_item("steps", s.steps)?;
                 d.set_item("rejected_steps", s.rejected)?;
                 d.set_item("rhs_evaluations", s.rhs_evals)?;
@@ -289,6 +290,7 @@ impl PySimResult {
                 d.set_item("thrashed", s.thrashed)?;
             }
             RunStats::Sampled { controller_steps, sample_time } => {
+                d.set_item("loop", "sampled")?;
                 d.set_item("controller_steps", controller_steps)?;
                 d.set_item("sample_time", sample_time)?;
             }
@@ -591,7 +593,7 @@ impl PySimResult {
 /// --------
 /// >>> r = quell.simulate(quell.paper_example(), t_end=2.0, sample_time=1e-3)
 /// >>> r.stats
-/// {'controller_steps': 2001, 'sample_time': 0.001}
+/// {'loop': 'sampled', 'controller_steps': 2001, 'sample_time': 0.001}
 /// >>> explicit = quell.simulate(quell.paper_example(), t_end=5.0, method="explicit")
 /// >>> imex = quell.simulate(quell.paper_example(), t_end=5.0, method="imex")
 /// >>> bool(np.abs(explicit.y - imex.y).max() < 1e-6)

@@ -27,6 +27,7 @@ def test_explicit_and_imex_agree_and_take_their_own_steps():
     # The stats say which method took the steps: all of imex's, none of DOP853's, no switch.
     assert imex.stats["implicit_steps"] == imex.stats["steps"] and explicit.stats["implicit_steps"] == 0
     assert imex.stats["switches"] == explicit.stats["switches"] == 0 and explicit.stats["thrashed"] is None
+    assert explicit.stats["loop"] == "continuous"
     # "auto" (the default) is DOP853 on a loop that is not stiff: the same result bit for bit.
     assert quell.simulate(s, t_end=20.0) == explicit == quell.simulate(s, t_end=20.0, method="auto")
 
