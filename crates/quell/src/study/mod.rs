@@ -532,9 +532,9 @@ impl Study {
     pub fn explicit_stiff_warning(&self, shard: Shard) -> Option<String> {
         use rayon::prelude::*;
         let set_by = "simulation.method = \"explicit\"";
-        let first = Scenario::from_document(&self.document(0, None)).ok()?;
         // `method` is not a grid key: the same at every point.
-        if first.simulation.method != crate::sim::Method::Explicit {
+        let method = self.base.get("simulation").and_then(|s| s.get("method")).and_then(toml::Value::as_str);
+        if method != Some(crate::sim::Method::Explicit.name()) {
             return None;
         }
         let draws = self.draws();

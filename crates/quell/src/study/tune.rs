@@ -386,7 +386,6 @@ fn tolerance_scale(s: &Scenario, i: usize) -> f64 {
     sim.rtol * g + sim.atol
 }
 
-/// The `[tune]` table of a study that tuning can run: present, and no grid or draws it would ignore.
 /// For a tuning forced onto DOP853 (`simulation.method = "explicit"`), the caution of
 /// [`crate::sim::explicit_stiff_warning`] at the μ its searches reach, every μ_i at its upper bound;
 /// `None` otherwise, or without a valid `[tune]` (which [`tune`] then refuses). One design.
@@ -404,6 +403,7 @@ pub fn tune_stiff_warning(study: &Study) -> Option<String> {
     Some(format!("the searches reach μ = [{}] (the upper bounds): {w}", mu.join(", ")))
 }
 
+/// The `[tune]` table of a study that tuning can run: present, and no grid or draws it would ignore.
 fn tune_spec(study: &Study) -> Result<&TuneSpec, StudyError> {
     let spec = study
         .tune
