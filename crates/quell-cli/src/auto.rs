@@ -73,10 +73,8 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
     } else {
         print_stdout(&report_text(&auto));
     }
-    // The file's method verified the design: on DOP853 a stiff law's run is less accurate.
-    let run = quell::sim::Run::of(&auto.scenario, &auto.design);
-    if let Some(w) = quell::sim::explicit_stiff_warning(&run, "simulation.method = \"explicit\"") {
-        eprintln!("⚠ warning: the chosen design was verified on DOP853: {w}");
+    if let Some(w) = auto.explicit_stiff_warning() {
+        eprintln!("⚠ warning: {w}");
     }
     let v = &auto.verification;
     if !v.passed {

@@ -88,9 +88,6 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     prepare_out(&args.out, OUTPUTS)?;
     let journal = Journal::create(&args.out, &meta, &kept)
         .map_err(|e| Failure::Input(format!("--out {}: {e}; choose another output directory", args.out.display())))?;
-    if let Some(w) = pool.install(|| study.explicit_stiff_warning(shard)) {
-        eprintln!("⚠ warning: {w}");
-    }
 
     // Ctrl-C or SIGTERM: the first stops the sweep (runs under way are abandoned) and the rows done
     // are written; a second before writing begins quits at once.
@@ -110,6 +107,9 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     interrupt.start_writing();
     let seconds = started.elapsed().as_secs_f64();
     let (ran, mut rows) = (result.rows.len(), kept);
+    if let Some(w) = study.explicit_stiff_caution(&result.rows) {
+        eprintln!("⚠ warning: {w}");
+    }
     rows.extend(result.rows);
     rows.sort_by_key(|r| r.run);
     write_all(&args.out, &meta, &rows, result.partial, !args.no_plots)?;

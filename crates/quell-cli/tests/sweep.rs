@@ -559,8 +559,8 @@ fn a_shard_without_runs_says_so_and_still_merges() {
     assert_eq!(rows_without_wall_time(Path::new(&merged)).len(), 1 + 8);
 }
 
-/// A study forced onto DOP853 is cautioned before its runs where a grid point's adaptive law is
-/// stiff, as `quell run --method explicit` is: here μ × 5 puts channel 2 at 4.7ρ (the paper's μ at
+/// A study forced onto DOP853 is cautioned where a run's adaptive law is stiff, as `quell run
+/// --method explicit` is: here μ × 5 puts channel 2 at 4.7ρ (the paper's μ at
 /// 0.95ρ). The same study on the default method, or at the paper's μ alone, is not.
 #[test]
 fn a_study_forced_onto_dop853_with_a_stiff_point_is_cautioned() {
@@ -578,7 +578,7 @@ fn a_study_forced_onto_dop853_with_a_stiff_point_is_cautioned() {
     };
     let cautioned = study("method = \"explicit\"", "[[20.0, 30.0], [100.0, 150.0]]");
     assert!(
-        cautioned.contains("⚠ warning: grid point 1 (design.mu = [100.0, 150.0]; stiff at 1 of the 2 grid points): simulation.method = \"explicit\" on a stiff adaptive law"),
+        cautioned.contains("⚠ warning: 1 of the 2 runs carried out ran on DOP853 at a stiff adaptive law, so their figures may be off by more than the tolerance; the first, run 1, design.mu = [100.0, 150.0]: simulation.method = \"explicit\" on a stiff adaptive law"),
         "{cautioned}"
     );
     for (method, mus) in [("", "[[20.0, 30.0], [100.0, 150.0]]"), ("method = \"explicit\"", "[[20.0, 30.0]]")] {
@@ -587,8 +587,10 @@ fn a_study_forced_onto_dop853_with_a_stiff_point_is_cautioned() {
     }
 }
 
-/// A tuning forced onto DOP853 whose upper bounds of μ make the adaptive law stiff is cautioned
-/// before its searches (μ = 2000 on both channels: 63ρ); up to the paper's μ it is not.
+/// A tuning forced onto DOP853 whose searches run a μ that makes the adaptive law stiff is
+/// cautioned before them (channel 1's search reaches μ = [2000, 30]: 37ρ); up to the paper's μ it
+/// is not, and a search whose other channel is stiff at the scenario's μ is (μ₂ = 1000 while μ₁ is
+/// searched over [2, 20]).
 #[test]
 fn a_tuning_on_dop853_reaching_a_stiff_mu_is_cautioned() {
     let dir_tmp = scratch("tune-explicit");
@@ -602,8 +604,15 @@ fn a_tuning_on_dop853_reaching_a_stiff_mu_is_cautioned() {
     };
     let err = tune(text);
     assert!(
-        err.contains("⚠ warning: the searches reach μ = [2000, 2000] (the upper bounds): simulation.method = \"explicit\" on a stiff adaptive law"),
+        err.contains("⚠ warning: channel 1's search runs μ = [2000, 30]: simulation.method = \"explicit\" on a stiff adaptive law"),
         "{err}"
     );
     assert!(!tune(&text.replace("2000.0", "20.0")).contains("stiff adaptive law"));
+    let scenario = fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/paper.toml")).unwrap();
+    fs::write(dir.join("stiff.toml"), scenario.replace("mu = [20.0, 30.0]", "mu = [20.0, 1000.0]")).unwrap();
+    let other = format!(
+        "scenario = \"stiff.toml\"\n{}",
+        text.replace("mu = [2.0, 2000.0]", "mu = [[2.0, 20.0], [1000.0, 1000.0]]")
+    );
+    assert!(tune(&other).contains("⚠ warning: channel 1's search runs μ = [20, 1000]: "));
 }

@@ -973,5 +973,8 @@ pub fn auto_design<'py>(
     });
     let report = py.import("json")?.call_method1("loads", (report.to_string(),))?;
     crate::errors::warn_fragile(py, &auto.design, &auto.scenario.design)?;
+    if let Some(w) = auto.explicit_stiff_warning() {
+        crate::errors::warn(py, &w)?;
+    }
     Ok((PyScenario::new(auto.scenario), report))
 }

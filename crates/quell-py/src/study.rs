@@ -885,13 +885,13 @@ fn sweep_frame(
         ));
     }
     let pool = thread_pool(py, jobs, usize::try_from(study.len()).unwrap_or(usize::MAX))?;
-    if let Some(w) = py.detach(|| pool.install(|| study.explicit_stiff_warning(Shard::ALL))) {
-        crate::errors::warn(py, &crate::errors::in_python(w))?;
-    }
     let (swept, interrupt) = crate::interrupt::interruptible_keeping(py, |stop| {
         let opts = SweepOptions { stop: Some(&stop), ..SweepOptions::default() };
         pool.install(|| study::sweep(study, &opts))
     })?;
+    if let Some(w) = study.explicit_stiff_caution(&swept.rows) {
+        crate::errors::warn(py, &crate::errors::in_python(w))?;
+    }
     let meta = StudyMeta::new(study, Shard::ALL);
     let mut text = Vec::new();
     study::write_runs_csv(&mut text, &meta, &swept.rows, swept.partial)

@@ -107,11 +107,12 @@ def test_dop853_forced_on_a_stiff_law_is_cautioned_naming_where_it_was_set():
     in_file = quell.Scenario(p.plant, p.reference, p.disturbance, t_end=0.5, method="explicit", **choices)
     with pytest.warns(UserWarning, match=r'^simulation.method = "explicit" on a stiff adaptive law'):
         quell.simulate(in_file)
-    # A study: the first stiff grid point, its values and how many points are stiff.
+    # A study: how many runs were stiff, and the first one's run and grid values.
     study = quell.Study(p, grid={"design.mu": [[20.0, 30.0], [100.0, 150.0]]},
                         simulation={"t_end": 0.5, "method": "explicit"})
-    with pytest.warns(UserWarning, match=r'^grid point 1 \(design.mu = \[100.0, 150.0\]; stiff at 1 of the 2 grid '
-                                         r'points\): simulation.method = "explicit" on a stiff'):
+    with pytest.warns(UserWarning, match=r'^1 of the 2 runs carried out ran on DOP853 at a stiff adaptive law, .*; '
+                                         r'the first, run 1, design.mu = \[100.0, 150.0\]: simulation.method = '
+                                         r'"explicit" on a stiff'):
         quell.sweep(study, jobs=1)
     # A run of the study simulated again is cautioned as quell.simulate is.
     with pytest.warns(UserWarning, match=r'^simulation.method = "explicit" on a stiff adaptive law'):

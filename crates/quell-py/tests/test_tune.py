@@ -220,8 +220,8 @@ def test_a_choice_at_an_end_of_the_bounds_is_warned_of():
 
 
 def test_a_tuning_on_dop853_reaching_a_stiff_mu_is_cautioned():
-    # μ = 2000 on both channels of the paper's example: 63ρ, where DOP853 sits at its bound.
-    with pytest.warns(UserWarning, match=r'^the searches reach μ = \[2000, 2000\] \(the upper bounds\): '
+    # Channel 1's search reaches μ = [2000, 30] (37ρ), where DOP853 sits at its bound.
+    with pytest.warns(UserWarning, match=r'^channel 1\'s search runs μ = \[2000, 30\]: '
                                          r'simulation.method = "explicit" on a stiff adaptive law'):
         quell.tune(quell.paper_example(), mu=[2.0, 2000.0], objective="tail_rms_e", points=2, refine=0,
                    simulation={"t_end": 0.5, "method": "explicit"}, jobs=1)

@@ -82,6 +82,23 @@ def test_auto_design_meets_the_tail_bound():
         quell.auto_design(without_design(PAPER), convergence_time=-1.0)
 
 
+def test_auto_design_verified_on_dop853_at_a_stiff_mu_is_cautioned():
+    # Wood–Berry's column: the automatic design puts μλ_max(Ω̄) at 10ρ. On a file forced onto
+    # DOP853 the law it chose is stiff there, as `quell design --auto` and a simulate of the result
+    # say too; on the default method nothing is said.
+    text = (REFERENCE / "wood-berry.toml").read_text()
+    head, rest = text.split("\n[design]\n", 1)
+    column = head + "\n[design]\n\n" + rest[rest.index("[[reference.components]]"):]
+    explicit = column.replace("\n[simulation]\n", '\n[simulation]\nmethod = "explicit"\n')
+    with pytest.warns(UserWarning, match=r'^the chosen design was verified on DOP853: simulation.method = "explicit" '
+                                         r'on a stiff adaptive law'):
+        quell.auto_design(explicit)
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        quell.auto_design(column)
+
+
 def test_auto_design_refuses_a_short_horizon_with_the_t_end_that_works():
     """The quadruple tank (harmonics 0.01 rad/s apart, 600 s = 0.95 beats): the report says why the
     verification failed, names the beats and proposes a t_end the design verified, at most two beats

@@ -263,6 +263,17 @@ pub struct AutoDesign {
     pub verification: Verification,
 }
 
+impl AutoDesign {
+    /// On a scenario forced onto DOP853 (`simulation.method = "explicit"`), which verified the
+    /// design, the caution of [`crate::sim::explicit_stiff_warning`] where the chosen μ makes the
+    /// adaptive law stiff (an automatic design aims μλ_max(Ω̄) at 10ρ); `None` otherwise.
+    pub fn explicit_stiff_warning(&self) -> Option<String> {
+        let run = crate::sim::Run::of(&self.scenario, &self.design);
+        let w = crate::sim::explicit_stiff_warning(&run, "simulation.method = \"explicit\"")?;
+        Some(format!("the chosen design was verified on DOP853: {w}"))
+    }
+}
+
 /// Why no automatic design was returned.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum AutoError {

@@ -523,49 +523,30 @@ impl Study {
         (0..self.len() as usize).map_while(|i| self.spec_with_nominal(i))
     }
 
-    /// For a study forced onto DOP853 (`simulation.method = "explicit"`), the caution of
-    /// [`crate::sim::explicit_stiff_warning`] at the first of `shard`'s grid points whose nominal
-    /// loop is stiff, with that point's values and how many of the shard's points are; `None`
-    /// otherwise. Draws perturb the true plant around the nominal loop and are not checked. A design
-    /// per grid point (in parallel on rayon's current pool; 0.25 ms for the paper's example): less
-    /// than the runs cost, and nothing for a study on another method.
-    pub fn explicit_stiff_warning(&self, shard: Shard) -> Option<String> {
-        use rayon::prelude::*;
-        let set_by = "simulation.method = \"explicit\"";
-        // `method` is not a grid key: the same at every point.
-        let method = self.base.get("simulation").and_then(|s| s.get("method")).and_then(toml::Value::as_str);
-        if method != Some(crate::sim::Method::Explicit.name()) {
-            return None;
-        }
-        let draws = self.draws();
-        let points: Vec<usize> = if draws >= shard.count {
-            (0..self.points()).collect()
-        } else {
-            let mut p: Vec<usize> = shard.runs(self.len() as usize).map(|r| r / draws).collect();
-            p.dedup();
-            p
-        };
-        let stiff: Vec<(usize, String)> = points
-            .par_iter()
-            .filter_map(|&point| {
-                let s = Scenario::from_document(&self.document(point, None)).ok()?;
-                let design = s.design().ok()?;
-                crate::sim::explicit_stiff_warning(&crate::sim::Run::of(&s, &design), set_by).map(|w| (point, w))
-            })
-            .collect();
-        let (point, w) = stiff.iter().min_by_key(|(p, _)| *p)?;
-        if self.grid.is_empty() {
-            return Some(w.clone());
-        }
-        let values: Vec<String> = (self.grid.iter().zip(self.grid_index(*point)))
+    /// The caution for a study's runs forced onto DOP853 (`simulation.method = "explicit"`) on an
+    /// adaptive law it makes stiff ([`Row::explicit_stiff`], set as each run starts, draws and
+    /// grid points alike): how many of `rows` were, and the first one's run, grid values and the
+    /// caution of [`crate::sim::explicit_stiff_warning`] for it (one design). `None` when none was.
+    pub fn explicit_stiff_caution(&self, rows: &[Row]) -> Option<String> {
+        let stiff = rows.iter().filter(|r| r.explicit_stiff).count();
+        let first = rows.iter().filter(|r| r.explicit_stiff).min_by_key(|r| r.run)?;
+        let s = Scenario::from_document(&self.spec_with_nominal(first.run)?.scenario).ok()?;
+        let design = s.design().ok()?;
+        let w = crate::sim::explicit_stiff_warning(&crate::sim::Run::of(&s, &design), sweep::EXPLICIT_SET_BY)?;
+        let values: Vec<String> = (self.grid.iter().zip(self.grid_index(first.point)))
             .map(|(a, i)| format!("{} = {}", a.key, sweep::grid_text(&a.values[i])))
             .collect();
-        let whose = if shard == Shard::ALL { "" } else { " of this shard" };
-        let count = match points.len() {
-            1 => String::new(),
-            n => format!("; stiff at {} of the {n} grid points{whose}", stiff.len()),
+        let at = match (values.is_empty(), self.draws() > 1) {
+            (true, false) => String::new(),
+            (true, true) => format!(", draw {}", first.draw),
+            (false, false) => format!(", {}", values.join(", ")),
+            (false, true) => format!(", {}, draw {}", values.join(", "), first.draw),
         };
-        Some(format!("grid point {point} ({}{count}): {w}", values.join(", ")))
+        Some(format!(
+            "{stiff} of the {} runs carried out ran on DOP853 at a stiff adaptive law, so their figures may be off by more than the tolerance; the first, run {}{at}: {w}",
+            rows.len(),
+            first.run
+        ))
     }
 
     /// The scenario's unit of time (`[plant] time_unit`, checked when the study was read).

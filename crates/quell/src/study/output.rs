@@ -188,6 +188,7 @@ pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
             channels,
             steps: int(first + 5 * m)?,
             wall_ms: num(first + 5 * m + 1)?,
+            explicit_stiff: false,
         });
     }
     Ok(RunsFile { rows, partial })

@@ -125,6 +125,11 @@ pub struct Row {
     pub steps: u64,
     /// Wall time of the run in ms, to the microsecond.
     pub wall_ms: f64,
+    /// The run was forced onto DOP853 (`simulation.method = "explicit"`) on an adaptive law it
+    /// makes stiff ([`crate::sim::explicit_stiff_warning`]); not in runs.csv, so false for rows
+    /// read back ([`super::Study::explicit_stiff_caution`] words it).
+    #[serde(skip)]
+    pub explicit_stiff: bool,
 }
 
 /// A study run's result, the breakpoints t = Σ k_i τ_i its loop lands on (0 for a sampled-data
@@ -139,6 +144,9 @@ pub(crate) struct Simulated {
     /// [`Run::delay_floor`] of the run.
     pub delay_floor: usize,
     pub runaway_steps: Option<usize>,
+    /// Forced onto DOP853 on a stiff adaptive law (looked at only on `explicit`, which alone pays
+    /// for the averaged law it needs).
+    pub explicit_stiff: bool,
 }
 
 /// Simulates a scenario as its `[simulation]` says ([`Run::of`]), a continuous run within the
@@ -154,6 +162,8 @@ pub(crate) fn simulate(
     let design = s.design().map_err(|e| e.to_string())?;
     let mut settings = RunSettings::of(s);
     let run = Run::of(s, &design);
+    let explicit_stiff =
+        s.simulation.method == sim::Method::Explicit && sim::explicit_stiff_warning(&run, EXPLICIT_SET_BY).is_some();
     let (breakpoints, delay_floor) = (run.breakpoints(), run.delay_floor());
     let mut runaway_steps = None;
     if let Loop::Continuous(integrator) = &mut settings.mode {
@@ -178,8 +188,11 @@ pub(crate) fn simulate(
     let memory = run.reserve_memory(stop);
     let waited = waiting.elapsed();
     let result = run.simulate(progress).map_err(|e| e.to_string())?;
-    Ok(Simulated { result, memory, waited, breakpoints, delay_floor, runaway_steps })
+    Ok(Simulated { result, memory, waited, breakpoints, delay_floor, runaway_steps, explicit_stiff })
 }
+
+/// How a study's cautions name its method: the scenario's or the study's `[simulation]`.
+pub(super) const EXPLICIT_SET_BY: &str = "simulation.method = \"explicit\"";
 
 /// A grid value as runs.csv writes it: numbers in [`super::csv_number`]'s shortest round-trip form
 /// (a grid value of 1e300 was written as its 301 digits), a whole float with its `.0` (so that
@@ -213,13 +226,23 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
         channels: Vec::new(),
         steps: 0,
         wall_ms: 0.0,
+        explicit_stiff: false,
     };
     match spec.simulate_within_limits(stop) {
         Err(reason) => row.reason = reason,
         // `_memory` stays held until the row is made.
-        Ok(Simulated { result: r, runaway_steps, breakpoints, delay_floor, memory: _memory, waited }) => {
+        Ok(Simulated {
+            result: r,
+            runaway_steps,
+            breakpoints,
+            delay_floor,
+            memory: _memory,
+            waited,
+            explicit_stiff,
+        }) => {
             // The wait for memory is not the run's time.
             started += waited;
+            row.explicit_stiff = explicit_stiff;
             row.steps = r.stats.steps() as u64;
             match r.outcome.as_ref().unwrap_or(&sim::Outcome::Completed) {
                 sim::Outcome::Completed => {

@@ -387,20 +387,26 @@ fn tolerance_scale(s: &Scenario, i: usize) -> f64 {
 }
 
 /// For a tuning forced onto DOP853 (`simulation.method = "explicit"`), the caution of
-/// [`crate::sim::explicit_stiff_warning`] at the μ its searches reach, every μ_i at its upper bound;
-/// `None` otherwise, or without a valid `[tune]` (which [`tune`] then refuses). One design.
+/// [`crate::sim::explicit_stiff_warning`] at the first μ a search runs that makes the adaptive law
+/// stiff: channel i's search varies μ_i over its bounds with the other μ_j at the scenario's, so
+/// each channel's two ends are checked (2m designs). `None` otherwise, or without a valid `[tune]`
+/// (which [`tune`] then refuses).
 pub fn tune_stiff_warning(study: &Study) -> Option<String> {
     let spec = study.tune.as_ref()?;
-    let mut s = Scenario::from_document(study.base()).ok()?;
+    let s = Scenario::from_document(study.base()).ok()?;
     if s.simulation.method != crate::sim::Method::Explicit || spec.bounds.len() != s.design.mu.len() {
         return None;
     }
-    let top: Vec<f64> = spec.bounds.iter().map(|b| b[1]).collect();
-    s.design.mu = top.clone();
-    let design = s.design().ok()?;
-    let w = crate::sim::explicit_stiff_warning(&crate::sim::Run::of(&s, &design), "simulation.method = \"explicit\"")?;
-    let mu: Vec<String> = top.iter().map(|&v| crate::settings::fmt_short(v)).collect();
-    Some(format!("the searches reach μ = [{}] (the upper bounds): {w}", mu.join(", ")))
+    let ends = spec.bounds.iter().enumerate().flat_map(|(i, b)| [(i, b[1]), (i, b[0])]);
+    ends.into_iter().find_map(|(i, end)| {
+        let mut at = s.clone();
+        at.design.mu[i] = end;
+        let design = at.design().ok()?;
+        let w =
+            crate::sim::explicit_stiff_warning(&crate::sim::Run::of(&at, &design), "simulation.method = \"explicit\"")?;
+        let mu: Vec<String> = at.design.mu.iter().map(|&v| crate::settings::fmt_short(v)).collect();
+        Some(format!("channel {}'s search runs μ = [{}]: {w}", i + 1, mu.join(", ")))
+    })
 }
 
 /// The `[tune]` table of a study that tuning can run: present, and no grid or draws it would ignore.
