@@ -561,3 +561,19 @@ fn a_rate_far_faster_than_the_loop_is_cautioned_by_its_source() {
     let long = warning(1.0, 1e6).expect("a caution over 1e6 s");
     assert!(long.contains("ρ = 9.000e0/s") && long.contains("1.5e6 steps") && !long.contains("next fastest"), "{long}");
 }
+
+/// Band-limited measurement noise sets the steps too, and the default budget counts it: at 1,400 Hz
+/// (near the most the noise check admits, 1,000 ρ/2π = 1,432 Hz) the paper's loop takes about 2,300
+/// steps a second, and 10 s had failed the budget of 20,000 (10,000 + 100·(ρ·t_end + t_end/τ_min)
+/// without the noise); with 2π·1,400 in place of ρ it is 8.8 million, and the run completes.
+#[test]
+fn band_limited_noise_counts_in_the_default_step_budget() {
+    let text =
+        PAPER_EXAMPLE.replace("t_end = 100.0", "t_end = 10.0") + "\n[noise]\nstd = [0.03, 0.02]\nbandwidth = 1400.0\n";
+    let s = Scenario::from_toml(&text).unwrap();
+    let d = s.design().unwrap();
+    let r = Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
+    assert_eq!(r.outcome, Some(Outcome::Completed), "{:?}", r.outcome);
+    let steps = r.stats.steps();
+    assert!(steps > 20_000 && steps < 40_000, "{steps} steps");
+}

@@ -795,7 +795,8 @@ pub fn explicit_stiff_warning(run: &Run<'_>, set_by: &str) -> Option<String> {
 ///
 /// N = [`BUDGET_MIN_STEPS`] + [`BUDGET_STEPS_PER_RATE`]·(ρ·t_end + t_end/τ_min)·f·g + S,
 ///
-/// ρ = [`loop_rate`], τ_min the shortest positive delay (a step is at most τ_min long),
+/// ρ = [`loop_rate`] (or 2π times band-limited noise's bandwidth where faster), τ_min the shortest
+/// positive delay (a step is at most τ_min long),
 /// f = max(1, ([`BUDGET_TOLERANCE`]/tol)^(1/p)) and, with r = [`adaptation_rate`]:
 /// * [`Method::Explicit`](dde::Method::Explicit) (DOP853 alone): p = 8, g = 1 and
 ///   S = [`BUDGET_STABILITY_MARGIN`]·r·t_end/[`DOP853_STABLE_H_RATE`], the steps its stability
@@ -814,7 +815,9 @@ pub fn default_max_steps(run: &Run<'_>, integrator: &Integrator) -> usize {
     let delays = design.plant().delays.iter().chain(&truth.delays).filter(|&&d| d > 0.0);
     let tau_min = delays.fold(f64::INFINITY, |a, &d| a.min(d));
     let (rate, rho) = run.rates();
-    let scale = rho * t_end + if tau_min.is_finite() { t_end / tau_min } else { 0.0 };
+    // Band-limited measurement noise is content the steps resolve as well (1,400 Hz on the
+    // paper's example took 2,300 steps a second, and a healthy run failed its budget at t = 48 s).
+    let scale = rho.max(noise_rate(run)) * t_end + if tau_min.is_finite() { t_end / tau_min } else { 0.0 };
     let tol = integrator.rtol.min(integrator.atol).max(BUDGET_TOLERANCE_FLOOR);
     let (order, g, stability) = match integrator.method {
         dde::Method::Explicit => (8.0, 1.0, BUDGET_STABILITY_MARGIN * rate * t_end / DOP853_STABLE_H_RATE),
@@ -905,16 +908,23 @@ pub fn loop_rates(design: &Design, truth: &Plant, signals: [&Signal; 2]) -> [(&'
         .iter()
         .flat_map(|s| s.components.iter().flat_map(|c| c.harmonics.iter().map(|h| h.frequency.abs())))
         .fold(0.0, f64::max);
+    let plant = if truth.A == design.plant().A { "plant.A" } else { "truth.A" };
     [
-        ("the plant (truth.A)", radius(&truth.A)),
-        ("A − BK (design.channel_poles)", largest(design.decoupled_eigenvalues())),
-        ("the observer A − LC", largest(design.observer_eigenvalues())),
+        (plant, radius(&truth.A)),
+        ("design.channel_poles (A − BK)", largest(design.decoupled_eigenvalues())),
+        ("the observer (A − LC)", largest(design.observer_eigenvalues())),
         ("design.reference_filter_poles", radius(design.G_g())),
         ("design.disturbance_filter_poles", radius(design.G_w())),
-        ("the channels G_ii (design.channel_poles)", channels),
+        ("design.channel_poles (G_ii)", channels),
         ("1/design.beta", 1.0 / design.beta()),
         ("the signals' highest frequency", frequency),
     ]
+}
+
+/// The rate of a run's band-limited measurement noise, 2π·bandwidth (rad per unit of time); 0
+/// without noise or band limit.
+fn noise_rate(run: &Run<'_>) -> f64 {
+    run.settings.noise.as_ref().and_then(|n| n.bandwidth).map_or(0.0, |b| std::f64::consts::TAU * b)
 }
 
 /// Steps beyond which [`fast_rate_warning`] cautions: about ten seconds of a run.
@@ -928,7 +938,8 @@ pub const FAST_RATE_STEPS: f64 = 1e6;
 /// before the history's cap ended it, with nothing said of β). `None` otherwise.
 pub fn fast_rate_warning(run: &Run<'_>) -> Option<String> {
     let Loop::Continuous(_) = &run.settings.mode else { return None };
-    let mut rates = loop_rates(run.design, run.truth, [run.reference, run.disturbance]);
+    let mut rates = loop_rates(run.design, run.truth, [run.reference, run.disturbance]).to_vec();
+    rates.push(("2π·noise.bandwidth", noise_rate(run)));
     rates.sort_by(|a, b| b.1.total_cmp(&a.1));
     let mut finite = rates.iter().filter(|r| r.1.is_finite());
     let (name, rho) = *finite.next()?;
@@ -937,12 +948,16 @@ pub fn fast_rate_warning(run: &Run<'_>) -> Option<String> {
         return None;
     }
     let unit = run.design.plant().time_unit;
-    let next = finite.find(|r| r.0 != name).copied().filter(|r| r.1 > 0.0);
+    // The next fastest from another key (the channel poles set both A − BK and G_ii).
+    let key = |n: &str| n.split(" (").next().unwrap_or(n).to_string();
+    let next = finite.find(|r| key(r.0) != key(name)).copied().filter(|r| r.1 > 0.0);
     let outlier = next.filter(|&(_, r)| rho > 100.0 * r).map_or(String::new(), |(next_name, r)| {
-        format!(", {:.1e}× the next fastest ({next_name}, {r:.3e}/{unit}); bring it to the loop's time scale", rho / r)
+        // A plant's own rate is not a choice: only the controller's are brought to its scale.
+        let advice = if name.ends_with(".A") { "" } else { "; bring it to the loop's time scale" };
+        format!(", {:.1e}× the next fastest ({next_name}, {r:.3e}/{unit}){advice}", rho / r)
     });
     Some(format!(
-        "{name} sets the loop's fastest rate, ρ = {rho:.3e}/{unit}: every method's steps follow it (DOP853 is stable for h ≤ {DOP853_STABLE_H_RATE}/ρ, and the implicit method takes only η̂ implicitly), so t_end = {} {unit} takes at least {steps:.1e} steps{outlier}",
+        "{name} sets the loop's fastest rate, ρ = {rho:.3e}/{unit}: every method's steps follow it (DOP853 is stable for steps up to {DOP853_STABLE_H_RATE}/ρ, and the implicit method takes only η̂ implicitly), so t_end = {} {unit} takes at least {steps:.1e} steps{outlier}",
         crate::settings::fmt_short(run.settings.t_end)
     ))
 }
