@@ -369,6 +369,16 @@ fn the_coarse_sample_warning_offers_a_sample_time_that_divides_the_output_step()
     assert!(Run::new(&d, g, o, RunSettings::sampled(1.0, 0.05, 0.02)).check().is_err());
     let r = Run::new(&d, g, o, RunSettings::sampled(1.0, 0.05, 0.01)).check();
     assert!(r.is_ok(), "{:?}", r.err());
+    // β = 1e-5 and 1e-7: ρ = 1/β is printed as it is (it read 99900 for 1e5), and where no sample
+    // time within the bound keeps the delay lines within their limit none is offered (one 15
+    // times the bound was).
+    for (beta, rho, bound) in [(1e-5, "ρ = 100000 /s", "T_s ≤ 2e-6 s"), (1e-7, "ρ = 1e7 /s", "T_s ≤ 2e-8 s")] {
+        let mut spec = s.design.clone();
+        spec.beta = beta;
+        let fast = quell::Design::new(&s.plant, &spec).unwrap();
+        let w = quell::sim::coarse_sample_warning(&fast, signals, 0.001, Some(0.1)).unwrap();
+        assert!(w.contains(rho) && w.contains(&format!("{bound} (T_s·ρ ≤ 0.2), or slower poles")), "{w}");
+    }
 }
 
 /// A true plant with delays of its own: a sample time that makes the model's delays whole but not

@@ -46,7 +46,7 @@ pub fn coarse_sample_warning(
             "simulation.sample_time: T_s = {} {unit} is {:.2} of the loop's fastest time constant 1/ρ (ρ = {} /{unit}: the plant, observer, channel and filter poles, 1/β and the signals' frequencies): the discrete controller may depart from the continuous design; choose {}, or slower poles",
             settings::fmt_short(sample_time),
             sample_time * rate,
-            settings::fmt_short(settings::three_digits_down(rate)),
+            settings::fmt_short(settings::significant(rate, 3)),
             fine_sample_time(design, rate, output_step)
         )
     })
@@ -61,8 +61,10 @@ pub(crate) fn fine_sample_time(design: &Design, rate: f64, output_step: Option<f
         Some(h) => discrete::sample_time_dividing(design, bound, h),
         None => discrete::valid_sample_time_at_most(design, bound),
     };
+    // A sample time beyond the bound is no example of one within it (β = 1e-7 had offered 3e-7 s
+    // for T_s ≤ 2e-8 s: no shorter one keeps the delay lines within their limit).
     let whole = match valid {
-        Some(t) if t != bound => format!(
+        Some(t) if t != bound && t <= bound => format!(
             ", e.g. {} {unit}, which makes every delay whole{}",
             settings::fmt_short(t),
             if output_step.is_some() { " and divides simulation.output_step" } else { "" }
