@@ -64,7 +64,7 @@ pub(crate) fn fine_sample_time(design: &Design, rate: f64, output_step: Option<f
     // A sample time beyond the bound is no example of one within it (β = 1e-7 had offered 3e-7 s
     // for T_s ≤ 2e-8 s: no shorter one keeps the delay lines within their limit).
     let whole = match valid {
-        Some(t) if t != bound && t <= bound => format!(
+        Some(t) if t < bound => format!(
             ", e.g. {} {unit}, which makes every delay whole{}",
             settings::fmt_short(t),
             if output_step.is_some() { " and divides simulation.output_step" } else { "" }
