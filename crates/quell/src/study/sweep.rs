@@ -147,6 +147,8 @@ pub(crate) struct Simulated {
     /// Forced onto DOP853 on a stiff adaptive law (looked at only on `explicit`, which alone pays
     /// for the averaged law it needs).
     pub explicit_stiff: bool,
+    /// For a run its step budget or the history's cap ended, [`sim::fast_rate_warning`].
+    pub fast_rate: Option<String>,
 }
 
 /// Simulates a scenario as its `[simulation]` says ([`Run::of`]), a continuous run within the
@@ -188,7 +190,15 @@ pub(crate) fn simulate(
     let memory = run.reserve_memory(stop);
     let waited = waiting.elapsed();
     let result = run.simulate(progress).map_err(|e| e.to_string())?;
-    Ok(Simulated { result, memory, waited, breakpoints, delay_floor, runaway_steps, explicit_stiff })
+    // A run its own budget or the history's cap ended: a rate far faster than the loop may be why.
+    let fast_rate = match result.outcome {
+        Some(sim::Outcome::TooManySteps { max_steps, .. }) if runaway_steps != Some(max_steps) => {
+            sim::fast_rate_warning(&Run::of(s, &design))
+        }
+        Some(sim::Outcome::HistoryTooLarge { .. }) => sim::fast_rate_warning(&Run::of(s, &design)),
+        _ => None,
+    };
+    Ok(Simulated { result, memory, waited, breakpoints, delay_floor, runaway_steps, explicit_stiff, fast_rate })
 }
 
 /// How a study's cautions name its method: the scenario's or the study's `[simulation]`.
@@ -239,6 +249,7 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
             memory: _memory,
             waited,
             explicit_stiff,
+            fast_rate,
         }) => {
             // The wait for memory is not the run's time.
             started += waited;
@@ -282,6 +293,9 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                 }
                 sim::Outcome::Interrupted { .. } => return None,
                 other => row.reason = other.explain("max_steps in the study file", r.time_unit).unwrap_or_default(),
+            }
+            if let Some(w) = fast_rate {
+                row.reason += &format!("; {w}");
             }
         }
     }
