@@ -607,6 +607,8 @@ fn a_tuning_on_dop853_reaching_a_stiff_mu_is_cautioned() {
         err.contains("⚠ warning: channel 1's search runs μ = [2000, 30]: simulation.method = \"explicit\" on a stiff adaptive law"),
         "{err}"
     );
+    // Channel 2's search reaches μ = [20, 2000] as well: a caution each.
+    assert!(err.contains("⚠ warning: channel 2's search runs μ = [20, 2000]: "), "{err}");
     assert!(!tune(&text.replace("2000.0", "20.0")).contains("stiff adaptive law"));
     let scenario = fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/paper.toml")).unwrap();
     fs::write(dir.join("stiff.toml"), scenario.replace("mu = [20.0, 30.0]", "mu = [20.0, 1000.0]")).unwrap();

@@ -134,7 +134,7 @@ pub fn tune(
     let study = py.detach(|| study::Study::from_table(&doc, None)).map_err(|e| argument_error(py, &e))?;
     let channels = study.m;
     let pool = thread_pool(py, jobs, channels * study.tune.as_ref().map_or(1, |t| t.points))?;
-    if let Some(w) = py.detach(|| study::tune_stiff_warning(&study)) {
+    for w in py.detach(|| study::tune_stiff_warnings(&study)) {
         crate::errors::warn(py, &crate::errors::in_python(w))?;
     }
     let (result, interrupt) = crate::interrupt::interruptible_keeping(py, |stop| {

@@ -445,19 +445,27 @@ fn a_study_on_dop853_counts_its_runs_at_a_stiff_law() {
 }
 
 /// A study run that its step budget ends because one rate is far faster than the loop says so in
-/// its reason, as `quell run` says before a run: β = 1e-7 (1/β = 1e7/s against 9/s) at a budget of
-/// 1,000 steps; the paper's β completes.
+/// its reason, as `quell run` says before a run: β = 1e-5 and 1e-7 (1/β = 1e5/s and 1e7/s against
+/// 9/s) at a budget of 1,000 steps, whatever steps ρ alone would take; a run the budget ends with no
+/// rate standing out (β = 1, 2 s at 5 steps) is not told about rates.
 #[test]
 fn a_run_ended_by_a_rate_far_faster_than_the_loop_names_it() {
-    let text = "max_steps = 1000\n[simulation]\nt_end = 2.0\n[grid]\n\"design.beta\" = [1.0, 1e-7]\n";
+    let text = "max_steps = 1000\n[simulation]\nt_end = 2.0\n[grid]\n\"design.beta\" = [1.0, 1e-5, 1e-7]\n";
     let study = Study::from_toml(text, None).unwrap();
     let rows = sweep(&study, &SweepOptions::default()).rows;
     assert_eq!(rows[0].outcome, Outcome::Completed, "{}", rows[0].reason);
-    assert_eq!(rows[1].outcome, Outcome::Failed);
-    assert!(rows[1].reason.starts_with("the solver needed more than 1000 steps by t = "), "{}", rows[1].reason);
-    assert!(
-        rows[1].reason.contains("; 1/design.beta sets the loop's fastest rate, ρ = 1.000e7/s: "),
-        "{}",
-        rows[1].reason
-    );
+    for (row, rate) in [(&rows[1], "1.000e5/s"), (&rows[2], "1.000e7/s")] {
+        assert_eq!(row.outcome, Outcome::Failed);
+        assert!(row.reason.starts_with("the solver needed more than 1000 steps by t = "), "{}", row.reason);
+        let named = format!("; 1/design.beta sets the loop's fastest rate, {rate}: ");
+        assert!(
+            row.reason.contains(&named) && row.reason.ends_with("bring it to the loop's time scale"),
+            "{}",
+            row.reason
+        );
+    }
+    let tight = Study::from_toml(&text.replace("max_steps = 1000", "max_steps = 5"), None).unwrap();
+    let row = &sweep(&tight, &SweepOptions::default()).rows[0];
+    assert_eq!(row.outcome, Outcome::Failed);
+    assert!(!row.reason.contains("fastest rate"), "{}", row.reason);
 }

@@ -221,7 +221,12 @@ fn noise_far_beyond_the_loops_rate_is_refused_by_name() {
     let noise = |bandwidth: f64| Noise { std: vec![0.01, 0.01], seed: 1, bandwidth: Some(bandwidth) };
     let settings = |b| RunSettings { noise: Some(noise(b)), ..RunSettings::continuous(2.0, 0.1, 1e-6, 1e-6) };
     let e = Run::new(&d, &s.reference, &s.disturbance, settings(1e6)).simulate(go).unwrap_err();
-    assert!(e.to_string().starts_with("noise.bandwidth: expected at most 1430 cycles per s"), "{e}");
+    assert!(
+        e.to_string().starts_with(
+            "noise.bandwidth: expected at most 143 cycles per s (1e2× the loop's fastest rate ρ = 9 rad/s"
+        ),
+        "{e}"
+    );
     let r = Run::new(&d, &s.reference, &s.disturbance, settings(50.0)).simulate(go).unwrap();
     assert_eq!(r.outcome, Some(Outcome::Completed));
 }

@@ -795,8 +795,7 @@ pub fn explicit_stiff_warning(run: &Run<'_>, set_by: &str) -> Option<String> {
 ///
 /// N = [`BUDGET_MIN_STEPS`] + [`BUDGET_STEPS_PER_RATE`]·(ρ·t_end + t_end/τ_min)·f·g + S,
 ///
-/// ρ = [`loop_rate`] (or 2π times band-limited noise's bandwidth where faster), τ_min the shortest
-/// positive delay (a step is at most τ_min long),
+/// ρ = [`loop_rate`], τ_min the shortest positive delay (a step is at most τ_min long),
 /// f = max(1, ([`BUDGET_TOLERANCE`]/tol)^(1/p)) and, with r = [`adaptation_rate`]:
 /// * [`Method::Explicit`](dde::Method::Explicit) (DOP853 alone): p = 8, g = 1 and
 ///   S = [`BUDGET_STABILITY_MARGIN`]·r·t_end/[`DOP853_STABLE_H_RATE`], the steps its stability
@@ -815,9 +814,7 @@ pub fn default_max_steps(run: &Run<'_>, integrator: &Integrator) -> usize {
     let delays = design.plant().delays.iter().chain(&truth.delays).filter(|&&d| d > 0.0);
     let tau_min = delays.fold(f64::INFINITY, |a, &d| a.min(d));
     let (rate, rho) = run.rates();
-    // Band-limited measurement noise is content the steps resolve as well (1,400 Hz on the
-    // paper's example took 2,300 steps a second, and a healthy run failed its budget at t = 48 s).
-    let scale = rho.max(noise_rate(run)) * t_end + if tau_min.is_finite() { t_end / tau_min } else { 0.0 };
+    let scale = rho * t_end + if tau_min.is_finite() { t_end / tau_min } else { 0.0 };
     let tol = integrator.rtol.min(integrator.atol).max(BUDGET_TOLERANCE_FLOOR);
     let (order, g, stability) = match integrator.method {
         dde::Method::Explicit => (8.0, 1.0, BUDGET_STABILITY_MARGIN * rate * t_end / DOP853_STABLE_H_RATE),
@@ -930,36 +927,68 @@ fn noise_rate(run: &Run<'_>) -> f64 {
 /// Steps beyond which [`fast_rate_warning`] cautions: about ten seconds of a run.
 pub const FAST_RATE_STEPS: f64 = 1e6;
 
-/// A caution before a continuous run whose fastest rate ρ ([`loop_rates`], the adaptive law aside)
-/// makes it take more than [`FAST_RATE_STEPS`] steps on any method: DOP853's stable steps are at
-/// most [`DOP853_STABLE_H_RATE`]/ρ, and the implicit method takes only η̂ implicitly. Names the
-/// rate's source and, where it is a hundred times the next, says to bring it to the loop's time
-/// scale (β = 1e-7 on the paper's example: 1/β = 1e7/s against 9/s, 2 s took 3.7 s and 646 MB
-/// before the history's cap ended it, with nothing said of β). `None` otherwise.
+/// A rate this many times the next fastest (from another key) is named as the culprit.
+const FAST_RATE_OUTLIER: f64 = 100.0;
+
+/// A caution before a continuous run whose fastest rate ρ ([`loop_rates`], the adaptive law aside,
+/// and band-limited noise) makes it take more than [`FAST_RATE_STEPS`] steps on any method:
+/// DOP853's stable steps are at most [`DOP853_STABLE_H_RATE`]/ρ, and the implicit method takes only
+/// η̂ implicitly. Names the rate's source and, where it is a hundred times the next, says to bring
+/// it to the loop's time scale (β = 1e-7 on the paper's example: 1/β = 1e7/s against 9/s, 2 s took
+/// 3.7 s and 646 MB before the history's cap ended it, with nothing said of β). `None` otherwise.
 pub fn fast_rate_warning(run: &Run<'_>) -> Option<String> {
-    let Loop::Continuous(_) = &run.settings.mode else { return None };
-    let mut rates = loop_rates(run.design, run.truth, [run.reference, run.disturbance]).to_vec();
-    rates.push(("2π·noise.bandwidth", noise_rate(run)));
-    rates.sort_by(|a, b| b.1.total_cmp(&a.1));
-    let mut finite = rates.iter().filter(|r| r.1.is_finite());
-    let (name, rho) = *finite.next()?;
-    let steps = rho * run.settings.t_end / DOP853_STABLE_H_RATE;
-    if steps <= FAST_RATE_STEPS {
-        return None;
+    let fast = FastRate::of(run)?;
+    (fast.steps > FAST_RATE_STEPS).then(|| fast.text(run))
+}
+
+/// For a run that its step budget or the history's cap ended: the caution of
+/// [`fast_rate_warning`] where one rate is a hundred times the next, whatever the steps (a study's
+/// β = 1e-5 at a budget of 1,000); `None` where no rate stands out (a runaway is then the likelier
+/// cause).
+pub fn fast_rate_culprit(run: &Run<'_>) -> Option<String> {
+    let fast = FastRate::of(run)?;
+    fast.outlier().then(|| fast.text(run))
+}
+
+/// The fastest of a run's rates, its source, the steps it sets over t_end, and the next fastest
+/// from another key (the channel poles set both A − BK and G_ii).
+struct FastRate {
+    name: &'static str,
+    rho: f64,
+    steps: f64,
+    next: Option<(&'static str, f64)>,
+}
+
+impl FastRate {
+    fn of(run: &Run<'_>) -> Option<FastRate> {
+        let Loop::Continuous(_) = &run.settings.mode else { return None };
+        let mut rates = loop_rates(run.design, run.truth, [run.reference, run.disturbance]).to_vec();
+        rates.push(("2π·noise.bandwidth", noise_rate(run)));
+        rates.sort_by(|a, b| b.1.total_cmp(&a.1));
+        let mut finite = rates.into_iter().filter(|r| r.1.is_finite());
+        let (name, rho) = finite.next()?;
+        let key = |n: &str| n.split(" (").next().unwrap_or(n).to_string();
+        let next = finite.find(|r| key(r.0) != key(name)).filter(|r| r.1 > 0.0);
+        Some(FastRate { name, rho, steps: rho * run.settings.t_end / DOP853_STABLE_H_RATE, next })
     }
-    let unit = run.design.plant().time_unit;
-    // The next fastest from another key (the channel poles set both A − BK and G_ii).
-    let key = |n: &str| n.split(" (").next().unwrap_or(n).to_string();
-    let next = finite.find(|r| key(r.0) != key(name)).copied().filter(|r| r.1 > 0.0);
-    let outlier = next.filter(|&(_, r)| rho > 100.0 * r).map_or(String::new(), |(next_name, r)| {
-        // A plant's own rate is not a choice: only the controller's are brought to its scale.
-        let advice = if name.ends_with(".A") { "" } else { "; bring it to the loop's time scale" };
-        format!(", {:.1e}× the next fastest ({next_name}, {r:.3e}/{unit}){advice}", rho / r)
-    });
-    Some(format!(
-        "{name} sets the loop's fastest rate, ρ = {rho:.3e}/{unit}: every method's steps follow it (DOP853 is stable for steps up to {DOP853_STABLE_H_RATE}/ρ, and the implicit method takes only η̂ implicitly), so t_end = {} {unit} takes at least {steps:.1e} steps{outlier}",
-        crate::settings::fmt_short(run.settings.t_end)
-    ))
+
+    fn outlier(&self) -> bool {
+        self.next.is_some_and(|(_, r)| self.rho > FAST_RATE_OUTLIER * r)
+    }
+
+    fn text(&self, run: &Run<'_>) -> String {
+        let (name, rho, unit) = (self.name, self.rho, run.design.plant().time_unit);
+        let outlier = self.next.filter(|_| self.outlier()).map_or(String::new(), |(next_name, r)| {
+            // A plant's own rate is not a choice: only the controller's are brought to its scale.
+            let advice = if name.ends_with(".A") { "" } else { "; bring it to the loop's time scale" };
+            format!(", {:.1e}× the next fastest ({next_name}, {r:.3e}/{unit}){advice}", rho / r)
+        });
+        format!(
+            "{name} sets the loop's fastest rate, {rho:.3e}/{unit}: every method's steps follow it (DOP853 is stable for steps up to {DOP853_STABLE_H_RATE} over it, and the implicit method takes only η̂ implicitly), so t_end = {} {unit} takes at least {:.1e} steps{outlier}",
+            crate::settings::fmt_short(run.settings.t_end),
+            self.steps
+        )
+    }
 }
 
 /// Every check of a continuous run (the settings, the signals, the truth, the delays against the
@@ -986,8 +1015,11 @@ pub(super) fn check<'a>(run: &Run<'a>, integrator: &Integrator) -> Result<Contin
 
 /// Band-limited noise beyond this many times the loop's fastest rate ρ (in cycles, ρ/2π) is refused:
 /// the loop filters it out, and the integrator resolves it at several steps a cycle (a bandwidth of
-/// 1e6 on a loop at 1e2 ran out of memory as a blow-up does).
-const MAX_NOISE_OVER_RATE: f64 = 1e3;
+/// 1e6 on a loop at 1e2 ran out of memory as a blow-up does). At 100 the noise takes at most about
+/// 27 steps per unit of ρ·t (0.27 steps a radian measured at 1,000 Hz on the paper's loop), within
+/// the default budget's 100 ([`BUDGET_STEPS_PER_RATE`]); at 1,000 a healthy run at 1,400 Hz failed
+/// that budget, and a budget raised for the noise let a noisy runaway fill the history's cap.
+const MAX_NOISE_OVER_RATE: f64 = 1e2;
 
 /// `noise.bandwidth` (cycles per unit of time) within [`MAX_NOISE_OVER_RATE`] × ρ/2π.
 fn check_noise_bandwidth(bandwidth: f64, rho: f64, unit: crate::settings::TimeUnit) -> Result<(), KeyError> {
@@ -1000,7 +1032,7 @@ fn check_noise_bandwidth(bandwidth: f64, rho: f64, unit: crate::settings::TimeUn
         format!(
             "expected at most {} cycles per {unit} ({MAX_NOISE_OVER_RATE:e}× the loop's fastest rate ρ = {} rad/{unit}: the loop filters out noise beyond its bandwidth, and the integrator would resolve it at several steps a cycle), found {}; about 10× the loop's bandwidth is the usual choice",
             settings::fmt_short(crate::settings::three_digits_down(max)),
-            settings::fmt_short(rho),
+            settings::fmt_4(rho),
             settings::fmt_short(bandwidth)
         ),
     ))

@@ -147,7 +147,7 @@ pub(crate) struct Simulated {
     /// Forced onto DOP853 on a stiff adaptive law (looked at only on `explicit`, which alone pays
     /// for the averaged law it needs).
     pub explicit_stiff: bool,
-    /// For a run its step budget or the history's cap ended, [`sim::fast_rate_warning`].
+    /// For a run its step budget or the history's cap ended, [`sim::fast_rate_culprit`].
     pub fast_rate: Option<String>,
 }
 
@@ -193,9 +193,9 @@ pub(crate) fn simulate(
     // A run its own budget or the history's cap ended: a rate far faster than the loop may be why.
     let fast_rate = match result.outcome {
         Some(sim::Outcome::TooManySteps { max_steps, .. }) if runaway_steps != Some(max_steps) => {
-            sim::fast_rate_warning(&Run::of(s, &design))
+            sim::fast_rate_culprit(&Run::of(s, &design))
         }
-        Some(sim::Outcome::HistoryTooLarge { .. }) => sim::fast_rate_warning(&Run::of(s, &design)),
+        Some(sim::Outcome::HistoryTooLarge { .. }) => sim::fast_rate_culprit(&Run::of(s, &design)),
         _ => None,
     };
     Ok(Simulated { result, memory, waited, breakpoints, delay_floor, runaway_steps, explicit_stiff, fast_rate })

@@ -386,27 +386,27 @@ fn tolerance_scale(s: &Scenario, i: usize) -> f64 {
     sim.rtol * g + sim.atol
 }
 
-/// For a tuning forced onto DOP853 (`simulation.method = "explicit"`), the caution of
-/// [`crate::sim::explicit_stiff_warning`] at the first μ a search runs that makes the adaptive law
-/// stiff: channel i's search varies μ_i over its bounds with the other μ_j at the scenario's, so
-/// each channel's two ends are checked (2m designs). `None` otherwise, or without a valid `[tune]`
+/// For a tuning forced onto DOP853 (`simulation.method = "explicit"`), per channel whose search runs
+/// a μ that makes the adaptive law stiff, the caution of [`crate::sim::explicit_stiff_warning`]
+/// there: channel i's search varies μ_i over its bounds with the other μ_j at the scenario's, so
+/// each channel's two ends are checked (2m designs). Empty otherwise, or without a valid `[tune]`
 /// (which [`tune`] then refuses).
-pub fn tune_stiff_warning(study: &Study) -> Option<String> {
-    let spec = study.tune.as_ref()?;
-    let s = Scenario::from_document(study.base()).ok()?;
+pub fn tune_stiff_warnings(study: &Study) -> Vec<String> {
+    let Some(spec) = study.tune.as_ref() else { return vec![] };
+    let Ok(s) = Scenario::from_document(study.base()) else { return vec![] };
     if s.simulation.method != crate::sim::Method::Explicit || spec.bounds.len() != s.design.mu.len() {
-        return None;
+        return vec![];
     }
-    let ends = spec.bounds.iter().enumerate().flat_map(|(i, b)| [(i, b[1]), (i, b[0])]);
-    ends.into_iter().find_map(|(i, end)| {
+    let at_end = |i: usize, end: f64| {
         let mut at = s.clone();
         at.design.mu[i] = end;
         let design = at.design().ok()?;
-        let w =
-            crate::sim::explicit_stiff_warning(&crate::sim::Run::of(&at, &design), "simulation.method = \"explicit\"")?;
+        let run = crate::sim::Run::of(&at, &design);
+        let w = crate::sim::explicit_stiff_warning(&run, "simulation.method = \"explicit\"")?;
         let mu: Vec<String> = at.design.mu.iter().map(|&v| crate::settings::fmt_short(v)).collect();
         Some(format!("channel {}'s search runs μ = [{}]: {w}", i + 1, mu.join(", ")))
-    })
+    };
+    spec.bounds.iter().enumerate().filter_map(|(i, b)| at_end(i, b[1]).or_else(|| at_end(i, b[0]))).collect()
 }
 
 /// The `[tune]` table of a study that tuning can run: present, and no grid or draws it would ignore.
