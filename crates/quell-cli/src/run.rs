@@ -66,7 +66,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     if let Loop::Sampled { sample_time } = settings.mode {
         eprint!("{}", report::sample_time_text(&scenario, &design, sample_time, Some(settings.output_step)));
     }
-    let set_by = if args.method.is_some() { "--method explicit" } else { "simulation.method = \"explicit\"" };
+    let set_by = if args.method.is_some() { "--method explicit" } else { quell::sim::EXPLICIT_IN_FILE };
     let run = Run::of(&scenario, &design).settings(settings.clone());
     for w in
         [quell::sim::explicit_stiff_warning(&run, set_by), quell::sim::fast_rate_warning(&run)].into_iter().flatten()

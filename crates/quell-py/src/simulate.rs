@@ -644,7 +644,7 @@ pub fn simulate(
         Loop::Sampled { sample_time } => Some((sample_time, settings.output_step)),
         Loop::Continuous(_) => None,
     };
-    let set_by = if method.is_some() { "method=\"explicit\"" } else { "simulation.method = \"explicit\"" };
+    let set_by = if method.is_some() { "method=\"explicit\"" } else { quell::sim::EXPLICIT_IN_FILE };
     let run = quell::sim::Run::of(scn, &design).settings(settings.clone());
     for w in
         [quell::sim::explicit_stiff_warning(&run, set_by), quell::sim::fast_rate_warning(&run)].into_iter().flatten()

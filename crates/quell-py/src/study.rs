@@ -527,7 +527,7 @@ impl PyRunSpec {
             .map_err(|e| crate::scenario::scenario_error(py, &e))?;
         let design = scenario.design().map_err(|e| crate::errors::raise(py, Kind::Design)(&e))?;
         let run = quell::sim::Run::of(&scenario, &design);
-        if let Some(w) = quell::sim::explicit_stiff_warning(&run, "simulation.method = \"explicit\"") {
+        if let Some(w) = quell::sim::explicit_stiff_warning(&run, quell::sim::EXPLICIT_IN_FILE) {
             crate::errors::warn(py, &crate::errors::in_python(w))?;
         }
         let spec = &self.inner;

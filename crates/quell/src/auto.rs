@@ -269,7 +269,7 @@ impl AutoDesign {
     /// adaptive law stiff (an automatic design aims μλ_max(Ω̄) at 10ρ); `None` otherwise.
     pub fn explicit_stiff_warning(&self) -> Option<String> {
         let run = crate::sim::Run::of(&self.scenario, &self.design);
-        let w = crate::sim::explicit_stiff_warning(&run, "simulation.method = \"explicit\"")?;
+        let w = crate::sim::explicit_stiff_warning(&run, crate::sim::EXPLICIT_IN_FILE)?;
         Some(format!("the chosen design was verified on DOP853: {w}"))
     }
 }

@@ -760,6 +760,10 @@ pub const DOP853_STABLE_H_RATE: f64 = 6.1;
 /// paper's example, the quadruple tank and the supply vessel of `tests/data`).
 pub const BUDGET_STABILITY_MARGIN: f64 = 2.0;
 
+/// How [`explicit_stiff_warning`] names the setting where the scenario (or a study's
+/// `[simulation]`) holds it; a front end's flag or argument names itself.
+pub const EXPLICIT_IN_FILE: &str = "simulation.method = \"explicit\"";
+
 /// The caution before a continuous run forced onto DOP853 ([`Method::Explicit`](dde::Method::Explicit))
 /// whose adaptive law is stiff: beyond [`STIFF_RATIO`]·ρ its steps are bounded by DOP853's
 /// stability, h·μλ_max ≤ [`DOP853_STABLE_H_RATE`], whatever the accuracy needs (a magnetic bearing
@@ -769,8 +773,7 @@ pub const BUDGET_STABILITY_MARGIN: f64 = 2.0;
 /// otherwise. `set_by` names the setting as the user gave it (`simulation.method = "explicit"`, or
 /// a front end's own flag or argument), which the caution starts with.
 pub fn explicit_stiff_warning(run: &Run<'_>, set_by: &str) -> Option<String> {
-    let Loop::Continuous(integrator) = &run.settings.mode else { return None };
-    if integrator.method != dde::Method::Explicit {
+    if !explicit_on_stiff_law(run) {
         return None;
     }
     let (rate, rho) = run.rates();
@@ -780,14 +783,24 @@ pub fn explicit_stiff_warning(run: &Run<'_>, set_by: &str) -> Option<String> {
         rate / rho
     );
     let auto = "the default method, \"auto\", takes the adaptive law implicitly";
-    if rate > STIFF_RATIO * rho {
+    Some(if rate > STIFF_RATIO * rho {
         let steps = rate * run.settings.t_end / DOP853_STABLE_H_RATE;
-        Some(format!("{head}, so the run takes about {steps:.1e} steps (at the rate Ω settles to); {auto}"))
-    } else if run.expects_stiff() {
-        Some(format!("{head}, where its steps may sit once Ω has filled, and there its error estimate misses η̂'s errors (on published loops by 10–1000× the tolerance); {auto} from there"))
+        format!("{head}, so the run takes about {steps:.1e} steps (at the rate Ω settles to); {auto}")
     } else {
-        None
+        format!("{head}, where its steps may sit once Ω has filled, and there its error estimate misses η̂'s errors (on published loops by 10–1000× the tolerance); {auto} from there")
+    })
+}
+
+/// Whether `run` is continuous, forced onto DOP853, and its adaptive law stiff: beyond
+/// [`STIFF_RATIO`]·ρ, or expected at DOP853's bound ([`Run::expects_stiff`]); what
+/// [`explicit_stiff_warning`] words. The averaged law it needs is computed on DOP853 runs only.
+pub fn explicit_on_stiff_law(run: &Run<'_>) -> bool {
+    let Loop::Continuous(integrator) = &run.settings.mode else { return false };
+    if integrator.method != dde::Method::Explicit {
+        return false;
     }
+    let (rate, rho) = run.rates();
+    rate > STIFF_RATIO * rho || run.expects_stiff()
 }
 
 /// The default step budget of a continuous run, from the problem's time scales, its adaptation

@@ -532,7 +532,7 @@ impl Study {
         let first = rows.iter().filter(|r| r.explicit_stiff).min_by_key(|r| r.run)?;
         let s = Scenario::from_document(&self.spec_with_nominal(first.run)?.scenario).ok()?;
         let design = s.design().ok()?;
-        let w = crate::sim::explicit_stiff_warning(&crate::sim::Run::of(&s, &design), sweep::EXPLICIT_SET_BY)?;
+        let w = crate::sim::explicit_stiff_warning(&crate::sim::Run::of(&s, &design), crate::sim::EXPLICIT_IN_FILE)?;
         let values: Vec<String> = (self.grid.iter().zip(self.grid_index(first.point)))
             .map(|(a, i)| format!("{} = {}", a.key, sweep::grid_text(&a.values[i])))
             .collect();

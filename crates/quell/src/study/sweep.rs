@@ -164,8 +164,7 @@ pub(crate) fn simulate(
     let design = s.design().map_err(|e| e.to_string())?;
     let mut settings = RunSettings::of(s);
     let run = Run::of(s, &design);
-    let explicit_stiff =
-        s.simulation.method == sim::Method::Explicit && sim::explicit_stiff_warning(&run, EXPLICIT_SET_BY).is_some();
+    let explicit_stiff = sim::explicit_on_stiff_law(&run);
     let (breakpoints, delay_floor) = (run.breakpoints(), run.delay_floor());
     let mut runaway_steps = None;
     if let Loop::Continuous(integrator) = &mut settings.mode {
@@ -191,18 +190,14 @@ pub(crate) fn simulate(
     let waited = waiting.elapsed();
     let result = run.simulate(progress).map_err(|e| e.to_string())?;
     // A run its own budget or the history's cap ended: a rate far faster than the loop may be why.
-    let fast_rate = match result.outcome {
-        Some(sim::Outcome::TooManySteps { max_steps, .. }) if runaway_steps != Some(max_steps) => {
-            sim::fast_rate_culprit(&Run::of(s, &design))
-        }
-        Some(sim::Outcome::HistoryTooLarge { .. }) => sim::fast_rate_culprit(&Run::of(s, &design)),
-        _ => None,
+    let own_budget = match result.outcome {
+        Some(sim::Outcome::TooManySteps { max_steps, .. }) => runaway_steps != Some(max_steps),
+        Some(sim::Outcome::HistoryTooLarge { .. }) => true,
+        _ => false,
     };
+    let fast_rate = own_budget.then(|| sim::fast_rate_culprit(&Run::of(s, &design))).flatten();
     Ok(Simulated { result, memory, waited, breakpoints, delay_floor, runaway_steps, explicit_stiff, fast_rate })
 }
-
-/// How a study's cautions name its method: the scenario's or the study's `[simulation]`.
-pub(super) const EXPLICIT_SET_BY: &str = "simulation.method = \"explicit\"";
 
 /// A grid value as runs.csv writes it: numbers in [`super::csv_number`]'s shortest round-trip form
 /// (a grid value of 1e300 was written as its 301 digits), a whole float with its `.0` (so that

@@ -402,7 +402,7 @@ pub fn tune_stiff_warnings(study: &Study) -> Vec<String> {
         at.design.mu[i] = end;
         let design = at.design().ok()?;
         let run = crate::sim::Run::of(&at, &design);
-        let w = crate::sim::explicit_stiff_warning(&run, "simulation.method = \"explicit\"")?;
+        let w = crate::sim::explicit_stiff_warning(&run, crate::sim::EXPLICIT_IN_FILE)?;
         let mu: Vec<String> = at.design.mu.iter().map(|&v| crate::settings::fmt_short(v)).collect();
         Some(format!("channel {}'s search runs μ = [{}]: {w}", i + 1, mu.join(", ")))
     };
