@@ -159,6 +159,10 @@ pub struct Nominal {
     /// whose delays differ lands on more, each a step the nominal run did not take.
     #[serde(default)]
     pub breakpoints: usize,
+    /// Its adaptive law was expected stiff ([`crate::sim::Run::expects_stiff`]): the step rule
+    /// holds a draw expected stiff to its steps only then.
+    #[serde(default)]
+    pub expects_stiff: bool,
 }
 
 /// A parsed and checked study.
@@ -502,13 +506,14 @@ impl Study {
         if s.simulation.sample_time.is_some() {
             return Ok(*cell.get_or_init(|| None));
         }
-        let nominal = match sweep::simulate(&s, self.max_steps, &|_, _| None, stop) {
+        let nominal = match sweep::simulate(&s, self.max_steps, &|_| None, stop) {
             Ok(run) => match run.result.outcome {
                 Some(crate::sim::Outcome::Interrupted { .. }) => return Err(()),
                 Some(crate::sim::Outcome::Completed) => Some(Nominal {
                     steps: run.result.stats.steps(),
                     peaks: run.result.peaks,
-                    breakpoints: run.breakpoints,
+                    breakpoints: run.shape.breakpoints,
+                    expects_stiff: run.shape.expects_stiff,
                 }),
                 _ => None,
             },

@@ -48,19 +48,24 @@ pub struct RunSpec {
 }
 
 impl RunSpec {
-    /// The runaway rules' limits of this run, with a nominal run, for a run landing on
-    /// `breakpoints` breakpoints: at most ⌈steps · (its steps + the breakpoints beyond its)⌉ solver
-    /// steps (drawn delays add breakpoints t = Σ k_i τ_i, each a step the nominal run did not
-    /// take: the paper's loop at t_end = 40 with both delays 2 % off lands on 559 instead of 29
-    /// and takes 752 steps instead of 268), and peak · its peaks per watched signal (no bound on a
-    /// signal that stayed 0 there); `None` without one.
-    /// The runaway rules' step budget and peaks for a run with `breakpoints` and `delay_floor`
-    /// ([`Run::delay_floor`]): runaway.steps × (the nominal run's steps, or the floor this run's
-    /// shortest delay sets when that is more, + the breakpoints its delays add).
-    fn runaway_limits(&self, breakpoints: usize, delay_floor: usize) -> Option<(usize, Peaks)> {
+    /// The runaway rules' limits of this run against its nominal run (`None` without one): at most
+    /// ⌈runaway.steps · (the nominal run's steps, or the floor this run's shortest delay sets
+    /// when that is more, + the breakpoints its delays add)⌉ solver steps, and runaway.peak · the
+    /// nominal peaks per watched signal (no bound on a signal that stayed 0 there). Drawn delays
+    /// add breakpoints t = Σ k_i τ_i, each a step the nominal run did not take: the paper's loop
+    /// at t_end = 40 with both delays 2 % off lands on 559 instead of 29 and takes 752 steps
+    /// instead of 268. A run whose adaptive law is expected stiff where the nominal run's is not
+    /// ([`Run::expects_stiff`]: a drawn μ or filter) takes the implicit path from its start, whose
+    /// steps the nominal run's say nothing about (the paper's loop with μ₂ = 117 takes 2,187
+    /// where μ₂ = 90 takes 704); it keeps its own step budget and the peak rule.
+    fn runaway_limits(&self, shape: &Shape) -> Option<(usize, Peaks)> {
         self.nominal.map(|n| {
-            let steps = n.steps.max(delay_floor) + breakpoints.saturating_sub(n.breakpoints);
-            ((self.runaway.steps * steps as f64).ceil() as usize, n.peaks.bounds(self.runaway.peak))
+            let peaks = n.peaks.bounds(self.runaway.peak);
+            if shape.expects_stiff && !n.expects_stiff {
+                return (usize::MAX, peaks);
+            }
+            let steps = n.steps.max(shape.delay_floor) + shape.breakpoints.saturating_sub(n.breakpoints);
+            ((self.runaway.steps * steps as f64).ceil() as usize, peaks)
         })
     }
 
@@ -79,7 +84,7 @@ impl RunSpec {
     /// [`RunSpec::simulate_until`], with what decided its step budget.
     fn simulate_within_limits(&self, stop: &dyn Fn() -> bool) -> Result<Simulated, String> {
         let s = Scenario::from_document(&self.scenario).map_err(|e| e.to_string())?;
-        simulate(&s, self.max_steps, &|breakpoints, floor| self.runaway_limits(breakpoints, floor), stop)
+        simulate(&s, self.max_steps, &|shape| self.runaway_limits(shape), stop)
     }
 }
 
@@ -132,17 +137,26 @@ pub struct Row {
     pub explicit_stiff: bool,
 }
 
-/// A study run's result, the breakpoints t = Σ k_i τ_i its loop lands on (0 for a sampled-data
-/// loop) and the runaway rules' step budget when that was the run's budget.
+/// What the runaway rules' limits of a run depend on besides its nominal run.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Shape {
+    /// The breakpoints t = Σ k_i τ_i its loop lands on ([`Run::breakpoints`]; 0 when sampled).
+    pub breakpoints: usize,
+    /// [`Run::delay_floor`].
+    pub delay_floor: usize,
+    /// [`Run::expects_stiff`] of a continuous run.
+    pub expects_stiff: bool,
+}
+
+/// A study run's result, its [`Shape`] and the runaway rules' step budget when that was the run's
+/// budget.
 pub(crate) struct Simulated {
     pub result: SimResult,
     /// The run's memory bound, reserved ([`sim::Run::reserve_memory`]) until its row is made.
     pub memory: Option<sim::Held<'static>>,
     /// How long the run waited for that memory (not part of its `wall_ms`).
     pub waited: std::time::Duration,
-    pub breakpoints: usize,
-    /// [`Run::delay_floor`] of the run.
-    pub delay_floor: usize,
+    pub shape: Shape,
     pub runaway_steps: Option<usize>,
     /// Forced onto DOP853 on a stiff adaptive law (looked at only on `explicit`, which alone pays
     /// for the averaged law it needs).
@@ -153,24 +167,26 @@ pub(crate) struct Simulated {
 
 /// Simulates a scenario as its `[simulation]` says ([`Run::of`]), a continuous run within the
 /// step budget `max_steps` (`None`: the run's own, [`sim::default_max_steps`]) and, given its
-/// breakpoints and [`Run::delay_floor`], `runaway` = (steps, peaks): within at most that many steps
-/// and those peaks per watched signal; `Err` when it cannot start.
+/// [`Shape`], `runaway` = (steps, peaks): within at most that many steps and those peaks per
+/// watched signal; `Err` when it cannot start.
 pub(crate) fn simulate(
     s: &Scenario,
     max_steps: Option<usize>,
-    runaway: &dyn Fn(usize, usize) -> Option<(usize, Peaks)>,
+    runaway: &dyn Fn(&Shape) -> Option<(usize, Peaks)>,
     stop: &dyn Fn() -> bool,
 ) -> Result<Simulated, String> {
     let design = s.design().map_err(|e| e.to_string())?;
     let mut settings = RunSettings::of(s);
     let run = Run::of(s, &design);
     let explicit_stiff = sim::explicit_on_stiff_law(&run);
-    let (breakpoints, delay_floor) = (run.breakpoints(), run.delay_floor());
+    let mut shape = Shape { breakpoints: run.breakpoints(), delay_floor: run.delay_floor(), expects_stiff: false };
     let mut runaway_steps = None;
     if let Loop::Continuous(integrator) = &mut settings.mode {
+        // The loop computes it anyway (`dde::Options::expect_stiff`); `run` keeps it.
+        shape.expects_stiff = run.expects_stiff();
         let given = integrator.clone();
         let own = || max_steps.unwrap_or_else(|| sim::default_max_steps(&run, &given));
-        let limits = runaway(breakpoints, delay_floor);
+        let limits = runaway(&shape);
         let budget = match limits {
             // The default is never below BUDGET_MIN_STEPS: a runaway budget within it decides alone
             // (and a Monte Carlo draw skips the averaged law the default needs).
@@ -196,7 +212,7 @@ pub(crate) fn simulate(
         _ => false,
     };
     let fast_rate = own_budget.then(|| sim::fast_rate_culprit(&Run::of(s, &design))).flatten();
-    Ok(Simulated { result, memory, waited, breakpoints, delay_floor, runaway_steps, explicit_stiff, fast_rate })
+    Ok(Simulated { result, memory, waited, shape, runaway_steps, explicit_stiff, fast_rate })
 }
 
 /// A grid value as runs.csv writes it: numbers in [`super::csv_number`]'s shortest round-trip form
@@ -239,8 +255,7 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
         Ok(Simulated {
             result: r,
             runaway_steps,
-            breakpoints,
-            delay_floor,
+            shape: Shape { breakpoints, delay_floor, .. },
             memory: _memory,
             waited,
             explicit_stiff,
