@@ -468,6 +468,12 @@ pub fn fmt_4(v: f64) -> String {
     fmt_short(significant(v, 4))
 }
 
+/// How many times, `x`, to two significant digits in [`fmt_short`]'s form: 3 (not 3.0e0), 47,
+/// 1.1e6.
+pub(crate) fn fmt_ratio(x: f64) -> String {
+    fmt_short(significant(x, 2))
+}
+
 /// Numbers in [`fmt_short`]'s form, comma-separated.
 pub(crate) fn fmt_short_list(v: &[f64]) -> String {
     v.iter().map(|&x| fmt_short(x)).collect::<Vec<_>>().join(", ")

@@ -171,7 +171,7 @@ fn an_explicit_run_of_a_stiff_law_is_cautioned_with_its_steps() {
     // its tolerance: the caution says so, without a count of steps.
     let w = warning(&design(5.0), Method::Explicit).expect("a caution at 4.7ρ");
     assert!(
-        w.contains("4.7e0× the loop's fastest other rate") && w.contains("where its steps may sit once Ω has filled"),
+        w.contains("4.7× the loop's fastest other rate") && w.contains("where its steps may sit once Ω has filled"),
         "{w}"
     );
     assert!(!w.contains("takes about"), "{w}");
@@ -579,7 +579,7 @@ fn band_limited_noise_is_admitted_where_the_default_budget_covers_it() {
         Run::of(&s, &d).simulate(|_| ControlFlow::Continue(()))
     };
     let e = noisy(1400.0).unwrap_err().to_string();
-    assert!(e.starts_with("noise.bandwidth: expected at most 143 cycles per s"), "{e}");
+    assert!(e.starts_with("noise.bandwidth: expected at most 143 Hz"), "{e}");
     let r = noisy(143.0).unwrap();
     assert_eq!(r.outcome, Some(Outcome::Completed), "{:?}", r.outcome);
     // Within the default budget of 10,000 + 100·(9·10 + 10/1) = 20,000, with room to spare.

@@ -222,9 +222,8 @@ fn noise_far_beyond_the_loops_rate_is_refused_by_name() {
     let settings = |b| RunSettings { noise: Some(noise(b)), ..RunSettings::continuous(2.0, 0.1, 1e-6, 1e-6) };
     let e = Run::new(&d, &s.reference, &s.disturbance, settings(1e6)).simulate(go).unwrap_err();
     assert!(
-        e.to_string().starts_with(
-            "noise.bandwidth: expected at most 143 cycles per s (1e2× the loop's fastest rate ρ = 9 rad/s"
-        ),
+        e.to_string()
+            .starts_with("noise.bandwidth: expected at most 143 Hz (100× the loop's fastest rate ρ = 9 rad/s, over 2π"),
         "{e}"
     );
     let r = Run::new(&d, &s.reference, &s.disturbance, settings(50.0)).simulate(go).unwrap();

@@ -114,9 +114,9 @@ pub(crate) fn stiff_advice(design: &Design, i: usize, (mu, lambda_max): (f64, f6
         crate::design::RegressorScaling::Normalized | crate::design::RegressorScaling::Modal => "",
     };
     format!(
-        "channel {} adapts at μ λ_max = {rate:.3e}/{unit}, {:.1e}× the loop's fastest other rate ({rho:.3e}/{unit}): the loop is stiff (the automatic integrator handles it, an explicit one crawls), and a gain this high can drive u_f hard (check max|u_f|); lower design.mu[{i}] to about {}{scaling_hint}",
+        "channel {} adapts at μ λ_max = {rate:.3e}/{unit}, {}× the loop's fastest other rate ({rho:.3e}/{unit}): the loop is stiff (the automatic integrator handles it, an explicit one crawls), and a gain this high can drive u_f hard (check max|u_f|); lower design.mu[{i}] to about {}{scaling_hint}",
         i + 1,
-        rate / rho,
+        crate::settings::fmt_ratio(rate / rho),
         crate::settings::fmt_short(crate::settings::round_down_2(STIFF_RATIO * rho / lambda_max)),
     )
 }

@@ -779,8 +779,8 @@ pub fn explicit_stiff_warning(run: &Run<'_>, set_by: &str) -> Option<String> {
     let (rate, rho) = run.rates();
     let unit = run.design.plant().time_unit;
     let head = format!(
-        "{set_by} on a stiff adaptive law: μλ_max = {rate:.3e}/{unit} is {:.1e}× the loop's fastest other rate ρ = {rho:.3e}/{unit}, and DOP853 is stable only for h·μλ_max ≤ {DOP853_STABLE_H_RATE}",
-        rate / rho
+        "{set_by} on a stiff adaptive law: μλ_max = {rate:.3e}/{unit} is {}× the loop's fastest other rate ρ = {rho:.3e}/{unit}, and DOP853 is stable only for h·μλ_max ≤ {DOP853_STABLE_H_RATE}",
+        settings::fmt_ratio(rate / rho)
     );
     let auto = "the default method, \"auto\", takes the adaptive law implicitly";
     Some(if rate > STIFF_RATIO * rho {
@@ -994,7 +994,7 @@ impl FastRate {
         let outlier = self.next.filter(|_| self.outlier()).map_or(String::new(), |(next_name, r)| {
             // A plant's own rate is not a choice: only the controller's are brought to its scale.
             let advice = if name.ends_with(".A") { "" } else { "; bring it to the loop's time scale" };
-            format!(", {:.1e}× the next fastest ({next_name}, {r:.3e}/{unit}){advice}", rho / r)
+            format!(", {}× the next fastest ({next_name}, {r:.3e}/{unit}){advice}", settings::fmt_ratio(rho / r))
         });
         format!(
             "{name} sets the loop's fastest rate, {rho:.3e}/{unit}: every method's steps follow it (DOP853 is stable for steps up to {DOP853_STABLE_H_RATE} over it, and the implicit method takes only η̂ implicitly), so t_end = {} {unit} takes at least {:.1e} steps{outlier}",
@@ -1040,11 +1040,16 @@ fn check_noise_bandwidth(bandwidth: f64, rho: f64, unit: crate::settings::TimeUn
     if bandwidth <= max || !max.is_finite() {
         return Ok(());
     }
+    let per = match unit {
+        crate::settings::TimeUnit::Seconds => "Hz".to_string(),
+        _ => format!("cycles per {unit}"),
+    };
     Err(KeyError::new(
         "noise.bandwidth",
         format!(
-            "expected at most {} cycles per {unit} ({MAX_NOISE_OVER_RATE:e}× the loop's fastest rate ρ = {} rad/{unit}: the loop filters out noise beyond its bandwidth, and the integrator would resolve it at several steps a cycle), found {}; about 10× the loop's bandwidth is the usual choice",
+            "expected at most {} {per} ({}× the loop's fastest rate ρ = {} rad/{unit}, over 2π: the loop filters out noise beyond its bandwidth, and the integrator would resolve it at several steps a cycle), found {}; about 10× the loop's bandwidth is the usual choice",
             settings::fmt_short(crate::settings::three_digits_down(max)),
+            settings::fmt_ratio(MAX_NOISE_OVER_RATE),
             settings::fmt_4(rho),
             settings::fmt_short(bandwidth)
         ),

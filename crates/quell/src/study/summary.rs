@@ -132,7 +132,10 @@ impl StudyMeta {
             grid: study
                 .grid
                 .iter()
-                .map(|a| AxisMeta { key: a.key.clone(), values: a.values.iter().map(|v| v.to_string()).collect() })
+                .map(|a| AxisMeta {
+                    key: a.key.clone(),
+                    values: a.values.iter().map(super::sweep::grid_text).collect(),
+                })
                 .collect(),
             draws: study.draws(),
             seed: study.monte_carlo.as_ref().map(|mc| mc.seed),

@@ -506,6 +506,10 @@ fn grid_values_are_written_in_their_shortest_form() {
     assert_eq!(text("v = -inf"), "-inf");
     assert_eq!(text("v = 7"), "7");
     assert_eq!(text("v = 1e300").parse::<f64>(), Ok(1e300));
+    // summary.json's grid names each value as runs.csv does (it wrote 1e-7 as "0.0000001").
+    let study = study("[grid]\n\"design.beta\" = [1e-7, 0.01]\n").unwrap();
+    let meta = super::StudyMeta::new(&study, super::Shard::ALL);
+    assert_eq!(meta.grid[0].values, ["1e-7", "0.01"]);
 }
 
 /// A sampled-data study that draws a delay is refused before any run, naming the draw: every draw
