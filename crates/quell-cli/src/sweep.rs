@@ -86,6 +86,9 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     }
     let pool = thread_pool(args.jobs, n - kept.len())?;
     prepare_out(&args.out, OUTPUTS)?;
+    if let Some(w) = study.fast_rate_caution() {
+        eprintln!("⚠ warning: {w}");
+    }
     let journal = Journal::create(&args.out, &meta, &kept)
         .map_err(|e| Failure::Input(format!("--out {}: {e}; choose another output directory", args.out.display())))?;
 

@@ -587,6 +587,28 @@ fn a_study_forced_onto_dop853_with_a_stiff_point_is_cautioned() {
     }
 }
 
+/// A grid point whose β puts a rate far beyond the loop's is cautioned before the sweep's runs
+/// (over 0.5 s, before the first delay, the run itself stays cheap: the caution is the point).
+#[test]
+fn a_sweep_over_a_rate_far_faster_than_the_loop_is_cautioned_before_its_runs() {
+    let dir_tmp = scratch("fast-rate");
+    let dir = dir_tmp.path();
+    paper_into(dir);
+    let path = write_study(
+        dir,
+        "study.toml",
+        "scenario = \"paper.toml\"\n[simulation]\nt_end = 0.5\n[grid]\n\"design.beta\" = [0.01, 1e-7]\n",
+    );
+    let out = dir.join("out").display().to_string();
+    let o = quell(&["sweep", &path, "--out", &out, "--no-plots"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("⚠ warning: 1 of the 2 grid points: the first, design.beta = 1e-7: 1/design.beta sets the loop's fastest rate, 1.000e7/s"),
+        "{}",
+        stderr(&o)
+    );
+}
+
 /// A tuning forced onto DOP853 whose searches run a μ that makes the adaptive law stiff is
 /// cautioned before them (channel 1's search reaches μ = [2000, 30]: 37ρ); up to the paper's μ it
 /// is not, and a search whose other channel is stiff at the scenario's μ is (μ₂ = 1000 while μ₁ is

@@ -885,6 +885,9 @@ fn sweep_frame(
         ));
     }
     let pool = thread_pool(py, jobs, usize::try_from(study.len()).unwrap_or(usize::MAX))?;
+    if let Some(w) = py.detach(|| study.fast_rate_caution()) {
+        crate::errors::warn(py, &crate::errors::in_python(w))?;
+    }
     let (swept, interrupt) = crate::interrupt::interruptible_keeping(py, |stop| {
         let opts = SweepOptions { stop: Some(&stop), ..SweepOptions::default() };
         pool.install(|| study::sweep(study, &opts))

@@ -97,6 +97,14 @@ def test_continuous_runs_the_continuous_loop_of_a_sampled_scenario():
         quell.simulate(sampled, continuous="yes")
 
 
+def test_a_sweep_over_a_rate_far_faster_than_the_loop_is_cautioned_before_its_runs():
+    # β = 1e-7 puts 1/β at 1e7/s; over 0.5 s (before the first delay) the run stays cheap.
+    p = quell.paper_example()
+    study = quell.Study(p, grid={"design.beta": [0.01, 1e-7]}, simulation={"t_end": 0.5})
+    with pytest.warns(UserWarning, match=r"^1 of the 2 grid points: the first, design.beta = 1e-7: 1/design.beta sets "):
+        quell.sweep(study, jobs=1)
+
+
 def test_dop853_forced_on_a_stiff_law_is_cautioned_naming_where_it_was_set():
     # μ × 5 puts channel 2 at 4.7ρ: DOP853's steps may sit at its stability bound there.
     p = quell.paper_example()

@@ -544,6 +544,9 @@ fn runaways_end_within_their_default_budgets_with_a_bounded_history() {
 /// it starts, naming the rate's source: β = 1e-7 on the paper's example puts 1/β at 1e7/s, 1.1e6
 /// times the next fastest rate (the reference filter's pole at −9), and 2 s take 1e7·2/6.1 = 3.3e6
 /// steps; the paper's own β is not cautioned, and over 1e6 s its 9/s are, without a culprit.
+/// β = 1e-6 over 5 s takes 8.2e5 steps, under the million, but the records of its last delay
+/// (τ_max = 3 s) fill the history's 1 GiB cap: that run ended at t = 2.9 s with nothing said
+/// before; it is cautioned with the history's size.
 #[test]
 fn a_rate_far_faster_than_the_loop_is_cautioned_by_its_source() {
     let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
@@ -555,8 +558,19 @@ fn a_rate_far_faster_than_the_loop_is_cautioned_by_its_source() {
         quell::sim::fast_rate_warning(&Run::of(&s, &d).settings(settings))
     };
     let w = warning(1e-7, 2.0).expect("a caution");
-    assert!(w.starts_with("1/design.beta sets the loop's fastest rate, 1.000e7/s: "), "{w}");
-    assert!(w.contains("t_end = 2 s takes at least 3.3e6 steps, 1.1e6× the next fastest (design.reference_filter_poles, 9.000e0/s)"), "{w}");
+    assert!(
+        w.starts_with("1/design.beta sets the loop's fastest rate, 1.000e7/s, 1.1e6× the next fastest (design.reference_filter_poles, 9.000e0/s): "),
+        "{w}"
+    );
+    assert!(
+        w.contains("t_end = 2 s takes at least 3.3e6 steps") && w.ends_with("; bring it to the loop's time scale"),
+        "{w}"
+    );
+    // Memory alone: 2 (the ring's doubling) · ρτ_max/6.1 records of 8·(8·27 + 9) bytes, in MiB.
+    let w = warning(1e-6, 5.0).expect("a caution for the history");
+    let mib: f64 = 2.0 * 1e6 * 3.0 / 6.1 * 8.0 * (8.0 * 27.0 + 9.0) / 1048576.0;
+    let text = format!("takes at least 8.2e5 steps and its delay history (the steps of the last τ_max = 3 s) at least {} MB, beyond the run's budget of 1024 MB", mib.round());
+    assert!(w.contains(&text), "{w}\n{text}");
     assert_eq!(warning(1.0, 100.0), None);
     let long = warning(1.0, 1e6).expect("a caution over 1e6 s");
     assert!(

@@ -944,14 +944,16 @@ pub const FAST_RATE_STEPS: f64 = 1e6;
 const FAST_RATE_OUTLIER: f64 = 100.0;
 
 /// A caution before a continuous run whose fastest rate ρ ([`loop_rates`], the adaptive law aside,
-/// and band-limited noise) makes it take more than [`FAST_RATE_STEPS`] steps on any method:
+/// and band-limited noise) makes it take more than [`FAST_RATE_STEPS`] steps on any method, or
+/// hold more records in its delay history than its memory budget allows ([`history_bound`]):
 /// DOP853's stable steps are at most [`DOP853_STABLE_H_RATE`]/ρ, and the implicit method takes only
 /// η̂ implicitly. Names the rate's source and, where it is a hundred times the next, says to bring
 /// it to the loop's time scale (β = 1e-7 on the paper's example: 1/β = 1e7/s against 9/s, 2 s took
-/// 3.7 s and 646 MB before the history's cap ended it, with nothing said of β). `None` otherwise.
+/// 3.7 s and 646 MB before the history's cap ended it, with nothing said of β; β = 1e-6 over 5 s,
+/// 8.2e5 steps, filled the 1 GiB cap at t = 2.9 s). `None` otherwise.
 pub fn fast_rate_warning(run: &Run<'_>) -> Option<String> {
     let fast = FastRate::of(run)?;
-    (fast.steps > FAST_RATE_STEPS).then(|| fast.text(run))
+    (fast.steps > FAST_RATE_STEPS || fast.history_over(run)).then(|| fast.text(run))
 }
 
 /// For a run that its step budget or the history's cap ended: the caution of
@@ -989,17 +991,55 @@ impl FastRate {
         self.next.is_some_and(|(_, r)| self.rho > FAST_RATE_OUTLIER * r)
     }
 
+    /// The longest delay τ_max, the bytes of the records the rate's steps put within it (twice
+    /// that: the history's ring doubles), and the run's history budget.
+    fn history(&self, run: &Run<'_>) -> (f64, f64, usize) {
+        let Loop::Continuous(integrator) = &run.settings.mode else { return (0.0, 0.0, usize::MAX) };
+        let (p, q) = (run.design.plant(), run.design.q());
+        let delays = loop_delays(p, run.truth, run.settings.actuator.as_ref());
+        let tau_max = delays.iter().copied().fold(0.0, f64::max).min(run.settings.t_end);
+        let record = dde::record_bytes(delayed_prefix(p.n(), q, p.m())) as f64;
+        (tau_max, 2.0 * self.rho * tau_max / DOP853_STABLE_H_RATE * record, history_bound(run, integrator))
+    }
+
+    fn history_over(&self, run: &Run<'_>) -> bool {
+        let (_, bytes, budget) = self.history(run);
+        bytes > budget as f64
+    }
+
     fn text(&self, run: &Run<'_>) -> String {
         let (name, rho, unit) = (self.name, self.rho, run.design.plant().time_unit);
-        let outlier = self.next.filter(|_| self.outlier()).map_or(String::new(), |(next_name, r)| {
-            // A plant's own rate is not a choice: only the controller's are brought to its scale.
-            let advice = if name.ends_with(".A") { "" } else { "; bring it to the loop's time scale" };
-            format!(", {}× the next fastest ({next_name}, {r:.3e}/{unit}){advice}", settings::fmt_ratio(rho / r))
+        let outlier = self.next.filter(|_| self.outlier());
+        let ratio = outlier.map_or(String::new(), |(next_name, r)| {
+            format!(", {}× the next fastest ({next_name}, {r:.3e}/{unit})", settings::fmt_ratio(rho / r))
         });
+        // A plant's own rate is not a choice: only the controller's are brought to its scale.
+        let advice = match outlier {
+            Some(_) if !name.ends_with(".A") => "; bring it to the loop's time scale",
+            _ => "",
+        };
         format!(
-            "{name} sets the loop's fastest rate, {rho:.3e}/{unit}: every method's steps follow it (DOP853 is stable for steps up to {DOP853_STABLE_H_RATE} over it, and the implicit method takes only η̂ implicitly), so t_end = {} {unit} takes at least {:.1e} steps{outlier}",
+            "{name} sets the loop's fastest rate, {rho:.3e}/{unit}{ratio}: every method's steps follow it (DOP853 is stable for steps up to {DOP853_STABLE_H_RATE} over it, and the implicit method takes only η̂ implicitly), so t_end = {} {unit} takes at least {:.1e} steps{}{advice}",
             crate::settings::fmt_short(run.settings.t_end),
-            self.steps
+            self.steps,
+            self.history_text(run)
+        )
+    }
+
+    /// Where the delay history outgrows the run's memory budget: by how much.
+    fn history_text(&self, run: &Run<'_>) -> String {
+        let (tau_max, bytes, budget) = self.history(run);
+        if bytes <= budget as f64 {
+            return String::new();
+        }
+        // In MiB, as the history's own message counts them (its 1 GiB cap is "1024 MB").
+        let mb = |b: f64| crate::settings::fmt_short((b / 1048576.0).round().max(1.0));
+        format!(
+            " and its delay history (the steps of the last τ_max = {} {}) at least {} MB, beyond the run's budget of {} MB, where the run would end",
+            crate::settings::fmt_4(tau_max),
+            run.design.plant().time_unit,
+            mb(bytes),
+            mb(budget as f64)
         )
     }
 }

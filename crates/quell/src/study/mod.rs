@@ -148,6 +148,10 @@ impl Default for Runaway {
 
 const RUNAWAY_KEYS: &[&str] = &["peak", "steps"];
 
+/// How many grid points [`Study::fast_rate_caution`] checks before a sweep (each a design and
+/// the loop's eigenvalues, about 1 ms on the paper's example).
+pub const FAST_RATE_POINTS: usize = 64;
+
 /// What a grid point's nominal run did: the scale [`Runaway`] compares a draw with.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Nominal {
@@ -538,20 +542,53 @@ impl Study {
         let s = Scenario::from_document(&self.spec_with_nominal(first.run)?.scenario).ok()?;
         let design = s.design().ok()?;
         let w = crate::sim::explicit_stiff_warning(&crate::sim::Run::of(&s, &design), crate::sim::EXPLICIT_IN_FILE)?;
-        let values: Vec<String> = (self.grid.iter().zip(self.grid_index(first.point)))
-            .map(|(a, i)| format!("{} = {}", a.key, sweep::grid_text(&a.values[i])))
-            .collect();
+        let values = self.point_values(first.point);
         let at = match (values.is_empty(), self.draws() > 1) {
             (true, false) => String::new(),
             (true, true) => format!(", draw {}", first.draw),
-            (false, false) => format!(", {}", values.join(", ")),
-            (false, true) => format!(", {}, draw {}", values.join(", "), first.draw),
+            (false, false) => format!(", {values}"),
+            (false, true) => format!(", {values}, draw {}", first.draw),
         };
         Some(format!(
             "{stiff} of the {} runs carried out ran on DOP853 at a stiff adaptive law, so their figures may be off by more than the tolerance; the first, run {}{at}: {w}",
             rows.len(),
             first.run
         ))
+    }
+
+    /// Grid point `point`'s values, `key = value, …` (empty without a grid).
+    fn point_values(&self, point: usize) -> String {
+        let values: Vec<String> = (self.grid.iter().zip(self.grid_index(point)))
+            .map(|(a, i)| format!("{} = {}", a.key, sweep::grid_text(&a.values[i])))
+            .collect();
+        values.join(", ")
+    }
+
+    /// The caution before a sweep whose runs a rate far faster than the loop makes costly
+    /// ([`crate::sim::fast_rate_warning`], more than 10⁶ steps a run), from the nominal scenarios
+    /// of its first [`FAST_RATE_POINTS`] grid points (draws aside: a draw perturbs, it does not
+    /// set a time scale): how many of those, and the first one's values and caution. `None` when
+    /// none is. A grid over design.beta reaching 1e-7 had said nothing before its runs, each of
+    /// which spends its budget or the history's cap.
+    pub fn fast_rate_caution(&self) -> Option<String> {
+        let checked = self.points().min(FAST_RATE_POINTS);
+        let warning = |point: usize| {
+            let s = Scenario::from_document(&self.document(point, None)).ok()?;
+            let design = s.design().ok()?;
+            crate::sim::fast_rate_warning(&crate::sim::Run::of(&s, &design))
+        };
+        let mut flagged = (0..checked).filter_map(|p| warning(p).map(|w| (p, w)));
+        let (first, w) = flagged.next()?;
+        let count = 1 + flagged.count();
+        Some(match (self.grid.is_empty(), checked < self.points()) {
+            (true, _) => format!("every run: {w}"),
+            (false, more) => format!(
+                "{count} of the {}{checked} grid points{}: the first, {}: {w}",
+                if more { "first " } else { "" },
+                if more { " checked" } else { "" },
+                self.point_values(first)
+            ),
+        })
     }
 
     /// The scenario's unit of time (`[plant] time_unit`, checked when the study was read).
