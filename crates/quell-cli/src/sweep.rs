@@ -86,9 +86,6 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     }
     let pool = thread_pool(args.jobs, n - kept.len())?;
     prepare_out(&args.out, OUTPUTS)?;
-    if let Some(w) = study.fast_rate_caution() {
-        eprintln!("⚠ warning: {w}");
-    }
     let journal = Journal::create(&args.out, &meta, &kept)
         .map_err(|e| Failure::Input(format!("--out {}: {e}; choose another output directory", args.out.display())))?;
 
@@ -97,6 +94,10 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     let interrupt = Interrupt::install(
         "interrupted twice; stopped without writing runs.csv: the rows done are in runs.partial.csv, which --resume reads",
     );
+    let stop = || interrupt.stop_flag().load(std::sync::atomic::Ordering::Relaxed);
+    if let Some(w) = study.fast_rate_caution(&stop) {
+        eprintln!("⚠ warning: {w}");
+    }
     let bar = crate::progress_bar(n as u64, "sweeping {bar:40} {pos}/{len} runs, {elapsed_precise} elapsed, ETA {eta}");
     bar.inc(kept.len() as u64);
     let on_row = |row: &Row| {

@@ -885,7 +885,9 @@ fn sweep_frame(
         ));
     }
     let pool = thread_pool(py, jobs, usize::try_from(study.len()).unwrap_or(usize::MAX))?;
-    if let Some(w) = py.detach(|| study.fast_rate_caution()) {
+    // Ctrl-C during the check raises KeyboardInterrupt before any run.
+    let caution = crate::interrupt::interruptible_with(py, |stop| study.fast_rate_caution(&|| stop.load(Relaxed)))?;
+    if let Some(w) = caution {
         crate::errors::warn(py, &crate::errors::in_python(w))?;
     }
     let (swept, interrupt) = crate::interrupt::interruptible_keeping(py, |stop| {

@@ -134,8 +134,9 @@ pub fn tune(
     let study = py.detach(|| study::Study::from_table(&doc, None)).map_err(|e| argument_error(py, &e))?;
     let channels = study.m;
     let pool = thread_pool(py, jobs, channels * study.tune.as_ref().map_or(1, |t| t.points))?;
-    let cautions = py
-        .detach(|| study::tune_stiff_warnings(&study).into_iter().chain(study.fast_rate_caution()).collect::<Vec<_>>());
+    let cautions = py.detach(|| {
+        study::tune_stiff_warnings(&study).into_iter().chain(study.fast_rate_caution(&|| false)).collect::<Vec<_>>()
+    });
     for w in cautions {
         crate::errors::warn(py, &crate::errors::in_python(w))?;
     }

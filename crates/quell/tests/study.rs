@@ -440,29 +440,32 @@ fn a_draw_stiff_where_its_nominal_run_is_not_is_not_taken_for_a_runaway() {
 /// A grid over design.beta reaching 1e-7 is cautioned before its runs, from each point's nominal
 /// scenario: 1/β = 1e7/s and 1e6/s take the paper's loop past its history's cap over 5 s (each
 /// such run spends a second and 1 GiB before the cap ends it). Only the first 64 points are
-/// looked at, and a study whose rates are the loop's own says nothing.
+/// looked at (for at most 0.25 s: 64 of the paper's designs take about 10 ms), a stop ends the
+/// check, and a study whose rates are the loop's own says nothing.
 #[test]
 fn a_grid_point_with_a_rate_far_faster_than_the_loop_is_cautioned_before_the_runs() {
     let study = |grid: &str| {
         Study::from_toml(&format!("[simulation]\nt_end = 5.0\n[grid]\n\"design.beta\" = {grid}\n"), None).unwrap()
     };
-    let w = study("[0.01, 1e-7, 1e-6]").fast_rate_caution().expect("a caution");
+    let w = study("[0.01, 1e-7, 1e-6]").fast_rate_caution(&|| false).expect("a caution");
     assert!(
         w.starts_with("2 of the 3 grid points: the first, design.beta = 1e-7: 1/design.beta sets the loop's fastest rate, 1.000e7/s"),
         "{w}"
     );
-    assert_eq!(study("[0.01, 1.0]").fast_rate_caution(), None);
+    assert_eq!(study("[0.01, 1.0]").fast_rate_caution(&|| false), None);
+    // A stop (Ctrl-C) ends the check: nothing is said.
+    assert_eq!(study("[1e-7]").fast_rate_caution(&|| true), None);
     let many: Vec<String> = (0..70)
         .map(|k| if k == 0 || k == 66 { "1e-7".into() } else { format!("{}", 0.01 + 0.001 * k as f64) })
         .collect();
-    let w = study(&format!("[{}]", many.join(", "))).fast_rate_caution().expect("a caution");
+    let w = study(&format!("[{}]", many.join(", "))).fast_rate_caution(&|| false).expect("a caution");
     assert!(w.starts_with("1 of the first 64 grid points checked: the first, design.beta = 1e-7: "), "{w}");
     let plain = Study::from_toml(
         "[simulation]\nt_end = 5.0\n[monte_carlo]\nruns = 3\n\"truth.A\" = { relative = 0.05 }\n",
         None,
     )
     .unwrap();
-    assert_eq!(plain.fast_rate_caution(), None);
+    assert_eq!(plain.fast_rate_caution(&|| false), None);
 }
 
 /// A study's runs forced onto DOP853 at a stiff adaptive law are counted and the first named,

@@ -148,9 +148,12 @@ impl Default for Runaway {
 
 const RUNAWAY_KEYS: &[&str] = &["peak", "steps"];
 
-/// How many grid points [`Study::fast_rate_caution`] checks before a sweep (each a design and
-/// the loop's eigenvalues, about 1 ms on the paper's example).
+/// How many grid points [`Study::fast_rate_caution`] checks before a sweep at most (each a design
+/// and the loop's eigenvalues, about 0.1 ms on the paper's example).
 pub const FAST_RATE_POINTS: usize = 64;
+
+/// How long [`Study::fast_rate_caution`] checks grid points at most, after the first.
+pub const FAST_RATE_CHECK_TIME: std::time::Duration = std::time::Duration::from_millis(250);
 
 /// What a grid point's nominal run did: the scale [`Runaway`] compares a draw with.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -565,21 +568,29 @@ impl Study {
     }
 
     /// The caution before a sweep whose runs a rate far faster than the loop makes costly
-    /// ([`crate::sim::fast_rate_warning`], more than 10⁶ steps a run), from the nominal scenarios
-    /// of its first [`FAST_RATE_POINTS`] grid points (draws aside: a draw perturbs, it does not
-    /// set a time scale): how many of those, and the first one's values and caution. `None` when
-    /// none is. A grid over design.beta reaching 1e-7 had said nothing before its runs, each of
-    /// which spends its budget or the history's cap.
-    pub fn fast_rate_caution(&self) -> Option<String> {
-        let checked = self.points().min(FAST_RATE_POINTS);
+    /// ([`crate::sim::fast_rate_warning`]: more than 10⁶ steps a run, or a delay history beyond
+    /// its budget), from the nominal scenarios of its first grid points (draws aside: a draw
+    /// perturbs, it does not set a time scale), at most [`FAST_RATE_POINTS`] of them and for at
+    /// most [`FAST_RATE_CHECK_TIME`] (each costs a design: 0.85 s at 200 states), until `stop`:
+    /// how many of those, and the first one's values and caution. `None` when none is. A grid
+    /// over design.beta reaching 1e-7 had said nothing before its runs, each of which spends its
+    /// budget or the history's cap.
+    pub fn fast_rate_caution(&self, stop: &dyn Fn() -> bool) -> Option<String> {
         let warning = |point: usize| {
             let s = Scenario::from_document(&self.document(point, None)).ok()?;
             let design = s.design().ok()?;
             crate::sim::fast_rate_warning(&crate::sim::Run::of(&s, &design))
         };
-        let mut flagged = (0..checked).filter_map(|p| warning(p).map(|w| (p, w)));
-        let (first, w) = flagged.next()?;
-        let count = 1 + flagged.count();
+        let started = std::time::Instant::now();
+        let (mut checked, mut flagged) = (0, Vec::new());
+        while checked < self.points().min(FAST_RATE_POINTS)
+            && (checked == 0 || started.elapsed() < FAST_RATE_CHECK_TIME)
+            && !stop()
+        {
+            flagged.extend(warning(checked).map(|w| (checked, w)));
+            checked += 1;
+        }
+        let (count, (first, w)) = (flagged.len(), flagged.into_iter().next()?);
         Some(match (self.grid.is_empty(), checked < self.points()) {
             (true, _) => format!("every run: {w}"),
             (false, more) => format!(
