@@ -514,7 +514,7 @@ fn a_run_ended_by_a_rate_far_faster_than_the_loop_names_it() {
     for (row, rate) in [(&rows[1], "1.000e5/s"), (&rows[2], "1.000e7/s")] {
         assert_eq!(row.outcome, Outcome::Failed);
         assert!(row.reason.starts_with("the solver needed more than 1000 steps by t = "), "{}", row.reason);
-        let named = format!("; 1/design.beta sets the loop's fastest rate, {rate}: ");
+        let named = format!("; 1/design.beta sets the loop's fastest rate, {rate}, ");
         assert!(
             row.reason.contains(&named) && row.reason.ends_with("bring it to the loop's time scale"),
             "{}",
