@@ -286,6 +286,41 @@ fn a_pole_repeated_beyond_rank_b_is_refused() {
     assert_repeated(&A, &B, &reals(&[-1.0, -1.0, -1.2, -1.2]), 1e-9);
 }
 
+/// A slow plant in fast units is placed as its fast twin: the Wood–Berry column's observer (A, C
+/// of `tests/data/wood-berry.toml`, in minutes; poles −0.6 … −1.2) with its time in units α times
+/// shorter. At α = 3.3e-9 (poles −2e-9 … −4e-9) the four poles were "one pole requested 4 times"
+/// (the tolerance was absolute below |p| = 1: helper tryout, 2026-12-05), and the check of the gain
+/// absolute too. Each placement is judged against its own poles, |λ − p|/|p| (eigenvalues of the
+/// formed A − LC), and a pole truly repeated beyond rank C at that scale is refused at its value.
+#[test]
+fn a_slow_problem_is_placed_relative_to_its_own_poles() {
+    let A = DMatrix::from_diagonal(&quell::nalgebra::DVector::from_vec(vec![
+        -1.0 / 16.7,
+        -1.0 / 21.0,
+        -1.0 / 10.9,
+        -1.0 / 14.4,
+    ]));
+    let C = DMatrix::from_row_slice(2, 4, &[1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0]);
+    let poles = reals(&[-0.6, -0.755952629936924, -0.9524406311809199, -1.2]);
+    for alpha in [1.0, 1e-3, 3.3e-9, 1e-12, 1e-30] {
+        let (As, ps): (DMatrix<f64>, Vec<C64>) = (&A * alpha, poles.iter().map(|p| p * alpha).collect());
+        let L = place(&As.transpose(), &C.transpose(), &ps).unwrap_or_else(|e| panic!("α = {alpha}: {e}")).transpose();
+        let eigs = eigenvalues(&(&As - &L * &C));
+        let mut worst: f64 = 0.0;
+        for p in &ps {
+            let nearest = eigs.iter().map(|l| (l - p).norm()).fold(f64::INFINITY, f64::min);
+            worst = worst.max(nearest / p.norm());
+        }
+        assert!(worst < 1e-9, "α = {alpha}: relative pole error {worst:e}");
+    }
+    let alpha = 3.3e-9;
+    let repeated = reals(&[-2e-9, -2e-9, -2e-9, -4e-9]);
+    assert_eq!(
+        place(&(&A * alpha).transpose(), &C.transpose(), &repeated),
+        Err(PlaceError::Multiplicity { pole: re(-2e-9), multiplicity: 3, rank: 2 })
+    );
+}
+
 // ---------------------------------------------------------------- eigenvector condition
 
 /// κ₂(X) of the closed-loop eigenvector matrix, by closed forms.

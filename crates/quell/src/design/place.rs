@@ -169,6 +169,13 @@ pub fn place(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[Complex<f64>]) -> Resu
     if n == 0 {
         return Ok(DMatrix::zeros(m, 0));
     }
+    let s = unit_time_scale(poles);
+    let As = A / s;
+    if s != 1.0 && As.iter().all(|x| x.is_finite()) {
+        // eig(A − BK) = p ⇔ eig(A/s − B K/s) = p/s, exactly for a power of two s.
+        let scaled: Vec<C64> = poles.iter().map(|p| p / s).collect();
+        return place(&As, B, &scaled).map(|K| K * s).map_err(|e| e.rescaled(s));
+    }
 
     let tol = staircase_tol(A, B);
     let st = staircase(A, B, tol);
@@ -224,6 +231,34 @@ pub fn place(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[Complex<f64>]) -> Resu
     }
 }
 
+/// The power of two s with max |p|/s in (½, 1] when every pole is slower than 1 (else 1): the
+/// time scale [`place`] works in. Its tolerances are relative to max(1, |p|), so poles of a slow
+/// plant in seconds (the Wood–Berry column with its time in s ×3·10⁷: −2e-8 … −4e-8) were all
+/// "the same pole" and every check absolute; in units of s they are what they are in minutes.
+fn unit_time_scale(poles: &[C64]) -> f64 {
+    let fastest = poles.iter().map(|p| p.norm()).fold(0.0, f64::max);
+    if fastest > 0.0 && fastest < 1.0 {
+        2f64.powi(fastest.log2().ceil() as i32)
+    } else {
+        1.0
+    }
+}
+
+impl PlaceError {
+    /// The error of the problem at time scale `s` ([`unit_time_scale`]) in the caller's: its
+    /// poles times s.
+    fn rescaled(self, s: f64) -> PlaceError {
+        match self {
+            PlaceError::Multiplicity { pole, multiplicity, rank } => {
+                PlaceError::Multiplicity { pole: pole * s, multiplicity, rank }
+            }
+            PlaceError::NotConjugateClosed { pole } => PlaceError::NotConjugateClosed { pole: pole * s },
+            PlaceError::NonFinite { pole } => PlaceError::NonFinite { pole: pole * s },
+            other => other,
+        }
+    }
+}
+
 /// Pair up complex poles with their conjugates; real poles are those with zero imaginary part.
 fn classify(poles: &[C64]) -> Result<Vec<Slot>, PlaceError> {
     let mut used = vec![false; poles.len()];
@@ -272,14 +307,16 @@ fn expand(slots: &[Slot]) -> Vec<C64> {
     out
 }
 
-fn same_pole(a: C64, b: C64) -> bool {
-    (a - b).norm() <= SAME_POLE_RTOL * a.norm().max(b.norm()).max(1.0)
+/// Whether a and b count as one pole, relative to the larger or to `unit` ([`unit_time_scale`]).
+fn same_pole(a: C64, b: C64, unit: f64) -> bool {
+    (a - b).norm() <= SAME_POLE_RTOL * a.norm().max(b.norm()).max(unit)
 }
 
 /// The pole requested most often and how many times (`None` for no poles).
 pub(crate) fn most_repeated(poles: &[C64]) -> Option<(C64, usize)> {
     // The first of equally repeated poles (λ before λ̄ of a pair): max_by_key keeps the last.
-    poles.iter().rev().map(|&p| (p, poles.iter().filter(|&&q| same_pole(p, q)).count())).max_by_key(|&(_, k)| k)
+    let unit = unit_time_scale(poles);
+    poles.iter().rev().map(|&p| (p, poles.iter().filter(|&&q| same_pole(p, q, unit)).count())).max_by_key(|&(_, k)| k)
 }
 
 /// The fallback placement when KNV0's gain fails the check. A generic feedback K₀ makes
@@ -1000,16 +1037,17 @@ fn residual(M: &DMatrix<f64>, lambda: C64, v: &DVector<C64>) -> DVector<C64> {
     })
 }
 
-/// Largest |λ − p| / max(1, |p|) after matching each requested pole p, in order, to the nearest
-/// eigenvalue not yet matched (a greedy matching: it can only overstate the error).
-fn matching_error(eigs: &[C64], poles: &[C64]) -> f64 {
+/// Largest |λ − p| / max(s, |p|), s the poles' [`unit_time_scale`] (1 within [`place`]), after
+/// matching each requested pole p, in order, to the nearest eigenvalue not yet matched (a greedy
+/// matching: it can only overstate the error).
+pub(crate) fn matching_error(eigs: &[C64], poles: &[C64]) -> f64 {
     let mut free: Vec<C64> = eigs.to_vec();
-    let mut worst: f64 = 0.0;
+    let (mut worst, unit): (f64, f64) = (0.0, unit_time_scale(poles));
     for &p in poles {
         let Some(l) = take_nearest(&mut free, p) else {
             return f64::INFINITY;
         };
-        worst = worst.max((l - p).norm() / p.norm().max(1.0));
+        worst = worst.max((l - p).norm() / p.norm().max(unit));
     }
     worst
 }

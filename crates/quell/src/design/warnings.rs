@@ -3,7 +3,6 @@
 //! placed pole repeated beyond the rank of C is refused by [`super::place()`]). Reported as warnings, with the figures and what
 //! to do, by `quell design`, `design.json`, `quell run` and Python (`warnings.warn`).
 
-use nalgebra::Complex;
 use serde::Serialize;
 
 use super::{Design, DesignSpec, ObserverChoice};
@@ -45,7 +44,7 @@ pub fn warnings(design: &Design, spec: &DesignSpec) -> Vec<DesignWarning> {
     let (multiplicity, error) = match &spec.observer {
         ObserverChoice::Poles(poles) => (
             super::place::most_repeated(poles).map_or(0, |(_, k)| k),
-            Some(matching_error(design.observer_eigenvalues(), poles)),
+            Some(super::place::matching_error(design.observer_eigenvalues(), poles)),
         ),
         ObserverChoice::Gain(_) => (1, None),
     };
@@ -101,20 +100,6 @@ pub fn warnings(design: &Design, spec: &DesignSpec) -> Vec<DesignWarning> {
 /// κ₂ above [`FRAGILE_CONDITION`], or NaN.
 fn fragile(kappa: f64) -> bool {
     kappa.is_nan() || kappa > FRAGILE_CONDITION
-}
-
-/// max |λ − p| / max(1, |p|) over a greedy nearest matching of eigenvalues to requested poles.
-fn matching_error(eigs: &[Complex<f64>], poles: &[Complex<f64>]) -> f64 {
-    let mut free = eigs.to_vec();
-    let mut worst: f64 = 0.0;
-    for &p in poles {
-        let Some((j, d)) = free.iter().map(|&l| (l - p).norm()).enumerate().min_by(|a, b| a.1.total_cmp(&b.1)) else {
-            return f64::INFINITY;
-        };
-        free.swap_remove(j);
-        worst = worst.max(d / p.norm().max(1.0));
-    }
-    worst
 }
 
 #[cfg(test)]
