@@ -348,6 +348,26 @@ pub(crate) fn check_horizon(t_end: f64, output_step: f64) -> Result<(), KeyError
     Ok(())
 }
 
+/// The shortest horizon of the continuous loop, in the model's unit of time: the integrator resolves
+/// t to 1e-14·max(1, |t|) (its least step, `dde::h_min`), so shorter horizons leave it fewer than
+/// 10⁴ distinguishable steps (t_end = 1e-15 had ended as "the solver's step size underflowed", a
+/// run failure, exit 1).
+pub const MIN_INTEGRATOR_T_END: f64 = 1e-10;
+
+/// [`MIN_INTEGRATOR_T_END`] ≤ t_end: `simulation.t_end` of the continuous loop.
+pub(crate) fn check_integrator_horizon((t_end, unit): (f64, TimeUnit)) -> Result<(), KeyError> {
+    if t_end >= MIN_INTEGRATOR_T_END {
+        return Ok(());
+    }
+    Err(KeyError::new(
+        "simulation.t_end",
+        format!(
+            "expected t_end ≥ {MIN_INTEGRATOR_T_END:e} {unit} in the continuous loop (its integrator resolves time to 1e-14 of max(1, |t|), so a shorter horizon leaves too few distinguishable steps), found {}; write the model in a time unit in which its horizon is at least that (t → αt: A, B, D, every pole and μ divided by α; delays, β, t_end and output_step multiplied by it), or run the sampled-data loop (simulation.sample_time)",
+            fmt_short(t_end)
+        ),
+    ))
+}
+
 /// The continuous loop's delays against its horizon: the integrator's steps are at most min τ long
 /// (over the nonzero delays), so t_end / τ must not exceed [`MAX_SAMPLING_STEPS`], the limit of a
 /// sampled-data run. `key` names the delays (`plant.delays`, `truth.delays`).

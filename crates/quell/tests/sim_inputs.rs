@@ -65,6 +65,26 @@ fn non_finite_signal_parameters_are_errors() {
     assert_eq!(sampled_key(&s.reference, &w, RunSettings::sampled(1.0, 0.1, 1e-3)), "disturbance.components[1].bias");
 }
 
+/// A continuous horizon shorter than the integrator resolves is refused by its key: t_end = 1e-15
+/// (and down to the least subnormal) had ended as "the solver's step size underflowed", exit 1
+/// (helper tryout, 2026-12-05); from 1e-10 on it runs.
+#[test]
+fn a_horizon_below_the_integrators_resolution_is_refused() {
+    let (s, d) = paper();
+    let (g, w) = (&s.reference, &s.disturbance);
+    let settings = |t: f64| RunSettings::continuous(t, t, 1e-9, 1e-9);
+    for t in [1e-15, 1e-300, 5e-324, 9.9e-11] {
+        assert_eq!(continuous_key(g, w, settings(t)), "simulation.t_end", "t_end = {t:e}");
+    }
+    let e = Run::new(&d, g, w, settings(1e-15)).simulate(go).unwrap_err().to_string();
+    assert!(
+        e.starts_with("simulation.t_end: expected t_end ≥ 1e-10 s in the continuous loop (its integrator resolves time to 1e-14 of max(1, |t|), so a shorter horizon leaves too few distinguishable steps), found 1e-15; "),
+        "{e}"
+    );
+    let r = Run::new(&d, g, w, settings(1e-10)).simulate(go).unwrap();
+    assert_eq!(r.outcome, Some(Outcome::Completed));
+}
+
 #[test]
 fn horizons_and_tolerances_are_checked() {
     let (s, _) = paper();

@@ -1053,6 +1053,7 @@ pub(super) fn check<'a>(run: &Run<'a>, integrator: &Integrator) -> Result<Contin
     let (actuator, noise) = (st.actuator.as_ref(), st.noise.as_ref());
     let sys = ContinuousLoop::with_physics(run.design, truth, run.reference, run.disturbance, actuator, noise)?;
     let horizon = (st.t_end, run.design.plant().time_unit);
+    settings::check_integrator_horizon(horizon)?;
     settings::check_integrator_signal("reference", run.reference, horizon)?;
     settings::check_integrator_signal("disturbance", run.disturbance, horizon)?;
     settings::check_integrator_delays("plant.delays", &run.design.plant().delays, horizon)?;
