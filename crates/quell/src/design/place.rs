@@ -146,32 +146,14 @@ enum Slot {
 ///
 /// A not square, B without A's rows, or an entry beyond [`MAX_ENTRY`](crate::plant::MAX_ENTRY) is [`PlaceError::Matrix`].
 pub fn place(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[Complex<f64>]) -> Result<DMatrix<f64>, PlaceError> {
+    let slots = checked_slots(A, B, poles)?;
     let n = A.nrows();
-    let m = B.ncols();
-    check_shape("A", A, n, n).map_err(PlaceError::Matrix)?;
-    if B.nrows() != n {
-        return Err(PlaceError::InputRows { n, rows: B.nrows(), cols: m });
-    }
-    if poles.len() != n {
-        return Err(PlaceError::WrongCount { expected: n, found: poles.len() });
-    }
-    if let Some(&pole) = poles.iter().find(|p| !(p.re.is_finite() && p.im.is_finite())) {
-        return Err(PlaceError::NonFinite { pole });
-    }
-    let slots = classify(poles)?;
-    if A.iter().any(|x| !x.is_finite()) {
-        return Err(PlaceError::NonFiniteSystem { which: "A" });
-    }
-    if B.iter().any(|x| !x.is_finite()) {
-        return Err(PlaceError::NonFiniteSystem { which: "B" });
-    }
-    check_entries("A", A).and_then(|()| check_entries("B", B)).map_err(PlaceError::Matrix)?;
     if n == 0 {
-        return Ok(DMatrix::zeros(m, 0));
+        return Ok(DMatrix::zeros(B.ncols(), 0));
     }
     let s = unit_time_scale(poles);
     let As = A / s;
-    if s != 1.0 && As.iter().all(|x| x.is_finite()) {
+    if s != 1.0 && As.iter().all(|x| x.abs() <= crate::plant::MAX_ENTRY) {
         // eig(A − BK) = p ⇔ eig(A/s − B K/s) = p/s, exactly for a power of two s.
         let scaled: Vec<C64> = poles.iter().map(|p| p / s).collect();
         return place(&As, B, &scaled).map(|K| K * s).map_err(|e| e.rescaled(s));
@@ -229,6 +211,31 @@ pub fn place(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[Complex<f64>]) -> Resu
             })
         }
     }
+}
+
+/// Every check of [`place`]'s arguments that needs no factorization; the poles as slots.
+fn checked_slots(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[C64]) -> Result<Vec<Slot>, PlaceError> {
+    let n = A.nrows();
+    let m = B.ncols();
+    check_shape("A", A, n, n).map_err(PlaceError::Matrix)?;
+    if B.nrows() != n {
+        return Err(PlaceError::InputRows { n, rows: B.nrows(), cols: m });
+    }
+    if poles.len() != n {
+        return Err(PlaceError::WrongCount { expected: n, found: poles.len() });
+    }
+    if let Some(&pole) = poles.iter().find(|p| !(p.re.is_finite() && p.im.is_finite())) {
+        return Err(PlaceError::NonFinite { pole });
+    }
+    let slots = classify(poles)?;
+    if A.iter().any(|x| !x.is_finite()) {
+        return Err(PlaceError::NonFiniteSystem { which: "A" });
+    }
+    if B.iter().any(|x| !x.is_finite()) {
+        return Err(PlaceError::NonFiniteSystem { which: "B" });
+    }
+    check_entries("A", A).and_then(|()| check_entries("B", B)).map_err(PlaceError::Matrix)?;
+    Ok(slots)
 }
 
 /// The power of two s with max |p|/s in (½, 1] when every pole is slower than 1 (else 1): the
