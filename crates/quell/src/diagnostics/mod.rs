@@ -128,7 +128,29 @@ pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) ->
     if let Some(line) = model_error_advice(s, result) {
         d.advice.insert(0, line);
     }
+    d.advice.extend(loose_atol(s, result));
     d
+}
+
+/// A continuous run whose `simulation.atol` is above the peak of every watched state (x, x̂, ξ̂,
+/// η̂): the error test then allows each an error of its own size, whatever rtol says (atol = 1e300
+/// on the Wood–Berry column ran as at rtol = 1e-4, with nothing said: helper tryout, 2026-12-05).
+/// What to set instead. `None` otherwise, and for a sampled run.
+pub fn loose_atol(s: &crate::Scenario, result: &SimResult) -> Option<String> {
+    let (atol, rtol) = (s.simulation.atol, s.simulation.rtol);
+    let names = ["x", "x_hat", "xi_hat", "eta"];
+    let (i, largest) = result.peaks.0.iter().copied().enumerate().max_by(|a, b| a.1.total_cmp(&b.1))?;
+    if s.simulation.sample_time.is_some() || !(atol >= largest && largest > 0.0) {
+        return None;
+    }
+    Some(format!(
+        "simulation.atol = {} is above the peak of every watched state (the largest, |{}| = {}): the error test allowed each state an error of its own size, so the run is not accurate to rtol = {}; set atol to about rtol × the states' size ({} here) or below",
+        crate::settings::fmt_short(atol),
+        names[i],
+        crate::settings::fmt_4(largest),
+        crate::settings::fmt_short(rtol),
+        crate::settings::fmt_4(rtol * largest)
+    ))
 }
 
 /// A run that ended early as a loop blowing up does (diverged, its step size underflowed, or its
