@@ -777,7 +777,9 @@ fn draw_sweep_panel<DB: DrawingBackend>(
     // Differences below 0.1 % of the values are the solver's, not the grid's: drawn flat.
     let (lo, hi) = widened(lo, hi, 1e-3);
     let (x0, x1) = x.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
-    let (x0, x1) = if x0 < x1 { (x0, x1) } else { (x0 - 1.0, x0 + 1.0) };
+    // One grid value: a span around it that keeps its sign (a delay of 0.1 had an axis from −0.9).
+    let half = if scale == AxisScale::Linear && x0 != 0.0 { 0.5 * x0.abs() } else { 1.0 };
+    let (x0, x1) = if x0 < x1 { (x0, x1) } else { (x0 - half, x0 + half) };
     let pad = 0.05 * (hi - lo);
     let (y0, y1) = (lo - pad, hi + pad);
     let mut chart = ChartBuilder::on(area)
@@ -816,7 +818,7 @@ fn draw_sweep_panel<DB: DrawingBackend>(
         .label_style(("sans-serif", 13))
         .draw()
         .map_err(|e| e.to_string())?;
-    let medians = draw_quantile_bands(&mut chart, &at, pick(i))?;
+    let medians = draw_quantile_bands(&mut chart, &at, pick(i), 0.01 * (x1 - x0))?;
     if medians < s.points.len() {
         let note = missing_median(figure, empty);
         missing_median_note(&mut chart, note, (empty, &at(0.5)), (x0, x1), (y0, y1))?;
@@ -824,20 +826,24 @@ fn draw_sweep_panel<DB: DrawingBackend>(
     Ok(())
 }
 
-/// The 5–95 % and 25–75 % bands and the median line of the quantile curves `at(p)`, in `color`;
-/// returns the number of points that have a median.
+/// The 5–95 % and 25–75 % bands and the median line of the quantile curves `at(p)`, in `color`
+/// (a band of one point: a bar `half_width` either side of it); returns the number of points that
+/// have a median.
 fn draw_quantile_bands<DB: DrawingBackend>(
     chart: &mut Chart<'_, DB>,
     at: &dyn Fn(f64) -> Vec<(f64, f64)>,
     color: RGBAColor,
+    half_width: f64,
 ) -> Result<usize, String> {
     for (a, b, alpha) in [(Q[0], Q[4], 0.15), (Q[1], Q[3], 0.3)] {
         let (low, high) = (at(a), at(b));
+        let style = color.mix(alpha).filled();
         if low.len() >= 2 && low.len() == high.len() {
             let ring: Vec<(f64, f64)> = low.iter().copied().chain(high.iter().rev().copied()).collect();
-            chart
-                .draw_series(std::iter::once(Polygon::new(ring, color.mix(alpha).filled())))
-                .map_err(|e| e.to_string())?;
+            chart.draw_series(std::iter::once(Polygon::new(ring, style))).map_err(|e| e.to_string())?;
+        } else if let ([(x, lo)], [(_, hi)]) = (low.as_slice(), high.as_slice()) {
+            let bar = Rectangle::new([(x - half_width, *lo), (x + half_width, *hi)], style);
+            chart.draw_series(std::iter::once(bar)).map_err(|e| e.to_string())?;
         }
     }
     let median = at(0.5);
@@ -1292,6 +1298,31 @@ mod tests {
             |(r, g, b): (u8, u8, u8)| (r as i32 - 31).abs() + (g as i32 - 119).abs() + (b as i32 - 180).abs() < 60;
         let below = (axis + 2..h).flat_map(|y| (0..w).map(move |x| (x, y))).filter(|&(x, y)| blue(pixel(x, y))).count();
         assert_eq!(below, 0, "{below} pixels of the curve below the x axis at row {axis}");
+    }
+
+    /// The bands of a grid point alone (one grid value, or the only point with completed draws)
+    /// are a bar around it: only its median dot had been drawn, on an axis scaled to the bands
+    /// (tryout, 2026-12-05). The bar spans the 5–95 % values and nothing beyond.
+    #[test]
+    fn the_bands_of_a_point_alone_are_a_bar() {
+        let (w, h) = (400u32, 300u32);
+        let mut rgb = vec![255u8; (w * h * 3) as usize];
+        {
+            let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
+            let mut chart = ChartBuilder::on(&root).build_cartesian_2d(0.0..2.0, 0.0..10.0).unwrap();
+            let at = |p: f64| vec![(1.0, 2.0 + 6.0 * p)]; // 5 %: 2.3, 95 %: 7.7
+            draw_quantile_bands(&mut chart, &at, BLUE.into(), 0.1).unwrap();
+            root.present().unwrap();
+        }
+        let tinted = |x: u32, y: u32| {
+            let i = ((y * w + x) * 3) as usize;
+            rgb[i] < 250 && rgb[i + 2] > rgb[i]
+        };
+        // x = 1 is column 200; values 2.3 and 7.7 are rows 300·(1 − v/10).
+        let column: Vec<u32> = (0..h).filter(|&y| tinted(200, y)).collect();
+        let (top, bottom) = (column.first().copied().unwrap_or(0), column.last().copied().unwrap_or(0));
+        assert!((67..=71).contains(&top) && (228..=232).contains(&bottom), "bar from row {top} to {bottom}");
+        assert!(!tinted(200 - 25, 150) && tinted(200 - 15, 150), "the bar is 0.1 either side: 20 px");
     }
 
     #[test]
