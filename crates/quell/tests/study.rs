@@ -468,6 +468,22 @@ fn a_grid_point_with_a_rate_far_faster_than_the_loop_is_cautioned_before_the_run
     assert_eq!(plain.fast_rate_caution(&|| false), None);
 }
 
+/// The caution on runs forced onto DOP853 at a stiff law speaks of figures only where such a run
+/// completed: μ = [2000, 3000] (94ρ) spends its 400 steps within 20 s, so no figure exists to be
+/// "off" (two quadruple-tank draws that both filled the history's cap had been told so).
+#[test]
+fn the_dop853_caution_speaks_of_figures_only_where_a_stiff_run_completed() {
+    let text = "max_steps = 400\n[simulation]\nt_end = 20.0\nrtol = 1e-6\natol = 1e-6\nmethod = \"explicit\"\n[grid]\n\"design.mu\" = [[20.0, 30.0], [2000.0, 3000.0]]\n";
+    let study = Study::from_toml(text, None).unwrap();
+    let rows = sweep(&study, &SweepOptions::default()).rows;
+    assert_eq!((rows[0].outcome, rows[1].outcome), (Outcome::Completed, Outcome::Failed));
+    let w = study.explicit_stiff_caution(&rows).expect("a caution");
+    assert!(
+        w.starts_with("1 of the 2 runs carried out ran on DOP853 at a stiff adaptive law, none completed (DOP853's steps sit at its stability bound there); "),
+        "{w}"
+    );
+}
+
 /// A study's runs forced onto DOP853 at a stiff adaptive law are counted and the first named,
 /// however late it comes: 300 points of μ₁ from 140 to 169.9 (channel 1 of the paper's example
 /// reaches 3ρ, 27/s, at μ₁ = 162.55), so only the last 74 are stiff. On the default method nothing

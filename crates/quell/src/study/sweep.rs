@@ -58,7 +58,7 @@ impl RunSpec {
     /// ([`Run::expects_stiff`]: a drawn μ or filter) takes the implicit path from its start, whose
     /// steps the nominal run's say nothing about (the paper's loop with μ₂ = 117 takes 2,187
     /// where μ₂ = 90 takes 704); it keeps its own step budget and the peak rule.
-    fn runaway_limits(&self, shape: &Shape) -> Option<(usize, Peaks)> {
+    fn runaway_limits(&self, shape: &StepScale) -> Option<(usize, Peaks)> {
         self.nominal.map(|n| {
             let peaks = n.peaks.bounds(self.runaway.peak);
             if shape.expects_stiff && !n.expects_stiff {
@@ -137,9 +137,9 @@ pub struct Row {
     pub explicit_stiff: bool,
 }
 
-/// What the runaway rules' limits of a run depend on besides its nominal run.
+/// What sets a run's steps beside its nominal run's: what the runaway rules' limits depend on.
 #[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct Shape {
+pub(crate) struct StepScale {
     /// The breakpoints t = Σ k_i τ_i its loop lands on ([`Run::breakpoints`]; 0 when sampled).
     pub breakpoints: usize,
     /// [`Run::delay_floor`].
@@ -148,7 +148,7 @@ pub(crate) struct Shape {
     pub expects_stiff: bool,
 }
 
-/// A study run's result, its [`Shape`] and the runaway rules' step budget when that was the run's
+/// A study run's result, its [`StepScale`] and the runaway rules' step budget when that was the run's
 /// budget.
 pub(crate) struct Simulated {
     pub result: SimResult,
@@ -156,7 +156,7 @@ pub(crate) struct Simulated {
     pub memory: Option<sim::Held<'static>>,
     /// How long the run waited for that memory (not part of its `wall_ms`).
     pub waited: std::time::Duration,
-    pub shape: Shape,
+    pub shape: StepScale,
     pub runaway_steps: Option<usize>,
     /// Forced onto DOP853 on a stiff adaptive law (looked at only on `explicit`, which alone pays
     /// for the averaged law it needs).
@@ -167,19 +167,19 @@ pub(crate) struct Simulated {
 
 /// Simulates a scenario as its `[simulation]` says ([`Run::of`]), a continuous run within the
 /// step budget `max_steps` (`None`: the run's own, [`sim::default_max_steps`]) and, given its
-/// [`Shape`], `runaway` = (steps, peaks): within at most that many steps and those peaks per
+/// [`StepScale`], `runaway` = (steps, peaks): within at most that many steps and those peaks per
 /// watched signal; `Err` when it cannot start.
 pub(crate) fn simulate(
     s: &Scenario,
     max_steps: Option<usize>,
-    runaway: &dyn Fn(&Shape) -> Option<(usize, Peaks)>,
+    runaway: &dyn Fn(&StepScale) -> Option<(usize, Peaks)>,
     stop: &dyn Fn() -> bool,
 ) -> Result<Simulated, String> {
     let design = s.design().map_err(|e| e.to_string())?;
     let mut settings = RunSettings::of(s);
     let run = Run::of(s, &design);
     let explicit_stiff = sim::explicit_on_stiff_law(&run);
-    let mut shape = Shape { breakpoints: run.breakpoints(), delay_floor: run.delay_floor(), expects_stiff: false };
+    let mut shape = StepScale { breakpoints: run.breakpoints(), delay_floor: run.delay_floor(), expects_stiff: false };
     let mut runaway_steps = None;
     if let Loop::Continuous(integrator) = &mut settings.mode {
         // The loop computes it anyway (`dde::Options::expect_stiff`); `run` keeps it.
@@ -255,7 +255,7 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
         Ok(Simulated {
             result: r,
             runaway_steps,
-            shape: Shape { breakpoints, delay_floor, .. },
+            shape: StepScale { breakpoints, delay_floor, .. },
             memory: _memory,
             waited,
             explicit_stiff,
