@@ -381,7 +381,7 @@ fn tune_writes_the_chosen_mu_and_each_curve() {
     let err = stderr(&b);
     assert_eq!(b.status.code(), Some(2), "{err}");
     assert!(err.contains("no μ in tune.mu[0] completed: none of the 5 runs did (at μ = 2: failed, the solver needed more than 20 steps"), "{err}");
-    assert!(err.contains("raise max_steps in the study file") && !err.contains("max_u"), "{err}");
+    assert!(err.contains("raise the study's max_steps") && !err.contains("max_u"), "{err}");
     let rows = fs::read_to_string(format!("{out}-budget/tune.csv")).unwrap();
     assert!(rows.starts_with("channel,mu,objective,outcome,reason,"), "{rows}");
     assert_eq!(rows.matches(",failed,\"the solver needed more than 20 steps").count(), 10, "{rows}");

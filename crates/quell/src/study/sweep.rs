@@ -296,13 +296,13 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                         _ => format!("({base} + the {extra} breakpoints this draw's delays add)"),
                     };
                     row.reason = format!(
-                        "step budget: more than {} × {scale} ({max_steps}) by t = {t:.4} {} (the loop turned stiff: its signals grew well beyond the nominal run's; raise runaway.steps in the study file if the run is sound)",
+                        "step budget: more than {} × {scale} ({max_steps}) by t = {t:.4} {} (the loop turned stiff: its signals grew well beyond the nominal run's; raise the study's runaway.steps if the run is sound)",
                         spec.runaway.steps,
                         r.time_unit
                     );
                 }
                 sim::Outcome::Interrupted { .. } => return None,
-                other => row.reason = other.explain("max_steps in the study file", r.time_unit).unwrap_or_default(),
+                other => row.reason = other.explain("the study's max_steps", r.time_unit).unwrap_or_default(),
             }
             if let Some(w) = fast_rate {
                 row.reason += &format!("; {w}");
