@@ -85,21 +85,10 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
         )));
     }
     // After the channels without a feasible μ: the joint run then holds the scenario's μ there.
-    let broken: Vec<String> = (0..result.within_limits.len())
-        .filter(|&i| !result.within_limits[i])
-        .map(|i| {
-            let what = joint_broken(&result, spec, i);
-            let what = if what.is_empty() { "its run has no figures".to_string() } else { what.join(", ") };
-            format!("channel {}: {what}", i + 1)
-        })
-        .collect();
-    if !broken.is_empty() {
-        return Err(Failure::Input(format!(
-            "the tuned μ together break limits in the joint run ({}); each search met them with the other channels' μ at the scenario's, but u_f = −K x̂ + F u_d mixes every channel's command: lower the broken limit by the excess and tune again, or tune with a grid over the μ together (docs/studies.md)",
-            broken.join("; ")
-        )));
+    match result.joint_limits_caution(spec, "tune.") {
+        Some(broken) => Err(Failure::Input(broken)),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// tune.csv: every evaluation of every channel's search.
@@ -134,11 +123,6 @@ fn write_curves(w: &mut dyn std::io::Write, r: &TuneResult) -> std::io::Result<(
     Ok(())
 }
 
-/// Channel i's limits that the joint run broke (none without a joint run).
-fn joint_broken(r: &TuneResult, spec: &quell::study::TuneSpec, i: usize) -> Vec<String> {
-    r.joint.as_ref().and_then(|j| j.channels.get(i)).map_or(vec![], |f| spec.broken_limits(i, f, "tune."))
-}
-
 /// The chosen μ and the joint check, one line per channel; a settling time in `unit`.
 fn report(r: &TuneResult, spec: &quell::study::TuneSpec, unit: quell::TimeUnit) -> String {
     let mut s = match r.objective {
@@ -169,13 +153,12 @@ fn report(r: &TuneResult, spec: &quell::study::TuneSpec, unit: quell::TimeUnit) 
                 if r.partial || r.within_limits.get(c.channel).copied().unwrap_or(true) {
                     String::new()
                 } else {
-                    format!(", but BREAKS {} there", joint_broken(r, spec, c.channel).join(", "))
+                    format!(", but BREAKS {} there", r.joint_broken(spec, c.channel, "tune.").join(", "))
                 },
                 // Interrupted, the largest μ evaluated is not the range's end.
-                c.at_bound().filter(|_| !r.partial).map_or(String::new(), |end| format!(
-                    "; at the {end} end of tune.mu[{}]: the best may lie beyond, widen the range",
-                    c.channel
-                )),
+                c.bound_note(&format!("tune.mu[{}]", c.channel))
+                    .filter(|_| !r.partial)
+                    .map_or(String::new(), |note| format!("; {note}")),
             )),
             None if r.partial && c.curve.is_empty() => {
                 s.push_str(&format!("channel {}: not evaluated (tuning interrupted)\n", c.channel + 1))

@@ -173,15 +173,15 @@ fn warn_choices(py: Python<'_>, study: &study::Study, result: &study::TuneResult
             ),
         )?;
     }
+    let spec = study.tune.as_ref().expect("a tuning study has its [tune]");
+    // As `quell tune`'s exit status 2, and its "does NOT reproduce it".
+    let joint = result.joint_limits_caution(spec, "").into_iter().chain(result.unreproduced_cautions());
+    for w in joint {
+        crate::errors::warn(py, &w)?;
+    }
     for c in result.channels.iter().filter(|_| !result.partial) {
-        if let Some(end) = c.at_bound() {
-            let i = c.channel;
-            let message = format!(
-                "channel {}: the chosen μ, {}, is at the {end} end of mu[{i}]: the best may lie beyond, widen the range",
-                i + 1,
-                result.mu[i]
-            );
-            crate::errors::warn(py, &message)?;
+        if let Some(note) = c.bound_note(&format!("mu[{}]", c.channel)) {
+            crate::errors::warn(py, &format!("channel {}: {note}", c.channel + 1))?;
         }
     }
     Ok(())

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import quell
-from conftest import EXAMPLES
+from conftest import EXAMPLES, REFERENCE
 
 pd = pytest.importorskip("pandas")
 
@@ -217,6 +217,27 @@ def test_a_choice_at_an_end_of_the_bounds_is_warned_of():
     with pytest.warns(UserWarning, match=r"^channel 1: the chosen μ, 3(\.0)?, is at the upper end of mu\[0\]") as caught:
         r = quell.tune(s, mu=[1.0, 3.0], objective="tail_rms_e", points=3, refine=0, jobs=1)
     assert len(caught) == 1 and r.mu == [3.0]
+
+
+def test_a_joint_run_that_breaks_a_limit_or_misses_its_search_is_warned_of():
+    """What `quell tune` exits 2 with (the tuned μ together break a limit each search kept) and what
+    its line calls "does NOT reproduce it" are Python warnings too: both had returned in silence.
+    On the CSTR, μ₁ = 5.48 and μ₂ = 1.46 each keep max |u_f,2| ≤ 0.16 with the other μ at the
+    scenario's, and together reach 0.17; the Wood–Berry column sampled at 0.5 min does not
+    reproduce channel 2's search (helper tryout, 2026-12-05)."""
+    cstr = quell.Scenario.load(str(REFERENCE / "cstr.toml"))
+    with pytest.warns(UserWarning, match=r"^the tuned μ together break limits in the joint run \(channel 2: max \|u_f,2\| = "):
+        r = quell.tune(cstr, mu=[0.3, 100.0], objective="settle_t", max_uf=[11.0, 0.16], points=9, refine=6)
+    assert r.within_limits == [True, False]
+    # The joint run's figure, simulated independently, is beyond the limit the warning names.
+    import re
+    tuned = quell.Scenario.from_toml(re.sub(r"(?m)^mu = .*$", f"mu = {list(r.mu)}", cstr.to_toml()))
+    assert tuned.design().choices["mu"] == list(r.mu)
+    assert np.max(np.abs(quell.simulate(tuned).u_f[:, 1])) > 0.16
+    wb = quell.Scenario.load(str(REFERENCE / "wood-berry.toml"))
+    with pytest.warns(UserWarning, match=r"^channel 2: the joint run with every tuned μ does not reproduce"):
+        w = quell.tune(wb, mu=[5.0, 500.0], objective="tail_rms_e", simulation={"sample_time": 0.5})
+    assert w.reproduced == [True, False]
 
 
 def test_a_tuning_on_dop853_reaching_a_stiff_mu_is_cautioned():

@@ -185,6 +185,29 @@ fn a_limit_each_search_meets_can_be_broken_together() {
     assert_eq!(r.within_limits, [false, true]);
 }
 
+/// A channel's search keeps the other inputs' limits that the scenario's own μ keeps: on the CSTR
+/// with max_uf = [11, 0.16], μ₁ = 100 took max |u_f,2| to 0.199 (the scenario's μ: 0.159), and
+/// channel 1's search had chosen it, its own u_f,1 being within 11 (helper tryout, 2026-12-05).
+/// Every point it now calls feasible keeps max |u_f,2| ≤ 0.16, checked by sweeping those μ
+/// (another path than the search's), and μ₁ = 100 is not among them.
+#[test]
+fn a_search_keeps_the_other_inputs_limits_that_the_scenarios_mu_keeps() {
+    let text = "scenario = \"cstr.toml\"\n[tune]\nobjective = \"settle_t\"\nmu = [0.3, 100.0]\nmax_uf = [11.0, 0.16]\npoints = 9\nrefine = 6\n";
+    let data = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data"));
+    let r = quell::study::tune(&Study::from_toml(text, Some(data)).unwrap(), &Default::default()).unwrap();
+    let base2 = 3.9019391149305314; // cstr.toml's μ₂
+    let feasible: Vec<f64> = r.channels[0].curve.iter().filter(|p| p.objective.is_some()).map(|p| p.mu).collect();
+    assert!(!feasible.is_empty() && feasible.iter().all(|&mu| mu < 100.0), "{feasible:?}");
+    let grid: Vec<String> = feasible.iter().chain([&100.0]).map(|mu| format!("[{mu:?}, {base2:?}]")).collect();
+    let check = format!("scenario = \"cstr.toml\"\n[grid]\n\"design.mu\" = [{}]\n", grid.join(", "));
+    let rows = sweep(&Study::from_toml(&check, Some(data)).unwrap(), &SweepOptions::default()).rows;
+    let (kept, last) = rows.split_at(feasible.len());
+    for row in kept {
+        assert!(row.channels[1].max_uf <= 0.16, "run {}: max |u_f,2| = {}", row.run, row.channels[1].max_uf);
+    }
+    assert!(last[0].channels[1].max_uf > 0.16, "μ₁ = 100 breaks it: {}", last[0].channels[1].max_uf);
+}
+
 /// Stopping a tuning keeps the points evaluated so far: on one worker thread, a stop after the
 /// third evaluation leaves exactly those three (the run under way when the flag is set completes
 /// only if it finishes before its next recorded sample, and none is under way here), no joint

@@ -279,17 +279,40 @@ impl TuneCurve {
         )
     }
 
-    /// "upper" or "lower" when the chosen μ is the largest or the smallest evaluated (an end of
-    /// the bounds): the best may lie beyond it, and a wider range would tell.
+    /// "upper" or "lower" when the chosen μ, or the least objective's μ it ties with, is the
+    /// largest or the smallest evaluated (an end of the bounds): the best may lie beyond it, and a
+    /// wider range would tell.
     pub fn at_bound(&self) -> Option<&'static str> {
         let chosen = self.chosen.as_ref()?.mu;
+        [Some(chosen), self.tie.map(|t| t.mu)].into_iter().flatten().find_map(|mu| self.end_at(mu))
+    }
+
+    fn end_at(&self, mu: f64) -> Option<&'static str> {
         let (lo, hi) =
             self.curve.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.mu), b.max(p.mu)));
         match self.curve.len() > 1 {
-            true if chosen >= hi => Some("upper"),
-            true if chosen <= lo => Some("lower"),
+            true if mu >= hi => Some("upper"),
+            true if mu <= lo => Some("lower"),
             _ => None,
         }
+    }
+
+    /// [`TuneCurve::at_bound`] in words, `key` naming the bounds (`tune.mu[0]`): which μ is at
+    /// which end, and to widen the range. A search whose least objective lay at its upper end, the
+    /// chosen μ just inside tying with it, had said nothing (a reactor's settling time kept falling
+    /// to 23.8 min at μ = 1000 where the range ended at 100 with 36.1).
+    pub fn bound_note(&self, key: &str) -> Option<String> {
+        let end = self.at_bound()?;
+        let chosen = self.chosen.as_ref()?.mu;
+        let short = crate::settings::fmt_short;
+        Some(match self.end_at(chosen) {
+            Some(_) => format!("the chosen μ, {}, is at the {end} end of {key}: the best may lie beyond, widen the range", short(chosen)),
+            None => format!(
+                "the least objective, at μ = {}, is at the {end} end of {key} (the chosen μ, {}, ties with it): the best may lie beyond, widen the range",
+                short(self.tie.map_or(chosen, |t| t.mu)),
+                short(chosen)
+            ),
+        })
     }
 }
 
@@ -331,6 +354,51 @@ pub struct TuneResult {
     /// carried out: the curves hold the points evaluated so far and `chosen` is the best of them.
     #[serde(default)]
     pub partial: bool,
+}
+
+impl TuneResult {
+    /// Channel i's limits that the joint run broke, one phrase each, the keys named after
+    /// `prefix` (none without a joint run).
+    pub fn joint_broken(&self, spec: &TuneSpec, i: usize, prefix: &str) -> Vec<String> {
+        self.joint.as_ref().and_then(|j| j.channels.get(i)).map_or(vec![], |f| spec.broken_limits(i, f, prefix))
+    }
+
+    /// When the joint run with every tuned μ_i breaks a limit each search met: which, and what
+    /// to do (`quell tune` exits 2 with it, Python warns); `None` otherwise, and where a channel
+    /// has no feasible μ (said first: its scenario's μ is no tuned one).
+    pub fn joint_limits_caution(&self, spec: &TuneSpec, prefix: &str) -> Option<String> {
+        if self.channels.iter().any(|c| c.chosen.is_none()) {
+            return None;
+        }
+        let broken: Vec<String> = (0..self.within_limits.len())
+            .filter(|&i| !self.within_limits[i])
+            .map(|i| {
+                let what = self.joint_broken(spec, i, prefix);
+                let what = if what.is_empty() { "its run has no figures".to_string() } else { what.join(", ") };
+                format!("channel {}: {what}", i + 1)
+            })
+            .collect();
+        (!broken.is_empty()).then(|| format!(
+            "the tuned μ together break limits in the joint run ({}); each search met every limit with the other channels' μ at the scenario's, but u_f = −K x̂ + F u_d mixes every channel's command: lower the broken limit by the excess and tune again, or tune with a grid over the μ together (docs/studies.md)",
+            broken.join("; ")
+        ))
+    }
+
+    /// Per channel whose joint run does not reproduce its search's objective (the channels'
+    /// searches interact): a caution; none for a partial tuning.
+    pub fn unreproduced_cautions(&self) -> Vec<String> {
+        let cautions = self.channels.iter().zip(self.joint_difference.iter().zip(&self.reproduced));
+        cautions
+            .filter(|(c, (_, ok))| !**ok && c.chosen.is_some() && !self.partial)
+            .map(|(c, (d, _))| {
+                let by = d.map_or("it has no figure".to_string(), |d| format!("difference {d:.3e}"));
+                format!(
+                    "channel {}: the joint run with every tuned μ does not reproduce the objective its search found ({by}): each channel was searched with the others' μ at the scenario's, and the tuned μ together interact; check the joint run, or tune with a grid over the μ together (docs/studies.md)",
+                    c.channel + 1
+                )
+            })
+            .collect()
+    }
 }
 
 /// A callback on each evaluation: the channel and its point.
@@ -470,6 +538,9 @@ struct Search<'a> {
     scenario: &'a Scenario,
     spec: &'a TuneSpec,
     base_mu: &'a [f64],
+    /// Per channel j, whether the scenario's own μ keeps its limits: every search must then keep
+    /// them too (a limit the scenario's μ already breaks is channel j's search to meet).
+    guarded: Vec<bool>,
     opts: &'a TuneOptions<'a>,
 }
 
@@ -488,14 +559,19 @@ impl Search<'_> {
         let row = run_with(self.study, &mu, &|| self.stopped())?;
         let figures = row.channels.get(i).copied();
         let (spec, objective) = (self.spec, self.spec.objective);
-        let objective = figures
-            .filter(|c| c.max_u <= spec.max_u[i] && c.max_uf <= spec.max_uf[i])
-            .map(|c| objective.of(&c))
-            .filter(|v| v.is_finite());
+        // Every input's limits that the scenario's μ keeps: u_f = −K x̂ + F u_d (5) mixes the
+        // channels' commands, so μ_i moves u_f,j too (a reactor's μ₁ = 100 took max |u_f,2| from
+        // 0.159 to 0.199, beyond its 0.16, and the search had called it feasible).
+        let kept = |j: usize| j == i || self.guarded[j];
+        let broken: Vec<String> = (row.channels.iter().enumerate())
+            .filter(|&(j, _)| kept(j))
+            .flat_map(|(j, f)| spec.broken_limits(j, f, "tune."))
+            .collect();
+        let objective = figures.filter(|_| broken.is_empty()).map(|c| objective.of(&c)).filter(|v| v.is_finite());
         // A completed run beyond a limit: the limit is why it has no objective.
         let mut reason = row.reason;
-        if let (true, Some(f)) = (reason.is_empty(), &figures) {
-            reason = spec.broken_limits(i, f, "tune.").join("; ");
+        if reason.is_empty() && figures.is_some() {
+            reason = broken.join("; ");
         }
         // Within the limits but with no objective: say so (the row's reason was empty).
         if reason.is_empty() && figures.is_some() && objective.is_none() {
@@ -581,8 +657,15 @@ pub fn tune(study: &Study, opts: &TuneOptions<'_>) -> Result<TuneResult, StudyEr
     let spec = tune_spec(study)?;
     let scenario = Scenario::from_document(study.base()).map_err(|e| err("scenario", e.to_string()))?;
     let base_mu = scenario.design.mu.clone();
-    let search = Search { study, scenario: &scenario, spec, base_mu: &base_mu, opts };
     let m = base_mu.len();
+    let stopped = || opts.stop.is_some_and(|s| s.load(Ordering::Relaxed));
+    // The scenario's own run, where a limit is set: which limits every search must keep.
+    let limited = spec.max_u.iter().chain(&spec.max_uf).any(|l| l.is_finite());
+    let base = if limited { run_with(study, &base_mu, &stopped) } else { None };
+    let guarded = (0..m)
+        .map(|j| base.as_ref().and_then(|r| r.channels.get(j)).is_some_and(|f| spec.broken_limits(j, f, "").is_empty()))
+        .collect();
+    let search = Search { study, scenario: &scenario, spec, base_mu: &base_mu, guarded, opts };
     let jobs: Vec<(usize, f64)> = (0..m).flat_map(|i| search.log_grid(i).map(move |mu| (i, mu))).collect();
     let coarse: Vec<(usize, TunePoint)> =
         jobs.into_par_iter().filter_map(|(i, mu)| Some((i, search.score(i, mu)?))).collect();
@@ -638,6 +721,38 @@ mod tests {
         assert_eq!(r.channels[0].chosen.as_ref().map(|p| p.mu), Some(5.0));
         assert_eq!(r.channels[0].at_bound(), None);
         assert_eq!(r.channels[1].curve.len(), 3 + 2);
+    }
+
+    /// A least objective at an end of the bounds is named even where the chosen μ, tying with it,
+    /// lies inside (a reactor's settling time fell to the upper end, 100, and the chosen 96.5 had
+    /// said nothing).
+    #[test]
+    fn a_least_objective_at_an_end_is_named_where_the_chosen_mu_ties_inside() {
+        let point = |mu: f64| TunePoint {
+            mu,
+            objective: Some(1.0),
+            outcome: Outcome::Completed,
+            reason: String::new(),
+            figures: None,
+        };
+        let c = TuneCurve {
+            channel: 1,
+            curve: [50.0, 96.5, 100.0].map(point).to_vec(),
+            chosen: Some(point(96.5)),
+            tie: Some(Tie { least: 36.05, mu: 100.0, bound: 36.15 }),
+        };
+        assert_eq!(c.at_bound(), Some("upper"));
+        assert_eq!(
+            c.bound_note("tune.mu[1]").unwrap(),
+            "the least objective, at μ = 100, is at the upper end of tune.mu[1] (the chosen μ, 96.5, ties with it): the best may lie beyond, widen the range"
+        );
+        let inside = TuneCurve { tie: Some(Tie { least: 36.05, mu: 96.5, bound: 36.15 }), ..c.clone() };
+        assert_eq!((inside.at_bound(), inside.bound_note("tune.mu[1]")), (None, None));
+        let at_end = TuneCurve { chosen: Some(point(100.0)), ..c };
+        assert_eq!(
+            at_end.bound_note("mu[1]").unwrap(),
+            "the chosen μ, 100, is at the upper end of mu[1]: the best may lie beyond, widen the range"
+        );
     }
 
     #[test]
