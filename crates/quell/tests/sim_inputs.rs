@@ -85,6 +85,33 @@ fn a_horizon_below_the_integrators_resolution_is_refused() {
     assert_eq!(r.outcome, Some(Outcome::Completed));
 }
 
+/// A shortest delay whose steps cannot hold the longest delay's history within the run's memory
+/// budget is refused by its key before the run: the paper's loop with delays [1e-6, 3] needs 3e6
+/// records of 1,800 bytes (twice that with the ring's doubling), 10 GB against the 1 GiB cap. (A
+/// CSTR with [1e-7, 0.1] min had run 2.2 s into 808 MB and failed at the cap, blamed on a blow-up:
+/// helper tryout, 2026-12-05.) The τ it offers passes.
+#[test]
+fn a_delay_too_short_for_the_history_of_the_longest_is_refused_by_its_key() {
+    let (s, _) = paper();
+    let with_delays = |d: [f64; 2]| {
+        let text = PAPER_EXAMPLE.replace("delays = [1.0, 3.0]", &format!("delays = [{:?}, {:?}]", d[0], d[1]));
+        let s = Scenario::from_toml(&text).unwrap();
+        let d = s.design().unwrap();
+        let settings = RunSettings { t_end: 5.0, output_step: 1.0, ..RunSettings::of(&s) };
+        // The checks alone (Run::check): a run at τ = 1e-5 would take 5e5 steps.
+        Run::new(&d, &s.reference, &s.disturbance, settings).check().map_err(|e| e.to_string())
+    };
+    let e = with_delays([1e-6, 3.0]).unwrap_err();
+    // 2 · 3/1e-6 records · 8·(8·27 + 9) bytes, in MiB.
+    let mib = (2.0 * 3e6 * 1800.0 / 1048576.0f64).round();
+    let head = format!("plant.delays[0]: τ = 1e-6 s caps the integrator's steps at τ while the delay history holds the last τ_max = 3 s: at least 3.0e6 records of 1800 bytes, {mib} MB with the ring's doubling, beyond the run's memory budget of 1024 MB; expected 0 (no delay) or τ ≥ ");
+    assert!(e.starts_with(&head), "{e}\n{head}");
+    let offered: f64 = e[head.len()..].split(' ').next().unwrap().parse().unwrap();
+    assert!(with_delays([offered, 3.0]).is_ok(), "τ = {offered}");
+    assert!(with_delays([0.5 * offered, 3.0]).is_err());
+    let _ = s;
+}
+
 #[test]
 fn horizons_and_tolerances_are_checked() {
     let (s, _) = paper();

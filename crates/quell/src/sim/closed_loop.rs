@@ -1064,7 +1064,42 @@ pub(super) fn check<'a>(run: &Run<'a>, integrator: &Integrator) -> Result<Contin
     if let Some(b) = noise.and_then(|n| n.bandwidth) {
         check_noise_bandwidth(b, run.loop_rate(), horizon.1)?;
     }
+    check_history_span(run, integrator, dde::record_bytes(sys.n_delayed()), sys.delays())?;
     Ok(sys)
+}
+
+/// The shortest delay τ_min caps the integrator's steps at τ_min while the delay history holds
+/// the records of the last τ_max (of the whole run when t_end is shorter): at least τ_max/τ_min of them, twice that with the ring's
+/// doubling, must fit the run's history budget ([`budgets`]). A CSTR with delays [1e-7, 0.1] min
+/// passed every check, ran 2.2 s into 808 MB and failed at the cap, blamed on a blow-up.
+fn check_history_span(run: &Run<'_>, integrator: &Integrator, record: usize, delays: &[f64]) -> Result<(), KeyError> {
+    let (tau_min, tau_max) = delays.iter().fold((f64::INFINITY, 0.0f64), |(a, b), &d| (a.min(d), b.max(d)));
+    // Over a run shorter than τ_max the history holds the whole run.
+    let tau_max = tau_max.min(run.settings.t_end);
+    let budget = budgets(run, integrator, record, delays).1 as f64;
+    let bytes = 2.0 * (tau_max / tau_min).ceil() * record as f64;
+    if !(tau_min > 0.0 && tau_min.is_finite()) || bytes <= budget {
+        return Ok(());
+    }
+    let (p, truth, unit) = (run.design.plant(), run.truth, run.design.plant().time_unit);
+    let found = |key: &str, d: &[f64]| d.iter().position(|&x| x == tau_min).map(|i| format!("{key}[{i}]"));
+    let actuator = run.settings.actuator.as_ref().map_or(&[][..], |a| &a.delays[..]);
+    let key = found("plant.delays", &p.delays)
+        .or_else(|| found("truth.delays", &truth.delays))
+        .unwrap_or_else(|| found("truth.actuator_delays", actuator).unwrap_or("truth.actuator_delays".into()));
+    let mb = |b: f64| settings::fmt_short((b / 1048576.0).round().max(1.0));
+    Err(KeyError::new(
+        key,
+        format!(
+            "τ = {} {unit} caps the integrator's steps at τ while the delay history holds the last τ_max = {} {unit}: at least {:.1e} records of {record} bytes, {} MB with the ring's doubling, beyond the run's memory budget of {} MB; expected 0 (no delay) or τ ≥ {} {unit}, or a shorter longest delay",
+            settings::fmt_short(tau_min),
+            settings::fmt_4(tau_max),
+            (tau_max / tau_min).ceil(),
+            mb(bytes),
+            mb(budget),
+            settings::fmt_4(settings::significant(2.0 * tau_max * record as f64 / budget * 1.001, 3))
+        ),
+    ))
 }
 
 /// Band-limited noise beyond this many times the loop's fastest rate ρ (in cycles, ρ/2π) is refused:
