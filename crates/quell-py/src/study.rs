@@ -443,8 +443,9 @@ fn run_index(run: &Bound<'_, PyAny>, len: u64) -> PyResult<usize> {
 
 fn out_of_range(i: i128, len: u64) -> PyErr {
     PyIndexError::new_err(format!(
-        "run: expected a run index from 0 to {} (the study has {len} runs; from −{len} to −1 counting from the end, as in a list), found {i}",
-        len.saturating_sub(1)
+        "run: expected a run index from 0 to {} (the study has {}; from −{len} to −1 counting from the end, as in a list), found {i}",
+        len.saturating_sub(1),
+        if len == 1 { "1 run".to_string() } else { format!("{len} runs") }
     ))
 }
 
