@@ -93,14 +93,16 @@ fn a_horizon_below_the_integrators_resolution_is_refused() {
 #[test]
 fn a_delay_too_short_for_the_history_of_the_longest_is_refused_by_its_key() {
     let (s, _) = paper();
-    let with_delays = |d: [f64; 2]| {
+    let with_budget = |d: [f64; 2], max_steps: Option<usize>| {
         let text = PAPER_EXAMPLE.replace("delays = [1.0, 3.0]", &format!("delays = [{:?}, {:?}]", d[0], d[1]));
         let s = Scenario::from_toml(&text).unwrap();
         let d = s.design().unwrap();
-        let settings = RunSettings { t_end: 5.0, output_step: 1.0, ..RunSettings::of(&s) };
+        let mut settings = RunSettings { t_end: 5.0, output_step: 1.0, ..RunSettings::of(&s) };
+        settings.set_max_steps(max_steps).unwrap();
         // The checks alone (Run::check): a run at τ = 1e-5 would take 5e5 steps.
         Run::new(&d, &s.reference, &s.disturbance, settings).check().map_err(|e| e.to_string())
     };
+    let with_delays = |d: [f64; 2]| with_budget(d, None);
     let e = with_delays([1e-6, 3.0]).unwrap_err();
     // 2 · 3/1e-6 records · 8·(8·27 + 9) bytes, in MiB.
     let mib = (2.0 * 3e6 * 1800.0 / 1048576.0f64).round();
@@ -109,6 +111,8 @@ fn a_delay_too_short_for_the_history_of_the_longest_is_refused_by_its_key() {
     let offered: f64 = e[head.len()..].split(' ').next().unwrap().parse().unwrap();
     assert!(with_delays([offered, 3.0]).is_ok(), "τ = {offered}");
     assert!(with_delays([0.5 * offered, 3.0]).is_err());
+    // A step budget given below the 3e6 records ends the run first: it may start.
+    assert!(with_budget([1e-6, 3.0], Some(1000)).is_ok());
     let _ = s;
 }
 
