@@ -1032,14 +1032,12 @@ impl FastRate {
         if bytes <= budget as f64 {
             return String::new();
         }
-        // In MiB, as the history's own message counts them (its 1 GiB cap is "1024 MB").
-        let mb = |b: f64| crate::settings::fmt_short((b / 1048576.0).round().max(1.0));
         format!(
             " and its delay history (the steps of the last τ_max = {} {}) at least {} MB, beyond the run's budget of {} MB, where the run would end",
             crate::settings::fmt_4(tau_max),
             run.design.plant().time_unit,
-            mb(bytes),
-            mb(budget as f64)
+            mib(bytes),
+            mib(budget as f64)
         )
     }
 }
@@ -1068,11 +1066,17 @@ pub(super) fn check<'a>(run: &Run<'a>, integrator: &Integrator) -> Result<Contin
     Ok(sys)
 }
 
+/// Bytes in whole MiB, as the history's own message counts them (its 1 GiB cap is "1024 MB").
+fn mib(bytes: f64) -> String {
+    settings::fmt_short((bytes / 1048576.0).round().max(1.0))
+}
+
 /// The shortest delay τ_min caps the integrator's steps at τ_min while the delay history holds
-/// the records of the last τ_max (of the whole run when t_end is shorter): at least τ_max/τ_min of them, twice that with the ring's
-/// doubling, must fit the run's history budget ([`budgets`]), unless a step budget given below
-/// that count ends the run first. A CSTR with delays [1e-7, 0.1] min
-/// passed every check, ran 2.2 s into 808 MB and failed at the cap, blamed on a blow-up.
+/// the records of the last τ_max (of the whole run when t_end is shorter): at least τ_max/τ_min
+/// of them, twice that with the ring's doubling, must fit the run's history budget
+/// ([`budgets`]), unless a step budget given below that count ends the run first. A CSTR with
+/// delays [1e-7, 0.1] min passed every check, ran 2.2 s into 808 MB and failed at the cap, blamed
+/// on a blow-up.
 fn check_history_span(run: &Run<'_>, integrator: &Integrator, record: usize, delays: &[f64]) -> Result<(), KeyError> {
     let (tau_min, tau_max) = delays.iter().fold((f64::INFINITY, 0.0f64), |(a, b), &d| (a.min(d), b.max(d)));
     // Over a run shorter than τ_max the history holds the whole run.
@@ -1091,7 +1095,6 @@ fn check_history_span(run: &Run<'_>, integrator: &Integrator, record: usize, del
     let key = found("plant.delays", &p.delays)
         .or_else(|| found("truth.delays", &truth.delays))
         .unwrap_or_else(|| found("truth.actuator_delays", actuator).unwrap_or("truth.actuator_delays".into()));
-    let mb = |b: f64| settings::fmt_short((b / 1048576.0).round().max(1.0));
     Err(KeyError::new(
         key,
         format!(
@@ -1099,8 +1102,8 @@ fn check_history_span(run: &Run<'_>, integrator: &Integrator, record: usize, del
             settings::fmt_short(tau_min),
             settings::fmt_4(tau_max),
             records,
-            mb(bytes),
-            mb(budget),
+            mib(bytes),
+            mib(budget),
             settings::fmt_4(settings::significant(2.0 * tau_max * record as f64 / budget * 1.001, 3))
         ),
     ))
