@@ -313,6 +313,21 @@ fn a_slow_problem_is_placed_relative_to_its_own_poles() {
         }
         assert!(worst < 1e-9, "α = {alpha}: relative pole error {worst:e}");
     }
+    // A slow plant's B is as slow as its A: the supply vessel's (A, B) in time units α = 1e5 and
+    // 1e9 times longer (B ≈ 1e-16 there) was "not controllable" while control.place placed it
+    // (helper tryout, 2026-12-05); B is brought to unit size with A.
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/supply-vessel.toml");
+    let vessel = quell::Scenario::from_toml(&std::fs::read_to_string(path).unwrap()).unwrap().plant;
+    let p6 = reals(&[-0.4, -0.45, -0.5, -0.55, -0.6, -0.65]);
+    for alpha in [1.0, 1e5, 1e9] {
+        let (As, Bs) = (&vessel.A / alpha, &vessel.B / alpha);
+        let ps: Vec<C64> = p6.iter().map(|p| p / alpha).collect();
+        let K = place(&As, &Bs, &ps).unwrap_or_else(|e| panic!("α = {alpha}: {e}"));
+        let eigs = eigenvalues(&(&As - &Bs * &K));
+        let worst = ps.iter().map(|p| eigs.iter().map(|l| (l - p).norm()).fold(f64::INFINITY, f64::min) / p.norm());
+        let worst = worst.fold(0.0, f64::max);
+        assert!(worst < 1e-9, "vessel, α = {alpha}: relative pole error {worst:e}");
+    }
     let alpha = 3.3e-9;
     let repeated = reals(&[-2e-9, -2e-9, -2e-9, -4e-9]);
     assert_eq!(

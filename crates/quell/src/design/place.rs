@@ -152,11 +152,16 @@ pub fn place(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[Complex<f64>]) -> Resu
         return Ok(DMatrix::zeros(B.ncols(), 0));
     }
     let s = unit_time_scale(poles);
-    let As = A / s;
-    if s != 1.0 && As.iter().all(|x| x.abs() <= crate::plant::MAX_ENTRY) {
-        // eig(A − BK) = p ⇔ eig(A/s − B K/s) = p/s, exactly for a power of two s.
+    // B to unit size too, by a power of two b: a slow plant's B is as small as its A (a supply
+    // vessel in s × 1e5 had B ≈ 1e-16 beside A/s ≈ 1, and its rank test failed).
+    let b = B.amax();
+    let b = if s != 1.0 && b > 0.0 { 2f64.powi(-(b.log2().ceil() as i32)) } else { 1.0 };
+    let (As, Bs) = (A / s, B * b);
+    let within = |M: &DMatrix<f64>| M.iter().all(|x| x.abs() <= crate::plant::MAX_ENTRY);
+    if s != 1.0 && within(&As) && within(&Bs) {
+        // eig(A − BK) = p ⇔ eig(A/s − (bB)(K/(sb))) = p/s, exactly for powers of two s and b.
         let scaled: Vec<C64> = poles.iter().map(|p| p / s).collect();
-        return place(&As, B, &scaled).map(|K| K * s).map_err(|e| e.rescaled(s));
+        return place(&As, &Bs, &scaled).map(|K| K * (s * b)).map_err(|e| e.rescaled(s));
     }
 
     let tol = staircase_tol(A, B);
