@@ -792,8 +792,8 @@ fn draw_sweep_panel<DB: DrawingBackend>(
         .map_err(|e| e.to_string())?;
     let values: Vec<String> = axis.values.iter().map(|v| short_value(v)).collect();
     let fmt = move |v: &f64| match scale {
-        // Tick values like 2.8000000000000003 read as 2.8.
-        AxisScale::Linear => format!("{v:.6}").trim_end_matches('0').trim_end_matches('.').to_string(),
+        // Tick values like 2.8000000000000003 read as 2.8, and 1e-7 not as 0 (the y axis's rule).
+        AxisScale::Linear => tick_label(*v, x0, x1),
         AxisScale::Log => decade_label(*v),
         // A value's label only at its own position, not at the ticks between.
         AxisScale::Positions if (v - v.round()).abs() < 1e-6 => {
@@ -1303,6 +1303,15 @@ mod tests {
     /// The bands of a grid point alone (one grid value, or the only point with completed draws)
     /// are a bar around it: only its median dot had been drawn, on an axis scaled to the bands
     /// (tryout, 2026-12-05). The bar spans the 5–95 % values and nothing beyond.
+    /// A grid of small values (a state's x0 of 1e-7 and 2e-7) had every tick labelled "0": the x
+    /// axis now labels ticks as the y axis does.
+    #[test]
+    fn small_grid_values_keep_their_digits_on_the_axis() {
+        assert_eq!(tick_label(1.2e-7, 1e-7, 2e-7), "1.2e-7");
+        assert_eq!(tick_label(-1.5e-7, -2e-7, -1e-7), "-1.5e-7");
+        assert_eq!(tick_label(2.8000000000000003, 2.0, 4.0), "2.8");
+    }
+
     #[test]
     fn the_bands_of_a_point_alone_are_a_bar() {
         let (w, h) = (400u32, 300u32);

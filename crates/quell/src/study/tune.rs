@@ -304,7 +304,8 @@ impl TuneCurve {
     pub fn bound_note(&self, key: &str) -> Option<String> {
         let end = self.at_bound()?;
         let chosen = self.chosen.as_ref()?.mu;
-        let short = crate::settings::fmt_short;
+        // Six significant digits, as the line around it gives μ.
+        let short = |mu: f64| crate::settings::fmt_short(crate::settings::significant(mu, 6));
         Some(match self.end_at(chosen) {
             Some(_) => format!("the chosen μ, {}, is at the {end} end of {key}: the best may lie beyond, widen the range", short(chosen)),
             None => format!(
