@@ -331,7 +331,11 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
             Ok(())
         }
         outcome => {
-            let why = outcome.explain("--max-steps", result.time_unit).unwrap_or_default();
+            let mut why = outcome.explain("--max-steps", result.time_unit).unwrap_or_default();
+            let run = quell::sim::Run::of(done.scenario, done.design);
+            if let Some(culprit) = quell::sim::budget_culprit(&run, Some(outcome)) {
+                why = format!("{why}; {culprit}");
+            }
             // A true actuator that clipped may be why: the clipping, and the advice on the whole
             // loop (which names it as the likely cause), are said before the failure.
             let advice: String = diagnostics.advice.iter().map(|a| format!("advice: {a}\n")).collect();

@@ -89,6 +89,30 @@ fn a_diverging_continuous_run_ends_within_its_default_budget() {
     assert!(time_in(&stderr, "steps by t = ").is_some_and(|t2| t2 < t), "{stderr}");
 }
 
+/// A run its step budget ends where one rate far outruns the rest names that rate, as a study's
+/// row does: observer poles at −1e4 … −1.5e4 on the paper's loop (1,700× the next rate) filled the
+/// history's cap in 1.8 s, and the message named only a small design.beta among its causes (helper
+/// tryout, 2026-12-05). A small budget ends it here in milliseconds.
+#[test]
+fn a_run_ended_by_its_budget_names_a_rate_far_faster_than_the_loop() {
+    let dir_tmp = scratch_dir("budget-culprit");
+    let dir = dir_tmp.path();
+    let observer = "observer_gain = [[-8.0988, 4.4574], [10.6506, -5.0619], [2.7762, -1.1783]]";
+    let scenario = paper_with(dir, &[(observer, "observer_poles = [-1e4, -1.2e4, -1.5e4]")]);
+    let output = Command::new(env!("CARGO_BIN_EXE_quell"))
+        .args(["run", "--no-plots", "--max-steps", "2000", "--out"])
+        .arg(dir.join("out"))
+        .arg(&scenario)
+        .output()
+        .expect("run quell");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "stderr: {stderr}");
+    assert!(
+        stderr.contains("raise --max-steps if the run is sound); the observer (A − LC) sets the loop's fastest rate, 1.500e4/s, 1700× the next fastest"),
+        "{stderr}"
+    );
+}
+
 #[test]
 fn max_steps_is_refused_for_a_sampled_data_run() {
     let dir_tmp = scratch_dir("budget-sampled");

@@ -657,6 +657,7 @@ pub fn simulate(
         crate::errors::warn_coarse_sample(py, &design, &scn.reference, &scn.disturbance, t, Some(h))?;
     }
     let (outcome, unit) = (result.outcome.clone().unwrap_or(Outcome::Completed), result.time_unit);
+    let culprit = quell::sim::budget_culprit(&run, result.outcome.as_ref());
     let result = Py::new(py, PySimResult::from_run(py, scn, &design, result, s.labels.clone())?)?;
     if let Some(e) = interrupt {
         // Ctrl-C keeps the samples up to it, as sweeps and tunings keep their rows.
@@ -665,6 +666,10 @@ pub fn simulate(
     }
     match failure(outcome, unit) {
         Some((message, t, signal, value)) if check => {
+            let message = match culprit {
+                Some(c) => format!("{message}; {c}"),
+                None => message,
+            };
             Err(simulation_error(py, message, t, signal, value, result.into_any()))
         }
         _ => Ok(result),

@@ -82,3 +82,15 @@ def test_a_result_holds_its_record_once():
     record = 1_000_001 * 27 * 8
     assert r["outcome"]["status"] == "completed"
     assert r["grown"] < 1.3 * record, f"grew {r['grown'] >> 20} MiB for a record of {record >> 20} MiB"
+
+
+def test_a_run_ended_by_its_budget_names_a_rate_far_faster_than_the_loop():
+    """As `quell run` and a study's row: observer poles at −1e4 … −1.5e4 on the paper's loop (1,700×
+    the next rate) end a run on its step budget, and the error names the observer's rate."""
+    import pathlib
+    text = (pathlib.Path(__file__).resolve().parents[3] / "examples" / "paper.toml").read_text()
+    gain = "observer_gain = [[-8.0988, 4.4574], [10.6506, -5.0619], [2.7762, -1.1783]]"
+    assert gain in text
+    s = quell.Scenario.from_toml(text.replace(gain, "observer_poles = [-1e4, -1.2e4, -1.5e4]"))
+    with pytest.raises(quell.SimulationError, match=r"the observer \(A − LC\) sets the loop's fastest rate, 1\.500e4/s, 1700× the next fastest"):
+        quell.simulate(s, max_steps=2000)

@@ -599,3 +599,23 @@ fn band_limited_noise_is_admitted_where_the_default_budget_covers_it() {
     // Within the default budget of 10,000 + 100·(9·10 + 10/1) = 20,000, with room to spare.
     assert!(r.stats.steps() < 10_000, "{} steps", r.stats.steps());
 }
+
+/// A shortest delay that caps every step at its length so that t_end takes more than a million
+/// steps is cautioned before the run (delays [1e-6, 0.1] on the paper's loop ran 10 s for 2.35 s
+/// of its 100, with nothing said: helper tryout, 2026-12-05); the paper's own delays are not.
+#[test]
+fn a_shortest_delay_that_caps_the_steps_is_cautioned() {
+    let warning = |text: &str| {
+        let s = Scenario::from_toml(text).unwrap();
+        let d = s.design().unwrap();
+        quell::sim::fast_rate_warning(&Run::of(&s, &d))
+    };
+    let w = warning(&PAPER_EXAMPLE.replace("delays = [1.0, 3.0]", "delays = [1e-5, 0.1]")).expect("a caution");
+    assert!(
+        w.starts_with(
+            "the shortest delay, 1e-5 s, caps every step at its length, so t_end = 100 s takes at least 1.0e7 steps"
+        ),
+        "{w}"
+    );
+    assert_eq!(warning(PAPER_EXAMPLE), None);
+}

@@ -952,8 +952,25 @@ const FAST_RATE_OUTLIER: f64 = 100.0;
 /// 3.7 s and 646 MB before the history's cap ended it, with nothing said of β; β = 1e-6 over 5 s,
 /// 8.2e5 steps, filled the 1 GiB cap at t = 2.9 s). `None` otherwise.
 pub fn fast_rate_warning(run: &Run<'_>) -> Option<String> {
-    let fast = FastRate::of(run)?;
-    (fast.steps > FAST_RATE_STEPS || fast.history_over(run)).then(|| fast.text(run))
+    let rate = FastRate::of(run).filter(|f| f.steps > FAST_RATE_STEPS || f.history_over(run)).map(|f| f.text(run));
+    let cautions: Vec<String> = rate.into_iter().chain(short_delay_warning(run)).collect();
+    (!cautions.is_empty()).then(|| cautions.join("; "))
+}
+
+/// A shortest delay τ_min that caps the steps at τ_min so that t_end takes more than
+/// [`FAST_RATE_STEPS`] ([`Run::delay_floor`]): delays [1e-6, 0.1] on the paper's loop took 10 s
+/// for 2.35 of its 100 s, with nothing said (a history too long for such steps is refused instead).
+fn short_delay_warning(run: &Run<'_>) -> Option<String> {
+    let floor = run.delay_floor() as f64;
+    let tau_min = run.settings.t_end / floor;
+    (floor > FAST_RATE_STEPS).then(|| {
+        let unit = run.design.plant().time_unit;
+        format!(
+            "the shortest delay, {} {unit}, caps every step at its length, so t_end = {} {unit} takes at least {floor:.1e} steps; a delay negligible beside the loop's time scale is best set to 0",
+            settings::fmt_4(tau_min),
+            settings::fmt_short(run.settings.t_end)
+        )
+    })
 }
 
 /// For a run that its step budget or the history's cap ended: the caution of
@@ -963,6 +980,17 @@ pub fn fast_rate_warning(run: &Run<'_>) -> Option<String> {
 pub fn fast_rate_culprit(run: &Run<'_>) -> Option<String> {
     let fast = FastRate::of(run)?;
     fast.outlier().then(|| fast.text(run))
+}
+
+/// For a run that `outcome` ended on its step budget or the history's cap: the rate far faster
+/// than the loop that may be why ([`fast_rate_culprit`]), so that `quell run` and Python name it
+/// as a study's row does (observer poles at −1e4 on the paper's loop filled the cap in 1.8 s, and
+/// the message named only a small design.beta among its causes). `None` otherwise.
+pub fn budget_culprit(run: &Run<'_>, outcome: Option<&Outcome>) -> Option<String> {
+    match outcome {
+        Some(Outcome::TooManySteps { .. } | Outcome::HistoryTooLarge { .. }) => fast_rate_culprit(run),
+        _ => None,
+    }
 }
 
 /// The fastest of a run's rates, its source, the steps it sets over t_end, and the next fastest
@@ -1095,16 +1123,19 @@ fn check_history_span(run: &Run<'_>, integrator: &Integrator, record: usize, del
     let key = found("plant.delays", &p.delays)
         .or_else(|| found("truth.delays", &truth.delays))
         .unwrap_or_else(|| found("truth.actuator_delays", actuator).unwrap_or("truth.actuator_delays".into()));
+    let fits = settings::significant(2.0 * tau_max * record as f64 / budget * 1.001, 3);
     Err(KeyError::new(
         key,
         format!(
-            "τ = {} {unit} caps the integrator's steps at τ while the delay history holds the last τ_max = {} {unit}: at least {:.1e} records of {record} bytes, {} MB with the ring's doubling, beyond the run's memory budget of {} MB; expected 0 (no delay) or τ ≥ {} {unit}, or a shorter longest delay",
+            "τ = {} {unit} caps the integrator's steps at τ while the delay history holds the last τ_max = {} {unit}: at least {:.1e} records of {record} bytes, {} MB with the ring's doubling, beyond the run's memory budget of {} MB; expected 0 (no delay) or τ ≥ {} {unit} (over t_end = {} {unit}, at least {:.1e} steps), or a shorter longest delay",
             settings::fmt_short(tau_min),
             settings::fmt_4(tau_max),
             records,
             mib(bytes),
             mib(budget),
-            settings::fmt_4(settings::significant(2.0 * tau_max * record as f64 / budget * 1.001, 3))
+            settings::fmt_4(fits),
+            settings::fmt_short(run.settings.t_end),
+            (run.settings.t_end / fits).ceil()
         ),
     ))
 }
