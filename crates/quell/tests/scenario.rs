@@ -582,6 +582,22 @@ fn output_step_beyond_t_end() {
     );
 }
 
+/// Without `output_step` the default is min(0.1, t_end), but at most 10⁶ rows: a model whose time
+/// is in a unit 1e6 times shorter than its scale (t_end = 6e8) had its default refused as 6e9
+/// rows, even by `quell design`, which does not use it (helper tryout, 2026-12-05).
+#[test]
+fn the_default_output_step_gives_at_most_a_million_rows() {
+    let step = |t_end: &str| {
+        let text = with(&[(T_END, t_end), (OUTPUT_STEP, "")]);
+        let text = text.replace("     # rows of signals.csv at t = k * output_step", "");
+        Scenario::from_toml(&text).unwrap_or_else(|e| panic!("{t_end}: {e}")).simulation.output_step
+    };
+    assert_eq!(step("t_end = 100.0"), 0.1);
+    assert_eq!(step("t_end = 0.05"), 0.05);
+    assert_eq!(step("t_end = 1e5"), 0.1);
+    assert_eq!(step("t_end = 6e8"), 600.0);
+}
+
 #[test]
 fn output_step_too_many_samples() {
     check(

@@ -163,6 +163,9 @@ pub const DESIGN_KEYS: &[&str] = &[
 const SIGNAL_KEYS: &[&str] = &["components"];
 const COMPONENT_KEYS: &[&str] = &["bias", "harmonics"];
 const HARMONIC_KEYS: &[&str] = &["amplitude", "frequency", "phase"];
+/// The most rows the default output step gives (t_end / output_step).
+const DEFAULT_MAX_ROWS: f64 = 1e6;
+
 const SIMULATION_KEYS: &[&str] = &["t_end", "output_step", "rtol", "atol", "sample_time", "method"];
 const NOISE_KEYS: &[&str] = &["std", "seed", "bandwidth"];
 
@@ -608,7 +611,9 @@ fn simulation(v: Value) -> Result<Simulation, ScenarioError> {
     let default = Simulation::default();
     let number = |key| t.get(key, |v| v.number());
     let t_end = number("t_end")?.unwrap_or(default.t_end);
-    let output_step = number("output_step")?.unwrap_or(default.output_step.min(t_end));
+    // min(0.1, t_end), but never more than DEFAULT_MAX_ROWS rows: a model in a unit 1e6 times
+    // shorter than its time scale (t_end = 6e8) had its default refused, even by `quell design`.
+    let output_step = number("output_step")?.unwrap_or(default.output_step.min(t_end).max(t_end / DEFAULT_MAX_ROWS));
     settings::check_horizon(t_end, output_step)?;
     let sample_time = number("sample_time")?;
     if let Some(T) = sample_time {
