@@ -724,18 +724,16 @@ mod tests {
         assert_eq!(r.channels[1].curve.len(), 3 + 2);
     }
 
+    /// A completed evaluation at μ with objective 1.
+    fn point(mu: f64) -> TunePoint {
+        TunePoint { mu, objective: Some(1.0), outcome: Outcome::Completed, reason: String::new(), figures: None }
+    }
+
     /// A least objective at an end of the bounds is named even where the chosen μ, tying with it,
     /// lies inside (a reactor's settling time fell to the upper end, 100, and the chosen 96.5 had
     /// said nothing).
     #[test]
     fn a_least_objective_at_an_end_is_named_where_the_chosen_mu_ties_inside() {
-        let point = |mu: f64| TunePoint {
-            mu,
-            objective: Some(1.0),
-            outcome: Outcome::Completed,
-            reason: String::new(),
-            figures: None,
-        };
         let c = TuneCurve {
             channel: 1,
             curve: [50.0, 96.5, 100.0].map(point).to_vec(),
@@ -758,13 +756,6 @@ mod tests {
 
     #[test]
     fn a_choice_at_an_end_of_the_bounds_is_named() {
-        let point = |mu: f64| TunePoint {
-            mu,
-            objective: Some(1.0),
-            outcome: Outcome::Completed,
-            reason: String::new(),
-            figures: None,
-        };
         let curve = |chosen: f64, mus: &[f64]| TuneCurve {
             channel: 0,
             curve: mus.iter().map(|&m| point(m)).collect(),
