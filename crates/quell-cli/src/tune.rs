@@ -35,7 +35,7 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
     }
     let pool = crate::sweep::thread_pool(args.jobs, usize::MAX)?;
     prepare_out(&args.out, &["tune.json", "tune.csv", "tune.png", "tune.svg"])?;
-    for w in study::tune_stiff_warnings(&study).into_iter().chain(study.fast_rate_caution(&|| false)) {
+    for w in study::tune_cautions(&study) {
         eprintln!("⚠ warning: {w}");
     }
     // Ctrl-C or SIGTERM: the first stops the searches (runs under way are abandoned) and the

@@ -32,6 +32,19 @@ fn quell_measured(args: &[&str], scenario: &std::path::Path) -> (Option<i32>, St
     (code, std::fs::read_to_string(stderr_path).expect("stderr"), ru.ru_maxrss as u64 * 1024)
 }
 
+/// `quell run --no-plots ARGS --out DIR/out SCENARIO`: its exit status and stderr.
+fn run_into(dir: &std::path::Path, args: &[&str], scenario: &std::path::Path) -> (Option<i32>, String) {
+    let output = Command::new(env!("CARGO_BIN_EXE_quell"))
+        .args(["run", "--no-plots"])
+        .args(args)
+        .arg("--out")
+        .arg(dir.join("out"))
+        .arg(scenario)
+        .output()
+        .expect("run quell");
+    (output.status.code(), String::from_utf8_lossy(&output.stderr).into_owned())
+}
+
 /// docs/errors.md shows the message of stderr's `error:` line exactly, with `out` written as the
 /// default `quell-out` (the run is deterministic, so its times are the same on every machine).
 fn shown_in_errors_md(stderr: &str, out: &std::path::Path) {
@@ -99,14 +112,8 @@ fn a_run_ended_by_its_budget_names_a_rate_far_faster_than_the_loop() {
     let dir = dir_tmp.path();
     let observer = "observer_gain = [[-8.0988, 4.4574], [10.6506, -5.0619], [2.7762, -1.1783]]";
     let scenario = paper_with(dir, &[(observer, "observer_poles = [-1e4, -1.2e4, -1.5e4]")]);
-    let output = Command::new(env!("CARGO_BIN_EXE_quell"))
-        .args(["run", "--no-plots", "--max-steps", "2000", "--out"])
-        .arg(dir.join("out"))
-        .arg(&scenario)
-        .output()
-        .expect("run quell");
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(1), "stderr: {stderr}");
+    let (code, stderr) = run_into(dir, &["--max-steps", "2000"], &scenario);
+    assert_eq!(code, Some(1), "stderr: {stderr}");
     assert!(
         stderr.contains("raise --max-steps if the run is sound); the observer (A − LC) sets the loop's fastest rate, 1.500e4/s, 1700× the next fastest"),
         "{stderr}"
@@ -118,14 +125,8 @@ fn max_steps_is_refused_for_a_sampled_data_run() {
     let dir_tmp = scratch_dir("budget-sampled");
     let dir = dir_tmp.path();
     let scenario = paper_with(dir, &[]);
-    let output = Command::new(env!("CARGO_BIN_EXE_quell"))
-        .args(["run", "--no-plots", "--sample-time", "0.01", "--max-steps", "10", "--out"])
-        .arg(dir.join("out"))
-        .arg(&scenario)
-        .output()
-        .expect("run quell");
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(2), "stderr: {stderr}");
+    let (code, stderr) = run_into(dir, &["--sample-time", "0.01", "--max-steps", "10"], &scenario);
+    assert_eq!(code, Some(2), "stderr: {stderr}");
     assert!(stderr.contains("--max-steps: a step budget applies to the continuous loop"), "{stderr}");
 }
 
@@ -138,14 +139,8 @@ fn a_step_budget_below_one_is_refused_as_elsewhere() {
     let dir = dir_tmp.path();
     let scenario = paper_with(dir, &[]);
     for bad in ["0", "-5", "1.5"] {
-        let output = Command::new(env!("CARGO_BIN_EXE_quell"))
-            .args(["run", "--no-plots", "--max-steps", bad, "--out"])
-            .arg(dir.join("out"))
-            .arg(&scenario)
-            .output()
-            .expect("run quell");
-        let stderr = String::from_utf8_lossy(&output.stderr);
-        assert_eq!(output.status.code(), Some(2), "{bad}: {stderr}");
+        let (code, stderr) = run_into(dir, &["--max-steps", bad], &scenario);
+        assert_eq!(code, Some(2), "{bad}: {stderr}");
         assert!(
             stderr.contains(&format!("expected a step budget, an integer from 1 to {}, found {bad}", usize::MAX)),
             "{stderr}"

@@ -134,10 +134,7 @@ pub fn tune(
     let study = py.detach(|| study::Study::from_table(&doc, None)).map_err(|e| argument_error(py, &e))?;
     let channels = study.m;
     let pool = thread_pool(py, jobs, channels * study.tune.as_ref().map_or(1, |t| t.points))?;
-    let cautions = py.detach(|| {
-        study::tune_stiff_warnings(&study).into_iter().chain(study.fast_rate_caution(&|| false)).collect::<Vec<_>>()
-    });
-    for w in cautions {
+    for w in py.detach(|| study::tune_cautions(&study)) {
         crate::errors::warn(py, &crate::errors::in_python(w))?;
     }
     let (result, interrupt) = crate::interrupt::interruptible_keeping(py, |stop| {
@@ -159,10 +156,10 @@ pub fn tune(
 /// The warnings of `quell tune`'s report: a channel without a feasible μ (which keeps the
 /// scenario's; the CLI exits 2), and a choice at an end of the bounds.
 fn warn_choices(py: Python<'_>, study: &study::Study, result: &study::TuneResult) -> PyResult<()> {
+    let spec = study.tune.as_ref().expect("a tuning study has its [tune]");
     // As `quell tune`'s exit status 2: a channel without a feasible μ keeps the scenario's.
     for c in result.channels.iter().filter(|c| c.chosen.is_none() && !result.partial) {
         let i = c.channel;
-        let spec = study.tune.as_ref().expect("a tuning study has its [tune]");
         crate::errors::warn(
             py,
             &format!(
@@ -173,7 +170,6 @@ fn warn_choices(py: Python<'_>, study: &study::Study, result: &study::TuneResult
             ),
         )?;
     }
-    let spec = study.tune.as_ref().expect("a tuning study has its [tune]");
     // As `quell tune`'s exit status 2, and its "does NOT reproduce it".
     let joint = result.joint_limits_caution(spec, "").into_iter().chain(result.unreproduced_cautions());
     for w in joint {

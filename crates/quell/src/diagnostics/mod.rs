@@ -138,14 +138,14 @@ pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) ->
 /// on the paper's example, above ξ̂'s 0.75, took max |u_f,2| to 950 against 21.7, with nothing
 /// said: helper tryouts, 2026-12-05). What to set instead. `None` otherwise, and for a sampled run.
 pub fn loose_atol(s: &crate::Scenario, result: &SimResult) -> Option<String> {
+    if s.simulation.sample_time.is_some() {
+        return None;
+    }
     let (atol, rtol) = (s.simulation.atol, s.simulation.rtol);
     // x, x̂ and ξ̂ are held to atol itself (η̂ to atol over ξ̂'s size); the smallest one under it.
     let names = ["x", "x_hat", "xi_hat"];
     let peaks = result.peaks.0[..3].iter().copied().enumerate().filter(|&(_, p)| p > 0.0 && p <= atol);
     let (i, peak) = peaks.min_by(|a, b| a.1.total_cmp(&b.1))?;
-    if s.simulation.sample_time.is_some() {
-        return None;
-    }
     Some(format!(
         "simulation.atol = {} is above the peak of {} ({}): the error test allowed it an error of its own size, so the run is not accurate to rtol = {}; set atol to about rtol × its size ({} here) or below",
         crate::settings::fmt_short(atol),

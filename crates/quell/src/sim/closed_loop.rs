@@ -945,7 +945,7 @@ const FAST_RATE_OUTLIER: f64 = 100.0;
 
 /// A caution before a continuous run whose fastest rate ρ ([`loop_rates`], the adaptive law aside,
 /// and band-limited noise) makes it take more than [`FAST_RATE_STEPS`] steps on any method, or
-/// hold more records in its delay history than its memory budget allows (`history_bound`):
+/// hold more records in its delay history than its memory budget allows (`budgets`):
 /// DOP853's stable steps are at most [`DOP853_STABLE_H_RATE`]/ρ, and the implicit method takes only
 /// η̂ implicitly. Names the rate's source and, where it is a hundred times the next, says to bring
 /// it to the loop's time scale (β = 1e-7 on the paper's example: 1/β = 1e7/s against 9/s, 2 s took
@@ -1026,8 +1026,9 @@ impl FastRate {
         let (p, q) = (run.design.plant(), run.design.q());
         let delays = loop_delays(p, run.truth, run.settings.actuator.as_ref());
         let tau_max = delays.iter().copied().fold(0.0, f64::max).min(run.settings.t_end);
-        let record = dde::record_bytes(delayed_prefix(p.n(), q, p.m())) as f64;
-        (tau_max, 2.0 * self.rho * tau_max / DOP853_STABLE_H_RATE * record, history_bound(run, integrator))
+        let record = dde::record_bytes(delayed_prefix(p.n(), q, p.m()));
+        let budget = budgets(run, integrator, record, &delays).1;
+        (tau_max, 2.0 * self.rho * tau_max / DOP853_STABLE_H_RATE * record as f64, budget)
     }
 
     fn history_over(&self, run: &Run<'_>) -> bool {

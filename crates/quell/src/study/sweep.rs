@@ -205,13 +205,10 @@ pub(crate) fn simulate(
     let memory = run.reserve_memory(stop);
     let waited = waiting.elapsed();
     let result = run.simulate(progress).map_err(|e| e.to_string())?;
-    // A run its own budget or the history's cap ended: a rate far faster than the loop may be why.
-    let own_budget = match result.outcome {
-        Some(sim::Outcome::TooManySteps { max_steps, .. }) => runaway_steps != Some(max_steps),
-        Some(sim::Outcome::HistoryTooLarge { .. }) => true,
-        _ => false,
-    };
-    let fast_rate = own_budget.then(|| sim::fast_rate_culprit(&Run::of(s, &design))).flatten();
+    // A run its own budget or the history's cap ended (not the runaway rule's budget): a rate far
+    // faster than the loop may be why.
+    let by_runaway = matches!(result.outcome, Some(sim::Outcome::TooManySteps { max_steps, .. }) if runaway_steps == Some(max_steps));
+    let fast_rate = (!by_runaway).then(|| sim::budget_culprit(&Run::of(s, &design), result.outcome.as_ref())).flatten();
     Ok(Simulated { result, memory, waited, shape, runaway_steps, explicit_stiff, fast_rate })
 }
 

@@ -455,6 +455,12 @@ fn tolerance_scale(s: &Scenario, i: usize) -> f64 {
     sim.rtol * g + sim.atol
 }
 
+/// The cautions before a tuning's searches (`quell tune` and Python's `tune` print them): those of
+/// [`tune_stiff_warnings`], then [`Study::fast_rate_caution`] of its scenario.
+pub fn tune_cautions(study: &Study) -> Vec<String> {
+    tune_stiff_warnings(study).into_iter().chain(study.fast_rate_caution(&|| false)).collect()
+}
+
 /// For a tuning forced onto DOP853 (`simulation.method = "explicit"`), per channel whose search runs
 /// a μ that makes the adaptive law stiff, the caution of [`crate::sim::explicit_stiff_warning`]
 /// there: channel i's search varies μ_i over its bounds with the other μ_j at the scenario's, so
