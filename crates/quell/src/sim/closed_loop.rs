@@ -946,11 +946,11 @@ const FAST_RATE_OUTLIER: f64 = 100.0;
 /// A caution before a continuous run whose fastest rate ρ ([`loop_rates`], the adaptive law aside,
 /// and band-limited noise) makes it take more than [`FAST_RATE_STEPS`] steps on any method, or
 /// hold more records in its delay history than its memory budget allows (`budgets`):
-/// DOP853's stable steps are at most [`DOP853_STABLE_H_RATE`]/ρ, and the implicit method takes only
-/// η̂ implicitly. Names the rate's source and, where it is a hundred times the next, says to bring
+/// DOP853's steps are at most [`dde::DOP853_ACCURATE_H_RATE`]/ρ (the implicit method's shorter),
+/// and the implicit method takes only η̂ implicitly. Names the rate's source and, where it is a hundred times the next, says to bring
 /// it to the loop's time scale (β = 1e-7 on the paper's example: 1/β = 1e7/s against 9/s, 2 s took
-/// 3.7 s and 646 MB before the history's cap ended it, with nothing said of β; β = 1e-6 over 5 s,
-/// 8.2e5 steps, filled the 1 GiB cap at t = 2.9 s). `None` otherwise.
+/// 3.7 s and 646 MB before the history's cap ended it, with nothing said of β; β = 1e-6 over 5 s
+/// filled the 1 GiB cap at t = 2.9 s). `None` otherwise.
 pub fn fast_rate_warning(run: &Run<'_>) -> Option<String> {
     let rate = FastRate::of(run).filter(|f| f.steps > FAST_RATE_STEPS || f.history_over(run)).map(|f| f.text(run));
     let cautions: Vec<String> = rate.into_iter().chain(short_delay_warning(run)).collect();
@@ -1012,7 +1012,7 @@ impl FastRate {
         let (name, rho) = finite.next()?;
         let key = |n: &str| n.split(" (").next().unwrap_or(n).to_string();
         let next = finite.find(|r| key(r.0) != key(name)).filter(|r| r.1 > 0.0);
-        Some(FastRate { name, rho, steps: rho * run.settings.t_end / DOP853_STABLE_H_RATE, next })
+        Some(FastRate { name, rho, steps: rho * run.settings.t_end / dde::DOP853_ACCURATE_H_RATE, next })
     }
 
     fn outlier(&self) -> bool {
@@ -1028,7 +1028,7 @@ impl FastRate {
         let tau_max = delays.iter().copied().fold(0.0, f64::max).min(run.settings.t_end);
         let record = dde::record_bytes(delayed_prefix(p.n(), q, p.m()));
         let budget = budgets(run, integrator, record, &delays).1;
-        (tau_max, 2.0 * self.rho * tau_max / DOP853_STABLE_H_RATE * record as f64, budget)
+        (tau_max, 2.0 * self.rho * tau_max / dde::DOP853_ACCURATE_H_RATE * record as f64, budget)
     }
 
     fn history_over(&self, run: &Run<'_>) -> bool {
@@ -1048,7 +1048,8 @@ impl FastRate {
             _ => "",
         };
         format!(
-            "{name} sets the loop's fastest rate, {rho:.3e}/{unit}{ratio}: every method's steps follow it (DOP853 is stable for steps up to {DOP853_STABLE_H_RATE} over it, and the implicit method takes only η̂ implicitly), so t_end = {} {unit} takes at least {:.1e} steps{}{advice}",
+            "{name} sets the loop's fastest rate, {rho:.3e}/{unit}{ratio}: every method's steps follow it (DOP853 takes steps up to {} over it, where it still integrates it accurately, and the implicit method takes only η̂ implicitly), so t_end = {} {unit} takes at least {:.1e} steps{}{advice}",
+            dde::DOP853_ACCURATE_H_RATE,
             crate::settings::fmt_short(run.settings.t_end),
             self.steps,
             self.history_text(run)
@@ -1231,6 +1232,7 @@ pub(super) fn simulate(
         max_history_len,
         method,
         expect_stiff: run.expects_stiff(),
+        rate: run.loop_rate(),
         ..Options::default()
     };
     let mut outcome = Outcome::Completed;
