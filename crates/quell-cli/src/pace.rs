@@ -77,6 +77,9 @@ pub fn pace_text(d: &Design, estimates: &[RateEstimate], t_end: f64, time: TimeU
             (false, false) => "",
         }
         .to_string();
+        if e.adaptation_rate == 0.0 && e.lambda_max_omega > 0.0 {
+            flag.push_str("  (μ = 0: the channel does not adapt, η̂ keeps its start)");
+        }
         // From 3ρ (below the cost threshold of ⚠ stiff) the run is accurate only on the implicit
         // method, which `auto` then takes; say so, as the ratio is rounded.
         if !e.stiff && e.adaptation_rate >= quell::sim::EXPECT_STIFF_RATIO * e.loop_rate {

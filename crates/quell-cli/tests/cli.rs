@@ -212,7 +212,8 @@ fn design_reports_the_adaptation_pace() {
 /// (no flag, no "raise μ"; once a panic on an empty factor of Ω̄), a horizon too short for μ (raise
 /// μ: following it clears the flag), a direction that no horizon within 1000× t_end converges
 /// (the SI vessel: it was told to lengthen t_end to 2e17 s), and a direction that carries no error
-/// (the paper with one disturbance component 1e-6 of its size: no flag).
+/// (the paper with one disturbance component 1e-6 of its size: no flag); μ = 0 is named as no
+/// adaptation.
 #[test]
 fn design_advice_names_the_cause_of_slow_adaptation() {
     let dir = temp_dir("slow");
@@ -263,6 +264,12 @@ fn design_advice_names_the_cause_of_slow_adaptation() {
     assert!(vessel.contains("past 1000× t_end: excite that direction more") && !vessel.contains("e17 s"), "{vessel}");
     let faint = report(&write("faint.toml", &faint));
     assert!(faint.contains("(excited rank 5 of 8)") && !faint.contains("weakly excited"), "{faint}");
+    // μ = 0 turns a channel's adaptation off: said, where its convergence time reads ∞.
+    let off = report(&write("off.toml", &text.replace("mu = [20.0, 30.0]", "mu = [20.0, 0.0]")));
+    let channel_2 = off.lines().find(|l| l.contains("channel 2: μ")).unwrap();
+    assert!(channel_2.contains("≈ ∞  (μ = 0: the channel does not adapt, η̂ keeps its start)"), "{off}");
+    let channel_1 = off.lines().find(|l| l.contains("channel 1: μ")).unwrap();
+    assert!(!channel_1.contains("μ = 0"), "{off}");
 }
 
 #[test]

@@ -487,6 +487,8 @@ impl PySimResult {
         d.set_item("peaks", r.peaks.0.to_vec())?;
         d.set_item("limited", r.limited.clone())?;
         d.set_item("u_max", r.u_max.clone())?;
+        d.set_item("peak_u", r.peak_u.clone())?;
+        d.set_item("peak_uf", r.peak_uf.clone())?;
         d.set_item("diagnostics", &me.diagnostics)?;
         let l = &me.labels;
         let unit = me.inner.time_unit.symbol();
@@ -527,6 +529,9 @@ impl PySimResult {
             limited: item("limited")?.extract()?,
             // Results pickled before `u_max` have none.
             u_max: state.get_item("u_max")?.map_or(Ok(vec![]), |v| v.extract())?,
+            // Results pickled before the peaks between rows have none.
+            peak_u: state.get_item("peak_u")?.map_or(Ok(vec![]), |v| v.extract())?,
+            peak_uf: state.get_item("peak_uf")?.map_or(Ok(vec![]), |v| v.extract())?,
             time_unit,
         };
         PySimResult::new(py, r, item("diagnostics")?.extract()?, Labels { inputs, outputs, states })

@@ -29,7 +29,10 @@ def test_u_f_is_minus_K_x_hat_plus_F_u_delayed(sample_time):
     np.testing.assert_allclose(r.u_f, want, rtol=0, atol=1e-10 * peak)
     assert np.abs(r.u_f - r.u).max() > 1.0, "u_f is not the command u"
     # summary() and to_pandas() carry u_f (and the states when recorded).
-    assert [c["max_uf"] for c in r.summary()] == list(np.abs(r.u_f).max(axis=0))
+    # The summary's peak counts every solver (controller) step between the rows too: at least the
+    # rows' peak, and within 1 % of it here, where the rows (0.05 s) are denser than the steps.
+    rows, peaks = np.abs(r.u_f).max(axis=0), np.array([c["max_uf"] for c in r.summary()])
+    assert np.all(peaks >= rows) and np.all(peaks <= 1.01 * rows), (peaks, rows)
     df = r.to_pandas()
     np.testing.assert_array_equal(df[["uf1", "uf2"]].to_numpy(), r.u_f)
     np.testing.assert_array_equal(df[["xhat1", "xhat2", "xhat3"]].to_numpy(), r.x_hat)

@@ -1256,6 +1256,9 @@ fn horizon_advice(
             if given { "; design.mu is the file's, which the automatic design keeps: a larger μ speeds those directions up (or leave it out for the rules to choose)" } else { "" }
         ));
     }
+    // Observer poles held at slow zeros of (A, D, C) (the F-8's −0.0015 ± 0.089j over 60 s) or any
+    // design pole whose transient outlives the run: a cause the run's own diagnostics name.
+    advice.extend(crate::diagnostics::slow_transient_advice(design, t_end));
     if many_harmonics(s, design) {
         advice.push(format!("a component has {} harmonics, and the companion forms' Ω̄ is singular to rounding with many: design.regressor_scaling = \"modal\" with a resonator −b ± jω per harmonic as filter poles keeps it well conditioned (what the automatic design chooses where the file gives neither the key nor μ; μ then anew)", most_harmonics(s)));
     }

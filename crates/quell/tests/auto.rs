@@ -229,9 +229,9 @@ fn the_papers_regressor_fails_away_from_1_s() {
 }
 
 /// A Targets::u_limit bounds the plant input u_f (5), as the verifying run records it: an
-/// unreachable limit fails the verification, and the reported max |u_f,i| is the recorded one of
-/// the written scenario's run (u_f recomputed there, not the adaptive command u); a loose limit
-/// changes nothing.
+/// unreachable limit fails the verification, and the reported max |u_f,i| is the one of the written
+/// scenario's run (its summary: rows and step ends; u_f there, not the adaptive command u); a loose
+/// limit changes nothing.
 #[test]
 fn the_actuator_limit_bounds_the_recorded_plant_input() {
     let text = scenario(&mut Rng(7), &[2], &[vec![]], 1.0, BASE);
@@ -241,12 +241,13 @@ fn the_actuator_limit_bounds_the_recorded_plant_input() {
     let rerun = |a: &quell::auto::AutoDesign| {
         let s = Scenario::from_toml(&a.scenario.to_toml()).unwrap();
         let r = Run::of(&s, &s.design().unwrap()).simulate(|_| ControlFlow::Continue(())).unwrap();
-        let u_f = r.u_f.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let u = r.u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        (u_f, u)
+        let figures = r.summary()[0].figures;
+        // The peaks count the step ends between rows too (at least the rows' peak).
+        assert!(figures.max_uf >= r.u_f.iter().fold(0.0f64, |m, v| m.max(v.abs())));
+        (figures.max_uf, figures.max_u)
     };
     let (u_f, u) = rerun(&free);
-    // The same run, the same samples: equal to rounding.
+    // The same run, the same steps: equal to rounding.
     assert!((free.verification.max_uf[0] - u_f).abs() <= 1e-12 * u_f, "{:?} vs {u_f}", free.verification);
     assert!(u_f != u, "u_f {u_f} and u {u} must differ for this check to tell them apart");
     let loose = auto_design(&doc, &Targets { u_limit: vec![10.0 * u_f], ..Targets::default() }).unwrap();

@@ -64,10 +64,10 @@ pub trait DelaySystem {
     fn observe(&mut self, _t: f64, _y: &[f64], _past: &Past<'_>) -> ControlFlow<()> {
         ControlFlow::Continue(())
     }
-    /// Called at the end t of each accepted step with the whole state `y` there, after the outputs
-    /// in the step: for a watch between outputs. `Break` stops the run as `on_output`'s does.
-    /// Default: nothing.
-    fn accepted(&mut self, _t: f64, _y: &[f64]) -> ControlFlow<()> {
+    /// Called at the end t of each accepted step with the whole state `y` there and the past (as in
+    /// [`DelaySystem::observe`]), after the outputs in the step: for a watch between outputs.
+    /// `Break` stops the run as `on_output`'s does. Default: nothing.
+    fn accepted(&mut self, _t: f64, _y: &[f64], _past: &Past<'_>) -> ControlFlow<()> {
         ControlFlow::Continue(())
     }
     /// The components (default: none) whose rate is linear in themselves and may be stiff:
@@ -440,7 +440,7 @@ pub fn solve_events<S: DelaySystem>(
         };
         steps.accept(&step)?;
         if steps.record_and_emit(&step, len, &mut |t, y| on_event(Event::Output(t, y))).is_break()
-            || steps.sys.accepted(step.t_new, &steps.y_new).is_break()
+            || steps.accepted(&step).is_break()
             || on_event(Event::Step(step.t_new)).is_break()
         {
             return Ok(steps.finish());
@@ -825,6 +825,20 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
             on_output(t_k, out)?;
         }
         ControlFlow::Continue(())
+    }
+
+    /// [`DelaySystem::accepted`] at the end of `step`, which the history already holds.
+    fn accepted(&mut self, step: &Step) -> ControlFlow<()> {
+        let ctx = &self.ctx;
+        let past = Past {
+            hist: &self.hist,
+            initial: ctx.initial,
+            y0: &ctx.y0,
+            t0: ctx.t0,
+            lead: self.t - step.t_new,
+            tol: ctx.tol,
+        };
+        self.sys.accepted(step.t_new, &self.y_new, &past)
     }
 
     /// Moves to t_new: prunes the history to the last max τ, then restarts at a breakpoint or

@@ -550,6 +550,7 @@ fn sampled_loop<C: SampledController + ?Sized>(
             }
         }
         plant.input(k, ctrl.command());
+        result.record_input_peaks(ctrl.command(), &plant.u_f);
         taken += 1;
         if k % every == 0 {
             // Rows at k·output_step, which every sample time accepted as dividing it meets to the
