@@ -620,6 +620,11 @@ fn decade_label(v: f64) -> String {
     }
 }
 
+/// A grid axis's values as tick labels ([`short_value`]: 1.6e6, not 1600000.0).
+fn short_values(values: &[String]) -> Vec<String> {
+    values.iter().map(|v| short_value(v)).collect()
+}
+
 /// A grid value as a tick label: every number in it to 4 significant digits
 /// (`[0.0, -6.666666666666667]` reads `[0, -6.667]`), the rest as written.
 fn short_value(value: &str) -> String {
@@ -790,7 +795,7 @@ fn draw_sweep_panel<DB: DrawingBackend>(
         .y_label_area_size(80)
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(|e| e.to_string())?;
-    let values: Vec<String> = axis.values.iter().map(|v| short_value(v)).collect();
+    let values = short_values(&axis.values);
     let fmt = move |v: &f64| match scale {
         // Tick values like 2.8000000000000003 read as 2.8, and 1e-7 not as 0 (the y axis's rule).
         AxisScale::Linear => tick_label(*v, x0, x1),
@@ -924,7 +929,7 @@ fn draw_sweep_2d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
             .y_label_area_size(70)
             .build_cartesian_2d(-0.5..nx as f64 - 0.5, -0.5..ny as f64 - 0.5)
             .map_err(|e| e.to_string())?;
-        let (xv, yv) = (ax.values.clone(), ay.values.clone());
+        let (xv, yv) = (short_values(&ax.values), short_values(&ay.values));
         let fx = move |v: &f64| xv.get(v.round().max(0.0) as usize).cloned().unwrap_or_default();
         let fy = move |v: &f64| yv.get(v.round().max(0.0) as usize).cloned().unwrap_or_default();
         chart
@@ -1507,6 +1512,8 @@ mod tests {
         assert_eq!(short_value("[0.0, -6.666666666666667, 0.6666666666666666]"), "[0, -6.667, 0.6667]");
         assert_eq!(short_value("[[1.23456e-13, 2.5e6], [12345.678]]"), "[[1.235e-13, 2.5e6], [12346]]");
         assert_eq!(short_value("0.004"), "0.004");
+        // The heat map's rows and columns too (they had read 1600000.0).
+        assert_eq!(super::short_values(&["1600000.0".into(), "400000.0".into()]), ["1.6e6", "4e5"]);
         assert_eq!(short_value("\"dop853\""), "\"dop853\"");
         assert_eq!(short_value("-1.2000000000000002"), "-1.2");
     }

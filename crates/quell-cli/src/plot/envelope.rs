@@ -40,6 +40,18 @@ const DECADES: f64 = 14.0;
 
 /// A panel of `series` (positive values) against t on a logarithmic value axis, from `t0` to
 /// `t_right`.
+/// The log axis of values from `lo` to `hi`: half a decade of room above and below, at most
+/// [`DECADES`] below the peak, widened to whole decades so that at least two are labelled (a
+/// diverged run's error, flat at its final 4.4e4, had an axis from 1.5e4 to 1.3e5 with the one
+/// label 1e5); 0.1 to 10 for values all 0.
+fn log_range(lo: f64, hi: f64) -> (f64, f64) {
+    if hi <= 0.0 {
+        return (0.1, 10.0);
+    }
+    let decade = |v: f64, round: fn(f64) -> f64| 10f64.powf(round(v.log10()));
+    (decade((lo / 3.0).max(hi * 10f64.powf(-DECADES)), f64::floor), decade(hi * 3.0, f64::ceil))
+}
+
 pub(super) fn log_panel<DB: DrawingBackend + Strokes>(
     area: &DrawingArea<DB, Shift>,
     (title, ylabel): (&str, &str),
@@ -50,11 +62,9 @@ pub(super) fn log_panel<DB: DrawingBackend + Strokes>(
     let points = series.iter().flat_map(|(_, p)| p.iter());
     let (lo, hi) = points.clone().fold((f64::INFINITY, 0.0f64), |(lo, hi), &(_, v)| (lo.min(v), hi.max(v)));
     let (t0, t1) = if t0 < t_right { (t0, t_right) } else { (t0, t0 + 1.0) };
-    // Half a decade of room above and below, at most DECADES; one decade where the values are all
-    // equal. Below the axis the curve ends, and the title says from when (drawn at the axis, its
-    // run at 1e-90 looked like a floor at 1e-14).
-    let floor = hi * 10f64.powf(-DECADES);
-    let (lo, hi) = if hi > 0.0 { ((lo / 3.0).max(floor), hi * 3.0) } else { (0.1, 10.0) };
+    // Below the axis the curve ends, and the title says from when (drawn at the axis, its run at
+    // 1e-90 looked like a floor at 1e-14).
+    let (lo, hi) = log_range(lo, hi);
     let below = points.clone().find(|&&(_, v)| v < lo).map(|&(t, _)| t);
     let title = match (below, points.clone().next()) {
         (Some(t), _) => format!("{title}; below 1e-{DECADES} of its peak from t = {} {time} on", crate::run::short(t)),
@@ -113,5 +123,16 @@ mod tests {
             assert!(a <= (-t).exp() * (1.0 + 1e-12) && a >= 0.99 * (-t - half).exp(), "m({t}) = {a}");
         }
         assert!(from_t_on(&[(0.0, 0.0), (1.0, 0.0)], (0.0, 1.0)).is_empty());
+    }
+
+    /// Whole decades, two labels at least: a flat error, the paper's channel 1 (20.7 to 0.011), a
+    /// run far below its peak (cut 14 decades down), none at all.
+    #[test]
+    fn a_log_axis_spans_whole_decades() {
+        let close = |(a, b): (f64, f64), (c, d): (f64, f64)| (a / c - 1.0).abs() < 1e-12 && (b / d - 1.0).abs() < 1e-12;
+        assert!(close(log_range(4.4e4, 4.4e4), (1e4, 1e6)));
+        assert!(close(log_range(0.011, 20.7), (1e-3, 100.0)));
+        assert!(close(log_range(1e-90, 1.0), (1e-14, 10.0)));
+        assert_eq!(log_range(0.0, 0.0), (0.1, 10.0));
     }
 }
