@@ -886,8 +886,8 @@ fn missing_median_note<DB: DrawingBackend>(
 fn missing_median(figure: SweepFigure, all: bool) -> [String; 2] {
     let head = if all { "no grid point has a median:" } else { "some grid points have no median:" };
     let why = match figure {
-        SweepFigure::SettleT => "no completed run, or half or more never settled (never_settled)",
-        _ => "no completed run there (completed)",
+        SweepFigure::SettleT => "no completed run, or half or more never settled (summary.json's never_settled)",
+        _ => "no completed run there (summary.json's outcomes)",
     };
     [head.into(), why.into()]
 }
@@ -1157,6 +1157,11 @@ fn draw_tune<DB: DrawingBackend>(
         let (lo, hi) = if log_y { (lo.log10().floor(), hi.log10().ceil()) } else { widened(lo, hi, 1e-3) };
         let pad = if log_y { 0.0 } else { 0.05 * (hi - lo) };
         let (y0, y1) = (lo - pad - if log_y { 0.3 } else { 0.0 }, hi + pad + if log_y { 0.3 } else { 0.0 });
+        // Evaluations without an objective (not completed, beyond a limit, never settled) are
+        // marked in a band of their own below the axis's values, not at a value (at its bottom edge
+        // they read as points near the chosen one).
+        let none: Vec<f64> = c.curve.iter().filter(|p| p.objective.is_none()).map(|p| p.mu.log10()).collect();
+        let band = if none.is_empty() { 0.0 } else { 0.12 * (y1 - y0) };
         let mut chart = ChartBuilder::on(area)
             .caption(
                 format!("{}: {} against μ{}", channel_title(c.channel, outputs), r.objective.name(), c.channel + 1),
@@ -1166,7 +1171,7 @@ fn draw_tune<DB: DrawingBackend>(
             .margin_right(24)
             .x_label_area_size(40)
             .y_label_area_size(80)
-            .build_cartesian_2d(m0..m1, y0..y1)
+            .build_cartesian_2d(m0..m1, y0 - band..y1)
             .map_err(|e| e.to_string())?;
         let y_desc = if log_y { format!("{objective} (log scale)") } else { objective.clone() };
         chart
@@ -1176,19 +1181,22 @@ fn draw_tune<DB: DrawingBackend>(
             .x_labels(12)
             // Decades over a wide range; over less than two, each tick's μ to three digits.
             .x_label_formatter(&|v| if m1 - m0 >= 2.0 { decade_label(*v) } else { format!("{:.3}", 10f64.powf(*v)) })
-            .y_label_formatter(&|v| if log_y { decade_label(*v) } else { tick_label(*v, y0, y1) })
+            .y_label_formatter(&|v| match *v < y0 - 1e-9 * (y1 - y0) {
+                true => String::new(),
+                false if log_y => decade_label(*v),
+                false => tick_label(*v, y0, y1),
+            })
             .label_style(("sans-serif", 13))
             .draw()
             .map_err(|e| e.to_string())?;
         let color = pick(c.channel);
         chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2))).map_err(|e| e.to_string())?;
         chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled()))).map_err(|e| e.to_string())?;
-        // Evaluations without an objective (not completed, beyond a limit, never settled): marked
-        // along the bottom rather than left out without a sign.
-        let none: Vec<f64> = c.curve.iter().filter(|p| p.objective.is_none()).map(|p| p.mu.log10()).collect();
         if !none.is_empty() {
-            let y = y0 + 0.04 * (y1 - y0);
-            let grey = RGBColor(120, 120, 120);
+            let (y, grey) = (y0 - band / 2.0, RGBColor(120, 120, 120));
+            chart
+                .draw_series(LineSeries::new([(m0, y0), (m1, y0)], grey.stroke_width(1)))
+                .map_err(|e| e.to_string())?;
             chart
                 .draw_series(none.iter().map(|&mu| Cross::new((mu, y), 5, grey.stroke_width(2))))
                 .map_err(|e| e.to_string())?;

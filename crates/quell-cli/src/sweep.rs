@@ -462,6 +462,7 @@ fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
     let meta = StudyMeta { shard: Shard::ALL, ..first };
     prepare_out(out, OUTPUTS)?;
     write_all(out, &meta, &rows, false, plots)?;
-    eprintln!("merged {} shards: {} runs into {}", count, rows.len(), out.display());
+    let shards = if count == 1 { "shard" } else { "shards" };
+    eprintln!("merged {count} {shards}: {} runs into {}", rows.len(), out.display());
     Ok(())
 }

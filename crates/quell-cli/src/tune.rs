@@ -150,7 +150,7 @@ fn report(r: &TuneResult, spec: &quell::study::TuneSpec, unit: quell::TimeUnit) 
                     (false, false) => "does NOT reproduce it",
                 },
                 d.map_or("n/a".to_string(), |d| format!("{d:.3e}")),
-                if r.partial || r.within_limits.get(c.channel).copied().unwrap_or(true) {
+                if r.partial || r.within_limits.get(c.channel).copied().flatten().unwrap_or(true) {
                     String::new()
                 } else {
                     format!(", but BREAKS {} there", r.joint_broken(spec, c.channel, "tune.").join(", "))
@@ -234,7 +234,7 @@ mod tests {
             joint: None,
             joint_difference: vec![None, None],
             reproduced: vec![false, false],
-            within_limits: vec![false, false],
+            within_limits: vec![None, None],
             partial: true,
         };
         let spec = quell::study::TuneSpec {

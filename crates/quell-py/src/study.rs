@@ -923,5 +923,13 @@ fn sweep_frame(
     }
     let frame = py.import("quell._frames")?.call_method1("runs_frame", (text, drawn))?;
     frame.getattr("attrs")?.set_item("partial", swept.partial)?;
+    // Said as `quell sweep` says it: a bare KeyboardInterrupt left the rows kept unmentioned.
+    let interrupt = interrupt.map(|_| {
+        pyo3::exceptions::PyKeyboardInterrupt::new_err(format!(
+            "interrupted after {} of {} runs; their rows are in the exception's .result (partial)",
+            swept.rows.len(),
+            study.len()
+        ))
+    });
     Ok((frame.unbind(), interrupt))
 }

@@ -141,11 +141,14 @@ def test_ctrl_c_stops_a_tuning_keeping_the_points_so_far(python_child):
             print('finished')
         except KeyboardInterrupt as e:
             print('partial', e.result.partial, len(e.result), e.result.joint is None, flush=True)
+            print('limits', e.result.within_limits, flush=True)
         """)
     out, err, seconds = interrupt(python_child, code, 3.0)
     assert "finished" not in out, out
     words = out.split()
     assert words[:2] == ["partial", "True"] and int(words[2]) >= 1 and words[3] == "True", (out, err)
+    # No joint run: no limit was checked, and none is said broken (it had warned of broken limits).
+    assert "limits [None, None]" in out and "break limits" not in err, (out, err)
     assert seconds < 10
 
 
@@ -165,11 +168,15 @@ def test_ctrl_c_stops_a_sweep_keeping_the_rows_so_far(python_child):
             except KeyboardInterrupt as e:
                 f = {frame}
                 print('partial', f.attrs["partial"], len(f), sorted(set(f["outcome"])), flush=True)
+                print('said', str(e), getattr(e.result, "partial", True), flush=True)
             """)
         out, err, seconds = interrupt(python_child, code, 3.0)
         assert "finished" not in out, (call, out)
         words = out.split()
         assert words[:2] == ["partial", "True"] and 1 <= int(words[2]) < 2000, (call, out, err)
+        # The exception says how many runs it kept and where (it had been a bare KeyboardInterrupt).
+        said = f"said interrupted after {words[2]} of 2000 runs; their rows are in the exception's .result (partial) True"
+        assert said in out, (call, out, err)
         assert seconds < 10, call
 
 

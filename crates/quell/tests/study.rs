@@ -132,7 +132,7 @@ fn tuned_channels_are_reproduced_by_the_joint_run() {
     assert!(r.channels[0].curve.iter().any(|p| p.figures.is_some_and(|f| f.max_u > 22.0)));
     assert_eq!(r.mu, [r.channels[0].chosen.as_ref().unwrap().mu, r.channels[1].chosen.as_ref().unwrap().mu]);
     assert_eq!(r.reproduced, [true, true], "joint differences {:?}", r.joint_difference);
-    assert_eq!(r.within_limits, [true, true]);
+    assert_eq!(r.within_limits, [Some(true), Some(true)]);
 }
 
 /// A flat objective is not decided by rounding. On examples/siso-complex.toml over 200 s every μ
@@ -182,7 +182,7 @@ fn a_limit_each_search_meets_can_be_broken_together() {
     let joint = &r.joint.as_ref().expect("a joint run").channels;
     assert!(chosen.max_uf <= 10.6 && joint[0].max_uf > 10.6, "search {} joint {}", chosen.max_uf, joint[0].max_uf);
     assert_eq!(r.reproduced, [true, true], "{:?}", r.joint_difference);
-    assert_eq!(r.within_limits, [false, true]);
+    assert_eq!(r.within_limits, [Some(false), Some(true)]);
 }
 
 /// A channel's search keeps the other inputs' limits that the scenario's own μ keeps: on the CSTR
@@ -230,6 +230,9 @@ fn a_stopped_tuning_keeps_the_points_evaluated() {
     assert!(r.partial && r.joint.is_none());
     assert_eq!(r.channels.iter().map(|c| c.curve.len()).sum::<usize>(), 3);
     assert_eq!(r.reproduced, [false, false]);
+    // No joint run: no limit checked, none broken (they had read false, and Python warned of them).
+    assert_eq!(r.within_limits, [None, None]);
+    assert_eq!(r.joint_limits_caution(study.tune.as_ref().unwrap(), ""), None);
     for c in &r.channels {
         let g = [3.0, 2.0][c.channel];
         let within = least_mu_within(c, 3.0 * (1e-6 * g + 1e-6));

@@ -32,6 +32,9 @@ class StudyResult:
         One row per run, in run order: ``run, point, draw, seed``, the grid values, ``outcome``,
         ``reason``, per channel ``tail_max_e, tail_rms_e, max_u, max_uf, settle_t``, ``steps``,
         ``wall_ms``, then one column per drawn number (``truth.delays[1]``, ``truth.A[0][2]``).
+    partial : bool
+        True when Ctrl-C stopped the sweep: the rows are those of the runs carried out (the
+        KeyboardInterrupt's ``.result``); ``frame.attrs["partial"]`` holds the same.
 
     Examples
     --------
@@ -54,6 +57,10 @@ class StudyResult:
 
     def __len__(self):
         return len(self.frame)
+
+    @property
+    def partial(self):
+        return bool(self.frame.attrs.get("partial", False))
 
     def __repr__(self):
         counts = self.frame["outcome"].value_counts().to_dict() if len(self.frame) else {}

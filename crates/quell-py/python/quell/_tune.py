@@ -38,10 +38,10 @@ class TuneResult:
     reproduced : list of bool
         Per channel, whether the joint run (every μ_i tuned at once) reproduced the search's
         objective within tolerance (Proposition 1's decoupling); all False when ``partial``.
-    within_limits : list of bool
+    within_limits : list of bool or None
         Per channel, whether the joint run kept max |u_i| and max |u_f,i| within ``max_u`` and
         ``max_uf`` (u_f mixes every channel's command, so limits met in each search can be broken
-        together); all False when ``partial``.
+        together); all None when ``partial`` (nothing was checked).
     joint_difference : list of float or None
         Per channel, the joint run's objective minus the search's.
     joint : dict or None

@@ -348,9 +348,10 @@ pub struct TuneResult {
     pub reproduced: Vec<bool>,
     /// Per channel, whether the joint run keeps max |u_i| and max |u_f,i| within `max_u`, `max_uf`:
     /// the objective decouples (Proposition 1) but u_f = −K x̂ + F u_d (5) mixes every channel's
-    /// command, so limits met in each search can be broken together (false without a joint run).
+    /// command, so limits met in each search can be broken together. `None` (null) without a joint
+    /// run: a tuning stopped before it has checked nothing.
     #[serde(default)]
-    pub within_limits: Vec<bool>,
+    pub within_limits: Vec<Option<bool>>,
     /// True when stopped ([`TuneOptions::stop`]) before every evaluation and the joint run were
     /// carried out: the curves hold the points evaluated so far and `chosen` is the best of them.
     #[serde(default)]
@@ -372,7 +373,7 @@ impl TuneResult {
             return None;
         }
         let broken: Vec<String> = (0..self.within_limits.len())
-            .filter(|&i| !self.within_limits[i])
+            .filter(|&i| self.within_limits[i] == Some(false))
             .map(|i| {
                 let what = self.joint_broken(spec, i, prefix);
                 let what = if what.is_empty() { "its run has no figures".to_string() } else { what.join(", ") };
@@ -694,8 +695,8 @@ pub fn tune(study: &Study, opts: &TuneOptions<'_>) -> Result<TuneResult, StudyEr
         .unzip();
     let within_limits = (0..m)
         .map(|i| {
-            let f = joint.as_ref().and_then(|j| j.channels.get(i));
-            f.is_some_and(|f| f.max_u <= spec.max_u[i] && f.max_uf <= spec.max_uf[i])
+            let joint = joint.as_ref()?;
+            Some(joint.channels.get(i).is_some_and(|f| f.max_u <= spec.max_u[i] && f.max_uf <= spec.max_uf[i]))
         })
         .collect();
     let partial = joint.is_none();
@@ -758,6 +759,37 @@ mod tests {
             at_end.bound_note("mu[1]").unwrap(),
             "the chosen μ, 100, is at the upper end of mu[1]: the best may lie beyond, widen the range"
         );
+    }
+
+    /// A tuning stopped before its joint run has checked no limit: none is said broken (every
+    /// channel's search had chosen a μ, and the result had read `within_limits` false, which
+    /// Python warned of as broken limits in a joint run that never ran).
+    #[test]
+    fn a_tuning_stopped_before_its_joint_run_breaks_no_limit() {
+        let spec = TuneSpec {
+            objective: Objective::TailRmsE,
+            bounds: vec![[1.0, 100.0]; 2],
+            max_u: vec![f64::INFINITY; 2],
+            max_uf: vec![f64::INFINITY; 2],
+            points: 3,
+            refine: 0,
+        };
+        let curve = |channel| TuneCurve { channel, curve: vec![point(10.0)], chosen: Some(point(10.0)), tie: None };
+        let stopped = TuneResult {
+            objective: Objective::TailRmsE,
+            channels: vec![curve(0), curve(1)],
+            mu: vec![10.0, 10.0],
+            joint: None,
+            joint_difference: vec![None, None],
+            reproduced: vec![false, false],
+            within_limits: vec![None, None],
+            partial: true,
+        };
+        assert_eq!(stopped.joint_limits_caution(&spec, ""), None);
+        // Where the joint run broke one, it is named (here without figures to quote).
+        let broken = TuneResult { within_limits: vec![Some(false), Some(true)], ..stopped };
+        let caution = broken.joint_limits_caution(&spec, "").unwrap();
+        assert!(caution.starts_with("the tuned μ together break limits in the joint run (channel 1: "), "{caution}");
     }
 
     #[test]
