@@ -266,6 +266,13 @@ struct Ctx<'a> {
     tol: f64,
 }
 
+impl Ctx<'_> {
+    /// The past as read at time t within the step that starts at t_n: lead = t_n − t.
+    fn past<'p>(&'p self, hist: &'p History, lead: f64) -> Past<'p> {
+        Past { hist, initial: self.initial, y0: &self.y0, t0: self.t0, lead, tol: self.tol }
+    }
+}
+
 /// One RHS evaluation at stage time `t` of the step starting at `t_n`.
 #[inline]
 #[allow(clippy::too_many_arguments)]
@@ -279,8 +286,7 @@ fn eval_rhs<S: DelaySystem>(
     y: &[f64],
     dy: &mut [f64],
 ) {
-    let past = Past { hist, initial: ctx.initial, y0: &ctx.y0, t0: ctx.t0, lead: t_n - t, tol: ctx.tol };
-    sys.rhs(t, y, &past, dy);
+    sys.rhs(t, y, &ctx.past(hist, t_n - t), dy);
     stats.rhs_evals += 1;
 }
 
@@ -812,16 +818,7 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
             };
             self.schedule.next += 1;
             // The step is in the history, and t_k − τ ≤ t_new − min τ ≤ t: the past is all known.
-            let ctx = &self.ctx;
-            let past = Past {
-                hist: &self.hist,
-                initial: ctx.initial,
-                y0: &ctx.y0,
-                t0: ctx.t0,
-                lead: self.t - t_k,
-                tol: ctx.tol,
-            };
-            self.sys.observe(t_k, out, &past)?;
+            self.sys.observe(t_k, out, &self.ctx.past(&self.hist, self.t - t_k))?;
             on_output(t_k, out)?;
         }
         ControlFlow::Continue(())
@@ -829,16 +826,7 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
 
     /// [`DelaySystem::accepted`] at the end of `step`, which the history already holds.
     fn accepted(&mut self, step: &Step) -> ControlFlow<()> {
-        let ctx = &self.ctx;
-        let past = Past {
-            hist: &self.hist,
-            initial: ctx.initial,
-            y0: &ctx.y0,
-            t0: ctx.t0,
-            lead: self.t - step.t_new,
-            tol: ctx.tol,
-        };
-        self.sys.accepted(step.t_new, &self.y_new, &past)
+        self.sys.accepted(step.t_new, &self.y_new, &self.ctx.past(&self.hist, self.t - step.t_new))
     }
 
     /// Moves to t_new: prunes the history to the last max τ, then restarts at a breakpoint or
