@@ -723,13 +723,114 @@ impl SweepFigure {
 /// 1-D grid: rows = figures, columns = channels; the median with 25–75 % and 5–95 % bands.
 fn draw_sweep_1d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::study::Summary) -> Result<(), String> {
     let (x, scale) = axis_coords(&s.study.grid[0].values);
-    let areas = root.split_evenly((SweepFigure::ALL.len(), s.study.m));
+    let rows = sweep_1d_rows(s);
+    let height = root.dim_in_pixel().1 as i32;
+    let (figures, outcomes) = root.split_vertically(height * SweepFigure::ALL.len() as i32 / rows as i32);
+    let areas = figures.split_evenly((SweepFigure::ALL.len(), s.study.m));
     for (f, figure) in SweepFigure::ALL.into_iter().enumerate() {
         for i in 0..s.study.m {
             draw_sweep_panel(&areas[f * s.study.m + i], s, (&x, scale), figure, i)?;
         }
     }
+    if rows > SweepFigure::ALL.len() {
+        draw_outcomes_panel(&outcomes, s, (&x, scale))?;
+    }
     root.present().map_err(|e| e.to_string())
+}
+
+/// The 1-D figure's rows of panels: the four figures, and a fifth of the outcomes where some grid
+/// point has runs that did not complete (a delay-margin study's result, which the figures' empty
+/// panels had only hinted at).
+fn sweep_1d_rows(s: &quell::study::Summary) -> usize {
+    SweepFigure::ALL.len() + usize::from(s.points.iter().any(|p| p.completed < p.runs))
+}
+
+/// The grid axis's span over the values at `x`: one value alone gets a span around it that keeps
+/// its sign (a delay of 0.1 had an axis from −0.9).
+fn grid_span(x: &[f64], scale: AxisScale) -> (f64, f64) {
+    let (x0, x1) = x.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+    let half = if scale == AxisScale::Linear && x0 != 0.0 { 0.5 * x0.abs() } else { 1.0 };
+    if x0 < x1 {
+        (x0, x1)
+    } else {
+        (x0 - half, x0 + half)
+    }
+}
+
+/// How many ticks a grid axis of `scale` over `n` values asks for.
+fn grid_labels(scale: AxisScale, n: usize) -> usize {
+    match scale {
+        AxisScale::Linear => 6,
+        AxisScale::Log => 12,
+        AxisScale::Positions => n.min(12),
+    }
+}
+
+/// A grid axis's tick label at `v`, for the axis of `scale` spanning (x0, x1) over `values`.
+fn grid_tick(v: f64, scale: AxisScale, values: &[String], (x0, x1): (f64, f64)) -> String {
+    match scale {
+        // Tick values like 2.8000000000000003 read as 2.8, and 1e-7 not as 0 (the y axis's rule).
+        AxisScale::Linear => tick_label(v, x0, x1),
+        AxisScale::Log => decade_label(v),
+        // A value's label only at its own position, not at the ticks between.
+        AxisScale::Positions if (v - v.round()).abs() < 1e-6 => {
+            values.get(v.round() as usize).cloned().unwrap_or_default()
+        }
+        AxisScale::Positions => String::new(),
+    }
+}
+
+/// The bottom row of a 1-D sweep: per grid value, the share of its runs that diverged and that
+/// failed, in % (summary.json's `diverged_fraction`, `failed_fraction`).
+fn draw_outcomes_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    s: &quell::study::Summary,
+    (x, scale): (&[f64], AxisScale),
+) -> Result<(), String> {
+    let (x0, x1) = grid_span(x, scale);
+    let values = short_values(&s.study.grid[0].values);
+    let mut chart = ChartBuilder::on(area)
+        .caption("Runs that did not complete, per grid value", ("sans-serif", 18))
+        .margin(8)
+        .margin_right(if scale == AxisScale::Positions { 56 } else { 28 })
+        .x_label_area_size(36)
+        .y_label_area_size(80)
+        .build_cartesian_2d(x0..x1, -5.0..105.0)
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .max_light_lines(2)
+        .x_labels(grid_labels(scale, values.len()))
+        .x_desc(key_label(&s.study.grid[0].key, &s.study.time_unit))
+        .y_desc("% of the point's runs")
+        .y_labels(6)
+        .x_label_formatter(&|v| grid_tick(*v, scale, &values, (x0, x1)))
+        .y_label_formatter(&|v| tick_label(*v, 0.0, 100.0))
+        .label_style(("sans-serif", 13))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    let shares = [
+        ("diverged", s.points.iter().map(|p| p.diverged_fraction).collect::<Vec<_>>()),
+        ("failed", s.points.iter().map(|p| p.failed_fraction).collect()),
+    ];
+    for (k, (name, share)) in shares.into_iter().enumerate() {
+        let pts: Vec<(f64, f64)> = s.points.iter().zip(share).map(|(p, f)| (x[p.point], 100.0 * f)).collect();
+        let color = pick(k + 3);
+        chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2))).map_err(|e| e.to_string())?;
+        chart
+            .draw_series(pts.iter().map(|&p| Circle::new(p, 4, color.filled())))
+            .map_err(|e| e.to_string())?
+            .label(name)
+            .legend(move |(x, y)| Circle::new((x + 10, y), 4, color.filled()));
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 14))
+        .draw()
+        .map_err(|e| e.to_string())
 }
 
 /// The grid axis's description under a sweep panel: the key and its unit, the scale, and with
@@ -781,10 +882,7 @@ fn draw_sweep_panel<DB: DrawingBackend>(
     let empty = at(0.5).is_empty();
     // Differences below 0.1 % of the values are the solver's, not the grid's: drawn flat.
     let (lo, hi) = widened(lo, hi, 1e-3);
-    let (x0, x1) = x.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
-    // One grid value: a span around it that keeps its sign (a delay of 0.1 had an axis from −0.9).
-    let half = if scale == AxisScale::Linear && x0 != 0.0 { 0.5 * x0.abs() } else { 1.0 };
-    let (x0, x1) = if x0 < x1 { (x0, x1) } else { (x0 - half, x0 + half) };
+    let (x0, x1) = grid_span(x, scale);
     let pad = 0.05 * (hi - lo);
     let (y0, y1) = (lo - pad, hi + pad);
     let mut chart = ChartBuilder::on(area)
@@ -796,25 +894,12 @@ fn draw_sweep_panel<DB: DrawingBackend>(
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(|e| e.to_string())?;
     let values = short_values(&axis.values);
-    let fmt = move |v: &f64| match scale {
-        // Tick values like 2.8000000000000003 read as 2.8, and 1e-7 not as 0 (the y axis's rule).
-        AxisScale::Linear => tick_label(*v, x0, x1),
-        AxisScale::Log => decade_label(*v),
-        // A value's label only at its own position, not at the ticks between.
-        AxisScale::Positions if (v - v.round()).abs() < 1e-6 => {
-            values.get(v.round() as usize).cloned().unwrap_or_default()
-        }
-        AxisScale::Positions => String::new(),
-    };
+    let fmt = |v: &f64| grid_tick(*v, scale, &values, (x0, x1));
     let x_desc = grid_axis_desc(s, scale);
     chart
         .configure_mesh()
         .max_light_lines(2)
-        .x_labels(match scale {
-            AxisScale::Linear => 6,
-            AxisScale::Log => 12,
-            AxisScale::Positions => axis.values.len().min(12),
-        })
+        .x_labels(grid_labels(scale, axis.values.len()))
         .x_desc(x_desc)
         .y_desc(if log { format!("{label} (log scale)") } else { label.to_string() })
         .y_labels(if empty { 0 } else { 10 })
@@ -1107,6 +1192,10 @@ pub fn plot_sweep(dir: &Path, s: &quell::study::Summary, rows: &[quell::study::R
     let size = |height| ((640 * s.study.m as u32).max(700), height);
     let height = 300 * SweepFigure::ALL.len() as u32;
     match s.study.grid.len() {
+        1 => {
+            let height = 300 * sweep_1d_rows(s) as u32;
+            write_figure(dir, "sweep", size(height), |r| draw_sweep_1d(r, s), |r| draw_sweep_1d(r, s))
+        }
         0 => write_figure(
             dir,
             "sweep",
@@ -1114,7 +1203,6 @@ pub fn plot_sweep(dir: &Path, s: &quell::study::Summary, rows: &[quell::study::R
             |r| draw_distributions(r, s, rows),
             |r| draw_distributions(r, s, rows),
         ),
-        1 => write_figure(dir, "sweep", size(height), |r| draw_sweep_1d(r, s), |r| draw_sweep_1d(r, s)),
         2 => write_figure(dir, "sweep", size(520), |r| draw_sweep_2d(r, s), |r| draw_sweep_2d(r, s)),
         _ => return Ok(false),
     }?;
@@ -1193,18 +1281,7 @@ fn draw_tune<DB: DrawingBackend>(
         chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2))).map_err(|e| e.to_string())?;
         chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled()))).map_err(|e| e.to_string())?;
         if !none.is_empty() {
-            let (y, grey) = (y0 - band / 2.0, RGBColor(120, 120, 120));
-            chart
-                .draw_series(LineSeries::new([(m0, y0), (m1, y0)], grey.stroke_width(1)))
-                .map_err(|e| e.to_string())?;
-            chart
-                .draw_series(none.iter().map(|&mu| Cross::new((mu, y), 5, grey.stroke_width(2))))
-                .map_err(|e| e.to_string())?;
-            let note = format!("× {} without an objective: not completed, beyond a limit or never settled", none.len());
-            let font = ("sans-serif", 12).into_font().color(&grey);
-            chart
-                .draw_series(std::iter::once(Text::new(note, (m0, y1 - 0.02 * (y1 - y0)), font)))
-                .map_err(|e| e.to_string())?;
+            mark_without_objective(&mut chart, &none, (m0, m1), (y0 - band, y0, y1))?;
         }
         if let Some(best) = c.chosen.as_ref().and_then(at) {
             chart
@@ -1213,6 +1290,25 @@ fn draw_tune<DB: DrawingBackend>(
         }
     }
     root.present().map_err(|e| e.to_string())
+}
+
+/// The evaluations at log10 μ `none`, which have no objective, as crosses in the band (b, y0)
+/// below a line at y0, and a note at the top of the panel (its μ span (m0, m1), top y1).
+fn mark_without_objective<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    none: &[f64],
+    (m0, m1): (f64, f64),
+    (b, y0, y1): (f64, f64, f64),
+) -> Result<(), String> {
+    let (y, grey) = ((b + y0) / 2.0, RGBColor(120, 120, 120));
+    chart.draw_series(LineSeries::new([(m0, y0), (m1, y0)], grey.stroke_width(1))).map_err(|e| e.to_string())?;
+    chart
+        .draw_series(none.iter().map(|&mu| Cross::new((mu, y), 5, grey.stroke_width(2))))
+        .map_err(|e| e.to_string())?;
+    let note = format!("× {} without an objective: not completed, beyond a limit or never settled", none.len());
+    let font = ("sans-serif", 12).into_font().color(&grey);
+    chart.draw_series(std::iter::once(Text::new(note, (m0, y1 - 0.02 * (y1 - b)), font))).map_err(|e| e.to_string())?;
+    Ok(())
 }
 
 /// Writes tune.png and tune.svg.

@@ -479,6 +479,27 @@ fn values_spanning_decades_are_drawn_on_a_log_axis() {
     assert_eq!(svg.matches("tail RMS e (log scale)").count(), 1, "channel 1's panel only");
 }
 
+/// A 1-D sweep where some runs did not complete adds a row of panels: the share of each grid
+/// value's runs that diverged and that failed (the delay margin of the paper's loop: τ₂ = 4.5 s
+/// against the designed 3 diverges), which the figures' empty panels had only hinted at; where all
+/// completed, the figure keeps its four rows. sweep.png is 300 px a row.
+#[test]
+fn a_sweep_where_runs_diverge_plots_their_share_per_grid_value() {
+    let png_height = |dir: &tempfile::TempDir| {
+        let bytes = fs::read(dir.path().join("out/sweep.png")).unwrap();
+        u32::from_be_bytes(bytes[20..24].try_into().unwrap())
+    };
+    let study = |delays: &str| {
+        format!("[simulation]\nt_end = 40.0\nrtol = 1e-6\natol = 1e-6\n[grid]\n\"truth.delays[1]\" = {delays}\n")
+    };
+    let (dir, svg) = sweep_figure("outcomes", &study("[3.0, 4.5]"));
+    assert!(svg.contains("Runs that did not complete, per grid value") && svg.contains("diverged"), "the panel");
+    assert_eq!(png_height(&dir), 5 * 300);
+    let (dir, svg) = sweep_figure("all-completed", &study("[2.9, 3.0]"));
+    assert!(!svg.contains("Runs that did not complete"));
+    assert_eq!(png_height(&dir), 4 * 300);
+}
+
 /// The settling-time panels of sweep.png/.svg are labelled in the scenario's unit of time
 /// (`[plant] time_unit`), also after a merge of shards (the unit travels in their summaries).
 #[test]
