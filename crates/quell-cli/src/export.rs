@@ -13,7 +13,7 @@ pub struct ExportArgs {
     /// Sample time T_s, in the plant model's unit of time; every input delay must be a whole number of samples.
     /// Defaults to the scenario's simulation.sample_time.
     #[arg(long, value_name = "T_S", allow_hyphen_values = true, value_parser = crate::parse_real)]
-    sample_time: Option<f64>,
+    pub(crate) sample_time: Option<f64>,
     /// Output directory for <PREFIX>_controller.h and <PREFIX>_controller.c.
     #[arg(long, default_value = ".")]
     out: PathBuf,

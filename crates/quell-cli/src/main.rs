@@ -60,7 +60,12 @@ pub(crate) enum Failure {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let has_sample_time = matches!(cli.command, Some(Command::Run(_) | Command::Export(_)) | None);
+    // Only a --sample-time given is named beside the key (a file's value had been blamed on the flag).
+    let has_sample_time = match &cli.command {
+        Some(Command::Run(args)) => args.sample_time.is_some(),
+        Some(Command::Export(args)) => args.sample_time.is_some(),
+        _ => false,
+    };
     SAMPLE_TIME_FLAG.store(has_sample_time, std::sync::atomic::Ordering::Relaxed);
     let result = match cli.command {
         Some(Command::Design(args)) if args.auto => auto::auto(&args),
@@ -99,7 +104,7 @@ const FLAGS: [(&str, &str); 6] = [
     ("compiler", "--compiler"),
 ];
 
-/// Whether the command has `--sample-time` (`run` and `export`): only then does a message on
+/// Whether the command was given `--sample-time` (`run` and `export`): only then does a message on
 /// `simulation.sample_time` name the flag too.
 static SAMPLE_TIME_FLAG: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(true);
 

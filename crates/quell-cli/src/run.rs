@@ -109,7 +109,7 @@ fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result
     let mut settings = match args.sample_time {
         Some(t) if !(t.is_finite() && t > 0.0) => {
             return Err(Failure::Input(format!(
-                "--sample-time: expected a sample time > 0 (in the plant model's unit of time), found {t}"
+                "--sample-time: expected a finite sample time > 0 (in the plant model's unit of time), found {t}"
             )))
         }
         Some(sample_time) => RunSettings { mode: Loop::Sampled { sample_time }, ..RunSettings::of(scenario) },

@@ -73,3 +73,28 @@ fn absurd_sample_times_are_input_errors_not_crashes() {
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("a delay line holds at most"), "{stderr}");
 }
+
+/// A sample time from the file is named by its key alone; only one given as `--sample-time` is
+/// named with the flag (a file's 0.3 s, which does not divide the delays, had been blamed on the
+/// flag that was not used).
+#[test]
+fn a_sample_time_from_the_file_is_not_blamed_on_the_flag() {
+    let dir_tmp = scratch_dir("file-sample-time");
+    let dir = dir_tmp.path();
+    let scenario = paper_with(dir, &[("[simulation]", "[simulation]\nsample_time = 0.3")]);
+    let run = |extra: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_quell"))
+            .args(["run", "--no-plots", scenario.to_str().unwrap_or_default()])
+            .args(extra)
+            .arg("--out")
+            .arg(dir.join("out"))
+            .output()
+            .expect("run");
+        assert_eq!(out.status.code(), Some(2));
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let from_file = run(&[]);
+    assert!(from_file.starts_with("error: simulation.sample_time: channel 1's delay"), "{from_file}");
+    let from_flag = run(&["--sample-time", "0.3"]);
+    assert!(from_flag.starts_with("error: simulation.sample_time (--sample-time): channel 1's delay"), "{from_flag}");
+}

@@ -350,7 +350,7 @@ fn negative_and_malformed_numbers_are_named_by_their_flag() {
     let s = study(dir.path(), "s.toml", "[grid]\n\"design.mu[0]\" = [20.0]\n");
     let p = paper();
     for (args, fragment) in [
-        (vec!["run", &p, "--sample-time", "-inf", "--out", &out], "--sample-time: expected a sample time > 0"),
+        (vec!["run", &p, "--sample-time", "-inf", "--out", &out], "--sample-time: expected a finite sample time > 0"),
         (vec!["run", &p, "--max-steps", "-inf", "--out", &out], "'--max-steps <N>': expected a step budget"),
         (vec!["export", &p, "--sample-time", "-inf", "--out", &out], "--sample-time"),
         (

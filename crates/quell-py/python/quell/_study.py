@@ -60,6 +60,7 @@ class StudyResult:
 
     @property
     def partial(self):
+        """Whether Ctrl-C stopped the sweep before every run (``frame.attrs["partial"]``)."""
         return bool(self.frame.attrs.get("partial", False))
 
     def __repr__(self):

@@ -581,12 +581,11 @@ static {R} {p}_channel({p}_state *s, unsigned i, unsigned sigma, const {R} *Phi,
         }
     }
     /* Adaptive step (33) with c = T_s mu_i, nonexpansive for any c: up to c tr Omega = {implicit_from},
-     * implicit in rho I with rho = tr Omega, eta <- eta + c (Y - Omega eta) / (1 + c rho); beyond,
-     * the implicit Euler step. */
+     * explicit Euler, eta <- eta + c (Y - Omega eta) (each direction contracts by 1 - c lambda, in
+     * [1 - {implicit_from}, 1]); beyond, the implicit Euler step. */
     if (c * trace <= {implicit_from}) {
-        const {R} gain = c / (1 + c * trace);
         for (unsigned j = 0; j < {P}_Q; j++)
-            eta[j] += gain * (Y[j] - Omega_eta[j]);
+            eta[j] += c * (Y[j] - Omega_eta[j]);
     } else {
         {p}_implicit_step(Omega, c, Y, Omega_eta, eta);
     }

@@ -66,6 +66,6 @@ void suspension_command(const suspension_state *s, double u[SUSPENSION_M]);
 #endif
 
 /* Identifies this header's source: suspension_controller.c compiles only with it. */
-#define SUSPENSION_LAYOUT_ID 0xb916607248b40c21u
+#define SUSPENSION_LAYOUT_ID 0xc9c37bdcba91b685u
 
 #endif /* SUSPENSION_CONTROLLER_H */

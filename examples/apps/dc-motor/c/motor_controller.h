@@ -66,6 +66,6 @@ void motor_command(const motor_state *s, double u[MOTOR_M]);
 #endif
 
 /* Identifies this header's source: motor_controller.c compiles only with it. */
-#define MOTOR_LAYOUT_ID 0xdebc3af58c7537c2u
+#define MOTOR_LAYOUT_ID 0x113bbcd5f02e2ca6u
 
 #endif /* MOTOR_CONTROLLER_H */

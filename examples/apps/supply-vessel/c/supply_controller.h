@@ -66,6 +66,6 @@ void supply_command(const supply_state *s, double u[SUPPLY_M]);
 #endif
 
 /* Identifies this header's source: supply_controller.c compiles only with it. */
-#define SUPPLY_LAYOUT_ID 0xb2b240e897f94d8eu
+#define SUPPLY_LAYOUT_ID 0xfa3552573dcd2562u
 
 #endif /* SUPPLY_CONTROLLER_H */
