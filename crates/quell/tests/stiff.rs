@@ -524,7 +524,7 @@ fn a_run_ended_by_its_budget_counts_the_steps_it_kept() {
 /// bound ends it first ([`history_bound`]: 26,400 to 93,591 records of (8·27 + 9)·8 = 1,800 bytes,
 /// nd = 27 delayed states: ξ̂, x̂ 11 and η̂ 16); the paper at μ × 1000 forced to DOP853 used to fill
 /// the 1 GiB cap (298,261 records by t = 21.9 s), and now holds 93,591 (160 MiB). Measured: ends at
-/// t = 20.5 to 38.4 s after 0.4 to 1.9 s. The bound of 60 s leaves a factor 30 for a loaded machine
+/// t = 20.5 to 39.1 s after 0.4 to 1.9 s. The bound of 60 s leaves a factor 30 for a loaded machine
 /// and still fails without a budget (the run then held 15 GB by t = 35 s).
 #[test]
 fn runaways_end_within_their_default_budgets_with_a_bounded_history() {

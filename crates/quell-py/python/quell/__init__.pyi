@@ -390,7 +390,7 @@ class TuneResult:
     objective: str
     mu: List[float]
     reproduced: List[bool]
-    within_limits: List[bool]
+    within_limits: List[Optional[bool]]
     joint_difference: List[Optional[float]]
     joint: Optional[Dict[str, Any]]
     ties: List[Optional[Dict[str, float]]]
