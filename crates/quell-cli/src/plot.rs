@@ -116,9 +116,19 @@ fn panel<DB: DrawingBackend + Strokes>(
         limit_lines(&mut chart, label, &levels, (t0, t1))?;
     }
     let Some((font, size)) = legend else { return Ok(()) };
+    draw_legend(&mut chart, legend_corner(series, ((t0, t1), (y0, y1)), size).0, font)
+}
+
+/// A panel's legend at `position`, in the figures' one style: a boxed, nearly opaque white field,
+/// labels of `font` px.
+fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+    font: u32,
+) -> Result<(), String> {
     chart
         .configure_series_labels()
-        .position(legend_corner(series, ((t0, t1), (y0, y1)), size).0)
+        .position(position)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .label_font(("sans-serif", font))
@@ -823,14 +833,7 @@ fn draw_outcomes_panel<DB: DrawingBackend>(
             .label(name)
             .legend(move |(x, y)| Circle::new((x + 10, y), 4, color.filled()));
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 14))
-        .draw()
-        .map_err(|e| e.to_string())
+    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft, 14)
 }
 
 /// The grid axis's description under a sweep panel: the key and its unit, the scale, and with

@@ -38,8 +38,6 @@ pub(super) fn from_t_on(points: &[(f64, f64)], (t0, t1): (f64, f64)) -> Vec<(f64
 /// integrator's rounding, not the loop.
 const DECADES: f64 = 14.0;
 
-/// A panel of `series` (positive values) against t on a logarithmic value axis, from `t0` to
-/// `t_right`.
 /// The log axis of values from `lo` to `hi`: half a decade of room above and below, at most
 /// [`DECADES`] below the peak, widened to whole decades so that at least two are labelled (a
 /// diverged run's error, flat at its final 4.4e4, had an axis from 1.5e4 to 1.3e5 with the one
@@ -52,6 +50,8 @@ fn log_range(lo: f64, hi: f64) -> (f64, f64) {
     (decade((lo / 3.0).max(hi * 10f64.powf(-DECADES)), f64::floor), decade(hi * 3.0, f64::ceil))
 }
 
+/// A panel of `series` (positive values) against t on a logarithmic value axis, from `t0` to
+/// `t_right`.
 pub(super) fn log_panel<DB: DrawingBackend + Strokes>(
     area: &DrawingArea<DB, Shift>,
     (title, ylabel): (&str, &str),
@@ -94,14 +94,7 @@ pub(super) fn log_panel<DB: DrawingBackend + Strokes>(
     if series.iter().all(|(_, p)| p.is_empty()) {
         return Ok(());
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 14))
-        .draw()
-        .map_err(|e| e.to_string())
+    super::draw_legend(&mut chart, SeriesLabelPosition::UpperRight, 14)
 }
 
 #[cfg(test)]
