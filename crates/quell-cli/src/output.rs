@@ -42,18 +42,30 @@ fn probe(dir: &Path) -> io::Result<()> {
     tempfile::Builder::new().prefix(".quell-write-test.").suffix(".tmp").tempfile_in(dir)?.close()
 }
 
+/// The output directories this process has locked ([`quell::files::lock_dir`]), held until it
+/// exits.
+static LOCKED: std::sync::Mutex<Vec<quell::files::DirLock>> = std::sync::Mutex::new(Vec::new());
+
 /// Creates `--out` and proves it writable ([`probe`]), and that none of the `files` to be written
 /// there is anything but a regular file or nothing (a directory, a symbolic link, a FIFO, a device:
 /// [`quell::files::check_target`]), before any work is done: every output-path problem is bad input
-/// (exit 2) naming the path.
+/// (exit 2) naming the path. Then locks it for the rest of the command: a second command writing
+/// the same directory meanwhile is refused (exit 2) rather than mixing its files with these.
 pub fn prepare_out(dir: &Path, files: &[&str]) -> Result<(), Failure> {
     let bad = |e: String| Failure::Input(format!("--out {}: {e}; choose another output directory", dir.display()));
     quell::files::check_dir(dir).map_err(|e| bad(e.to_string()))?;
     fs::create_dir_all(dir).and_then(|()| probe(dir)).map_err(|e| bad(format!("cannot write there ({e})")))?;
-    match files.iter().map(|f| quell::files::check_target(&dir.join(f))).find_map(Result::err) {
-        Some(e) => Err(bad(e.to_string())),
-        None => Ok(()),
+    if let Some(e) = files.iter().map(|f| quell::files::check_target(&dir.join(f))).find_map(Result::err) {
+        return Err(bad(e.to_string()));
     }
+    let lock = quell::files::lock_dir(dir).map_err(|_| {
+        Failure::Input(format!(
+            "--out {}: another quell command is writing there now; wait for it to finish or choose another output directory",
+            dir.display()
+        ))
+    })?;
+    LOCKED.lock().unwrap_or_else(|e| e.into_inner()).extend(lock);
+    Ok(())
 }
 
 /// Proves the output file given by `flag` writable before any work is done, as [`prepare_out`]

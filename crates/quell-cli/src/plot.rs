@@ -437,11 +437,15 @@ fn draw<DB: DrawingBackend + Strokes>(
     use quell::sim::Outcome;
     let ended = match &r.outcome {
         None | Some(Outcome::Completed) => String::new(),
-        Some(Outcome::Diverged { t, signal, .. }) => format!(" (diverged at t = {t:.4} {time}: {signal})"),
-        Some(Outcome::Interrupted { t }) => format!(" (interrupted at t = {t:.4} {time})"),
+        Some(Outcome::Diverged { t, signal, .. }) => {
+            format!(" (diverged at t = {} {time}: {signal})", quell::settings::fmt_instant(*t))
+        }
+        Some(Outcome::Interrupted { t }) => {
+            format!(" (interrupted at t = {} {time})", quell::settings::fmt_instant(*t))
+        }
         Some(
             Outcome::StepSizeTooSmall { t } | Outcome::TooManySteps { t, .. } | Outcome::HistoryTooLarge { t, .. },
-        ) => format!(" (failed at t = {t:.4} {time}: summary.json's outcome says why)"),
+        ) => format!(" (failed at t = {} {time}: summary.json's outcome says why)", quell::settings::fmt_instant(*t)),
     };
     let tracking = [(format!("g{c} (reference)"), col(&r.g)), (format!("y{c}"), col(&r.y))];
     let error = [(format!("e{c}"), col(&r.e))];

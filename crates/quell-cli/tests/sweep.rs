@@ -599,7 +599,7 @@ fn a_study_forced_onto_dop853_with_a_stiff_point_is_cautioned() {
     };
     let cautioned = study("method = \"explicit\"", "[[20.0, 30.0], [100.0, 150.0]]");
     assert!(
-        cautioned.contains("⚠ warning: 1 of the 2 runs carried out ran on DOP853 at a stiff adaptive law, so their figures may be off by more than the tolerance; the first, run 1, design.mu = [100.0, 150.0]: simulation.method = \"explicit\" on a stiff adaptive law"),
+        cautioned.contains("⚠ warning: 1 of the 2 runs carried out ran on DOP853 at a stiff adaptive law, all completed: DOP853 keeps its steps within that law's rate; the first, run 1, design.mu = [100.0, 150.0]: simulation.method = \"explicit\" on a stiff adaptive law"),
         "{cautioned}"
     );
     for (method, mus) in [("", "[[20.0, 30.0], [100.0, 150.0]]"), ("method = \"explicit\"", "[[20.0, 30.0]]")] {

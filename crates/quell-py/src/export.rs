@@ -186,6 +186,8 @@ pub fn export(
     let mut files = vec![(code.header_name, code.header.into_bytes()), (code.source_name, code.source.into_bytes())];
     files.extend(archive.map(|a| (a.file_name, a.bytes)));
     let files: Vec<(PathBuf, &[u8])> = files.iter().map(|(name, bytes)| (out.join(name), bytes.as_slice())).collect();
+    // Held until the files are in place: another export into `out` meanwhile is refused.
+    let _lock = quell::files::lock_dir(&out).map_err(|e| Kind::Export.err(py, format!("out: {e}")))?;
     // All written before any is renamed, as `quell export` does: a failed write leaves the old
     // files together, never a new header beside an old source.
     quell::files::write_atomic_all(&files)

@@ -291,3 +291,22 @@ def test_a_sample_time_given_to_load_reads_the_file_as_its_sampled_scenario(tmp_
         with pytest.raises(quell.ScenarioError, match=r"^sample_time=(-1|0|NaN|inf): ") as caught:
             quell.Scenario.from_toml(without, sample_time=bad)
         assert caught.value.key == "sample_time"
+
+
+def test_an_export_into_a_directory_another_process_is_writing_is_refused(tmp_path):
+    # quell export (CLI or Python) locks its output directory while it writes: two exports into one
+    # directory had left a header of one beside the other's source.
+    import fcntl
+    import os
+    fd = os.open(tmp_path, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        with pytest.raises(quell.ExportError, match=r"^out: another command is writing in .*; wait for it to finish"):
+            quell.export(quell.paper_example(), 1e-3, out=str(tmp_path))
+        assert list(tmp_path.iterdir()) == []
+    finally:
+        os.close(fd)
+    # Released, the same export writes there.
+    written = quell.export(quell.paper_example(), 1e-3, out=str(tmp_path))
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(pathlib.Path(w).name for w in written)
+    assert len(written) == 2

@@ -477,6 +477,12 @@ pub fn fmt_time(x: f64) -> String {
     s.parse::<f64>().map_or(s, fmt_short)
 }
 
+/// The time of an event (a divergence, a budget's end) in a message: seven significant digits in
+/// `fmt_short`'s form (36.75, 808080; not 808080.0000).
+pub fn fmt_instant(t: f64) -> String {
+    fmt_short(significant(t, 7))
+}
+
 /// `x` rounded to `digits` significant digits (≥ 1), through its decimal form.
 pub(crate) fn significant(x: f64, digits: usize) -> f64 {
     format!("{x:.*e}", digits.max(1) - 1).parse().unwrap_or(x)

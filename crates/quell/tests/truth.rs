@@ -200,7 +200,7 @@ fn a_run_that_diverges_on_a_mismatched_truth_names_the_mismatch_first() {
     let advice = quell::diagnostics::diagnose_run(&s, &d, &r).advice;
     assert!(
         advice[0].starts_with("the run ended early (")
-            && advice[0].contains("on a true plant that differs from the design model: truth.delays [1, 9] s against plant.delays [1, 3]; the advice below is for the model"),
+            && advice[0].contains("on a true plant that differs from the design model: truth.delays [1, 9] s against plant.delays [1, 3]; the run did not simulate the design model"),
         "{advice:?}"
     );
     let nominal = scenario("");

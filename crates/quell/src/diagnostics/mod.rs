@@ -160,7 +160,7 @@ pub fn loose_atol(s: &crate::Scenario, result: &SimResult) -> Option<String> {
 /// steps crowded the delay history past its memory budget; not out of a step budget the caller
 /// may have set low) on a true plant
 /// (`[truth]`) that differs from the design model: which keys differ and by how much, and that
-/// the advice after it is for the model. The observer advice of a chemostat whose true delays are
+/// any other advice is for the model. The observer advice of a chemostat whose true delays are
 /// 20× the model's named the model's observer speed-ups and nothing of the mismatch. A completed
 /// run on such a plant that missed its tail bound gets a shorter line: the mismatch may set the
 /// tail.
@@ -184,7 +184,7 @@ pub fn model_error_advice(s: &crate::Scenario, result: &SimResult) -> Option<Str
         return None;
     }
     Some(format!(
-        "the run ended early ({outcome}, t in {unit}) on a true plant that differs from the design model: {}; the advice below is for the model, which the run did not simulate: first check that the design holds on its own model (the scenario without [truth]), then how much mismatch it tolerates (a study over the truth keys, docs/studies.md)",
+        "the run ended early ({outcome}, t in {unit}) on a true plant that differs from the design model: {}; the run did not simulate the design model, so first check that the design holds on it (the scenario without [truth]), then how much mismatch it tolerates (a study over the truth keys, docs/studies.md); any other advice here is for the model",
         diffs.join(", ")
     ))
 }

@@ -33,15 +33,28 @@ impl std::fmt::Display for Outcome {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Outcome::Completed => write!(f, "reached t_end"),
-            Outcome::Diverged { t, signal, value } => write!(f, "diverged at t = {t:.4}: {signal} = {value:.3e}"),
-            Outcome::StepSizeTooSmall { t } => write!(f, "the solver's step size underflowed at t = {t:.6}"),
+            Outcome::Diverged { t, signal, value } => {
+                write!(f, "diverged at t = {t}: {signal} = {value:.3e}", t = crate::settings::fmt_instant(*t))
+            }
+            Outcome::StepSizeTooSmall { t } => {
+                write!(f, "the solver's step size underflowed at t = {t}", t = crate::settings::fmt_instant(*t))
+            }
             Outcome::TooManySteps { t, max_steps } => {
-                write!(f, "the solver needed more than {max_steps} steps by t = {t:.6} (the step budget)")
+                write!(
+                    f,
+                    "the solver needed more than {max_steps} steps by t = {t} (the step budget)",
+                    t = crate::settings::fmt_instant(*t)
+                )
             }
             Outcome::HistoryTooLarge { t, max_bytes } => {
-                write!(f, "the delay history would have exceeded {} MB by t = {t:.6}", max_bytes >> 20)
+                write!(
+                    f,
+                    "the delay history would have exceeded {} MB by t = {t}",
+                    max_bytes >> 20,
+                    t = crate::settings::fmt_instant(*t)
+                )
             }
-            Outcome::Interrupted { t } => write!(f, "interrupted at t = {t:.3}"),
+            Outcome::Interrupted { t } => write!(f, "interrupted at t = {t}", t = crate::settings::fmt_instant(*t)),
         }
     }
 }
@@ -53,33 +66,37 @@ impl Outcome {
     pub fn explain(&self, raise: &str, unit: TimeUnit) -> Option<String> {
         Some(match self {
             Outcome::Completed => return None,
-            Outcome::Diverged { t, signal, value } => format!("the closed loop diverged at t = {t:.4} {unit}: {signal} = {value:e}"),
+            Outcome::Diverged { t, signal, value } => format!("the closed loop diverged at t = {t} {unit}: {signal} = {value:e}", t = crate::settings::fmt_instant(*t)),
             Outcome::StepSizeTooSmall { t } => format!(
-                "the solver's step size underflowed at t = {t:.6} {unit} (the loop is too stiff or blows up there, a signal is \
+                "the solver's step size underflowed at t = {t} {unit} (the loop is too stiff or blows up there, a signal is \
                  faster than any step can resolve, an input delay is shorter than a step can be, simulation.rtol is tighter \
                  than rounding allows at the loop's stiffness: try it 10× looser, or simulation.atol is too small for a signal \
-                 that leaves zero, as the delayed commands do at each delay: give it the smallest size that matters times rtol)"
+                 that leaves zero, as the delayed commands do at each delay: give it the smallest size that matters times rtol)",
+                t = crate::settings::fmt_instant(*t)
             ),
             Outcome::TooManySteps { t, max_steps } => format!(
-                "the solver needed more than {max_steps} steps by t = {t:.6} {unit} (the step budget: the loop turned stiff, as a \
+                "the solver needed more than {max_steps} steps by t = {t} {unit} (the step budget: the loop turned stiff, as a \
                  loop blowing up does before its states reach the divergence bound, or its adaptation is stiff from the \
-                 start, or a signal is faster than a step can follow; raise {raise} if the run is sound)"
+                 start, or a signal is faster than a step can follow; raise {raise} if the run is sound)",
+                t = crate::settings::fmt_instant(*t)
             ),
             // At the cap no step budget raises it; a stiff loop integrated explicitly lands there.
             Outcome::HistoryTooLarge { t, max_bytes } if *max_bytes >= super::MAX_HISTORY_BYTES => format!(
-                "the delay history would have exceeded {} MB by t = {t:.6} {unit} (the memory budget's cap: the solver's steps \
+                "the delay history would have exceeded {} MB by t = {t} {unit} (the memory budget's cap: the solver's steps \
                  had crowded into the last delay, as a loop blowing up does, a stiff loop integrated explicitly \
                  (simulation.method = \"auto\" takes a stiff adaptive law implicitly), or one with a rate far faster \
                  than the rest, such as a small design.beta, which every method's steps follow)",
-                max_bytes >> 20
+                max_bytes >> 20,
+                t = crate::settings::fmt_instant(*t)
             ),
             Outcome::HistoryTooLarge { t, max_bytes } => format!(
-                "the delay history would have exceeded {} MB by t = {t:.6} {unit} (the memory budget: the solver's steps had \
+                "the delay history would have exceeded {} MB by t = {t} {unit} (the memory budget: the solver's steps had \
                  crowded into the last delay, as a loop blowing up does; it scales with {raise}, raise that if the run is \
                  sound)",
-                max_bytes >> 20
+                max_bytes >> 20,
+                t = crate::settings::fmt_instant(*t)
             ),
-            Outcome::Interrupted { t } => format!("interrupted at t = {t:.3} {unit}"),
+            Outcome::Interrupted { t } => format!("interrupted at t = {t} {unit}", t = crate::settings::fmt_instant(*t)),
         })
     }
 }

@@ -553,16 +553,14 @@ impl Study {
             (false, false) => format!(", {values}"),
             (false, true) => format!(", {values}, draw {}", first.draw),
         };
-        // Figures only where such a run completed (two quadruple-tank draws that both filled the
-        // history's cap had been told their figures "may be off").
         let completed = rows.iter().filter(|r| r.explicit_stiff && r.outcome == Outcome::Completed).count();
         let consequence = match completed {
-            0 => "none completed (DOP853's steps sit at its stability bound there); the default method, \"auto\", takes the adaptive law implicitly".to_string(),
-            c if c == stiff => "so their figures may be off by more than the tolerance".to_string(),
-            c => format!("so the figures of the {c} that completed may be off by more than the tolerance"),
+            0 => "none completed".to_string(),
+            c if c == stiff => "all completed".to_string(),
+            c => format!("{c} completed"),
         };
         Some(format!(
-            "{stiff} of the {} runs carried out ran on DOP853 at a stiff adaptive law, {consequence}; the first, run {}{at}: {w}",
+            "{stiff} of the {} runs carried out ran on DOP853 at a stiff adaptive law, {consequence}: DOP853 keeps its steps within that law's rate; the first, run {}{at}: {w}",
             rows.len(),
             first.run
         ))

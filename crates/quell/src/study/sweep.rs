@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 use super::{Nominal, Runaway, Settle, Study};
 use crate::hash::{mix64, GOLDEN_GAMMA};
 use crate::scenario::Scenario;
+use crate::settings::fmt_instant;
 use crate::sim::{self, ChannelFigures, Loop, Peaks, Run, RunSettings, SimResult, DIVERGENCE_BOUND};
 
 /// The seed of Monte Carlo draw `draw` of a study with seed `study_seed`. It depends on nothing
@@ -269,7 +270,7 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                 }
                 sim::Outcome::Diverged { t, signal, value } => {
                     row.outcome = Outcome::Diverged;
-                    row.reason = format!("{signal} = {value:e} at t = {t:.4} {}", r.time_unit);
+                    row.reason = format!("{signal} = {value:e} at t = {} {}", fmt_instant(*t), r.time_unit);
                     if let (Some(n), true) = (spec.nominal, value.abs() <= DIVERGENCE_BOUND) {
                         let group = Peaks::index_of(signal);
                         row.reason += &format!(
@@ -293,8 +294,9 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                         _ => format!("({base} + the {extra} breakpoints this draw's delays add)"),
                     };
                     row.reason = format!(
-                        "step budget: more than {} × {scale} ({max_steps}) by t = {t:.4} {} (the loop turned stiff: its signals grew well beyond the nominal run's; raise the study's runaway.steps if the run is sound)",
+                        "step budget: more than {} × {scale} ({max_steps}) by t = {} {} (the loop turned stiff: its signals grew well beyond the nominal run's; raise the study's runaway.steps if the run is sound)",
                         spec.runaway.steps,
+                        fmt_instant(*t),
                         r.time_unit
                     );
                 }
