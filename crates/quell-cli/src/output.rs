@@ -3,13 +3,14 @@
 
 use std::fs;
 use std::io;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use quell::sim::SimResult;
 
 use crate::{decimal, Failure};
 
-pub use quell::files::{write_atomic, write_atomic_all};
+pub use quell::files::write_atomic_all;
+use quell::files::Staged;
 
 /// A failed write as exit 2 when the target is not a regular file (the user named the wrong path:
 /// [`write_atomic`] leaves devices, FIFOs and links alone), otherwise exit 1.
@@ -21,13 +22,53 @@ pub fn write_failure(message: String, e: &io::Error) -> Failure {
     }
 }
 
-/// Removes the figures (`<stem>.png`, `<stem>.svg`) in `dir` whose stem `ours` claims, before new
-/// ones are written: an earlier run's figures must not stand beside new data.
-pub fn remove_figures(dir: &Path, ours: impl Fn(&str) -> bool) -> io::Result<()> {
+/// The files written within [`all_or_nothing`], staged until its work has succeeded.
+static BATCH: std::sync::Mutex<Option<Vec<Staged>>> = std::sync::Mutex::new(None);
+
+fn batch() -> std::sync::MutexGuard<'static, Option<Vec<Staged>>> {
+    BATCH.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Writes a file atomically ([`quell::files::write_atomic`]); within [`all_or_nothing`] it is
+/// staged, and renamed into place only once the whole work has succeeded.
+pub fn write_atomic(path: &Path, contents: impl FnOnce(&mut dyn io::Write) -> io::Result<()>) -> io::Result<()> {
+    let staged = Staged::write(path, contents)?;
+    match batch().as_mut() {
+        Some(files) => {
+            files.push(staged);
+            Ok(())
+        }
+        None => staged.persist(),
+    }
+}
+
+/// Runs `work`, which writes files into `dir` ([`write_atomic`]), so that its files replace the old
+/// ones together or not at all: each is staged under its temporary name, and only when `work` has
+/// succeeded are they all renamed into place and the figures of `dir` that `stale` claims and
+/// `work` did not write removed. A failed write (a full disk) leaves the earlier outputs as they
+/// were: a run whose figures failed for lack of space had replaced signals.csv, summary.json and
+/// design.json and removed the figures.
+pub fn all_or_nothing(
+    dir: &Path,
+    stale: impl Fn(&str) -> bool,
+    work: impl FnOnce() -> io::Result<()>,
+) -> io::Result<()> {
+    *batch() = Some(Vec::new());
+    let done = work();
+    let staged = batch().take().unwrap_or_default();
+    done?;
+    let written: Vec<PathBuf> = staged.iter().map(|s| s.path().to_path_buf()).collect();
+    staged.into_iter().try_for_each(Staged::persist)?;
+    remove_figures(dir, |stem| stale(stem), &written)
+}
+
+/// Removes the figures (`<stem>.png`, `<stem>.svg`) in `dir` whose stem `ours` claims, but for those
+/// in `keep`: an earlier command's figures must not stand beside new data.
+pub fn remove_figures(dir: &Path, ours: impl Fn(&str) -> bool, keep: &[PathBuf]) -> io::Result<()> {
     for entry in fs::read_dir(dir)? {
         let path = entry?.path();
         let figure = matches!(path.extension().and_then(|e| e.to_str()), Some("png" | "svg"));
-        if figure && path.file_stem().and_then(|s| s.to_str()).is_some_and(&ours) {
+        if figure && path.file_stem().and_then(|s| s.to_str()).is_some_and(&ours) && !keep.contains(&path) {
             match fs::remove_file(&path) {
                 Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(e),
                 _ => {}
@@ -150,6 +191,39 @@ fn push_num(out: &mut Vec<u8>, v: f64, buffer: &mut zmij::Buffer) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The files of a work that fails replace none of the old ones and leave no temporary file; a
+    /// work that succeeds replaces them together and removes the stale figures it did not write.
+    #[test]
+    fn a_failed_work_keeps_every_old_file_and_a_finished_one_replaces_them_together() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
+        for name in ["signals.csv", "channel1.png", "channel2.png"] {
+            fs::write(dir.join(name), "old").unwrap();
+        }
+        let write = |name: &str| write_atomic(&dir.join(name), |w| w.write_all(b"new"));
+        let figure = |stem: &str| stem.starts_with("channel");
+        let failed = all_or_nothing(dir, figure, || {
+            write("signals.csv")?;
+            write("channel1.png")?;
+            Err(io::Error::new(io::ErrorKind::StorageFull, "channel2.png: No space left on device"))
+        });
+        assert!(failed.is_err());
+        let mut names: Vec<String> =
+            fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+        names.sort();
+        assert_eq!(names, ["channel1.png", "channel2.png", "signals.csv"]);
+        assert!(names.iter().all(|n| fs::read_to_string(dir.join(n)).unwrap() == "old"));
+        all_or_nothing(dir, figure, || write("signals.csv").and_then(|()| write("channel1.png"))).unwrap();
+        let mut names: Vec<String> =
+            fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+        names.sort();
+        assert_eq!(names, ["channel1.png", "signals.csv"]);
+        assert!(names.iter().all(|n| fs::read_to_string(dir.join(n)).unwrap() == "new"));
+        // Outside it a write is in place at once.
+        write("design.json").unwrap();
+        assert_eq!(fs::read_to_string(dir.join("design.json")).unwrap(), "new");
+    }
 
     /// signals.csv as `core::fmt` lays it out: `{}` for t and for |v| = 0, in [1e-4, 1e15) or not
     /// finite, `{:e}` otherwise.

@@ -89,7 +89,12 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     let seconds = started.elapsed().as_secs_f64();
     let diagnostics = quell::diagnostics::diagnose_run(&scenario, &design, &result);
     let done = Finished { scenario: &scenario, design: &design, result: &result, diagnostics: &diagnostics, seconds };
-    write_outputs(out, &done, !args.no_plots).map_err(|e| Failure::Run(format!("writing {}: {e}", out.display())))?;
+    write_outputs(out, &done, !args.no_plots).map_err(|e| {
+        Failure::Run(format!(
+            "writing {}: {e}; none of this run's files replaced those there before: make room or choose another --out, and run again",
+            out.display()
+        ))
+    })?;
     report_outcome(&done, out)
 }
 
@@ -205,19 +210,21 @@ fn simulate(
 
 fn write_outputs(dir: &Path, done: &Finished<'_>, plots: bool) -> std::io::Result<()> {
     let r = done.result;
-    // Figures of an earlier run (more channels, or plots now skipped) must not stand beside the new
-    // data; removed first, so a failed write leaves figures missing rather than stale.
-    output::remove_figures(dir, |stem| stem.strip_prefix("channel").is_some_and(|i| i.parse::<usize>().is_ok()))?;
-    // Figures render on their own threads (one per channel) while the data files are written.
-    std::thread::scope(|scope| {
-        let figures: Vec<_> = (0..if plots { r.m } else { 0 })
-            .map(|i| scope.spawn(move || plot::plot_channel(dir, r, i, &done.scenario.names)))
-            .collect();
-        let data = write_data(dir, done);
-        for figure in figures {
-            figure.join().map_err(|_| std::io::Error::other("plotting panicked"))??;
-        }
-        data
+    // Every file in place or none; figures of an earlier run (more channels, or plots now skipped)
+    // removed with them, as they must not stand beside the new data.
+    let channel_figure = |stem: &str| stem.strip_prefix("channel").is_some_and(|i| i.parse::<usize>().is_ok());
+    output::all_or_nothing(dir, channel_figure, || {
+        // Figures render on their own threads (one per channel) while the data files are written.
+        std::thread::scope(|scope| {
+            let figures: Vec<_> = (0..if plots { r.m } else { 0 })
+                .map(|i| scope.spawn(move || plot::plot_channel(dir, r, i, &done.scenario.names)))
+                .collect();
+            let data = write_data(dir, done);
+            for figure in figures {
+                figure.join().map_err(|_| std::io::Error::other("plotting panicked"))??;
+            }
+            data
+        })
     })
 }
 

@@ -216,7 +216,7 @@ fn write_all(dir: &Path, meta: &StudyMeta, rows: &[Row], partial: bool, plots: b
     crate::output::write_json(&dir.join("summary.json"), &summary).map_err(failed)?;
     // A figure of an earlier sweep (plots now skipped, or a grid that has none) must not stand
     // beside the new rows.
-    crate::output::remove_figures(dir, |stem| stem == "sweep").map_err(failed)?;
+    crate::output::remove_figures(dir, |stem| stem == "sweep", &[]).map_err(failed)?;
     if plots && !crate::plot::plot_sweep(dir, &summary, rows).map_err(failed)? {
         eprintln!(
             "no sweep.png: a grid of {} keys has no figure (one is drawn for none, one or two); runs.csv has every run",
@@ -347,6 +347,13 @@ fn read_sweep_dir(dir: &Path, flag: &str) -> Result<(StudyMeta, Vec<Row>, bool),
         std::io::ErrorKind::InvalidData => {
             bad(what, format!("{e}: the file is damaged; run that shard again (its quell sweep --shard command)"))
         }
+        // Not a sweep's directory at all: say what one holds.
+        std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory => bad(
+            what,
+            format!(
+                "{e}; give the output directory of a `quell sweep` (its --out), which holds summary.json and runs.csv"
+            ),
+        ),
         _ => bad(what, e.to_string()),
     };
     let text = std::fs::read_to_string(dir.join("summary.json")).map_err(|e| unreadable("summary.json", e))?;

@@ -56,7 +56,7 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
     crate::output::write_json(&args.out.join("tune.json"), &result).map_err(failed)?;
     write_atomic(&args.out.join("tune.csv"), |w| write_curves(w, &result)).map_err(failed)?;
     // A figure of an earlier tuning must not stand beside the new curves.
-    crate::output::remove_figures(&args.out, |stem| stem == "tune").map_err(failed)?;
+    crate::output::remove_figures(&args.out, |stem| stem == "tune", &[]).map_err(failed)?;
     if !args.no_plots {
         crate::plot::plot_tune(&args.out, &result, study.time_unit(), &study.outputs()).map_err(failed)?;
     }

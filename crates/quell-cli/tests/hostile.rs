@@ -443,3 +443,21 @@ fn a_second_command_writing_the_same_out_is_refused_while_the_first_holds_it() {
     assert_eq!(ran.status.code(), Some(0), "{}", stderr(&ran));
     assert_eq!(names(&out), ["design.json", "signals.csv", "summary.json"]);
 }
+
+/// `--merge` given a path that is no sweep's directory (missing, or a file) says what to give: it
+/// had printed the system's "No such file or directory" alone.
+#[test]
+fn a_merge_of_what_is_not_a_sweeps_directory_says_what_to_give() {
+    let tmp = TempDir::new().unwrap();
+    let file = tmp.path().join("afile");
+    fs::write(&file, "x").unwrap();
+    let out = tmp.path().join("merged").display().to_string();
+    for dir in [tmp.path().join("nonexistent"), file] {
+        let d = dir.display().to_string();
+        refused(&quell(&["sweep", "--merge", &d, "--out", &out]), &format!("--merge {d}: summary.json: "));
+        refused(
+            &quell(&["sweep", "--merge", &d, "--out", &out]),
+            "; give the output directory of a `quell sweep` (its --out), which holds summary.json and runs.csv",
+        );
+    }
+}

@@ -11,8 +11,35 @@ use tempfile::NamedTempFile;
 /// (`.stem.XXXXXX.tmp.ext`, so two runs sharing a directory never collide), which is then renamed
 /// to `path`. On error the temporary file is removed.
 pub fn write_atomic(path: &Path, contents: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> io::Result<()> {
-    stage(path, contents)?.persist(path).map_err(|e| naming(path, e.error))?;
-    Ok(())
+    Staged::write(path, contents)?.persist()
+}
+
+/// A file written to its temporary name ([`write_atomic`]) and not yet renamed into place: a
+/// caller that writes several files renames them once every one is written ([`Staged::persist`]),
+/// or drops them all (each temporary file is then removed), so that a failed write leaves the old
+/// files together, never a new one beside an old one.
+#[derive(Debug)]
+pub struct Staged {
+    tmp: NamedTempFile,
+    path: PathBuf,
+}
+
+impl Staged {
+    /// Writes `contents` to the temporary name of `path`.
+    pub fn write(path: &Path, contents: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> io::Result<Staged> {
+        Ok(Staged { tmp: stage(path, contents)?, path: path.to_path_buf() })
+    }
+
+    /// Renames the file into place.
+    pub fn persist(self) -> io::Result<()> {
+        self.tmp.persist(&self.path).map_err(|e| naming(&self.path, e.error))?;
+        Ok(())
+    }
+
+    /// The path it is renamed to.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
 }
 
 /// `e` with the name of the file it happened on (`summary.json: No space left on device`), so a
@@ -26,12 +53,11 @@ fn naming(path: &Path, e: io::Error) -> io::Error {
 /// goes to its temporary name first, then all are renamed (a failed write leaves the old files
 /// together, never a new one beside an old one).
 pub fn write_atomic_all(files: &[(PathBuf, &[u8])]) -> io::Result<()> {
-    let staged =
-        files.iter().map(|(path, bytes)| stage(path, |w| w.write_all(bytes))).collect::<io::Result<Vec<_>>>()?;
-    for (tmp, (path, _)) in staged.into_iter().zip(files) {
-        tmp.persist(path).map_err(|e| naming(path, e.error))?;
-    }
-    Ok(())
+    let staged = files
+        .iter()
+        .map(|(path, bytes)| Staged::write(path, |w| w.write_all(bytes)))
+        .collect::<io::Result<Vec<_>>>()?;
+    staged.into_iter().try_for_each(Staged::persist)
 }
 
 /// The temporary file of [`write_atomic`], written and synced, not yet renamed. Its name keeps at
