@@ -489,6 +489,7 @@ impl PySimResult {
         d.set_item("u_max", r.u_max.clone())?;
         d.set_item("peak_u", r.peak_u.clone())?;
         d.set_item("peak_uf", r.peak_uf.clone())?;
+        d.set_item("uf_terms", r.uf_terms.clone())?;
         d.set_item("diagnostics", &me.diagnostics)?;
         let l = &me.labels;
         let unit = me.inner.time_unit.symbol();
@@ -532,6 +533,7 @@ impl PySimResult {
             // Results pickled before the peaks between rows have none.
             peak_u: state.get_item("peak_u")?.map_or(Ok(vec![]), |v| v.extract())?,
             peak_uf: state.get_item("peak_uf")?.map_or(Ok(vec![]), |v| v.extract())?,
+            uf_terms: state.get_item("uf_terms")?.map_or(Ok(vec![]), |v| v.extract())?,
             time_unit,
         };
         PySimResult::new(py, r, item("diagnostics")?.extract()?, Labels { inputs, outputs, states })

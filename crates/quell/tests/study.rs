@@ -93,6 +93,11 @@ fn a_stopped_sweep_is_partial() {
     let text = String::from_utf8(csv).unwrap();
     assert!(text.lines().last().unwrap().starts_with("# partial: 0 of the shard's runs"));
     assert!(read_runs_csv(&text, &meta).unwrap().partial);
+    // A study of 1e9 runs stopped before its first: no run is visited (the stop had skipped them
+    // one by one, 4.6 s after a Ctrl-C), and it is partial.
+    let huge = Study::from_toml("[monte_carlo]\nruns = 1000000000\n\"truth.A\" = { relative = 0.05 }\n", None).unwrap();
+    let s = sweep(&huge, &SweepOptions { stop: Some(&stop), ..Default::default() });
+    assert!(s.partial && s.rows.is_empty());
 }
 
 /// The least μ among a curve's feasible points whose error objective ties with the least: within 5 %

@@ -129,7 +129,36 @@ pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) ->
         d.advice.insert(0, line);
     }
     d.advice.extend(loose_atol(s, result));
+    d.advice.extend(uf_cancellation(result));
     d
+}
+
+/// From this ratio of u_f's terms to its peak ([`SimResult::uf_terms`]) a run says u_f holds fewer
+/// digits than the states: the loops of `tests/data` and `examples` stay under 10 (the paper's
+/// example 8.8) but for a hard-disk servo (422), a magnetic bearing (102) and a tanker (29).
+pub const UF_CANCELLATION: f64 = 20.0;
+
+/// Per channel whose plant input u_f = −K x̂ + F u_d is the small difference of terms
+/// [`UF_CANCELLATION`] or more times its peak: its error is theirs, that many times larger against
+/// its own size than the states' are against theirs (a grid inverter's LCL loop, 28×, had u_f 1e-4
+/// of its peak off at rtol = 1e-6 with nothing said). What to tighten where its digits matter.
+pub fn uf_cancellation(result: &SimResult) -> Vec<String> {
+    let lines = result.uf_terms.iter().enumerate().filter_map(|(i, &terms)| {
+        let peak = result.max_uf(i);
+        let ratio = terms / peak;
+        (ratio >= UF_CANCELLATION).then(|| {
+            format!(
+                "u_f[{}] = −K x̂ + F u_d is the small difference of terms up to {}× its peak ({} against {}): it keeps their errors, so it holds about {} fewer digits than the states; where they matter (not for its peak against a limit), tighten simulation.rtol and atol about {ratio}×",
+                i + 1,
+                crate::settings::fmt_ratio(ratio),
+                crate::settings::fmt_4(terms),
+                crate::settings::fmt_4(peak),
+                crate::settings::fmt_ratio(ratio.log10()),
+                ratio = crate::settings::fmt_ratio(ratio),
+            )
+        })
+    });
+    lines.collect()
 }
 
 /// A continuous run whose `simulation.atol` is above the peak of a watched state held to it (x,

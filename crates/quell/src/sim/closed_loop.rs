@@ -269,6 +269,8 @@ struct Record {
     y: Vec<f64>,
     u: Vec<f64>,
     u_f: Vec<f64>,
+    /// −K x̂, u_f's first term.
+    kx: Vec<f64>,
 }
 
 impl Record {
@@ -400,6 +402,9 @@ impl DelaySystem for ContinuousLoop<'_> {
             rec.result.push(&Sample { t, y, g, u, u_f, eta, states });
             if let Some(act) = &self.actuator {
                 rec.result.count_limited(act.limited.iter().map(Cell::get));
+            } else {
+                mat_vec(&self.eq.K_neg, x_hat, &mut rec.kx, false);
+                rec.result.record_uf_terms(&rec.kx, &rec.u_f);
             }
         }
         self.record = Some(rec);
@@ -816,7 +821,7 @@ pub fn explicit_on_stiff_law(run: &Run<'_>) -> bool {
 /// ([`loop_rate`]), and on [`Method::Explicit`](dde::Method::Explicit) the adaptive law's
 /// μλ_max(Ω̄) too, scaled so that h·μλ_max ≤ [`EXPLICIT_ADAPTATION_H_RATE`], as DOP853 then
 /// integrates it alone.
-fn step_rate(run: &Run<'_>, method: dde::Method) -> f64 {
+pub fn step_rate(run: &Run<'_>, method: dde::Method) -> f64 {
     match method {
         dde::Method::Explicit => {
             let (rate, rho) = run.rates();
@@ -1246,6 +1251,7 @@ pub(super) fn simulate(
         y: vec![0.0; m],
         u: vec![0.0; m],
         u_f: vec![0.0; m],
+        kx: vec![0.0; m],
     });
     let record = dde::record_bytes(sys.n_delayed());
     let (max_steps, max_history_bytes) = budgets(run, integrator, record, sys.delays());

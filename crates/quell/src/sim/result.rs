@@ -156,6 +156,12 @@ pub struct SimResult {
     /// 0.1 apart read 5.6). Empty where a loop tracked none; [`SimResult::figures`] takes the larger.
     pub peak_u: Vec<f64>,
     pub peak_uf: Vec<f64>,
+    /// Per channel, the larger magnitude of u_f's two terms, (K x̂)_i and (F u_d)_i, at the recorded
+    /// rows: where it is many times u_f's peak, u_f is their small difference and keeps that many
+    /// times the states' error (a grid inverter's LCL loop: |K x̂| up to 28× u_f's peak, and u_f
+    /// 1e-4 off at rtol = 1e-6 while x̂ was 1e-5). Empty where the loop tracked none (the sampled
+    /// loop, a true plant with its own actuator).
+    pub uf_terms: Vec<f64>,
     /// Per input, at how many recorded samples the true plant's actuator limit (`[truth]` u_max)
     /// clipped it; empty without an actuator. The continuous loop reads the clipping at the
     /// integrator's latest evaluation of the derivative (within one step of the sample).
@@ -244,6 +250,7 @@ impl SimResult {
             peaks: Peaks::default(),
             peak_u: Vec::new(),
             peak_uf: Vec::new(),
+            uf_terms: Vec::new(),
             limited: Vec::new(),
             u_max: Vec::new(),
             time_unit: TimeUnit::default(),
@@ -257,6 +264,15 @@ impl SimResult {
             for (p, v) in peaks.iter_mut().zip(now) {
                 *p = max_or_nan(*p, v.abs());
             }
+        }
+    }
+
+    /// Raises [`SimResult::uf_terms`] to the terms of u_f = −K x̂ + F u_d now, from −K x̂ (`kx`) and
+    /// u_f.
+    pub(crate) fn record_uf_terms(&mut self, kx: &[f64], u_f: &[f64]) {
+        self.uf_terms.resize(kx.len(), 0.0);
+        for ((p, k), f) in self.uf_terms.iter_mut().zip(kx).zip(u_f) {
+            *p = p.max(k.abs()).max((f - k).abs());
         }
     }
 
@@ -376,6 +392,11 @@ impl SimResult {
             .collect()
     }
 
+    /// max |u_f,i| over the rows and between them ([`SimResult::peak_uf`]); NaN where u_f was.
+    pub fn max_uf(&self, i: usize) -> f64 {
+        self.column(&self.u_f, self.m, i).fold(peak(&self.peak_uf, i), |a, u| max_or_nan(a, u.abs()))
+    }
+
     /// Whether the run reached t_end (its outcome is completed, or not set yet).
     fn reached_end(&self) -> bool {
         matches!(self.outcome, None | Some(Outcome::Completed))
@@ -410,7 +431,7 @@ impl SimResult {
             tail_max_e,
             tail_rms_e,
             max_u: self.column(&self.u, self.m, i).fold(peak(&self.peak_u, i), |a, u| max_or_nan(a, u.abs())),
-            max_uf: self.column(&self.u_f, self.m, i).fold(peak(&self.peak_uf, i), |a, u| max_or_nan(a, u.abs())),
+            max_uf: self.max_uf(i),
             settle_t: settling.time().filter(|_| reached),
         };
         Some((figures, settling))

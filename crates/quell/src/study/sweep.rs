@@ -402,11 +402,13 @@ pub fn sweep(study: &Study, opts: &SweepOptions<'_>) -> Sweep {
     let stopped = || opts.stop.is_some_and(|s| s.load(Ordering::Relaxed));
     let shard = opts.shard;
     let done = |k: usize| opts.done.get(k).copied().unwrap_or(false);
+    // `None` only when stopped, which ends the iteration: the runs not started are not visited (a
+    // Ctrl-C on a study of 1e9 runs had taken 4.6 s to skip them one by one).
     let rows: Vec<Row> = (0..shard.len(runs))
         .into_par_iter()
         .filter(|&k| !done(k))
         .map(|k| shard.index + k * shard.count)
-        .filter_map(|i| {
+        .map(|i| {
             if stopped() {
                 return None;
             }
@@ -416,8 +418,10 @@ pub fn sweep(study: &Study, opts: &SweepOptions<'_>) -> Sweep {
             }
             Some(row)
         })
+        .while_some()
         .collect();
-    let partial = rows.len() < (0..shard.len(runs)).filter(|&k| !done(k)).count();
+    let kept = opts.done.iter().take(shard.len(runs)).filter(|&&d| d).count();
+    let partial = rows.len() < shard.len(runs) - kept;
     Sweep { rows, partial }
 }
 
