@@ -338,6 +338,10 @@ fn shard_to_merge(dir: &Path) -> Result<(StudyMeta, Vec<Row>, bool), Failure> {
     read_sweep_dir(dir, "--merge")
 }
 
+/// What a directory read as a sweep's must be.
+const WHAT_TO_GIVE: &str =
+    "give the output directory of a `quell sweep` (its --out), which holds summary.json and runs.csv";
+
 /// Reads one sweep's directory (a shard for `--merge`, an interrupted sweep for `--resume`, the
 /// `flag` its messages name): its summary's study identity, its rows and whether it is partial.
 fn read_sweep_dir(dir: &Path, flag: &str) -> Result<(StudyMeta, Vec<Row>, bool), Failure> {
@@ -348,17 +352,12 @@ fn read_sweep_dir(dir: &Path, flag: &str) -> Result<(StudyMeta, Vec<Row>, bool),
             bad(what, format!("{e}: the file is damaged; run that shard again (its quell sweep --shard command)"))
         }
         // Not a sweep's directory at all: say what one holds.
-        std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory => bad(
-            what,
-            format!(
-                "{e}; give the output directory of a `quell sweep` (its --out), which holds summary.json and runs.csv"
-            ),
-        ),
+        std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory => bad(what, format!("{e}; {WHAT_TO_GIVE}")),
         _ => bad(what, e.to_string()),
     };
     let text = std::fs::read_to_string(dir.join("summary.json")).map_err(|e| unreadable("summary.json", e))?;
     let summary: Summary = serde_json::from_str(&text)
-        .map_err(|e| bad("summary.json", format!("not a summary written by `quell sweep` ({e})")))?;
+        .map_err(|e| bad("summary.json", format!("not a summary written by `quell sweep` ({e}); {WHAT_TO_GIVE}")))?;
     let csv = std::fs::read_to_string(dir.join("runs.csv")).map_err(|e| unreadable("runs.csv", e))?;
     let shard = summary.study.shard;
     if shard.index >= shard.count {

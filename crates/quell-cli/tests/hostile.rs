@@ -444,15 +444,19 @@ fn a_second_command_writing_the_same_out_is_refused_while_the_first_holds_it() {
     assert_eq!(names(&out), ["design.json", "signals.csv", "summary.json"]);
 }
 
-/// `--merge` given a path that is no sweep's directory (missing, or a file) says what to give: it
-/// had printed the system's "No such file or directory" alone.
+/// `--merge` given a path that is no sweep's directory (missing, a file, a run's directory) says
+/// what to give: it had printed the system's "No such file or directory" alone.
 #[test]
 fn a_merge_of_what_is_not_a_sweeps_directory_says_what_to_give() {
     let tmp = TempDir::new().unwrap();
     let file = tmp.path().join("afile");
     fs::write(&file, "x").unwrap();
     let out = tmp.path().join("merged").display().to_string();
-    for dir in [tmp.path().join("nonexistent"), file] {
+    // A directory `quell run` wrote: its summary.json is no sweep's.
+    let run_dir = tmp.path().join("a-run");
+    let ran = quell(&["run", &paper(), "--out", &run_dir.display().to_string(), "--no-plots"]);
+    assert_eq!(ran.status.code(), Some(0), "{}", stderr(&ran));
+    for dir in [tmp.path().join("nonexistent"), file, run_dir] {
         let d = dir.display().to_string();
         refused(&quell(&["sweep", "--merge", &d, "--out", &out]), &format!("--merge {d}: summary.json: "));
         refused(
