@@ -206,7 +206,7 @@ fn report_text(a: &AutoDesign) -> String {
         let per_input = v.candidates[0].max_uf.len() > 1;
         let uf = if per_input { "max|u_f,i|" } else { "max|u_f|" };
         s.push_str(&format!(
-            "  candidates (poles and μ over the first proposal's: worst tail/bound, {uf}, solver steps):\n"
+            "  candidates (poles over the first proposal's, μ over the averaged law's choice for those poles: worst tail/bound, {uf}, solver steps):\n"
         ));
         for c in &v.candidates {
             let kept = if c.chosen { "  ← kept" } else { "" };

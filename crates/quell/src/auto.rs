@@ -307,7 +307,9 @@ struct Proposal {
     relaxable: [bool; 3],
 }
 
-/// A candidate's chosen channel poles, observer poles and μ over the first proposal's.
+/// A candidate's chosen channel and observer poles over the first proposal's, and its μ over the
+/// averaged law's choice for those poles (which moves with them: μ ×1 is that choice, not the first
+/// proposal's μ).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Speed {
     pub channel: f64,
