@@ -106,6 +106,8 @@ pub fn prepare_out(dir: &Path, files: &[&str]) -> Result<(), Failure> {
         ))
     })?;
     LOCKED.lock().unwrap_or_else(|e| e.into_inner()).extend(lock);
+    // No other quell writes here now: what temporary files a killed one left can go.
+    quell::files::remove_stale_temporaries(dir);
     Ok(())
 }
 

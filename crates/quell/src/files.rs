@@ -70,7 +70,9 @@ fn stage(path: &Path, contents: impl FnOnce(&mut dyn Write) -> io::Result<()>) -
     let ext = path.extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let (prefix, suffix) = (format!(".{stem}."), format!(".tmp{ext}"));
-    remove_stale(dir, &prefix, &suffix);
+    remove_stale(dir, |name| {
+        name.len() == prefix.len() + 6 + suffix.len() && name.starts_with(&prefix) && name.ends_with(&suffix)
+    });
     let mut builder = tempfile::Builder::new();
     builder.prefix(&prefix).suffix(&suffix);
     // tempfile creates 0600; ask for 0666 less the umask, the mode `File::create` gives an output.
@@ -88,16 +90,16 @@ fn stage(path: &Path, contents: impl FnOnce(&mut dyn Write) -> io::Result<()>) -
 /// A temporary file older than this and not locked was left by a process that was killed.
 const STALE_AFTER: std::time::Duration = std::time::Duration::from_secs(2);
 
-/// Removes the temporary files of [`stage`] (`prefix` + six characters + `suffix`) in `dir` that a
-/// killed process left: older than [`STALE_AFTER`] and locked by no one. A run killed while writing
-/// a 460 MB signals.csv left it behind, and every later kill added one. Best effort: what cannot
-/// be read or removed stays.
-fn remove_stale(dir: &Path, prefix: &str, suffix: &str) {
+/// Removes the temporary files in `dir` whose names `ours` claims that a killed process left:
+/// older than [`STALE_AFTER`] and locked by no one. A run killed while writing a 460 MB
+/// signals.csv left it behind, and every later kill added one. Best effort: what cannot be read or
+/// removed stays.
+fn remove_stale(dir: &Path, ours: impl Fn(&str) -> bool) {
     let Ok(entries) = std::fs::read_dir(dir) else { return };
     for entry in entries.flatten() {
         let name = entry.file_name();
         let Some(name) = name.to_str() else { continue };
-        let ours = name.len() == prefix.len() + 6 + suffix.len() && name.starts_with(prefix) && name.ends_with(suffix);
+        let ours = ours(name);
         let old =
             || entry.metadata().and_then(|m| m.modified()).is_ok_and(|t| t.elapsed().is_ok_and(|a| a > STALE_AFTER));
         if ours && old() {
@@ -133,6 +135,27 @@ pub fn lock_dir(dir: &Path) -> io::Result<Option<DirLock>> {
         )),
         Err(std::fs::TryLockError::Error(_)) => Ok(None),
     }
+}
+
+/// Removes every temporary file of [`write_atomic`] (`.stem.XXXXXX.tmp.ext`) in `dir` that a
+/// killed process left (older than 2 s, locked by no one), whatever file it was
+/// meant to become: a write removes only its own name's, so a run killed while drawing a third
+/// channel's figure, followed by runs of two channels or without figures, had kept it for good.
+pub fn remove_stale_temporaries(dir: &Path) {
+    remove_stale(dir, is_temporary);
+}
+
+/// Whether `name` has the form of [`stage`]'s temporary files: `.`, a stem, `.`, six letters or
+/// digits, `.tmp`, then nothing or one extension.
+fn is_temporary(name: &str) -> bool {
+    let Some((head, tail)) = name.strip_prefix('.').and_then(|rest| rest.rsplit_once(".tmp")) else {
+        return false;
+    };
+    let extension = tail.is_empty() || tail.strip_prefix('.').is_some_and(|e| !e.is_empty() && !e.contains('.'));
+    let random = head.len() >= 7
+        && head.as_bytes()[head.len() - 7] == b'.'
+        && head[head.len() - 6..].bytes().all(|b| b.is_ascii_alphanumeric());
+    extension && random
 }
 
 /// The renaming replaces whatever `path` names: refused (`InvalidInput`) unless that is a regular
@@ -234,6 +257,39 @@ mod tests {
                 ".signals.toolong7.tmp.csv",
                 "signals.csv"
             ]
+        );
+    }
+
+    #[test]
+    fn every_stale_temporary_file_is_removed_whatever_it_was_meant_to_become() {
+        // A 3-channel run killed while drawing, then a 2-channel one: channel3's temporary figure
+        // is no name the new run writes. Left: a live writer's (locked), a fresh one, and files of
+        // other forms (a user's hidden file, a name with ".tmp" elsewhere).
+        let dir = tempfile::tempdir().unwrap();
+        let at = |name: &str| dir.path().join(name);
+        let old = std::time::SystemTime::now() - 2 * STALE_AFTER;
+        let names = [
+            ".channel3.F0BUOg.tmp.png",
+            ".quell-write-test.Ab12Cd.tmp",
+            ".signals.live00.tmp.csv",
+            ".hidden",
+            "notes.tmp.txt",
+            ".x.ABCDE.tmp.csv",
+        ];
+        for name in names {
+            fs::write(at(name), "partial").unwrap();
+            fs::File::options().write(true).open(at(name)).unwrap().set_modified(old).unwrap();
+        }
+        fs::write(at(".summary.fresh0.tmp.json"), "partial").unwrap();
+        let live = fs::File::open(at(".signals.live00.tmp.csv")).unwrap();
+        live.lock().unwrap();
+        remove_stale_temporaries(dir.path());
+        let mut left: Vec<String> =
+            fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+        left.sort();
+        assert_eq!(
+            left,
+            [".hidden", ".signals.live00.tmp.csv", ".summary.fresh0.tmp.json", ".x.ABCDE.tmp.csv", "notes.tmp.txt"]
         );
     }
 

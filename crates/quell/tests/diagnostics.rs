@@ -667,7 +667,7 @@ fn an_atol_above_a_states_peak_is_named_in_the_advice() {
 }
 
 /// A plant input that is the small difference of large terms is flagged with their ratio to its
-/// peak: the hard-disk servo of `tests/data` (its K x̂ and F u_d reach 422× u_f's peak), against
+/// peak, a bound on how much of the states' relative error it may magnify: the hard-disk servo of `tests/data` (its K x̂ and F u_d reach 422× u_f's peak), against
 /// the same ratio recomputed from the run's rows (x̂, K and u_f: F u_d = u_f + K x̂). u_f's peak
 /// counts the solver's step ends too, so the flagged ratio is at most the rows' and within 5 % of
 /// it. The paper's example (8.8×) is not flagged.
