@@ -799,8 +799,12 @@ pub fn explicit_stiff_warning(run: &Run<'_>, set_by: &str) -> Option<String> {
     let (rate, rho) = run.rates();
     let unit = run.design.plant().time_unit;
     let steps = rate * run.settings.t_end / EXPLICIT_ADAPTATION_H_RATE;
+    // The rate whose DOP853 steps (h·rate ≤ DOP853_ACCURATE_H_RATE) are those of the cap: whether
+    // the history of the longest delay can hold them (the quadruple tank at μ = 1 cannot).
+    let capped = rate * dde::DOP853_ACCURATE_H_RATE / EXPLICIT_ADAPTATION_H_RATE;
+    let history = FastRate { name: "", rho: capped, steps, next: None }.history_text(run);
     Some(format!(
-        "{set_by} on a stiff adaptive law: μλ_max = {rate:.3e}/{unit} is {}× the loop's fastest other rate ρ = {rho:.3e}/{unit}, and DOP853 keeps h·μλ_max ≤ {EXPLICIT_ADAPTATION_H_RATE} to follow it accurately (its stability bound is {DOP853_STABLE_H_RATE}), so the run takes about {steps:.1e} steps (at the rate Ω settles to); the default method, \"auto\", takes the adaptive law implicitly",
+        "{set_by} on a stiff adaptive law: μλ_max = {rate:.3e}/{unit} is {}× the loop's fastest other rate ρ = {rho:.3e}/{unit}, and DOP853 keeps h·μλ_max ≤ {EXPLICIT_ADAPTATION_H_RATE} to follow it accurately (its stability bound is {DOP853_STABLE_H_RATE}), so the run takes about {steps:.1e} steps (at the rate Ω settles to){history}; the default method, \"auto\", takes the adaptive law implicitly",
         settings::fmt_ratio(rate / rho)
     ))
 }
