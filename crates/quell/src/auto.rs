@@ -738,7 +738,7 @@ fn sampled_start(doc: &toml::Table, targets: &Targets) -> Result<(Proposal, Desi
     let worst = |p: &Proposal, d: &Design| fidelity(&p.scenario, d).into_iter().fold(0.0, f64::max);
     let first_error = worst(&p, &design);
     for _ in 0..MAX_SAMPLED_HALVINGS {
-        if t_s * rho <= COARSE_SAMPLE {
+        if !crate::sim::is_coarse(t_s * rho) {
             break;
         }
         // The observer's poles alone first (they are the fastest the rules place), then the
@@ -760,7 +760,7 @@ fn sampled_start(doc: &toml::Table, targets: &Targets) -> Result<(Proposal, Desi
     }
     if speed != Speed::FIRST {
         let unit = design.plant().time_unit;
-        let met = if t_s * rho <= COARSE_SAMPLE {
+        let met = if !crate::sim::is_coarse(t_s * rho) {
             format!("T_s·ρ = {:.2} ≤ {COARSE_SAMPLE}", t_s * rho)
         } else {
             // Halving stopped lowering ρ 1.5×: a rate the halved poles do not set.

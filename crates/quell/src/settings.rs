@@ -483,6 +483,15 @@ pub fn fmt_instant(t: f64) -> String {
     fmt_short(significant(t, 7))
 }
 
+/// `x` > `bound` with two decimals, or as many more as show it above the bound (T_s·ρ =
+/// 0.2003 against 0.2 had printed "0.20 > 0.2").
+pub(crate) fn fmt_above(x: f64, bound: f64) -> String {
+    (2..=6)
+        .map(|d| format!("{x:.d$}"))
+        .find(|s| s.parse::<f64>().is_ok_and(|v| v > bound))
+        .unwrap_or_else(|| x.to_string())
+}
+
 /// `x` rounded to `digits` significant digits (≥ 1), through its decimal form.
 pub(crate) fn significant(x: f64, digits: usize) -> f64 {
     format!("{x:.*e}", digits.max(1) - 1).parse().unwrap_or(x)
@@ -611,6 +620,18 @@ pub(crate) fn check_sample_time(t_end: f64, sample_time: f64) -> Result<(), KeyE
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// T_s·ρ at the bound by rounding alone is no coarse sample (the quadruple tank at 1 s:
+    /// 0.20000000000000023 had been warned of as "0.20 > 0.2"); one truly beyond prints the digits
+    /// that show it.
+    #[test]
+    fn a_sample_at_the_bound_by_rounding_is_not_coarse_and_one_beyond_shows_it() {
+        let bound = crate::sim::COARSE_SAMPLE;
+        assert!(!crate::sim::is_coarse(0.20000000000000023));
+        assert!(crate::sim::is_coarse(0.2003) && crate::sim::is_coarse(0.45));
+        assert_eq!((fmt_above(0.2003, bound), fmt_above(0.45, bound)), ("0.2003".to_string(), "0.45".to_string()));
+        assert_eq!(fmt_above(0.2000001, bound), "0.2000001");
+    }
 
     /// A proposed value is at least the value asked for, at most 10 % above it (one unit of its
     /// second digit), and prints short; a value already of two digits stays.

@@ -408,12 +408,12 @@ pub(crate) fn unit_mismatch(avg: &Averaged, [reference, disturbance]: [&Signal; 
 fn coarse_advice(design: &Design, result: &SimResult, rho: f64, missed: bool) -> Option<String> {
     let crate::sim::RunStats::Sampled { sample_time, .. } = result.stats else { return None };
     let output_step = (result.t.len() > 1).then(|| result.t[1] - result.t[0]).filter(|h| *h > 0.0);
-    (missed && sample_time * rho > crate::sim::COARSE_SAMPLE).then(|| {
+    (missed && crate::sim::is_coarse(sample_time * rho)).then(|| {
         format!(
-            "the sampled-data loop at T_s = {} {} is coarse for this design (T_s·ρ = {:.2} > {}): its errors are the sampling's as much as the adaptation's; compare with the continuous loop, and choose {}, or slower poles, before tuning μ, t_end or the observer",
+            "the sampled-data loop at T_s = {} {} is coarse for this design (T_s·ρ = {} > {}): its errors are the sampling's as much as the adaptation's; compare with the continuous loop, and choose {}, or slower poles, before tuning μ, t_end or the observer",
             fmt_short(sample_time),
             design.plant().time_unit,
-            sample_time * rho,
+            crate::settings::fmt_above(sample_time * rho, crate::sim::COARSE_SAMPLE),
             crate::sim::COARSE_SAMPLE,
             crate::sim::fine_sample_time(design, rho, output_step)
         )
@@ -718,7 +718,7 @@ fn faster_observer(design: &Design, faster: &FasterObserver, sample_time: Option
         "give design.observer_poles {factor}× faster, [{}] (the averaged loop then passes every frequency of ω with relative error {error:.2} at worst)",
         fmt_complex_list(&faster.poles)
     );
-    if sample_time.is_some_and(|t_s| t_s * rho > crate::sim::COARSE_SAMPLE) {
+    if sample_time.is_some_and(|t_s| crate::sim::is_coarse(t_s * rho)) {
         let unit = design.plant().time_unit;
         advice += &format!(
             ", which needs simulation.sample_time ≤ {} {unit} (T_s·ρ ≤ {}, ρ = {:.3e}/{unit})",

@@ -29,6 +29,12 @@ use crate::signal::{Signal, SignalBank};
 /// servo at 18 matched its continuous loop, the maglev's automatic design at 0.82 peaked at 85×).
 pub const COARSE_SAMPLE: f64 = 0.2;
 
+/// Whether T_s·ρ = `ts_rho` is beyond [`COARSE_SAMPLE`], by more than rounding: T_s = 1 s on a
+/// loop of ρ = 0.2 /s (the quadruple tank) gave 0.20000000000000023 and a warning at the bound.
+pub fn is_coarse(ts_rho: f64) -> bool {
+    ts_rho > COARSE_SAMPLE * (1.0 + 1e-12)
+}
+
 /// A warning when `sample_time` is coarse for `design` under g = `reference`, ω = `disturbance`
 /// (T_s·ρ > [`COARSE_SAMPLE`]), with the sample time that is not and that a run accepts: every
 /// delay whole and, given the `output_step`, dividing it (0.2 s beside an output step of 0.5 s sent
@@ -41,11 +47,11 @@ pub fn coarse_sample_warning(
 ) -> Option<String> {
     let rate = super::loop_rate(design, design.plant(), [reference, disturbance]);
     let unit = design.plant().time_unit;
-    (sample_time * rate > COARSE_SAMPLE).then(|| {
+    is_coarse(sample_time * rate).then(|| {
         format!(
-            "simulation.sample_time: T_s = {} {unit} is {:.2} of the loop's fastest time constant 1/ρ (ρ = {} /{unit}: the plant, observer, channel and filter poles, 1/β and the signals' frequencies): the discrete controller may depart from the continuous design; choose {}, or slower poles",
+            "simulation.sample_time: T_s = {} {unit} is {} of the loop's fastest time constant 1/ρ (ρ = {} /{unit}: the plant, observer, channel and filter poles, 1/β and the signals' frequencies): the discrete controller may depart from the continuous design; choose {}, or slower poles",
             settings::fmt_short(sample_time),
-            sample_time * rate,
+            settings::fmt_above(sample_time * rate, COARSE_SAMPLE),
             settings::fmt_short(settings::significant(rate, 3)),
             fine_sample_time(design, rate, output_step)
         )
