@@ -59,7 +59,7 @@ pub fn all_or_nothing(
     done?;
     let written: Vec<PathBuf> = staged.iter().map(|s| s.path().to_path_buf()).collect();
     staged.into_iter().try_for_each(Staged::persist)?;
-    remove_figures(dir, |stem| stale(stem), &written)
+    remove_figures(dir, stale, &written)
 }
 
 /// Removes the figures (`<stem>.png`, `<stem>.svg`) in `dir` whose stem `ours` claims, but for those

@@ -778,6 +778,12 @@ pub const DOP853_STABLE_H_RATE: f64 = 6.1;
 /// peak off with its steps at DOP853's stability bound, 9.4e-4 with h·μλ_max ≤ 3.5, 5.5e-8 with 3.
 pub const EXPLICIT_ADAPTATION_H_RATE: f64 = 3.0;
 
+/// The rate whose DOP853 steps (h·rate ≤ [`dde::DOP853_ACCURATE_H_RATE`]) are those of the cap
+/// h·μλ_max ≤ [`EXPLICIT_ADAPTATION_H_RATE`] on the adaptation rate `rate`.
+fn explicit_capped_rate(rate: f64) -> f64 {
+    rate * dde::DOP853_ACCURATE_H_RATE / EXPLICIT_ADAPTATION_H_RATE
+}
+
 /// A run forced to [`Method::Explicit`](dde::Method::Explicit) may take this many times the steps
 /// its cap on the adaptive law's rate sets ([`EXPLICIT_ADAPTATION_H_RATE`]).
 pub const BUDGET_STABILITY_MARGIN: f64 = 2.0;
@@ -799,10 +805,9 @@ pub fn explicit_stiff_warning(run: &Run<'_>, set_by: &str) -> Option<String> {
     let (rate, rho) = run.rates();
     let unit = run.design.plant().time_unit;
     let steps = rate * run.settings.t_end / EXPLICIT_ADAPTATION_H_RATE;
-    // The rate whose DOP853 steps (h·rate ≤ DOP853_ACCURATE_H_RATE) are those of the cap: whether
-    // the history of the longest delay can hold them (the quadruple tank at μ = 1 cannot).
-    let capped = rate * dde::DOP853_ACCURATE_H_RATE / EXPLICIT_ADAPTATION_H_RATE;
-    let history = FastRate { name: "", rho: capped, steps, next: None }.history_text(run);
+    // Whether the history of the longest delay can hold those steps (the quadruple tank at μ = 1
+    // cannot).
+    let history = history_beyond_budget(run, explicit_capped_rate(rate));
     Some(format!(
         "{set_by} on a stiff adaptive law: μλ_max = {rate:.3e}/{unit} is {}× the loop's fastest other rate ρ = {rho:.3e}/{unit}, and DOP853 keeps h·μλ_max ≤ {EXPLICIT_ADAPTATION_H_RATE} to follow it accurately (its stability bound is {DOP853_STABLE_H_RATE}), so the run takes about {steps:.1e} steps (at the rate Ω settles to){history}; the default method, \"auto\", takes the adaptive law implicitly",
         settings::fmt_ratio(rate / rho)
@@ -829,7 +834,7 @@ pub fn step_rate(run: &Run<'_>, method: dde::Method) -> f64 {
     match method {
         dde::Method::Explicit => {
             let (rate, rho) = run.rates();
-            (rate * dde::DOP853_ACCURATE_H_RATE / EXPLICIT_ADAPTATION_H_RATE).max(rho)
+            explicit_capped_rate(rate).max(rho)
         }
         _ => run.loop_rate(),
     }
@@ -1054,20 +1059,8 @@ impl FastRate {
         self.next.is_some_and(|(_, r)| self.rho > FAST_RATE_OUTLIER * r)
     }
 
-    /// The longest delay τ_max, the bytes of the records the rate's steps put within it (twice
-    /// that: the history's ring doubles), and the run's history budget.
-    fn history(&self, run: &Run<'_>) -> (f64, f64, usize) {
-        let Loop::Continuous(integrator) = &run.settings.mode else { return (0.0, 0.0, usize::MAX) };
-        let (p, q) = (run.design.plant(), run.design.q());
-        let delays = loop_delays(p, run.truth, run.settings.actuator.as_ref());
-        let tau_max = delays.iter().copied().fold(0.0, f64::max).min(run.settings.t_end);
-        let record = dde::record_bytes(delayed_prefix(p.n(), q, p.m()));
-        let budget = budgets(run, integrator, record, &delays).1;
-        (tau_max, 2.0 * self.rho * tau_max / dde::DOP853_ACCURATE_H_RATE * record as f64, budget)
-    }
-
     fn history_over(&self, run: &Run<'_>) -> bool {
-        let (_, bytes, budget) = self.history(run);
+        let (_, bytes, budget) = history_at(run, self.rho);
         bytes > budget as f64
     }
 
@@ -1087,24 +1080,38 @@ impl FastRate {
             dde::DOP853_ACCURATE_H_RATE,
             crate::settings::fmt_short(run.settings.t_end),
             self.steps,
-            self.history_text(run)
+            history_beyond_budget(run, self.rho)
         )
     }
+}
 
-    /// Where the delay history outgrows the run's memory budget: by how much.
-    fn history_text(&self, run: &Run<'_>) -> String {
-        let (tau_max, bytes, budget) = self.history(run);
-        if bytes <= budget as f64 {
-            return String::new();
-        }
-        format!(
-            " and its delay history (the steps of the last τ_max = {} {}) at least {} MB, beyond the run's budget of {} MB, where the run would end",
-            crate::settings::fmt_4(tau_max),
-            run.design.plant().time_unit,
-            mib(bytes),
-            mib(budget as f64)
-        )
+/// For DOP853 steps at h·`rho` = [`dde::DOP853_ACCURATE_H_RATE`]: the longest delay τ_max, the
+/// bytes of the records those steps put within it (twice that: the history's ring doubles), and
+/// the run's history budget.
+fn history_at(run: &Run<'_>, rho: f64) -> (f64, f64, usize) {
+    let Loop::Continuous(integrator) = &run.settings.mode else { return (0.0, 0.0, usize::MAX) };
+    let (p, q) = (run.design.plant(), run.design.q());
+    let delays = loop_delays(p, run.truth, run.settings.actuator.as_ref());
+    let tau_max = delays.iter().copied().fold(0.0, f64::max).min(run.settings.t_end);
+    let record = dde::record_bytes(delayed_prefix(p.n(), q, p.m()));
+    let budget = budgets(run, integrator, record, &delays).1;
+    (tau_max, 2.0 * rho * tau_max / dde::DOP853_ACCURATE_H_RATE * record as f64, budget)
+}
+
+/// Where the delay history of steps at rate `rho` ([`history_at`]) outgrows the run's memory
+/// budget: by how much, as a clause of a caution; empty otherwise.
+fn history_beyond_budget(run: &Run<'_>, rho: f64) -> String {
+    let (tau_max, bytes, budget) = history_at(run, rho);
+    if bytes <= budget as f64 {
+        return String::new();
     }
+    format!(
+        " and its delay history (the steps of the last τ_max = {} {}) at least {} MB, beyond the run's budget of {} MB, where the run would end",
+        crate::settings::fmt_4(tau_max),
+        run.design.plant().time_unit,
+        mib(bytes),
+        mib(budget as f64)
+    )
 }
 
 /// Every check of a continuous run (the settings, the signals, the truth, the delays against the
