@@ -74,7 +74,7 @@ pub fn estimate(
             let weakly_excited = slow.is_some();
             let mut advice = Vec::new();
             if stiff {
-                advice.push(stiff_advice(design, i, (mu, lambda_max), rho));
+                advice.push(stiff_advice(design, (i, mu), c, (rho, t_end)));
             }
             if rank == 0 {
                 advice.push(format!(
@@ -104,20 +104,48 @@ pub fn estimate(
 }
 
 /// Channel i adapting at μ λ_max beyond [`STIFF_RATIO`] times the loop's rate ρ: what it means and
-/// the μ at the threshold. The design report and the run's diagnostics share it.
-pub(crate) fn stiff_advice(design: &Design, i: usize, (mu, lambda_max): (f64, f64), rho: f64) -> String {
-    let (rate, unit) = (mu * lambda_max, design.plant().time_unit);
+/// the μ to lower it to. That is the threshold's μ unless the slowest relevant direction would then
+/// not converge by t_end ([`super::horizon_mu`]): there the stiffness is the price of Ω̄'s spread and
+/// the advice says so (the quadruple tank at μ = 1, told to lower μ to the threshold's 7.3e-6,
+/// ends with a tail max|e| of 9.0e-3, at that μ of 0.16). The design report and the run's
+/// diagnostics share it.
+pub(crate) fn stiff_advice(
+    design: &Design,
+    (i, mu): (usize, f64),
+    c: &crate::averaged::ChannelAverage,
+    (rho, t_end): (f64, f64),
+) -> String {
+    let (lambda_max, unit) = (c.lambda_max(), design.plant().time_unit);
+    let rate = mu * lambda_max;
     let scaling_hint = match design.regressor_scaling() {
         crate::design::RegressorScaling::Paper => {
-            " or set design.regressor_scaling = \"normalized\" (ξ̂ of the signals' size) and choose μ anew"
+            " or set design.regressor_scaling = \"normalized\" (ξ̂ of the signals' size, which also narrows the spread where the filters' poles differ in scale) and choose μ anew"
         }
         crate::design::RegressorScaling::Normalized | crate::design::RegressorScaling::Modal => "",
     };
+    let relevant = c.slowest_relevant(super::RELEVANT_SHARE);
+    let (wanted, fastest) = super::horizon_mu(relevant, lambda_max, (t_end, STIFF_RATIO * rho));
+    let fmt = crate::settings::fmt_short;
+    let lower = if !(relevant.is_finite() && wanted > fastest) {
+        format!("lower design.mu[{i}] to about {}{scaling_hint}", fmt(crate::settings::round_down_2(fastest)))
+    } else {
+        let needed = crate::settings::round_up_2(wanted);
+        let keep = if needed < mu {
+            format!("lower design.mu[{i}] at most to about {} where max|u_f| allows", fmt(needed))
+        } else {
+            format!("keep design.mu[{i}] where max|u_f| allows")
+        };
+        format!(
+            "lowered to the stiffness threshold (μ λ_max = {STIFF_RATIO:.0}ρ), about {}, its slowest relevant direction would not converge by t_end (that needs μ ≥ {}: Ω̄'s eigenvalues spread {}-fold), so {keep}{scaling_hint}",
+            fmt(crate::settings::round_down_2(fastest)),
+            fmt(needed),
+            crate::settings::fmt_ratio(lambda_max / relevant),
+        )
+    };
     format!(
-        "channel {} adapts at μ λ_max = {rate:.3e}/{unit}, {}× the loop's fastest other rate ({rho:.3e}/{unit}): the loop is stiff (the automatic integrator handles it, an explicit one crawls), and a gain this high can drive u_f hard (check max|u_f|); lower design.mu[{i}] to about {}{scaling_hint}",
+        "channel {} adapts at μ λ_max = {rate:.3e}/{unit}, {}× the loop's fastest other rate ({rho:.3e}/{unit}): the loop is stiff (the automatic integrator handles it, an explicit one crawls), and a gain this high can drive u_f hard (check max|u_f|); {lower}",
         i + 1,
         crate::settings::fmt_ratio(rate / rho),
-        crate::settings::fmt_short(crate::settings::round_down_2(STIFF_RATIO * rho / lambda_max)),
     )
 }
 

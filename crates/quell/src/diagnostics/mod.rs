@@ -807,7 +807,7 @@ pub(crate) const AVERAGED_MARGIN: f64 = 3.0;
 /// The μ that decays a direction of Ω̄ at rate μ λ by [`CONVERGED_EFOLDS`] at t_end, with the
 /// [`AVERAGED_MARGIN`], and the largest μ that keeps the adaptation rate μ λ_max below the
 /// stiffness threshold `stiff`.
-fn horizon_mu(relevant: f64, lambda_max: f64, (t_end, stiff): (f64, f64)) -> (f64, f64) {
+pub(super) fn horizon_mu(relevant: f64, lambda_max: f64, (t_end, stiff): (f64, f64)) -> (f64, f64) {
     (AVERAGED_MARGIN * CONVERGED_EFOLDS / (relevant * t_end), stiff / lambda_max)
 }
 
@@ -1015,7 +1015,7 @@ fn channel(
         _ => {}
     }
     if mu * c.lambda_max() > stiff {
-        advice.push(estimate::stiff_advice(design, i, (mu, c.lambda_max()), stiff / STIFF_RATIO));
+        advice.push(estimate::stiff_advice(design, (i, mu), c, (stiff / STIFF_RATIO, t_end)));
     }
     if c.residual_rms > 1e-3 * c.open_loop_rms.max(f64::MIN_POSITIVE) {
         advice.push(format!(
