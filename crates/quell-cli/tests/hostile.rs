@@ -55,7 +55,11 @@ fn study_size_jobs_and_shard_flags_are_refused_with_their_message() {
         );
     }
     // The refusal without --yes gives the exact count (it printed a saturated one).
-    let s = study(dir, "big.toml", "[grid]\n\"design.beta\" = [1.0, 2.0]\n[monte_carlo]\nruns = 300000000\n");
+    let s = study(
+        dir,
+        "big.toml",
+        "[grid]\n\"design.beta\" = [1.0, 2.0]\n[monte_carlo]\nruns = 300000000\n\"truth.A\" = { relative = 0.05 }\n",
+    );
     refused(
         &quell(&["sweep", &s, "--out", &out]),
         "the study has 600000000 runs (2 grid points × 300000000 draws), more than 1e7",

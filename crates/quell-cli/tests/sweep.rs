@@ -133,7 +133,7 @@ fn bad_study_files_exit_2_naming_the_key() {
             "invalid value '0' for '--jobs <N>': expected a number of worker threads from 1 to 1024",
         ),
         (
-            "[grid]\n\"design.beta\" = [1.0, 2.0]\n[monte_carlo]\nruns = 6000000\n",
+            "[grid]\n\"design.beta\" = [1.0, 2.0]\n[monte_carlo]\nruns = 6000000\n\"truth.A\" = { relative = 0.05 }\n",
             &[],
             "more than 1e7; check the grid, or pass --yes",
         ),

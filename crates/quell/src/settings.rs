@@ -409,10 +409,11 @@ pub(crate) fn check_integrator_signal(
             return Err(KeyError::new(
                 format!("{key}.components[{c}].harmonics[{h}].frequency"),
                 format!(
-                    "ω = {} rad/{unit} needs at least ω·t_end/π = {steps:.3e} integrator steps over t_end = {} {unit} (two a period); at most {MAX_SAMPLING_STEPS:e} are run; expected ω ≤ {}: frequencies are in rad per unit of the plant's time (not Hz)",
+                    "ω = {} rad/{unit} needs at least ω·t_end/π = {steps:.3e} integrator steps over t_end = {} {unit} (two a period); at most {MAX_SAMPLING_STEPS:e} are run; expected ω ≤ {} (frequencies are in rad per unit of the plant's time, not Hz) or simulation.t_end ≤ {} {unit}",
                     fmt_short(w.frequency),
                     fmt_short(t_end),
-                    fmt_short(three_digits_down(std::f64::consts::PI * MAX_SAMPLING_STEPS / t_end))
+                    fmt_short(three_digits_down(std::f64::consts::PI * MAX_SAMPLING_STEPS / t_end)),
+                    fmt_short(three_digits_down(std::f64::consts::PI * MAX_SAMPLING_STEPS / w.frequency))
                 ),
             ));
         }

@@ -222,11 +222,18 @@ fn a_harmonic_faster_than_any_run_can_resolve_is_refused_naming_it() {
     let docs = include_str!("../../../docs/errors.md");
     assert!(docs.contains(&format!("{}: {}", e.key, e.message)), "docs/errors.md does not show: {}", e.message);
     let largest: f64 =
-        e.message.split("expected ω ≤ ").nth(1).and_then(|r| r.split(':').next()).unwrap().parse().unwrap();
+        e.message.split("expected ω ≤ ").nth(1).and_then(|r| r.split(' ').next()).unwrap().parse().unwrap();
     let bound = std::f64::consts::PI * 1e10 / 100.0;
     assert!(largest <= bound && largest > 0.99 * bound, "{largest}");
     w.components[1].harmonics[0].frequency = largest;
     assert!(check(&w, continuous()).is_ok());
+    // The horizon it names for ω = 1e15 (π·1e10/ω, rounded down) passes too.
+    let horizon: f64 =
+        e.message.split("simulation.t_end ≤ ").nth(1).and_then(|r| r.split(' ').next()).unwrap().parse().unwrap();
+    w.components[1].harmonics[0].frequency = 1e15;
+    assert!(horizon <= std::f64::consts::PI * 1e-5 && horizon > 0.99 * std::f64::consts::PI * 1e-5, "{horizon}");
+    let short = RunSettings::continuous(horizon, horizon / 10.0, 1e-9, 1e-9);
+    assert!(check(&w, short).is_ok(), "t_end = {horizon}");
     w.components[1].harmonics[0].frequency = 1e15;
     assert!(check(&w, RunSettings::sampled(100.0, 0.1, 1e-3)).is_ok());
 }

@@ -1057,6 +1057,13 @@ fn monte_carlo(base: &toml::Table, t: &toml::Table, source: &str) -> Result<Mont
         }
         perturbations.push(Perturbation { key: key.clone(), path, law });
     }
+    // Draws reseed nothing else (not [noise]): without a law every draw repeats the nominal run.
+    if perturbations.is_empty() {
+        return Err(err(
+            "monte_carlo",
+            format!("expected at least one scenario key with a distribution, found only runs and seed, so every draw would repeat the nominal run; add one such as \"truth.A\" = {{ relative = 0.05 }} (laws: {LAWS}), or use [grid] for runs that differ by given values"),
+        ));
+    }
     Ok(MonteCarlo { runs: runs as usize, seed, perturbations })
 }
 

@@ -64,6 +64,7 @@ fn study_mistakes_name_their_key() {
         ("[grid]\n\"name\" = [1.0]", "grid.\"name\": name in the paper's example is a string, not a number, vector or matrix"),
         ("[grid]\n\"design.mu[x]\" = [1.0]", "grid.\"design.mu[x]\": `design.mu[x]` is not a key path"),
         ("[monte_carlo]\nseed = 1", "monte_carlo.runs: missing"),
+        ("[monte_carlo]\nruns = 5\nseed = 1", "monte_carlo: expected at least one scenario key with a distribution, found only runs and seed, so every draw would repeat the nominal run; add one such as"),
         ("[monte_carlo]\nrun = 5", "monte_carlo.runs: missing (`run` is no key of [monte_carlo]: did you mean `runs`?); required"),
         ("[monte_carlo]\nruns = 0", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found 0"),
         ("[monte_carlo]\nruns = -3", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found -3"),
@@ -256,7 +257,9 @@ fn studies_beyond_max_runs_are_refused_when_read_with_their_true_size() {
         );
     }
     // Within the draws' limit, beyond it with the grid: the exact product, not a saturated count.
-    let e = error("[grid]\n\"design.beta\" = [1.0, 2.0, 3.0]\n[monte_carlo]\nruns = 600000000");
+    let e = error(
+        "[grid]\n\"design.beta\" = [1.0, 2.0, 3.0]\n[monte_carlo]\nruns = 600000000\n\"truth.A\" = { relative = 0.05 }",
+    );
     assert!(
         e.starts_with(
             "monte_carlo.runs: the study has 1800000000 runs (3 grid points (3) × 600000000 draws), more than the 1e9"
@@ -285,7 +288,10 @@ fn studies_beyond_max_runs_are_refused_when_read_with_their_true_size() {
     let e = error(&format!("[grid]\n{axes}"));
     assert!(e.starts_with("grid: the study has 10000000000 runs (10000000000 grid points (10 × 10 × 10 × 10 × 10 × 10 × 10 × 10 × 10 × 10) × 1 draw)"), "{e}");
     // At the limit: read, and its length is exact.
-    let s = study("[grid]\n\"design.beta\" = [1.0, 2.0]\n[monte_carlo]\nruns = 500000000").unwrap();
+    let s = study(
+        "[grid]\n\"design.beta\" = [1.0, 2.0]\n[monte_carlo]\nruns = 500000000\n\"truth.A\" = { relative = 0.05 }",
+    )
+    .unwrap();
     assert_eq!(s.len(), MAX_RUNS);
 }
 
@@ -308,9 +314,10 @@ fn two_spellings_of_one_grid_value_are_refused() {
 #[test]
 fn tune_refuses_a_grid_or_draws_it_would_ignore() {
     let tune = "[tune]\nobjective = \"tail_rms_e\"\nmu = [1.0, 100.0]\n";
-    for (table, key) in
-        [("[grid]\n\"design.beta\" = [1.0, 2.0]\n", "grid"), ("[monte_carlo]\nruns = 2\n", "monte_carlo")]
-    {
+    for (table, key) in [
+        ("[grid]\n\"design.beta\" = [1.0, 2.0]\n", "grid"),
+        ("[monte_carlo]\nruns = 2\n\"truth.A\" = { relative = 0.05 }\n", "monte_carlo"),
+    ] {
         let s = study(&format!("{table}{tune}")).unwrap();
         let e = super::tune(&s, &Default::default()).expect_err("refused").to_string();
         assert!(
