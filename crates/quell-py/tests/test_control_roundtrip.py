@@ -98,8 +98,10 @@ def test_a_transfer_function_that_cancels_an_unstable_pole_is_refused():
     # The unstable pole and its zero are named; an exact unstable cancellation is refused too.
     for num, pole, zero in [([1.0, -1.00001], "1", "1.00001"), ([1.0, -1.0], "1", "1")]:
         G = control.tf(num, np.poly([1.0, -2.0, -3.0]))
-        with pytest.raises(quell.ScenarioError, match=f"the pole {pole} in the closed right half-plane and the zero {zero} "):
+        with pytest.raises(quell.ScenarioError, match=f"the pole {pole} in the closed right half-plane and the zero {zero} ") as e:
             quell.Plant(G, delays=[0.1])
+        # The argument is the key, as for the library's own checks of sys (dt, below).
+        assert e.value.key == "sys"
     # A stable cancelled pair stays cancelled (the realization above).
     assert quell.Plant(control.tf([1.0, 2.0], np.poly([1.0, -2.0, -3.0])), delays=[0.1]).n == 2
 

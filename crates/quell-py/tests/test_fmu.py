@@ -303,6 +303,19 @@ def test_fmi3_calls_one_by_one(tmp_path):
         fmu.doStep(1.1, 0.05)
     assert logged[-1].startswith(not_stepping), logged[-1]
     assert fmu.getFloat64([vr["time"]]) == [1.1]
+    # FMI 3.0: a defined stopTime may not be passed (the FMU had stepped on to t = 2 past 1), and a
+    # start time whose doubles are coarser than a thousandth of T_s is refused (at 1e17 the
+    # samples' times stood still).
+    fmu.reset()
+    with pytest.raises(FMICallException, match="status 3"):
+        fmu.enterInitializationMode(startTime=1e17)
+    assert logged[-1].startswith("fmi3EnterInitializationMode: startTime = 1e+17 s: doubles there are 22.2045 s apart"), logged[-1]
+    fmu.enterInitializationMode(startTime=0.0, stopTime=1.0)
+    fmu.exitInitializationMode()
+    fmu.doStep(0.0, 1.0)
+    with pytest.raises(FMICallException, match="status 3"):
+        fmu.doStep(1.0, 0.05)
+    assert logged[-1].startswith("fmi3DoStep: the step to t + h = 1.05 s passes stopTime = 1 s"), logged[-1]
     fmu.freeInstance()
 
     events = slave()

@@ -688,8 +688,8 @@ fn an_atol_above_a_states_peak_is_named_in_the_advice() {
         let r = Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
         (quell::diagnostics::diagnose_run(&s, &d, &r).advice, r.peaks.0[2])
     };
-    // ξ̂ peaks far below x here: atol = 10 (ξ̂ then reaches 5.1, x about 50) lets ξ̂ (and so u_f)
-    // drift, 1e300 everything; ξ̂ is named in both.
+    // ξ̂ peaks far below x here: atol = 10 (ξ̂ then peaks at 0.75) lets ξ̂ (and so u_f) drift,
+    // 1e300 everything; ξ̂ is named in both.
     for atol in ["1e300", "10"] {
         let (lines, xi_peak) = advice(&format!("atol = {atol}"), false);
         let head = format!("simulation.atol = {atol} is above the peak of xi_hat (");

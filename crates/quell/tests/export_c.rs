@@ -212,10 +212,16 @@ int main(void)
     EXPECT(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, NULL), fmi2Error, "a NULL value pointer");
     EXPECT(fmi2SetupExperiment(c, 0, 0, nan, 0, 0), fmi2Error, "fmi2SetupExperiment: startTime = nan; the start time must be finite");
     EXPECT(fmi2ExitInitializationMode(c), fmi2Error, "fmi2ExitInitializationMode: not allowed when the FMU is instantiated (after Instantiate or Reset); only when it is in initialization mode");
-    EXPECT(fmi2SetupExperiment(c, 0, 0, 2, 0, 0), fmi2OK, "");
+    /* At 1e17 doubles are 16 s apart: every sample's time was 1e17 and the steps went on. */
+    EXPECT(fmi2SetupExperiment(c, 0, 0, 1e17, 0, 0), fmi2Error, "fmi2SetupExperiment: startTime = 1e+17 s: doubles there are 22.2045 s apart, more than a thousandth of T_s = 0.05 s, so the samples' times would blur; start within 2.2518e+11 s of 0 (0 is usual)");
+    EXPECT(fmi2SetupExperiment(c, 0, 0, 2e11, 0, 0), fmi2OK, "");
+    EXPECT(fmi2SetupExperiment(c, 0, 0, 2, fmi2True, 1), fmi2Error, "fmi2SetupExperiment: stopTime = 1 s is before startTime = 2 s");
+    EXPECT(fmi2SetupExperiment(c, 0, 0, 2, fmi2True, 2.15), fmi2OK, "");
     EXPECT(fmi2EnterInitializationMode(c), fmi2OK, "");
     EXPECT(fmi2SetupExperiment(c, 0, 0, 0, 0, 0), fmi2Error, "the start time is set before initialization only");
     EXPECT(fmi2ExitInitializationMode(c), fmi2OK, "");
+    /* FMI 2.0: past a defined stopTime the FMU returns fmi2Error (it had stepped on). */
+    EXPECT(fmi2DoStep(c, 2, 0.2, fmi2True), fmi2Error, "fmi2DoStep: the step to t + h = 2.2 s passes stopTime = 2.15 s set at initialization; stop there, or set a later stopTime");
     /* A step of 1e12 samples ran for days: more than 1e8 samples are refused. */
     EXPECT(fmi2DoStep(c, 2, 5e10, fmi2True), fmi2Error, "fmi2DoStep: communication step h = 5e+10 s is 1000000000000 samples of T_s = 0.05 s; at most 1e+08 are taken in one step: take several shorter steps");
     EXPECT(fmi2DoStep(c, 2, 0, fmi2True), fmi2Error, "fmi2DoStep: communication step h = 0 s: expected h > 0, a whole number of samples of T_s = 0.05 s");

@@ -81,20 +81,16 @@ def state_space(sys):
         for j in range(sys.ninputs):
             num, den = (np.trim_zeros(np.atleast_1d(np.asarray(v, dtype=float)), "f") for v in (sys.num[i][j], sys.den[i][j]))
             if len(num) and len(num) >= len(den):
-                from ._errors import ScenarioError
-
                 where = f" (output {i + 1}, input {j + 1})" if sys.noutputs * sys.ninputs > 1 else ""
-                raise ScenarioError(
+                raise _sys_error(
                     f"sys: the transfer function{where} has a numerator of degree {len(num) - 1} and a "
                     f"denominator of degree {len(den) - 1}: a plant (1) is strictly proper (no "
                     "feedthrough from u to y), so the numerator's degree must be below the denominator's"
                 )
     for i, j, p, z in _cancelled_pairs(sys):
         if p.real >= 0.0:
-            from ._errors import ScenarioError
-
             where = f" (output {i + 1}, input {j + 1})" if sys.noutputs * sys.ninputs > 1 else ""
-            raise ScenarioError(
+            raise _sys_error(
                 f"sys: the transfer function{where} has the pole {_num(p)} in the closed right half-plane "
                 f"and the zero {_num(z)} (|p - z| = {abs(p - z):.3g}), which a minimal realization "
                 "cancels: the unstable mode would be hidden, not gone; give the plant as a StateSpace "
@@ -108,15 +104,23 @@ def state_space(sys):
                           inputs=sys.input_labels, outputs=sys.output_labels)
     # python-control's ControlMIMONotImplemented (no slycot) is a NotImplementedError.
     except (ImportError, TypeError, ValueError, NotImplementedError) as e:
-        from ._errors import ScenarioError
-
         need = ("a MIMO realization needs slycot: install it, or pass a StateSpace"
                 if sys.noutputs * sys.ninputs > 1 else
                 "a plant (1) is strictly proper: the numerator's degree must be below the denominator's")
-        raise ScenarioError(
+        raise _sys_error(
             f"sys: python-control cannot realize this {sys.noutputs}x{sys.ninputs} transfer function "
             f"as a state-space system ({e}); {need}"
         ) from e
+
+
+def _sys_error(message):
+    """A ``ScenarioError`` on the argument ``sys`` (its ``key``, as the library's own checks of
+    ``sys`` give it)."""
+    from ._errors import ScenarioError
+
+    error = ScenarioError(message)
+    error.key = "sys"
+    return error
 
 
 def _cancelled_pairs(sys):
