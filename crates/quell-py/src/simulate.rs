@@ -363,7 +363,8 @@ impl PySimResult {
     /// -------
     /// control.TimeResponseData
     ///     Outputs y (m × samples) labelled with the plant's output names (`y[i]` by default);
-    ///     inputs the adaptive commands u (labels `u[i]`).
+    ///     inputs the adaptive commands u (labels `u[i]`); with `states=True` in the run, the
+    ///     plant states x (n × samples) labelled with the plant's state names (`x[j]`).
     ///
     /// Raises
     /// ------
@@ -376,8 +377,9 @@ impl PySimResult {
     /// >>> resp.outputs.shape, resp.output_labels
     /// ((2, 11), ['y[1]', 'y[2]'])
     fn to_control(slf: &Bound<'_, Self>) -> PyResult<Py<PyAny>> {
-        let outputs = slf.get().labels.outputs(slf.get().inner.m);
-        Ok(slf.py().import("quell._control")?.call_method1("to_control", (slf, outputs))?.unbind())
+        let (labels, r) = (&slf.get().labels, &slf.get().inner);
+        let (outputs, states) = (labels.outputs(r.m), labels.states(r.n));
+        Ok(slf.py().import("quell._control")?.call_method1("to_control", (slf, outputs, states))?.unbind())
     }
     /// The columns of signals.csv as a pandas DataFrame.
     ///

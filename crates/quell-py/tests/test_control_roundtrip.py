@@ -145,6 +145,13 @@ def test_result_to_control_is_outputs_by_time_with_labels():
     assert resp.output_labels == ["y[1]", "y[2]"] and resp.input_labels == ["u[1]", "u[2]"]
     frame = resp.to_pandas()  # python-control's own conversion reads the labels
     np.testing.assert_array_equal(frame["y[2]"].to_numpy(), result.y[:, 1])
+    assert resp.nstates == 0  # no states recorded
+    # With states=True the plant states come along (they were dropped), from the plant's x0.
+    with_states = quell.simulate(quell.paper_example(), t_end=2.0, states=True)
+    resp = with_states.to_control()
+    assert resp.states.shape == (3, len(with_states.t)) and resp.state_labels == ["x[1]", "x[2]", "x[3]"]
+    np.testing.assert_array_equal(resp.states, with_states.x.T)
+    np.testing.assert_array_equal(resp.states[:, 0], quell.paper_example().plant.x0)
 
 
 def test_state_space_signal_names_are_kept_through_to_the_loops_and_results():
@@ -167,8 +174,8 @@ def test_state_space_signal_names_are_kept_through_to_the_loops_and_results():
         # python-control finds the signals by name: the decoupled channel from u_d[1] to height.
         sub = dec[dec.find_output("height"), dec.find_input("u_d[1]")]
         assert abs(complex(sub(1j)) - d.channels[0]["q0"] / np.prod(1j - np.asarray(d.channels[0]["poles"]))) < 1e-9
-    resp = quell.simulate(s).to_control()
-    assert resp.output_labels == ["height", "angle"]
+    resp = quell.simulate(s, states=True).to_control()
+    assert resp.output_labels == ["height", "angle"] and resp.state_labels == ["h", "v", "w"]
     for obj in (plant, s, s.design(), quell.simulate(s)):
         back = pickle.loads(pickle.dumps(obj))
         assert back == obj

@@ -144,17 +144,19 @@ def _num(x):
     return f"{x.real:.6g}" if x.imag == 0 else f"{x.real:.6g}{x.imag:+.6g}j"
 
 
-def to_control(result, outputs):
+def to_control(result, outputs, states):
     """A SimResult as ``control.TimeResponseData``: outputs y (m × samples) labelled with the
-    plant's output names (``outputs``, by default y[i]), and the adaptive commands u as inputs,
-    labels u[i]."""
+    plant's output names (``outputs``, by default y[i]), the adaptive commands u as inputs,
+    labels u[i], and, where the run recorded them, the plant states x labelled ``states``."""
     import control
 
-    m = result.m
+    m, x = result.m, result.x
+    recorded = {} if x is None else {"states": np.asarray(x).T, "state_labels": list(states)}
     return control.TimeResponseData(
         np.asarray(result.t),
         np.asarray(result.y).T,
         inputs=np.asarray(result.u).T,
+        **recorded,
         output_labels=list(outputs),
         input_labels=_labels("u", m),
         issiso=m == 1,
