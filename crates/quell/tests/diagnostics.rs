@@ -550,6 +550,17 @@ fn the_stiff_gain_line_does_not_trade_convergence_for_a_non_stiff_rate() {
     let (normalized, _, _) =
         run(&text.replace("mu = [1.0, 1.0]", "mu = [1.0, 1.0]\nregressor_scaling = \"normalized\""));
     assert!(spread(&normalized[0]) < 1e-2 * spread(&report[0]), "{normalized:?}");
+    // Over 200 s that direction (1/(μλ) = 51 s) is not converged at μ = 1 either: the horizon
+    // advice asks for the threshold and a longer run, and the stiff line agrees with it.
+    let s = Scenario::from_toml(text).unwrap();
+    let short = quell::diagnostics::estimate(&s.design().unwrap(), s.true_plant(), &s.reference, &s.disturbance, 200.0);
+    let lines = short[0].advice.join("\n");
+    // (The horizon advice names the threshold of the faster observer it proposes first.)
+    assert!(
+        lines.contains("lower design.mu[0] to about 7.3e-6") && lines.contains("so lower design.mu[0] to "),
+        "{lines}"
+    );
+    assert!(!lines.contains("keep design.mu[0] where"), "{lines}");
 }
 
 /// The excited rank counts the signals' independent directions whatever the units: the SI vessel

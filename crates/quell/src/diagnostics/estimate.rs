@@ -104,9 +104,9 @@ pub fn estimate(
 }
 
 /// Channel i adapting at μ λ_max beyond [`STIFF_RATIO`] times the loop's rate ρ: what it means and
-/// the μ to lower it to. That is the threshold's μ unless the slowest relevant direction would then
-/// not converge by t_end ([`super::horizon_mu`]): there the stiffness is the price of Ω̄'s spread and
-/// the advice says so (the quadruple tank at μ = 1, told to lower μ to the threshold's 7.3e-6,
+/// the μ to lower it to. That is the threshold's μ unless the slowest relevant direction, converged
+/// by t_end at the present μ, would then not be ([`super::horizon_mu`]): there the stiffness is the
+/// price of Ω̄'s spread and the advice says so (the quadruple tank at μ = 1, told to lower μ to the threshold's 7.3e-6,
 /// ends with a tail max|e| of 9.0e-3, at that μ of 0.16). The design report and the run's
 /// diagnostics share it.
 pub(crate) fn stiff_advice(
@@ -126,7 +126,10 @@ pub(crate) fn stiff_advice(
     let relevant = c.slowest_relevant(super::RELEVANT_SHARE);
     let (wanted, fastest) = super::horizon_mu(relevant, lambda_max, (t_end, STIFF_RATIO * rho));
     let fmt = crate::settings::fmt_short;
-    let lower = if !(relevant.is_finite() && wanted > fastest) {
+    // Where the present μ leaves that direction unconverged too, the horizon advice
+    // ([`super::slow_direction_advice`]) asks for the threshold and a longer run: the line agrees.
+    let converges = mu * relevant * t_end >= super::CONVERGED_EFOLDS;
+    let lower = if !(relevant.is_finite() && wanted > fastest && converges) {
         format!("lower design.mu[{i}] to about {}{scaling_hint}", fmt(crate::settings::round_down_2(fastest)))
     } else {
         let needed = crate::settings::round_up_2(wanted);

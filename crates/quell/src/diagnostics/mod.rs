@@ -797,7 +797,7 @@ fn tail_within_bound(result: &SimResult, i: usize) -> bool {
 }
 
 /// A direction of Ω̄ at rate μ λ has converged by t_end when μ λ t_end ≥ this many e-folds.
-const CONVERGED_EFOLDS: f64 = 5.0;
+pub(super) const CONVERGED_EFOLDS: f64 = 5.0;
 /// How much later than the averaged law predicts a weakly excited direction converges in the run:
 /// the μ (or t_end) that advice asks for is this many times the averaged law's. Asked for
 /// 5/(λ t_end) alone, a servo whose μ was 1000× too small still missed its tail bound 3×; 3× that
