@@ -11,6 +11,7 @@
 pub use crate::averaged;
 pub mod effort;
 pub mod estimate;
+pub mod sampled;
 
 use crate::sim::dde::THRASHING;
 use serde::Serialize;
@@ -18,6 +19,7 @@ use serde::Serialize;
 pub use averaged::{disturbance_observer_gain, Averaged, ChannelAverage, Excitation, Fidelity};
 pub use effort::{steady_input, InputTone, SteadyInput};
 pub use estimate::{estimate, RateEstimate, STIFF_RATIO};
+pub use sampled::{sampled_advice, sampled_transient, SAMPLED_TRANSIENT};
 
 use nalgebra::{Complex, DMatrix, DVector};
 
@@ -130,45 +132,8 @@ pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) ->
     }
     d.advice.extend(loose_atol(s, result));
     d.advice.extend(uf_cancellation(result));
-    d.advice.extend(sampled_transient(result));
+    d.advice.extend(sampled_advice(s, design, result));
     d
-}
-
-/// A completed sampled-data run's peak of u_f over its peak in the tail from which the sampling is
-/// suspected: the continuous loops of `examples` and `tests/data` peak at most 43× their tails
-/// (the quadruple tank's first minutes), while the flexible-joint robot of `tests/data` sampled at
-/// 0.5 ms, within T_s·ρ ≤ [`crate::sim::COARSE_SAMPLE`], peaked 19,000× (8,637 against 0.97 in
-/// the continuous loop, the actuator limit 1 its automatic design verified). A heuristic: a large
-/// x(0) against small signals gives the continuous loop such a transient too (the paper's example
-/// with x0 = [5, −5, 5] and signals × 1e-3: 1,164×), and at 0.2 ms the same robot peaked 116× its
-/// continuous u_f but only 245× its tail, unflagged; hence the advice asks for the comparison.
-pub const SAMPLED_TRANSIENT: f64 = 1000.0;
-
-/// Per channel of a completed sampled-data run whose u_f peaked [`SAMPLED_TRANSIENT`] times its
-/// tail's peak or more: what to compare it with and which way to move T_s. Empty otherwise.
-pub fn sampled_transient(result: &SimResult) -> Vec<String> {
-    let crate::sim::RunStats::Sampled { sample_time, .. } = result.stats else { return Vec::new() };
-    let (Some(from), None | Some(Outcome::Completed)) = (result.tail_from(), &result.outcome) else {
-        return Vec::new();
-    };
-    let unit = result.time_unit;
-    let lines = (0..result.m).filter_map(|i| {
-        let rows = result.t.iter().zip(result.column(&result.u_f, result.m, i));
-        let tail = rows.filter(|(t, _)| **t >= from).fold(0.0f64, |a, (_, u)| a.max(u.abs()));
-        let peak = result.max_uf(i);
-        (peak >= SAMPLED_TRANSIENT * tail).then(|| {
-            format!(
-                "u_f[{}] peaked at {}, {}× its peak over the tail ({}): where the continuous loop (the run without its sample time) does not, the sampling at T_s = {} {unit} makes it, even within T_s·ρ ≤ {}; then shorten T_s until the peak comes near the continuous one",
-                i + 1,
-                crate::settings::fmt_4(peak),
-                crate::settings::fmt_ratio(peak / tail),
-                crate::settings::fmt_4(tail),
-                fmt_short(sample_time),
-                crate::sim::COARSE_SAMPLE
-            )
-        })
-    });
-    lines.collect()
 }
 
 /// From this ratio of u_f's terms to its peak ([`SimResult::uf_terms`]) a run says u_f may hold
