@@ -188,6 +188,25 @@ pub fn vector(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<f6
 
 /// A str argument, or a TypeError naming it; a str with a lone surrogate (`"\ud800"`, which UTF-8 cannot hold) is a ScenarioError naming
 /// it, not Python's UnicodeEncodeError.
+/// [`text`] meant as TOML: a single line without `=` that is not a comment or a table header, and
+/// so not TOML, but ends in `.toml` or names a file, is taken for a path given where the text goes
+/// (a bare syntax error had named neither the argument nor the path), and `load` (the function
+/// that reads a file) is named.
+pub fn toml_text(obj: &Bound<'_, PyAny>, name: &str, load: &str) -> PyResult<String> {
+    let text = text(obj, name)?;
+    let line = text.trim();
+    let not_toml = !line.is_empty() && !line.contains(['\n', '=']) && !line.starts_with(['#', '[']);
+    if not_toml && (line.to_ascii_lowercase().ends_with(".toml") || std::path::Path::new(line).is_file()) {
+        return Err(crate::errors::keyed(
+            obj.py(),
+            crate::errors::Kind::Scenario,
+            format!("{name}: expected TOML text, found a file's path, {line:?}; read the file with {load}"),
+            Some(name.into()),
+        ));
+    }
+    Ok(text)
+}
+
 pub fn text(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<String> {
     if !obj.is_instance_of::<PyString>() {
         return Err(type_error(name, "a str", obj));

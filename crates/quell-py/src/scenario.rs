@@ -587,7 +587,8 @@ impl PyScenario {
     #[staticmethod]
     #[pyo3(signature = (text, *, sample_time=None))]
     fn from_toml(py: Python<'_>, text: &Bound<'_, PyAny>, sample_time: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
-        let (text, sample_time) = (crate::convert::text(text, "text")?, sample_time_arg(sample_time)?);
+        let text = crate::convert::toml_text(text, "text", "quell.Scenario.load(path)")?;
+        let sample_time = sample_time_arg(sample_time)?;
         match sample_time {
             None => Self::parse(py, &text),
             Some(t) => {
@@ -860,7 +861,7 @@ fn auto_document<'py>(
         if let Some((k, v)) = scenario.and_then(|d| d.iter().next()) {
             return Err(type_error(&k.to_string(), with_text, &v));
         }
-        let text = crate::convert::text(text, "text")?;
+        let text = crate::convert::toml_text(text, "text", "open(path).read() (auto_design takes the text)")?;
         return quell::scenario::parse_document(&text).map_err(|e| scenario_error(py, &e));
     }
     if text.extract::<PyRef<'py, PyPlant>>().is_err() {

@@ -373,7 +373,7 @@ impl PyStudy {
     #[staticmethod]
     #[pyo3(signature = (text, dir=None))]
     fn from_toml(py: Python<'_>, text: &Bound<'_, PyAny>, dir: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
-        let text = crate::convert::text(text, "text")?;
+        let text = crate::convert::toml_text(text, "text", "quell.Study.load(path)")?;
         let dir = dir.filter(|d| !d.is_none()).map(|d| crate::convert::path(d, "dir")).transpose()?;
         study::Study::from_toml(&text, dir.as_deref())
             .map(|s| PyStudy { inner: Arc::new(s) })

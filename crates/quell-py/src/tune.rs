@@ -143,10 +143,15 @@ pub fn tune(
     let result = result.map_err(|e| argument_error(py, &e))?;
     warn_choices(py, &study, &result)?;
     let json = serde_json::to_string(&result).map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
+    let evaluations: usize = result.channels.iter().map(|c| c.curve.len()).sum();
     let result = py.import("quell._tune")?.getattr("TuneResult")?.call1((json,))?;
     match interrupt {
         None => Ok(result.unbind()),
-        Some(e) => {
+        Some(_) => {
+            // Said as an interrupted sweep says it: a bare KeyboardInterrupt left the kept curve unmentioned.
+            let e = pyo3::exceptions::PyKeyboardInterrupt::new_err(format!(
+                "interrupted after {evaluations} evaluations; they are in the exception's .result (partial)"
+            ));
             e.value(py).setattr("result", result)?;
             Err(e)
         }

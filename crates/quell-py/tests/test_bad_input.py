@@ -3,6 +3,7 @@ ValueErrors) for a bad value, naming the argument, never a Rust panic (pyo3_runt
 so `except Exception` would not even catch it)."""
 
 import itertools
+import re
 
 import numpy as np
 import pytest
@@ -206,6 +207,22 @@ def test_oversized_texts_surrogates_and_long_lists_are_refused_by_what_is_wrong(
         quell.Plant(A, B, C, inputs=["a"] * 1_000_000)
     with pytest.raises(TypeError, match=r"^delays\[1\]: expected a real number, found a bool"):
         quell.Plant(A, B, C, delays=[1.0, True])
+
+
+def test_a_path_given_as_toml_text_is_named_with_the_function_that_reads_it(tmp_path):
+    """A scenario's or study's path passed where its TOML text goes had a bare syntax error ("line 1,
+    column 50: key with no value") that named neither the argument nor the path."""
+    path = tmp_path / "plant"
+    path.write_text(quell.paper_example().to_toml())
+    for call, given, load in [
+        (quell.Scenario.from_toml, "examples/paper.toml", "quell.Scenario.load(path)"),
+        (quell.Scenario.from_toml, str(path), "quell.Scenario.load(path)"),
+        (quell.Study.from_toml, "studies/monte-carlo-A.toml", "quell.Study.load(path)"),
+        (quell.auto_design, "examples/paper.toml", "open(path).read()"),
+    ]:
+        with pytest.raises(quell.ScenarioError, match=f"^text: expected TOML text, found a file's path, \"{re.escape(given)}\"; read the file with {re.escape(load)}") as e:
+            call(given)
+        assert e.value.key == "text"
 
 
 def test_every_scenario_error_has_the_key_or_argument_it_names():

@@ -54,6 +54,8 @@ def test_tune_gives_the_clis_evaluations_and_choice(quell_bin, tmp_path):
         np.testing.assert_array_equal(ours[column].astype(float).to_numpy(), cli[column].astype(float).to_numpy(),
                                       err_msg=column)
     assert list(ours["outcome"]) == list(cli["outcome"])
+    # Empty reasons are NaN in both (the frame had "" where tune.csv read by pandas has NaN).
+    assert list(ours["reason"].isna()) == list(cli["reason"].isna())
     import json
 
     assert r.mu == json.loads((out / "tune.json").read_text())["mu"]
@@ -142,6 +144,7 @@ def test_ctrl_c_stops_a_tuning_keeping_the_points_so_far(python_child):
         except KeyboardInterrupt as e:
             print('partial', e.result.partial, len(e.result), e.result.joint is None, flush=True)
             print('limits', e.result.within_limits, flush=True)
+            print('said', str(e), len(e.result.frame), flush=True)
         """)
     out, err, seconds = interrupt(python_child, code, 3.0)
     assert "finished" not in out, out
@@ -149,6 +152,10 @@ def test_ctrl_c_stops_a_tuning_keeping_the_points_so_far(python_child):
     assert words[:2] == ["partial", "True"] and int(words[2]) >= 1 and words[3] == "True", (out, err)
     # No joint run: no limit was checked, and none is said broken (it had warned of broken limits).
     assert "limits [None, None]" in out and "break limits" not in err, (out, err)
+    # Said as an interrupted sweep says it (it was a bare KeyboardInterrupt), with the frame's count.
+    said = next(line for line in out.splitlines() if line.startswith("said "))
+    kept = said.rsplit(" ", 1)[1]
+    assert said == f"said interrupted after {kept} evaluations; they are in the exception's .result (partial) {kept}", said
     assert seconds < 10
 
 

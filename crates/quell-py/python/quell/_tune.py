@@ -107,7 +107,7 @@ class TuneResult:
             for p in c["curve"]:
                 figures = p.get("figures") or {}
                 row = {"channel": c["channel"], "mu": p["mu"], "objective": p["objective"],
-                       "outcome": p["outcome"], "reason": p.get("reason", "")}
+                       "outcome": p["outcome"], "reason": p.get("reason") or float("nan")}
                 row.update({f: figures.get(f) for f in FIGURES})
                 row["chosen"] = chosen is not None and chosen["mu"] == p["mu"]
                 yield row
@@ -116,7 +116,8 @@ class TuneResult:
     def frame(self):
         """Every evaluation, one row each, by channel and μ: tune.csv's columns ``channel`` (from 1),
         ``mu``, ``objective`` (None where infeasible), ``outcome``, ``reason`` (why a run did not
-        complete, as runs.csv's), the channel's figures and ``chosen``."""
+        complete, as runs.csv's; NaN for a completed run, as a sweep's frame and tune.csv read by
+        pandas have it), the channel's figures and ``chosen``."""
         import pandas as pd
 
         return pd.DataFrame(list(self._rows()), columns=list(COLUMNS))
