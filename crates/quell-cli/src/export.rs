@@ -39,7 +39,8 @@ pub struct ExportArgs {
 /// Generates, then writes both files (each to a temporary name, then renamed).
 pub fn run(args: &ExportArgs) -> Result<(), Failure> {
     // The sample time is the controller's, not a run's: export runs nothing, so the horizon is
-    // capped where a run's step budget would refuse the sample time.
+    // capped where a run's step budget would refuse the sample time, and raised to one sample where
+    // a run would end before its first step (T_s = 1000 s had been refused by the 100 s of t_end).
     let (scenario, design) = load_with(Some(&args.scenario), |sim| {
         if let Some(t) = set_sample_time(sim, args.sample_time) {
             let t_end = match sim.get("t_end") {
@@ -48,9 +49,9 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
             };
             // A t_end that is not a number stays, for the reader to name; the output step stays within it.
             let cap = t * quell::settings::MAX_SAMPLING_STEPS;
-            if t_end.is_some_and(|t_end| t_end > cap) {
-                sim.insert("t_end".into(), toml::Value::Float(cap));
-                sim.insert("output_step".into(), toml::Value::Float(cap));
+            if let Some(horizon) = t_end.filter(|t_end| *t_end > cap || *t_end < t).map(|t_end| t_end.clamp(t, cap)) {
+                sim.insert("t_end".into(), toml::Value::Float(horizon));
+                sim.insert("output_step".into(), toml::Value::Float(horizon));
             }
         }
     })?;

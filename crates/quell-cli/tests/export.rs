@@ -137,6 +137,25 @@ fn a_sample_time_beyond_a_runs_step_budget_still_exports() {
     assert!(stderr(&o).contains("controller steps; at most 1e10 are run"), "{}", stderr(&o));
 }
 
+/// A sample time longer than the scenario's t_end exports too (it had been refused: "the run would
+/// end before the controller's first step"), while a run at it is still refused.
+#[test]
+fn a_sample_time_beyond_t_end_still_exports() {
+    let dir_tmp = temp_dir("short");
+    let text = std::fs::read_to_string(example("paper.toml")).unwrap().replace("t_end = 100.0", "t_end = 0.5");
+    let text = text.replace("output_step = 0.1", "output_step = 0.5");
+    assert!(text.contains("t_end = 0.5") && text.contains("output_step = 0.5"));
+    let scenario = dir_tmp.path().join("short.toml");
+    std::fs::write(&scenario, text).unwrap();
+    let out = dir_tmp.path().join("out").display().to_string();
+    let o = quell(&["export", scenario.to_str().unwrap(), "--sample-time", "1", "--out", &out]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stderr(&o).contains("T_s = 1 s"), "{}", stderr(&o));
+    let o = quell(&["run", scenario.to_str().unwrap(), "--sample-time", "1", "--out", &out]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("the run would end before the controller's first step"), "{}", stderr(&o));
+}
+
 #[test]
 fn export_fmu_writes_one_archive_or_fails_with_1() {
     // The FMU's content is validated and simulated by FMPy in crates/quell-py/tests/test_fmu.py;
