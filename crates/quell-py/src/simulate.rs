@@ -72,7 +72,8 @@ impl PySimResult {
         r: SimResult,
         labels: Labels,
     ) -> PyResult<Self> {
-        let diagnostics = quell::diagnostics::diagnose_run(scenario, design, &r);
+        // Without the GIL: a sampled run's diagnostics run its continuous loop too.
+        let diagnostics = py.detach(|| quell::diagnostics::diagnose_run(scenario, design, &r));
         PySimResult::new(py, r, serde_json::to_string(&diagnostics).unwrap_or_default(), labels)
     }
 

@@ -813,4 +813,18 @@ fn a_sampled_run_is_compared_with_its_continuous_loop() {
     let p = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
     let pd = p.design().unwrap();
     assert!(run(&p, &pd, Some(1e-3)).0.is_empty());
+    // With no signals and x(0) = 0 every y is zero in both loops: no departure (0/0 had been one).
+    let mut quiet = p.clone();
+    for signal in [&mut quiet.reference, &mut quiet.disturbance] {
+        for c in signal.components.iter_mut() {
+            c.bias = 0.0;
+            c.harmonics.iter_mut().for_each(|h| h.amplitude = 0.0);
+        }
+    }
+    quiet.plant.x0.fill(0.0);
+    if let Some(truth) = quiet.truth.as_mut() {
+        truth.x0.fill(0.0);
+    }
+    let (advice, r) = run(&quiet, &pd, Some(1e-3));
+    assert!(r.y.iter().all(|&y| y == 0.0) && advice.is_empty(), "{advice:?}");
 }

@@ -113,7 +113,9 @@ pub fn departures(sampled: &SimResult, continuous: &SimResult) -> Option<Vec<Cha
         let (ys, yc) = (sampled.column(&sampled.y, m, i).take(rows), continuous.column(&continuous.y, m, i));
         let peak = continuous.column(&continuous.y, m, i).fold(0.0f64, |a, v| a.max(v.abs()));
         let gap = ys.zip(yc).fold(0.0f64, |a, (s, c)| if (s - c).abs() > a { (s - c).abs() } else { a });
-        ChannelDeparture { y: gap / peak, uf: (sampled.max_uf(i), continuous.max_uf(i)) }
+        // A y that is zero in both (no signals, x(0) = 0) has not departed.
+        let y = if gap == 0.0 { 0.0 } else { gap / peak };
+        ChannelDeparture { y, uf: (sampled.max_uf(i), continuous.max_uf(i)) }
     };
     Some((0..m).map(channel).collect())
 }
