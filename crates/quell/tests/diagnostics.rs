@@ -508,8 +508,13 @@ fn a_stiff_gain_is_named_after_the_run_as_before_it() {
     let stiff = line(&before[0].advice).unwrap_or_else(|| panic!("{before:?}"));
     assert_eq!(line(&after.channels[0].advice).as_ref(), Some(&stiff));
     assert!(line(&before[1].advice).is_none() && line(&after.channels[1].advice).is_none());
-    let mu: f64 =
-        stiff.split("lower design.mu[0] to about ").nth(1).and_then(|r| r.split(' ').next()).unwrap().parse().unwrap();
+    let mu: f64 = stiff
+        .split("lower design.mu[0] to about ")
+        .nth(1)
+        .and_then(|r| r.split([' ', ',']).next())
+        .unwrap()
+        .parse()
+        .unwrap();
     assert!(mu * before[0].lambda_max_omega <= 100.0 * before[0].loop_rate, "{mu}: {stiff}");
     assert!(mu * before[0].lambda_max_omega >= 90.0 * before[0].loop_rate, "two digits, rounded down: {mu}");
 }
@@ -536,7 +541,10 @@ fn the_stiff_gain_line_does_not_trade_convergence_for_a_non_stiff_rate() {
     let spread = |c: &quell::diagnostics::RateEstimate| c.lambda_max_omega / c.lambda_min_excited_omega;
     for (i, c) in report.iter().enumerate() {
         let line = c.advice.iter().find(|a| a.contains("adapts at")).unwrap_or_else(|| panic!("{c:?}"));
-        assert!(line.contains(&format!("so keep design.mu[{i}] where max|u_f| allows")), "{line}");
+        assert!(
+            line.contains(&format!("so keep design.mu[{i}], or raise it toward 1.3, where max|u_f| allows")),
+            "{line}"
+        );
         assert!(!line.contains(&format!("lower design.mu[{i}] to about")), "{line}");
         assert!(after.channels[i].advice.contains(line), "{:?}", after.channels[i].advice);
         assert!(spread(c) > 1e8, "{c:?}");
@@ -550,17 +558,17 @@ fn the_stiff_gain_line_does_not_trade_convergence_for_a_non_stiff_rate() {
     let (normalized, _, _) =
         run(&text.replace("mu = [1.0, 1.0]", "mu = [1.0, 1.0]\nregressor_scaling = \"normalized\""));
     assert!(spread(&normalized[0]) < 1e-2 * spread(&report[0]), "{normalized:?}");
-    // Over 200 s that direction (1/(μλ) = 51 s) is not converged at μ = 1 either: the horizon
-    // advice asks for the threshold and a longer run, and the stiff line agrees with it.
+    // Over 200 s that direction (1/(μλ) = 51 s) is not converged at μ = 1 either: neither the
+    // horizon advice nor the stiff line asks for the threshold then (which slows it further).
     let s = Scenario::from_toml(text).unwrap();
     let short = quell::diagnostics::estimate(&s.design().unwrap(), s.true_plant(), &s.reference, &s.disturbance, 200.0);
     let lines = short[0].advice.join("\n");
-    // (The horizon advice names the threshold of the faster observer it proposes first.)
     assert!(
-        lines.contains("lower design.mu[0] to about 7.3e-6") && lines.contains("so lower design.mu[0] to "),
+        lines.contains("so keep design.mu[0], or raise it toward ")
+            && lines.contains("so keep design.mu[0] (or raise it toward "),
         "{lines}"
     );
-    assert!(!lines.contains("keep design.mu[0] where"), "{lines}");
+    assert!(!lines.contains("lower design.mu[0] to"), "{lines}");
 }
 
 /// The excited rank counts the signals' independent directions whatever the units: the SI vessel

@@ -104,11 +104,11 @@ pub fn estimate(
 }
 
 /// Channel i adapting at μ λ_max beyond [`STIFF_RATIO`] times the loop's rate ρ: what it means and
-/// the μ to lower it to. That is the threshold's μ unless the slowest relevant direction, converged
-/// by t_end at the present μ, would then not be ([`super::horizon_mu`]): there the stiffness is the
-/// price of Ω̄'s spread and the advice says so (the quadruple tank at μ = 1, told to lower μ to the threshold's 7.3e-6,
-/// ends with a tail max|e| of 9.0e-3, at that μ of 0.16). The design report and the run's
-/// diagnostics share it.
+/// the μ to lower it to. That is the threshold's μ unless the slowest relevant direction would then
+/// not converge by t_end ([`super::horizon_mu`]): there the stiffness is the price of Ω̄'s spread,
+/// and the advice names the μ that direction needs, to keep or approach (the quadruple tank at μ = 1,
+/// told to lower μ to the threshold's 7.3e-6, ends with a tail max|e| of 9.0e-3, at that μ of 0.16).
+/// The design report and the run's diagnostics share it.
 pub(crate) fn stiff_advice(
     design: &Design,
     (i, mu): (usize, f64),
@@ -119,24 +119,21 @@ pub(crate) fn stiff_advice(
     let rate = mu * lambda_max;
     let scaling_hint = match design.regressor_scaling() {
         crate::design::RegressorScaling::Paper => {
-            " or set design.regressor_scaling = \"normalized\" (ξ̂ of the signals' size, which also narrows the spread where the filters' poles differ in scale) and choose μ anew"
+            ", or set design.regressor_scaling = \"normalized\" (ξ̂ of the signals' size, which also narrows the spread where the filters' poles differ in scale) and choose μ anew"
         }
         crate::design::RegressorScaling::Normalized | crate::design::RegressorScaling::Modal => "",
     };
     let relevant = c.slowest_relevant(super::RELEVANT_SHARE);
     let (wanted, fastest) = super::horizon_mu(relevant, lambda_max, (t_end, STIFF_RATIO * rho));
     let fmt = crate::settings::fmt_short;
-    // Where the present μ leaves that direction unconverged too, the horizon advice
-    // ([`super::slow_direction_advice`]) asks for the threshold and a longer run: the line agrees.
-    let converges = mu * relevant * t_end >= super::CONVERGED_EFOLDS;
-    let lower = if !(relevant.is_finite() && wanted > fastest && converges) {
+    let lower = if !(relevant.is_finite() && wanted > fastest) {
         format!("lower design.mu[{i}] to about {}{scaling_hint}", fmt(crate::settings::round_down_2(fastest)))
     } else {
         let needed = crate::settings::round_up_2(wanted);
         let keep = if needed < mu {
             format!("lower design.mu[{i}] at most to about {} where max|u_f| allows", fmt(needed))
         } else {
-            format!("keep design.mu[{i}] where max|u_f| allows")
+            format!("keep design.mu[{i}], or raise it toward {}, where max|u_f| allows", fmt(needed))
         };
         format!(
             "lowered to the stiffness threshold (μ λ_max = {STIFF_RATIO:.0}ρ), about {}, its slowest relevant direction would not converge by t_end (that needs μ ≥ {}: Ω̄'s eigenvalues spread {}-fold), so {keep}{scaling_hint}",

@@ -762,7 +762,7 @@ fn tail_within_bound(result: &SimResult, i: usize) -> bool {
 }
 
 /// A direction of Ω̄ at rate μ λ has converged by t_end when μ λ t_end ≥ this many e-folds.
-pub(super) const CONVERGED_EFOLDS: f64 = 5.0;
+const CONVERGED_EFOLDS: f64 = 5.0;
 /// How much later than the averaged law predicts a weakly excited direction converges in the run:
 /// the μ (or t_end) that advice asks for is this many times the averaged law's. Asked for
 /// 5/(λ t_end) alone, a servo whose μ was 1000× too small still missed its tail bound 3×; 3× that
@@ -840,7 +840,8 @@ pub(crate) fn slow_direction_advice(
 
 /// `key` = μ too small for the horizon t_end, its slowest relevant direction of Ω̄ at rate
 /// μ λ: raise μ to [`horizon_mu`]'s, unless that would put μ λ_max beyond the stiffness threshold
-/// `stiff` (then only a longer run, or more excitation, helps).
+/// `stiff` (then a longer run, or more excitation, helps; a μ already beyond the threshold is kept,
+/// with the horizon it needs).
 fn horizon_advice(
     key: &str,
     mu: f64,
@@ -851,32 +852,50 @@ fn horizon_advice(
     let (wanted, fastest) = horizon_mu(relevant, lambda_max, (t_end, stiff));
     let (mu_text, rule) = (fmt_short(mu), format!("{AVERAGED_MARGIN:.0}·{CONVERGED_EFOLDS:.0}/(λ t_end)"));
     if wanted > fastest {
-        // At the cap, which a μ beyond it is also told to come down to (the stiff-loop advice).
-        let needed = round_up_2(AVERAGED_MARGIN * CONVERGED_EFOLDS / (fastest * relevant));
+        // A μ below the cap is held to it; one beyond it keeps its value.
         let beyond = mu > fastest;
-        let fastest = crate::settings::round_down_2(fastest);
+        // The horizon a μ needs (μ at the cap, or the present one beyond it).
+        let at = |mu: f64| round_up_2(AVERAGED_MARGIN * CONVERGED_EFOLDS / (mu * relevant));
         // A horizon past a thousand times the run's is no remedy (1e18 s on an SI vessel).
-        let longer = if needed <= MAX_HORIZON_RATIO * t_end {
-            format!("lengthen simulation.t_end to about {} {unit}, or excite that direction more", fmt_short(needed))
-        } else {
-            format!("even then it needs {needed:.1e} {unit}, past {MAX_HORIZON_RATIO:.0}× t_end: excite that direction more (a larger amplitude at its frequency, filter poles near it) or accept its error")
+        let longer = |needed: f64, even: &str| {
+            if needed <= MAX_HORIZON_RATIO * t_end {
+                format!(
+                    "lengthen simulation.t_end to about {} {unit}, or excite that direction more",
+                    fmt_short(needed)
+                )
+            } else {
+                format!("{even} it needs {needed:.1e} {unit}, past {MAX_HORIZON_RATIO:.0}× t_end: excite that direction more (a larger amplitude at its frequency, filter poles near it) or accept its error")
+            }
         };
-        // A μ already past the threshold is not "too small": the horizon is short at any μ it allows.
         let decays = format!("the error's slowest relevant direction decays at μ λ = {:.2e}/{unit}", mu * relevant);
-        let (head, keep) = if beyond {
-            (
-                format!("the horizon is too short even at {key} = {mu_text}, beyond the stiffness threshold: {decays}"),
-                format!("lower {key} to {}", fmt_short(fastest)),
-            )
-        } else {
-            (
-                format!("{key} = {mu_text} is too small for the horizon: {decays}"),
-                format!("keep {key} at most {}", fmt_short(fastest)),
-            )
-        };
-        format!(
-            "{head}; {rule} = {wanted:.3e} would put the adaptation rate μ λ_max at {:.2e}/{unit}, beyond the stiffness threshold {stiff:.2e}/{unit} ({STIFF_RATIO}·ρ), so {keep} and {longer}",
+        let beyond_threshold = format!(
+            "{rule} = {wanted:.3e} would put the adaptation rate μ λ_max at {:.2e}/{unit}, beyond the stiffness threshold {stiff:.2e}/{unit} ({STIFF_RATIO}·ρ)",
             wanted * lambda_max,
+        );
+        if beyond {
+            // A μ already past the threshold is not "too small", nor told to come down to it: that
+            // slows the direction further (the quadruple tank at μ = 0.1, told to lower it to the
+            // threshold's 7.3e-6, ended 9× worse).
+            // Raising it is offered where that is a step, not a leap (2.5e12 on a magnetic bearing).
+            let raise = if wanted <= 10.0 * mu {
+                format!(
+                    " (or raise it toward {} where max|u_f| allows: the automatic integrator takes a stiff law)",
+                    fmt_short(round_up_2(wanted))
+                )
+            } else {
+                String::new()
+            };
+            return format!(
+                "the horizon is too short even at {key} = {mu_text}, beyond the stiffness threshold: {decays}; {beyond_threshold}, and at the threshold ({}) it would need {:.1e} {unit}; so keep {key}{raise}: {}",
+                fmt_short(crate::settings::round_down_2(fastest)),
+                at(fastest),
+                longer(at(mu), "at this μ"),
+            );
+        }
+        format!(
+            "{key} = {mu_text} is too small for the horizon: {decays}; {beyond_threshold}, so keep {key} at most {} and {}",
+            fmt_short(crate::settings::round_down_2(fastest)),
+            longer(at(fastest), "even then"),
         )
     } else {
         format!(
@@ -1027,7 +1046,8 @@ mod tests {
         let unit = TimeUnit::default();
         let beyond = horizon_advice("design.mu[0]", 6.46e8, (1.2e-11, 2.25), (0.5, 1.45e6), unit);
         assert!(beyond.starts_with("the horizon is too short even at design.mu[0] = 6.46e8, beyond"), "{beyond}");
-        assert!(beyond.contains("so lower design.mu[0] to 640000 and even then it needs 2.0e6 s"), "{beyond}");
+        // Not told to come down to the threshold, where the horizon is 1000× longer still.
+        assert!(beyond.ends_with("and at the threshold (640000) it would need 2.0e6 s; so keep design.mu[0]: at this μ it needs 2.0e3 s, past 1000× t_end: excite that direction more (a larger amplitude at its frequency, filter poles near it) or accept its error"), "{beyond}");
         let below = horizon_advice("design.mu[0]", 1e3, (1.2e-11, 2.25), (0.5, 1.45e6), unit);
         assert!(below.starts_with("design.mu[0] = 1000 is too small for the horizon"), "{below}");
         assert!(below.contains("so keep design.mu[0] at most 640000 and even then it needs 2.0e6 s"), "{below}");

@@ -48,6 +48,9 @@ pub const DEPARTED_UF: f64 = 2.0;
 pub const FOLLOWS_Y: f64 = 0.1;
 /// See [`FOLLOWS_Y`].
 pub const FOLLOWS_UF: f64 = 1.2;
+/// A channel's continuous peaks (of y, of u_f) below this share of the largest channel's are
+/// measured against that share instead ([`departures`]).
+pub const QUIET: f64 = 1e-3;
 /// How many times the comparison halves a departing sample time to find one that agrees…
 pub const HALVINGS: u32 = 6;
 /// …taking at most this many controller steps in one run.
@@ -85,19 +88,36 @@ pub fn against_continuous(
     result: &SimResult,
 ) -> Option<(SimResult, Vec<ChannelDeparture>)> {
     let RunStats::Sampled { .. } = result.stats else { return None };
+    let continuous = continuous_loop(s, design).ok()?;
+    let channels = departures(result, &continuous)?;
+    Some((continuous, channels))
+}
+
+/// Why a sampled run was not compared with its continuous loop.
+enum Skipped {
+    /// Measurement noise, which the two loops read differently.
+    Noise,
+    /// The continuous loop did not complete: past its steps, or diverged.
+    Ended(Outcome),
+}
+
+/// The continuous loop of scenario `s` at its settings without the sample time, within
+/// [`COMPARISON_STEPS`] steps.
+fn continuous_loop(s: &crate::Scenario, design: &Design) -> Result<SimResult, Skipped> {
     if s.noise.is_some() {
-        return None;
+        return Err(Skipped::Noise);
     }
     let sim = &s.simulation;
     let integrator =
         Integrator { method: sim.method, max_steps: Some(COMPARISON_STEPS), ..Integrator::new(sim.rtol, sim.atol) };
     let settings = RunSettings { mode: Loop::Continuous(integrator), ..RunSettings::of(s) };
-    let continuous = Run::of(s, design).settings(settings).simulate(|_| ControlFlow::Continue(())).ok()?;
-    if !matches!(continuous.outcome, None | Some(Outcome::Completed)) {
-        return None;
+    let run = Run::of(s, design).settings(settings).simulate(|_| ControlFlow::Continue(()));
+    let ended = |o: Outcome| Err(Skipped::Ended(o));
+    match run {
+        Ok(r) if matches!(r.outcome, None | Some(Outcome::Completed)) => Ok(r),
+        Ok(r) => ended(r.outcome.unwrap_or(Outcome::Completed)),
+        Err(_) => ended(Outcome::TooManySteps { t: 0.0, max_steps: COMPARISON_STEPS }),
     }
-    let channels = departures(result, &continuous)?;
-    Some((continuous, channels))
 }
 
 /// Each channel's departure of `sampled` from `continuous` over their common rows (`None` when
@@ -109,13 +129,20 @@ pub fn departures(sampled: &SimResult, continuous: &SimResult) -> Option<Vec<Cha
         return None;
     }
     let m = sampled.m;
+    let y_peaks: Vec<f64> =
+        (0..m).map(|i| continuous.column(&continuous.y, m, i).fold(0.0f64, |a, v| a.max(v.abs()))).collect();
+    let uf_peaks: Vec<f64> = (0..m).map(|i| continuous.max_uf(i)).collect();
+    // A channel the continuous loop holds near zero (no signal of its own: the paper's y2 at
+    // 7.9e-14 with g = [1, 0]) is measured against a thousandth of the largest channel's peak, not
+    // its round-off.
+    let floor = |peaks: &[f64]| QUIET * peaks.iter().copied().fold(0.0, f64::max);
+    let (y_floor, uf_floor) = (floor(&y_peaks), floor(&uf_peaks));
     let channel = |i: usize| {
         let (ys, yc) = (sampled.column(&sampled.y, m, i).take(rows), continuous.column(&continuous.y, m, i));
-        let peak = continuous.column(&continuous.y, m, i).fold(0.0f64, |a, v| a.max(v.abs()));
         let gap = ys.zip(yc).fold(0.0f64, |a, (s, c)| if (s - c).abs() > a { (s - c).abs() } else { a });
         // A y that is zero in both (no signals, x(0) = 0) has not departed.
-        let y = if gap == 0.0 { 0.0 } else { gap / peak };
-        ChannelDeparture { y, uf: (sampled.max_uf(i), continuous.max_uf(i)) }
+        let y = if gap == 0.0 { 0.0 } else { gap / y_peaks[i].max(y_floor) };
+        ChannelDeparture { y, uf: (sampled.max_uf(i), uf_peaks[i].max(uf_floor)) }
     };
     Some((0..m).map(channel).collect())
 }
@@ -150,10 +177,27 @@ pub fn sampled_advice(s: &crate::Scenario, design: &Design, result: &SimResult) 
     if matches!(result.outcome, Some(Outcome::Interrupted { .. } | Outcome::TooManySteps { .. })) {
         return Vec::new();
     }
-    let Some((continuous, channels)) = against_continuous(s, design, result) else {
-        return sampled_transient(result);
+    let continuous = match continuous_loop(s, design) {
+        Ok(c) => c,
+        Err(Skipped::Ended(Outcome::TooManySteps { t, .. })) => {
+            let mut lines = vec![format!(
+                "this sampled-data run was not compared with its continuous loop (the same scenario without its sample time), which needed more than {COMPARISON_STEPS} steps by t = {} {}: run that to compare",
+                fmt_instant(t),
+                result.time_unit
+            )];
+            lines.extend(sampled_transient(result));
+            return lines;
+        }
+        Err(_) => return sampled_transient(result),
     };
+    let Some(channels) = departures(result, &continuous) else { return sampled_transient(result) };
     let (unit, coarse) = (result.time_unit, coarse(s, design, sample_time));
+    // On a [truth] both loops run the true plant: said, beside the advice that is for the model.
+    let loop_of = if super::truth_differences(s).is_empty() {
+        "the same scenario without its sample time"
+    } else {
+        "the same scenario and true plant without its sample time"
+    };
     let at = format!("T_s = {} {unit}", fmt_short(sample_time));
     let uf_text = |i: usize, c: &ChannelDeparture| {
         format!("max|u_f[{}]| {} against {} ({}×)", i + 1, fmt_4(c.uf.0), fmt_4(c.uf.1), fmt_ratio(c.uf.0 / c.uf.1))
@@ -162,7 +206,7 @@ pub fn sampled_advice(s: &crate::Scenario, design: &Design, result: &SimResult) 
         Some(Outcome::Diverged { t, .. }) => {
             let peaks: Vec<String> = (0..result.m).map(|i| fmt_4(continuous.max_uf(i))).collect();
             format!(
-                "the sampled-data loop at {at} diverged at t = {} {unit}, where its continuous loop (the same scenario without its sample time) completes with max|u_f| = {}",
+                "the sampled-data loop at {at} diverged at t = {} {unit}, where its continuous loop ({loop_of}) completes with max|u_f| = {}",
                 fmt_instant(*t),
                 peaks.join(", ")
             )
@@ -172,7 +216,7 @@ pub fn sampled_advice(s: &crate::Scenario, design: &Design, result: &SimResult) 
                 .map(|(i, c)| format!("y[{}] by {} of its continuous peak, {}", i + 1, percent(c.y), uf_text(i, c)))
                 .collect();
             format!(
-                "the sampled-data loop at {at} departs from its continuous loop (the same scenario without its sample time): {}",
+                "the sampled-data loop at {at} departs from its continuous loop ({loop_of}): {}",
                 departed.join("; ")
             )
         }
