@@ -169,7 +169,7 @@ fn agreeing_sample_time(
 
 /// The advice on a sampled-data run of scenario `s`: where it departs from its continuous loop
 /// ([`against_continuous`]) or diverged where that completes, by how much and the halved sample
-/// time that agrees, if one does ([`agreeing_sample_time`]); where T_s·ρ is beyond
+/// time that agrees, if one does (T_s/2 … T_s/64, within [`HALVING_STEPS`]); where T_s·ρ is beyond
 /// [`COARSE_SAMPLE`] (warned before the run) but the run follows its continuous loop, that it
 /// does. Without a comparison, the heuristic [`sampled_transient`].
 pub fn sampled_advice(s: &crate::Scenario, design: &Design, result: &SimResult) -> Vec<String> {
