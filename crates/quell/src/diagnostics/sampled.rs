@@ -53,7 +53,7 @@ pub const FOLLOWS_UF: f64 = 1.2;
 pub const QUIET: f64 = 1e-3;
 /// How many times the comparison halves a departing sample time to find one that agrees…
 pub const HALVINGS: u32 = 6;
-/// …taking at most this many controller steps in one run.
+/// …taking at most this many controller steps in all its runs.
 pub const HALVING_STEPS: f64 = 2e6;
 
 /// One channel of a sampled-data run against the continuous loop, over their common rows.
@@ -147,7 +147,7 @@ pub fn departures(sampled: &SimResult, continuous: &SimResult) -> Option<Vec<Cha
     Some((0..m).map(channel).collect())
 }
 
-/// The longest of T_s/2, T_s/4, … ([`HALVINGS`] at most, each within [`HALVING_STEPS`]) whose
+/// The longest of T_s/2, T_s/4, … ([`HALVINGS`] at most, within [`HALVING_STEPS`] in all) whose
 /// completed run agrees with `continuous` on every channel, with its departures.
 fn agreeing_sample_time(
     s: &crate::Scenario,
@@ -156,7 +156,9 @@ fn agreeing_sample_time(
     continuous: &SimResult,
 ) -> Option<(f64, Vec<ChannelDeparture>)> {
     let t_end = s.simulation.t_end;
-    (1..=HALVINGS).map(|k| sample_time / f64::from(1u32 << k)).take_while(|T| t_end / T <= HALVING_STEPS).find_map(
+    // The halvings' steps add up: T_s/2 … T_s/2^k take t_end/T_s·(2^(k+1) − 2) in all.
+    let total = |k: u32| t_end / sample_time * f64::from((1u32 << (k + 1)) - 2);
+    (1..=HALVINGS).take_while(|&k| total(k) <= HALVING_STEPS).map(|k| sample_time / f64::from(1u32 << k)).find_map(
         |T| {
             let settings = RunSettings { mode: Loop::Sampled { sample_time: T }, ..RunSettings::of(s) };
             let r = Run::of(s, design).settings(settings).simulate(|_| ControlFlow::Continue(())).ok()?;
