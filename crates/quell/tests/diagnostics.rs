@@ -801,6 +801,16 @@ fn a_sampled_run_is_compared_with_its_continuous_loop() {
     let (none, finer) = run(&s, &d, Some(agrees));
     let (gap, sampled_uf, continuous_uf) = gap_and_peaks(&finer, &continuous);
     assert!(gap <= 0.5 && sampled_uf <= 2.0 * continuous_uf && none.is_empty(), "{gap} {sampled_uf} {none:?}");
+    // At 1 ms (T_s·ρ = 0.30) it diverges: the run's advice is the comparison's, without the
+    // coarse-sample line that asks for that comparison (which `diagnose` alone still gives).
+    let mut at_1ms = s.clone();
+    at_1ms.simulation.sample_time = Some(1.0);
+    let diverged = Run::of(&at_1ms, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
+    let whole = quell::diagnostics::diagnose_run(&at_1ms, &d, &diverged).advice;
+    assert!(whole.iter().any(|a| a.starts_with("the sampled-data loop at T_s = 1 ms diverged at t = ")), "{whole:?}");
+    assert!(whole.iter().all(|a| !a.contains("is coarse for this design")), "{whole:?}");
+    let alone = diagnose(&d, &at_1ms.reference, &at_1ms.disturbance, &diverged).advice;
+    assert!(alone.iter().any(|a| a.contains("is coarse for this design")), "{alone:?}");
     let heuristic = quell::diagnostics::sampled_transient(&coarse);
     assert!(
         heuristic.len() == 1

@@ -132,7 +132,12 @@ pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) ->
     }
     d.advice.extend(loose_atol(s, result));
     d.advice.extend(uf_cancellation(result));
-    d.advice.extend(sampled_advice(s, design, result));
+    let (sampled, compared) = sampled::sampled_lines(s, design, result);
+    // The comparison settles what the coarse-sample line asks for.
+    if compared {
+        d.advice.retain(|a| !a.contains(COARSE_WORDS));
+    }
+    d.advice.extend(sampled);
     d
 }
 
@@ -370,12 +375,15 @@ pub(crate) fn unit_mismatch(avg: &Averaged, [reference, disturbance]: [&Signal; 
 
 /// A sampled-data run that missed its tail bound at a sample time coarse for the design (T_s·ρ >
 /// [`crate::sim::COARSE_SAMPLE`]), with the sample times that are not; `None` otherwise.
+/// The words by which the coarse-sample line ([`coarse_advice`]) is known.
+const COARSE_WORDS: &str = "is coarse for this design";
+
 fn coarse_advice(design: &Design, result: &SimResult, rho: f64, missed: bool) -> Option<String> {
     let crate::sim::RunStats::Sampled { sample_time, .. } = result.stats else { return None };
     let output_step = (result.t.len() > 1).then(|| result.t[1] - result.t[0]).filter(|h| *h > 0.0);
     (missed && crate::sim::is_coarse(sample_time * rho)).then(|| {
         format!(
-            "the sampled-data loop at T_s = {} {} is coarse for this design (T_s·ρ = {} > {}): its errors are the sampling's as much as the adaptation's; compare with the continuous loop, and choose {}, or slower poles, before tuning μ, t_end or the observer",
+            "the sampled-data loop at T_s = {} {} {COARSE_WORDS} (T_s·ρ = {} > {}): its errors are the sampling's as much as the adaptation's; compare with the continuous loop, and choose {}, or slower poles, before tuning μ, t_end or the observer",
             fmt_short(sample_time),
             design.plant().time_unit,
             crate::settings::fmt_above(sample_time * rho, crate::sim::COARSE_SAMPLE),

@@ -175,9 +175,14 @@ fn agreeing_sample_time(
 /// [`COARSE_SAMPLE`] (warned before the run) but the run follows its continuous loop, that it
 /// does. Without a comparison, the heuristic [`sampled_transient`].
 pub fn sampled_advice(s: &crate::Scenario, design: &Design, result: &SimResult) -> Vec<String> {
-    let RunStats::Sampled { sample_time, .. } = result.stats else { return Vec::new() };
+    sampled_lines(s, design, result).0
+}
+
+/// [`sampled_advice`], and whether the run was compared with its continuous loop.
+pub(crate) fn sampled_lines(s: &crate::Scenario, design: &Design, result: &SimResult) -> (Vec<String>, bool) {
+    let RunStats::Sampled { sample_time, .. } = result.stats else { return (Vec::new(), false) };
     if matches!(result.outcome, Some(Outcome::Interrupted { .. } | Outcome::TooManySteps { .. })) {
-        return Vec::new();
+        return (Vec::new(), false);
     }
     let continuous = match continuous_loop(s, design) {
         Ok(c) => c,
@@ -188,11 +193,11 @@ pub fn sampled_advice(s: &crate::Scenario, design: &Design, result: &SimResult) 
                 result.time_unit
             )];
             lines.extend(sampled_transient(result));
-            return lines;
+            return (lines, false);
         }
-        Err(_) => return sampled_transient(result),
+        Err(_) => return (sampled_transient(result), false),
     };
-    let Some(channels) = departures(result, &continuous) else { return sampled_transient(result) };
+    let Some(channels) = departures(result, &continuous) else { return (sampled_transient(result), false) };
     let (unit, coarse) = (result.time_unit, coarse(s, design, sample_time));
     // On a [truth] both loops run the true plant: said, beside the advice that is for the model.
     let loop_of = if super::truth_differences(s).is_empty() {
@@ -225,13 +230,13 @@ pub fn sampled_advice(s: &crate::Scenario, design: &Design, result: &SimResult) 
         _ if coarse && channels.iter().all(ChannelDeparture::follows) => {
             let worst = channels.iter().map(|c| c.y).fold(0.0, f64::max);
             let ratio = channels.iter().map(|c| c.uf.0 / c.uf.1).fold(0.0, f64::max);
-            return vec![format!(
+            return (vec![format!(
                 "T_s·ρ is beyond {COARSE_SAMPLE} (the warning before the run), yet this run at {at} follows its continuous loop: y within {} of its peak, u_f's peaks at most {}× the continuous ones",
                 percent(worst),
                 fmt_ratio(ratio)
-            )];
+            )], true);
         }
-        _ => return Vec::new(),
+        _ => return (Vec::new(), true),
     };
     let within = if coarse { "" } else { ", even within T_s·ρ ≤ 0.2" };
     let design_for =
@@ -247,7 +252,7 @@ pub fn sampled_advice(s: &crate::Scenario, design: &Design, result: &SimResult) 
             "halving T_s up to {HALVINGS} times did not bring the two together (or took more than {HALVING_STEPS:.0e} controller steps): let the automatic design choose poles for the sample time (give the scenario simulation.sample_time)"
         ),
     };
-    vec![format!("{what}; the sampling makes it{within}: {remedy}")]
+    (vec![format!("{what}; the sampling makes it{within}: {remedy}")], true)
 }
 
 /// T_s·ρ beyond [`COARSE_SAMPLE`] for the run's true plant and signals.
