@@ -4,6 +4,23 @@
 //! Exit codes: 0 success, 1 a run that failed (diverged, solver failure, interrupted),
 //! 2 bad input or an infeasible design.
 
+/// `eprint!` and `eprintln!` that drop what a closed or full stderr cannot take: std's panic there
+/// (`quell run … 2>&1 | head -1` exited 101 and wrote no output directory). Defined before the
+/// modules, so they are the ones every module's `eprint!` names.
+macro_rules! eprint {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = write!(std::io::stderr(), $($arg)*);
+    }};
+}
+/// See [`eprint!`].
+macro_rules! eprintln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
 mod auto;
 mod decimal;
 mod export;

@@ -469,3 +469,32 @@ fn a_merge_of_what_is_not_a_sweeps_directory_says_what_to_give() {
         );
     }
 }
+
+/// A closed stderr (`quell run … 2>&1 | head -1`, or a parent that closes the pipe) is no reason to
+/// fail: std's `eprintln!` panicked there (exit 101, no output directory). Every command here
+/// prints to stderr before and after its work: a run, a study and an export.
+#[test]
+fn a_closed_stderr_loses_the_messages_not_the_work() {
+    let tmp = TempDir::new().unwrap();
+    let dir = tmp.path();
+    let sweep = study(dir, "grid.toml", "[grid]\n\"design.beta\" = [1.0, 2.0]\n");
+    let out = |name: &str| dir.join(name).display().to_string();
+    let (run, swept, exported, paper) = (out("run"), out("swept"), out("exported"), paper());
+    let cases: [(Vec<&str>, &str, &str); 3] = [
+        (vec!["run", &paper, "--no-plots", "--out", &run], &run, "signals.csv"),
+        (vec!["sweep", &sweep, "--no-plots", "--out", &swept], &swept, "runs.csv"),
+        (vec!["export", &paper, "--sample-time", "0.01", "--out", &exported], &exported, "quell_controller.c"),
+    ];
+    for (args, out, file) in cases {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_quell"))
+            .args(&args)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stderr.take());
+        let status = child.wait().unwrap();
+        assert_eq!(status.code(), Some(0), "{args:?}");
+        assert!(Path::new(out).join(file).is_file(), "{args:?}: {:?}", names(Path::new(out)));
+    }
+}
