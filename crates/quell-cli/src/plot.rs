@@ -933,20 +933,42 @@ fn draw_quantile_bands<DB: DrawingBackend>(
     half_width: f64,
 ) -> Result<usize, String> {
     for (a, b, alpha) in [(Q[0], Q[4], 0.15), (Q[1], Q[3], 0.3)] {
-        let (low, high) = (at(a), at(b));
         let style = color.mix(alpha).filled();
-        if low.len() >= 2 && low.len() == high.len() {
-            let ring: Vec<(f64, f64)> = low.iter().copied().chain(high.iter().rev().copied()).collect();
-            chart.draw_series(std::iter::once(Polygon::new(ring, style))).map_err(|e| e.to_string())?;
-        } else if let ([(x, lo)], [(_, hi)]) = (low.as_slice(), high.as_slice()) {
-            let bar = Rectangle::new([(x - half_width, *lo), (x + half_width, *hi)], style);
-            chart.draw_series(std::iter::once(bar)).map_err(|e| e.to_string())?;
+        for span in band_spans(&at(a), &at(b)) {
+            if let [(x, lo, hi)] = span[..] {
+                let bar = Rectangle::new([(x - half_width, lo), (x + half_width, hi)], style);
+                chart.draw_series(std::iter::once(bar)).map_err(|e| e.to_string())?;
+            } else {
+                let ring = span.iter().map(|&(x, lo, _)| (x, lo)).chain(span.iter().rev().map(|&(x, _, hi)| (x, hi)));
+                chart
+                    .draw_series(std::iter::once(Polygon::new(ring.collect::<Vec<_>>(), style)))
+                    .map_err(|e| e.to_string())?;
+            }
         }
     }
     let median = at(0.5);
     chart.draw_series(LineSeries::new(median.iter().copied(), color.stroke_width(2))).map_err(|e| e.to_string())?;
     chart.draw_series(median.iter().map(|&p| Circle::new(p, 3, color.filled()))).map_err(|e| e.to_string())?;
     Ok(median.len())
+}
+
+/// The runs of consecutive points (x, low, high) that have both quantiles: a band is drawn over
+/// each, so that a point without its upper quantile (a settling time that 5 % of the draws never
+/// reached) breaks the band there instead of removing it from every point.
+fn band_spans(low: &[(f64, f64)], high: &[(f64, f64)]) -> Vec<Vec<(f64, f64, f64)>> {
+    let mut xs: Vec<f64> = low.iter().chain(high).map(|p| p.0).collect();
+    xs.sort_by(f64::total_cmp);
+    xs.dedup();
+    let value = |v: &[(f64, f64)], x: f64| v.iter().find(|p| p.0 == x).map(|p| p.1);
+    let mut spans = vec![Vec::new()];
+    for x in xs {
+        match (value(low, x), value(high, x)) {
+            (Some(lo), Some(hi)) => spans.last_mut().expect("one span at least").push((x, lo, hi)),
+            _ => spans.push(Vec::new()),
+        }
+    }
+    spans.retain(|s| !s.is_empty());
+    spans
 }
 
 /// Writes `lines` at the top left of a panel spanning `xs` × `ys` (the bottom left where a point
@@ -1328,6 +1350,21 @@ pub fn plot_tune(dir: &Path, r: &quell::study::TuneResult, unit: TimeUnit, outpu
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A point without its upper quantile breaks the band there; the points with both keep theirs
+    /// (the active-suspension study's settling-time band had vanished at every point because one
+    /// point's 95 % quantile was "never settled").
+    #[test]
+    fn a_band_breaks_where_a_point_lacks_a_quantile() {
+        let low = [(0.0, 1.0), (4.0, 2.0), (7.0, 3.0)];
+        let full = [(0.0, 5.0), (4.0, 6.0), (7.0, 7.0)];
+        assert_eq!(band_spans(&low, &full), vec![vec![(0.0, 1.0, 5.0), (4.0, 2.0, 6.0), (7.0, 3.0, 7.0)]]);
+        let upper = [(0.0, 5.0), (4.0, 6.0)];
+        assert_eq!(band_spans(&low, &upper), vec![vec![(0.0, 1.0, 5.0), (4.0, 2.0, 6.0)]]);
+        let middle = [(0.0, 5.0), (7.0, 7.0)];
+        assert_eq!(band_spans(&low, &middle), vec![vec![(0.0, 1.0, 5.0)], vec![(7.0, 3.0, 7.0)]]);
+        assert!(band_spans(&[], &[]).is_empty());
+    }
     use plotters::prelude::SeriesLabelPosition;
 
     #[test]
