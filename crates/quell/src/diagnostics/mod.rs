@@ -11,6 +11,7 @@
 pub use crate::averaged;
 pub mod effort;
 pub mod estimate;
+pub mod noise;
 pub mod sampled;
 
 use crate::sim::dde::THRASHING;
@@ -128,6 +129,9 @@ pub struct Diagnostics {
 pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) -> Diagnostics {
     let mut d = diagnose(design, &s.reference, &s.disturbance, result);
     if let Some(line) = model_error_advice(s, result) {
+        d.advice.insert(0, line);
+    }
+    if let Some(line) = noise::noise_advice(s, design, result) {
         d.advice.insert(0, line);
     }
     d.advice.extend(loose_atol(s, result));

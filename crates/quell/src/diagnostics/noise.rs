@@ -1,0 +1,55 @@
+//! A run under measurement noise against the same scenario without it: whose tail is it?
+//!
+//! Under `[noise]` a tail that misses its bound may be the noise's alone, which no advice on the
+//! design (the observer's poles, μ, t_end) reduces: an active suspension read with 0.5 mm of
+//! band-limited noise ended at 0.95 mm, was told to move its observer poles to the zeros of
+//! (A, D, C), and following that made its noise-free tail 2,400× larger and its force 40 % higher.
+//! So such a run is run again without the noise ([`noise_advice`]).
+
+use std::ops::ControlFlow;
+
+use super::{tail_within_bound, TAIL_BOUND};
+use crate::design::Design;
+use crate::sim::{Integrator, Loop, Outcome, Run, RunSettings, SimResult};
+
+/// For a completed run of scenario `s` under `[noise]` whose tail misses its bound on some channel
+/// ([`TAIL_BOUND`] of its scale), the same run without the noise (a continuous loop within
+/// [`super::sampled::COMPARISON_STEPS`] steps); the channels whose tail is within the bound there
+/// are named, with both tails, as the noise's. `None` otherwise.
+pub fn noise_advice(s: &crate::Scenario, design: &Design, result: &SimResult) -> Option<String> {
+    s.noise.as_ref()?;
+    if !matches!(result.outcome, None | Some(Outcome::Completed)) {
+        return None;
+    }
+    let missed: Vec<usize> = (0..result.m).filter(|&i| !tail_within_bound(result, i)).collect();
+    if missed.is_empty() {
+        return None;
+    }
+    let quiet = crate::Scenario { noise: None, ..s.clone() };
+    let mut settings = RunSettings::of(&quiet);
+    if let Loop::Continuous(integrator) = &mut settings.mode {
+        *integrator = Integrator { max_steps: Some(super::sampled::COMPARISON_STEPS), ..*integrator };
+    }
+    let clean = Run::of(&quiet, design).settings(settings).simulate(|_| ControlFlow::Continue(())).ok()?;
+    if !matches!(clean.outcome, None | Some(Outcome::Completed)) {
+        return None;
+    }
+    let tail = |r: &SimResult, i: usize| {
+        let (from, to) = (r.tail_from().unwrap_or(0.0), r.t.last().copied().unwrap_or(0.0));
+        r.max_abs_error(i, from, to).unwrap_or(f64::NAN)
+    };
+    let noisy: Vec<String> = missed
+        .iter()
+        .filter(|&&i| tail_within_bound(&clean, i))
+        .map(|&i| {
+            format!("channel {}'s tail max|e| = {:.2e} ({:.2e} without it)", i + 1, tail(result, i), tail(&clean, i))
+        })
+        .collect();
+    (!noisy.is_empty()).then(|| {
+        format!(
+            "the tail is the measurement noise's: {}, within its bound ({:.0} % of the channel's scale) without [noise]; advice on the design's poles, μ and t_end is for the noise-free loop and does not reduce it (the noise's level and bandwidth, and how much of it the observer and the adaptive law pass, do)",
+            noisy.join("; "),
+            100.0 * TAIL_BOUND
+        )
+    })
+}
