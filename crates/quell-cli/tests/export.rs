@@ -154,6 +154,11 @@ fn a_sample_time_beyond_t_end_still_exports() {
     let o = quell(&["run", scenario.to_str().unwrap(), "--sample-time", "1", "--out", &out]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("the run would end before the controller's first step"), "{}", stderr(&o));
+    // The same sample time from the file exports too (only the flag's had been taken).
+    let text = std::fs::read_to_string(&scenario).unwrap().replace("[simulation]", "[simulation]\nsample_time = 1.0");
+    std::fs::write(&scenario, text).unwrap();
+    let o = quell(&["export", scenario.to_str().unwrap(), "--out", &out]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }
 
 #[test]

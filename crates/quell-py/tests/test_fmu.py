@@ -309,7 +309,7 @@ def test_fmi3_calls_one_by_one(tmp_path):
     fmu.reset()
     with pytest.raises(FMICallException, match="status 3"):
         fmu.enterInitializationMode(startTime=1e17)
-    assert logged[-1].startswith("fmi3EnterInitializationMode: startTime = 1e+17 s: doubles there are 22.2045 s apart"), logged[-1]
+    assert logged[-1].startswith("fmi3EnterInitializationMode: startTime = 1e+17 s: doubles there are 16 s apart"), logged[-1]
     fmu.enterInitializationMode(startTime=0.0, stopTime=1.0)
     fmu.exitInitializationMode()
     fmu.doStep(0.0, 1.0)

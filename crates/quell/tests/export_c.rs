@@ -213,7 +213,7 @@ int main(void)
     EXPECT(fmi2SetupExperiment(c, 0, 0, nan, 0, 0), fmi2Error, "fmi2SetupExperiment: startTime = nan; the start time must be finite");
     EXPECT(fmi2ExitInitializationMode(c), fmi2Error, "fmi2ExitInitializationMode: not allowed when the FMU is instantiated (after Instantiate or Reset); only when it is in initialization mode");
     /* At 1e17 doubles are 16 s apart: every sample's time was 1e17 and the steps went on. */
-    EXPECT(fmi2SetupExperiment(c, 0, 0, 1e17, 0, 0), fmi2Error, "fmi2SetupExperiment: startTime = 1e+17 s: doubles there are 22.2045 s apart, more than a thousandth of T_s = 0.05 s, so the samples' times would blur; start within 2.2518e+11 s of 0 (0 is usual)");
+    EXPECT(fmi2SetupExperiment(c, 0, 0, 1e17, 0, 0), fmi2Error, "fmi2SetupExperiment: startTime = 1e+17 s: doubles there are 16 s apart, more than a thousandth of T_s = 0.05 s, so the samples' times would blur; start below 2.74878e+11 s in magnitude (0 is usual)");
     EXPECT(fmi2SetupExperiment(c, 0, 0, 2e11, 0, 0), fmi2OK, "");
     EXPECT(fmi2SetupExperiment(c, 0, 0, 2, fmi2True, 1), fmi2Error, "fmi2SetupExperiment: stopTime = 1 s is before startTime = 2 s");
     EXPECT(fmi2SetupExperiment(c, 0, 0, 2, fmi2True, 2.15), fmi2OK, "");
@@ -239,6 +239,18 @@ int main(void)
     EXPECT(fmi2EnterInitializationMode(c), fmi2OK, "");
     EXPECT(fmi2ExitInitializationMode(c), fmi2OK, "");
     EXPECT(fmi2DoStep(c, 0, 0.05, fmi2True), fmi2OK, "");
+    fmi2FreeInstance(c);
+    /* At a start of 1e11 s a relative tolerance of 1e-9 was 100 s: a step 1 s off its sample and
+     * one past the stop time were taken. */
+    c = fmi2Instantiate("c", fmi2CoSimulation, GUID, "", &cb, fmi2False, fmi2False);
+    if (!c)
+        return 2;
+    EXPECT(fmi2SetupExperiment(c, 0, 0, 1e11, fmi2True, 1e11 + 0.1), fmi2OK, "");
+    EXPECT(fmi2EnterInitializationMode(c), fmi2OK, "");
+    EXPECT(fmi2ExitInitializationMode(c), fmi2OK, "");
+    EXPECT(fmi2DoStep(c, 1e11 + 1, 0.05, fmi2True), fmi2Error, "fmi2DoStep: at t = 100000000001 s, but the controller's next sample is at 100000000000 s");
+    EXPECT(fmi2DoStep(c, 1e11, 0.1, fmi2True), fmi2OK, "");
+    EXPECT(fmi2DoStep(c, 1e11 + 0.1, 0.05, fmi2True), fmi2Error, "fmi2DoStep: the step to t + h = 100000000000.15 s passes stopTime = 100000000000.1 s");
     fmi2FreeInstance(c);
     return fails;
 }
