@@ -130,10 +130,12 @@ pub(crate) fn stiff_advice(
         format!("lower design.mu[{i}] to about {}{scaling_hint}", fmt(crate::settings::round_down_2(fastest)))
     } else {
         let needed = crate::settings::round_up_2(wanted);
-        let keep = if needed < mu {
+        let keep = if needed < 0.999 * mu {
             format!("lower design.mu[{i}] at most to about {} where max|u_f| allows", fmt(needed))
+        } else if needed > 1.001 * mu && needed <= super::RAISE_AT_MOST * mu {
+            format!("raise design.mu[{i}] toward {} where max|u_f| allows (or keep it)", fmt(needed))
         } else {
-            format!("keep design.mu[{i}], or raise it toward {}, where max|u_f| allows", fmt(needed))
+            format!("keep design.mu[{i}] where max|u_f| allows")
         };
         format!(
             "lowered to the stiffness threshold (μ λ_max = {STIFF_RATIO:.0}ρ), about {}, its slowest relevant direction would not converge by t_end (that needs μ ≥ {}: Ω̄'s eigenvalues spread {}-fold), so {keep}{scaling_hint}",

@@ -128,10 +128,24 @@ pub struct Diagnostics {
 /// [`model_error_advice`] when the run ended early on a true plant that differs from the model.
 pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) -> Diagnostics {
     let mut d = diagnose(design, &s.reference, &s.disturbance, result);
-    if let Some(line) = model_error_advice(s, result) {
-        d.advice.insert(0, line);
+    // A tail that is the noise's: those channels' advice on the design is the noise-free run's
+    // (an observer line that only the noise had brought on made a suspension worse when followed).
+    let noise = noise::noise_tail(s, design, result);
+    // Where the noise's are all the missed tails, the shared advice and the mismatch's are judged on
+    // the noise-free run too.
+    let mut judged = result;
+    if let Some(n) = &noise {
+        let clean = diagnose(design, &s.reference, &s.disturbance, &n.clean);
+        if (0..result.m).filter(|&i| !tail_within_bound(result, i)).count() == n.channels.len() {
+            d.advice = clean.advice;
+            judged = &n.clean;
+        }
+        for (i, line) in &n.channels {
+            d.channels[*i].advice.clone_from(&clean.channels[*i].advice);
+            d.channels[*i].advice.insert(0, line.clone());
+        }
     }
-    if let Some(line) = noise::noise_advice(s, design, result) {
+    if let Some(line) = model_error_advice(s, judged) {
         d.advice.insert(0, line);
     }
     d.advice.extend(loose_atol(s, result));
@@ -773,6 +787,9 @@ fn tail_within_bound(result: &SimResult, i: usize) -> bool {
     result.max_abs_error(i, from, t1).is_some_and(|e| e <= TAIL_BOUND * scale(result, i))
 }
 
+/// The most, in multiples of the present μ, that advice raises a μ already beyond the stiffness
+/// threshold toward the one its slowest relevant direction needs.
+pub(crate) const RAISE_AT_MOST: f64 = 100.0;
 /// A direction of Ω̄ at rate μ λ has converged by t_end when μ λ t_end ≥ this many e-folds.
 const CONVERGED_EFOLDS: f64 = 5.0;
 /// How much later than the averaged law predicts a weakly excited direction converges in the run:
@@ -889,20 +906,22 @@ fn horizon_advice(
             // slows the direction further (the quadruple tank at μ = 0.1, told to lower it to the
             // threshold's 7.3e-6, ended 9× worse).
             // Raising it is offered where that is a step, not a leap (2.5e12 on a magnetic bearing).
-            let raise = if wanted <= 10.0 * mu {
+            let head = format!(
+                "the horizon is too short even at {key} = {mu_text}, beyond the stiffness threshold: {decays}; {beyond_threshold}, and at the threshold ({}) it would need {:.1e} {unit}",
+                fmt_short(crate::settings::round_down_2(fastest)),
+                at(fastest),
+            );
+            let keep = longer(at(mu), "at this μ");
+            // Raising it is offered, first, where that is a step (the quadruple tank at μ = 0.1:
+            // 1.3 met both bounds, the longer run did not), not a leap (2.5e12 on a bearing).
+            return if wanted <= RAISE_AT_MOST * mu {
                 format!(
-                    " (or raise it toward {} where max|u_f| allows: the automatic integrator takes a stiff law)",
+                    "{head}; so raise {key} toward {} where max|u_f| allows (the automatic integrator takes a stiff law), or keep it: {keep}",
                     fmt_short(round_up_2(wanted))
                 )
             } else {
-                String::new()
+                format!("{head}; so keep {key}: {keep}")
             };
-            return format!(
-                "the horizon is too short even at {key} = {mu_text}, beyond the stiffness threshold: {decays}; {beyond_threshold}, and at the threshold ({}) it would need {:.1e} {unit}; so keep {key}{raise}: {}",
-                fmt_short(crate::settings::round_down_2(fastest)),
-                at(fastest),
-                longer(at(mu), "at this μ"),
-            );
         }
         format!(
             "{key} = {mu_text} is too small for the horizon: {decays}; {beyond_threshold}, so keep {key} at most {} and {}",

@@ -14,9 +14,21 @@ use crate::sim::{Integrator, Loop, Outcome, Run, RunSettings, SimResult};
 
 /// For a completed run of scenario `s` under `[noise]` whose tail misses its bound on some channel
 /// ([`TAIL_BOUND`] of its scale), the same run without the noise (a continuous loop within
-/// [`super::sampled::COMPARISON_STEPS`] steps); the channels whose tail is within the bound there
-/// are named, with both tails, as the noise's. `None` otherwise.
-pub fn noise_advice(s: &crate::Scenario, design: &Design, result: &SimResult) -> Option<String> {
+/// [`super::sampled::COMPARISON_STEPS`] steps); one line per channel whose tail is within the bound
+/// there, with both tails, naming it the noise's. Empty otherwise.
+pub fn noise_advice(s: &crate::Scenario, design: &Design, result: &SimResult) -> Vec<String> {
+    noise_tail(s, design, result).map_or_else(Vec::new, |n| n.channels.into_iter().map(|(_, line)| line).collect())
+}
+
+/// What [`noise_advice`] found: the run without the noise, and the channels (0-based) whose tail is
+/// the noise's, each with its line.
+pub(crate) struct NoiseTail {
+    pub clean: SimResult,
+    pub channels: Vec<(usize, String)>,
+}
+
+/// [`noise_advice`] with the run it made.
+pub(crate) fn noise_tail(s: &crate::Scenario, design: &Design, result: &SimResult) -> Option<NoiseTail> {
     s.noise.as_ref()?;
     if !matches!(result.outcome, None | Some(Outcome::Completed)) {
         return None;
@@ -38,18 +50,16 @@ pub fn noise_advice(s: &crate::Scenario, design: &Design, result: &SimResult) ->
         let (from, to) = (r.tail_from().unwrap_or(0.0), r.t.last().copied().unwrap_or(0.0));
         r.max_abs_error(i, from, to).unwrap_or(f64::NAN)
     };
-    let noisy: Vec<String> = missed
-        .iter()
-        .filter(|&&i| tail_within_bound(&clean, i))
-        .map(|&i| {
-            format!("channel {}'s tail max|e| = {:.2e} ({:.2e} without it)", i + 1, tail(result, i), tail(&clean, i))
+    let channels: Vec<(usize, String)> = (missed.into_iter().filter(|&i| tail_within_bound(&clean, i)))
+        .map(|i| {
+            (i, format!(
+                "channel {}'s tail max|e| = {:.2e} is the measurement noise's: {:.2e} without [noise], within its bound ({:.0} % of its scale); the advice below is the noise-free run's, since none on the design's poles, μ or t_end reduces the noise's part (its level and bandwidth, and how much of it the observer and the adaptive law pass, set it)",
+                i + 1,
+                tail(result, i),
+                tail(&clean, i),
+                100.0 * TAIL_BOUND
+            ))
         })
         .collect();
-    (!noisy.is_empty()).then(|| {
-        format!(
-            "the tail is the measurement noise's: {}, within its bound ({:.0} % of the channel's scale) without [noise]; advice on the design's poles, μ and t_end is for the noise-free loop and does not reduce it (the noise's level and bandwidth, and how much of it the observer and the adaptive law pass, do)",
-            noisy.join("; "),
-            100.0 * TAIL_BOUND
-        )
-    })
+    (!channels.is_empty()).then_some(NoiseTail { clean, channels })
 }
