@@ -932,7 +932,9 @@ fn time_unit_labels_the_model_and_changes_no_number() {
     let wrapper = std::io::read_to_string(archive.by_name("sources/quell_fmu.c").unwrap()).unwrap();
     assert!(wrapper.contains("communication step h = %g min is not a whole number of samples of T_s = %g min"));
     assert!(
-        wrapper.contains("at t = %g min, but the controller's next sample is at %g min") && !wrapper.contains("%g s")
+        wrapper.contains("at t = %.15g min, but the controller's next sample is at %.15g min")
+            && !wrapper.contains("%g s")
+            && !wrapper.contains("%.15g s")
     );
 }
 
