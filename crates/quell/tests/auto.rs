@@ -918,8 +918,8 @@ fn the_sampled_halving_says_when_it_costs_the_disturbance_observer() {
 }
 
 /// A design that fails because the horizon is shorter than its adaptation needs (a servo in ms,
-/// tests/data/servo-ms.toml: its slowest excited direction converges in 1/(μλ) ≈ 1.4 s, the
-/// stiffness cap keeps μ, and 2 s leave a tail error of 54 % of the reference's peak) gets advice
+/// tests/data/servo-ms.toml: its slowest excited direction converges in 1/(μλ) ≈ 1.3 s, the
+/// stiffness cap keeps μ, and 2 s leave a tail error of 14 % of the reference's peak) gets advice
 /// with the horizon the averaged law calls for; with that horizon the same rules pass.
 #[test]
 fn a_horizon_too_short_for_the_adaptation_gets_the_one_it_needs() {
