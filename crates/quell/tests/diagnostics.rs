@@ -912,3 +912,26 @@ fn a_tail_that_is_the_noises_is_said_to_be() {
     let s = Scenario::from_toml(text).unwrap();
     assert!(quell::diagnostics::noise::noise_advice(&s, &d, &clean).is_empty());
 }
+
+/// Under noise a tail within its bound is not told to shrink on toward 1e-4 of its scale, which the
+/// noise rules out: `examples/paper-noise.toml` with std [0.1, 0.06] over 170 s ends within its
+/// bounds and had been told to run to 420 s, where channel 2 ended above its bound. `diagnose`
+/// alone (no scenario, no noise) still gives the line.
+#[test]
+fn a_noisy_tail_within_its_bound_is_not_told_to_shrink() {
+    let text = include_str!("../../../examples/paper-noise.toml")
+        .replace("t_end = 100.0", "t_end = 170.0")
+        .replace("std = [0.03, 0.02]", "std = [0.1, 0.06]");
+    let s = Scenario::from_toml(&text).unwrap();
+    let d = s.design().unwrap();
+    let r = Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
+    let from = r.tail_from().unwrap();
+    for (i, bound) in [(0, 0.03), (1, 0.02)] {
+        assert!(r.max_abs_error(i, from, 170.0).unwrap() <= bound, "channel {} within its bound", i + 1);
+    }
+    let shrinking = |advice: &[String]| advice.iter().any(|a| a.contains("error is still shrinking"));
+    let raw = diagnose(&d, &s.reference, &s.disturbance, &r);
+    assert!(raw.channels.iter().any(|c| shrinking(&c.advice)), "{raw:?}");
+    let whole = quell::diagnostics::diagnose_run(&s, &d, &r);
+    assert!(whole.channels.iter().all(|c| !shrinking(&c.advice)), "{whole:?}");
+}

@@ -252,6 +252,29 @@ int main(void)
     EXPECT(fmi2DoStep(c, 1e11, 0.1, fmi2True), fmi2OK, "");
     EXPECT(fmi2DoStep(c, 1e11 + 0.1, 0.05, fmi2True), fmi2Error, "fmi2DoStep: the step to t + h = 100000000000.15 s passes stopTime = 100000000000.1 s");
     fmi2FreeInstance(c);
+    /* From a Unix-epoch start, two masters run 20,000 steps: one adds h to t (drifting by its
+     * rounding: refused from step 10,487 under a tolerance of T_s/100), one computes t = t0 + n h
+     * and h = t_next - t (0.0500001192, refused as no whole number of samples). */
+    for (int accumulate = 0; accumulate < 2; accumulate++) {
+        c = fmi2Instantiate("c", fmi2CoSimulation, GUID, "", &cb, fmi2False, fmi2False);
+        if (!c)
+            return 2;
+        EXPECT(fmi2SetupExperiment(c, 0, 0, 1.7e9, 0, 0), fmi2OK, "");
+        EXPECT(fmi2EnterInitializationMode(c), fmi2OK, "");
+        EXPECT(fmi2ExitInitializationMode(c), fmi2OK, "");
+        double t = 1.7e9;
+        for (int n = 0; n < 20000; n++) {
+            const double next = accumulate ? t + 0.05 : 1.7e9 + (n + 1) * 0.05;
+            const double h = accumulate ? 0.05 : next - t;
+            if (fmi2DoStep(c, t, h, fmi2True) != fmi2OK) {
+                printf("master %d refused at step %d, t = %.17g: %s\n", accumulate, n, t, last);
+                fails++;
+                break;
+            }
+            t = next;
+        }
+        fmi2FreeInstance(c);
+    }
     return fails;
 }
 "#;
