@@ -812,6 +812,20 @@ fn a_sampled_run_is_compared_with_its_continuous_loop() {
     assert!(whole.iter().all(|a| !a.contains("is coarse for this design")), "{whole:?}");
     let alone = diagnose(&d, &at_1ms.reference, &at_1ms.disturbance, &diverged).advice;
     assert!(alone.iter().any(|a| a.contains("is coarse for this design")), "{alone:?}");
+    // Under 1e-4 rad of measurement noise the two loops are compared without it (the tail's noise
+    // had hidden the transient from the heuristic, and no comparison was made).
+    let mut noisy = s.clone();
+    noisy.noise = Scenario::from_toml(&format!(
+        "{}\n[noise]\nstd = [1e-4]\nseed = 3\n",
+        include_str!("data/flexible-joint.toml").replace("[simulation]", "[simulation]\nsample_time = 0.5")
+    ))
+    .unwrap()
+    .noise;
+    let (advice, _) = run(&noisy, &d, Some(0.5));
+    assert!(
+        advice.iter().any(|a| a.starts_with("the sampled-data loop at T_s = 0.5 ms departs from its continuous loop (the same scenario without its sample time; both without [noise]): y[1] by 920 %")),
+        "{advice:?}"
+    );
     let heuristic = quell::diagnostics::sampled_transient(&coarse);
     assert!(
         heuristic.len() == 1
