@@ -187,19 +187,14 @@ pub(crate) fn sampled_lines(s: &crate::Scenario, design: &Design, result: &SimRe
     // Under noise, which the two loops read at different instants, both are compared without it (a
     // flexible joint whose u_f reached 8,646 under 1e-4 rad of noise had been compared with
     // nothing, and its tail's noise hid the transient from the heuristic).
-    let (quiet_s, quiet_r);
-    let (s, result, without) = if s.noise.is_some() {
-        quiet_s = crate::Scenario { noise: None, ..s.clone() };
-        match Run::of(&quiet_s, design).simulate(|_| ControlFlow::Continue(())) {
-            Ok(r) if matches!(r.outcome, None | Some(Outcome::Completed | Outcome::Diverged { .. })) => {
-                quiet_r = r;
-                (&quiet_s, &quiet_r, "; both without [noise]")
-            }
-            _ => return (sampled_transient(result), false),
-        }
-    } else {
-        (s, result, "")
+    let quiet = match s.noise {
+        Some(_) => match without_noise(s, design) {
+            Some(q) => Some(q),
+            None => return (sampled_transient(result), false),
+        },
+        None => None,
     };
+    let (s, result, without) = quiet.as_ref().map_or((s, result, ""), |(qs, qr)| (qs, qr, "; both without [noise]"));
     let continuous = match continuous_loop(s, design) {
         Ok(c) => c,
         Err(Skipped::Ended(Outcome::TooManySteps { t, .. })) => {
@@ -255,9 +250,17 @@ pub(crate) fn sampled_lines(s: &crate::Scenario, design: &Design, result: &SimRe
         _ => return (Vec::new(), true),
     };
     let within = if coarse { "" } else { ", even within T_s·ρ ≤ 0.2" };
+    let remedy = remedy(s, design, sample_time, &continuous);
+    (vec![format!("{what}; the sampling makes it{within}: {remedy}")], true)
+}
+
+/// What to do about a departure at `sample_time`: the halved sample time that agrees
+/// ([`agreeing_sample_time`]), or a design for that sample time.
+fn remedy(s: &crate::Scenario, design: &Design, sample_time: f64, continuous: &SimResult) -> String {
+    let unit = continuous.time_unit;
     let design_for =
         "or let the automatic design choose poles for that sample time (give the scenario that simulation.sample_time)";
-    let remedy = match agreeing_sample_time(s, design, sample_time, &continuous) {
+    match agreeing_sample_time(s, design, sample_time, continuous) {
         Some((T, c)) => format!(
             "at T_s = {} {unit} it stays within half of y's peak and twice u_f's (y within {}, u_f's peaks at most {}× the continuous ones): sample that fast, {design_for}",
             fmt_short(T),
@@ -267,8 +270,14 @@ pub(crate) fn sampled_lines(s: &crate::Scenario, design: &Design, result: &SimRe
         None => format!(
             "halving T_s up to {HALVINGS} times did not bring the two together (or took more than {HALVING_STEPS:.0e} controller steps): let the automatic design choose poles for the sample time (give the scenario simulation.sample_time)"
         ),
-    };
-    (vec![format!("{what}; the sampling makes it{within}: {remedy}")], true)
+    }
+}
+
+/// Scenario `s` without its `[noise]` and its sampled-data run, where that completes or diverges.
+fn without_noise(s: &crate::Scenario, design: &Design) -> Option<(crate::Scenario, SimResult)> {
+    let quiet = crate::Scenario { noise: None, ..s.clone() };
+    let r = Run::of(&quiet, design).simulate(|_| ControlFlow::Continue(())).ok()?;
+    matches!(r.outcome, None | Some(Outcome::Completed | Outcome::Diverged { .. })).then_some((quiet, r))
 }
 
 /// T_s·ρ beyond [`COARSE_SAMPLE`] for the run's true plant and signals.
