@@ -130,19 +130,22 @@ pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) ->
     let mut d = diagnose(design, &s.reference, &s.disturbance, result);
     // A tail that is the noise's: those channels' advice on the design is the noise-free run's
     // (an observer line that only the noise had brought on made a suspension worse when followed).
-    let noise = noise::noise_tail(s, design, result);
+    // The noise-free run is made once, for this and for the sampled comparison, where either needs it.
+    let sampled = matches!(result.stats, crate::sim::RunStats::Sampled { .. });
+    let missed = (0..result.m).any(|i| !tail_within_bound(result, i));
+    let quiet = if sampled || missed { noise::without_noise(s, design) } else { None };
     // Where the noise's are all the missed tails, the shared advice and the mismatch's are judged on
     // the noise-free run too.
     let mut judged = result;
-    if let Some(n) = &noise {
-        let clean = diagnose(design, &s.reference, &s.disturbance, &n.clean);
-        if (0..result.m).filter(|&i| !tail_within_bound(result, i)).count() == n.channels.len() {
-            d.advice = clean.advice;
-            judged = &n.clean;
+    if let (Some(n), Some((_, clean))) = (noise::noise_tail(result, quiet.as_ref()), &quiet) {
+        let clean_d = diagnose(design, &s.reference, &s.disturbance, clean);
+        if n.all {
+            d.advice = clean_d.advice;
+            judged = clean;
         }
-        for (i, line) in &n.channels {
-            d.channels[*i].advice.clone_from(&clean.channels[*i].advice);
-            d.channels[*i].advice.insert(0, line.clone());
+        for (i, line) in n.channels {
+            d.channels[i].advice.clone_from(&clean_d.channels[i].advice);
+            d.channels[i].advice.insert(0, line);
         }
     }
     // Under noise a tail within its bound is not told to shrink on toward 1e-4 of its scale: the
@@ -160,12 +163,12 @@ pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) ->
     }
     d.advice.extend(loose_atol(s, result));
     d.advice.extend(uf_cancellation(result));
-    let (sampled, compared) = sampled::sampled_lines(s, design, result);
+    let (lines, compared) = sampled::sampled_lines(s, design, result, quiet.as_ref());
     // The comparison settles what the coarse-sample line asks for.
     if compared {
         d.advice.retain(|a| !a.contains(COARSE_WORDS));
     }
-    d.advice.extend(sampled);
+    d.advice.extend(lines);
     d
 }
 
@@ -401,14 +404,14 @@ pub(crate) fn unit_mismatch(avg: &Averaged, [reference, disturbance]: [&Signal; 
     })
 }
 
-/// A sampled-data run that missed its tail bound at a sample time coarse for the design (T_s·ρ >
-/// [`crate::sim::COARSE_SAMPLE`]), with the sample times that are not; `None` otherwise.
 /// The words by which the tail-trend line ([`shrinking_advice`]) is known.
 const SHRINKING_WORDS: &str = "'s error is still shrinking over the tail";
 
 /// The words by which the coarse-sample line ([`coarse_advice`]) is known.
 const COARSE_WORDS: &str = "is coarse for this design";
 
+/// A sampled-data run that missed its tail bound at a sample time coarse for the design (T_s·ρ >
+/// [`crate::sim::COARSE_SAMPLE`]), with the sample times that are not; `None` otherwise.
 fn coarse_advice(design: &Design, result: &SimResult, rho: f64, missed: bool) -> Option<String> {
     let crate::sim::RunStats::Sampled { sample_time, .. } = result.stats else { return None };
     let output_step = (result.t.len() > 1).then(|| result.t[1] - result.t[0]).filter(|h| *h > 0.0);
@@ -803,6 +806,7 @@ fn tail_within_bound(result: &SimResult, i: usize) -> bool {
 /// The most, in multiples of the present μ, that advice raises a μ already beyond the stiffness
 /// threshold toward the one its slowest relevant direction needs.
 pub(crate) const RAISE_AT_MOST: f64 = 1000.0;
+
 /// A direction of Ω̄ at rate μ λ has converged by t_end when μ λ t_end ≥ this many e-folds.
 const CONVERGED_EFOLDS: f64 = 5.0;
 /// How much later than the averaged law predicts a weakly excited direction converges in the run:
@@ -918,7 +922,6 @@ fn horizon_advice(
             // A μ already past the threshold is not "too small", nor told to come down to it: that
             // slows the direction further (the quadruple tank at μ = 0.1, told to lower it to the
             // threshold's 7.3e-6, ended 9× worse).
-            // Raising it is offered where that is a step, not a leap (2.5e12 on a magnetic bearing).
             let head = format!(
                 "the horizon is too short even at {key} = {mu_text}, beyond the stiffness threshold: {decays}; {beyond_threshold}, and at the threshold ({}) it would need {:.1e} {unit}",
                 fmt_short(crate::settings::round_down_2(fastest)),

@@ -6,60 +6,63 @@
 //! (A, D, C), and following that made its noise-free tail 2,400× larger and its force 40 % higher.
 //! So such a run is run again without the noise ([`noise_advice`]).
 
-use std::ops::ControlFlow;
-
 use super::{tail_within_bound, TAIL_BOUND};
 use crate::design::Design;
-use crate::sim::{Integrator, Loop, Outcome, Run, RunSettings, SimResult};
+use crate::sim::{Outcome, SimResult};
+
+/// A scenario without its `[noise]`, and its run ([`super::sampled::side_run`]).
+pub(crate) type Quiet = (crate::Scenario, SimResult);
+
+/// Scenario `s` without its `[noise]` and its run, where that completes or diverges; `None` for a
+/// scenario without noise. The noise line and the sampled comparison share it.
+pub(crate) fn without_noise(s: &crate::Scenario, design: &Design) -> Option<Quiet> {
+    s.noise.as_ref()?;
+    let quiet = crate::Scenario { noise: None, ..s.clone() };
+    let r = super::sampled::side_run(&quiet, design).ok()?;
+    matches!(r.outcome, None | Some(Outcome::Completed | Outcome::Diverged { .. })).then_some((quiet, r))
+}
 
 /// For a completed run of scenario `s` under `[noise]` whose tail misses its bound on some channel
 /// ([`TAIL_BOUND`] of its scale), the same run without the noise (a continuous loop within
 /// [`super::sampled::COMPARISON_STEPS`] steps); one line per channel whose tail is within the bound
 /// there, with both tails, naming it the noise's. Empty otherwise.
 pub fn noise_advice(s: &crate::Scenario, design: &Design, result: &SimResult) -> Vec<String> {
-    noise_tail(s, design, result).map_or_else(Vec::new, |n| n.channels.into_iter().map(|(_, line)| line).collect())
+    let missed = (0..result.m).any(|i| !tail_within_bound(result, i));
+    let quiet = if missed { without_noise(s, design) } else { None };
+    noise_tail(result, quiet.as_ref()).map_or_else(Vec::new, |n| n.channels.into_iter().map(|(_, line)| line).collect())
 }
 
-/// What [`noise_advice`] found: the run without the noise, and the channels (0-based) whose tail is
-/// the noise's, each with its line.
+/// What [`noise_advice`] found: the channels (0-based) whose tail is the noise's, each with its
+/// line, and whether they are all the channels that missed their bound.
 pub(crate) struct NoiseTail {
-    pub clean: SimResult,
     pub channels: Vec<(usize, String)>,
+    pub all: bool,
 }
 
-/// [`noise_advice`] with the run it made.
-pub(crate) fn noise_tail(s: &crate::Scenario, design: &Design, result: &SimResult) -> Option<NoiseTail> {
-    s.noise.as_ref()?;
-    if !matches!(result.outcome, None | Some(Outcome::Completed)) {
+/// [`noise_advice`] on `result` against `quiet`, the same run without the noise.
+pub(crate) fn noise_tail(result: &SimResult, quiet: Option<&Quiet>) -> Option<NoiseTail> {
+    let (_, clean) = quiet?;
+    if !matches!(result.outcome, None | Some(Outcome::Completed))
+        || !matches!(clean.outcome, None | Some(Outcome::Completed))
+    {
         return None;
     }
     let missed: Vec<usize> = (0..result.m).filter(|&i| !tail_within_bound(result, i)).collect();
-    if missed.is_empty() {
-        return None;
-    }
-    let quiet = crate::Scenario { noise: None, ..s.clone() };
-    let mut settings = RunSettings::of(&quiet);
-    if let Loop::Continuous(integrator) = &mut settings.mode {
-        *integrator = Integrator { max_steps: Some(super::sampled::COMPARISON_STEPS), ..*integrator };
-    }
-    let clean = Run::of(&quiet, design).settings(settings).simulate(|_| ControlFlow::Continue(())).ok()?;
-    if !matches!(clean.outcome, None | Some(Outcome::Completed)) {
-        return None;
-    }
     let tail = |r: &SimResult, i: usize| {
         let (from, to) = (r.tail_from().unwrap_or(0.0), r.t.last().copied().unwrap_or(0.0));
         r.max_abs_error(i, from, to).unwrap_or(f64::NAN)
     };
-    let channels: Vec<(usize, String)> = (missed.into_iter().filter(|&i| tail_within_bound(&clean, i)))
+    let channels: Vec<(usize, String)> = (missed.iter().copied().filter(|&i| tail_within_bound(clean, i)))
         .map(|i| {
             (i, format!(
                 "channel {}'s tail max|e| = {:.2e} is the measurement noise's: {:.2e} without [noise], within its bound ({:.0} % of its scale); the advice below is the noise-free run's, since none on the design's poles, μ or t_end reduces the noise's part (its level and bandwidth, and how much of it the observer and the adaptive law pass, set it)",
                 i + 1,
                 tail(result, i),
-                tail(&clean, i),
+                tail(clean, i),
                 100.0 * TAIL_BOUND
             ))
         })
         .collect();
-    (!channels.is_empty()).then_some(NoiseTail { clean, channels })
+    let all = channels.len() == missed.len();
+    (!channels.is_empty()).then_some(NoiseTail { channels, all })
 }

@@ -13,9 +13,7 @@ use std::ops::ControlFlow;
 
 use crate::design::Design;
 use crate::settings::{fmt_4, fmt_instant, fmt_ratio, fmt_short};
-use crate::sim::{
-    is_coarse, loop_rate, Integrator, Loop, Outcome, Run, RunSettings, RunStats, SimResult, COARSE_SAMPLE,
-};
+use crate::sim::{is_coarse, loop_rate, Loop, Outcome, Run, RunSettings, RunStats, SimResult, COARSE_SAMPLE};
 
 /// A completed sampled-data run's peak of u_f over its peak in the tail from which the sampling is
 /// suspected when no comparison runs: the continuous loops of `examples` and `tests/data` peak at
@@ -99,25 +97,32 @@ enum Skipped {
     Noise,
     /// The continuous loop did not complete: past its steps, or diverged.
     Ended(Outcome),
+    /// The continuous loop could not be run.
+    Failed,
 }
 
-/// The continuous loop of scenario `s` at its settings without the sample time, within
-/// [`COMPARISON_STEPS`] steps.
+/// The continuous loop of scenario `s` at its settings without the sample time ([`side_run`]).
 fn continuous_loop(s: &crate::Scenario, design: &Design) -> Result<SimResult, Skipped> {
     if s.noise.is_some() {
         return Err(Skipped::Noise);
     }
-    let sim = &s.simulation;
-    let integrator =
-        Integrator { method: sim.method, max_steps: Some(COMPARISON_STEPS), ..Integrator::new(sim.rtol, sim.atol) };
-    let settings = RunSettings { mode: Loop::Continuous(integrator), ..RunSettings::of(s) };
-    let run = Run::of(s, design).settings(settings).simulate(|_| ControlFlow::Continue(()));
-    let ended = |o: Outcome| Err(Skipped::Ended(o));
-    match run {
+    let continuous =
+        crate::Scenario { simulation: crate::scenario::Simulation { sample_time: None, ..s.simulation }, ..s.clone() };
+    match side_run(&continuous, design) {
         Ok(r) if matches!(r.outcome, None | Some(Outcome::Completed)) => Ok(r),
-        Ok(r) => ended(r.outcome.unwrap_or(Outcome::Completed)),
-        Err(_) => ended(Outcome::TooManySteps { t: 0.0, max_steps: COMPARISON_STEPS }),
+        Ok(r) => Err(Skipped::Ended(r.outcome.unwrap_or(Outcome::Completed))),
+        Err(_) => Err(Skipped::Failed),
     }
+}
+
+/// A run a diagnostic makes beside the user's: scenario `s` at its own settings, a continuous loop
+/// within [`COMPARISON_STEPS`] steps.
+pub(crate) fn side_run(s: &crate::Scenario, design: &Design) -> Result<SimResult, crate::sim::SimError> {
+    let mut settings = RunSettings::of(s);
+    if let Loop::Continuous(integrator) = &mut settings.mode {
+        integrator.max_steps = Some(COMPARISON_STEPS);
+    }
+    Run::of(s, design).settings(settings).simulate(|_| ControlFlow::Continue(()))
 }
 
 /// Each channel's departure of `sampled` from `continuous` over their common rows (`None` when
@@ -175,11 +180,18 @@ fn agreeing_sample_time(
 /// [`COARSE_SAMPLE`] (warned before the run) but the run follows its continuous loop, that it
 /// does. Without a comparison, the heuristic [`sampled_transient`].
 pub fn sampled_advice(s: &crate::Scenario, design: &Design, result: &SimResult) -> Vec<String> {
-    sampled_lines(s, design, result).0
+    let quiet = super::noise::without_noise(s, design);
+    sampled_lines(s, design, result, quiet.as_ref()).0
 }
 
-/// [`sampled_advice`], and whether the run was compared with its continuous loop.
-pub(crate) fn sampled_lines(s: &crate::Scenario, design: &Design, result: &SimResult) -> (Vec<String>, bool) {
+/// [`sampled_advice`], with `quiet` the run without `s`'s noise where it has some
+/// ([`super::noise::without_noise`]), and whether the run was compared with its continuous loop.
+pub(crate) fn sampled_lines(
+    s: &crate::Scenario,
+    design: &Design,
+    result: &SimResult,
+    quiet: Option<&super::noise::Quiet>,
+) -> (Vec<String>, bool) {
     let RunStats::Sampled { sample_time, .. } = result.stats else { return (Vec::new(), false) };
     if matches!(result.outcome, Some(Outcome::Interrupted { .. } | Outcome::TooManySteps { .. })) {
         return (Vec::new(), false);
@@ -187,14 +199,11 @@ pub(crate) fn sampled_lines(s: &crate::Scenario, design: &Design, result: &SimRe
     // Under noise, which the two loops read at different instants, both are compared without it (a
     // flexible joint whose u_f reached 8,646 under 1e-4 rad of noise had been compared with
     // nothing, and its tail's noise hid the transient from the heuristic).
-    let quiet = match s.noise {
-        Some(_) => match without_noise(s, design) {
-            Some(q) => Some(q),
-            None => return (sampled_transient(result), false),
-        },
-        None => None,
+    let (s, result, without) = match (&s.noise, quiet) {
+        (None, _) => (s, result, ""),
+        (Some(_), Some((qs, qr))) => (qs, qr, "; both without [noise]"),
+        (Some(_), None) => return (sampled_transient(result), false),
     };
-    let (s, result, without) = quiet.as_ref().map_or((s, result, ""), |(qs, qr)| (qs, qr, "; both without [noise]"));
     let continuous = match continuous_loop(s, design) {
         Ok(c) => c,
         Err(Skipped::Ended(Outcome::TooManySteps { t, .. })) => {
@@ -271,13 +280,6 @@ fn remedy(s: &crate::Scenario, design: &Design, sample_time: f64, continuous: &S
             "halving T_s up to {HALVINGS} times did not bring the two together (or took more than {HALVING_STEPS:.0e} controller steps): let the automatic design choose poles for the sample time (give the scenario simulation.sample_time)"
         ),
     }
-}
-
-/// Scenario `s` without its `[noise]` and its sampled-data run, where that completes or diverges.
-fn without_noise(s: &crate::Scenario, design: &Design) -> Option<(crate::Scenario, SimResult)> {
-    let quiet = crate::Scenario { noise: None, ..s.clone() };
-    let r = Run::of(&quiet, design).simulate(|_| ControlFlow::Continue(())).ok()?;
-    matches!(r.outcome, None | Some(Outcome::Completed | Outcome::Diverged { .. })).then_some((quiet, r))
 }
 
 /// T_s·ρ beyond [`COARSE_SAMPLE`] for the run's true plant and signals.
