@@ -42,14 +42,14 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
     // capped where a run's step budget would refuse the sample time, and raised to one sample where
     // a run would end before its first step (T_s = 1000 s had been refused by the 100 s of t_end).
     let (scenario, design) = load_with(Some(&args.scenario), |sim| {
-        // The flag's sample time, or the file's (a number: anything else stays for the reader to name).
-        let from_file = sim.get("sample_time").and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)));
-        let sample_time = set_sample_time(sim, args.sample_time).or(from_file.filter(|t| t.is_finite() && *t > 0.0));
-        if let Some(t) = sample_time {
-            let t_end = match sim.get("t_end") {
-                None => Some(quell::scenario::Simulation::default().t_end),
-                Some(v) => v.as_float().or_else(|| v.as_integer().map(|i| i as f64)),
-            };
+        // A number of [simulation] (anything else stays for the reader to name).
+        let number = |sim: &toml::Table, key: &str| {
+            sim.get(key).map(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+        };
+        // The flag's sample time, or the file's.
+        let from_file = number(sim, "sample_time").flatten().filter(|t| t.is_finite() && *t > 0.0);
+        if let Some(t) = set_sample_time(sim, args.sample_time).or(from_file) {
+            let t_end = number(sim, "t_end").unwrap_or(Some(quell::scenario::Simulation::default().t_end));
             // A t_end that is not a number stays, for the reader to name; the output step stays within it.
             let cap = t * quell::settings::MAX_SAMPLING_STEPS;
             if let Some(horizon) = t_end.filter(|t_end| *t_end > cap || *t_end < t).map(|t_end| t_end.clamp(t, cap)) {
