@@ -764,8 +764,8 @@ fn sampled_start(doc: &toml::Table, targets: &Targets) -> Result<(Proposal, Desi
             format!("T_s·ρ = {:.2} ≤ {COARSE_SAMPLE}", t_s * rho)
         } else {
             // Halving stopped lowering ρ 1.5×: a rate the halved poles do not set.
-            let shorter = crate::settings::three_digits_down(COARSE_SAMPLE / rho);
-            format!("T_s·ρ = {:.2}, still above {COARSE_SAMPLE}: ρ = {rho:.3e}/{unit} is now set by what halving leaves as it is (the plant's eigenvalues, the signals' frequencies, the filter poles placed around them, 1/β), which slower channel and observer poles do not lower; a simulation.sample_time ≤ {} {unit} would meet it", t_s * rho, crate::settings::fmt_short(shorter))
+            let fine = crate::sim::fine_sample_time(&design, rho, Some(p.scenario.simulation.output_step));
+            format!("T_s·ρ = {:.2}, still above {COARSE_SAMPLE}: ρ = {rho:.3e}/{unit} is now set by what halving leaves as it is (the plant's eigenvalues, the signals' frequencies, the filter poles placed around them, 1/β), which slower channel and observer poles do not lower; a simulation.sample_time {fine} would meet it", t_s * rho)
         };
         let note = |f: f64| {
             format!("; ×{f} of that for simulation.sample_time = {t_s} {unit} ({met}, ρ the loop's fastest rate: docs/running.md)")

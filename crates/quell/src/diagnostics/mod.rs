@@ -301,12 +301,12 @@ pub fn truth_differences(s: &crate::Scenario) -> Vec<String> {
 pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, result: &SimResult) -> Diagnostics {
     let avg = Averaged::new(design, reference, disturbance);
     let t_end = result.t.last().copied().unwrap_or(0.0);
-    let sample_time = match result.stats {
-        crate::sim::RunStats::Sampled { sample_time, .. } => Some(sample_time),
+    let sampled = match result.stats {
+        crate::sim::RunStats::Sampled { sample_time, .. } => Some((sample_time, row_step(result))),
         _ => None,
     };
     let signals = [reference, disturbance];
-    let remedy = ObserverRemedy::new(design, signals, sample_time);
+    let remedy = ObserverRemedy::new(design, signals, sampled);
     let unit = design.plant().time_unit;
     // The adaptation rate beyond which the loop is stiff (the pace estimate's threshold).
     let rho = crate::sim::loop_rate(design, design.plant(), [reference, disturbance]);
@@ -410,11 +410,16 @@ const SHRINKING_WORDS: &str = "'s error is still shrinking over the tail";
 /// The words by which the coarse-sample line ([`coarse_advice`]) is known.
 const COARSE_WORDS: &str = "is coarse for this design";
 
+/// The step between a result's rows (simulation.output_step), `None` with fewer than two rows.
+fn row_step(result: &SimResult) -> Option<f64> {
+    (result.t.len() > 1).then(|| result.t[1] - result.t[0]).filter(|h| *h > 0.0)
+}
+
 /// A sampled-data run that missed its tail bound at a sample time coarse for the design (T_s·ρ >
 /// [`crate::sim::COARSE_SAMPLE`]), with the sample times that are not; `None` otherwise.
 fn coarse_advice(design: &Design, result: &SimResult, rho: f64, missed: bool) -> Option<String> {
     let crate::sim::RunStats::Sampled { sample_time, .. } = result.stats else { return None };
-    let output_step = (result.t.len() > 1).then(|| result.t[1] - result.t[0]).filter(|h| *h > 0.0);
+    let output_step = row_step(result);
     (missed && crate::sim::is_coarse(sample_time * rho)).then(|| {
         format!(
             "the sampled-data loop at T_s = {} {} {COARSE_WORDS} (T_s·ρ = {} > {}): its errors are the sampling's as much as the adaptation's; compare with the continuous loop, and choose {}, or slower poles, before tuning μ, t_end or the observer",
@@ -625,18 +630,19 @@ pub fn singular_disturbance_zeros(p: &Plant) -> Option<Vec<Complex<f64>>> {
 pub(crate) struct ObserverRemedy<'a> {
     design: &'a Design,
     signals: [&'a Signal; 2],
-    sample_time: Option<f64>,
+    /// A sampled-data run's sample time and output step.
+    sampled: Option<(f64, Option<f64>)>,
     text: std::cell::OnceCell<String>,
     faster: std::cell::OnceCell<Option<FasterObserver>>,
 }
 
 impl<'a> ObserverRemedy<'a> {
-    pub(crate) fn new(design: &'a Design, signals: [&'a Signal; 2], sample_time: Option<f64>) -> Self {
-        ObserverRemedy { design, signals, sample_time, text: Default::default(), faster: Default::default() }
+    pub(crate) fn new(design: &'a Design, signals: [&'a Signal; 2], sampled: Option<(f64, Option<f64>)>) -> Self {
+        ObserverRemedy { design, signals, sampled, text: Default::default(), faster: Default::default() }
     }
 
     fn text(&self) -> &str {
-        self.text.get_or_init(|| observer_remedy(self.design, self.faster(), self.sample_time))
+        self.text.get_or_init(|| observer_remedy(self.design, self.faster(), self.sampled))
     }
 
     /// The speed-up the remedy offers ([`faster_observer_design`]), searched once for the text and
@@ -657,9 +663,9 @@ fn holds_zero(observer: &[Complex<f64>], z: &Complex<f64>) -> bool {
 /// the error stays (placing the zeros as poles is not enough: an unknown-input observer also needs
 /// the eigenvectors there to be the zeros' state directions, which the placement does not impose
 /// when m > 1) and when it matters ([`holds_zero`]).
-fn observer_remedy(design: &Design, faster: Option<&FasterObserver>, sample_time: Option<f64>) -> String {
+fn observer_remedy(design: &Design, faster: Option<&FasterObserver>, sampled: Option<(f64, Option<f64>)>) -> String {
     let p = design.plant();
-    let faster = faster.map(|f| faster_observer(design, f, sample_time));
+    let faster = faster.map(|f| faster_observer(design, f, sampled));
     let none = format!(
         "no speed-up of design.observer_poles up to {}× brings the averaged loop's error below {FIDELITY_TARGET:.2}; give a gain by hand (design.observer_gain), or accept the error, which costs convergence only where the frequency's excitation of Ω̄_i is weak (the channels' `excitation`)",
         OBSERVER_SPEEDUPS[OBSERVER_SPEEDUPS.len() - 1]
@@ -717,22 +723,19 @@ pub(crate) struct FasterObserver {
     rho: f64,
 }
 
-/// `faster` as advice (the averaged loop's T(jw) against L_ω), with the sample time that observer
-/// needs when the run's is coarse for it.
-fn faster_observer(design: &Design, faster: &FasterObserver, sample_time: Option<f64>) -> String {
+/// `faster` as advice (the averaged loop's T(jw) against L_ω), with the sample times that observer
+/// needs when the run's (`sampled`: T_s and the output step) is coarse for it, one of them a run
+/// accepts (0.000307 s had been named beside delays of 1 s, which it does not divide).
+fn faster_observer(design: &Design, faster: &FasterObserver, sampled: Option<(f64, Option<f64>)>) -> String {
     let FasterObserver { factor, error, rho, .. } = *faster;
     let mut advice = format!(
         "give design.observer_poles {factor}× faster, [{}] (the averaged loop then passes every frequency of ω with relative error {error:.2} at worst)",
         fmt_complex_list(&faster.poles)
     );
-    if sample_time.is_some_and(|t_s| crate::sim::is_coarse(t_s * rho)) {
+    if let Some((_, output_step)) = sampled.filter(|(t_s, _)| crate::sim::is_coarse(t_s * rho)) {
         let unit = design.plant().time_unit;
-        advice += &format!(
-            ", which needs simulation.sample_time ≤ {} {unit} (T_s·ρ ≤ {}, ρ = {:.3e}/{unit})",
-            fmt_short(crate::settings::three_digits_down(crate::sim::COARSE_SAMPLE / rho)),
-            crate::sim::COARSE_SAMPLE,
-            rho
-        );
+        let fine = crate::sim::fine_sample_time(design, rho, output_step);
+        advice += &format!(", which needs simulation.sample_time {fine} (ρ = {rho:.3e}/{unit})");
     }
     advice
 }
@@ -1208,7 +1211,7 @@ mod tests {
         let d = diagnosed(text, 1.0, |t| 0.02 + 0.5 * (-t).exp());
         let passes: Vec<&String> = d.advice.iter().filter(|a| a.contains("passes ω")).collect();
         assert_eq!(passes.len(), 1, "{:?}", d.advice);
-        let faster = "give design.observer_poles 20× faster, [-360.000000, -300.000000, -240.000000, -200.000000] (the averaged loop then passes every frequency of ω with relative error 0.08 at worst), which needs simulation.sample_time ≤ ";
+        let faster = "give design.observer_poles 20× faster, [-360.000000, -300.000000, -240.000000, -200.000000] (the averaged loop then passes every frequency of ω with relative error 0.08 at worst), which needs simulation.sample_time T_s ≤ ";
         assert!(
             passes[0].contains("at 0, 1.5, 3 rad/s with relative errors 0.97, 0.46, 0.98")
                 && passes[0].contains(faster),
@@ -1235,7 +1238,7 @@ mod tests {
             weak(&d)
         );
         assert!(
-            passes[0].contains("which needs simulation.sample_time ≤ 0.000555 s (T_s·ρ ≤ 0.2, ρ = 3.600e2/s)"),
+            passes[0].contains("which needs simulation.sample_time T_s ≤ 0.000555 s (T_s·ρ ≤ 0.2), e.g. 0.0005 s, which makes every delay whole and divides simulation.output_step (ρ = 3.600e2/s)"),
             "{}",
             passes[0]
         );
