@@ -65,7 +65,7 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
         }
     }
     let auto = with_progress(|progress| auto_design_with(&doc, &targets, progress)).map_err(|e| match e {
-        AutoError::Run(_) | AutoError::Interrupted => Failure::Run(e.to_string()),
+        AutoError::Run(_) | AutoError::Departed(_) | AutoError::Interrupted => Failure::Run(e.to_string()),
         _ => Failure::Input(e.to_string()),
     })?;
     if args.json {

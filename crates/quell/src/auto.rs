@@ -295,6 +295,10 @@ pub enum AutoError {
     /// A verifying simulation ended before t_end (`Outcome` says how).
     #[error("the verifying simulation {0}")]
     Run(Outcome),
+    /// A sampled-data verifying run drove u_f beyond twice its continuous loop's peak (how, per
+    /// channel, as the run's comparison with its continuous loop words it: docs/sampled-data.md).
+    #[error("the verifying sampled-data run drives u_f beyond twice its continuous loop's (the scenario without its sample time): {0}")]
+    Departed(String),
 }
 
 /// One proposal of the rules at a pole speed: the complete scenario, the choices and the caps the
@@ -377,7 +381,10 @@ impl Verifier<'_> {
         })?;
         self.steps += r.stats.steps();
         match r.outcome.clone().unwrap_or(Outcome::Completed) {
-            Outcome::Completed => Ok(candidate(scenario, &r, speed, self.convergence_time)),
+            Outcome::Completed => match crate::diagnostics::sampled::effort_departure(scenario, design, &r) {
+                Some(how) => Err(AutoError::Departed(how)),
+                None => Ok(candidate(scenario, &r, speed, self.convergence_time)),
+            },
             Outcome::Interrupted { .. } => Err(AutoError::Interrupted),
             other => Err(AutoError::Run(other)),
         }
@@ -617,16 +624,18 @@ fn check_first(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier) ->
     let (mut retries, mut slowed) = (0, 0);
     let check = loop {
         let c = match verifier.check(&first.scenario, &design, start) {
-            Err(AutoError::Run(outcome)) => match slower_start(doc, targets, &first, start, slowed, &outcome) {
-                Some((p, d, speed)) => {
-                    (first, design, start, slowed) = (p, d, speed, slowed + 1);
-                    continue;
+            Err(e @ (AutoError::Run(_) | AutoError::Departed(_))) => {
+                match slower_start(doc, targets, &first, start, slowed, &e) {
+                    Some((p, d, speed)) => {
+                        (first, design, start, slowed) = (p, d, speed, slowed + 1);
+                        continue;
+                    }
+                    None => {
+                        let advice = ended_early(&first.scenario, &e);
+                        return unverified((first, design, start), advice, verifier.runs - runs_before, &bound);
+                    }
                 }
-                None => {
-                    let advice = ended_early(&first.scenario, &outcome);
-                    return unverified((first, design, start), advice, verifier.runs - runs_before, &bound);
-                }
-            },
+            }
             c => c?,
         };
         regulated_bounds(&mut bound, &c);
@@ -648,7 +657,8 @@ fn check_first(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier) ->
 /// How many times a first proposal whose verifying run ended early is slowed ([`slower_start`]).
 const MAX_SLOWER_STARTS: i32 = 3;
 
-/// After the first proposal's verifying run ended early (`outcome`), the proposal with the
+/// After the first proposal's verifying run ended early or departed from its continuous loop
+/// (`failed`: [`AutoError::Run`] or [`AutoError::Departed`]), the proposal with the
 /// channel and observer poles the rules chose halved (the relaxation's first steps, taken before
 /// a run passes), at most [`MAX_SLOWER_STARTS`] times (`slowed` so far), the reason noted in their
 /// choices; `None` when the file gives both or the budget is spent. The active suspension's first
@@ -660,7 +670,7 @@ fn slower_start(
     first: &Proposal,
     start: Speed,
     slowed: i32,
-    outcome: &Outcome,
+    failed: &AutoError,
 ) -> Option<(Proposal, Design, Speed)> {
     let [channels, observer, _] = first.relaxable;
     if slowed >= MAX_SLOWER_STARTS || !(channels || observer) {
@@ -672,15 +682,23 @@ fn slower_start(
     let mut p = propose(doc, targets, speed).ok()?;
     let d = p.scenario.design().ok()?;
     let unit = p.scenario.plant.time_unit;
-    let factor = 0.5f64.powi(slowed + 1);
-    for c in p
-        .choices
-        .iter_mut()
-        .filter(|c| (channels && c.key == "design.channel_poles") || (observer && c.key == "design.observer_poles"))
-    {
-        c.why.push_str(&format!(
-            "; ×{factor} of that: the verifying runs of the faster proposals ended early (the last: {outcome}, t in {unit})"
-        ));
+    for c in p.choices.iter_mut() {
+        // The whole factor over the rules' poles (a sampled-data start had halved them already),
+        // after the reasons the faster proposal gave (its sample-time note among them).
+        let factor = match c.key.as_str() {
+            "design.channel_poles" if channels => speed.channel,
+            "design.observer_poles" if observer => speed.observer,
+            _ => continue,
+        };
+        if let Some(before) = first.choices.iter().find(|b| b.key == c.key) {
+            c.why.clone_from(&before.why);
+        }
+        c.why.push_str(&match failed {
+            AutoError::Departed(how) => format!(
+                "; ×{factor} of the rules' poles in all: the sampled-data verifying runs of the faster proposals drove u_f beyond twice their continuous loop's (the last: {how})"
+            ),
+            e => format!("; ×{factor} of the rules' poles in all: the verifying runs of the faster proposals ended early (the last: {}, t in {unit})", ended(e)),
+        });
     }
     Some((p, d, speed))
 }
@@ -1104,8 +1122,17 @@ fn too_fast_for_its_horizon(s: &Scenario, design: &Design) -> Option<String> {
     })
 }
 
-/// Advice on a first proposal whose verifying run ended before t_end (`outcome`).
-fn ended_early(s: &Scenario, outcome: &Outcome) -> String {
+/// How a verifying run failed, as [`AutoError::Run`]'s outcome reads.
+fn ended(failed: &AutoError) -> String {
+    match failed {
+        AutoError::Run(outcome) => outcome.to_string(),
+        e => e.to_string(),
+    }
+}
+
+/// Advice on a first proposal whose verifying run ended before t_end or departed from its
+/// continuous loop (`failed`).
+fn ended_early(s: &Scenario, failed: &AutoError) -> String {
     let why = match s.simulation.sample_time {
         Some(t_s) => format!(
             "its poles may be too fast for the sample time {t_s} {} even at the slowest start (docs/tuning.md, a sampled-data scenario): try a shorter simulation.sample_time, or give slower design.channel_poles and design.observer_poles by hand",
@@ -1114,10 +1141,16 @@ fn ended_early(s: &Scenario, outcome: &Outcome) -> String {
         None => "give some [design] keys by hand (slower channel or observer poles, a smaller mu; docs/tuning.md)".to_string(),
     };
     let unit = s.plant.time_unit;
-    format!(
-        "the first proposal's verifying simulation ended before t_end = {} {unit}: {outcome}; {why}",
-        s.simulation.t_end
-    )
+    match failed {
+        AutoError::Departed(how) => format!(
+            "the first proposal's sampled-data verifying run drives u_f beyond twice its continuous loop's (the scenario without its sample time), even at the slowest start: {how}; {why}"
+        ),
+        e => format!(
+            "the first proposal's verifying simulation ended before t_end = {} {unit}: {}; {why}",
+            s.simulation.t_end,
+            ended(e)
+        ),
+    }
 }
 
 /// A horizon shorter than [`SEPARATION_BEATS`] beats of the two closest frequencies cannot tell

@@ -104,7 +104,9 @@ pub fn estimate(
 }
 
 /// Channel i adapting at μ λ_max beyond [`STIFF_RATIO`] times the loop's rate ρ: what it means and
-/// the μ to lower it to. That is the threshold's μ unless the slowest relevant direction would then
+/// the μ to lower it to where u_f is more than the actuator takes (the integrator handles the
+/// stiffness: a Wardle–Wood column at 10× the threshold's μ ended with tails 1e6× smaller than at
+/// it, in 5 % more steps). That is the threshold's μ unless the slowest relevant direction would then
 /// not converge by t_end ([`super::horizon_mu`]): there the stiffness is the price of Ω̄'s spread,
 /// and the advice names the μ that direction needs, to keep or approach (the quadruple tank at μ = 1,
 /// told to lower μ to the threshold's 7.3e-6, ends with a tail max|e| of 9.0e-3, at that μ of 0.16).
@@ -127,7 +129,10 @@ pub(crate) fn stiff_advice(
     let (wanted, fastest) = super::horizon_mu(relevant, lambda_max, (t_end, STIFF_RATIO * rho));
     let fmt = crate::settings::fmt_short;
     let lower = if !(relevant.is_finite() && wanted > fastest) {
-        format!("lower design.mu[{i}] to about {}{scaling_hint}", fmt(crate::settings::round_down_2(fastest)))
+        format!(
+            "where max|u_f| is more than the actuator takes, lower design.mu[{i}] to about {} (slower adaptation: a larger tail){scaling_hint}",
+            fmt(crate::settings::round_down_2(fastest))
+        )
     } else {
         let needed = crate::settings::round_up_2(wanted);
         let keep = if needed < 0.999 * mu {
@@ -145,7 +150,7 @@ pub(crate) fn stiff_advice(
         )
     };
     format!(
-        "channel {} adapts at μ λ_max = {rate:.3e}/{unit}, {}× the loop's fastest other rate ({rho:.3e}/{unit}): the loop is stiff (the automatic integrator handles it, an explicit one crawls), and a gain this high can drive u_f hard (check max|u_f|); {lower}",
+        "channel {} adapts at μ λ_max = {rate:.3e}/{unit}, {}× the loop's fastest other rate ({rho:.3e}/{unit}): the loop is stiff (the automatic integrator handles it, an explicit one crawls), and a gain this high can drive u_f hard; {lower}",
         i + 1,
         crate::settings::fmt_ratio(rate / rho),
     )
