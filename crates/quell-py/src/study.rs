@@ -119,17 +119,30 @@ fn flatten(name: String, v: &Value, out: &mut Vec<(String, f64)>) {
     }
 }
 
-/// The values a run's draw gave each perturbed key (flattened: `truth.A[0][1]`); a column that
-/// would share its name with a grid column is `… (drawn)`.
+/// The values a run's draw gave each perturbed key (flattened: `truth.A[0][1]`); the columns of a
+/// key the grid also sets, whole or in part, are `… (drawn)` (`truth.delays[1] (drawn)` beside the
+/// grid's `truth.delays[1]`: a draw of the whole `truth.delays` had overwritten that grid column).
 fn drawn_values(keys: &[String], spec: &RunSpec) -> Vec<(String, f64)> {
     let mut out = Vec::new();
     for key in keys {
         if let Some(v) = KeyPath::parse(key).ok().and_then(|p| p.get(&spec.scenario).ok()) {
-            let name = if spec.grid.iter().any(|(g, _)| g == key) { format!("{key} (drawn)") } else { key.clone() };
-            flatten(name, v, &mut out);
+            let start = out.len();
+            flatten(key.clone(), v, &mut out);
+            if spec.grid.iter().any(|(g, _)| overlap(g, key)) {
+                out[start..].iter_mut().for_each(|(name, _)| name.push_str(" (drawn)"));
+            }
         }
     }
     out
+}
+
+/// Whether key paths `a` and `b` name the same value or one holds the other (`truth.delays`,
+/// `truth.delays[1]`).
+fn overlap(a: &str, b: &str) -> bool {
+    let within = |inner: &str, outer: &str| {
+        inner.strip_prefix(outer).is_some_and(|rest| rest.is_empty() || rest.starts_with(['[', '.']))
+    };
+    within(a, b) || within(b, a)
 }
 
 /// The perturbed keys of a study's Monte Carlo draws, in the study's order.

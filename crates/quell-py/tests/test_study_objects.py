@@ -66,6 +66,35 @@ def test_a_study_from_objects_is_the_study_file(tmp_path, quell_bin, swept):
     assert list(quell.sweep(study, jobs=1).columns) == list(frame.columns)
 
 
+def test_a_draw_of_a_key_the_grid_sets_in_part_keeps_the_grid_column(tmp_path, quell_bin):
+    """The grid sets truth.delays[1], the draws perturb the whole truth.delays around it: the grid's
+    column keeps the grid's values (runs.csv's), and each drawn number is `… (drawn)` (the draw of
+    delays[1] had overwritten the grid column, so the frame's rows differed from runs.csv's)."""
+    grid = {"truth.delays[1]": [1.95, 2.05]}
+    draws = {"runs": 2, "seed": 11, "truth.delays": {"relative_uniform": 0.02}}
+    study = quell.Study(quell.paper_example(), grid=grid, monte_carlo=draws, simulation={"t_end": 2.0})
+    frame = study.sweep(jobs=1).frame
+    path = tmp_path / "study.toml"
+    path.write_text(
+        f'scenario = "{(EXAMPLES / "paper.toml").as_posix()}"\n[simulation]\nt_end = 2.0\n'
+        '[grid]\n"truth.delays[1]" = [1.95, 2.05]\n'
+        '[monte_carlo]\nruns = 2\nseed = 11\n"truth.delays" = { relative_uniform = 0.02 }\n'
+    )
+    out = tmp_path / "out"
+    subprocess.run([quell_bin, "sweep", path, "--out", out, "--no-plots"], check=True, capture_output=True)
+    cli = pd.read_csv(out / "runs.csv", comment="#")
+    same_rows(frame[list(cli.columns)], cli)
+    assert list(frame["truth.delays[1]"]) == [1.95, 1.95, 2.05, 2.05]
+    drawn = ["truth.delays[0] (drawn)", "truth.delays[1] (drawn)"]
+    assert list(frame.columns) == list(cli.columns) + drawn
+    # The drawn delay is the grid's times 1 ± 2 %, and the run's own scenario holds it.
+    ratio = frame["truth.delays[1] (drawn)"] / frame["truth.delays[1]"]
+    assert ((ratio - 1).abs() <= 0.02).all() and (ratio != 1).all(), ratio
+    spec = study.spec(3)
+    assert spec.drawn == {k: frame.iloc[3][k] for k in drawn}
+    assert spec.scenario().truth.delays[1] == frame.iloc[3]["truth.delays[1] (drawn)"]
+
+
 def test_drawn_values_follow_their_laws():
     """2,000 draws (specifications only, nothing simulated): the relative-uniform delay lies in
     3·[0.9, 1.1] and passes SciPy's KS test against U(2.7, 3.3) at the 0.1 % level; the
