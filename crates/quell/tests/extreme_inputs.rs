@@ -275,14 +275,20 @@ fn delays_at_the_edges_are_accepted_and_the_loop_says_what_it_can_run() {
         Err(quell::sim::SimError::Controller(quell::ControllerError::DelayTooLong { channel: 0, .. }))
     ));
     // τ_1 = 1e-300 s: 0 samples at T_s = 1 ms, so the sampled loop runs; the integrator's steps are
-    // at most min τ long, so the continuous loop would need 1e301 steps: an input error, as for a
-    // sampled-data run beyond 1e10 steps (was StepSizeTooSmall at t = 0, a failed run).
+    // at most min τ long, so the continuous loop would need 1e301 steps and a history of 3e300
+    // records: an input error (was StepSizeTooSmall at t = 0, a failed run), naming the least τ
+    // that passes every check of the run (the step limit's 1e-9 had been named first, and followed
+    // it met the history's).
     let (s, d) = load("delays = [1.0, 3.0]", "delays = [1e-300, 3.0]").unwrap();
     let settings = RunSettings::continuous(10.0, 0.1, 1e-9, 1e-9);
-    match Run::new(&d, &s.reference, &s.disturbance, settings).simulate(|_| ControlFlow::Continue(())) {
+    match Run::new(&d, &s.reference, &s.disturbance, settings.clone()).simulate(|_| ControlFlow::Continue(())) {
         Err(quell::sim::SimError::Input(e)) => {
             assert_eq!(e.key, "plant.delays[0]");
-            assert!(e.message.ends_with("expected 0 (no delay) or τ ≥ 1e-9"), "{e}");
+            let tau = e.message.split("expected 0 (no delay) or τ ≥ ").nth(1).and_then(|r| r.split(' ').next());
+            let tau: f64 = tau.and_then(|t| t.parse().ok()).unwrap_or_else(|| panic!("{e}"));
+            let (s, d) = load("delays = [1.0, 3.0]", &format!("delays = [{tau:e}, 3.0]")).unwrap();
+            let run = Run::new(&d, &s.reference, &s.disturbance, settings.clone());
+            assert!(run.check().is_ok(), "τ = {tau:e}: {:?}", run.check());
         }
         other => panic!("{:?}", other.map(|r| r.outcome)),
     }

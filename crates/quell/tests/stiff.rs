@@ -677,5 +677,24 @@ fn a_shortest_delay_that_caps_the_steps_is_cautioned() {
         ),
         "{w}"
     );
+    // 1e-5 s against the loop's fastest time constant 1/ρ = 1/9 s: best dropped.
+    assert!(
+        w.ends_with("; a delay this short beside the loop's fastest time constant 1/ρ = 0.1111 s is best set to 0"),
+        "{w}"
+    );
     assert_eq!(warning(PAPER_EXAMPLE), None);
+    // Where the loop's rate binds the steps (t_end = 1e8 s: at least 2.6e9 steps from ρ = 9/s,
+    // 1e8 from the 1 s delay), the delay is not named (it had been told to be set to 0).
+    let long = |t_end: &str, delays: &str| {
+        PAPER_EXAMPLE
+            .replace("t_end = 100.0", &format!("t_end = {t_end}"))
+            .replace("output_step = 0.1", "output_step = 1e4")
+            .replace("delays = [1.0, 3.0]", delays)
+    };
+    let w = warning(&long("1e8", "delays = [1.0, 3.0]")).expect("the rate's caution");
+    assert!(!w.contains("shortest delay"), "{w}");
+    // A delay that binds (0.2 s against DOP853's 3.5/ρ = 0.39 s) but is longer than 1/ρ is named
+    // without being called negligible.
+    let w = warning(&long("1e6", "delays = [0.2, 3.0]")).expect("the delay's caution");
+    assert!(w.contains("the shortest delay, 0.2 s, caps every step at its length") && !w.contains("set to 0"), "{w}");
 }

@@ -998,15 +998,28 @@ pub fn fast_rate_warning(run: &Run<'_>) -> Option<String> {
 }
 
 /// A shortest delay τ_min that caps the steps at τ_min so that t_end takes more than
-/// [`FAST_RATE_STEPS`] ([`Run::delay_floor`]): delays [1e-6, 0.1] on the paper's loop took 10 s
-/// for 2.35 of its 100 s, with nothing said (a history too long for such steps is refused instead).
+/// [`FAST_RATE_STEPS`] ([`Run::delay_floor`]) and more than the loop's fastest rate takes
+/// ([`FastRate`]): delays [1e-6, 0.1] on the paper's loop took 10 s for 2.35 of its 100 s, with
+/// nothing said (a history too long for such steps is refused instead). A τ_min shorter than the
+/// loop's fastest time constant 1/ρ is said to be best set to 0; a longer one is no approximation
+/// to drop (a 1 s delay in a loop of ρ = 71/s had been told so, where the rate bound the steps).
 fn short_delay_warning(run: &Run<'_>) -> Option<String> {
-    let floor = run.delay_floor() as f64;
-    let tau_min = run.settings.t_end / floor;
-    (floor > FAST_RATE_STEPS).then(|| {
+    // From τ_min itself: ⌈t_end/τ_min⌉ as a count saturates (1e-300 s had been named 5.4e-19 s).
+    let tau_min = run.loop_delays().first().copied().filter(|_| run.delay_floor() > 0)?;
+    let floor = (run.settings.t_end / tau_min).ceil();
+    let rate = FastRate::of(run);
+    let binding = rate.as_ref().is_none_or(|r| floor > r.steps);
+    (floor > FAST_RATE_STEPS && binding).then(|| {
         let unit = run.design.plant().time_unit;
+        let drop = match rate {
+            Some(r) if tau_min * r.rho < 1.0 => format!(
+                "; a delay this short beside the loop's fastest time constant 1/ρ = {} {unit} is best set to 0",
+                settings::fmt_4(1.0 / r.rho)
+            ),
+            _ => String::new(),
+        };
         format!(
-            "the shortest delay, {} {unit}, caps every step at its length, so t_end = {} {unit} takes at least {floor:.1e} steps; a delay negligible beside the loop's time scale is best set to 0",
+            "the shortest delay, {} {unit}, caps every step at its length, so t_end = {} {unit} takes at least {floor:.1e} steps{drop}",
             settings::fmt_4(tau_min),
             settings::fmt_short(run.settings.t_end)
         )
@@ -1126,21 +1139,25 @@ pub(super) fn check<'a>(run: &Run<'a>, integrator: &Integrator) -> Result<Contin
     settings::check_integrator_horizon(horizon)?;
     settings::check_integrator_signal("reference", run.reference, horizon)?;
     settings::check_integrator_signal("disturbance", run.disturbance, horizon)?;
+    if let Some(b) = noise.and_then(|n| n.bandwidth) {
+        check_noise_bandwidth(b, run.loop_rate(), horizon.1)?;
+    }
+    // The history's memory first: its least τ is usually the larger (delays [1e-12, 2] s over
+    // 20 s were told τ ≥ 2e-9 by the step limit, then τ ≥ 6.95e-6 by the history).
+    check_history_span(run, integrator, dde::record_bytes(sys.n_delayed()), sys.delays())?;
     settings::check_integrator_delays("plant.delays", &run.design.plant().delays, horizon)?;
     settings::check_integrator_delays("truth.delays", &truth.delays, horizon)?;
     if let Some(a) = actuator {
         settings::check_integrator_delays("truth.actuator_delays", &a.delays, horizon)?;
     }
-    if let Some(b) = noise.and_then(|n| n.bandwidth) {
-        check_noise_bandwidth(b, run.loop_rate(), horizon.1)?;
-    }
-    check_history_span(run, integrator, dde::record_bytes(sys.n_delayed()), sys.delays())?;
     Ok(sys)
 }
 
-/// Bytes in whole MiB, as the history's own message counts them (its 1 GiB cap is "1024 MB").
+/// Bytes in whole MiB, as the history's own message counts them (its 1 GiB cap is "1024 MB"); three
+/// significant digits beyond a million (a 1e-300 s delay's history printed 1.02996826171875e298).
 fn mib(bytes: f64) -> String {
-    settings::fmt_short((bytes / 1048576.0).round().max(1.0))
+    let m = (bytes / 1048576.0).round().max(1.0);
+    settings::fmt_short(if m < 1e6 { m } else { settings::significant(m, 3) })
 }
 
 /// The shortest delay τ_min caps the integrator's steps at τ_min while the delay history holds
