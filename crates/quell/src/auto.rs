@@ -793,7 +793,7 @@ fn sampled_start(doc: &toml::Table, targets: &Targets) -> Result<(Proposal, Desi
         let error = worst(&p, &design);
         let observer_why = match error {
             _ if p.scenario.plant.k() == 0 => observer,
-            e if e > FIDELITY_LIMIT && e > first_error => format!("{observer}; its error is then {e:.2e} at worst: the sample time costs the disturbance observer's fidelity (the run's diagnostics will say so), which a shorter simulation.sample_time would keep"),
+            e if e > FIDELITY_LIMIT && e > first_error => format!("{observer}; its error is then {e:.2e} at worst: the sample time costs the disturbance observer's fidelity (the run's diagnostics say so where a tail misses its bound), which a shorter simulation.sample_time would keep"),
             e => format!("{observer}; its error is then {e:.2e} at worst"),
         };
         for c in p.choices.iter_mut() {
@@ -1727,12 +1727,15 @@ fn choose_scaling(partial: &PartialDesign, s: &Scenario, note: &mut Note) -> Reg
 
 /// The observer candidates of [`observer`]: per r_o = r_0·2^k (k = 0..3) n real poles spread ×2
 /// and ×4 and, with `zeros`, those zeros and the other poles from −r_o; each with how many of its
-/// poles are zeros and its description.
+/// poles are zeros and its description. `pseudo`: more outputs than disturbances, where the zeros
+/// are those of (A, D, (CD)⁺C), not of (A, D, C) (which has none).
 fn observer_candidates(
     zeros: Option<Vec<Complex<f64>>>,
     r_0: f64,
     n: usize,
+    pseudo: bool,
 ) -> Vec<(Vec<Complex<f64>>, usize, String)> {
+    let of = if pseudo { "of (A, D, (CD)⁺C)" } else { "of (A, D, C)" };
     let mut candidates: Vec<(Vec<Complex<f64>>, usize, String)> = Vec::new();
     for k in 0..4 {
         let rate = r_0 * 2f64.powi(k);
@@ -1753,8 +1756,8 @@ fn observer_candidates(
                 poles,
                 z.len(),
                 format!(
-                    "the {} zeros of (A, D, C) and {fast} real poles from −r_o to −2·r_o, r_o = {rate:.4e}",
-                    z.len()
+                    "the {} {of} and {fast} real poles from −r_o to −2·r_o, r_o = {rate:.4e}",
+                    crate::settings::count(z.len(), "zero", "zeros")
                 ),
             ));
         }
@@ -1778,7 +1781,8 @@ fn observer(
     n: usize,
     speed: f64,
 ) -> Result<(Design, String), AutoError> {
-    let candidates = observer_candidates(crate::diagnostics::disturbance_zeros(&s.plant), r_0, n);
+    let pseudo = s.plant.m() > s.plant.k();
+    let candidates = observer_candidates(crate::diagnostics::disturbance_zeros(&s.plant), r_0, n, pseudo);
     /// A candidate's design, poles, worst fidelity error and description.
     type Candidate = (Design, Vec<Complex<f64>>, usize, f64, String);
     let mut tried: Vec<Candidate> = Vec::new();
@@ -1801,7 +1805,6 @@ fn observer(
     // them apart and they are no better than a guess; all-fast poles then (the Shell
     // fractionator's five such zeros, error 3.99, missed the bound at 3,000 min where all-fast
     // poles, error above 4, met it).
-    let pseudo = s.plant.m() > s.plant.k();
     if pseudo && tried.iter().all(|c| c.3 > FIDELITY_LIMIT) && tried.iter().any(|c| c.2 == 0) {
         tried.retain(|c| c.2 == 0);
     }
@@ -1900,6 +1903,23 @@ mod tests {
     fn square(n: usize, w0: f64) -> Signal {
         let harmonic = |k: usize| Harmonic { amplitude: 1.0 / k as f64, frequency: k as f64 * w0, phase: 0.0 };
         Signal { components: vec![Component { bias: 0.0, harmonics: (0..n).map(|j| harmonic(2 * j + 1)).collect() }] }
+    }
+
+    /// A candidate that holds zeros names whose: those of (A, D, C), or with more outputs than
+    /// disturbances those of (A, D, (CD)⁺C) (a motor's two outputs and one load had been said to
+    /// give "the 2 zeros of (A, D, C)", which has none).
+    #[test]
+    fn observer_candidates_name_whose_zeros_they_hold() {
+        let zeros = || Some(vec![Complex::new(-1.0, 0.0)]);
+        for (pseudo, whose) in [
+            (false, "the 1 zero of (A, D, C) and 2 real poles"),
+            (true, "the 1 zero of (A, D, (CD)⁺C) and 2 real poles"),
+        ] {
+            let c = observer_candidates(zeros(), 10.0, 3, pseudo);
+            let with_zeros: Vec<&String> = c.iter().filter(|c| c.1 == 1).map(|c| &c.2).collect();
+            assert_eq!(with_zeros.len(), 4);
+            assert!(with_zeros.iter().all(|w| w.starts_with(whose)), "{with_zeros:?}");
+        }
     }
 
     /// The poles' extreme magnitudes and the largest ratio between neighbours.

@@ -916,7 +916,7 @@ fn the_sampled_halving_says_when_it_costs_the_disturbance_observer() {
         "{why}"
     );
     assert!(
-        why.ends_with(&format!("; its error is then {kept:.2e} at worst: the sample time costs the disturbance observer's fidelity (the run's diagnostics will say so), which a shorter simulation.sample_time would keep")),
+        why.ends_with(&format!("; its error is then {kept:.2e} at worst: the sample time costs the disturbance observer's fidelity (the run's diagnostics say so where a tail misses its bound), which a shorter simulation.sample_time would keep")),
         "{why}"
     );
 }
