@@ -60,6 +60,7 @@ def test_tune_gives_the_clis_evaluations_and_choice(quell_bin, tmp_path):
 
     assert r.mu == json.loads((out / "tune.json").read_text())["mu"]
     assert r.objective == "tail_rms_e" and not r.partial and r.joint is not None
+    assert ours.attrs == {"partial": False}
 
 
 def test_coarse_points_are_log_spaced_and_the_best_is_the_least_mu_within_the_solvers_error():
@@ -145,6 +146,7 @@ def test_ctrl_c_stops_a_tuning_keeping_the_points_so_far(python_child):
             print('partial', e.result.partial, len(e.result), e.result.joint is None, flush=True)
             print('limits', e.result.within_limits, flush=True)
             print('said', str(e), len(e.result.frame), flush=True)
+            print('attrs', e.result.frame.attrs, flush=True)
         """)
     out, err, seconds = interrupt(python_child, code, 3.0)
     assert "finished" not in out, out
@@ -156,6 +158,8 @@ def test_ctrl_c_stops_a_tuning_keeping_the_points_so_far(python_child):
     said = next(line for line in out.splitlines() if line.startswith("said "))
     kept = said.rsplit(" ", 1)[1]
     assert said == f"said interrupted after {kept} evaluations; they are in the exception's .result (partial) {kept}", said
+    # The frame says so as a sweep's does (its attrs were empty).
+    assert "attrs {'partial': True}" in out, out
     assert seconds < 10
 
 

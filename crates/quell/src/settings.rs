@@ -342,7 +342,11 @@ pub(crate) fn check_horizon(t_end: f64, output_step: f64) -> Result<(), KeyError
     if samples > MAX_OUTPUT_SAMPLES {
         return Err(KeyError::new(
             "simulation.output_step",
-            format!("t_end / output_step = {samples:.3e} rows of signals.csv; at most {MAX_OUTPUT_SAMPLES:e} are kept; choose output_step ≥ {}", at_least(t_end, MAX_OUTPUT_SAMPLES)),
+            format!(
+                "t_end / output_step = {samples:.3e} rows of signals.csv; at most {MAX_OUTPUT_SAMPLES:e} are kept; choose output_step ≥ {}, or a simulation.t_end ≤ {}",
+                at_least(t_end, MAX_OUTPUT_SAMPLES),
+                fmt_short(three_digits_down(output_step * MAX_OUTPUT_SAMPLES))
+            ),
         ));
     }
     Ok(())

@@ -117,10 +117,13 @@ class TuneResult:
         """Every evaluation, one row each, by channel and μ: tune.csv's columns ``channel`` (from 1),
         ``mu``, ``objective`` (None where infeasible), ``outcome``, ``reason`` (why a run did not
         complete, as runs.csv's; NaN for a completed run, as a sweep's frame and tune.csv read by
-        pandas have it), the channel's figures and ``chosen``."""
+        pandas have it), the channel's figures and ``chosen``; ``attrs["partial"]`` as a sweep's
+        frame has it (True after Ctrl-C)."""
         import pandas as pd
 
-        return pd.DataFrame(list(self._rows()), columns=list(COLUMNS))
+        frame = pd.DataFrame(list(self._rows()), columns=list(COLUMNS))
+        frame.attrs["partial"] = self.partial
+        return frame
 
     @property
     def best(self):
