@@ -1324,3 +1324,20 @@ fn a_sampled_candidate_that_departs_from_its_continuous_loop_is_slowed() {
         assert!(us < 50.0, "{us}");
     }
 }
+
+/// A design the automatic design verified at its sample time is not sent back to it by the run's
+/// comparison with the continuous loop: the verification checks u_f against the continuous loop's,
+/// not y, and the active suspension's design (examples/apps, 1 kHz, its own true bus) departs in y
+/// alone (by 100 % of the continuous peak, at 0.08× its u_f), so the run's line offers the sample
+/// time that agrees or slower poles, not the automatic design (it had, circularly).
+#[test]
+fn a_verified_sampled_design_is_not_sent_back_to_the_automatic_design() {
+    let text = include_str!("../../../examples/apps/active-suspension/scenario.toml");
+    let a = auto_design(&without_design(text), &Targets::default()).unwrap();
+    assert!(a.verification.passed, "{:?}", a.verification);
+    let r = Run::of(&a.scenario, &a.design).simulate(|_| ControlFlow::Continue(())).unwrap();
+    let advice = quell::diagnostics::sampled_advice(&a.scenario, &a.design, &r);
+    let departs = advice.iter().find(|l| l.contains("departs from its continuous loop")).expect("a departure in y");
+    assert!(departs.ends_with("or give slower design.channel_poles and design.observer_poles"), "{departs}");
+    assert!(advice.iter().all(|l| !l.contains("automatic design")), "{advice:?}");
+}
