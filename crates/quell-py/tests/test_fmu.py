@@ -292,6 +292,9 @@ def test_fmi3_calls_one_by_one(tmp_path):
         # A finite input beyond the controller's bound is refused by the step, which names it.
         (lambda: fmu.setFloat64([vr["g[3]"]], [1e101]) or fmu.doStep(1.1, 0.05),
          "fmi3DoStep: input g[3] = 1e+101 is NaN or beyond +-1e+100; the step was refused"),
+        # Just beyond the bound: the value as it reads back, not as %g rounded it (to the bound).
+        (lambda: fmu.setFloat64([vr["g[3]"]], [1.0000001e100]) or fmu.doStep(1.1, 0.05),
+         "fmi3DoStep: input g[3] = 1.0000001e+100 is NaN or beyond +-1e+100; the step was refused"),
     ]
     for call, why in refusals:
         with pytest.raises(FMICallException, match="status 3"):
