@@ -339,9 +339,19 @@ impl PyController {
     }
 
     /// Pickles as the design, the sample time and the state: the copy continues where this one is.
+    /// A controller whose state is no longer finite (after `StateNotFinite`) is refused: its copy
+    /// could not be restored (a checkpoint taken at a fault had pickled, then failed to load).
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Reduced<'py>> {
         let py = slf.py();
         let me = slf.get();
+        if let Some(k) = me.lock().state().iter().position(|v| !v.is_finite()) {
+            return Err(Kind::Controller.err(
+                py,
+                format!(
+                    "Controller: its state is no longer finite (state[{k}]; the fault a step reported as StateNotFinite), so a pickle or copy of it could not be restored; reset() it first, or keep a checkpoint taken before the fault"
+                ),
+            ));
+        }
         let T = me.lock().sample_time();
         Ok((slf.get_type().into_any(), (me.design.clone_ref(py), T), me.__getstate__(py)))
     }

@@ -128,3 +128,28 @@ def test_step_refuses_booleans_as_plant_does(y):
         ctrl.step(y, [0.0, 0.0])
     with pytest.raises(TypeError, match="booleans"):
         quell.Plant([[True]], [[1.0]], [[1.0]])
+
+
+def test_a_faulted_controller_is_not_pickled_into_a_checkpoint_that_cannot_load():
+    """A state past floating point (StateNotFinite; a PMSM's controller got there from five spikes
+    just within the input bound, here from a finite state of 1e300 entries): such a controller had
+    pickled, and the pickle then failed to load (its NaN state refused), so a host loop's
+    checkpoint taken at the fault was lost. Pickling and copying it are refused with what to do;
+    after reset() it pickles and the copy steps as it does."""
+    import copy
+    import pickle
+
+    c = quell.Controller(quell.paper_example().design(), sample_time=1e-2)
+    c.step([0.5, 0.0], [1.0, 2.0])
+    huge = c.__getstate__()
+    huge[:] = 1e300  # finite, and Ω_i stays symmetric
+    c.__setstate__(huge)
+    with pytest.raises(quell.ControllerError, match="no longer finite"):
+        c.step([0.5, 0.0], [1.0, 2.0])
+    assert not np.isfinite(c.__getstate__()).all()
+    for save in (pickle.dumps, copy.copy, copy.deepcopy):
+        with pytest.raises(quell.ControllerError, match=r"no longer finite .*reset\(\) it first"):
+            save(c)
+    c.reset()
+    again = pickle.loads(pickle.dumps(c))
+    assert np.array_equal(again.step([0.5, 0.0], [1.0, 2.0]), c.step([0.5, 0.0], [1.0, 2.0]))

@@ -30,7 +30,7 @@ pub enum ControllerError {
     },
     /// `nearest` as in `DelayNotMultiple`: the sample time nearest T_s at which every line fits and
     /// every delay is whole.
-    #[error("simulation.sample_time: channel {}'s delay τ = {} {unit} is {samples:e} samples of T_s = {} {unit}; a delay line holds at most {max:e} samples; {}", .channel + 1, crate::linalg::fmt_number(*.delay), crate::linalg::fmt_number(*.sample_time), longer(*.nearest, *.unit), max = MAX_DELAY_SAMPLES)]
+    #[error("simulation.sample_time: channel {}'s delay τ = {} {unit} is {} samples of T_s = {} {unit}; a delay line holds at most {max:e} samples; {}", .channel + 1, crate::settings::fmt_short(*.delay), crate::settings::fmt_4(*.samples), crate::settings::fmt_short(*.sample_time), longer(*.nearest, *.unit), max = MAX_DELAY_SAMPLES)]
     DelayTooLong { channel: usize, delay: f64, sample_time: f64, samples: f64, nearest: Option<f64>, unit: TimeUnit },
     /// The delay lines together would hold more than [`MAX_DELAY_LINE_BYTES`]; `at_least` is the
     /// shortest sample time at which they would not, `nearest` the shortest round one from there on
@@ -308,12 +308,16 @@ fn delay_samples(delays: &[f64], T: f64, width: usize, unit: TimeUnit) -> Result
     for (channel, &delay) in delays.iter().enumerate() {
         let samples = delay / T;
         if samples.is_nan() || samples > MAX_DELAY_SAMPLES {
+            // The shortest round sample time from the least every line allows, as the lines' bytes
+            // offer it (τ/k had offered 2.870000459e-8 ms where 5e-8 ms passes).
+            let longest = delays.iter().copied().fold(0.0, f64::max) / MAX_DELAY_SAMPLES;
+            let at_least = lines_at_least(delays, width).max(longest);
             return Err(ControllerError::DelayTooLong {
                 channel,
                 delay,
                 sample_time: T,
                 samples,
-                nearest: nearest(),
+                nearest: round_at_least(delays, width, at_least).or_else(nearest),
                 unit,
             });
         }
