@@ -400,27 +400,6 @@ fn the_delay_lines_are_budgeted_together_in_bytes() {
     assert!(quell::Controller::new(&d, printed).is_ok(), "{printed}");
 }
 
-/// A delay line beyond its 1e7 samples offers the shortest round sample time (1, 2, 2.5 or 5 ×
-/// 10^e) at which every line holds at most 1e7 samples and every delay is whole, as the lines'
-/// bytes offer theirs (τ/k had offered a PMSM 2.870000459e-8 ms where 5e-8 ms passes). On the
-/// paper's example at 1e-9 s: the 3 s line needs T_s ≥ 3e-7 s, so 5e-7 s (its lines, 8e6 rows,
-/// are not allocated here).
-#[test]
-fn a_delay_line_too_long_offers_a_round_sample_time() {
-    let d = Scenario::from_toml(PAPER_EXAMPLE).unwrap().design().unwrap();
-    let e = quell::Controller::new(&d, 1e-9).unwrap_err();
-    assert!(
-        e.to_string().ends_with(
-            "a delay line holds at most 1e7 samples; use a longer sample time: the nearest valid one is 5e-7 s"
-        ),
-        "{e}"
-    );
-    let quell::ControllerError::DelayTooLong { nearest: Some(t), .. } = e else { panic!("{e}") };
-    let samples = |tau: f64| tau / t;
-    assert!(samples(3.0) <= 1e7 && (samples(1.0) - samples(1.0).round()).abs() < 1e-9 * samples(1.0), "{t}");
-    assert!(samples(3.0) > 1e7 / 2.5, "a round value the next one down (2e-7) would not pass: {t}");
-}
-
 /// An internal-model filter whose polynomial ∏(s − p_j) has a coefficient beyond 1e150 is refused
 /// naming the list: 44 poles near −1e7 overflowed it to ∞, and the design report and every run
 /// then hung in an eigenvalue iteration on the non-finite companion matrix, deaf to Ctrl-C. With

@@ -308,16 +308,12 @@ fn delay_samples(delays: &[f64], T: f64, width: usize, unit: TimeUnit) -> Result
     for (channel, &delay) in delays.iter().enumerate() {
         let samples = delay / T;
         if samples.is_nan() || samples > MAX_DELAY_SAMPLES {
-            // The shortest round sample time from the least every line allows, as the lines' bytes
-            // offer it (τ/k had offered 2.870000459e-8 ms where 5e-8 ms passes).
-            let longest = delays.iter().copied().fold(0.0, f64::max) / MAX_DELAY_SAMPLES;
-            let at_least = lines_at_least(delays, width).max(longest);
             return Err(ControllerError::DelayTooLong {
                 channel,
                 delay,
                 sample_time: T,
                 samples,
-                nearest: round_at_least(delays, width, at_least).or_else(nearest),
+                nearest: nearest(),
                 unit,
             });
         }
