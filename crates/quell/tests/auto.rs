@@ -1323,6 +1323,14 @@ fn a_sampled_candidate_that_departs_from_its_continuous_loop_is_slowed() {
         // The actuator effort of the continuous design (about 20), not the departed one's 1e4.
         assert!(us < 50.0, "{us}");
     }
+    // Under measurement noise, which the two loops read at different instants, both are compared
+    // without it (a noisy scenario had been verified with no comparison at all): the same design.
+    let noisy = format!("{text}\n[noise]\nstd = [1e-4, 1e-4]\nseed = 3\n");
+    let b = auto_design(&without_design(&noisy), &Targets::default()).unwrap();
+    assert!(b.verification.passed, "{:?}", b.verification);
+    let poles = &b.choices.iter().find(|c| c.key == "design.channel_poles").unwrap().why;
+    assert!(poles.ends_with("; both without [noise])"), "{poles}");
+    assert_eq!(b.design.K(), a.design.K());
 }
 
 /// A design the automatic design verified at its sample time is not sent back to it by the run's
