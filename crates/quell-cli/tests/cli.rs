@@ -1064,7 +1064,7 @@ fn a_coarse_sample_time_is_warned_of() {
     let suggested: f64 = w.split("choose T_s ≤ ").nth(1).and_then(|r| r.split(' ').next()).unwrap().parse().unwrap();
     assert!(suggested <= 0.2 / 9.0 && suggested > 0.99 * 0.2 / 9.0, "{suggested}");
     // The bound does not divide the delays (1 s and 3 s); the example given does, and runs quietly.
-    assert!(w.contains("(T_s·ρ ≤ 0.2), e.g. 0.02 s, which makes every delay whole"), "{w}");
+    assert!(w.contains("(T_s·ρ ≤ 0.2), e.g. 0.02 s, which makes plant.delays whole"), "{w}");
     assert_eq!(run("0.02"), None);
     let c = dir.path().join("c");
     let export = ["export", &paper(), "--sample-time", "0.05", "--out", c.to_str().unwrap()];

@@ -125,24 +125,16 @@ fn flatten(name: String, v: &Value, out: &mut Vec<(String, f64)>) {
 fn drawn_values(keys: &[String], spec: &RunSpec) -> Vec<(String, f64)> {
     let mut out = Vec::new();
     for key in keys {
-        if let Some(v) = KeyPath::parse(key).ok().and_then(|p| p.get(&spec.scenario).ok()) {
+        let Ok(path) = KeyPath::parse(key) else { continue };
+        if let Ok(v) = path.get(&spec.scenario) {
             let start = out.len();
             flatten(key.clone(), v, &mut out);
-            if spec.grid.iter().any(|(g, _)| overlap(g, key)) {
+            if spec.grid.iter().any(|(g, _)| KeyPath::parse(g).is_ok_and(|g| g.overlaps(&path))) {
                 out[start..].iter_mut().for_each(|(name, _)| name.push_str(" (drawn)"));
             }
         }
     }
     out
-}
-
-/// Whether key paths `a` and `b` name the same value or one holds the other (`truth.delays`,
-/// `truth.delays[1]`).
-fn overlap(a: &str, b: &str) -> bool {
-    let within = |inner: &str, outer: &str| {
-        inner.strip_prefix(outer).is_some_and(|rest| rest.is_empty() || rest.starts_with(['[', '.']))
-    };
-    within(a, b) || within(b, a)
 }
 
 /// The perturbed keys of a study's Monte Carlo draws, in the study's order.

@@ -381,10 +381,25 @@ impl Verifier<'_> {
         })?;
         self.steps += r.stats.steps();
         match r.outcome.clone().unwrap_or(Outcome::Completed) {
-            Outcome::Completed => match crate::diagnostics::sampled::effort_departure(scenario, design, &r) {
-                Some(how) => Err(AutoError::Departed(how)),
-                None => Ok(candidate(scenario, &r, speed, self.convergence_time)),
-            },
+            Outcome::Completed => {
+                // The comparison's side runs report as the run did, and stop with it (Ctrl-C).
+                let mut stopped = false;
+                let mut watch = |t: f64| {
+                    let flow = if crate::cancel::check().is_err() {
+                        ControlFlow::Break(())
+                    } else {
+                        progress(&Progress { run, speed, t, t_end })
+                    };
+                    stopped |= flow.is_break();
+                    flow
+                };
+                let departure = crate::diagnostics::sampled::effort_departure(scenario, design, &r, &mut watch);
+                match departure {
+                    _ if stopped => Err(AutoError::Interrupted),
+                    Some(how) => Err(AutoError::Departed(how)),
+                    None => Ok(candidate(scenario, &r, speed, self.convergence_time)),
+                }
+            }
             Outcome::Interrupted { .. } => Err(AutoError::Interrupted),
             other => Err(AutoError::Run(other)),
         }
@@ -631,7 +646,7 @@ fn check_first(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier) ->
                         continue;
                     }
                     None => {
-                        let advice = ended_early(&first.scenario, &e);
+                        let advice = ended_early(&first.scenario, &e, slowed > 0);
                         return unverified((first, design, start), advice, verifier.runs - runs_before, &bound);
                     }
                 }
@@ -699,6 +714,11 @@ fn slower_start(
             ),
             e => format!("; ×{factor} of the rules' poles in all: the verifying runs of the faster proposals ended early (the last: {}, t in {unit})", ended(e)),
         });
+        // The disturbance observer's error of these poles (the faster proposal's quoted above).
+        if c.key == "design.observer_poles" && p.scenario.plant.k() > 0 {
+            let error = fidelity(&p.scenario, &d).into_iter().fold(0.0, f64::max);
+            c.why.push_str(&format!("; its error is then {error:.2e} at worst"));
+        }
     }
     Some((p, d, speed))
 }
@@ -1132,10 +1152,13 @@ fn ended(failed: &AutoError) -> String {
 
 /// Advice on a first proposal whose verifying run ended before t_end or departed from its
 /// continuous loop (`failed`).
-fn ended_early(s: &Scenario, failed: &AutoError) -> String {
+fn ended_early(s: &Scenario, failed: &AutoError, slowed: bool) -> String {
+    // "Even at the slowest start" only where the proposal was slowed (a file that gives both kinds
+    // of poles has none slower).
+    let slowest = if slowed { " even at the slowest start" } else { "" };
     let why = match s.simulation.sample_time {
         Some(t_s) => format!(
-            "its poles may be too fast for the sample time {t_s} {} even at the slowest start (docs/tuning.md, a sampled-data scenario): try a shorter simulation.sample_time, or give slower design.channel_poles and design.observer_poles by hand",
+            "its poles may be too fast for the sample time {t_s} {}{slowest} (docs/tuning.md, a sampled-data scenario): try a shorter simulation.sample_time, or give slower design.channel_poles and design.observer_poles by hand",
             s.plant.time_unit
         ),
         None => "give some [design] keys by hand (slower channel or observer poles, a smaller mu; docs/tuning.md)".to_string(),
@@ -1143,7 +1166,8 @@ fn ended_early(s: &Scenario, failed: &AutoError) -> String {
     let unit = s.plant.time_unit;
     match failed {
         AutoError::Departed(how) => format!(
-            "the first proposal's sampled-data verifying run drives u_f beyond twice its continuous loop's (the scenario without its sample time), even at the slowest start: {how}; {why}"
+            "the first proposal's sampled-data verifying run drives u_f beyond twice its continuous loop's (the scenario without its sample time){}: {how}; {why}",
+            if slowed { ", even at the slowest start" } else { "" }
         ),
         e => format!(
             "the first proposal's verifying simulation ended before t_end = {} {unit}: {}; {why}",
@@ -1830,7 +1854,8 @@ fn observer(
         format!("{what}: the slowest candidate (r_o = 6r, 3× the slowest channel pole the rules start from, −2r): the plant has no disturbance input (k = 0), so no disturbance observer (eq. (20)) decides among faster ones")
     } else {
         format!(
-            "{what}: the first candidate (r_o = r_0·2^k, r_0 = 6r, 3× the slowest channel pole the rules start from (−2r, also when the file gives the channel poles), k ≤ 3; spreads ×2, ×4; the zeros of (A, D, C) kept) whose disturbance observer (eq. (20), driven by x̂) passes every frequency of ω with relative error ≤ {FIDELITY_AIM}, or within {FIDELITY_SLACK}× the best candidate's; its error is {error:.2e} at worst"
+            "{what}: the first candidate (r_o = r_0·2^k, r_0 = 6r, 3× the slowest channel pole the rules start from (−2r, also when the file gives the channel poles), k ≤ 3; spreads ×2, ×4; the zeros {} kept) whose disturbance observer (eq. (20), driven by x̂) passes every frequency of ω with relative error ≤ {FIDELITY_AIM}, or within {FIDELITY_SLACK}× the best candidate's; its error is {error:.2e} at worst",
+            if pseudo { "of (A, D, (CD)⁺C)" } else { "of (A, D, C)" }
         )
     };
     Ok((design, why))

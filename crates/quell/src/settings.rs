@@ -343,9 +343,8 @@ pub(crate) fn check_horizon(t_end: f64, output_step: f64) -> Result<(), KeyError
         return Err(KeyError::new(
             "simulation.output_step",
             format!(
-                "t_end / output_step = {samples:.3e} rows of signals.csv; at most {MAX_OUTPUT_SAMPLES:e} are kept; choose output_step ≥ {}, or a simulation.t_end ≤ {}",
-                at_least(t_end, MAX_OUTPUT_SAMPLES),
-                fmt_short(three_digits_down(output_step * MAX_OUTPUT_SAMPLES))
+                "t_end / output_step = {samples:.3e} rows of signals.csv; at most {MAX_OUTPUT_SAMPLES:e} are kept; choose output_step ≥ {}, or a shorter simulation.t_end",
+                at_least(t_end, MAX_OUTPUT_SAMPLES)
             ),
         ));
     }
@@ -680,12 +679,12 @@ mod tests {
         for (t_end, step) in [(1e300, 0.1), (100.0, 1e-6), (3.0, 1e-7), (1e20, 1e-300)] {
             let e = check_horizon(t_end, step).unwrap_err();
             let rest = e.message.rsplit("choose output_step ≥ ").next().unwrap();
-            let (suggested, horizon) = rest.split_once(", or a simulation.t_end ≤ ").unwrap();
-            assert!(suggested.len() <= 8 && horizon.len() <= 8, "{e}");
+            // No horizon is named: the recorded signals' memory, checked later, may ask for a
+            // shorter one (t_end = 10 s at output_step = 1e-6 s is 2.01 GiB of rows).
+            let suggested = rest.strip_suffix(", or a shorter simulation.t_end").unwrap();
+            assert!(suggested.len() <= 8, "{e}");
             let h: f64 = suggested.parse().unwrap();
             assert!(check_horizon(t_end, h).is_ok(), "{e}");
-            // The horizon named passes at the output step given.
-            assert!(check_horizon(horizon.parse().unwrap(), step).is_ok(), "{e}");
             let e = check_sample_time(t_end, step * 1e-4).unwrap_err();
             let suggested = e.message.rsplit("choose sample_time ≥ ").next().unwrap();
             assert!(suggested.len() <= 8, "{e}");
@@ -693,7 +692,7 @@ mod tests {
         }
         // 1e300 / 1e293 rounds to just above 1e7, so the suggestion is the next 3-digit value.
         let e = check_horizon(1e300, 0.1).unwrap_err();
-        assert!(e.message.ends_with("choose output_step ≥ 1.01e293, or a simulation.t_end ≤ 1e6"), "{e}");
+        assert!(e.message.ends_with("choose output_step ≥ 1.01e293, or a shorter simulation.t_end"), "{e}");
         assert!(check_horizon(1e300, 1e293).is_err());
     }
 }

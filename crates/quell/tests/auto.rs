@@ -324,10 +324,10 @@ fn a_value_the_rules_chose_and_the_design_refuses_is_named_as_theirs() {
 /// A sampled-data scenario starts the rules from channel and observer poles slow enough for its
 /// sample time: the maglev (tests/data/maglev.toml, ±57 /s, 1 ms delay) gets an observer for
 /// ρ = 686 /s in the continuous loop, too fast for 0.5 ms (T_s·ρ = 0.34); with
-/// simulation.sample_time = 0.0005 the rules halve the poles to T_s·ρ ≤ 0.2. That start still
-/// drives u_f 3.7× its continuous loop's peak (it had passed so, and the run's own comparison then
-/// sent the user back to the automatic design), so it is slowed until the sampled run stays within
-/// twice its continuous u_f; over the 5 s of the file that slower loop misses the tail bound, and
+/// simulation.sample_time = 0.0005 the rules halve the poles to T_s·ρ ≤ 0.2. That start drives
+/// u_f 195× its continuous loop's peak (1059 V against 5.4 V; it had passed so, and the run's own
+/// comparison then sent the user back to the automatic design), the next slower one still 3.7×, so
+/// it is slowed until the sampled run stays within twice its continuous u_f; over the 5 s of the file that slower loop misses the tail bound, and
 /// the failed verification names the horizon at which the automatic design passes.
 #[test]
 fn a_sampled_scenario_gets_poles_slow_enough_for_its_sample_time() {
@@ -354,6 +354,15 @@ fn a_sampled_scenario_gets_poles_slow_enough_for_its_sample_time() {
     assert!(kept.observer <= 0.125, "{kept:?}");
     let why = &sampled.choices.iter().find(|c| c.key == "design.observer_poles").unwrap().why;
     assert!(why.contains("of that for simulation.sample_time = 0.0005 s (T_s·ρ = "), "{why}");
+    // The disturbance observer's error quoted last is the kept poles' (the faster proposal's had
+    // been left as the last word).
+    let kept_error =
+        quell::diagnostics::Averaged::new(&sampled.design, &sampled.scenario.reference, &sampled.scenario.disturbance)
+            .fidelity
+            .iter()
+            .map(|f| f.relative_error)
+            .fold(0.0, f64::max);
+    assert!(why.ends_with(&format!("; its error is then {kept_error:.2e} at worst")), "{why}");
     let slowed = format!("×{} of the rules' poles in all: the sampled-data verifying runs of the faster proposals drove u_f beyond twice their continuous loop's (the last: y[1] by ", kept.observer);
     assert!(why.contains(&slowed), "{why}");
     // The kept design's sampled run against its continuous loop, on their own rows.
@@ -957,7 +966,7 @@ fn a_sample_time_the_poles_cannot_meet_is_said_to_be_missed() {
     let why = &a.choices.iter().find(|c| c.key == "design.channel_poles").unwrap().why;
     assert!(
         why.contains("(T_s·ρ = 0.47, still above 0.2: ρ = 1.885e1/ms")
-            && why.contains("a simulation.sample_time T_s ≤ 0.0106 ms (T_s·ρ ≤ 0.2), e.g. 0.005 ms, which makes every delay whole and divides simulation.output_step would meet it"),
+            && why.contains("a simulation.sample_time T_s ≤ 0.0106 ms (T_s·ρ ≤ 0.2), e.g. 0.005 ms, which makes plant.delays whole and divides simulation.output_step would meet it"),
         "{why}"
     );
 }
@@ -1348,4 +1357,28 @@ fn a_verified_sampled_design_is_not_sent_back_to_the_automatic_design() {
     let departs = advice.iter().find(|l| l.contains("departs from its continuous loop")).expect("a departure in y");
     assert!(departs.ends_with("or give slower design.channel_poles and design.observer_poles"), "{departs}");
     assert!(advice.iter().all(|l| !l.contains("automatic design")), "{advice:?}");
+}
+
+/// A stop during a sampled verifying run's comparison with its continuous loop ends the
+/// automatic design as interrupted: the comparison's side run reports its progress as the
+/// verifying run does (its t starts again from 0 within the same run), and a stop there had let
+/// the candidate pass unchecked (and the CLI's Ctrl-C, which stops through the progress callback,
+/// had not reached the side run at all).
+#[test]
+fn a_stop_during_the_continuous_comparison_interrupts_the_design() {
+    let doc = without_design(&data("wardle-wood-column.toml"));
+    let (mut last, mut restarted) = ((0, 0.0), false);
+    let mut stop_in_the_side_run = |p: &quell::auto::Progress| {
+        restarted |= p.run == last.0 && p.t < last.1;
+        last = (p.run, p.t);
+        if restarted {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    };
+    let e =
+        quell::auto::auto_design_with(&doc, &Targets::default(), &mut stop_in_the_side_run).map(|_| ()).unwrap_err();
+    assert!(matches!(e, AutoError::Interrupted), "{e:?}");
+    assert!(restarted, "the side run reported no progress");
 }

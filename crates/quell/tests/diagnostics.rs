@@ -510,7 +510,7 @@ fn a_stiff_gain_is_named_after_the_run_as_before_it() {
     assert_eq!(line(&after.channels[0].advice).as_ref(), Some(&stiff));
     assert!(line(&before[1].advice).is_none() && line(&after.channels[1].advice).is_none());
     // Lowering μ is asked for only where u_f is too large: the integrator handles the stiffness (a
-    // Wardle–Wood column at 10× the threshold's μ settled with tails 1e6× smaller than at it).
+    // tryout's Wardle–Wood column at about 10× the threshold's μ settled with tails 3e4–8e5× smaller).
     assert!(stiff.contains("where max|u_f| is more than the actuator takes, lower design.mu[0] to about "), "{stiff}");
     let mu: f64 = stiff
         .split("lower design.mu[0] to about ")

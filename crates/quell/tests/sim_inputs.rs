@@ -418,9 +418,9 @@ fn the_coarse_sample_warning_offers_a_sample_time_that_divides_the_output_step()
     let (s, d) = paper();
     let signals = [&s.reference, &s.disturbance];
     let alone = quell::sim::coarse_sample_warning(&d, signals, 0.05, None).unwrap();
-    assert!(alone.contains("e.g. 0.02 s, which makes every delay whole, or"), "{alone}");
+    assert!(alone.contains("e.g. 0.02 s, which makes plant.delays whole, or"), "{alone}");
     let w = quell::sim::coarse_sample_warning(&d, signals, 0.05, Some(0.05)).unwrap();
-    assert!(w.contains("e.g. 0.01 s, which makes every delay whole and divides simulation.output_step"), "{w}");
+    assert!(w.contains("e.g. 0.01 s, which makes plant.delays whole and divides simulation.output_step"), "{w}");
     let (g, o) = (&s.reference, &s.disturbance);
     assert!(Run::new(&d, g, o, RunSettings::sampled(1.0, 0.05, 0.02)).check().is_err());
     let r = Run::new(&d, g, o, RunSettings::sampled(1.0, 0.05, 0.01)).check();

@@ -1238,7 +1238,7 @@ mod tests {
             weak(&d)
         );
         assert!(
-            passes[0].contains("which needs simulation.sample_time T_s ≤ 0.000555 s (T_s·ρ ≤ 0.2), e.g. 0.0005 s, which makes every delay whole and divides simulation.output_step (ρ = 3.600e2/s)"),
+            passes[0].contains("which needs simulation.sample_time T_s ≤ 0.000555 s (T_s·ρ ≤ 0.2), e.g. 0.0005 s, which makes plant.delays whole and divides simulation.output_step (ρ = 3.600e2/s)"),
             "{}",
             passes[0]
         );

@@ -59,7 +59,9 @@ pub fn coarse_sample_warning(
 }
 
 /// "T_s ≤ bound (T_s·ρ ≤ [`COARSE_SAMPLE`]), e.g. t …": the sample times fine for a loop of rate
-/// `rate`, with one that makes every delay whole (and divides `output_step`, when given).
+/// `rate`, with one that makes the design's delays whole (and divides `output_step`, when given);
+/// a `[truth]`'s own delays are not seen here, and the run that refuses them names the nearest
+/// sample time that makes them whole too.
 pub(crate) fn fine_sample_time(design: &Design, rate: f64, output_step: Option<f64>) -> String {
     let unit = design.plant().time_unit;
     let bound = settings::three_digits_down(COARSE_SAMPLE / rate);
@@ -71,7 +73,7 @@ pub(crate) fn fine_sample_time(design: &Design, rate: f64, output_step: Option<f
     // for T_s ≤ 2e-8 s: no shorter one keeps the delay lines within their limit).
     let whole = match valid {
         Some(t) if t < bound => format!(
-            ", e.g. {} {unit}, which makes every delay whole{}",
+            ", e.g. {} {unit}, which makes plant.delays whole{}",
             settings::fmt_short(t),
             if output_step.is_some() { " and divides simulation.output_step" } else { "" }
         ),
