@@ -485,6 +485,8 @@ fn a_shrinking_tail_is_told_the_horizon_and_the_mu_that_converge_it() {
         advice.split(after).nth(1).and_then(|r| r.split(' ').next()).unwrap_or_else(|| panic!("{advice}")).into()
     };
     let (t_end, mu) = (number("by about t = "), number("raise design.mu[0] to about "));
+    // Said with its cost (a house's heater, told to raise μ 3×, peaked 54× higher).
+    assert!(advice.contains(&format!("raise design.mu[0] to about {mu} where max|u_f| allows")), "{advice}");
     let t: f64 = t_end.parse().unwrap();
     assert!(t > 100.0 && t < 1e3, "{advice}");
     let (_, raised) = run(&PAPER_EXAMPLE.replace("mu = [20.0, 30.0]", &format!("mu = [{mu}, 30.0]")));

@@ -983,7 +983,8 @@ fn shrinking_advice(result: &SimResult, i: usize, r: f64, (mu, lambda_max, stiff
     }
     let raised = round_up_2(mu * (1.0 + AVERAGED_MARGIN * (t_needed - t1) / (t1 - t0)));
     let or_mu = if raised * lambda_max <= stiff {
-        format!(", or raise {key} to about {} (the missing e-folds at a pace raised with μ, {AVERAGED_MARGIN:.0}× for the transient before it)", fmt_short(raised))
+        // Said with its cost: a house's heater, told to raise μ 3×, peaked 54× higher.
+        format!(", or raise {key} to about {} where max|u_f| allows (the missing e-folds at a pace raised with μ, {AVERAGED_MARGIN:.0}× for the transient before it; a faster adaptation drives u_f harder)", fmt_short(raised))
     } else {
         String::new()
     };
