@@ -373,26 +373,22 @@ impl Verifier<'_> {
         self.runs += 1;
         let (run, t_end) = (self.runs, scenario.simulation.t_end);
         let progress = &mut *self.progress;
-        let r = Run::of(scenario, design).simulate(|t| {
-            if crate::cancel::check().is_err() {
-                return ControlFlow::Break(());
-            }
-            progress(&Progress { run, speed, t, t_end })
-        })?;
+        // The verifying run and its comparison's side runs report alike, and a stop (Ctrl-C) ends
+        // any of them.
+        let mut stopped = false;
+        let mut watch = |t: f64| {
+            let flow = if crate::cancel::check().is_err() {
+                ControlFlow::Break(())
+            } else {
+                progress(&Progress { run, speed, t, t_end })
+            };
+            stopped |= flow.is_break();
+            flow
+        };
+        let r = Run::of(scenario, design).simulate(&mut watch)?;
         self.steps += r.stats.steps();
         match r.outcome.clone().unwrap_or(Outcome::Completed) {
             Outcome::Completed => {
-                // The comparison's side runs report as the run did, and stop with it (Ctrl-C).
-                let mut stopped = false;
-                let mut watch = |t: f64| {
-                    let flow = if crate::cancel::check().is_err() {
-                        ControlFlow::Break(())
-                    } else {
-                        progress(&Progress { run, speed, t, t_end })
-                    };
-                    stopped |= flow.is_break();
-                    flow
-                };
                 let departure = crate::diagnostics::sampled::effort_departure(scenario, design, &r, &mut watch);
                 match departure {
                     _ if stopped => Err(AutoError::Interrupted),
@@ -1749,17 +1745,25 @@ fn choose_scaling(partial: &PartialDesign, s: &Scenario, note: &mut Note) -> Reg
     }
 }
 
+/// Whose zeros [`crate::diagnostics::disturbance_zeros`] are: with more outputs than disturbances
+/// (`pseudo`) those of (A, D, (CD)⁺C), since (A, D, C) then has none.
+fn zeros_of(pseudo: bool) -> &'static str {
+    if pseudo {
+        "of (A, D, (CD)⁺C)"
+    } else {
+        "of (A, D, C)"
+    }
+}
+
 /// The observer candidates of [`observer`]: per r_o = r_0·2^k (k = 0..3) n real poles spread ×2
-/// and ×4 and, with `zeros`, those zeros and the other poles from −r_o; each with how many of its
-/// poles are zeros and its description. `pseudo`: more outputs than disturbances, where the zeros
-/// are those of (A, D, (CD)⁺C), not of (A, D, C) (which has none).
+/// and ×4 and, with `zeros` (`of` whom, [`zeros_of`]), those zeros and the other poles from −r_o;
+/// each with how many of its poles are zeros and its description.
 fn observer_candidates(
     zeros: Option<Vec<Complex<f64>>>,
     r_0: f64,
     n: usize,
-    pseudo: bool,
+    of: &str,
 ) -> Vec<(Vec<Complex<f64>>, usize, String)> {
-    let of = if pseudo { "of (A, D, (CD)⁺C)" } else { "of (A, D, C)" };
     let mut candidates: Vec<(Vec<Complex<f64>>, usize, String)> = Vec::new();
     for k in 0..4 {
         let rate = r_0 * 2f64.powi(k);
@@ -1806,7 +1810,7 @@ fn observer(
     speed: f64,
 ) -> Result<(Design, String), AutoError> {
     let pseudo = s.plant.m() > s.plant.k();
-    let candidates = observer_candidates(crate::diagnostics::disturbance_zeros(&s.plant), r_0, n, pseudo);
+    let candidates = observer_candidates(crate::diagnostics::disturbance_zeros(&s.plant), r_0, n, zeros_of(pseudo));
     /// A candidate's design, poles, worst fidelity error and description.
     type Candidate = (Design, Vec<Complex<f64>>, usize, f64, String);
     let mut tried: Vec<Candidate> = Vec::new();
@@ -1855,7 +1859,7 @@ fn observer(
     } else {
         format!(
             "{what}: the first candidate (r_o = r_0·2^k, r_0 = 6r, 3× the slowest channel pole the rules start from (−2r, also when the file gives the channel poles), k ≤ 3; spreads ×2, ×4; the zeros {} kept) whose disturbance observer (eq. (20), driven by x̂) passes every frequency of ω with relative error ≤ {FIDELITY_AIM}, or within {FIDELITY_SLACK}× the best candidate's; its error is {error:.2e} at worst",
-            if pseudo { "of (A, D, (CD)⁺C)" } else { "of (A, D, C)" }
+            zeros_of(pseudo)
         )
     };
     Ok((design, why))
@@ -1940,7 +1944,7 @@ mod tests {
             (false, "the 1 zero of (A, D, C) and 2 real poles"),
             (true, "the 1 zero of (A, D, (CD)⁺C) and 2 real poles"),
         ] {
-            let c = observer_candidates(zeros(), 10.0, 3, pseudo);
+            let c = observer_candidates(zeros(), 10.0, 3, zeros_of(pseudo));
             let with_zeros: Vec<&String> = c.iter().filter(|c| c.1 == 1).map(|c| &c.2).collect();
             assert_eq!(with_zeros.len(), 4);
             assert!(with_zeros.iter().all(|w| w.starts_with(whose)), "{with_zeros:?}");

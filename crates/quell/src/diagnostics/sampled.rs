@@ -315,14 +315,14 @@ fn departed(channels: &[ChannelDeparture], which: impl Fn(&ChannelDeparture) -> 
 }
 
 /// Where the completed sampled-data run `result` of scenario `s` (under measurement noise, both
-/// loops without it) drives u_f beyond [`DEPARTED_UF`] times its continuous loop's peak ([`against_continuous`]), how
-/// ([`departed`]); `None` where it does not or the comparison cannot run. What the automatic
-/// design's verification asks of a sampled-data candidate besides its tails (a Wardle–Wood
-/// column's, sampled at 1 min, had passed with u_f about 1e4 against about 20 in its continuous
-/// loop, and the run's advice
-/// then sent the user back to the automatic design); a transient of y that differs but converges
-/// within the tail bound at no more effort (the maglev's first proposal: y by 69 %, u_f 0.83×) is
-/// the tail's to judge. `progress` is the side runs' callback (a stop ends them; the caller tells).
+/// loops without it) drives u_f beyond [`DEPARTED_UF`] times its continuous loop's peak
+/// ([`against_continuous`]), how ([`departed`]); `None` where it does not or the comparison cannot
+/// run. What the automatic design's verification asks of a sampled-data candidate besides its
+/// tails (a Wardle–Wood column's, sampled at 1 min, had passed with u_f about 1e4 against about 20
+/// in its continuous loop, and the run's advice then sent the user back to the automatic design);
+/// a transient of y that differs but converges within the tail bound at no more effort (the
+/// maglev's first proposal: y by 69 %, u_f 0.83×) is the tail's to judge. `progress` is the side
+/// runs' callback (a stop ends them; the caller tells).
 pub(crate) fn effort_departure(
     s: &crate::Scenario,
     design: &Design,
@@ -367,11 +367,13 @@ fn remedy(s: &crate::Scenario, design: &Design, (sample_time, effort): (f64, boo
             percent(c.iter().map(|c| c.y).fold(0.0, f64::max)),
             fmt_ratio(c.iter().map(|c| c.uf.0 / c.uf.1).fold(0.0, f64::max))
         ),
-        None if effort => format!(
-            "halving T_s up to {HALVINGS} times did not bring the two together (or took more than {HALVING_STEPS:.0e} controller steps): let the automatic design choose poles for the sample time (give the scenario simulation.sample_time)"
-        ),
         None => format!(
-            "halving T_s up to {HALVINGS} times did not bring the two together (or took more than {HALVING_STEPS:.0e} controller steps): give slower design.channel_poles and design.observer_poles, or judge the sampled loop by its own tail and effort"
+            "halving T_s up to {HALVINGS} times did not bring the two together (or took more than {HALVING_STEPS:.0e} controller steps): {}",
+            if effort {
+                "let the automatic design choose poles for the sample time (give the scenario simulation.sample_time)"
+            } else {
+                "give slower design.channel_poles and design.observer_poles, or judge the sampled loop by its own tail and effort"
+            }
         ),
     }
 }

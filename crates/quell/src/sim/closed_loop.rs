@@ -1005,7 +1005,7 @@ pub fn fast_rate_warning(run: &Run<'_>) -> Option<String> {
 /// to drop (a 1 s delay in a loop of ρ = 71/s had been told so, where the rate bound the steps).
 fn short_delay_warning(run: &Run<'_>) -> Option<String> {
     // From τ_min itself: ⌈t_end/τ_min⌉ as a count saturates (1e-300 s had been named 5.4e-19 s).
-    let tau_min = run.loop_delays().first().copied().filter(|_| run.delay_floor() > 0)?;
+    let tau_min = run.shortest_delay()?;
     let floor = (run.settings.t_end / tau_min).ceil();
     let rate = FastRate::of(run);
     let binding = rate.as_ref().is_none_or(|r| floor > r.steps);

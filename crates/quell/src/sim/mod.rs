@@ -249,10 +249,15 @@ impl<'a> Run<'a> {
     /// most the shortest delay τ_min long (the method of steps), so ⌈t_end/τ_min⌉; 0 for a loop
     /// without delays and for a sampled-data loop.
     pub fn delay_floor(&self) -> usize {
-        let tau_min = self.loop_delays().first().copied().unwrap_or(f64::INFINITY);
+        self.shortest_delay().map_or(0, |tau_min| (self.settings.t_end / tau_min).ceil() as usize)
+    }
+
+    /// The continuous loop's shortest delay τ_min, which caps its steps; `None` for a loop without
+    /// delays and for a sampled-data loop.
+    fn shortest_delay(&self) -> Option<f64> {
         match &self.settings.mode {
-            Loop::Continuous(_) if tau_min.is_finite() => (self.settings.t_end / tau_min).ceil() as usize,
-            _ => 0,
+            Loop::Continuous(_) => self.loop_delays().first().copied().filter(|tau| tau.is_finite()),
+            Loop::Sampled { .. } => None,
         }
     }
 
