@@ -77,13 +77,21 @@ pub(crate) enum Failure {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    // Only a --sample-time given is named beside the key (a file's value had been blamed on the flag).
-    let has_sample_time = match &cli.command {
-        Some(Command::Run(args)) => args.sample_time.is_some(),
-        Some(Command::Export(args)) => args.sample_time.is_some(),
-        _ => false,
+    // Only a flag given is named beside the key its value sets (a file's value had been blamed on
+    // the flag).
+    let given: Vec<&'static str> = match &cli.command {
+        Some(Command::Run(args)) => [
+            ("simulation.sample_time", args.sample_time.is_some()),
+            ("simulation.t_end", args.t_end.is_some()),
+            ("simulation.output_step", args.output_step.is_some()),
+        ]
+        .into_iter()
+        .filter_map(|(key, given)| given.then_some(key))
+        .collect(),
+        Some(Command::Export(args)) if args.sample_time.is_some() => vec!["simulation.sample_time"],
+        _ => vec![],
     };
-    SAMPLE_TIME_FLAG.store(has_sample_time, std::sync::atomic::Ordering::Relaxed);
+    let _ = GIVEN_SCENARIO_FLAGS.set(given);
     let result = match cli.command {
         Some(Command::Design(args)) if args.auto => auto::auto(&args),
         Some(Command::Design(args)) => design(&args),
@@ -112,8 +120,10 @@ fn main() -> ExitCode {
 }
 
 /// Library keys that a flag sets, as the CLI names them.
-const FLAGS: [(&str, &str); 6] = [
+const FLAGS: [(&str, &str); 8] = [
     ("simulation.sample_time", "simulation.sample_time (--sample-time)"),
+    ("simulation.t_end", "simulation.t_end (--t-end)"),
+    ("simulation.output_step", "simulation.output_step (--output-step)"),
     ("u_limit", "--u-limit"),
     ("convergence_time", "--convergence-time"),
     ("prefix", "--prefix"),
@@ -121,9 +131,9 @@ const FLAGS: [(&str, &str); 6] = [
     ("compiler", "--compiler"),
 ];
 
-/// Whether the command was given `--sample-time` (`run` and `export`): only then does a message on
-/// `simulation.sample_time` name the flag too.
-static SAMPLE_TIME_FLAG: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(true);
+/// The scenario's keys (`simulation.*`) that the command's flags set: only a message on one of
+/// them names the flag beside the key. Unset (library tests) counts every flag as given.
+static GIVEN_SCENARIO_FLAGS: std::sync::OnceLock<Vec<&'static str>> = std::sync::OnceLock::new();
 
 /// A library message whose leading key a flag of the command sets, with the flag named; an
 /// argument named in parentheses within it ("raise the limits (u_limit)") is its flag there too.
@@ -132,8 +142,9 @@ pub(crate) fn in_flags(msg: String) -> String {
     for (key, flag) in FLAGS.iter().filter(|(_, flag)| flag.starts_with("--")) {
         msg = msg.replace(&format!("({key})"), &format!("({flag})"));
     }
-    let sample_time_flag = SAMPLE_TIME_FLAG.load(std::sync::atomic::Ordering::Relaxed);
-    for (key, flag) in FLAGS.iter().filter(|(key, _)| sample_time_flag || *key != "simulation.sample_time") {
+    let given =
+        |key: &str| !key.starts_with("simulation.") || GIVEN_SCENARIO_FLAGS.get().is_none_or(|g| g.contains(&key));
+    for (key, flag) in FLAGS.iter().filter(|(key, _)| given(key)) {
         if let Some(rest) = msg.strip_prefix(key).filter(|r| r.starts_with([':', ' '])) {
             return format!("{flag}{rest}");
         }

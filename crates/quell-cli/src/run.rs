@@ -14,7 +14,7 @@ use quell::TimeUnit;
 use serde_json::json;
 
 use crate::interrupt::Interrupt;
-use crate::{load, output, plot, report, Failure};
+use crate::{load_with, output, plot, report, set_sample_time, Failure};
 
 #[derive(clap::Args, Default)]
 pub struct RunArgs {
@@ -27,6 +27,12 @@ pub struct RunArgs {
     /// time (plant.time_unit); overrides simulation.sample_time.
     #[arg(long, value_name = "T_S", allow_hyphen_values = true, value_parser = crate::parse_real)]
     pub sample_time: Option<f64>,
+    /// Simulate to this time, in the plant's unit of time; overrides simulation.t_end.
+    #[arg(long, value_name = "T", allow_hyphen_values = true, value_parser = crate::parse_real)]
+    pub t_end: Option<f64>,
+    /// A row of signals.csv every H, in the plant's unit of time; overrides simulation.output_step.
+    #[arg(long, value_name = "H", allow_hyphen_values = true, value_parser = crate::parse_real)]
+    pub output_step: Option<f64>,
     /// The continuous loop even where the scenario sets simulation.sample_time: to compare the
     /// sampled-data loop with the one it approximates.
     #[arg(long, conflicts_with = "sample_time")]
@@ -51,7 +57,15 @@ pub struct RunArgs {
 }
 
 pub fn run(args: &RunArgs) -> Result<(), Failure> {
-    let (mut scenario, design) = load(args.scenario.as_deref(), args.sample_time)?;
+    let (mut scenario, design) = load_with(args.scenario.as_deref(), |sim| {
+        set_sample_time(sim, args.sample_time);
+        // Any value, for the scenario's checks to name with the flag.
+        for (key, value) in [("t_end", args.t_end), ("output_step", args.output_step)] {
+            if let Some(v) = value {
+                sim.insert(key.into(), toml::Value::Float(v));
+            }
+        }
+    })?;
     if args.continuous {
         scenario.simulation.sample_time = None;
     }

@@ -1443,3 +1443,54 @@ fn an_automatic_design_verified_on_dop853_at_a_stiff_mu_is_cautioned() {
     let o = quell(&["design", file.to_str().unwrap(), "--auto"]);
     assert!(o.status.success() && !stderr(&o).contains("stiff adaptive law"), "{}", stderr(&o));
 }
+
+/// `--t-end` and `--output-step` set simulation.t_end and .output_step: the same signals.csv, byte
+/// for byte, as the scenario with those keys written in; a bad value names the key and the flag,
+/// and a bad value in the file is not blamed on a flag.
+#[test]
+fn t_end_and_output_step_flags_are_the_scenario_keys() {
+    let dir = temp_dir("t-end-flags");
+    let paper = examples_dir().join("paper.toml");
+    let text = fs::read_to_string(&paper).unwrap();
+    let start = text.find("[simulation]").unwrap() + "[simulation]".len();
+    let edited = dir.path().join("short.toml");
+    let with_keys = format!("{}\nt_end = 5.0\noutput_step = 0.5{}", &text[..start], &text[start..]);
+    fs::write(&edited, with_keys.replace("\nt_end = 100.0", "").replace("\noutput_step = 0.1", "")).unwrap();
+    let (by_flags, by_file) = (dir.path().join("flags"), dir.path().join("file"));
+    let o = quell(&[
+        "run",
+        paper.to_str().unwrap(),
+        "--t-end",
+        "5",
+        "--output-step",
+        "0.5",
+        "--no-plots",
+        "--out",
+        by_flags.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = quell(&["run", edited.to_str().unwrap(), "--no-plots", "--out", by_file.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let signals = fs::read_to_string(by_flags.join("signals.csv")).unwrap();
+    assert_eq!(signals.lines().count(), 1 + 11, "rows at 0, 0.5, …, 5");
+    assert!(signals.lines().last().unwrap().starts_with("5,"), "{signals}");
+    assert_eq!(signals, fs::read_to_string(by_file.join("signals.csv")).unwrap());
+
+    let o = quell(&["run", paper.to_str().unwrap(), "--t-end", "nan", "--out", by_flags.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("error: simulation.t_end (--t-end): expected a finite number, found NaN"),
+        "{}",
+        stderr(&o)
+    );
+    let o = quell(&["run", paper.to_str().unwrap(), "--output-step", "50", "--t-end", "1", "--out", "unused"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("simulation.output_step (--output-step): expected an output step ≤ t_end = 1, found 50")
+    );
+    let bad_file = dir.path().join("bad.toml");
+    fs::write(&bad_file, text.replace("t_end = 100.0", "t_end = -3.0")).unwrap();
+    let o = quell(&["run", bad_file.to_str().unwrap(), "--output-step", "0.5", "--out", "unused"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("error: simulation.t_end: expected a final time > 0, found -3"), "{}", stderr(&o));
+}
