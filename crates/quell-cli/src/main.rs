@@ -188,6 +188,19 @@ pub(crate) fn load_with(
         Some(p) => quell::scenario::read_document(p),
         None => quell::scenario::parse_document(PAPER_EXAMPLE),
     };
+    // The file's own [simulation] values first where a flag overrides some: it must not hide a bad
+    // one (a study's are its own, and the reading below says what to run it with).
+    let overridden = GIVEN_SCENARIO_FLAGS.get().is_some_and(|g| !g.is_empty());
+    if let (Some(p), Ok(doc), true) = (path, &parsed, overridden) {
+        if !doc.contains_key("scenario") {
+            quell::scenario::check_simulation(doc).map_err(|e| {
+                Failure::Input(format!(
+                    "{}: {e} (the file's value must be valid even where a flag overrides it)",
+                    p.display()
+                ))
+            })?;
+        }
+    }
     let scenario = parsed
         .and_then(|mut doc| {
             if let Some(sim) = doc.entry("simulation").or_insert(toml::Table::new().into()).as_table_mut() {

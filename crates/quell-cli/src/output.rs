@@ -87,17 +87,32 @@ fn probe(dir: &Path) -> io::Result<()> {
 /// exits.
 static LOCKED: std::sync::Mutex<Vec<quell::files::DirLock>> = std::sync::Mutex::new(Vec::new());
 
+/// The file that marks the output directory of each command that owns one (`quell export` writes
+/// into any directory: its two files are named by their prefix).
+const MARKS: [(&str, &str); 3] =
+    [("signals.csv", "quell run"), ("runs.csv", "quell sweep"), ("tune.json", "quell tune")];
+
 /// Creates `--out` and proves it writable ([`probe`]), and that none of the `files` to be written
 /// there is anything but a regular file or nothing (a directory, a symbolic link, a FIFO, a device:
 /// [`quell::files::check_target`]), before any work is done: every output-path problem is bad input
 /// (exit 2) naming the path. Then locks it for the rest of the command: a second command writing
-/// the same directory meanwhile is refused (exit 2) rather than mixing its files with these.
+/// the same directory meanwhile is refused (exit 2) rather than mixing its files with these, as is
+/// a directory that holds another command's output ([`MARKS`]).
 pub fn prepare_out(dir: &Path, files: &[&str]) -> Result<(), Failure> {
     let bad = |e: String| Failure::Input(format!("--out {}: {e}; choose another output directory", dir.display()));
     quell::files::check_dir(dir).map_err(|e| bad(e.to_string()))?;
     fs::create_dir_all(dir).and_then(|()| probe(dir)).map_err(|e| bad(format!("cannot write there ({e})")))?;
     if let Some(e) = files.iter().map(|f| quell::files::check_target(&dir.join(f))).find_map(Result::err) {
         return Err(bad(e.to_string()));
+    }
+    // Run, sweep and tune each own their directory: a sweep's summary.json had replaced a run's
+    // beside its signals.csv and figures.
+    if MARKS.iter().any(|(mark, _)| files.contains(mark)) {
+        if let Some((mark, command)) = MARKS.iter().find(|(mark, _)| !files.contains(mark) && dir.join(mark).exists()) {
+            return Err(bad(format!(
+                "it holds the output of `{command}` ({mark}), which this command's files would mix with"
+            )));
+        }
     }
     let lock = quell::files::lock_dir(dir).map_err(|_| {
         Failure::Input(format!(

@@ -14,7 +14,8 @@ use crate::Failure;
 #[derive(clap::Args)]
 #[command(override_usage = "quell sweep [OPTIONS] <STUDY>\n       quell sweep --merge <DIR>... [--out <OUT>]")]
 pub struct SweepArgs {
-    /// Study file (TOML): scenario, [simulation], [grid], [monte_carlo], [settle].
+    /// Study file (TOML): scenario, max_steps, [simulation], [grid], [monte_carlo], [runaway], [settle]
+    /// (docs/studies.md).
     #[arg(required_unless_present = "merge", conflicts_with = "merge")]
     study: Option<PathBuf>,
     /// Output directory.

@@ -1492,5 +1492,85 @@ fn t_end_and_output_step_flags_are_the_scenario_keys() {
     fs::write(&bad_file, text.replace("t_end = 100.0", "t_end = -3.0")).unwrap();
     let o = quell(&["run", bad_file.to_str().unwrap(), "--output-step", "0.5", "--out", "unused"]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("error: simulation.t_end: expected a final time > 0, found -3"), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("simulation.t_end: expected a final time > 0, found -3") && !e.contains("--t-end"), "{e}");
+}
+
+/// A flag that overrides a `[simulation]` key does not hide a bad value of it in the file (a
+/// `sample_time = true` that `quell design` refused had run under `--sample-time`): refused, exit
+/// 2, named as the file's, not the flag's.
+#[test]
+fn a_flag_does_not_hide_a_bad_value_in_the_file() {
+    let dir = temp_dir("bad-file-value");
+    let text = fs::read_to_string(examples_dir().join("paper.toml")).unwrap();
+    for (key, bad, flags) in [
+        ("sample_time", "true", ["run", "--sample-time", "0.1"]),
+        ("sample_time", "-1.0", ["export", "--sample-time", "0.1"]),
+        ("t_end", "\"abc\"", ["run", "--t-end", "2"]),
+        ("output_step", "[1, 2]", ["run", "--output-step", "0.5"]),
+    ] {
+        let file = dir.path().join(format!("{key}.toml"));
+        let edited = text
+            .replace("\nt_end = 100.0", "\nt_end = 3.0")
+            .replace("[simulation]", &format!("[simulation]\n{key} = {bad}"));
+        let edited = match key {
+            "t_end" => edited.replace("\nt_end = 3.0", ""),
+            "output_step" => edited.replace("\noutput_step = 0.1", "\n"),
+            _ => edited,
+        };
+        fs::write(&file, edited).unwrap();
+        let out = dir.path().join("out");
+        let mut args = vec![flags[0], file.to_str().unwrap(), "--out", out.to_str().unwrap()];
+        args.extend(&flags[1..]);
+        let o = quell(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        let want = format!("error: {}: simulation.{key}: expected ", file.display());
+        assert!(stderr(&o).starts_with(&want), "{args:?}: {}", stderr(&o));
+        assert!(!out.exists(), "{args:?}: nothing written");
+    }
+}
+
+/// Run, sweep and tune each own their output directory: one holding another's output is refused
+/// (exit 2) with nothing changed (a sweep had replaced a run's summary.json beside its
+/// signals.csv); the same command again, and an export beside any of them, still write there.
+#[test]
+fn a_directory_holding_another_commands_output_is_refused() {
+    let dir = temp_dir("mixed-out");
+    let out = dir.path().join("out");
+    let paper = examples_dir().join("paper.toml");
+    let study = dir.path().join("study.toml");
+    fs::write(
+        &study,
+        format!(
+            "scenario = {:?}\n[simulation]\nt_end = 1.0\n[grid]\n\"design.mu[0]\" = [1.0]\n",
+            paper.to_str().unwrap()
+        ),
+    )
+    .unwrap();
+    let run = ["run", "--t-end", "1", "--no-plots", "--out", out.to_str().unwrap()];
+    let o = quell(&run);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let summary = fs::read(out.join("summary.json")).unwrap();
+    let o = quell(&["sweep", study.to_str().unwrap(), "--no-plots", "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains(&format!(
+            "--out {}: it holds the output of `quell run` (signals.csv), which this command's files would mix with; choose another output directory",
+            out.display()
+        )),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(fs::read(out.join("summary.json")).unwrap(), summary);
+    assert!(!out.join("runs.csv").exists());
+    let o = quell(&run);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = quell(&["export", paper.to_str().unwrap(), "--sample-time", "0.01", "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let swept = dir.path().join("swept");
+    let o = quell(&["sweep", study.to_str().unwrap(), "--no-plots", "--out", swept.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = quell(&["run", "--t-end", "1", "--no-plots", "--out", swept.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("holds the output of `quell sweep` (runs.csv)"), "{}", stderr(&o));
 }

@@ -236,7 +236,11 @@ fn figures_of_an_earlier_run_do_not_stay_beside_new_data() {
     let o = quell(&["run", &scenario.display().to_string(), "--out", &out.display().to_string()]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(names(&out).contains(&"channel2.svg".to_string()) && !names(&out).contains(&"channel3.png".to_string()));
-    // A sweep whose grid has no figure (three axes) removes an earlier sweep.png.
+    // A sweep whose grid has no figure (three axes) removes an earlier sweep.png (in a directory
+    // of its own: a run's is refused, `cli.rs`' a_directory_holding_another_commands_output_is_refused).
+    let out = tmp.path().join("swept");
+    fs::create_dir_all(&out).unwrap();
+    fs::write(out.join("sweep.png"), "old").unwrap();
     let s = study(
         tmp.path(),
         "study.toml",

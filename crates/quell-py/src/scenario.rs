@@ -106,8 +106,11 @@ impl PyScenario {
 
     /// `doc` with `sample_time` as its `simulation.sample_time`, validated; the refusals of the value
     /// itself (not finite, not positive, beyond t_end, a delay no whole number of samples) name the
-    /// argument, `sample_time=…` with key `"sample_time"`, as `quell run --sample-time` names its flag.
+    /// argument, `sample_time=…` with key `"sample_time"`, as `quell run --sample-time` names its flag;
+    /// a bad value in the document itself is the document's.
     fn sampled(py: Python<'_>, mut doc: Table, t: f64) -> PyResult<Self> {
+        // The file's own values first: the argument that overrides one does not hide it.
+        quell::scenario::check_simulation(&doc).map_err(|e| scenario_error(py, &e))?;
         let sim = doc.entry("simulation").or_insert(Table::new().into());
         match sim.as_table_mut() {
             Some(sim) => sim.insert("sample_time".into(), Value::Float(t)),

@@ -292,6 +292,13 @@ def test_a_sample_time_given_to_load_reads_the_file_as_its_sampled_scenario(tmp_
             quell.Scenario.from_toml(without, sample_time=bad)
         assert caught.value.key == "sample_time"
 
+    # A bad sample time in the file is the file's, even where the argument overrides it (it had
+    # been dropped silently: `quell design` refused the file that `load(sample_time=…)` ran).
+    for bad in ("true", '"abc"', "nan", "-1.0", "0", "[1, 2]"):
+        text = keyed.replace("\nsample_time = 0.001 ", f"\nsample_time = {bad} ")
+        with pytest.raises(quell.ScenarioError, match=r"^simulation.sample_time: expected ") as caught:
+            quell.Scenario.from_toml(text, sample_time=0.001)
+        assert caught.value.key == "simulation.sample_time"
 
 def test_an_export_into_a_directory_another_process_is_writing_is_refused(tmp_path):
     # quell export (CLI or Python) locks its output directory while it writes: two exports into one

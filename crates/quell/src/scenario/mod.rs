@@ -605,6 +605,21 @@ fn harmonic(v: Value) -> Result<Harmonic, ScenarioError> {
     Ok(Harmonic { amplitude, frequency, phase })
 }
 
+/// A document's `[simulation]` keys each checked on its own (type and range; the bounds between
+/// them are the whole scenario's): for a run whose flags or arguments then override some of them
+/// (`quell run --sample-time`, `Scenario.load(sample_time=…)`), which must not hide a bad value in
+/// the file.
+pub fn check_simulation(doc: &toml::Table) -> Result<(), ScenarioError> {
+    let Some(value) = doc.get("simulation") else { return Ok(()) };
+    let t = Value { key: "simulation", value }.table(SIMULATION_KEYS)?;
+    for (key, what) in
+        [("t_end", "a final time"), ("output_step", "an output step"), ("sample_time", "a sampling period")]
+    {
+        t.get(key, |v| Ok(settings::positive(v.key, what, v.number()?)?))?;
+    }
+    Ok(())
+}
+
 /// `[simulation]`, with defaults for absent keys; the ranges are [`settings`]' checks.
 fn simulation(v: Value) -> Result<Simulation, ScenarioError> {
     let t = v.table(SIMULATION_KEYS)?;

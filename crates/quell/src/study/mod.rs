@@ -703,6 +703,7 @@ fn base_scenario(doc: &toml::Table, dir: Option<&Path>) -> Result<(toml::Table, 
 /// Puts the study's `[simulation]` into the scenario document `base`, and reads and designs the
 /// result; an error in a value the study set names the study's key.
 fn apply_simulation(doc: &toml::Table, base: &mut toml::Table, source: &str) -> Result<Scenario, StudyError> {
+    let own = base.clone();
     if let Some(sim) = doc.get("simulation") {
         let sim = table("simulation", sim)?;
         let target = base.entry("simulation").or_insert_with(|| toml::Value::Table(toml::Table::new()));
@@ -716,6 +717,19 @@ fn apply_simulation(doc: &toml::Table, base: &mut toml::Table, source: &str) -> 
         let set_here = |key: &str| doc.get("simulation").and_then(|s| s.get(key)).is_some();
         match e.key.strip_prefix("simulation.") {
             Some(key) if set_here(key) => err(e.key.clone(), e.message),
+            // The scenario's value, valid on its own, against one the study set (its output_step
+            // beside the study's t_end): the study's keys, and the remedy in the study.
+            Some(key) if doc.get("simulation").is_some() && Scenario::from_document(&own).is_ok() => {
+                let set: Vec<String> = sim_keys(doc).map(|k| format!("simulation.{k}")).collect();
+                err(
+                    e.key.clone(),
+                    format!(
+                        "{} ({key} from {source}, with the study's {}); set simulation.{key} in the study's [simulation] too",
+                        e.message,
+                        set.join(", ")
+                    ),
+                )
+            }
             _ if e.is_a_study() => err(
                 "scenario",
                 format!(
@@ -727,6 +741,11 @@ fn apply_simulation(doc: &toml::Table, base: &mut toml::Table, source: &str) -> 
     })?;
     scenario.design().map_err(|e| err("scenario", format!("{source}: {e}")))?;
     Ok(scenario)
+}
+
+/// The keys the study's `[simulation]` sets.
+fn sim_keys(doc: &toml::Table) -> impl Iterator<Item = &String> {
+    doc.get("simulation").and_then(toml::Value::as_table).into_iter().flat_map(toml::Table::keys)
 }
 
 /// What every check a run of the study's own scenario makes before it starts refuses (a sample

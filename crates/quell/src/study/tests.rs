@@ -535,3 +535,25 @@ fn a_sampled_study_draws_no_delay() {
     let continuous = "[simulation]\nt_end = 5.0\n[monte_carlo]\nruns = 3\n\"truth.delays\" = { uniform = 0.2 }\n";
     assert!(Study::from_toml(continuous, None).is_ok());
 }
+
+/// A study's t_end that its scenario's own output_step does not fit is named as the study's
+/// combination, with the remedy in the study (it had read as the scenario file's mistake); a
+/// scenario value wrong on its own stays the scenario's.
+#[test]
+fn a_study_key_against_a_scenario_key_names_the_study() {
+    let e = error("[simulation]\nt_end = 0.05\n[grid]\n\"design.beta\" = [1.0]\n");
+    assert_eq!(
+        e,
+        "simulation.output_step: expected an output step ≤ t_end = 0.05, found 0.1 (output_step from the paper's example, with the study's simulation.t_end); set simulation.output_step in the study's [simulation] too"
+    );
+    assert!(study("[simulation]\nt_end = 0.05\noutput_step = 0.01\n[grid]\n\"design.beta\" = [1.0]\n").is_ok());
+    let mut bad: toml::Table = PAPER_EXAMPLE.parse().unwrap();
+    bad["simulation"].as_table_mut().unwrap().insert("output_step".into(), toml::Value::Float(-1.0));
+    let mut doc: toml::Table = "[simulation]\nrtol = 1e-7\n[grid]\n\"design.beta\" = [1.0]\n".parse().unwrap();
+    doc.insert("scenario".into(), toml::Value::Table(bad));
+    let e = Study::from_table(&doc, None).unwrap_err().to_string();
+    assert!(
+        e.starts_with("scenario: the study's scenario: simulation.output_step: expected an output step > 0"),
+        "{e}"
+    );
+}
