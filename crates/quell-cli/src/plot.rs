@@ -771,6 +771,18 @@ fn grid_span(x: &[f64], scale: AxisScale) -> (f64, f64) {
     }
 }
 
+/// The right margin of a grid panel: where the positions carry the values, room for half the last
+/// value's label (13 px sans-serif, about 0.6 em a character; a matrix's "[[166.7, 0], [0, 166.7]]"
+/// was cut at the figure's edge).
+fn grid_right_margin(scale: AxisScale, values: &[String]) -> u32 {
+    match (scale, values.last()) {
+        (AxisScale::Positions, Some(last)) => {
+            56.max((last.chars().count() as f64 * 13.0 * 0.6 / 2.0).ceil() as u32 + 8)
+        }
+        _ => 28,
+    }
+}
+
 /// How many ticks a grid axis of `scale` over `n` values asks for.
 fn grid_labels(scale: AxisScale, n: usize) -> usize {
     match scale {
@@ -806,7 +818,7 @@ fn draw_outcomes_panel<DB: DrawingBackend>(
     let mut chart = ChartBuilder::on(area)
         .caption("Runs that did not complete, per grid value", ("sans-serif", 18))
         .margin(8)
-        .margin_right(if scale == AxisScale::Positions { 56 } else { 28 })
+        .margin_right(grid_right_margin(scale, &values))
         .x_label_area_size(36)
         .y_label_area_size(80)
         .build_cartesian_2d(x0..x1, -5.0..105.0)
@@ -892,15 +904,15 @@ fn draw_sweep_panel<DB: DrawingBackend>(
     let (x0, x1) = grid_span(x, scale);
     let pad = 0.05 * (hi - lo);
     let (y0, y1) = (lo - pad, hi + pad);
+    let values = short_values(&axis.values);
     let mut chart = ChartBuilder::on(area)
         .caption(format!("{}: {label}", s.study.channel(i)), ("sans-serif", 18))
         .margin(8)
-        .margin_right(if scale == AxisScale::Positions { 56 } else { 28 })
+        .margin_right(grid_right_margin(scale, &values))
         .x_label_area_size(36)
         .y_label_area_size(80)
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(|e| e.to_string())?;
-    let values = short_values(&axis.values);
     let fmt = |v: &f64| grid_tick(*v, scale, &values, (x0, x1));
     let x_desc = grid_axis_desc(s, scale);
     chart

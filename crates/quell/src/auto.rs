@@ -1313,6 +1313,7 @@ fn horizon_advice(
     }
     // Observer poles held at slow zeros of (A, D, C) (the F-8's −0.0015 ± 0.089j over 60 s) or any
     // design pole whose transient outlives the run: a cause the run's own diagnostics name.
+    let at = advice.len();
     advice.extend(crate::diagnostics::slow_transient_advice(design, t_end));
     if many_harmonics(s, design) {
         advice.push(format!("a component has {} harmonics, and the companion forms' Ω̄ is singular to rounding with many: design.regressor_scaling = \"modal\" with a resonator −b ± jω per harmonic as filter poles keeps it well conditioned (what the automatic design chooses where the file gives neither the key nor μ; μ then anew)", most_harmonics(s)));
@@ -1338,7 +1339,13 @@ fn horizon_advice(
     .flatten()
     .collect();
     if !estimates.is_empty() && !verifier.nested {
-        advice.push(verified_horizon(doc, targets, verifier, estimates, (s, design, first.steps))?);
+        let (verified, passed) = verified_horizon(doc, targets, verifier, estimates, (s, design, first.steps))?;
+        if passed {
+            // A horizon verified to pass supersedes the slow poles' rule of thumb (30/|Re p|), which
+            // had been offered beside it (an LCL filter's held zeros asked for 2.5 s where 0.49 s passed).
+            advice.truncate(at);
+        }
+        advice.push(verified);
     }
     Ok(advice)
 }
@@ -1353,7 +1360,8 @@ const EXCITE_SLOW: &str =
 /// The horizon advice after the automatic design is repeated on `doc` with simulation.t_end at
 /// each estimate (rounded up, shortest first), then at the largest doubled ([`DOUBLINGS`] times),
 /// within [`MAX_VERIFIED_HORIZON`]·t_end and [`HORIZON_STEPS`] steps (the first run of scenario `s`, of design `design`,
-/// took `steps`): the first horizon that passes, or those tried and why no longer one was. Without
+/// took `steps`): the first horizon that passes (and `true`), or those tried and why no longer one
+/// was. Without
 /// actuator limits the repeat verifies the first proposal, whose pass the relaxation keeps; with
 /// them it is the whole design, limits included. The averaged law's estimate alone was
 /// optimistic (the active suspension's 1500 s failed), and an estimate beyond the cap is not
@@ -1364,7 +1372,7 @@ fn verified_horizon(
     verifier: &mut Verifier,
     mut estimates: Vec<Estimate>,
     (s, design, steps): (&Scenario, &Design, usize),
-) -> Result<String, AutoError> {
+) -> Result<(String, bool), AutoError> {
     let (t_end, unit) = (s.simulation.t_end, s.plant.time_unit);
     let four = crate::settings::fmt_4;
     estimates.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -1393,9 +1401,9 @@ fn verified_horizon(
         let passed = match repeated_at(doc, targets, verifier, horizon) {
             Err(AutoError::Interrupted) => {
                 let so_far = if tried.is_empty() { String::new() } else { format!(" ({})", tried.join("; ")) };
-                return Ok(format!(
-                    "the search for a horizon that passes was interrupted at {} {unit}{so_far}",
-                    four(horizon)
+                return Ok((
+                    format!("the search for a horizon that passes was interrupted at {} {unit}{so_far}", four(horizon)),
+                    false,
                 ));
             }
             other => other?,
@@ -1408,9 +1416,12 @@ fn verified_horizon(
                 } else {
                     format!("; shorter ones missed: {}", tried.join("; "))
                 };
-                return Ok(format!(
-                    "lengthen simulation.t_end to at least {} {unit} ({basis}): the automatic design repeated with that horizon passes its verification ({tails}{earlier})",
-                    four(horizon)
+                return Ok((
+                    format!(
+                        "lengthen simulation.t_end to at least {} {unit} ({basis}): the automatic design repeated with that horizon passes its verification ({tails}{earlier})",
+                        four(horizon)
+                    ),
+                    true,
                 ));
             }
             Err(why) => tried.push(format!("{} {unit} ({basis}): {why}", four(horizon))),
@@ -1419,9 +1430,12 @@ fn verified_horizon(
     let signals = [&s.reference, &s.disturbance];
     let avg = Averaged::new(design, &s.reference, &s.disturbance);
     let what = unit_mismatch(&avg, signals).unwrap_or_else(|| EXCITE_SLOW.to_string());
-    Ok(format!(
-        "no horizon the automatic design could verify passes ({}): rather than a longer t_end, {what}",
-        [tried, beyond].concat().join("; ")
+    Ok((
+        format!(
+            "no horizon the automatic design could verify passes ({}): rather than a longer t_end, {what}",
+            [tried, beyond].concat().join("; ")
+        ),
+        false,
     ))
 }
 

@@ -1382,3 +1382,39 @@ fn a_stop_during_the_continuous_comparison_interrupts_the_design() {
     assert!(matches!(e, AutoError::Interrupted), "{e:?}");
     assert!(restarted, "the side run reported no progress");
 }
+
+/// An LCL-filtered grid inverter over 0.2 s (tests/data/lcl-inverter.toml): the automatic design's
+/// observer holds the plant's zeros, the L1–Cf resonance −R1/(2L1) ± j(ω_r ± ω_grid) in the
+/// rotating frame (closed form), which decay by only 2.5 e-folds, and it fails its verification.
+/// Its advice gives one horizon, the one it verified (the held zeros' rule of thumb, 30/|Re z| =
+/// 2.5 s, had been offered beside it as a second "lengthen"), and at that horizon it passes.
+#[test]
+fn an_lcl_inverters_held_zeros_get_the_verified_horizon_alone() {
+    let doc = without_design(&data("lcl-inverter.toml"));
+    let short = auto_design(&doc, &Targets::default()).unwrap();
+    assert!(!short.verification.passed, "{:?}", short.verification);
+    let (r1, l1, cf, w): (f64, f64, f64, f64) = (0.05, 2e-3, 10e-6, 2.0 * std::f64::consts::PI * 50.0);
+    let (re, wr) = (-r1 / (2.0 * l1), (1.0 / (l1 * cf) - (r1 / (2.0 * l1)).powi(2)).sqrt());
+    let zeros = disturbance_zeros(short.design.plant()).unwrap();
+    for im in [wr + w, wr - w] {
+        let z = Complex::new(re, im);
+        assert!(zeros.iter().any(|p| (p - z).norm() < 1e-6 * z.norm()), "{z} not among {zeros:?}");
+        let held = short.design.observer_eigenvalues();
+        assert!(held.iter().any(|p| (p - z).norm() < 1e-6 * z.norm()), "{z} not held: {held:?}");
+    }
+    // The run's own diagnostics would name them with 30/|Re z|; the failure names the verified one.
+    let rule = quell::diagnostics::slow_transient_advice(&short.design, 0.2).unwrap();
+    assert!(
+        rule.contains("hold the zeros of (A, D, C)") && rule.contains("lengthen simulation.t_end to 2.5 s"),
+        "{rule}"
+    );
+    let advice = short.verification.advice.join("\n");
+    assert_eq!(advice.matches("lengthen simulation.t_end").count(), 1, "{advice}");
+    assert!(advice.contains("passes its verification") && !advice.contains("2.5 s"), "{advice}");
+    let proposed = number_after(&advice, "lengthen simulation.t_end to at least ", " s");
+    assert!(proposed < 2.5, "{proposed}");
+    let mut doc = doc;
+    doc["simulation"].as_table_mut().unwrap().insert("t_end".into(), toml::Value::Float(proposed));
+    let long = auto_design(&doc, &Targets::default()).unwrap();
+    assert!(long.verification.passed, "{:?}", long.verification);
+}

@@ -89,6 +89,18 @@ fn suggested_sample_times_pass_the_check_or_none_is_offered() {
         Err(ControllerError::DelayNotMultiple { nearest: Some(t), .. }) => assert_eq!(t, 0.005),
         other => panic!("{other:?}"),
     }
+    // A PWM delay of 1.5 samples (τ = 150 µs at 100 µs): τ/2 = 75 µs is nearer than τ/1 = 150 µs
+    // (150 µs was offered: one side of k = round(τ/T_s) only), and generally the τ/k nearest T_s
+    // by brute force over k.
+    for (tau, T) in [(1.5e-4, 1e-4), (1.5e-4, 1.1e-4), (1.5e-4, 1.2e-4), (2.5e-3, 1e-3), (0.35, 0.1), (0.7, 0.2)] {
+        let want = (1..1000).map(|k| tau / k as f64).min_by(|a, b| (a - T).abs().total_cmp(&(b - T).abs())).unwrap();
+        match Controller::new(&design_with(&[tau, tau]), T) {
+            Err(ControllerError::DelayNotMultiple { nearest: Some(t), .. }) => {
+                assert!((t / want - 1.0).abs() < 1e-9, "τ = {tau} at {T}: {t}, want {want}")
+            }
+            other => panic!("τ = {tau} at {T}: {other:?}"),
+        }
+    }
     // τ = [1, 3] at T_s below 3e-7: τ_2 would need more than the 1e7 samples a line holds. The
     // suggestion is the nearest sample time that divides both delays *and* fits the lines, 1/k
     // with k ≤ 3,333,333 (before, the search stayed near 1/T_s, found nothing and called the

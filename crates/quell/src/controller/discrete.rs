@@ -439,14 +439,16 @@ fn sample_time_near(delays: &[f64], T: f64, width: usize, at_most: bool) -> Opti
     let shortest = (tau / MAX_DELAY_SAMPLES).max(lines_at_least(delays, width));
     let fits = |t: f64| fits(delays, width, t);
     let (target, k_max) = (T.max(shortest), (tau / shortest).floor());
-    let k0 = (tau / target).round().clamp(1.0, k_max.max(1.0)) as i64;
-    // The first fit on either side of k0, then the one nearer T (not nearer in k: with τ = 0.12
-    // and 0.05 at T = 0.007, k = 12 is nearer k0 = 17 than k = 24, but 0.005 is nearer T than 0.01).
+    // τ/k ≤ target from k_short on, ≥ target up to k_short − 1 (k = round(τ/target) on one side
+    // only had offered 150 µs for T = 100 µs and τ = 150 µs, where 75 µs is nearer).
+    let k_short = (tau / target).ceil().clamp(1.0, k_max.max(1.0) + 1.0) as i64;
+    // The first fit on either side, then the one nearer T (not nearer in k: with τ = 0.12 and
+    // 0.05 at T = 0.007, k = 12 is nearer 17 than k = 24, but 0.005 is nearer T than 0.01).
     let first = |ks: &mut dyn Iterator<Item = i64>| {
         ks.filter(|&k| k >= 1 && k as f64 <= k_max).map(|k| tau / k as f64).find(|&t| fits(t))
     };
-    let shorter = first(&mut (k0..k0 + SEARCHED).filter(|&k| !at_most || tau / k as f64 <= T));
-    let longer = first(&mut (k0 - SEARCHED..k0).rev().filter(|&k| !at_most || tau / k as f64 <= T));
+    let shorter = first(&mut (k_short..k_short + SEARCHED).filter(|&k| !at_most || tau / k as f64 <= T));
+    let longer = first(&mut (k_short - SEARCHED..k_short).rev().filter(|&k| !at_most || tau / k as f64 <= T));
     let nearest = match (shorter, longer) {
         (Some(a), Some(b)) => Some(if (a - target).abs() <= (b - target).abs() { a } else { b }),
         (a, b) => a.or(b),
