@@ -102,7 +102,9 @@ def test_bad_arguments_are_named_as_python_spells_them():
     s = quell.paper_example()
     cases = [
         (dict(mu=[[1.0, 2.0]]), "mu: expected 2 entries (one per channel), found 1", "tune.mu"),
-        (dict(mu=[5.0, 1.0]), "mu[0]: expected 0 < μ_min ≤ μ_max", "tune.mu[0]"),
+        # One pair for all channels is the argument itself; one of a list per channel, its entry.
+        (dict(mu=[5.0, 1.0]), "mu: expected 0 < μ_min ≤ μ_max", "tune.mu"),
+        (dict(mu=[[1.0, 2.0], [5.0, 1.0]]), "mu[1]: expected 0 < μ_min ≤ μ_max", "tune.mu[1]"),
         (dict(mu=[1.0, 2.0], objective="fast"), 'objective: expected "settle_t", "tail_rms_e" or "tail_max_e"',
          "tune.objective"),
         (dict(mu=[1.0, 2.0], max_u=[1.0, 0.0]), "max_u[1]: expected a limit on max |u_i| > 0 (inf for none), found 0",

@@ -95,7 +95,7 @@ fn study_mistakes_name_their_key() {
         ("[settle]\nband = 0.1", "settle.band: unknown key; valid keys in [settle]: relative, absolute"),
         ("[tune]\nobjective = \"settle_t\"", "tune.mu: missing; required: the search interval"),
         ("[tune]\nmu = [[1.0, 2.0]]", "tune.mu: expected 2 entries (one per channel), found 1"),
-        ("[tune]\nmu = [0.0, 10.0]", "tune.mu[0]: expected 0 < μ_min ≤ μ_max (the search is on a log scale), found [0, 10]"),
+        ("[tune]\nmu = [0.0, 10.0]", "tune.mu: expected 0 < μ_min ≤ μ_max (the search is on a log scale), found [0, 10]"),
         ("[tune]\nmu = [1.0, 10.0]\nobjective = \"fast\"", "tune.objective: expected \"settle_t\", \"tail_rms_e\" or \"tail_max_e\", found \"fast\""),
         ("[tune]\nmu = [1.0, 10.0]\nmax_u = [1.0, -2.0]", "tune.max_u[1]: expected a limit on max |u_i| > 0 (inf for none), found -2"),
         ("[tune]\nmu = [1.0, 10.0]\npoints = 1", "tune.points: expected an integer in [2, 10000], found 1"),

@@ -119,14 +119,13 @@ impl TuneSpec {
             None => return Err(err("tune.mu", "missing; required: the search interval [μ_min, μ_max] of every channel, e.g. [[1.0, 200.0], [1.0, 200.0]] (or one [μ_min, μ_max] for all)")),
             Some(v) => {
                 // One [lo, hi] for every channel, or one per channel.
-                let list = match v {
-                    toml::Value::Array(a) if a.len() == 2 && a.iter().all(|x| x.is_integer() || x.is_float()) => vec![v.clone(); m],
-                    _ => per_channel("tune.mu", v)?,
-                };
+                let shared = matches!(v, toml::Value::Array(a) if a.len() == 2 && a.iter().all(|x| x.is_integer() || x.is_float()));
+                let list = if shared { vec![v.clone(); m] } else { per_channel("tune.mu", v)? };
                 list.iter()
                     .enumerate()
                     .map(|(i, b)| {
-                        let key = format!("tune.mu[{i}]");
+                        // One pair for every channel is named as the key itself.
+                        let key = if shared { "tune.mu".to_string() } else { format!("tune.mu[{i}]") };
                         let pair = b.as_array().filter(|a| a.len() == 2).ok_or_else(|| {
                             err(&key, format!("expected [μ_min, μ_max], found {}", kind(b)))
                         })?;
