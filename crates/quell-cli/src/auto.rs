@@ -73,7 +73,7 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
     } else {
         print_stdout(&report_text(&auto));
     }
-    if let Some(w) = auto.explicit_stiff_warning() {
+    for w in [auto.explicit_stiff_warning(), auto.cancellation_warning()].into_iter().flatten() {
         eprintln!("⚠ warning: {w}");
     }
     let v = &auto.verification;

@@ -215,6 +215,9 @@ pub struct Verification {
     /// How the relaxation went and why the kept candidate was kept; for a passing first proposal
     /// not relaxed, why not (empty when the verification failed first).
     pub relaxation: String,
+    /// The kept run's largest ratio of u_f's terms to its peak over the channels
+    /// ([`crate::diagnostics::uf_cancellation`]): NaN for a run that ended early.
+    pub uf_cancellation: f64,
 }
 
 impl Verification {
@@ -252,6 +255,9 @@ pub struct Candidate {
     /// The run's caution that DOP853 thrashed at its stability bound ([`crate::diagnostics::thrashing`]).
     #[serde(skip)]
     thrashing: Option<String>,
+    /// The largest ratio of u_f's terms to its peak ([`Verification::uf_cancellation`]).
+    #[serde(skip)]
+    uf_cancellation: f64,
 }
 
 /// A complete scenario, its design, the choices made and their verification.
@@ -263,7 +269,31 @@ pub struct AutoDesign {
     pub verification: Verification,
 }
 
+/// From this ratio of u_f's terms to its peak, a design verified in the continuous loop is
+/// cautioned before it is sampled ([`AutoDesign::cancellation_warning`]): a water network's design
+/// kept under an actuator limit, 8,400×, diverged sampled at every sample time down to 9 s while
+/// its continuous loop converged. The automatic designs of the examples have 10–13 (paper,
+/// three-channel, siso-complex), the hard-disk servo's 67, the flexible joint's 1,441 (sampled at
+/// 0.5 ms its first proposal had driven u_f 8,900× the continuous loop's, which the sampled
+/// verification now slows).
+pub const SAMPLED_CANCELLATION: f64 = 1000.0;
+
 impl AutoDesign {
+    /// On a design verified in the continuous loop, the caution that its u_f is the small
+    /// difference of terms [`SAMPLED_CANCELLATION`] or more times its peak, so that a sampled
+    /// controller's errors (and a model's, and noise) reach u_f amplified as much; `None`
+    /// otherwise (a sampled scenario's design was compared with its continuous loop already).
+    pub fn cancellation_warning(&self) -> Option<String> {
+        let ratio = self.verification.uf_cancellation;
+        (self.scenario.simulation.sample_time.is_none() && ratio >= SAMPLED_CANCELLATION).then(|| {
+            format!(
+                "the chosen design's u_f = −K x̂ + F u_d is the small difference of terms up to {}× its peak: a sampled controller's errors, a model error or noise reach u_f amplified by about as much (a design like it diverged sampled at every sample time while its continuous loop converged); before implementing it, set simulation.sample_time and run the automatic design again, which then compares the sampled loop with its continuous loop{}",
+                crate::settings::fmt_ratio(ratio),
+                if self.verification.relaxation.contains("actuator limit") { ", or allow more actuator effort (a slower observer can buy a lower u_f peak with this cancellation)" } else { "" }
+            )
+        })
+    }
+
     /// On a scenario forced onto DOP853 (`simulation.method = "explicit"`), which verified the
     /// design, the caution of [`crate::sim::explicit_stiff_warning`] where the chosen μ makes the
     /// adaptive law stiff (an automatic design aims μλ_max(Ω̄) at 10ρ); `None` otherwise.
@@ -427,6 +457,9 @@ fn candidate(scenario: &Scenario, r: &crate::sim::SimResult, speed: Speed, conve
         peak_e,
         mid_max_e,
         thrashing: crate::diagnostics::thrashing(&r.stats, scenario.plant.time_unit),
+        uf_cancellation: (0..m)
+            .map(|i| r.uf_terms.get(i).map_or(f64::NAN, |t| t / r.max_uf(i)))
+            .fold(f64::NAN, f64::max),
     }
 }
 
@@ -445,6 +478,7 @@ impl Candidate {
             peak_e: none.clone(),
             mid_max_e: none,
             thrashing: None,
+            uf_cancellation: f64::NAN,
         }
     }
 
@@ -1009,6 +1043,7 @@ fn finish(
             advice,
             candidates,
             relaxation,
+            uf_cancellation: c.uf_cancellation,
         },
     }
 }
@@ -1313,8 +1348,9 @@ fn horizon_advice(
     }
     // Observer poles held at slow zeros of (A, D, C) (the F-8's −0.0015 ± 0.089j over 60 s) or any
     // design pole whose transient outlives the run: a cause the run's own diagnostics name.
-    let at = advice.len();
-    advice.extend(crate::diagnostics::slow_transient_advice(design, t_end));
+    let transient = crate::diagnostics::slow_transient_advice(design, t_end);
+    let at = transient.is_some().then_some(advice.len());
+    advice.extend(transient);
     if many_harmonics(s, design) {
         advice.push(format!("a component has {} harmonics, and the companion forms' Ω̄ is singular to rounding with many: design.regressor_scaling = \"modal\" with a resonator −b ± jω per harmonic as filter poles keeps it well conditioned (what the automatic design chooses where the file gives neither the key nor μ; μ then anew)", most_harmonics(s)));
     }
@@ -1340,10 +1376,10 @@ fn horizon_advice(
     .collect();
     if !estimates.is_empty() && !verifier.nested {
         let (verified, passed) = verified_horizon(doc, targets, verifier, estimates, (s, design, first.steps))?;
-        if passed {
+        if let Some(at) = at.filter(|_| passed) {
             // A horizon verified to pass supersedes the slow poles' rule of thumb (30/|Re p|), which
             // had been offered beside it (an LCL filter's held zeros asked for 2.5 s where 0.49 s passed).
-            advice.truncate(at);
+            advice.remove(at);
         }
         advice.push(verified);
     }
@@ -1847,9 +1883,18 @@ fn observer(
     // them apart and they are no better than a guess; all-fast poles then (the Shell
     // fractionator's five such zeros, error 3.99, missed the bound at 3,000 min where all-fast
     // poles, error above 4, met it).
-    if pseudo && tried.iter().all(|c| c.3 > FIDELITY_LIMIT) && tried.iter().any(|c| c.2 == 0) {
+    let hopeless = pseudo && tried.iter().all(|c| c.3 > FIDELITY_LIMIT);
+    if hopeless && tried.iter().any(|c| c.2 == 0) {
         tried.retain(|c| c.2 == 0);
     }
+    // Where none of them could be designed, the reason says why the zeros stay (a five-zone
+    // building's all-fast observers missed their placement check).
+    let unplaced = match &first_error {
+        Some(e) if hopeless && tried.iter().all(|c| c.2 > 0) => format!(
+            "; all-fast poles, which are kept where no candidate passes ω within {FIDELITY_LIMIT}, could not be designed ({e})"
+        ),
+        _ => String::new(),
+    };
     // The slowest candidate within FIDELITY_SLACK of the best error (or within the aim): a faster
     // observer that barely improves the fidelity only stiffens the loop.
     let best_error = tried.iter().map(|c| c.3).fold(f64::INFINITY, f64::min);
@@ -1872,7 +1917,7 @@ fn observer(
         format!("{what}: the slowest candidate (r_o = 6r, 3× the slowest channel pole the rules start from, −2r): the plant has no disturbance input (k = 0), so no disturbance observer (eq. (20)) decides among faster ones")
     } else {
         format!(
-            "{what}: the first candidate (r_o = r_0·2^k, r_0 = 6r, 3× the slowest channel pole the rules start from (−2r, also when the file gives the channel poles), k ≤ 3; spreads ×2, ×4; the zeros {} kept) whose disturbance observer (eq. (20), driven by x̂) passes every frequency of ω with relative error ≤ {FIDELITY_AIM}, or within {FIDELITY_SLACK}× the best candidate's; its error is {error:.2e} at worst",
+            "{what}: the first candidate (r_o = r_0·2^k, r_0 = 6r, 3× the slowest channel pole the rules start from (−2r, also when the file gives the channel poles), k ≤ 3; spreads ×2, ×4; the zeros {} kept) whose disturbance observer (eq. (20), driven by x̂) passes every frequency of ω with relative error ≤ {FIDELITY_AIM}, or within {FIDELITY_SLACK}× the best candidate's; its error is {error:.2e} at worst{unplaced}",
             zeros_of(pseudo)
         )
     };

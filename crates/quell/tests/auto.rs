@@ -10,7 +10,7 @@ mod common;
 use std::ops::ControlFlow;
 
 use common::{companion, poly_from_roots, Rng};
-use quell::auto::{auto_design, AutoError, Targets, EFFORT_GROWTH, TAIL_BOUND};
+use quell::auto::{auto_design, AutoError, Targets, EFFORT_GROWTH, SAMPLED_CANCELLATION, TAIL_BOUND};
 use quell::diagnostics::{diagnose, disturbance_zeros, FIDELITY_LIMIT};
 use quell::nalgebra::{Complex, DMatrix};
 use quell::scenario::Scenario;
@@ -1417,4 +1417,36 @@ fn an_lcl_inverters_held_zeros_get_the_verified_horizon_alone() {
     doc["simulation"].as_table_mut().unwrap().insert("t_end".into(), toml::Value::Float(proposed));
     let long = auto_design(&doc, &Targets::default()).unwrap();
     assert!(long.verification.passed, "{:?}", long.verification);
+}
+
+/// A design verified in the continuous loop whose u_f is the small difference of terms thousands
+/// of times its peak is cautioned before it is sampled: the water network's design under a 15
+/// (1000 m³/h) pump limit (tests/data/water-network.toml) passes its verification, and its
+/// sampled loop diverges at T_s = 0.01 h (36 s) where the same design's continuous loop completes
+/// its horizon: what the warning says. The
+/// paper's example, whose terms are under 10× its peak, gets none.
+#[test]
+fn a_design_whose_input_cancels_thousands_of_times_is_cautioned_before_it_is_sampled() {
+    let doc = without_design(&data("water-network.toml"));
+    let targets = Targets { u_limit: vec![15.0], ..Targets::default() };
+    let auto = auto_design(&doc, &targets).unwrap();
+    assert!(auto.verification.passed, "{:?}", auto.verification);
+    let warning = auto.cancellation_warning().expect("a caution");
+    assert!(warning.contains("set simulation.sample_time and run the automatic design again"), "{warning}");
+    let s = &auto.scenario;
+    let continuous = Run::of(s, &auto.design).simulate(|_| ControlFlow::Continue(())).unwrap();
+    assert_eq!(continuous.outcome, Some(quell::sim::Outcome::Completed));
+    let settings = quell::sim::RunSettings {
+        mode: quell::sim::Loop::Sampled { sample_time: 0.01 },
+        ..quell::sim::RunSettings::of(s)
+    };
+    let sampled = Run::of(s, &auto.design).settings(settings).simulate(|_| ControlFlow::Continue(()));
+    let outcome = sampled.unwrap().outcome;
+    assert!(matches!(outcome, Some(quell::sim::Outcome::Diverged { .. })), "sampled at 0.01 h: {outcome:?}");
+    let paper = without_design(
+        &std::fs::read_to_string(format!("{}/../../examples/paper.toml", env!("CARGO_MANIFEST_DIR"))).unwrap(),
+    );
+    let paper = auto_design(&paper, &Targets::default()).unwrap();
+    let ratio = paper.verification.uf_cancellation;
+    assert!(ratio < SAMPLED_CANCELLATION && paper.cancellation_warning().is_none(), "{ratio}");
 }

@@ -122,6 +122,9 @@ pub struct Design {
     observability: RankTest,
     observer_eigenvalues: Vec<Complex<f64>>,
     decoupled_eigenvalues: Vec<Complex<f64>>,
+    /// The plant's zeros that passed [`check_zero_dynamics`] only by refinement: stable, but within
+    /// the rounding margin of the imaginary axis ([`warnings`] reports them).
+    near_axis_zeros: Vec<Complex<f64>>,
     /// κ₂ of A − LC's and A − BK's eigenvectors, computed once when first asked (an eigen-
     /// decomposition each: seconds for n in the hundreds).
     observer_kappa: std::sync::OnceLock<f64>,
@@ -153,7 +156,7 @@ pub enum DesignError {
         margin: f64,
         kappa: f64,
     },
-    #[error("plant.C: output {} is reached by no input: c_i A^(l-1) B = 0 for every l ≤ n (largest cosine between c_i A^(l-1) and a column of B: {largest:.1e}, below τ = {tol:.0e}), so the plant cannot be decoupled; check row {channel} of plant.C", .channel + 1, tol = TOL)]
+    #[error("plant.C: output {} is reached by no input: c_i A^(l-1) B = 0 for every l ≤ n (largest cosine between c_i A^(l-1) and a column of B, states balanced: {largest:.1e}, below τ = {tol:.0e}), so the plant cannot be decoupled; check row {channel} of plant.C", .channel + 1, tol = TOL)]
     NoRelativeDegree { channel: usize, largest: f64 },
     #[error("design.channel_poles[{channel}]: channel {} has relative degree {sigma}, so it needs {sigma} pole{}; found {got}", .channel + 1, if *.sigma == 1 { "" } else { "s" })]
     ChannelPoleCount { channel: usize, sigma: usize, got: usize },
@@ -163,9 +166,9 @@ pub enum DesignError {
     UnstableZeroDynamics { placed: usize, zeros: Vec<Complex<f64>>, unstable: Vec<Complex<f64>>, unit: TimeUnit },
     #[error("design.relative_degrees[{index}]: expected a relative degree 1 ≤ σ_i ≤ n = {n}, found {value}")]
     RelativeDegreeRange { index: usize, value: usize, n: usize },
-    #[error("design.relative_degrees[{channel}]: σ_{} = {given} contradicts the plant: c_{0} A^({}) B is clearly non-zero (largest cosine between c_{0} A^({1}) and a column of B: {measure:.2e}, above {cf}·τ = {bound:.0e}), so channel {0} has relative degree at most {l}; give σ_{0} ≤ {l}, or remove design.relative_degrees to let eq. (7) decide", .channel + 1, .l - 1, cf = CLOSE_FACTOR, bound = TOL * CLOSE_FACTOR)]
+    #[error("design.relative_degrees[{channel}]: σ_{} = {given} contradicts the plant: c_{0} A^({}) B is clearly non-zero (largest cosine between c_{0} A^({1}) and a column of B, states balanced: {measure:.2e}, above {cf}·τ = {bound:.0e}), so channel {0} has relative degree at most {l}; give σ_{0} ≤ {l}, or remove design.relative_degrees to let eq. (7) decide", .channel + 1, .l - 1, cf = CLOSE_FACTOR, bound = TOL * CLOSE_FACTOR)]
     RelativeDegreeTooHigh { channel: usize, given: usize, l: usize, measure: f64 },
-    #[error("design.relative_degrees[{channel}]: σ_{} = {given} contradicts the plant: c_{0} A^({}) B is clearly zero (largest cosine between c_{0} A^({1}) and a column of B: {measure:.2e}, below τ/{cf} = {bound:.0e}), so no input reaches output {0} at l = {given}; give a larger σ_{0}, or remove design.relative_degrees to let eq. (7) decide", .channel + 1, .given - 1, cf = CLOSE_FACTOR, bound = TOL / CLOSE_FACTOR)]
+    #[error("design.relative_degrees[{channel}]: σ_{} = {given} contradicts the plant: c_{0} A^({}) B is clearly zero (largest cosine between c_{0} A^({1}) and a column of B, states balanced: {measure:.2e}, below τ/{cf} = {bound:.0e}), so no input reaches output {0} at l = {given}; give a larger σ_{0}, or remove design.relative_degrees to let eq. (7) decide", .channel + 1, .given - 1, cf = CLOSE_FACTOR, bound = TOL / CLOSE_FACTOR)]
     RelativeDegreeTooLow { channel: usize, given: usize, measure: f64 },
     #[error("design.relative_degrees: Σσ_i = {sum} exceeds n = {n}; for a decouplable plant the Σσ_i rows c_i A^j (j < σ_i) are independent, so Σσ_i ≤ n; give smaller relative degrees, or remove design.relative_degrees to let eq. (7) decide")]
     RelativeDegreeSum { sum: usize, n: usize },
@@ -290,7 +293,7 @@ impl Design {
         poll()?;
         let decoupled_eigenvalues = eigenvalues(&A_f).map_err(|e| eigen_error("plant", "A − BK", e))?;
         poll()?;
-        check_zero_dynamics(plant, &fw)?;
+        let near_axis_zeros = check_zero_dynamics(plant, &fw)?;
         let (G_g, L_g) = internal_model(&spec.reference_filter_poles, spec.regressor_scaling);
         let (G_w, L_w) = internal_model(&spec.disturbance_filter_poles, spec.regressor_scaling);
         let (N, cond_D) = disturbance_observer_gain(&plant.D, &L_w)?;
@@ -318,6 +321,7 @@ impl Design {
             observability,
             observer_eigenvalues,
             decoupled_eigenvalues,
+            near_axis_zeros,
             observer_kappa: std::sync::OnceLock::new(),
             decoupled_kappa: std::sync::OnceLock::new(),
         })
@@ -425,6 +429,11 @@ impl Design {
     /// eig(A − BK), sorted.
     pub fn decoupled_eigenvalues(&self) -> &[Complex<f64>] {
         &self.decoupled_eigenvalues
+    }
+    /// The plant's zeros (A − BK's zero dynamics) that are stable within only the rounding margin
+    /// √ε‖Z‖ of the imaginary axis.
+    pub fn near_axis_zeros(&self) -> &[Complex<f64>] {
+        &self.near_axis_zeros
     }
     /// κ₂ of the eigenvector matrix of A − LC ([`place::eigenvector_condition`] by duality):
     /// how much a perturbation of the model moves the observer poles; ∞ for a Jordan design.
@@ -685,26 +694,39 @@ fn check_observer_hurwitz(
 /// The least damping −Re z/|z| of a zero the refinement may settle as stable: below it the zero is
 /// on the imaginary axis to the rounding of its computation (a disk drive's −14.5 ± 16532i has 9e-4).
 const AXIS_DAMPING: f64 = 1e-12;
+/// A zero within this many ε·‖Z‖ of the origin is at s = 0 to the rounding of its computation.
+const ORIGIN_ROUNDING: f64 = 1e3;
 
-fn check_zero_dynamics(plant: &Plant, fw: &FalbWolovich) -> Result<(), DesignError> {
+fn check_zero_dynamics(plant: &Plant, fw: &FalbWolovich) -> Result<Vec<Complex<f64>>, DesignError> {
     let n = plant.n();
     let sigma = fw.sigma();
     let placed: usize = sigma.iter().sum();
     let Z = zero_dynamics_matrix((&plant.A, &plant.B, &plant.C), fw);
     if Z.ncols() == 0 {
-        return Ok(());
+        return Ok(vec![]);
     }
     let zeros = eigenvalues(&Z).map_err(|e| eigen_error("plant", "the zero dynamics of A − BK", e))?;
     let bad = unstable(&zeros, Z.norm());
     // A zero on the imaginary axis comes out at Re ≈ ±1e-17 |z|: damping beyond AXIS_DAMPING is
     // needed to count as stable (s² + 1.69 had passed as "max Re λ = 0.00000" and its run grew).
-    let damped = |z: &Complex<f64>| z.re < -AXIS_DAMPING * z.norm();
+    // A zero within rounding of the origin has no damping to judge (one exactly at 0, computed as
+    // −1e-17, had passed, and its run's u_f grew without end).
+    let origin = ORIGIN_ROUNDING * f64::EPSILON * Z.norm();
+    let damped = |z: &Complex<f64>| z.re < -AXIS_DAMPING * z.norm() && z.norm() > origin;
     let settled = || zeros.iter().all(damped) && place::refined_left_half_plane(&Z, &zeros);
     if bad.is_empty() || settled() {
-        Ok(())
+        Ok(bad)
     } else {
         debug_assert_eq!(zeros.len(), n - placed);
-        Err(DesignError::UnstableZeroDynamics { placed, zeros, unstable: bad, unit: plant.time_unit })
+        // At the origin to rounding: reported as 0, not as its computed −3e-16.
+        let at = |z: &Complex<f64>| if z.norm() <= origin { Complex::new(0.0, 0.0) } else { *z };
+        let zeros = zeros.iter().map(at).collect();
+        Err(DesignError::UnstableZeroDynamics {
+            placed,
+            zeros,
+            unstable: bad.iter().map(at).collect(),
+            unit: plant.time_unit,
+        })
     }
 }
 

@@ -80,6 +80,23 @@ pub fn warnings(design: &Design, spec: &DesignSpec) -> Vec<DesignWarning> {
             ),
         });
     }
+    let near = design.near_axis_zeros();
+    if !near.is_empty() {
+        let unit = p.time_unit;
+        let slowest = near.iter().map(|z| -z.re).fold(f64::INFINITY, f64::min);
+        out.push(DesignWarning {
+            key: "plant.C",
+            multiplicity: 0,
+            rank: numerical_rank(&p.C),
+            verified_error: None,
+            eigenvector_condition: f64::NAN,
+            message: format!(
+                "plant.C: zeros of (A, B, C) within rounding of the imaginary axis, [{}] (per {unit}): stable, but decoupling cancels them, so A − BK keeps modes that decay only over 1/|Re z| = {} {unit}, the steady plant input at frequencies near them grows as 1/|z − jω| (the report's steady input), and a model error of that size puts them in the right half-plane; measure other outputs, or check the model's zeros",
+                crate::linalg::fmt_complex_list(near),
+                crate::settings::fmt_short(crate::settings::significant(1.0 / slowest, 3)),
+            ),
+        });
+    }
     let cond = design.cond_B_star();
     if cond > ILL_CONDITIONED_DECOUPLER {
         out.push(DesignWarning {

@@ -606,9 +606,8 @@ fn harmonic(v: Value) -> Result<Harmonic, ScenarioError> {
 }
 
 /// A document's `[simulation]` keys each checked on its own (type and range; the bounds between
-/// them are the whole scenario's): for a run whose flags or arguments then override some of them
-/// (`quell run --sample-time`, `Scenario.load(sample_time=…)`), which must not hide a bad value in
-/// the file.
+/// them are the whole scenario's): for a run that then overrides some of them (a sample time,
+/// horizon or output step given apart from the file), which must not hide a bad value in it.
 pub fn check_simulation(doc: &toml::Table) -> Result<(), ScenarioError> {
     let Some(value) = doc.get("simulation") else { return Ok(()) };
     let t = Value { key: "simulation", value }.table(SIMULATION_KEYS)?;
