@@ -133,25 +133,21 @@ pub(crate) fn balanced_system(
 ) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
     let n = A.nrows();
     let mut t = vec![1.0_f64; n];
-    let scaled = |t: &[f64]| {
-        let Ab = DMatrix::from_fn(n, n, |i, j| A[(i, j)] * t[i] / t[j]);
-        let Bb = DMatrix::from_fn(n, B.ncols(), |i, j| B[(i, j)] * t[i]);
-        let Cb = DMatrix::from_fn(C.nrows(), n, |i, j| C[(i, j)] / t[j]);
-        (Ab, Bb, Cb)
-    };
     // A few hundred sweeps at most: each applied factor cuts a row-plus-column sum by 5 %.
     for _ in 0..400 {
-        let (_, Bb, Cb) = scaled(&t);
-        let b_norms: Vec<f64> = Bb.column_iter().map(|c| c.norm()).collect();
-        let c_norms: Vec<f64> = Cb.row_iter().map(|r| r.norm()).collect();
+        // B̂ and Ĉ: T B and C T⁻¹ with unit columns and rows, in the coordinates so far.
+        let b_norms: Vec<f64> =
+            (0..B.ncols()).map(|j| (0..n).map(|i| (B[(i, j)] * t[i]).powi(2)).sum::<f64>().sqrt()).collect();
+        let c_norms: Vec<f64> =
+            (0..C.nrows()).map(|i| (0..n).map(|j| (C[(i, j)] / t[j]).powi(2)).sum::<f64>().sqrt()).collect();
         let mut converged = true;
         for k in 0..n {
             let s = t[k];
-            // Row k of [T A T⁻¹, B̂] and column k of [T A T⁻¹; Ĉ], in the coordinates so far.
+            // Row k of [T A T⁻¹, B̂] and column k of [T A T⁻¹; Ĉ].
             let r: f64 = (0..n).filter(|&j| j != k).map(|j| (A[(k, j)] * s / t[j]).abs()).sum::<f64>()
-                + (0..B.ncols()).filter(|&j| b_norms[j] > 0.0).map(|j| Bb[(k, j)].abs() / b_norms[j]).sum::<f64>();
+                + (0..B.ncols()).filter(|&j| b_norms[j] > 0.0).map(|j| (B[(k, j)] * s).abs() / b_norms[j]).sum::<f64>();
             let c: f64 = (0..n).filter(|&i| i != k).map(|i| (A[(i, k)] * t[i] / s).abs()).sum::<f64>()
-                + (0..C.nrows()).filter(|&i| c_norms[i] > 0.0).map(|i| Cb[(i, k)].abs() / c_norms[i]).sum::<f64>();
+                + (0..C.nrows()).filter(|&i| c_norms[i] > 0.0).map(|i| (C[(i, k)] / s).abs() / c_norms[i]).sum::<f64>();
             if !(c > 0.0 && r > 0.0 && c.is_finite() && r.is_finite()) {
                 continue;
             }
@@ -174,7 +170,11 @@ pub(crate) fn balanced_system(
             break;
         }
     }
-    scaled(&t)
+    (
+        DMatrix::from_fn(n, n, |i, j| A[(i, j)] * t[i] / t[j]),
+        DMatrix::from_fn(n, B.ncols(), |i, j| B[(i, j)] * t[i]),
+        DMatrix::from_fn(C.nrows(), n, |i, j| C[(i, j)] / t[j]),
+    )
 }
 
 /// Backward-error factor δ = 1000·n·ε of the eigensolver, used by [`cluster_radius`].

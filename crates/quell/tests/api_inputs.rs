@@ -205,7 +205,7 @@ fn falb_wolovich_without_channels_is_an_error() {
     let (A, _, _) = chain();
     let e = quell::design::falb_wolovich(&A, &DMatrix::zeros(3, 0), &DMatrix::zeros(0, 3), &[]);
     assert!(
-        matches!(e, Err(quell::DesignError::NotDecouplable { smallest, cond }) if smallest == 0.0 && cond == f64::INFINITY),
+        matches!(e, Err(quell::DesignError::NotDecouplable { smallest, cond, .. }) if smallest == 0.0 && cond == f64::INFINITY),
         "{e:?}"
     );
 }

@@ -216,7 +216,10 @@ pub fn falb_wolovich_given(
     let (smallest, cond_B_star) = singular_extremes(&scaled);
     let inv = match B_star.clone().try_inverse() {
         Some(inv) if smallest >= TOL => inv,
-        _ => return Err(DesignError::NotDecouplable { smallest, cond: cond_B_star }),
+        _ => {
+            let sigma = channels.iter().map(ChannelTf::sigma).collect();
+            return Err(DesignError::NotDecouplable { smallest, cond: cond_B_star, sigma });
+        }
     };
     let K = &inv * &C_star;
     let q0 = DVector::from_iterator(m, channels.iter().map(ChannelTf::q0));
