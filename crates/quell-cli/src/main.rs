@@ -144,12 +144,33 @@ pub(crate) fn in_flags(msg: String) -> String {
     }
     let given =
         |key: &str| !key.starts_with("simulation.") || GIVEN_SCENARIO_FLAGS.get().is_none_or(|g| g.contains(&key));
+    // A given flag's key in the message's prose ("or a shorter simulation.t_end") names it too; not
+    // a key that heads a message of its own ("FILE: simulation.sample_time: …" is the file's).
+    for (key, flag) in FLAGS.iter().filter(|(key, _)| key.starts_with("simulation.") && given(key)) {
+        let pattern = format!(" {key}");
+        let mut named = String::with_capacity(msg.len());
+        let mut rest = msg.as_str();
+        while let Some(at) = rest.find(&pattern) {
+            let after = &rest[at + pattern.len()..];
+            let prose = !after.starts_with(':') && !after.starts_with(" (");
+            named.push_str(&rest[..at]);
+            named.push_str(&if prose { format!(" {flag}") } else { pattern.clone() });
+            rest = after;
+        }
+        named.push_str(rest);
+        msg = named;
+    }
     for (key, flag) in FLAGS.iter().filter(|(key, _)| given(key)) {
         if let Some(rest) = msg.strip_prefix(key).filter(|r| r.starts_with([':', ' '])) {
             return format!("{flag}{rest}");
         }
     }
-    msg
+    // The file's output step or sample time refused against a --t-end: the fix is a flag too.
+    let by_t_end = GIVEN_SCENARIO_FLAGS.get().is_some_and(|g| g.contains(&"simulation.t_end"));
+    match ["output_step", "sample_time"].iter().find(|k| msg.starts_with(&format!("simulation.{k}:"))) {
+        Some(k) if by_t_end => format!("{msg} (the file's {k}, against --t-end: give --{} too)", k.replace('_', "-")),
+        _ => msg,
+    }
 }
 
 pub(crate) fn print_json(value: &serde_json::Value) {
@@ -190,10 +211,11 @@ pub(crate) fn load_with(
     };
     // The file's own [simulation] values first where a flag overrides some: it must not hide a bad
     // one (a study's are its own, and the reading below says what to run it with).
-    let overridden = GIVEN_SCENARIO_FLAGS.get().is_some_and(|g| !g.is_empty());
-    if let (Some(p), Ok(doc), true) = (path, &parsed, overridden) {
+    let overridden: Vec<&str> =
+        GIVEN_SCENARIO_FLAGS.get().into_iter().flatten().filter_map(|k| k.strip_prefix("simulation.")).collect();
+    if let (Some(p), Ok(doc), false) = (path, &parsed, overridden.is_empty()) {
         if !doc.contains_key("scenario") {
-            quell::scenario::check_simulation(doc).map_err(|e| {
+            quell::scenario::check_simulation(doc, &overridden).map_err(|e| {
                 Failure::Input(format!(
                     "{}: {e} (the file's value must be valid even where a flag overrides it)",
                     p.display()

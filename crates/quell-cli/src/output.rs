@@ -89,8 +89,12 @@ static LOCKED: std::sync::Mutex<Vec<quell::files::DirLock>> = std::sync::Mutex::
 
 /// The file that marks the output directory of each command that owns one (`quell export` writes
 /// into any directory: its two files are named by their prefix).
-const MARKS: [(&str, &str); 3] =
-    [("signals.csv", "quell run"), ("runs.csv", "quell sweep"), ("tune.json", "quell tune")];
+const MARKS: [(&str, &str); 4] = [
+    ("signals.csv", "quell run"),
+    ("runs.csv", "quell sweep"),
+    (crate::journal::JOURNAL, "quell sweep"),
+    ("tune.json", "quell tune"),
+];
 
 /// Creates `--out` and proves it writable ([`probe`]), and that none of the `files` to be written
 /// there is anything but a regular file or nothing (a directory, a symbolic link, a FIFO, a device:
@@ -107,8 +111,10 @@ pub fn prepare_out(dir: &Path, files: &[&str]) -> Result<(), Failure> {
     }
     // Run, sweep and tune each own their directory: a sweep's summary.json had replaced a run's
     // beside its signals.csv and figures.
-    if MARKS.iter().any(|(mark, _)| files.contains(mark)) {
-        if let Some((mark, command)) = MARKS.iter().find(|(mark, _)| !files.contains(mark) && dir.join(mark).exists()) {
+    let owner = |file: &str| MARKS.iter().find(|(mark, _)| *mark == file).map(|(_, command)| *command);
+    if let Some(ours) = files.iter().find_map(|f| owner(f)) {
+        if let Some((mark, command)) = MARKS.iter().find(|(mark, command)| *command != ours && dir.join(mark).exists())
+        {
             return Err(bad(format!(
                 "it holds the output of `{command}` ({mark}), which this command's files would mix with"
             )));

@@ -776,8 +776,9 @@ fn grid_span(x: &[f64], scale: AxisScale) -> (f64, f64) {
 /// was cut at the figure's edge).
 fn grid_right_margin(scale: AxisScale, values: &[String]) -> u32 {
     match (scale, values.last()) {
+        // At most 140 px: a 15-state matrix's label had squeezed every panel to a sliver.
         (AxisScale::Positions, Some(last)) => {
-            56.max((last.chars().count() as f64 * 13.0 * 0.6 / 2.0).ceil() as u32 + 8)
+            ((last.chars().count() as f64 * 13.0 * 0.6 / 2.0).ceil() as u32 + 8).clamp(56, 140)
         }
         _ => 28,
     }

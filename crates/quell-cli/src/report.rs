@@ -187,7 +187,7 @@ fn relative_degrees(s: &mut String, d: &Design) {
     let (tol, cf) = (quell::design::TOL, quell::design::CLOSE_FACTOR);
     let _ = writeln!(
         s,
-        "\nrelative degrees σ = {:?} (c_i A^(l−1) B ≠ 0 when its largest cosine, states balanced, ≥ τ = {tol:.0e})",
+        "\nrelative degrees σ = {:?} (c_i A^(l−1) B ≠ 0 when its largest cosine ≥ τ = {tol:.0e})",
         d.sigma()
     );
     for (i, r) in d.relative_degree_decisions().iter().enumerate() {

@@ -58,6 +58,14 @@ pub struct RunArgs {
 
 pub fn run(args: &RunArgs) -> Result<(), Failure> {
     let (mut scenario, design) = load_with(args.scenario.as_deref(), |sim| {
+        // --continuous discards a valid sample time before the checks (one beyond a --t-end is no
+        // matter); a bad one stays, for them to refuse.
+        let valid = |v: &toml::Value| {
+            v.as_float().or(v.as_integer().map(|i| i as f64)).is_some_and(|t| t.is_finite() && t > 0.0)
+        };
+        if args.continuous && sim.get("sample_time").is_some_and(valid) {
+            sim.remove("sample_time");
+        }
         set_sample_time(sim, args.sample_time);
         // Any value, for the scenario's checks to name with the flag.
         for (key, value) in [("t_end", args.t_end), ("output_step", args.output_step)] {

@@ -1488,6 +1488,19 @@ fn t_end_and_output_step_flags_are_the_scenario_keys() {
     assert!(
         stderr(&o).contains("simulation.output_step (--output-step): expected an output step ≤ t_end = 1, found 50")
     );
+    // The file's output step against a --t-end: the flag named, and the fix.
+    let o = quell(&["run", paper.to_str().unwrap(), "--t-end", "0.05", "--out", "unused"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("found 0.1 (the file's output_step, against --t-end: give --output-step too)"),
+        "{}",
+        stderr(&o)
+    );
+    // --continuous discards the file's sample time before a --t-end shorter than it is checked.
+    let sampled = examples_dir().join("paper-sampled.toml");
+    let args = ["run", sampled.to_str().unwrap(), "--continuous", "--t-end", "0.0005", "--output-step", "0.0005"];
+    let o = quell(&[&args[..], &["--no-plots", "--out", by_flags.to_str().unwrap()]].concat());
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let bad_file = dir.path().join("bad.toml");
     fs::write(&bad_file, text.replace("t_end = 100.0", "t_end = -3.0")).unwrap();
     let o = quell(&["run", bad_file.to_str().unwrap(), "--output-step", "0.5", "--out", "unused"]);
@@ -1573,4 +1586,11 @@ fn a_directory_holding_another_commands_output_is_refused() {
     let o = quell(&["run", "--t-end", "1", "--no-plots", "--out", swept.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("holds the output of `quell sweep` (runs.csv)"), "{}", stderr(&o));
+    // A sweep killed before its runs.csv leaves its journal, which marks the directory as well.
+    let killed = dir.path().join("killed");
+    fs::create_dir_all(&killed).unwrap();
+    fs::write(killed.join("runs.partial.csv"), "run,point\n").unwrap();
+    let o = quell(&["run", "--t-end", "1", "--no-plots", "--out", killed.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("holds the output of `quell sweep` (runs.partial.csv)"), "{}", stderr(&o));
 }

@@ -110,7 +110,7 @@ impl PyScenario {
     /// a bad value in the document itself is the document's.
     fn sampled(py: Python<'_>, mut doc: Table, t: f64) -> PyResult<Self> {
         // The file's own values first: the argument that overrides one does not hide it.
-        quell::scenario::check_simulation(&doc).map_err(|e| scenario_error(py, &e))?;
+        quell::scenario::check_simulation(&doc, &["sample_time"]).map_err(|e| scenario_error(py, &e))?;
         let sim = doc.entry("simulation").or_insert(Table::new().into());
         match sim.as_table_mut() {
             Some(sim) => sim.insert("sample_time".into(), Value::Float(t)),

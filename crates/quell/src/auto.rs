@@ -216,7 +216,7 @@ pub struct Verification {
     /// not relaxed, why not (empty when the verification failed first).
     pub relaxation: String,
     /// The kept run's largest ratio of u_f's terms to its peak over the channels
-    /// ([`crate::diagnostics::uf_cancellation`]): NaN for a run that ended early.
+    /// ([`crate::sim::SimResult::uf_cancellation`]); 0 for a run that ended early.
     pub uf_cancellation: f64,
 }
 
@@ -287,9 +287,8 @@ impl AutoDesign {
         let ratio = self.verification.uf_cancellation;
         (self.scenario.simulation.sample_time.is_none() && ratio >= SAMPLED_CANCELLATION).then(|| {
             format!(
-                "the chosen design's u_f = −K x̂ + F u_d is the small difference of terms up to {}× its peak: a sampled controller's errors, a model error or noise reach u_f amplified by about as much (a design like it diverged sampled at every sample time while its continuous loop converged); before implementing it, set simulation.sample_time and run the automatic design again, which then compares the sampled loop with its continuous loop{}",
+                "the chosen design's u_f = −K x̂ + F u_d is the small difference of terms up to {}× its peak: a sampled controller's errors, a model error or noise reach u_f amplified by about as much (a design like it diverged sampled at every sample time while its continuous loop converged); before implementing it, set simulation.sample_time and run the automatic design again, which then compares the sampled loop with its continuous loop",
                 crate::settings::fmt_ratio(ratio),
-                if self.verification.relaxation.contains("actuator limit") { ", or allow more actuator effort (a slower observer can buy a lower u_f peak with this cancellation)" } else { "" }
             )
         })
     }
@@ -457,9 +456,7 @@ fn candidate(scenario: &Scenario, r: &crate::sim::SimResult, speed: Speed, conve
         peak_e,
         mid_max_e,
         thrashing: crate::diagnostics::thrashing(&r.stats, scenario.plant.time_unit),
-        uf_cancellation: (0..m)
-            .map(|i| r.uf_terms.get(i).map_or(f64::NAN, |t| t / r.max_uf(i)))
-            .fold(f64::NAN, f64::max),
+        uf_cancellation: (0..m).map(|i| r.uf_cancellation(i)).fold(0.0, f64::max),
     }
 }
 
@@ -478,7 +475,7 @@ impl Candidate {
             peak_e: none.clone(),
             mid_max_e: none,
             thrashing: None,
-            uf_cancellation: f64::NAN,
+            uf_cancellation: 0.0,
         }
     }
 

@@ -119,64 +119,6 @@ pub(crate) fn balance(M: &DMatrix<f64>) -> DMatrix<f64> {
     B
 }
 
-/// (A, B, C) in balanced state coordinates x_b = T x, T diagonal of powers of 2 (exact in floating
-/// point): for each state, the row of [T A T⁻¹, B̂] and the column of [T A T⁻¹; Ĉ] have comparable
-/// 1-norms, where B̂ and Ĉ are T B and C T⁻¹ with unit columns and unit rows (so the units of the
-/// inputs and outputs play no part), as [`balance`] scales a square matrix. A diagonal change of
-/// the states' units leaves every Markov parameter c_i A^(l−1) b_j as it is but had moved their
-/// cosines by the units' ratio (a plant with states in mm beside km got another relative degree);
-/// balanced, the coordinates the user wrote no longer matter (to the powers of 2).
-pub(crate) fn balanced_system(
-    A: &DMatrix<f64>,
-    B: &DMatrix<f64>,
-    C: &DMatrix<f64>,
-) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
-    let n = A.nrows();
-    let mut t = vec![1.0_f64; n];
-    // A few hundred sweeps at most: each applied factor cuts a row-plus-column sum by 5 %.
-    for _ in 0..400 {
-        // B̂ and Ĉ: T B and C T⁻¹ with unit columns and rows, in the coordinates so far.
-        let b_norms: Vec<f64> =
-            (0..B.ncols()).map(|j| (0..n).map(|i| (B[(i, j)] * t[i]).powi(2)).sum::<f64>().sqrt()).collect();
-        let c_norms: Vec<f64> =
-            (0..C.nrows()).map(|i| (0..n).map(|j| (C[(i, j)] / t[j]).powi(2)).sum::<f64>().sqrt()).collect();
-        let mut converged = true;
-        for k in 0..n {
-            let s = t[k];
-            // Row k of [T A T⁻¹, B̂] and column k of [T A T⁻¹; Ĉ].
-            let r: f64 = (0..n).filter(|&j| j != k).map(|j| (A[(k, j)] * s / t[j]).abs()).sum::<f64>()
-                + (0..B.ncols()).filter(|&j| b_norms[j] > 0.0).map(|j| (B[(k, j)] * s).abs() / b_norms[j]).sum::<f64>();
-            let c: f64 = (0..n).filter(|&i| i != k).map(|i| (A[(i, k)] * t[i] / s).abs()).sum::<f64>()
-                + (0..C.nrows()).filter(|&i| c_norms[i] > 0.0).map(|i| (C[(i, k)] / s).abs() / c_norms[i]).sum::<f64>();
-            if !(c > 0.0 && r > 0.0 && c.is_finite() && r.is_finite()) {
-                continue;
-            }
-            // x_k → f x_k scales its row by f and its column by 1/f: balanced at f² = c/r.
-            let (mut f, mut rs) = (1.0, r);
-            while rs < c / 2.0 {
-                f *= 2.0;
-                rs *= 4.0;
-            }
-            while rs >= c * 2.0 {
-                f /= 2.0;
-                rs /= 4.0;
-            }
-            if r * f + c / f < 0.95 * (r + c) {
-                converged = false;
-                t[k] *= f;
-            }
-        }
-        if converged {
-            break;
-        }
-    }
-    (
-        DMatrix::from_fn(n, n, |i, j| A[(i, j)] * t[i] / t[j]),
-        DMatrix::from_fn(n, B.ncols(), |i, j| B[(i, j)] * t[i]),
-        DMatrix::from_fn(C.nrows(), n, |i, j| C[(i, j)] / t[j]),
-    )
-}
-
 /// Backward-error factor δ = 1000·n·ε of the eigensolver, used by [`cluster_radius`].
 fn backward_error(n: usize) -> f64 {
     1000.0 * n.max(1) as f64 * f64::EPSILON

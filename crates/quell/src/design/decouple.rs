@@ -3,13 +3,12 @@
 use nalgebra::{Complex, DMatrix, DVector, RowDVector};
 
 use super::{ChannelTf, DesignError};
-use crate::linalg::{balanced_system, singular_extremes};
+use crate::linalg::singular_extremes;
 use crate::plant::{check, PlantError};
 
 /// The design layer's one tolerance τ. Every "is it zero?" and "is it singular?" decision is made
 /// on a scale-free measure in [0, 1] (it does not grow with ‖A‖^(l−1), nor change with the units of
-/// the inputs, outputs or disturbances, nor, for eq. (7) and B*, with those of the states: they are
-/// measured in balanced states, [`balanced_system`]) and compared with τ:
+/// the inputs, outputs or disturbances) and compared with τ:
 ///
 /// | decision | measure | passes when |
 /// |---|---|---|
@@ -69,9 +68,8 @@ pub(crate) fn unit_columns(B: &DMatrix<f64>) -> DMatrix<f64> {
     Bn
 }
 
-/// Eq. (7) for every output, on the normalized iterates r_l = c_i A^(l−1) / ‖c_i A^(l−1)‖ of the
-/// balanced (A, B, C) ([`balanced_system`]): the measure at l is max_j |r_l b̂_j| with b̂_j the unit
-/// columns of B (see [`TOL`]). An error when A
+/// Eq. (7) for every output, on the normalized iterates r_l = c_i A^(l−1) / ‖c_i A^(l−1)‖: the
+/// measure at l is max_j |r_l b̂_j| with b̂_j the unit columns of B (see [`TOL`]). An error when A
 /// is not square, B has not A's rows or C not A's columns, or an entry is non-finite or beyond
 /// [`MAX_ENTRY`](crate::plant::MAX_ENTRY).
 pub fn relative_degree_measures(
@@ -83,7 +81,6 @@ pub fn relative_degree_measures(
     check("A", A, n, n)?;
     check("B", B, n, B.ncols())?;
     check("C", C, C.nrows(), n)?;
-    let (A, B, C) = &balanced_system(A, B, C);
     let Bn = unit_columns(B);
     Ok((0..C.nrows())
         .map(|i| {
@@ -209,10 +206,7 @@ pub fn falb_wolovich_given(
         return Err(DesignError::RelativeDegreeSum { sum, n });
     }
     let channels: Vec<ChannelTf> = channel_poles.iter().map(|p| ChannelTf::new(p)).collect();
-    let (B_star, C_star, _) = decoupling_rows(A, B, C, &channels);
-    // The measure in balanced states, as eq. (7)'s (its B* is the same: T is exact).
-    let (Ab, Bb, Cb) = balanced_system(A, B, C);
-    let scaled = decoupling_rows(&Ab, &Bb, &Cb, &channels).2;
+    let (B_star, C_star, scaled) = decoupling_rows(A, B, C, &channels);
     let (smallest, cond_B_star) = singular_extremes(&scaled);
     let inv = match B_star.clone().try_inverse() {
         Some(inv) if smallest >= TOL => inv,

@@ -156,7 +156,7 @@ pub enum DesignError {
         margin: f64,
         kappa: f64,
     },
-    #[error("plant.C: output {} is reached by no input: c_i A^(l-1) B = 0 for every l ≤ n (largest cosine between c_i A^(l-1) and a column of B, states balanced: {largest:.1e}, below τ = {tol:.0e}), so the plant cannot be decoupled; check row {channel} of plant.C", .channel + 1, tol = TOL)]
+    #[error("plant.C: output {} is reached by no input: c_i A^(l-1) B = 0 for every l ≤ n (largest cosine between c_i A^(l-1) and a column of B: {largest:.1e}, below τ = {tol:.0e}), so the plant cannot be decoupled; check row {channel} of plant.C", .channel + 1, tol = TOL)]
     NoRelativeDegree { channel: usize, largest: f64 },
     #[error("design.channel_poles[{channel}]: channel {} has relative degree {sigma}, so it needs {sigma} pole{}; found {got}", .channel + 1, if *.sigma == 1 { "" } else { "s" })]
     ChannelPoleCount { channel: usize, sigma: usize, got: usize },
@@ -166,9 +166,9 @@ pub enum DesignError {
     UnstableZeroDynamics { placed: usize, zeros: Vec<Complex<f64>>, unstable: Vec<Complex<f64>>, unit: TimeUnit },
     #[error("design.relative_degrees[{index}]: expected a relative degree 1 ≤ σ_i ≤ n = {n}, found {value}")]
     RelativeDegreeRange { index: usize, value: usize, n: usize },
-    #[error("design.relative_degrees[{channel}]: σ_{} = {given} contradicts the plant: c_{0} A^({}) B is clearly non-zero (largest cosine between c_{0} A^({1}) and a column of B, states balanced: {measure:.2e}, above {cf}·τ = {bound:.0e}), so channel {0} has relative degree at most {l}; give σ_{0} ≤ {l}, or remove design.relative_degrees to let eq. (7) decide", .channel + 1, .l - 1, cf = CLOSE_FACTOR, bound = TOL * CLOSE_FACTOR)]
+    #[error("design.relative_degrees[{channel}]: σ_{} = {given} contradicts the plant: c_{0} A^({}) B is clearly non-zero (largest cosine between c_{0} A^({1}) and a column of B: {measure:.2e}, above {cf}·τ = {bound:.0e}), so channel {0} has relative degree at most {l}; give σ_{0} ≤ {l}, or remove design.relative_degrees to let eq. (7) decide", .channel + 1, .l - 1, cf = CLOSE_FACTOR, bound = TOL * CLOSE_FACTOR)]
     RelativeDegreeTooHigh { channel: usize, given: usize, l: usize, measure: f64 },
-    #[error("design.relative_degrees[{channel}]: σ_{} = {given} contradicts the plant: c_{0} A^({}) B is clearly zero (largest cosine between c_{0} A^({1}) and a column of B, states balanced: {measure:.2e}, below τ/{cf} = {bound:.0e}), so no input reaches output {0} at l = {given}; give a larger σ_{0}, or remove design.relative_degrees to let eq. (7) decide", .channel + 1, .given - 1, cf = CLOSE_FACTOR, bound = TOL / CLOSE_FACTOR)]
+    #[error("design.relative_degrees[{channel}]: σ_{} = {given} contradicts the plant: c_{0} A^({}) B is clearly zero (largest cosine between c_{0} A^({1}) and a column of B: {measure:.2e}, below τ/{cf} = {bound:.0e}), so no input reaches output {0} at l = {given}; give a larger σ_{0}, or remove design.relative_degrees to let eq. (7) decide", .channel + 1, .given - 1, cf = CLOSE_FACTOR, bound = TOL / CLOSE_FACTOR)]
     RelativeDegreeTooLow { channel: usize, given: usize, measure: f64 },
     #[error("design.relative_degrees: Σσ_i = {sum} exceeds n = {n}; for a decouplable plant the Σσ_i rows c_i A^j (j < σ_i) are independent, so Σσ_i ≤ n; give smaller relative degrees, or remove design.relative_degrees to let eq. (7) decide")]
     RelativeDegreeSum { sum: usize, n: usize },

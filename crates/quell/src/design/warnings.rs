@@ -5,6 +5,8 @@
 
 use serde::Serialize;
 
+use nalgebra::{Complex, DMatrix};
+
 use super::{Design, DesignSpec, ObserverChoice};
 use crate::linalg::numerical_rank;
 
@@ -80,6 +82,21 @@ pub fn warnings(design: &Design, spec: &DesignSpec) -> Vec<DesignWarning> {
             ),
         });
     }
+    if let Some((error, s_at)) = decoupling_error(design).filter(|(e, _)| *e > COUPLING) {
+        out.push(DesignWarning {
+            key: "design.relative_degrees",
+            multiplicity: 0,
+            rank: numerical_rank(&p.B),
+            verified_error: Some(error),
+            eigenvector_condition: f64::NAN,
+            message: format!(
+                "design.relative_degrees: the decoupler does not decouple this plant: at s = {} /{} the closed loop C (sI − A + BK)⁻¹ B F differs from diag(G_ii(s)) by {error:.1e} of its diagonal (σ = {:?}); eq. (7)'s cosines, taken in the states as written, can read a non-zero c_i A^(l−1) B as zero where the states' scales differ by many decades (a state in thousandths beside one in thousands): write the states in comparable units, or give design.relative_degrees",
+                crate::linalg::fmt_complex(&s_at),
+                p.time_unit.symbol(),
+                design.sigma(),
+            ),
+        });
+    }
     let near = design.near_axis_zeros();
     if !near.is_empty() {
         let unit = p.time_unit;
@@ -112,6 +129,44 @@ pub fn warnings(design: &Design, spec: &DesignSpec) -> Vec<DesignWarning> {
         });
     }
     out
+}
+
+/// The closed loop's departure from diag(G_ii) above which [`warnings`] says the decoupler does
+/// not decouple: far above its rounding (the examples' 1e-15 … 1e-10), far below what a σ_i misread
+/// leaves (a channel 5 % coupled, its diagonal 30 % off).
+pub const COUPLING: f64 = 1e-6;
+
+/// max_{i,j} |G(s)_ij − δ_ij G_ii(s)| / max_i |G_ii(s)| over three points s at the channel poles'
+/// scale, G(s) = C (sI − A_f)⁻¹ B_f: a transfer matrix, so the same in any state coordinates (the
+/// check eq. (7)'s coordinate-bound cosines cannot make). With the worst point; `None` where every
+/// point is singular or not finite.
+fn decoupling_error(design: &Design) -> Option<(f64, Complex<f64>)> {
+    let (A_f, B_f, C) = (design.A_f(), design.B_f(), &design.plant().C);
+    let n = A_f.nrows();
+    let r = design
+        .channels()
+        .iter()
+        .flat_map(|c| c.poles.iter())
+        .map(|p| p.norm())
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
+    let c = |M: &DMatrix<f64>| M.map(|v| Complex::new(v, 0.0));
+    let (Ac, Bc, Cc) = (c(A_f), c(B_f), c(C));
+    [Complex::new(0.5 * r, r), Complex::new(0.0, 1.3 * r), Complex::new(2.0 * r, 0.7 * r)]
+        .into_iter()
+        .filter_map(|s| {
+            let X = (DMatrix::identity(n, n) * s - &Ac).lu().solve(&Bc)?;
+            let G = &Cc * X;
+            let diag: Vec<Complex<f64>> = design.channels().iter().map(|tf| tf.eval(s)).collect();
+            let scale = diag.iter().map(|d| d.norm()).fold(0.0, f64::max);
+            let worst = (0..G.nrows())
+                .flat_map(|i| (0..G.ncols()).map(move |j| (i, j)))
+                .map(|(i, j)| (G[(i, j)] - if i == j { diag[i] } else { Complex::new(0.0, 0.0) }).norm())
+                .fold(0.0, f64::max)
+                / scale;
+            worst.is_finite().then_some((worst, s))
+        })
+        .max_by(|a, b| a.0.total_cmp(&b.0))
 }
 
 /// κ₂ above [`FRAGILE_CONDITION`], or NaN.

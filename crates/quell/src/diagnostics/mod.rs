@@ -187,7 +187,7 @@ pub const UF_CANCELLATION: f64 = 20.0;
 pub fn uf_cancellation(result: &SimResult) -> Vec<String> {
     let lines = result.uf_terms.iter().enumerate().filter_map(|(i, &terms)| {
         let peak = result.max_uf(i);
-        let ratio = terms / peak;
+        let ratio = result.uf_cancellation(i);
         (ratio >= UF_CANCELLATION).then(|| {
             format!(
                 "u_f[{}] = −K x̂ + F u_d is the small difference of terms up to {ratio}× its peak ({} against {}): its error relative to its peak can reach that many times the states' (up to {} digits fewer; less where their errors cancel in K x̂ too); where its digits matter (not for its peak against a limit), compare with a run at simulation.rtol and atol {ratio}× tighter",

@@ -605,16 +605,18 @@ fn harmonic(v: Value) -> Result<Harmonic, ScenarioError> {
     Ok(Harmonic { amplitude, frequency, phase })
 }
 
-/// A document's `[simulation]` keys each checked on its own (type and range; the bounds between
+/// A document's `[simulation]` `keys` each checked on its own (type and range; the bounds between
 /// them are the whole scenario's): for a run that then overrides some of them (a sample time,
 /// horizon or output step given apart from the file), which must not hide a bad value in it.
-pub fn check_simulation(doc: &toml::Table) -> Result<(), ScenarioError> {
+pub fn check_simulation(doc: &toml::Table, keys: &[&str]) -> Result<(), ScenarioError> {
     let Some(value) = doc.get("simulation") else { return Ok(()) };
     let t = Value { key: "simulation", value }.table(SIMULATION_KEYS)?;
     for (key, what) in
         [("t_end", "a final time"), ("output_step", "an output step"), ("sample_time", "a sampling period")]
     {
-        t.get(key, |v| Ok(settings::positive(v.key, what, v.number()?)?))?;
+        if keys.contains(&key) {
+            t.get(key, |v| Ok(settings::positive(v.key, what, v.number()?)?))?;
+        }
     }
     Ok(())
 }

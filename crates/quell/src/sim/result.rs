@@ -392,6 +392,12 @@ impl SimResult {
             .collect()
     }
 
+    /// The ratio of u_f,i's terms (−K x̂ and F u_d, [`SimResult::uf_terms`]) to its peak: how many
+    /// times larger than u_f the terms it is the difference of are; 0 where none were recorded.
+    pub fn uf_cancellation(&self, i: usize) -> f64 {
+        self.uf_terms.get(i).map_or(0.0, |terms| terms / self.max_uf(i))
+    }
+
     /// max |u_f,i| over the rows and between them ([`SimResult::peak_uf`]); NaN where u_f was.
     pub fn max_uf(&self, i: usize) -> f64 {
         self.column(&self.u_f, self.m, i).fold(peak(&self.peak_uf, i), |a, u| max_or_nan(a, u.abs()))

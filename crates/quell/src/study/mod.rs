@@ -720,7 +720,11 @@ fn apply_simulation(doc: &toml::Table, base: &mut toml::Table, source: &str) -> 
             // The scenario's value, valid on its own, against one the study set (its output_step
             // beside the study's t_end): the study's keys, and the remedy in the study.
             Some(key) if doc.get("simulation").is_some() && Scenario::from_document(&own).is_ok() => {
-                let set: Vec<String> = sim_keys(doc).map(|k| format!("simulation.{k}")).collect();
+                // The horizon where the study set it (the bounds on output_step and sample_time
+                // are against t_end), else every key it set.
+                let horizon = key != "t_end" && sim_keys(doc).any(|k| k == "t_end");
+                let set: Vec<String> =
+                    sim_keys(doc).filter(|k| !horizon || *k == "t_end").map(|k| format!("simulation.{k}")).collect();
                 err(
                     e.key.clone(),
                     format!(

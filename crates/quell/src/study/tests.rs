@@ -547,6 +547,9 @@ fn a_study_key_against_a_scenario_key_names_the_study() {
         "simulation.output_step: expected an output step ≤ t_end = 0.05, found 0.1 (output_step from the paper's example, with the study's simulation.t_end); set simulation.output_step in the study's [simulation] too"
     );
     assert!(study("[simulation]\nt_end = 0.05\noutput_step = 0.01\n[grid]\n\"design.beta\" = [1.0]\n").is_ok());
+    // Only the key the bound is against is named, not every key the study sets.
+    let e = error("[simulation]\nt_end = 0.05\nrtol = 1e-7\nmethod = \"imex\"\n[grid]\n\"design.beta\" = [1.0]\n");
+    assert!(e.ends_with("(output_step from the paper's example, with the study's simulation.t_end); set simulation.output_step in the study's [simulation] too"), "{e}");
     let mut bad: toml::Table = PAPER_EXAMPLE.parse().unwrap();
     bad["simulation"].as_table_mut().unwrap().insert("output_step".into(), toml::Value::Float(-1.0));
     let mut doc: toml::Table = "[simulation]\nrtol = 1e-7\n[grid]\n\"design.beta\" = [1.0]\n".parse().unwrap();
