@@ -82,6 +82,29 @@ pub fn warnings(design: &Design, spec: &DesignSpec) -> Vec<DesignWarning> {
             ),
         });
     }
+    out.extend(plant_warnings(design));
+    let cond = design.cond_B_star();
+    if cond > ILL_CONDITIONED_DECOUPLER {
+        out.push(DesignWarning {
+            key: "plant.B",
+            multiplicity: 0,
+            rank: numerical_rank(&p.B),
+            verified_error: None,
+            eigenvector_condition: f64::NAN,
+            message: format!(
+                "plant.B: ill-conditioned decoupler: B* (Proposition 1) has scale-free condition number {cond:.2e}, and K, F invert it, so a relative error ε in the plant's input gains reaches the decoupled channels as about {cond:.0}·ε ({:.0} % at ε = 1 %); check the loop's robustness with a study over truth.B (docs/studies.md), or pair inputs and outputs whose leading responses differ more",
+                cond
+            ),
+        });
+    }
+    out
+}
+
+/// The plant's part: a decoupler that does not decouple ([`decoupling_error`]) and zeros within
+/// rounding of the imaginary axis ([`Design::near_axis_zeros`]).
+fn plant_warnings(design: &Design) -> Vec<DesignWarning> {
+    let p = design.plant();
+    let mut out = Vec::new();
     if let Some((error, s_at)) = decoupling_error(design).filter(|(e, _)| *e > COUPLING) {
         out.push(DesignWarning {
             key: "design.relative_degrees",
@@ -111,20 +134,6 @@ pub fn warnings(design: &Design, spec: &DesignSpec) -> Vec<DesignWarning> {
                 "plant.C: zeros of (A, B, C) within rounding of the imaginary axis, [{}] (per {unit}): stable, but decoupling cancels them, so A − BK keeps modes that decay only over 1/|Re z| = {} {unit}, the steady plant input at frequencies near them grows as 1/|z − jω| (the report's steady input), and a model error of that size puts them in the right half-plane; measure other outputs, or check the model's zeros",
                 crate::linalg::fmt_complex_list(near),
                 crate::settings::fmt_short(crate::settings::significant(1.0 / slowest, 3)),
-            ),
-        });
-    }
-    let cond = design.cond_B_star();
-    if cond > ILL_CONDITIONED_DECOUPLER {
-        out.push(DesignWarning {
-            key: "plant.B",
-            multiplicity: 0,
-            rank: numerical_rank(&p.B),
-            verified_error: None,
-            eigenvector_condition: f64::NAN,
-            message: format!(
-                "plant.B: ill-conditioned decoupler: B* (Proposition 1) has scale-free condition number {cond:.2e}, and K, F invert it, so a relative error ε in the plant's input gains reaches the decoupled channels as about {cond:.0}·ε ({:.0} % at ε = 1 %); check the loop's robustness with a study over truth.B (docs/studies.md), or pair inputs and outputs whose leading responses differ more",
-                cond
             ),
         });
     }
