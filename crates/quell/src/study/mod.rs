@@ -1056,7 +1056,7 @@ fn monte_carlo(base: &toml::Table, t: &toml::Table, source: &str) -> Result<Mont
             }
         };
         let size_key = format!("{at}.{name}");
-        let size = non_negative(&size_key, size, "a spread ≥ 0")?;
+        let size = non_negative(&size_key, size, "a finite spread ≥ 0")?;
         let law = match name.as_str() {
             "relative" => Law::Relative(size),
             "relative_uniform" => Law::RelativeUniform(size),
