@@ -106,8 +106,8 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
         code.constant_bytes,
         code.state_bytes
     );
-    if let Some(w) = code.size_warning() {
-        eprintln!("⚠ warning: {w}");
+    for w in [code.size_warning(), code.precision_warning.clone()].into_iter().flatten() {
+        eprintln!("⚠ warning: {}", crate::in_flags(w));
     }
     Ok(())
 }

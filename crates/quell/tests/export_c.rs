@@ -910,3 +910,18 @@ fn a_controller_beyond_a_mebibyte_is_warned_about() {
         "{w}"
     );
 }
+
+/// An f32 export of a design whose closed loop is ill-conditioned is cautioned: the disk servo's
+/// observer has κ₂ = 2.75e6, so rounding to float can move its poles by about κ₂·6e-8 = 16 %
+/// (a tryout's f32 C controller gave a u_f 18 % of its peak away from the f64 one's); the paper's
+/// (κ₂ = 27) is not, and no f64 export is.
+#[test]
+fn an_f32_export_of_an_ill_conditioned_design_is_cautioned() {
+    let text = std::fs::read_to_string(format!("{}/tests/data/hdd-servo.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let hdd = Scenario::from_toml(&text).unwrap().design().unwrap();
+    let w = export(&hdd, 0.0025, "quell", Precision::F32).precision_warning.expect("cautioned");
+    assert!(w.contains("κ₂ = 2.75e6") && w.contains("= 16 % of themselves"), "{w}");
+    assert_eq!(export(&hdd, 0.0025, "quell", Precision::F64).precision_warning, None);
+    let (_, paper) = example("paper");
+    assert_eq!(export(&paper, 1e-3, "quell", Precision::F32).precision_warning, None);
+}

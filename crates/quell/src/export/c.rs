@@ -157,6 +157,7 @@ pub(super) fn write(design: &Design, ctrl: &Controller, o: &ExportOptions) -> Re
         source: c,
         constant_bytes,
         state_bytes,
+        precision_warning: super::precision_warning(design, o.precision),
     })
 }
 
