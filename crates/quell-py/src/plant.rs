@@ -138,7 +138,7 @@ fn required<'a, 'py>(
 fn system_matrices(sys: &Bound<'_, PyAny>, given_bc: bool) -> PyResult<(DMatrix<f64>, DMatrix<f64>, DMatrix<f64>)> {
     let (py, k) = (sys.py(), Kind::Scenario);
     if given_bc {
-        return Err(k.err(py, "B, C: the first argument is a state-space system, which gives A, B and C; pass D and Q (the disturbance matrices) as keywords: Plant(sys, D=..., Q=..., delays=...)"));
+        return Err(k.err(py, "B: the first argument is a state-space system, which gives A, B and C, so B and C are not passed beside it; pass D and Q (the disturbance matrices) as keywords: Plant(sys, D=..., Q=..., delays=...)"));
     }
     let dt = sys.getattr("dt").ok().filter(|d| !d.is_none());
     if let Some(dt) = dt {

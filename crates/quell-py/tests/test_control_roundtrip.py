@@ -116,6 +116,24 @@ def test_a_discrete_or_improper_transfer_function_is_refused_by_name():
         degrees = f"a numerator of degree {len(num) - 1} and a denominator of degree {len(den) - 1}"
         with pytest.raises(quell.ScenarioError, match=f"{degrees}: a plant \\(1\\) is strictly proper .*numerator's degree must be below the denominator's"):
             quell.Plant(control.tf(num, den))
+    # A biproper discrete one is named as discrete, not as biproper (the properness check had run
+    # first, steering to the wrong fix); likewise dt = True.
+    for dt in (0.1, True):
+        with pytest.raises(quell.ScenarioError, match=r"^sys: expected a continuous-time system \(dt = 0\)") as e:
+            quell.Plant(control.tf([1.0, 0.0], [1.0, -0.5], dt))
+        assert e.value.key == "sys"
+    # A coefficient that is not finite is named on sys (NaN in a denominator had leaked numpy's
+    # LinAlgError; in a numerator it was blamed on C[0][0], an argument not given).
+    for num, den, part in (([1.0], [1.0, np.nan], "denominator"), ([1.0], [1.0, np.inf, 1.0], "denominator"),
+                           ([np.nan], [1.0, 1.0], "numerator")):
+        with pytest.raises(quell.ScenarioError, match=f"^sys: the transfer function has a {part} that is not finite") as e:
+            quell.Plant(control.tf(num, den))
+        assert e.value.key == "sys"
+    # B or C beside a system is named on B.
+    sys = control.ss([[-1.0]], [[1.0]], [[1.0]], [[0.0]])
+    with pytest.raises(quell.ScenarioError, match="^B: the first argument is a state-space system") as e:
+        quell.Plant(sys, [[1.0]], [[1.0]])
+    assert e.value.key == "B"
     # A frequency response is not a model of the plant's state.
     with pytest.raises(TypeError, match="A: expected a matrix, a control.StateSpace or a control.TransferFunction, found a FrequencyResponseData"):
         quell.Plant(control.frd(control.tf([1.0], [1.0, 1.0]), [1.0, 2.0, 3.0]))
@@ -146,6 +164,8 @@ def test_result_to_control_is_outputs_by_time_with_labels():
     frame = resp.to_pandas()  # python-control's own conversion reads the labels
     np.testing.assert_array_equal(frame["y[2]"].to_numpy(), result.y[:, 1])
     assert resp.nstates == 0  # no states recorded
+    # python-control takes time in seconds: the title says the plant's unit.
+    assert resp.title == "quell simulation (t in s)"
     # With states=True the plant states come along (they were dropped), from the plant's x0.
     with_states = quell.simulate(quell.paper_example(), t_end=2.0, states=True)
     resp = with_states.to_control()

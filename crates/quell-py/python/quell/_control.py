@@ -77,6 +77,19 @@ def state_space(sys):
 
     if not isinstance(sys, control.TransferFunction):
         return sys
+    # Discrete first: a biproper z/(z - 0.5) had been told to be strictly proper.
+    if sys.dt is not None and sys.dt is not False and (sys.dt is True or sys.dt != 0):
+        raise _sys_error(
+            f"sys: expected a continuous-time system (dt = 0), found dt = {sys.dt}; quell designs for "
+            "continuous plants (sample the controller with Controller(design, sample_time))"
+        )
+    for i in range(sys.noutputs):
+        for j in range(sys.ninputs):
+            for part, v in (("numerator", sys.num[i][j]), ("denominator", sys.den[i][j])):
+                if not np.all(np.isfinite(np.asarray(v, dtype=float))):
+                    where = f" (output {i + 1}, input {j + 1})" if sys.noutputs * sys.ninputs > 1 else ""
+                    raise _sys_error(f"sys: the transfer function{where} has a {part} that is not finite "
+                                     f"({np.asarray(v, dtype=float).tolist()}); give finite coefficients")
     for i in range(sys.noutputs):
         for j in range(sys.ninputs):
             num, den = (np.trim_zeros(np.atleast_1d(np.asarray(v, dtype=float)), "f") for v in (sys.num[i][j], sys.den[i][j]))
@@ -147,7 +160,8 @@ def _num(x):
 def to_control(result, outputs, states):
     """A SimResult as ``control.TimeResponseData``: outputs y (m × samples) labelled with the
     plant's output names (``outputs``, by default y[i]), the adaptive commands u as inputs,
-    labels u[i], and, where the run recorded them, the plant states x labelled ``states``."""
+    labels u[i], and, where the run recorded them, the plant states x labelled ``states``; the
+    title names the plant's unit of time, which python-control does not carry."""
     import control
 
     m, x = result.m, result.x
@@ -160,6 +174,7 @@ def to_control(result, outputs, states):
         output_labels=list(outputs),
         input_labels=_labels("u", m),
         issiso=m == 1,
-        title="quell simulation",
+        # python-control takes time in seconds: the unit of t is said where the plot shows it.
+        title=f"quell simulation (t in {result.time_unit})",
         sysname="quell",
     )
