@@ -91,7 +91,8 @@ fn names(obj: Option<&Bound<'_, PyAny>>, name: &str, count: usize) -> PyResult<O
 }
 
 /// A `control.StateSpace`'s labels of one kind (`<kind>_labels`, `count` of them) for the keyword
-/// `name`, unless they are python-control's own (`u[0]`, `u[1]`, …, counting from 0); checked as
+/// `name`, unless they are python-control's own (`u[0]`, `u[1]`, …, counting from 0) or quell's
+/// (`u_f[1]`, …); checked as
 /// the keyword's names are (python-control keeps one of repeated labels, so a repeat shows as a
 /// missing name).
 fn system_labels(sys: &Bound<'_, PyAny>, kind: &str, name: &str, count: usize) -> PyResult<Option<Vec<String>>> {
@@ -104,7 +105,14 @@ fn system_labels(sys: &Bound<'_, PyAny>, kind: &str, name: &str, count: usize) -
     let Some(labels) = sys.getattr(attribute.as_str()).ok().and_then(|l| l.extract::<Vec<String>>().ok()) else {
         return Ok(None);
     };
-    if (0..labels.len()).all(|i| labels[i] == format!("{generic}[{i}]")) {
+    // quell's own defaults (u_f[1], y[1], x[1], …, as `to_control` and the loops write them) are
+    // no names either: a plant sent to python-control and back is the same plant (`==`).
+    let own = match kind {
+        "input" => Labels::default().inputs(count),
+        "output" => Labels::default().outputs(count),
+        _ => Labels::default().states(count),
+    };
+    if (0..labels.len()).all(|i| labels[i] == format!("{generic}[{i}]")) || labels == own {
         return Ok(None);
     }
     quell::scenario::check_names(&format!("sys.{attribute}"), &labels, count, per(name)).map_err(|e| {

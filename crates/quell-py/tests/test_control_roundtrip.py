@@ -247,6 +247,15 @@ def test_a_systems_labels_are_checked_as_names():
     assert quell.Plant(empty, delays=[0.0, 0.0], outputs=["z", "w"]).outputs == ["z", "w"]
 
 
+def test_a_plant_sent_to_python_control_with_its_own_names_comes_back_equal():
+    # quell's default names given back explicitly are no names: the plant is == again (its TOML had
+    # gained inputs = ["u_f[1]", …]).
+    p = quell.paper_example().plant
+    sys = control.ss(p.A, p.B, p.C, 0, inputs=p.inputs, outputs=p.outputs, states=p.states)
+    back = quell.Plant(sys, D=p.D, Q=p.Q, delays=p.delays, time_unit=p.time_unit)
+    assert back == p and back.inputs == p.inputs and back.states == p.states
+
+
 def test_transfer_function_names_are_kept():
     G = control.tf([1.0], [1.0, 2.0, 1.0], inputs="force", outputs="position")
     p = quell.Plant(G, delays=[0.1])
