@@ -73,7 +73,7 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
     } else {
         print_stdout(&report_text(&auto));
     }
-    for w in [auto.explicit_stiff_warning(), auto.cancellation_warning()].into_iter().flatten() {
+    for w in auto.warnings() {
         eprintln!("⚠ warning: {w}");
     }
     let v = &auto.verification;

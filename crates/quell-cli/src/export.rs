@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use quell::export::{generate, generate_fmu, ExportError, ExportOptions, FmiVersion};
 
-use crate::{load_with, output, set_sample_time, Failure};
+use crate::{file_sample_time, load_with, output, set_sample_time, sim_number, Failure};
 
 #[derive(clap::Args)]
 pub struct ExportArgs {
@@ -42,14 +42,10 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
     // capped where a run's step budget would refuse the sample time, and raised to one sample where
     // a run would end before its first step (T_s = 1000 s had been refused by the 100 s of t_end).
     let (scenario, design) = load_with(Some(&args.scenario), |sim| {
-        // A number of [simulation] (anything else stays for the reader to name).
-        let number = |sim: &toml::Table, key: &str| {
-            sim.get(key).map(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
-        };
         // The flag's sample time, or the file's.
-        let from_file = number(sim, "sample_time").flatten().filter(|t| t.is_finite() && *t > 0.0);
+        let from_file = file_sample_time(sim);
         if let Some(t) = set_sample_time(sim, args.sample_time).or(from_file) {
-            let t_end = number(sim, "t_end").unwrap_or(Some(quell::scenario::Simulation::default().t_end));
+            let t_end = sim_number(sim, "t_end").unwrap_or(Some(quell::scenario::Simulation::default().t_end));
             // A t_end that is not a number stays, for the reader to name; the output step stays within it.
             let cap = t * quell::settings::MAX_SAMPLING_STEPS;
             if let Some(horizon) = t_end.filter(|t_end| *t_end > cap || *t_end < t).map(|t_end| t_end.clamp(t, cap)) {
@@ -106,7 +102,7 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
         code.constant_bytes,
         code.state_bytes
     );
-    for w in [code.size_warning(), code.precision_warning.clone()].into_iter().flatten() {
+    for w in code.warnings() {
         eprintln!("⚠ warning: {}", crate::in_flags(w));
     }
     Ok(())

@@ -200,6 +200,17 @@ pub(crate) fn set_sample_time(sim: &mut toml::Table, sample_time: Option<f64>) -
     Some(t)
 }
 
+/// A number of `[simulation]` `sim` (an integer read as one): `None` where the key is absent,
+/// `Some(None)` where it is not a number (left for the reader to name).
+pub(crate) fn sim_number(sim: &toml::Table, key: &str) -> Option<Option<f64>> {
+    sim.get(key).map(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+}
+
+/// The sample time of `[simulation]` `sim` where it is a finite number > 0.
+pub(crate) fn file_sample_time(sim: &toml::Table) -> Option<f64> {
+    sim_number(sim, "sample_time").flatten().filter(|t| t.is_finite() && *t > 0.0)
+}
+
 /// [`load`] with `[simulation]` changed by `adjust` first (a table, empty where the file has none).
 pub(crate) fn load_with(
     path: Option<&Path>,

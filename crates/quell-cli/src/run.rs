@@ -14,7 +14,7 @@ use quell::TimeUnit;
 use serde_json::json;
 
 use crate::interrupt::Interrupt;
-use crate::{load_with, output, plot, report, set_sample_time, Failure};
+use crate::{file_sample_time, load_with, output, plot, report, set_sample_time, Failure};
 
 #[derive(clap::Args, Default)]
 pub struct RunArgs {
@@ -57,13 +57,10 @@ pub struct RunArgs {
 }
 
 pub fn run(args: &RunArgs) -> Result<(), Failure> {
-    let (mut scenario, design) = load_with(args.scenario.as_deref(), |sim| {
+    let (scenario, design) = load_with(args.scenario.as_deref(), |sim| {
         // --continuous discards a valid sample time before the checks (one beyond a --t-end is no
-        // matter); a bad one stays, for them to refuse.
-        let valid = |v: &toml::Value| {
-            v.as_float().or(v.as_integer().map(|i| i as f64)).is_some_and(|t| t.is_finite() && t > 0.0)
-        };
-        if args.continuous && sim.get("sample_time").is_some_and(valid) {
+        // matter); a bad one stays, for them to refuse, so the scenario read has none.
+        if args.continuous && file_sample_time(sim).is_some() {
             sim.remove("sample_time");
         }
         set_sample_time(sim, args.sample_time);
@@ -74,9 +71,6 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
             }
         }
     })?;
-    if args.continuous {
-        scenario.simulation.sample_time = None;
-    }
     eprint!("{}", report::warnings_text(&quell::design::warnings(&design, &scenario.design)));
     // A run on [truth] says so up front: its figures are not the design model's.
     let truth = quell::diagnostics::truth_differences(&scenario);

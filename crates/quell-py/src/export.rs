@@ -176,7 +176,7 @@ pub fn export(
         })
         .map_err(raise)?;
     crate::errors::warn_coarse_sample(py, &design, &signals.0, &signals.1, T, None)?;
-    for w in [code.size_warning(), code.precision_warning.clone()].into_iter().flatten() {
+    for w in code.warnings() {
         crate::errors::warn(py, &w)?;
     }
     let out = out.unwrap_or_else(|| PathBuf::from("."));

@@ -977,7 +977,7 @@ pub fn auto_design<'py>(
     });
     let report = py.import("json")?.call_method1("loads", (report.to_string(),))?;
     crate::errors::warn_fragile(py, &auto.design, &auto.scenario.design)?;
-    for w in [auto.explicit_stiff_warning(), auto.cancellation_warning()].into_iter().flatten() {
+    for w in auto.warnings() {
         crate::errors::warn(py, &w)?;
     }
     Ok((PyScenario::new(auto.scenario), report))

@@ -293,6 +293,12 @@ impl AutoDesign {
         })
     }
 
+    /// Every caution on the chosen design: [`AutoDesign::explicit_stiff_warning`] and
+    /// [`AutoDesign::cancellation_warning`].
+    pub fn warnings(&self) -> impl Iterator<Item = String> {
+        [self.explicit_stiff_warning(), self.cancellation_warning()].into_iter().flatten()
+    }
+
     /// On a scenario forced onto DOP853 (`simulation.method = "explicit"`), which verified the
     /// design, the caution of [`crate::sim::explicit_stiff_warning`] where the chosen μ makes the
     /// adaptive law stiff (an automatic design aims μλ_max(Ω̄) at 10ρ); `None` otherwise.

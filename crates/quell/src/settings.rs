@@ -327,11 +327,21 @@ pub(crate) fn positive(key: &str, what: &str, x: f64) -> Result<f64, KeyError> {
     }
 }
 
+/// The `[simulation]` numbers that must be finite and > 0 on their own, with what each is.
+pub(crate) const POSITIVE_SIMULATION: [(&str, &str); 3] =
+    [("t_end", "a final time"), ("output_step", "an output step"), ("sample_time", "a sampling period")];
+
+/// `simulation.<key>` = `x` as [`POSITIVE_SIMULATION`] requires it.
+pub(crate) fn check_positive(key: &str, x: f64) -> Result<f64, KeyError> {
+    let what = POSITIVE_SIMULATION.iter().find(|(k, _)| *k == key).map_or("a number", |(_, what)| what);
+    positive(&format!("simulation.{key}"), what, x)
+}
+
 /// The horizon of a run: 0 < output_step ≤ t_end, both finite, and at most [`MAX_OUTPUT_SAMPLES`]
 /// rows.
 pub(crate) fn check_horizon(t_end: f64, output_step: f64) -> Result<(), KeyError> {
-    positive("simulation.t_end", "a final time", t_end)?;
-    positive("simulation.output_step", "an output step", output_step)?;
+    check_positive("t_end", t_end)?;
+    check_positive("output_step", output_step)?;
     if output_step > t_end {
         return Err(KeyError::new(
             "simulation.output_step",
@@ -600,7 +610,7 @@ pub(crate) fn check_tolerances(rtol: f64, atol: f64) -> Result<(), KeyError> {
 /// A sampling period: finite, > 0, and at most [`MAX_SAMPLING_STEPS`] controller steps to t_end.
 pub(crate) fn check_sample_time(t_end: f64, sample_time: f64) -> Result<(), KeyError> {
     const KEY: &str = "simulation.sample_time";
-    positive(KEY, "a sampling period", sample_time)?;
+    check_positive("sample_time", sample_time)?;
     if sample_time > t_end {
         return Err(KeyError::new(
             KEY,

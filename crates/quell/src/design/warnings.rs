@@ -3,9 +3,8 @@
 //! placed pole repeated beyond the rank of C is refused by [`super::place()`]). Reported as warnings, with the figures and what
 //! to do, by `quell design`, `design.json`, `quell run` and Python (`warnings.warn`).
 
-use serde::Serialize;
-
 use nalgebra::{Complex, DMatrix};
+use serde::Serialize;
 
 use super::{Design, DesignSpec, ObserverChoice};
 use crate::linalg::numerical_rank;

@@ -127,6 +127,12 @@ pub struct CCode {
 pub const LARGE_EXPORT_BYTES: usize = 1 << 20;
 
 impl CCode {
+    /// Every caution on this export: its size ([`CCode::size_warning`]) and its precision
+    /// ([`precision_warning`]).
+    pub fn warnings(&self) -> impl Iterator<Item = String> {
+        [self.size_warning(), self.precision_warning.clone()].into_iter().flatten()
+    }
+
     /// A warning when the controller needs more than [`LARGE_EXPORT_BYTES`] of RAM or of flash:
     /// its state is mostly the delay lines, τ_i/T_s past samples each, so a delay given in the
     /// wrong unit or a very short sample time shows here first.
@@ -159,9 +165,10 @@ pub fn precision_warning(design: &Design, precision: Precision) -> Option<String
         (design.observer_eigenvector_condition(), "A − LC (the observer)"),
         (design.decoupled_eigenvector_condition(), "A − BK (the decoupled channels)"),
     ];
-    let worst = |(k, _): &(f64, &str)| if k.is_nan() { f64::INFINITY } else { *k };
-    let (kappa, what) = parts.into_iter().max_by(|a, b| worst(a).total_cmp(&worst(b)))?;
-    let shift = worst(&(kappa, what)) * f64::from(f32::EPSILON) / 2.0;
+    // A NaN κ₂ (a defective eigenvector matrix) counts as infinite.
+    let worst = |k: f64| if k.is_nan() { f64::INFINITY } else { k };
+    let (kappa, what) = parts.into_iter().max_by(|a, b| worst(a.0).total_cmp(&worst(b.0)))?;
+    let shift = worst(kappa) * f64::from(f32::EPSILON) / 2.0;
     (shift > F32_POLE_SHIFT).then(|| {
         format!(
             "precision: f32 rounds the controller's matrices to about 6e-8, and {what} has eigenvector condition number κ₂ = {kappa:.2e}, so its poles can move by about κ₂·6e-8 = {} of themselves (a disk servo's f32 u_f departed 18 % of its peak from the f64 export's at κ₂ = 2.75e6); export f64, or choose poles nearer the plant's own (a smaller κ₂, quell design reports it)",

@@ -611,12 +611,8 @@ fn harmonic(v: Value) -> Result<Harmonic, ScenarioError> {
 pub fn check_simulation(doc: &toml::Table, keys: &[&str]) -> Result<(), ScenarioError> {
     let Some(value) = doc.get("simulation") else { return Ok(()) };
     let t = Value { key: "simulation", value }.table(SIMULATION_KEYS)?;
-    for (key, what) in
-        [("t_end", "a final time"), ("output_step", "an output step"), ("sample_time", "a sampling period")]
-    {
-        if keys.contains(&key) {
-            t.get(key, |v| Ok(settings::positive(v.key, what, v.number()?)?))?;
-        }
+    for (key, _) in settings::POSITIVE_SIMULATION.iter().filter(|(key, _)| keys.contains(key)) {
+        t.get(key, |v| Ok(settings::check_positive(key, v.number()?)?))?;
     }
     Ok(())
 }
