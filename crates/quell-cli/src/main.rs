@@ -106,7 +106,7 @@ fn main() -> ExitCode {
             run::run(&RunArgs { out: PathBuf::from("quell-out"), ..Default::default() })
         }
     };
-    match result {
+    match stdout_failure(result) {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure::Input(msg)) => {
             eprintln!("error: {}", in_flags(msg));
@@ -288,10 +288,29 @@ fn design(args: &auto::DesignArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// Writes to stdout; a closed pipe (`quell design … | head`) ends the output quietly.
+/// Why writing to stdout failed, other than a closed pipe: the command then exits 1.
+static STDOUT_FAILED: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+
+/// Writes to stdout; a closed pipe (`quell design … | head`) ends the output quietly, any other
+/// failure (a full disk under `> design.json`) makes the command exit 1 ([`stdout_failure`]).
 pub(crate) fn print_stdout(text: &str) {
     use std::io::Write;
-    let _ = std::io::stdout().lock().write_all(text.as_bytes());
+    let mut out = std::io::stdout().lock();
+    if let Err(e) = out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        if e.kind() != std::io::ErrorKind::BrokenPipe {
+            let _ = STDOUT_FAILED.set(e.to_string());
+        }
+    }
+}
+
+/// A command that succeeded but whose printed report was cut short, as a failure.
+fn stdout_failure(result: Result<(), Failure>) -> Result<(), Failure> {
+    match (result, STDOUT_FAILED.get()) {
+        (Ok(()), Some(e)) => Err(Failure::Run(format!(
+            "cannot write to standard output ({e}): what it printed is incomplete (the files it wrote are whole)"
+        ))),
+        (result, _) => result,
+    }
 }
 
 /// A progress bar of `len` steps drawn on stderr with `template` when stderr is a terminal, hidden

@@ -47,17 +47,27 @@ pub fn write_atomic(path: &Path, contents: impl FnOnce(&mut dyn io::Write) -> io
 /// succeeded are they all renamed into place and the figures of `dir` that `stale` claims and
 /// `work` did not write removed. A failed write (a full disk) leaves the earlier outputs as they
 /// were: a run whose figures failed for lack of space had replaced signals.csv, summary.json and
-/// design.json and removed the figures.
+/// design.json and removed the figures. The file `last` marks a complete set: the old one is
+/// removed before the renames and the new one renamed after the others, so a process killed among
+/// them (an out-of-memory kill) leaves a directory without it, not an old summary.json beside a new
+/// signals.csv.
 pub fn all_or_nothing(
     dir: &Path,
+    last: &str,
     stale: impl Fn(&str) -> bool,
     work: impl FnOnce() -> io::Result<()>,
 ) -> io::Result<()> {
     *batch() = Some(Vec::new());
     let done = work();
-    let staged = batch().take().unwrap_or_default();
+    let mut staged = batch().take().unwrap_or_default();
     done?;
     let written: Vec<PathBuf> = staged.iter().map(|s| s.path().to_path_buf()).collect();
+    let mark = dir.join(last);
+    staged.sort_by_key(|s| s.path() == mark);
+    match fs::remove_file(&mark) {
+        Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(e),
+        _ => {}
+    }
     staged.into_iter().try_for_each(Staged::persist)?;
     remove_figures(dir, stale, &written)
 }
@@ -120,16 +130,25 @@ pub fn prepare_out(dir: &Path, files: &[&str]) -> Result<(), Failure> {
             )));
         }
     }
-    let lock = quell::files::lock_dir(dir).map_err(|_| {
-        Failure::Input(format!(
-            "--out {}: another quell command is writing there now; wait for it to finish or choose another output directory",
-            dir.display()
-        ))
-    })?;
+    let lock = quell::files::lock_dir(dir).map_err(|_| busy(dir))?;
     LOCKED.lock().unwrap_or_else(|e| e.into_inner()).extend(lock);
     // No other quell writes here now: what temporary files a killed one left can go.
     quell::files::remove_stale_temporaries(dir);
     Ok(())
+}
+
+/// The refusal of `--out dir` while another quell command writes there.
+fn busy(dir: &Path) -> Failure {
+    Failure::Input(format!(
+        "--out {}: another quell command is writing there now; wait for it to finish or choose another output directory",
+        dir.display()
+    ))
+}
+
+/// Refuses `dir` while another quell command holds its lock, before what it holds is judged (a
+/// running sweep's journal had been called one to `--resume`).
+pub fn check_not_busy(dir: &Path) -> Result<(), Failure> {
+    quell::files::lock_dir(dir).map(drop).map_err(|_| busy(dir))
 }
 
 /// Proves the output file given by `flag` writable before any work is done, as [`prepare_out`]
@@ -226,7 +245,7 @@ mod tests {
         }
         let write = |name: &str| write_atomic(&dir.join(name), |w| w.write_all(b"new"));
         let figure = |stem: &str| stem.starts_with("channel");
-        let failed = all_or_nothing(dir, figure, || {
+        let failed = all_or_nothing(dir, "summary.json", figure, || {
             write("signals.csv")?;
             write("channel1.png")?;
             Err(io::Error::new(io::ErrorKind::StorageFull, "channel2.png: No space left on device"))
@@ -237,7 +256,8 @@ mod tests {
         names.sort();
         assert_eq!(names, ["channel1.png", "channel2.png", "signals.csv"]);
         assert!(names.iter().all(|n| fs::read_to_string(dir.join(n)).unwrap() == "old"));
-        all_or_nothing(dir, figure, || write("signals.csv").and_then(|()| write("channel1.png"))).unwrap();
+        all_or_nothing(dir, "summary.json", figure, || write("signals.csv").and_then(|()| write("channel1.png")))
+            .unwrap();
         let mut names: Vec<String> =
             fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
         names.sort();
@@ -246,6 +266,36 @@ mod tests {
         // Outside it a write is in place at once.
         write("design.json").unwrap();
         assert_eq!(fs::read_to_string(dir.join("design.json")).unwrap(), "new");
+    }
+
+    /// The mark of a complete set is renamed into place after the other files (its change time,
+    /// which a rename sets, is the latest though it was written first).
+    #[test]
+    #[cfg(unix)]
+    fn the_mark_of_a_complete_set_is_renamed_last() {
+        use std::os::unix::fs::MetadataExt;
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
+        fs::write(dir.join("summary.json"), "old").unwrap();
+        let write = |name: &str| write_atomic(&dir.join(name), |w| w.write_all(b"new"));
+        all_or_nothing(
+            dir,
+            "summary.json",
+            |_| false,
+            || {
+                write("summary.json")?;
+                std::thread::sleep(std::time::Duration::from_millis(5));
+                write("signals.csv")?;
+                write("design.json")
+            },
+        )
+        .unwrap();
+        let changed = |name: &str| {
+            let m = fs::metadata(dir.join(name)).unwrap();
+            (m.ctime(), m.ctime_nsec())
+        };
+        assert!(changed("summary.json") >= changed("signals.csv").max(changed("design.json")));
+        assert_eq!(fs::read_to_string(dir.join("summary.json")).unwrap(), "new");
     }
 
     /// signals.csv as `core::fmt` lays it out: `{}` for t and for |v| = 0, in [1e-4, 1e15) or not

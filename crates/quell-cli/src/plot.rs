@@ -1178,7 +1178,7 @@ fn draw_distributions<DB: DrawingBackend>(
         for i in 0..s.study.m {
             let mut values: Vec<f64> = rows
                 .iter()
-                .filter_map(|r| r.channels.get(i).and_then(|c| figure.of_run(c)))
+                .filter_map(|r| r.completed().get(i).and_then(|c| figure.of_run(c)))
                 .filter(|v| v.is_finite())
                 .collect();
             values.sort_by(f64::total_cmp);

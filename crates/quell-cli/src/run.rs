@@ -229,7 +229,8 @@ fn write_outputs(dir: &Path, done: &Finished<'_>, plots: bool) -> std::io::Resul
     // Every file in place or none; figures of an earlier run (more channels, or plots now skipped)
     // removed with them, as they must not stand beside the new data.
     let channel_figure = |stem: &str| stem.strip_prefix("channel").is_some_and(|i| i.parse::<usize>().is_ok());
-    output::all_or_nothing(dir, channel_figure, || {
+    // summary.json last: a directory without it holds no complete run.
+    output::all_or_nothing(dir, "summary.json", channel_figure, || {
         // Figures render on their own threads (one per channel) while the data files are written.
         std::thread::scope(|scope| {
             let figures: Vec<_> = (0..if plots { r.m } else { 0 })
@@ -295,7 +296,7 @@ fn report_diagnostics(d: &ChannelDiagnostics, time: TimeUnit, text: &mut String)
     };
     let _ = writeln!(
         text,
-        "  Ω̄: λ_min = {:.3e}, λ_max = {:.3e}; convergence time 1/(μλ_min) = {convergence}, adaptation rate μλ_max = {:.3e}/{time}{excited}{trend}",
+        "  Ω̄: λ_min = {:.3e}, λ_max = {:.3e}; averaged-law convergence time 1/(μλ_min) = {convergence}, adaptation rate μλ_max = {:.3e}/{time}{excited}{trend}",
         d.lambda_min_omega, d.lambda_max_omega, d.adaptation_rate
     );
     for line in &d.advice {

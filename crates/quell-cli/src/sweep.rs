@@ -8,7 +8,7 @@ use quell::study::{self, Outcome, Row, Shard, Study, StudyMeta, Summary, SweepOp
 
 use crate::interrupt::Interrupt;
 use crate::journal::{self, Journal, JOURNAL};
-use crate::output::{prepare_out, write_atomic};
+use crate::output::{check_not_busy, prepare_out, write_atomic};
 use crate::Failure;
 
 #[derive(clap::Args)]
@@ -71,6 +71,7 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     let (study, shard, n) = planned(args)?;
     let meta = StudyMeta::new(&study, shard);
     if !args.resume && args.out.join(JOURNAL).exists() {
+        check_not_busy(&args.out)?;
         return Err(journal_in_the_way(&args.out, &meta));
     }
     let (kept, done) = if args.resume { resumed(&args.out, &meta, n)? } else { (Vec::new(), Vec::new()) };

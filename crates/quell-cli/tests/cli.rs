@@ -1594,3 +1594,28 @@ fn a_directory_holding_another_commands_output_is_refused() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("holds the output of `quell sweep` (runs.partial.csv)"), "{}", stderr(&o));
 }
+
+/// A report that cannot be written to stdout (a full disk under `> design.json`) is a failure,
+/// exit 1 and named; a closed pipe (`| head`) is not.
+#[test]
+fn a_report_cut_short_on_stdout_fails_and_a_closed_pipe_does_not() {
+    use std::process::Stdio;
+    let full = fs::OpenOptions::new().write(true).open("/dev/full").expect("/dev/full opens");
+    let o = Command::new(env!("CARGO_BIN_EXE_quell"))
+        .args(["design", &paper(), "--json"])
+        .stdout(Stdio::from(full))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("cannot write to standard output (No space left on device"), "{}", stderr(&o));
+    // A reader that stops at once: the pipe closes under the report.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_quell"))
+        .args(["design", &paper()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}

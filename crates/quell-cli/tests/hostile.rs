@@ -446,6 +446,10 @@ fn a_second_command_writing_the_same_out_is_refused_while_the_first_holds_it() {
     let s = study(tmp.path(), "two.toml", "[grid]\n\"design.beta\" = [1.0, 2.0]\n");
     refused(&quell(&["sweep", &s, "--out", &o, "--no-plots"]), &busy);
     assert!(names(&out).is_empty(), "{:?}", names(&out));
+    // A running sweep's journal is not one to finish with --resume (that advice had come first).
+    fs::write(out.join("runs.partial.csv"), "").unwrap();
+    refused(&quell(&["sweep", &s, "--out", &o, "--no-plots"]), &busy);
+    fs::remove_file(out.join("runs.partial.csv")).unwrap();
     drop(held);
     let ran = quell(&["run", &paper(), "--out", &o, "--no-plots"]);
     assert_eq!(ran.status.code(), Some(0), "{}", stderr(&ran));

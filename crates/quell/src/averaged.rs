@@ -206,6 +206,9 @@ pub struct Averaged {
     /// max_j Σ_tones |ξ̂_j|: a bound of the steady-state regressor's entries, the size ξ̂ has in its
     /// own units (1e9 for forces in newtons in the paper's form).
     pub xi_peak: f64,
+    /// Σ_tones (|g|∞/σ_min(C) + |[x; x̂]|∞ driven by ω without adaptive command): the size the plant's
+    /// and the observer's states have in their own units (7e12 for a heat store in joules).
+    pub x_peak: f64,
 }
 
 impl Averaged {
@@ -228,6 +231,7 @@ impl Averaged {
         C_z.view_mut((0, 0), (m, n)).copy_from(&p.C);
         // Per tone: ξ̂ (q) and δ without adaptive command (m).
         let mut fidelity = Vec::new();
+        let (mut x_peak, smallest_gain) = (0.0, crate::sim::smallest_gain(&p.C));
         let per_tone: Vec<(f64, DVector<C64>, DVector<C64>)> = tones
             .iter()
             .map(|tone| {
@@ -238,14 +242,16 @@ impl Averaged {
                 let mut xi = DVector::zeros(q);
                 xi.rows_mut(0, design.q_g()).copy_from(&xi_g);
                 xi.rows_mut(design.q_g(), design.q_w()).copy_from(&xi_w);
-                let y =
-                    complex(&C_z) * resolvent_vec(&M, tone.w, complex(&E) * &tone.omega) + complex(&p.Q) * &tone.omega;
+                let z = resolvent_vec(&M, tone.w, complex(&E) * &tone.omega);
+                let y = complex(&C_z) * &z + complex(&p.Q) * &tone.omega;
+                x_peak += tone.g.iter().map(|g| g.norm()).fold(0.0, f64::max) / smallest_gain
+                    + z.iter().map(|z| z.norm()).fold(0.0, f64::max);
                 (tone.w, xi, y - &tone.g)
             })
             .collect();
         let channels = (0..m).map(|i| channel(design, i, &per_tone)).collect();
         let xi_peak = (0..q).map(|j| per_tone.iter().map(|(_, xi, _)| xi[j].norm()).sum::<f64>()).fold(0.0, f64::max);
-        Averaged { channels, fidelity, xi_peak }
+        Averaged { channels, fidelity, xi_peak, x_peak }
     }
 }
 

@@ -187,10 +187,19 @@ pub fn check_target(path: &Path) -> io::Result<()> {
 /// (`InvalidInput`) when `dir` names a regular file, a device, a FIFO or a socket, so that the
 /// message says so rather than the system's "File exists". A symbolic link to a directory is one.
 pub fn check_dir(dir: &Path) -> io::Result<()> {
+    let refuse = |why: String| Err(io::Error::new(io::ErrorKind::InvalidInput, why));
     match std::fs::metadata(dir) {
         Ok(meta) if !meta.is_dir() => {
             let what = if meta.is_file() { "regular file" } else { "device, FIFO or socket" };
-            Err(io::Error::new(io::ErrorKind::InvalidInput, format!("{} is a {what}, not a directory", dir.display())))
+            refuse(format!("{} is a {what}, not a directory", dir.display()))
+        }
+        // A link to nowhere: creating the directory fails with "File exists", which says nothing.
+        Err(_) if dir.is_symlink() => {
+            let target = std::fs::read_link(dir).map_or_else(|_| "?".into(), |t| t.display().to_string());
+            refuse(format!(
+                "{} is a symbolic link to {target}, which does not exist; create that directory",
+                dir.display()
+            ))
         }
         _ => Ok(()),
     }
@@ -200,6 +209,21 @@ pub fn check_dir(dir: &Path) -> io::Result<()> {
 mod tests {
     use super::*;
     use std::fs;
+
+    #[test]
+    #[cfg(unix)]
+    fn a_directory_behind_a_dangling_link_is_named_as_missing() {
+        let dir = tempfile::tempdir().unwrap();
+        let link = dir.path().join("dangle");
+        std::os::unix::fs::symlink("nowhere/x", &link).unwrap();
+        let e = check_dir(&link).unwrap_err().to_string();
+        assert!(
+            e.ends_with("dangle is a symbolic link to nowhere/x, which does not exist; create that directory"),
+            "{e}"
+        );
+        fs::create_dir_all(dir.path().join("nowhere/x")).unwrap();
+        assert!(check_dir(&link).is_ok());
+    }
 
     #[test]
     #[cfg(unix)]

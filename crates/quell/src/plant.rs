@@ -87,21 +87,29 @@ impl PlantError {
                         _ => format!("k = {k} (columns of {prefix}D)"),
                     })
                     .collect();
+                // A matrix written with its rows as columns (one row per input of B): its transpose fits.
+                let transposed = name != "A" && rows != expected_rows && cols == expected_rows;
                 // C with a different number of outputs than B has inputs: the method pairs them.
-                let square = if name == "C" && rows != expected_rows {
+                let square = if name == "C" && rows != expected_rows && !transposed {
                     "; the method decouples the plant into one channel per input, so it needs as many outputs as inputs (a square plant): choose m outputs to track, or add inputs"
                 } else {
                     ""
                 };
-                let hint = if name == "A" {
-                    "; A must be square".to_string()
+                // B's columns set m and D's set k: with its rows wrong, only n is known independently.
+                let rows_only = matches!(name, "B" | "D") && rows != expected_rows;
+                let (expected, hint) = if rows_only {
+                    (format!("{expected_rows} rows (n = {n}, the rows of {prefix}A)"), String::new())
+                } else if name == "A" {
+                    (format!("{expected_rows}×{expected_cols} ({dims})"), "; A must be square".to_string())
                 } else {
-                    format!("; {}{square}", defs.join(", "))
+                    (format!("{expected_rows}×{expected_cols} ({dims})"), format!("; {}{square}", defs.join(", ")))
                 };
-                (
-                    format!("{prefix}{name}"),
-                    format!("expected {expected_rows}×{expected_cols} ({dims}), found {rows}×{cols}{hint}"),
-                )
+                let transposed = if transposed {
+                    format!("; it looks transposed: write it as {cols}×{rows}")
+                } else {
+                    String::new()
+                };
+                (format!("{prefix}{name}"), format!("expected {expected}, found {rows}×{cols}{hint}{transposed}"))
             }
             PlantError::NonFinite { name, row, col, value } => (
                 entry(name, row, col),

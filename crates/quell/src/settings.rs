@@ -72,8 +72,13 @@ pub fn read_input(path: &std::path::Path) -> Result<String, String> {
     if let Some(e) = input_too_long(bytes.len()) {
         return Err(e);
     }
-    String::from_utf8(bytes)
-        .map_err(|e| format!("not UTF-8 text (invalid byte at offset {})", e.utf8_error().valid_up_to()))
+    // A UTF-16 byte-order mark (Windows editors' "Unicode"): named, with the way out.
+    if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
+        return Err("UTF-16 text, not UTF-8; save the file as UTF-8".into());
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        format!("not UTF-8 text (invalid byte at offset {}); save the file as UTF-8", e.utf8_error().valid_up_to())
+    })
 }
 
 /// The candidate nearest to `name` (at most two edits apart, ignoring case): what a message
@@ -634,6 +639,19 @@ pub(crate) fn check_sample_time(t_end: f64, sample_time: f64) -> Result<(), KeyE
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Text that is not UTF-8 is refused with the way out; UTF-16 (a byte-order mark) is named.
+    #[test]
+    fn a_file_that_is_not_utf8_says_how_to_save_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("s.toml");
+        let utf16: Vec<u8> =
+            [0xFF, 0xFE].into_iter().chain("t = 1".encode_utf16().flat_map(u16::to_le_bytes)).collect();
+        std::fs::write(&path, utf16).unwrap();
+        assert_eq!(read_input(&path).unwrap_err(), "UTF-16 text, not UTF-8; save the file as UTF-8");
+        std::fs::write(&path, b"t = \xE9").unwrap();
+        assert_eq!(read_input(&path).unwrap_err(), "not UTF-8 text (invalid byte at offset 4); save the file as UTF-8");
+    }
 
     /// T_s·ρ at the bound by rounding alone is no coarse sample (the quadruple tank at 1 s:
     /// 0.20000000000000023 had been warned of as "0.20 > 0.2"); one truly beyond prints the digits

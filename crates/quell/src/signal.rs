@@ -118,12 +118,12 @@ impl Component {
     }
 
     /// The maximum of |value| over one period 2π/ω₀ where every frequency of `active` is k·ω₀ for
-    /// a whole k ≤ [`PEAK_MAX_INDEX`] (ω₀ = ω_min/d, d ≤ 16, each ratio whole to 1e-9), found on
+    /// a whole k ≤ [`PEAK_MAX_INDEX`] (ω₀ = ω_min/d, d ≤ 16, each ratio whole to [`WHOLE_RATIO`]), found on
     /// 64 samples per period of the highest harmonic and refined by golden section around the
     /// largest; `None` otherwise.
     fn period_peak(&self, active: &[&Harmonic]) -> Option<f64> {
         let lowest = active.iter().map(|h| h.frequency).fold(f64::INFINITY, f64::min);
-        let whole = |x: f64| (x - x.round()).abs() <= 1e-9 * x.max(1.0);
+        let whole = |x: f64| (x - x.round()).abs() <= WHOLE_RATIO * x.max(1.0);
         let base = (1..=16)
             .map(|d| lowest / f64::from(d))
             .find(|&w| active.iter().all(|h| whole(h.frequency / w) && h.frequency / w <= PEAK_MAX_INDEX))?;
@@ -146,6 +146,13 @@ impl Component {
         Some(at(best).max(at(0.5 * (lo + hi))))
     }
 }
+
+/// How near a whole number a ratio of frequencies must be for [`Component::peak`] to take them as
+/// harmonics of one: relative 1e-5, so frequencies written to six digits count (k·2π/24 as
+/// 0.261799, 0.523599, …: their ratios are whole to 1.5e-6, and with 1e-9 the peak had been the
+/// sum of amplitudes, 26 % above the true one). Two frequencies that close but not commensurate
+/// drift apart by 1e-5 of a radian per radian: over the horizons a peak serves, the same.
+const WHOLE_RATIO: f64 = 1e-5;
 
 /// The highest harmonic index [`Component::peak`] samples a common period for (a component of
 /// commensurate frequencies beyond it keeps the sum of amplitudes).
@@ -414,6 +421,7 @@ mod tests {
     /// period in numpy); incommensurate frequencies (1 and √2) keep the sum, as
     /// does one harmonic with a bias.
     #[test]
+    #[allow(clippy::approx_constant)] // π/6, π/4, π/3 written to six digits, as users write them
     fn the_peak_is_the_largest_value_over_all_t() {
         let h = |amplitude: f64, frequency: f64| Harmonic { amplitude, frequency, phase: 0.0 };
         let c = (33f64.sqrt() - 1.0) / 8.0;
@@ -434,5 +442,13 @@ mod tests {
         assert_eq!(apart.peak(), 2.0);
         let one = Component { bias: -1.0, harmonics: vec![h(0.5, 3.0)] };
         assert_eq!(one.peak(), 1.5);
+        // Harmonics of 2π/24 written to six decimals: their common period's peak, not the sum 3.5
+        // (the largest of 1 + 1.5 sin t + 0.5 sin 2t + 0.3 sin 3t + 0.2 sin 4t, by the derivative's
+        // roots in SciPy: 2.785963).
+        let rounded = Component {
+            bias: 1.0,
+            harmonics: vec![h(1.5, 0.261799), h(0.5, 0.523599), h(0.3, 0.785398), h(0.2, 1.047198)],
+        };
+        assert!((rounded.peak() - 2.785963).abs() < 1e-5, "{}", rounded.peak());
     }
 }

@@ -352,6 +352,28 @@ fn wrong_shape() {
     );
 }
 
+/// B written one row per input (its transpose) and D likewise: the expected size is the n rows
+/// (B's own columns cannot tell m there), and the transpose is named.
+#[test]
+fn a_transposed_matrix_is_named_as_such() {
+    check(
+        &with(&[(B_LINE, "B = [[-2.0, 2.0, 1.0], [1.0, -1.0, 0.0]]\n")]),
+        "plant.B",
+        "expected 3 rows (n = 3, the rows of plant.A), found 2×3; it looks transposed: write it as 3×2",
+    );
+    check(
+        &with(&[(D_LINE, "D = [[1.0, 2.0, 3.0], [-3.0, 1.0, 1.0]]\n")]),
+        "plant.D",
+        "expected 3 rows (n = 3, the rows of plant.A), found 2×3; it looks transposed: write it as 3×2",
+    );
+    // C as n×m: the transpose, not a square plant, is what is wrong.
+    check(
+        &with(&[(C_LINE, "C = [[2.0, 2.0], [2.0, 1.0], [0.0, 2.0]]")]),
+        "plant.C",
+        "found 3×2; m = 2 (columns of plant.B), n = 3 (rows of plant.A); it looks transposed: write it as 2×3",
+    );
+}
+
 #[test]
 fn wrong_shape_of_Q() {
     check(&with(&[(Q_LINE, "Q = [[1.0], [1.0]]\n")]), "plant.Q", "expected 2×2 (m×k), found 2×1");

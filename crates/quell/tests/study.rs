@@ -316,6 +316,7 @@ fn the_nominal_run_is_the_grid_point_without_draws() {
 
 #[test]
 fn a_runaway_draw_is_diverged_early_and_converging_draws_are_untouched() {
+    let on_study = || Study::from_toml(MC8, None).unwrap();
     let off = Study::from_toml(&format!("{MC8}[runaway]\npeak = inf\nsteps = inf\n"), None).unwrap();
     let on = Study::from_toml(MC8, None).unwrap();
     let (off, on) = (sweep(&off, &SweepOptions::default()).rows, sweep(&on, &SweepOptions::default()).rows);
@@ -333,6 +334,18 @@ fn a_runaway_draw_is_diverged_early_and_converging_draws_are_untouched() {
     // or, the stiff blow-up integrated implicitly, the divergence bound ends) would have.
     assert!(matches!(off[7].outcome, Outcome::Failed | Outcome::Diverged), "{:?}", off[7].outcome);
     assert!(r.steps <= 3 * nominal.steps as u64 && r.steps < off[7].steps, "{} vs {}", r.steps, off[7].steps);
+    // How hard it drove the actuators before it was stopped is kept (runs.csv had left it blank),
+    // its tails are not (never reached), and runs.csv reads it back so.
+    assert!(r.completed().is_empty());
+    assert!(
+        r.channels.len() == 2
+            && r.channels.iter().all(|c| c.max_uf > 0.0 && c.max_uf.is_finite() && c.tail_max_e.is_nan())
+    );
+    let meta = StudyMeta::new(&on_study(), Shard::ALL);
+    let mut csv = Vec::new();
+    write_runs_csv(&mut csv, &meta, &on, false).unwrap();
+    let back = read_runs_csv(std::str::from_utf8(&csv).unwrap(), &meta).unwrap().rows;
+    assert_eq!(format!("{:?}", back[7].channels), format!("{:?}", r.channels));
 
     // With the peak rule off, the relative step budget ends it: failed, at 1.5 × the nominal steps
     // (at 3 × it reaches the divergence bound first, which the watch at every step end now sees).

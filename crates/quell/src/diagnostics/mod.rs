@@ -329,9 +329,9 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
         advice.extend(filter_scale_advice(design, signals));
     }
     // Not from a run that ended early: its last sample is no t_end (a diverged ship's 25.5 s).
-    if missed && completed {
-        advice.extend(slow_transient_advice(design, t_end));
-    }
+    let transient = (missed && completed).then(|| slow_transient_advice(design, t_end)).flatten();
+    let settling = transient.is_some();
+    advice.extend(transient);
     if !poor.is_empty() && tunable {
         let list = |part: &dyn Fn(&Fidelity) -> String| poor.iter().map(|f| part(f)).collect::<Vec<_>>().join(", ");
         let (plural, freqs, errors) = (
@@ -349,7 +349,7 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
         .channels
         .iter()
         .enumerate()
-        .map(|(i, c)| channel(design, i, c, &avg.fidelity, result, (t_end, stiff, tunable), &remedy))
+        .map(|(i, c)| channel(design, i, c, &avg.fidelity, result, (t_end, stiff, tunable, settling), &remedy))
         .collect();
     // A direction no μ converges, where the cause is g's and ω's units: the way out is a rescaling.
     if channels.iter().flat_map(|c| &c.advice).any(|a| a.contains("excite that direction more")) {
@@ -666,18 +666,28 @@ fn holds_zero(observer: &[Complex<f64>], z: &Complex<f64>) -> bool {
 fn observer_remedy(design: &Design, faster: Option<&FasterObserver>, sampled: Option<(f64, Option<f64>)>) -> String {
     let p = design.plant();
     let faster = faster.map(|f| faster_observer(design, f, sampled));
+    let found = faster.is_some();
+    let none_kept = format!(
+        "no speed-up of its other poles up to {}× brings the averaged loop's error below {FIDELITY_TARGET:.2}: accept the error, which costs convergence only where the frequency's excitation of Ω̄_i is weak (the channels' `excitation`)",
+        OBSERVER_SPEEDUPS[OBSERVER_SPEEDUPS.len() - 1]
+    );
     let none = format!(
         "no speed-up of design.observer_poles up to {}× brings the averaged loop's error below {FIDELITY_TARGET:.2}; give a gain by hand (design.observer_gain), or accept the error, which costs convergence only where the frequency's excitation of Ω̄_i is weak (the channels' `excitation`)",
         OBSERVER_SPEEDUPS[OBSERVER_SPEEDUPS.len() - 1]
     );
     let faster = faster.as_deref().unwrap_or(&none);
     let observer = eigenvalues(&(&p.A - design.L() * &p.C)).unwrap_or_default();
-    let held = |z: &Complex<f64>| holds_zero(&observer, z);
+    if let Some(z) = held_zeros(p, &observer) {
+        let held = format!("design.observer_poles already hold the zeros of (A, D, C), [{}]", fmt_complex_list(&z));
+        return match (found, p.m()) {
+            (true, _) => format!("{held}; the error that stays comes from the other poles' speed: {faster}"),
+            (false, 1) => format!("{held}; with one output L is fixed by its poles, and {none_kept}"),
+            _ => format!(
+                "{held}; the error that stays comes from the placed eigenvectors (L is not unique for m > 1) more than from the other poles' speed, and costs convergence only where the frequency's excitation of Ω̄_i is weak (the channels' `excitation`); if it is, try other fast poles or a gain L by hand"
+            ),
+        };
+    }
     match disturbance_zeros(p).or_else(|| singular_disturbance_zeros(p)) {
-        Some(z) if z.iter().all(held) => format!(
-            "design.observer_poles already hold the zeros of (A, D, C), [{}]; the error that stays comes from the placed eigenvectors (L is not unique for m > 1), not from the poles' speed, and costs convergence only where the frequency's excitation of Ω̄_i is weak (the channels' `excitation`); if it is, try other fast poles or a gain L by hand",
-            fmt_complex_list(&z)
-        ),
         Some(z) if p.m() == p.k() => format!(
             "give design.observer_poles the zeros of (A, D, C), [{}], and the other {} faster than the plant and the signals (e.g. 3× their rates); all-fast poles cannot remove this error{}",
             fmt_complex_list(&z),
@@ -714,9 +724,12 @@ const FIDELITY_TARGET: f64 = FIDELITY_LIMIT / 3.0;
 
 /// A faster observer that passes ω ([`faster_observer_design`]).
 pub(crate) struct FasterObserver {
-    /// The speed-up of [`OBSERVER_SPEEDUPS`], the poles × it, and the worst relative error.
+    /// The speed-up of [`OBSERVER_SPEEDUPS`], the poles × it (those holding the zeros of (A, D, C)
+    /// kept where they are, [`held_zeros`]), and the worst relative error.
     factor: f64,
     poles: Vec<Complex<f64>>,
+    /// Whether poles holding the zeros of (A, D, C) were kept.
+    kept: bool,
     error: f64,
     /// The averaged loop with that observer, and its rate ρ ([`crate::sim::loop_rate`]).
     averaged: Averaged,
@@ -727,9 +740,10 @@ pub(crate) struct FasterObserver {
 /// needs when the run's (`sampled`: T_s and the output step) is coarse for it, one of them a run
 /// accepts (0.000307 s had been named beside delays of 1 s, which it does not divide).
 fn faster_observer(design: &Design, faster: &FasterObserver, sampled: Option<(f64, Option<f64>)>) -> String {
-    let FasterObserver { factor, error, rho, .. } = *faster;
+    let FasterObserver { factor, error, rho, kept, .. } = *faster;
+    let which = if kept { "the other design.observer_poles" } else { "design.observer_poles" };
     let mut advice = format!(
-        "give design.observer_poles {factor}× faster, [{}] (the averaged loop then passes every frequency of ω with relative error {error:.2} at worst)",
+        "give {which} {factor}× faster, [{}] (the averaged loop then passes every frequency of ω with relative error {error:.2} at worst)",
         fmt_complex_list(&faster.poles)
     );
     if let Some((_, output_step)) = sampled.filter(|(t_s, _)| crate::sim::is_coarse(t_s * rho)) {
@@ -740,19 +754,33 @@ fn faster_observer(design: &Design, faster: &FasterObserver, sampled: Option<(f6
     advice
 }
 
+/// The zeros of (A, D, C) ([`disturbance_zeros`], [`singular_disturbance_zeros`]) when the observer
+/// poles `observer` hold every one of them ([`holds_zero`]); none otherwise.
+fn held_zeros(p: &Plant, observer: &[Complex<f64>]) -> Option<Vec<Complex<f64>>> {
+    disturbance_zeros(p).or_else(|| singular_disturbance_zeros(p)).filter(|z| z.iter().all(|z| holds_zero(observer, z)))
+}
+
 /// The observer poles × the first of [`OBSERVER_SPEEDUPS`] whose disturbance observer (20) passes
-/// every frequency of ω within [`FIDELITY_TARGET`]; `None` when no speed-up reaches it.
+/// every frequency of ω within [`FIDELITY_TARGET`], the poles that hold the zeros of (A, D, C)
+/// kept ([`held_zeros`]: with one output they fix L's error there, and the others' speed is what
+/// is left); `None` when no speed-up reaches it.
 fn faster_observer_design(design: &Design, signals: [&Signal; 2]) -> Option<FasterObserver> {
     let [reference, disturbance] = signals;
     let now = design.observer_eigenvalues();
+    let zeros = held_zeros(design.plant(), now).unwrap_or_default();
+    let keep = |o: &Complex<f64>| zeros.iter().any(|z| holds_zero(std::slice::from_ref(o), z));
+    if now.iter().all(keep) {
+        return None;
+    }
+    let kept = now.iter().any(keep);
     OBSERVER_SPEEDUPS.iter().find_map(|&factor| {
-        let poles: Vec<Complex<f64>> = now.iter().map(|p| p * factor).collect();
+        let poles: Vec<Complex<f64>> = now.iter().map(|p| if keep(p) { *p } else { p * factor }).collect();
         let faster = design.with_observer_poles(&poles).ok()?;
         let averaged = Averaged::new(&faster, reference, disturbance);
         let error = averaged.fidelity.iter().map(|f| f.relative_error).fold(0.0, f64::max);
         (error <= FIDELITY_TARGET).then(|| {
             let rho = crate::sim::loop_rate(&faster, faster.plant(), signals);
-            FasterObserver { factor, poles, error, averaged, rho }
+            FasterObserver { factor, poles, kept, error, averaged, rho }
         })
     })
 }
@@ -994,17 +1022,31 @@ fn shrinking_advice(result: &SimResult, i: usize, r: f64, (mu, lambda_max, stiff
     )
 }
 
-/// Channel i's input delay when it is not shorter than the run: its command never reached the plant.
+/// The share of the run beyond which an input delay is what its horizon lacks ([`delay_advice`]).
+const LONG_DELAY: f64 = 0.1;
+
+/// Channel i's input delay when it is not shorter than the run (its command never reached the
+/// plant), or takes more than [`LONG_DELAY`] of it: the adaptation the averaged law paces from t = 0
+/// starts τ later, so advice on μ from that pace is wrong there (a pendulum whose 20 ms delay was
+/// typed as 20 s in a 60 s run was told to raise μ 1.4×, which made its tail worse).
 fn delay_advice(design: &Design, i: usize, t_end: f64) -> Option<String> {
     let (tau, unit) = (design.plant().delays[i], design.plant().time_unit);
-    (tau >= t_end).then(|| {
-        format!(
-            "channel {}'s input delay τ = {} {unit} is not shorter than the run (its last sample is at {} {unit}): its command never reaches the plant; lengthen simulation.t_end to several times τ (or check plant.delays[{i}]'s unit)",
+    let (tau_text, t_text) = (fmt_short(tau), fmt_short(t_end));
+    if tau >= t_end {
+        Some(format!(
+            "channel {}'s input delay τ = {tau_text} {unit} is not shorter than the run (its last sample is at {t_text} {unit}): its command never reaches the plant; lengthen simulation.t_end to several times τ (or check plant.delays[{i}]'s unit)",
+            i + 1
+        ))
+    } else if tau > LONG_DELAY * t_end {
+        Some(format!(
+            "channel {}'s input delay τ = {tau_text} {unit} is {:.0} % of the run ({t_text} {unit}): its command reaches the plant only after τ, so the adaptation starts late and the pace from t = 0 that advice on μ assumes does not hold; lengthen simulation.t_end to {} {unit} (10 τ) before tuning μ (or check plant.delays[{i}]'s unit)",
             i + 1,
-            fmt_short(tau),
-            fmt_short(t_end)
-        )
-    })
+            100.0 * tau / t_end,
+            fmt_short(round_up_2(tau / LONG_DELAY))
+        ))
+    } else {
+        None
+    }
 }
 
 fn channel(
@@ -1013,7 +1055,7 @@ fn channel(
     c: &ChannelAverage,
     fidelity: &[Fidelity],
     result: &SimResult,
-    (t_end, stiff, tunable): (f64, f64, bool),
+    (t_end, stiff, tunable, settling): (f64, f64, bool, bool),
     remedy: &ObserverRemedy<'_>,
 ) -> ChannelDiagnostics {
     let mu = design.mu()[i];
@@ -1027,15 +1069,19 @@ fn channel(
     // A sampled run too coarse for its design is told so first ([`diagnose`]); advice on μ and
     // t_end would be tuned to the sampling's errors (a servo at 0.5 ms was told to raise μ before it).
     let horizon_advice = horizon && tunable;
-    let mut advice: Vec<String> = delay_advice(design, i, t_end).filter(|_| horizon).into_iter().collect();
+    let missed = !tail_within_bound(result, i);
+    let delay = delay_advice(design, i, t_end).filter(|_| horizon && (missed || design.plant().delays[i] >= t_end));
     // A tail already within the bound needs no faster adaptation (an automatic design's μ is chosen
-    // for that bound, not for the averaged law's e^-5 over the horizon).
-    let slow = (horizon_advice && !tail_within_bound(result, i))
+    // for that bound, not for the averaged law's e^-5 over the horizon); nor does a delay-bound one.
+    let slow = (horizon_advice && missed && delay.is_none())
         .then(|| slow_direction_advice(c, (i, mu), fidelity, (t_end, stiff), unit, remedy))
         .flatten();
     // The slow direction's μ, where given, is the one to follow: the tail's extrapolated μ beside
-    // it named another (a ship: 3.6 and 0.36).
-    let extrapolate = slow.is_none();
+    // it named another (a ship: 3.6 and 0.36). Nor is a tail extrapolated while the filters' own
+    // transient is still settling (`settling`, [`slow_transient_advice`]): a cart–pendulum over 5 s
+    // was told "by about t = 12 s, or μ × 5", and either left its error 600× above the aim.
+    let extrapolate = slow.is_none() && !settling && delay.is_none();
+    let mut advice: Vec<String> = delay.into_iter().collect();
     advice.extend(slow);
     match trend.filter(|_| horizon_advice && windows.is_some_and(|(last, _)| !negligible_tail(result, i, last))) {
         Some(r) if r < SHRINKING && extrapolate => {

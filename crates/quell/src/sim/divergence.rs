@@ -81,10 +81,14 @@ impl Peaks {
 /// states in 1e9 times the outputs' units (C = 1e-9 I) are judged as states in those units are,
 /// and a plant whose outputs read its states with gains of 1 or more (the paper's) keeps 1.
 pub(crate) fn state_scale(plant: &Plant) -> f64 {
-    let sv = plant.C.singular_values();
+    [1.0 / smallest_gain(&plant.C), plant.x0.amax()].into_iter().filter(|v| v.is_finite()).fold(1.0, f64::max)
+}
+
+/// σ_min(C): C's smallest singular value above 1e-12 of its largest (+∞ for C = 0).
+pub(crate) fn smallest_gain(C: &nalgebra::DMatrix<f64>) -> f64 {
+    let sv = C.singular_values();
     let largest = sv.max();
-    let smallest = sv.iter().copied().filter(|&s| s > largest * 1e-12).fold(f64::INFINITY, f64::min);
-    [1.0 / smallest, plant.x0.amax()].into_iter().filter(|v| v.is_finite()).fold(1.0, f64::max)
+    sv.iter().copied().filter(|&s| s > largest * 1e-12).fold(f64::INFINITY, f64::min)
 }
 
 /// How far above its nominal size a regressor or parameter vector may go before it counts as
@@ -101,8 +105,18 @@ pub(crate) const NOMINAL_MARGIN: f64 = 1e3;
 /// bound of 1e9 times its size). A size that is not finite counts as 0.
 pub(crate) fn regressor_scales(avg: &crate::averaged::Averaged) -> (f64, f64) {
     let eta = avg.channels.iter().map(|c| c.eta_star().amax()).fold(0.0, f64::max);
-    let factor = |size: f64| if size.is_finite() { (NOMINAL_MARGIN * size / DIVERGENCE_BOUND).max(1.0) } else { 1.0 };
-    (factor(avg.xi_peak), factor(eta))
+    (nominal_factor(avg.xi_peak), nominal_factor(eta))
+}
+
+/// max(1, [`NOMINAL_MARGIN`]·size/[`DIVERGENCE_BOUND`]); 1 for a size that is not finite. The same
+/// rule raises the bound on x and x̂ by their nominal size [`Averaged::x_peak`](crate::averaged::Averaged)
+/// (a reference of 7e12 J is not a divergence of a heat store's state).
+pub(crate) fn nominal_factor(size: f64) -> f64 {
+    if size.is_finite() {
+        (NOMINAL_MARGIN * size / DIVERGENCE_BOUND).max(1.0)
+    } else {
+        1.0
+    }
 }
 
 /// Whether v is outside [−bound, bound] or not finite (so NaN is always beyond).

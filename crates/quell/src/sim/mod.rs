@@ -31,6 +31,7 @@ pub use closed_loop::{
     EXPLICIT_ADAPTATION_H_RATE, EXPLICIT_IN_FILE, FAST_RATE_STEPS, HISTORY_MARGIN, MAX_HISTORY_BYTES, STIFF_RATIO,
 };
 pub use dde::{Method, Stats};
+pub(crate) use divergence::smallest_gain;
 pub use divergence::{Peaks, Watched, DIVERGENCE_BOUND};
 pub use memory::{runs_memory_bytes, Held, MIN_RUNS_MEMORY_BYTES};
 pub use noise::{band_limited, NOISE_SINES};
@@ -267,15 +268,19 @@ impl<'a> Run<'a> {
     }
 
     /// The bound per watched signal (x, x̂, ξ̂, η̂): `divergence_bound`, times the state's scale in
-    /// its coordinates for x and x̂ ([`divergence::state_scale`]) and by the regressor's and the
-    /// parameters' nominal sizes beyond 1e6 for ξ̂ and η̂ ([`divergence::regressor_scales`]; not computed where
-    /// `runaway` bounds both below `divergence_bound`), and at most `runaway`'s.
+    /// its coordinates for x and x̂ ([`divergence::state_scale`], or their nominal size under the
+    /// signals where that is beyond 1e6, [`divergence::nominal_factor`]) and by the regressor's and
+    /// the parameters' nominal sizes beyond 1e6 for ξ̂ and η̂ ([`divergence::regressor_scales`]; not
+    /// computed where `runaway` bounds every signal below `divergence_bound`), and at most `runaway`'s.
     fn bounds(&self) -> Peaks {
         let b = self.settings.divergence_bound;
         let scale = divergence::state_scale;
         let mut bounds = [b * scale(self.truth), b * scale(self.design.plant()), b, b];
-        if self.settings.runaway.is_none_or(|r| r.0[2] > b || r.0[3] > b) {
-            let (xi, eta) = divergence::regressor_scales(self.averaged());
+        if self.settings.runaway.is_none_or(|r| r.0.iter().any(|&r| r > b)) {
+            let avg = self.averaged();
+            let (xi, eta) = divergence::regressor_scales(avg);
+            let x = divergence::nominal_factor(avg.x_peak);
+            (bounds[0], bounds[1]) = (bounds[0].max(b * x), bounds[1].max(b * x));
             (bounds[2], bounds[3]) = (b * xi, b * eta);
         }
         if let Some(r) = self.settings.runaway {

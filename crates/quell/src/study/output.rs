@@ -64,7 +64,8 @@ pub fn write_runs_header(w: &mut dyn Write, meta: &StudyMeta) -> io::Result<()> 
 
 /// One row of runs.csv, its line ended.
 pub fn write_run_row(w: &mut dyn Write, meta: &StudyMeta, r: &Row) -> io::Result<()> {
-    let opt = |v: Option<f64>| v.map_or(String::new(), csv_number);
+    // NaN (a stopped run's tail) is an empty cell.
+    let opt = |v: Option<f64>| v.filter(|v| !v.is_nan()).map_or(String::new(), csv_number);
     let mut f: Vec<String> = vec![r.run.to_string(), r.point.to_string(), r.draw.to_string(), r.seed.to_string()];
     f.extend(r.grid.iter().map(|g| csv_field(g)));
     f.push(r.outcome.as_str().to_string());
@@ -162,21 +163,22 @@ pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
             o => return Err(at(format!("outcome: expected completed, diverged or failed, found `{o}`"))),
         };
         let first = 6 + g;
-        let channels = if outcome == Outcome::Completed {
-            (0..m)
-                .map(|i| {
-                    Ok(ChannelFigures {
-                        tail_max_e: finite(first + i)?,
-                        tail_rms_e: finite(first + m + i)?,
-                        max_u: finite(first + 2 * m + i)?,
-                        max_uf: finite(first + 3 * m + i)?,
-                        settle_t: opt(first + 4 * m + i)?,
-                    })
+        // A completed run's figures are finite; a run that stopped has its peaks and empty (NaN)
+        // tails; one that never started (an invalid draw) has none.
+        let completed = outcome == Outcome::Completed;
+        let figure = |i: usize| if completed { finite(i) } else { opt(i).map(|v| v.unwrap_or(f64::NAN)) };
+        let started = completed || (0..m).any(|i| !f[first + 2 * m + i].is_empty());
+        let channels = (0..if started { m } else { 0 })
+            .map(|i| {
+                Ok(ChannelFigures {
+                    tail_max_e: figure(first + i)?,
+                    tail_rms_e: figure(first + m + i)?,
+                    max_u: figure(first + 2 * m + i)?,
+                    max_uf: figure(first + 3 * m + i)?,
+                    settle_t: opt(first + 4 * m + i)?,
                 })
-                .collect::<Result<Vec<_>, String>>()?
-        } else {
-            Vec::new()
-        };
+            })
+            .collect::<Result<Vec<_>, String>>()?;
         rows.push(Row {
             run: int(0)? as usize,
             point: int(1)? as usize,

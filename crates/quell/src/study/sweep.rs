@@ -125,7 +125,9 @@ pub struct Row {
     pub outcome: Outcome,
     /// Why a run diverged or failed; empty when it completed.
     pub reason: String,
-    /// One per channel when completed, else empty.
+    /// One per channel: the run's figures up to where it ended (a run that stopped early has NaN
+    /// tails, written empty, and the peaks |u|, |u_f| it reached); empty where no run took place.
+    /// [`Row::completed`] has them only for a completed run.
     pub channels: Vec<ChannelFigures>,
     /// Solver steps (controller steps of a sampled-data run).
     pub steps: u64,
@@ -136,6 +138,18 @@ pub struct Row {
     /// read back ([`super::Study::explicit_stiff_caution`] words it).
     #[serde(skip)]
     pub explicit_stiff: bool,
+}
+
+impl Row {
+    /// The figures of a completed run; none for a run that diverged or failed, whose tails were
+    /// never reached and whose peaks are those of a runaway.
+    pub fn completed(&self) -> &[ChannelFigures] {
+        if self.outcome == Outcome::Completed {
+            &self.channels
+        } else {
+            &[]
+        }
+    }
 }
 
 /// What sets a run's steps beside its nominal run's: what the runaway rules' limits depend on.
@@ -263,11 +277,10 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
             started += waited;
             row.explicit_stiff = explicit_stiff;
             row.steps = r.stats.steps() as u64;
+            // A run that diverged keeps the actuator peaks it reached on the way.
+            row.channels = r.figures(&spec.settle);
             match r.outcome.as_ref().unwrap_or(&sim::Outcome::Completed) {
-                sim::Outcome::Completed => {
-                    row.outcome = Outcome::Completed;
-                    row.channels = r.figures(&spec.settle);
-                }
+                sim::Outcome::Completed => row.outcome = Outcome::Completed,
                 sim::Outcome::Diverged { t, signal, value } => {
                     row.outcome = Outcome::Diverged;
                     row.reason = format!("{signal} = {value:e} at t = {} {}", fmt_instant(*t), r.time_unit);

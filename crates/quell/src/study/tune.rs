@@ -361,7 +361,7 @@ impl TuneResult {
     /// Channel i's limits that the joint run broke, one phrase each, the keys named after
     /// `prefix` (none without a joint run).
     pub fn joint_broken(&self, spec: &TuneSpec, i: usize, prefix: &str) -> Vec<String> {
-        self.joint.as_ref().and_then(|j| j.channels.get(i)).map_or(vec![], |f| spec.broken_limits(i, f, prefix))
+        self.joint.as_ref().and_then(|j| j.completed().get(i)).map_or(vec![], |f| spec.broken_limits(i, f, prefix))
     }
 
     /// When the joint run with every tuned μ_i breaks a limit each search met: which, and what
@@ -564,13 +564,13 @@ impl Search<'_> {
         let mut mu = self.base_mu.to_vec();
         mu[i] = mu_i;
         let row = run_with(self.study, &mu, &|| self.stopped())?;
-        let figures = row.channels.get(i).copied();
+        let figures = row.completed().get(i).copied();
         let (spec, objective) = (self.spec, self.spec.objective);
         // Every input's limits that the scenario's μ keeps: u_f = −K x̂ + F u_d (5) mixes the
         // channels' commands, so μ_i moves u_f,j too (a reactor's μ₁ = 100 took max |u_f,2| from
         // 0.159 to 0.199, beyond its 0.16, and the search had called it feasible).
         let kept = |j: usize| j == i || self.guarded[j];
-        let broken: Vec<String> = (row.channels.iter().enumerate())
+        let broken: Vec<String> = (row.completed().iter().enumerate())
             .filter(|&(j, _)| kept(j))
             .flat_map(|(j, f)| spec.broken_limits(j, f, "tune."))
             .collect();
@@ -670,7 +670,9 @@ pub fn tune(study: &Study, opts: &TuneOptions<'_>) -> Result<TuneResult, StudyEr
     let limited = spec.max_u.iter().chain(&spec.max_uf).any(|l| l.is_finite());
     let base = if limited { run_with(study, &base_mu, &stopped) } else { None };
     let guarded = (0..m)
-        .map(|j| base.as_ref().and_then(|r| r.channels.get(j)).is_some_and(|f| spec.broken_limits(j, f, "").is_empty()))
+        .map(|j| {
+            base.as_ref().and_then(|r| r.completed().get(j)).is_some_and(|f| spec.broken_limits(j, f, "").is_empty())
+        })
         .collect();
     let search = Search { study, scenario: &scenario, spec, base_mu: &base_mu, guarded, opts };
     let jobs: Vec<(usize, f64)> = (0..m).flat_map(|i| search.log_grid(i).map(move |mu| (i, mu))).collect();
@@ -683,7 +685,7 @@ pub fn tune(study: &Study, opts: &TuneOptions<'_>) -> Result<TuneResult, StudyEr
         .iter()
         .map(|c| {
             let search = c.chosen.as_ref().and_then(|p| p.figures).map(|f| spec.objective.of(&f));
-            let joint_value = joint.as_ref().and_then(|j| j.channels.get(c.channel)).map(|f| spec.objective.of(f));
+            let joint_value = joint.as_ref().and_then(|j| j.completed().get(c.channel)).map(|f| spec.objective.of(f));
             match (search, joint_value) {
                 (Some(s), Some(j)) if s.is_finite() && j.is_finite() => {
                     (Some(j - s), (j - s).abs() <= tolerance(spec.objective, s, &scenario, c.channel))
@@ -695,7 +697,7 @@ pub fn tune(study: &Study, opts: &TuneOptions<'_>) -> Result<TuneResult, StudyEr
     let within_limits = (0..m)
         .map(|i| {
             let joint = joint.as_ref()?;
-            Some(joint.channels.get(i).is_some_and(|f| f.max_u <= spec.max_u[i] && f.max_uf <= spec.max_uf[i]))
+            Some(joint.completed().get(i).is_some_and(|f| f.max_u <= spec.max_u[i] && f.max_uf <= spec.max_uf[i]))
         })
         .collect();
     let partial = joint.is_none();
