@@ -87,8 +87,13 @@ impl PlantError {
                         _ => format!("k = {k} (columns of {prefix}D)"),
                     })
                     .collect();
-                // A matrix written with its rows as columns (one row per input of B): its transpose fits.
-                let transposed = name != "A" && rows != expected_rows && cols == expected_rows;
+                // A matrix written with its rows as columns (one row per input of B): its transpose
+                // fits (for B and D, whose columns set m and k, any transpose with n rows does).
+                let own_columns = matches!(name, "B" | "D");
+                let transposed = name != "A"
+                    && rows != expected_rows
+                    && cols == expected_rows
+                    && (own_columns || rows == expected_cols);
                 // C with a different number of outputs than B has inputs: the method pairs them.
                 let square = if name == "C" && rows != expected_rows && !transposed {
                     "; the method decouples the plant into one channel per input, so it needs as many outputs as inputs (a square plant): choose m outputs to track, or add inputs"
@@ -96,7 +101,7 @@ impl PlantError {
                     ""
                 };
                 // B's columns set m and D's set k: with its rows wrong, only n is known independently.
-                let rows_only = matches!(name, "B" | "D") && rows != expected_rows;
+                let rows_only = own_columns && rows != expected_rows;
                 let (expected, hint) = if rows_only {
                     (format!("{expected_rows} rows (n = {n}, the rows of {prefix}A)"), String::new())
                 } else if name == "A" {

@@ -133,31 +133,42 @@ pub(crate) fn max_row_sum(omega: &[f64], q: usize) -> f64 {
 pub(crate) fn solve_shifted(omega: &[f64], c: f64, x: &mut [f64], factor: &mut [f64]) -> bool {
     let q = x.len();
     let (omega, r) = (&omega[..len(q)], &mut factor[..len(q)]);
+    r.iter_mut().zip(omega).for_each(|(ri, oi)| *ri = c * oi);
     for i in 0..q {
-        for j in i..q {
-            let mut s = c * omega[at(q, i, j)] + if i == j { 1.0 } else { 0.0 };
-            for k in 0..i {
-                s -= r[at(q, k, i)] * r[at(q, k, j)];
-            }
-            if i == j {
-                // NaN fails this test too.
-                if !(s > 0.0 && s.is_finite()) {
-                    return false;
-                }
-                r[at(q, i, i)] = s.sqrt();
-            } else {
-                r[at(q, i, j)] = s / r[at(q, i, i)];
-            }
+        r[at(q, i, i)] += 1.0;
+    }
+    // Row by row, each row then taken out of the rows below it (right-looking): every inner loop
+    // runs along a packed row, contiguous, where the inner products down two columns had strided
+    // through the triangle (the cost of the implicit path at q = 75: 1.6 ms a step).
+    for i in 0..q {
+        let (done, rest) = r.split_at_mut(at(q, i, i) + q - i);
+        let row = &mut done[at(q, i, i)..];
+        // NaN fails this test too.
+        if !(row[0] > 0.0 && row[0].is_finite()) {
+            return false;
+        }
+        let d = row[0].sqrt();
+        row[0] = d;
+        row[1..].iter_mut().for_each(|v| *v /= d);
+        let mut below = rest;
+        for j in i + 1..q {
+            let (target, next) = below.split_at_mut(q - j);
+            let f = row[j - i];
+            target.iter_mut().zip(&row[j - i..]).for_each(|(t, v)| *t -= f * v);
+            below = next;
         }
     }
-    // Rᵀ y = b, then R x = y.
+    // Rᵀ y = b (each solved entry taken out of those below), then R x = y.
     for i in 0..q {
-        let s: f64 = (0..i).map(|k| r[at(q, k, i)] * x[k]).sum();
-        x[i] = (x[i] - s) / r[at(q, i, i)];
+        let row = &r[at(q, i, i)..at(q, i, i) + q - i];
+        x[i] /= row[0];
+        let xi = x[i];
+        x[i + 1..].iter_mut().zip(&row[1..]).for_each(|(xj, v)| *xj -= v * xi);
     }
     for i in (0..q).rev() {
-        let s: f64 = (i + 1..q).map(|j| r[at(q, i, j)] * x[j]).sum();
-        x[i] = (x[i] - s) / r[at(q, i, i)];
+        let row = &r[at(q, i, i)..at(q, i, i) + q - i];
+        let s: f64 = row[1..].iter().zip(&x[i + 1..]).map(|(v, xj)| v * xj).sum();
+        x[i] = (x[i] - s) / row[0];
     }
     true
 }
@@ -244,7 +255,7 @@ mod tests {
         /// (I + cΩ) x = b for a random positive semidefinite Ω = G Gᵀ against the dense product, to
         /// 1e-12 relative to |b| + c|Ω||x| (the backward error of Cholesky is a few ulps times q).
         #[test]
-        fn solve_shifted_solves_the_shifted_system(q in 1usize..=12, seed in any::<u64>(), e in -3i32..9) {
+        fn solve_shifted_solves_the_shifted_system(q in 1usize..=80, seed in any::<u64>(), e in -3i32..9) {
             let mut next = uniform(seed);
             let g: Vec<f64> = (0..q * q).map(|_| next()).collect();
             let mut dense = vec![0.0; q * q];
