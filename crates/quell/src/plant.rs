@@ -71,50 +71,7 @@ impl PlantError {
         };
         match *self {
             PlantError::Shape { name, expected_rows, expected_cols, rows, cols } => {
-                let (dims, symbols): (&str, &[char]) = match name {
-                    "A" => ("n×n", &[]),
-                    "B" => ("n×m", &['n']),
-                    "C" => ("m×n", &['m', 'n']),
-                    "D" => ("n×k", &['n']),
-                    "Q" => ("m×k", &['m', 'k']),
-                    _ => ("", &[]),
-                };
-                let defs: Vec<String> = symbols
-                    .iter()
-                    .map(|s| match s {
-                        'n' => format!("n = {n} (rows of {prefix}A)"),
-                        'm' => format!("m = {m} (columns of {prefix}B)"),
-                        _ => format!("k = {k} (columns of {prefix}D)"),
-                    })
-                    .collect();
-                // A matrix written with its rows as columns (one row per input of B): its transpose
-                // fits (for B and D, whose columns set m and k, any transpose with n rows does).
-                let own_columns = matches!(name, "B" | "D");
-                let transposed = name != "A"
-                    && rows != expected_rows
-                    && cols == expected_rows
-                    && (own_columns || rows == expected_cols);
-                // C with a different number of outputs than B has inputs: the method pairs them.
-                let square = if name == "C" && rows != expected_rows && !transposed {
-                    "; the method decouples the plant into one channel per input, so it needs as many outputs as inputs (a square plant): choose m outputs to track, or add inputs"
-                } else {
-                    ""
-                };
-                // B's columns set m and D's set k: with its rows wrong, only n is known independently.
-                let rows_only = own_columns && rows != expected_rows;
-                let (expected, hint) = if rows_only {
-                    (format!("{expected_rows} rows (n = {n}, the rows of {prefix}A)"), String::new())
-                } else if name == "A" {
-                    (format!("{expected_rows}×{expected_cols} ({dims})"), "; A must be square".to_string())
-                } else {
-                    (format!("{expected_rows}×{expected_cols} ({dims})"), format!("; {}{square}", defs.join(", ")))
-                };
-                let transposed = if transposed {
-                    format!("; it looks transposed: write it as {cols}×{rows}")
-                } else {
-                    String::new()
-                };
-                (format!("{prefix}{name}"), format!("expected {expected}, found {rows}×{cols}{hint}{transposed}"))
+                shape_message(name, (expected_rows, expected_cols), (rows, cols), (n, m, k), prefix)
             }
             PlantError::NonFinite { name, row, col, value } => (
                 entry(name, row, col),
@@ -145,6 +102,56 @@ impl PlantError {
             ),
         }
     }
+}
+
+/// [`PlantError::Shape`] as (key, message): what n, m and k were taken from, and a transpose that
+/// would fit.
+fn shape_message(
+    name: &str,
+    (expected_rows, expected_cols): (usize, usize),
+    (rows, cols): (usize, usize),
+    (n, m, k): (usize, usize, usize),
+    prefix: &str,
+) -> (String, String) {
+    let (dims, symbols): (&str, &[char]) = match name {
+        "A" => ("n×n", &[]),
+        "B" => ("n×m", &['n']),
+        "C" => ("m×n", &['m', 'n']),
+        "D" => ("n×k", &['n']),
+        "Q" => ("m×k", &['m', 'k']),
+        _ => ("", &[]),
+    };
+    let defs: Vec<String> = symbols
+        .iter()
+        .map(|s| match s {
+            'n' => format!("n = {n} (rows of {prefix}A)"),
+            'm' => format!("m = {m} (columns of {prefix}B)"),
+            _ => format!("k = {k} (columns of {prefix}D)"),
+        })
+        .collect();
+    // A matrix written with its rows as columns (one row per input of B): its transpose
+    // fits (for B and D, whose columns set m and k, any transpose with n rows does).
+    let own_columns = matches!(name, "B" | "D");
+    let transposed =
+        name != "A" && rows != expected_rows && cols == expected_rows && (own_columns || rows == expected_cols);
+    // C with a different number of outputs than B has inputs: the method pairs them.
+    let square = if name == "C" && rows != expected_rows && !transposed {
+        "; the method decouples the plant into one channel per input, so it needs as many outputs as inputs (a square plant): choose m outputs to track, or add inputs"
+    } else {
+        ""
+    };
+    // B's columns set m and D's set k: with its rows wrong, only n is known independently.
+    let rows_only = own_columns && rows != expected_rows;
+    let (expected, hint) = if rows_only {
+        (format!("{expected_rows} rows (n = {n}, the rows of {prefix}A)"), String::new())
+    } else if name == "A" {
+        (format!("{expected_rows}×{expected_cols} ({dims})"), "; A must be square".to_string())
+    } else {
+        (format!("{expected_rows}×{expected_cols} ({dims})"), format!("; {}{square}", defs.join(", ")))
+    };
+    let transposed =
+        if transposed { format!("; it looks transposed: write it as {cols}×{rows}") } else { String::new() };
+    (format!("{prefix}{name}"), format!("expected {expected}, found {rows}×{cols}{hint}{transposed}"))
 }
 
 /// `M` is `rows × cols`.
