@@ -317,3 +317,16 @@ def test_an_export_into_a_directory_another_process_is_writing_is_refused(tmp_pa
     written = quell.export(quell.paper_example(), 1e-3, out=str(tmp_path))
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(pathlib.Path(w).name for w in written)
     assert len(written) == 2
+
+
+def test_a_plot_of_many_parameters_names_their_range_in_the_title():
+    """Beyond 14 entries of η̂_i the legend would hide the traces (q = 33 covered a third of them) and
+    the palette repeats: as the CLI's figure, no legend, and the title names the range."""
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    wind = quell.Scenario.load(pathlib.Path(__file__).parents[2] / "quell" / "tests" / "data" / "wind-ipc-12h.toml")
+    fig = quell.simulate(wind, t_end=0.2).plot(channel=1)
+    eta = fig.axes[4]
+    assert len(eta.lines) == 75 and eta.get_legend() is None
+    assert eta.get_title().endswith(": adjustable parameters (33), η1_1 … η1_75 in the palette's order"), eta.get_title()
+    matplotlib.pyplot.close(fig)

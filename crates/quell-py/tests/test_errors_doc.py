@@ -67,6 +67,7 @@ CASES = [
     ("non_square_A", edit((A_LINE, "A = [[-3.2, -1.7], [2.8, 1.3], [0.3, 0.3]]")), "plant.A", None),
     ("wrong_shape", edit((C_LINE, "C = [[2.0, 2.0], [2.0, 1.0]]")), "plant.C", None),
     ("wrong_shape_of_Q", edit((Q_LINE, "Q = [[1.0], [1.0]]\n")), "plant.Q", None),
+    ("a_transposed_matrix_is_named_as_such", edit((B_LINE, "B = [[-2.0, 2.0, 1.0], [1.0, -1.0, 0.0]]\n")), "plant.B", None),
     ("empty_plant", edit((A_LINE, "A = []")), "plant.A", None),
     ("non_finite_entry", edit(("[0.3, 0.3, -0.5]", "[0.3, nan, -0.5]")), "plant.A[2][1]", None),
     ("entry_too_large", edit(("[0.3, 0.3, -0.5]", "[0.3, 0.3, -5e200]")), "plant.A[2][2]", None),

@@ -1354,12 +1354,12 @@ fn horizon_advice(
     let transient = crate::diagnostics::slow_transient_advice(design, t_end);
     let at = transient.is_some().then_some(advice.len());
     advice.extend(transient);
-    if many_harmonics(s, design) {
-        advice.push(format!("a component has {} harmonics, and the companion forms' Ω̄ is singular to rounding with many: design.regressor_scaling = \"modal\" with a resonator −b ± jω per harmonic as filter poles keeps it well conditioned (what the automatic design chooses where the file gives neither the key nor μ; μ then anew)", most_harmonics(s)));
-    }
+    advice.extend(modal_advice([&s.reference, &s.disturbance], design));
     if !slow.hopeless.is_empty() {
         let scaling = match design.regressor_scaling() {
-            _ if many_harmonics(s, design) => ", or design.regressor_scaling = \"modal\" (below)",
+            _ if many_harmonics([&s.reference, &s.disturbance], design) => {
+                ", or design.regressor_scaling = \"modal\" (below)"
+            }
             RegressorScaling::Paper => ", or design.regressor_scaling = \"normalized\" (ξ̂ of the signals' size)",
             RegressorScaling::Normalized | RegressorScaling::Modal => "",
         };
@@ -1621,13 +1621,21 @@ fn filters(
 /// Whether `design`'s regressor is a companion form while a component of g or ω has
 /// [`MODAL_HARMONICS`] harmonics or more (a file that gives μ keeps the paper's form: four square
 /// harmonics failed at 1.45 against 0.041, and passed at 1.2e-10 with the modal form and that μ).
-fn many_harmonics(s: &Scenario, design: &Design) -> bool {
-    design.regressor_scaling() != RegressorScaling::Modal && most_harmonics(s) >= MODAL_HARMONICS
+pub(crate) fn many_harmonics(signals: [&Signal; 2], design: &Design) -> bool {
+    design.regressor_scaling() != RegressorScaling::Modal && most_harmonics(signals) >= MODAL_HARMONICS
+}
+
+/// Where [`many_harmonics`]: that the modal form keeps Ω̄ well conditioned (the advice of the
+/// automatic design's verification and of a run's diagnostics: a building with 8-harmonic
+/// references, told only to normalize, kept λ_min(Ω̄) at 1e-10; modal with a resonator per harmonic
+/// gave 1e-3 and converged).
+pub(crate) fn modal_advice(signals: [&Signal; 2], design: &Design) -> Option<String> {
+    many_harmonics(signals, design).then(|| format!("a component has {} harmonics, and the companion forms' Ω̄ is singular to rounding with many: design.regressor_scaling = \"modal\" with a resonator −b ± jω per harmonic as filter poles keeps it well conditioned (what the automatic design chooses where the file gives neither the key nor μ; μ then anew)", most_harmonics(signals)))
 }
 
 /// The most harmonics of one component of g or ω.
-fn most_harmonics(s: &Scenario) -> usize {
-    s.reference.components.iter().chain(&s.disturbance.components).map(|c| frequencies(c).count()).max().unwrap_or(0)
+fn most_harmonics([reference, disturbance]: [&Signal; 2]) -> usize {
+    reference.components.iter().chain(&disturbance.components).map(|c| frequencies(c).count()).max().unwrap_or(0)
 }
 
 /// The modal filter of a component with harmonics `ws` (nonzero) and `order` poles: a pair
@@ -1775,7 +1783,7 @@ fn choose_beta(s: &Scenario, r: f64, note: &mut Note) -> f64 {
 /// or more, else the normalized form, whose Ω̄ keeps its conditioning at every time scale (the
 /// paper's form spreads its eigenvalues by about r^2(q−1) away from r = 1 rad/s).
 fn choose_scaling(partial: &PartialDesign, s: &Scenario, note: &mut Note) -> RegressorScaling {
-    let most = most_harmonics(s);
+    let most = most_harmonics([&s.reference, &s.disturbance]);
     match (partial.regressor_scaling, &partial.mu) {
         (Some(g), _) => g,
         (None, Some(_)) => {

@@ -1214,6 +1214,17 @@ fn a_given_mu_with_many_harmonics_is_told_of_the_modal_form() {
         advice.contains("a component has 4 harmonics") && advice.contains("design.regressor_scaling = \"modal\""),
         "{advice}"
     );
+    // The design report beside a stiff μ names the modal form too (it had named only "normalized").
+    let mut spec = paper.scenario.design.clone();
+    spec.mu = vec![1e9];
+    let stiff = quell::Design::new(&paper.scenario.plant, &spec).unwrap();
+    let s = &paper.scenario;
+    let estimates = quell::diagnostics::estimate(&stiff, &s.plant, &s.reference, &s.disturbance, 1000.0);
+    assert!(
+        estimates[0].advice.iter().any(|a| a.contains("adapts at") && a.contains("regressor_scaling = \"modal\"")),
+        "{:?}",
+        estimates[0].advice
+    );
     doc["design"].as_table_mut().unwrap().insert("regressor_scaling".into(), "modal".into());
     let modal = auto_design(&doc, &Targets::default()).unwrap();
     assert!(modal.verification.passed, "{:?}", modal.verification);

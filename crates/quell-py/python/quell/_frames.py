@@ -34,6 +34,9 @@ def to_pandas(result):
     return pd.DataFrame(data, columns=columns(m, q, result.n if states else 0))
 
 
+# The most η̂ entries a panel's legend names (the CLI's MAX_LEGEND).
+MAX_LEGEND = 14
+
 # A reference whose path runs more than this many times its panel's width is drawn as a band.
 BAND = 6.0
 
@@ -157,9 +160,15 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
                 share = f"{share:.1e}" if 0 < share < 0.1 else f"{share:.1f}"  # "0.0 %" hid a peak of 0.0018 %
                 title_ax.set_title(f"{title_ax.get_title()}; peak {share} % of truth.u_max")
         eta_ax = axes[4] if len(axes) == 6 else axes[-1]
+        # As the CLI's figure: beyond MAX_LEGEND entries a legend hides the traces (q = 33 covered a
+        # third of them) and the palette repeats, so the title names the range instead.
+        many = result.q > MAX_LEGEND
         for j in range(result.q):
-            eta_ax.plot(t, result.eta[:, i, j], label=f"η{c}_{j + 1}")
-        eta_ax.set(title=f"{channel_title}: adjustable parameters (33)", ylabel="η")
+            eta_ax.plot(t, result.eta[:, i, j], label=None if many else f"η{c}_{j + 1}")
+        eta_title = f"{channel_title}: adjustable parameters (33)"
+        if many:
+            eta_title += f", η{c}_1 … η{c}_{result.q} in the palette's order"
+        eta_ax.set(title=eta_title, ylabel="η")
         if len(axes) == 4:
             uf_ax.legend(loc="best", fontsize="small")
         if len(axes) == 6:

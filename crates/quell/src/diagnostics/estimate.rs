@@ -74,7 +74,7 @@ pub fn estimate(
             let weakly_excited = slow.is_some();
             let mut advice = Vec::new();
             if stiff {
-                advice.push(stiff_advice(design, (i, mu), c, (rho, t_end)));
+                advice.push(stiff_advice(design, (i, mu), c, (rho, t_end), [reference, disturbance]));
             }
             if rank == 0 {
                 advice.push(format!(
@@ -117,10 +117,15 @@ pub(crate) fn stiff_advice(
     (i, mu): (usize, f64),
     c: &crate::averaged::ChannelAverage,
     (rho, t_end): (f64, f64),
+    signals: [&Signal; 2],
 ) -> String {
     let (lambda_max, unit) = (c.lambda_max(), design.plant().time_unit);
     let rate = mu * lambda_max;
+    // Many harmonics: the modal form (normalizing alone left a building's λ_min(Ω̄) at 1e-10).
     let scaling_hint = match design.regressor_scaling() {
+        _ if crate::auto::many_harmonics(signals, design) => {
+            ", or set design.regressor_scaling = \"modal\" with a resonator −b ± jω per harmonic as filter poles (the companion forms' Ω̄ is singular to rounding with many harmonics) and choose μ anew"
+        }
         crate::design::RegressorScaling::Paper => {
             ", or set design.regressor_scaling = \"normalized\" (ξ̂ of the signals' size, which also narrows the spread where the filters' poles differ in scale) and choose μ anew"
         }
