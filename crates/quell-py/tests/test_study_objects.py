@@ -151,6 +151,12 @@ def test_worst_counts_a_run_without_figures_as_worst():
     frame.loc[1, "tail_max_e1"] = np.nan  # as a diverged run's row
     doctored = quell.StudyResult(study, frame)
     assert result.worst("tail_max_e1")["run"] == frame["tail_max_e1"].idxmax() and doctored.worst("tail_max_e")["run"] == 1
+    # A diverged row keeps the actuator peaks it reached, but ranks as the worst by them too (a
+    # small peak of a run stopped early had ranked it below completed runs).
+    frame = result.frame.copy()
+    smaller = int(frame["max_uf1"].idxmin())
+    frame.loc[smaller, "outcome"] = "diverged"
+    assert quell.StudyResult(study, frame).worst("max_uf")["run"] == smaller
     with pytest.raises(quell.ScenarioError, match=r"metric: expected one of tail_max_e, .* found 'tail_max_err'"):
         result.worst("tail_max_err")
     with pytest.raises(TypeError, match="metric: expected a str"):

@@ -197,7 +197,7 @@ pub fn check_dir(dir: &Path) -> io::Result<()> {
         Err(_) if dir.is_symlink() => {
             let target = std::fs::read_link(dir).map_or_else(|_| "?".into(), |t| t.display().to_string());
             refuse(format!(
-                "{} is a symbolic link to {target}, which does not exist; create that directory",
+                "{} is a symbolic link to {target}, which does not exist (create that directory)",
                 dir.display()
             ))
         }
@@ -218,7 +218,7 @@ mod tests {
         std::os::unix::fs::symlink("nowhere/x", &link).unwrap();
         let e = check_dir(&link).unwrap_err().to_string();
         assert!(
-            e.ends_with("dangle is a symbolic link to nowhere/x, which does not exist; create that directory"),
+            e.ends_with("dangle is a symbolic link to nowhere/x, which does not exist (create that directory)"),
             "{e}"
         );
         fs::create_dir_all(dir.path().join("nowhere/x")).unwrap();

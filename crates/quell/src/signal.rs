@@ -148,11 +148,12 @@ impl Component {
 }
 
 /// How near a whole number a ratio of frequencies must be for [`Component::peak`] to take them as
-/// harmonics of one: relative 1e-5, so frequencies written to six digits count (k·2π/24 as
+/// harmonics of one: relative 2e-6, so frequencies written to six digits count (k·2π/24 as
 /// 0.261799, 0.523599, …: their ratios are whole to 1.5e-6, and with 1e-9 the peak had been the
 /// sum of amplitudes, 26 % above the true one). Two frequencies that close but not commensurate
-/// drift apart by 1e-5 of a radian per radian: over the horizons a peak serves, the same.
-const WHOLE_RATIO: f64 = 1e-5;
+/// drift apart by 2e-6 of a radian per radian of the higher: a tenth of a radian after 8,000 of its
+/// periods.
+const WHOLE_RATIO: f64 = 2e-6;
 
 /// The highest harmonic index [`Component::peak`] samples a common period for (a component of
 /// commensurate frequencies beyond it keeps the sum of amplitudes).

@@ -313,8 +313,14 @@ fn error_wrong_channel_pole_count_names_sigma() {
     let mut spec = paper_spec();
     spec.channel_poles[1] = vec![re(-4.0), re(-5.0)];
     let e = expect_err(&paper_plant(), &spec);
-    assert_eq!(e, DesignError::ChannelPoleCount { channel: 1, sigma: 1, got: 2 });
+    assert_eq!(e, DesignError::ChannelPoleCount { channel: 1, sigma: 1, got: 2, pairs: 0 });
     assert_eq!(e.to_string(), "design.channel_poles[1]: channel 2 has relative degree 1, so it needs 1 pole; found 2");
+    // A pair [re, im] is two poles, which the count had not said.
+    spec.channel_poles[1] = vec![Complex::new(-4.0, 1.0), Complex::new(-4.0, -1.0)];
+    assert_eq!(
+        expect_err(&paper_plant(), &spec).to_string(),
+        "design.channel_poles[1]: channel 2 has relative degree 1, so it needs 1 pole; found 2 (a pair [re, im] is two poles, re ± i·im)"
+    );
 }
 
 #[test]

@@ -1032,6 +1032,21 @@ fn uncontrollable_plant() {
         "(A, B) is not controllable (Assumption 1): numerical rank 2 of 3",
         Some(" (tolerance"),
     );
+    // The mode the inputs miss is named (the PBH test: [A − 3I, B] loses rank at λ = 3 only).
+    let text = with(&[
+        (A_LINE, "A = [[-1.0, 0.0, 0.0], [0.0, -2.0, 0.0], [0.0, 0.0, 3.0]]"),
+        (B_LINE, "B = [[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]]\n"),
+    ]);
+    let e = load_and_design(&text).map(|_| ()).unwrap_err().to_string();
+    assert!(e.ends_with("every mode must be reachable from the inputs; no input reaches the mode at 3.000000"), "{e}");
+    // Likewise the mode no output shows: C reads the first two states of diag(−1, −2, −4) only.
+    let text = with(&[
+        (A_LINE, "A = [[-1.0, 0.0, 0.0], [0.0, -2.0, 0.0], [0.0, 0.0, -4.0]]"),
+        (B_LINE, "B = [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]\n"),
+        (C_LINE, "C = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]"),
+    ]);
+    let e = load_and_design(&text).map(|_| ()).unwrap_err().to_string();
+    assert!(e.ends_with("every mode must show in the outputs; no output shows the mode at -4.000000"), "{e}");
 }
 
 #[test]

@@ -127,8 +127,9 @@ class StudyResult:
         return self.study.spec(run).simulate()
 
     def worst(self, metric="tail_max_e"):
-        """The worst row by ``metric``: its largest value, a run without the figure (diverged,
-        failed, or not settled for ``settle_t``) counting as worse than any; the first on ties.
+        """The worst row by ``metric``: its largest value, a run that did not complete (diverged or
+        failed: the peaks it keeps are a runaway's) or has no figure (not settled, for ``settle_t``)
+        counting as worse than any; the first on ties.
 
         Parameters
         ----------
@@ -197,7 +198,8 @@ class StudyResult:
         return self.rerun(int(self.worst(metric)["run"]))
 
     def _metric(self, metric):
-        """Per row, the value of ``metric`` (NaN where the row has none)."""
+        """Per row, the value of ``metric``: NaN where the row has none, and for a run that did not
+        complete (a diverged run keeps the peaks it reached, which would rank it below completed ones)."""
         import numpy as np
 
         if not isinstance(metric, str):
@@ -209,10 +211,11 @@ class StudyResult:
             columns = [metric]
         else:
             names = ", ".join(METRICS)
+            columns = f"{METRICS[0]}1" if m == 1 else f"{METRICS[0]}1 … {METRICS[0]}{m}"
             raise ScenarioError(
                 f"metric: expected one of {names} (the largest over the channels) or one channel's column "
-                f"such as {METRICS[0]}1 … {METRICS[0]}{m}, found {metric!r}"
+                f"such as {columns}, found {metric!r}"
             )
         values = self.frame[columns].to_numpy(dtype=float)
-        missing = np.isnan(values).any(axis=1)
+        missing = np.isnan(values).any(axis=1) | (self.frame["outcome"] != "completed").to_numpy()
         return np.where(missing, np.nan, np.nanmax(np.where(np.isnan(values), -np.inf, values), axis=1))

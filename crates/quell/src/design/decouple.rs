@@ -198,7 +198,8 @@ pub fn falb_wolovich_given(
         let s = relative_degree_in_use(d, channel, given.map(|g| g[channel]), n)?;
         let got = channel_poles[channel].len();
         if got != s {
-            return Err(DesignError::ChannelPoleCount { channel, sigma: s, got });
+            let pairs = channel_poles[channel].iter().filter(|p| p.im > 0.0).count();
+            return Err(DesignError::ChannelPoleCount { channel, sigma: s, got, pairs });
         }
         sum += s;
     }

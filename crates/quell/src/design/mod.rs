@@ -158,8 +158,8 @@ pub enum DesignError {
     },
     #[error("plant.C: output {} is reached by no input: c_i A^(l-1) B = 0 for every l ≤ n (largest cosine between c_i A^(l-1) and a column of B: {largest:.1e}, below τ = {tol:.0e}), so the plant cannot be decoupled; check row {channel} of plant.C", .channel + 1, tol = TOL)]
     NoRelativeDegree { channel: usize, largest: f64 },
-    #[error("design.channel_poles[{channel}]: channel {} has relative degree {sigma}, so it needs {sigma} pole{}; found {got}", .channel + 1, if *.sigma == 1 { "" } else { "s" })]
-    ChannelPoleCount { channel: usize, sigma: usize, got: usize },
+    #[error("design.channel_poles[{channel}]: channel {} has relative degree {sigma}, so it needs {sigma} pole{}; found {got}{}", .channel + 1, if *.sigma == 1 { "" } else { "s" }, match .pairs { 0 => String::new(), 1 => " (a pair [re, im] is two poles, re ± i·im)".into(), p => format!(" ({p} pairs [re, im], each two poles, re ± i·im)") })]
+    ChannelPoleCount { channel: usize, sigma: usize, got: usize, pairs: usize },
     #[error("plant: not decouplable (Proposition 1): B* is singular: with rows c_i A^(σ_i-1) and the columns of B scaled to unit norm its smallest singular value is {smallest:.3e}, below τ = {tol:.0e} (condition number {cond:.3e}); the outputs' leading responses to the inputs (c_i A^(σ_i−1) B, σ = {sigma:?}) are (nearly) dependent; measure outputs whose leading responses differ (another sensor, or other combinations of the states), pair the outputs with other inputs, or, where the design report calls a σ_i decision close, give design.relative_degrees", tol = TOL)]
     NotDecouplable { smallest: f64, cond: f64, sigma: Vec<usize> },
     #[error("plant: unstable zero dynamics: A − BK keeps the plant's {} zero{} (its eigenvalues besides the {placed} channel poles that Proposition 1 places), and {} not in the open left half-plane: {} (per {unit}); the plant is non-minimum-phase with these outputs (a transmission zero of (A, B, C) in the closed right half-plane) and decoupling cancels its zeros, so it cannot be decoupled stably; measure outputs whose zeros lie in the left half-plane (a boost converter's inductor current in place of its output voltage; another sensor placement), or control this plant by another method", .zeros.len(), if .zeros.len() == 1 { "" } else { "s" }, if .unstable.len() == 1 { "this one is" } else { "these are" }, fmt_complex_list(.unstable))]
@@ -589,15 +589,49 @@ fn assumption_1(plant: &Plant) -> Result<(RankTest, RankTest), DesignError> {
     let n = plant.n();
     let ctrb = controllability(&plant.A, &plant.B)?;
     if !ctrb.full() {
-        let scaling = badly_scaled(&plant.A, &plant.B, "B", ctrb.tol);
+        // A scaling verdict names no modes: every one would look hidden.
+        let mut scaling = badly_scaled(&plant.A, &plant.B, "B", ctrb.tol);
+        if scaling.is_empty() {
+            scaling = hidden_modes(&plant.A.transpose(), &plant.B.transpose(), n - ctrb.rank, "no input reaches");
+        }
         return Err(DesignError::Uncontrollable { rank: ctrb.rank, n, tol: ctrb.tol, scaling });
     }
     let obsv = observability(&plant.A, &plant.C)?;
     if !obsv.full() {
-        let scaling = badly_scaled(&plant.A, &plant.C, "C", obsv.tol);
+        let mut scaling = badly_scaled(&plant.A, &plant.C, "C", obsv.tol);
+        if scaling.is_empty() {
+            scaling = hidden_modes(&plant.A, &plant.C, n - obsv.rank, "no output shows");
+        }
         return Err(DesignError::Unobservable { rank: obsv.rank, n, tol: obsv.tol, scaling });
     }
     Ok((ctrb, obsv))
+}
+
+/// The `count` eigenvalues λ of A (`At` = A with M = C for observability, Aᵀ with M = Bᵀ for
+/// controllability) whose PBH matrix [At − λI; M] is nearest to losing rank, by its smallest
+/// singular value relative to the matrix's norm: the modes the rank test found hidden, named for
+/// the message (a pendulum measured by its angle alone: its cart's modes at 0 show in no output). ""
+/// where the eigenvalues cannot be computed.
+fn hidden_modes(At: &DMatrix<f64>, M: &DMatrix<f64>, count: usize, verb: &str) -> String {
+    let Ok(mut lambdas) = eigenvalues(At) else { return String::new() };
+    let n = At.nrows();
+    let norm = At.norm() + M.norm();
+    let nearness = |l: &Complex<f64>| {
+        let mut P = nalgebra::DMatrix::<Complex<f64>>::zeros(n + M.nrows(), n);
+        P.view_mut((0, 0), (n, n)).copy_from(&At.map(|a| Complex::new(a, 0.0)));
+        for i in 0..n {
+            P[(i, i)] -= l;
+        }
+        P.view_mut((n, 0), (M.nrows(), n)).copy_from(&M.map(|a| Complex::new(a, 0.0)));
+        P.singular_values().min() / norm.max(f64::MIN_POSITIVE)
+    };
+    lambdas.sort_by(|a, b| nearness(a).total_cmp(&nearness(b)));
+    lambdas.truncate(count);
+    if lambdas.is_empty() {
+        return String::new();
+    }
+    let modes = if count == 1 { "the mode" } else { "the modes" };
+    format!("; {verb} {modes} at {}", fmt_complex_list(&lambdas))
 }
 
 /// Where the rank test's tolerance (set by ‖A‖) exceeds every entry of `M` (B or C), the verdict

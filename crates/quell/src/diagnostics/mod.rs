@@ -681,7 +681,7 @@ fn observer_remedy(design: &Design, faster: Option<&FasterObserver>, sampled: Op
     if let Some(z) = held_zeros(p, &observer) {
         let held = format!("design.observer_poles already hold the zeros of (A, D, C), [{}]", fmt_complex_list(&z));
         return match (found, p.m()) {
-            (true, _) => format!("{held}; the error that stays comes from the other poles' speed: {faster}"),
+            (true, _) => format!("{held}; keeping them, {faster}"),
             (false, 1) => format!("{held}; with one output L is fixed by its poles, and {none_kept}"),
             _ => format!(
                 "{held}; the error that stays comes from the placed eigenvectors (L is not unique for m > 1) more than from the other poles' speed, and costs convergence only where the frequency's excitation of Ω̄_i is weak (the channels' `excitation`); if it is, try other fast poles or a gain L by hand"
@@ -988,13 +988,13 @@ fn horizon_advice(
 
 /// Channel i's error still shrinking over the tail (the RMS ratio `r` < [`SHRINKING`] of the last
 /// two tenths of the run): at that pace, the time its tail RMS reaches a third of [`NEGLIGIBLE`] of
-/// its scale, and a μ that gets there by t_end, unless it would make the loop stiff: the missing e-folds over
+/// its scale, and a μ that gets there by t_end, unless it would make the loop stiff (beyond `stiff`; none offered without it): the missing e-folds over
 /// the run at a rate raised with μ, with the [`AVERAGED_MARGIN`] since the loop's own transient
 /// before the decay does not speed up with μ (the paper's example, aiming at 1e-4: asked for 160 s
 /// or μ_1 = 32 without the margin, 160 s reached 1.4e-4 of its scale and μ_1 = 32 9e-4; with it
 /// μ_1 = 56, where 60 reaches 3e-5). Wood–Berry's automatic design (tail 8e-3 of its scale) was told only
 /// "raise μ"; twice its μ gave 2.5e-4, four times 2.3e-7.
-fn shrinking_advice(result: &SimResult, i: usize, r: f64, (mu, lambda_max, stiff): (f64, f64, f64)) -> String {
+fn shrinking_advice(result: &SimResult, i: usize, r: f64, (mu, lambda_max, stiff): (f64, f64, Option<f64>)) -> String {
     let key = format!("design.mu[{i}]");
     let unit = result.time_unit;
     let (t0, t1) = (result.t.first().copied().unwrap_or(0.0), result.t.last().copied().unwrap_or(0.0));
@@ -1011,7 +1011,7 @@ fn shrinking_advice(result: &SimResult, i: usize, r: f64, (mu, lambda_max, stiff
         return format!("{head}: lengthen simulation.t_end or raise {key}");
     }
     let raised = round_up_2(mu * (1.0 + AVERAGED_MARGIN * (t_needed - t1) / (t1 - t0)));
-    let or_mu = if raised * lambda_max <= stiff {
+    let or_mu = if stiff.is_some_and(|stiff| raised * lambda_max <= stiff) {
         // Said with its cost: a house's heater, told to raise μ 3×, peaked 54× higher.
         format!(", or raise {key} to about {} where max|u_f| allows (the missing e-folds at a pace raised with μ, {AVERAGED_MARGIN:.0}× for the transient before it; a faster adaptation drives u_f harder)", fmt_short(raised))
     } else {
@@ -1040,7 +1040,7 @@ fn delay_advice(design: &Design, i: usize, t_end: f64) -> Option<String> {
         ))
     } else if tau > LONG_DELAY * t_end {
         Some(format!(
-            "channel {}'s input delay τ = {tau_text} {unit} is {:.0} % of the run ({t_text} {unit}): its command reaches the plant only after τ, so the adaptation starts late and the pace from t = 0 that advice on μ assumes does not hold; lengthen simulation.t_end to {} {unit} (10 τ) before tuning μ (or check plant.delays[{i}]'s unit)",
+            "channel {}'s input delay τ = {tau_text} {unit} is {:.0} % of the run ({t_text} {unit}): its command reaches the plant only after τ, so the adaptation starts late and the pace from t = 0 that advice on μ assumes does not hold; lengthen simulation.t_end to at least {} {unit} (10 τ) before tuning μ (or check plant.delays[{i}]'s unit)",
             i + 1,
             100.0 * tau / t_end,
             fmt_short(round_up_2(tau / LONG_DELAY))
@@ -1081,16 +1081,19 @@ fn channel(
     // it named another (a ship: 3.6 and 0.36). Nor is a tail extrapolated while the filters' own
     // transient is still settling (`settling`, [`slow_transient_advice`]): a cart–pendulum over 5 s
     // was told "by about t = 12 s, or μ × 5", and either left its error 600× above the aim.
-    let extrapolate = slow.is_none() && !settling && delay.is_none();
+    // Beside a long delay the tail, measured long after it, is still extrapolated in time, but μ
+    // from that pace is not offered (the pendulum, told μ × 1.4, ended worse).
+    let extrapolate = slow.is_none() && !settling;
+    let offer_mu = delay.is_none();
     let mut advice: Vec<String> = delay.into_iter().collect();
     advice.extend(slow);
     match trend.filter(|_| horizon_advice && windows.is_some_and(|(last, _)| !negligible_tail(result, i, last))) {
         Some(r) if r < SHRINKING && extrapolate => {
-            let mut line = shrinking_advice(result, i, r, (mu, c.lambda_max(), stiff));
+            let mut line = shrinking_advice(result, i, r, (mu, c.lambda_max(), offer_mu.then_some(stiff)));
             // Within the bound an automatic design verifies, the run's own 1e-4 is a choice: a
             // CSTR that design had passed was asked for 570 min more without a word of it.
             if !missed {
-                line += &format!("; optional: its tail max|e| is already within {:.0} % of the reference's peak, the bound an automatic design verifies", 100.0 * TAIL_BOUND);
+                line += &format!("; optional: its tail is already within the {:.0} % tail bound an automatic design verifies", 100.0 * TAIL_BOUND);
             }
             advice.push(line)
         }

@@ -357,8 +357,9 @@ fn plant(v: Value, disturbance: Option<&Signal>) -> Result<(Plant, SignalNames),
             return Err(err(
                 t.key("D"),
                 format!(
-                "missing; [disturbance] has {k_signal} components, so plant.D (n×k, disturbance to state) is required"
-            ),
+                    "missing; [disturbance] has {}, so plant.D (n×k, disturbance to state) is required",
+                    crate::settings::count(k_signal, "component", "components")
+                ),
             ))
         }
         _ => DMatrix::zeros(n, 0),
@@ -369,7 +370,7 @@ fn plant(v: Value, disturbance: Option<&Signal>) -> Result<(Plant, SignalNames),
         None if k > 0 => {
             return Err(err(
                 t.key("Q"),
-                format!("missing; plant.D has {k} columns, so plant.Q ({m}×{k}, m×k, disturbance to output) is required; write zeros if ω does not reach y directly"),
+                format!("missing; plant.D has {}, so plant.Q ({m}×{k}, m×k, disturbance to output) is required; write zeros if ω does not reach y directly", crate::settings::count(k, "column", "columns")),
             ))
         }
         _ => DMatrix::zeros(m, 0),
