@@ -1112,24 +1112,32 @@ fn channel(
             i + 1, c.residual_rms, c.open_loop_rms
         ));
     }
-    ChannelDiagnostics {
-        channel: i + 1,
-        lambda_min_omega: c.lambda_min(),
-        lambda_max_omega: c.lambda_max(),
-        // λ_min below the excited floor is Ω̄'s rounding of a singular direction: ∞, as for 0.
-        convergence_time: if c.excited().count() < c.lambda.len() {
-            f64::INFINITY
-        } else {
-            1.0 / (mu * c.lambda_min())
-        },
-        adaptation_rate: mu * c.lambda_max(),
-        excited_rank: c.excited().count(),
-        lambda_min_excited_omega: c.excited().fold(f64::INFINITY, f64::min),
-        convergence_time_excited: 1.0 / (mu * c.excited().fold(f64::INFINITY, f64::min)),
-        predicted_final_rms_e: c.predicted_error(mu, t_end),
-        tail_trend: trend,
-        excitation: c.excitation.clone(),
-        advice,
+    ChannelDiagnostics::of(i, c, mu, (t_end, trend), advice)
+}
+
+impl ChannelDiagnostics {
+    /// Channel i's figures from its averaged law `c` at `mu` over `t_end`, with the run's tail trend
+    /// and the advice.
+    fn of(i: usize, c: &ChannelAverage, mu: f64, (t_end, trend): (f64, Option<f64>), advice: Vec<String>) -> Self {
+        ChannelDiagnostics {
+            channel: i + 1,
+            lambda_min_omega: c.lambda_min(),
+            lambda_max_omega: c.lambda_max(),
+            // λ_min below the excited floor is Ω̄'s rounding of a singular direction: ∞, as for 0.
+            convergence_time: if c.excited().count() < c.lambda.len() {
+                f64::INFINITY
+            } else {
+                1.0 / (mu * c.lambda_min())
+            },
+            adaptation_rate: mu * c.lambda_max(),
+            excited_rank: c.excited().count(),
+            lambda_min_excited_omega: c.excited().fold(f64::INFINITY, f64::min),
+            convergence_time_excited: 1.0 / (mu * c.excited().fold(f64::INFINITY, f64::min)),
+            predicted_final_rms_e: c.predicted_error(mu, t_end),
+            tail_trend: trend,
+            excitation: c.excitation.clone(),
+            advice,
+        }
     }
 }
 
