@@ -807,8 +807,9 @@ fn grid_tick(v: f64, scale: AxisScale, values: &[String], (x0, x1): (f64, f64)) 
     }
 }
 
-/// The bottom row of a 1-D sweep: per grid value, the share of its runs that diverged and that
-/// failed, in % (summary.json's `diverged_fraction`, `failed_fraction`).
+/// The bottom row of a 1-D sweep: per grid value, the share of its runs that diverged, failed and
+/// were stopped by `[runaway]`, in % (summary.json's `diverged_fraction`, `failed_fraction`,
+/// `stopped_fraction`).
 fn draw_outcomes_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     s: &quell::study::Summary,
@@ -839,6 +840,7 @@ fn draw_outcomes_panel<DB: DrawingBackend>(
     let shares = [
         ("diverged", s.points.iter().map(|p| p.diverged_fraction).collect::<Vec<_>>()),
         ("failed", s.points.iter().map(|p| p.failed_fraction).collect()),
+        ("stopped", s.points.iter().map(|p| p.stopped_fraction).collect()),
     ];
     for (k, (name, share)) in shares.into_iter().enumerate() {
         let pts: Vec<(f64, f64)> = s.points.iter().zip(share).map(|(p, f)| (x[p.point], 100.0 * f)).collect();

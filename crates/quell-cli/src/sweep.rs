@@ -191,11 +191,12 @@ pub(crate) fn thread_pool(jobs: Option<usize>, runs: usize) -> Result<rayon::Thr
 fn report(rows: &[Row], ran: usize, n: usize, seconds: f64, jobs: usize, out: &Path) {
     let count = |o: Outcome| rows.iter().filter(|r| r.outcome == o).count();
     eprintln!(
-        "{} of {n} runs: {} completed, {} diverged, {} failed; {seconds:.2} s on {jobs} thread{}{}; wrote {}",
+        "{} of {n} runs: {} completed, {} diverged, {} failed, {} stopped by [runaway]; {seconds:.2} s on {jobs} thread{}{}; wrote {}",
         rows.len(),
         count(Outcome::Completed),
         count(Outcome::Diverged),
         count(Outcome::Failed),
+        count(Outcome::Stopped),
         if jobs == 1 { "" } else { "s" },
         // Per run of this process (a resumed sweep's kept rows took no time here).
         match ran {

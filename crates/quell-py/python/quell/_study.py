@@ -127,8 +127,8 @@ class StudyResult:
         return self.study.spec(run).simulate()
 
     def worst(self, metric="tail_max_e"):
-        """The worst row by ``metric``: its largest value, a run that did not complete (diverged or
-        failed: the peaks it keeps are a runaway's) or has no figure (not settled, for ``settle_t``)
+        """The worst row by ``metric``: its largest value, a run that did not complete (diverged,
+        failed or stopped: the peaks it keeps are a runaway's) or has no figure (not settled, for ``settle_t``)
         counting as worse than any; the first on ties.
 
         Parameters

@@ -160,7 +160,8 @@ pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
             "completed" => Outcome::Completed,
             "diverged" => Outcome::Diverged,
             "failed" => Outcome::Failed,
-            o => return Err(at(format!("outcome: expected completed, diverged or failed, found `{o}`"))),
+            "stopped" => Outcome::Stopped,
+            o => return Err(at(format!("outcome: expected completed, diverged, failed or stopped, found `{o}`"))),
         };
         let first = 6 + g;
         // A completed run's figures are finite; a run that stopped has its peaks and empty (NaN)

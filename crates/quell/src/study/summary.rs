@@ -1,5 +1,5 @@
 //! Aggregation per grid point: quantiles of each channel's figures over the draws, and the
-//! fractions that diverged or failed (summary.json).
+//! fractions that diverged, failed or were stopped (summary.json).
 
 use serde::{Deserialize, Serialize};
 
@@ -80,6 +80,9 @@ pub struct PointSummary {
     pub completed: usize,
     pub diverged_fraction: f64,
     pub failed_fraction: f64,
+    /// Ended by a rule of `[runaway]` ([`super::Outcome::Stopped`]); 0 in a summary written before it.
+    #[serde(default)]
+    pub stopped_fraction: f64,
     pub channels: Vec<ChannelQuantiles>,
 }
 
@@ -212,6 +215,7 @@ impl Summary {
                     completed: done.len(),
                     diverged_fraction: frac(Outcome::Diverged),
                     failed_fraction: frac(Outcome::Failed),
+                    stopped_fraction: frac(Outcome::Stopped),
                     channels,
                 }
             })

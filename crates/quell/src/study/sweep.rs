@@ -100,6 +100,11 @@ pub enum Outcome {
     /// The run could not be carried out: its scenario or design is invalid (a draw or a combination
     /// of grid values made it so) or the solver's step underflowed.
     Failed,
+    /// A rule of `[runaway]` ended it early (a signal beyond `peak` × the nominal run's peak, or
+    /// more than `steps` × its steps): what a loop that blows up does, and what a converging loop
+    /// with a large transient may do too (a maglev 30 % off: 11 of the 13 draws the peak rule ended
+    /// converged without it), so not called diverged.
+    Stopped,
 }
 
 impl Outcome {
@@ -109,6 +114,7 @@ impl Outcome {
             Outcome::Completed => "completed",
             Outcome::Diverged => "diverged",
             Outcome::Failed => "failed",
+            Outcome::Stopped => "stopped",
         }
     }
 }
@@ -123,7 +129,7 @@ pub struct Row {
     /// The grid values as written in the study file (TOML syntax).
     pub grid: Vec<String>,
     pub outcome: Outcome,
-    /// Why a run diverged or failed; empty when it completed.
+    /// Why a run diverged, failed or was stopped; empty when it completed.
     pub reason: String,
     /// One per channel: the run's figures up to where it ended (a run that stopped early has NaN
     /// tails, written empty, and the peaks |u|, |u_f| it reached); empty where no run took place.
@@ -141,7 +147,7 @@ pub struct Row {
 }
 
 impl Row {
-    /// The figures of a completed run; none for a run that diverged or failed, whose tails were
+    /// The figures of a completed run; none for a run that diverged, failed or was stopped, whose tails were
     /// never reached and whose peaks are those of a runaway.
     pub fn completed(&self) -> &[ChannelFigures] {
         if self.outcome == Outcome::Completed {
@@ -285,6 +291,7 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                     row.outcome = Outcome::Diverged;
                     row.reason = format!("{signal} = {value:e} at t = {} {}", fmt_instant(*t), r.time_unit);
                     if let (Some(n), true) = (spec.nominal, value.abs() <= DIVERGENCE_BOUND) {
+                        row.outcome = Outcome::Stopped;
                         let group = Peaks::index_of(signal);
                         row.reason += &format!(
                             ": beyond {} × the peak of {} in the nominal run, {:.4e} (over its entries; runaway.peak)",
@@ -295,17 +302,8 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                     }
                 }
                 sim::Outcome::TooManySteps { t, max_steps } if runaway_steps == Some(*max_steps) => {
-                    let (n, extra) =
-                        spec.nominal.map_or((0, 0), |n| (n.steps, breakpoints.saturating_sub(n.breakpoints)));
-                    let base = if delay_floor > n {
-                        format!("the {delay_floor} steps this draw's shortest delay needs at least (a step is at most that delay)")
-                    } else {
-                        format!("the nominal run's {n} solver steps")
-                    };
-                    let scale = match extra {
-                        0 => base,
-                        _ => format!("({base} + the {extra} breakpoints this draw's delays add)"),
-                    };
+                    row.outcome = Outcome::Stopped;
+                    let scale = step_rule_scale(spec, breakpoints, delay_floor);
                     row.reason = format!(
                         "step budget: more than {} × {scale} ({max_steps}) by t = {} {} (the loop turned stiff: its signals grew well beyond the nominal run's; raise the study's runaway.steps if the run is sound)",
                         spec.runaway.steps,
@@ -324,6 +322,22 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
     // Whole microseconds, as runs.csv writes them, so a row reads back exactly.
     row.wall_ms = started.elapsed().as_micros() as f64 / 1e3;
     Some(row)
+}
+
+/// What the step rule of `[runaway]` multiplies, in words: the nominal run's steps, or the steps
+/// this draw's shortest delay forces where more (`delay_floor`), plus the breakpoints its delays add
+/// beyond the nominal run's.
+fn step_rule_scale(spec: &RunSpec, breakpoints: usize, delay_floor: usize) -> String {
+    let (n, extra) = spec.nominal.map_or((0, 0), |n| (n.steps, breakpoints.saturating_sub(n.breakpoints)));
+    let base = if delay_floor > n {
+        format!("the {delay_floor} steps this draw's shortest delay needs at least (a step is at most that delay)")
+    } else {
+        format!("the nominal run's {n} solver steps")
+    };
+    match extra {
+        0 => base,
+        _ => format!("({base} + the {extra} breakpoints this draw's delays add)"),
+    }
 }
 
 /// Carries out one run: its row (a diverging or invalid run is a row too, never an error).
