@@ -84,8 +84,13 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     }
     let set_by = if args.method.is_some() { "--method explicit" } else { quell::sim::EXPLICIT_IN_FILE };
     let run = Run::of(&scenario, &design).settings(settings.clone());
-    for w in
-        [quell::sim::explicit_stiff_warning(&run, set_by), quell::sim::fast_rate_warning(&run)].into_iter().flatten()
+    for w in [
+        quell::sim::explicit_stiff_warning(&run, set_by),
+        quell::sim::fast_rate_warning(&run),
+        csv_size_warning(&design, &settings),
+    ]
+    .into_iter()
+    .flatten()
     {
         eprintln!("⚠ warning: {w}");
     }
@@ -223,6 +228,25 @@ fn simulate(
     bar.finish_and_clear();
     Ok(result)
 }
+
+/// signals.csv's size where it passes [`LARGE_CSV`]: rows × numbers × about 20 bytes (the
+/// shortest digits that read back, and a comma), which the row and memory limits allow up to many
+/// gigabytes (a servo at an output step of 5e-7 s wrote 2.4 GB without a word).
+fn csv_size_warning(design: &quell::Design, settings: &quell::sim::RunSettings) -> Option<String> {
+    let (m, q, n) = (design.plant().m(), design.q(), design.plant().n());
+    let rows = (settings.t_end / settings.output_step).floor() + 1.0;
+    let numbers = 1 + 5 * m + m * q + if settings.record_states { 2 * n } else { 0 };
+    let bytes = rows * numbers as f64 * 20.0;
+    (bytes > LARGE_CSV).then(|| {
+        format!(
+            "signals.csv will hold {rows:.3e} rows of {numbers} numbers, about {:.1} GB; a longer simulation.output_step (--output-step) writes less",
+            bytes / 1e9
+        )
+    })
+}
+
+/// The size of signals.csv beyond which a run warns before it starts.
+const LARGE_CSV: f64 = 1e9;
 
 fn write_outputs(dir: &Path, done: &Finished<'_>, plots: bool) -> std::io::Result<()> {
     let r = done.result;

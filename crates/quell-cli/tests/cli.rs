@@ -1619,3 +1619,24 @@ fn a_report_cut_short_on_stdout_fails_and_a_closed_pipe_does_not() {
     let o = child.wait_with_output().unwrap();
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }
+
+/// A run whose signals.csv would pass 1 GB is warned of before it starts, with the size and the
+/// flag that writes less (a servo at an output step of 5e-7 s had written 2.4 GB without a word);
+/// here a step budget of 10 ends it at once.
+#[test]
+fn a_run_whose_signals_would_take_gigabytes_is_warned_of() {
+    let dir = temp_dir("big-csv");
+    let out = dir.path().display().to_string();
+    let args =
+        ["run", &paper(), "--output-step", "1e-5", "--t-end", "50", "--max-steps", "10", "--no-plots", "--out", &out];
+    let o = quell(&args);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    // 5e6 + 1 rows of 1 + 5·2 + 2·8 = 27 numbers, about 20 bytes each.
+    assert!(
+        stderr(&o).starts_with("⚠ warning: signals.csv will hold 5.000e6 rows of 27 numbers, about 2.7 GB; a longer simulation.output_step (--output-step) writes less"),
+        "{}",
+        stderr(&o)
+    );
+    let o = quell(&["run", &paper(), "--t-end", "1", "--no-plots", "--out", &out]);
+    assert!(!stderr(&o).contains("will hold"), "{}", stderr(&o));
+}

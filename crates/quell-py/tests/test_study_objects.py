@@ -153,6 +153,8 @@ def test_worst_counts_a_run_without_figures_as_worst():
     assert result.worst("tail_max_e1")["run"] == frame["tail_max_e1"].idxmax() and doctored.worst("tail_max_e")["run"] == 1
     # A diverged row keeps the actuator peaks it reached, but ranks as the worst by them too (a
     # small peak of a run stopped early had ranked it below completed runs).
+    # Every run completed: `reason` is still a text column (it had read as float, all NaN).
+    assert result.frame["reason"].dtype == object and not result.frame["reason"].str.contains("runaway").any()
     frame = result.frame.copy()
     smaller = int(frame["max_uf1"].idxmin())
     frame.loc[smaller, "outcome"] = "diverged"

@@ -210,7 +210,9 @@ def runs_frame(text, drawn=None):
         raise ImportError("quell.sweep needs pandas: pip install pandas") from e
     import io
 
-    frame = pd.read_csv(io.StringIO(text), comment="#")
+    # `reason` as text even where every run completed (all missing had read as float, and
+    # `frame.reason.str` failed on exactly the healthy studies).
+    frame = pd.read_csv(io.StringIO(text), comment="#", dtype={"reason": object})
     for name, values in (drawn or {}).items():
         frame[name] = values
     return frame

@@ -122,6 +122,7 @@ class TuneResult:
         import pandas as pd
 
         frame = pd.DataFrame(list(self._rows()), columns=list(COLUMNS))
+        frame["reason"] = frame["reason"].astype(object)  # text, also where every run completed
         frame.attrs["partial"] = self.partial
         return frame
 

@@ -194,19 +194,21 @@ fn agreeing_sample_time(
     design: &Design,
     sample_time: f64,
     continuous: &SimResult,
-) -> Option<(f64, Vec<ChannelDeparture>)> {
+) -> Result<(f64, Vec<ChannelDeparture>), u32> {
     let t_end = s.simulation.t_end;
     // The halvings' steps add up: T_s/2 … T_s/2^k take t_end/T_s·(2^(k+1) − 2) in all.
     let total = |k: u32| t_end / sample_time * f64::from((1u32 << (k + 1)) - 2);
-    (1..=HALVINGS).take_while(|&k| total(k) <= HALVING_STEPS).map(|k| sample_time / f64::from(1u32 << k)).find_map(
-        |T| {
+    let tried = (1..=HALVINGS).take_while(|&k| total(k) <= HALVING_STEPS).count() as u32;
+    (1..=tried)
+        .map(|k| sample_time / f64::from(1u32 << k))
+        .find_map(|T| {
             let settings = RunSettings { mode: Loop::Sampled { sample_time: T }, ..RunSettings::of(s) };
             let r = Run::of(s, design).settings(settings).simulate(|_| ControlFlow::Continue(())).ok()?;
             let channels =
                 departures(&r, continuous).filter(|_| matches!(r.outcome, None | Some(Outcome::Completed)))?;
             channels.iter().all(|c| !c.departed()).then_some((T, channels))
-        },
-    )
+        })
+        .ok_or(tried)
 }
 
 /// The advice on a sampled-data run of scenario `s`: where it departs from its continuous loop
@@ -351,6 +353,21 @@ pub(crate) fn effort_departure(
     channels.iter().any(driven).then(|| departed(&channels, driven) + without)
 }
 
+/// What the search of [`agreeing_sample_time`] tried before it gave up: `tried` halvings of
+/// `sample_time`, fewer than [`HALVINGS`] where [`HALVING_STEPS`] cut it short (a maglev told
+/// "halving up to 6 times did not bring the two together (or took more than 2e6 controller
+/// steps)" had been tried 3 times, and one fewer from T_s/2 found the sample time).
+fn halvings_tried(tried: u32, sample_time: f64, unit: crate::settings::TimeUnit) -> String {
+    let reached = fmt_short(sample_time / f64::from(1u32 << tried.min(31)));
+    match tried {
+        0 => format!("a halved T_s would take more than {HALVING_STEPS:.0e} controller steps, so none was tried"),
+        k if k < HALVINGS => format!(
+            "halving T_s {k} times, to {reached} {unit}, did not bring the two together (a shorter one would take more than {HALVING_STEPS:.0e} controller steps, so none was tried)"
+        ),
+        k => format!("halving T_s {k} times, to {reached} {unit}, did not bring the two together"),
+    }
+}
+
 /// What to do about a departure at `sample_time`: the halved sample time that agrees
 /// ([`agreeing_sample_time`]), or a design for that sample time.
 fn remedy(s: &crate::Scenario, design: &Design, (sample_time, effort): (f64, bool), continuous: &SimResult) -> String {
@@ -361,14 +378,15 @@ fn remedy(s: &crate::Scenario, design: &Design, (sample_time, effort): (f64, boo
         "or give slower design.channel_poles and design.observer_poles"
     };
     match agreeing_sample_time(s, design, sample_time, continuous) {
-        Some((T, c)) => format!(
+        Ok((T, c)) => format!(
             "at T_s = {} {unit} it stays within half of y's peak and twice u_f's (y within {}, u_f's peaks at most {}× the continuous ones): sample that fast, {design_for}",
             fmt_short(T),
             percent(c.iter().map(|c| c.y).fold(0.0, f64::max)),
             fmt_ratio(c.iter().map(|c| c.uf.0 / c.uf.1).fold(0.0, f64::max))
         ),
-        None => format!(
-            "halving T_s up to {HALVINGS} times did not bring the two together (or took more than {HALVING_STEPS:.0e} controller steps): {}",
+        Err(tried) => format!(
+            "{}: {}",
+            halvings_tried(tried, sample_time, unit),
             if effort {
                 "let the automatic design choose poles for the sample time (give the scenario simulation.sample_time)"
             } else {
@@ -413,4 +431,27 @@ pub fn sampled_transient(result: &SimResult) -> Vec<String> {
         })
     });
     lines.collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The search says how far it went, and why it stopped there.
+    #[test]
+    fn the_halvings_tried_are_named() {
+        let ms = crate::settings::TimeUnit::from_name("ms").unwrap();
+        assert_eq!(
+            halvings_tried(0, 0.02, ms),
+            "a halved T_s would take more than 2e6 controller steps, so none was tried"
+        );
+        assert_eq!(
+            halvings_tried(3, 0.02, ms),
+            "halving T_s 3 times, to 0.0025 ms, did not bring the two together (a shorter one would take more than 2e6 controller steps, so none was tried)"
+        );
+        assert_eq!(
+            halvings_tried(HALVINGS, 0.64, ms),
+            "halving T_s 6 times, to 0.01 ms, did not bring the two together"
+        );
+    }
 }
