@@ -1467,24 +1467,11 @@ fn a_design_whose_input_cancels_thousands_of_times_is_cautioned_before_it_is_sam
 /// was 413× its aim there, and a run then asked for μ that made its tail worse); the choice says so.
 #[test]
 fn mu_is_aimed_after_the_longest_delay() {
-    let doc: toml::Table = r#"
-[plant]
-A = [[0.0, 1.0, 0.0, 0.0], [0.0, -0.181818, 2.672727, 0.0], [0.0, 0.0, 0.0, 1.0], [0.0, -0.454545, 31.181818, 0.0]]
-B = [[0.0], [1.818182], [0.0], [4.545455]]
-C = [[1.0, 1.8333, -10.2, -2.3667]]
-D = [[0.0], [1.0], [0.0], [2.5]]
-Q = [[0.0]]
-delays = [20.0]
-[design]
-[reference]
-components = [ { bias = 0.2, harmonics = [{ amplitude = 0.1, frequency = 0.5 }] } ]
-[disturbance]
-components = [ { harmonics = [{ amplitude = 0.3, frequency = 2.0 }] } ]
-[simulation]
-t_end = 60.0
-"#
-    .parse()
-    .unwrap();
+    let text = data("cart-pendulum.toml")
+        .replace("delays = [0.02]", "delays = [20.0]")
+        .replace("frequency = 200.0", "frequency = 2.0")
+        .replace("t_end = 10.0", "t_end = 60.0");
+    let doc = without_design(&text);
     let auto = auto_design(&doc, &Targets::default()).unwrap();
     assert_eq!(auto.verification.convergence_time, 40.0);
     let mu = auto.choices.iter().find(|c| c.key == "design.mu").unwrap();

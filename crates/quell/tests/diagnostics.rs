@@ -962,34 +962,12 @@ fn a_noisy_tail_within_its_bound_is_not_told_to_shrink() {
     assert!(whole.channels.iter().all(|c| !shrinking(&c.advice)), "{whole:?}");
 }
 
-/// A cart–pendulum (the CTMS model: M = 0.5 kg, m = 0.2 kg, b = 0.1, l = 0.3 m, I = 0.006; the output
-/// s = x + 1.8333 ẋ − 10.2 φ − 2.3667 φ̇ has zeros −1, −2, −3), its automatic design, pushed at 200 rad/s.
-const PENDULUM: &str = r#"
-[plant]
-A = [[0.0, 1.0, 0.0, 0.0], [0.0, -0.181818, 2.672727, 0.0], [0.0, 0.0, 0.0, 1.0], [0.0, -0.454545, 31.181818, 0.0]]
-B = [[0.0], [1.818182], [0.0], [4.545455]]
-C = [[1.0, 1.8333, -10.2, -2.3667]]
-D = [[0.0], [1.0], [0.0], [2.5]]
-Q = [[0.0]]
-delays = [0.02]
-[design]
-observer_poles = [-1.000085679164434, -1.999828873465962, -2.999914023695998, -16.81228226]
-channel_poles = [[-11.20818817]]
-reference_filter_poles = [[-0.5, -0.75, -1.125]]
-disturbance_filter_poles = [[-1.632993162, -2.449489743]]
-mu = [4055.804900833981]
-beta = 2.0
-regressor_scaling = "normalized"
-[reference]
-components = [ { bias = 0.2, harmonics = [{ amplitude = 0.1, frequency = 0.5 }] } ]
-[disturbance]
-components = [ { harmonics = [{ amplitude = 0.3, frequency = 200.0 }] } ]
-[simulation]
-t_end = 10.0
-"#;
+/// A cart–pendulum (the CTMS model; the output's zeros −1, −2, −3), its automatic design, pushed
+/// at 200 rad/s (tests/data/cart-pendulum.toml).
+const PENDULUM: &str = include_str!("data/cart-pendulum.toml");
 
-/// The cart–pendulum ([`PENDULUM`]) pushed at 200 rad/s, its observer holding the zeros of (A, D, C) and a fourth pole at −16.8: with one output L is fixed
-/// by its poles, so what stays is that pole's speed, not "the placed eigenvectors" (the advice's
+/// The cart–pendulum ([`PENDULUM`]) pushed at 200 rad/s, its observer holding the zeros of
+/// (A, D, C) and a fourth pole at −16.8: with one output L is fixed by its poles, so what stays is that pole's speed, not "the placed eigenvectors" (the advice's
 /// reason for m > 1, which it had given here). The advice keeps the zeros and speeds up the rest,
 /// and the averaged loop with its poles passes ω within 0.1.
 #[test]
