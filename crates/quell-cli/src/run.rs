@@ -84,6 +84,8 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     }
     let set_by = if args.method.is_some() { "--method explicit" } else { quell::sim::EXPLICIT_IN_FILE };
     let run = Run::of(&scenario, &design).settings(settings.clone());
+    // Before the output directory is touched (one refused for its memory budget had been created).
+    run.check().map_err(|e| Failure::Input(e.to_string()))?;
     for w in [
         quell::sim::explicit_stiff_warning(&run, set_by),
         quell::sim::fast_rate_warning(&run),

@@ -1639,4 +1639,9 @@ fn a_run_whose_signals_would_take_gigabytes_is_warned_of() {
     );
     let o = quell(&["run", &paper(), "--t-end", "1", "--no-plots", "--out", &out]);
     assert!(!stderr(&o).contains("will hold"), "{}", stderr(&o));
+    // One refused for the memory its rows take is refused before its --out is made.
+    let fresh = dir.path().join("fresh").display().to_string();
+    let o = quell(&["run", &paper(), "--output-step", "1.005e-5", "--no-plots", "--out", &fresh]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("GiB of recorded signals") && !Path::new(&fresh).exists(), "{}", stderr(&o));
 }
