@@ -25,7 +25,7 @@ pub struct DesignArgs {
     #[arg(long, value_name = "OUT.toml")]
     pub write: Option<PathBuf>,
     /// With --auto: when the error should be down to 0.2 % of the reference's peak, the target μ is
-    /// chosen for by the averaged law (in the plant's unit of time; default simulation.t_end/20, or twice the longest delay where later);
+    /// chosen for by the averaged law (in the plant's unit of time; default simulation.t_end/20);
     /// the verification reports the run's error there.
     #[arg(long, value_name = "TIME", allow_hyphen_values = true, value_parser = crate::parse_real)]
     pub convergence_time: Option<f64>,

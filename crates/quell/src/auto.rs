@@ -90,14 +90,6 @@ const MAX_SAMPLED_HALVINGS: usize = 10;
 /// lag, the delays and the swapping error and is optimistic (a factor 4 on the paper's example);
 /// aiming at half the horizon left tails 1e3–1e5 times those of μ ×10 on the shipped examples.
 const DEFAULT_CONVERGENCE: f64 = 20.0;
-
-/// The convergence time μ is chosen for without a target: t_end / [`DEFAULT_CONVERGENCE`], or twice
-/// the longest input delay where that is later (no command reaches the plant before τ: a
-/// pendulum's 20 ms delay typed as 20 s in a 60 s run had μ aimed at 3 s, 413× the aim there).
-fn default_convergence_time(s: &Scenario) -> f64 {
-    let tau = s.plant.delays.iter().copied().fold(0.0, f64::max);
-    (s.simulation.t_end / DEFAULT_CONVERGENCE).max(2.0 * tau).min(s.simulation.t_end)
-}
 /// β is at most t_end / this: H's lag then leaves most of the horizon to converge.
 const BETA_HORIZON: f64 = 10.0;
 /// The horizon the adaptive law needs to tell the two closest frequencies apart, in beats 2π/gap:
@@ -134,7 +126,7 @@ const FIDELITY_SLACK: f64 = 1.5;
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Targets {
     /// When the averaged law should have brought the error to 0.2 % of the reference's peak (s);
-    /// default: t_end/20, or twice the longest input delay where that is later.
+    /// default: t_end/20.
     pub convergence_time: Option<f64>,
     /// Actuator limits on |u_f,i|, the plant input u_f = −K x̂ + F u_d (5) the actuator delivers:
     /// none (empty), one for every input, or one per input (inputs in different units: a
@@ -200,8 +192,7 @@ pub struct Verification {
     /// Per input, the share of the kept run's samples that the true actuator's limit clipped
     /// (`[truth] u_max`; empty without one): a design verified through a saturating actuator.
     pub limited_fraction: Vec<f64>,
-    /// The convergence time t_c μ was chosen for ([`Targets::convergence_time`], default t_end/20 or
-    /// twice the longest delay).
+    /// The convergence time t_c μ was chosen for ([`Targets::convergence_time`], default t_end/20).
     pub convergence_time: f64,
     /// The RMS error μ_i aims at by t_c (0.2 % of the reference's peak; NaN for a reference of
     /// peak 0, where the aim is the open loop's) and what the kept run had over [0.9, 1.1]·t_c: the
@@ -407,7 +398,7 @@ struct Verifier<'p> {
     /// Accepted solver steps (controller steps when sampled) of every run so far.
     steps: usize,
     progress: &'p mut dyn FnMut(&Progress) -> ControlFlow<()>,
-    /// The convergence time μ is chosen for ([`Targets::convergence_time`], or its default).
+    /// The convergence time μ is chosen for ([`Targets::convergence_time`], or t_end/20).
     convergence_time: Option<f64>,
 }
 
@@ -447,10 +438,10 @@ impl Verifier<'_> {
 }
 
 /// The candidate at `speed` from its verifying run `r` of `scenario`; its RMS errors over
-/// [0.9, 1.1]·t_c about the convergence time t_c (`convergence_time`, or its default).
+/// [0.9, 1.1]·t_c about the convergence time t_c (`convergence_time`, default t_end/20).
 fn candidate(scenario: &Scenario, r: &crate::sim::SimResult, speed: Speed, convergence_time: Option<f64>) -> Candidate {
     let t_end = scenario.simulation.t_end;
-    let t_c = convergence_time.unwrap_or_else(|| default_convergence_time(scenario));
+    let t_c = convergence_time.unwrap_or(t_end / DEFAULT_CONVERGENCE);
     let m = scenario.plant.m();
     let tail_from = r.tail_from().unwrap_or(0.9 * t_end);
     let tail_max_e = (0..m).map(|i| r.max_abs_error(i, tail_from, t_end).unwrap_or(f64::NAN)).collect();
@@ -994,7 +985,7 @@ fn finish(
     advice: Vec<String>,
 ) -> AutoDesign {
     let speed = c.speed;
-    let convergence_time = convergence_time.unwrap_or_else(|| default_convergence_time(&p.scenario));
+    let convergence_time = convergence_time.unwrap_or(p.scenario.simulation.t_end / DEFAULT_CONVERGENCE);
     let aim_at_convergence = p.scenario.reference.components.iter().map(|g| match g.peak() {
         peak if peak > 0.0 => AIM * peak,
         _ => f64::NAN,
@@ -1959,7 +1950,7 @@ fn rate_caps(s: &Scenario, design: &Design, r: f64) -> (f64, f64) {
 /// is ≤ 0.2 % of the reference's peak, capped by [`rate_caps`]; with the retries' cap on μ_i.
 fn choose_mu(s: &Scenario, design: &Design, targets: &Targets, r: f64) -> (Vec<f64>, Vec<f64>, String) {
     let avg = Averaged::new(design, &s.reference, &s.disturbance);
-    let t_c = targets.convergence_time.unwrap_or_else(|| default_convergence_time(s));
+    let t_c = targets.convergence_time.unwrap_or(s.simulation.t_end / DEFAULT_CONVERGENCE);
     let (max_rate, retry_rate) = rate_caps(s, design, r);
     let unit = s.plant.time_unit;
     let mut notes = Vec::new();
@@ -1996,11 +1987,7 @@ fn choose_mu(s: &Scenario, design: &Design, targets: &Targets, r: f64) -> (Vec<f
         .unzip();
     let why = format!(
         "the smallest μ_i for which the averaged adaptive law (η̃' = −μ Ω̄ η̃) predicts an RMS error ≤ 0.2 % of the reference's peak by t = {t_c:.4e} {unit} ({}), with μ_i λ_max(Ω̄_i) ≤ {max_rate:.4e}/{unit} (the smaller of {MAX_RATE_PER_SCALE}·r and a {STIFF_MARGIN}th of the stiffness threshold {STIFF_RATIO}·ρ){}",
-        match targets.convergence_time {
-            Some(_) => "the target convergence time",
-            None if t_c > s.simulation.t_end / DEFAULT_CONVERGENCE => "twice the longest input delay, later than t_end/20",
-            None => "t_end/20",
-        },
+        if targets.convergence_time.is_some() { "the target convergence time" } else { "t_end/20" },
         if notes.is_empty() { String::new() } else { format!("; {}", notes.join("; ")) }
     );
     (mu, caps, why)

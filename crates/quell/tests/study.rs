@@ -348,6 +348,10 @@ fn a_runaway_draw_is_stopped_early_and_converging_draws_are_untouched() {
     write_runs_csv(&mut csv, &meta, &on, false).unwrap();
     let back = read_runs_csv(std::str::from_utf8(&csv).unwrap(), &meta).unwrap().rows;
     assert_eq!(format!("{:?}", back[7].channels), format!("{:?}", r.channels));
+    // A runs.csv written before `stopped` (the peak rule's row read `diverged`) reads as today's,
+    // so a shard or journal of then merges or resumes beside today's rows.
+    let old = std::str::from_utf8(&csv).unwrap().replace(",stopped,", ",diverged,");
+    assert_eq!(read_runs_csv(&old, &meta).unwrap().rows[7].outcome, Outcome::Stopped);
 
     // With the peak rule off, the relative step budget ends it: stopped, at 1.5 × the nominal steps
     // (at 3 × it reaches the divergence bound first, which the watch at every step end now sees).
@@ -586,4 +590,32 @@ fn a_run_ended_by_a_rate_far_faster_than_the_loop_names_it() {
     let row = &sweep(&tight, &SweepOptions::default()).rows[0];
     assert_eq!(row.outcome, Outcome::Failed);
     assert!(!row.reason.contains("fastest rate"), "{}", row.reason);
+}
+
+/// The paper's loop with its states in 1e8 times their units (B, D and L × 1e8, C × 1e-8: the
+/// same loop), its draws 30 % off in A: the peak rule stops the same draws as in the plant's own
+/// units, and calls none diverged (its limits, 100 × nominal peaks of 1e9 and more, had been taken
+/// for divergence by a fixed 1e9: 12 of 40).
+#[test]
+fn the_peak_rule_stops_the_same_draws_in_any_units_of_the_state() {
+    let scaled = quell::scenario::PAPER_EXAMPLE
+        .replace("B = [[-2.0, 1.0], [2.0, -1.0], [1.0, 0.0]]", "B = [[-2.0e8, 1.0e8], [2.0e8, -1.0e8], [1.0e8, 0.0]]")
+        .replace("C = [[2.0, 2.0, 0.0], [2.0, 1.0, 2.0]]", "C = [[2.0e-8, 2.0e-8, 0.0], [2.0e-8, 1.0e-8, 2.0e-8]]")
+        .replace("D = [[1.0, -3.0], [2.0, 1.0], [3.0, 1.0]]", "D = [[1.0e8, -3.0e8], [2.0e8, 1.0e8], [3.0e8, 1.0e8]]")
+        .replace(
+            "observer_gain = [[-8.0988, 4.4574], [10.6506, -5.0619], [2.7762, -1.1783]]",
+            "observer_gain = [[-8.0988e8, 4.4574e8], [10.6506e8, -5.0619e8], [2.7762e8, -1.1783e8]]",
+        );
+    assert_eq!((scaled.matches("e8").count(), scaled.matches("e-8").count()), (17, 5), "every edit applied");
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("paper.toml"), quell::scenario::PAPER_EXAMPLE).unwrap();
+    std::fs::write(dir.path().join("scaled.toml"), scaled).unwrap();
+    let outcomes = |file: &str| {
+        let text = format!("scenario = \"{file}\"\n[simulation]\nt_end = 40.0\nrtol = 1e-6\natol = 1e-6\n[monte_carlo]\nruns = 16\nseed = 1\n\"truth.A\" = {{ relative = 0.3 }}\n");
+        let study = Study::from_toml(&text, Some(dir.path())).unwrap();
+        sweep(&study, &SweepOptions::default()).rows.iter().map(|r| r.outcome).collect::<Vec<_>>()
+    };
+    let (own, scaled) = (outcomes("paper.toml"), outcomes("scaled.toml"));
+    assert!(own.contains(&Outcome::Stopped) && !own.contains(&Outcome::Diverged), "{own:?}");
+    assert_eq!(scaled, own);
 }

@@ -267,28 +267,34 @@ impl<'a> Run<'a> {
         closed_loop::loop_delays(self.design.plant(), self.truth, self.settings.actuator.as_ref())
     }
 
-    /// The bound per watched signal (x, x̂, ξ̂, η̂): `divergence_bound`, times the state's scale in
-    /// its coordinates for x and x̂ ([`divergence::state_scale`], or their nominal size under the
-    /// signals where that is beyond 1e6, [`divergence::nominal_factor`]) and by the regressor's and
-    /// the parameters' nominal sizes beyond 1e6 for ξ̂ and η̂ ([`divergence::regressor_scales`]; not
-    /// computed where `runaway` bounds every signal below `divergence_bound`), and at most `runaway`'s.
+    /// The bound per watched signal (x, x̂, ξ̂, η̂) without `runaway`'s: `divergence_bound`, times
+    /// the state's scale in its coordinates for x and x̂ ([`divergence::state_scale`], or their
+    /// nominal size under the signals where that is beyond 1e6, [`divergence::nominal_factor`]) and
+    /// by the regressor's and the parameters' nominal sizes beyond 1e6 for ξ̂ and η̂
+    /// ([`divergence::regressor_scales`]). A watched value within these that ended a run was
+    /// stopped by a `runaway` limit, not by divergence.
+    pub fn divergence_bounds(&self) -> Peaks {
+        let b = self.settings.divergence_bound;
+        let avg = self.averaged();
+        let (xi, eta) = divergence::regressor_scales(avg);
+        let x = b * divergence::nominal_factor(avg.x_peak);
+        let scale = divergence::state_scale;
+        Peaks([(b * scale(self.truth)).max(x), (b * scale(self.design.plant())).max(x), b * xi, b * eta])
+    }
+
+    /// [`Run::divergence_bounds`], at most `runaway`'s; where `runaway` bounds every signal below
+    /// `divergence_bound`, the averaged law they need is not computed (a Monte Carlo draw's).
     fn bounds(&self) -> Peaks {
         let b = self.settings.divergence_bound;
-        let scale = divergence::state_scale;
-        let mut bounds = [b * scale(self.truth), b * scale(self.design.plant()), b, b];
-        if self.settings.runaway.is_none_or(|r| r.0.iter().any(|&r| r > b)) {
-            let avg = self.averaged();
-            let (xi, eta) = divergence::regressor_scales(avg);
-            let x = divergence::nominal_factor(avg.x_peak);
-            (bounds[0], bounds[1]) = (bounds[0].max(b * x), bounds[1].max(b * x));
-            (bounds[2], bounds[3]) = (b * xi, b * eta);
-        }
-        if let Some(r) = self.settings.runaway {
-            for (bound, runaway) in bounds.iter_mut().zip(r.0) {
-                *bound = bound.min(runaway);
+        match self.settings.runaway {
+            // Every absolute bound is at least b, so the runaway limits decide alone.
+            Some(r) if r.0.iter().all(|&r| r <= b) => r,
+            Some(r) => {
+                let d = self.divergence_bounds();
+                Peaks(std::array::from_fn(|k| d.0[k].min(r.0[k])))
             }
+            None => self.divergence_bounds(),
         }
-        Peaks(bounds)
     }
 
     /// The averaged law of the design under the run's signals ([`crate::averaged`]).

@@ -108,6 +108,30 @@ fn split(line: &str) -> Result<Vec<String>, String> {
     Ok(out)
 }
 
+/// A row's outcome from its word and its reason ([`stopped_before_2026_12_06`]).
+fn outcome(word: &str, reason: &str) -> Result<Outcome, String> {
+    let outcome = match word {
+        "completed" => Outcome::Completed,
+        "diverged" => Outcome::Diverged,
+        "failed" => Outcome::Failed,
+        "stopped" => Outcome::Stopped,
+        o => return Err(format!("outcome: expected completed, diverged, failed or stopped, found `{o}`")),
+    };
+    Ok(if stopped_before_2026_12_06(outcome, reason) { Outcome::Stopped } else { outcome })
+}
+
+/// A row written before runs a `[runaway]` rule ended had their own outcome: `diverged` (the peak
+/// rule) or `failed` (the step rule), known by their reasons, which are unchanged; read as
+/// `stopped`, so that a shard or a journal of then merges or resumes beside today's rows without
+/// two names for one thing.
+fn stopped_before_2026_12_06(outcome: Outcome, reason: &str) -> bool {
+    match outcome {
+        Outcome::Diverged => reason.contains("(over its entries; runaway.peak)"),
+        Outcome::Failed => reason.starts_with("step budget: more than ") && reason.contains("runaway.steps"),
+        _ => false,
+    }
+}
+
 /// A runs.csv read back.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RunsFile {
@@ -156,13 +180,7 @@ pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
                 }
             })
         };
-        let outcome = match f[4 + g].as_str() {
-            "completed" => Outcome::Completed,
-            "diverged" => Outcome::Diverged,
-            "failed" => Outcome::Failed,
-            "stopped" => Outcome::Stopped,
-            o => return Err(at(format!("outcome: expected completed, diverged, failed or stopped, found `{o}`"))),
-        };
+        let outcome = outcome(&f[4 + g], &f[5 + g]).map_err(at)?;
         let first = 6 + g;
         // A completed run's figures are finite; a run that stopped has its peaks and empty (NaN)
         // tails; one that never started (an invalid draw) has none.

@@ -11,7 +11,7 @@ use super::{Nominal, Runaway, Settle, Study};
 use crate::hash::{mix64, GOLDEN_GAMMA};
 use crate::scenario::Scenario;
 use crate::settings::fmt_instant;
-use crate::sim::{self, ChannelFigures, Loop, Peaks, Run, RunSettings, SimResult, DIVERGENCE_BOUND};
+use crate::sim::{self, ChannelFigures, Loop, Peaks, Run, RunSettings, SimResult};
 
 /// The seed of Monte Carlo draw `draw` of a study with seed `study_seed`. It depends on nothing
 /// else, so a run can be carried out alone (on any machine, in any order), and draw d perturbs the
@@ -184,6 +184,9 @@ pub(crate) struct Simulated {
     pub explicit_stiff: bool,
     /// For a run its step budget or the history's cap ended, [`sim::fast_rate_culprit`].
     pub fast_rate: Option<String>,
+    /// A run ended as diverged within its divergence bounds ([`Run::divergence_bounds`]): a
+    /// `[runaway]` peak limit stopped it.
+    pub peak_rule: bool,
 }
 
 /// Simulates a scenario as its `[simulation]` says ([`Run::of`]), a continuous run within the
@@ -219,6 +222,7 @@ pub(crate) fn simulate(
         runaway_steps = limits.map(|l| l.0).filter(|&l| l == budget && max_steps.is_none_or(|given| l < given));
         settings.runaway = limits.map(|(_, peaks)| peaks);
     }
+    let limits_set = settings.runaway.is_some();
     let progress = |_t: f64| if stop() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
     let run = run.settings(settings);
     // A stop while waiting for memory lets the run start and end at its first progress check.
@@ -230,7 +234,16 @@ pub(crate) fn simulate(
     // faster than the loop may be why.
     let by_runaway = matches!(result.outcome, Some(sim::Outcome::TooManySteps { max_steps, .. }) if runaway_steps == Some(max_steps));
     let fast_rate = (!by_runaway).then(|| sim::budget_culprit(&Run::of(s, &design), result.outcome.as_ref())).flatten();
-    Ok(Simulated { result, memory, waited, shape, runaway_steps, explicit_stiff, fast_rate })
+    // Which limit ended a diverged run, by its absolute bounds (computed only here: a Monte Carlo
+    // draw skips the averaged law they need). A fixed 1e9 had called a rule's stop on a plant in
+    // small units a divergence.
+    let peak_rule = match &result.outcome {
+        Some(sim::Outcome::Diverged { signal, value, .. }) if limits_set => {
+            value.is_finite() && value.abs() <= Run::of(s, &design).divergence_bounds().0[Peaks::index_of(signal)]
+        }
+        _ => false,
+    };
+    Ok(Simulated { result, memory, waited, shape, runaway_steps, explicit_stiff, fast_rate, peak_rule })
 }
 
 /// A grid value as runs.csv writes it: numbers in [`super::csv_number`]'s shortest round-trip form
@@ -278,6 +291,7 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
             waited,
             explicit_stiff,
             fast_rate,
+            peak_rule,
         }) => {
             // The wait for memory is not the run's time.
             started += waited;
@@ -290,7 +304,7 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                 sim::Outcome::Diverged { t, signal, value } => {
                     row.outcome = Outcome::Diverged;
                     row.reason = format!("{signal} = {value:e} at t = {} {}", fmt_instant(*t), r.time_unit);
-                    if let (Some(n), true) = (spec.nominal, value.abs() <= DIVERGENCE_BOUND) {
+                    if let (Some(n), true) = (spec.nominal, peak_rule) {
                         row.outcome = Outcome::Stopped;
                         let group = Peaks::index_of(signal);
                         row.reason += &format!(
