@@ -764,7 +764,12 @@ fn sweep_1d_rows(s: &quell::study::Summary) -> usize {
 fn grid_span(x: &[f64], scale: AxisScale) -> (f64, f64) {
     let (x0, x1) = x.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
     let half = if scale == AxisScale::Linear && x0 != 0.0 { 0.5 * x0.abs() } else { 1.0 };
-    if x0 < x1 {
+    if x0 < x1 && scale == AxisScale::Linear {
+        // A hair wider, so that the end values are ticks: 3.3 / 0.1 rounds below 33, and a grid from
+        // 2.7 to 3.3 had no label at its last point.
+        let hair = 1e-9 * (x1 - x0);
+        (x0 - hair, x1 + hair)
+    } else if x0 < x1 {
         (x0, x1)
     } else {
         (x0 - half, x0 + half)
@@ -787,7 +792,8 @@ fn grid_right_margin(scale: AxisScale, values: &[String]) -> u32 {
 /// How many ticks a grid axis of `scale` over `n` values asks for.
 fn grid_labels(scale: AxisScale, n: usize) -> usize {
     match scale {
-        AxisScale::Linear => 6,
+        // As many as the grid has values (up to 12), so that a tick can fall on each.
+        AxisScale::Linear => n.clamp(6, 12),
         AxisScale::Log => 12,
         AxisScale::Positions => n.min(12),
     }

@@ -661,3 +661,17 @@ fn a_tuning_on_dop853_reaching_a_stiff_mu_is_cautioned() {
     );
     assert!(tune(&other).contains("⚠ warning: channel 1's search runs μ = [20, 1000]: "));
 }
+
+/// A linear grid has a tick at each of its values, ends included: from 2.7 to 3.3 in steps of 0.1
+/// the last point had no label (3.3 / 0.1 rounds below 33, and six ticks were asked for seven
+/// values).
+#[test]
+fn a_linear_grid_is_labelled_at_every_value() {
+    let study = "[simulation]\nt_end = 2.0\nrtol = 1e-6\natol = 1e-6\n[grid]\n\"truth.delays[1]\" = [2.7, 2.8, 2.9, 3.0, 3.1, 3.2, 3.3]\n";
+    let (_dir, svg) = sweep_figure("linear-ticks", study);
+    // plotters writes a label's text on a line of its own.
+    let labels: Vec<&str> = svg.lines().map(str::trim).collect();
+    for v in ["2.7", "2.8", "2.9", "3.1", "3.2", "3.3"] {
+        assert_eq!(labels.iter().filter(|l| **l == v).count(), 8, "the tick label {v} in each of the 8 panels");
+    }
+}
