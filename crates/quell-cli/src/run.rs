@@ -148,7 +148,7 @@ fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result
         run.check().map_err(|e| match args.sample_time {
             // The flag, not the file's key, made the output step invalid: name both.
             Some(t) if e.to_string().starts_with("simulation.output_step:") => {
-                output_step_error(design, t, scenario.simulation.output_step)
+                output_step_error(design, t, scenario.simulation.output_step, args.output_step.is_some())
             }
             _ => Failure::Input(e.to_string()),
         })?;
@@ -171,14 +171,17 @@ fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result
     Ok(settings)
 }
 
-/// `--sample-time T` against the file's `simulation.output_step` h, which is not a whole number ≥ 1
+/// `--sample-time T` against `simulation.output_step` h (the file's, or `--output-step`'s: `flag`), which is not a whole number ≥ 1
 /// of samples (every recorded row is a controller step): the error names the flag and the key,
 /// with the nearest fix on either side.
-fn output_step_error(design: &Design, T: f64, h: f64) -> Failure {
+fn output_step_error(design: &Design, T: f64, h: f64, flag: bool) -> Failure {
     let (ratio, s) = (h / T, design.plant().time_unit);
     let (divisor, multiple) = quell::sim::output_step_fixes(design, T, h);
+    // Where --output-step gave it, the key is named with the flag ([`crate::in_flags`]); it had
+    // said "from the scenario file".
+    let from = if flag { "" } else { " (from the scenario file)" };
     Failure::Input(format!(
-        "--sample-time {}: simulation.output_step = {} {s} (from the scenario file) is not a whole number of samples of {} {s} ({ratio:.6} samples; each recorded row is a controller step); give a --sample-time that divides it, e.g. {} {s}, or set simulation.output_step to a multiple of the sample time, e.g. {} {s}",
+        "--sample-time {}: simulation.output_step = {} {s}{from} is not a whole number of samples of {} {s} ({ratio:.6} samples; each recorded row is a controller step); give a --sample-time that divides it, e.g. {} {s}, or set simulation.output_step to a multiple of the sample time, e.g. {} {s}",
         short(T),
         short(h),
         short(T),

@@ -527,6 +527,21 @@ fn run_sample_time_flag_the_output_step_is_not_a_multiple_of_names_both() {
         assert!(err.contains(&format!("multiple of the sample time, e.g. {multiple}")), "{err}");
         assert!(!out.exists(), "--out was touched");
     }
+    // An output step given by --output-step is named as the flag's (it had read "from the scenario file").
+    let err = input_error(&[
+        "run",
+        "--sample-time",
+        "0.2",
+        "--output-step",
+        "0.3",
+        "--no-plots",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        err.starts_with("error: --sample-time 0.2: simulation.output_step (--output-step) = 0.3 s is not"),
+        "{err}"
+    );
     // A divisor of the output step is accepted (0.025 s: 4 samples a row, delays 40 and 120 samples).
     let o = quell(&["run", "--sample-time", "0.025", "--no-plots", "--out", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));

@@ -199,6 +199,14 @@ fn quantiles_match_numpy() {
     assert_eq!(quantile(&[], 0.5), None);
     let settle = Quantiles::of(vec![1.0, 2.0, f64::INFINITY, f64::INFINITY]);
     assert_eq!((settle.p25, settle.p50, settle.max), (Some(1.75), None, None));
+    // The median of 15 settling times, 7 never (+∞): the 8th, 94.8 (numpy.quantile gives NaN from
+    // 0·∞; the level falls on a value, which is the quantile). 8 settled of 16: between the 8th
+    // and the first ∞, none.
+    let mut times: Vec<f64> = (1..=8).map(|k| 87.0 + f64::from(k) * 0.975).collect();
+    times.extend([f64::INFINITY; 7]);
+    assert_eq!(Quantiles::of(times.clone()).p50, Some(94.8));
+    times.push(f64::INFINITY);
+    assert_eq!(Quantiles::of(times).p50, None);
 }
 
 #[test]
