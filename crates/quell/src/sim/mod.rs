@@ -268,10 +268,10 @@ impl<'a> Run<'a> {
     }
 
     /// The bound per watched signal (x, x̂, ξ̂, η̂) without `runaway`'s: `divergence_bound`, times
-    /// the state's scale in its coordinates for x and x̂ ([`divergence::state_scale`], or their
-    /// nominal size under the signals where that is beyond 1e6, [`divergence::nominal_factor`]) and
-    /// by the regressor's and the parameters' nominal sizes beyond 1e6 for ξ̂ and η̂
-    /// ([`divergence::regressor_scales`]). A watched value within these that ended a run was
+    /// the state's scale in its coordinates for x and x̂ (max(1, |x(0)|, 1/σ_min(C)), or 1e-6 ×
+    /// their nominal size under the signals where that is larger) and the regressor's and the
+    /// parameters' nominal sizes beyond 1e6 for ξ̂ and η̂ (a thousandfold margin over them;
+    /// docs/errors.md, "Faults during a run"). A watched value within these that ended a run was
     /// stopped by a `runaway` limit, not by divergence.
     pub fn divergence_bounds(&self) -> Peaks {
         let b = self.settings.divergence_bound;
