@@ -98,3 +98,26 @@ fn a_sample_time_from_the_file_is_not_blamed_on_the_flag() {
     let from_flag = run(&["--sample-time", "0.3"]);
     assert!(from_flag.starts_with("error: simulation.sample_time (--sample-time): channel 1's delay"), "{from_flag}");
 }
+
+/// A run that stopped early plots |e(t)| itself on its log panel, where the largest error from t on
+/// is its last spike's everywhere (a flat line: the blow-up's onset could not be seen); a run that
+/// completes keeps the largest error from t on.
+#[test]
+fn a_diverged_runs_log_panel_shows_the_growth() {
+    let dir_tmp = scratch_dir("diverge-figure");
+    let dir = dir_tmp.path();
+    let scenario = paper_with(dir, &[("output_step = 0.1 ", "output_step = 0.5 ")]);
+    let out = dir.join("out");
+    let (output, stderr) = run_quell(&["run", "--sample-time", "0.5", "--out"], &out, &scenario);
+    assert_eq!(output.status.code(), Some(1), "stderr: {stderr}");
+    let svg = std::fs::read_to_string(out.join("channel1.svg")).unwrap();
+    assert!(
+        svg.contains("Channel 1: tracking error |e(t)|, log scale (the run stopped early: its growth)"),
+        "the log panel's title"
+    );
+    assert!(!svg.contains("largest tracking error from t on"));
+    let (output, stderr) = run_quell(&["run", "--t-end", "5", "--out"], &out, &scenario);
+    assert_eq!(output.status.code(), Some(0), "stderr: {stderr}");
+    let svg = std::fs::read_to_string(out.join("channel1.svg")).unwrap();
+    assert!(svg.contains("largest tracking error from t on, log scale"));
+}

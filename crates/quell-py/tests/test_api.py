@@ -330,3 +330,20 @@ def test_a_plot_of_many_parameters_names_their_range_in_the_title():
     assert len(eta.lines) == 75 and eta.get_legend() is None
     assert eta.get_title().endswith(": adjustable parameters (33), η1_1 … η1_75 in the palette's order"), eta.get_title()
     matplotlib.pyplot.close(fig)
+
+
+def test_a_stopped_runs_log_panel_shows_the_growth():
+    """A run that diverged plots |e(t)| on its log panel (the largest error from t on is its last
+    spike's everywhere), as the CLI's figure; its values are |e| itself."""
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    text = (EXAMPLES / "paper.toml").read_text().replace("output_step = 0.1 ", "output_step = 0.5 ")
+    with pytest.warns(UserWarning, match=r"^sample_time: T_s = 0.5 s is 4.50 of the loop's fastest time constant"):
+        r = quell.simulate(quell.Scenario.from_toml(text), sample_time=0.5, check=False)
+    assert r.outcome["status"] == "diverged"
+    panel = r.plot(channel=1).axes[5]
+    assert panel.get_title() == "Channel 1: tracking error |e(t)|, log scale (the run stopped early: its growth)"
+    (line,) = panel.lines
+    e = np.abs(r.e[:, 0])
+    np.testing.assert_array_equal(line.get_ydata(), e[e > 0])
+    matplotlib.pyplot.close("all")

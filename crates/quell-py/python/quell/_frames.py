@@ -174,11 +174,17 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
         if len(axes) == 6:
             # max |e_i(s)| over s >= t: the summary's tail figure read from every t on.
             magnitude = np.where(np.isfinite(result.e[:, i]), np.abs(result.e[:, i]), 0.0)
-            tail = np.maximum.accumulate(magnitude[::-1])[::-1]
+            if ended:
+                # As the CLI's panel: a run that stopped early shows |e(t)| itself, its growth (the
+                # largest from t on is its last spike's everywhere, a flat line).
+                tail, name = magnitude, f"|e{c}(t)|"
+                title = f"{channel_title}: tracking error |e(t)|, log scale (the run stopped early: its growth)"
+            else:
+                tail, name = np.maximum.accumulate(magnitude[::-1])[::-1], f"max |e{c}(s)|, s ≥ t"
+                title = f"{channel_title}: largest tracking error from t on, log scale"
             shown = tail > 0
-            title = f"{channel_title}: largest tracking error from t on, log scale"
             if shown.any():
-                axes[5].semilogy(t[shown], tail[shown], label=f"max |e{c}(s)|, s ≥ t")
+                axes[5].semilogy(t[shown], tail[shown], label=name)
                 # As the CLI's panel: at most 14 decades, and from when the curve is below them.
                 floor = tail.max() * 1e-14
                 low = np.nonzero(shown & (tail < floor))[0]
