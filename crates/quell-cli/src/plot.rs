@@ -486,23 +486,34 @@ fn draw<DB: DrawingBackend + Strokes>(
     for ((title, ylabel, series, limit), area) in panels.iter().zip(areas.iter()) {
         panel(area, (title, ylabel), series, (*limit, Some(t_right)), time)?;
     }
-    // The error from each time on, on a log axis, last: convergence over decades. For a run that
-    // stopped early, |e(t)| itself: the largest from t on is its last spike's everywhere (a flat
-    // line for a blow-up, whose onset the linear panels, scaled to that spike, hide too).
+    let (tail, title) = error_on_log_axis(r, i, span, (&channel, !ended.is_empty()));
+    envelope::log_panel(&areas[5], (&title, "|e|"), &tail, (span.0, t_right), time)?;
+    root.present().map_err(|e| e.to_string())
+}
+
+/// The last panel's series and title: channel i's error from each time on, on a log axis
+/// (convergence over decades); for a run that `stopped` early, |e(t)| itself: the largest from t
+/// on is its last spike's everywhere (a flat line for a blow-up, whose onset the linear panels,
+/// scaled to that spike, hide too).
+fn error_on_log_axis(
+    r: &SimResult,
+    i: usize,
+    span: (f64, f64),
+    (channel, stopped): (&str, bool),
+) -> ([Series; 1], String) {
+    let c = i + 1;
     let e: Vec<(f64, f64)> = samples(r, &r.e, i).collect();
-    let (tail, title) = if ended.is_empty() {
-        (
-            [(format!("max |e{c}(s)|, s ≥ t"), envelope::from_t_on(&e, span))],
-            format!("{channel}: largest tracking error from t on, log scale"),
-        )
-    } else {
+    if stopped {
         (
             [(format!("|e{c}(t)|"), decimated(e.iter().map(|&(t, v)| (t, v.abs())), span))],
             format!("{channel}: tracking error |e(t)|, log scale (the run stopped early: its growth)"),
         )
-    };
-    envelope::log_panel(&areas[5], (&title, "|e|"), &tail, (span.0, t_right), time)?;
-    root.present().map_err(|e| e.to_string())
+    } else {
+        (
+            [(format!("max |e{c}(s)|, s ≥ t"), envelope::from_t_on(&e, span))],
+            format!("{channel}: largest tracking error from t on, log scale"),
+        )
+    }
 }
 
 /// Channel i's η̂_i (33), one series per entry, and the panel's title (`channel` names it).
