@@ -470,7 +470,7 @@ fn draw<DB: DrawingBackend + Strokes>(
     let plant_input = [(format!("uf{c}"), uf)];
     let (etas, eta_title) = eta_panel(r, i, span, &channel);
     let panels: [PanelSpec; 5] = [
-        (format!("{channel}: output and reference{ended}"), "y, g", &tracking, None),
+        (format!("{channel}: output and reference{}{ended}", sampled_at(r)), "y, g", &tracking, None),
         (format!("{channel}: tracking error"), "e = y − g", &error, None),
         (format!("{channel}: adaptive command (25)"), "u", &command, None),
         (uf_title, "u_f", &plant_input, limit),
@@ -489,6 +489,17 @@ fn draw<DB: DrawingBackend + Strokes>(
     let (tail, title) = error_on_log_axis(r, i, span, (&channel, !ended.is_empty()));
     envelope::log_panel(&areas[5], (&title, "|e|"), &tail, (span.0, t_right), time)?;
     root.present().map_err(|e| e.to_string())
+}
+
+/// ", sampled at T_s = 0.1 s" for a sampled-data run (at 1 ms its staircases cannot be seen, and
+/// the figure had looked like the continuous loop's); "" for a continuous one.
+fn sampled_at(r: &SimResult) -> String {
+    match r.stats {
+        quell::sim::RunStats::Sampled { sample_time, .. } => {
+            format!(", sampled at T_s = {} {}", crate::run::short(sample_time), r.time_unit)
+        }
+        _ => String::new(),
+    }
 }
 
 /// The last panel's series and title: channel i's error from each time on, on a log axis

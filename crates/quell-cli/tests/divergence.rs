@@ -116,8 +116,14 @@ fn a_diverged_runs_log_panel_shows_the_growth() {
         "the log panel's title"
     );
     assert!(!svg.contains("largest tracking error from t on"));
+    // A sampled run's figure says so: its staircases cannot be seen at every sample time.
+    assert!(
+        svg.contains("Channel 1: output and reference, sampled at T_s = 0.5 s (diverged at t = "),
+        "the first title"
+    );
     let (output, stderr) = run_quell(&["run", "--t-end", "5", "--out"], &out, &scenario);
     assert_eq!(output.status.code(), Some(0), "stderr: {stderr}");
     let svg = std::fs::read_to_string(out.join("channel1.svg")).unwrap();
     assert!(svg.contains("largest tracking error from t on, log scale"));
+    assert!(!svg.contains("sampled at"), "a continuous run's title");
 }

@@ -341,7 +341,9 @@ def test_a_stopped_runs_log_panel_shows_the_growth():
     with pytest.warns(UserWarning, match=r"^sample_time: T_s = 0.5 s is 4.50 of the loop's fastest time constant"):
         r = quell.simulate(quell.Scenario.from_toml(text), sample_time=0.5, check=False)
     assert r.outcome["status"] == "diverged"
-    panel = r.plot(channel=1).axes[5]
+    fig = r.plot(channel=1)
+    assert fig.axes[0].get_title().startswith("Channel 1: output and reference, sampled at T_s = 0.5 s (run diverged at t = ")
+    panel = fig.axes[5]
     assert panel.get_title() == "Channel 1: tracking error |e(t)|, log scale (the run stopped early: its growth)"
     (line,) = panel.lines
     e = np.abs(r.e[:, 0])

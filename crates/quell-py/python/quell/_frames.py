@@ -129,7 +129,10 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
     # A run that stopped early says so where its curves end.
     status = result.outcome.get("status", "completed")
     ended = "" if status == "completed" else f" (run {status} at t = {result.outcome['t']:.4g} {result.time_unit})"
-    axes[0].set(title=f"{channel_title}: output and reference{ended}", ylabel="y, g")
+    # As the CLI's figure: a sampled-data run says so (at 1 ms its staircases cannot be seen).
+    stats = result.stats or {}
+    sampled = f", sampled at T_s = {stats['sample_time']:.6g} {result.time_unit}" if stats.get("loop") == "sampled" else ""
+    axes[0].set(title=f"{channel_title}: output and reference{sampled}{ended}", ylabel="y, g")
     if len(axes) > 1:
         axes[1].plot(t, result.e[:, i], label=f"e{c}")
         axes[1].set(title=f"{channel_title}: tracking error", ylabel="e = y − g")
