@@ -238,9 +238,9 @@ fn simulate(
 /// shortest digits that read back, and a comma), which the row and memory limits allow up to many
 /// gigabytes (a servo at an output step of 5e-7 s wrote 2.4 GB without a word).
 fn csv_size_warning(design: &quell::Design, settings: &quell::sim::RunSettings) -> Option<String> {
-    let (m, q, n) = (design.plant().m(), design.q(), design.plant().n());
+    let p = design.plant();
     let rows = (settings.t_end / settings.output_step).floor() + 1.0;
-    let numbers = 1 + 5 * m + m * q + if settings.record_states { 2 * n } else { 0 };
+    let (numbers, _) = quell::sim::SimResult::row_len(p.m(), design.q(), p.n(), settings.record_states);
     let bytes = rows * numbers as f64 * 20.0;
     (bytes > LARGE_CSV).then(|| {
         format!(

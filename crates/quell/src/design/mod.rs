@@ -613,7 +613,7 @@ fn assumption_1(plant: &Plant) -> Result<(RankTest, RankTest), DesignError> {
 /// the message (a pendulum measured by its angle alone: its cart's modes at 0 show in no output). ""
 /// where the eigenvalues cannot be computed.
 fn hidden_modes(At: &DMatrix<f64>, M: &DMatrix<f64>, count: usize, verb: &str) -> String {
-    let Ok(mut lambdas) = eigenvalues(At) else { return String::new() };
+    let Ok(lambdas) = eigenvalues(At) else { return String::new() };
     let n = At.nrows();
     let norm = At.norm() + M.norm();
     let nearness = |l: &Complex<f64>| {
@@ -625,8 +625,10 @@ fn hidden_modes(At: &DMatrix<f64>, M: &DMatrix<f64>, count: usize, verb: &str) -
         P.view_mut((n, 0), (M.nrows(), n)).copy_from(&M.map(|a| Complex::new(a, 0.0)));
         P.singular_values().min() / norm.max(f64::MIN_POSITIVE)
     };
-    lambdas.sort_by(|a, b| nearness(a).total_cmp(&nearness(b)));
-    lambdas.truncate(count);
+    // One SVD per eigenvalue (a comparison sort had made two per comparison).
+    let mut near: Vec<(f64, Complex<f64>)> = lambdas.iter().map(|l| (nearness(l), *l)).collect();
+    near.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let lambdas: Vec<Complex<f64>> = near.into_iter().take(count).map(|(_, l)| l).collect();
     if lambdas.is_empty() {
         return String::new();
     }

@@ -677,8 +677,7 @@ fn observer_remedy(design: &Design, faster: Option<&FasterObserver>, sampled: Op
         OBSERVER_SPEEDUPS[OBSERVER_SPEEDUPS.len() - 1]
     );
     let faster = faster.as_deref().unwrap_or(&none);
-    let observer = eigenvalues(&(&p.A - design.L() * &p.C)).unwrap_or_default();
-    if let Some(z) = held_zeros(p, &observer) {
+    if let Some(z) = held_zeros(p, design.observer_eigenvalues()) {
         let held = format!("design.observer_poles already hold the zeros of (A, D, C), [{}]", fmt_complex_list(&z));
         return match (found, p.m()) {
             (true, _) => format!("{held}; keeping them, {faster}"),
@@ -1027,10 +1026,11 @@ fn shrinking_advice(result: &SimResult, i: usize, r: f64, (mu, lambda_max, stiff
 const LONG_DELAY: f64 = 0.1;
 
 /// Channel i's input delay when it is not shorter than the run (its command never reached the
-/// plant), or takes more than [`LONG_DELAY`] of it: the adaptation the averaged law paces from t = 0
-/// starts τ later, so advice on μ from that pace is wrong there (a pendulum whose 20 ms delay was
-/// typed as 20 s in a 60 s run was told to raise μ 1.4×, which made its tail worse).
-fn delay_advice(design: &Design, i: usize, t_end: f64) -> Option<String> {
+/// plant), or, where its tail `missed` its bound, takes more than [`LONG_DELAY`] of it: the
+/// adaptation the averaged law paces from t = 0 starts τ later, so advice on μ from that pace is
+/// wrong there (a pendulum whose 20 ms delay was typed as 20 s in a 60 s run was told to raise μ
+/// 1.4×, which made its tail worse).
+fn delay_advice(design: &Design, i: usize, t_end: f64, missed: bool) -> Option<String> {
     let (tau, unit) = (design.plant().delays[i], design.plant().time_unit);
     let (tau_text, t_text) = (fmt_short(tau), fmt_short(t_end));
     if tau >= t_end {
@@ -1038,7 +1038,7 @@ fn delay_advice(design: &Design, i: usize, t_end: f64) -> Option<String> {
             "channel {}'s input delay τ = {tau_text} {unit} is not shorter than the run (its last sample is at {t_text} {unit}): its command never reaches the plant; lengthen simulation.t_end to several times τ (or check plant.delays[{i}]'s unit)",
             i + 1
         ))
-    } else if tau > LONG_DELAY * t_end {
+    } else if missed && tau > LONG_DELAY * t_end {
         Some(format!(
             "channel {}'s input delay τ = {tau_text} {unit} is {:.0} % of the run ({t_text} {unit}): its command reaches the plant only after τ, so the adaptation starts late and the pace from t = 0 that advice on μ assumes does not hold; lengthen simulation.t_end to at least {} {unit} (10 τ) before tuning μ (or check plant.delays[{i}]'s unit)",
             i + 1,
@@ -1071,7 +1071,7 @@ fn channel(
     // t_end would be tuned to the sampling's errors (a servo at 0.5 ms was told to raise μ before it).
     let horizon_advice = horizon && tunable;
     let missed = !tail_within_bound(result, i);
-    let delay = delay_advice(design, i, t_end).filter(|_| horizon && (missed || design.plant().delays[i] >= t_end));
+    let delay = delay_advice(design, i, t_end, missed).filter(|_| horizon);
     // A tail already within the bound needs no faster adaptation (an automatic design's μ is chosen
     // for that bound, not for the averaged law's e^-5 over the horizon); nor does a delay-bound one.
     let slow = (horizon_advice && missed && delay.is_none())

@@ -220,7 +220,7 @@ pub struct ChannelSummary {
 impl SimResult {
     /// The numbers one recorded row holds (t, y, g, e, u, u_f, η̂, and x, x̂ with `states`) for m
     /// channels, regressor size q and plant order n, and their names.
-    pub(crate) fn row_len(m: usize, q: usize, n: usize, states: bool) -> (usize, &'static str) {
+    pub fn row_len(m: usize, q: usize, n: usize, states: bool) -> (usize, &'static str) {
         if states {
             (1 + 5 * m + m * q + 2 * n, "t, y, g, e, u, u_f, η̂, x, x̂")
         } else {
