@@ -463,9 +463,8 @@ fn draw<DB: DrawingBackend + Strokes>(
     let limit = label.as_deref().zip(u_max).filter(|&(_, u)| peak >= 0.1 * u);
     if let (None, Some(u)) = (limit, u_max) {
         // Two significant digits below 0.1 % ("0.0 %" hid a peak of 0.0018 %).
-        let share = 100.0 * peak / u;
-        let share = if share < 0.1 && share > 0.0 { format!("{share:.1e}") } else { format!("{share:.1}") };
-        write!(uf_title, "; peak {share} % of truth.u_max").map_err(|e| e.to_string())?;
+        let share = quell::settings::fmt_percent(peak / u);
+        write!(uf_title, "; peak {share} of truth.u_max").map_err(|e| e.to_string())?;
     }
     let plant_input = [(format!("uf{c}"), uf)];
     let (etas, eta_title) = eta_panel(r, i, span, &channel);

@@ -201,9 +201,14 @@ pub(crate) fn fixed_or_sci(x: f64, decimals: usize) -> String {
     }
 }
 
-/// Input i's share `f` of the recorded samples that the true actuator's limit clipped, as a line.
+/// Input i's share `f` of the recorded samples that the true actuator's limit clipped, as a line
+/// (its channel's max|u_f| is then what the controller asked for, [`quell::sim::SimResult::peak_demand`]).
 pub(crate) fn clipped(i: usize, f: f64) -> String {
-    format!("input {}: clipped by truth.u_max[{i}] at {:.1} % of the recorded samples", i + 1, 100.0 * f)
+    format!(
+        "input {}: clipped by truth.u_max[{i}] at {} of the recorded samples (max|u_f| is what the controller asked for)",
+        i + 1,
+        quell::settings::fmt_percent(f)
+    )
 }
 
 /// A time for a message, to 12 significant digits and without trailing zeros.
@@ -386,7 +391,7 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
         outcome => {
             let mut why = outcome.explain("--max-steps", result.time_unit).unwrap_or_default();
             let run = quell::sim::Run::of(done.scenario, done.design);
-            if let Some(culprit) = quell::sim::budget_culprit(&run, Some(outcome)) {
+            if let Some(culprit) = quell::sim::budget_culprit(&run, result) {
                 why = format!("{why}; {culprit}");
             }
             // A true actuator that clipped may be why: the clipping, and the advice on the whole

@@ -492,6 +492,7 @@ impl PySimResult {
         d.set_item("u_max", r.u_max.clone())?;
         d.set_item("peak_u", r.peak_u.clone())?;
         d.set_item("peak_uf", r.peak_uf.clone())?;
+        d.set_item("peak_demand", r.peak_demand.clone())?;
         d.set_item("uf_terms", r.uf_terms.clone())?;
         d.set_item("diagnostics", &me.diagnostics)?;
         let l = &me.labels;
@@ -536,6 +537,8 @@ impl PySimResult {
             // Results pickled before the peaks between rows have none.
             peak_u: state.get_item("peak_u")?.map_or(Ok(vec![]), |v| v.extract())?,
             peak_uf: state.get_item("peak_uf")?.map_or(Ok(vec![]), |v| v.extract())?,
+            // Results pickled before the actuator's demand have none.
+            peak_demand: state.get_item("peak_demand")?.map_or(Ok(vec![]), |v| v.extract())?,
             uf_terms: state.get_item("uf_terms")?.map_or(Ok(vec![]), |v| v.extract())?,
             time_unit,
         };
@@ -667,7 +670,7 @@ pub fn simulate(
         crate::errors::warn_coarse_sample(py, &design, &scn.reference, &scn.disturbance, t, Some(h))?;
     }
     let (outcome, unit) = (result.outcome.clone().unwrap_or(Outcome::Completed), result.time_unit);
-    let culprit = quell::sim::budget_culprit(&run, result.outcome.as_ref());
+    let culprit = quell::sim::budget_culprit(&run, &result);
     let result = Py::new(py, PySimResult::from_run(py, scn, &design, result, s.labels.clone())?)?;
     if let Some(e) = interrupt {
         // Ctrl-C keeps the samples up to it, as sweeps and tunings keep their rows.

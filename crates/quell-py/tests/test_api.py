@@ -342,7 +342,7 @@ def test_a_stopped_runs_log_panel_shows_the_growth():
         r = quell.simulate(quell.Scenario.from_toml(text), sample_time=0.5, check=False)
     assert r.outcome["status"] == "diverged"
     fig = r.plot(channel=1)
-    assert fig.axes[0].get_title().startswith("Channel 1: output and reference, sampled at T_s = 0.5 s (run diverged at t = ")
+    assert fig.axes[0].get_title().startswith("Channel 1: output and reference, sampled at T_s = 0.5 s (diverged at t = ")
     panel = fig.axes[5]
     assert panel.get_title() == "Channel 1: tracking error |e(t)|, log scale (the run stopped early: its growth)"
     (line,) = panel.lines

@@ -169,3 +169,23 @@ def test_the_steady_state_input_is_the_plants_inverse_and_what_the_converged_run
     np.testing.assert_allclose(rms, steady["rms"], rtol=5e-3)
     np.testing.assert_allclose(np.abs(r.u_f[tail]).max(axis=0), steady["peak"], rtol=5e-3)
     assert steady["advice"] == []
+
+
+@pytest.mark.parametrize("sample_time", [None, 0.01])
+def test_a_clipped_plant_input_reports_what_the_controller_asked_for(sample_time):
+    """Under [truth] u_max the u_f column holds what the plant received, at most the limit, and
+    max_uf what the controller asked for, -K x_hat + F u_d before the clip (recomputed here as above,
+    at the rows): a limit checked against the clipped u_f is never exceeded."""
+    text = quell.paper_example().to_toml() + "\n[truth]\nu_max = [10.0, inf]\n"
+    s = quell.Scenario.from_toml(text)
+    d = s.design()
+    r = quell.simulate(s, t_end=20.0, output_step=0.05, sample_time=sample_time, states=True)
+    assert r.outcome["status"] == "completed"
+    u_d = np.column_stack([delayed(r.t, r.u[:, i], tau) for i, tau in enumerate(s.plant.delays)])
+    asked = (u_d @ d.F.T - r.x_hat @ d.K.T)[:, 0]
+    # 1e-9 of the limit: the continuous loop reads u(t - tau) from its dense history (the rows here).
+    assert np.abs(r.u_f[:, 0] - np.clip(asked, -10.0, 10.0)).max() <= 1e-9 * 10.0
+    peak = np.abs(asked).max()
+    max_uf = r.summary()[0]["max_uf"]
+    assert peak > 12.0 and peak * (1 - 1e-9) <= max_uf <= 1.02 * peak, (peak, max_uf)
+    assert r.limited_fraction[0] > 0.0

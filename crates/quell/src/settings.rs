@@ -528,6 +528,17 @@ pub(crate) fn fmt_ratio(x: f64) -> String {
     fmt_short(significant(x, 2))
 }
 
+/// A fraction as a percentage for a message: one decimal from 0.1 %, two significant digits below
+/// (0.043 %, 1.8e-5 %; "0.0 %" had hidden one clipped sample in 2,301).
+pub fn fmt_percent(fraction: f64) -> String {
+    let p = 100.0 * fraction;
+    if p > 0.0 && p < 0.1 {
+        format!("{} %", fmt_ratio(p))
+    } else {
+        format!("{p:.1} %")
+    }
+}
+
 /// Numbers in [`fmt_short`]'s form, comma-separated.
 pub(crate) fn fmt_short_list(v: &[f64]) -> String {
     v.iter().map(|&x| fmt_short(x)).collect::<Vec<_>>().join(", ")

@@ -105,6 +105,71 @@ fn plant_input_is_recorded_as_minus_K_x_hat_plus_F_delayed_u() {
     assert!(peak > 1.0 && dev <= 1e-12 * peak, "sampled: max deviation {dev:e}, peak {peak}");
 }
 
+/// Under a true actuator limit, `u_f` holds what the plant received, u_f clipped, and `max_uf` what
+/// the controller asked for, −K x̂ + F u_d before the clip: the figure an actuator limit is checked
+/// against (a tuning's limit of 5 V had been met by every μ, the clip holding u_f at 5). Recomputed
+/// from the recorded x̂ and u as above; the limit 10 clips u_f,1 of the paper's loop (its peak about
+/// 15), and the loop completes. Both loops.
+#[test]
+fn a_clipped_plant_input_reports_what_the_controller_asked_for() {
+    let d = Design::new(&paper_plant(), &paper_spec()).unwrap();
+    let (g, w) = paper_signals();
+    let limit = 10.0;
+    let actuator = Some(quell::settings::Actuator { delays: vec![0.0; 2], limits: vec![limit, f64::INFINITY] });
+    let loops = [
+        (RunSettings::continuous(20.0, 0.05, 1e-9, 1e-9), [20, 60], 1e-9),
+        (RunSettings::sampled(20.0, 0.01, 0.01), [100, 300], 1e-12),
+    ];
+    for (settings, shift, tol) in loops {
+        let st = RunSettings { record_states: true, actuator: actuator.clone(), ..settings };
+        let r = Run::new(&d, &g, &w, st).simulate(|_| ControlFlow::Continue(())).unwrap();
+        assert_eq!(r.outcome, Some(Outcome::Completed));
+        let (m, n) = (r.m, r.n);
+        let mut demand = 0.0f64;
+        for k in 0..r.len() {
+            let x_hat = DVector::from_column_slice(&r.x_hat[k * n..(k + 1) * n]);
+            let u_d = DVector::from_iterator(
+                m,
+                (0..m).map(|i| if k >= shift[i] { r.u[(k - shift[i]) * m + i] } else { 0.0 }),
+            );
+            let want = (d.F() * u_d - d.K() * x_hat)[0];
+            let got = r.u_f[k * m];
+            assert!((got - want.clamp(-limit, limit)).abs() <= tol * limit, "row {k}: u_f,1 = {got}, clip({want})");
+            demand = demand.max(want.abs());
+        }
+        let max_uf = r.summary()[0].figures.max_uf;
+        assert!(demand > 1.2 * limit, "the limit clips: the controller asked for {demand}");
+        // The rows' demand, and at most 2 % more between them (a step end on the same trajectory).
+        assert!(max_uf >= demand * (1.0 - 1e-9) && max_uf <= 1.02 * demand, "max_uf {max_uf}, rows' demand {demand}");
+        assert!(r.limited_fraction()[0] > 0.0 && r.limited_fraction()[1] == 0.0);
+    }
+}
+
+/// The sampled loop watches its states at every controller step, not only at the rows: on a true
+/// plant with the delays 4× the design's, rows 50 s apart had named the divergence at t = 34.6 s,
+/// by a controller input of 1.1e100, where rows 0.1 s apart named a plant state at 11.2 s (helper
+/// tryout, 2026-12-06). Both now end at the same controller step, on the same signal.
+#[test]
+fn a_sampled_run_diverges_at_the_same_step_whatever_its_output_step() {
+    let d = Design::new(&paper_plant(), &paper_spec()).unwrap();
+    let (g, w) = paper_signals();
+    let mut truth = paper_plant();
+    truth.delays = vec![4.0, 12.0];
+    let ended = |output_step: f64| {
+        let r = Run::new(&d, &g, &w, RunSettings::sampled(200.0, output_step, 0.01))
+            .truth(&truth)
+            .simulate(|_| ControlFlow::Continue(()))
+            .unwrap();
+        match r.outcome {
+            Some(Outcome::Diverged { t, signal, .. }) => (t, signal, r.stats.steps()),
+            other => panic!("output step {output_step}: {other:?}"),
+        }
+    };
+    let (fine, coarse) = (ended(0.1), ended(50.0));
+    assert_eq!(fine, coarse);
+    assert!(fine.0 < 20.0 && fine.1.contains("state"), "{fine:?}");
+}
+
 /// A sample time that divides the output step to the whole-number tolerance but not exactly (1/30 s
 /// to ten digits: the delays' nearest valid sample time as a message prints it) records its rows at
 /// k·output_step, the last at t_end, as the continuous loop does: they had fallen at k·T, 0.0999999999,

@@ -213,6 +213,28 @@ fn a_search_keeps_the_other_inputs_limits_that_the_scenarios_mu_keeps() {
     assert!(last[0].channels[1].max_uf > 0.16, "μ₁ = 100 breaks it: {}", last[0].channels[1].max_uf);
 }
 
+/// Where the true actuator clips u_f, a tuning's limit on u_f is judged on what the controller asked
+/// for: with `truth.u_max = tune.max_uf = 5` every μ of a pendulum had read max |u_f| = 5 (the
+/// clip) and counted as feasible (helper tryout, 2026-12-06). On the paper's loop (u_f,1 peaks at
+/// about 15) with a limit of 10 on input 1, every evaluation of μ₁ asks for more than 10: its
+/// max |u_f,1| is above the limit and no μ₁ is feasible.
+#[test]
+fn a_limit_on_u_f_is_judged_on_the_demand_where_the_true_actuator_clips() {
+    let scenario =
+        quell::scenario::PAPER_EXAMPLE.replace("t_end = 100.0", "t_end = 20.0") + "\n[truth]\nu_max = [10.0, inf]\n";
+    let mut doc: toml::Table =
+        "[tune]\nobjective = \"tail_rms_e\"\nmu = [[1.0, 100.0], [1.0, 100.0]]\nmax_uf = [10.0, inf]\npoints = 3\nrefine = 0\n"
+            .parse()
+            .unwrap();
+    doc.insert("scenario".into(), toml::Value::Table(scenario.parse().unwrap()));
+    let r = quell::study::tune(&Study::from_table(&doc, None).unwrap(), &Default::default()).unwrap();
+    let curve = &r.channels[0].curve;
+    assert!(curve.len() == 3 && curve.iter().all(|p| p.objective.is_none()), "{curve:?}");
+    let completed: Vec<_> = curve.iter().filter_map(|p| p.figures.map(|f| (p.mu, f.max_uf))).collect();
+    assert!(!completed.is_empty() && completed.iter().all(|&(_, uf)| uf > 10.0), "{completed:?}");
+    assert!(r.channels[0].chosen.is_none());
+}
+
 /// Stopping a tuning keeps the points evaluated so far: on one worker thread, a stop after the
 /// third evaluation leaves exactly those three (the run under way when the flag is set completes
 /// only if it finishes before its next recorded sample, and none is under way here), no joint

@@ -41,6 +41,21 @@ MAX_LEGEND = 14
 BAND = 6.0
 
 
+def _ended(outcome, unit):
+    """Where and why a run's curves end, in the CLI's words: "" for a completed run, " (diverged at
+    t = 11.16 s: x[2] (plant state))", " (interrupted at t = …)", or for a budget or the step size
+    " (failed at t = …: result.outcome says why)" (the raw status had read "run history_too_large")."""
+    status = outcome.get("status", "completed")
+    if status == "completed":
+        return ""
+    at = f"at t = {outcome['t']:.6g} {unit}"
+    if status == "diverged":
+        return f" (diverged {at}: {outcome['signal']})"
+    if status == "interrupted":
+        return f" (interrupted {at})"
+    return f" (failed {at}: result.outcome says why)"
+
+
 def _path_widths(ax, t, v, shown):
     """The length of the path (t, v) in widths of ``ax``, its value axis spanning ``shown``'s range."""
     import numpy as np
@@ -127,8 +142,7 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
         axes[0].plot(t, y, color="C1", label=f"y{c}")
         axes[0].plot(t, g, "--", color="C0", label=f"g{c} (reference)")
     # A run that stopped early says so where its curves end.
-    status = result.outcome.get("status", "completed")
-    ended = "" if status == "completed" else f" (run {status} at t = {result.outcome['t']:.4g} {result.time_unit})"
+    ended = _ended(result.outcome, result.time_unit)
     # As the CLI's figure: a sampled-data run says so (at 1 ms its staircases cannot be seen).
     stats = result.stats or {}
     sampled = f", sampled at T_s = {stats['sample_time']:.6g} {result.time_unit}" if stats.get("loop") == "sampled" else ""
@@ -160,7 +174,8 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
             else:
                 title_ax = uf_ax if len(axes) >= 5 else axes[2]
                 share = 100 * peak / limit
-                share = f"{share:.1e}" if 0 < share < 0.1 else f"{share:.1f}"  # "0.0 %" hid a peak of 0.0018 %
+                # Two significant digits below 0.1 %, as the CLI ("0.0 %" hid a peak of 0.0018 %).
+                share = f"{share:.2g}".replace("e-0", "e-") if 0 < share < 0.1 else f"{share:.1f}"
                 title_ax.set_title(f"{title_ax.get_title()}; peak {share} % of truth.u_max")
         eta_ax = axes[4] if len(axes) == 6 else axes[-1]
         # As the CLI's figure: beyond MAX_LEGEND entries a legend hides the traces (q = 33 covered a

@@ -377,6 +377,9 @@ impl DelaySystem for ContinuousLoop<'_> {
             self.commands(s, &mut rec.u);
             self.plant_input(t, s, past, &mut rec.u_f);
             rec.result.record_input_peaks(&rec.u, &rec.u_f);
+            if let Some(act) = &self.actuator {
+                rec.result.record_demand(&act.demand);
+            }
         }
         self.record = Some(rec);
         flow
@@ -402,6 +405,7 @@ impl DelaySystem for ContinuousLoop<'_> {
             rec.result.push(&Sample { t, y, g, u, u_f, eta, states });
             if let Some(act) = &self.actuator {
                 rec.result.count_limited(act.limited.iter().map(Cell::get));
+                rec.result.record_demand(&act.demand);
             } else {
                 mat_vec(&self.eq.K_neg, x_hat, &mut rec.kx, false);
                 rec.result.record_uf_terms(&rec.kx, &rec.u_f);
@@ -556,6 +560,8 @@ struct ActuatorPath {
     u: Vec<f64>,
     /// Per input: whether the limit clipped it at the latest evaluation (shared with the probe).
     limited: Rc<[Cell<bool>]>,
+    /// Per input: the controller's u_f before the limit, at the latest evaluation.
+    demand: Vec<f64>,
 }
 
 impl ActuatorPath {
@@ -567,6 +573,7 @@ impl ActuatorPath {
             x_hat: vec![0.0; truth.n()],
             u: vec![0.0; m],
             limited: (0..m).map(|_| Cell::new(false)).collect(),
+            demand: vec![0.0; m],
         }
     }
 
@@ -601,7 +608,7 @@ impl ActuatorPath {
             }
             let (clipped, limited) = self.actuator.clip(i, v);
             self.limited[i].set(limited);
-            *u_i = clipped;
+            (*u_i, self.demand[i]) = (clipped, v);
         }
     }
 }
@@ -1035,15 +1042,17 @@ pub fn fast_rate_culprit(run: &Run<'_>) -> Option<String> {
     fast.outlier().then(|| fast.text(run))
 }
 
-/// For a run that `outcome` ended on its step budget or the history's cap: the rate far faster
-/// than the loop that may be why ([`fast_rate_culprit`]), so that `quell run` and Python name it
-/// as a study's row does (observer poles at −1e4 on the paper's loop filled the cap in 1.8 s, and
-/// the message named only a small design.beta among its causes). `None` otherwise.
-pub fn budget_culprit(run: &Run<'_>, outcome: Option<&Outcome>) -> Option<String> {
-    match outcome {
-        Some(Outcome::TooManySteps { .. } | Outcome::HistoryTooLarge { .. }) => fast_rate_culprit(run),
-        _ => None,
-    }
+/// For a run that its step budget or the history's cap ended (`result`'s outcome): the rate far
+/// faster than the loop that may be why ([`fast_rate_culprit`]), so that `quell run` and Python
+/// name it as a study's row does (observer poles at −1e4 on the paper's loop filled the cap in
+/// 1.8 s, and the message named only a small design.beta among its causes), and the watched signal
+/// nearest its divergence bound by then ([`Peaks::nearest_bound`]: a loop blowing up, or not; the
+/// outcome names no signal). `None` otherwise.
+pub fn budget_culprit(run: &Run<'_>, result: &SimResult) -> Option<String> {
+    let Some(Outcome::TooManySteps { .. } | Outcome::HistoryTooLarge { .. }) = &result.outcome else { return None };
+    let growth = result.peaks.nearest_bound(&run.divergence_bounds());
+    let parts: Vec<String> = [growth, fast_rate_culprit(run)].into_iter().flatten().collect();
+    (!parts.is_empty()).then(|| parts.join("; "))
 }
 
 /// The fastest of a run's rates, its source, the steps it sets over t_end, and the next fastest

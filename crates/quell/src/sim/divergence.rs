@@ -69,6 +69,24 @@ impl Peaks {
         Peaks(self.0.map(|p| if p > 0.0 && p.is_finite() { factor * p } else { f64::INFINITY }))
     }
 
+    /// The watched signal nearest its bound in `bounds` (by its share of it), as "by then x_hat
+    /// (observer state) had reached 3.20e9 in magnitude, 3.2e-3 of its divergence bound": what a run a budget
+    /// ended was doing, blowing up or not. `None` before any peak was recorded.
+    pub fn nearest_bound(&self, bounds: &Peaks) -> Option<String> {
+        const NAMES: [&str; 4] =
+            ["x (plant state)", "x_hat (observer state)", "xi_hat (regressor)", "eta (adaptive parameters)"];
+        let share = |k: usize| self.0[k] / bounds.0[k];
+        let k = (0..4)
+            .filter(|&k| share(k).is_finite() && self.0[k] > 0.0)
+            .max_by(|&a, &b| share(a).total_cmp(&share(b)))?;
+        Some(format!(
+            "by then {} had reached {:.2e} in magnitude, {:.1e} of its divergence bound",
+            NAMES[k],
+            self.0[k],
+            share(k)
+        ))
+    }
+
     /// The index (0: x, 1: x̂, 2: ξ̂, 3: η̂) of the signal an [`Outcome::Diverged`] names.
     pub fn index_of(signal: &str) -> usize {
         ["x[", "x_hat[", "xi_hat[", "eta"].iter().rposition(|p| signal.starts_with(p)).unwrap_or(0)

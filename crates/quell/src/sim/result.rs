@@ -156,6 +156,11 @@ pub struct SimResult {
     /// 0.1 apart read 5.6). Empty where a loop tracked none; [`SimResult::figures`] takes the larger.
     pub peak_u: Vec<f64>,
     pub peak_uf: Vec<f64>,
+    /// Per input, max |u_f,i| the controller asked for before the true actuator's limit (`[truth]`
+    /// u_max) clipped it, at the rows and between them as [`SimResult::peak_uf`]: what an actuator
+    /// limit is checked against (`u_f` holds what the plant received, at most u_max). Empty without
+    /// an actuator.
+    pub peak_demand: Vec<f64>,
     /// Per channel, the larger magnitude of u_f's two terms, (K x̂)_i and (F u_d)_i, at the recorded
     /// rows: where it is many times u_f's peak, u_f is their small difference and keeps that many
     /// times the states' error (a grid inverter's LCL loop: |K x̂| up to 28× u_f's peak, and u_f
@@ -197,7 +202,8 @@ pub struct ChannelFigures {
     pub tail_rms_e: f64,
     /// max |u_i| over the run (the adaptive command (25)).
     pub max_u: f64,
-    /// max |u_f,i| over the run: the plant input (5), what the actuator delivers.
+    /// max |u_f,i| over the run: the plant input (5), what the actuator must deliver; where the
+    /// true actuator's limit (`[truth]` u_max) clipped it, the largest the controller asked for.
     pub max_uf: f64,
     /// First recorded t after which |e_i| stays within the settling band ([`Settle`],
     /// [`crate::sim::settle`]); `None` when the channel did not settle, or only in the last 5 % of
@@ -250,6 +256,7 @@ impl SimResult {
             peaks: Peaks::default(),
             peak_u: Vec::new(),
             peak_uf: Vec::new(),
+            peak_demand: Vec::new(),
             uf_terms: Vec::new(),
             limited: Vec::new(),
             u_max: Vec::new(),
@@ -259,12 +266,13 @@ impl SimResult {
 
     /// Raises [`SimResult::peak_u`] and [`SimResult::peak_uf`] to |u| and |u_f| now (NaN stays).
     pub(crate) fn record_input_peaks(&mut self, u: &[f64], u_f: &[f64]) {
-        for (peaks, now) in [(&mut self.peak_u, u), (&mut self.peak_uf, u_f)] {
-            peaks.resize(now.len(), 0.0);
-            for (p, v) in peaks.iter_mut().zip(now) {
-                *p = max_or_nan(*p, v.abs());
-            }
-        }
+        raise(&mut self.peak_u, u);
+        raise(&mut self.peak_uf, u_f);
+    }
+
+    /// Raises [`SimResult::peak_demand`] to |u_f| before the actuator's limit now.
+    pub(crate) fn record_demand(&mut self, demand: &[f64]) {
+        raise(&mut self.peak_demand, demand);
     }
 
     /// Raises [`SimResult::uf_terms`] to the terms of u_f = −K x̂ + F u_d now, from −K x̂ (`kx`) and
@@ -398,9 +406,12 @@ impl SimResult {
         self.uf_terms.get(i).map_or(0.0, |terms| terms / self.max_uf(i))
     }
 
-    /// max |u_f,i| over the rows and between them ([`SimResult::peak_uf`]); NaN where u_f was.
+    /// max |u_f,i| over the rows and between them ([`SimResult::peak_uf`]), and where the true
+    /// actuator's limit clipped it, what the controller asked for ([`SimResult::peak_demand`]); NaN
+    /// where u_f was.
     pub fn max_uf(&self, i: usize) -> f64 {
-        self.column(&self.u_f, self.m, i).fold(peak(&self.peak_uf, i), |a, u| max_or_nan(a, u.abs()))
+        let between = max_or_nan(peak(&self.peak_uf, i), peak(&self.peak_demand, i));
+        self.column(&self.u_f, self.m, i).fold(between, |a, u| max_or_nan(a, u.abs()))
     }
 
     /// Whether the run reached t_end (its outcome is completed, or not set yet).
@@ -441,6 +452,14 @@ impl SimResult {
             settle_t: settling.time().filter(|_| reached),
         };
         Some((figures, settling))
+    }
+}
+
+/// Raises each of `peaks` to |v| of `now`'s entry (NaN stays), sized to `now`.
+fn raise(peaks: &mut Vec<f64>, now: &[f64]) {
+    peaks.resize(now.len(), 0.0);
+    for (p, v) in peaks.iter_mut().zip(now) {
+        *p = max_or_nan(*p, v.abs());
     }
 }
 

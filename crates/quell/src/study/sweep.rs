@@ -233,7 +233,7 @@ pub(crate) fn simulate(
     // A run its own budget or the history's cap ended (not the runaway rule's budget): a rate far
     // faster than the loop may be why.
     let by_runaway = matches!(result.outcome, Some(sim::Outcome::TooManySteps { max_steps, .. }) if runaway_steps == Some(max_steps));
-    let fast_rate = (!by_runaway).then(|| sim::budget_culprit(&Run::of(s, &design), result.outcome.as_ref())).flatten();
+    let fast_rate = (!by_runaway).then(|| sim::budget_culprit(&Run::of(s, &design), &result)).flatten();
     // Which limit ended a diverged run, by its absolute bounds (computed only here: a Monte Carlo
     // draw skips the averaged law they need). A fixed 1e9 had called a rule's stop on a plant in
     // small units a divergence.
