@@ -918,7 +918,17 @@ fn grid_axis_desc(s: &quell::study::Summary, scale: AxisScale) -> String {
         };
         x_desc += &format!("; median and 25–75, 5–95 % bands of {of}");
     }
-    x_desc
+    x_desc + &partial(s)
+}
+
+/// "; partial: 47 of 84 runs (--resume completes it)" for a study stopped before its end (its
+/// empty grid values had looked like values with nothing to show); "" otherwise.
+fn partial(s: &quell::study::Summary) -> String {
+    if s.partial {
+        format!("; partial: {} of {} runs (--resume completes it)", s.runs_done, s.study.runs)
+    } else {
+        String::new()
+    }
 }
 
 /// One panel of [`draw_sweep_1d`]: channel i's `figure` against the grid's values at `x`, drawn
@@ -1095,10 +1105,16 @@ fn draw_sweep_2d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
         if !logs.is_empty() {
             colour_bar(&scale, lo, span)?;
         }
-        // Grey cells, "—", have no median: say so where there are any.
+        // Grey cells, "—", have no median: say so where there are any; a cell whose runs did not all
+        // complete counts them (a cell of 1 completed run in 6 had been drawn as the map's best).
         let grey = if s.points.iter().any(|pt| cell(pt).is_none()) { " (—: no completed run)" } else { "" };
+        let counted =
+            if s.points.iter().any(|pt| pt.completed < pt.runs) { " (k/n: completed of a cell's runs)" } else { "" };
         let mut chart = ChartBuilder::on(&cells)
-            .caption(format!("{}: median tail RMS e{grey}", s.study.channel(i)), ("sans-serif", 18))
+            .caption(
+                format!("{}: median tail RMS e{grey}{counted}{}", s.study.channel(i), partial(s)),
+                ("sans-serif", 18),
+            )
             .margin(10)
             .x_label_area_size(40)
             .y_label_area_size(70)
@@ -1139,6 +1155,13 @@ fn draw_sweep_2d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
                         ("sans-serif", 12).into_font().color(&ink),
                     )))
                     .map_err(|e| e.to_string())?;
+                if pt.completed < pt.runs {
+                    let share = format!("{}/{}", pt.completed, pt.runs);
+                    let font = ("sans-serif", 12).into_font().color(&ink);
+                    chart
+                        .draw_series(std::iter::once(Text::new(share, (x - 0.3, y - 0.15), font)))
+                        .map_err(|e| e.to_string())?;
+                }
             }
         }
     }

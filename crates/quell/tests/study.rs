@@ -483,16 +483,17 @@ fn drawn_delays_are_not_taken_for_a_runaway() {
     );
 }
 
-/// A drawn μ that makes the adaptive law stiff (3ρ = 27/s on the paper's loop; μ₂ = 90 gives
-/// channel 2 25.6/s) takes the implicit path from its start, about 2,200 steps over 100 s where
-/// the nominal run takes 704: 48 of 100 such healthy draws (tail max |e| below 0.02) failed as
-/// "step budget" runaways when the rule compared them with the nominal steps (tryout,
+/// A drawn μ that makes the adaptive law stiff (3ρ = 27/s on the paper's loop: μ₂ above 94.9;
+/// μ₂ = 60 gives channel 2 17.1/s) takes the implicit path from its start, about 2,200 steps over
+/// 100 s where the nominal run takes 708: 48 of 100 such healthy draws (tail max |e| below 0.02)
+/// failed as "step budget" runaways when the rule compared them with the nominal steps (tryout,
 /// 2026-12-05). Such a draw keeps its own budget and the peak rule: every draw completes, with the
-/// rows of the rules-off study.
+/// rows of the rules-off study. (The nominal μ₂ was 90 before DOP853's steps were capped on the
+/// adaptive law's rate, which took that nominal run from 704 steps to 864.)
 #[test]
 fn a_draw_stiff_where_its_nominal_run_is_not_is_not_taken_for_a_runaway() {
-    let text = "[simulation]\nrtol = 1e-6\natol = 1e-6\n[grid]\n\"design.mu\" = [[60.0, 90.0]]\n\
-                [monte_carlo]\nruns = 12\nseed = 1\n\"design.mu\" = { relative = 0.3 }\n";
+    let text = "[simulation]\nrtol = 1e-6\natol = 1e-6\n[grid]\n\"design.mu\" = [[60.0, 60.0]]\n\
+                [monte_carlo]\nruns = 24\nseed = 1\n\"design.mu\" = { relative = 0.5 }\n";
     let study = Study::from_toml(text, None).unwrap();
     let nominal = study.nominal(0).unwrap();
     assert!(!nominal.expects_stiff);
@@ -502,9 +503,10 @@ fn a_draw_stiff_where_its_nominal_run_is_not_is_not_taken_for_a_runaway() {
     let failed: Vec<_> = on.iter().filter(|r| r.outcome != Outcome::Completed).map(|r| (r.run, &r.reason)).collect();
     assert!(failed.is_empty(), "{failed:?}");
     assert_eq!(timeless(&on), timeless(&off));
-    let beyond = on.iter().filter(|r| r.steps > 3 * nominal.steps as u64).count();
-    assert!(beyond >= 2, "draws beyond the rule's 3 × {} steps: {beyond}", nominal.steps);
-    for r in &on {
+    // The draws beyond the rule's budget are healthy ones (a draw of a small μ₂ converges slowly).
+    let beyond: Vec<_> = on.iter().filter(|r| r.steps > 3 * nominal.steps as u64).collect();
+    assert!(beyond.len() >= 2, "draws beyond the rule's 3 × {} steps: {}", nominal.steps, beyond.len());
+    for r in beyond {
         assert!(r.channels.iter().all(|c| c.tail_max_e < 0.05), "run {}: {:?}", r.run, r.channels);
     }
 }

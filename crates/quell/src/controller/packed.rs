@@ -126,6 +126,35 @@ pub(crate) fn max_row_sum(omega: &[f64], q: usize) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// A lower estimate of λ_max(Ω), Ω positive semidefinite: the Rayleigh quotient xᵀΩx / xᵀx of
+/// x = Ω^(k−1) x₀, x₀_j = 1 + j/q, k = `iterations`. It never exceeds λ_max (up to rounding) and
+/// approaches it as (λ₂/λ₁)^(2(k−1)), where [`max_row_sum`] may exceed it by up to √q. `work`
+/// holds 2q.
+pub(crate) fn max_eigenvalue_below(omega: &[f64], q: usize, iterations: usize, work: &mut [f64]) -> f64 {
+    let (x, y) = work[..2 * q].split_at_mut(q);
+    for (j, v) in x.iter_mut().enumerate() {
+        *v = 1.0 + j as f64 / q as f64;
+    }
+    let mut quotient = 0.0;
+    for _ in 0..iterations {
+        apply_rows(q, omega, x, y);
+        let (xx, xy) = x.iter().zip(y.iter()).fold((0.0, 0.0), |(xx, xy), (a, b)| (xx + a * a, xy + a * b));
+        quotient = xy / xx;
+        let norm = y.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if !(norm > 0.0 && norm.is_finite()) {
+            break;
+        }
+        for (a, b) in x.iter_mut().zip(y.iter()) {
+            *a = b / norm;
+        }
+    }
+    if quotient.is_finite() {
+        quotient.max(0.0)
+    } else {
+        0.0
+    }
+}
+
 /// Solves (I + c Ω) x = b in place (`x` holds b on entry) by a Cholesky factorization into
 /// `factor` (packed, q(q+1)/2 long): the implicit stage of the adaptive law η̂' = μ (Y − Ω η̂)
 /// (eq. (33)) with c = h γ μ. `false`, x unspecified, when I + c Ω is not numerically positive
@@ -283,6 +312,38 @@ mod tests {
             prop_assert!(max_row_sum(&omega, q) <= trace * q as f64 + 1e-12);
             prop_assert!(max_row_sum(&omega, q) >= trace / q as f64 - 1e-12);
         }
+    }
+
+    proptest! {
+        /// The Rayleigh quotient never exceeds λ_max (nalgebra's symmetric eigenvalues, 1e-12
+        /// relative) and is not negative, for random positive semidefinite Ω = G Gᵀ.
+        #[test]
+        fn the_power_steps_stay_below_the_largest_eigenvalue(q in 1usize..=40, seed in any::<u64>(), k in 1usize..=12) {
+            let mut next = uniform(seed);
+            let g: Vec<f64> = (0..q * q).map(|_| next()).collect();
+            let dense = nalgebra::DMatrix::from_fn(q, q, |i, j| (0..q).map(|l| g[i * q + l] * g[j * q + l]).sum::<f64>());
+            let omega: Vec<f64> = (0..q).flat_map(|i| (i..q).map(move |j| (i, j))).map(|(i, j)| dense[(i, j)]).collect();
+            let lambda = dense.clone().symmetric_eigen().eigenvalues.max();
+            let below = max_eigenvalue_below(&omega, q, k, &mut vec![0.0; 2 * q]);
+            prop_assert!(below >= 0.0 && below <= lambda * (1.0 + 1e-12), "q {q}: {below} against λ_max {lambda}");
+        }
+    }
+
+    /// A rank-one Ω = g gᵀ (the filter's ΔΔᵀ) has λ_max = |g|², the quotient of Ω x₀ (two
+    /// steps); a diagonal with its next eigenvalue half the largest is within 1e-3 of it after
+    /// eight (the error shrinks as (1/2)^(2(k − 1)).
+    #[test]
+    fn the_power_steps_find_a_dominant_eigenvalue() {
+        let g = [0.3, -1.2, 2.0, 0.5];
+        let omega: Vec<f64> = (0..4).flat_map(|i| (i..4).map(move |j| g[i] * g[j])).collect();
+        let norm2: f64 = g.iter().map(|v| v * v).sum();
+        let found = max_eigenvalue_below(&omega, 4, 2, &mut [0.0; 8]);
+        assert!((found - norm2).abs() <= 1e-14 * norm2, "{found} against {norm2}");
+        let diagonal = [0.2, 3.0, 1.5, 0.7, 0.1];
+        let omega: Vec<f64> =
+            (0..5).flat_map(|i| (i..5).map(move |j| if i == j { diagonal[i] } else { 0.0 })).collect();
+        let found = max_eigenvalue_below(&omega, 5, 8, &mut [0.0; 10]);
+        assert!((3.0 * (1.0 - 1e-3)..=3.0).contains(&found), "{found}");
     }
 
     #[test]

@@ -98,7 +98,8 @@ pub struct ContinuousLoop<'a> {
     xi_d: Vec<f64>,
     Delta: Vec<f64>,
     tmp: Vec<f64>,
-    /// The Cholesky factor of I + hγμ_iΩ_i in the implicit stages ([`DelaySystem::solve_implicit`]).
+    /// The Cholesky factor of I + hγμ_iΩ_i in the implicit stages ([`DelaySystem::solve_implicit`]),
+    /// and the power steps' vectors ([`DelaySystem::implicit_rate_below`]).
     factor: Vec<f64>,
     u_d: Vec<f64>,
     /// What [`DelaySystem::observe`] records; `None` for a loop used as a bare [`DelaySystem`].
@@ -197,7 +198,7 @@ impl<'a> ContinuousLoop<'a> {
             xi_d: vec![0.0; q],
             Delta: vec![0.0; q],
             tmp: vec![0.0; q],
-            factor: vec![0.0; packed::len(q)],
+            factor: vec![0.0; packed::len(q).max(2 * q)],
             u_d: vec![0.0; m],
             record: None,
             w_scales: filter_bank_scales(design, &eq, &layout),
@@ -335,6 +336,17 @@ impl DelaySystem for ContinuousLoop<'_> {
         let (l, q) = (&self.layout, self.layout.q);
         self.eq.channels.iter().enumerate().fold(0.0, |rate, (i, ch)| {
             rate.max(ch.mu.abs() * packed::max_row_sum(&s[l.omega[i]..l.omega[i] + packed::len(q)], q))
+        })
+    }
+
+    /// max_i μ_i · (a Rayleigh quotient of Ω_i after [`POWER_STEPS`] power steps), at most the
+    /// adaptive law's fastest rate.
+    fn implicit_rate_below(&mut self, s: &[f64]) -> f64 {
+        let (l, q) = (&self.layout, self.layout.q);
+        let work = &mut self.factor;
+        self.eq.channels.iter().enumerate().fold(0.0, |rate, (i, ch)| {
+            let omega = &s[l.omega[i]..l.omega[i] + packed::len(q)];
+            rate.max(ch.mu.abs() * packed::max_eigenvalue_below(omega, q, POWER_STEPS, work))
         })
     }
 
@@ -925,6 +937,9 @@ pub fn adaptation_rate(design: &Design, averaged: &Averaged) -> f64 {
         0.0
     }
 }
+
+/// Power steps of [`DelaySystem::implicit_rate_below`].
+const POWER_STEPS: usize = 8;
 
 /// Where the adaptation rate max_i μ_i λ_max(Ω̄_i) is at least this many times ρ, the automatic
 /// method hands η̂ to the implicit method at DOP853's first step beyond its stability bound, for the

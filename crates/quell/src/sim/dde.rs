@@ -84,6 +84,12 @@ pub trait DelaySystem {
     fn implicit_rate(&self, _y: &[f64]) -> f64 {
         0.0
     }
+    /// A lower estimate of that rate (at most the true one), sharper than [`DelaySystem::implicit_rate`]
+    /// and dearer: where h times it passes DOP853's stability bound, the step was unstable on the
+    /// implicit block. Default 0: never known to be.
+    fn implicit_rate_below(&mut self, _y: &[f64]) -> f64 {
+        0.0
+    }
     /// Solves z_I = r + c·f_I(t, z) for z_I, where on entry z_I holds r and the other components of
     /// z are final: (I + c M) z_I = r + c·c(t, z). f_I is [`DelaySystem::rhs`] on the implicit block,
     /// which must not read the past. `false` when the solve fails (the step is then rejected and
@@ -507,6 +513,9 @@ struct Steps<'a, S: DelaySystem> {
     t_end: f64,
     tau_max: f64,
     h_cap: f64,
+    /// The longest DOP853 step on the adaptive law's rate at the last step point (`law_h` in
+    /// `imex.rs`; ∞ where it sets none).
+    h_law: f64,
     t: f64,
     y: Vec<f64>,
     /// Stage derivatives k_1, …, k_16, n each (k_1 = f(t, y); k_13 = f(t_new, y_new), the FSAL stage).
@@ -580,6 +589,7 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
             t_end,
             tau_max,
             h_cap,
+            h_law: f64::INFINITY,
             t: t0,
             y: y0.to_vec(),
             k: vec![0.0; STAGES_DENSE * n],
@@ -636,10 +646,11 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
     /// The longest step the current method takes on the rate ρ ([`Options::rate`]).
     fn accurate_h(&self) -> f64 {
         let bound = if self.stiff { ARK_ACCURATE_H_RATE } else { DOP853_ACCURATE_H_RATE };
+        let on_law = if self.stiff { f64::INFINITY } else { self.h_law };
         if self.opts.rate > 0.0 {
-            bound / self.opts.rate
+            (bound / self.opts.rate).min(on_law)
         } else {
-            f64::INFINITY
+            on_law
         }
     }
 

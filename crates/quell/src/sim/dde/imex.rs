@@ -23,6 +23,8 @@ const HERMITE3_NODES: Nodes = [0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0];
 /// bound exceeds this: the bound may exceed λ_max by up to √q, so a step accuracy-limited at
 /// h λ_max ≈ 1 does not qualify.
 const STIFF_H_RATE: f64 = 4.0;
+/// A DOP853 step at least this share of the cap on the adaptive law's rate (`law_h`) was held by it.
+const LAW_HELD: f64 = 0.9;
 /// The implicit method hands back to DOP853 when its steps fall below this h · rate: DOP853 could
 /// then take steps eight times longer before meeting its stability bound, which outweighs its
 /// higher cost per step (12–13 right-hand sides against 6 and the block solves).
@@ -279,6 +281,25 @@ impl<S: DelaySystem> Steps<'_, S> {
         }
     }
 
+    /// The longest DOP853 step on the adaptive law's rate λ at the new step point, `bound` ≥ λ its
+    /// Gershgorin bound: [`DOP853_ACCURATE_H_RATE`]/λ, where the next step would pass it (λ from
+    /// [`DelaySystem::implicit_rate_below`]); ∞ where even the bound keeps it within. The cap on ρ
+    /// keeps every other mode there; this one keeps the law's. Between h·λ = 4.4 and DOP853's
+    /// stability bound 6.1 its R hardly damps (0.06 at 5 against e⁻⁵ = 0.007, 0.5 at 6): a
+    /// two-mass spring whose adaptation at 0.9ρ averaged rose to h·λ = 5.9 in a transient was 1e-3 of
+    /// u_f's peak off at rtol 1e-7 without one rejected step (helper tryout, 2026-12-06).
+    fn law_h(&mut self, bound: f64) -> f64 {
+        if self.h * bound <= super::DOP853_ACCURATE_H_RATE {
+            return f64::INFINITY;
+        }
+        let rate = self.sys.implicit_rate_below(&self.y_new);
+        if rate > 0.0 {
+            super::DOP853_ACCURATE_H_RATE / rate
+        } else {
+            f64::INFINITY
+        }
+    }
+
     /// After an accepted step under [`Method::Auto`]: on DOP853, counts the steps of a stretch that no
     /// six in a row below [`OFF_H_RATE`] interrupt, and switches to the implicit method after
     /// `patience` of them when [`LIMITED_SHARE`] of them exceed [`STIFF_H_RATE`], or after
@@ -291,6 +312,12 @@ impl<S: DelaySystem> Steps<'_, S> {
             return;
         }
         let h_rate = step.h * self.sys.implicit_rate(&self.y_new);
+        // A step the cap on the law's rate held counts as stability-limited, as one beyond
+        // STIFF_H_RATE does: held there, DOP853 crawls on a stiff law until the switch.
+        let held = step.h >= LAW_HELD * self.h_law;
+        if !self.stiff {
+            self.h_law = self.law_h(h_rate / step.h);
+        }
         let now = (step.t_new, self.stats.rhs_evals);
         let sw = &mut self.switching;
         let rate = |since: (f64, usize)| (now.0 - since.0) / (now.1 - since.1).max(1) as f64;
@@ -302,7 +329,7 @@ impl<S: DelaySystem> Steps<'_, S> {
                 return;
             }
             sw.run += 1;
-            sw.limited += usize::from(h_rate > STIFF_H_RATE);
+            sw.limited += usize::from(h_rate > STIFF_H_RATE || held);
             if sw.run == 1 {
                 (sw.since, sw.rejected_since) = (now, self.stats.rejected);
             }
