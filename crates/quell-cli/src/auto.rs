@@ -144,10 +144,7 @@ fn report_json(a: &AutoDesign) -> serde_json::Value {
     json!({
         "choices": a.choices,
         "verification": a.verification,
-        "design": crate::report::with_warnings(
-            crate::report::design_json(&a.design),
-            &quell::design::warnings(&a.design, &a.scenario.design)
-        ),
+        "design": crate::pace::design_json(&a.scenario, &a.design),
     })
 }
 
@@ -221,8 +218,7 @@ fn report_text(a: &AutoDesign) -> String {
         s.push_str(&format!("  advice: {}\n", crate::in_flags(a.clone()))); // u_limit is --u-limit here
     }
     s.push('\n');
-    s.push_str(&crate::report::design_text(&a.design));
-    s.push_str(&crate::report::warnings_text(&quell::design::warnings(&a.design, &a.scenario.design)));
+    s.push_str(&crate::pace::design_text(&a.scenario, &a.design));
     s
 }
 

@@ -269,21 +269,10 @@ fn design(args: &auto::DesignArgs) -> Result<(), Failure> {
     // The scenario's run must be able to start (its sample time against the delays, its signals
     // against t_end), or `quell run` and `quell export` would refuse what the design accepted.
     quell::sim::Run::of(&s, &d).check().map_err(|e| Failure::Input(e.to_string()))?;
-    let warnings = quell::design::warnings(&d, &s.design);
-    let estimates = pace::estimates(&s, &d);
-    let steady = s.steady_input();
     if args.json {
-        print_json(&pace::with_pace(
-            report::with_warnings(report::design_json(&d), &warnings),
-            &d,
-            &estimates,
-            &steady,
-        ));
+        print_json(&pace::design_json(&s, &d));
     } else {
-        let pace = pace::pace_text(&d, &estimates, s.simulation.t_end, s.plant.time_unit);
-        let effort =
-            pace::steady_text(&steady, &s.names.inputs(s.plant.B.ncols()), s.plant.time_unit, s.truth.is_some());
-        print_stdout(&format!("{}{pace}{effort}{}", report::design_text(&d), report::warnings_text(&warnings)));
+        print_stdout(&pace::design_text(&s, &d));
     }
     Ok(())
 }

@@ -16,6 +16,29 @@ pub fn estimates(s: &Scenario, d: &Design) -> Vec<RateEstimate> {
 
 /// `regressor_scaling`, `mu_meaning`, `adaptation` (one object per channel) and `steady_input`
 /// added to the design's JSON.
+/// The design's JSON report with its pace and steady input, as `quell design --json` writes it
+/// (the automatic design's `design` too).
+pub fn design_json(s: &Scenario, d: &Design) -> Value {
+    let warnings = quell::design::warnings(d, &s.design);
+    with_pace(
+        crate::report::with_warnings(crate::report::design_json(d), &warnings),
+        d,
+        &estimates(s, d),
+        &s.steady_input(),
+    )
+}
+
+/// The design's text report with its pace, steady input and warnings, as `quell design` prints it
+/// (the automatic design's report too: it had left out the pace, so a stiff or unexcited channel of
+/// the design it chose was seen only by running `quell design` on the written file).
+pub fn design_text(s: &Scenario, d: &Design) -> String {
+    let pace = pace_text(d, &estimates(s, d), s.simulation.t_end, s.plant.time_unit);
+    let effort =
+        steady_text(&s.steady_input(), &s.names.inputs(s.plant.B.ncols()), s.plant.time_unit, s.truth.is_some());
+    let warnings = crate::report::warnings_text(&quell::design::warnings(d, &s.design));
+    format!("{}{pace}{effort}{warnings}", crate::report::design_text(d))
+}
+
 pub fn with_pace(mut design: Value, d: &Design, estimates: &[RateEstimate], steady: &SteadyInput) -> Value {
     if let Value::Object(map) = &mut design {
         map.insert("regressor_scaling".into(), json!(d.regressor_scaling().name()));

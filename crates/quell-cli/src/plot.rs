@@ -921,11 +921,11 @@ fn grid_axis_desc(s: &quell::study::Summary, scale: AxisScale) -> String {
     x_desc + &partial(s)
 }
 
-/// "; partial: 47 of 84 runs (--resume completes it)" for a study stopped before its end (its
-/// empty grid values had looked like values with nothing to show); "" otherwise.
+/// "; partial: 47 runs done of the study's 84 (--resume completes it)" for a sweep stopped before
+/// its end (its empty grid values had looked like values with nothing to show); "" otherwise.
 fn partial(s: &quell::study::Summary) -> String {
     if s.partial {
-        format!("; partial: {} of {} runs (--resume completes it)", s.runs_done, s.study.runs)
+        format!("; partial: {} runs done of the study's {} (--resume completes it)", s.runs_done, s.study.runs)
     } else {
         String::new()
     }
@@ -1108,8 +1108,9 @@ fn draw_sweep_2d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
         // Grey cells, "—", have no median: say so where there are any; a cell whose runs did not all
         // complete counts them (a cell of 1 completed run in 6 had been drawn as the map's best).
         let grey = if s.points.iter().any(|pt| cell(pt).is_none()) { " (—: no completed run)" } else { "" };
-        let counted =
-            if s.points.iter().any(|pt| pt.completed < pt.runs) { " (k/n: completed of a cell's runs)" } else { "" };
+        let labelled = nx * ny <= 144;
+        let short = s.points.iter().any(|pt| pt.completed < pt.runs);
+        let counted = if labelled && short { " (k/n: completed of a cell's runs)" } else { "" };
         let mut chart = ChartBuilder::on(&cells)
             .caption(
                 format!("{}: median tail RMS e{grey}{counted}{}", s.study.channel(i), partial(s)),
@@ -1147,7 +1148,7 @@ fn draw_sweep_2d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
             chart
                 .draw_series(std::iter::once(Rectangle::new([(x - 0.5, y - 0.5), (x + 0.5, y + 0.5)], color.filled())))
                 .map_err(|e| e.to_string())?;
-            if nx * ny <= 144 {
+            if labelled {
                 chart
                     .draw_series(std::iter::once(Text::new(
                         text,

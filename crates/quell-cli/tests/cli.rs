@@ -757,6 +757,14 @@ fn design_auto_writes_a_complete_scenario_that_meets_the_tail_bound() {
     for key in ["design.observer_poles", "design.channel_poles", "design.mu", "design.beta", "verification"] {
         assert!(stdout(&o).contains(key), "the report explains {key}:\n{}", stdout(&o));
     }
+    // The chosen design's pace as `quell design` prints it (it had been left out, so a stiff or
+    // unexcited channel was seen only by designing the written file again).
+    let paced = quell(&["design", out.to_str().unwrap()]);
+    let pace = stdout(&paced);
+    let section = |text: &str| {
+        text.split("\nadaptation (averaged").nth(1).map(|r| r.split("\n\n").next().unwrap_or(r).to_string())
+    };
+    assert!(section(&stdout(&o)).is_some() && section(&stdout(&o)) == section(&pace), "{}", stdout(&o));
     // Two inputs: each candidate's peaks input by input, as the relaxation's effort rule judges
     // them (the first proposal's line holds one peak per input).
     let report = stdout(&o);

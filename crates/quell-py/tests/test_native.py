@@ -251,5 +251,5 @@ def test_a_diverged_runs_summary_has_no_tail():
     import matplotlib.pyplot as plt
 
     title = r.plot(channel=1).axes[0].get_title()
-    assert title.endswith(f"(diverged at t = {r.outcome['t']:.6g} s: {r.outcome['signal']})"), title
+    assert title.endswith(f"(diverged at t = {r.outcome['t']:.7g} s: {r.outcome['signal']})"), title
     plt.close("all")

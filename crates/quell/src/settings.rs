@@ -651,6 +651,15 @@ pub(crate) fn check_sample_time(t_end: f64, sample_time: f64) -> Result<(), KeyE
 mod tests {
     use super::*;
 
+    /// One decimal from 0.1 %, two significant digits below it, and 0 as 0.0 %.
+    #[test]
+    fn shares_below_a_tenth_of_a_percent_keep_two_digits() {
+        let cases = [(0.5, "50.0 %"), (0.001, "0.1 %"), (0.000999, "0.1 %"), (0.00043478, "0.043 %")];
+        for (fraction, text) in cases.into_iter().chain([(1.8e-7, "1.8e-5 %"), (0.0, "0.0 %")]) {
+            assert_eq!(fmt_percent(fraction), text, "{fraction}");
+        }
+    }
+
     /// Text that is not UTF-8 is refused with the way out; UTF-16 (a byte-order mark) is named.
     #[test]
     fn a_file_that_is_not_utf8_says_how_to_save_it() {

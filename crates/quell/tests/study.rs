@@ -503,11 +503,13 @@ fn a_draw_stiff_where_its_nominal_run_is_not_is_not_taken_for_a_runaway() {
     let failed: Vec<_> = on.iter().filter(|r| r.outcome != Outcome::Completed).map(|r| (r.run, &r.reason)).collect();
     assert!(failed.is_empty(), "{failed:?}");
     assert_eq!(timeless(&on), timeless(&off));
-    // The draws beyond the rule's budget are healthy ones (a draw of a small μ₂ converges slowly).
+    // The draws beyond the rule's budget are healthy: stiff on μ₂, whose channel converges (tail
+    // e₂ about 1e-5); channel 1's tail is its own drawn μ₁'s (up to 0.05 over these 100 s).
     let beyond: Vec<_> = on.iter().filter(|r| r.steps > 3 * nominal.steps as u64).collect();
     assert!(beyond.len() >= 2, "draws beyond the rule's 3 × {} steps: {}", nominal.steps, beyond.len());
     for r in beyond {
-        assert!(r.channels.iter().all(|c| c.tail_max_e < 0.05), "run {}: {:?}", r.run, r.channels);
+        let (e1, e2) = (r.channels[0].tail_max_e, r.channels[1].tail_max_e);
+        assert!(e2 < 1e-3 && e1 < 0.1, "run {}: {:?}", r.run, r.channels);
     }
 }
 

@@ -48,7 +48,7 @@ def _ended(outcome, unit):
     status = outcome.get("status", "completed")
     if status == "completed":
         return ""
-    at = f"at t = {outcome['t']:.6g} {unit}"
+    at = f"at t = {outcome['t']:.7g} {unit}"  # seven digits, as the CLI's fmt_instant
     if status == "diverged":
         return f" (diverged {at}: {outcome['signal']})"
     if status == "interrupted":

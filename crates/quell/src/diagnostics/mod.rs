@@ -971,9 +971,16 @@ fn horizon_advice(
                 format!("{head}; so keep {key}: {keep}")
             };
         }
+        // A μ already at the cap to its two digits keeps its value (0.1296 had been told "at most
+        // 0.12", which read as lowering it).
+        let cap = crate::settings::round_down_2(fastest);
+        let keep = if mu >= cap {
+            "where it is (at the threshold)".to_string()
+        } else {
+            format!("at most {}", fmt_short(cap))
+        };
         format!(
-            "{key} = {mu_text} is too small for the horizon: {decays}; {beyond_threshold}, so keep {key} at most {} and {}",
-            fmt_short(crate::settings::round_down_2(fastest)),
+            "{key} = {mu_text} is too small for the horizon: {decays}; {beyond_threshold}, so keep {key} {keep} and {}",
             longer(at(fastest), "even then"),
         )
     } else {
@@ -1164,6 +1171,9 @@ mod tests {
         let below = horizon_advice("design.mu[0]", 1e3, (1.2e-11, 2.25), (0.5, 1.45e6), unit);
         assert!(below.starts_with("design.mu[0] = 1000 is too small for the horizon"), "{below}");
         assert!(below.contains("so keep design.mu[0] at most 640000 and even then it needs 2.0e6 s"), "{below}");
+        // A μ at the cap to its two digits (644,444 written 640000) is kept where it is.
+        let at_cap = horizon_advice("design.mu[0]", 6.44e5, (1.2e-11, 2.25), (0.5, 1.45e6), unit);
+        assert!(at_cap.contains("so keep design.mu[0] where it is (at the threshold) and even then"), "{at_cap}");
     }
 
     /// The paper's design with a made-up run of 100 s recorded every 0.1 s (sampled at 1 ms, not

@@ -417,7 +417,8 @@ pub fn sampled_transient(result: &SimResult) -> Vec<String> {
     let lines = (0..result.m).filter_map(|i| {
         let rows = result.t.iter().zip(result.column(&result.u_f, result.m, i));
         let tail = rows.filter(|(t, _)| **t >= from).fold(0.0f64, |a, (_, u)| a.max(u.abs()));
-        let peak = result.max_uf(i);
+        // What the plant received, as the tail is (a clipping actuator's demand is not its input).
+        let peak = result.max_uf_applied(i);
         (peak >= SAMPLED_TRANSIENT * tail).then(|| {
             format!(
                 "u_f[{}] peaked at {}, {}× its peak over the tail ({}): where the continuous loop (the run without its sample time) does not, the sampling at T_s = {} {unit} makes it, even within T_s·ρ ≤ {}; then shorten T_s until the peak comes near the continuous one",

@@ -85,8 +85,9 @@ pub trait DelaySystem {
         0.0
     }
     /// A lower estimate of that rate (at most the true one), sharper than [`DelaySystem::implicit_rate`]
-    /// and dearer: where h times it passes DOP853's stability bound, the step was unstable on the
-    /// implicit block. Default 0: never known to be.
+    /// and dearer: `auto` holds DOP853's step where h times it would pass
+    /// [`DOP853_ACCURATE_H_RATE`], beyond which DOP853's R no longer damps the implicit block.
+    /// Default 0: never known to.
     fn implicit_rate_below(&mut self, _y: &[f64]) -> f64 {
         0.0
     }

@@ -162,6 +162,20 @@ mod tests {
     use super::*;
     use nalgebra::{dmatrix, dvector, DMatrix};
 
+    /// The signal with the largest share of its bound is named; a signal without a bound (∞) or
+    /// without a peak is not; nothing recorded names nothing.
+    #[test]
+    fn the_signal_nearest_its_bound_is_named_with_its_share() {
+        let bounds = Peaks([1e9, 1e9, 1e4, f64::INFINITY]);
+        let text = Peaks([2e6, 3e6, 50.0, 1e20]).nearest_bound(&bounds).unwrap();
+        assert_eq!(text, "by then xi_hat (regressor) had reached 5.00e1 in magnitude, 5.0e-3 of its divergence bound");
+        assert_eq!(Peaks([0.0; 4]).nearest_bound(&bounds), None);
+        assert!(Peaks([1.0, f64::NAN, 0.0, 0.0])
+            .nearest_bound(&bounds)
+            .unwrap()
+            .starts_with("by then x (plant state)"));
+    }
+
     #[test]
     fn the_state_scale_is_the_state_a_unit_output_needs() {
         let plant = |c: f64, x0: f64| {

@@ -410,8 +410,13 @@ impl SimResult {
     /// actuator's limit clipped it, what the controller asked for ([`SimResult::peak_demand`]); NaN
     /// where u_f was.
     pub fn max_uf(&self, i: usize) -> f64 {
-        let between = max_or_nan(peak(&self.peak_uf, i), peak(&self.peak_demand, i));
-        self.column(&self.u_f, self.m, i).fold(between, |a, u| max_or_nan(a, u.abs()))
+        max_or_nan(self.max_uf_applied(i), peak(&self.peak_demand, i))
+    }
+
+    /// max |u_f,i| the plant received, over the rows and between them ([`SimResult::peak_uf`]): at
+    /// most the true actuator's limit, unlike [`SimResult::max_uf`].
+    pub fn max_uf_applied(&self, i: usize) -> f64 {
+        self.column(&self.u_f, self.m, i).fold(peak(&self.peak_uf, i), |a, u| max_or_nan(a, u.abs()))
     }
 
     /// Whether the run reached t_end (its outcome is completed, or not set yet).

@@ -182,8 +182,9 @@ pub(crate) struct Simulated {
     /// Forced onto DOP853 on a stiff adaptive law (looked at only on `explicit`, which alone pays
     /// for the averaged law it needs).
     pub explicit_stiff: bool,
-    /// For a run its step budget or the history's cap ended, [`sim::fast_rate_culprit`].
-    pub fast_rate: Option<String>,
+    /// For a run its step budget or the history's cap ended, [`sim::budget_culprit`]: how large its
+    /// signals had grown, and a rate far faster than the loop.
+    pub budget_note: Option<String>,
     /// A run ended as diverged within its divergence bounds ([`Run::divergence_bounds`]): a
     /// `[runaway]` peak limit stopped it.
     pub peak_rule: bool,
@@ -233,7 +234,7 @@ pub(crate) fn simulate(
     // A run its own budget or the history's cap ended (not the runaway rule's budget): a rate far
     // faster than the loop may be why.
     let by_runaway = matches!(result.outcome, Some(sim::Outcome::TooManySteps { max_steps, .. }) if runaway_steps == Some(max_steps));
-    let fast_rate = (!by_runaway).then(|| sim::budget_culprit(&Run::of(s, &design), &result)).flatten();
+    let budget_note = (!by_runaway).then(|| sim::budget_culprit(&Run::of(s, &design), &result)).flatten();
     // Which limit ended a diverged run, by its absolute bounds (computed only here: a Monte Carlo
     // draw skips the averaged law they need). A fixed 1e9 had called a rule's stop on a plant in
     // small units a divergence.
@@ -243,7 +244,7 @@ pub(crate) fn simulate(
         }
         _ => false,
     };
-    Ok(Simulated { result, memory, waited, shape, runaway_steps, explicit_stiff, fast_rate, peak_rule })
+    Ok(Simulated { result, memory, waited, shape, runaway_steps, explicit_stiff, budget_note, peak_rule })
 }
 
 /// A grid value as runs.csv writes it: numbers in [`super::csv_number`]'s shortest round-trip form
@@ -290,7 +291,7 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
             memory: _memory,
             waited,
             explicit_stiff,
-            fast_rate,
+            budget_note,
             peak_rule,
         }) => {
             // The wait for memory is not the run's time.
@@ -328,7 +329,7 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                 sim::Outcome::Interrupted { .. } => return None,
                 other => row.reason = other.explain("the study's max_steps", r.time_unit).unwrap_or_default(),
             }
-            if let Some(w) = fast_rate {
+            if let Some(w) = budget_note {
                 row.reason += &format!("; {w}");
             }
         }

@@ -282,14 +282,16 @@ impl<S: DelaySystem> Steps<'_, S> {
     }
 
     /// The longest DOP853 step on the adaptive law's rate λ at the new step point, `bound` ≥ λ its
-    /// Gershgorin bound: [`DOP853_ACCURATE_H_RATE`]/λ, where the next step would pass it (λ from
-    /// [`DelaySystem::implicit_rate_below`]); ∞ where even the bound keeps it within. The cap on ρ
-    /// keeps every other mode there; this one keeps the law's. Between h·λ = 4.4 and DOP853's
-    /// stability bound 6.1 its R hardly damps (0.06 at 5 against e⁻⁵ = 0.007, 0.5 at 6): a
-    /// two-mass spring whose adaptation at 0.9ρ averaged rose to h·λ = 5.9 in a transient was 1e-3 of
-    /// u_f's peak off at rtol 1e-7 without one rejected step (helper tryout, 2026-12-06).
+    /// Gershgorin bound: [`super::DOP853_ACCURATE_H_RATE`]/λ, where the next step (the proposal
+    /// within the cap on ρ) would pass it (λ from [`DelaySystem::implicit_rate_below`]); ∞ where
+    /// even the bound keeps it within. The cap on ρ keeps every other mode there; this one keeps
+    /// the law's. Between h·λ = 4.4 and DOP853's stability bound 6.1 its R hardly damps (0.06 at 5
+    /// against e⁻⁵ = 0.007, 0.5 at 6): a two-mass spring at 1.83ρ averaged rose to h·λ = 5.9 in its
+    /// transient and was 1.2e-3 of u_f's peak off at rtol 1e-7, with one rejected attempt in 760
+    /// steps (helper tryout, 2026-12-06).
     fn law_h(&mut self, bound: f64) -> f64 {
-        if self.h * bound <= super::DOP853_ACCURATE_H_RATE {
+        let on_rho = if self.opts.rate > 0.0 { super::DOP853_ACCURATE_H_RATE / self.opts.rate } else { f64::INFINITY };
+        if self.h.min(on_rho) * bound <= super::DOP853_ACCURATE_H_RATE {
             return f64::INFINITY;
         }
         let rate = self.sys.implicit_rate_below(&self.y_new);
@@ -369,6 +371,8 @@ impl<S: DelaySystem> Steps<'_, S> {
         sw.settle = step.t_new + self.tau_max;
         self.stiff = !self.stiff;
         self.stats.switches += 1;
+        // Back on DOP853 the law's rate is measured afresh (the cap set before the switch is stale).
+        self.h_law = f64::INFINITY;
         // Back on DOP853, the Hermite stencil starts from the next step point: its earlier points
         // carry the implicit method's (lower-order) errors.
         self.fresh_stencil = !self.stiff;
