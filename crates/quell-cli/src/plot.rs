@@ -331,7 +331,10 @@ fn limit_lines<DB: DrawingBackend>(
         let line = DashedLineSeries::new([(t0, level), (t1, level)], 6, 4, grey.stroke_width(1));
         let drawn = chart.draw_series(line).map_err(|e| e.to_string())?;
         if k == 0 {
-            drawn.label(label).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], grey));
+            // Dashed in the legend too (two dashes), as the lines are.
+            drawn
+                .label(label)
+                .legend(move |(x, y)| plotters::element::DashedPathElement::new(vec![(x, y), (x + 20, y)], 6, 4, grey));
         }
     }
     Ok(())
@@ -465,6 +468,12 @@ fn draw<DB: DrawingBackend + Strokes>(
         // Two significant digits below 0.1 % ("0.0 %" hid a peak of 0.0018 %).
         let share = quell::settings::fmt_percent(peak / u);
         write!(uf_title, "; peak {share} of truth.u_max").map_err(|e| e.to_string())?;
+    }
+    // Where the limit clipped it, how much the controller asked for (summary.json's max_uf).
+    let asked = r.max_uf(i);
+    if u_max.is_some_and(|u| asked > u) {
+        write!(uf_title, "; the controller asked for up to {}", quell::settings::fmt_4(asked))
+            .map_err(|e| e.to_string())?;
     }
     let plant_input = [(format!("uf{c}"), uf)];
     let (etas, eta_title) = eta_panel(r, i, span, &channel);
@@ -740,7 +749,7 @@ impl SweepFigure {
         match self {
             SweepFigure::TailRmsE => "tail RMS e".into(),
             SweepFigure::MaxU => "max |u|".into(),
-            SweepFigure::MaxUf => "max |u_f| (plant input)".into(),
+            SweepFigure::MaxUf => "max |u_f| (plant input, as asked)".into(),
             SweepFigure::SettleT => format!("settling time, {unit}"),
         }
     }
@@ -1411,7 +1420,9 @@ fn draw_tune<DB: DrawingBackend>(
             .draw()
             .map_err(|e| e.to_string())?;
         let color = pick(c.channel);
-        chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2))).map_err(|e| e.to_string())?;
+        for run in feasible_runs(c.curve.iter().map(at)) {
+            chart.draw_series(LineSeries::new(run, color.stroke_width(2))).map_err(|e| e.to_string())?;
+        }
         chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled()))).map_err(|e| e.to_string())?;
         if !none.is_empty() {
             mark_without_objective(&mut chart, &none, (m0, m1), (y0 - band, y0, y1))?;
@@ -1423,6 +1434,23 @@ fn draw_tune<DB: DrawingBackend>(
         }
     }
     root.present().map_err(|e| e.to_string())
+}
+
+/// The runs of consecutive points among `points` (in order of μ; `None` for an evaluation without
+/// an objective): the tuning curve's line joins neighbours within a run only. Across an infeasible
+/// μ it had read as feasible there (two μ beyond a voltage limit between good ones; helper tryout,
+/// 2026-12-06).
+fn feasible_runs(points: impl Iterator<Item = Option<(f64, f64)>>) -> Vec<Vec<(f64, f64)>> {
+    let mut runs = vec![Vec::new()];
+    for p in points {
+        match p {
+            Some(xy) => runs.last_mut().expect("never empty").push(xy),
+            None if runs.last().is_some_and(|r| !r.is_empty()) => runs.push(Vec::new()),
+            None => {}
+        }
+    }
+    runs.retain(|r| !r.is_empty());
+    runs
 }
 
 /// The evaluations at log10 μ `none`, which have no objective, as crosses in the band (b, y0)
@@ -1458,6 +1486,14 @@ mod tests {
     /// A point without its upper quantile breaks the band there; the points with both keep theirs
     /// (the active-suspension study's settling-time band had vanished at every point because one
     /// point's 95 % quantile was "never settled").
+    #[test]
+    fn the_tuning_curve_breaks_at_an_infeasible_mu() {
+        let p = |x: f64| Some((x, 2.0 * x));
+        let runs = feasible_runs([None, p(1.0), p(2.0), None, None, p(3.0), None].into_iter());
+        assert_eq!(runs, vec![vec![(1.0, 2.0), (2.0, 4.0)], vec![(3.0, 6.0)]]);
+        assert!(feasible_runs([None, None].into_iter()).is_empty());
+    }
+
     #[test]
     fn a_band_breaks_where_a_point_lacks_a_quantile() {
         let low = [(0.0, 1.0), (4.0, 2.0), (7.0, 3.0)];

@@ -1328,6 +1328,11 @@ fn run_figures_show_the_actuator_limit_or_how_far_u_f_stays_from_it() {
     assert!((share - exact).abs() <= 0.034 * exact && !svg1.contains("±truth.u_max"), "{share} against {exact}");
     let svg2 = fs::read_to_string(out.join("channel2.svg")).unwrap();
     assert!(svg2.contains("±truth.u_max[1] = 10") && !svg2.contains("% of truth.u_max"));
+    // Input 2's limit clips (u_f,2 asks for about 21): the title says how much it asked for, as
+    // summary.json's max_uf; input 1's never clipped.
+    let asked = summary["channels"][1]["max_uf"].as_f64().unwrap();
+    assert!(asked > 10.0 && svg2.contains("the controller asked for up to "), "{asked}");
+    assert!(!svg1.contains("the controller asked for"));
 }
 
 /// A run that fails under the true actuator's limits says how much they clipped before the failure

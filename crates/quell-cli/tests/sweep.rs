@@ -491,7 +491,10 @@ fn a_study_without_a_grid_plots_the_distribution_over_its_draws() {
     let study = "[simulation]\nt_end = 20.0\nrtol = 1e-6\natol = 1e-6\n[monte_carlo]\nruns = 6\nseed = 3\n\"truth.A\" = { relative = 0.02 }\n";
     let (dir, svg) = sweep_figure("draws", study);
     assert_eq!(svg.matches("fraction of draws ≤ value").count(), 4 * 2, "four figures, two channels");
-    assert!(svg.contains("max |u_f| (plant input)") && svg.contains("of 6 draws have a value"), "the panels' labels");
+    assert!(
+        svg.contains("max |u_f| (plant input, as asked)") && svg.contains("of 6 draws have a value"),
+        "the panels' labels"
+    );
     assert!(dir.path().join("out/sweep.png").is_file());
 }
 
@@ -545,7 +548,7 @@ fn the_settling_time_axis_is_in_the_plants_unit_of_time() {
     let svg = fs::read_to_string(dir.join("merged/sweep.svg")).unwrap();
     assert!(svg.contains("settling time, min") && !svg.contains("settling time, s"), "the panels' titles");
     // Each channel has a panel of the plant input's peak (5), what the actuator must deliver.
-    assert_eq!(svg.matches("max |u_f| (plant input)").count(), 2 * 2, "title and y label, two channels");
+    assert_eq!(svg.matches("max |u_f| (plant input, as asked)").count(), 2 * 2, "title and y label, two channels");
 }
 
 /// The sweep's figures title each channel with its output's name, as `quell run`'s do ("Channel 1

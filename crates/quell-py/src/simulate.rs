@@ -212,7 +212,8 @@ impl PySimResult {
     fn u(&self, py: Python<'_>) -> Py<PyAny> {
         self.arrays[4].clone_ref(py)
     }
-    /// Plant inputs u_f = −K x̂ + F u_d (5), what the actuators deliver (N, m).
+    /// Plant inputs u_f = −K x̂ + F u_d (5) as the plant receives them (N, m): clipped where
+    /// `[truth] u_max` limits them (`summary()`'s `max_uf` is then the demand before the clip).
     #[getter]
     fn u_f(&self, py: Python<'_>) -> Py<PyAny> {
         self.arrays[5].clone_ref(py)
@@ -304,7 +305,7 @@ impl PySimResult {
     /// -------
     /// list of dict
     ///     Per channel: tail max |e_i| and RMS e_i over the last 10 % of the horizon
-    ///     (`tail_max_e`, `tail_rms_e`; None for a run that stopped before t_end), `max_u`, `max_uf` (the plant input),
+    ///     (`tail_max_e`, `tail_rms_e`; None for a run that stopped before t_end), `max_u`, `max_uf` (the plant input as asked: above a clipping `[truth] u_max`),
     ///     `final_eta_norm` (‖η̂_i‖ at the end), `settle_t` (2 % band; None when not settled, or only
     ///     in the last 5 % of the horizon) and `settle_note` (why settle_t is None).
     ///

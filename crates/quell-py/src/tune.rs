@@ -50,7 +50,7 @@ fn numbers(obj: Option<&Bound<'_, PyAny>>, name: &str, expected: &str) -> PyResu
 /// objective : str, optional
 ///     What each search minimizes: "settle_t" (default), "tail_rms_e" or "tail_max_e".
 /// max_u, max_uf : float or list of float, optional
-///     Limits on max |u_i| (the adaptive command) and max |u_f,i| (the plant input), one for all
+///     Limits on max |u_i| (the adaptive command) and max |u_f,i| (the plant input as asked), one for all
 ///     channels or one per channel; a point beyond one is infeasible.
 /// points : int, optional
 ///     Log-spaced values per channel before refining (default 13).

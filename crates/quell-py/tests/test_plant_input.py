@@ -189,3 +189,12 @@ def test_a_clipped_plant_input_reports_what_the_controller_asked_for(sample_time
     max_uf = r.summary()[0]["max_uf"]
     assert peak > 12.0 and peak * (1 - 1e-9) <= max_uf <= 1.02 * peak, (peak, max_uf)
     assert r.limited_fraction[0] > 0.0
+    # The figure's u_f panel says how much the controller asked for, as max_uf.
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    titles = [ax.get_title() for ax in r.plot(channel=1).axes]
+    assert any(t.endswith(f"; the controller asked for up to {max_uf:.4g}") for t in titles), titles
+    plt.close("all")

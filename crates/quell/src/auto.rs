@@ -128,7 +128,8 @@ pub struct Targets {
     /// When the averaged law should have brought the error to 0.2 % of the reference's peak (s);
     /// default: t_end/20.
     pub convergence_time: Option<f64>,
-    /// Actuator limits on |u_f,i|, the plant input u_f = −K x̂ + F u_d (5) the actuator delivers:
+    /// Actuator limits on |u_f,i|, the plant input u_f = −K x̂ + F u_d (5) as the controller asks
+    /// for it (above a clipping `[truth]` u_max, the demand):
     /// none (empty), one for every input, or one per input (inputs in different units: a
     /// vessel's thrusts in N and its yaw moment in N·m).
     pub u_limit: Vec<f64>,

@@ -177,6 +177,11 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
                 # Two significant digits below 0.1 %, as the CLI ("0.0 %" hid a peak of 0.0018 %).
                 share = f"{share:.2g}".replace("e-0", "e-") if 0 < share < 0.1 else f"{share:.1f}"
                 title_ax.set_title(f"{title_ax.get_title()}; peak {share} % of truth.u_max")
+            # Where the limit clipped it, how much the controller asked for (summary()'s max_uf).
+            asked = result.summary()[i]["max_uf"]
+            if asked is not None and asked > limit:
+                title_ax = uf_ax if len(axes) >= 5 else axes[2]
+                title_ax.set_title(f"{title_ax.get_title()}; the controller asked for up to {asked:.4g}")
         eta_ax = axes[4] if len(axes) == 6 else axes[-1]
         # As the CLI's figure: beyond MAX_LEGEND entries a legend hides the traces (q = 33 covered a
         # third of them) and the palette repeats, so the title names the range instead.

@@ -148,7 +148,8 @@ impl TuneSpec {
                     .collect(),
             }
         };
-        let (max_u, max_uf) = (limits("max_u", "max |u_i|")?, limits("max_uf", "max |u_f,i| (the plant input)")?);
+        let (max_u, max_uf) =
+            (limits("max_u", "max |u_i|")?, limits("max_uf", "max |u_f,i| (the plant input as asked)")?);
         let count = |key: &str, d: usize, min: u64| -> Result<usize, StudyError> {
             match t.get(key) {
                 None => Ok(d),
