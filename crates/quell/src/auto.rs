@@ -779,7 +779,8 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
     for c in &mut candidates {
         c.chosen = c.speed == speed;
     }
-    let advice = if within { Vec::new() } else { vec![limit_advice(targets, &kept.2)] };
+    let advice =
+        if within { Vec::new() } else { vec![limit_advice(targets, &kept.2, kept.0.scenario.actuator.as_ref())] };
     Ok(finish(
         kept,
         bound,
@@ -929,8 +930,26 @@ fn relax(
     Ok((kept, within))
 }
 
-/// Why no candidate was kept within the actuator limits: `closest` is the one nearest to them.
-fn limit_advice(targets: &Targets, closest: &Candidate) -> String {
+/// Why no candidate was kept within the actuator limits: `closest` is the one nearest to them; with
+/// a true actuator (`[truth]` u_max) that the limit to raise to would pass, that it clips there (the
+/// advice had told a ball and beam to raise u_limit past its 0.45 drive).
+fn limit_advice(targets: &Targets, closest: &Candidate, actuator: Option<&crate::settings::Actuator>) -> String {
+    let advice = limits_to_raise(targets, closest);
+    let beyond: Vec<String> = (actuator.map_or(&[][..], |a| &a.limits[..]).iter().enumerate())
+        .filter(|&(i, &u)| closest.max_uf.get(i).is_some_and(|&asked| asked > u))
+        .map(|(i, &u)| format!("truth.u_max[{i}] = {}", crate::settings::fmt_short(u)))
+        .collect();
+    if beyond.is_empty() {
+        return advice;
+    }
+    format!(
+        "{advice}; but {} clips the true plant's input below that, so asking less of the loop is the way there (a raised limit is met only through the clip, which the method does not model)",
+        beyond.join(", ")
+    )
+}
+
+/// [`limit_advice`] without the true actuator.
+fn limits_to_raise(targets: &Targets, closest: &Candidate) -> String {
     use crate::settings::{fmt_4 as four, fmt_short, round_up_2};
     let ask_less = "or ask less of the loop (smaller or slower references, a longer t_end)";
     let short = |v: &[f64]| v.iter().map(|&x| four(x)).collect::<Vec<_>>().join(", ");

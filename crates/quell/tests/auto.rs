@@ -261,6 +261,22 @@ fn the_actuator_limit_bounds_the_recorded_plant_input() {
     assert!((tight.verification.max_uf[0] - u_f).abs() <= 1e-12 * u_f && u_f > 1e-3 * free.verification.max_uf[0]);
 }
 
+/// A limit no candidate meets, where the true actuator (`[truth]` u_max) clips below the limit the
+/// advice would raise to, says so: a ball and beam with a 0.45 drive and `--u-limit 0.45` had been
+/// told to raise the limit to 0.52, past the physical one (helper tryout, 2026-12-06).
+#[test]
+fn a_limit_beyond_the_true_actuators_is_not_offered_alone() {
+    let doc: toml::Table = data("ball-beam.toml").parse().unwrap();
+    let a = auto_design(&doc, &Targets { u_limit: vec![0.45], ..Targets::default() }).unwrap();
+    let v = &a.verification;
+    assert!(!v.passed && v.max_uf[0] > 0.45, "{v:?}");
+    let advice = v.advice.iter().find(|l| l.contains("raise the actuator limit")).expect("the limit's advice");
+    assert!(advice.contains("; but truth.u_max[0] = 0.45 clips the true plant's input below that"), "{advice}");
+    // Without [truth] the same limit is met (the design then asks 0.33).
+    let free: toml::Table = data("ball-beam.toml").split("\n[truth]\n").next().unwrap().parse().unwrap();
+    assert!(auto_design(&free, &Targets { u_limit: vec![0.45], ..Targets::default() }).unwrap().verification.passed);
+}
+
 /// Targets out of range are refused before any choice or simulation, naming the field: a
 /// convergence time that is not a finite positive number or beyond t_end, limits of another count
 /// than 1 or m, or not positive.
