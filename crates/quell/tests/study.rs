@@ -235,6 +235,25 @@ fn a_limit_on_u_f_is_judged_on_the_demand_where_the_true_actuator_clips() {
     assert!(r.channels[0].chosen.is_none());
 }
 
+/// A tuning's limit on u_f above the true actuator's is cautioned before the searches: a μ within
+/// it may be clipped. At or below the clip, nothing is said.
+#[test]
+fn a_tuning_limit_above_the_true_actuators_is_cautioned() {
+    let cautions = |max_uf: &str| {
+        let scenario = quell::scenario::PAPER_EXAMPLE.to_string() + "\n[truth]\nu_max = [10.0, inf]\n";
+        let mut doc: toml::Table = format!("[tune]\nmu = [1.0, 100.0]\nmax_uf = {max_uf}\n").parse().unwrap();
+        doc.insert("scenario".into(), toml::Value::Table(scenario.parse().unwrap()));
+        quell::study::tune_cautions(&Study::from_table(&doc, None).unwrap())
+    };
+    let above = cautions("[12.0, inf]");
+    assert_eq!(above.len(), 1, "{above:?}");
+    assert!(
+        above[0].starts_with("tune.max_uf[0] = 12 is above the true actuator's truth.u_max[0] = 10: "),
+        "{above:?}"
+    );
+    assert!(cautions("[10.0, inf]").is_empty() && cautions("[5.0, 3.0]").is_empty());
+}
+
 /// Stopping a tuning keeps the points evaluated so far: on one worker thread, a stop after the
 /// third evaluation leaves exactly those three (the run under way when the flag is set completes
 /// only if it finishes before its next recorded sample, and none is under way here), no joint

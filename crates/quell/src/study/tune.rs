@@ -457,9 +457,32 @@ fn tolerance_scale(s: &Scenario, i: usize) -> f64 {
 }
 
 /// The cautions before a tuning's searches (`quell tune` and Python's `tune` print them): those of
-/// [`tune_stiff_warnings`], then [`Study::fast_rate_caution`] of its scenario.
+/// [`tune_stiff_warnings`], those of a `max_uf` above `[truth] u_max`, then
+/// [`Study::fast_rate_caution`] of its scenario.
 pub fn tune_cautions(study: &Study) -> Vec<String> {
-    tune_stiff_warnings(study).into_iter().chain(study.fast_rate_caution(&|| false)).collect()
+    let stiff = tune_stiff_warnings(study).into_iter();
+    stiff.chain(limit_above_the_clip(study)).chain(study.fast_rate_caution(&|| false)).collect()
+}
+
+/// Per input whose `tune.max_uf` is above the scenario's `[truth] u_max`: a μ within the tuning's
+/// limit may still ask more than the true actuator gives, and be clipped (a ball and beam tuned to
+/// max_uf = 1 under a 0.6 drive chose a μ asking 0.95, clipped at 1.8 % of its samples, with
+/// nothing said; helper tryout, 2026-12-06).
+pub(crate) fn limit_above_the_clip(study: &Study) -> Vec<String> {
+    let (Some(spec), Ok(s)) = (study.tune.as_ref(), Scenario::from_document(study.base())) else { return vec![] };
+    let Some(actuator) = s.actuator else { return vec![] };
+    let fmt = crate::settings::fmt_short;
+    (spec.max_uf.iter().zip(&actuator.limits).enumerate())
+        .filter(|&(_, (&wanted, &clip))| wanted > clip)
+        .map(|(i, (&wanted, &clip))| {
+            format!(
+                "tune.max_uf[{i}] = {} is above the true actuator's truth.u_max[{i}] = {}: a μ within the tuning's limit may ask more than the actuator gives and be clipped (the method has no anti-windup); give tune.max_uf[{i}] at most {} to keep u_f within it",
+                fmt(wanted),
+                fmt(clip),
+                fmt(clip)
+            )
+        })
+        .collect()
 }
 
 /// For a tuning forced onto DOP853 (`simulation.method = "explicit"`), per channel whose search runs
