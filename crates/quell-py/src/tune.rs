@@ -170,7 +170,7 @@ fn warn_choices(py: Python<'_>, study: &study::Study, result: &study::TuneResult
             &format!(
                 "channel {}: {}; mu[{i}] is the scenario's, {} (feasible[{i}] is False; the curve is in .frame)",
                 i + 1,
-                c.why_none(spec, "", study.clips_u_f()),
+                c.why_none(spec, "", study.u_max(c.channel)),
                 result.mu[i]
             ),
         )?;

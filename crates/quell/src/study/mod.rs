@@ -193,8 +193,9 @@ pub struct Study {
     pub runaway: Runaway,
     /// Channels m of the scenario.
     pub m: usize,
-    /// Whether the scenario's true actuator limits u_f (a finite `truth.u_max`), as it parsed it.
-    clips: bool,
+    /// The scenario's true actuator limits on u_f (`truth.u_max`, ∞ each without one), as it parsed
+    /// them.
+    u_max: Vec<f64>,
     fingerprint: u64,
     /// The study as one self-contained document: `scenario` the scenario table, `[simulation]`'s
     /// overrides applied to it.
@@ -389,7 +390,10 @@ impl Study {
             max_steps: read_max_steps(doc)?,
             runaway: read_runaway(doc)?,
             m: scenario.plant.m(),
-            clips: scenario.actuator.as_ref().is_some_and(|a| a.limits.iter().any(|l| l.is_finite())),
+            u_max: scenario
+                .actuator
+                .as_ref()
+                .map_or_else(|| vec![f64::INFINITY; scenario.plant.m()], |a| a.limits.clone()),
             document,
             nominal,
         })
@@ -623,7 +627,12 @@ impl Study {
 
     /// Whether the scenario's true actuator limits u_f (a finite `truth.u_max`).
     pub fn clips_u_f(&self) -> bool {
-        self.clips
+        self.u_max.iter().any(|l| l.is_finite())
+    }
+
+    /// The scenario's true actuator limit on input i (`truth.u_max[i]`), ∞ for none.
+    pub fn u_max(&self, i: usize) -> f64 {
+        self.u_max.get(i).copied().unwrap_or(f64::INFINITY)
     }
 
     /// Whether some run's true plant differs from the design model: the scenario's `[truth]`

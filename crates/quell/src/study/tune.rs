@@ -215,9 +215,11 @@ impl TuneCurve {
     /// Why no μ was chosen, the keys named after `prefix` (`"tune."` in a study file, `""` for
     /// Python's arguments): the limits the tuning was given and the objective, and when no run
     /// completed, the first run's reason (a step budget, a divergence) in place of the limits.
-    /// `clips`: the scenario's true actuator limits u_f ([`Study::clips_u_f`]), which the message
-    /// then names as a likely cause (its runs may never settle while clipped).
-    pub fn why_none(&self, spec: &TuneSpec, prefix: &str, clips: bool) -> String {
+    /// `clip`: the scenario's true actuator limit on this input ([`Study::u_max`], ∞ for none),
+    /// which the message names as a likely cause (a run may never settle while clipped) where some
+    /// run asked beyond it, or ended without figures to tell (a motor whose least demand, 19.3 V,
+    /// stayed under its 20 V drive had been told so as well).
+    pub fn why_none(&self, spec: &TuneSpec, prefix: &str, clip: f64) -> String {
         let (i, c) = (self.channel, self.channel + 1);
         let failed = self.curve.iter().find(|p| p.outcome != Outcome::Completed);
         if let (Some(first), false) = (failed, self.curve.iter().any(|p| p.outcome == Outcome::Completed)) {
@@ -267,7 +269,8 @@ impl TuneCurve {
         wanted.push(format!("a finite {}", spec.objective.name()));
         let limits = if wanted.len() > 1 { ", raise the limits" } else { "" };
         let reached = if reached.is_empty() { String::new() } else { format!(" ({})", reached.join("; ")) };
-        let clipping = if clips {
+        let clipped = |p: &TunePoint| p.figures.is_none_or(|f| f.max_uf > clip);
+        let clipping = if clip.is_finite() && self.curve.iter().any(clipped) {
             "; the scenario's truth.u_max clips u_f and the method has no anti-windup, so a clipped loop may never settle: a run of the scenario reports how often it clips"
         } else {
             ""
@@ -868,13 +871,15 @@ mod tests {
             points: 2,
             refine: 0,
         };
-        let why = curve.why_none(&spec, "tune.", false);
+        let why = curve.why_none(&spec, "tune.", f64::INFINITY);
         assert!(
             why.contains("(the least max |u_f,1| of the runs with a finite settle_t is 3.226 (at μ = 10), above tune.max_uf[0] = 1)"),
             "{why}"
         );
         assert!(!why.contains("truth.u_max"), "{why}");
-        // Through a clipping actuator the clipping is named too (tune.csv had only "never settled").
-        assert!(curve.why_none(&spec, "tune.", true).ends_with("a run of the scenario reports how often it clips"));
+        // Through a clipping actuator the clipping is named too (tune.csv had only "never settled"),
+        // where a run asked beyond it: not under a limit above every demand (3.226 here).
+        assert!(curve.why_none(&spec, "tune.", 3.0).ends_with("a run of the scenario reports how often it clips"));
+        assert!(!curve.why_none(&spec, "tune.", 3.5).contains("truth.u_max"));
     }
 }
