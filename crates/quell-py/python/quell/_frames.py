@@ -165,6 +165,7 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
         uf_ax.set(ylabel="u_f")
         limit = u_max[i] if i < len(u_max) and np.isfinite(u_max[i]) else None
         if limit is not None:
+            title_ax = uf_ax if len(axes) >= 5 else axes[2]
             finite = np.abs(result.u_f[:, i][np.isfinite(result.u_f[:, i])])
             peak = finite.max() if finite.size else 0.0
             if peak >= 0.1 * limit:
@@ -172,7 +173,6 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
                     uf_ax.axhline(level, color="0.35", linestyle="--", linewidth=1,
                                   label=f"±truth.u_max[{i}] = {limit:.6g}" if level > 0 else None)
             else:
-                title_ax = uf_ax if len(axes) >= 5 else axes[2]
                 share = 100 * peak / limit
                 # Two significant digits below 0.1 %, as the CLI ("0.0 %" hid a peak of 0.0018 %).
                 share = f"{share:.2g}".replace("e-0", "e-") if 0 < share < 0.1 else f"{share:.1f}"
@@ -180,7 +180,6 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
             # Where the limit clipped it, how much the controller asked for (summary()'s max_uf).
             asked = result.summary()[i]["max_uf"]
             if asked is not None and asked > limit:
-                title_ax = uf_ax if len(axes) >= 5 else axes[2]
                 title_ax.set_title(f"{title_ax.get_title()}; the controller asked for up to {asked:.4g}")
         eta_ax = axes[4] if len(axes) == 6 else axes[-1]
         # As the CLI's figure: beyond MAX_LEGEND entries a legend hides the traces (q = 33 covered a

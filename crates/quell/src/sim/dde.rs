@@ -644,14 +644,20 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
         self.stencil.restart(t, &self.y, &self.k[..n]);
     }
 
-    /// The longest step the current method takes on the rate ρ ([`Options::rate`]).
+    /// The longest step the current method takes: on the rate ρ ([`Options::rate`]) and, on
+    /// DOP853, on the adaptive law's (`h_law`, ∞ on the implicit method: reset at each switch and
+    /// set on DOP853's steps only).
     fn accurate_h(&self) -> f64 {
         let bound = if self.stiff { ARK_ACCURATE_H_RATE } else { DOP853_ACCURATE_H_RATE };
-        let on_law = if self.stiff { f64::INFINITY } else { self.h_law };
+        self.on_rho(bound).min(self.h_law)
+    }
+
+    /// The longest step with h·ρ ≤ `bound` ([`Options::rate`]); ∞ without a rate.
+    fn on_rho(&self, bound: f64) -> f64 {
         if self.opts.rate > 0.0 {
-            (bound / self.opts.rate).min(on_law)
+            bound / self.opts.rate
         } else {
-            on_law
+            f64::INFINITY
         }
     }
 

@@ -625,11 +625,6 @@ impl Study {
         names.map_or_else(Vec::new, |a| a.iter().filter_map(|n| n.as_str().map(str::to_string)).collect())
     }
 
-    /// Whether the scenario's true actuator limits u_f (a finite `truth.u_max`).
-    pub fn clips_u_f(&self) -> bool {
-        self.u_max.iter().any(|l| l.is_finite())
-    }
-
     /// The scenario's true actuator limit on input i (`truth.u_max[i]`), ∞ for none.
     pub fn u_max(&self, i: usize) -> f64 {
         self.u_max.get(i).copied().unwrap_or(f64::INFINITY)

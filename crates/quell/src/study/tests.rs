@@ -469,15 +469,16 @@ fn a_stop_ends_a_nominal_run_under_way() {
     assert!(s.nominal.first().is_some_and(|cell| cell.get().is_none()), "an interrupted nominal run was kept");
 }
 
-/// `clips_u_f`: the scenario's true actuator limits u_f where some truth.u_max is finite.
+/// `u_max`: the scenario's true actuator limits u_f where some truth.u_max is finite.
 #[test]
 fn a_scenario_with_finite_actuator_limits_clips() {
-    assert!(!study("").unwrap().clips_u_f());
+    let clips = |s: &Study| (0..2).any(|i| s.u_max(i).is_finite());
+    assert!(!clips(&study("").unwrap()));
     let with = |u_max: &str| {
         let text = format!("{}\n[truth]\nu_max = {u_max}\n", crate::scenario::PAPER_EXAMPLE);
         let mut doc = toml::Table::new();
         doc.insert("scenario".into(), toml::Value::Table(text.parse().unwrap()));
-        Study::from_table(&doc, None).unwrap().clips_u_f()
+        clips(&Study::from_table(&doc, None).unwrap())
     };
     assert!(with("[30.0, inf]") && with("[30, inf]"));
     assert!(!with("[inf, inf]"));

@@ -472,12 +472,11 @@ pub fn tune_cautions(study: &Study) -> Vec<String> {
 /// max_uf = 1 under a 0.6 drive chose a μ asking 0.95, clipped at 1.8 % of its samples, with
 /// nothing said; helper tryout, 2026-12-06).
 pub(crate) fn limit_above_the_clip(study: &Study) -> Vec<String> {
-    let (Some(spec), Ok(s)) = (study.tune.as_ref(), Scenario::from_document(study.base())) else { return vec![] };
-    let Some(actuator) = s.actuator else { return vec![] };
+    let Some(spec) = study.tune.as_ref() else { return vec![] };
     let fmt = crate::settings::fmt_short;
-    (spec.max_uf.iter().zip(&actuator.limits).enumerate())
-        .filter(|&(_, (&wanted, &clip))| wanted > clip)
-        .map(|(i, (&wanted, &clip))| {
+    (spec.max_uf.iter().enumerate().map(|(i, &wanted)| (i, (wanted, study.u_max(i)))))
+        .filter(|&(_, (wanted, clip))| wanted > clip)
+        .map(|(i, (wanted, clip))| {
             format!(
                 "tune.max_uf[{i}] = {} is above the true actuator's truth.u_max[{i}] = {}: a μ within the tuning's limit may ask more than the actuator gives and be clipped (the method has no anti-windup); give tune.max_uf[{i}] at most {} to keep u_f within it",
                 fmt(wanted),

@@ -290,8 +290,7 @@ impl<S: DelaySystem> Steps<'_, S> {
     /// transient and was 1.2e-3 of u_f's peak off at rtol 1e-7, with one rejected attempt in 760
     /// steps (helper tryout, 2026-12-06).
     fn law_h(&mut self, bound: f64) -> f64 {
-        let on_rho = if self.opts.rate > 0.0 { super::DOP853_ACCURATE_H_RATE / self.opts.rate } else { f64::INFINITY };
-        if self.h.min(on_rho) * bound <= super::DOP853_ACCURATE_H_RATE {
+        if self.h.min(self.on_rho(super::DOP853_ACCURATE_H_RATE)) * bound <= super::DOP853_ACCURATE_H_RATE {
             return f64::INFINITY;
         }
         let rate = self.sys.implicit_rate_below(&self.y_new);
@@ -313,12 +312,13 @@ impl<S: DelaySystem> Steps<'_, S> {
         if self.implicit.is_empty() || self.opts.method != Method::Auto {
             return;
         }
-        let h_rate = step.h * self.sys.implicit_rate(&self.y_new);
+        let bound = self.sys.implicit_rate(&self.y_new);
+        let h_rate = step.h * bound;
         // A step the cap on the law's rate held counts as stability-limited, as one beyond
         // STIFF_H_RATE does: held there, DOP853 crawls on a stiff law until the switch.
         let held = step.h >= LAW_HELD * self.h_law;
         if !self.stiff {
-            self.h_law = self.law_h(h_rate / step.h);
+            self.h_law = self.law_h(bound);
         }
         let now = (step.t_new, self.stats.rhs_evals);
         let sw = &mut self.switching;
