@@ -26,13 +26,14 @@
 //! * verification: the scenario is simulated; a channel whose tail error exceeds 1 % of its
 //!   reference's peak gets 4× its μ (up to three times, never beyond the stiffness threshold);
 //! * relaxation: the first proposal's poles and μ are the fastest the rules justify, not the
-//!   cheapest that converge. When it passes, slower candidates follow in three phases, each from the
+//!   cheapest that converge. When it passes, slower candidates follow in phases, each from the
 //!   candidate kept so far: the observer's own poles (not the plant's zeros it holds) × 2^−k, then
-//!   the channel poles with them, then μ, k ≤ [`RELAX_STEPS`], μ re-chosen by its rule, one run each;
+//!   the channel poles with them, then (while none is within the actuator limits) the channel poles
+//!   alone, then μ, k ≤ [`RELAX_STEPS`], μ re-chosen by its rule, one run each;
 //!   a phase stops at a tail beyond [`TAIL_BOUND`] / [`TAIL_MARGIN`]. Kept: the least steps ×
 //!   max(tail/bound, [`TAIL_FLOOR`])^[`TAIL_EXPONENT`]. An observer that holds the zeros of (A, D, C)
 //!   keeps the frequencies it passes within [`crate::diagnostics::FIDELITY_LIMIT`] there. At most
-//!   4 + 3·[`RELAX_STEPS`] runs;
+//!   4 + 4·[`RELAX_STEPS`] runs;
 //! * actuator limits ([`Targets::u_limit`]: one for every input, or one per input): candidates
 //!   beyond them are not kept, and the phases go on while none is within them; the first within
 //!   them needs only the bound. None within: the verification fails with the closest max |u_f,i|
@@ -587,7 +588,7 @@ type Verified = (Proposal, Design, Candidate);
 /// be missing: every key is then chosen).
 ///
 /// The rules' first proposal is verified (with up to three μ retries); when it passes, slower
-/// candidates are verified in three phases and the cheapest kept (module docs: relaxation,
+/// candidates are verified in phases and the cheapest kept (module docs: relaxation,
 /// actuator limit).
 pub fn auto_design(doc: &toml::Table, targets: &Targets) -> Result<AutoDesign, AutoError> {
     auto_design_with(doc, targets, &mut |_| ControlFlow::Continue(()))
@@ -884,14 +885,24 @@ fn relax(
     let effort_kept = |c: &Candidate| {
         !targets.u_limit.is_empty() || c.max_uf.iter().zip(&first_uf).all(|(u, u0)| *u <= EFFORT_GROWTH * u0)
     };
-    // Three phases, each from the candidate kept so far: the observer's own poles halved (1), then
-    // the channel poles with them when the observer is chosen here (2), then μ (3).
-    let phases =
-        [(relax_observer, [0, 1, 0]), (relax_channels, [1, u8::from(relax_observer), 0]), (relax_mu, [0, 0, 1])];
-    for (enabled, halved) in phases {
-        // Relax only from a candidate with a margin (or while none is within the limit).
-        let mut go_on = enabled && (!within || kept.2.tail_within(bound, TAIL_MARGIN));
-        let base = kept.2.speed;
+    // Four phases: the observer's own poles halved (1), then the channel poles with them when the
+    // observer is chosen here (2), then, while no candidate is within the actuator limit, the
+    // channel poles alone from the observer phase 1 kept (3: phase 2 slows an observer phase 1
+    // already slowed as far as the loop tolerates; a ball and beam under a 0.45 drive reached 0.52
+    // at best, where channels ×1/4 with phase 1's observer ×1/16 ask 0.33), then μ (4); each from
+    // the candidate kept so far but phase 3.
+    let phases = [
+        (relax_observer, [0, 1, 0]),
+        (relax_channels, [1, u8::from(relax_observer), 0]),
+        (relax_channels && relax_observer, [1, 0, 0]),
+        (relax_mu, [0, 0, 1]),
+    ];
+    let mut after_observer = kept.2.speed;
+    for (phase, (enabled, halved)) in phases.into_iter().enumerate() {
+        // Relax only from a candidate with a margin (or while none is within the limit); phase 3
+        // only while none is.
+        let mut go_on = enabled && (!within || (phase != 2 && kept.2.tail_within(bound, TAIL_MARGIN)));
+        let base = if phase == 2 { Speed { channel: kept.2.speed.channel, ..after_observer } } else { kept.2.speed };
         for j in 1..=RELAX_STEPS {
             if !go_on {
                 break;
@@ -925,6 +936,9 @@ fn relax(
                 kept = (p, d, c);
             }
             go_on = margin || !within;
+        }
+        if phase == 0 {
+            after_observer = kept.2.speed;
         }
     }
     Ok((kept, within))
@@ -1026,7 +1040,7 @@ fn finish(
             }
         }
         format!(
-            "{} verifying runs: from the first proposal, the observer's own poles halved (phase 1), then the channel poles with them (2), then μ (3), up to {RELAX_STEPS} times each, each phase from the candidate kept so far and stopped by a tail beyond the bound / {TAIL_MARGIN}{}; kept {speed}: {}",
+            "{} verifying runs: from the first proposal, the observer's own poles halved (phase 1), then the channel poles with them (2), then, while none is within the actuator limits, the channel poles alone from phase 1's observer (3), then μ (4), up to {RELAX_STEPS} times each, each phase from the candidate kept so far and stopped by a tail beyond the bound / {TAIL_MARGIN}{}; kept {speed}: {}",
             runs,
             if targets_limited { String::new() } else { format!(" or a max|u_f,i| beyond {EFFORT_GROWTH}× the first proposal's") },
             if targets_limited && !passed {
@@ -2038,6 +2052,24 @@ mod tests {
             let with_zeros: Vec<&String> = c.iter().filter(|c| c.1 == 1).map(|c| &c.2).collect();
             assert_eq!(with_zeros.len(), 4);
             assert!(with_zeros.iter().all(|w| w.starts_with(whose)), "{with_zeros:?}");
+        }
+    }
+
+    /// A limit no candidate meets, where the true actuator (`[truth]` u_max) clips below the limit
+    /// the advice would raise to, says so: a ball and beam with a 0.45 drive had been told to raise
+    /// `--u-limit` to 0.52, past the physical limit (helper tryout, 2026-12-06); a drive above the
+    /// candidate's demand is not named.
+    #[test]
+    fn a_limit_beyond_the_true_actuators_is_not_offered_alone() {
+        let targets = Targets { u_limit: vec![0.45], ..Targets::default() };
+        let mut closest = Candidate::ended(Speed::FIRST, 1);
+        closest.max_uf = vec![0.5156];
+        let drive = |u: f64| crate::settings::Actuator { delays: vec![0.0], limits: vec![u] };
+        let advice = limit_advice(&targets, &closest, Some(&drive(0.45)));
+        assert!(advice.contains("raise the actuator limit (u_limit) to at least 0.52"), "{advice}");
+        assert!(advice.ends_with("; but truth.u_max[0] = 0.45 clips the true plant's input below that, so asking less of the loop is the way there (a raised limit is met only through the clip, which the method does not model)"), "{advice}");
+        for actuator in [Some(drive(0.6)), None] {
+            assert_eq!(limit_advice(&targets, &closest, actuator.as_ref()), limits_to_raise(&targets, &closest));
         }
     }
 

@@ -261,20 +261,22 @@ fn the_actuator_limit_bounds_the_recorded_plant_input() {
     assert!((tight.verification.max_uf[0] - u_f).abs() <= 1e-12 * u_f && u_f > 1e-3 * free.verification.max_uf[0]);
 }
 
-/// A limit no candidate meets, where the true actuator (`[truth]` u_max) clips below the limit the
-/// advice would raise to, says so: a ball and beam with a 0.45 drive and `--u-limit 0.45` had been
-/// told to raise the limit to 0.52, past the physical one (helper tryout, 2026-12-06).
+/// A limit the channel poles alone meet is met: a ball and beam with a 0.45 drive and `--u-limit
+/// 0.45` had been refused (0.516 at best) because the relaxation slowed the channel poles only
+/// together with an observer already slowed as far as the loop tolerates; channels ×¼ with the
+/// observer phase 1 kept ask 0.333, the steady-state input itself (helper tryout, 2026-12-06).
 #[test]
-fn a_limit_beyond_the_true_actuators_is_not_offered_alone() {
+fn an_actuator_limit_met_by_the_channel_poles_alone_is_met() {
     let doc: toml::Table = data("ball-beam.toml").parse().unwrap();
     let a = auto_design(&doc, &Targets { u_limit: vec![0.45], ..Targets::default() }).unwrap();
     let v = &a.verification;
-    assert!(!v.passed && v.max_uf[0] > 0.45, "{v:?}");
-    let advice = v.advice.iter().find(|l| l.contains("raise the actuator limit")).expect("the limit's advice");
-    assert!(advice.contains("; but truth.u_max[0] = 0.45 clips the true plant's input below that"), "{advice}");
-    // Without [truth] the same limit is met (the design then asks 0.33).
-    let free: toml::Table = data("ball-beam.toml").split("\n[truth]\n").next().unwrap().parse().unwrap();
-    assert!(auto_design(&free, &Targets { u_limit: vec![0.45], ..Targets::default() }).unwrap().verification.passed);
+    assert!(v.passed && v.max_uf[0] <= 0.45, "{v:?}");
+    // The steady state alone asks 0.3333 (phasor sum of the bias's 0.0952 and the harmonic's 0.2381,
+    // `quell design`'s steady-input section): the kept candidate is within 1 % of that floor.
+    assert!(v.max_uf[0] <= 1.01 * (0.02 / 0.21 + 0.2 * 0.25 / 0.21), "{v:?}");
+    let kept = v.candidates.iter().find(|c| c.chosen).unwrap();
+    let slowest_observer = v.candidates.iter().map(|c| c.speed.observer).fold(1.0, f64::min);
+    assert!(kept.speed.observer > slowest_observer, "{v:?}");
 }
 
 /// Targets out of range are refused before any choice or simulation, naming the field: a
