@@ -494,6 +494,7 @@ impl PySimResult {
         d.set_item("peak_u", r.peak_u.clone())?;
         d.set_item("peak_uf", r.peak_uf.clone())?;
         d.set_item("peak_demand", r.peak_demand.clone())?;
+        d.set_item("peak_e", r.peak_e.clone())?;
         d.set_item("uf_terms", r.uf_terms.clone())?;
         d.set_item("diagnostics", &me.diagnostics)?;
         let l = &me.labels;
@@ -540,6 +541,8 @@ impl PySimResult {
             peak_uf: state.get_item("peak_uf")?.map_or(Ok(vec![]), |v| v.extract())?,
             // Results pickled before the actuator's demand have none.
             peak_demand: state.get_item("peak_demand")?.map_or(Ok(vec![]), |v| v.extract())?,
+            // And before the error's.
+            peak_e: state.get_item("peak_e")?.map_or(Ok(vec![]), |v| v.extract())?,
             uf_terms: state.get_item("uf_terms")?.map_or(Ok(vec![]), |v| v.extract())?,
             time_unit,
         };

@@ -248,9 +248,13 @@ pub struct Candidate {
     pub steps: usize,
     /// The candidate returned.
     pub chosen: bool,
-    /// max |e_i| over the run: the scale of a channel whose reference is 0 (regulation).
+    /// max |e_i| over the run's rows: with the tail's, whether the error grows.
     #[serde(skip)]
     peak_e: Vec<f64>,
+    /// max |e_i| over the run, at its rows and between them ([`crate::sim::SimResult::peak_error`]):
+    /// the scale of a channel whose reference is 0 (regulation), whatever the output step.
+    #[serde(skip)]
+    error_scale: Vec<f64>,
     /// max |e_i| over [0.5, 0.6]·t_end: with the tail's, whether the error still decays.
     #[serde(skip)]
     mid_max_e: Vec<f64>,
@@ -451,6 +455,7 @@ fn candidate(scenario: &Scenario, r: &crate::sim::SimResult, speed: Speed, conve
         (0..m).map(|i| r.rms_error(i, 0.9 * t_c, (1.1 * t_c).min(t_end)).unwrap_or(f64::NAN)).collect();
     let max_uf = r.summary().iter().map(|c| c.figures.max_uf).collect();
     let peak_e = (0..m).map(|i| r.max_abs_error(i, 0.0, t_end).unwrap_or(f64::NAN)).collect();
+    let error_scale = (0..m).map(|i| r.peak_error(i).unwrap_or(f64::NAN)).collect();
     let mid_max_e = (0..m).map(|i| r.max_abs_error(i, 0.5 * t_end, 0.6 * t_end).unwrap_or(f64::NAN)).collect();
     let limited_fraction = if r.limited.is_empty() { vec![] } else { r.limited_fraction() };
     Candidate {
@@ -462,6 +467,7 @@ fn candidate(scenario: &Scenario, r: &crate::sim::SimResult, speed: Speed, conve
         steps: r.stats.steps(),
         chosen: false,
         peak_e,
+        error_scale,
         mid_max_e,
         thrashing: crate::diagnostics::thrashing(&r.stats, scenario.plant.time_unit),
         uf_cancellation: (0..m).map(|i| r.uf_cancellation(i)).fold(0.0, f64::max),
@@ -481,6 +487,7 @@ impl Candidate {
             steps: 0,
             chosen: true,
             peak_e: none.clone(),
+            error_scale: none.clone(),
             mid_max_e: none,
             thrashing: None,
             uf_cancellation: 0.0,
@@ -1087,9 +1094,10 @@ fn finish(
 
 /// A channel whose reference is 0 throughout (a regulated output) has a bound of 0, which no tail
 /// meets: [`TAIL_BOUND`] times its error's peak in the first verifying run instead, the scale the
-/// run's diagnostics use.
+/// run's diagnostics use; at the rows and between them, so that the output step does not set it (a
+/// boiler's drum level passed at rows 0.1 min apart and failed at 1 min, the same run).
 fn regulated_bounds(bound: &mut [f64], first: &Candidate) {
-    for (b, peak) in bound.iter_mut().zip(&first.peak_e) {
+    for (b, peak) in bound.iter_mut().zip(&first.error_scale) {
         if *b == 0.0 && peak.is_finite() {
             *b = TAIL_BOUND * peak;
         }
@@ -2057,7 +2065,7 @@ mod tests {
 
     /// A limit no candidate meets, where the true actuator (`[truth]` u_max) clips below the limit
     /// the advice would raise to, says so: a ball and beam with a 0.45 drive had been told to raise
-    /// `--u-limit` to 0.52, past the physical limit (helper tryout, 2026-12-06); a drive above the
+    /// `u_limit` to 0.52, past the physical limit (helper tryout, 2026-12-06); a drive above the
     /// candidate's demand is not named.
     #[test]
     fn a_limit_beyond_the_true_actuators_is_not_offered_alone() {

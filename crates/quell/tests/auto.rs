@@ -1479,3 +1479,32 @@ fn a_design_whose_input_cancels_thousands_of_times_is_cautioned_before_it_is_sam
     let ratio = paper.verification.uf_cancellation;
     assert!(ratio < SAMPLED_CANCELLATION && paper.cancellation_warning().is_none(), "{ratio}");
 }
+
+/// A regulated channel's bound (1 % of its error's peak: its reference is 0) is read at the rows
+/// and between them, so the output step does not set it: a boiler's drum level passed its
+/// verification with rows 0.1 min apart and failed with rows 1 min apart, the same run (its peak
+/// between rows; helper tryout, 2026-12-06). A ball and beam holding r = 0 against a tilt: its
+/// error peaks within the first 30 s, which rows 30 s apart miss (their bound was 2.5e-4 against
+/// 2.3e-3).
+#[test]
+fn a_regulated_channels_bound_does_not_depend_on_the_output_step() {
+    let regulated = |step: f64| -> toml::Table {
+        let text = data("ball-beam.toml")
+            .replace(
+                "components = [ { bias = 0.1, harmonics = [{ amplitude = 0.2, frequency = 0.5 }] } ]",
+                "components = [ { bias = 0.0 } ]",
+            )
+            .replace("output_step = 0.01", &format!("output_step = {step}"));
+        assert!(text.contains("{ bias = 0.0 }") && text.contains(&format!("output_step = {step}")));
+        text.split("\n[truth]\n").next().unwrap().parse().unwrap()
+    };
+    let bound = |step: f64| {
+        let a = auto_design(&regulated(step), &Targets::default()).unwrap();
+        (a.verification.bound[0], a.verification.passed)
+    };
+    let (fine, coarse) = (bound(0.01), bound(30.0));
+    assert!(fine.1 && coarse.1, "{fine:?} {coarse:?}");
+    // Both are the peak over the solver's step ends (finer than the rows 0.01 s apart here): the
+    // same steps, so the same peak but for the rows, to 1e-6 (the peak is flat where it falls).
+    assert!((fine.0 - coarse.0).abs() <= 1e-5 * fine.0, "{fine:?} {coarse:?}");
+}

@@ -187,27 +187,33 @@ fn sampled_rows_fall_on_the_output_grid() {
     assert_eq!(r.t, expected);
 }
 
-/// The peaks of u and u_f count the solver's step ends (continuous loop) and every controller step
-/// (sampled), not only the rows: the paper's example with rows 10 s apart reports max |u_i| and
-/// max |u_f,i| within 2 % of what rows 1 ms apart read (the same trajectory: the output step does
+/// The peaks of u, u_f and e count the solver's step ends (continuous loop) and every controller
+/// step (sampled), not only the rows: the paper's example with rows 10 s apart reports max |u_i|,
+/// max |u_f,i| and max |e_i| ([`SimResult::peak_error`]) within 2 % of what rows 1 ms apart read (the same trajectory: the output step does
 /// not move the steps, whose ends are ~0.15 s apart, ±1.2 % of a 2 rad/s peak), where those 11
-/// rows alone read up to 40 % less; and never above it (a step end is a point of that trajectory;
+/// rows alone read up to 40 % less (e: 85 %); and never above it (a step end is a point of that trajectory;
 /// 1e-6 for the fine rows' own sampling). Sampled, rows 1 s apart report the peaks of rows at every
 /// sample exactly. The fine rows' peak equals the summary's.
 #[test]
 fn the_input_peaks_count_what_falls_between_rows_and_states_are_recorded_only_when_asked() {
     let d = Design::new(&paper_plant(), &paper_spec()).unwrap();
     let (g, w) = paper_signals();
-    let figures = |r: &SimResult| r.summary().iter().map(|c| [c.figures.max_u, c.figures.max_uf]).collect::<Vec<_>>();
+    let figures = |r: &SimResult| {
+        r.summary()
+            .iter()
+            .enumerate()
+            .map(|(i, c)| [c.figures.max_u, c.figures.max_uf, r.peak_error(i).unwrap()])
+            .collect::<Vec<_>>()
+    };
     let rows_peak =
         |r: &SimResult, column: &[f64], i: usize| r.column(column, 2, i).fold(0.0, |a: f64, v| a.max(v.abs()));
     let fine = run_paper(paper_spec(), 100.0, 0.001, 1e-9);
     let coarse = run_paper(paper_spec(), 100.0, 10.0, 1e-9);
     for (i, (f, c)) in figures(&fine).iter().zip(figures(&coarse)).enumerate() {
         assert_eq!(f[1], rows_peak(&fine, &fine.u_f, i), "the fine rows hold the peak");
-        for k in 0..2 {
-            let rows = rows_peak(&coarse, [&coarse.u, &coarse.u_f][k], i);
-            println!("channel {i} {}: fine {:.4}, coarse {:.4}, its rows {rows:.4}", ["u", "u_f"][k], f[k], c[k]);
+        for k in 0..3 {
+            let rows = rows_peak(&coarse, [&coarse.u, &coarse.u_f, &coarse.e][k], i);
+            println!("channel {i} {}: fine {:.4}, coarse {:.4}, its rows {rows:.4}", ["u", "u_f", "e"][k], f[k], c[k]);
             assert!(c[k] >= 0.98 * f[k] && c[k] <= f[k] * (1.0 + 1e-6), "channel {i}: {c:?} against {f:?}");
         }
         assert!(c[1] != c[0], "u_f is not the command u: {c:?}");

@@ -811,14 +811,14 @@ fn tail_windows(result: &SimResult, i: usize) -> Option<(f64, f64)> {
     Some((rms(t1 - 0.1 * span, t1)?, rms(t1 - 0.2 * span, t1 - 0.1 * span)?))
 }
 
-/// Channel i's scale: the peak of |g_i| over the run, or of |e_i| for a reference that is zero.
+/// Channel i's scale: the peak of |g_i| over the run, or for a reference that is zero of |e_i|, at
+/// the rows and between them ([`SimResult::peak_error`]: not set by the output step).
 fn scale(result: &SimResult, i: usize) -> f64 {
-    let peak = |signal: &[f64]| result.column(signal, result.m, i).fold(0.0f64, |p, v| p.max(v.abs()));
-    let g = peak(&result.g);
+    let g = result.column(&result.g, result.m, i).fold(0.0f64, |p, v| p.max(v.abs()));
     if g > 0.0 {
         g
     } else {
-        peak(&result.e)
+        result.peak_error(i).unwrap_or(0.0)
     }
 }
 

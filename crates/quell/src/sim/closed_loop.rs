@@ -231,6 +231,15 @@ impl<'a> ContinuousLoop<'a> {
         Watched { xi_hat: eq.regressor(s), x_hat: eq.x_hat(s), eta: &s[l.nz..l.x], x: &s[l.x..l.x + eq.n] }
     }
 
+    /// [g; ω] at t and the output y = C x + Q ω (1) in the state s, into the record's buffers.
+    fn output(&mut self, t: f64, s: &[f64], rec: &mut Record) {
+        self.signals.eval_into_unchecked(t, &mut rec.gw);
+        let w = &rec.gw[self.eq.m..];
+        let x = self.watched(s).x;
+        mat_vec(self.C, x, &mut rec.y, false);
+        mat_vec(self.Q, &w[..self.Q.ncols()], &mut rec.y, true);
+    }
+
     /// The commands u_i = −η̂_iᵀ ξ̂ (25) in the state s, into `u`.
     fn commands(&self, s: &[f64], u: &mut [f64]) {
         let (eq, l) = (&self.eq, &self.layout);
@@ -392,6 +401,8 @@ impl DelaySystem for ContinuousLoop<'_> {
             if let Some(act) = &self.actuator {
                 rec.result.record_demand(&act.demand);
             }
+            self.output(t, s, &mut rec);
+            rec.result.record_error_peak(&rec.y, &rec.gw[..self.eq.m]);
         }
         self.record = Some(rec);
         flow
@@ -401,15 +412,12 @@ impl DelaySystem for ContinuousLoop<'_> {
     /// bound: then the run ends as diverged.
     fn observe(&mut self, t: f64, s: &[f64], past: &Past<'_>) -> ControlFlow<()> {
         let Some(mut rec) = self.record.take() else { return ControlFlow::Continue(()) };
-        let eq = &self.eq;
         let watched = self.watched(s);
         let (x_hat, eta, x) = (watched.x_hat, watched.eta, watched.x);
         let flow = rec.watch(t, watched);
         if flow.is_continue() {
-            self.signals.eval_into_unchecked(t, &mut rec.gw);
-            let (g, w) = rec.gw.split_at(eq.m);
-            mat_vec(self.C, x, &mut rec.y, false);
-            mat_vec(self.Q, &w[..self.Q.ncols()], &mut rec.y, true);
+            self.output(t, s, &mut rec);
+            let g = &rec.gw[..self.eq.m];
             self.commands(s, &mut rec.u);
             self.plant_input(t, s, past, &mut rec.u_f);
             let states = rec.states.then_some((x, x_hat));

@@ -586,6 +586,7 @@ fn sampled_loop<C: SampledController + ?Sized>(
         }
         plant.input(k, ctrl.command());
         result.record_input_peaks(ctrl.command(), &plant.u_f);
+        result.record_error_peak(&plant.y, &plant.g);
         if let Some(a) = &plant.actuator {
             result.record_demand(&a.demand);
         }
