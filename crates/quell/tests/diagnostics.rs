@@ -409,6 +409,37 @@ fn filter_poles_far_from_the_signals_frequencies_are_named() {
     assert!(a.contains("design.disturbance_filter_poles (|p| from 1005 to 2262 rad/ms) are 667× faster"), "{a}");
 }
 
+/// Where the filters are off the signals' scale, a rescaling of the disturbance read from Ω̄'s
+/// spread is not offered as well: a distillation column whose reference filters were given
+/// 19,000× too fast (rad/s typed for rad/min) had been told both to bring the poles to the
+/// frequencies and to multiply plant.D and plant.Q by 1.3e15 (helper tryout, 2026-12-06), two
+/// remedies of which the second rewrites the plant for nothing.
+#[test]
+fn filters_off_scale_are_not_mistaken_for_a_units_mismatch() {
+    let path = format!("{}/tests/data/vinante-luyben.toml", env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(path).unwrap();
+    let fast = text
+        .replace(
+            "reference_filter_poles = [[-0.1, -0.2, -0.3], [-0.1]]",
+            "reference_filter_poles = [[-3000.0, -6000.0, -9000.0], [-1000.0]]",
+        )
+        .replace("t_end = 1200.0", "t_end = 30.0");
+    assert!(fast.contains("-9000.0") && fast.contains("t_end = 30.0"));
+    let s = Scenario::from_toml(&fast).unwrap();
+    let d = s.design().unwrap();
+    let r = Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
+    let diagnostics = diagnose(&d, &s.reference, &s.disturbance, &r);
+    let advice = diagnostics.advice.join("\n");
+    assert!(
+        advice.contains("design.reference_filter_poles (|p| from 1000 to 9000 rad/min) are 19099× faster"),
+        "{advice}"
+    );
+    // What the rescaling would answer: a direction no μ converges (before, this led to it).
+    let channels: Vec<&String> = diagnostics.channels.iter().flat_map(|c| &c.advice).collect();
+    assert!(channels.iter().any(|a| a.contains("excite that direction more")), "{channels:?}");
+    assert!(!advice.contains("express the disturbance in"), "{advice}");
+}
+
 /// Resonators at the signals' own frequencies but near the imaginary axis (−1e-6 ± jω, given by
 /// hand): ξ̂ builds up at the rate |Re p| = 1e-6/s, so over 100 s it stays near zero and the loop
 /// does not converge, while the averaged pace (the steady state's) promises convergence in seconds.

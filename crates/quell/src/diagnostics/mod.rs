@@ -325,9 +325,9 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
     let coarse = coarse_advice(design, result, rho, missed);
     let tunable = coarse.is_none();
     advice.extend(coarse);
-    if missed {
-        advice.extend(filter_scale_advice(design, signals));
-    }
+    let filters_off_scale = missed.then(|| filter_scale_advice(design, signals)).flatten();
+    let off_scale = filters_off_scale.is_some();
+    advice.extend(filters_off_scale);
     // Not from a run that ended early: its last sample is no t_end (a diverged ship's 25.5 s).
     let transient = (missed && completed).then(|| slow_transient_advice(design, t_end)).flatten();
     let settling = transient.is_some();
@@ -352,7 +352,10 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
         .map(|(i, c)| channel(design, i, c, &avg.fidelity, result, (t_end, stiff, tunable, settling), &remedy))
         .collect();
     // A direction no μ converges, where the cause is g's and ω's units: the way out is a rescaling.
-    if channels.iter().flat_map(|c| &c.advice).any(|a| a.contains("excite that direction more")) {
+    // Not where the filters are off the signals' scale: bringing them to it changes Ω̄'s spread, so
+    // a scale s read from it would have the plant rewritten for nothing (1.3e15 for a column whose
+    // reference filters were 19,000× too fast).
+    if !off_scale && channels.iter().flat_map(|c| &c.advice).any(|a| a.contains("excite that direction more")) {
         advice.extend(unit_mismatch(&avg, signals));
         advice.extend(crate::auto::modal_advice(signals, design));
     }
