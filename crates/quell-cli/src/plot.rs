@@ -995,26 +995,55 @@ fn draw_sweep_panel<DB: DrawingBackend>(
         .label_style(("sans-serif", 13))
         .draw()
         .map_err(|e| e.to_string())?;
-    let medians = draw_quantile_bands(&mut chart, &at, pick(i), 0.01 * (x1 - x0))?;
-    if medians < s.points.len() {
+    // A settling time some draws never reached: its upper quantiles are "never", beyond any value
+    // on the axis, so their bands run to its top (they had vanished, leaving a median alone that
+    // looked certain where a quarter of the draws never settled).
+    let settling = matches!(figure, SweepFigure::SettleT);
+    let never = |pt: &quell::study::PointSummary| pt.channels[i].never_settled.filter(|&f| settling && f > 0.0);
+    let most_never = s.points.iter().filter_map(never).fold(0.0, f64::max);
+    let band_at = |p: f64| -> Vec<(f64, f64)> {
+        s.points
+            .iter()
+            .filter_map(|pt| match figure.quantiles(&pt.channels[i]).at(p) {
+                Some(v) => Some((x[pt.point], if log { v.log10() } else { v })),
+                None => never(pt).map(|_| (x[pt.point], y1)),
+            })
+            .collect()
+    };
+    let medians = draw_quantile_bands(&mut chart, (&at, &band_at), pick(i), 0.01 * (x1 - x0))?;
+    if most_never > 0.0 {
+        let note = never_settled_note(most_never, medians < s.points.len());
+        missing_median_note(&mut chart, note, (empty, &at(0.5)), (x0, x1), (y0, y1))?;
+    } else if medians < s.points.len() {
         let note = missing_median(figure, empty);
         missing_median_note(&mut chart, note, (empty, &at(0.5)), (x0, x1), (y0, y1))?;
     }
     Ok(())
 }
 
-/// The 5–95 % and 25–75 % bands and the median line of the quantile curves `at(p)`, in `color`
-/// (a band of one point: a bar `half_width` either side of it); returns the number of points that
-/// have a median.
+/// The settling-time panel's note where draws never settled: the largest share at a grid point,
+/// and that the bands run to the top (and, `median_missing`, why some points have no median).
+fn never_settled_note(most: f64, median_missing: bool) -> [String; 2] {
+    let then = if median_missing {
+        "bands run to the top; no median where half or more"
+    } else {
+        "their bands run to the top"
+    };
+    [format!("up to {} of a point's draws never settled:", quell::settings::fmt_percent(most)), then.into()]
+}
+
+/// The 5–95 % and 25–75 % bands of the quantile curves `band_at(p)` and the median line of
+/// `at(0.5)`, in `color` (a band of one point: a bar `half_width` either side of it); returns the
+/// number of points that have a median.
 fn draw_quantile_bands<DB: DrawingBackend>(
     chart: &mut Chart<'_, DB>,
-    at: &dyn Fn(f64) -> Vec<(f64, f64)>,
+    (at, band_at): (&dyn Fn(f64) -> Vec<(f64, f64)>, &dyn Fn(f64) -> Vec<(f64, f64)>),
     color: RGBAColor,
     half_width: f64,
 ) -> Result<usize, String> {
     for (a, b, alpha) in [(Q[0], Q[4], 0.15), (Q[1], Q[3], 0.3)] {
         let style = color.mix(alpha).filled();
-        for span in band_spans(&at(a), &at(b)) {
+        for span in band_spans(&band_at(a), &band_at(b)) {
             if let [(x, lo, hi)] = span[..] {
                 let bar = Rectangle::new([(x - half_width, lo), (x + half_width, hi)], style);
                 chart.draw_series(std::iter::once(bar)).map_err(|e| e.to_string())?;
@@ -1613,7 +1642,7 @@ mod tests {
             let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
             let mut chart = ChartBuilder::on(&root).build_cartesian_2d(0.0..2.0, 0.0..10.0).unwrap();
             let at = |p: f64| vec![(1.0, 2.0 + 6.0 * p)]; // 5 %: 2.3, 95 %: 7.7
-            draw_quantile_bands(&mut chart, &at, BLUE.into(), 0.1).unwrap();
+            draw_quantile_bands(&mut chart, (&at, &at), BLUE.into(), 0.1).unwrap();
             root.present().unwrap();
         }
         let tinted = |x: u32, y: u32| {

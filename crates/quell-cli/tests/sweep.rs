@@ -459,6 +459,29 @@ fn sweep_figure(tag: &str, study: &str) -> (tempfile::TempDir, String) {
     (dir, svg)
 }
 
+/// A settling-time panel where some draws never settled says how many at most and draws their
+/// bands to the top of the axis (the upper quantiles are "never"): the bands had vanished and left
+/// a median that looked certain where a quarter of a column's draws never settled (helper tryout,
+/// 2026-12-06). The paper's loop over 90 s, where it settles near the horizon; the note's share is
+/// summary.json's largest `never_settled`, and only the settling-time panels carry it.
+#[test]
+fn a_settling_time_panel_counts_the_draws_that_never_settled() {
+    let study = "[simulation]\nt_end = 90.0\nrtol = 1e-6\natol = 1e-6\n[grid]\n\"design.mu[0]\" = [20.0, 40.0]\n[monte_carlo]\nruns = 4\nseed = 5\n\"truth.A\" = { relative = 0.02 }\n";
+    let (dir, svg) = sweep_figure("never-settled", study);
+    let summary: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(dir.path().join("out/summary.json")).unwrap()).unwrap();
+    let points = summary["points"].as_array().unwrap();
+    let never =
+        |i: usize| points.iter().map(|p| p["channels"][i]["never_settled"].as_f64().unwrap()).fold(0.0, f64::max);
+    let shares: Vec<f64> = (0..2).map(never).filter(|&f| f > 0.0).collect();
+    assert!(!shares.is_empty(), "the study should have draws that never settled: {summary}");
+    assert_eq!(svg.matches("never settled:").count(), shares.len(), "one note per settling-time panel with some");
+    for f in shares {
+        let note = format!("up to {:.1} % of a point&apos;s draws never settled:", 100.0 * f);
+        assert!(svg.contains(&note), "{note}");
+    }
+}
+
 /// A heat map's cell whose runs did not all complete counts them under its median (a cell where 1
 /// run of 6 completed had been drawn as the map's best, with nothing to tell it from a full one;
 /// helper tryout, 2026-12-06): the paper's loop with τ₂ of the true plant at 3.0 s (the design's:
