@@ -1032,12 +1032,15 @@ fn never_settled_note(most: f64, median_missing: bool) -> [String; 2] {
     [format!("up to {} of a point's draws never settled:", quell::settings::fmt_percent(most)), then.into()]
 }
 
+/// A figure's quantile at level p at each grid point, as (x, value) points.
+type QuantileCurve<'a> = &'a dyn Fn(f64) -> Vec<(f64, f64)>;
+
 /// The 5–95 % and 25–75 % bands of the quantile curves `band_at(p)` and the median line of
 /// `at(0.5)`, in `color` (a band of one point: a bar `half_width` either side of it); returns the
 /// number of points that have a median.
 fn draw_quantile_bands<DB: DrawingBackend>(
     chart: &mut Chart<'_, DB>,
-    (at, band_at): (&dyn Fn(f64) -> Vec<(f64, f64)>, &dyn Fn(f64) -> Vec<(f64, f64)>),
+    (at, band_at): (QuantileCurve<'_>, QuantileCurve<'_>),
     color: RGBAColor,
     half_width: f64,
 ) -> Result<usize, String> {
