@@ -102,7 +102,8 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
         code.constant_bytes,
         code.state_bytes
     );
-    for w in code.warnings() {
+    let unit = fmu.as_ref().and_then(|f| quell::export::time_unit_warning(&design, sample_time, f.version));
+    for w in code.warnings().chain(unit) {
         eprintln!("⚠ warning: {}", crate::in_flags(w));
     }
     Ok(())

@@ -120,7 +120,7 @@ fn main() -> ExitCode {
 }
 
 /// Library keys that a flag sets, as the CLI names them.
-const FLAGS: [(&str, &str); 8] = [
+const FLAGS: [(&str, &str); 9] = [
     ("simulation.sample_time", "simulation.sample_time (--sample-time)"),
     ("simulation.t_end", "simulation.t_end (--t-end)"),
     ("simulation.output_step", "simulation.output_step (--output-step)"),
@@ -129,6 +129,7 @@ const FLAGS: [(&str, &str); 8] = [
     ("prefix", "--prefix"),
     ("precision", "--precision"),
     ("compiler", "--compiler"),
+    ("fmi_version", "--fmi-version"),
 ];
 
 /// The scenario's keys (`simulation.*`) that the command's flags set: only a message on one of

@@ -231,6 +231,27 @@ fn export_fmu_writes_one_archive_or_fails_with_1() {
     assert!(!bad.exists(), "the output directory was touched");
 }
 
+/// An FMI 2.0 FMU of a plant in ms is cautioned (FMI 2.0 has no unit of time: a master stepping at
+/// the sample time in seconds runs it 1000× slow), naming the flag that declares it; FMI 3.0 is not.
+#[test]
+fn an_fmi2_fmu_in_milliseconds_is_cautioned_naming_the_flag() {
+    let dir_tmp = temp_dir("fmu-ms");
+    let dir = dir_tmp.path();
+    let text = std::fs::read_to_string(example("three-channel.toml")).unwrap();
+    let ms = dir.join("ms.toml");
+    std::fs::write(&ms, text.replacen("[plant]\n", "[plant]\ntime_unit = \"ms\"\n", 1)).unwrap();
+    let export = |version: &str| {
+        let (scenario, out) = (ms.to_str().unwrap(), dir.to_str().unwrap());
+        let args = ["export", scenario, "--sample-time", "0.05", "--out", out, "--fmu", "--compiler", "none"];
+        let o = quell(&[&args[..], &["--fmi-version", version]].concat());
+        assert!(o.status.success(), "{}", stderr(&o));
+        stderr(&o)
+    };
+    let e = export("2");
+    assert!(e.contains("⚠ warning: FMI 2.0 has no unit of time: an importer reads this FMU's times in seconds (its stepSize 0.05, the sample time), while the plant model's are in milliseconds, so a master stepping 0.05 s runs the controller 1000× too slow; export it as FMI 3.0 (--fmi-version)"), "{e}");
+    assert!(!export("3").contains("no unit of time"));
+}
+
 #[path = "../../quell/tests/c_harness/mod.rs"]
 mod c_harness;
 

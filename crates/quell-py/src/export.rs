@@ -176,7 +176,8 @@ pub fn export(
         })
         .map_err(raise)?;
     crate::errors::warn_coarse_sample(py, &design, &signals.0, &signals.1, T, None)?;
-    for w in code.warnings() {
+    let unit = archive.as_ref().and_then(|a| quell::export::time_unit_warning(&design, T, a.version));
+    for w in code.warnings().chain(unit) {
         crate::errors::warn(py, &w)?;
     }
     let out = out.unwrap_or_else(|| PathBuf::from("."));

@@ -156,6 +156,26 @@ def test_fmi3_time_is_declared_in_the_plants_unit(tmp_path, unit, symbol, factor
     assert declared.name == symbol and declared.baseUnit.s == 1 and declared.baseUnit.factor == factor
 
 
+@pytest.mark.parametrize("unit, version, warned", [("ms", 2, "1000× too slow"), ("min", 2, "60× too fast"),
+                                                    ("ms", 3, None), ("s", 2, None)])
+def test_fmi2_of_a_plant_not_in_seconds_is_cautioned(tmp_path, unit, version, warned):
+    """FMI 2.0 has no unit of time (importers count seconds): an FMU of a plant in ms or min is
+    cautioned with the factor a master stepping at the sample time in seconds gets wrong (a maglev
+    in ms had been exported without a word); FMI 3.0 declares the unit, and seconds need nothing."""
+    import warnings
+    text = (EXAMPLES / "three-channel.toml").read_text().replace("[plant]\n", f'[plant]\ntime_unit = "{unit}"\n', 1)
+    path = tmp_path / "plant.toml"
+    path.write_text(text)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        quell.export(quell.Scenario.load(path), 0.05, out=tmp_path, fmu=True, fmi_version=version, compiler="none")
+    texts = [str(w.message) for w in caught if "FMI 2.0 has no unit of time" in str(w.message)]
+    if warned is None:
+        assert texts == []
+    else:
+        assert len(texts) == 1 and warned in texts[0] and "(fmi_version)" in texts[0], texts
+
+
 @pytest.mark.parametrize("version", [2, 3])
 def test_variable_descriptions_name_the_plants_signals(tmp_path, version):
     """The plant's `outputs` and `inputs` names go into the variables' descriptions (y_i, g_i and u_i

@@ -123,6 +123,22 @@ pub struct Fmu {
     pub version: FmiVersion,
 }
 
+/// For an FMI 2.0 FMU of a plant not in seconds, the caution that FMI 2.0 has no unit of time: an
+/// importer reads the FMU's times in seconds, so a master stepping at the sample time runs the
+/// controller that many times slow or fast (a maglev written in ms, stepped at 0.1 s, 1000× slow;
+/// helper tryout, 2026-12-06). FMI 3.0 declares the unit. `None` otherwise.
+pub fn time_unit_warning(design: &Design, sample_time: f64, version: FmiVersion) -> Option<String> {
+    let unit = design.plant().time_unit;
+    let seconds = unit.seconds();
+    (version == FmiVersion::V2 && seconds != 1.0).then(|| {
+        let (factor, pace) = if seconds < 1.0 { (1.0 / seconds, "slow") } else { (seconds, "fast") };
+        format!(
+            "FMI 2.0 has no unit of time: an importer reads this FMU's times in seconds (its stepSize {sample_time}, the sample time), while the plant model's are in {}, so a master stepping {sample_time} s runs the controller {factor}× too {pace}; export it as FMI 3.0 (fmi_version), which declares the unit, or write the plant in seconds (docs/deployment.md, \"Units of time\")",
+            unit.name()
+        )
+    })
+}
+
 /// Generates the FMI `version` FMU of `design` at `sample_time`: the controller of [`generate`],
 /// wrapped. With a `compiler` (a C99 compiler taking gcc's flags: `gcc`, `cc`, `clang`) the archive
 /// also holds the binary for this machine's platform, compiled with `-std=c99 -O2
