@@ -1081,7 +1081,7 @@ fn a_coarse_sample_time_is_warned_of() {
     };
     let w = run("0.05").expect("T_s = 0.05 s warns");
     assert!(
-        w.starts_with("⚠ warning: ") && w.contains("is 0.45 of the loop's fastest time constant 1/ρ (ρ = 9 /s"),
+        w.starts_with("⚠ warning: ") && w.contains("is 0.45× the loop's fastest time constant 1/ρ (ρ = 9 /s"),
         "{w}"
     );
     let suggested: f64 = w.split("choose T_s ≤ ").nth(1).and_then(|r| r.split(' ').next()).unwrap().parse().unwrap();

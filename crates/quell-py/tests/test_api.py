@@ -284,7 +284,7 @@ def test_a_sample_time_given_to_load_reads_the_file_as_its_sampled_scenario(tmp_
     # 0.25 s fits the delays; the file's output step (0.1 s) does not, and simulate may set another.
     quarter = quell.Scenario.load(EXAMPLES / "paper.toml", sample_time=0.25)
     assert quarter.simulation["sample_time"] == 0.25
-    with pytest.warns(UserWarning, match="T_s = 0.25 s is 2.25 of the loop's fastest time constant"):
+    with pytest.warns(UserWarning, match="T_s = 0.25 s is 2.25× the loop's fastest time constant"):
         assert quell.simulate(quarter, t_end=2.0, output_step=0.5).t[-1] == 2.0
     # A bad sample time is the scenario's check's, naming the argument (it had named the file's key).
     for bad in (-1.0, 0.0, float("nan"), float("inf")):
@@ -338,7 +338,7 @@ def test_a_stopped_runs_log_panel_shows_the_growth():
     matplotlib = pytest.importorskip("matplotlib")
     matplotlib.use("Agg")
     text = (EXAMPLES / "paper.toml").read_text().replace("output_step = 0.1 ", "output_step = 0.5 ")
-    with pytest.warns(UserWarning, match=r"^sample_time: T_s = 0.5 s is 4.50 of the loop's fastest time constant"):
+    with pytest.warns(UserWarning, match=r"^sample_time: T_s = 0.5 s is 4.50× the loop's fastest time constant"):
         r = quell.simulate(quell.Scenario.from_toml(text), sample_time=0.5, check=False)
     assert r.outcome["status"] == "diverged"
     fig = r.plot(channel=1)

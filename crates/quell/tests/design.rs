@@ -885,7 +885,29 @@ fn a_zero_at_the_origin_is_refused_and_one_within_rounding_of_the_axis_is_warned
     assert!(rosenbrock.determinant().abs() < 1e-12, "{}", rosenbrock.determinant());
     match s.design() {
         Err(e @ DesignError::UnstableZeroDynamics { .. }) => {
-            assert!(e.to_string().contains("this one is not in the open left half-plane: 0.000000 (per s)"), "{e}")
+            assert!(e.to_string().contains("this one is not in the open left half-plane: 0.000000 (per s)"), "{e}");
+            assert!(
+                e.to_string().contains("; a zero at s = 0 is a mode the plant integrates that no output sees"),
+                "{e}"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+    // A single-machine infinite bus (Heffron–Phillips, Kundur's Examples 12.3/12.4, exciter gain
+    // 200) measured by its rotor speed, which integrates to the angle no output sees: its one zero,
+    // computed 2.4e-14 from a 1×1 zero dynamics of that norm, is at 0 on the plant's scale (‖A‖ =
+    // 1.8e3; helper tryout, 2026-12-06: it had been reported as an unstable zero at 2.375877e-14).
+    let smib = text(
+        "[[0.0, 377.0, 0.0, 0.0], [-0.10918571428571429, 0.0, -0.12355714285714285, 0.0], [-0.19375902748414378, 0.0, -0.4228329809725158, 0.1365750528541226], [585.2, 0.0, -1667.2, -20.0]]",
+        "[[0.0, 0.0], [0.14285714285714285, 0.0], [0.0, 0.0], [0.0, 4000.0]]",
+        "[[0.0, 1.0, 0.0, 0.0], [-0.1463, 0.0, 0.4168, 0.0]]",
+    )
+    .replace("channel_poles = [[-2.0], [-3.0]]", "channel_poles = [[-2.0], [-3.0, -4.0]]");
+    match quell::scenario::Scenario::from_toml(&smib).unwrap().design() {
+        Err(e @ DesignError::UnstableZeroDynamics { .. }) => {
+            let e = e.to_string();
+            assert!(e.contains("A − BK keeps the plant's 1 zero") && e.contains(": 0.000000 (per s)"), "{e}");
+            assert!(e.contains("a zero at s = 0 is a mode the plant integrates that no output sees"), "{e}");
         }
         other => panic!("{other:?}"),
     }

@@ -162,7 +162,7 @@ pub enum DesignError {
     ChannelPoleCount { channel: usize, sigma: usize, got: usize, pairs: usize },
     #[error("plant: not decouplable (Proposition 1): B* is singular: with rows c_i A^(σ_i-1) and the columns of B scaled to unit norm its smallest singular value is {smallest:.3e}, below τ = {tol:.0e} (condition number {cond:.3e}); the outputs' leading responses to the inputs (c_i A^(σ_i−1) B, σ = {sigma:?}) are (nearly) dependent; measure outputs whose leading responses differ (another sensor, or other combinations of the states), pair the outputs with other inputs, or, where the design report calls a σ_i decision close, give design.relative_degrees", tol = TOL)]
     NotDecouplable { smallest: f64, cond: f64, sigma: Vec<usize> },
-    #[error("plant: unstable zero dynamics: A − BK keeps the plant's {} zero{} (its eigenvalues besides the {placed} channel poles that Proposition 1 places), and {} not in the open left half-plane: {} (per {unit}); the plant is non-minimum-phase with these outputs (a transmission zero of (A, B, C) in the closed right half-plane) and decoupling cancels its zeros, so it cannot be decoupled stably; measure outputs whose zeros lie in the left half-plane (a boost converter's inductor current in place of its output voltage; another sensor placement), or control this plant by another method", .zeros.len(), if .zeros.len() == 1 { "" } else { "s" }, if .unstable.len() == 1 { "this one is" } else { "these are" }, fmt_complex_list(.unstable))]
+    #[error("plant: unstable zero dynamics: A − BK keeps the plant's {} zero{} (its eigenvalues besides the {placed} channel poles that Proposition 1 places), and {} not in the open left half-plane: {} (per {unit}); the plant is non-minimum-phase with these outputs (a transmission zero of (A, B, C) in the closed right half-plane) and decoupling cancels its zeros, so it cannot be decoupled stably; {}measure outputs whose zeros lie in the left half-plane (a boost converter's inductor current in place of its output voltage; another sensor placement), or control this plant by another method", .zeros.len(), if .zeros.len() == 1 { "" } else { "s" }, if .unstable.len() == 1 { "this one is" } else { "these are" }, fmt_complex_list(.unstable), if .unstable.iter().any(|z| z.norm() == 0.0) { "a zero at s = 0 is a mode the plant integrates that no output sees (a rotor's speed measured without its angle, a level's inflow without the level): measure the integrated quantity itself, or " } else { "" })]
     UnstableZeroDynamics { placed: usize, zeros: Vec<Complex<f64>>, unstable: Vec<Complex<f64>>, unit: TimeUnit },
     #[error("design.relative_degrees[{index}]: expected a relative degree 1 ≤ σ_i ≤ n = {n}, found {value}")]
     RelativeDegreeRange { index: usize, value: usize, n: usize },
@@ -747,7 +747,9 @@ fn check_zero_dynamics(plant: &Plant, fw: &FalbWolovich) -> Result<Vec<Complex<f
     // needed to count as stable (s² + 1.69 had passed as "max Re λ = 0.00000" and its run grew).
     // A zero within rounding of the origin has no damping to judge (one exactly at 0, computed as
     // −1e-17, had passed, and its run's u_f grew without end).
-    let origin = ORIGIN_ROUNDING * f64::EPSILON * Z.norm();
+    // Z's norm is the zeros' own scale; forming Z from A − BK₀ rounds at n·ε·‖A‖ too (a 1×1 Z of
+    // 2.4e-14 from a power system's A of norm 1.8e3 is a zero at 0).
+    let origin = f64::EPSILON * (ORIGIN_ROUNDING * Z.norm()).max(n as f64 * plant.A.norm());
     let damped = |z: &Complex<f64>| z.re < -AXIS_DAMPING * z.norm() && z.norm() > origin;
     let settled = || zeros.iter().all(damped) && place::refined_left_half_plane(&Z, &zeros);
     if bad.is_empty() || settled() {
