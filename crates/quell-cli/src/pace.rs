@@ -20,12 +20,22 @@ pub fn estimates(s: &Scenario, d: &Design) -> Vec<RateEstimate> {
 /// (the automatic design's `design` too).
 pub fn design_json(s: &Scenario, d: &Design) -> Value {
     let warnings = quell::design::warnings(d, &s.design);
-    with_pace(
+    let mut json = with_pace(
         crate::report::with_warnings(crate::report::design_json(d), &warnings),
         d,
         &estimates(s, d),
         &s.steady_input(),
-    )
+    );
+    if let Value::Object(map) = &mut json {
+        let rho = quell::sim::loop_rate(d, d.plant(), [&s.reference, &s.disturbance]);
+        let deployment = json!({
+            "loop_rate": rho,
+            "sample_time_at_most": quell::sim::COARSE_SAMPLE / rho,
+            "f32_pole_shift": quell::export::f32_pole_shift(d).0,
+        });
+        map.insert("deployment".into(), deployment);
+    }
+    json
 }
 
 /// The design's text report with its pace, steady input and warnings, as `quell design` prints it
@@ -36,7 +46,35 @@ pub fn design_text(s: &Scenario, d: &Design) -> String {
     let effort =
         steady_text(&s.steady_input(), &s.names.inputs(s.plant.B.ncols()), s.plant.time_unit, s.truth.is_some());
     let warnings = crate::report::warnings_text(&quell::design::warnings(d, &s.design));
-    format!("{}{pace}{effort}{warnings}", crate::report::design_text(d))
+    let deployment = deployment_text(s, d);
+    format!("{}{pace}{effort}{deployment}{warnings}", crate::report::design_text(d))
+}
+
+/// What the controller needs on hardware before any sampled run or export says it: the longest
+/// sample time its loop tolerates, and how far f32 would move its poles.
+fn deployment_text(s: &Scenario, d: &Design) -> String {
+    let (need, rho) = quell::sim::sample_time_need(d, [&s.reference, &s.disturbance]);
+    let unit = s.plant.time_unit;
+    let (shift, kappa, what) = quell::export::f32_pole_shift(d);
+    let precision = if shift > quell::export::F32_POLE_SHIFT {
+        format!(
+            "f32 could move the poles of {what} by about {} (κ₂ = {kappa:.2e} × 6e-8): export in f64 (the default), or choose poles that give a smaller κ₂",
+            quell::export::fmt_shift(shift)
+        )
+    } else {
+        format!(
+            "f32 moves the poles by at most {} (κ₂ = {kappa:.2e} × 6e-8): either precision serves",
+            quell::export::fmt_shift(shift)
+        )
+    };
+    format!(
+        "
+deployment (a sampled-data controller, docs/deployment.md):
+  sample time: {need}; ρ = {} /{unit}, the loop's fastest rate
+  precision: {precision}
+",
+        fmt_4(rho)
+    )
 }
 
 pub fn with_pace(mut design: Value, d: &Design, estimates: &[RateEstimate], steady: &SteadyInput) -> Value {

@@ -282,15 +282,7 @@ fn write_outputs(dir: &Path, done: &Finished<'_>, plots: bool) -> std::io::Resul
 fn write_data(dir: &Path, done: &Finished<'_>) -> std::io::Result<()> {
     let Finished { scenario, design, result: r, diagnostics, seconds } = *done;
     output::write_signals(&dir.join("signals.csv"), r)?;
-    let warnings = quell::design::warnings(design, &scenario.design);
-    let pace = crate::pace::estimates(scenario, design);
-    let json = crate::pace::with_pace(
-        report::with_warnings(report::design_json(design), &warnings),
-        design,
-        &pace,
-        &scenario.steady_input(),
-    );
-    output::write_json(&dir.join("design.json"), &json)?;
+    output::write_json(&dir.join("design.json"), &crate::pace::design_json(scenario, design))?;
     let summary = json!({
         "scenario": scenario.name,
         "time_unit": scenario.plant.time_unit.symbol(),

@@ -110,6 +110,32 @@ fn design_text_on_paper_example() {
     assert!(out.contains("K (2×3)") && out.contains("F (2×2)"), "{out}");
 }
 
+/// The design report says what the controller needs on hardware before any sampled run or export:
+/// the longest sample time (T_s·ρ ≤ 0.2; the paper's ρ = 9 /s is its fastest filter pole, so
+/// 0.2/9 = 0.0222 s, and 0.02 s makes its delays of 1 and 3 s whole) and how far f32 moves the
+/// poles (κ₂·6e-8). A disk servo's observer (κ₂ = 2.75e6, 16 % of itself in f32) is told to stay in
+/// f64: an automatic maglev design with κ₂ = 1.5e7 had learnt it only at `quell export --precision
+/// f32` (helper tryout, 2026-12-06).
+#[test]
+fn the_design_report_says_what_deployment_needs() {
+    let o = quell(&["design", &paper()]);
+    let out = stdout(&o);
+    assert!(out.contains("\ndeployment (a sampled-data controller, docs/deployment.md):\n  sample time: T_s ≤ 0.0222 s (T_s·ρ ≤ 0.2), e.g. 0.02 s, which makes plant.delays whole; ρ = 9 /s, the loop's fastest rate\n"), "{out}");
+    assert!(
+        out.contains(
+            "  precision: f32 moves the poles by at most 0.00016 % (κ₂ = 2.75e1 × 6e-8): either precision serves"
+        ),
+        "{out}"
+    );
+    let o = quell(&["design", "--json", &paper()]);
+    let d: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(d["deployment"]["loop_rate"], 9.0);
+    assert!((d["deployment"]["sample_time_at_most"].as_f64().unwrap() - 0.2 / 9.0).abs() < 1e-15);
+    let hdd = Path::new(env!("CARGO_MANIFEST_DIR")).join("../quell/tests/data/hdd-servo.toml");
+    let out = stdout(&quell(&["design", hdd.to_str().unwrap()]));
+    assert!(out.contains("  precision: f32 could move the poles of A − LC (the observer) by about 16 % (κ₂ = 2.75e6 × 6e-8): export in f64 (the default)"), "{out}");
+}
+
 #[test]
 fn design_json_on_paper_example() {
     let o = quell(&["design", "--json", &paper()]);

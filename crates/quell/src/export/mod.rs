@@ -161,20 +161,39 @@ pub fn precision_warning(design: &Design, precision: Precision) -> Option<String
     if precision != Precision::F32 {
         return None;
     }
+    let (shift, kappa, what) = f32_pole_shift(design);
+    (shift > F32_POLE_SHIFT).then(|| {
+        format!(
+            "precision: f32 rounds the controller's matrices to about 6e-8, and {what} has eigenvector condition number κ₂ = {kappa:.2e}, so its poles can move by about κ₂·6e-8 = {} of themselves (a disk servo's f32 u_f departed 18 % of its peak from the f64 export's at κ₂ = 2.75e6); export f64, or choose poles nearer the plant's own (a smaller κ₂, quell design reports it)",
+            fmt_shift(shift)
+        )
+    })
+}
+
+/// How far f32's rounding (ε/2 = 6e-8) can move the design's poles, relative to themselves:
+/// κ₂·6e-8 for the larger eigenvector condition number κ₂ of A − LC and A − BK (∞ for a defective
+/// one), with κ₂ and which matrix it is.
+pub fn f32_pole_shift(design: &Design) -> (f64, f64, &'static str) {
     let parts = [
         (design.observer_eigenvector_condition(), "A − LC (the observer)"),
         (design.decoupled_eigenvector_condition(), "A − BK (the decoupled channels)"),
     ];
     // A NaN κ₂ (a defective eigenvector matrix) counts as infinite.
     let worst = |k: f64| if k.is_nan() { f64::INFINITY } else { k };
-    let (kappa, what) = parts.into_iter().max_by(|a, b| worst(a.0).total_cmp(&worst(b.0)))?;
-    let shift = worst(kappa) * f64::from(f32::EPSILON) / 2.0;
-    (shift > F32_POLE_SHIFT).then(|| {
-        format!(
-            "precision: f32 rounds the controller's matrices to about 6e-8, and {what} has eigenvector condition number κ₂ = {kappa:.2e}, so its poles can move by about κ₂·6e-8 = {} of themselves (a disk servo's f32 u_f departed 18 % of its peak from the f64 export's at κ₂ = 2.75e6); export f64, or choose poles nearer the plant's own (a smaller κ₂, quell design reports it)",
-            if shift >= 1.0 { format!("{shift:.1}×") } else { format!("{:.0} %", 100.0 * shift) }
-        )
-    })
+    let [a, b] = parts;
+    let (kappa, what) = if worst(a.0) >= worst(b.0) { a } else { b };
+    (worst(kappa) * f64::from(f32::EPSILON) / 2.0, kappa, what)
+}
+
+/// A relative pole shift as "92 %" or "1.5×".
+pub fn fmt_shift(shift: f64) -> String {
+    if shift >= 1.0 {
+        format!("{shift:.1}×")
+    } else if shift >= 0.01 {
+        format!("{:.0} %", 100.0 * shift)
+    } else {
+        format!("{} %", crate::settings::fmt_short(crate::settings::significant(100.0 * shift, 2)))
+    }
 }
 
 /// Longest `prefix`: `<prefix>_controller.h` must fit a file name (255 bytes on common file

@@ -37,7 +37,9 @@ pub use memory::{runs_memory_bytes, Held, MIN_RUNS_MEMORY_BYTES};
 pub use noise::{band_limited, NOISE_SINES};
 pub use result::{ChannelFigures, ChannelSummary, Outcome, RunStats, Sample, SimResult};
 pub(crate) use sampled::fine_sample_time;
-pub use sampled::{coarse_sample_warning, is_coarse, output_step_fixes, SampledController, COARSE_SAMPLE};
+pub use sampled::{
+    coarse_sample_warning, is_coarse, output_step_fixes, sample_time_need, SampledController, COARSE_SAMPLE,
+};
 pub use settle::{Settle, Settling};
 
 /// The front door as `docs/running.md` shows it, compiled and run as a doc test.

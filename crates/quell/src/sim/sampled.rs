@@ -58,6 +58,15 @@ pub fn coarse_sample_warning(
     })
 }
 
+/// What a sampled-data controller of `design` needs, as `quell design` reports it before any
+/// sampled run: "T_s ≤ bound (T_s·ρ ≤ [`COARSE_SAMPLE`]), e.g. t …" for the loop's fastest rate ρ
+/// under g = `reference`, ω = `disturbance`, and ρ (an automatic design's poles at ρ = 900 /ms
+/// had needed T_s ≤ 0.22 ms, said only when a run at 0.5 ms departed from its continuous loop).
+pub fn sample_time_need(design: &Design, [reference, disturbance]: [&Signal; 2]) -> (String, f64) {
+    let rate = super::loop_rate(design, design.plant(), [reference, disturbance]);
+    (fine_sample_time(design, rate, None), rate)
+}
+
 /// "T_s ≤ bound (T_s·ρ ≤ [`COARSE_SAMPLE`]), e.g. t …": the sample times fine for a loop of rate
 /// `rate`, with one that makes the design's delays whole (and divides `output_step`, when given);
 /// a `[truth]`'s own delays are not seen here, and the run that refuses them names the nearest
