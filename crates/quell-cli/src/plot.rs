@@ -89,18 +89,19 @@ fn tick_label(v: f64, lo: f64, hi: f64) -> String {
 }
 
 /// One panel of a run's figure: `series` against t (in `time`, the plant's unit of time), with
-/// dashed lines at ±`limit` (its label, its value) and the view widened to show them, and the time
-/// axis to `t_right` where that is later (a figure's panels share one).
+/// dashed lines at ±`limit` (its label, its value) and the view widened to show them, the time
+/// axis to `t_right` where that is later, and `column` px right of the plotting area for legends
+/// that do not fit beside the data (a figure's panels share both, so that their axes line up).
 fn panel<DB: DrawingBackend + Strokes>(
     area: &DrawingArea<DB, Shift>,
     (title, ylabel): (&str, &str),
     series: &[Series],
-    (limit, t_right): (Option<(&str, f64)>, Option<f64>),
+    (limit, t_right, column): (Option<(&str, f64)>, Option<f64>, u32),
     time: TimeUnit,
 ) -> Result<(), String> {
     let levels = limit.map_or(vec![], |(_, u)| vec![-u, u]);
-    let (((t0, t1), (y0, y1)), legend) = panel_view(area, series, limit, t_right);
-    let mut chart = run_panel(area, title).build_cartesian_2d(t0..t1, y0..y1).map_err(|e| e.to_string())?;
+    let (((t0, t1), (y0, y1)), legend) = panel_view(area, series, limit, (t_right, column));
+    let mut chart = run_panel(area, title, column).build_cartesian_2d(t0..t1, y0..y1).map_err(|e| e.to_string())?;
     chart
         .configure_mesh()
         .max_light_lines(2)
@@ -115,8 +116,73 @@ fn panel<DB: DrawingBackend + Strokes>(
     if let Some((label, _)) = limit {
         limit_lines(&mut chart, label, &levels, (t0, t1))?;
     }
-    let Some((font, size)) = legend else { return Ok(()) };
-    draw_legend(&mut chart, legend_corner(series, ((t0, t1), (y0, y1)), size).0, font)
+    match legend {
+        Legend::None => Ok(()),
+        Legend::Inside(font, size) => {
+            draw_legend(&mut chart, legend_corner(series, ((t0, t1), (y0, y1)), size).0, font)
+        }
+        Legend::Outside(font, _) => {
+            // Beside the plotting area, top-aligned with it, on the panel's own area (plotters
+            // clips a chart's legend to its plotting area).
+            let (x, y) = chart.plotting_area().get_pixel_range();
+            let base = area.get_base_pixel();
+            let reference = |name: &str| name.ends_with("(reference)");
+            let mut entries: Vec<(String, RGBAColor, bool)> =
+                series.iter().enumerate().map(|(k, (name, _))| (name.clone(), pick(k), reference(name))).collect();
+            entries.extend(limit.map(|(label, _)| (label.to_string(), RGBColor(90, 90, 90).into(), true)));
+            legend_beside(area, (x.end - base.0 + 8, y.start - base.1), &entries, font)
+        }
+    }
+}
+
+/// A legend box at `(x, y)` of `area` (its top left, px): per entry a 20 px line in its colour
+/// (dashed where asked) and its label in `font` px, in the style of [`draw_legend`].
+fn legend_beside<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    (x, y): (i32, i32),
+    entries: &[(String, RGBAColor, bool)],
+    font: u32,
+) -> Result<(), String> {
+    let row = font as i32 + 6;
+    let longest = entries.iter().map(|(name, ..)| name.chars().count()).max().unwrap_or(0);
+    let (w, h) = (40 + (0.6 * f64::from(font) * longest as f64).ceil() as i32, 10 + row * entries.len() as i32);
+    let text = ("sans-serif", font).into_font().color(&BLACK);
+    area.draw(&Rectangle::new([(x, y), (x + w, y + h)], WHITE.mix(0.85).filled())).map_err(|e| e.to_string())?;
+    area.draw(&Rectangle::new([(x, y), (x + w, y + h)], BLACK)).map_err(|e| e.to_string())?;
+    for (j, (name, color, dashed)) in entries.iter().enumerate() {
+        let mid = y + 5 + row * j as i32 + row / 2;
+        let line = vec![(x + 6, mid), (x + 26, mid)];
+        if *dashed {
+            area.draw(&plotters::element::DashedPathElement::new(line, 6, 4, color.stroke_width(2)))
+        } else {
+            area.draw(&PathElement::new(line, color.stroke_width(2)))
+        }
+        .map_err(|e| e.to_string())?;
+        area.draw(&Text::new(name.as_str(), (x + 32, mid - font as i32 / 2 - 1), text.clone()))
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}
+
+/// Where a panel's legend goes: nowhere (too many entries: the colours are the key), inside the
+/// plotting area at the corner that hides the fewest samples (its font and box as fractions of the
+/// area), or right of it (its font and width in px), where a box taller than most of the panel
+/// would hide the data in every corner (η̂'s eight or twelve entries over its transients).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Legend {
+    None,
+    Inside(u32, (f64, f64)),
+    Outside(u32, u32),
+}
+
+impl Legend {
+    /// The px a figure's legend column needs for this legend (0 inside or without one).
+    fn column(self) -> u32 {
+        match self {
+            Legend::Outside(_, width) => width + 16,
+            _ => 0,
+        }
+    }
 }
 
 /// A panel's legend at `position`, in the figures' one style: a boxed, nearly opaque white field,
@@ -137,10 +203,11 @@ fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
 }
 
 /// The plotting area's size in pixels of a panel drawn on `area`: the area less the margins (8 px,
-/// 24 on the right), the axis label areas (72 px left, 36 below) and the 20 px caption's ~30 px.
-fn plotting_size<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>) -> (f64, f64) {
+/// 24 + a legend `column` on the right), the axis label areas (72 px left, 36 below) and the
+/// 20 px caption's ~30 px.
+fn plotting_size<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, column: u32) -> (f64, f64) {
     let (w, h) = area.dim_in_pixel();
-    ((f64::from(w) - 104.0).max(1.0), (f64::from(h) - 82.0).max(1.0))
+    ((f64::from(w) - 104.0 - f64::from(column)).max(1.0), (f64::from(h) - 82.0).max(1.0))
 }
 
 /// A panel's legend: its font (px) and its box as fractions `size` of the plotting area
@@ -162,16 +229,18 @@ fn legend_box(series: &[Series], limit: Option<&str>, (w, h): (f64, f64)) -> Opt
     Some((font, ((48.0 + 0.6 * f * longest) / w, (20.0 + entries * (f + 6.0)) / h)))
 }
 
+/// A panel's view ((t0, t1), (y0, y1)).
+type View = ((f64, f64), (f64, f64));
+
 /// A panel's view ((t0, t1), (y0, y1)) over `series` (and ±`limit`'s value), its time axis
-/// reaching `t_right` at least, with room beside the data for its legend ([`with_headroom`]),
-/// and the legend's font and box ([`legend_box`]).
-#[allow(clippy::type_complexity)]
+/// reaching `t_right` at least, with room above the data for its legend or the legend placed right
+/// of the plotting area ([`with_headroom`]; `column` px are kept there).
 fn panel_view<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     series: &[Series],
     limit: Option<(&str, f64)>,
-    t_right: Option<f64>,
-) -> (((f64, f64), (f64, f64)), Option<(u32, (f64, f64))>) {
+    (t_right, column): (Option<f64>, u32),
+) -> (View, Legend) {
     let (t0, t1) = series
         .iter()
         .flat_map(|(_, p)| p.iter().map(|(t, _)| *t))
@@ -182,20 +251,30 @@ fn panel_view<DB: DrawingBackend>(
     let (lo, hi) = value_range(series.iter().flat_map(|(_, p)| p.iter().map(|(_, v)| *v)).chain(levels));
     let pad = 0.05 * (hi - lo);
     let view = ((t0, t1), (lo - pad, hi + pad));
-    let legend = legend_box(series, limit.map(|(label, _)| label), plotting_size(area));
-    match legend {
-        Some((_, size)) => {
-            let (t1, y1) = with_headroom(series, view, size);
-            (((t0, t1), (view.1 .0, y1)), legend)
-        }
-        None => (view, legend),
+    let plotting = plotting_size(area, column);
+    match legend_box(series, limit.map(|(label, _)| label), plotting) {
+        Some((font, size)) => match with_headroom(series, view, size) {
+            Some(y1) => (((t0, t1), (view.1 .0, y1)), Legend::Inside(font, size)),
+            None => (view, Legend::Outside(font, (size.0 * plotting.0).ceil() as u32)),
+        },
+        None => (view, Legend::None),
     }
 }
 
-/// A run figure's panel before its coordinates: the title and the room for the axes' labels.
-fn run_panel<'a, 'b, DB: DrawingBackend>(area: &'a DrawingArea<DB, Shift>, title: &'b str) -> ChartBuilder<'a, 'b, DB> {
+/// A run figure's panel before its coordinates: the title and the room for the axes' labels, and
+/// `column` px right of the plotting area for the figure's legends that do not fit inside.
+fn run_panel<'a, 'b, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    title: &'b str,
+    column: u32,
+) -> ChartBuilder<'a, 'b, DB> {
     let mut builder = ChartBuilder::on(area);
-    builder.caption(title, ("sans-serif", 20)).margin(8).margin_right(24).x_label_area_size(36).y_label_area_size(72);
+    builder
+        .caption(title, ("sans-serif", 20))
+        .margin(8)
+        .margin_right(24 + column)
+        .x_label_area_size(36)
+        .y_label_area_size(72);
     builder
 }
 
@@ -340,23 +419,24 @@ fn limit_lines<DB: DrawingBackend>(
     Ok(())
 }
 
-/// The view's right and top ends `(t1, y1)`; where the legend box (`size`) would hide samples in
-/// every corner, one of them moved out by the box's size so that it sits beside the data: the top
-/// raised where the box is flatter than wide (a few entries), else the time axis extended right
-/// (η̂'s eight or twelve entries, a box taller than most of the panel, covered its transients).
+/// The view's top end y1 with the legend box (`size`) inside the plotting area; where the box would
+/// hide samples in every corner, the top raised by the box's height where the box is flatter than
+/// wide (a few entries), or `None` for a tall, narrow box (η̂'s eight or twelve entries covered its
+/// transients), which goes beside the plotting area (the time axis had been extended instead, and
+/// every panel of the figure ran 12–33 % past t_end over nothing).
 fn with_headroom(
     series: &[Series],
     ((t0, t1), (y0, y1)): ((f64, f64), (f64, f64)),
     (width, height): (f64, f64),
-) -> (f64, f64) {
+) -> Option<f64> {
     let (_, hidden) = legend_corner(series, ((t0, t1), (y0, y1)), (width, height));
     // 2 % of the axis between the data and the box.
     let gap = 0.02;
     match hidden {
-        0 => (t1, y1),
-        _ if height <= width && height < 0.6 => (t1, y0 + (y1 - y0) / (1.0 - height - gap)),
-        _ if width < 0.4 => (t0 + (t1 - t0) / (1.0 - width - gap), y1),
-        _ => (t1, y1),
+        0 => Some(y1),
+        _ if height <= width && height < 0.6 => Some(y0 + (y1 - y0) / (1.0 - height - gap)),
+        _ if width < 0.4 => None,
+        _ => Some(y1),
     }
 }
 
@@ -484,18 +564,18 @@ fn draw<DB: DrawingBackend + Strokes>(
         (uf_title, "u_f", &plant_input, limit),
         (eta_title, "η", &etas, None),
     ];
-    // One time axis for the six: as far right as the panel whose legend needs room beside its
-    // data (η̂'s) takes it, so that the panels line up.
-    let t_right = panels
-        .iter()
-        .zip(areas.iter())
-        .map(|((_, _, series, limit), area)| panel_view(area, series, *limit, None).0 .0 .1)
-        .fold(f64::MIN, f64::max);
+    // One time axis for the six, and one column right of them for the legends that do not fit
+    // beside their data (η̂'s), so that the panels line up.
+    let views = |column: u32| {
+        panels.iter().zip(areas.iter()).map(move |((_, _, s, l), a)| panel_view(a, s, *l, (None, column)))
+    };
+    let column = views(0).map(|(_, legend)| legend.column()).max().unwrap_or(0);
+    let t_right = views(column).map(|(view, _)| view.0 .1).fold(f64::MIN, f64::max);
     for ((title, ylabel, series, limit), area) in panels.iter().zip(areas.iter()) {
-        panel(area, (title, ylabel), series, (*limit, Some(t_right)), time)?;
+        panel(area, (title, ylabel), series, (*limit, Some(t_right), column), time)?;
     }
     let (tail, title) = error_on_log_axis(r, i, span, (&channel, !ended.is_empty()));
-    envelope::log_panel(&areas[5], (&title, "|e|"), &tail, (span.0, t_right), time)?;
+    envelope::log_panel(&areas[5], (&title, "|e|"), &tail, (span.0, t_right, column), time)?;
     root.present().map_err(|e| e.to_string())
 }
 
@@ -1587,14 +1667,40 @@ mod tests {
                 )
             })
             .collect();
-        let (t1, y1) = with_headroom(&sines, ((0.0, 10.0), (-1.0, 1.0)), (0.3, 0.25));
-        assert!(t1 == 10.0 && (y1 - (-1.0 + 2.0 / 0.73)).abs() < 1e-12, "{t1} {y1}");
+        let y1 = with_headroom(&sines, ((0.0, 10.0), (-1.0, 1.0)), (0.3, 0.25)).unwrap();
+        assert!((y1 - (-1.0 + 2.0 / 0.73)).abs() < 1e-12, "{y1}");
         assert_eq!(legend_corner(&sines, ((0.0, 10.0), (-1.0, y1)), (0.3, 0.25)).1, 0);
-        // A tall box (twelve entries over most of the panel's height): the time axis is extended.
-        let (t1, y1) = with_headroom(&sines, ((0.0, 10.0), (-1.0, 1.0)), (0.1, 0.9));
-        assert!((t1 - 10.0 / 0.88).abs() < 1e-12 && y1 == 1.0, "{t1} {y1}");
-        assert_eq!(legend_corner(&sines, ((0.0, t1), (-1.0, 1.0)), (0.1, 0.9)).1, 0);
-        assert_eq!(with_headroom(&flat, view, (0.2, 0.2)), (10.0, 1.0));
+        // A tall box (twelve entries over most of the panel's height): beside the plotting area.
+        assert_eq!(with_headroom(&sines, ((0.0, 10.0), (-1.0, 1.0)), (0.1, 0.9)), None);
+        assert_eq!(with_headroom(&flat, view, (0.2, 0.2)), Some(1.0));
+    }
+
+    /// η̂'s eight entries over transients filling the panel go beside the plotting area, and the
+    /// time axis ends at the data's end (it had been extended 12–33 % past t_end for the box, on
+    /// every panel of the figure; three helper tryouts took it for a defect); the legend's column is
+    /// its estimated width and a gap.
+    #[test]
+    fn a_tall_legend_goes_beside_the_panel_and_the_time_axis_ends_with_the_data() {
+        let (w, h) = (1000u32, 275u32);
+        let mut rgb = vec![255u8; (w * h * 3) as usize];
+        let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
+        let sines: Vec<Series> = (0..8)
+            .map(|j| {
+                (
+                    format!("η1_{j}"),
+                    (0..=400).map(|k| (0.25 * k as f64, (0.025 * k as f64 * (j + 1) as f64).sin())).collect(),
+                )
+            })
+            .collect();
+        let ((t, _), legend) = panel_view(&root, &sines, None, (None, 0));
+        assert_eq!(t, (0.0, 100.0));
+        // 48 + 0.6·14·4 px for "η1_0" at 14 px.
+        assert_eq!(legend, Legend::Outside(14, (48.0f64 + 0.6 * 14.0 * 4.0).ceil() as u32));
+        assert_eq!(legend.column(), 82 + 16);
+        // A line that leaves a corner free keeps its legend there, also in a figure with a column.
+        let ramp: Vec<Series> = vec![("y1".into(), (0..=100).map(|k| (k as f64, k as f64)).collect())];
+        let ((t, _), legend) = panel_view(&root, &ramp, None, (None, 98));
+        assert!(t == (0.0, 100.0) && matches!(legend, Legend::Inside(14, _)), "{legend:?}");
     }
 
     #[test]
@@ -1609,7 +1715,7 @@ mod tests {
         let mut rgb = vec![255u8; (w * h * 3) as usize];
         {
             let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
-            panel(&root, ("zigzag", "u"), &[("u1".into(), points)], (None, None), TimeUnit::default()).unwrap();
+            panel(&root, ("zigzag", "u"), &[("u1".into(), points)], (None, None, 0), TimeUnit::default()).unwrap();
             root.present().unwrap();
         }
         let pixel = |x: u32, y: u32| {
@@ -1678,7 +1784,7 @@ mod tests {
             let mut rgb = vec![255u8; (w * h * 3) as usize];
             {
                 let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
-                panel(&root, ("tracking", "y"), &series, (None, None), TimeUnit::default()).unwrap();
+                panel(&root, ("tracking", "y"), &series, (None, None, 0), TimeUnit::default()).unwrap();
                 root.present().unwrap();
             }
             rgb.chunks(3).filter(|p| (p[0], p[1], p[2]) == (31, 119, 180)).count()

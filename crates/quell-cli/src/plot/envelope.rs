@@ -56,7 +56,7 @@ pub(super) fn log_panel<DB: DrawingBackend + Strokes>(
     area: &DrawingArea<DB, Shift>,
     (title, ylabel): (&str, &str),
     series: &[Series],
-    (t0, t_right): (f64, f64),
+    (t0, t_right, column): (f64, f64, u32),
     time: TimeUnit,
 ) -> Result<(), String> {
     let points = series.iter().flat_map(|(_, p)| p.iter());
@@ -71,8 +71,9 @@ pub(super) fn log_panel<DB: DrawingBackend + Strokes>(
         (None, None) => format!("{title}: e ≡ 0"),
         (None, Some(_)) => title.to_string(),
     };
-    let mut chart =
-        super::run_panel(area, &title).build_cartesian_2d(t0..t1, (lo..hi).log_scale()).map_err(|e| e.to_string())?;
+    let mut chart = super::run_panel(area, &title, column)
+        .build_cartesian_2d(t0..t1, (lo..hi).log_scale())
+        .map_err(|e| e.to_string())?;
     chart
         .configure_mesh()
         .max_light_lines(2)
