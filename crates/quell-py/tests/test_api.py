@@ -134,12 +134,12 @@ def test_simulate_shapes_and_overrides(tmp_path):
     assert sampled.stats == {"loop": "sampled", "controller_steps": 10001, "sample_time": 1e-3}
     # A sample time coarse for the design (the paper's fastest rate: its filter pole −9) is a
     # UserWarning naming the argument, with the bound.
-    with pytest.warns(UserWarning, match=r"^sample_time: T_s = 0.05 s is 0.45 of .*choose T_s ≤ 0.0222 s"):
+    with pytest.warns(UserWarning, match=r"^sample_time: T_s = 0.05 s is 0.45× the loop.*choose T_s ≤ 0.0222 s"):
         quell.simulate(s, t_end=2.0, sample_time=0.05)
     # ... and so are the controller and its export at that sample time.
-    with pytest.warns(UserWarning, match=r"^sample_time: T_s = 0.05 s is 0.45 of"):
+    with pytest.warns(UserWarning, match=r"^sample_time: T_s = 0.05 s is 0.45× the"):
         quell.Controller(s.design(), 0.05)
-    with pytest.warns(UserWarning, match=r"^sample_time: T_s = 0.05 s is 0.45 of"):
+    with pytest.warns(UserWarning, match=r"^sample_time: T_s = 0.05 s is 0.45× the"):
         quell.export(s, 0.05, out=str(tmp_path))
     # A controller beyond 1 MiB of RAM (the delay lines: 3 s at 10 µs) is a UserWarning too.
     with pytest.warns(UserWarning, match=r"^the controller needs [0-9.]+ MiB of RAM"):
