@@ -115,3 +115,12 @@ def test_the_script_writes_quells_columns(quell_bin, tmp_path):
     assert out.read_text().splitlines()[0] == (quell / "signals.csv").read_text().splitlines()[0]
     cols = read_signals(out)
     assert len(cols["t"]) == 6 and cols["g2"][0] == 2.0 and cols["e2"][0] == -2.0 and cols["u1"][0] == 0.0
+
+
+def test_a_scenario_with_truth_is_refused(tmp_path, capsys):
+    # [truth] is not modelled by the script: it had run the design model silently (helper tryout,
+    # 2026-12-06), so a comparison with quell's run of the true plant read as quell's error.
+    scenario = tmp_path / "truth.toml"
+    scenario.write_text((EXAMPLES / "paper.toml").read_text() + "\n[truth]\nu_max = [100.0, 100.0]\n")
+    assert scipy_loop.main([str(scenario), str(tmp_path / "unread.json")]) == 2
+    assert "[truth] is not modelled here" in capsys.readouterr().err
