@@ -90,10 +90,14 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
                 v.advice.join("; ")
             )));
         }
+        // A run that ended early has no tail (its ∞ had been quoted as "tail max|e| [inf, inf]").
+        let tails = if v.tail_max_e.iter().all(|e| e.is_finite()) {
+            format!("tail max|e| {} against bounds {}", list(&v.tail_max_e), list(&v.bound))
+        } else {
+            format!("its last run ended before t_end, with no tail to hold to the bounds {}", list(&v.bound))
+        };
         return Err(failure(format!(
-            "the automatic design did not pass its verifying simulation (tail max|e| {} against bounds {}{}){}; nothing written; see docs/tuning.md",
-            list(&v.tail_max_e),
-            list(&v.bound),
+            "the automatic design did not pass its verifying simulation ({tails}{}){}; nothing written; see docs/tuning.md",
             match targets.u_limit.as_slice() {
                 [] => String::new(),
                 [l] => format!(", max|u_f| {} against the limit {}", list(&v.max_uf), crate::run::short(*l)),

@@ -1508,3 +1508,20 @@ fn a_regulated_channels_bound_does_not_depend_on_the_output_step() {
     // same steps, so the same peak but for the rows, to 1e-6 (the peak is flat where it falls).
     assert!((fine.0 - coarse.0).abs() <= 1e-5 * fine.0, "{fine:?} {coarse:?}");
 }
+
+/// A steady state beyond the true actuator is named as the cause of a failed verification, first:
+/// a ball and beam under a 0.3 drive whose reference and tilt ask 0.333 in steady state (0.0952
+/// for the tilt and 0.2381 for the harmonic, as phasors apart in frequency) cannot track whatever
+/// the poles (a heating plant asking 15 of a 12 drive had been told to slow its poles; helper
+/// tryout, 2026-12-06). The same loop under a 0.45 drive passes and says nothing of it.
+#[test]
+fn a_steady_state_beyond_the_true_actuator_is_named_first() {
+    let text = data("ball-beam.toml").replace("u_max = [0.45]", "u_max = [0.3]");
+    assert!(text.contains("u_max = [0.3]"));
+    let a = auto_design(&text.parse().unwrap(), &Targets::default()).unwrap();
+    let v = &a.verification;
+    assert!(!v.passed, "{v:?}");
+    assert!(v.advice[0].starts_with("the steady state itself asks more than the true actuator gives (u_f,1 peaks at 0.3333 against truth.u_max[0] = 0.3;"), "{:?}", v.advice);
+    let a = auto_design(&data("ball-beam.toml").parse().unwrap(), &Targets::default()).unwrap();
+    assert!(a.verification.passed && !a.verification.advice.iter().any(|l| l.contains("the steady state itself")));
+}
