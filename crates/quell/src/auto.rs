@@ -1466,6 +1466,24 @@ type Estimate = (f64, String);
 const EXCITE_SLOW: &str =
     "excite the slow directions better (references of several frequencies) or ask less of the loop";
 
+/// Where the disturbance observer passes some frequency of ω poorly (beyond
+/// [`FIDELITY_LIMIT`]), the remedy to try before more excitation: a channel whose references
+/// already hold several harmonics had been told only to add some (a B747's pitch with the observer's
+/// error 0.94 at the gust's frequency; helper tryout, 2026-12-06).
+fn poor_observer(avg: &Averaged, unit: crate::TimeUnit) -> Option<String> {
+    let worst = avg
+        .fidelity
+        .iter()
+        .filter(|f| f.relative_error > FIDELITY_LIMIT)
+        .max_by(|a, b| a.relative_error.total_cmp(&b.relative_error))?;
+    Some(format!(
+        "look first at the disturbance observer, which passes ω at {} rad/{} with relative error {:.2} (above {FIDELITY_LIMIT}; eq. (20), driven by x̂): ξ̂ then misreads ω there and the directions it excites converge slowly or to the wrong η; give design.observer_poles or design.observer_gain by hand (a run's diagnostics name candidates), then {EXCITE_SLOW}",
+        crate::settings::fmt_4(worst.frequency),
+        unit,
+        worst.relative_error
+    ))
+}
+
 /// The horizon advice after the automatic design is repeated on `doc` with simulation.t_end at
 /// each estimate (rounded up, shortest first), then at the largest doubled ([`DOUBLINGS`] times),
 /// within [`MAX_VERIFIED_HORIZON`]·t_end and [`HORIZON_STEPS`] steps (the first run of scenario `s`, of design `design`,
@@ -1538,7 +1556,8 @@ fn verified_horizon(
     }
     let signals = [&s.reference, &s.disturbance];
     let avg = Averaged::new(design, &s.reference, &s.disturbance);
-    let what = unit_mismatch(&avg, signals).unwrap_or_else(|| EXCITE_SLOW.to_string());
+    let what = unit_mismatch(&avg, signals)
+        .unwrap_or_else(|| poor_observer(&avg, s.plant.time_unit).unwrap_or_else(|| EXCITE_SLOW.to_string()));
     Ok((
         format!(
             "no horizon the automatic design could verify passes ({}): rather than a longer t_end, {what}",

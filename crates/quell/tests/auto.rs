@@ -1525,3 +1525,28 @@ fn a_steady_state_beyond_the_true_actuator_is_named_first() {
     let a = auto_design(&data("ball-beam.toml").parse().unwrap(), &Targets::default()).unwrap();
     assert!(a.verification.passed && !a.verification.advice.iter().any(|l| l.contains("the steady state itself")));
 }
+
+/// A failed verification whose disturbance observer passes ω poorly names it before asking for more
+/// excitation: a B747's pitch channel already tracks a bias and two harmonics, and had been told
+/// only to excite its slow directions with "references of several frequencies" while the observer
+/// the rules found passed the gust's bias with error 0.94 (helper tryout, 2026-12-06).
+#[test]
+fn a_failed_design_with_a_poor_disturbance_observer_names_it() {
+    let a = auto_design(&data("b747-longitudinal.toml").parse().unwrap(), &Targets::default()).unwrap();
+    let v = &a.verification;
+    assert!(!v.passed, "{v:?}");
+    let d = &a.design;
+    let worst = quell::diagnostics::Averaged::new(d, &a.scenario.reference, &a.scenario.disturbance)
+        .fidelity
+        .iter()
+        .map(|f| f.relative_error)
+        .fold(0.0, f64::max);
+    assert!(worst > FIDELITY_LIMIT, "{worst}");
+    let advice = v.advice.join("\n");
+    assert!(
+        advice.contains(&format!(
+            "look first at the disturbance observer, which passes ω at 0 rad/s with relative error {worst:.2}"
+        )),
+        "{advice}"
+    );
+}
