@@ -52,7 +52,8 @@ impl RunSpec {
     /// The runaway rules' limits of this run against its nominal run (`None` without one): at most
     /// ⌈runaway.steps · (the nominal run's steps, or the floor this run's shortest delay sets
     /// when that is more, + the breakpoints its delays add)⌉ solver steps, and runaway.peak · the
-    /// nominal peaks per watched signal (no bound on a signal that stayed 0 there). Drawn delays
+    /// nominal peaks of x, x̂ (at least x's) and η̂ (no bound on a signal that stayed 0 there, nor on
+    /// ξ̂). Drawn delays
     /// add breakpoints t = Σ k_i τ_i, each a step the nominal run did not take: the paper's loop
     /// at t_end = 40 with both delays 2 % off lands on 559 instead of 29 and takes 752 steps
     /// instead of 268. A run whose adaptive law is expected stiff where the nominal run's is not
@@ -61,7 +62,18 @@ impl RunSpec {
     /// where μ₂ = 90 takes 704); it keeps its own step budget and the peak rule.
     fn runaway_limits(&self, shape: &StepScale) -> Option<(usize, Peaks)> {
         self.nominal.map(|n| {
-            let peaks = n.peaks.bounds(self.runaway.peak);
+            let mut peaks = n.peaks.bounds(self.runaway.peak);
+            // Not ξ̂: the disturbance observer (20) reads a true plant's mismatch as disturbance,
+            // so ξ̂_ω of a converging draw can pass 100× a nominal run's whose observer was exact
+            // (an aircraft pitch loop with truth.A, B 10 % off: 28 of 50 draws stopped at its
+            // nominal delay, all of which converge, tails 1.7e-9 to 4e-5 against 2.5e-3). A ξ̂
+            // that runs away drives u, so x̂ and η̂ follow it past their bounds.
+            peaks.0[Peaks::index_of("xi_hat[")] = f64::INFINITY;
+            // x̂ estimates x in x's coordinates: a mismatch moves x̂ towards x, so it is bounded as
+            // x is (the same pitch loop's observer, nominally at 0.26 beside an x of 5.3e6 in an
+            // unobserved integrator, reached 27 in 11 converging draws).
+            let (x, x_hat) = (Peaks::index_of("x["), Peaks::index_of("x_hat["));
+            peaks.0[x_hat] = peaks.0[x_hat].max(peaks.0[x]);
             if shape.expects_stiff && !n.expects_stiff {
                 return (usize::MAX, peaks);
             }
@@ -471,6 +483,24 @@ pub fn sweep(study: &Study, opts: &SweepOptions<'_>) -> Sweep {
 mod tests {
     use super::*;
     use crate::sim::settle::settling;
+
+    /// The peak rule bounds x, x̂ (at least as x) and η̂ by runaway.peak × their nominal peaks, and
+    /// not ξ̂, which a true plant's mismatch inflates through the disturbance observer in draws that
+    /// converge (an aircraft pitch loop: 28 of 50 draws at its nominal delay had been stopped).
+    #[test]
+    fn the_peak_rule_bounds_the_states_and_the_parameters_not_the_regressor() {
+        let study =
+            crate::study::Study::from_toml("[monte_carlo]\nruns = 2\n\"truth.A\" = { relative = 0.01 }\n", None)
+                .unwrap();
+        let mut spec = study.spec_with_nominal(1).unwrap();
+        let n = spec.nominal.as_mut().unwrap();
+        n.peaks = Peaks([2.0, 0.5, 3.0, 4.0]);
+        let shape = StepScale { breakpoints: 0, delay_floor: 0, expects_stiff: false };
+        let (_, bounds) = spec.runaway_limits(&shape).unwrap();
+        assert_eq!(bounds, Peaks([200.0, 200.0, f64::INFINITY, 400.0]));
+        spec.nominal.as_mut().unwrap().peaks = Peaks([2.0, 5.0, 3.0, 0.0]);
+        assert_eq!(spec.runaway_limits(&shape).unwrap().1, Peaks([200.0, 500.0, f64::INFINITY, f64::INFINITY]));
+    }
 
     #[test]
     fn a_nan_in_the_reference_means_never_settled() {
