@@ -74,6 +74,9 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
         check_not_busy(&args.out)?;
         return Err(journal_in_the_way(&args.out, &meta));
     }
+    if !args.resume {
+        unfinished_in_the_way(&args.out)?;
+    }
     let (kept, done) = if args.resume { resumed(&args.out, &meta, n)? } else { (Vec::new(), Vec::new()) };
     if args.resume && kept.len() == n {
         // Killed while it wrote its files: the journal holds every row, the files may not.
@@ -281,6 +284,22 @@ fn journal_in_the_way(dir: &Path, meta: &StudyMeta) -> Failure {
         ),
         Err(e) => format!("{here}: {JOURNAL}: {e}; remove it to start over here, or choose another --out"),
     })
+}
+
+/// The refusal of a new sweep into `dir`, which holds the rows of an interrupted sweep (its
+/// summary.json marked partial): they would be replaced, where `--resume` can finish them (a
+/// Ctrl-C's or a batch system's time limit's rows had been overwritten without a word).
+fn unfinished_in_the_way(dir: &Path) -> Result<(), Failure> {
+    let Ok(text) = std::fs::read_to_string(dir.join("summary.json")) else { return Ok(()) };
+    match serde_json::from_str::<Summary>(&text) {
+        Ok(s) if s.partial => Err(Failure::Input(format!(
+            "--out {}: holds an unfinished sweep ({} of its {} runs done, summary.json's partial): add --resume to finish it with its study file, or remove runs.csv and summary.json to start over, or choose another --out",
+            dir.display(),
+            s.runs_done,
+            s.study.runs
+        ))),
+        _ => Ok(()),
+    }
 }
 
 /// `--resume`: the rows the interrupted sweep of this study and shard (`meta`, of `n` runs) wrote

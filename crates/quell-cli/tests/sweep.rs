@@ -186,6 +186,17 @@ fn ctrl_c_writes_the_rows_done_marked_partial() {
         serde_json::from_str(&fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["partial"], true);
     assert_eq!(summary["runs_done"].as_u64().unwrap() as usize, lines.len() - 2);
+    // A new sweep into it, of this study or another, would replace the rows --resume can finish
+    // (it did, silently; helper tryout, 2026-12-06): refused, exit 2, the files left as they were.
+    let other = write_study(dir, "other.toml", "[simulation]\nt_end = 1.0\n[grid]\n\"design.mu[0]\" = [10.0]\n");
+    for study in [&study, &other] {
+        let again = quell(&["sweep", study, "--no-plots", "--out", out.to_str().unwrap()]);
+        assert_eq!(again.status.code(), Some(2), "{}", stderr(&again));
+        let done = lines.len() - 2;
+        let want = format!("holds an unfinished sweep ({done} of its 4000 runs done, summary.json's partial): add --resume to finish it with its study file, or remove runs.csv and summary.json to start over, or choose another --out");
+        assert!(stderr(&again).contains(&want), "{}", stderr(&again));
+        assert_eq!(fs::read_to_string(out.join("runs.csv")).unwrap(), csv);
+    }
 }
 
 /// An interrupted sweep resumed with `--resume` ends with the rows of an uninterrupted one (every
