@@ -70,12 +70,8 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     }
     let (study, shard, n) = planned(args)?;
     let meta = StudyMeta::new(&study, shard);
-    if !args.resume && args.out.join(JOURNAL).exists() {
-        check_not_busy(&args.out)?;
-        return Err(journal_in_the_way(&args.out, &meta));
-    }
     if !args.resume {
-        unfinished_in_the_way(&args.out)?;
+        unfinished_in_the_way(&args.out, &meta)?;
     }
     let (kept, done) = if args.resume { resumed(&args.out, &meta, n)? } else { (Vec::new(), Vec::new()) };
     if args.resume && kept.len() == n {
@@ -286,10 +282,14 @@ fn journal_in_the_way(dir: &Path, meta: &StudyMeta) -> Failure {
     })
 }
 
-/// The refusal of a new sweep into `dir`, which holds the rows of an interrupted sweep (its
-/// summary.json marked partial): they would be replaced, where `--resume` can finish them (a
-/// Ctrl-C's or a batch system's time limit's rows had been overwritten without a word).
-fn unfinished_in_the_way(dir: &Path) -> Result<(), Failure> {
+/// The refusal of a new sweep into `dir`, which holds the rows of an interrupted sweep: a journal
+/// ([`journal_in_the_way`]), or a summary.json marked partial (a Ctrl-C's or a batch system's time
+/// limit's rows had been overwritten without a word), which `--resume` can finish.
+fn unfinished_in_the_way(dir: &Path, meta: &StudyMeta) -> Result<(), Failure> {
+    if dir.join(JOURNAL).exists() {
+        check_not_busy(dir)?;
+        return Err(journal_in_the_way(dir, meta));
+    }
     let Ok(text) = std::fs::read_to_string(dir.join("summary.json")) else { return Ok(()) };
     match serde_json::from_str::<Summary>(&text) {
         Ok(s) if s.partial => Err(Failure::Input(format!(

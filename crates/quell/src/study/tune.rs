@@ -235,7 +235,7 @@ impl TuneCurve {
         // Per limit set, the least reached by the runs the limit alone rejected (completed, with a
         // finite objective): raising the limit to that figure admits one. Runs that never settled
         // do not count (their peak admitted none: a servo's 2.559 where 3.226 was needed).
-        let mut reached: Vec<String> = vec![];
+        let (mut reached, mut flat_peaks): (Vec<String>, Vec<String>) = (vec![], vec![]);
         let completed: Vec<(f64, ChannelFigures)> = self
             .curve
             .iter()
@@ -255,15 +255,13 @@ impl TuneCurve {
                 continue;
             }
             wanted.push(format!("{what} ≤ {prefix}{key}[{i}]"));
-            let least = completed.iter().map(|(mu, f)| (value(f), *mu)).min_by(|a, b| a.0.total_cmp(&b.0));
-            if let Some((v, mu)) = least.filter(|(v, _)| *v > limit) {
-                reached.push(format!(
-                    "the least {what} of the runs with a finite {} is {} (at μ = {}), above {prefix}{key}[{i}] = {}",
-                    spec.objective.name(),
-                    crate::settings::fmt_4(v),
-                    crate::settings::fmt_4(mu),
-                    crate::settings::fmt_short(limit)
-                ));
+            let name = format!("{prefix}{key}[{i}]");
+            let peaks: Vec<(f64, f64)> = completed.iter().map(|(mu, f)| (value(f), *mu)).collect();
+            if let Some((text, flat)) = limit_reached(&peaks, (&what, &name, limit), spec.objective.name()) {
+                reached.push(text);
+                if flat {
+                    flat_peaks.push(name);
+                }
             }
         }
         wanted.push(format!("a finite {}", spec.objective.name()));
@@ -275,6 +273,13 @@ impl TuneCurve {
         } else {
             ""
         };
+        if !flat_peaks.is_empty() {
+            return format!(
+                "no μ in {prefix}mu[{i}] completed with {}{reached}; raise {}, or slow the scenario's channel and observer poles (an automatic design with an actuator limit, u_limit, chooses poles within it){clipping}",
+                wanted.join(" and "),
+                flat_peaks.join(" and ")
+            );
+        }
         format!(
             "no μ in {prefix}mu[{i}] completed with {}{reached}; widen the bounds{limits} or lengthen {}t_end{clipping}",
             wanted.join(" and "),
@@ -739,6 +744,41 @@ pub fn tune(study: &Study, opts: &TuneOptions<'_>) -> Result<TuneResult, StudyEr
     })
 }
 
+/// Peaks within this ratio over a tuning's runs are the same at every μ.
+const FLAT_PEAK: f64 = 1.01;
+
+/// Where a limit (`what`, its key `name`, its value) rejected every run with a finite objective
+/// (`peaks`: (the figure, μ) per such run): how close they came, and whether the figure is the same
+/// at every μ ([`FLAT_PEAK`]): μ does not set it then, so no bound on μ helps (a buck converter's
+/// u_f of 0.0707 from μ = 10 to 1e5 had been told to widen them; helper tryout, 2026-12-06).
+fn limit_reached(
+    peaks: &[(f64, f64)],
+    (what, name, limit): (&str, &str, f64),
+    objective: &str,
+) -> Option<(String, bool)> {
+    let (v, mu) = peaks.iter().copied().min_by(|a, b| a.0.total_cmp(&b.0)).filter(|(v, _)| *v > limit)?;
+    let most = peaks.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
+    let (four, short) = (crate::settings::fmt_4, crate::settings::fmt_short);
+    if peaks.len() > 1 && most <= FLAT_PEAK * v {
+        let (lo, hi) = peaks.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), p| (lo.min(p.1), hi.max(p.1)));
+        let text = format!(
+            "{what} is {} at every μ with a finite {objective} (from {} to {}), above {name} = {}: the poles and the signals set it, not μ",
+            four(v),
+            short(lo),
+            short(hi),
+            short(limit)
+        );
+        return Some((text, true));
+    }
+    let text = format!(
+        "the least {what} of the runs with a finite {objective} is {} (at μ = {}), above {name} = {}",
+        four(v),
+        four(mu),
+        short(limit)
+    );
+    Some((text, false))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -880,5 +920,16 @@ mod tests {
         // where a run asked beyond it: not under a limit above every demand (3.226 here).
         assert!(curve.why_none(&spec, "tune.", 3.0).ends_with("a run of the scenario reports how often it clips"));
         assert!(!curve.why_none(&spec, "tune.", 3.5).contains("truth.u_max"));
+        // The same max |u_f| at every μ (within 1 %): μ does not set it, so the bounds are not
+        // what to widen.
+        let flat = TuneCurve {
+            curve: vec![point(10.0, figures(0.07074, Some(1.0))), point(1e5, figures(0.0708, Some(2.0)))],
+            ..curve
+        };
+        let spec = TuneSpec { max_uf: vec![0.05], ..spec };
+        assert_eq!(
+            flat.why_none(&spec, "tune.", f64::INFINITY),
+            "no μ in tune.mu[0] completed with max |u_f,1| ≤ tune.max_uf[0] and a finite settle_t (max |u_f,1| is 0.07074 at every μ with a finite settle_t (from 10 to 100000), above tune.max_uf[0] = 0.05: the poles and the signals set it, not μ); raise tune.max_uf[0], or slow the scenario's channel and observer poles (an automatic design with an actuator limit, u_limit, chooses poles within it)"
+        );
     }
 }
