@@ -285,11 +285,13 @@ fn misplaced_top_key(at: &str, key: &str, valid: &[&str]) -> Option<StudyError> 
     })
 }
 
-/// A plant key of `[truth]` that may be perturbed before the scenario gives it.
-const TRUTH_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0"];
+/// A key of `[truth]` that may be perturbed before the scenario gives it.
+const TRUTH_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0", "actuator_delays", "u_max"];
 
 /// Gives `doc` the value that `path` names when the scenario leaves it to a default: `truth.<X>`
-/// defaults to `plant.<X>`, and `plant.x0` (or `truth.x0`) to zeros. Other paths are left alone.
+/// defaults to `plant.<X>`, `plant.x0` (or `truth.x0`) and `truth.actuator_delays` to zeros and
+/// `truth.u_max` to +∞ per input (a grid over a drive's limit had needed the scenario to give one
+/// first). Other paths are left alone.
 fn fill_default(doc: &mut toml::Table, path: &KeyPath) {
     let section = path.section();
     let key = path.to_string();
@@ -301,6 +303,9 @@ fn fill_default(doc: &mut toml::Table, path: &KeyPath) {
     let n = plant.and_then(|p| p.get("A")).and_then(toml::Value::as_array).map_or(0, Vec::len);
     let from_plant = plant.and_then(|p| p.get(name)).cloned();
     let zeros = || toml::Value::Array(vec![toml::Value::Float(0.0); n]);
+    let inputs = plant.and_then(|p| p.get("B")).and_then(toml::Value::as_array);
+    let m = inputs.and_then(|b| b.first()).and_then(toml::Value::as_array).map_or(0, Vec::len);
+    let per_input = |v: f64| toml::Value::Array(vec![toml::Value::Float(v); m]);
     if section == "plant" {
         if from_plant.is_none() {
             if let Some(toml::Value::Table(p)) = doc.get_mut("plant") {
@@ -309,10 +314,12 @@ fn fill_default(doc: &mut toml::Table, path: &KeyPath) {
         }
         return;
     }
-    let value = match from_plant {
-        Some(v) => v,
-        None if name == "x0" => zeros(),
-        None => return,
+    let value = match (name, from_plant) {
+        ("actuator_delays", _) => per_input(0.0),
+        ("u_max", _) => per_input(f64::INFINITY),
+        (_, Some(v)) => v,
+        ("x0", None) => zeros(),
+        (_, None) => return,
     };
     let truth = doc.entry("truth").or_insert_with(|| toml::Value::Table(toml::Table::new()));
     if let toml::Value::Table(t) = truth {
