@@ -56,7 +56,9 @@ fn deployment_text(s: &Scenario, d: &Design) -> String {
     let (need, rho) = quell::sim::sample_time_need(d, [&s.reference, &s.disturbance]);
     let unit = s.plant.time_unit;
     let (shift, kappa, what) = quell::export::f32_pole_shift(d);
-    let precision = if shift > quell::export::F32_POLE_SHIFT {
+    let precision = if !shift.is_finite() {
+        format!("{what} has a defective eigenvector matrix (κ₂ = ∞): f32's rounding, as any model error, can move its poles without bound; export in f64 (the default) and give distinct poles")
+    } else if shift > quell::export::F32_POLE_SHIFT {
         format!(
             "f32 could move the poles of {what} by about {} (κ₂ = {kappa:.2e} × 6e-8): export in f64 (the default), or choose poles that give a smaller κ₂",
             quell::export::fmt_shift(shift)

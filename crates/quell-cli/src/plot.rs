@@ -564,19 +564,32 @@ fn draw<DB: DrawingBackend + Strokes>(
         (uf_title, "u_f", &plant_input, limit),
         (eta_title, "η", &etas, None),
     ];
-    // One time axis for the six, and one column right of them for the legends that do not fit
-    // beside their data (η̂'s), so that the panels line up.
-    let views = |column: u32| {
-        panels.iter().zip(areas.iter()).map(move |((_, _, s, l), a)| panel_view(a, s, *l, (None, column)))
-    };
-    let column = views(0).map(|(_, legend)| legend.column()).max().unwrap_or(0);
-    let t_right = views(column).map(|(view, _)| view.0 .1).fold(f64::MIN, f64::max);
+    let (t_right, column) = shared_axes(&panels, &areas[..5]);
     for ((title, ylabel, series, limit), area) in panels.iter().zip(areas.iter()) {
         panel(area, (title, ylabel), series, (*limit, Some(t_right), column), time)?;
     }
     let (tail, title) = error_on_log_axis(r, i, span, (&channel, !ended.is_empty()));
     envelope::log_panel(&areas[5], (&title, "|e|"), &tail, (span.0, t_right, column), time)?;
     root.present().map_err(|e| e.to_string())
+}
+
+/// One time axis for a figure's panels, and one column right of them for the legends that do not
+/// fit beside their data (η̂'s), so that the panels line up: (t_right, column px). A column narrows
+/// every plotting area, so a legend that fitted inside may not any more: it is widened until no
+/// panel needs more (it only grows; two or three passes).
+fn shared_axes<DB: DrawingBackend>(panels: &[PanelSpec<'_>], areas: &[DrawingArea<DB, Shift>]) -> (f64, u32) {
+    let views = |column: u32| {
+        panels.iter().zip(areas.iter()).map(move |((_, _, s, l), a)| panel_view(a, s, *l, (None, column)))
+    };
+    let mut column = 0;
+    for _ in 0..4 {
+        let needed = views(column).map(|(_, legend)| legend.column()).max().unwrap_or(0).max(column);
+        if needed == column {
+            break;
+        }
+        column = needed;
+    }
+    (views(column).map(|(view, _)| view.0 .1).fold(f64::MIN, f64::max), column)
 }
 
 /// ", sampled at T_s = 0.1 s" for a sampled-data run (at 1 ms its staircases cannot be seen, and
@@ -1109,7 +1122,7 @@ fn never_settled_note(most: f64, median_missing: bool) -> [String; 2] {
     } else {
         "their bands run to the top"
     };
-    [format!("up to {} of a point's draws never settled:", quell::settings::fmt_percent(most)), then.into()]
+    [format!("up to {} of a point's completed draws never settled:", quell::settings::fmt_percent(most)), then.into()]
 }
 
 /// A figure's quantile at level p at each grid point, as (x, value) points.

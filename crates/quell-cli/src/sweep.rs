@@ -283,23 +283,50 @@ fn journal_in_the_way(dir: &Path, meta: &StudyMeta) -> Failure {
 }
 
 /// The refusal of a new sweep into `dir`, which holds the rows of an interrupted sweep: a journal
-/// ([`journal_in_the_way`]), or a summary.json marked partial (a Ctrl-C's or a batch system's time
-/// limit's rows had been overwritten without a word), which `--resume` can finish.
+/// ([`journal_in_the_way`]), a summary.json marked partial (a Ctrl-C's or a batch system's time
+/// limit's rows had been overwritten without a word), or, where summary.json cannot be read (a kill
+/// between the two renames), a runs.csv that ends with `# partial: …`; `--resume` can finish them.
 fn unfinished_in_the_way(dir: &Path, meta: &StudyMeta) -> Result<(), Failure> {
     if dir.join(JOURNAL).exists() {
         check_not_busy(dir)?;
         return Err(journal_in_the_way(dir, meta));
     }
-    let Ok(text) = std::fs::read_to_string(dir.join("summary.json")) else { return Ok(()) };
-    match serde_json::from_str::<Summary>(&text) {
-        Ok(s) if s.partial => Err(Failure::Input(format!(
-            "--out {}: holds an unfinished sweep ({} of its {} runs done, summary.json's partial): add --resume to finish it with its study file, or remove runs.csv and summary.json to start over, or choose another --out",
-            dir.display(),
-            s.runs_done,
-            s.study.runs
-        ))),
+    let refuse = |what: String| {
+        Err(Failure::Input(format!(
+            "--out {}: holds an unfinished sweep ({what}): add --resume to finish it with its study file (and its --shard), or remove runs.csv and summary.json to start over, or choose another --out",
+            dir.display()
+        )))
+    };
+    /// The fields wanted of summary.json, read as a stream: a 3e5-point grid's is 800 MB.
+    #[derive(serde::Deserialize)]
+    struct Marked {
+        partial: bool,
+        runs_done: usize,
+    }
+    if let Ok(file) = std::fs::File::open(dir.join("summary.json")) {
+        if let Ok(m) = serde_json::from_reader::<_, Marked>(std::io::BufReader::new(file)) {
+            return match m.partial {
+                true => refuse(format!("{} of its runs done, summary.json's partial", m.runs_done)),
+                false => Ok(()),
+            };
+        }
+    }
+    match last_line(&dir.join("runs.csv")) {
+        Some(line) if line.starts_with("# partial:") => refuse(format!("runs.csv ends with {line:?}")),
         _ => Ok(()),
     }
+}
+
+/// The last line of the file at `path` (from its last 4 KiB), or `None` when it cannot be read.
+fn last_line(path: &Path) -> Option<String> {
+    use std::io::{Read, Seek, SeekFrom};
+    let mut file = std::fs::File::open(path).ok()?;
+    let len = file.metadata().ok()?.len();
+    file.seek(SeekFrom::Start(len.saturating_sub(4096))).ok()?;
+    let mut tail = Vec::new();
+    file.read_to_end(&mut tail).ok()?;
+    let text = String::from_utf8_lossy(&tail);
+    text.trim_end().lines().last().map(str::to_string)
 }
 
 /// `--resume`: the rows the interrupted sweep of this study and shard (`meta`, of `n` runs) wrote

@@ -193,10 +193,21 @@ fn ctrl_c_writes_the_rows_done_marked_partial() {
         let again = quell(&["sweep", study, "--no-plots", "--out", out.to_str().unwrap()]);
         assert_eq!(again.status.code(), Some(2), "{}", stderr(&again));
         let done = lines.len() - 2;
-        let want = format!("holds an unfinished sweep ({done} of its 4000 runs done, summary.json's partial): add --resume to finish it with its study file, or remove runs.csv and summary.json to start over, or choose another --out");
+        let want = format!("holds an unfinished sweep ({done} of its runs done, summary.json's partial): add --resume to finish it with its study file (and its --shard), or remove runs.csv and summary.json to start over, or choose another --out");
         assert!(stderr(&again).contains(&want), "{}", stderr(&again));
         assert_eq!(fs::read_to_string(out.join("runs.csv")).unwrap(), csv);
     }
+    // Without a readable summary.json (a kill between the two renames, or a damaged file),
+    // runs.csv's last line tells (a garbled summary.json had let the rows be replaced).
+    fs::write(out.join("summary.json"), "garbage").unwrap();
+    let again = quell(&["sweep", &other, "--no-plots", "--out", out.to_str().unwrap()]);
+    assert_eq!(again.status.code(), Some(2), "{}", stderr(&again));
+    assert!(
+        stderr(&again).contains("holds an unfinished sweep (runs.csv ends with \"# partial: "),
+        "{}",
+        stderr(&again)
+    );
+    assert_eq!(fs::read_to_string(out.join("runs.csv")).unwrap(), csv);
 }
 
 /// An interrupted sweep resumed with `--resume` ends with the rows of an uninterrupted one (every
@@ -488,7 +499,7 @@ fn a_settling_time_panel_counts_the_draws_that_never_settled() {
     assert!(!shares.is_empty(), "the study should have draws that never settled: {summary}");
     assert_eq!(svg.matches("never settled:").count(), shares.len(), "one note per settling-time panel with some");
     for f in shares {
-        let note = format!("up to {:.1} % of a point&apos;s draws never settled:", 100.0 * f);
+        let note = format!("up to {:.1} % of a point&apos;s completed draws never settled:", 100.0 * f);
         assert!(svg.contains(&note), "{note}");
     }
 }

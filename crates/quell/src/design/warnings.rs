@@ -49,7 +49,19 @@ pub fn warnings(design: &Design, spec: &DesignSpec) -> Vec<DesignWarning> {
         ),
         ObserverChoice::Gain(_) => (1, None),
     };
-    if fragile(kappa) || error.is_some_and(|e| e > FRAGILE_ERROR) {
+    if let (ObserverChoice::Gain(_), true) = (&spec.observer, fragile(kappa)) {
+        // A gain given: no requested poles to be off from (a "?" had stood for their error).
+        out.push(DesignWarning {
+            key: "design.observer_gain",
+            multiplicity,
+            rank,
+            verified_error: None,
+            eigenvector_condition: kappa,
+            message: format!(
+                "design.observer_gain: fragile observer gain: eig(A − LC) has eigenvector condition number κ₂ = {kappa:.2e}: a relative model error ε can move the observer poles by about κ₂·ε·‖A − LC‖; give a gain whose A − LC has distinct eigenvalues not far faster than the plant's, or give design.observer_poles instead"
+            ),
+        });
+    } else if fragile(kappa) || error.is_some_and(|e| e > FRAGILE_ERROR) {
         out.push(DesignWarning {
             key: "design.observer_poles",
             multiplicity,
@@ -212,9 +224,14 @@ mod tests {
         );
         let s = Scenario::from_toml(&text).unwrap();
         let w = warnings(&s.design().unwrap(), &s.design);
-        let o = w.iter().find(|w| w.key == "design.observer_poles").expect("a warning on the observer");
+        let o = w.iter().find(|w| w.key == "design.observer_gain").expect("a warning on the given gain");
         assert_eq!(o.eigenvector_condition, f64::INFINITY, "{o:?}");
-        assert!(o.message.contains("κ₂ = inf") && o.message.contains("give distinct poles"), "{}", o.message);
+        assert!(
+            o.message.contains("κ₂ = inf") && o.message.contains("give a gain whose A − LC has distinct eigenvalues"),
+            "{}",
+            o.message
+        );
+        assert!(!o.message.contains('?'), "{}", o.message);
     }
 
     /// B = [[1, 0.99], [1, 1]] with C = I (tests/data/ill-conditioned-b.toml; σ = [1, 1], so

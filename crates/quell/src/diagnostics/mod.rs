@@ -355,8 +355,8 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
     // Not where the filters are off the signals' scale: bringing them to it changes Ω̄'s spread, so
     // a scale s read from it would have the plant rewritten for nothing (1.3e15 for a column whose
     // reference filters were 19,000× too fast).
-    if !off_scale && channels.iter().flat_map(|c| &c.advice).any(|a| a.contains("excite that direction more")) {
-        advice.extend(unit_mismatch(&avg, signals));
+    if channels.iter().flat_map(|c| &c.advice).any(|a| a.contains("excite that direction more")) {
+        advice.extend(unit_mismatch(&avg, signals).filter(|_| !off_scale));
         advice.extend(crate::auto::modal_advice(signals, design));
     }
     Diagnostics { channels, observer_fidelity: avg.fidelity, advice }

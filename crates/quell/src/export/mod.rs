@@ -185,9 +185,11 @@ pub fn f32_pole_shift(design: &Design) -> (f64, f64, &'static str) {
     (worst(kappa) * f64::from(f32::EPSILON) / 2.0, kappa, what)
 }
 
-/// A relative pole shift as "92 %" or "1.5×".
+/// A relative pole shift as "92 %" or "1.5×" ("∞" for a defective eigenvector matrix).
 pub fn fmt_shift(shift: f64) -> String {
-    if shift >= 1.0 {
+    if !shift.is_finite() {
+        "∞".to_string()
+    } else if shift >= 1.0 {
         format!("{shift:.1}×")
     } else if shift >= 0.01 {
         format!("{:.0} %", 100.0 * shift)

@@ -145,7 +145,8 @@ pub fn load_and_design(text: &str) -> Result<(Scenario, Design), LoadError> {
 
 const TOP_KEYS: &[&str] = &["name", "plant", "design", "reference", "disturbance", "simulation", "noise", "truth"];
 const PLANT_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0", "inputs", "outputs", "states", "time_unit"];
-const TRUTH_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0", "actuator_delays", "u_max"];
+/// The keys of `[truth]`.
+pub(crate) const TRUTH_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0", "actuator_delays", "u_max"];
 /// The keys of `[design]`.
 pub const DESIGN_KEYS: &[&str] = &[
     "observer_gain",

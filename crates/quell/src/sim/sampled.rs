@@ -60,7 +60,7 @@ pub fn coarse_sample_warning(
 
 /// What a sampled-data controller of `design` needs, as `quell design` reports it before any
 /// sampled run: "T_s ≤ bound (T_s·ρ ≤ [`COARSE_SAMPLE`]), e.g. t …" for the loop's fastest rate ρ
-/// under g = `reference`, ω = `disturbance`, and ρ (an automatic design's poles at ρ = 900 /ms
+/// under g = `reference`, ω = `disturbance`, and ρ (an automatic design's poles at ρ = 900 /s
 /// had needed T_s ≤ 0.22 ms, said only when a run at 0.5 ms departed from its continuous loop).
 pub fn sample_time_need(design: &Design, [reference, disturbance]: [&Signal; 2]) -> (String, f64) {
     let rate = super::loop_rate(design, design.plant(), [reference, disturbance]);
@@ -595,7 +595,6 @@ fn sampled_loop<C: SampledController + ?Sized>(
         }
         plant.input(k, ctrl.command());
         result.record_input_peaks(ctrl.command(), &plant.u_f);
-        result.record_error_peak(&plant.y, &plant.g);
         if let Some(a) = &plant.actuator {
             result.record_demand(&a.demand);
         }
@@ -617,6 +616,9 @@ fn sampled_loop<C: SampledController + ?Sized>(
             outcome = Outcome::Interrupted { t };
             break;
         }
+        // After the watch, as the continuous loop's step ends: a sample at which the run diverged
+        // is no error of the loop's (and a NaN there would spoil the scale).
+        result.record_error_peak(&plant.y, &plant.g);
         plant.advance();
     }
     result.stats = stats(taken);

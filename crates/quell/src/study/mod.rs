@@ -126,8 +126,8 @@ pub struct MonteCarlo {
 /// (docs/studies.md, "Runaway").
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Runaway {
-    /// A watched signal (x, x̂, ξ̂ or η̂) beyond `peak` times its peak in the nominal run: the run
-    /// is `diverged`.
+    /// The plant state x, the observer state x̂ (bounded at least as x is) or the parameters η̂
+    /// beyond `peak` times its peak in the nominal run: the run is `stopped`.
     #[serde(deserialize_with = "off_from_null")]
     pub peak: f64,
     /// More than `steps` times the nominal run's solver steps: the run is `failed` ("step budget").
@@ -171,6 +171,16 @@ pub struct Nominal {
     /// holds a draw expected stiff to its steps only then.
     #[serde(default)]
     pub expects_stiff: bool,
+    /// Its divergence bound on ξ̂ ([`crate::sim::Run::divergence_bounds`]), which the peak rule keeps
+    /// for ξ̂ in place of a multiple of its peak (ξ̂ is not bounded by [`Runaway::peak`]); computed
+    /// once per grid point, so that a draw need not compute the averaged law it rests on.
+    #[serde(default = "unbounded", deserialize_with = "off_from_null")]
+    pub xi_bound: f64,
+}
+
+/// No bound (a nominal run written before [`Nominal::xi_bound`]).
+fn unbounded() -> f64 {
+    f64::INFINITY
 }
 
 /// A parsed and checked study.
@@ -285,8 +295,8 @@ fn misplaced_top_key(at: &str, key: &str, valid: &[&str]) -> Option<StudyError> 
     })
 }
 
-/// A key of `[truth]` that may be perturbed before the scenario gives it.
-const TRUTH_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0", "actuator_delays", "u_max"];
+/// A key of `[truth]` that may be perturbed before the scenario gives it: every one.
+use crate::scenario::TRUTH_KEYS;
 
 /// Gives `doc` the value that `path` names when the scenario leaves it to a default: `truth.<X>`
 /// defaults to `plant.<X>`, `plant.x0` (or `truth.x0`) and `truth.actuator_delays` to zeros and
@@ -533,6 +543,9 @@ impl Study {
                     peaks: run.result.peaks,
                     breakpoints: run.shape.breakpoints,
                     expects_stiff: run.shape.expects_stiff,
+                    xi_bound: s
+                        .design()
+                        .map_or(f64::INFINITY, |d| crate::sim::Run::of(&s, &d).divergence_bounds().0[2]),
                 }),
                 _ => None,
             },
@@ -943,8 +956,7 @@ fn study_size(grid: &[GridAxis], mc: Option<&MonteCarlo>) -> Result<usize, Study
 }
 
 /// Optional scenario keys without a default: a study varies them only where the scenario gives them.
-const OPTIONAL_KEYS: &[&str] =
-    &["simulation.sample_time", "truth.u_max", "truth.actuator_delays", "noise.std", "noise.bandwidth"];
+const OPTIONAL_KEYS: &[&str] = &["simulation.sample_time", "noise.std", "noise.bandwidth"];
 
 /// Why `path` is not in the scenario (`why`), with what to do: for an [`OPTIONAL_KEYS`] key the
 /// scenario leaves out, give it there; otherwise `hint` on key paths.

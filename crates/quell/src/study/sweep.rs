@@ -63,12 +63,12 @@ impl RunSpec {
     fn runaway_limits(&self, shape: &StepScale) -> Option<(usize, Peaks)> {
         self.nominal.map(|n| {
             let mut peaks = n.peaks.bounds(self.runaway.peak);
-            // Not ξ̂: the disturbance observer (20) reads a true plant's mismatch as disturbance,
-            // so ξ̂_ω of a converging draw can pass 100× a nominal run's whose observer was exact
-            // (an aircraft pitch loop with truth.A, B 10 % off: 28 of 50 draws stopped at its
-            // nominal delay, all of which converge, tails 1.7e-9 to 4e-5 against 2.5e-3). A ξ̂
-            // that runs away drives u, so x̂ and η̂ follow it past their bounds.
-            peaks.0[Peaks::index_of("xi_hat[")] = f64::INFINITY;
+            // ξ̂ only at its divergence bound: the disturbance observer (20) reads a true plant's
+            // mismatch as disturbance, so ξ̂_ω of a converging draw can pass 100× a nominal run's
+            // whose observer was exact (an aircraft pitch loop with truth.A, B 10 % off: 28 of 50
+            // draws stopped at its nominal delay, all of which converge, tails 1.7e-9 to 4e-5
+            // against 2.5e-3). A ξ̂ that runs away drives u, so x̂ and η̂ follow it past theirs.
+            peaks.0[Peaks::index_of("xi_hat[")] = n.xi_bound;
             // x̂ estimates x in x's coordinates: a mismatch moves x̂ towards x, so it is bounded as
             // x is (the same pitch loop's observer, nominally at 0.26 beside an x of 5.3e6 in an
             // unobserved integrator, reached 27 in 11 converging draws).
@@ -319,7 +319,11 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                     row.reason = format!("{signal} = {value:e} at t = {} {}", fmt_instant(*t), r.time_unit);
                     if let (Some(n), true) = (spec.nominal, peak_rule) {
                         row.outcome = Outcome::Stopped;
-                        let group = Peaks::index_of(signal);
+                        // x̂ is bounded as x is where x's peak is the larger.
+                        let group = match Peaks::index_of(signal) {
+                            1 if n.peaks.0[0] > n.peaks.0[1] => 0,
+                            g => g,
+                        };
                         row.reason += &format!(
                             ": beyond {} × the peak of {} in the nominal run, {:.4e} (over its entries; runaway.peak)",
                             spec.runaway.peak,
@@ -497,9 +501,11 @@ mod tests {
         n.peaks = Peaks([2.0, 0.5, 3.0, 4.0]);
         let shape = StepScale { breakpoints: 0, delay_floor: 0, expects_stiff: false };
         let (_, bounds) = spec.runaway_limits(&shape).unwrap();
-        assert_eq!(bounds, Peaks([200.0, 200.0, f64::INFINITY, 400.0]));
+        let xi = spec.nominal.unwrap().xi_bound;
+        assert!(xi >= crate::sim::DIVERGENCE_BOUND, "ξ̂ at its divergence bound: {xi}");
+        assert_eq!(bounds, Peaks([200.0, 200.0, xi, 400.0]));
         spec.nominal.as_mut().unwrap().peaks = Peaks([2.0, 5.0, 3.0, 0.0]);
-        assert_eq!(spec.runaway_limits(&shape).unwrap().1, Peaks([200.0, 500.0, f64::INFINITY, f64::INFINITY]));
+        assert_eq!(spec.runaway_limits(&shape).unwrap().1, Peaks([200.0, 500.0, xi, f64::INFINITY]));
     }
 
     #[test]

@@ -274,8 +274,20 @@ impl TuneCurve {
             ""
         };
         if !flat_peaks.is_empty() {
+            // Runs whose objective was not finite (never settled) are not in the flat figure: a
+            // longer horizon may still admit one of them.
+            let unsettled = self.curve.iter().any(|p| p.figures.is_some_and(|f| !spec.objective.of(&f).is_finite()));
+            let horizon = if unsettled {
+                format!(
+                    ", or lengthen {}t_end (some μ did not reach a finite {})",
+                    if prefix.is_empty() { "" } else { "simulation." },
+                    spec.objective.name()
+                )
+            } else {
+                String::new()
+            };
             return format!(
-                "no μ in {prefix}mu[{i}] completed with {}{reached}; raise {}, or slow the scenario's channel and observer poles (an automatic design with an actuator limit, u_limit, chooses poles within it){clipping}",
+                "no μ in {prefix}mu[{i}] completed with {}{reached}; raise {}, or slow the scenario's channel and observer poles (an automatic design with an actuator limit, u_limit, chooses poles within it){horizon}{clipping}",
                 wanted.join(" and "),
                 flat_peaks.join(" and ")
             );
