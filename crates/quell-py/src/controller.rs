@@ -329,6 +329,13 @@ impl PyController {
         {
             return Err(crate::errors::type_error("state", "an array of real numbers", state));
         }
+        // A numpy array of another shape is named by its dimensions, not as "a ndarray".
+        let ndim = state.getattr("ndim").ok().and_then(|n| n.extract::<usize>().ok());
+        if let Some(d) = ndim.filter(|&d| d != 1) {
+            return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+                "state: expected a 1-D array of real numbers (Controller.__getstate__()'s), found a {d}-D array"
+            )));
+        }
         let values = match state.cast::<PyArray1<f64>>() {
             Ok(a) => a.readonly().as_array().to_vec(),
             Err(_) => state

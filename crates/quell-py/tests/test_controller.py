@@ -153,3 +153,14 @@ def test_a_faulted_controller_is_not_pickled_into_a_checkpoint_that_cannot_load(
     c.reset()
     again = pickle.loads(pickle.dumps(c))
     assert np.array_equal(again.step([0.5, 0.0], [1.0, 2.0]), c.step([0.5, 0.0], [1.0, 2.0]))
+
+
+def test_a_state_of_another_shape_is_named_by_its_dimensions():
+    """A 2-D state had been refused as "expected an array of real numbers, found a ndarray"
+    (helper tryout, 2026-12-06): it names the dimensions; the 1-D state still loads."""
+    c = quell.Controller(quell.paper_example().design(), sample_time=1e-2)
+    state = c.__getstate__()
+    with pytest.raises(TypeError, match=r"^state: expected a 1-D array of real numbers .*, found a 2-D array$"):
+        c.__setstate__(state.reshape(2, -1))
+    c.__setstate__(state)
+    assert np.array_equal(c.__getstate__(), state)

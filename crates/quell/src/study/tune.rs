@@ -326,6 +326,19 @@ impl TuneCurve {
         let chosen = self.chosen.as_ref()?.mu;
         // Six significant digits, as the line around it gives μ.
         let short = |mu: f64| crate::settings::fmt_short(crate::settings::significant(mu, 6));
+        // The same objective at every μ that completed: μ changes nothing there, and the end was
+        // chosen by the tie (μ from 1e-300 to 1e-100 had been told the best may lie beyond).
+        let scored: Vec<(f64, f64)> = self.curve.iter().filter_map(|p| Some((p.mu, p.objective?))).collect();
+        let (lo, hi) = scored.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.1), b.max(p.1)));
+        if scored.len() > 1 && hi <= lo * (1.0 + 1e-9) {
+            let (mu_lo, mu_hi) = scored.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.0), b.max(p.0)));
+            return Some(format!(
+                "the objective is the same at every μ that completed ({} of them, from {} to {}): μ changes nothing there over this horizon (no adaptation to speak of, or one long done), and the μ chosen is the tie's; search μ where the adaptation acts (the design report's adaptation rate μ λ_max against the horizon)",
+                scored.len(),
+                short(mu_lo),
+                short(mu_hi)
+            ));
+        }
         Some(match self.end_at(chosen) {
             Some(_) => format!("the chosen μ, {}, is at the {end} end of {key}: the best may lie beyond, widen the range", short(chosen)),
             None => format!(
@@ -820,9 +833,10 @@ mod tests {
     /// said nothing).
     #[test]
     fn a_least_objective_at_an_end_is_named_where_the_chosen_mu_ties_inside() {
+        let scored = |mu: f64, objective: f64| TunePoint { objective: Some(objective), ..point(mu) };
         let c = TuneCurve {
             channel: 1,
-            curve: [50.0, 96.5, 100.0].map(point).to_vec(),
+            curve: vec![scored(50.0, 40.0), scored(96.5, 36.1), scored(100.0, 36.05)],
             chosen: Some(point(96.5)),
             tie: Some(Tie { least: 36.05, mu: 100.0, bound: 36.15 }),
         };
@@ -869,6 +883,25 @@ mod tests {
         let broken = TuneResult { within_limits: vec![Some(false), Some(true)], ..stopped };
         let caution = broken.joint_limits_caution(&spec, "").unwrap();
         assert!(caution.starts_with("the tuned μ together break limits in the joint run (channel 1: "), "{caution}");
+    }
+
+    /// The same objective at every μ that completed is said to be so, not that the best may lie
+    /// beyond an end (μ from 1e-300 to 1e300 on the paper's loop over 10 s: the same tail at every
+    /// μ up to 1e-100, the chosen the lowest by the tie; helper tryout, 2026-12-06).
+    #[test]
+    fn a_flat_objective_is_named_not_an_end() {
+        let failed = TunePoint { objective: None, outcome: Outcome::Failed, ..point(1e300) };
+        let c = TuneCurve {
+            channel: 0,
+            curve: vec![point(1e-300), point(1e-100), failed],
+            chosen: Some(point(1e-300)),
+            tie: None,
+        };
+        assert_eq!(c.at_bound(), Some("lower"));
+        assert_eq!(
+            c.bound_note("tune.mu[0]").unwrap(),
+            "the objective is the same at every μ that completed (2 of them, from 1e-300 to 1e-100): μ changes nothing there over this horizon (no adaptation to speak of, or one long done), and the μ chosen is the tie's; search μ where the adaptation acts (the design report's adaptation rate μ λ_max against the horizon)"
+        );
     }
 
     #[test]
