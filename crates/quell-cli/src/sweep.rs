@@ -337,14 +337,14 @@ fn resumed(dir: &Path, meta: &StudyMeta, n: usize) -> Result<(Vec<Row>, Vec<bool
         Failure::Input(format!("{here}: {e}; resume into the --out directory of the interrupted sweep"))
     })?;
     // The journal, where there is one, is newer than runs.csv: it is removed once runs.csv is written.
-    let (old, rows) = match journal::read(dir) {
+    let (old, rows, source) = match journal::read(dir) {
         Err(e) => {
             return Err(Failure::Input(format!("{here}: {JOURNAL}: {e}; remove it and run the sweep again without --resume")))
         }
-        Ok(Some(journal)) => journal,
+        Ok(Some((old, rows))) => (old, rows, JOURNAL),
         Ok(None) if dir.join("summary.json").exists() => {
             let (old, rows, _) = read_sweep_dir(dir, "--resume")?;
-            (old, rows)
+            (old, rows, "runs.csv")
         }
         Ok(None) => {
             return Err(Failure::Input(format!(
@@ -365,10 +365,11 @@ fn resumed(dir: &Path, meta: &StudyMeta, n: usize) -> Result<(Vec<Row>, Vec<bool
         match k {
             Some(k) if !done[k] => done[k] = true,
             _ => {
+                // Starting over means removing what a new sweep would refuse to replace.
                 return Err(Failure::Input(format!(
-                    "{here}: runs.csv's run {} is not a run of shard {}/{} or is there twice (the file was edited?); run the sweep again without --resume",
+                    "{here}: {source}'s run {} is not a run of shard {}/{} or is there twice (the file was edited?); to start over, remove {JOURNAL}, runs.csv and summary.json from it and run the sweep without --resume",
                     row.run, shard.index, shard.count
-                )))
+                )));
             }
         }
     }

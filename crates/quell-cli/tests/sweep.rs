@@ -323,6 +323,24 @@ fn a_killed_sweep_resumes_from_its_journal() {
     assert!(stderr(&resumed).contains("the journal held every run of the study (3000)"), "{}", stderr(&resumed));
     assert_eq!(rows_without_wall_time(&late), rows_without_wall_time(&dir.join("full")));
     assert!(late.join("summary.json").exists() && !late.join("runs.partial.csv").exists());
+    // A journal holding a run twice: the way to start over is named whole (it had said "run the
+    // sweep again without --resume", which the journal then refused, sending the user back).
+    let twice = dir.join("twice");
+    fs::create_dir(&twice).unwrap();
+    let first_row = rows.lines().nth(1).unwrap();
+    let journal_text = format!(
+        "# quell sweep journal: {}\n{}\n{first_row}\n{first_row}\n",
+        summary["study"],
+        rows.lines().next().unwrap()
+    );
+    fs::write(twice.join("runs.partial.csv"), journal_text).unwrap();
+    let refused = quell(&["sweep", &study, "--no-plots", "--out", &out("twice"), "--resume"]);
+    assert_eq!(refused.status.code(), Some(2), "{}", stderr(&refused));
+    assert!(
+        stderr(&refused).contains("runs.partial.csv's run 0 is not a run of shard 0/1 or is there twice (the file was edited?); to start over, remove runs.partial.csv, runs.csv and summary.json from it and run the sweep without --resume"),
+        "{}",
+        stderr(&refused)
+    );
     // A journal that is not one is named, not taken, with or without --resume.
     fs::write(&journal, "run,point\n").unwrap();
     refused_plainly(&study, "; remove it to start over here, or choose another --out");
