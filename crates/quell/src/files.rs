@@ -194,8 +194,15 @@ pub fn check_dir(dir: &Path) -> io::Result<()> {
             refuse(format!("{} is a {what}, not a directory", dir.display()))
         }
         // A link to nowhere: creating the directory fails with "File exists", which says nothing.
-        Err(_) if dir.is_symlink() => {
+        // A loop of links (ELOOP) is not a missing directory to create.
+        Err(e) if dir.is_symlink() => {
             let target = std::fs::read_link(dir).map_or_else(|_| "?".into(), |t| t.display().to_string());
+            if e.raw_os_error() == Some(libc_eloop()) {
+                return refuse(format!(
+                    "{} is a symbolic link to {target} that leads back to itself (a loop of links); give a directory",
+                    dir.display()
+                ));
+            }
             refuse(format!(
                 "{} is a symbolic link to {target}, which does not exist (create that directory)",
                 dir.display()
@@ -205,10 +212,32 @@ pub fn check_dir(dir: &Path) -> io::Result<()> {
     }
 }
 
+/// ELOOP, "too many levels of symbolic links": 40 on Linux, 62 on the BSDs and macOS.
+fn libc_eloop() -> i32 {
+    if cfg!(any(target_os = "linux", target_os = "android")) {
+        40
+    } else {
+        62
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use std::fs;
+
+    /// A loop of links is named as one (it had been "a symbolic link to b, which does not exist
+    /// (create that directory)"; helper tryout, 2026-12-06).
+    #[test]
+    #[cfg(unix)]
+    fn a_loop_of_links_is_named_as_one() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+        std::os::unix::fs::symlink(&b, &a).unwrap();
+        std::os::unix::fs::symlink(&a, &b).unwrap();
+        let e = check_dir(&a).unwrap_err().to_string();
+        assert!(e.ends_with("that leads back to itself (a loop of links); give a directory"), "{e}");
+    }
 
     #[test]
     #[cfg(unix)]
