@@ -121,31 +121,31 @@ fn panel<DB: DrawingBackend + Strokes>(
         Legend::Inside(font, size) => {
             draw_legend(&mut chart, legend_corner(series, ((t0, t1), (y0, y1)), size).0, font)
         }
-        Legend::Outside(font, _) => {
+        Legend::Outside(font, width) => {
             // Beside the plotting area, top-aligned with it, on the panel's own area (plotters
-            // clips a chart's legend to its plotting area).
+            // clips a chart's legend to its plotting area); its entries as the chart's own legend
+            // draws them: each series solid in its colour ([`lines`]), the limit dashed grey.
             let (x, y) = chart.plotting_area().get_pixel_range();
             let base = area.get_base_pixel();
-            let reference = |name: &str| name.ends_with("(reference)");
             let mut entries: Vec<(String, RGBAColor, bool)> =
-                series.iter().enumerate().map(|(k, (name, _))| (name.clone(), pick(k), reference(name))).collect();
-            entries.extend(limit.map(|(label, _)| (label.to_string(), RGBColor(90, 90, 90).into(), true)));
-            legend_beside(area, (x.end - base.0 + 8, y.start - base.1), &entries, font)
+                series.iter().enumerate().map(|(k, (name, _))| (name.clone(), pick(k), false)).collect();
+            entries.extend(limit.map(|(label, _)| (label.to_string(), LIMIT_GREY.into(), true)));
+            legend_beside(area, (x.end - base.0 + 8, y.start - base.1), &entries, (font, width))
         }
     }
 }
 
-/// A legend box at `(x, y)` of `area` (its top left, px): per entry a 20 px line in its colour
-/// (dashed where asked) and its label in `font` px, in the style of [`draw_legend`].
+/// A legend box `width` px wide (the estimate [`legend_box`] sized the figure's column for) at
+/// `(x, y)` of `area` (its top left, px): per entry a 20 px line in its colour (dashed where asked)
+/// and its label in `font` px, in the style of [`draw_legend`].
 fn legend_beside<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     (x, y): (i32, i32),
     entries: &[(String, RGBAColor, bool)],
-    font: u32,
+    (font, width): (u32, u32),
 ) -> Result<(), String> {
     let row = font as i32 + 6;
-    let longest = entries.iter().map(|(name, ..)| name.chars().count()).max().unwrap_or(0);
-    let (w, h) = (40 + (0.6 * f64::from(font) * longest as f64).ceil() as i32, 10 + row * entries.len() as i32);
+    let (w, h) = (width as i32, 10 + row * entries.len() as i32);
     let text = ("sans-serif", font).into_font().color(&BLACK);
     area.draw(&Rectangle::new([(x, y), (x + w, y + h)], WHITE.mix(0.85).filled())).map_err(|e| e.to_string())?;
     area.draw(&Rectangle::new([(x, y), (x + w, y + h)], BLACK)).map_err(|e| e.to_string())?;
@@ -398,6 +398,9 @@ fn lines<DB: DrawingBackend + Strokes>(
     Ok(())
 }
 
+/// The colour of a limit's dashed lines and their legend entry.
+const LIMIT_GREY: RGBColor = RGBColor(90, 90, 90);
+
 /// Dashed grey lines at `levels` across `(t0, t1)`, one legend entry `label` for them.
 fn limit_lines<DB: DrawingBackend>(
     chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
@@ -405,7 +408,7 @@ fn limit_lines<DB: DrawingBackend>(
     levels: &[f64],
     (t0, t1): (f64, f64),
 ) -> Result<(), String> {
-    let grey = RGBColor(90, 90, 90);
+    let grey = LIMIT_GREY;
     for (k, &level) in levels.iter().enumerate() {
         let line = DashedLineSeries::new([(t0, level), (t1, level)], 6, 4, grey.stroke_width(1));
         let drawn = chart.draw_series(line).map_err(|e| e.to_string())?;

@@ -56,7 +56,8 @@ pub fn interruptible<R: Send>(py: Python<'_>, work: impl FnOnce() -> R + Send) -
 
 /// `work(stop)` on a worker thread with the GIL released, while this thread runs Python's signal
 /// handlers every [`SIGNAL_CHECK`] until it ends (returning as soon as it does); a
-/// KeyboardInterrupt sets `stop`, waits for `work` to notice it and is raised. For calls that take their stop flag as an argument (a sweep's `SweepOptions`).
+/// KeyboardInterrupt sets `stop`, waits for `work` to notice it and is raised. For calls that
+/// take their stop flag as an argument (a sweep's `SweepOptions`).
 pub fn interruptible_with<R: Send>(py: Python<'_>, work: impl FnOnce(Arc<AtomicBool>) -> R + Send) -> PyResult<R> {
     match interruptible_keeping(py, work)? {
         (_, Some(e)) => Err(e),

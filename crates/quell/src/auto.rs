@@ -871,8 +871,9 @@ fn sampled_start(doc: &toml::Table, targets: &Targets) -> Result<(Proposal, Desi
 }
 
 /// The relaxation (module docs): from the verified first proposal, slower candidates in four
-/// phases, each from the candidate kept so far but the third (from phase 1's observer); returns the kept one and whether it is within the
-/// actuator limit. Each verifying run is listed in `candidates`; an interruption ends it as an error.
+/// phases, each from the candidate kept so far but the third (from phase 1's observer); returns
+/// the kept one and whether it is within the actuator limit. Each verifying run is listed in
+/// `candidates`; an interruption ends it as an error.
 fn relax(
     doc: &toml::Table,
     targets: &Targets,
