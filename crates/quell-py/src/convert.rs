@@ -42,6 +42,17 @@ fn real_array<'py>(obj: &Bound<'py, PyAny>, name: &str, kind: Kind) -> PyResult<
     if obj.is_none() || obj.is_instance_of::<PyDict>() {
         return Err(type_error(name, "an array-like of real numbers", obj));
     }
+    // numpy reads a masked array as its data, masked entries and all: refuse those entries.
+    if obj.is_instance(&np.getattr("ma")?.getattr("MaskedArray")?)? {
+        let masked: usize = np.getattr("ma")?.call_method1("count_masked", (obj,))?.extract()?;
+        if masked > 0 {
+            let entries = if masked == 1 { "entry" } else { "entries" };
+            return Err(kind.err(
+                py,
+                format!("{name}: expected real numbers, found a masked array with {masked} masked {entries}, whose values numpy would pass on as they are; fill them (`.filled(value)`) or pass `.data` if those values are meant"),
+            ));
+        }
+    }
     let arr = np.call_method1("asarray", (obj,)).map_err(|e| {
         kind.err(
             py,

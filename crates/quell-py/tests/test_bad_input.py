@@ -248,3 +248,14 @@ def test_a_name_that_is_not_valid_unicode_and_a_feedthrough_are_named_with_their
     with pytest.raises(quell.ScenarioError, match=r"^sys\.D\[1\]\[1\]: .*expected 0, found 1\.000000e-300; ") as e:
         quell.Plant(control.ss(A, B, C, D))
     assert len(str(e.value)) < 300
+
+
+def test_masked_entries_are_refused_not_read_as_data():
+    """numpy.asarray reads a masked array as its data, the masked entries' values included: a
+    plant with a masked entry of A (a missing measurement, say) is refused, naming how many; a
+    masked array with nothing masked is its data."""
+    A_masked = np.ma.masked_array(A, mask=[[False, True, False], [False] * 3, [False] * 3])
+    with pytest.raises(quell.ScenarioError, match=r"^A: expected real numbers, found a masked array with 1 masked entry,"):
+        quell.Plant(A=A_masked, B=B, C=C)
+    unmasked = quell.Plant(A=np.ma.masked_array(A), B=B, C=C)
+    np.testing.assert_array_equal(unmasked.A, A)

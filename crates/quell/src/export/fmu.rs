@@ -199,7 +199,7 @@ pub fn generate_fmu(
             })?;
             let mut all = sources.clone();
             all.extend(header_files.clone());
-            let so = compile(cc, &all, &units, &format!("{p}.{ext}"))?;
+            let so = compile(cc, &all, &units, &format!("{p}.{ext}"), COMPILE_TIMEOUT)?;
             Some((platform, format!("binaries/{platform}/{p}.{ext}"), so))
         }
     };
@@ -357,9 +357,19 @@ fn build_description(model_identifier: &str, units: &[&str]) -> String {
     )
 }
 
+/// How long a compiler may take before it is taken as hung (one that waits for input, a wrapper
+/// stuck on a licence server): the generated code compiles in about a second.
+const COMPILE_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(120);
+
 /// Compiles `units` of `sources` into the shared library `output` with `compiler`, in a temporary
-/// directory; returns its bytes.
-fn compile(compiler: &str, sources: &[(String, String)], units: &[&str], output: &str) -> Result<Vec<u8>, ExportError> {
+/// directory, killing it after `timeout`; returns the library's bytes.
+fn compile(
+    compiler: &str,
+    sources: &[(String, String)],
+    units: &[&str],
+    output: &str,
+    timeout: std::time::Duration,
+) -> Result<Vec<u8>, ExportError> {
     let fail = |message: String| ExportError::Compiler { compiler: compiler.to_string(), message };
     let dir = tempfile::tempdir().map_err(|e| fail(format!("cannot create a temporary directory ({e})")))?;
     for (name, text) in sources {
@@ -382,9 +392,14 @@ fn compile(compiler: &str, sources: &[(String, String)], units: &[&str], output:
     cmd.args(flags);
     cmd.args(["-std=c99", "-O2", "-ffp-contract=off", "-shared", "-fPIC", "-fvisibility=hidden", "-o"]).arg(&out);
     cmd.args(units.iter().map(|u| dir.path().join(u))).current_dir(dir.path());
-    let result = cmd
-        .output()
-        .map_err(|e| ExportError::CompilerNotFound { compiler: compiler.to_string(), message: e.to_string() })?;
+    let result = run_within(cmd, timeout)
+        .map_err(|e| ExportError::CompilerNotFound { compiler: compiler.to_string(), message: e.to_string() })?
+        .ok_or_else(|| {
+            fail(format!(
+                "it had not finished after {} s and was stopped: does it wait for input or a licence? Name a C compiler that runs unattended, such as gcc or clang",
+                timeout.as_secs_f64()
+            ))
+        })?;
     if !result.status.success() {
         let stderr = String::from_utf8_lossy(&result.stderr);
         let first: Vec<&str> = stderr.lines().take(12).collect();
@@ -398,6 +413,41 @@ fn compile(compiler: &str, sources: &[(String, String)], units: &[&str], output:
             Path::new(output).display()
         ))
     })
+}
+
+/// Runs `cmd` with stdin closed, its output captured, and waits at most `timeout`: `None` (the
+/// process killed) when it has not exited by then.
+fn run_within(mut cmd: Command, timeout: std::time::Duration) -> std::io::Result<Option<std::process::Output>> {
+    use std::io::Read;
+    use std::process::Stdio;
+    let mut child = cmd.stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn()?;
+    // Each pipe drained on its own thread, so that a talkative compiler never blocks on a full one.
+    let drain = |pipe: Option<Box<dyn Read + Send>>| {
+        std::thread::spawn(move || {
+            let mut bytes = Vec::new();
+            if let Some(mut p) = pipe {
+                let _ = p.read_to_end(&mut bytes);
+            }
+            bytes
+        })
+    };
+    let stdout = drain(child.stdout.take().map(|p| Box::new(p) as Box<dyn Read + Send>));
+    let stderr = drain(child.stderr.take().map(|p| Box::new(p) as Box<dyn Read + Send>));
+    let deadline = std::time::Instant::now() + timeout;
+    let status = loop {
+        if let Some(status) = child.try_wait()? {
+            break status;
+        }
+        if std::time::Instant::now() >= deadline {
+            // The readers are left to end with the pipes (a child of the compiler may hold them).
+            let _ = child.kill();
+            let _ = child.wait();
+            return Ok(None);
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    };
+    let (stdout, stderr) = (stdout.join().unwrap_or_default(), stderr.join().unwrap_or_default());
+    Ok(Some(std::process::Output { status, stdout, stderr }))
 }
 
 /// The zip archive of `files` (deflated).
@@ -422,5 +472,29 @@ mod tests {
     fn the_guid_is_fnv1a_128_of_the_texts() {
         assert_eq!(guid(&["a"]), "{d228cb69-6f1a-8caf-7891-2b704e4a8964}");
         assert_eq!(guid(&["foo", "bar"]), "{343e1662-793c-64bf-6f0d-3597ba446f18}");
+    }
+
+    /// A compiler that never finishes is stopped at the timeout with an error that says so, and
+    /// one that finishes is waited for, its output kept.
+    #[cfg(unix)]
+    #[test]
+    fn a_hung_compiler_is_stopped_at_the_timeout() {
+        use std::os::unix::fs::PermissionsExt as _;
+        let dir = tempfile::tempdir().unwrap();
+        let hung = dir.path().join("hung-cc");
+        std::fs::write(&hung, "#!/bin/sh\nexec sleep 30\n").unwrap();
+        std::fs::set_permissions(&hung, std::fs::Permissions::from_mode(0o755)).unwrap();
+        let start = std::time::Instant::now();
+        let sources = [("a.c".to_string(), "int a(void) { return 1; }\n".to_string())];
+        let e = compile(hung.to_str().unwrap(), &sources, &["a.c"], "a.so", std::time::Duration::from_millis(300))
+            .unwrap_err()
+            .to_string();
+        assert!(start.elapsed() < std::time::Duration::from_secs(10), "{:?}", start.elapsed());
+        assert!(e.contains("had not finished after 0.3 s and was stopped"), "{e}");
+        let mut echo = Command::new("sh");
+        echo.args(["-c", "echo out; echo err >&2"]);
+        let done = run_within(echo, std::time::Duration::from_secs(30)).unwrap().unwrap();
+        assert!(done.status.success());
+        assert_eq!((done.stdout.as_slice(), done.stderr.as_slice()), (&b"out\n"[..], &b"err\n"[..]));
     }
 }

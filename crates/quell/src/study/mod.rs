@@ -994,6 +994,11 @@ fn check_values<'v>(
     base_error: Option<&(String, StudyError)>,
 ) -> Result<(), StudyError> {
     let mut doc = base.clone();
+    // Whose shape a value must have: the scenario's value, or the default it leaves the key to.
+    let shape_of = match path.get(&doc) {
+        Ok(_) => format!("the shape of {path} in {source}"),
+        Err(_) => format!("the shape {path} takes by default in {source}, which leaves it out"),
+    };
     fill_default(&mut doc, path);
     let current = path.get(&doc).map_err(|m| {
         err(at, not_in_scenario(path, &m, "grid and Monte Carlo keys are scenario key paths as error messages write them, e.g. design.mu[0] or truth.A"))
@@ -1006,7 +1011,7 @@ fn check_values<'v>(
         match path::shape(v) {
             Some(found) if found == expected => {}
             Some(found) => {
-                return Err(err(key, format!("expected {expected} (the shape of {path} in {source}), found {found}")))
+                return Err(err(key, format!("expected {expected} ({shape_of}), found {found}")))
             }
             None => return Err(err(key, format!("expected {expected} (the shape of {path}), found {}", kind(v)))),
         }

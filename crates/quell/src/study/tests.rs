@@ -57,6 +57,8 @@ fn study_mistakes_name_their_key() {
         ("[grid]\n\"design.mu[2]\" = [1.0]", "grid.\"design.mu[2]\": design.mu[2] is not a value of the scenario (design.mu has no [2] (it has 2 entries))"),
         ("[grid]\n\"design.mu\" = [[1.0, 2.0, 3.0]]", "grid.\"design.mu\"[0]: expected a vector of 2 numbers (the shape of design.mu in the paper's example), found a vector of 3 numbers"),
         ("[grid]\n\"plant.A\" = [[[1.0]]]", "grid.\"plant.A\"[0]: expected a 3×3 matrix"),
+        // A key the scenario leaves to its default is not said to be in the scenario.
+        ("[grid]\n\"truth.A\" = [[[1.0, 2.0]]]", "grid.\"truth.A\"[0]: expected a 3×3 matrix (the shape truth.A takes by default in the paper's example, which leaves it out), found a 1×2 matrix"),
         ("[grid]\n\"design.mu[0]\" = []", "grid.\"design.mu[0]\": expected a non-empty list of values, found an empty array"),
         ("[grid]\n\"design.mu[0]\" = 5.0", "grid.\"design.mu[0]\": expected a list of values (e.g. [5.0, 10.0]), found a floating-point number"),
         ("[grid]\n\"design.mu[0]\" = [5.0, \"x\"]", "grid.\"design.mu[0]\"[1]: expected a number (the shape of design.mu[0]), found a string"),
