@@ -1,7 +1,8 @@
 //! Ctrl-C (SIGINT), and SIGTERM and SIGHUP alike (a batch system's time limit, a closed terminal),
 //! for the long commands. The first signal asks the work to stop and the results so far to be
 //! written; a second one before writing has begun quits at once with nothing written; once writing
-//! has begun further signals wait for it, so no file is cut short and no temporary is left.
+//! has begun further signals wait for it (the first is answered with a note), so no file is cut
+//! short and no temporary is left.
 
 use std::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 use std::sync::Arc;
@@ -11,6 +12,8 @@ const RUNNING: u8 = 0;
 const INTERRUPTED: u8 = 1;
 const QUITTING: u8 = 2;
 const WRITING: u8 = 3;
+/// Writing, and the user told that a signal now waits for it.
+const WRITING_TOLD: u8 = 4;
 
 /// The installed handler's state.
 pub struct Interrupt {
@@ -26,11 +29,16 @@ impl Interrupt {
         let _ = keeping_ignored_sigint(|| {
             ctrlc::set_handler(move || {
                 handler_stop.store(true, Ordering::SeqCst);
-                if handler_phase.compare_exchange(RUNNING, INTERRUPTED, Ordering::SeqCst, Ordering::SeqCst).is_err()
-                    && handler_phase.compare_exchange(INTERRUPTED, QUITTING, Ordering::SeqCst, Ordering::SeqCst).is_ok()
-                {
-                    eprintln!("error: {twice}");
-                    std::process::exit(1);
+                match on_signal(&handler_phase) {
+                    Some(Said::Quit) => {
+                        eprintln!("error: {twice}");
+                        std::process::exit(1);
+                    }
+                    // A large signals.csv takes seconds: say why the signal seems to do nothing.
+                    Some(Said::Writing) => eprintln!(
+                        "note: writing the results; stopping now would leave them incomplete, so quell finishes writing first"
+                    ),
+                    None => {}
                 }
             })
         });
@@ -69,6 +77,30 @@ impl Interrupt {
     }
 }
 
+/// What a signal makes the handler say.
+#[derive(Debug, PartialEq)]
+enum Said {
+    /// A second signal before writing began: quit with nothing written.
+    Quit,
+    /// The first signal while writing: it waits for the files.
+    Writing,
+}
+
+/// Moves `phase` on for a signal: the first asks the work to stop (nothing said), a second before
+/// writing quits, the first during writing is answered once, later ones silently.
+fn on_signal(phase: &AtomicU8) -> Option<Said> {
+    let to = |from, to| phase.compare_exchange(from, to, Ordering::SeqCst, Ordering::SeqCst).is_ok();
+    if to(RUNNING, INTERRUPTED) {
+        None
+    } else if to(INTERRUPTED, QUITTING) {
+        Some(Said::Quit)
+    } else if to(WRITING, WRITING_TOLD) {
+        Some(Said::Writing)
+    } else {
+        None
+    }
+}
+
 /// Runs `install` (which handles SIGINT, SIGTERM and SIGHUP) and, where SIGINT was ignored when it
 /// ran, ignores it again: a shell without job control starts `quell sweep … &` with SIGINT ignored,
 /// so that Ctrl-C at the terminal spares background work, and the handler took that back (POSIX
@@ -92,4 +124,23 @@ fn keeping_ignored_sigint<T>(install: impl FnOnce() -> T) -> T {
     }
     #[cfg(not(unix))]
     install()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn signals_move_the_phases_on() {
+        let phase = AtomicU8::new(RUNNING);
+        assert_eq!(on_signal(&phase), None);
+        assert_eq!(on_signal(&phase), Some(Said::Quit));
+        assert_eq!(on_signal(&phase), None, "quitting already");
+        // Once writing has begun, the first signal is answered and the next ones are not.
+        let phase = AtomicU8::new(INTERRUPTED);
+        phase.store(WRITING, Ordering::SeqCst);
+        assert_eq!(on_signal(&phase), Some(Said::Writing));
+        assert_eq!(on_signal(&phase), None);
+        assert_eq!(phase.load(Ordering::SeqCst), WRITING_TOLD);
+    }
 }
