@@ -134,6 +134,14 @@ fn the_design_report_says_what_deployment_needs() {
     let hdd = Path::new(env!("CARGO_MANIFEST_DIR")).join("../quell/tests/data/hdd-servo.toml");
     let out = stdout(&quell(&["design", hdd.to_str().unwrap()]));
     assert!(out.contains("  precision: f32 could move the poles of A − LC (the observer) by about 16 % (κ₂ = 2.75e6 × 6e-8): export in f64 (the default)"), "{out}");
+    // Delays of 1.5 and 2.5 µs are whole at 0.5 µs, far below the bound: 100 s / 5e-7 s = 2e8
+    // samples, which the report counts.
+    let dir = temp_dir("deployment-us");
+    let text = fs::read_to_string(paper()).unwrap().replace("delays = [1.0, 3.0]", "delays = [1.5e-6, 2.5e-6]");
+    let us = dir.path().join("us.toml");
+    fs::write(&us, text).unwrap();
+    let out = stdout(&quell(&["design", us.to_str().unwrap()]));
+    assert!(out.contains("e.g. 5e-7 s, which makes plant.delays whole (2.0e8 samples over t_end = 100 s: a sample time nearer the bound needs delays nearer its whole multiples)"), "{out}");
 }
 
 #[test]

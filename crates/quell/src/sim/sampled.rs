@@ -62,17 +62,39 @@ pub fn coarse_sample_warning(
 /// sampled run: "T_s ≤ bound (T_s·ρ ≤ [`COARSE_SAMPLE`]), e.g. t …" for the loop's fastest rate ρ
 /// under g = `reference`, ω = `disturbance`, and ρ (an automatic design's poles at ρ = 900 /s
 /// had needed T_s ≤ 0.22 ms, said only when a run at 0.5 ms departed from its continuous loop).
-pub fn sample_time_need(design: &Design, [reference, disturbance]: [&Signal; 2]) -> (String, f64) {
+/// Where t, set by the delays rather than ρ, makes a run over `t_end` more than
+/// [`MANY_SAMPLES`] samples, it says how many (µs delays had offered 1e-8 s for a 100 s run).
+pub fn sample_time_need(design: &Design, [reference, disturbance]: [&Signal; 2], t_end: f64) -> (String, f64) {
     let rate = super::loop_rate(design, design.plant(), [reference, disturbance]);
-    (fine_sample_time(design, rate, None), rate)
+    let (bound, whole) = sample_time_choice(design, rate, None);
+    let mut need = fine_sample_time_text(design, bound, whole, false);
+    if let Some(t) = whole.filter(|t| t_end / t > MANY_SAMPLES) {
+        need += &format!(
+            " ({:.1e} samples over t_end = {} {}: a sample time nearer the bound needs delays nearer its whole multiples)",
+            t_end / t,
+            settings::fmt_short(t_end),
+            design.plant().time_unit
+        );
+    }
+    (need, rate)
 }
+
+/// A sampled run's length beyond which [`sample_time_need`] counts its samples: about a minute of
+/// simulation at ~10 million samples a minute.
+const MANY_SAMPLES: f64 = 1e7;
 
 /// "T_s ≤ bound (T_s·ρ ≤ [`COARSE_SAMPLE`]), e.g. t …": the sample times fine for a loop of rate
 /// `rate`, with one that makes the design's delays whole (and divides `output_step`, when given);
 /// a `[truth]`'s own delays are not seen here, and the run that refuses them names the nearest
 /// sample time that makes them whole too.
 pub(crate) fn fine_sample_time(design: &Design, rate: f64, output_step: Option<f64>) -> String {
-    let unit = design.plant().time_unit;
+    let (bound, whole) = sample_time_choice(design, rate, output_step);
+    fine_sample_time_text(design, bound, whole, output_step.is_some())
+}
+
+/// The bound T_s ≤ [`COARSE_SAMPLE`]/`rate` (three digits, rounded down) and a sample time within
+/// it that makes the design's delays whole (and divides `output_step`, when given), if any.
+fn sample_time_choice(design: &Design, rate: f64, output_step: Option<f64>) -> (f64, Option<f64>) {
     let bound = settings::three_digits_down(COARSE_SAMPLE / rate);
     let valid = match output_step {
         Some(h) => discrete::sample_time_dividing(design, bound, h),
@@ -80,14 +102,19 @@ pub(crate) fn fine_sample_time(design: &Design, rate: f64, output_step: Option<f
     };
     // A sample time beyond the bound is no example of one within it (β = 1e-7 had offered 3e-7 s
     // for T_s ≤ 2e-8 s: no shorter one keeps the delay lines within their limit).
-    let whole = match valid {
-        Some(t) if t < bound => format!(
+    (bound, valid.filter(|t| *t < bound))
+}
+
+/// [`fine_sample_time`]'s text; `divides`: the sample time divides the output step too.
+fn fine_sample_time_text(design: &Design, bound: f64, whole: Option<f64>, divides: bool) -> String {
+    let unit = design.plant().time_unit;
+    let whole = whole.map_or(String::new(), |t| {
+        format!(
             ", e.g. {} {unit}, which makes plant.delays whole{}",
             settings::fmt_short(t),
-            if output_step.is_some() { " and divides simulation.output_step" } else { "" }
-        ),
-        _ => String::new(),
-    };
+            if divides { " and divides simulation.output_step" } else { "" }
+        )
+    });
     format!("T_s ≤ {} {unit} (T_s·ρ ≤ {COARSE_SAMPLE}){whole}", settings::fmt_short(bound))
 }
 
