@@ -112,24 +112,22 @@ fn panel<DB: DrawingBackend + Strokes>(
         .label_style(("sans-serif", 14))
         .draw()
         .map_err(|e| e.to_string())?;
-    lines(&mut chart, series)?;
+    let mut entries = lines(&mut chart, series)?;
     if let Some((label, _)) = limit {
-        limit_lines(&mut chart, label, &levels, (t0, t1))?;
+        limit_lines(&mut chart, &levels, (t0, t1))?;
+        entries.push((label.to_string(), LIMIT_GREY.into(), true));
     }
     match legend {
         Legend::None => Ok(()),
         Legend::Inside(font, size) => {
+            label_entries(&mut chart, &entries)?;
             draw_legend(&mut chart, legend_corner(series, ((t0, t1), (y0, y1)), size).0, font)
         }
         Legend::Outside(font, width) => {
             // Beside the plotting area, top-aligned with it, on the panel's own area (plotters
-            // clips a chart's legend to its plotting area); its entries as the chart's own legend
-            // draws them: each series solid in its colour ([`lines`]), the limit dashed grey.
+            // clips a chart's legend to its plotting area).
             let (x, y) = chart.plotting_area().get_pixel_range();
             let base = area.get_base_pixel();
-            let mut entries: Vec<(String, RGBAColor, bool)> =
-                series.iter().enumerate().map(|(k, (name, _))| (name.clone(), pick(k), false)).collect();
-            entries.extend(limit.map(|(label, _)| (label.to_string(), LIMIT_GREY.into(), true)));
             legend_beside(area, (x.end - base.0 + 8, y.start - base.1), &entries, (font, width))
         }
     }
@@ -141,7 +139,7 @@ fn panel<DB: DrawingBackend + Strokes>(
 fn legend_beside<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     (x, y): (i32, i32),
-    entries: &[(String, RGBAColor, bool)],
+    entries: &[Entry],
     (font, width): (u32, u32),
 ) -> Result<(), String> {
     let row = font as i32 + 6;
@@ -356,7 +354,7 @@ fn m4(points: &[(f64, f64)], x: &std::ops::Range<f64>, w: u32) -> Vec<(f64, f64)
 fn lines<DB: DrawingBackend + Strokes>(
     chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
     series: &[Series],
-) -> Result<(), String> {
+) -> Result<Vec<Entry>, String> {
     let (w, h) = chart.plotting_area().dim_in_pixel();
     let (x, y) = (chart.x_range(), chart.y_range());
     let band = |points: &[(f64, f64)]| path_pixels(points, (w, h), &x, &y) > BAND * w as f64;
@@ -372,8 +370,8 @@ fn lines<DB: DrawingBackend + Strokes>(
         let points = m4(points, &x, w);
         let color = if faint.contains(&k) { pick(k).mix(0.35) } else { pick(k) };
         let shifted = |(dt, dv): (f64, f64)| points.iter().map(move |&(t, v)| (t + dt, v + dv));
-        for (j, &offset) in offsets.iter().enumerate() {
-            let drawn = if faint.contains(&k) {
+        for &offset in offsets {
+            if faint.contains(&k) {
                 chart.draw_series(LineSeries::new(shifted(offset), color.stroke_width(1)))
             } else if reference(name) {
                 chart.draw_series(DashedLineSeries::new(shifted(offset), 8, 5, color.stroke_width(width)))
@@ -388,12 +386,36 @@ fn lines<DB: DrawingBackend + Strokes>(
                 chart.draw_series(LineSeries::new(shifted(offset), color.stroke_width(width)))
             }
             .map_err(|e| e.to_string())?;
-            if j + 1 == offsets.len() {
-                drawn
-                    .label(name.clone())
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
-            }
         }
+    }
+    // The key in the series' own order (not the drawing's, which puts references first or last),
+    // each entry drawn as its line is.
+    Ok(series
+        .iter()
+        .enumerate()
+        .map(|(k, (name, _))| match faint.contains(&k) {
+            true => (name.clone(), pick(k).mix(0.35), false),
+            false => (name.clone(), pick(k), reference(name)),
+        })
+        .collect())
+}
+
+/// A legend entry: its label, its line's colour, and whether that line is dashed.
+type Entry = (String, RGBAColor, bool);
+
+/// Gives the chart's own legend `entries`, in their order.
+fn label_entries<'a, DB: DrawingBackend + 'a>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    entries: &[Entry],
+) -> Result<(), String> {
+    for (name, color, dashed) in entries.iter().cloned() {
+        chart.draw_series(std::iter::empty::<PathElement<(f64, f64)>>()).map_err(|e| e.to_string())?.label(name).legend(
+            move |(x, y)| match dashed {
+                true => plotters::element::DashedPathElement::new(vec![(x, y), (x + 20, y)], 6, 4, color.stroke_width(2))
+                    .into_dyn(),
+                false => PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)).into_dyn(),
+            },
+        );
     }
     Ok(())
 }
@@ -401,23 +423,15 @@ fn lines<DB: DrawingBackend + Strokes>(
 /// The colour of a limit's dashed lines and their legend entry.
 const LIMIT_GREY: RGBColor = RGBColor(90, 90, 90);
 
-/// Dashed grey lines at `levels` across `(t0, t1)`, one legend entry `label` for them.
+/// Dashed grey lines at `levels` across `(t0, t1)` (their legend entry is the caller's).
 fn limit_lines<DB: DrawingBackend>(
     chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
-    label: &str,
     levels: &[f64],
     (t0, t1): (f64, f64),
 ) -> Result<(), String> {
-    let grey = LIMIT_GREY;
-    for (k, &level) in levels.iter().enumerate() {
-        let line = DashedLineSeries::new([(t0, level), (t1, level)], 6, 4, grey.stroke_width(1));
-        let drawn = chart.draw_series(line).map_err(|e| e.to_string())?;
-        if k == 0 {
-            // Dashed in the legend too (two dashes), as the lines are.
-            drawn
-                .label(label)
-                .legend(move |(x, y)| plotters::element::DashedPathElement::new(vec![(x, y), (x + 20, y)], 6, 4, grey));
-        }
+    for &level in levels {
+        let line = DashedLineSeries::new([(t0, level), (t1, level)], 6, 4, LIMIT_GREY.stroke_width(1));
+        chart.draw_series(line).map_err(|e| e.to_string())?;
     }
     Ok(())
 }
