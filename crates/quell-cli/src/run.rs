@@ -368,8 +368,9 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
                     report_diagnostics(d, scenario.plant.time_unit, &mut text);
                 }
             }
+            // The whole loop's advice after the channels, not indented under the last one.
             for line in &diagnostics.advice {
-                let _ = writeln!(text, "  advice: {line}");
+                let _ = writeln!(text, "advice (the whole loop): {line}");
             }
             text.push_str(&clipping);
             crate::print_stdout(&text);

@@ -1716,3 +1716,22 @@ fn a_run_whose_signals_would_take_gigabytes_is_warned_of() {
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("GiB of recorded signals") && !Path::new(&fresh).exists(), "{}", stderr(&o));
 }
+
+/// The whole loop's advice follows the channels' figures, unindented: it had been printed as if
+/// it were the last channel's (helper tryout, 2026-12-06). The disk servo has two such lines (its
+/// disturbance observer, u_f's cancellation) and no channel advice of its own.
+#[test]
+fn the_whole_loops_advice_is_not_the_last_channels() {
+    let dir = temp_dir("loop-advice");
+    let hdd = Path::new(env!("CARGO_MANIFEST_DIR")).join("../quell/tests/data/hdd-servo.toml");
+    let o = quell(&["run", hdd.to_str().unwrap(), "--no-plots", "--out", dir.path().join("o").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let out = stdout(&o);
+    let lines: Vec<&str> = out.lines().collect();
+    let last_channel = lines.iter().rposition(|l| l.starts_with("channel ")).expect("a channel line");
+    let whole: Vec<usize> =
+        (0..lines.len()).filter(|&k| lines[k].starts_with("advice (the whole loop): ")).collect();
+    assert!(whole.len() >= 2, "{out}");
+    assert!(whole.iter().all(|&k| k > last_channel), "{out}");
+    assert!(lines[whole[0]].contains("the disturbance observer passes ω"), "{out}");
+}
