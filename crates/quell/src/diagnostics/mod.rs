@@ -814,6 +814,24 @@ fn tail_windows(result: &SimResult, i: usize) -> Option<(f64, f64)> {
     Some((rms(t1 - 0.1 * span, t1)?, rms(t1 - 0.2 * span, t1 - 0.1 * span)?))
 }
 
+/// Whether the tail's windows ([`tail_windows`], a tenth of the run each) span a period of the
+/// slowest beat of g and ω (their lowest nonzero frequency, or difference of two), so that their
+/// RMS ratio is a trend and not the phase of that beat (over one period, a beat of two equal tones
+/// moves a window's RMS by 16 % at most, inside the 0.8 … 1.25 band; over half of one, 64 %).
+fn windows_resolve(result: &SimResult, signals: [&Signal; 2]) -> bool {
+    let frequencies: Vec<f64> = signals
+        .iter()
+        .flat_map(|s| &s.components)
+        .flat_map(|c| &c.harmonics)
+        .map(|h| h.frequency.abs())
+        .filter(|w| *w > 0.0)
+        .collect();
+    let beats = frequencies.iter().flat_map(|a| frequencies.iter().map(move |b| (a - b).abs()));
+    let slowest = frequencies.iter().copied().chain(beats).filter(|w| *w > 0.0).fold(f64::INFINITY, f64::min);
+    let span = result.t.last().zip(result.t.first()).map_or(0.0, |(t1, t0)| t1 - t0);
+    0.1 * span * slowest >= std::f64::consts::TAU
+}
+
 /// Channel i's scale: the peak of |g_i| over the run, or for a reference that is zero of |e_i|, at
 /// the rows and between them ([`SimResult::peak_error`]: not set by the output step).
 fn scale(result: &SimResult, i: usize) -> f64 {
@@ -1101,6 +1119,9 @@ fn channel(
     let key = format!("design.mu[{i}]");
     let windows = tail_windows(result, i);
     let trend = windows.and_then(trend);
+    // The trend read for advice only where each window spans the signals' slowest beat: a
+    // microgrid's windows of 10 ms, half its 20 ms beat, read a bounded ripple as growing (1.33).
+    let judged = trend.filter(|_| windows_resolve(result, remedy.signals));
     let unit = design.plant().time_unit;
     // A run that ended early (diverged, failed, interrupted) says nothing of its horizon: advice
     // on t_end and on μ against it would take the time it ended at for the horizon.
@@ -1120,7 +1141,7 @@ fn channel(
     // a 0.1 V ripple over 500 ms with no word; the μ the averaged law gave it raised max|u_f| 12×
     // and left the ripple as it was).
     let stalled = (horizon_advice && !missed && delay.is_none())
-        .then(|| windows.and_then(|(last, _)| stalled_advice(result, c, (i, mu), (last, trend), t_end)))
+        .then(|| windows.and_then(|(last, _)| stalled_advice(result, c, (i, mu), (last, judged), t_end)))
         .flatten();
     // The slow direction's μ, where given, is the one to follow: the tail's extrapolated μ beside
     // it named another (a ship: 3.6 and 0.36). Nor is a tail extrapolated while the filters' own
@@ -1133,7 +1154,7 @@ fn channel(
     let mut advice: Vec<String> = delay.into_iter().collect();
     advice.extend(slow);
     advice.extend(stalled);
-    match trend.filter(|_| horizon_advice && windows.is_some_and(|(last, _)| !negligible_tail(result, i, last))) {
+    match judged.filter(|_| horizon_advice && windows.is_some_and(|(last, _)| !negligible_tail(result, i, last))) {
         Some(r) if r < SHRINKING && extrapolate => {
             let mut line = shrinking_advice(result, i, r, (mu, c.lambda_max(), offer_mu.then_some(stiff)));
             // Within the bound an automatic design verifies, the run's own 1e-4 is a choice: a
@@ -1225,13 +1246,18 @@ mod tests {
 
     /// [`advice_on`] for the scenario `text` (two outputs), all of its diagnostics.
     fn diagnosed(text: &str, size: f64, e: impl Fn(f64) -> f64) -> Diagnostics {
+        diagnosed_over(100.0, text, size, e)
+    }
+
+    /// [`diagnosed`] over a run of `span` s (1,000 rows).
+    fn diagnosed_over(span: f64, text: &str, size: f64, e: impl Fn(f64) -> f64) -> Diagnostics {
         let s = Scenario::from_toml(text).unwrap();
         let d = s.design().unwrap();
         let (m, q) = (2, d.q());
         let mut r = SimResult::new(m, q, 3, RunStats::Sampled { controller_steps: 0, sample_time: 1e-3 });
         let zeros = vec![0.0; m * q];
         for k in 0..=1000 {
-            let t = k as f64 * 0.1;
+            let t = k as f64 * span / 1000.0;
             let g = [size * 3.0 * (2.0 * t).sin(), size * 2.0];
             let y = [g[0] + e(t), g[1] + e(t)];
             r.push(&Sample { t, y: &y, g: &g, u: &[0.0; 2], u_f: &[0.0; 2], eta: &zeros, states: None });
@@ -1276,6 +1302,21 @@ mod tests {
         for c in advice_on(1.0, |_| 0.01) {
             assert!((c.tail_trend.unwrap() - 1.0).abs() < 1e-12);
             assert!(trend_advice(&c).is_empty(), "{:?}", c.advice);
+        }
+    }
+
+    /// The paper's signals beat at 1 rad/s at the slowest (ω's 1 and 2 rad/s, g's 2): a run of
+    /// 50 s has windows of 5 s, less than the beat's period 2π s, so its RMS ratio gets no advice
+    /// (it is still reported); one of 62.9 s (windows of 6.29 s) does.
+    #[test]
+    fn a_trend_is_advised_on_only_over_windows_that_span_the_slowest_beat() {
+        let growing = |t: f64| 1e-3 * (t / 10.0).exp();
+        for c in diagnosed_over(50.0, PAPER_EXAMPLE, 1.0, growing).channels {
+            assert!((c.tail_trend.unwrap() - 0.5f64.exp()).abs() < 1e-12, "{:?}", c.tail_trend);
+            assert!(trend_advice(&c).is_empty(), "{:?}", c.advice);
+        }
+        for c in diagnosed_over(62.9, PAPER_EXAMPLE, 1.0, |t| 1e-3 * (t / 12.58).exp()).channels {
+            assert!(trend_advice(&c)[0].contains("grows over the tail"), "{:?}", c.advice);
         }
     }
 
