@@ -415,18 +415,33 @@ fn compile(
     })
 }
 
+/// The most of a compiler's stdout and stderr kept, each.
+const KEPT_OUTPUT: usize = 64 * 1024;
+
 /// Runs `cmd` with stdin closed, its output captured, and waits at most `timeout`: `None` (the
 /// process killed) when it has not exited by then.
 fn run_within(mut cmd: Command, timeout: std::time::Duration) -> std::io::Result<Option<std::process::Output>> {
     use std::io::Read;
     use std::process::Stdio;
     let mut child = cmd.stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn()?;
-    // Each pipe drained on its own thread, so that a talkative compiler never blocks on a full one.
+    // Each pipe drained on its own thread, so that a talkative compiler never blocks on a full one;
+    // its first [`KEPT_OUTPUT`] bytes kept (the message quotes the first lines), the rest read and
+    // dropped (a compiler flooding its output had taken 8 GB).
     let drain = |pipe: Option<Box<dyn Read + Send>>| {
         std::thread::spawn(move || {
-            let mut bytes = Vec::new();
+            let (mut bytes, mut chunk) = (Vec::new(), vec![0u8; 8192]);
             if let Some(mut p) = pipe {
-                let _ = p.read_to_end(&mut bytes);
+                loop {
+                    match p.read(&mut chunk) {
+                        Ok(0) => break,
+                        Ok(n) => {
+                            let room = KEPT_OUTPUT.saturating_sub(bytes.len());
+                            bytes.extend_from_slice(&chunk[..n.min(room)]);
+                        }
+                        Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                        Err(_) => break,
+                    }
+                }
             }
             bytes
         })
@@ -491,6 +506,11 @@ mod tests {
             .to_string();
         assert!(start.elapsed() < std::time::Duration::from_secs(10), "{:?}", start.elapsed());
         assert!(e.contains("had not finished after 0.3 s and was stopped"), "{e}");
+        // A compiler flooding its output is kept to its first 64 KiB.
+        let mut flood = Command::new("sh");
+        flood.args(["-c", "head -c 10000000 /dev/zero >&2; exit 1"]);
+        let done = run_within(flood, std::time::Duration::from_secs(60)).unwrap().unwrap();
+        assert_eq!((done.status.success(), done.stderr.len()), (false, KEPT_OUTPUT));
         let mut echo = Command::new("sh");
         echo.args(["-c", "echo out; echo err >&2"]);
         let done = run_within(echo, std::time::Duration::from_secs(30)).unwrap().unwrap();
