@@ -100,9 +100,12 @@ fn remove_stale(dir: &Path, ours: impl Fn(&str) -> bool) {
         let name = entry.file_name();
         let Some(name) = name.to_str() else { continue };
         let ours = ours(name);
+        // A regular file only, not followed through a link: opening a pipe of that name to test its
+        // lock blocked run, export and sweep for good.
+        let file = || entry.file_type().is_ok_and(|t| t.is_file());
         let old =
             || entry.metadata().and_then(|m| m.modified()).is_ok_and(|t| t.elapsed().is_ok_and(|a| a > STALE_AFTER));
-        if ours && old() {
+        if ours && file() && old() {
             // Unlocked: its writer is gone (a live writer holds the lock until the rename).
             if std::fs::File::open(entry.path()).is_ok_and(|f| f.try_lock().is_ok()) {
                 let _ = std::fs::remove_file(entry.path());
@@ -311,6 +314,27 @@ mod tests {
                 "signals.csv"
             ]
         );
+    }
+
+    /// A pipe (or a link) with a temporary file's name is not opened to test its lock, which
+    /// blocked until a writer came; it is left where it is.
+    #[cfg(unix)]
+    #[test]
+    fn a_pipe_named_as_a_stale_temporary_is_left_alone() {
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join(".signals.Ab12Cd.tmp.csv");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status().unwrap();
+        assert!(made.success());
+        let aged = std::process::Command::new("touch").args(["-h", "-d", "1 hour ago"]).arg(&fifo).status().unwrap();
+        assert!(aged.success());
+        let path = dir.path().to_path_buf();
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            write_atomic(&path.join("signals.csv"), |w| w.write_all(b"t,y1")).unwrap();
+            tx.send(()).unwrap();
+        });
+        rx.recv_timeout(std::time::Duration::from_secs(20)).expect("writing beside a pipe blocked");
+        assert!(fifo.exists());
     }
 
     #[test]
