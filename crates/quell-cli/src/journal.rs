@@ -73,7 +73,7 @@ impl Journal {
 /// line break (the kill came while it was written) is dropped; anything else that is not a
 /// journal's content is an error naming the line.
 pub fn read(dir: &Path) -> Result<Option<(StudyMeta, Vec<Row>)>, String> {
-    let text = match std::fs::read_to_string(dir.join(JOURNAL)) {
+    let text = match quell::files::read_regular(&dir.join(JOURNAL)) {
         Ok(text) => text,
         Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(None),
         Err(e) => return Err(e.to_string()),

@@ -303,7 +303,7 @@ fn unfinished_in_the_way(dir: &Path, meta: &StudyMeta) -> Result<(), Failure> {
         partial: bool,
         runs_done: usize,
     }
-    if let Ok(file) = std::fs::File::open(dir.join("summary.json")) {
+    if let Ok(file) = quell::files::open_regular(&dir.join("summary.json")) {
         if let Ok(m) = serde_json::from_reader::<_, Marked>(std::io::BufReader::new(file)) {
             return match m.partial {
                 true => refuse(format!("{} of its runs done, summary.json's partial", m.runs_done)),
@@ -320,7 +320,7 @@ fn unfinished_in_the_way(dir: &Path, meta: &StudyMeta) -> Result<(), Failure> {
 /// The last line of the file at `path` (from its last 4 KiB), or `None` when it cannot be read.
 fn last_line(path: &Path) -> Option<String> {
     use std::io::{Read, Seek, SeekFrom};
-    let mut file = std::fs::File::open(path).ok()?;
+    let mut file = quell::files::open_regular(path).ok()?;
     let len = file.metadata().ok()?.len();
     file.seek(SeekFrom::Start(len.saturating_sub(4096))).ok()?;
     let mut tail = Vec::new();
@@ -405,10 +405,10 @@ fn read_sweep_dir(dir: &Path, flag: &str) -> Result<(StudyMeta, Vec<Row>, bool),
         std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory => bad(what, format!("{e}; {WHAT_TO_GIVE}")),
         _ => bad(what, e.to_string()),
     };
-    let text = std::fs::read_to_string(dir.join("summary.json")).map_err(|e| unreadable("summary.json", e))?;
+    let text = quell::files::read_regular(&dir.join("summary.json")).map_err(|e| unreadable("summary.json", e))?;
     let summary: Summary = serde_json::from_str(&text)
         .map_err(|e| bad("summary.json", format!("not a summary written by `quell sweep` ({e}); {WHAT_TO_GIVE}")))?;
-    let csv = std::fs::read_to_string(dir.join("runs.csv")).map_err(|e| unreadable("runs.csv", e))?;
+    let csv = quell::files::read_regular(&dir.join("runs.csv")).map_err(|e| unreadable("runs.csv", e))?;
     let shard = summary.study.shard;
     if shard.index >= shard.count {
         return Err(bad(

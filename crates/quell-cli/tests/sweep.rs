@@ -766,3 +766,104 @@ fn a_linear_grid_is_labelled_at_every_value() {
         assert_eq!(labels.iter().filter(|l| **l == v).count(), 8, "the tick label {v} in each of the 8 panels");
     }
 }
+
+/// `quell` with `args`, killed after 60 s (a read of a pipe had blocked for ever): its output, or
+/// a panic saying it hung.
+fn quell_within(args: &[&str]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_quell"))
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the quell binary runs");
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(60) {
+            let _ = child.kill();
+            panic!("quell {args:?} did not finish in 60 s");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// A sweep's files edited or replaced (helper review, 2026-12-06) are refused with exit 2 naming
+/// what is wrong: an m of 1e15 in summary.json (it had aborted asking for 24 PB), a row whose point
+/// or grid value is not its run index's (merged as they stood), and a runs.csv or journal that is a
+/// pipe or /dev/zero (they had hung or taken 9 GB).
+#[cfg(unix)]
+#[test]
+fn edited_or_replaced_sweep_files_are_refused_not_read() {
+    let dir_tmp = scratch("edited");
+    let dir = dir_tmp.path();
+    paper_into(dir);
+    let study = write_study(dir, "study.toml", STUDY);
+    let out = |name: &str| dir.join(name).display().to_string();
+    let o = quell(&["sweep", &study, "--out", &out("all"), "--no-plots"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let copy = |name: &str| {
+        fs::create_dir(dir.join(name)).unwrap();
+        for f in ["runs.csv", "summary.json"] {
+            fs::copy(dir.join("all").join(f), dir.join(name).join(f)).unwrap();
+        }
+        dir.join(name)
+    };
+    let refused = |what: &str, o: Output, fragment: &str| {
+        assert_eq!(o.status.code(), Some(2), "{what}: {}", stderr(&o));
+        assert!(stderr(&o).contains(fragment), "{what}: {}", stderr(&o));
+    };
+    let m = copy("m");
+    let summary = fs::read_to_string(m.join("summary.json")).unwrap().replacen("\"m\": 2", "\"m\": 1000000000000000", 1);
+    fs::write(m.join("summary.json"), summary).unwrap();
+    refused(
+        "m",
+        quell_within(&["sweep", "--merge", &out("m"), "--out", &out("x")]),
+        "line 1: expected the header of a study of 2 grid keys and m = 1000000000000000 channels, found 20 fields",
+    );
+    // Row 2 (run 1: point 0, draw 1) given point 3; row 3 (run 2: point 1) given μ_1 = 99.
+    let runs = fs::read_to_string(dir.join("all/runs.csv")).unwrap();
+    let edit = |row: usize, field: usize, value: &str| {
+        let mut lines: Vec<String> = runs.lines().map(str::to_string).collect();
+        let mut fields: Vec<&str> = lines[row].split(',').collect();
+        fields[field] = value;
+        lines[row] = fields.join(",");
+        lines.join("\n") + "\n"
+    };
+    fs::write(copy("point").join("runs.csv"), edit(2, 1, "3")).unwrap();
+    refused(
+        "point",
+        quell_within(&["sweep", "--merge", &out("point"), "--out", &out("x")]),
+        "line 3: point: expected 0 for run 1 (2 draws a grid point), found 3; the file was edited",
+    );
+    fs::write(copy("grid").join("runs.csv"), edit(3, 4, "99.0")).unwrap();
+    refused(
+        "grid value",
+        quell_within(&["sweep", "--merge", &out("grid"), "--out", &out("x")]),
+        "line 4: design.mu[0]: expected `10.0` for run 2 (2 draws a grid point), found `99.0`",
+    );
+    let fifo = copy("fifo");
+    fs::remove_file(fifo.join("runs.csv")).unwrap();
+    assert!(Command::new("mkfifo").arg(fifo.join("runs.csv")).status().unwrap().success());
+    refused(
+        "pipe",
+        quell_within(&["sweep", "--merge", &out("fifo"), "--out", &out("x")]),
+        "runs.csv: is a device, FIFO or socket, not a regular file",
+    );
+    let zero = copy("zero");
+    fs::remove_file(zero.join("summary.json")).unwrap();
+    std::os::unix::fs::symlink("/dev/zero", zero.join("summary.json")).unwrap();
+    refused(
+        "device",
+        quell_within(&["sweep", "--merge", &out("zero"), "--out", &out("x")]),
+        "summary.json: is a device, FIFO or socket, not a regular file",
+    );
+    // A journal that is a pipe, met by a new sweep into its directory and by --resume.
+    fs::create_dir(dir.join("journal")).unwrap();
+    assert!(Command::new("mkfifo").arg(dir.join("journal/runs.partial.csv")).status().unwrap().success());
+    let journal = out("journal");
+    for resume in [false, true] {
+        let mut args = vec!["sweep", &study, "--out", &journal, "--no-plots"];
+        args.extend(resume.then_some("--resume"));
+        refused("journal", quell_within(&args), "is a device, FIFO or socket, not a regular file");
+    }
+}

@@ -161,6 +161,40 @@ fn is_temporary(name: &str) -> bool {
     extension && random
 }
 
+/// The most bytes of an earlier command's output that is read back (4 GiB: a sweep's runs.csv of
+/// about ten million runs): a larger one is a wrong path or a damaged file, not a sweep's.
+pub const MAX_READ_BACK_BYTES: u64 = 4 << 30;
+
+/// Opens an earlier output at `path` for reading, refused (`InvalidInput`) unless it is a regular
+/// file (followed through links): opening a pipe waits for a writer, and a device such as
+/// /dev/zero never ends (a sweep's runs.csv replaced by either had hung `--resume` or taken 9 GB).
+pub fn open_regular(path: &Path) -> io::Result<std::fs::File> {
+    let meta = std::fs::metadata(path)?;
+    if !meta.is_file() {
+        let what = if meta.is_dir() { "directory" } else { "device, FIFO or socket" };
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("is a {what}, not a regular file as the command that wrote it leaves"),
+        ));
+    }
+    std::fs::File::open(path)
+}
+
+/// An earlier output's text ([`open_regular`]), at most [`MAX_READ_BACK_BYTES`] of it.
+pub fn read_regular(path: &Path) -> io::Result<String> {
+    use std::io::Read;
+    let file = open_regular(path)?;
+    let mut text = String::new();
+    file.take(MAX_READ_BACK_BYTES + 1).read_to_string(&mut text)?;
+    if text.len() as u64 > MAX_READ_BACK_BYTES {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("is longer than {} GiB, more than any sweep writes (the wrong file, or damaged)", MAX_READ_BACK_BYTES >> 30),
+        ));
+    }
+    Ok(text)
+}
+
 /// The renaming replaces whatever `path` names: refused (`InvalidInput`) unless that is a regular
 /// file or nothing, so that a device (`/dev/full`), a FIFO, a socket, a symbolic link or a
 /// directory is never replaced by a file. Public so that a caller can check its targets before

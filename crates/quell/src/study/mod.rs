@@ -295,6 +295,17 @@ fn misplaced_top_key(at: &str, key: &str, valid: &[&str]) -> Option<StudyError> 
     })
 }
 
+/// Grid point `point`'s index on each axis of `lens` values (the first axis varies slowest).
+pub(crate) fn axis_indices(point: usize, lens: &[usize]) -> Vec<usize> {
+    let mut rest = point;
+    let mut idx = vec![0; lens.len()];
+    for (i, &len) in lens.iter().enumerate().rev() {
+        idx[i] = rest % len.max(1);
+        rest /= len.max(1);
+    }
+    idx
+}
+
 /// A key of `[truth]` that may be perturbed before the scenario gives it: every one.
 use crate::scenario::TRUTH_KEYS;
 
@@ -449,13 +460,7 @@ impl Study {
 
     /// Index of each axis at grid point `point`; the first axis varies slowest.
     pub fn grid_index(&self, point: usize) -> Vec<usize> {
-        let mut rest = point;
-        let mut idx = vec![0; self.grid.len()];
-        for (i, axis) in self.grid.iter().enumerate().rev() {
-            idx[i] = rest % axis.values.len();
-            rest /= axis.values.len();
-        }
-        idx
+        axis_indices(point, &self.grid.iter().map(|a| a.values.len()).collect::<Vec<_>>())
     }
 
     /// The scenario document of run `index`: the grid point's values, then the draw's

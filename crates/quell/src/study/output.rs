@@ -142,6 +142,17 @@ pub struct RunsFile {
 /// Reads a runs.csv written by [`write_runs_csv`] for `meta`; the message names the line.
 pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
     let mut lines = text.lines().enumerate();
+    // The header's length first, from the study's m, before a header of m channels is built (an
+    // edited m of 1e15 had asked for 24 PB).
+    let found = split(text.lines().next().unwrap_or_default())?.len();
+    let fields = meta.m.checked_mul(5).and_then(|f| f.checked_add(8 + meta.grid.len()));
+    if fields != Some(found) {
+        return Err(format!(
+            "line 1: expected the header of a study of {} grid keys and m = {} channels, found {found} fields; the file was edited or is another study's",
+            meta.grid.len(),
+            meta.m
+        ));
+    }
     let expected = header(meta);
     match lines.next() {
         Some((_, h)) if split(h)? == expected => {}
@@ -198,7 +209,7 @@ pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
                 })
             })
             .collect::<Result<Vec<_>, String>>()?;
-        rows.push(Row {
+        let row = Row {
             run: int(0)? as usize,
             point: int(1)? as usize,
             draw: int(2)? as usize,
@@ -210,9 +221,42 @@ pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
             steps: int(first + 5 * m)?,
             wall_ms: num(first + 5 * m + 1)?,
             explicit_stiff: false,
-        });
+        };
+        identity(&row, meta).map_err(at)?;
+        rows.push(row);
     }
     Ok(RunsFile { rows, partial })
+}
+
+/// Checks that a row's point, draw, seed and grid values are those its run index has in the
+/// study `meta` (an edited point or grid value had been merged as it stood).
+fn identity(row: &Row, meta: &StudyMeta) -> Result<(), String> {
+    if row.run as u64 >= meta.runs {
+        return Err(format!("run: expected a run index below the study's {} runs, found {}", meta.runs, row.run));
+    }
+    let draws = meta.draws.max(1);
+    let (point, draw) = (row.run / draws, row.run % draws);
+    let seed = meta.seed.map_or(0, |s| super::sweep::run_seed(s, draw));
+    let differs = |column: &str, want: String, found: String| {
+        Err(format!("{column}: expected {want} for run {} ({draws} draws a grid point), found {found}; the file was edited", row.run))
+    };
+    if row.point != point {
+        return differs("point", point.to_string(), row.point.to_string());
+    }
+    if row.draw != draw {
+        return differs("draw", draw.to_string(), row.draw.to_string());
+    }
+    if row.seed != seed {
+        return differs("seed", seed.to_string(), row.seed.to_string());
+    }
+    let lens: Vec<usize> = meta.grid.iter().map(|a| a.values.len()).collect();
+    for ((axis, &i), value) in meta.grid.iter().zip(&super::axis_indices(point, &lens)).zip(&row.grid) {
+        match axis.values.get(i) {
+            Some(want) if want == value => {}
+            want => return differs(&axis.key, format!("`{}`", want.map_or("", String::as_str)), format!("`{value}`")),
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
