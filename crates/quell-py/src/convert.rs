@@ -54,6 +54,11 @@ fn real_array<'py>(obj: &Bound<'py, PyAny>, name: &str, kind: Kind) -> PyResult<
         }
     }
     let arr = np.call_method1("asarray", (obj,)).map_err(|e| {
+        // A Ctrl-C (or SystemExit) met while numpy reads a lazy array-like is the user's, not a
+        // bad value: it goes on as it is.
+        if !e.is_instance_of::<pyo3::exceptions::PyException>(py) {
+            return e;
+        }
         kind.err(
             py,
             format!(

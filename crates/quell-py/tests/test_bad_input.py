@@ -259,3 +259,18 @@ def test_masked_entries_are_refused_not_read_as_data():
         quell.Plant(A=A_masked, B=B, C=C)
     unmasked = quell.Plant(A=np.ma.masked_array(A), B=B, C=C)
     np.testing.assert_array_equal(unmasked.A, A)
+
+
+def test_a_keyboard_interrupt_while_reading_an_array_goes_on_as_it_is():
+    """A Ctrl-C met while numpy reads a lazy array-like (here raised by its __getitem__) had been
+    turned into a ScenarioError, so the program went on after the user asked it to stop."""
+
+    class Lazy:
+        def __len__(self):
+            return 3
+
+        def __getitem__(self, i):
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        quell.Plant(A=Lazy(), B=B, C=C)
