@@ -11,7 +11,8 @@
 //!   Ω̄ keeps its conditioning at every time scale;
 //! * channel poles (G_ii, Proposition 1): σ_i distinct real poles from −2r down by factors 1.5;
 //! * observer poles (6): searched over speed, spread and the zeros of (A, D, C) for the disturbance
-//!   observer's fidelity (it is driven by x̂, not x, eq. (20)), the slowest good enough candidate;
+//!   observer's fidelity (it is driven by x̂, not x, eq. (20)), the slowest good enough candidate
+//!   (from 6r up, or from 6r/16 or 6r/256 up where the placement refuses every faster one);
 //! * filter orders: `reference_filter_orders` / `disturbance_filter_orders`, else two per harmonic
 //!   and one per bias (Assumptions 2, 3); their poles distinct real, spread by factors 1.5 around
 //!   the geometric mean of the component's frequencies (r for a bias alone), or closer (down to
@@ -622,11 +623,11 @@ fn with_design_table(doc: &toml::Table) -> toml::Table {
 }
 
 /// Why the rules can miss for `key` (a `design.` key): the filter poles' spread, or the placement
-/// of observer and channel poles from the plant's fastest eigenvalue.
+/// of observer and channel poles from the time scale r.
 fn rules_why(key: &str) -> &'static str {
     match key {
         "design.observer_poles" | "design.channel_poles" | "design.observer_gain" => {
-            "they are placed from the plant's fastest eigenvalue, and a plant whose eigenvalues span many decades, or a badly scaled realization (a companion form from a transfer function), makes that placement ill-conditioned: place them by hand near the signals' rates, realize the plant in physical states, or leave a fast stable mode out of the model"
+            "they are placed from the time scale r, the fastest of the signals' frequencies, the plant's eigenvalues and 20/t_end (the observer's from 6r, then down to 6r/256 where faster ones fail), and a plant whose eigenvalues span many decades, or a badly scaled realization (a companion form from a transfer function), makes that placement ill-conditioned: place them by hand near the plant's own rates, realize the plant in physical states, or leave a fast stable mode out of the model"
         }
         _ => "many harmonics or frequencies far apart call for filter poles by hand",
     }
@@ -1906,6 +1907,9 @@ fn zeros_of(pseudo: bool) -> &'static str {
     }
 }
 
+/// What an observer candidate slower than r_0 says of itself.
+const SLOWER_OBSERVER: &str = " (below r_0: every candidate from r_0 up was refused by the placement's check)";
+
 /// The observer candidates of [`observer`]: per r_o = r_0·2^k (k = 0..3) n real poles spread ×2
 /// and ×4 and, with `zeros` (`of` whom, [`zeros_of`]), those zeros and the other poles from −r_o;
 /// each with how many of its poles are zeros and its description.
@@ -1961,21 +1965,30 @@ fn observer(
     speed: f64,
 ) -> Result<(Design, String), AutoError> {
     let pseudo = s.plant.m() > s.plant.k();
-    let candidates = observer_candidates(crate::diagnostics::disturbance_zeros(&s.plant), r_0, n, zeros_of(pseudo));
+    let zeros = crate::diagnostics::disturbance_zeros(&s.plant);
     /// A candidate's design, poles, worst fidelity error and description.
     type Candidate = (Design, Vec<Complex<f64>>, usize, f64, String);
     let mut tried: Vec<Candidate> = Vec::new();
     let mut first_error = None;
-    for (poles, zeros, what) in candidates {
-        spec.observer = ObserverChoice::Poles(poles.clone());
-        match Design::new(&s.plant, spec) {
-            Ok(design) => {
-                let fidelity = Averaged::new(&design, &s.reference, &s.disturbance).fidelity;
-                let error = fidelity.iter().map(|f| f.relative_error).fold(0.0, f64::max);
-                tried.push((design, poles, zeros, error, what));
-            }
-            Err(e) => {
-                first_error.get_or_insert(e);
+    // From r_0 up; where every one of those is refused (a single output's gain ill-conditioned
+    // far from a plant whose modes span decades: a propofol model's observer at 38/min, where
+    // −2 … −5 /min place well), from r_0/16 and r_0/256 up, slower than the signals perhaps, which
+    // the verifying run then judges.
+    for (base, slower) in [(r_0, ""), (r_0 / 16.0, SLOWER_OBSERVER), (r_0 / 256.0, SLOWER_OBSERVER)] {
+        if !tried.is_empty() {
+            break;
+        }
+        for (poles, zeros, what) in observer_candidates(zeros.clone(), base, n, zeros_of(pseudo)) {
+            spec.observer = ObserverChoice::Poles(poles.clone());
+            match Design::new(&s.plant, spec) {
+                Ok(design) => {
+                    let fidelity = Averaged::new(&design, &s.reference, &s.disturbance).fidelity;
+                    let error = fidelity.iter().map(|f| f.relative_error).fold(0.0, f64::max);
+                    tried.push((design, poles, zeros, error, format!("{what}{slower}")));
+                }
+                Err(e) => {
+                    first_error.get_or_insert(e);
+                }
             }
         }
     }

@@ -1550,3 +1550,32 @@ fn a_failed_design_with_a_poor_disturbance_observer_names_it() {
         "{advice}"
     );
 }
+
+/// A single-output plant whose modes span 0.0035 … 0.92 /min with a disturbance at 6.28 rad/min
+/// (Schnider's propofol model, tests/data/propofol-schnider.toml, no observer poles given): every
+/// observer candidate from r_0 = 6r = 37.7 /min up gives a gain the placement's check refuses
+/// (verified error 2e-5), and the automatic design had given up, naming the plant's fastest
+/// eigenvalue as r's source (it is the disturbance's frequency). It now seeks slower candidates
+/// and verifies one: eig(A − LC) recomputed here from L (the test's own balanced QR) is the poles
+/// it wrote to 1e-6 relative, all below r_0.
+#[test]
+fn an_observer_refused_from_r0_up_is_sought_slower() {
+    let path = format!("{}/tests/data/propofol-schnider.toml", env!("CARGO_MANIFEST_DIR"));
+    let doc: toml::Table = std::fs::read_to_string(path).unwrap().parse().unwrap();
+    let auto = auto_design(&doc, &Targets::default()).unwrap();
+    let chosen = auto.choices.iter().find(|c| c.key == "design.observer_poles").expect("the observer was chosen");
+    assert!(chosen.why.contains("below r_0: every candidate from r_0 up was refused"), "{}", chosen.why);
+    let p = &auto.scenario.plant;
+    let mut eig = common::eigenvalues(&(&p.A - auto.design.L() * &p.C));
+    let value: toml::Table = format!("v = {}", chosen.value).parse().unwrap();
+    let mut wanted: Vec<Complex<f64>> =
+        value["v"].as_array().unwrap().iter().map(|x| Complex::new(x.as_float().unwrap(), 0.0)).collect();
+    assert_eq!(wanted.len(), 4);
+    for v in [&mut eig, &mut wanted] {
+        v.sort_by(|a, b| a.re.total_cmp(&b.re));
+    }
+    for (e, w) in eig.iter().zip(&wanted) {
+        assert!((e - w).norm() <= 1e-6 * w.norm().max(1.0), "{eig:?} against {wanted:?}");
+        assert!(w.norm() < 6.0 * 2.0 * std::f64::consts::PI, "{w} is not below r_0");
+    }
+}
