@@ -72,7 +72,7 @@ fn deployment_text(s: &Scenario, d: &Design) -> String {
     format!(
         "
 deployment (a sampled-data controller, docs/deployment.md):
-  sample time: {need}; ρ = {} /{unit}, the loop's fastest rate
+  sample time: {need}; ρ = {} /{unit}, the loop's fastest rate (a bound the sampled loop needs, not one that suffices: a sampled run compares itself with its continuous loop and says where it departs)
   precision: {precision}
 ",
         fmt_4(rho)

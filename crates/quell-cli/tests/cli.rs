@@ -120,7 +120,7 @@ fn design_text_on_paper_example() {
 fn the_design_report_says_what_deployment_needs() {
     let o = quell(&["design", &paper()]);
     let out = stdout(&o);
-    assert!(out.contains("\ndeployment (a sampled-data controller, docs/deployment.md):\n  sample time: T_s ≤ 0.0222 s (T_s·ρ ≤ 0.2), e.g. 0.02 s, which makes plant.delays whole; ρ = 9 /s, the loop's fastest rate\n"), "{out}");
+    assert!(out.contains("\ndeployment (a sampled-data controller, docs/deployment.md):\n  sample time: T_s ≤ 0.0222 s (T_s·ρ ≤ 0.2), e.g. 0.02 s, which makes plant.delays whole; ρ = 9 /s, the loop's fastest rate (a bound the sampled loop needs, not one that suffices: a sampled run compares itself with its continuous loop and says where it departs)\n"), "{out}");
     assert!(
         out.contains(
             "  precision: f32 moves the poles by at most 0.00016 % (κ₂ = 2.75e1 × 6e-8): either precision serves"
