@@ -33,6 +33,10 @@ pub struct DesignArgs {
     /// input, or one per input separated by commas (inputs in different units).
     #[arg(long, value_name = "U[,U…]", value_delimiter = ',', allow_hyphen_values = true, value_parser = crate::parse_real)]
     pub u_limit: Vec<f64>,
+    /// With --auto: run the chosen design again with every input delay this much longer and
+    /// shorter (relative; default 0.1, 0 for none), reported for information.
+    #[arg(long, value_name = "FRACTION", allow_hyphen_values = true, value_parser = crate::parse_real)]
+    pub delay_error: Option<f64>,
 }
 
 impl DesignArgs {
@@ -42,6 +46,7 @@ impl DesignArgs {
             ("--write", self.write.is_some()),
             ("--convergence-time", self.convergence_time.is_some()),
             ("--u-limit", !self.u_limit.is_empty()),
+            ("--delay-error", self.delay_error.is_some()),
         ]
         .into_iter()
         .find_map(|(flag, given)| given.then_some(flag))
@@ -49,7 +54,11 @@ impl DesignArgs {
 }
 
 pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
-    let targets = Targets { convergence_time: args.convergence_time, u_limit: args.u_limit.clone() };
+    let targets = Targets {
+        convergence_time: args.convergence_time,
+        u_limit: args.u_limit.clone(),
+        delay_error: args.delay_error,
+    };
     // The text is kept: --write writes it back with the chosen [design].
     let input = quell::scenario::read_text(&args.scenario).map_err(|e| Failure::Input(e.to_string()))?;
     let doc = quell::scenario::parse_document(&input).map_err(|e| Failure::Input(e.to_string()))?;
@@ -200,6 +209,7 @@ fn report_text(a: &AutoDesign) -> String {
     if !v.relaxation.is_empty() {
         s.push_str(&format!("  relaxation: {}\n", v.relaxation));
     }
+    s.push_str(&delay_lines(a));
     if v.candidates.len() > 1 {
         // Each input's peak where there are several: the limits and the relaxation's effort rule
         // judge them one by one (a house's u_2 went 1.118 → 2.421, past 2×, while the worst input
@@ -223,6 +233,51 @@ fn report_text(a: &AutoDesign) -> String {
     }
     s.push('\n');
     s.push_str(&crate::pace::design_text(&a.scenario, &a.design));
+    s
+}
+
+/// The kept design with its delays off ([`quell::auto::DelayCheck`]): how far off they may be,
+/// then one line a run, its tail against the bound and max|u_f| against the verified run's, ⚠
+/// where it misses either ([`quell::auto::DelayCheck::meets`]) or ended early.
+fn delay_lines(a: &AutoDesign) -> String {
+    let v = &a.verification;
+    let Some(first) = v.delay_check.first() else { return String::new() };
+    let percent = |f: f64| format!("{} %", crate::run::short(format!("{:.2}", (f - 1.0).abs() * 100.0).parse().unwrap_or(0.0)));
+    let tolerance = v.delay_tolerance;
+    let summary = if tolerance == 0.0 {
+        format!(
+            "the tail bound is missed with every true input delay off by as little as {} either way: the method predicts over the delays as given (the paper assumes them known), so measure them that well or better",
+            percent(1.0 + v.delay_check.last().map_or(0.0, |c| c.factor - 1.0))
+        )
+    } else if tolerance == (first.factor - 1.0).abs() {
+        format!("the tail bound is met with every true input delay {} longer and shorter", percent(1.0 + tolerance))
+    } else {
+        format!(
+            "the tail bound is met with every true input delay {} longer and shorter, not at {}: know the delays that well",
+            percent(1.0 + tolerance),
+            percent(first.factor)
+        )
+    };
+    let mut s = format!("  delays (for information, not a condition of passing): {summary}\n");
+    let unit = a.scenario.plant.time_unit;
+    for c in &v.delay_check {
+        let delays = c.delays.iter().map(|d| crate::run::short(*d)).collect::<Vec<_>>().join(", ");
+        let head = format!("    ×{} (τ = [{delays}] {unit})", crate::run::short(c.factor));
+        let flag = if c.meets(v) { "" } else { " ⚠" };
+        let line = match &c.ended {
+            Some(why) => format!("{head}: {why}{flag}"),
+            None => {
+                let tail = c.tail_max_e.iter().zip(&v.bound).map(|(e, b)| e / b).fold(0.0, f64::max);
+                let growth = c.max_uf.iter().zip(&v.max_uf).map(|(u, u0)| u / u0).fold(0.0, f64::max);
+                format!(
+                    "{head}: worst tail {tail:.2e} of its bound, max|u_f| up to {}× the verified run's{flag}",
+                    crate::run::short(format!("{growth:.3}").parse().unwrap_or(growth))
+                )
+            }
+        };
+        s.push_str(&line);
+        s.push('\n');
+    }
     s
 }
 

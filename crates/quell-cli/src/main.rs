@@ -120,12 +120,13 @@ fn main() -> ExitCode {
 }
 
 /// Library keys that a flag sets, as the CLI names them.
-const FLAGS: [(&str, &str); 9] = [
+const FLAGS: [(&str, &str); 10] = [
     ("simulation.sample_time", "simulation.sample_time (--sample-time)"),
     ("simulation.t_end", "simulation.t_end (--t-end)"),
     ("simulation.output_step", "simulation.output_step (--output-step)"),
     ("u_limit", "--u-limit"),
     ("convergence_time", "--convergence-time"),
+    ("delay_error", "--delay-error"),
     ("prefix", "--prefix"),
     ("precision", "--precision"),
     ("compiler", "--compiler"),

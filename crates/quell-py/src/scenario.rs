@@ -916,6 +916,10 @@ fn auto_document<'py>(
 /// u_limit : float or sequence of float, optional
 ///     A limit on max |u_f,i|, the plant input (5): one for every input, or one per input
 ///     (inputs in different units).
+/// delay_error : float, optional
+///     The relative error of the input delays the chosen design is also run with, longer and
+///     shorter, then 0.3 and 0.1 of it until both ways meet the tail bound (default 0.1; 0 for
+///     none): the report's ``verification["delay_check"]`` and ``["delay_tolerance"]``.
 ///
 /// Returns
 /// -------
@@ -946,7 +950,8 @@ fn auto_document<'py>(
 /// >>> report["passed"], s.simulation["t_end"]
 /// (True, 60.0)
 #[pyfunction]
-#[pyo3(signature = (text, reference=None, disturbance=None, *, convergence_time=None, u_limit=None, **scenario))]
+#[pyo3(signature = (text, reference=None, disturbance=None, *, convergence_time=None, u_limit=None, delay_error=None, **scenario))]
+#[allow(clippy::too_many_arguments)]
 pub fn auto_design<'py>(
     py: Python<'py>,
     text: &Bound<'py, PyAny>,
@@ -954,6 +959,7 @@ pub fn auto_design<'py>(
     disturbance: Option<&Bound<'py, PyAny>>,
     convergence_time: Option<&Bound<'py, PyAny>>,
     u_limit: Option<&Bound<'py, PyAny>>,
+    delay_error: Option<&Bound<'py, PyAny>>,
     scenario: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<(PyScenario, Bound<'py, PyAny>)> {
     let doc = auto_document(py, text, (reference, disturbance), scenario)?;
@@ -963,8 +969,10 @@ pub fn auto_design<'py>(
         .transpose()?;
     let u_limit = given(u_limit).map(|v| crate::convert::vector(&v, "u_limit", Kind::Design)).transpose()?;
     let u_limit = u_limit.unwrap_or_default();
+    let delay_error =
+        given(delay_error).map(|v| number(&v, "delay_error", Kind::Design, "delay_error")).transpose()?;
     // Their ranges are checked by auto_design (AutoError::Target: a DesignError below).
-    let targets = quell::auto::Targets { convergence_time, u_limit };
+    let targets = quell::auto::Targets { convergence_time, u_limit, delay_error };
     let auto =
         crate::interrupt::interruptible(py, || quell::auto::auto_design(&doc, &targets))?.map_err(|e| match e {
             quell::auto::AutoError::Scenario(e) => scenario_error(py, &e),

@@ -1579,3 +1579,41 @@ fn an_observer_refused_from_r0_up_is_sought_slower() {
         assert!(w.norm() < 6.0 * 2.0 * std::f64::consts::PI, "{w} is not below r_0");
     }
 }
+
+/// The chosen design of the paper's plant with its delays off: 10 % either way misses the tail
+/// bound (as the paper's own design does: its loop diverges at +10 %), so 3 % and then 1 % are
+/// tried, and the tolerance is the first both ways met. The +10 % run, repeated here from the
+/// written scenario with a `[truth]` table of those delays, ends as the check says.
+#[test]
+fn the_chosen_design_is_run_with_its_delays_off() {
+    let text = quell::scenario::PAPER_EXAMPLE;
+    let start = text.find("[design]").unwrap();
+    let end = start + text[start..].find("[reference]").unwrap();
+    let doc: toml::Table = format!("{}[design]\n{}", &text[..start], &text[end..]).parse().unwrap();
+    let auto = auto_design(&doc, &Targets::default()).unwrap();
+    let v = &auto.verification;
+    let factors: Vec<f64> = v.delay_check.iter().map(|c| c.factor).collect();
+    assert!(factors.len() >= 4 && factors.len() % 2 == 0, "{factors:?}");
+    for (pair, level) in factors.chunks(2).zip([0.1, 0.03, 0.01]) {
+        assert_eq!(pair, [1.0 + level, 1.0 - level]);
+    }
+    let met: Vec<bool> = v.delay_check.chunks(2).map(|p| p.iter().all(|c| c.meets(v))).collect();
+    // The ladder stops at the first level met both ways (or after the third).
+    assert!(!met[0] && met[..met.len() - 1].iter().all(|m| !m), "{:?}", v.delay_check);
+    let expected_tolerance = if *met.last().unwrap() { 1.0 - factors[factors.len() - 1] } else { 0.0 };
+    assert!((v.delay_tolerance - expected_tolerance).abs() < 1e-12, "{} {expected_tolerance}", v.delay_tolerance);
+    for c in &v.delay_check {
+        assert_eq!(c.delays.len(), 2);
+        assert!((c.delays[0] - c.factor).abs() < 1e-12 && (c.delays[1] - 3.0 * c.factor).abs() < 1e-12);
+    }
+    // The +10 % run again, from the scenario file the design writes.
+    let longer = format!("{}\n[truth]\ndelays = [1.1, 3.3000000000000003]\n", auto.scenario.to_toml());
+    let s = Scenario::from_toml(&longer).unwrap();
+    let d = s.design().unwrap();
+    let r = Run::of(&s, &d).simulate(&mut |_| ControlFlow::Continue(())).unwrap();
+    let ended = r.outcome.map(|o| o.to_string());
+    assert_eq!(ended, v.delay_check[0].ended, "{:?}", v.delay_check[0]);
+    // delay_error = 0: no check.
+    let none = auto_design(&doc, &Targets { delay_error: Some(0.0), ..Targets::default() }).unwrap();
+    assert!(none.verification.delay_check.is_empty() && none.verification.delay_tolerance.is_nan());
+}
