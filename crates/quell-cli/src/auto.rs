@@ -242,7 +242,8 @@ fn report_text(a: &AutoDesign) -> String {
 fn delay_lines(a: &AutoDesign) -> String {
     let v = &a.verification;
     let Some(first) = v.delay_check.first() else { return String::new() };
-    let percent = |f: f64| format!("{} %", crate::run::short(format!("{:.2}", (f - 1.0).abs() * 100.0).parse().unwrap_or(0.0)));
+    let percent =
+        |f: f64| format!("{} %", crate::run::short(format!("{:.2}", (f - 1.0).abs() * 100.0).parse().unwrap_or(0.0)));
     let tolerance = v.delay_tolerance;
     let summary = if tolerance == 0.0 {
         format!(

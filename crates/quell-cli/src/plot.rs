@@ -409,13 +409,17 @@ fn label_entries<'a, DB: DrawingBackend + 'a>(
     entries: &[Entry],
 ) -> Result<(), String> {
     for (name, color, dashed) in entries.iter().cloned() {
-        chart.draw_series(std::iter::empty::<PathElement<(f64, f64)>>()).map_err(|e| e.to_string())?.label(name).legend(
-            move |(x, y)| match dashed {
-                true => plotters::element::DashedPathElement::new(vec![(x, y), (x + 20, y)], 6, 4, color.stroke_width(2))
-                    .into_dyn(),
+        chart
+            .draw_series(std::iter::empty::<PathElement<(f64, f64)>>())
+            .map_err(|e| e.to_string())?
+            .label(name)
+            .legend(move |(x, y)| match dashed {
+                true => {
+                    plotters::element::DashedPathElement::new(vec![(x, y), (x + 20, y)], 6, 4, color.stroke_width(2))
+                        .into_dyn()
+                }
                 false => PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)).into_dyn(),
-            },
-        );
+            });
     }
     Ok(())
 }

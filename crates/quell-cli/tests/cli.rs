@@ -1729,8 +1729,7 @@ fn the_whole_loops_advice_is_not_the_last_channels() {
     let out = stdout(&o);
     let lines: Vec<&str> = out.lines().collect();
     let last_channel = lines.iter().rposition(|l| l.starts_with("channel ")).expect("a channel line");
-    let whole: Vec<usize> =
-        (0..lines.len()).filter(|&k| lines[k].starts_with("advice (the whole loop): ")).collect();
+    let whole: Vec<usize> = (0..lines.len()).filter(|&k| lines[k].starts_with("advice (the whole loop): ")).collect();
     assert!(whole.len() >= 2, "{out}");
     assert!(whole.iter().all(|&k| k > last_channel), "{out}");
     assert!(lines[whole[0]].contains("the disturbance observer passes ω"), "{out}");

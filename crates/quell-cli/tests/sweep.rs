@@ -780,6 +780,7 @@ fn quell_within(args: &[&str]) -> Output {
     while child.try_wait().unwrap().is_none() {
         if start.elapsed() > Duration::from_secs(60) {
             let _ = child.kill();
+            let _ = child.wait();
             panic!("quell {args:?} did not finish in 60 s");
         }
         std::thread::sleep(Duration::from_millis(20));
@@ -813,12 +814,13 @@ fn edited_or_replaced_sweep_files_are_refused_not_read() {
         assert!(stderr(&o).contains(fragment), "{what}: {}", stderr(&o));
     };
     let m = copy("m");
-    let summary = fs::read_to_string(m.join("summary.json")).unwrap().replacen("\"m\": 2", "\"m\": 1000000000000000", 1);
+    let summary =
+        fs::read_to_string(m.join("summary.json")).unwrap().replacen("\"m\": 2", "\"m\": 1000000000000000", 1);
     fs::write(m.join("summary.json"), summary).unwrap();
     refused(
         "m",
         quell_within(&["sweep", "--merge", &out("m"), "--out", &out("x")]),
-        "line 1: expected the header of a study of 2 grid keys and m = 1000000000000000 channels, found 20 fields",
+        "line 1: expected the header of a study of 2 grid keys and m = 1000000000000000 channels, found 20 fields; was the file edited",
     );
     // Row 2 (run 1: point 0, draw 1) given point 3; row 3 (run 2: point 1) given μ_1 = 99.
     let runs = fs::read_to_string(dir.join("all/runs.csv")).unwrap();
@@ -833,7 +835,7 @@ fn edited_or_replaced_sweep_files_are_refused_not_read() {
     refused(
         "point",
         quell_within(&["sweep", "--merge", &out("point"), "--out", &out("x")]),
-        "line 3: point: expected 0 for run 1 (2 draws a grid point), found 3; the file was edited",
+        "line 3: point: expected 0 for run 1 (2 draws a grid point), found 3; was the file edited?",
     );
     fs::write(copy("grid").join("runs.csv"), edit(3, 4, "99.0")).unwrap();
     refused(

@@ -969,8 +969,7 @@ pub fn auto_design<'py>(
         .transpose()?;
     let u_limit = given(u_limit).map(|v| crate::convert::vector(&v, "u_limit", Kind::Design)).transpose()?;
     let u_limit = u_limit.unwrap_or_default();
-    let delay_error =
-        given(delay_error).map(|v| number(&v, "delay_error", Kind::Design, "delay_error")).transpose()?;
+    let delay_error = given(delay_error).map(|v| number(&v, "delay_error", Kind::Design, "delay_error")).transpose()?;
     // Their ranges are checked by auto_design (AutoError::Target: a DesignError below).
     let targets = quell::auto::Targets { convergence_time, u_limit, delay_error };
     let auto =

@@ -179,7 +179,10 @@ impl Targets {
         } else if let Some(e) = self.delay_error.filter(|e| !(0.0..1.0).contains(e)) {
             (
                 "delay_error",
-                format!("expected a relative error from 0 (no check) to below 1, e.g. 0.1 for the delays ±10 %, found {}", crate::settings::fmt_short(e)),
+                format!(
+                    "expected a relative error from 0 (no check) to below 1, e.g. 0.1 for the delays ±10 %, found {}",
+                    crate::settings::fmt_short(e)
+                ),
             )
         } else {
             return Ok(());
@@ -873,7 +876,9 @@ fn delay_checks(
             let (ended, tail_max_e, max_uf) = match verifier.check(&scenario, design, speed) {
                 Ok(c) => (None, c.tail_max_e, c.max_uf),
                 Err(AutoError::Run(o)) => (Some(o.to_string()), Vec::new(), Vec::new()),
-                Err(AutoError::Departed(how)) => (Some(format!("departed from its continuous loop: {how}")), Vec::new(), Vec::new()),
+                Err(AutoError::Departed(how)) => {
+                    (Some(format!("departed from its continuous loop: {how}")), Vec::new(), Vec::new())
+                }
                 Err(AutoError::Sim(e)) => (Some(e.to_string()), Vec::new(), Vec::new()),
                 Err(e) => return Err(e),
             };
@@ -1286,15 +1291,10 @@ fn spread(r: f64, count: usize, factor: f64, centred: bool) -> Vec<Complex<f64>>
     (0..count).map(|j| Complex::new(-ten_digits(r * factor.powf(j as f64 - shift)), 0.0)).collect()
 }
 
-/// Nonzero frequencies of a component.
-fn frequencies(c: &Component) -> impl Iterator<Item = f64> + '_ {
-    c.harmonics.iter().filter(|h| h.frequency > 0.0 && h.amplitude != 0.0).map(|h| h.frequency)
-}
-
 /// The time scale r of the scenario (module docs).
 fn time_scale(s: &Scenario) -> Result<f64, AutoError> {
     let comps = || s.reference.components.iter().chain(&s.disturbance.components);
-    let w_max = comps().flat_map(frequencies).fold(0.0, f64::max);
+    let w_max = comps().flat_map(Component::frequencies).fold(0.0, f64::max);
     let plant = eigenvalues(&s.plant.A)
         .map_err(|_| ScenarioError::new("plant.A", "its eigenvalues could not be computed"))?
         .iter()
@@ -1308,7 +1308,7 @@ fn time_scale(s: &Scenario) -> Result<f64, AutoError> {
 /// from DC) included, lower first; `None` without harmonics.
 fn closest_pair(s: &Scenario) -> Option<(f64, f64)> {
     let comps = s.reference.components.iter().chain(&s.disturbance.components);
-    let mut ws: Vec<f64> = comps.flat_map(frequencies).collect();
+    let mut ws: Vec<f64> = comps.flat_map(Component::frequencies).collect();
     ws.push(0.0);
     ws.sort_by(f64::total_cmp);
     ws.windows(2).filter(|w| w[1] > w[0]).map(|w| (w[0], w[1])).min_by(|a, b| (a.1 - a.0).total_cmp(&(b.1 - b.0)))
@@ -1793,7 +1793,7 @@ fn filters(
                 ),
             ));
         }
-        let ws: Vec<f64> = frequencies(c).collect();
+        let ws: Vec<f64> = c.frequencies().collect();
         if scaling == RegressorScaling::Modal && !ws.is_empty() {
             lists.push(resonators(&ws, order, t_end));
             continue;
@@ -1839,7 +1839,7 @@ pub(crate) fn modal_advice(signals: [&Signal; 2], design: &Design) -> Option<Str
 
 /// The most harmonics of one component of g or ω.
 fn most_harmonics([reference, disturbance]: [&Signal; 2]) -> usize {
-    reference.components.iter().chain(&disturbance.components).map(|c| frequencies(c).count()).max().unwrap_or(0)
+    reference.components.iter().chain(&disturbance.components).map(|c| c.frequencies().count()).max().unwrap_or(0)
 }
 
 /// The modal filter of a component with harmonics `ws` (nonzero) and `order` poles: a pair

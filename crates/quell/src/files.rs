@@ -161,13 +161,10 @@ fn is_temporary(name: &str) -> bool {
     extension && random
 }
 
-/// The most bytes of an earlier command's output that is read back (4 GiB: a sweep's runs.csv of
-/// about ten million runs): a larger one is a wrong path or a damaged file, not a sweep's.
-pub const MAX_READ_BACK_BYTES: u64 = 4 << 30;
-
 /// Opens an earlier output at `path` for reading, refused (`InvalidInput`) unless it is a regular
 /// file (followed through links): opening a pipe waits for a writer, and a device such as
-/// /dev/zero never ends (a sweep's runs.csv replaced by either had hung `--resume` or taken 9 GB).
+/// /dev/zero never ends (a sweep's runs.csv replaced by either had hung its resumption or taken
+/// 9 GB).
 pub fn open_regular(path: &Path) -> io::Result<std::fs::File> {
     let meta = std::fs::metadata(path)?;
     if !meta.is_file() {
@@ -180,19 +177,10 @@ pub fn open_regular(path: &Path) -> io::Result<std::fs::File> {
     std::fs::File::open(path)
 }
 
-/// An earlier output's text ([`open_regular`]), at most [`MAX_READ_BACK_BYTES`] of it.
+/// An earlier output's text ([`open_regular`]). Not capped: a sweep of ten million runs writes
+/// a runs.csv of gigabytes, which resuming or merging it reads back.
 pub fn read_regular(path: &Path) -> io::Result<String> {
-    use std::io::Read;
-    let file = open_regular(path)?;
-    let mut text = String::new();
-    file.take(MAX_READ_BACK_BYTES + 1).read_to_string(&mut text)?;
-    if text.len() as u64 > MAX_READ_BACK_BYTES {
-        return Err(io::Error::new(
-            io::ErrorKind::InvalidInput,
-            format!("is longer than {} GiB, more than any sweep writes (the wrong file, or damaged)", MAX_READ_BACK_BYTES >> 30),
-        ));
-    }
-    Ok(text)
+    io::read_to_string(open_regular(path)?)
 }
 
 /// The renaming replaces whatever `path` names: refused (`InvalidInput`) unless that is a regular

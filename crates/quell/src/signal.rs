@@ -97,6 +97,11 @@ fn sin_kernel(x: f64) -> f64 {
 }
 
 impl Component {
+    /// The frequencies of its harmonics that are there: nonzero, of nonzero amplitude.
+    pub fn frequencies(&self) -> impl Iterator<Item = f64> + '_ {
+        self.harmonics.iter().filter(|h| h.frequency > 0.0 && h.amplitude != 0.0).map(|h| h.frequency)
+    }
+
     /// Value at time `t`.
     pub fn eval(&self, t: f64) -> f64 {
         self.harmonics.iter().fold(self.bias, |acc, h| acc + h.amplitude * sin(h.frequency * t + h.phase))

@@ -163,7 +163,7 @@ fn the_keys_each_page_says_are_automatic_are_what_quell_design_auto_chooses() {
     assert_same_design(&auto.design, &Scenario::from_toml(&scenario_text(&MOTOR)).unwrap().design);
     // active-suspension: the road filter, β and μ with --convergence-time 5.
     let keys = ["disturbance_filter_poles", "mu", "beta"];
-    let auto = auto_of(&SUSPENSION, &keys, Targets { convergence_time: Some(5.0), u_limit: vec![] });
+    let auto = auto_of(&SUSPENSION, &keys, Targets { convergence_time: Some(5.0), ..Targets::default() });
     assert_same_design(&auto.design, &Scenario::from_toml(&scenario_text(&SUSPENSION)).unwrap().design);
     // supply-vessel: the filters and β (μ stays the page's: the automatic μ would adapt beyond the
     // stiffness threshold, where the automatic design no longer goes; README). The verification is

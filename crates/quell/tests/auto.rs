@@ -1593,7 +1593,7 @@ fn the_chosen_design_is_run_with_its_delays_off() {
     let auto = auto_design(&doc, &Targets::default()).unwrap();
     let v = &auto.verification;
     let factors: Vec<f64> = v.delay_check.iter().map(|c| c.factor).collect();
-    assert!(factors.len() >= 4 && factors.len() % 2 == 0, "{factors:?}");
+    assert!(factors.len() >= 4 && factors.len().is_multiple_of(2), "{factors:?}");
     for (pair, level) in factors.chunks(2).zip([0.1, 0.03, 0.01]) {
         assert_eq!(pair, [1.0 + level, 1.0 - level]);
     }

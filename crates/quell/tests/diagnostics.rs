@@ -1052,14 +1052,13 @@ fn a_delay_that_takes_a_third_of_the_run_is_named_before_mu() {
     assert!(advice[0].starts_with("channel 1's input delay τ = 20 s is 33 % of the run (60 s)"), "{advice:?}");
     assert!(advice[0].contains("lengthen simulation.t_end to at least 200 s (10 τ)"), "{advice:?}");
     assert!(!advice.iter().any(|a| a.contains("raise design.mu[0]")), "{advice:?}");
-    // The paper's example over 25 s (τ_2 = 3 s, 12 % of it): the delay is named, and the tail,
-    // measured long after it, is still extrapolated in time (by about 60 s, where 30 s, ten
-    // delays, still missed its bound), without a μ.
+    // The paper's example over 25 s (τ_2 = 3 s, 12 % of it): the delay is named, and no μ is
+    // offered; its tail is not extrapolated either, since windows of 2.5 s span 0.4 of ω's 2π s
+    // period, too little to read a trend from.
     let s = Scenario::from_toml(&PAPER_EXAMPLE.replace("t_end = 100.0", "t_end = 25.0")).unwrap();
     let d = s.design().unwrap();
     let r = Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
     let advice = &diagnose(&d, &s.reference, &s.disturbance, &r).channels[1].advice;
     assert!(advice[0].starts_with("channel 2's input delay τ = 3 s is 12 % of the run (25 s)"), "{advice:?}");
-    let shrinking = advice.iter().find(|a| a.contains("still shrinking")).expect("the tail extrapolated");
-    assert!(shrinking.contains("by about t = ") && !shrinking.contains("raise design.mu"), "{shrinking}");
+    assert!(!advice.iter().any(|a| a.contains("still shrinking") || a.contains("raise design.mu")), "{advice:?}");
 }

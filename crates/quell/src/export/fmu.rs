@@ -419,15 +419,22 @@ fn compile(
 const KEPT_OUTPUT: usize = 64 * 1024;
 
 /// Runs `cmd` with stdin closed, its output captured, and waits at most `timeout`: `None` (the
-/// process killed) when it has not exited by then.
+/// process killed, with the processes it started) when it has not exited by then.
 fn run_within(mut cmd: Command, timeout: std::time::Duration) -> std::io::Result<Option<std::process::Output>> {
     use std::io::Read;
     use std::process::Stdio;
+    use std::time::{Duration, Instant};
+    // Its own process group, so that a timeout kills the compiler's own children too (cc1, as, ld,
+    // or a wrapper script's), which would otherwise run on holding the pipes.
+    #[cfg(unix)]
+    std::os::unix::process::CommandExt::process_group(&mut cmd, 0);
     let mut child = cmd.stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn()?;
     // Each pipe drained on its own thread, so that a talkative compiler never blocks on a full one;
     // its first [`KEPT_OUTPUT`] bytes kept (the message quotes the first lines), the rest read and
     // dropped (a compiler flooding its output had taken 8 GB).
-    let drain = |pipe: Option<Box<dyn Read + Send>>| {
+    let (sent, received) = std::sync::mpsc::channel();
+    let drain = |which: usize, pipe: Option<Box<dyn Read + Send>>| {
+        let sent = sent.clone();
         std::thread::spawn(move || {
             let (mut bytes, mut chunk) = (Vec::new(), vec![0u8; 8192]);
             if let Some(mut p) = pipe {
@@ -443,25 +450,45 @@ fn run_within(mut cmd: Command, timeout: std::time::Duration) -> std::io::Result
                     }
                 }
             }
-            bytes
-        })
+            let _ = sent.send((which, bytes));
+        });
     };
-    let stdout = drain(child.stdout.take().map(|p| Box::new(p) as Box<dyn Read + Send>));
-    let stderr = drain(child.stderr.take().map(|p| Box::new(p) as Box<dyn Read + Send>));
-    let deadline = std::time::Instant::now() + timeout;
+    drain(0, child.stdout.take().map(|p| Box::new(p) as Box<dyn Read + Send>));
+    drain(1, child.stderr.take().map(|p| Box::new(p) as Box<dyn Read + Send>));
+    let deadline = Instant::now() + timeout;
+    let kill = |child: &mut std::process::Child| {
+        #[cfg(unix)]
+        if let Ok(group) = libc::pid_t::try_from(child.id()) {
+            // SAFETY: killpg sends a signal to the group the child leads; no memory is touched.
+            unsafe { libc::killpg(group, libc::SIGKILL) };
+        }
+        let _ = child.kill();
+        let _ = child.wait();
+    };
     let status = loop {
-        if let Some(status) = child.try_wait()? {
-            break status;
+        match child.try_wait() {
+            Ok(Some(status)) => break status,
+            Ok(None) if Instant::now() < deadline => std::thread::sleep(Duration::from_millis(10)),
+            Ok(None) => {
+                kill(&mut child);
+                return Ok(None);
+            }
+            Err(e) => {
+                kill(&mut child);
+                return Err(e);
+            }
         }
-        if std::time::Instant::now() >= deadline {
-            // The readers are left to end with the pipes (a child of the compiler may hold them).
-            let _ = child.kill();
-            let _ = child.wait();
-            return Ok(None);
-        }
-        std::thread::sleep(std::time::Duration::from_millis(10));
     };
-    let (stdout, stderr) = (stdout.join().unwrap_or_default(), stderr.join().unwrap_or_default());
+    // The output, waited for until the deadline (a daemon the compiler left may hold the pipes).
+    let mut output = [Vec::new(), Vec::new()];
+    for _ in 0..2 {
+        let left = deadline.saturating_duration_since(Instant::now()).max(Duration::from_secs(1));
+        match received.recv_timeout(left) {
+            Ok((which, bytes)) => output[which] = bytes,
+            Err(_) => break,
+        }
+    }
+    let [stdout, stderr] = output;
     Ok(Some(std::process::Output { status, stdout, stderr }))
 }
 
@@ -506,6 +533,22 @@ mod tests {
             .to_string();
         assert!(start.elapsed() < std::time::Duration::from_secs(10), "{:?}", start.elapsed());
         assert!(e.contains("had not finished after 0.3 s and was stopped"), "{e}");
+        // A compiler's own children are stopped with it: a wrapper that runs its compiler without
+        // exec (its pid written to a file) leaves nothing running.
+        let wrapper = dir.path().join("wrapper-cc");
+        let pid_file = dir.path().join("child.pid");
+        std::fs::write(&wrapper, format!("#!/bin/sh\nsleep 30 &\necho $! > {}\nwait\n", pid_file.display())).unwrap();
+        std::fs::set_permissions(&wrapper, std::fs::Permissions::from_mode(0o755)).unwrap();
+        let e = compile(wrapper.to_str().unwrap(), &sources, &["a.c"], "a.so", std::time::Duration::from_millis(500));
+        assert!(e.is_err());
+        let pid = std::fs::read_to_string(&pid_file).unwrap().trim().to_string();
+        let alive =
+            || Command::new("kill").args(["-0", &pid]).stderr(std::process::Stdio::null()).status().unwrap().success();
+        let start = std::time::Instant::now();
+        while alive() && start.elapsed() < std::time::Duration::from_secs(5) {
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        assert!(!alive(), "the wrapper's child {pid} still runs");
         // A compiler flooding its output is kept to its first 64 KiB.
         let mut flood = Command::new("sh");
         flood.args(["-c", "head -c 10000000 /dev/zero >&2; exit 1"]);

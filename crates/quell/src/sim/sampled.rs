@@ -62,15 +62,21 @@ pub fn coarse_sample_warning(
 /// sampled run: "T_s ≤ bound (T_s·ρ ≤ [`COARSE_SAMPLE`]), e.g. t …" for the loop's fastest rate ρ
 /// under g = `reference`, ω = `disturbance`, and ρ (an automatic design's poles at ρ = 900 /s
 /// had needed T_s ≤ 0.22 ms, said only when a run at 0.5 ms departed from its continuous loop).
-/// Where t, set by the delays rather than ρ, makes a run over `t_end` more than
-/// [`MANY_SAMPLES`] samples, it says how many (µs delays had offered 1e-8 s for a 100 s run).
+/// Where t makes a run over `t_end` more than [`MANY_SAMPLES`] samples, it says how many, and
+/// where the delays rather than ρ set t, that (µs delays had offered 5e-7 s for a 100 s run).
 pub fn sample_time_need(design: &Design, [reference, disturbance]: [&Signal; 2], t_end: f64) -> (String, f64) {
     let rate = super::loop_rate(design, design.plant(), [reference, disturbance]);
     let (bound, whole) = sample_time_choice(design, rate, None);
     let mut need = fine_sample_time_text(design, bound, whole, false);
     if let Some(t) = whole.filter(|t| t_end / t > MANY_SAMPLES) {
+        // Where the delays, not ρ, set t (well below the bound), what would lengthen it.
+        let why = if t < bound / 2.0 {
+            ": a sample time nearer the bound needs delays nearer its whole multiples"
+        } else {
+            ""
+        };
         need += &format!(
-            " ({:.1e} samples over t_end = {} {}: a sample time nearer the bound needs delays nearer its whole multiples)",
+            " ({:.1e} samples over t_end = {} {}{why})",
             t_end / t,
             settings::fmt_short(t_end),
             design.plant().time_unit

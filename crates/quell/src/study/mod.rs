@@ -1015,9 +1015,7 @@ fn check_values<'v>(
         let key = format!("{at}[{i}]");
         match path::shape(v) {
             Some(found) if found == expected => {}
-            Some(found) => {
-                return Err(err(key, format!("expected {expected} ({shape_of}), found {found}")))
-            }
+            Some(found) => return Err(err(key, format!("expected {expected} ({shape_of}), found {found}"))),
             None => return Err(err(key, format!("expected {expected} (the shape of {path}), found {}", kind(v)))),
         }
         let mut trial = doc.clone();

@@ -142,17 +142,7 @@ pub struct RunsFile {
 /// Reads a runs.csv written by [`write_runs_csv`] for `meta`; the message names the line.
 pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
     let mut lines = text.lines().enumerate();
-    // The header's length first, from the study's m, before a header of m channels is built (an
-    // edited m of 1e15 had asked for 24 PB).
-    let found = split(text.lines().next().unwrap_or_default())?.len();
-    let fields = meta.m.checked_mul(5).and_then(|f| f.checked_add(8 + meta.grid.len()));
-    if fields != Some(found) {
-        return Err(format!(
-            "line 1: expected the header of a study of {} grid keys and m = {} channels, found {found} fields; the file was edited or is another study's",
-            meta.grid.len(),
-            meta.m
-        ));
-    }
+    header_length(text.lines().next(), meta)?;
     let expected = header(meta);
     match lines.next() {
         Some((_, h)) if split(h)? == expected => {}
@@ -228,6 +218,34 @@ pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
     Ok(RunsFile { rows, partial })
 }
 
+/// Checks the header line's number of fields against the study's m and grid before a header of m
+/// channels is built (an edited m of 1e15 had asked for 24 PB).
+fn header_length(line: Option<&str>, meta: &StudyMeta) -> Result<(), String> {
+    let wanted = format!("the header of a study of {} grid keys and m = {} channels", meta.grid.len(), meta.m);
+    let Some(line) = line.filter(|l| !l.is_empty()) else {
+        return Err(format!("line 1: expected {wanted}, found an empty file"));
+    };
+    let found = split(line)?.len();
+    match meta.m.checked_mul(5).and_then(|f| f.checked_add(8 + meta.grid.len())) {
+        Some(fields) if fields == found => Ok(()),
+        _ => Err(format!(
+            "line 1: expected {wanted}, found {found} fields; was the file edited, or is it another study's?"
+        )),
+    }
+}
+
+/// Whether two texts of a grid value are the same value: the same text, or the same numbers in
+/// turn (a summary.json before 2026-12-05 wrote 1e-7 as 0.0000001, its runs.csv as 1e-7).
+fn same_value(a: &str, b: &str) -> bool {
+    let numbers = |t: &str| -> Option<Vec<f64>> {
+        t.split(|c: char| matches!(c, '[' | ']' | ',') || c.is_whitespace())
+            .filter(|w| !w.is_empty())
+            .map(|w| w.parse().ok())
+            .collect()
+    };
+    a == b || numbers(a).is_some_and(|x| numbers(b).is_some_and(|y| x == y))
+}
+
 /// Checks that a row's point, draw, seed and grid values are those its run index has in the
 /// study `meta` (an edited point or grid value had been merged as it stood).
 fn identity(row: &Row, meta: &StudyMeta) -> Result<(), String> {
@@ -238,7 +256,11 @@ fn identity(row: &Row, meta: &StudyMeta) -> Result<(), String> {
     let (point, draw) = (row.run / draws, row.run % draws);
     let seed = meta.seed.map_or(0, |s| super::sweep::run_seed(s, draw));
     let differs = |column: &str, want: String, found: String| {
-        Err(format!("{column}: expected {want} for run {} ({draws} draws a grid point), found {found}; the file was edited", row.run))
+        let per_point = crate::settings::count(draws, "draw", "draws");
+        Err(format!(
+            "{column}: expected {want} for run {} ({per_point} a grid point), found {found}; was the file edited?",
+            row.run
+        ))
     };
     if row.point != point {
         return differs("point", point.to_string(), row.point.to_string());
@@ -252,7 +274,7 @@ fn identity(row: &Row, meta: &StudyMeta) -> Result<(), String> {
     let lens: Vec<usize> = meta.grid.iter().map(|a| a.values.len()).collect();
     for ((axis, &i), value) in meta.grid.iter().zip(&super::axis_indices(point, &lens)).zip(&row.grid) {
         match axis.values.get(i) {
-            Some(want) if want == value => {}
+            Some(want) if same_value(want, value) => {}
             want => return differs(&axis.key, format!("`{}`", want.map_or("", String::as_str)), format!("`{value}`")),
         }
     }
@@ -261,7 +283,19 @@ fn identity(row: &Row, meta: &StudyMeta) -> Result<(), String> {
 
 #[cfg(test)]
 mod tests {
-    use super::csv_number;
+    use super::{csv_number, same_value};
+
+    /// A grid value's text in summary.json and in runs.csv may differ in form, not in value.
+    #[test]
+    fn grid_values_compare_by_value() {
+        assert!(same_value("1e-7", "0.0000001"));
+        assert!(same_value("1e20", "100000000000000000000.0"));
+        assert!(same_value("[1.0, 2.5]", "[1, 2.5]"));
+        assert!(same_value("\"x\"", "\"x\""));
+        assert!(!same_value("10.0", "99.0"));
+        assert!(!same_value("[1.0, 2.0]", "[1.0]"));
+        assert!(!same_value("\"x\"", "\"y\""));
+    }
 
     #[test]
     fn csv_numbers_are_short_and_read_back() {
