@@ -240,16 +240,16 @@ pub struct Verification {
     /// ([`crate::sim::SimResult::uf_cancellation`]); 0 for a run that ended early.
     pub uf_cancellation: f64,
     /// The kept design run again with every true input delay longer, then shorter, by
-    /// [`Targets::delay_error`] and smaller errors in turn ([`delay_checks`]; for information, not
-    /// a condition of passing); empty when the verification failed, the delays are all 0, or the
-    /// error is 0.
+    /// [`Targets::delay_error`], then 0.3 and 0.1 of it until both ways meet the bound (for
+    /// information, not a condition of passing); empty when the verification failed, the delays
+    /// are all 0, or the error is 0.
     pub delay_check: Vec<DelayCheck>,
     /// The largest relative delay error of those that met the tail bound both ways (0 where none
     /// did; NaN, `null` in JSON, without checks): how well the delays must be known.
     pub delay_tolerance: f64,
 }
 
-/// The chosen design's run with every true input delay scaled by `factor` ([`delay_checks`]).
+/// The chosen design's run with every true input delay scaled by `factor`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct DelayCheck {
     pub factor: f64,

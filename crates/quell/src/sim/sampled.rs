@@ -62,7 +62,7 @@ pub fn coarse_sample_warning(
 /// sampled run: "T_s ≤ bound (T_s·ρ ≤ [`COARSE_SAMPLE`]), e.g. t …" for the loop's fastest rate ρ
 /// under g = `reference`, ω = `disturbance`, and ρ (an automatic design's poles at ρ = 900 /s
 /// had needed T_s ≤ 0.22 ms, said only when a run at 0.5 ms departed from its continuous loop).
-/// Where t makes a run over `t_end` more than [`MANY_SAMPLES`] samples, it says how many, and
+/// Where t makes a run over `t_end` more than ten million samples, it says how many, and
 /// where the delays rather than ρ set t, that (µs delays had offered 5e-7 s for a 100 s run).
 pub fn sample_time_need(design: &Design, [reference, disturbance]: [&Signal; 2], t_end: f64) -> (String, f64) {
     let rate = super::loop_rate(design, design.plant(), [reference, disturbance]);
