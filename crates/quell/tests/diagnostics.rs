@@ -1062,3 +1062,26 @@ fn a_delay_that_takes_a_third_of_the_run_is_named_before_mu() {
     assert!(advice[0].starts_with("channel 2's input delay τ = 3 s is 12 % of the run (25 s)"), "{advice:?}");
     assert!(!advice.iter().any(|a| a.contains("still shrinking") || a.contains("raise design.mu")), "{advice:?}");
 }
+
+/// A sampled run at T_s·ρ = 0.46 (warned before it) that does not depart from its continuous loop (a glucose
+/// model at 5 min, tests/data/bergman-glucose-sampled.toml), its tail 100× its bound: its channel
+/// gets the advice its continuous loop gets, since the errors are the design's, not the
+/// sampling's; it had had none (helper tryout, 2026-12-06).
+#[test]
+fn a_coarse_sampled_run_that_follows_its_continuous_loop_keeps_its_channel_advice() {
+    let path = format!("{}/tests/data/bergman-glucose-sampled.toml", env!("CARGO_MANIFEST_DIR"));
+    let s = Scenario::from_toml(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let d = s.design().unwrap();
+    let r = Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
+    let diagnosed = quell::diagnostics::diagnose_run(&s, &d, &r);
+    // Compared, so the coarse-sample line (what the comparison settles) is gone.
+    assert!(!diagnosed.advice.iter().any(|a| a.contains("is coarse for this design")), "{:?}", diagnosed.advice);
+    let sampled = &diagnosed.channels[0].advice;
+    assert!(!sampled.is_empty(), "{diagnosed:?}");
+    // The same scenario continuous: the same channel advice.
+    let mut continuous = s.clone();
+    continuous.simulation.sample_time = None;
+    let rc = Run::of(&continuous, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
+    let first = |a: &[String]| a.first().map(|l| l.split(':').next().unwrap_or_default().to_string());
+    assert_eq!(first(sampled), first(&quell::diagnostics::diagnose_run(&continuous, &d, &rc).channels[0].advice));
+}

@@ -127,18 +127,24 @@ pub struct Diagnostics {
 /// The diagnostics of `result`, a run of scenario `s` with `design` ([`diagnose`]), led by
 /// [`model_error_advice`] when the run ended early on a true plant that differs from the model.
 pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) -> Diagnostics {
-    let mut d = diagnose(design, &s.reference, &s.disturbance, result);
     // A tail that is the noise's: those channels' advice on the design is the noise-free run's
     // (an observer line that only the noise had brought on made a suspension worse when followed).
     // The noise-free run is made once, for this and for the sampled comparison, where either needs it.
     let sampled = matches!(result.stats, crate::sim::RunStats::Sampled { .. });
     let missed = (0..result.m).any(|i| !tail_within_bound(result, i));
     let quiet = if sampled || missed { noise::without_noise(s, design) } else { None };
+    // A coarse sampled run that follows its continuous loop has the design's errors, not the
+    // sampling's: its channels get their advice (a glucose model at T_s·ρ = 0.46, its tail 100×
+    // its bound, had none).
+    let (lines, compared) = sampled::sampled_lines(s, design, result, quiet.as_ref());
+    let follows = compared == sampled::Compared::Follows;
+    let diagnose = |result: &SimResult| diagnose_with(design, [&s.reference, &s.disturbance], result, follows);
+    let mut d = diagnose(result);
     // Where the noise's are all the missed tails, the shared advice and the mismatch's are judged on
     // the noise-free run too.
     let mut judged = result;
     if let (Some(n), Some((_, clean))) = (noise::noise_tail(result, quiet.as_ref()), &quiet) {
-        let clean_d = diagnose(design, &s.reference, &s.disturbance, clean);
+        let clean_d = diagnose(clean);
         if n.all {
             d.advice = clean_d.advice;
             judged = clean;
@@ -163,9 +169,8 @@ pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) ->
     }
     d.advice.extend(loose_atol(s, result));
     d.advice.extend(uf_cancellation(result));
-    let (lines, compared) = sampled::sampled_lines(s, design, result, quiet.as_ref());
     // The comparison settles what the coarse-sample line asks for.
-    if compared {
+    if compared != sampled::Compared::Not {
         d.advice.retain(|a| !a.contains(COARSE_WORDS));
     }
     d.advice.extend(lines);
@@ -299,6 +304,17 @@ pub fn truth_differences(s: &crate::Scenario) -> Vec<String> {
 
 /// The diagnostics of `result`, a run of `design` under g = `reference`, ω = `disturbance`.
 pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, result: &SimResult) -> Diagnostics {
+    diagnose_with(design, [reference, disturbance], result, false)
+}
+
+/// [`diagnose`]; `follows`: a sampled run found to follow its continuous loop, whose coarse sample
+/// time then withholds no advice.
+fn diagnose_with(
+    design: &Design,
+    [reference, disturbance]: [&Signal; 2],
+    result: &SimResult,
+    follows: bool,
+) -> Diagnostics {
     let avg = Averaged::new(design, reference, disturbance);
     let t_end = result.t.last().copied().unwrap_or(0.0);
     let sampled = match result.stats {
@@ -323,7 +339,7 @@ pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, resul
     // adaptation's, and advice on μ, t_end or a faster observer (which needs a shorter T_s still)
     // would be tuned to them.
     let coarse = coarse_advice(design, result, rho, missed);
-    let tunable = coarse.is_none();
+    let tunable = coarse.is_none() || follows;
     advice.extend(coarse);
     let filters_off_scale = missed.then(|| filter_scale_advice(design, signals)).flatten();
     let off_scale = filters_off_scale.is_some();

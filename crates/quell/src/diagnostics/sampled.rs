@@ -221,17 +221,29 @@ pub fn sampled_advice(s: &crate::Scenario, design: &Design, result: &SimResult) 
     sampled_lines(s, design, result, quiet.as_ref()).0
 }
 
+/// What the comparison of a sampled-data run with its continuous loop found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Compared {
+    /// Not compared (a continuous run, one that ended early, a comparison that could not run).
+    Not,
+    /// The sampled loop departs from its continuous loop, or diverged where that completes.
+    Departs,
+    /// It follows its continuous loop, coarse sample time or not: its errors are the design's.
+    Follows,
+}
+
 /// [`sampled_advice`], with `quiet` the run without `s`'s noise where it has some
-/// ([`super::noise::without_noise`]), and whether the run was compared with its continuous loop.
+/// ([`super::noise::without_noise`]), and what the comparison with its continuous loop found.
 pub(crate) fn sampled_lines(
     s: &crate::Scenario,
     design: &Design,
     result: &SimResult,
     quiet: Option<&super::noise::Quiet>,
-) -> (Vec<String>, bool) {
-    let RunStats::Sampled { sample_time, .. } = result.stats else { return (Vec::new(), false) };
+) -> (Vec<String>, Compared) {
+    let not = (Vec::new(), Compared::Not);
+    let RunStats::Sampled { sample_time, .. } = result.stats else { return not };
     if matches!(result.outcome, Some(Outcome::Interrupted { .. } | Outcome::TooManySteps { .. })) {
-        return (Vec::new(), false);
+        return not;
     }
     // Under noise, which the two loops read at different instants, both are compared without it (a
     // flexible joint whose u_f reached 8,646 under 1e-4 rad of noise had been compared with
@@ -239,7 +251,7 @@ pub(crate) fn sampled_lines(
     let (s, result, without) = match (&s.noise, quiet) {
         (None, _) => (s, result, ""),
         (Some(_), Some((qs, qr))) => (qs, qr, "; both without [noise]"),
-        (Some(_), None) => return (sampled_transient(result), false),
+        (Some(_), None) => return (sampled_transient(result), Compared::Not),
     };
     let continuous = match continuous_loop(s, design, None) {
         Ok(c) => c,
@@ -250,11 +262,11 @@ pub(crate) fn sampled_lines(
                 result.time_unit
             )];
             lines.extend(sampled_transient(result));
-            return (lines, false);
+            return (lines, Compared::Not);
         }
-        Err(_) => return (sampled_transient(result), false),
+        Err(_) => return (sampled_transient(result), Compared::Not),
     };
-    let Some(channels) = departures(result, &continuous) else { return (sampled_transient(result), false) };
+    let Some(channels) = departures(result, &continuous) else { return (sampled_transient(result), Compared::Not) };
     let (unit, coarse) = (result.time_unit, coarse(s, design, sample_time));
     // On a [truth] both loops run the true plant: said, beside the advice that is for the model.
     let loop_of = if super::truth_differences(s).is_empty() {
@@ -283,9 +295,9 @@ pub(crate) fn sampled_lines(
                 "T_s·ρ is beyond {COARSE_SAMPLE} (the warning before the run), yet this run at {at} follows its continuous loop: y within {} of its peak, u_f's peaks at most {}× the continuous ones",
                 percent(worst),
                 fmt_ratio(ratio)
-            )], true);
+            )], Compared::Follows);
         }
-        _ => return (Vec::new(), true),
+        _ => return (Vec::new(), Compared::Follows),
     };
     let within = if coarse { "" } else { ", even within T_s·ρ ≤ 0.2" };
     // The automatic design checks a sampled run's u_f against its continuous loop's, not its y: it
@@ -294,7 +306,7 @@ pub(crate) fn sampled_lines(
     let effort =
         !matches!(result.outcome, None | Some(Outcome::Completed)) || channels.iter().any(ChannelDeparture::driven);
     let remedy = remedy(s, design, (sample_time, effort), &continuous);
-    (vec![format!("{what}; the sampling makes it{within}: {remedy}")], true)
+    (vec![format!("{what}; the sampling makes it{within}: {remedy}")], Compared::Departs)
 }
 
 /// The channels of `channels` that `which` picks, each with its figures: "y[i] by X % of its
