@@ -925,8 +925,9 @@ fn auto_document<'py>(
 /// -------
 /// tuple of (Scenario, dict)
 ///     The designed scenario and the report `{"choices": [{"key", "value", "why"}],
-///     "verification": {...}, "passed": bool}`; a design that fails its verification is
-///     returned too, with passed False.
+///     "verification": {...}, "passed": bool}` (each choice's value as the scenario file writes it,
+///     TOML text; the scenario's ``design()`` has the values); a design that fails its
+///     verification is returned too, with passed False and a UserWarning.
 ///
 /// Raises
 /// ------
@@ -986,6 +987,15 @@ pub fn auto_design<'py>(
     crate::errors::warn_fragile(py, &auto.design, &auto.scenario.design)?;
     for w in auto.warnings() {
         crate::errors::warn(py, &w)?;
+    }
+    // The CLI writes nothing for a failed design and exits non-zero; here the scenario comes back
+    // for study, so its failure is said where a notebook shows it, not only in the report.
+    if !auto.verification.passed {
+        let advice = auto.verification.advice.first().map_or(String::new(), |a| format!(": {a}"));
+        crate::errors::warn(
+            py,
+            &format!("the automatic design failed its verification (report[\"passed\"] is False; report[\"verification\"] has the figures){advice}"),
+        )?;
     }
     Ok((PyScenario::new(auto.scenario), report))
 }
