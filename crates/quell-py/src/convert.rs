@@ -71,8 +71,15 @@ fn real_array<'py>(obj: &Bound<'py, PyAny>, name: &str, kind: Kind) -> PyResult<
     let mut code: String = dtype.getattr("kind")?.extract()?;
     // Python ints beyond int64 (10**30) make an object array; within a float64's range they are
     // the numbers they are, as numpy reads them into float64.
-    let floats =
-        if code == "O" && all_ints_or_floats(&arr)? { np.call_method1("asarray", (obj, "float64")).ok() } else { None };
+    let floats = match code == "O" && all_ints_or_floats(&arr)? {
+        // A Ctrl-C met here goes on too ([`real_array`]'s first reading).
+        true => match np.call_method1("asarray", (obj, "float64")) {
+            Ok(floats) => Some(floats),
+            Err(e) if !e.is_instance_of::<pyo3::exceptions::PyException>(py) => return Err(e),
+            Err(_) => None,
+        },
+        false => None,
+    };
     let arr = match floats {
         Some(floats) => {
             (dtype, code) = (floats.getattr("dtype")?, "f".to_string());

@@ -2141,7 +2141,7 @@ fn observer(
         Design::new(&s.plant, spec)?
     };
     let why = if s.plant.k() == 0 {
-        format!("{what}: the slowest candidate (r_o = 6r, 3× the slowest channel pole the rules start from, −2r): the plant has no disturbance input (k = 0), so no disturbance observer (eq. (20)) decides among faster ones")
+        format!("{what}: the slowest candidate the placement accepts (from r_o = 6r, 3× the slowest channel pole the rules start from, −2r): the plant has no disturbance input (k = 0), so no disturbance observer (eq. (20)) decides among faster ones")
     } else {
         format!(
             "{what}: the first candidate (r_o = r_0·2^k, r_0 = 6r, 3× the slowest channel pole the rules start from (−2r, also when the file gives the channel poles), k ≤ 3; spreads ×2, ×4; the zeros {} kept) whose disturbance observer (eq. (20), driven by x̂) passes every frequency of ω with relative error ≤ {FIDELITY_AIM}, or within {FIDELITY_SLACK}× the best candidate's; its error is {error:.2e} at worst{unplaced}",
