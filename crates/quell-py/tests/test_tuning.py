@@ -106,7 +106,7 @@ def test_auto_design_refuses_a_short_horizon_with_the_t_end_that_works():
     text = without_design((REFERENCE / "quadruple-tank.toml").read_text())
     # A failed design comes back for study, with a UserWarning saying so (a notebook had carried on
     # with one it had not seen fail).
-    with pytest.warns(UserWarning, match=r"^the automatic design failed its verification \(report\["passed"\] is False"):
+    with pytest.warns(UserWarning, match=r'^the automatic design failed its verification \(report\["passed"\] is False'):
         _, report = quell.auto_design(text)
     assert not report["passed"]
     advice = " ".join(report["verification"]["advice"])
