@@ -238,25 +238,35 @@ fn report_text(a: &AutoDesign) -> String {
 
 /// The kept design with its delays off ([`quell::auto::DelayCheck`]): how far off they may be,
 /// then one line a run, its tail against the bound and max|u_f| against the verified run's, ⚠
-/// where it misses either ([`quell::auto::DelayCheck::meets`]) or ended early.
+/// where it was not met or ended early.
 fn delay_lines(a: &AutoDesign) -> String {
     let v = &a.verification;
     let Some(first) = v.delay_check.first() else { return String::new() };
-    let percent =
-        |f: f64| format!("{} %", crate::run::short(format!("{:.2}", (f - 1.0).abs() * 100.0).parse().unwrap_or(0.0)));
-    let tolerance = v.delay_tolerance;
-    let summary = if tolerance == 0.0 {
+    let percent = |e: f64| format!("{} %", crate::run::short(format!("{:.3}", e * 100.0).parse().unwrap_or(0.0)));
+    let summary = if v.delay_tolerance > 0.0 {
+        let not_first = v.delay_check.iter().take(2).any(|c| !c.met);
+        let also = if not_first {
+            format!(", not at {}: know the delays that well", percent(first.error))
+        } else {
+            String::new()
+        };
         format!(
-            "the tail bound is missed with every true input delay off by as little as {} either way: the method predicts over the delays as given (the paper assumes them known), so measure them that well or better",
-            percent(1.0 + v.delay_check.last().map_or(0.0, |c| c.factor - 1.0))
+            "the tail bound is met with every true input delay {} longer and shorter{also}",
+            percent(v.delay_tolerance)
         )
-    } else if tolerance == (first.factor - 1.0).abs() {
-        format!("the tail bound is met with every true input delay {} longer and shorter", percent(1.0 + tolerance))
     } else {
+        // The last level run: which way missed, and by how little.
+        let last = &v.delay_check[v.delay_check.len().saturating_sub(2)..];
+        let missed: Vec<&quell::auto::DelayCheck> = last.iter().filter(|c| !c.met).collect();
+        let way = match missed.as_slice() {
+            [one] if one.factor > 1.0 => "longer",
+            [_] => "shorter",
+            _ => "longer and shorter",
+        };
+        let least = missed.iter().map(|c| c.error).fold(f64::INFINITY, f64::min);
         format!(
-            "the tail bound is met with every true input delay {} longer and shorter, not at {}: know the delays that well",
-            percent(1.0 + tolerance),
-            percent(first.factor)
+            "the tail bound is missed with every true input delay {way} by as little as {}: the method predicts over the delays as given (the paper assumes them known), so measure them that well or better",
+            percent(least)
         )
     };
     let mut s = format!("  delays (for information, not a condition of passing): {summary}\n");
@@ -264,14 +274,15 @@ fn delay_lines(a: &AutoDesign) -> String {
     for c in &v.delay_check {
         let delays = c.delays.iter().map(|d| crate::run::short(*d)).collect::<Vec<_>>().join(", ");
         let head = format!("    ×{} (τ = [{delays}] {unit})", crate::run::short(c.factor));
-        let flag = if c.meets(v) { "" } else { " ⚠" };
+        let flag = if c.met { "" } else { " ⚠" };
         let line = match &c.ended {
             Some(why) => format!("{head}: {why}{flag}"),
             None => {
                 let tail = c.tail_max_e.iter().zip(&v.bound).map(|(e, b)| e / b).fold(0.0, f64::max);
+                let peaks = c.max_uf.iter().map(|u| crate::run::fixed_or_sci(*u, 4)).collect::<Vec<_>>().join(", ");
                 let growth = c.max_uf.iter().zip(&v.max_uf).map(|(u, u0)| u / u0).fold(0.0, f64::max);
                 format!(
-                    "{head}: worst tail {tail:.2e} of its bound, max|u_f| up to {}× the verified run's{flag}",
+                    "{head}: worst tail {tail:.2e} of its bound, max|u_f| [{peaks}], up to {}× the verified run's{flag}",
                     crate::run::short(format!("{growth:.3}").parse().unwrap_or(growth))
                 )
             }

@@ -146,6 +146,10 @@ pub struct Targets {
 /// delays 10 % off).
 pub const DELAY_ERROR: f64 = 0.1;
 
+/// The largest [`Targets::delay_error`]: beyond it the shorter run nears no delay at all (0.999
+/// ran 0.1 % of each delay, 120× the cost of the verification), no longer a delay error.
+pub const MAX_DELAY_ERROR: f64 = 0.5;
+
 impl Targets {
     /// The limit on input i (∞ without one).
     fn limit(&self, i: usize) -> f64 {
@@ -158,8 +162,8 @@ impl Targets {
 
     /// A convergence time that is positive, finite and within the horizon t_end (the verifying run
     /// must reach it), limits that are positive (+∞: none on that input) and one or m of them, and
-    /// a delay error in [0, 1); otherwise an error naming `convergence_time`, `u_limit` or
-    /// `delay_error`.
+    /// a delay error in [0, [`MAX_DELAY_ERROR`]]; otherwise an error naming `convergence_time`,
+    /// `u_limit` or `delay_error`.
     fn check(&self, m: usize, (t_end, unit): (f64, crate::TimeUnit)) -> Result<(), AutoError> {
         let n = self.u_limit.len();
         let (key, message): (&'static str, _) = if let Some(t) =
@@ -244,8 +248,9 @@ pub struct Verification {
     /// information, not a condition of passing); empty when the verification failed, the delays
     /// are all 0, or the error is 0.
     pub delay_check: Vec<DelayCheck>,
-    /// The largest relative delay error of those that met the tail bound both ways (0 where none
-    /// did; NaN, `null` in JSON, without checks): how well the delays must be known.
+    /// The relative delay error met both ways: of the level met, the smaller of its two runs'
+    /// actual errors ([`DelayCheck::error`]); 0 where no level was, NaN (`null` in JSON) without
+    /// checks. How well the delays must be known.
     pub delay_tolerance: f64,
 }
 
@@ -256,6 +261,12 @@ pub struct DelayCheck {
     /// The true delays run: τ_i × factor, or in a sampled scenario the nearest whole number of
     /// samples at least one sample away.
     pub delays: Vec<f64>,
+    /// The relative error run: the largest |τ_i'/τ_i − 1| (whole samples can make it more than
+    /// |factor − 1|).
+    pub error: f64,
+    /// Completed within the tail bound, with max|u_f,i| within [`EFFORT_GROWTH`]× the verified
+    /// run's and within the actuator limits ([`Targets::u_limit`]).
+    pub met: bool,
     /// Why the run ended before t_end (diverged, failed), or how it departed from its continuous
     /// loop; `None` when it completed.
     pub ended: Option<String>,
@@ -850,9 +861,10 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
 }
 
 /// [`DelayCheck`]s of the chosen design (at `speed`): every true input delay longer, then shorter,
-/// by [`Targets::delay_error`], then by 0.3 and 0.1 of it until both ways meet the tail
-/// bound (and keep max|u_f| within [`EFFORT_GROWTH`]× the verified run's); none where that error
-/// or every delay is 0. With the largest error both ways met (0 where none was).
+/// by [`Targets::delay_error`], then by 0.3 and 0.1 of it until both ways meet
+/// ([`DelayCheck::met`]); a level whose delays (whole samples) are those of one run already is
+/// skipped. None where that error or every delay is 0, or inside a horizon's repeat. With the
+/// smaller actual error of the two runs of the level met (0 where none was).
 fn delay_checks(
     s: &Scenario,
     design: &Design,
@@ -861,15 +873,22 @@ fn delay_checks(
 ) -> Result<(Vec<DelayCheck>, f64), AutoError> {
     let error = targets.delay_error.unwrap_or(DELAY_ERROR);
     let truth = s.true_plant();
-    let mut checks = Vec::new();
-    if error == 0.0 || truth.delays.iter().all(|&d| d == 0.0) {
+    let mut checks: Vec<DelayCheck> = Vec::new();
+    if error == 0.0 || truth.delays.iter().all(|&d| d == 0.0) || verifier.nested {
         return Ok((checks, f64::NAN));
     }
     for level in [error, 0.3 * error, 0.1 * error] {
-        let mut met = true;
-        for factor in [1.0 + level, 1.0 - level] {
-            let delays: Vec<f64> =
-                truth.delays.iter().map(|&d| scaled_delay(d, factor, s.simulation.sample_time)).collect();
+        let runs = [1.0 + level, 1.0 - level].map(|factor| {
+            (
+                factor,
+                truth.delays.iter().map(|&d| scaled_delay(d, factor, s.simulation.sample_time)).collect::<Vec<f64>>(),
+            )
+        });
+        if runs.iter().all(|(_, delays)| checks.iter().any(|c| &c.delays == delays)) {
+            continue;
+        }
+        let mut level_checks = Vec::new();
+        for (factor, delays) in runs {
             let (mut scenario, mut plant) = (s.clone(), truth.clone());
             plant.delays.clone_from(&delays);
             scenario.truth = Some(plant);
@@ -882,24 +901,26 @@ fn delay_checks(
                 Err(AutoError::Sim(e)) => (Some(e.to_string()), Vec::new(), Vec::new()),
                 Err(e) => return Err(e),
             };
-            let check = DelayCheck { factor, delays, ended, tail_max_e, max_uf };
-            met &= check.meets(verified);
-            checks.push(check);
+            // The error run: the largest relative change of a delay (whole samples move it more).
+            let change = delays.iter().zip(&truth.delays).filter(|(_, t)| **t > 0.0).map(|(d, t)| (d / t - 1.0).abs());
+            let actual = change.fold(0.0, f64::max);
+            let met = ended.is_none()
+                && tail_max_e.iter().zip(&verified.bound).all(|(e, b)| e <= b)
+                && max_uf
+                    .iter()
+                    .zip(&verified.max_uf)
+                    .enumerate()
+                    .all(|(i, (u, u0))| *u <= EFFORT_GROWTH * u0 && *u <= targets.limit(i));
+            level_checks.push(DelayCheck { factor, delays, error: actual, ended, tail_max_e, max_uf, met });
         }
-        if met {
-            return Ok((checks, level));
+        let both = level_checks.iter().all(|c| c.met);
+        let smaller = level_checks.iter().map(|c| c.error).fold(f64::INFINITY, f64::min);
+        checks.extend(level_checks);
+        if both {
+            return Ok((checks, smaller));
         }
     }
     Ok((checks, 0.0))
-}
-
-impl DelayCheck {
-    /// Completed within the tail bound, max|u_f,i| within [`EFFORT_GROWTH`]× the verified run's.
-    pub fn meets(&self, verified: &Verification) -> bool {
-        self.ended.is_none()
-            && self.tail_max_e.iter().zip(&verified.bound).all(|(e, b)| e <= b)
-            && self.max_uf.iter().zip(&verified.max_uf).all(|(u, u0)| *u <= EFFORT_GROWTH * u0)
-    }
 }
 
 /// The delay τ × `factor`; with a sample time, the nearest whole number of samples to it, at least

@@ -1597,7 +1597,13 @@ fn the_chosen_design_is_run_with_its_delays_off() {
     for (pair, level) in factors.chunks(2).zip([0.1, 0.03, 0.01]) {
         assert_eq!(pair, [1.0 + level, 1.0 - level]);
     }
-    let met: Vec<bool> = v.delay_check.chunks(2).map(|p| p.iter().all(|c| c.meets(v))).collect();
+    // Met: completed, every tail within its bound, u_f within twice the verified run's.
+    for c in &v.delay_check {
+        let within = c.tail_max_e.iter().zip(&v.bound).all(|(e, b)| e <= b)
+            && c.max_uf.iter().zip(&v.max_uf).all(|(u, u0)| *u <= 2.0 * u0);
+        assert_eq!(c.met, c.ended.is_none() && within, "{c:?}");
+    }
+    let met: Vec<bool> = v.delay_check.chunks(2).map(|p| p.iter().all(|c| c.met)).collect();
     // The ladder stops at the first level met both ways (or after the third).
     assert!(!met[0] && met[..met.len() - 1].iter().all(|m| !m), "{:?}", v.delay_check);
     let expected_tolerance = if *met.last().unwrap() { 1.0 - factors[factors.len() - 1] } else { 0.0 };
@@ -1605,6 +1611,7 @@ fn the_chosen_design_is_run_with_its_delays_off() {
     for c in &v.delay_check {
         assert_eq!(c.delays.len(), 2);
         assert!((c.delays[0] - c.factor).abs() < 1e-12 && (c.delays[1] - 3.0 * c.factor).abs() < 1e-12);
+        assert!((c.error - (c.factor - 1.0).abs()).abs() < 1e-12, "{c:?}");
     }
     // The +10 % run again, from the scenario file the design writes.
     let longer = format!("{}\n[truth]\ndelays = [1.1, 3.3000000000000003]\n", auto.scenario.to_toml());
@@ -1616,4 +1623,40 @@ fn the_chosen_design_is_run_with_its_delays_off() {
     // delay_error = 0: no check.
     let none = auto_design(&doc, &Targets { delay_error: Some(0.0), ..Targets::default() }).unwrap();
     assert!(none.verification.delay_check.is_empty() && none.verification.delay_tolerance.is_nan());
+}
+
+/// Sampled at 0.05 s, a delay of 0.5 s (10 samples) moves by whole samples: ±10 % is one sample,
+/// and ±3 % and ±1 % round to the same delays, so they are not run again; each run's error is the
+/// one run (0.1). With an actuator limit, a delayed run beyond it is not met, whatever its tail
+/// (the paper's plant under 23: the +3 % run's max|u_f,2| passes it).
+#[test]
+fn a_delay_check_runs_distinct_whole_samples_and_respects_the_actuator_limit() {
+    let text = include_str!("../../../examples/siso-complex.toml");
+    let start = text.find("[design]").unwrap();
+    let end = start + text[start..].find("[reference]").unwrap();
+    let sampled = format!("{}[design]\n{}", &text[..start], &text[end..])
+        .replace("[simulation]\n", "[simulation]\nsample_time = 0.05\noutput_step = 0.1\n");
+    let doc: toml::Table = sampled.parse().unwrap();
+    let auto = auto_design(&doc, &Targets::default()).unwrap();
+    let checks = &auto.verification.delay_check;
+    let delays: Vec<f64> = checks.iter().map(|c| c.delays[0]).collect();
+    assert_eq!(delays.len(), 2, "{checks:?}");
+    assert!((delays[0] - 0.55).abs() < 1e-12 && (delays[1] - 0.45).abs() < 1e-12, "{delays:?}");
+    assert!(checks.iter().all(|c| (c.error - 0.1).abs() < 1e-9), "{checks:?}");
+
+    let paper = quell::scenario::PAPER_EXAMPLE;
+    let start = paper.find("[design]").unwrap();
+    let end = start + paper[start..].find("[reference]").unwrap();
+    let doc: toml::Table = format!("{}[design]\n{}", &paper[..start], &paper[end..]).parse().unwrap();
+    let limited = auto_design(&doc, &Targets { u_limit: vec![23.0], ..Targets::default() }).unwrap();
+    for c in &limited.verification.delay_check {
+        if c.max_uf.iter().any(|u| *u > 23.0) {
+            assert!(!c.met, "{c:?}");
+        }
+    }
+    assert!(
+        limited.verification.delay_check.iter().any(|c| c.ended.is_none() && !c.met),
+        "{:?}",
+        limited.verification.delay_check
+    );
 }
