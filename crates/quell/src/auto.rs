@@ -180,11 +180,11 @@ impl Targets {
                 "u_limit",
                 format!("expected limits > 0 (inf for none on an input), found {}", crate::settings::fmt_short(*l)),
             )
-        } else if let Some(e) = self.delay_error.filter(|e| !(0.0..1.0).contains(e)) {
+        } else if let Some(e) = self.delay_error.filter(|e| !(0.0..=MAX_DELAY_ERROR).contains(e)) {
             (
                 "delay_error",
                 format!(
-                    "expected a relative error from 0 (no check) to below 1, e.g. 0.1 for the delays ±10 %, found {}",
+                    "expected a relative error from 0 (no check) to {MAX_DELAY_ERROR}, e.g. 0.1 for the delays ±10 %, found {}",
                     crate::settings::fmt_short(e)
                 ),
             )

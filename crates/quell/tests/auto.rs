@@ -301,6 +301,10 @@ fn targets_out_of_range_are_refused_naming_the_field() {
         let e = refused(Targets { u_limit: limits, ..Targets::default() });
         assert!(e.starts_with("u_limit: expected") && e.contains(found), "{e}");
     }
+    for (error, found) in [(-0.1, "-0.1"), (0.6, "0.6"), (f64::NAN, "NaN"), (1.0, "1")] {
+        let e = refused(Targets { delay_error: Some(error), ..Targets::default() });
+        assert_eq!(e, format!("delay_error: expected a relative error from 0 (no check) to 0.5, e.g. 0.1 for the delays ±10 %, found {found}"));
+    }
 }
 
 /// A value the rules chose and the design refuses is said to be the rules' (with what to give by
