@@ -241,7 +241,14 @@ fn report_text(a: &AutoDesign) -> String {
 /// where it was not met or ended early.
 fn delay_lines(a: &AutoDesign) -> String {
     let v = &a.verification;
-    let Some(first) = v.delay_check.first() else { return String::new() };
+    let truth = a.scenario.true_plant();
+    let Some(first) = v.delay_check.first() else {
+        // Passed, and nothing to check: said, so that no line reads as a check skipped.
+        return match v.passed && truth.delays.iter().all(|&d| d == 0.0) {
+            true => "  delays: all 0, so no delay error was checked\n".to_string(),
+            false => String::new(),
+        };
+    };
     let percent = |e: f64| format!("{} %", crate::run::short(format!("{:.3}", e * 100.0).parse().unwrap_or(0.0)));
     let summary = if v.delay_tolerance > 0.0 {
         let not_first = v.delay_check.iter().take(2).any(|c| !c.met);
@@ -269,7 +276,14 @@ fn delay_lines(a: &AutoDesign) -> String {
             percent(least)
         )
     };
-    let mut s = format!("  delays (for information, not a condition of passing): {summary}\n");
+    // With a [truth] whose delays are not the model's, the errors are of the true delays.
+    let of = if truth.delays != a.scenario.plant.delays {
+        let model = a.scenario.plant.delays.iter().map(|d| crate::run::short(*d)).collect::<Vec<_>>().join(", ");
+        format!(" (the errors are of [truth]'s delays, not the model's [{model}])")
+    } else {
+        String::new()
+    };
+    let mut s = format!("  delays (for information, not a condition of passing){of}: {summary}\n");
     let unit = a.scenario.plant.time_unit;
     for c in &v.delay_check {
         let delays = c.delays.iter().map(|d| crate::run::short(*d)).collect::<Vec<_>>().join(", ");

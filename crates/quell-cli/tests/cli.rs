@@ -1734,3 +1734,28 @@ fn the_whole_loops_advice_is_not_the_last_channels() {
     assert!(whole.iter().all(|&k| k > last_channel), "{out}");
     assert!(lines[whole[0]].contains("the disturbance observer passes ω"), "{out}");
 }
+
+/// The automatic design's delay lines (helper tryout, 2026-12-06): plant delays all 0 say that
+/// nothing was checked (no line had read as a check skipped), and with a `[truth]` whose delays
+/// are not the model's the summary says whose delays it scaled.
+#[test]
+fn the_delay_check_says_when_it_has_nothing_to_check_and_whose_delays_it_scaled() {
+    let dir = temp_dir("delay-lines");
+    let input = paper_without_design(&dir);
+    let text = fs::read_to_string(&input).unwrap();
+    let zero = dir.path().join("zero.toml");
+    fs::write(&zero, text.replace("delays = [1.0, 3.0]", "delays = [0.0, 0.0]")).unwrap();
+    let o = quell(&["design", zero.to_str().unwrap(), "--auto"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stdout(&o).contains("\n  delays: all 0, so no delay error was checked\n"), "{}", stdout(&o));
+    let truth = dir.path().join("truth.toml");
+    fs::write(&truth, format!("{text}\n[truth]\ndelays = [1.02, 2.9]\n")).unwrap();
+    let o = quell(&["design", truth.to_str().unwrap(), "--auto"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(
+        out.contains("  delays (for information, not a condition of passing) (the errors are of [truth]'s delays, not the model's [1, 3]): "),
+        "{out}"
+    );
+    assert!(out.contains("×1.1 (τ = [1.122, 3.19] s)"), "{out}");
+}
