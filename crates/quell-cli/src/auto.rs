@@ -250,6 +250,7 @@ fn delay_lines(a: &AutoDesign) -> String {
         };
     };
     let percent = |e: f64| format!("{} %", crate::run::short(format!("{:.3}", e * 100.0).parse().unwrap_or(0.0)));
+    let delays = |v: &[f64]| v.iter().map(|d| crate::run::short(*d)).collect::<Vec<_>>().join(", ");
     let summary = if v.delay_tolerance > 0.0 {
         let not_first = v.delay_check.iter().take(2).any(|c| !c.met);
         let also = if not_first {
@@ -278,16 +279,14 @@ fn delay_lines(a: &AutoDesign) -> String {
     };
     // With a [truth] whose delays are not the model's, the errors are of the true delays.
     let of = if truth.delays != a.scenario.plant.delays {
-        let model = a.scenario.plant.delays.iter().map(|d| crate::run::short(*d)).collect::<Vec<_>>().join(", ");
-        format!(" (the errors are of [truth]'s delays, not the model's [{model}])")
+        format!(" (the errors are of [truth]'s delays, not the model's [{}])", delays(&a.scenario.plant.delays))
     } else {
         String::new()
     };
     let mut s = format!("  delays (for information, not a condition of passing){of}: {summary}\n");
     let unit = a.scenario.plant.time_unit;
     for c in &v.delay_check {
-        let delays = c.delays.iter().map(|d| crate::run::short(*d)).collect::<Vec<_>>().join(", ");
-        let head = format!("    ×{} (τ = [{delays}] {unit})", crate::run::short(c.factor));
+        let head = format!("    ×{} (τ = [{}] {unit})", crate::run::short(c.factor), delays(&c.delays));
         let flag = if c.met { "" } else { " ⚠" };
         let line = match &c.ended {
             Some(why) => format!("{head}: {why}{flag}"),

@@ -609,6 +609,11 @@ impl Candidate {
         self.max_uf.iter().enumerate().all(|(i, u)| *u <= targets.limit(i))
     }
 
+    /// Every max |u_f,i| within [`EFFORT_GROWTH`]× `reference`'s (another run's peaks).
+    fn effort_within(&self, reference: &[f64]) -> bool {
+        self.max_uf.iter().zip(reference).all(|(u, u0)| *u <= EFFORT_GROWTH * u0)
+    }
+
     /// Nearer the limits than `other`: a smaller largest max |u_f,i| / limit_i, or, where the two
     /// tie to rounding (the paper's candidates share the peak of u_f,2), a smaller sum of them.
     fn closer_to_limits(&self, other: &Candidate, targets: &Targets) -> bool {
@@ -892,25 +897,22 @@ fn delay_checks(
             let (mut scenario, mut plant) = (s.clone(), truth.clone());
             plant.delays.clone_from(&delays);
             scenario.truth = Some(plant);
-            let (ended, tail_max_e, max_uf) = match verifier.check(&scenario, design, speed) {
-                Ok(c) => (None, c.tail_max_e, c.max_uf),
-                Err(AutoError::Run(o)) => (Some(o.to_string()), Vec::new(), Vec::new()),
-                Err(AutoError::Departed(how)) => {
-                    (Some(format!("departed from its continuous loop: {how}")), Vec::new(), Vec::new())
+            let ended = |why: String| (Some(why), false, Vec::new(), Vec::new());
+            let (ended, met, tail_max_e, max_uf) = match verifier.check(&scenario, design, speed) {
+                Ok(c) => {
+                    let met = c.tail_within(&verified.bound, 1.0)
+                        && c.effort_within(&verified.max_uf)
+                        && c.within_limit(targets);
+                    (None, met, c.tail_max_e, c.max_uf)
                 }
-                Err(AutoError::Sim(e)) => (Some(e.to_string()), Vec::new(), Vec::new()),
+                Err(AutoError::Run(o)) => ended(o.to_string()),
+                Err(AutoError::Departed(how)) => ended(format!("departed from its continuous loop: {how}")),
+                Err(AutoError::Sim(e)) => ended(e.to_string()),
                 Err(e) => return Err(e),
             };
             // The error run: the largest relative change of a delay (whole samples move it more).
             let change = delays.iter().zip(&truth.delays).filter(|(_, t)| **t > 0.0).map(|(d, t)| (d / t - 1.0).abs());
             let actual = change.fold(0.0, f64::max);
-            let met = ended.is_none()
-                && tail_max_e.iter().zip(&verified.bound).all(|(e, b)| e <= b)
-                && max_uf
-                    .iter()
-                    .zip(&verified.max_uf)
-                    .enumerate()
-                    .all(|(i, (u, u0))| *u <= EFFORT_GROWTH * u0 && *u <= targets.limit(i));
             level_checks.push(DelayCheck { factor, delays, error: actual, ended, tail_max_e, max_uf, met });
         }
         let both = level_checks.iter().all(|c| c.met);
@@ -1028,9 +1030,7 @@ fn relax(
     // observer's fidelity: slower ones must keep it ([`keeps_fidelity`]).
     let first_fidelity = holds_zeros(&kept.0.scenario).then(|| fidelity(&kept.0.scenario, &kept.1));
     let first_uf = kept.2.max_uf.clone();
-    let effort_kept = |c: &Candidate| {
-        !targets.u_limit.is_empty() || c.max_uf.iter().zip(&first_uf).all(|(u, u0)| *u <= EFFORT_GROWTH * u0)
-    };
+    let effort_kept = |c: &Candidate| !targets.u_limit.is_empty() || c.effort_within(&first_uf);
     // Four phases: the observer's own poles halved (1), then the channel poles with them when the
     // observer is chosen here (2), then, while no candidate is within the actuator limit, the
     // channel poles alone from the observer phase 1 kept (3: phase 2 slows an observer phase 1

@@ -222,7 +222,7 @@ pub fn check_dir(dir: &Path) -> io::Result<()> {
         // A loop of links (ELOOP) is not a missing directory to create.
         Err(e) if dir.is_symlink() => {
             let target = std::fs::read_link(dir).map_or_else(|_| "?".into(), |t| t.display().to_string());
-            if e.raw_os_error() == Some(libc_eloop()) {
+            if is_link_loop(&e) {
                 return refuse(format!(
                     "{} is a symbolic link to {target} that leads back to itself (a loop of links); give a directory",
                     dir.display()
@@ -237,13 +237,13 @@ pub fn check_dir(dir: &Path) -> io::Result<()> {
     }
 }
 
-/// ELOOP, "too many levels of symbolic links": 40 on Linux, 62 on the BSDs and macOS.
-fn libc_eloop() -> i32 {
-    if cfg!(any(target_os = "linux", target_os = "android")) {
-        40
-    } else {
-        62
-    }
+/// Whether `e` is ELOOP, "too many levels of symbolic links".
+fn is_link_loop(e: &io::Error) -> bool {
+    #[cfg(unix)]
+    let eloop = Some(libc::ELOOP);
+    #[cfg(not(unix))]
+    let eloop = None;
+    eloop.is_some() && e.raw_os_error() == eloop
 }
 
 #[cfg(test)]

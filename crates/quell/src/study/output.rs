@@ -149,6 +149,7 @@ pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
         _ => return Err(format!("line 1: expected the header {}", expected.join(","))),
     }
     let (g, m) = (meta.grid.len(), meta.m);
+    let lens: Vec<usize> = meta.grid.iter().map(|a| a.values.len()).collect();
     let mut rows = Vec::new();
     let mut partial = false;
     for (n, line) in lines {
@@ -212,7 +213,7 @@ pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
             wall_ms: num(first + 5 * m + 1)?,
             explicit_stiff: false,
         };
-        identity(&row, meta).map_err(at)?;
+        identity(&row, meta, &lens).map_err(at)?;
         rows.push(row);
     }
     Ok(RunsFile { rows, partial })
@@ -247,8 +248,9 @@ fn same_value(a: &str, b: &str) -> bool {
 }
 
 /// Checks that a row's point, draw, seed and grid values are those its run index has in the
-/// study `meta` (an edited point or grid value had been merged as it stood).
-fn identity(row: &Row, meta: &StudyMeta) -> Result<(), String> {
+/// study `meta`, whose grid axes have `lens` values (an edited point or grid value had been merged
+/// as it stood).
+fn identity(row: &Row, meta: &StudyMeta, lens: &[usize]) -> Result<(), String> {
     if row.run as u64 >= meta.runs {
         return Err(format!("run: expected a run index below the study's {} runs, found {}", meta.runs, row.run));
     }
@@ -271,8 +273,7 @@ fn identity(row: &Row, meta: &StudyMeta) -> Result<(), String> {
     if row.seed != seed {
         return differs("seed", seed.to_string(), row.seed.to_string());
     }
-    let lens: Vec<usize> = meta.grid.iter().map(|a| a.values.len()).collect();
-    for ((axis, &i), value) in meta.grid.iter().zip(&super::axis_indices(point, &lens)).zip(&row.grid) {
+    for ((axis, &i), value) in meta.grid.iter().zip(&super::axis_indices(point, lens)).zip(&row.grid) {
         match axis.values.get(i) {
             Some(want) if same_value(want, value) => {}
             want => return differs(&axis.key, format!("`{}`", want.map_or("", String::as_str)), format!("`{value}`")),
