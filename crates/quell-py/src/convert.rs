@@ -43,15 +43,13 @@ fn real_array<'py>(obj: &Bound<'py, PyAny>, name: &str, kind: Kind) -> PyResult<
         return Err(type_error(name, "an array-like of real numbers", obj));
     }
     // numpy reads a masked array as its data, masked entries and all: refuse those entries.
-    if obj.is_instance(&np.getattr("ma")?.getattr("MaskedArray")?)? {
-        let masked: usize = np.getattr("ma")?.call_method1("count_masked", (obj,))?.extract()?;
-        if masked > 0 {
-            let entries = if masked == 1 { "entry" } else { "entries" };
-            return Err(kind.err(
-                py,
-                format!("{name}: expected real numbers, found a masked array with {masked} masked {entries}, whose values numpy would pass on as they are; fill them (`.filled(value)`) or pass `.data` if those values are meant"),
-            ));
-        }
+    let masked = masked_entries(&np, obj, 0)?;
+    if masked > 0 {
+        let entries = if masked == 1 { "entry" } else { "entries" };
+        return Err(kind.err(
+            py,
+            format!("{name}: expected real numbers, found a masked array with {masked} masked {entries}, whose values numpy would pass on as they are; fill them (`.filled(value)`) or pass `.data` if those values are meant"),
+        ));
     }
     let arr = np.call_method1("asarray", (obj,)).map_err(|e| {
         // A Ctrl-C (or SystemExit) met while numpy reads a lazy array-like is the user's, not a
@@ -111,6 +109,24 @@ fn real_array<'py>(obj: &Bound<'py, PyAny>, name: &str, kind: Kind) -> PyResult<
         no_bools(obj, &arr, name)?;
     }
     Ok(arr.call_method1("astype", ("float64",))?.cast_into::<PyArrayDyn<f64>>()?)
+}
+
+/// How many masked entries `obj` holds: a masked array's (`np.ma.masked` is one), and those of the
+/// masked arrays within a list or tuple of rows, which numpy reads as their data too. Nesting
+/// deeper than numpy's 64 dimensions is left to numpy's reading, which refuses it.
+fn masked_entries(np: &Bound<'_, PyModule>, obj: &Bound<'_, PyAny>, depth: usize) -> PyResult<usize> {
+    let ma = np.getattr("ma")?;
+    if obj.is_instance(&ma.getattr("MaskedArray")?)? {
+        return ma.call_method1("count_masked", (obj,))?.extract();
+    }
+    if depth >= 64 || !(obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>()) {
+        return Ok(0);
+    }
+    let mut masked = 0;
+    for item in obj.try_iter()? {
+        masked += masked_entries(np, &item?, depth + 1)?;
+    }
+    Ok(masked)
 }
 
 /// Whether every entry of the object array `arr` is a Python int or float (bools are ints here;

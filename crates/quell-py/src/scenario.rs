@@ -166,9 +166,19 @@ fn sample_time_error(py: Python<'_>, t: f64, message: &str) -> PyErr {
 
 /// A ScenarioError with `.key` set to the offending key path.
 pub fn scenario_error(py: Python<'_>, e: &quell::ScenarioError) -> PyErr {
-    let err = Kind::Scenario.err(py, e.to_string());
+    let err = Kind::Scenario.err(py, in_python_calls(e.to_string()));
     let _ = err.value(py).setattr("key", e.key.clone());
     err
+}
+
+/// `message` with the remedy a Python caller has: white noise without a bandwidth is valid in a
+/// sampled-data run, which `sample_time=` of `Scenario`, `Scenario.load` and `Scenario.from_toml`
+/// asks for as `simulation.sample_time` does in a file.
+fn in_python_calls(message: String) -> String {
+    message.replace(
+        "or set simulation.sample_time for white noise",
+        "or pass sample_time=… (simulation.sample_time in a file) for white noise",
+    )
 }
 
 /// A ScenarioError of a call with Python arguments: the message names the argument
@@ -190,7 +200,7 @@ fn values_error(py: Python<'_>, e: &quell::ScenarioError) -> PyErr {
         ("a floating-point number", "a float"),
         ("a boolean", "a bool"),
     ];
-    let message = WORDS.iter().fold(e.to_string(), |m, (toml, python)| m.replace(toml, python));
+    let message = WORDS.iter().fold(in_python_calls(e.to_string()), |m, (toml, python)| m.replace(toml, python));
     if !e.wrong_type {
         return crate::errors::keyed(py, Kind::Scenario, message, Some(e.key.clone()));
     }

@@ -267,8 +267,13 @@ def test_a_sample_time_given_to_load_reads_the_file_as_its_sampled_scenario(tmp_
     without = "\n".join(line for line in keyed.splitlines() if not line.startswith("sample_time"))
     path = tmp_path / "white.toml"
     path.write_text(without)
-    with pytest.raises(quell.ScenarioError, match="noise.bandwidth: missing"):
+    # The message names the argument that makes it valid, not only the file's key.
+    remedy = r"or pass sample_time=… \(simulation.sample_time in a file\) for white noise"
+    with pytest.raises(quell.ScenarioError, match="noise.bandwidth: missing.*" + remedy):
         quell.Scenario.load(path)
+    with pytest.raises(quell.ScenarioError, match=r'^noise\["bandwidth"\]: missing.*' + remedy):
+        paper_from_values(noise={"std": [0.01, 0.01]})
+    assert paper_from_values(noise={"std": [0.01, 0.01]}, sample_time=0.001).noise["bandwidth"] is None
     loaded = quell.Scenario.load(path, sample_time=0.001)
     parsed = quell.Scenario.from_toml(without, sample_time=0.001)
     reference = quell.Scenario.from_toml(keyed)

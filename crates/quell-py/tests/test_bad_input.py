@@ -259,6 +259,13 @@ def test_masked_entries_are_refused_not_read_as_data():
         quell.Plant(A=A_masked, B=B, C=C)
     unmasked = quell.Plant(A=np.ma.masked_array(A), B=B, C=C)
     np.testing.assert_array_equal(unmasked.A, A)
+    # Within a list of rows too (numpy reads those rows as their data), and numpy's masked constant.
+    rows = [np.ma.masked_array(A[0], mask=[True, False, True]), A[1], A[2]]
+    with pytest.raises(quell.ScenarioError, match=r"^A: expected real numbers, found a masked array with 2 masked entries,"):
+        quell.Plant(A=rows, B=B, C=C)
+    with pytest.raises(quell.ScenarioError, match=r"^C: .* with 1 masked entry,"):
+        quell.Plant(A=A, B=B, C=(C[0], [C[1][0], np.ma.masked, C[1][2]]))
+    np.testing.assert_array_equal(quell.Plant(A=[np.ma.masked_array(r) for r in A], B=B, C=C).A, A)
 
 
 def test_a_keyboard_interrupt_while_reading_an_array_goes_on_as_it_is():

@@ -122,7 +122,8 @@ CASES = [
      "simulation.method", None),
     ("sample_time_not_positive", edit((SAMPLED, "sample_time = -0.001")), "simulation.sample_time", None),
     ("sample_time_too_many_steps", edit((SAMPLED, "sample_time = 1e-9")), "simulation.sample_time", None),
-    ("noise_without_bandwidth", edit(append=NOISE), "noise.bandwidth", None),
+    # Python's remedy is the sample_time= argument (test_api), the file's the key.
+    ("noise_without_bandwidth", edit(append=NOISE), "noise.bandwidth", ", or pass sample_time="),
     ("noise_bandwidth_not_positive", edit(append=NOISE + "bandwidth = 0\n"), "noise.bandwidth", None),
     ("noise_count", edit((SAMPLED, "sample_time = 0.001"), append="[noise]\nstd = [0.03]\n"), "noise.std", None),
     ("noise_negative", edit((SAMPLED, "sample_time = 0.001"), append="[noise]\nstd = [0.03, -0.02]\n"),

@@ -164,9 +164,15 @@ fn is_temporary(name: &str) -> bool {
 /// Opens an earlier output at `path` for reading, refused (`InvalidInput`) unless it is a regular
 /// file (followed through links): opening a pipe waits for a writer, and a device such as
 /// /dev/zero never ends (a sweep's runs.csv replaced by either had hung its resumption or taken
-/// 9 GB).
+/// 9 GB). The file is opened without waiting (`O_NONBLOCK`, which a regular file's reads ignore)
+/// and then checked, so a pipe swapped in between a check and the opening cannot block either.
 pub fn open_regular(path: &Path) -> io::Result<std::fs::File> {
-    let meta = std::fs::metadata(path)?;
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, libc::O_NONBLOCK);
+    let file = options.open(path)?;
+    let meta = file.metadata()?;
     if !meta.is_file() {
         let what = if meta.is_dir() { "directory" } else { "device, FIFO or socket" };
         return Err(io::Error::new(
@@ -174,7 +180,7 @@ pub fn open_regular(path: &Path) -> io::Result<std::fs::File> {
             format!("is a {what}, not a regular file as the command that wrote it leaves"),
         ));
     }
-    std::fs::File::open(path)
+    Ok(file)
 }
 
 /// An earlier output's text ([`open_regular`]). Not capped: a sweep of ten million runs writes
@@ -300,6 +306,25 @@ mod tests {
         assert!(!fs::symlink_metadata("/dev/null").unwrap().file_type().is_file());
         write_atomic(&file, |w| w.write_all(b"new")).unwrap();
         assert_eq!(fs::read_to_string(&file).unwrap(), "new");
+    }
+
+    #[test]
+    #[cfg(unix)]
+    fn an_earlier_output_that_is_a_pipe_is_refused_without_waiting_for_a_writer() {
+        // open_regular opens before it checks (so nothing can be swapped in between): the
+        // opening must not wait for the pipe's writer, which never comes. On another thread, so
+        // that a regression fails after ten seconds instead of hanging the suite.
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("runs.csv");
+        let name = std::ffi::CString::new(fifo.as_os_str().as_encoded_bytes()).unwrap();
+        assert_eq!(unsafe { libc::mkfifo(name.as_ptr(), 0o600) }, 0);
+        let (sent, received) = std::sync::mpsc::channel();
+        std::thread::spawn(move || sent.send(read_regular(&fifo).map_err(|e| (e.kind(), e.to_string()))));
+        let (kind, e) = received.recv_timeout(std::time::Duration::from_secs(10)).expect("waited").unwrap_err();
+        assert_eq!(kind, io::ErrorKind::InvalidInput);
+        assert!(e.contains("FIFO"), "{e}");
+        fs::write(dir.path().join("summary.json"), "{}").unwrap();
+        assert_eq!(read_regular(&dir.path().join("summary.json")).unwrap(), "{}");
     }
 
     #[test]
