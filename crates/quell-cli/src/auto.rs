@@ -259,7 +259,8 @@ fn delay_lines(a: &AutoDesign) -> String {
             String::new()
         };
         format!(
-            "the tail bound is met with every true input delay {} longer and shorter{also}",
+            "the tail bound and the effort (max|u_f| within {}× the verified run's) hold with every true input delay {} longer and shorter{also}",
+            quell::auto::EFFORT_GROWTH,
             percent(v.delay_tolerance)
         )
     } else {
@@ -272,8 +273,23 @@ fn delay_lines(a: &AutoDesign) -> String {
             _ => "longer and shorter",
         };
         let least = missed.iter().map(|c| c.error).fold(f64::INFINITY, f64::min);
+        // What was missed, in the order of DelayCheck::missed, each once.
+        let mut what: Vec<String> = Vec::new();
+        for m in missed.iter().flat_map(|c| &c.missed) {
+            let name = match *m {
+                "ended" => "a run to t_end".to_string(),
+                "tail" => "the tail bound".to_string(),
+                "effort" => format!("the effort (max|u_f| within {}× the verified run's)", quell::auto::EFFORT_GROWTH),
+                _ => "the actuator limit".to_string(),
+            };
+            if !what.contains(&name) {
+                what.push(name);
+            }
+        }
+        let verb = if what.len() == 1 { "is" } else { "are" };
         format!(
-            "the tail bound is missed with every true input delay {way} by as little as {}: the method predicts over the delays as given (the paper assumes them known), so measure them that well or better",
+            "{} {verb} missed with every true input delay {way} by as little as {}: the method predicts over the delays as given (the paper assumes them known), so measure them that well or better",
+            what.join(" and "),
             percent(least)
         )
     };
@@ -287,7 +303,11 @@ fn delay_lines(a: &AutoDesign) -> String {
     let unit = a.scenario.plant.time_unit;
     for c in &v.delay_check {
         let head = format!("    ×{} (τ = [{}] {unit})", crate::run::short(c.factor), delays(&c.delays));
-        let flag = if c.met { "" } else { " ⚠" };
+        let flag = match c.met {
+            true => String::new(),
+            false if c.ended.is_some() => " ⚠".to_string(),
+            false => format!(" ⚠ {}", c.missed.join(", ")),
+        };
         let line = match &c.ended {
             Some(why) => format!("{head}: {why}{flag}"),
             None => {

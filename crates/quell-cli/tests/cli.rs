@@ -1758,4 +1758,12 @@ fn the_delay_check_says_when_it_has_nothing_to_check_and_whose_delays_it_scaled(
         "{out}"
     );
     assert!(out.contains("×1.1 (τ = [1.122, 3.19] s)"), "{out}");
+    // A run that completed says what it missed (the summary had blamed the tail bound where only
+    // u_f had grown past twice the verified run's).
+    let flagged: Vec<&str> = out.lines().filter(|l| l.contains("worst tail") && l.contains(" ⚠")).collect();
+    assert!(!flagged.is_empty(), "{out}");
+    for line in flagged {
+        let missed = line.rsplit_once(" ⚠ ").expect("what it missed").1;
+        assert!(missed.split(", ").all(|m| ["tail", "effort", "u_limit"].contains(&m)), "{line}");
+    }
 }

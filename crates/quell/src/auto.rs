@@ -265,8 +265,11 @@ pub struct DelayCheck {
     /// |factor − 1|).
     pub error: f64,
     /// Completed within the tail bound, with max|u_f,i| within [`EFFORT_GROWTH`]× the verified
-    /// run's and within the actuator limits ([`Targets::u_limit`]).
+    /// run's and within the actuator limits ([`Targets::u_limit`]): `missed` is empty.
     pub met: bool,
+    /// What it missed, of "ended" (before t_end, or departing from its continuous loop), "tail",
+    /// "effort" ([`EFFORT_GROWTH`]) and "u_limit", so that a report names the one that failed.
+    pub missed: Vec<&'static str>,
     /// Why the run ended before t_end (diverged, failed), or how it departed from its continuous
     /// loop; `None` when it completed.
     pub ended: Option<String>,
@@ -897,13 +900,16 @@ fn delay_checks(
             let (mut scenario, mut plant) = (s.clone(), truth.clone());
             plant.delays.clone_from(&delays);
             scenario.truth = Some(plant);
-            let ended = |why: String| (Some(why), false, Vec::new(), Vec::new());
-            let (ended, met, tail_max_e, max_uf) = match verifier.check(&scenario, design, speed) {
+            let ended = |why: String| (Some(why), vec!["ended"], Vec::new(), Vec::new());
+            let (ended, missed, tail_max_e, max_uf) = match verifier.check(&scenario, design, speed) {
                 Ok(c) => {
-                    let met = c.tail_within(&verified.bound, 1.0)
-                        && c.effort_within(&verified.max_uf)
-                        && c.within_limit(targets);
-                    (None, met, c.tail_max_e, c.max_uf)
+                    let tests = [
+                        ("tail", c.tail_within(&verified.bound, 1.0)),
+                        ("effort", c.effort_within(&verified.max_uf)),
+                        ("u_limit", c.within_limit(targets)),
+                    ];
+                    let missed = tests.iter().filter(|(_, within)| !within).map(|(what, _)| *what).collect();
+                    (None, missed, c.tail_max_e, c.max_uf)
                 }
                 Err(AutoError::Run(o)) => ended(o.to_string()),
                 Err(AutoError::Departed(how)) => ended(format!("departed from its continuous loop: {how}")),
@@ -913,7 +919,8 @@ fn delay_checks(
             // The error run: the largest relative change of a delay (whole samples move it more).
             let change = delays.iter().zip(&truth.delays).filter(|(_, t)| **t > 0.0).map(|(d, t)| (d / t - 1.0).abs());
             let actual = change.fold(0.0, f64::max);
-            level_checks.push(DelayCheck { factor, delays, error: actual, ended, tail_max_e, max_uf, met });
+            let met = missed.is_empty();
+            level_checks.push(DelayCheck { factor, delays, error: actual, ended, tail_max_e, max_uf, met, missed });
         }
         let both = level_checks.iter().all(|c| c.met);
         let smaller = level_checks.iter().map(|c| c.error).fold(f64::INFINITY, f64::min);

@@ -911,6 +911,36 @@ fn a_zero_at_the_origin_is_refused_and_one_within_rounding_of_the_axis_is_warned
         }
         other => panic!("{other:?}"),
     }
+    // A two-area load-frequency model (non-reheat, Tg = 0.08 s, Tt = 0.3 s, Tp = 20 s, Kp = 120,
+    // R = 2.4, 2πT12 = 0.545) measured by its two frequencies: the tie-line power integrates their
+    // difference, which no output sees, so its zero is at 0 (the Rosenbrock matrix is singular,
+    // checked). Computed as −2.2e-16, it had passed as stable (helper tryout, 2026-12-06).
+    let (a, b) = (
+        "[[-0.05, 6.0, 0.0, 0.0, 0.0, 0.0, -6.0], [0.0, -3.3333333333333335, 3.3333333333333335, 0.0, 0.0, 0.0, 0.0], \
+          [-5.208333333333333, 0.0, -12.5, 0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, -0.05, 6.0, 0.0, 6.0], \
+          [0.0, 0.0, 0.0, 0.0, -3.3333333333333335, 3.3333333333333335, 0.0], \
+          [0.0, 0.0, 0.0, -5.208333333333333, 0.0, -12.5, 0.0], [0.545, 0.0, 0.0, -0.545, 0.0, 0.0, 0.0]]",
+        "[[0.0, 0.0], [0.0, 0.0], [12.5, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 12.5], [0.0, 0.0]]",
+    );
+    let lfc = text(a, b, "[[1.0, 0, 0, 0, 0, 0, 0], [0, 0, 0, 1.0, 0, 0, 0]]")
+        .replace("[-5.0, -6.0, -7.0, -8.0]", "[-3.0, -3.5, -4.0, -4.5, -5.0, -5.5, -6.0]")
+        .replace("[[-2.0], [-3.0]]", "[[-1.0, -1.5, -2.0], [-1.0, -1.5, -2.0]]");
+    let s = quell::scenario::Scenario::from_toml(&lfc).unwrap();
+    let mut rosenbrock = DMatrix::zeros(9, 9);
+    rosenbrock.view_mut((0, 0), (7, 7)).copy_from(&(-&s.plant.A));
+    rosenbrock.view_mut((0, 7), (7, 2)).copy_from(&(-&s.plant.B));
+    rosenbrock.view_mut((7, 0), (2, 7)).copy_from(&s.plant.C);
+    assert!(rosenbrock.determinant().abs() < 1e-12, "{}", rosenbrock.determinant());
+    match s.design() {
+        Err(e @ DesignError::UnstableZeroDynamics { .. }) => {
+            let e = e.to_string();
+            assert!(
+                e.contains(": 0.000000 (per s)") && e.contains("a mode the plant integrates that no output sees"),
+                "{e}"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
     // [[−1, 0.5, 1], [0.3, −2, 0.5], [1, 0.5, z]] with y = x_1, x_2 and u on them: the zero is A_33 = z.
     let near = |z: &str| {
         let three = format!(

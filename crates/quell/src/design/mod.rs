@@ -747,19 +747,20 @@ fn check_zero_dynamics(plant: &Plant, fw: &FalbWolovich) -> Result<Vec<Complex<f
     // needed to count as stable (s² + 1.69 had passed as "max Re λ = 0.00000" and its run grew).
     // A zero within rounding of the origin has no damping to judge (one exactly at 0, computed as
     // −1e-17, had passed, and its run's u_f grew without end).
-    let origin = ORIGIN_ROUNDING * f64::EPSILON * Z.norm();
+    // Within rounding of the origin on Z's scale, or on A's, from which Z is formed (n·ε·‖A‖: a
+    // 1×1 Z of 2.4e-14 from a power system's A of norm 1.8e3 is a zero at 0; one of −2.2e-16 from a
+    // two-area power system's tie-line integrator, ‖A‖ = 18, had passed as a stable zero, and its
+    // tie-line power drifted without end). Z's refinement cannot tell such a zero's sign: the
+    // rounding is in forming Z, not in its eigenvalues.
+    let origin = f64::EPSILON * (ORIGIN_ROUNDING * Z.norm()).max(n as f64 * plant.A.norm());
     let damped = |z: &Complex<f64>| z.re < -AXIS_DAMPING * z.norm() && z.norm() > origin;
-    // Reported as 0: within rounding of the origin on Z's scale, or on A's, from which Z is formed
-    // (n·ε·‖A‖: a 1×1 Z of 2.4e-14 from a power system's A of norm 1.8e3 is a zero at 0). Only the
-    // report: a stable zero that small is judged by its refinement above, whatever A's units.
-    let reported_origin = origin.max(n as f64 * f64::EPSILON * plant.A.norm());
     let settled = || zeros.iter().all(damped) && place::refined_left_half_plane(&Z, &zeros);
     if bad.is_empty() || settled() {
         Ok(bad)
     } else {
         debug_assert_eq!(zeros.len(), n - placed);
         // At the origin to rounding: reported as 0, not as its computed −3e-16.
-        let at = |z: &Complex<f64>| if z.norm() <= reported_origin { Complex::new(0.0, 0.0) } else { *z };
+        let at = |z: &Complex<f64>| if z.norm() <= origin { Complex::new(0.0, 0.0) } else { *z };
         let zeros = zeros.iter().map(at).collect();
         Err(DesignError::UnstableZeroDynamics {
             placed,
