@@ -816,6 +816,11 @@ fn trend((last, before): (f64, f64)) -> Option<f64> {
 
 /// RMS of e_i over the last 10 % of the run and over the 10 % before.
 fn tail_windows(result: &SimResult, i: usize) -> Option<(f64, f64)> {
+    tail_windows_of(result, i, TENTH)
+}
+
+/// RMS of e_i over the last `fraction` of the run and over the `fraction` before.
+fn tail_windows_of(result: &SimResult, i: usize, fraction: f64) -> Option<(f64, f64)> {
     let (t0, t1) = (*result.t.first()?, *result.t.last()?);
     let span = t1 - t0;
     let rms = |from: f64, to: f64| {
@@ -827,21 +832,66 @@ fn tail_windows(result: &SimResult, i: usize) -> Option<(f64, f64)> {
             .fold((0.0, 0usize), |(s, n), (_, e)| (s + e * e, n + 1));
         (count > 0).then(|| (sum / count as f64).sqrt())
     };
-    Some((rms(t1 - 0.1 * span, t1)?, rms(t1 - 0.2 * span, t1 - 0.1 * span)?))
+    let w = fraction * span;
+    Some((rms(t1 - w, t1)?, rms(t1 - 2.0 * w, t1 - w)?))
 }
 
-/// Whether the tail's windows ([`tail_windows`], a tenth of the run each) read a trend, not the
-/// phase of the signals' content: each spans at least [`RESOLVED`] of a period of their slowest
+/// The tail windows' share of the run: a tenth, unless that cannot resolve the signals.
+const TENTH: f64 = 0.1;
+/// Longer windows tried where tenths do not resolve the signals ([`judged_trend`]): two of them
+/// stay within the run's second half.
+const LONGER_WINDOWS: [f64; 3] = [0.15, 0.2, 0.25];
+
+/// A tail's RMS ratio read over two adjacent windows that resolve the signals' content
+/// ([`windows_resolve`]): `ratio` of the last window's RMS (`last`) to the one before, each
+/// `fraction` of the run.
+#[derive(Debug, Clone, Copy)]
+struct Trend {
+    ratio: f64,
+    fraction: f64,
+    last: f64,
+}
+
+impl Trend {
+    /// The ratio over a tenth of the run at the same exponential pace, what the thresholds
+    /// [`SHRINKING`] and [`GROWING`] are for.
+    fn per_tenth(&self) -> f64 {
+        self.ratio.powf(TENTH / self.fraction)
+    }
+
+    /// "over the last two tenths", or the windows' length where they are longer.
+    fn windows(&self, span: f64, unit: TimeUnit) -> String {
+        if self.fraction == TENTH {
+            "over the last two tenths of the run".to_string()
+        } else {
+            let w = fmt_short(format!("{:.3e}", self.fraction * span).parse().unwrap_or(self.fraction * span));
+            format!("over the last two windows of {w} {unit}, each spanning {RESOLVED} of the signals' slowest period")
+        }
+    }
+}
+
+/// Channel i's tail trend over the shortest windows, a tenth of the run or longer
+/// ([`LONGER_WINDOWS`]), that resolve the signals ([`windows_resolve`]); `None` where none does
+/// (a quadrotor's tenths of 500 ms over its 3.1 s reference had read a ratio of 2.10 as growth,
+/// where the run converged), or the earlier window's RMS is 0.
+fn judged_trend(result: &SimResult, i: usize, signals: [&Signal; 2]) -> Option<Trend> {
+    let span = result.t.last().zip(result.t.first()).map_or(0.0, |(t1, t0)| t1 - t0);
+    let fraction = std::iter::once(TENTH).chain(LONGER_WINDOWS).find(|f| windows_resolve(f * span, signals))?;
+    let (last, before) = tail_windows_of(result, i, fraction)?;
+    Some(Trend { ratio: trend((last, before))?, fraction, last })
+}
+
+/// Whether tail windows of length `window` ([`tail_windows_of`]) read a trend, not the phase of
+/// the signals' content: each spans at least [`RESOLVED`] of a period of their slowest
 /// frequency, and no beat of two of their frequencies has a period between [`UNRESOLVED`]
 /// windows and 1/[`RESOLVED`] of one (a beat that slow moves adjacent windows' mean square by
 /// about 2π·window/period at most; over half a period, by 64 %, as a microgrid's 100 ms run read
 /// a bounded ripple as growing, 1.33).
-fn windows_resolve(result: &SimResult, [reference, disturbance]: [&Signal; 2]) -> bool {
+fn windows_resolve(window: f64, [reference, disturbance]: [&Signal; 2]) -> bool {
     let mut ws: Vec<f64> =
         reference.components.iter().chain(&disturbance.components).flat_map(Component::frequencies).collect();
     ws.sort_by(f64::total_cmp);
     ws.dedup();
-    let window = 0.1 * result.t.last().zip(result.t.first()).map_or(0.0, |(t1, t0)| t1 - t0);
     // Gaps Δ with window·Δ/2π in (1/UNRESOLVED, RESOLVED) leave the ratio to the beat's phase.
     let (low, high) = (std::f64::consts::TAU / (UNRESOLVED * window), std::f64::consts::TAU * RESOLVED / window);
     let slow_beat = ws.iter().enumerate().any(|(i, &w)| {
@@ -855,8 +905,6 @@ fn windows_resolve(result: &SimResult, [reference, disturbance]: [&Signal; 2]) -
 const RESOLVED: f64 = 0.75;
 /// A beat whose period is this many windows or more changes adjacent windows' RMS by a few percent.
 const UNRESOLVED: f64 = 20.0;
-/// A tail RMS ratio beyond any beat's reach over unresolved windows: growth, reported anyway.
-const GROWING_ANYWAY: f64 = 2.0;
 
 /// Channel i's scale: the peak of |g_i| over the run, or for a reference that is zero of |e_i|, at
 /// the rows and between them ([`SimResult::peak_error`]: not set by the output step).
@@ -1047,19 +1095,24 @@ fn horizon_advice(
 /// or μ_1 = 32 without the margin, 160 s reached 1.4e-4 of its scale and μ_1 = 32 9e-4; with it
 /// μ_1 = 56, where 60 reaches 3e-5). Wood–Berry's automatic design (tail 8e-3 of its scale) was told only
 /// "raise μ"; twice its μ gave 2.5e-4, four times 2.3e-7.
-fn shrinking_advice(result: &SimResult, i: usize, r: f64, (mu, lambda_max, stiff): (f64, f64, Option<f64>)) -> String {
+fn shrinking_advice(
+    result: &SimResult,
+    i: usize,
+    r: &Trend,
+    (mu, lambda_max, stiff): (f64, f64, Option<f64>),
+) -> String {
     let key = format!("design.mu[{i}]");
     let unit = result.time_unit;
     let (t0, t1) = (result.t.first().copied().unwrap_or(0.0), result.t.last().copied().unwrap_or(0.0));
-    let last = tail_windows(result, i).map_or(0.0, |w| w.0);
-    // e-folds per unit of time between the windows' centres, a tenth of the run apart.
-    let rate = -r.ln() / (0.1 * (t1 - t0));
+    let last = r.last;
+    // e-folds per unit of time between the windows' centres, a window apart.
+    let rate = -r.ratio.ln() / (r.fraction * (t1 - t0));
     // A third of the level at which the advice stops, so that following it does not land on the
     // threshold and bring the line back with a slightly longer t_end.
     let aim = NEGLIGIBLE / 3.0;
     let needed = (last / (aim * scale(result, i))).ln().max(0.0) / rate;
     let t_needed = round_up_2(t1 + needed);
-    let head = format!("channel {}{SHRINKING_WORDS} (RMS ratio {r:.2} between the last two tenths of the run)", i + 1);
+    let head = format!("channel {}{SHRINKING_WORDS} (RMS ratio {:.2} {})", i + 1, r.ratio, r.windows(t1 - t0, unit));
     if !(t_needed.is_finite() && t_needed > t1 && t_needed <= MAX_HORIZON_RATIO * t1) {
         return format!("{head}: lengthen simulation.t_end or raise {key}");
     }
@@ -1113,19 +1166,19 @@ fn stalled_advice(
     result: &SimResult,
     c: &ChannelAverage,
     (i, mu): (usize, f64),
-    (last, trend): (f64, Option<f64>),
+    (last, trend): (f64, Option<&Trend>),
     t_end: f64,
 ) -> Option<String> {
     let level = last / scale(result, i);
     let relevant = c.slowest_relevant(NEGLIGIBLE * NEGLIGIBLE);
     let slow = relevant.is_finite() && mu * relevant * t_end < CONVERGED_EFOLDS;
     // Flat: a ratio read over windows that resolve the signals, neither shrinking nor growing.
-    let flat = trend.is_some_and(|r| (SHRINKING..=GROWING).contains(&r));
+    let flat = trend.is_some_and(|r| (SHRINKING..=GROWING).contains(&r.per_tenth()));
     if !(level >= NEGLIGIBLE && flat && slow) {
         return None;
     }
     let unit = result.time_unit;
-    let ratio = trend.map_or(String::new(), |r| format!(" (RMS ratio {r:.2} over the last two tenths)"));
+    let ratio = trend.map_or(String::new(), |r| format!(" (RMS ratio {:.2} {})", r.ratio, r.windows(t_end, unit)));
     Some(format!(
         "channel {}'s tail has stalled at {level:.1e} of its scale{ratio}, within the {:.0} % tail bound an automatic design verifies: the directions of its internal model that matter at that level decay with time constant 1/(μλ) = {:.1e} {unit}, {CONVERGED_EFOLDS:.0} of which converge them, against t_end = {} {unit}; to go lower, raise design.mu[{i}] (watch max|u_f|, which rises with it) or lengthen simulation.t_end, comparing runs (a tuning over μ, docs/tuning.md, does that): no μ is offered, since the averaged law that would set one misjudges directions at this level",
         i + 1,
@@ -1148,9 +1201,9 @@ fn channel(
     let key = format!("design.mu[{i}]");
     let windows = tail_windows(result, i);
     let trend = windows.and_then(trend);
-    // The trend read for advice only where each window spans the signals' slowest beat: a
+    // The trend read for advice only over windows that span the signals' slowest beat: a
     // microgrid's windows of 10 ms, half its 20 ms beat, read a bounded ripple as growing (1.33).
-    let judged = trend.filter(|&r| r > GROWING_ANYWAY || windows_resolve(result, remedy.signals));
+    let judged = judged_trend(result, i, remedy.signals);
     let unit = design.plant().time_unit;
     // A run that ended early (diverged, failed, interrupted) says nothing of its horizon: advice
     // on t_end and on μ against it would take the time it ended at for the horizon.
@@ -1170,7 +1223,7 @@ fn channel(
     // a 0.1 V ripple over 500 ms with no word; the μ the averaged law gave it raised max|u_f| 12×
     // and left the ripple as it was).
     let stalled = (horizon_advice && !missed && delay.is_none())
-        .then(|| windows.and_then(|(last, _)| stalled_advice(result, c, (i, mu), (last, judged), t_end)))
+        .then(|| windows.and_then(|(last, _)| stalled_advice(result, c, (i, mu), (last, judged.as_ref()), t_end)))
         .flatten();
     // The slow direction's μ, where given, is the one to follow: the tail's extrapolated μ beside
     // it named another (a ship: 3.6 and 0.36). Nor is a tail extrapolated while the filters' own
@@ -1184,8 +1237,8 @@ fn channel(
     advice.extend(slow);
     advice.extend(stalled);
     match judged.filter(|_| horizon_advice && windows.is_some_and(|(last, _)| !negligible_tail(result, i, last))) {
-        Some(r) if r < SHRINKING && extrapolate => {
-            let mut line = shrinking_advice(result, i, r, (mu, c.lambda_max(), offer_mu.then_some(stiff)));
+        Some(r) if r.per_tenth() < SHRINKING && extrapolate => {
+            let mut line = shrinking_advice(result, i, &r, (mu, c.lambda_max(), offer_mu.then_some(stiff)));
             // Within the bound an automatic design verifies, the run's own 1e-4 is a choice: a
             // CSTR that design had passed was asked for 570 min more without a word of it.
             if !missed {
@@ -1193,9 +1246,11 @@ fn channel(
             }
             advice.push(line)
         }
-        Some(r) if r > GROWING => advice.push(format!(
-            "channel {}'s error grows over the tail (RMS ratio {r:.2}): check the run for divergence; a model error ([truth]) or a too large {key} can do this",
-            i + 1
+        Some(r) if r.per_tenth() > GROWING => advice.push(format!(
+            "channel {}'s error grows over the tail (RMS ratio {:.2} {}): check the run for divergence; a model error ([truth]) or a too large {key} can do this",
+            i + 1,
+            r.ratio,
+            r.windows(t_end, unit)
         )),
         _ => {}
     }
@@ -1334,21 +1389,35 @@ mod tests {
         }
     }
 
-    /// The paper's signals: frequencies 1 and 2 rad/s, beating at 1 rad/s. A run of 40 s has
-    /// windows of 4 s, 0.64 of the period 2π s, so its RMS ratio gets no advice (it is still
-    /// reported) unless beyond 2, which no beat reaches; one of 48 s (windows of 4.8 s, 0.76 of a
-    /// period) does.
+    /// The paper's signals: frequencies 1 and 2 rad/s, beating at 1 rad/s. A run of 48 s has
+    /// windows of 4.8 s, 0.76 of the period 2π s, and its tenths' ratio is advised on; one of 40 s
+    /// has tenths of 4 s (0.64 of the period), so its trend is read over two windows of 6 s (0.15
+    /// of the run, 0.95 of the period): exp(6/8) = 2.12 for e = e^(t/8) (the tenths' e^0.5 is still
+    /// reported). One of 11 s resolves the period with no window up to a quarter of the run, so a
+    /// bounded wave e = sin t, whose tenths read 2.64, gets no advice (a quadrotor's tenths of 0.5 s
+    /// over its 3.1 s reference had read 2.10 as growth where the run converged).
     #[test]
     fn a_trend_is_advised_on_only_over_windows_that_span_the_slowest_beat() {
+        for c in diagnosed_over(48.0, PAPER_EXAMPLE, 1.0, |t| 1e-3 * (t / 9.6).exp()).channels {
+            assert!(
+                trend_advice(&c)[0].contains("grows over the tail (RMS ratio 1.65 over the last two tenths"),
+                "{:?}",
+                c.advice
+            );
+        }
         for c in diagnosed_over(40.0, PAPER_EXAMPLE, 1.0, |t| 1e-3 * (t / 8.0).exp()).channels {
             assert!((c.tail_trend.unwrap() - 0.5f64.exp()).abs() < 1e-12, "{:?}", c.tail_trend);
+            let expected = "grows over the tail (RMS ratio 2.12 over the last two windows of 6 s, each spanning 0.75 of the signals' slowest period)";
+            assert!(trend_advice(&c)[0].contains(expected), "{:?}", c.advice);
+        }
+        for c in diagnosed_over(11.0, PAPER_EXAMPLE, 1.0, |t| 0.01 * t.sin()).channels {
+            assert!(c.tail_trend.unwrap() > 2.5, "{:?}", c.tail_trend);
             assert!(trend_advice(&c).is_empty(), "{:?}", c.advice);
         }
-        for c in diagnosed_over(40.0, PAPER_EXAMPLE, 1.0, |t| 1e-3 * (t / 4.0).exp()).channels {
-            assert!(trend_advice(&c)[0].contains("grows over the tail (RMS ratio 2.72"), "{:?}", c.advice);
-        }
-        for c in diagnosed_over(48.0, PAPER_EXAMPLE, 1.0, |t| 1e-3 * (t / 9.6).exp()).channels {
-            assert!(trend_advice(&c)[0].contains("grows over the tail"), "{:?}", c.advice);
+        // Growth that windows up to a quarter of the run cannot resolve is not advised on either:
+        // the run's tail or its divergence says it.
+        for c in diagnosed_over(11.0, PAPER_EXAMPLE, 1.0, |t| 1e-3 * t.exp()).channels {
+            assert!(trend_advice(&c).is_empty(), "{:?}", c.advice);
         }
     }
 
@@ -1372,14 +1441,14 @@ mod tests {
             r.push(&Sample { t: k as f64, y: &[0.0], g: &[0.0], u: &[0.0], u_f: &[0.0], eta: &[0.0], states: None });
         }
         let none = Signal::default();
-        assert!(windows_resolve(&r, [&signal(&[1.0, 1.0001]), &none]));
-        assert!(windows_resolve(&r, [&signal(&[1.0, 1.05]), &none]));
-        assert!(!windows_resolve(&r, [&signal(&[1.0, 1.02]), &none]));
-        assert!(!windows_resolve(&r, [&signal(&[0.01]), &none]), "slowest frequency: 100 s is 0.16 of its period");
+        assert!(windows_resolve(100.0, [&signal(&[1.0, 1.0001]), &none]));
+        assert!(windows_resolve(100.0, [&signal(&[1.0, 1.05]), &none]));
+        assert!(!windows_resolve(100.0, [&signal(&[1.0, 1.02]), &none]));
+        assert!(!windows_resolve(100.0, [&signal(&[0.01]), &none]), "slowest frequency: 100 s is 0.16 of its period");
         // A harmonic of amplitude 0 is not there.
         let mut zero = signal(&[1.0, 1.02]);
         zero.components[0].harmonics[1].amplitude = 0.0;
-        assert!(windows_resolve(&r, [&zero, &none]));
+        assert!(windows_resolve(100.0, [&zero, &none]));
     }
 
     /// A flat tail within the 1 % bound but above 1e-4 of its scale is explained where μ is too
@@ -1415,9 +1484,13 @@ mod tests {
         for c in diagnosed(&slow, 1.0, |t| 4e-3 * ((t - 100.0) / 20.0).exp()).channels {
             assert!(!stalled(&c) && trend_advice(&c)[0].contains("grows over the tail"), "growing: {:?}", c.advice);
         }
-        // Over windows that do not resolve the signals (40 s: 0.64 of the 2π s period), no trend.
-        for c in diagnosed_over(40.0, &slow, 1.0, |_| 0.005).channels {
+        // Over windows that do not resolve the signals (11 s: a quarter of it is 0.44 of the 2π s
+        // period), no trend; over 40 s, windows of 6 s (0.15 of the run) resolve it.
+        for c in diagnosed_over(11.0, &slow, 1.0, |_| 0.005).channels {
             assert!(!stalled(&c), "unresolved: {:?}", c.advice);
+        }
+        for c in diagnosed_over(40.0, &slow, 1.0, |_| 0.005).channels {
+            assert!(stalled(&c), "resolved over longer windows: {:?}", c.advice);
         }
         for c in diagnosed(&slow, 1.0, |_| 0.1).channels {
             assert!(!stalled(&c), "outside the bound: {:?}", c.advice);
