@@ -516,6 +516,9 @@ fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
     let mut rows: Vec<Row> = shards.into_iter().flat_map(|(_, (_, rows, _))| rows).collect();
     rows.sort_by_key(|r| r.run);
     let meta = StudyMeta { shard: Shard::ALL, ..first };
+    // As for a new sweep: an interrupted sweep's rows there are refused, not replaced (a merge had
+    // overwritten them, and the journal beside them then belonged to no result).
+    unfinished_in_the_way(out, &meta)?;
     prepare_out(out, OUTPUTS)?;
     write_all(out, &meta, &rows, false, plots)?;
     let shards = if count == 1 { "shard" } else { "shards" };

@@ -197,6 +197,14 @@ fn ctrl_c_writes_the_rows_done_marked_partial() {
         assert!(stderr(&again).contains(&want), "{}", stderr(&again));
         assert_eq!(fs::read_to_string(out.join("runs.csv")).unwrap(), csv);
     }
+    // So is a merge of complete shards into it (it had replaced the rows; hostile review).
+    let shard = dir.join("shard");
+    let o = quell(&["sweep", &other, "--shard", "0/1", "--no-plots", "--out", shard.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let merged = quell(&["sweep", "--merge", shard.to_str().unwrap(), "--no-plots", "--out", out.to_str().unwrap()]);
+    assert_eq!(merged.status.code(), Some(2), "{}", stderr(&merged));
+    assert!(stderr(&merged).contains("holds an unfinished sweep ("), "{}", stderr(&merged));
+    assert_eq!(fs::read_to_string(out.join("runs.csv")).unwrap(), csv);
     // Without a readable summary.json (a kill between the two renames, or a damaged file),
     // runs.csv's last line tells (a garbled summary.json had let the rows be replaced).
     fs::write(out.join("summary.json"), "garbage").unwrap();
