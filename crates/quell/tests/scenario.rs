@@ -464,6 +464,18 @@ fn control_character_in_a_name() {
     let named = PAPER_EXAMPLE.replacen("name = \"paper-example\"", "name = \"a\\u0000b\"", 1);
     let e = Scenario::from_toml(&named).unwrap_err();
     assert_eq!(e.key, "name", "{e}");
+    // Unicode's noncharacters: U+FFFE and U+FFFF are not XML, and an FMU's model description with
+    // one was refused by its importer (hostile review).
+    for c in ["\\uFFFE", "\\uFFFF", "\\uFDD0", "\\U0010FFFF"] {
+        let named = PAPER_EXAMPLE.replacen("name = \"paper-example\"", &format!("name = \"ctl{c}\""), 1);
+        let e = Scenario::from_toml(&named).unwrap_err();
+        assert!(e.key == "name" && e.to_string().ends_with("remove the noncharacter"), "{e}");
+        let e = Scenario::from_toml(&with(&[(X0, &format!("{X0}\noutputs = [\"a{c}\", \"b\"]"))])).unwrap_err();
+        assert!(e.key == "plant.outputs[0]" && e.to_string().ends_with("remove the noncharacter"), "{e}");
+    }
+    // Other characters beyond ASCII are names like any.
+    let named = PAPER_EXAMPLE.replacen("name = \"paper-example\"", "name = \"Regelkreis \\uFFFD\\u00e9\\U0001F600\"", 1);
+    assert!(Scenario::from_toml(&named).is_ok());
 }
 
 #[test]

@@ -66,10 +66,14 @@ impl SignalNames {
 }
 
 /// The message for a name holding a control character (a line break, a tab, NUL), which would break
-/// the lines and columns it labels; `None` for a printable name.
+/// the lines and columns it labels, or a Unicode noncharacter (U+FFFE, U+FFFF, U+FDD0–U+FDEF and
+/// the last two of every plane), which no text may carry (U+FFFE and U+FFFF are not XML: an FMU's
+/// model description with one is refused by every importer); `None` for a printable name.
 pub(crate) fn control_character(name: &str) -> Option<String> {
-    name.chars().find(|c| c.is_control()).map(|c| {
-        format!("expected printable characters, found {name:?} (with {c:?}); a name labels lines, columns and files: remove the control character")
+    let noncharacter = |c: char| matches!(c as u32, 0xFDD0..=0xFDEF) || (c as u32 & 0xFFFE) == 0xFFFE;
+    name.chars().find(|&c| c.is_control() || noncharacter(c)).map(|c| {
+        let what = if c.is_control() { "control character" } else { "noncharacter" };
+        format!("expected printable characters, found {name:?} (with {c:?}); a name labels lines, columns and files: remove the {what}")
     })
 }
 
