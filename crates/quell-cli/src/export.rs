@@ -76,21 +76,31 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
         None
     };
     let out = &args.out;
-    output::prepare_out(out, &[&code.header_name, &code.source_name])?;
-    // Both files are written before either is renamed into place: a failed write never leaves a
-    // new header beside an old source (a mismatched pair would not compile anyway: LAYOUT_ID).
-    let files =
-        [(out.join(&code.header_name), code.header.as_bytes()), (out.join(&code.source_name), code.source.as_bytes())];
+    let fmu_name = format!("{}.fmu", options.prefix);
+    output::prepare_out(out, &[&code.header_name, &code.source_name, &fmu_name])?;
+    // Every file is written before any is renamed into place: a failed write never leaves a new
+    // header beside an old source (a mismatched pair would not compile anyway: LAYOUT_ID), nor an
+    // FMU of another sample time beside them.
+    let mut files = vec![
+        (out.join(&code.header_name), code.header.as_bytes()),
+        (out.join(&code.source_name), code.source.as_bytes()),
+    ];
+    files.extend(fmu.as_ref().map(|f| (out.join(&f.file_name), f.bytes.as_slice())));
+    let names = files.iter().filter_map(|(p, _)| p.file_name()).map(|n| n.to_string_lossy()).collect::<Vec<_>>();
     output::write_atomic_all(&files).map_err(|e| {
-        let what = format!("writing {} and {} in {}: {e}", code.header_name, code.source_name, out.display());
+        let what = format!("writing {} in {}: {e}", names.join(", "), out.display());
         output::write_failure(what, &e)
     })?;
-    if let Some(fmu) = &fmu {
-        let path = out.join(&fmu.file_name);
-        output::write_atomic(&path, |w| w.write_all(&fmu.bytes))
-            .map_err(|e| output::write_failure(format!("writing {}: {e}", path.display()), &e))?;
-        let binary = fmu.platform.map(|p| format!("binary for {p}")).unwrap_or_else(|| "sources only".into());
-        eprintln!("wrote {} in {} (FMI {} co-simulation, {binary})", fmu.file_name, out.display(), fmu.version.name());
+    match &fmu {
+        Some(fmu) => {
+            let binary = fmu.platform.map(|p| format!("binary for {p}")).unwrap_or_else(|| "sources only".into());
+            eprintln!("wrote {} in {} (FMI {} co-simulation, {binary})", fmu.file_name, out.display(), fmu.version.name());
+        }
+        None => match quell::export::remove_earlier_fmu(out, &options.prefix) {
+            Ok(Some(_)) => eprintln!("removed {fmu_name} from {}: an earlier export's, which this code replaces (add --fmu to write it again)", out.display()),
+            Ok(None) => {}
+            Err(e) => return Err(output::write_failure(format!("removing the earlier {fmu_name} in {}: {e}", out.display()), &e)),
+        },
     }
     eprintln!(
         "wrote {} and {} in {} (T_s = {sample_time} {}, {}; {} bytes of constants, {} bytes of state)",

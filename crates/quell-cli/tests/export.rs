@@ -203,6 +203,14 @@ fn export_fmu_writes_one_archive_or_fails_with_1() {
         assert!(text.contains(name), "{name} is missing from the FMI 3.0 archive");
     }
     assert!(!text.contains("sources/fmi3Functions.h"), "FMI 3.0 has the importer supply the headers");
+    // The C alone at another sample time: the earlier FMU, of 0.05, goes, said so (it had stayed
+    // beside code of 0.1; hostile review); another prefix's is left alone.
+    std::fs::write(dir.join("other.fmu"), "not ours").unwrap();
+    let o = quell(&["export", &three, "--sample-time", "0.1", "--out", &out, "--prefix", "plant3"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("removed plant3.fmu from"), "{}", stderr(&o));
+    assert!(!dir.join("plant3.fmu").exists() && dir.join("other.fmu").exists());
+    assert!(std::fs::read_to_string(dir.join("plant3_controller.h")).unwrap().contains("0.1"));
     let o = quell(&["export", &three, "--sample-time", "0.05", "--out", &out, "--fmu", "--fmi-version", "4"]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("--fmi-version"), "{}", stderr(&o));

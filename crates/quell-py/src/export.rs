@@ -193,5 +193,18 @@ pub fn export(
     // files together, never a new header beside an old source.
     quell::files::write_atomic_all(&files)
         .map_err(|e| pyo3::exceptions::PyOSError::new_err(format!("out: writing in {} failed ({e})", out.display())))?;
+    if fmu.is_none() {
+        let removed = quell::export::remove_earlier_fmu(&out, &options.prefix).map_err(|e| {
+            pyo3::exceptions::PyOSError::new_err(format!(
+                "out: removing the earlier {}.fmu in {} failed ({e})",
+                options.prefix,
+                out.display()
+            ))
+        })?;
+        if let Some(path) = removed {
+            let name = path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default();
+            crate::errors::warn(py, &format!("out: removed {name}, an earlier export's, which this code replaces (pass fmu=True to write it again)"))?;
+        }
+    }
     Ok(files.into_iter().map(|(path, _)| path).collect())
 }

@@ -213,6 +213,13 @@ def test_source_only_fmu(tmp_path, version):
     mode = lambda p: p.stat().st_mode & 0o777  # noqa: E731
     assert [mode(p) for p in written] == [mode(created)] * 3
     assert sorted(p.name for p in tmp_path.iterdir()) == ["created", "quell.fmu", "quell_controller.c", "quell_controller.h"]
+    # The C alone at another sample time removes that FMU, with a warning (it had stayed beside
+    # code it no longer matched); another prefix's export leaves it.
+    quell.export(scenario, 0.1, out=tmp_path, prefix="other")
+    assert (tmp_path / "quell.fmu").exists()
+    with pytest.warns(UserWarning, match=r"^out: removed quell.fmu, an earlier export's"):
+        quell.export(scenario, 0.1, out=tmp_path)
+    assert not (tmp_path / "quell.fmu").exists()
 
 
 def test_bad_arguments(tmp_path):

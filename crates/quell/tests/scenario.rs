@@ -474,7 +474,8 @@ fn control_character_in_a_name() {
         assert!(e.key == "plant.outputs[0]" && e.to_string().ends_with("remove the noncharacter"), "{e}");
     }
     // Other characters beyond ASCII are names like any.
-    let named = PAPER_EXAMPLE.replacen("name = \"paper-example\"", "name = \"Regelkreis \\uFFFD\\u00e9\\U0001F600\"", 1);
+    let named =
+        PAPER_EXAMPLE.replacen("name = \"paper-example\"", "name = \"Regelkreis \\uFFFD\\u00e9\\U0001F600\"", 1);
     assert!(Scenario::from_toml(&named).is_ok());
 }
 

@@ -123,6 +123,21 @@ pub struct Fmu {
     pub version: FmiVersion,
 }
 
+/// Removes the FMU `<prefix>.fmu` an earlier export left in `dir`, for an export of the C alone: it
+/// would stand beside code it no longer matches (another sample time, another design; hostile
+/// review, 2026-12-06), as a run's earlier figures would beside new data. Returns its path when
+/// there was one; anything but a regular file there is left alone (the export's own checks refuse
+/// to write beside it).
+pub fn remove_earlier_fmu(dir: &std::path::Path, prefix: &str) -> std::io::Result<Option<std::path::PathBuf>> {
+    let path = dir.join(format!("{prefix}.fmu"));
+    match std::fs::symlink_metadata(&path) {
+        Ok(meta) if meta.is_file() => std::fs::remove_file(&path).map(|()| Some(path)),
+        Ok(_) => Ok(None),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+        Err(e) => Err(e),
+    }
+}
+
 /// For an FMI 2.0 FMU of a plant not in seconds, the caution that FMI 2.0 has no unit of time: an
 /// importer reads the FMU's times in seconds, so a master stepping at the sample time runs the
 /// controller that many times slow or fast (a maglev written in ms, stepped at 0.1 s, 1000× slow;
