@@ -101,6 +101,17 @@ fn on_signal(phase: &AtomicU8) -> Option<Said> {
     }
 }
 
+/// Ignores SIGXFSZ, so that a write past the file-size limit (`ulimit -f`) fails as a full disk
+/// does, with "File too large" and exit status 1, keeping the earlier results, instead of killing
+/// quell mid-write with no word (as Python, which ignores it too, already did).
+pub fn ignore_file_size_signal() {
+    // SAFETY: sets a disposition, no handler code.
+    #[cfg(unix)]
+    unsafe {
+        libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+    }
+}
+
 /// Runs `install` (which handles SIGINT, SIGTERM and SIGHUP) and, where SIGINT was ignored when it
 /// ran, ignores it again: a shell without job control starts `quell sweep … &` with SIGINT ignored,
 /// so that Ctrl-C at the terminal spares background work, and the handler took that back (POSIX

@@ -76,6 +76,7 @@ pub(crate) enum Failure {
 }
 
 fn main() -> ExitCode {
+    interrupt::ignore_file_size_signal();
     let cli = Cli::parse();
     // Only a flag given is named beside the key its value sets (a file's value had been blamed on
     // the flag).

@@ -506,3 +506,31 @@ fn a_closed_stderr_loses_the_messages_not_the_work() {
         assert!(Path::new(out).join(file).is_file(), "{args:?}: {:?}", names(Path::new(out)));
     }
 }
+
+/// A write past the file-size limit (`ulimit -f`) fails as a full disk does: exit 1 naming the
+/// file and "File too large", the earlier run's files kept and no temporary file left (SIGXFSZ had
+/// killed quell with status 153 and no word; hostile review, 2026-12-06).
+#[test]
+#[cfg(unix)]
+fn a_write_past_the_file_size_limit_is_an_error_not_a_kill() {
+    let dir = TempDir::new().unwrap();
+    let out = dir.path().join("run");
+    let o = quell(&["run", &paper(), "--out", out.to_str().unwrap(), "--no-plots", "--t-end", "5"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let before = fs::read(out.join("signals.csv")).unwrap();
+    // 200 blocks of 512 bytes: the 100 s run's signals.csv (about 300 kB) does not fit.
+    let limited = Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "ulimit -f 200 && exec {} run {} --out {} --no-plots",
+            env!("CARGO_BIN_EXE_quell"),
+            paper(),
+            out.display()
+        ))
+        .output()
+        .unwrap();
+    assert_eq!(limited.status.code(), Some(1), "{}", stderr(&limited));
+    assert!(stderr(&limited).contains("File too large"), "{}", stderr(&limited));
+    assert_eq!(fs::read(out.join("signals.csv")).unwrap(), before);
+    assert_eq!(names(&out), ["design.json", "signals.csv", "summary.json"]);
+}
