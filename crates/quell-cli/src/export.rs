@@ -70,7 +70,11 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
     let fmu = if args.fmu {
         let (compiler, from_env) = quell::export::compiler_choice(args.compiler.clone());
         let version: FmiVersion = args.fmi_version.parse().map_err(export_failure)?;
-        let fmu = generate_fmu(&design, sample_time, &options, compiler.as_deref(), version);
+        // A signal stops the compiler with what it started, and its temporary directory goes.
+        let ctrl_c = crate::interrupt::Interrupt::install("interrupted twice; stopped without writing");
+        let fmu = quell::cancel::with_stop(ctrl_c.shared_flag(), || {
+            generate_fmu(&design, sample_time, &options, compiler.as_deref(), version)
+        });
         Some(fmu.map_err(|e| failure_naming(e, from_env))?)
     } else {
         None
@@ -129,7 +133,7 @@ fn export_failure(e: ExportError) -> Failure {
 fn failure_naming(e: ExportError, from_env: bool) -> Failure {
     let message = quell::export::compiler_message(&e, from_env);
     match e {
-        ExportError::Compiler { .. } | ExportError::Archive { .. } => Failure::Run(message),
+        ExportError::Compiler { .. } | ExportError::Archive { .. } | ExportError::Interrupted => Failure::Run(message),
         _ => Failure::Input(message),
     }
 }

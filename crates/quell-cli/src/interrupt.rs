@@ -66,6 +66,11 @@ impl Interrupt {
         &self.stop
     }
 
+    /// The same flag, shared: what [`quell::cancel::with_stop`] takes.
+    pub fn shared_flag(&self) -> Arc<AtomicBool> {
+        self.stop.clone()
+    }
+
     /// From here on signals are ignored until the files are written (unless a second one is
     /// already quitting the process).
     pub fn start_writing(&self) {

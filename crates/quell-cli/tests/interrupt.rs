@@ -225,3 +225,55 @@ fn an_ignored_sigint_stays_ignored_and_sigterm_still_stops_the_run() {
     assert!(stderr.contains("interrupted at t = "), "{stderr}");
     assert_eq!(check_outputs(&out)["outcome"]["status"], "interrupted");
 }
+
+/// A signal while the FMU's compiler runs stops it with the processes it started and removes its
+/// temporary directory; quell exits 1 saying so and writes nothing (the compiler had run on,
+/// orphaned, and its directory of sources had stayed in the temporary directory; hostile review,
+/// 2026-12-06).
+#[test]
+#[cfg(unix)]
+fn a_signal_during_the_fmu_build_stops_the_compiler_and_leaves_nothing() {
+    use std::os::unix::fs::PermissionsExt as _;
+    let dir_tmp = scratch_dir("fmu-signal");
+    let dir = dir_tmp.path();
+    let temporary = dir.join("tmp");
+    std::fs::create_dir(&temporary).unwrap();
+    let (pid_file, compiler) = (dir.join("cc.pid"), dir.join("slow-cc"));
+    // A compiler that runs a child without exec, writing the child's pid when it has started.
+    std::fs::write(&compiler, format!("#!/bin/sh\nsleep 60 &\necho $! > {}\nwait\n", pid_file.display())).unwrap();
+    std::fs::set_permissions(&compiler, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let scenario = paper_with(dir, &[]);
+    let out = dir.join("out");
+    let child = Command::new(env!("CARGO_BIN_EXE_quell"))
+        .args(["export", scenario.to_str().unwrap(), "--sample-time", "0.05", "--fmu", "--compiler"])
+        .arg(&compiler)
+        .arg("--out")
+        .arg(&out)
+        .env("TMPDIR", &temporary)
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start quell");
+    let waited = std::time::Instant::now();
+    while !pid_file.exists() || std::fs::read_to_string(&pid_file).unwrap().trim().is_empty() {
+        assert!(waited.elapsed() < Duration::from_secs(30), "the compiler never started");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let status = Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap();
+    assert!(status.success());
+    let output = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("interrupted while the compiler built the FMU; it was stopped and nothing was written"),
+        "{stderr}"
+    );
+    let pid = std::fs::read_to_string(&pid_file).unwrap().trim().to_string();
+    let alive = || Command::new("kill").args(["-0", &pid]).stderr(Stdio::null()).status().unwrap().success();
+    let start = std::time::Instant::now();
+    while alive() && start.elapsed() < Duration::from_secs(5) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert!(!alive(), "the compiler's child {pid} still runs");
+    assert_eq!(std::fs::read_dir(&temporary).unwrap().count(), 0, "a temporary directory was left");
+    assert!(!out.join("quell.fmu").exists() && !out.join("quell_controller.c").exists());
+}

@@ -167,14 +167,13 @@ pub fn export(
         _ => Kind::Export.err(py, message(&e)),
     };
     let out = out.filter(|o| !o.is_none()).map(|o| crate::convert::path(o, "out")).transpose()?;
-    let (code, archive) = py
-        .detach(|| -> Result<_, ExportError> {
-            let code = generate(&design, T, &options)?;
-            let archive =
-                fmu.as_ref().map(|(v, cc)| generate_fmu(&design, T, &options, cc.as_deref(), *v)).transpose()?;
-            Ok((code, archive))
-        })
-        .map_err(raise)?;
+    // Ctrl-C stops the compiler with what it started and raises KeyboardInterrupt.
+    let (code, archive) = crate::interrupt::interruptible(py, || -> Result<_, ExportError> {
+        let code = generate(&design, T, &options)?;
+        let archive = fmu.as_ref().map(|(v, cc)| generate_fmu(&design, T, &options, cc.as_deref(), *v)).transpose()?;
+        Ok((code, archive))
+    })?
+    .map_err(raise)?;
     crate::errors::warn_coarse_sample(py, &design, &signals.0, &signals.1, T, None)?;
     let unit = archive.as_ref().and_then(|a| quell::export::time_unit_warning(&design, T, a.version));
     for w in code.warnings().chain(unit) {

@@ -352,3 +352,42 @@ def test_fmi3_calls_one_by_one(tmp_path):
     with pytest.raises(Exception, match="Failed to instantiate"):
         events.instantiate(eventModeUsed=True, logMessage=lambda env, s, c, message: logged.append(message.decode()))
     assert "this FMU has no event mode (hasEventMode is false)" in logged[-1]
+
+
+def test_ctrl_c_during_the_fmu_build_stops_the_compiler(tmp_path, python_child):
+    """SIGINT while the FMU's compiler runs raises KeyboardInterrupt at once and stops the compiler
+    with the processes it started, leaving no temporary directory (it had run to its end; hostile
+    review, 2026-12-06)."""
+    import os
+    import signal
+    import time
+
+    pid_file, compiler, temporary = tmp_path / "cc.pid", tmp_path / "slow-cc", tmp_path / "tmp"
+    temporary.mkdir()
+    compiler.write_text(f"#!/bin/sh\nsleep 60 &\necho $! > {pid_file}\nwait\n")
+    compiler.chmod(0o755)
+    code = (
+        f"import os\nos.environ['TMPDIR'] = {str(temporary)!r}\nimport quell\nprint('ready', flush=True)\n"
+        f"try:\n    quell.export(quell.paper_example(), 0.05, out={str(tmp_path / 'out')!r}, fmu=True, compiler={str(compiler)!r})\n"
+        "except KeyboardInterrupt:\n    print('interrupted', flush=True)\n"
+    )
+    child = python_child(code)
+    start = time.monotonic()
+    while not (pid_file.exists() and pid_file.read_text().strip()):
+        assert time.monotonic() - start < 30, "the compiler never started"
+        time.sleep(0.02)
+    os.kill(child.pid, signal.SIGINT)
+    out, err = child.communicate(timeout=30)
+    assert out.strip() == "interrupted", out + err
+    pid = int(pid_file.read_text())
+    start = time.monotonic()
+    while time.monotonic() - start < 5:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.02)
+    else:
+        pytest.fail(f"the compiler's child {pid} still runs")
+    assert list(temporary.iterdir()) == []
+    assert not (tmp_path / "out" / "quell.fmu").exists()

@@ -408,7 +408,10 @@ fn compile(
     cmd.args(["-std=c99", "-O2", "-ffp-contract=off", "-shared", "-fPIC", "-fvisibility=hidden", "-o"]).arg(&out);
     cmd.args(units.iter().map(|u| dir.path().join(u))).current_dir(dir.path());
     let result = run_within(cmd, timeout)
-        .map_err(|e| ExportError::CompilerNotFound { compiler: compiler.to_string(), message: e.to_string() })?
+        .map_err(|e| match e.kind() {
+            std::io::ErrorKind::Interrupted => ExportError::Interrupted,
+            _ => ExportError::CompilerNotFound { compiler: compiler.to_string(), message: e.to_string() },
+        })?
         .ok_or_else(|| {
             fail(format!(
                 "it had not finished after {} s and was stopped: does it wait for input or a licence? Name a C compiler that runs unattended, such as gcc or clang",
@@ -434,7 +437,9 @@ fn compile(
 const KEPT_OUTPUT: usize = 64 * 1024;
 
 /// Runs `cmd` with stdin closed, its output captured, and waits at most `timeout`: `None` (the
-/// process killed, with the processes it started) when it has not exited by then.
+/// process killed, with the processes it started) when it has not exited by then, and an
+/// `Interrupted` error (killed likewise) once the stop flag ([`crate::cancel::check`]) is set: a
+/// signal that ended quell had left the compiler running, orphaned, and its directory behind.
 fn run_within(mut cmd: Command, timeout: std::time::Duration) -> std::io::Result<Option<std::process::Output>> {
     use std::io::Read;
     use std::process::Stdio;
@@ -483,6 +488,10 @@ fn run_within(mut cmd: Command, timeout: std::time::Duration) -> std::io::Result
     let status = loop {
         match child.try_wait() {
             Ok(Some(status)) => break status,
+            Ok(None) if crate::cancel::check().is_err() => {
+                kill(&mut child);
+                return Err(std::io::Error::new(std::io::ErrorKind::Interrupted, "interrupted"));
+            }
             Ok(None) if Instant::now() < deadline => std::thread::sleep(Duration::from_millis(10)),
             Ok(None) => {
                 kill(&mut child);

@@ -228,6 +228,10 @@ pub enum ExportError {
     CompilerNotFound { compiler: String, message: String },
     #[error("writing the FMU archive failed: {message}")]
     Archive { message: String },
+    /// The stop flag ([`crate::cancel::with_stop`]) was set while the compiler ran: it was stopped
+    /// with the processes it started.
+    #[error("interrupted while the compiler built the FMU; it was stopped and nothing was written")]
+    Interrupted,
 }
 
 /// The compiler an FMU build runs: `given` (the front end's choice), else `$CC` when set and not
