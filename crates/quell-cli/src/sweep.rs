@@ -139,7 +139,8 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
 }
 
 /// The study of `args`, checked, with its shard and that shard's number of runs: refused when the
-/// study cannot be swept or is over [`study::CONFIRM_RUNS`] runs without `--yes`.
+/// study cannot be swept or is over [`study::CONFIRM_RUNS`] runs or [`study::CONFIRM_POINTS`] grid
+/// points without `--yes`.
 fn planned(args: &SweepArgs) -> Result<(Study, Shard, usize), Failure> {
     let path = args.study.as_deref().expect("clap requires a study without --merge");
     let study = read_study(path)?;
@@ -156,6 +157,14 @@ fn planned(args: &SweepArgs) -> Result<(Study, Shard, usize), Failure> {
             quell::study::count(study.points(), "grid point"),
             quell::study::count(study.draws(), "draw"),
             study::CONFIRM_RUNS as f64
+        )));
+    }
+    if study.points() > study::CONFIRM_POINTS && !args.yes {
+        return Err(Failure::Input(format!(
+            "{}: the study has {}, more than {:e}, and summary.json summarizes each (~3 kB of file and ~2 kB of memory a point with two channels); check the grid, or pass --yes to run it",
+            path.display(),
+            quell::study::count(study.points(), "grid point"),
+            study::CONFIRM_POINTS as f64
         )));
     }
     let n = shard.len(usize::try_from(runs).unwrap_or(usize::MAX));

@@ -137,6 +137,9 @@ fn bad_study_files_exit_2_naming_the_key() {
             &[],
             "more than 1e7; check the grid, or pass --yes",
         ),
+        // 317 × 316 grid points of one run each: under 1e7 runs, but each point's summary costs
+        // kilobytes (a 700 × 700 grid had taken 1 GB and written 1.5 GB without asking).
+        (&grid_of(317, 316), &[], "the study has 100172 grid points, more than 1e5, and summary.json summarizes each"),
     ];
     for (k, (text, flags, expected)) in cases.iter().enumerate() {
         let study = write_study(dir, &format!("s{k}.toml"), text);
@@ -148,6 +151,12 @@ fn bad_study_files_exit_2_naming_the_key() {
         assert!(stderr(&o).contains(expected), "{text}\nexpected: {expected}\ngot: {}", stderr(&o));
         assert!(!dir.join(format!("o{k}")).exists(), "nothing is written for a bad study");
     }
+}
+
+/// A `[grid]` of `a` values of design.mu[0] by `b` of design.mu[1].
+fn grid_of(a: usize, b: usize) -> String {
+    let values = |n: usize| (1..=n).map(|k| format!("{k}.0")).collect::<Vec<_>>().join(", ");
+    format!("[grid]\n\"design.mu[0]\" = [{}]\n\"design.mu[1]\" = [{}]\n", values(a), values(b))
 }
 
 #[test]

@@ -70,6 +70,12 @@ impl From<crate::ScenarioError> for StudyError {
 /// Runs above which a front end asks for confirmation before a sweep starts.
 pub const CONFIRM_RUNS: u64 = 10_000_000;
 
+/// Grid points above which a front end that writes summary.json asks for confirmation too: it
+/// summarizes every point, about 3 kB of file and 2 kB of memory each with two channels (a 700 ×
+/// 700 grid of 490,000 one-draw runs, under [`CONFIRM_RUNS`], took 1 GB and wrote 1.5 GB; hostile
+/// review, 2026-12-06).
+pub const CONFIRM_POINTS: usize = 100_000;
+
 /// Worker threads a sweep or tuning may ask for (`jobs`): far more than any machine's
 /// cores, few enough that starting them is quick (10⁴ threads took over a minute).
 pub const MAX_JOBS: usize = 1024;
