@@ -176,6 +176,15 @@ fn truth_mistakes_name_their_key() {
         .unwrap_err()
         .to_string();
     assert!(e.starts_with("simulation.sample_time: T_s = 0.001 s does not make every delay of the run a whole number of samples (plant.delays [1, 3], truth.actuator_delays [0.0005, 0] s)"), "{e}");
+    // A true delay whole in samples but past a delay line's 1e7 of them is said so (it had been
+    // called not whole; hostile review, 2026-12-06), with the sample time that holds it.
+    let s = scenario("delays = [1e6, 3.0]");
+    let e = Run::new(&d, &s.reference, &s.disturbance, RunSettings::sampled(1.0, 0.1, 0.01))
+        .truth(s.true_plant())
+        .simulate(|_| ControlFlow::Continue(()))
+        .unwrap_err()
+        .to_string();
+    assert_eq!(e, "simulation.sample_time: T_s = 0.01 s makes truth.delays[0] = 1e6 s 1e8 samples; the true plant's delay line holds at most 1e7 samples (plant.delays [1, 3], truth.delays [1e6, 3] s): the nearest that makes them all whole is 0.1 s");
     // Called directly with a plant of other dimensions.
     let text =
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/siso-complex.toml")).unwrap();

@@ -243,6 +243,22 @@ fn true_delays_whole(run: &Run<'_>, T: f64) -> Result<(), KeyError> {
         Some(t) => format!(": the nearest that makes them all whole is {} {unit}", settings::fmt_short(t)),
         None => ": no sample time near it makes them all whole; choose one that divides each".into(),
     };
+    // A true delay too long for a delay line at T is said so (it had been called not whole).
+    let named = truth.iter().enumerate().map(|(i, &d)| (format!("truth.delays[{i}]"), d));
+    let named = named.chain(actuator.iter().enumerate().map(|(i, &d)| (format!("truth.actuator_delays[{i}]"), d)));
+    if let Some((key, tau)) = named.into_iter().find(|(_, tau)| tau / T > discrete::MAX_DELAY_SAMPLES) {
+        return Err(KeyError::new(
+            "simulation.sample_time",
+            format!(
+                "T_s = {} {unit} makes {key} = {} {unit} {:e} samples; the true plant's delay line holds at most {:e} samples ({} {unit}){offer}",
+                settings::fmt_short(T),
+                settings::fmt_short(tau),
+                (tau / T).round(),
+                discrete::MAX_DELAY_SAMPLES,
+                sets.join(", ")
+            ),
+        ));
+    }
     Err(KeyError::new(
         "simulation.sample_time",
         format!(
