@@ -580,6 +580,13 @@ fn the_stiff_gain_line_does_not_trade_convergence_for_a_non_stiff_rate() {
         assert!(after.channels[i].advice.contains(line), "{:?}", after.channels[i].advice);
         assert!(spread(c) > 1e8, "{c:?}");
     }
+    // Within a quarter of it, μ is kept, not nudged (a headbox at μ = 50 had been told "lower it at
+    // most to about 49").
+    let (near, _, _) = run(&text.replace("mu = [1.0, 1.0]", "mu = [1.2, 1.2]"));
+    for (i, c) in near.iter().enumerate() {
+        let line = c.advice.iter().find(|a| a.contains("adapts at")).unwrap_or_else(|| panic!("{c:?}"));
+        assert!(line.contains(&format!("so keep design.mu[{i}] where max|u_f| allows")), "{line}");
+    }
     let threshold = 100.0 * report[0].loop_rate / report[0].lambda_max_omega;
     let (_, _, lowered) = run(&text.replace("mu = [1.0, 1.0]", &format!("mu = [{threshold}, {threshold}]")));
     assert!(

@@ -103,6 +103,10 @@ pub fn estimate(
         .collect()
 }
 
+/// The least factor by which the stiff line's μ must differ from the design's to be offered: a
+/// headbox at μ = 50 had been told to lower it "at most to about 49".
+const WORTH_CHANGING: f64 = 1.25;
+
 /// Channel i adapting at μ λ_max beyond [`STIFF_RATIO`] times the loop's rate ρ: what it means and
 /// the μ to lower it to where u_f is more than the actuator takes (the integrator handles the
 /// stiffness: a tryout's Wardle–Wood column design over 14,400 min, μ = [8.7, 3.5] against the
@@ -141,9 +145,9 @@ pub(crate) fn stiff_advice(
         )
     } else {
         let needed = crate::settings::round_up_2(wanted);
-        let keep = if needed < 0.999 * mu {
+        let keep = if needed * WORTH_CHANGING < mu {
             format!("lower design.mu[{i}] at most to about {} where max|u_f| allows", fmt(needed))
-        } else if needed > 1.001 * mu && needed <= super::RAISE_AT_MOST * mu {
+        } else if needed > WORTH_CHANGING * mu && needed <= super::RAISE_AT_MOST * mu {
             format!("raise design.mu[{i}] toward {} where max|u_f| allows (or keep it)", fmt(needed))
         } else {
             format!("keep design.mu[{i}] where max|u_f| allows")
