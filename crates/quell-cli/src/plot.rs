@@ -9,6 +9,7 @@ use std::sync::Once;
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use quell::scenario::SignalNames;
 use quell::sim::SimResult;
 use quell::TimeUnit;
@@ -1571,7 +1572,7 @@ fn draw_tune<DB: DrawingBackend>(
         }
         chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled()))).map_err(|e| e.to_string())?;
         if !none.is_empty() {
-            mark_without_objective(&mut chart, &none, (m0, m1), (y0 - band, y0, y1))?;
+            mark_without_objective(&mut chart, &none, (m0, m1), (y0 - band, y0))?;
         }
         if let Some(best) = c.chosen.as_ref().and_then(at) {
             chart
@@ -1600,21 +1601,23 @@ fn feasible_runs(points: impl Iterator<Item = Option<(f64, f64)>>) -> Vec<Vec<(f
 }
 
 /// The evaluations at log10 μ `none`, which have no objective, as crosses in the band (b, y0)
-/// below a line at y0, and a note at the top of the panel (its μ span (m0, m1), top y1).
+/// below a line at y0, with the note saying what they are at the band's top (its μ span (m0, m1)):
+/// at the panel's top it had been drawn over the frame and the first tick label.
 fn mark_without_objective<DB: DrawingBackend>(
     chart: &mut Chart<'_, DB>,
     none: &[f64],
     (m0, m1): (f64, f64),
-    (b, y0, y1): (f64, f64, f64),
+    (b, y0): (f64, f64),
 ) -> Result<(), String> {
-    let (y, grey) = ((b + y0) / 2.0, RGBColor(120, 120, 120));
+    let (y, grey) = (b + 0.3 * (y0 - b), RGBColor(120, 120, 120));
     chart.draw_series(LineSeries::new([(m0, y0), (m1, y0)], grey.stroke_width(1))).map_err(|e| e.to_string())?;
     chart
         .draw_series(none.iter().map(|&mu| Cross::new((mu, y), 5, grey.stroke_width(2))))
         .map_err(|e| e.to_string())?;
     let note = format!("× {} without an objective: not completed, beyond a limit or never settled", none.len());
-    let font = ("sans-serif", 12).into_font().color(&grey);
-    chart.draw_series(std::iter::once(Text::new(note, (m0, y1 - 0.02 * (y1 - b)), font))).map_err(|e| e.to_string())?;
+    let font = ("sans-serif", 12).into_font().color(&grey).pos(Pos::new(HPos::Left, VPos::Top));
+    let at = (m0 + 0.01 * (m1 - m0), y0 - 0.08 * (y0 - b));
+    chart.draw_series(std::iter::once(Text::new(note, at, font))).map_err(|e| e.to_string())?;
     Ok(())
 }
 
