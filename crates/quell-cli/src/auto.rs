@@ -236,9 +236,27 @@ fn report_text(a: &AutoDesign) -> String {
     s
 }
 
+/// What the delay-check runs `missed` missed ([`quell::auto::DelayCheck::missed`]), named for the
+/// summary, in that order, each once.
+fn missed_names(missed: &[&quell::auto::DelayCheck]) -> Vec<String> {
+    let mut what: Vec<String> = Vec::new();
+    for m in missed.iter().flat_map(|c| &c.missed) {
+        let name = match *m {
+            "ended" => "a run that completes (it diverged, failed or departed from its continuous loop)".to_string(),
+            "tail" => "the tail bound".to_string(),
+            "effort" => format!("the effort (max|u_f| within {}× the verified run's)", quell::auto::EFFORT_GROWTH),
+            _ => "the actuator limit".to_string(),
+        };
+        if !what.contains(&name) {
+            what.push(name);
+        }
+    }
+    what
+}
+
 /// The kept design with its delays off ([`quell::auto::DelayCheck`]): how far off they may be,
 /// then one line a run, its tail against the bound and max|u_f| against the verified run's, ⚠
-/// where it was not met or ended early.
+/// where it was not met (with what it missed) or ended early.
 fn delay_lines(a: &AutoDesign) -> String {
     let v = &a.verification;
     let truth = a.scenario.true_plant();
@@ -259,7 +277,7 @@ fn delay_lines(a: &AutoDesign) -> String {
             String::new()
         };
         format!(
-            "the tail bound and the effort (max|u_f| within {}× the verified run's) hold with every true input delay {} longer and shorter{also}",
+            "the tail bound and the effort (max|u_f| within {}× the verified run's, and any --u-limit) hold with every true input delay {} longer and shorter{also}",
             quell::auto::EFFORT_GROWTH,
             percent(v.delay_tolerance)
         )
@@ -273,19 +291,7 @@ fn delay_lines(a: &AutoDesign) -> String {
             _ => "longer and shorter",
         };
         let least = missed.iter().map(|c| c.error).fold(f64::INFINITY, f64::min);
-        // What was missed, in the order of DelayCheck::missed, each once.
-        let mut what: Vec<String> = Vec::new();
-        for m in missed.iter().flat_map(|c| &c.missed) {
-            let name = match *m {
-                "ended" => "a run to t_end".to_string(),
-                "tail" => "the tail bound".to_string(),
-                "effort" => format!("the effort (max|u_f| within {}× the verified run's)", quell::auto::EFFORT_GROWTH),
-                _ => "the actuator limit".to_string(),
-            };
-            if !what.contains(&name) {
-                what.push(name);
-            }
-        }
+        let what = missed_names(&missed);
         let verb = if what.len() == 1 { "is" } else { "are" };
         format!(
             "{} {verb} missed with every true input delay {way} by as little as {}: the method predicts over the delays as given (the paper assumes them known), so measure them that well or better",

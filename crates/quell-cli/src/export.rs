@@ -1,8 +1,8 @@
 //! `quell export`: the real-time controller as dependency-free C99 (`quell::export`).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use quell::export::{generate, generate_fmu, ExportError, ExportOptions, FmiVersion};
+use quell::export::{generate, generate_fmu, CCode, ExportError, ExportOptions, FmiVersion, Fmu};
 
 use crate::{file_sample_time, load_with, output, set_sample_time, sim_number, Failure};
 
@@ -36,7 +36,8 @@ pub struct ExportArgs {
     compiler: Option<String>,
 }
 
-/// Generates, then writes both files (each to a temporary name, then renamed).
+/// Generates, then writes the header, the source and, with `--fmu`, the FMU (each to a temporary
+/// name, all renamed once every one is written).
 pub fn run(args: &ExportArgs) -> Result<(), Failure> {
     // The sample time is the controller's, not a run's: export runs nothing, so the horizon is
     // capped where a run's step budget would refuse the sample time, and raised to one sample where
@@ -67,45 +68,29 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
     };
     let code = generate(&design, sample_time, &options).map_err(export_failure)?;
     eprint!("{}", crate::report::sample_time_text(&scenario, &design, sample_time, None));
+    let mut ctrl_c = None;
     let fmu = if args.fmu {
         let (compiler, from_env) = quell::export::compiler_choice(args.compiler.clone());
         let version: FmiVersion = args.fmi_version.parse().map_err(export_failure)?;
         // A signal stops the compiler with what it started, and its temporary directory goes.
-        let ctrl_c = crate::interrupt::Interrupt::install("interrupted twice; stopped without writing");
-        let fmu = quell::cancel::with_stop(ctrl_c.shared_flag(), || {
+        let c = crate::interrupt::Interrupt::install("interrupted twice; stopped without writing");
+        let fmu = quell::cancel::with_stop(c.shared_flag(), || {
             generate_fmu(&design, sample_time, &options, compiler.as_deref(), version)
         });
+        ctrl_c = Some(c);
         Some(fmu.map_err(|e| failure_naming(e, from_env))?)
     } else {
         None
     };
-    let out = &args.out;
-    let fmu_name = format!("{}.fmu", options.prefix);
-    output::prepare_out(out, &[&code.header_name, &code.source_name, &fmu_name])?;
-    // Every file is written before any is renamed into place: a failed write never leaves a new
-    // header beside an old source (a mismatched pair would not compile anyway: LAYOUT_ID), nor an
-    // FMU of another sample time beside them.
-    let mut files = vec![
-        (out.join(&code.header_name), code.header.as_bytes()),
-        (out.join(&code.source_name), code.source.as_bytes()),
-    ];
-    files.extend(fmu.as_ref().map(|f| (out.join(&f.file_name), f.bytes.as_slice())));
-    let names = files.iter().filter_map(|(p, _)| p.file_name()).map(|n| n.to_string_lossy()).collect::<Vec<_>>();
-    output::write_atomic_all(&files).map_err(|e| {
-        let what = format!("writing {} in {}: {e}", names.join(", "), out.display());
-        output::write_failure(what, &e)
-    })?;
-    match &fmu {
-        Some(fmu) => {
-            let binary = fmu.platform.map(|p| format!("binary for {p}")).unwrap_or_else(|| "sources only".into());
-            eprintln!("wrote {} in {} (FMI {} co-simulation, {binary})", fmu.file_name, out.display(), fmu.version.name());
-        }
-        None => match quell::export::remove_earlier_fmu(out, &options.prefix) {
-            Ok(Some(_)) => eprintln!("removed {fmu_name} from {}: an earlier export's, which this code replaces (add --fmu to write it again)", out.display()),
-            Ok(None) => {}
-            Err(e) => return Err(output::write_failure(format!("removing the earlier {fmu_name} in {}: {e}", out.display()), &e)),
-        },
+    if ctrl_c.as_ref().is_some_and(|c| c.interrupted()) {
+        return Err(Failure::Run("interrupted; nothing was written".into()));
     }
+    // From here a signal waits for the files (a second one quits without writing).
+    if let Some(c) = &ctrl_c {
+        c.start_writing();
+    }
+    let out = &args.out;
+    let earlier = write(out, &code, fmu.as_ref(), &options.prefix)?;
     eprintln!(
         "wrote {} and {} in {} (T_s = {sample_time} {}, {}; {} bytes of constants, {} bytes of state)",
         code.header_name,
@@ -117,10 +102,45 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
         code.state_bytes
     );
     let unit = fmu.as_ref().and_then(|f| quell::export::time_unit_warning(&design, sample_time, f.version));
-    for w in code.warnings().chain(unit) {
+    for w in code.warnings().chain(unit).chain(earlier) {
         eprintln!("⚠ warning: {}", crate::in_flags(w));
     }
     Ok(())
+}
+
+/// Writes the header, the source and the FMU (when there is one) into `out`, all renamed into place
+/// once every one is written: a failed write never leaves a new header beside an old source (a
+/// mismatched pair would not compile anyway: LAYOUT_ID), nor an FMU of another sample time beside
+/// them. Returns the warning on an earlier export's FMU of `prefix` that the C alone left as it was.
+fn write(out: &Path, code: &CCode, fmu: Option<&Fmu>, prefix: &str) -> Result<Option<String>, Failure> {
+    let mut names = vec![code.header_name.as_str(), code.source_name.as_str()];
+    names.extend(fmu.map(|f| f.file_name.as_str()));
+    output::prepare_out(out, &names)?;
+    let mut files = vec![
+        (out.join(&code.header_name), code.header.as_bytes()),
+        (out.join(&code.source_name), code.source.as_bytes()),
+    ];
+    files.extend(fmu.map(|f| (out.join(&f.file_name), f.bytes.as_slice())));
+    output::write_atomic_all(&files).map_err(|e| {
+        let what = format!("writing {} in {}: {e}", names.join(", "), out.display());
+        output::write_failure(what, &e)
+    })?;
+    Ok(match fmu {
+        Some(fmu) => {
+            let binary = fmu.platform.map(|p| format!("binary for {p}")).unwrap_or_else(|| "sources only".into());
+            eprintln!(
+                "wrote {} in {} (FMI {} co-simulation, {binary})",
+                fmu.file_name,
+                out.display(),
+                fmu.version.name()
+            );
+            None
+        }
+        None => quell::export::earlier_fmu(out, prefix).map(|p| {
+            let name = p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+            quell::export::earlier_fmu_warning(&name, "add --fmu")
+        }),
+    })
 }
 
 /// An export error as the CLI reports it: a compiler that runs and fails or an archive that cannot

@@ -33,7 +33,7 @@ pub struct SweepArgs {
     /// Skip sweep.png/.svg.
     #[arg(long)]
     no_plots: bool,
-    /// Run a study of more than 10⁷ runs (not with --merge, which runs nothing).
+    /// Run a study of more than 10⁷ runs or 10⁵ grid points (not with --merge, which runs nothing).
     #[arg(long, conflicts_with = "merge")]
     yes: bool,
     /// Resume the interrupted sweep in --out: keep its rows and run the others (the same study
@@ -71,7 +71,7 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     let (study, shard, n) = planned(args)?;
     let meta = StudyMeta::new(&study, shard);
     if !args.resume {
-        unfinished_in_the_way(&args.out, &meta)?;
+        unfinished_in_the_way(&args.out, &meta, RESUME)?;
     }
     let (kept, done) = if args.resume { resumed(&args.out, &meta, n)? } else { (Vec::new(), Vec::new()) };
     if args.resume && kept.len() == n {
@@ -161,7 +161,7 @@ fn planned(args: &SweepArgs) -> Result<(Study, Shard, usize), Failure> {
     }
     if study.points() > study::CONFIRM_POINTS && !args.yes {
         return Err(Failure::Input(format!(
-            "{}: the study has {}, more than {:e}, and summary.json summarizes each (~3 kB of file and ~2 kB of memory a point with two channels); check the grid, or pass --yes to run it",
+            "{}: the study has {}, more than {:e}, and summary.json summarizes each (~3 kB of file and ~2.4 kB of memory a point with two channels); check the grid, or pass --yes to run it",
             path.display(),
             quell::study::count(study.points(), "grid point"),
             study::CONFIRM_POINTS as f64
@@ -275,14 +275,19 @@ fn check_shard_rows(dir: &Path, shard: Shard, rows: &[Row], total: usize) -> Res
     Ok(())
 }
 
+/// How an unfinished sweep in `--out` is finished, said to a new sweep into it, and to a merge.
+const RESUME: &str = "add --resume";
+const RESUME_BEFORE_MERGE: &str = "run `quell sweep STUDY --resume` into it";
+
 /// The refusal of a new sweep into `dir`, which holds a journal: the rows of a sweep killed outright
 /// are only there, and the new sweep would replace it. It names the way on for this study's
-/// journal (`--resume`), another study's or shard's, and a file that is not a journal.
-fn journal_in_the_way(dir: &Path, meta: &StudyMeta) -> Failure {
+/// journal (`resume`: "add --resume", or how a merge gets there), another study's or shard's, and
+/// a file that is not a journal.
+fn journal_in_the_way(dir: &Path, meta: &StudyMeta, resume: &str) -> Failure {
     let here = format!("--out {}", dir.display());
     Failure::Input(match journal::read(dir) {
         Ok(Some((old, _))) if same_sweep(&old, meta) => format!(
-            "{here}: holds the journal {JOURNAL} of a sweep of this study that did not finish; add --resume to finish it (it keeps the rows done), or remove {JOURNAL} to start over"
+            "{here}: holds the journal {JOURNAL} of a sweep of this study that did not finish; {resume} to finish it (it keeps the rows done), or remove {JOURNAL} to start over"
         ),
         Ok(_) => format!(
             "{here}: holds the journal {JOURNAL} of an unfinished sweep of another study or shard; finish it with that study file and --shard (--resume), or remove {JOURNAL} to start over here, or choose another --out"
@@ -294,15 +299,16 @@ fn journal_in_the_way(dir: &Path, meta: &StudyMeta) -> Failure {
 /// The refusal of a new sweep into `dir`, which holds the rows of an interrupted sweep: a journal
 /// ([`journal_in_the_way`]), a summary.json marked partial (a Ctrl-C's or a batch system's time
 /// limit's rows had been overwritten without a word), or, where summary.json cannot be read (a kill
-/// between the two renames), a runs.csv that ends with `# partial: …`; `--resume` can finish them.
-fn unfinished_in_the_way(dir: &Path, meta: &StudyMeta) -> Result<(), Failure> {
+/// between the two renames), a runs.csv that ends with `# partial: …`; `--resume` can finish them
+/// (`resume` says how: [`RESUME`], or [`RESUME_BEFORE_MERGE`]).
+fn unfinished_in_the_way(dir: &Path, meta: &StudyMeta, resume: &str) -> Result<(), Failure> {
     if dir.join(JOURNAL).exists() {
         check_not_busy(dir)?;
-        return Err(journal_in_the_way(dir, meta));
+        return Err(journal_in_the_way(dir, meta, resume));
     }
     let refuse = |what: String| {
         Err(Failure::Input(format!(
-            "--out {}: holds an unfinished sweep ({what}): add --resume to finish it with its study file (and its --shard), or remove runs.csv and summary.json to start over, or choose another --out",
+            "--out {}: holds an unfinished sweep ({what}): {resume} to finish it with its study file (and its --shard), or remove runs.csv and summary.json to start over, or choose another --out",
             dir.display()
         )))
     };
@@ -527,7 +533,7 @@ fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
     let meta = StudyMeta { shard: Shard::ALL, ..first };
     // As for a new sweep: an interrupted sweep's rows there are refused, not replaced (a merge had
     // overwritten them, and the journal beside them then belonged to no result).
-    unfinished_in_the_way(out, &meta)?;
+    unfinished_in_the_way(out, &meta, RESUME_BEFORE_MERGE)?;
     prepare_out(out, OUTPUTS)?;
     write_all(out, &meta, &rows, false, plots)?;
     let shards = if count == 1 { "shard" } else { "shards" };

@@ -1762,8 +1762,43 @@ fn the_delay_check_says_when_it_has_nothing_to_check_and_whose_delays_it_scaled(
     // u_f had grown past twice the verified run's).
     let flagged: Vec<&str> = out.lines().filter(|l| l.contains("worst tail") && l.contains(" ⚠")).collect();
     assert!(!flagged.is_empty(), "{out}");
-    for line in flagged {
+    for line in &flagged {
         let missed = line.rsplit_once(" ⚠ ").expect("what it missed").1;
         assert!(missed.split(", ").all(|m| ["tail", "effort", "u_limit"].contains(&m)), "{line}");
     }
+    // The summary names what the last level's runs missed, each once, or that all held.
+    let summary = out.lines().find(|l| l.starts_with("  delays (for information")).expect("the summary");
+    let runs: Vec<&str> = out.lines().filter(|l| l.starts_with("    ×")).collect();
+    let last_level = &runs[runs.len() - 2..];
+    let missed = |code: &str| {
+        last_level.iter().any(|l| l.rsplit_once(" ⚠ ").is_some_and(|(_, m)| m.split(", ").any(|x| x == code)))
+    };
+    if summary.contains(" hold with every true input delay ") {
+        assert!(!last_level.iter().any(|l| l.contains(" ⚠")), "{out}");
+    } else {
+        assert!(summary.contains("missed with every true input delay"), "{summary}");
+        assert_eq!(summary.contains("the tail bound"), missed("tail"), "{out}");
+        assert_eq!(summary.contains("the effort (max|u_f| within 2× the verified run's)"), missed("effort"), "{out}");
+    }
+}
+
+/// A regulated channel (g = 0) settles within 2 % of its own peak error, which the summary says
+/// (a two-area power system's 0.098 pu tail "settled (2 % band)", five times its load step; helper
+/// tryout, 2026-12-06); a tracking channel's band is the reference's.
+#[test]
+fn a_regulated_channels_settling_band_says_whose_peak_it_is() {
+    let text = fs::read_to_string(paper()).unwrap();
+    let tracked =
+        "components = [ { harmonics = [{ amplitude = 3.0, frequency = 2.0, phase = 0.0 }] }, { bias = 2.0 } ]";
+    assert!(text.contains(tracked));
+    let dir = temp_dir("regulated");
+    let file = dir.path().join("scenario.toml");
+    fs::write(&file, text.replacen(tracked, "components = [ { bias = 0.0 }, { bias = 2.0 } ]", 1)).unwrap();
+    let out = dir.path().join("out");
+    let o = quell(&["run", file.to_str().unwrap(), "--out", out.to_str().unwrap(), "--no-plots"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stdout(&o);
+    let line = |i: usize| err.lines().find(|l| l.starts_with(&format!("channel {i}:"))).unwrap_or_default().to_string();
+    assert!(line(1).contains("settled (2 % band of its peak error, g being 0) at t = "), "{err}");
+    assert!(line(2).contains("settled (2 % band) at t = "), "{err}");
 }

@@ -203,14 +203,21 @@ fn export_fmu_writes_one_archive_or_fails_with_1() {
         assert!(text.contains(name), "{name} is missing from the FMI 3.0 archive");
     }
     assert!(!text.contains("sources/fmi3Functions.h"), "FMI 3.0 has the importer supply the headers");
-    // The C alone at another sample time: the earlier FMU, of 0.05, goes, said so (it had stayed
-    // beside code of 0.1; hostile review); another prefix's is left alone.
-    std::fs::write(dir.join("other.fmu"), "not ours").unwrap();
+    // The C alone at another sample time: the earlier FMU, of 0.05, is kept (it may be the user's
+    // still) with a warning that it was not rewritten (it had stood beside code of 0.1 without a
+    // word; hostile review); another prefix's FMU is not this export's concern.
+    let before = std::fs::read(dir.join("plant3.fmu")).unwrap();
     let o = quell(&["export", &three, "--sample-time", "0.1", "--out", &out, "--prefix", "plant3"]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(stderr(&o).contains("removed plant3.fmu from"), "{}", stderr(&o));
-    assert!(!dir.join("plant3.fmu").exists() && dir.join("other.fmu").exists());
+    assert!(
+        stderr(&o).contains("⚠ warning: plant3.fmu beside this code is an earlier export's, not rewritten: it keeps the design and sample time it was written with (add --fmu to write it with this code)"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(std::fs::read(dir.join("plant3.fmu")).unwrap(), before);
     assert!(std::fs::read_to_string(dir.join("plant3_controller.h")).unwrap().contains("0.1"));
+    let o = quell(&["export", &three, "--sample-time", "0.1", "--out", &out, "--prefix", "other"]);
+    assert!(o.status.success() && !stderr(&o).contains("earlier export"), "{}", stderr(&o));
     let o = quell(&["export", &three, "--sample-time", "0.05", "--out", &out, "--fmu", "--fmi-version", "4"]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("--fmi-version"), "{}", stderr(&o));

@@ -213,6 +213,11 @@ fn ctrl_c_writes_the_rows_done_marked_partial() {
     let merged = quell(&["sweep", "--merge", shard.to_str().unwrap(), "--no-plots", "--out", out.to_str().unwrap()]);
     assert_eq!(merged.status.code(), Some(2), "{}", stderr(&merged));
     assert!(stderr(&merged).contains("holds an unfinished sweep ("), "{}", stderr(&merged));
+    assert!(
+        stderr(&merged).contains(": run `quell sweep STUDY --resume` into it to finish it with its study file"),
+        "{}",
+        stderr(&merged)
+    );
     assert_eq!(fs::read_to_string(out.join("runs.csv")).unwrap(), csv);
     // Without a readable summary.json (a kill between the two renames, or a damaged file),
     // runs.csv's last line tells (a garbled summary.json had let the rows be replaced).

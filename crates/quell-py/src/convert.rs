@@ -42,15 +42,7 @@ fn real_array<'py>(obj: &Bound<'py, PyAny>, name: &str, kind: Kind) -> PyResult<
     if obj.is_none() || obj.is_instance_of::<PyDict>() {
         return Err(type_error(name, "an array-like of real numbers", obj));
     }
-    // numpy reads a masked array as its data, masked entries and all: refuse those entries.
-    let masked = masked_entries(&np, obj, 0)?;
-    if masked > 0 {
-        let entries = if masked == 1 { "entry" } else { "entries" };
-        return Err(kind.err(
-            py,
-            format!("{name}: expected real numbers, found a masked array with {masked} masked {entries}, whose values numpy would pass on as they are; fill them (`.filled(value)`) or pass `.data` if those values are meant"),
-        ));
-    }
+    unreadable_nesting(&np, obj, name, kind)?;
     let arr = np.call_method1("asarray", (obj,)).map_err(|e| {
         // A Ctrl-C (or SystemExit) met while numpy reads a lazy array-like is the user's, not a
         // bad value: it goes on as it is.
@@ -111,22 +103,75 @@ fn real_array<'py>(obj: &Bound<'py, PyAny>, name: &str, kind: Kind) -> PyResult<
     Ok(arr.call_method1("astype", ("float64",))?.cast_into::<PyArrayDyn<f64>>()?)
 }
 
-/// How many masked entries `obj` holds: a masked array's (`np.ma.masked` is one), and those of the
-/// masked arrays within a list or tuple of rows, which numpy reads as their data too. Nesting
-/// deeper than numpy's 64 dimensions is left to numpy's reading, which refuses it.
-fn masked_entries(np: &Bound<'_, PyModule>, obj: &Bound<'_, PyAny>, depth: usize) -> PyResult<usize> {
+/// What numpy would read wrongly or for ever in `obj` ([`walk`]): masked entries, which numpy reads
+/// as their data, and nested lists of more than [`MAX_NESTED_ENTRIES`] entries; `kind`'s error
+/// naming `name`.
+fn unreadable_nesting(np: &Bound<'_, PyModule>, obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<()> {
+    let py = obj.py();
     let ma = np.getattr("ma")?;
-    if obj.is_instance(&ma.getattr("MaskedArray")?)? {
-        return ma.call_method1("count_masked", (obj,))?.extract();
+    let Nested { masked, entries } =
+        walk(obj, (&ma, &ma.getattr("MaskedArray")?), &mut std::collections::HashMap::new(), 0)?;
+    if entries > MAX_NESTED_ENTRIES {
+        return Err(kind.err(
+            py,
+            format!("{name}: expected an array-like of at most {MAX_NESTED_ENTRIES:e} numbers, found nested lists of {entries:e} (rows shared at every level?)"),
+        ));
+    }
+    if masked > 0 {
+        let entries = if masked == 1 { "entry" } else { "entries" };
+        return Err(kind.err(
+            py,
+            format!("{name}: expected real numbers, found a masked array with {masked} masked {entries}, whose values numpy would pass on as they are; fill them (`.filled(value)`) or pass `.data` if those values are meant"),
+        ));
+    }
+    Ok(())
+}
+
+/// What nested lists and tuples hold, as numpy would read them ([`walk`]).
+#[derive(Clone, Copy, Default)]
+struct Nested {
+    /// Masked entries: a masked array's (`np.ma.masked` is one), and those of the masked arrays
+    /// within a list or tuple of rows, which numpy reads as their data too.
+    masked: usize,
+    /// Entries numpy would read, a row shared k times counted k times.
+    entries: f64,
+}
+
+/// Entries beyond which nested lists are refused before numpy reads them: rows shared at every
+/// level, `a = [a, a]` forty times, are 2^40 entries, which numpy walked for ever.
+const MAX_NESTED_ENTRIES: f64 = 1e9;
+
+/// [`Nested`] of `obj`, each list or tuple walked once (`memo`: its result, or a default while it
+/// is walked, so that one holding itself ends; numpy refuses that one itself), nesting deeper than
+/// numpy's 64 dimensions left to numpy, which refuses it.
+fn walk(
+    obj: &Bound<'_, PyAny>,
+    (ma, masked_array): (&Bound<'_, PyAny>, &Bound<'_, PyAny>),
+    memo: &mut std::collections::HashMap<usize, Nested>,
+    depth: usize,
+) -> PyResult<Nested> {
+    if obj.is_instance_of::<pyo3::types::PyFloat>() || obj.is_instance_of::<pyo3::types::PyInt>() {
+        return Ok(Nested { masked: 0, entries: 1.0 });
+    }
+    if obj.is_instance(masked_array)? {
+        let masked = ma.call_method1("count_masked", (obj,))?.extract()?;
+        return Ok(Nested { masked, entries: obj.getattr("size")?.extract::<f64>().unwrap_or(1.0) });
     }
     if depth >= 64 || !(obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>()) {
-        return Ok(0);
+        return Ok(Nested { masked: 0, entries: 1.0 });
     }
-    let mut masked = 0;
+    let id = obj.as_ptr() as usize;
+    if let Some(known) = memo.get(&id) {
+        return Ok(*known);
+    }
+    memo.insert(id, Nested::default());
+    let mut total = Nested::default();
     for item in obj.try_iter()? {
-        masked += masked_entries(np, &item?, depth + 1)?;
+        let inner = walk(&item?, (ma, masked_array), memo, depth + 1)?;
+        total = Nested { masked: total.masked + inner.masked, entries: total.entries + inner.entries };
     }
-    Ok(masked)
+    memo.insert(id, total);
+    Ok(total)
 }
 
 /// Whether every entry of the object array `arr` is a Python int or float (bools are ints here;

@@ -180,30 +180,27 @@ pub fn export(
         crate::errors::warn(py, &w)?;
     }
     let out = out.unwrap_or_else(|| PathBuf::from("."));
-    quell::files::check_dir(&out).and_then(|()| std::fs::create_dir_all(&out)).map_err(|e| {
-        Kind::Export.err(py, format!("out: cannot create {} ({e}); choose a writable directory", out.display()))
-    })?;
     let mut files = vec![(code.header_name, code.header.into_bytes()), (code.source_name, code.source.into_bytes())];
     files.extend(archive.map(|a| (a.file_name, a.bytes)));
+    let written = write(py, &out, &files)?;
+    if let Some(path) = quell::export::earlier_fmu(&out, &options.prefix).filter(|_| fmu.is_none()) {
+        let name = path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default();
+        crate::errors::warn(py, &format!("out: {}", quell::export::earlier_fmu_warning(&name, "pass fmu=True")))?;
+    }
+    Ok(written)
+}
+
+/// Writes `files` (name, bytes) into `out`, created if need be, all renamed into place once every
+/// one is written, as `quell export` does: a failed write leaves the old files together, never a
+/// new header beside an old source. Returns their paths.
+fn write(py: Python<'_>, out: &std::path::Path, files: &[(String, Vec<u8>)]) -> PyResult<Vec<PathBuf>> {
+    quell::files::check_dir(out).and_then(|()| std::fs::create_dir_all(out)).map_err(|e| {
+        Kind::Export.err(py, format!("out: cannot create {} ({e}); choose a writable directory", out.display()))
+    })?;
     let files: Vec<(PathBuf, &[u8])> = files.iter().map(|(name, bytes)| (out.join(name), bytes.as_slice())).collect();
     // Held until the files are in place: another export into `out` meanwhile is refused.
-    let _lock = quell::files::lock_dir(&out).map_err(|e| Kind::Export.err(py, format!("out: {e}")))?;
-    // All written before any is renamed, as `quell export` does: a failed write leaves the old
-    // files together, never a new header beside an old source.
+    let _lock = quell::files::lock_dir(out).map_err(|e| Kind::Export.err(py, format!("out: {e}")))?;
     quell::files::write_atomic_all(&files)
         .map_err(|e| pyo3::exceptions::PyOSError::new_err(format!("out: writing in {} failed ({e})", out.display())))?;
-    if fmu.is_none() {
-        let removed = quell::export::remove_earlier_fmu(&out, &options.prefix).map_err(|e| {
-            pyo3::exceptions::PyOSError::new_err(format!(
-                "out: removing the earlier {}.fmu in {} failed ({e})",
-                options.prefix,
-                out.display()
-            ))
-        })?;
-        if let Some(path) = removed {
-            let name = path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default();
-            crate::errors::warn(py, &format!("out: removed {name}, an earlier export's, which this code replaces (pass fmu=True to write it again)"))?;
-        }
-    }
     Ok(files.into_iter().map(|(path, _)| path).collect())
 }

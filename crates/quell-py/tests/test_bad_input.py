@@ -268,6 +268,24 @@ def test_masked_entries_are_refused_not_read_as_data():
     np.testing.assert_array_equal(quell.Plant(A=[np.ma.masked_array(r) for r in A], B=B, C=C).A, A)
 
 
+def test_nested_lists_that_share_their_rows_are_refused_at_once():
+    """Rows shared at every level (`a = [a, a]` forty times: 2^40 entries) had made the masked-entry
+    walk, and numpy's own reading after it, run for ever; a list holding itself ends too."""
+    import time
+
+    a = [1.0]
+    for _ in range(40):
+        a = [a, a]
+    start = time.monotonic()
+    with pytest.raises(quell.ScenarioError, match=r"^A: expected an array-like of at most 1e9 numbers, found nested lists of 1.099511627776e12"):
+        quell.Plant(A=a, B=B, C=C)
+    looped = []
+    looped.append(looped)
+    with pytest.raises((quell.ScenarioError, TypeError)):
+        quell.Plant(A=looped, B=B, C=C)
+    assert time.monotonic() - start < 5
+
+
 def test_a_keyboard_interrupt_while_reading_an_array_goes_on_as_it_is():
     """A Ctrl-C met while numpy reads a lazy array-like (here raised by its __getitem__) had been
     turned into a ScenarioError, so the program went on after the user asked it to stop."""

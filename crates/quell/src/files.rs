@@ -164,22 +164,27 @@ fn is_temporary(name: &str) -> bool {
 /// Opens an earlier output at `path` for reading, refused (`InvalidInput`) unless it is a regular
 /// file (followed through links): opening a pipe waits for a writer, and a device such as
 /// /dev/zero never ends (a sweep's runs.csv replaced by either had hung its resumption or taken
-/// 9 GB). The file is opened without waiting (`O_NONBLOCK`, which a regular file's reads ignore)
-/// and then checked, so a pipe swapped in between a check and the opening cannot block either.
+/// 9 GB). Checked before opening (opening a device can act on it: a terminal, a tape), then opened
+/// without waiting (`O_NONBLOCK`, which a regular file's reads ignore) and checked again, so a
+/// pipe swapped in between cannot block either.
 pub fn open_regular(path: &Path) -> io::Result<std::fs::File> {
+    let regular = |meta: std::fs::Metadata| {
+        if meta.is_file() {
+            return Ok(());
+        }
+        let what = if meta.is_dir() { "directory" } else { "device, FIFO or socket" };
+        Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("is a {what}, not a regular file as the command that wrote it leaves"),
+        ))
+    };
+    regular(std::fs::metadata(path)?)?;
     let mut options = std::fs::OpenOptions::new();
     options.read(true);
     #[cfg(unix)]
     std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, libc::O_NONBLOCK);
     let file = options.open(path)?;
-    let meta = file.metadata()?;
-    if !meta.is_file() {
-        let what = if meta.is_dir() { "directory" } else { "device, FIFO or socket" };
-        return Err(io::Error::new(
-            io::ErrorKind::InvalidInput,
-            format!("is a {what}, not a regular file as the command that wrote it leaves"),
-        ));
-    }
+    regular(file.metadata()?)?;
     Ok(file)
 }
 
@@ -311,9 +316,10 @@ mod tests {
     #[test]
     #[cfg(unix)]
     fn an_earlier_output_that_is_a_pipe_is_refused_without_waiting_for_a_writer() {
-        // open_regular opens before it checks (so nothing can be swapped in between): the
-        // opening must not wait for the pipe's writer, which never comes. On another thread, so
-        // that a regression fails after ten seconds instead of hanging the suite.
+        // A pipe is refused without waiting for its writer, which never comes (open_regular
+        // checks, opens without waiting and checks again, so that a pipe swapped in between
+        // cannot block either). On another thread, so that a regression fails after ten seconds
+        // instead of hanging the suite.
         let dir = tempfile::tempdir().unwrap();
         let fifo = dir.path().join("runs.csv");
         let name = std::ffi::CString::new(fifo.as_os_str().as_encoded_bytes()).unwrap();

@@ -184,7 +184,7 @@ fn truth_mistakes_name_their_key() {
         .simulate(|_| ControlFlow::Continue(()))
         .unwrap_err()
         .to_string();
-    assert_eq!(e, "simulation.sample_time: T_s = 0.01 s makes truth.delays[0] = 1e6 s 1e8 samples; the true plant's delay line holds at most 1e7 samples (plant.delays [1, 3], truth.delays [1e6, 3] s): the nearest that makes them all whole is 0.1 s");
+    assert_eq!(e, "simulation.sample_time: T_s = 0.01 s makes truth.delays[0] = 1e6 s a delay of 1e8 samples; the true plant's delay line holds at most 1e7 samples (plant.delays [1, 3], truth.delays [1e6, 3] s): the nearest that makes them all whole is 0.1 s");
     // Called directly with a plant of other dimensions.
     let text =
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/siso-complex.toml")).unwrap();

@@ -844,12 +844,13 @@ const LONGER_WINDOWS: [f64; 3] = [0.15, 0.2, 0.25];
 
 /// A tail's RMS ratio read over two adjacent windows that resolve the signals' content
 /// ([`windows_resolve`]): `ratio` of the last window's RMS (`last`) to the one before, each
-/// `fraction` of the run.
+/// `fraction` of the run's `span` (t_last − t_first).
 #[derive(Debug, Clone, Copy)]
 struct Trend {
     ratio: f64,
     fraction: f64,
     last: f64,
+    span: f64,
 }
 
 impl Trend {
@@ -860,12 +861,13 @@ impl Trend {
     }
 
     /// "over the last two tenths", or the windows' length where they are longer.
-    fn windows(&self, span: f64, unit: TimeUnit) -> String {
+    fn windows(&self, unit: TimeUnit) -> String {
+        let span = self.span;
         if self.fraction == TENTH {
             "over the last two tenths of the run".to_string()
         } else {
             let w = fmt_short(format!("{:.3e}", self.fraction * span).parse().unwrap_or(self.fraction * span));
-            format!("over the last two windows of {w} {unit}, each spanning {RESOLVED} of the signals' slowest period")
+            format!("over the last two windows of {w} {unit}, the shortest from a tenth of the run that resolve the signals' slowest period and beats")
         }
     }
 }
@@ -878,7 +880,7 @@ fn judged_trend(result: &SimResult, i: usize, signals: [&Signal; 2]) -> Option<T
     let span = result.t.last().zip(result.t.first()).map_or(0.0, |(t1, t0)| t1 - t0);
     let fraction = std::iter::once(TENTH).chain(LONGER_WINDOWS).find(|f| windows_resolve(f * span, signals))?;
     let (last, before) = tail_windows_of(result, i, fraction)?;
-    Some(Trend { ratio: trend((last, before))?, fraction, last })
+    Some(Trend { ratio: trend((last, before))?, fraction, last, span })
 }
 
 /// Whether tail windows of length `window` ([`tail_windows_of`]) read a trend, not the phase of
@@ -1087,8 +1089,8 @@ fn horizon_advice(
     }
 }
 
-/// Channel i's error still shrinking over the tail (the RMS ratio `r` < [`SHRINKING`] of the last
-/// two tenths of the run): at that pace, the time its tail RMS reaches a third of [`NEGLIGIBLE`] of
+/// Channel i's error still shrinking over the tail (the [`Trend`] `r`, below [`SHRINKING`] a tenth
+/// of the run, over the last two tenths or the longer windows that resolve the signals): at that pace, the time its tail RMS reaches a third of [`NEGLIGIBLE`] of
 /// its scale, and a μ that gets there by t_end, unless it would make the loop stiff (beyond `stiff`; none offered without it): the missing e-folds over
 /// the run at a rate raised with μ, with the [`AVERAGED_MARGIN`] since the loop's own transient
 /// before the decay does not speed up with μ (the paper's example, aiming at 1e-4: asked for 160 s
@@ -1106,13 +1108,13 @@ fn shrinking_advice(
     let (t0, t1) = (result.t.first().copied().unwrap_or(0.0), result.t.last().copied().unwrap_or(0.0));
     let last = r.last;
     // e-folds per unit of time between the windows' centres, a window apart.
-    let rate = -r.ratio.ln() / (r.fraction * (t1 - t0));
+    let rate = -r.ratio.ln() / (r.fraction * r.span);
     // A third of the level at which the advice stops, so that following it does not land on the
     // threshold and bring the line back with a slightly longer t_end.
     let aim = NEGLIGIBLE / 3.0;
     let needed = (last / (aim * scale(result, i))).ln().max(0.0) / rate;
     let t_needed = round_up_2(t1 + needed);
-    let head = format!("channel {}{SHRINKING_WORDS} (RMS ratio {:.2} {})", i + 1, r.ratio, r.windows(t1 - t0, unit));
+    let head = format!("channel {}{SHRINKING_WORDS} (RMS ratio {:.2} {})", i + 1, r.ratio, r.windows(unit));
     if !(t_needed.is_finite() && t_needed > t1 && t_needed <= MAX_HORIZON_RATIO * t1) {
         return format!("{head}: lengthen simulation.t_end or raise {key}");
     }
@@ -1178,7 +1180,7 @@ fn stalled_advice(
         return None;
     }
     let unit = result.time_unit;
-    let ratio = trend.map_or(String::new(), |r| format!(" (RMS ratio {:.2} {})", r.ratio, r.windows(t_end, unit)));
+    let ratio = trend.map_or(String::new(), |r| format!(" (RMS ratio {:.2} {})", r.ratio, r.windows(unit)));
     Some(format!(
         "channel {}'s tail has stalled at {level:.1e} of its scale{ratio}, within the {:.0} % tail bound an automatic design verifies: the directions of its internal model that matter at that level decay with time constant 1/(μλ) = {:.1e} {unit}, {CONVERGED_EFOLDS:.0} of which converge them, against t_end = {} {unit}; to go lower, raise design.mu[{i}] (watch max|u_f|, which rises with it) or lengthen simulation.t_end, comparing runs (a tuning over μ, docs/tuning.md, does that): no μ is offered, since the averaged law that would set one misjudges directions at this level",
         i + 1,
@@ -1250,7 +1252,7 @@ fn channel(
             "channel {}'s error grows over the tail (RMS ratio {:.2} {}): check the run for divergence; a model error ([truth]) or a too large {key} can do this",
             i + 1,
             r.ratio,
-            r.windows(t_end, unit)
+            r.windows(unit)
         )),
         _ => {}
     }
@@ -1407,7 +1409,7 @@ mod tests {
         }
         for c in diagnosed_over(40.0, PAPER_EXAMPLE, 1.0, |t| 1e-3 * (t / 8.0).exp()).channels {
             assert!((c.tail_trend.unwrap() - 0.5f64.exp()).abs() < 1e-12, "{:?}", c.tail_trend);
-            let expected = "grows over the tail (RMS ratio 2.12 over the last two windows of 6 s, each spanning 0.75 of the signals' slowest period)";
+            let expected = "grows over the tail (RMS ratio 2.12 over the last two windows of 6 s, the shortest from a tenth of the run that resolve the signals' slowest period and beats)";
             assert!(trend_advice(&c)[0].contains(expected), "{:?}", c.advice);
         }
         for c in diagnosed_over(11.0, PAPER_EXAMPLE, 1.0, |t| 0.01 * t.sin()).channels {

@@ -123,19 +123,20 @@ pub struct Fmu {
     pub version: FmiVersion,
 }
 
-/// Removes the FMU `<prefix>.fmu` an earlier export left in `dir`, for an export of the C alone: it
-/// would stand beside code it no longer matches (another sample time, another design; hostile
-/// review, 2026-12-06), as a run's earlier figures would beside new data. Returns its path when
-/// there was one; anything but a regular file there is left alone (the export's own checks refuse
-/// to write beside it).
-pub fn remove_earlier_fmu(dir: &std::path::Path, prefix: &str) -> std::io::Result<Option<std::path::PathBuf>> {
+/// The FMU `<prefix>.fmu` an earlier export left in `dir`, for an export of the C alone, which does
+/// not rewrite it: it may no longer match the code beside it (another sample time, another design;
+/// hostile review, 2026-12-06), so front ends say so. Not removed: it may be the user's still (an
+/// f64 FMU beside f32 code for a microcontroller, or one whose binaries they added). `None` where
+/// there is no regular file of that name.
+pub fn earlier_fmu(dir: &std::path::Path, prefix: &str) -> Option<std::path::PathBuf> {
     let path = dir.join(format!("{prefix}.fmu"));
-    match std::fs::symlink_metadata(&path) {
-        Ok(meta) if meta.is_file() => std::fs::remove_file(&path).map(|()| Some(path)),
-        Ok(_) => Ok(None),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
-        Err(e) => Err(e),
-    }
+    std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file()).then_some(path)
+}
+
+/// What a front end says of [`earlier_fmu`]'s file; `rewrite` is how to write it again
+/// (what the front end asks for, e.g. its FMU option).
+pub fn earlier_fmu_warning(name: &str, rewrite: &str) -> String {
+    format!("{name} beside this code is an earlier export's, not rewritten: it keeps the design and sample time it was written with ({rewrite} to write it with this code)")
 }
 
 /// For an FMI 2.0 FMU of a plant not in seconds, the caution that FMI 2.0 has no unit of time: an

@@ -250,7 +250,7 @@ fn true_delays_whole(run: &Run<'_>, T: f64) -> Result<(), KeyError> {
         return Err(KeyError::new(
             "simulation.sample_time",
             format!(
-                "T_s = {} {unit} makes {key} = {} {unit} {:e} samples; the true plant's delay line holds at most {:e} samples ({} {unit}){offer}",
+                "T_s = {} {unit} makes {key} = {} {unit} a delay of {:e} samples; the true plant's delay line holds at most {:e} samples ({} {unit}){offer}",
                 settings::fmt_short(T),
                 settings::fmt_short(tau),
                 (tau / T).round(),

@@ -71,7 +71,7 @@ impl From<crate::ScenarioError> for StudyError {
 pub const CONFIRM_RUNS: u64 = 10_000_000;
 
 /// Grid points above which a front end that writes summary.json asks for confirmation too: it
-/// summarizes every point, about 3 kB of file and 2 kB of memory each with two channels (a 700 ×
+/// summarizes every point, about 3 kB of file and 2.4 kB of memory each with two channels (a 700 ×
 /// 700 grid of 490,000 one-draw runs, under [`CONFIRM_RUNS`], took 1 GB and wrote 1.5 GB; hostile
 /// review, 2026-12-06).
 pub const CONFIRM_POINTS: usize = 100_000;
