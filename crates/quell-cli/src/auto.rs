@@ -236,69 +236,21 @@ fn report_text(a: &AutoDesign) -> String {
     s
 }
 
-/// What the delay-check runs `missed` missed ([`quell::auto::DelayCheck::missed`]), named for the
-/// summary, in that order, each once.
-fn missed_names(missed: &[&quell::auto::DelayCheck]) -> Vec<String> {
-    let mut what: Vec<String> = Vec::new();
-    for m in missed.iter().flat_map(|c| &c.missed) {
-        let name = match *m {
-            "ended" => "a run that completes (it diverged, failed or departed from its continuous loop)".to_string(),
-            "tail" => "the tail bound".to_string(),
-            "effort" => format!("the effort (max|u_f| within {}× the verified run's)", quell::auto::EFFORT_GROWTH),
-            _ => "the actuator limit".to_string(),
-        };
-        if !what.contains(&name) {
-            what.push(name);
-        }
-    }
-    what
-}
-
 /// The kept design with its delays off ([`quell::auto::DelayCheck`]): how far off they may be,
 /// then one line a run, its tail against the bound and max|u_f| against the verified run's, ⚠
 /// where it was not met (with what it missed) or ended early.
 fn delay_lines(a: &AutoDesign) -> String {
     let v = &a.verification;
     let truth = a.scenario.true_plant();
-    let Some(first) = v.delay_check.first() else {
+    if v.delay_check.is_empty() {
         // Passed, and nothing to check: said, so that no line reads as a check skipped.
         return match v.passed && truth.delays.iter().all(|&d| d == 0.0) {
             true => "  delays: all 0, so no delay error was checked\n".to_string(),
             false => String::new(),
         };
-    };
-    let percent = |e: f64| format!("{} %", crate::run::short(format!("{:.3}", e * 100.0).parse().unwrap_or(0.0)));
+    }
     let delays = |v: &[f64]| v.iter().map(|d| crate::run::short(*d)).collect::<Vec<_>>().join(", ");
-    let summary = if v.delay_tolerance > 0.0 {
-        let not_first = v.delay_check.iter().take(2).any(|c| !c.met);
-        let also = if not_first {
-            format!(", not at {}: know the delays that well", percent(first.error))
-        } else {
-            String::new()
-        };
-        format!(
-            "the tail bound and the effort (max|u_f| within {}× the verified run's, and any --u-limit) hold with every true input delay {} longer and shorter{also}",
-            quell::auto::EFFORT_GROWTH,
-            percent(v.delay_tolerance)
-        )
-    } else {
-        // The last level run: which way missed, and by how little.
-        let last = &v.delay_check[v.delay_check.len().saturating_sub(2)..];
-        let missed: Vec<&quell::auto::DelayCheck> = last.iter().filter(|c| !c.met).collect();
-        let way = match missed.as_slice() {
-            [one] if one.factor > 1.0 => "longer",
-            [_] => "shorter",
-            _ => "longer and shorter",
-        };
-        let least = missed.iter().map(|c| c.error).fold(f64::INFINITY, f64::min);
-        let what = missed_names(&missed);
-        let verb = if what.len() == 1 { "is" } else { "are" };
-        format!(
-            "{} {verb} missed with every true input delay {way} by as little as {}: the method predicts over the delays as given (the paper assumes them known), so measure them that well or better",
-            what.join(" and "),
-            percent(least)
-        )
-    };
+    let summary = v.delay_summary().replace("any u_limit", "any --u-limit");
     // With a [truth] whose delays are not the model's, the errors are of the true delays.
     let of = if truth.delays != a.scenario.plant.delays {
         format!(" (the errors are of [truth]'s delays, not the model's [{}])", delays(&a.scenario.plant.delays))

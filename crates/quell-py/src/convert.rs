@@ -270,6 +270,28 @@ pub fn vector(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<f6
     view.as_array().iter().enumerate().map(|(i, &v)| finite(name, &[i], v, kind, py)).collect()
 }
 
+/// Limits: one number (for every input) or a 1-D array-like of them, each finite or +∞ (no limit
+/// on that input), as the CLI's `--u-limit 40,inf` takes them; NaN and −∞ are `kind`'s error naming
+/// the entry (a limit ≤ 0 is the target's own check).
+pub fn limits(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<f64>> {
+    let py = obj.py();
+    let arr = real_array(obj, name, kind)?;
+    if arr.ndim() > 1 {
+        return Err(kind.err(
+            py,
+            format!("{name}: expected a number or a 1-D array of numbers, found {}", shape_text(arr.shape())),
+        ));
+    }
+    let scalar = arr.ndim() == 0;
+    let view = arr.readonly();
+    let checked = |(i, &v): (usize, &f64)| match v {
+        f64::INFINITY => Ok(v),
+        _ if scalar => finite(name, &[], v, kind, py),
+        _ => finite(name, &[i], v, kind, py),
+    };
+    view.as_array().iter().enumerate().map(checked).collect()
+}
+
 /// A str argument, or a TypeError naming it; a str with a lone surrogate (`"\ud800"`, which UTF-8 cannot hold) is a ScenarioError naming
 /// it, not Python's UnicodeEncodeError.
 /// [`text`] meant as TOML: a single line without `=` that is not a comment or a table header, and

@@ -280,6 +280,55 @@ pub struct DelayCheck {
 }
 
 impl Verification {
+    /// The delay check in a sentence ([`Verification::delay_check`]): the error at which the tail
+    /// bound and the effort hold both ways, or what the last level's runs missed and by how
+    /// little. Empty without checks.
+    pub fn delay_summary(&self) -> String {
+        let Some(first) = self.delay_check.first() else { return String::new() };
+        let percent =
+            |e: f64| format!("{} %", crate::settings::fmt_time(format!("{:.3}", e * 100.0).parse().unwrap_or(0.0)));
+        if self.delay_tolerance > 0.0 {
+            let also = match self.delay_check.iter().take(2).any(|c| !c.met) {
+                true => format!(", not at {}: know the delays that well", percent(first.error)),
+                false => String::new(),
+            };
+            return format!(
+                "the tail bound and the effort (max|u_f| within {EFFORT_GROWTH}× the verified run's, and any u_limit) hold with every true input delay {} longer and shorter{also}",
+                percent(self.delay_tolerance)
+            );
+        }
+        // The last level run: which way missed, and by how little.
+        let last = &self.delay_check[self.delay_check.len().saturating_sub(2)..];
+        let missed: Vec<&DelayCheck> = last.iter().filter(|c| !c.met).collect();
+        let way = match missed.as_slice() {
+            [one] if one.factor > 1.0 => "longer",
+            [_] => "shorter",
+            _ => "longer and shorter",
+        };
+        let least = missed.iter().map(|c| c.error).fold(f64::INFINITY, f64::min);
+        // What was missed, in the order of DelayCheck::missed, each once.
+        let mut what: Vec<String> = Vec::new();
+        for m in missed.iter().flat_map(|c| &c.missed) {
+            let name = match *m {
+                "ended" => {
+                    "a run that completes (it diverged, failed or departed from its continuous loop)".to_string()
+                }
+                "tail" => "the tail bound".to_string(),
+                "effort" => format!("the effort (max|u_f| within {EFFORT_GROWTH}× the verified run's)"),
+                _ => "the actuator limit".to_string(),
+            };
+            if !what.contains(&name) {
+                what.push(name);
+            }
+        }
+        let verb = if what.len() == 1 { "is" } else { "are" };
+        format!(
+            "{} {verb} missed with every true input delay {way} by as little as {}: the method predicts over the delays as given (the paper assumes them known), so measure them that well or better",
+            what.join(" and "),
+            percent(least)
+        )
+    }
+
     /// Every tail within its bound: a verification that did not pass then failed on the actuator
     /// limits alone (no candidate met them), an infeasible target rather than a failed run.
     pub fn tails_met(&self) -> bool {

@@ -189,13 +189,28 @@ pub const UF_CANCELLATION: f64 = 20.0;
 /// with x̂ 1e-5, with nothing said: 12× measured). An upper bound: where the states' errors are
 /// correlated they cancel in K x̂ too (the hard-disk servo, 420×, measured 1–3×), so the advice
 /// asks for a comparison at a tighter tolerance, not a verdict.
+/// In a sampled run the states' error is the controller's rounding, so the advice there is on the
+/// precision it is deployed in.
 pub fn uf_cancellation(result: &SimResult) -> Vec<String> {
+    let sampled = matches!(result.stats, crate::sim::RunStats::Sampled { .. });
     let lines = result.uf_terms.iter().enumerate().filter_map(|(i, &terms)| {
         let peak = result.max_uf(i);
         let ratio = result.uf_cancellation(i);
+        let remedy = if sampled {
+            format!(
+                "in the discrete controller that error is its arithmetic's rounding: about {:.0e} of its peak in f64, {:.0e} in f32 (export in f64 where that matters)",
+                0.5 * f64::EPSILON * ratio,
+                0.5 * f64::from(f32::EPSILON) * ratio
+            )
+        } else {
+            format!(
+                "where its digits matter (not for its peak against a limit), compare with a run at simulation.rtol and atol {}× tighter",
+                crate::settings::fmt_ratio(ratio)
+            )
+        };
         (ratio >= UF_CANCELLATION).then(|| {
             format!(
-                "u_f[{}] = −K x̂ + F u_d is the small difference of terms up to {ratio}× its peak ({} against {}): its error relative to its peak can reach that many times the states' (up to {} digits fewer; less where their errors cancel in K x̂ too); where its digits matter (not for its peak against a limit), compare with a run at simulation.rtol and atol {ratio}× tighter",
+                "u_f[{}] = −K x̂ + F u_d is the small difference of terms up to {ratio}× its peak ({} against {}): its error relative to its peak can reach that many times the states' (up to {} digits fewer; less where their errors cancel in K x̂ too); {remedy}",
                 i + 1,
                 crate::settings::fmt_4(terms),
                 crate::settings::fmt_4(peak),

@@ -621,8 +621,10 @@ fn sampled_loop<C: SampledController + ?Sized>(
     let stats = |controller_steps| RunStats::Sampled { controller_steps, sample_time: T };
     let mut result = SimResult::new(run.truth.m(), run.design.q(), n, stats(0));
     result.time_unit = run.design.plant().time_unit;
-    // x̂(k) when states are recorded (read before the step moves it to x̂(k + 1)).
+    // x̂(k) at the rows (read before the step moves it to x̂(k + 1)): recorded with the states, and
+    // what u_f(k)'s terms are formed from.
     let mut x_hat = vec![0.0; n];
+    let mut terms = plant.actuator.is_none().then(|| UfTerms::new(run.design));
     let bounds = run.bounds();
     let mut outcome = Outcome::Completed;
     let mut taken = 0;
@@ -632,11 +634,17 @@ fn sampled_loop<C: SampledController + ?Sized>(
         // the continuous loop's last row (t_end = 99.99999999 at T = 0.1 ended at 100).
         let t = grid.at(k).min(settings.t_end);
         plant.measure(t, run.reference);
-        if settings.record_states && k % every == 0 {
+        let row = k % every == 0;
+        if row {
             x_hat.copy_from_slice(ctrl.watched().x_hat);
         }
         match step_controller(ctrl, &plant.y_meas, &plant.g, t)? {
-            Ok(v) => plant.hold(v),
+            Ok(v) => {
+                if let Some(terms) = terms.as_mut().filter(|_| row) {
+                    terms.record(&x_hat, v, &mut result);
+                }
+                plant.hold(v)
+            }
             Err(diverged) => {
                 outcome = diverged;
                 break;
@@ -673,6 +681,26 @@ fn sampled_loop<C: SampledController + ?Sized>(
     result.stats = stats(taken);
     result.outcome = Some(outcome);
     Ok(result)
+}
+
+/// u_f(k)'s terms at the rows, −K x̂(k) and F u_d(k) = u_f(k) + K x̂(k), for
+/// [`SimResult::uf_cancellation`], as the continuous loop records them (a sampled design's report
+/// had said 0 where its terms were 350× u_f); not through a true actuator, whose u_f is not the
+/// controller's.
+struct UfTerms {
+    K_neg: DMatrix<f64>,
+    kx: Vec<f64>,
+}
+
+impl UfTerms {
+    fn new(design: &Design) -> Self {
+        UfTerms { K_neg: -design.K(), kx: vec![0.0; design.K().nrows()] }
+    }
+
+    fn record(&mut self, x_hat: &[f64], u_f: &[f64], result: &mut SimResult) {
+        crate::controller::mat_vec(&self.K_neg, x_hat, &mut self.kx, false);
+        result.record_uf_terms(&self.kx, u_f);
+    }
 }
 
 /// The sampled loop's measurement noise: white samples, or the band-limited n(t) at the sample
