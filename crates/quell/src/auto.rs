@@ -898,8 +898,13 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
     for c in &mut candidates {
         c.chosen = c.speed == speed;
     }
-    let advice =
-        if within { Vec::new() } else { vec![limit_advice(targets, &kept.2, kept.0.scenario.actuator.as_ref())] };
+    let advice = match within {
+        true => Vec::new(),
+        false => {
+            let s = &kept.0.scenario;
+            vec![limit_advice(targets, &kept.2, s.actuator.as_ref(), &s.steady_input().peak)]
+        }
+    };
     let mut auto = finish(
         kept,
         bound,
@@ -1148,9 +1153,30 @@ fn relax(
 
 /// Why no candidate was kept within the actuator limits: `closest` is the one nearest to them; with
 /// a true actuator (`[truth]` u_max) that the limit to raise to would pass, that it clips there (the
-/// advice had told a ball and beam to raise u_limit past its 0.45 drive).
-fn limit_advice(targets: &Targets, closest: &Candidate, actuator: Option<&crate::settings::Actuator>) -> String {
-    let advice = limits_to_raise(targets, closest);
+/// advice had told a ball and beam to raise u_limit past its 0.45 drive). Where the steady state
+/// alone (`steady`: its peak per input) passes a limit, that comes first: no design meets it (an
+/// F-16 pitch loop needing 29.2 of its elevator had been told only "raise to 33").
+fn limit_advice(
+    targets: &Targets,
+    closest: &Candidate,
+    actuator: Option<&crate::settings::Actuator>,
+    steady: &[f64],
+) -> String {
+    let over: Vec<String> = (steady.iter().enumerate())
+        .filter(|&(i, &peak)| peak > targets.limit(i))
+        .map(|(i, &peak)| {
+            let (peak, limit) = (crate::settings::fmt_4(peak), crate::settings::fmt_short(targets.limit(i)));
+            format!("u_f,{} {peak} against {limit}", i + 1)
+        })
+        .collect();
+    let advice = match over.is_empty() {
+        true => limits_to_raise(targets, closest),
+        false => format!(
+            "the steady state alone asks more than the actuator limit ({}; the design report's steady-state section): the plant needs that input for y = g whatever the controller; {}",
+            over.join(", "),
+            limits_to_raise(targets, closest)
+        ),
+    };
     let beyond: Vec<String> = (actuator.map_or(&[][..], |a| &a.limits[..]).iter().enumerate())
         .filter(|&(i, &u)| closest.max_uf.get(i).is_some_and(|&asked| asked > u))
         .map(|(i, &u)| format!("truth.u_max[{i}] = {}", crate::settings::fmt_short(u)))
@@ -2337,12 +2363,23 @@ mod tests {
         let mut closest = Candidate::ended(Speed::FIRST, 1);
         closest.max_uf = vec![0.5156];
         let drive = |u: f64| crate::settings::Actuator { delays: vec![0.0], limits: vec![u] };
-        let advice = limit_advice(&targets, &closest, Some(&drive(0.45)));
+        let advice = limit_advice(&targets, &closest, Some(&drive(0.45)), &[]);
         assert!(advice.contains("raise the actuator limit (u_limit) to at least 0.52"), "{advice}");
         assert!(advice.ends_with("; but truth.u_max[0] = 0.45 clips the true plant's input below that, so asking less of the loop is the way there (a raised limit is met only through the clip, which the method does not model)"), "{advice}");
         for actuator in [Some(drive(0.6)), None] {
-            assert_eq!(limit_advice(&targets, &closest, actuator.as_ref()), limits_to_raise(&targets, &closest));
+            assert_eq!(
+                limit_advice(&targets, &closest, actuator.as_ref(), &[0.4]),
+                limits_to_raise(&targets, &closest)
+            );
         }
+        // A steady state beyond the limit is named first (helper tryout, 2026-12-06: an F-16 pitch
+        // loop whose steady elevator is 29.2 was told only to raise its limit of 25).
+        let steady = limit_advice(&targets, &closest, None, &[0.47]);
+        assert!(
+            steady.starts_with("the steady state alone asks more than the actuator limit (u_f,1 0.47 against 0.45; "),
+            "{steady}"
+        );
+        assert!(steady.ends_with(&limits_to_raise(&targets, &closest)), "{steady}");
     }
 
     /// The poles' extreme magnitudes and the largest ratio between neighbours.
