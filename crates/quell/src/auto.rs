@@ -59,7 +59,7 @@ use crate::linalg::eigenvalues;
 use crate::scenario::exosystem::Exosystem;
 use crate::scenario::{pole_lists, poles_value, PartialDesign, Scenario, ScenarioError};
 use crate::signal::{Component, Signal};
-use crate::sim::{loop_rate, Outcome, Run, SimError, COARSE_SAMPLE};
+use crate::sim::{loop_rate, Outcome, Peaks, Run, SimError, COARSE_SAMPLE};
 
 /// Fastest adaptation rate μ_i λ_max(Ω̄_i) the automatic design chooses, per unit of the time
 /// scale r: faster buys little (the error is then limited by the filters) and makes the loop stiff.
@@ -370,6 +370,9 @@ pub struct Candidate {
     /// The largest ratio of u_f's terms to its peak ([`Verification::uf_cancellation`]).
     #[serde(skip)]
     uf_cancellation: f64,
+    /// The watched signals' peaks in its run: what the delay check's runaway bounds are set from.
+    #[serde(skip)]
+    peaks: Peaks,
 }
 
 /// A complete scenario, its design, the choices made and their verification.
@@ -517,6 +520,18 @@ struct Verifier<'p> {
 impl Verifier<'_> {
     /// One verifying simulation of `scenario` with `design`, the candidate at `speed`.
     fn check(&mut self, scenario: &Scenario, design: &Design, speed: Speed) -> Result<Candidate, AutoError> {
+        self.check_within(scenario, design, speed, None)
+    }
+
+    /// [`Verifier::check`] within `runaway` bounds per watched signal (a run past one ends as
+    /// diverged there; [`crate::sim::RunSettings::runaway`]).
+    fn check_within(
+        &mut self,
+        scenario: &Scenario,
+        design: &Design,
+        speed: Speed,
+        runaway: Option<Peaks>,
+    ) -> Result<Candidate, AutoError> {
         self.runs += 1;
         let (run, t_end) = (self.runs, scenario.simulation.t_end);
         let progress = &mut *self.progress;
@@ -532,7 +547,13 @@ impl Verifier<'_> {
             stopped |= flow.is_break();
             flow
         };
-        let r = Run::of(scenario, design).simulate(&mut watch)?;
+        let run_of = Run::of(scenario, design);
+        let run_of = match runaway {
+            Some(peaks) => run_of
+                .settings(crate::sim::RunSettings { runaway: Some(peaks), ..crate::sim::RunSettings::of(scenario) }),
+            None => run_of,
+        };
+        let r = run_of.simulate(&mut watch)?;
         self.steps += r.stats.steps();
         match r.outcome.clone().unwrap_or(Outcome::Completed) {
             Outcome::Completed => {
@@ -577,6 +598,7 @@ fn candidate(scenario: &Scenario, r: &crate::sim::SimResult, speed: Speed, conve
         mid_max_e,
         thrashing: crate::diagnostics::thrashing(&r.stats, scenario.plant.time_unit),
         uf_cancellation: (0..m).map(|i| r.uf_cancellation(i)).fold(0.0, f64::max),
+        peaks: r.peaks,
     }
 }
 
@@ -597,6 +619,7 @@ impl Candidate {
             mid_max_e: none,
             thrashing: None,
             uf_cancellation: 0.0,
+            peaks: Peaks::default(),
         }
     }
 
@@ -939,6 +962,13 @@ fn delay_checks(
     if error == 0.0 || truth.delays.iter().all(|&d| d == 0.0) || verifier.nested {
         return Ok((checks, f64::NAN));
     }
+    // A run past a study's default runaway factor times the verified run's peaks ends there, as a
+    // study's draw does (one diverging at +10 % had filled the history's budget first and been
+    // reported by it).
+    let peak_factor = crate::study::Runaway::default().peak;
+    let verified_peaks = verified.candidates.iter().find(|c| c.chosen).map(|c| c.peaks);
+    let xi_bound = Run::of(s, design).divergence_bounds().0[Peaks::index_of("xi_hat[")];
+    let runaway = verified_peaks.map(|p| p.runaway(peak_factor, xi_bound));
     for level in [error, 0.3 * error, 0.1 * error] {
         let runs = [1.0 + level, 1.0 - level].map(|factor| {
             (
@@ -955,7 +985,7 @@ fn delay_checks(
             plant.delays.clone_from(&delays);
             scenario.truth = Some(plant);
             let ended = |why: String| (Some(why), vec!["ended"], Vec::new(), Vec::new());
-            let (ended, missed, tail_max_e, max_uf) = match verifier.check(&scenario, design, speed) {
+            let (ended, missed, tail_max_e, max_uf) = match verifier.check_within(&scenario, design, speed, runaway) {
                 Ok(c) => {
                     let tests = [
                         ("tail", c.tail_within(&verified.bound, 1.0)),
@@ -965,6 +995,9 @@ fn delay_checks(
                     let missed = tests.iter().filter(|(_, within)| !within).map(|(what, _)| *what).collect();
                     (None, missed, c.tail_max_e, c.max_uf)
                 }
+                Err(AutoError::Run(o @ Outcome::Diverged { .. })) if runaway.is_some() => ended(format!(
+                    "{o} (the divergence bound, or {peak_factor}× the verified run's peak of that signal)"
+                )),
                 Err(AutoError::Run(o)) => ended(o.to_string()),
                 Err(AutoError::Departed(how)) => ended(format!("departed from its continuous loop: {how}")),
                 Err(AutoError::Sim(e)) => ended(e.to_string()),

@@ -1623,13 +1623,25 @@ fn the_chosen_design_is_run_with_its_delays_off() {
         assert!((c.delays[0] - c.factor).abs() < 1e-12 && (c.delays[1] - 3.0 * c.factor).abs() < 1e-12);
         assert!((c.error - (c.factor - 1.0).abs()).abs() < 1e-12, "{c:?}");
     }
-    // The +10 % run again, from the scenario file the design writes.
+    // The +10 % run again, from the scenario file the design writes, within 100× the verified
+    // run's peaks (ξ̂ at its divergence bound, x̂ at least as x is), as a study's runaway rule.
+    let verified = Run::of(&auto.scenario, &auto.design).simulate(&mut |_| ControlFlow::Continue(())).unwrap();
     let longer = format!("{}\n[truth]\ndelays = [1.1, 3.3000000000000003]\n", auto.scenario.to_toml());
     let s = Scenario::from_toml(&longer).unwrap();
     let d = s.design().unwrap();
-    let r = Run::of(&s, &d).simulate(&mut |_| ControlFlow::Continue(())).unwrap();
-    let ended = r.outcome.map(|o| o.to_string());
+    let mut bounds = verified.peaks.bounds(100.0);
+    bounds.0[2] = Run::of(&s, &d).divergence_bounds().0[2];
+    bounds.0[1] = bounds.0[1].max(bounds.0[0]);
+    let settings = quell::sim::RunSettings { runaway: Some(bounds), ..quell::sim::RunSettings::of(&s) };
+    let r = Run::of(&s, &d).settings(settings).simulate(&mut |_| ControlFlow::Continue(())).unwrap();
+    let ended = r
+        .outcome
+        .as_ref()
+        .map(|o| format!("{o} (the divergence bound, or 100× the verified run's peak of that signal)"));
     assert_eq!(ended, v.delay_check[0].ended, "{:?}", v.delay_check[0]);
+    // Without the rule it diverges later (it had filled the history budget first in some builds).
+    let unbounded = Run::of(&s, &d).simulate(&mut |_| ControlFlow::Continue(())).unwrap();
+    assert!(unbounded.t.last() > r.t.last(), "{:?} {:?}", unbounded.outcome, r.outcome);
     // delay_error = 0: no check.
     let none = auto_design(&doc, &Targets { delay_error: Some(0.0), ..Targets::default() }).unwrap();
     assert!(none.verification.delay_check.is_empty() && none.verification.delay_tolerance.is_nan());

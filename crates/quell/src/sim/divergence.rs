@@ -69,6 +69,25 @@ impl Peaks {
         Peaks(self.0.map(|p| if p > 0.0 && p.is_finite() { factor * p } else { f64::INFINITY }))
     }
 
+    /// The runaway rule's bounds of a run against a reference run of these peaks (a study's nominal
+    /// run, the automatic design's verified one): `factor` times them, but ξ̂ at `xi_bound` (its
+    /// divergence bound), and x̂ at least as x is.
+    /// ξ̂ only at its divergence bound: the disturbance observer (20) reads a true plant's mismatch
+    /// as disturbance, so ξ̂_ω of a converging run can pass 100× a reference run's whose observer
+    /// was exact (an aircraft pitch loop with truth.A, B 10 % off: 28 of 50 draws stopped at its
+    /// nominal delay, all of which converge, tails 1.7e-9 to 4e-5 against 2.5e-3). A ξ̂ that runs
+    /// away drives u, so x̂ and η̂ follow it past theirs. x̂ estimates x in x's coordinates: a
+    /// mismatch moves x̂ towards x, so it is bounded as x is (the same pitch loop's observer,
+    /// nominally at 0.26 beside an x of 5.3e6 in an unobserved integrator, reached 27 in 11
+    /// converging draws).
+    pub(crate) fn runaway(&self, factor: f64, xi_bound: f64) -> Peaks {
+        let mut peaks = self.bounds(factor);
+        peaks.0[Peaks::index_of("xi_hat[")] = xi_bound;
+        let (x, x_hat) = (Peaks::index_of("x["), Peaks::index_of("x_hat["));
+        peaks.0[x_hat] = peaks.0[x_hat].max(peaks.0[x]);
+        peaks
+    }
+
     /// The watched signal nearest its bound in `bounds` (by its share of it), as "by then x_hat
     /// (observer state) had reached 3.20e9 in magnitude, 3.2e-3 of its divergence bound": what a run a budget
     /// ended was doing, blowing up or not. `None` before any peak was recorded.

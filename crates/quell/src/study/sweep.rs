@@ -62,18 +62,7 @@ impl RunSpec {
     /// where μ₂ = 90 takes 704); it keeps its own step budget and the peak rule.
     fn runaway_limits(&self, shape: &StepScale) -> Option<(usize, Peaks)> {
         self.nominal.map(|n| {
-            let mut peaks = n.peaks.bounds(self.runaway.peak);
-            // ξ̂ only at its divergence bound: the disturbance observer (20) reads a true plant's
-            // mismatch as disturbance, so ξ̂_ω of a converging draw can pass 100× a nominal run's
-            // whose observer was exact (an aircraft pitch loop with truth.A, B 10 % off: 28 of 50
-            // draws stopped at its nominal delay, all of which converge, tails 1.7e-9 to 4e-5
-            // against 2.5e-3). A ξ̂ that runs away drives u, so x̂ and η̂ follow it past theirs.
-            peaks.0[Peaks::index_of("xi_hat[")] = n.xi_bound;
-            // x̂ estimates x in x's coordinates: a mismatch moves x̂ towards x, so it is bounded as
-            // x is (the same pitch loop's observer, nominally at 0.26 beside an x of 5.3e6 in an
-            // unobserved integrator, reached 27 in 11 converging draws).
-            let (x, x_hat) = (Peaks::index_of("x["), Peaks::index_of("x_hat["));
-            peaks.0[x_hat] = peaks.0[x_hat].max(peaks.0[x]);
+            let peaks = n.peaks.runaway(self.runaway.peak, n.xi_bound);
             if shape.expects_stiff && !n.expects_stiff {
                 return (usize::MAX, peaks);
             }
