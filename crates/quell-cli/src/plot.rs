@@ -639,7 +639,9 @@ fn error_on_log_axis(
     let e: Vec<(f64, f64)> = samples(r, &r.e, i).collect();
     if stopped {
         (
-            [(format!("|e{c}(t)|"), decimated(e.iter().map(|&(t, v)| (t, v.abs())), span))],
+            // Zeros (an e(0) of 0) have no logarithm: left out, as the envelope leaves them (a
+            // bicycle's e₁(0) = 0 had emptied the panel under a title saying e stayed below 1e-14).
+            [(format!("|e{c}(t)|"), decimated(e.iter().map(|&(t, v)| (t, v.abs())).filter(|&(_, v)| v > 0.0), span))],
             format!("{channel}: tracking error |e(t)|, log scale (the run stopped early: its growth)"),
         )
     } else {

@@ -50,6 +50,17 @@ fn log_range(lo: f64, hi: f64) -> (f64, f64) {
     (decade((lo / 3.0).max(hi * 10f64.powf(-DECADES)), f64::floor), decade(hi * 3.0, f64::ceil))
 }
 
+/// The time from which every point is below the axis's `lo`: the first after the last on the axis
+/// (a series that is not monotone, a stopped run's |e|, may dip below it and come back: a bicycle's
+/// e₁(0) = 0 had been read as "below 1e-14 from t = 0 on" and its whole growth left undrawn).
+fn below_axis<'a>(points: impl Iterator<Item = &'a (f64, f64)>, lo: f64) -> Option<f64> {
+    let all: Vec<&(f64, f64)> = points.collect();
+    match all.iter().rposition(|&&(_, v)| v >= lo) {
+        Some(k) => all.get(k + 1).map(|&&(t, _)| t),
+        None => all.first().map(|&&(t, _)| t),
+    }
+}
+
 /// A panel of `series` (positive values) against t on a logarithmic value axis, from `t0` to
 /// `t_right`.
 pub(super) fn log_panel<DB: DrawingBackend + Strokes>(
@@ -65,7 +76,7 @@ pub(super) fn log_panel<DB: DrawingBackend + Strokes>(
     // Below the axis the curve ends, and the title says from when (drawn at the axis, its run at
     // 1e-90 looked like a floor at 1e-14).
     let (lo, hi) = log_range(lo, hi);
-    let below = points.clone().find(|&&(_, v)| v < lo).map(|&(t, _)| t);
+    let below = below_axis(points.clone(), lo);
     let title = match (below, points.clone().next()) {
         (Some(t), _) => format!("{title}; below 1e-{DECADES} of its peak from t = {} {time} on", crate::run::short(t)),
         (None, None) => format!("{title}: e ≡ 0"),
@@ -87,7 +98,7 @@ pub(super) fn log_panel<DB: DrawingBackend + Strokes>(
     for (k, (name, points)) in series.iter().enumerate().filter(|(_, (_, p))| !p.is_empty()) {
         let style = pick(k).stroke_width(if DB::SPIKES { 1 } else { 2 });
         chart
-            .draw_series(LineSeries::new(points.iter().copied().take_while(|&(_, v)| v >= lo), style))
+            .draw_series(LineSeries::new(points.iter().copied().filter(|&(_, v)| v >= lo), style))
             .map_err(|e| e.to_string())?
             .label(name.as_str())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], pick(k).stroke_width(2)));
@@ -101,6 +112,18 @@ pub(super) fn log_panel<DB: DrawingBackend + Strokes>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Below the axis from the first point after the last on it: a dip that comes back is not; a
+    /// curve that falls off for good is, from where it fell; one wholly below, from its start.
+    #[test]
+    fn a_series_is_below_the_axis_from_where_it_leaves_it_for_good() {
+        let dip = [(0.0, 1e-20), (1.0, 1.0), (2.0, 1e-20), (3.0, 5.0)];
+        assert_eq!(below_axis(dip.iter(), 1e-10), None);
+        let falls = [(0.0, 1.0), (1.0, 1e-3), (2.0, 1e-20), (3.0, 1e-30)];
+        assert_eq!(below_axis(falls.iter(), 1e-10), Some(2.0));
+        assert_eq!(below_axis([(0.0, 1e-20), (1.0, 1e-30)].iter(), 1e-10), Some(0.0));
+        assert_eq!(below_axis([].iter(), 1e-10), None);
+    }
 
     /// m(t) of e = e^{−t} sin 40t over 10 s: non-increasing, never above e^{−t} nor below the
     /// largest crest after t, e^{−(t + T/2)} sin(…) ≥ 0.99 e^{−t − 0.079} (a half period T/2 =
