@@ -1801,3 +1801,22 @@ fn a_regulated_channels_settling_band_says_whose_peak_it_is() {
     assert!(line(1).contains("settled (2 % band of its peak error, g being 0) at t = "), "{err}");
     assert!(line(2).contains("settled (2 % band) at t = "), "{err}");
 }
+
+/// A sampled run that diverges under its noise and completes without it is told so before the
+/// sampling's advice, which is for the noise-free loop (a bicycle under 0.2 mrad of noise had
+/// been told only to sample faster, and diverged as fast there; helper tryout, 2026-12-06).
+#[test]
+fn a_run_the_noise_drives_away_is_told_so() {
+    let dir = temp_dir("noise-drives");
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../quell/tests/data/whipple-bicycle-noise.toml");
+    let out = dir.path().join("out");
+    let args = ["--t-end", "3", "--output-step", "0.0005", "--sample-time", "0.0005", "--no-plots", "--out"];
+    let o = quell(&[&["run", file.to_str().unwrap()][..], &args[..], &[out.to_str().unwrap()]].concat());
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let text = stdout(&o);
+    let noise = text
+        .find("advice: the run diverged under its [noise] and completes without it at the same sample time")
+        .expect(&text);
+    let sampling = text.find("advice: the sampled-data loop at T_s = 0.0005 s").expect(&text);
+    assert!(noise < sampling, "{text}");
+}
