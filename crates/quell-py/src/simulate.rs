@@ -54,13 +54,15 @@ struct OfSamples {
     summary: Vec<quell::sim::ChannelSummary>,
 }
 
-/// `data` as a read-only numpy array of `shape`, owning the vector (no copy).
+/// `data` as a read-only numpy array of `shape`, owning the vector (no copy). The flat array the
+/// shaped one views is frozen first: frozen after, its base stayed writable, so
+/// `r.y.flags.writeable = True` was allowed and a write changed the stored result (hostile review).
 fn frozen_array(py: Python<'_>, data: Vec<f64>, shape: &[usize]) -> PyResult<Py<PyAny>> {
-    let a = PyArray1::from_vec(py, data).reshape(shape.to_vec())?.into_any();
+    let flat = PyArray1::from_vec(py, data);
     let kwargs = PyDict::new(py);
     kwargs.set_item("write", false)?;
-    a.call_method("setflags", (), Some(&kwargs))?;
-    Ok(a.unbind())
+    flat.call_method("setflags", (), Some(&kwargs))?;
+    Ok(flat.reshape(shape.to_vec())?.into_any().unbind())
 }
 
 impl PySimResult {

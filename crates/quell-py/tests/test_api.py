@@ -128,6 +128,11 @@ def test_simulate_shapes_and_overrides(tmp_path):
     np.testing.assert_array_equal(r.e, r.y - r.g)
     with pytest.raises(ValueError):
         r.y[0, 0] = 1.0  # results are read-only
+    # ... and cannot be made writable: their flat base had stayed writable, so flags.writeable =
+    # True went through and a write changed the stored result, its pickles and frames.
+    for a in (r.t, r.y, r.u_f, r.eta):
+        with pytest.raises(ValueError):
+            a.flags.writeable = True
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # 1 ms is fine for the paper (T_s·ρ = 0.009)
         sampled = quell.simulate(s, t_end=10.0, sample_time=1e-3)

@@ -101,3 +101,19 @@ def test_an_output_named_as_an_input_is_refused_by_the_observer_system():
         d.observer_system()
     assert e.value.key == "plant.outputs"
     assert d.decoupled_system().output_labels == ["left", "roll"]  # the other systems are unaffected
+
+
+def test_a_name_both_input_and_output_of_a_loop_system_is_refused():
+    """An output named as the estimate of a state (`v_hat` beside a state `v`), or as the decoupled
+    plant's input `u_d[1]`, had been accepted: wired by name with control.interconnect, the
+    estimate was fed back as the measurement (poles -12.9, -3, -1.2 instead of -4, -3, -2;
+    hostile review, 2026-12-06). Refused naming the shared signal."""
+    text = named_paper()
+    states = quell.Scenario.from_toml(text).plant.states
+    d = quell.Scenario.from_toml(text.replace('outputs = ["pitch", "roll"]', f'outputs = ["{states[0]}_hat", "roll"]')).design()
+    with pytest.raises(quell.ScenarioError, match=rf"the observer's output '{states[0]}_hat' is also one of its inputs' names") as e:
+        d.observer_system()
+    assert e.value.key == "plant.outputs"
+    d = quell.Scenario.from_toml(text.replace('outputs = ["pitch", "roll"]', 'outputs = ["u_d[1]", "roll"]')).design()
+    with pytest.raises(quell.ScenarioError, match=r"the decoupled plant's output 'u_d\[1\]' is also one of its inputs' names"):
+        d.decoupled_system()

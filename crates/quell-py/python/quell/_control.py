@@ -9,6 +9,25 @@ def _labels(name, count):
     return [f"{name}[{i + 1}]" for i in range(count)]
 
 
+def _refuse_shared(system, inputs, outputs):
+    """A ScenarioError naming a signal of `system` that is both an input and an output: wired by
+    name (``control.interconnect``), python-control would connect the output to that input (an
+    observer whose estimate of v was named as the measurement ``v_hat`` had its loop's poles at
+    -12.9, -3, -1.2 instead of -4, -3, -2)."""
+    shared = [name for name in outputs if name in inputs]
+    if shared:
+        from ._errors import ScenarioError
+
+        error = ScenarioError(
+            f"plant.outputs: {system}'s output {shared[0]!r} is also one of its inputs' names, so "
+            "python-control, wiring by name, would feed it back into that input; rename the plant's "
+            "signals (plant.inputs, plant.outputs, plant.states, or the inputs=/outputs=/states= "
+            "keywords) so that no name is both"
+        )
+        error.key = "plant.outputs"
+        raise error
+
+
 def decoupled_system(design):
     """The delay-free decoupled plant of Proposition 1 with x̂ = x: ẋ = A_f x + B_f u_d, y = C x,
     from the (delayed) adaptive commands u_d to y. Its transfer matrix is diagonal, channel i's
@@ -17,6 +36,7 @@ def decoupled_system(design):
 
     plant = design.plant
     m = plant.m
+    _refuse_shared("the decoupled plant", _labels("u_d", m), plant.outputs)
     return control.ss(
         design.A_f,
         design.B_f,
@@ -50,6 +70,7 @@ def observer_system(design):
         )
         error.key = "plant.outputs"
         raise error
+    _refuse_shared("the observer", plant.inputs + plant.outputs, estimates)
     return control.ss(
         A - L @ C,
         np.hstack([B, L]),
