@@ -93,6 +93,12 @@ fn read(obj: &Bound<'_, PyAny>, name: &str, out: &mut [f64]) -> PyResult<()> {
         }
     }
     if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
+        // The length first: a list subclass reporting 10^12 entries had aborted the interpreter
+        // allocating room for them.
+        if let Some(n) = obj.len().ok().filter(|&n| n != m) {
+            let expected = quell::settings::entries(m);
+            return Err(Kind::Controller.err(py, format!("{name}: expected {expected} (one per output), found {n}")));
+        }
         // Booleans are refused as `Plant` refuses a boolean array, not read as 0 and 1.
         if obj.try_iter().is_ok_and(|mut items| items.any(|x| x.is_ok_and(|x| x.is_instance_of::<PyBool>()))) {
             return Err(pyo3::exceptions::PyTypeError::new_err(format!(
@@ -335,6 +341,12 @@ impl PyController {
             return Err(pyo3::exceptions::PyTypeError::new_err(format!(
                 "state: expected a 1-D array of real numbers (Controller.__getstate__()'s), found a {d}-D array"
             )));
+        }
+        // The length first: range(10**12) had aborted the interpreter allocating its entries.
+        let expected = self.lock().state_len();
+        if let Some(n) = state.len().ok().filter(|&n| n != expected) {
+            let e = quell::ControllerError::StateLength { expected, found: n };
+            return Err(raise(py, Kind::Controller)(&e));
         }
         let values = match state.cast::<PyArray1<f64>>() {
             Ok(a) => a.readonly().as_array().to_vec(),

@@ -114,7 +114,7 @@ fn unreadable_nesting(np: &Bound<'_, PyModule>, obj: &Bound<'_, PyAny>, name: &s
     if entries > MAX_NESTED_ENTRIES {
         return Err(kind.err(
             py,
-            format!("{name}: expected an array-like of at most {MAX_NESTED_ENTRIES:e} numbers, found nested lists of {entries:e} (rows shared at every level?)"),
+            format!("{name}: expected an array-like of at most {MAX_NESTED_ENTRIES:e} numbers, found {entries:e} entries (a sequence that long, or rows shared at every level)"),
         ));
     }
     if masked > 0 {
@@ -158,7 +158,11 @@ fn walk(
         return Ok(Nested { masked, entries: obj.getattr("size")?.extract::<f64>().unwrap_or(1.0) });
     }
     if depth >= 64 || !(obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>()) {
-        return Ok(Nested { masked: 0, entries: 1.0 });
+        // Another sequence counts as its length (range(10**12) had numpy allocate until the
+        // process aborted); an array's own size is numpy's to read.
+        let sequence = !(obj.is_instance_of::<PyString>() || obj.hasattr("__array__").unwrap_or(false));
+        let entries = obj.len().ok().filter(|_| sequence).map_or(1.0, |n| n as f64);
+        return Ok(Nested { masked: 0, entries });
     }
     let id = obj.as_ptr() as usize;
     if let Some(known) = memo.get(&id) {

@@ -277,8 +277,22 @@ def test_nested_lists_that_share_their_rows_are_refused_at_once():
     for _ in range(40):
         a = [a, a]
     start = time.monotonic()
-    with pytest.raises(quell.ScenarioError, match=r"^A: expected an array-like of at most 1e9 numbers, found nested lists of 1.099511627776e12"):
+    with pytest.raises(quell.ScenarioError, match=r"^A: expected an array-like of at most 1e9 numbers, found 1.099511627776e12 entries"):
         quell.Plant(A=a, B=B, C=C)
+    # A sequence that long (range(10**12) had numpy allocate until the process aborted), and a
+    # controller's input or state of that length (its allocation had aborted the interpreter).
+    with pytest.raises(quell.ScenarioError, match=r"^A: expected an array-like of at most 1e9 numbers, found 1e12 entries \(a sequence"):
+        quell.Plant(A=range(10**12), B=B, C=C)
+
+    class Huge(list):
+        def __len__(self):
+            return 10**12
+
+    c = quell.Controller(quell.paper_example().design(), 0.01)
+    with pytest.raises(quell.ControllerError, match=r"^y: expected 2 entries \(one per output\), found 1000000000000"):
+        c.step(Huge([0.0, 0.0]), [0.0, 0.0])
+    with pytest.raises(quell.ControllerError, match="found 1000000000000"):
+        c.__setstate__(range(10**12))
     looped = []
     looped.append(looped)
     with pytest.raises((quell.ScenarioError, TypeError)):
