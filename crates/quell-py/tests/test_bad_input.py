@@ -313,3 +313,20 @@ def test_a_keyboard_interrupt_while_reading_an_array_goes_on_as_it_is():
 
     with pytest.raises(KeyboardInterrupt):
         quell.Plant(A=Lazy(), B=B, C=C)
+
+
+def test_a_terminal_given_as_a_scenario_file_is_refused_not_read():
+    """A terminal's path (a pty here) had blocked Scenario.load and Study.load past Ctrl-C: a
+    device is refused before it is opened (hostile review, 2026-12-06)."""
+    import os
+    import pty
+
+    leader, follower = pty.openpty()
+    try:
+        path = os.ttyname(follower)
+        for load in (quell.Scenario.load, quell.Study.load):
+            with pytest.raises(quell.ScenarioError, match="a device, not a file"):
+                load(path)
+    finally:
+        os.close(leader)
+        os.close(follower)

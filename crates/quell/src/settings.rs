@@ -65,6 +65,11 @@ pub fn read_input(path: &std::path::Path) -> Result<String, String> {
         if kind.is_fifo() || kind.is_socket() {
             return Err("a pipe or socket, not a file; give the path of a scenario or study file".into());
         }
+        // A terminal waits for typing that never ends the read (Scenario.load of /dev/pts/N had
+        // blocked past Ctrl-C); no device holds a scenario.
+        if kind.is_char_device() || kind.is_block_device() {
+            return Err("a device, not a file; give the path of a scenario or study file".into());
+        }
     }
     let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
     let mut bytes = Vec::new();
