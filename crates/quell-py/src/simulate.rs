@@ -54,6 +54,41 @@ struct OfSamples {
     summary: Vec<quell::sim::ChannelSummary>,
 }
 
+/// Whether a restored result's sizes agree: every signal's length is its rows times its width
+/// (m, m·q, n), computed without overflow; per-channel figures at most m long, and m ≤ n within a
+/// design's limit. A tampered pickle (q = 100, m = 2^40) had panicked in the
+/// summary's slicing.
+fn consistent(r: &quell::sim::SimResult) -> Result<(), &'static str> {
+    let rows = r.t.len();
+    let sized = |v: &[f64], width: usize| rows.checked_mul(width).is_some_and(|n| n == v.len());
+    let (m, q, n) = (r.m, r.q, r.n);
+    // A design's plant has at most MAX_STATES states and no more inputs than states.
+    if m == 0 || q == 0 || n > quell::design::MAX_STATES || m > n {
+        return Err("its m, q or n");
+    }
+    let signals = [&r.y, &r.g, &r.e, &r.u, &r.u_f].iter().all(|v| sized(v, m));
+    let eta = m.checked_mul(q).is_some_and(|w| sized(&r.eta, w));
+    let states = [&r.x, &r.x_hat].iter().all(|v| v.is_empty() || sized(v, n));
+    let per_channel = [
+        &r.limited.len(),
+        &r.u_max.len(),
+        &r.peak_u.len(),
+        &r.peak_uf.len(),
+        &r.peak_demand.len(),
+        &r.peak_e.len(),
+        &r.uf_terms.len(),
+    ]
+    .iter()
+    .all(|&&len| len <= m);
+    match (signals, eta, states, per_channel) {
+        (true, true, true, true) => Ok(()),
+        (false, ..) => Err("its signals' lengths are not its rows times m"),
+        (_, false, ..) => Err("η̂'s length is not its rows times m·q"),
+        (_, _, false, _) => Err("its states' lengths are not its rows times n"),
+        _ => Err("a per-channel figure longer than m"),
+    }
+}
+
 /// `data` as a read-only numpy array of `shape`, owning the vector (no copy). The flat array the
 /// shaped one views is frozen first: frozen after, its base stayed writable, so
 /// `r.y.flags.writeable = True` was allowed and a write changed the stored result (hostile review).
@@ -548,6 +583,7 @@ impl PySimResult {
             uf_terms: state.get_item("uf_terms")?.map_or(Ok(vec![]), |v| v.extract())?,
             time_unit,
         };
+        consistent(&r).map_err(bad)?;
         PySimResult::new(py, r, item("diagnostics")?.extract()?, Labels { inputs, outputs, states })
     }
     /// Python's repr, the outcome as the `outcome` property's dict.

@@ -330,3 +330,14 @@ def test_a_terminal_given_as_a_scenario_file_is_refused_not_read():
     finally:
         os.close(leader)
         os.close(follower)
+
+
+def test_a_tampered_result_pickle_is_refused_not_a_panic():
+    """A SimResult's pickled state with sizes that do not agree (q = 100, m = 2**40) had raised a
+    Rust PanicException in the summary (hostile review)."""
+    r = quell.simulate(quell.paper_example(), t_end=1.0)
+    restore, (state,) = r.__reduce__()
+    assert restore(dict(state)).summary() == r.summary()
+    for key, value in [("q", 100), ("m", 2**40), ("m", 0), ("n", 10**6)]:
+        with pytest.raises(quell.ScenarioError, match=r"^state: not a pickled quell.SimResult \("):
+            restore({**state, key: value}).summary()
