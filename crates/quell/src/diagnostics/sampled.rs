@@ -232,6 +232,21 @@ pub(crate) enum Compared {
     Follows,
 }
 
+/// A run that diverged under its noise and completes without it, said first: what the comparison
+/// with the continuous loop offers (a sample time) is for the noise-free loop (a bicycle under 0.2
+/// mrad of noise had been told only to sample faster, and diverged as fast there).
+fn noise_drove(result: &SimResult, quiet: Option<&super::noise::Quiet>) -> Vec<String> {
+    match quiet {
+        Some((_, qr))
+            if matches!(result.outcome, Some(Outcome::Diverged { .. }))
+                && matches!(qr.outcome, None | Some(Outcome::Completed)) =>
+        {
+            vec!["the run diverged under its [noise] and completes without it at the same sample time: the noise drives it away, whatever the sampling below adds; reduce the noise (a sensor filter, noise.std) or slow the loop that amplifies it (slower design.observer_poles and design.channel_poles)".to_string()]
+        }
+        _ => Vec::new(),
+    }
+}
+
 /// [`sampled_advice`], with `quiet` the run without `s`'s noise where it has some
 /// ([`super::noise::without_noise`]), and what the comparison with its continuous loop found.
 pub(crate) fn sampled_lines(
@@ -248,18 +263,7 @@ pub(crate) fn sampled_lines(
     // Under noise, which the two loops read at different instants, both are compared without it (a
     // flexible joint whose u_f reached 8,646 under 1e-4 rad of noise had been compared with
     // nothing, and its tail's noise hid the transient from the heuristic).
-    // A run that diverged under its noise and completes without it is said so first: what the
-    // comparison below offers (a sample time) is for the noise-free loop (a bicycle under 1 mrad of
-    // noise had been told only to sample faster, and diverged as fast there).
-    let noise_drove = match quiet {
-        Some((_, qr))
-            if matches!(result.outcome, Some(Outcome::Diverged { .. }))
-                && matches!(qr.outcome, None | Some(Outcome::Completed)) =>
-        {
-            vec!["the run diverged under its [noise] and completes without it at the same sample time: the noise drives it away, whatever the sampling below adds; reduce the noise (a sensor filter, noise.std) or slow the loop that amplifies it (slower design.observer_poles and design.channel_poles)".to_string()]
-        }
-        _ => Vec::new(),
-    };
+    let noise_drove = noise_drove(result, quiet);
     let (s, result, without) = match (&s.noise, quiet) {
         (None, _) => (s, result, ""),
         (Some(_), Some((qs, qr))) => (qs, qr, "; both without [noise]"),
