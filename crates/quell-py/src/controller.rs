@@ -93,9 +93,10 @@ fn read(obj: &Bound<'_, PyAny>, name: &str, out: &mut [f64]) -> PyResult<()> {
         }
     }
     if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
-        // The length first: a list subclass reporting 10^12 entries had aborted the interpreter
-        // allocating room for them.
-        if let Some(n) = obj.len().ok().filter(|&n| n != m) {
+        // Too long, refused before it is read: a list subclass reporting 10^12 entries had aborted
+        // the interpreter allocating room for them (a short one keeps its own message: [[0, 0]]
+        // is not 1-D).
+        if let Some(n) = obj.len().ok().filter(|&n| n > m) {
             let expected = quell::settings::entries(m);
             return Err(Kind::Controller.err(py, format!("{name}: expected {expected} (one per output), found {n}")));
         }
