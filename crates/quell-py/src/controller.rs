@@ -100,8 +100,10 @@ fn read(obj: &Bound<'_, PyAny>, name: &str, out: &mut [f64]) -> PyResult<()> {
             let expected = quell::settings::entries(m);
             return Err(Kind::Controller.err(py, format!("{name}: expected {expected} (one per output), found {n}")));
         }
-        // Booleans are refused as `Plant` refuses a boolean array, not read as 0 and 1.
-        if obj.try_iter().is_ok_and(|mut items| items.any(|x| x.is_ok_and(|x| x.is_instance_of::<PyBool>()))) {
+        // Booleans (numpy's too: np.True_ had been read as 1) are refused as `Plant` refuses a
+        // boolean array, not read as 0 and 1.
+        let boolean = |x: &Bound<'_, PyAny>| x.is_instance_of::<PyBool>() || crate::convert::is_numpy_bool(x);
+        if obj.try_iter().is_ok_and(|mut items| items.any(|x| x.is_ok_and(|x| boolean(&x)))) {
             return Err(pyo3::exceptions::PyTypeError::new_err(format!(
                 "{name}: expected real numbers, found booleans"
             )));

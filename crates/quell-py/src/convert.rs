@@ -191,7 +191,7 @@ fn all_ints_or_floats(arr: &Bound<'_, PyAny>) -> PyResult<bool> {
 }
 
 /// A numpy bool scalar (`np.True_`), which converts to a float as 1.0.
-fn is_numpy_bool(obj: &Bound<'_, PyAny>) -> bool {
+pub(crate) fn is_numpy_bool(obj: &Bound<'_, PyAny>) -> bool {
     obj.getattr("dtype").and_then(|d| d.getattr("kind")).is_ok_and(|k| k.eq("b").unwrap_or(false))
 }
 

@@ -241,6 +241,9 @@ def test_to_pandas_and_plot():
     for size in ((-1, 2), (4, 0), (float("nan"), 3)):
         with pytest.raises(quell.ScenarioError, match=r"^figsize: expected \(width, height\) in inches, both finite and > 0"):
             r.plot(figsize=size)
+    # (300, 300) had taken 3.6 GB to draw (hostile review).
+    with pytest.raises(quell.ScenarioError, match=r"^figsize: expected \(width, height\) of at most 100 inches each, found \(300, 300\)"):
+        r.plot(figsize=(300, 300))
     # The titles name the output and the input where the plant does (Wood–Berry's column).
     wood_berry = quell.Scenario.load(pathlib.Path(__file__).parents[2] / "quell" / "tests" / "data" / "wood-berry.toml")
     fig = quell.simulate(wood_berry, t_end=5.0).plot(channel=1)

@@ -121,7 +121,7 @@ def test_a_spike_is_refused_and_the_state_kept():
         np.testing.assert_array_equal(a.step(y, g), b.step(y, g))
 
 
-@pytest.mark.parametrize("y", [[True, False], (False, 1.0), np.array([True, False])])
+@pytest.mark.parametrize("y", [[True, False], (False, 1.0), np.array([True, False]), [np.True_, 0.0]])
 def test_step_refuses_booleans_as_plant_does(y):
     ctrl = quell.Controller(quell.paper_example().design(), sample_time=1e-3)
     with pytest.raises(TypeError, match="y: .*booleans"):

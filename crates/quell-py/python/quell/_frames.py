@@ -70,6 +70,10 @@ def _path_widths(ax, t, v, shown):
     return float(np.hypot(dt, dv).sum() / w)
 
 
+MAX_FIGSIZE = 100
+"""The largest width or height, in inches, ``plot`` draws a figure of."""
+
+
 def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None), u_max=()):
     """Channel ``channel`` (1-based; None is 1) in the six panels of the CLI's figure, like the paper's
     Figs. 1 and 2: y_i with g_i, e_i = y_i - g_i, the command u_i (25), the plant input u_f,i (5),
@@ -112,6 +116,10 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
         raise TypeError(f"figsize: expected (width, height) in inches, found {found}")
     if figsize is not None and not all(np.isfinite(v) and v > 0 for v in figsize):
         raise ScenarioError(f"figsize: expected (width, height) in inches, both finite and > 0, found {tuple(figsize)!r}")
+    # A poster is 50 inches; (300, 300) had taken 3.6 GB drawing at the default dpi.
+    if figsize is not None and max(figsize) > MAX_FIGSIZE:
+        raise ScenarioError(f"figsize: expected (width, height) of at most {MAX_FIGSIZE} inches each, found {tuple(figsize)!r}; "
+                            "for a large image, save the figure at a higher dpi instead")
     if fig is not None and ax is not None:
         raise TypeError("fig and ax: expected one of them or neither (ax's panels belong to a figure already), found both")
     if fig is not None and not hasattr(fig, "subplots"):
