@@ -136,10 +136,7 @@ fn write(out: &Path, code: &CCode, fmu: Option<&Fmu>, prefix: &str) -> Result<Op
             );
             None
         }
-        None => quell::export::earlier_fmu(out, prefix).map(|p| {
-            let name = p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-            quell::export::earlier_fmu_warning(&name, "add --fmu")
-        }),
+        None => quell::export::earlier_fmu_warning(out, prefix, "add --fmu"),
     })
 }
 

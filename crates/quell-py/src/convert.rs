@@ -265,32 +265,29 @@ pub fn matrix(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<DMatri
 
 /// A real vector (1-D array-like; a number counts as one entry) with finite entries.
 pub fn vector(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<f64>> {
-    let py = obj.py();
-    let arr = real_array(obj, name, kind)?;
-    if arr.ndim() > 1 {
-        return Err(kind.err(py, format!("{name}: expected a 1-D array of numbers, found {}", shape_text(arr.shape()))));
-    }
-    let view = arr.readonly();
-    view.as_array().iter().enumerate().map(|(i, &v)| finite(name, &[i], v, kind, py)).collect()
+    one_dimensional(obj, name, kind, false)
 }
 
 /// Limits: one number (for every input) or a 1-D array-like of them, each finite or +∞ (no limit
 /// on that input), as the CLI's `--u-limit 40,inf` takes them; NaN and −∞ are `kind`'s error naming
 /// the entry (a limit ≤ 0 is the target's own check).
 pub fn limits(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<f64>> {
+    one_dimensional(obj, name, kind, true)
+}
+
+/// [`vector`], or with `limits` [`limits`]: +∞ taken, and a single number named without an index.
+fn one_dimensional(obj: &Bound<'_, PyAny>, name: &str, kind: Kind, limits: bool) -> PyResult<Vec<f64>> {
     let py = obj.py();
     let arr = real_array(obj, name, kind)?;
     if arr.ndim() > 1 {
-        return Err(kind.err(
-            py,
-            format!("{name}: expected a number or a 1-D array of numbers, found {}", shape_text(arr.shape())),
-        ));
+        let expected = if limits { "a number or a 1-D array of numbers" } else { "a 1-D array of numbers" };
+        return Err(kind.err(py, format!("{name}: expected {expected}, found {}", shape_text(arr.shape()))));
     }
-    let scalar = arr.ndim() == 0;
+    let unindexed = limits && arr.ndim() == 0;
     let view = arr.readonly();
     let checked = |(i, &v): (usize, &f64)| match v {
-        f64::INFINITY => Ok(v),
-        _ if scalar => finite(name, &[], v, kind, py),
+        f64::INFINITY if limits => Ok(v),
+        _ if unindexed => finite(name, &[], v, kind, py),
         _ => finite(name, &[i], v, kind, py),
     };
     view.as_array().iter().enumerate().map(checked).collect()

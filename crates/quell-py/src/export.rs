@@ -183,9 +183,10 @@ pub fn export(
     let mut files = vec![(code.header_name, code.header.into_bytes()), (code.source_name, code.source.into_bytes())];
     files.extend(archive.map(|a| (a.file_name, a.bytes)));
     let written = write(py, &out, &files)?;
-    if let Some(path) = quell::export::earlier_fmu(&out, &options.prefix).filter(|_| fmu.is_none()) {
-        let name = path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default();
-        crate::errors::warn(py, &format!("out: {}", quell::export::earlier_fmu_warning(&name, "pass fmu=True")))?;
+    if let Some(w) =
+        fmu.is_none().then(|| quell::export::earlier_fmu_warning(&out, &options.prefix, "pass fmu=True")).flatten()
+    {
+        crate::errors::warn(py, &format!("out: {w}"))?;
     }
     Ok(written)
 }

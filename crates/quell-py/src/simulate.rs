@@ -70,16 +70,16 @@ fn consistent(r: &quell::sim::SimResult) -> Result<(), &'static str> {
     let eta = m.checked_mul(q).is_some_and(|w| sized(&r.eta, w));
     let states = [&r.x, &r.x_hat].iter().all(|v| v.is_empty() || sized(v, n));
     let per_channel = [
-        &r.limited.len(),
-        &r.u_max.len(),
-        &r.peak_u.len(),
-        &r.peak_uf.len(),
-        &r.peak_demand.len(),
-        &r.peak_e.len(),
-        &r.uf_terms.len(),
+        r.limited.len(),
+        r.u_max.len(),
+        r.peak_u.len(),
+        r.peak_uf.len(),
+        r.peak_demand.len(),
+        r.peak_e.len(),
+        r.uf_terms.len(),
     ]
     .iter()
-    .all(|&&len| len <= m);
+    .all(|&len| len <= m);
     match (signals, eta, states, per_channel) {
         (true, true, true, true) => Ok(()),
         (false, ..) => Err("its signals' lengths are not its rows times m"),

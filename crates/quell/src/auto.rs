@@ -547,13 +547,8 @@ impl Verifier<'_> {
             stopped |= flow.is_break();
             flow
         };
-        let run_of = Run::of(scenario, design);
-        let run_of = match runaway {
-            Some(peaks) => run_of
-                .settings(crate::sim::RunSettings { runaway: Some(peaks), ..crate::sim::RunSettings::of(scenario) }),
-            None => run_of,
-        };
-        let r = run_of.simulate(&mut watch)?;
+        let settings = crate::sim::RunSettings { runaway, ..crate::sim::RunSettings::of(scenario) };
+        let r = Run::of(scenario, design).settings(settings).simulate(&mut watch)?;
         self.steps += r.stats.steps();
         match r.outcome.clone().unwrap_or(Outcome::Completed) {
             Outcome::Completed => {

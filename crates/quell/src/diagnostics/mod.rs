@@ -294,7 +294,7 @@ pub fn truth_differences(s: &crate::Scenario) -> Vec<String> {
                 diffs.push(format!(
                     "truth.{key} is {} % off plant.{key} (‖Δ{key}‖/‖{key}‖{})",
                     crate::settings::fmt_4(100.0 * relative),
-                    largest_entry_change(t, m)
+                    largest_entry_change(t, m, relative)
                 ));
             }
         }
@@ -325,11 +325,10 @@ pub fn truth_differences(s: &crate::Scenario) -> Vec<String> {
     diffs
 }
 
-/// ", up to X % in entry [i][j]" where an entry changes by more than the norm does (a station's
-/// gravity-gradient terms 7.5 % off had read as 0.003 %, the norm set by exact 1.0 entries), or
-/// ", entry [i][j], 0 in the model, is v" for a new entry; empty otherwise.
-fn largest_entry_change(t: &nalgebra::DMatrix<f64>, m: &nalgebra::DMatrix<f64>) -> String {
-    let relative = (t - m).norm() / m.norm().max(f64::MIN_POSITIVE);
+/// ", up to X % in entry [i][j]" where an entry changes by more than the norm does (`relative`:
+/// ‖t − m‖/‖m‖; a station's gravity-gradient terms 7.5 % off had read as 0.003 %, the norm set by
+/// exact 1.0 entries), or ", entry [i][j], 0 in the model, is v" for a new entry; empty otherwise.
+fn largest_entry_change(t: &nalgebra::DMatrix<f64>, m: &nalgebra::DMatrix<f64>, relative: f64) -> String {
     let mut largest: Option<(f64, usize, usize)> = None;
     for ((i, j), &mv) in m.iter().enumerate().map(|(k, v)| ((k % m.nrows(), k / m.nrows()), v)) {
         let tv = t[(i, j)];
@@ -909,11 +908,11 @@ impl Trend {
 
     /// "over the last two tenths", or the windows' length where they are longer.
     fn windows(&self, unit: TimeUnit) -> String {
-        let span = self.span;
         if self.fraction == TENTH {
             "over the last two tenths of the run".to_string()
         } else {
-            let w = fmt_short(format!("{:.3e}", self.fraction * span).parse().unwrap_or(self.fraction * span));
+            let w = self.fraction * self.span;
+            let w = fmt_short(format!("{w:.3e}").parse().unwrap_or(w));
             format!("over the last two windows of {w} {unit}, the shortest from a tenth of the run that resolve the signals' slowest period and beats")
         }
     }
@@ -1353,10 +1352,12 @@ mod tests {
     fn a_mismatch_is_named_by_its_largest_entry_where_the_norm_hides_it() {
         let m = nalgebra::DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 1e-3, 0.0]);
         let t = nalgebra::DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 1.075e-3, 0.0]);
-        assert_eq!(largest_entry_change(&t, &m), ", up to 7.5 % in entry [1][0]");
-        assert_eq!(largest_entry_change(&(&m * 1.1), &m), "");
+        let relative = |t: &nalgebra::DMatrix<f64>| (t - &m).norm() / m.norm();
+        assert_eq!(largest_entry_change(&t, &m, relative(&t)), ", up to 7.5 % in entry [1][0]");
+        let scaled = &m * 1.1;
+        assert_eq!(largest_entry_change(&scaled, &m, relative(&scaled)), "");
         let new = nalgebra::DMatrix::from_row_slice(2, 2, &[0.5, 1.0, 1e-3, 0.0]);
-        assert_eq!(largest_entry_change(&new, &m), ", entry [0][0], 0 in the model, is 0.5");
+        assert_eq!(largest_entry_change(&new, &m, relative(&new)), ", entry [0][0], 0 in the model, is 0.5");
         let s = Scenario::from_toml(&format!("{PAPER_EXAMPLE}\n[truth]\nx0 = [0.1, 0.0, 0.0]\n")).unwrap();
         assert_eq!(truth_differences(&s), ["truth.x0 [0.1, 0, 0] against plant.x0 [0, 0, 0]"]);
     }
@@ -1500,10 +1501,6 @@ mod tests {
                     .collect(),
             }],
         };
-        let mut r = SimResult::new(1, 1, 1, RunStats::Sampled { controller_steps: 0, sample_time: 1.0 });
-        for k in 0..=1000 {
-            r.push(&Sample { t: k as f64, y: &[0.0], g: &[0.0], u: &[0.0], u_f: &[0.0], eta: &[0.0], states: None });
-        }
         let none = Signal::default();
         assert!(windows_resolve(100.0, [&signal(&[1.0, 1.0001]), &none]));
         assert!(windows_resolve(100.0, [&signal(&[1.0, 1.05]), &none]));

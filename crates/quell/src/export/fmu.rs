@@ -123,20 +123,17 @@ pub struct Fmu {
     pub version: FmiVersion,
 }
 
-/// The FMU `<prefix>.fmu` an earlier export left in `dir`, for an export of the C alone, which does
-/// not rewrite it: it may no longer match the code beside it (another sample time, another design;
-/// hostile review, 2026-12-06), so front ends say so. Not removed: it may be the user's still (an
-/// f64 FMU beside f32 code for a microcontroller, or one whose binaries they added). `None` where
-/// there is no regular file of that name.
-pub fn earlier_fmu(dir: &std::path::Path, prefix: &str) -> Option<std::path::PathBuf> {
-    let path = dir.join(format!("{prefix}.fmu"));
-    std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file()).then_some(path)
-}
-
-/// What a front end says of [`earlier_fmu`]'s file; `rewrite` is how to write it again
-/// (what the front end asks for, e.g. its FMU option).
-pub fn earlier_fmu_warning(name: &str, rewrite: &str) -> String {
-    format!("{name} beside this code is an earlier export's, not rewritten: it keeps the design and sample time it was written with ({rewrite} to write it with this code)")
+/// For an export of the C alone into `dir`, the warning on the FMU `<prefix>.fmu` an earlier
+/// export left there, which this one does not rewrite: it may no longer match the code beside it
+/// (another sample time, another design; hostile review, 2026-12-06). Not removed: it may be the
+/// user's still (an f64 FMU beside f32 code for a microcontroller, or one whose binaries they
+/// added). `rewrite` is how the front end writes it again (its FMU option); `None` where there is
+/// no regular file of that name.
+pub fn earlier_fmu_warning(dir: &std::path::Path, prefix: &str, rewrite: &str) -> Option<String> {
+    let name = format!("{prefix}.fmu");
+    std::fs::symlink_metadata(dir.join(&name)).is_ok_and(|m| m.is_file()).then(|| {
+        format!("{name} beside this code is an earlier export's, not rewritten: it keeps the design and sample time it was written with ({rewrite} to write it with this code)")
+    })
 }
 
 /// For an FMI 2.0 FMU of a plant not in seconds, the caution that FMI 2.0 has no unit of time: an

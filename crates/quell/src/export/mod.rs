@@ -12,7 +12,7 @@
 mod c;
 mod fmu;
 
-pub use fmu::{earlier_fmu, earlier_fmu_warning, generate_fmu, time_unit_warning, FmiVersion, Fmu};
+pub use fmu::{earlier_fmu_warning, generate_fmu, time_unit_warning, FmiVersion, Fmu};
 
 use thiserror::Error;
 

@@ -72,6 +72,7 @@ impl Peaks {
     /// The runaway rule's bounds of a run against a reference run of these peaks (a study's nominal
     /// run, the automatic design's verified one): `factor` times them, but ξ̂ at `xi_bound` (its
     /// divergence bound), and x̂ at least as x is.
+    ///
     /// ξ̂ only at its divergence bound: the disturbance observer (20) reads a true plant's mismatch
     /// as disturbance, so ξ̂_ω of a converging run can pass 100× a reference run's whose observer
     /// was exact (an aircraft pitch loop with truth.A, B 10 % off: 28 of 50 draws stopped at its
