@@ -535,3 +535,35 @@ fn a_write_past_the_file_size_limit_is_an_error_not_a_kill() {
     assert_eq!(fs::read(out.join("signals.csv")).unwrap(), before);
     assert_eq!(names(&out), ["design.json", "signals.csv", "summary.json"]);
 }
+
+/// One shard of a 10⁹-point grid runs in the memory of its runs: the summary had kept a slot for
+/// every grid point (24 GB: aborted under `ulimit -v`; hostile review, 2026-12-06). Three axes of
+/// 999 values (997,002,999 points, under the 10⁹ runs a study may have), run 5 of them alone,
+/// under a 2 GB address-space limit.
+#[test]
+#[cfg(unix)]
+fn a_shard_of_a_billion_point_grid_runs_in_its_own_memory() {
+    let dir = TempDir::new().unwrap();
+    let values = |a: f64, b: f64| (0..999).map(|i| format!("{}", a + i as f64 * (b - a) / 998.0)).collect::<Vec<_>>();
+    let grid = format!(
+        "[grid]\n\"design.mu[0]\" = [{}]\n\"design.mu[1]\" = [{}]\n\"design.beta\" = [{}]\n",
+        values(10.0, 50.0).join(", "),
+        values(10.0, 50.0).join(", "),
+        values(0.5, 2.0).join(", ")
+    );
+    let file = study(dir.path(), "huge.toml", &grid);
+    let out = dir.path().join("shard");
+    let limited = Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v 2000000 && exec {} sweep {file} --out {} --no-plots --yes --shard 5/997002999",
+            env!("CARGO_BIN_EXE_quell"),
+            out.display()
+        ))
+        .output()
+        .unwrap();
+    assert_eq!(limited.status.code(), Some(0), "{}", stderr(&limited));
+    let rows = fs::read_to_string(out.join("runs.csv")).unwrap();
+    assert_eq!(rows.lines().filter(|l| !l.starts_with('#')).count(), 2, "{rows}");
+    assert!(rows.contains("\n5,5,0,"), "{rows}");
+}

@@ -263,7 +263,22 @@ fn integer_key(key: &str) -> Option<&'static str> {
 /// A Python value (numbers, strings, lists, dicts, numpy arrays and scalars) as a TOML value;
 /// `key` names it in messages, as Python spells it (`reference[0]["bias"]`).
 pub fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
+    nested_value(obj, key, 0)
+}
+
+/// Nesting beyond any scenario or study value (a grid over a table of matrices is 5 deep): a list
+/// that holds itself, or 10⁴ levels, had overflowed the stack (SIGSEGV).
+const MAX_DEPTH: usize = 32;
+
+/// [`toml_value`] of a value `depth` levels inside the argument.
+fn nested_value(obj: &Bound<'_, PyAny>, key: &str, depth: usize) -> PyResult<Value> {
     let py = obj.py();
+    if depth > MAX_DEPTH {
+        return Err(PyTypeError::new_err(format!(
+            "{}: expected numbers, vectors, matrices or tables of them, found lists or dicts nested more than {MAX_DEPTH} deep (a list that holds itself?)",
+            key.split_once('[').map_or(key, |(name, _)| name)
+        )));
+    }
     let bad =
         |what: &str| PyTypeError::new_err(format!("{key}: expected a number, string, list or dict, found {what}"));
     if obj.is_instance_of::<PyBool>() {
@@ -303,15 +318,27 @@ pub fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
             let name: String = k.extract().map_err(|_| bad(&format!("a dict key of type {}", type_name(&k))))?;
             if !v.is_none() {
                 let child = format!("{key}[{name:?}]");
-                t.insert(name, toml_value(&v, &child)?);
+                t.insert(name, nested_value(&v, &child, depth + 1)?);
             }
         }
         return Ok(Value::Table(t));
     }
-    // numpy arrays and scalars: as Python lists and numbers.
-    if obj.hasattr("dtype")? {
+    // numpy arrays and scalars: as Python lists and numbers. A long double's tolist() is itself
+    // (which had recursed until the stack overflowed): a real one is taken as the float it rounds to.
+    if let Ok(dtype) = obj.getattr("dtype") {
+        let kind: String = dtype.getattr("kind").and_then(|k| k.extract()).unwrap_or_default();
+        if kind == "c" {
+            return Err(PyTypeError::new_err(format!(
+                "{key}: expected real numbers, found a complex array or number (complex numbers are poles, in the *_poles lists)"
+            )));
+        }
         if let Ok(v) = obj.call_method0("tolist") {
-            return toml_value(&v, key);
+            if !v.hasattr("dtype")? {
+                return nested_value(&v, key, depth);
+            }
+            if kind == "f" {
+                return Ok(Value::Float(v.call_method0("__float__")?.extract()?));
+            }
         }
     }
     if obj.is_none() {
@@ -320,7 +347,7 @@ pub fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
     match obj.try_iter() {
         Ok(items) => items
             .enumerate()
-            .map(|(i, v)| toml_value(&v?, &format!("{key}[{i}]")))
+            .map(|(i, v)| nested_value(&v?, &format!("{key}[{i}]"), depth + 1))
             .collect::<PyResult<Vec<_>>>()
             .map(Value::Array),
         Err(_) => Err(bad(&a_type(obj))),
@@ -979,6 +1006,11 @@ pub fn auto_design<'py>(
         .map(|v| number(&v, "convergence_time", Kind::Design, "convergence_time"))
         .transpose()?;
     let u_limit = given(u_limit).map(|v| crate::convert::limits(&v, "u_limit", Kind::Design)).transpose()?;
+    // An empty sequence is no limit to the library; given here, it is a mistake, not a choice.
+    if u_limit.as_ref().is_some_and(Vec::is_empty) {
+        let message = "u_limit: expected one actuator limit, or one per input, found an empty sequence; leave u_limit out (None) for no limit";
+        return Err(Kind::Design.err(py, message.to_string()));
+    }
     let u_limit = u_limit.unwrap_or_default();
     let delay_error = given(delay_error).map(|v| number(&v, "delay_error", Kind::Design, "delay_error")).transpose()?;
     // Their ranges are checked by auto_design (AutoError::Target: a DesignError below).

@@ -194,7 +194,8 @@ impl PyStudy {
         simulation: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let doc = study_document(scenario, [grid, monte_carlo, settle, runaway, simulation], max_steps)?;
-        let inner = py.detach(|| study::Study::from_table(&doc, None)).map_err(|e| argument_error(py, &e))?;
+        let inner = crate::interrupt::interruptible(py, || study::Study::from_table(&doc, None))?
+            .map_err(|e| argument_error(py, &e))?;
         Ok(PyStudy { inner: Arc::new(inner) })
     }
 
@@ -347,7 +348,9 @@ impl PyStudy {
     #[staticmethod]
     fn load(py: Python<'_>, path: &Bound<'_, PyAny>) -> PyResult<Self> {
         let path = crate::convert::path(path, "path")?;
-        study::Study::from_path(&path).map(|s| PyStudy { inner: Arc::new(s) }).map_err(|e| study_error(py, &e))
+        crate::interrupt::interruptible(py, || study::Study::from_path(&path))?
+            .map(|s| PyStudy { inner: Arc::new(s) })
+            .map_err(|e| study_error(py, &e))
     }
 
     /// Parses a study file's text.
@@ -380,7 +383,7 @@ impl PyStudy {
     fn from_toml(py: Python<'_>, text: &Bound<'_, PyAny>, dir: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
         let text = crate::convert::toml_text(text, "text", "quell.Study.load(path)")?;
         let dir = dir.filter(|d| !d.is_none()).map(|d| crate::convert::path(d, "dir")).transpose()?;
-        study::Study::from_toml(&text, dir.as_deref())
+        crate::interrupt::interruptible(py, || study::Study::from_toml(&text, dir.as_deref()))?
             .map(|s| PyStudy { inner: Arc::new(s) })
             .map_err(|e| study_error(py, &e))
     }
@@ -709,11 +712,55 @@ pub fn run_one<'py>(py: Python<'py>, spec: &Bound<'py, PyAny>) -> PyResult<Bound
     Ok(d)
 }
 
-/// An iterator over a study's run specifications, in run order.
-#[pyclass(module = "quell", name = "RunSpecs")]
+/// An iterator over a study's run specifications, in run order; threads may share it (each spec
+/// goes to one of them; a thread waits for another's nominal run without the GIL).
+#[pyclass(module = "quell", name = "RunSpecs", frozen)]
 pub struct PyRunSpecs {
     study: Arc<study::Study>,
-    next: usize,
+    next: Turn,
+}
+
+/// The next run's index, held by one thread at a time: [`Turn::take`] waits (without the GIL) while
+/// another thread holds it; the [`Held`] turn ends when dropped, advanced or not.
+#[derive(Default)]
+struct Turn {
+    /// (the next index, a thread holds it)
+    state: std::sync::Mutex<(usize, bool)>,
+    free: std::sync::Condvar,
+}
+
+impl Turn {
+    fn lock(&self) -> std::sync::MutexGuard<'_, (usize, bool)> {
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    fn take(&self, py: Python<'_>) -> Held<'_> {
+        let index = py.detach(|| {
+            let mut state = self.lock();
+            while state.1 {
+                state = self.free.wait(state).unwrap_or_else(|e| e.into_inner());
+            }
+            state.1 = true;
+            state.0
+        });
+        Held { turn: self, index, advanced: false }
+    }
+}
+
+/// A thread's turn at [`Turn`]: `index` is its run; `advanced` moves the next one on.
+struct Held<'a> {
+    turn: &'a Turn,
+    index: usize,
+    advanced: bool,
+}
+
+impl Drop for Held<'_> {
+    fn drop(&mut self) {
+        let mut state = self.turn.lock();
+        state.0 += usize::from(self.advanced);
+        state.1 = false;
+        self.turn.free.notify_one();
+    }
 }
 
 /// Run `index`'s spec: the first of a grid point carries out that point's nominal run, without the
@@ -727,14 +774,17 @@ impl PyRunSpecs {
     fn __iter__(slf: PyRef<'_, Self>) -> PyRef<'_, Self> {
         slf
     }
-    fn __next__(&mut self, py: Python<'_>) -> PyResult<Option<PyRunSpec>> {
-        let (study, index) = (&self.study, self.next);
-        let Some(inner) = spec_interruptibly(py, study, index)? else { return Ok(None) };
-        self.next += 1;
-        Ok(Some(PyRunSpec { inner, drawn: drawn_keys(study) }))
+    fn __next__(&self, py: Python<'_>) -> PyResult<Option<PyRunSpec>> {
+        // A &mut self had raised "Already borrowed" in a second thread while the first's nominal
+        // run had the GIL released. An interrupted spec is not consumed.
+        let mut turn = self.next.take(py);
+        let Some(inner) = spec_interruptibly(py, &self.study, turn.index)? else { return Ok(None) };
+        turn.advanced = true;
+        Ok(Some(PyRunSpec { inner, drawn: drawn_keys(&self.study) }))
     }
     fn __len__(&self) -> usize {
-        usize::try_from(self.study.len()).unwrap_or(usize::MAX).saturating_sub(self.next)
+        let next = self.next.lock().0;
+        usize::try_from(self.study.len()).unwrap_or(usize::MAX).saturating_sub(next)
     }
 }
 
@@ -744,7 +794,8 @@ fn study_arg(py: Python<'_>, study: &Bound<'_, PyAny>) -> PyResult<Arc<study::St
     }
     if study.is_instance_of::<PyString>() || study.hasattr("__fspath__")? {
         let path: PathBuf = study.extract()?;
-        return study::Study::from_path(&path).map(Arc::new).map_err(|e| study_error(py, &e));
+        let read = crate::interrupt::interruptible(py, || study::Study::from_path(&path))?;
+        return read.map(Arc::new).map_err(|e| study_error(py, &e));
     }
     Err(PyTypeError::new_err(format!(
         "study: expected a quell.Study or the path of a study file, found {}",
@@ -780,7 +831,7 @@ fn study_arg(py: Python<'_>, study: &Bound<'_, PyAny>) -> PyResult<Arc<study::St
 pub fn sweep_runs(py: Python<'_>, study: &Bound<'_, PyAny>) -> PyResult<PyRunSpecs> {
     let study = study_arg(py, study)?;
     study::check_sweep(&study).map_err(|e| study_error(py, &e))?;
-    Ok(PyRunSpecs { study, next: 0 })
+    Ok(PyRunSpecs { study, next: Turn::default() })
 }
 
 /// Every run of a study, in parallel on `jobs` threads (default: every core), with the GIL

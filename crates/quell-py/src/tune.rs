@@ -131,7 +131,8 @@ pub fn tune(
     }
     doc.insert("tune".into(), Value::Table(table));
     let jobs = jobs_arg(py, jobs)?;
-    let study = py.detach(|| study::Study::from_table(&doc, None)).map_err(|e| argument_error(py, &e))?;
+    let study = crate::interrupt::interruptible(py, || study::Study::from_table(&doc, None))?
+        .map_err(|e| argument_error(py, &e))?;
     let channels = study.m;
     let pool = thread_pool(py, jobs, channels * study.tune.as_ref().map_or(1, |t| t.points))?;
     for w in py.detach(|| study::tune_cautions(&study)) {

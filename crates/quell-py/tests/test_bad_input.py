@@ -341,3 +341,31 @@ def test_a_tampered_result_pickle_is_refused_not_a_panic():
     for key, value in [("q", 100), ("m", 2**40), ("m", 0), ("n", 10**6)]:
         with pytest.raises(quell.ScenarioError, match=r"^state: not a pickled quell.SimResult \("):
             restore({**state, key: value}).summary()
+
+
+def test_long_doubles_are_floats_and_self_holding_lists_are_refused():
+    """numpy's long doubles, whose tolist() is themselves, had recursed until the stack overflowed
+    (SIGSEGV) in every value taken as TOML (a study's grid, μ, a reference); a list that holds
+    itself, or one 10⁴ levels deep, likewise. Long doubles are now the float64 they round to,
+    complex ones a TypeError, and nesting past 32 levels a TypeError naming the argument."""
+    s = quell.paper_example()
+    study = quell.Study(s, grid={"design.mu[0]": [np.longdouble(3.0), np.float64(4.0)]})
+    assert len(study) == 2 and "3.0, 4.0" in study.to_toml()
+    grid = quell.Study(s, grid={"design.mu[0]": np.array([3.0, 5.0], dtype=np.longdouble)})
+    assert len(grid) == 2
+    disturbance = s.disturbance
+    kw = dict(DESIGN, mu=[np.longdouble(1.5), 2])
+    scenario = quell.Scenario(PLANT, [{"bias": np.longdouble(1.0)}, {"bias": 2.0}], disturbance, **kw)
+    assert scenario.design().mu == [1.5, 2.0] and scenario.reference[0]["bias"] == 1.0
+    with pytest.raises(TypeError, match=r"^grid\[\"design.mu\[0\]\"\]\[0\]: expected real numbers, found a complex"):
+        quell.Study(s, grid={"design.mu[0]": [np.clongdouble(3.0)]})
+    holds_itself = []
+    holds_itself.append(holds_itself)
+    deep = 1.0
+    for _ in range(10_000):
+        deep = [deep]
+    for bad in (holds_itself, deep):
+        with pytest.raises(TypeError, match=r"^grid: expected numbers, .* nested more than 32 deep"):
+            quell.Study(s, grid={"design.mu[0]": bad})
+    with pytest.raises(TypeError, match=r"nested more than 32 deep"):
+        quell.Scenario(PLANT, [{"bias": deep}, {"bias": 2.0}], disturbance, **DESIGN)

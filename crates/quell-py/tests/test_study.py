@@ -1,6 +1,7 @@
 """Studies from Python: quell.sweep as a DataFrame, and quell.sweep_runs/run_one mapped over a
 dask LocalCluster of two worker processes, both compared with the rows of `quell sweep`."""
 
+import concurrent.futures
 import pickle
 import subprocess
 
@@ -72,6 +73,15 @@ def test_run_specs_are_picklable(study_file):
     s = specs[3].scenario()
     assert s.design().mu == [40.0, 30.0]
     assert s.truth is not None and not np.array_equal(s.truth.A, s.plant.A)
+
+
+def test_threads_share_one_run_spec_iterator(study_file):
+    """Two threads drawing from one sweep_runs() iterator get every spec once between them (the
+    second had raised "Already borrowed" while the first's nominal run had the GIL released)."""
+    specs = quell.sweep_runs(study_file)
+    with concurrent.futures.ThreadPoolExecutor(2) as pool:
+        taken = list(pool.map(lambda _: [s.run for s in specs], range(2)))
+    assert sorted(taken[0] + taken[1]) == [0, 1, 2, 3] and len(specs) == 0, taken
 
 
 def test_a_missing_figure_of_run_one_is_nan_as_in_runs_csv():

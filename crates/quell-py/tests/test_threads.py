@@ -215,3 +215,12 @@ def test_ctrl_c_stops_a_studys_nominal_run(python_child):
     )
     cpu = interrupted_cpu(python_child, "list(quell.sweep_runs(study))", setup=setup, after=0.5)
     assert cpu < 4.0, f"KeyboardInterrupt came after {cpu:.1f} s of CPU (the nominal run alone: ~10 s)"
+
+
+def test_ctrl_c_stops_the_check_of_a_large_grid(python_child):
+    """SIGINT while quell.Study checks 10⁶ grid values (a design each: about a minute of CPU)
+    raises KeyboardInterrupt promptly; the check had run to its end (71 s measured)."""
+    setup = "import time, numpy as np, quell\nvalues = list(np.linspace(1.0, 100.0, 10**6))\n"
+    call = "quell.Study(quell.paper_example(), grid={'design.mu[0]': values})"
+    cpu = interrupted_cpu(python_child, call, setup=setup)
+    assert cpu < 10.0, f"KeyboardInterrupt came after {cpu:.1f} s of CPU (the whole check: ~1 min)"

@@ -4,6 +4,8 @@ points are log-spaced between the bounds), the sweep (an evaluation's figures ar
 the same μ gives), argument errors naming the Python argument, and Ctrl-C keeping the points so
 far; plus Ctrl-C during quell.run_one."""
 
+import copy
+import json
 import pickle
 import signal
 import subprocess
@@ -96,6 +98,19 @@ def test_results_pickle_compare_and_rebuild_from_json():
     assert repr(r).startswith("TuneResult(objective='settle_t', mu=[") and len(r) == 2
     with pytest.raises(quell.ScenarioError, match="^json: not a quell tuning result"):
         quell.TuneResult("{}")
+    # Malformed parts the first reading does not touch (a channel or a curve point of the wrong
+    # kind) had raised AttributeError, or only later from .frame.
+    data = json.loads(r.to_json())
+    for path, bad in [(("channels",), [1]), (("channels", 0, "curve"), "x"), (("channels", 0, "curve", 0), 3),
+                      (("objective",), 5), (("mu",), ["a"])]:
+        broken = copy.deepcopy(data)
+        *parents, last = path
+        target = broken
+        for key in parents:
+            target = target[key]
+        target[last] = bad
+        with pytest.raises(quell.ScenarioError, match="^json: not a quell tuning result"):
+            quell.TuneResult(json.dumps(broken))
 
 
 def test_bad_arguments_are_named_as_python_spells_them():

@@ -170,7 +170,10 @@ def test_auto_design_takes_one_actuator_limit_per_input():
     r = quell.simulate(scenario)
     for c, limit, peak in zip(r.summary(), limits, [10.0, 5.0, 0.1]):
         assert c["max_uf"] <= limit and c["tail_max_e"] <= 0.01 * peak, c
-    for bad, message in [([1e7, 1e7], "or one per input (3), found 2"), ([1e7, -1.0, 1e8], "found -1")]:
+    # An empty sequence had been taken as no limit at all.
+    cases = [([1e7, 1e7], "or one per input (3), found 2"), ([1e7, -1.0, 1e8], "found -1"),
+             ([], "or one per input, found an empty sequence; leave u_limit out (None)"), (np.array([]), "found an empty")]
+    for bad, message in cases:
         with pytest.raises(quell.DesignError, match=r"u_limit: expected .*" + re.escape(message)):
             quell.auto_design(text, u_limit=bad)
     # inf leaves an input unlimited, as tuning.md and --u-limit 40,inf have it (it had been refused

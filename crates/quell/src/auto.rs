@@ -393,6 +393,29 @@ pub struct AutoDesign {
 /// verification now slows).
 pub const SAMPLED_CANCELLATION: f64 = 1000.0;
 
+/// From this ratio of a verifying run's max|u_f,i| to its steady state's peak, the chosen design is
+/// cautioned ([`AutoDesign::peaking_warning`]): a Whipple bicycle's design under `[truth]` passed
+/// its tail bounds with u_f at 5.2e6 against a steady 39 (helper tryout, 2026-12-06). The
+/// automatic designs of the examples and test plants that pass have 1–313 (a supply vessel's 313, a
+/// tanker's 303: transients of slow, heavy plants).
+pub const PEAKING: f64 = 1000.0;
+
+/// [`AutoDesign::peaking_warning`] on the verifying run's peaks `max_uf` and the steady state's
+/// `steady`, per input.
+fn peaking(max_uf: &[f64], steady: &[f64]) -> Option<String> {
+    use crate::settings::{fmt_4, fmt_ratio};
+    let over: Vec<String> = (max_uf.iter().zip(steady).enumerate())
+        .filter(|&(_, (&u, &s))| s > 0.0 && u >= PEAKING * s)
+        .map(|(i, (&u, &s))| format!("u_f,{} {} against {} ({}×)", i + 1, fmt_4(u), fmt_4(s), fmt_ratio(u / s)))
+        .collect();
+    (!over.is_empty()).then(|| {
+        format!(
+            "the chosen design's verifying run asks far more of the plant input than its steady state needs ({}; the design report's steady-state section): its transient asks that of the actuators, which the tail bounds do not see; where they cannot give it, give the automatic design an actuator limit on u_f, or slower channel and observer poles (docs/tuning.md)",
+            over.join(", ")
+        )
+    })
+}
+
 impl AutoDesign {
     /// On a design verified in the continuous loop, the caution that its u_f is the small
     /// difference of terms [`SAMPLED_CANCELLATION`] or more times its peak, so that a sampled
@@ -408,10 +431,18 @@ impl AutoDesign {
         })
     }
 
-    /// Every caution on the chosen design: [`AutoDesign::explicit_stiff_warning`] and
-    /// [`AutoDesign::cancellation_warning`].
+    /// Every caution on the chosen design: [`AutoDesign::explicit_stiff_warning`],
+    /// [`AutoDesign::cancellation_warning`] and [`AutoDesign::peaking_warning`].
     pub fn warnings(&self) -> impl Iterator<Item = String> {
-        [self.explicit_stiff_warning(), self.cancellation_warning()].into_iter().flatten()
+        [self.explicit_stiff_warning(), self.cancellation_warning(), self.peaking_warning()].into_iter().flatten()
+    }
+
+    /// The caution that the kept verifying run's max|u_f,i| is [`PEAKING`] or more times the peak
+    /// of u_f,i that the steady state needs (y = g; the design report's steady-state section),
+    /// which no tail bound sees; `None` otherwise, and for inputs the steady state leaves at 0.
+    pub fn peaking_warning(&self) -> Option<String> {
+        let kept = self.verification.candidates.iter().find(|c| c.chosen)?;
+        peaking(&kept.max_uf, &self.scenario.steady_input().peak)
     }
 
     /// On a scenario forced onto DOP853 (`simulation.method = "explicit"`), which verified the
@@ -2385,6 +2416,17 @@ mod tests {
     /// the advice would raise to, says so: a ball and beam with a 0.45 drive had been told to raise
     /// `u_limit` to 0.52, past the physical limit (helper tryout, 2026-12-06); a drive above the
     /// candidate's demand is not named.
+    #[test]
+    fn a_transient_far_above_the_steady_input_is_named_per_input() {
+        // The bicycle's figures (u_f,1 5.2e6 against a steady 39); u_f,2 at 900× is not named, an
+        // input the steady state leaves at 0 has no ratio, and an ended run's NaN peaks none.
+        let w = peaking(&[5.2e6, 1440.0, 7.0], &[39.0, 1.6, 0.0]).unwrap();
+        assert!(w.contains("(u_f,1 5.2e6 against 39 ("), "{w}");
+        assert!(!w.contains("u_f,2") && !w.contains("u_f,3"), "{w}");
+        assert!(peaking(&[1600.0], &[1.6]).is_some() && peaking(&[1599.0], &[1.6]).is_none());
+        assert_eq!(peaking(&[f64::NAN, f64::NAN], &[1.0, 1.0]), None);
+    }
+
     #[test]
     fn a_limit_beyond_the_true_actuators_is_not_offered_alone() {
         let targets = Targets { u_limit: vec![0.45], ..Targets::default() };

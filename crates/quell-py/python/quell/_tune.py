@@ -76,7 +76,10 @@ class TuneResult:
             self.partial = bool(data.get("partial", False))
             self.feasible = [c.get("chosen") is not None for c in self._channels]
             self.ties = [c.get("tie") for c in self._channels]
-        except (ValueError, KeyError, TypeError) as e:
+            if not isinstance(self.objective, str) or not all(isinstance(v, (int, float)) for v in self.mu):
+                raise TypeError("objective is not a str or mu not numbers")
+            list(self._rows())  # every channel's curve readable now, not at the first frame
+        except (ValueError, KeyError, TypeError, AttributeError) as e:
             raise ScenarioError(f"json: not a quell tuning result ({e!r})") from None
         self._json = json
 

@@ -15,7 +15,6 @@ mod sweep;
 mod tune;
 
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
 
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -184,6 +183,22 @@ pub struct Nominal {
     pub xi_bound: f64,
 }
 
+/// The nominal runs carried out so far, by grid point ([`Study::nominal`]).
+#[derive(Debug, Default)]
+struct NominalRuns(std::sync::Mutex<std::collections::HashMap<usize, Option<Nominal>>>);
+
+impl NominalRuns {
+    fn lock(&self) -> std::sync::MutexGuard<'_, std::collections::HashMap<usize, Option<Nominal>>> {
+        self.0.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+impl Clone for NominalRuns {
+    fn clone(&self) -> Self {
+        NominalRuns(std::sync::Mutex::new(self.lock().clone()))
+    }
+}
+
 /// No bound (a nominal run written before [`Nominal::xi_bound`]).
 fn unbounded() -> f64 {
     f64::INFINITY
@@ -216,9 +231,11 @@ pub struct Study {
     /// The study as one self-contained document: `scenario` the scenario table, `[simulation]`'s
     /// overrides applied to it.
     document: toml::Table,
-    /// Per grid point with Monte Carlo draws, its nominal run (`None`: sampled-data, or it did not
-    /// complete), carried out at the point's first [`Study::spec_with_nominal`].
-    nominal: Vec<OnceLock<Option<Nominal>>>,
+    /// Per grid point reached, in a study with Monte Carlo draws, its nominal run (`None`:
+    /// sampled-data, or it did not complete), carried out at the point's first
+    /// [`Study::spec_with_nominal`]; kept by point, not for every point (a shard of 10⁹ points
+    /// reaches a few).
+    nominal: Option<NominalRuns>,
 }
 
 /// A study's top-level keys; every one but `simulation` is unknown to a scenario.
@@ -408,7 +425,7 @@ impl Study {
             Some((_, e)) if grid.is_empty() => return Err(e.clone()),
             _ => check_grid(&grid, &base, &scenario_source, base_error.as_ref())?,
         }
-        let nominal = (0..if monte_carlo.is_some() { points } else { 0 }).map(|_| OnceLock::new()).collect();
+        let nominal = monte_carlo.is_some().then(Default::default);
         let mut document = doc.clone();
         document.remove("simulation");
         document.insert("scenario".into(), toml::Value::Table(base.clone()));
@@ -538,13 +555,14 @@ impl Study {
     /// that reach a point at once may each carry out its nominal run (the same run: the first kept),
     /// rather than wait on one they could not interrupt.
     fn nominal_until(&self, point: usize, stop: &dyn Fn() -> bool) -> Result<Option<Nominal>, ()> {
-        let Some(cell) = self.nominal.get(point) else { return Ok(None) };
-        if let Some(kept) = cell.get() {
-            return Ok(*kept);
+        let Some(kept) = &self.nominal else { return Ok(None) };
+        if let Some(nominal) = kept.lock().get(&point) {
+            return Ok(*nominal);
         }
-        let Ok(s) = Scenario::from_document(&self.document(point, None)) else { return Ok(*cell.get_or_init(|| None)) };
+        let keep = |nominal: Option<Nominal>| Ok(*kept.lock().entry(point).or_insert(nominal));
+        let Ok(s) = Scenario::from_document(&self.document(point, None)) else { return keep(None) };
         if s.simulation.sample_time.is_some() {
-            return Ok(*cell.get_or_init(|| None));
+            return keep(None);
         }
         let nominal = match sweep::simulate(&s, self.max_steps, &|_| None, stop) {
             Ok(run) => match run.result.outcome {
@@ -562,7 +580,7 @@ impl Study {
             },
             Err(_) => None,
         };
-        Ok(*cell.get_or_init(|| nominal))
+        keep(nominal)
     }
 
     /// Every run's specification, in index order (what `quell.sweep_runs` yields), each with its
@@ -1019,6 +1037,9 @@ fn check_values<'v>(
     };
     for (i, v) in values {
         let key = format!("{at}[{i}]");
+        // A million values take a minute (a design each): the stop flag of an enclosing
+        // cancel::with_stop ends it (Python's Ctrl-C).
+        crate::cancel::check().map_err(|_| err(&key, "interrupted while checking the grid's values"))?;
         match path::shape(v) {
             Some(found) if found == expected => {}
             Some(found) => return Err(err(key, format!("expected {expected} ({shape_of}), found {found}"))),

@@ -181,17 +181,15 @@ pub struct Summary {
 impl Summary {
     /// Aggregates `rows` (any order) per grid point.
     pub fn new(study: StudyMeta, rows: &[Row], partial: bool) -> Summary {
-        let mut by_point: Vec<Vec<&Row>> = vec![Vec::new(); study.points()];
-        for r in rows {
-            if let Some(p) = by_point.get_mut(r.point) {
-                p.push(r);
-            }
+        // By the points the rows reach, not a slot for every point (a shard of a 10⁹-point grid
+        // had asked for 24 GB here).
+        let mut by_point: std::collections::BTreeMap<usize, Vec<&Row>> = Default::default();
+        for r in rows.iter().filter(|r| r.point < study.points()) {
+            by_point.entry(r.point).or_default().push(r);
         }
         let points = by_point
             .iter()
-            .enumerate()
-            .filter(|(_, rs)| !rs.is_empty())
-            .map(|(point, rs)| {
+            .map(|(&point, rs)| {
                 let done: Vec<&Row> = rs.iter().copied().filter(|r| r.outcome == Outcome::Completed).collect();
                 let frac = |o: Outcome| rs.iter().filter(|r| r.outcome == o).count() as f64 / rs.len() as f64;
                 let channels = (0..study.m)

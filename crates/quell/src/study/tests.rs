@@ -470,7 +470,7 @@ fn a_stop_ends_a_nominal_run_under_way() {
     let took = started.elapsed().as_secs_f64();
     assert!(done.partial && done.rows.is_empty(), "{done:?}");
     assert!(took < 3.0, "the sweep took {took:.1} s after its stop");
-    assert!(s.nominal.first().is_some_and(|cell| cell.get().is_none()), "an interrupted nominal run was kept");
+    assert!(s.nominal.as_ref().is_some_and(|kept| kept.lock().is_empty()), "an interrupted nominal run was kept");
 }
 
 /// `u_max`: the scenario's true actuator limits u_f where some truth.u_max is finite.
