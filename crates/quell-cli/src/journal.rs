@@ -72,8 +72,10 @@ impl Journal {
 /// The study identity and rows of the journal in `dir`, if there is one. A last line without its
 /// line break (the kill came while it was written) is dropped; anything else that is not a
 /// journal's content is an error naming the line.
-pub fn read(dir: &Path) -> Result<Option<(StudyMeta, Vec<Row>)>, String> {
-    let text = match quell::files::read_regular(&dir.join(JOURNAL)) {
+pub fn read(dir: &Path, meta: &StudyMeta) -> Result<Option<(StudyMeta, Vec<Row>)>, String> {
+    // Lines as long as a runs.csv's of the study being swept, or its own first line's, or 16 MiB.
+    let line = study::runs_csv_bounds(meta).0.max(OPENING.len() + serde_json::to_string(meta).map_or(0, |j| j.len()));
+    let text = match quell::files::read_lines_within(&dir.join(JOURNAL), line.max(16 << 20), usize::MAX) {
         Ok(text) => text,
         Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(None),
         Err(e) => return Err(e.to_string()),

@@ -77,8 +77,11 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     if args.resume && kept.len() == n {
         // Killed while it wrote its files: the journal holds every row, the files may not.
         if args.out.join(JOURNAL).exists() {
-            write_all(&args.out, &meta, &kept, false, !args.no_plots)?;
-            std::fs::remove_file(args.out.join(JOURNAL)).map_err(|e| Failure::Run(format!("{}: {e}", JOURNAL)))?;
+            let mut removed = Ok(());
+            write_all(&args.out, &meta, (&kept, false), !args.no_plots, || {
+                removed = std::fs::remove_file(args.out.join(JOURNAL))
+            })?;
+            removed.map_err(|e| Failure::Run(format!("{JOURNAL}: {e}")))?;
             eprintln!("resumed: the journal held every run of the study ({n}); wrote {}", args.out.display());
         } else {
             eprintln!("nothing to resume: {} holds every run of the study ({n})", args.out.display());
@@ -86,6 +89,9 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
         return Ok(());
     }
     let pool = thread_pool(args.jobs, n - kept.len())?;
+    // A complete sweep's files (an unfinished one's were refused above), which only a complete
+    // sweep replaces.
+    let earlier = !args.resume && args.out.join("runs.csv").exists();
     prepare_out(&args.out, OUTPUTS)?;
     let journal = Journal::create(&args.out, &meta, &kept)
         .map_err(|e| Failure::Input(format!("--out {}: {e}; choose another output directory", args.out.display())))?;
@@ -117,13 +123,23 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     }
     rows.extend(result.rows);
     rows.sort_by_key(|r| r.run);
-    write_all(&args.out, &meta, &rows, result.partial, !args.no_plots)?;
-    if let Err(e) = journal.remove() {
-        eprintln!(
-            "⚠ warning: {}: {e}; runs.csv holds its rows, so it may be removed",
+    if result.partial && earlier {
+        // An earlier sweep's whole results stay until this one completes (an interrupted sweep
+        // had replaced another study's 3,000 rows with its 328; hostile review, 2026-12-06).
+        return Err(Failure::Run(format!(
+            "interrupted after {} of {n} runs; those rows are in {} (`--resume` runs the others, and then replaces the earlier sweep's files); runs.csv and summary.json there are the earlier sweep's, kept",
+            rows.len(),
             args.out.join(JOURNAL).display()
-        );
+        )));
     }
+    write_all(&args.out, &meta, (&rows, result.partial), !args.no_plots, || {
+        if let Err(e) = journal.remove() {
+            eprintln!(
+                "⚠ warning: {}: {e}; runs.csv holds its rows, so it may be removed",
+                args.out.join(JOURNAL).display()
+            );
+        }
+    })?;
     report(&rows, ran, n, seconds, pool.current_num_threads(), &args.out);
     if args.resume {
         eprintln!("resumed: {} rows kept, {ran} runs run", rows.len() - ran);
@@ -216,7 +232,13 @@ fn report(rows: &[Row], ran: usize, n: usize, seconds: f64, jobs: usize, out: &P
 }
 
 /// runs.csv, summary.json and (for a 1-D or 2-D grid) sweep.png/.svg.
-fn write_all(dir: &Path, meta: &StudyMeta, rows: &[Row], partial: bool, plots: bool) -> Result<(), Failure> {
+fn write_all(
+    dir: &Path,
+    meta: &StudyMeta,
+    (rows, partial): (&[Row], bool),
+    plots: bool,
+    written: impl FnOnce(),
+) -> Result<(), Failure> {
     let failed = |e: std::io::Error| Failure::Run(format!("writing {}: {e}", dir.display()));
     write_atomic(&dir.join("runs.csv"), |w| study::write_runs_csv(w, meta, rows, partial)).map_err(failed)?;
     // From here on runs.csv holds every run: a failure says so.
@@ -225,6 +247,9 @@ fn write_all(dir: &Path, meta: &StudyMeta, rows: &[Row], partial: bool, plots: b
     };
     let summary = Summary::new(meta.clone(), rows, partial);
     crate::output::write_json(&dir.join("summary.json"), &summary).map_err(failed)?;
+    // The data are whole: the journal can go before the figures (one that failed had left it,
+    // and the next sweep had called the directory unfinished).
+    written();
     // A figure of an earlier sweep (plots now skipped, or a grid that has none) must not stand
     // beside the new rows.
     crate::output::remove_figures(dir, |stem| stem == "sweep", &[]).map_err(failed)?;
@@ -285,7 +310,7 @@ const RESUME_BEFORE_MERGE: &str = "run `quell sweep STUDY --resume` into it";
 /// a file that is not a journal.
 fn journal_in_the_way(dir: &Path, meta: &StudyMeta, resume: &str) -> Failure {
     let here = format!("--out {}", dir.display());
-    Failure::Input(match journal::read(dir) {
+    Failure::Input(match journal::read(dir, meta) {
         Ok(Some((old, _))) if same_sweep(&old, meta) => format!(
             "{here}: holds the journal {JOURNAL} of a sweep of this study that did not finish; {resume} to finish it (it keeps the rows done), or remove {JOURNAL} to start over"
         ),
@@ -352,7 +377,7 @@ fn resumed(dir: &Path, meta: &StudyMeta, n: usize) -> Result<(Vec<Row>, Vec<bool
         Failure::Input(format!("{here}: {e}; resume into the --out directory of the interrupted sweep"))
     })?;
     // The journal, where there is one, is newer than runs.csv: it is removed once runs.csv is written.
-    let (old, rows, source) = match journal::read(dir) {
+    let (old, rows, source) = match journal::read(dir, meta) {
         Err(e) => {
             return Err(Failure::Input(format!("{here}: {JOURNAL}: {e}; remove it and run the sweep again without --resume")))
         }
@@ -420,10 +445,13 @@ fn read_sweep_dir(dir: &Path, flag: &str) -> Result<(StudyMeta, Vec<Row>, bool),
         std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory => bad(what, format!("{e}; {WHAT_TO_GIVE}")),
         _ => bad(what, e.to_string()),
     };
-    let text = quell::files::read_regular(&dir.join("summary.json")).map_err(|e| unreadable("summary.json", e))?;
-    let summary: Summary = serde_json::from_str(&text)
+    // Read as a stream: what is not a summary is refused at its first wrong byte, not once read.
+    let file = quell::files::open_regular(&dir.join("summary.json")).map_err(|e| unreadable("summary.json", e))?;
+    let summary: Summary = serde_json::from_reader(std::io::BufReader::new(file))
         .map_err(|e| bad("summary.json", format!("not a summary written by `quell sweep` ({e}); {WHAT_TO_GIVE}")))?;
-    let csv = quell::files::read_regular(&dir.join("runs.csv")).map_err(|e| unreadable("runs.csv", e))?;
+    let (line, lines) = study::runs_csv_bounds(&summary.study);
+    let csv =
+        quell::files::read_lines_within(&dir.join("runs.csv"), line, lines).map_err(|e| unreadable("runs.csv", e))?;
     let shard = summary.study.shard;
     if shard.index >= shard.count {
         return Err(bad(
@@ -535,7 +563,7 @@ fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
     // overwritten them, and the journal beside them then belonged to no result).
     unfinished_in_the_way(out, &meta, RESUME_BEFORE_MERGE)?;
     prepare_out(out, OUTPUTS)?;
-    write_all(out, &meta, &rows, false, plots)?;
+    write_all(out, &meta, (&rows, false), plots, || ())?;
     let shards = if count == 1 { "shard" } else { "shards" };
     eprintln!("merged {count} {shards}: {} runs into {}", rows.len(), out.display());
     Ok(())

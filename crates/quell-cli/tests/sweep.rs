@@ -274,6 +274,48 @@ fn an_interrupted_sweep_resumed_equals_an_uninterrupted_one() {
     assert!(stderr(&refused).contains("its rows come from another study or shard"), "{}", stderr(&refused));
 }
 
+/// An interrupted sweep into the directory of another, complete sweep keeps that sweep's files
+/// and leaves its own rows in the journal, which `--resume` finishes and which then replaces them
+/// (an interrupted sweep had replaced another study's 3,000 rows with its few hundred; hostile
+/// review, 2026-12-06).
+#[test]
+fn an_interrupted_sweep_keeps_the_complete_one_it_would_replace() {
+    let dir_tmp = scratch("keep");
+    let dir = dir_tmp.path();
+    let out = dir.join("out");
+    let other = write_study(dir, "other.toml", "[simulation]\nt_end = 1.0\n[grid]\n\"design.mu[0]\" = [10.0, 20.0]\n");
+    let o = quell(&["sweep", &other, "--no-plots", "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (csv, summary) = (fs::read(out.join("runs.csv")).unwrap(), fs::read(out.join("summary.json")).unwrap());
+    let text = "[simulation]\nt_end = 20.0\nrtol = 1e-6\natol = 1e-6\n[monte_carlo]\nruns = 3000\nseed = 3\n\"plant.x0\" = { normal = 0.1 }\n";
+    let study = write_study(dir, "study.toml", text);
+    let child = Command::new(env!("CARGO_BIN_EXE_quell"))
+        .args(["sweep", &study, "--no-plots", "--out"])
+        .arg(&out)
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start quell");
+    std::thread::sleep(Duration::from_millis(700));
+    let _ = Command::new("kill").args(["-INT", &child.id().to_string()]).status();
+    let part = child.wait_with_output().unwrap();
+    if part.status.code() == Some(1) {
+        let err = stderr(&part);
+        assert!(err.contains("runs.csv and summary.json there are the earlier sweep's, kept"), "{err}");
+        assert_eq!(fs::read(out.join("runs.csv")).unwrap(), csv);
+        assert_eq!(fs::read(out.join("summary.json")).unwrap(), summary);
+        assert!(out.join("runs.partial.csv").is_file());
+        // A new sweep is told of the journal; --resume finishes it and replaces the files.
+        let again = quell(&["sweep", &other, "--no-plots", "--out", out.to_str().unwrap()]);
+        assert_eq!(again.status.code(), Some(2), "{}", stderr(&again));
+        let resumed = quell(&["sweep", &study, "--no-plots", "--out", out.to_str().unwrap(), "--resume"]);
+        assert!(resumed.status.success(), "{}", stderr(&resumed));
+    }
+    // Finished either way: the new study's 3,000 rows, no journal.
+    let rows = fs::read_to_string(out.join("runs.csv")).unwrap();
+    assert_eq!(rows.lines().count(), 3001, "{}", &rows[..200.min(rows.len())]);
+    assert!(!out.join("runs.partial.csv").exists());
+}
+
 /// A sweep killed outright (SIGKILL: the out-of-memory killer, a batch system past its grace
 /// period) writes neither runs.csv nor summary.json, but its journal holds every run that finished:
 /// `--resume` keeps those and ends with the rows of an uninterrupted sweep. A last line cut by the

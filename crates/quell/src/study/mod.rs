@@ -24,7 +24,8 @@ use crate::scenario::{kind, syntax_message, Scenario, PAPER_EXAMPLE};
 pub use crate::sim::settle::Settle;
 use crate::sim::Peaks;
 pub use output::{
-    csv_field, csv_number, header, read_runs_csv, write_run_row, write_runs_csv, write_runs_header, RunsFile,
+    csv_field, csv_number, header, read_runs_csv, runs_csv_bounds, write_run_row, write_runs_csv, write_runs_header,
+    RunsFile,
 };
 pub use path::{KeyPath, Shape};
 pub use summary::{quantile, AxisMeta, ChannelQuantiles, PointSummary, Quantiles, StudyMeta, Summary, QUANTILES};

@@ -20,6 +20,20 @@ pub fn header(meta: &StudyMeta) -> Vec<String> {
     h
 }
 
+/// The longest line and the most lines a runs.csv of `meta`'s shard can hold, for
+/// [`crate::files::read_lines_within`]: every number within 32 bytes, each grid value as summary.json
+/// writes it (quoted, its quotes doubled), a reason within 64 KiB; the header, the rows and a
+/// `# partial` line.
+pub fn runs_csv_bounds(meta: &StudyMeta) -> (usize, usize) {
+    // Counted, not built: an edited m of 1e15 is the reader's to refuse (`header_length`).
+    let fields = meta.m.saturating_mul(5).saturating_add(8 + meta.grid.len());
+    let keys: usize = meta.grid.iter().map(|a| 2 * a.key.len() + 3).sum();
+    let grid: usize = meta.grid.iter().map(|a| a.values.iter().map(|v| 2 * v.len() + 3).max().unwrap_or(0)).sum();
+    let line = fields.saturating_mul(32).saturating_add(keys.max(grid)).saturating_add(64 << 10);
+    let rows = meta.shard.len(usize::try_from(meta.runs).unwrap_or(usize::MAX));
+    (line, rows.saturating_add(2))
+}
+
 /// A number in a CSV output (runs.csv, tune.csv), as signals.csv writes its numbers: the shortest
 /// digits that read back to it, in plain decimal from 1e-4 to below 1e15 (and 0, inf, NaN), in
 /// exponent form outside (`{}` alone wrote μ = 1e20 as 21 digits and 1e-300 as 300 zeros).
@@ -188,12 +202,22 @@ pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
         // tails; one that never started (an invalid draw) has none.
         let completed = outcome == Outcome::Completed;
         let figure = |i: usize| if completed { finite(i) } else { opt(i).map(|v| v.unwrap_or(f64::NAN)) };
+        // A tail is a completed run's (an edited outcome had been merged with its tails).
+        let tail = |i: usize| match f[i].is_empty() || completed {
+            true => figure(i),
+            false => Err(at(format!(
+                "{}: expected no tail in a row whose run did not complete ({}), found `{}`",
+                expected[i],
+                f[4 + g],
+                f[i]
+            ))),
+        };
         let started = completed || (0..m).any(|i| !f[first + 2 * m + i].is_empty());
         let channels = (0..if started { m } else { 0 })
             .map(|i| {
                 Ok(ChannelFigures {
-                    tail_max_e: figure(first + i)?,
-                    tail_rms_e: figure(first + m + i)?,
+                    tail_max_e: tail(first + i)?,
+                    tail_rms_e: tail(first + m + i)?,
                     max_u: figure(first + 2 * m + i)?,
                     max_uf: figure(first + 3 * m + i)?,
                     settle_t: opt(first + 4 * m + i)?,
