@@ -1200,8 +1200,10 @@ fn band_spans(low: &[(f64, f64)], high: &[(f64, f64)]) -> Vec<Vec<(f64, f64, f64
     spans
 }
 
-/// Writes `lines` at the top left of a panel spanning `xs` × `ys` (the bottom left where a point
-/// of `curve` lies under the top left), or in the middle of an `empty` one.
+/// Writes `lines` in the first corner of a panel spanning `xs` × `ys` that no point of `curve`
+/// lies under (top left, bottom left, top right, bottom right; else the one with the fewest), or
+/// in the middle of an `empty` one. (Bottom left had been taken whenever the top left was not: a
+/// curve rising from there ran under the note.)
 fn missing_median_note<DB: DrawingBackend>(
     chart: &mut Chart<'_, DB>,
     lines: [String; 2],
@@ -1209,11 +1211,12 @@ fn missing_median_note<DB: DrawingBackend>(
     (x0, x1): (f64, f64),
     (y0, y1): (f64, f64),
 ) -> Result<(), String> {
-    let covered = curve.iter().any(|&(x, y)| (x - x0) / (x1 - x0) < 0.65 && (y - y0) / (y1 - y0) > 0.8);
-    let (x, y) = match (empty, covered) {
-        (true, _) => (x0 + 0.1 * (x1 - x0), 0.5 * (y0 + y1)),
-        (false, false) => (x0 + 0.02 * (x1 - x0), y1 - 0.03 * (y1 - y0)),
-        (false, true) => (x0 + 0.02 * (x1 - x0), y0 + 0.12 * (y1 - y0)),
+    let (x, y) = match empty {
+        false => {
+            let (left, top) = note_corner(curve, (x0, x1), (y0, y1));
+            (x0 + left * (x1 - x0), y0 + top * (y1 - y0))
+        }
+        true => (x0 + 0.1 * (x1 - x0), 0.5 * (y0 + y1)),
     };
     let font = ("sans-serif", 13).into_font().color(&RGBColor(90, 90, 90));
     let ats = [(x, y), (x, y - 0.07 * (y1 - y0))];
@@ -1221,6 +1224,20 @@ fn missing_median_note<DB: DrawingBackend>(
         .draw_series(lines.into_iter().zip(ats).map(|(line, at)| Text::new(line, at, font.clone())))
         .map_err(|e| e.to_string())?;
     Ok(())
+}
+
+/// [`missing_median_note`]'s corner, as fractions of the panel (its left edge, its first line's
+/// height): the note spans 0.65 of the width and 0.2 of the height below its first line.
+fn note_corner(curve: &[(f64, f64)], (x0, x1): (f64, f64), (y0, y1): (f64, f64)) -> (f64, f64) {
+    const CORNERS: [(f64, f64); 4] = [(0.02, 0.97), (0.02, 0.19), (0.33, 0.97), (0.33, 0.19)];
+    let under = |&(left, top): &(f64, f64)| {
+        let inside = |&&(x, y): &&(f64, f64)| {
+            let (u, v) = ((x - x0) / (x1 - x0), (y - y0) / (y1 - y0));
+            (left - 0.02..=left + 0.65).contains(&u) && (top - 0.2..=top + 0.03).contains(&v)
+        };
+        curve.iter().filter(inside).count()
+    };
+    *CORNERS.iter().find(|c| under(c) == 0).unwrap_or_else(|| CORNERS.iter().min_by_key(|c| under(c)).expect("four"))
 }
 
 /// Why a sweep panel lacks the median at some (`all`: every) grid point, in two short lines: no
@@ -1633,6 +1650,17 @@ pub fn plot_tune(dir: &Path, r: &quell::study::TuneResult, unit: TimeUnit, outpu
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The note goes where the curve is not: top left; bottom left under a curve that starts high;
+    /// top right where a curve rises from the bottom left (a boiler's tail RMS rose from there
+    /// under the note; helper tryout, 2026-12-06).
+    #[test]
+    fn the_missing_median_note_avoids_the_curve() {
+        let panel = ((0.0, 60.0), (0.0, 1.0));
+        assert_eq!(note_corner(&[(0.0, 0.5), (5.0, 0.55)], panel.0, panel.1), (0.02, 0.97));
+        assert_eq!(note_corner(&[(0.0, 0.95), (5.0, 0.6)], panel.0, panel.1), (0.02, 0.19));
+        assert_eq!(note_corner(&[(0.0, 0.02), (2.0, 0.4), (5.0, 0.98)], panel.0, panel.1), (0.33, 0.97));
+    }
 
     /// A point without its upper quantile breaks the band there; the points with both keep theirs
     /// (the active-suspension study's settling-time band had vanished at every point because one

@@ -204,7 +204,7 @@ fn relative_degrees(s: &mut String, d: &Design) {
         } else if r.is_close() {
             let _ = writeln!(
                 s,
-                "  ⚠ close decision for output {}: cosines for l = 1…{l} are [{}], within ×{cf} of τ; check row {i} of plant.C and plant.B, or give design.relative_degrees",
+                "  ⚠ close decision for output {}: cosines for l = 1…{l} are [{}], within ×{cf} of τ; check plant.C[{i}] (its row) and plant.B, or give design.relative_degrees",
                 i + 1,
                 measures.join(", "),
             );

@@ -310,9 +310,7 @@ impl Verification {
         let mut what: Vec<String> = Vec::new();
         for m in missed.iter().flat_map(|c| &c.missed) {
             let name = match *m {
-                "ended" => {
-                    "a run that completes (it diverged, failed or departed from its continuous loop)".to_string()
-                }
+                "ended" => "completion (they diverged, failed or departed from their continuous loop)".to_string(),
                 "tail" => "the tail bound".to_string(),
                 "effort" => format!("the effort (max|u_f| within {EFFORT_GROWTH}× the verified run's)"),
                 _ => "the actuator limit".to_string(),
@@ -321,11 +319,10 @@ impl Verification {
                 what.push(name);
             }
         }
-        let verb = if what.len() == 1 { "is" } else { "are" };
         format!(
-            "{} {verb} missed with every true input delay {way} by as little as {}: the method predicts over the delays as given (the paper assumes them known), so measure them that well or better",
-            what.join(" and "),
-            percent(least)
+            "with every true input delay {way} by as little as {}, the runs miss {}: the method predicts over the delays as given (the paper assumes them known), so measure them that well or better",
+            percent(least),
+            what.join(" and ")
         )
     }
 

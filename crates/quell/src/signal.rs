@@ -112,8 +112,13 @@ impl Component {
     /// whole multiple of one base frequency, the maximum over that
     /// period: a square wave's first five odd harmonics (4/(πk) each) peak at 1.18, where the sum
     /// says 2.28, and a tail bound of 1 % of the sum passed tails of up to 1.9 % of the real peak.
+    /// A harmonic of frequency 0 is the constant a·sin φ, part of the bias (`amplitude = 50,
+    /// frequency = 0` is g ≡ 0, whose peak had read 50; helper tryout, 2026-12-06).
     pub fn peak(&self) -> f64 {
-        let sum = self.harmonics.iter().fold(self.bias.abs(), |acc, h| acc + h.amplitude.abs());
+        let still = self.harmonics.iter().filter(|h| h.frequency == 0.0);
+        let constant = still.fold(self.bias, |acc, h| acc + h.amplitude * h.phase.sin());
+        let moving = self.harmonics.iter().filter(|h| h.frequency != 0.0);
+        let sum = moving.fold(constant.abs(), |acc, h| acc + h.amplitude.abs());
         let active: Vec<&Harmonic> =
             self.harmonics.iter().filter(|h| h.amplitude != 0.0 && h.frequency > 0.0).collect();
         match active.len() {
@@ -448,6 +453,13 @@ mod tests {
         assert_eq!(apart.peak(), 2.0);
         let one = Component { bias: -1.0, harmonics: vec![h(0.5, 3.0)] };
         assert_eq!(one.peak(), 1.5);
+        // A harmonic of frequency 0 is the constant a·sin φ: 50 sin 0 is nothing, 50 sin(π/2) and a
+        // bias of −10 are 40, and a moving harmonic adds its amplitude.
+        let still = |phase: f64| Harmonic { amplitude: 50.0, frequency: 0.0, phase };
+        assert_eq!(Component { bias: 0.0, harmonics: vec![still(0.0)] }.peak(), 0.0);
+        let half_pi = std::f64::consts::FRAC_PI_2;
+        assert_eq!(Component { bias: -10.0, harmonics: vec![still(half_pi)] }.peak(), 40.0);
+        assert_eq!(Component { bias: -10.0, harmonics: vec![still(half_pi), h(2.0, 1.0)] }.peak(), 42.0);
         // Harmonics of 2π/24 written to six decimals: their common period's peak, not the sum 3.5
         // (the largest of 1 + 1.5 sin t + 0.5 sin 2t + 0.3 sin 3t + 0.2 sin 4t, by the derivative's
         // roots in SciPy: 2.785963).

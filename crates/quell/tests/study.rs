@@ -44,6 +44,9 @@ fn sharded_and_merged_equals_unsharded() {
         write_runs_csv(&mut csv, &meta, &part.rows, part.partial).unwrap();
         let back = read_runs_csv(std::str::from_utf8(&csv).unwrap(), &meta).unwrap();
         assert_eq!(back.rows, part.rows, "runs.csv reads back exactly");
+        // A blank line an editor left at the end holds no row (it had been refused).
+        let blank = format!("{}\n\n", std::str::from_utf8(&csv).unwrap());
+        assert_eq!(read_runs_csv(&blank, &meta).unwrap().rows, part.rows);
         merged.extend(back.rows);
     }
     merged.sort_by_key(|r| r.run);

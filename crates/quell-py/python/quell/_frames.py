@@ -229,8 +229,14 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
     eta_panel = axes[4] if len(axes) == 6 else axes[-1]
     for a in axes:
         a.grid(True, alpha=0.3)
-        # Where it hides the least of the curves (a fixed corner covered the η̂ traces).
-        if a.get_legend_handles_labels()[0]:
+        # Where it hides the least of the curves (a fixed corner covered the η̂ traces); the η̂
+        # legend of a figure plot draws beside its panel, as the CLI's (inside, "best" still hid a
+        # transient of eleven traces; helper tryout, 2026-12-06).
+        labels = a.get_legend_handles_labels()[1]
+        if labels and a is eta_panel and ax is None:
+            a.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize="small",
+                     ncol=1 + (len(labels) > 12))
+        elif labels:
             a.legend(loc="best", fontsize="small", ncol=1 + (len(axes) > 1 and a is eta_panel) * 2)
     if ax is None:
         fig.tight_layout()

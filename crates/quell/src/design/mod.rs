@@ -156,7 +156,7 @@ pub enum DesignError {
         margin: f64,
         kappa: f64,
     },
-    #[error("plant.C: output {} is reached by no input: c_i A^(l-1) B = 0 for every l ≤ n (largest cosine between c_i A^(l-1) and a column of B: {largest:.1e}, below τ = {tol:.0e}), so the plant cannot be decoupled; check row {channel} of plant.C", .channel + 1, tol = TOL)]
+    #[error("plant.C: output {} is reached by no input: c_i A^(l-1) B = 0 for every l ≤ n (largest cosine between c_i A^(l-1) and a column of B: {largest:.1e}, below τ = {tol:.0e}), so the plant cannot be decoupled; check plant.C[{channel}] (its row)", .channel + 1, tol = TOL)]
     NoRelativeDegree { channel: usize, largest: f64 },
     #[error("design.channel_poles[{channel}]: channel {} has relative degree {sigma}, so it needs {sigma} pole{}; found {got}{}", .channel + 1, if *.sigma == 1 { "" } else { "s" }, match .pairs { 0 => String::new(), 1 => " (a pair [re, im] is two poles, re ± i·im)".into(), p => format!(" ({p} pairs [re, im], each two poles, re ± i·im)") })]
     ChannelPoleCount { channel: usize, sigma: usize, got: usize, pairs: usize },

@@ -680,7 +680,10 @@ fn stable_zeros(z: Vec<Complex<f64>>, scale: f64) -> Option<Vec<Complex<f64>>> {
 /// degree 2 or more does, as a disk drive's torque disturbance) and there are as many outputs as
 /// disturbances: those of its zero dynamics by its own relative degrees
 /// ([`crate::design::decoupling_zeros`]), when all are stable. Only the run's advice offers them;
-/// the automatic design's candidates keep [`disturbance_zeros`].
+/// the automatic design's candidates keep [`disturbance_zeros`]: as a candidate, an
+/// electro-hydraulic actuator's zeros (−0.2, −0.14 /ms) brought its max|u_f| from 23 to 3.6 but a
+/// loop that diverged with its 1 ms delay 1 % off (3 % held with all-fast poles) and u_f the
+/// difference of terms 5,900× its peak (helper tryout, 2026-12-06).
 pub fn singular_disturbance_zeros(p: &Plant) -> Option<Vec<Complex<f64>>> {
     let k = p.k();
     if k == 0 || p.m() != k || numerical_rank(&(&p.C * &p.D)) == k {

@@ -427,6 +427,7 @@ impl Study {
             _ => check_grid(&grid, &base, &scenario_source, base_error.as_ref())?,
         }
         let nominal = monte_carlo.is_some().then(Default::default);
+        let max_steps = read_max_steps(doc, &scenario, &grid)?;
         let mut document = doc.clone();
         document.remove("simulation");
         document.insert("scenario".into(), toml::Value::Table(base.clone()));
@@ -439,7 +440,7 @@ impl Study {
             monte_carlo,
             settle: read_settle(doc)?,
             tune,
-            max_steps: read_max_steps(doc)?,
+            max_steps,
             runaway: read_runaway(doc)?,
             m: scenario.plant.m(),
             u_max: scenario
@@ -730,16 +731,21 @@ impl Study {
 fn base_scenario(doc: &toml::Table, dir: Option<&Path>) -> Result<(toml::Table, String), StudyError> {
     match doc.get("scenario") {
         None => Ok((PAPER_EXAMPLE.parse().expect("the paper's example is valid TOML"), "the paper's example".into())),
+        Some(toml::Value::String(s)) if s.is_empty() => Err(err(
+            "scenario",
+            "expected the scenario file's path, found an empty string; name the file (scenario = \"paper.toml\"), or leave the key out for the paper's example",
+        )),
         Some(toml::Value::String(s)) => {
             let p = dir.map_or_else(|| PathBuf::from(s), |d| d.join(s));
+            // Where a relative path was looked for: beside the study file, or (a study given as
+            // text) the working directory; an absolute one is where it says.
+            let relative = match (Path::new(s).is_absolute(), dir) {
+                (true, _) => "",
+                (false, Some(_)) => "; the path is relative to the study file",
+                (false, None) => "; the path is relative to the working directory (the study was given as text)",
+            };
             let text = crate::settings::read_input(&p).map_err(|e| {
-                err(
-                    "scenario",
-                    format!(
-                        "cannot read the scenario file {} ({e}); the path is relative to the study file",
-                        p.display()
-                    ),
-                )
+                err("scenario", format!("cannot read the scenario file {:?} ({e}){relative}", p.display().to_string()))
             })?;
             let base = text.parse().map_err(|e: toml::de::Error| {
                 err("scenario", format!("{s} is not valid TOML: {}", syntax_message(&text, &e)))
@@ -911,15 +917,23 @@ fn read_settle(doc: &toml::Table) -> Result<Settle, StudyError> {
     Ok(s)
 }
 
-/// `max_steps`: a step budget ≥ 1 (`None` when not given: each run's own default).
-fn read_max_steps(doc: &toml::Table) -> Result<Option<usize>, StudyError> {
+/// `max_steps`: a step budget ≥ 1 (`None` when not given: each run's own default), for the
+/// continuous loop: refused where every run is sampled-data (the scenario's, no grid over
+/// `simulation.sample_time`), as `quell run --max-steps` is; it had been ignored.
+fn read_max_steps(doc: &toml::Table, scenario: &Scenario, grid: &[GridAxis]) -> Result<Option<usize>, StudyError> {
     const WHAT: &str = "a step budget per run (an integer ≥ 1)";
-    match doc.get("max_steps") {
-        None => Ok(None),
-        Some(v) => match unsigned("max_steps", v, WHAT)? {
-            0 => Err(err("max_steps", format!("expected {WHAT}, found 0"))),
-            n => Ok(Some(usize::try_from(n).unwrap_or(usize::MAX))),
-        },
+    let Some(v) = doc.get("max_steps") else { return Ok(None) };
+    let n = match unsigned("max_steps", v, WHAT)? {
+        0 => return Err(err("max_steps", format!("expected {WHAT}, found 0"))),
+        n => usize::try_from(n).unwrap_or(usize::MAX),
+    };
+    let gridded = grid.iter().any(|a| a.key.starts_with("simulation.sample_time"));
+    match scenario.simulation.sample_time {
+        Some(t_s) if !gridded => Err(err(
+            "max_steps",
+            format!("a step budget applies to the continuous loop; this study's runs are sampled-data (simulation.sample_time = {}), whose controller steps are known before they start: leave max_steps out", crate::settings::fmt_short(t_s)),
+        )),
+        _ => Ok(Some(n)),
     }
 }
 
@@ -1007,7 +1021,11 @@ fn not_in_scenario(path: &KeyPath, why: &str, hint: &str) -> String {
             }
         })
         .unwrap_or_default();
-    match OPTIONAL_KEYS.iter().find(|k| base == **k || base.starts_with(&format!("{k}."))) {
+    // A signal component's bias or a harmonic's phase, left out as 0 (`reference.components[0].bias`).
+    let signal_default = (section == "reference" || section == "disturbance")
+        && ["bias", "phase"].iter().any(|k| key.ends_with(&format!(".{k}")));
+    let optional = OPTIONAL_KEYS.iter().find(|k| base == **k || base.starts_with(&format!("{k}."))).copied();
+    match optional.or(signal_default.then_some(key.as_str())) {
         Some(k) => format!("{path} is not a value of the scenario ({why}): {k} is optional and the scenario leaves it out; give it a value in the scenario file (any, e.g. the first of the study's), which the study then varies"),
         None => format!("{path} is not a value of the scenario ({why}){nearest}; {hint}"),
     }
@@ -1137,6 +1155,13 @@ fn monte_carlo(base: &toml::Table, t: &toml::Table, source: &str) -> Result<Mont
         if contains_integer_key(&path) {
             return Err(err(&at, format!("{path} is an integer setting; draws perturb real numbers only")));
         }
+        // ∞ perturbed is ∞: every draw would repeat the nominal run (truth.u_max left unlimited).
+        if all_infinite(current) {
+            return Err(err(
+                &at,
+                format!("{path} in {source} is infinite (no limit), which no draw changes, so every draw would repeat the nominal run; give it a finite value in the scenario file to perturb it"),
+            ));
+        }
         perturbations.push(Perturbation { key: key.clone(), path, law });
     }
     // Draws reseed nothing else (not [noise]): without a law every draw repeats the nominal run.
@@ -1147,6 +1172,15 @@ fn monte_carlo(base: &toml::Table, t: &toml::Table, source: &str) -> Result<Mont
         ));
     }
     Ok(MonteCarlo { runs: runs as usize, seed, perturbations })
+}
+
+/// Every number of `v` is ±∞ (and there is one).
+fn all_infinite(v: &toml::Value) -> bool {
+    match v {
+        toml::Value::Float(x) => x.is_infinite(),
+        toml::Value::Array(a) => !a.is_empty() && a.iter().all(all_infinite),
+        _ => false,
+    }
 }
 
 /// Scenario values that must stay integers.

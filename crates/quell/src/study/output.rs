@@ -23,7 +23,7 @@ pub fn header(meta: &StudyMeta) -> Vec<String> {
 /// The longest line and the most lines a runs.csv of `meta`'s shard can hold, for
 /// [`crate::files::read_lines_within`]: every number within 32 bytes, each grid value as summary.json
 /// writes it (quoted, its quotes doubled), a reason within 64 KiB; the header, the rows and a
-/// `# partial` line.
+/// `# partial` line and two blank ones.
 pub fn runs_csv_bounds(meta: &StudyMeta) -> (usize, usize) {
     // Counted, not built: an edited m of 1e15 is the reader's to refuse (`header_length`).
     let fields = meta.m.saturating_mul(5).saturating_add(8 + meta.grid.len());
@@ -31,7 +31,7 @@ pub fn runs_csv_bounds(meta: &StudyMeta) -> (usize, usize) {
     let grid: usize = meta.grid.iter().map(|a| a.values.iter().map(|v| 2 * v.len() + 3).max().unwrap_or(0)).sum();
     let line = fields.saturating_mul(32).saturating_add(keys.max(grid)).saturating_add(64 << 10);
     let rows = meta.shard.len(usize::try_from(meta.runs).unwrap_or(usize::MAX));
-    (line, rows.saturating_add(2))
+    (line, rows.saturating_add(4))
 }
 
 /// A number in a CSV output (runs.csv, tune.csv), as signals.csv writes its numbers: the shortest
@@ -170,6 +170,10 @@ pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
         let at = |msg: String| format!("line {}: {msg}", n + 1);
         if line.starts_with(PARTIAL) {
             partial = true;
+            continue;
+        }
+        // A blank line (an editor's at the end) holds no row.
+        if line.trim().is_empty() {
             continue;
         }
         let f = split(line).map_err(at)?;

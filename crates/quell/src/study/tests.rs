@@ -49,7 +49,7 @@ fn study_mistakes_name_their_key() {
         ("sceanrio = \"x.toml\"", "sceanrio: unknown key (did you mean `scenario`?); valid keys at the top level"),
         ("[runaway]\npaek = 50", "runaway.paek: unknown key (did you mean `peak`?); valid keys in [runaway]: peak, steps"),
         ("scenario = 3", "scenario: expected the scenario file's path (a string) or a scenario table, found an integer"),
-        ("scenario = \"/nonexistent/x.toml\"", "scenario: cannot read the scenario file /nonexistent/x.toml"),
+        ("scenario = \"/nonexistent/x.toml\"", "scenario: cannot read the scenario file \"/nonexistent/x.toml\" (No such file or directory (os error 2))"),
         ("[grid]\n\"design.nu\" = [1.0]", "grid.\"design.nu\": design.nu is not a value of the scenario (design has no nu)"),
         // A misspelt key of a known table names the nearest (names of three letters or more).
         ("[grid]\n\"truth.delay[0]\" = [0.2]", "grid.\"truth.delay[0]\": truth.delay[0] is not a value of the scenario (the scenario has no truth) (did you mean truth.delays?); grid and Monte Carlo keys"),
@@ -85,7 +85,12 @@ fn study_mistakes_name_their_key() {
         ("[simulation]\nsteps = 3", "simulation.steps: unknown key; valid keys in [simulation]"),
         ("[simulation]\nmethod = \"imx\"", "simulation.method: expected \"auto\" (DOP853"),
         ("[grid]\n\"simulation.method\" = [\"auto\", \"imex\"]", "grid.\"simulation.method\": the integrator is not a grid key"),
+        ("scenario = \"\"", "scenario: expected the scenario file's path, found an empty string"),
+        ("[grid]\n\"reference.components[0].bias\" = [0.5]", "grid.\"reference.components[0].bias\": reference.components[0].bias is not a value of the scenario (reference.components[0] has no bias): reference.components[0].bias is optional and the scenario leaves it out; give it a value in the scenario file"),
         ("max_steps = 0", "max_steps: expected a step budget per run (an integer ≥ 1), found 0"),
+        ("[monte_carlo]\nruns = 2\n\"truth.u_max\" = { normal = 1.0 }", "monte_carlo.\"truth.u_max\": truth.u_max in "),
+        // Ignored in a sampled-data study, which `quell run --max-steps` refuses (hostile review).
+        ("max_steps = 100\n[simulation]\nsample_time = 0.01", "max_steps: a step budget applies to the continuous loop; this study's runs are sampled-data (simulation.sample_time = 0.01)"),
         ("[runaway]\npeak = 0.5", "runaway.peak: expected a factor ≥ 1 (or inf to turn the rule off), found 0.5"),
         ("[runaway]\nsteps = 0", "runaway.steps: expected a factor ≥ 1 (or inf to turn the rule off), found 0"),
         ("[runaway]\nsteps = nan", "runaway.steps: expected a factor ≥ 1 (or inf to turn the rule off), found NaN"),
@@ -97,6 +102,7 @@ fn study_mistakes_name_their_key() {
         ("[settle]\nband = 0.1", "settle.band: unknown key; valid keys in [settle]: relative, absolute"),
         ("[tune]\nobjective = \"settle_t\"", "tune.mu: missing; required: the search interval"),
         ("[tune]\nmu = [[1.0, 2.0]]", "tune.mu: expected 2 entries (one per channel), found 1"),
+        ("[tune]\nmu = [[1.0, 10.0], [2.0]]", "tune.mu[1]: expected [μ_min, μ_max], found an array of 1 entry"),
         ("[tune]\nmu = [0.0, 10.0]", "tune.mu: expected 0 < μ_min ≤ μ_max (the search is on a log scale), found [0, 10]"),
         ("[tune]\nmu = [1.0, 10.0]\nobjective = \"fast\"", "tune.objective: expected \"settle_t\", \"tail_rms_e\" or \"tail_max_e\", found \"fast\""),
         ("[tune]\nmu = [1.0, 10.0]\nmax_u = [1.0, -2.0]", "tune.max_u[1]: expected a limit on max |u_i| > 0 (inf for none), found -2"),
@@ -360,7 +366,7 @@ fn an_endless_input_file_is_refused_naming_its_path() {
     let e = crate::Scenario::from_path(zero).expect_err("refused").to_string();
     assert!(e.starts_with("/dev/zero: cannot read the file: a device, not a file"), "{e}");
     let e = error("scenario = \"/dev/zero\"");
-    assert!(e.starts_with("scenario: cannot read the scenario file /dev/zero (a device, not a file"), "{e}");
+    assert!(e.starts_with("scenario: cannot read the scenario file \"/dev/zero\" (a device, not a file"), "{e}");
 }
 
 /// A study whose `scenario` names a study (itself, or another) says so, not only that

@@ -127,7 +127,12 @@ impl TuneSpec {
                         // One pair for every channel is named as the key itself.
                         let key = if shared { "tune.mu".to_string() } else { format!("tune.mu[{i}]") };
                         let pair = b.as_array().filter(|a| a.len() == 2).ok_or_else(|| {
-                            err(&key, format!("expected [μ_min, μ_max], found {}", kind(b)))
+                            let found = match b.as_array() {
+                                Some(a) if a.len() == 1 => "an array of 1 entry".to_string(),
+                                Some(a) => format!("an array of {} entries", a.len()),
+                                None => kind(b).to_string(),
+                            };
+                            err(&key, format!("expected [μ_min, μ_max], found {found}"))
                         })?;
                         let (lo, hi) = (number(&key, &pair[0], "a finite number")?, number(&key, &pair[1], "a finite number")?);
                         if !(lo > 0.0 && lo <= hi) {
