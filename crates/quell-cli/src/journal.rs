@@ -73,9 +73,10 @@ impl Journal {
 /// line break (the kill came while it was written) is dropped; anything else that is not a
 /// journal's content is an error naming the line.
 pub fn read(dir: &Path, meta: &StudyMeta) -> Result<Option<(StudyMeta, Vec<Row>)>, String> {
-    // Lines as long as a runs.csv's of the study being swept, or its own first line's, or 16 MiB.
-    let line = study::runs_csv_bounds(meta).0.max(OPENING.len() + serde_json::to_string(meta).map_or(0, |j| j.len()));
-    let text = match quell::files::read_lines_within(&dir.join(JOURNAL), line.max(16 << 20), usize::MAX) {
+    // Lines as long as a runs.csv's of the study being swept, or 64 MiB: the first line of any
+    // study's journal (its identity, in JSON about twice the 16 MiB a study file may take in TOML).
+    let line = study::runs_csv_bounds(meta).0.max(64 << 20);
+    let text = match quell::files::read_lines_within(&dir.join(JOURNAL), line, usize::MAX) {
         Ok(text) => text,
         Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(None),
         Err(e) => return Err(e.to_string()),

@@ -1230,12 +1230,19 @@ fn missing_median_note<DB: DrawingBackend>(
 /// height): the note spans 0.65 of the width and 0.2 of the height below its first line.
 fn note_corner(curve: &[(f64, f64)], (x0, x1): (f64, f64), (y0, y1): (f64, f64)) -> (f64, f64) {
     const CORNERS: [(f64, f64); 4] = [(0.02, 0.97), (0.02, 0.19), (0.33, 0.97), (0.33, 0.19)];
+    // The curve's points and 20 along each segment between them (a line from (0, 0.5) to
+    // (60, 1) crossed the top-left note with no point under it; diff review).
+    let along: Vec<(f64, f64)> = (curve.windows(2))
+        .flat_map(|w| (0..20).map(move |k| (k as f64 / 20.0, w[0], w[1])))
+        .map(|(t, a, b)| (a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1)))
+        .chain(curve.last().copied())
+        .collect();
     let under = |&(left, top): &(f64, f64)| {
         let inside = |&&(x, y): &&(f64, f64)| {
             let (u, v) = ((x - x0) / (x1 - x0), (y - y0) / (y1 - y0));
             (left - 0.02..=left + 0.65).contains(&u) && (top - 0.2..=top + 0.03).contains(&v)
         };
-        curve.iter().filter(inside).count()
+        along.iter().filter(inside).count()
     };
     *CORNERS.iter().find(|c| under(c) == 0).unwrap_or_else(|| CORNERS.iter().min_by_key(|c| under(c)).expect("four"))
 }
@@ -1273,8 +1280,7 @@ fn draw_sweep_2d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
     for (i, area) in areas.iter().enumerate() {
         let cell = |pt: &quell::study::PointSummary| pt.channels[i].tail_rms_e.p50.filter(|v| *v > 0.0);
         let logs: Vec<f64> = s.points.iter().filter_map(cell).map(f64::log10).collect();
-        let (lo, hi) = logs.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
-        let span = if hi > lo { hi - lo } else { 1.0 };
+        let (lo, span, digits) = colour_scale(&logs);
         // The colours' scale beside the cells: each channel has its own.
         let (cells, scale) = area.split_horizontally(area.dim_in_pixel().0.saturating_sub(COLOUR_BAR) as i32);
         if !logs.is_empty() {
@@ -1315,7 +1321,7 @@ fn draw_sweep_2d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
             let (gx, gy) = (pt.point / ny, pt.point % ny);
             let (x, y) = (gx as f64, gy as f64);
             let (shade, text) = match cell(pt) {
-                Some(v) => ((v.log10() - lo) / span, format!("{v:.2e}")),
+                Some(v) => ((v.log10() - lo) / span, format!("{v:.digits$e}")),
                 None => (1.0, "—".to_string()),
             };
             let color = if text == "—" { RGBColor(200, 200, 200) } else { ramp(shade) };
@@ -1349,6 +1355,28 @@ const COLOUR_BAR: u32 = 110;
 
 /// A heat map's colour bar: [`ramp`] over log10 of the values from `lo` to `lo + span`, labelled
 /// with the values and titled with what they are.
+/// The least span of a heat map's colours, in decades: a factor of 2.
+const MIN_COLOUR_SPAN: f64 = std::f64::consts::LOG10_2;
+
+/// A heat map's colour scale over the decades `logs`: its lowest decade and span, over a factor of
+/// 2 at least about the medians (a spread of 0.08 % had run from dark blue to yellow, as if μ
+/// mattered; helper tryout, 2026-12-06), and the cell labels' decimals that tell them apart.
+fn colour_scale(logs: &[f64]) -> (f64, f64, usize) {
+    let (lo, hi) = logs.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+    let span = (hi - lo).max(MIN_COLOUR_SPAN);
+    (0.5 * (lo + hi - span), span, telling_digits(hi - lo))
+}
+
+/// Decimals (of `{:.De}`) that tell apart values spanning `decades` (log10 of the largest over the
+/// smallest): 2 from a 10 % spread, up to 5.
+fn telling_digits(decades: f64) -> usize {
+    let spread = 10f64.powf(decades) - 1.0;
+    match spread > 0.0 {
+        true => ((-spread.log10()).ceil().max(2.0) as usize).min(5),
+        false => 2,
+    }
+}
+
 fn colour_bar<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, lo: f64, span: f64) -> Result<(), String> {
     let mut bar = ChartBuilder::on(area)
         .caption("tail RMS e", ("sans-serif", 13))
@@ -1655,11 +1683,24 @@ mod tests {
     /// top right where a curve rises from the bottom left (a boiler's tail RMS rose from there
     /// under the note; helper tryout, 2026-12-06).
     #[test]
+    fn heat_map_labels_tell_close_medians_apart() {
+        // 1.230102e-3 … 1.231129e-3 (a TRMS's medians): 0.08 %, four decimals; 10 % and more, two.
+        assert_eq!(telling_digits((1.231129e-3f64 / 1.230102e-3).log10()), 4);
+        assert_eq!(format!("{:.4e}", 1.230102e-3), "1.2301e-3");
+        assert_eq!(telling_digits(1.1f64.log10()), 2);
+        assert_eq!(telling_digits(3.0), 2);
+        assert_eq!(telling_digits(0.0), 2);
+        assert_eq!(telling_digits(1e-12), 5);
+    }
+
+    #[test]
     fn the_missing_median_note_avoids_the_curve() {
         let panel = ((0.0, 60.0), (0.0, 1.0));
         assert_eq!(note_corner(&[(0.0, 0.5), (5.0, 0.55)], panel.0, panel.1), (0.02, 0.97));
         assert_eq!(note_corner(&[(0.0, 0.95), (5.0, 0.6)], panel.0, panel.1), (0.02, 0.19));
         assert_eq!(note_corner(&[(0.0, 0.02), (2.0, 0.4), (5.0, 0.98)], panel.0, panel.1), (0.33, 0.97));
+        // A segment crossing the top left with no point under it.
+        assert_eq!(note_corner(&[(0.0, 0.5), (60.0, 1.0)], panel.0, panel.1), (0.02, 0.19));
     }
 
     /// A point without its upper quantile breaks the band there; the points with both keep theirs

@@ -75,23 +75,11 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     }
     let (kept, done) = if args.resume { resumed(&args.out, &meta, n)? } else { (Vec::new(), Vec::new()) };
     if args.resume && kept.len() == n {
-        // Killed while it wrote its files: the journal holds every row, the files may not.
-        if args.out.join(JOURNAL).exists() {
-            let mut removed = Ok(());
-            write_all(&args.out, &meta, (&kept, false), !args.no_plots, || {
-                removed = std::fs::remove_file(args.out.join(JOURNAL))
-            })?;
-            removed.map_err(|e| Failure::Run(format!("{JOURNAL}: {e}")))?;
-            eprintln!("resumed: the journal held every run of the study ({n}); wrote {}", args.out.display());
-        } else {
-            eprintln!("nothing to resume: {} holds every run of the study ({n})", args.out.display());
-        }
-        return Ok(());
+        return finish_resumed(&args.out, &meta, &kept, !args.no_plots);
     }
     let pool = thread_pool(args.jobs, n - kept.len())?;
-    // A complete sweep's files (an unfinished one's were refused above), which only a complete
-    // sweep replaces.
-    let earlier = !args.resume && args.out.join("runs.csv").exists();
+    // A complete sweep's files, which only a complete sweep replaces (a resumed one's too).
+    let earlier = marked_summary(&args.out).is_some_and(|m| !m.partial);
     prepare_out(&args.out, OUTPUTS)?;
     let journal = Journal::create(&args.out, &meta, &kept)
         .map_err(|e| Failure::Input(format!("--out {}: {e}; choose another output directory", args.out.display())))?;
@@ -124,13 +112,7 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     rows.extend(result.rows);
     rows.sort_by_key(|r| r.run);
     if result.partial && earlier {
-        // An earlier sweep's whole results stay until this one completes (an interrupted sweep
-        // had replaced another study's 3,000 rows with its 328; hostile review, 2026-12-06).
-        return Err(Failure::Run(format!(
-            "interrupted after {} of {n} runs; those rows are in {} (`--resume` runs the others, and then replaces the earlier sweep's files); runs.csv and summary.json there are the earlier sweep's, kept",
-            rows.len(),
-            args.out.join(JOURNAL).display()
-        )));
+        return Err(kept_earlier(&args.out, rows.len(), n));
     }
     write_all(&args.out, &meta, (&rows, result.partial), !args.no_plots, || {
         if let Err(e) = journal.remove() {
@@ -337,24 +319,55 @@ fn unfinished_in_the_way(dir: &Path, meta: &StudyMeta, resume: &str) -> Result<(
             dir.display()
         )))
     };
-    /// The fields wanted of summary.json, read as a stream: a 3e5-point grid's is 800 MB.
-    #[derive(serde::Deserialize)]
-    struct Marked {
-        partial: bool,
-        runs_done: usize,
-    }
-    if let Ok(file) = quell::files::open_regular(&dir.join("summary.json")) {
-        if let Ok(m) = serde_json::from_reader::<_, Marked>(std::io::BufReader::new(file)) {
-            return match m.partial {
-                true => refuse(format!("{} of its runs done, summary.json's partial", m.runs_done)),
-                false => Ok(()),
-            };
-        }
+    if let Some(m) = marked_summary(dir) {
+        return match m.partial {
+            true => refuse(format!("{} of its runs done, summary.json's partial", m.runs_done)),
+            false => Ok(()),
+        };
     }
     match last_line(&dir.join("runs.csv")) {
         Some(line) if line.starts_with("# partial:") => refuse(format!("runs.csv ends with {line:?}")),
         _ => Ok(()),
     }
+}
+
+/// An interrupted sweep's end where `out` held a complete sweep's files: they stay until a sweep
+/// completes, its `done` rows of `n` in the journal (an interrupted sweep had replaced another
+/// study's 3,000 rows with its 328; hostile review, 2026-12-06).
+fn kept_earlier(out: &Path, done: usize, n: usize) -> Failure {
+    Failure::Run(format!(
+        "interrupted after {done} of {n} runs; those rows are in {} (`--resume` runs the others, and then replaces the earlier sweep's files); runs.csv and summary.json there are the earlier sweep's, kept",
+        out.join(JOURNAL).display()
+    ))
+}
+
+/// The fields wanted of summary.json.
+#[derive(serde::Deserialize)]
+struct Marked {
+    partial: bool,
+    runs_done: usize,
+}
+
+/// Whether the summary.json in `dir` is partial and its runs done, read as a stream (a 3e5-point
+/// grid's is 800 MB); `None` where there is none or it cannot be read.
+fn marked_summary(dir: &Path) -> Option<Marked> {
+    let file = quell::files::open_regular(&dir.join("summary.json")).ok()?;
+    serde_json::from_reader(std::io::BufReader::new(file)).ok()
+}
+
+/// A resumed sweep whose rows were all done (killed while it wrote its files: the journal holds
+/// every row, the files may not): its files written from them, the journal removed.
+fn finish_resumed(out: &Path, meta: &StudyMeta, kept: &[Row], plots: bool) -> Result<(), Failure> {
+    let n = kept.len();
+    if !out.join(JOURNAL).exists() {
+        eprintln!("nothing to resume: {} holds every run of the study ({n})", out.display());
+        return Ok(());
+    }
+    let mut removed = Ok(());
+    write_all(out, meta, (kept, false), plots, || removed = std::fs::remove_file(out.join(JOURNAL)))?;
+    removed.map_err(|e| Failure::Run(format!("{JOURNAL}: {e}")))?;
+    eprintln!("resumed: the journal held every run of the study ({n}); wrote {}", out.display());
+    Ok(())
 }
 
 /// The last line of the file at `path` (from its last 4 KiB), or `None` when it cannot be read.

@@ -287,30 +287,29 @@ fn an_interrupted_sweep_keeps_the_complete_one_it_would_replace() {
     let o = quell(&["sweep", &other, "--no-plots", "--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
     let (csv, summary) = (fs::read(out.join("runs.csv")).unwrap(), fs::read(out.join("summary.json")).unwrap());
+    // 3,000 runs on one thread: seconds of work, interrupted at 0.7 s, then again when resumed.
     let text = "[simulation]\nt_end = 20.0\nrtol = 1e-6\natol = 1e-6\n[monte_carlo]\nruns = 3000\nseed = 3\n\"plant.x0\" = { normal = 0.1 }\n";
     let study = write_study(dir, "study.toml", text);
-    let child = Command::new(env!("CARGO_BIN_EXE_quell"))
-        .args(["sweep", &study, "--no-plots", "--out"])
-        .arg(&out)
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start quell");
-    std::thread::sleep(Duration::from_millis(700));
-    let _ = Command::new("kill").args(["-INT", &child.id().to_string()]).status();
-    let part = child.wait_with_output().unwrap();
-    if part.status.code() == Some(1) {
+    for resume in [false, true] {
+        let mut args = vec!["sweep", &study, "--no-plots", "--jobs", "1", "--out", out.to_str().unwrap()];
+        args.extend(resume.then_some("--resume"));
+        let child =
+            Command::new(env!("CARGO_BIN_EXE_quell")).args(&args).stderr(Stdio::piped()).spawn().expect("start quell");
+        std::thread::sleep(Duration::from_millis(700));
+        let _ = Command::new("kill").args(["-INT", &child.id().to_string()]).status();
+        let part = child.wait_with_output().unwrap();
         let err = stderr(&part);
+        assert_eq!(part.status.code(), Some(1), "resume {resume}: {err}");
         assert!(err.contains("runs.csv and summary.json there are the earlier sweep's, kept"), "{err}");
         assert_eq!(fs::read(out.join("runs.csv")).unwrap(), csv);
         assert_eq!(fs::read(out.join("summary.json")).unwrap(), summary);
         assert!(out.join("runs.partial.csv").is_file());
-        // A new sweep is told of the journal; --resume finishes it and replaces the files.
-        let again = quell(&["sweep", &other, "--no-plots", "--out", out.to_str().unwrap()]);
-        assert_eq!(again.status.code(), Some(2), "{}", stderr(&again));
-        let resumed = quell(&["sweep", &study, "--no-plots", "--out", out.to_str().unwrap(), "--resume"]);
-        assert!(resumed.status.success(), "{}", stderr(&resumed));
     }
-    // Finished either way: the new study's 3,000 rows, no journal.
+    // A new sweep is told of the journal; --resume finishes it and replaces the files.
+    let again = quell(&["sweep", &other, "--no-plots", "--out", out.to_str().unwrap()]);
+    assert_eq!(again.status.code(), Some(2), "{}", stderr(&again));
+    let resumed = quell(&["sweep", &study, "--no-plots", "--out", out.to_str().unwrap(), "--resume"]);
+    assert!(resumed.status.success(), "{}", stderr(&resumed));
     let rows = fs::read_to_string(out.join("runs.csv")).unwrap();
     assert_eq!(rows.lines().count(), 3001, "{}", &rows[..200.min(rows.len())]);
     assert!(!out.join("runs.partial.csv").exists());

@@ -47,7 +47,7 @@ impl CtrlC {
 }
 
 /// How often the waiting thread runs Python's signal handlers.
-const SIGNAL_CHECK: Duration = Duration::from_millis(50);
+pub const SIGNAL_CHECK: Duration = Duration::from_millis(50);
 
 /// `work()` with Ctrl-C raising KeyboardInterrupt during it (see the module docs).
 pub fn interruptible<R: Send>(py: Python<'_>, work: impl FnOnce() -> R + Send) -> PyResult<R> {
@@ -71,7 +71,17 @@ pub fn interruptible_keeping<R: Send>(
     py: Python<'_>,
     work: impl FnOnce(Arc<AtomicBool>) -> R + Send,
 ) -> PyResult<(R, Option<PyErr>)> {
-    let (stop, ctrl_c) = (Arc::new(AtomicBool::new(false)), CtrlC::new());
+    interruptible_since(py, &CtrlC::new(), work)
+}
+
+/// [`interruptible_keeping`] that also answers the Ctrl-Cs `ctrl_c` has seen since it was made (a
+/// call that waited its turn before starting, [`crate::study`]'s shared iterator).
+pub fn interruptible_since<R: Send>(
+    py: Python<'_>,
+    ctrl_c: &CtrlC,
+    work: impl FnOnce(Arc<AtomicBool>) -> R + Send,
+) -> PyResult<(R, Option<PyErr>)> {
+    let stop = Arc::new(AtomicBool::new(false));
     let mut interrupt = None;
     let result = py.detach(|| {
         std::thread::scope(|scope| {

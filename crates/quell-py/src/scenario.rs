@@ -275,7 +275,7 @@ fn nested_value(obj: &Bound<'_, PyAny>, key: &str, depth: usize) -> PyResult<Val
     let py = obj.py();
     if depth > MAX_DEPTH {
         return Err(PyTypeError::new_err(format!(
-            "{}: expected numbers, vectors, matrices or tables of them, found lists or dicts nested more than {MAX_DEPTH} deep (a list that holds itself?)",
+            "{}: expected numbers, vectors, matrices or tables of them, found lists or dicts nested more than {MAX_DEPTH} deep (one that holds itself?)",
             key.split_once('[').map_or(key, |(name, _)| name)
         )));
     }
@@ -323,23 +323,8 @@ fn nested_value(obj: &Bound<'_, PyAny>, key: &str, depth: usize) -> PyResult<Val
         }
         return Ok(Value::Table(t));
     }
-    // numpy arrays and scalars: as Python lists and numbers. A long double's tolist() is itself
-    // (which had recursed until the stack overflowed): a real one is taken as the float it rounds to.
-    if let Ok(dtype) = obj.getattr("dtype") {
-        let kind: String = dtype.getattr("kind").and_then(|k| k.extract()).unwrap_or_default();
-        if kind == "c" {
-            return Err(PyTypeError::new_err(format!(
-                "{key}: expected real numbers, found a complex array or number (complex numbers are poles, in the *_poles lists)"
-            )));
-        }
-        if let Ok(v) = obj.call_method0("tolist") {
-            if !v.hasattr("dtype")? {
-                return nested_value(&v, key, depth);
-            }
-            if kind == "f" {
-                return Ok(Value::Float(v.call_method0("__float__")?.extract()?));
-            }
-        }
+    if let Some(v) = numpy_value(obj, key, depth)? {
+        return Ok(v);
     }
     if obj.is_none() {
         return Err(bad("None"));
@@ -351,6 +336,25 @@ fn nested_value(obj: &Bound<'_, PyAny>, key: &str, depth: usize) -> PyResult<Val
             .collect::<PyResult<Vec<_>>>()
             .map(Value::Array),
         Err(_) => Err(bad(&a_type(obj))),
+    }
+}
+
+/// A numpy array or scalar as Python lists and numbers (`None` for anything else). A long double's
+/// tolist() is itself (which had recursed until the stack overflowed): a real one is taken as the
+/// float it rounds to, a complex one refused.
+fn numpy_value(obj: &Bound<'_, PyAny>, key: &str, depth: usize) -> PyResult<Option<Value>> {
+    let Ok(dtype) = obj.getattr("dtype") else { return Ok(None) };
+    let kind: String = dtype.getattr("kind").and_then(|k| k.extract()).unwrap_or_default();
+    if kind == "c" {
+        return Err(PyTypeError::new_err(format!(
+            "{key}: expected real numbers, found a complex array or number (complex numbers are poles, in the *_poles lists)"
+        )));
+    }
+    let Ok(v) = obj.call_method0("tolist") else { return Ok(None) };
+    match (v.hasattr("dtype")?, kind.as_str()) {
+        (false, _) => nested_value(&v, key, depth).map(Some),
+        (true, "f") => Ok(Some(Value::Float(v.call_method0("__float__")?.extract()?))),
+        (true, _) => Ok(None),
     }
 }
 

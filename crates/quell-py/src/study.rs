@@ -4,7 +4,7 @@
 //! a cluster.
 
 use std::path::PathBuf;
-use std::sync::atomic::Ordering::Relaxed;
+use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
 use std::sync::Arc;
 
 use pyo3::exceptions::{PyIndexError, PyTypeError};
@@ -16,6 +16,7 @@ use toml::{Table, Value};
 
 use crate::convert::{a_type, as_int, type_name};
 use crate::errors::{subscripts, Kind};
+use crate::interrupt::{CtrlC, SIGNAL_CHECK};
 use crate::scenario::{toml_value, PyScenario};
 use crate::simulate::PySimResult;
 
@@ -257,7 +258,8 @@ impl PyStudy {
         let len = self.inner.len();
         let index = run_index(run, len)?;
         let study = &self.inner;
-        let inner = spec_interruptibly(py, study, index)?.ok_or_else(|| out_of_range(index as i128, len))?;
+        let inner =
+            spec_interruptibly(py, &CtrlC::new(), study, index)?.ok_or_else(|| out_of_range(index as i128, len))?;
         Ok(PyRunSpec { inner, drawn: drawn_keys(study) })
     }
 
@@ -734,16 +736,22 @@ impl Turn {
         self.state.lock().unwrap_or_else(|e| e.into_inner())
     }
 
-    fn take(&self, py: Python<'_>) -> Held<'_> {
-        let index = py.detach(|| {
+    /// The turn, or the KeyboardInterrupt of a Ctrl-C `ctrl_c` sees while waiting for it (a thread
+    /// had waited out another's nominal run, 9 s, deaf to Ctrl-C; diff review, 2026-12-06).
+    fn take(&self, py: Python<'_>, ctrl_c: &CtrlC) -> PyResult<Held<'_>> {
+        let index = py.detach(|| loop {
             let mut state = self.lock();
-            while state.1 {
-                state = self.free.wait(state).unwrap_or_else(|e| e.into_inner());
+            if state.1 {
+                state = self.free.wait_timeout(state, SIGNAL_CHECK).unwrap_or_else(|e| e.into_inner()).0;
             }
-            state.1 = true;
-            state.0
-        });
-        Held { turn: self, index, advanced: false }
+            if !state.1 {
+                state.1 = true;
+                return Ok::<usize, PyErr>(state.0);
+            }
+            drop(state);
+            ctrl_c.check()?;
+        })?;
+        Ok(Held { turn: self, index, advanced: false })
     }
 }
 
@@ -764,9 +772,19 @@ impl Drop for Held<'_> {
 }
 
 /// Run `index`'s spec: the first of a grid point carries out that point's nominal run, without the
-/// GIL and stopped by Ctrl-C (a KeyboardInterrupt; nothing of the run is kept). `None` past the end.
-fn spec_interruptibly(py: Python<'_>, study: &study::Study, index: usize) -> PyResult<Option<study::RunSpec>> {
-    crate::interrupt::interruptible_with(py, |stop| study.spec_with_nominal_until(index, &|| stop.load(Relaxed)))
+/// GIL and stopped by Ctrl-C (since `ctrl_c` was made: a KeyboardInterrupt; nothing of the run is
+/// kept). `None` past the end.
+fn spec_interruptibly(
+    py: Python<'_>,
+    ctrl_c: &CtrlC,
+    study: &study::Study,
+    index: usize,
+) -> PyResult<Option<study::RunSpec>> {
+    let work = |stop: Arc<AtomicBool>| study.spec_with_nominal_until(index, &|| stop.load(Relaxed));
+    match crate::interrupt::interruptible_since(py, ctrl_c, work)? {
+        (_, Some(e)) => Err(e),
+        (spec, None) => Ok(spec),
+    }
 }
 
 #[pymethods]
@@ -777,8 +795,9 @@ impl PyRunSpecs {
     fn __next__(&self, py: Python<'_>) -> PyResult<Option<PyRunSpec>> {
         // A &mut self had raised "Already borrowed" in a second thread while the first's nominal
         // run had the GIL released. An interrupted spec is not consumed.
-        let mut turn = self.next.take(py);
-        let Some(inner) = spec_interruptibly(py, &self.study, turn.index)? else { return Ok(None) };
+        let ctrl_c = CtrlC::new();
+        let mut turn = self.next.take(py, &ctrl_c)?;
+        let Some(inner) = spec_interruptibly(py, &ctrl_c, &self.study, turn.index)? else { return Ok(None) };
         turn.advanced = true;
         Ok(Some(PyRunSpec { inner, drawn: drawn_keys(&self.study) }))
     }

@@ -341,8 +341,22 @@ def test_a_plot_of_many_parameters_names_their_range_in_the_title():
     fig = quell.simulate(wind, t_end=0.2).plot(channel=1)
     eta = fig.axes[4]
     assert len(eta.lines) == 75 and eta.get_legend() is None
-    assert eta.get_title().endswith(": adjustable parameters (33), η1_1 … η1_75 in the palette's order"), eta.get_title()
+    assert eta.get_title().endswith(": adjustable parameters (33), η1_1 … η1_75 from dark blue to yellow"), eta.get_title()
+    # The ramp the title names: every trace its own colour, in order.
+    colours = [tuple(line.get_color()) for line in eta.lines]
+    assert len(set(colours)) == 75 and colours[0] == matplotlib.colormaps["viridis"](0.0)
     matplotlib.pyplot.close(fig)
+
+
+def test_up_to_fourteen_parameters_have_distinct_colours():
+    """q = 11 … 14 had repeated matplotlib's ten colours (η_1 and η_11 both blue; helper tryout)."""
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    from quell._frames import eta_colour
+
+    for q in (8, 12, 14):
+        colours = [matplotlib.colors.to_rgba(eta_colour(j, q)) for j in range(q)]
+        assert len(set(colours)) == q, q
 
 
 def test_a_stopped_runs_log_panel_shows_the_growth():

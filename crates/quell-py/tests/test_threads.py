@@ -224,3 +224,24 @@ def test_ctrl_c_stops_the_check_of_a_large_grid(python_child):
     call = "quell.Study(quell.paper_example(), grid={'design.mu[0]': values})"
     cpu = interrupted_cpu(python_child, call, setup=setup)
     assert cpu < 10.0, f"KeyboardInterrupt came after {cpu:.1f} s of CPU (the whole check: ~1 min)"
+
+
+def test_ctrl_c_reaches_a_thread_waiting_for_a_shared_spec_iterator(python_child):
+    """SIGINT while the main thread waits for its turn at a sweep_runs() iterator that a worker
+    holds (carrying out a grid point's nominal run, ~10 s of CPU) raises KeyboardInterrupt
+    promptly: the wait had been deaf to it until the worker's run ended (8.7 s; diff review)."""
+    setup = (
+        "import threading, time, quell\n"
+        "study = quell.Study(quell.paper_example(), simulation={'t_end': 1e5, 'output_step': 10.0},\n"
+        "                    monte_carlo={'runs': 2, 'plant.x0': {'normal': 0.1}})\n"
+        "specs = quell.sweep_runs(study)\n"
+        "def take():\n"
+        "    try:\n"
+        "        next(specs)\n"
+        "    except KeyboardInterrupt:\n"
+        "        pass\n"
+        "threading.Thread(target=take, daemon=True).start()\n"
+        "time.sleep(0.3)\n"
+    )
+    cpu = interrupted_cpu(python_child, "next(specs)", setup=setup, after=1.0)
+    assert cpu < 5.0, f"KeyboardInterrupt came after {cpu:.1f} s of CPU (the worker's nominal run alone: ~10 s)"

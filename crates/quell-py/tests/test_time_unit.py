@@ -40,7 +40,7 @@ def test_a_plant_keyword_sets_the_unit_and_a_scenario_from_values_writes_it():
 @pytest.mark.parametrize(
     "given, error, message",
     [
-        ("mins", quell.ScenarioError, 'time_unit: expected one of "µs" (microseconds), "ms" (milliseconds), "s" (seconds), "min" (minutes), "h" (hours), "d" (days), found "mins" (did you mean "min"?)'),
+        ("mins", quell.ScenarioError, 'time_unit: expected one of "µs" (microseconds), "ms" (milliseconds), "s" (seconds), "min" (minutes), "h" (hours), "d" (days), found "mins" (did you mean "min" (minutes)?)'),
         (60, TypeError, 'time_unit: expected a str such as "min", found an int'),
     ],
 )

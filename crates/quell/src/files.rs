@@ -198,23 +198,27 @@ pub fn read_regular(path: &Path) -> io::Result<String> {
 /// longer than `max_line` bytes (its line break included) or beyond `max_lines` lines, before the rest is read: a damaged
 /// runs.csv (2 GB of NULs on one line) had taken 4.2 GB to be refused.
 pub fn read_lines_within(path: &Path, max_line: usize, max_lines: usize) -> io::Result<String> {
-    use io::BufRead;
+    use io::{BufRead, Read};
     let mut reader = io::BufReader::new(open_regular(path)?);
-    let (mut text, mut start) = (String::new(), 0);
+    let (mut text, mut line) = (String::new(), Vec::new());
+    let limit = u64::try_from(max_line).unwrap_or(u64::MAX).saturating_add(1);
     for n in 1.. {
-        let limit = u64::try_from(max_line).unwrap_or(u64::MAX).saturating_add(1);
-        let read = io::Read::take(&mut reader, limit).read_line(&mut text)?;
-        if read == 0 {
+        line.clear();
+        if (&mut reader).take(limit).read_until(b'\n', &mut line)? == 0 {
             break;
         }
         let bad = |what: String| Err(io::Error::new(io::ErrorKind::InvalidData, format!("line {n}: {what}")));
-        if text.len() - start > max_line {
+        if line.len() > max_line {
             return bad(format!("longer than {max_line} bytes, the most a line of this file can hold"));
         }
         if n > max_lines {
             return bad(format!("more than the {max_lines} lines this file can hold"));
         }
-        start = text.len();
+        // Checked whole, so that a character cut by the limit is not taken for bad text.
+        match std::str::from_utf8(&line) {
+            Ok(l) => text.push_str(l),
+            Err(e) => return bad(format!("not UTF-8 text ({e})")),
+        }
     }
     Ok(text)
 }
@@ -303,6 +307,10 @@ mod tests {
             (e.kind(), e.to_string()),
             (io::ErrorKind::InvalidData, "line 2: longer than 5 bytes, the most a line of this file can hold".into())
         );
+        // A character the limit cuts in two: too long, not bad text (diff review).
+        fs::write(&path, format!("head\n{}\n", "yé".repeat(40))).unwrap();
+        let e = read_lines_within(&path, 6, 3).unwrap_err();
+        assert_eq!(e.to_string(), "line 2: longer than 6 bytes, the most a line of this file can hold");
     }
 
     /// A loop of links is named as one (it had been "a symbolic link to b, which does not exist

@@ -206,8 +206,12 @@ impl TimeUnit {
         if let Some((u, ..)) = found {
             return Ok(*u);
         }
+        // The nearest symbol or name, said as the list says its unit ("day": "d" (days)).
         let names = Self::ALL.iter().flat_map(|(_, s, n)| [*s, *n]);
-        let hint = nearest(given, names).map(|n| format!(" (did you mean \"{n}\"?)")).unwrap_or_default();
+        let unit = |near: &str| Self::ALL.iter().find(|(_, s, n)| near == *s || near == *n).map(|(_, s, n)| (*s, *n));
+        let hint = (nearest(given, names).and_then(unit))
+            .map(|(s, n)| format!(" (did you mean \"{s}\" ({n})?)"))
+            .unwrap_or_default();
         let list: Vec<String> = Self::ALL.iter().map(|(_, s, n)| format!("\"{s}\" ({n})")).collect();
         Err(format!("expected one of {}, found \"{given}\"{hint}", list.join(", ")))
     }

@@ -481,7 +481,11 @@ fn control_character_in_a_name() {
 
 #[test]
 fn unknown_time_unit() {
-    check(&with(&[(X0, &format!("{X0}\ntime_unit = \"mins\""))]), "plant.time_unit", "(did you mean \"min\"?)");
+    check(
+        &with(&[(X0, &format!("{X0}\ntime_unit = \"mins\""))]),
+        "plant.time_unit",
+        "(did you mean \"min\" (minutes)?)",
+    );
 }
 
 #[test]

@@ -194,10 +194,11 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
         # third of them) and the palette repeats, so the title names the range instead.
         many = result.q > MAX_LEGEND
         for j in range(result.q):
-            eta_ax.plot(t, result.eta[:, i, j], label=None if many else f"η{c}_{j + 1}")
+            eta_ax.plot(t, result.eta[:, i, j], label=None if many else f"η{c}_{j + 1}",
+                        color=eta_colour(j, result.q))
         eta_title = f"{channel_title}: adjustable parameters (33)"
         if many:
-            eta_title += f", η{c}_1 … η{c}_{result.q} in the palette's order"
+            eta_title += f", η{c}_1 … η{c}_{result.q} from dark blue to yellow"
         eta_ax.set(title=eta_title, ylabel="η")
         if len(axes) == 4:
             uf_ax.legend(loc="best", fontsize="small")
@@ -241,6 +242,19 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
     if ax is None:
         fig.tight_layout()
     return fig
+
+
+def eta_colour(j, q):
+    """The colour of η̂_j+1 of q: matplotlib's cycle up to ten, then twenty distinct ones (the cycle
+    had repeated: η_1 and η_11 both blue; helper tryout, 2026-12-06), and beyond the legend's
+    fourteen a ramp from dark blue to yellow, which the title names."""
+    from matplotlib import colormaps
+
+    if q <= 10:
+        return f"C{j}"
+    if q <= MAX_LEGEND:
+        return colormaps["tab20"](j)
+    return colormaps["viridis"](j / (q - 1))
 
 
 def runs_frame(text, drawn=None):

@@ -414,6 +414,9 @@ impl Study {
         if let (Some(mc), Some(t_s)) = (&monte_carlo, scenario.simulation.sample_time) {
             check_drawn_delays(mc, t_s, scenario.plant.time_unit)?;
         }
+        if let Some(mc) = &monte_carlo {
+            check_infinite_laws(mc, &base, &grid, &scenario_source)?;
+        }
         let tune = match doc.get("tune") {
             None => None,
             Some(t) => Some(TuneSpec::parse(table("tune", t)?, &scenario)?),
@@ -427,7 +430,7 @@ impl Study {
             _ => check_grid(&grid, &base, &scenario_source, base_error.as_ref())?,
         }
         let nominal = monte_carlo.is_some().then(Default::default);
-        let max_steps = read_max_steps(doc, &scenario, &grid)?;
+        let max_steps = read_max_steps(doc, &scenario)?;
         let mut document = doc.clone();
         document.remove("simulation");
         document.insert("scenario".into(), toml::Value::Table(base.clone()));
@@ -918,18 +921,18 @@ fn read_settle(doc: &toml::Table) -> Result<Settle, StudyError> {
 }
 
 /// `max_steps`: a step budget ≥ 1 (`None` when not given: each run's own default), for the
-/// continuous loop: refused where every run is sampled-data (the scenario's, no grid over
-/// `simulation.sample_time`), as `quell run --max-steps` is; it had been ignored.
-fn read_max_steps(doc: &toml::Table, scenario: &Scenario, grid: &[GridAxis]) -> Result<Option<usize>, StudyError> {
+/// continuous loop: refused in a sampled-data study (a grid over `simulation.sample_time` needs
+/// the scenario's, and its values are sample times), as a sampled run refuses one; it had been
+/// ignored.
+fn read_max_steps(doc: &toml::Table, scenario: &Scenario) -> Result<Option<usize>, StudyError> {
     const WHAT: &str = "a step budget per run (an integer ≥ 1)";
     let Some(v) = doc.get("max_steps") else { return Ok(None) };
     let n = match unsigned("max_steps", v, WHAT)? {
         0 => return Err(err("max_steps", format!("expected {WHAT}, found 0"))),
         n => usize::try_from(n).unwrap_or(usize::MAX),
     };
-    let gridded = grid.iter().any(|a| a.key.starts_with("simulation.sample_time"));
     match scenario.simulation.sample_time {
-        Some(t_s) if !gridded => Err(err(
+        Some(t_s) => Err(err(
             "max_steps",
             format!("a step budget applies to the continuous loop; this study's runs are sampled-data (simulation.sample_time = {}), whose controller steps are known before they start: leave max_steps out", crate::settings::fmt_short(t_s)),
         )),
@@ -1023,7 +1026,7 @@ fn not_in_scenario(path: &KeyPath, why: &str, hint: &str) -> String {
         .unwrap_or_default();
     // A signal component's bias or a harmonic's phase, left out as 0 (`reference.components[0].bias`).
     let signal_default = (section == "reference" || section == "disturbance")
-        && ["bias", "phase"].iter().any(|k| key.ends_with(&format!(".{k}")));
+        && ["bias", "phase"].iter().any(|k| key.ends_with(&format!(".{k}")) && why.ends_with(&format!("has no {k}")));
     let optional = OPTIONAL_KEYS.iter().find(|k| base == **k || base.starts_with(&format!("{k}."))).copied();
     match optional.or(signal_default.then_some(key.as_str())) {
         Some(k) => format!("{path} is not a value of the scenario ({why}): {k} is optional and the scenario leaves it out; give it a value in the scenario file (any, e.g. the first of the study's), which the study then varies"),
@@ -1155,13 +1158,6 @@ fn monte_carlo(base: &toml::Table, t: &toml::Table, source: &str) -> Result<Mont
         if contains_integer_key(&path) {
             return Err(err(&at, format!("{path} is an integer setting; draws perturb real numbers only")));
         }
-        // ∞ perturbed is ∞: every draw would repeat the nominal run (truth.u_max left unlimited).
-        if all_infinite(current) {
-            return Err(err(
-                &at,
-                format!("{path} in {source} is infinite (no limit), which no draw changes, so every draw would repeat the nominal run; give it a finite value in the scenario file to perturb it"),
-            ));
-        }
         perturbations.push(Perturbation { key: key.clone(), path, law });
     }
     // Draws reseed nothing else (not [noise]): without a law every draw repeats the nominal run.
@@ -1172,6 +1168,23 @@ fn monte_carlo(base: &toml::Table, t: &toml::Table, source: &str) -> Result<Mont
         ));
     }
     Ok(MonteCarlo { runs: runs as usize, seed, perturbations })
+}
+
+/// A law on a value infinite in the scenario (`truth.u_max` left unlimited) where no grid axis sets
+/// it: ∞ perturbed is ∞, so every draw would repeat the nominal run (it had, without a word).
+fn check_infinite_laws(mc: &MonteCarlo, base: &toml::Table, grid: &[GridAxis], source: &str) -> Result<(), StudyError> {
+    for p in &mc.perturbations {
+        let mut doc = base.clone();
+        fill_default(&mut doc, &p.path);
+        let gridded = grid.iter().any(|a| a.path.overlaps(&p.path));
+        if !gridded && p.path.get(&doc).is_ok_and(all_infinite) {
+            return Err(err(
+                format!("monte_carlo.\"{}\"", p.key),
+                format!("{} in {source} is infinite (no limit), which no draw changes, so every draw would repeat the nominal run; give it a finite value in the scenario file to perturb it", p.path),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Every number of `v` is ±∞ (and there is one).

@@ -162,7 +162,6 @@ pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
         Some((_, h)) if split(h)? == expected => {}
         _ => return Err(format!("line 1: expected the header {}", expected.join(","))),
     }
-    let (g, m) = (meta.grid.len(), meta.m);
     let lens: Vec<usize> = meta.grid.iter().map(|a| a.values.len()).collect();
     let mut rows = Vec::new();
     let mut partial = false;
@@ -180,71 +179,64 @@ pub fn read_runs_csv(text: &str, meta: &StudyMeta) -> Result<RunsFile, String> {
         if f.len() != expected.len() {
             return Err(at(format!("expected {} fields, found {}", expected.len(), f.len())));
         }
-        let num = |i: usize| {
-            f[i].parse::<f64>().map_err(|_| at(format!("{}: expected a number, found `{}`", expected[i], f[i])))
-        };
-        let int = |i: usize| {
-            f[i].parse::<u64>().map_err(|_| at(format!("{}: expected an integer, found `{}`", expected[i], f[i])))
-        };
-        let opt = |i: usize| if f[i].is_empty() { Ok(None) } else { num(i).map(Some) };
-        // A completed run's figures are finite (NaN marks a run that stopped).
-        let finite = |i: usize| {
-            num(i).and_then(|x| {
-                if x.is_finite() {
-                    Ok(x)
-                } else {
-                    Err(at(format!(
-                        "{}: expected a finite number in a completed run's row, found `{}`",
-                        expected[i], f[i]
-                    )))
-                }
-            })
-        };
-        let outcome = outcome(&f[4 + g], &f[5 + g]).map_err(at)?;
-        let first = 6 + g;
-        // A completed run's figures are finite; a run that stopped has its peaks and empty (NaN)
-        // tails; one that never started (an invalid draw) has none.
-        let completed = outcome == Outcome::Completed;
-        let figure = |i: usize| if completed { finite(i) } else { opt(i).map(|v| v.unwrap_or(f64::NAN)) };
-        // A tail is a completed run's (an edited outcome had been merged with its tails).
-        let tail = |i: usize| match f[i].is_empty() || completed {
-            true => figure(i),
-            false => Err(at(format!(
-                "{}: expected no tail in a row whose run did not complete ({}), found `{}`",
-                expected[i],
-                f[4 + g],
-                f[i]
-            ))),
-        };
-        let started = completed || (0..m).any(|i| !f[first + 2 * m + i].is_empty());
-        let channels = (0..if started { m } else { 0 })
-            .map(|i| {
-                Ok(ChannelFigures {
-                    tail_max_e: tail(first + i)?,
-                    tail_rms_e: tail(first + m + i)?,
-                    max_u: figure(first + 2 * m + i)?,
-                    max_uf: figure(first + 3 * m + i)?,
-                    settle_t: opt(first + 4 * m + i)?,
-                })
-            })
-            .collect::<Result<Vec<_>, String>>()?;
-        let row = Row {
-            run: int(0)? as usize,
-            point: int(1)? as usize,
-            draw: int(2)? as usize,
-            seed: int(3)?,
-            grid: f[4..4 + g].to_vec(),
-            outcome,
-            reason: f[5 + g].clone(),
-            channels,
-            steps: int(first + 5 * m)?,
-            wall_ms: num(first + 5 * m + 1)?,
-            explicit_stiff: false,
-        };
+        let row = read_row(&f, meta, &expected).map_err(at)?;
         identity(&row, meta, &lens).map_err(at)?;
         rows.push(row);
     }
     Ok(RunsFile { rows, partial })
+}
+
+/// One row's fields `f` (as many as the header `expected`) read back.
+fn read_row(f: &[String], meta: &StudyMeta, expected: &[String]) -> Result<Row, String> {
+    let (g, m) = (meta.grid.len(), meta.m);
+    let num =
+        |i: usize| f[i].parse::<f64>().map_err(|_| format!("{}: expected a number, found `{}`", expected[i], f[i]));
+    let int =
+        |i: usize| f[i].parse::<u64>().map_err(|_| format!("{}: expected an integer, found `{}`", expected[i], f[i]));
+    let opt = |i: usize| if f[i].is_empty() { Ok(None) } else { num(i).map(Some) };
+    // A completed run's figures are finite (NaN marks a run that stopped).
+    let finite = |i: usize| {
+        num(i).and_then(|x| match x.is_finite() {
+            true => Ok(x),
+            false => {
+                Err(format!("{}: expected a finite number in a completed run's row, found `{}`", expected[i], f[i]))
+            }
+        })
+    };
+    let outcome = outcome(&f[4 + g], &f[5 + g])?;
+    let first = 6 + g;
+    // A completed run's figures are finite; a run that stopped has its peaks and empty (NaN)
+    // tails; one that never started (an invalid draw) has none.
+    let completed = outcome == Outcome::Completed;
+    let figure = |i: usize| if completed { finite(i) } else { opt(i).map(|v| v.unwrap_or(f64::NAN)) };
+    // A tail is a completed run's: one on a row that did not complete (written before 2026-12-03,
+    // or an outcome edited) reads as none, so that the row says what its outcome says.
+    let tail = |i: usize| if completed { finite(i) } else { opt(i).map(|_| f64::NAN) };
+    let started = completed || (0..m).any(|i| !f[first + 2 * m + i].is_empty());
+    let channels = (0..if started { m } else { 0 })
+        .map(|i| {
+            Ok(ChannelFigures {
+                tail_max_e: tail(first + i)?,
+                tail_rms_e: tail(first + m + i)?,
+                max_u: figure(first + 2 * m + i)?,
+                max_uf: figure(first + 3 * m + i)?,
+                settle_t: opt(first + 4 * m + i)?,
+            })
+        })
+        .collect::<Result<Vec<_>, String>>()?;
+    Ok(Row {
+        run: int(0)? as usize,
+        point: int(1)? as usize,
+        draw: int(2)? as usize,
+        seed: int(3)?,
+        grid: f[4..4 + g].to_vec(),
+        outcome,
+        reason: f[5 + g].clone(),
+        channels,
+        steps: int(first + 5 * m)?,
+        wall_ms: num(first + 5 * m + 1)?,
+        explicit_stiff: false,
+    })
 }
 
 /// Checks the header line's number of fields against the study's m and grid before a header of m

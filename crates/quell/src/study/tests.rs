@@ -11,6 +11,16 @@ fn error(text: &str) -> String {
     study(text).expect_err("the study must be refused").to_string()
 }
 
+/// A law on a value the scenario leaves infinite is refused, but not where a grid gives it finite
+/// values (the draws perturb those; the refusal had broken such a study; diff review).
+#[test]
+fn a_law_on_an_infinite_value_is_refused_unless_a_grid_sets_it() {
+    let law = "[monte_carlo]\nruns = 2\n\"truth.u_max\" = { relative = 0.1 }\n";
+    assert!(error(law).contains("truth.u_max in the paper's example is infinite (no limit)"));
+    let gridded = format!("[grid]\n\"truth.u_max\" = [[30.0, 30.0], [50.0, 50.0]]\n{law}");
+    assert_eq!(study(&gridded).unwrap().len(), 4);
+}
+
 #[test]
 fn paper_example_by_default() {
     let s = study("").unwrap();
@@ -88,8 +98,12 @@ fn study_mistakes_name_their_key() {
         ("scenario = \"\"", "scenario: expected the scenario file's path, found an empty string"),
         ("[grid]\n\"reference.components[0].bias\" = [0.5]", "grid.\"reference.components[0].bias\": reference.components[0].bias is not a value of the scenario (reference.components[0] has no bias): reference.components[0].bias is optional and the scenario leaves it out; give it a value in the scenario file"),
         ("max_steps = 0", "max_steps: expected a step budget per run (an integer ≥ 1), found 0"),
+        ("max_steps = 100\n[simulation]\nsample_time = 0.01\n[grid]\n\"simulation.sample_time\" = [0.01, 0.02]", "max_steps: a step budget applies to the continuous loop"),
         ("[monte_carlo]\nruns = 2\n\"truth.u_max\" = { normal = 1.0 }", "monte_carlo.\"truth.u_max\": truth.u_max in "),
-        // Ignored in a sampled-data study, which `quell run --max-steps` refuses (hostile review).
+        // A component that is not there is named so, not called optional.
+        ("[grid]\n\"reference.components[5].bias\" = [0.5]", "grid.\"reference.components[5].bias\": reference.components[5].bias is not a value of the scenario (reference.components has no [5] (it has 2 entries)); grid and Monte Carlo keys"),
+        // Ignored in a sampled-data study, as a sampled run refuses a budget (hostile review); a grid
+        // over the sample time needs the scenario's, so its runs are all sampled too.
         ("max_steps = 100\n[simulation]\nsample_time = 0.01", "max_steps: a step budget applies to the continuous loop; this study's runs are sampled-data (simulation.sample_time = 0.01)"),
         ("[runaway]\npeak = 0.5", "runaway.peak: expected a factor ≥ 1 (or inf to turn the rule off), found 0.5"),
         ("[runaway]\nsteps = 0", "runaway.steps: expected a factor ≥ 1 (or inf to turn the rule off), found 0"),
