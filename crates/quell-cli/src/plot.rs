@@ -269,12 +269,21 @@ fn run_panel<'a, 'b, DB: DrawingBackend>(
 ) -> ChartBuilder<'a, 'b, DB> {
     let mut builder = ChartBuilder::on(area);
     builder
-        .caption(title, ("sans-serif", 20))
+        .caption(title, ("sans-serif", caption_size(title, area.dim_in_pixel().0, 20)))
         .margin(8)
         .margin_right(24 + column)
         .x_label_area_size(36)
         .y_label_area_size(72);
     builder
+}
+
+/// The font size (px, `size` at most, 11 at least) at which a caption of `title` fits `width` px:
+/// plotters centres a caption and cuts what passes the area's edges (a u_f panel's "Input 1 (…)"
+/// had lost its first letter), at ~0.55 em a character.
+fn caption_size(title: &str, width: u32, size: u32) -> u32 {
+    let chars = title.chars().count().max(1) as f64;
+    let fits = (f64::from(width.saturating_sub(16)) / (0.55 * chars)).floor() as u32;
+    fits.clamp(11, size)
 }
 
 /// How a backend draws a curve's 2 px line.
@@ -1292,11 +1301,10 @@ fn draw_sweep_2d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, s: &quell::st
         let labelled = nx * ny <= 144;
         let short = s.points.iter().any(|pt| pt.completed < pt.runs);
         let counted = if labelled && short { " (k/n: completed of a cell's runs)" } else { "" };
+        let title = format!("{}: median tail RMS e{grey}{counted}{}", s.study.channel(i), partial(s));
+        let size = caption_size(&title, cells.dim_in_pixel().0, 18);
         let mut chart = ChartBuilder::on(&cells)
-            .caption(
-                format!("{}: median tail RMS e{grey}{counted}{}", s.study.channel(i), partial(s)),
-                ("sans-serif", 18),
-            )
+            .caption(title, ("sans-serif", size))
             .margin(10)
             .x_label_area_size(40)
             .y_label_area_size(70)
@@ -1691,6 +1699,15 @@ mod tests {
         assert_eq!(telling_digits(3.0), 2);
         assert_eq!(telling_digits(0.0), 2);
         assert_eq!(telling_digits(1e-12), 5);
+    }
+
+    #[test]
+    fn a_caption_shrinks_to_fit_its_panel() {
+        // 87 characters in 1,000 px at 20 px (~957 px) → 20; the u_f title with the controller's
+        // ask, 104 characters → 17; a title that would need less than 11 px keeps 11.
+        assert_eq!(caption_size(&"x".repeat(87), 1000, 20), 20);
+        assert_eq!(caption_size(&"x".repeat(104), 1000, 20), 17);
+        assert_eq!(caption_size(&"x".repeat(400), 1000, 20), 11);
     }
 
     #[test]
