@@ -525,3 +525,12 @@ pub fn complex_numpy<'py>(py: Python<'py>, z: &[Complex<f64>]) -> PyResult<Bound
 pub fn vec_numpy<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyArray1<f64>> {
     PyArray1::from_slice(py, v)
 }
+
+/// The TOML document of a pickle's text (this package's own `to_toml`): parsed without the 16 MiB
+/// a file may hold; a text that is not TOML is a tampered pickle's `ScenarioError`.
+pub fn pickled_document(py: Python<'_>, text: &str) -> PyResult<toml::Table> {
+    text.parse::<toml::Table>().map_err(|e| {
+        crate::errors::Kind::Scenario
+            .err(py, format!("a pickled quell object whose text is not TOML ({e}); pickle it again"))
+    })
+}

@@ -596,7 +596,10 @@ impl PyScenario {
     #[staticmethod]
     #[pyo3(signature = (text, from_values=false))]
     fn _restore(py: Python<'_>, text: &str, from_values: bool) -> PyResult<Self> {
-        Ok(PyScenario { from_values, ..Self::parse(py, text)? })
+        // Not held to a file's 16 MiB: the text is this package's own (a 1,000-state plant's
+        // pickle had not loaded), and a pickle runs what it holds anyway.
+        let doc = crate::convert::pickled_document(py, text)?;
+        Ok(PyScenario { from_values, ..Self::from_document(py, &doc)? })
     }
 
     /// Parses and validates a scenario file's text (the format of `examples/paper.toml`).

@@ -227,7 +227,7 @@ impl PyStudy {
 
     /// Pickles as `Study.from_toml(study.to_toml())`.
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
-        Ok((slf.get_type().getattr("from_toml")?, (slf.get().to_toml(),)))
+        Ok((slf.get_type().getattr("_restore")?, (slf.get().to_toml(),)))
     }
 
     /// Run `run`'s specification (carrying out its grid point's nominal run first, if it has draws).
@@ -386,6 +386,16 @@ impl PyStudy {
         let text = crate::convert::toml_text(text, "text", "quell.Study.load(path)")?;
         let dir = dir.filter(|d| !d.is_none()).map(|d| crate::convert::path(d, "dir")).transpose()?;
         crate::interrupt::interruptible(py, || study::Study::from_toml(&text, dir.as_deref()))?
+            .map(|s| PyStudy { inner: Arc::new(s) })
+            .map_err(|e| study_error(py, &e))
+    }
+
+    /// A pickled study (`__reduce__`): its text read as `from_toml` does, but not held to a file's
+    /// 16 MiB (the text is this package's own).
+    #[staticmethod]
+    fn _restore(py: Python<'_>, text: &str) -> PyResult<Self> {
+        let doc = crate::convert::pickled_document(py, text)?;
+        crate::interrupt::interruptible(py, || study::Study::from_table(&doc, None))?
             .map(|s| PyStudy { inner: Arc::new(s) })
             .map_err(|e| study_error(py, &e))
     }

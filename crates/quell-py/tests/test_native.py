@@ -31,6 +31,26 @@ def test_scenarios_pickle_and_compare():
     assert quell.paper_example() != quell.Scenario.load(EXAMPLES / "three-channel.toml")
 
 
+def test_a_pickle_beyond_a_files_16_mib_loads():
+    """A file may hold 16 MiB of TOML; a pickle's text is the package's own and is not held to it
+    (a scenario or study that large, a 1,000-state plant's, had pickled but not loaded). A 17 MiB
+    comment stands in for the size: the same text read as a file's is refused."""
+    import pytest
+
+    big = "# " + "x" * (17 << 20) + "\n"
+    s = quell.paper_example()
+    assert quell.Scenario._restore(s.to_toml() + big, False) == s
+    with pytest.raises(quell.ScenarioError, match="16 MiB"):
+        quell.Scenario.from_toml(s.to_toml() + big)
+    study = quell.Study(s, grid={"design.beta": [1.0, 2.0]})
+    assert quell.Study._restore(study.to_toml() + big) == study
+    with pytest.raises(quell.ScenarioError, match="16 MiB"):
+        quell.Study.from_toml(study.to_toml() + big)
+    assert pickle.loads(pickle.dumps(study)) == study
+    with pytest.raises(quell.ScenarioError, match="^a pickled quell object whose text is not TOML"):
+        quell.Scenario._restore("[[[", False)
+
+
 def test_reprs_are_python():
     s = quell.paper_example()
     r = quell.simulate(s, t_end=0.2)
