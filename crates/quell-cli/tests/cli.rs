@@ -135,13 +135,19 @@ fn the_design_report_says_what_deployment_needs() {
     let out = stdout(&quell(&["design", hdd.to_str().unwrap()]));
     assert!(out.contains("  precision: f32 could move the poles of A − LC (the observer) by about 16 % (κ₂ = 2.75e6 × 6e-8): export in f64 (the default)"), "{out}");
     // Delays of 1.5 and 2.5 µs are whole at 0.5 µs, far below the bound: 100 s / 5e-7 s = 2e8
-    // samples, which the report counts.
+    // samples, which the report counts, and the delays, not that sample time, are the remedy.
     let dir = temp_dir("deployment-us");
     let text = fs::read_to_string(paper()).unwrap().replace("delays = [1.0, 3.0]", "delays = [1.5e-6, 2.5e-6]");
     let us = dir.path().join("us.toml");
     fs::write(&us, text).unwrap();
     let out = stdout(&quell(&["design", us.to_str().unwrap()]));
-    assert!(out.contains("e.g. 5e-7 s, which makes plant.delays whole (2.0e8 samples over t_end = 100 s: a sample time nearer the bound needs delays nearer its whole multiples)"), "{out}");
+    assert!(out.contains("sample time: T_s ≤ 0.0222 s (T_s·ρ ≤ 0.2), but the longest that makes plant.delays whole is 5e-7 s (2.0e8 samples over t_end = 100 s): round plant.delays to whole multiples (0 included) of a sample time near the bound"), "{out}");
+    // Where that sample time is a run of fewer than 1e7 samples it is offered: delays of 0.1 and
+    // 0.3 ms are whole at 0.1 ms, 1e6 samples over 100 s.
+    let text = fs::read_to_string(paper()).unwrap().replace("delays = [1.0, 3.0]", "delays = [1e-4, 3e-4]");
+    fs::write(&us, text).unwrap();
+    let out = stdout(&quell(&["design", us.to_str().unwrap()]));
+    assert!(out.contains("e.g. 0.0001 s, which makes plant.delays whole"), "{out}");
 }
 
 #[test]

@@ -274,9 +274,33 @@ pub fn model_error_advice(s: &crate::Scenario, result: &SimResult) -> Option<Str
         return None;
     }
     Some(format!(
-        "the run ended early ({outcome}, t in {unit}) on a true plant that differs from the design model: {}; the run did not simulate the design model, so first check that the design holds on it (the scenario without [truth]), then how much mismatch it tolerates (a study over the truth keys, docs/studies.md); any other advice here is for the model",
-        diffs.join(", ")
+        "the run ended early ({outcome}, t in {unit}) on a true plant that differs from the design model: {}; {}the run did not simulate the design model, so first check that the design holds on it (the scenario without [truth]), then how much mismatch it tolerates (a study over the truth keys, docs/studies.md); any other advice here is for the model",
+        diffs.join(", "),
+        actuator_delay_cause(s).unwrap_or_default()
     ))
+}
+
+/// The loop's fastest rate ρ times an actuator delay from which that delay is named as the likely
+/// cause: a zero-order hold's delay at the sample times quell offers (T_s·ρ ≤ 0.2, half a sample).
+const ACTUATOR_DELAY_RATE: f64 = 0.1;
+
+/// "the actuator delay … is the likeliest cause; …" where `[truth]`'s largest actuator delay τ_a
+/// reaches [`ACTUATOR_DELAY_RATE`]/ρ: a lane-keeping loop whose 20 ms steering actuator (ρτ_a
+/// above it) diverged had been told only of the clipping it caused; its automatic design with the
+/// delay in `[truth]` slowed its poles and passed (helper tryout, 2026-12-06).
+fn actuator_delay_cause(s: &crate::Scenario) -> Option<String> {
+    let tau = s.actuator.as_ref()?.delays.iter().copied().fold(0.0, f64::max);
+    let design = s.design().ok().filter(|_| tau > 0.0)?;
+    let rho = crate::sim::loop_rate(&design, s.truth.as_ref().unwrap_or(&s.plant), [&s.reference, &s.disturbance]);
+    (rho * tau >= ACTUATOR_DELAY_RATE).then(|| {
+        format!(
+            "the actuator delay {} {} is {}× the loop's fastest time constant 1/ρ (ρ = {}/{1}), a delay of the whole u_f, the feedback −K x̂ included, which the method does not model, and at that size the likeliest cause: design with it in [truth] (the automatic design then slows the poles for it, docs/tuning.md) or with faster actuators; ",
+            crate::settings::fmt_short(tau),
+            s.plant.time_unit,
+            crate::settings::fmt_ratio(rho * tau),
+            crate::settings::fmt_4(rho),
+        )
+    })
 }
 
 /// How the simulated plant differs from the design model, one phrase per key: each matrix of
@@ -1363,6 +1387,22 @@ mod tests {
         assert_eq!(largest_entry_change(&new, &m, relative(&new)), ", entry [0][0], 0 in the model, is 0.5");
         let s = Scenario::from_toml(&format!("{PAPER_EXAMPLE}\n[truth]\nx0 = [0.1, 0.0, 0.0]\n")).unwrap();
         assert_eq!(truth_differences(&s), ["truth.x0 [0.1, 0, 0] against plant.x0 [0, 0, 0]"]);
+    }
+
+    /// An actuator delay is named as the likely cause from ρτ_a = 0.1: the paper's loop has
+    /// ρ = 9 /s (its fastest filter pole), so 50 ms is 0.45 and 10 ms, 0.09, is not named.
+    #[test]
+    fn a_long_actuator_delay_is_named_as_the_likely_cause() {
+        let with = |tau: f64| {
+            let text = format!("{PAPER_EXAMPLE}\n[truth]\nactuator_delays = [{tau}, 0.0]\n");
+            actuator_delay_cause(&Scenario::from_toml(&text).unwrap())
+        };
+        let named = with(0.05).expect("named");
+        assert!(
+            named.starts_with("the actuator delay 0.05 s is 0.45× the loop's fastest time constant 1/ρ (ρ = 9/s)"),
+            "{named}"
+        );
+        assert_eq!(with(0.01), None);
     }
     use crate::sim::{RunStats, Sample};
 

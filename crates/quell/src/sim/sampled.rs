@@ -67,6 +67,23 @@ pub fn coarse_sample_warning(
 pub fn sample_time_need(design: &Design, [reference, disturbance]: [&Signal; 2], t_end: f64) -> (String, f64) {
     let rate = super::loop_rate(design, design.plant(), [reference, disturbance]);
     let (bound, whole) = sample_time_choice(design, rate, None);
+    // Delays that only a sample time far below the bound makes whole, at more samples than a run
+    // takes in a minute (rounded FOPDT dead times,
+    // 0.28333 and 0.26667 min, had offered 1e-5 min for T_s ≤ 0.0338 min; helper tryout): the
+    // delays to round, not that sample time to take.
+    if let Some(t) = whole.filter(|t| *t < bound / 100.0 && t_end / t > MANY_SAMPLES) {
+        let unit = design.plant().time_unit;
+        return (
+            format!(
+                "T_s ≤ {} {unit} (T_s·ρ ≤ {COARSE_SAMPLE}), but the longest that makes plant.delays whole is {} {unit} ({:.1e} samples over t_end = {} {unit}): round plant.delays to whole multiples (0 included) of a sample time near the bound",
+                settings::fmt_short(bound),
+                settings::fmt_short(t),
+                t_end / t,
+                settings::fmt_short(t_end)
+            ),
+            rate,
+        );
+    }
     let mut need = fine_sample_time_text(design, bound, whole, false);
     if let Some(t) = whole.filter(|t| t_end / t > MANY_SAMPLES) {
         // Where the delays, not ρ, set t (well below the bound), what would lengthen it.
