@@ -90,7 +90,7 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
         c.start_writing();
     }
     let out = &args.out;
-    let earlier = write(out, &code, fmu.as_ref(), &options.prefix)?;
+    let earlier = write((out, &args.scenario), &code, fmu.as_ref(), &options.prefix)?;
     eprintln!(
         "wrote {} and {} in {} (T_s = {sample_time} {}, {}; {} bytes of constants, {} bytes of state)",
         code.header_name,
@@ -108,13 +108,20 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// Writes the header, the source and the FMU (when there is one) into `out`, all renamed into place
+/// Writes the header, the source and the FMU (when there is one) into `out` (not over the `input`
+/// scenario), all renamed into place
 /// once every one is written: a failed write never leaves a new header beside an old source (a
 /// mismatched pair would not compile anyway: LAYOUT_ID), nor an FMU of another sample time beside
 /// them. Returns the warning on an earlier export's FMU of `prefix` that the C alone left as it was.
-fn write(out: &Path, code: &CCode, fmu: Option<&Fmu>, prefix: &str) -> Result<Option<String>, Failure> {
+fn write(
+    (out, input): (&Path, &Path),
+    code: &CCode,
+    fmu: Option<&Fmu>,
+    prefix: &str,
+) -> Result<Option<String>, Failure> {
     let mut names = vec![code.header_name.as_str(), code.source_name.as_str()];
     names.extend(fmu.map(|f| f.file_name.as_str()));
+    output::not_the_input(input, out, &names)?;
     output::prepare_out(out, &names)?;
     let mut files = vec![
         (out.join(&code.header_name), code.header.as_bytes()),

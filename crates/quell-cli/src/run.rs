@@ -102,6 +102,9 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
         (1..=design.plant().m()).flat_map(|i| ["png", "svg"].map(|e| format!("channel{i}.{e}"))).collect();
     let files: Vec<&str> =
         ["signals.csv", "design.json", "summary.json"].into_iter().chain(figures.iter().map(String::as_str)).collect();
+    if let Some(input) = &args.scenario {
+        output::not_the_input(input, out, &files)?;
+    }
     output::prepare_out(out, &files)?;
     // Ctrl-C or SIGTERM stops the run at its next recorded sample; a second one before that sample
     // (a very stiff run can take long to reach it) quits with no files.

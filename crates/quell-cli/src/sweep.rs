@@ -80,6 +80,7 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     let pool = thread_pool(args.jobs, n - kept.len())?;
     // A complete sweep's files, which only a complete sweep replaces (a resumed one's too).
     let earlier = marked_summary(&args.out).is_some_and(|m| !m.partial);
+    crate::output::not_the_input(args.study.as_deref().expect("a study without --merge"), &args.out, OUTPUTS)?;
     prepare_out(&args.out, OUTPUTS)?;
     let journal = Journal::create(&args.out, &meta, &kept)
         .map_err(|e| Failure::Input(format!("--out {}: {e}; choose another output directory", args.out.display())))?;

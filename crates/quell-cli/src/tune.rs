@@ -34,7 +34,9 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
         )));
     }
     let pool = crate::sweep::thread_pool(args.jobs, usize::MAX)?;
-    prepare_out(&args.out, &["tune.json", "tune.csv", "tune.png", "tune.svg"])?;
+    let files = ["tune.json", "tune.csv", "tune.png", "tune.svg"];
+    crate::output::not_the_input(path, &args.out, &files)?;
+    prepare_out(&args.out, &files)?;
     for w in study::tune_cautions(&study) {
         eprintln!("⚠ warning: {w}");
     }

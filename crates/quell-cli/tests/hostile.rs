@@ -567,3 +567,29 @@ fn a_shard_of_a_billion_point_grid_runs_in_its_own_memory() {
     assert_eq!(rows.lines().filter(|l| !l.starts_with('#')).count(), 2, "{rows}");
     assert!(rows.contains("\n5,5,0,"), "{rows}");
 }
+
+/// A command whose output would replace its own input is refused, the input kept: a scenario named
+/// signals.csv run into its own directory had been replaced by its signals (hostile review,
+/// 2026-12-06); so for a study named runs.csv and a scenario named like an export's header.
+#[test]
+fn an_output_that_would_replace_the_input_is_refused() {
+    let dir = TempDir::new().unwrap();
+    let d = dir.path().to_str().unwrap();
+    let text = fs::read_to_string(paper()).unwrap();
+    for (name, args) in [
+        ("signals.csv", vec!["run", "--no-plots", "--t-end", "1"]),
+        ("quell_controller.h", vec!["export", "--sample-time", "0.001"]),
+    ] {
+        let input = dir.path().join(name);
+        fs::write(&input, &text).unwrap();
+        let mut all = args.clone();
+        all.extend([input.to_str().unwrap(), "--out", d]);
+        let o = quell(&all);
+        refused(&o, &format!("its {name} would replace the input file"));
+        assert_eq!(fs::read_to_string(&input).unwrap(), text, "{name}");
+    }
+    let study = dir.path().join("runs.csv");
+    fs::write(&study, format!("scenario = {:?}\n[simulation]\nt_end = 1.0\n", paper())).unwrap();
+    let o = quell(&["sweep", study.to_str().unwrap(), "--out", d, "--no-plots"]);
+    refused(&o, "its runs.csv would replace the input file");
+}

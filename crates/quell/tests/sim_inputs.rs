@@ -461,3 +461,24 @@ fn a_sample_time_is_offered_for_the_truths_delays_too() {
     let ok = Run::of(&s, &d).settings(RunSettings::sampled(5.0, h, offered)).check();
     assert!(ok.is_ok(), "{offered}: {:?}", ok.err());
 }
+
+/// A rejected step that landed on a breakpoint is not proposed again as it was: the paper's loop
+/// in a unit of 5e-12 s had rejected a landing of 1.79e-14 s, shrunk it to 1.52e-14 s, landed on
+/// 1.79e-14 s again, and so on for ever, deaf to Ctrl-C and SIGTERM (hostile review, 2026-12-06).
+/// It now ends at the integrator's floor with the cause named, at once (0.02 s measured; a
+/// minute is the watchdog).
+#[test]
+fn a_rejected_landing_is_not_tried_again_for_ever() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/paper-at-5e-12-s.toml");
+    let s = Scenario::from_toml(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let (done, result) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let d = s.design().unwrap();
+        let _ = done.send(Run::of(&s, &d).simulate(&mut go).map(|r| r.outcome));
+    });
+    let outcome = result.recv_timeout(std::time::Duration::from_secs(60)).expect("the run ended within a minute");
+    let outcome = outcome.unwrap().expect("an outcome");
+    assert!(matches!(outcome, Outcome::StepSizeTooSmall { t } if t > 3e-11 && t < 4e-11), "{outcome:?}");
+    let why = outcome.explain("max_steps", quell::TimeUnit::Seconds).unwrap();
+    assert!(why.contains(": below t = 1 the integrator resolves no step shorter than 1e-14 s"), "{why}");
+}

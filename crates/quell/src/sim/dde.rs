@@ -778,6 +778,13 @@ impl<'a, S: DelaySystem> Steps<'a, S> {
         self.stats.rejected += 1;
         self.last_rejected = true;
         self.h = step.h / (1.0 / FAC_MIN).min(self.err.powf(self.exponent()) / SAFE);
+        // A landing the smaller step would stretch back to (it ends within tiny(t_new) of the
+        // breakpoint) would be tried as it was, for ever: a loop at 5e-12 s a unit of time had
+        // rejected 1.79e-14 s, proposed 1.52e-14 s and landed on 1.79e-14 s again without end,
+        // deaf to signals (hostile review, 2026-12-06). Half the landing step does not land.
+        if step.lands && step.t_new - (self.t + self.h) <= tiny(step.t_new) {
+            self.h = 0.5 * step.h;
+        }
         if self.h < h_min(self.t) {
             return Err(SolveError::StepSizeTooSmall { t: self.t, h: self.h, stats: self.finish() });
         }

@@ -67,6 +67,15 @@ impl Outcome {
         Some(match self {
             Outcome::Completed => return None,
             Outcome::Diverged { t, signal, value } => format!("the closed loop diverged at t = {t} {unit}: {signal} = {value:e}", t = crate::settings::fmt_instant(*t)),
+            // Below t = 1e-6 the integrator's absolute floor (1e-14) is near the loop's own steps:
+            // that, not the tolerances, is the likely cause (a loop at 5e-12 s a unit; hostile review).
+            Outcome::StepSizeTooSmall { t } if t.abs() < 1e-6 => format!(
+                "the solver's step size underflowed at t = {t} {unit}: below t = 1 the integrator resolves no step \
+                 shorter than 1e-14 {unit}, near the steps of a loop on this time scale; write the model in a longer \
+                 unit of time (t → αt: A, B, D, every pole and μ divided by α; delays, β, t_end and output_step \
+                 multiplied by it)",
+                t = crate::settings::fmt_instant(*t)
+            ),
             Outcome::StepSizeTooSmall { t } => format!(
                 "the solver's step size underflowed at t = {t} {unit} (the loop is too stiff or blows up there, a signal is \
                  faster than any step can resolve, an input delay is shorter than a step can be, simulation.rtol is tighter \
