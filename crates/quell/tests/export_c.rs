@@ -787,6 +787,17 @@ fn a_header_and_source_of_different_exports_do_not_compile_together() {
     let e = try_compile(&dir.0, &["-c", "quell_controller.c"], "mismatched.o")
         .expect_err("a mismatched pair must not compile");
     assert!(e.contains("quell_header_matches_source"), "gcc names the check: {e}");
+    // An application compiled with the old header and linked with the new source: it had linked
+    // (the names were the same) and crashed in quell_init; the linked names now differ.
+    let app = "#include \"quell_controller.h\"\nint main(void) { static quell_state s; quell_init(&s); return 0; }\n";
+    std::fs::write(dir.0.join("app.c"), app).unwrap();
+    std::fs::write(dir.0.join("quell_controller.h"), &old.header).unwrap();
+    try_compile(&dir.0, &["-c", "app.c"], "app.o").expect("the application compiles with its header");
+    std::fs::write(dir.0.join("quell_controller.h"), &new.header).unwrap();
+    std::fs::write(dir.0.join("quell_controller.c"), &new.source).unwrap();
+    try_compile(&dir.0, &["-c", "quell_controller.c"], "new.o").expect("the new pair compiles");
+    let e = try_compile(&dir.0, &["app.o", "new.o", "-lm"], "app").expect_err("a stale header must not link");
+    assert!(e.contains("undefined reference to `quell_init_"), "the linker names the function: {e}");
 }
 
 #[test]

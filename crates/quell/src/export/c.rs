@@ -375,9 +375,20 @@ fn comment_safe(text: &str) -> String {
 
 /// A check that a header and a source were generated together: the header defines
 /// `<P>_LAYOUT_ID`, a hash of both texts, and the source declares an array of size −1 unless the
-/// header's id is its own, so a mismatched pair (a failed or partial update) does not compile.
+/// header's id is its own, so a mismatched pair (a failed or partial update) does not compile; and
+/// the functions' linked names carry the id, so that an application compiled with another export's
+/// header fails to link rather than index past the state (it had linked, and crashed in
+/// `<p>_init`; hostile review, 2026-12-06).
 fn pair_layout_id(h: &mut String, c: &mut String, p: &str, P: &str) {
     let id = crate::hash::fnv1a_64(h.bytes().chain(c.bytes()));
+    let opener = format!("#define {P}_CONTROLLER_H\n");
+    let linked: String =
+        ["init", "step", "command"].iter().map(|f| format!("#define {p}_{f} {p}_{f}_{id:016x}\n")).collect();
+    *h = h.replacen(
+        &opener,
+        &format!("{opener}\n/* The linked names carry this export's layout id: an object compiled with another export's\n * header does not link with this source. */\n{linked}"),
+        1,
+    );
     let guard = format!("#endif /* {P}_CONTROLLER_H */");
     *h = h.replacen(
         &guard,
@@ -688,5 +699,14 @@ mod tests {
         pair_layout_id(&mut h, &mut c, "p", "P");
         assert!(h.contains("#define P_LAYOUT_ID 0x3316624e6667060cu\n"), "{h}");
         assert!(c.contains("P_LAYOUT_ID == 0x3316624e6667060cu ? 1 : -1"), "{c}");
+        // With the guard's opener (FNV-1a of both texts: 0xe8a427ccc6c2a260, Python), the linked
+        // names follow it, before any prototype.
+        let (mut h, mut c) = (
+            "#define P_CONTROLLER_H\n#endif /* P_CONTROLLER_H */\n".to_string(),
+            "#include \"p_controller.h\"\n".to_string(),
+        );
+        pair_layout_id(&mut h, &mut c, "p", "P");
+        assert!(h.starts_with("#define P_CONTROLLER_H\n\n/* The linked names"), "{h}");
+        assert!(h.contains("#define p_step p_step_e8a427ccc6c2a260\n"), "{h}");
     }
 }
