@@ -149,8 +149,12 @@ fn loop_settings(args: &RunArgs, scenario: &Scenario, design: &Design) -> Result
     if let Loop::Sampled { .. } = settings.mode {
         let run = Run::of(scenario, design).settings(settings.clone());
         run.check().map_err(|e| match args.sample_time {
-            // The flag, not the file's key, made the output step invalid: name both.
-            Some(t) if e.to_string().starts_with("simulation.output_step:") => {
+            // The flag, not the file's key, made the output step no whole number of samples: name
+            // both (not for the record's size, also a refusal of output_step, which it had hidden
+            // behind "1.000000 samples"; hostile review).
+            Some(t)
+                if e.to_string().starts_with("simulation.output_step: expected a whole multiple of sample_time") =>
+            {
                 output_step_error(design, t, scenario.simulation.output_step, args.output_step.is_some())
             }
             _ => Failure::Input(e.to_string()),

@@ -593,3 +593,15 @@ fn an_output_that_would_replace_the_input_is_refused() {
     let o = quell(&["sweep", study.to_str().unwrap(), "--out", d, "--no-plots"]);
     refused(&o, "its runs.csv would replace the input file");
 }
+
+/// A record too large for memory under `--sample-time` is named as such: it had been told
+/// "0.1 s is not a whole number of samples of 0.1 s (1.000000 samples)" (hostile review).
+#[test]
+fn a_sampled_record_too_large_is_named_by_its_size() {
+    let dir = TempDir::new().unwrap();
+    let out = dir.path().join("o");
+    let args = ["run", &paper(), "--t-end", "1000000", "--output-step", "0.1", "--sample-time", "0.1", "--no-plots"];
+    let o = quell(&[&args[..], &["--out", out.to_str().unwrap()]].concat());
+    refused(&o, "rows of 216 bytes");
+    assert!(!stderr(&o).contains("whole number of samples"), "{}", stderr(&o));
+}
