@@ -19,6 +19,12 @@
 #ifndef SUSPENSION_CONTROLLER_H
 #define SUSPENSION_CONTROLLER_H
 
+/* The linked names carry this export's layout id: an object compiled with another export's
+ * header does not link with this source. */
+#define suspension_init suspension_init_c9c37bdcba91b685
+#define suspension_step suspension_step_c9c37bdcba91b685
+#define suspension_command suspension_command_c9c37bdcba91b685
+
 #include <stdint.h>
 
 #ifdef __cplusplus

@@ -19,6 +19,12 @@
 #ifndef MOTOR_CONTROLLER_H
 #define MOTOR_CONTROLLER_H
 
+/* The linked names carry this export's layout id: an object compiled with another export's
+ * header does not link with this source. */
+#define motor_init motor_init_113bbcd5f02e2ca6
+#define motor_step motor_step_113bbcd5f02e2ca6
+#define motor_command motor_command_113bbcd5f02e2ca6
+
 #include <stdint.h>
 
 #ifdef __cplusplus

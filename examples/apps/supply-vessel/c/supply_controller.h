@@ -19,6 +19,12 @@
 #ifndef SUPPLY_CONTROLLER_H
 #define SUPPLY_CONTROLLER_H
 
+/* The linked names carry this export's layout id: an object compiled with another export's
+ * header does not link with this source. */
+#define supply_init supply_init_fa3552573dcd2562
+#define supply_step supply_step_fa3552573dcd2562
+#define supply_command supply_command_fa3552573dcd2562
+
 #include <stdint.h>
 
 #ifdef __cplusplus
