@@ -114,6 +114,24 @@ pub fn thrashing(stats: &crate::sim::RunStats, unit: TimeUnit) -> Option<String>
     })
 }
 
+/// Beside a run that thrashed at DOP853's stability bound ([`thrashing`]), the loop's fastest rate
+/// ([`crate::sim::loop_rates`]) where it is 10× or more the next: that key sets the steps (an
+/// observer 30× too fast had made a lane-keeping run 900× slower, 5.4e6 steps, with no line
+/// naming it; helper tryout, 2026-12-06).
+fn fastest_outlier(design: &Design, signals: [&Signal; 2]) -> Option<String> {
+    let mut rates = crate::sim::loop_rates(design, design.plant(), signals);
+    rates.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let ([(key, top), (next_key, next)], unit) = ([rates[0], rates[1]], design.plant().time_unit);
+    (top.is_finite() && next > 0.0 && top >= 10.0 * next).then(|| {
+        format!(
+            "the loop's fastest rate is {key}'s, {}/{unit}, {}× the next ({next_key}, {}/{unit}): it sets those steps; slower poles there, nearer the plant's and the signals' rates, shorten the run about in proportion",
+            crate::settings::fmt_4(top),
+            crate::settings::fmt_ratio(top / next),
+            crate::settings::fmt_4(next)
+        )
+    })
+}
+
 /// The diagnostics of one run.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Diagnostics {
@@ -430,7 +448,10 @@ fn diagnose_with(
             remedy.text()
         ));
     }
-    advice.extend(thrashing(&result.stats, unit));
+    let thrashed = thrashing(&result.stats, unit);
+    let outlier = thrashed.as_ref().and_then(|_| fastest_outlier(design, signals));
+    advice.extend(thrashed);
+    advice.extend(outlier);
     let channels: Vec<ChannelDiagnostics> = avg
         .channels
         .iter()
@@ -1465,6 +1486,25 @@ mod tests {
         assert!(!advice.contains("reference_filter_poles[1]"), "{advice}");
         let paper = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
         assert_eq!(filter_scale_advice(&paper.design().unwrap(), [&paper.reference, &paper.disturbance]), None);
+    }
+
+    /// The fastest rate is named where it is 10× the next: the paper's observer moved to −200,
+    /// −300, −400 is 44× its fastest filter pole (9 /s); the paper's own rates are not that apart.
+    #[test]
+    fn a_rate_far_above_the_rest_is_named() {
+        let gain = "observer_gain = [[-8.0988, 4.4574], [10.6506, -5.0619], [2.7762, -1.1783]]";
+        assert!(PAPER_EXAMPLE.contains(gain));
+        let fast = PAPER_EXAMPLE.replace(gain, "observer_poles = [-200.0, -300.0, -400.0]");
+        let at = |text: &str| {
+            let s = Scenario::from_toml(text).unwrap();
+            fastest_outlier(&s.design().unwrap(), [&s.reference, &s.disturbance])
+        };
+        let named = at(&fast).expect("named");
+        assert!(
+            named.starts_with("the loop's fastest rate is the observer (A − LC)'s, 400/s, 44× the next ("),
+            "{named}"
+        );
+        assert_eq!(at(PAPER_EXAMPLE), None);
     }
 
     /// An actuator delay is named as the likely cause from ρτ_a = 0.1: the paper's loop has
