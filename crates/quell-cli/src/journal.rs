@@ -62,6 +62,11 @@ impl Journal {
         }
     }
 
+    /// Every row appended was written (no write failed).
+    pub fn whole(&self) -> bool {
+        !self.failed.load(Ordering::Relaxed)
+    }
+
     /// Removes the journal once runs.csv and summary.json hold its rows.
     pub fn remove(self) -> io::Result<()> {
         drop(self.file);
