@@ -66,7 +66,7 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
         output::prepare_file("--write", out)?;
         // The written scenario is the input with its [design] replaced: refuse to replace the input
         // (and the design it holds) with it.
-        if out.canonicalize().ok().is_some_and(|o| args.scenario.canonicalize().is_ok_and(|s| s == o)) {
+        if output::same_file(out, &args.scenario) {
             return Err(Failure::Input(format!(
                 "--write {}: it is the scenario being designed, whose [design] the written file would replace; write to another file",
                 out.display()

@@ -137,13 +137,16 @@ pub fn prepare_out(dir: &Path, files: &[&str]) -> Result<(), Failure> {
     Ok(())
 }
 
+/// Whether `a` and `b` name one existing file (their canonical paths: links and `..` resolved).
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    a.canonicalize().is_ok_and(|a| b.canonicalize().is_ok_and(|b| a == b))
+}
+
 /// Refuses to write `files` into `dir` where one of them is the `input` file the command reads
 /// (its canonical path): the output would replace it (`quell run selfd/signals.csv --out selfd`
 /// had replaced the scenario with its own signals; hostile review, 2026-12-06).
 pub fn not_the_input(input: &Path, dir: &Path, files: &[&str]) -> Result<(), Failure> {
-    let Ok(read) = input.canonicalize() else { return Ok(()) };
-    let Ok(dir_path) = dir.canonicalize() else { return Ok(()) };
-    match files.iter().find(|f| dir_path.join(f) == read) {
+    match files.iter().find(|f| same_file(input, &dir.join(f))) {
         Some(f) => Err(Failure::Input(format!(
             "--out {}: its {f} would replace the input file {} this command reads; choose another output directory, or move the input",
             dir.display(),

@@ -78,8 +78,6 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
         return finish_resumed(&args.out, &meta, &kept, !args.no_plots);
     }
     let pool = thread_pool(args.jobs, n - kept.len())?;
-    // A complete sweep's files, which only a complete sweep replaces (a resumed one's too).
-    let earlier = marked_summary(&args.out).is_some_and(|m| !m.partial);
     crate::output::not_the_input(args.study.as_deref().expect("a study without --merge"), &args.out, OUTPUTS)?;
     prepare_out(&args.out, OUTPUTS)?;
     let journal = Journal::create(&args.out, &meta, &kept)
@@ -112,8 +110,11 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     }
     rows.extend(result.rows);
     rows.sort_by_key(|r| r.run);
-    // Only where the journal holds the rows: one whose writes failed leaves runs.csv to hold them.
-    if result.partial && earlier && journal.whole() {
+    // A complete sweep's files (still in --out: nothing has been written over them) only a
+    // complete sweep replaces, resumed or not; only where the journal holds the rows, as one whose
+    // writes failed leaves runs.csv to hold them. Read on interruption alone, not at every start
+    // (a large grid's summary.json is hundreds of MB).
+    if result.partial && journal.whole() && marked_summary(&args.out).is_some_and(|m| !m.partial) {
         return Err(kept_earlier(&args.out, rows.len(), n));
     }
     write_all(&args.out, &meta, (&rows, result.partial), !args.no_plots, || {

@@ -564,21 +564,20 @@ fn filter_scale_advice(design: &Design, [reference, disturbance]: [&Signal; 2]) 
             // The whole bank against the whole signal, else each component's filters against its
             // own harmonics (an air-handling unit's two banks at 40× their components' frequencies
             // had passed as 25× of the other component's; helper tryout, 2026-12-06).
-            let whole = far_apart(&eigenvalues(G).ok()?, signal.components.iter())
+            let whole = far_apart(&eigenvalues(G).ok()?, signal.components.iter(), unit)
                 .map(|(p, w, how)| format!("design.{name}_filter_poles ({p}) are {how} than the {name}'s frequencies ({w})"));
             whole.or_else(|| {
-                let each: Vec<String> = (diagonal_blocks(G).into_iter())
-                    .filter_map(|rows| {
-                        let i = (0..L.ncols()).find(|&i| rows.iter().any(|&r| L[(r, i)] != 0.0))?;
+                let each: Vec<String> = (0..L.ncols())
+                    .filter_map(|i| {
+                        let rows = component_rows(G, L, i);
                         let block = G.select_rows(&rows).select_columns(&rows);
-                        let (p, w, how) = far_apart(&eigenvalues(&block).ok()?, signal.components.get(i).into_iter())?;
+                        let (p, w, how) = far_apart(&eigenvalues(&block).ok()?, signal.components.get(i).into_iter(), unit)?;
                         Some(format!("design.{name}_filter_poles[{i}] ({p}) are {how} than {name}.components[{i}]'s frequencies ({w})"))
                     })
                     .collect();
                 (!each.is_empty()).then(|| each.join("; "))
             })
         })
-        .map(|text| text.replace("rad/UNIT", &format!("rad/{unit}")))
         .collect();
     (!parts.is_empty()).then(|| {
         format!(
@@ -590,10 +589,11 @@ fn filter_scale_advice(design: &Design, [reference, disturbance]: [&Signal; 2]) 
 
 /// Filter `poles` all faster than [`FILTER_SCALE_FACTOR`] times the fastest harmonic of
 /// `components`, or all slower than its slowest over that factor: the poles' and frequencies'
-/// spans ("|p| from a to b rad/UNIT", "c to d rad/UNIT") and "N× faster" or "N× slower".
+/// spans ("|p| from a to b rad/s", "c to d rad/s" in `unit`) and "N× faster" or "N× slower".
 fn far_apart<'a>(
     poles: &[nalgebra::Complex<f64>],
     components: impl Iterator<Item = &'a crate::signal::Component>,
+    unit: TimeUnit,
 ) -> Option<(String, String, String)> {
     let freqs = components.flat_map(|c| &c.harmonics).filter(|h| h.amplitude != 0.0);
     let (w_lo, w_hi) = freqs
@@ -614,37 +614,29 @@ fn far_apart<'a>(
     };
     let four = crate::settings::fmt_4;
     Some((
-        format!("|p| from {} to {} rad/UNIT", four(p_lo), four(p_hi)),
-        format!("{} to {} rad/UNIT", four(w_lo), four(w_hi)),
+        format!("|p| from {} to {} rad/{unit}", four(p_lo), four(p_hi)),
+        format!("{} to {} rad/{unit}", four(w_lo), four(w_hi)),
         format!("{ratio:.0}× {side}"),
     ))
 }
 
-/// The index sets of a block-diagonal matrix's diagonal blocks (rows joined by a nonzero entry
-/// either way), each ascending, in the order of their first row.
-fn diagonal_blocks(G: &DMatrix<f64>) -> Vec<Vec<usize>> {
+/// The rows of the filter bank (`G`, `L`) that component `c` drives: those `L` feeds it into,
+/// grown by `G`'s couplings either way, ascending. One component's whole filter in every
+/// realization: a companion's l = e_q reaches one row of its block, a modal one's each of its
+/// pole blocks (rows of `G`'s connectivity alone had split a modal filter into one bank per pole).
+fn component_rows(G: &DMatrix<f64>, L: &DMatrix<f64>, c: usize) -> Vec<usize> {
     let n = G.nrows();
-    let mut block: Vec<usize> = (0..n).collect();
-    fn root(block: &mut [usize], mut r: usize) -> usize {
-        while block[r] != r {
-            block[r] = block[block[r]];
-            r = block[r];
-        }
-        r
-    }
-    for (i, j) in (0..n).flat_map(|i| (0..n).map(move |j| (i, j))).filter(|&(i, j)| i != j && G[(i, j)] != 0.0) {
-        let (a, b) = (root(&mut block, i), root(&mut block, j));
-        block[a.max(b)] = a.min(b);
-    }
-    let mut blocks: Vec<Vec<usize>> = Vec::new();
-    for r in 0..n {
-        let top = root(&mut block, r);
-        match blocks.iter_mut().find(|b| b[0] == top) {
-            Some(b) => b.push(r),
-            None => blocks.push(vec![r]),
+    let mut inside: Vec<bool> = (0..n).map(|r| L[(r, c)] != 0.0).collect();
+    let mut grown = true;
+    while grown {
+        grown = false;
+        for (i, j) in (0..n).flat_map(|i| (0..n).map(move |j| (i, j))) {
+            if inside[i] && !inside[j] && (G[(i, j)] != 0.0 || G[(j, i)] != 0.0) {
+                (inside[j], grown) = (true, true);
+            }
         }
     }
-    blocks
+    (0..n).filter(|&r| inside[r]).collect()
 }
 
 /// Fewer e-folds than this of a design pole's transient over the run get [`slow_transient_advice`].
@@ -1484,6 +1476,17 @@ mod tests {
         let advice = filter_scale_advice(&s.design().unwrap(), [&s.reference, &s.disturbance]).expect("named");
         assert!(advice.starts_with("design.reference_filter_poles[0] (|p| from 20 to 25 rad/s) are 40× faster than reference.components[0]'s frequencies (0.5 to 0.5 rad/s): ξ̂ sees"), "{advice}");
         assert!(!advice.contains("reference_filter_poles[1]"), "{advice}");
+        // The same in the modal realization, one block per pole: the component's two poles
+        // together, once.
+        let modal =
+            Scenario::from_toml(&text.replace("[design]\n", "[design]\nregressor_scaling = \"modal\"\n")).unwrap();
+        assert_eq!(modal.design().unwrap().regressor_scaling(), crate::design::RegressorScaling::Modal);
+        let in_modal = filter_scale_advice(&modal.design().unwrap(), [&modal.reference, &modal.disturbance]).unwrap();
+        assert!(
+            in_modal.starts_with("design.reference_filter_poles[0] (|p| from 20 to 25 rad/s) are 40× faster"),
+            "{in_modal}"
+        );
+        assert_eq!(in_modal.matches("design.reference_filter_poles[0]").count(), 1, "{in_modal}");
         let paper = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
         assert_eq!(filter_scale_advice(&paper.design().unwrap(), [&paper.reference, &paper.disturbance]), None);
     }
