@@ -823,6 +823,44 @@ fn gap_and_peaks(a: &quell::sim::SimResult, b: &quell::sim::SimResult) -> (f64, 
     (gap / peak(&yb), peak(&column(a, &a.u_f)), peak(&column(b, &b.u_f)))
 }
 
+/// The continuous loop a sampled run is compared with records at most `SIDE_ROWS` rows and no
+/// states, whatever the run's own record (it had held a second record as large as the run's): the
+/// paper's example sampled and recorded every 0.5 ms over 60 s (120,001 rows, with x and x̂) is
+/// compared on every second row, and its departures are those of the comparison on every row: y's
+/// to 1 % (the sampling's error is smooth at the rows' 1 ms spacing), the continuous u_f's peak to
+/// 0.1 % (peaks count at the solver's step ends too, about 0.15 s apart, and the rows add samples
+/// between them: 4e-7 here), the sampled run's own peak exactly.
+#[test]
+fn the_comparison_of_a_sampled_run_records_a_bounded_continuous_loop() {
+    let mut s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+    let d = s.design().unwrap();
+    (s.simulation.t_end, s.simulation.output_step, s.simulation.sample_time) = (60.0, 5e-4, Some(5e-4));
+    let mut settings = RunSettings::of(&s);
+    settings.record_states = true;
+    let r = Run::of(&s, &d).settings(settings).simulate(|_| ControlFlow::Continue(())).unwrap();
+    assert_eq!(r.len(), 120_001);
+    let (continuous, channels) = quell::diagnostics::sampled::against_continuous(&s, &d, &r).expect("compared");
+    assert!(continuous.len() <= quell::diagnostics::sampled::SIDE_ROWS as usize + 1, "{}", continuous.len());
+    assert!(continuous.x.is_empty() && continuous.x_hat.is_empty());
+    let full = Run::of(&s, &d)
+        .settings(RunSettings {
+            mode: RunSettings::of(&Scenario {
+                simulation: quell::scenario::Simulation { sample_time: None, ..s.simulation },
+                ..s.clone()
+            })
+            .mode,
+            ..RunSettings::of(&s)
+        })
+        .simulate(|_| ControlFlow::Continue(()))
+        .unwrap();
+    assert_eq!(full.len(), 120_001);
+    let every_row = quell::diagnostics::sampled::departures(&r, &full).unwrap();
+    for (a, b) in channels.iter().zip(&every_row) {
+        assert!((a.y - b.y).abs() <= 0.01 * b.y, "{a:?} {b:?}");
+        assert!(a.uf.0 == b.uf.0 && (a.uf.1 - b.uf.1).abs() <= 1e-3 * b.uf.1, "{a:?} {b:?}");
+    }
+}
+
 /// A sampled-data run is compared with its continuous loop (the same scenario without its sample
 /// time), which the rule T_s·ρ ≤ 0.2 alone misjudges both ways:
 /// * the flexible-joint robot of `tests/data` (its automatic design for an actuator limit of 1) at

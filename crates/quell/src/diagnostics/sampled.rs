@@ -50,6 +50,10 @@ pub const FOLLOWS_UF: f64 = 1.2;
 /// A channel's continuous peaks (of y, of u_f) below this share of the largest channel's are
 /// measured against that share instead ([`departures`]).
 pub const QUIET: f64 = 1e-3;
+/// Most rows a run a diagnostic makes beside the user's records ([`side_settings`]): the
+/// comparison of a sampled run with its continuous loop had held a second record as large as the
+/// run's own (805 MB for a 398 MB record, n = 200, m = 8), and its halvings a third.
+pub const SIDE_ROWS: f64 = 1e5;
 /// How many times the comparison halves a departing sample time to find one that agrees…
 pub const HALVINGS: u32 = 6;
 /// …taking at most this many controller steps in all its runs.
@@ -132,7 +136,7 @@ fn continuous_loop(s: &crate::Scenario, design: &Design, uncapped: Option<Progre
         crate::Scenario { simulation: crate::scenario::Simulation { sample_time: None, ..s.simulation }, ..s.clone() };
     let run = match uncapped {
         None => side_run(&continuous, design),
-        Some(progress) => Run::of(&continuous, design).simulate(progress),
+        Some(progress) => Run::of(&continuous, design).settings(side_settings(&continuous)).simulate(progress),
     };
     match run {
         Ok(r) if matches!(r.outcome, None | Some(Outcome::Completed)) => Ok(r),
@@ -141,10 +145,24 @@ fn continuous_loop(s: &crate::Scenario, design: &Design, uncapped: Option<Progre
     }
 }
 
-/// A run a diagnostic makes beside the user's: scenario `s` at its own settings, a continuous loop
+/// The settings of a run a diagnostic makes beside the user's: scenario `s`'s own, without the
+/// states and at most [`SIDE_ROWS`] rows, its output step a whole multiple of `s`'s so that its rows
+/// fall on the user's run's ([`departures`] pairs them by time). Peaks between rows are kept as in
+/// any run ([`SimResult::max_uf`]).
+fn side_settings(s: &crate::Scenario) -> RunSettings {
+    let mut settings = RunSettings::of(s);
+    settings.record_states = false;
+    let rows = settings.t_end / settings.output_step;
+    if rows > SIDE_ROWS {
+        settings.output_step *= (rows / SIDE_ROWS).ceil();
+    }
+    settings
+}
+
+/// A run a diagnostic makes beside the user's: scenario `s` at [`side_settings`], a continuous loop
 /// within [`COMPARISON_STEPS`] steps.
 pub(crate) fn side_run(s: &crate::Scenario, design: &Design) -> Result<SimResult, crate::sim::SimError> {
-    let mut settings = RunSettings::of(s);
+    let mut settings = side_settings(s);
     if let Loop::Continuous(integrator) = &mut settings.mode {
         integrator.max_steps = Some(COMPARISON_STEPS);
     }
@@ -160,12 +178,30 @@ fn go_on(_: f64) -> ControlFlow<()> {
     }
 }
 
-/// Each channel's departure of `sampled` from `continuous` over their common rows (`None` when
-/// they have none, or their times differ).
+/// The rows of `a` and `b` at the same time (within 1e-9 of it, relative beyond 1), as index pairs
+/// in time order: every row of a run at an output step a whole multiple of the other's.
+fn common_rows(a: &[f64], b: &[f64]) -> Vec<(usize, usize)> {
+    let mut pairs = Vec::with_capacity(a.len().min(b.len()));
+    let mut k = 0;
+    for (j, &t) in b.iter().enumerate() {
+        let close = |s: f64| (s - t).abs() <= 1e-9 * t.abs().max(1.0);
+        while k < a.len() && a[k] < t && !close(a[k]) {
+            k += 1;
+        }
+        match a.get(k) {
+            Some(&s) if close(s) => pairs.push((k, j)),
+            Some(_) => {}
+            None => break,
+        }
+    }
+    pairs
+}
+
+/// Each channel's departure of `sampled` from `continuous` over their common rows ([`common_rows`];
+/// `None` when they have none).
 pub fn departures(sampled: &SimResult, continuous: &SimResult) -> Option<Vec<ChannelDeparture>> {
-    let rows = sampled.len().min(continuous.len());
-    let same = (0..rows).all(|k| (sampled.t[k] - continuous.t[k]).abs() <= 1e-9 * continuous.t[k].abs().max(1.0));
-    if rows == 0 || !same {
+    let rows = common_rows(&sampled.t, &continuous.t);
+    if rows.is_empty() {
         return None;
     }
     let m = sampled.m;
@@ -178,8 +214,14 @@ pub fn departures(sampled: &SimResult, continuous: &SimResult) -> Option<Vec<Cha
     let floor = |peaks: &[f64]| QUIET * peaks.iter().copied().fold(0.0, f64::max);
     let (y_floor, uf_floor) = (floor(&y_peaks), floor(&uf_peaks));
     let channel = |i: usize| {
-        let (ys, yc) = (sampled.column(&sampled.y, m, i).take(rows), continuous.column(&continuous.y, m, i));
-        let gap = ys.zip(yc).fold(0.0f64, |a, (s, c)| if (s - c).abs() > a { (s - c).abs() } else { a });
+        let gap = rows.iter().fold(0.0f64, |a, &(k, j)| {
+            let d = (sampled.y[k * m + i] - continuous.y[j * m + i]).abs();
+            if d > a {
+                d
+            } else {
+                a
+            }
+        });
         // A y that is zero in both (no signals, x(0) = 0) has not departed.
         let y = if gap == 0.0 { 0.0 } else { gap / y_peaks[i].max(y_floor) };
         ChannelDeparture { y, uf: (sampled.max_uf(i), uf_peaks[i].max(uf_floor)) }
@@ -202,7 +244,7 @@ fn agreeing_sample_time(
     (1..=tried)
         .map(|k| sample_time / f64::from(1u32 << k))
         .find_map(|T| {
-            let settings = RunSettings { mode: Loop::Sampled { sample_time: T }, ..RunSettings::of(s) };
+            let settings = RunSettings { mode: Loop::Sampled { sample_time: T }, ..side_settings(s) };
             let r = Run::of(s, design).settings(settings).simulate(|_| ControlFlow::Continue(())).ok()?;
             let channels =
                 departures(&r, continuous).filter(|_| matches!(r.outcome, None | Some(Outcome::Completed)))?;
@@ -371,7 +413,7 @@ pub(crate) fn effort_departure(
         None => (s, result, ""),
         Some(_) => {
             let q = crate::Scenario { noise: None, ..s.clone() };
-            let r = Run::of(&q, design).simulate(&mut *progress).ok()?;
+            let r = Run::of(&q, design).settings(side_settings(&q)).simulate(&mut *progress).ok()?;
             quiet = (q, r);
             (&quiet.0, &quiet.1, "; both without [noise]")
         }
