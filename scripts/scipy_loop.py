@@ -257,6 +257,19 @@ class Result:
     history: History
 
 
+def default_output_step(scenario: dict, t_end: float) -> float:
+    """The scenario format's default output step (docs/errors.md, `output_step_not_positive`): the
+    longest 1, 2 or 5 × 10^k within t_end/1000 and 2π/(20 ω_max), at least t_end/1e6."""
+    freqs = [h.get("frequency", 0.0) for part in ("reference", "disturbance")
+             for c in scenario.get(part, {}).get("components", []) for h in c.get("harmonics", [])
+             if h.get("amplitude", 0.0) != 0.0]
+    fastest = max([f for f in freqs if f > 0.0], default=0.0)
+    want = min(t_end / 1000.0, 2 * math.pi / (20.0 * fastest) if fastest > 0.0 else math.inf)
+    decade = 10.0 ** math.floor(math.log10(want))
+    step = next((m * decade for m in (5.0, 2.0, 1.0) if m * decade <= want * (1 + 1e-12)), decade)
+    return max(step, t_end / 1e6)
+
+
 def simulate(loop: Loop, t_end: float, output_step: float, rtol: float, atol: float, method: str = "DOP853") -> Result:
     """The loop on [0, t_end] by the method of steps; the state at t = k·output_step."""
     history = History()
@@ -332,7 +345,7 @@ def main(argv: Optional[List[str]] = None) -> int:
         design = json.load(f)
     sim = scenario.get("simulation", {})
     t_end = a.t_end if a.t_end is not None else float(sim.get("t_end", 100.0))
-    output_step = float(sim.get("output_step", 0.1))
+    output_step = float(sim["output_step"]) if "output_step" in sim else default_output_step(scenario, t_end)
     rtol = a.rtol if a.rtol is not None else float(sim.get("rtol", 1e-6))
     atol = a.atol if a.atol is not None else float(sim.get("atol", rtol))
     rng = np.random.default_rng(a.seed)

@@ -187,13 +187,18 @@ fn output_step_error(design: &Design, T: f64, h: f64, flag: bool) -> Failure {
     // Where --output-step gave it, the key is named with the flag ([`crate::in_flags`]); it had
     // said "from the scenario file".
     let from = if flag { "" } else { " (from the scenario file)" };
+    let multiple = format!("set simulation.output_step to a multiple of the sample time, e.g. {} {s}", short(multiple));
+    // A divisor only where one makes the delays whole too: h/⌈h/T⌉ had been offered where none
+    // does, which the delays' check then refused.
+    let fixes = match divisor {
+        Some(d) => format!("give a --sample-time that divides it, e.g. {} {s}, or {multiple}", short(d)),
+        None => format!("{multiple} (no sample time near {} {s} that divides it makes plant.delays whole)", short(T)),
+    };
     Failure::Input(format!(
-        "--sample-time {}: simulation.output_step = {} {s}{from} is not a whole number of samples of {} {s} ({ratio:.6} samples; each recorded row is a controller step); give a --sample-time that divides it, e.g. {} {s}, or set simulation.output_step to a multiple of the sample time, e.g. {} {s}",
+        "--sample-time {}: simulation.output_step = {} {s}{from} is not a whole number of samples of {} {s} ({ratio:.6} samples; each recorded row is a controller step); {fixes}",
         short(T),
         short(h),
         short(T),
-        short(divisor),
-        short(multiple)
     ))
 }
 

@@ -120,7 +120,7 @@ fn design_text_on_paper_example() {
 fn the_design_report_says_what_deployment_needs() {
     let o = quell(&["design", &paper()]);
     let out = stdout(&o);
-    assert!(out.contains("\ndeployment (a sampled-data controller, docs/deployment.md):\n  sample time: T_s ≤ 0.0222 s (T_s·ρ ≤ 0.2), e.g. 0.02 s, which makes plant.delays whole; ρ = 9 /s, the loop's fastest rate (a bound the sampled loop needs, not one that suffices: a sampled run compares itself with its continuous loop and says where it departs)\n"), "{out}");
+    assert!(out.contains("\ndeployment (a sampled-data controller, docs/deployment.md):\n  sample time: T_s ≤ 0.0222 s (T_s·ρ ≤ 0.2), e.g. 0.02 s, which makes plant.delays whole and divides simulation.output_step; ρ = 9 /s, the loop's fastest rate (a bound the sampled loop needs, not one that suffices: a sampled run compares itself with its continuous loop and says where it departs)\n"), "{out}");
     assert!(
         out.contains(
             "  precision: f32 moves the poles by at most 0.00016 % (κ₂ = 2.75e1 × 6e-8): either precision serves"
@@ -584,6 +584,36 @@ fn run_sample_time_flag_the_output_step_is_not_a_multiple_of_names_both() {
     );
     // A divisor of the output step is accepted (0.025 s: 4 samples a row, delays 40 and 120 samples).
     let o = quell(&["run", "--sample-time", "0.025", "--no-plots", "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
+
+/// The values a message offers after "e.g. ", in order (as typed back, without the unit).
+fn offered(message: &str) -> Vec<String> {
+    message.split("e.g. ").skip(1).filter_map(|r| r.split(' ').next()).map(str::to_string).collect()
+}
+
+/// Delays that no sample time makes whole together with the output step (1.0000001 and 3.0000003 s
+/// beside 0.1 s; 1/60 min written to six digits beside 0.5 min in the tryout): `quell design`
+/// offers the delays' sample time with the output step to set beside it, `quell run
+/// --sample-time` at it offers that output step alone (it had offered 0.1/⌈0.1/T⌉, which the
+/// delays' check refused), and the two run.
+#[test]
+fn run_sample_time_flag_offers_the_output_step_where_no_divisor_makes_the_delays_whole() {
+    let dir = temp_dir("ts-no-divisor");
+    let text = fs::read_to_string(paper()).unwrap().replace("delays = [1.0, 3.0]", "delays = [1.0000001, 3.0000003]");
+    let file = dir.path().join("delays.toml");
+    fs::write(&file, text).unwrap();
+    let (file, out) = (file.to_str().unwrap(), dir.path().join("out"));
+    let out = out.to_str().unwrap();
+    let report = stdout(&quell(&["design", file]));
+    let line = report.lines().find(|l| l.contains("sample time: T_s")).unwrap_or_else(|| panic!("{report}"));
+    assert!(line.contains("and none within the bound also divides simulation.output_step = 0.1 s"), "{line}");
+    let [t_s, step] = &offered(line)[..] else { panic!("{line}") };
+    let err = input_error(&["run", file, "--sample-time", t_s, "--no-plots", "--out", out]);
+    assert!(!err.contains("give a --sample-time") && err.contains("that divides it makes plant.delays whole"), "{err}");
+    assert_eq!(offered(&err), [step.as_str()], "{err}");
+    let o =
+        quell(&["run", file, "--sample-time", t_s, "--output-step", step, "--t-end", "2", "--no-plots", "--out", out]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }
 

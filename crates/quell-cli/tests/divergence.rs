@@ -17,7 +17,7 @@ fn run_quell(args: &[&str], out: &std::path::Path, scenario: &std::path::Path) -
 
 #[test]
 fn diverging_sampled_run_exits_1_and_keeps_the_files() {
-    // The paper's example sampled at T_s = 0.5 s is unstable: x[1] passes 1e9 at t = 15 s.
+    // The paper's example sampled at T_s = 0.5 s is unstable: x1 passes 1e9 at t = 15 s.
     let dir_tmp = scratch_dir("diverge");
     let dir = dir_tmp.path();
     let scenario = paper_with(dir, &[("output_step = 0.1 ", "output_step = 0.5 ")]);
@@ -26,15 +26,41 @@ fn diverging_sampled_run_exits_1_and_keeps_the_files() {
     assert_eq!(output.status.code(), Some(1), "stderr: {stderr}");
     let t = time_in(&stderr, "diverged at t = ").unwrap_or_else(|| panic!("no time on stderr: {stderr}"));
     assert!((5.0..50.0).contains(&t), "t = {t}");
-    assert!(stderr.contains("x[1] (plant state)"), "the signal is not named: {stderr}");
+    assert!(stderr.contains("x1 (plant state)"), "the signal is not named: {stderr}");
 
     let summary = check_outputs(&out);
     assert_eq!(summary["outcome"]["status"], "diverged", "{summary}");
-    assert_eq!(summary["outcome"]["signal"], "x[1] (plant state)");
+    assert_eq!(summary["outcome"]["signal"], "x1 (plant state)");
     // The rows stop before the divergent sample.
     let csv = std::fs::read_to_string(out.join("signals.csv")).unwrap_or_default();
     let last: f64 = csv.lines().last().and_then(|l| l.split(',').next()).and_then(|s| s.parse().ok()).unwrap_or(-1.0);
     assert!(last < t && last >= t - 0.5 - 1e-9, "last row t = {last}, divergence at {t}");
+}
+
+/// The diverged entry is named by its column of signals.csv (x1, with --states a column of the
+/// file) and by the state's name in `[plant] states`, on stderr and in summary.json: it had read
+/// "x_hat[6] (observer state)", which beside the file's 0-based keys read as the seventh state.
+#[test]
+fn a_diverged_state_is_named_by_its_column_and_its_name() {
+    let dir_tmp = scratch_dir("diverge-named");
+    let dir = dir_tmp.path();
+    let scenario = paper_with(
+        dir,
+        &[
+            ("output_step = 0.1 ", "output_step = 0.5 "),
+            ("x0 = [0.0, 0.0, 0.0]", "x0 = [0.0, 0.0, 0.0]\nstates = [\"level\", \"flow\", \"heat\"]"),
+        ],
+    );
+    let out = dir.join("out");
+    let args = ["run", "--no-plots", "--states", "--sample-time", "0.5", "--out"];
+    let (output, stderr) = run_quell(&args, &out, &scenario);
+    assert_eq!(output.status.code(), Some(1), "stderr: {stderr}");
+    assert!(stderr.contains(": x1 (plant state level) = "), "{stderr}");
+    let summary = check_outputs(&out);
+    assert_eq!(summary["outcome"]["signal"], "x1 (plant state level)");
+    let csv = std::fs::read_to_string(out.join("signals.csv")).unwrap_or_default();
+    let header: Vec<&str> = csv.lines().next().unwrap_or_default().split(',').collect();
+    assert!(header.contains(&"x1") && header.contains(&"xhat1"), "{header:?}");
 }
 
 #[test]

@@ -38,7 +38,8 @@ use crate::plant::{plant_arg, Labels, PyPlant};
 /// t_end : float, optional
 ///     Final time, in the plant's unit of time (default 100).
 /// output_step : float, optional
-///     Interval of the recorded samples (default 0.1 s).
+///     Interval of the recorded samples (default: t_end/1000 or twenty samples a period of the
+///     fastest harmonic, whichever is shorter, rounded down to 1, 2 or 5 × 10^k).
 /// rtol, atol : float, optional
 ///     The solver's tolerances (default 1e-9).
 /// sample_time : float, optional

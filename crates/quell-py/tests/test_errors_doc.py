@@ -212,6 +212,13 @@ def test_faults_during_a_run():
     assert "diverged" in str(e) and e.signal and e.t > 0
     assert not abs(e.value) <= 1e9  # beyond the divergence bound, or not finite
     assert e.result.outcome["status"] == "diverged" and len(e.result) > 0 and e.result.t[-1] <= e.t
+    # Named by its column of signals.csv (counted from 1), and by the state's name where the
+    # scenario gives one.
+    assert e.signal == "x1 (plant state)", e.signal
+    named = quell.Scenario.from_toml(edit((X0, X0 + '\nstates = ["level", "flow", "heat"]')))
+    with pytest.raises(quell.SimulationError) as info:
+        quell.simulate(named, sample_time=0.5, output_step=0.5)
+    assert info.value.signal == "x1 (plant state level)" and ": x1 (plant state level) = " in str(info.value)
     # μ_1 = 1e300, an infinitely stiff adaptive law: the step size underflows at t = 1 s.
     fast = quell.Scenario.from_toml(s.to_toml().replace("mu = [20.0, 30.0]", "mu = [1e300, 30.0]"))
     assert fast.to_toml() != s.to_toml()

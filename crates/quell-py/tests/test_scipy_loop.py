@@ -50,7 +50,8 @@ def both(quell_bin, tmp_path, scenario_path, t_end, scipy_tol=1e-9):
     design = subprocess.run([quell_bin, "design", "--json", path], check=True, capture_output=True, text=True)
 
     loop = scipy_loop.Loop(tomllib.loads(path.read_text()), json.loads(design.stdout))
-    res = scipy_loop.simulate(loop, t_end, float(sim.get("output_step", 0.1)), scipy_tol, scipy_tol)
+    step = float(sim["output_step"]) if "output_step" in sim else scipy_loop.default_output_step(scenario, t_end)
+    res = scipy_loop.simulate(loop, t_end, step, scipy_tol, scipy_tol)
     return read_signals(out / "signals.csv"), scipy_loop.signals(loop, res)
 
 

@@ -87,6 +87,56 @@ fn tolerance_is_scaled_to_the_data() {
     }
 }
 
+/// Units of the inputs (B) and of the outputs (C) do not move a verdict: the same couplings of
+/// relative size 1e-20 and 1e-6 as above with B alone scaled by 1e-15 … 1e15, and the paper's
+/// plant with C in units 1e15 and 1e-15 times its own (observable; the tolerance had taken ‖C‖
+/// and called it unobservable), while its second mode stays unseen by a C that misses it.
+#[test]
+fn input_and_output_units_do_not_move_the_verdict() {
+    for scale in [1e-15, 1e-3, 1.0, 1e3, 1e15] {
+        for (delta, want) in [(1e-20, 1), (1e-6, 2)] {
+            let B = DMatrix::from_row_slice(2, 1, &[1.0, delta]) * scale;
+            let t = controllability(&diag(&[1.0, 2.0]), &B).unwrap();
+            assert_eq!(t.rank, want, "B × {scale}, δ {delta}: {t:?}");
+        }
+        let A = DMatrix::from_row_slice(3, 3, &[-3.2, -1.7, -3.0, 2.8, 1.3, 4.0, 0.3, 0.3, -0.5]);
+        let C = DMatrix::from_row_slice(2, 3, &[2.0, 2.0, 0.0, 2.0, 1.0, 2.0]) * scale;
+        assert!(observability(&A, &C).unwrap().full(), "C × {scale}");
+        let blind = DMatrix::from_row_slice(1, 2, &[1.0, 0.0]) * scale;
+        assert_eq!(observability(&diag(&[1.0, 2.0]), &blind).unwrap().rank, 1, "C × {scale}");
+    }
+}
+
+/// Nor do the units of the states: the paper's plant with x → T x for T = diag(10^−e, 1, 10^e),
+/// e up to 12 (A → T A T⁻¹, B → T B, C → C T⁻¹), stays controllable and observable (over 8
+/// decades it had been called neither), and the hidden part of the MIMO plant above stays hidden
+/// under T = diag(10^−6 … 10^6).
+#[test]
+fn state_units_do_not_move_the_verdict() {
+    let A = DMatrix::from_row_slice(3, 3, &[-3.2, -1.7, -3.0, 2.8, 1.3, 4.0, 0.3, 0.3, -0.5]);
+    let B = DMatrix::from_row_slice(3, 2, &[-2.0, 1.0, 2.0, -1.0, 1.0, 0.0]);
+    let C = DMatrix::from_row_slice(2, 3, &[2.0, 2.0, 0.0, 2.0, 1.0, 2.0]);
+    for e in [3, 6, 9, 12] {
+        let t = 10f64.powi(e);
+        for d in [[1.0 / t, 1.0, t], [t, 1.0 / t, 1.0]] {
+            let (T, Ti) = (diag(&d), diag(&d.map(|x| 1.0 / x)));
+            assert!(controllability(&(&T * &A * &Ti), &(&T * &B)).unwrap().full(), "T = {d:?}");
+            assert!(observability(&(&T * &A * &Ti), &(&C * &Ti)).unwrap().full(), "T = {d:?}");
+        }
+    }
+    let n = 6;
+    let mut A = DMatrix::<f64>::zeros(n, n);
+    let Ac = DMatrix::from_row_slice(4, 4, &[0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., -1., -2., -3., -4.]);
+    A.view_mut((0, 0), (4, 4)).copy_from(&Ac);
+    A.view_mut((4, 4), (2, 2)).copy_from(&DMatrix::from_row_slice(2, 2, &[-1.0, 5.0, -5.0, -1.0]));
+    A[(0, 5)] = 0.7;
+    let mut B = DMatrix::<f64>::zeros(n, 2);
+    (B[(3, 0)], B[(1, 1)]) = (1.0, 1.0);
+    let d = [1e-6, 1e-3, 1.0, 1e3, 1e6, 1e-4];
+    let (T, Ti) = (diag(&d), diag(&d.map(|x| 1.0 / x)));
+    assert_eq!(controllability(&(&T * &A * &Ti), &(&T * &B)).unwrap().rank, 4);
+}
+
 /// Rank of the controllability matrix [B AB … A^{n−1}B] by SVD with the same kind of relative
 /// tolerance — the naive test the staircase replaces.
 fn naive_rank(A: &DMatrix<f64>, B: &DMatrix<f64>) -> usize {

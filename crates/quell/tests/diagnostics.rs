@@ -370,6 +370,24 @@ fn the_zeros_of_a_relative_degree_two_disturbance_path_are_the_observer_advice()
     for z in &zeros {
         assert!((z.re - re).abs() < 1e-9 && (z.im.abs() - im).abs() < 1e-9, "{z} against {re} ± {im}i");
     }
+    // The same in other states x → T x (T well conditioned, mixing every state), where C D is about
+    // 1e-15 instead of 0: it had been taken as full rank, and the
+    // zeros came out at −18 ± 51i and −1.2e16.
+    let mut p = d.plant().clone();
+    let T = DMatrix::from_row_slice(
+        4,
+        4,
+        &[1.0, 0.3, 0.2, 0.1, 0.2, 2.0, 0.1, 0.4, 0.1, 0.2, 0.5, 0.3, 0.3, 0.1, 0.2, 1.0],
+    );
+    let Ti = T.clone().try_inverse().unwrap();
+    (p.A, p.B, p.C, p.D) = (&T * &p.A * &Ti, &T * &p.B, &p.C * &Ti, &T * &p.D);
+    assert!((&p.C * &p.D).amax() > 0.0, "rounding leaves C D nonzero here");
+    assert!(quell::diagnostics::disturbance_zeros(&p).is_none());
+    let moved = quell::diagnostics::singular_disturbance_zeros(&p).expect("zeros of (A, D, C), rotated");
+    assert_eq!(moved.len(), 2, "{moved:?}");
+    for z in &moved {
+        assert!((z.re - re).abs() < 1e-9 * im && (z.im.abs() - im).abs() < 1e-9 * im, "{z} against {re} ± {im}i");
+    }
     let worst = |d: &quell::Design| {
         Averaged::new(d, &s.reference, &s.disturbance).fidelity.iter().map(|f| f.relative_error).fold(0.0, f64::max)
     };

@@ -699,3 +699,31 @@ fn acker_places_a_repeated_pole_with_one_input() {
     let B2 = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 1.0, 0.0]);
     assert!(matches!(quell::design::acker(&A, &B2, &reals(&[-1.0, -1.0])), Err(PlaceError::Matrix(_))));
 }
+
+/// States in units far apart: the DC motor of `auto.rs`'s companion-form test (entries 1 to 3e9),
+/// whose observer at {−2e6, −200, −100} placed by duality as given missed by 3.4 (relative), is
+/// placed on its balanced pair, and the loop formed in the given coordinates has the poles to 1e-6;
+/// and a single-input plant with one state in a unit 1e7 times another's gets the gain of the plant
+/// in its own units up to that scaling (K T⁻¹; single-input placement is unique), where it had been
+/// refused at 1.5e-5.
+#[test]
+fn states_in_units_far_apart_are_placed_on_the_balanced_pair() {
+    let A =
+        DMatrix::from_row_slice(3, 3, &[-1454546.5441054385, -86143521.68050542, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+    let C = DMatrix::from_row_slice(1, 3, &[0.0, 0.0, 3086281645.3728113]);
+    let (At, Ct) = (A.transpose(), C.transpose());
+    assert_places(&At, &Ct, &reals(&[-2e6, -200.0, -100.0]), 1e-6);
+
+    let A = DMatrix::from_row_slice(3, 3, &[-3.2, -1.7, -3.0, 2.8, 1.3, 4.0, 0.3, 0.3, -0.5]);
+    let b = DMatrix::from_row_slice(3, 1, &[1.0, 0.0, 0.0]);
+    let poles = reals(&[-1.0, -2.0, -3.0]);
+    let K = assert_places(&A, &b, &poles, 1e-9);
+    for e in [7, 9, 12] {
+        let t = 10f64.powi(e);
+        let diag = |d: [f64; 3]| DMatrix::from_diagonal(&quell::nalgebra::DVector::from_row_slice(&d));
+        let (T, Ti) = (diag([1.0, t, 1.0]), diag([1.0, 1.0 / t, 1.0]));
+        let Ks = assert_places(&(&T * &A * &Ti), &(&T * &b), &poles, 1e-6);
+        let back = &Ks * &T;
+        assert!((&back - &K).norm() <= 1e-6 * K.norm(), "T = diag(1, 1e{e}, 1): K' T = {back} against K = {K}");
+    }
+}

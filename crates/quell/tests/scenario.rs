@@ -188,9 +188,9 @@ fn defaults_for_optional_keys() {
     assert_eq!(s.name, None);
     assert_eq!(s.plant.x0.as_slice(), &[0.0; 3]);
     assert_eq!(s.simulation, Simulation::default());
-    // output_step defaults to min(0.1, t_end).
+    // output_step defaults to t_end/1000 here (the_default_output_step_is_scale_free).
     let s = Scenario::from_toml(&with(&[(T_END, "t_end = 0.05"), (OUTPUT_STEP, "")])).unwrap();
-    assert_eq!(s.simulation.output_step, 0.05);
+    assert!((s.simulation.output_step - 5e-5).abs() < 1e-18);
     // Phase defaults to 0, bias to 0, harmonics to none.
     assert_eq!(
         s.disturbance.components[0],
@@ -329,7 +329,70 @@ fn matrix_without_rows() {
 
 #[test]
 fn ragged_matrix() {
-    check(&with(&[("[2.8, 1.3, 4.0]", "[2.8, 1.3]")]), "plant.A[1]", "expected 3 entries");
+    check(&with(&[("[2.8, 1.3, 4.0]", "[2.8, 1.3]")]), "plant.A[1]", "expected 3 entries (n, the number of rows");
+    // Row 0 of C is the short one: C's rows have n entries, n from A (row 1, which is right, had
+    // been blamed "as in row 0").
+    check(
+        &with(&[(C_LINE, "C = [[2.0, 2.0], [2.0, 1.0, 2.0]]")]),
+        "plant.C[0]",
+        "expected 3 entries (n, from plant.A), found 2",
+    );
+    // B's columns set m: its rows are checked against the length the others have.
+    check(
+        &with(&[(B_LINE, "B = [[-2.0], [2.0, -1.0], [1.0, 0.0]]\n")]),
+        "plant.B[0]",
+        "(as in every other row), found 1",
+    );
+}
+
+/// A ragged matrix is blamed on the row that is wrong: against the length another key fixes (Q's
+/// k from D, the observer gain's m from B, a `[truth]` matrix's from its `[plant]` counterpart),
+/// else against the length most rows have, and row 0's only where no length is more common.
+#[test]
+fn a_ragged_matrix_names_the_row_that_differs() {
+    let error = |text: &str| match Scenario::from_toml(text) {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("a ragged matrix was accepted:\n{text}"),
+    };
+    let cases = [
+        (with(&[(Q_LINE, "Q = [[1.0], [1.0, 0.0]]\n")]), "plant.Q[0]: expected 2 entries (k, from plant.D), found 1"),
+        (
+            with(&[(L_LINE, "observer_gain = [[-8.0988], [10.6506, -5.0619], [2.7762, -1.1783]]")]),
+            "design.observer_gain[0]: expected 2 entries (m, from plant.B), found 1",
+        ),
+        (
+            format!("{PAPER_EXAMPLE}\n[truth]\nC = [[2.0, 2.0], [2.0, 1.0, 2.0]]\n"),
+            "truth.C[0]: expected 3 entries (as plant.C), found 2",
+        ),
+        (
+            with(&[(A_LINE, "A = [[-3.2, -1.7], [2.8, 1.3, 4.0], [0.3, 0.3, -0.5]]")]),
+            "plant.A[0]: expected 3 entries (n, the number of rows of plant.A: A is n×n), found 2",
+        ),
+        // D sets k: one row of three against two rows of two is the odd one, wherever it is.
+        (
+            with(&[(D_LINE, "D = [[1.0, -3.0, 0.0], [2.0, 1.0], [3.0, 1.0]]\n")]),
+            "plant.D[0]: expected 2 entries (as in every other row), found 3",
+        ),
+        // No length more common than every other: row 0's, as before.
+        (
+            with(&[(D_LINE, "D = [[1.0], [2.0, 1.0], [3.0, 1.0, 0.0]]\n")]),
+            "plant.D[1]: expected 1 entry (as in row 0; every row of a matrix has the same length), found 2",
+        ),
+    ];
+    for (text, expected) in cases {
+        assert_eq!(error(&text), expected);
+    }
+    // Four rows, two of one length: "2 of its 4 rows", the first other row named.
+    let four = "[[1.0, 0.0], [1.0], [0.0, 1.0], [1.0, 2.0, 3.0]]";
+    let text = with(&[(
+        A_LINE,
+        "A = [[-1.0, 0.0, 0.0, 0.0], [0.0, -1.0, 0.0, 0.0], [0.0, 0.0, -1.0, 0.0], [0.0, 0.0, 0.0, -1.0]]",
+    )]);
+    let e = error(&text.replace(B_LINE, &format!("B = {four}\n")));
+    assert_eq!(
+        e,
+        "plant.B[1]: expected 2 entries (as in 2 of its 4 rows; every row of a matrix has the same length), found 1"
+    );
 }
 
 #[test]
@@ -621,20 +684,48 @@ fn output_step_beyond_t_end() {
     );
 }
 
-/// Without `output_step` the default is min(0.1, t_end), but at most 10⁶ rows: a model whose time
-/// is in a unit 1e6 times shorter than its scale (t_end = 6e8) had its default refused as 6e9
-/// rows, even by `quell design`, which does not use it (helper tryout, 2026-12-05).
+/// Without `output_step` the default is 1, 2 or 5 × 10^k within t_end/1000 and twenty rows a
+/// period of the fastest harmonic (the paper's 2 rad/s: 0.157), at most 10⁶ rows, a whole number
+/// of samples with a sample time: the same in any unit of time (a fixed 0.1 had recorded 2 rows of
+/// a loop in ms written in s and 600,001 of one in s written in ms), and a model in a unit 1e6 times
+/// shorter than its scale (t_end = 6e8) is not refused for 6e9 rows.
 #[test]
-fn the_default_output_step_gives_at_most_a_million_rows() {
-    let step = |t_end: &str| {
-        let text = with(&[(T_END, t_end), (OUTPUT_STEP, "")]);
-        let text = text.replace("     # rows of signals.csv at t = k * output_step", "");
-        Scenario::from_toml(&text).unwrap_or_else(|e| panic!("{t_end}: {e}")).simulation.output_step
+fn the_default_output_step_is_scale_free() {
+    let step = |edits: &[(&str, &str)], frequencies: f64| {
+        let mut edits = edits.to_vec();
+        edits.push((OUTPUT_STEP, ""));
+        let text = with(&edits).replace("     # rows of signals.csv at t = k * output_step", "");
+        let text = text
+            .replace("frequency = 2.0", &format!("frequency = {:e}", 2.0 * frequencies))
+            .replace("frequency = 1.0", &format!("frequency = {:e}", frequencies));
+        Scenario::from_toml(&text).unwrap_or_else(|e| panic!("{edits:?}: {e}")).simulation.output_step
     };
-    assert_eq!(step("t_end = 100.0"), 0.1);
-    assert_eq!(step("t_end = 0.05"), 0.05);
-    assert_eq!(step("t_end = 1e5"), 0.1);
-    assert_eq!(step("t_end = 6e8"), 600.0);
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b;
+    assert_eq!(step(&[], 1.0), 0.1);
+    assert!(close(step(&[(T_END, "t_end = 0.05")], 1.0), 5e-5));
+    assert_eq!(step(&[(T_END, "t_end = 1e5")], 1.0), 0.1);
+    assert_eq!(step(&[(T_END, "t_end = 6e8")], 1.0), 600.0);
+    // The paper's loop in ms, in µs, in h (t_end and every frequency rescaled): its 0.1 s.
+    for (t_end, per) in [("1e5", 1e-3), ("1e8", 1e-6), ("0.027777777777777776", 3600.0)] {
+        let h = step(&[(T_END, &format!("t_end = {t_end}"))], per);
+        let want = 0.1 / per;
+        let nice = [1.0, 2.0, 5.0].iter().any(|m| {
+            let decade = 10f64.powf((h / m).log10().round());
+            close(h, m * decade)
+        });
+        assert!(nice && h <= want * (1.0 + 1e-12) && h > want / 2.5, "t_end {t_end}: {h} against {want}");
+        assert!(per != 1e-3 || close(h, 100.0), "{h}");
+    }
+    // With a sample time, the least whole multiple of it at or beyond 0.1.
+    assert!(close(step(&[(T_END, "t_end = 100.0\nsample_time = 0.003")], 1.0), 0.102));
+    // With no harmonics, t_end/1000.
+    let text = with(&[(OUTPUT_STEP, "")]).replace("     # rows of signals.csv at t = k * output_step", "");
+    let flat = text.replace("harmonics = [{ amplitude = 3.0, frequency = 2.0, phase = 0.0 }]", "bias = 0.5");
+    let flat = flat.replace("{ harmonics = [{ amplitude = 1.0, frequency = 1.0 }] }", "{ bias = 0.3 }");
+    let flat = flat.replace(", harmonics = [{ amplitude = 2.0, frequency = 2.0 }]", "");
+    let s = Scenario::from_toml(&flat.replace(T_END, "t_end = 3000.0")).unwrap();
+    assert!(s.reference.components.iter().all(|c| c.harmonics.is_empty()), "{flat}");
+    assert_eq!(s.simulation.output_step, 2.0);
 }
 
 #[test]
@@ -882,13 +973,13 @@ fn relative_degree_contradicts_plant() {
     check(
         &with(&[(BETA, "beta = 1.0\nrelative_degrees = [2, 2]\n"), (CHANNEL, "channel_poles = [[-6.0, -2.0], [-4.0, -5.0]]")]),
         "design.relative_degrees[1]",
-        "σ_2 = 2 contradicts the plant: c_2 A^(0) B is clearly non-zero (largest cosine between c_2 A^(0) and a column of B: 2.36e-1",
+        "σ_2 = 2 contradicts the plant: c_2 A^(0) B is clearly non-zero (largest cosine between c_2 A^(0) and a column of B, the states balanced: 2.89e-1",
     );
     // c_1 B = [0, 0] exactly, so σ_1 = 1 is refused.
     check(
         &with(&[(BETA, "beta = 1.0\nrelative_degrees = [1, 1]\n")]),
         "design.relative_degrees[0]",
-        "σ_1 = 1 contradicts the plant: c_1 A^(0) B is clearly zero (largest cosine between c_1 A^(0) and a column of B: 0.00e0",
+        "σ_1 = 1 contradicts the plant: c_1 A^(0) B is clearly zero (largest cosine between c_1 A^(0) and a column of B, the states balanced: 0.00e0",
     );
 }
 
@@ -1083,16 +1174,20 @@ fn a_file_without_a_plant_is_told_so_first() {
     }
 }
 
-/// A[0][0] = 1e15 in the paper's plant: the rank test's tolerance (6.7, from ‖A‖) exceeds every
-/// entry of B, so "rank 0 of 3" is a scaling verdict (B alone has rank 2; every mode is reachable
-/// by the PBH test in numpy): said so, with the fix; a plant really uncontrollable keeps the plain
-/// message.
+/// A[2][2] = −1e15 in the paper's plant: the rank test's tolerance (7.0, from ‖A‖) exceeds the
+/// couplings of the other states (every mode is reachable by the PBH test in numpy), so "rank 2 of
+/// 3" is a scaling verdict: said so, with the fix; a plant really uncontrollable keeps the plain
+/// message. (A[0][0] = 1e15 had given "rank 0 of 3" from a tolerance above every entry of B; with B
+/// scaled to A's size it is controllable.)
 #[test]
 fn a_badly_scaled_plant_is_not_just_called_uncontrollable() {
+    let text = with(&[(A_LINE, "A = [[-3.2, -1.7, -3.0], [2.8, 1.3, 4.0], [0.3, 0.3, -1e15]]")]);
+    let e = load_and_design(&text).map(|_| ()).unwrap_err().to_string();
+    assert!(e.starts_with("plant: (A, B) is not controllable (Assumption 1): numerical rank 2 of 3"), "{e}");
+    assert!(e.contains("counts couplings as small as 0.600000 as zero: the plant's numbers span too many decades for a rank test in double precision"), "{e}");
     let text = with(&[(A_LINE, "A = [[1e15, -1.7, -3.0], [2.8, 1.3, 4.0], [0.3, 0.3, -0.5]]")]);
     let e = load_and_design(&text).map(|_| ()).unwrap_err().to_string();
-    assert!(e.starts_with("plant: (A, B) is not controllable (Assumption 1): numerical rank 0 of 3"), "{e}");
-    assert!(e.contains("the plant's numbers span too many decades for a rank test in double precision"), "{e}");
+    assert!(!e.contains("not controllable") && !e.contains("not observable"), "{e}");
     let A = "A = [[-1.0, 0.0, 0.0], [0.0, -2.0, 0.0], [0.0, 0.0, -3.0]]";
     let B = "B = [[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]]\n";
     let e = load_and_design(&with(&[(A_LINE, A), (B_LINE, B)])).map(|_| ()).unwrap_err().to_string();

@@ -175,9 +175,10 @@ fn an_output_step_between_samples_gets_fixes_that_run() {
     let message = err.to_string();
     assert!(message.contains("e.g. 0.12 s") && message.contains("e.g. 0.025 s"), "{message}");
     let (divisor, multiple) = quell::sim::output_step_fixes(&d, 0.04, 0.1);
+    let divisor = divisor.unwrap();
     assert!((multiple - 0.12).abs() < 1e-15 && divisor == 0.025, "{multiple} {divisor}");
     // Where the longest divisor is short, it is the one offered: 1 s / 8 below 0.13 s, not a round 0.1 s.
-    assert_eq!(quell::sim::output_step_fixes(&d, 0.13, 1.0).0, 0.125);
+    assert_eq!(quell::sim::output_step_fixes(&d, 0.13, 1.0).0, Some(0.125));
     for (h, ts) in [(multiple, 0.04), (0.1, divisor)] {
         let r = Run::new(&d, g, w, RunSettings::sampled(1.0, h, ts)).simulate(go);
         assert!(r.is_ok(), "output_step {h}, sample_time {ts}: {:?}", r.err());
@@ -187,6 +188,7 @@ fn an_output_step_between_samples_gets_fixes_that_run() {
     // beyond a delay line's 1e7: the offer was refused by the delays' check, whose own offer was
     // 3.0000003e-7 again. Both fixes now pass every check.
     let (divisor, multiple) = quell::sim::output_step_fixes(&d, 3.0000003e-7, 0.1);
+    let divisor = divisor.unwrap();
     for (h, ts) in [(multiple, 3.0000003e-7), (0.1, divisor)] {
         let r = Run::new(&d, g, w, RunSettings::sampled(0.3, h, ts)).check();
         assert!(r.is_ok(), "output_step {h}, sample_time {ts}: {:?}", r.err());
@@ -307,9 +309,40 @@ fn both_loops_watch_the_same_signals() {
     else {
         panic!("expected both to diverge: {a:?}, {b:?}");
     };
-    assert!(sa.starts_with("x_hat[") || sa.starts_with("xi_hat["), "{sa}");
+    assert!(sa.starts_with("xhat") || sa.starts_with("xihat"), "{sa}");
     assert_eq!(sa, sb);
     assert!((ta - tb).abs() <= 0.02 + 1e-9, "continuous at {ta}, sampled at {tb}");
+}
+
+/// A scenario's run names a diverged entry as signals.csv names its column (x1, xhat2, counted
+/// from 1) and, for x and x̂, by the state's name in `[plant] states` too: the run had said
+/// "x_hat[6] (observer state)", which read as 0-based beside the file's 0-based keys and not as
+/// the state the user named (a two-area load-frequency loop's dPv2; helper tryout).
+#[test]
+fn a_scenarios_divergence_names_the_state_by_its_column_and_name() {
+    let names = ["level", "flow", "heat"];
+    let with_names = PAPER_EXAMPLE
+        .replace("x0 = [0.0, 0.0, 0.0]", &format!("x0 = [0.0, 0.0, 0.0]\nstates = [\"{}\"]", names.join("\", \"")));
+    let short = |text: &str| Scenario::from_toml(&text.replace("t_end = 100.0", "t_end = 30.0")).unwrap();
+    let signal = |s: &Scenario, settings: RunSettings| {
+        let d = s.design().unwrap();
+        match Run::of(s, &d).settings(settings).simulate(go).unwrap().outcome {
+            Some(Outcome::Diverged { signal, .. }) => signal,
+            other => panic!("{other:?}"),
+        }
+    };
+    // The paper's loop sampled at 0.5 s blows up, x1 first.
+    let sampled = RunSettings::sampled(30.0, 0.5, 0.5);
+    let (plain, named) = (short(PAPER_EXAMPLE), short(&with_names));
+    assert_eq!(signal(&plain, sampled.clone()), "x1 (plant state)");
+    assert_eq!(signal(&named, sampled), "x1 (plant state level)");
+    // An observer state past a runaway bound of 0.1: its column and its state's name agree.
+    let inf = f64::INFINITY;
+    let runaway = RunSettings { runaway: Some(quell::sim::Peaks([inf, 0.1, inf, inf])), ..RunSettings::of(&named) };
+    let x_hat = signal(&named, runaway.clone());
+    let j: usize = x_hat.split(' ').next().and_then(|c| c.strip_prefix("xhat")).and_then(|j| j.parse().ok()).unwrap();
+    assert_eq!(x_hat, format!("xhat{j} (observer state {})", names[j - 1]));
+    assert_eq!(signal(&plain, runaway), format!("xhat{j} (observer state)"));
 }
 
 #[test]
@@ -435,6 +468,68 @@ fn the_coarse_sample_warning_offers_a_sample_time_that_divides_the_output_step()
         let w = quell::sim::coarse_sample_warning(&fast, signals, 0.001, Some(0.1)).unwrap();
         assert!(w.contains(rho) && w.contains(&format!("{bound} (T_s·ρ ≤ 0.2), or slower poles")), "{w}");
     }
+}
+
+/// The numbers a message offers: each after "e.g. " or "valid sample time is ", in order.
+fn offered(message: &str) -> Vec<f64> {
+    let starts = message.match_indices("e.g. ").chain(message.match_indices("valid sample time is "));
+    let mut at: Vec<(usize, f64)> = starts
+        .filter_map(|(i, p)| {
+            let rest = &message[i + p.len()..];
+            Some((i, rest.split(' ').next()?.parse().ok()?))
+        })
+        .collect();
+    at.sort_by_key(|&(i, _)| i);
+    at.into_iter().map(|(_, x)| x).collect()
+}
+
+/// Delays that no sample time makes whole together with the output step (1.0000001 and 3.0000003
+/// s beside 0.1 s, as 1/60 min written to six digits beside 0.5 min): every message offers a
+/// sample time and output step that the others accept, and says that none does both at the
+/// file's output step. The three had sent a user round: the design report's 0.00833335 min (delays
+/// whole) was refused by the output step's check for 0.008333333333333 min (dividing 0.5 min),
+/// which the delays' check refused for 0.00833335 min again (helper tryout).
+#[test]
+fn sample_time_offers_agree_where_none_makes_delays_and_output_step_whole() {
+    let text = PAPER_EXAMPLE.replace("delays = [1.0, 3.0]", "delays = [1.0000001, 3.0000003]");
+    let s = Scenario::from_toml(&text).unwrap();
+    let d = s.design().unwrap();
+    let signals = [&s.reference, &s.disturbance];
+    let h = s.simulation.output_step;
+    let accepted = |t_s: f64, h: f64| {
+        let r = Run::of(&s, &d).settings(RunSettings::sampled(2.0, h, t_s)).check();
+        assert!(r.is_ok(), "sample_time {t_s}, output_step {h}: {:?}", r.err());
+    };
+    let refused = |t_s: f64| match Run::of(&s, &d).settings(RunSettings::sampled(2.0, h, t_s)).check() {
+        Err(e) => e.to_string(),
+        Ok(()) => panic!("sample time {t_s} accepted beside output_step {h}"),
+    };
+    // The design report (quell design): the sample time for the delays, and the output step to
+    // set with it.
+    let (need, _) = quell::sim::sample_time_need(&d, signals, (s.simulation.t_end, h));
+    assert!(
+        need.contains(
+            "which makes plant.delays whole, and none within the bound also divides simulation.output_step = 0.1 s"
+        ),
+        "{need}"
+    );
+    let [t_s, multiple] = offered(&need)[..] else { panic!("{need}") };
+    accepted(t_s, multiple);
+    // The coarse-sample warning offers the same.
+    let w = quell::sim::coarse_sample_warning(&d, signals, 0.05, Some(h)).unwrap();
+    assert_eq!(offered(&w), [t_s, multiple], "{w}");
+    // That sample time at the file's output step: only the output step to change is offered.
+    let e = refused(t_s);
+    assert!(e.starts_with("simulation.output_step: ") && e.contains("no sample time near"), "{e}");
+    assert_eq!(quell::sim::output_step_fixes(&d, t_s, h).0, None);
+    let [fix] = offered(&e)[..] else { panic!("{e}") };
+    accepted(t_s, fix);
+    // A sample time that divides the output step but not the delays: the delays' sample time, with
+    // the output step to set beside it.
+    let e = refused(h / (h / t_s).round());
+    assert!(e.contains("none near it also divides simulation.output_step = 0.1 s"), "{e}");
+    let [nearest, fix] = offered(&e)[..] else { panic!("{e}") };
+    accepted(nearest, fix);
 }
 
 /// A true plant with delays of its own: a sample time that makes the model's delays whole but not

@@ -674,3 +674,20 @@ fn the_peak_rule_stops_the_same_draws_in_any_units_of_the_state() {
     assert!(own.contains(&Outcome::Stopped) && !own.contains(&Outcome::Diverged), "{own:?}");
     assert_eq!(scaled, own);
 }
+
+/// A diverged run's reason (runs.csv) names the entry as `quell run` does: its column of
+/// signals.csv, counted from 1, and its state's name in `[plant] states` (it had read
+/// "x[1] (plant state)", the user's name for it nowhere).
+#[test]
+fn a_diverged_runs_reason_names_the_state_as_the_scenario_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let named = quell::scenario::PAPER_EXAMPLE
+        .replace("x0 = [0.0, 0.0, 0.0]", "x0 = [0.0, 0.0, 0.0]\nstates = [\"level\", \"flow\", \"heat\"]");
+    std::fs::write(dir.path().join("named.toml"), named).unwrap();
+    // The paper's loop sampled at 0.5 s blows up, x1 first.
+    let text = "scenario = \"named.toml\"\n[simulation]\nt_end = 30.0\noutput_step = 0.5\nsample_time = 0.5\n[grid]\n\"design.mu[0]\" = [20.0]\n";
+    let study = Study::from_toml(text, Some(dir.path())).unwrap();
+    let rows = sweep(&study, &SweepOptions::default()).rows;
+    assert_eq!(rows[0].outcome, Outcome::Diverged, "{}", rows[0].reason);
+    assert!(rows[0].reason.starts_with("x1 (plant state level) = "), "{}", rows[0].reason);
+}

@@ -43,7 +43,7 @@ BAND = 6.0
 
 def _ended(outcome, unit):
     """Where and why a run's curves end, in the CLI's words: "" for a completed run, " (diverged at
-    t = 11.16 s: x[2] (plant state))", " (interrupted at t = …)", or for a budget or the step size
+    t = 11.16 s: x2 (plant state))", " (interrupted at t = …)", or for a budget or the step size
     " (failed at t = …: result.outcome says why)" (the raw status had read "run history_too_large")."""
     status = outcome.get("status", "completed")
     if status == "completed":

@@ -17,7 +17,9 @@ pub enum ControllerError {
     BadSampleTime { value: f64 },
     /// `nearest` is a sample time that passes this same check, written with the fewest digits that do
     /// (so the printed value works when typed back), or `None` when no τ_c/k near T_s fits every delay.
-    /// In a run it also divides the output step, `output_step` then (`None` for a controller alone).
+    /// `output_step`: a run's output step, which `nearest` divides where a sample time near T_s
+    /// does, else the message names the output step to set with it (`None` for a controller alone,
+    /// or where `nearest` divides it anyway).
     #[error("simulation.sample_time: channel {}'s delay τ = {} {unit} is not a whole number of samples of T_s = {} {unit} ({ratio:.6} samples); {}", .channel + 1, crate::settings::fmt_short(*.delay), crate::settings::fmt_short(*.sample_time), suggestion(*.nearest, *.output_step, *.unit))]
     DelayNotMultiple {
         channel: usize,
@@ -203,6 +205,9 @@ pub struct Controller {
 fn suggestion(nearest: Option<f64>, output_step: Option<f64>, unit: TimeUnit) -> String {
     let fmt = crate::settings::fmt_short;
     match (nearest, output_step) {
+        (Some(t), Some(h)) if !divides(h, t) => {
+            format!("the nearest valid sample time is {} {unit}{}", fmt(t), output_step_note(t, h, "near it", unit))
+        }
         (Some(t), Some(h)) => format!(
             "the nearest valid sample time that also divides simulation.output_step = {} {unit} (a run's rows fall on samples) is {} {unit}",
             fmt(h),
@@ -229,6 +234,27 @@ fn such_as(nearest: Option<f64>, unit: TimeUnit) -> String {
     nearest.map_or_else(String::new, |t| {
         format!(" that makes every delay whole, such as {} {unit}", crate::settings::fmt_short(t))
     })
+}
+
+/// Whether the output step `h` is a whole number ≥ 1 of samples of `t`, as a run needs.
+pub(crate) fn divides(h: f64, t: f64) -> bool {
+    whole_multiple(h, t).is_some_and(|k| k >= 1)
+}
+
+/// What a run at a sample time `t` offered for its delays needs of its output step `h` where `t`
+/// does not divide it and no sample time `near` (a phrase: "near it") does both: the output step
+/// to set with it, t·round(h/t) ("", where `t` divides h). Delays of 1/60 min written to six
+/// digits beside h = 0.5 min had been offered 0.00833335 min, which the output step's check then
+/// refused for 0.008333333333333 min, which the delays' check refused in turn.
+pub(crate) fn output_step_note(t: f64, h: f64, near: &str, unit: TimeUnit) -> String {
+    if divides(h, t) {
+        return String::new();
+    }
+    format!(
+        ", and none {near} also divides simulation.output_step = {} {unit} (a run's rows fall on samples): with it, set output_step to a whole multiple of it, e.g. {} {unit}",
+        crate::settings::fmt_short(h),
+        crate::settings::fmt_time(t * (h / t).round().max(1.0))
+    )
 }
 
 /// How many candidate sample counts k on either side of τ_c/T_s the suggestion tries.

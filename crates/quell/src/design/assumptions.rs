@@ -145,8 +145,79 @@ pub fn observability(A: &DMatrix<f64>, C: &DMatrix<f64>) -> Result<RankTest, Pla
     Ok(rank_test(&A.transpose(), &C.transpose()))
 }
 
-/// The staircase rank test of (A, B), whose shapes and entries have been checked.
+/// The staircase rank test of (A, B), whose shapes and entries have been checked, on the pair
+/// [`conditioned`] for it. `tol` is the tolerance of that pair.
 fn rank_test(A: &DMatrix<f64>, B: &DMatrix<f64>) -> RankTest {
-    let tol = staircase_tol(A, B);
-    RankTest { rank: staircase(A, B, tol).rank, n: A.nrows(), tol }
+    let (A, B) = conditioned(A, B);
+    let tol = staircase_tol(&A, &B);
+    RankTest { rank: staircase(&A, &B, tol).rank, n: A.nrows(), tol }
+}
+
+/// (A, B) in the units the rank test takes: B scaled by the power of two that brings ‖B‖_F nearest
+/// ‖A‖_F, then the states [`balanced`], then B again. Both are exact in floating point and keep the
+/// controllable subspace's dimension, while the tolerance [`staircase_tol`] takes the larger norm
+/// and the staircase's orthogonal steps mix the states: inputs in units 1e4 times larger (a supply
+/// vessel's) or a C in units 1e15 had been called uncontrollable or unobservable, as had any plant
+/// whose states were rescaled over 8 decades.
+pub(crate) fn conditioned(A: &DMatrix<f64>, B: &DMatrix<f64>) -> (DMatrix<f64>, DMatrix<f64>) {
+    let to_A = |A: &DMatrix<f64>, B: DMatrix<f64>| {
+        let (a, b) = (A.norm(), B.norm());
+        if a > 0.0 && b > 0.0 && (a / b).is_finite() {
+            B * 2f64.powi(((a / b).log2().round() as i32).clamp(-1000, 1000))
+        } else {
+            B
+        }
+    };
+    let B = to_A(A, B.clone());
+    let (A, B, _, _) = balanced(A, &B, &DMatrix::zeros(0, A.nrows()));
+    let B = to_A(&A, B);
+    (A, B)
+}
+
+/// Most sweeps over the states [`balanced`] makes (LAPACK's dgebal converges in a few).
+const BALANCING_SWEEPS: usize = 100;
+
+/// A realization (D⁻¹AD, D⁻¹B, CD) balanced by the diagonal D of powers of two, and D's diagonal.
+pub(crate) type Balanced = (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, Vec<f64>);
+
+/// (D⁻¹AD, D⁻¹B, CD, D's diagonal) for the diagonal D of powers of two that balances each state's
+/// off-diagonal column of A with its column of C against its off-diagonal row of A with its row of
+/// B (Parlett & Reinsch 1969, as LAPACK's dgebal; B and C counted as in SLICOT's TB01ID), exact in
+/// floating point. A state that no other drives or that drives none is left as it is. `C` may have
+/// no rows.
+pub(crate) fn balanced(A: &DMatrix<f64>, B: &DMatrix<f64>, C: &DMatrix<f64>) -> Balanced {
+    let n = A.nrows();
+    let (mut A, mut B, mut C) = (A.clone(), B.clone(), C.clone());
+    let mut d = vec![1.0; n];
+    for _ in 0..BALANCING_SWEEPS {
+        let mut moved = false;
+        for (i, di) in d.iter_mut().enumerate() {
+            let off = |v: f64, j: usize| if j == i { 0.0 } else { v * v };
+            let column = A.column(i).iter().enumerate().map(|(j, &v)| off(v, j)).sum::<f64>();
+            let row = A.row(i).iter().enumerate().map(|(j, &v)| off(v, j)).sum::<f64>();
+            let (c, r) = ((column + C.column(i).norm_squared()).sqrt(), (row + B.row(i).norm_squared()).sqrt());
+            if !(c > 0.0 && r > 0.0 && (c + r).is_finite()) {
+                continue;
+            }
+            let (mut f, mut cf, mut rf) = (1.0f64, c, r);
+            while cf < rf / 2.0 && f < 2f64.powi(500) {
+                (f, cf, rf) = (f * 2.0, cf * 2.0, rf / 2.0);
+            }
+            while cf >= rf * 2.0 && f > 2f64.powi(-500) {
+                (f, cf, rf) = (f / 2.0, cf / 2.0, rf * 2.0);
+            }
+            if cf + rf < 0.95 * (c + r) {
+                moved = true;
+                A.column_mut(i).scale_mut(f);
+                C.column_mut(i).scale_mut(f);
+                A.row_mut(i).scale_mut(1.0 / f);
+                B.row_mut(i).scale_mut(1.0 / f);
+                *di *= f;
+            }
+        }
+        if !moved {
+            break;
+        }
+    }
+    (A, B, C, d)
 }

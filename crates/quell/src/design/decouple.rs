@@ -2,13 +2,16 @@
 
 use nalgebra::{Complex, DMatrix, DVector, RowDVector};
 
+use super::assumptions::balanced;
 use super::{ChannelTf, DesignError};
 use crate::linalg::singular_extremes;
 use crate::plant::{check, PlantError};
 
 /// The design layer's one tolerance τ. Every "is it zero?" and "is it singular?" decision is made
 /// on a scale-free measure in [0, 1] (it does not grow with ‖A‖^(l−1), nor change with the units of
-/// the inputs, outputs or disturbances) and compared with τ:
+/// the inputs, outputs or disturbances, and the first two are taken on the balanced realization
+/// (the states balanced by powers of two, as LAPACK's dgebal), so that the states' units hardly move them) and compared
+/// with τ:
 ///
 /// | decision | measure | passes when |
 /// |---|---|---|
@@ -81,6 +84,9 @@ pub fn relative_degree_measures(
     check("A", A, n, n)?;
     check("B", B, n, B.ncols())?;
     check("C", C, C.nrows(), n)?;
+    // On the balanced realization: the cosines are the states' coordinates' (one state in a unit
+    // 1e6 times another's had left no relative degree at all), the balanced ones nearly not.
+    let (A, B, C, _) = &balanced(A, B, C);
     let Bn = unit_columns(B);
     Ok((0..C.nrows())
         .map(|i| {
@@ -123,9 +129,11 @@ pub struct FalbWolovich {
     pub K: DMatrix<f64>,
     /// F = (B*)⁻¹ diag(q_i0).
     pub F: DMatrix<f64>,
-    /// Condition number of B* scaled as in [`TOL`] (rows and the columns of B to unit norm).
+    /// Condition number of B* with its rows and columns scaled to unit norm in turn until they stay
+    /// (scale-free: invariant under the states' coordinates and the units of inputs and outputs).
     pub cond_B_star: f64,
-    /// Smallest singular value of that scaled B* (≥ [`TOL`]).
+    /// Smallest singular value of B* scaled as in [`TOL`] (the rows c_i A^(σ_i−1) and the columns
+    /// of B to unit norm: its entries are cosines), ≥ [`TOL`].
     pub smallest_B_star: f64,
     /// The decision of eq. (7) for each output.
     pub degrees: Vec<RelativeDegree>,
@@ -207,19 +215,56 @@ pub fn falb_wolovich_given(
         return Err(DesignError::RelativeDegreeSum { sum, n });
     }
     let channels: Vec<ChannelTf> = channel_poles.iter().map(|p| ChannelTf::new(p)).collect();
-    let (B_star, C_star, scaled) = decoupling_rows(A, B, C, &channels);
-    let (smallest, cond_B_star) = singular_extremes(&scaled);
+    let (B_star, C_star, _) = decoupling_rows(A, B, C, &channels);
+    // The cosines on the balanced realization, as the relative degrees' ([`relative_degree_measures`]).
+    let (Ab, Bb, Cb, _) = balanced(A, B, C);
+    let (_, _, scaled) = decoupling_rows(&Ab, &Bb, &Cb, &channels);
+    let (smallest, cond) = singular_extremes(&scaled);
     let inv = match B_star.clone().try_inverse() {
         Some(inv) if smallest >= TOL => inv,
         _ => {
             let sigma = channels.iter().map(ChannelTf::sigma).collect();
-            return Err(DesignError::NotDecouplable { smallest, cond: cond_B_star, sigma });
+            return Err(DesignError::NotDecouplable { smallest, cond, sigma });
         }
     };
+    let cond_B_star = equilibrated_condition(&B_star);
     let K = &inv * &C_star;
     let q0 = DVector::from_iterator(m, channels.iter().map(ChannelTf::q0));
     let F = &inv * DMatrix::from_diagonal(&q0);
     Ok(FalbWolovich { channels, B_star, C_star, K, F, cond_B_star, smallest_B_star: smallest, degrees })
+}
+
+/// Most sweeps of [`equilibrated_condition`] (a 2×2 settles in one, the examples' 3×3 in a few).
+const EQUILIBRATION_SWEEPS: usize = 50;
+
+/// κ₂ of B* with its rows and its columns scaled to unit norm, in turn until they stay: invariant,
+/// as B* itself is, under the states' coordinates and the units of the inputs and outputs, and near
+/// the least κ₂ over those scalings (a 2×2 [[a, b], [c, d]] ends as [[γ, σ], [σ, γ]] up to signs,
+/// κ₂ = (γ + σ)/|γ − σ| with γ/σ = √|ad/bc|). The cosines of [`TOL`] are not invariant: one state in
+/// a unit 50× another's had moved them from κ₂ = 1.7 to 50.
+fn equilibrated_condition(B_star: &DMatrix<f64>) -> f64 {
+    let mut M = B_star.clone();
+    for _ in 0..EQUILIBRATION_SWEEPS {
+        let mut moved = 0.0f64;
+        for mut r in M.row_iter_mut() {
+            let norm = r.norm();
+            if norm > 0.0 {
+                r /= norm;
+                moved = moved.max((norm - 1.0).abs());
+            }
+        }
+        for mut c in M.column_iter_mut() {
+            let norm = c.norm();
+            if norm > 0.0 {
+                c /= norm;
+                moved = moved.max((norm - 1.0).abs());
+            }
+        }
+        if moved <= 1e-12 {
+            break;
+        }
+    }
+    singular_extremes(&M).1
 }
 
 /// The σ_i channel `channel` uses: the `given` one unless the plant clearly contradicts it (see

@@ -156,7 +156,7 @@ pub enum DesignError {
         margin: f64,
         kappa: f64,
     },
-    #[error("plant.C: output {} is reached by no input: c_i A^(l-1) B = 0 for every l ≤ n (largest cosine between c_i A^(l-1) and a column of B: {largest:.1e}, below τ = {tol:.0e}), so the plant cannot be decoupled; check plant.C[{channel}] (its row)", .channel + 1, tol = TOL)]
+    #[error("plant.C: output {} is reached by no input: c_i A^(l-1) B = 0 for every l ≤ n (largest cosine between c_i A^(l-1) and a column of B, the states balanced: {largest:.1e}, below τ = {tol:.0e}), so the plant cannot be decoupled; check plant.C[{channel}] (its row)", .channel + 1, tol = TOL)]
     NoRelativeDegree { channel: usize, largest: f64 },
     #[error("design.channel_poles[{channel}]: channel {} has relative degree {sigma}, so it needs {sigma} pole{}; found {got}{}", .channel + 1, if *.sigma == 1 { "" } else { "s" }, match .pairs { 0 => String::new(), 1 => " (a pair [re, im] is two poles, re ± i·im)".into(), p => format!(" ({p} pairs [re, im], each two poles, re ± i·im)") })]
     ChannelPoleCount { channel: usize, sigma: usize, got: usize, pairs: usize },
@@ -166,9 +166,9 @@ pub enum DesignError {
     UnstableZeroDynamics { placed: usize, zeros: Vec<Complex<f64>>, unstable: Vec<Complex<f64>>, unit: TimeUnit },
     #[error("design.relative_degrees[{index}]: expected a relative degree 1 ≤ σ_i ≤ n = {n}, found {value}")]
     RelativeDegreeRange { index: usize, value: usize, n: usize },
-    #[error("design.relative_degrees[{channel}]: σ_{} = {given} contradicts the plant: c_{0} A^({}) B is clearly non-zero (largest cosine between c_{0} A^({1}) and a column of B: {measure:.2e}, above {cf}·τ = {bound:.0e}), so channel {0} has relative degree at most {l}; give σ_{0} ≤ {l}, or remove design.relative_degrees to let eq. (7) decide", .channel + 1, .l - 1, cf = CLOSE_FACTOR, bound = TOL * CLOSE_FACTOR)]
+    #[error("design.relative_degrees[{channel}]: σ_{} = {given} contradicts the plant: c_{0} A^({}) B is clearly non-zero (largest cosine between c_{0} A^({1}) and a column of B, the states balanced: {measure:.2e}, above {cf}·τ = {bound:.0e}), so channel {0} has relative degree at most {l}; give σ_{0} ≤ {l}, or remove design.relative_degrees to let eq. (7) decide", .channel + 1, .l - 1, cf = CLOSE_FACTOR, bound = TOL * CLOSE_FACTOR)]
     RelativeDegreeTooHigh { channel: usize, given: usize, l: usize, measure: f64 },
-    #[error("design.relative_degrees[{channel}]: σ_{} = {given} contradicts the plant: c_{0} A^({}) B is clearly zero (largest cosine between c_{0} A^({1}) and a column of B: {measure:.2e}, below τ/{cf} = {bound:.0e}), so no input reaches output {0} at l = {given}; give a larger σ_{0}, or remove design.relative_degrees to let eq. (7) decide", .channel + 1, .given - 1, cf = CLOSE_FACTOR, bound = TOL / CLOSE_FACTOR)]
+    #[error("design.relative_degrees[{channel}]: σ_{} = {given} contradicts the plant: c_{0} A^({}) B is clearly zero (largest cosine between c_{0} A^({1}) and a column of B, the states balanced: {measure:.2e}, below τ/{cf} = {bound:.0e}), so no input reaches output {0} at l = {given}; give a larger σ_{0}, or remove design.relative_degrees to let eq. (7) decide", .channel + 1, .given - 1, cf = CLOSE_FACTOR, bound = TOL / CLOSE_FACTOR)]
     RelativeDegreeTooLow { channel: usize, given: usize, measure: f64 },
     #[error("design.relative_degrees: Σσ_i = {sum} exceeds n = {n}; for a decouplable plant the Σσ_i rows c_i A^j (j < σ_i) are independent, so Σσ_i ≤ n; give smaller relative degrees, or remove design.relative_degrees to let eq. (7) decide")]
     RelativeDegreeSum { sum: usize, n: usize },
@@ -362,7 +362,8 @@ impl Design {
     pub fn B_star(&self) -> &DMatrix<f64> {
         &self.B_star
     }
-    /// Condition number of B* in the 2-norm.
+    /// Condition number of B* in the 2-norm, its rows and columns equilibrated (scale-free:
+    /// [`decouple::FalbWolovich::cond_B_star`]).
     pub fn cond_B_star(&self) -> f64 {
         self.cond_B_star
     }
@@ -598,7 +599,7 @@ fn assumption_1(plant: &Plant) -> Result<(RankTest, RankTest), DesignError> {
     }
     let obsv = observability(&plant.A, &plant.C)?;
     if !obsv.full() {
-        let mut scaling = badly_scaled(&plant.A, &plant.C, "C", obsv.tol);
+        let mut scaling = badly_scaled(&plant.A.transpose(), &plant.C.transpose(), "C", obsv.tol);
         if scaling.is_empty() {
             scaling = hidden_modes(&plant.A, &plant.C, n - obsv.rank, "no output shows");
         }
@@ -636,19 +637,20 @@ fn hidden_modes(At: &DMatrix<f64>, M: &DMatrix<f64>, count: usize, verb: &str) -
     format!("; {verb} {modes} at {}", fmt_complex_list(&lambdas))
 }
 
-/// Where the rank test's tolerance (set by ‖A‖) exceeds every entry of `M` (B or C), the verdict
-/// says more about the plant's scaling than its structure: A[0][0] = 1e15 in the paper's plant
-/// gave "rank 0 of 3" although B alone has rank 2. The text appended to the error, or "".
+/// Where the rank test's tolerance erases couplings of the plant, the verdict says more about its
+/// scaling than its structure: in the pair the test takes (B or C scaled to A's size, the states
+/// balanced: [`assumptions::conditioned`]), a nonzero entry of A or of `M` (B, or Cᵀ) at or below
+/// the tolerance (the paper's plant with A[2][2] = −1e15: a tolerance of 6.7 beside couplings of
+/// 0.3). The text appended to the error, or "".
 fn badly_scaled(A: &DMatrix<f64>, M: &DMatrix<f64>, name: &str, tol: f64) -> String {
-    let largest = |X: &DMatrix<f64>| X.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    let (a, m) = (largest(A), largest(M));
-    if m > tol || m == 0.0 {
-        return String::new();
-    }
+    let (A, M) = assumptions::conditioned(A, M);
+    let erased = A.iter().chain(M.iter()).map(|x| x.abs()).filter(|&x| x > 0.0 && x <= tol);
+    let Some(small) = erased.reduce(f64::min) else { return String::new() };
+    let largest = A.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     format!(
-        "; but the tolerance follows A, whose entries reach {}, while {name}'s reach only {}: the plant's numbers span too many decades for a rank test in double precision, so rescale its states or units (e.g. a balanced realization) before concluding",
-        fmt_number(a),
-        fmt_number(m)
+        "; but the tolerance follows A's largest entries ({}, with the states balanced and {name} scaled to A) and counts couplings as small as {} as zero: the plant's numbers span too many decades for a rank test in double precision, so rescale its states or units (e.g. a balanced realization) before concluding",
+        fmt_number(largest),
+        fmt_number(small)
     )
 }
 

@@ -31,7 +31,7 @@
 use nalgebra::{Complex, ComplexField, DMatrix, DVector};
 use thiserror::Error;
 
-use super::assumptions::{staircase, staircase_tol};
+use super::assumptions::{balanced, staircase, staircase_tol};
 use crate::plant::{check_entries, check_shape, PlantError};
 
 type C64 = Complex<f64>;
@@ -145,7 +145,26 @@ enum Slot {
 /// An observer gain follows by duality: `L = place(Aᵀ, Cᵀ, p)ᵀ` gives eig(A − L C) = p.
 ///
 /// A not square, B without A's rows, or an entry beyond [`MAX_ENTRY`](crate::plant::MAX_ENTRY) is [`PlaceError::Matrix`].
+///
+/// Where (A, B) as given fails (uncontrollable to the staircase's tolerance, or inaccurate), the
+/// placement is made again on its balanced pair (D⁻¹AD, D⁻¹B) (D of powers of two; K = K' D⁻¹, the
+/// closed loop formed exactly similar): states in units 1e7 apart had been refused, and balancing
+/// every plant would move the gains of multi-input placements, which depend on the coordinates.
 pub fn place(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[Complex<f64>]) -> Result<DMatrix<f64>, PlaceError> {
+    let as_given = placed(A, B, poles);
+    let Err(e @ (PlaceError::Uncontrollable { .. } | PlaceError::Inaccurate { .. })) = as_given else {
+        return as_given;
+    };
+    let (Ab, Bb, _, d) = balanced(A, B, &DMatrix::zeros(0, A.nrows()));
+    if d.iter().all(|&x| x == 1.0) {
+        return Err(e);
+    }
+    let Ok(K) = placed(&Ab, &Bb, poles) else { return Err(e) };
+    Ok(K * DMatrix::from_diagonal(&nalgebra::DVector::from_iterator(d.len(), d.iter().map(|x| 1.0 / x))))
+}
+
+/// [`place`] on (A, B) as given.
+fn placed(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[Complex<f64>]) -> Result<DMatrix<f64>, PlaceError> {
     let slots = checked_slots(A, B, poles)?;
     let n = A.nrows();
     if n == 0 {
@@ -161,7 +180,7 @@ pub fn place(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[Complex<f64>]) -> Resu
     if s != 1.0 && within(&As) && within(&Bs) {
         // eig(A − BK) = p ⇔ eig(A/s − (bB)(K/(sb))) = p/s, exactly for powers of two s and b.
         let scaled: Vec<C64> = poles.iter().map(|p| p / s).collect();
-        return place(&As, &Bs, &scaled).map(|K| K * (s * b)).map_err(|e| e.rescaled(s));
+        return placed(&As, &Bs, &scaled).map(|K| K * (s * b)).map_err(|e| e.rescaled(s));
     }
 
     let tol = staircase_tol(A, B);

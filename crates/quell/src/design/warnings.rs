@@ -124,7 +124,7 @@ fn plant_warnings(design: &Design) -> Vec<DesignWarning> {
             verified_error: Some(error),
             eigenvector_condition: f64::NAN,
             message: format!(
-                "design.relative_degrees: the decoupler does not decouple this plant: at s = {} /{} the closed loop C (sI − A + BK)⁻¹ B F differs from diag(G_ii(s)) by {error:.1e} of its diagonal (σ = {:?}); eq. (7)'s cosines, taken in the states as written, can read a non-zero c_i A^(l−1) B as zero where the states' scales differ by many decades (a state in thousandths beside one in thousands): write the states in comparable units, or give design.relative_degrees",
+                "design.relative_degrees: the decoupler does not decouple this plant: at s = {} /{} the closed loop C (sI − A + BK)⁻¹ B F differs from diag(G_ii(s)) by {error:.1e} of its diagonal (σ = {:?}); eq. (7)'s cosines (taken on the balanced realization) read a non-zero c_i A^(l−1) B as zero where it is small beside the plant's other gains: give design.relative_degrees with the smaller σ_i if that gain is real, or write the states in comparable units",
                 crate::linalg::fmt_complex(&s_at),
                 p.time_unit.symbol(),
                 design.sigma(),
@@ -199,12 +199,15 @@ mod tests {
     use super::*;
     use crate::scenario::{Scenario, PAPER_EXAMPLE};
 
-    fn with_observer(poles: &str) -> (Design, DesignSpec) {
-        let text = PAPER_EXAMPLE.replace(
+    fn with_observer_text(poles: &str) -> String {
+        PAPER_EXAMPLE.replace(
             "observer_gain = [[-8.0988, 4.4574], [10.6506, -5.0619], [2.7762, -1.1783]]",
             &format!("observer_poles = {poles}"),
-        );
-        let s = Scenario::from_toml(&text).unwrap();
+        )
+    }
+
+    fn with_observer(poles: &str) -> (Design, DesignSpec) {
+        let s = Scenario::from_toml(&with_observer_text(poles)).unwrap();
         (s.design().unwrap(), s.design)
     }
 
@@ -235,13 +238,15 @@ mod tests {
     }
 
     /// B = [[1, 0.99], [1, 1]] with C = I (tests/data/ill-conditioned-b.toml; σ = [1, 1], so
-    /// B* = C B = B): its columns of unit norm have singular values √(1 ± c), c the cosine between
-    /// them, so κ = √((1 + c)/(1 − c)) = 398 by hand; the paper's B* (1.23) gets no warning.
+    /// B* = C B = B): equilibrated it is [[γ, σ], [σ, γ]] with γ/σ = √(ad/bc) = 1/√0.99, so
+    /// κ = (γ + σ)/(γ − σ) = 401 by hand (the least over diagonal scalings, 2λ − 1 + √((2λ−1)² − 1)
+    /// = 398 with the RGA's λ = 100, is near); the paper's B* gets no warning, nor does it in other
+    /// states (one in a unit 50× another's had read 50).
     #[test]
     fn an_ill_conditioned_decoupler_is_reported_with_its_condition_number() {
         let text = include_str!("../../tests/data/ill-conditioned-b.toml");
-        let cos = (1.0 + 0.99) / (2f64.sqrt() * (1.0f64 + 0.99 * 0.99).sqrt());
-        let kappa = ((1.0 + cos) / (1.0 - cos)).sqrt();
+        let r = (1.0f64 / 0.99).sqrt();
+        let kappa = (r + 1.0) / (r - 1.0);
         let s = Scenario::from_toml(text).unwrap();
         let d = s.design().unwrap();
         assert!((d.cond_B_star() / kappa - 1.0).abs() < 1e-9, "{} {kappa}", d.cond_B_star());
@@ -254,7 +259,31 @@ mod tests {
             "{}",
             b.message
         );
-        assert!(with_observer("[-2.0, -3.0, -4.0]").0.cond_B_star() < ILL_CONDITIONED_DECOUPLER);
+        let paper = with_observer("[-2.0, -3.0, -4.0]").0.cond_B_star();
+        assert!(paper < ILL_CONDITIONED_DECOUPLER);
+        for t in [50.0, 1e-3, 1e3] {
+            // x₂ → t·x₂: A → T A T⁻¹, B → T B, C → C T⁻¹, D → T D; L from the observer poles.
+            let text = with_observer_text("[-2.0, -3.0, -4.0]")
+                .replace(
+                    "A = [[-3.2, -1.7, -3.0], [2.8, 1.3, 4.0], [0.3, 0.3, -0.5]]",
+                    &format!(
+                        "A = [[-3.2, {:e}, -3.0], [{:e}, 1.3, {:e}], [0.3, {:e}, -0.5]]",
+                        -1.7 / t,
+                        2.8 * t,
+                        4.0 * t,
+                        0.3 / t
+                    ),
+                )
+                .replace("[2.0, -1.0], [1.0, 0.0]]", &format!("[{:e}, {:e}], [1.0, 0.0]]", 2.0 * t, -t))
+                .replace(
+                    "C = [[2.0, 2.0, 0.0], [2.0, 1.0, 2.0]]",
+                    &format!("C = [[2.0, {:e}, 0.0], [2.0, {:e}, 2.0]]", 2.0 / t, 1.0 / t),
+                )
+                .replace("[2.0, 1.0], [3.0, 1.0]]", &format!("[{:e}, {:e}], [3.0, 1.0]]", 2.0 * t, t));
+            let s = Scenario::from_toml(&text).unwrap();
+            let c = s.design().unwrap().cond_B_star();
+            assert!((c / paper - 1.0).abs() < 1e-9, "x₂ × {t}: {c} against {paper}");
+        }
     }
 
     #[test]

@@ -50,7 +50,7 @@ pub const FOLLOWS_UF: f64 = 1.2;
 /// A channel's continuous peaks (of y, of u_f) below this share of the largest channel's are
 /// measured against that share instead ([`departures`]).
 pub const QUIET: f64 = 1e-3;
-/// Most rows a run a diagnostic makes beside the user's records ([`side_settings`]): the
+/// Most rows a run a diagnostic makes beside the user's records (on every k-th of its rows): the
 /// comparison of a sampled run with its continuous loop had held a second record as large as the
 /// run's own (805 MB for a 398 MB record, n = 200, m = 8), and its halvings a third.
 pub const SIDE_ROWS: f64 = 1e5;
@@ -197,8 +197,8 @@ fn common_rows(a: &[f64], b: &[f64]) -> Vec<(usize, usize)> {
     pairs
 }
 
-/// Each channel's departure of `sampled` from `continuous` over their common rows ([`common_rows`];
-/// `None` when they have none).
+/// Each channel's departure of `sampled` from `continuous` over the rows at the same times (where
+/// one output step is a whole multiple of the other's); `None` when they have none.
 pub fn departures(sampled: &SimResult, continuous: &SimResult) -> Option<Vec<ChannelDeparture>> {
     let rows = common_rows(&sampled.t, &continuous.t);
     if rows.is_empty() {

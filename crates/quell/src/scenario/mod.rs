@@ -164,7 +164,7 @@ pub const DESIGN_KEYS: &[&str] = &[
 const SIGNAL_KEYS: &[&str] = &["components"];
 const COMPONENT_KEYS: &[&str] = &["bias", "harmonics"];
 const HARMONIC_KEYS: &[&str] = &["amplitude", "frequency", "phase"];
-/// The most rows the default output step gives (t_end / output_step).
+/// The most rows the default output step gives (t_end / output_step): [`default_output_step`].
 const DEFAULT_MAX_ROWS: f64 = 1e6;
 
 const SIMULATION_KEYS: &[&str] = &["t_end", "output_step", "rtol", "atol", "sample_time", "method"];
@@ -233,9 +233,17 @@ impl Scenario {
         let partial = root.require(
             "design",
             &format!("the [design] table (observer, channel poles, filter poles, mu, beta), or {AUTO_DESIGN} to choose them all"),
-            partial_design,
+            |v| partial_design(v, plant.m()),
         )?;
-        let simulation = root.get("simulation", simulation)?.unwrap_or_default();
+        let components = reference.components.iter().chain(disturbance.iter().flat_map(|d| &d.components));
+        let fastest = components.flat_map(Component::frequencies).fold(0.0, f64::max);
+        let simulation = match root.get("simulation", |v| simulation(v, fastest))? {
+            Some(simulation) => simulation,
+            None => {
+                let t_end = Simulation::default().t_end;
+                Simulation { output_step: default_output_step(t_end, fastest, None), ..Simulation::default() }
+            }
+        };
         let noise = root.get("noise", noise)?;
 
         let (m, k) = (plant.m(), plant.k());
@@ -342,14 +350,17 @@ pub fn read_text(path: &Path) -> Result<String, ScenarioError> {
 /// the signals' names.
 fn plant(v: Value, disturbance: Option<&Signal>) -> Result<(Plant, SignalNames), ScenarioError> {
     let t = v.table(PLANT_KEYS)?;
-    let A = t.require("A", "the n×n state matrix", |v| v.matrix())?;
-    let B = t.require("B", "the n×m input matrix", |v| v.matrix())?;
-    let C = t.require("C", "the m×n output matrix", |v| v.matrix())?;
-    let D = t.get("D", |v| v.matrix())?;
-    let Q = t.get("Q", |v| v.matrix())?;
+    // A ragged matrix's rows are checked against n and k where those are known (C's n from A).
+    let A = t.require("A", "the n×n state matrix", |v| v.matrix(square(v.value)))?;
+    let n = A.nrows();
+    let B = t.require("B", "the n×m input matrix", |v| v.matrix(None))?;
+    let C = t.require("C", "the m×n output matrix", |v| v.matrix(Some((n, "n, from plant.A"))))?;
+    let D = t.get("D", |v| v.matrix(None))?;
+    let k_of_D = D.as_ref().map(DMatrix::ncols).filter(|&k| k > 0);
+    let Q = t.get("Q", |v| v.matrix(k_of_D.map(|k| (k, "k, from plant.D"))))?;
     let delays = t.require("delays", "one input delay τ_i ≥ 0 per input", |v| v.numbers())?;
     let x0 = t.get("x0", |v| v.numbers())?.map(DVector::from_vec);
-    let (n, m) = (A.nrows(), B.ncols());
+    let m = B.ncols();
     let k_signal = disturbance.map_or(0, Signal::len);
     // `D = []` (no rows) means no disturbance columns, like an absent D.
     let D = match D {
@@ -396,7 +407,8 @@ fn truth(v: Value, plant: &Plant) -> Result<(Plant, Option<Actuator>), ScenarioE
         a.check(m)?;
     }
     let matrix = |name: &str, like: &DMatrix<f64>| -> Result<DMatrix<f64>, ScenarioError> {
-        let Some(M) = t.get(name, |v| v.matrix())? else { return Ok(like.clone()) };
+        let from = format!("as plant.{name}");
+        let Some(M) = t.get(name, |v| v.matrix(Some((like.ncols(), from.as_str()))))? else { return Ok(like.clone()) };
         // `[]` stands for a matrix without columns, as in [plant].
         let M = if M.nrows() == 0 && like.ncols() == 0 { like.clone() } else { M };
         if M.shape() != like.shape() {
@@ -444,6 +456,11 @@ fn truth(v: Value, plant: &Plant) -> Result<(Plant, Option<Actuator>), ScenarioE
 fn plant_error(e: PlantError, n: usize, m: usize, k: usize) -> ScenarioError {
     let (key, message) = e.explained((n, m, k), "plant.");
     err(key, message)
+}
+
+/// A's row length: n, its number of rows (A is n×n), for [`Value::matrix`].
+fn square(value: &toml::Value) -> Option<(usize, &'static str)> {
+    value.as_array().map(|rows| (rows.len(), "n, the number of rows of plant.A: A is n×n"))
 }
 
 /// `[design]` as written, every key optional: [`PartialDesign::complete`] requires the keys of a
@@ -533,9 +550,10 @@ impl PartialDesign {
 }
 
 /// `[design]`: the observer, channel and filter poles (or orders), μ and β, each optional here.
-fn partial_design(v: Value) -> Result<PartialDesign, ScenarioError> {
+/// `m`: the plant's inputs, the observer gain's columns.
+fn partial_design(v: Value, m: usize) -> Result<PartialDesign, ScenarioError> {
     let t = v.table(DESIGN_KEYS)?;
-    let gain = t.get("observer_gain", |v| v.matrix())?;
+    let gain = t.get("observer_gain", |v| v.matrix(Some((m, "m, from plant.B"))))?;
     let poles = t.get("observer_poles", |v| v.poles())?;
     let observer = match (gain, poles) {
         (Some(L), None) => Some(ObserverChoice::Gain(L)),
@@ -619,17 +637,33 @@ pub fn check_simulation(doc: &toml::Table, keys: &[&str]) -> Result<(), Scenario
     Ok(())
 }
 
-/// `[simulation]`, with defaults for absent keys; the ranges are [`settings`]' checks.
-fn simulation(v: Value) -> Result<Simulation, ScenarioError> {
+/// The output step of a scenario that gives none: 1, 2 or 5 × 10^k, the longest within t_end/1000
+/// and 2π/(20·ω_max) (twenty rows a period of the fastest harmonic, `fastest` rad per unit, of g
+/// and ω), never more than 10⁶ rows; with a sample time T_s the least whole
+/// multiple of it at or beyond that. Scale-free: a fixed 0.1 had recorded 2 rows of a loop in ms
+/// written in s and 600,001 of one in s written in ms. The paper's 100 s at 2 rad/s: 0.1.
+pub fn default_output_step(t_end: f64, fastest: f64, sample_time: Option<f64>) -> f64 {
+    let period = if fastest > 0.0 { std::f64::consts::TAU / (20.0 * fastest) } else { f64::INFINITY };
+    let want = (t_end / 1000.0).min(period);
+    let decade = 10f64.powf(want.log10().floor());
+    let step = [5.0, 2.0, 1.0].iter().map(|f| f * decade).find(|&h| h <= want * (1.0 + 1e-12)).unwrap_or(decade);
+    let step = step.max(t_end / DEFAULT_MAX_ROWS);
+    match sample_time {
+        Some(T) if T > 0.0 && step.is_finite() => T * (step / T * (1.0 - 1e-12)).ceil().max(1.0),
+        _ => step,
+    }
+}
+
+/// `[simulation]`, with defaults for absent keys (the output step [`default_output_step`] for
+/// the fastest harmonic `fastest` of g and ω); the ranges are [`settings`]' checks.
+fn simulation(v: Value, fastest: f64) -> Result<Simulation, ScenarioError> {
     let t = v.table(SIMULATION_KEYS)?;
     let default = Simulation::default();
     let number = |key| t.get(key, |v| v.number());
     let t_end = number("t_end")?.unwrap_or(default.t_end);
-    // min(0.1, t_end), but never more than DEFAULT_MAX_ROWS rows: a model in a unit 1e6 times
-    // shorter than its time scale (t_end = 6e8) had its default refused, even by `quell design`.
-    let output_step = number("output_step")?.unwrap_or(default.output_step.min(t_end).max(t_end / DEFAULT_MAX_ROWS));
-    settings::check_horizon(t_end, output_step)?;
     let sample_time = number("sample_time")?;
+    let output_step = number("output_step")?.unwrap_or_else(|| default_output_step(t_end, fastest, sample_time));
+    settings::check_horizon(t_end, output_step)?;
     if let Some(T) = sample_time {
         settings::check_sample_time(t_end, T)?;
     }

@@ -206,7 +206,9 @@ impl<'a> Value<'a, '_> {
     }
 
     /// A matrix written as an array of rows of equal length. `[]` is a matrix with no rows.
-    pub(crate) fn matrix(&self) -> Result<DMatrix<f64>, ScenarioError> {
+    /// `width`: the row length another key fixes and where it comes from (`(6, "n, from
+    /// plant.A")`), which a ragged matrix's rows are checked against ([`ragged_row`]).
+    pub(crate) fn matrix(&self, width: Option<(usize, &str)>) -> Result<DMatrix<f64>, ScenarioError> {
         const FORM: &str = "a matrix (an array of rows, e.g. [[1.0, 0.0], [0.0, 1.0]])";
         if let toml::Value::Array(items) = self.value {
             if items.first().is_some_and(|v| matches!(v, toml::Value::Integer(_) | toml::Value::Float(_))) {
@@ -217,18 +219,10 @@ impl<'a> Value<'a, '_> {
             }
         }
         let rows = self.array(FORM, |row| row.array("a row (an array of numbers)", |v| v.number()))?;
-        let cols = rows.first().map_or(0, Vec::len);
-        for (i, row) in rows.iter().enumerate() {
-            if row.len() != cols {
-                return Err(err(
-                    format!("{}[{i}]", self.key),
-                    format!(
-                        "expected {cols} entries (as in row 0; every row of a matrix has the same length), found {}",
-                        row.len()
-                    ),
-                ));
-            }
+        if let Some(e) = ragged_row(self.key, &rows, width) {
+            return Err(e);
         }
+        let cols = rows.first().map_or(0, Vec::len);
         Ok(DMatrix::from_fn(rows.len(), cols, |r, c| rows[r][c]))
     }
 
@@ -285,6 +279,35 @@ impl<'a> Value<'a, '_> {
         }
         self.array(&format!("one list of poles per {per}"), |p| p.poles())
     }
+}
+
+/// The first wrong row of a ragged matrix (rows of different lengths) as an error on `key[i]`:
+/// against `width` where another key fixes the length (C's n from plant.A: a C whose row 0 alone
+/// was short had been blamed on its right row 1), else against the length most rows have, row 0's
+/// where no length is more common than every other. `None` when every row has the same length.
+fn ragged_row(key: &str, rows: &[Vec<f64>], width: Option<(usize, &str)>) -> Option<ScenarioError> {
+    let first = rows.first()?.len();
+    if rows.iter().all(|r| r.len() == first) {
+        return None;
+    }
+    let count = |len: usize| rows.iter().filter(|r| r.len() == len).count();
+    let (cols, why) = match width {
+        Some((cols, from)) => (cols, from.to_string()),
+        None => {
+            let (len, most) = rows.iter().map(|r| (r.len(), count(r.len()))).max_by_key(|&(_, c)| c)?;
+            let ties = rows.iter().any(|r| r.len() != len && count(r.len()) == most);
+            match (ties || most < 2, most + 1 == rows.len()) {
+                (true, _) => (first, "as in row 0; every row of a matrix has the same length".to_string()),
+                (false, true) => (len, "as in every other row".to_string()),
+                (false, false) => {
+                    (len, format!("as in {most} of its {} rows; every row of a matrix has the same length", rows.len()))
+                }
+            }
+        }
+    };
+    let (i, row) = rows.iter().enumerate().find(|(_, r)| r.len() != cols)?;
+    let expected = crate::settings::entries(cols);
+    Some(err(format!("{key}[{i}]"), format!("expected {expected} ({why}), found {}", row.len())))
 }
 
 /// A TOML syntax error as "line L, column C: what" (the parser's message; a duplicate key is

@@ -31,14 +31,18 @@ impl Watched<'_> {
     }
 
     /// [`Watched::diverged`] with a bound per signal: the first value that is non-finite or above
-    /// its signal's bound in magnitude.
+    /// its signal's bound in magnitude, named by its column of signals.csv (1-based, [`WATCHED`]):
+    /// `x3 (plant state)`, `xhat7 (observer state)`, `xihat2 (regressor)` (ξ̂ has no column; named
+    /// as x̂ is), `eta1_3 (adaptive parameters)`. A scenario's run adds the states' names
+    /// (the state's name beside its column name).
     pub fn beyond(&self, t: f64, bounds: &Peaks) -> Option<Outcome> {
         let q = self.xi_hat.len();
-        let name = |signal: usize, j: usize| match signal {
-            0 => format!("x[{}] (plant state)", j + 1),
-            1 => format!("x_hat[{}] (observer state)", j + 1),
-            2 => format!("xi_hat[{}] (regressor)", j + 1),
-            _ => format!("eta{}[{}] (adaptive parameters)", j / q + 1, j % q + 1),
+        let name = |signal: usize, j: usize| {
+            let (column, what) = WATCHED[signal];
+            match signal {
+                3 => format!("{column}{}_{} ({what})", j / q + 1, j % q + 1),
+                _ => format!("{column}{} ({what})", j + 1),
+            }
         };
         self.signals().iter().zip(bounds.0).enumerate().find_map(|(signal, (values, bound))| {
             values.iter().position(|&v| beyond(v, bound)).map(|j| Outcome::Diverged {
@@ -48,6 +52,25 @@ impl Watched<'_> {
             })
         })
     }
+}
+
+/// The watched signals x, x̂, ξ̂, η̂ (the order of [`Peaks`]): the stem of their entries' names, as
+/// signals.csv names its columns (x1, xhat1, eta1_1), and what they are.
+pub const WATCHED: [(&str, &str); 4] =
+    [("x", "plant state"), ("xhat", "observer state"), ("xihat", "regressor"), ("eta", "adaptive parameters")];
+
+/// A divergence's signal as [`Watched::beyond`] names it, with the state's name where it is an
+/// entry of x or x̂ and `states` names it: "xhat6 (observer state dPv2)" (the run had said
+/// "x_hat[6] (observer state)", read as 0-based beside the scenario's keys and not the name the
+/// user gave). Any other signal as it is.
+pub(crate) fn with_state_name(signal: &str, states: &[String]) -> String {
+    let named = signal.split_once(" (").and_then(|(column, rest)| {
+        let group = Peaks::group(signal).filter(|&g| g <= 1)?;
+        let j: usize = column.strip_prefix(WATCHED[group].0)?.parse().ok()?;
+        let name = states.get(j.checked_sub(1)?)?;
+        Some(format!("{column} ({} {name})", rest.strip_suffix(')')?))
+    });
+    named.unwrap_or_else(|| signal.to_string())
 }
 
 /// The largest magnitude each watched signal reached, in the order x, x̂, ξ̂, η̂ (max over its
@@ -83,9 +106,9 @@ impl Peaks {
     /// converging draws).
     pub(crate) fn runaway(&self, factor: f64, xi_bound: f64) -> Peaks {
         let mut peaks = self.bounds(factor);
-        peaks.0[Peaks::index_of("xi_hat[")] = xi_bound;
-        let (x, x_hat) = (Peaks::index_of("x["), Peaks::index_of("x_hat["));
-        peaks.0[x_hat] = peaks.0[x_hat].max(peaks.0[x]);
+        peaks.0[2] = xi_bound;
+        // x̂ (1) at least as x (0).
+        peaks.0[1] = peaks.0[1].max(peaks.0[0]);
         peaks
     }
 
@@ -107,9 +130,17 @@ impl Peaks {
         ))
     }
 
-    /// The index (0: x, 1: x̂, 2: ξ̂, 3: η̂) of the signal an [`Outcome::Diverged`] names.
+    /// The index (0: x, 1: x̂, 2: ξ̂, 3: η̂) of the signal an [`Outcome::Diverged`] names ("xhat7
+    /// (observer state)", or a stem of [`WATCHED`] alone); 0 for any other signal.
     pub fn index_of(signal: &str) -> usize {
-        ["x[", "x_hat[", "xi_hat[", "eta"].iter().rposition(|p| signal.starts_with(p)).unwrap_or(0)
+        Peaks::group(signal).unwrap_or(0)
+    }
+
+    /// [`Peaks::index_of`]; `None` for a signal that is none of x, x̂, ξ̂, η̂ (a controller input).
+    fn group(signal: &str) -> Option<usize> {
+        let column = signal.split(' ').next().unwrap_or_default();
+        let stem = column.trim_end_matches(|c: char| c.is_ascii_digit() || c == '_');
+        WATCHED.iter().position(|&(s, _)| s == stem)
     }
 }
 
@@ -222,24 +253,44 @@ mod tests {
         let bounds = Peaks([10.0, 10.0, 0.2, 10.0]);
         assert_eq!(
             w.beyond(7.0, &bounds),
-            Some(Outcome::Diverged { t: 7.0, signal: "xi_hat[1] (regressor)".into(), value: -0.25 })
+            Some(Outcome::Diverged { t: 7.0, signal: "xihat1 (regressor)".into(), value: -0.25 })
         );
         assert_eq!(w.beyond(7.0, &p.bounds(1.0)), None, "every value is within its own peak");
         assert_eq!(Peaks([2.0, 0.0, 1.0, f64::NAN]).bounds(10.0), Peaks([20.0, f64::INFINITY, 10.0, f64::INFINITY]));
-        for (i, signal) in [
-            "x[1] (plant state)",
-            "x_hat[2] (observer state)",
-            "xi_hat[3] (regressor)",
-            "eta2[1] (adaptive parameters)",
-        ]
-        .iter()
-        .enumerate()
+        for (i, signal) in
+            ["x1 (plant state)", "xhat2 (observer state)", "xihat3 (regressor)", "eta2_1 (adaptive parameters)"]
+                .iter()
+                .enumerate()
         {
             assert_eq!(Peaks::index_of(signal), i);
         }
+        assert_eq!(Peaks::index_of("y2 (controller input)"), 0);
         assert_eq!(w.diverged(7.0, 3.5), w.beyond(7.0, &Peaks([3.5; 4])));
         assert!(
-            matches!(w.diverged(7.0, 3.5), Some(Outcome::Diverged { ref signal, .. }) if signal == "eta1[2] (adaptive parameters)")
+            matches!(w.diverged(7.0, 3.5), Some(Outcome::Diverged { ref signal, .. }) if signal == "eta1_2 (adaptive parameters)")
         );
+    }
+
+    /// Each watched signal is named by its column of signals.csv, counted from 1, and an entry of
+    /// x or x̂ by the state's name too where the scenario gives one.
+    #[test]
+    fn a_diverged_signal_is_named_by_its_column_and_state() {
+        let w = Watched { x: &[0.0, 0.0], x_hat: &[0.0, 5.0], xi_hat: &[0.0; 3], eta: &[0.0; 6] };
+        let signal = |w: Watched<'_>| match w.diverged(1.0, 1.0) {
+            Some(Outcome::Diverged { signal, .. }) => signal,
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(signal(w), "xhat2 (observer state)");
+        assert_eq!(signal(Watched { x: &[0.0, f64::NAN], ..w }), "x2 (plant state)");
+        assert_eq!(signal(Watched { x_hat: &[0.0; 2], xi_hat: &[0.0, 0.0, -2.0], ..w }), "xihat3 (regressor)");
+        let eta = [0.0, 0.0, 0.0, 0.0, 3.0, 0.0];
+        assert_eq!(signal(Watched { x_hat: &[0.0; 2], eta: &eta, ..w }), "eta2_2 (adaptive parameters)");
+        let states = ["dw1".to_string(), "dP12".to_string()];
+        assert_eq!(with_state_name("xhat2 (observer state)", &states), "xhat2 (observer state dP12)");
+        assert_eq!(with_state_name("x1 (plant state)", &states), "x1 (plant state dw1)");
+        for other in ["xihat2 (regressor)", "eta1_2 (adaptive parameters)", "y2 (controller input)", "x3 (plant state)"]
+        {
+            assert_eq!(with_state_name(other, &states), other, "no state of that name");
+        }
     }
 }

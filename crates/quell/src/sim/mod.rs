@@ -32,7 +32,7 @@ pub use closed_loop::{
 };
 pub use dde::{Method, Stats};
 pub(crate) use divergence::smallest_gain;
-pub use divergence::{Peaks, Watched, DIVERGENCE_BOUND};
+pub use divergence::{Peaks, Watched, DIVERGENCE_BOUND, WATCHED};
 pub use memory::{runs_memory_bytes, Held, MIN_RUNS_MEMORY_BYTES};
 pub use noise::{band_limited, NOISE_SINES};
 pub use result::{ChannelFigures, ChannelSummary, Outcome, RunStats, Sample, SimResult};
@@ -193,6 +193,9 @@ pub struct Run<'a> {
     disturbance: &'a Signal,
     settings: RunSettings,
     controller: Option<&'a mut dyn SampledController>,
+    /// The states' names (a scenario's `[plant] states`), which a divergence of x or x̂ is named
+    /// by too ([`divergence::with_state_name`]).
+    state_names: Option<&'a [String]>,
     /// The adaptive law's steady state under the signals, computed once when first needed (by the
     /// step budget and the divergence bounds).
     averaged: std::cell::OnceCell<Averaged>,
@@ -211,6 +214,7 @@ impl<'a> Run<'a> {
             disturbance,
             settings,
             controller: None,
+            state_names: None,
             averaged: Default::default(),
             rho: Default::default(),
         }
@@ -223,6 +227,12 @@ impl<'a> Run<'a> {
     /// and delays. A truth without the design plant's dimensions is an error naming the key.
     pub fn truth(self, truth: &'a Plant) -> Self {
         Run { truth, ..self }
+    }
+
+    /// The plant's states named `names` (n of them) in what the run reports: a divergence of an
+    /// entry of x or x̂ names its state, "xhat6 (observer state dPv2)".
+    pub fn state_names(self, names: Option<&'a [String]>) -> Self {
+        Run { state_names: names, ..self }
     }
 
     /// These settings in place of the ones given before.
@@ -372,11 +382,15 @@ impl<'a> Run<'a> {
 
     pub fn simulate(self, on_progress: impl FnMut(f64) -> ControlFlow<()>) -> Result<SimResult, SimError> {
         let u_max = self.settings.actuator.as_ref().map_or(vec![], |a| a.limits.clone());
+        let names = self.state_names;
         let mut result = match self.settings.mode.clone() {
             Loop::Continuous(integrator) => closed_loop::simulate(&self, &integrator, on_progress),
             Loop::Sampled { sample_time } => sampled::simulate(self, sample_time, on_progress),
         }?;
         result.u_max = u_max;
+        if let (Some(Outcome::Diverged { signal, .. }), Some(names)) = (&mut result.outcome, names) {
+            *signal = divergence::with_state_name(signal, names);
+        }
         Ok(result)
     }
 }

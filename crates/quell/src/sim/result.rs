@@ -27,7 +27,7 @@ pub enum Outcome {
     Interrupted { t: f64 },
 }
 
-/// How a run ended, in a phrase: "reached t_end", "diverged at t = 36.75: x\[2\] (plant state) =
+/// How a run ended, in a phrase: "reached t_end", "diverged at t = 36.75: x2 (plant state) =
 /// 1.06e9", …
 impl std::fmt::Display for Outcome {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -544,7 +544,7 @@ mod tests {
         }
         let completed = r.summary()[0].figures;
         assert_eq!((completed.tail_max_e, completed.tail_rms_e, completed.settle_t), (0.0, 0.0, Some(0.0)));
-        r.outcome = Some(Outcome::Diverged { t: 10.5, signal: "x[1] (plant state)".into(), value: 2e9 });
+        r.outcome = Some(Outcome::Diverged { t: 10.5, signal: "x1 (plant state)".into(), value: 2e9 });
         let stopped = r.summary()[0].figures;
         assert!(
             stopped.tail_max_e.is_nan() && stopped.tail_rms_e.is_nan() && stopped.settle_t.is_none(),

@@ -64,9 +64,15 @@ pub fn coarse_sample_warning(
 /// had needed T_s ≤ 0.22 ms, said only when a run at 0.5 ms departed from its continuous loop).
 /// Where t makes a run over `t_end` more than ten million samples, it says how many, and
 /// where the delays rather than ρ set t, that (µs delays had offered 5e-7 s for a 100 s run).
-pub fn sample_time_need(design: &Design, [reference, disturbance]: [&Signal; 2], t_end: f64) -> (String, f64) {
+/// t divides `output_step` too where one within the bound does, else the output step to set
+/// with it is named (0.00833335 min had been offered beside 0.5 min, which it does not divide).
+pub fn sample_time_need(
+    design: &Design,
+    [reference, disturbance]: [&Signal; 2],
+    (t_end, output_step): (f64, f64),
+) -> (String, f64) {
     let rate = super::loop_rate(design, design.plant(), [reference, disturbance]);
-    let (bound, whole) = sample_time_choice(design, rate, None);
+    let (bound, whole) = sample_time_choice(design, rate, Some(output_step));
     // Delays that only a sample time far below the bound makes whole, at more samples than a run
     // takes in a minute (rounded FOPDT dead times,
     // 0.28333 and 0.26667 min, had offered 1e-5 min for T_s ≤ 0.0338 min; helper tryout): the
@@ -84,7 +90,7 @@ pub fn sample_time_need(design: &Design, [reference, disturbance]: [&Signal; 2],
             rate,
         );
     }
-    let mut need = fine_sample_time_text(design, bound, whole, false);
+    let mut need = fine_sample_time_text(design, bound, whole, Some(output_step));
     if let Some(t) = whole.filter(|t| t_end / t > MANY_SAMPLES) {
         // Where the delays, not ρ, set t (well below the bound), what would lengthen it.
         let why = if t < bound / 2.0 {
@@ -107,36 +113,37 @@ pub fn sample_time_need(design: &Design, [reference, disturbance]: [&Signal; 2],
 const MANY_SAMPLES: f64 = 1e7;
 
 /// "T_s ≤ bound (T_s·ρ ≤ [`COARSE_SAMPLE`]), e.g. t …": the sample times fine for a loop of rate
-/// `rate`, with one that makes the design's delays whole (and divides `output_step`, when given);
-/// a `[truth]`'s own delays are not seen here, and the run that refuses them names the nearest
-/// sample time that makes them whole too.
+/// `rate`, with one that makes the design's delays whole (and divides `output_step`, when given,
+/// or else names the output step to set with it); a `[truth]`'s own delays are not seen here, and
+/// the run that refuses them names the nearest sample time that makes them whole too.
 pub(crate) fn fine_sample_time(design: &Design, rate: f64, output_step: Option<f64>) -> String {
     let (bound, whole) = sample_time_choice(design, rate, output_step);
-    fine_sample_time_text(design, bound, whole, output_step.is_some())
+    fine_sample_time_text(design, bound, whole, output_step)
 }
 
 /// The bound T_s ≤ [`COARSE_SAMPLE`]/`rate` (three digits, rounded down) and a sample time within
-/// it that makes the design's delays whole (and divides `output_step`, when given), if any.
+/// it that makes the design's delays whole and divides `output_step`, when given, where one does;
+/// else one that makes the delays whole, if any.
 fn sample_time_choice(design: &Design, rate: f64, output_step: Option<f64>) -> (f64, Option<f64>) {
     let bound = settings::three_digits_down(COARSE_SAMPLE / rate);
-    let valid = match output_step {
-        Some(h) => discrete::sample_time_dividing(design, bound, h),
-        None => discrete::valid_sample_time_at_most(design, bound),
-    };
     // A sample time beyond the bound is no example of one within it (β = 1e-7 had offered 3e-7 s
     // for T_s ≤ 2e-8 s: no shorter one keeps the delay lines within their limit).
-    (bound, valid.filter(|t| *t < bound))
+    let within = |t: Option<f64>| t.filter(|t| *t < bound);
+    let dividing = output_step.and_then(|h| within(discrete::sample_time_dividing(design, bound, h)));
+    (bound, dividing.or_else(|| within(discrete::valid_sample_time_at_most(design, bound))))
 }
 
-/// [`fine_sample_time`]'s text; `divides`: the sample time divides the output step too.
-fn fine_sample_time_text(design: &Design, bound: f64, whole: Option<f64>, divides: bool) -> String {
+/// [`fine_sample_time`]'s text: `whole` divides `output_step` (when given), or the output step
+/// to set with it is named.
+fn fine_sample_time_text(design: &Design, bound: f64, whole: Option<f64>, output_step: Option<f64>) -> String {
     let unit = design.plant().time_unit;
     let whole = whole.map_or(String::new(), |t| {
-        format!(
-            ", e.g. {} {unit}, which makes plant.delays whole{}",
-            settings::fmt_short(t),
-            if divides { " and divides simulation.output_step" } else { "" }
-        )
+        let also = match output_step {
+            Some(h) if discrete::divides(h, t) => " and divides simulation.output_step".to_string(),
+            Some(h) => discrete::output_step_note(t, h, "within the bound", unit),
+            None => String::new(),
+        };
+        format!(", e.g. {} {unit}, which makes plant.delays whole{also}", settings::fmt_short(t))
     });
     format!("T_s ≤ {} {unit} (T_s·ρ ≤ {COARSE_SAMPLE}){whole}", settings::fmt_short(bound))
 }
@@ -196,13 +203,16 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
     let every = discrete::whole_multiple(h, T).filter(|&k| k >= 1).ok_or_else(|| {
         let (divisor, multiple) = output_step_fixes(run.design, T, h);
         let short = crate::settings::fmt_time;
+        let divisor = match divisor {
+            Some(d) => format!(", or sample_time to one that divides it, e.g. {} {unit}", short(d)),
+            None => format!(" (no sample time near {T} {unit} that divides it makes plant.delays whole)"),
+        };
         KeyError::new(
             "simulation.output_step",
             format!(
-                "expected a whole multiple of sample_time = {T} {unit}, found {h} {unit} ({:.6} samples; each recorded row is a controller step); set output_step to a multiple of the sample time, e.g. {} {unit}, or sample_time to one that divides it, e.g. {} {unit}",
+                "expected a whole multiple of sample_time = {T} {unit}, found {h} {unit} ({:.6} samples; each recorded row is a controller step); set output_step to a multiple of the sample time, e.g. {} {unit}{divisor}",
                 h / T,
                 short(multiple),
-                short(divisor)
             ),
         )
     })?;
@@ -210,24 +220,22 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
 }
 
 /// The delay check's offer ([`ControllerError::DelayNotMultiple`]) made to divide the output step
-/// `h` too, where one near T_s does ([`discrete::valid_sample_time_near`]): the controller's own
-/// check knows no output step.
+/// `h` too, where one near T_s does ([`discrete::valid_sample_time_near`]), else told with the
+/// output step to set beside it: the controller's own check knows no output step.
 fn dividing_output_step(e: ControllerError, design: &Design, h: f64) -> ControllerError {
     match e {
         ControllerError::DelayNotMultiple { channel, delay, sample_time, ratio, nearest: Some(t), unit, .. }
-            if discrete::whole_multiple(h, t).is_none() =>
+            if !discrete::divides(h, t) =>
         {
             let width = 1 + design.q();
             let offer = discrete::valid_sample_time_near(&design.plant().delays, h, sample_time, width);
-            // Named only when the offer divides h (else it is the delays' alone, as the controller's).
-            let output_step = offer.filter(|&o| discrete::whole_multiple(h, o).is_some()).map(|_| h);
             ControllerError::DelayNotMultiple {
                 channel,
                 delay,
                 sample_time,
                 ratio,
                 nearest: offer.or(Some(t)),
-                output_step,
+                output_step: Some(h),
                 unit,
             }
         }
@@ -256,8 +264,13 @@ fn true_delays_whole(run: &Run<'_>, T: f64) -> Result<(), KeyError> {
     if actuator.iter().any(|&d| d > 0.0) {
         sets.push(format!("truth.actuator_delays [{}]", list(actuator)));
     }
-    let offer = match discrete::valid_sample_time_near(&all, run.settings.output_step, T, 1 + run.design.q()) {
-        Some(t) => format!(": the nearest that makes them all whole is {} {unit}", settings::fmt_short(t)),
+    let h = run.settings.output_step;
+    let offer = match discrete::valid_sample_time_near(&all, h, T, 1 + run.design.q()) {
+        Some(t) => format!(
+            ": the nearest that makes them all whole is {} {unit}{}",
+            settings::fmt_short(t),
+            discrete::output_step_note(t, h, "near it", unit)
+        ),
         None => ": no sample time near it makes them all whole; choose one that divides each".into(),
     };
     // A true delay too long for a delay line at T is said so (it had been called not whole).
@@ -289,10 +302,11 @@ fn true_delays_whole(run: &Run<'_>, T: f64) -> Result<(), KeyError> {
 /// The nearest fixes of an output step h that is not a whole number ≥ 1 of samples of T: a sample
 /// time that divides h and at which `design`'s delays are whole and fit (the largest ≤ T that
 /// divides h, h/⌈h/T⌉, where it passes; an offer that failed the delays' check sent a user back
-/// and forth), and the multiple of T nearest h, T·round(h/T) (at least T).
-pub fn output_step_fixes(design: &Design, T: f64, h: f64) -> (f64, f64) {
-    let divisor = discrete::sample_time_dividing(design, T, h).unwrap_or(h / (h / T).ceil().max(1.0));
-    (divisor, T * (h / T).round().max(1.0))
+/// and forth), `None` where none near T does (delays of 1/60 min to six digits beside h = 0.5
+/// min: h/60 had been offered all the same), and the multiple of T nearest h, T·round(h/T) (at
+/// least T).
+pub fn output_step_fixes(design: &Design, T: f64, h: f64) -> (Option<f64>, f64) {
+    (discrete::sample_time_dividing(design, T, h), T * (h / T).round().max(1.0))
 }
 
 /// The sampled-data loop of `run` ([`Run::simulate`]) at `sample_time`, with the run's controller
@@ -615,7 +629,7 @@ fn step_controller<'c, C: SampledController + ?Sized>(
 ) -> Result<Result<&'c [f64], Outcome>, SimError> {
     match ctrl.step(y, g) {
         Err(ControllerError::InputOutOfRange { name, index, value }) => {
-            Ok(Err(Outcome::Diverged { t, signal: format!("{name}[{}] (controller input)", index + 1), value }))
+            Ok(Err(Outcome::Diverged { t, signal: format!("{name}{} (controller input)", index + 1), value }))
         }
         Err(ControllerError::StateNotFinite { value }) => {
             Ok(Err(Outcome::Diverged { t, signal: "u_f (controller output)".to_string(), value }))

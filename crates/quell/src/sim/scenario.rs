@@ -27,9 +27,12 @@ impl RunSettings {
 
 impl<'a> Run<'a> {
     /// Scenario `s` with its design `design` (of `s.plant`) on its true plant, with its reference,
-    /// disturbance and settings ([`RunSettings::of`]).
+    /// disturbance and settings ([`RunSettings::of`]), its states named as `[plant] states` names
+    /// them ([`Run::state_names`]).
     pub fn of(s: &'a Scenario, design: &'a Design) -> Self {
-        Run::new(design, &s.reference, &s.disturbance, RunSettings::of(s)).truth(s.true_plant())
+        Run::new(design, &s.reference, &s.disturbance, RunSettings::of(s))
+            .truth(s.true_plant())
+            .state_names(s.names.states.as_deref())
     }
 }
 
@@ -156,7 +159,7 @@ mod tests {
         half.0[1] = 0.5 * peaks.0[1];
         let ended = run(&s, &RunSettings { runaway: Some(half), ..st });
         let Some(Outcome::Diverged { t, signal, value }) = ended.outcome else { panic!("{:?}", ended.outcome) };
-        assert!(signal.starts_with("x_hat[") && value.abs() > half.0[1], "{signal} = {value}");
+        assert!(signal.starts_with("xhat") && value.abs() > half.0[1], "{signal} = {value}");
         assert!(t < 2.0 && ended.peaks.0[1] <= half.0[1], "t = {t}, recorded peaks {:?}", ended.peaks);
         assert_eq!(ended.y[..], full.y[..ended.y.len()], "the run is the same up to then");
     }

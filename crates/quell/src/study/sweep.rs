@@ -316,7 +316,7 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
                         row.reason += &format!(
                             ": beyond {} × the peak of {} in the nominal run, {:.4e} (over its entries; runaway.peak)",
                             spec.runaway.peak,
-                            ["x", "x_hat", "xi_hat", "eta"][group],
+                            sim::WATCHED[group].0,
                             n.peaks.0[group]
                         );
                     }
