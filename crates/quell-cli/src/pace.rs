@@ -54,7 +54,11 @@ pub fn design_text(s: &Scenario, d: &Design) -> String {
 /// sample time its loop tolerates, and how far f32 would move its poles.
 fn deployment_text(s: &Scenario, d: &Design) -> String {
     let sim = &s.simulation;
-    let (need, rho) = quell::sim::sample_time_need(d, [&s.reference, &s.disturbance], (sim.t_end, sim.output_step));
+    let (need, rho) = quell::sim::sample_time_need(
+        d,
+        [&s.reference, &s.disturbance],
+        (sim.t_end, sim.output_step_given.then_some(sim.output_step)),
+    );
     let unit = s.plant.time_unit;
     let (shift, kappa, what) = quell::export::f32_pole_shift(d);
     let precision = if !shift.is_finite() {

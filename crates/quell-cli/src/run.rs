@@ -80,7 +80,8 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     // Every check that can fail on input happens before the output directory is touched.
     let settings = loop_settings(args, &scenario, &design)?;
     if let Loop::Sampled { sample_time } = settings.mode {
-        eprint!("{}", report::sample_time_text(&scenario, &design, sample_time, Some(settings.output_step)));
+        let output_step = settings.output_step_given.then_some(settings.output_step);
+        eprint!("{}", report::sample_time_text(&scenario, &design, sample_time, output_step));
     }
     let set_by = if args.method.is_some() { "--method explicit" } else { quell::sim::EXPLICIT_IN_FILE };
     let run = Run::of(&scenario, &design).settings(settings.clone());

@@ -376,3 +376,15 @@ def test_a_stopped_runs_log_panel_shows_the_growth():
     e = np.abs(r.e[:, 0])
     np.testing.assert_array_equal(line.get_ydata(), e[e > 0])
     matplotlib.pyplot.close("all")
+
+
+def test_a_default_output_step_follows_the_overrides():
+    # A scenario without output_step: its default (t_end/1000, twenty rows a period of the fastest
+    # harmonic, a whole number of samples) follows simulate()'s t_end and sample_time, as the
+    # CLI's --t-end does (it had kept the file's 0.1 s: 6 rows over 0.5 s, and refused
+    # sample_time=0.04 for an output step the user never set).
+    text = (EXAMPLES / "paper.toml").read_text().replace("output_step = 0.1     # rows of signals.csv at t = k * output_step", "")
+    s = quell.Scenario.from_toml(text)
+    assert len(quell.simulate(s, t_end=0.5).t) == 1001
+    sampled = quell.simulate(s, t_end=2.0, sample_time=0.04)
+    assert len(sampled.t) == 51 and abs(sampled.t[1] - 0.04) < 1e-15

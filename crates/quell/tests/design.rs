@@ -1018,3 +1018,28 @@ fn a_decoupler_that_does_not_decouple_is_warned_of() {
     assert!(coupling(&small) > 1e-6, "{}", coupling(&small));
     assert_eq!(warned(&small, &s), 1);
 }
+
+/// Eq. (7)'s cosines do not move with the units of the inputs and outputs: the balancing counts B's
+/// columns and C's rows at A's size (it had counted them as written, so that the plant of
+/// `a_decoupler_that_does_not_decouple_is_warned_of` with c_1 B = [5e-4, 2e-4], its input 1 in units
+/// 1e3 larger and output 2 in units 1e6 larger, read a cosine of 9.8e-6 < τ and σ_1 = 2 where the
+/// same plant as written reads 5e-4 and σ_1 = 1).
+#[test]
+fn the_inputs_and_outputs_units_do_not_move_the_relative_degrees() {
+    let A = mat(4, 4, &[0.0, 1.0, 0.3, 0.0, -2.0, -3.0, 0.0, 0.5, 0.0, 0.2, -1.0, 0.0, 0.4, 0.0, 0.0, -2.0]);
+    let B = mat(4, 2, &[0.0005, 0.0002, 1.0, 0.3, 0.1, 1.0, 0.0, 0.5]);
+    let C = mat(2, 4, &[1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+    let written = relative_degree_measures(&A, &B, &C).unwrap();
+    for (u, y) in [(1e-3, 1e6), (1e3, 1e-6), (1e-9, 1.0)] {
+        let Bu = DMatrix::from_fn(4, 2, |i, j| B[(i, j)] * if j == 0 { u } else { 1.0 });
+        let Cy = DMatrix::from_fn(2, 4, |i, j| C[(i, j)] * if i == 1 { y } else { 1.0 });
+        let scaled = relative_degree_measures(&A, &Bu, &Cy).unwrap();
+        for (a, b) in written.iter().zip(&scaled) {
+            assert_eq!(a.decided, b.decided, "u × {u}, y × {y}");
+            for (x, z) in a.measures.iter().zip(&b.measures) {
+                assert!((x - z).abs() <= 1e-12 * x.abs().max(1e-300), "u × {u}, y × {y}: {x} against {z}");
+            }
+        }
+    }
+    assert_eq!(written.iter().map(|d| d.decided).collect::<Vec<_>>(), vec![Some(1), Some(1)]);
+}

@@ -727,3 +727,16 @@ fn states_in_units_far_apart_are_placed_on_the_balanced_pair() {
         assert!((&back - &K).norm() <= 1e-6 * K.norm(), "T = diag(1, 1e{e}, 1): K' T = {back} against K = {K}");
     }
 }
+
+/// The retry takes B's columns at A's size too, as the rank test does: the paper's observer by
+/// duality with C in units 1e-15 (and 1e15) of its own, which the rank test calls observable, is
+/// placed at {−2, −3, −4} (it had been refused as uncontrollable, its poles giving no time scale).
+#[test]
+fn outputs_in_units_far_from_the_states_are_placed() {
+    let A = DMatrix::from_row_slice(3, 3, &[-3.2, -1.7, -3.0, 2.8, 1.3, 4.0, 0.3, 0.3, -0.5]);
+    let C = DMatrix::from_row_slice(2, 3, &[2.0, 2.0, 0.0, 2.0, 1.0, 2.0]);
+    for scale in [1e-15, 1e15] {
+        let Ct = (&C * scale).transpose();
+        assert_places(&A.transpose(), &Ct, &reals(&[-2.0, -3.0, -4.0]), 1e-6);
+    }
+}

@@ -111,7 +111,15 @@ fn paper_example_parses_into_the_papers_numbers() {
     }
     assert_eq!(
         s.simulation,
-        Simulation { t_end: 100.0, output_step: 0.1, rtol: 1e-9, atol: 1e-9, sample_time: None, method: Method::Auto }
+        Simulation {
+            t_end: 100.0,
+            output_step: 0.1,
+            output_step_given: true,
+            rtol: 1e-9,
+            atol: 1e-9,
+            sample_time: None,
+            method: Method::Auto
+        }
     );
     assert_eq!(s.noise, None);
 }
@@ -1184,10 +1192,15 @@ fn a_badly_scaled_plant_is_not_just_called_uncontrollable() {
     let text = with(&[(A_LINE, "A = [[-3.2, -1.7, -3.0], [2.8, 1.3, 4.0], [0.3, 0.3, -1e15]]")]);
     let e = load_and_design(&text).map(|_| ()).unwrap_err().to_string();
     assert!(e.starts_with("plant: (A, B) is not controllable (Assumption 1): numerical rank 2 of 3"), "{e}");
-    assert!(e.contains("counts couplings as small as 0.600000 as zero: the plant's numbers span too many decades for a rank test in double precision"), "{e}");
+    assert!(e.contains("counts couplings as small as 0.750000 as zero: the plant's numbers span too many decades for a rank test in double precision"), "{e}");
     let text = with(&[(A_LINE, "A = [[1e15, -1.7, -3.0], [2.8, 1.3, 4.0], [0.3, 0.3, -0.5]]")]);
     let e = load_and_design(&text).map(|_| ()).unwrap_err().to_string();
     assert!(!e.contains("not controllable") && !e.contains("not observable"), "{e}");
+    // A near-integrator (a diagonal 1e-20) is no coupling: the mode no input reaches is named.
+    let A = "A = [[-1.0, 1.0, 0.0], [0.0, 1e-20, 0.0], [0.0, 0.0, -5.0]]";
+    let B = "B = [[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]]\n";
+    let e = load_and_design(&with(&[(A_LINE, A), (B_LINE, B)])).map(|_| ()).unwrap_err().to_string();
+    assert!(e.ends_with("no input reaches the mode at -5.000000"), "{e}");
     let A = "A = [[-1.0, 0.0, 0.0], [0.0, -2.0, 0.0], [0.0, 0.0, -3.0]]";
     let B = "B = [[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]]\n";
     let e = load_and_design(&with(&[(A_LINE, A), (B_LINE, B)])).map(|_| ()).unwrap_err().to_string();

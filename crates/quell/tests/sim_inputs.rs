@@ -506,7 +506,7 @@ fn sample_time_offers_agree_where_none_makes_delays_and_output_step_whole() {
     };
     // The design report (quell design): the sample time for the delays, and the output step to
     // set with it.
-    let (need, _) = quell::sim::sample_time_need(&d, signals, (s.simulation.t_end, h));
+    let (need, _) = quell::sim::sample_time_need(&d, signals, (s.simulation.t_end, Some(h)));
     assert!(
         need.contains(
             "which makes plant.delays whole, and none within the bound also divides simulation.output_step = 0.1 s"
@@ -576,4 +576,23 @@ fn a_rejected_landing_is_not_tried_again_for_ever() {
     assert!(matches!(outcome, Outcome::StepSizeTooSmall { t } if t > 3e-11 && t < 4e-11), "{outcome:?}");
     let why = outcome.explain("max_steps", quell::TimeUnit::Seconds).unwrap();
     assert!(why.contains(": below t = 1 the integrator resolves no step shorter than 1e-14 s"), "{why}");
+}
+
+/// A scenario that gives no output_step gets a default that follows its sample time, and asks
+/// nothing of the sample time offered for the delays: without `output_step`, the paper's example at
+/// T_s = 0.0303 s (its 1 s delay 33.0033 samples) is offered 1/33 s, which then runs (it had been
+/// offered 0.0004 s, to divide the default 0.1212 s that 0.0303 itself had set).
+#[test]
+fn a_default_output_step_asks_nothing_of_the_sample_time_offered() {
+    let text = PAPER_EXAMPLE
+        .replace("output_step = 0.1     # rows of signals.csv at t = k * output_step", "")
+        .replace("atol = 1e-9", "atol = 1e-9\nsample_time = 0.0303");
+    let s = Scenario::from_toml(&text).unwrap();
+    assert!(!s.simulation.output_step_given && (s.simulation.output_step - 0.1212).abs() < 1e-12);
+    let d = s.design().unwrap();
+    let e = Run::of(&s, &d).check().unwrap_err().to_string();
+    assert!(e.contains("the nearest valid sample time is 0.030303030303"), "{e}");
+    let t_s: f64 = e.rsplit("is ").next().unwrap().split(' ').next().unwrap().parse().unwrap();
+    let s = Scenario::from_toml(&text.replace("sample_time = 0.0303", &format!("sample_time = {t_s}"))).unwrap();
+    assert!(Run::of(&s, &d).check().is_ok());
 }

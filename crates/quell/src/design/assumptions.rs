@@ -153,25 +153,39 @@ fn rank_test(A: &DMatrix<f64>, B: &DMatrix<f64>) -> RankTest {
     RankTest { rank: staircase(&A, &B, tol).rank, n: A.nrows(), tol }
 }
 
-/// (A, B) in the units the rank test takes: B scaled by the power of two that brings ‖B‖_F nearest
-/// ‖A‖_F, then the states [`balanced`], then B again. Both are exact in floating point and keep the
-/// controllable subspace's dimension, while the tolerance [`staircase_tol`] takes the larger norm
-/// and the staircase's orthogonal steps mix the states: inputs in units 1e4 times larger (a supply
-/// vessel's) or a C in units 1e15 had been called uncontrollable or unobservable, as had any plant
-/// whose states were rescaled over 8 decades.
+/// (A, B) in the units the rank test takes: each column of B scaled by the power of two that
+/// brings its norm nearest ‖A‖_F/√m ([`columns_to`]), then the states [`balanced`], then B's columns
+/// again. All exact in floating point and keeping the controllable subspace's dimension, while the
+/// tolerance [`staircase_tol`] takes the larger norm and the staircase's orthogonal steps mix the
+/// states: inputs in units 1e4 times larger (a supply vessel's) or a C in units 1e15 had been
+/// called uncontrollable or unobservable, as had any plant whose states were rescaled over 8
+/// decades.
 pub(crate) fn conditioned(A: &DMatrix<f64>, B: &DMatrix<f64>) -> (DMatrix<f64>, DMatrix<f64>) {
-    let to_A = |A: &DMatrix<f64>, B: DMatrix<f64>| {
-        let (a, b) = (A.norm(), B.norm());
-        if a > 0.0 && b > 0.0 && (a / b).is_finite() {
-            B * 2f64.powi(((a / b).log2().round() as i32).clamp(-1000, 1000))
-        } else {
-            B
-        }
-    };
-    let B = to_A(A, B.clone());
+    let (B, _) = columns_to(A.norm(), B);
     let (A, B, _, _) = balanced(A, &B, &DMatrix::zeros(0, A.nrows()));
-    let B = to_A(&A, B);
+    let (B, _) = columns_to(A.norm(), &B);
     (A, B)
+}
+
+/// `B` with each nonzero column scaled by the power of two that brings its norm nearest a/√m (1/√m
+/// where a = 0), so that ‖B‖_F is about a whatever the inputs' units, and the factors (B S, S).
+pub(crate) fn columns_to(a: f64, B: &DMatrix<f64>) -> (DMatrix<f64>, Vec<f64>) {
+    let target = if a > 0.0 { a } else { 1.0 } / (B.ncols().max(1) as f64).sqrt();
+    let mut B = B.clone();
+    let factors = B
+        .column_iter_mut()
+        .map(|mut b| {
+            let norm = b.norm();
+            let f = if norm > 0.0 && (target / norm).is_finite() {
+                2f64.powi(((target / norm).log2().round() as i32).clamp(-1000, 1000))
+            } else {
+                1.0
+            };
+            b *= f;
+            f
+        })
+        .collect();
+    (B, factors)
 }
 
 /// Most sweeps over the states [`balanced`] makes (LAPACK's dgebal converges in a few).
@@ -183,19 +197,32 @@ pub(crate) type Balanced = (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, Vec<f64>);
 /// (D⁻¹AD, D⁻¹B, CD, D's diagonal) for the diagonal D of powers of two that balances each state's
 /// off-diagonal column of A with its column of C against its off-diagonal row of A with its row of
 /// B (Parlett & Reinsch 1969, as LAPACK's dgebal; B and C counted as in SLICOT's TB01ID), exact in
-/// floating point. A state that no other drives or that drives none is left as it is. `C` may have
-/// no rows.
+/// floating point. B's columns and C's rows count at the size of A (‖A‖_F/√m each), so that the
+/// inputs' and outputs' units do not move D. A state that no other drives or that drives none is
+/// left as it is. `C` may have no rows.
 pub(crate) fn balanced(A: &DMatrix<f64>, B: &DMatrix<f64>, C: &DMatrix<f64>) -> Balanced {
     let n = A.nrows();
     let (mut A, mut B, mut C) = (A.clone(), B.clone(), C.clone());
     let mut d = vec![1.0; n];
+    // The weights that bring each column of B and each row of C to A's size, as given: fixed, since
+    // weights taken afresh each sweep would undo the balancing's effect on B and C, and push D to
+    // its limits (the paper's plant with A[0][0] = 1e15 had its couplings scaled to 1e-171).
+    let a = A.norm();
+    let weights = |norms: Vec<f64>| -> Vec<f64> {
+        let target = if a > 0.0 { a } else { 1.0 } / (norms.len().max(1) as f64).sqrt();
+        norms.into_iter().map(|x| if x > 0.0 && (target / x).is_finite() { target / x } else { 0.0 }).collect()
+    };
+    let wb = weights(B.column_iter().map(|b| b.norm()).collect());
+    let wc = weights(C.row_iter().map(|c| c.norm()).collect());
     for _ in 0..BALANCING_SWEEPS {
         let mut moved = false;
         for (i, di) in d.iter_mut().enumerate() {
             let off = |v: f64, j: usize| if j == i { 0.0 } else { v * v };
-            let column = A.column(i).iter().enumerate().map(|(j, &v)| off(v, j)).sum::<f64>();
-            let row = A.row(i).iter().enumerate().map(|(j, &v)| off(v, j)).sum::<f64>();
-            let (c, r) = ((column + C.column(i).norm_squared()).sqrt(), (row + B.row(i).norm_squared()).sqrt());
+            let column = A.column(i).iter().enumerate().map(|(j, &v)| off(v, j)).sum::<f64>()
+                + C.column(i).iter().zip(&wc).map(|(v, w)| (v * w).powi(2)).sum::<f64>();
+            let row = A.row(i).iter().enumerate().map(|(j, &v)| off(v, j)).sum::<f64>()
+                + B.row(i).iter().zip(&wb).map(|(v, w)| (v * w).powi(2)).sum::<f64>();
+            let (c, r) = (column.sqrt(), row.sqrt());
             if !(c > 0.0 && r > 0.0 && (c + r).is_finite()) {
                 continue;
             }

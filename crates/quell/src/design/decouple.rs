@@ -238,10 +238,12 @@ pub fn falb_wolovich_given(
 const EQUILIBRATION_SWEEPS: usize = 50;
 
 /// κ₂ of B* with its rows and its columns scaled to unit norm, in turn until they stay: invariant,
-/// as B* itself is, under the states' coordinates and the units of the inputs and outputs, and near
+/// as B* itself is, under the states' coordinates, and under the units of the inputs and outputs
+/// where B* has no zero pattern that lets the scaling drift (a triangular B* settles within a few
+/// percent of one value: 1.106 against 1.202 for three-channel's inputs in units 1e12 apart); near
 /// the least κ₂ over those scalings (a 2×2 [[a, b], [c, d]] ends as [[γ, σ], [σ, γ]] up to signs,
-/// κ₂ = (γ + σ)/|γ − σ| with γ/σ = √|ad/bc|). The cosines of [`TOL`] are not invariant: one state in
-/// a unit 50× another's had moved them from κ₂ = 1.7 to 50.
+/// κ₂ = (γ + σ)/|γ − σ| with γ/σ = √|ad/bc|, that least). The cosines of [`TOL`] are not
+/// invariant: one state in a unit 50× another's had moved them from κ₂ = 1.7 to 50.
 fn equilibrated_condition(B_star: &DMatrix<f64>) -> f64 {
     let mut M = B_star.clone();
     for _ in 0..EQUILIBRATION_SWEEPS {

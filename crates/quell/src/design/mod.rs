@@ -644,11 +644,14 @@ fn hidden_modes(At: &DMatrix<f64>, M: &DMatrix<f64>, count: usize, verb: &str) -
 /// 0.3). The text appended to the error, or "".
 fn badly_scaled(A: &DMatrix<f64>, M: &DMatrix<f64>, name: &str, tol: f64) -> String {
     let (A, M) = assumptions::conditioned(A, M);
-    let erased = A.iter().chain(M.iter()).map(|x| x.abs()).filter(|&x| x > 0.0 && x <= tol);
+    // Couplings only: a diagonal entry (a near-integrator's 1e-20) is no scaling matter, and the
+    // modes hidden behind it are named instead.
+    let couplings = A.iter().enumerate().filter(|(k, _)| k % A.nrows() != k / A.nrows()).map(|(_, x)| x);
+    let erased = couplings.chain(M.iter()).map(|x| x.abs()).filter(|&x| x > 0.0 && x <= tol);
     let Some(small) = erased.reduce(f64::min) else { return String::new() };
     let largest = A.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     format!(
-        "; but the tolerance follows A's largest entries ({}, with the states balanced and {name} scaled to A) and counts couplings as small as {} as zero: the plant's numbers span too many decades for a rank test in double precision, so rescale its states or units (e.g. a balanced realization) before concluding",
+        "; but the tolerance follows A's largest entries ({}, with the states balanced and {name} scaled to A) and counts couplings as small as {} as zero: the plant's numbers span too many decades for a rank test in double precision, balanced or not, so rewrite the model so that its couplings are of comparable size (e.g. leave a fast mode out) before concluding",
         fmt_number(largest),
         fmt_number(small)
     )

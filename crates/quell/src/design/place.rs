@@ -31,7 +31,7 @@
 use nalgebra::{Complex, ComplexField, DMatrix, DVector};
 use thiserror::Error;
 
-use super::assumptions::{balanced, staircase, staircase_tol};
+use super::assumptions::{balanced, columns_to, staircase, staircase_tol};
 use crate::plant::{check_entries, check_shape, PlantError};
 
 type C64 = Complex<f64>;
@@ -147,20 +147,26 @@ enum Slot {
 /// A not square, B without A's rows, or an entry beyond [`MAX_ENTRY`](crate::plant::MAX_ENTRY) is [`PlaceError::Matrix`].
 ///
 /// Where (A, B) as given fails (uncontrollable to the staircase's tolerance, or inaccurate), the
-/// placement is made again on its balanced pair (D⁻¹AD, D⁻¹B) (D of powers of two; K = K' D⁻¹, the
-/// closed loop formed exactly similar): states in units 1e7 apart had been refused, and balancing
-/// every plant would move the gains of multi-input placements, which depend on the coordinates.
+/// placement is made again on its balanced pair with B's columns at A's size, (D⁻¹AD, D⁻¹B S) (D
+/// and S diagonal, of powers of two; K = S K′ D⁻¹, the closed loop formed exactly similar), as the
+/// rank test takes it: states in units 1e7 apart had been refused, and balancing every plant would
+/// move the gains of multi-input placements, which depend on the coordinates.
 pub fn place(A: &DMatrix<f64>, B: &DMatrix<f64>, poles: &[Complex<f64>]) -> Result<DMatrix<f64>, PlaceError> {
     let as_given = placed(A, B, poles);
     let Err(e @ (PlaceError::Uncontrollable { .. } | PlaceError::Inaccurate { .. })) = as_given else {
         return as_given;
     };
     let (Ab, Bb, _, d) = balanced(A, B, &DMatrix::zeros(0, A.nrows()));
-    if d.iter().all(|&x| x == 1.0) {
+    // B's columns at A's size too, as the rank test takes them: a C in units 1e-15 had passed that
+    // test and failed here.
+    let (Bs, S) = columns_to(Ab.norm(), &Bb);
+    if d.iter().chain(&S).all(|&x| x == 1.0) {
         return Err(e);
     }
-    let Ok(K) = placed(&Ab, &Bb, poles) else { return Err(e) };
-    Ok(K * DMatrix::from_diagonal(&nalgebra::DVector::from_iterator(d.len(), d.iter().map(|x| 1.0 / x))))
+    let Ok(K) = placed(&Ab, &Bs, poles) else { return Err(e) };
+    // Ab − Bs K = Ab − Bb (S K): K_b = S K for (D⁻¹AD, D⁻¹B), and K_b D⁻¹ for (A, B).
+    let diag = |v: Vec<f64>| DMatrix::from_diagonal(&nalgebra::DVector::from_vec(v));
+    Ok(diag(S) * K * diag(d.iter().map(|x| 1.0 / x).collect()))
 }
 
 /// [`place`] on (A, B) as given.

@@ -239,9 +239,9 @@ mod tests {
 
     /// B = [[1, 0.99], [1, 1]] with C = I (tests/data/ill-conditioned-b.toml; σ = [1, 1], so
     /// B* = C B = B): equilibrated it is [[γ, σ], [σ, γ]] with γ/σ = √(ad/bc) = 1/√0.99, so
-    /// κ = (γ + σ)/(γ − σ) = 401 by hand (the least over diagonal scalings, 2λ − 1 + √((2λ−1)² − 1)
-    /// = 398 with the RGA's λ = 100, is near); the paper's B* gets no warning, nor does it in other
-    /// states (one in a unit 50× another's had read 50).
+    /// κ = (γ + σ)/(γ − σ) = 398 by hand (the least over diagonal scalings, 2λ − 1 + √((2λ−1)² − 1)
+    /// with the RGA's λ = 100); the paper's B* gets no warning, nor does it in other states (one in
+    /// a unit 50× another's had read 50) or with an input and an output in other units.
     #[test]
     fn an_ill_conditioned_decoupler_is_reported_with_its_condition_number() {
         let text = include_str!("../../tests/data/ill-conditioned-b.toml");
@@ -284,6 +284,15 @@ mod tests {
             let c = s.design().unwrap().cond_B_star();
             assert!((c / paper - 1.0).abs() < 1e-9, "x₂ × {t}: {c} against {paper}");
         }
+        // Input 2 in units 1e3 larger (B's second column / 1e3) and output 1 in units 1e-3 (C's
+        // first row and g₁ × 1e3, Q's first row too): B* = diag(1e3, 1) B* diag(1, 1e-3).
+        let text = with_observer_text("[-2.0, -3.0, -4.0]")
+            .replace("B = [[-2.0, 1.0], [2.0, -1.0], [1.0, 0.0]]", "B = [[-2.0, 1e-3], [2.0, -1e-3], [1.0, 0.0]]")
+            .replace("C = [[2.0, 2.0, 0.0], [2.0, 1.0, 2.0]]", "C = [[2e3, 2e3, 0.0], [2.0, 1.0, 2.0]]")
+            .replace("Q = [[1.0, 2.0], [1.0, 0.0]]", "Q = [[1e3, 2e3], [1.0, 0.0]]")
+            .replace("amplitude = 3.0, frequency = 2.0", "amplitude = 3e3, frequency = 2.0");
+        let c = Scenario::from_toml(&text).unwrap().design().unwrap().cond_B_star();
+        assert!((c / paper - 1.0).abs() < 1e-9, "units: {c} against {paper}");
     }
 
     #[test]

@@ -178,13 +178,16 @@ fn go_on(_: f64) -> ControlFlow<()> {
     }
 }
 
-/// The rows of `a` and `b` at the same time (within 1e-9 of it, relative beyond 1), as index pairs
-/// in time order: every row of a run at an output step a whole multiple of the other's.
+/// The rows of `a` and `b` at the same time (within 1e-9 of it, relative beyond 1, and within a
+/// thousandth of either's row spacing), as index pairs in time order: every row of a run at an
+/// output step a whole multiple of the other's.
 fn common_rows(a: &[f64], b: &[f64]) -> Vec<(usize, usize)> {
+    let spacing = |t: &[f64]| if t.len() > 1 { t[1] - t[0] } else { f64::INFINITY };
+    let within = 1e-3 * spacing(a).min(spacing(b));
     let mut pairs = Vec::with_capacity(a.len().min(b.len()));
     let mut k = 0;
     for (j, &t) in b.iter().enumerate() {
-        let close = |s: f64| (s - t).abs() <= 1e-9 * t.abs().max(1.0);
+        let close = |s: f64| (s - t).abs() <= (1e-9 * t.abs().max(1.0)).min(within);
         while k < a.len() && a[k] < t && !close(a[k]) {
             k += 1;
         }

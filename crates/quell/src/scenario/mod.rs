@@ -94,6 +94,9 @@ pub struct Simulation {
     pub t_end: f64,
     /// Output rows at t = k·output_step, 0 < output_step ≤ t_end.
     pub output_step: f64,
+    /// Whether the scenario gave `output_step`; otherwise it is [`default_output_step`]'s, which a
+    /// change of t_end or sample time recomputes, and which no sample time offered must divide.
+    pub output_step_given: bool,
     /// Solver tolerances, > 0.
     pub rtol: f64,
     pub atol: f64,
@@ -108,6 +111,7 @@ impl Default for Simulation {
         Simulation {
             t_end: 100.0,
             output_step: 0.1,
+            output_step_given: false,
             rtol: settings::DEFAULT_TOLERANCE,
             atol: settings::DEFAULT_TOLERANCE,
             sample_time: None,
@@ -662,7 +666,8 @@ fn simulation(v: Value, fastest: f64) -> Result<Simulation, ScenarioError> {
     let number = |key| t.get(key, |v| v.number());
     let t_end = number("t_end")?.unwrap_or(default.t_end);
     let sample_time = number("sample_time")?;
-    let output_step = number("output_step")?.unwrap_or_else(|| default_output_step(t_end, fastest, sample_time));
+    let given = number("output_step")?;
+    let output_step = given.unwrap_or_else(|| default_output_step(t_end, fastest, sample_time));
     settings::check_horizon(t_end, output_step)?;
     if let Some(T) = sample_time {
         settings::check_sample_time(t_end, T)?;
@@ -672,7 +677,7 @@ fn simulation(v: Value, fastest: f64) -> Result<Simulation, ScenarioError> {
     let method = t
         .get("method", |v| Method::from_name(&v.string()?).map_err(|message| err(v.key, message)))?
         .unwrap_or_default();
-    Ok(Simulation { t_end, output_step, rtol, atol, sample_time, method })
+    Ok(Simulation { t_end, output_step, output_step_given: given.is_some(), rtol, atol, sample_time, method })
 }
 
 /// `[noise]`: per-output standard deviations and a seed.

@@ -240,7 +240,9 @@ pub fn signal_table(s: &Signal) -> Table {
 fn simulation_table(s: &Simulation) -> Table {
     let mut t = Table::new();
     t.insert("t_end".into(), Value::Float(s.t_end));
-    t.insert("output_step".into(), Value::Float(s.output_step));
+    if s.output_step_given {
+        t.insert("output_step".into(), Value::Float(s.output_step));
+    }
     t.insert("rtol".into(), Value::Float(s.rtol));
     t.insert("atol".into(), Value::Float(s.atol));
     if let Some(T) = s.sample_time {

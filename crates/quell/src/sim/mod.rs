@@ -96,6 +96,9 @@ pub struct RunSettings {
     pub t_end: f64,
     /// Time between recorded samples; in the sampled-data loop a whole multiple of `sample_time`.
     pub output_step: f64,
+    /// Whether `output_step` was chosen (a scenario's default is not: a sample time offered need
+    /// not divide it, since the default follows the sample time; [`crate::scenario::Simulation`]).
+    pub output_step_given: bool,
     /// The continuous loop (with its integrator) or the sampled-data loop (with its sample time).
     pub mode: Loop,
     /// A watched signal above this magnitude counts as divergence ([`Watched`]).
@@ -121,6 +124,7 @@ impl RunSettings {
         RunSettings {
             t_end,
             output_step,
+            output_step_given: true,
             mode,
             divergence_bound: DIVERGENCE_BOUND,
             runaway: None,

@@ -64,15 +64,16 @@ pub fn coarse_sample_warning(
 /// had needed T_s ≤ 0.22 ms, said only when a run at 0.5 ms departed from its continuous loop).
 /// Where t makes a run over `t_end` more than ten million samples, it says how many, and
 /// where the delays rather than ρ set t, that (µs delays had offered 5e-7 s for a 100 s run).
-/// t divides `output_step` too where one within the bound does, else the output step to set
-/// with it is named (0.00833335 min had been offered beside 0.5 min, which it does not divide).
+/// t divides `output_step` too, where one is given and one within the bound does, else the output
+/// step to set with it is named (0.00833335 min had been offered beside 0.5 min, which it does not
+/// divide); a default output step follows the sample time and asks nothing of it.
 pub fn sample_time_need(
     design: &Design,
     [reference, disturbance]: [&Signal; 2],
-    (t_end, output_step): (f64, f64),
+    (t_end, output_step): (f64, Option<f64>),
 ) -> (String, f64) {
     let rate = super::loop_rate(design, design.plant(), [reference, disturbance]);
-    let (bound, whole) = sample_time_choice(design, rate, Some(output_step));
+    let (bound, whole) = sample_time_choice(design, rate, output_step);
     // Delays that only a sample time far below the bound makes whole, at more samples than a run
     // takes in a minute (rounded FOPDT dead times,
     // 0.28333 and 0.26667 min, had offered 1e-5 min for T_s ≤ 0.0338 min; helper tryout): the
@@ -90,7 +91,7 @@ pub fn sample_time_need(
             rate,
         );
     }
-    let mut need = fine_sample_time_text(design, bound, whole, Some(output_step));
+    let mut need = fine_sample_time_text(design, bound, whole, output_step);
     if let Some(t) = whole.filter(|t| t_end / t > MANY_SAMPLES) {
         // Where the delays, not ρ, set t (well below the bound), what would lengthen it.
         let why = if t < bound / 2.0 {
@@ -194,10 +195,10 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
     true_delays_whole(run, sample_time)?;
     let own = match run.controller {
         Some(_) => None,
-        None => Some(
-            Controller::new(run.design, sample_time)
-                .map_err(|e| dividing_output_step(e, run.design, st.output_step))?,
-        ),
+        None => Some(Controller::new(run.design, sample_time).map_err(|e| match st.output_step_given {
+            true => dividing_output_step(e, run.design, st.output_step),
+            false => e,
+        })?),
     };
     let (T, h, unit) = (sample_time, st.output_step, run.design.plant().time_unit);
     let every = discrete::whole_multiple(h, T).filter(|&k| k >= 1).ok_or_else(|| {
@@ -205,7 +206,7 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
         let short = crate::settings::fmt_time;
         let divisor = match divisor {
             Some(d) => format!(", or sample_time to one that divides it, e.g. {} {unit}", short(d)),
-            None => format!(" (no sample time near {T} {unit} that divides it makes plant.delays whole)"),
+            None => format!(" (no sample time near {} {unit} that divides it makes plant.delays whole)", short(T)),
         };
         KeyError::new(
             "simulation.output_step",

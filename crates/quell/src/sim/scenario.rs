@@ -20,6 +20,7 @@ impl RunSettings {
         RunSettings {
             noise: s.noise.clone(),
             actuator: s.actuator.clone(),
+            output_step_given: sim.output_step_given,
             ..RunSettings::new(sim.t_end, sim.output_step, mode)
         }
     }
