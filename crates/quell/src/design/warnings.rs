@@ -18,7 +18,11 @@ pub const FRAGILE_ERROR: f64 = 1e-8;
 /// Scale-free condition number of B* (Proposition 1) above which the decoupler is reported: K and F
 /// invert B*, so a relative error ε in the plant's input gains reaches the decoupled channels as
 /// about κ·ε, the size of the channels themselves for ε = 2 % at κ = 50. Skogestad's LV column
-/// (κ = 142) diverged in 7 of 10 draws with truth.B 2 % off.
+/// (κ = 142 by the cosines then in use) diverged in 7 of 10 draws with truth.B 2 % off. κ is B*'s
+/// equilibrated ([`crate::Design::cond_B_star`]), near the least over the inputs' and outputs'
+/// units, which for a 2×2 is set by its relative gain λ (2λ − 1 + √((2λ − 1)² − 1)): an
+/// ill-conditioning the units make is not reported (Ogunnaike–Ray's column, 193 by the cosines,
+/// is 7.5 equilibrated), one the plant makes is (the LV column's λ = 35 at steady state: 138).
 pub const ILL_CONDITIONED_DECOUPLER: f64 = 50.0;
 
 /// One fragile part of a design.
