@@ -167,24 +167,25 @@ pub(crate) fn conditioned(A: &DMatrix<f64>, B: &DMatrix<f64>) -> (DMatrix<f64>, 
     (A, B)
 }
 
-/// `B` with each nonzero column scaled by the power of two that brings its norm nearest a/√m (1/√m
-/// where a = 0), so that ‖B‖_F is about a whatever the inputs' units, and the factors (B S, S).
+/// The factor that brings each of `norms` (B's columns' or C's rows') to a/√count, 1/√count where
+/// a = 0, so that those vectors together are of A's size ‖A‖_F = a; `None` for a zero norm, or one
+/// the factor would overflow.
+fn to_size(a: f64, norms: impl ExactSizeIterator<Item = f64>) -> Vec<Option<f64>> {
+    let target = if a > 0.0 { a } else { 1.0 } / (norms.len().max(1) as f64).sqrt();
+    norms.map(|x| (x > 0.0 && (target / x).is_finite()).then(|| target / x)).collect()
+}
+
+/// `B` with each nonzero column scaled by the power of two nearest [`to_size`]'s factor, so that
+/// ‖B‖_F is about a whatever the inputs' units, and the factors (B S, S).
 pub(crate) fn columns_to(a: f64, B: &DMatrix<f64>) -> (DMatrix<f64>, Vec<f64>) {
-    let target = if a > 0.0 { a } else { 1.0 } / (B.ncols().max(1) as f64).sqrt();
-    let mut B = B.clone();
-    let factors = B
-        .column_iter_mut()
-        .map(|mut b| {
-            let norm = b.norm();
-            let f = if norm > 0.0 && (target / norm).is_finite() {
-                2f64.powi(((target / norm).log2().round() as i32).clamp(-1000, 1000))
-            } else {
-                1.0
-            };
-            b *= f;
-            f
-        })
+    let factors: Vec<f64> = to_size(a, B.column_iter().map(|b| b.norm()))
+        .into_iter()
+        .map(|f| f.map_or(1.0, |f| 2f64.powi((f.log2().round() as i32).clamp(-1000, 1000))))
         .collect();
+    let mut B = B.clone();
+    for (mut b, f) in B.column_iter_mut().zip(&factors) {
+        b *= *f;
+    }
     (B, factors)
 }
 
@@ -207,13 +208,9 @@ pub(crate) fn balanced(A: &DMatrix<f64>, B: &DMatrix<f64>, C: &DMatrix<f64>) -> 
     // The weights that bring each column of B and each row of C to A's size, as given: fixed, since
     // weights taken afresh each sweep would undo the balancing's effect on B and C, and push D to
     // its limits (the paper's plant with A[0][0] = 1e15 had its couplings scaled to 1e-171).
-    let a = A.norm();
-    let weights = |norms: Vec<f64>| -> Vec<f64> {
-        let target = if a > 0.0 { a } else { 1.0 } / (norms.len().max(1) as f64).sqrt();
-        norms.into_iter().map(|x| if x > 0.0 && (target / x).is_finite() { target / x } else { 0.0 }).collect()
-    };
-    let wb = weights(B.column_iter().map(|b| b.norm()).collect());
-    let wc = weights(C.row_iter().map(|c| c.norm()).collect());
+    let weights = |norms: Vec<Option<f64>>| -> Vec<f64> { norms.into_iter().map(|w| w.unwrap_or(0.0)).collect() };
+    let wb = weights(to_size(A.norm(), B.column_iter().map(|b| b.norm())));
+    let wc = weights(to_size(A.norm(), C.row_iter().map(|c| c.norm())));
     for _ in 0..BALANCING_SWEEPS {
         let mut moved = false;
         for (i, di) in d.iter_mut().enumerate() {

@@ -10,8 +10,8 @@ use crate::plant::{check, PlantError};
 /// The design layer's one tolerance τ. Every "is it zero?" and "is it singular?" decision is made
 /// on a scale-free measure in [0, 1] (it does not grow with ‖A‖^(l−1), nor change with the units of
 /// the inputs, outputs or disturbances, and the first two are taken on the balanced realization
-/// (the states balanced by powers of two, as LAPACK's dgebal), so that the states' units hardly move them) and compared
-/// with τ:
+/// (the states balanced by powers of two, as LAPACK's dgebal), so that the states' units hardly
+/// move them) and compared with τ:
 ///
 /// | decision | measure | passes when |
 /// |---|---|---|
@@ -84,11 +84,17 @@ pub fn relative_degree_measures(
     check("A", A, n, n)?;
     check("B", B, n, B.ncols())?;
     check("C", C, C.nrows(), n)?;
-    // On the balanced realization: the cosines are the states' coordinates' (one state in a unit
-    // 1e6 times another's had left no relative degree at all), the balanced ones nearly not.
-    let (A, B, C, _) = &balanced(A, B, C);
+    let (A, B, C, _) = balanced(A, B, C);
+    Ok(cosines(&A, &B, &C))
+}
+
+/// [`relative_degree_measures`] on a realization already balanced: the cosines are the states'
+/// coordinates' (one state in a unit 1e6 times another's had left no relative degree at all), the
+/// balanced ones nearly not.
+fn cosines(A: &DMatrix<f64>, B: &DMatrix<f64>, C: &DMatrix<f64>) -> Vec<RelativeDegree> {
+    let n = A.nrows();
     let Bn = unit_columns(B);
-    Ok((0..C.nrows())
+    (0..C.nrows())
         .map(|i| {
             let mut row: RowDVector<f64> = C.row(i).clone_owned();
             let mut measures = Vec::with_capacity(n);
@@ -105,7 +111,7 @@ pub fn relative_degree_measures(
             let decided = measures.iter().position(|&m| m >= TOL).map(|l| l + 1);
             RelativeDegree { decided, given: None, measures }
         })
-        .collect())
+        .collect()
 }
 
 /// Relative degrees σ_i (eq. (7)), decided as in [`relative_degree_measures`]. `None` for an output
@@ -200,7 +206,9 @@ pub fn falb_wolovich_given(
     if let Some(g) = given.filter(|g| g.len() != m) {
         return Err(DesignError::Count { key: "design.relative_degrees", per: "output", expected: m, got: g.len() });
     }
-    let mut degrees = relative_degree_measures(A, B, C)?;
+    // Eq. (7)'s cosines and B*'s on the balanced realization, balanced once.
+    let (Ab, Bb, Cb, _) = balanced(A, B, C);
+    let mut degrees = cosines(&Ab, &Bb, &Cb);
     let mut sum = 0;
     for (channel, d) in degrees.iter_mut().enumerate() {
         let s = relative_degree_in_use(d, channel, given.map(|g| g[channel]), n)?;
@@ -215,11 +223,8 @@ pub fn falb_wolovich_given(
         return Err(DesignError::RelativeDegreeSum { sum, n });
     }
     let channels: Vec<ChannelTf> = channel_poles.iter().map(|p| ChannelTf::new(p)).collect();
-    let (B_star, C_star, _) = decoupling_rows(A, B, C, &channels);
-    // The cosines on the balanced realization, as the relative degrees' ([`relative_degree_measures`]).
-    let (Ab, Bb, Cb, _) = balanced(A, B, C);
-    let (_, _, scaled) = decoupling_rows(&Ab, &Bb, &Cb, &channels);
-    let (smallest, cond) = singular_extremes(&scaled);
+    let (B_star, C_star) = decoupling_rows(A, B, C, &channels);
+    let (smallest, cond) = singular_extremes(&cosine_B_star(&Ab, &Bb, &Cb, &channels));
     let inv = match B_star.clone().try_inverse() {
         Some(inv) if smallest >= TOL => inv,
         _ => {
@@ -297,18 +302,16 @@ fn relative_degree_in_use(
 }
 
 /// Proposition 1's rows for each channel: B* with row i = c_i A^(σ_i−1) B, C* with row
-/// i = c_i A^(σ_i) + Σ_z q_iz c_i A^z (q_iz the coefficients of ∏_j (s − λ_ij)), and the B* of the
-/// tolerance policy, entry (i, j) the cosine between c_i A^(σ_i−1) and b_j.
+/// i = c_i A^(σ_i) + Σ_z q_iz c_i A^z (q_iz the coefficients of ∏_j (s − λ_ij)).
 fn decoupling_rows(
     A: &DMatrix<f64>,
     B: &DMatrix<f64>,
     C: &DMatrix<f64>,
     channels: &[ChannelTf],
-) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
+) -> (DMatrix<f64>, DMatrix<f64>) {
     let (m, n) = (channels.len(), A.nrows());
     let mut B_star = DMatrix::zeros(m, B.ncols());
     let mut C_star = DMatrix::zeros(m, n);
-    let mut row_norms = Vec::with_capacity(m);
     for (i, tf) in channels.iter().enumerate() {
         let mut row: RowDVector<f64> = C.row(i).clone_owned(); // c_i A^z
         let mut c_star = RowDVector::zeros(n);
@@ -320,17 +323,31 @@ fn decoupling_rows(
         }
         // row is now c_i A^{σ_i}; B* uses c_i A^{σ_i − 1} B.
         c_star += &row;
-        row_norms.push(last.norm());
         B_star.set_row(i, &(&last * B));
         C_star.set_row(i, &c_star);
     }
-    let scaled = DMatrix::from_fn(m, B.ncols(), |i, j| {
-        let d = row_norms[i] * B.column(j).norm();
+    (B_star, C_star)
+}
+
+/// The B* of the tolerance policy ([`TOL`]) on the realization given (the balanced one): entry
+/// (i, j) the cosine between c_i A^(σ_i−1) and b_j.
+fn cosine_B_star(A: &DMatrix<f64>, B: &DMatrix<f64>, C: &DMatrix<f64>, channels: &[ChannelTf]) -> DMatrix<f64> {
+    // c_i A^(σ_i−1), and its products with B (row i of B*).
+    let rows: Vec<(RowDVector<f64>, RowDVector<f64>)> = channels
+        .iter()
+        .enumerate()
+        .map(|(i, tf)| (1..tf.sigma()).fold(C.row(i).clone_owned(), |row, _| &row * A))
+        .map(|row| {
+            let product = &row * B;
+            (row, product)
+        })
+        .collect();
+    DMatrix::from_fn(channels.len(), B.ncols(), |i, j| {
+        let d = rows[i].0.norm() * B.column(j).norm();
         if d > 0.0 {
-            B_star[(i, j)] / d
+            rows[i].1[j] / d
         } else {
             0.0
         }
-    });
-    (B_star, C_star, scaled)
+    })
 }

@@ -25,7 +25,7 @@ pub use sampled::{sampled_advice, sampled_transient, SAMPLED_TRANSIENT};
 use nalgebra::{Complex, DMatrix, DVector};
 
 use crate::design::Design;
-use crate::linalg::{eigenvalues, fmt_complex, fmt_complex_list, numerical_rank};
+use crate::linalg::{eigenvalues, fmt_complex, fmt_complex_list};
 use crate::plant::Plant;
 use crate::settings::{fmt_short, fmt_short_list, round_up_2, TimeUnit};
 use crate::signal::{Component, Signal};
@@ -752,7 +752,7 @@ pub fn disturbance_zeros(p: &Plant) -> Option<Vec<Complex<f64>>> {
         return None;
     }
     let CD = &p.C * &p.D;
-    if rank_of_CD(p) < k {
+    if rank_of_CD(p, &CD) < k {
         return None;
     }
     let P = DMatrix::identity(n, n) - &p.D * CD.clone().pseudo_inverse(1e-12 * CD.norm()).ok()? * &p.C;
@@ -767,17 +767,18 @@ pub fn disturbance_zeros(p: &Plant) -> Option<Vec<Complex<f64>>> {
     stable_zeros(z, scale)
 }
 
-/// The numerical rank of C D: its singular values above its own rounding ([`numerical_rank`]) and
-/// above the product's, 10·n·ε·‖C‖_F·‖D‖_F. A C D exactly zero in one choice of states is about
-/// 1e-15 in another (a disk drive's in rotated coordinates, whose zeros of (A, D, C) had then come
-/// out at −18 ± 51i and −1.2e16 against −0.29 ± 16.5i).
-fn rank_of_CD(p: &Plant) -> usize {
-    let CD = &p.C * &p.D;
-    let rounding = 10.0 * p.n() as f64 * f64::EPSILON * p.C.norm() * p.D.norm();
+/// The numerical rank of `CD` = C D of plant `p`: its singular values above its own rounding (as
+/// `linalg::numerical_rank`'s) and above the product's, 10·n·ε·‖C‖_F·‖D‖_F. A C D exactly zero in one
+/// choice of states is about 1e-15 in another (a disk drive's in rotated coordinates, whose zeros
+/// of (A, D, C) had then come out at −18 ± 51i and −1.2e16 against −0.29 ± 16.5i).
+fn rank_of_CD(p: &Plant, CD: &DMatrix<f64>) -> usize {
     if CD.is_empty() {
         return 0;
     }
-    numerical_rank(&CD).min(CD.singular_values().iter().filter(|&&s| s > rounding).count())
+    let s = CD.singular_values();
+    let own = CD.nrows().max(CD.ncols()) as f64 * f64::EPSILON * s.max();
+    let product = 10.0 * p.n() as f64 * f64::EPSILON * p.C.norm() * p.D.norm();
+    s.iter().filter(|&&v| v > own.max(product)).count()
 }
 
 /// `z` when it is not empty and all of it lies left of −1e-6·`scale`.
@@ -795,7 +796,7 @@ fn stable_zeros(z: Vec<Complex<f64>>, scale: f64) -> Option<Vec<Complex<f64>>> {
 /// difference of terms 5,900× its peak (helper tryout, 2026-12-06).
 pub fn singular_disturbance_zeros(p: &Plant) -> Option<Vec<Complex<f64>>> {
     let k = p.k();
-    if k == 0 || p.m() != k || rank_of_CD(p) == k {
+    if k == 0 || p.m() != k || rank_of_CD(p, &(&p.C * &p.D)) == k {
         return None;
     }
     stable_zeros(crate::design::decoupling_zeros(&p.A, &p.D, &p.C)?, p.A.norm().max(f64::MIN_POSITIVE))
