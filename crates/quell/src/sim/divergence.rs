@@ -106,9 +106,9 @@ impl Peaks {
     /// converging draws).
     pub(crate) fn runaway(&self, factor: f64, xi_bound: f64) -> Peaks {
         let mut peaks = self.bounds(factor);
-        peaks.0[2] = xi_bound;
-        // x̂ (1) at least as x (0).
-        peaks.0[1] = peaks.0[1].max(peaks.0[0]);
+        peaks.0[Peaks::index_of("xihat")] = xi_bound;
+        let (x, x_hat) = (Peaks::index_of("x"), Peaks::index_of("xhat"));
+        peaks.0[x_hat] = peaks.0[x_hat].max(peaks.0[x]);
         peaks
     }
 

@@ -195,9 +195,12 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
     true_delays_whole(run, sample_time)?;
     let own = match run.controller {
         Some(_) => None,
-        None => Some(Controller::new(run.design, sample_time).map_err(|e| match st.output_step_given {
-            true => dividing_output_step(e, run.design, st.output_step),
-            false => e,
+        None => Some(Controller::new(run.design, sample_time).map_err(|e| {
+            if st.output_step_given {
+                dividing_output_step(e, run.design, st.output_step)
+            } else {
+                e
+            }
         })?),
     };
     let (T, h, unit) = (sample_time, st.output_step, run.design.plant().time_unit);
