@@ -525,11 +525,11 @@ fn the_batch_reactors_slow_channel_is_diagnosed_and_the_automatic_design_avoids_
     for (i, c) in auto.scenario.reference.components.iter().enumerate() {
         assert!(r.max_abs_error(i, 90.0, 100.0).unwrap() <= TAIL_BOUND * c.peak());
     }
-    // 3 rad/s (ω's first component) stays beyond the threshold with the zeros among the poles
-    // (0.57 at r_o = 52, 0.78 at 4000: the placed eigenvectors, not the speed), and costs nothing:
-    // every tail meets the bound (checked above), so the run gets no advice on the observer.
+    // 3 rad/s (ω's first component) passes too, 0.18, measured by ω's effect on the states (in
+    // ξ̂_ω's units, which add ω's components as numbers, it had read 0.57), and every tail meets
+    // the bound (checked above), so the run gets no advice on the observer.
     let at_3 = diag.observer_fidelity.iter().find(|f| f.frequency == 3.0).unwrap();
-    assert!(at_3.relative_error > FIDELITY_LIMIT && diag.advice.is_empty(), "{at_3:?} {:?}", diag.advice);
+    assert!(at_3.relative_error <= FIDELITY_LIMIT && diag.advice.is_empty(), "{at_3:?} {:?}", diag.advice);
 }
 
 /// A hard-disk head positioner in SI units at its own millisecond time scale: a voice-coil arm
@@ -624,18 +624,16 @@ fn the_automatic_design_takes_no_more_solver_steps_than_the_hand_tuned_examples(
 }
 
 /// The supply vessel in SI units (tests/data/supply-vessel.toml, `[design]` emptied): thrust in N
-/// and N·m. Without a limit the automatic design peaks at about 1.9e8 (the yaw moment); a limit of
-/// 7e7 must be met by a slower design (its channel poles slower than the unlimited one's), whose
-/// written scenario, run again, keeps every max |u_f,i| within the limit and every tail within 1 %
-/// of its reference's peak; a limit of 1e7, below what any candidate reaches with the tail
+/// and N·m. Without a limit the automatic design peaks at about 1.2e8 (the yaw moment); a limit of
+/// 7e7 must be met by another design (the relaxation buys fewer solver steps with slower poles
+/// where nothing limits the effort, up to twice the first proposal's peak; under the limit it
+/// keeps a faster observer and peaks at 6.6e7), whose written scenario, run again, keeps every
+/// max |u_f,i| within the limit and every tail within 1 % of its reference's peak; a limit of 1e7, below what any candidate reaches with the tail
 /// bound, fails the verification with advice naming the limit and the smallest max |u_f| reached
 /// (a figure of a candidate's run: at least the limit).
 #[test]
-fn the_actuator_limit_trades_pole_speed_for_thrust_on_the_supply_vessel() {
+fn an_actuator_limit_on_the_supply_vessel_is_met_by_another_design() {
     let doc = without_design(&data("supply-vessel.toml"));
-    let fastest = |a: &quell::auto::AutoDesign| -> f64 {
-        a.scenario.design.channel_poles.iter().flatten().map(|p| p.norm()).fold(0.0, f64::max)
-    };
     let free = auto_design(&doc, &Targets::default()).unwrap();
     assert!(free.verification.passed, "{:?}", free.verification);
     let free_peak = free.verification.max_uf.iter().copied().fold(0.0, f64::max);
@@ -643,7 +641,7 @@ fn the_actuator_limit_trades_pole_speed_for_thrust_on_the_supply_vessel() {
     assert!(free_peak > limit, "the unlimited design's peak {free_peak:e} must exceed the limit for this test");
     let limited = auto_design(&doc, &Targets { u_limit: vec![limit], ..Targets::default() }).unwrap();
     assert!(limited.verification.passed, "{:?}", limited.verification);
-    assert!(fastest(&limited) < fastest(&free), "{} against {}", fastest(&limited), fastest(&free));
+    assert!(limited.scenario.design != free.scenario.design, "the limit changed nothing");
     let s = Scenario::from_toml(&limited.scenario.to_toml()).unwrap();
     let r = Run::of(&s, &s.design().unwrap()).simulate(|_| ControlFlow::Continue(())).unwrap();
     let t_end = s.simulation.t_end;

@@ -1043,3 +1043,26 @@ fn the_inputs_and_outputs_units_do_not_move_the_relative_degrees() {
     }
     assert_eq!(written.iter().map(|d| d.decided).collect::<Vec<_>>(), vec![Some(1), Some(1)]);
 }
+
+/// A diagonal change of the states' units leaves the eigenvector condition numbers the design
+/// reports, and so its fragility warnings, as they were: the three-channel example with x₂ in
+/// units 1e9 smaller had been warned of a fragile decoupler at κ₂ = 1.2e10 (A − BK's as written;
+/// 9.9 in its own units), for a loop that runs alike. A − BK is the same matrix up to the
+/// similarity (K is Proposition 1's, unique), so its κ₂ agrees to 1e-8; A − LC's observer gain is
+/// KNV's, which depends on the coordinates (three outputs), so only its warning is compared.
+#[test]
+fn the_states_units_do_not_make_a_decoupler_fragile() {
+    let text =
+        std::fs::read_to_string(format!("{}/../../examples/three-channel.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let designs = [text, three_channel_x2_in_nano_units()].map(|t| {
+        let s = quell::Scenario::from_toml(&t).unwrap();
+        let d = s.design().unwrap();
+        let warned: Vec<&str> = quell::design::warnings(&d, &s.design).iter().map(|w| w.key).collect();
+        (d.decoupled_eigenvector_condition(), warned, d.observer_eigenvector_condition())
+    });
+    let [(kappa, warned, observer), (kappa_nano, warned_nano, observer_nano)] = designs;
+    assert!((kappa_nano / kappa - 1.0).abs() < 1e-8, "{kappa} against {kappa_nano}");
+    assert!(kappa < 20.0, "{kappa}");
+    assert!(warned.is_empty() && warned_nano.is_empty(), "{warned:?} / {warned_nano:?}");
+    assert!(observer < 1e3 && observer_nano < 1e3, "{observer} / {observer_nano}");
+}

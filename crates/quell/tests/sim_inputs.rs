@@ -5,6 +5,8 @@
 
 use std::ops::ControlFlow;
 
+mod common;
+
 use quell::scenario::PAPER_EXAMPLE;
 use quell::sim::{MeasurementNoise, Outcome, Run, RunSettings, RunStats, SimError, Stats};
 use quell::{Design, Scenario, Signal};
@@ -357,6 +359,25 @@ fn a_non_finite_state_is_divergence_even_without_a_bound() {
     let refused = signal.ends_with("(controller input)") && value.abs() > quell::controller::MAX_MEASUREMENT;
     assert!(!value.is_finite() || refused, "{signal} = {value} at t = {t}");
     assert!(t > 14.5 && t < 5000.0, "t = {t}");
+}
+
+/// A state the outputs do not read, in units 1e9 smaller than theirs, is as large as tracking makes
+/// it, not diverged: examples/three-channel.toml with x₂ = 1e9 x₁' (x₂ in nano-units) and no
+/// disturbance. y₁ = x₁ follows sin(0.5 t), so x₂ settles to 1e9 × 0.5 cos(0.5 t), a peak of 5e8
+/// (closed form), half the divergence bound of 1e9 that a bound raised only by |x(0)|, 1/σ_min(C)
+/// and ω's response kept: the run had ended as diverged at t = 2.1 s, x₂ = 1.02e9 (unit hunt).
+#[test]
+fn an_unmeasured_state_in_small_units_is_not_called_diverged_while_it_tracks() {
+    let s = Scenario::from_toml(&common::three_channel_x2_in_nano_units()).unwrap();
+    assert_eq!(s.plant.A[(1, 0)], 1e9, "the rewrite took");
+    let d = s.design().unwrap();
+    let r = Run::of(&s, &d).settings(RunSettings { record_states: true, ..RunSettings::of(&s) }).simulate(go).unwrap();
+    assert_eq!(r.outcome, Some(Outcome::Completed));
+    let n = s.plant.n();
+    let tail = r.t.iter().enumerate().filter(|(_, &t)| t >= 80.0).map(|(k, _)| r.x[k * n + 1].abs());
+    let peak = tail.fold(0.0, f64::max);
+    // The loop tracks to about 1e-5 of g by then (the example's tails); 1 % of the peak is loose.
+    assert!((peak / 5e8 - 1.0).abs() < 1e-2, "x₂'s tail peak {peak:e} against 5e8");
 }
 
 #[test]

@@ -239,9 +239,6 @@ pub fn falb_wolovich_given(
     Ok(FalbWolovich { channels, B_star, C_star, K, F, cond_B_star, smallest_B_star: smallest, degrees })
 }
 
-/// Most sweeps of [`equilibrated_condition`] (a 2×2 settles in one, the examples' 3×3 in a few).
-const EQUILIBRATION_SWEEPS: usize = 50;
-
 /// κ₂ of B* with its rows and its columns scaled to unit norm, in turn until they stay: invariant,
 /// as B* itself is, under the states' coordinates, and under the units of the inputs and outputs
 /// where B* has no zero pattern that lets the scaling drift (a triangular B* settles within a few
@@ -250,28 +247,7 @@ const EQUILIBRATION_SWEEPS: usize = 50;
 /// κ₂ = (γ + σ)/|γ − σ| with γ/σ = √|ad/bc|, that least). The cosines of [`TOL`] are not
 /// invariant: one state in a unit 50× another's had moved them from κ₂ = 1.7 to 50.
 fn equilibrated_condition(B_star: &DMatrix<f64>) -> f64 {
-    let mut M = B_star.clone();
-    for _ in 0..EQUILIBRATION_SWEEPS {
-        let mut moved = 0.0f64;
-        for mut r in M.row_iter_mut() {
-            let norm = r.norm();
-            if norm > 0.0 {
-                r /= norm;
-                moved = moved.max((norm - 1.0).abs());
-            }
-        }
-        for mut c in M.column_iter_mut() {
-            let norm = c.norm();
-            if norm > 0.0 {
-                c /= norm;
-                moved = moved.max((norm - 1.0).abs());
-            }
-        }
-        if moved <= 1e-12 {
-            break;
-        }
-    }
-    singular_extremes(&M).1
+    singular_extremes(&crate::linalg::equilibrated(B_star.clone())).1
 }
 
 /// The σ_i channel `channel` uses: the `given` one unless the plant clearly contradicts it (see

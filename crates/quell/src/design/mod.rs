@@ -436,17 +436,20 @@ impl Design {
     pub fn near_axis_zeros(&self) -> &[Complex<f64>] {
         &self.near_axis_zeros
     }
-    /// κ₂ of the eigenvector matrix of A − LC ([`place::eigenvector_condition`] by duality):
-    /// how much a perturbation of the model moves the observer poles; ∞ for a Jordan design.
+    /// κ₂ of the eigenvector matrix of A − LC (by duality), its rows and columns equilibrated so
+    /// that the states' units do not move it: how much a relative error in the model's entries
+    /// moves the observer poles; ∞ for a Jordan design. [`place::eigenvector_condition`] gives κ₂
+    /// in the coordinates as given.
     pub fn observer_eigenvector_condition(&self) -> f64 {
         let p = &self.plant;
         *self
             .observer_kappa
-            .get_or_init(|| place::closed_loop_condition(&p.A.transpose(), &p.C.transpose(), &self.L.transpose()))
+            .get_or_init(|| place::scale_free_condition(&p.A.transpose(), &p.C.transpose(), &self.L.transpose()))
     }
-    /// κ₂ of the eigenvector matrix of A − BK = A_f; ∞ for a Jordan design.
+    /// κ₂ of the eigenvector matrix of A − BK = A_f, equilibrated as
+    /// [`Design::observer_eigenvector_condition`]'s; ∞ for a Jordan design.
     pub fn decoupled_eigenvector_condition(&self) -> f64 {
-        *self.decoupled_kappa.get_or_init(|| place::closed_loop_condition(&self.plant.A, &self.plant.B, &self.K))
+        *self.decoupled_kappa.get_or_init(|| place::scale_free_condition(&self.plant.A, &self.plant.B, &self.K))
     }
     /// Dimension q_g of the reference regressor ξ̂_g.
     pub fn q_g(&self) -> usize {

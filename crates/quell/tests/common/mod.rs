@@ -258,3 +258,16 @@ pub fn eigenvalues_faer(M: &DMatrix<f64>) -> Vec<Complex<f64>> {
     let F = faer::Mat::<f64>::from_fn(n, n, |r, c| B[(r, c)]);
     F.eigenvalues().expect("faer's QR converges").iter().map(|z| Complex::new(z.re, z.im)).collect()
 }
+
+/// examples/three-channel.toml with its unmeasured state x₂ in units 1e9 smaller (x₂ → 1e9 x₂:
+/// row 2 of A, B, D times 1e9, column 2 of A over 1e9) and no disturbance: the same loop in other
+/// units (a unit hunt's case).
+pub fn three_channel_x2_in_nano_units() -> String {
+    std::fs::read_to_string(format!("{}/../../examples/three-channel.toml", env!("CARGO_MANIFEST_DIR")))
+        .unwrap()
+        .replace("[0.0, 1.0, 0.0, 0.0], [1.0, -1.0, 0.5, 0.0]", "[0.0, 1e-9, 0.0, 0.0], [1e9, -1.0, 5e8, 0.0]")
+        .replace("[0.0, 0.4, -0.3, -1.0]", "[0.0, 4e-10, -0.3, -1.0]")
+        .replace("[1.0, 0.5, 0.0], [0.0, 1.0, 0.0]", "[1e9, 5e8, 0.0], [0.0, 1.0, 0.0]")
+        .replace("D = [[0.0], [1.0]", "D = [[0.0], [1e9]")
+        .replace("{ bias = 0.5, harmonics = [{ amplitude = 0.5, frequency = 1.0 }] } ]", "{ bias = 0.0 } ]")
+}
