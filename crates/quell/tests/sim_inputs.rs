@@ -493,7 +493,7 @@ fn the_coarse_sample_warning_offers_a_sample_time_that_divides_the_output_step()
 
 /// The numbers a message offers: each after "e.g. " or "valid sample time is ", in order.
 fn offered(message: &str) -> Vec<f64> {
-    let starts = message.match_indices("e.g. ").chain(message.match_indices("valid sample time is "));
+    let starts = ["e.g. ", "valid sample time is ", "valid one is "].into_iter().flat_map(|p| message.match_indices(p));
     let mut at: Vec<(usize, f64)> = starts
         .filter_map(|(i, p)| {
             let rest = &message[i + p.len()..];
@@ -551,6 +551,21 @@ fn sample_time_offers_agree_where_none_makes_delays_and_output_step_whole() {
     assert!(e.contains("none near it also divides simulation.output_step = 0.1 s"), "{e}");
     let [nearest, fix] = offered(&e)[..] else { panic!("{e}") };
     accepted(nearest, fix);
+}
+
+/// A sample time whose delay lines would be too long is offered one that divides the output step
+/// too: the paper's at 3e-8 s (τ = 1 s is 3.3e7 samples, beyond 1e7) had been offered
+/// 3.0000003e-7 s, which the output step of 0.1 s then refused; the offer runs.
+#[test]
+fn a_sample_time_offered_for_delay_lines_too_long_divides_the_output_step() {
+    let (s, d) = paper();
+    let h = s.simulation.output_step;
+    let settings = |t_s: f64| RunSettings { output_step_given: true, ..RunSettings::sampled(2.0, h, t_s) };
+    let e = Run::of(&s, &d).settings(settings(3e-8)).check().unwrap_err().to_string();
+    assert!(e.contains("a delay line holds at most"), "{e}");
+    let [offer] = offered(&e)[..] else { panic!("{e}") };
+    let r = Run::of(&s, &d).settings(settings(offer)).check();
+    assert!(r.is_ok(), "{offer}: {:?}", r.err());
 }
 
 /// A true plant with delays of its own: a sample time that makes the model's delays whole but not

@@ -223,25 +223,40 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
     Ok((own, every))
 }
 
-/// The delay check's offer ([`ControllerError::DelayNotMultiple`]) made to divide the output step
-/// `h` too, where one near T_s does ([`discrete::valid_sample_time_near`]), else told with the
-/// output step to set beside it: the controller's own check knows no output step.
+/// The delay check's offer ([`ControllerError::DelayNotMultiple`], `DelayTooLong`,
+/// `DelayLinesTooLarge`) made to divide the output step `h` too, where one near T_s (near the
+/// lines' shortest sample time for the last) does ([`discrete::valid_sample_time_near`]); a delay
+/// that is not whole is else told with the output step to set beside it. The controller's own
+/// check knows no output step: a delay line too long at 3e-8 s had offered 3.0000003e-7 s, which
+/// the output step of 0.1 s then refused.
 fn dividing_output_step(e: ControllerError, design: &Design, h: f64) -> ControllerError {
+    let offer = |near: f64, t: f64| {
+        discrete::valid_sample_time_near(&design.plant().delays, h, near, 1 + design.q()).or(Some(t))
+    };
     match e {
         ControllerError::DelayNotMultiple { channel, delay, sample_time, ratio, nearest: Some(t), unit, .. }
             if !discrete::divides(h, t) =>
         {
-            let width = 1 + design.q();
-            let offer = discrete::valid_sample_time_near(&design.plant().delays, h, sample_time, width);
+            let nearest = offer(sample_time, t);
             ControllerError::DelayNotMultiple {
                 channel,
                 delay,
                 sample_time,
                 ratio,
-                nearest: offer.or(Some(t)),
+                nearest,
                 output_step: Some(h),
                 unit,
             }
+        }
+        ControllerError::DelayTooLong { channel, delay, sample_time, samples, nearest: Some(t), unit }
+            if !discrete::divides(h, t) =>
+        {
+            ControllerError::DelayTooLong { channel, delay, sample_time, samples, nearest: offer(t, t), unit }
+        }
+        ControllerError::DelayLinesTooLarge { rows, width, sample_time, at_least, nearest: Some(t), unit }
+            if !discrete::divides(h, t) =>
+        {
+            ControllerError::DelayLinesTooLarge { rows, width, sample_time, at_least, nearest: offer(t, t), unit }
         }
         e => e,
     }
