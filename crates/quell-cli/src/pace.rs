@@ -65,7 +65,7 @@ fn deployment_text(s: &Scenario, d: &Design) -> String {
         format!("{what} has a defective eigenvector matrix (κ₂ = ∞): f32's rounding, as any model error, can move its poles without bound; export in f64 (the default) and give distinct poles")
     } else if shift > quell::export::F32_POLE_SHIFT {
         format!(
-            "f32 could move the poles of {what} by about {} (κ₂ = {kappa:.2e} × 6e-8): export in f64 (the default), or choose poles that give a smaller κ₂",
+            "f32 could move the poles of {what} by about {} (κ₂ = {kappa:.2e} × 6e-8, κ₂ in the states' coordinates as given): export in f64 (the default), or choose poles that give a smaller κ₂",
             quell::export::fmt_shift(shift)
         )
     } else {

@@ -133,7 +133,7 @@ fn the_design_report_says_what_deployment_needs() {
     assert!((d["deployment"]["sample_time_at_most"].as_f64().unwrap() - 0.2 / 9.0).abs() < 1e-15);
     let hdd = Path::new(env!("CARGO_MANIFEST_DIR")).join("../quell/tests/data/hdd-servo.toml");
     let out = stdout(&quell(&["design", hdd.to_str().unwrap()]));
-    assert!(out.contains("  precision: f32 could move the poles of A − LC (the observer) by about 16 % (κ₂ = 2.75e6 × 6e-8): export in f64 (the default)"), "{out}");
+    assert!(out.contains("  precision: f32 could move the poles of A − LC (the observer) by about 16 % (κ₂ = 2.75e6 × 6e-8, κ₂ in the states' coordinates as given): export in f64 (the default)"), "{out}");
     // Delays of 1.5 and 2.5 µs are whole at 0.5 µs, far below the bound: 100 s / 5e-7 s = 2e8
     // samples, which the report counts, and the delays, not that sample time, are the remedy.
     let dir = temp_dir("deployment-us");

@@ -135,9 +135,9 @@ def test_fragile_observer_gain_warns():
         quell.Scenario.from_toml(PAPER).design()
 
 
-def test_auto_design_meets_the_actuator_limit_with_another_design():
+def test_auto_design_trades_pole_speed_for_the_actuator_limit():
     """The SI supply vessel with its [design] emptied (thrust in N and N·m): u_limit = 7e7, below
-    the unlimited design's peak, is met by another design whose run, simulated again here, keeps
+    the unlimited design's peak, is met by a slower design whose run, simulated again here, keeps
     every max |u_f,i| within the limit and every tail within 1 % of its reference's peak; 1e7 is
     refused with advice naming the limit and the smallest max |u_f| reached (above the limit)."""
     text = without_design((REFERENCE / "supply-vessel.toml").read_text())
@@ -161,7 +161,7 @@ def test_auto_design_meets_the_actuator_limit_with_another_design():
 def test_auto_design_takes_one_actuator_limit_per_input():
     """The same vessel with a limit per input in its own units (1.5e7 N, 1.5e7 N, 1e8 N·m): the
     design's run, simulated again, keeps each max |u_f,i| within its own limit (one limit of 1e8
-    would allow 2.0e7 N on surge); two limits for three inputs, or a negative one, are DesignErrors
+    would allow 2.5e7 N on surge); two limits for three inputs, or a negative one, are DesignErrors
     naming u_limit."""
     text = without_design((REFERENCE / "supply-vessel.toml").read_text())
     limits = [1.5e7, 1.5e7, 1e8]

@@ -525,11 +525,11 @@ fn the_batch_reactors_slow_channel_is_diagnosed_and_the_automatic_design_avoids_
     for (i, c) in auto.scenario.reference.components.iter().enumerate() {
         assert!(r.max_abs_error(i, 90.0, 100.0).unwrap() <= TAIL_BOUND * c.peak());
     }
-    // 3 rad/s (ω's first component) passes too, 0.18, measured by ω's effect on the states (in
-    // ξ̂_ω's units, which add ω's components as numbers, it had read 0.57), and every tail meets
-    // the bound (checked above), so the run gets no advice on the observer.
+    // 3 rad/s (ω's first component) stays beyond the threshold with the zeros among the poles
+    // (0.34 at the kept observer: its placed eigenvectors decide with two outputs), and costs
+    // nothing: every tail meets the bound (checked above), so the run gets no advice on the observer.
     let at_3 = diag.observer_fidelity.iter().find(|f| f.frequency == 3.0).unwrap();
-    assert!(at_3.relative_error <= FIDELITY_LIMIT && diag.advice.is_empty(), "{at_3:?} {:?}", diag.advice);
+    assert!(at_3.relative_error > FIDELITY_LIMIT && diag.advice.is_empty(), "{at_3:?} {:?}", diag.advice);
 }
 
 /// A hard-disk head positioner in SI units at its own millisecond time scale: a voice-coil arm
@@ -624,16 +624,18 @@ fn the_automatic_design_takes_no_more_solver_steps_than_the_hand_tuned_examples(
 }
 
 /// The supply vessel in SI units (tests/data/supply-vessel.toml, `[design]` emptied): thrust in N
-/// and N·m. Without a limit the automatic design peaks at about 1.2e8 (the yaw moment); a limit of
-/// 7e7 must be met by another design (the relaxation buys fewer solver steps with slower poles
-/// where nothing limits the effort, up to twice the first proposal's peak; under the limit it
-/// keeps a faster observer and peaks at 6.6e7), whose written scenario, run again, keeps every
-/// max |u_f,i| within the limit and every tail within 1 % of its reference's peak; a limit of 1e7, below what any candidate reaches with the tail
+/// and N·m. Without a limit the automatic design peaks at about 1.9e8 (the yaw moment); a limit of
+/// 7e7 must be met by a slower design (its channel poles slower than the unlimited one's), whose
+/// written scenario, run again, keeps every max |u_f,i| within the limit and every tail within 1 %
+/// of its reference's peak; a limit of 1e7, below what any candidate reaches with the tail
 /// bound, fails the verification with advice naming the limit and the smallest max |u_f| reached
 /// (a figure of a candidate's run: at least the limit).
 #[test]
-fn an_actuator_limit_on_the_supply_vessel_is_met_by_another_design() {
+fn the_actuator_limit_trades_pole_speed_for_thrust_on_the_supply_vessel() {
     let doc = without_design(&data("supply-vessel.toml"));
+    let fastest = |a: &quell::auto::AutoDesign| -> f64 {
+        a.scenario.design.channel_poles.iter().flatten().map(|p| p.norm()).fold(0.0, f64::max)
+    };
     let free = auto_design(&doc, &Targets::default()).unwrap();
     assert!(free.verification.passed, "{:?}", free.verification);
     let free_peak = free.verification.max_uf.iter().copied().fold(0.0, f64::max);
@@ -641,7 +643,7 @@ fn an_actuator_limit_on_the_supply_vessel_is_met_by_another_design() {
     assert!(free_peak > limit, "the unlimited design's peak {free_peak:e} must exceed the limit for this test");
     let limited = auto_design(&doc, &Targets { u_limit: vec![limit], ..Targets::default() }).unwrap();
     assert!(limited.verification.passed, "{:?}", limited.verification);
-    assert!(limited.scenario.design != free.scenario.design, "the limit changed nothing");
+    assert!(fastest(&limited) < fastest(&free), "{} against {}", fastest(&limited), fastest(&free));
     let s = Scenario::from_toml(&limited.scenario.to_toml()).unwrap();
     let r = Run::of(&s, &s.design().unwrap()).simulate(|_| ControlFlow::Continue(())).unwrap();
     let t_end = s.simulation.t_end;
@@ -927,7 +929,7 @@ fn a_scenario_without_a_design_table_is_designed_whole() {
 }
 
 /// Where the halving for the sample time costs the disturbance observer its fidelity (the Quanser
-/// helicopter, tests/data/quanser-heli.toml, at 2 ms: the rules' observer passes ω within 0.033,
+/// helicopter, tests/data/quanser-heli.toml, at 2 ms: the rules' observer passes ω within 0.035,
 /// the one 16× slower with 0.49), the observer's reason says so and what would keep it.
 #[test]
 fn the_sampled_halving_says_when_it_costs_the_disturbance_observer() {
@@ -941,7 +943,7 @@ fn the_sampled_halving_says_when_it_costs_the_disturbance_observer() {
         .fold(0.0, f64::max);
     assert!(kept > 0.3, "{kept}");
     assert!(
-        why.contains("its error is 3.31e-2 at worst; ×0.0625 of that for simulation.sample_time = 0.002 s"),
+        why.contains("its error is 3.52e-2 at worst; ×0.0625 of that for simulation.sample_time = 0.002 s"),
         "{why}"
     );
     assert!(
@@ -1415,40 +1417,36 @@ fn a_stop_during_the_continuous_comparison_interrupts_the_design() {
     assert!(restarted, "the side run reported no progress");
 }
 
-/// An LCL-filtered grid inverter over 0.2 s (tests/data/lcl-inverter.toml): the automatic design's
-/// observer holds the plant's zeros, the L1–Cf resonance −R1/(2L1) ± j(ω_r ± ω_grid) in the
-/// rotating frame (closed form), which decay by only 2.5 e-folds, and it fails its verification.
-/// Its advice gives one horizon, the one it verified (the held zeros' rule of thumb, 30/|Re z| =
-/// 2.5 s, had been offered beside it as a second "lengthen"), and at that horizon it passes.
+/// An LCL-filtered grid inverter over 0.2 s (tests/data/lcl-inverter.toml): the plant's zeros of
+/// (A, D, C) are the L1–Cf resonance −R1/(2L1) ± j(ω_r ± ω_grid) in the rotating frame (closed
+/// form), which decay by only 2.5 e-folds over the run, so the run's own diagnostics would ask for
+/// 30/|Re z| = 2.5 s where an observer holds them. The automatic design does not hold them: held,
+/// the disturbance observer leaks 8 % of the d-axis bias (325 V) into the q-axis estimate, 4× that
+/// component's size (6.5 V); with all-fast poles both estimates are small, an error of 1.0 of each
+/// component's size. Judged in ξ̂_ω's units, which add the two components as numbers, holding them
+/// had read 0.11, and that design failed its verification at 0.2 s (tails 0.28, 0.28 against 0.22,
+/// 0.01); the all-fast one passes it, with tails of 3.5e-8 and 4.2e-9.
 #[test]
-fn an_lcl_inverters_held_zeros_get_the_verified_horizon_alone() {
+fn an_lcl_inverters_slow_zeros_are_not_held_and_its_design_passes_at_its_horizon() {
     let doc = without_design(&data("lcl-inverter.toml"));
-    let short = auto_design(&doc, &Targets::default()).unwrap();
-    assert!(!short.verification.passed, "{:?}", short.verification);
+    let auto = auto_design(&doc, &Targets::default()).unwrap();
+    assert!(auto.verification.passed, "{:?}", auto.verification);
     let (r1, l1, cf, w): (f64, f64, f64, f64) = (0.05, 2e-3, 10e-6, 2.0 * std::f64::consts::PI * 50.0);
     let (re, wr) = (-r1 / (2.0 * l1), (1.0 / (l1 * cf) - (r1 / (2.0 * l1)).powi(2)).sqrt());
-    let zeros = disturbance_zeros(short.design.plant()).unwrap();
+    let zeros = disturbance_zeros(auto.design.plant()).unwrap();
+    let held = auto.design.observer_eigenvalues();
     for im in [wr + w, wr - w] {
         let z = Complex::new(re, im);
         assert!(zeros.iter().any(|p| (p - z).norm() < 1e-6 * z.norm()), "{z} not among {zeros:?}");
-        let held = short.design.observer_eigenvalues();
-        assert!(held.iter().any(|p| (p - z).norm() < 1e-6 * z.norm()), "{z} not held: {held:?}");
+        assert!(held.iter().all(|p| (p - z).norm() > 1e-3 * z.norm()), "{z} held: {held:?}");
     }
-    // The run's own diagnostics would name them with 30/|Re z|; the failure names the verified one.
-    let rule = quell::diagnostics::slow_transient_advice(&short.design, 0.2).unwrap();
-    assert!(
-        rule.contains("hold the zeros of (A, D, C)") && rule.contains("lengthen simulation.t_end to 2.5 s"),
-        "{rule}"
-    );
-    let advice = short.verification.advice.join("\n");
-    assert_eq!(advice.matches("lengthen simulation.t_end").count(), 1, "{advice}");
-    assert!(advice.contains("passes its verification") && !advice.contains("2.5 s"), "{advice}");
-    let proposed = number_after(&advice, "lengthen simulation.t_end to at least ", " s");
-    assert!(proposed < 2.5, "{proposed}");
-    let mut doc = doc;
-    doc["simulation"].as_table_mut().unwrap().insert("t_end".into(), toml::Value::Float(proposed));
-    let long = auto_design(&doc, &Targets::default()).unwrap();
-    assert!(long.verification.passed, "{:?}", long.verification);
+    // Held, the run's diagnostics would name them with 30/|Re z|.
+    let holding = [zeros.clone(), vec![(-75369.6112).into(), (-150739.2224).into()]].concat();
+    let rule = quell::diagnostics::slow_transient_advice(&auto.design.with_observer_poles(&holding).unwrap(), 0.2);
+    let rule = rule.unwrap_or_default();
+    assert!(rule.contains("lengthen simulation.t_end to 2.5 s"), "{rule}");
+    let written: toml::Table = auto.scenario.to_toml().parse().unwrap();
+    assert!(Scenario::from_document(&written).is_ok());
 }
 
 /// A design verified in the continuous loop whose u_f is the small difference of terms thousands
