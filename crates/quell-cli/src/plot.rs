@@ -379,6 +379,11 @@ fn lines<DB: DrawingBackend + Strokes>(
     for (k, (name, points)) in under.into_iter().chain(outputs).chain(over) {
         let points = m4(points, &x, w);
         let color = if faint.contains(&k) { pick(k).mix(0.35) } else { pick(k) };
+        if let [point] = points[..] {
+            // One row (a run that ended before its second): a line of one point draws nothing.
+            chart.draw_series(std::iter::once(Circle::new(point, 3, color.filled()))).map_err(|e| e.to_string())?;
+            continue;
+        }
         let shifted = |(dt, dv): (f64, f64)| points.iter().map(move |&(t, v)| (t + dt, v + dv));
         for &offset in offsets {
             if faint.contains(&k) {

@@ -1432,6 +1432,23 @@ fn a_failed_run_says_how_much_the_actuator_clipped() {
     }
 }
 
+/// A run that diverges before its second row (a true plant starting at x1 = 1e150: diverged at
+/// t = 1e-6) has one point per curve, which a line does not draw: each panel shows it as a dot
+/// (they had stayed empty), the log panel's |e1(0)| = 2e150 among them.
+#[test]
+fn a_run_that_ends_before_its_second_row_is_drawn_as_points() {
+    let dir = temp_dir("one-row");
+    let file = dir.path().join("huge-x0.toml");
+    fs::write(&file, format!("{}\n[truth]\nx0 = [1e150, 0.0, 0.0]\n", fs::read_to_string(paper()).unwrap())).unwrap();
+    let out = dir.path().join("out");
+    let o = quell(&["run", file.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert_eq!(fs::read_to_string(out.join("signals.csv")).unwrap().lines().count(), 2, "a header and one row");
+    let svg = fs::read_to_string(out.join("channel1.svg")).unwrap();
+    // y, g, e, u, u_f, the 8 entries of η̂_1 and |e|: 14 curves of one point.
+    assert_eq!(svg.matches("<circle").count(), 14, "{}", &svg[..svg.len().min(400)]);
+}
+
 #[test]
 fn design_auto_on_a_fully_specified_scenario_says_nothing_was_chosen() {
     // The heading "the keys chosen, and why" stood over an empty list.

@@ -332,6 +332,24 @@ def test_an_export_into_a_directory_another_process_is_writing_is_refused(tmp_pa
     assert len(written) == 2
 
 
+def test_a_run_that_ends_before_its_second_row_is_drawn_as_points():
+    """A true plant starting at x1 = 1e150 diverges at t = 1e-6, before the second row: each curve
+    has one point, which a line does not draw (the panels had stayed empty); as the CLI's figure,
+    each is a dot."""
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    text = (EXAMPLES / "paper.toml").read_text() + "\n[truth]\nx0 = [1e150, 0.0, 0.0]\n"
+    with pytest.raises(quell.SimulationError, match="diverged at t = 1e-6 s") as e:
+        quell.simulate(quell.Scenario.from_toml(text))
+    r = e.value.result
+    assert len(r.t) == 1, len(r.t)
+    fig = r.plot(channel=1)
+    for a in fig.axes:
+        drawn = [line for line in a.get_lines() if len(line.get_xdata()) == 1]
+        assert drawn and all(line.get_marker() == "o" for line in drawn), a.get_title()
+    matplotlib.pyplot.close(fig)
+
+
 def test_a_plot_of_many_parameters_names_their_range_in_the_title():
     """Beyond 14 entries of η̂_i the legend would hide the traces (q = 33 covered a third of them) and
     the palette repeats: as the CLI's figure, no legend, and the title names the range."""

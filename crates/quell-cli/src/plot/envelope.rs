@@ -97,8 +97,13 @@ pub(super) fn log_panel<DB: DrawingBackend + Strokes>(
         .map_err(|e| e.to_string())?;
     for (k, (name, points)) in series.iter().enumerate().filter(|(_, (_, p))| !p.is_empty()) {
         let style = pick(k).stroke_width(if DB::SPIKES { 1 } else { 2 });
-        chart
-            .draw_series(LineSeries::new(points.iter().copied().filter(|&(_, v)| v >= lo), style))
+        let on_axis: Vec<(f64, f64)> = points.iter().copied().filter(|&(_, v)| v >= lo).collect();
+        // One point (a run that ended before its second row) as a dot: a line of one draws nothing.
+        let drawn = match on_axis[..] {
+            [point] => chart.draw_series(std::iter::once(Circle::new(point, 3, pick(k).filled()))),
+            _ => chart.draw_series(LineSeries::new(on_axis, style)),
+        };
+        drawn
             .map_err(|e| e.to_string())?
             .label(name.as_str())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], pick(k).stroke_width(2)));

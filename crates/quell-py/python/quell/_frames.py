@@ -228,6 +228,13 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
             axes[5].set(title=title, ylabel="|e|")
     axes[-1].set(xlabel=f"t, {result.time_unit}")
     eta_panel = axes[4] if len(axes) == 6 else axes[-1]
+    # As the CLI's figure: a run that ended before its second row has one point per curve, which a
+    # line does not draw; a dot does.
+    twin = [uf_ax] if len(axes) > 1 and all(uf_ax is not a for a in axes) else []
+    for a in list(axes) + twin:
+        for line in a.get_lines():
+            if len(line.get_xdata()) == 1:
+                line.set_marker("o")
     for a in axes:
         a.grid(True, alpha=0.3)
         # Where it hides the least of the curves (a fixed corner covered the η̂ traces); the η̂
