@@ -96,9 +96,10 @@ fn largest(v: &DVector<C64>) -> f64 {
 /// y = C x + Q ω = g, whatever input v reaches it (after its delays): the solution of Rosenbrock's
 /// system [jwI − A, −B; C, 0] [x; v] = [D ω; g − Q ω]. What x is while the loop tracks, and an
 /// unmeasured state that C does not bound (σ_min(C)) can be far larger than y. `None` where the
-/// system, rows and columns equilibrated, is singular to working precision, σ_min < √ε σ_max (a zero of the plant at jw, or damped
-/// within rounding of it: its steady state is reached only over 1/|Re z|, and at −1e-11 ± j a tone
-/// at 1 rad/s had raised x's bound to 5e13), or the solution is not finite.
+/// system, rows and columns equilibrated, is singular to working precision, σ_min < √ε σ_max (a
+/// zero of the plant at jw, or damped within rounding of it: its steady state is reached only over
+/// 1/|Re z|, and at −1e-11 ± j a tone at 1 rad/s had raised x's bound to 5e13), or the solution is
+/// not finite.
 pub(crate) fn tracking_state(p: &crate::plant::Plant, tone: &Tone) -> Option<DVector<C64>> {
     let (n, m) = (p.n(), p.m());
     let mut S = DMatrix::<C64>::zeros(n + m, n + m);
@@ -247,9 +248,9 @@ pub struct Averaged {
     /// own units (1e9 for forces in newtons in the paper's form).
     pub xi_peak: f64,
     /// Σ_tones (max(|g|∞/σ_min(C), |x_g|∞) + |[x; x̂]|∞ driven by ω without adaptive command), x_g
-    /// the state of y = g against ω (Rosenbrock's system at each tone): the size the plant's and the observer's
-    /// states have in their own units (7e12 for a heat store in joules; an unmeasured state in
-    /// units 1e9 smaller than the outputs' is 1e9 while y follows g).
+    /// the state of y = g against ω (Rosenbrock's system at each tone): the size the plant's and
+    /// the observer's states have in their own units (7e12 for a heat store in joules; an
+    /// unmeasured state in units 1e9 smaller than the outputs' is 1e9 while y follows g).
     pub x_peak: f64,
 }
 
@@ -297,7 +298,7 @@ impl Averaged {
     }
 }
 
-/// What [`Fidelity`] holds the estimate's error against: L_ω⁺, which reads E = L_ω⁺ T − I from T,
+/// What [`Fidelity`] holds the estimate's error against: L_ω⁺, which reads I + E = L_ω⁺ T from T,
 /// and each component's peak.
 struct OmegaSizes {
     L_w_pinv: DMatrix<C64>,
@@ -318,19 +319,15 @@ impl OmegaSizes {
 
 /// Fidelity of the disturbance observer at one tone, over the components of ω with energy there.
 fn fidelity_at(sizes: &OmegaSizes, tone: &Tone, T: &DMatrix<C64>) -> Option<Fidelity> {
-    let E = &sizes.L_w_pinv * T;
     let peaks = &sizes.peaks;
+    let E = &sizes.L_w_pinv * T - DMatrix::<C64>::identity(peaks.len(), peaks.len());
     tone.omega
         .iter()
         .enumerate()
         .filter(|(_, a)| a.norm() > 0.0)
         .map(|(alpha, _)| {
-            let delta = |beta: usize| if beta == alpha { C64::new(1.0, 0.0) } else { C64::new(0.0, 0.0) };
-            let sum: f64 = (0..peaks.len())
-                .filter(|&beta| peaks[beta] > 0.0)
-                .map(|beta| ((E[(beta, alpha)] - delta(beta)).norm() * peaks[alpha] / peaks[beta]).powi(2))
-                .sum();
-            sum.sqrt()
+            let sized = (0..peaks.len()).filter(|&beta| peaks[beta] > 0.0);
+            sized.map(|beta| (E[(beta, alpha)].norm() * peaks[alpha] / peaks[beta]).powi(2)).sum::<f64>().sqrt()
         })
         .reduce(f64::max)
         .map(|relative_error| Fidelity { frequency: tone.w, relative_error })

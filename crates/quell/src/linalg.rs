@@ -271,7 +271,7 @@ pub(crate) fn cond(M: &DMatrix<f64>) -> f64 {
 
 /// The smallest singular value and the condition number of M from one SVD: (0, ∞) for an empty
 /// matrix (nalgebra's SVD panics on one), cond ∞ for a singular one.
-pub(crate) fn singular_extremes(M: &DMatrix<f64>) -> (f64, f64) {
+pub(crate) fn singular_extremes<T: nalgebra::ComplexField<RealField = f64>>(M: &DMatrix<T>) -> (f64, f64) {
     if M.is_empty() {
         return (0.0, f64::INFINITY);
     }

@@ -438,9 +438,9 @@ impl Design {
     }
     /// κ₂ of the eigenvector matrix of A − LC (by duality), its rows and columns equilibrated so
     /// that the states' units do not move it (for distinct eigenvalues; the basis of a repeated
-    /// one's eigenspace depends on them, by up to about 15 %): how much a relative error in the model's entries
-    /// moves the observer poles; ∞ for a Jordan design. [`place::eigenvector_condition`] gives κ₂
-    /// in the coordinates as given.
+    /// one's eigenspace depends on them, by up to about 15 %): how much a relative error in the
+    /// model's entries moves the observer poles; ∞ for a Jordan design.
+    /// [`place::eigenvector_condition`] gives κ₂ in the coordinates as given.
     pub fn observer_eigenvector_condition(&self) -> f64 {
         let p = &self.plant;
         *self

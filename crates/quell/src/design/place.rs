@@ -1189,17 +1189,12 @@ pub(crate) fn scale_free_condition(A: &DMatrix<f64>, B: &DMatrix<f64>, K: &DMatr
         .map_or(f64::INFINITY, |X| condition(&crate::linalg::equilibrated(X)))
 }
 
-/// σ_max/σ_min of X (∞ for a singular X, 1 for an empty one).
+/// σ_max/σ_min of X (∞ for a singular X, 1 for an empty one: a loop of no states).
 fn condition(X: &DMatrix<C64>) -> f64 {
     if X.is_empty() {
-        return 1.0;
-    }
-    let s = X.singular_values();
-    let (max, min) = (s.max(), s.min());
-    if min > 0.0 {
-        max / min
+        1.0
     } else {
-        f64::INFINITY
+        crate::linalg::singular_extremes(X).1
     }
 }
 
