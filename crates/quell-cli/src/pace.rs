@@ -87,7 +87,9 @@ deployment (a sampled-data controller, docs/deployment.md):
 pub fn with_pace(mut design: Value, d: &Design, estimates: &[RateEstimate], steady: &SteadyInput) -> Value {
     if let Value::Object(map) = &mut design {
         map.insert("regressor_scaling".into(), json!(d.regressor_scaling().name()));
-        map.insert("mu_meaning".into(), json!(d.regressor_scaling().mu_meaning()));
+        map.insert("mu_meaning".into(), json!(d.regressor_scaling().mu_meaning(d.has_sizes())));
+        map.insert("reference_sizes".into(), json!(d.reference_sizes()));
+        map.insert("disturbance_sizes".into(), json!(d.disturbance_sizes()));
         map.insert("adaptation".into(), json!(estimates));
         map.insert("steady_input".into(), json!(steady));
     }
@@ -130,12 +132,26 @@ pub fn steady_text(steady: &SteadyInput, inputs: &[String], time: TimeUnit, trut
     s
 }
 
+/// The components' sizes as the report's `regressor_scaling` line names them, where any is not 1.
+fn sizes_text(d: &Design) -> String {
+    if !d.has_sizes() {
+        return String::new();
+    }
+    let list = |v: &[f64]| v.iter().map(|&x| fmt_4(x)).collect::<Vec<_>>().join(", ");
+    let mut s = format!(", reference_sizes = [{}]", list(d.reference_sizes()));
+    if !d.disturbance_sizes().is_empty() {
+        s += &format!(", disturbance_sizes = [{}]", list(d.disturbance_sizes()));
+    }
+    s
+}
+
 /// The pace as lines of text.
 pub fn pace_text(d: &Design, estimates: &[RateEstimate], t_end: f64, time: TimeUnit) -> String {
     let scaling = d.regressor_scaling();
     let mut s = format!(
-        "\nadaptation (averaged over g and ω, before the run; t_end = {t_end} {time}):\n  regressor_scaling = \"{scaling}\": {}\n",
-        scaling.mu_meaning()
+        "\nadaptation (averaged over g and ω, before the run; t_end = {t_end} {time}):\n  regressor_scaling = \"{scaling}\"{}: {}\n",
+        sizes_text(d),
+        scaling.mu_meaning(d.has_sizes())
     );
     for e in estimates {
         let mut flag = match (e.stiff, e.weakly_excited) {

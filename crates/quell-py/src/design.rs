@@ -60,6 +60,7 @@ pub fn spec(
     observer_gain: Option<&Bound<'_, PyAny>>,
     relative_degrees: Option<&Bound<'_, PyAny>>,
     regressor_scaling: Option<&Bound<'_, PyAny>>,
+    sizes: [Option<&Bound<'_, PyAny>>; 2],
 ) -> PyResult<DesignSpec> {
     let k = Kind::Design;
     // Both are read first, so that a wrong type is named before a wrong combination.
@@ -92,6 +93,8 @@ pub fn spec(
             })
             .transpose()?
             .unwrap_or_default(),
+        reference_sizes: sizes[0].map(|v| vector(v, "reference_sizes", k)).transpose()?.unwrap_or_default(),
+        disturbance_sizes: sizes[1].map(|v| vector(v, "disturbance_sizes", k)).transpose()?.unwrap_or_default(),
     })
 }
 
@@ -153,6 +156,12 @@ fn integers(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<usiz
 ///     "paper" (default: the paper's filters, l = e_q), "normalized" (filters of unit DC gain at
 ///     their own time scale, so ξ̂ has the signals' size) or "modal" (a block per real pole or
 ///     complex pair, each of unit gain at its own frequency: resonators for many harmonics).
+/// reference_sizes : array_like, optional
+///     Per reference component, its size (expected peak, in its own units, > 0): its block of ξ̂
+///     is divided by it, so ξ̂ is dimensionless and outputs in different units do not spread the
+///     adaptation's rates (default: 1 each, the paper's).
+/// disturbance_sizes : array_like, optional
+///     Per disturbance component, its size, as reference_sizes.
 ///
 /// Returns
 /// -------
@@ -175,7 +184,7 @@ fn integers(obj: &Bound<'_, PyAny>, name: &str, kind: Kind) -> PyResult<Vec<usiz
 /// >>> np.sort(np.real(d.observer_eigenvalues))
 /// array([-4., -3., -2.])
 #[pyfunction]
-#[pyo3(signature = (plant, *, channel_poles, reference_filter_poles, mu, beta, disturbance_filter_poles=None, observer_poles=None, observer_gain=None, relative_degrees=None, regressor_scaling=None))]
+#[pyo3(signature = (plant, *, channel_poles, reference_filter_poles, mu, beta, disturbance_filter_poles=None, observer_poles=None, observer_gain=None, relative_degrees=None, regressor_scaling=None, reference_sizes=None, disturbance_sizes=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn design(
     py: Python<'_>,
@@ -189,6 +198,8 @@ pub fn design(
     observer_gain: Option<&Bound<'_, PyAny>>,
     relative_degrees: Option<&Bound<'_, PyAny>>,
     regressor_scaling: Option<&Bound<'_, PyAny>>,
+    reference_sizes: Option<&Bound<'_, PyAny>>,
+    disturbance_sizes: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyDesign> {
     let plant = plant_arg(plant, "plant")?;
     let spec = spec(
@@ -202,6 +213,7 @@ pub fn design(
         observer_gain,
         relative_degrees,
         regressor_scaling,
+        [reference_sizes, disturbance_sizes],
     )?;
     let d = designed(py, &plant, spec)?;
     crate::errors::warn_fragile(py, &d.inner, &d.spec)?;
@@ -232,6 +244,7 @@ fn restore(py: Python<'_>, plant: &PyPlant, choices: &Bound<'_, PyDict>) -> PyRe
         get("observer_gain")?.as_ref(),
         get("relative_degrees")?.filter(|v| !v.is_none()).as_ref(),
         get("regressor_scaling")?.as_ref(),
+        [get("reference_sizes")?.as_ref(), get("disturbance_sizes")?.as_ref()],
     )?;
     designed(py, plant, spec)
 }
@@ -373,6 +386,16 @@ impl PyDesign {
     fn regressor_scaling(&self) -> &'static str {
         self.inner.regressor_scaling().name()
     }
+    /// Each reference component's size, which divides its block of ξ̂ (1 where none was given).
+    #[getter]
+    fn reference_sizes(&self) -> Vec<f64> {
+        self.inner.reference_sizes().to_vec()
+    }
+    /// Each disturbance component's size, which divides its block of ξ̂ (1 where none was given).
+    #[getter]
+    fn disturbance_sizes(&self) -> Vec<f64> {
+        self.inner.disturbance_sizes().to_vec()
+    }
     /// Regressor size q = q_g + q_ω (the length of each η̂_i).
     #[getter]
     fn q(&self) -> usize {
@@ -430,7 +453,8 @@ impl PyDesign {
     }
     /// The designer's choices, as `quell.design`'s keyword arguments: channel_poles,
     /// reference_filter_poles, disturbance_filter_poles, mu, beta, observer_gain or
-    /// observer_poles, relative_degrees when given, and regressor_scaling.
+    /// observer_poles, relative_degrees when given, regressor_scaling, and reference_sizes and
+    /// disturbance_sizes when given.
     #[getter]
     fn choices<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let s = &self.spec;
@@ -448,6 +472,11 @@ impl PyDesign {
             d.set_item("relative_degrees", r.clone())?;
         }
         d.set_item("regressor_scaling", s.regressor_scaling.name())?;
+        for (key, sizes) in [("reference_sizes", &s.reference_sizes), ("disturbance_sizes", &s.disturbance_sizes)] {
+            if !sizes.is_empty() {
+                d.set_item(key, sizes.clone())?;
+            }
+        }
         Ok(d)
     }
     /// Rebuilds a pickled design.

@@ -191,3 +191,36 @@ def test_modal_regressor_is_a_resonator_per_harmonic_and_conditions_omega():
     assert spread_of(modal) > 1e-3 > 1e-7 > spread_of(normalized)
     with pytest.raises(quell.DesignError, match=r"^reference_filter_poles\[0\]: pole .* is repeated"):
         quell.design(d.plant, reference_filter_poles=[[-1.0, -1.0], [-9.0]], regressor_scaling="modal", **kwargs)
+
+
+def test_component_sizes_divide_their_blocks_of_the_regressor():
+    """reference_sizes / disturbance_sizes divide each component's block of ξ̂: (sI − G)⁻¹ L's
+    column i is the paper's filter of component i over its size, checked against the closed form
+    1/∏(s − p_j) of the companion form's first entry; the choices carry them through a pickle, and
+    a size that is not > 0 is refused naming it."""
+    import pickle
+    d = paper_design()
+    kwargs = dict(channel_poles=[[-6.0, -2.0], [-4.0]], reference_filter_poles=[[-1.0, -6.0], [-9.0]],
+                  disturbance_filter_poles=[[-1.0, -3.0], [-1.0, -2.0, -3.0]], mu=[20.0, 30.0], beta=1.0,
+                  observer_poles=[-2.0, -3.0, -4.0])
+    sized = quell.design(d.plant, reference_sizes=[3000.0, 2.0], disturbance_sizes=[1.0, 3.0], **kwargs)
+    assert sized.reference_sizes == [3000.0, 2.0] and sized.disturbance_sizes == [1.0, 3.0]
+    plain = quell.design(d.plant, **kwargs)
+    assert plain.reference_sizes == [1.0, 1.0] and "reference_sizes" not in plain.choices
+    for s in S:
+        for G, L, poles, sizes in [(sized.G_g, sized.L_g, [[-1.0, -6.0], [-9.0]], [3000.0, 2.0]),
+                                   (sized.G_w, sized.L_w, [[-1.0, -3.0], [-1.0, -2.0, -3.0]], [1.0, 3.0])]:
+            X = np.linalg.solve(s * np.eye(G.shape[0]) - G, L)
+            for i, (row, size) in enumerate(zip([0, 2], sizes)):
+                want = 1.0 / np.prod([s - p for p in poles[i]]) / size
+                assert abs(X[row, i] - want) <= 1e-12 * abs(want)
+    # ξ̂'s coordinates change, the decoupler and observer do not.
+    np.testing.assert_array_equal(sized.K, plain.K)
+    np.testing.assert_array_equal(sized.L, plain.L)
+    again = pickle.loads(pickle.dumps(sized))
+    assert again.reference_sizes == [3000.0, 2.0]
+    np.testing.assert_array_equal(again.L_g, sized.L_g)
+    with pytest.raises(quell.DesignError, match=r"^reference_sizes\[1\]: expected a finite size > 0 .*found -2"):
+        quell.design(d.plant, reference_sizes=[3.0, -2.0], **kwargs)
+    with pytest.raises(quell.DesignError, match=r"^disturbance_sizes: expected 2 entries .*found 3"):
+        quell.design(d.plant, disturbance_sizes=[1.0, 1.0, 1.0], **kwargs)

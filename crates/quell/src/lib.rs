@@ -289,6 +289,8 @@
 //!     beta: 1.0,
 //!     relative_degrees: None,
 //!     regressor_scaling: Default::default(),
+//!     reference_sizes: Vec::new(),
+//!     disturbance_sizes: Vec::new(),
 //! };
 //! let design = Design::new(&plant, &spec)?;
 //! assert_eq!(design.sigma(), vec![1]);

@@ -471,6 +471,22 @@ fn data(name: &str) -> String {
 }
 
 /// The document of a scenario file with its `[design]` emptied (every key left to `auto_design`).
+/// `doc` with every component's size given as 1 (`design.reference_sizes`,
+/// `design.disturbance_sizes`): the regressor in the signals' own units, as the automatic design
+/// had it before it sized components whose peaks span three decades. For the tests of rules that
+/// such a scenario exercised unsized (its advice on a failure, its actuator limits).
+fn with_unit_sizes(mut doc: toml::Table) -> toml::Table {
+    let count = |signal: &str| doc.get(signal).and_then(|s| s["components"].as_array()).map_or(0, |c| c.len());
+    let ones = |n: usize| toml::Value::Array(vec![toml::Value::Float(1.0); n]);
+    let (m, k) = (count("reference"), count("disturbance"));
+    let design = doc.entry("design").or_insert_with(|| toml::Value::Table(toml::Table::new())).as_table_mut().unwrap();
+    design.insert("reference_sizes".into(), ones(m));
+    if k > 0 {
+        design.insert("disturbance_sizes".into(), ones(k));
+    }
+    doc
+}
+
 fn without_design(text: &str) -> toml::Table {
     let mut doc: toml::Table = text.parse().unwrap();
     doc.insert("design".into(), toml::Value::Table(toml::Table::new()));
@@ -632,7 +648,7 @@ fn the_automatic_design_takes_no_more_solver_steps_than_the_hand_tuned_examples(
 /// (a figure of a candidate's run: at least the limit).
 #[test]
 fn the_actuator_limit_trades_pole_speed_for_thrust_on_the_supply_vessel() {
-    let doc = without_design(&data("supply-vessel.toml"));
+    let doc = with_unit_sizes(without_design(&data("supply-vessel.toml")));
     let fastest = |a: &quell::auto::AutoDesign| -> f64 {
         a.scenario.design.channel_poles.iter().flatten().map(|p| p.norm()).fold(0.0, f64::max)
     };
@@ -710,7 +726,7 @@ fn with_more_outputs_than_disturbances_a_hopeless_fidelity_takes_all_fast_observ
 /// peak. Two limits for three inputs, or a limit that is not positive, are errors naming u_limit.
 #[test]
 fn per_input_actuator_limits_bind_each_input_in_its_own_units() {
-    let doc = without_design(&data("supply-vessel.toml"));
+    let doc = with_unit_sizes(without_design(&data("supply-vessel.toml")));
     let limits = vec![1.5e7, 1.5e7, 1e8];
     let one = auto_design(&doc, &Targets { u_limit: vec![1e8], ..Targets::default() }).unwrap();
     assert!(one.verification.passed && one.verification.max_uf[0] > limits[0], "{:?}", one.verification);
@@ -1015,7 +1031,7 @@ fn a_channel_no_horizon_converges_is_told_to_excite_it() {
     let text = include_str!("data/vessel-si.toml");
     let (start, end) = (text.find("[design]").unwrap(), text.find("[reference]").unwrap());
     let doc: toml::Table = format!("{}[design]\n{}", &text[..start], &text[end..]).parse().unwrap();
-    let auto = auto_design(&doc, &Targets::default()).unwrap();
+    let auto = auto_design(&with_unit_sizes(doc), &Targets::default()).unwrap();
     assert!(!auto.verification.passed, "{:?}", auto.verification);
     let advice = auto.verification.advice.join("\n");
     assert!(advice.contains("channel 1: the averaged law predicts") && advice.contains("no horizon helps"), "{advice}");
@@ -1284,14 +1300,19 @@ t_end = 10.0
 }
 
 /// g and ω in units of very different sizes: the magnetic bearing's gaps of 1e-5 m against forces of
-/// 20 N (tests/data/magnetic-bearing.toml, its [design] left to the rules). In Ω̄ the reference's
+/// 20 N (tests/data/magnetic-bearing.toml, its [design] left to the rules). From an empty design the
+/// automatic design sizes the components and passes. With sizes of 1 given, in Ω̄ the reference's
 /// directions are excited 1.5e-11 of the disturbance's, so no μ below the stiffness threshold
-/// converges them and no horizon passes. The advice had asked for "more excitation"; it now says to
-/// express ω in larger units, by a factor s, and the same plant with D and Q times s and ω over s,
-/// designed again, passes; a run of the file's design says the same.
+/// converges them and no horizon passes. The advice had asked for "more excitation"; it now names
+/// the sizes, or to express ω in larger units, by a factor s, and the same plant with D and Q times
+/// s and ω over s, designed again, passes; a run of the file's design says the same.
 #[test]
 fn units_of_very_different_sizes_are_named_and_rescaling_passes() {
+    // From an empty design the components are sized (peaks 1e-5 m and 20 N) and it passes at once.
     let doc = without_design(&data("magnetic-bearing.toml"));
+    let sized = auto_design(&doc, &Targets::default()).unwrap();
+    assert!(sized.verification.passed && sized.design.has_sizes(), "{:?}", sized.verification);
+    let doc = with_unit_sizes(doc);
     let failed = auto_design(&doc, &Targets::default()).unwrap();
     assert!(!failed.verification.passed);
     let advice = failed.verification.advice.join("\n");
@@ -1678,4 +1699,40 @@ fn a_delay_check_runs_distinct_whole_samples_and_respects_the_actuator_limit() {
         "{:?}",
         limited.verification.delay_check
     );
+}
+
+/// The paper's example with y₁ in mm (C's and Q's first rows and g₁ × 1000): its components' peaks
+/// span 3000 to 1, so the automatic design sizes them, each peak rounded to a power of ten (1e3
+/// for g₁, 1 for the rest): ξ̂ is the paper's own, and the rules choose the paper's design, the
+/// same observer poles and β and μ within 1e-4 (the verifying runs' absolute tolerance meets y₁ in
+/// other units), its tails within their bounds. The paper in its own units gets no sizes (peaks 3,
+/// 2 and 1, 3). Before the sizes, the mm file's Ω̄₁ spread by 6e6 (λ_min 0.13, λ_max 7.8e5) and its
+/// design failed its verification with a tail of 5.5e3 mm.
+#[test]
+fn an_output_in_millimetres_gets_the_design_of_its_own_units() {
+    let paper = without_design(quell::scenario::PAPER_EXAMPLE);
+    let mut mm = paper.clone();
+    let scale_row = |v: &mut toml::Value| {
+        let row = v.as_array_mut().unwrap()[0].as_array_mut().unwrap();
+        row.iter_mut().for_each(|x| *x = toml::Value::Float(x.as_float().unwrap() * 1000.0));
+    };
+    let plant = mm["plant"].as_table_mut().unwrap();
+    scale_row(plant.get_mut("C").unwrap());
+    scale_row(plant.get_mut("Q").unwrap());
+    let text = toml::to_string(&mm).unwrap().replace("amplitude = 3.0", "amplitude = 3000.0");
+    assert!(text.contains("amplitude = 3000.0"), "{text}");
+    let mm: toml::Table = text.parse().unwrap();
+    let (a, b) = (auto_design(&paper, &Targets::default()).unwrap(), auto_design(&mm, &Targets::default()).unwrap());
+    assert!(a.verification.passed && b.verification.passed, "{:?}\n{:?}", a.verification, b.verification);
+    assert!(!a.design.has_sizes() && !a.choices.iter().any(|c| c.key.ends_with("_sizes")));
+    assert_eq!((b.design.reference_sizes(), b.design.disturbance_sizes()), (&[1e3, 1.0][..], &[1.0, 1.0][..]));
+    let same = |x: &[Complex<f64>], y: &[Complex<f64>]| x.iter().zip(y).all(|(p, q)| (p - q).norm() <= 1e-9 * p.norm());
+    assert!(same(a.design.observer_eigenvalues(), b.design.observer_eigenvalues()));
+    assert_eq!(a.design.beta(), b.design.beta());
+    for (x, y) in a.design.mu().iter().zip(b.design.mu()) {
+        assert!((x - y).abs() <= 1e-4 * x, "μ {:?} against {:?}", a.design.mu(), b.design.mu());
+    }
+    // The sizes reach the file the design writes, and a run of it reads them back.
+    let written = Scenario::from_toml(&b.scenario.to_toml()).unwrap();
+    assert_eq!(written.design().unwrap().reference_sizes(), [1e3, 1.0]);
 }

@@ -293,6 +293,8 @@ fn paper_in_units(alpha: f64, s: f64, o: f64, tol: f64) -> (Design, SimResult) {
         beta: alpha,
         relative_degrees: None,
         regressor_scaling: quell::design::RegressorScaling::Normalized,
+        reference_sizes: Vec::new(),
+        disturbance_sizes: Vec::new(),
     };
     let d = Design::new(&p, &spec).unwrap();
     let (mut g, mut w) = paper_signals();
@@ -460,4 +462,62 @@ fn a_run_reports_progress_between_rows() {
         assert_eq!(r.stats.steps(), steps);
         assert_eq!(r.len(), 1, "only the row at t = 0 was recorded");
     }
+}
+
+/// An output in other units, with its reference's size, runs the same loop: the paper's y₁ in mm
+/// (C's and Q's first rows, g₁ × 1000, L's first column ÷ 1000) with `reference_sizes = [3000, 2]`
+/// against the paper with [3, 2]. The sizes divide ξ̂'s blocks, so ξ̂ is the same in both, η̂₁ and
+/// u_d₁ carry the factor 1000, and y₁/1000, y₂ and u_f (the plant's input, whose units did not
+/// change) agree to 1e-6 of their peaks (both at rtol = atol = 1e-9 over 20 s; the error tests
+/// see η̂₁ 1000× larger, so the two take different steps, each within about 1e-7 of the truth).
+/// Without the sizes the mm loop is another one: Ω̄₁ spreads by 1e6 and y₁ departs (the test can
+/// fail).
+#[test]
+fn an_output_in_millimetres_with_its_size_runs_the_same_loop() {
+    let sized = |spec: &mut quell::DesignSpec, first: f64| spec.reference_sizes = vec![first, 2.0];
+    let mut spec = paper_spec();
+    sized(&mut spec, 3.0);
+    let base = run_paper(spec, 20.0, 0.1, 1e-9);
+
+    let p = paper_plant();
+    let mut C = p.C.clone();
+    let mut Q = p.Q.clone();
+    C.row_mut(0).scale_mut(1000.0);
+    Q.row_mut(0).scale_mut(1000.0);
+    let mm = quell::Plant::new(p.A.clone(), p.B.clone(), C, p.D.clone(), Q, p.delays.clone(), None).unwrap();
+    let mut L = paper_L();
+    L.column_mut(0).scale_mut(1e-3);
+    let (mut g, w) = paper_signals();
+    g.components[0].harmonics[0].amplitude = 3000.0;
+    let run = |spec: &quell::DesignSpec| {
+        let d = Design::new(&mm, spec).unwrap();
+        Run::new(&d, &g, &w, RunSettings::continuous(20.0, 0.1, 1e-9, 1e-9))
+            .simulate(|_| ControlFlow::Continue(()))
+            .unwrap()
+    };
+    let mut spec = paper_spec();
+    spec.observer = quell::design::ObserverChoice::Gain(L);
+    sized(&mut spec, 3000.0);
+    let other = run(&spec);
+    assert_eq!(other.outcome, Some(Outcome::Completed));
+    let worst = |a: &SimResult, b: &SimResult, of: fn(&SimResult) -> &Vec<f64>, i: usize, scale: f64| {
+        let peak = a.column(of(a), 2, i).fold(0.0f64, |p, v| p.max(v.abs()));
+        let dev = a.column(of(a), 2, i).zip(b.column(of(b), 2, i)).map(|(x, y)| (x - y / scale).abs());
+        dev.fold(0.0, f64::max) / peak
+    };
+    for (name, of, i, scale) in [
+        ("y1", (|r| &r.y) as fn(&SimResult) -> &Vec<f64>, 0, 1000.0),
+        ("y2", |r| &r.y, 1, 1.0),
+        ("uf1", |r| &r.u_f, 0, 1.0),
+        ("uf2", |r| &r.u_f, 1, 1.0),
+        ("u1", |r| &r.u, 0, 1000.0),
+    ] {
+        let d = worst(&base, &other, of, i, scale);
+        assert!(d <= 1e-6, "{name}: {d:e} of its peak");
+    }
+    spec.reference_sizes.clear();
+    let without = run(&spec);
+    let n = without.len().min(base.len());
+    let dev = (0..n).map(|k| (without.y[2 * k] / 1000.0 - base.y[2 * k]).abs()).fold(0.0, f64::max);
+    assert!(dev > 1e-2, "without the sizes y₁ should depart: {dev:e}");
 }

@@ -357,6 +357,8 @@ fn error_not_decouplable_observable_plant() {
         beta: 1.0,
         relative_degrees: None,
         regressor_scaling: Default::default(),
+        reference_sizes: Vec::new(),
+        disturbance_sizes: Vec::new(),
     };
     match expect_err(&plant, &spec) {
         DesignError::NotDecouplable { smallest, .. } => assert!(smallest < 1e-12, "σ_min {smallest}"),
@@ -382,6 +384,8 @@ fn siso_spec() -> quell::DesignSpec {
         beta: 1.0,
         relative_degrees: None,
         regressor_scaling: Default::default(),
+        reference_sizes: Vec::new(),
+        disturbance_sizes: Vec::new(),
     }
 }
 
@@ -638,6 +642,8 @@ fn triple_channel_pole_is_designed() {
         beta: 1.0,
         relative_degrees: None,
         regressor_scaling: Default::default(),
+        reference_sizes: Vec::new(),
+        disturbance_sizes: Vec::new(),
     };
     let d = Design::new(&plant, &spec).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(d.sigma(), &[2, 1, 1]);
@@ -691,6 +697,8 @@ fn chain_observer_with_a_large_gain_is_designed_and_reported_fragile() {
         beta: 1.0,
         relative_degrees: None,
         regressor_scaling: Default::default(),
+        reference_sizes: Vec::new(),
+        disturbance_sizes: Vec::new(),
     };
     let d = Design::new(&plant, &spec).unwrap_or_else(|e| panic!("{e}"));
     assert!(multiset_mismatch(&poles, d.observer_eigenvalues()) <= 1e-6 * 9.7, "{:?}", d.observer_eigenvalues());
@@ -724,6 +732,8 @@ fn an_observer_that_cannot_be_confirmed_hurwitz_says_so_with_its_figures() {
         beta: 1e3,
         relative_degrees: None,
         regressor_scaling: Default::default(),
+        reference_sizes: Vec::new(),
+        disturbance_sizes: Vec::new(),
     };
     let e = expect_err(&plant, &spec);
     let DesignError::ObserverUnconfirmed { key, eigenvalues, in_margin, margin, kappa } = &e else { panic!("{e}") };
@@ -748,6 +758,8 @@ fn chain_spec(n: usize) -> quell::DesignSpec {
         beta: 1.0,
         relative_degrees: None,
         regressor_scaling: Default::default(),
+        reference_sizes: Vec::new(),
+        disturbance_sizes: Vec::new(),
     }
 }
 
@@ -1000,6 +1012,8 @@ fn a_decoupler_that_does_not_decouple_is_warned_of() {
         beta: 1.0,
         relative_degrees: None,
         regressor_scaling: quell::design::RegressorScaling::Paper,
+        reference_sizes: Vec::new(),
+        disturbance_sizes: Vec::new(),
     };
     let warned = |d: &Design, s: &quell::DesignSpec| {
         quell::design::warnings(d, s).into_iter().filter(|w| w.key == "design.relative_degrees").count()

@@ -182,6 +182,8 @@ fn case(rng: &mut Rng, unstable: bool) -> Case {
             beta: 1.0,
             relative_degrees: None,
             regressor_scaling: Default::default(),
+            reference_sizes: Vec::new(),
+            disturbance_sizes: Vec::new(),
         };
         return Case { plant, sigma, zeros, spec };
     }

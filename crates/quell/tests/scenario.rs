@@ -873,6 +873,22 @@ fn negative_mu() {
     check(&with(&[(MU, "mu = [20.0, -1.0]")]), "design.mu[1]", "expected a finite adaptation gain ≥ 0, found -1");
 }
 
+/// A component's size divides its block of ξ̂: one per component, each finite and > 0.
+#[test]
+fn regressor_sizes_are_checked() {
+    let sized = |line: &str| format!("mu = [20.0, 30.0]\n{line}");
+    check(
+        &with(&[(MU, &sized("reference_sizes = [3.0]"))]),
+        "design.reference_sizes",
+        "expected 2 entries (one per reference component, or none for 1 each), found 1",
+    );
+    check(
+        &with(&[(MU, &sized("disturbance_sizes = [1.0, 0.0]"))]),
+        "design.disturbance_sizes[1]",
+        "expected a finite size > 0 (the component's expected peak, in its own units), found 0",
+    );
+}
+
 #[test]
 fn beta_not_positive() {
     check(&with(&[(BETA, "beta = 0.0 ")]), "design.beta", "expected a finite β > 0");

@@ -77,6 +77,8 @@ pub fn synthetic(m: usize, q: usize) -> Design {
         beta: 1.0,
         relative_degrees: None,
         regressor_scaling: Default::default(),
+        reference_sizes: Vec::new(),
+        disturbance_sizes: Vec::new(),
     };
     Design::new(&plant, &spec).unwrap()
 }

@@ -56,6 +56,14 @@ pub struct DesignSpec {
     /// How the internal-model filters are realized, and so the size of ξ̂ and the meaning of μ
     /// (`design.regressor_scaling`; [`RegressorScaling::Paper`] by default).
     pub regressor_scaling: RegressorScaling,
+    /// Per reference component: its size s_gi > 0 (its expected peak, in its own units), which
+    /// divides l_gi and so ξ̂'s block of that component (`design.reference_sizes`; empty: 1 each,
+    /// the paper's form). Sizes make ξ̂ dimensionless: an output in mm and another in rad then
+    /// give Ω̄ no spread from their units.
+    pub reference_sizes: Vec<f64>,
+    /// Per disturbance component: its size s_ωα > 0, as [`DesignSpec::reference_sizes`]
+    /// (`design.disturbance_sizes`; empty: 1 each).
+    pub disturbance_sizes: Vec<f64>,
 }
 
 /// Channel i's decoupled transfer function G_ii(s) = q_i0 / ∏_j (s − λ_ij).
@@ -118,6 +126,8 @@ pub struct Design {
     mu: Vec<f64>,
     beta: f64,
     regressor_scaling: RegressorScaling,
+    reference_sizes: Vec<f64>,
+    disturbance_sizes: Vec<f64>,
     controllability: RankTest,
     observability: RankTest,
     observer_eigenvalues: Vec<Complex<f64>>,
@@ -190,6 +200,8 @@ pub enum DesignError {
     BadMu { index: usize, value: f64 },
     #[error("design.beta: expected a finite β > 0 (H(s) = 1/(βs + 1)), found {}", crate::settings::fmt_short(*.value))]
     BadBeta { value: f64 },
+    #[error("{key}[{index}]: expected a finite size > 0 (the component's expected peak, in its own units), found {}", crate::settings::fmt_short(*.value))]
+    BadSize { key: &'static str, index: usize, value: f64 },
     #[error("{key}: pole {} is out of the design's span of rates: given the other pole lists and 1/β, expected decay rate −Re p ≥ {} and magnitude ≤ {}; {SPAN_WHY}", fmt_complex(.pole), fmt_number(*.min_decay), fmt_number(*.max_magnitude))]
     PoleOutOfSpan { key: String, pole: Complex<f64>, min_decay: f64, max_magnitude: f64 },
     #[error("design.beta: β = {} is out of the design's span of rates: given its poles, expected {} ≤ β ≤ {}; {SPAN_WHY}", fmt_number(*.value), fmt_number(*.min), fmt_number(*.max))]
@@ -294,8 +306,9 @@ impl Design {
         let decoupled_eigenvalues = eigenvalues(&A_f).map_err(|e| eigen_error("plant", "A − BK", e))?;
         poll()?;
         let near_axis_zeros = check_zero_dynamics(plant, &fw)?;
-        let (G_g, L_g) = internal_model(&spec.reference_filter_poles, spec.regressor_scaling);
-        let (G_w, L_w) = internal_model(&spec.disturbance_filter_poles, spec.regressor_scaling);
+        let (G_g, L_g) = internal_model(&spec.reference_filter_poles, &spec.reference_sizes, spec.regressor_scaling);
+        let (G_w, L_w) =
+            internal_model(&spec.disturbance_filter_poles, &spec.disturbance_sizes, spec.regressor_scaling);
         let (N, cond_D) = disturbance_observer_gain(&plant.D, &L_w)?;
         Ok(Design {
             plant: plant.clone(),
@@ -317,6 +330,8 @@ impl Design {
             mu: spec.mu.clone(),
             beta: spec.beta,
             regressor_scaling: spec.regressor_scaling,
+            reference_sizes: sizes_or_ones(&spec.reference_sizes, plant.m()),
+            disturbance_sizes: sizes_or_ones(&spec.disturbance_sizes, plant.k()),
             controllability,
             observability,
             observer_eigenvalues,
@@ -415,6 +430,21 @@ impl Design {
     pub fn regressor_scaling(&self) -> RegressorScaling {
         self.regressor_scaling
     }
+    /// Each reference component's size s_gi, which divides its block of ξ̂ (1 where the design
+    /// gives none).
+    pub fn reference_sizes(&self) -> &[f64] {
+        &self.reference_sizes
+    }
+    /// Each disturbance component's size s_ωα, which divides its block of ξ̂ (1 where the design
+    /// gives none).
+    pub fn disturbance_sizes(&self) -> &[f64] {
+        &self.disturbance_sizes
+    }
+    /// Whether any component's size differs from 1 (`design.reference_sizes` or
+    /// `design.disturbance_sizes`): ξ̂ is then dimensionless.
+    pub fn has_sizes(&self) -> bool {
+        self.reference_sizes.iter().chain(&self.disturbance_sizes).any(|&s| s != 1.0)
+    }
     /// Assumption 1: the controllability rank test.
     pub fn controllability(&self) -> &RankTest {
         &self.controllability
@@ -468,6 +498,15 @@ impl Design {
 
 /// The designer's choices: one entry per channel / component, μ_i ≥ 0, β > 0, every pole list
 /// Hurwitz and closed under conjugation.
+/// `sizes`, or `count` ones where none are given.
+fn sizes_or_ones(sizes: &[f64], count: usize) -> Vec<f64> {
+    if sizes.is_empty() {
+        vec![1.0; count]
+    } else {
+        sizes.to_vec()
+    }
+}
+
 fn check_spec(plant: &Plant, spec: &DesignSpec) -> Result<(), DesignError> {
     let (m, k) = (plant.m(), plant.k());
     let count = |key, per, expected, got| {
@@ -491,6 +530,17 @@ fn check_spec(plant: &Plant, spec: &DesignSpec) -> Result<(), DesignError> {
         spec.disturbance_filter_poles.len(),
     )?;
     count("design.mu", "channel", m, spec.mu.len())?;
+    for (key, per, sizes, components) in [
+        ("design.reference_sizes", "reference component, or none for 1 each", &spec.reference_sizes, m),
+        ("design.disturbance_sizes", "disturbance component, or none for 1 each", &spec.disturbance_sizes, k),
+    ] {
+        if !sizes.is_empty() {
+            count(key, per, components, sizes.len())?;
+        }
+        if let Some((index, &value)) = sizes.iter().enumerate().find(|(_, v)| !(v.is_finite() && **v > 0.0)) {
+            return Err(DesignError::BadSize { key, index, value });
+        }
+    }
     if let Some((index, &value)) = spec.mu.iter().enumerate().find(|(_, v)| !(v.is_finite() && **v >= 0.0)) {
         return Err(DesignError::BadMu { index, value });
     }

@@ -477,9 +477,10 @@ const UNIT_MISMATCH: f64 = 1e-6;
 /// different sizes (a magnetic bearing's gap of 1e-5 m against forces of 20 N; a quadrotor's
 /// torques of 1e-5 N·m against angles of 0.1 rad): in Ω̄ the directions at the frequencies only one
 /// of them has are excited below [`UNIT_MISMATCH`] of those at the frequencies only the other has,
-/// so no μ below the stiffness threshold converges them. Dividing ω's numbers by s (D and Q times s,
-/// the same plant) scales ω's part of Ω̄ by 1/s², and s = 1/√r or √r (r the ratio) brings the two
-/// to one size. `None` where the frequencies do not tell the two apart or no ratio is that small.
+/// so no μ below the stiffness threshold converges them. Sizes for the components
+/// (`design.reference_sizes`, `design.disturbance_sizes`) divide their blocks of ξ̂ and bring them
+/// to one size; or dividing ω's numbers by s (D and Q times s, the same plant) scales ω's part of
+/// Ω̄ by 1/s², and s = 1/√r or √r (r the ratio) brings the two to one size. `None` where the frequencies do not tell the two apart or no ratio is that small.
 pub(crate) fn unit_mismatch(avg: &Averaged, [reference, disturbance]: [&Signal; 2]) -> Option<String> {
     // `avg`'s excitations are per tone of `tones`, in its order: a tone is one signal's alone where
     // the other has no phasor there.
@@ -510,7 +511,7 @@ pub(crate) fn unit_mismatch(avg: &Averaged, [reference, disturbance]: [&Signal; 
         let (units, d_q, omega) =
             if larger { ("larger", "multiply", "divide") } else { ("smaller", "divide", "multiply") };
         format!(
-            "express the disturbance in {units} units: Ω̄'s directions at the {weak} frequencies are excited {r:.1e} of those at the {strong}, since g is in the outputs' units and ω in its own, and no μ below the stiffness threshold converges them; {d_q} plant.D and plant.Q by s and {omega} ω's amplitudes and biases by s (the same plant), with s about {scale} (the two parts then of one size), and design again"
+            "express the disturbance in {units} units: Ω̄'s directions at the {weak} frequencies are excited {r:.1e} of those at the {strong}, since g is in the outputs' units and ω in its own, and no μ below the stiffness threshold converges them; give each component its size (design.reference_sizes and design.disturbance_sizes: its expected peak, which divides its block of ξ̂; μ then anew, or leave μ out and the automatic design sizes them), or {d_q} plant.D and plant.Q by s and {omega} ω's amplitudes and biases by s (the same plant), with s about {scale} (the two parts then of one size), and design again"
         )
     })
 }

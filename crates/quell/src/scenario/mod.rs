@@ -162,6 +162,8 @@ pub const DESIGN_KEYS: &[&str] = &[
     "beta",
     "relative_degrees",
     "regressor_scaling",
+    "reference_sizes",
+    "disturbance_sizes",
     "reference_filter_orders",
     "disturbance_filter_orders",
 ];
@@ -480,6 +482,10 @@ pub struct PartialDesign {
     pub relative_degrees: Option<Vec<usize>>,
     /// `None`: [`RegressorScaling::Paper`].
     pub regressor_scaling: Option<RegressorScaling>,
+    /// Each reference component's size ([`DesignSpec::reference_sizes`]); `None`: 1 each.
+    pub reference_sizes: Option<Vec<f64>>,
+    /// Each disturbance component's size ([`DesignSpec::disturbance_sizes`]); `None`: 1 each.
+    pub disturbance_sizes: Option<Vec<f64>>,
     /// Filter orders per reference component, for an automatic design in place of the poles.
     pub reference_filter_orders: Option<Vec<usize>>,
     /// Filter orders per disturbance component, for an automatic design in place of the poles.
@@ -535,6 +541,8 @@ impl PartialDesign {
             beta: required(self.beta, "beta", "β > 0 of H(s) = 1/(βs + 1)")?,
             relative_degrees: self.relative_degrees,
             regressor_scaling: self.regressor_scaling.unwrap_or_default(),
+            reference_sizes: self.reference_sizes.unwrap_or_default(),
+            disturbance_sizes: self.disturbance_sizes.unwrap_or_default(),
         })
     }
 
@@ -549,6 +557,8 @@ impl PartialDesign {
             beta: 1.0,
             relative_degrees: None,
             regressor_scaling: RegressorScaling::Paper,
+            reference_sizes: Vec::new(),
+            disturbance_sizes: Vec::new(),
         }
     }
 }
@@ -588,6 +598,8 @@ fn partial_design(v: Value, m: usize) -> Result<PartialDesign, ScenarioError> {
         regressor_scaling: t.get("regressor_scaling", |v| {
             RegressorScaling::from_name(&v.string()?).map_err(|message| err(v.key, message))
         })?,
+        reference_sizes: t.get("reference_sizes", |v| v.numbers())?,
+        disturbance_sizes: t.get("disturbance_sizes", |v| v.numbers())?,
         reference_filter_orders: orders("reference_filter_orders", "reference component")?,
         disturbance_filter_orders: orders("disturbance_filter_orders", "disturbance component")?,
     })

@@ -204,6 +204,11 @@ pub fn design_table(d: &DesignSpec) -> Table {
     t.insert("mu".into(), numbers(&d.mu));
     t.insert("beta".into(), Value::Float(d.beta));
     t.insert("regressor_scaling".into(), Value::String(d.regressor_scaling.name().into()));
+    for (key, sizes) in [("reference_sizes", &d.reference_sizes), ("disturbance_sizes", &d.disturbance_sizes)] {
+        if !sizes.is_empty() {
+            t.insert(key.into(), numbers(sizes));
+        }
+    }
     if let Some(sigma) = &d.relative_degrees {
         let sigma = sigma.iter().map(|&s| Value::Integer(i64::try_from(s).unwrap_or(i64::MAX))).collect();
         t.insert("relative_degrees".into(), Value::Array(sigma));

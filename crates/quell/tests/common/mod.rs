@@ -45,6 +45,8 @@ pub fn paper_spec() -> DesignSpec {
         beta: 1.0,
         relative_degrees: None,
         regressor_scaling: Default::default(),
+        reference_sizes: Vec::new(),
+        disturbance_sizes: Vec::new(),
     }
 }
 
