@@ -93,9 +93,22 @@ pub fn spec(
             })
             .transpose()?
             .unwrap_or_default(),
-        reference_sizes: sizes[0].map(|v| vector(v, "reference_sizes", k)).transpose()?.unwrap_or_default(),
-        disturbance_sizes: sizes[1].map(|v| vector(v, "disturbance_sizes", k)).transpose()?.unwrap_or_default(),
+        reference_sizes: component_sizes(py, sizes[0], "reference_sizes")?,
+        disturbance_sizes: component_sizes(py, sizes[1], "disturbance_sizes")?,
     })
+}
+
+/// `reference_sizes` or `disturbance_sizes`: none (1 each) or at least one number (an empty list
+/// is refused, as in a scenario file).
+fn component_sizes(py: Python<'_>, obj: Option<&Bound<'_, PyAny>>, name: &str) -> PyResult<Vec<f64>> {
+    let sizes = obj.map(|v| vector(v, name, Kind::Design)).transpose()?.unwrap_or_default();
+    if obj.is_some() && sizes.is_empty() {
+        return Err(Kind::Design.err(
+            py,
+            format!("{name}: expected one size per component, found an empty list; leave the argument out for 1 each"),
+        ));
+    }
+    Ok(sizes)
 }
 
 /// A sequence of integers ≥ 1 (a bool or float is refused, naming `name[i]`).

@@ -220,7 +220,12 @@ def test_component_sizes_divide_their_blocks_of_the_regressor():
     again = pickle.loads(pickle.dumps(sized))
     assert again.reference_sizes == [3000.0, 2.0]
     np.testing.assert_array_equal(again.L_g, sized.L_g)
-    with pytest.raises(quell.DesignError, match=r"^reference_sizes\[1\]: expected a finite size > 0 .*found -2"):
-        quell.design(d.plant, reference_sizes=[3.0, -2.0], **kwargs)
+    with pytest.raises(quell.DesignError, match=r"^reference_sizes\[1\]: expected a finite number, found inf"):
+        quell.design(d.plant, reference_sizes=[3.0, float("inf")], **kwargs)
+    for bad, found in [(-2.0, "-2"), (1e-320, "1e-320")]:
+        with pytest.raises(quell.DesignError, match=rf"^reference_sizes\[1\]: expected a size from 1e-150 to 1e150 .*found {found}"):
+            quell.design(d.plant, reference_sizes=[3.0, bad], **kwargs)
+    with pytest.raises(quell.DesignError, match=r"^reference_sizes: expected one size per component, found an empty list"):
+        quell.design(d.plant, reference_sizes=[], **kwargs)
     with pytest.raises(quell.DesignError, match=r"^disturbance_sizes: expected 2 entries .*found 3"):
         quell.design(d.plant, disturbance_sizes=[1.0, 1.0, 1.0], **kwargs)

@@ -139,6 +139,8 @@ CASES = [
      "design.reference_sizes", None),
     ("regressor_sizes_are_checked", edit((MU, "mu = [20.0, 30.0]\ndisturbance_sizes = [1.0, 0.0]")),
      "design.disturbance_sizes[1]", None),
+    ("regressor_sizes_are_checked", edit((MU, "mu = [20.0, 30.0]\nreference_sizes = []")),
+     "design.reference_sizes", None),
     ("beta_not_positive", edit((BETA, "beta = 0.0 ")), "design.beta", None),
     ("channel_pole_not_hurwitz", edit((CHANNEL, "channel_poles = [[-6.0, 2.0], [-4.0]]")),
      "design.channel_poles[0]", None),

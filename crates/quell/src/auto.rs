@@ -950,7 +950,8 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
         true => Vec::new(),
         false => {
             let s = &kept.0.scenario;
-            vec![limit_advice(targets, &kept.2, s.actuator.as_ref(), &s.steady_input().peak)]
+            let met = kept.2.tail_within(&bound, 1.0);
+            vec![limit_advice(targets, &kept.2, s.actuator.as_ref(), &s.steady_input().peak, met)]
         }
     };
     let mut auto = finish(
@@ -1213,15 +1214,22 @@ fn relax(
 /// a true actuator (`[truth]` u_max) that the limit to raise to would pass, that it clips there (the
 /// advice had told a ball and beam to raise u_limit past its 0.45 drive). Where the steady state
 /// alone (`steady`: its peak per input) passes a limit, that comes first: no design meets it (an
-/// F-16 pitch loop needing 29.2 of its elevator had been told only "raise to 33").
+/// F-16 pitch loop needing 29.2 of its elevator had been told only "raise to 33"), unless
+/// `closest` met every tail bound (`met`) with less than that input: the bound then lets the loop
+/// leave part of the disturbance uncancelled (the SI supply vessel under a limit of 1 MN·m: its
+/// steady yaw moment is 3 MN·m, and a candidate met the 1e-3 rad bound with 1.27 MN·m, since the
+/// 2 MN·m wave at 0.8 rad/s moves its 4.5e9 kg·m² hull by 7e-4 rad; the advice had said the
+/// plant needs 3 MN·m whatever the controller).
 fn limit_advice(
     targets: &Targets,
     closest: &Candidate,
     actuator: Option<&crate::settings::Actuator>,
     steady: &[f64],
+    met: bool,
 ) -> String {
+    let needed = |i: usize, peak: f64| !(met && closest.max_uf.get(i).is_some_and(|&reached| reached < peak));
     let over: Vec<String> = (steady.iter().enumerate())
-        .filter(|&(i, &peak)| peak > targets.limit(i))
+        .filter(|&(i, &peak)| peak > targets.limit(i) && needed(i, peak))
         .map(|(i, &peak)| {
             let (peak, limit) = (crate::settings::fmt_4(peak), crate::settings::fmt_short(targets.limit(i)));
             format!("u_f,{} {peak} against {limit}", i + 1)
@@ -2195,26 +2203,26 @@ fn choose_scaling(partial: &PartialDesign, s: &Scenario, note: &mut Note) -> Reg
     }
 }
 
-/// From this ratio of the largest component's peak to the smallest (nonzero; both signals
-/// together) the automatic design sizes the components: three decades, units that differ (mm
-/// beside m, kN beside N, gaps of 1e-5 m beside forces of 20 N). Within it the signals' own sizes
-/// are kept: a disturbance a tenth or a hundredth of the reference (twenty of the examples and
-/// test plants) is small in its effect as in its units, and sizing it up speeds its directions of
-/// Ω̄ at the others' expense (a DC motor's load torque, 0.015 N·m against 0.5 rad, sized to 0.01:
-/// λ_max/λ_min from 1.3e6 to 270, μ then at 150/s against channel poles of 2.5–5.6/s, and the
-/// sampled verification diverged).
+/// From this ratio of a component's peak to the smallest reference component's (nonzero) the
+/// automatic design sizes the components: three decades, units that differ (mm beside m, forces
+/// in N beside positions in m, gaps of 1e-5 m beside forces of 20 N). Below it the signals' own
+/// sizes are kept (every example and test plant but the five with units that differ).
 const SIZE_SPREAD: f64 = 1e3;
 
 /// Each component's size, which divides its block of ξ̂: the file's, else none where the file
-/// gives μ (μ's meaning depends on them, as on the scaling), else, where the components' peaks
-/// span [`SIZE_SPREAD`] or more, each peak rounded to a power of ten (1 for a component that is 0
-/// throughout), and none otherwise. A change of units by a power of ten (mm, kN, µN·m) then moves
-/// that component's size by the same power exactly, so ξ̂ and the design are the same as in the
-/// original units, μ included: the paper's example with y₁ in mm gets sizes 1e3 for g₁ and 1 for
-/// the rest, and the paper's design. Before, its Ω̄₁ spread by 6e6 where in its own units it has
-/// 10, and its design failed its verification. Sizes of the peaks themselves were tried first:
-/// they gave the paper's own example (peaks 3, 2 and 1, 3) another design, with 2.4× the solver
-/// steps, as a choice of units should not.
+/// gives μ (μ's meaning depends on them, as on the scaling), else, where a component's peak is
+/// [`SIZE_SPREAD`] or more times the smallest reference peak P, d(P)·max(1, d(peak/P)) with d(x)
+/// the power of ten nearest x: every component larger than P is brought to P's size, within √10,
+/// and ξ̂ to about 1. A component smaller than P keeps its size relative to the references: a
+/// disturbance that is small in its units is taken to be small in its effect (a DC motor's load
+/// torque, 0.015 N·m against 0.5 rad; sized up to the reference's size, Ω̄'s λ_max/λ_min went from
+/// 1.3e6 to 270, the rules' μ to the stiffness cap, 150/s against channel poles of 2.5–5.6/s, and
+/// the sampled verification diverged; so did the same motor with its torque in kN·m under a rule
+/// that sized every component by its own peak). A change of units by a power of ten of a
+/// component larger than P moves its size by the same power exactly, so ξ̂ and the design stay
+/// those of the original units: the paper's example with y₁ in mm (peaks 3000, 2 and 1, 3) gets
+/// sizes 1e3 for g₁ and 1 for the rest, and the paper's design, where its Ω̄₁ had spread by 6e6
+/// and its design failed its verification.
 fn choose_sizes(partial: &PartialDesign, s: &Scenario, note: &mut Note) -> [Vec<f64>; 2] {
     let given = [&partial.reference_sizes, &partial.disturbance_sizes];
     if partial.mu.is_some() || given.iter().any(|g| g.is_some()) {
@@ -2222,16 +2230,17 @@ fn choose_sizes(partial: &PartialDesign, s: &Scenario, note: &mut Note) -> [Vec<
     }
     let peaks = [&s.reference, &s.disturbance].map(|s| s.components.iter().map(|c| c.peak()).collect::<Vec<f64>>());
     let sized = |p: &f64| *p > 0.0 && p.is_finite();
-    let (low, high) =
-        peaks.iter().flatten().filter(|p| sized(p)).fold((f64::INFINITY, 0.0f64), |(l, h), &p| (l.min(p), h.max(p)));
-    if high < SIZE_SPREAD * low {
+    let smallest = peaks[0].iter().filter(|p| sized(p)).fold(f64::INFINITY, |a, &p| a.min(p));
+    let largest = peaks.iter().flatten().filter(|p| sized(p)).fold(0.0f64, |a, &p| a.max(p));
+    if !smallest.is_finite() || largest < SIZE_SPREAD * smallest {
         return [Vec::new(), Vec::new()];
     }
-    let decade = |p: &f64| if sized(p) { 10f64.powi(p.log10().round() as i32) } else { 1.0 };
-    let sizes = peaks.map(|p| p.iter().map(decade).collect::<Vec<f64>>());
+    let decade = |x: f64| 10f64.powi(x.log10().round() as i32);
+    let size = |p: &f64| decade(smallest) * if sized(p) { decade(p / smallest).max(1.0) } else { 1.0 };
+    let sizes = peaks.map(|p| p.iter().map(size).collect::<Vec<f64>>());
     for (key, sizes) in ["reference", "disturbance"].into_iter().zip(&sizes) {
         if !sizes.is_empty() {
-            note(&format!("design.{key}_sizes"), format!("{sizes:?}"), format!("each {key} component's peak rounded to a power of ten (1 where it is 0 throughout), since the components' peaks span {} to {}, {SIZE_SPREAD:.0e} or more: each block of ξ̂ is divided by its size, so components in units that differ by powers of ten do not spread Ω̄'s eigenvalues and the design is the one of consistent units; μ is chosen for it (no sizes when the file gives μ)", crate::settings::fmt_short(low), crate::settings::fmt_short(high)));
+            note(&format!("design.{key}_sizes"), format!("{sizes:?}"), format!("a component's peak is {} or more times the smallest reference peak P = {} (the largest is {}): each component larger than P is brought to P's size within √10, d(P)·d(peak/P) with d the nearest power of ten, a smaller one keeps its size relative to the references (d(P)), so units that differ do not spread Ω̄'s eigenvalues; μ is chosen for it (no sizes when the file gives μ)", crate::settings::fmt_4(SIZE_SPREAD), crate::settings::fmt_4(smallest), crate::settings::fmt_4(largest)));
         }
     }
     sizes
@@ -2527,23 +2536,29 @@ mod tests {
         let mut closest = Candidate::ended(Speed::FIRST, 1);
         closest.max_uf = vec![0.5156];
         let drive = |u: f64| crate::settings::Actuator { delays: vec![0.0], limits: vec![u] };
-        let advice = limit_advice(&targets, &closest, Some(&drive(0.45)), &[]);
+        let advice = limit_advice(&targets, &closest, Some(&drive(0.45)), &[], false);
         assert!(advice.contains("raise the actuator limit (u_limit) to at least 0.52"), "{advice}");
         assert!(advice.ends_with("; but truth.u_max[0] = 0.45 clips the true plant's input below that, so asking less of the loop is the way there (a raised limit is met only through the clip, which the method does not model)"), "{advice}");
         for actuator in [Some(drive(0.6)), None] {
             assert_eq!(
-                limit_advice(&targets, &closest, actuator.as_ref(), &[0.4]),
+                limit_advice(&targets, &closest, actuator.as_ref(), &[0.4], false),
                 limits_to_raise(&targets, &closest)
             );
         }
         // A steady state beyond the limit is named first (helper tryout, 2026-12-06: an F-16 pitch
         // loop whose steady elevator is 29.2 was told only to raise its limit of 25).
-        let steady = limit_advice(&targets, &closest, None, &[0.47]);
+        let steady = limit_advice(&targets, &closest, None, &[0.47], false);
         assert!(
             steady.starts_with("the steady state alone asks more than the actuator limit (u_f,1 0.47 against 0.45; "),
             "{steady}"
         );
         assert!(steady.ends_with(&limits_to_raise(&targets, &closest)), "{steady}");
+        // Not where the closest candidate met its tail bounds with less than the steady input (it
+        // then met them leaving part of the disturbance uncancelled); where it reached as much, or
+        // missed its bounds, the steady state still comes first.
+        assert_eq!(limit_advice(&targets, &closest, None, &[0.6], true), limits_to_raise(&targets, &closest));
+        assert_eq!(limit_advice(&targets, &closest, None, &[0.47], true), steady);
+        assert_eq!(limit_advice(&targets, &closest, None, &[0.6], false), steady.replace("0.47", "0.6"));
     }
 
     /// The poles' extreme magnitudes and the largest ratio between neighbours.

@@ -1701,13 +1701,16 @@ fn a_delay_check_runs_distinct_whole_samples_and_respects_the_actuator_limit() {
     );
 }
 
-/// The paper's example with y₁ in mm (C's and Q's first rows and g₁ × 1000): its components' peaks
-/// span 3000 to 1, so the automatic design sizes them, each peak rounded to a power of ten (1e3
-/// for g₁, 1 for the rest): ξ̂ is the paper's own, and the rules choose the paper's design, the
-/// same observer poles and β and μ within 1e-4 (the verifying runs' absolute tolerance meets y₁ in
-/// other units), its tails within their bounds. The paper in its own units gets no sizes (peaks 3,
-/// 2 and 1, 3). Before the sizes, the mm file's Ω̄₁ spread by 6e6 (λ_min 0.13, λ_max 7.8e5) and its
-/// design failed its verification with a tail of 5.5e3 mm.
+/// The paper's example with y₁ in mm (C's and Q's first rows and g₁ × 1000): g₁'s peak is 1500×
+/// the smallest reference peak (2), so the automatic design sizes the components, each larger one
+/// brought to that size within √10 (1e3 for g₁, 1 for the rest): ξ̂ is the paper's own, and the
+/// rules choose the paper's design, the same observer poles and β and μ within 1e-4 (the verifying
+/// runs' absolute tolerance meets y₁ in other units), its tails within their bounds. The paper in
+/// its own units gets no sizes (peaks 3, 2 and 1, 3). Before the sizes, the mm file's Ω̄₁ spread by
+/// 6e6 (λ_min 0.13, λ_max 7.8e5) and its design failed its verification with a tail of 5.5e3 mm.
+/// The DC motor of examples/apps with its load torque in kN·m (peaks 0.5 rad and 1.5e-5 kN·m) is
+/// not sized: a disturbance small in its units is taken to be small in its effect (sized up, by an
+/// earlier rule, its sampled verification diverged; unsized it passes).
 #[test]
 fn an_output_in_millimetres_gets_the_design_of_its_own_units() {
     let paper = without_design(quell::scenario::PAPER_EXAMPLE);
@@ -1735,4 +1738,11 @@ fn an_output_in_millimetres_gets_the_design_of_its_own_units() {
     // The sizes reach the file the design writes, and a run of it reads them back.
     let written = Scenario::from_toml(&b.scenario.to_toml()).unwrap();
     assert_eq!(written.design().unwrap().reference_sizes(), [1e3, 1.0]);
+    let motor = include_str!("../../../examples/apps/dc-motor/scenario.toml")
+        .replace("D = [[0.0], [-100.0], [0.0]]", "D = [[0.0], [-100000.0], [0.0]]")
+        .replace("D = [[0.0], [-66.66666666666667], [0.0]]", "D = [[0.0], [-66666.66666666667], [0.0]]")
+        .replace("bias = 0.01, harmonics = [{ amplitude = 0.005,", "bias = 1e-5, harmonics = [{ amplitude = 5e-6,");
+    assert!(motor.contains("[-100000.0]") && motor.contains("[-66666.66666666667]") && motor.contains("bias = 1e-5"));
+    let kn = auto_design(&without_design(&motor), &Targets::default()).unwrap();
+    assert!(!kn.design.has_sizes() && kn.verification.passed, "{:?}", kn.verification);
 }

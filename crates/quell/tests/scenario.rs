@@ -885,7 +885,18 @@ fn regressor_sizes_are_checked() {
     check(
         &with(&[(MU, &sized("disturbance_sizes = [1.0, 0.0]"))]),
         "design.disturbance_sizes[1]",
-        "expected a finite size > 0 (the component's expected peak, in its own units), found 0",
+        "expected a size from 1e-150 to 1e150 (the component's expected peak, in its own units), found 0",
+    );
+    check_upto(
+        &with(&[(MU, &sized("disturbance_sizes = [1.0, 1e-320]"))]),
+        "design.disturbance_sizes[1]",
+        "expected a size from 1e-150 to 1e150",
+        Some(", found"),
+    );
+    check(
+        &with(&[(MU, &sized("reference_sizes = []"))]),
+        "design.reference_sizes",
+        "expected one size per component, found an empty list; leave the key out for 1 each",
     );
 }
 

@@ -65,7 +65,10 @@ impl RegressorScaling {
             (RegressorScaling::Paper, true) => {
                 return "ξ̂ is the paper's companion form (l = e_q) with each component's block divided by its size: dimensionless, but still divided by ∏|p_j| of each filter, so μ_i's effect depends on the filter poles; μ_i λ_max(Ω̄_i) below is the rate it gives"
             }
-            (_, true) => {
+            (RegressorScaling::Modal, true) => {
+                return "ξ̂ is modal (a block per filter pole or pair, each of unit gain at its own frequency), and each component's block divided by its size (design.reference_sizes, design.disturbance_sizes), so components in unrelated units have comparable sizes in ξ̂: μ_i is a rate per squared unit of ξ̂ (μ_i·|ξ̂|²·|G_ii|² ≈ μ_i λ_max(Ω̄_i), per unit of the plant's time)"
+            }
+            (RegressorScaling::Normalized, true) => {
                 return "ξ̂ is normalized at each filter's time scale, and each component's block divided by its size (design.reference_sizes, design.disturbance_sizes), so components in unrelated units have comparable sizes in ξ̂: μ_i is a rate per squared unit of ξ̂ (μ_i·|ξ̂|²·|G_ii|² ≈ μ_i λ_max(Ω̄_i), per unit of the plant's time)"
             }
             _ => {}

@@ -200,7 +200,7 @@ pub enum DesignError {
     BadMu { index: usize, value: f64 },
     #[error("design.beta: expected a finite β > 0 (H(s) = 1/(βs + 1)), found {}", crate::settings::fmt_short(*.value))]
     BadBeta { value: f64 },
-    #[error("{key}[{index}]: expected a finite size > 0 (the component's expected peak, in its own units), found {}", crate::settings::fmt_short(*.value))]
+    #[error("{key}[{index}]: expected a size from 1e-150 to 1e150 (the component's expected peak, in its own units), found {}", crate::settings::fmt_short(*.value))]
     BadSize { key: &'static str, index: usize, value: f64 },
     #[error("{key}: pole {} is out of the design's span of rates: given the other pole lists and 1/β, expected decay rate −Re p ≥ {} and magnitude ≤ {}; {SPAN_WHY}", fmt_complex(.pole), fmt_number(*.min_decay), fmt_number(*.max_magnitude))]
     PoleOutOfSpan { key: String, pole: Complex<f64>, min_decay: f64, max_magnitude: f64 },
@@ -537,7 +537,8 @@ fn check_spec(plant: &Plant, spec: &DesignSpec) -> Result<(), DesignError> {
         if !sizes.is_empty() {
             count(key, per, components, sizes.len())?;
         }
-        if let Some((index, &value)) = sizes.iter().enumerate().find(|(_, v)| !(v.is_finite() && **v > 0.0)) {
+        let sane = |v: f64| (1.0 / crate::plant::MAX_ENTRY..=crate::plant::MAX_ENTRY).contains(&v);
+        if let Some((index, &value)) = sizes.iter().enumerate().find(|(_, v)| !sane(**v)) {
             return Err(DesignError::BadSize { key, index, value });
         }
     }

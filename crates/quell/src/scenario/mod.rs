@@ -598,11 +598,21 @@ fn partial_design(v: Value, m: usize) -> Result<PartialDesign, ScenarioError> {
         regressor_scaling: t.get("regressor_scaling", |v| {
             RegressorScaling::from_name(&v.string()?).map_err(|message| err(v.key, message))
         })?,
-        reference_sizes: t.get("reference_sizes", |v| v.numbers())?,
-        disturbance_sizes: t.get("disturbance_sizes", |v| v.numbers())?,
+        reference_sizes: t.get("reference_sizes", sizes)?,
+        disturbance_sizes: t.get("disturbance_sizes", sizes)?,
         reference_filter_orders: orders("reference_filter_orders", "reference component")?,
         disturbance_filter_orders: orders("disturbance_filter_orders", "disturbance component")?,
     })
+}
+
+/// `design.reference_sizes` or `design.disturbance_sizes`: numbers, at least one (an empty list
+/// would read as "1 each" and yet count as given, which keeps the automatic design from sizing).
+fn sizes(v: Value) -> Result<Vec<f64>, ScenarioError> {
+    let sizes = v.numbers()?;
+    if sizes.is_empty() {
+        return Err(err(v.key, "expected one size per component, found an empty list; leave the key out for 1 each"));
+    }
+    Ok(sizes)
 }
 
 /// `[reference]` or `[disturbance]`: `components = [{ bias, harmonics = [...] }, ...]`.
