@@ -344,7 +344,8 @@ fn a_value_the_rules_chose_and_the_design_refuses_is_named_as_theirs() {
 }
 
 /// A sampled-data scenario starts the rules from channel and observer poles slow enough for its
-/// sample time: the maglev (tests/data/maglev.toml, ±57 /s, 1 ms delay) gets an observer for
+/// sample time (with sizes of 1, the regressor in its signals' units: sized, the maglev's
+/// continuous design is slow enough for 0.5 ms already): the maglev (tests/data/maglev.toml, ±57 /s, 1 ms delay) gets an observer for
 /// ρ = 686 /s in the continuous loop, too fast for 0.5 ms (T_s·ρ = 0.34); with
 /// simulation.sample_time = 0.0005 the rules halve the poles to T_s·ρ ≤ 0.2. That start drives
 /// u_f 195× its continuous loop's peak (1059 V against 5.4 V; it had passed so, and the run's own
@@ -357,16 +358,17 @@ fn a_sampled_scenario_gets_poles_slow_enough_for_its_sample_time() {
         quell::sim::loop_rate(&a.design, a.design.plant(), [&a.scenario.reference, &a.scenario.disturbance])
     };
     let t_s = 5e-4;
-    let continuous = auto_design(&toml::from_str(&data("maglev.toml")).unwrap(), &Targets::default()).unwrap();
+    let unit_sized = |text: &str| with_unit_sizes(toml::from_str(text).unwrap());
+    let continuous = auto_design(&unit_sized(&data("maglev.toml")), &Targets::default()).unwrap();
     assert!(continuous.verification.passed, "{:?}", continuous.verification);
     assert!(t_s * rho(&continuous) > quell::sim::COARSE_SAMPLE, "ρ = {}", rho(&continuous));
     let text = data("maglev.toml").replace("[simulation]\n", &format!("[simulation]\nsample_time = {t_s}\n"));
-    let short = auto_design(&toml::from_str(&text).unwrap(), &Targets::default()).unwrap();
+    let short = auto_design(&unit_sized(&text), &Targets::default()).unwrap();
     assert!(!short.verification.passed, "{:?}", short.verification);
     let advice = short.verification.advice.join("\n");
     let proposed = number_after(&advice, "lengthen simulation.t_end to at least ", " ");
     let longer = text.replace("t_end = 5.0", &format!("t_end = {proposed:?}"));
-    let sampled = auto_design(&toml::from_str(&longer).unwrap(), &Targets::default()).unwrap();
+    let sampled = auto_design(&unit_sized(&longer), &Targets::default()).unwrap();
     assert_eq!(sampled.scenario.simulation.sample_time, Some(t_s));
     assert!(sampled.verification.passed, "{:?}", sampled.verification);
     assert!(t_s * rho(&sampled) <= quell::sim::COARSE_SAMPLE, "ρ = {}", rho(&sampled));
@@ -1051,7 +1053,7 @@ fn a_channel_no_horizon_converges_is_told_to_excite_it() {
 #[test]
 fn a_failed_verification_names_a_horizon_it_has_verified() {
     let text = include_str!("../../../examples/apps/active-suspension/scenario.toml");
-    let mut doc = without_design(text);
+    let mut doc = with_unit_sizes(without_design(text));
     doc["simulation"].as_table_mut().unwrap().remove("sample_time");
     doc["design"].as_table_mut().unwrap().insert("regressor_scaling".into(), "paper".into());
     let short = auto_design(&doc, &Targets::default()).unwrap();
@@ -1092,7 +1094,7 @@ fn a_horizon_that_misses_is_doubled_and_none_beyond_the_cap_is_proposed() {
 fn a_first_proposal_that_blows_up_is_slowed_until_it_verifies() {
     let text =
         include_str!("../../../examples/apps/active-suspension/scenario.toml").replace("sample_time = 0.001", "");
-    let a = auto_design(&without_design(&text), &Targets::default()).unwrap();
+    let a = auto_design(&with_unit_sizes(without_design(&text)), &Targets::default()).unwrap();
     assert!(a.verification.passed, "{:?}", a.verification);
     for key in ["design.channel_poles", "design.observer_poles"] {
         let why = &a.choices.iter().find(|c| c.key == key).unwrap().why;
@@ -1405,7 +1407,7 @@ fn a_sampled_candidate_that_departs_from_its_continuous_loop_is_slowed() {
 #[test]
 fn a_verified_sampled_design_is_not_sent_back_to_the_automatic_design() {
     let text = include_str!("../../../examples/apps/active-suspension/scenario.toml");
-    let a = auto_design(&without_design(text), &Targets::default()).unwrap();
+    let a = auto_design(&with_unit_sizes(without_design(text)), &Targets::default()).unwrap();
     assert!(a.verification.passed, "{:?}", a.verification);
     let r = Run::of(&a.scenario, &a.design).simulate(|_| ControlFlow::Continue(())).unwrap();
     let advice = quell::diagnostics::sampled_advice(&a.scenario, &a.design, &r);
@@ -1554,7 +1556,12 @@ fn a_steady_state_beyond_the_true_actuator_is_named_first() {
 /// the rules found passed the gust's bias with error 0.94 (helper tryout, 2026-12-06).
 #[test]
 fn a_failed_design_with_a_poor_disturbance_observer_names_it() {
-    let a = auto_design(&data("b747-longitudinal.toml").parse().unwrap(), &Targets::default()).unwrap();
+    // Sized (its pitch reference is 1/100 of its speed's), the automatic design passes; with sizes of 1
+    // it fails, and says why.
+    let doc: toml::Table = data("b747-longitudinal.toml").parse().unwrap();
+    let sized = auto_design(&doc, &Targets::default()).unwrap();
+    assert!(sized.design.has_sizes() && sized.verification.passed, "{:?}", sized.verification);
+    let a = auto_design(&with_unit_sizes(doc), &Targets::default()).unwrap();
     let v = &a.verification;
     assert!(!v.passed, "{v:?}");
     let d = &a.design;
