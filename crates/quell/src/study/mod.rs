@@ -1003,7 +1003,8 @@ fn study_size(grid: &[GridAxis], mc: Option<&MonteCarlo>) -> Result<usize, Study
 }
 
 /// Optional scenario keys without a default: a study varies them only where the scenario gives them.
-const OPTIONAL_KEYS: &[&str] = &["simulation.sample_time", "noise.std", "noise.bandwidth"];
+const OPTIONAL_KEYS: &[&str] =
+    &["simulation.sample_time", "noise.std", "noise.bandwidth", "design.reference_sizes", "design.disturbance_sizes"];
 
 /// Why `path` is not in the scenario (`why`), with what to do: for an [`OPTIONAL_KEYS`] key the
 /// scenario leaves out, give it there; otherwise `hint` on key paths.

@@ -91,6 +91,9 @@ fn study_mistakes_name_their_key() {
         ("[monte_carlo]\nruns = 2\n\"plant.E\" = { relative = 0.1 }", "monte_carlo.\"plant.E\": plant.E is not a value of the scenario (plant has no E)"),
         // An optional key the scenario leaves out: give it there first.
         ("[grid]\n\"simulation.sample_time\" = [0.001, 0.01]", "grid.\"simulation.sample_time\": simulation.sample_time is not a value of the scenario (simulation has no sample_time): simulation.sample_time is optional and the scenario leaves it out; give it a value in the scenario file"),
+        // The components' sizes, 1 each where the scenario leaves them out (a review found the message
+        // said only that design has no reference_sizes).
+        ("[grid]\n\"design.reference_sizes[0]\" = [1.0, 10.0]", "grid.\"design.reference_sizes[0]\": design.reference_sizes[0] is not a value of the scenario (design has no reference_sizes): design.reference_sizes is optional and the scenario leaves it out; give it a value in the scenario file"),
         ("[simulation]\nt_end = -1.0", "simulation.t_end: expected a final time > 0, found -1"),
         ("[simulation]\nsteps = 3", "simulation.steps: unknown key; valid keys in [simulation]"),
         ("[simulation]\nmethod = \"imx\"", "simulation.method: expected \"auto\" (DOP853"),
