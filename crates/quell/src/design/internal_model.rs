@@ -60,19 +60,20 @@ impl RegressorScaling {
 
     /// What μ_i means under this scaling, for the design report; `sized`: the components' sizes
     /// divide ξ̂'s blocks ([`crate::design::DesignSpec::reference_sizes`]).
-    pub fn mu_meaning(self, sized: bool) -> &'static str {
-        match (self, sized) {
+    pub fn mu_meaning(self, sized: bool) -> String {
+        let form = match (self, sized) {
             (RegressorScaling::Paper, true) => {
-                return "ξ̂ is the paper's companion form (l = e_q) with each component's block divided by its size: dimensionless, but still divided by ∏|p_j| of each filter, so μ_i's effect depends on the filter poles; μ_i λ_max(Ω̄_i) below is the rate it gives"
+                return "ξ̂ is the paper's companion form (l = e_q) with each component's block divided by its size: dimensionless, but still divided by ∏|p_j| of each filter, so μ_i's effect depends on the filter poles; μ_i λ_max(Ω̄_i) below is the rate it gives".into()
             }
-            (RegressorScaling::Modal, true) => {
-                return "ξ̂ is modal (a block per filter pole or pair, each of unit gain at its own frequency), and each component's block divided by its size (design.reference_sizes, design.disturbance_sizes), so components in unrelated units have comparable sizes in ξ̂: μ_i is a rate per squared unit of ξ̂ (μ_i·|ξ̂|²·|G_ii|² ≈ μ_i λ_max(Ω̄_i), per unit of the plant's time)"
-            }
-            (RegressorScaling::Normalized, true) => {
-                return "ξ̂ is normalized at each filter's time scale, and each component's block divided by its size (design.reference_sizes, design.disturbance_sizes), so components in unrelated units have comparable sizes in ξ̂: μ_i is a rate per squared unit of ξ̂ (μ_i·|ξ̂|²·|G_ii|² ≈ μ_i λ_max(Ω̄_i), per unit of the plant's time)"
-            }
-            _ => {}
-        }
+            (RegressorScaling::Modal, true) => "modal (a block per filter pole or pair, each of unit gain at its own frequency)",
+            (RegressorScaling::Normalized, true) => "normalized at each filter's time scale",
+            (_, false) => return self.unsized_mu_meaning().into(),
+        };
+        format!("ξ̂ is {form}, and each component's block divided by its size (design.reference_sizes, design.disturbance_sizes), so components in unrelated units have comparable sizes in ξ̂: μ_i is a rate per squared unit of ξ̂ (μ_i·|ξ̂|²·|G_ii|² ≈ μ_i λ_max(Ω̄_i), per unit of the plant's time)")
+    }
+
+    /// What μ_i means under this scaling where every component's size is 1.
+    fn unsized_mu_meaning(self) -> &'static str {
         match self {
             RegressorScaling::Paper => {
                 "ξ̂ is the paper's companion form (l = e_q): its size is the signals' divided by ∏|p_j| of each filter, so μ_i's effect depends on the filter poles; μ_i λ_max(Ω̄_i) below is the rate it gives"
@@ -153,7 +154,7 @@ pub fn time_scale(poles: &[Complex<f64>]) -> f64 {
 
 /// Block-diagonal (G, L) = (blkdiag G_i, blkdiag l_i / s_i) for one pole list per signal
 /// component (eqs. (11), (16)): G is Σq_i × Σq_i, L is Σq_i × (number of components). s_i is
-/// component i's size (`sizes`, empty: 1 each): dividing l_i by it divides block i of ξ̂ by it, a
+/// component i's size (`sizes`, one per pole list): dividing l_i by it divides block i of ξ̂ by it, a
 /// change of ξ̂'s coordinates that the method allows (any controllable (G_i, l_i) serves) and that
 /// makes ξ̂ dimensionless, so Ω̄'s conditioning no longer depends on the components' units.
 pub fn internal_model(
@@ -161,12 +162,13 @@ pub fn internal_model(
     sizes: &[f64],
     scaling: RegressorScaling,
 ) -> (DMatrix<f64>, DMatrix<f64>) {
+    debug_assert_eq!(poles.len(), sizes.len(), "one size per pole list");
     let (Gs, ls): (Vec<_>, Vec<_>) = poles
         .iter()
-        .enumerate()
-        .map(|(i, p)| {
+        .zip(sizes)
+        .map(|(p, &size)| {
             let (G, l) = filter_pair(p, scaling);
-            (G, l / sizes.get(i).copied().unwrap_or(1.0))
+            (G, l / size)
         })
         .unzip();
     (blkdiag(&Gs), blkdiag(&ls))

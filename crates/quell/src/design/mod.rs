@@ -306,9 +306,10 @@ impl Design {
         let decoupled_eigenvalues = eigenvalues(&A_f).map_err(|e| eigen_error("plant", "A − BK", e))?;
         poll()?;
         let near_axis_zeros = check_zero_dynamics(plant, &fw)?;
-        let (G_g, L_g) = internal_model(&spec.reference_filter_poles, &spec.reference_sizes, spec.regressor_scaling);
-        let (G_w, L_w) =
-            internal_model(&spec.disturbance_filter_poles, &spec.disturbance_sizes, spec.regressor_scaling);
+        let reference_sizes = sizes_or_ones(&spec.reference_sizes, plant.m());
+        let disturbance_sizes = sizes_or_ones(&spec.disturbance_sizes, plant.k());
+        let (G_g, L_g) = internal_model(&spec.reference_filter_poles, &reference_sizes, spec.regressor_scaling);
+        let (G_w, L_w) = internal_model(&spec.disturbance_filter_poles, &disturbance_sizes, spec.regressor_scaling);
         let (N, cond_D) = disturbance_observer_gain(&plant.D, &L_w)?;
         Ok(Design {
             plant: plant.clone(),
@@ -330,8 +331,8 @@ impl Design {
             mu: spec.mu.clone(),
             beta: spec.beta,
             regressor_scaling: spec.regressor_scaling,
-            reference_sizes: sizes_or_ones(&spec.reference_sizes, plant.m()),
-            disturbance_sizes: sizes_or_ones(&spec.disturbance_sizes, plant.k()),
+            reference_sizes,
+            disturbance_sizes,
             controllability,
             observability,
             observer_eigenvalues,
@@ -496,8 +497,6 @@ impl Design {
     }
 }
 
-/// The designer's choices: one entry per channel / component, μ_i ≥ 0, β > 0, every pole list
-/// Hurwitz and closed under conjugation.
 /// `sizes`, or `count` ones where none are given.
 fn sizes_or_ones(sizes: &[f64], count: usize) -> Vec<f64> {
     if sizes.is_empty() {
@@ -507,6 +506,8 @@ fn sizes_or_ones(sizes: &[f64], count: usize) -> Vec<f64> {
     }
 }
 
+/// The designer's choices: one entry per channel / component, μ_i ≥ 0, β > 0, every pole list
+/// Hurwitz and closed under conjugation.
 fn check_spec(plant: &Plant, spec: &DesignSpec) -> Result<(), DesignError> {
     let (m, k) = (plant.m(), plant.k());
     let count = |key, per, expected, got| {
