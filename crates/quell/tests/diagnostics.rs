@@ -880,6 +880,34 @@ fn the_comparison_of_a_sampled_run_records_a_bounded_continuous_loop() {
     }
 }
 
+/// A sampled run's departure from its continuous loop does not depend on the inputs' units: the
+/// paper's example with input 2 in units 10⁴ times larger (B's column × 10⁴, so u_f,2 ÷ 10⁴, the
+/// loop otherwise the same) departs by the same ratios of u_f's peaks on both channels, to 1e-6.
+/// Its u_f,2 (peak 2.2e-3) had been measured against a thousandth of u_f,1's peak (a floor meant
+/// for a channel with no signal of its own), as a quadrotor's yaw torque against its thrust
+/// (helper tryout, 2026-12-07: 2.2× read as 0.2×).
+#[test]
+fn a_sampled_runs_departure_does_not_depend_on_the_inputs_units() {
+    let mut s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+    (s.simulation.t_end, s.simulation.sample_time) = (30.0, Some(0.05));
+    let mut scaled = s.clone();
+    scaled.plant.B.column_mut(1).scale_mut(1e4);
+    let departures = |s: &Scenario| {
+        let d = s.design().unwrap();
+        let r = Run::of(s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
+        quell::diagnostics::sampled::against_continuous(s, &d, &r).expect("compared")
+    };
+    let ((c, a), (cs, b)) = (departures(&s), departures(&scaled));
+    // The same loop: u_f,2 ÷ 10⁴, u_f,1 as it was.
+    assert!((cs.max_uf(1) * 1e4 / c.max_uf(1) - 1.0).abs() < 1e-6, "{} {}", cs.max_uf(1), c.max_uf(1));
+    assert!(cs.max_uf(1) < 1e-3 * c.max_uf(0), "{} {}", cs.max_uf(1), c.max_uf(0));
+    for (i, (a, b)) in a.iter().zip(&b).enumerate() {
+        let (ra, rb) = (a.uf.0 / a.uf.1, b.uf.0 / b.uf.1);
+        assert!((ra / rb - 1.0).abs() < 1e-6 && (a.y / b.y - 1.0).abs() < 1e-6, "channel {i}: {a:?} {b:?}");
+        assert!(!a.floored && !b.floored, "channel {i}: {a:?} {b:?}");
+    }
+}
+
 /// A sampled-data run is compared with its continuous loop (the same scenario without its sample
 /// time), which the rule T_s·ρ ≤ 0.2 alone misjudges both ways:
 /// * the flexible-joint robot of `tests/data` (its automatic design for an actuator limit of 1) at
@@ -981,10 +1009,14 @@ fn a_sampled_run_is_compared_with_its_continuous_loop() {
         c.bias = 0.0;
         c.harmonics.iter_mut().for_each(|h| h.amplitude = 0.0);
     }
-    let (advice, _) = run(&one, &pd, Some(1e-3));
+    let (advice, sampled) = run(&one, &pd, Some(1e-3));
     let (_, continuous) = run(&one, &pd, None);
     let y2 = continuous.column(&continuous.y, 2, 1).fold(0.0f64, |a, v| a.max(v.abs()));
     assert!(y2 < 1e-9 && advice.is_empty(), "{y2:e}: {advice:?}");
+    let channels = quell::diagnostics::sampled::departures(&sampled, &continuous).unwrap();
+    // Its u_f (1.5e-13 in the continuous loop) likewise, flagged as floored.
+    assert!(channels[1].floored && !channels[0].floored, "{channels:?}");
+    assert!((channels[1].uf.1 / (1e-3 * channels[0].uf.1) - 1.0).abs() < 1e-12, "{channels:?}");
     // A continuous loop past the comparison's 200,000 steps is not compared, and the run says so.
     let long = Scenario::from_toml(
         &PAPER_EXAMPLE.replace("t_end = 100.0", "t_end = 20000.0").replace("output_step = 0.1 ", "output_step = 1.0 "),

@@ -47,8 +47,8 @@ pub const DEPARTED_UF: f64 = 2.0;
 pub const FOLLOWS_Y: f64 = 0.1;
 /// See [`FOLLOWS_Y`].
 pub const FOLLOWS_UF: f64 = 1.2;
-/// A channel's continuous peaks (of y, of u_f) below this share of the largest channel's are
-/// measured against that share instead ([`departures`]).
+/// A channel with no reference of its own whose continuous peaks (of y, of u_f) are below this
+/// share of the largest channel's is measured against that share instead ([`departures`]).
 pub const QUIET: f64 = 1e-3;
 /// Most rows a run a diagnostic makes beside the user's records (on every k-th of its rows): the
 /// comparison of a sampled run with its continuous loop had held a second record as large as the
@@ -64,8 +64,11 @@ pub const HALVING_STEPS: f64 = 2e6;
 pub struct ChannelDeparture {
     /// max_k |y_i(t_k) − y_i,c(t_k)| / max_k |y_i,c(t_k)|.
     pub y: f64,
-    /// max |u_f,i| of the sampled run and of the continuous loop.
+    /// max |u_f,i| of the sampled run and of the continuous loop (or the floor it is measured
+    /// against, where that is larger: [`ChannelDeparture::floored`]).
     pub uf: (f64, f64),
+    /// Whether `uf.1` is a floor ([`QUIET`]) above the continuous loop's own peak.
+    pub floored: bool,
 }
 
 impl ChannelDeparture {
@@ -211,11 +214,13 @@ pub fn departures(sampled: &SimResult, continuous: &SimResult) -> Option<Vec<Cha
     let y_peaks: Vec<f64> =
         (0..m).map(|i| continuous.column(&continuous.y, m, i).fold(0.0f64, |a, v| a.max(v.abs()))).collect();
     let uf_peaks: Vec<f64> = (0..m).map(|i| continuous.max_uf(i)).collect();
-    // A channel the continuous loop holds near zero (no signal of its own: the paper's y2 at
-    // 7.9e-14 with g = [1, 0]) is measured against a thousandth of the largest channel's peak, not
-    // its round-off.
-    let floor = |peaks: &[f64]| QUIET * peaks.iter().copied().fold(0.0, f64::max);
-    let (y_floor, uf_floor) = (floor(&y_peaks), floor(&uf_peaks));
+    // A channel with no reference of its own that the continuous loop holds near zero (the paper's
+    // y2 at 7.9e-14 with g = [1, 0] and ω = 0) is measured against a thousandth of the largest
+    // channel's peak, not its round-off. Only such a channel: the channels' units differ, and a
+    // quadrotor's yaw torque (1.9e-5 N·m) measured against a thousandth of its thrust (0.21 N) had
+    // read its sampled loop's 2.2× as 0.2×, which hid it from the automatic design's check too.
+    let own = |i: usize| continuous.column(&continuous.g, m, i).any(|g| g != 0.0);
+    let floor = |peaks: &[f64], i: usize| if own(i) { 0.0 } else { QUIET * peaks.iter().copied().fold(0.0, f64::max) };
     let channel = |i: usize| {
         let gap = rows.iter().fold(0.0f64, |a, &(k, j)| {
             let d = (sampled.y[k * m + i] - continuous.y[j * m + i]).abs();
@@ -226,8 +231,9 @@ pub fn departures(sampled: &SimResult, continuous: &SimResult) -> Option<Vec<Cha
             }
         });
         // A y that is zero in both (no signals, x(0) = 0) has not departed.
-        let y = if gap == 0.0 { 0.0 } else { gap / y_peaks[i].max(y_floor) };
-        ChannelDeparture { y, uf: (sampled.max_uf(i), uf_peaks[i].max(uf_floor)) }
+        let y = if gap == 0.0 { 0.0 } else { gap / y_peaks[i].max(floor(&y_peaks, i)) };
+        let uf_floor = floor(&uf_peaks, i);
+        ChannelDeparture { y, uf: (sampled.max_uf(i), uf_peaks[i].max(uf_floor)), floored: uf_floor > uf_peaks[i] }
     };
     Some((0..m).map(channel).collect())
 }
@@ -377,12 +383,13 @@ pub(crate) fn sampled_lines(
 fn departed(channels: &[ChannelDeparture], which: impl Fn(&ChannelDeparture) -> bool) -> String {
     let line = |(i, c): (usize, &ChannelDeparture)| {
         format!(
-            "y[{}] by {} of its continuous peak, max|u_f[{}]| {} against {} ({}×)",
+            "y[{}] by {} of its continuous peak, max|u_f[{}]| {} against {}{} ({}×)",
             i + 1,
             percent(c.y),
             i + 1,
             fmt_4(c.uf.0),
             fmt_4(c.uf.1),
+            if c.floored { " (a floor: the continuous loop holds it near zero)" } else { "" },
             // Three digits: 2.04× had read "2×" beside "beyond twice".
             fmt_short(crate::settings::significant(c.uf.0 / c.uf.1, 3))
         )
