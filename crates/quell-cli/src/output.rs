@@ -156,6 +156,14 @@ pub fn not_the_input(input: &Path, dir: &Path, files: &[&str]) -> Result<(), Fai
     }
 }
 
+/// [`not_the_input`] for a study's command: neither the study file nor the scenario file it
+/// names may be replaced (a study whose scenario was `summary.json`, swept with `--out` its own
+/// directory, had its scenario replaced by the sweep's summary; hostile review, 2026-12-07).
+pub fn not_the_study_inputs(study: &Path, scenario: Option<&Path>, dir: &Path, files: &[&str]) -> Result<(), Failure> {
+    not_the_input(study, dir, files)?;
+    scenario.map_or(Ok(()), |scenario| not_the_input(scenario, dir, files))
+}
+
 /// The refusal of `--out dir` while another quell command writes there.
 fn busy(dir: &Path) -> Failure {
     Failure::Input(format!(

@@ -78,7 +78,8 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
         return finish_resumed(&args.out, &meta, &kept, !args.no_plots);
     }
     let pool = thread_pool(args.jobs, n - kept.len())?;
-    crate::output::not_the_input(args.study.as_deref().expect("a study without --merge"), &args.out, OUTPUTS)?;
+    let path = args.study.as_deref().expect("a study without --merge");
+    crate::output::not_the_study_inputs(path, study.scenario_path.as_deref(), &args.out, OUTPUTS)?;
     prepare_out(&args.out, OUTPUTS)?;
     let journal = Journal::create(&args.out, &meta, &kept)
         .map_err(|e| Failure::Input(format!("--out {}: {e}; choose another output directory", args.out.display())))?;

@@ -35,7 +35,7 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
     }
     let pool = crate::sweep::thread_pool(args.jobs, usize::MAX)?;
     let files = ["tune.json", "tune.csv", "tune.png", "tune.svg"];
-    crate::output::not_the_input(path, &args.out, &files)?;
+    crate::output::not_the_study_inputs(path, study.scenario_path.as_deref(), &args.out, &files)?;
     prepare_out(&args.out, &files)?;
     for w in study::tune_cautions(&study) {
         eprintln!("⚠ warning: {w}");

@@ -592,6 +592,19 @@ fn an_output_that_would_replace_the_input_is_refused() {
     fs::write(&study, format!("scenario = {:?}\n[simulation]\nt_end = 1.0\n", paper())).unwrap();
     let o = quell(&["sweep", study.to_str().unwrap(), "--out", d, "--no-plots"]);
     refused(&o, "its runs.csv would replace the input file");
+    // Nor the scenario a study names (a sweep had replaced a scenario called summary.json with its
+    // summary, and a tune one called tune.json; hostile review, 2026-12-07).
+    for (name, command, extra) in
+        [("summary.json", "sweep", ""), ("tune.json", "tune", "[tune]\nobjective = \"settle_t\"\nmu = [2.0, 200.0]\n")]
+    {
+        let scenario = dir.path().join(name);
+        fs::write(&scenario, &text).unwrap();
+        let study = dir.path().join(format!("{command}-study.toml"));
+        fs::write(&study, format!("scenario = {name:?}\n[simulation]\nt_end = 1.0\n{extra}")).unwrap();
+        let o = quell(&[command, study.to_str().unwrap(), "--out", d, "--no-plots"]);
+        refused(&o, &format!("its {name} would replace the input file"));
+        assert_eq!(fs::read_to_string(&scenario).unwrap(), text, "{name}");
+    }
 }
 
 /// A record too large for memory under `--sample-time` is named as such: it had been told

@@ -782,6 +782,22 @@ fn try_compile(dir: &std::path::Path, files: &[&str], name: &str) -> Result<(), 
     }
 }
 
+/// A build that assumes no NaN or infinity (gcc's -ffast-math, -Ofast, -ffinite-math-only) would
+/// compile the checks of y, g, u and u_f out, so the source refuses it, naming the flags: an FMU
+/// built with `--compiler "gcc -ffast-math"` had accepted a NaN input (hostile review, 2026-12-07).
+/// The same source compiles without them (the other tests).
+#[test]
+fn a_build_without_ieee_arithmetic_is_refused() {
+    let (_, d) = example("paper");
+    let dir = TempDir::new("fast-math");
+    write_code(&export(&d, 1e-3, "quell", Precision::F64), &dir.0);
+    for flag in ["-ffast-math", "-Ofast", "-ffinite-math-only"] {
+        let e = try_compile(&dir.0, &[flag, "-c", "quell_controller.c"], "fast.o").expect_err(flag);
+        assert!(e.contains("build without -ffast-math, -Ofast or -ffinite-math-only"), "{flag}: {e}");
+    }
+    try_compile(&dir.0, &["-c", "quell_controller.c"], "ieee.o").expect("compiles with IEEE arithmetic");
+}
+
 #[test]
 fn a_header_and_source_of_different_exports_do_not_compile_together() {
     // A failed write could leave a new header beside an old source; the pair compiled cleanly and

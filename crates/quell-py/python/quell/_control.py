@@ -91,9 +91,10 @@ def _hat(state):
 def state_space(sys):
     """A ``control.TransferFunction`` as a minimal ``control.StateSpace`` (pole-zero pairs cancelled
     by ``control.minreal``, then ``control.ss``, keeping ``dt``); anything else unchanged. A pair
-    whose pole has Re p ≥ 0 is refused: cancelling it hides an unstable mode (no controller can
-    stabilize it through this input and output), and python-control's default tolerance also
-    cancels pairs as far apart as 1e-5 relative."""
+    whose pole has Re p ≥ −√ε·|p| (on the axis to the roots' rounding) is refused: cancelling it
+    hides an unstable or undamped mode (no controller can stabilize it through this input and
+    output), and python-control's default tolerance also cancels pairs as far apart as 1e-5
+    relative."""
     import control
 
     if not isinstance(sys, control.TransferFunction):
@@ -122,10 +123,14 @@ def state_space(sys):
                     "feedthrough from u to y), so the numerator's degree must be below the denominator's"
                 )
     for i, j, p, z in _cancelled_pairs(sys):
-        if p.real >= 0.0:
+        # On the axis within the roots' rounding: (s^2+4)/((s^2+4)(s+1)(s+3)(s+4)) has its pole at
+        # -2.1e-15+2j, which had been cancelled while the same pair at lower order (+1.1e-16+2j) was
+        # refused (hostile review, 2026-12-07).
+        if p.real >= -np.sqrt(np.finfo(float).eps) * abs(p):
             where = f" (output {i + 1}, input {j + 1})" if sys.noutputs * sys.ninputs > 1 else ""
             raise _sys_error(
                 f"sys: the transfer function{where} has the pole {_num(p)} in the closed right half-plane "
+                f"{'' if p.real >= 0.0 else '(on the imaginary axis to the roots’ rounding) '}"
                 f"and the zero {_num(z)} (|p - z| = {abs(p - z):.3g}), which a minimal realization "
                 "cancels: the unstable mode would be hidden, not gone; give the plant as a StateSpace "
                 "(control.ss of a realization that keeps the mode) so that the design's checks see it"

@@ -212,6 +212,9 @@ pub struct Study {
     base: toml::Table,
     /// Where the scenario came from, for messages (`paper.toml`, or `the paper's example`).
     pub scenario_source: String,
+    /// The scenario file read (its path joined to the study file's directory); `None` for the
+    /// paper's example or a scenario table. A command's outputs must not replace it.
+    pub scenario_path: Option<PathBuf>,
     pub grid: Vec<GridAxis>,
     /// Grid points: the product of the axes' lengths (1 without a grid), counted once when read.
     points: usize,
@@ -404,7 +407,7 @@ impl Study {
             }
             e
         })?;
-        let (mut base, scenario_source) = base_scenario(doc, dir)?;
+        let (mut base, scenario_source, scenario_path) = base_scenario(doc, dir)?;
         let scenario = apply_simulation(doc, &mut base, &scenario_source)?;
         let grid = read_grid(doc)?;
         let monte_carlo = match doc.get("monte_carlo") {
@@ -438,6 +441,7 @@ impl Study {
             fingerprint: fingerprint(doc, &base),
             base,
             scenario_source,
+            scenario_path,
             grid,
             points,
             monte_carlo,
@@ -729,11 +733,13 @@ impl Study {
     }
 }
 
-/// The study's scenario document and where it came from (for messages): the paper's example, a
-/// file's path (relative to `dir`) or the scenario table itself.
-fn base_scenario(doc: &toml::Table, dir: Option<&Path>) -> Result<(toml::Table, String), StudyError> {
+/// The study's scenario document, where it came from (for messages): the paper's example, a
+/// file's path (relative to `dir`) or the scenario table itself, and the file's path where it is one.
+fn base_scenario(doc: &toml::Table, dir: Option<&Path>) -> Result<(toml::Table, String, Option<PathBuf>), StudyError> {
     match doc.get("scenario") {
-        None => Ok((PAPER_EXAMPLE.parse().expect("the paper's example is valid TOML"), "the paper's example".into())),
+        None => {
+            Ok((PAPER_EXAMPLE.parse().expect("the paper's example is valid TOML"), "the paper's example".into(), None))
+        }
         Some(toml::Value::String(s)) if s.is_empty() => Err(err(
             "scenario",
             "expected the scenario file's path, found an empty string; name the file (scenario = \"paper.toml\"), or leave the key out for the paper's example",
@@ -753,9 +759,9 @@ fn base_scenario(doc: &toml::Table, dir: Option<&Path>) -> Result<(toml::Table, 
             let base = text.parse().map_err(|e: toml::de::Error| {
                 err("scenario", format!("{s} is not valid TOML: {}", syntax_message(&text, &e)))
             })?;
-            Ok((base, s.clone()))
+            Ok((base, s.clone(), Some(p)))
         }
-        Some(toml::Value::Table(t)) => Ok((t.clone(), "the study's scenario".into())),
+        Some(toml::Value::Table(t)) => Ok((t.clone(), "the study's scenario".into(), None)),
         Some(v) => Err(err(
             "scenario",
             format!("expected the scenario file's path (a string) or a scenario table, found {}", kind(v)),
@@ -1124,6 +1130,13 @@ fn monte_carlo(base: &toml::Table, t: &toml::Table, source: &str) -> Result<Mont
             return Err(e);
         }
         let at = format!("monte_carlo.\"{key}\"");
+        // A misspelt `seed` ([monte_carlo] sed = 1) is no key path either: name it, as `runs` above.
+        if let Some(near) = crate::settings::nearest(key, ["runs", "seed"]).filter(|_| !key.contains('.')) {
+            return Err(err(
+                &at,
+                format!("unknown key (did you mean `{near}`?); [monte_carlo] takes runs, seed and scenario key paths with a distribution, e.g. \"truth.A\" = {{ relative = 0.05 }}"),
+            ));
+        }
         let path = KeyPath::parse(key).map_err(|m| err(&at, m))?;
         let law = table(&at, v)
             .map_err(|_| err(&at, format!("expected a distribution, one of {LAWS}; found {}", kind(v))))?;

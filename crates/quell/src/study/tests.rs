@@ -78,6 +78,7 @@ fn study_mistakes_name_their_key() {
         ("[monte_carlo]\nseed = 1", "monte_carlo.runs: missing"),
         ("[monte_carlo]\nruns = 5\nseed = 1", "monte_carlo: expected at least one scenario key with a distribution, found only runs and seed, so every draw would repeat the nominal run; add one such as"),
         ("[monte_carlo]\nrun = 5", "monte_carlo.runs: missing (`run` is no key of [monte_carlo]: did you mean `runs`?); required"),
+        ("[monte_carlo]\nruns = 2\nsed = 1", "monte_carlo.\"sed\": unknown key (did you mean `seed`?); [monte_carlo] takes runs, seed and scenario key paths with a distribution"),
         ("[monte_carlo]\nruns = 0", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found 0"),
         ("[monte_carlo]\nruns = -3", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found -3"),
         ("[monte_carlo]\nruns = 1e12", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found 1e12, a floating-point number; write it as an integer, 1000000000000"),

@@ -2,8 +2,11 @@
 #include "suspension_controller.h"
 
 /* A header from another export fails here (size -1): regenerate both files together. */
-typedef char suspension_header_matches_source[SUSPENSION_LAYOUT_ID == 0xc9c37bdcba91b685u ? 1 : -1];
+typedef char suspension_header_matches_source[SUSPENSION_LAYOUT_ID == 0x6b64e14e90c2b8b2u ? 1 : -1];
 #include <float.h>
+#if defined(__FAST_MATH__) || (defined(__FINITE_MATH_ONLY__) && __FINITE_MATH_ONLY__)
+#error "quell's checks of its inputs and state need NaN and infinities: build without -ffast-math, -Ofast or -ffinite-math-only"
+#endif
 
 /* Core (observers (6), (14), (20) with (5) substituted) at ZOH: z(k+1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
 static const double suspension_PhiGamma_z[SUSPENSION_NZ][SUSPENSION_NZ + 3 * SUSPENSION_M] = {

@@ -21,9 +21,9 @@
 
 /* The linked names carry this export's layout id: an object compiled with another export's
  * header does not link with this source. */
-#define suspension_init suspension_init_c9c37bdcba91b685
-#define suspension_step suspension_step_c9c37bdcba91b685
-#define suspension_command suspension_command_c9c37bdcba91b685
+#define suspension_init suspension_init_6b64e14e90c2b8b2
+#define suspension_step suspension_step_6b64e14e90c2b8b2
+#define suspension_command suspension_command_6b64e14e90c2b8b2
 
 #include <stdint.h>
 
@@ -72,6 +72,6 @@ void suspension_command(const suspension_state *s, double u[SUSPENSION_M]);
 #endif
 
 /* Identifies this header's source: suspension_controller.c compiles only with it. */
-#define SUSPENSION_LAYOUT_ID 0xc9c37bdcba91b685u
+#define SUSPENSION_LAYOUT_ID 0x6b64e14e90c2b8b2u
 
 #endif /* SUSPENSION_CONTROLLER_H */

@@ -2,8 +2,11 @@
 #include "motor_controller.h"
 
 /* A header from another export fails here (size -1): regenerate both files together. */
-typedef char motor_header_matches_source[MOTOR_LAYOUT_ID == 0x113bbcd5f02e2ca6u ? 1 : -1];
+typedef char motor_header_matches_source[MOTOR_LAYOUT_ID == 0x48b7c3d73b31a9d1u ? 1 : -1];
 #include <float.h>
+#if defined(__FAST_MATH__) || (defined(__FINITE_MATH_ONLY__) && __FINITE_MATH_ONLY__)
+#error "quell's checks of its inputs and state need NaN and infinities: build without -ffast-math, -Ofast or -ffinite-math-only"
+#endif
 
 /* Core (observers (6), (14), (20) with (5) substituted) at ZOH: z(k+1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
 static const double motor_PhiGamma_z[MOTOR_NZ][MOTOR_NZ + 3 * MOTOR_M] = {

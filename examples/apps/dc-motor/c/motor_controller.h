@@ -21,9 +21,9 @@
 
 /* The linked names carry this export's layout id: an object compiled with another export's
  * header does not link with this source. */
-#define motor_init motor_init_113bbcd5f02e2ca6
-#define motor_step motor_step_113bbcd5f02e2ca6
-#define motor_command motor_command_113bbcd5f02e2ca6
+#define motor_init motor_init_48b7c3d73b31a9d1
+#define motor_step motor_step_48b7c3d73b31a9d1
+#define motor_command motor_command_48b7c3d73b31a9d1
 
 #include <stdint.h>
 
@@ -72,6 +72,6 @@ void motor_command(const motor_state *s, double u[MOTOR_M]);
 #endif
 
 /* Identifies this header's source: motor_controller.c compiles only with it. */
-#define MOTOR_LAYOUT_ID 0x113bbcd5f02e2ca6u
+#define MOTOR_LAYOUT_ID 0x48b7c3d73b31a9d1u
 
 #endif /* MOTOR_CONTROLLER_H */

@@ -2,8 +2,11 @@
 #include "supply_controller.h"
 
 /* A header from another export fails here (size -1): regenerate both files together. */
-typedef char supply_header_matches_source[SUPPLY_LAYOUT_ID == 0xfa3552573dcd2562u ? 1 : -1];
+typedef char supply_header_matches_source[SUPPLY_LAYOUT_ID == 0x68fbb79fa160bd41u ? 1 : -1];
 #include <float.h>
+#if defined(__FAST_MATH__) || (defined(__FINITE_MATH_ONLY__) && __FINITE_MATH_ONLY__)
+#error "quell's checks of its inputs and state need NaN and infinities: build without -ffast-math, -Ofast or -ffinite-math-only"
+#endif
 
 /* Core (observers (6), (14), (20) with (5) substituted) at ZOH: z(k+1) = [Phi_z Gamma_z] [z(k); y(k); g(k); u_d(k)]. */
 static const double supply_PhiGamma_z[SUPPLY_NZ][SUPPLY_NZ + 3 * SUPPLY_M] = {

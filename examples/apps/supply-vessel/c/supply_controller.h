@@ -21,9 +21,9 @@
 
 /* The linked names carry this export's layout id: an object compiled with another export's
  * header does not link with this source. */
-#define supply_init supply_init_fa3552573dcd2562
-#define supply_step supply_step_fa3552573dcd2562
-#define supply_command supply_command_fa3552573dcd2562
+#define supply_init supply_init_68fbb79fa160bd41
+#define supply_step supply_step_68fbb79fa160bd41
+#define supply_command supply_command_68fbb79fa160bd41
 
 #include <stdint.h>
 
@@ -72,6 +72,6 @@ void supply_command(const supply_state *s, double u[SUPPLY_M]);
 #endif
 
 /* Identifies this header's source: supply_controller.c compiles only with it. */
-#define SUPPLY_LAYOUT_ID 0xfa3552573dcd2562u
+#define SUPPLY_LAYOUT_ID 0x68fbb79fa160bd41u
 
 #endif /* SUPPLY_CONTROLLER_H */
