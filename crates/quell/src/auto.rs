@@ -415,7 +415,48 @@ fn peaking(max_uf: &[f64], steady: &[f64]) -> Option<String> {
     })
 }
 
+/// From this ratio of a verifying run's max|e_i| to the reference's peak, the chosen design is
+/// cautioned ([`AutoDesign::error_peaking_warning`]): a reactor whose file gave channel poles −5/s
+/// passed its tail bound while its relative power swung from −7 to +5 about a reference of 0.07
+/// (helper tryout, 2026-12-07).
+pub const ERROR_PEAKING: f64 = 10.0;
+
+/// [`AutoDesign::error_peaking_warning`] on the verifying run's max|e_i| `peak_e` and the
+/// reference's peaks, per channel, with the design keys the file gave (`given`).
+fn error_peaking(peak_e: &[f64], reference: &[f64], given: &[&str]) -> Option<String> {
+    use crate::settings::{fmt_4, fmt_ratio};
+    let over: Vec<String> = (peak_e.iter().zip(reference).enumerate())
+        .filter(|&(_, (&e, &g))| g > 0.0 && e >= ERROR_PEAKING * g)
+        .map(|(i, (&e, &g))| {
+            format!("e_{} peaks at {}, {}× the reference's peak {}", i + 1, fmt_4(e), fmt_ratio(e / g), fmt_4(g))
+        })
+        .collect();
+    let keys = if given.is_empty() {
+        "give design.channel_poles and design.observer_poles slower than the rules' by hand".to_string()
+    } else {
+        format!("leave the file's {} out for the rules to choose, or give slower ones", given.join(" and "))
+    };
+    (!over.is_empty()).then(|| {
+        format!(
+            "the chosen design's verifying run drives the tracking error far beyond the reference ({}): its transient, which the tail bounds do not see, takes the outputs there; where they cannot go there, {keys}, or ask less of the loop (a gentler reference or initial state)",
+            over.join(", ")
+        )
+    })
+}
+
 impl AutoDesign {
+    /// The caution that the kept verifying run's max|e_i| is [`ERROR_PEAKING`] or more times the
+    /// reference's peak, a transient no tail bound sees; `None` otherwise, and for a reference of
+    /// peak 0 (regulation: the error's own peak is its scale).
+    pub fn error_peaking_warning(&self) -> Option<String> {
+        let kept = self.verification.candidates.iter().find(|c| c.chosen)?;
+        let reference: Vec<f64> = self.scenario.reference.components.iter().map(Component::peak).collect();
+        let chosen = |key: &str| self.choices.iter().any(|c| c.key == key);
+        let given: Vec<&str> =
+            ["design.channel_poles", "design.observer_poles"].into_iter().filter(|k| !chosen(k)).collect();
+        error_peaking(&kept.error_scale, &reference, &given)
+    }
+
     /// On a design verified in the continuous loop, the caution that its u_f is the small
     /// difference of terms [`SAMPLED_CANCELLATION`] or more times its peak, so that a sampled
     /// controller's errors (and a model's, and noise) reach u_f amplified as much; `None`
@@ -431,9 +472,17 @@ impl AutoDesign {
     }
 
     /// Every caution on the chosen design: [`AutoDesign::explicit_stiff_warning`],
-    /// [`AutoDesign::cancellation_warning`] and [`AutoDesign::peaking_warning`].
+    /// [`AutoDesign::cancellation_warning`], [`AutoDesign::peaking_warning`] and
+    /// [`AutoDesign::error_peaking_warning`].
     pub fn warnings(&self) -> impl Iterator<Item = String> {
-        [self.explicit_stiff_warning(), self.cancellation_warning(), self.peaking_warning()].into_iter().flatten()
+        [
+            self.explicit_stiff_warning(),
+            self.cancellation_warning(),
+            self.peaking_warning(),
+            self.error_peaking_warning(),
+        ]
+        .into_iter()
+        .flatten()
     }
 
     /// The caution that the kept verifying run's max|u_f,i| is [`PEAKING`] or more times the peak
@@ -951,7 +1000,8 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
         false => {
             let s = &kept.0.scenario;
             let met = kept.2.tail_within(&bound, 1.0);
-            vec![limit_advice(targets, &kept.2, s.actuator.as_ref(), &s.steady_input().peak, met)]
+            let advice = limit_advice(targets, &kept.2, s.actuator.as_ref(), &s.steady_input().peak, met);
+            vec![advice + &kept_keys(kept.0.relaxable)]
         }
     };
     let mut auto = finish(
@@ -1254,6 +1304,20 @@ fn limit_advice(
         "{advice}; but {} clips the true plant's input below that, so asking less of the loop is the way there (a raised limit is met only through the clip, which the method does not model)",
         beyond.join(", ")
     )
+}
+
+/// What the relaxation could not slow, where the actuator limit was missed: the keys the file gives
+/// (`relaxable` false), said after [`limit_advice`]; empty when it relaxed them all. A reactor whose
+/// file gave channel poles −5/s had been told only to raise its limit 46-fold, where the rules' own
+/// poles kept within 0.4 of it (helper tryout, 2026-12-07).
+fn kept_keys(relaxable: [bool; 3]) -> String {
+    let keys = ["design.channel_poles", "design.observer_poles", "design.mu"];
+    let given: Vec<&str> = keys.iter().zip(relaxable).filter(|(_, r)| !r).map(|(k, _)| *k).collect();
+    match given.as_slice() {
+        [] => String::new(),
+        [one] => format!("; the file gives {one}, which the relaxation keeps as it is: leave it out for slower candidates to be tried"),
+        many => format!("; the file gives {}, which the relaxation keeps as they are: leave them out for slower candidates to be tried", many.join(" and ")),
+    }
 }
 
 /// [`limit_advice`] without the true actuator.
@@ -2420,11 +2484,23 @@ fn choose_mu(s: &Scenario, design: &Design, targets: &Targets, r: f64) -> (Vec<f
             let peak = s.reference.components[i].peak();
             let aim = AIM * if peak > 0.0 { peak } else { c.open_loop_rms };
             let cap = max_rate / c.lambda_max().max(f64::MIN_POSITIVE);
+            let retry_cap = retry_rate / c.lambda_max().max(f64::MIN_POSITIVE);
             if c.predicted_error(cap, t_c) > aim {
                 // The excited directions' smallest eigenvalue: a zero one (a direction no signal excites) is harmless.
                 let excited = c.excited().fold(f64::INFINITY, f64::min);
                 notes.push(format!("channel {}: even the fastest rate leaves a predicted RMS error {:.2e} at t = {} {unit} (the smallest eigenvalue of Ω̄ over its {} excited directions is {:.2e}); see the run's diagnostics", i + 1, c.predicted_error(cap, t_c), crate::settings::fmt_4(t_c), c.excited().count(), excited));
-                return (cap, retry_rate / c.lambda_max().max(f64::MIN_POSITIVE));
+                // At least the μ that the design report asks of a direction left unconverged by
+                // t_end, where that keeps the loop below the stiffness threshold: a reactor kept at
+                // the cap (2.6e7) passed at 80 % of its tail bound while its own report said "raise
+                // design.mu[0] to 2.1e8", which reached 1e-5 of it in as many steps.
+                let horizon = crate::diagnostics::horizon_mu_rounded(c, s.simulation.t_end);
+                return match horizon {
+                    Some(mu) if mu > cap && mu <= retry_cap => {
+                        notes.push(format!("channel {}: μ raised to {} for its slowest relevant direction to decay by t_end (the design report's rule)", i + 1, crate::settings::fmt_short(mu)));
+                        (mu, retry_cap)
+                    }
+                    _ => (cap, retry_cap),
+                };
             }
             // Bisection on log μ: predicted_error decreases with μ.
             let (mut lo, mut hi) = (cap * 1e-12, cap);
@@ -2436,7 +2512,7 @@ fn choose_mu(s: &Scenario, design: &Design, targets: &Targets, r: f64) -> (Vec<f
                     hi = mid;
                 }
             }
-            (hi, retry_rate / c.lambda_max().max(f64::MIN_POSITIVE))
+            (hi, retry_cap)
         })
         .unzip();
     let why = format!(
@@ -2450,6 +2526,60 @@ fn choose_mu(s: &Scenario, design: &Design, targets: &Targets, r: f64) -> (Vec<f
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Where the averaged law's aim is out of reach at the first choice's cap (a tenth of the
+    /// stiffness threshold), μ is raised to what the design report asks of the slowest relevant
+    /// direction (5 e-folds by t_end, 3× margin), within the threshold: the point-kinetics reactor
+    /// of `tests/data` with the rules' poles had been kept at 2.6e7 while its report said "raise
+    /// design.mu[0] to 2.1e8" (helper tryout, 2026-12-07). With μ so, the report's condition for
+    /// that advice (μ λ t_end < 5) no longer holds.
+    #[test]
+    fn a_mu_at_its_cap_is_raised_to_what_the_report_asks_within_the_threshold() {
+        let text = include_str!("../tests/data/point-kinetics.toml").replace(
+            "[design]",
+            "[design]\nobserver_poles = [-0.08, -0.2, -7804.135028]\nchannel_poles = [[-650.3445857]]\nreference_filter_poles = [[-0.06666666667, -0.1, -0.15]]\ndisturbance_filter_poles = [[-0.6666666667, -1.0, -1.5]]\nmu = [1.0]\nbeta = 10.0\nregressor_scaling = \"normalized\"",
+        );
+        let s = Scenario::from_toml(&text).unwrap();
+        let design = s.design().unwrap();
+        let r = time_scale(&s).unwrap();
+        let (mu, caps, why) = choose_mu(&s, &design, &Targets::default(), r);
+        let c = &Averaged::new(&design, &s.reference, &s.disturbance).channels[0];
+        let (first_cap, threshold) = rate_caps(&s, &design, r);
+        assert!(mu[0] * c.lambda_max() > first_cap, "{mu:?} {first_cap}");
+        assert!(mu[0] * c.lambda_max() <= threshold && mu[0] <= caps[0], "{mu:?} {caps:?}");
+        let relevant = c.slowest_relevant(crate::diagnostics::RELEVANT_SHARE);
+        assert!(mu[0] * relevant * s.simulation.t_end >= 5.0, "{}", mu[0] * relevant * s.simulation.t_end);
+        assert_eq!(mu[0], 2.1e8, "{why}");
+        assert!(
+            why.contains("channel 1: μ raised to 2.1e8 for its slowest relevant direction to decay by t_end"),
+            "{why}"
+        );
+    }
+
+    /// A verifying run whose error peaks [`ERROR_PEAKING`] times the reference's peak or more is
+    /// cautioned, naming the keys the file gave; a regulated channel (reference 0) is not judged.
+    #[test]
+    fn an_error_far_beyond_the_reference_is_cautioned() {
+        let given = ["design.channel_poles", "design.observer_poles"];
+        let w = error_peaking(&[6.946, 0.5], &[0.07, 0.0], &given).unwrap();
+        assert!(w.contains("(e_1 peaks at 6.946, 99× the reference's peak 0.07)"), "{w}");
+        assert!(w.contains("leave the file's design.channel_poles and design.observer_poles out"), "{w}");
+        assert!(error_peaking(&[0.6], &[0.07], &given).is_none());
+        assert!(error_peaking(&[1.0], &[0.0], &given).is_none());
+        assert!(error_peaking(&[0.8], &[0.07], &[])
+            .unwrap()
+            .contains("give design.channel_poles and design.observer_poles slower than the rules'"));
+    }
+
+    /// The keys the relaxation keeps, named after a missed actuator limit.
+    #[test]
+    fn the_keys_the_file_gives_are_named_after_a_missed_limit() {
+        assert_eq!(kept_keys([true; 3]), "");
+        assert_eq!(kept_keys([true, true, false]), "; the file gives design.mu, which the relaxation keeps as it is: leave it out for slower candidates to be tried");
+        assert!(kept_keys([false, false, true]).starts_with(
+            "; the file gives design.channel_poles and design.observer_poles, which the relaxation keeps as they are"
+        ));
+    }
 
     /// A repeat at a longer horizon tells whether its tails met their bounds, so that only the
     /// actuator limit failed: the paper's example with its [design] left out, at 20 s within

@@ -1753,3 +1753,36 @@ fn an_output_in_millimetres_gets_the_design_of_its_own_units() {
     let kn = auto_design(&without_design(&motor), &Targets::default()).unwrap();
     assert!(!kn.design.has_sizes() && kn.verification.passed, "{:?}", kn.verification);
 }
+
+/// The point-kinetics reactor of `tests/data` with the channel and observer poles given by hand
+/// (−5/s; −0.08, −0.2, −50/s): its automatic design passes its tail bound while the verifying
+/// run's error peaks near 100× the reference's peak (relative power from −7 to +5 about 0.07), and
+/// is warned of it, naming the given keys; under an actuator limit of 0.001, which only the rules'
+/// own poles meet (their verified run peaks at 4.1e-4), the refusal names the keys the relaxation
+/// kept, not only the limit to raise (helper tryout, 2026-12-07).
+#[test]
+fn given_poles_that_drive_the_error_far_beyond_the_reference_are_named() {
+    let mut doc: toml::Table = data("point-kinetics.toml").parse().unwrap();
+    let given: toml::Table = "channel_poles = [[-5.0]]\nobserver_poles = [-0.08, -0.2, -50.0]".parse().unwrap();
+    doc.insert("design".into(), toml::Value::Table(given));
+    let a = auto_design(&doc, &Targets::default()).unwrap();
+    assert!(a.verification.passed);
+    let peak_e = quell::sim::Run::of(&a.scenario, &a.design)
+        .simulate(|_| ControlFlow::Continue(()))
+        .unwrap()
+        .peak_error(0)
+        .unwrap();
+    assert!(peak_e > 10.0 * 0.07, "{peak_e}");
+    let warning = a.error_peaking_warning().expect("cautioned");
+    assert!(warning.contains("leave the file's design.channel_poles and design.observer_poles out"), "{warning}");
+    let limited = auto_design(&doc, &Targets { u_limit: vec![1e-3], ..Targets::default() }).unwrap();
+    assert!(!limited.verification.passed);
+    let e = limited.verification.advice.join("\n");
+    assert!(e.contains("raise the actuator limit (u_limit) to at least"), "{e}");
+    assert!(
+        e.contains(
+            "the file gives design.channel_poles and design.observer_poles, which the relaxation keeps as they are"
+        ),
+        "{e}"
+    );
+}

@@ -1110,6 +1110,14 @@ pub(super) fn horizon_mu(relevant: f64, lambda_max: f64, (t_end, stiff): (f64, f
     (AVERAGED_MARGIN * CONVERGED_EFOLDS / (relevant * t_end), stiff / lambda_max)
 }
 
+/// The μ that the design report's advice names for channel `c`'s slowest relevant direction of Ω̄
+/// over `t_end` ([`horizon_mu`], rounded up to two digits as the advice prints it); `None` where no
+/// direction is relevant.
+pub(crate) fn horizon_mu_rounded(c: &ChannelAverage, t_end: f64) -> Option<f64> {
+    let relevant = c.slowest_relevant(RELEVANT_SHARE);
+    (relevant.is_finite() && relevant > 0.0).then(|| round_up_2(horizon_mu(relevant, c.lambda_max(), (t_end, 0.0)).0))
+}
+
 /// Advice for channel i (gain μ) when its slowest relevant direction of Ω̄ (one that carries at
 /// least [`RELEVANT_SHARE`] of the initial error's energy) decays at μλ with μλ t_end < 5, so that
 /// it has not converged by t_end; `None` otherwise ([`horizon_advice`]). Where the weakest frequency
