@@ -78,8 +78,6 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
         return finish_resumed(&args.out, &meta, &kept, !args.no_plots);
     }
     let pool = thread_pool(args.jobs, n - kept.len())?;
-    let path = args.study.as_deref().expect("a study without --merge");
-    crate::output::not_the_study_inputs(path, study.scenario_path.as_deref(), &args.out, OUTPUTS)?;
     prepare_out(&args.out, OUTPUTS)?;
     let journal = Journal::create(&args.out, &meta, &kept)
         .map_err(|e| Failure::Input(format!("--out {}: {e}; choose another output directory", args.out.display())))?;
@@ -147,6 +145,8 @@ fn planned(args: &SweepArgs) -> Result<(Study, Shard, usize), Failure> {
     let path = args.study.as_deref().expect("clap requires a study without --merge");
     let study = read_study(path)?;
     quell::study::check_sweep(&study).map_err(|e| Failure::Input(format!("{}: {e}", path.display())))?;
+    // Before a resumed sweep's early finish too, which writes the same files.
+    crate::output::not_the_study_inputs(path, study.scenario_path.as_deref(), &args.out, OUTPUTS)?;
     let shard = match &args.shard {
         None => Shard::ALL,
         Some(s) => Shard::parse(s).map_err(|e| Failure::Input(format!("--shard: {e}")))?,

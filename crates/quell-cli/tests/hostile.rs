@@ -605,6 +605,16 @@ fn an_output_that_would_replace_the_input_is_refused() {
         refused(&o, &format!("its {name} would replace the input file"));
         assert_eq!(fs::read_to_string(&scenario).unwrap(), text, "{name}");
     }
+    // Nor by a resumed sweep whose journal holds every run, which finishes without running any
+    // (it had written its summary over the scenario; review, 2026-12-07).
+    let elsewhere = TempDir::new().unwrap();
+    let study = dir.path().join("sweep-study.toml");
+    let o = quell(&["sweep", study.to_str().unwrap(), "--out", elsewhere.path().to_str().unwrap(), "--no-plots"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    fs::copy(elsewhere.path().join("runs.csv"), dir.path().join("runs.partial.csv")).unwrap();
+    let o = quell(&["sweep", study.to_str().unwrap(), "--out", d, "--no-plots", "--resume"]);
+    refused(&o, "its summary.json would replace the input file");
+    assert_eq!(fs::read_to_string(dir.path().join("summary.json")).unwrap(), text);
 }
 
 /// A record too large for memory under `--sample-time` is named as such: it had been told

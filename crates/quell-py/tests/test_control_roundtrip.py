@@ -103,11 +103,14 @@ def test_a_transfer_function_that_cancels_an_unstable_pole_is_refused():
         # The argument is the key, as for the library's own checks of sys (dt, below).
         assert e.value.key == "sys"
     # A pair on the imaginary axis is refused whichever side of it the roots' rounding puts the
-    # pole: here −2.1e-15 ± 2j (it had been cancelled, hiding the undamped mode) and +1.1e-16 ± 2j.
-    for den in (np.poly([2j, -2j, -1.0, -3.0, -4.0]).real, np.poly([2j, -2j, -1.0]).real):
-        G = control.tf([1.0, 0.0, 4.0], den)
-        with pytest.raises(quell.ScenarioError, match=r"the pole \S+2j in the closed right half-plane "):
-            quell.Plant(G, delays=[0.1])
+    # pole: here −2.1e-15 ± 2j (it had been cancelled, hiding the undamped mode) and +1.1e-16 ± 2j,
+    # and a triple pair ±3j, whose computed roots spread to −2.8e-7 ± 3j.
+    cases = [([1.0, 0.0, 4.0], np.poly([2j, -2j, -1.0, -3.0, -4.0]).real),
+             ([1.0, 0.0, 4.0], np.poly([2j, -2j, -1.0]).real),
+             (np.poly([3j, -3j]).real, np.poly([3j, -3j] * 3 + [-1.0]).real)]
+    for num, den in cases:
+        with pytest.raises(quell.ScenarioError, match=r"the pole \S+[23]j (in the closed right half-plane|on the imaginary axis) "):
+            quell.Plant(control.tf(num, den), delays=[0.1])
     # A stable cancelled pair stays cancelled (the realization above).
     assert quell.Plant(control.tf([1.0, 2.0], np.poly([1.0, -2.0, -3.0])), delays=[0.1]).n == 2
 

@@ -122,15 +122,18 @@ def state_space(sys):
                     f"denominator of degree {len(den) - 1}: a plant (1) is strictly proper (no "
                     "feedthrough from u to y), so the numerator's degree must be below the denominator's"
                 )
-    for i, j, p, z in _cancelled_pairs(sys):
-        # On the axis within the roots' rounding: (s^2+4)/((s^2+4)(s+1)(s+3)(s+4)) has its pole at
-        # -2.1e-15+2j, which had been cancelled while the same pair at lower order (+1.1e-16+2j) was
-        # refused (hostile review, 2026-12-07).
-        if p.real >= -np.sqrt(np.finfo(float).eps) * abs(p):
+    eps = np.finfo(float).eps
+    for i, j, p, z, k in _cancelled_pairs(sys):
+        # On the axis within the roots' rounding, which grows as eps^(1/k) for a root of multiplicity
+        # k: (s^2+4)/((s^2+4)(s+1)(s+3)(s+4)) has its pole at -2.1e-15+2j, which had been cancelled
+        # while the same pair at lower order (+1.1e-16+2j) was refused, and a triple pair on the
+        # axis came out at -2.8e-7+3j (hostile reviews, 2026-12-07).
+        if p.real >= -max(np.sqrt(eps), 10.0 * eps ** (1.0 / k)) * abs(p):
             where = f" (output {i + 1}, input {j + 1})" if sys.noutputs * sys.ninputs > 1 else ""
+            side = ("in the closed right half-plane" if p.real >= 0.0 else
+                    "on the imaginary axis (to the rounding of its computed roots)")
             raise _sys_error(
-                f"sys: the transfer function{where} has the pole {_num(p)} in the closed right half-plane "
-                f"{'' if p.real >= 0.0 else '(on the imaginary axis to the roots’ rounding) '}"
+                f"sys: the transfer function{where} has the pole {_num(p)} {side} "
                 f"and the zero {_num(z)} (|p - z| = {abs(p - z):.3g}), which a minimal realization "
                 "cancels: the unstable mode would be hidden, not gone; give the plant as a StateSpace "
                 "(control.ss of a realization that keeps the mode) so that the design's checks see it"
@@ -163,18 +166,22 @@ def _sys_error(message):
 
 
 def _cancelled_pairs(sys):
-    """The (output, input, pole, zero) pairs that ``control.minreal`` cancels, found with its own
-    default tolerance (1000·max(ε, |z|·√ε))."""
+    """The (output, input, pole, zero, k) pairs that ``control.minreal`` cancels, found with its own
+    default tolerance (1000·max(ε, |z|·√ε)), with k the pole's multiplicity among the denominator's
+    roots (those within 1e-3·|p| of it: a k-fold root's computed copies spread by about ε^(1/k))."""
     eps = np.finfo(float).eps
     pairs = []
     for i in range(sys.noutputs):
         for j in range(sys.ninputs):
-            poles = list(np.roots(np.atleast_1d(sys.den[i][j])))
+            roots = np.roots(np.atleast_1d(sys.den[i][j]))
+            poles = list(roots)
             for z in np.roots(np.atleast_1d(sys.num[i][j])):
                 tol = 1000 * max(eps, abs(z) * np.sqrt(eps))
                 near = [k for k, p in enumerate(poles) if abs(z - p) < tol]
                 if near:
-                    pairs.append((i, j, poles.pop(near[0]), z))
+                    p = poles.pop(near[0])
+                    k = int(np.sum(np.abs(roots - p) <= 1e-3 * max(abs(p), eps)))
+                    pairs.append((i, j, p, z, max(k, 1)))
     return pairs
 
 

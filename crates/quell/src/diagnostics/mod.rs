@@ -1110,12 +1110,14 @@ pub(super) fn horizon_mu(relevant: f64, lambda_max: f64, (t_end, stiff): (f64, f
     (AVERAGED_MARGIN * CONVERGED_EFOLDS / (relevant * t_end), stiff / lambda_max)
 }
 
-/// The μ that the design report's advice names for channel `c`'s slowest relevant direction of Ω̄
-/// over `t_end` ([`horizon_mu`], rounded up to two digits as the advice prints it); `None` where no
-/// direction is relevant.
-pub(crate) fn horizon_mu_rounded(c: &ChannelAverage, t_end: f64) -> Option<f64> {
+/// Where the design report calls channel `c`'s gain `mu` too small for the horizon `t_end` (its
+/// slowest relevant direction of Ω̄ decays by fewer than [`CONVERGED_EFOLDS`] e-folds: the
+/// condition of [`slow_direction_advice`]), the μ its advice names ([`horizon_mu`], rounded up to
+/// two digits as the advice prints it); `None` otherwise.
+pub(crate) fn too_small_for_the_horizon(c: &ChannelAverage, mu: f64, t_end: f64) -> Option<f64> {
     let relevant = c.slowest_relevant(RELEVANT_SHARE);
-    (relevant.is_finite() && relevant > 0.0).then(|| round_up_2(horizon_mu(relevant, c.lambda_max(), (t_end, 0.0)).0))
+    (relevant.is_finite() && mu * relevant * t_end < CONVERGED_EFOLDS)
+        .then(|| round_up_2(horizon_mu(relevant, c.lambda_max(), (t_end, 0.0)).0))
 }
 
 /// Advice for channel i (gain μ) when its slowest relevant direction of Ω̄ (one that carries at
@@ -1135,9 +1137,7 @@ pub(crate) fn slow_direction_advice(
 ) -> Option<String> {
     let key = format!("design.mu[{i}]");
     let relevant = c.slowest_relevant(RELEVANT_SHARE);
-    if !(relevant.is_finite() && mu * relevant * t_end < CONVERGED_EFOLDS) {
-        return None;
-    }
+    too_small_for_the_horizon(c, mu, t_end)?;
     let weakest = c.excitation.iter().min_by(|a, b| a.excitation.total_cmp(&b.excitation));
     let poor =
         weakest.and_then(|w| fidelity.iter().find(|f| f.frequency == w.frequency && f.relative_error > FIDELITY_LIMIT));

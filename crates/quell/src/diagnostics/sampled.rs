@@ -47,9 +47,13 @@ pub const DEPARTED_UF: f64 = 2.0;
 pub const FOLLOWS_Y: f64 = 0.1;
 /// See [`FOLLOWS_Y`].
 pub const FOLLOWS_UF: f64 = 1.2;
-/// A channel with no reference of its own whose continuous peaks (of y, of u_f) are below this
-/// share of the largest channel's is measured against that share instead ([`departures`]).
+/// A channel with no reference of its own that the continuous loop leaves idle ([`IDLE`]) is
+/// measured against this share of the largest channel's peak (of y, of u_f) instead of its own
+/// ([`departures`]).
 pub const QUIET: f64 = 1e-3;
+/// A continuous peak (of y, of u_f) at most this share of the largest channel's is rounding's
+/// residue, the channel idle (as the automatic design's peaking caution reads a steady input).
+pub const IDLE: f64 = 1e-9;
 /// Most rows a run a diagnostic makes beside the user's records (on every k-th of its rows): the
 /// comparison of a sampled run with its continuous loop had held a second record as large as the
 /// run's own (805 MB for a 398 MB record, n = 200, m = 8), and its halvings a third.
@@ -214,13 +218,22 @@ pub fn departures(sampled: &SimResult, continuous: &SimResult) -> Option<Vec<Cha
     let y_peaks: Vec<f64> =
         (0..m).map(|i| continuous.column(&continuous.y, m, i).fold(0.0f64, |a, v| a.max(v.abs()))).collect();
     let uf_peaks: Vec<f64> = (0..m).map(|i| continuous.max_uf(i)).collect();
-    // A channel with no reference of its own that the continuous loop holds near zero (the paper's
-    // y2 at 7.9e-14 with g = [1, 0] and ω = 0) is measured against a thousandth of the largest
-    // channel's peak, not its round-off. Only such a channel: the channels' units differ, and a
-    // quadrotor's yaw torque (1.9e-5 N·m) measured against a thousandth of its thrust (0.21 N) had
-    // read its sampled loop's 2.2× as 0.2×, which hid it from the automatic design's check too.
+    // A channel with no reference of its own that the continuous loop leaves at rounding's level
+    // beside the largest channel ([`IDLE`]: the paper's y2 at 7.9e-14 with g = [1, 0] and ω = 0) is
+    // measured against a thousandth of the largest channel's peak, not its round-off. Only such a
+    // channel: the channels' units differ, and a quadrotor's yaw torque (1.9e-5 N·m) measured
+    // against a thousandth of its thrust (0.21 N) had read its sampled loop's 2.2× as 0.2×, which
+    // hid it from the automatic design's check too (as a regulated channel that ω drives, in units
+    // 1e4 smaller than its neighbour's).
     let own = |i: usize| continuous.column(&continuous.g, m, i).any(|g| g != 0.0);
-    let floor = |peaks: &[f64], i: usize| if own(i) { 0.0 } else { QUIET * peaks.iter().copied().fold(0.0, f64::max) };
+    let floor = |peaks: &[f64], i: usize| {
+        let largest = peaks.iter().copied().fold(0.0, f64::max);
+        if !own(i) && peaks[i] <= IDLE * largest {
+            QUIET * largest
+        } else {
+            0.0
+        }
+    };
     let channel = |i: usize| {
         let gap = rows.iter().fold(0.0f64, |a, &(k, j)| {
             let d = (sampled.y[k * m + i] - continuous.y[j * m + i]).abs();

@@ -1098,6 +1098,18 @@ fn check_values<'v>(
     Ok(())
 }
 
+/// A misspelt `runs` or `seed` among `[monte_carlo]`'s key paths (`sed = 1`), named as such: no
+/// scenario key path lacks a dot.
+fn misspelt_draw_key(key: &str, at: &str) -> Result<(), StudyError> {
+    match crate::settings::nearest(key, ["runs", "seed"]).filter(|_| !key.contains('.')) {
+        Some(near) => Err(err(
+            at,
+            format!("unknown key (did you mean `{near}`?); [monte_carlo] takes runs, seed and scenario key paths with a distribution, e.g. \"truth.A\" = {{ relative = 0.05 }}"),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// `[monte_carlo]`: `runs`, `seed` and one perturbation law per scenario key path.
 fn monte_carlo(base: &toml::Table, t: &toml::Table, source: &str) -> Result<MonteCarlo, StudyError> {
     let runs = match t.get("runs") {
@@ -1130,13 +1142,7 @@ fn monte_carlo(base: &toml::Table, t: &toml::Table, source: &str) -> Result<Mont
             return Err(e);
         }
         let at = format!("monte_carlo.\"{key}\"");
-        // A misspelt `seed` ([monte_carlo] sed = 1) is no key path either: name it, as `runs` above.
-        if let Some(near) = crate::settings::nearest(key, ["runs", "seed"]).filter(|_| !key.contains('.')) {
-            return Err(err(
-                &at,
-                format!("unknown key (did you mean `{near}`?); [monte_carlo] takes runs, seed and scenario key paths with a distribution, e.g. \"truth.A\" = {{ relative = 0.05 }}"),
-            ));
-        }
+        misspelt_draw_key(key, &at)?;
         let path = KeyPath::parse(key).map_err(|m| err(&at, m))?;
         let law = table(&at, v)
             .map_err(|_| err(&at, format!("expected a distribution, one of {LAWS}; found {}", kind(v))))?;

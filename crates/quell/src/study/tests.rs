@@ -75,21 +75,6 @@ fn study_mistakes_name_their_key() {
         ("[grid]\n\"design.mu[0]\" = [5.0, -1.0]", "grid.\"design.mu[0]\"[1]: with design.mu[0] = -1.0 the scenario is not valid: design.mu[0]"),
         ("[grid]\n\"name\" = [1.0]", "grid.\"name\": name in the paper's example is a string, not a number, vector or matrix"),
         ("[grid]\n\"design.mu[x]\" = [1.0]", "grid.\"design.mu[x]\": `design.mu[x]` is not a key path"),
-        ("[monte_carlo]\nseed = 1", "monte_carlo.runs: missing"),
-        ("[monte_carlo]\nruns = 5\nseed = 1", "monte_carlo: expected at least one scenario key with a distribution, found only runs and seed, so every draw would repeat the nominal run; add one such as"),
-        ("[monte_carlo]\nrun = 5", "monte_carlo.runs: missing (`run` is no key of [monte_carlo]: did you mean `runs`?); required"),
-        ("[monte_carlo]\nruns = 2\nsed = 1", "monte_carlo.\"sed\": unknown key (did you mean `seed`?); [monte_carlo] takes runs, seed and scenario key paths with a distribution"),
-        ("[monte_carlo]\nruns = 0", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found 0"),
-        ("[monte_carlo]\nruns = -3", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found -3"),
-        ("[monte_carlo]\nruns = 1e12", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found 1e12, a floating-point number; write it as an integer, 1000000000000"),
-        ("[monte_carlo]\nruns = 2.0", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found 2.0, a floating-point number; write it as an integer, 2"),
-        ("[monte_carlo]\nruns = 2\nseed = 1.5", "monte_carlo.seed: expected a seed (an integer ≥ 0), found a floating-point number"),
-        ("[monte_carlo]\nruns = 2\n\"plant.A\" = { gaussian = 0.1 }", "monte_carlo.\"plant.A\".gaussian: unknown distribution; expected one of { relative = r }"),
-        ("[monte_carlo]\nruns = 2\n\"plant.A\" = { relative = -0.1 }", "monte_carlo.\"plant.A\".relative: expected a finite spread ≥ 0, found -0.1"),
-        ("[monte_carlo]\nruns = 2\n\"plant.A\" = { normal = inf }", "monte_carlo.\"plant.A\".normal: expected a finite spread ≥ 0, found inf"),
-        ("[monte_carlo]\nruns = 2\n\"plant.A\" = 0.1", "monte_carlo.\"plant.A\": expected a distribution"),
-        ("[monte_carlo]\nruns = 2\n\"plant.A\" = { relative = 0.1, uniform = 0.1 }", "monte_carlo.\"plant.A\": expected exactly one distribution"),
-        ("[monte_carlo]\nruns = 2\n\"plant.E\" = { relative = 0.1 }", "monte_carlo.\"plant.E\": plant.E is not a value of the scenario (plant has no E)"),
         // An optional key the scenario leaves out: give it there first.
         ("[grid]\n\"simulation.sample_time\" = [0.001, 0.01]", "grid.\"simulation.sample_time\": simulation.sample_time is not a value of the scenario (simulation has no sample_time): simulation.sample_time is optional and the scenario leaves it out; give it a value in the scenario file"),
         // The components' sizes, 1 each where the scenario leaves them out (a review found the message
@@ -127,6 +112,33 @@ fn study_mistakes_name_their_key() {
         ("[tune]\nmu = [1.0, 10.0]\npoints = 1", "tune.points: expected an integer in [2, 10000], found 1"),
         ("[grid", "syntax: line 1, column 6: unclosed table"),
     ];
+    each_names_its_key(cases);
+}
+
+/// `[monte_carlo]`'s mistakes, as [`study_mistakes_name_their_key`].
+#[test]
+fn monte_carlo_mistakes_name_their_key() {
+    each_names_its_key(&[
+            ("[monte_carlo]\nseed = 1", "monte_carlo.runs: missing"),
+            ("[monte_carlo]\nruns = 5\nseed = 1", "monte_carlo: expected at least one scenario key with a distribution, found only runs and seed, so every draw would repeat the nominal run; add one such as"),
+            ("[monte_carlo]\nrun = 5", "monte_carlo.runs: missing (`run` is no key of [monte_carlo]: did you mean `runs`?); required"),
+            ("[monte_carlo]\nruns = 2\nsed = 1", "monte_carlo.\"sed\": unknown key (did you mean `seed`?); [monte_carlo] takes runs, seed and scenario key paths with a distribution"),
+            ("[monte_carlo]\nruns = 0", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found 0"),
+            ("[monte_carlo]\nruns = -3", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found -3"),
+            ("[monte_carlo]\nruns = 1e12", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found 1e12, a floating-point number; write it as an integer, 1000000000000"),
+            ("[monte_carlo]\nruns = 2.0", "monte_carlo.runs: expected the number of draws per grid point (an integer ≥ 1), found 2.0, a floating-point number; write it as an integer, 2"),
+            ("[monte_carlo]\nruns = 2\nseed = 1.5", "monte_carlo.seed: expected a seed (an integer ≥ 0), found a floating-point number"),
+            ("[monte_carlo]\nruns = 2\n\"plant.A\" = { gaussian = 0.1 }", "monte_carlo.\"plant.A\".gaussian: unknown distribution; expected one of { relative = r }"),
+            ("[monte_carlo]\nruns = 2\n\"plant.A\" = { relative = -0.1 }", "monte_carlo.\"plant.A\".relative: expected a finite spread ≥ 0, found -0.1"),
+            ("[monte_carlo]\nruns = 2\n\"plant.A\" = { normal = inf }", "monte_carlo.\"plant.A\".normal: expected a finite spread ≥ 0, found inf"),
+            ("[monte_carlo]\nruns = 2\n\"plant.A\" = 0.1", "monte_carlo.\"plant.A\": expected a distribution"),
+            ("[monte_carlo]\nruns = 2\n\"plant.A\" = { relative = 0.1, uniform = 0.1 }", "monte_carlo.\"plant.A\": expected exactly one distribution"),
+            ("[monte_carlo]\nruns = 2\n\"plant.E\" = { relative = 0.1 }", "monte_carlo.\"plant.E\": plant.E is not a value of the scenario (plant has no E)"),
+    ]);
+}
+
+/// Each study text of `cases` is refused with a message that starts as expected.
+fn each_names_its_key(cases: &[(&str, &str)]) {
     for (text, expected) in cases {
         let got = error(text);
         assert!(got.starts_with(expected), "study:\n{text}\nexpected: {expected}\ngot:      {got}");
