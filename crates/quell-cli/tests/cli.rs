@@ -123,7 +123,7 @@ fn the_design_report_says_what_deployment_needs() {
     assert!(out.contains("\ndeployment (a sampled-data controller, docs/deployment.md):\n  sample time: T_s ≤ 0.0222 s (T_s·ρ ≤ 0.2), e.g. 0.02 s, which makes plant.delays whole and divides simulation.output_step; ρ = 9 /s, the loop's fastest rate (a bound the sampled loop needs, not one that suffices: a sampled run compares itself with its continuous loop and says where it departs)\n"), "{out}");
     assert!(
         out.contains(
-            "  precision: f32 moves the poles by at most 0.00016 % (κ₂ = 2.75e1 × 6e-8): either precision serves"
+            "  precision: f32 moves the poles by at most 0.00016 % (κ₂ = 2.75e1 × 6e-8): its constants serve in either precision (the rounding its states accumulate over a run is not bounded by this: test an f32 build in closed loop)"
         ),
         "{out}"
     );
@@ -1874,4 +1874,31 @@ fn a_run_the_noise_drives_away_is_told_so() {
         .expect(&text);
     let sampling = text.find("advice: the sampled-data loop at T_s = 0.0005 s").expect(&text);
     assert!(noise < sampling, "{text}");
+}
+
+/// A sampled scenario's automatic design (the Pelican arm of `tests/data` at 1 ms, without its
+/// noise and design): the observer's reason gives its whole factor over the rules' poles, the
+/// sampled-data start's and the relaxation's (it had read "r_o = 473.86 …; then ×0.25 of that" at
+/// ×1/64 of it), and the delay check's rows say that whole samples move the delays further than
+/// their factor (2 ms × 1.1 at 1 ms is 3 ms, +50 %; helper tryout, 2026-12-07).
+#[test]
+fn a_sampled_automatic_design_says_its_whole_factors() {
+    let text =
+        fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../quell/tests/data/pelican-arm-noise.toml"))
+            .unwrap();
+    let (start, end) = (text.find("[design]").unwrap(), text.find("[reference]").unwrap());
+    let noise = text.find("[noise]").unwrap();
+    let scenario = format!("{}[design]\n{}", &text[..start], &text[end..noise]);
+    let dir = temp_dir("arm-auto");
+    let path = dir.path().join("arm.toml");
+    fs::write(&path, scenario).unwrap();
+    let o = quell(&["design", path.to_str().unwrap(), "--auto"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report = stdout(&o);
+    let observer = report.lines().skip_while(|l| !l.starts_with("  design.observer_poles = ")).nth(1).unwrap();
+    assert!(
+        observer.contains("; then ×0.015625 of that in all: ×0.0625 in the first candidate (see the verification's candidates) and ×0.25 in the relaxation"),
+        "{observer}"
+    );
+    assert!(report.contains("    ×1.1 (τ = [0.003, 0.005] s: whole samples, up to 50 % off): "), "{report}");
 }

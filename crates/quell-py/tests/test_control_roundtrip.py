@@ -109,7 +109,7 @@ def test_a_transfer_function_that_cancels_an_unstable_pole_is_refused():
              ([1.0, 0.0, 4.0], np.poly([2j, -2j, -1.0]).real),
              (np.poly([3j, -3j]).real, np.poly([3j, -3j] * 3 + [-1.0]).real)]
     for num, den in cases:
-        with pytest.raises(quell.ScenarioError, match=r"the pole \S+[23]j (in the closed right half-plane|on the imaginary axis) "):
+        with pytest.raises(quell.ScenarioError, match=r"the pole \S+j (in the closed right half-plane|on the imaginary axis) "):
             quell.Plant(control.tf(num, den), delays=[0.1])
     # A stable cancelled pair stays cancelled (the realization above).
     assert quell.Plant(control.tf([1.0, 2.0], np.poly([1.0, -2.0, -3.0])), delays=[0.1]).n == 2

@@ -1492,17 +1492,27 @@ fn finish(
     });
     let aim_at_convergence = aim_at_convergence.collect();
     if candidates.len() > 1 {
-        // Relative to the first candidate (the rules' proposal, or its sampled-data start).
+        // The relaxation's factor is relative to the first candidate (the rules' proposal, or a
+        // slower start: for the sample time, or after faster proposals ended early), whose own
+        // factor a relaxed proposal's reasons do not carry: said with it, over the rules' poles (an
+        // arm's observer had read "r_o = 473.86 …; then ×0.25 of that" at ×1/64 of it).
         let start = candidates[0].speed;
-        let own = |key: &str| match key {
-            "design.channel_poles" => Some(speed.channel / start.channel),
-            "design.observer_poles" => Some(speed.observer / start.observer),
-            "design.mu" => Some(speed.mu / start.mu),
+        let factors = |key: &str| match key {
+            "design.channel_poles" => Some((start.channel, speed.channel / start.channel)),
+            "design.observer_poles" => Some((start.observer, speed.observer / start.observer)),
+            "design.mu" => Some((start.mu, speed.mu / start.mu)),
             _ => None,
         };
         for ch in &mut p.choices {
-            if let Some(f) = own(&ch.key).filter(|&f| f != 1.0) {
-                ch.why.push_str(&format!("; then ×{f} of that in the relaxation (the verification says how)"));
+            match factors(&ch.key) {
+                Some((1.0, relaxed)) if relaxed != 1.0 => {
+                    ch.why.push_str(&format!("; then ×{relaxed} of that in the relaxation (the verification says how)"));
+                }
+                Some((first, relaxed)) if relaxed != 1.0 => ch.why.push_str(&format!(
+                    "; then ×{} of that in all: ×{first} in the first candidate (see the verification's candidates) and ×{relaxed} in the relaxation",
+                    first * relaxed
+                )),
+                _ => {}
             }
         }
     }

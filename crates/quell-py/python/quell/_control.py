@@ -135,7 +135,7 @@ def state_space(sys):
             raise _sys_error(
                 f"sys: the transfer function{where} has the pole {_num(p)} {side} "
                 f"and the zero {_num(z)} (|p - z| = {abs(p - z):.3g}), which a minimal realization "
-                "cancels: the unstable mode would be hidden, not gone; give the plant as a StateSpace "
+                "cancels: the unstable or undamped mode would be hidden, not gone; give the plant as a StateSpace "
                 "(control.ss of a realization that keeps the mode) so that the design's checks see it"
             )
     try:

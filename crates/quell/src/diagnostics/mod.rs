@@ -147,10 +147,9 @@ pub struct Diagnostics {
 pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) -> Diagnostics {
     // A tail that is the noise's: those channels' advice on the design is the noise-free run's
     // (an observer line that only the noise had brought on made a suspension worse when followed).
-    // The noise-free run is made once, for this and for the sampled comparison, where either needs it.
-    let sampled = matches!(result.stats, crate::sim::RunStats::Sampled { .. });
-    let missed = (0..result.m).any(|i| !tail_within_bound(result, i));
-    let quiet = if sampled || missed { noise::without_noise(s, design) } else { None };
+    // The noise-free run is made once, for this, the sampled comparison and the noise's effort.
+    // Under noise always: whether the noise drives u_f is judged against it too.
+    let quiet = noise::without_noise(s, design);
     // A coarse sampled run that follows its continuous loop has the design's errors, not the
     // sampling's: its channels get their advice (a glucose model at T_s·ρ = 0.46, its tail 100×
     // its bound, had none).
@@ -186,6 +185,7 @@ pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) ->
         d.advice.insert(0, line);
     }
     d.advice.extend(loose_atol(s, result));
+    d.advice.extend(noise::noise_effort(result, quiet.as_ref()));
     d.advice.extend(uf_cancellation(result));
     // The comparison settles what the coarse-sample line asks for.
     if compared != sampled::Compared::Not {
@@ -216,7 +216,7 @@ pub fn uf_cancellation(result: &SimResult) -> Vec<String> {
         let ratio = result.uf_cancellation(i);
         let remedy = if sampled {
             format!(
-                "in the discrete controller that error is its arithmetic's rounding: about {:.0e} of its peak in f64, {:.0e} in f32 (export in f64 where that matters)",
+                "in the discrete controller that error is at least its arithmetic's rounding of one step: about {:.0e} of its peak in f64, {:.0e} in f32; its states (x̂, the filters, η̂) accumulate rounding over the run, which the loop can magnify far beyond that (a two-link arm's f32 build measured 1e-2 of u_f's peak against 3e-6 here): export in f64 where that matters, or test the f32 build in closed loop (docs/deployment.md)",
                 0.5 * f64::EPSILON * ratio,
                 0.5 * f64::from(f32::EPSILON) * ratio
             )
