@@ -819,7 +819,7 @@ fn a_plant_input_that_is_a_small_difference_of_large_terms_is_flagged() {
         );
         // The remedy of each loop: a tighter tolerance, or the deployed precision.
         let remedy = if sampled {
-            "in the discrete controller that error is its arithmetic's rounding"
+            "in the discrete controller that error is at least its arithmetic's rounding of one step"
         } else {
             "compare with a run at simulation.rtol"
         };
