@@ -1158,8 +1158,8 @@ pub(crate) fn slow_direction_advice(
         // observer with the present one's μ ≤ 16 and 23,000 s ran 72 s).
         let after = remedy.faster().map(|f| {
             let (c, rho) = (&f.averaged.channels[i], f.rho);
-            let relevant = c.slowest_relevant(RELEVANT_SHARE);
-            if relevant.is_finite() && mu * relevant * t_end < CONVERGED_EFOLDS {
+            if too_small_for_the_horizon(c, mu, t_end).is_some() {
+                let relevant = c.slowest_relevant(RELEVANT_SHARE);
                 format!(
                     "with that observer, {}",
                     horizon_advice(&key, mu, (relevant, c.lambda_max()), (t_end, STIFF_RATIO * rho), unit)
