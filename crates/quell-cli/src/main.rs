@@ -85,6 +85,7 @@ fn main() -> ExitCode {
             ("simulation.sample_time", args.sample_time.is_some()),
             ("simulation.t_end", args.t_end.is_some()),
             ("simulation.output_step", args.output_step.is_some()),
+            ("simulation.precision", args.precision.is_some()),
         ]
         .into_iter()
         .filter_map(|(key, given)| given.then_some(key))
@@ -121,8 +122,9 @@ fn main() -> ExitCode {
 }
 
 /// Library keys that a flag sets, as the CLI names them.
-const FLAGS: [(&str, &str); 10] = [
+const FLAGS: [(&str, &str); 11] = [
     ("simulation.sample_time", "simulation.sample_time (--sample-time)"),
+    ("simulation.precision", "simulation.precision (--precision)"),
     ("simulation.t_end", "simulation.t_end (--t-end)"),
     ("simulation.output_step", "simulation.output_step (--output-step)"),
     ("u_limit", "--u-limit"),

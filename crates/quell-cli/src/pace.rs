@@ -70,7 +70,7 @@ fn deployment_text(s: &Scenario, d: &Design) -> String {
         )
     } else {
         format!(
-            "f32 moves the poles by at most {} (κ₂ = {kappa:.2e} × 6e-8): its constants serve in either precision (the rounding its states accumulate over a run is not bounded by this: test an f32 build in closed loop)",
+            "f32 moves the poles by at most {} (κ₂ = {kappa:.2e} × 6e-8): its constants serve in either precision (the rounding its states accumulate over a run is not bounded by this: quell run --sample-time T_s --precision f32 measures it)",
             quell::export::fmt_shift(shift)
         )
     };

@@ -54,6 +54,11 @@ pub struct RunArgs {
     /// simulation.method.
     #[arg(long, value_name = "METHOD")]
     pub method: Option<String>,
+    /// The discrete controller's arithmetic in a sampled-data run: f64, or f32 to see the loop as a
+    /// single-precision build (quell export --precision f32) runs it, emulated; overrides
+    /// simulation.precision.
+    #[arg(long, value_name = "PRECISION", conflicts_with = "continuous")]
+    pub precision: Option<String>,
 }
 
 pub fn run(args: &RunArgs) -> Result<(), Failure> {
@@ -62,6 +67,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
         // matter); a bad one stays, for them to refuse, so the scenario read has none.
         if args.continuous && file_sample_time(sim).is_some() {
             sim.remove("sample_time");
+            sim.remove("precision"); // the discrete controller's, which the continuous loop has not
         }
         set_sample_time(sim, args.sample_time);
         // Any value, for the scenario's checks to name with the flag.
@@ -69,6 +75,9 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
             if let Some(v) = value {
                 sim.insert(key.into(), toml::Value::Float(v));
             }
+        }
+        if let Some(name) = &args.precision {
+            sim.insert("precision".into(), toml::Value::String(name.clone()));
         }
     })?;
     eprint!("{}", report::warnings_text(&quell::design::warnings(&design, &scenario.design)));

@@ -123,7 +123,7 @@ fn the_design_report_says_what_deployment_needs() {
     assert!(out.contains("\ndeployment (a sampled-data controller, docs/deployment.md):\n  sample time: T_s ≤ 0.0222 s (T_s·ρ ≤ 0.2), e.g. 0.02 s, which makes plant.delays whole and divides simulation.output_step; ρ = 9 /s, the loop's fastest rate (a bound the sampled loop needs, not one that suffices: a sampled run compares itself with its continuous loop and says where it departs)\n"), "{out}");
     assert!(
         out.contains(
-            "  precision: f32 moves the poles by at most 0.00016 % (κ₂ = 2.75e1 × 6e-8): its constants serve in either precision (the rounding its states accumulate over a run is not bounded by this: test an f32 build in closed loop)"
+            "  precision: f32 moves the poles by at most 0.00016 % (κ₂ = 2.75e1 × 6e-8): its constants serve in either precision (the rounding its states accumulate over a run is not bounded by this: quell run --sample-time T_s --precision f32 measures it)"
         ),
         "{out}"
     );
@@ -1069,6 +1069,55 @@ fn bad_method_flag_exits_2_naming_the_flag_and_the_names() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("--method: the integrator applies to the continuous loop only"), "{}", stderr(&o));
     assert!(!out.exists(), "nothing is written before the input is checked");
+}
+
+/// `--precision f32` runs the sampled loop with the controller's arithmetic emulated in float: its
+/// signals differ from the f64 run's by rounding's magnitude (the paper's y within 1e-3 of its peak,
+/// not bit for bit), and the run says how far. A bad name, a continuous run or `--continuous`
+/// beside it exit 2 naming the flag, with nothing written.
+#[test]
+fn precision_flag_runs_the_f32_controller_and_says_how_far_it_departs() {
+    let dir = temp_dir("precision");
+    let run = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec!["run", "--no-plots", "--t-end", "20", "--out", out.to_str().unwrap()];
+        args.extend(extra);
+        (quell(&args), out)
+    };
+    let (o64, d64) = run("f64", &["--sample-time", "0.001"]);
+    let (o32, d32) = run("f32", &["--sample-time", "0.001", "--precision", "f32"]);
+    assert!(o64.status.success() && o32.status.success(), "{}", stderr(&o32));
+    assert!(
+        stdout(&o32).contains("precision f32 (emulated:") && !stdout(&o64).contains("precision f32"),
+        "{}",
+        stdout(&o32)
+    );
+    let column = |dir: &Path, name: &str| -> Vec<f64> {
+        let text = fs::read_to_string(dir.join("signals.csv")).unwrap();
+        let mut lines = text.lines();
+        let at = lines.next().unwrap().split(',').position(|h| h == name).unwrap();
+        lines.map(|l| l.split(',').nth(at).unwrap().parse().unwrap()).collect()
+    };
+    let (a, b) = (column(&d32, "y1"), column(&d64, "y1"));
+    let gap = a.iter().zip(&b).fold(0.0f64, |g, (x, y)| g.max((x - y).abs()));
+    let peak = b.iter().fold(0.0f64, |p, y| p.max(y.abs()));
+    assert!(gap > 0.0 && gap < 1e-3 * peak, "{gap} of {peak}");
+    for (extra, said) in [
+        (
+            &["--sample-time", "0.001", "--precision", "f16"][..],
+            "error: simulation.precision (--precision): expected \"f64\" or \"f32\", found \"f16\"",
+        ),
+        (
+            &["--precision", "f32"][..],
+            "error: simulation.precision (--precision): f32 is the discrete controller's arithmetic",
+        ),
+        (&["--continuous", "--precision", "f32"][..], "cannot be used with"),
+    ] {
+        let (o, out) = run("refused", extra);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(said), "{extra:?}: {}", stderr(&o));
+        assert!(!out.exists(), "nothing is written before the input is checked");
+    }
 }
 
 /// `--continuous` runs the continuous loop of a file that sets simulation.sample_time: signals.csv

@@ -824,7 +824,8 @@ impl PyScenario {
         signal_py(py, &self.inner.disturbance)
     }
     /// The `[simulation]` settings: t_end, output_step, rtol, atol, sample_time (None: continuous)
-    /// and method ("auto", "explicit" or "imex": the continuous loop's integrator).
+    /// method ("auto", "explicit" or "imex": the continuous loop's integrator) and precision ("f64"
+    /// or "f32": the discrete controller's arithmetic, f32 emulated).
     #[getter]
     fn simulation<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let s = &self.inner.simulation;
@@ -835,6 +836,7 @@ impl PyScenario {
         d.set_item("atol", s.atol)?;
         d.set_item("sample_time", s.sample_time)?;
         d.set_item("method", s.method.name())?;
+        d.set_item("precision", s.precision.name())?;
         Ok(d)
     }
     /// Measurement noise {std, seed, bandwidth} (bandwidth None: white per sample), or None.

@@ -7,6 +7,7 @@ use std::time::{Duration, Instant};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
+use quell::controller::Precision;
 use quell::sim::{Loop, Outcome, Peaks, Run, RunSettings, RunStats, SimError, SimResult, Stats};
 use quell::TimeUnit;
 use toml::Value;
@@ -598,6 +599,21 @@ impl PySimResult {
     }
 }
 
+/// `precision=`: "f64" or "f32", for a sampled-data run only.
+fn precision_argument(py: Python<'_>, value: &Bound<'_, PyAny>, sampled: bool) -> PyResult<Precision> {
+    let name: String =
+        value.extract().map_err(|_| crate::errors::type_error("precision", "\"f64\" or \"f32\"", value))?;
+    let key = Some("simulation.precision".to_string());
+    let Some(precision) = Precision::from_name(&name) else {
+        return Err(keyed(py, Kind::Scenario, format!("precision: expected \"f64\" or \"f32\", found {name:?}"), key));
+    };
+    if precision != Precision::F64 && !sampled {
+        let msg = format!("precision: {name} is the discrete controller's, and this run is the continuous loop; pass sample_time (or a scenario with simulation.sample_time), or leave precision out");
+        return Err(keyed(py, Kind::Scenario, msg, key));
+    }
+    Ok(precision)
+}
+
 /// Simulates a scenario's closed loop: the continuous-time controller on the delay equation, or,
 /// with a sample time, the sampled-data loop with the real-time controller; the plant simulated is
 /// the scenario's truth where it has one. The GIL is released; Ctrl-C stops the run.
@@ -624,6 +640,10 @@ impl PySimResult {
 /// check : bool, optional
 ///     Raise SimulationError when the run does not reach t_end (default True); False returns
 ///     the result whatever its outcome.
+/// precision : str, optional
+///     The discrete controller's arithmetic in a sampled-data run, overriding the scenario's:
+///     "f64" (the default) or "f32", the loop as a single-precision build (`quell export
+///     --precision f32`) runs it, emulated (constants, inputs and states rounded to float).
 ///
 /// Returns
 /// -------
@@ -654,7 +674,7 @@ impl PySimResult {
 /// >>> bool(np.abs(explicit.y - imex.y).max() < 1e-6)
 /// True
 #[pyfunction]
-#[pyo3(signature = (scenario, *, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, continuous=false, method=None, max_steps=None, states=false, check=true))]
+#[pyo3(signature = (scenario, *, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, continuous=false, method=None, max_steps=None, states=false, check=true, precision=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate(
     py: Python<'_>,
@@ -669,6 +689,7 @@ pub fn simulate(
     max_steps: Option<&Bound<'_, PyAny>>,
     #[pyo3(from_py_with = crate::convert::argument::states)] states: bool,
     #[pyo3(from_py_with = crate::convert::argument::check)] check: bool,
+    precision: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PySimResult>> {
     let s: PyRef<'_, PyScenario> =
         scenario.extract().map_err(|_| crate::errors::type_error("scenario", "a quell.Scenario", scenario))?;
@@ -683,7 +704,12 @@ pub fn simulate(
     let mut edited = with_overrides(py, &s.inner, [t_end, output_step, rtol, atol, sample_time], method)?;
     if continuous && s.inner.simulation.sample_time.is_some() {
         let scn = edited.get_or_insert_with(|| s.inner.clone());
-        scn.simulation.sample_time = None;
+        scn.simulation = scn.simulation.continuous();
+    }
+    if let Some(p) = precision.filter(|v| !v.is_none()) {
+        let sampled = edited.as_ref().unwrap_or(&s.inner).simulation.sample_time.is_some();
+        let precision = precision_argument(py, p, sampled)?;
+        edited.get_or_insert_with(|| s.inner.clone()).simulation.precision = precision;
     }
     let scn = edited.as_ref().unwrap_or(&s.inner);
     let mut settings = RunSettings::of(scn);

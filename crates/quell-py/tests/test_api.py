@@ -99,7 +99,7 @@ def test_scenario_accessors():
     np.testing.assert_array_equal(s.plant.delays, [1.0, 3.0])
     assert s.reference[1] == {"bias": 2.0, "harmonics": []}
     assert s.simulation == {"t_end": 100.0, "output_step": 0.1, "rtol": 1e-9, "atol": 1e-9, "sample_time": None,
-                            "method": "auto"}
+                            "method": "auto", "precision": "f64"}
     assert s.noise is None
     # scenario.design() is the Design of quell.design on the same plant and choices.
     d1 = s.design()

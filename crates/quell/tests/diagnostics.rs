@@ -1235,3 +1235,53 @@ fn noise_that_drives_the_plant_input_is_named() {
     let pr = Run::of(&paper, &pd).simulate(|_| ControlFlow::Continue(())).unwrap();
     assert!(quell::diagnostics::diagnose_run(&paper, &pd, &pr).advice.iter().all(|a| !a.contains("noise drives")));
 }
+
+/// A sampled run in f32 (emulated, `simulation.precision = "f32"`) is measured against the same
+/// run in f64: the line gives each channel's departure of u_f, recomputed here from the two runs'
+/// rows (to the two significant digits it prints), and asks for an f64 export beyond 1 % of the
+/// peak: the disk servo's u_f departs 18 % (its compiled f32 C too: `tests/export_c.rs`), the
+/// paper's about 2e-4.
+#[test]
+fn an_f32_run_is_measured_against_the_same_run_in_f64() {
+    let hdd = format!("{}/tests/data/hdd-servo.toml", env!("CARGO_MANIFEST_DIR"));
+    let go = |_| ControlFlow::Continue(());
+    for (s, T, beyond) in [
+        (Scenario::from_toml(PAPER_EXAMPLE).unwrap(), 1e-3, false),
+        (Scenario::from_path(std::path::Path::new(&hdd)).unwrap(), 0.0025, true),
+    ] {
+        let d = s.design().unwrap();
+        let mut s = s;
+        s.simulation.sample_time = Some(T);
+        let double = Run::of(&s, &d).simulate(go).unwrap();
+        s.simulation.precision = quell::controller::Precision::F32;
+        let single = Run::of(&s, &d).simulate(go).unwrap();
+        let m = single.m;
+        let line = quell::diagnostics::diagnose_run(&s, &d, &single)
+            .advice
+            .into_iter()
+            .find(|a| a.starts_with("precision f32"))
+            .unwrap_or_else(|| panic!("{}: no precision line", s.name.as_deref().unwrap_or_default()));
+        for i in 0..m {
+            let (a, b) = (single.column(&single.u_f, m, i), double.column(&double.u_f, m, i));
+            let gap = a.zip(b).fold(0.0f64, |g, (x, y)| g.max((x - y).abs()));
+            let share = gap / double.column(&double.u_f, m, i).fold(0.0f64, |p, v| p.max(v.abs()));
+            let said: f64 = line
+                .split(&format!("u_f[{}] by ", i + 1))
+                .nth(1)
+                .unwrap()
+                .split([';', ' '])
+                .next()
+                .unwrap()
+                .parse()
+                .unwrap();
+            assert!((said / share - 1.0).abs() < 0.06, "{T}: u_f[{}] said {said:e}, recomputed {share:e}", i + 1);
+            assert!(share > 0.0 && (share > 0.01) == beyond, "{T}: {share:e}");
+        }
+        assert_eq!(line.contains("export in f64"), beyond, "{line}");
+        // The measured departure replaces the cancellation's bound (the servo's is flagged in f64).
+        assert!(quell::diagnostics::diagnose_run(&s, &d, &single)
+            .advice
+            .iter()
+            .all(|a| !a.contains("small difference")));
+    }
+}

@@ -118,7 +118,8 @@ fn paper_example_parses_into_the_papers_numbers() {
             rtol: 1e-9,
             atol: 1e-9,
             sample_time: None,
-            method: Method::Auto
+            method: Method::Auto,
+            precision: quell::controller::Precision::F64,
         }
     );
     assert_eq!(s.noise, None);
@@ -772,6 +773,21 @@ fn method_named_as_the_enum() {
         &with(&[("atol = 1e-9\n", "atol = 1e-9\nmethod = \"Implicit\"\n")]),
         "simulation.method",
         "found \"Implicit\" (did you mean \"imex\"?)",
+    );
+}
+
+#[test]
+fn precision_unknown() {
+    let sampled = with(&[(SAMPLED, "sample_time = 0.001\nprecision = \"f16\"")]);
+    check(&sampled, "simulation.precision", "expected \"f64\" or \"f32\", found \"f16\"");
+}
+
+#[test]
+fn precision_without_a_sample_time() {
+    check(
+        &with(&[("atol = 1e-9\n", "atol = 1e-9\nprecision = \"f32\"\n")]),
+        "simulation.precision",
+        "f32 is the discrete controller's arithmetic: give simulation.sample_time too",
     );
 }
 

@@ -632,3 +632,17 @@ fn a_default_output_step_asks_nothing_of_the_sample_time_offered() {
     let s = Scenario::from_toml(&text.replace("sample_time = 0.0303", &format!("sample_time = {t_s}"))).unwrap();
     assert!(Run::of(&s, &d).check().is_ok());
 }
+
+/// The precision is the discrete controller's: a continuous run asked for f32 is refused before it
+/// starts, naming the key.
+#[test]
+fn a_continuous_run_in_f32_is_refused_naming_the_key() {
+    let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+    let d = s.design().unwrap();
+    let settings = RunSettings { precision: quell::controller::Precision::F32, ..RunSettings::of(&s) };
+    let e = Run::of(&s, &d).settings(settings).simulate(|_| ControlFlow::Continue(())).unwrap_err();
+    assert!(
+        e.to_string().starts_with("simulation.precision: f32 applies to the discrete controller of a sampled-data run"),
+        "{e}"
+    );
+}

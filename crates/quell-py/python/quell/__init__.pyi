@@ -317,6 +317,7 @@ def simulate(
     max_steps: Optional[int] = None,
     states: bool = False,
     check: bool = True,
+    precision: Optional[Literal["f64", "f32"]] = None,
 ) -> SimResult: ...
 
 @final

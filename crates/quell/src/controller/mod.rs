@@ -15,15 +15,49 @@
 pub(crate) mod discrete;
 pub(crate) mod packed;
 
-pub(crate) use discrete::Discretized;
 pub use discrete::{
     Controller, ControllerError, MAX_ADAPTATION_STEP, MAX_DELAY_LINE_BYTES, MAX_DELAY_SAMPLES, MAX_MEASUREMENT,
 };
+pub(crate) use discrete::{Discretized, SinglePrecision};
 
 use nalgebra::DMatrix;
 
 use crate::design::{ChannelTf, Design};
 use crate::linalg::companion;
+
+/// Floating-point arithmetic of the discrete controller: the Rust [`Controller`]'s, or a
+/// single-precision build's (the export's `Precision::F32`), which a sampled-data run emulates
+/// (`simulation.precision`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Precision {
+    /// `double`: the Rust [`Controller`]'s arithmetic.
+    #[default]
+    F64,
+    /// `float`: for microcontrollers whose FPU is single precision (Cortex-M4F, M33).
+    F32,
+}
+
+impl Precision {
+    /// The name of the key `precision`: `f64` or `f32`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Precision::F64 => "f64",
+            Precision::F32 => "f32",
+        }
+    }
+    /// Largest |y_i|, |g_i| the step takes: [`MAX_MEASUREMENT`] in double, 1e12 in float (float's
+    /// products of two signals stay below 1e24 · gains, far from its 3.4e38).
+    pub fn input_bound(self) -> f64 {
+        match self {
+            Precision::F64 => MAX_MEASUREMENT,
+            Precision::F32 => 1e12,
+        }
+    }
+    /// The precision named `f64` or `f32`.
+    pub fn from_name(name: &str) -> Option<Precision> {
+        [Precision::F64, Precision::F32].into_iter().find(|p| p.name() == name)
+    }
+}
 
 /// Matrices of the controller's linear parts, built once from a [`Design`].
 #[derive(Debug, Clone)]

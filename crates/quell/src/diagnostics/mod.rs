@@ -186,7 +186,12 @@ pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) ->
     }
     d.advice.extend(loose_atol(s, result));
     d.advice.extend(noise::noise_effort(result, quiet.as_ref()));
-    d.advice.extend(uf_cancellation(result));
+    // In an f32 run the departure measured replaces the cancellation's bound on it.
+    let precision = sampled::precision_lines(s, design, result);
+    if precision.is_empty() {
+        d.advice.extend(uf_cancellation(result));
+    }
+    d.advice.extend(precision);
     // The comparison settles what the coarse-sample line asks for.
     if compared != sampled::Compared::Not {
         d.advice.retain(|a| !a.contains(COARSE_WORDS));
@@ -216,7 +221,7 @@ pub fn uf_cancellation(result: &SimResult) -> Vec<String> {
         let ratio = result.uf_cancellation(i);
         let remedy = if sampled {
             format!(
-                "in the discrete controller that error is at least its arithmetic's rounding of one step: about {:.0e} of its peak in f64, {:.0e} in f32; its states (x̂, the filters, η̂) accumulate rounding over the run, which the loop can magnify far beyond that (a two-link arm's f32 build measured 1e-2 of u_f's peak against 3e-6 here): export in f64 where that matters, or test the f32 build in closed loop (docs/deployment.md)",
+                "in the discrete controller that error is at least its arithmetic's rounding of one step: about {:.0e} of its peak in f64, {:.0e} in f32; its states (x̂, the filters, η̂) accumulate rounding over the run, which the loop can magnify far beyond that (a two-link arm's f32 build measured 1e-2 of u_f's peak against 3e-6 here): before an f32 build, measure its departure with a run at simulation.precision = \"f32\" (docs/deployment.md)",
                 0.5 * f64::EPSILON * ratio,
                 0.5 * f64::from(f32::EPSILON) * ratio
             )

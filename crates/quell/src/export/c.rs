@@ -194,7 +194,7 @@ fn constants(view: &Discretized, layout: &Layout, P: &str) -> Vec<Constant> {
         "H(s) = 1/(beta s + 1) at ZOH: x <- a x + b v, a = exp(-T_s/beta), b = 1 - a (beta = {}).",
         eq.beta
     )));
-    constants.push(Constant::new("b", vec![], 1, vec![1.0 - view.a]));
+    constants.push(Constant::new("b", vec![], 1, vec![view.b]));
     constants
 }
 

@@ -20,15 +20,7 @@ use crate::controller::{Controller, ControllerError};
 use crate::design::Design;
 use crate::settings::TimeUnit;
 
-/// Floating-point type of the generated code.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Precision {
-    /// `double`: the Rust [`Controller`]'s arithmetic.
-    #[default]
-    F64,
-    /// `float`: for microcontrollers whose FPU is single precision (Cortex-M4F, M33).
-    F32,
-}
+pub use crate::controller::Precision;
 
 impl Precision {
     /// The C type.
@@ -39,26 +31,10 @@ impl Precision {
         }
     }
     /// Bytes of one number.
-    /// Largest |y_i|, |g_i| the generated step takes: [`MAX_MEASUREMENT`](crate::controller::MAX_MEASUREMENT) in double, 1e12 in float
-    /// (float's products of two signals stay below 1e24 · gains, far from its 3.4e38).
-    pub fn input_bound(self) -> f64 {
-        match self {
-            Precision::F64 => crate::controller::MAX_MEASUREMENT,
-            Precision::F32 => 1e12,
-        }
-    }
-
     pub fn bytes(self) -> usize {
         match self {
             Precision::F64 => 8,
             Precision::F32 => 4,
-        }
-    }
-    /// The name of the key `precision`: `f64` or `f32`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Precision::F64 => "f64",
-            Precision::F32 => "f32",
         }
     }
 }
@@ -66,11 +42,7 @@ impl Precision {
 impl std::str::FromStr for Precision {
     type Err = ExportError;
     fn from_str(s: &str) -> Result<Precision, ExportError> {
-        match s {
-            "f64" => Ok(Precision::F64),
-            "f32" => Ok(Precision::F32),
-            _ => Err(ExportError::Precision { found: s.to_string() }),
-        }
+        Precision::from_name(s).ok_or_else(|| ExportError::Precision { found: s.to_string() })
     }
 }
 
@@ -164,7 +136,7 @@ pub fn precision_warning(design: &Design, precision: Precision) -> Option<String
     let (shift, kappa, what) = f32_pole_shift(design);
     (shift > F32_POLE_SHIFT).then(|| {
         format!(
-            "precision: f32 rounds the controller's matrices to about 6e-8, and {what} has eigenvector condition number κ₂ = {kappa:.2e}, so its poles can move by about κ₂·6e-8 = {} of themselves (a disk servo's f32 u_f departed 18 % of its peak from the f64 export's at κ₂ = 2.75e6); export f64, or choose poles nearer the plant's own (a smaller κ₂)",
+            "precision: f32 rounds the controller's matrices to about 6e-8, and {what} has eigenvector condition number κ₂ = {kappa:.2e}, so its poles can move by about κ₂·6e-8 = {} of themselves (a disk servo's f32 u_f departed 18 % of its peak from the f64 export's at κ₂ = 2.75e6); export f64, or choose poles nearer the plant's own (a smaller κ₂); a sampled run at simulation.precision = \"f32\" measures how far the loop departs",
             fmt_shift(shift)
         )
     })

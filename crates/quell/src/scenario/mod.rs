@@ -21,6 +21,7 @@ use std::str::FromStr;
 use nalgebra::{Complex, DMatrix, DVector};
 use thiserror::Error;
 
+use crate::controller::Precision;
 use crate::design::{Design, DesignError, DesignSpec, ObserverChoice, RegressorScaling};
 use crate::plant::{Plant, PlantError};
 use crate::settings::TimeUnit;
@@ -104,6 +105,16 @@ pub struct Simulation {
     pub sample_time: Option<f64>,
     /// The continuous loop's integrator (`method = "auto" | "explicit" | "imex"`; absent: auto).
     pub method: Method,
+    /// The discrete controller's arithmetic (`precision = "f64" | "f32"`; absent: f64), with a
+    /// `sample_time` only: f32 emulates a single-precision build ([`crate::sim::RunSettings::precision`]).
+    pub precision: Precision,
+}
+
+impl Simulation {
+    /// The same settings for the continuous loop: no sample time, and so no precision of its own.
+    pub fn continuous(&self) -> Simulation {
+        Simulation { sample_time: None, precision: Precision::F64, ..*self }
+    }
 }
 
 impl Default for Simulation {
@@ -116,6 +127,7 @@ impl Default for Simulation {
             atol: settings::DEFAULT_TOLERANCE,
             sample_time: None,
             method: Method::Auto,
+            precision: Precision::F64,
         }
     }
 }
@@ -173,7 +185,7 @@ const HARMONIC_KEYS: &[&str] = &["amplitude", "frequency", "phase"];
 /// The most rows the default output step gives (t_end / output_step): [`default_output_step`].
 const DEFAULT_MAX_ROWS: f64 = 1e6;
 
-const SIMULATION_KEYS: &[&str] = &["t_end", "output_step", "rtol", "atol", "sample_time", "method"];
+const SIMULATION_KEYS: &[&str] = &["t_end", "output_step", "rtol", "atol", "sample_time", "method", "precision"];
 const NOISE_KEYS: &[&str] = &["std", "seed", "bandwidth"];
 
 /// The keys a scenario's table `section` takes (`"design"`, `"truth"`, …; `""` for the top level),
@@ -699,7 +711,21 @@ fn simulation(v: Value, fastest: f64) -> Result<Simulation, ScenarioError> {
     let method = t
         .get("method", |v| Method::from_name(&v.string()?).map_err(|message| err(v.key, message)))?
         .unwrap_or_default();
-    Ok(Simulation { t_end, output_step, output_step_given: given.is_some(), rtol, atol, sample_time, method })
+    let precision = t
+        .get("precision", |v| {
+            let name = v.string()?;
+            let found = Precision::from_name(&name);
+            found.ok_or_else(|| err(v.key, format!("expected \"f64\" or \"f32\", found {name:?}")))
+        })?
+        .unwrap_or_default();
+    if precision != Precision::F64 && sample_time.is_none() {
+        return Err(err(
+            "simulation.precision",
+            "f32 is the discrete controller's arithmetic: give simulation.sample_time too, or leave precision out for the continuous loop, whose controller has none".to_string(),
+        ));
+    }
+    let output_step_given = given.is_some();
+    Ok(Simulation { t_end, output_step, output_step_given, rtol, atol, sample_time, method, precision })
 }
 
 /// `[noise]`: per-output standard deviations and a seed.

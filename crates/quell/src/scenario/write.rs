@@ -257,6 +257,9 @@ fn simulation_table(s: &Simulation) -> Table {
     if s.method != Method::Auto {
         t.insert("method".into(), Value::String(s.method.name().into()));
     }
+    if s.precision != crate::controller::Precision::F64 {
+        t.insert("precision".into(), Value::String(s.precision.name().into()));
+    }
     t
 }
 
@@ -348,6 +351,18 @@ mod tests {
         }
         let explicit = super::super::PAPER_EXAMPLE.replacen("atol = 1e-9\n", "atol = 1e-9\nmethod = \"auto\"\n", 1);
         assert_eq!(Scenario::from_toml(&explicit).unwrap().to_toml(), paper.to_toml(), "\"auto\" is the default");
+    }
+
+    #[test]
+    fn the_precision_round_trips_and_f64_is_written_as_no_key() {
+        let paper = Scenario::from_toml(super::super::PAPER_EXAMPLE).unwrap();
+        let mut s = paper.clone();
+        s.simulation.sample_time = Some(1e-3);
+        assert!(!s.to_toml().contains("precision"), "f64, the default, stays absent");
+        s.simulation.precision = crate::controller::Precision::F32;
+        let text = s.to_toml();
+        assert!(text.contains("precision = \"f32\""), "{text}");
+        assert_eq!(Scenario::from_toml(&text).unwrap().simulation, s.simulation);
     }
 
     #[test]

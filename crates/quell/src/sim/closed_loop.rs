@@ -1165,6 +1165,16 @@ pub(super) fn check<'a>(run: &Run<'a>, integrator: &Integrator) -> Result<Contin
     let (st, truth) = (&run.settings, run.truth);
     check_run(run)?;
     settings::check_tolerances(integrator.rtol, integrator.atol)?;
+    if st.precision != crate::controller::Precision::F64 {
+        return Err(KeyError::new(
+            "simulation.precision",
+            format!(
+                "{} applies to the discrete controller of a sampled-data run; give simulation.sample_time, or leave precision out for the continuous loop",
+                st.precision.name()
+            ),
+        )
+        .into());
+    }
     let (actuator, noise) = (st.actuator.as_ref(), st.noise.as_ref());
     let sys = ContinuousLoop::with_physics(run.design, truth, run.reference, run.disturbance, actuator, noise)?;
     let horizon = (st.t_end, run.design.plant().time_unit);

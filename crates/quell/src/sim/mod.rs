@@ -17,7 +17,7 @@ pub mod settle;
 use std::ops::ControlFlow;
 
 use crate::averaged::Averaged;
-use crate::controller::ControllerError;
+use crate::controller::{ControllerError, Precision};
 use crate::design::Design;
 use crate::plant::Plant;
 use crate::settings::{self, Actuator, KeyError};
@@ -115,6 +115,11 @@ pub struct RunSettings {
     pub actuator: Option<Actuator>,
     /// Record the plant state x and the observer state x̂ too ([`SimResult::x`]); off by default.
     pub record_states: bool,
+    /// The discrete controller's arithmetic in the sampled-data loop: f64, or a single-precision
+    /// build's, emulated ([`Precision::F32`]: constants, inputs and states rounded to f32); the
+    /// continuous loop has none other than f64. A controller given by [`Run::controller`] keeps its
+    /// own.
+    pub precision: Precision,
 }
 
 impl RunSettings {
@@ -131,6 +136,7 @@ impl RunSettings {
             noise: None,
             actuator: None,
             record_states: false,
+            precision: Precision::F64,
         }
     }
 

@@ -13,7 +13,7 @@ use super::noise::Gaussian;
 use super::result::{Outcome, RunStats, Sample, SimResult};
 use super::{check_run, Run, SimError, PROGRESS_EVERY};
 use crate::controller::discrete::{self, MAX_DELAY_SAMPLES};
-use crate::controller::{mat_vec, Controller, ControllerError};
+use crate::controller::{mat_vec, Controller, ControllerError, Precision, SinglePrecision};
 use crate::design::Design;
 use crate::linalg::zoh_unchecked;
 use crate::plant::Plant;
@@ -160,6 +160,18 @@ pub trait SampledController {
     fn command(&self) -> &[f64];
     /// ξ̂, x̂ and η̂ after the last step (`x` is left empty: the loop fills in the plant's).
     fn watched(&self) -> Watched<'_>;
+}
+
+impl SampledController for SinglePrecision {
+    fn step(&mut self, y: &[f64], g: &[f64]) -> Result<&[f64], ControllerError> {
+        SinglePrecision::step(self, y, g)
+    }
+    fn command(&self) -> &[f64] {
+        self.controller().command()
+    }
+    fn watched(&self) -> Watched<'_> {
+        self.controller().watched()
+    }
 }
 
 impl SampledController for Controller {
@@ -337,10 +349,12 @@ pub(super) fn simulate(
 ) -> Result<SimResult, SimError> {
     let (own, every) = check(&run, sample_time)?;
     let mut run = run;
-    match (run.controller.take(), own) {
-        (Some(ctrl), _) => sampled_loop(&run, ctrl, (sample_time, every), on_progress),
-        (None, Some(mut ctrl)) => sampled_loop(&run, &mut ctrl, (sample_time, every), on_progress),
-        (None, None) => unreachable!("check builds a controller for a run without one"),
+    let steps = (sample_time, every);
+    match (run.controller.take(), own, run.settings.precision) {
+        (Some(ctrl), ..) => sampled_loop(&run, ctrl, steps, on_progress),
+        (None, Some(mut ctrl), Precision::F64) => sampled_loop(&run, &mut ctrl, steps, on_progress),
+        (None, Some(ctrl), Precision::F32) => sampled_loop(&run, &mut SinglePrecision::new(ctrl), steps, on_progress),
+        (None, None, _) => unreachable!("check builds a controller for a run without one"),
     }
 }
 

@@ -21,6 +21,7 @@ impl RunSettings {
             noise: s.noise.clone(),
             actuator: s.actuator.clone(),
             output_step_given: sim.output_step_given,
+            precision: sim.precision,
             ..RunSettings::new(sim.t_end, sim.output_step, mode)
         }
     }

@@ -1,0 +1,43 @@
+"""`precision=`: the sampled-data loop with the discrete controller's arithmetic as a
+single-precision build's (`quell export --precision f32`), emulated; `simulation.precision` in files."""
+import numpy as np
+import pytest
+
+import quell
+
+
+def test_f32_departs_from_f64_by_rounding_and_says_how_far():
+    s = quell.paper_example()
+    double = quell.simulate(s, t_end=20.0, sample_time=1e-3)
+    single = quell.simulate(s, t_end=20.0, sample_time=1e-3, precision="f32")
+    # Rounding's magnitude: the paper's y departs by about 3e-5 of its peak (tests/export_c.rs holds
+    # the emulation to the compiled f32 C), far below the 1e-3 bound and never exactly 0.
+    gap = np.abs(single.y - double.y).max() / np.abs(double.y).max()
+    assert 0 < gap < 1e-3, gap
+    assert quell.simulate(s, t_end=20.0, sample_time=1e-3, precision="f64") == double
+    assert quell.simulate(s, t_end=20.0, sample_time=1e-3, precision=None) == double
+
+
+def test_a_bad_precision_is_refused_naming_the_argument():
+    s = quell.paper_example()
+    with pytest.raises(quell.ScenarioError, match='precision: expected "f64" or "f32", found "f16"') as e:
+        quell.simulate(s, sample_time=1e-3, precision="f16")
+    assert e.value.key == "simulation.precision"
+    with pytest.raises(quell.ScenarioError, match="precision: f32 is the discrete controller's") as e:
+        quell.simulate(s, precision="f32")
+    assert e.value.key == "simulation.precision"
+    with pytest.raises(TypeError, match="precision"):
+        quell.simulate(s, sample_time=1e-3, precision=32)
+
+
+def test_the_file_key_is_read_and_written():
+    text = quell.paper_example().to_toml()
+    s = quell.Scenario.from_toml(text.replace("[simulation]\n", '[simulation]\nsample_time = 0.001\nprecision = "f32"\n', 1))
+    assert s.simulation["precision"] == "f32"
+    assert 'precision = "f32"' in s.to_toml()
+    assert quell.simulate(s, t_end=2.0) == quell.simulate(s, t_end=2.0, precision="f32")
+    assert quell.simulate(s, t_end=2.0) != quell.simulate(s, t_end=2.0, precision="f64")
+    # The continuous loop of the same file has no precision of its own.
+    assert quell.simulate(s, t_end=2.0, continuous=True).stats["loop"] == "continuous"
+    with pytest.raises(quell.ScenarioError, match="give simulation.sample_time too"):
+        quell.Scenario.from_toml(text.replace("[simulation]\n", '[simulation]\nprecision = "f32"\n', 1))
