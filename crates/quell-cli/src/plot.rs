@@ -885,6 +885,15 @@ impl SweepFigure {
         }
     }
 
+    /// Whose figure it is: input i's for the plant input u_f (a plant need not pair its inputs with
+    /// its outputs: a distillation column's reflux is not its top composition), channel i's else.
+    fn whose(self, study: &quell::study::StudyMeta, i: usize) -> String {
+        match self {
+            SweepFigure::MaxUf => study.input(i),
+            _ => study.channel(i),
+        }
+    }
+
     /// Its quantiles over a grid point's runs.
     fn quantiles(self, c: &quell::study::ChannelQuantiles) -> &quell::study::Quantiles {
         match self {
@@ -1105,7 +1114,7 @@ fn draw_sweep_panel<DB: DrawingBackend>(
     let (y0, y1) = (lo - pad, hi + pad);
     let values = short_values(&axis.values);
     let mut chart = ChartBuilder::on(area)
-        .caption(format!("{}: {label}", s.study.channel(i)), ("sans-serif", 18))
+        .caption(format!("{}: {label}", figure.whose(&s.study, i)), ("sans-serif", 18))
         .margin(8)
         .margin_right(grid_right_margin(scale, &values))
         .x_label_area_size(36)
@@ -1496,7 +1505,7 @@ fn draw_distributions<DB: DrawingBackend>(
             let pad = if log { 0.0 } else { 0.05 * (x1 - x0) };
             let (x0, x1) = (x0 - pad, x1 + pad);
             let mut chart = ChartBuilder::on(&areas[f * s.study.m + i])
-                .caption(format!("{}: {label}", s.study.channel(i)), ("sans-serif", 18))
+                .caption(format!("{}: {label}", figure.whose(&s.study, i)), ("sans-serif", 18))
                 .margin(8)
                 .margin_right(28)
                 .x_label_area_size(36)

@@ -2,7 +2,7 @@
 
 use std::fmt::Write;
 
-use quell::fmt_complex_list;
+use quell::fmt_eigenvalues;
 use quell::nalgebra::{Complex, DMatrix};
 use quell::Design;
 use serde_json::{json, Value};
@@ -78,14 +78,6 @@ fn fmt_matrix(out: &mut String, name: &str, M: &DMatrix<f64>) {
         let row: Vec<String> = r.iter().map(|v| format!("{:>width$}", cell(v))).collect();
         let _ = writeln!(out, "  [{} ]", row.join(""));
     }
-}
-
-/// Computed eigenvalues as [`fmt_complex_list`] writes them, an imaginary part below 1e-9 of the
-/// eigenvalue's size (rounding: a double real pole comes out as −3.875268 ± 4.6e-15i) left out.
-fn fmt_eigenvalues(e: &[Complex<f64>]) -> String {
-    let shown: Vec<Complex<f64>> =
-        e.iter().map(|z| if z.im.abs() <= 1e-9 * z.norm() { Complex::new(z.re, 0.0) } else { *z }).collect();
-    fmt_complex_list(&shown)
 }
 
 /// G_ii(s) as `q0 / (s+a)(s+b)…`, its real numbers to 12 significant digits (a product of poles

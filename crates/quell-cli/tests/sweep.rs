@@ -678,7 +678,8 @@ fn the_settling_time_axis_is_in_the_plants_unit_of_time() {
 }
 
 /// The sweep's figures title each channel with its output's name, as `quell run`'s do ("Channel 1
-/// (pitch)"; they said "Channel 1"), from `[plant] outputs`, which summary.json now carries.
+/// (pitch)"; they said "Channel 1"), from `[plant] outputs`, which summary.json now carries; the
+/// plant input's panels with the input's ("Input 1 (Vp)"; they said "Channel 1 (pitch)").
 #[test]
 fn sweep_figures_name_the_outputs() {
     let tmp = scratch("names");
@@ -705,6 +706,12 @@ fn sweep_figures_name_the_outputs() {
         let summary: serde_json::Value =
             serde_json::from_str(&fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
         assert_eq!(summary["study"]["outputs"], serde_json::json!(["pitch", "yaw"]));
+        // The plant input's panels are the inputs', which the heli names apart from its outputs.
+        assert_eq!(summary["study"]["inputs"], serde_json::json!(["Vp", "Vy"]));
+        // (The 2-D grid's figure maps the tail error alone.)
+        let one_d = name == "one.toml";
+        assert_eq!(svg.contains("Input 1 (Vp): max |u_f|"), one_d, "{name}");
+        assert!(!svg.contains("Channel 1 (pitch): max |u_f|"), "{name}");
     }
 }
 

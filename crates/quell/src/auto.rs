@@ -914,7 +914,7 @@ fn check_first(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier) ->
                         continue;
                     }
                     None => {
-                        let advice = ended_early(&first.scenario, &e, slowed > 0);
+                        let advice = ended_early(&first.scenario, &design, &e, slowed > 0);
                         return unverified((first, design, start), advice, verifier.runs - runs_before, &bound);
                     }
                 }
@@ -1150,6 +1150,8 @@ fn sampled_start(doc: &toml::Table, targets: &Targets) -> Result<(Proposal, Desi
     let mut rho = rate(&p, &design);
     let worst = |p: &Proposal, d: &Design| fidelity(&p.scenario, d).into_iter().fold(0.0, f64::max);
     let first_error = worst(&p, &design);
+    // ρ with both kinds of poles halved once more, where that was not kept.
+    let mut halved_rho = rho;
     for _ in 0..MAX_SAMPLED_HALVINGS {
         if !crate::sim::is_coarse(t_s * rho) {
             break;
@@ -1167,6 +1169,7 @@ fn sampled_start(doc: &toml::Table, targets: &Targets) -> Result<(Proposal, Desi
                 kept = Some((q, d, slower, r));
                 break;
             }
+            halved_rho = r;
         }
         let Some(k) = kept else { break };
         (p, design, speed, rho) = k;
@@ -1178,7 +1181,14 @@ fn sampled_start(doc: &toml::Table, targets: &Targets) -> Result<(Proposal, Desi
         } else {
             // Halving stopped lowering ρ 1.5×: a rate the halved poles do not set.
             let fine = crate::sim::fine_sample_time(&design, rho, Some(p.scenario.simulation.output_step));
-            format!("T_s·ρ = {:.2}, still above {COARSE_SAMPLE}: ρ = {rho:.3e}/{unit} is now set by what halving leaves as it is (the plant's eigenvalues, the signals' frequencies, the filter poles placed around them, 1/β), which slower channel and observer poles do not lower; a simulation.sample_time {fine} would meet it", t_s * rho)
+            // The halving's own rate: a PMSM's channel poles set ρ = 1.508e4/s, and halving them
+            // left ρ = 1.131e4/s at its filter poles, which the text had given as ρ's own cause.
+            let halved = if halved_rho < rho {
+                format!("halving both kinds of poles again would lower ρ = {rho:.3e}/{unit} only to {halved_rho:.3e}/{unit}, where what halving leaves as it is sets it")
+            } else {
+                format!("ρ = {rho:.3e}/{unit} is now set by what halving leaves as it is")
+            };
+            format!("T_s·ρ = {:.2}, still above {COARSE_SAMPLE}: {halved} (the plant's eigenvalues, the signals' frequencies, the filter poles placed around them, 1/β), which slower channel and observer poles do not lower; a simulation.sample_time {fine} would meet it for this first proposal", t_s * rho)
         };
         let note = |f: f64| {
             format!("; ×{f} of that for simulation.sample_time = {t_s} {unit} ({met}, ρ the loop's fastest rate: docs/running.md)")
@@ -1757,20 +1767,26 @@ fn ended(failed: &AutoError) -> String {
     }
 }
 
-/// Advice on a first proposal whose verifying run ended before t_end or departed from its
-/// continuous loop (`failed`).
-fn ended_early(s: &Scenario, failed: &AutoError, slowed: bool) -> String {
-    // "Even at the slowest start" only where the proposal was slowed (a file that gives both kinds
-    // of poles has none slower).
-    let slowest = if slowed { " even at the slowest start" } else { "" };
+/// Advice on a first proposal (`design`) whose verifying run ended before t_end or departed from
+/// its continuous loop (`failed`). Where the proposal was slowed as far as the retries go, slower
+/// poles are not asked for again: a piezo stage told "give slower poles" after its poles had gone
+/// to 1/128 of the rules' went round in a circle (helper tryout, 2026-12-07).
+fn ended_early(s: &Scenario, design: &Design, failed: &AutoError, slowed: bool) -> String {
+    let unit = s.plant.time_unit;
     let why = match s.simulation.sample_time {
+        Some(t_s) if slowed => {
+            let rho = loop_rate(design, s.true_plant(), [&s.reference, &s.disturbance]);
+            let fine = crate::sim::fine_sample_time(design, rho, Some(s.simulation.output_step));
+            format!(
+                "its poles were slowed as far as the retries go and its loop still runs at T_s·ρ = {:.2} (ρ = {rho:.3e}/{unit}, set there by the plant's eigenvalues, the signals' frequencies and their filters as much as by the poles): a shorter simulation.sample_time is what remains ({fine}: a bound the sampled loop needs, not one that suffices); where that fails too, design the continuous loop (no sample time) and judge a sampled run by its own tail and effort, or track fewer or slower harmonics (docs/tuning.md, a sampled-data scenario)",
+                t_s * rho
+            )
+        }
         Some(t_s) => format!(
-            "its poles may be too fast for the sample time {t_s} {}{slowest} (docs/tuning.md, a sampled-data scenario): try a shorter simulation.sample_time, or give slower design.channel_poles and design.observer_poles by hand",
-            s.plant.time_unit
+            "its poles may be too fast for the sample time {t_s} {unit} (docs/tuning.md, a sampled-data scenario): try a shorter simulation.sample_time, or give slower design.channel_poles and design.observer_poles by hand"
         ),
         None => "give some [design] keys by hand (slower channel or observer poles, a smaller mu; docs/tuning.md)".to_string(),
     };
-    let unit = s.plant.time_unit;
     match failed {
         AutoError::Departed(how) => format!(
             "the first proposal's sampled-data verifying run drives u_f beyond twice its continuous loop's (the scenario without its sample time){}: {how}; {why}",

@@ -342,7 +342,7 @@ pub mod bench_api {
 pub use controller::{Controller, ControllerError};
 pub use design::{place, Design, DesignError, DesignSpec, ObserverChoice, PlaceError};
 /// How quell writes a number (and a complex number) in messages, reports and generated headers.
-pub use linalg::{fmt_complex, fmt_complex_list, fmt_number};
+pub use linalg::{fmt_complex, fmt_complex_list, fmt_eigenvalues, fmt_number};
 pub use plant::{Plant, PlantError};
 pub use scenario::{Scenario, ScenarioError};
 pub use settings::TimeUnit;

@@ -316,6 +316,15 @@ pub fn fmt_complex_list(z: &[Complex<f64>]) -> String {
     z.iter().map(fmt_complex).collect::<Vec<_>>().join(", ")
 }
 
+/// Computed eigenvalues for people, as [`fmt_complex_list`] writes them, an imaginary part within
+/// 1e-9 of its eigenvalue's modulus shown as 0 (rounding's: a double real pole at −7539.8 had come
+/// out −7539.8 ± 2.3e-13i in the exported header, and −7539.8 in the design report).
+pub fn fmt_eigenvalues(e: &[Complex<f64>]) -> String {
+    let shown: Vec<Complex<f64>> =
+        e.iter().map(|z| if z.im.abs() <= 1e-9 * z.norm() { Complex::new(z.re, 0.0) } else { *z }).collect();
+    fmt_complex_list(&shown)
+}
+
 /// Largest ‖[A B]·T‖₁ [`zoh_unchecked`] discretizes: 10¹⁵ time constants of the fastest block in
 /// one sample, far past any meaningful sample time, and still about 50 squarings, whose norm
 /// estimates (up to the 13th power) stay finite.

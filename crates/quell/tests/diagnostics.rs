@@ -1285,3 +1285,38 @@ fn an_f32_run_is_measured_against_the_same_run_in_f64() {
             .all(|a| !a.contains("small difference")));
     }
 }
+
+/// The stiff line's offer to lower μ is the averaged law's, and a run checks it: Skogestad's LV
+/// column at μ = 50 meets its tail bound, and at the averaged law's 0.045 / 0.043 its tails are
+/// beyond it (recomputed here by that run: 4.5× and 13× the references' peaks), so the advice
+/// keeps μ and says what the check found instead of offering it.
+#[test]
+fn an_offer_to_lower_a_stiff_mu_is_checked_by_a_run() {
+    let path = format!("{}/tests/data/skogestad-lv.toml", env!("CARGO_MANIFEST_DIR"));
+    let s = Scenario::from_path(std::path::Path::new(&path)).unwrap();
+    let go = |_| ControlFlow::Continue(());
+    let tail = |s: &Scenario, i: usize| {
+        let r = Run::of(s, &s.design().unwrap()).simulate(go).unwrap();
+        let peak = r.column(&r.g, r.m, i).fold(0.0f64, |p, g| p.max(g.abs()));
+        r.max_abs_error(i, 2700.0, 3000.0).unwrap() / peak
+    };
+    let mut low = s.clone();
+    low.design.mu = vec![0.045, 0.043];
+    for i in 0..2 {
+        assert!(
+            tail(&s, i) < 0.01 && tail(&low, i) > 1.0,
+            "channel {}: {} at 50, {} lowered",
+            i + 1,
+            tail(&s, i),
+            tail(&low, i)
+        );
+    }
+    let d = s.design().unwrap();
+    let r = Run::of(&s, &d).simulate(go).unwrap();
+    let advice = quell::diagnostics::diagnose_run(&s, &d, &r);
+    for (i, mu) in [(0, "0.045"), (1, "0.043")] {
+        let line = advice.channels[i].advice.iter().find(|a| a.contains("adapts at μ λ_max")).unwrap();
+        let kept = format!("keep design.mu[{i}] where max|u_f| allows: that μ is the averaged law's, and a run at μ = {mu} left channel {}'s tail at", i + 1);
+        assert!(line.contains(&kept) && !line.contains("at most to about"), "{line}");
+    }
+}

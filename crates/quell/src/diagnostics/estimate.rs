@@ -107,6 +107,17 @@ pub fn estimate(
 /// headbox at μ = 50 had been told to lower it "at most to about 49".
 const WORTH_CHANGING: f64 = 1.25;
 
+/// The μ below the design's `mu` that [`stiff_advice`] offers to lower a stiff channel's gain to,
+/// "at most to about": what its slowest relevant direction needs by t_end ([`super::horizon_mu`]),
+/// where that is above the stiffness threshold's μ and below `mu` by [`WORTH_CHANGING`]; `None`
+/// otherwise. It is the averaged law's, which a run checks ([`super::diagnose_run`]).
+pub(crate) fn lower_offer(c: &crate::averaged::ChannelAverage, mu: f64, (rho, t_end): (f64, f64)) -> Option<f64> {
+    let relevant = c.slowest_relevant(super::RELEVANT_SHARE);
+    let (wanted, fastest) = super::horizon_mu(relevant, c.lambda_max(), (t_end, STIFF_RATIO * rho));
+    let needed = crate::settings::round_up_2(wanted);
+    (relevant.is_finite() && wanted > fastest && needed * WORTH_CHANGING < mu).then_some(needed)
+}
+
 /// Channel i adapting at μ λ_max beyond [`STIFF_RATIO`] times the loop's rate ρ: what it means and
 /// the μ to lower it to where u_f is more than the actuator takes (the integrator handles the
 /// stiffness: a tryout's Wardle–Wood column design over 14,400 min, μ = [8.7, 3.5] against the
@@ -145,7 +156,7 @@ pub(crate) fn stiff_advice(
         )
     } else {
         let needed = crate::settings::round_up_2(wanted);
-        let keep = if needed * WORTH_CHANGING < mu {
+        let keep = if lower_offer(c, mu, (rho, t_end)).is_some() {
             format!("lower design.mu[{i}] at most to about {} where max|u_f| allows", fmt(needed))
         } else if needed > WORTH_CHANGING * mu && needed <= super::RAISE_AT_MOST * mu {
             format!("raise design.mu[{i}] toward {} where max|u_f| allows (or keep it)", fmt(needed))
@@ -160,7 +171,7 @@ pub(crate) fn stiff_advice(
         )
     };
     format!(
-        "channel {} adapts at μ λ_max = {rate:.3e}/{unit}, {}× the loop's fastest other rate ({rho:.3e}/{unit}): the loop is stiff (the automatic integrator handles it, an explicit one crawls), and a gain this high can drive u_f hard; {lower}",
+        "channel {} adapts at μ λ_max = {rate:.3e}/{unit}, {}× the loop's fastest other rate ({rho:.3e}/{unit}): the adaptive law is stiff (the continuous loop's automatic integrator and the discrete controller's implicit step take it stably; an explicit integrator crawls), and a gain this high can drive u_f hard; {lower}",
         i + 1,
         crate::settings::fmt_ratio(rate / rho),
     )

@@ -525,7 +525,7 @@ fn halvings_tried(tried: u32, sample_time: f64, unit: crate::settings::TimeUnit)
 fn remedy(s: &crate::Scenario, design: &Design, (sample_time, effort): (f64, bool), continuous: &SimResult) -> String {
     let unit = continuous.time_unit;
     let design_for = if effort {
-        "or let the automatic design choose poles for that sample time (give the scenario that simulation.sample_time)"
+        "or let the automatic design choose poles for that sample time (the scenario with that simulation.sample_time and its [design] poles left out)"
     } else {
         "or give slower design.channel_poles and design.observer_poles"
     };
@@ -540,7 +540,7 @@ fn remedy(s: &crate::Scenario, design: &Design, (sample_time, effort): (f64, boo
             "{}: {}",
             halvings_tried(tried, sample_time, unit),
             if effort {
-                "let the automatic design choose poles for the sample time (give the scenario simulation.sample_time)"
+                "let the automatic design choose poles for the sample time (the scenario with its simulation.sample_time and its [design] poles left out), or design the continuous loop and judge the sampled one by its own tail and effort"
             } else {
                 "give slower design.channel_poles and design.observer_poles, or judge the sampled loop by its own tail and effort"
             }

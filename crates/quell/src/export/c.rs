@@ -7,7 +7,7 @@ use nalgebra::DMatrix;
 use super::{CCode, ExportError, ExportOptions, Precision};
 use crate::controller::{Controller, Discretized};
 use crate::design::Design;
-use crate::linalg::fmt_complex_list;
+use crate::linalg::fmt_eigenvalues;
 use crate::settings::TimeUnit;
 
 /// One `static const` array (or scalar, with no `dims`) of the generated source.
@@ -307,8 +307,8 @@ fn header(
             ("qg", &design.q_g().to_string()),
             ("qw", &design.q_w().to_string()),
             ("delay_text", &delay_text),
-            ("obs", &fmt_complex_list(design.observer_eigenvalues())),
-            ("dec", &fmt_complex_list(design.decoupled_eigenvalues())),
+            ("obs", &fmt_eigenvalues(design.observer_eigenvalues())),
+            ("dec", &fmt_eigenvalues(design.decoupled_eigenvalues())),
             ("constant_bytes", &constant_bytes.to_string()),
             ("state_bytes", &state_bytes.to_string()),
             ("defines", &defines),

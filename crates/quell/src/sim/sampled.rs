@@ -49,7 +49,7 @@ pub fn coarse_sample_warning(
     let unit = design.plant().time_unit;
     is_coarse(sample_time * rate).then(|| {
         format!(
-            "simulation.sample_time: T_s = {} {unit} is {}× the loop's fastest time constant 1/ρ (ρ = {} /{unit}: the plant, observer, channel and filter poles, 1/β and the signals' frequencies): the discrete controller may depart from the continuous design; choose {}, or slower poles (a bound the sampled loop needs, not one that suffices: compare a sampled run with its continuous loop, as a sampled run's advice does)",
+            "simulation.sample_time: T_s = {} {unit} is {}× the loop's fastest time constant 1/ρ (ρ = {} /{unit}: the plant, observer, channel and filter poles, 1/β and the signals' frequencies): the discrete controller may depart from the continuous design; choose {}, or slower poles: the automatic design chooses them for a sample time set in simulation.sample_time (T_s·ρ ≤ {COARSE_SAMPLE} is a bound the sampled loop needs, not one that suffices: compare a sampled run with its continuous loop, as a sampled run's advice does)",
             settings::fmt_short(sample_time),
             settings::fmt_above(sample_time * rate, COARSE_SAMPLE),
             settings::fmt_short(settings::significant(rate, 3)),

@@ -679,7 +679,17 @@ impl Study {
 
     /// The outputs' names the scenario gives (`[plant] outputs`); empty without them.
     pub fn outputs(&self) -> Vec<String> {
-        let names = self.base.get("plant").and_then(|p| p.get("outputs")).and_then(toml::Value::as_array);
+        self.plant_names("outputs")
+    }
+
+    /// The inputs' names (`[plant] inputs`); empty when not given.
+    pub fn inputs(&self) -> Vec<String> {
+        self.plant_names("inputs")
+    }
+
+    /// `[plant]`'s list of names `key`, empty when not given.
+    fn plant_names(&self, key: &str) -> Vec<String> {
+        let names = self.base.get("plant").and_then(|p| p.get(key)).and_then(toml::Value::as_array);
         names.map_or_else(Vec::new, |a| a.iter().filter_map(|n| n.as_str().map(str::to_string)).collect())
     }
 

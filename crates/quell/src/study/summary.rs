@@ -122,6 +122,9 @@ pub struct StudyMeta {
     /// The outputs' names (`[plant] outputs`), for the figures' titles; empty when not given.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub outputs: Vec<String>,
+    /// The inputs' names (`[plant] inputs`), for the plant input's panels; empty when not given.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub inputs: Vec<String>,
 }
 
 fn seconds() -> String {
@@ -151,6 +154,7 @@ impl StudyMeta {
             shard,
             time_unit: study.time_unit().symbol().into(),
             outputs: study.outputs(),
+            inputs: study.inputs(),
         }
     }
 
@@ -159,6 +163,15 @@ impl StudyMeta {
         match self.outputs.get(i) {
             Some(name) => format!("Channel {} ({name})", i + 1),
             None => format!("Channel {}", i + 1),
+        }
+    }
+
+    /// "Input i" (from 1), with the input's name when the scenario gives one: "Input 1 (L)". The
+    /// plant input u_f's figures are the inputs', which a plant need not pair with its outputs.
+    pub fn input(&self, i: usize) -> String {
+        match self.inputs.get(i) {
+            Some(name) => format!("Input {} ({name})", i + 1),
+            None => format!("Input {}", i + 1),
         }
     }
 

@@ -11,7 +11,7 @@
  * Input delays: channel 1: tau = 1 = 10 samples; channel 2: tau = 1 = 10 samples; channel 3: tau = 1 = 10 samples.
  * Eigenvalues of the design (continuous time):
  *   observer A - L C:  -0.650000, -0.600000, -0.550000, -0.500000, -0.450000, -0.400000
- *   decoupled A - B K: -0.120000-5.835482e-16i, -0.120000+5.835482e-16i, -0.120000, -0.100000, -0.100000-4.761113e-16i, -0.100000+4.761113e-16i
+ *   decoupled A - B K: -0.120000, -0.120000, -0.120000, -0.100000, -0.100000, -0.100000
  * Memory: 4324 bytes of constants (static const), 4568 bytes of state
  *   (sizeof(supply_state) where a double is aligned to its size).
  * Arithmetic: double throughout. No dynamic memory, no libm, no global mutable state.
@@ -21,9 +21,9 @@
 
 /* The linked names carry this export's layout id: an object compiled with another export's
  * header does not link with this source. */
-#define supply_init supply_init_68fbb79fa160bd41
-#define supply_step supply_step_68fbb79fa160bd41
-#define supply_command supply_command_68fbb79fa160bd41
+#define supply_init supply_init_00ff05314fa833cd
+#define supply_step supply_step_00ff05314fa833cd
+#define supply_command supply_command_00ff05314fa833cd
 
 #include <stdint.h>
 
@@ -72,6 +72,6 @@ void supply_command(const supply_state *s, double u[SUPPLY_M]);
 #endif
 
 /* Identifies this header's source: supply_controller.c compiles only with it. */
-#define SUPPLY_LAYOUT_ID 0x68fbb79fa160bd41u
+#define SUPPLY_LAYOUT_ID 0x00ff05314fa833cdu
 
 #endif /* SUPPLY_CONTROLLER_H */
