@@ -20,9 +20,10 @@ pub struct ExportArgs {
     /// Prefix of every generated name, so several controllers can share one firmware.
     #[arg(long, default_value = "quell")]
     prefix: String,
-    /// Floating-point type of the generated code: f64 (double) or f32 (float, for single-precision FPUs).
-    #[arg(long, default_value = "f64", value_parser = ["f64", "f32"])]
-    precision: String,
+    /// Floating-point type of the generated code: f64 (double) or f32 (float, for single-precision
+    /// FPUs); default: the scenario's simulation.precision, else f64.
+    #[arg(long, value_parser = ["f64", "f32"])]
+    precision: Option<String>,
     /// Also write <PREFIX>.fmu: an FMI co-simulation FMU of the same C (inputs y, g; outputs u_f,
     /// u), with its sources and a binary for this machine built by --compiler.
     #[arg(long)]
@@ -62,7 +63,11 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
     })?;
     let options = ExportOptions {
         prefix: args.prefix.clone(),
-        precision: args.precision.parse().map_err(export_failure)?,
+        // The file's simulation.precision, which its sampled runs measured, unless the flag says.
+        precision: match &args.precision {
+            Some(name) => name.parse().map_err(export_failure)?,
+            None => scenario.simulation.precision,
+        },
         scenario_name: scenario.name.clone(),
         names: scenario.names.clone(),
     };

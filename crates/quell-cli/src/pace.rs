@@ -69,8 +69,14 @@ fn deployment_text(s: &Scenario, d: &Design) -> String {
             quell::export::fmt_shift(shift)
         )
     } else {
+        let measured = match s.simulation.precision {
+            quell::controller::Precision::F32 => {
+                "this scenario's sampled runs are in f32 and say how far it moves the loop"
+            }
+            quell::controller::Precision::F64 => "quell run --sample-time T_s --precision f32 measures it",
+        };
         format!(
-            "f32 moves the poles by at most {} (κ₂ = {kappa:.2e} × 6e-8): its constants serve in either precision (the rounding its states accumulate over a run is not bounded by this: quell run --sample-time T_s --precision f32 measures it)",
+            "f32 moves the poles by at most {} (κ₂ = {kappa:.2e} × 6e-8): its constants serve in either precision (the rounding its states accumulate over a run is not bounded by this: {measured})",
             quell::export::fmt_shift(shift)
         )
     };

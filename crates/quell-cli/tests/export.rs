@@ -90,6 +90,20 @@ fn f32_export_uses_float() {
     assert!(o.status.success(), "{}", stderr(&o));
     let header = std::fs::read_to_string(dir.join("quell_controller.h")).unwrap();
     assert!(header.contains("const float y[QUELL_M]") && header.contains("--precision f32"));
+    // A scenario whose sampled runs are f32 (simulation.precision) exports f32 unless the flag says
+    // otherwise: it had exported double, unlike the runs that measured it.
+    let text = std::fs::read_to_string(example("paper-sampled.toml")).unwrap();
+    let f32_file = dir.join("f32.toml");
+    std::fs::write(&f32_file, text.replacen("[simulation]\n", "[simulation]\nprecision = \"f32\"\n", 1)).unwrap();
+    for (flag, float) in [(None, true), (Some("f64"), false)] {
+        let sub = dir.join(format!("{flag:?}"));
+        let mut args = vec!["export", f32_file.to_str().unwrap(), "--out", sub.to_str().unwrap()];
+        args.extend(flag.map(|f| ["--precision", f]).into_iter().flatten());
+        let o = quell(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let header = std::fs::read_to_string(sub.join("quell_controller.h")).unwrap();
+        assert_eq!(header.contains("const float y[QUELL_M]"), float, "{flag:?}");
+    }
 }
 
 #[test]

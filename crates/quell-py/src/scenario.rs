@@ -366,8 +366,19 @@ fn poles_value(list: Vec<quell::nalgebra::Complex<f64>>, key: &str, py: Python<'
 }
 
 /// `Scenario`'s own keywords besides the design's.
-const SCENARIO_KEYWORDS: [&str; 10] =
-    ["name", "t_end", "output_step", "rtol", "atol", "sample_time", "method", "noise", "truth", "actuator"];
+const SCENARIO_KEYWORDS: [&str; 11] = [
+    "name",
+    "t_end",
+    "output_step",
+    "rtol",
+    "atol",
+    "sample_time",
+    "method",
+    "precision",
+    "noise",
+    "truth",
+    "actuator",
+];
 
 /// The `[design]` table from keyword arguments: pole lists in the file's form, the rest as values;
 /// a keyword that is no design key is refused naming the nearest keyword.
@@ -489,6 +500,8 @@ struct Options<'a, 'py> {
     /// t_end, output_step, rtol, atol, sample_time.
     numbers: [Option<&'a Bound<'py, PyAny>>; 5],
     method: Option<&'a Bound<'py, PyAny>>,
+    /// The discrete controller's arithmetic, "f64" or "f32" (`[simulation] precision`).
+    precision: Option<&'a Bound<'py, PyAny>>,
     noise: Option<&'a Bound<'py, PyAny>>,
     truth: Option<&'a Bound<'py, PyAny>>,
     actuator: Option<&'a Bound<'py, PyAny>>,
@@ -504,7 +517,7 @@ fn scenario_document(
     design: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Table> {
     let plant = plant_arg(plant, "plant")?;
-    let Options { name, numbers, method, noise, truth, actuator } = options;
+    let Options { name, numbers, method, precision, noise, truth, actuator } = options;
     let mut doc = Table::new();
     if let Some(name) = name.filter(|n| !n.is_none()) {
         let text: String = name.extract().map_err(|_| type_error("name", "a str", name))?;
@@ -528,6 +541,10 @@ fn scenario_document(
     }
     let mut sim = Table::new();
     write_simulation(&mut sim, *numbers, *method)?;
+    if let Some(p) = precision.filter(|p| !p.is_none()) {
+        let name: String = p.extract().map_err(|_| type_error("precision", "a str: \"f64\" or \"f32\"", p))?;
+        sim.insert("precision".into(), Value::String(name));
+    }
     doc.insert("simulation".into(), Value::Table(sim));
     if let Some(n) = noise.filter(|n| !n.is_none()) {
         if !n.is_instance_of::<PyDict>() {
@@ -566,7 +583,7 @@ fn sample_time_arg(sample_time: Option<&Bound<'_, PyAny>>) -> PyResult<Option<f6
 #[pymethods]
 impl PyScenario {
     #[new]
-    #[pyo3(signature = (plant, reference, disturbance=None, *, name=None, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, method=None, noise=None, truth=None, actuator=None, **design))]
+    #[pyo3(signature = (plant, reference, disturbance=None, *, name=None, t_end=None, output_step=None, rtol=None, atol=None, sample_time=None, method=None, precision=None, noise=None, truth=None, actuator=None, **design))]
     #[allow(clippy::too_many_arguments)]
     fn py_new(
         py: Python<'_>,
@@ -580,13 +597,14 @@ impl PyScenario {
         atol: Option<&Bound<'_, PyAny>>,
         sample_time: Option<&Bound<'_, PyAny>>,
         method: Option<&Bound<'_, PyAny>>,
+        precision: Option<&Bound<'_, PyAny>>,
         noise: Option<&Bound<'_, PyAny>>,
         truth: Option<&Bound<'_, PyAny>>,
         actuator: Option<&Bound<'_, PyAny>>,
         design: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
-        let options =
-            Options { name, numbers: [t_end, output_step, rtol, atol, sample_time], method, noise, truth, actuator };
+        let numbers = [t_end, output_step, rtol, atol, sample_time];
+        let options = Options { name, numbers, method, precision, noise, truth, actuator };
         let doc = scenario_document(py, plant, (reference, disturbance), &options, design)?;
         let inner = quell::Scenario::from_document(&doc).map_err(|e| values_error(py, &e))?;
         Ok(PyScenario { from_values: true, ..Self::new(inner) })
@@ -929,12 +947,13 @@ fn auto_document<'py>(
         }
     }
     let get = |k: &str| scenario.and_then(|d| d.get_item(k).ok().flatten());
-    let [name, t_end, output_step, rtol, atol, sample_time, method, noise, truth, actuator] =
+    let [name, t_end, output_step, rtol, atol, sample_time, method, precision, noise, truth, actuator] =
         SCENARIO_KEYWORDS.map(get);
     let options = Options {
         name: name.as_ref(),
         numbers: [t_end.as_ref(), output_step.as_ref(), rtol.as_ref(), atol.as_ref(), sample_time.as_ref()],
         method: method.as_ref(),
+        precision: precision.as_ref(),
         noise: noise.as_ref(),
         truth: truth.as_ref(),
         actuator: actuator.as_ref(),

@@ -209,6 +209,11 @@ fn stats_from(d: &Bound<'_, PyDict>) -> Option<RunStats> {
         Some(controller_steps) => RunStats::Sampled {
             controller_steps,
             sample_time: d.get_item("sample_time").ok().flatten()?.extract().ok()?,
+            // A pickle from before precisions were recorded is f64's.
+            precision: match d.get_item("precision").ok().flatten() {
+                Some(p) => Precision::from_name(&p.extract::<String>().ok()?)?,
+                None => Precision::F64,
+            },
         },
         None => RunStats::Continuous(Stats {
             steps: int("steps")?,
@@ -329,10 +334,11 @@ impl PySimResult {
                 d.set_item("switches", s.switches)?;
                 d.set_item("thrashed", s.thrashed)?;
             }
-            RunStats::Sampled { controller_steps, sample_time } => {
+            RunStats::Sampled { controller_steps, sample_time, precision } => {
                 d.set_item("loop", "sampled")?;
                 d.set_item("controller_steps", controller_steps)?;
                 d.set_item("sample_time", sample_time)?;
+                d.set_item("precision", precision.name())?;
             }
         }
         Ok(d)
@@ -668,7 +674,7 @@ fn precision_argument(py: Python<'_>, value: &Bound<'_, PyAny>, sampled: bool) -
 /// --------
 /// >>> r = quell.simulate(quell.paper_example(), t_end=2.0, sample_time=1e-3)
 /// >>> r.stats
-/// {'loop': 'sampled', 'controller_steps': 2001, 'sample_time': 0.001}
+/// {'loop': 'sampled', 'controller_steps': 2001, 'sample_time': 0.001, 'precision': 'f64'}
 /// >>> explicit = quell.simulate(quell.paper_example(), t_end=5.0, method="explicit")
 /// >>> imex = quell.simulate(quell.paper_example(), t_end=5.0, method="imex")
 /// >>> bool(np.abs(explicit.y - imex.y).max() < 1e-6)

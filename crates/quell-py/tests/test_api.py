@@ -136,7 +136,7 @@ def test_simulate_shapes_and_overrides(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # 1 ms is fine for the paper (T_s·ρ = 0.009)
         sampled = quell.simulate(s, t_end=10.0, sample_time=1e-3)
-    assert sampled.stats == {"loop": "sampled", "controller_steps": 10001, "sample_time": 1e-3}
+    assert sampled.stats == {"loop": "sampled", "controller_steps": 10001, "sample_time": 1e-3, "precision": "f64"}
     # A sample time coarse for the design (the paper's fastest rate: its filter pole −9) is a
     # UserWarning naming the argument, with the bound.
     with pytest.warns(UserWarning, match=r"^sample_time: T_s = 0.05 s is 0.45× the loop.*choose T_s ≤ 0.0222 s"):

@@ -41,3 +41,15 @@ def test_the_file_key_is_read_and_written():
     assert quell.simulate(s, t_end=2.0, continuous=True).stats["loop"] == "continuous"
     with pytest.raises(quell.ScenarioError, match="give simulation.sample_time too"):
         quell.Scenario.from_toml(text.replace("[simulation]\n", '[simulation]\nprecision = "f32"\n', 1))
+
+
+def test_the_scenario_keyword():
+    p = quell.paper_example()
+    s = quell.Scenario(p.plant, p.reference, p.disturbance, t_end=2.0, sample_time=1e-3, precision="f32",
+                       **p.design().choices)
+    assert s.simulation["precision"] == "f32"
+    r = quell.simulate(s)
+    assert r.stats["precision"] == "f32"
+    assert r == quell.simulate(s, precision="f32") != quell.simulate(s, precision="f64")
+    with pytest.raises(TypeError, match="precision"):
+        quell.Scenario(p.plant, p.reference, p.disturbance, sample_time=1e-3, precision=32, **p.design().choices)

@@ -1156,6 +1156,7 @@ fn sampled_start(doc: &toml::Table, targets: &Targets) -> Result<(Proposal, Desi
         if !crate::sim::is_coarse(t_s * rho) {
             break;
         }
+        halved_rho = rho;
         // The observer's poles alone first (they are the fastest the rules place), then the
         // channel poles with them: the first halving that lowers ρ enough is kept.
         let observer = Speed { observer: speed.observer / 2.0, mu: 1.0, ..speed };
@@ -1768,17 +1769,22 @@ fn ended(failed: &AutoError) -> String {
 }
 
 /// Advice on a first proposal (`design`) whose verifying run ended before t_end or departed from
-/// its continuous loop (`failed`). Where the proposal was slowed as far as the retries go, slower
-/// poles are not asked for again: a piezo stage told "give slower poles" after its poles had gone
+/// its continuous loop (`failed`). Where the proposal was slowed (`slowed`), slower poles are not
+/// asked for again: a piezo stage told "give slower poles" after its poles had gone
 /// to 1/128 of the rules' went round in a circle (helper tryout, 2026-12-07).
 fn ended_early(s: &Scenario, design: &Design, failed: &AutoError, slowed: bool) -> String {
     let unit = s.plant.time_unit;
     let why = match s.simulation.sample_time {
         Some(t_s) if slowed => {
             let rho = loop_rate(design, s.true_plant(), [&s.reference, &s.disturbance]);
-            let fine = crate::sim::fine_sample_time(design, rho, Some(s.simulation.output_step));
+            let shorter = if crate::sim::is_coarse(t_s * rho) {
+                let fine = crate::sim::fine_sample_time(design, rho, Some(s.simulation.output_step));
+                format!("a shorter simulation.sample_time is what remains ({fine}: a bound the sampled loop needs, not one that suffices)")
+            } else {
+                format!("T_s·ρ ≤ {COARSE_SAMPLE} is a bound the sampled loop needs, not one that suffices: a shorter simulation.sample_time (half of it, say) is what remains")
+            };
             format!(
-                "its poles were slowed as far as the retries go and its loop still runs at T_s·ρ = {:.2} (ρ = {rho:.3e}/{unit}, set there by the plant's eigenvalues, the signals' frequencies and their filters as much as by the poles): a shorter simulation.sample_time is what remains ({fine}: a bound the sampled loop needs, not one that suffices); where that fails too, design the continuous loop (no sample time) and judge a sampled run by its own tail and effort, or track fewer or slower harmonics (docs/tuning.md, a sampled-data scenario)",
+                "after its poles were slowed, its loop at the sample time {t_s} {unit} runs at T_s·ρ = {:.2} (ρ = {rho:.3e}/{unit}, set there by the plant's eigenvalues, the signals' frequencies and their filters as much as by the poles): {shorter}; where that fails too, design the continuous loop (no sample time) and judge a sampled run by its own tail and effort, or track fewer or slower harmonics (docs/tuning.md, a sampled-data scenario)",
                 t_s * rho
             )
         }

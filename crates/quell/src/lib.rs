@@ -261,12 +261,12 @@
 //! written in code ([`DesignSpec`], [`ObserverChoice`]) rather than read from a file, each
 //! module's error ([`PlantError`], [`DesignError`], [`ControllerError`], [`ScenarioError`]), pole
 //! placement ([`place()`], [`PlaceError`]), and how quell writes a number in its messages
-//! ([`fmt_number`], [`fmt_complex`], [`fmt_complex_list`]). Matrices and complex numbers are
+//! ([`fmt_number`], [`fmt_complex`], [`fmt_complex_list`], [`fmt_eigenvalues`]). Matrices and complex numbers are
 //! [`nalgebra`]'s, re-exported so that a caller's version always matches.
 //!
 //! ```
 //! use quell::nalgebra::{dmatrix, Complex};
-//! use quell::{fmt_complex_list, fmt_number, place, DesignSpec, Design, ObserverChoice, Plant, PlaceError};
+//! use quell::{fmt_complex_list, fmt_eigenvalues, fmt_number, place, DesignSpec, Design, ObserverChoice, Plant, PlaceError};
 //!
 //! // The double integrator x1' = x2, x2' = u: K = [2, 3] puts eig(A − BK) at −1 and −2, the roots
 //! // of s² + 3s + 2 = s² + k₂s + k₁.
@@ -296,6 +296,8 @@
 //! assert_eq!(design.sigma(), vec![1]);
 //! assert_eq!(fmt_complex_list(design.observer_eigenvalues()), "-5.000000");
 //! assert_eq!((fmt_number(0.25), fmt_number(1e300)), ("0.250000".to_string(), "1.000000e300".to_string()));
+//! // A computed double pole's rounding residue (2.3e-13i on −7539.8) is not printed.
+//! assert_eq!(fmt_eigenvalues(&[Complex::new(-7539.8, 2.3e-13)]), "-7539.800000");
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!

@@ -625,11 +625,12 @@ fn closed_loop_with_the_c_controller_and_f32_tail_bounds() {
 }
 
 /// The f32 emulation of a sampled run (`simulation.precision = "f32"`: constants, inputs and states
-/// rounded to float, each step's arithmetic in double) departs from the f64 run about as far as the
-/// compiled f32 C does in the same loop, in y and in u_f: within a factor of 4 either way, on the
-/// paper's example (about 5e-5 of the peaks) and on the disk servo of `tests/data` (about 1.5e-3 of
-/// u_f's peak). The factor: the emulation leaves each operation's own rounding out, which is of the
-/// order of the states' (the C departed 0.8–2.6× as far on five plants).
+/// rounded to float, the observers' update and u_f computed in float, the adaptive law's operations
+/// in double) departs from the f64 run about as far as the compiled f32 C does in the same loop, in
+/// y and in u_f: within a factor of 4 either way, on the paper's example (u_f about 2e-4 of its peak
+/// emulated, 8e-5 compiled) and on the disk servo of `tests/data` (18.8 % and 18.2 %). The factor:
+/// the emulation leaves the adaptive law's operations' own rounding out (the C departed 0.4–2.1× as
+/// far on six plants, docs/deployment.md).
 #[test]
 fn the_emulated_f32_loop_departs_as_far_as_the_compiled_f32_c() {
     let go = |_| std::ops::ControlFlow::Continue(());

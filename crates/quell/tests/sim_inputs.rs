@@ -386,7 +386,10 @@ fn each_loop_reports_its_own_statistics() {
     let (g, w) = (&s.reference, &s.disturbance);
     let r = Run::new(&d, g, w, RunSettings::sampled(10.0, 0.1, 1e-3)).simulate(go).unwrap();
     // Samples k = 0, …, 10,000.
-    assert_eq!(r.stats, RunStats::Sampled { controller_steps: 10_001, sample_time: 1e-3 });
+    assert_eq!(
+        r.stats,
+        RunStats::Sampled { controller_steps: 10_001, sample_time: 1e-3, precision: quell::controller::Precision::F64 }
+    );
     let r = Run::new(&d, g, w, RunSettings::continuous(10.0, 0.1, 1e-9, 1e-9)).simulate(go).unwrap();
     let RunStats::Continuous(Stats { steps, rhs_evals: rhs_evaluations, breakpoints, .. }) = r.stats else {
         panic!("{:?}", r.stats)

@@ -182,6 +182,7 @@ class Scenario:
         atol: Optional[float] = None,
         sample_time: Optional[float] = None,
         method: Optional[Literal["auto", "explicit", "imex"]] = None,
+        precision: Optional[Literal["f64", "f32"]] = None,
         noise: Optional[Dict[str, Any]] = None,
         truth: Optional[Union[Plant, Dict[str, Any]]] = None,
         actuator: Optional[Dict[str, Sequence[float]]] = None,

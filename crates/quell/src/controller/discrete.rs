@@ -924,7 +924,11 @@ impl SinglePrecision {
                 to_f32(v);
             }
         }
-        Ok(&self.ctrl.u_f)
+        // Beyond float's range the rounding gives ±∞, which the f32 C's own check returns as 2.
+        match c.u_f.iter().chain(&c.u).find(|v| !v.is_finite()) {
+            Some(&value) => Err(ControllerError::StateNotFinite { value }),
+            None => Ok(&self.ctrl.u_f),
+        }
     }
 
     /// The controller, for its command and watched states.

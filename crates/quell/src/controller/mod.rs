@@ -28,7 +28,8 @@ use crate::linalg::companion;
 /// Floating-point arithmetic of the discrete controller: the Rust [`Controller`]'s, or a
 /// single-precision build's (the export's `Precision::F32`), which a sampled-data run emulates
 /// (`simulation.precision`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Precision {
     /// `double`: the Rust [`Controller`]'s arithmetic.
     #[default]

@@ -118,6 +118,12 @@ pub(crate) fn lower_offer(c: &crate::averaged::ChannelAverage, mu: f64, (rho, t_
     (relevant.is_finite() && wanted > fastest && needed * WORTH_CHANGING < mu).then_some(needed)
 }
 
+/// How [`stiff_advice`] offers [`lower_offer`]'s μ, which [`super::diagnose_run`] replaces where a
+/// run at it misses the tail bound.
+pub(crate) fn lower_offer_text(i: usize, mu: f64) -> String {
+    format!("lower design.mu[{i}] at most to about {} where max|u_f| allows", crate::settings::fmt_short(mu))
+}
+
 /// Channel i adapting at μ λ_max beyond [`STIFF_RATIO`] times the loop's rate ρ: what it means and
 /// the μ to lower it to where u_f is more than the actuator takes (the integrator handles the
 /// stiffness: a tryout's Wardle–Wood column design over 14,400 min, μ = [8.7, 3.5] against the
@@ -157,7 +163,7 @@ pub(crate) fn stiff_advice(
     } else {
         let needed = crate::settings::round_up_2(wanted);
         let keep = if lower_offer(c, mu, (rho, t_end)).is_some() {
-            format!("lower design.mu[{i}] at most to about {} where max|u_f| allows", fmt(needed))
+            lower_offer_text(i, needed)
         } else if needed > WORTH_CHANGING * mu && needed <= super::RAISE_AT_MOST * mu {
             format!("raise design.mu[{i}] toward {} where max|u_f| allows (or keep it)", fmt(needed))
         } else {

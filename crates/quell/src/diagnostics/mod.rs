@@ -206,11 +206,12 @@ pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) ->
 /// μ = 50 met its tail bound (6.8e-10) and was offered 0.045, where its tail was 4.5× its
 /// reference's peak (it needed about 4.5; helper tryout, 2026-12-07). Where the run completed
 /// within its bound, one side run with every offered μ checks the offers; a channel that misses its
-/// bound there is told to keep its μ, with what the check found. Not under noise or a true plant's
-/// actuator, whose tails are not the adaptation's alone.
+/// bound there, or a side run that diverges or fails, has the offer replaced by what the check
+/// found. Not under noise or a true plant's actuator, whose tails are not the adaptation's alone,
+/// nor where the side run ends on its step budget (no verdict).
 fn check_lower_offers(s: &crate::Scenario, design: &Design, result: &SimResult, d: &mut Diagnostics) {
     let completed = |r: &SimResult| matches!(r.outcome, None | Some(Outcome::Completed));
-    if !completed(result) || s.noise.is_some() {
+    if !completed(result) || s.noise.is_some() || s.actuator.is_some() {
         return;
     }
     let signals = [&s.reference, &s.disturbance];
@@ -230,18 +231,36 @@ fn check_lower_offers(s: &crate::Scenario, design: &Design, result: &SimResult, 
     }
     let Ok(at) = lowered.design() else { return };
     let Ok(r) = sampled::side_run(&lowered, &at) else { return };
-    let Some((from, t1)) = r.tail_from().zip(r.t.last().copied()).filter(|_| completed(&r)) else { return };
-    for (i, x) in offers.into_iter().filter(|&(i, _)| !tail_within_bound(&r, i)) {
-        let tail = r.max_abs_error(i, from, t1).unwrap_or(f64::NAN) / scale(&r, i);
-        let fmt = crate::settings::fmt_short;
-        let offered = format!("lower design.mu[{i}] at most to about {} where max|u_f| allows", fmt(x));
+    let fmt = crate::settings::fmt_short;
+    let together = if offers.len() > 1 { " (every offered μ at once)" } else { "" };
+    let found = |i: usize| -> Option<String> {
+        match &r.outcome {
+            None | Some(Outcome::Completed) if tail_within_bound(&r, i) => None,
+            None | Some(Outcome::Completed) => {
+                let (from, t1) = r.tail_from().zip(r.t.last().copied())?;
+                let tail = r.max_abs_error(i, from, t1)? / scale(&r, i);
+                let size = if tail >= 1.0 {
+                    format!("{}×", crate::settings::fmt_ratio(tail))
+                } else {
+                    format!("{tail:.1e} of")
+                };
+                Some(format!(
+                    "left channel {}'s tail at {size} its scale, beyond the {:.0} % bound",
+                    i + 1,
+                    100.0 * TAIL_BOUND
+                ))
+            }
+            Some(Outcome::TooManySteps { .. } | Outcome::Interrupted { .. }) => None,
+            Some(ended) => Some(format!("ended early ({ended})")),
+        }
+    };
+    for (i, x) in offers {
+        let Some(found) = found(i) else { continue };
         let checked = format!(
-            "keep design.mu[{i}] where max|u_f| allows: that μ is the averaged law's, and a run at μ = {} left channel {}'s tail at {} its scale, beyond the {:.0} % bound (the averaged law misjudges this stiff loop; lower μ only as far as runs show converging, a tuning over μ: docs/tuning.md)",
-            fmt(x),
-            i + 1,
-            if tail >= 1.0 { format!("{}×", crate::settings::fmt_ratio(tail)) } else { format!("{tail:.1e} of") },
-            100.0 * TAIL_BOUND
+            "keep design.mu[{i}] where max|u_f| allows: that μ is the averaged law's, and a run at μ = {}{together} {found} (the averaged law misjudges this stiff loop; lower μ only as far as runs show converging, a tuning over μ: docs/tuning.md)",
+            fmt(x)
         );
+        let offered = estimate::lower_offer_text(i, x);
         for line in &mut d.channels[i].advice {
             *line = line.replace(&offered, &checked);
         }
@@ -1643,7 +1662,12 @@ mod tests {
         let s = Scenario::from_toml(text).unwrap();
         let d = s.design().unwrap();
         let (m, q) = (2, d.q());
-        let mut r = SimResult::new(m, q, 3, RunStats::Sampled { controller_steps: 0, sample_time: 1e-3 });
+        let mut r = SimResult::new(
+            m,
+            q,
+            3,
+            RunStats::Sampled { controller_steps: 0, sample_time: 1e-3, precision: Default::default() },
+        );
         let zeros = vec![0.0; m * q];
         for k in 0..=1000 {
             let t = k as f64 * span / 1000.0;

@@ -263,15 +263,21 @@ pub fn departures(sampled: &SimResult, continuous: &SimResult) -> Option<Vec<Cha
 /// operations: compiled f32 C in the same loops departed 0.4–2.1× as far (the paper's example, a
 /// disk servo, a PMSM, a flexible satellite, a piezo stage, a two-link arm; `tests/export_c.rs`).
 pub fn precision_lines(s: &crate::Scenario, design: &Design, result: &SimResult) -> Vec<String> {
-    if s.simulation.precision != crate::controller::Precision::F32 || !matches!(result.stats, RunStats::Sampled { .. })
-    {
-        return Vec::new();
-    }
+    use crate::controller::Precision;
+    let RunStats::Sampled { precision: Precision::F32, .. } = result.stats else { return Vec::new() };
     let f64_scenario = crate::Scenario {
-        simulation: crate::scenario::Simulation { precision: crate::controller::Precision::F64, ..s.simulation },
+        simulation: crate::scenario::Simulation { precision: Precision::F64, ..s.simulation },
         ..s.clone()
     };
     let Ok(reference) = side_run(&f64_scenario, design) else { return Vec::new() };
+    let what = "precision f32 (emulated: the observers' products and u_f in float, constants, inputs and states rounded to float)";
+    let ended = |r: &SimResult| !matches!(r.outcome, None | Some(Outcome::Completed));
+    if ended(result) && !ended(&reference) {
+        let how = result.outcome.as_ref().map_or(String::new(), |o| o.to_string());
+        return vec![format!(
+            "{what}: the f32 loop ended early ({how}) where the same run in f64 completes: export in f64"
+        )];
+    }
     let m = result.m;
     let rows = common_rows(&result.t, &reference.t);
     let share = |of: fn(&SimResult) -> &Vec<f64>, i: usize| {
@@ -290,11 +296,8 @@ pub fn precision_lines(s: &crate::Scenario, design: &Design, result: &SimResult)
         .enumerate()
         .map(|(i, (y, uf))| format!("y[{}] by {y:.1e} of its peak, u_f[{}] by {uf:.1e}", i + 1, i + 1))
         .collect();
-    let ended = |r: &SimResult| !matches!(r.outcome, None | Some(Outcome::Completed));
     let worst = shares.iter().map(|&(y, uf)| y.max(uf)).fold(0.0, f64::max);
-    let verdict = if ended(result) && !ended(&reference) {
-        "; the f32 loop ended early where the f64 one completes: export in f64".to_string()
-    } else if worst > F32_DEPARTURE || worst.is_nan() {
+    let verdict = if worst > F32_DEPARTURE || worst.is_nan() {
         format!(
             "; beyond {} of a peak: export in f64, or choose poles nearer the plant's own (the design report's κ₂)",
             percent(F32_DEPARTURE)
@@ -303,7 +306,7 @@ pub fn precision_lines(s: &crate::Scenario, design: &Design, result: &SimResult)
         String::new()
     };
     vec![format!(
-        "precision f32 (emulated: the observers' products and u_f in float, constants, inputs and states rounded to float): against the same run in f64, {}{verdict}; compiled f32 builds departed 0.4–2.1× as far as this emulation in the loops measured (docs/deployment.md)",
+        "{what}: against the same run in f64, {}{verdict}; compiled f32 builds departed 0.4–2.1× as far as this emulation in the loops measured (docs/deployment.md)",
         listed.join("; ")
     )]
 }

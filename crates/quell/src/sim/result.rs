@@ -116,8 +116,10 @@ impl Outcome {
 pub enum RunStats {
     /// The continuous loop: the delay-equation integrator's statistics.
     Continuous(Stats),
-    /// The sampled-data loop: controller steps taken, at the sample time.
-    Sampled { controller_steps: usize, sample_time: f64 },
+    /// The sampled-data loop: controller steps taken, at the sample time, in the run's precision
+    /// ([`super::RunSettings::precision`]; a controller given by [`super::Run::controller`] is
+    /// recorded as the settings say).
+    Sampled { controller_steps: usize, sample_time: f64, precision: crate::controller::Precision },
 }
 
 impl RunStats {
@@ -518,7 +520,12 @@ mod tests {
 
     #[test]
     fn max_abs_error_is_none_for_an_empty_window_and_nan_propagates() {
-        let mut r = SimResult::new(1, 1, 1, RunStats::Sampled { controller_steps: 0, sample_time: 0.1 });
+        let mut r = SimResult::new(
+            1,
+            1,
+            1,
+            RunStats::Sampled { controller_steps: 0, sample_time: 0.1, precision: Default::default() },
+        );
         let push = |r: &mut SimResult, t: f64, y: f64| {
             r.push(&Sample { t, y: &[y], g: &[1.0], u: &[0.0], u_f: &[0.0], eta: &[0.0], states: None })
         };
@@ -537,7 +544,12 @@ mod tests {
 
     #[test]
     fn a_run_stopped_early_has_no_tail_and_no_settling_time() {
-        let mut r = SimResult::new(1, 1, 1, RunStats::Sampled { controller_steps: 0, sample_time: 1.0 });
+        let mut r = SimResult::new(
+            1,
+            1,
+            1,
+            RunStats::Sampled { controller_steps: 0, sample_time: 1.0, precision: Default::default() },
+        );
         for k in 0..=10 {
             // e = 0 from t = 0 on: settled at once, with a tail of zeros.
             r.push(&Sample { t: k as f64, y: &[1.0], g: &[1.0], u: &[2.0], u_f: &[-3.0], eta: &[0.0], states: None });
@@ -570,7 +582,8 @@ mod tests {
             }
             r.commands_held()
         };
-        let sampled = |sample_time| RunStats::Sampled { controller_steps: 0, sample_time };
+        let sampled =
+            |sample_time| RunStats::Sampled { controller_steps: 0, sample_time, precision: Default::default() };
         assert!(rows(sampled(0.1), 0.1), "a row per sample");
         assert!(rows(sampled(0.5), 0.1), "five rows per sample");
         assert!(!rows(sampled(0.001), 0.1), "a hundred samples per row: a row is a point sample");
@@ -581,7 +594,12 @@ mod tests {
     fn summary_shows_a_nan_in_the_error_or_the_input() {
         // Two channels; channel 0's error is NaN at t = 9.5 (in the last 10 %), channel 1's input
         // is NaN at t = 0 (outside the tail, but max |u| is over the whole run).
-        let mut r = SimResult::new(2, 1, 1, RunStats::Sampled { controller_steps: 0, sample_time: 0.5 });
+        let mut r = SimResult::new(
+            2,
+            1,
+            1,
+            RunStats::Sampled { controller_steps: 0, sample_time: 0.5, precision: Default::default() },
+        );
         for k in 0..=20 {
             let t = 0.5 * k as f64;
             let y0 = if k == 19 { f64::NAN } else { 1.0 };

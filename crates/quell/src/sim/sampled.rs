@@ -13,7 +13,7 @@ use super::noise::Gaussian;
 use super::result::{Outcome, RunStats, Sample, SimResult};
 use super::{check_run, Run, SimError, PROGRESS_EVERY};
 use crate::controller::discrete::{self, MAX_DELAY_SAMPLES};
-use crate::controller::{mat_vec, Controller, ControllerError, Precision, SinglePrecision};
+use crate::controller::{mat_vec, Controller, ControllerError, Precision, SinglePrecision, MAX_MEASUREMENT};
 use crate::design::Design;
 use crate::linalg::zoh_unchecked;
 use crate::plant::Plant;
@@ -160,6 +160,11 @@ pub trait SampledController {
     fn command(&self) -> &[f64];
     /// ξ̂, x̂ and η̂ after the last step (`x` is left empty: the loop fills in the plant's).
     fn watched(&self) -> Watched<'_>;
+    /// The largest |y_i|, |g_i| `step` takes ([`MAX_MEASUREMENT`] unless the controller says less):
+    /// a run beyond it ends as diverged, naming the bound where it is below that.
+    fn input_bound(&self) -> f64 {
+        MAX_MEASUREMENT
+    }
 }
 
 impl SampledController for SinglePrecision {
@@ -171,6 +176,9 @@ impl SampledController for SinglePrecision {
     }
     fn watched(&self) -> Watched<'_> {
         self.controller().watched()
+    }
+    fn input_bound(&self) -> f64 {
+        Precision::F32.input_bound()
     }
 }
 
@@ -660,9 +668,14 @@ fn step_controller<'c, C: SampledController + ?Sized>(
     g: &[f64],
     t: f64,
 ) -> Result<Result<&'c [f64], Outcome>, SimError> {
+    // An f32 controller's ±1e12 is far below what a loop diverging reaches: named (a reference of
+    // 2e12 had read as a divergence at t = 0).
+    let bound = ctrl.input_bound();
     match ctrl.step(y, g) {
         Err(ControllerError::InputOutOfRange { name, index, value }) => {
-            Ok(Err(Outcome::Diverged { t, signal: format!("{name}{} (controller input)", index + 1), value }))
+            let beyond =
+                if bound < MAX_MEASUREMENT { format!(", beyond its bound ±{bound:e}") } else { String::new() };
+            Ok(Err(Outcome::Diverged { t, signal: format!("{name}{} (controller input{beyond})", index + 1), value }))
         }
         Err(ControllerError::StateNotFinite { value }) => {
             Ok(Err(Outcome::Diverged { t, signal: "u_f (controller output)".to_string(), value }))
@@ -682,7 +695,8 @@ fn sampled_loop<C: SampledController + ?Sized>(
     let settings = &run.settings;
     let mut plant = PlantSide::new(run, T)?;
     let n = run.truth.n();
-    let stats = |controller_steps| RunStats::Sampled { controller_steps, sample_time: T };
+    let precision = settings.precision;
+    let stats = |controller_steps| RunStats::Sampled { controller_steps, sample_time: T, precision };
     let mut result = SimResult::new(run.truth.m(), run.design.q(), n, stats(0));
     result.time_unit = run.design.plant().time_unit;
     // x̂(k) at the rows (read before the step moves it to x̂(k + 1)): recorded with the states, and

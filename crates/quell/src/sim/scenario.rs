@@ -66,7 +66,7 @@ mod tests {
         // A sample time in [simulation] (here through the override) selects the sampled-data loop.
         let sampled = run(&nominal, &sampled_at(&nominal, 0.01));
         assert!(
-            matches!(sampled.stats, RunStats::Sampled { controller_steps: 201, sample_time } if sample_time == 0.01)
+            matches!(sampled.stats, RunStats::Sampled { controller_steps: 201, sample_time, .. } if sample_time == 0.01)
         );
         // [truth] changes the simulated plant: x0 = [1, 0, 0] moves y(0) = C x0 + Q ω(0) by C[:, 0] = [2, 2].
         let truth = scenario("[truth]\nx0 = [1.0, 0.0, 0.0]");

@@ -881,6 +881,12 @@ fn read_grid(doc: &toml::Table) -> Result<Vec<GridAxis>, StudyError> {
                 "the integrator is not a grid key: grid values are numbers, and runs.csv compares designs and plants, not solvers; run the study once per method with [simulation] method = \"explicit\" or \"imex\"",
             ));
         }
+        if path.to_string() == "simulation.precision" {
+            return Err(err(
+                &at,
+                "the precision is not a grid key: grid values are numbers; run the study once per precision with [simulation] precision = \"f32\" (a sampled-data study's runs then compute as an f32 build would)",
+            ));
+        }
         let values = match values {
             toml::Value::Array(v) if v.is_empty() => return Err(err(
                 &at,

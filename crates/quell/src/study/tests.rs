@@ -60,6 +60,7 @@ fn study_mistakes_name_their_key() {
         ("[runaway]\npaek = 50", "runaway.paek: unknown key (did you mean `peak`?); valid keys in [runaway]: peak, steps"),
         ("scenario = 3", "scenario: expected the scenario file's path (a string) or a scenario table, found an integer"),
         ("scenario = \"/nonexistent/x.toml\"", "scenario: cannot read the scenario file \"/nonexistent/x.toml\" (No such file or directory (os error 2))"),
+        ("[grid]\n\"simulation.precision\" = [\"f64\", \"f32\"]", "grid.\"simulation.precision\": the precision is not a grid key"),
         ("[grid]\n\"design.nu\" = [1.0]", "grid.\"design.nu\": design.nu is not a value of the scenario (design has no nu)"),
         // A misspelt key of a known table names the nearest (names of three letters or more).
         ("[grid]\n\"truth.delay[0]\" = [0.2]", "grid.\"truth.delay[0]\": truth.delay[0] is not a value of the scenario (the scenario has no truth) (did you mean truth.delays?); grid and Monte Carlo keys"),
