@@ -249,6 +249,8 @@ pub fn write_json(path: &Path, value: &impl serde::Serialize) -> io::Result<()> 
 /// A number as plain decimal where that is short (`{}`), scientific otherwise (`{:e}`); always
 /// round-trips. The thresholds of `quell::study::csv_number`, written faster ([`decimal`]).
 fn push_num(out: &mut Vec<u8>, v: f64, buffer: &mut zmij::Buffer) {
+    // −0 (u = −η̂ᵀξ̂ at t = 0) is written 0.
+    let v = if v == 0.0 { 0.0 } else { v };
     let a = v.abs();
     if a == 0.0 || (1e-4..1e15).contains(&a) || !a.is_finite() {
         decimal::push_display(out, v, buffer)

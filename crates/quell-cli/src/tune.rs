@@ -77,7 +77,13 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
         .channels
         .iter()
         .filter(|c| c.chosen.is_none())
-        .map(|c| format!("channel {}: {}", c.channel + 1, c.why_none(spec, "tune.", study.u_max(c.channel))))
+        .map(|c| {
+            format!(
+                "channel {}: {}",
+                c.channel + 1,
+                c.why_none(spec, "tune.", (study.u_max(c.channel), study.steady_input_peak(c.channel)))
+            )
+        })
         .collect();
     if !none.is_empty() {
         return Err(Failure::Input(format!(

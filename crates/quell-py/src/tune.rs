@@ -171,7 +171,7 @@ fn warn_choices(py: Python<'_>, study: &study::Study, result: &study::TuneResult
             &format!(
                 "channel {}: {}; mu[{i}] is the scenario's, {} (feasible[{i}] is False; the curve is in .frame)",
                 i + 1,
-                c.why_none(spec, "", study.u_max(c.channel)),
+                c.why_none(spec, "", (study.u_max(c.channel), study.steady_input_peak(c.channel))),
                 result.mu[i]
             ),
         )?;

@@ -120,6 +120,9 @@ CASES = [
     ("method_unknown", edit(("atol = 1e-9\n", 'atol = 1e-9\nmethod = "imx"\n')), "simulation.method", None),
     ("method_named_as_the_enum", edit(("atol = 1e-9\n", 'atol = 1e-9\nmethod = "Implicit"\n')),
      "simulation.method", None),
+    ("precision_unknown", edit((SAMPLED, 'sample_time = 0.001\nprecision = "f16"')), "simulation.precision", None),
+    ("precision_without_a_sample_time", edit(("atol = 1e-9\n", 'atol = 1e-9\nprecision = "f32"\n')),
+     "simulation.precision", None),
     ("sample_time_not_positive", edit((SAMPLED, "sample_time = -0.001")), "simulation.sample_time", None),
     ("sample_time_too_many_steps", edit((SAMPLED, "sample_time = 1e-9")), "simulation.sample_time", None),
     # Python's remedy is the sample_time= argument (test_api), the file's the key.

@@ -679,6 +679,41 @@ fn the_actuator_limit_trades_pole_speed_for_thrust_on_the_supply_vessel() {
     println!("free peak {free_peak:e}; limited {:?}; impossible: {advice}", limited.verification.max_uf);
 }
 
+/// A limit below the steady state's own input is said to be so first, even where the closest
+/// candidate met its tails a hair under that input (the bicycle model's 0.02449 rad against the
+/// steady state's 0.02458 and a limit of 0.02: it had been told only to raise the limit or slow the
+/// loop). The steady input is recomputed here: u = B⁻¹((jωI − A) x − D w) per tone, y = x.
+#[test]
+fn a_limit_below_the_steady_input_is_said_first() {
+    let text = data("bicycle-4ws.toml");
+    let doc: toml::Table = text.parse().unwrap();
+    let matrix = |key: &str| {
+        let rows = doc["plant"][key].as_array().unwrap();
+        let row = |r: &toml::Value| r.as_array().unwrap().iter().map(|v| v.as_float().unwrap()).collect::<Vec<f64>>();
+        let rows: Vec<Vec<f64>> = rows.iter().map(row).collect();
+        DMatrix::from_fn(rows.len(), rows[0].len(), |i, j| rows[i][j])
+    };
+    let (A, B, D) = (&matrix("A"), &matrix("B"), &matrix("D"));
+    let inv = B.clone().try_inverse().unwrap();
+    // The wind's bias (x = 0 for y = g = 0 on v_y, r's reference has no bias) and its 1.5 rad/s
+    // tone, then the yaw-rate reference's 1.2566 rad/s tone with v_y = 0.
+    let dc = (&inv * (-(D * 500.0)))[(0, 0)].abs();
+    let wind = (&inv * (D * 300.0))[(0, 0)].abs();
+    let w = 1.2566;
+    let x = DMatrix::from_column_slice(2, 1, &[Complex::new(0.0, 0.0), Complex::new(0.1, 0.0)]);
+    let jw = DMatrix::from_diagonal_element(2, 2, Complex::new(0.0, w)) - A.map(|a| Complex::new(a, 0.0));
+    let yaw = (inv.map(|a| Complex::new(a, 0.0)) * (jw * x))[(0, 0)].norm();
+    let steady = dc + wind + yaw;
+    assert!((steady - 0.02458).abs() < 5e-6, "{steady}");
+    let a = auto_design(&without_design(&text), &Targets { u_limit: vec![0.02], ..Targets::default() }).unwrap();
+    assert!(!a.verification.passed, "{:?}", a.verification);
+    let advice = &a.verification.advice[0];
+    assert!(
+        advice.starts_with("the steady state alone asks more than the actuator limit (u_f,1 0.02458 against 0.02"),
+        "{advice}"
+    );
+}
+
 /// A single-zone house (Bacher & Madsen 2011, hours, kW): without an actuator limit the
 /// relaxation once kept a candidate whose heater peaked at 3.8 MW (the first proposal's 2.6 kW)
 /// with the sensor 3,500 °C off, for 12 % fewer steps. Now no candidate beyond

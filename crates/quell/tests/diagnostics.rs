@@ -1269,7 +1269,7 @@ fn an_f32_run_is_measured_against_the_same_run_in_f64() {
                 .split(&format!("u_f[{}] by ", i + 1))
                 .nth(1)
                 .unwrap()
-                .split([';', ' '])
+                .split([';', ',', ' '])
                 .next()
                 .unwrap()
                 .parse()
@@ -1319,4 +1319,53 @@ fn an_offer_to_lower_a_stiff_mu_is_checked_by_a_run() {
         let kept = format!("keep design.mu[{i}] where max|u_f| allows: that μ is the averaged law's, and a run at μ = {mu} (every offered μ at once) left channel {}'s tail at", i + 1);
         assert!(line.contains(&kept) && !line.contains("at most to about"), "{line}");
     }
+}
+
+/// Rounding moves η̂ along directions of Ω̄ the signals do not excite, where nothing pulls it back:
+/// the turbofan of `tests/data` sampled at 10 ms in f32 has η̂₂ 3× its f64 peak away by 120 s and
+/// growing (recomputed here from the two runs), which the check names as a drift with "export in
+/// f64", judging the rest of the advice on the f64 run (it had been told "the error grows: a model
+/// error or a too large μ"); at 1 ms its f32 loop diverges at 96 s where f64 completes.
+#[test]
+fn an_f32_run_whose_parameters_drift_is_told_so_and_advised_on_f64() {
+    let path = format!("{}/tests/data/two-spool-turbofan.toml", env!("CARGO_MANIFEST_DIR"));
+    let mut s = Scenario::from_path(std::path::Path::new(&path)).unwrap();
+    let d = s.design().unwrap();
+    let go = |_| ControlFlow::Continue(());
+    s.simulation.sample_time = Some(0.01);
+    let double = Run::of(&s, &d).simulate(go).unwrap();
+    s.simulation.precision = quell::controller::Precision::F32;
+    let single = Run::of(&s, &d).simulate(go).unwrap();
+    // η̂₂'s departure over the run and its growth, from the rows.
+    let (m, q) = (single.m, single.q);
+    let dev = |k: usize| {
+        (0..q).map(|j| (single.eta[k * m * q + q + j] - double.eta[k * m * q + q + j]).powi(2)).sum::<f64>().sqrt()
+    };
+    let norm = |k: usize| (0..q).map(|j| double.eta[k * m * q + q + j].powi(2)).sum::<f64>().sqrt();
+    let rows = single.t.len();
+    let peak = (0..rows).map(norm).fold(0.0, f64::max);
+    let tenth = rows / 10;
+    let last = (rows - tenth..rows).map(dev).fold(0.0, f64::max);
+    let before = (rows - 2 * tenth..rows - tenth).map(dev).fold(0.0, f64::max);
+    assert!(last / peak > 1.0 && last > before, "η̂₂ departs {} of its peak, {last} against {before}", last / peak);
+    let advice = quell::diagnostics::diagnose_run(&s, &d, &single).advice;
+    let line = &advice[0];
+    assert!(line.starts_with("precision f32") && line.contains("η̂_2 (") && line.contains("export in f64"), "{line}");
+    assert!(
+        advice
+            .iter()
+            .chain(quell::diagnostics::diagnose_run(&s, &d, &single).channels.iter().flat_map(|c| &c.advice))
+            .all(|a| !a.contains("grows over the tail") && !a.contains("the sampling makes it")),
+        "{advice:?}"
+    );
+    s.simulation.sample_time = Some(0.001);
+    let diverged = Run::of(&s, &d).simulate(go).unwrap();
+    assert!(matches!(diverged.outcome, Some(quell::sim::Outcome::Diverged { .. })), "{:?}", diverged.outcome);
+    let advice = quell::diagnostics::diagnose_run(&s, &d, &diverged).advice;
+    assert!(
+        advice[0].contains("the f32 loop ended early (diverged at t = ") && advice[0].ends_with("export in f64"),
+        "{}",
+        advice[0]
+    );
+    assert!(advice.iter().all(|a| !a.contains("the sampling makes it")), "{advice:?}");
 }

@@ -145,6 +145,25 @@ pub struct Diagnostics {
 /// The diagnostics of `result`, a run of scenario `s` with `design` ([`diagnose`]), led by
 /// [`model_error_advice`] when the run ended early on a true plant that differs from the model.
 pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) -> Diagnostics {
+    let Some(check) = sampled::precision_check(s, design, result) else {
+        return diagnose_loop(s, design, result, true);
+    };
+    // An f32 run that departs from its f64 run has the rest of its advice judged on that run: a
+    // turbofan whose f32 loop diverged had been told that the sampling made it and to redesign
+    // for the sample time, and a drifting one that μ or a model error grew its error.
+    let mut d = if check.flagged {
+        let simulation = crate::scenario::Simulation { precision: crate::controller::Precision::F64, ..s.simulation };
+        diagnose_loop(&crate::Scenario { simulation, ..s.clone() }, design, &check.reference, false)
+    } else {
+        diagnose_loop(s, design, result, false)
+    };
+    d.advice.insert(0, check.line);
+    d
+}
+
+/// [`diagnose_run`] of a run in the precision it was run in; with `cancellation`, the u_f
+/// cancellation's bound on the rounding (an f32 run measures it instead).
+fn diagnose_loop(s: &crate::Scenario, design: &Design, result: &SimResult, cancellation: bool) -> Diagnostics {
     // A tail that is the noise's: those channels' advice on the design is the noise-free run's
     // (an observer line that only the noise had brought on made a suspension worse when followed).
     // The noise-free run is made once, for this, the sampled comparison and the noise's effort.
@@ -187,12 +206,9 @@ pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) ->
     check_lower_offers(s, design, result, &mut d);
     d.advice.extend(loose_atol(s, result));
     d.advice.extend(noise::noise_effort(result, quiet.as_ref()));
-    // In an f32 run the departure measured replaces the cancellation's bound on it.
-    let precision = sampled::precision_lines(s, design, result);
-    if precision.is_empty() {
+    if cancellation {
         d.advice.extend(uf_cancellation(result));
     }
-    d.advice.extend(precision);
     // The comparison settles what the coarse-sample line asks for.
     if compared != sampled::Compared::Not {
         d.advice.retain(|a| !a.contains(COARSE_WORDS));

@@ -255,60 +255,123 @@ pub fn departures(sampled: &SimResult, continuous: &SimResult) -> Option<Vec<Cha
     Some((0..m).map(channel).collect())
 }
 
+/// What [`precision_check`] found: its line, whether the f32 loop departs enough for the rest of
+/// the advice to be the f64 run's, and that run.
+pub(crate) struct PrecisionCheck {
+    pub line: String,
+    pub flagged: bool,
+    pub reference: SimResult,
+}
+
 /// A sampled-data run in f32 (`simulation.precision = "f32"`, emulated) against the same run in
-/// f64: how far its y and u_f depart, per channel, relative to the f64 run's peaks, said always
-/// (the user asked for it), with the advice to export in f64 beyond [`F32_DEPARTURE`] or where
-/// the f32 loop ended early and the f64 one did not. The emulation ([`crate::sim::RunSettings::precision`])
+/// f64: how far its y, u_f and η̂ depart, per channel, relative to the f64 run's peaks, said always
+/// (the user asked for it). Flagged, with the advice to export in f64, beyond [`F32_DEPARTURE`],
+/// where the f32 loop ends early and the f64 one does not, or where η̂ drifts: rounding moves η̂
+/// along directions the signals do not excite (Ω̄'s null space, where nothing pulls it back), so
+/// its departure grows with the run (a turbofan's η̂₂ departed 3.3× its peak over 120 s, its f32
+/// loop diverging at 96 s at T_s = 1 ms and a haemodynamic model's after days, as their compiled
+/// f32 C did; helper tryout, 2026-12-07). The emulation ([`crate::sim::RunSettings::precision`])
 /// rounds the core's operations, the constants, inputs and states, not the adaptive law's
 /// operations: compiled f32 C in the same loops departed 0.4–2.1× as far (the paper's example, a
 /// disk servo, a PMSM, a flexible satellite, a piezo stage, a two-link arm; `tests/export_c.rs`).
-pub fn precision_lines(s: &crate::Scenario, design: &Design, result: &SimResult) -> Vec<String> {
+pub(crate) fn precision_check(s: &crate::Scenario, design: &Design, result: &SimResult) -> Option<PrecisionCheck> {
     use crate::controller::Precision;
-    let RunStats::Sampled { precision: Precision::F32, .. } = result.stats else { return Vec::new() };
+    let RunStats::Sampled { precision: Precision::F32, .. } = result.stats else { return None };
     let f64_scenario = crate::Scenario {
         simulation: crate::scenario::Simulation { precision: Precision::F64, ..s.simulation },
         ..s.clone()
     };
-    let Ok(reference) = side_run(&f64_scenario, design) else { return Vec::new() };
+    let reference = side_run(&f64_scenario, design).ok()?;
     let what = "precision f32 (emulated: the observers' products and u_f in float, constants, inputs and states rounded to float)";
     let ended = |r: &SimResult| !matches!(r.outcome, None | Some(Outcome::Completed));
     if ended(result) && !ended(&reference) {
         let how = result.outcome.as_ref().map_or(String::new(), |o| o.to_string());
-        return vec![format!(
-            "{what}: the f32 loop ended early ({how}) where the same run in f64 completes: export in f64"
-        )];
+        let line =
+            format!("{what}: the f32 loop ended early ({how}) where the same run in f64 completes: export in f64");
+        return Some(PrecisionCheck { line, flagged: true, reference });
     }
-    let m = result.m;
-    let rows = common_rows(&result.t, &reference.t);
-    let share = |of: fn(&SimResult) -> &Vec<f64>, i: usize| {
-        let (a, b) = (of(result), of(&reference));
-        let peak = rows.iter().fold(0.0f64, |p, &(_, j)| p.max(b[j * m + i].abs()));
-        let gap = rows.iter().fold(0.0f64, |g, &(k, j)| g.max((a[k * m + i] - b[j * m + i]).abs()));
-        if gap == 0.0 {
-            0.0
-        } else {
-            gap / peak
-        }
-    };
-    let shares: Vec<(f64, f64)> = (0..m).map(|i| (share(|r| &r.y, i), share(|r| &r.u_f, i))).collect();
-    let listed: Vec<String> = shares
+    let departures = precision_departures(result, &reference);
+    let listed: Vec<String> = departures
         .iter()
         .enumerate()
-        .map(|(i, (y, uf))| format!("y[{}] by {y:.1e} of its peak, u_f[{}] by {uf:.1e}", i + 1, i + 1))
+        .map(|(i, d)| {
+            format!(
+                "y[{}] by {:.1e} of its peak, u_f[{}] by {:.1e}, η̂_{} by {:.1e}",
+                i + 1,
+                d.y,
+                i + 1,
+                d.uf,
+                i + 1,
+                d.eta
+            )
+        })
         .collect();
-    let worst = shares.iter().map(|&(y, uf)| y.max(uf)).fold(0.0, f64::max);
-    let verdict = if worst > F32_DEPARTURE || worst.is_nan() {
-        format!(
-            "; beyond {} of a peak: export in f64, or choose poles nearer the plant's own (the design report's κ₂)",
-            percent(F32_DEPARTURE)
-        )
+    let beyond = |x: f64| x > F32_DEPARTURE || x.is_nan();
+    let drifting: Vec<String> = (departures.iter().enumerate())
+        .filter(|(_, d)| beyond(d.eta) && d.growth > 1.0)
+        .map(|(i, d)| format!("η̂_{} ({}× over the last tenth of the run)", i + 1, crate::settings::fmt_ratio(d.growth)))
+        .collect();
+    let verdict = if !drifting.is_empty() {
+        let verb = if drifting.len() == 1 { "drifts" } else { "drift" };
+        format!("; {} {verb}: rounding moves η̂ along directions the signals do not excite (Ω̄'s null space, where nothing pulls it back), so a longer run departs further and can diverge (a turbofan's f32 loop did at 96 s): export in f64 (the other advice is the f64 run's)", drifting.join(", "))
+    } else if departures.iter().any(|d| beyond(d.y) || beyond(d.uf)) {
+        format!("; beyond {} of a peak: export in f64, or choose poles nearer the plant's own (the design report's κ₂; the other advice is the f64 run's)", percent(F32_DEPARTURE))
     } else {
         String::new()
     };
-    vec![format!(
+    let line = format!(
         "{what}: against the same run in f64, {}{verdict}; compiled f32 builds departed 0.4–2.1× as far as this emulation in the loops measured (docs/deployment.md)",
         listed.join("; ")
-    )]
+    );
+    Some(PrecisionCheck { line, flagged: !verdict.is_empty(), reference })
+}
+
+/// One channel's departure of an f32 run from its f64 run ([`precision_check`]), each relative to
+/// the f64 run's peak over their common rows; `growth` is η̂'s largest departure over the last
+/// tenth of the rows against the tenth before.
+struct PrecisionDeparture {
+    y: f64,
+    uf: f64,
+    eta: f64,
+    growth: f64,
+}
+
+fn precision_departures(single: &SimResult, double: &SimResult) -> Vec<PrecisionDeparture> {
+    let (m, q) = (single.m, single.q);
+    let rows = common_rows(&single.t, &double.t);
+    // The largest gap over `rows` of a block of `w` columns at `at` (rows of `width`), its norm,
+    // relative to the f64 block's largest norm.
+    let gap = |of: fn(&SimResult) -> &Vec<f64>, (width, at, w): (usize, usize, usize), rows: &[(usize, usize)]| {
+        let (a, b) = (of(single), of(double));
+        let block = |v: &[f64], k: usize| v[k * width + at..k * width + at + w].to_vec();
+        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let peak = rows.iter().fold(0.0f64, |p, &(_, j)| p.max(norm(&block(b, j))));
+        let dev = rows.iter().fold(0.0f64, |g, &(k, j)| {
+            let d: Vec<f64> = block(a, k).iter().zip(block(b, j)).map(|(x, y)| x - y).collect();
+            g.max(norm(&d))
+        });
+        if dev == 0.0 {
+            0.0
+        } else {
+            dev / peak
+        }
+    };
+    let tenth = (rows.len() / 10).max(1);
+    let (last, before) = (
+        &rows[rows.len().saturating_sub(tenth)..],
+        &rows[rows.len().saturating_sub(2 * tenth)..rows.len().saturating_sub(tenth)],
+    );
+    (0..m)
+        .map(|i| {
+            let eta = (m * q, i * q, q);
+            PrecisionDeparture {
+                y: gap(|r| &r.y, (m, i, 1), &rows),
+                uf: gap(|r| &r.u_f, (m, i, 1), &rows),
+                eta: gap(|r| &r.eta, eta, &rows),
+                growth: gap(|r| &r.eta, eta, last) / gap(|r| &r.eta, eta, before),
+            }
+        })
+        .collect()
 }
 
 /// The longest of T_s/2, T_s/4, … ([`HALVINGS`] at most, within [`HALVING_STEPS`] in all) whose

@@ -671,6 +671,14 @@ impl Study {
         })
     }
 
+    /// The peak of the plant input u_f,i that the steady state y = g needs on the first grid
+    /// point's scenario ([`crate::diagnostics::steady_input`]), a bound no μ or poles lower; 0 where
+    /// that scenario cannot be read.
+    pub fn steady_input_peak(&self, i: usize) -> f64 {
+        let s = Scenario::from_document(&self.document(0, None)).ok();
+        s.and_then(|s| s.steady_input().peak.get(i).copied()).unwrap_or(0.0)
+    }
+
     /// The scenario's unit of time (`[plant] time_unit`, checked when the study was read).
     pub fn time_unit(&self) -> crate::settings::TimeUnit {
         let given = self.base.get("plant").and_then(|p| p.get("time_unit")).and_then(toml::Value::as_str);

@@ -38,6 +38,8 @@ pub fn runs_csv_bounds(meta: &StudyMeta) -> (usize, usize) {
 /// digits that read back to it, in plain decimal from 1e-4 to below 1e15 (and 0, inf, NaN), in
 /// exponent form outside (`{}` alone wrote μ = 1e20 as 21 digits and 1e-300 as 300 zeros).
 pub fn csv_number(v: f64) -> String {
+    // −0 is written 0.
+    let v = if v == 0.0 { 0.0 } else { v };
     let a = v.abs();
     if a == 0.0 || (1e-4..1e15).contains(&a) || !a.is_finite() {
         v.to_string()
@@ -322,6 +324,7 @@ mod tests {
     fn csv_numbers_are_short_and_read_back() {
         for (v, text) in [
             (0.0, "0"),
+            (-0.0, "0"),
             (0.5, "0.5"),
             (1e-4, "0.0001"),
             (9.9e-5, "9.9e-5"),

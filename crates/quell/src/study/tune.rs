@@ -223,8 +223,10 @@ impl TuneCurve {
     /// `clip`: the scenario's true actuator limit on this input ([`Study::u_max`], ∞ for none),
     /// which the message names as a likely cause (a run may never settle while clipped) where some
     /// run asked beyond it, or ended without figures to tell (a motor whose least demand, 19.3 V,
-    /// stayed under its 20 V drive had been told so as well).
-    pub fn why_none(&self, spec: &TuneSpec, prefix: &str, clip: f64) -> String {
+    /// stayed under its 20 V drive had been told so as well). `steady`: the peak of u_f,i the
+    /// steady state needs ([`Study::steady_input_peak`]); beyond `max_uf` no poles bring the
+    /// input under it, which the message says in place of slower poles.
+    pub fn why_none(&self, spec: &TuneSpec, prefix: &str, (clip, steady): (f64, f64)) -> String {
         let (i, c) = (self.channel, self.channel + 1);
         let failed = self.curve.iter().find(|p| p.outcome != Outcome::Completed);
         if let (Some(first), false) = (failed, self.curve.iter().any(|p| p.outcome == Outcome::Completed)) {
@@ -291,8 +293,15 @@ impl TuneCurve {
             } else {
                 String::new()
             };
+            // Beyond the steady state's own input no poles help (a bicycle model's steering, 0.02458
+            // rad for y = g against a limit of 0.02, had been told to slow its poles).
+            let slower = if steady > spec.max_uf[i] {
+                format!("the steady state alone asks max |u_f,{c}| = {} for y = g (the design report's steady-state section), whatever μ and the poles: ask less of the loop (smaller references or disturbances)", crate::settings::fmt_4(steady))
+            } else {
+                "slow the scenario's channel and observer poles (an automatic design with an actuator limit, u_limit, chooses poles within it)".to_string()
+            };
             return format!(
-                "no μ in {prefix}mu[{i}] completed with {}{reached}; raise {}, or slow the scenario's channel and observer poles (an automatic design with an actuator limit, u_limit, chooses poles within it){horizon}{clipping}",
+                "no μ in {prefix}mu[{i}] completed with {}{reached}; raise {}, or {slower}{horizon}{clipping}",
                 wanted.join(" and "),
                 flat_peaks.join(" and ")
             );
@@ -960,7 +969,7 @@ mod tests {
             points: 2,
             refine: 0,
         };
-        let why = curve.why_none(&spec, "tune.", f64::INFINITY);
+        let why = curve.why_none(&spec, "tune.", (f64::INFINITY, 0.0));
         assert!(
             why.contains("(the least max |u_f,1| of the runs with a finite settle_t is 3.226 (at μ = 10), above tune.max_uf[0] = 1)"),
             "{why}"
@@ -968,8 +977,10 @@ mod tests {
         assert!(!why.contains("truth.u_max"), "{why}");
         // Through a clipping actuator the clipping is named too (tune.csv had only "never settled"),
         // where a run asked beyond it: not under a limit above every demand (3.226 here).
-        assert!(curve.why_none(&spec, "tune.", 3.0).ends_with("a run of the scenario reports how often it clips"));
-        assert!(!curve.why_none(&spec, "tune.", 3.5).contains("truth.u_max"));
+        assert!(curve
+            .why_none(&spec, "tune.", (3.0, 0.0))
+            .ends_with("a run of the scenario reports how often it clips"));
+        assert!(!curve.why_none(&spec, "tune.", (3.5, 0.0)).contains("truth.u_max"));
         // The same max |u_f| at every μ (within 1 %): μ does not set it, so the bounds are not
         // what to widen.
         let flat = TuneCurve {
@@ -978,8 +989,11 @@ mod tests {
         };
         let spec = TuneSpec { max_uf: vec![0.05], ..spec };
         assert_eq!(
-            flat.why_none(&spec, "tune.", f64::INFINITY),
+            flat.why_none(&spec, "tune.", (f64::INFINITY, 0.0)),
             "no μ in tune.mu[0] completed with max |u_f,1| ≤ tune.max_uf[0] and a finite settle_t (max |u_f,1| is 0.07074 at every μ with a finite settle_t (from 10 to 100000), above tune.max_uf[0] = 0.05: the poles and the signals set it, not μ); raise tune.max_uf[0], or slow the scenario's channel and observer poles (an automatic design with an actuator limit, u_limit, chooses poles within it)"
         );
+        // A steady state beyond the limit is said instead of slower poles, which cannot help.
+        let steady = flat.why_none(&spec, "tune.", (f64::INFINITY, 0.0706));
+        assert!(steady.ends_with("raise tune.max_uf[0], or the steady state alone asks max |u_f,1| = 0.0706 for y = g (the design report's steady-state section), whatever μ and the poles: ask less of the loop (smaller references or disturbances)"), "{steady}");
     }
 }
