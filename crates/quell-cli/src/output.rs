@@ -22,10 +22,16 @@ pub fn write_failure(message: String, e: &io::Error) -> Failure {
     }
 }
 
-/// The files written within [`all_or_nothing`], staged until its work has succeeded.
-static BATCH: std::sync::Mutex<Option<Vec<Staged>>> = std::sync::Mutex::new(None);
+/// The directory of the [`all_or_nothing`] under way and the files written into it, staged until
+/// its work has succeeded. Files outside it are written at once: the unit tests of this binary run
+/// on threads of one process, and a test writing its own directory had its file staged into
+/// another test's batch, then missing.
+static BATCH: std::sync::Mutex<Option<(PathBuf, Vec<Staged>)>> = std::sync::Mutex::new(None);
 
-fn batch() -> std::sync::MutexGuard<'static, Option<Vec<Staged>>> {
+/// One [`all_or_nothing`] at a time (the command makes one; tests on several threads more).
+static ONE_BATCH: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn batch() -> std::sync::MutexGuard<'static, Option<(PathBuf, Vec<Staged>)>> {
     BATCH.lock().unwrap_or_else(|e| e.into_inner())
 }
 
@@ -34,11 +40,11 @@ fn batch() -> std::sync::MutexGuard<'static, Option<Vec<Staged>>> {
 pub fn write_atomic(path: &Path, contents: impl FnOnce(&mut dyn io::Write) -> io::Result<()>) -> io::Result<()> {
     let staged = Staged::write(path, contents)?;
     match batch().as_mut() {
-        Some(files) => {
+        Some((dir, files)) if path.starts_with(&*dir) => {
             files.push(staged);
             Ok(())
         }
-        None => staged.persist(),
+        _ => staged.persist(),
     }
 }
 
@@ -57,9 +63,10 @@ pub fn all_or_nothing(
     stale: impl Fn(&str) -> bool,
     work: impl FnOnce() -> io::Result<()>,
 ) -> io::Result<()> {
-    *batch() = Some(Vec::new());
+    let _one = ONE_BATCH.lock().unwrap_or_else(|e| e.into_inner());
+    *batch() = Some((dir.to_path_buf(), Vec::new()));
     let done = work();
-    let mut staged = batch().take().unwrap_or_default();
+    let mut staged = batch().take().map(|(_, files)| files).unwrap_or_default();
     done?;
     let written: Vec<PathBuf> = staged.iter().map(|s| s.path().to_path_buf()).collect();
     let mark = dir.join(last);
@@ -326,6 +333,7 @@ mod tests {
     /// finite, `{:e}` otherwise.
     fn signals_by_core_fmt(r: &SimResult) -> String {
         let num = |v: f64| {
+            let v = if v == 0.0 { 0.0 } else { v }; // −0 written 0
             let a = v.abs();
             if a == 0.0 || (1e-4..1e15).contains(&a) || !a.is_finite() {
                 format!("{v}")

@@ -281,27 +281,9 @@ impl TuneCurve {
             ""
         };
         if !flat_peaks.is_empty() {
-            // Runs whose objective was not finite (never settled) are not in the flat figure: a
-            // longer horizon may still admit one of them.
-            let unsettled = self.curve.iter().any(|p| p.figures.is_some_and(|f| !spec.objective.of(&f).is_finite()));
-            let horizon = if unsettled {
-                format!(
-                    ", or lengthen {}t_end (some μ did not reach a finite {})",
-                    if prefix.is_empty() { "" } else { "simulation." },
-                    spec.objective.name()
-                )
-            } else {
-                String::new()
-            };
-            // Beyond the steady state's own input no poles help (a bicycle model's steering, 0.02458
-            // rad for y = g against a limit of 0.02, had been told to slow its poles).
-            let slower = if steady > spec.max_uf[i] {
-                format!("the steady state alone asks max |u_f,{c}| = {} for y = g (the design report's steady-state section), whatever μ and the poles: ask less of the loop (smaller references or disturbances)", crate::settings::fmt_4(steady))
-            } else {
-                "slow the scenario's channel and observer poles (an automatic design with an actuator limit, u_limit, chooses poles within it)".to_string()
-            };
+            let remedy = self.flat_remedy(spec, prefix, steady);
             return format!(
-                "no μ in {prefix}mu[{i}] completed with {}{reached}; raise {}, or {slower}{horizon}{clipping}",
+                "no μ in {prefix}mu[{i}] completed with {}{reached}; raise {}, or {remedy}{clipping}",
                 wanted.join(" and "),
                 flat_peaks.join(" and ")
             );
@@ -781,6 +763,31 @@ pub fn tune(study: &Study, opts: &TuneOptions<'_>) -> Result<TuneResult, StudyEr
         within_limits,
         partial,
     })
+}
+
+impl TuneCurve {
+    /// What [`TuneCurve::why_none`] offers where a limit's figure is the same at every μ: slower
+    /// poles, or, beyond the steady state's own input `steady`, asking less of the loop (a bicycle
+    /// model's steering, 0.02458 rad for y = g against a limit of 0.02, had been told to slow its
+    /// poles); and a longer horizon where some μ never reached a finite objective (a longer one may
+    /// admit it).
+    fn flat_remedy(&self, spec: &TuneSpec, prefix: &str, steady: f64) -> String {
+        let (i, c) = (self.channel, self.channel + 1);
+        let slower = if steady > spec.max_uf[i] {
+            format!("the steady state alone asks max |u_f,{c}| = {} for y = g (the design report's steady-state section), whatever μ and the poles: ask less of the loop (smaller references or disturbances)", crate::settings::fmt_4(steady))
+        } else {
+            "slow the scenario's channel and observer poles (an automatic design with an actuator limit, u_limit, chooses poles within it)".to_string()
+        };
+        let unsettled = self.curve.iter().any(|p| p.figures.is_some_and(|f| !spec.objective.of(&f).is_finite()));
+        if !unsettled {
+            return slower;
+        }
+        format!(
+            "{slower}, or lengthen {}t_end (some μ did not reach a finite {})",
+            if prefix.is_empty() { "" } else { "simulation." },
+            spec.objective.name()
+        )
+    }
 }
 
 /// Peaks within this ratio over a tuning's runs are the same at every μ.
