@@ -103,7 +103,7 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
         let tails = if v.tail_max_e.iter().all(|e| e.is_finite()) {
             format!("tail max|e| {} against bounds {}", list(&v.tail_max_e), list(&v.bound))
         } else {
-            format!("its last run ended before t_end, with no tail to hold to the bounds {}", list(&v.bound))
+            format!("its last run ended before t_end or departed from its continuous loop (below), with no tail to hold to the bounds {}", list(&v.bound))
         };
         return Err(failure(format!(
             "the automatic design did not pass its verifying simulation ({tails}{}){}; nothing written; see docs/tuning.md",

@@ -1316,7 +1316,7 @@ fn an_offer_to_lower_a_stiff_mu_is_checked_by_a_run() {
     let advice = quell::diagnostics::diagnose_run(&s, &d, &r);
     for (i, mu) in [(0, "0.045"), (1, "0.043")] {
         let line = advice.channels[i].advice.iter().find(|a| a.contains("adapts at μ λ_max")).unwrap();
-        let kept = format!("keep design.mu[{i}] where max|u_f| allows: that μ is the averaged law's, and a run at μ = {mu} (every offered μ at once) left channel {}'s tail at", i + 1);
+        let kept = format!("keep design.mu[{i}] where max|u_f| allows: the μ the averaged law offers, {mu}, failed its check: a run at it (every offered μ at once) left channel {}'s tail at", i + 1);
         assert!(line.contains(&kept) && !line.contains("at most to about"), "{line}");
     }
 }

@@ -148,16 +148,26 @@ pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) ->
     let Some(check) = sampled::precision_check(s, design, result) else {
         return diagnose_loop(s, design, result, true);
     };
-    // An f32 run that departs from its f64 run has the rest of its advice judged on that run: a
+    if !check.flagged {
+        let mut d = diagnose_loop(s, design, result, false);
+        d.advice.insert(0, check.line);
+        return d;
+    }
+    // An f32 run that departs from its f64 run: its errors are the precision's, so its figures are
+    // given as they are and the advice on sampling, μ and the design is left to the f64 run (a
     // turbofan whose f32 loop diverged had been told that the sampling made it and to redesign
-    // for the sample time, and a drifting one that μ or a model error grew its error.
-    let mut d = if check.flagged {
-        let simulation = crate::scenario::Simulation { precision: crate::controller::Precision::F64, ..s.simulation };
-        diagnose_loop(&crate::Scenario { simulation, ..s.clone() }, design, &check.reference, false)
-    } else {
-        diagnose_loop(s, design, result, false)
-    };
-    d.advice.insert(0, check.line);
+    // for the sample time, a drifting one that μ or a model error grew its error).
+    let mut d = diagnose_with(design, [&s.reference, &s.disturbance], result, false);
+    let double = &check.reference;
+    for (i, c) in d.channels.iter_mut().enumerate() {
+        let tail = double.tail_from().zip(double.t.last()).and_then(|(from, &t1)| double.max_abs_error(i, from, t1));
+        c.advice = vec![format!(
+            "channel {}'s figures carry f32's departure (the precision line); the same run in f64 ends with tail max|e| = {}: the advice on the design is a run's without simulation.precision = \"f32\"",
+            i + 1,
+            tail.map_or("(none)".to_string(), |e| format!("{e:.3e}"))
+        )];
+    }
+    d.advice = vec![check.line];
     d
 }
 
@@ -233,7 +243,8 @@ fn check_lower_offers(s: &crate::Scenario, design: &Design, result: &SimResult, 
     let signals = [&s.reference, &s.disturbance];
     let (avg, rho) =
         (Averaged::new(design, signals[0], signals[1]), crate::sim::loop_rate(design, design.plant(), signals));
-    let t_end = s.simulation.t_end;
+    // The horizon the stiff line's offer was computed with ([`diagnose_with`]): the last row.
+    let Some(&t_end) = result.t.last() else { return };
     let offers: Vec<(usize, f64)> = (avg.channels.iter().enumerate())
         .filter(|&(i, c)| design.mu()[i] * c.lambda_max() > STIFF_RATIO * rho && tail_within_bound(result, i))
         .filter_map(|(i, c)| estimate::lower_offer(c, design.mu()[i], (rho, t_end)).map(|x| (i, x)))
@@ -273,7 +284,7 @@ fn check_lower_offers(s: &crate::Scenario, design: &Design, result: &SimResult, 
     for (i, x) in offers {
         let Some(found) = found(i) else { continue };
         let checked = format!(
-            "keep design.mu[{i}] where max|u_f| allows: that μ is the averaged law's, and a run at μ = {}{together} {found} (the averaged law misjudges this stiff loop; lower μ only as far as runs show converging, a tuning over μ: docs/tuning.md)",
+            "keep design.mu[{i}] where max|u_f| allows: the μ the averaged law offers, {}, failed its check: a run at it{together} {found} (that law misjudges this stiff loop; lower μ only as far as runs show converging, a tuning over μ: docs/tuning.md)",
             fmt(x)
         );
         let offered = estimate::lower_offer_text(i, x);

@@ -255,8 +255,8 @@ pub fn departures(sampled: &SimResult, continuous: &SimResult) -> Option<Vec<Cha
     Some((0..m).map(channel).collect())
 }
 
-/// What [`precision_check`] found: its line, whether the f32 loop departs enough for the rest of
-/// the advice to be the f64 run's, and that run.
+/// What [`precision_check`] found: its line, whether the f32 loop departs enough for the advice on
+/// the design to be left to the f64 run, and that run.
 pub(crate) struct PrecisionCheck {
     pub line: String,
     pub flagged: bool,
@@ -277,6 +277,10 @@ pub(crate) struct PrecisionCheck {
 pub(crate) fn precision_check(s: &crate::Scenario, design: &Design, result: &SimResult) -> Option<PrecisionCheck> {
     use crate::controller::Precision;
     let RunStats::Sampled { precision: Precision::F32, .. } = result.stats else { return None };
+    // An interrupted run, or one its budget ended, is no verdict on the precision.
+    if matches!(result.outcome, Some(Outcome::Interrupted { .. } | Outcome::TooManySteps { .. })) {
+        return None;
+    }
     let f64_scenario = crate::Scenario {
         simulation: crate::scenario::Simulation { precision: Precision::F64, ..s.simulation },
         ..s.clone()
@@ -308,14 +312,17 @@ pub(crate) fn precision_check(s: &crate::Scenario, design: &Design, result: &Sim
         .collect();
     let beyond = |x: f64| x > F32_DEPARTURE || x.is_nan();
     let drifting: Vec<String> = (departures.iter().enumerate())
-        .filter(|(_, d)| beyond(d.eta) && d.growth > 1.0)
+        .filter(|(_, d)| beyond(d.eta) && d.growth > DRIFT_GROWTH)
         .map(|(i, d)| format!("η̂_{} ({}× over the last tenth of the run)", i + 1, crate::settings::fmt_ratio(d.growth)))
         .collect();
     let verdict = if !drifting.is_empty() {
         let verb = if drifting.len() == 1 { "drifts" } else { "drift" };
-        format!("; {} {verb}: rounding moves η̂ along directions the signals do not excite (Ω̄'s null space, where nothing pulls it back), so a longer run departs further and can diverge (a turbofan's f32 loop did at 96 s): export in f64 (the other advice is the f64 run's)", drifting.join(", "))
+        format!("; {} {verb}: rounding moves η̂ along directions the signals do not excite (Ω̄'s null space, where nothing pulls it back), so a longer run departs further and can diverge (a turbofan's f32 loop did at 96 s): export in f64", drifting.join(", "))
     } else if departures.iter().any(|d| beyond(d.y) || beyond(d.uf)) {
-        format!("; beyond {} of a peak: export in f64, or choose poles nearer the plant's own (the design report's κ₂; the other advice is the f64 run's)", percent(F32_DEPARTURE))
+        format!(
+            "; beyond {} of a peak: export in f64, or choose poles nearer the plant's own (the design report's κ₂)",
+            percent(F32_DEPARTURE)
+        )
     } else {
         String::new()
     };
@@ -328,7 +335,7 @@ pub(crate) fn precision_check(s: &crate::Scenario, design: &Design, result: &Sim
 
 /// One channel's departure of an f32 run from its f64 run ([`precision_check`]), each relative to
 /// the f64 run's peak over their common rows; `growth` is η̂'s largest departure over the last
-/// tenth of the rows against the tenth before.
+/// tenth of the rows against the tenth before (NaN with fewer than [`DRIFT_ROWS`] rows).
 struct PrecisionDeparture {
     y: f64,
     uf: f64,
@@ -336,39 +343,41 @@ struct PrecisionDeparture {
     growth: f64,
 }
 
+/// η̂'s departure growing by more than this over a tenth of the run is a drift: a departure that
+/// grows linearly from t = 0 grows by 1.11 over the last tenth; rounding's noise about a steady
+/// departure, by less than this.
+const DRIFT_GROWTH: f64 = 1.05;
+/// The fewest common rows over which a growth is judged (two tenths of at least two rows each).
+const DRIFT_ROWS: usize = 20;
+
 fn precision_departures(single: &SimResult, double: &SimResult) -> Vec<PrecisionDeparture> {
     let (m, q) = (single.m, single.q);
     let rows = common_rows(&single.t, &double.t);
-    // The largest gap over `rows` of a block of `w` columns at `at` (rows of `width`), its norm,
-    // relative to the f64 block's largest norm.
-    let gap = |of: fn(&SimResult) -> &Vec<f64>, (width, at, w): (usize, usize, usize), rows: &[(usize, usize)]| {
-        let (a, b) = (of(single), of(double));
-        let block = |v: &[f64], k: usize| v[k * width + at..k * width + at + w].to_vec();
-        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let peak = rows.iter().fold(0.0f64, |p, &(_, j)| p.max(norm(&block(b, j))));
-        let dev = rows.iter().fold(0.0f64, |g, &(k, j)| {
-            let d: Vec<f64> = block(a, k).iter().zip(block(b, j)).map(|(x, y)| x - y).collect();
-            g.max(norm(&d))
-        });
-        if dev == 0.0 {
-            0.0
-        } else {
-            dev / peak
-        }
+    // The largest over `rows` of a block's (`w` columns at `at`, rows of `width`) departure's norm,
+    // and of the f64 block's norm.
+    let gaps = |(a, b): (&[f64], &[f64]), (width, at, w): (usize, usize, usize), rows: &[(usize, usize)]| {
+        rows.iter().fold((0.0f64, 0.0f64), |(dev, peak), &(k, j)| {
+            let (x, y) = (&a[k * width + at..k * width + at + w], &b[j * width + at..j * width + at + w]);
+            let d = x.iter().zip(y).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt();
+            (dev.max(d), peak.max(y.iter().map(|y| y * y).sum::<f64>().sqrt()))
+        })
     };
-    let tenth = (rows.len() / 10).max(1);
-    let (last, before) = (
-        &rows[rows.len().saturating_sub(tenth)..],
-        &rows[rows.len().saturating_sub(2 * tenth)..rows.len().saturating_sub(tenth)],
-    );
+    let share = |(dev, peak): (f64, f64)| if dev == 0.0 { 0.0 } else { dev / peak };
+    let tenth = rows.len() / 10;
+    let (last, before) = (&rows[rows.len() - tenth..], &rows[rows.len() - 2 * tenth..rows.len() - tenth]);
     (0..m)
         .map(|i| {
-            let eta = (m * q, i * q, q);
+            let eta = ((&single.eta[..], &double.eta[..]), (m * q, i * q, q));
+            let growth = if rows.len() < DRIFT_ROWS {
+                f64::NAN
+            } else {
+                gaps(eta.0, eta.1, last).0 / gaps(eta.0, eta.1, before).0
+            };
             PrecisionDeparture {
-                y: gap(|r| &r.y, (m, i, 1), &rows),
-                uf: gap(|r| &r.u_f, (m, i, 1), &rows),
-                eta: gap(|r| &r.eta, eta, &rows),
-                growth: gap(|r| &r.eta, eta, last) / gap(|r| &r.eta, eta, before),
+                y: share(gaps((&single.y, &double.y), (m, i, 1), &rows)),
+                uf: share(gaps((&single.u_f, &double.u_f), (m, i, 1), &rows)),
+                eta: share(gaps(eta.0, eta.1, &rows)),
+                growth,
             }
         })
         .collect()

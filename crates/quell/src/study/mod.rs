@@ -415,7 +415,8 @@ impl Study {
             Some(mc) => Some(monte_carlo(&base, table("monte_carlo", mc)?, &scenario_source)?),
         };
         if let (Some(mc), Some(t_s)) = (&monte_carlo, scenario.simulation.sample_time) {
-            check_drawn_delays(mc, t_s, scenario.plant.time_unit)?;
+            let own = doc.get("simulation").and_then(|s| s.get("sample_time")).is_some();
+            check_drawn_delays(mc, (t_s, own), scenario.plant.time_unit)?;
         }
         if let Some(mc) = &monte_carlo {
             check_infinite_laws(mc, &base, &grid, &scenario_source)?;
@@ -856,7 +857,12 @@ fn base_run_error(doc: &toml::Table, scenario: &Scenario, source: &str) -> Optio
 /// A sampled-data study draws no delay: a delay drawn from a continuous law is a whole number of
 /// samples with probability zero, so every draw would fail its run's check (15 failed rows and exit
 /// 0, where a grid value that is not whole samples is refused before any run).
-fn check_drawn_delays(mc: &MonteCarlo, sample_time: f64, unit: crate::settings::TimeUnit) -> Result<(), StudyError> {
+/// `own`: whether the study's `[simulation]` sets the sample time (it cannot unset the scenario's).
+fn check_drawn_delays(
+    mc: &MonteCarlo,
+    (sample_time, own): (f64, bool),
+    unit: crate::settings::TimeUnit,
+) -> Result<(), StudyError> {
     let delays = ["plant.delays", "truth.delays", "truth.actuator_delays"];
     let Some(p) =
         mc.perturbations.iter().find(|p| delays.iter().any(|d| p.key == *d || p.key.starts_with(&format!("{d}["))))
@@ -866,8 +872,13 @@ fn check_drawn_delays(mc: &MonteCarlo, sample_time: f64, unit: crate::settings::
     Err(err(
         format!("monte_carlo.\"{}\"", p.key),
         format!(
-            "a delay drawn from a continuous law is almost never a whole number of samples of simulation.sample_time = {} {unit}, so every sampled run would fail; draw it in the continuous loop (leave simulation.sample_time out of the study) or give whole-sample delays as [grid] values",
-            crate::settings::fmt_short(sample_time)
+            "a delay drawn from a continuous law is almost never a whole number of samples of simulation.sample_time = {} {unit}, so every sampled run would fail; draw it in the continuous loop ({}) or give whole-sample delays as [grid] values",
+            crate::settings::fmt_short(sample_time),
+            if own {
+                "leave simulation.sample_time out of the study"
+            } else {
+                "a study of a copy of the scenario without its simulation.sample_time, which a study's [simulation] cannot remove"
+            }
         ),
     ))
 }

@@ -582,7 +582,12 @@ fn a_sampled_study_draws_no_delay() {
         let e = error(&text);
         assert!(e.starts_with(&format!("monte_carlo.\"{key}\": a delay drawn from a continuous law")), "{e}");
         assert!(e.contains("simulation.sample_time = 0.01 s"), "{e}");
+        assert!(e.contains("(leave simulation.sample_time out of the study)"), "{e}");
     }
+    // A sample time from the scenario is not the study's to leave out (a study had been told to).
+    let file = format!("{}/../../examples/paper-sampled.toml", env!("CARGO_MANIFEST_DIR"));
+    let e = error(&format!("scenario = \"{file}\"\n[monte_carlo]\nruns = 3\n\"truth.delays\" = {{ uniform = 0.2 }}\n"));
+    assert!(e.contains("(a study of a copy of the scenario without its simulation.sample_time, which a study's [simulation] cannot remove)"), "{e}");
     let continuous = "[simulation]\nt_end = 5.0\n[monte_carlo]\nruns = 3\n\"truth.delays\" = { uniform = 0.2 }\n";
     assert!(Study::from_toml(continuous, None).is_ok());
 }

@@ -288,6 +288,12 @@ impl TuneCurve {
                 flat_peaks.join(" and ")
             );
         }
+        if let Some(steady) = self.steady_beyond(spec, steady) {
+            return format!(
+                "no μ in {prefix}mu[{i}] completed with {}{reached}; raise {prefix}max_uf[{i}], or {steady}{clipping}",
+                wanted.join(" and ")
+            );
+        }
         format!(
             "no μ in {prefix}mu[{i}] completed with {}{reached}; widen the bounds{limits} or lengthen {}t_end{clipping}",
             wanted.join(" and "),
@@ -766,18 +772,27 @@ pub fn tune(study: &Study, opts: &TuneOptions<'_>) -> Result<TuneResult, StudyEr
 }
 
 impl TuneCurve {
+    /// Where the steady state's own input `steady` is beyond `max_uf`: no μ, bounds, poles or
+    /// horizon bring the input under it, so the remedy is to ask less of the loop.
+    fn steady_beyond(&self, spec: &TuneSpec, steady: f64) -> Option<String> {
+        let (i, c) = (self.channel, self.channel + 1);
+        (steady > spec.max_uf[i]).then(|| {
+            format!(
+                "ask less of the loop (smaller references or disturbances): the steady state alone asks max |u_f,{c}| = {} for y = g (the design report's steady-state section), whatever μ and the poles",
+                crate::settings::fmt_4(steady)
+            )
+        })
+    }
+
     /// What [`TuneCurve::why_none`] offers where a limit's figure is the same at every μ: slower
     /// poles, or, beyond the steady state's own input `steady`, asking less of the loop (a bicycle
     /// model's steering, 0.02458 rad for y = g against a limit of 0.02, had been told to slow its
     /// poles); and a longer horizon where some μ never reached a finite objective (a longer one may
     /// admit it).
     fn flat_remedy(&self, spec: &TuneSpec, prefix: &str, steady: f64) -> String {
-        let (i, c) = (self.channel, self.channel + 1);
-        let slower = if steady > spec.max_uf[i] {
-            format!("the steady state alone asks max |u_f,{c}| = {} for y = g (the design report's steady-state section), whatever μ and the poles: ask less of the loop (smaller references or disturbances)", crate::settings::fmt_4(steady))
-        } else {
+        let slower = self.steady_beyond(spec, steady).unwrap_or_else(|| {
             "slow the scenario's channel and observer poles (an automatic design with an actuator limit, u_limit, chooses poles within it)".to_string()
-        };
+        });
         let unsettled = self.curve.iter().any(|p| p.figures.is_some_and(|f| !spec.objective.of(&f).is_finite()));
         if !unsettled {
             return slower;
@@ -1001,6 +1016,16 @@ mod tests {
         );
         // A steady state beyond the limit is said instead of slower poles, which cannot help.
         let steady = flat.why_none(&spec, "tune.", (f64::INFINITY, 0.0706));
-        assert!(steady.ends_with("raise tune.max_uf[0], or the steady state alone asks max |u_f,1| = 0.0706 for y = g (the design report's steady-state section), whatever μ and the poles: ask less of the loop (smaller references or disturbances)"), "{steady}");
+        assert!(steady.ends_with("raise tune.max_uf[0], or ask less of the loop (smaller references or disturbances): the steady state alone asks max |u_f,1| = 0.0706 for y = g (the design report's steady-state section), whatever μ and the poles"), "{steady}");
+        // Where the figure varies with μ too (the least at one μ): not "widen the bounds".
+        let varied = TuneCurve {
+            curve: vec![point(10.0, figures(0.0707, Some(1.0))), point(1e5, figures(0.09, Some(2.0)))],
+            ..flat.clone()
+        };
+        let varied = varied.why_none(&spec, "tune.", (f64::INFINITY, 0.0706));
+        assert!(
+            varied.contains("; raise tune.max_uf[0], or ask less of the loop") && !varied.contains("widen"),
+            "{varied}"
+        );
     }
 }
