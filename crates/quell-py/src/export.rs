@@ -77,7 +77,7 @@ fn fmu_arguments(
 /// prefix : str, optional
 ///     The C identifiers' prefix (default "quell").
 /// precision : str, optional
-///     "f64" (default) or "f32".
+///     "f64" or "f32"; default: a scenario's simulation.precision, else "f64".
 /// fmu : bool, optional
 ///     Also write `<prefix>.fmu`.
 /// fmi_version : int, optional
@@ -127,19 +127,23 @@ pub fn export(
     fmi_version: Option<&Bound<'_, PyAny>>,
     compiler: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Vec<PathBuf>> {
-    let (design, (scenario_name, names), scenario_T, signals) = if let Ok(s) = source.cast::<PyScenario>() {
-        let s = s.get();
-        let signals = (s.inner.reference.clone(), s.inner.disturbance.clone());
-        let labels = (s.inner.name.clone(), s.inner.names.clone());
-        (s.design_arc(py)?, labels, s.inner.simulation.sample_time, signals)
-    } else if let Ok(d) = source.cast::<PyDesign>() {
-        (d.get().inner.clone(), Default::default(), None, Default::default())
-    } else {
-        return Err(pyo3::exceptions::PyTypeError::new_err(format!(
-            "source: expected a quell.Scenario or quell.Design, found {}",
-            a_type(source)
-        )));
-    };
+    // A scenario's sample time and precision (`simulation.precision`, which its runs measured) are
+    // the defaults.
+    let (design, (scenario_name, names), (scenario_T, scenario_precision), signals) =
+        if let Ok(s) = source.cast::<PyScenario>() {
+            let s = s.get();
+            let signals = (s.inner.reference.clone(), s.inner.disturbance.clone());
+            let labels = (s.inner.name.clone(), s.inner.names.clone());
+            let sim = &s.inner.simulation;
+            (s.design_arc(py)?, labels, (sim.sample_time, sim.precision), signals)
+        } else if let Ok(d) = source.cast::<PyDesign>() {
+            (d.get().inner.clone(), Default::default(), (None, Default::default()), Default::default())
+        } else {
+            return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+                "source: expected a quell.Scenario or quell.Design, found {}",
+                a_type(source)
+            )));
+        };
     let T = match sample_time {
         Some(v) => number(v, "sample_time", Kind::Scenario, "simulation.sample_time")?,
         None => scenario_T.ok_or_else(|| {
@@ -147,7 +151,7 @@ pub fn export(
         })?,
     };
     let precision = match precision {
-        None => Default::default(),
+        None => scenario_precision,
         Some(p) => p
             .extract::<String>()
             .map_err(|_| {

@@ -53,3 +53,13 @@ def test_the_scenario_keyword():
     assert r == quell.simulate(s, precision="f32") != quell.simulate(s, precision="f64")
     with pytest.raises(TypeError, match="precision"):
         quell.Scenario(p.plant, p.reference, p.disturbance, sample_time=1e-3, precision=32, **p.design().choices)
+
+
+def test_export_takes_the_scenarios_precision(tmp_path):
+    # A scenario whose runs are f32 exports float unless precision= says otherwise, as the CLI does.
+    p = quell.paper_example()
+    s = quell.Scenario(p.plant, p.reference, p.disturbance, sample_time=1e-3, precision="f32", **p.design().choices)
+    quell.export(s, out=tmp_path / "a")
+    assert "const float y[QUELL_M]" in (tmp_path / "a" / "quell_controller.h").read_text()
+    quell.export(s, out=tmp_path / "b", precision="f64")
+    assert "const double y[QUELL_M]" in (tmp_path / "b" / "quell_controller.h").read_text()
