@@ -1784,7 +1784,7 @@ fn ended_early(s: &Scenario, design: &Design, failed: &AutoError, slowed: bool) 
     let unit = s.plant.time_unit;
     let why = match s.simulation.sample_time {
         Some(t_s) if slowed => {
-            let rho = loop_rate(design, s.true_plant(), [&s.reference, &s.disturbance]);
+            let rho = loop_rate(design, design.plant(), [&s.reference, &s.disturbance]);
             let shorter = if crate::sim::is_coarse(t_s * rho) {
                 let fine = crate::sim::fine_sample_time(design, rho, Some(s.simulation.output_step));
                 format!("a shorter simulation.sample_time is what remains ({fine}: a bound the sampled loop needs, not one that suffices)")

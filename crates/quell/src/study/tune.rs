@@ -831,6 +831,24 @@ fn limit_reached(
         );
         return Some((text, true));
     }
+    // The least at the smallest μ, and the next μ's within FLAT_PEAK: the figure has stopped falling
+    // with μ there, so smaller μ do not lower it (a power system's 0.351 p.u. peaked at 0.07 s,
+    // before its 0.1 s delayed adaptive command acted, at every μ from 0.01 up; "widen the bounds"
+    // had been offered).
+    let mut by_mu = peaks.to_vec();
+    by_mu.sort_by(|a, b| a.1.total_cmp(&b.1));
+    if let [(first, mu0), (next, mu1), ..] = by_mu[..] {
+        if first == v && mu0 == mu && next <= FLAT_PEAK * v {
+            let text = format!(
+                "{what} levels off at {} toward the smallest μ (at μ = {} and {}), above {name} = {}: the poles and the signals set it there, not μ",
+                four(v),
+                four(mu0),
+                four(mu1),
+                short(limit)
+            );
+            return Some((text, true));
+        }
+    }
     let text = format!(
         "the least {what} of the runs with a finite {objective} is {} (at μ = {}), above {name} = {}",
         four(v),
@@ -963,23 +981,9 @@ mod tests {
     /// nothing (a servo's tuning, from a tryout).
     #[test]
     fn the_least_peak_named_is_that_of_a_run_the_limit_alone_rejected() {
-        let figures = |max_uf: f64, settle_t: Option<f64>| ChannelFigures {
-            tail_max_e: 1e-3,
-            tail_rms_e: 1e-3,
-            max_u: 1.0,
-            max_uf,
-            settle_t,
-        };
-        let point = |mu: f64, f: ChannelFigures| TunePoint {
-            mu,
-            objective: None,
-            outcome: Outcome::Completed,
-            reason: String::new(),
-            figures: Some(f),
-        };
         let curve = TuneCurve {
             channel: 0,
-            curve: vec![point(1.0, figures(2.559, None)), point(10.0, figures(3.226, Some(80.0)))],
+            curve: vec![completed(1.0, figures(2.559, None)), completed(10.0, figures(3.226, Some(80.0)))],
             chosen: None,
             tie: None,
         };
@@ -1006,7 +1010,7 @@ mod tests {
         // The same max |u_f| at every μ (within 1 %): μ does not set it, so the bounds are not
         // what to widen.
         let flat = TuneCurve {
-            curve: vec![point(10.0, figures(0.07074, Some(1.0))), point(1e5, figures(0.0708, Some(2.0)))],
+            curve: vec![completed(10.0, figures(0.07074, Some(1.0))), completed(1e5, figures(0.0708, Some(2.0)))],
             ..curve
         };
         let spec = TuneSpec { max_uf: vec![0.05], ..spec };
@@ -1014,12 +1018,59 @@ mod tests {
             flat.why_none(&spec, "tune.", (f64::INFINITY, 0.0)),
             "no μ in tune.mu[0] completed with max |u_f,1| ≤ tune.max_uf[0] and a finite settle_t (max |u_f,1| is 0.07074 at every μ with a finite settle_t (from 10 to 100000), above tune.max_uf[0] = 0.05: the poles and the signals set it, not μ); raise tune.max_uf[0], or slow the scenario's channel and observer poles (an automatic design with an actuator limit, u_limit, chooses poles within it)"
         );
+    }
+
+    /// A completed run's figures with this max |u_f| and settling time.
+    fn figures(max_uf: f64, settle_t: Option<f64>) -> ChannelFigures {
+        ChannelFigures { tail_max_e: 1e-3, tail_rms_e: 1e-3, max_u: 1.0, max_uf, settle_t }
+    }
+
+    /// A completed evaluation at μ with these figures.
+    fn completed(mu: f64, f: ChannelFigures) -> TunePoint {
+        TunePoint { mu, objective: None, outcome: Outcome::Completed, reason: String::new(), figures: Some(f) }
+    }
+
+    /// Where no μ can meet a limit, the bounds are not what to widen: a steady state beyond the
+    /// limit is said (slower poles cannot help either), and so is a figure that levels off toward
+    /// the smallest μ.
+    #[test]
+    fn a_limit_no_mu_meets_is_not_met_by_wider_bounds() {
+        let flat = TuneCurve {
+            channel: 0,
+            curve: vec![completed(10.0, figures(0.07074, Some(1.0))), completed(1e5, figures(0.0708, Some(2.0)))],
+            chosen: None,
+            tie: None,
+        };
+        let spec = TuneSpec {
+            objective: Objective::SettleT,
+            bounds: vec![[10.0, 1e5]],
+            max_u: vec![f64::INFINITY],
+            max_uf: vec![0.05],
+            points: 2,
+            refine: 0,
+        };
         // A steady state beyond the limit is said instead of slower poles, which cannot help.
         let steady = flat.why_none(&spec, "tune.", (f64::INFINITY, 0.0706));
         assert!(steady.ends_with("raise tune.max_uf[0], or ask less of the loop (smaller references or disturbances): the steady state alone asks max |u_f,1| = 0.0706 for y = g (the design report's steady-state section), whatever μ and the poles"), "{steady}");
+        // A figure that levels off toward the smallest μ is not widened toward it either.
+        let levels = TuneCurve {
+            curve: vec![
+                completed(10.0, figures(0.07074, Some(1.0))),
+                completed(100.0, figures(0.0708, Some(1.5))),
+                completed(1e5, figures(0.12, Some(2.0))),
+            ],
+            ..flat.clone()
+        };
+        let levels = levels.why_none(&spec, "tune.", (f64::INFINITY, 0.0));
+        assert!(
+            levels.contains("max |u_f,1| levels off at 0.07074 toward the smallest μ (at μ = 10 and 100)")
+                && levels.contains("or slow the scenario's channel and observer poles")
+                && !levels.contains("widen"),
+            "{levels}"
+        );
         // Where the figure varies with μ too (the least at one μ): not "widen the bounds".
         let varied = TuneCurve {
-            curve: vec![point(10.0, figures(0.0707, Some(1.0))), point(1e5, figures(0.09, Some(2.0)))],
+            curve: vec![completed(10.0, figures(0.0707, Some(1.0))), completed(1e5, figures(0.09, Some(2.0)))],
             ..flat.clone()
         };
         let varied = varied.why_none(&spec, "tune.", (f64::INFINITY, 0.0706));
