@@ -981,20 +981,10 @@ mod tests {
     /// nothing (a servo's tuning, from a tryout).
     #[test]
     fn the_least_peak_named_is_that_of_a_run_the_limit_alone_rejected() {
-        let curve = TuneCurve {
-            channel: 0,
-            curve: vec![completed(1.0, figures(2.559, None)), completed(10.0, figures(3.226, Some(80.0)))],
-            chosen: None,
-            tie: None,
-        };
-        let spec = TuneSpec {
-            objective: Objective::SettleT,
-            bounds: vec![[1.0, 10.0]],
-            max_u: vec![f64::INFINITY],
-            max_uf: vec![1.0],
-            points: 2,
-            refine: 0,
-        };
+        let (curve, spec) = settle_tuning(
+            vec![completed(1.0, figures(2.559, None)), completed(10.0, figures(3.226, Some(80.0)))],
+            ([1.0, 10.0], 1.0),
+        );
         let why = curve.why_none(&spec, "tune.", (f64::INFINITY, 0.0));
         assert!(
             why.contains("(the least max |u_f,1| of the runs with a finite settle_t is 3.226 (at μ = 10), above tune.max_uf[0] = 1)"),
@@ -1020,6 +1010,20 @@ mod tests {
         );
     }
 
+    /// Channel 1's curve `curve`, nothing chosen, and a settling-time tuning over `bounds` with the
+    /// limit `max_uf` on max |u_f,1|.
+    fn settle_tuning(curve: Vec<TunePoint>, (bounds, max_uf): ([f64; 2], f64)) -> (TuneCurve, TuneSpec) {
+        let spec = TuneSpec {
+            objective: Objective::SettleT,
+            bounds: vec![bounds],
+            max_u: vec![f64::INFINITY],
+            max_uf: vec![max_uf],
+            points: 2,
+            refine: 0,
+        };
+        (TuneCurve { channel: 0, curve, chosen: None, tie: None }, spec)
+    }
+
     /// A completed run's figures with this max |u_f| and settling time.
     fn figures(max_uf: f64, settle_t: Option<f64>) -> ChannelFigures {
         ChannelFigures { tail_max_e: 1e-3, tail_rms_e: 1e-3, max_u: 1.0, max_uf, settle_t }
@@ -1035,20 +1039,10 @@ mod tests {
     /// the smallest μ.
     #[test]
     fn a_limit_no_mu_meets_is_not_met_by_wider_bounds() {
-        let flat = TuneCurve {
-            channel: 0,
-            curve: vec![completed(10.0, figures(0.07074, Some(1.0))), completed(1e5, figures(0.0708, Some(2.0)))],
-            chosen: None,
-            tie: None,
-        };
-        let spec = TuneSpec {
-            objective: Objective::SettleT,
-            bounds: vec![[10.0, 1e5]],
-            max_u: vec![f64::INFINITY],
-            max_uf: vec![0.05],
-            points: 2,
-            refine: 0,
-        };
+        let (flat, spec) = settle_tuning(
+            vec![completed(10.0, figures(0.07074, Some(1.0))), completed(1e5, figures(0.0708, Some(2.0)))],
+            ([10.0, 1e5], 0.05),
+        );
         // A steady state beyond the limit is said instead of slower poles, which cannot help.
         let steady = flat.why_none(&spec, "tune.", (f64::INFINITY, 0.0706));
         assert!(steady.ends_with("raise tune.max_uf[0], or ask less of the loop (smaller references or disturbances): the steady state alone asks max |u_f,1| = 0.0706 for y = g (the design report's steady-state section), whatever μ and the poles"), "{steady}");
