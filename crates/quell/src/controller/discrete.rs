@@ -551,11 +551,12 @@ impl Controller {
                 })
             })
             .collect::<Result<_, _>>()?;
+        let a = (-T / eq.beta).exp();
         Ok(Controller {
             T,
             PhiGamma_z,
-            a: (-T / eq.beta).exp(),
-            b: 1.0 - (-T / eq.beta).exp(),
+            a,
+            b: 1.0 - a,
             channels,
             zv: vec![0.0; nz + 3 * m],
             z_next: vec![0.0; nz],
@@ -576,14 +577,7 @@ impl Controller {
     /// ([`ControllerError::InputOutOfRange`]), is an error, and the state is left as it was.
     pub fn step(&mut self, y: &[f64], g: &[f64]) -> Result<&[f64], ControllerError> {
         let (m, q) = (self.eq.m, self.eq.q);
-        for (name, v) in [("y", y), ("g", g)] {
-            if v.len() != m {
-                return Err(ControllerError::InputLength { name, expected: m, found: v.len() });
-            }
-            if let Some(index) = v.iter().position(|x| x.is_nan() || x.abs() > MAX_MEASUREMENT) {
-                return Err(ControllerError::InputOutOfRange { name, index, value: v[index] });
-            }
-        }
+        check_inputs((y, g), m, MAX_MEASUREMENT)?;
         let cols = 1 + q;
         // ξ̂(k) = C_ξ z_k.
         let (nz, zv) = (self.eq.nz, &mut self.zv);
@@ -833,6 +827,20 @@ impl Controller {
     }
 }
 
+/// y and g of `m` entries each, none NaN or beyond ±`bound`: [`Controller::step`]'s checks, with
+/// its bound or the f32 step's ([`SinglePrecision`]).
+fn check_inputs((y, g): (&[f64], &[f64]), m: usize, bound: f64) -> Result<(), ControllerError> {
+    for (name, v) in [("y", y), ("g", g)] {
+        if v.len() != m {
+            return Err(ControllerError::InputLength { name, expected: m, found: v.len() });
+        }
+        if let Some(index) = v.iter().position(|x| x.is_nan() || x.abs() > bound) {
+            return Err(ControllerError::InputOutOfRange { name, index, value: v[index] });
+        }
+    }
+    Ok(())
+}
+
 /// The discrete controller as a single-precision build computes it, emulated: every constant
 /// rounded to f32 once, as the f32 export writes them; y and g rounded to f32; the
 /// core's products (the observers' update and u_f = −K x̂ + F u_d, sums whose terms can cancel far
@@ -893,22 +901,13 @@ impl SinglePrecision {
     /// u_f, sums of terms that can cancel) done again in f32, then every state rounded to f32.
     pub(crate) fn step(&mut self, y: &[f64], g: &[f64]) -> Result<&[f64], ControllerError> {
         let nz = self.ctrl.eq.nz;
+        check_inputs((y, g), self.ctrl.eq.m, super::Precision::F32.input_bound())?;
         self.zv[..nz].copy_from_slice(&self.ctrl.zv[..nz]);
-        if y.len() == self.y.len() && g.len() == self.g.len() {
-            let bound = super::Precision::F32.input_bound();
-            for (name, v) in [("y", y), ("g", g)] {
-                if let Some(index) = v.iter().position(|x| x.abs() > bound) {
-                    return Err(ControllerError::InputOutOfRange { name, index, value: v[index] });
-                }
-            }
-            self.y.copy_from_slice(y);
-            self.g.copy_from_slice(g);
-            to_f32(&mut self.y);
-            to_f32(&mut self.g);
-            self.ctrl.step(&self.y, &self.g)?;
-        } else {
-            self.ctrl.step(y, g)?; // its error names the lengths
-        }
+        self.y.copy_from_slice(y);
+        self.g.copy_from_slice(g);
+        to_f32(&mut self.y);
+        to_f32(&mut self.g);
+        self.ctrl.step(&self.y, &self.g)?;
         let c = &mut self.ctrl;
         // The step left [z_{k+1}; y_k; g_k; u_d(k)]: the held inputs beside z_k.
         self.zv[nz..].copy_from_slice(&c.zv[nz..]);

@@ -118,13 +118,13 @@ pub(crate) fn lower_offer(c: &crate::averaged::ChannelAverage, mu: f64, (rho, t_
     (relevant.is_finite() && wanted > fastest && needed * WORTH_CHANGING < mu).then_some(needed)
 }
 
+/// What ends every [`lower_offer_text`]: a run's diagnostics look for it before checking an offer.
+pub(crate) const LOWER_OFFER_WORDS: &str = "where max|u_f| allows (the averaged law's figure, which a run checks)";
+
 /// How [`stiff_advice`] offers [`lower_offer`]'s μ, which [`super::diagnose_run`] replaces where a
 /// run at it misses the tail bound.
 pub(crate) fn lower_offer_text(i: usize, mu: f64) -> String {
-    format!(
-        "lower design.mu[{i}] at most to about {} where max|u_f| allows (the averaged law's figure, which a run checks)",
-        crate::settings::fmt_short(mu)
-    )
+    format!("lower design.mu[{i}] at most to about {} {LOWER_OFFER_WORDS}", crate::settings::fmt_short(mu))
 }
 
 /// Channel i adapting at μ λ_max beyond [`STIFF_RATIO`] times the loop's rate ρ: what it means and

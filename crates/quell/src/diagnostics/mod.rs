@@ -160,7 +160,7 @@ pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) ->
     let mut d = diagnose_with(design, [&s.reference, &s.disturbance], result, false);
     let double = &check.reference;
     for (i, c) in d.channels.iter_mut().enumerate() {
-        let tail = double.tail_from().zip(double.t.last()).and_then(|(from, &t1)| double.max_abs_error(i, from, t1));
+        let tail = double.tail_max_abs_error(i);
         c.advice = vec![format!(
             "channel {}'s figures carry f32's departure (the precision line); the same run in f64 ends with tail max|e| = {}: the advice on the design is a run's without simulation.precision = \"f32\"",
             i + 1,
@@ -240,6 +240,10 @@ fn check_lower_offers(s: &crate::Scenario, design: &Design, result: &SimResult, 
     if !completed(result) || s.noise.is_some() || s.actuator.is_some() {
         return;
     }
+    // No offer made, none to check (and no second averaged law to compute).
+    if !d.channels.iter().flat_map(|c| &c.advice).any(|a| a.contains(estimate::LOWER_OFFER_WORDS)) {
+        return;
+    }
     let signals = [&s.reference, &s.disturbance];
     let (avg, rho) =
         (Averaged::new(design, signals[0], signals[1]), crate::sim::loop_rate(design, design.plant(), signals));
@@ -264,8 +268,7 @@ fn check_lower_offers(s: &crate::Scenario, design: &Design, result: &SimResult, 
         match &r.outcome {
             None | Some(Outcome::Completed) if tail_within_bound(&r, i) => None,
             None | Some(Outcome::Completed) => {
-                let (from, t1) = r.tail_from().zip(r.t.last().copied())?;
-                let tail = r.max_abs_error(i, from, t1)? / scale(&r, i);
+                let tail = r.tail_max_abs_error(i)? / scale(&r, i);
                 let size = if tail >= 1.0 {
                     format!("{}×", crate::settings::fmt_ratio(tail))
                 } else {
@@ -1186,8 +1189,7 @@ fn negligible_tail(result: &SimResult, i: usize, last: f64) -> bool {
 /// Whether channel i's max |e_i| over the last 10 % of the run is within [`TAIL_BOUND`] of its
 /// scale (a run too short to tell is not).
 fn tail_within_bound(result: &SimResult, i: usize) -> bool {
-    let (Some(from), Some(&t1)) = (result.tail_from(), result.t.last()) else { return false };
-    result.max_abs_error(i, from, t1).is_some_and(|e| e <= TAIL_BOUND * scale(result, i))
+    result.tail_max_abs_error(i).is_some_and(|e| e <= TAIL_BOUND * scale(result, i))
 }
 
 /// The most, in multiples of the present μ, that advice raises a μ already beyond the stiffness

@@ -883,6 +883,19 @@ fn check_drawn_delays(
     ))
 }
 
+/// The `[simulation]` settings that take names, not numbers, and so are no grid keys: each with
+/// what to do instead.
+const NOT_GRID_KEYS: [(&str, &str); 2] = [
+    (
+        "simulation.method",
+        "the integrator is not a grid key: grid values are numbers, and runs.csv compares designs and plants, not solvers; run the study once per method with [simulation] method = \"explicit\" or \"imex\"",
+    ),
+    (
+        "simulation.precision",
+        "the precision is not a grid key: grid values are numbers; run the study once per precision with [simulation] precision = \"f32\" (a sampled-data study's runs then compute as an f32 build would)",
+    ),
+];
+
 /// `[grid]`: each key a scenario path, each value a non-empty list of values of its shape, no two
 /// keys naming the same value.
 fn read_grid(doc: &toml::Table) -> Result<Vec<GridAxis>, StudyError> {
@@ -894,17 +907,8 @@ fn read_grid(doc: &toml::Table) -> Result<Vec<GridAxis>, StudyError> {
         }
         let at = format!("grid.\"{key}\"");
         let path = KeyPath::parse(key).map_err(|m| err(&at, m))?;
-        if path.to_string() == "simulation.method" {
-            return Err(err(
-                &at,
-                "the integrator is not a grid key: grid values are numbers, and runs.csv compares designs and plants, not solvers; run the study once per method with [simulation] method = \"explicit\" or \"imex\"",
-            ));
-        }
-        if path.to_string() == "simulation.precision" {
-            return Err(err(
-                &at,
-                "the precision is not a grid key: grid values are numbers; run the study once per precision with [simulation] precision = \"f32\" (a sampled-data study's runs then compute as an f32 build would)",
-            ));
+        if let Some((_, why)) = NOT_GRID_KEYS.iter().find(|(k, _)| path.to_string() == *k) {
+            return Err(err(&at, *why));
         }
         let values = match values {
             toml::Value::Array(v) if v.is_empty() => return Err(err(
