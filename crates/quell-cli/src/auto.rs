@@ -191,7 +191,11 @@ fn report_text(a: &AutoDesign) -> String {
             continue;
         }
         let regulated = a.scenario.reference.components.get(i).is_some_and(|c| c.peak() == 0.0);
-        let of = if regulated { "the error's peak: the reference is 0" } else { "the reference's peak" };
+        let of = if regulated {
+            "the error's peak, at least 1.5e-8 of the loop's signals: the reference is 0"
+        } else {
+            "the reference's peak"
+        };
         s.push_str(&format!(
             "  channel {}: tail max|e| = {:.3e} (bound {:.3e}: 1 % of {of}) {}, max|u_f| = {}\n",
             i + 1,

@@ -354,8 +354,9 @@ pub struct Candidate {
     /// max |e_i| over the run's rows: with the tail's, whether the error grows.
     #[serde(skip)]
     peak_e: Vec<f64>,
-    /// max |e_i| over the run, at its rows and between them ([`crate::sim::SimResult::peak_error`]):
-    /// the scale of a channel whose reference is 0 (regulation), whatever the output step.
+    /// max |e_i| over the run, at its rows and between them, at least rounding's share of the loop's
+    /// signals ([`crate::sim::SimResult::error_scale`]): the scale of a channel whose reference is 0
+    /// (regulation), whatever the output step.
     #[serde(skip)]
     error_scale: Vec<f64>,
     /// max |e_i| over [0.5, 0.6]·t_end: with the tail's, whether the error still decays.
@@ -671,7 +672,7 @@ fn candidate(scenario: &Scenario, r: &crate::sim::SimResult, speed: Speed, conve
         (0..m).map(|i| r.rms_error(i, 0.9 * t_c, (1.1 * t_c).min(t_end)).unwrap_or(f64::NAN)).collect();
     let max_uf = r.summary().iter().map(|c| c.figures.max_uf).collect();
     let peak_e = (0..m).map(|i| r.max_abs_error(i, 0.0, t_end).unwrap_or(f64::NAN)).collect();
-    let error_scale = (0..m).map(|i| r.peak_error(i).unwrap_or(f64::NAN)).collect();
+    let error_scale = (0..m).map(|i| r.error_scale(i)).collect();
     let mid_max_e = (0..m).map(|i| r.max_abs_error(i, 0.5 * t_end, 0.6 * t_end).unwrap_or(f64::NAN)).collect();
     let initial_e = (0..m).map(|i| r.e.get(i).map_or(f64::NAN, |e| e.abs())).collect();
     let limited_fraction = if r.limited.is_empty() { vec![] } else { r.limited_fraction() };
@@ -2670,6 +2671,12 @@ fn choose_mu(s: &Scenario, design: &Design, targets: &Targets, r: f64) -> (Vec<f
             let aim = AIM * if peak > 0.0 { peak } else { c.open_loop_rms };
             let cap = max_rate / c.lambda_max().max(f64::MIN_POSITIVE);
             let retry_cap = retry_rate / c.lambda_max().max(f64::MIN_POSITIVE);
+            // An aim of 0 is met by any μ: the bisection had written its floor, 1e-12 of the cap,
+            // which the design report then called too small (an irrigation canal's middle pool).
+            if aim == 0.0 {
+                notes.push(format!("channel {}: nothing drives its error (its reference is 0 and no disturbance reaches it): μ does not matter, and the fastest rate allowed is written", i + 1));
+                return (cap, retry_cap);
+            }
             if c.predicted_error(cap, t_c) > aim {
                 // The excited directions' smallest eigenvalue: a zero one (a direction no signal excites) is harmless.
                 let excited = c.excited().fold(f64::INFINITY, f64::min);

@@ -1821,3 +1821,28 @@ fn given_poles_that_drive_the_error_far_beyond_the_reference_are_named() {
         "{e}"
     );
 }
+
+/// The irrigation canal of `tests/data` without disturbances and with an empty `[design]`: its
+/// middle pool, at 0 and undriven, has nothing to adapt to. Its μ had been the bisection's floor,
+/// 1e-12 of the cap, which the design report called too small; and its rounding-level error (8e-19)
+/// had failed a bound of 1 % of its own peak. Now the verification passes and the report flags
+/// no channel weakly excited.
+#[test]
+fn an_undriven_regulated_channel_passes_and_is_not_called_too_slow() {
+    let text =
+        std::fs::read_to_string(format!("{}/tests/data/irrigation-canal.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let keep = |l: &&str| {
+        !["D =", "Q =", "observer_poles", "channel_poles", "reference_filter", "disturbance_filter", "mu =", "beta ="]
+            .iter()
+            .any(|k| l.starts_with(k))
+    };
+    let quiet: String = text.lines().filter(keep).map(|l| format!("{l}\n")).collect();
+    let quiet =
+        quiet[..quiet.find("[disturbance]").unwrap()].to_string() + &quiet[quiet.find("[simulation]").unwrap()..];
+    let auto = auto_design(&quiet.parse().unwrap(), &Targets::default()).unwrap();
+    assert!(auto.verification.passed, "{:?}", auto.verification);
+    let s = &auto.scenario;
+    let d = s.design().unwrap();
+    let rates = quell::diagnostics::estimate(&d, &s.plant, &s.reference, &s.disturbance, s.simulation.t_end);
+    assert!(rates.iter().all(|r| !r.weakly_excited), "{rates:?}");
+}

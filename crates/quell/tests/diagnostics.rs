@@ -1369,3 +1369,54 @@ fn an_f32_run_whose_parameters_drift_is_told_so_and_advised_on_f64() {
     );
     assert!(advice.iter().all(|a| !a.contains("the sampling makes it")), "{advice:?}");
 }
+
+/// An irrigation canal in the paper's regressor form (`tests/data`, Litrico & Fromion's pools) at
+/// the μ the averaged law offered, 2.9e-24, adapting at 250× the loop's rate: its tails stall far
+/// beyond the 1 % bound, where a run at 1e-22 converges (both recomputed here), so the run says the
+/// averaged law misjudges it and points to runs over μ, and its stiff line no longer says "keep".
+/// Without disturbances its middle pool, at 0 and undriven, has an error of rounding alone: settled
+/// at once, and no advice (it had been "not settled", told to lengthen t_end 4×).
+#[test]
+fn a_tail_the_averaged_law_cannot_explain_is_sent_to_runs_and_rounding_is_converged() {
+    let path = format!("{}/tests/data/irrigation-canal.toml", env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(path).unwrap();
+    let s = Scenario::from_toml(&text).unwrap();
+    let go = |_| ControlFlow::Continue(());
+    let tail = |r: &quell::sim::SimResult, i: usize| r.max_abs_error(i, 0.9 * 432000.0, 432000.0).unwrap() / 0.05;
+    let d = s.design().unwrap();
+    let r = Run::of(&s, &d).simulate(go).unwrap();
+    let mut faster = s.clone();
+    faster.design.mu = vec![1e-22; 3];
+    let quick = Run::of(&faster, &faster.design().unwrap()).simulate(go).unwrap();
+    assert!(tail(&r, 0) > 0.1 && tail(&quick, 0) < 1e-3, "{} at 2.9e-24, {} at 1e-22", tail(&r, 0), tail(&quick, 0));
+    let advice = &quell::diagnostics::diagnose_run(&s, &d, &r).channels[0].advice;
+    assert!(
+        advice[0].starts_with("channel 1's tail misses its 1 % bound")
+            && advice[0].contains("choose design.mu[0] by runs"),
+        "{advice:?}"
+    );
+    let stiff = advice.iter().find(|a| a.contains("adapts at μ λ_max")).unwrap();
+    assert!(
+        stiff.contains("so choose design.mu[0] by runs, not by that law's figure") && !stiff.contains("keep"),
+        "{stiff}"
+    );
+
+    let mut quiet = String::new();
+    for line in text
+        .lines()
+        .filter(|l| !l.starts_with("D =") && !l.starts_with("Q =") && !l.starts_with("disturbance_filter_poles"))
+    {
+        quiet += line;
+        quiet.push('\n');
+    }
+    let quiet =
+        quiet[..quiet.find("[disturbance]").unwrap()].to_string() + &quiet[quiet.find("[simulation]").unwrap()..];
+    let s = Scenario::from_toml(&quiet).unwrap();
+    let d = s.design().unwrap();
+    let r = Run::of(&s, &d).simulate(go).unwrap();
+    let peak = r.peak_error(1).unwrap();
+    assert!(peak < 1e-20, "the middle pool's error is rounding: {peak}");
+    assert_eq!(r.summary()[1].figures.settle_t, Some(0.0));
+    let advice = &quell::diagnostics::diagnose_run(&s, &d, &r).channels[1].advice;
+    assert!(advice.iter().all(|a| !a.contains("t_end") && !a.contains("tail")), "{advice:?}");
+}

@@ -74,7 +74,7 @@ pub fn estimate(
             let weakly_excited = slow.is_some();
             let mut advice = Vec::new();
             if stiff {
-                advice.push(stiff_advice(design, (i, mu), c, (rho, t_end), [reference, disturbance]));
+                advice.push(stiff_advice(design, (i, mu), c, (rho, t_end, false), [reference, disturbance]));
             }
             if rank == 0 {
                 advice.push(format!(
@@ -105,7 +105,7 @@ pub fn estimate(
 
 /// The least factor by which the stiff line's μ must differ from the design's to be offered: a
 /// headbox at μ = 50 had been told to lower it "at most to about 49".
-const WORTH_CHANGING: f64 = 1.25;
+pub(crate) const WORTH_CHANGING: f64 = 1.25;
 
 /// The μ below the design's `mu` that [`stiff_advice`] offers to lower a stiff channel's gain to,
 /// "at most to about": what its slowest relevant direction needs by t_end ([`super::horizon_mu`]),
@@ -135,12 +135,13 @@ pub(crate) fn lower_offer_text(i: usize, mu: f64) -> String {
 /// not converge by t_end ([`super::horizon_mu`]): there the stiffness is the price of Ω̄'s spread,
 /// and the advice names the μ that direction needs, to keep or approach (the quadruple tank at μ = 1,
 /// told to lower μ to the threshold's 7.3e-6, ends with a tail max|e| of 9.0e-3, at that μ of 0.16).
-/// The design report and the run's diagnostics share it.
+/// The design report and the run's diagnostics share it; a run whose tail missed its bound against
+/// that law's word (`missed`) is not told to keep μ on it ([`super::diagnose_run`]).
 pub(crate) fn stiff_advice(
     design: &Design,
     (i, mu): (usize, f64),
     c: &crate::averaged::ChannelAverage,
-    (rho, t_end): (f64, f64),
+    (rho, t_end, missed): (f64, f64, bool),
     signals: [&Signal; 2],
 ) -> String {
     let (lambda_max, unit) = (c.lambda_max(), design.plant().time_unit);
@@ -165,10 +166,12 @@ pub(crate) fn stiff_advice(
         )
     } else {
         let needed = crate::settings::round_up_2(wanted);
-        let keep = if lower_offer(c, mu, (rho, t_end)).is_some() {
+        let keep = if lower_offer(c, mu, (rho, t_end)).is_some() && !missed {
             lower_offer_text(i, needed)
         } else if needed > WORTH_CHANGING * mu && needed <= super::RAISE_AT_MOST * mu {
             format!("raise design.mu[{i}] toward {} where max|u_f| allows (or keep it)", fmt(needed))
+        } else if missed {
+            format!("choose design.mu[{i}] by runs, not by that law's figure (this run's tail misses its bound)")
         } else {
             format!("keep design.mu[{i}] where max|u_f| allows")
         };

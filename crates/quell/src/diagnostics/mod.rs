@@ -268,7 +268,7 @@ fn check_lower_offers(s: &crate::Scenario, design: &Design, result: &SimResult, 
         match &r.outcome {
             None | Some(Outcome::Completed) if tail_within_bound(&r, i) => None,
             None | Some(Outcome::Completed) => {
-                let tail = r.tail_max_abs_error(i)? / scale(&r, i);
+                let tail = r.tail_max_abs_error(i)? / r.scale(i);
                 let size = if tail >= 1.0 {
                     format!("{}×", crate::settings::fmt_ratio(tail))
                 } else {
@@ -1170,26 +1170,15 @@ const RESOLVED: f64 = 0.75;
 /// A beat whose period is this many windows or more changes adjacent windows' RMS by a few percent.
 const UNRESOLVED: f64 = 20.0;
 
-/// Channel i's scale: the peak of |g_i| over the run, or for a reference that is zero of |e_i|, at
-/// the rows and between them ([`SimResult::peak_error`]: not set by the output step).
-fn scale(result: &SimResult, i: usize) -> f64 {
-    let g = result.column(&result.g, result.m, i).fold(0.0f64, |p, v| p.max(v.abs()));
-    if g > 0.0 {
-        g
-    } else {
-        result.peak_error(i).unwrap_or(0.0)
-    }
-}
-
 /// Whether channel i's tail RMS `last` is below [`NEGLIGIBLE`] of its scale.
 fn negligible_tail(result: &SimResult, i: usize, last: f64) -> bool {
-    last < NEGLIGIBLE * scale(result, i)
+    last < NEGLIGIBLE * result.scale(i)
 }
 
 /// Whether channel i's max |e_i| over the last 10 % of the run is within [`TAIL_BOUND`] of its
 /// scale (a run too short to tell is not).
 fn tail_within_bound(result: &SimResult, i: usize) -> bool {
-    result.tail_max_abs_error(i).is_some_and(|e| e <= TAIL_BOUND * scale(result, i))
+    result.tail_max_abs_error(i).is_some_and(|e| e <= TAIL_BOUND * result.scale(i))
 }
 
 /// The most, in multiples of the present μ, that advice raises a μ already beyond the stiffness
@@ -1381,7 +1370,7 @@ fn shrinking_advice(
     // A third of the level at which the advice stops, so that following it does not land on the
     // threshold and bring the line back with a slightly longer t_end.
     let aim = NEGLIGIBLE / 3.0;
-    let needed = (last / (aim * scale(result, i))).ln().max(0.0) / rate;
+    let needed = (last / (aim * result.scale(i))).ln().max(0.0) / rate;
     let t_needed = round_up_2(t1 + needed);
     let head = format!("channel {}{SHRINKING_WORDS} (RMS ratio {:.2} {})", i + 1, r.ratio, r.windows(unit));
     if !(t_needed.is_finite() && t_needed > t1 && t_needed <= MAX_HORIZON_RATIO * t1) {
@@ -1440,7 +1429,7 @@ fn stalled_advice(
     (last, trend): (f64, Option<&Trend>),
     t_end: f64,
 ) -> Option<String> {
-    let level = last / scale(result, i);
+    let level = last / result.scale(i);
     let relevant = c.slowest_relevant(NEGLIGIBLE * NEGLIGIBLE);
     let slow = relevant.is_finite() && mu * relevant * t_end < CONVERGED_EFOLDS;
     // Flat: a ratio read over windows that resolve the signals, neither shrinking nor growing.
@@ -1457,6 +1446,40 @@ fn stalled_advice(
         1.0 / (mu * relevant),
         fmt_short(t_end)
     ))
+}
+
+/// Channel i (gain μ) whose tail misses its bound where the averaged law has every relevant
+/// direction converge by t_end and nothing else (delay, trend) says why: that law misjudges the
+/// loop, so μ is found by runs. An irrigation canal's pools in the paper's regressor form, at the
+/// μ = 2.9e-24 that law offered (adapting at 250× the loop's rate), stalled at 57× their bound and
+/// were told to keep μ; a run at 1e-22 converged (helper tryout, 2026-12-07).
+fn unexplained_miss(
+    result: &SimResult,
+    (i, mu): (usize, f64),
+    c: &ChannelAverage,
+    (t_end, stiff): (f64, f64),
+    trend: Option<&Trend>,
+) -> String {
+    let unit = result.time_unit;
+    let tail = result.tail_max_abs_error(i).unwrap_or(f64::NAN) / result.scale(i);
+    let ratio = trend.map_or(String::new(), |r| format!(", RMS ratio {:.2} {}", r.ratio, r.windows(unit)));
+    let relevant = c.slowest_relevant(RELEVANT_SHARE);
+    let fast = mu * c.lambda_max() / (stiff / STIFF_RATIO);
+    let why = if mu * c.lambda_max() > stiff {
+        format!(
+            ", which assumes adaptation slower than the loop's own rates, not {}× its fastest",
+            crate::settings::fmt_ratio(fast)
+        )
+    } else {
+        String::new()
+    };
+    format!(
+        "channel {}'s tail misses its {:.0} % bound ({tail:.1e} of its scale{ratio}) although the averaged law has its slowest relevant direction converge by t_end (1/(μλ) = {:.1e} {unit}, {:.0} e-folds): that law misjudges this loop{why}; choose design.mu[{i}] by runs, a tuning over μ (quell tune, docs/tuning.md), trying larger μ as well as smaller",
+        i + 1,
+        100.0 * TAIL_BOUND,
+        1.0 / (mu * relevant),
+        mu * relevant * t_end,
+    )
 }
 
 fn channel(
@@ -1525,8 +1548,17 @@ fn channel(
         )),
         _ => {}
     }
+    // A tail beyond its bound that none of the above explains: the averaged law has it converge,
+    // at no more than a small raise of μ (which the stiff line offers, where it applies).
+    let relevant = c.slowest_relevant(RELEVANT_SHARE);
+    let law_raises = round_up_2(horizon_mu(relevant, c.lambda_max(), (t_end, stiff)).0) > estimate::WORTH_CHANGING * mu;
+    let unexplained = horizon_advice && missed && advice.is_empty() && !law_raises;
+    if unexplained {
+        advice.push(unexplained_miss(result, (i, mu), c, (t_end, stiff), judged.as_ref()));
+    }
     if mu * c.lambda_max() > stiff {
-        advice.push(estimate::stiff_advice(design, (i, mu), c, (stiff / STIFF_RATIO, t_end), remedy.signals));
+        let signals = remedy.signals;
+        advice.push(estimate::stiff_advice(design, (i, mu), c, (stiff / STIFF_RATIO, t_end, unexplained), signals));
     }
     if c.residual_rms > 1e-3 * c.open_loop_rms.max(f64::MIN_POSITIVE) {
         advice.push(format!(

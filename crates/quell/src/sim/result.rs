@@ -386,6 +386,32 @@ impl SimResult {
         self.max_abs_error(i, f64::NEG_INFINITY, f64::INFINITY).map(|e| max_or_nan(e, peak(&self.peak_e, i)))
     }
 
+    /// Channel i's scale, of which its tail bound, settling band and advice take a share: the peak
+    /// of |g_i| over the run (NaN with a NaN in g), or for a reference that is 0 throughout (a
+    /// regulated output) [`SimResult::error_scale`].
+    pub fn scale(&self, i: usize) -> f64 {
+        match self.column(&self.g, self.m, i).fold(0.0, |p, v| max_or_nan(p, v.abs())) {
+            0.0 => self.error_scale(i),
+            g => g,
+        }
+    }
+
+    /// Channel i's error peak ([`SimResult::peak_error`]), but at least the run's
+    /// [`Precision::rounding_floor`] of the loop's largest output or reference. An output that
+    /// nothing drives (no reference or disturbance, exact decoupling) has an error of rounding alone,
+    /// which a share of its own peak cannot judge (an irrigation canal's middle pool: 8e-19 m,
+    /// beside a 0.05 m set-point, failed a bound of 1 % of it).
+    ///
+    /// [`Precision::rounding_floor`]: crate::controller::Precision::rounding_floor
+    pub fn error_scale(&self, i: usize) -> f64 {
+        let precision = match self.stats {
+            RunStats::Sampled { precision, .. } => precision,
+            RunStats::Continuous(_) => crate::controller::Precision::F64,
+        };
+        let signals = self.g.iter().chain(&self.y).fold(0.0f64, |p, v| p.max(v.abs()));
+        max_or_nan(self.peak_error(i).unwrap_or(0.0), precision.rounding_floor() * signals)
+    }
+
     /// RMS of e_i over the recorded samples in [from, to]; `None` when there are none.
     pub fn rms_error(&self, i: usize, from: f64, to: f64) -> Option<f64> {
         let (n, sum) = self
@@ -397,11 +423,11 @@ impl SimResult {
         (n > 0).then(|| (sum / n as f64).sqrt())
     }
 
-    /// How channel i's error met the band `settle` (of its reference's recorded peak): the one
+    /// How channel i's error met the band `settle` (of its [`SimResult::scale`]): the one
     /// definition of [`crate::sim::settle`].
     pub fn settling(&self, i: usize, settle: &Settle) -> Settling {
         let e: Vec<f64> = self.column(&self.e, self.m, i).collect();
-        settling(&self.t, &e, settle.band(self.column(&self.g, self.m, i), e.iter().copied()))
+        settling(&self.t, &e, settle.band(self.scale(i)))
     }
 
     /// Figures of merit per channel, settled within the band `settle`; the tail is the last 10 %
@@ -627,5 +653,40 @@ mod tests {
             format!("{s:?}"),
             "summary() holds figures() (NaN != NaN, so compared as text)"
         );
+    }
+
+    /// A regulated channel's scale is its error's peak, but not below √ε of the loop's largest
+    /// output or reference (f64: 1.49e-8; f32: 3.45e-4): an output nothing drives, whose error is
+    /// rounding (1e-19 beside a 0.05 set-point), then settles at once and meets a 1 % tail bound.
+    #[test]
+    fn an_error_of_rounding_alone_is_judged_against_the_loops_signals() {
+        let run = |precision, e2: f64| {
+            let stats = RunStats::Sampled { controller_steps: 0, sample_time: 1.0, precision };
+            let mut r = SimResult::new(2, 1, 1, stats);
+            for k in 0..=10 {
+                let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+                let (y, g) = ([0.05, sign * e2], [0.05, 0.0]);
+                r.push(&Sample {
+                    t: k as f64,
+                    y: &y,
+                    g: &g,
+                    u: &[0.0; 2],
+                    u_f: &[0.0; 2],
+                    eta: &[0.0; 2],
+                    states: None,
+                });
+            }
+            r
+        };
+        let r = run(crate::controller::Precision::F64, 1e-19);
+        assert_eq!(r.scale(0), 0.05, "a tracked channel's scale is its reference's peak");
+        assert_eq!(r.scale(1), f64::EPSILON.sqrt() * 0.05);
+        assert!(r.figures(&Settle::default())[1].settle_t == Some(0.0));
+        let f32_floor = f64::from(f32::EPSILON).sqrt() * 0.05;
+        assert_eq!(run(crate::controller::Precision::F32, 1e-9).scale(1), f32_floor);
+        // A genuine regulation error is its own scale, and a tail at its peak is outside its band.
+        let r = run(crate::controller::Precision::F64, 1e-3);
+        assert_eq!(r.scale(1), 1e-3);
+        assert_eq!(r.figures(&Settle::default())[1].settle_t, None);
     }
 }

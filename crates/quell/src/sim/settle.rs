@@ -30,16 +30,10 @@ impl Default for Settle {
 }
 
 impl Settle {
-    /// The band for a reference with samples `g` and an error with samples `e`: max(relative ·
-    /// max |g|, absolute), or, where g is 0 throughout (a regulated output), with the error's peak
-    /// in place of the reference's, as the tail trend measures it: a band of 0 was never met. A
-    /// NaN in g makes the band NaN, so that nothing settles (`f64::max` would drop the NaN).
-    pub fn band(&self, g: impl IntoIterator<Item = f64>, e: impl IntoIterator<Item = f64>) -> f64 {
-        let peak = |x: &mut dyn Iterator<Item = f64>| x.fold(0.0, |a, v| max_or_nan(a, v.abs()));
-        let scale = match peak(&mut g.into_iter()) {
-            0.0 => peak(&mut e.into_iter()),
-            g => g,
-        };
+    /// The band for a channel of scale `scale` ([`crate::sim::SimResult::scale`]: its reference's
+    /// peak, or a regulated output's error peak): max(relative · scale, absolute). A NaN scale (a
+    /// NaN in g) makes the band NaN, so that nothing settles (`f64::max` would drop the NaN).
+    pub fn band(&self, scale: f64) -> f64 {
         max_or_nan(self.relative * scale, self.absolute)
     }
 }
@@ -113,7 +107,7 @@ mod tests {
         // t = 2 ln 50 = 7.824 s, so the first sample inside is t = 7.9 s.
         let t = grid(600, 60.0);
         let e: Vec<f64> = t.iter().map(|t| (-t / 2.0).exp()).collect();
-        let band = Settle::default().band([1.0, -1.0], e.iter().copied());
+        let band = Settle::default().band(1.0);
         assert_eq!(band, 0.02);
         let s = settling(&t, &e, band);
         assert!(matches!(s, Settling::Settled { t } if (t - 7.9).abs() < 1e-12), "{s:?}");
@@ -150,15 +144,15 @@ mod tests {
 
     #[test]
     fn a_regulated_output_settles_within_two_percent_of_its_errors_peak() {
-        // g = 0 throughout: the band was 0, so a regulation loop never settled. e = 0.5·exp(−t)
-        // on [0, 20]: band 0.02 · 0.5 = 0.01, met from t = ln 50 = 3.912 (first sample 4.0).
+        // g = 0 throughout, scale the error's peak 0.5: e = 0.5·exp(−t) on [0, 20]: band
+        // 0.02 · 0.5 = 0.01, met from t = ln 50 = 3.912 (first sample 4.0).
         let t = grid(200, 20.0);
         let e: Vec<f64> = t.iter().map(|t| 0.5 * (-t).exp()).collect();
-        let band = Settle::default().band([0.0; 3], e.iter().copied());
+        let band = Settle::default().band(0.5);
         assert_eq!(band, 0.01);
         assert!(matches!(settling(&t, &e, band), Settling::Settled { t } if (t - 4.0).abs() < 1e-12));
         // An absolute band still holds alone when it is wider.
-        assert_eq!(Settle { relative: 0.02, absolute: 0.1 }.band([0.0], e.iter().copied()), 0.1);
+        assert_eq!(Settle { relative: 0.02, absolute: 0.1 }.band(0.5), 0.1);
     }
 
     #[test]
@@ -169,7 +163,7 @@ mod tests {
         let mut e = vec![0.0; 11];
         e[10] = f64::NAN;
         assert_eq!(settling(&t, &e, 0.1), Settling::NotSettled);
-        assert!(Settle::default().band([1.0, f64::NAN], [0.0]).is_nan());
+        assert!(Settle::default().band(f64::NAN).is_nan());
         assert_eq!(settling(&t, &[0.0; 11], f64::NAN), Settling::NotSettled);
         // One sample only: the stretch is the whole (zero-length) horizon.
         assert_eq!(settling(&[0.0], &[0.0], 0.1), Settling::Settled { t: 0.0 });

@@ -475,7 +475,6 @@ pub fn sweep(study: &Study, opts: &SweepOptions<'_>) -> Sweep {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::settle::settling;
 
     /// The peak rule bounds x, x̂ (at least as x) and η̂ by runaway.peak × their nominal peaks, and
     /// not ξ̂, which a true plant's mismatch inflates through the disturbance observer in draws that
@@ -499,10 +498,24 @@ mod tests {
 
     #[test]
     fn a_nan_in_the_reference_means_never_settled() {
+        use crate::sim::{RunStats, Sample, SimResult};
+        let time = |g: [f64; 5], s: &Settle| {
+            let stats = RunStats::Sampled { controller_steps: 0, sample_time: 1.0, precision: Default::default() };
+            let mut r = SimResult::new(1, 1, 1, stats);
+            for (k, (e, g)) in [1.0, 0.5, 0.01, 0.01, 0.01].into_iter().zip(g).enumerate() {
+                r.push(&Sample {
+                    t: k as f64,
+                    y: &[g + e],
+                    g: &[g],
+                    u: &[0.0],
+                    u_f: &[0.0],
+                    eta: &[0.0],
+                    states: None,
+                });
+            }
+            r.figures(s)[0].settle_t
+        };
         let s = Settle { relative: 0.02, absolute: 0.0 };
-        let t = [0.0, 1.0, 2.0, 3.0, 4.0];
-        let e = [1.0, 0.5, 0.01, 0.01, 0.01];
-        let time = |g: [f64; 5], s: &Settle| settling(&t, &e, s.band(g, e)).time();
         // Band 0.02 · 1 = 0.02: settled from t = 2.
         assert_eq!(time([1.0; 5], &s), Some(2.0));
         // Was Some(2.0): the NaN sample was dropped by f64::max.
