@@ -197,11 +197,12 @@ fn report_text(a: &AutoDesign) -> String {
             "the reference's peak"
         };
         s.push_str(&format!(
-            "  channel {}: tail max|e| = {:.3e} (bound {:.3e}: 1 % of {of}) {}, max|u_f| = {}\n",
+            "  channel {}: tail max|e| = {:.3e} (bound {:.3e}: 1 % of {of}) {}, {} = {}\n",
             i + 1,
             v.tail_max_e[i],
             v.bound[i],
             if v.tail_max_e[i] <= v.bound[i] { "✓" } else { "✗" },
+            crate::run::uf_label(a.scenario.names.inputs.as_deref(), i),
             crate::run::fixed_or_sci(v.max_uf[i], 4)
         ));
         if let Some(f) = v.limited_fraction.get(i).filter(|f| **f > 0.0) {

@@ -233,6 +233,16 @@ pub(crate) fn clipped(i: usize, f: f64) -> String {
     )
 }
 
+/// "max|u_f,i|" (i from 1), with input i's name where the scenario gives one: u_f,i is plant input
+/// i, which channel i's line shows without pairing it with output i (a quadrotor's input 1, thrust,
+/// drives z, not channel 1's x; the line had read "channel 1 (x_m): … max|u_f| = 0.399").
+pub(crate) fn uf_label(inputs: Option<&[String]>, i: usize) -> String {
+    match inputs.and_then(|n| n.get(i)) {
+        Some(name) => format!("max|u_f,{}| ({name})", i + 1),
+        None => format!("max|u_f,{}|", i + 1),
+    }
+}
+
 /// A time for a message, to 12 significant digits and without trailing zeros.
 pub(crate) use quell::settings::fmt_time as short;
 
@@ -384,11 +394,12 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
                 let name = outputs.and_then(|o| o.get(i)).map_or(String::new(), |n| format!(" ({n})"));
                 let _ = writeln!(
                     text,
-                    "channel {}{name}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {}, max|u_f| = {}, ‖η̂‖ = {:.4e}, {settle}",
+                    "channel {}{name}: tail max|e| = {:.3e}, tail RMS e = {:.3e}, max|u| = {}, {} = {}, ‖η̂‖ = {:.4e}, {settle}",
                     i + 1,
                     c.figures.tail_max_e,
                     c.figures.tail_rms_e,
                     fixed_or_sci(c.figures.max_u, 3),
+                    uf_label(scenario.names.inputs.as_deref(), i),
                     fixed_or_sci(c.figures.max_uf, 3),
                     c.final_eta_norm
                 );

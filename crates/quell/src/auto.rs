@@ -252,6 +252,9 @@ pub struct Verification {
     /// actual errors ([`DelayCheck::error`]); 0 where no level was, NaN (`null` in JSON) without
     /// checks. How well the delays must be known.
     pub delay_tolerance: f64,
+    /// The actuator limit verified on each input ([`Targets::u_limit`]; ∞ for none).
+    #[serde(skip)]
+    pub u_limit: Vec<f64>,
 }
 
 /// The chosen design's run with every true input delay scaled by `factor`.
@@ -479,9 +482,13 @@ impl AutoDesign {
 
     /// Every caution on the chosen design: [`AutoDesign::explicit_stiff_warning`],
     /// [`AutoDesign::cancellation_warning`], [`AutoDesign::peaking_warning`] and
-    /// [`AutoDesign::error_peaking_warning`].
+    /// [`AutoDesign::error_peaking_warning`]; none where the verification failed, whose advice
+    /// speaks for the candidates (a refused quadrotor design had been cautioned as "the chosen
+    /// design").
     pub fn warnings(&self) -> impl Iterator<Item = String> {
+        let passed = self.verification.passed;
         [
+            self.explicit_stiff_warning(),
             self.explicit_stiff_warning(),
             self.cancellation_warning(),
             self.peaking_warning(),
@@ -489,14 +496,20 @@ impl AutoDesign {
         ]
         .into_iter()
         .flatten()
+        .filter(move |_| passed)
     }
 
     /// The caution that the kept verifying run's max|u_f,i| is [`PEAKING`] or more times the peak
     /// of u_f,i that the steady state needs (y = g; the design report's steady-state section),
-    /// which no tail bound sees; `None` otherwise, and for inputs the steady state leaves at 0.
+    /// which no tail bound sees; `None` otherwise, for inputs the steady state leaves at 0, and for
+    /// inputs verified within an actuator limit ([`Targets::u_limit`]: what the actuator gives is
+    /// known; a quadrotor under one had been told to give one).
     pub fn peaking_warning(&self) -> Option<String> {
         let kept = self.verification.candidates.iter().find(|c| c.chosen)?;
-        peaking(&kept.max_uf, &self.scenario.steady_input().peak)
+        let limited = |i: usize| self.verification.u_limit.get(i).is_some_and(|l| l.is_finite());
+        let unlimited: Vec<f64> =
+            (kept.max_uf.iter().enumerate()).map(|(i, &u)| if limited(i) { 0.0 } else { u }).collect();
+        peaking(&unlimited, &self.scenario.steady_input().peak)
     }
 
     /// On a scenario forced onto DOP853 (`simulation.method = "explicit"`), which verified the
@@ -891,13 +904,12 @@ fn check_first(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier) ->
     let runs_before = verifier.runs;
     let unverified = |(first, design, start): (Proposal, Design, Speed), advice: String, runs: usize, bound: &[f64]| {
         let c = Candidate::ended(start, first.scenario.plant.m());
-        let limited = !targets.u_limit.is_empty();
         let d = finish(
             (first, design, c.clone()),
             bound.to_vec(),
             (runs, targets.convergence_time),
             vec![c],
-            (false, limited),
+            (false, &targets.u_limit),
             vec![advice],
         );
         Ok(FirstCheck::Unverified(Box::new(d)))
@@ -1009,7 +1021,7 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
             bound,
             (verifier.runs, verifier.convergence_time),
             candidates,
-            (false, !targets.u_limit.is_empty()),
+            (false, &targets.u_limit),
             advice,
         ));
     }
@@ -1027,14 +1039,8 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
             vec![limit_advice(targets, &kept.2, s.actuator.as_ref(), (&s.steady_input().peak, met), &given)]
         }
     };
-    let mut auto = finish(
-        kept,
-        bound,
-        (verifier.runs, verifier.convergence_time),
-        candidates,
-        (within, !targets.u_limit.is_empty()),
-        advice,
-    );
+    let mut auto =
+        finish(kept, bound, (verifier.runs, verifier.convergence_time), candidates, (within, &targets.u_limit), advice);
     if auto.verification.passed {
         let v = &auto.verification;
         let (checks, tolerance) = delay_checks(&auto.scenario, &auto.design, (targets, speed, v), verifier)?;
@@ -1501,9 +1507,10 @@ fn finish(
     bound: Vec<f64>,
     (runs, convergence_time): (usize, Option<f64>),
     candidates: Vec<Candidate>,
-    (passed, targets_limited): (bool, bool),
+    (passed, u_limit): (bool, &[f64]),
     advice: Vec<String>,
 ) -> AutoDesign {
+    let targets_limited = !u_limit.is_empty();
     let speed = c.speed;
     let convergence_time = convergence_time.unwrap_or(p.scenario.simulation.t_end / DEFAULT_CONVERGENCE);
     let aim_at_convergence = p.scenario.reference.components.iter().map(|g| match g.peak() {
@@ -1551,6 +1558,9 @@ fn finish(
         verification: Verification {
             tail_max_e: c.tail_max_e,
             bound,
+            u_limit: (0..c.max_uf.len())
+                .map(|i| *u_limit.get(i).or(u_limit.first()).unwrap_or(&f64::INFINITY))
+                .collect(),
             max_uf: c.max_uf,
             limited_fraction: c.limited_fraction,
             convergence_time,

@@ -1846,3 +1846,27 @@ fn an_undriven_regulated_channel_passes_and_is_not_called_too_slow() {
     let rates = quell::diagnostics::estimate(&d, &s.plant, &s.reference, &s.disturbance, s.simulation.t_end);
     assert!(rates.iter().all(|r| !r.weakly_excited), "{rates:?}");
 }
+
+/// A Crazyflie's automatic design (`tests/data`, Förster's mass and inertia, sampled at 2 ms) asks
+/// the thrust for 1,400× its steady input in its transient: without an actuator limit the design
+/// is cautioned to give one; with one, the input is verified within what the actuator gives and
+/// the caution is not repeated (it had been); a refused design is not cautioned as "the chosen
+/// design" (its failure advice speaks for it).
+#[test]
+fn the_input_peaking_caution_is_for_inputs_without_a_limit_on_a_passing_design() {
+    let text =
+        std::fs::read_to_string(format!("{}/tests/data/crazyflie-hover.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let doc: toml::Table = text.parse().unwrap();
+    let free = auto_design(&doc, &Targets::default()).unwrap();
+    let steady = free.scenario.steady_input().peak[0];
+    let kept = free.verification.max_uf[0];
+    assert!(free.verification.passed && kept >= 1000.0 * steady, "{kept} against {steady}");
+    assert!(free.warnings().any(|w| w.contains("asks far more of the plant input") && w.contains("u_f,1")));
+    let limited =
+        auto_design(&doc, &Targets { u_limit: vec![0.41, 0.001, 0.001, 0.0005], ..Targets::default() }).unwrap();
+    assert!(limited.verification.passed && limited.verification.max_uf[0] <= 0.41);
+    assert!(limited.warnings().all(|w| !w.contains("asks far more")), "{:?}", limited.warnings().collect::<Vec<_>>());
+    let refused =
+        auto_design(&doc, &Targets { u_limit: vec![0.25, 0.001, 0.001, 0.0005], ..Targets::default() }).unwrap();
+    assert!(!refused.verification.passed && refused.warnings().next().is_none());
+}
