@@ -50,17 +50,7 @@ pub fn design_json(d: &Design) -> Value {
         // κ₂ of the closed-loop eigenvector matrices; null when defective (a Jordan block).
         "observer_eigenvector_condition": finite(d.observer_eigenvector_condition()),
         "decoupled_eigenvector_condition": finite(d.decoupled_eigenvector_condition()),
-        "checks": {
-            "controllability_rank": d.controllability().rank,
-            "observability_rank": d.observability().rank,
-            "cond_B_star": d.cond_B_star(),
-            "cond_D": d.cond_D(),
-            "tolerance": quell::design::TOL,
-            "relative_degree_measures": d.relative_degree_decisions().iter().map(|r| r.deciding()).collect::<Vec<_>>(),
-            "relative_degree_close": d.relative_degree_decisions().iter().map(|r| r.is_close()).collect::<Vec<_>>(),
-            // σ_i from design.relative_degrees (null where eq. (7) decided it).
-            "relative_degrees_given": d.relative_degree_decisions().iter().map(|r| r.given).collect::<Vec<_>>(),
-        },
+        "checks": d.checks(),
     })
 }
 

@@ -194,6 +194,9 @@ fn report(r: &TuneResult, spec: &quell::study::TuneSpec, unit: quell::TimeUnit) 
     };
     let mu = r.mu.iter().map(|&m| mu_6(m)).collect::<Vec<_>>().join(", ");
     s.push_str(&format!("{label} = [{mu}]{note}\n"));
+    if let Some(note) = r.searched_note("tune.") {
+        s.push_str(&format!("note: {note}\n"));
+    }
     s
 }
 
@@ -244,6 +247,7 @@ mod tests {
             reproduced: vec![false, false],
             within_limits: vec![None, None],
             partial: true,
+            searched_within: None,
         };
         let spec = quell::study::TuneSpec {
             objective: Objective::TailRmsE,

@@ -426,10 +426,20 @@ pub fn decimal_digits(obj: &Bound<'_, PyAny>) -> String {
     format!("about {}", ((bits.max(1) - 1) as f64 * std::f64::consts::LOG10_2).floor() as u64 + 1)
 }
 
-/// The items of a list argument; a string or a dict (iterable, but never meant) is a TypeError
-/// naming `name` and the expected `form`, as is anything not iterable.
+/// Whether `obj` is a list, a tuple or a numpy array of at least one dimension: the sequences an
+/// argument takes. Other iterables are refused: a set has no order, bytes are not numbers, and a
+/// python-control system passed inside a dict had leaked python-control's own OSError from its
+/// `__getitem__` (helper tryout, 2026-12-07).
+pub fn is_sequence(obj: &Bound<'_, PyAny>) -> bool {
+    obj.is_instance_of::<PyList>()
+        || obj.is_instance_of::<PyTuple>()
+        || obj.cast::<numpy::PyUntypedArray>().is_ok_and(|a| a.ndim() > 0)
+}
+
+/// The items of a list argument ([`is_sequence`]); anything else is a TypeError naming `name` and
+/// the expected `form`.
 fn items<'py>(obj: &Bound<'py, PyAny>, name: &str, form: &str) -> PyResult<Bound<'py, PyIterator>> {
-    if obj.is_instance_of::<PyString>() || obj.is_instance_of::<PyDict>() {
+    if !is_sequence(obj) {
         return Err(type_error(name, form, obj));
     }
     obj.try_iter().map_err(|_| type_error(name, form, obj))

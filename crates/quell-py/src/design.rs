@@ -527,23 +527,16 @@ impl PyDesign {
             })
             .collect()
     }
-    /// The assumption checks passed (the `checks` of `quell design --json`, and more): ranks and
-    /// tolerances of Assumption 1, cond(B*) of Proposition 1, the largest real parts of eig(A − BK)
-    /// and eig(A − LC), rank D.
+    /// The assumption checks passed: the `checks` of `quell design --json`, one figure each. Ranks
+    /// and tolerances of Assumption 1; `cond_B_star`, cond₂(B*) of Proposition 1 with B*'s rows and
+    /// columns equilibrated (scale-free: not `numpy.linalg.cond(design.B_star)`); `cond_D`; the
+    /// scale-free decisions' `tolerance`; per output eq. (7)'s `relative_degree_measures`, whether one
+    /// is `relative_degree_close` to the tolerance and `relative_degrees_given`; the largest real
+    /// parts of eig(A − BK) and eig(A − LC); `disturbance_rank`, k.
     #[getter]
-    fn checks<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let d = &self.inner;
-        let max_re = |e: &[quell::nalgebra::Complex<f64>]| e.iter().map(|z| z.re).fold(f64::NEG_INFINITY, f64::max);
-        let c = PyDict::new(py);
-        c.set_item("controllability_rank", d.controllability().rank)?;
-        c.set_item("controllability_tol", d.controllability().tol)?;
-        c.set_item("observability_rank", d.observability().rank)?;
-        c.set_item("observability_tol", d.observability().tol)?;
-        c.set_item("cond_B_star", d.cond_B_star())?;
-        c.set_item("max_re_decoupled_eigenvalue", max_re(d.decoupled_eigenvalues()))?;
-        c.set_item("max_re_observer_eigenvalue", max_re(d.observer_eigenvalues()))?;
-        c.set_item("disturbance_rank", d.plant().k())?;
-        Ok(c)
+    fn checks<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let text = serde_json::to_string(&self.inner.checks()).unwrap_or_default();
+        py.import("json")?.call_method1("loads", (text,))
     }
 
     fn __repr__(&self) -> String {

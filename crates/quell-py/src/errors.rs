@@ -76,7 +76,13 @@ pub fn in_python(message: String) -> String {
 /// The exception of `kind` with a library `message` ([`in_python`]) and `.key`, the scenario key
 /// path it names (`None`: none).
 pub fn keyed(py: Python<'_>, kind: Kind, message: String, key: Option<String>) -> PyErr {
-    let err = kind.err(py, in_python(message));
+    keyed_as(py, kind, message, key, true)
+}
+
+/// [`keyed`], the message's key in the Python spelling only where `python` (a scenario read from a
+/// file names its keys as the file writes them, `simulation.sample_time`).
+pub fn keyed_as(py: Python<'_>, kind: Kind, message: String, key: Option<String>, python: bool) -> PyErr {
+    let err = kind.err(py, if python { in_python(message) } else { message });
     let _ = err.value(py).setattr("key", key);
     err
 }

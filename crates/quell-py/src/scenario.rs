@@ -87,7 +87,7 @@ pub struct PyScenario {
     /// The plant's signal names: `inner.names` (a file's `[plant]` names, or a Python plant's).
     pub labels: Labels,
     /// Built from Python values: messages name the arguments (`mu[0]`), not the file's keys.
-    from_values: bool,
+    pub(crate) from_values: bool,
 }
 
 impl PyScenario {
@@ -330,14 +330,15 @@ fn nested_value(obj: &Bound<'_, PyAny>, key: &str, depth: usize) -> PyResult<Val
     if obj.is_none() {
         return Err(bad("None"));
     }
-    match obj.try_iter() {
-        Ok(items) => items
-            .enumerate()
-            .map(|(i, v)| nested_value(&v?, &format!("{key}[{i}]"), depth + 1))
-            .collect::<PyResult<Vec<_>>>()
-            .map(Value::Array),
-        Err(_) => Err(bad(&a_type(obj))),
+    if !crate::convert::is_sequence(obj) {
+        return Err(bad(&a_type(obj)));
     }
+    let items = obj.try_iter().map_err(|_| bad(&a_type(obj)))?;
+    items
+        .enumerate()
+        .map(|(i, v)| nested_value(&v?, &format!("{key}[{i}]"), depth + 1))
+        .collect::<PyResult<Vec<_>>>()
+        .map(Value::Array)
 }
 
 /// A numpy array or scalar as Python lists and numbers (`None` for anything else). A long double's
@@ -1044,9 +1045,13 @@ pub fn auto_design<'py>(
     let delay_error = given(delay_error).map(|v| number(&v, "delay_error", Kind::Design, "delay_error")).transpose()?;
     // Their ranges are checked by auto_design (AutoError::Target: a DesignError below).
     let targets = quell::auto::Targets { convergence_time, u_limit, delay_error };
+    // With a quell.Plant the scenario is Python's values: messages name the arguments (`beta`).
+    let from_values = !text.is_instance_of::<PyString>();
     let auto =
         crate::interrupt::interruptible(py, || quell::auto::auto_design(&doc, &targets))?.map_err(|e| match e {
+            quell::auto::AutoError::Scenario(e) if from_values => argument_error(py, &e),
             quell::auto::AutoError::Scenario(e) => scenario_error(py, &e),
+            e if from_values => Kind::Design.err(py, in_python(e.to_string())),
             e => Kind::Design.err(py, e.to_string()),
         })?;
     let report = serde_json::json!({

@@ -738,7 +738,9 @@ pub fn simulate(
     {
         crate::errors::warn(py, &crate::errors::in_python(w))?;
     }
-    let (result, interrupt) = run_released(py, scn, &design, settings)?;
+    // A file's scenario names its keys as the file does, unless this call set them.
+    let python_keys = s.from_values || edited.is_some();
+    let (result, interrupt) = run_released(py, scn, &design, settings, python_keys)?;
     // After the run's own checks (a sample time they refuse gets no warning).
     if let Some((t, h)) = sampled {
         crate::errors::warn_coarse_sample(py, &design, &scn.reference, &scn.disturbance, t, Some(h))?;
@@ -808,6 +810,7 @@ fn run_released(
     scn: &quell::Scenario,
     design: &quell::Design,
     settings: RunSettings,
+    python_keys: bool,
 ) -> PyResult<(SimResult, Option<PyErr>)> {
     // A Mutex, not a RefCell: the closures run with the GIL released, so must be Send.
     let interrupt: std::sync::Mutex<Option<PyErr>> = std::sync::Mutex::new(None);
@@ -845,7 +848,7 @@ fn run_released(
             SimError::Input(k) => Some(k.key.clone()),
             SimError::Controller(c) => c.key(),
         };
-        keyed(py, Kind::Scenario, e.to_string(), key)
+        crate::errors::keyed_as(py, Kind::Scenario, e.to_string(), key, python_keys)
     });
     match (result, interrupt) {
         (Ok(r), interrupt) => Ok((r, interrupt)),

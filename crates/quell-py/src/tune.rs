@@ -177,7 +177,8 @@ fn warn_choices(py: Python<'_>, study: &study::Study, result: &study::TuneResult
         )?;
     }
     // As `quell tune`'s exit status 2, and its "does NOT reproduce it".
-    let joint = result.joint_limits_caution(spec, "").into_iter().chain(result.unreproduced_cautions());
+    let searched = result.searched_note("");
+    let joint = searched.into_iter().chain(result.joint_limits_caution(spec, "")).chain(result.unreproduced_cautions());
     for w in joint {
         crate::errors::warn(py, &w)?;
     }

@@ -94,6 +94,31 @@ def test_checks_report():
     assert c["max_re_observer_eigenvalue"] < 0
 
 
+def test_checks_are_the_cli_checks(tmp_path, quell_bin):
+    """design.checks holds every figure of `quell design --json`'s checks, with the same values;
+    cond_B_star is the equilibrated (scale-free) one: B* scaled row and column by diagonal
+    matrices leaves it as it is, where numpy's cond(B*) changes (a ship's 1.0002 against 34.7)."""
+    import json, subprocess
+    path = tmp_path / "paper.toml"
+    path.write_text(quell.paper_example().to_toml())
+    out = subprocess.run([quell_bin, "design", str(path), "--json"], capture_output=True, text=True, check=True)
+    cli = json.loads(out.stdout)["checks"]
+    c = paper_design().checks
+    assert set(cli) <= set(c), sorted(set(cli) - set(c))
+    for key, value in cli.items():
+        assert c[key] == value, key
+    assert c["tolerance"] == 1e-5 and len(c["relative_degree_measures"]) == 2
+    # Outputs and inputs in other units: B* becomes D1 B* D2, numpy's cond grows, ours does not.
+    p = quell.paper_example().plant
+    D1, D2 = np.diag([1e3, 1e-2]), np.diag([5.0, 1e-4])
+    kw = dict(channel_poles=[[-6, -2], [-4]], reference_filter_poles=[[-1, -6], [-9]],
+              disturbance_filter_poles=[[-1, -3], [-1, -2, -3]], mu=[20, 30], beta=1.0, observer_poles=[-2, -3, -4])
+    scaled = quell.design(quell.Plant(p.A, p.B @ D2, D1 @ p.C, D=p.D, Q=D1 @ p.Q, delays=p.delays), **kw)
+    np.testing.assert_allclose(scaled.B_star, D1 @ paper_design().B_star @ D2, rtol=1e-12)
+    assert np.linalg.cond(scaled.B_star) > 10 * np.linalg.cond(paper_design().B_star)
+    assert scaled.checks["cond_B_star"] == pytest.approx(c["cond_B_star"], rel=1e-6)
+
+
 def test_relative_degrees_given():
     """design(relative_degrees=...) overrides eq. (7); the paper's σ = (2, 1) gives the decided K,
     a contradicting σ is DesignError naming the channel, a non-integer names the entry."""

@@ -454,6 +454,27 @@ impl Design {
     pub fn observability(&self) -> &RankTest {
         &self.observability
     }
+    /// The assumption checks passed, one figure each: `quell design --json`'s `checks` and Python's
+    /// `Design.checks` ([`AssumptionChecks`]).
+    pub fn checks(&self) -> AssumptionChecks {
+        let max_re = |e: &[Complex<f64>]| e.iter().map(|z| z.re).fold(f64::NEG_INFINITY, f64::max);
+        let decisions = self.relative_degree_decisions();
+        AssumptionChecks {
+            controllability_rank: self.controllability.rank,
+            controllability_tol: self.controllability.tol,
+            observability_rank: self.observability.rank,
+            observability_tol: self.observability.tol,
+            cond_B_star: self.cond_B_star,
+            cond_D: self.cond_D,
+            tolerance: TOL,
+            relative_degree_measures: decisions.iter().map(|r| r.deciding().to_vec()).collect(),
+            relative_degree_close: decisions.iter().map(RelativeDegree::is_close).collect(),
+            relative_degrees_given: decisions.iter().map(|r| r.given).collect(),
+            max_re_decoupled_eigenvalue: max_re(self.decoupled_eigenvalues()),
+            max_re_observer_eigenvalue: max_re(self.observer_eigenvalues()),
+            disturbance_rank: self.plant.k(),
+        }
+    }
     /// eig(A − LC), sorted.
     pub fn observer_eigenvalues(&self) -> &[Complex<f64>] {
         &self.observer_eigenvalues
@@ -913,4 +934,32 @@ fn eigen_error(key: &'static str, of: &'static str, e: EigenError) -> DesignErro
         }
     };
     DesignError::Eigenvalues { key, of, reason }
+}
+
+/// [`Design::checks`]: the figures behind the assumption checks.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct AssumptionChecks {
+    /// Assumption 1: the ranks of the controllability and observability matrices and their
+    /// tolerances ([`RankTest`]).
+    pub controllability_rank: usize,
+    pub controllability_tol: f64,
+    pub observability_rank: usize,
+    pub observability_tol: f64,
+    /// Proposition 1: cond₂(B*) with its rows and columns equilibrated (scale-free, so not
+    /// `numpy.linalg.cond` of B* itself).
+    pub cond_B_star: f64,
+    /// cond₂(D) with unit columns.
+    pub cond_D: f64,
+    /// The tolerance [`TOL`] of the scale-free decisions.
+    pub tolerance: f64,
+    /// Per output, eq. (7)'s measures up to σ_i, whether one lies within a factor 100 of the
+    /// tolerance, and σ_i where `design.relative_degrees` gave it.
+    pub relative_degree_measures: Vec<Vec<f64>>,
+    pub relative_degree_close: Vec<bool>,
+    pub relative_degrees_given: Vec<Option<usize>>,
+    /// The largest real parts of eig(A − BK) and eig(A − LC).
+    pub max_re_decoupled_eigenvalue: f64,
+    pub max_re_observer_eigenvalue: f64,
+    /// rank D: the disturbance components k.
+    pub disturbance_rank: usize,
 }

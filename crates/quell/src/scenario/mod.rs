@@ -702,10 +702,13 @@ fn simulation(v: Value, fastest: f64) -> Result<Simulation, ScenarioError> {
     let sample_time = number("sample_time")?;
     let given = number("output_step")?;
     let output_step = given.unwrap_or_else(|| default_output_step(t_end, fastest, sample_time));
-    settings::check_horizon(t_end, output_step)?;
+    // The sample time first: a default output step is a multiple of it, which a sample time beyond
+    // t_end had made the error's subject (helper tryout, 2026-12-07).
+    settings::check_positive("t_end", t_end)?;
     if let Some(T) = sample_time {
         settings::check_sample_time(t_end, T)?;
     }
+    settings::check_horizon(t_end, output_step)?;
     let (rtol, atol) = (number("rtol")?.unwrap_or(default.rtol), number("atol")?.unwrap_or(default.atol));
     settings::check_tolerances(rtol, atol)?;
     let method = t

@@ -391,6 +391,20 @@ pub struct TuneResult {
     /// carried out: the curves hold the points evaluated so far and `chosen` is the best of them.
     #[serde(default)]
     pub partial: bool,
+    /// The limits the last round's searches kept, where a joint run had broken the file's
+    /// ([`tune`]); `None` (absent) where the first round's joint run kept them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub searched_within: Option<SearchedWithin>,
+}
+
+/// The tightened limits of [`TuneResult::searched_within`] and the file's, per channel (+∞ for
+/// none).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SearchedWithin {
+    pub max_u: Vec<f64>,
+    pub max_uf: Vec<f64>,
+    pub file_max_u: Vec<f64>,
+    pub file_max_uf: Vec<f64>,
 }
 
 impl TuneResult {
@@ -416,8 +430,34 @@ impl TuneResult {
             })
             .collect();
         (!broken.is_empty()).then(|| format!(
-            "the tuned μ together break limits in the joint run ({}); each search met every limit with the other channels' μ at the scenario's, but u_f = −K x̂ + F u_d mixes every channel's command: lower the broken limit by the excess and tune again, or tune with a grid over the μ together (docs/studies.md)",
+            "the tuned μ together break limits in the joint run ({}); each search met every limit with the other channels' μ at the scenario's, but u_f = −K x̂ + F u_d mixes every channel's command, and searches run again within limits tightened by the joint run's excess (up to {JOINT_ROUNDS} rounds, while every channel keeps a feasible μ) did not bring it within them: tune with a grid over the μ together (docs/studies.md)",
             broken.join("; ")
+        ))
+    }
+
+    /// Where the searches ran again within tightened limits ([`TuneResult::searched_within`]):
+    /// which limits they kept, keys named after `prefix`; `None` otherwise.
+    pub fn searched_note(&self, prefix: &str) -> Option<String> {
+        let within = self.searched_within.as_ref()?;
+        let fmt = crate::settings::fmt_4;
+        let tightened: Vec<String> =
+            [("max_u", &within.max_u, &within.file_max_u), ("max_uf", &within.max_uf, &within.file_max_uf)]
+                .into_iter()
+                .flat_map(|(key, searched, file)| {
+                    (searched.iter().zip(file).enumerate())
+                        .filter(|(_, (s, f))| s < f)
+                        .map(move |(i, (s, f))| format!("{prefix}{key}[{i}] = {} as {}", fmt(*f), fmt(*s)))
+                })
+                .collect();
+        let kept = if self.within_limits.iter().all(|w| *w == Some(true)) {
+            "keeps the file's limits"
+        } else {
+            "still breaks them"
+        };
+        Some(format!(
+            "each channel's search met its limits, but their joint run broke them (u_f = −K x̂ + F u_d mixes every channel's command); the searches ran again keeping {} (each broken limit × limit / the joint run's figure, {} rounds at most), and the joint run {kept}",
+            tightened.join(", "),
+            JOINT_ROUNDS
         ))
     }
 
@@ -601,7 +641,10 @@ fn key(p: &TunePoint) -> f64 {
 struct Search<'a> {
     study: &'a Study,
     scenario: &'a Scenario,
+    /// The limits the searched channel keeps ([`tune`]'s round) and the file's, which it keeps
+    /// on the other channels it guards.
     spec: &'a TuneSpec,
+    file: &'a TuneSpec,
     base_mu: &'a [f64],
     /// Per channel j, whether the scenario's own μ keeps its limits: every search must then keep
     /// them too (a limit the scenario's μ already breaks is channel j's search to meet).
@@ -630,7 +673,7 @@ impl Search<'_> {
         let kept = |j: usize| j == i || self.guarded[j];
         let broken: Vec<String> = (row.completed().iter().enumerate())
             .filter(|&(j, _)| kept(j))
-            .flat_map(|(j, f)| spec.broken_limits(j, f, "tune."))
+            .flat_map(|(j, f)| if j == i { spec } else { self.file }.broken_limits(j, f, "tune."))
             .collect();
         let objective = figures.filter(|_| broken.is_empty()).map(|c| objective.of(&c)).filter(|v| v.is_finite());
         // A completed run beyond a limit: the limit is why it has no objective.
@@ -716,15 +759,74 @@ impl Search<'_> {
     }
 }
 
+/// Search rounds at most: the first within the file's limits, then within limits tightened where
+/// the joint run broke them ([`tightened`]).
+pub const JOINT_ROUNDS: usize = 4;
+
 /// Runs the m searches of `study.tune` (in parallel on rayon's current pool) and the joint check.
+/// Where the joint run breaks a limit each search met (u_f mixes every channel's command), the
+/// searches run again within that limit scaled by limit / joint figure, up to [`JOINT_ROUNDS`]
+/// rounds, the joint run always judged against the file's limits: a bioreactor's 0.51125 against
+/// 0.5 had been told to lower the limit by the excess and tune again, which missed the lowered
+/// limit (0.4915 > 0.48875) while meeting its own, three times by hand (helper tryout, 2026-12-07).
 /// When `opts.stop` is set the result holds what was evaluated by then, marked partial.
 pub fn tune(study: &Study, opts: &TuneOptions<'_>) -> Result<TuneResult, StudyError> {
     let spec = tune_spec(study)?;
     let scenario = Scenario::from_document(study.base()).map_err(|e| err("scenario", e.to_string()))?;
+    let mut searched = spec.clone();
+    let mut result = search_and_join(study, (&scenario, spec, &searched), opts);
+    for _ in 1..JOINT_ROUNDS {
+        let Some(tighter) = tightened((&searched, spec), &result).filter(|_| !result.partial) else { break };
+        let mut next = search_and_join(study, (&scenario, spec, &tighter), opts);
+        // A round that leaves a channel without a feasible μ (a limit tightened below what its
+        // search can meet) is no better: the last round stands, with its caution.
+        let lost = (result.channels.iter().zip(&next.channels)).any(|(a, b)| a.chosen.is_some() && b.chosen.is_none());
+        if lost || next.partial {
+            break;
+        }
+        searched = tighter;
+        next.searched_within = Some(SearchedWithin {
+            max_u: searched.max_u.clone(),
+            max_uf: searched.max_uf.clone(),
+            file_max_u: spec.max_u.clone(),
+            file_max_uf: spec.max_uf.clone(),
+        });
+        result = next;
+    }
+    Ok(result)
+}
+
+/// The limits of `searched` scaled down where the joint run of `result` broke the file's (`spec`):
+/// each broken limit × limit / the joint figure; `None` where it broke none (or has no figures).
+fn tightened((searched, spec): (&TuneSpec, &TuneSpec), result: &TuneResult) -> Option<TuneSpec> {
+    let joint = result.joint.as_ref()?.completed();
+    let mut tighter = searched.clone();
+    let mut changed = false;
+    for (i, f) in joint.iter().enumerate().filter(|(i, _)| result.within_limits.get(*i) == Some(&Some(false))) {
+        for (limit, value, file) in
+            [(&mut tighter.max_u[i], f.max_u, spec.max_u[i]), (&mut tighter.max_uf[i], f.max_uf, spec.max_uf[i])]
+        {
+            if value > file && value.is_finite() {
+                *limit *= file / value;
+                changed = true;
+            }
+        }
+    }
+    changed.then_some(tighter)
+}
+
+/// One round of [`tune`]: the m searches within `searched`'s limits, the joint run judged against
+/// `spec`'s (the file's).
+fn search_and_join(
+    study: &Study,
+    (scenario, spec, searched): (&Scenario, &TuneSpec, &TuneSpec),
+    opts: &TuneOptions<'_>,
+) -> TuneResult {
     let base_mu = scenario.design.mu.clone();
     let m = base_mu.len();
     let stopped = || opts.stop.is_some_and(|s| s.load(Ordering::Relaxed));
-    // The scenario's own run, where a limit is set: which limits every search must keep.
+    // The scenario's own run, where a limit is set: which of the file's limits every search must
+    // keep (a tightened one is its own channel's search's to keep).
     let limited = spec.max_u.iter().chain(&spec.max_uf).any(|l| l.is_finite());
     let base = if limited { run_with(study, &base_mu, &stopped) } else { None };
     let guarded = (0..m)
@@ -732,7 +834,7 @@ pub fn tune(study: &Study, opts: &TuneOptions<'_>) -> Result<TuneResult, StudyEr
             base.as_ref().and_then(|r| r.completed().get(j)).is_some_and(|f| spec.broken_limits(j, f, "").is_empty())
         })
         .collect();
-    let search = Search { study, scenario: &scenario, spec, base_mu: &base_mu, guarded, opts };
+    let search = Search { study, scenario, spec: searched, file: spec, base_mu: &base_mu, guarded, opts };
     let jobs: Vec<(usize, f64)> = (0..m).flat_map(|i| search.log_grid(i).map(move |mu| (i, mu))).collect();
     let coarse: Vec<(usize, TunePoint)> =
         jobs.into_par_iter().filter_map(|(i, mu)| Some((i, search.score(i, mu)?))).collect();
@@ -746,7 +848,7 @@ pub fn tune(study: &Study, opts: &TuneOptions<'_>) -> Result<TuneResult, StudyEr
             let joint_value = joint.as_ref().and_then(|j| j.completed().get(c.channel)).map(|f| spec.objective.of(f));
             match (search, joint_value) {
                 (Some(s), Some(j)) if s.is_finite() && j.is_finite() => {
-                    (Some(j - s), (j - s).abs() <= tolerance(spec.objective, s, &scenario, c.channel))
+                    (Some(j - s), (j - s).abs() <= tolerance(spec.objective, s, scenario, c.channel))
                 }
                 _ => (None, false),
             }
@@ -759,7 +861,7 @@ pub fn tune(study: &Study, opts: &TuneOptions<'_>) -> Result<TuneResult, StudyEr
         })
         .collect();
     let partial = joint.is_none();
-    Ok(TuneResult {
+    TuneResult {
         objective: spec.objective,
         channels,
         mu,
@@ -768,7 +870,8 @@ pub fn tune(study: &Study, opts: &TuneOptions<'_>) -> Result<TuneResult, StudyEr
         reproduced,
         within_limits,
         partial,
-    })
+        searched_within: None,
+    }
 }
 
 impl TuneCurve {
@@ -931,6 +1034,7 @@ mod tests {
             reproduced: vec![false, false],
             within_limits: vec![None, None],
             partial: true,
+            searched_within: None,
         };
         assert_eq!(stopped.joint_limits_caution(&spec, ""), None);
         // Where the joint run broke one, it is named (here without figures to quote).
