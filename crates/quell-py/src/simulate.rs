@@ -738,9 +738,7 @@ pub fn simulate(
     {
         crate::errors::warn(py, &crate::errors::in_python(w))?;
     }
-    // A file's scenario names its keys as the file does, unless this call set them.
-    let python_keys = s.from_values || edited.is_some();
-    let (result, interrupt) = run_released(py, scn, &design, settings, python_keys)?;
+    let (result, interrupt) = run_released(py, scn, &design, settings, s.from_values || edited.is_some())?;
     // After the run's own checks (a sample time they refuse gets no warning).
     if let Some((t, h)) = sampled {
         crate::errors::warn_coarse_sample(py, &design, &scn.reference, &scn.disturbance, t, Some(h))?;
@@ -804,7 +802,9 @@ fn step_budget(py: Python<'_>, max_steps: Option<&Bound<'_, PyAny>>) -> PyResult
 /// KeyboardInterrupt that stopped it (the result then holds the samples up to it). The run first
 /// reserves its memory bound from the budget that runs under way share ([`Run::reserve_memory`]),
 /// so that threads calling `quell.simulate` at once wait rather than take the machine's memory; a
-/// Ctrl-C while it waits ends the run at its first progress check.
+/// Ctrl-C while it waits ends the run at its first progress check. Its errors name keys in
+/// Python's spelling where `python_keys` (a file's scenario names them as the file does, unless
+/// the call set them).
 fn run_released(
     py: Python<'_>,
     scn: &quell::Scenario,

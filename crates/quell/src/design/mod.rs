@@ -454,8 +454,8 @@ impl Design {
     pub fn observability(&self) -> &RankTest {
         &self.observability
     }
-    /// The assumption checks passed, one figure each: `quell design --json`'s `checks` and Python's
-    /// `Design.checks` ([`AssumptionChecks`]).
+    /// The assumption checks passed, one figure each ([`AssumptionChecks`]): the design report's
+    /// `checks` in JSON, and Python's `Design.checks`.
     pub fn checks(&self) -> AssumptionChecks {
         let max_re = |e: &[Complex<f64>]| e.iter().map(|z| z.re).fold(f64::NEG_INFINITY, f64::max);
         let decisions = self.relative_degree_decisions();

@@ -1449,8 +1449,9 @@ fn stalled_advice(
 }
 
 /// Channel i (gain μ) whose tail misses its bound where the averaged law has every relevant
-/// direction converge by t_end and nothing else (delay, trend) says why: that law misjudges the
-/// loop, so μ is found by runs. An irrigation canal's pools in the paper's regressor form, at the
+/// direction converge by t_end, at no more than a small raise of μ (which the stiff line offers),
+/// and nothing else (delay, trend) says why: that law misjudges the loop, so μ is found by runs;
+/// `None` where the law asks for more μ. An irrigation canal's pools in the paper's regressor form, at the
 /// μ = 2.9e-24 that law offered (adapting at 250× the loop's rate), stalled at 57× their bound and
 /// were told to keep μ; a run at 1e-22 converged (helper tryout, 2026-12-07).
 fn unexplained_miss(
@@ -1459,11 +1460,14 @@ fn unexplained_miss(
     c: &ChannelAverage,
     (t_end, stiff): (f64, f64),
     trend: Option<&Trend>,
-) -> String {
+) -> Option<String> {
+    let relevant = c.slowest_relevant(RELEVANT_SHARE);
+    if round_up_2(horizon_mu(relevant, c.lambda_max(), (t_end, stiff)).0) > estimate::WORTH_CHANGING * mu {
+        return None;
+    }
     let unit = result.time_unit;
     let tail = result.tail_max_abs_error(i).unwrap_or(f64::NAN) / result.scale(i);
     let ratio = trend.map_or(String::new(), |r| format!(", RMS ratio {:.2} {}", r.ratio, r.windows(unit)));
-    let relevant = c.slowest_relevant(RELEVANT_SHARE);
     let fast = mu * c.lambda_max() / (stiff / STIFF_RATIO);
     let why = if mu * c.lambda_max() > stiff {
         format!(
@@ -1473,13 +1477,13 @@ fn unexplained_miss(
     } else {
         String::new()
     };
-    format!(
+    Some(format!(
         "channel {}'s tail misses its {:.0} % bound ({tail:.1e} of its scale{ratio}) although the averaged law has its slowest relevant direction converge by t_end (1/(μλ) = {:.1e} {unit}, {:.0} e-folds): that law misjudges this loop{why}; choose design.mu[{i}] by runs, a tuning over μ (quell tune, docs/tuning.md), trying larger μ as well as smaller",
         i + 1,
         100.0 * TAIL_BOUND,
         1.0 / (mu * relevant),
         mu * relevant * t_end,
-    )
+    ))
 }
 
 fn channel(
@@ -1548,25 +1552,25 @@ fn channel(
         )),
         _ => {}
     }
-    // A tail beyond its bound that none of the above explains: the averaged law has it converge,
-    // at no more than a small raise of μ (which the stiff line offers, where it applies).
-    let relevant = c.slowest_relevant(RELEVANT_SHARE);
-    let law_raises = round_up_2(horizon_mu(relevant, c.lambda_max(), (t_end, stiff)).0) > estimate::WORTH_CHANGING * mu;
-    let unexplained = horizon_advice && missed && advice.is_empty() && !law_raises;
-    if unexplained {
-        advice.push(unexplained_miss(result, (i, mu), c, (t_end, stiff), judged.as_ref()));
-    }
+    let unexplained = (horizon_advice && missed && advice.is_empty())
+        .then(|| unexplained_miss(result, (i, mu), c, (t_end, stiff), judged.as_ref()))
+        .flatten();
+    let pace = (stiff / STIFF_RATIO, t_end, unexplained.is_some());
+    advice.extend(unexplained);
     if mu * c.lambda_max() > stiff {
-        let signals = remedy.signals;
-        advice.push(estimate::stiff_advice(design, (i, mu), c, (stiff / STIFF_RATIO, t_end, unexplained), signals));
+        advice.push(estimate::stiff_advice(design, (i, mu), c, pace, remedy.signals));
     }
-    if c.residual_rms > 1e-3 * c.open_loop_rms.max(f64::MIN_POSITIVE) {
-        advice.push(format!(
-            "part of channel {}'s error (RMS {:.2e} of {:.2e}) lies outside the regressor's span: give every signal frequency its filter poles (two per harmonic, one per bias)",
-            i + 1, c.residual_rms, c.open_loop_rms
-        ));
-    }
+    advice.extend(residual_advice(i, c));
     ChannelDiagnostics::of(i, c, mu, (t_end, trend), advice)
+}
+
+/// Where more than 1e-3 of channel i's open-loop error lies outside the regressor's span: which
+/// filter poles are missing.
+fn residual_advice(i: usize, c: &ChannelAverage) -> Option<String> {
+    (c.residual_rms > 1e-3 * c.open_loop_rms.max(f64::MIN_POSITIVE)).then(|| format!(
+        "part of channel {}'s error (RMS {:.2e} of {:.2e}) lies outside the regressor's span: give every signal frequency its filter poles (two per harmonic, one per bias)",
+        i + 1, c.residual_rms, c.open_loop_rms
+    ))
 }
 
 impl ChannelDiagnostics {
