@@ -175,9 +175,11 @@ fn report_text(a: &AutoDesign) -> String {
         s.push_str(&format!("  {} = {}\n    {}\n", c.key, c.value, c.why));
     }
     let v = &a.verification;
+    // A sampled scenario's runs count the controller's steps (t_end / T_s + 1), not a solver's.
+    let steps_of = if a.scenario.simulation.sample_time.is_some() { "controller steps" } else { "solver steps" };
     let kept = match v.steps {
         0 => "no run reached t_end".to_string(),
-        steps => format!("the kept design's run: {steps} solver steps"),
+        steps => format!("the kept design's run: {steps} {steps_of}"),
     };
     s.push_str(&format!("verification ({} simulation{}; {kept}):\n", v.runs, if v.runs == 1 { "" } else { "s" }));
     for i in 0..v.bound.len() {
@@ -222,7 +224,7 @@ fn report_text(a: &AutoDesign) -> String {
         let per_input = v.candidates[0].max_uf.len() > 1;
         let uf = if per_input { "max|u_f,i|" } else { "max|u_f|" };
         s.push_str(&format!(
-            "  candidates (poles over the first proposal's, μ over the averaged law's choice for those poles: worst tail/bound, {uf}, solver steps):\n"
+            "  candidates (poles over the first proposal's, μ over the averaged law's choice for those poles: worst tail/bound, {uf}, {steps_of}):\n"
         ));
         for c in &v.candidates {
             let kept = if c.chosen { "  ← kept" } else { "" };
@@ -268,7 +270,7 @@ fn delay_lines(a: &AutoDesign) -> String {
         // Whole samples move a sampled scenario's delays further than the factor (2 ms at
         // T_s = 1 ms × 1.1 is 3 ms, +50 %): said, as the summary line counts them.
         let whole = if (c.error - (c.factor - 1.0).abs()).abs() > 1e-9 {
-            format!(": whole samples, up to {} % off", crate::run::short(100.0 * c.error))
+            format!(": whole samples, up to {} off", quell::auto::percent(c.error))
         } else {
             String::new()
         };

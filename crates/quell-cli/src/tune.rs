@@ -152,10 +152,11 @@ fn report(r: &TuneResult, spec: &quell::study::TuneSpec, unit: quell::TimeUnit) 
                     mu_6(t.mu),
                     t.bound
                 )),
-                match (r.partial, *ok) {
-                    (true, _) => "not carried out (interrupted)",
-                    (false, true) => "reproduces it",
-                    (false, false) => "does NOT reproduce it",
+                match (r.partial, *ok, d.is_some_and(|d| d < 0.0)) {
+                    (true, ..) => "not carried out (interrupted)",
+                    (false, true, _) => "reproduces it",
+                    (false, false, true) => "does better than its search (the channels interact)",
+                    (false, false, false) => "does NOT reproduce it",
                 },
                 d.map_or("n/a".to_string(), |d| format!("{d:.3e}")),
                 if r.partial || r.within_limits.get(c.channel).copied().flatten().unwrap_or(true) {

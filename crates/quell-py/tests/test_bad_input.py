@@ -369,3 +369,55 @@ def test_long_doubles_are_floats_and_self_holding_lists_are_refused():
             quell.Study(s, grid={"design.mu[0]": bad})
     with pytest.raises(TypeError, match=r"nested more than 32 deep"):
         quell.Scenario(PLANT, [{"bias": deep}, {"bias": 2.0}], disturbance, **DESIGN)
+
+
+def test_sets_bytes_and_systems_inside_dict_arguments_are_type_errors():
+    """Inside dict arguments a set (no order), bytes (not numbers), a generator or a
+    python-control system were read as lists (b"ab" as u_max = [97, 98]) or leaked
+    python-control's OSError; they are TypeErrors naming the entry, as at top level. Lists,
+    tuples and numpy arrays are still read."""
+    control = pytest.importorskip("control")
+    s = quell.paper_example()
+    sys = control.ss(s.plant.A, s.plant.B, s.plant.C, 0)
+    design = s.design().choices
+    make = lambda **kw: quell.Scenario(s.plant, s.reference, s.disturbance, **design, **kw)
+    for value, found in [(b"ab", "bytes"), ({0.6, 0.3}, "set"), ((x for x in [1.0]), "generator"), (sys, "StateSpace")]:
+        with pytest.raises(TypeError, match=r'^actuator\["u_max"\]: expected a number, string, list or dict, found an? ' + found):
+            make(actuator={"u_max": value})
+    with pytest.raises(TypeError, match=r'^truth\["A"\]: .*found a StateSpace'):
+        make(truth={"A": sys})
+    with pytest.raises(TypeError, match=r"^poles: expected a list of poles.*found a StateSpace"):
+        quell.place(s.plant.A, s.plant.B, sys)
+    with pytest.raises(TypeError, match="found a set"):
+        quell.place(s.plant.A, s.plant.B, {-1.0, -2.0, -3.0})
+    for good in [(0.6, 0.3), [0.6, 0.3], np.array([0.6, 0.3])]:
+        assert "u_max = [0.6, 0.3]" in make(actuator={"u_max": good}).to_toml()
+
+
+def test_a_sample_time_beyond_t_end_is_named_as_the_sample_time():
+    """The default output step is a multiple of the sample time, so a sample time beyond t_end was
+    refused as `output_step`, which the caller had not given."""
+    s = quell.paper_example()
+    with pytest.raises(quell.ScenarioError, match=r"^sample_time: expected a sample time ≤ t_end = 100, found 200") as e:
+        quell.simulate(s, sample_time=200.0)
+    assert e.value.key == "simulation.sample_time"
+
+
+def test_a_file_scenario_names_its_keys_as_the_file_does(tmp_path):
+    """A sampled run's own checks on a scenario read from a file name `simulation.sample_time`, as
+    the CLI does; on a scenario built from arguments, or a sample time given to simulate, the
+    argument `sample_time`."""
+    text = quell.paper_example().to_toml().replace("[simulation]", "[simulation]\nsample_time = 0.3")
+    s = quell.Scenario.from_toml(text)
+    with pytest.raises(quell.ScenarioError, match=r"^simulation\.sample_time: channel 1's delay"):
+        quell.simulate(s)
+    with pytest.raises(quell.ScenarioError, match=r"^sample_time: channel 1's delay"):
+        quell.simulate(quell.paper_example(), sample_time=0.3)
+
+
+def test_auto_design_with_a_plant_names_the_python_argument():
+    """auto_design(plant, …, beta=-1) had named the file's key `design.beta`; Scenario names
+    `beta`, as docs/python.md says of messages on Python arguments."""
+    p = quell.Plant([[0.0, 1.0], [0.0, 0.0]], [[0.0], [1.0]], [[1.0, 0.0]])
+    with pytest.raises((quell.ScenarioError, quell.DesignError), match=r"^beta: "):
+        quell.auto_design(p, [{"bias": 1.0}], t_end=20.0, beta=-1.0)

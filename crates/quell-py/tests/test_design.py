@@ -109,13 +109,14 @@ def test_checks_are_the_cli_checks(tmp_path, quell_bin):
         assert c[key] == value, key
     assert c["tolerance"] == 1e-5 and len(c["relative_degree_measures"]) == 2
     # Outputs and inputs in other units: B* becomes D1 B* D2, numpy's cond grows, ours does not.
-    p = quell.paper_example().plant
+    B = np.array([[1.0, 0.5], [0.3, 2.0]])
     D1, D2 = np.diag([1e3, 1e-2]), np.diag([5.0, 1e-4])
-    kw = dict(channel_poles=[[-6, -2], [-4]], reference_filter_poles=[[-1, -6], [-9]],
-              disturbance_filter_poles=[[-1, -3], [-1, -2, -3]], mu=[20, 30], beta=1.0, observer_poles=[-2, -3, -4])
-    scaled = quell.design(quell.Plant(p.A, p.B @ D2, D1 @ p.C, D=p.D, Q=D1 @ p.Q, delays=p.delays), **kw)
-    np.testing.assert_allclose(scaled.B_star, D1 @ paper_design().B_star @ D2, rtol=1e-12)
-    assert np.linalg.cond(scaled.B_star) > 10 * np.linalg.cond(paper_design().B_star)
+    kw = dict(channel_poles=[[-1], [-2]], reference_filter_poles=[[-0.5], [-0.5]], mu=[1, 1], beta=1.0, observer_poles=[-3, -4])
+    one = quell.design(quell.Plant(np.zeros((2, 2)), B, np.eye(2)), **kw)
+    scaled = quell.design(quell.Plant(np.zeros((2, 2)), B @ D2, D1), **kw)
+    np.testing.assert_allclose(scaled.B_star, D1 @ B @ D2, rtol=1e-12)
+    assert np.linalg.cond(scaled.B_star) > 1e3 * np.linalg.cond(B)
+    c = one.checks
     assert scaled.checks["cond_B_star"] == pytest.approx(c["cond_B_star"], rel=1e-6)
 
 

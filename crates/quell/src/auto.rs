@@ -282,14 +282,18 @@ pub struct DelayCheck {
     pub max_uf: Vec<f64>,
 }
 
+/// A relative delay error as the delay check prints it: a percentage to three decimals, without
+/// trailing zeros (33.333 %, 10 %).
+pub fn percent(e: f64) -> String {
+    format!("{} %", crate::settings::fmt_time(format!("{:.3}", e * 100.0).parse().unwrap_or(0.0)))
+}
+
 impl Verification {
     /// The delay check in a sentence ([`Verification::delay_check`]): the error at which the tail
     /// bound and the effort hold both ways, or what the last level's runs missed and by how
     /// little. Empty without checks.
     pub fn delay_summary(&self) -> String {
         let Some(first) = self.delay_check.first() else { return String::new() };
-        let percent =
-            |e: f64| format!("{} %", crate::settings::fmt_time(format!("{:.3}", e * 100.0).parse().unwrap_or(0.0)));
         if self.delay_tolerance > 0.0 {
             let also = match self.delay_check.iter().take(2).any(|c| !c.met) {
                 true => format!(", not at {}: know the delays that well", percent(first.error)),
@@ -323,7 +327,7 @@ impl Verification {
             }
         }
         format!(
-            "with the true input delays {way} by up to {}, the runs miss {}: the method predicts over the delays as given (the paper assumes them known), so measure them that well or better",
+            "with the true input delays {way} by as little as {} (the least error checked), the runs miss {}: the method predicts over the delays as given (the paper assumes them known), so measure them that well or better",
             percent(least),
             what.join(" and ")
         )

@@ -1420,3 +1420,30 @@ fn a_tail_the_averaged_law_cannot_explain_is_sent_to_runs_and_rounding_is_conver
     let advice = &quell::diagnostics::diagnose_run(&s, &d, &r).channels[1].advice;
     assert!(advice.iter().all(|a| !a.contains("t_end") && !a.contains("tail")), "{advice:?}");
 }
+
+/// The tail-pace line's raised μ assumes a pace in proportion to μ: an F-16 with aft c.g.
+/// (`tests/data`, Stevens & Lewis) was told to raise μ₂ to 15 for 3.3e-5 of its scale by t_end,
+/// and a run at 15 (recomputed here) leaves 2.6e-4. The run now checks the offer with a side run
+/// and says what it reached, keeping the longer t_end as the remedy.
+#[test]
+fn a_raised_mu_the_run_does_not_bear_out_is_not_offered() {
+    let path = format!("{}/tests/data/f16-longitudinal.toml", env!("CARGO_MANIFEST_DIR"));
+    let s = Scenario::from_path(std::path::Path::new(&path)).unwrap();
+    let go = |_| ControlFlow::Continue(());
+    let d = s.design().unwrap();
+    let r = Run::of(&s, &d).simulate(go).unwrap();
+    let mut raised = s.clone();
+    raised.design.mu[1] = 15.0;
+    let at = Run::of(&raised, &raised.design().unwrap()).simulate(go).unwrap();
+    let level = at.rms_error(1, 108.0, 120.0).unwrap() / 3.0;
+    assert!(level > 1e-4, "a run at 15: {level} of its 3° scale");
+    let advice = &quell::diagnostics::diagnose_run(&s, &d, &r).channels[1].advice;
+    let line = advice.iter().find(|a| a.contains("still shrinking")).unwrap();
+    assert!(
+        line.contains(
+            "lengthen simulation.t_end to that, not raise design.mu[1] alone: a run at 15 leaves its tail RMS at"
+        ),
+        "{line}"
+    );
+    assert!(!line.contains("or raise design.mu[1] to about"), "{line}");
+}

@@ -629,7 +629,7 @@ fn closed_loop_with_the_c_controller_and_f32_tail_bounds() {
 /// in double) departs from the f64 run about as far as the compiled f32 C does in the same loop, in
 /// y and in u_f: within a factor of 4 either way, on the paper's example (u_f about 2e-4 of its peak
 /// emulated, 8e-5 compiled) and on the disk servo of `tests/data` (18.8 % and 18.2 %). The factor:
-/// the emulation leaves the adaptive law's operations' own rounding out (the C departed 0.4–2.1× as
+/// the emulation leaves the adaptive law's operations' own rounding out (the C departed 0.4–2.8× as
 /// far on six plants, docs/deployment.md).
 #[test]
 fn the_emulated_f32_loop_departs_as_far_as_the_compiled_f32_c() {

@@ -492,6 +492,14 @@ fn the_coarse_sample_warning_offers_a_sample_time_that_divides_the_output_step()
         let w = quell::sim::coarse_sample_warning(&fast, signals, 0.001, Some(0.1)).unwrap();
         assert!(w.contains(rho) && w.contains(&format!("{bound} (T_s·ρ ≤ 0.2), or slower poles")), "{w}");
     }
+    // Where the signals' highest frequency sets ρ (a 6 rad/s disturbance harmonic against the
+    // paper's 9/s filter pole, within twice it), slower poles are not offered as a remedy.
+    let mut fast = s.clone();
+    fast.disturbance.components[0].harmonics[0].frequency = 6.0;
+    let rates = quell::sim::loop_rates(&d, &s.plant, [&fast.reference, &fast.disturbance]);
+    assert!(rates.iter().all(|&(_, r)| r <= 9.0 + 1e-9) && 9.0 <= 2.0 * 6.0, "{rates:?}");
+    let w = quell::sim::coarse_sample_warning(&d, [&fast.reference, &fast.disturbance], 0.05, None).unwrap();
+    assert!(w.contains("slower poles lower ρ little") && !w.contains("or slower poles"), "{w}");
 }
 
 /// The numbers a message offers: each after "e.g. " or "valid sample time is ", in order.

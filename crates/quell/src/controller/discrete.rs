@@ -20,7 +20,7 @@ pub enum ControllerError {
     /// `output_step`: a run's output step, which `nearest` divides where a sample time near T_s
     /// does, else the message names the output step to set with it (`None` for a controller alone,
     /// or where `nearest` divides it anyway).
-    #[error("simulation.sample_time: channel {}'s delay τ = {} {unit} is not a whole number of samples of T_s = {} {unit} ({ratio:.6} samples); {}", .channel + 1, crate::settings::fmt_short(*.delay), crate::settings::fmt_short(*.sample_time), suggestion(*.nearest, *.output_step, *.unit))]
+    #[error("simulation.sample_time: channel {}'s delay τ = {} {unit} is not a whole number of samples of T_s = {} {unit} ({ratio:.6} samples); {}", .channel + 1, crate::settings::fmt_short(*.delay), crate::settings::fmt_time(*.sample_time), suggestion(*.nearest, *.output_step, *.unit))]
     DelayNotMultiple {
         channel: usize,
         delay: f64,
@@ -32,12 +32,12 @@ pub enum ControllerError {
     },
     /// `nearest` as in `DelayNotMultiple`: the sample time nearest T_s at which every line fits and
     /// every delay is whole.
-    #[error("simulation.sample_time: channel {}'s delay τ = {} {unit} is {} samples of T_s = {} {unit}; a delay line holds at most {max:e} samples; {}", .channel + 1, crate::settings::fmt_short(*.delay), crate::settings::fmt_4(*.samples), crate::settings::fmt_short(*.sample_time), longer(*.nearest, *.unit), max = MAX_DELAY_SAMPLES)]
+    #[error("simulation.sample_time: channel {}'s delay τ = {} {unit} is {} samples of T_s = {} {unit}; a delay line holds at most {max:e} samples; {}", .channel + 1, crate::settings::fmt_short(*.delay), crate::settings::fmt_4(*.samples), crate::settings::fmt_time(*.sample_time), longer(*.nearest, *.unit), max = MAX_DELAY_SAMPLES)]
     DelayTooLong { channel: usize, delay: f64, sample_time: f64, samples: f64, nearest: Option<f64>, unit: TimeUnit },
     /// The delay lines together would hold more than [`MAX_DELAY_LINE_BYTES`]; `at_least` is the
     /// shortest sample time at which they would not, `nearest` the shortest round one from there on
     /// that passes, else as in `DelayTooLong`.
-    #[error("simulation.sample_time: the delay lines of u_i(t − τ_i) and ξ̂(t − τ_i) would hold {rows:e} rows of {width} numbers at T_s = {} {unit} ({:.3} GiB); at most {} GiB are kept; use a sample time ≥ {} {unit}{}", crate::settings::fmt_short(*.sample_time), *.rows * (8 * *.width) as f64 / 1024f64.powi(3), MAX_DELAY_LINE_BYTES / 1024f64.powi(3), crate::settings::fmt_short(*.at_least), such_as(*.nearest, *.unit))]
+    #[error("simulation.sample_time: the delay lines of u_i(t − τ_i) and ξ̂(t − τ_i) would hold {rows:e} rows of {width} numbers at T_s = {} {unit} ({:.3} GiB); at most {} GiB are kept; use a sample time ≥ {} {unit}{}", crate::settings::fmt_time(*.sample_time), *.rows * (8 * *.width) as f64 / 1024f64.powi(3), MAX_DELAY_LINE_BYTES / 1024f64.powi(3), crate::settings::fmt_short(*.at_least), such_as(*.nearest, *.unit))]
     DelayLinesTooLarge {
         rows: f64,
         width: usize,
@@ -847,7 +847,7 @@ fn check_inputs((y, g): (&[f64], &[f64]), m: usize, bound: f64) -> Result<(), Co
 /// above their result) in f32 arithmetic, in the generated C's order; and every state rounded to
 /// f32 after each step. The adaptive law's and the filters' operations stay f64, their results
 /// rounded. `tests/export_c.rs` holds it to the compiled f32 C in closed loop: the C's departure
-/// from f64 was 0.4–2.1× the emulation's on six plants, among them a disk servo whose u_f departs
+/// from f64 was 0.4–2.8× the emulation's on six plants, among them a disk servo whose u_f departs
 /// 18 % of its peak (the emulation without the core's products in f32 had read 0.15 %).
 #[derive(Debug, Clone)]
 pub(crate) struct SinglePrecision {

@@ -214,6 +214,7 @@ fn diagnose_loop(s: &crate::Scenario, design: &Design, result: &SimResult, cance
         d.advice.insert(0, line);
     }
     check_lower_offers(s, design, result, &mut d);
+    check_raise_offers(s, result, &mut d);
     d.advice.extend(loose_atol(s, result));
     d.advice.extend(noise::noise_effort(result, quiet.as_ref()));
     if cancellation {
@@ -1379,7 +1380,7 @@ fn shrinking_advice(
     let raised = round_up_2(mu * (1.0 + AVERAGED_MARGIN * (t_needed - t1) / (t1 - t0)));
     let or_mu = if stiff.is_some_and(|stiff| raised * lambda_max <= stiff) {
         // Said with its cost: a house's heater, told to raise μ 3×, peaked 54× higher.
-        format!(", or raise {key} to about {} where max|u_f| allows (the missing e-folds at a pace raised with μ, {AVERAGED_MARGIN:.0}× for the transient before it; a faster adaptation drives u_f harder)", fmt_short(raised))
+        format!(", {}{RAISE_OFFER_WORDS}, {AVERAGED_MARGIN:.0}× for the transient before it; a faster adaptation drives u_f harder)", raise_offer(i, raised))
     } else {
         String::new()
     };
@@ -1387,6 +1388,69 @@ fn shrinking_advice(
         "{head}: at that pace it reaches {aim:.1e} of its scale (a third of the {NEGLIGIBLE:e} at which it counts as converged) by about t = {} {unit}, a lower estimate where the pace slows as the slowest mode takes over (a run followed this far then asks for more); lengthen simulation.t_end to that{or_mu}",
         fmt_short(t_needed)
     )
+}
+
+/// What follows every [`raise_offer`] in [`shrinking_advice`]: [`check_raise_offers`] looks for it.
+const RAISE_OFFER_WORDS: &str = " where max|u_f| allows (the missing e-folds at a pace raised with μ";
+
+/// How [`shrinking_advice`] offers a raised μ_i, which [`check_raise_offers`] finds by it.
+fn raise_offer(i: usize, mu: f64) -> String {
+    format!("{}{}", raise_prefix(i), fmt_short(mu))
+}
+
+fn raise_prefix(i: usize) -> String {
+    format!("or raise design.mu[{i}] to about ")
+}
+
+/// The tail-pace line's offer to raise μ_i "to about X" ([`shrinking_advice`]) assumes the pace
+/// grows in proportion to μ, which a loop's own dynamics cap: an F-16's pitch channel, told to raise
+/// μ₂ to 15 for 3.3e-5 of its scale by t_end, reached 2.6e-4 there (helper tryout, 2026-12-07).
+/// After a completed run, one side run with every offered μ raised checks them; a channel whose
+/// tail RMS there is still beyond [`NEGLIGIBLE`] of its scale has the offer replaced by what the
+/// run reached. Not under noise or a true actuator (their tails are not the adaptation's alone),
+/// nor where the side run does not complete.
+fn check_raise_offers(s: &crate::Scenario, result: &SimResult, d: &mut Diagnostics) {
+    if !matches!(result.outcome, None | Some(Outcome::Completed)) || s.noise.is_some() || s.actuator.is_some() {
+        return;
+    }
+    let offered = |i: usize, line: &str| -> Option<f64> {
+        let (head, words) = (raise_prefix(i), line.find(RAISE_OFFER_WORDS)?);
+        line[line[..words].rfind(&head)? + head.len()..words].parse().ok()
+    };
+    let offers: Vec<(usize, f64)> = (d.channels.iter().enumerate())
+        .filter_map(|(i, c)| c.advice.iter().find_map(|a| offered(i, a)).map(|x| (i, x)))
+        .collect();
+    if offers.is_empty() {
+        return;
+    }
+    let mut raised = s.clone();
+    for &(i, x) in &offers {
+        raised.design.mu[i] = x;
+    }
+    let Ok(at) = raised.design() else { return };
+    let Ok(r) = sampled::side_run(&raised, &at) else { return };
+    if !matches!(r.outcome, None | Some(Outcome::Completed)) {
+        return;
+    }
+    let together = if offers.len() > 1 { " (every offered μ at once)" } else { "" };
+    for (i, x) in offers {
+        let (from, to) = (r.tail_from().unwrap_or(0.0), r.t.last().copied().unwrap_or(0.0));
+        let Some(level) = r.rms_error(i, from, to).map(|e| e / r.scale(i)) else { continue };
+        if level <= NEGLIGIBLE {
+            continue;
+        }
+        let checked = format!(
+            "not raise design.mu[{i}] alone: a run at {}{together} leaves its tail RMS at {level:.1e} of its scale, the pace growing less than μ here (runs over μ compare: quell tune, docs/tuning.md)",
+            fmt_short(x)
+        );
+        let offer = raise_offer(i, x);
+        for line in &mut d.channels[i].advice {
+            if let (Some(at), Some(end)) = (line.find(&offer), line.find(RAISE_OFFER_WORDS)) {
+                let close = line[end..].find(')').map_or(line.len(), |k| end + k + 1);
+                line.replace_range(at..close, &checked);
+            }
+        }
+    }
 }
 
 /// The share of the run beyond which an input delay is what its horizon lacks ([`delay_advice`]).

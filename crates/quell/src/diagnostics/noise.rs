@@ -55,7 +55,7 @@ pub(crate) fn noise_tail(result: &SimResult, quiet: Option<&Quiet>) -> Option<No
     let channels: Vec<(usize, String)> = (missed.iter().copied().filter(|&i| tail_within_bound(clean, i)))
         .map(|i| {
             (i, format!(
-                "channel {}'s tail max|e| = {:.2e} is the measurement noise's: {:.2e} without [noise], within its bound ({:.0} % of its scale); the advice below is the noise-free run's, since none on the design's poles, μ or t_end reduces the noise's part (its level and bandwidth, and how much of it the observer and the adaptive law pass, set it)",
+                "channel {}'s tail max|e| = {:.2e} is the measurement noise's: {:.2e} without [noise], within its bound ({:.0} % of its scale); any advice on this channel is the noise-free run's (none where that run needs none), since none on the design's poles, μ or t_end reduces the noise's part (its level and bandwidth, and how much of it the observer and the adaptive law pass, set it)",
                 i + 1,
                 tail(result, i),
                 tail(clean, i),

@@ -48,14 +48,36 @@ pub fn coarse_sample_warning(
     let rate = super::loop_rate(design, design.plant(), [reference, disturbance]);
     let unit = design.plant().time_unit;
     is_coarse(sample_time * rate).then(|| {
+        let slower = match fixed_rate(design, [reference, disturbance], rate) {
+            Some(what) if what.starts_with("plant.") => format!("; slower poles cannot lower ρ, which {what} sets"),
+            Some(_) => "; slower poles lower ρ little, within twice the signals' highest frequency, which the internal model follows".to_string(),
+            None => ", or slower poles: the automatic design chooses them for a sample time set in simulation.sample_time".to_string(),
+        };
         format!(
-            "simulation.sample_time: T_s = {} {unit} is {}× the loop's fastest time constant 1/ρ (ρ = {} /{unit}: the plant, observer, channel and filter poles, 1/β and the signals' frequencies): the discrete controller may depart from the continuous design; choose {}, or slower poles: the automatic design chooses them for a sample time set in simulation.sample_time (T_s·ρ ≤ {COARSE_SAMPLE} is a bound the sampled loop needs, not one that suffices: compare a sampled run with its continuous loop, as a sampled run's advice does)",
-            settings::fmt_short(sample_time),
+            "simulation.sample_time: T_s = {} {unit} is {}× the loop's fastest time constant 1/ρ (ρ = {} /{unit}: the plant, observer, channel and filter poles, 1/β and the signals' frequencies): the discrete controller may depart from the continuous design; choose {}{slower} (T_s·ρ ≤ {COARSE_SAMPLE} is a bound the sampled loop needs, not one that suffices: compare a sampled run with its continuous loop, as a sampled run's advice does)",
+            settings::fmt_time(sample_time),
             settings::fmt_above(sample_time * rate, COARSE_SAMPLE),
             settings::fmt_short(settings::significant(rate, 3)),
             fine_sample_time(design, rate, output_step)
         )
     })
+}
+
+/// What sets the loop's rate `rate` where slower poles do not lower it: the plant itself, or the
+/// signals' highest frequency with poles within twice it (the internal model's filters sit near the
+/// frequencies, and the automatic design's rules start the channel poles at twice them); `None`
+/// where poles the design chooses set it beyond that. A converter's 6th harmonic at 2.262 rad/ms
+/// set ρ = 4.524 through its channel poles, and the warning had still offered slower poles
+/// (helper tryout, 2026-12-07).
+fn fixed_rate(design: &Design, signals: [&Signal; 2], rate: f64) -> Option<&'static str> {
+    let rates = super::loop_rates(design, design.plant(), signals);
+    let frequency = rates.iter().find(|(what, _)| what.starts_with("the signals")).map_or(0.0, |r| r.1);
+    let (what, _) = rates.into_iter().find(|&(_, r)| r == rate)?;
+    if what.starts_with("plant.") {
+        Some(what)
+    } else {
+        (rate <= 2.0 * frequency * (1.0 + 1e-9)).then_some("the signals' highest frequency")
+    }
 }
 
 /// What a sampled-data controller of `design` needs, as `quell design` reports it before any
@@ -234,7 +256,9 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
         KeyError::new(
             "simulation.output_step",
             format!(
-                "expected a whole multiple of sample_time = {T} {unit}, found {h} {unit} ({:.6} samples; each recorded row is a controller step); set output_step to a multiple of the sample time, e.g. {} {unit}{divisor}",
+                "expected a whole multiple of sample_time = {} {unit}, found {} {unit} ({:.6} samples; each recorded row is a controller step); set output_step to a multiple of the sample time, e.g. {} {unit}{divisor}",
+                short(T),
+                short(h),
                 h / T,
                 short(multiple),
             ),
@@ -320,7 +344,7 @@ fn true_delays_whole(run: &Run<'_>, T: f64) -> Result<(), KeyError> {
             "simulation.sample_time",
             format!(
                 "T_s = {} {unit} makes {key} = {} {unit} a delay of {:e} samples; the true plant's delay line holds at most {:e} samples ({} {unit}){offer}",
-                settings::fmt_short(T),
+                settings::fmt_time(T),
                 settings::fmt_short(tau),
                 (tau / T).round(),
                 discrete::MAX_DELAY_SAMPLES,
@@ -332,7 +356,7 @@ fn true_delays_whole(run: &Run<'_>, T: f64) -> Result<(), KeyError> {
         "simulation.sample_time",
         format!(
             "T_s = {} {unit} does not make every delay of the run a whole number of samples ({} {unit}){offer}",
-            settings::fmt_short(T),
+            settings::fmt_time(T),
             sets.join(", ")
         ),
     ))
