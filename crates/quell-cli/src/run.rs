@@ -385,7 +385,11 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
                     // two-area power system's 0.098 pu tail "settled" within, 5× its load step.
                     (Some(t), _) => {
                         let regulated = result.column(&result.g, result.m, i).all(|g| g == 0.0);
-                        let of = if regulated { " of its peak error, g being 0" } else { "" };
+                        let of = if regulated {
+                            " of its peak error, at least 1e-10 of the loop's signals, g being 0"
+                        } else {
+                            ""
+                        };
                         format!("settled (2 % band{of}) at t = {} {}", short(t), result.time_unit)
                     }
                     (None, Some(note)) => note.clone(),

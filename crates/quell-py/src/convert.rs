@@ -426,14 +426,19 @@ pub fn decimal_digits(obj: &Bound<'_, PyAny>) -> String {
     format!("about {}", ((bits.max(1) - 1) as f64 * std::f64::consts::LOG10_2).floor() as u64 + 1)
 }
 
-/// Whether `obj` is a list, a tuple or a numpy array of at least one dimension: the sequences an
-/// argument takes. Other iterables are refused: a set has no order, bytes are not numbers, and a
-/// python-control system passed inside a dict had leaked python-control's own OSError from its
-/// `__getitem__` (helper tryout, 2026-12-07).
+/// Whether `obj` is a sequence an argument takes: a list, a tuple, a range, a numpy array of at
+/// least one dimension, or an array-like with `__array__` (a pandas Series, a torch tensor). Other
+/// iterables are refused: a set has no order, bytes are not numbers, an iterator is used up by
+/// reading, and a python-control system passed inside a dict had leaked python-control's own
+/// OSError from its `__getitem__` (helper tryout, 2026-12-07).
 pub fn is_sequence(obj: &Bound<'_, PyAny>) -> bool {
+    if let Ok(a) = obj.cast::<numpy::PyUntypedArray>() {
+        return a.ndim() > 0;
+    }
     obj.is_instance_of::<PyList>()
         || obj.is_instance_of::<PyTuple>()
-        || obj.cast::<numpy::PyUntypedArray>().is_ok_and(|a| a.ndim() > 0)
+        || obj.is_instance_of::<pyo3::types::PyRange>()
+        || (obj.hasattr("__array__").unwrap_or(false) && obj.hasattr("__len__").unwrap_or(false))
 }
 
 /// The items of a list argument ([`is_sequence`]); anything else is a TypeError naming `name` and

@@ -493,7 +493,6 @@ impl AutoDesign {
         let passed = self.verification.passed;
         [
             self.explicit_stiff_warning(),
-            self.explicit_stiff_warning(),
             self.cancellation_warning(),
             self.peaking_warning(),
             self.error_peaking_warning(),

@@ -54,14 +54,6 @@ impl Precision {
             Precision::F32 => 1e12,
         }
     }
-    /// The unit roundoff's square root: below this share of a loop's largest signal, an error is
-    /// rounding ([`crate::sim::SimResult::scale`]).
-    pub fn rounding_floor(self) -> f64 {
-        match self {
-            Precision::F64 => f64::EPSILON.sqrt(),
-            Precision::F32 => f64::from(f32::EPSILON).sqrt(),
-        }
-    }
     /// The precision named `f64` or `f32`.
     pub fn from_name(name: &str) -> Option<Precision> {
         [Precision::F64, Precision::F32].into_iter().find(|p| p.name() == name)

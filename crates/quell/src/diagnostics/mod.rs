@@ -157,7 +157,7 @@ pub fn diagnose_run(s: &crate::Scenario, design: &Design, result: &SimResult) ->
     // given as they are and the advice on sampling, μ and the design is left to the f64 run (a
     // turbofan whose f32 loop diverged had been told that the sampling made it and to redesign
     // for the sample time, a drifting one that μ or a model error grew its error).
-    let mut d = diagnose_with(design, [&s.reference, &s.disturbance], result, false);
+    let mut d = diagnose_with(design, [&s.reference, &s.disturbance], result, (false, modelled(s)));
     let double = &check.reference;
     for (i, c) in d.channels.iter_mut().enumerate() {
         let tail = double.tail_max_abs_error(i);
@@ -184,7 +184,8 @@ fn diagnose_loop(s: &crate::Scenario, design: &Design, result: &SimResult, cance
     // its bound, had none).
     let (lines, compared) = sampled::sampled_lines(s, design, result, quiet.as_ref());
     let follows = compared == sampled::Compared::Follows;
-    let diagnose = |result: &SimResult| diagnose_with(design, [&s.reference, &s.disturbance], result, follows);
+    let diagnose =
+        |result: &SimResult| diagnose_with(design, [&s.reference, &s.disturbance], result, (follows, modelled(s)));
     let mut d = diagnose(result);
     // Where the noise's are all the missed tails, the shared advice and the mismatch's are judged on
     // the noise-free run too.
@@ -495,16 +496,22 @@ fn largest_entry_change(t: &nalgebra::DMatrix<f64>, m: &nalgebra::DMatrix<f64>, 
 
 /// The diagnostics of `result`, a run of `design` under g = `reference`, ω = `disturbance`.
 pub fn diagnose(design: &Design, reference: &Signal, disturbance: &Signal, result: &SimResult) -> Diagnostics {
-    diagnose_with(design, [reference, disturbance], result, false)
+    diagnose_with(design, [reference, disturbance], result, (false, true))
+}
+
+/// Whether `s` runs the design model itself, with no true plant or actuator of its own: only then
+/// is a tail the averaged law cannot explain that law's misjudgement ([`unexplained_miss`]).
+fn modelled(s: &crate::Scenario) -> bool {
+    !s.truth_differs() && s.actuator.is_none()
 }
 
 /// [`diagnose`]; `follows`: a sampled run found to follow its continuous loop, whose coarse sample
-/// time then withholds no advice.
+/// time then withholds no advice; `modelled`: the run's plant is the design model ([`modelled`]).
 fn diagnose_with(
     design: &Design,
     [reference, disturbance]: [&Signal; 2],
     result: &SimResult,
-    follows: bool,
+    (follows, modelled): (bool, bool),
 ) -> Diagnostics {
     let avg = Averaged::new(design, reference, disturbance);
     let t_end = result.t.last().copied().unwrap_or(0.0);
@@ -559,7 +566,9 @@ fn diagnose_with(
         .channels
         .iter()
         .enumerate()
-        .map(|(i, c)| channel(design, i, c, &avg.fidelity, result, (t_end, stiff, tunable, settling), &remedy))
+        .map(|(i, c)| {
+            channel(design, i, c, &avg.fidelity, result, (t_end, stiff, tunable, settling, modelled), &remedy)
+        })
         .collect();
     // A direction no μ converges, where the cause is g's and ω's units: the way out is a rescaling.
     // Not where the filters are off the signals' scale: bringing them to it changes Ω̄'s spread, so
@@ -1407,8 +1416,8 @@ fn raise_prefix(i: usize) -> String {
 /// μ₂ to 15 for 3.3e-5 of its scale by t_end, reached 2.6e-4 there (helper tryout, 2026-12-07).
 /// After a completed run, one side run with every offered μ raised checks them; a channel whose
 /// tail RMS there is still beyond [`NEGLIGIBLE`] of its scale has the offer replaced by what the
-/// run reached. Not under noise or a true actuator (their tails are not the adaptation's alone),
-/// nor where the side run does not complete.
+/// run reached, or how it ended where it diverged or failed. Not under noise or a true actuator
+/// (their tails are not the adaptation's alone), nor where the side run's step budget ended it.
 fn check_raise_offers(s: &crate::Scenario, result: &SimResult, d: &mut Diagnostics) {
     if !matches!(result.outcome, None | Some(Outcome::Completed)) || s.noise.is_some() || s.actuator.is_some() {
         return;
@@ -1429,18 +1438,23 @@ fn check_raise_offers(s: &crate::Scenario, result: &SimResult, d: &mut Diagnosti
     }
     let Ok(at) = raised.design() else { return };
     let Ok(r) = sampled::side_run(&raised, &at) else { return };
-    if !matches!(r.outcome, None | Some(Outcome::Completed)) {
-        return;
-    }
     let together = if offers.len() > 1 { " (every offered μ at once)" } else { "" };
     for (i, x) in offers {
         let (from, to) = (r.tail_from().unwrap_or(0.0), r.t.last().copied().unwrap_or(0.0));
-        let Some(level) = r.rms_error(i, from, to).map(|e| e / r.scale(i)) else { continue };
-        if level <= NEGLIGIBLE {
-            continue;
-        }
+        let found = match &r.outcome {
+            None | Some(Outcome::Completed) => match r.rms_error(i, from, to).map(|e| e / r.scale(i)) {
+                Some(level) if level > NEGLIGIBLE => {
+                    format!("leaves its tail RMS at {level:.1e} of its scale, the pace growing less than μ here")
+                }
+                _ => continue,
+            },
+            // No verdict from a run its budget or Ctrl-C ended.
+            Some(Outcome::TooManySteps { .. } | Outcome::Interrupted { .. }) => return,
+            // A faster adaptation that destabilizes the loop is the offer failing most of all.
+            Some(ended) => format!("ended early ({ended})"),
+        };
         let checked = format!(
-            "not raise design.mu[{i}] alone: a run at {}{together} leaves its tail RMS at {level:.1e} of its scale, the pace growing less than μ here (runs over μ compare: quell tune, docs/tuning.md)",
+            "not raise design.mu[{i}] alone: a run at {}{together} {found} (runs over μ compare: quell tune, docs/tuning.md)",
             fmt_short(x)
         );
         let offer = raise_offer(i, x);
@@ -1515,7 +1529,9 @@ fn stalled_advice(
 /// Channel i (gain μ) whose tail misses its bound where the averaged law has every relevant
 /// direction converge by t_end, at no more than a small raise of μ (which the stiff line offers),
 /// and nothing else (delay, trend) says why: that law misjudges the loop, so μ is found by runs;
-/// `None` where the law asks for more μ. An irrigation canal's pools in the paper's regressor form, at the
+/// `None` where the law asks for more μ, or names no relevant direction. Only on a run of the design
+/// model itself ([`modelled`]): a true plant's mismatch or a clipping actuator explains as much (a
+/// ball and beam clipped at 92 % of its samples had been told larger μ). An irrigation canal's pools in the paper's regressor form, at the
 /// μ = 2.9e-24 that law offered (adapting at 250× the loop's rate), stalled at 57× their bound and
 /// were told to keep μ; a run at 1e-22 converged (helper tryout, 2026-12-07).
 fn unexplained_miss(
@@ -1526,7 +1542,8 @@ fn unexplained_miss(
     trend: Option<&Trend>,
 ) -> Option<String> {
     let relevant = c.slowest_relevant(RELEVANT_SHARE);
-    if round_up_2(horizon_mu(relevant, c.lambda_max(), (t_end, stiff)).0) > estimate::WORTH_CHANGING * mu {
+    let law_raises = round_up_2(horizon_mu(relevant, c.lambda_max(), (t_end, stiff)).0) > estimate::WORTH_CHANGING * mu;
+    if !relevant.is_finite() || law_raises {
         return None;
     }
     let unit = result.time_unit;
@@ -1556,7 +1573,7 @@ fn channel(
     c: &ChannelAverage,
     fidelity: &[Fidelity],
     result: &SimResult,
-    (t_end, stiff, tunable, settling): (f64, f64, bool, bool),
+    (t_end, stiff, tunable, settling, modelled): (f64, f64, bool, bool, bool),
     remedy: &ObserverRemedy<'_>,
 ) -> ChannelDiagnostics {
     let mu = design.mu()[i];
@@ -1616,7 +1633,7 @@ fn channel(
         )),
         _ => {}
     }
-    let unexplained = (horizon_advice && missed && advice.is_empty())
+    let unexplained = (horizon_advice && missed && modelled && advice.is_empty())
         .then(|| unexplained_miss(result, (i, mu), c, (t_end, stiff), judged.as_ref()))
         .flatten();
     let pace = (stiff / STIFF_RATIO, t_end, unexplained.is_some());

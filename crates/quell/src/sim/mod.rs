@@ -35,7 +35,7 @@ pub(crate) use divergence::smallest_gain;
 pub use divergence::{Peaks, Watched, DIVERGENCE_BOUND, WATCHED};
 pub use memory::{runs_memory_bytes, Held, MIN_RUNS_MEMORY_BYTES};
 pub use noise::{band_limited, NOISE_SINES};
-pub use result::{ChannelFigures, ChannelSummary, Outcome, RunStats, Sample, SimResult};
+pub use result::{ChannelFigures, ChannelSummary, Outcome, RunStats, Sample, SimResult, ROUNDING_SHARE};
 pub(crate) use sampled::fine_sample_time;
 pub use sampled::{
     coarse_sample_warning, is_coarse, output_step_fixes, sample_time_need, SampledController, COARSE_SAMPLE,

@@ -194,6 +194,13 @@ pub struct SimResult {
     pub time_unit: TimeUnit,
 }
 
+/// The share of a loop's largest output or reference below which a regulated channel's error is
+/// taken for rounding ([`SimResult::error_scale`]): far above double's accumulated rounding (the
+/// canal's 2e-17) and below any error an engineer weighs, but a ratio across the outputs' units, so
+/// beside an output of 1e5 Pa a regulation error in metres below 1e-5 m counts as rounding. An f32
+/// run's own rounding (about 1e-7) lies above it: there the precision check judges the loop.
+pub const ROUNDING_SHARE: f64 = 1e-10;
+
 /// One recorded instant, as the loops hand it to [`SimResult::push`]: y, g, u, u_f (m each), η̂
 /// (m·q) and, when states are recorded, (x, x̂).
 #[derive(Debug, Clone, Copy)]
@@ -396,20 +403,14 @@ impl SimResult {
         }
     }
 
-    /// Channel i's error peak ([`SimResult::peak_error`]), but at least the run's
-    /// [`Precision::rounding_floor`] of the loop's largest output or reference. An output that
-    /// nothing drives (no reference or disturbance, exact decoupling) has an error of rounding alone,
-    /// which a share of its own peak cannot judge (an irrigation canal's middle pool: 8e-19 m,
-    /// beside a 0.05 m set-point, failed a bound of 1 % of it).
-    ///
-    /// [`Precision::rounding_floor`]: crate::controller::Precision::rounding_floor
+    /// Channel i's error peak ([`SimResult::peak_error`]), but at least [`ROUNDING_SHARE`] of the
+    /// loop's largest output or reference. An output that nothing drives (no reference or
+    /// disturbance, exact decoupling) has an error of rounding alone, which a share of its own peak
+    /// cannot judge (an irrigation canal's middle pool: 8e-19 m, beside a 0.05 m set-point, failed a
+    /// bound of 1 % of it).
     pub fn error_scale(&self, i: usize) -> f64 {
-        let precision = match self.stats {
-            RunStats::Sampled { precision, .. } => precision,
-            RunStats::Continuous(_) => crate::controller::Precision::F64,
-        };
         let signals = self.g.iter().chain(&self.y).fold(0.0f64, |p, v| p.max(v.abs()));
-        max_or_nan(self.peak_error(i).unwrap_or(0.0), precision.rounding_floor() * signals)
+        max_or_nan(self.peak_error(i).unwrap_or(0.0), ROUNDING_SHARE * signals)
     }
 
     /// RMS of e_i over the recorded samples in [from, to]; `None` when there are none.
@@ -655,9 +656,9 @@ mod tests {
         );
     }
 
-    /// A regulated channel's scale is its error's peak, but not below √ε of the loop's largest
-    /// output or reference (f64: 1.49e-8; f32: 3.45e-4): an output nothing drives, whose error is
-    /// rounding (1e-19 beside a 0.05 set-point), then settles at once and meets a 1 % tail bound.
+    /// A regulated channel's scale is its error's peak, but not below 1e-10 of the loop's largest
+    /// output or reference: an output nothing drives, whose error is rounding (1e-19 beside a 0.05
+    /// set-point), then settles at once and meets a 1 % tail bound.
     #[test]
     fn an_error_of_rounding_alone_is_judged_against_the_loops_signals() {
         let run = |precision, e2: f64| {
@@ -680,10 +681,10 @@ mod tests {
         };
         let r = run(crate::controller::Precision::F64, 1e-19);
         assert_eq!(r.scale(0), 0.05, "a tracked channel's scale is its reference's peak");
-        assert_eq!(r.scale(1), f64::EPSILON.sqrt() * 0.05);
+        assert_eq!(r.scale(1), 1e-10 * 0.05);
         assert!(r.figures(&Settle::default())[1].settle_t == Some(0.0));
-        let f32_floor = f64::from(f32::EPSILON).sqrt() * 0.05;
-        assert_eq!(run(crate::controller::Precision::F32, 1e-9).scale(1), f32_floor);
+        // Not by the precision: an f32 run's regulation error of 1e-9 is its own scale.
+        assert_eq!(run(crate::controller::Precision::F32, 1e-9).scale(1), 1e-9);
         // A genuine regulation error is its own scale, and a tail at its peak is outside its band.
         let r = run(crate::controller::Precision::F64, 1e-3);
         assert_eq!(r.scale(1), 1e-3);
