@@ -787,7 +787,7 @@ impl Search<'_> {
 }
 
 /// Search rounds at most: the first within the file's limits, then within limits tightened where
-/// the joint run broke them ([`tightened`]).
+/// the joint run broke them ([`tune`]).
 pub const JOINT_ROUNDS: usize = 4;
 
 /// Runs the m searches of `study.tune` (in parallel on rayon's current pool) and the joint check.
