@@ -1902,7 +1902,11 @@ fn a_regulated_channels_settling_band_says_whose_peak_it_is() {
     assert!(o.status.success(), "{}", stderr(&o));
     let err = stdout(&o);
     let line = |i: usize| err.lines().find(|l| l.starts_with(&format!("channel {i}:"))).unwrap_or_default().to_string();
-    assert!(line(1).contains("settled (2 % band of its peak error, g being 0) at t = "), "{err}");
+    assert!(
+        line(1)
+            .contains("settled (2 % band of its peak error, at least 1e-10 of the loop's signals, g being 0) at t = "),
+        "{err}"
+    );
     assert!(line(2).contains("settled (2 % band) at t = "), "{err}");
 }
 
