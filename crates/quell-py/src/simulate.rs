@@ -703,9 +703,7 @@ pub fn simulate(
     let method = method.filter(|v| !v.is_none());
     let sample_time = sample_time.filter(|v| !v.is_none());
     if continuous && sample_time.is_some() {
-        let msg =
-            "continuous: True asks for the continuous loop and sample_time for the sampled-data loop; give one of them";
-        return Err(keyed(py, Kind::Scenario, msg.into(), Some("continuous".into())));
+        return Err(keyed(py, Kind::Scenario, BOTH_LOOPS.into(), Some("continuous".into())));
     }
     let mut edited = with_overrides(py, &s.inner, [t_end, output_step, rtol, atol, sample_time], method)?;
     if continuous && s.inner.simulation.sample_time.is_some() {
@@ -738,7 +736,8 @@ pub fn simulate(
     {
         crate::errors::warn(py, &crate::errors::in_python(w))?;
     }
-    let (result, interrupt) = run_released(py, scn, &design, settings, s.from_values || edited.is_some())?;
+    let given = set_here([t_end, output_step, rtol, atol, sample_time, method, precision]);
+    let (result, interrupt) = run_released(py, scn, &design, settings, (s.from_values, &given))?;
     // After the run's own checks (a sample time they refuse gets no warning).
     if let Some((t, h)) = sampled {
         crate::errors::warn_coarse_sample(py, &design, &scn.reference, &scn.disturbance, t, Some(h))?;
@@ -798,19 +797,30 @@ fn step_budget(py: Python<'_>, max_steps: Option<&Bound<'_, PyAny>>) -> PyResult
     }
 }
 
+/// `simulate(continuous=True, sample_time=…)`.
+const BOTH_LOOPS: &str =
+    "continuous: True asks for the continuous loop and sample_time for the sampled-data loop; give one of them";
+
+/// The `[simulation]` keys this call of `simulate` set, by the keyword's name (which is the key's
+/// last name): a file's scenario names the others as the file does.
+fn set_here(values: [Option<&Bound<'_, PyAny>>; 7]) -> Vec<&'static str> {
+    let names = ["t_end", "output_step", "rtol", "atol", "sample_time", "method", "precision"];
+    names.into_iter().zip(values).filter(|(_, v)| v.is_some_and(|v| !v.is_none())).map(|(n, _)| n).collect()
+}
+
 /// The run with the GIL released, looking for Ctrl-C every [`SIGNAL_CHECK`]: its result, and the
 /// KeyboardInterrupt that stopped it (the result then holds the samples up to it). The run first
 /// reserves its memory bound from the budget that runs under way share ([`Run::reserve_memory`]),
 /// so that threads calling `quell.simulate` at once wait rather than take the machine's memory; a
 /// Ctrl-C while it waits ends the run at its first progress check. Its errors name keys in
-/// Python's spelling where `python_keys` (a file's scenario names them as the file does, unless
-/// the call set them).
+/// Python's spelling where the scenario is Python's values (`from_values`) or the call set that
+/// key (`given`, [`set_here`]); a file's scenario names the others as the file does.
 fn run_released(
     py: Python<'_>,
     scn: &quell::Scenario,
     design: &quell::Design,
     settings: RunSettings,
-    python_keys: bool,
+    (from_values, given): (bool, &[&str]),
 ) -> PyResult<(SimResult, Option<PyErr>)> {
     // A Mutex, not a RefCell: the closures run with the GIL released, so must be Send.
     let interrupt: std::sync::Mutex<Option<PyErr>> = std::sync::Mutex::new(None);
@@ -848,7 +858,8 @@ fn run_released(
             SimError::Input(k) => Some(k.key.clone()),
             SimError::Controller(c) => c.key(),
         };
-        crate::errors::keyed_as(py, Kind::Scenario, e.to_string(), key, python_keys)
+        let set_here = key.as_deref().and_then(|k| k.strip_prefix("simulation.")).is_some_and(|k| given.contains(&k));
+        crate::errors::keyed_as(py, Kind::Scenario, e.to_string(), key, from_values || set_here)
     });
     match (result, interrupt) {
         (Ok(r), interrupt) => Ok((r, interrupt)),

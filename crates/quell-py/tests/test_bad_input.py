@@ -411,6 +411,9 @@ def test_a_file_scenario_names_its_keys_as_the_file_does(tmp_path):
     s = quell.Scenario.from_toml(text)
     with pytest.raises(quell.ScenarioError, match=r"^simulation\.sample_time: channel 1's delay"):
         quell.simulate(s)
+    # Another setting given to simulate does not make the file's key Python's argument.
+    with pytest.raises(quell.ScenarioError, match=r"^simulation\.sample_time: channel 1's delay"):
+        quell.simulate(s, t_end=50.0)
     with pytest.raises(quell.ScenarioError, match=r"^sample_time: channel 1's delay"):
         quell.simulate(quell.paper_example(), sample_time=0.3)
 

@@ -229,6 +229,21 @@ fn diagnose_loop(s: &crate::Scenario, design: &Design, result: &SimResult, cance
     d
 }
 
+/// The side run of `s` with every offered μ_i (`offers`) set at once, and the words that say so
+/// where there are several; `None` without offers, or where the design or the run cannot be made.
+fn run_at_offers(s: &crate::Scenario, offers: &[(usize, f64)]) -> Option<(SimResult, &'static str)> {
+    if offers.is_empty() {
+        return None;
+    }
+    let mut at = s.clone();
+    for &(i, x) in offers {
+        at.design.mu[i] = x;
+    }
+    let design = at.design().ok()?;
+    let r = sampled::side_run(&at, &design).ok()?;
+    Some((r, if offers.len() > 1 { " (every offered μ at once)" } else { "" }))
+}
+
 /// The stiff line's offer to lower μ_i "at most to about X" ([`estimate::lower_offer`]) is the
 /// averaged law's, which can misjudge a stiff loop by far: Skogestad's LV distillation column at
 /// μ = 50 met its tail bound (6.8e-10) and was offered 0.045, where its tail was 4.5× its
@@ -255,17 +270,8 @@ fn check_lower_offers(s: &crate::Scenario, design: &Design, result: &SimResult, 
         .filter(|&(i, c)| design.mu()[i] * c.lambda_max() > STIFF_RATIO * rho && tail_within_bound(result, i))
         .filter_map(|(i, c)| estimate::lower_offer(c, design.mu()[i], (rho, t_end)).map(|x| (i, x)))
         .collect();
-    if offers.is_empty() {
-        return;
-    }
-    let mut lowered = s.clone();
-    for &(i, x) in &offers {
-        lowered.design.mu[i] = x;
-    }
-    let Ok(at) = lowered.design() else { return };
-    let Ok(r) = sampled::side_run(&lowered, &at) else { return };
+    let Some((r, together)) = run_at_offers(s, &offers) else { return };
     let fmt = crate::settings::fmt_short;
-    let together = if offers.len() > 1 { " (every offered μ at once)" } else { "" };
     let found = |i: usize| -> Option<String> {
         match &r.outcome {
             None | Some(Outcome::Completed) if tail_within_bound(&r, i) => None,
@@ -1429,16 +1435,7 @@ fn check_raise_offers(s: &crate::Scenario, result: &SimResult, d: &mut Diagnosti
     let offers: Vec<(usize, f64)> = (d.channels.iter().enumerate())
         .filter_map(|(i, c)| c.advice.iter().find_map(|a| offered(i, a)).map(|x| (i, x)))
         .collect();
-    if offers.is_empty() {
-        return;
-    }
-    let mut raised = s.clone();
-    for &(i, x) in &offers {
-        raised.design.mu[i] = x;
-    }
-    let Ok(at) = raised.design() else { return };
-    let Ok(r) = sampled::side_run(&raised, &at) else { return };
-    let together = if offers.len() > 1 { " (every offered μ at once)" } else { "" };
+    let Some((r, together)) = run_at_offers(s, &offers) else { return };
     for (i, x) in offers {
         let (from, to) = (r.tail_from().unwrap_or(0.0), r.t.last().copied().unwrap_or(0.0));
         let found = match &r.outcome {
