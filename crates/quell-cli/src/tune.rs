@@ -44,15 +44,17 @@ pub fn tune(args: &TuneArgs) -> Result<(), Failure> {
     // points evaluated so far are written, marked partial; a second before writing begins quits.
     let interrupt = Interrupt::install("interrupted twice; stopped without writing files");
     let spec = study.tune.as_ref().expect("checked above");
-    let bar = crate::progress_bar(
-        (spec.bounds.len() * (spec.points + if spec.refine == 0 { 0 } else { spec.refine.max(2) })) as u64,
-        "tuning {bar:40} {pos}/{len} evaluations, {elapsed_precise} elapsed",
-    );
-    let on_point = |_: usize, _: &TunePoint| bar.inc(1);
+    let (bar, round) = round_bar(spec);
+    let on_point = |_: usize, _: &TunePoint| count(&bar, round);
     let options = TuneOptions { stop: Some(interrupt.stop_flag()), on_point: Some(&on_point) };
     let result = pool.install(|| study::tune(&study, &options));
     bar.finish_and_clear();
     let result = result.map_err(|e| Failure::Input(format!("{}: {e}", path.display())))?;
+    // Stopped in a later round of searches (a joint run had broken a limit): the round before is
+    // complete, and written as the result.
+    if !result.partial && interrupt.stop_flag().load(std::sync::atomic::Ordering::Relaxed) {
+        eprintln!("⚠ warning: interrupted after a complete round of searches, which is written (a later round within tightened limits, if one was under way, was abandoned)");
+    }
     interrupt.start_writing();
     let failed = |e: std::io::Error| Failure::Run(format!("writing {}: {e}", args.out.display()));
     crate::output::write_json(&args.out.join("tune.json"), &result).map_err(failed)?;
@@ -132,6 +134,21 @@ fn write_curves(w: &mut dyn std::io::Write, r: &TuneResult) -> std::io::Result<(
 }
 
 /// The chosen μ and the joint check, one line per channel; a settling time in `unit`.
+/// The tuning's progress bar, one round of evaluations long, and that round's count.
+fn round_bar(spec: &quell::study::TuneSpec) -> (indicatif::ProgressBar, u64) {
+    let round = (spec.bounds.len() * (spec.points + if spec.refine == 0 { 0 } else { spec.refine.max(2) })) as u64;
+    (crate::progress_bar(round, "tuning {bar:40} {pos}/{len} evaluations, {elapsed_precise} elapsed"), round)
+}
+
+/// One evaluation on `bar`; a later round of searches (a joint run beyond a limit) adds `round` to
+/// its length when the count reaches the end.
+fn count(bar: &indicatif::ProgressBar, round: u64) {
+    if bar.position() >= bar.length().unwrap_or(0) {
+        bar.inc_length(round);
+    }
+    bar.inc(1)
+}
+
 fn report(r: &TuneResult, spec: &quell::study::TuneSpec, unit: quell::TimeUnit) -> String {
     let mut s = match r.objective {
         quell::study::Objective::SettleT => format!("objective: settle_t, in {}\n", unit.name()),
@@ -267,5 +284,17 @@ mod tests {
         );
         assert!(!text.contains("end of tune.mu"), "{text}");
         assert!(!text.contains("no feasible"), "{text}");
+    }
+
+    /// A later round of searches lengthens the bar by a round where the count reaches its end,
+    /// so that it never reads more evaluations done than it holds.
+    #[test]
+    fn the_progress_bar_grows_by_a_round_for_a_later_round() {
+        let bar = indicatif::ProgressBar::hidden();
+        bar.set_length(4);
+        for _ in 0..5 {
+            super::count(&bar, 4);
+        }
+        assert_eq!((bar.position(), bar.length()), (5, Some(8)));
     }
 }
