@@ -194,9 +194,12 @@ fn report_text(a: &AutoDesign) -> String {
         }
         let regulated = a.scenario.reference.components.get(i).is_some_and(|c| c.peak() == 0.0);
         let of = if regulated {
-            "the error's peak, at least 1.5e-8 of the loop's signals: the reference is 0"
+            format!(
+                "the error's peak, at least {:e} of the loop's signals: the reference is 0",
+                quell::sim::ROUNDING_SHARE
+            )
         } else {
-            "the reference's peak"
+            "the reference's peak".to_string()
         };
         s.push_str(&format!(
             "  channel {}: tail max|e| = {:.3e} (bound {:.3e}: 1 % of {of}) {}, {} = {}\n",

@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use quell::diagnostics::{ChannelDiagnostics, Diagnostics};
 use quell::scenario::Scenario;
-use quell::sim::{Loop, Method, Outcome, Run, RunSettings, RunStats, SimResult};
+use quell::sim::{Loop, Method, Outcome, Run, RunSettings, RunStats, SimResult, ROUNDING_SHARE};
 use quell::Design;
 use quell::TimeUnit;
 use serde_json::json;
@@ -386,9 +386,12 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
                     (Some(t), _) => {
                         let regulated = result.column(&result.g, result.m, i).all(|g| g == 0.0);
                         let of = if regulated {
-                            " of its peak error, at least 1e-10 of the loop's signals, g being 0"
+                            format!(
+                                " of its peak error, at least {:e} of the loop's signals, g being 0",
+                                ROUNDING_SHARE
+                            )
                         } else {
-                            ""
+                            String::new()
                         };
                         format!("settled (2 % band{of}) at t = {} {}", short(t), result.time_unit)
                     }

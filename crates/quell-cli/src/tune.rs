@@ -169,7 +169,7 @@ fn report(r: &TuneResult, spec: &quell::study::TuneSpec, unit: quell::TimeUnit) 
                     mu_6(t.mu),
                     t.bound
                 )),
-                match (r.partial, *ok, d.is_some_and(|d| d < 0.0)) {
+                match (r.partial, *ok, quell::study::joint_better(*d)) {
                     (true, ..) => "not carried out (interrupted)",
                     (false, true, _) => "reproduces it",
                     (false, false, true) => "does better than its search (the channels interact)",

@@ -682,8 +682,7 @@ fn candidate(scenario: &Scenario, r: &crate::sim::SimResult, speed: Speed, conve
     let t_end = scenario.simulation.t_end;
     let t_c = convergence_time.unwrap_or(t_end / DEFAULT_CONVERGENCE);
     let m = scenario.plant.m();
-    let tail_from = r.tail_from().unwrap_or(0.9 * t_end);
-    let tail_max_e = (0..m).map(|i| r.max_abs_error(i, tail_from, t_end).unwrap_or(f64::NAN)).collect();
+    let tail_max_e = (0..m).map(|i| r.tail_max_abs_error(i).unwrap_or(f64::NAN)).collect();
     let rms_at_convergence =
         (0..m).map(|i| r.rms_error(i, 0.9 * t_c, (1.1 * t_c).min(t_end)).unwrap_or(f64::NAN)).collect();
     let max_uf = r.summary().iter().map(|c| c.figures.max_uf).collect();
@@ -912,7 +911,7 @@ fn check_first(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier) ->
             bound.to_vec(),
             (runs, targets.convergence_time),
             vec![c],
-            (false, &targets.u_limit),
+            (false, targets),
             vec![advice],
         );
         Ok(FirstCheck::Unverified(Box::new(d)))
@@ -1024,7 +1023,7 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
             bound,
             (verifier.runs, verifier.convergence_time),
             candidates,
-            (false, &targets.u_limit),
+            (false, targets),
             advice,
         ));
     }
@@ -1043,7 +1042,7 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
         }
     };
     let mut auto =
-        finish(kept, bound, (verifier.runs, verifier.convergence_time), candidates, (within, &targets.u_limit), advice);
+        finish(kept, bound, (verifier.runs, verifier.convergence_time), candidates, (within, targets), advice);
     if auto.verification.passed {
         let v = &auto.verification;
         let (checks, tolerance) = delay_checks(&auto.scenario, &auto.design, (targets, speed, v), verifier)?;
@@ -1510,10 +1509,10 @@ fn finish(
     bound: Vec<f64>,
     (runs, convergence_time): (usize, Option<f64>),
     candidates: Vec<Candidate>,
-    (passed, u_limit): (bool, &[f64]),
+    (passed, targets): (bool, &Targets),
     advice: Vec<String>,
 ) -> AutoDesign {
-    let targets_limited = !u_limit.is_empty();
+    let targets_limited = !targets.u_limit.is_empty();
     let speed = c.speed;
     let convergence_time = convergence_time.unwrap_or(p.scenario.simulation.t_end / DEFAULT_CONVERGENCE);
     let aim_at_convergence = p.scenario.reference.components.iter().map(|g| match g.peak() {
@@ -1561,9 +1560,7 @@ fn finish(
         verification: Verification {
             tail_max_e: c.tail_max_e,
             bound,
-            u_limit: (0..c.max_uf.len())
-                .map(|i| *u_limit.get(i).or(u_limit.first()).unwrap_or(&f64::INFINITY))
-                .collect(),
+            u_limit: (0..c.max_uf.len()).map(|i| targets.limit(i)).collect(),
             max_uf: c.max_uf,
             limited_fraction: c.limited_fraction,
             convergence_time,

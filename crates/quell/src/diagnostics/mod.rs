@@ -1437,9 +1437,8 @@ fn check_raise_offers(s: &crate::Scenario, result: &SimResult, d: &mut Diagnosti
         .collect();
     let Some((r, together)) = run_at_offers(s, &offers) else { return };
     for (i, x) in offers {
-        let (from, to) = (r.tail_from().unwrap_or(0.0), r.t.last().copied().unwrap_or(0.0));
         let found = match &r.outcome {
-            None | Some(Outcome::Completed) => match r.rms_error(i, from, to).map(|e| e / r.scale(i)) {
+            None | Some(Outcome::Completed) => match r.tail_rms_error(i).map(|e| e / r.scale(i)) {
                 Some(level) if level > NEGLIGIBLE => {
                     format!("leaves its tail RMS at {level:.1e} of its scale, the pace growing less than μ here")
                 }
@@ -1528,9 +1527,10 @@ fn stalled_advice(
 /// and nothing else (delay, trend) says why: that law misjudges the loop, so μ is found by runs;
 /// `None` where the law asks for more μ, or names no relevant direction. Only on a run of the design
 /// model itself ([`modelled`]): a true plant's mismatch or a clipping actuator explains as much (a
-/// ball and beam clipped at 92 % of its samples had been told larger μ). An irrigation canal's pools in the paper's regressor form, at the
-/// μ = 2.9e-24 that law offered (adapting at 250× the loop's rate), stalled at 57× their bound and
-/// were told to keep μ; a run at 1e-22 converged (helper tryout, 2026-12-07).
+/// ball and beam clipped at 92 % of its samples had been told larger μ). An irrigation canal's
+/// pools in the paper's regressor form, at the μ = 2.9e-24 that law offered (adapting at 250× the
+/// loop's rate), stalled at 57× their bound and were told to keep μ; a run at 1e-22 converged
+/// (helper tryout, 2026-12-07).
 fn unexplained_miss(
     result: &SimResult,
     (i, mu): (usize, f64),
@@ -1547,7 +1547,7 @@ fn unexplained_miss(
     let tail = result.tail_max_abs_error(i).unwrap_or(f64::NAN) / result.scale(i);
     let ratio = trend.map_or(String::new(), |r| format!(", RMS ratio {:.2} {}", r.ratio, r.windows(unit)));
     let fast = mu * c.lambda_max() / (stiff / STIFF_RATIO);
-    let why = if mu * c.lambda_max() > stiff {
+    let why = if fast > STIFF_RATIO {
         format!(
             ", which assumes adaptation slower than the loop's own rates, not {}× its fastest",
             crate::settings::fmt_ratio(fast)

@@ -48,10 +48,7 @@ pub(crate) fn noise_tail(result: &SimResult, quiet: Option<&Quiet>) -> Option<No
         return None;
     }
     let missed: Vec<usize> = (0..result.m).filter(|&i| !tail_within_bound(result, i)).collect();
-    let tail = |r: &SimResult, i: usize| {
-        let (from, to) = (r.tail_from().unwrap_or(0.0), r.t.last().copied().unwrap_or(0.0));
-        r.max_abs_error(i, from, to).unwrap_or(f64::NAN)
-    };
+    let tail = |r: &SimResult, i: usize| r.tail_max_abs_error(i).unwrap_or(f64::NAN);
     let channels: Vec<(usize, String)> = (missed.iter().copied().filter(|&i| tail_within_bound(clean, i)))
         .map(|i| {
             (i, format!(

@@ -499,6 +499,13 @@ impl SimResult {
         self.max_abs_error(i, from, t1)
     }
 
+    /// RMS of e_i over the tail, from [`SimResult::tail_from`] to the last row; `None` without
+    /// samples.
+    pub fn tail_rms_error(&self, i: usize) -> Option<f64> {
+        let (from, &t1) = self.tail_from().zip(self.t.last())?;
+        self.rms_error(i, from, t1)
+    }
+
     /// Channel i's figures and how it settled; `None` without samples.
     fn channel(&self, i: usize, settle: &Settle) -> Option<(ChannelFigures, Settling)> {
         let from = self.tail_from()?;

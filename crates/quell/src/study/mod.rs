@@ -31,8 +31,8 @@ pub use path::{KeyPath, Shape};
 pub use summary::{quantile, AxisMeta, ChannelQuantiles, PointSummary, Quantiles, StudyMeta, Summary, QUANTILES};
 pub use sweep::{run_one, run_one_until, run_seed, sweep, Outcome, Row, RunSpec, Shard, Sweep, SweepOptions};
 pub use tune::{
-    tune, tune_cautions, tune_stiff_warnings, Objective, OnPoint, SearchedWithin, Tie, TuneCurve, TuneOptions,
-    TunePoint, TuneResult, TuneSpec, JOINT_ROUNDS,
+    joint_better, tune, tune_cautions, tune_stiff_warnings, Objective, OnPoint, SearchedWithin, Tie, TuneCurve,
+    TuneOptions, TunePoint, TuneResult, TuneSpec, JOINT_ROUNDS,
 };
 
 /// A study-file error: the key path in the study file (`grid."design.mu[0]"[2]`) and what was

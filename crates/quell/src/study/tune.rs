@@ -466,9 +466,8 @@ impl TuneResult {
     pub fn unreproduced_cautions(&self) -> Vec<String> {
         let cautions = self.channels.iter().zip(self.joint_difference.iter().zip(&self.reproduced));
         // A joint run that does better than its search is no caution: the interaction helped.
-        let better = |d: &Option<f64>| d.is_some_and(|d| d < 0.0);
         cautions
-            .filter(|(c, (d, ok))| !**ok && !better(d) && c.chosen.is_some() && !self.partial)
+            .filter(|(c, (d, ok))| !**ok && !joint_better(**d) && c.chosen.is_some() && !self.partial)
             .map(|(c, (d, _))| {
                 let by = d.map_or("it has no figure".to_string(), |d| format!("difference {d:.3e}"));
                 format!(
@@ -478,6 +477,12 @@ impl TuneResult {
             })
             .collect()
     }
+}
+
+/// Whether a joint run's objective beat its search's (`difference` = joint − search < 0): the
+/// channels' interaction helped, which is said, not cautioned.
+pub fn joint_better(difference: Option<f64>) -> bool {
+    difference.is_some_and(|d| d < 0.0)
 }
 
 /// A callback on each evaluation: the channel and its point.
@@ -794,9 +799,10 @@ pub const JOINT_ROUNDS: usize = 4;
 /// Where the joint run breaks a limit each search met (u_f mixes every channel's command), the
 /// searches run again within that limit scaled by limit / joint figure, up to [`JOINT_ROUNDS`]
 /// rounds while each breaks the limits by less and keeps every channel a feasible μ (else the
-/// round before stands), the joint run always judged against the file's limits: a bioreactor's 0.51125 against
-/// 0.5 had been told to lower the limit by the excess and tune again, which missed the lowered
-/// limit (0.4915 > 0.48875) while meeting its own, three times by hand (helper tryout, 2026-12-07).
+/// round before stands), the joint run always judged against the file's limits: a bioreactor's
+/// 0.51125 against 0.5 had been told to lower the limit by the excess and tune again, which missed
+/// the lowered limit (0.4915 > 0.48875) while meeting its own, three times by hand (helper
+/// tryout, 2026-12-07).
 /// When `opts.stop` is set the result holds what was evaluated by then, marked partial.
 pub fn tune(study: &Study, opts: &TuneOptions<'_>) -> Result<TuneResult, StudyError> {
     let spec = tune_spec(study)?;
