@@ -2,6 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
+use quell::controller::Precision;
 use quell::export::{generate, generate_fmu, CCode, ExportError, ExportOptions, FmiVersion, Fmu};
 
 use crate::{file_sample_time, load_with, output, set_sample_time, sim_number, Failure};
@@ -73,6 +74,7 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
     };
     let code = generate(&design, sample_time, &options).map_err(export_failure)?;
     eprint!("{}", crate::report::sample_time_text(&scenario, &design, sample_time, None));
+    let f32_check = (options.precision == Precision::F32).then(|| f32_check(&scenario, &design, sample_time));
     let mut ctrl_c = None;
     let fmu = if args.fmu {
         let (compiler, from_env) = quell::export::compiler_choice(args.compiler.clone());
@@ -108,9 +110,38 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
     );
     let unit = fmu.as_ref().and_then(|f| quell::export::time_unit_warning(&design, sample_time, f.version));
     for w in code.warnings().chain(unit).chain(earlier) {
-        eprintln!("⚠ warning: {}", crate::in_flags(w));
+        let w = crate::in_flags(w);
+        // The file's simulation.precision, not the flag, chose f32.
+        let w = if args.precision.is_none() { w.replacen("--precision:", "simulation.precision:", 1) } else { w };
+        eprintln!("⚠ warning: {w}");
     }
+    print_f32_check(f32_check, sample_time);
     Ok(())
+}
+
+/// The f32 check's line ([`f32_check`]): a warning where the loop departs or could not be measured.
+fn print_f32_check(check: Option<Result<(String, bool), String>>, sample_time: f64) {
+    match check {
+        Some(Ok((line, true))) => eprintln!("⚠ warning: {line}"),
+        Some(Ok((line, false))) => eprintln!("{line}"),
+        Some(Err(why)) => eprintln!(
+            "⚠ warning: precision f32: the f32 loop could not be measured against f64 ({why}): run quell run SCENARIO --sample-time {sample_time} --precision f32 before deploying it"
+        ),
+        None => {}
+    }
+}
+
+/// An f32 export's loop, measured: the scenario's sampled run in f32 (emulated) against the same
+/// run in f64, over its t_end ([`quell::diagnostics::f32_export_check`]).
+fn f32_check(scenario: &quell::Scenario, design: &quell::Design, sample_time: f64) -> Result<(String, bool), String> {
+    eprintln!(
+        "measuring the f32 loop: the scenario sampled at T_s = {} {} in f32 (emulated) and in f64, over t_end = {} {} …",
+        quell::settings::fmt_time(sample_time),
+        scenario.plant.time_unit,
+        quell::settings::fmt_time(scenario.simulation.t_end),
+        scenario.plant.time_unit
+    );
+    quell::diagnostics::f32_export_check(scenario, design, sample_time)
 }
 
 /// Writes the header, the source and the FMU (when there is one) into `out` (not over the `input`

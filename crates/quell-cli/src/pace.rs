@@ -73,10 +73,12 @@ fn deployment_text(s: &Scenario, d: &Design) -> String {
             quell::controller::Precision::F32 => {
                 "this scenario's sampled runs are in f32 and say how far it moves the loop"
             }
-            quell::controller::Precision::F64 => "quell run --sample-time T_s --precision f32 measures it",
+            quell::controller::Precision::F64 => {
+                "quell run --sample-time T_s --precision f32 measures it, as quell export --precision f32 does before it writes"
+            }
         };
         format!(
-            "f32 moves the poles by at most {} (κ₂ = {kappa:.2e} × 6e-8): its constants serve in either precision (the rounding its states accumulate over a run is not bounded by this: {measured})",
+            "f32 moves the poles by at most {} (κ₂ = {kappa:.2e} × 6e-8): its poles allow f32, but the rounding its states accumulate over a run is not bounded by this: {measured}",
             quell::export::fmt_shift(shift)
         )
     };

@@ -194,7 +194,11 @@ fn report(r: &TuneResult, spec: &quell::study::TuneSpec, unit: quell::TimeUnit) 
                 c.channel + 1,
                 c.curve.len()
             )),
-            None => s.push_str(&format!("channel {}: no feasible mu in the bounds\n", c.channel + 1)),
+            None => s.push_str(&format!(
+                "channel {}: no feasible mu among the {} evaluated in the bounds\n",
+                c.channel + 1,
+                c.curve.len()
+            )),
         }
     }
     // A channel without a feasible μ keeps the scenario's (TuneResult::mu): not a tuned value.

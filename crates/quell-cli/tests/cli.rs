@@ -123,7 +123,7 @@ fn the_design_report_says_what_deployment_needs() {
     assert!(out.contains("\ndeployment (a sampled-data controller, docs/deployment.md):\n  sample time: T_s ≤ 0.0222 s (T_s·ρ ≤ 0.2), e.g. 0.02 s, which makes plant.delays whole and divides simulation.output_step; ρ = 9 /s, the loop's fastest rate (a bound the sampled loop needs, not one that suffices: a sampled run compares itself with its continuous loop and says where it departs)\n"), "{out}");
     assert!(
         out.contains(
-            "  precision: f32 moves the poles by at most 0.00016 % (κ₂ = 2.75e1 × 6e-8): its constants serve in either precision (the rounding its states accumulate over a run is not bounded by this: quell run --sample-time T_s --precision f32 measures it)"
+            "  precision: f32 moves the poles by at most 0.00016 % (κ₂ = 2.75e1 × 6e-8): its poles allow f32, but the rounding its states accumulate over a run is not bounded by this: quell run --sample-time T_s --precision f32 measures it, as quell export --precision f32 does before it writes"
         ),
         "{out}"
     );

@@ -428,7 +428,10 @@ fn tune_writes_the_chosen_mu_and_each_curve() {
     let printed = String::from_utf8_lossy(&o.stdout).into_owned();
     assert!(printed.contains("channel 1: mu = ") && printed.contains("joint run reproduces it"), "{printed}");
     let csv = fs::read_to_string(dir.join("out/tune.csv")).unwrap();
-    assert_eq!(csv.lines().count(), 1 + 2 * (5 + 2));
+    // Each channel's 5 points and 2 refinements, and channel 2's own μ = 30, off its grid (channel
+    // 1's 20 is on it), from the scenario's run.
+    assert_eq!(csv.lines().count(), 1 + 2 * (5 + 2) + 1);
+    assert_eq!(csv.lines().filter(|l| l.starts_with("2,30,")).count(), 1, "{csv}");
     assert_eq!(csv.lines().filter(|l| l.ends_with(",true")).count(), 2, "one chosen μ per channel");
     let json: serde_json::Value =
         serde_json::from_str(&fs::read_to_string(dir.join("out/tune.json")).unwrap()).unwrap();
@@ -459,10 +462,15 @@ fn tune_writes_the_chosen_mu_and_each_curve() {
     // Only the limits the file gives are named (it has no max_uf).
     let err = stderr(&o);
     assert!(
-        err.contains("channel 1: no μ in tune.mu[0] completed with max |u_1| ≤ tune.max_u[0] and a finite tail_rms_e (the least max |u_1| of the runs with a finite tail_rms_e is "),
+        err.contains("channel 1: none of the 5 μ evaluated in tune.mu[0] completed with max |u_1| ≤ tune.max_u[0] and a finite tail_rms_e (the least max |u_1| of the runs with a finite tail_rms_e is "),
         "{err}"
     );
-    assert!(err.contains("above tune.max_u[0] = 1); widen the bounds, raise the limits"), "{err}");
+    assert!(
+        err.contains(
+            "above tune.max_u[0] = 1); widen the bounds, evaluate more of them (tune.points), raise the limits"
+        ),
+        "{err}"
+    );
     assert!(!err.contains("max_uf"), "{err}");
     // The least peak named, taken as the limit (1.001× for its four digits), admits a μ.
     let least: f64 =
@@ -487,7 +495,8 @@ fn tune_writes_the_chosen_mu_and_each_curve() {
     assert!(err.contains("raise the study's max_steps") && !err.contains("max_u"), "{err}");
     let rows = fs::read_to_string(format!("{out}-budget/tune.csv")).unwrap();
     assert!(rows.starts_with("channel,mu,objective,outcome,reason,"), "{rows}");
-    assert_eq!(rows.matches(",failed,\"the solver needed more than 20 steps").count(), 10, "{rows}");
+    // Each channel's 5 points, and channel 2's own μ = 30 (off its grid), from the scenario's run.
+    assert_eq!(rows.matches(",failed,\"the solver needed more than 20 steps").count(), 11, "{rows}");
     // stdout does not present the scenario's μ, kept where nothing was feasible, as tuned.
     let printed = String::from_utf8_lossy(&o.stdout).into_owned();
     assert!(!printed.contains("tuned mu"), "{printed}");

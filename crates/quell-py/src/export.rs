@@ -4,6 +4,7 @@ use std::borrow::Cow;
 use std::path::PathBuf;
 
 use pyo3::prelude::*;
+use quell::controller::Precision;
 use quell::export::{generate, generate_fmu, ExportError, ExportOptions, FmiVersion};
 
 use crate::convert::{a_type, number};
@@ -127,17 +128,16 @@ pub fn export(
     fmi_version: Option<&Bound<'_, PyAny>>,
     compiler: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Vec<PathBuf>> {
-    // A scenario's sample time and precision (`simulation.precision`, which its runs measured) are
-    // the defaults.
-    let (design, (scenario_name, names), (scenario_T, scenario_precision), signals) =
+    // A scenario's sample time and precision (`simulation.precision`, its runs') are the defaults.
+    let (design, (scenario_name, names), (scenario_T, scenario_precision), signals, scenario) =
         if let Ok(s) = source.cast::<PyScenario>() {
             let s = s.get();
             let signals = (s.inner.reference.clone(), s.inner.disturbance.clone());
             let labels = (s.inner.name.clone(), s.inner.names.clone());
             let sim = &s.inner.simulation;
-            (s.design_arc(py)?, labels, (sim.sample_time, sim.precision), signals)
+            (s.design_arc(py)?, labels, (sim.sample_time, sim.precision), signals, Some(s.inner.clone()))
         } else if let Ok(d) = source.cast::<PyDesign>() {
-            (d.get().inner.clone(), Default::default(), (None, Default::default()), Default::default())
+            (d.get().inner.clone(), Default::default(), (None, Default::default()), Default::default(), None)
         } else {
             return Err(pyo3::exceptions::PyTypeError::new_err(format!(
                 "source: expected a quell.Scenario or quell.Design, found {}",
@@ -183,6 +183,9 @@ pub fn export(
     for w in code.warnings().chain(unit) {
         crate::errors::warn(py, &w)?;
     }
+    if let Some(s) = scenario.filter(|_| precision == Precision::F32) {
+        warn_f32_check(py, &s, &design, T)?;
+    }
     let out = out.unwrap_or_else(|| PathBuf::from("."));
     let mut files = vec![(code.header_name, code.header.into_bytes()), (code.source_name, code.source.into_bytes())];
     files.extend(archive.map(|a| (a.file_name, a.bytes)));
@@ -193,6 +196,16 @@ pub fn export(
         crate::errors::warn(py, &format!("out: {w}"))?;
     }
     Ok(written)
+}
+
+/// An f32 export of a scenario: its loop in f32 against f64, as `quell export` measures it
+/// ([`quell::diagnostics::f32_export_check`]), warned of where it departs or cannot be measured.
+fn warn_f32_check(py: Python<'_>, s: &quell::Scenario, design: &quell::Design, T: f64) -> PyResult<()> {
+    match crate::interrupt::interruptible(py, || quell::diagnostics::f32_export_check(s, design, T))? {
+        Ok((line, true)) => crate::errors::warn(py, &line),
+        Ok((_, false)) => Ok(()),
+        Err(why) => crate::errors::warn(py, &format!("precision f32: the f32 loop could not be measured against f64 ({why}): run quell.simulate(scenario, sample_time={T}, precision=\"f32\") before deploying it")),
+    }
 }
 
 /// Writes `files` (name, bytes) into `out`, created if need be, all renamed into place once every

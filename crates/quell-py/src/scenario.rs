@@ -192,6 +192,15 @@ pub fn argument_error(py: Python<'_>, e: &quell::ScenarioError) -> PyErr {
 /// Python's (a table is a dict, an array a list), and a value of the wrong type (a str for a
 /// number) a `TypeError`, with `.key` as well.
 fn values_error(py: Python<'_>, e: &quell::ScenarioError) -> PyErr {
+    let message = python_words(in_python_calls(e.to_string()));
+    if !e.wrong_type {
+        return crate::errors::keyed(py, Kind::Scenario, message, Some(e.key.clone()));
+    }
+    keyed_type_error(py, in_python(message), &e.key)
+}
+
+/// A reader's TOML words in Python's: a table is a dict, an array a list, a string a str.
+pub fn python_words(message: String) -> String {
     const WORDS: [(&str, &str); 7] = [
         ("(inline tables)", "(dicts)"),
         ("a table", "a dict"),
@@ -201,12 +210,13 @@ fn values_error(py: Python<'_>, e: &quell::ScenarioError) -> PyErr {
         ("a floating-point number", "a float"),
         ("a boolean", "a bool"),
     ];
-    let message = WORDS.iter().fold(in_python_calls(e.to_string()), |m, (toml, python)| m.replace(toml, python));
-    if !e.wrong_type {
-        return crate::errors::keyed(py, Kind::Scenario, message, Some(e.key.clone()));
-    }
-    let err = PyTypeError::new_err(in_python(message));
-    let _ = err.value(py).setattr("key", e.key.clone());
+    WORDS.iter().fold(message, |m, (toml, python)| m.replace(toml, python))
+}
+
+/// A `TypeError` with `.key`, the scenario or study key path of the value of the wrong type.
+pub fn keyed_type_error(py: Python<'_>, message: String, key: &str) -> PyErr {
+    let err = PyTypeError::new_err(message);
+    let _ = err.value(py).setattr("key", key);
     err
 }
 

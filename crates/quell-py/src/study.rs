@@ -85,9 +85,14 @@ pub fn python_key(key: &str) -> String {
     }
 }
 
-/// A study error of `quell.Study(...)`: the message names the Python argument, `.key` the study key.
+/// A study error of `quell.Study(...)` or `quell.tune(...)`: the message names the Python argument
+/// in Python's words, `.key` the study key; a value of the wrong type is a `TypeError`.
 pub fn argument_error(py: Python<'_>, e: &study::StudyError) -> PyErr {
-    let err = Kind::Scenario.err(py, format!("{}: {}", python_key(&e.key), e.message));
+    let message = format!("{}: {}", python_key(&e.key), crate::scenario::python_words(e.message.clone()));
+    if e.wrong_type {
+        return crate::scenario::keyed_type_error(py, message, &e.key);
+    }
+    let err = Kind::Scenario.err(py, message);
     let _ = err.value(py).setattr("key", e.key.clone());
     err
 }

@@ -87,7 +87,7 @@ fn numbers(obj: Option<&Bound<'_, PyAny>>, name: &str, expected: &str) -> PyResu
 /// >>> r = quell.tune(quell.paper_example(), mu=[5.0, 80.0], objective="tail_rms_e", points=3,
 /// ...                refine=0, simulation={"t_end": 10.0}, jobs=1)
 /// >>> r
-/// TuneResult(objective='tail_rms_e', mu=[...], evaluations=6, partial=False)
+/// TuneResult(objective='tail_rms_e', mu=[...], evaluations=7, partial=False)
 /// >>> list(r.best["channel"]), bool(r.best["chosen"].all())
 /// ([1, 2], True)
 #[pyfunction]

@@ -63,3 +63,24 @@ def test_export_takes_the_scenarios_precision(tmp_path):
     assert "const float y[QUELL_M]" in (tmp_path / "a" / "quell_controller.h").read_text()
     quell.export(s, out=tmp_path / "b", precision="f64")
     assert "const double y[QUELL_M]" in (tmp_path / "b" / "quell_controller.h").read_text()
+
+
+def test_an_f32_export_of_a_scenario_measures_its_loop(tmp_path):
+    """As `quell export --precision f32`: the scenario's loop in f32 against f64 before writing. The
+    disk servo's f32 u_f departs 0.182 of its peak as compiled C (docs/deployment.md), which the
+    warning's emulated figure reproduces within the 0.4–2.8× measured; the paper's example exports
+    with no such warning, and a bare Design (no scenario to run) is not measured."""
+    from conftest import REFERENCE
+
+    servo = quell.Scenario.load(REFERENCE / "hdd-servo.toml")
+    with pytest.warns(UserWarning, match=r"^precision f32 \(emulated") as record:
+        quell.export(servo, 0.0025, out=tmp_path / "servo", precision="f32")
+    line = next(str(w.message) for w in record if str(w.message).startswith("precision f32"))
+    uf = float(line.split("u_f[1] by ")[1].split(",")[0])
+    assert 0.182 / 2.8 <= uf <= 0.182 / 0.4, line
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        quell.export(quell.paper_example(), 1e-3, out=tmp_path / "paper", precision="f32")
+        quell.export(quell.paper_example().design(), 1e-3, out=tmp_path / "design", precision="f32")

@@ -198,3 +198,25 @@ def test_a_study_with_tune_is_not_swept(tmp_path):
     assert e.value.key == "tune"
     with pytest.raises(quell.ScenarioError, match=r"^tune: read by tuning only"):
         quell.sweep_runs(study)
+
+
+@pytest.mark.parametrize("arguments, message, key", [
+    ({"grid": {"design.beta": 1.0}}, r'^grid\["design.beta"\]: expected a list of values \(e.g. \[5.0, 10.0\]\), found a float$', 'grid."design.beta"'),
+    ({"grid": {"design.beta": ["a"]}}, r'^grid\["design.beta"\]\[0\]: expected a number \(the shape of design.beta\), found a str$', 'grid."design.beta"[0]'),
+    ({"monte_carlo": {"runs": "3"}}, r'^monte_carlo\["runs"\]: expected the number of draws per grid point \(an integer ≥ 1\), found a str$', "monte_carlo.runs"),
+    ({"monte_carlo": {"runs": 3, "truth.A": 0.01}}, r'^monte_carlo\["truth.A"\]: expected a distribution, one of .*; found a float$', 'monte_carlo."truth.A"'),
+    ({"settle": {"relative": "a"}}, r'^settle\["relative"\]: expected a band ≥ 0, found a str$', "settle.relative"),
+])
+def test_a_value_of_the_wrong_type_in_a_study_dict_is_a_type_error(arguments, message, key):
+    """README: a wrong type is a TypeError. Inside Study's dicts it had been a ScenarioError,
+    worded in TOML's terms ("found a floating-point number")."""
+    with pytest.raises(TypeError, match=message) as e:
+        quell.Study(quell.paper_example(), **arguments)
+    assert e.value.key == key
+
+
+def test_a_wrong_value_in_a_study_dict_is_still_a_scenario_error():
+    with pytest.raises(quell.ScenarioError, match=r'^monte_carlo\["runs"\]: expected the number of draws per grid point \(an integer ≥ 1\), found 0$'):
+        quell.Study(quell.paper_example(), monte_carlo={"runs": 0, "truth.A": {"relative": 0.1}})
+    with pytest.raises(TypeError, match=r"^mu\[0\]: expected \[μ_min, μ_max\], found a str$"):
+        quell.tune(quell.paper_example(), mu=["a", [1.0, 2.0]])

@@ -230,7 +230,7 @@ def test_a_channel_without_a_feasible_mu_is_warned_of_and_flagged():
     in silence. It now warns, naming the channel, and `feasible` says which channels had one."""
     s = unstable_first_order()
     # The limit given is named, not max_uf, which was not.
-    with pytest.warns(UserWarning, match=r"^channel 1: no μ in mu\[0\] completed with max \|u_1\| ≤ max_u\[0\] and a finite tail_rms_e \(the least max \|u_1\| of the runs with a finite tail_rms_e is [0-9.]+(e-?[0-9]+)? \(at μ = [0-9.]+\), above max_u\[0\] = 1e-6\); widen the bounds, raise the limits or lengthen t_end;") as caught:
+    with pytest.warns(UserWarning, match=r"^channel 1: none of the [0-9]+ μ evaluated in mu\[0\] completed with max \|u_1\| ≤ max_u\[0\] and a finite tail_rms_e \(the least max \|u_1\| of the runs with a finite tail_rms_e is [0-9.]+(e-?[0-9]+)? \(at μ = [0-9.]+\), above max_u\[0\] = 1e-6\); widen the bounds, evaluate more of them \(points\), raise the limits or lengthen t_end;") as caught:
         r = quell.tune(s, mu=[1.0, 100.0], objective="tail_rms_e", max_u=1e-6, points=3, refine=0, jobs=1)
     assert len(caught) == 1 and "is the scenario's" in str(caught[0].message)
     assert r.feasible == [False] and len(r.best) == 0 and r.ties == [None]

@@ -952,6 +952,48 @@ fn check_first(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier) ->
     Ok(FirstCheck::Verified(Box::new((first, design, check)), bound))
 }
 
+/// The most times [`beyond_threshold`] raises μ_i ×4 beyond the stiffness threshold: up to 64× it.
+const BEYOND_RAISES: usize = 3;
+
+/// Where a channel's tail misses its bound with μ_i at the stiffness threshold (the retries' cap),
+/// μ_i ×4 beyond it, at most [`BEYOND_RAISES`] times while the worst tail over its bound shrinks;
+/// the μ and its run when they then meet every bound. The loop is stiff there (the continuous
+/// run's implicit method and the sampled controller's implicit law take it) and its effort may
+/// grow, so this is offered beside the horizon, not chosen: a two-drug haemodynamic model
+/// (λ_min/λ_max of Ω̄ = 4e-6) missed at the threshold's μ = 10.9 and was told only to run 7×
+/// longer, where μ = 56 passes in its 120 min (helper tryout, 2026-12-07).
+fn beyond_threshold(
+    proposal: &Proposal,
+    first: &Candidate,
+    bound: &[f64],
+    verifier: &mut Verifier,
+) -> Result<Option<(Vec<f64>, Candidate)>, AutoError> {
+    let Some(caps) = proposal.mu_caps.as_deref() else { return Ok(None) };
+    let worst = |c: &Candidate| {
+        (c.tail_max_e.iter().zip(bound))
+            .map(|(e, b)| if e.is_nan() { f64::INFINITY } else { e / b })
+            .fold(0.0, f64::max)
+    };
+    let (mut mu, mut check) = (proposal.scenario.design.mu.clone(), first.clone());
+    for _ in 0..BEYOND_RAISES {
+        let missed = |i: usize| check.tail_max_e[i].is_nan() || check.tail_max_e[i] > bound[i];
+        // Only where every channel that misses is at its cap: below it, the retries had room.
+        if !(0..mu.len()).any(missed) || (0..mu.len()).any(|i| missed(i) && mu[i] < caps[i]) {
+            break;
+        }
+        let raised: Vec<f64> = (0..mu.len()).map(|i| if missed(i) { 4.0 * mu[i] } else { mu[i] }).collect();
+        let design = DesignSpec { mu: raised.clone(), ..proposal.scenario.design.clone() };
+        let scenario = Scenario { design, ..proposal.scenario.clone() };
+        match verifier.check(&scenario, &scenario.design()?, first.speed) {
+            Ok(c) if worst(&c) < worst(&check) => (mu, check) = (raised, c),
+            // Worse, or a run that ended early: no further.
+            Ok(_) | Err(AutoError::Run(_) | AutoError::Departed(_)) => break,
+            Err(e) => return Err(e),
+        }
+    }
+    Ok((mu != proposal.scenario.design.mu && worst(&check) <= 1.0).then_some((mu, check)))
+}
+
 /// How many times a first proposal whose verifying run ended early is slowed ([`slower_start`]).
 const MAX_SLOWER_STARTS: i32 = 3;
 
@@ -1954,6 +1996,8 @@ fn horizon_advice(
         advice.push(growth);
         return Ok(advice);
     }
+    let missed = |i: usize| first.tail_max_e[i].is_nan() || first.tail_max_e[i] > bound[i];
+    advice.extend((0..bound.len()).filter(|&i| missed(i)).filter_map(|i| long_delay(design, i, t_end)));
     let slow = slow_convergence(s, design, &first.tail_max_e, bound);
     if !slow.why.is_empty() {
         let given = !proposal.relaxable[2];
@@ -2000,11 +2044,63 @@ fn horizon_advice(
         }
         advice.push(verified);
     }
+    if !verifier.nested {
+        advice.extend(beyond_offer(targets, verifier, (proposal, first), bound)?);
+    }
     Ok(advice)
+}
+
+/// The horizon advice's other remedy where a run verifies it ([`beyond_threshold`]): μ beyond the
+/// stiffness threshold, within any actuator limit.
+fn beyond_offer(
+    targets: &Targets,
+    verifier: &mut Verifier,
+    (proposal, first): (&Proposal, &Candidate),
+    bound: &[f64],
+) -> Result<Option<String>, AutoError> {
+    let Some((mu, check)) = beyond_threshold(proposal, first, bound, verifier)? else { return Ok(None) };
+    if (0..mu.len()).any(|i| check.max_uf[i] > targets.limit(i)) {
+        return Ok(None);
+    }
+    let list = |v: &[f64], f: &dyn Fn(f64) -> String| v.iter().map(|&x| f(x)).collect::<Vec<_>>().join(", ");
+    let four = |x: f64| crate::settings::fmt_4(x);
+    Ok(Some(format!(
+        "or keep t_end and set design.mu = [{}], beyond the stiffness threshold (the loop is then stiff, which the continuous run's implicit method and the sampled controller's implicit law take): the automatic design's run at that μ passes, tail max|e| [{}] against bounds [{}], with max|u_f| [{}] where the threshold's μ asked [{}]",
+        list(&mu, &|x| crate::settings::fmt_short(crate::settings::significant(x, 4))),
+        list(&check.tail_max_e, &|x| format!("{x:.3e}")),
+        list(bound, &|x| format!("{x:.3e}")),
+        list(&check.max_uf, &four),
+        list(&first.max_uf, &four),
+    )))
 }
 
 /// A horizon and what it rests on.
 type Estimate = (f64, String);
+
+/// The share of the horizon from which a missed channel's input delay is named ([`long_delay`]).
+const LONG_DELAY_SHARE: f64 = 0.25;
+
+/// Channel i's input delay where it takes [`LONG_DELAY_SHARE`] of the run or more: its command
+/// acts only from τ on, which is also how a delay typed in the wrong unit shows (45 and 60 "min"
+/// for seconds in a 120 min run had been told only to run 7× longer; helper tryout, 2026-12-07).
+fn long_delay(design: &Design, i: usize, t_end: f64) -> Option<String> {
+    let (tau, unit) = (design.plant().delays[i], design.plant().time_unit);
+    (tau >= LONG_DELAY_SHARE * t_end).then(|| {
+        let fmt = crate::settings::fmt_short;
+        format!(
+            "channel {}'s input delay τ = {} {unit} is {} of the run ({} {unit}): {}; if τ is not in {unit} (plant.time_unit), correct plant.delays[{i}] before anything below",
+            i + 1,
+            fmt(tau),
+            crate::settings::fmt_percent(tau / t_end),
+            fmt(t_end),
+            if tau >= t_end {
+                "its command never reaches the plant within the run"
+            } else {
+                "its command acts only from τ on, so the adaptation starts late"
+            }
+        )
+    })
+}
 
 /// The horizon advice where every horizon tried met its tail bounds and missed only the actuator
 /// limit (`u_limit`), with slower poles tried by the relaxation already.

@@ -1,6 +1,6 @@
 //! Small dense linear-algebra helpers shared by the design layer.
 
-use nalgebra::{Complex, DMatrix};
+use nalgebra::{Complex, DMatrix, DVector};
 
 /// Coefficients `[a_0, …, a_{q−1}]` of the monic polynomial ∏(s − p_j) = s^q + a_{q−1}s^{q−1} + … + a_0.
 /// The poles must be closed under conjugation (callers check); imaginary round-off is dropped.
@@ -88,8 +88,14 @@ pub(crate) fn eigenvalues(M: &DMatrix<f64>) -> Result<Vec<Complex<f64>>, EigenEr
 /// D⁻¹ M D with D diagonal of powers of 2 chosen so that each row and column have comparable
 /// norms (Parlett & Reinsch 1969, the scaling loop of LAPACK's `dgebal`). Exact in floating point.
 pub(crate) fn balance(M: &DMatrix<f64>) -> DMatrix<f64> {
+    balancing(M).0
+}
+
+/// [`balance`]'s D⁻¹ M D together with D's diagonal: an eigenvector v of D⁻¹ M D is D v of M.
+pub(crate) fn balancing(M: &DMatrix<f64>) -> (DMatrix<f64>, DVector<f64>) {
     let n = M.nrows();
     let mut B = M.clone();
+    let mut d = DVector::from_element(n, 1.0);
     let mut converged = false;
     while !converged {
         converged = true;
@@ -113,10 +119,11 @@ pub(crate) fn balance(M: &DMatrix<f64>) -> DMatrix<f64> {
                 converged = false;
                 B.column_mut(i).scale_mut(f);
                 B.row_mut(i).scale_mut(1.0 / f);
+                d[i] *= f;
             }
         }
     }
-    B
+    (B, d)
 }
 
 /// Backward-error factor δ = 1000·n·ε of the eigensolver, used by [`cluster_radius`].

@@ -133,7 +133,8 @@ fn tuned_channels_are_reproduced_by_the_joint_run() {
         let g = [3.0, 2.0][c.channel];
         assert_eq!(Some(chosen.mu), least_mu_within(c, 3.0 * (1e-9 * g + 1e-9)));
         assert!(chosen.figures.unwrap().max_u <= limit);
-        assert_eq!(c.curve.len(), 7 + 4);
+        // Channel 2's own μ = 30 is off its grid (channel 1's 20 is on it).
+        assert_eq!(c.curve.len(), 7 + 4 + usize::from(c.channel == 1));
         assert!(c.curve.windows(2).all(|w| w[0].mu <= w[1].mu));
     }
     // The limit binds on channel 1: some μ₁ in the bounds exceeds it, so the optimum is interior.
@@ -199,6 +200,31 @@ fn a_limit_each_search_meets_can_be_broken_together() {
     assert!(second.channels[0].chosen.is_none(), "{:?}", second.channels[0].chosen);
 }
 
+/// The scenario's own μ_i, inside the bounds and off the grid, is a point of channel i's curve: on
+/// the paper's loop with max_uf = [15, 22] and a grid of μ = 0.1 and 1e4 only, μ₁ = 0.1 keeps
+/// u_f,1 within 15 with a tail RMS near 5, μ₁ = 1e4 breaks it, and the scenario's μ₁ = 20 keeps it
+/// with a far smaller tail: it is chosen (a quadrotor's tuning had said "no feasible mu" while its
+/// scenario's μ₄ kept the limit; helper tryout, 2026-12-07). Its figures are those of a plain sweep
+/// of the scenario (another path than the tuning's).
+#[test]
+fn the_scenarios_own_mu_is_a_point_of_the_search() {
+    let paper = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/paper.toml");
+    let settings = "[simulation]\nt_end = 40.0\nrtol = 1e-6\natol = 1e-6\n";
+    let text = format!("scenario = \"{paper}\"\n{settings}[tune]\nobjective = \"tail_rms_e\"\nmu = [0.1, 1e4]\nmax_uf = [15.0, 22.0]\npoints = 2\nrefine = 0\n");
+    let r = quell::study::tune(&Study::from_toml(&text, None).unwrap(), &Default::default()).unwrap();
+    let mus: Vec<f64> = r.channels[0].curve.iter().map(|p| p.mu).collect();
+    assert_eq!(mus, [0.1, 20.0, 1e4]);
+    let chosen = r.channels[0].chosen.as_ref().expect("a feasible μ₁");
+    assert_eq!(chosen.mu, 20.0);
+    let plain = sweep(
+        &Study::from_toml(&format!("scenario = \"{paper}\"\n{settings}"), None).unwrap(),
+        &SweepOptions::default(),
+    );
+    let f = chosen.figures.unwrap();
+    assert_eq!((f.max_uf, f.tail_rms_e), (plain.rows[0].channels[0].max_uf, plain.rows[0].channels[0].tail_rms_e));
+    assert!(f.max_uf <= 15.0 && r.channels[0].curve[0].objective.unwrap() > 5.0 * f.tail_rms_e);
+}
+
 /// A channel's search keeps the other inputs' limits that the scenario's own μ keeps: on the CSTR
 /// with max_uf = [11, 0.16], μ₁ = 100 took max |u_f,2| to 0.199 (the scenario's μ: 0.159), and
 /// channel 1's search had chosen it, its own u_f,1 being within 11 (helper tryout, 2026-12-05).
@@ -238,7 +264,8 @@ fn a_limit_on_u_f_is_judged_on_the_demand_where_the_true_actuator_clips() {
     doc.insert("scenario".into(), toml::Value::Table(scenario.parse().unwrap()));
     let r = quell::study::tune(&Study::from_table(&doc, None).unwrap(), &Default::default()).unwrap();
     let curve = &r.channels[0].curve;
-    assert!(curve.len() == 3 && curve.iter().all(|p| p.objective.is_none()), "{curve:?}");
+    // The 3 points and the scenario's own μ₁ = 20.
+    assert!(curve.len() == 4 && curve.iter().all(|p| p.objective.is_none()), "{curve:?}");
     let completed: Vec<_> = curve.iter().filter_map(|p| p.figures.map(|f| (p.mu, f.max_uf))).collect();
     assert!(!completed.is_empty() && completed.iter().all(|&(_, uf)| uf > 10.0), "{completed:?}");
     assert!(r.channels[0].chosen.is_none());

@@ -20,7 +20,7 @@ use serde::Serialize;
 pub use averaged::{disturbance_observer_gain, Averaged, ChannelAverage, Excitation, Fidelity};
 pub use effort::{steady_input, InputTone, SteadyInput};
 pub use estimate::{estimate, RateEstimate, STIFF_RATIO};
-pub use sampled::{sampled_advice, sampled_transient, SAMPLED_TRANSIENT};
+pub use sampled::{f32_export_check, sampled_advice, sampled_transient, SAMPLED_TRANSIENT};
 
 use nalgebra::{Complex, DMatrix, DVector};
 

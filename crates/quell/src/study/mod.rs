@@ -42,6 +42,9 @@ pub use tune::{
 pub struct StudyError {
     pub key: String,
     pub message: String,
+    /// The value has the wrong TOML type (a string for a number): Python raises it as a
+    /// `TypeError`, as it does [`crate::ScenarioError::wrong_type`].
+    pub wrong_type: bool,
 }
 
 /// A study a sweep can run: one without `[tune]`, which only tuning reads (`quell tune`, Python's
@@ -57,13 +60,18 @@ pub fn check_sweep(study: &Study) -> Result<(), StudyError> {
 }
 
 fn err(key: impl Into<String>, message: impl Into<String>) -> StudyError {
-    StudyError { key: key.into(), message: message.into() }
+    StudyError { key: key.into(), message: message.into(), wrong_type: false }
+}
+
+/// `v` at `key` is not of the type `expected` names: "expected …, found a string".
+pub(crate) fn found(key: impl Into<String>, expected: &str, v: &toml::Value) -> StudyError {
+    StudyError { wrong_type: true, ..err(key, format!("expected {expected}, found {}", kind(v))) }
 }
 
 /// The scenario reader's errors (`scenario::read`) name study keys when it reads a study.
 impl From<crate::ScenarioError> for StudyError {
     fn from(e: crate::ScenarioError) -> Self {
-        StudyError { key: e.key, message: e.message }
+        StudyError { key: e.key, message: e.message, wrong_type: e.wrong_type }
     }
 }
 
@@ -270,7 +278,7 @@ fn factor(key: &str, v: &toml::Value) -> Result<f64, StudyError> {
         toml::Value::Integer(i) if *i >= 1 => Ok(*i as f64),
         toml::Value::Float(x) => Err(err(key, format!("expected {WHAT}, found {}", crate::settings::fmt_short(*x)))),
         toml::Value::Integer(i) => Err(err(key, format!("expected {WHAT}, found {i}"))),
-        _ => Err(err(key, format!("expected {WHAT}, found {}", kind(v)))),
+        _ => Err(found(key, WHAT, v)),
     }
 }
 
@@ -287,12 +295,12 @@ fn unsigned(key: &str, v: &toml::Value, what: &str) -> Result<u64, StudyError> {
             );
             Err(err(key, message))
         }
-        _ => Err(err(key, format!("expected {what}, found {}", kind(v)))),
+        _ => Err(found(key, what, v)),
     }
 }
 
 fn table<'a>(key: &str, v: &'a toml::Value) -> Result<&'a toml::Table, StudyError> {
-    v.as_table().ok_or_else(|| err(key, format!("expected a table, found {}", kind(v))))
+    v.as_table().ok_or_else(|| found(key, "a table", v))
 }
 
 /// Every key of `t` (the table at `at`, "" for the document) is one of `valid`: the scenario
@@ -781,10 +789,7 @@ fn base_scenario(doc: &toml::Table, dir: Option<&Path>) -> Result<(toml::Table, 
             Ok((base, s.clone(), Some(p)))
         }
         Some(toml::Value::Table(t)) => Ok((t.clone(), "the study's scenario".into(), None)),
-        Some(v) => Err(err(
-            "scenario",
-            format!("expected the scenario file's path (a string) or a scenario table, found {}", kind(v)),
-        )),
+        Some(v) => Err(found("scenario", "the scenario file's path (a string) or a scenario table", v)),
     }
 }
 
@@ -916,7 +921,7 @@ fn read_grid(doc: &toml::Table) -> Result<Vec<GridAxis>, StudyError> {
                 "expected a non-empty list of values, found an empty array; give at least one value or remove the key",
             )),
             toml::Value::Array(v) => v.clone(),
-            v => return Err(err(&at, format!("expected a list of values (e.g. [5.0, 10.0]), found {}", kind(v)))),
+            v => return Err(found(&at, "a list of values (e.g. [5.0, 10.0])", v)),
         };
         if let Some(other) = grid.iter().find(|a| a.path.overlaps(&path)) {
             return Err(err(
@@ -1111,7 +1116,7 @@ fn check_values<'v>(
         match path::shape(v) {
             Some(found) if found == expected => {}
             Some(found) => return Err(err(key, format!("expected {expected} ({shape_of}), found {found}"))),
-            None => return Err(err(key, format!("expected {expected} (the shape of {path}), found {}", kind(v)))),
+            None => return Err(found(key, &format!("{expected} (the shape of {path})"), v)),
         }
         let mut trial = doc.clone();
         path.set(&mut trial, v.clone()).expect("found above");
@@ -1183,8 +1188,10 @@ fn monte_carlo(base: &toml::Table, t: &toml::Table, source: &str) -> Result<Mont
         let at = format!("monte_carlo.\"{key}\"");
         misspelt_draw_key(key, &at)?;
         let path = KeyPath::parse(key).map_err(|m| err(&at, m))?;
-        let law = table(&at, v)
-            .map_err(|_| err(&at, format!("expected a distribution, one of {LAWS}; found {}", kind(v))))?;
+        let law = table(&at, v).map_err(|_| StudyError {
+            wrong_type: true,
+            ..err(&at, format!("expected a distribution, one of {LAWS}; found {}", kind(v)))
+        })?;
         let (name, size) = match law.iter().collect::<Vec<_>>()[..] {
             [(name, size)] => (name, size),
             _ => {

@@ -8,8 +8,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::sweep::{execute, Outcome, Row, RunSpec};
-use super::{err, number, Study, StudyError};
-use crate::scenario::kind;
+use super::{err, found, number, Study, StudyError};
 use crate::scenario::Scenario;
 use crate::sim::ChannelFigures;
 
@@ -103,7 +102,7 @@ impl TuneSpec {
                 "tail_max_e" => Objective::TailMaxE,
                 _ => return Err(err("tune.objective", format!("expected {OBJECTIVES}, found \"{o}\""))),
             },
-            Some(v) => return Err(err("tune.objective", format!("expected {OBJECTIVES}, found {}", kind(v)))),
+            Some(v) => return Err(found("tune.objective", OBJECTIVES, v)),
         };
         let per_channel = |key: &str, v: &toml::Value| -> Result<Vec<toml::Value>, StudyError> {
             match v {
@@ -126,13 +125,9 @@ impl TuneSpec {
                     .map(|(i, b)| {
                         // One pair for every channel is named as the key itself.
                         let key = if shared { "tune.mu".to_string() } else { format!("tune.mu[{i}]") };
-                        let pair = b.as_array().filter(|a| a.len() == 2).ok_or_else(|| {
-                            let found = match b.as_array() {
-                                Some(a) if a.len() == 1 => "an array of 1 entry".to_string(),
-                                Some(a) => format!("an array of {} entries", a.len()),
-                                None => kind(b).to_string(),
-                            };
-                            err(&key, format!("expected [μ_min, μ_max], found {found}"))
+                        let pair = b.as_array().filter(|a| a.len() == 2).ok_or_else(|| match b.as_array() {
+                            Some(a) => err(&key, format!("expected [μ_min, μ_max], found an array of {}", crate::settings::entries(a.len()))),
+                            None => found(&key, "[μ_min, μ_max]", b),
                         })?;
                         let (lo, hi) = (number(&key, &pair[0], "a finite number")?, number(&key, &pair[1], "a finite number")?);
                         if !(lo > 0.0 && lo <= hi) {
@@ -238,6 +233,7 @@ impl TuneCurve {
                 first.reason
             );
         }
+        let evaluated = self.curve.len();
         let mut wanted: Vec<String> = vec![];
         // Per limit set, the least reached by the runs the limit alone rejected (completed, with a
         // finite objective): raising the limit to that figure admits one. Runs that never settled
@@ -283,19 +279,19 @@ impl TuneCurve {
         if !flat_peaks.is_empty() {
             let remedy = self.flat_remedy(spec, prefix, steady);
             return format!(
-                "no μ in {prefix}mu[{i}] completed with {}{reached}; raise {}, or {remedy}{clipping}",
+                "none of the {evaluated} μ evaluated in {prefix}mu[{i}] completed with {}{reached}; raise {}, or {remedy}{clipping}",
                 wanted.join(" and "),
                 flat_peaks.join(" and ")
             );
         }
         if let Some(steady) = self.steady_beyond(spec, steady) {
             return format!(
-                "no μ in {prefix}mu[{i}] completed with {}{reached}; raise {prefix}max_uf[{i}], or {steady}{clipping}",
+                "none of the {evaluated} μ evaluated in {prefix}mu[{i}] completed with {}{reached}; raise {prefix}max_uf[{i}], or {steady}{clipping}",
                 wanted.join(" and ")
             );
         }
         format!(
-            "no μ in {prefix}mu[{i}] completed with {}{reached}; widen the bounds{limits} or lengthen {}t_end{clipping}",
+            "none of the {evaluated} μ evaluated in {prefix}mu[{i}] completed with {}{reached}; widen the bounds, evaluate more of them ({prefix}points){limits} or lengthen {}t_end{clipping}",
             wanted.join(" and "),
             if prefix.is_empty() { "" } else { "simulation." }
         )
@@ -696,7 +692,15 @@ impl Search<'_> {
         }
         let mut mu = self.base_mu.to_vec();
         mu[i] = mu_i;
-        let row = run_with(self.study, &mu, &|| self.stopped())?;
+        let point = self.point(i, mu_i, run_with(self.study, &mu, &|| self.stopped())?);
+        if let Some(f) = self.opts.on_point {
+            f(i, &point);
+        }
+        Some(point)
+    }
+
+    /// Channel i's point at μ_i = `mu_i` from its run's `row` (the other channels at the scenario's μ).
+    fn point(&self, i: usize, mu_i: f64, row: Row) -> TunePoint {
         let figures = row.completed().get(i).copied();
         let (spec, objective) = (self.spec, self.spec.objective);
         // Every input's limits that the scenario's μ keeps: u_f = −K x̂ + F u_d (5) mixes the
@@ -717,11 +721,7 @@ impl Search<'_> {
         if reason.is_empty() && figures.is_some() && objective.is_none() {
             reason = format!("no finite {} (never settled within the run)", spec.objective.name());
         }
-        let point = TunePoint { mu: mu_i, objective, outcome: row.outcome, reason, figures };
-        if let Some(f) = self.opts.on_point {
-            f(i, &point);
-        }
-        Some(point)
+        TunePoint { mu: mu_i, objective, outcome: row.outcome, reason, figures }
     }
 
     /// Channel i's log-spaced starting points; through the logarithms where μ_max/μ_min overflows
@@ -783,6 +783,8 @@ impl Search<'_> {
     /// Channel i's curve (its points of `coarse`, refined) in order of μ, and its chosen point ([`least_mu_within_tolerance`]).
     fn curve(&self, i: usize, coarse: &[(usize, TunePoint)]) -> TuneCurve {
         let mut curve: Vec<TunePoint> = coarse.iter().filter(|(c, _)| *c == i).map(|(_, p)| p.clone()).collect();
+        // In order of μ: the refinement brackets the best point by its neighbours.
+        curve.sort_by(|a, b| a.mu.total_cmp(&b.mu));
         self.refine(i, &mut curve);
         curve.sort_by(|a, b| a.mu.total_cmp(&b.mu));
         let found = least_mu_within_tolerance(&curve, self.spec.objective, self.scenario, i);
@@ -879,16 +881,29 @@ fn search_and_join(
     // The scenario's own run, where a limit is set: which of the file's limits every search must
     // keep (a tightened one is its own channel's search's to keep).
     let limited = spec.max_u.iter().chain(&spec.max_uf).any(|l| l.is_finite());
-    let base = if limited { run_with(study, &base_mu, &stopped) } else { None };
+    let search = Search { study, scenario, spec: searched, file: spec, base_mu: &base_mu, guarded: vec![], opts };
+    // The scenario's own μ_i, inside channel i's bounds and off its grid, is a point of its curve
+    // too: a quadrotor's tuning said "no feasible mu" of 7 points over three decades while the
+    // scenario's μ₄ = 5204 kept max |u_f,4| = 2.86 within its 3 (helper tryout, 2026-12-07).
+    let own: Vec<usize> = (0..m)
+        .filter(|&i| {
+            let [lo, hi] = searched.bounds[i];
+            (lo..=hi).contains(&base_mu[i]) && search.log_grid(i).all(|mu| (mu / base_mu[i] - 1.0).abs() > 1e-9)
+        })
+        .collect();
+    let base = if limited || !own.is_empty() { run_with(study, &base_mu, &stopped) } else { None };
     let guarded = (0..m)
         .map(|j| {
             base.as_ref().and_then(|r| r.completed().get(j)).is_some_and(|f| spec.broken_limits(j, f, "").is_empty())
         })
         .collect();
-    let search = Search { study, scenario, spec: searched, file: spec, base_mu: &base_mu, guarded, opts };
+    let search = Search { guarded, ..search };
     let jobs: Vec<(usize, f64)> = (0..m).flat_map(|i| search.log_grid(i).map(move |mu| (i, mu))).collect();
-    let coarse: Vec<(usize, TunePoint)> =
+    let mut coarse: Vec<(usize, TunePoint)> =
         jobs.into_par_iter().filter_map(|(i, mu)| Some((i, search.score(i, mu)?))).collect();
+    if let Some(row) = base.as_ref().filter(|_| !search.stopped()) {
+        coarse.extend(own.iter().map(|&i| (i, search.point(i, base_mu[i], row.clone()))));
+    }
     let channels: Vec<TuneCurve> = (0..m).into_par_iter().map(|i| search.curve(i, &coarse)).collect();
     let mu: Vec<f64> = channels.iter().zip(&base_mu).map(|(c, &m0)| c.chosen.as_ref().map_or(m0, |p| p.mu)).collect();
     let joint = if search.stopped() { None } else { run_with(study, &mu, &|| search.stopped()) };
@@ -1179,7 +1194,7 @@ mod tests {
         let spec = TuneSpec { max_uf: vec![0.05], ..spec };
         assert_eq!(
             flat.why_none(&spec, "tune.", (f64::INFINITY, 0.0)),
-            "no μ in tune.mu[0] completed with max |u_f,1| ≤ tune.max_uf[0] and a finite settle_t (max |u_f,1| is 0.07074 at every μ with a finite settle_t (from 10 to 100000), above tune.max_uf[0] = 0.05: the poles and the signals set it, not μ); raise tune.max_uf[0], or slow the scenario's channel and observer poles (an automatic design with an actuator limit, u_limit, chooses poles within it)"
+            "none of the 2 μ evaluated in tune.mu[0] completed with max |u_f,1| ≤ tune.max_uf[0] and a finite settle_t (max |u_f,1| is 0.07074 at every μ with a finite settle_t (from 10 to 100000), above tune.max_uf[0] = 0.05: the poles and the signals set it, not μ); raise tune.max_uf[0], or slow the scenario's channel and observer poles (an automatic design with an actuator limit, u_limit, chooses poles within it)"
         );
     }
 
