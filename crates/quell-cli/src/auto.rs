@@ -242,8 +242,26 @@ fn report_text(a: &AutoDesign) -> String {
         s.push_str(&format!("  advice: {}\n", crate::in_flags(a.clone()))); // u_limit is --u-limit here
     }
     s.push('\n');
-    s.push_str(&crate::pace::design_text(&a.scenario, &a.design));
+    let report = crate::pace::design_text(&a.scenario, &a.design);
+    s.push_str(&report);
+    s.push_str(&limit_note(v, &report));
     s
+}
+
+/// Under an actuator limit, a note on the design report's advice to raise μ: the averaged law's
+/// pace, which knows no limit (a mixing tank verified within 0.051 and 0.1 was told to raise μ₂ to
+/// 18, where max|u_f| reached 0.060 and 0.121; helper tryout, 2026-12-07).
+fn limit_note(v: &quell::auto::Verification, report: &str) -> String {
+    let limited = v.u_limit.iter().any(|u| u.is_finite());
+    if !(v.passed && limited && report.contains("raise design.mu[")) {
+        return String::new();
+    }
+    let list = |x: &[f64], f: fn(f64) -> String| x.iter().map(|&u| f(u)).collect::<Vec<_>>().join(", ");
+    format!(
+        "note: the design report's advice to raise design.mu is the averaged law's pace and knows no actuator limit: the automatic design verified the μ above within --u-limit (max|u_f| [{}] against [{}]); a larger μ moves max|u_f|, so run the raised scenario (quell run) before keeping it\n",
+        list(&v.max_uf, |u| crate::run::fixed_or_sci(u, 4)),
+        list(&v.u_limit, crate::run::short)
+    )
 }
 
 /// The kept design with its delays off ([`quell::auto::DelayCheck`]): how far off they may be,

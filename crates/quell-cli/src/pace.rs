@@ -82,10 +82,20 @@ fn deployment_text(s: &Scenario, d: &Design) -> String {
             quell::export::fmt_shift(shift)
         )
     };
+    // The scenario's own sample time, which its runs verify, beside the bound's longest (a ball on
+    // a plate verified at 1 ms had read "e.g. 0.005 s", at which it departed 200 %; helper tryout,
+    // 2026-12-07).
+    let own = sim.sample_time.map_or(String::new(), |t_s| {
+        format!(
+            "; this scenario samples at {} {unit} (T_s·ρ = {:.2}), which its sampled runs judge: a longer T_s within the bound is not verified by them",
+            quell::settings::fmt_time(t_s),
+            t_s * rho
+        )
+    });
     format!(
         "
 deployment (a sampled-data controller, docs/deployment.md):
-  sample time: {need}; ρ = {} /{unit}, the loop's fastest rate (a bound the sampled loop needs, not one that suffices: a sampled run compares itself with its continuous loop and says where it departs)
+  sample time: {need}; ρ = {} /{unit}, the loop's fastest rate (a bound the sampled loop needs, not one that suffices: a sampled run compares itself with its continuous loop and says where it departs){own}
   precision: {precision}
 ",
         fmt_4(rho)

@@ -1955,3 +1955,40 @@ fn a_sampled_automatic_design_says_its_whole_factors() {
     );
     assert!(report.contains("    ×1.1 (τ = [0.003, 0.005] s: whole samples, up to 50 % off): "), "{report}");
 }
+
+/// Under --u-limit, the design report's advice to raise μ (the averaged law's pace) is noted as
+/// unchecked against the limit: a mixing tank (`quell/tests/data/mixing-tank.toml`, minutes)
+/// verified within 0.051 and 0.1 was told to raise μ₂ to 18, which breaks them. A run of the
+/// written scenario with that μ (another path than the automatic design's) shows why.
+#[test]
+fn a_raise_of_mu_under_an_actuator_limit_is_noted_as_unchecked() {
+    let dir = temp_dir("ulimit-note");
+    let tank = Path::new(env!("CARGO_MANIFEST_DIR")).join("../quell/tests/data/mixing-tank.toml");
+    let out = dir.path().join("tank-auto.toml");
+    let o = quell(&[
+        "design",
+        tank.to_str().unwrap(),
+        "--auto",
+        "--u-limit",
+        "0.051,0.1",
+        "--write",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let text = stdout(&o);
+    let raise = text.split_once("raise design.mu[1] to ").expect("the report's raise").1;
+    let mu2: f64 = raise.split_once(' ').unwrap().0.parse().unwrap();
+    assert!(text.contains("note: the design report's advice to raise design.mu is the averaged law's pace and knows no actuator limit"), "{text}");
+    let written = fs::read_to_string(&out).unwrap();
+    let line = written.lines().find(|l| l.starts_with("mu = [")).unwrap();
+    let mu1 = line.trim_start_matches("mu = [").split(',').next().unwrap();
+    let raised = dir.path().join("raised.toml");
+    fs::write(&raised, written.replace(line, &format!("mu = [{mu1}, {mu2}]"))).unwrap();
+    let run = dir.path().join("run");
+    let o = quell(&["run", raised.to_str().unwrap(), "--out", run.to_str().unwrap(), "--no-plots"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let summary = read_json(&run.join("summary.json"));
+    let peaks: Vec<f64> =
+        summary["channels"].as_array().unwrap().iter().map(|c| c["max_uf"].as_f64().unwrap()).collect();
+    assert!(peaks[0] > 0.051 || peaks[1] > 0.1, "μ₂ = {mu2}: max|u_f| {peaks:?} within the limits");
+}

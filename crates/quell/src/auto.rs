@@ -1593,7 +1593,7 @@ fn finish(
     let relaxation = relaxation_text(&p, &c, (runs, &candidates), &bound, (passed, targets_limited));
     // A steady state beyond the true actuator is the cause to name first; a passing run may still
     // have thrashed at DOP853's stability bound: the caution `quell run` gives.
-    let saturated = (!passed).then(|| saturation_advice(&p.scenario)).flatten();
+    let saturated = (!passed).then(|| crate::diagnostics::effort::saturation_advice(&p.scenario)).flatten();
     let advice = saturated.into_iter().chain(advice).chain(c.thrashing.clone()).collect();
     AutoDesign {
         scenario: p.scenario,
@@ -1672,32 +1672,6 @@ fn relaxation_text(
             ),
         }
     }
-}
-
-/// Where the steady state itself asks more of an input than the true actuator gives (`[truth]`
-/// u_max): the plant needs that input for y = g whatever the controller, so no poles or μ meet the
-/// tail bound. A heating plant asking 15 of a 12 drive had every candidate diverge through the clip
-/// and was told to give slower poles or a smaller μ by hand (helper tryout, 2026-12-06).
-fn saturation_advice(s: &Scenario) -> Option<String> {
-    let limits = &s.actuator.as_ref()?.limits;
-    let steady = s.steady_input();
-    let over: Vec<String> = (steady.peak.iter().zip(limits).enumerate())
-        .filter(|(_, (peak, limit))| peak > limit)
-        .map(|(i, (peak, limit))| {
-            format!(
-                "u_f,{} peaks at {} against truth.u_max[{i}] = {}",
-                i + 1,
-                crate::settings::fmt_4(*peak),
-                crate::settings::fmt_short(*limit)
-            )
-        })
-        .collect();
-    (!over.is_empty()).then(|| {
-        format!(
-            "the steady state itself asks more than the true actuator gives ({}; the design report's steady-state section): the plant needs that input for y = g whatever the controller, so no poles or μ meet the tail bound, and the clip, which the method does not model, can drive the verifying runs away; ask less of the loop (smaller references, a disturbance the actuator can hold) or raise truth.u_max",
-            over.join(", ")
-        )
-    })
 }
 
 /// A channel whose reference is 0 throughout (a regulated output) has a bound of 0, which no tail

@@ -1908,3 +1908,24 @@ fn a_delay_long_against_the_horizon_is_named_when_the_verification_fails() {
     assert!(advice.contains("channel 1's input delay τ = 45 min is 37.5 % of the run (120 min): its command acts only from τ on, so the adaptation starts late; if τ is not in min (plant.time_unit), correct plant.delays[0] before anything below"), "{advice}");
     assert!(advice.contains("channel 2's input delay τ = 60 min is 50.0 % of the run"), "{advice}");
 }
+
+/// A run through a true actuator below what the steady state itself asks is told so first, as the
+/// automatic design's failure is: the ball and beam's design (verified under its 0.45 drive) run
+/// under 0.3, below the 0.3333 its reference and tilt ask in steady state (0.0952 + 0.2381, above),
+/// had been told only that the clip bit (a ball on a plate whose run diverged through a 0.3 V clip;
+/// helper tryout, 2026-12-07).
+#[test]
+fn a_run_through_an_actuator_below_the_steady_state_is_told_so_first() {
+    let a = auto_design(&data("ball-beam.toml").parse().unwrap(), &Targets::default()).unwrap();
+    assert!(a.verification.passed);
+    let text = a.scenario.to_toml().replace("u_max = [0.45]", "u_max = [0.3]");
+    assert!(text.contains("u_max = [0.3]"), "{text}");
+    let s = Scenario::from_toml(&text).unwrap();
+    let d = s.design().unwrap();
+    let r = Run::of(&s, &d).simulate(|_| ControlFlow::Continue(())).unwrap();
+    let advice = quell::diagnostics::model_error_advice(&s, &r).expect("a model error line");
+    assert!(advice.starts_with("the steady state itself asks more than the true actuator gives (u_f,1 peaks at 0.3333 against truth.u_max[0] = 0.3;"), "{advice}");
+    // Under the 0.45 drive it passes, and the line is not given.
+    let r = Run::of(&a.scenario, &a.design).simulate(|_| ControlFlow::Continue(())).unwrap();
+    assert!(!quell::diagnostics::model_error_advice(&a.scenario, &r).is_some_and(|l| l.contains("steady state itself")));
+}

@@ -284,6 +284,33 @@ fn costly_harmonics(
     advice
 }
 
+/// Where the steady state itself asks more of an input than the true actuator gives (`[truth]`
+/// u_max): the plant needs that input for y = g whatever the controller, so no poles or μ meet the
+/// tail bound. A heating plant asking 15 of a 12 drive had every candidate diverge through the clip
+/// and was told to give slower poles or a smaller μ by hand (helper tryout, 2026-12-06); a ball on a
+/// plate whose run diverged through a 0.3 V clip was told only of the clipping (2026-12-07).
+pub(crate) fn saturation_advice(s: &crate::Scenario) -> Option<String> {
+    let limits = &s.actuator.as_ref()?.limits;
+    let steady = s.steady_input();
+    let over: Vec<String> = (steady.peak.iter().zip(limits).enumerate())
+        .filter(|(_, (peak, limit))| peak > limit)
+        .map(|(i, (peak, limit))| {
+            format!(
+                "u_f,{} peaks at {} against truth.u_max[{i}] = {}",
+                i + 1,
+                crate::settings::fmt_4(*peak),
+                crate::settings::fmt_short(*limit)
+            )
+        })
+        .collect();
+    (!over.is_empty()).then(|| {
+        format!(
+            "the steady state itself asks more than the true actuator gives ({}; the design report's steady-state section): the plant needs that input for y = g whatever the controller, so no poles or μ meet the tail bound, and the clip, which the method does not model, can drive the runs away; ask less of the loop (smaller references, a disturbance the actuator can hold) or raise truth.u_max",
+            over.join(", ")
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::C64;

@@ -387,6 +387,13 @@ pub fn model_error_advice(s: &crate::Scenario, result: &SimResult) -> Option<Str
     if diffs.is_empty() {
         return None;
     }
+    // A true actuator below what the steady state itself asks: that first, whatever else differs.
+    let ended = result.outcome.as_ref().is_some_and(|o| !matches!(o, Outcome::Completed));
+    if ended || (0..result.m).any(|i| !tail_within_bound(result, i)) {
+        if let Some(saturated) = effort::saturation_advice(s) {
+            return Some(saturated);
+        }
+    }
     // A completed run that missed its tail bound: the mismatch may set the floor (a vessel's
     // actuator delay left a tail 1.3× its bound that no advice on the model's keys explained).
     let Some(outcome) = result.outcome.as_ref().filter(|o| !matches!(o, Outcome::Completed)) else {
@@ -1512,7 +1519,16 @@ fn stalled_advice(
         return None;
     }
     let unit = result.time_unit;
-    let ratio = trend.map_or(String::new(), |r| format!(" (RMS ratio {:.2} {})", r.ratio, r.windows(unit)));
+    // The thresholds judge the pace over a tenth of the run: said beside a ratio over longer
+    // windows (0.60 over 5 s windows read as "stalled" against thresholds of 0.8 … 1.25).
+    let ratio = trend.map_or(String::new(), |r| {
+        let tenth = if (r.per_tenth() - r.ratio).abs() >= 0.005 {
+            format!(", {:.2} at that pace over a tenth of the run", r.per_tenth())
+        } else {
+            String::new()
+        };
+        format!(" (RMS ratio {:.2} {}{tenth})", r.ratio, r.windows(unit))
+    });
     Some(format!(
         "channel {}'s tail has stalled at {level:.1e} of its scale{ratio}, within the {:.0} % tail bound an automatic design verifies: the directions of its internal model that matter at that level decay with time constant 1/(μλ) = {:.1e} {unit}, {CONVERGED_EFOLDS:.0} of which converge them, against t_end = {} {unit}; to go lower, raise design.mu[{i}] (watch max|u_f|, which rises with it) or lengthen simulation.t_end, comparing runs (a tuning over μ, docs/tuning.md, does that): no μ is offered, since the averaged law that would set one misjudges directions at this level",
         i + 1,
