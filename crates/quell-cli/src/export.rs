@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use quell::controller::Precision;
+use quell::diagnostics::ExportCheck;
 use quell::export::{generate, generate_fmu, CCode, ExportError, ExportOptions, FmiVersion, Fmu};
 
 use crate::{file_sample_time, load_with, output, set_sample_time, sim_number, Failure};
@@ -74,7 +75,7 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
     };
     let code = generate(&design, sample_time, &options).map_err(export_failure)?;
     eprint!("{}", crate::report::sample_time_text(&scenario, &design, sample_time, None));
-    let f32_check = (options.precision == Precision::F32).then(|| f32_check(&scenario, &design, sample_time));
+    let check = loop_check(&scenario, &design, (sample_time, options.precision));
     let mut ctrl_c = None;
     let fmu = if args.fmu {
         let (compiler, from_env) = quell::export::compiler_choice(args.compiler.clone());
@@ -115,33 +116,50 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
         let w = if args.precision.is_none() { w.replacen("--precision:", "simulation.precision:", 1) } else { w };
         eprintln!("⚠ warning: {w}");
     }
-    print_f32_check(f32_check, sample_time);
+    print_check(check, scenario.plant.time_unit);
     Ok(())
 }
 
-/// The f32 check's line ([`f32_check`]): a warning where the loop departs or could not be measured.
-fn print_f32_check(check: Option<Result<(String, bool), String>>, sample_time: f64) {
+/// The loop check's lines ([`loop_check`]): warnings where the loop departs or could not be measured.
+fn print_check(check: Result<ExportCheck, String>, unit: quell::TimeUnit) {
     match check {
-        Some(Ok((line, true))) => eprintln!("⚠ warning: {line}"),
-        Some(Ok((line, false))) => eprintln!("{line}"),
-        Some(Err(why)) => eprintln!(
-            "⚠ warning: precision f32: the f32 loop could not be measured against f64 ({why}): run quell run SCENARIO --sample-time {sample_time} --precision f32 before deploying it"
+        Ok(c) => {
+            let cut = if c.cut { " (cut at 1e6 controller steps)" } else { "" };
+            let horizon = quell::settings::fmt_time(c.horizon);
+            if c.lines.is_empty() {
+                eprintln!("over {horizon} {unit}{cut}: the sampled-data loop follows its continuous loop");
+            }
+            for (line, warns) in c.lines {
+                match warns {
+                    true => eprintln!("⚠ warning: over {horizon} {unit}{cut}: {line}"),
+                    false => eprintln!("over {horizon} {unit}{cut}: {line}"),
+                }
+            }
+        }
+        Err(why) => eprintln!(
+            "⚠ warning: the exported loop could not be measured ({why}): measure it with a sampled run of the scenario at this T_s (quell run SCENARIO --sample-time T_S, its t_end a few hundred samples or more) before deploying it"
         ),
-        None => {}
     }
 }
 
-/// An f32 export's loop, measured: the scenario's sampled run in f32 (emulated) against the same
-/// run in f64, over its t_end ([`quell::diagnostics::f32_export_check`]).
-fn f32_check(scenario: &quell::Scenario, design: &quell::Design, sample_time: f64) -> Result<(String, bool), String> {
+/// The exported controller's loop, measured: the scenario sampled at T_s in the export's precision
+/// against its continuous loop, and in f32 against f64 ([`quell::diagnostics::export_check`]).
+fn loop_check(
+    scenario: &quell::Scenario,
+    design: &quell::Design,
+    (sample_time, precision): (f64, Precision),
+) -> Result<ExportCheck, String> {
+    let against = match precision {
+        Precision::F32 => "its continuous loop and the same run in f64",
+        Precision::F64 => "its continuous loop",
+    };
     eprintln!(
-        "measuring the f32 loop: the scenario sampled at T_s = {} {} in f32 (emulated) and in f64, over t_end = {} {} …",
+        "measuring the exported loop: the scenario sampled at T_s = {} {} in {} against {against} …",
         quell::settings::fmt_time(sample_time),
         scenario.plant.time_unit,
-        quell::settings::fmt_time(scenario.simulation.t_end),
-        scenario.plant.time_unit
+        precision.c_type(),
     );
-    quell::diagnostics::f32_export_check(scenario, design, sample_time)
+    quell::diagnostics::export_check(scenario, design, (sample_time, precision))
 }
 
 /// Writes the header, the source and the FMU (when there is one) into `out` (not over the `input`

@@ -86,11 +86,12 @@ fn deployment_text(s: &Scenario, d: &Design) -> String {
     // a plate verified at 1 ms had read "e.g. 0.005 s", at which it departed 200 %; helper tryout,
     // 2026-12-07).
     let own = sim.sample_time.map_or(String::new(), |t_s| {
-        format!(
-            "; this scenario samples at {} {unit} (T_s·ρ = {:.2}), which its sampled runs judge: a longer T_s within the bound is not verified by them",
-            quell::settings::fmt_time(t_s),
-            t_s * rho
-        )
+        let (at, product) = (quell::settings::fmt_time(t_s), t_s * rho);
+        if quell::sim::is_coarse(product) {
+            format!("; this scenario samples at {at} {unit}, beyond it (T_s·ρ = {product:.2}): its sampled runs say how far the loop departs from the continuous one")
+        } else {
+            format!("; this scenario samples at {at} {unit} (T_s·ρ = {product:.2}), which its sampled runs judge: a longer T_s within the bound is not verified by them")
+        }
     });
     format!(
         "

@@ -183,8 +183,8 @@ pub fn export(
     for w in code.warnings().chain(unit) {
         crate::errors::warn(py, &w)?;
     }
-    if let Some(s) = scenario.filter(|_| precision == Precision::F32) {
-        warn_f32_check(py, &s, &design, T)?;
+    if let Some(s) = scenario {
+        warn_loop_check(py, &s, &design, (T, precision))?;
     }
     let out = out.unwrap_or_else(|| PathBuf::from("."));
     let mut files = vec![(code.header_name, code.header.into_bytes()), (code.source_name, code.source.into_bytes())];
@@ -198,13 +198,24 @@ pub fn export(
     Ok(written)
 }
 
-/// An f32 export of a scenario: its loop in f32 against f64, as `quell export` measures it
-/// ([`quell::diagnostics::f32_export_check`]), warned of where it departs or cannot be measured.
-fn warn_f32_check(py: Python<'_>, s: &quell::Scenario, design: &quell::Design, T: f64) -> PyResult<()> {
-    match crate::interrupt::interruptible(py, || quell::diagnostics::f32_export_check(s, design, T))? {
-        Ok((line, true)) => crate::errors::warn(py, &line),
-        Ok((_, false)) => Ok(()),
-        Err(why) => crate::errors::warn(py, &format!("precision f32: the f32 loop could not be measured against f64 ({why}): run quell.simulate(scenario, sample_time={T}, precision=\"f32\") before deploying it")),
+/// An export of a scenario: its loop at T_s, against its continuous loop and, in f32, against
+/// f64, as `quell export` measures it ([`quell::diagnostics::export_check`]), warned of where it
+/// departs or cannot be measured.
+fn warn_loop_check(
+    py: Python<'_>,
+    s: &quell::Scenario,
+    design: &quell::Design,
+    (T, precision): (f64, Precision),
+) -> PyResult<()> {
+    match crate::interrupt::interruptible(py, || quell::diagnostics::export_check(s, design, (T, precision)))? {
+        Ok(c) => {
+            let cut = if c.cut { " (over its first 1e6 controller steps)" } else { "" };
+            for (line, _) in c.lines.iter().filter(|(_, warns)| *warns) {
+                crate::errors::warn(py, &format!("{line}{cut}"))?;
+            }
+            Ok(())
+        }
+        Err(why) => crate::errors::warn(py, &format!("the exported loop could not be measured ({why}): measure it with quell.simulate(scenario, sample_time=…), t_end a few hundred samples or more, before deploying it")),
     }
 }
 

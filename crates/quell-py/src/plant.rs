@@ -187,9 +187,18 @@ impl PyPlant {
         if type_name(A) == "FrequencyResponseData" {
             return Err(PyTypeError::new_err("A: expected a matrix, a control.StateSpace or a control.TransferFunction, found a FrequencyResponseData (a frequency response holds no state-space model: fit one to it first, e.g. a transfer function)"));
         }
-        // A control.TransferFunction becomes its minimal state-space realization.
+        // A control.TransferFunction becomes its minimal state-space realization, whose states no
+        // D, x0 or state name can refer to (a D given with one had been read in the realization's
+        // coordinates: a disturbance's DC gain 5e8 where 2 was meant; helper tryout, 2026-12-07).
         let realized;
         let A = if type_name(A) == "TransferFunction" {
+            let given =
+                |v: Option<&Bound<'_, PyAny>>| v.is_some_and(|v| !v.is_none() && !v.len().is_ok_and(|l| l == 0));
+            if let Some(name) =
+                [("D", D), ("x0", x0), ("states", states)].iter().find(|(_, v)| given(*v)).map(|(n, _)| n)
+            {
+                return Err(k.err(py, format!("{name}: refers to the plant's states, but with a control.TransferFunction as A the states are those of its minimal realization (control.minreal, then control.ss), which you did not choose; give the plant as a control.StateSpace, or A, B, C, in the coordinates {name} is written in")));
+            }
             realized = py.import("quell._control")?.call_method1("state_space", (A,))?;
             &realized
         } else {

@@ -91,6 +91,21 @@ def test_plant_from_a_transfer_function_is_its_minimal_realization():
     np.testing.assert_array_equal(quell.Plant(ss).A, ss.A)
 
 
+def test_state_keys_are_refused_with_a_transfer_function():
+    """D, x0 and states refer to the plant's states, which a transfer function's realization
+    chooses: a D given with one had been applied in the realization's coordinates (a disturbance's
+    DC gain 5e8 where 2 was meant; helper tryout, 2026-12-07). The same D with the StateSpace it was
+    written for is taken."""
+    A = np.array([[0.0, 1.0], [2.0, -1.0]])
+    B, C = np.array([[0.0], [1.0]]), np.array([[1.0, 0.0]])
+    G = control.ss2tf(control.ss(A, B, C, 0))
+    for name, value in [("D", [[1.0], [0.0]]), ("x0", [1.0, 0.0]), ("states", ["p", "v"])]:
+        with pytest.raises(quell.ScenarioError, match=f"^{name}: refers to the plant's states, but with a control.TransferFunction"):
+            quell.Plant(G, **{name: value})
+    plant = quell.Plant(control.ss(A, B, C, 0), D=[[1.0], [0.0]], Q=[[0.0]])
+    np.testing.assert_array_equal(plant.D, [[1.0], [0.0]])
+
+
 def test_a_transfer_function_that_cancels_an_unstable_pole_is_refused():
     # (s − 1.00001) / ((s − 1)(s + 2)(s + 3)): python-control's minreal cancels the pole at +1
     # against the zero 1e-5 away (its default tolerance), which would leave a stable,

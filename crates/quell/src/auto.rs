@@ -1080,7 +1080,9 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
             let s = &kept.0.scenario;
             let met = kept.2.tail_within(&bound, 1.0);
             let given = given_keys(kept.0.relaxable, &s.design);
-            vec![limit_advice(targets, &kept.2, s.actuator.as_ref(), (&s.steady_input().peak, met), &given)]
+            // The peak with the harmonics the tail bounds let pass uncancelled.
+            let steady = s.steady_input().peak_letting_pass(&bound);
+            vec![limit_advice(targets, &kept.2, s.actuator.as_ref(), (&steady, met), &given)]
         }
     };
     let mut auto =
@@ -1965,13 +1967,14 @@ fn horizon_advice(
     let s = &proposal.scenario;
     let t_end = s.simulation.t_end;
     let beats = beat_horizon(s);
-    let mut advice: Vec<String> = beats.iter().map(|(why, _)| why.clone()).collect();
-    if let Some(growth) = first.growth(bound) {
-        advice.push(growth);
-        return Ok(advice);
-    }
+    // A long delay first, then the beats: a diverging loop has no horizon advice.
     let missed = |i: usize| first.tail_max_e[i].is_nan() || first.tail_max_e[i] > bound[i];
-    advice.extend((0..bound.len()).filter(|&i| missed(i)).filter_map(|i| long_delay(design, i, t_end)));
+    let delays: Vec<String> =
+        (0..bound.len()).filter(|&i| missed(i)).filter_map(|i| long_delay(design, i, t_end)).collect();
+    if let Some(growth) = first.growth(bound) {
+        return Ok(beats.iter().map(|(why, _)| why.clone()).chain([growth]).collect());
+    }
+    let mut advice: Vec<String> = delays.into_iter().chain(beats.iter().map(|(why, _)| why.clone())).collect();
     let slow = slow_convergence(s, design, &first.tail_max_e, bound);
     if !slow.why.is_empty() {
         let given = !proposal.relaxable[2];
@@ -2009,8 +2012,10 @@ fn horizon_advice(
     .into_iter()
     .flatten()
     .collect();
+    let mut horizon = false;
     if !estimates.is_empty() && !verifier.nested {
         let (verified, passed) = verified_horizon(doc, targets, verifier, estimates, (s, design, first.steps))?;
+        horizon = passed;
         if let Some(at) = at.filter(|_| passed) {
             // A horizon verified to pass supersedes the slow poles' rule of thumb (30/|Re p|), which
             // had been offered beside it (an LCL filter's held zeros asked for 2.5 s where 0.49 s passed).
@@ -2019,7 +2024,7 @@ fn horizon_advice(
         advice.push(verified);
     }
     if !verifier.nested {
-        advice.extend(beyond_offer(targets, verifier, (proposal, first), bound)?);
+        advice.extend(beyond_offer(targets, verifier, (proposal, first), bound, horizon)?);
     }
     Ok(advice)
 }
@@ -2031,6 +2036,7 @@ fn beyond_offer(
     verifier: &mut Verifier,
     (proposal, first): (&Proposal, &Candidate),
     bound: &[f64],
+    horizon: bool,
 ) -> Result<Option<String>, AutoError> {
     let Some((mu, check)) = beyond_threshold(proposal, first, bound, verifier)? else { return Ok(None) };
     if (0..mu.len()).any(|i| check.max_uf[i] > targets.limit(i)) {
@@ -2039,7 +2045,8 @@ fn beyond_offer(
     let list = |v: &[f64], f: &dyn Fn(f64) -> String| v.iter().map(|&x| f(x)).collect::<Vec<_>>().join(", ");
     let four = |x: f64| crate::settings::fmt_4(x);
     Ok(Some(format!(
-        "or keep t_end and set design.mu = [{}], beyond the stiffness threshold (the loop is then stiff, which the continuous run's implicit method and the sampled controller's implicit law take): the automatic design's run at that μ passes, tail max|e| [{}] against bounds [{}], with max|u_f| [{}] where the threshold's μ asked [{}]",
+        "{}set design.mu = [{}], beyond the stiffness threshold (the loop is then stiff, which the continuous run's implicit method and the sampled controller's implicit law take): the automatic design's run at that μ passes, tail max|e| [{}] against bounds [{}], with max|u_f| [{}] where the threshold's μ asked [{}]",
+        if horizon { "or keep t_end and " } else { "" },
         list(&mu, &|x| crate::settings::fmt_short(crate::settings::significant(x, 4))),
         list(&check.tail_max_e, &|x| format!("{x:.3e}")),
         list(bound, &|x| format!("{x:.3e}")),

@@ -1156,7 +1156,8 @@ fn hessenberg_char_poly(M: &DMatrix<f64>) -> Vec<f64> {
 /// `linalg::clusters` (the copies of one repeated eigenvalue): a simple eigenvalue's
 /// column is faer's eigenvector, to unit length; for a cluster of k copies
 /// around its mean μ, the k right singular vectors of M − μI for its k smallest singular values
-/// (an orthonormal basis of the eigenspace, the best-conditioned choice within it). The cluster is
+/// (an orthonormal basis of the eigenspace, the best-conditioned choice within it), all of the
+/// balanced matrix and mapped back (as `closed_loop_condition` does). The cluster is
 /// declared defective (result ∞) when the largest of those k singular values exceeds
 /// √ε·‖M‖_F, i.e. when μ has fewer than k independent eigenvectors to half the working precision.
 ///
@@ -1176,21 +1177,10 @@ pub fn eigenvector_condition(A: &DMatrix<f64>, B: &DMatrix<f64>, K: &DMatrix<f64
 /// powers of 2), as LAPACK's `dgeev` balances by default. faer's eigenvalues of a badly scaled
 /// matrix as given can be far off: a quadrotor's A − B K (entries from 1e-13 to 4.8e8) had its
 /// 4-fold poles −628.32, −942.48 and −1413.72 split by up to 0.1 (numpy's, balanced: 1e-12), so
-/// each fell into two clusters of two, read as defective, and κ₂ was ∞ where it is 1.4e7.
+/// each fell into two clusters of two, read as defective, and κ₂ was ∞ where it is 1.4e7. Where
+/// the balanced matrix reads defective, the matrix as given decides ([`balanced_eigenvectors`]).
 pub(crate) fn closed_loop_condition(A: &DMatrix<f64>, B: &DMatrix<f64>, K: &DMatrix<f64>) -> f64 {
-    let (balanced, d) = crate::linalg::balancing(&(A - B * K));
-    eigenvectors(balanced).map_or(f64::INFINITY, |Xb| {
-        let mut X = Xb;
-        for (mut row, &di) in X.row_iter_mut().zip(d.iter()) {
-            row *= C64::new(di, 0.0);
-        }
-        // Columns back to unit length, as for the matrix as given.
-        for mut col in X.column_iter_mut() {
-            let norm = col.norm();
-            col /= C64::new(norm, 0.0);
-        }
-        condition(&X)
-    })
+    balanced_eigenvectors(&(A - B * K), true).map_or(f64::INFINITY, |X| condition(&X))
 }
 
 /// κ₂ of A − B K's eigenvector matrix with its rows and columns equilibrated
@@ -1203,8 +1193,22 @@ pub(crate) fn scale_free_condition(A: &DMatrix<f64>, B: &DMatrix<f64>, K: &DMatr
     // Balanced first (exactly, by powers of two): eigenvectors of D⁻¹MD are D⁻¹ times M's, whose
     // rows the equilibration rescales anyway, but computed in units 1e12 apart their small rows
     // carry the solver's error relative to the large ones (κ₂ 3.7 read as 13.8).
-    eigenvectors(crate::linalg::balance(&(A - B * K)))
-        .map_or(f64::INFINITY, |X| condition(&crate::linalg::equilibrated(X)))
+    balanced_eigenvectors(&(A - B * K), false).map_or(f64::INFINITY, |X| condition(&crate::linalg::equilibrated(X)))
+}
+
+/// An eigenvector matrix of `M` from its balanced D⁻¹MD ([`crate::linalg::balancing`]), in M's
+/// coordinates (`given`: its columns D v, a cluster's orthonormalized there) or the balanced ones;
+/// where the balanced matrix reads defective, from M itself: balancing scales rounding-sized
+/// entries too, and an aircraft's decoupled loop with a double channel pole (‖M‖ = 1.6e3, the
+/// pole's coupling 4e-15) read as a Jordan block after it (coupling 1.5e-7 beside ‖D⁻¹MD‖ = 5.5),
+/// as it does not before (helper tryout, 2026-12-07). `None` where both read it defective.
+fn balanced_eigenvectors(M: &DMatrix<f64>, given: bool) -> Option<DMatrix<C64>> {
+    let (balanced, d) = crate::linalg::balancing(M);
+    let found = match given {
+        true => eigenvectors(balanced, Some(&d)),
+        false => eigenvectors(balanced, None),
+    };
+    found.or_else(|| eigenvectors(M.clone(), None))
 }
 
 /// σ_max/σ_min of X (∞ for a singular X, 1 for an empty one: a loop of no states).
@@ -1217,8 +1221,9 @@ fn condition(X: &DMatrix<C64>) -> f64 {
 }
 
 /// The eigenvector matrix X of M = A − B K as [`eigenvector_condition`] builds it; `None` for a
-/// defective or non-finite M.
-fn eigenvectors(M: DMatrix<f64>) -> Option<DMatrix<C64>> {
+/// defective or non-finite M. With `scale` (D), the columns are those of D X, each simple one to
+/// unit length and each cluster's orthonormalized, the best-conditioned choice in D's coordinates.
+fn eigenvectors(M: DMatrix<f64>, scale: Option<&DVector<f64>>) -> Option<DMatrix<C64>> {
     let n = M.nrows();
     let size = M.norm();
     if !size.is_finite() {
@@ -1236,9 +1241,10 @@ fn eigenvectors(M: DMatrix<f64>) -> Option<DMatrix<C64>> {
     let mut c = 0;
     for cluster in crate::linalg::clusters(&eigs, size) {
         let k = cluster.len();
+        let scaled = |r: usize| scale.map_or(1.0, |d| d[r]);
         if k == 1 {
             // A simple eigenvalue's eigenvector, from the same decomposition, to unit length.
-            let v = DVector::<C64>::from_fn(n, |r, _| U[(r, cluster[0])]);
+            let v = DVector::<C64>::from_fn(n, |r, _| U[(r, cluster[0])] * scaled(r));
             let norm = v.norm();
             if !(norm.is_finite() && norm > 0.0) {
                 return None;
@@ -1255,7 +1261,14 @@ fn eigenvectors(M: DMatrix<f64>) -> Option<DMatrix<C64>> {
         if svd.singular_values[n - k] > f64::EPSILON.sqrt() * size {
             return None;
         }
-        X.view_mut((0, c), (n, k)).copy_from(&Vt.rows(n - k, k).adjoint());
+        let mut basis = Vt.rows(n - k, k).adjoint();
+        if scale.is_some() {
+            for (r, mut row) in basis.row_iter_mut().enumerate() {
+                row *= C64::new(scaled(r), 0.0);
+            }
+            basis = basis.qr().q();
+        }
+        X.view_mut((0, c), (n, k)).copy_from(&basis);
         c += k;
     }
     Some(X)
@@ -1364,5 +1377,41 @@ mod tests {
         let kappa = closed_loop_condition(&M, &DMatrix::identity(n, n), &DMatrix::zeros(n, n));
         assert!((kappa / expected - 1.0).abs() < 1e-6, "κ₂ {kappa:e} against {expected:e}");
         assert!(expected > 1e3, "badly scaled, as meant: {expected:e}");
+    }
+
+    /// A double channel pole whose coupling is rounding (an aircraft's decoupled loop from an
+    /// automatic design, helper tryout 2026-12-07: −3.681835933 twice, semisimple, numpy's
+    /// singular values of M − λI 3.4 and 2.9e-14 beside ‖M‖ = 1.6e3) is not a Jordan block: it read
+    /// κ₂ = ∞ after balancing, which lifted the 4e-15 coupling to 1.5e-7 beside ‖D⁻¹MD‖ = 5.5.
+    /// numpy's `cond(eig(M)[1])` is 1280; κ₂ as given depends on the basis chosen within the
+    /// double pole's eigenspace, so within a factor 10 of it.
+    #[test]
+    fn a_semisimple_double_pole_is_not_read_as_defective_after_balancing() {
+        let M = DMatrix::from_row_slice(
+            4,
+            4,
+            &[
+                -3.6818359330000003,
+                4.440892098500626e-15,
+                -6.505213034913027e-19,
+                0.0,
+                1.009692559149214,
+                -3.3038076823718194,
+                -0.0003613681287169975,
+                3.153739639880436,
+                -36.48815089446127,
+                985.7761291594495,
+                -0.898256940049032,
+                -1301.9230657735366,
+                1.009692559149214,
+                0.3780282506281804,
+                -0.0003613681287169978,
+                -0.5280962931195642,
+            ],
+        );
+        let (I, Z) = (DMatrix::identity(4, 4), DMatrix::zeros(4, 4));
+        let given = closed_loop_condition(&M, &I, &Z);
+        assert!((128.0..=12_800.0).contains(&given), "κ₂ as given {given:e} against numpy's 1280");
+        assert!(scale_free_condition(&M, &I, &Z).is_finite());
     }
 }

@@ -53,6 +53,38 @@ pub struct InputTone {
     pub disturbance_output: Option<Vec<f64>>,
 }
 
+impl InputTone {
+    /// A harmonic of ω that the loop may let pass: ω has one at this frequency and its forced
+    /// response (input held at 0) stays within `bounds` (the tail bounds, per output) at every
+    /// output.
+    fn passable(&self, bounds: &[f64]) -> bool {
+        self.frequency > 0.0
+            && !self.transmission_zero
+            && self.for_disturbance.iter().any(|&u| u > 0.0)
+            && self.disturbance_output.as_ref().is_some_and(|y| y.iter().zip(bounds).all(|(y, b)| y <= b))
+    }
+}
+
+impl SteadyInput {
+    /// Per input, the steady-state peak with the passable harmonics of ω let pass (ω has one there
+    /// and its forced response stays within `bounds`; their input only g's part): the sum of the
+    /// amplitudes (an upper bound where the frequencies are whole multiples of one),
+    /// [`SteadyInput::peak`] where none is passable. A ball on a plate whose 18.85 rad/s vibration
+    /// moved the ball 1.4e-4 m within a 5e-4 m bound was told that its plant "needs" 0.54 V against
+    /// a 0.3 V limit, 0.47 V of it for that vibration (helper tryout, 2026-12-07).
+    pub fn peak_letting_pass(&self, bounds: &[f64]) -> Vec<f64> {
+        if !self.tones.iter().any(|t| t.passable(bounds)) {
+            return self.peak.clone();
+        }
+        (0..self.peak.len())
+            .map(|i| {
+                let kept = |t: &InputTone| if t.passable(bounds) { t.for_reference[i] } else { t.amplitude[i] };
+                self.tones.iter().map(kept).sum()
+            })
+            .collect()
+    }
+}
+
 /// The steady-state plant input u_f of exact tracking and rejection ([module docs](self)).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SteadyInput {
@@ -244,11 +276,8 @@ fn costly_harmonics(
 ) -> Vec<String> {
     let bounds: Vec<f64> = reference.components.iter().map(|c| TAIL_BOUND * c.peak()).collect();
     let mut advice = Vec::new();
-    for t in steady.tones.iter().filter(|t| t.frequency > 0.0 && !t.transmission_zero) {
+    for t in steady.tones.iter().filter(|t| t.passable(&bounds)) {
         let Some(moved) = &t.disturbance_output else { continue };
-        if !moved.iter().zip(&bounds).all(|(y, b)| y <= b) {
-            continue;
-        }
         let costly: Vec<String> = (0..steady.peak.len())
             .filter(|&i| steady.peak[i].is_finite() && t.for_disturbance[i] > 0.0)
             .filter(|&i| t.for_disturbance[i] >= COSTLY_SHARE * steady.peak[i])
@@ -313,7 +342,7 @@ pub(crate) fn saturation_advice(s: &crate::Scenario) -> Option<String> {
 
 #[cfg(test)]
 mod tests {
-    use super::C64;
+    use super::{C64, TAIL_BOUND};
     use crate::scenario::Scenario;
 
     /// Nomoto's ship (Fossen 2011, Mariner: T = 107.3 s, K = 0.185 /s) with a rudder servo of
@@ -404,6 +433,24 @@ mod tests {
         // the 0.9 rad/s wave's share then falls to 7 %, below the quarter.
         let advice = ship((2e-3, 1e-4), None).steady_input().advice;
         assert!(advice.is_empty(), "{advice:?}");
+    }
+
+    /// Both waves turn the ship within the course's tail bound (3e-3 rad): let pass, the rudder's
+    /// steady state is the course's and the disturbance's bias, the peak of the same ship without
+    /// the waves (another scenario's steady state); ten times the 0.6 rad/s wave is beyond the
+    /// bound and stays in (its amplitude, as the full peak counts it, on top).
+    #[test]
+    fn the_peak_letting_harmless_waves_pass_is_that_without_them() {
+        let bounds = [TAIL_BOUND * 0.3];
+        let calm = ship((0.0, 0.0), None).steady_input().peak[0];
+        let passing = ship((2e-4, 1e-4), None).steady_input().peak_letting_pass(&bounds)[0];
+        assert!((passing - calm).abs() <= 1e-12 * calm, "{passing} against {calm}");
+        let rough = ship((2e-3, 1e-4), None).steady_input();
+        let kept_wave = rough.tones.iter().find(|t| t.frequency == 0.6).unwrap().amplitude[0];
+        let passing = rough.peak_letting_pass(&bounds)[0];
+        assert!((passing - (calm + kept_wave)).abs() <= 1e-12 * passing, "{passing} against {calm} + {kept_wave}");
+        // Nothing to let pass: the peak itself.
+        assert_eq!(ship((2e-3, 1e-4), None).steady_input().peak_letting_pass(&[0.0]), rough.peak);
     }
 
     #[test]

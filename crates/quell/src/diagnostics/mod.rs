@@ -20,7 +20,7 @@ use serde::Serialize;
 pub use averaged::{disturbance_observer_gain, Averaged, ChannelAverage, Excitation, Fidelity};
 pub use effort::{steady_input, InputTone, SteadyInput};
 pub use estimate::{estimate, RateEstimate, STIFF_RATIO};
-pub use sampled::{f32_export_check, sampled_advice, sampled_transient, SAMPLED_TRANSIENT};
+pub use sampled::{export_check, sampled_advice, sampled_transient, ExportCheck, SAMPLED_TRANSIENT};
 
 use nalgebra::{Complex, DMatrix, DVector};
 
@@ -387,13 +387,22 @@ pub fn model_error_advice(s: &crate::Scenario, result: &SimResult) -> Option<Str
     if diffs.is_empty() {
         return None;
     }
-    // A true actuator below what the steady state itself asks: that first, whatever else differs.
-    let ended = result.outcome.as_ref().is_some_and(|o| !matches!(o, Outcome::Completed));
-    if ended || (0..result.m).any(|i| !tail_within_bound(result, i)) {
-        if let Some(saturated) = effort::saturation_advice(s) {
-            return Some(saturated);
-        }
+    // A true actuator below what the steady state itself asks: said first, before the rest.
+    let failed = result.outcome.as_ref().is_some_and(|o| {
+        matches!(o, Outcome::Diverged { .. } | Outcome::StepSizeTooSmall { .. } | Outcome::HistoryTooLarge { .. })
+    });
+    let saturated = (failed || (0..result.m).any(|i| !tail_within_bound(result, i)))
+        .then(|| effort::saturation_advice(s))
+        .flatten();
+    let mismatch = mismatch_advice(s, result, &diffs, unit);
+    match (saturated, mismatch) {
+        (Some(a), Some(b)) => Some(format!("{a}; besides, {b}")),
+        (a, b) => a.or(b),
     }
+}
+
+/// [`model_error_advice`]'s line on the true plant's differences `diffs` from the model.
+fn mismatch_advice(s: &crate::Scenario, result: &SimResult, diffs: &[String], unit: TimeUnit) -> Option<String> {
     // A completed run that missed its tail bound: the mismatch may set the floor (a vessel's
     // actuator delay left a tail 1.3× its bound that no advice on the model's keys explained).
     let Some(outcome) = result.outcome.as_ref().filter(|o| !matches!(o, Outcome::Completed)) else {

@@ -333,31 +333,81 @@ pub(crate) fn precision_check(s: &crate::Scenario, design: &Design, result: &Sim
     Some(PrecisionCheck { line, flagged: !verdict.is_empty(), reference })
 }
 
-/// The most controller steps of [`f32_export_check`]'s runs (two runs of a million steps take about
+/// The most controller steps of [`export_check`]'s runs (two runs of a million steps take about
 /// 10 s): an export's horizon may be any length (`quell export` runs nothing else).
-pub const F32_CHECK_SAMPLES: f64 = 1e6;
+pub const EXPORT_CHECK_SAMPLES: f64 = 1e6;
 
-/// Before an f32 export at `sample_time`: the scenario's sampled run in f32 (emulated) against the
-/// same run in f64 over its horizon (the check of an f32 run): the check's line and whether it departs
-/// beyond [`F32_DEPARTURE`]. The design report's κ₂ bound on the poles' move does not stand in for
-/// it: a quadrotor's poles moved at most 0.19 % in f32 while its u_f departed 4.6× its peak, and
-/// its compiled f32 C asked 17 N of a rotor against 2.8 N in f64 (helper tryout, 2026-12-07).
-/// A horizon beyond [`F32_CHECK_SAMPLES`] samples is cut there, with 1,000 rows. `Err` says why the
-/// runs could not be made (the scenario's output step or delays at this sample time) or gave no
-/// verdict.
-pub fn f32_export_check(s: &crate::Scenario, design: &Design, sample_time: f64) -> Result<(String, bool), String> {
-    use crate::controller::Precision;
-    let mut simulation =
-        crate::scenario::Simulation { precision: Precision::F32, sample_time: Some(sample_time), ..s.simulation };
-    if simulation.t_end > F32_CHECK_SAMPLES * sample_time {
-        simulation.output_step = F32_CHECK_SAMPLES / 1000.0 * sample_time;
-        simulation.t_end = F32_CHECK_SAMPLES * sample_time;
+/// The fewest controller steps over which [`export_check`] measures a loop.
+pub const EXPORT_MIN_SAMPLES: f64 = 100.0;
+
+/// Before an export at `sample_time` in `precision`: the scenario's sampled-data loop, as the
+/// exported controller runs it, against its continuous loop (the comparison of a sampled run,
+/// without `[noise]`) and, in f32, against the same sampled loop in f64. The sample-time bound
+/// T_s·ρ ≤ 0.2 does not stand in for the first: an aircraft exported at the 5 ms it suggested
+/// asked 362× its continuous loop's u_f, its adaptation running at 64/s beside ρ = 22/s; nor the
+/// design report's κ₂ bound for the second: a quadrotor's poles moved at most 0.19 % in f32 while
+/// its u_f departed 4.6× its peak, and its compiled f32 C asked 17 N of a rotor against 2.8 N in
+/// f64 (helper tryouts, 2026-12-07).
+///
+/// A horizon beyond [`EXPORT_CHECK_SAMPLES`] samples is cut there, with 1,000 rows; the output
+/// step is a whole number of samples (the export's T_s need not divide the scenario's), with at
+/// least 20 rows where the samples allow. `Err` says why the runs could not be made: a horizon of
+/// fewer than [`EXPORT_MIN_SAMPLES`] samples (an export at a T_s near t_end had reported one
+/// sample's "departure" of 0), delays that are not whole samples.
+pub fn export_check(
+    s: &crate::Scenario,
+    design: &Design,
+    (sample_time, precision): (f64, crate::controller::Precision),
+) -> Result<ExportCheck, String> {
+    let samples = (s.simulation.t_end / sample_time).floor();
+    if samples < EXPORT_MIN_SAMPLES {
+        return Err(format!(
+            "t_end = {} {} holds {} samples of T_s, fewer than {EXPORT_MIN_SAMPLES:.0}",
+            fmt_short(s.simulation.t_end),
+            s.plant.time_unit,
+            samples
+        ));
     }
-    let f32_scenario = crate::Scenario { simulation, ..s.clone() };
-    let result = side_run(&f32_scenario, design).map_err(|e| e.to_string())?;
-    precision_check(&f32_scenario, design, &result)
-        .map(|c| (c.line, c.flagged))
-        .ok_or_else(|| "the f32 run was interrupted or ran out of steps".to_string())
+    let (cut, samples) = (samples > EXPORT_CHECK_SAMPLES, samples.min(EXPORT_CHECK_SAMPLES));
+    let per_row = if cut { samples / 1000.0 } else { (s.simulation.output_step / sample_time).round() };
+    let per_row = per_row.clamp(1.0, (samples / DRIFT_ROWS as f64).floor().max(1.0));
+    let t_end = if cut { samples * sample_time } else { s.simulation.t_end };
+    let simulation = crate::scenario::Simulation {
+        precision,
+        sample_time: Some(sample_time),
+        t_end,
+        output_step: per_row * sample_time,
+        ..s.simulation
+    };
+    let sampled = crate::Scenario { simulation, noise: None, ..s.clone() };
+    let result = side_run(&sampled, design).map_err(|e| e.to_string())?;
+    let mut lines = Vec::new();
+    // In f32, the sampling is judged on the same loop in f64, which the precision check runs.
+    let double = match precision_check(&sampled, design, &result) {
+        Some(check) => {
+            lines.push((check.line, check.flagged));
+            check.reference
+        }
+        None => result,
+    };
+    let f64_scenario = crate::Scenario {
+        simulation: crate::scenario::Simulation { precision: crate::controller::Precision::F64, ..sampled.simulation },
+        ..sampled
+    };
+    let (sampling, compared) = sampled_lines(&f64_scenario, design, &double, None);
+    let departs = compared == Compared::Departs || (compared == Compared::Not && !sampling.is_empty());
+    lines.extend(sampling.into_iter().map(|l| (l, departs)));
+    Ok(ExportCheck { lines, horizon: t_end, cut })
+}
+
+/// What [`export_check`] found: its lines, each with whether it warns (the loop departs), and the
+/// horizon run (`cut`: shorter than the scenario's t_end). No line: the sampled loop follows its
+/// continuous loop.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExportCheck {
+    pub lines: Vec<(String, bool)>,
+    pub horizon: f64,
+    pub cut: bool,
 }
 
 /// One channel's departure of an f32 run from its f64 run ([`precision_check`]), each relative to

@@ -1007,8 +1007,10 @@ fn limit_reached(
     // had been offered it again, helper tryout, 2026-12-07).
     let mut by_mu = peaks.to_vec();
     by_mu.sort_by(|a, b| a.1.total_cmp(&b.1));
-    if let [(first, mu0), (next, mu1), ..] = by_mu[..] {
-        if first <= FLAT_PEAK * v && next <= FLAT_PEAK * v {
+    // Every point up to the least's μ within FLAT_PEAK (not a least at the upper end, still falling).
+    let level = by_mu.iter().filter(|p| p.1 <= mu).all(|p| p.0 <= FLAT_PEAK * v);
+    if let [(_, mu0), (next, mu1), ..] = by_mu[..] {
+        if level && next <= FLAT_PEAK * v {
             let text = format!(
                 "{what} levels off at {} toward the smallest μ (at μ = {} and {}), above {name} = {}: the poles and the signals set it there, not μ",
                 four(v),
@@ -1267,6 +1269,19 @@ mod tests {
             dip.contains("levels off at 0.112 toward the smallest μ (at μ = 0.3 and 0.7)") && !dip.contains("widen"),
             "{dip}"
         );
+        // Not where the least lies at the upper end, past a rise (the review's counterexample).
+        let falling = TuneCurve {
+            curve: vec![
+                completed(1.0, figures(0.101, Some(1.0))),
+                completed(3.0, figures(0.1009, Some(1.0))),
+                completed(10.0, figures(0.5, Some(1.0))),
+                completed(30.0, figures(0.3, Some(1.0))),
+                completed(100.0, figures(0.1, Some(1.0))),
+            ],
+            ..flat.clone()
+        };
+        let falling = falling.why_none(&spec, "tune.", (f64::INFINITY, 0.0));
+        assert!(!falling.contains("levels off") && falling.contains("widen the bounds"), "{falling}");
         // Where the figure varies with μ too (the least at one μ): not "widen the bounds".
         let varied = TuneCurve {
             curve: vec![completed(10.0, figures(0.0707, Some(1.0))), completed(1e5, figures(0.09, Some(2.0)))],
