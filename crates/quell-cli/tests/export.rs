@@ -173,7 +173,30 @@ fn an_export_measures_its_sampled_loop_against_the_continuous_one() {
     // Four digits quoted.
     assert!((a / sampled - 1.0).abs() < 5e-4 && (b / continuous - 1.0).abs() < 5e-4, "{a} {b}: {sampled} {continuous}");
     let o = quell(&["export", &paper, "--sample-time", "0.001", "--out", &out]);
-    assert!(stderr(&o).contains("over 100 s: the sampled-data loop follows its continuous loop"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("over 100 s: the sampled-data loop stays within its continuous loop's departure bounds"),
+        "{}",
+        stderr(&o)
+    );
+    // --no-loop-check runs nothing.
+    let o = quell(&["export", &paper, "--sample-time", "0.1", "--out", &out, "--no-loop-check"]);
+    assert!(
+        o.status.success() && !stderr(&o).contains("measuring") && !stderr(&o).contains("departs"),
+        "{}",
+        stderr(&o)
+    );
+    // A true plant on which the continuous loop diverges is not compared, and says so (it had read
+    // "follows"; the review's case: the paper's A[2][2] = 5 in [truth]).
+    let text = std::fs::read_to_string(&paper).unwrap();
+    let a = text.split_once("A = ").unwrap().1.lines().next().unwrap();
+    let truth = format!("{text}\n[truth]\nA = {}\n", a.replacen("-0.5]]", "5.0]]", 1));
+    assert_ne!(truth.matches("5.0]]").count(), 0, "{a}");
+    let diverging = dir.join("diverging.toml");
+    std::fs::write(&diverging, truth).unwrap();
+    let o = quell(&["export", diverging.to_str().unwrap(), "--sample-time", "0.01", "--out", &out]);
+    let text = stderr(&o);
+    assert!(!text.contains("stays within"), "{text}");
+    assert!(text.lines().any(|l| l.starts_with("⚠ warning: over 100 s: the sampled-data loop")), "{text}");
 }
 
 #[test]

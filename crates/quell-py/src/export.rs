@@ -85,6 +85,9 @@ fn fmu_arguments(
 ///     The FMU's FMI version: 2 (default, FMI 2.0) or 3 (FMI 3.0).
 /// compiler : str, optional
 ///     The C compiler for the FMU's binary (default $CC or cc; "none": sources only).
+/// check : bool, optional
+///     Measure a scenario's loop first (default True): sampled at `sample_time` against its
+///     continuous loop, and in f32 against f64, a warning where it departs.
 ///
 /// Returns
 /// -------
@@ -113,8 +116,8 @@ fn fmu_arguments(
 /// ['quell_controller.h', 'quell_controller.c', 'quell.fmu']
 #[pyfunction]
 #[pyo3(
-    signature = (source, sample_time=None, *, out=None, prefix=Cow::Borrowed("quell"), precision=None, fmu=false, fmi_version=None, compiler=None),
-    text_signature = "(source, sample_time=None, *, out=None, prefix='quell', precision=None, fmu=False, fmi_version=2, compiler=None)"
+    signature = (source, sample_time=None, *, out=None, prefix=Cow::Borrowed("quell"), precision=None, fmu=false, fmi_version=None, compiler=None, check=true),
+    text_signature = "(source, sample_time=None, *, out=None, prefix='quell', precision=None, fmu=False, fmi_version=2, compiler=None, check=True)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub fn export(
@@ -127,6 +130,7 @@ pub fn export(
     #[pyo3(from_py_with = crate::convert::argument::fmu)] fmu: bool,
     fmi_version: Option<&Bound<'_, PyAny>>,
     compiler: Option<&Bound<'_, PyAny>>,
+    #[pyo3(from_py_with = crate::convert::argument::check)] check: bool,
 ) -> PyResult<Vec<PathBuf>> {
     // A scenario's sample time and precision (`simulation.precision`, its runs') are the defaults.
     let (design, (scenario_name, names), (scenario_T, scenario_precision), signals, scenario) =
@@ -183,7 +187,7 @@ pub fn export(
     for w in code.warnings().chain(unit) {
         crate::errors::warn(py, &w)?;
     }
-    if let Some(s) = scenario {
+    if let Some(s) = scenario.filter(|_| check) {
         warn_loop_check(py, &s, &design, (T, precision))?;
     }
     let out = out.unwrap_or_else(|| PathBuf::from("."));

@@ -192,11 +192,17 @@ impl PyPlant {
         // coordinates: a disturbance's DC gain 5e8 where 2 was meant; helper tryout, 2026-12-07).
         let realized;
         let A = if type_name(A) == "TransferFunction" {
-            let given =
-                |v: Option<&Bound<'_, PyAny>>| v.is_some_and(|v| !v.is_none() && !v.len().is_ok_and(|l| l == 0));
-            if let Some(name) =
-                [("D", D), ("x0", x0), ("states", states)].iter().find(|(_, v)| given(*v)).map(|(n, _)| n)
-            {
+            // Zeros mean the same in any coordinates: only values that name states are refused.
+            let nonzero = |values: Option<PyResult<Vec<f64>>>| {
+                values.is_some_and(|v| v.map_or(true, |v| v.iter().any(|&x| x != 0.0)))
+            };
+            fn present<'a, 'py>(v: Option<&'a Bound<'py, PyAny>>) -> Option<&'a Bound<'py, PyAny>> {
+                v.filter(|v| !v.is_none())
+            }
+            let d = nonzero(present(D).map(|v| matrix(v, "D", k).map(|m| m.as_slice().to_vec())));
+            let x = nonzero(present(x0).map(|v| vector(v, "x0", k)));
+            let refused = [("D", d), ("x0", x), ("states", present(states).is_some())];
+            if let Some((name, _)) = refused.iter().find(|(_, r)| *r) {
                 return Err(k.err(py, format!("{name}: refers to the plant's states, but with a control.TransferFunction as A the states are those of its minimal realization (control.minreal, then control.ss), which you did not choose; give the plant as a control.StateSpace, or A, B, C, in the coordinates {name} is written in")));
             }
             realized = py.import("quell._control")?.call_method1("state_space", (A,))?;

@@ -104,6 +104,8 @@ def test_state_keys_are_refused_with_a_transfer_function():
             quell.Plant(G, **{name: value})
     plant = quell.Plant(control.ss(A, B, C, 0), D=[[1.0], [0.0]], Q=[[0.0]])
     np.testing.assert_array_equal(plant.D, [[1.0], [0.0]])
+    # Zeros name no state: taken.
+    assert quell.Plant(G, x0=np.zeros(2), D=np.zeros((2, 1)), Q=[[0.0]]).n == 2
 
 
 def test_a_transfer_function_that_cancels_an_unstable_pole_is_refused():

@@ -50,7 +50,7 @@ def _valid():
         "Controller": (quell.Controller, dict(design=design, sample_time=1e-3)),
         "Controller.step": (quell.Controller(design, 1e-3).step, dict(y=[0.0, 0.0], g=[0.0, 0.0])),
         "export": (quell.export, dict(source=design, sample_time=1e-3, out="out", prefix="q", precision="f64",
-                                      fmu=True, fmi_version=3, compiler="none")),
+                                      fmu=True, fmi_version=3, compiler="none", check=True)),
         "Study": (quell.Study, dict(scenario=s, grid={}, monte_carlo={"runs": 1}, settle={}, max_steps=100,
                                     runaway={}, simulation={})),
         "Study.load": (quell.Study.load, dict(path="study.toml")),

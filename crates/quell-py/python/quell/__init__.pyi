@@ -304,6 +304,7 @@ def export(
     fmu: bool = False,
     fmi_version: Literal[2, 3] = 2,
     compiler: Optional[str] = None,
+    check: bool = True,
 ) -> List[Path]: ...
 def simulate(
     scenario: Scenario,

@@ -1380,11 +1380,12 @@ mod tests {
     }
 
     /// A double channel pole whose coupling is rounding (an aircraft's decoupled loop from an
-    /// automatic design, helper tryout 2026-12-07: −3.681835933 twice, semisimple, numpy's
-    /// singular values of M − λI 3.4 and 2.9e-14 beside ‖M‖ = 1.6e3) is not a Jordan block: it read
-    /// κ₂ = ∞ after balancing, which lifted the 4e-15 coupling to 1.5e-7 beside ‖D⁻¹MD‖ = 5.5.
-    /// numpy's `cond(eig(M)[1])` is 1280; κ₂ as given depends on the basis chosen within the
-    /// double pole's eigenspace, so within a factor 10 of it.
+    /// automatic design, helper tryout 2026-12-07: −3.681835933 twice, semisimple: numpy's two
+    /// smallest singular values of M − λI are 2.9e-14 and 3.8e-18 beside ‖M‖ = 1.6e3) is not a
+    /// Jordan block: it read κ₂ = ∞ after balancing, which lifted the 4e-15 coupling to 1.5e-7
+    /// beside ‖D⁻¹MD‖ = 5.5. numpy's `cond(eig(M)[1])` is 1.3e3–1.6e3 (its basis within the double
+    /// pole's eigenspace is arbitrary, as is the rounding of M's entries it is given); κ₂ as given
+    /// depends on that basis, so within a factor 10 of it.
     #[test]
     fn a_semisimple_double_pole_is_not_read_as_defective_after_balancing() {
         let M = DMatrix::from_row_slice(

@@ -76,10 +76,11 @@ impl SteadyInput {
         if !self.tones.iter().any(|t| t.passable(bounds)) {
             return self.peak.clone();
         }
+        // The sum bounds the peak from above: never above the peak with nothing let pass.
         (0..self.peak.len())
             .map(|i| {
                 let kept = |t: &InputTone| if t.passable(bounds) { t.for_reference[i] } else { t.amplitude[i] };
-                self.tones.iter().map(kept).sum()
+                self.tones.iter().map(kept).sum::<f64>().min(self.peak[i])
             })
             .collect()
     }

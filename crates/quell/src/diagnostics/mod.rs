@@ -20,7 +20,9 @@ use serde::Serialize;
 pub use averaged::{disturbance_observer_gain, Averaged, ChannelAverage, Excitation, Fidelity};
 pub use effort::{steady_input, InputTone, SteadyInput};
 pub use estimate::{estimate, RateEstimate, STIFF_RATIO};
-pub use sampled::{export_check, sampled_advice, sampled_transient, ExportCheck, SAMPLED_TRANSIENT};
+pub use sampled::{
+    export_check, sampled_advice, sampled_transient, ExportCheck, EXPORT_CHECK_SAMPLES, SAMPLED_TRANSIENT,
+};
 
 use nalgebra::{Complex, DMatrix, DVector};
 
