@@ -187,9 +187,7 @@ pub fn export(
     for w in code.warnings().chain(unit) {
         crate::errors::warn(py, &w)?;
     }
-    if let Some(s) = scenario.filter(|_| check) {
-        warn_loop_check(py, &s, &design, (T, precision))?;
-    }
+    scenario.filter(|_| check).map_or(Ok(()), |s| warn_loop_check(py, &s, &design, (T, precision)))?;
     let out = out.unwrap_or_else(|| PathBuf::from("."));
     let mut files = vec![(code.header_name, code.header.into_bytes()), (code.source_name, code.source.into_bytes())];
     files.extend(archive.map(|a| (a.file_name, a.bytes)));

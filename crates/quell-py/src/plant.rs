@@ -90,6 +90,25 @@ fn names(obj: Option<&Bound<'_, PyAny>>, name: &str, count: usize) -> PyResult<O
     Ok(Some(given))
 }
 
+/// With a `control.TransferFunction` as A, the keywords that name its states (`D`, `x0`, `states`)
+/// refused: its states are those of the minimal realization, which the user did not choose (a D
+/// given with one had been read in the realization's coordinates: a disturbance's DC gain 5e8
+/// where 2 was meant; helper tryout, 2026-12-07). Zeros mean the same in any coordinates.
+fn refuse_state_keys(py: Python<'_>, [D, x0, states]: [Option<&Bound<'_, PyAny>>; 3]) -> PyResult<()> {
+    let k = Kind::Scenario;
+    let nonzero =
+        |values: Option<PyResult<Vec<f64>>>| values.is_some_and(|v| v.map_or(true, |v| v.iter().any(|&x| x != 0.0)));
+    fn present<'a, 'py>(v: Option<&'a Bound<'py, PyAny>>) -> Option<&'a Bound<'py, PyAny>> {
+        v.filter(|v| !v.is_none())
+    }
+    let d = nonzero(present(D).map(|v| matrix(v, "D", k).map(|m| m.as_slice().to_vec())));
+    let x = nonzero(present(x0).map(|v| vector(v, "x0", k)));
+    match [("D", d), ("x0", x), ("states", present(states).is_some())].iter().find(|(_, r)| *r) {
+        Some((name, _)) => Err(k.err(py, format!("{name}: refers to the plant's states, but with a control.TransferFunction as A the states are those of its minimal realization (control.minreal, then control.ss), which you did not choose; give the plant as a control.StateSpace, or A, B, C, in the coordinates {name} is written in"))),
+        None => Ok(()),
+    }
+}
+
 /// A `control.StateSpace`'s labels of one kind (`<kind>_labels`, `count` of them) for the keyword
 /// `name`, unless they are python-control's own (`u[0]`, `u[1]`, …, counting from 0) or quell's
 /// (`u_f[1]`, …); checked as
@@ -188,23 +207,10 @@ impl PyPlant {
             return Err(PyTypeError::new_err("A: expected a matrix, a control.StateSpace or a control.TransferFunction, found a FrequencyResponseData (a frequency response holds no state-space model: fit one to it first, e.g. a transfer function)"));
         }
         // A control.TransferFunction becomes its minimal state-space realization, whose states no
-        // D, x0 or state name can refer to (a D given with one had been read in the realization's
-        // coordinates: a disturbance's DC gain 5e8 where 2 was meant; helper tryout, 2026-12-07).
+        // D, x0 or state name can refer to.
         let realized;
         let A = if type_name(A) == "TransferFunction" {
-            // Zeros mean the same in any coordinates: only values that name states are refused.
-            let nonzero = |values: Option<PyResult<Vec<f64>>>| {
-                values.is_some_and(|v| v.map_or(true, |v| v.iter().any(|&x| x != 0.0)))
-            };
-            fn present<'a, 'py>(v: Option<&'a Bound<'py, PyAny>>) -> Option<&'a Bound<'py, PyAny>> {
-                v.filter(|v| !v.is_none())
-            }
-            let d = nonzero(present(D).map(|v| matrix(v, "D", k).map(|m| m.as_slice().to_vec())));
-            let x = nonzero(present(x0).map(|v| vector(v, "x0", k)));
-            let refused = [("D", d), ("x0", x), ("states", present(states).is_some())];
-            if let Some((name, _)) = refused.iter().find(|(_, r)| *r) {
-                return Err(k.err(py, format!("{name}: refers to the plant's states, but with a control.TransferFunction as A the states are those of its minimal realization (control.minreal, then control.ss), which you did not choose; give the plant as a control.StateSpace, or A, B, C, in the coordinates {name} is written in")));
-            }
+            refuse_state_keys(py, [D, x0, states])?;
             realized = py.import("quell._control")?.call_method1("state_space", (A,))?;
             &realized
         } else {
