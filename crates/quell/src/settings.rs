@@ -209,9 +209,14 @@ impl TimeUnit {
         // The nearest symbol or name, said as the list says its unit ("day": "d" (days)).
         let names = Self::ALL.iter().flat_map(|(_, s, n)| [*s, *n]);
         let unit = |near: &str| Self::ALL.iter().find(|(_, s, n)| near == *s || near == *n).map(|(_, s, n)| (*s, *n));
-        let hint = (nearest(given, names).and_then(unit))
-            .map(|(s, n)| format!(" (did you mean \"{s}\" ({n})?)"))
-            .unwrap_or_default();
+        // Spaces around a unit: that unit, said so (" s" had been offered "µs", one edit away).
+        let trimmed = given.trim();
+        let hint = match unit(trimmed).filter(|_| trimmed != given) {
+            Some((s, n)) => format!(" (did you mean \"{s}\" ({n}), without the spaces?)"),
+            None => (nearest(trimmed, names).and_then(unit))
+                .map(|(s, n)| format!(" (did you mean \"{s}\" ({n})?)"))
+                .unwrap_or_default(),
+        };
         let list: Vec<String> = Self::ALL.iter().map(|(_, s, n)| format!("\"{s}\" ({n})")).collect();
         Err(format!("expected one of {}, found \"{given}\"{hint}", list.join(", ")))
     }
@@ -659,6 +664,20 @@ pub(crate) fn check_sample_time(t_end: f64, sample_time: f64) -> Result<(), KeyE
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A unit with spaces around it is named without them (" s" had been offered "µs", one edit
+    /// away; helper tryout, 2026-12-07); a misspelt one still gets its nearest.
+    #[test]
+    fn a_time_unit_with_spaces_is_named_without_them() {
+        assert!(TimeUnit::from_name(" s")
+            .unwrap_err()
+            .ends_with("found \" s\" (did you mean \"s\" (seconds), without the spaces?)"));
+        assert!(TimeUnit::from_name("min ")
+            .unwrap_err()
+            .ends_with("(did you mean \"min\" (minutes), without the spaces?)"));
+        assert!(TimeUnit::from_name("mins").unwrap_err().ends_with("(did you mean \"min\" (minutes)?)"));
+        assert_eq!(TimeUnit::from_name("s"), Ok(TimeUnit::Seconds));
+    }
 
     /// One decimal from 0.1 %, two significant digits below it, and 0 as 0.0 %.
     #[test]
