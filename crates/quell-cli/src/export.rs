@@ -131,15 +131,12 @@ fn print_check(check: Result<ExportCheck, String>, unit: quell::TimeUnit) {
     match check {
         Ok(c) => {
             let cut = if c.cut { " (cut at 1e6 controller steps)" } else { "" };
-            let horizon = quell::settings::fmt_time(c.horizon);
+            let over = format!("over {} {unit}{cut}", quell::settings::fmt_time(c.horizon));
             if c.follows {
-                eprintln!("over {horizon} {unit}{cut}: the sampled-data loop stays within its continuous loop's departure bounds (y within half its peak, u_f's peak within twice; a sampled run's advice gives the figures)");
+                eprintln!("{over}: the sampled-data loop stays within its continuous loop's departure bounds (y within half its peak, u_f's peak within twice; a sampled run's advice gives the figures)");
             }
             for (line, warns) in c.lines {
-                match warns {
-                    true => eprintln!("⚠ warning: over {horizon} {unit}{cut}: {line}"),
-                    false => eprintln!("over {horizon} {unit}{cut}: {line}"),
-                }
+                eprintln!("{}{over}: {line}", if warns { "⚠ warning: " } else { "" });
             }
         }
         Err(why) => eprintln!(

@@ -976,7 +976,7 @@ fn beyond_threshold(
     };
     let (mut mu, mut check) = (proposal.scenario.design.mu.clone(), first.clone());
     for _ in 0..BEYOND_RAISES {
-        let missed = |i: usize| check.tail_max_e[i].is_nan() || check.tail_max_e[i] > bound[i];
+        let missed = |i: usize| missed(check.tail_max_e[i], bound[i]);
         // Only where every channel that misses is at its cap: below it, the retries had room.
         if !(0..mu.len()).any(missed) || (0..mu.len()).any(|i| missed(i) && mu[i] < caps[i]) {
             break;
@@ -1688,12 +1688,17 @@ fn regulated_bounds(bound: &mut [f64], first: &Candidate) {
     }
 }
 
+/// A channel's tail error beyond its bound, or none (its run ended before a tail).
+fn missed(tail: f64, bound: f64) -> bool {
+    tail.is_nan() || tail > bound
+}
+
 /// Raises μ_i ×4 (at most to `caps[i]`) where the tail error is beyond its bound; whether anything
 /// changed.
 fn raise_mu(mu: &mut [f64], caps: &[f64], tail: &[f64], bound: &[f64]) -> bool {
     let mut changed = false;
     for i in 0..mu.len() {
-        if (tail[i].is_nan() || tail[i] > bound[i]) && mu[i] < caps[i] {
+        if missed(tail[i], bound[i]) && mu[i] < caps[i] {
             mu[i] = (4.0 * mu[i]).min(caps[i]);
             changed = true;
         }
@@ -1968,7 +1973,7 @@ fn horizon_advice(
     let t_end = s.simulation.t_end;
     let beats = beat_horizon(s);
     // A long delay first, then the beats: a diverging loop has no horizon advice.
-    let missed = |i: usize| first.tail_max_e[i].is_nan() || first.tail_max_e[i] > bound[i];
+    let missed = |i: usize| missed(first.tail_max_e[i], bound[i]);
     let delays: Vec<String> =
         (0..bound.len()).filter(|&i| missed(i)).filter_map(|i| long_delay(design, i, t_end)).collect();
     if let Some(growth) = first.growth(bound) {

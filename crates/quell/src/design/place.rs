@@ -1204,11 +1204,7 @@ pub(crate) fn scale_free_condition(A: &DMatrix<f64>, B: &DMatrix<f64>, K: &DMatr
 /// as it does not before (helper tryout, 2026-12-07). `None` where both read it defective.
 fn balanced_eigenvectors(M: &DMatrix<f64>, given: bool) -> Option<DMatrix<C64>> {
     let (balanced, d) = crate::linalg::balancing(M);
-    let found = match given {
-        true => eigenvectors(balanced, Some(&d)),
-        false => eigenvectors(balanced, None),
-    };
-    found.or_else(|| eigenvectors(M.clone(), None))
+    eigenvectors(balanced, given.then_some(&d)).or_else(|| eigenvectors(M.clone(), None))
 }
 
 /// σ_max/σ_min of X (∞ for a singular X, 1 for an empty one: a loop of no states).

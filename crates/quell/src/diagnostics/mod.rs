@@ -390,9 +390,7 @@ pub fn model_error_advice(s: &crate::Scenario, result: &SimResult) -> Option<Str
         return None;
     }
     // A true actuator below what the steady state itself asks: said first, before the rest.
-    let failed = result.outcome.as_ref().is_some_and(|o| {
-        matches!(o, Outcome::Diverged { .. } | Outcome::StepSizeTooSmall { .. } | Outcome::HistoryTooLarge { .. })
-    });
+    let failed = result.outcome.as_ref().is_some_and(ended_by_the_loop);
     let saturated = (failed || (0..result.m).any(|i| !tail_within_bound(result, i)))
         .then(|| effort::saturation_advice(s))
         .flatten();
@@ -401,6 +399,12 @@ pub fn model_error_advice(s: &crate::Scenario, result: &SimResult) -> Option<Str
         (Some(a), Some(b)) => Some(format!("{a}; besides, {b}")),
         (a, b) => a.or(b),
     }
+}
+
+/// A run ended by its loop (diverged, stiffened past the step size, or its history past its
+/// budget), not by the caller's step budget or a stop.
+fn ended_by_the_loop(outcome: &Outcome) -> bool {
+    matches!(outcome, Outcome::Diverged { .. } | Outcome::StepSizeTooSmall { .. } | Outcome::HistoryTooLarge { .. })
 }
 
 /// [`model_error_advice`]'s line on the true plant's differences `diffs` from the model.
@@ -415,8 +419,7 @@ fn mismatch_advice(s: &crate::Scenario, result: &SimResult, diffs: &[String], un
         ));
     };
     // Not a run that the caller's step budget or a stop ended: the mismatch need not be why.
-    if !matches!(outcome, Outcome::Diverged { .. } | Outcome::StepSizeTooSmall { .. } | Outcome::HistoryTooLarge { .. })
-    {
+    if !ended_by_the_loop(outcome) {
         return None;
     }
     Some(format!(

@@ -75,6 +75,27 @@ const TUNE_KEYS: &[&str] = &["objective", "mu", "max_u", "max_uf", "points", "re
 const OBJECTIVES: &str = "\"settle_t\", \"tail_rms_e\" or \"tail_max_e\"";
 
 impl TuneSpec {
+    /// Channel i's log-spaced starting points; through the logarithms where μ_max/μ_min overflows
+    /// (a range such as [1e-300, 1e300] gave μ = inf past its first point).
+    fn log_grid(&self, i: usize) -> impl Iterator<Item = f64> {
+        let ([lo, hi], points) = (self.bounds[i], self.points);
+        // A fixed μ_i (μ_min = μ_max) is one evaluation, not `points` identical ones.
+        let points = if lo == hi { 1 } else { points };
+        let ratio = hi / lo;
+        (0..points).map(move |k| {
+            let x = k as f64 / (points - 1).max(1) as f64;
+            if ratio.is_finite() {
+                lo * ratio.powf(x)
+            } else if k == 0 {
+                lo
+            } else if k + 1 == points {
+                hi
+            } else {
+                (lo.ln() + x * (hi.ln() - lo.ln())).exp().clamp(lo, hi)
+            }
+        })
+    }
+
     /// The limits on channel i that a run's figures `f` break, one phrase each (`max |u_f,1| =
     /// 4.0706e0 beyond tune.max_uf[0] = 4`): only limits that are set (finite) and exceeded.
     pub fn broken_limits(&self, i: usize, f: &ChannelFigures, prefix: &str) -> Vec<String> {
@@ -724,27 +745,6 @@ impl Search<'_> {
         TunePoint { mu: mu_i, objective, outcome: row.outcome, reason, figures }
     }
 
-    /// Channel i's log-spaced starting points; through the logarithms where μ_max/μ_min overflows
-    /// (a range such as [1e-300, 1e300] gave μ = inf past its first point).
-    fn log_grid(&self, i: usize) -> impl Iterator<Item = f64> {
-        let ([lo, hi], points) = (self.spec.bounds[i], self.spec.points);
-        // A fixed μ_i (μ_min = μ_max) is one evaluation, not `points` identical ones.
-        let points = if lo == hi { 1 } else { points };
-        let ratio = hi / lo;
-        (0..points).map(move |k| {
-            let x = k as f64 / (points - 1).max(1) as f64;
-            if ratio.is_finite() {
-                lo * ratio.powf(x)
-            } else if k == 0 {
-                lo
-            } else if k + 1 == points {
-                hi
-            } else {
-                (lo.ln() + x * (hi.ln() - lo.ln())).exp().clamp(lo, hi)
-            }
-        })
-    }
-
     /// Golden-section search on log μ_i over the neighbours of the best point of `curve`, each
     /// evaluation appended to it; returns early when stopped.
     fn refine(&self, i: usize, curve: &mut Vec<TunePoint>) {
@@ -881,14 +881,13 @@ fn search_and_join(
     // The scenario's own run, where a limit is set: which of the file's limits every search must
     // keep (a tightened one is its own channel's search's to keep).
     let limited = spec.max_u.iter().chain(&spec.max_uf).any(|l| l.is_finite());
-    let search = Search { study, scenario, spec: searched, file: spec, base_mu: &base_mu, guarded: vec![], opts };
     // The scenario's own μ_i, inside channel i's bounds and off its grid, is a point of its curve
     // too: a quadrotor's tuning said "no feasible mu" of 7 points over three decades while the
     // scenario's μ₄ = 5204 kept max |u_f,4| = 2.86 within its 3 (helper tryout, 2026-12-07).
     let own: Vec<usize> = (0..m)
         .filter(|&i| {
             let [lo, hi] = searched.bounds[i];
-            (lo..=hi).contains(&base_mu[i]) && search.log_grid(i).all(|mu| (mu / base_mu[i] - 1.0).abs() > 1e-9)
+            (lo..=hi).contains(&base_mu[i]) && searched.log_grid(i).all(|mu| (mu / base_mu[i] - 1.0).abs() > 1e-9)
         })
         .collect();
     let base = if limited || !own.is_empty() { run_with(study, &base_mu, &stopped) } else { None };
@@ -897,8 +896,8 @@ fn search_and_join(
             base.as_ref().and_then(|r| r.completed().get(j)).is_some_and(|f| spec.broken_limits(j, f, "").is_empty())
         })
         .collect();
-    let search = Search { guarded, ..search };
-    let jobs: Vec<(usize, f64)> = (0..m).flat_map(|i| search.log_grid(i).map(move |mu| (i, mu))).collect();
+    let search = Search { study, scenario, spec: searched, file: spec, base_mu: &base_mu, guarded, opts };
+    let jobs: Vec<(usize, f64)> = (0..m).flat_map(|i| searched.log_grid(i).map(move |mu| (i, mu))).collect();
     let mut coarse: Vec<(usize, TunePoint)> =
         jobs.into_par_iter().filter_map(|(i, mu)| Some((i, search.score(i, mu)?))).collect();
     if let Some(row) = base.as_ref().filter(|_| !search.stopped()) {
