@@ -109,6 +109,10 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
             "the automatic design did not pass its verifying simulation ({tails}{}){}; nothing written; see docs/tuning.md",
             match targets.u_limit.as_slice() {
                 [] => String::new(),
+                // A run that ended early has no peak to quote ("max|u_f| [NaN, NaN]" had been).
+                _ if !v.max_uf.iter().all(|u| u.is_finite()) => {
+                    ", and no completed run whose max|u_f| the limit could be held to".to_string()
+                }
                 [l] => format!(", max|u_f| {} against the limit {}", list(&v.max_uf), crate::run::short(*l)),
                 each => format!(", max|u_f| {} against the limits {each:?}", list(&v.max_uf)),
             },
@@ -285,7 +289,7 @@ fn delay_lines(a: &AutoDesign) -> String {
     } else {
         String::new()
     };
-    let mut s = format!("  delays (for information, not a condition of passing){of}: {summary}\n");
+    let mut s = format!("  delays (not a condition of passing; --delay-error E slows the chosen channel poles until ±E holds){of}: {summary}\n");
     let unit = a.scenario.plant.time_unit;
     for c in &v.delay_check {
         // Whole samples move a sampled scenario's delays further than the factor (2 ms at

@@ -424,7 +424,7 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
                 RunStats::Continuous(stats) => format!("{} solver steps", stats.steps),
                 RunStats::Sampled { controller_steps, .. } => format!("{controller_steps} controller steps"),
             };
-            eprintln!("wrote {out} ({} samples, {steps}, {seconds:.3} s)", result.len());
+            eprintln!("wrote {out} ({} samples, {steps}, in {seconds:.3} s of wall time)", result.len());
             Ok(())
         }
         outcome => {

@@ -208,10 +208,16 @@ fn report(rows: &[Row], ran: usize, n: usize, seconds: f64, jobs: usize, out: &P
         count(Outcome::Failed),
         count(Outcome::Stopped),
         if jobs == 1 { "" } else { "s" },
-        // Per run of this process (a resumed sweep's kept rows took no time here).
+        // Per run of this process (a resumed sweep's kept rows took no time here); beside it a
+        // run's own time on its thread, which the wall time per run divides among the threads (a
+        // tryout read "110 ms per run" on 2 threads as the cost of a run that took 182 ms).
         match ran {
             0 => String::new(),
-            k => format!(" ({:.2} ms per run)", 1e3 * seconds / k as f64),
+            k => format!(
+                " ({:.2} ms of wall time per run; a run took {:.2} ms on its thread, the mean of runs.csv's wall_ms)",
+                1e3 * seconds / k as f64,
+                rows.iter().map(|r| r.wall_ms).sum::<f64>() / rows.len().max(1) as f64
+            ),
         },
         out.display()
     );

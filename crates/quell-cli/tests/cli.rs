@@ -895,16 +895,21 @@ fn design_auto_writes_a_complete_scenario_that_meets_the_tail_bound() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let v = &serde_json::from_str::<serde_json::Value>(&stdout(&o)).unwrap()["verification"];
     assert!(v["max_uf"].as_array().unwrap().iter().all(|u| u.as_f64().unwrap() <= 1e3), "{v}");
-    // A limit no candidate meets (the tails do) is an infeasible target: exit 2, nothing written.
+    // A limit far below the steady state's input is an infeasible target before any run: exit 2,
+    // the limit as written (it printed as 300 digits), nothing written.
     let out = dir.path().join("limited.toml");
     let o =
         quell(&["design", input.to_str().unwrap(), "--auto", "--u-limit", "1e-300", "--write", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(stderr(&o).contains("no candidate keeps max|u_f,i| within the actuator limit 1e-300"), "{}", stderr(&o));
-    // Its figures in four digits, the limit as written (it printed as 300 digits), and a limit to
-    // ask for that admits the peak.
+    assert!(stderr(&o).contains("the steady state alone asks more than the actuator limit, whatever the design (u_f[1]: 11.63 against 1e-300, "), "{}", stderr(&o));
+    assert!(!out.exists());
+    // One just below u_f,2's steady 21.68, which no candidate meets while the tails do: exit 2
+    // after the runs, with their figures in four digits.
+    let o = quell(&["design", input.to_str().unwrap(), "--auto", "--u-limit", "20", "--write", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no candidate keeps max|u_f,i| within the actuator limit 20"), "{}", stderr(&o));
     let err = stderr(&o);
-    let peaks = err.split(", max|u_f| [").nth(1).and_then(|r| r.split("] against the limit 1e-300)").next());
+    let peaks = err.split(", max|u_f| [").nth(1).and_then(|r| r.split("] against the limit 20)").next());
     let four_digits =
         |v: &str| v.len() == 7 && v.as_bytes()[1] == b'.' && v[5..].starts_with('e') && v.parse::<f64>().is_ok();
     assert!(peaks.is_some_and(|p| p.split(", ").all(four_digits) && p.split(", ").count() == 2), "{err}");
@@ -1858,7 +1863,7 @@ fn the_delay_check_says_when_it_has_nothing_to_check_and_whose_delays_it_scaled(
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let out = stdout(&o);
     assert!(
-        out.contains("  delays (for information, not a condition of passing) (the errors are of [truth]'s delays, not the model's [1, 3]): "),
+        out.contains("  delays (not a condition of passing; --delay-error E slows the chosen channel poles until ±E holds) (the errors are of [truth]'s delays, not the model's [1, 3]): "),
         "{out}"
     );
     assert!(out.contains("×1.1 (τ = [1.122, 3.19] s)"), "{out}");
@@ -1871,7 +1876,7 @@ fn the_delay_check_says_when_it_has_nothing_to_check_and_whose_delays_it_scaled(
         assert!(missed.split(", ").all(|m| ["tail", "effort", "u_limit"].contains(&m)), "{line}");
     }
     // The summary names what the last level's runs missed, each once, or that all held.
-    let summary = out.lines().find(|l| l.starts_with("  delays (for information")).expect("the summary");
+    let summary = out.lines().find(|l| l.starts_with("  delays (not a condition")).expect("the summary");
     let runs: Vec<&str> = out.lines().filter(|l| l.starts_with("    ×")).collect();
     let last_level = &runs[runs.len() - 2..];
     let missed = |code: &str| {

@@ -141,6 +141,20 @@ fn system_labels(sys: &Bound<'_, PyAny>, kind: &str, name: &str, count: usize) -
     Ok(Some(labels))
 }
 
+/// What a shape error of `key` means for a plant given as a python-control system (`system`) of
+/// n states and m inputs: its D is quell's disturbance matrix, not python-control's feedthrough,
+/// and inputs beyond the outputs' number may be disturbances, split off by indexing (a system
+/// with a load torque as its third input had been told only to "add inputs"; helper tryout,
+/// 2026-12-07).
+fn system_hint(system: bool, key: &str, (n, m, k): (usize, usize, usize), outputs: usize) -> String {
+    match key {
+        _ if !system => String::new(),
+        "D" => format!("; D here is the disturbance matrix of the plant (1), n×k = {n}×{k} into ẋ, not python-control's feedthrough sys.D"),
+        "C" if outputs < m => format!("; where sys's last {} inputs are disturbances, give the first {outputs} alone and the rest as D: Plant(sys[:, :{outputs}], D=sys.B[:, {outputs}:])", m - outputs),
+        _ => String::new(),
+    }
+}
+
 /// Whether `obj` looks like a `control.StateSpace` (has A, B, C, D and nstates).
 fn is_state_space(obj: &Bound<'_, PyAny>) -> bool {
     ["A", "B", "C", "D", "nstates"].iter().all(|a| obj.hasattr(*a).unwrap_or(false))
@@ -170,17 +184,28 @@ fn system_matrices(sys: &Bound<'_, PyAny>, given_bc: bool) -> PyResult<(DMatrix<
     let dt = sys.getattr("dt").ok().filter(|d| !d.is_none());
     if let Some(dt) = dt {
         if dt.extract::<f64>().map_or(true, |v| v != 0.0) {
-            return Err(k.err(py, format!("sys: expected a continuous-time system (dt = 0), found dt = {}; quell designs for continuous plants (sample the controller with Controller(design, sample_time))", dt.str()?)));
+            return Err(k.err(py, format!("sys: expected a continuous-time system (dt = 0), found dt = {}; quell designs for continuous plants (sample the controller with Controller(design, sample_time)); a dead time is not dt: give it as the input delays, Plant(sys, delays=[...]) with a continuous sys", dt.str()?)));
         }
     }
+    let (A, B, C) =
+        (matrix(&sys.getattr("A")?, "A", k)?, matrix(&sys.getattr("B")?, "B", k)?, matrix(&sys.getattr("C")?, "C", k)?);
     let feedthrough = matrix(&sys.getattr("D")?, "sys.D", k)?;
+    let rounding = feedthrough_rounding(&A, &B, &C);
     let nonzero = (0..feedthrough.nrows())
         .flat_map(|r| (0..feedthrough.ncols()).map(move |c| (r, c)))
-        .find(|&at| feedthrough[at] != 0.0);
+        .find(|&at| feedthrough[at].abs() > rounding);
     if let Some((r, c)) = nonzero {
-        return Err(k.err(py, format!("sys.D[{r}][{c}]: python-control's D is the feedthrough from u to y, which the plant (1) does not have; expected 0, found {}; give the disturbance matrices as Plant(sys, D=..., Q=...)", quell::fmt_number(feedthrough[(r, c)]))));
+        return Err(k.err(py, format!("sys.D[{r}][{c}]: python-control's D is the feedthrough from u to y, which the plant (1) does not have; expected 0 (within rounding, {}), found {}; give the disturbance matrices as Plant(sys, D=..., Q=...)", quell::fmt_number(rounding), quell::fmt_number(feedthrough[(r, c)]))));
     }
-    Ok((matrix(&sys.getattr("A")?, "A", k)?, matrix(&sys.getattr("B")?, "B", k)?, matrix(&sys.getattr("C")?, "C", k)?))
+    Ok((A, B, C))
+}
+
+/// The largest feedthrough entry taken for rounding's: 1e3·ε·‖C‖‖B‖/‖A‖ (Frobenius norms;
+/// ‖C‖‖B‖ where A is 0), the size of C (sI − A)⁻¹ B's high-frequency scale to a thousand roundings
+/// (`control.ss` of a realization had left 1e-17 there, refused as a feedthrough).
+fn feedthrough_rounding(A: &DMatrix<f64>, B: &DMatrix<f64>, C: &DMatrix<f64>) -> f64 {
+    let gain = C.norm() * B.norm();
+    1e3 * f64::EPSILON * if A.norm() > 0.0 { gain / A.norm() } else { gain }
 }
 
 #[pymethods]
@@ -241,10 +266,10 @@ impl PyPlant {
             None => vec![0.0; m],
         };
         let x0 = x0.map(|x| vector(x, "x0", k)).transpose()?.map(quell::nalgebra::DVector::from_vec);
-        let dims = (n, m, D.ncols());
+        let (dims, measured) = ((n, m, D.ncols()), C.nrows());
         let inner = quell::Plant::new(A, B, C, D, Q, delays, x0).map_err(|e| {
             let (key, message) = e.explained(dims, "");
-            k.err(py, format!("{key}: {message}"))
+            k.err(py, format!("{key}: {message}{}", system_hint(system.is_some(), &key, dims, measured)))
         })?;
         let (n, m) = (inner.n(), inner.m());
         // A keyword's names, else the system's labels (checked only where no keyword overrides them).

@@ -391,6 +391,23 @@ const SCENARIO_KEYWORDS: [&str; 11] = [
     "actuator",
 ];
 
+/// A keyword `name` that is none of `function`'s `own` arguments, [`SCENARIO_KEYWORDS`] or the
+/// design keys: a `ScenarioError` naming the nearest and listing them all.
+fn unknown_keyword(py: Python<'_>, name: String, (function, own): (&str, &[&str])) -> PyErr {
+    let all = own.iter().chain(SCENARIO_KEYWORDS.iter()).chain(quell::scenario::DESIGN_KEYS).copied();
+    let hint = quell::settings::nearest(&name, all).map(|n| format!(" (did you mean `{n}`?)")).unwrap_or_default();
+    let message = format!(
+        "{name}: unknown keyword{hint}; {function} takes {}, the keywords {} and the [design] keys {}",
+        own.join(", "),
+        SCENARIO_KEYWORDS.join(", "),
+        quell::scenario::DESIGN_KEYS.join(", ")
+    );
+    crate::errors::keyed(py, Kind::Scenario, message, Some(name))
+}
+
+/// `auto_design`'s own arguments, which a misspelt keyword is matched against too.
+const AUTO_ARGUMENTS: [&str; 6] = ["text", "reference", "disturbance", "convergence_time", "u_limit", "delay_error"];
+
 /// The `[design]` table from keyword arguments: pole lists in the file's form, the rest as values;
 /// a keyword that is no design key is refused naming the nearest keyword.
 fn design_value(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Table> {
@@ -402,15 +419,7 @@ fn design_value(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Table> {
         let py = v.py();
         if !quell::scenario::DESIGN_KEYS.contains(&name.as_str()) {
             // A misspelt keyword lands here with the design's keys (t_ned was "unknown in [design]").
-            let all = SCENARIO_KEYWORDS.iter().chain(quell::scenario::DESIGN_KEYS).copied();
-            let hint =
-                quell::settings::nearest(&name, all).map(|n| format!(" (did you mean `{n}`?)")).unwrap_or_default();
-            let message = format!(
-                "{name}: unknown keyword{hint}; quell.Scenario takes plant, reference, disturbance, the keywords {} and the [design] keys {}",
-                SCENARIO_KEYWORDS.join(", "),
-                quell::scenario::DESIGN_KEYS.join(", ")
-            );
-            return Err(crate::errors::keyed(py, Kind::Scenario, message, Some(name)));
+            return Err(unknown_keyword(py, name, ("quell.Scenario", &["plant", "reference", "disturbance"])));
         }
         if v.is_none() {
             continue;
@@ -953,7 +962,12 @@ fn auto_document<'py>(
     // Scenario's own keywords out of **scenario; the rest are [design] keys.
     let design = PyDict::new(py);
     for (k, v) in scenario.into_iter().flat_map(|d| d.iter()) {
-        if !SCENARIO_KEYWORDS.contains(&k.extract::<String>()?.as_str()) {
+        let name = k.extract::<String>()?;
+        if !SCENARIO_KEYWORDS.contains(&name.as_str()) {
+            // convergence_tim=3 had been named against quell.Scenario's keywords alone.
+            if !quell::scenario::DESIGN_KEYS.contains(&name.as_str()) {
+                return Err(unknown_keyword(py, name, ("quell.auto_design", &AUTO_ARGUMENTS)));
+            }
             design.set_item(k, v)?;
         }
     }

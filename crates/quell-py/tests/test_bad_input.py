@@ -244,10 +244,11 @@ def test_a_name_that_is_not_valid_unicode_and_a_feedthrough_are_named_with_their
     with pytest.raises(quell.ScenarioError, match=r"^inputs\[0\]: expected a str \(a signal name\) of valid Unicode, found a str with a lone surrogate"):
         quell.Plant(A, B, C, inputs=["\ud800", "b"])
     control = pytest.importorskip("control")
-    D = [[0.0, 0.0], [0.0, 1e-300]]
-    with pytest.raises(quell.ScenarioError, match=r"^sys\.D\[1\]\[1\]: .*expected 0, found 1\.000000e-300; ") as e:
+    # (1e-300 is now rounding's, accepted: test_python_control_shapes_get_hints_in_its_own_terms.)
+    D = [[0.0, 0.0], [0.0, 0.1 + 0.2]]
+    with pytest.raises(quell.ScenarioError, match=r"^sys\.D\[1\]\[1\]: .*expected 0 \(within rounding, [0-9.e-]+\), found 0\.300000; ") as e:
         quell.Plant(control.ss(A, B, C, D))
-    assert len(str(e.value)) < 300
+    assert len(str(e.value)) < 400
 
 
 def test_masked_entries_are_refused_not_read_as_data():

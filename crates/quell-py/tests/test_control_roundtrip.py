@@ -316,3 +316,45 @@ def test_a_python_control_plant_is_designed_automatically_without_toml():
     assert e.value.key == "reference"
     with pytest.raises(quell.ScenarioError, match=r"t_ned: unknown keyword \(did you mean `t_end`\?\)"):
         quell.auto_design(plant, paper.reference, t_ned=5.0)
+
+
+def test_python_control_shapes_get_hints_in_its_own_terms():
+    """Errors for a plant given as a python-control system speak of its terms (helper tryout,
+    2026-12-07): a feedthrough-shaped D is named as quell's disturbance matrix, a third input that
+    is a disturbance is split off by indexing, a rounding-level feedthrough is no feedthrough, a
+    dt is not a dead time, and an observer gain placed on the dual system is named as transposed."""
+    A = [[0.0, 1.0, 0.0], [2.0, -1.0, 0.0], [0.0, 0.0, -3.0]]
+    B = [[0.0, 0.0, 0.0], [1.0, 0.0, 1.0], [0.0, 1.0, 0.0]]
+    C = [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
+    sys = control.ss(A, B, C, np.zeros((2, 3)))
+    with pytest.raises(quell.ScenarioError, match=r"^C: .*where sys's last 1 inputs are disturbances, give the first 2 alone and the rest as D: Plant\(sys\[:, :2\], D=sys.B\[:, 2:\]\)"):
+        quell.Plant(sys)
+    # The split the hint names is a valid plant, its disturbance entering where the third input did.
+    split = quell.Plant(sys[:, :2], D=sys.B[:, 2:])
+    np.testing.assert_array_equal(split.D, np.asarray(B)[:, 2:])
+    square = control.ss(A, np.asarray(B)[:, :2], C, np.zeros((2, 2)))
+    with pytest.raises(quell.ScenarioError, match=r"^D: .*D here is the disturbance matrix of the plant \(1\), n×k = 3×2 into ẋ, not python-control's feedthrough sys.D"):
+        quell.Plant(square, D=np.zeros((2, 2)))
+    # A feedthrough at rounding's size is none; a real one is refused, naming the tolerance.
+    tiny = control.ss(A, np.asarray(B)[:, :2], C, [[1e-17, 0.0], [0.0, 0.0]])
+    assert quell.Plant(tiny).n == 3
+    with pytest.raises(quell.ScenarioError, match=r"^sys.D\[0\]\[0\]: python-control's D is the feedthrough .*expected 0 \(within rounding, "):
+        quell.Plant(control.ss(A, np.asarray(B)[:, :2], C, [[1e-3, 0.0], [0.0, 0.0]]))
+    with pytest.raises(quell.ScenarioError, match=r"a dead time is not dt: give it as the input delays, Plant\(sys, delays=\[\.\.\.\]\)"):
+        quell.Plant(control.tf([1.0], [1.0, 0.0, -1.0], 0.05))
+    # A gain placed on the dual system (control.place(A.T, C.T, p) is Lᵀ), passed as it is.
+    plant = quell.Plant(square, D=np.asarray(B)[:, 2:])
+    Lt = control.place(np.asarray(A).T, np.asarray(C).T, [-4.0, -5.0, -6.0])
+    with pytest.raises(quell.DesignError, match=r"^observer_gain: expected a 3×2 matrix, found 2×3 \(its transpose's shape: .*give its transpose\)"):
+        quell.design(plant, observer_gain=Lt, channel_poles=[[-1.0, -2.0], [-1.0]],
+                     reference_filter_poles=[[-1.0], [-1.0]], disturbance_filter_poles=[[-1.0]], mu=[1.0, 1.0], beta=1.0)
+    # Transposed, it designs.
+    quell.design(plant, observer_gain=Lt.T, channel_poles=[[-1.0, -2.0], [-1.0]],
+                 reference_filter_poles=[[-1.0], [-1.0]], disturbance_filter_poles=[[-1.0]], mu=[1.0, 1.0], beta=1.0)
+
+
+def test_a_misspelt_auto_design_keyword_is_matched_against_its_own_arguments():
+    p = quell.paper_example()
+    for typo, meant in (("convergence_tim", "convergence_time"), ("u_limt", "u_limit"), ("delay_eror", "delay_error")):
+        with pytest.raises(quell.ScenarioError, match=rf"^{typo}: unknown keyword \(did you mean `{meant}`\?\); quell.auto_design takes text, reference, disturbance, convergence_time, u_limit, delay_error, the keywords"):
+            quell.auto_design(p.plant, p.reference, p.disturbance, t_end=60.0, **{typo: 3.0})

@@ -207,6 +207,15 @@ impl Signal {
                     let key = format!("{key}.components[{i}].harmonics[{j}].frequency");
                     return Err(KeyError::new(key, negative_frequency(h.frequency)));
                 }
+                // At frequency 0 a harmonic is the constant a·sin(φ): with φ = 0 (a whole number of
+                // π) nothing, which a reference identically 0 had passed its verification with
+                // (helper tryout, 2026-12-07).
+                if h.frequency == 0.0 && h.amplitude != 0.0 && (h.phase.sin()).abs() <= 1e-12 {
+                    return Err(KeyError::new(
+                        format!("{key}.components[{i}].harmonics[{j}].frequency"),
+                        format!("expected a frequency > 0 (rad per unit of the plant's time), found 0, which makes this harmonic the constant amplitude·sin(phase) = 0 (phase {}): give its frequency, or a constant as the component's bias", crate::settings::fmt_short(h.phase)),
+                    ));
+                }
             }
         }
         Ok(())

@@ -1080,3 +1080,55 @@ fn the_states_units_do_not_make_a_decoupler_fragile() {
     assert!(warned.is_empty() && warned_nano.is_empty(), "{warned:?} / {warned_nano:?}");
     assert!(observer < 1e3 && observer_nano < 1e3, "{observer} / {observer_nano}");
 }
+
+/// A plant multiplied by a Padé approximation of its delay has right-half-plane zeros that mirror
+/// the approximation's poles: the refusal says so and points to plant.delays. An inverted pendulum
+/// 1/(0.018 s² − 0.5886) times pade(0.05 s, 2) = (s² − 120 s + 4800)/(s² + 120 s + 4800) (zeros
+/// 3/T ± i√3/T = 60 ± 34.64i), in controllable canonical form. A zero at +2 with no such pole is not
+/// said to mirror one.
+#[test]
+fn zeros_that_mirror_poles_are_named_as_a_delays_approximation() {
+    let root = |re: f64, im: f64| Complex::new(re, im);
+    let pendulum = (0.5886f64 / 0.018).sqrt();
+    let scenario = |poles: &[Complex<f64>], zeros: &[Complex<f64>]| {
+        let den = common::poly_from_roots(poles);
+        let mut num = common::poly_from_roots(zeros);
+        num.push(1.0);
+        num.resize(den.len(), 0.0);
+        let A = common::companion(&den);
+        let row = |r: usize| {
+            format!("[{}]", (0..A.ncols()).map(|c| format!("{:e}", A[(r, c)])).collect::<Vec<_>>().join(", "))
+        };
+        let a = (0..A.nrows()).map(row).collect::<Vec<_>>().join(", ");
+        let c = num.iter().map(|x| format!("{x:e}")).collect::<Vec<_>>().join(", ");
+        let b =
+            (0..den.len()).map(|k| if k + 1 == den.len() { "[1.0]" } else { "[0.0]" }).collect::<Vec<_>>().join(", ");
+        let observer = (1..=den.len()).map(|k| format!("{}.0", -10 * k as i32)).collect::<Vec<_>>().join(", ");
+        let sigma = den.len() - zeros.len();
+        let channel = (1..=sigma).map(|k| format!("{}.0", -(k as i32))).collect::<Vec<_>>().join(", ");
+        format!(
+            "[plant]\nA = [{a}]\nB = [{b}]\nC = [[{c}]]\nD = [{b}]\nQ = [[0.0]]\ndelays = [0.0]\n[design]\nobserver_poles = [{observer}]\nchannel_poles = [[{channel}]]\nreference_filter_poles = [[-1.0]]\ndisturbance_filter_poles = [[-1.0]]\nmu = [1.0]\nbeta = 1.0\n[reference]\ncomponents = [{{ bias = 1.0 }}]\n[disturbance]\ncomponents = [{{ bias = 0.0 }}]\n[simulation]\nt_end = 10.0\n"
+        )
+    };
+    let pade = [root(60.0, 34.64101615137755), root(60.0, -34.64101615137755)];
+    let poles =
+        [root(pendulum, 0.0), root(-pendulum, 0.0), root(-60.0, 34.64101615137755), root(-60.0, -34.64101615137755)];
+    let s = quell::scenario::Scenario::from_toml(&scenario(&poles, &pade)).unwrap();
+    match s.design() {
+        Err(e @ DesignError::UnstableZeroDynamics { mirrored: true, .. }) => {
+            assert!(e.to_string().contains("each of them mirrors a pole of A across the imaginary axis, an all-pass factor such as a Padé approximation of a delay: a delay is plant.delays"), "{e}");
+        }
+        other => panic!("{other:?}"),
+    }
+    let s = quell::scenario::Scenario::from_toml(&scenario(
+        &[root(pendulum, 0.0), root(-pendulum, 0.0), root(-3.0, 0.0)],
+        &[root(2.0, 0.0)],
+    ))
+    .unwrap();
+    match s.design() {
+        Err(e @ DesignError::UnstableZeroDynamics { mirrored: false, .. }) => {
+            assert!(!e.to_string().contains("mirrors a pole"), "{e}");
+        }
+        other => panic!("{other:?}"),
+    }
+}

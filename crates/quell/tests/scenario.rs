@@ -1249,3 +1249,24 @@ fn a_badly_scaled_plant_is_not_just_called_uncontrollable() {
     let e = load_and_design(&with(&[(A_LINE, A), (B_LINE, B)])).map(|_| ()).unwrap_err().to_string();
     assert!(e.contains("not controllable") && !e.contains("decades"), "{e}");
 }
+
+/// A harmonic at frequency 0 is the constant a·sin(φ): with φ = 0 it adds nothing, a mistake the
+/// reader names (a reference written that way had been identically 0); with φ = π/2 it is the
+/// constant a, as a bias is.
+#[test]
+fn a_harmonic_at_frequency_zero_that_adds_nothing_is_refused() {
+    let with = |phase: &str| {
+        quell::scenario::Scenario::from_toml(&PAPER_EXAMPLE.replace(
+            "{ amplitude = 3.0, frequency = 2.0, phase = 0.0 }",
+            &format!("{{ amplitude = 3.0, frequency = 0.0, phase = {phase} }}"),
+        ))
+    };
+    let e = with("0.0").unwrap_err().to_string();
+    assert!(
+        e.starts_with("reference.components[0].harmonics[0].frequency: expected a frequency > 0")
+            && e.contains("amplitude·sin(phase) = 0"),
+        "{e}"
+    );
+    let s = with("1.5707963267948966").unwrap();
+    assert!((s.reference.components[0].eval(7.0) - 3.0).abs() < 1e-12);
+}

@@ -103,7 +103,8 @@ def state_space(sys):
     if sys.dt is not None and sys.dt is not False and (sys.dt is True or sys.dt != 0):
         raise _sys_error(
             f"sys: expected a continuous-time system (dt = 0), found dt = {sys.dt}; quell designs for "
-            "continuous plants (sample the controller with Controller(design, sample_time))"
+            "continuous plants (sample the controller with Controller(design, sample_time)); a dead time "
+            "is not dt: give it as the input delays, Plant(sys, delays=[...]) with a continuous sys"
         )
     for i in range(sys.noutputs):
         for j in range(sys.ninputs):

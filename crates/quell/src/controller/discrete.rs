@@ -847,7 +847,7 @@ fn check_inputs((y, g): (&[f64], &[f64]), m: usize, bound: f64) -> Result<(), Co
 /// above their result) in f32 arithmetic, in the generated C's order; and every state rounded to
 /// f32 after each step. The adaptive law's and the filters' operations stay f64, their results
 /// rounded. `tests/export_c.rs` holds it to the compiled f32 C in closed loop: the C's departure
-/// from f64 was 0.4–2.8× the emulation's on six plants, among them a disk servo whose u_f departs
+/// from f64 was 0.4–2.8× the emulation's on six plants (up to 6.2× on a seventh, a power system's generator), among them a disk servo whose u_f departs
 /// 18 % of its peak (the emulation without the core's products in f32 had read 0.15 %).
 #[derive(Debug, Clone)]
 pub(crate) struct SinglePrecision {

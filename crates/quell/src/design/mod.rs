@@ -154,7 +154,7 @@ pub enum DesignError {
     Plant(#[from] PlantError),
     #[error("design.observer_gain[{row}][{col}]: expected a finite number, found {}", crate::settings::fmt_short(*.value))]
     ObserverGainNonFinite { row: usize, col: usize, value: f64 },
-    #[error("design.observer_gain: expected a {n}×{m} matrix, found {rows}×{cols}")]
+    #[error("design.observer_gain: expected a {n}×{m} matrix, found {rows}×{cols}{}", if .rows == .m && .cols == .n && .n != .m { " (its transpose's shape: a gain placed on the dual system, as place(Aᵀ, Cᵀ, poles) gives, is Lᵀ; give its transpose)" } else { "" })]
     ObserverGainShape { n: usize, m: usize, rows: usize, cols: usize },
     #[error("{key}: A − LC is not Hurwitz (eigenvalues {}); {}", fmt_complex_list(.eigenvalues), if *.key == "design.observer_gain" { "choose L with a stable observer, or give design.observer_poles instead" } else { "choose observer poles with larger decay rates" })]
     ObserverUnstable { key: &'static str, eigenvalues: Vec<Complex<f64>> },
@@ -172,8 +172,16 @@ pub enum DesignError {
     ChannelPoleCount { channel: usize, sigma: usize, got: usize, pairs: usize },
     #[error("plant: not decouplable (Proposition 1): B* is singular: with rows c_i A^(σ_i-1) and the columns of B scaled to unit norm its smallest singular value is {smallest:.3e}, below τ = {tol:.0e} (condition number {cond:.3e}); the outputs' leading responses to the inputs (c_i A^(σ_i−1) B, σ = {sigma:?}) are (nearly) dependent; measure outputs whose leading responses differ (another sensor, or other combinations of the states), pair the outputs with other inputs, or, where the design report calls a σ_i decision close, give design.relative_degrees", tol = TOL)]
     NotDecouplable { smallest: f64, cond: f64, sigma: Vec<usize> },
-    #[error("plant: unstable zero dynamics: A − BK keeps the plant's {} zero{} (its eigenvalues besides the {placed} channel poles that Proposition 1 places), and {} not in the open left half-plane: {} (per {unit}); the plant is non-minimum-phase with these outputs (a transmission zero of (A, B, C) in the closed right half-plane) and decoupling cancels its zeros, so it cannot be decoupled stably; {}measure outputs whose zeros lie in the left half-plane (a boost converter's inductor current in place of its output voltage; another sensor placement), or control this plant by another method", .zeros.len(), if .zeros.len() == 1 { "" } else { "s" }, if .unstable.len() == 1 { "this one is" } else { "these are" }, fmt_complex_list(.unstable), if .unstable.iter().any(|z| z.norm() == 0.0) { "a zero at s = 0 is a mode the plant integrates that no output sees (a rotor's speed measured without its angle, a level's inflow without the level): measure the integrated quantity itself, or " } else { "" })]
-    UnstableZeroDynamics { placed: usize, zeros: Vec<Complex<f64>>, unstable: Vec<Complex<f64>>, unit: TimeUnit },
+    #[error("plant: unstable zero dynamics: A − BK keeps the plant's {} zero{} (its eigenvalues besides the {placed} channel poles that Proposition 1 places), and {} not in the open left half-plane: {} (per {unit}); the plant is non-minimum-phase with these outputs (a transmission zero of (A, B, C) in the closed right half-plane) and decoupling cancels its zeros, so it cannot be decoupled stably; {}{}measure outputs whose zeros lie in the left half-plane (a boost converter's inductor current in place of its output voltage; another sensor placement), or control this plant by another method", .zeros.len(), if .zeros.len() == 1 { "" } else { "s" }, if .unstable.len() == 1 { "this one is" } else { "these are" }, fmt_complex_list(.unstable), if *.mirrored { "each of them mirrors a pole of A across the imaginary axis, an all-pass factor such as a Padé approximation of a delay: a delay is plant.delays (the method predicts over it exactly), so give the plant without that factor and the delay there; otherwise " } else { "" }, if .unstable.iter().any(|z| z.norm() == 0.0) { "a zero at s = 0 is a mode the plant integrates that no output sees (a rotor's speed measured without its angle, a level's inflow without the level): measure the integrated quantity itself, or " } else { "" })]
+    UnstableZeroDynamics {
+        placed: usize,
+        zeros: Vec<Complex<f64>>,
+        unstable: Vec<Complex<f64>>,
+        unit: TimeUnit,
+        /// Every unstable zero z in the open right half-plane mirrors an eigenvalue −z̄ of A (to
+        /// a millionth of |z|): an all-pass factor, as a Padé approximation of a delay.
+        mirrored: bool,
+    },
     #[error("design.relative_degrees[{index}]: expected a relative degree 1 ≤ σ_i ≤ n = {n}, found {value}")]
     RelativeDegreeRange { index: usize, value: usize, n: usize },
     #[error("design.relative_degrees[{channel}]: σ_{} = {given} contradicts the plant: c_{0} A^({}) B is clearly non-zero (largest cosine between c_{0} A^({1}) and a column of B, the states balanced: {measure:.2e}, above {cf}·τ = {bound:.0e}), so channel {0} has relative degree at most {l}; give σ_{0} ≤ {l}, or remove design.relative_degrees to let eq. (7) decide", .channel + 1, .l - 1, cf = CLOSE_FACTOR, bound = TOL * CLOSE_FACTOR)]
@@ -296,8 +304,9 @@ impl Design {
         check_spec(plant, spec)?;
         let (controllability, observability) = assumption_1(plant)?;
         poll()?;
-        let (L, observer_eigenvalues) = observer(plant, &spec.observer)?;
-        poll()?;
+        // The decoupling and its zero dynamics before the observer: a non-minimum-phase plant is
+        // refused for what no observer fixes (a random 30-state plant had been told that its
+        // observer "would miss the requested poles" by 2.9e234; helper tryout, 2026-12-07).
         let fw =
             falb_wolovich_given(&plant.A, &plant.B, &plant.C, &spec.channel_poles, spec.relative_degrees.as_deref())?;
         let A_f = &plant.A - &plant.B * &fw.K;
@@ -306,6 +315,8 @@ impl Design {
         let decoupled_eigenvalues = eigenvalues(&A_f).map_err(|e| eigen_error("plant", "A − BK", e))?;
         poll()?;
         let near_axis_zeros = check_zero_dynamics(plant, &fw)?;
+        poll()?;
+        let (L, observer_eigenvalues) = observer(plant, &spec.observer)?;
         let reference_sizes = sizes_or_ones(&spec.reference_sizes, plant.m());
         let disturbance_sizes = sizes_or_ones(&spec.disturbance_sizes, plant.k());
         let (G_g, L_g) = internal_model(&spec.reference_filter_poles, &reference_sizes, spec.regressor_scaling);
@@ -844,13 +855,31 @@ fn check_zero_dynamics(plant: &Plant, fw: &FalbWolovich) -> Result<Vec<Complex<f
         // At the origin to rounding: reported as 0, not as its computed −3e-16.
         let at = |z: &Complex<f64>| if z.norm() <= origin { Complex::new(0.0, 0.0) } else { *z };
         let zeros = zeros.iter().map(at).collect();
+        let unstable: Vec<Complex<f64>> = bad.iter().map(at).collect();
         Err(DesignError::UnstableZeroDynamics {
             placed,
             zeros,
-            unstable: bad.iter().map(at).collect(),
+            mirrored: mirrors_poles(&plant.A, &unstable),
+            unstable,
             unit: plant.time_unit,
         })
     }
+}
+
+/// Relative distance within which a zero z mirrors an eigenvalue −z̄ of A ([`mirrors_poles`]).
+const MIRROR_TOLERANCE: f64 = 1e-6;
+
+/// Every zero of `unstable` is in the open right half-plane and mirrors an eigenvalue of `A`
+/// across the imaginary axis (−z̄ within [`MIRROR_TOLERANCE`]·|z|): the zeros of an all-pass
+/// factor, which a Padé approximation of a delay multiplies a plant by (a pendulum given as
+/// G(s)·pade(0.05 s, 2) had been told only to measure other outputs; helper tryout, 2026-12-07).
+fn mirrors_poles(A: &DMatrix<f64>, unstable: &[Complex<f64>]) -> bool {
+    let Ok(poles) = eigenvalues(A) else { return false };
+    let mirrored = |z: &Complex<f64>| {
+        let image = Complex::new(-z.re, z.im);
+        z.re > 0.0 && poles.iter().any(|p| (p - image).norm() <= MIRROR_TOLERANCE * z.norm())
+    };
+    !unstable.is_empty() && unstable.iter().all(mirrored)
 }
 
 /// Wᵀ (A − B K_0) W on the zero dynamics' subspace (W its orthonormal basis, [`zero_dynamics_basis`];

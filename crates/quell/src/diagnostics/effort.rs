@@ -63,6 +63,15 @@ impl InputTone {
             && self.for_disturbance.iter().any(|&u| u > 0.0)
             && self.disturbance_output.as_ref().is_some_and(|y| y.iter().zip(bounds).all(|(y, b)| y <= b))
     }
+
+    /// Input i's amplitude here with a passable harmonic let pass: g's part alone.
+    fn kept(&self, i: usize, bounds: &[f64]) -> f64 {
+        if self.passable(bounds) {
+            self.for_reference[i]
+        } else {
+            self.amplitude[i]
+        }
+    }
 }
 
 impl SteadyInput {
@@ -78,10 +87,7 @@ impl SteadyInput {
         }
         // The sum bounds the peak from above: never above the peak with nothing let pass.
         (0..self.peak.len())
-            .map(|i| {
-                let kept = |t: &InputTone| if t.passable(bounds) { t.for_reference[i] } else { t.amplitude[i] };
-                self.tones.iter().map(kept).sum::<f64>().min(self.peak[i])
-            })
+            .map(|i| self.tones.iter().map(|t| t.kept(i, bounds)).sum::<f64>().min(self.peak[i]))
             .collect()
     }
 }

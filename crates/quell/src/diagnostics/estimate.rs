@@ -119,7 +119,7 @@ pub(crate) fn lower_offer(c: &crate::averaged::ChannelAverage, mu: f64, (rho, t_
 }
 
 /// What ends every [`lower_offer_text`]: a run's diagnostics look for it before checking an offer.
-pub(crate) const LOWER_OFFER_WORDS: &str = "where max|u_f| allows (the averaged law's figure, which a run checks)";
+pub(crate) const LOWER_OFFER_WORDS: &str = "where max|u_f| allows (the averaged law's figure, not yet run: a run of this scenario checks it and says whether it holds)";
 
 /// How [`stiff_advice`] offers [`lower_offer`]'s μ, which [`super::diagnose_run`] replaces where a
 /// run at it misses the tail bound.
