@@ -2202,7 +2202,11 @@ fn beyond_offer(
         .collect();
     let with = match with.is_empty() {
         true => String::new(),
-        false => format!(" with {} (μ's meaning depends on them)", with.join(" and ")),
+        false => format!(
+            " with {} (μ's meaning depends on {})",
+            with.join(" and "),
+            if with.len() == 1 { "it" } else { "them" }
+        ),
     };
     Ok(Some(format!(
         "{}set design.mu = [{}]{with}, beyond the stiffness threshold (the loop is then stiff, which the continuous run's implicit method and the sampled controller's implicit law take): the automatic design's run at that μ passes, tail max|e| [{}] against bounds [{}], with max|u_f| [{}] where the threshold's μ asked [{}]",

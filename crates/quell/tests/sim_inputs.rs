@@ -657,3 +657,17 @@ fn a_continuous_run_in_f32_is_refused_naming_the_key() {
         "{e}"
     );
 }
+
+/// A delay at least the horizon is cautioned before the run: the command never reaches the plant
+/// (a delay of 1e300 s had run silently, the adaptive command identically 0 at the plant).
+#[test]
+fn a_delay_beyond_the_horizon_is_cautioned_before_the_run() {
+    for (tau, shown, said) in [(300.0, "300", true), (1e300, "1e300", true), (3.0, "3", false)] {
+        let s = Scenario::from_toml(&PAPER_EXAMPLE.replace("delays = [1.0, 3.0]", &format!("delays = [1.0, {tau:e}]")))
+            .unwrap();
+        let d = s.design().unwrap();
+        let caution = quell::sim::fast_rate_warning(&Run::of(&s, &d)).unwrap_or_default();
+        let expected = format!("plant.delays[1] = {shown} s is at least t_end = 100 s: channel 2's adaptive command never reaches the plant in this run");
+        assert_eq!(caution.contains(&expected), said, "{tau}: {caution}");
+    }
+}

@@ -1020,11 +1020,28 @@ const FAST_RATE_OUTLIER: f64 = 100.0;
 /// and the implicit method takes only η̂ implicitly. Names the rate's source and, where it is a hundred times the next, says to bring
 /// it to the loop's time scale (β = 1e-7 on the paper's example: 1/β = 1e7/s against 9/s, 2 s took
 /// 3.7 s and 646 MB before the history's cap ended it, with nothing said of β; β = 1e-6 over 5 s
-/// filled the 1 GiB cap at t = 2.9 s). `None` otherwise.
+/// filled the 1 GiB cap at t = 2.9 s). Beside it, the delays' cautions: a shortest delay that caps
+/// the steps, and a delay at least the horizon. `None` otherwise.
 pub fn fast_rate_warning(run: &Run<'_>) -> Option<String> {
     let rate = FastRate::of(run).filter(|f| f.steps > FAST_RATE_STEPS || f.history_over(run)).map(|f| f.text(run));
-    let cautions: Vec<String> = rate.into_iter().chain(short_delay_warning(run)).collect();
+    let cautions: Vec<String> =
+        rate.into_iter().chain(short_delay_warning(run)).chain(delay_beyond_horizon(run)).collect();
     (!cautions.is_empty()).then(|| cautions.join("; "))
+}
+
+/// A design delay τ_i at least the horizon t_end: channel i's command never reaches the plant in
+/// the run, which then "completes" with no adaptation at all (a delay of 1e300 s had run silently;
+/// helper tryout, 2026-12-07), as a delay typed in the wrong unit does.
+fn delay_beyond_horizon(run: &Run<'_>) -> Option<String> {
+    let (plant, t_end) = (run.design.plant(), run.settings.t_end);
+    let (i, tau) = plant.delays.iter().copied().enumerate().find(|&(_, tau)| tau >= t_end)?;
+    Some(format!(
+        "plant.delays[{i}] = {} {unit} is at least t_end = {} {unit}: channel {}'s adaptive command never reaches the plant in this run; check the delay's unit (plant.time_unit = \"{unit}\") or lengthen simulation.t_end",
+        settings::fmt_short(tau),
+        settings::fmt_short(t_end),
+        i + 1,
+        unit = plant.time_unit
+    ))
 }
 
 /// A shortest delay τ_min that caps the steps at τ_min so that t_end takes more than

@@ -306,18 +306,20 @@ fn dividing_output_step(e: ControllerError, design: &Design, h: f64) -> Controll
     }
 }
 
-/// Where the truth adds delays (its own, or the actuator's), every delay of the run whole numbers
-/// of samples of T, or an error on simulation.sample_time with the nearest sample time that makes
-/// them all whole: the model's delays alone were checked first, and the sample time offered for
-/// them (0.016666666667 min for a CSTR) was then refused by the truth's, with no offer.
+/// Where the truth adds delays of the commands, every delay of the run whole numbers of samples of
+/// T, or an error on simulation.sample_time with the nearest sample time that makes them all whole:
+/// the model's delays alone were checked first, and the sample time offered for them
+/// (0.016666666667 min for a CSTR) was then refused by the truth's, with no offer. The actuator's
+/// delays need not be whole ([`ActuatorLine`]); with the others, they are offered a sample time
+/// that makes them whole too.
 fn true_delays_whole(run: &Run<'_>, T: f64) -> Result<(), KeyError> {
     let model = &run.design.plant().delays;
     let truth = run.truth.delays_beside(run.design.plant());
     let actuator: &[f64] = run.settings.actuator.as_ref().map_or(&[], |a| &a.delays);
-    let all: Vec<f64> = model.iter().chain(truth).chain(actuator).copied().collect();
-    if (truth.is_empty() && actuator.iter().all(|&d| d == 0.0)) || all.iter().all(|&tau| discrete::whole(tau, T)) {
+    if truth.is_empty() || model.iter().chain(truth).all(|&tau| discrete::whole(tau, T)) {
         return Ok(());
     }
+    let all: Vec<f64> = model.iter().chain(truth).chain(actuator).copied().collect();
     let unit = run.design.plant().time_unit;
     let list = settings::fmt_short_list;
     let mut sets = vec![format!("plant.delays [{}]", list(model))];
@@ -431,42 +433,81 @@ impl PastSamples {
     }
 }
 
-/// The actuator in whole samples: u_p,i(k) = sat_i(u_f,i(k − d_a,i)), u_f = 0 before k = 0.
+/// The actuator's delay line: τ_a,i = (d_i + f_i)·T with d_i whole and 0 ≤ f_i < 1, so that over
+/// [kT, (k+1)T) the plant receives u_p,i = sat_i(u_f,i(k − d_i − 1)) until kT + f_i·T (`early`, the
+/// value at the sample) and sat_i(u_f,i(k − d_i)) after it (`late`); u_f = 0 before k = 0. A whole
+/// delay has f_i = 0 and early = late.
 struct ActuatorLine {
     d: Vec<usize>,
+    fraction: Vec<f64>,
     actuator: Actuator,
     /// u_f's past.
     past: PastSamples,
-    u_p: Vec<f64>,
+    late: Vec<f64>,
+    early: Vec<f64>,
+    /// Whether the limit clipped the value at the sample (`early`).
     limited: Vec<bool>,
-    /// u_f(k − d_a,i) before the limit.
+    /// u_f(k − d_i) before the limit.
     demand: Vec<f64>,
 }
 
 impl ActuatorLine {
     fn new(actuator: &Actuator, T: (f64, TimeUnit)) -> Result<Self, KeyError> {
-        let d = delay_samples("truth.actuator_delays", &actuator.delays, T)?;
+        let (d, fraction) = split_delays("truth.actuator_delays", &actuator.delays, T)?;
         let m = d.len();
-        let past = PastSamples::new(m, &[&d]);
+        let before: Vec<usize> = d.iter().map(|d| d + 1).collect();
+        let past = PastSamples::new(m, &[&d, &before]);
         Ok(ActuatorLine {
             d,
+            fraction,
             actuator: actuator.clone(),
             past,
-            u_p: vec![0.0; m],
+            late: vec![0.0; m],
+            early: vec![0.0; m],
             limited: vec![false; m],
             demand: vec![0.0; m],
         })
     }
 
-    /// Records u_f(k) and returns u_p(k).
-    fn apply(&mut self, k: usize, u_f: &[f64]) -> &[f64] {
-        self.past.push(k, u_f);
-        for (i, &d) in self.d.iter().enumerate() {
-            self.demand[i] = self.past.at(k, d, i);
-            (self.u_p[i], self.limited[i]) = self.actuator.clip(i, self.demand[i]);
-        }
-        &self.u_p
+    /// Some input's delay is not whole: the plant input switches within a sample.
+    fn fractional(&self) -> bool {
+        self.fraction.iter().any(|&f| f > 0.0)
     }
+
+    /// Records u_f(k) and sets the early and late plant inputs of sample k.
+    fn apply(&mut self, k: usize, u_f: &[f64]) {
+        self.past.push(k, u_f);
+        for (i, (&d, &f)) in self.d.iter().zip(&self.fraction).enumerate() {
+            self.demand[i] = self.past.at(k, d, i);
+            self.late[i] = self.actuator.clip(i, self.demand[i]).0;
+            let at_sample = if f > 0.0 { d + 1 } else { d };
+            (self.early[i], self.limited[i]) = self.actuator.clip(i, self.past.at(k, at_sample, i));
+        }
+    }
+}
+
+/// Each delay as a whole number of samples of T and a fraction of one in [0, 1) (within rounding
+/// of a whole number, none), or an error on `key[i]` for one beyond [`MAX_DELAY_SAMPLES`] samples.
+fn split_delays(key: &str, delays: &[f64], (T, unit): (f64, TimeUnit)) -> Result<(Vec<usize>, Vec<f64>), KeyError> {
+    (delays.iter().enumerate())
+        .map(|(i, &tau)| {
+            if discrete::whole(tau, T) {
+                if let Some(d) = discrete::whole_multiple(tau, T) {
+                    return Ok((d, 0.0));
+                }
+            }
+            let samples = tau / T;
+            if !(samples.is_finite() && samples <= MAX_DELAY_SAMPLES) {
+                return Err(KeyError::new(
+                    format!("{key}[{i}]"),
+                    format!("τ = {tau} {unit} is {samples:e} samples of T_s = {T} {unit}; a sampled-data run's delay line holds at most {MAX_DELAY_SAMPLES:e}"),
+                ));
+            }
+            let d = samples.floor();
+            Ok((d as usize, samples - d))
+        })
+        .collect::<Result<Vec<_>, _>>()
+        .map(|v| v.into_iter().unzip())
 }
 
 /// Each delay as a whole number of samples of T, or an error on `key[i]`.
@@ -526,13 +567,42 @@ impl TrueInput {
 /// [x; w]_{k+1} = Φ [x; w]_k + Γ u_f(k), y_k = C_y [x; w]_k, from [x; w]_0 = s0.
 struct ExactPlant {
     Phi: DMatrix<f64>,
-    Gamma: DMatrix<f64>,
+    Gamma: Split,
     Cy: DMatrix<f64>,
     s0: DVector<f64>,
 }
 
+/// The input matrices of one sample: the late input's Γ_late (held from kT + f_i·T) and, where
+/// some input's delay has a fraction f_i > 0 of a sample, the early input's Γ_early (held over
+/// [kT, kT + f_i·T)): column i of Γ_late = Γ((1 − f_i)T), of Γ_early = Φ((1 − f_i)T) Γ(f_i T),
+/// with Γ(t) = ∫₀ᵗ e^{Ms} ds B (Åström & Wittenmark, Computer-Controlled Systems, §2.3, a delay
+/// that is not a whole number of samples). f_i = 0 gives Γ(T) and a zero column.
+struct Split {
+    late: DMatrix<f64>,
+    early: Option<DMatrix<f64>>,
+}
+
+impl Split {
+    fn of(M: &DMatrix<f64>, Bu: &DMatrix<f64>, (whole, T): (DMatrix<f64>, f64), fractions: &[f64]) -> Split {
+        if fractions.iter().all(|&f| f == 0.0) {
+            return Split { late: whole, early: None };
+        }
+        let (mut late, mut early) = (whole, DMatrix::zeros(Bu.nrows(), Bu.ncols()));
+        for (i, &f) in fractions.iter().enumerate().filter(|(_, &f)| f > 0.0) {
+            let column = Bu.columns(i, 1).into_owned();
+            let (after, held_late) = zoh_unchecked(M, &column, (1.0 - f) * T);
+            let (_, held_early) = zoh_unchecked(M, &column, f * T);
+            late.set_column(i, &held_late.column(0));
+            early.set_column(i, &(after * held_early).column(0));
+        }
+        Split { late, early: Some(early) }
+    }
+}
+
 impl ExactPlant {
-    fn new(p: &Plant, disturbance: &Signal, T: f64) -> Self {
+    /// The true plant `p` and the disturbance's exosystem sampled exactly at `T`, each input i
+    /// delayed by a `fractions[i]` of a sample beyond whole ones (none: empty).
+    fn new(p: &Plant, disturbance: &Signal, T: f64, fractions: &[f64]) -> Self {
         let (n, m) = (p.n(), p.m());
         let (S, H, w0) = disturbance.exosystem();
         let nw = S.nrows();
@@ -544,6 +614,7 @@ impl ExactPlant {
         let mut Bu = DMatrix::zeros(n + nw, m);
         Bu.view_mut((0, 0), (n, m)).copy_from(&p.B);
         let (Phi, Gamma) = zoh_unchecked(&M, &Bu, T);
+        let Gamma = Split::of(&M, &Bu, (Gamma, T), fractions);
         // y = [C, Q H] [x; w].
         let mut Cy = DMatrix::zeros(m, n + nw);
         Cy.view_mut((0, 0), (m, n)).copy_from(&p.C);
@@ -562,7 +633,7 @@ struct PlantSide {
     /// The plant's order: [x; w] holds x first.
     n: usize,
     Phi: DMatrix<f64>,
-    Gamma: DMatrix<f64>,
+    Gamma: Split,
     Cy: DMatrix<f64>,
     /// [x; w] at this sample, and at the next.
     s: DVector<f64>,
@@ -585,7 +656,8 @@ impl PlantSide {
             Some(a) => Some(ActuatorLine::new(a, (T, run.design.plant().time_unit))?),
             None => None,
         };
-        let ExactPlant { Phi, Gamma, Cy, s0 } = ExactPlant::new(truth, run.disturbance, T);
+        let fractions = actuator.as_ref().filter(|a| a.fractional()).map_or(&[][..], |a| &a.fraction[..]);
+        let ExactPlant { Phi, Gamma, Cy, s0 } = ExactPlant::new(truth, run.disturbance, T, fractions);
         let m = truth.m();
         let noise = settings.noise.as_ref().map(|nz| Noise::new(nz, m));
         let (y, y_meas, g, u_f) = (vec![0.0; m], vec![0.0; m], vec![0.0; m], vec![0.0; m]);
@@ -631,8 +703,8 @@ impl PlantSide {
             self.u_f.copy_from_slice(sh.apply(k, u));
         }
         if let Some(a) = self.actuator.as_mut() {
-            let applied = a.apply(k, &self.u_f);
-            self.u_f.copy_from_slice(applied);
+            a.apply(k, &self.u_f);
+            self.u_f.copy_from_slice(&a.late);
         }
     }
 
@@ -651,7 +723,9 @@ impl PlantSide {
         }
         let watched = Watched { x: &self.s.as_slice()[..self.n], ..ctrl.watched() };
         let states = x_hat.map(|x_hat| (watched.x, x_hat));
-        result.push(&Sample { t, y: &self.y, g: &self.g, u: ctrl.command(), u_f: &self.u_f, eta: watched.eta, states });
+        // The plant input at the sample: the early one where an actuator delay is fractional.
+        let u_f = self.actuator.as_ref().map_or(&self.u_f[..], |a| &a.early[..]);
+        result.push(&Sample { t, y: &self.y, g: &self.g, u: ctrl.command(), u_f, eta: watched.eta, states });
         if let Some(a) = &self.actuator {
             result.count_limited(a.limited.iter().copied());
         }
@@ -676,10 +750,13 @@ impl PlantSide {
         diverged
     }
 
-    /// s ← Φ s + Γ u_f: the next sample's state.
+    /// s ← Φ s + Γ_late u_f (+ Γ_early u_early, [`Split`]): the next sample's state.
     fn advance(&mut self) {
         mat_vec(&self.Phi, self.s.as_slice(), self.s_next.as_mut_slice(), false);
-        mat_vec(&self.Gamma, &self.u_f, self.s_next.as_mut_slice(), true);
+        mat_vec(&self.Gamma.late, &self.u_f, self.s_next.as_mut_slice(), true);
+        if let (Some(early), Some(a)) = (&self.Gamma.early, &self.actuator) {
+            mat_vec(early, &a.early, self.s_next.as_mut_slice(), true);
+        }
         std::mem::swap(&mut self.s, &mut self.s_next);
     }
 }

@@ -859,16 +859,17 @@ fn base_run_error(doc: &toml::Table, scenario: &Scenario, source: &str) -> Optio
     Some((e, error))
 }
 
-/// A sampled-data study draws no delay: a delay drawn from a continuous law is a whole number of
-/// samples with probability zero, so every draw would fail its run's check (15 failed rows and exit
-/// 0, where a grid value that is not whole samples is refused before any run).
+/// A sampled-data study draws no delay of the commands: a delay drawn from a continuous law is a
+/// whole number of samples with probability zero, so every draw would fail its run's check (15
+/// failed rows and exit 0, where a grid value that is not whole samples is refused before any run).
+/// The actuator's delays may be drawn: a sampled run takes them in fractions of a sample.
 /// `own`: whether the study's `[simulation]` sets the sample time (it cannot unset the scenario's).
 fn check_drawn_delays(
     mc: &MonteCarlo,
     (sample_time, own): (f64, bool),
     unit: crate::settings::TimeUnit,
 ) -> Result<(), StudyError> {
-    let delays = ["plant.delays", "truth.delays", "truth.actuator_delays"];
+    let delays = ["plant.delays", "truth.delays"];
     let Some(p) =
         mc.perturbations.iter().find(|p| delays.iter().any(|d| p.key == *d || p.key.starts_with(&format!("{d}["))))
     else {

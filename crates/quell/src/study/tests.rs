@@ -590,6 +590,9 @@ fn a_sampled_study_draws_no_delay() {
     assert!(e.contains("(a study of a copy of the scenario without its simulation.sample_time, which a study's [simulation] cannot remove)"), "{e}");
     let continuous = "[simulation]\nt_end = 5.0\n[monte_carlo]\nruns = 3\n\"truth.delays\" = { uniform = 0.2 }\n";
     assert!(Study::from_toml(continuous, None).is_ok());
+    // The actuator's delays may be drawn: a sampled run takes fractions of a sample there.
+    let actuator = "[simulation]\nt_end = 5.0\nsample_time = 0.01\n[monte_carlo]\nruns = 3\n\"truth.actuator_delays[0]\" = { uniform = 0.2 }\n";
+    assert!(Study::from_toml(actuator, None).is_ok());
 }
 
 /// A study's t_end that its scenario's own output_step does not fit is named as the study's
