@@ -895,16 +895,23 @@ fn design_auto_writes_a_complete_scenario_that_meets_the_tail_bound() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let v = &serde_json::from_str::<serde_json::Value>(&stdout(&o)).unwrap()["verification"];
     assert!(v["max_uf"].as_array().unwrap().iter().all(|u| u.as_f64().unwrap() <= 1e3), "{v}");
-    // A limit far below the steady state's input is an infeasible target before any run: exit 2,
-    // the limit as written (it printed as 300 digits), nothing written.
+    // A limit far below the steady state's input, every tone beyond 10× its tail bound, is an
+    // infeasible target after the first run: exit 2, the limit as written (it printed as 300
+    // digits), nothing written.
     let out = dir.path().join("limited.toml");
     let o =
         quell(&["design", input.to_str().unwrap(), "--auto", "--u-limit", "1e-300", "--write", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(stderr(&o).contains("the steady state alone asks more than the actuator limit, whatever the design (u_f[1]: 11.63 against 1e-300, "), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(
+            "--u-limit: the steady state alone asks more than the actuator limit (u_f[1]: 11.63 against 1e-300, "
+        ),
+        "{}",
+        stderr(&o)
+    );
     assert!(!out.exists());
     // One just below u_f,2's steady 21.68, which no candidate meets while the tails do: exit 2
-    // after the runs, with their figures in four digits.
+    // after the runs, with their figures in four digits and a limit that admits the peak.
     let o = quell(&["design", input.to_str().unwrap(), "--auto", "--u-limit", "20", "--write", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("no candidate keeps max|u_f,i| within the actuator limit 20"), "{}", stderr(&o));

@@ -947,7 +947,12 @@ fn auto_document<'py>(
             }
         }
         if let Some((k, v)) = scenario.and_then(|d| d.iter().next()) {
-            return Err(type_error(&k.to_string(), with_text, &v));
+            // A misspelt keyword is named as one, not as a keyword that TOML text leaves out.
+            let name = k.extract::<String>()?;
+            if !SCENARIO_KEYWORDS.contains(&name.as_str()) && !quell::scenario::DESIGN_KEYS.contains(&name.as_str()) {
+                return Err(unknown_keyword(py, name, ("quell.auto_design", &AUTO_ARGUMENTS)));
+            }
+            return Err(type_error(&name, with_text, &v));
         }
         let text = crate::convert::toml_text(text, "text", "open(path).read() (auto_design takes the text)")?;
         return quell::scenario::parse_document(&text).map_err(|e| scenario_error(py, &e));

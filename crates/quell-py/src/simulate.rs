@@ -620,6 +620,20 @@ fn precision_argument(py: Python<'_>, value: &Bound<'_, PyAny>, sampled: bool) -
     Ok(precision)
 }
 
+/// The cautions before a run, as Python warnings: DOP853 forced on a stiff law (`set_by` says
+/// where), a rate or a delay that makes it costly, a delay beyond its horizon.
+fn warn_before_run(py: Python<'_>, run: &quell::sim::Run<'_>, set_by: &str) -> PyResult<()> {
+    let cautions = [
+        quell::sim::explicit_stiff_warning(run, set_by),
+        quell::sim::fast_rate_warning(run),
+        quell::sim::delay_beyond_horizon(run),
+    ];
+    for w in cautions.into_iter().flatten() {
+        crate::errors::warn(py, &crate::errors::in_python(w))?;
+    }
+    Ok(())
+}
+
 /// Simulates a scenario's closed loop: the continuous-time controller on the delay equation, or,
 /// with a sample time, the sampled-data loop with the real-time controller; the plant simulated is
 /// the scenario's truth where it has one. The GIL is released; Ctrl-C stops the run.
@@ -731,11 +745,7 @@ pub fn simulate(
     };
     let set_by = if method.is_some() { "method=\"explicit\"" } else { quell::sim::EXPLICIT_IN_FILE };
     let run = quell::sim::Run::of(scn, &design).settings(settings.clone());
-    for w in
-        [quell::sim::explicit_stiff_warning(&run, set_by), quell::sim::fast_rate_warning(&run)].into_iter().flatten()
-    {
-        crate::errors::warn(py, &crate::errors::in_python(w))?;
-    }
+    warn_before_run(py, &run, set_by)?;
     let given = set_here([t_end, output_step, rtol, atol, sample_time, method, precision]);
     let (result, interrupt) = run_released(py, scn, &design, settings, (s.from_values, &given))?;
     // After the run's own checks (a sample time they refuse gets no warning).

@@ -358,3 +358,6 @@ def test_a_misspelt_auto_design_keyword_is_matched_against_its_own_arguments():
     for typo, meant in (("convergence_tim", "convergence_time"), ("u_limt", "u_limit"), ("delay_eror", "delay_error")):
         with pytest.raises(quell.ScenarioError, match=rf"^{typo}: unknown keyword \(did you mean `{meant}`\?\); quell.auto_design takes text, reference, disturbance, convergence_time, u_limit, delay_error, the keywords"):
             quell.auto_design(p.plant, p.reference, p.disturbance, t_end=60.0, **{typo: 3.0})
+        # With TOML text too (it had read as a keyword the text leaves out).
+        with pytest.raises(quell.ScenarioError, match=rf"^{typo}: unknown keyword \(did you mean `{meant}`\?\)"):
+            quell.auto_design(p.to_toml(), **{typo: 3.0})

@@ -213,7 +213,7 @@ impl Signal {
                 if h.frequency == 0.0 && h.amplitude != 0.0 && (h.phase.sin()).abs() <= 1e-12 {
                     return Err(KeyError::new(
                         format!("{key}.components[{i}].harmonics[{j}].frequency"),
-                        format!("expected a frequency > 0 (rad per unit of the plant's time), found 0, which makes this harmonic the constant amplitude·sin(phase) = 0 (phase {}): give its frequency, or a constant as the component's bias", crate::settings::fmt_short(h.phase)),
+                        format!("found 0 with phase {}, which makes this harmonic the constant amplitude·sin(phase) = 0: give its frequency (> 0, rad per unit of the plant's time), or a constant as the component's bias", crate::settings::fmt_short(h.phase)),
                     ));
                 }
             }

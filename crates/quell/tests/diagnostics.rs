@@ -1022,17 +1022,18 @@ fn a_sampled_run_is_compared_with_its_continuous_loop() {
     // Its u_f (1.5e-13 in the continuous loop) likewise, flagged as floored.
     assert!(channels[1].floored && !channels[0].floored, "{channels:?}");
     assert!((channels[1].uf.1 / (1e-3 * channels[0].uf.1) - 1.0).abs() < 1e-12, "{channels:?}");
-    // A continuous loop past its own budget is not compared, and the run says so: β = 1e-7 (1/β =
-    // 1e7/s beside 9/s) crowds its steps into the last delay until the history's 1 GiB cap, while
-    // the sampled loop's H filter, held exactly over a sample, completes.
+    // A continuous loop past the comparison's steps is not compared, and the run says so: β = 1e-4
+    // (1/β = 1e4/s beside 9/s) holds DOP853's steps near 6e-4 s, past 10 per controller step
+    // (200,010) over 200 s, while the sampled loop's H filter, held exactly over a sample,
+    // completes its 20,001 steps.
     let fast = Scenario::from_toml(
-        &PAPER_EXAMPLE.replace("beta = 1.0 ", "beta = 1e-7 ").replace("t_end = 100.0", "t_end = 2.0"),
+        &PAPER_EXAMPLE.replace("beta = 1.0 ", "beta = 1e-4 ").replace("t_end = 100.0", "t_end = 200.0"),
     )
     .unwrap();
-    let (advice, sampled) = run(&fast, &fast.design().unwrap(), Some(1e-3));
+    let (advice, sampled) = run(&fast, &fast.design().unwrap(), Some(0.01));
     assert_eq!(sampled.outcome, Some(quell::sim::Outcome::Completed));
     assert!(
-        advice.iter().any(|a| a.starts_with("this sampled-data run was not compared with its continuous loop (the same scenario without its sample time), which would have held more than its history budget of 1024 MB by t = ")),
+        advice.iter().any(|a| a.starts_with("this sampled-data run was not compared with its continuous loop (the same scenario without its sample time), which needed more than its step budget of 200010 by t = ")),
         "{advice:?}"
     );
 }

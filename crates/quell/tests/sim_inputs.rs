@@ -666,7 +666,7 @@ fn a_delay_beyond_the_horizon_is_cautioned_before_the_run() {
         let s = Scenario::from_toml(&PAPER_EXAMPLE.replace("delays = [1.0, 3.0]", &format!("delays = [1.0, {tau:e}]")))
             .unwrap();
         let d = s.design().unwrap();
-        let caution = quell::sim::fast_rate_warning(&Run::of(&s, &d)).unwrap_or_default();
+        let caution = quell::sim::delay_beyond_horizon(&Run::of(&s, &d)).unwrap_or_default();
         let expected = format!("plant.delays[1] = {shown} s is at least t_end = 100 s: channel 2's adaptive command never reaches the plant in this run");
         assert_eq!(caution.contains(&expected), said, "{tau}: {caution}");
     }

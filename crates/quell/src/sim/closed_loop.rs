@@ -1020,23 +1020,25 @@ const FAST_RATE_OUTLIER: f64 = 100.0;
 /// and the implicit method takes only η̂ implicitly. Names the rate's source and, where it is a hundred times the next, says to bring
 /// it to the loop's time scale (β = 1e-7 on the paper's example: 1/β = 1e7/s against 9/s, 2 s took
 /// 3.7 s and 646 MB before the history's cap ended it, with nothing said of β; β = 1e-6 over 5 s
-/// filled the 1 GiB cap at t = 2.9 s). Beside it, the delays' cautions: a shortest delay that caps
-/// the steps, and a delay at least the horizon. `None` otherwise.
+/// filled the 1 GiB cap at t = 2.9 s). Beside it, a shortest delay that caps the steps. `None`
+/// otherwise.
 pub fn fast_rate_warning(run: &Run<'_>) -> Option<String> {
     let rate = FastRate::of(run).filter(|f| f.steps > FAST_RATE_STEPS || f.history_over(run)).map(|f| f.text(run));
-    let cautions: Vec<String> =
-        rate.into_iter().chain(short_delay_warning(run)).chain(delay_beyond_horizon(run)).collect();
+    let cautions: Vec<String> = rate.into_iter().chain(short_delay_warning(run)).collect();
     (!cautions.is_empty()).then(|| cautions.join("; "))
 }
 
-/// A design delay τ_i at least the horizon t_end: channel i's command never reaches the plant in
-/// the run, which then "completes" with no adaptation at all (a delay of 1e300 s had run silently;
-/// helper tryout, 2026-12-07), as a delay typed in the wrong unit does.
-fn delay_beyond_horizon(run: &Run<'_>) -> Option<String> {
+/// A caution before a run whose delay τ_i (the truth's where it has its own) is at least the horizon
+/// t_end: channel i's command never reaches the plant in the run, which then "completes" with no
+/// adaptation at all (a delay of 1e300 s had run silently; helper tryout, 2026-12-07), as a delay
+/// typed in the wrong unit does. Not a study's: a short horizon is a cheap sweep's choice.
+pub fn delay_beyond_horizon(run: &Run<'_>) -> Option<String> {
     let (plant, t_end) = (run.design.plant(), run.settings.t_end);
-    let (i, tau) = plant.delays.iter().copied().enumerate().find(|&(_, tau)| tau >= t_end)?;
+    // The delays the run simulates: the truth's where it has its own.
+    let key = if run.truth.delays != plant.delays { "truth.delays" } else { "plant.delays" };
+    let (i, tau) = run.truth.delays.iter().copied().enumerate().find(|&(_, tau)| tau >= t_end)?;
     Some(format!(
-        "plant.delays[{i}] = {} {unit} is at least t_end = {} {unit}: channel {}'s adaptive command never reaches the plant in this run; check the delay's unit (plant.time_unit = \"{unit}\") or lengthen simulation.t_end",
+        "{key}[{i}] = {} {unit} is at least t_end = {} {unit}: channel {}'s adaptive command never reaches the plant in this run; check the delay's unit (plant.time_unit = \"{unit}\") or lengthen simulation.t_end",
         settings::fmt_short(tau),
         settings::fmt_short(t_end),
         i + 1,

@@ -25,10 +25,11 @@ use crate::signal::{check_signals, Signal};
 
 pub use crate::settings::MeasurementNoise;
 pub use closed_loop::{
-    adaptation_rate, budget_culprit, default_max_history_bytes, default_max_steps, explicit_on_stiff_law,
-    explicit_stiff_warning, fast_rate_culprit, fast_rate_warning, loop_rate, loop_rates, step_rate, BUDGET_MIN_STEPS,
-    BUDGET_STABILITY_MARGIN, BUDGET_STEPS_PER_RATE, BUDGET_TOLERANCE, DOP853_STABLE_H_RATE, EXPECT_STIFF_RATIO,
-    EXPLICIT_ADAPTATION_H_RATE, EXPLICIT_IN_FILE, FAST_RATE_STEPS, HISTORY_MARGIN, MAX_HISTORY_BYTES, STIFF_RATIO,
+    adaptation_rate, budget_culprit, default_max_history_bytes, default_max_steps, delay_beyond_horizon,
+    explicit_on_stiff_law, explicit_stiff_warning, fast_rate_culprit, fast_rate_warning, loop_rate, loop_rates,
+    step_rate, BUDGET_MIN_STEPS, BUDGET_STABILITY_MARGIN, BUDGET_STEPS_PER_RATE, BUDGET_TOLERANCE,
+    DOP853_STABLE_H_RATE, EXPECT_STIFF_RATIO, EXPLICIT_ADAPTATION_H_RATE, EXPLICIT_IN_FILE, FAST_RATE_STEPS,
+    HISTORY_MARGIN, MAX_HISTORY_BYTES, STIFF_RATIO,
 };
 pub use dde::{Method, Stats};
 pub(crate) use divergence::smallest_gain;
