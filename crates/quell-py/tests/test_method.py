@@ -106,18 +106,19 @@ def test_a_sweep_over_a_rate_far_faster_than_the_loop_is_cautioned_before_its_ru
 
 
 def test_dop853_forced_on_a_stiff_law_is_cautioned_naming_where_it_was_set():
-    # μ × 5 puts channel 2 at 4.7ρ: DOP853's steps may sit at its stability bound there.
+    # μ × 5 puts channel 2 at 4.7ρ: DOP853's steps may sit at its stability bound there. Over 3.5 s,
+    # beyond the delays (a horizon within one is cautioned of itself).
     p = quell.paper_example()
     choices = dict(p.design().choices, mu=[100.0, 150.0])
-    stiff = quell.Scenario(p.plant, p.reference, p.disturbance, t_end=0.5, **choices)
+    stiff = quell.Scenario(p.plant, p.reference, p.disturbance, t_end=3.5, **choices)
     with pytest.warns(UserWarning, match=r'^method="explicit" on a stiff adaptive law: μλ_max = '):
         quell.simulate(stiff, method="explicit")
-    in_file = quell.Scenario(p.plant, p.reference, p.disturbance, t_end=0.5, method="explicit", **choices)
+    in_file = quell.Scenario(p.plant, p.reference, p.disturbance, t_end=3.5, method="explicit", **choices)
     with pytest.warns(UserWarning, match=r'^simulation.method = "explicit" on a stiff adaptive law'):
         quell.simulate(in_file)
     # A study: how many runs were stiff, and the first one's run and grid values.
     study = quell.Study(p, grid={"design.mu": [[20.0, 30.0], [100.0, 150.0]]},
-                        simulation={"t_end": 0.5, "method": "explicit"})
+                        simulation={"t_end": 3.5, "method": "explicit"})
     with pytest.warns(UserWarning, match=r'^1 of the 2 runs carried out ran on DOP853 at a stiff adaptive law, .*; '
                                          r'the first, run 1, design.mu = \[100.0, 150.0\]: simulation.method = '
                                          r'"explicit" on a stiff'):
@@ -130,5 +131,5 @@ def test_dop853_forced_on_a_stiff_law_is_cautioned_naming_where_it_was_set():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         quell.simulate(stiff)
-        quell.sweep(quell.Study(p, simulation={"t_end": 0.5, "method": "explicit"}), jobs=1)
+        quell.sweep(quell.Study(p, simulation={"t_end": 3.5, "method": "explicit"}), jobs=1)
         study.spec(0).simulate()
