@@ -33,9 +33,10 @@ pub struct DesignArgs {
     /// input, or one per input separated by commas (inputs in different units).
     #[arg(long, value_name = "U[,U…]", value_delimiter = ',', allow_hyphen_values = true, value_parser = crate::parse_real)]
     pub u_limit: Vec<f64>,
-    /// With --auto: a target, the relative error of the input delays the design must hold at
+    /// With --auto: a target, the relative error of the input delays the design aims to hold at
     /// (its channel poles, where chosen, slowed until the delays this much longer and shorter
-    /// meet the tail bound); without it 0.1 is checked and reported only; 0 for no check.
+    /// meet the tail bound; where none does, the design is kept and the report says so); without
+    /// it 0.1 is checked and reported only; 0 for no check.
     #[arg(long, value_name = "FRACTION", allow_hyphen_values = true, value_parser = crate::parse_real)]
     pub delay_error: Option<f64>,
 }

@@ -99,7 +99,6 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     for w in [
         quell::sim::explicit_stiff_warning(&run, set_by),
         quell::sim::fast_rate_warning(&run),
-        quell::sim::delay_beyond_horizon(&run),
         csv_size_warning(&design, &settings),
     ]
     .into_iter()

@@ -670,4 +670,9 @@ fn a_delay_beyond_the_horizon_is_cautioned_before_the_run() {
         let expected = format!("plant.delays[1] = {shown} s is at least t_end = 100 s: channel 2's adaptive command never reaches the plant in this run");
         assert_eq!(caution.contains(&expected), said, "{tau}: {caution}");
     }
+    // The actuator's delay holds back the whole input.
+    let s = Scenario::from_toml(&format!("{PAPER_EXAMPLE}\n[truth]\nactuator_delays = [200.0, 0.0]\n")).unwrap();
+    let d = s.design().unwrap();
+    let caution = quell::sim::delay_beyond_horizon(&Run::of(&s, &d)).unwrap_or_default();
+    assert!(caution.starts_with("truth.actuator_delays[0] = 200 s is at least t_end = 100 s: channel 1's whole input u_f never reaches the plant"), "{caution}");
 }

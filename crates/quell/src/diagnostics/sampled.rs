@@ -556,7 +556,8 @@ fn noise_drove(result: &SimResult, quiet: Option<&super::noise::Quiet>) -> Vec<S
 }
 
 /// The continuous loop of scenario `s` for the sampled run `result`, within the run's own step
-/// budget: a Furuta pendulum's (342,727 steps, 1.4 s) had been cut at a fixed 200,000 and not
+/// budget and [`COMPARISON_PER_SAMPLE`] steps per controller step, up to where a diverged run
+/// ended: a Furuta pendulum's (342,727 steps, 1.4 s) had been cut at a fixed 200,000 and not
 /// compared, while its sampled loop and compiled f32 C asked 25.6 V against 4.1 V (helper tryout,
 /// 2026-12-07). Where it cannot be run, [`sampled_lines`]'s answer: what stopped it, or the
 /// heuristic.
@@ -570,11 +571,14 @@ fn continuous_within_budget(
     // per controller step of it (past the budget of the run, not of its comparison: a 3,000 s
     // wind turbine at 10 ms had cost 35 s more).
     let RunStats::Sampled { controller_steps, .. } = result.stats else { return Err((Vec::new(), Compared::Not)) };
-    let ended = !matches!(result.outcome, None | Some(Outcome::Completed));
-    let t_end = ended.then(|| result.t.last().copied()).flatten().map(|t| {
-        let h = s.simulation.output_step;
-        ((t / h).ceil() * h).max(h)
-    });
+    // To the row at or after the divergence (its last row comes before it).
+    let t_end = match result.outcome {
+        Some(Outcome::Diverged { t, .. }) => {
+            let h = s.simulation.output_step;
+            Some(((t / h).ceil() * h).max(h).min(s.simulation.t_end))
+        }
+        _ => None,
+    };
     let max_steps = Some(COMPARISON_STEPS.max(COMPARISON_PER_SAMPLE * controller_steps));
     match continuous_loop(s, design, Some(Reach { progress: &mut go_on, max_steps, t_end })) {
         Ok(c) => Ok(c),

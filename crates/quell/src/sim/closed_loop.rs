@@ -1028,21 +1028,26 @@ pub fn fast_rate_warning(run: &Run<'_>) -> Option<String> {
     (!cautions.is_empty()).then(|| cautions.join("; "))
 }
 
-/// A caution before a run whose delay τ_i (the truth's where it has its own) is at least the horizon
-/// t_end: channel i's command never reaches the plant in the run, which then "completes" with no
-/// adaptation at all (a delay of 1e300 s had run silently; helper tryout, 2026-12-07), as a delay
-/// typed in the wrong unit does. Not a study's: a short horizon is a cheap sweep's choice.
+/// A caution before a run whose delay τ_i (the truth's where it has its own, or the actuator's) is
+/// at least the horizon t_end: channel i's command, or input i altogether, never reaches the plant
+/// in the run, which then "completes" with no adaptation at all (a delay of 1e300 s had run
+/// silently; helper tryout, 2026-12-07), as a delay typed in the wrong unit does. For a front end
+/// that shows no run's advice before it ends (Python); not a study's: a short horizon is a cheap
+/// sweep's choice.
 pub fn delay_beyond_horizon(run: &Run<'_>) -> Option<String> {
     let (plant, t_end) = (run.design.plant(), run.settings.t_end);
+    let unit = plant.time_unit;
     // The delays the run simulates: the truth's where it has its own.
     let key = if run.truth.delays != plant.delays { "truth.delays" } else { "plant.delays" };
-    let (i, tau) = run.truth.delays.iter().copied().enumerate().find(|&(_, tau)| tau >= t_end)?;
+    let actuator: &[f64] = run.settings.actuator.as_ref().map_or(&[], |a| &a.delays);
+    let commands = run.truth.delays.iter().enumerate().map(|(i, &tau)| (key, "'s adaptive command", i, tau));
+    let inputs = actuator.iter().enumerate().map(|(i, &tau)| ("truth.actuator_delays", "'s whole input u_f", i, tau));
+    let (key, what, i, tau) = commands.chain(inputs).find(|&(.., tau)| tau >= t_end)?;
     Some(format!(
-        "{key}[{i}] = {} {unit} is at least t_end = {} {unit}: channel {}'s adaptive command never reaches the plant in this run; check the delay's unit (plant.time_unit = \"{unit}\") or lengthen simulation.t_end",
+        "{key}[{i}] = {} {unit} is at least t_end = {} {unit}: channel {}{what} never reaches the plant in this run; check the delay's unit (plant.time_unit = \"{unit}\") or lengthen simulation.t_end",
         settings::fmt_short(tau),
         settings::fmt_short(t_end),
         i + 1,
-        unit = plant.time_unit
     ))
 }
 

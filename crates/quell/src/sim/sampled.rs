@@ -310,24 +310,19 @@ fn dividing_output_step(e: ControllerError, design: &Design, h: f64) -> Controll
 /// T, or an error on simulation.sample_time with the nearest sample time that makes them all whole:
 /// the model's delays alone were checked first, and the sample time offered for them
 /// (0.016666666667 min for a CSTR) was then refused by the truth's, with no offer. The actuator's
-/// delays need not be whole ([`ActuatorLine`]); with the others, they are offered a sample time
-/// that makes them whole too.
+/// delays need not be whole ([`ActuatorLine`]), and neither the offer nor the message counts them.
 fn true_delays_whole(run: &Run<'_>, T: f64) -> Result<(), KeyError> {
     let model = &run.design.plant().delays;
     let truth = run.truth.delays_beside(run.design.plant());
-    let actuator: &[f64] = run.settings.actuator.as_ref().map_or(&[], |a| &a.delays);
     if truth.is_empty() || model.iter().chain(truth).all(|&tau| discrete::whole(tau, T)) {
         return Ok(());
     }
-    let all: Vec<f64> = model.iter().chain(truth).chain(actuator).copied().collect();
+    let all: Vec<f64> = model.iter().chain(truth).copied().collect();
     let unit = run.design.plant().time_unit;
     let list = settings::fmt_short_list;
     let mut sets = vec![format!("plant.delays [{}]", list(model))];
     if !truth.is_empty() {
         sets.push(format!("truth.delays [{}]", list(truth)));
-    }
-    if actuator.iter().any(|&d| d > 0.0) {
-        sets.push(format!("truth.actuator_delays [{}]", list(actuator)));
     }
     let h = run.settings.output_step;
     let offer = match discrete::valid_sample_time_near(&all, h, T, 1 + run.design.q()) {
@@ -340,7 +335,6 @@ fn true_delays_whole(run: &Run<'_>, T: f64) -> Result<(), KeyError> {
     };
     // A true delay too long for a delay line at T is said so (it had been called not whole).
     let named = truth.iter().enumerate().map(|(i, &d)| (format!("truth.delays[{i}]"), d));
-    let named = named.chain(actuator.iter().enumerate().map(|(i, &d)| (format!("truth.actuator_delays[{i}]"), d)));
     if let Some((key, tau)) = named.into_iter().find(|(_, tau)| tau / T > discrete::MAX_DELAY_SAMPLES) {
         return Err(KeyError::new(
             "simulation.sample_time",
@@ -436,7 +430,9 @@ impl PastSamples {
 /// The actuator's delay line: τ_a,i = (d_i + f_i)·T with d_i whole and 0 ≤ f_i < 1, so that over
 /// [kT, (k+1)T) the plant receives u_p,i = sat_i(u_f,i(k − d_i − 1)) until kT + f_i·T (`early`, the
 /// value at the sample) and sat_i(u_f,i(k − d_i)) after it (`late`); u_f = 0 before k = 0. A whole
-/// delay has f_i = 0 and early = late.
+/// delay has f_i = 0 and early = late. A run records the early value (the plant's input at kT)
+/// and its clipping; the peaks of u_f and of the demand count the late one (the same sequence, a
+/// sample later).
 struct ActuatorLine {
     d: Vec<usize>,
     fraction: Vec<f64>,
