@@ -984,12 +984,8 @@ fn steady_within_limit(s: &Scenario, targets: &Targets, bound: &[f64]) -> Result
     let small = |(c, b): (&crate::signal::Component, &f64)| {
         (c.bias != 0.0 && c.bias.abs() <= *b) || c.harmonics.iter().any(|h| h.amplitude.abs() <= *b)
     };
-    let passes = |t: &crate::diagnostics::InputTone| {
-        t.for_disturbance.iter().any(|&u| u > 0.0)
-            && t.disturbance_output.as_ref().is_some_and(|y| y.iter().zip(&lenient).all(|(y, b)| y <= b))
-    };
     if targets.u_limit.is_empty()
-        || steady.tones.iter().any(passes)
+        || steady.tones.iter().any(|t| t.forced_within(&lenient))
         || s.reference.components.iter().zip(&lenient).any(small)
     {
         return Ok(());
@@ -1155,10 +1151,7 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
         ));
     }
     let (kept, within) = relax(doc, targets, (first, design, first_check), &bound, verifier, &mut candidates)?;
-    let speed = kept.2.speed;
-    for c in &mut candidates {
-        c.chosen = c.speed == speed;
-    }
+    mark_chosen(&mut candidates, kept.2.speed);
     let advice = match within {
         true => Vec::new(),
         false => {
@@ -1180,6 +1173,13 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
         auto = delay_robust(doc, targets, (chosen, auto), &bound, verifier)?;
     }
     Ok(auto)
+}
+
+/// Marks the candidate at `speed` as the one returned, and no other.
+fn mark_chosen(candidates: &mut [Candidate], speed: Speed) {
+    for c in candidates {
+        c.chosen = c.speed == speed;
+    }
 }
 
 /// The passing design `auto` (of the kept candidate `chosen`) with its channel poles halved until
@@ -1237,9 +1237,7 @@ fn delay_robust(
         }
         let Some(level) = delay_level(&p.scenario, &d, (error, &[]), (targets, &c), bound, verifier)? else { break };
         if level.iter().all(|k| k.met) {
-            for k in &mut candidates {
-                k.chosen = k.speed == speed;
-            }
+            mark_chosen(&mut candidates, speed);
             let slowed = format!(
                 "; then, {asked}, the channel poles halved until the delays off by it both ways meet the tail bound and the effort: {after}, kept ×{factor} of the kept candidate's channel poles{mu} (its worst tail {:.1e} of the bound), {} (candidates and their delay runs)",
                 c.worst_tail(bound),

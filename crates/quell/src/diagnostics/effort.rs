@@ -58,9 +58,13 @@ impl InputTone {
     /// response (input held at 0) stays within `bounds` (the tail bounds, per output) at every
     /// output.
     fn passable(&self, bounds: &[f64]) -> bool {
-        self.frequency > 0.0
-            && !self.transmission_zero
-            && self.for_disturbance.iter().any(|&u| u > 0.0)
+        self.frequency > 0.0 && !self.transmission_zero && self.forced_within(bounds)
+    }
+
+    /// ω has a part at this frequency (its bias too) whose forced response (input held at 0)
+    /// stays within `bounds` at every output.
+    pub fn forced_within(&self, bounds: &[f64]) -> bool {
+        self.for_disturbance.iter().any(|&u| u > 0.0)
             && self.disturbance_output.as_ref().is_some_and(|y| y.iter().zip(bounds).all(|(y, b)| y <= b))
     }
 

@@ -475,9 +475,10 @@ impl ActuatorLine {
         self.past.push(k, u_f);
         for (i, (&d, &f)) in self.d.iter().zip(&self.fraction).enumerate() {
             self.demand[i] = self.past.at(k, d, i);
-            self.late[i] = self.actuator.clip(i, self.demand[i]).0;
-            let at_sample = if f > 0.0 { d + 1 } else { d };
-            (self.early[i], self.limited[i]) = self.actuator.clip(i, self.past.at(k, at_sample, i));
+            let late = self.actuator.clip(i, self.demand[i]);
+            self.late[i] = late.0;
+            (self.early[i], self.limited[i]) =
+                if f > 0.0 { self.actuator.clip(i, self.past.at(k, d + 1, i)) } else { late };
         }
     }
 }

@@ -1236,15 +1236,13 @@ mod tests {
         // A steady state beyond the limit is said instead of slower poles, which cannot help.
         let steady = flat.why_none(&spec, "tune.", (f64::INFINITY, 0.0706));
         assert!(steady.ends_with("raise tune.max_uf[0], or ask less of the loop (smaller references or disturbances): the steady state alone asks max |u_f,1| = 0.0706 for y = g (the design report's steady-state section), whatever μ and the poles"), "{steady}");
-        // A figure that levels off toward the smallest μ is not widened toward it either.
-        let levels = TuneCurve {
-            curve: vec![
-                completed(10.0, figures(0.07074, Some(1.0))),
-                completed(100.0, figures(0.0708, Some(1.5))),
-                completed(1e5, figures(0.12, Some(2.0))),
-            ],
+        // Channel 1's curve through these (μ, max |u_f,1|, settle_t), all completed.
+        let through = |points: &[(f64, f64, f64)]| TuneCurve {
+            curve: points.iter().map(|&(mu, uf, t)| completed(mu, figures(uf, Some(t)))).collect(),
             ..flat.clone()
         };
+        // A figure that levels off toward the smallest μ is not widened toward it either.
+        let levels = through(&[(10.0, 0.07074, 1.0), (100.0, 0.0708, 1.5), (1e5, 0.12, 2.0)]);
         let levels = levels.why_none(&spec, "tune.", (f64::INFINITY, 0.0));
         assert!(
             levels.contains("max |u_f,1| levels off at 0.07074 toward the smallest μ (at μ = 10 and 100)")
@@ -1254,38 +1252,19 @@ mod tests {
         );
         // Also where the least lies a little above the smallest μ, within 1 % of them (a mixing
         // tank's 0.11200, 0.11200, 0.11199 at μ = 0.3, 0.7, 4, rising beyond).
-        let dip = TuneCurve {
-            curve: vec![
-                completed(0.3, figures(0.11200, Some(1.0))),
-                completed(0.7, figures(0.11200, Some(1.0))),
-                completed(4.0, figures(0.11199, Some(1.0))),
-                completed(53.0, figures(0.2608, Some(1.0))),
-            ],
-            ..flat.clone()
-        };
+        let dip = through(&[(0.3, 0.11200, 1.0), (0.7, 0.11200, 1.0), (4.0, 0.11199, 1.0), (53.0, 0.2608, 1.0)]);
         let dip = dip.why_none(&spec, "tune.", (f64::INFINITY, 0.0));
         assert!(
             dip.contains("levels off at 0.112 toward the smallest μ (at μ = 0.3 and 0.7)") && !dip.contains("widen"),
             "{dip}"
         );
         // Not where the least lies at the upper end, past a rise (the review's counterexample).
-        let falling = TuneCurve {
-            curve: vec![
-                completed(1.0, figures(0.101, Some(1.0))),
-                completed(3.0, figures(0.1009, Some(1.0))),
-                completed(10.0, figures(0.5, Some(1.0))),
-                completed(30.0, figures(0.3, Some(1.0))),
-                completed(100.0, figures(0.1, Some(1.0))),
-            ],
-            ..flat.clone()
-        };
+        let falling =
+            through(&[(1.0, 0.101, 1.0), (3.0, 0.1009, 1.0), (10.0, 0.5, 1.0), (30.0, 0.3, 1.0), (100.0, 0.1, 1.0)]);
         let falling = falling.why_none(&spec, "tune.", (f64::INFINITY, 0.0));
         assert!(!falling.contains("levels off") && falling.contains("widen the bounds"), "{falling}");
         // Where the figure varies with μ too (the least at one μ): not "widen the bounds".
-        let varied = TuneCurve {
-            curve: vec![completed(10.0, figures(0.0707, Some(1.0))), completed(1e5, figures(0.09, Some(2.0)))],
-            ..flat.clone()
-        };
+        let varied = through(&[(10.0, 0.0707, 1.0), (1e5, 0.09, 2.0)]);
         let varied = varied.why_none(&spec, "tune.", (f64::INFINITY, 0.0706));
         assert!(
             varied.contains("; raise tune.max_uf[0], or ask less of the loop") && !varied.contains("widen"),
