@@ -297,14 +297,7 @@ fn delay_lines(a: &AutoDesign) -> String {
     let mut s = format!("  delays (not a condition of passing{hint}){of}: {summary}\n");
     let unit = a.scenario.plant.time_unit;
     for c in &v.delay_check {
-        // Whole samples move a sampled scenario's delays further than the factor (2 ms at
-        // T_s = 1 ms × 1.1 is 3 ms, +50 %): said, as the summary line counts them.
-        let whole = if (c.error - (c.factor - 1.0).abs()).abs() > 1e-9 {
-            format!(": whole samples, up to {} off", quell::auto::percent(c.error))
-        } else {
-            String::new()
-        };
-        let head = format!("    ×{} (τ = [{}] {unit}{whole})", crate::run::short(c.factor), delays(&c.delays));
+        let head = format!("    ×{} (τ = [{}] {unit})", crate::run::short(c.factor), delays(&c.delays));
         let flag = match c.met {
             true => String::new(),
             false if c.ended.is_some() => " ⚠".to_string(),

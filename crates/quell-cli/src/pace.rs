@@ -61,11 +61,24 @@ fn deployment_text(s: &Scenario, d: &Design) -> String {
     );
     let unit = s.plant.time_unit;
     let (shift, kappa, what) = quell::export::f32_pole_shift(d);
-    let precision = if !shift.is_finite() {
+    // The equilibrated κ₂ is the same in any units of the states: ∞ there is a defective matrix,
+    // ∞ only as given is one whose states' scales lie beyond f64's resolution (a hydraulic
+    // actuator's pressure in Pa beside positions in m, with distinct poles, had been called
+    // defective and told to give distinct poles; helper tryout, 2026-12-07).
+    let scale_free = if what.starts_with("A − LC") {
+        d.observer_eigenvector_condition()
+    } else {
+        d.decoupled_eigenvector_condition()
+    };
+    let precision = if !scale_free.is_finite() {
         format!("{what} has a defective eigenvector matrix (κ₂ = ∞): f32's rounding, as any model error, can move its poles without bound; export in f64 (the default) and give distinct poles")
+    } else if !shift.is_finite() {
+        format!(
+            "{what}'s eigenvector matrix is too ill-conditioned in the states' coordinates as given for f64 to resolve (its poles are distinct: equilibrated κ₂ = {scale_free:.2e}), so the states' units lie far apart (e.g. Pa beside m) and f32's rounding may move its poles far: export in f64 (the default), or give the states units of similar sizes; quell run --sample-time T_s --precision f32 measures it, as quell export --precision f32 does before it writes"
+        )
     } else if shift > quell::export::F32_POLE_SHIFT {
         format!(
-            "f32 could move the poles of {what} by about {} (κ₂ = {kappa:.2e} × 6e-8, κ₂ in the states' coordinates as given): export in f64 (the default), or choose poles that give a smaller κ₂",
+            "f32 could move the poles of {what} by about {} (κ₂ = {kappa:.2e} × 6e-8, κ₂ in the states' coordinates as given; equilibrated, {scale_free:.2e}): export in f64 (the default), or choose poles that give a smaller κ₂; quell run --sample-time T_s --precision f32 measures it, as quell export --precision f32 does before it writes",
             quell::export::fmt_shift(shift)
         )
     } else {

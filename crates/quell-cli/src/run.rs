@@ -124,7 +124,15 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     ctrl_c.start_writing();
     let seconds = started.elapsed().as_secs_f64();
     let diagnostics = quell::diagnostics::diagnose_run(&scenario, &design, &result);
-    let done = Finished { scenario: &scenario, design: &design, result: &result, diagnostics: &diagnostics, seconds };
+    let diagnosed = started.elapsed().as_secs_f64() - seconds;
+    let done = Finished {
+        scenario: &scenario,
+        design: &design,
+        result: &result,
+        diagnostics: &diagnostics,
+        seconds,
+        diagnosed,
+    };
     write_outputs(out, &done, !args.no_plots).map_err(|e| {
         Failure::Run(format!(
             "writing {}: {e}; none of this run's files replaced those there before: make room or choose another --out, and run again",
@@ -142,6 +150,9 @@ struct Finished<'a> {
     diagnostics: &'a Diagnostics,
     /// Wall time of the simulation.
     seconds: f64,
+    /// Wall time of the diagnosis after the run (its comparison runs: a sampled run's continuous
+    /// loop had taken 22 s of a command that said 0.77 s; helper tryout, 2026-12-07).
+    diagnosed: f64,
 }
 
 /// The scenario's loop ([`RunSettings::of`]), or the sampled-data loop at `--sample-time`, checked
@@ -312,7 +323,7 @@ fn write_outputs(dir: &Path, done: &Finished<'_>, plots: bool) -> std::io::Resul
 }
 
 fn write_data(dir: &Path, done: &Finished<'_>) -> std::io::Result<()> {
-    let Finished { scenario, design, result: r, diagnostics, seconds } = *done;
+    let Finished { scenario, design, result: r, diagnostics, seconds, .. } = *done;
     output::write_signals(&dir.join("signals.csv"), r)?;
     output::write_json(&dir.join("design.json"), &crate::pace::design_json(scenario, design))?;
     let summary = json!({
@@ -366,7 +377,7 @@ fn report_diagnostics(d: &ChannelDiagnostics, time: TimeUnit, text: &mut String)
 /// (exit 1; the files hold the samples up to then). A channel is named by its output where the
 /// scenario names them (`channel 1 (pitch): …`).
 fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
-    let Finished { scenario, result, diagnostics, seconds, .. } = *done;
+    let Finished { scenario, result, diagnostics, seconds, diagnosed, .. } = *done;
     let outputs = scenario.names.outputs.as_deref();
     let out = out.display();
     let clipping: String = result
@@ -393,7 +404,7 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
                         } else {
                             String::new()
                         };
-                        format!("settled (2 % band{of}) at t = {} {}", short(t), result.time_unit)
+                        format!("settled (2 % band{of}) at t = {} {}", quell::settings::fmt_4(t), result.time_unit)
                     }
                     (None, Some(note)) => note.clone(),
                     (None, None) => "not settled".into(),
@@ -424,7 +435,8 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
                 RunStats::Continuous(stats) => format!("{} solver steps", stats.steps),
                 RunStats::Sampled { controller_steps, .. } => format!("{controller_steps} controller steps"),
             };
-            eprintln!("wrote {out} ({} samples, {steps}, in {seconds:.3} s of wall time)", result.len());
+            let diagnosis = diagnosis_time(diagnosed);
+            eprintln!("wrote {out} ({} samples, {steps}, in {seconds:.3} s of wall time{diagnosis})", result.len());
             Ok(())
         }
         outcome => {
@@ -451,6 +463,15 @@ fn parse_max_steps(text: &str) -> Result<usize, String> {
             "expected a step budget, an integer from 1 to {}, found {text}; omit --max-steps for the run's own budget",
             usize::MAX
         )),
+    }
+}
+
+/// The diagnosis's wall time after the run's own, where it is worth saying (half a second or more).
+fn diagnosis_time(diagnosed: f64) -> String {
+    if diagnosed >= 0.5 {
+        format!(", and {diagnosed:.3} s more for its diagnosis, the runs it is compared with")
+    } else {
+        String::new()
     }
 }
 

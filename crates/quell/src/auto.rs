@@ -264,11 +264,9 @@ pub struct Verification {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct DelayCheck {
     pub factor: f64,
-    /// The true delays run: τ_i × factor, or in a sampled scenario the nearest whole number of
-    /// samples at least one sample away.
+    /// The true delays run: τ_i × factor (a sampled run takes them in fractions of a sample).
     pub delays: Vec<f64>,
-    /// The relative error run: the largest |τ_i'/τ_i − 1| (whole samples can make it more than
-    /// |factor − 1|).
+    /// The relative error run: the largest |τ_i'/τ_i − 1|, |factor − 1| up to rounding.
     pub error: f64,
     /// Completed within the tail bound, with max|u_f,i| within [`EFFORT_GROWTH`]× the verified
     /// run's and within the actuator limits ([`Targets::u_limit`]): `missed` is empty.
@@ -1235,7 +1233,7 @@ fn delay_robust(
         {
             break;
         }
-        let Some(level) = delay_level(&p.scenario, &d, (error, &[]), (targets, &c), bound, verifier)? else { break };
+        let level = delay_level(&p.scenario, &d, (error, &c), targets, bound, verifier)?;
         if level.iter().all(|k| k.met) {
             mark_chosen(&mut candidates, speed);
             let slowed = format!(
@@ -1262,8 +1260,7 @@ fn delay_robust(
 
 /// [`DelayCheck`]s of the chosen design (at `speed`): every true input delay longer, then shorter,
 /// by [`Targets::delay_error`], then by 0.3 and 0.1 of it until both ways meet
-/// ([`DelayCheck::met`]); a level whose delays (whole samples) are those of one run already is
-/// skipped. None where that error or every delay is 0, or inside a horizon's repeat. With the
+/// ([`DelayCheck::met`]). None where that error or every delay is 0, or inside a horizon's repeat. With the
 /// smaller actual error of the two runs of the level met (0 where none was).
 fn delay_checks(
     s: &Scenario,
@@ -1278,9 +1275,7 @@ fn delay_checks(
         return Ok((checks, f64::NAN));
     }
     for level in [error, 0.3 * error, 0.1 * error] {
-        let Some(level_checks) = delay_level(s, design, (level, &checks), (targets, verified), bound, verifier)? else {
-            continue;
-        };
+        let level_checks = delay_level(s, design, (level, verified), targets, bound, verifier)?;
         let both = level_checks.iter().all(|c| c.met);
         let smaller = level_checks.iter().map(|c| c.error).fold(f64::INFINITY, f64::min);
         checks.extend(level_checks);
@@ -1292,23 +1287,18 @@ fn delay_checks(
 }
 
 /// The two [`DelayCheck`]s of one `level` (every true input delay longer, then shorter, by it) of
-/// the design verified by run `verified`; `None` where both runs' delays (whole samples) are among
-/// the `done` checks'.
+/// the design verified by run `verified`.
 fn delay_level(
     s: &Scenario,
     design: &Design,
-    (level, done): (f64, &[DelayCheck]),
-    (targets, verified): (&Targets, &Candidate),
+    (level, verified): (f64, &Candidate),
+    targets: &Targets,
     bound: &[f64],
     verifier: &mut Verifier,
-) -> Result<Option<Vec<DelayCheck>>, AutoError> {
+) -> Result<Vec<DelayCheck>, AutoError> {
     let truth = s.true_plant();
-    let runs = [1.0 + level, 1.0 - level].map(|factor| {
-        (factor, truth.delays.iter().map(|&d| scaled_delay(d, factor, s.simulation.sample_time)).collect::<Vec<f64>>())
-    });
-    if runs.iter().all(|(_, delays)| done.iter().any(|c| &c.delays == delays)) {
-        return Ok(None);
-    }
+    let runs = [1.0 + level, 1.0 - level]
+        .map(|factor| (factor, truth.delays.iter().map(|&d| d * factor).collect::<Vec<f64>>()));
     // A run past a study's default runaway factor times the verified run's peaks ends there, as a
     // study's draw does (one diverging at +10 % had filled the history's budget first and been
     // reported by it).
@@ -1352,27 +1342,13 @@ fn delay_level(
                 Err(AutoError::Sim(e)) => ended(e.to_string()),
                 Err(e) => return Err(e),
             };
-        // The error run: the largest relative change of a delay (whole samples move it more).
+        // The error run: the largest relative change of a delay.
         let change = delays.iter().zip(&truth.delays).filter(|(_, t)| **t > 0.0).map(|(d, t)| (d / t - 1.0).abs());
         let actual = change.fold(0.0, f64::max);
         let met = missed.is_empty();
         level_checks.push(DelayCheck { factor, delays, error: actual, ended, tail_max_e, max_uf, met, missed });
     }
-    Ok(Some(level_checks))
-}
-
-/// The delay τ × `factor`; with a sample time, the nearest whole number of samples to it, at least
-/// one sample from τ's own (a delay of 0 stays 0), as a sampled run needs.
-fn scaled_delay(tau: f64, factor: f64, sample_time: Option<f64>) -> f64 {
-    match sample_time {
-        Some(t_s) if tau > 0.0 => {
-            let k = (tau / t_s).round();
-            let scaled = (k * factor).round();
-            let moved = if factor > 1.0 { scaled.max(k + 1.0) } else { scaled.min(k - 1.0) };
-            moved.max(0.0) * t_s
-        }
-        _ => tau * factor,
-    }
+    Ok(level_checks)
 }
 
 /// How much a halving of the channel and observer poles must lower the loop's rate ρ to go on
@@ -3126,18 +3102,6 @@ mod tests {
         assert_eq!(no_horizon_remedy(&s, &s.design().unwrap(), true), ACTUATOR_LIMIT_FAILS);
     }
 
-    /// A delay scaled for the check: τ × factor in the continuous loop; in a sampled one a whole
-    /// number of samples, at least one from τ's own (1 s at 0.02 s: 55 and 45 samples; one sample:
-    /// 2 and 0), and a delay of 0 stays 0.
-    #[test]
-    fn a_scaled_delay_is_whole_in_samples_and_moves_at_least_one() {
-        assert_eq!(scaled_delay(3.0, 1.1, None), 3.0 * 1.1);
-        assert!((scaled_delay(1.0, 1.1, Some(0.02)) - 1.1).abs() < 1e-12);
-        assert!((scaled_delay(1.0, 0.9, Some(0.02)) - 0.9).abs() < 1e-12);
-        assert!((scaled_delay(0.02, 1.01, Some(0.02)) - 0.04).abs() < 1e-15);
-        assert_eq!(scaled_delay(0.02, 0.99, Some(0.02)), 0.0);
-        assert_eq!(scaled_delay(0.0, 1.1, Some(0.02)), 0.0);
-    }
     use crate::signal::Harmonic;
 
     /// One component: a square wave's first `n` odd harmonics of `w0` rad/s, amplitudes 1/k.

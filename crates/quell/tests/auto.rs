@@ -1723,12 +1723,13 @@ fn the_chosen_design_is_run_with_its_delays_off() {
     assert!(none.verification.delay_check.is_empty() && none.verification.delay_tolerance.is_nan());
 }
 
-/// Sampled at 0.05 s, a delay of 0.5 s (10 samples) moves by whole samples: ±10 % is one sample,
-/// and ±3 % and ±1 % round to the same delays, so they are not run again; each run's error is the
-/// one run (0.1). With an actuator limit, a delayed run beyond it is not met, whatever its tail
+/// Sampled at 0.05 s, a delay of 0.5 s (10 samples) is run off by its factor exactly, in
+/// fractions of a sample where that is one (±3 %: 10.3 and 9.7 samples; they had been rounded to
+/// whole samples, ±1 sample = ±10 %, so the levels below ±10 % ran nothing new); each run's error
+/// is its factor's. With an actuator limit, a delayed run beyond it is not met, whatever its tail
 /// (the paper's plant under 23: the +3 % run's max|u_f,2| passes it).
 #[test]
-fn a_delay_check_runs_distinct_whole_samples_and_respects_the_actuator_limit() {
+fn a_delay_check_runs_its_factors_exactly_and_respects_the_actuator_limit() {
     let text = include_str!("../../../examples/siso-complex.toml");
     let start = text.find("[design]").unwrap();
     let end = start + text[start..].find("[reference]").unwrap();
@@ -1737,10 +1738,13 @@ fn a_delay_check_runs_distinct_whole_samples_and_respects_the_actuator_limit() {
     let doc: toml::Table = sampled.parse().unwrap();
     let auto = auto_design(&doc, &Targets::default()).unwrap();
     let checks = &auto.verification.delay_check;
+    assert!(checks.len() >= 2 && checks.len().is_multiple_of(2), "{checks:?}");
     let delays: Vec<f64> = checks.iter().map(|c| c.delays[0]).collect();
-    assert_eq!(delays.len(), 2, "{checks:?}");
     assert!((delays[0] - 0.55).abs() < 1e-12 && (delays[1] - 0.45).abs() < 1e-12, "{delays:?}");
-    assert!(checks.iter().all(|c| (c.error - 0.1).abs() < 1e-9), "{checks:?}");
+    for c in checks {
+        assert!((c.delays[0] - 0.5 * c.factor).abs() < 1e-12, "{c:?}");
+        assert!((c.error - (c.factor - 1.0).abs()).abs() < 1e-9, "{c:?}");
+    }
 
     let paper = quell::scenario::PAPER_EXAMPLE;
     let start = paper.find("[design]").unwrap();

@@ -169,10 +169,18 @@ pub fn f32_pole_shift(design: &Design) -> (f64, f64, &'static str) {
     (worst(kappa) * f64::from(f32::EPSILON) / 2.0, kappa, what)
 }
 
-/// A relative pole shift as "92 %" or "1.5×" ("∞" for a defective eigenvector matrix).
+/// A relative pole shift as "92 %", "1.5×" or "1.3e5×" ("∞" for a defective eigenvector matrix;
+/// "134837.8×" had been printed).
 pub fn fmt_shift(shift: f64) -> String {
     if !shift.is_finite() {
         "∞".to_string()
+    } else if shift >= 10.0 {
+        let v = crate::settings::significant(shift, 2);
+        if v >= 1e4 {
+            format!("{v:e}×")
+        } else {
+            format!("{v}×")
+        }
     } else if shift >= 1.0 {
         format!("{shift:.1}×")
     } else if shift >= 0.01 {

@@ -7,6 +7,7 @@
 pub(crate) mod closed_loop;
 pub(crate) mod dde;
 mod divergence;
+mod input_line;
 pub(crate) mod memory;
 pub(crate) mod noise;
 mod result;
@@ -111,7 +112,7 @@ pub struct RunSettings {
     /// Measurement noise on the y the controller reads: white per sample (sampled-data loop only),
     /// or band-limited with a bandwidth (the same n(t) in both loops).
     pub noise: Option<MeasurementNoise>,
-    /// The true plant's actuator (delay on u_f, limits; whole samples in the sampled-data loop);
+    /// The true plant's actuator (delay on u_f, limits; in fractions of a sample in the sampled-data loop);
     /// `None`: the plant receives u_f.
     pub actuator: Option<Actuator>,
     /// Record the plant state x and the observer state x̂ too ([`SimResult::x`]); off by default.

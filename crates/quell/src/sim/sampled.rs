@@ -9,16 +9,16 @@ use std::ops::ControlFlow;
 use nalgebra::{DMatrix, DVector};
 
 use super::divergence::{Peaks, Watched};
+use super::input_line::{split_delays, InputLine};
 use super::noise::Gaussian;
 use super::result::{Outcome, RunStats, Sample, SimResult};
 use super::{check_run, Run, SimError, PROGRESS_EVERY};
-use crate::controller::discrete::{self, MAX_DELAY_SAMPLES};
+use crate::controller::discrete;
 use crate::controller::{mat_vec, Controller, ControllerError, Precision, SinglePrecision, MAX_MEASUREMENT};
 use crate::design::Design;
 use crate::linalg::zoh_unchecked;
 use crate::plant::Plant;
-use crate::settings::TimeUnit;
-use crate::settings::{self, Actuator, KeyError, MeasurementNoise};
+use crate::settings::{self, KeyError, MeasurementNoise};
 use crate::signal::{Signal, SignalBank};
 
 /// T_s·ρ beyond which a sampled-data run gets a warning, ρ the loop's fastest rate
@@ -217,8 +217,8 @@ impl SampledController for Controller {
 }
 
 /// Every check of a sampled-data run, in this order: the settings (horizon, sample time, signals
-/// for the design's plant, noise, actuator, divergence bound), the truth, every delay of the run
-/// whole numbers of samples where the truth adds its own ([`true_delays_whole`]), the controller (a
+/// for the design's plant, noise, actuator, divergence bound), the truth, the true plant's delay
+/// lines ([`true_delay_lines`]), the controller (a
 /// new [`Controller`] at `sample_time` when the run brings none: delays whole numbers of samples),
 /// the output step (a whole multiple of `sample_time`). Returns that controller and the controller steps
 /// per recorded sample.
@@ -234,7 +234,7 @@ pub(super) fn check(run: &Run<'_>, sample_time: f64) -> Result<(Option<Controlle
         a.check(m)?;
     }
     super::check_truth(run.design, run.truth)?;
-    true_delays_whole(run, sample_time)?;
+    true_delay_lines(run, sample_time)?;
     let own = match run.controller {
         Some(_) => None,
         None => Some(Controller::new(run.design, sample_time).map_err(|e| {
@@ -306,56 +306,14 @@ fn dividing_output_step(e: ControllerError, design: &Design, h: f64) -> Controll
     }
 }
 
-/// Where the truth adds delays of the commands, every delay of the run whole numbers of samples of
-/// T, or an error on simulation.sample_time with the nearest sample time that makes them all whole:
-/// the model's delays alone were checked first, and the sample time offered for them
-/// (0.016666666667 min for a CSTR) was then refused by the truth's, with no offer. The actuator's
-/// delays need not be whole ([`ActuatorLine`]), and neither the offer nor the message counts them.
-fn true_delays_whole(run: &Run<'_>, T: f64) -> Result<(), KeyError> {
-    let model = &run.design.plant().delays;
-    let truth = run.truth.delays_beside(run.design.plant());
-    if truth.is_empty() || model.iter().chain(truth).all(|&tau| discrete::whole(tau, T)) {
-        return Ok(());
-    }
-    let all: Vec<f64> = model.iter().chain(truth).copied().collect();
+/// The true plant's delay lines at T: its own delays of the commands and its actuator's, each
+/// within [`discrete::MAX_DELAY_SAMPLES`] samples ([`InputLine`] takes fractions of a sample; the model's
+/// delays are the controller's, checked by it).
+fn true_delay_lines(run: &Run<'_>, T: f64) -> Result<(), KeyError> {
     let unit = run.design.plant().time_unit;
-    let list = settings::fmt_short_list;
-    let mut sets = vec![format!("plant.delays [{}]", list(model))];
-    if !truth.is_empty() {
-        sets.push(format!("truth.delays [{}]", list(truth)));
-    }
-    let h = run.settings.output_step;
-    let offer = match discrete::valid_sample_time_near(&all, h, T, 1 + run.design.q()) {
-        Some(t) => format!(
-            ": the nearest that makes them all whole is {} {unit}{}",
-            settings::fmt_short(t),
-            discrete::output_step_note(t, h, "near it", unit)
-        ),
-        None => ": no sample time near it makes them all whole; choose one that divides each".into(),
-    };
-    // A true delay too long for a delay line at T is said so (it had been called not whole).
-    let named = truth.iter().enumerate().map(|(i, &d)| (format!("truth.delays[{i}]"), d));
-    if let Some((key, tau)) = named.into_iter().find(|(_, tau)| tau / T > discrete::MAX_DELAY_SAMPLES) {
-        return Err(KeyError::new(
-            "simulation.sample_time",
-            format!(
-                "T_s = {} {unit} makes {key} = {} {unit} a delay of {:e} samples; the true plant's delay line holds at most {:e} samples ({} {unit}){offer}",
-                settings::fmt_time(T),
-                settings::fmt_short(tau),
-                (tau / T).round(),
-                discrete::MAX_DELAY_SAMPLES,
-                sets.join(", ")
-            ),
-        ));
-    }
-    Err(KeyError::new(
-        "simulation.sample_time",
-        format!(
-            "T_s = {} {unit} does not make every delay of the run a whole number of samples ({} {unit}){offer}",
-            settings::fmt_time(T),
-            sets.join(", ")
-        ),
-    ))
+    split_delays("truth.delays", run.truth.delays_beside(run.design.plant()), (T, unit))?;
+    let actuator = run.settings.actuator.as_ref().map_or(&[][..], |a| &a.delays[..]);
+    split_delays("truth.actuator_delays", actuator, (T, unit)).map(|_| ())
 }
 
 /// The nearest fixes of an output step h that is not a whole number ≥ 1 of samples of T: a sample
@@ -396,210 +354,22 @@ pub(super) fn delay_line_bound(run: &Run<'_>, sample_time: f64) -> usize {
     (samples * (8 * p.m() * (q + 3)) as f64).min(usize::MAX as f64) as usize
 }
 
-/// The last samples of an m-channel signal v, enough to read channel i at any delay up to the
-/// longest given: v_i(k − d), 0 before k = 0.
-struct PastSamples {
-    /// Row k mod len: v(k).
-    past: Vec<f64>,
-    len: usize,
-    m: usize,
-}
-
-impl PastSamples {
-    fn new(m: usize, delays: &[&[usize]]) -> Self {
-        let len = delays.iter().flat_map(|d| d.iter()).max().map_or(1, |x| x + 1);
-        PastSamples { past: vec![0.0; len * m], len, m }
-    }
-
-    /// Records v(k).
-    fn push(&mut self, k: usize, v: &[f64]) {
-        let row = k % self.len;
-        self.past[row * self.m..(row + 1) * self.m].copy_from_slice(v);
-    }
-
-    /// v_i(k − d), 0 before k = 0.
-    fn at(&self, k: usize, d: usize, i: usize) -> f64 {
-        if k >= d {
-            self.past[((k - d) % self.len) * self.m + i]
-        } else {
-            0.0
-        }
-    }
-}
-
-/// The actuator's delay line: τ_a,i = (d_i + f_i)·T with d_i whole and 0 ≤ f_i < 1, so that over
-/// [kT, (k+1)T) the plant receives u_p,i = sat_i(u_f,i(k − d_i − 1)) until kT + f_i·T (`early`, the
-/// value at the sample) and sat_i(u_f,i(k − d_i)) after it (`late`); u_f = 0 before k = 0. A whole
-/// delay has f_i = 0 and early = late. A run records the early value (the plant's input at kT)
-/// and its clipping; the peaks of u_f and of the demand count the late one (the same sequence, a
-/// sample later).
-struct ActuatorLine {
-    d: Vec<usize>,
-    fraction: Vec<f64>,
-    actuator: Actuator,
-    /// u_f's past.
-    past: PastSamples,
-    late: Vec<f64>,
-    early: Vec<f64>,
-    /// Whether the limit clipped the value at the sample (`early`).
-    limited: Vec<bool>,
-    /// u_f(k − d_i) before the limit.
-    demand: Vec<f64>,
-}
-
-impl ActuatorLine {
-    fn new(actuator: &Actuator, T: (f64, TimeUnit)) -> Result<Self, KeyError> {
-        let (d, fraction) = split_delays("truth.actuator_delays", &actuator.delays, T)?;
-        let m = d.len();
-        let before: Vec<usize> = d.iter().map(|d| d + 1).collect();
-        let past = PastSamples::new(m, &[&d, &before]);
-        Ok(ActuatorLine {
-            d,
-            fraction,
-            actuator: actuator.clone(),
-            past,
-            late: vec![0.0; m],
-            early: vec![0.0; m],
-            limited: vec![false; m],
-            demand: vec![0.0; m],
-        })
-    }
-
-    /// Some input's delay is not whole: the plant input switches within a sample.
-    fn fractional(&self) -> bool {
-        self.fraction.iter().any(|&f| f > 0.0)
-    }
-
-    /// Records u_f(k) and sets the early and late plant inputs of sample k.
-    fn apply(&mut self, k: usize, u_f: &[f64]) {
-        self.past.push(k, u_f);
-        for (i, (&d, &f)) in self.d.iter().zip(&self.fraction).enumerate() {
-            self.demand[i] = self.past.at(k, d, i);
-            let late = self.actuator.clip(i, self.demand[i]);
-            self.late[i] = late.0;
-            (self.early[i], self.limited[i]) =
-                if f > 0.0 { self.actuator.clip(i, self.past.at(k, d + 1, i)) } else { late };
-        }
-    }
-}
-
-/// Each delay as a whole number of samples of T and a fraction of one in [0, 1) (within rounding
-/// of a whole number, none), or an error on `key[i]` for one beyond [`MAX_DELAY_SAMPLES`] samples.
-fn split_delays(key: &str, delays: &[f64], (T, unit): (f64, TimeUnit)) -> Result<(Vec<usize>, Vec<f64>), KeyError> {
-    (delays.iter().enumerate())
-        .map(|(i, &tau)| {
-            if discrete::whole(tau, T) {
-                if let Some(d) = discrete::whole_multiple(tau, T) {
-                    return Ok((d, 0.0));
-                }
-            }
-            let samples = tau / T;
-            if !(samples.is_finite() && samples <= MAX_DELAY_SAMPLES) {
-                return Err(KeyError::new(
-                    format!("{key}[{i}]"),
-                    format!("τ = {tau} {unit} is {samples:e} samples of T_s = {T} {unit}; a sampled-data run's delay line holds at most {MAX_DELAY_SAMPLES:e}"),
-                ));
-            }
-            let d = samples.floor();
-            Ok((d as usize, samples - d))
-        })
-        .collect::<Result<Vec<_>, _>>()
-        .map(|v| v.into_iter().unzip())
-}
-
-/// Each delay as a whole number of samples of T, or an error on `key[i]`.
-fn delay_samples(key: &str, delays: &[f64], (T, unit): (f64, TimeUnit)) -> Result<Vec<usize>, KeyError> {
-    let whole = |tau: f64| discrete::whole(tau, T).then(|| discrete::whole_multiple(tau, T)).flatten();
-    (delays.iter().enumerate())
-        .map(|(i, &tau)| {
-            whole(tau).ok_or_else(|| {
-                KeyError::new(
-                    format!("{key}[{i}]"),
-                    format!("τ = {tau} {unit} is {:.6} samples of T_s = {T} {unit}; a sampled-data run needs whole numbers of samples (at most {MAX_DELAY_SAMPLES:e})", tau / T),
-                )
-            })
-        })
-        .collect()
-}
-
-/// The plant input at the true delays: u_f + F (u(k − d^true) − u(k − d)), from the commands of
-/// the last max d + 1 samples.
-struct TrueInput {
-    d: Vec<usize>,
-    d_true: Vec<usize>,
-    F: DMatrix<f64>,
-    /// u's past.
-    past: PastSamples,
-    du: Vec<f64>,
-    u_f: Vec<f64>,
-}
-
-impl TrueInput {
-    /// `None` when the true delays are the design's.
-    fn new(design: &Design, truth: &Plant, T: f64) -> Result<Option<TrueInput>, KeyError> {
-        let p = design.plant();
-        if truth.delays == p.delays {
-            return Ok(None);
-        }
-        let T = (T, p.time_unit);
-        let (d, d_true) =
-            (delay_samples("plant.delays", &p.delays, T)?, delay_samples("truth.delays", &truth.delays, T)?);
-        let m = d.len();
-        let past = PastSamples::new(m, &[&d, &d_true]);
-        Ok(Some(TrueInput { d, d_true, F: design.F().clone(), past, du: vec![0.0; m], u_f: vec![0.0; m] }))
-    }
-
-    /// Records u(k) and returns the true plant input from the controller's `u_f` (in `self.u_f`).
-    fn apply(&mut self, k: usize, u: &[f64]) -> &[f64] {
-        self.past.push(k, u);
-        for i in 0..u.len() {
-            self.du[i] = self.past.at(k, self.d_true[i], i) - self.past.at(k, self.d[i], i);
-        }
-        mat_vec(&self.F, &self.du, &mut self.u_f, true);
-        &self.u_f
-    }
-}
-
 /// The plant and the disturbance's exosystem as one linear system sampled exactly:
-/// [x; w]_{k+1} = Φ [x; w]_k + Γ u_f(k), y_k = C_y [x; w]_k, from [x; w]_0 = s0.
+/// [x; w]_{k+1} = Φ [x; w]_k + Σ_r Γ_r u_r(k), y_k = C_y [x; w]_k, from [x; w]_0 = s0, with the
+/// input u_r(k) held over segment [s_r T, s_{r+1} T) of the sample ([`InputLine`]) and
+/// Γ_r = Φ((1 − s_{r+1})T) Γ((s_{r+1} − s_r)T), Γ(t) = ∫₀ᵗ e^{Ms} ds B (Åström & Wittenmark,
+/// Computer-Controlled Systems, §2.3): one segment, Γ(T).
 struct ExactPlant {
     Phi: DMatrix<f64>,
-    Gamma: Split,
+    Gamma: Vec<DMatrix<f64>>,
     Cy: DMatrix<f64>,
     s0: DVector<f64>,
 }
 
-/// The input matrices of one sample: the late input's Γ_late (held from kT + f_i·T) and, where
-/// some input's delay has a fraction f_i > 0 of a sample, the early input's Γ_early (held over
-/// [kT, kT + f_i·T)): column i of Γ_late = Γ((1 − f_i)T), of Γ_early = Φ((1 − f_i)T) Γ(f_i T),
-/// with Γ(t) = ∫₀ᵗ e^{Ms} ds B (Åström & Wittenmark, Computer-Controlled Systems, §2.3, a delay
-/// that is not a whole number of samples). f_i = 0 gives Γ(T) and a zero column.
-struct Split {
-    late: DMatrix<f64>,
-    early: Option<DMatrix<f64>>,
-}
-
-impl Split {
-    fn of(M: &DMatrix<f64>, Bu: &DMatrix<f64>, (whole, T): (DMatrix<f64>, f64), fractions: &[f64]) -> Split {
-        if fractions.iter().all(|&f| f == 0.0) {
-            return Split { late: whole, early: None };
-        }
-        let (mut late, mut early) = (whole, DMatrix::zeros(Bu.nrows(), Bu.ncols()));
-        for (i, &f) in fractions.iter().enumerate().filter(|(_, &f)| f > 0.0) {
-            let column = Bu.columns(i, 1).into_owned();
-            let (after, held_late) = zoh_unchecked(M, &column, (1.0 - f) * T);
-            let (_, held_early) = zoh_unchecked(M, &column, f * T);
-            late.set_column(i, &held_late.column(0));
-            early.set_column(i, &(after * held_early).column(0));
-        }
-        Split { late, early: Some(early) }
-    }
-}
-
 impl ExactPlant {
-    /// The true plant `p` and the disturbance's exosystem sampled exactly at `T`, each input i
-    /// delayed by a `fractions[i]` of a sample beyond whole ones (none: empty).
-    fn new(p: &Plant, disturbance: &Signal, T: f64, fractions: &[f64]) -> Self {
+    /// The true plant `p` and the disturbance's exosystem sampled exactly at `T`, the input held
+    /// over the `segments` of a sample (fractions of it).
+    fn new(p: &Plant, disturbance: &Signal, T: f64, segments: impl Iterator<Item = (f64, f64)>) -> Self {
         let (n, m) = (p.n(), p.m());
         let (S, H, w0) = disturbance.exosystem();
         let nw = S.nrows();
@@ -610,8 +380,14 @@ impl ExactPlant {
         M.view_mut((n, n), (nw, nw)).copy_from(&S);
         let mut Bu = DMatrix::zeros(n + nw, m);
         Bu.view_mut((0, 0), (n, m)).copy_from(&p.B);
-        let (Phi, Gamma) = zoh_unchecked(&M, &Bu, T);
-        let Gamma = Split::of(&M, &Bu, (Gamma, T), fractions);
+        let (Phi, whole) = zoh_unchecked(&M, &Bu, T);
+        let segments: Vec<(f64, f64)> = segments.collect();
+        let Gamma = if segments.len() == 1 {
+            vec![whole]
+        } else {
+            let after = |end: f64| zoh_unchecked(&M, &Bu, (1.0 - end) * T).0;
+            segments.iter().map(|&(start, end)| after(end) * zoh_unchecked(&M, &Bu, (end - start) * T).1).collect()
+        };
         // y = [C, Q H] [x; w].
         let mut Cy = DMatrix::zeros(m, n + nw);
         Cy.view_mut((0, 0), (m, n)).copy_from(&p.C);
@@ -630,49 +406,31 @@ struct PlantSide {
     /// The plant's order: [x; w] holds x first.
     n: usize,
     Phi: DMatrix<f64>,
-    Gamma: Split,
+    Gamma: Vec<DMatrix<f64>>,
     Cy: DMatrix<f64>,
     /// [x; w] at this sample, and at the next.
     s: DVector<f64>,
     s_next: DVector<f64>,
-    shift: Option<TrueInput>,
-    actuator: Option<ActuatorLine>,
+    line: InputLine,
     noise: Option<Noise>,
-    /// y(k), its measurement y(k) + n(t), g(k) and the plant input u_f(k).
+    /// y(k), its measurement y(k) + n(t), g(k) and the controller's output u_f(k).
     y: Vec<f64>,
     y_meas: Vec<f64>,
     g: Vec<f64>,
-    u_f: Vec<f64>,
+    held: Vec<f64>,
 }
 
 impl PlantSide {
     fn new(run: &Run<'_>, T: f64) -> Result<Self, KeyError> {
         let (truth, settings) = (run.truth, &run.settings);
-        let shift = TrueInput::new(run.design, truth, T)?;
-        let actuator = match settings.actuator.as_ref().filter(|a| !a.is_ideal()) {
-            Some(a) => Some(ActuatorLine::new(a, (T, run.design.plant().time_unit))?),
-            None => None,
-        };
-        let fractions = actuator.as_ref().filter(|a| a.fractional()).map_or(&[][..], |a| &a.fraction[..]);
-        let ExactPlant { Phi, Gamma, Cy, s0 } = ExactPlant::new(truth, run.disturbance, T, fractions);
+        let model = run.design.plant();
+        let delays = (&model.delays[..], truth.delays_beside(model));
+        let line = InputLine::new(delays, run.design.F(), settings.actuator.as_ref(), (T, model.time_unit))?;
+        let ExactPlant { Phi, Gamma, Cy, s0 } = ExactPlant::new(truth, run.disturbance, T, line.segments());
         let m = truth.m();
         let noise = settings.noise.as_ref().map(|nz| Noise::new(nz, m));
-        let (y, y_meas, g, u_f) = (vec![0.0; m], vec![0.0; m], vec![0.0; m], vec![0.0; m]);
-        Ok(PlantSide {
-            n: truth.n(),
-            Phi,
-            Gamma,
-            Cy,
-            s_next: s0.clone(),
-            s: s0,
-            shift,
-            actuator,
-            noise,
-            y,
-            y_meas,
-            g,
-            u_f,
-        })
+        let (y, y_meas, g, held) = (vec![0.0; m], vec![0.0; m], vec![0.0; m], vec![0.0; m]);
+        Ok(PlantSide { n: truth.n(), Phi, Gamma, Cy, s_next: s0.clone(), s: s0, line, noise, y, y_meas, g, held })
     }
 
     /// y(k), g(k) and the measurement y(k) + n(t) at t = kT.
@@ -687,21 +445,20 @@ impl PlantSide {
 
     /// Takes the controller's output `v`: the plant input u_f(k) at the design's delays.
     fn hold(&mut self, v: &[f64]) {
-        match self.shift.as_mut() {
-            None => self.u_f.copy_from_slice(v),
-            Some(sh) => sh.u_f.copy_from_slice(v),
-        }
+        self.held.copy_from_slice(v);
     }
 
-    /// The plant input u_f(k) from the held output and the step's command `u` (25): moved to the
-    /// true delays, then through the actuator.
-    fn input(&mut self, k: usize, u: &[f64]) {
-        if let Some(sh) = self.shift.as_mut() {
-            self.u_f.copy_from_slice(sh.apply(k, u));
-        }
-        if let Some(a) = self.actuator.as_mut() {
-            a.apply(k, &self.u_f);
-            self.u_f.copy_from_slice(&a.late);
+    /// The plant's input over sample k from the held output and the step's command `u` (25):
+    /// moved to the true delays, then through the actuator ([`InputLine`]); its peaks counted in
+    /// `result` over every segment.
+    fn input(&mut self, k: usize, u: &[f64], result: &mut SimResult) {
+        self.line.apply(k, &self.held, u);
+        let m = self.held.len();
+        for (held, demand) in self.line.values.chunks(m).zip(self.line.demand.chunks(m)) {
+            result.record_input_peaks(u, held);
+            if self.line.has_actuator() {
+                result.record_demand(demand);
+            }
         }
     }
 
@@ -720,11 +477,11 @@ impl PlantSide {
         }
         let watched = Watched { x: &self.s.as_slice()[..self.n], ..ctrl.watched() };
         let states = x_hat.map(|x_hat| (watched.x, x_hat));
-        // The plant input at the sample: the early one where an actuator delay is fractional.
-        let u_f = self.actuator.as_ref().map_or(&self.u_f[..], |a| &a.early[..]);
+        // The plant's input at the sample: the first segment's.
+        let u_f = &self.line.values[..self.held.len()];
         result.push(&Sample { t, y: &self.y, g: &self.g, u: ctrl.command(), u_f, eta: watched.eta, states });
-        if let Some(a) = &self.actuator {
-            result.count_limited(a.limited.iter().copied());
+        if self.line.has_actuator() {
+            result.count_limited(self.line.limited.iter().copied());
         }
         on_progress(t).is_break().then_some(Outcome::Interrupted { t })
     }
@@ -747,12 +504,11 @@ impl PlantSide {
         diverged
     }
 
-    /// s ← Φ s + Γ_late u_f (+ Γ_early u_early, [`Split`]): the next sample's state.
+    /// s ← Φ s + Σ_r Γ_r u_r ([`ExactPlant`]): the next sample's state.
     fn advance(&mut self) {
         mat_vec(&self.Phi, self.s.as_slice(), self.s_next.as_mut_slice(), false);
-        mat_vec(&self.Gamma.late, &self.u_f, self.s_next.as_mut_slice(), true);
-        if let (Some(early), Some(a)) = (&self.Gamma.early, &self.actuator) {
-            mat_vec(early, &a.early, self.s_next.as_mut_slice(), true);
+        for (Gamma, u) in self.Gamma.iter().zip(self.line.values.chunks(self.held.len())) {
+            mat_vec(Gamma, u, self.s_next.as_mut_slice(), true);
         }
         std::mem::swap(&mut self.s, &mut self.s_next);
     }
@@ -800,7 +556,7 @@ fn sampled_loop<C: SampledController + ?Sized>(
     // x̂(k) at the rows (read before the step moves it to x̂(k + 1)): recorded with the states, and
     // what u_f(k)'s terms are formed from.
     let mut x_hat = vec![0.0; n];
-    let mut terms = plant.actuator.is_none().then(|| UfTerms::new(run.design));
+    let mut terms = (!plant.line.has_actuator()).then(|| UfTerms::new(run.design));
     let bounds = run.bounds();
     let mut outcome = Outcome::Completed;
     let mut taken = 0;
@@ -826,11 +582,7 @@ fn sampled_loop<C: SampledController + ?Sized>(
                 break;
             }
         }
-        plant.input(k, ctrl.command());
-        result.record_input_peaks(ctrl.command(), &plant.u_f);
-        if let Some(a) = &plant.actuator {
-            result.record_demand(&a.demand);
-        }
+        plant.input(k, ctrl.command(), &mut result);
         taken += 1;
         if k % every == 0 {
             // Rows at k·output_step, which every sample time accepted as dividing it meets to the

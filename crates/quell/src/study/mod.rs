@@ -859,26 +859,26 @@ fn base_run_error(doc: &toml::Table, scenario: &Scenario, source: &str) -> Optio
     Some((e, error))
 }
 
-/// A sampled-data study draws no delay of the commands: a delay drawn from a continuous law is a
-/// whole number of samples with probability zero, so every draw would fail its run's check (15
-/// failed rows and exit 0, where a grid value that is not whole samples is refused before any run).
-/// The actuator's delays may be drawn: a sampled run takes them in fractions of a sample.
-/// `own`: whether the study's `[simulation]` sets the sample time (it cannot unset the scenario's).
+/// A sampled-data study draws no delay of the model: the controller's delay lines need
+/// `plant.delays` in whole samples, which a delay drawn from a continuous law is with probability
+/// zero, so every draw would fail its run's check (15 failed rows and exit 0, where a grid value
+/// that is not whole samples is refused before any run). The true plant's delays
+/// (`truth.delays`, `truth.actuator_delays`) may be drawn: a sampled run takes them in fractions of
+/// a sample. `own`: whether the study's `[simulation]` sets the sample time (it cannot unset the
+/// scenario's).
 fn check_drawn_delays(
     mc: &MonteCarlo,
     (sample_time, own): (f64, bool),
     unit: crate::settings::TimeUnit,
 ) -> Result<(), StudyError> {
-    let delays = ["plant.delays", "truth.delays"];
-    let Some(p) =
-        mc.perturbations.iter().find(|p| delays.iter().any(|d| p.key == *d || p.key.starts_with(&format!("{d}["))))
-    else {
+    let model = "plant.delays";
+    let Some(p) = mc.perturbations.iter().find(|p| p.key == model || p.key.starts_with(&format!("{model}["))) else {
         return Ok(());
     };
     Err(err(
         format!("monte_carlo.\"{}\"", p.key),
         format!(
-            "a delay drawn from a continuous law is almost never a whole number of samples of simulation.sample_time = {} {unit}, so every sampled run would fail; draw it in the continuous loop ({}) or give whole-sample delays as [grid] values",
+            "a model delay drawn from a continuous law is almost never a whole number of samples of simulation.sample_time = {} {unit}, which the controller's delay lines need, so every sampled run would fail; draw the true plant's delay instead (truth.delays: the controller keeps the model's, and a sampled run takes the truth's in fractions of a sample), draw it in the continuous loop ({}), or give whole-sample delays as [grid] values",
             crate::settings::fmt_short(sample_time),
             if own {
                 "leave simulation.sample_time out of the study"

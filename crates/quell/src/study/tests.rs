@@ -570,29 +570,47 @@ fn grid_values_are_written_in_their_shortest_form() {
     assert_eq!(meta.grid[0].values, ["1e-7", "0.01"]);
 }
 
-/// A sampled-data study that draws a delay is refused before any run, naming the draw: every draw
-/// had failed its run's check (not whole samples) and the sweep exited 0. The same draw in the
-/// continuous loop is a study.
+/// A sampled-data study that draws a delay of the model is refused before any run, naming the
+/// draw: every draw had failed its run's check (not whole samples) and the sweep exited 0. The same
+/// draw in the continuous loop is a study, and so are the true plant's delays in the sampled loop,
+/// which takes them in fractions of a sample: three draws of truth.delays run, each with delays
+/// off the sample grid, each to its end, and no two alike.
 #[test]
-fn a_sampled_study_draws_no_delay() {
-    for key in ["truth.delays", "truth.delays[1]", "plant.delays"] {
+fn a_sampled_study_draws_no_delay_of_the_model() {
+    for key in ["plant.delays", "plant.delays[1]"] {
         let text = format!(
             "[simulation]\nt_end = 5.0\nsample_time = 0.01\n[monte_carlo]\nruns = 3\n\"{key}\" = {{ uniform = 0.2 }}\n"
         );
         let e = error(&text);
-        assert!(e.starts_with(&format!("monte_carlo.\"{key}\": a delay drawn from a continuous law")), "{e}");
+        assert!(e.starts_with(&format!("monte_carlo.\"{key}\": a model delay drawn from a continuous law")), "{e}");
         assert!(e.contains("simulation.sample_time = 0.01 s"), "{e}");
+        assert!(e.contains("draw the true plant's delay instead (truth.delays"), "{e}");
         assert!(e.contains("(leave simulation.sample_time out of the study)"), "{e}");
     }
     // A sample time from the scenario is not the study's to leave out (a study had been told to).
     let file = format!("{}/../../examples/paper-sampled.toml", env!("CARGO_MANIFEST_DIR"));
-    let e = error(&format!("scenario = \"{file}\"\n[monte_carlo]\nruns = 3\n\"truth.delays\" = {{ uniform = 0.2 }}\n"));
+    let e = error(&format!("scenario = \"{file}\"\n[monte_carlo]\nruns = 3\n\"plant.delays\" = {{ uniform = 0.2 }}\n"));
     assert!(e.contains("(a study of a copy of the scenario without its simulation.sample_time, which a study's [simulation] cannot remove)"), "{e}");
-    let continuous = "[simulation]\nt_end = 5.0\n[monte_carlo]\nruns = 3\n\"truth.delays\" = { uniform = 0.2 }\n";
+    let continuous = "[simulation]\nt_end = 5.0\n[monte_carlo]\nruns = 3\n\"plant.delays\" = { uniform = 0.2 }\n";
     assert!(Study::from_toml(continuous, None).is_ok());
-    // The actuator's delays may be drawn: a sampled run takes fractions of a sample there.
-    let actuator = "[simulation]\nt_end = 5.0\nsample_time = 0.01\n[monte_carlo]\nruns = 3\n\"truth.actuator_delays[0]\" = { uniform = 0.2 }\n";
-    assert!(Study::from_toml(actuator, None).is_ok());
+    // The true plant's delays may be drawn: a sampled run takes fractions of a sample there.
+    for key in ["truth.delays", "truth.delays[1]", "truth.actuator_delays[0]"] {
+        let text = format!(
+            "[simulation]\nt_end = 5.0\nsample_time = 0.01\n[monte_carlo]\nruns = 3\n\"{key}\" = {{ uniform = 0.2 }}\n"
+        );
+        assert!(Study::from_toml(&text, None).is_ok(), "{key}");
+    }
+    let s = study("[simulation]\nt_end = 5.0\nsample_time = 0.01\n[monte_carlo]\nruns = 3\n\"truth.delays\" = { uniform = 0.2 }\n").unwrap();
+    let mut tails = Vec::new();
+    for i in 0..3 {
+        let spec = s.spec_with_nominal(i).unwrap();
+        let delays = spec.scenario["truth"]["delays"].as_array().unwrap().iter().map(|v| v.as_float().unwrap());
+        assert!(delays.into_iter().all(|tau| ((tau / 0.01) - (tau / 0.01).round()).abs() > 1e-6), "{spec:?}");
+        let row = crate::study::sweep::run_one(&spec);
+        assert_eq!((row.outcome, row.steps), (crate::study::sweep::Outcome::Completed, 501u64), "{}", row.reason);
+        tails.push(row.channels[0].tail_max_e);
+    }
+    assert!(tails[0] != tails[1] && tails[1] != tails[2] && tails[0] != tails[2], "{tails:?}");
 }
 
 /// A study's t_end that its scenario's own output_step does not fit is named as the study's
