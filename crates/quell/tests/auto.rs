@@ -350,8 +350,10 @@ fn a_value_the_rules_chose_and_the_design_refuses_is_named_as_theirs() {
 /// simulation.sample_time = 0.0005 the rules halve the poles to T_s·ρ ≤ 0.2. That start drives
 /// u_f 195× its continuous loop's peak (1059 V against 5.4 V; it had passed so, and the run's own
 /// comparison then sent the user back to the automatic design), the next slower one still 3.7×, so
-/// it is slowed until the sampled run stays within twice its continuous u_f; over the 5 s of the file that slower loop misses the tail bound, and
-/// the failed verification names the horizon at which the automatic design passes.
+/// it is slowed until the sampled run stays within twice its continuous u_f; over the 5 s of the
+/// file that slower loop misses the tail bound, and its observer ×4, verified by runs, meets it
+/// (the failed verification had named a horizon of 13 s instead); over 13 s the slowed loop passes
+/// as it is.
 #[test]
 fn a_sampled_scenario_gets_poles_slow_enough_for_its_sample_time() {
     let rho = |a: &quell::auto::AutoDesign| {
@@ -364,10 +366,22 @@ fn a_sampled_scenario_gets_poles_slow_enough_for_its_sample_time() {
     assert!(t_s * rho(&continuous) > quell::sim::COARSE_SAMPLE, "ρ = {}", rho(&continuous));
     let text = data("maglev.toml").replace("[simulation]\n", &format!("[simulation]\nsample_time = {t_s}\n"));
     let short = auto_design(&unit_sized(&text), &Targets::default()).unwrap();
-    assert!(!short.verification.passed, "{:?}", short.verification);
-    let advice = short.verification.advice.join("\n");
-    let proposed = number_after(&advice, "lengthen simulation.t_end to at least ", " ");
-    let longer = text.replace("t_end = 5.0", &format!("t_end = {proposed:?}"));
+    assert!(short.verification.passed, "{:?}", short.verification);
+    let (first, kept) = (&short.verification.candidates[0], short.verification.candidates.iter().find(|c| c.chosen));
+    assert!(!first.tail_max_e.iter().zip(&short.verification.bound).all(|(e, b)| e <= b), "{first:?}");
+    assert_eq!(kept.unwrap().speed.observer, 4.0 * first.speed.observer, "{kept:?}");
+    let why = &short.choices.iter().find(|c| c.key == "design.observer_poles").unwrap().why;
+    assert!(
+        why.contains(
+            "; the relaxation started from ×4 of the proposal's observer: the proposal's run missed its tail bound ("
+        ),
+        "{why}"
+    );
+    let go = |_| ControlFlow::Continue(());
+    let r = Run::of(&short.scenario, &short.design).simulate(go).unwrap();
+    let tail = r.summary()[0].figures.tail_max_e;
+    assert!(tail <= short.verification.bound[0], "{tail}");
+    let longer = text.replace("t_end = 5.0", "t_end = 13.0");
     let sampled = auto_design(&unit_sized(&longer), &Targets::default()).unwrap();
     assert_eq!(sampled.scenario.simulation.sample_time, Some(t_s));
     assert!(sampled.verification.passed, "{:?}", sampled.verification);
@@ -390,7 +404,6 @@ fn a_sampled_scenario_gets_poles_slow_enough_for_its_sample_time() {
     let slowed = format!("×{} of the rules' poles in all: the sampled-data verifying runs of the faster proposals drove u_f beyond twice their continuous loop's (the last: y[1] by ", kept.observer);
     assert!(why.contains(&slowed), "{why}");
     // The kept design's sampled run against its continuous loop, on their own rows.
-    let go = |_| ControlFlow::Continue(());
     let r = Run::of(&sampled.scenario, &sampled.design).simulate(go).unwrap();
     let mut s = sampled.scenario.clone();
     s.simulation.sample_time = None;
@@ -1017,13 +1030,15 @@ fn the_sampled_halving_says_when_it_costs_the_disturbance_observer() {
 }
 
 /// A design that fails because the horizon is shorter than its adaptation needs (a servo in ms,
-/// tests/data/servo-ms.toml: its slowest excited direction converges in 1/(μλ) ≈ 1.3 s, the
-/// stiffness cap keeps μ, and 2 s leave a tail error of 14 % of the reference's peak) gets advice
-/// with the horizon the averaged law calls for; with that horizon the same rules pass.
+/// tests/data/servo-ms.toml with sizes of 1 given: its slowest excited direction converges in
+/// 1/(μλ) ≈ 1.3 s, the stiffness cap keeps μ, and 2 s leave a tail error of 14 % of the
+/// reference's peak) gets advice with the horizon the averaged law calls for; with that horizon
+/// the same rules pass. (Without the sizes its load torque, 1/67 of the reference, is sized after
+/// the first run and the design passes in the 2 s: `a_disturbance_small_only_in_its_units_…`.)
 #[test]
 fn a_horizon_too_short_for_the_adaptation_gets_the_one_it_needs() {
     let text = data("servo-ms.toml");
-    let a = auto_design(&without_design(&text), &Targets::default()).unwrap();
+    let a = auto_design(&with_unit_sizes(without_design(&text)), &Targets::default()).unwrap();
     assert!(!a.verification.passed);
     let advice = a.verification.advice.join("\n");
     let proposed = advice
@@ -1036,7 +1051,7 @@ fn a_horizon_too_short_for_the_adaptation_gets_the_one_it_needs() {
     // 3 × the predicted time over 0.9, well beyond the 2 s given.
     assert!((10_000.0..100_000.0).contains(&proposed), "{proposed}");
     let longer = text.replace("t_end = 2000.0", &format!("t_end = {proposed:?}"));
-    let b = auto_design(&without_design(&longer), &Targets::default()).unwrap();
+    let b = auto_design(&with_unit_sizes(without_design(&longer)), &Targets::default()).unwrap();
     assert!(b.verification.passed, "{:?}", b.verification);
     assert!(b.verification.advice.is_empty(), "{:?}", b.verification.advice);
 }
@@ -1191,11 +1206,12 @@ fn a_verified_horizon_holds_under_the_actuator_limit() {
     assert!(long.verification.max_uf.iter().all(|&u| u <= 25.0), "{:?}", long.verification.max_uf);
 }
 
-/// Stopped during the search for a longer horizon (the servo in ms fails at 2000 ms), the design
-/// still returns its failed verification, with the search so far, not only "interrupted".
+/// Stopped during the search for a longer horizon (the servo in ms with sizes of 1 fails at 2000
+/// ms), the design still returns its failed verification, with the search so far, not only
+/// "interrupted".
 #[test]
 fn a_stop_during_the_horizon_search_keeps_the_failed_verification() {
-    let doc = without_design(&data("servo-ms.toml"));
+    let doc = with_unit_sizes(without_design(&data("servo-ms.toml")));
     let mut stop_longer = |p: &quell::auto::Progress| {
         if p.t_end > 2000.0 {
             ControlFlow::Break(())
@@ -1807,6 +1823,81 @@ fn an_output_in_millimetres_gets_the_design_of_its_own_units() {
     assert!(motor.contains("[-100000.0]") && motor.contains("[-66666.66666666667]") && motor.contains("bias = 1e-5"));
     let kn = auto_design(&without_design(&motor), &Targets::default()).unwrap();
     assert!(!kn.design.has_sizes() && kn.verification.passed, "{:?}", kn.verification);
+}
+
+/// The paper's example with ω in units 1000× larger (D and Q ×1000, ω's amplitudes and biases
+/// ÷1000: the same plant): its components, 1000× below the references, were taken to be small in
+/// their effect and left unsized, and the design failed its verification (tails 240× the bound;
+/// Python tryout, 2026-12-07). After that first run the components are sized by their own peaks'
+/// powers of ten (1 for g, 1e-3 for ω), which makes ξ̂ the paper's own: the design is the one of
+/// the paper's own units (poles and β the same, μ within 1e-9, the verifying runs' tolerance), and
+/// the sizes' reason says why.
+#[test]
+fn a_disturbance_small_only_in_its_units_is_sized_after_its_first_run() {
+    let text = quell::scenario::PAPER_EXAMPLE;
+    let paper = without_design(text);
+    let scaled = text
+        .replace(
+            "D = [[1.0, -3.0], [2.0, 1.0], [3.0, 1.0]]",
+            "D = [[1000.0, -3000.0], [2000.0, 1000.0], [3000.0, 1000.0]]",
+        )
+        .replace("Q = [[1.0, 2.0], [1.0, 0.0]]", "Q = [[1000.0, 2000.0], [1000.0, 0.0]]")
+        .replace("{ amplitude = 1.0, frequency = 1.0", "{ amplitude = 0.001, frequency = 1.0")
+        .replace("bias = 1.0, harmonics = [{ amplitude = 2.0,", "bias = 0.001, harmonics = [{ amplitude = 0.002,");
+    for part in ["D = [[1000.0", "Q = [[1000.0", "amplitude = 0.001, frequency = 1.0", "bias = 0.001"] {
+        assert!(scaled.contains(part), "{part}");
+    }
+    let (a, b) = (
+        auto_design(&paper, &Targets::default()).unwrap(),
+        auto_design(&without_design(&scaled), &Targets::default()).unwrap(),
+    );
+    assert!(a.verification.passed && b.verification.passed, "{:?}\n{:?}", a.verification, b.verification);
+    let first = &b.verification.candidates[0];
+    assert!(first.worst_tail(&b.verification.bound) > 10.0, "{first:?}");
+    assert_eq!((b.design.reference_sizes(), b.design.disturbance_sizes()), (&[1.0, 1.0][..], &[1e-3, 1e-3][..]));
+    let why = &b.choices.iter().find(|c| c.key == "design.disturbance_sizes").unwrap().why;
+    assert!(
+        why.starts_with("each component sized by its own peak's power of ten: the first proposal, which sized none"),
+        "{why}"
+    );
+    let same =
+        |x: &[Complex<f64>], y: &[Complex<f64>]| x.iter().zip(y).all(|(p, q)| (p - q).norm() <= 1e-12 * p.norm());
+    assert!(same(a.design.observer_eigenvalues(), b.design.observer_eigenvalues()));
+    assert!(same(a.design.decoupled_eigenvalues(), b.design.decoupled_eigenvalues()));
+    assert_eq!(a.design.beta(), b.design.beta());
+    for (x, y) in a.design.mu().iter().zip(b.design.mu()) {
+        assert!((x - y).abs() <= 1e-9 * x, "μ {:?} against {:?}", a.design.mu(), b.design.mu());
+    }
+}
+
+/// A drum boiler (Bell & Åström's, fuel and feedwater to pressure and level, `tests/data/
+/// drum-boiler.toml`, seconds): with the observer the rules chose its level missed the tail
+/// bound 10× (1.3e-4 m against 1.27e-5), its run's advice reading the disturbance observer as no
+/// better up to 1000× faster; after that first run the observer's poles are doubled, each verified
+/// by a run, and ×8 meets it (helper tryout, 2026-12-07). The written scenario, run on its own,
+/// meets every bound.
+#[test]
+fn a_first_proposal_that_misses_gets_a_faster_observer_verified_by_runs() {
+    let doc = without_design(&data("drum-boiler.toml"));
+    let a = auto_design(&doc, &Targets::default()).unwrap();
+    assert!(a.verification.passed, "{:?}", a.verification);
+    let first = &a.verification.candidates[0];
+    let bound = &a.verification.bound;
+    assert!(first.worst_tail(bound) > 1.0, "{first:?}");
+    let kept = a.verification.candidates.iter().find(|c| c.chosen).unwrap();
+    assert!(kept.speed.observer > first.speed.observer, "{kept:?}");
+    let why = &a.choices.iter().find(|c| c.key == "design.observer_poles").unwrap().why;
+    assert!(
+        why.contains(
+            "; the relaxation started from ×8 of the proposal's observer: the proposal's run missed its tail bound"
+        ),
+        "{why}"
+    );
+    let written = Scenario::from_toml(&a.scenario.to_toml()).unwrap();
+    let r = Run::of(&written, &written.design().unwrap()).simulate(|_| ControlFlow::Continue(())).unwrap();
+    for (c, b) in r.summary().iter().zip(bound) {
+        assert!(c.figures.tail_max_e <= *b, "{} against {b}", c.figures.tail_max_e);
+    }
 }
 
 /// The point-kinetics reactor of `tests/data` with the channel and observer poles given by hand
