@@ -114,7 +114,7 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
         code.state_bytes
     );
     let unit = fmu.as_ref().and_then(|f| quell::export::time_unit_warning(&design, sample_time, f.version));
-    let precision = code.precision_warning.clone().filter(|_| !matches!(&check, Some(Ok(_))));
+    let precision = code.precision_warning.clone().filter(|_| !matches!(&check, Some(Ok(c)) if c.precision_measured));
     print_warnings(
         code.size_warning().into_iter().chain(precision).chain(unit).chain(earlier),
         args.precision.is_none(),

@@ -911,7 +911,7 @@ fn check_first(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier) ->
             (first, design, c.clone()),
             bound.to_vec(),
             (runs, targets.convergence_time),
-            vec![c],
+            (vec![c], 0),
             (false, targets),
             vec![advice],
         );
@@ -1142,11 +1142,10 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
     // own document.
     let (mut sized, mut again, mut notes) = (None, None, Vec::new());
     if !first_check.tail_within(&bound, 1.0) {
-        let v = (&first, &first_check);
-        if let Some((sized_doc, verified, sizes)) = sized_by_peaks(doc, targets, verifier, v, &bound, &mut candidates)?
-        {
+        let retry = Retry { doc, targets, first: &first, check: &first_check, bound: &bound };
+        if let Some((sized_doc, verified, sizes)) = sized_by_peaks(&retry, verifier, &mut candidates)? {
             (sized, again, notes) = (Some(sized_doc), Some(verified), sizes);
-        } else if let Some((verified, why)) = faster_observer(doc, targets, verifier, v, &bound, &mut candidates)? {
+        } else if let Some((verified, why)) = faster_observer(&retry, verifier, &mut candidates)? {
             let key = "design.observer_poles".to_string();
             (again, notes) = (Some(verified), vec![Choice { key, value: String::new(), why }]);
         }
@@ -1161,13 +1160,13 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
             (first, design, first_check),
             bound,
             (verifier.runs, verifier.convergence_time),
-            candidates,
+            (candidates, 0),
             (false, targets),
             advice,
         ));
     }
     let (kept, within) = relax(doc, targets, (first, design, first_check), &bound, verifier, &mut candidates)?;
-    mark_chosen(&mut candidates, kept.2.speed);
+    mark_chosen(&mut candidates, kept.2.speed, start);
     let advice = match within {
         true => Vec::new(),
         false => {
@@ -1180,10 +1179,8 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
         }
     };
     let chosen = kept.clone();
-    candidates.swap(0, start);
-    let mut auto =
-        finish(kept, bound.clone(), (verifier.runs, verifier.convergence_time), candidates, (within, targets), advice);
-    auto.verification.candidates.swap(0, start);
+    let runs = (verifier.runs, verifier.convergence_time);
+    let mut auto = finish(kept, bound.clone(), runs, (candidates, start), (within, targets), advice);
     add_notes(&mut auto.choices, notes);
     if auto.verification.passed {
         let (checks, tolerance) = delay_checks(&auto.scenario, &auto.design, (targets, &chosen.2), &bound, verifier)?;
@@ -1205,13 +1202,11 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
 /// tryout, 2026-12-07); a DC motor's load torque in kN·m, truly small, passes unsized and is never
 /// sized. Not inside a horizon's repeat.
 fn sized_by_peaks(
-    doc: &toml::Table,
-    targets: &Targets,
+    retry: &Retry,
     verifier: &mut Verifier,
-    (first, check): (&Proposal, &Candidate),
-    bound: &[f64],
     candidates: &mut Vec<Candidate>,
 ) -> Result<Option<(toml::Table, Verified, Vec<Choice>)>, AutoError> {
+    let Retry { doc, targets, first, check, bound } = *retry;
     let s = &first.scenario;
     let none_sized = s.design.reference_sizes.is_empty() && s.design.disturbance_sizes.is_empty();
     let peaks = [&s.reference, &s.disturbance].map(|g| g.components.iter().map(|c| c.peak()).collect::<Vec<f64>>());
@@ -1230,13 +1225,8 @@ fn sized_by_peaks(
             design.insert(key.to_string(), toml::Value::Array(v.iter().map(|&x| toml::Value::Float(x)).collect()));
         }
     }
-    let Ok(p) = propose(&sized, targets, check.speed) else { return Ok(None) };
-    let Ok(d) = p.scenario.design() else { return Ok(None) };
-    let c = match verifier.check(&p.scenario, &d, check.speed) {
-        Ok(c) => c,
-        Err(AutoError::Interrupted) => return Err(AutoError::Interrupted),
-        Err(_) => return Ok(None),
-    };
+    let Some((mut p, d, c)) = verified_at(&sized, targets, verifier, check.speed)? else { return Ok(None) };
+    carry_reasons(first, &mut p);
     candidates.push(c.clone());
     if !(c.tail_within(bound, 1.0) && c.within_limit(targets)) {
         return Ok(None);
@@ -1256,6 +1246,46 @@ fn sized_by_peaks(
     Ok(Some((sized, (p, d, c), notes)))
 }
 
+/// What a retry of a first proposal that missed its bound starts from ([`sized_by_peaks`],
+/// [`faster_observer`]): the document, the targets, the proposal, its run and the bounds.
+#[derive(Clone, Copy)]
+struct Retry<'a> {
+    doc: &'a toml::Table,
+    targets: &'a Targets,
+    first: &'a Proposal,
+    check: &'a Candidate,
+    bound: &'a [f64],
+}
+
+/// The first proposal's reasons, but μ's (a retry's μ is its own rule's), on a retry's choices of
+/// the same keys: they say how the poles were reached (for a sample time, after faster proposals
+/// ended early), which a fresh proposal does not (a retry of a sampled maglev had left its channel
+/// poles' ×0.25 unexplained; review, 2026-12-07).
+fn carry_reasons(first: &Proposal, retry: &mut Proposal) {
+    for choice in retry.choices.iter_mut().filter(|c| c.key != "design.mu") {
+        if let Some(from) = first.choices.iter().find(|c| c.key == choice.key) {
+            choice.why.clone_from(&from.why);
+        }
+    }
+}
+
+/// The rules' proposal for `doc` at `speed`, designed and verified by one run; `None` where it
+/// cannot be designed or its run fails (only a stop is an error).
+fn verified_at(
+    doc: &toml::Table,
+    targets: &Targets,
+    verifier: &mut Verifier,
+    speed: Speed,
+) -> Result<Option<Verified>, AutoError> {
+    let Ok(p) = propose(doc, targets, speed) else { return Ok(None) };
+    let Ok(d) = p.scenario.design() else { return Ok(None) };
+    match verifier.check(&p.scenario, &d, speed) {
+        Ok(c) => Ok(Some((p, d, c))),
+        Err(AutoError::Interrupted) => Err(AutoError::Interrupted),
+        Err(_) => Ok(None),
+    }
+}
+
 /// How many times [`faster_observer`] doubles the observer's poles.
 const OBSERVER_DOUBLINGS: i32 = 4;
 
@@ -1269,26 +1299,19 @@ const OBSERVER_DOUBLINGS: i32 = 4;
 /// rules chose, read as passing ω no better up to 1000× faster, and met it at ×10 (helper
 /// tryout, 2026-12-07). Not inside a horizon's repeat.
 fn faster_observer(
-    doc: &toml::Table,
-    targets: &Targets,
+    retry: &Retry,
     verifier: &mut Verifier,
-    (first, check): (&Proposal, &Candidate),
-    bound: &[f64],
     candidates: &mut Vec<Candidate>,
 ) -> Result<Option<(Verified, String)>, AutoError> {
+    let Retry { doc, targets, first, check, bound } = *retry;
     if !first.relaxable[1] || verifier.nested {
         return Ok(None);
     }
     let mut worst = check.worst_tail(bound);
     for j in 1..=OBSERVER_DOUBLINGS {
         let speed = Speed { observer: check.speed.observer * 2f64.powi(j), ..check.speed };
-        let Ok(p) = propose(doc, targets, speed) else { break };
-        let Ok(d) = p.scenario.design() else { break };
-        let c = match verifier.check(&p.scenario, &d, speed) {
-            Ok(c) => c,
-            Err(AutoError::Interrupted) => return Err(AutoError::Interrupted),
-            Err(_) => break,
-        };
+        let Some((mut p, d, c)) = verified_at(doc, targets, verifier, speed)? else { break };
+        carry_reasons(first, &mut p);
         candidates.push(c.clone());
         if c.tail_within(bound, 1.0) && c.within_limit(targets) {
             let why = format!(
@@ -1299,7 +1322,8 @@ fn faster_observer(
             );
             return Ok(Some(((p, d, c), why)));
         }
-        if c.worst_tail(bound) >= worst {
+        // A faster observer only asks more of the actuator: past the limit, no further.
+        if c.worst_tail(bound) >= worst || (c.tail_within(bound, 1.0) && !c.within_limit(targets)) {
             break;
         }
         worst = c.worst_tail(bound);
@@ -1318,10 +1342,13 @@ fn add_notes(choices: &mut Vec<Choice>, notes: Vec<Choice>) {
     }
 }
 
-/// Marks the candidate at `speed` as the one returned, and no other.
-fn mark_chosen(candidates: &mut [Candidate], speed: Speed) {
-    for c in candidates {
-        c.chosen = c.speed == speed;
+/// Marks the candidate at `speed` as the one returned, and no other: the last one at that speed
+/// from index `from` on (a retry runs the first proposal's speed with its components sized, and a
+/// relaxation may run a retry's rejected speed again; both had been marked).
+fn mark_chosen(candidates: &mut [Candidate], speed: Speed, from: usize) {
+    let kept = (from..candidates.len()).rev().find(|&i| candidates[i].speed == speed);
+    for (i, c) in candidates.iter_mut().enumerate() {
+        c.chosen = Some(i) == kept;
     }
 }
 
@@ -1364,13 +1391,7 @@ fn delay_robust(
     for j in 1..=RELAX_STEPS {
         let factor = 0.5f64.powi(j as i32);
         let speed = Speed { channel: base.channel * factor, raised: false, ..base };
-        let Ok(p) = propose(doc, targets, speed) else { break };
-        let Ok(d) = p.scenario.design() else { break };
-        let c = match verifier.check(&p.scenario, &d, speed) {
-            Ok(c) => c,
-            Err(AutoError::Interrupted) => return Err(AutoError::Interrupted),
-            Err(_) => break,
-        };
+        let Some((p, d, c)) = verified_at(doc, targets, verifier, speed)? else { break };
         candidates.push(c.clone());
         // Slower channels converge more slowly: past the bound (or the effort) they go no further.
         if !c.tail_within(bound, 1.0)
@@ -1380,14 +1401,14 @@ fn delay_robust(
         }
         let level = delay_level(&p.scenario, &d, (error, &c), targets, bound, verifier)?;
         if level.iter().all(|k| k.met) {
-            mark_chosen(&mut candidates, speed);
+            mark_chosen(&mut candidates, speed, 0);
             let slowed = format!(
                 "; then, {asked}, the channel poles halved until the delays off by it both ways meet the tail bound and the effort: {after}, kept ×{factor} of the kept candidate's channel poles{mu} (its worst tail {:.1e} of the bound), {} (candidates and their delay runs)",
                 c.worst_tail(bound),
                 crate::settings::count(verifier.runs - before, "more verifying run", "more verifying runs")
             );
             let runs = (verifier.runs, verifier.convergence_time);
-            let mut slower = finish((p, d, c), bound.to_vec(), runs, candidates, (true, targets), Vec::new());
+            let mut slower = finish((p, d, c), bound.to_vec(), runs, (candidates, 0), (true, targets), Vec::new());
             slower.verification.relaxation = format!("{}{slowed}", auto.verification.relaxation);
             let tolerance = level.iter().map(|k| k.error).fold(f64::INFINITY, f64::min);
             (slower.verification.delay_check, slower.verification.delay_tolerance) = (level, tolerance);
@@ -1869,7 +1890,7 @@ fn finish(
     (mut p, design, c): Verified,
     bound: Vec<f64>,
     (runs, convergence_time): (usize, Option<f64>),
-    candidates: Vec<Candidate>,
+    (candidates, from): (Vec<Candidate>, usize),
     (passed, targets): (bool, &Targets),
     advice: Vec<String>,
 ) -> AutoDesign {
@@ -1882,11 +1903,13 @@ fn finish(
     });
     let aim_at_convergence = aim_at_convergence.collect();
     if candidates.len() > 1 {
-        // The relaxation's factor is relative to the first candidate (the rules' proposal, or a
-        // slower start: for the sample time, or after faster proposals ended early), whose own
-        // factor a relaxed proposal's reasons do not carry: said with it, over the rules' poles (an
-        // arm's observer had read "r_o = 473.86 …; then ×0.25 of that" at ×1/64 of it).
-        let start = candidates[0].speed;
+        // The relaxation's factor is relative to the candidate it started from (`from`: the rules'
+        // proposal, or a slower start: for the sample time, or after faster proposals ended early;
+        // or a retry of a first proposal that missed), whose own factor a relaxed proposal's
+        // reasons do not carry: said with it, over the rules' poles (an arm's observer had read
+        // "r_o = 473.86 …; then ×0.25 of that" at ×1/64 of it).
+        let start = candidates[from].speed;
+        let started = if from == 0 { "the first candidate" } else { "the candidate the relaxation started from" };
         let factors = |key: &str| match key {
             "design.channel_poles" => Some((start.channel, speed.channel / start.channel)),
             "design.observer_poles" => Some((start.observer, speed.observer / start.observer)),
@@ -1899,7 +1922,7 @@ fn finish(
                     ch.why.push_str(&format!("; then ×{relaxed} of that in the relaxation (the verification says how)"));
                 }
                 Some((first, relaxed)) if relaxed != 1.0 => ch.why.push_str(&format!(
-                    "; then ×{} of that in all: ×{first} in the first candidate (see the verification's candidates) and ×{relaxed} in the relaxation",
+                    "; then ×{} of that in all: ×{first} in {started} (see the verification's candidates) and ×{relaxed} in the relaxation",
                     first * relaxed
                 )),
                 _ => {}
@@ -1909,7 +1932,8 @@ fn finish(
     if let (Some(raised), Some(ch)) = (&p.raised, p.choices.iter_mut().find(|c| c.key == "design.mu")) {
         ch.why.push_str(&format!("; {raised}"));
     }
-    let relaxation = relaxation_text(&p, &c, (runs, &candidates), &bound, (passed, targets_limited));
+    let origin = if from == 0 { "the first proposal" } else { "the retry" };
+    let relaxation = relaxation_text(&p, &c, (runs, &candidates[from..], origin), &bound, (passed, targets_limited));
     // A steady state beyond the true actuator is the cause to name first; a passing run may still
     // have thrashed at DOP853's stability bound: the caution `quell run` gives.
     let saturated = (!passed).then(|| crate::diagnostics::effort::saturation_advice(&p.scenario)).flatten();
@@ -1946,7 +1970,7 @@ fn finish(
 fn relaxation_text(
     p: &Proposal,
     c: &Candidate,
-    (runs, candidates): (usize, &[Candidate]),
+    (runs, candidates, origin): (usize, &[Candidate], &str),
     bound: &[f64],
     (passed, targets_limited): (bool, bool),
 ) -> String {
@@ -1955,9 +1979,9 @@ fn relaxation_text(
     let phased = candidates.iter().skip(1).any(|k| !k.speed.raised);
     if phased {
         format!(
-            "{} verifying runs: from the first proposal, the observer's own poles halved (phase 1), then the channel poles with them (2), then, while none is within the actuator limits, the channel poles alone from phase 1's observer (3), then μ (4), up to {RELAX_STEPS} times each, each phase from the candidate kept so far and stopped by a tail beyond the bound / {TAIL_MARGIN}{}; then μ raised where the design report would call the kept one's too small for the horizon (5: kept where it costs less); kept {speed}: {}",
+            "{} verifying runs: from {origin}, the observer's own poles halved (phase 1), then the channel poles with them (2), then, while none is within the actuator limits, the channel poles alone from phase 1's observer (3), then μ (4), up to {RELAX_STEPS} times each, each phase from the candidate kept so far and stopped by a tail beyond the bound / {TAIL_MARGIN}{}; then μ raised where the design report would call the kept one's too small for the horizon (5: kept where it costs less); kept {speed}: {}",
             runs,
-            if targets_limited { String::new() } else { format!(" or a max|u_f,i| beyond {EFFORT_GROWTH}× the first proposal's") },
+            if targets_limited { String::new() } else { format!(" or a max|u_f,i| beyond {EFFORT_GROWTH}× {origin}'s") },
             if targets_limited && !passed {
                 "none within the actuator limits: the closest to them (the least max|u_f,i| / limit at worst)".to_string()
             } else if targets_limited {
@@ -1975,7 +1999,7 @@ fn relaxation_text(
             "none: the scenario gives the channel poles, the observer poles and μ, so there is nothing to relax"
                 .to_string()
         } else if !first.tail_within(bound, TAIL_MARGIN) {
-            format!("none: the first proposal's worst tail is {:.1e} of its bound, above 1/{TAIL_MARGIN}, so no slower candidate was tried (slower poles or μ would leave a larger tail)", first.worst_tail(bound))
+            format!("none: {origin}'s worst tail is {:.1e} of its bound, above 1/{TAIL_MARGIN}, so no slower candidate was tried (slower poles or μ would leave a larger tail)", first.worst_tail(bound))
         } else {
             "none: no slower candidate could be designed".to_string()
         };
@@ -1986,7 +2010,7 @@ fn relaxation_text(
                 if speed.raised {
                     format!("kept, its worst tail {:.1e} of its bound against {:.1e}", r.worst_tail(bound), first.worst_tail(bound))
                 } else {
-                    format!("not kept, as it did not verify better (its worst tail {:.1e} of its bound, max|u_f,i| up to {}× the first proposal's)", r.worst_tail(bound), crate::settings::fmt_ratio(r.max_uf.iter().zip(&first.max_uf).map(|(a, b)| a / b).fold(0.0, f64::max)))
+                    format!("not kept, as it did not verify better (its worst tail {:.1e} of its bound, max|u_f,i| up to {}× {origin}'s)", r.worst_tail(bound), crate::settings::fmt_ratio(r.max_uf.iter().zip(&first.max_uf).map(|(a, b)| a / b).fold(0.0, f64::max)))
                 }
             ),
         }

@@ -1855,6 +1855,10 @@ fn a_disturbance_small_only_in_its_units_is_sized_after_its_first_run() {
     let first = &b.verification.candidates[0];
     assert!(first.worst_tail(&b.verification.bound) > 10.0, "{first:?}");
     assert_eq!((b.design.reference_sizes(), b.design.disturbance_sizes()), (&[1.0, 1.0][..], &[1e-3, 1e-3][..]));
+    // The retry runs the first proposal's speed: only one of the two is kept (both had been).
+    let kept: Vec<usize> =
+        (b.verification.candidates.iter().enumerate()).filter(|(_, c)| c.chosen).map(|(i, _)| i).collect();
+    assert!(kept.len() == 1 && kept[0] > 0, "{kept:?}");
     let why = &b.choices.iter().find(|c| c.key == "design.disturbance_sizes").unwrap().why;
     assert!(
         why.starts_with("each component sized by its own peak's power of ten: the first proposal, which sized none"),
@@ -1893,6 +1897,12 @@ fn a_first_proposal_that_misses_gets_a_faster_observer_verified_by_runs() {
         ),
         "{why}"
     );
+    // The first proposal's reasons are kept (how r_o was chosen), and the relaxation line speaks
+    // of the retry it started from, whose tail left no room (it had described phases never run).
+    assert!(why.starts_with("n distinct real poles from −r_o to −2·r_o"), "{why}");
+    let relaxation = &a.verification.relaxation;
+    assert!(relaxation.starts_with("none: the retry's worst tail is "), "{relaxation}");
+    assert_eq!(a.verification.candidates.iter().filter(|c| c.chosen).count(), 1);
     let written = Scenario::from_toml(&a.scenario.to_toml()).unwrap();
     let r = Run::of(&written, &written.design().unwrap()).simulate(|_| ControlFlow::Continue(())).unwrap();
     for (c, b) in r.summary().iter().zip(bound) {

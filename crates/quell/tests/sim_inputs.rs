@@ -594,7 +594,7 @@ fn the_truths_delays_need_not_be_whole_samples() {
     let text = format!("{PAPER_EXAMPLE}\n[truth]\ndelays = [1e6, 3.0]\n");
     let s = Scenario::from_toml(&text).unwrap();
     let e = Run::of(&s, &d).settings(RunSettings::sampled(5.0, 0.5, 0.01)).check().unwrap_err().to_string();
-    assert_eq!(e, "truth.delays[0]: τ = 1e6 s is 1e8 samples of T_s = 0.01 s; a sampled-data run's delay line holds at most 1e7: choose simulation.sample_time ≥ 0.1001 s or a shorter delay");
+    assert_eq!(e, "truth.delays[0]: τ = 1e6 s is 1e8 samples of T_s = 0.01 s; a sampled-data run's delay line holds at most 1e7: choose a simulation.sample_time of at least 0.1001 s (one that makes plant.delays whole samples) or a shorter delay");
 }
 
 /// A rejected step that landed on a breakpoint is not proposed again as it was: the paper's loop

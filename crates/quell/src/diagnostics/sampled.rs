@@ -406,7 +406,9 @@ pub fn export_check(
     let result = side_run(&sampled, design).map_err(|e| e.to_string())?;
     let mut lines = Vec::new();
     // In f32, the sampling is judged on the same loop in f64, which the precision check runs.
-    let double = match precision_check(&sampled, design, &result) {
+    let measured = precision_check(&sampled, design, &result);
+    let precision_measured = measured.is_some();
+    let double = match measured {
         Some(check) => {
             lines.push((check.line, check.flagged));
             check.reference
@@ -430,19 +432,21 @@ pub fn export_check(
         };
         lines.push((format!("the sampled-data loop {ended} and was not compared with its continuous loop, which did not run to t_end (a run of the scenario without its sample time says why)"), true));
     }
-    Ok(ExportCheck { lines, follows, horizon: t_end, cut })
+    Ok(ExportCheck { lines, follows, horizon: t_end, cut, precision_measured })
 }
 
 /// What [`export_check`] found: its lines, each with whether it warns (the loop departs, or was not
 /// compared), whether the sampled loop stays within the departure bounds of its continuous loop
 /// (y within half its peak, u_f's peak within twice: `follows`), and the horizon run (`cut`:
-/// shorter than the scenario's t_end).
+/// shorter than the scenario's t_end), and whether an f32 loop was measured against f64
+/// (`precision_measured`: not where either run was stopped or failed).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExportCheck {
     pub lines: Vec<(String, bool)>,
     pub follows: bool,
     pub horizon: f64,
     pub cut: bool,
+    pub precision_measured: bool,
 }
 
 /// One channel's departure of an f32 run from its f64 run ([`precision_check`]), each relative to

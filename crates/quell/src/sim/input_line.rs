@@ -8,7 +8,8 @@ use crate::controller::discrete::{self, MAX_DELAY_SAMPLES};
 use crate::settings::{self, Actuator, KeyError, TimeUnit};
 
 /// Breakpoints within a sample closer than this (a fraction of T_s) are one: a switch moved by
-/// 1e-9 T_s changes the plant's state by as little, and midpoints stay clear of every breakpoint.
+/// 1e-9 T_s changes the plant's state by as little (a midpoint may then fall on the wrong side of
+/// a merged point, for that sliver of a sample).
 const SAME_BREAKPOINT: f64 = 1e-9;
 
 /// The last samples of an m-channel signal v, enough to read channel i at any delay up to the
@@ -96,7 +97,7 @@ impl InputLine {
             None => (vec![0; m], vec![0.0; m]),
         };
         let shifted = !truth.is_empty();
-        let starts = segment_starts(&g, if shifted { &f } else { &[] });
+        let starts = segment_starts(&g, if shifted { &f } else { &[] }, F);
         let ends = starts.iter().skip(1).copied().chain([1.0]);
         let mids: Vec<f64> = starts.iter().zip(ends).map(|(s, e)| 0.5 * (s + e)).collect();
         // ⌊x⌋ for x in (−3, 1): the whole samples a read at x (in samples from kT) goes back.
@@ -172,10 +173,11 @@ impl InputLine {
 }
 
 /// s_0 = 0 and every point within a sample where an input switches: the actuator's fractions g_j,
-/// and with true delays of the commands (fractions f_i) (g_j + f_i) mod 1, merged within
-/// [`SAME_BREAKPOINT`].
-fn segment_starts(g: &[f64], f: &[f64]) -> Vec<f64> {
-    let through = g.iter().flat_map(|&gj| f.iter().map(move |&fi| (gj + fi).fract()));
+/// and with true delays of the commands (fractions f_i) (g_j + f_i) mod 1 where command i reaches
+/// input j (F_ji ≠ 0), merged within [`SAME_BREAKPOINT`].
+fn segment_starts(g: &[f64], f: &[f64], F: &DMatrix<f64>) -> Vec<f64> {
+    let pairs = g.iter().enumerate().flat_map(|(j, &gj)| f.iter().enumerate().map(move |(i, &fi)| (j, i, gj + fi)));
+    let through = pairs.filter(|&(j, i, _)| F[(j, i)] != 0.0).map(|(.., s)| s.fract());
     let mut points: Vec<f64> =
         g.iter().copied().chain(through).filter(|&s| s > SAME_BREAKPOINT && s < 1.0 - SAME_BREAKPOINT).collect();
     points.sort_by(f64::total_cmp);
@@ -207,7 +209,7 @@ pub(super) fn split_delays(
                 return Err(KeyError::new(
                     format!("{key}[{i}]"),
                     format!(
-                        "τ = {} {unit} is {samples:e} samples of T_s = {} {unit}; a sampled-data run's delay line holds at most {MAX_DELAY_SAMPLES:e}: choose simulation.sample_time ≥ {} {unit} or a shorter delay",
+                        "τ = {} {unit} is {samples:e} samples of T_s = {} {unit}; a sampled-data run's delay line holds at most {MAX_DELAY_SAMPLES:e}: choose a simulation.sample_time of at least {} {unit} (one that makes plant.delays whole samples) or a shorter delay",
                         settings::fmt_short(tau),
                         settings::fmt_time(T),
                         settings::fmt_short(settings::significant(tau / MAX_DELAY_SAMPLES * 1.001, 4)),
