@@ -991,7 +991,7 @@ fn observer_remedy(design: &Design, faster: Option<&FasterObserver>, sampled: Op
         OBSERVER_SPEEDUPS[OBSERVER_SPEEDUPS.len() - 1]
     );
     let none = format!(
-        "no speed-up of design.observer_poles up to {}× brings the averaged loop's error below {FIDELITY_TARGET:.2}; give a gain by hand (design.observer_gain), or accept the error, which costs convergence only where the frequency's excitation of Ω̄_i is weak (the channels' `excitation`)",
+        "no speed-up of design.observer_poles up to {}× brings the averaged loop's error below {FIDELITY_TARGET:.2}, by the averaged loop's reading, which a run can belie (a drum boiler read so met its bound with its observer ×8): try the poles ×2 to ×16 by runs, as the automatic design does, give a gain by hand (design.observer_gain), or accept the error, which costs convergence only where the frequency's excitation of Ω̄_i is weak (the channels' `excitation`)",
         OBSERVER_SPEEDUPS[OBSERVER_SPEEDUPS.len() - 1]
     );
     let faster = faster.as_deref().unwrap_or(&none);
