@@ -1980,6 +1980,25 @@ fn a_sampled_automatic_design_says_its_whole_factors() {
     assert!(report.contains("    ×1.1 (τ = [0.0022, 0.0044] s): "), "{report}");
 }
 
+/// A passing automatic design whose report calls μ too small for the horizon (the averaged law's
+/// estimate, beyond the stiffness cap) is told that its verifying run at this t_end met the tail
+/// bound, which decides: a piezo stage (`quell/tests/data/piezo-stage.toml`, 739 Hz, SI units) had
+/// been told in the same output to lengthen t_end (helper tryout, 2026-12-07).
+#[test]
+fn a_passing_design_called_too_slow_for_its_horizon_is_told_the_run_decides() {
+    let piezo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../quell/tests/data/piezo-stage.toml");
+    let o = quell(&["design", piezo.to_str().unwrap(), "--auto"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report = stdout(&o);
+    assert!(report.contains("is too small for the horizon"), "{report}");
+    let note = report
+        .lines()
+        .find(|l| l.starts_with("note: the design report's \"too small for the horizon\""))
+        .expect(&report);
+    let worst: f64 = note.split("(the worst tail ").nth(1).and_then(|r| r.split(' ').next()).unwrap().parse().unwrap();
+    assert!(worst <= 1.0, "{note}");
+}
+
 /// Under --u-limit, the design report's advice to raise μ (the averaged law's pace) is noted as
 /// unchecked against the limit: a mixing tank (`quell/tests/data/mixing-tank.toml`, minutes)
 /// verified within 0.051 and 0.1 was told to raise μ₂ to 18, which breaks them. A run of the
