@@ -1225,23 +1225,20 @@ fn sized_by_peaks(
     let keys = ["reference_sizes", "disturbance_sizes"];
     let design_table = doc.get("design").and_then(|d| d.as_table());
     let none_given = !keys.iter().any(|k| design_table.is_some_and(|d| d.contains_key(*k)));
-    let peaks = [&s.reference, &s.disturbance].map(|g| g.components.iter().map(|c| c.peak()).collect::<Vec<f64>>());
-    let nonzero = |p: &f64| *p > 0.0 && p.is_finite();
-    let smallest = peaks[0].iter().filter(|p| nonzero(p)).fold(f64::INFINITY, |a, &p| a.min(p));
-    let small = peaks.iter().flatten().any(|p| nonzero(p) && SIZE_SPREAD * p <= smallest);
+    let ComponentPeaks { peaks, smallest } = ComponentPeaks::of(s);
+    let small = peaks.iter().flatten().any(|&p| sized(p) && SIZE_SPREAD * p <= smallest);
     if !first.relaxable[2] || !none_given || !small || !smallest.is_finite() || verifier.nested {
         return Ok(None);
     }
-    let decade = |x: f64| 10f64.powi(x.log10().round() as i32);
-    let sizes = peaks.map(|p| p.iter().map(|x| decade(if nonzero(x) { *x } else { smallest })).collect::<Vec<f64>>());
-    let mut sized = doc.clone();
-    if let Some(design) = sized.get_mut("design").and_then(|d| d.as_table_mut()) {
+    let sizes = peaks.map(|p| p.iter().map(|&x| decade(if sized(x) { x } else { smallest })).collect::<Vec<f64>>());
+    let mut sized_doc = doc.clone();
+    if let Some(design) = sized_doc.get_mut("design").and_then(|d| d.as_table_mut()) {
         for (key, v) in keys.iter().zip(&sizes).filter(|(_, v)| !v.is_empty()) {
             design.insert(key.to_string(), toml::Value::Array(v.iter().map(|&x| toml::Value::Float(x)).collect()));
         }
     }
     let speed = Speed { sized: true, ..check.speed };
-    let Some((mut p, d, c)) = verified_at(&sized, targets, verifier, speed)? else { return Ok(None) };
+    let Some((mut p, d, c)) = verified_at(&sized_doc, targets, verifier, speed)? else { return Ok(None) };
     carry_reasons(first, &mut p);
     candidates.push(c.clone());
     if !(c.tail_within(bound, 1.0) && c.within_limit(targets)) {
@@ -1251,15 +1248,15 @@ fn sized_by_peaks(
         key: format!("design.{key}"),
         value: format!("{v:?}"),
         why: format!(
-                "each component sized by its own peak's power of ten: the first proposal, which sized no component below the references (one {} or more times below the smallest reference peak P = {} is taken to be small in its effect), missed its tail bound ({:.1e} of it), and this one met it ({:.1e}): sized, their directions of Ω̄ are excited as the references' are",
-                crate::settings::fmt_4(SIZE_SPREAD),
-                crate::settings::fmt_4(smallest),
+            "each component sized by its own peak's power of ten: the first proposal, which sized no component below the references (one {} or more times below the smallest reference peak P = {} is taken to be small in its effect), missed its tail bound ({:.1e} of it), and this one met it ({:.1e}): sized, their directions of Ω̄ are excited as the references' are",
+            crate::settings::fmt_4(SIZE_SPREAD),
+            crate::settings::fmt_4(smallest),
             check.worst_tail(bound),
             c.worst_tail(bound)
         ),
     });
     let notes = notes.collect();
-    Ok(Some((sized, (p, d, c), notes)))
+    Ok(Some((sized_doc, (p, d, c), notes)))
 }
 
 /// What a retry of a first proposal that missed its bound starts from ([`sized_by_peaks`],
@@ -2940,6 +2937,31 @@ fn choose_scaling(partial: &PartialDesign, s: &Scenario, note: &mut Note) -> Reg
 /// output in cm (the paper's, peaks 300 and 2) failing where in m it passes.
 const SIZE_SPREAD: f64 = 10.0;
 
+/// Each component's peak, g's then ω's, and the smallest nonzero peak P of g's (∞ for none): what
+/// the sizes are chosen from ([`choose_sizes`], [`sized_by_peaks`]).
+struct ComponentPeaks {
+    peaks: [Vec<f64>; 2],
+    smallest: f64,
+}
+
+impl ComponentPeaks {
+    fn of(s: &Scenario) -> Self {
+        let peaks = [&s.reference, &s.disturbance].map(|g| g.components.iter().map(|c| c.peak()).collect::<Vec<f64>>());
+        let smallest = peaks[0].iter().filter(|&&p| sized(p)).fold(f64::INFINITY, |a, &p| a.min(p));
+        ComponentPeaks { peaks, smallest }
+    }
+}
+
+/// A peak a size can be made of: positive and finite.
+fn sized(peak: f64) -> bool {
+    peak > 0.0 && peak.is_finite()
+}
+
+/// The power of ten nearest x.
+fn decade(x: f64) -> f64 {
+    10f64.powi(x.log10().round() as i32)
+}
+
 /// Each component's size, which divides its block of ξ̂: the file's, else none where the file
 /// gives μ (μ's meaning depends on them, as on the scaling), else, where a component's peak is
 /// [`SIZE_SPREAD`] or more times the smallest reference peak P, d(P)·max(1, d(peak/P)) with d(x)
@@ -2959,15 +2981,12 @@ fn choose_sizes(partial: &PartialDesign, s: &Scenario, note: &mut Note) -> [Vec<
     if partial.mu.is_some() || given.iter().any(|g| g.is_some()) {
         return given.map(|g| g.clone().unwrap_or_default());
     }
-    let peaks = [&s.reference, &s.disturbance].map(|s| s.components.iter().map(|c| c.peak()).collect::<Vec<f64>>());
-    let sized = |p: &f64| *p > 0.0 && p.is_finite();
-    let smallest = peaks[0].iter().filter(|p| sized(p)).fold(f64::INFINITY, |a, &p| a.min(p));
-    let largest = peaks.iter().flatten().filter(|p| sized(p)).fold(0.0f64, |a, &p| a.max(p));
+    let ComponentPeaks { peaks, smallest } = ComponentPeaks::of(s);
+    let largest = peaks.iter().flatten().filter(|&&p| sized(p)).fold(0.0f64, |a, &p| a.max(p));
     if !smallest.is_finite() || largest < SIZE_SPREAD * smallest {
         return [Vec::new(), Vec::new()];
     }
-    let decade = |x: f64| 10f64.powi(x.log10().round() as i32);
-    let size = |p: &f64| decade(smallest) * if sized(p) { decade(p / smallest).max(1.0) } else { 1.0 };
+    let size = |&p: &f64| decade(smallest) * if sized(p) { decade(p / smallest).max(1.0) } else { 1.0 };
     let sizes = peaks.map(|p| p.iter().map(size).collect::<Vec<f64>>());
     for (key, sizes) in ["reference", "disturbance"].into_iter().zip(&sizes) {
         if !sizes.is_empty() {
