@@ -31,7 +31,7 @@ pub fn design_json(s: &Scenario, d: &Design) -> Value {
         let deployment = json!({
             "loop_rate": rho,
             "sample_time_at_most": quell::sim::COARSE_SAMPLE / rho,
-            "f32_pole_shift": quell::export::f32_pole_shift(d).0,
+            "f32_pole_shift": quell::export::f32_pole_shift(d).shift,
         });
         map.insert("deployment".into(), deployment);
     }
@@ -60,16 +60,11 @@ fn deployment_text(s: &Scenario, d: &Design) -> String {
         (sim.t_end, sim.output_step_given.then_some(sim.output_step)),
     );
     let unit = s.plant.time_unit;
-    let (shift, kappa, what) = quell::export::f32_pole_shift(d);
     // The equilibrated κ₂ is the same in any units of the states: ∞ there is a defective matrix,
     // ∞ only as given is one whose states' scales lie beyond f64's resolution (a hydraulic
     // actuator's pressure in Pa beside positions in m, with distinct poles, had been called
     // defective and told to give distinct poles; helper tryout, 2026-12-07).
-    let scale_free = if what.starts_with("A − LC") {
-        d.observer_eigenvector_condition()
-    } else {
-        d.decoupled_eigenvector_condition()
-    };
+    let quell::export::PoleShift { shift, kappa, scale_free, what } = quell::export::f32_pole_shift(d);
     let precision = if !scale_free.is_finite() {
         format!("{what} has a defective eigenvector matrix (κ₂ = ∞): f32's rounding, as any model error, can move its poles without bound; export in f64 (the default) and give distinct poles")
     } else if !shift.is_finite() {

@@ -133,7 +133,7 @@ pub fn precision_warning(design: &Design, precision: Precision) -> Option<String
     if precision != Precision::F32 {
         return None;
     }
-    let (shift, kappa, what) = f32_pole_shift(design);
+    let PoleShift { shift, kappa, what, .. } = f32_pole_shift(design);
     (shift > F32_POLE_SHIFT).then(|| {
         format!(
             "precision: f32 rounds the controller's matrices to about 6e-8, and {what} has eigenvector condition number κ₂ = {kappa:.2e}, so its poles can move by about κ₂·6e-8 = {} of themselves (a disk servo's f32 u_f departed 18 % of its peak from the f64 export's at κ₂ = 2.75e6); export f64, or choose poles nearer the plant's own (a smaller κ₂); a sampled run at simulation.precision = \"f32\" measures how far the loop departs",
@@ -144,7 +144,7 @@ pub fn precision_warning(design: &Design, precision: Precision) -> Option<String
 
 /// How far f32's rounding (ε/2 = 6e-8) can move the design's poles, relative to themselves:
 /// κ₂·6e-8 for the larger eigenvector condition number κ₂ of A − LC and A − BK (∞ for a defective
-/// one), with κ₂ and which matrix it is.
+/// one), with κ₂, the same matrix's equilibrated κ₂ and which matrix it is ([`PoleShift`]).
 ///
 /// κ₂ here is taken in the states' coordinates as given, not equilibrated as the design's
 /// fragility measures are: a heuristic, kept because it cautions the designs whose f32 export was
@@ -153,20 +153,36 @@ pub fn precision_warning(design: &Design, precision: Precision) -> Option<String
 /// diagonal scaling of the states (the disk servo's departure stayed 13–18 % while this κ₂ spread
 /// from 3.0e5 to 2.5e9), and the equilibrated κ₂ (7.2e4 and 114 for those two) does not predict it:
 /// the mechanism is not the poles' conditioning alone.
-pub fn f32_pole_shift(design: &Design) -> (f64, f64, &'static str) {
+pub fn f32_pole_shift(design: &Design) -> PoleShift {
     let (p, (L, K)) = (design.plant(), (design.L(), design.K()));
     let parts = [
         (
             crate::design::place::closed_loop_condition(&p.A.transpose(), &p.C.transpose(), &L.transpose()),
+            design.observer_eigenvector_condition(),
             "A − LC (the observer)",
         ),
-        (crate::design::place::closed_loop_condition(&p.A, &p.B, K), "A − BK (the decoupled channels)"),
+        (
+            crate::design::place::closed_loop_condition(&p.A, &p.B, K),
+            design.decoupled_eigenvector_condition(),
+            "A − BK (the decoupled channels)",
+        ),
     ];
     // A NaN κ₂ (a defective eigenvector matrix) counts as infinite.
     let worst = |k: f64| if k.is_nan() { f64::INFINITY } else { k };
     let [a, b] = parts;
-    let (kappa, what) = if worst(a.0) >= worst(b.0) { a } else { b };
-    (worst(kappa) * f64::from(f32::EPSILON) / 2.0, kappa, what)
+    let (kappa, scale_free, what) = if worst(a.0) >= worst(b.0) { a } else { b };
+    PoleShift { shift: worst(kappa) * f64::from(f32::EPSILON) / 2.0, kappa, scale_free, what }
+}
+
+/// [`f32_pole_shift`]'s answer: the relative shift κ₂·6e-8, κ₂ as given, the same matrix's
+/// equilibrated κ₂ ([`Design::observer_eigenvector_condition`]: ∞ only for a defective one, in any
+/// units of the states), and which matrix it is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PoleShift {
+    pub shift: f64,
+    pub kappa: f64,
+    pub scale_free: f64,
+    pub what: &'static str,
 }
 
 /// A relative pole shift as "92 %", "1.5×" or "1.3e5×" ("∞" for a defective eigenvector matrix;
