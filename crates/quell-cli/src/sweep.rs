@@ -73,7 +73,11 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     if !args.resume {
         unfinished_in_the_way(&args.out, &meta, RESUME)?;
     }
-    let (kept, done) = if args.resume { resumed(&args.out, &meta, n)? } else { (Vec::new(), Vec::new()) };
+    let (mut kept, done) = if args.resume { resumed(&args.out, &meta, n)? } else { (Vec::new(), Vec::new()) };
+    // Rows of a sweep from before runs.csv held the drawn values get them from the study.
+    for row in kept.iter_mut().filter(|r| r.drawn.is_empty() && !meta.drawn.is_empty()) {
+        row.drawn = study.run_document(row.run).map_or_else(Vec::new, |doc| study.drawn(&doc, &meta.drawn));
+    }
     if args.resume && kept.len() == n {
         return finish_resumed(&args.out, &meta, &kept, !args.no_plots);
     }
@@ -415,7 +419,9 @@ fn resumed(dir: &Path, meta: &StudyMeta, n: usize) -> Result<(Vec<Row>, Vec<bool
             )))
         }
     };
-    // differing_key compares every key but the shard, the fingerprint included.
+    // differing_key compares every key but the shard, the fingerprint included; a sweep from
+    // before runs.csv held the drawn values has none (the caller gives its rows theirs).
+    let old = if old.drawn.is_empty() { StudyMeta { drawn: meta.drawn.clone(), ..old } } else { old };
     if !same_sweep(&old, meta) {
         return Err(Failure::Input(format!(
             "{here}: its rows come from another study or shard (fingerprint {}, shard {}/{}; this one: {}, {}/{}); resume with the same study file and --shard, or choose another --out",

@@ -46,7 +46,11 @@ fn paper_into(dir: &Path) {
 /// runs.csv without the wall_ms column (the only one that depends on the machine).
 fn rows_without_wall_time(dir: &Path) -> Vec<String> {
     let text = fs::read_to_string(dir.join("runs.csv")).unwrap();
-    text.lines().map(|l| l.rsplit_once(',').unwrap().0.to_string()).collect()
+    // Found by name: the drawn values follow it. (No field of these studies is quoted.)
+    let at = text.lines().next().unwrap().split(',').position(|h| h == "wall_ms").unwrap();
+    let without =
+        |l: &str| l.split(',').enumerate().filter(|&(i, _)| i != at).map(|(_, f)| f).collect::<Vec<_>>().join(",");
+    text.lines().map(|l| if l.starts_with('#') { l.to_string() } else { without(l) }).collect()
 }
 
 #[test]
@@ -230,6 +234,47 @@ fn ctrl_c_writes_the_rows_done_marked_partial() {
         stderr(&again)
     );
     assert_eq!(fs::read_to_string(out.join("runs.csv")).unwrap(), csv);
+}
+
+/// runs.csv's last columns are the values each draw gave, by key and index. A sweep interrupted
+/// before runs.csv held them (its summary.json without `drawn`, its rows without the columns) is
+/// resumed, not refused as another study's, and its kept rows get their values: the rows then
+/// equal an uninterrupted sweep's.
+#[test]
+fn the_drawn_values_are_columns_and_an_older_sweep_resumes_with_them() {
+    let dir_tmp = scratch("drawn");
+    let dir = dir_tmp.path();
+    let text =
+        "[simulation]\nt_end = 2.0\n[monte_carlo]\nruns = 6\nseed = 3\n\"truth.delays[1]\" = { uniform = 0.5 }\n";
+    let study = write_study(dir, "study.toml", text);
+    let out = |name: &str| dir.join(name).display().to_string();
+    let full = quell(&["sweep", &study, "--no-plots", "--out", &out("full")]);
+    assert!(full.status.success(), "{}", stderr(&full));
+    let csv = fs::read_to_string(dir.join("full/runs.csv")).unwrap();
+    assert!(csv.lines().next().unwrap().ends_with(",wall_ms,truth.delays[1]"), "{csv}");
+    // The paper's τ₂ = 3 ± 0.5, drawn anew each run.
+    let taus: Vec<f64> = csv.lines().skip(1).map(|l| l.rsplit(',').next().unwrap().parse().unwrap()).collect();
+    assert!(taus.iter().all(|t| (t - 3.0).abs() <= 0.5) && taus.windows(2).all(|w| w[0] != w[1]), "{taus:?}");
+    // The same directory as the previous version would have left it after three runs.
+    fs::create_dir(dir.join("old")).unwrap();
+    let old_rows: Vec<String> = csv.lines().take(4).map(|l| l.rsplit_once(',').unwrap().0.to_string()).collect();
+    fs::write(
+        dir.join("old/runs.csv"),
+        format!(
+            "{}\n# partial: 3 of the shard's runs were carried out before the sweep was interrupted\n",
+            old_rows.join("\n")
+        ),
+    )
+    .unwrap();
+    let mut summary: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(dir.join("full/summary.json")).unwrap()).unwrap();
+    assert!(summary["study"].as_object_mut().unwrap().remove("drawn").is_some());
+    summary["partial"] = serde_json::Value::Bool(true);
+    fs::write(dir.join("old/summary.json"), summary.to_string()).unwrap();
+    let resumed = quell(&["sweep", &study, "--no-plots", "--out", &out("old"), "--resume"]);
+    assert!(resumed.status.success(), "{}", stderr(&resumed));
+    assert!(stderr(&resumed).contains("resumed: 3 rows kept, 3 runs run"), "{}", stderr(&resumed));
+    assert_eq!(rows_without_wall_time(&dir.join("old")), rows_without_wall_time(&dir.join("full")));
 }
 
 /// An interrupted sweep resumed with `--resume` ends with the rows of an uninterrupted one (every
@@ -899,7 +944,7 @@ fn edited_or_replaced_sweep_files_are_refused_not_read() {
     refused(
         "m",
         quell_within(&["sweep", "--merge", &out("m"), "--out", &out("x")]),
-        "line 1: expected the header of a study of 2 grid keys and m = 1000000000000000 channels, found 20 fields; was the file edited",
+        "line 1: expected the header of a study of 2 grid keys, m = 1000000000000000 channels and 3 drawn values, found 23 fields; was the file edited",
     );
     // Row 2 (run 1: point 0, draw 1) given point 3; row 3 (run 2: point 1) given μ_1 = 99.
     let runs = fs::read_to_string(dir.join("all/runs.csv")).unwrap();

@@ -11,7 +11,7 @@ use pyo3::exceptions::{PyIndexError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString, PyTuple};
 use quell::sim::ChannelFigures;
-use quell::study::{self, KeyPath, RunSpec, Shard, StudyMeta, SweepOptions};
+use quell::study::{self, RunSpec, Shard, StudyMeta, SweepOptions};
 use toml::{Table, Value};
 
 use crate::convert::{a_type, as_int, type_name};
@@ -115,37 +115,10 @@ fn dict_arg(obj: &Bound<'_, PyAny>, name: &str, what: &str) -> PyResult<Table> {
     Ok(t)
 }
 
-/// Every number of `v` (a number, vector or matrix) as a column named `name` with its indices.
-fn flatten(name: String, v: &Value, out: &mut Vec<(String, f64)>) {
-    match v {
-        Value::Float(x) => out.push((name, *x)),
-        Value::Integer(i) => out.push((name, *i as f64)),
-        Value::Array(a) => a.iter().enumerate().for_each(|(i, x)| flatten(format!("{name}[{i}]"), x, out)),
-        _ => {}
-    }
-}
-
-/// The values a run's draw gave each perturbed key (flattened: `truth.A[0][1]`); the columns of a
-/// key the grid also sets, whole or in part, are `… (drawn)` (`truth.delays[1] (drawn)` beside the
-/// grid's `truth.delays[1]`: a draw of the whole `truth.delays` had overwritten that grid column).
+/// The values a run's draw gave each perturbed key of `keys` ([`study::drawn_values`]).
 fn drawn_values(keys: &[String], spec: &RunSpec) -> Vec<(String, f64)> {
-    let mut out = Vec::new();
-    for key in keys {
-        let Ok(path) = KeyPath::parse(key) else { continue };
-        if let Ok(v) = path.get(&spec.scenario) {
-            let start = out.len();
-            flatten(key.clone(), v, &mut out);
-            if spec.grid.iter().any(|(g, _)| KeyPath::parse(g).is_ok_and(|g| g.overlaps(&path))) {
-                out[start..].iter_mut().for_each(|(name, _)| name.push_str(" (drawn)"));
-            }
-        }
-    }
-    out
-}
-
-/// The perturbed keys of a study's Monte Carlo draws, in the study's order.
-fn drawn_keys(study: &study::Study) -> Vec<String> {
-    study.monte_carlo.as_ref().map_or_else(Vec::new, |mc| mc.perturbations.iter().map(|p| p.key.clone()).collect())
+    let grid: Vec<String> = spec.grid.iter().map(|(k, _)| k.clone()).collect();
+    study::drawn_values(keys, &grid, &spec.scenario)
 }
 
 /// A study document from a Scenario and the dict arguments of `quell.Study(...)` (grid,
@@ -265,7 +238,7 @@ impl PyStudy {
         let study = &self.inner;
         let inner =
             spec_interruptibly(py, &CtrlC::new(), study, index)?.ok_or_else(|| out_of_range(index as i128, len))?;
-        Ok(PyRunSpec { inner, drawn: drawn_keys(study) })
+        Ok(PyRunSpec { inner, drawn: study.drawn_keys() })
     }
 
     /// Every run, in parallel on `jobs` threads with the GIL released; Ctrl-C stops the sweep.
@@ -814,7 +787,7 @@ impl PyRunSpecs {
         let mut turn = self.next.take(py, &ctrl_c)?;
         let Some(inner) = spec_interruptibly(py, &ctrl_c, &self.study, turn.index)? else { return Ok(None) };
         turn.advanced = true;
-        Ok(Some(PyRunSpec { inner, drawn: drawn_keys(&self.study) }))
+        Ok(Some(PyRunSpec { inner, drawn: self.study.drawn_keys() }))
     }
     fn __len__(&self) -> usize {
         let next = self.next.lock().0;
@@ -993,25 +966,8 @@ fn sweep_frame(
     study::write_runs_csv(&mut text, &meta, &swept.rows, swept.partial)
         .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
     let text = String::from_utf8_lossy(&text).into_owned();
-    // The drawn values, one column per number, from each run's specification.
-    let keys = drawn_keys(study);
-    let drawn = PyDict::new(py);
-    if !keys.is_empty() {
-        let mut columns: Vec<(String, Vec<f64>)> = Vec::new();
-        for row in &swept.rows {
-            let values = study.spec_with_nominal(row.run).map(|spec| drawn_values(&keys, &spec)).unwrap_or_default();
-            for (i, (name, v)) in values.into_iter().enumerate() {
-                match columns.get_mut(i) {
-                    Some(c) => c.1.push(v),
-                    None => columns.push((name, vec![v])),
-                }
-            }
-        }
-        for (name, values) in columns {
-            drawn.set_item(name, values)?;
-        }
-    }
-    let frame = py.import("quell._frames")?.call_method1("runs_frame", (text, drawn))?;
+    // runs.csv's last columns are the drawn values.
+    let frame = py.import("quell._frames")?.call_method1("runs_frame", (text,))?;
     frame.getattr("attrs")?.set_item("partial", swept.partial)?;
     // Said as `quell sweep` says it: a bare KeyboardInterrupt left the rows kept unmentioned.
     let interrupt = interrupt.map(|_| {

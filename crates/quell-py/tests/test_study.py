@@ -54,9 +54,9 @@ def test_sweep_is_the_cli_rows(study_file, cli_rows):
     study = quell.Study.load(study_file)
     assert len(study) == 4 and study.columns == list(cli_rows.columns)
     frame = quell.sweep(study, jobs=2)
-    # runs.csv's columns, then the drawn values (one column per entry of truth.A).
+    # runs.csv's columns, the last the drawn values (one column per entry of truth.A).
     drawn = [f"truth.A[{i}][{j}]" for i in range(3) for j in range(3)]
-    assert list(frame.columns) == study.columns + drawn
+    assert list(frame.columns) == study.columns and study.columns[-9:] == drawn
     same_rows(frame[study.columns], cli_rows)
     assert (frame["outcome"] == "completed").all()
     # A path works as well as a Study.

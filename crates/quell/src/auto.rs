@@ -1193,13 +1193,15 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
     let chosen = kept.clone();
     let runs = (verifier.runs, verifier.convergence_time);
     let mut auto = finish(kept, bound.clone(), runs, (candidates, start), (within, targets), advice);
-    add_notes(&mut auto.choices, notes);
     if auto.verification.passed {
         let (checks, tolerance) = delay_checks(&auto.scenario, &auto.design, (targets, &chosen.2), &bound, verifier)?;
         (auto.verification.delay_check, auto.verification.delay_tolerance) = (checks, tolerance);
         auto.verification.runs = verifier.runs;
-        auto = delay_robust(doc, targets, (chosen, auto), &bound, verifier)?;
+        auto = delay_robust(doc, targets, (chosen, auto, start), &bound, verifier)?;
     }
+    // After the delay relaxation, whose slower design is proposed anew: the retry's reasons hold
+    // for it too (its observer is the retry's).
+    add_notes(&mut auto.choices, notes);
     Ok(auto)
 }
 
@@ -1378,14 +1380,15 @@ fn mark_chosen(candidates: &mut [Candidate], speed: Speed, from: usize) {
 /// its delay check meets the delay error asked for ([`Targets::delay_error`] given, and the
 /// channel poles chosen here), up to [`RELAX_STEPS`] times, each slower candidate verified as the
 /// relaxation's are and then run with its delays off both ways; `auto` as it is, its relaxation
-/// line saying so, where none meets it. A paper machine's headbox (delays 1 and 2 min) asked to hold
+/// line saying so, where none meets it. The effort bound and the factors are told from the
+/// candidate the relaxation started from (`start`: a retry's, where the first proposal missed). A paper machine's headbox (delays 1 and 2 min) asked to hold
 /// at ±20 % had been designed at the plant's fastest time scale and only told to know its delays
 /// to 3 %; with its channel poles ×¼ it holds, and a Monte Carlo over its plant completed 50
 /// draws of 50 where 17 had (helper tryout, 2026-12-07).
 fn delay_robust(
     doc: &toml::Table,
     targets: &Targets,
-    (chosen, mut auto): (Verified, AutoDesign),
+    (chosen, mut auto, start): (Verified, AutoDesign, usize),
     bound: &[f64],
     verifier: &mut Verifier,
 ) -> Result<AutoDesign, AutoError> {
@@ -1401,7 +1404,7 @@ fn delay_robust(
             .push_str(&format!("; the file gives design.channel_poles, so they were not slowed {asked}"));
         return Ok(auto);
     }
-    let (base, first_uf, before) = (chosen.2.speed, v.candidates[0].max_uf.clone(), v.runs);
+    let (base, first_uf, before) = (chosen.2.speed, v.candidates[start].max_uf.clone(), v.runs);
     let after =
         format!("after the kept design's {}", crate::settings::count(v.delay_check.len(), "delay run", "delay runs"));
     let mu = if base.raised {
@@ -1423,14 +1426,14 @@ fn delay_robust(
         }
         let level = delay_level(&p.scenario, &d, (error, &c), targets, bound, verifier)?;
         if level.iter().all(|k| k.met) {
-            mark_chosen(&mut candidates, speed, 0);
+            mark_chosen(&mut candidates, speed, start);
             let slowed = format!(
                 "; then, {asked}, the channel poles halved until the delays off by it both ways meet the tail bound and the effort: {after}, kept ×{factor} of the kept candidate's channel poles{mu} (its worst tail {:.1e} of the bound), {} (candidates and their delay runs)",
                 c.worst_tail(bound),
                 crate::settings::count(verifier.runs - before, "more verifying run", "more verifying runs")
             );
             let runs = (verifier.runs, verifier.convergence_time);
-            let mut slower = finish((p, d, c), bound.to_vec(), runs, (candidates, 0), (true, targets), Vec::new());
+            let mut slower = finish((p, d, c), bound.to_vec(), runs, (candidates, start), (true, targets), Vec::new());
             slower.verification.relaxation = format!("{}{slowed}", auto.verification.relaxation);
             let tolerance = level.iter().map(|k| k.error).fold(f64::INFINITY, f64::min);
             (slower.verification.delay_check, slower.verification.delay_tolerance) = (level, tolerance);

@@ -1890,6 +1890,25 @@ fn a_disturbance_small_only_in_its_units_is_sized_after_its_first_run() {
     for (x, y) in a.design.mu().iter().zip(c.design.mu()) {
         assert!((x - y).abs() <= 1e-4 * x, "μ {:?} against {:?}", a.design.mu(), c.design.mu());
     }
+    // Asked to hold at ±30 % of the delays, the retry's design is relaxed as the paper's: the same
+    // delay runs and slower candidates, told from the retry's (the delay relaxation had measured
+    // its effort against the first proposal's, 874 where the retry asks 22).
+    let asked = Targets { delay_error: Some(0.3), ..Targets::default() };
+    let (a, b) = (auto_design(&paper, &asked).unwrap(), auto_design(&without_design(&scaled), &asked).unwrap());
+    let runs = |x: &quell::auto::AutoDesign| {
+        let v = &x.verification;
+        let from = v.candidates.iter().position(|c| c.speed.sized).unwrap_or(0);
+        (
+            v.candidates[from..].iter().map(|c| (c.speed.channel, c.speed.observer, c.chosen)).collect::<Vec<_>>(),
+            v.delay_tolerance,
+        )
+    };
+    assert_eq!(runs(&a), runs(&b));
+    assert!(
+        b.verification.relaxation.ends_with("met it at none of the slower candidates tried (7 more verifying runs)"),
+        "{}",
+        b.verification.relaxation
+    );
 }
 
 /// A drum boiler (Bell & Åström's, fuel and feedwater to pressure and level, `tests/data/

@@ -264,9 +264,9 @@ def eta_colour(j, q):
     return colormaps["viridis"](j / (q - 1))
 
 
-def runs_frame(text, drawn=None):
+def runs_frame(text):
     """runs.csv's text (quell.sweep) as a DataFrame, read as `pandas.read_csv(path, comment="#")` reads
-    the file, then the drawn values (a dict of columns) after its columns."""
+    the file (its last columns the drawn values)."""
     try:
         import pandas as pd
     except ImportError as e:
@@ -275,7 +275,4 @@ def runs_frame(text, drawn=None):
 
     # `reason` as text even where every run completed (all missing had read as float, and
     # `frame.reason.str` failed on exactly the healthy studies).
-    frame = pd.read_csv(io.StringIO(text), comment="#", dtype={"reason": object})
-    for name, values in (drawn or {}).items():
-        frame[name] = values
-    return frame
+    return pd.read_csv(io.StringIO(text), comment="#", dtype={"reason": object})

@@ -31,7 +31,8 @@ class StudyResult:
     frame : pandas.DataFrame
         One row per run, in run order: ``run, point, draw, seed``, the grid values, ``outcome``,
         ``reason``, per channel ``tail_max_e, tail_rms_e, max_u, max_uf, settle_t``, ``steps``,
-        ``wall_ms``, then one column per drawn number (``truth.delays[1]``, ``truth.A[0][2]``).
+        ``wall_ms``, then one column per drawn number (``truth.delays[1]``, ``truth.A[0][2]``), as
+        the CLI's runs.csv.
     partial : bool
         True when Ctrl-C stopped the sweep: the rows are those of the runs carried out (the
         KeyboardInterrupt's ``.result``); ``frame.attrs["partial"]`` holds the same.

@@ -530,6 +530,46 @@ impl Study {
         doc
     }
 
+    /// The names of runs.csv's last columns, the values a draw gives ([`drawn_values`] of the
+    /// perturbed keys); none without Monte Carlo.
+    pub fn drawn_columns(&self) -> Vec<String> {
+        // A draw fills the keys it perturbs that the scenario leaves to their defaults.
+        let first = self.document(0, self.place(0).2);
+        drawn_values(&self.drawn_keys(), &self.grid_keys(), &first).into_iter().map(|(n, _)| n).collect()
+    }
+
+    /// The keys the Monte Carlo draws perturb, in the study's order.
+    pub fn drawn_keys(&self) -> Vec<String> {
+        self.monte_carlo.as_ref().map_or_else(Vec::new, |mc| mc.perturbations.iter().map(|p| p.key.clone()).collect())
+    }
+
+    /// The grid's keys, as written.
+    fn grid_keys(&self) -> Vec<String> {
+        self.grid.iter().map(|a| a.key.clone()).collect()
+    }
+
+    /// The drawn values of a run's scenario document `scenario` ([`RunSpec::scenario`],
+    /// [`Study::run_document`]) in the order of `columns` ([`Study::drawn_columns`]); `None` for a
+    /// column it does not have (a grid value of another shape).
+    pub fn drawn(&self, scenario: &toml::Table, columns: &[String]) -> Vec<Option<f64>> {
+        let values = drawn_values(&self.drawn_keys(), &self.grid_keys(), scenario);
+        columns.iter().map(|c| values.iter().find(|(n, _)| n == c).map(|&(_, v)| v)).collect()
+    }
+
+    /// Run `index`'s grid point, draw and seed (`None` without Monte Carlo).
+    fn place(&self, index: usize) -> (usize, usize, Option<u64>) {
+        let draws = self.draws();
+        let (point, draw) = (index / draws, index % draws);
+        (point, draw, self.monte_carlo.as_ref().map(|mc| run_seed(mc.seed, draw)))
+    }
+
+    /// Run `index`'s scenario document (as its [`RunSpec::scenario`], without the nominal run a
+    /// spec needs), or `None` if `index ≥ self.len()`.
+    pub fn run_document(&self, index: usize) -> Option<toml::Table> {
+        let (point, _, seed) = self.place(index);
+        ((index as u64) < self.len()).then(|| self.document(point, seed))
+    }
+
     /// Run `index`'s specification, or `None` if `index ≥ self.len()` (as `slice::get`), with its
     /// grid point's nominal run: the first call for a point of a study with draws *simulates* that
     /// run ([`Study::nominal`], once per point), so it costs a whole run; later calls are cheap.
@@ -544,9 +584,7 @@ impl Study {
         if index as u64 >= self.len() {
             return None;
         }
-        let draws = self.draws();
-        let (point, draw) = (index / draws, index % draws);
-        let seed = self.monte_carlo.as_ref().map(|mc| run_seed(mc.seed, draw));
+        let (point, draw, seed) = self.place(index);
         let grid_index = self.grid_index(point);
         Some(RunSpec {
             run: index,
@@ -1266,6 +1304,33 @@ fn all_infinite(v: &toml::Value) -> bool {
 /// Scenario values that must stay integers.
 fn contains_integer_key(path: &KeyPath) -> bool {
     path.to_string() == "noise.seed"
+}
+
+/// The values a run's draw gave each perturbed key of `keys` in its scenario `doc`, one per number
+/// (flattened: `truth.A[0][1]`); the columns of a key the grid (`grid`'s keys) also sets, whole or
+/// in part, are `… (drawn)` (`truth.delays[1] (drawn)` beside the grid's `truth.delays[1]`: a draw
+/// of the whole `truth.delays` had overwritten that grid column).
+pub fn drawn_values(keys: &[String], grid: &[String], doc: &toml::Table) -> Vec<(String, f64)> {
+    fn flatten(name: String, v: &toml::Value, out: &mut Vec<(String, f64)>) {
+        match v {
+            toml::Value::Float(x) => out.push((name, *x)),
+            toml::Value::Integer(i) => out.push((name, *i as f64)),
+            toml::Value::Array(a) => a.iter().enumerate().for_each(|(i, x)| flatten(format!("{name}[{i}]"), x, out)),
+            _ => {}
+        }
+    }
+    let mut out = Vec::new();
+    for key in keys {
+        let Ok(path) = KeyPath::parse(key) else { continue };
+        if let Ok(v) = path.get(doc) {
+            let start = out.len();
+            flatten(key.clone(), v, &mut out);
+            if grid.iter().any(|g| KeyPath::parse(g).is_ok_and(|g| g.overlaps(&path))) {
+                out[start..].iter_mut().for_each(|(name, _)| name.push_str(" (drawn)"));
+            }
+        }
+    }
+    out
 }
 
 #[cfg(test)]

@@ -8,7 +8,7 @@ use super::sweep::{Outcome, Row};
 use crate::sim::ChannelFigures;
 
 /// The header: `run,point,draw,seed,<grid keys>,outcome,reason,tail_max_e1..m,tail_rms_e1..m,
-/// max_u1..m,max_uf1..m,settle_t1..m,steps,wall_ms`.
+/// max_u1..m,max_uf1..m,settle_t1..m,steps,wall_ms,<drawn values>`.
 pub fn header(meta: &StudyMeta) -> Vec<String> {
     let mut h: Vec<String> = ["run", "point", "draw", "seed"].map(String::from).to_vec();
     h.extend(meta.grid.iter().map(|a| a.key.clone()));
@@ -17,7 +17,13 @@ pub fn header(meta: &StudyMeta) -> Vec<String> {
         h.extend((1..=meta.m).map(|i| format!("{name}{i}")));
     }
     h.extend(["steps", "wall_ms"].map(String::from));
+    h.extend(meta.drawn.iter().cloned());
     h
+}
+
+/// Fields of a row of `meta`'s runs.csv (`None`: more than a usize holds, from an edited m).
+fn fields(meta: &StudyMeta) -> Option<usize> {
+    meta.m.checked_mul(5)?.checked_add(8 + meta.grid.len())?.checked_add(meta.drawn.len())
 }
 
 /// The longest line and the most lines a runs.csv of `meta`'s shard can hold, for
@@ -26,8 +32,9 @@ pub fn header(meta: &StudyMeta) -> Vec<String> {
 /// `# partial` line and two blank ones.
 pub fn runs_csv_bounds(meta: &StudyMeta) -> (usize, usize) {
     // Counted, not built: an edited m of 1e15 is the reader's to refuse (`header_length`).
-    let fields = meta.m.saturating_mul(5).saturating_add(8 + meta.grid.len());
-    let keys: usize = meta.grid.iter().map(|a| 2 * a.key.len() + 3).sum();
+    let fields = fields(meta).unwrap_or(usize::MAX);
+    let keys: usize =
+        meta.grid.iter().map(|a| 2 * a.key.len() + 3).chain(meta.drawn.iter().map(|d| 2 * d.len() + 3)).sum();
     let grid: usize = meta.grid.iter().map(|a| a.values.iter().map(|v| 2 * v.len() + 3).max().unwrap_or(0)).sum();
     let line = fields.saturating_mul(32).saturating_add(keys.max(grid)).saturating_add(64 << 10);
     let rows = meta.shard.len(usize::try_from(meta.runs).unwrap_or(usize::MAX));
@@ -96,6 +103,7 @@ pub fn write_run_row(w: &mut dyn Write, meta: &StudyMeta, r: &Row) -> io::Result
     f.extend(per(&|c| c.settle_t));
     f.push(r.steps.to_string());
     f.push(format!("{:.3}", r.wall_ms));
+    f.extend((0..meta.drawn.len()).map(|i| opt(r.drawn.get(i).copied().flatten())));
     writeln!(w, "{}", f.join(","))
 }
 
@@ -237,6 +245,7 @@ fn read_row(f: &[String], meta: &StudyMeta, expected: &[String]) -> Result<Row, 
         channels,
         steps: int(first + 5 * m)?,
         wall_ms: num(first + 5 * m + 1)?,
+        drawn: (first + 5 * m + 2..f.len()).map(opt).collect::<Result<_, _>>()?,
         explicit_stiff: false,
     })
 }
@@ -244,12 +253,16 @@ fn read_row(f: &[String], meta: &StudyMeta, expected: &[String]) -> Result<Row, 
 /// Checks the header line's number of fields against the study's m and grid before a header of m
 /// channels is built (an edited m of 1e15 had asked for 24 PB).
 fn header_length(line: Option<&str>, meta: &StudyMeta) -> Result<(), String> {
-    let wanted = format!("the header of a study of {} grid keys and m = {} channels", meta.grid.len(), meta.m);
+    let (g, m) = (meta.grid.len(), meta.m);
+    let wanted = match meta.drawn.len() {
+        0 => format!("the header of a study of {g} grid keys and m = {m} channels"),
+        n => format!("the header of a study of {g} grid keys, m = {m} channels and {n} drawn values"),
+    };
     let Some(line) = line.filter(|l| !l.is_empty()) else {
         return Err(format!("line 1: expected {wanted}, found an empty file"));
     };
     let found = split(line)?.len();
-    match meta.m.checked_mul(5).and_then(|f| f.checked_add(8 + meta.grid.len())) {
+    match fields(meta) {
         Some(fields) if fields == found => Ok(()),
         _ => Err(format!(
             "line 1: expected {wanted}, found {found} fields; was the file edited, or is it another study's?"

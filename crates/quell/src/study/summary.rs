@@ -125,6 +125,10 @@ pub struct StudyMeta {
     /// The inputs' names (`[plant] inputs`), for the plant input's panels; empty when not given.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub inputs: Vec<String>,
+    /// runs.csv's columns after `wall_ms`: the values each draw gave ([`super::Study::drawn_columns`]);
+    /// empty without Monte Carlo (and in a summary written before 2026-12-07).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub drawn: Vec<String>,
 }
 
 fn seconds() -> String {
@@ -155,6 +159,7 @@ impl StudyMeta {
             time_unit: study.time_unit().symbol().into(),
             outputs: study.outputs(),
             inputs: study.inputs(),
+            drawn: study.drawn_columns(),
         }
     }
 

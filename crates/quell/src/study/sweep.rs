@@ -140,6 +140,10 @@ pub struct Row {
     pub steps: u64,
     /// Wall time of the run in ms, to the microsecond.
     pub wall_ms: f64,
+    /// The values its draw gave ([`super::StudyMeta::drawn`]'s columns; `None`: written empty);
+    /// empty without Monte Carlo.
+    #[serde(default)]
+    pub drawn: Vec<Option<f64>>,
     /// The run was forced onto DOP853 (`simulation.method = "explicit"`) on an adaptive law it
     /// makes stiff ([`crate::sim::explicit_stiff_warning`]); not in runs.csv, so false for rows
     /// read back ([`super::Study::explicit_stiff_caution`] words it).
@@ -280,6 +284,7 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
         channels: Vec::new(),
         steps: 0,
         wall_ms: 0.0,
+        drawn: Vec::new(),
         explicit_stiff: false,
     };
     match spec.simulate_within_limits(stop) {
@@ -451,6 +456,7 @@ pub fn sweep(study: &Study, opts: &SweepOptions<'_>) -> Sweep {
     let done = |k: usize| opts.done.get(k).copied().unwrap_or(false);
     // `None` only when stopped, which ends the iteration: the runs not started are not visited (a
     // Ctrl-C on a study of 1e9 runs had taken 4.6 s to skip them one by one).
+    let columns = study.drawn_columns();
     let rows: Vec<Row> = (0..shard.len(runs))
         .into_par_iter()
         .filter(|&k| !done(k))
@@ -459,7 +465,9 @@ pub fn sweep(study: &Study, opts: &SweepOptions<'_>) -> Sweep {
             if stopped() {
                 return None;
             }
-            let row = execute(&study.spec_with_nominal_until(i, &stopped)?, &stopped)?;
+            let spec = study.spec_with_nominal_until(i, &stopped)?;
+            let mut row = execute(&spec, &stopped)?;
+            row.drawn = study.drawn(&spec.scenario, &columns);
             if let Some(f) = opts.on_row {
                 f(&row);
             }

@@ -658,3 +658,39 @@ fn the_true_actuators_keys_vary_without_a_truth_table() {
         (0..4).map(|i| s.spec_with_nominal(i).unwrap().simulate().unwrap().summary()[1].figures.tail_max_e).collect();
     assert!(rows[0] != rows[2] && rows[1] != rows[3], "{rows:?}");
 }
+
+/// runs.csv's last columns are the values each draw gave (a CLI sweep had only its seed, so which
+/// plants diverged could be learnt only from Python): named by key and index, `… (drawn)` where
+/// the grid sets the key too, each the number the run's own scenario holds and within its law
+/// (τ₂ = 3 ± 10 % uniform, A[0][1] = −1.7 ± 0.01), and read back as written.
+#[test]
+fn runs_csv_holds_each_draws_values() {
+    let s = study("[simulation]\nt_end = 1.0\n[grid]\n\"truth.delays[1]\" = [3.0, 3.3]\n[monte_carlo]\nruns = 2\nseed = 4\n\"truth.delays\" = { relative_uniform = 0.1 }\n\"truth.A[0][1]\" = { uniform = 0.01 }\n").unwrap();
+    let meta = StudyMeta::new(&s, Shard::ALL);
+    let drawn = ["truth.delays[0] (drawn)", "truth.delays[1] (drawn)", "truth.A[0][1]"];
+    assert_eq!(meta.drawn, drawn);
+    assert_eq!(header(&meta)[header(&meta).len() - 3..], drawn);
+    let swept = sweep(&s, &SweepOptions::default());
+    assert_eq!(swept.rows.len(), 4);
+    for row in &swept.rows {
+        let spec = s.spec_with_nominal(row.run).unwrap();
+        let truth = &spec.scenario["truth"];
+        let tau = truth["delays"].as_array().unwrap().iter().map(|v| v.as_float().unwrap()).collect::<Vec<_>>();
+        let a01 = truth["A"][0][1].as_float().unwrap();
+        assert_eq!(row.drawn, [Some(tau[0]), Some(tau[1]), Some(a01)]);
+        let grid_tau = [3.0, 3.3][row.point];
+        assert!((tau[1] / grid_tau - 1.0).abs() <= 0.1 && tau[1] != grid_tau, "{tau:?}");
+        assert!((a01 + 1.7).abs() <= 0.01 && a01 != -1.7, "{a01}");
+    }
+    let mut text = Vec::new();
+    write_runs_csv(&mut text, &meta, &swept.rows, false).unwrap();
+    let text = String::from_utf8(text).unwrap();
+    assert_eq!(
+        read_runs_csv(&text, &meta).unwrap().rows,
+        swept.rows.iter().map(|r| Row { explicit_stiff: false, ..r.clone() }).collect::<Vec<_>>()
+    );
+    // A file without them (edited, or another study's) is refused by its header's length.
+    let cut: String = text.lines().map(|l| format!("{}\n", l.rsplitn(4, ',').last().unwrap())).collect();
+    let e = read_runs_csv(&cut, &meta).unwrap_err();
+    assert!(e.contains("and 3 drawn values"), "{e}");
+}
