@@ -119,10 +119,20 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
         code.size_warning().into_iter().chain(precision).chain(unit).chain(earlier),
         args.precision.is_none(),
     );
+    let diverged = check.as_ref().and_then(|c| c.as_ref().ok()).and_then(|c| c.diverged);
     if let Some(check) = check {
         print_check(check, scenario.plant.time_unit);
     }
-    Ok(())
+    // Written (nothing lost), but a loop that diverges is a failed check, not a warning to skim:
+    // a build that trusts the exit code had shipped one (helper tryout, 2026-12-07).
+    match diverged {
+        Some(t) => Err(Failure::Run(format!(
+            "the exported controller's loop diverged at t = {} {} (above): the files are written, but do not deploy them; choose a shorter --sample-time or slower poles (quell run SCENARIO --sample-time T_S shows the run), or pass --no-loop-check to export without measuring",
+            quell::settings::fmt_instant(t),
+            scenario.plant.time_unit
+        ))),
+        None => Ok(()),
+    }
 }
 
 /// The export's warnings, in the flags' terms (`from_file`: the file's simulation.precision, not

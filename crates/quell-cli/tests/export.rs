@@ -80,6 +80,41 @@ int main(void)
     assert!(Command::new(dir.join("main")).status().unwrap().success());
 }
 
+/// A loop that diverges at the exported T_s fails the export (exit 1) with its files written: the
+/// paper's loop at T_s = 0.5 s (ρ·T_s ≈ 3), which a sampled run diverges on its own (exit 1); it
+/// had been a warning above an exit of 0 (helper tryout, 2026-12-07). `--no-loop-check` writes it
+/// without measuring, as asked.
+#[test]
+fn an_export_whose_loop_diverges_fails_with_its_files_written() {
+    let dir_tmp = temp_dir("diverges");
+    let dir = dir_tmp.path();
+    let out = dir.join("c").display().to_string();
+    let o = quell(&["export", &example("paper.toml"), "--sample-time", "0.5", "--out", &out]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("error: the exported controller's loop diverged at t = 15 s (above): the files are written, but do not deploy them"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(dir.join("c/quell_controller.c").is_file() && dir.join("c/quell_controller.h").is_file());
+    let run = quell(&[
+        "run",
+        &example("paper.toml"),
+        "--sample-time",
+        "0.5",
+        "--output-step",
+        "0.5",
+        "--out",
+        &dir.join("run").display().to_string(),
+        "--no-plots",
+    ]);
+    assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
+    assert!(stderr(&run).contains("diverged"), "{}", stderr(&run));
+    let unchecked =
+        quell(&["export", &example("paper.toml"), "--sample-time", "0.5", "--out", &out, "--no-loop-check"]);
+    assert!(unchecked.status.success(), "{}", stderr(&unchecked));
+}
+
 #[test]
 fn f32_export_uses_float() {
     let dir_tmp = temp_dir("f32");

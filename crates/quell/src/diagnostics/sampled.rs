@@ -404,6 +404,10 @@ pub fn export_check(
     };
     let sampled = crate::Scenario { simulation, noise: None, ..s.clone() };
     let result = side_run(&sampled, design).map_err(|e| e.to_string())?;
+    let diverged = match &result.outcome {
+        Some(Outcome::Diverged { t, .. }) => Some(*t),
+        _ => None,
+    };
     let mut lines = Vec::new();
     // In f32, the sampling is judged on the same loop in f64, which the precision check runs.
     let measured = precision_check(&sampled, design, &result);
@@ -432,14 +436,15 @@ pub fn export_check(
         };
         lines.push((format!("the sampled-data loop {ended} and was not compared with its continuous loop, which did not run to t_end (a run of the scenario without its sample time says why)"), true));
     }
-    Ok(ExportCheck { lines, follows, horizon: t_end, cut, precision_measured })
+    Ok(ExportCheck { lines, follows, horizon: t_end, cut, precision_measured, diverged })
 }
 
 /// What [`export_check`] found: its lines, each with whether it warns (the loop departs, or was not
 /// compared), whether the sampled loop stays within the departure bounds of its continuous loop
 /// (y within half its peak, u_f's peak within twice: `follows`), and the horizon run (`cut`:
 /// shorter than the scenario's t_end), and whether an f32 loop was measured against f64
-/// (`precision_measured`: not where either run was stopped or failed).
+/// (`precision_measured`: not where either run was stopped or failed), and when the exported
+/// loop (its precision, sampled) diverged (`diverged`: the time; `quell export` then fails).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExportCheck {
     pub lines: Vec<(String, bool)>,
@@ -447,6 +452,7 @@ pub struct ExportCheck {
     pub horizon: f64,
     pub cut: bool,
     pub precision_measured: bool,
+    pub diverged: Option<f64>,
 }
 
 /// One channel's departure of an f32 run from its f64 run ([`precision_check`]), each relative to
