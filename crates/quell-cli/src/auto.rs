@@ -82,7 +82,7 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
     if args.json {
         print_json(&report_json(&auto));
     } else {
-        print_stdout(&report_text(&auto));
+        print_stdout(&report_text(&auto, targets.delay_error));
     }
     for w in auto.warnings() {
         eprintln!("⚠ warning: {w}");
@@ -119,6 +119,16 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
                 each => format!(", max|u_f| {} against the limits {each:?}", list(&v.max_uf)),
             },
             v.advice.iter().map(|a| format!("; {a}")).collect::<String>()
+        )));
+    }
+    // A delay error asked for is a target, as an actuator limit is: where no candidate holds at
+    // it, an infeasible target (exit 2), nothing written; a flag asked for and unmet had exited 0
+    // (helper tryout, 2026-12-07). No delay check (no delays): nothing to hold.
+    if let Some(asked) = targets.delay_error.filter(|&e| e > 0.0 && v.delay_tolerance < e * (1.0 - 1e-9)) {
+        return Err(Failure::Input(format!(
+            "--delay-error {asked}: the automatic design meets its tail bounds with the input delays off by up to ±{}, not ±{} (the report's delays and relaxation lines above say how far the slower channel poles got); nothing written; ask for a smaller --delay-error, or leave it out to write this design and know the delays that well",
+            quell::auto::percent(v.delay_tolerance),
+            quell::auto::percent(asked)
         )));
     }
     if let Some(out) = &args.write {
@@ -175,7 +185,7 @@ fn heading(a: &AutoDesign) -> &'static str {
     }
 }
 
-fn report_text(a: &AutoDesign) -> String {
+fn report_text(a: &AutoDesign, delay_error: Option<f64>) -> String {
     let mut s = String::from(heading(a));
     for c in &a.choices {
         s.push_str(&format!("  {} = {}\n    {}\n", c.key, c.value, c.why));
@@ -225,7 +235,7 @@ fn report_text(a: &AutoDesign) -> String {
     if !v.relaxation.is_empty() {
         s.push_str(&format!("  relaxation: {}\n", v.relaxation));
     }
-    s.push_str(&delay_lines(a));
+    s.push_str(&delay_lines(a, delay_error));
     if v.candidates.len() > 1 {
         // Each input's peak where there are several: the limits and the relaxation's effort rule
         // judge them one by one (a house's u_2 went 1.118 → 2.421, past 2×, while the worst input
@@ -288,7 +298,7 @@ fn limit_note(v: &quell::auto::Verification, report: &str) -> String {
 /// The kept design with its delays off ([`quell::auto::DelayCheck`]): how far off they may be,
 /// then one line a run, its tail against the bound and max|u_f| against the verified run's, ⚠
 /// where it was not met (with what it missed) or ended early.
-fn delay_lines(a: &AutoDesign) -> String {
+fn delay_lines(a: &AutoDesign, delay_error: Option<f64>) -> String {
     let v = &a.verification;
     let truth = a.scenario.true_plant();
     if v.delay_check.is_empty() {
@@ -309,7 +319,11 @@ fn delay_lines(a: &AutoDesign) -> String {
     // The flag's effect is offered only where the channel poles are the design's to slow.
     let chosen = a.choices.iter().any(|c| c.key == "design.channel_poles");
     let hint = if chosen { "; --delay-error E slows the chosen channel poles until ±E holds" } else { "" };
-    let mut s = format!("  delays (not a condition of passing{hint}){of}: {summary}\n");
+    let status = match delay_error.filter(|&e| e > 0.0) {
+        Some(e) => format!("the --delay-error {e} asked for is a condition of writing the design"),
+        None => format!("not a condition of passing{hint}"),
+    };
+    let mut s = format!("  delays ({status}){of}: {summary}\n");
     let unit = a.scenario.plant.time_unit;
     for c in &v.delay_check {
         let head = format!("    ×{} (τ = [{}] {unit})", crate::run::short(c.factor), delays(&c.delays));

@@ -1857,6 +1857,37 @@ fn the_whole_loops_advice_is_not_the_last_channels() {
     assert!(lines[whole[0]].contains("the disturbance observer passes ω"), "{out}");
 }
 
+/// A --delay-error asked for and met by no candidate is an infeasible target, as an unmet
+/// --u-limit is: exit 2 and nothing written (it had exited 0 with the design written; helper
+/// tryout, 2026-12-07). The paper's plant holds at ±3 %, not ±30 %; at ±3 % the design is written.
+#[test]
+fn an_unmet_delay_error_writes_nothing_and_exits_2() {
+    let dir = temp_dir("delay-unmet");
+    let input = paper_without_design(&dir);
+    let out = dir.path().join("out.toml");
+    let o =
+        quell(&["design", input.to_str().unwrap(), "--auto", "--delay-error", "0.3", "--write", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("error: --delay-error 0.3: the automatic design meets its tail bounds with the input delays off by up to ±3 %, not ±30 %"), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("  delays (the --delay-error 0.3 asked for is a condition of writing the design): "),
+        "{}",
+        stdout(&o)
+    );
+    assert!(!out.exists());
+    let o = quell(&[
+        "design",
+        input.to_str().unwrap(),
+        "--auto",
+        "--delay-error",
+        "0.03",
+        "--write",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(out.exists());
+}
+
 /// The automatic design's delay lines (helper tryout, 2026-12-06): plant delays all 0 say that
 /// nothing was checked (no line had read as a check skipped), and with a `[truth]` whose delays
 /// are not the model's the summary says whose delays it scaled.

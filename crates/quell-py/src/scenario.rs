@@ -1104,10 +1104,14 @@ pub fn auto_design<'py>(
     }
     // A design that passed but meets its bound at no delay error checked is said too (the CLI's
     // report flags those runs; an F-16 pitch loop whose u_f rose 400× at +1 % had passed in silence).
-    if auto.verification.passed && auto.verification.delay_tolerance == 0.0 {
+    // So is a delay_error asked for and not met (`quell design --auto` refuses to write it).
+    let v = &auto.verification;
+    let unmet = targets.delay_error.filter(|&e| e > 0.0 && v.delay_tolerance < e * (1.0 - 1e-9));
+    if v.passed && (v.delay_tolerance == 0.0 || unmet.is_some()) {
+        let asked = unmet.map_or(String::new(), |e| format!("not the delay_error = {e} asked for; "));
         crate::errors::warn(
             py,
-            &format!("delays: {} (report[\"verification\"][\"delay_check\"])", auto.verification.delay_summary()),
+            &format!("delays: {asked}{} (report[\"verification\"][\"delay_check\"])", v.delay_summary()),
         )?;
     }
     Ok((PyScenario::new(auto.scenario), report))

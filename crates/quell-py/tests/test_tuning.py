@@ -214,6 +214,10 @@ def test_auto_design_reports_how_well_the_delays_must_be_known():
     for c in v["delay_check"]:
         np.testing.assert_allclose(c["delays"], [c["factor"] * 1.0, c["factor"] * 3.0], rtol=1e-12)
         assert c["met"] == (c["missed"] == []) and set(c["missed"]) <= {"ended", "tail", "effort", "u_limit"}
+    # A delay error asked for and met by no candidate is said (the CLI writes nothing).
+    with pytest.warns(UserWarning, match=r"^delays: not the delay_error = 0.3 asked for; "):
+        _, asked = quell.auto_design(p.plant, p.reference, p.disturbance, t_end=60.0, delay_error=0.3)
+    assert asked["passed"] and asked["verification"]["delay_tolerance"] < 0.3
     _, none = quell.auto_design(p.plant, p.reference, p.disturbance, t_end=60.0, delay_error=0.0)
     assert none["verification"]["delay_check"] == [] and none["verification"]["delay_tolerance"] is None
     with pytest.raises(quell.DesignError, match=r"^delay_error: expected a relative error from 0 \(no check\) to 0.5"):

@@ -463,12 +463,7 @@ pub fn truth_differences(s: &crate::Scenario) -> Vec<String> {
             [("A", &truth.A, &model.A), ("B", &truth.B, &model.B), ("C", &truth.C, &model.C), ("D", &truth.D, &model.D)]
         {
             if t != m {
-                let relative = (t - m).norm() / m.norm().max(f64::MIN_POSITIVE);
-                diffs.push(format!(
-                    "truth.{key} is {} % off plant.{key} (‖Δ{key}‖/‖{key}‖{})",
-                    crate::settings::fmt_4(100.0 * relative),
-                    largest_entry_change(t, m, relative)
-                ));
+                diffs.push(matrix_difference(key, t, m));
             }
         }
         if truth.x0 != model.x0 {
@@ -498,15 +493,23 @@ pub fn truth_differences(s: &crate::Scenario) -> Vec<String> {
     diffs
 }
 
-/// ", up to X % in entry [i][j]" where an entry changes by more than the norm does (`relative`:
-/// ‖t − m‖/‖m‖; a station's gravity-gradient terms 7.5 % off had read as 0.003 %, the norm set by
-/// exact 1.0 entries), or ", entry [i][j], 0 in the model, is v" for a new entry; empty otherwise.
-fn largest_entry_change(t: &nalgebra::DMatrix<f64>, m: &nalgebra::DMatrix<f64>, relative: f64) -> String {
+/// `truth.KEY` against `plant.KEY` in a phrase: by ‖Δ‖/‖·‖, or led by its largest entry's relative
+/// change where that is more than 1.5× the norm's (a station's gravity-gradient terms 7.5 % off had
+/// read as 0.003 %, the norm set by exact 1.0 entries; a power system's inertia 43 % off, as
+/// 0.058 % beside a governor's −100), or with an entry new to the truth named with its value.
+fn matrix_difference(key: &str, t: &nalgebra::DMatrix<f64>, m: &nalgebra::DMatrix<f64>) -> String {
+    let relative = (t - m).norm() / m.norm().max(f64::MIN_POSITIVE);
+    let norm = format!("‖Δ{key}‖/‖{key}‖");
+    let pct = |r: f64| crate::settings::fmt_4(100.0 * r);
     let mut largest: Option<(f64, usize, usize)> = None;
     for ((i, j), &mv) in m.iter().enumerate().map(|(k, v)| ((k % m.nrows(), k / m.nrows()), v)) {
         let tv = t[(i, j)];
         if mv == 0.0 && tv != 0.0 {
-            return format!(", entry [{i}][{j}], 0 in the model, is {}", crate::settings::fmt_short(tv));
+            let v = crate::settings::fmt_short(tv);
+            return format!(
+                "truth.{key} is {} % off plant.{key} ({norm}), entry [{i}][{j}], 0 in the model, is {v}",
+                pct(relative)
+            );
         }
         let r = if mv == 0.0 { 0.0 } else { ((tv - mv) / mv).abs() };
         if largest.is_none_or(|(l, ..)| r > l) {
@@ -515,9 +518,13 @@ fn largest_entry_change(t: &nalgebra::DMatrix<f64>, m: &nalgebra::DMatrix<f64>, 
     }
     match largest {
         Some((r, i, j)) if r > 1.5 * relative => {
-            format!(", up to {} % in entry [{i}][{j}]", crate::settings::fmt_4(100.0 * r))
+            format!(
+                "truth.{key} is up to {} % off plant.{key}, in entry [{i}][{j}] ({} % by {norm})",
+                pct(r),
+                pct(relative)
+            )
         }
-        _ => String::new(),
+        _ => format!("truth.{key} is {} % off plant.{key} ({norm})", pct(relative)),
     }
 }
 
@@ -1719,12 +1726,18 @@ mod tests {
     fn a_mismatch_is_named_by_its_largest_entry_where_the_norm_hides_it() {
         let m = nalgebra::DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 1e-3, 0.0]);
         let t = nalgebra::DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 1.075e-3, 0.0]);
-        let relative = |t: &nalgebra::DMatrix<f64>| (t - &m).norm() / m.norm();
-        assert_eq!(largest_entry_change(&t, &m, relative(&t)), ", up to 7.5 % in entry [1][0]");
+        // ‖ΔA‖/‖A‖ = 7.5e-5 / 1.0000005.
+        assert_eq!(
+            matrix_difference("A", &t, &m),
+            "truth.A is up to 7.5 % off plant.A, in entry [1][0] (0.0075 % by ‖ΔA‖/‖A‖)"
+        );
         let scaled = &m * 1.1;
-        assert_eq!(largest_entry_change(&scaled, &m, relative(&scaled)), "");
+        assert_eq!(matrix_difference("A", &scaled, &m), "truth.A is 10 % off plant.A (‖ΔA‖/‖A‖)");
         let new = nalgebra::DMatrix::from_row_slice(2, 2, &[0.5, 1.0, 1e-3, 0.0]);
-        assert_eq!(largest_entry_change(&new, &m, relative(&new)), ", entry [0][0], 0 in the model, is 0.5");
+        assert_eq!(
+            matrix_difference("B", &new, &m),
+            "truth.B is 50 % off plant.B (‖ΔB‖/‖B‖), entry [0][0], 0 in the model, is 0.5"
+        );
         let s = Scenario::from_toml(&format!("{PAPER_EXAMPLE}\n[truth]\nx0 = [0.1, 0.0, 0.0]\n")).unwrap();
         assert_eq!(truth_differences(&s), ["truth.x0 [0.1, 0, 0] against plant.x0 [0, 0, 0]"]);
     }
