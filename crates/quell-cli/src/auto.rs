@@ -121,16 +121,7 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
             v.advice.iter().map(|a| format!("; {a}")).collect::<String>()
         )));
     }
-    // A delay error asked for is a target, as an actuator limit is: where no candidate holds at
-    // it, an infeasible target (exit 2), nothing written; a flag asked for and unmet had exited 0
-    // (helper tryout, 2026-12-07). No delay check (no delays): nothing to hold.
-    if let Some(asked) = targets.delay_error.filter(|&e| e > 0.0 && v.delay_tolerance < e * (1.0 - 1e-9)) {
-        return Err(Failure::Input(format!(
-            "--delay-error {asked}: the automatic design meets its tail bounds with the input delays off by up to ±{}, not ±{} (the report's delays and relaxation lines above say how far the slower channel poles got); nothing written; ask for a smaller --delay-error, or leave it out to write this design and know the delays that well",
-            quell::auto::percent(v.delay_tolerance),
-            quell::auto::percent(asked)
-        )));
-    }
+    delay_error_met(targets.delay_error, v)?;
     if let Some(out) = &args.write {
         // The input as it is, comments included, with the chosen [design].
         let text = quell::scenario::with_design(&input, &auto.scenario.design)
@@ -140,6 +131,20 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
         eprintln!("wrote {}", out.display());
     }
     Ok(())
+}
+
+/// A delay error asked for is a target, as an actuator limit is: where no candidate holds at it,
+/// an infeasible target (exit 2), nothing written; a flag asked for and unmet had exited 0 (helper
+/// tryout, 2026-12-07). No delay check (no delays): nothing to hold.
+fn delay_error_met(delay_error: Option<f64>, v: &quell::auto::Verification) -> Result<(), Failure> {
+    match delay_error.filter(|&e| e > 0.0 && v.delay_tolerance < e * (1.0 - 1e-9)) {
+        Some(asked) => Err(Failure::Input(format!(
+            "--delay-error {asked}: the automatic design meets its tail bounds with the input delays off by up to ±{}, not ±{} (the report's delays and relaxation lines above say how far the slower channel poles got); nothing written; ask for a smaller --delay-error, or leave it out to write this design and know the delays that well",
+            quell::auto::percent(v.delay_tolerance),
+            quell::auto::percent(asked)
+        ))),
+        None => Ok(()),
+    }
 }
 
 /// The automatic design `design` with a progress bar of each verifying simulation on a terminal;

@@ -123,16 +123,17 @@ pub fn run(args: &ExportArgs) -> Result<(), Failure> {
     if let Some(check) = check {
         print_check(check, scenario.plant.time_unit);
     }
-    // Written (nothing lost), but a loop that diverges is a failed check, not a warning to skim:
-    // a build that trusts the exit code had shipped one (helper tryout, 2026-12-07).
-    match diverged {
-        Some(t) => Err(Failure::Run(format!(
-            "the exported controller's loop diverged at t = {} {} (above): the files are written, but do not deploy them; choose a shorter --sample-time or slower poles (quell run SCENARIO --sample-time T_S shows the run), or pass --no-loop-check to export without measuring",
-            quell::settings::fmt_instant(t),
-            scenario.plant.time_unit
-        ))),
-        None => Ok(()),
-    }
+    diverged.map_or(Ok(()), |t| Err(diverged_failure(t, scenario.plant.time_unit)))
+}
+
+/// The export's failure where its loop check's sampled loop diverged at `t`: written (nothing
+/// lost), but a loop that diverges is a failed check, not a warning to skim (a build that trusts the
+/// exit code had shipped one; helper tryout, 2026-12-07).
+fn diverged_failure(t: f64, unit: quell::TimeUnit) -> Failure {
+    Failure::Run(format!(
+        "the exported controller's loop diverged at t = {} {unit} (above): the files are written, but do not deploy them; choose a shorter --sample-time or slower poles (quell run SCENARIO --sample-time T_S shows the run), or pass --no-loop-check to export without measuring",
+        quell::settings::fmt_instant(t)
+    ))
 }
 
 /// The export's warnings, in the flags' terms (`from_file`: the file's simulation.precision, not

@@ -73,11 +73,7 @@ pub fn sweep(args: &SweepArgs) -> Result<(), Failure> {
     if !args.resume {
         unfinished_in_the_way(&args.out, &meta, RESUME)?;
     }
-    let (mut kept, done) = if args.resume { resumed(&args.out, &meta, n)? } else { (Vec::new(), Vec::new()) };
-    // Rows of a sweep from before runs.csv held the drawn values get them from the study.
-    for row in kept.iter_mut().filter(|r| r.drawn.is_empty() && !meta.drawn.is_empty()) {
-        row.drawn = study.run_document(row.run).map_or_else(Vec::new, |doc| study.drawn(&doc, &meta.drawn));
-    }
+    let (kept, done) = if args.resume { resumed(&args.out, &meta, n, &study)? } else { (Vec::new(), Vec::new()) };
     if args.resume && kept.len() == n {
         return finish_resumed(&args.out, &meta, &kept, !args.no_plots);
     }
@@ -397,8 +393,9 @@ fn last_line(path: &Path) -> Option<String> {
 }
 
 /// `--resume`: the rows the interrupted sweep of this study and shard (`meta`, of `n` runs) wrote
-/// into `dir`, and which runs of the shard they are (by place k: run index + k·count).
-fn resumed(dir: &Path, meta: &StudyMeta, n: usize) -> Result<(Vec<Row>, Vec<bool>), Failure> {
+/// into `dir` (with their drawn values from `study` where it wrote none), and which runs of the
+/// shard they are (by place k: run index + k·count).
+fn resumed(dir: &Path, meta: &StudyMeta, n: usize, study: &Study) -> Result<(Vec<Row>, Vec<bool>), Failure> {
     let here = format!("--resume {}", dir.display());
     quell::files::check_dir(dir).map_err(|e| {
         Failure::Input(format!("{here}: {e}; resume into the --out directory of the interrupted sweep"))
@@ -420,8 +417,12 @@ fn resumed(dir: &Path, meta: &StudyMeta, n: usize) -> Result<(Vec<Row>, Vec<bool
         }
     };
     // differing_key compares every key but the shard, the fingerprint included; a sweep from
-    // before runs.csv held the drawn values has none (the caller gives its rows theirs).
-    let old = if old.drawn.is_empty() { StudyMeta { drawn: meta.drawn.clone(), ..old } } else { old };
+    // before runs.csv held the drawn values has none: its rows get them from the study.
+    let (old, mut rows) =
+        (if old.drawn.is_empty() { StudyMeta { drawn: meta.drawn.clone(), ..old } } else { old }, rows);
+    for row in rows.iter_mut().filter(|r| r.drawn.is_empty() && !meta.drawn.is_empty()) {
+        row.drawn = study.run_document(row.run).map_or_else(Vec::new, |doc| study.drawn(&doc, &meta.drawn));
+    }
     if !same_sweep(&old, meta) {
         return Err(Failure::Input(format!(
             "{here}: its rows come from another study or shard (fingerprint {}, shard {}/{}; this one: {}, {}/{}); resume with the same study file and --shard, or choose another --out",
