@@ -240,6 +240,7 @@ fn report_text(a: &AutoDesign, delay_error: Option<f64>) -> String {
     if !v.relaxation.is_empty() {
         s.push_str(&format!("  relaxation: {}\n", v.relaxation));
     }
+    s.push_str(&plant_line(a));
     s.push_str(&delay_lines(a, delay_error));
     if v.candidates.len() > 1 {
         // Each input's peak where there are several: the limits and the relaxation's effort rule
@@ -297,6 +298,37 @@ fn limit_note(v: &quell::auto::Verification, report: &str) -> String {
         "note: the design report's advice to raise design.mu is the averaged law's pace and knows no actuator limit: the automatic design verified the μ above within --u-limit (max|u_f| [{}] against [{}]); a larger μ moves max|u_f|, so run the raised scenario (quell run) before keeping it\n",
         list(&v.max_uf, |u| crate::run::fixed_or_sci(u, 4)),
         list(&v.u_limit, crate::run::short)
+    )
+}
+
+/// The plant check's line ([`quell::auto::Verification::plant_check`]): the kept design with the
+/// true plant's A ×1.1 and ×0.9, each run's worst tail over its bound or why it missed.
+fn plant_line(a: &AutoDesign) -> String {
+    let v = &a.verification;
+    if v.plant_check.is_empty() {
+        return String::new();
+    }
+    let runs: Vec<String> = v
+        .plant_check
+        .iter()
+        .map(|c| {
+            let how = match (&c.ended, c.tail_max_e.is_empty()) {
+                (Some(why), _) => format!("ended: {why}"),
+                (None, true) => "no tail".into(),
+                (None, false) => {
+                    let worst = c.tail_max_e.iter().zip(&v.bound).map(|(e, b)| e / b).fold(0.0, f64::max);
+                    format!("worst tail {worst:.2e} of its bound")
+                }
+            };
+            let flag = if c.met { String::new() } else { format!(" ⚠ {}", c.missed.join(", ")) };
+            format!("×{} {how}{flag}", crate::run::short(c.factor))
+        })
+        .collect();
+    let holds = if v.plant_check.iter().all(|c| c.met) { "holds" } else { "misses" };
+    format!(
+        "  plant (the true A ±{}, its rates faster and slower; the tail bound and the effort as for the delays): {holds}: {}\n",
+        quell::auto::percent(quell::auto::PLANT_ERROR),
+        runs.join("; ")
     )
 }
 

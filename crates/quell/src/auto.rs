@@ -258,6 +258,33 @@ pub struct Verification {
     /// The actuator limit verified on each input ([`Targets::u_limit`]; ∞ for none).
     #[serde(skip)]
     pub u_limit: Vec<f64>,
+    /// The kept design run again on the true plant with its A ×(1 ± [`PLANT_ERROR`]) (its rates
+    /// faster and slower), judged as the delay check's runs are; where the relaxation's cheapest
+    /// candidate missed it, the cheapest that meets it both ways is kept instead.
+    /// Empty when the verification failed, or inside a horizon's repeat.
+    pub plant_check: Vec<PlantCheck>,
+}
+
+/// The relative error of the true plant's A the kept design is run with both ways (every entry
+/// ×1.1, then ×0.9: the plant's rates 10 % faster and slower). A two-zone building's relaxation had
+/// kept its observer at 1/128 of the rules' speed, slower than the plant's own air modes and than
+/// its channels: it diverged with A ×1.1 and lost 14 of 20 Monte Carlo draws of A ±10 %, where its
+/// first proposal completed all 20 (helper tryout, 2026-12-07).
+pub const PLANT_ERROR: f64 = 0.1;
+
+/// How many candidates [`plant_robust`] verifies again and runs with A off, at most.
+const PLANT_TRIES: usize = 6;
+
+/// The chosen design's run with the true plant's A scaled by `factor` ([`Verification::plant_check`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PlantCheck {
+    pub factor: f64,
+    /// As [`DelayCheck::met`], [`DelayCheck::missed`], [`DelayCheck::ended`].
+    pub met: bool,
+    pub missed: Vec<&'static str>,
+    pub ended: Option<String>,
+    pub tail_max_e: Vec<f64>,
+    pub max_uf: Vec<f64>,
 }
 
 /// The chosen design's run with every true input delay scaled by `factor`.
@@ -1190,10 +1217,11 @@ fn verified_design(doc: &toml::Table, targets: &Targets, verifier: &mut Verifier
             vec![limit_advice(targets, &kept.2, s.actuator.as_ref(), (&steady, met), &given)]
         }
     };
-    let chosen = kept.clone();
+    let mut chosen = kept.clone();
     let runs = (verifier.runs, verifier.convergence_time);
     let mut auto = finish(kept, bound.clone(), runs, (candidates, start), (within, targets), advice);
     if auto.verification.passed {
+        (chosen, auto) = plant_robust(doc, targets, (chosen, auto, start), &bound, verifier)?;
         let (checks, tolerance) = delay_checks(&auto.scenario, &auto.design, (targets, &chosen.2), &bound, verifier)?;
         (auto.verification.delay_check, auto.verification.delay_tolerance) = (checks, tolerance);
         auto.verification.runs = verifier.runs;
@@ -1376,6 +1404,89 @@ fn mark_chosen(candidates: &mut [Candidate], speed: Speed, from: usize) {
     }
 }
 
+/// The passing design `auto` (of the kept candidate `chosen`) run with the true plant's A off by
+/// ±[`PLANT_ERROR`] ([`plant_checks`]); where it misses, the cheapest other candidate from `start`
+/// on that was within every bound (and the relaxation's effort rule), verified again and meeting
+/// the check both ways, is kept instead: at most [`PLANT_TRIES`] tried, cheapest first, none whose
+/// channel and observer poles are both at most as fast as one that missed (slower poles lean more
+/// on the model). Where none does, `auto` as it is, its relaxation line saying so.
+fn plant_robust(
+    doc: &toml::Table,
+    targets: &Targets,
+    (chosen, mut auto, start): (Verified, AutoDesign, usize),
+    bound: &[f64],
+    verifier: &mut Verifier,
+) -> Result<(Verified, AutoDesign), AutoError> {
+    let checks = plant_checks(&auto.scenario, &auto.design, (targets, &chosen.2), bound, verifier)?;
+    auto.verification.runs = verifier.runs;
+    let Some(miss) = checks.iter().find(|c| !c.met).map(plant_miss) else {
+        auto.verification.plant_check = checks;
+        return Ok((chosen, auto));
+    };
+    let v = &auto.verification;
+    let (before, first_uf) = (verifier.runs, v.candidates[start].max_uf.clone());
+    let within = |c: &Candidate| {
+        c.tail_within(bound, 1.0)
+            && c.within_limit(targets)
+            && (!targets.u_limit.is_empty() || c.effort_within(&first_uf))
+    };
+    let mut order: Vec<Candidate> =
+        v.candidates[start..].iter().filter(|c| !c.chosen && !c.speed.raised && within(c)).cloned().collect();
+    order.sort_by(|a, b| a.cost(bound).total_cmp(&b.cost(bound)));
+    let (mut candidates, mut missed, mut tried) = (v.candidates.clone(), vec![chosen.2.speed], 0);
+    for c in order {
+        let slower = |m: &Speed| c.speed.channel <= m.channel && c.speed.observer <= m.observer;
+        if tried == PLANT_TRIES || missed.iter().any(slower) {
+            continue;
+        }
+        tried += 1;
+        let Some((p, d, fresh)) = verified_at(doc, targets, verifier, c.speed)? else { continue };
+        let level = if within(&fresh) {
+            plant_checks(&p.scenario, &d, (targets, &fresh), bound, verifier)?
+        } else {
+            Vec::new()
+        };
+        if level.is_empty() || level.iter().any(|k| !k.met) {
+            missed.push(c.speed);
+            continue;
+        }
+        mark_chosen(&mut candidates, c.speed, start);
+        let note = format!(
+            "; then, the kept candidate missing with the true plant's A off by ±{} ({miss}), the cheapest other candidate within the bounds that meets them both ways: {} ({})",
+            percent(PLANT_ERROR),
+            c.speed,
+            crate::settings::count(verifier.runs - before, "more verifying run", "more verifying runs")
+        );
+        let runs = (verifier.runs, verifier.convergence_time);
+        let mut robust = finish(
+            (p.clone(), d.clone(), fresh.clone()),
+            bound.to_vec(),
+            runs,
+            (candidates, start),
+            (true, targets),
+            Vec::new(),
+        );
+        robust.verification.relaxation = format!("{}{note}", auto.verification.relaxation);
+        robust.verification.plant_check = level;
+        return Ok(((p, d, fresh), robust));
+    }
+    let v = &mut auto.verification;
+    v.relaxation.push_str(&format!(
+        "; the kept candidate misses with the true plant's A off by ±{} ({miss}), and none of the {} other candidates tried meets them both ways ({})",
+        percent(PLANT_ERROR),
+        tried,
+        crate::settings::count(verifier.runs - before, "more verifying run", "more verifying runs")
+    ));
+    (v.plant_check, v.runs) = (checks, verifier.runs);
+    Ok((chosen, auto))
+}
+
+/// A missed [`PlantCheck`] in a phrase: `A ×1.1: tail, effort`, or why its run ended.
+fn plant_miss(c: &PlantCheck) -> String {
+    let what = c.ended.clone().unwrap_or_else(|| format!("missed the {}", c.missed.join(", ")));
+    format!("A ×{}: {what}", crate::settings::fmt_short(c.factor))
+}
+
 /// The passing design `auto` (of the kept candidate `chosen`) with its channel poles halved until
 /// its delay check meets the delay error asked for ([`Targets::delay_error`] given, and the
 /// channel poles chosen here), up to [`RELAX_STEPS`] times, each slower candidate verified as the
@@ -1412,7 +1523,7 @@ fn delay_robust(
     } else {
         ""
     };
-    let mut candidates = v.candidates.clone();
+    let (mut candidates, mut plant_missed) = (v.candidates.clone(), String::new());
     for j in 1..=RELAX_STEPS {
         let factor = 0.5f64.powi(j as i32);
         let speed = Speed { channel: base.channel * factor, raised: false, ..base };
@@ -1426,6 +1537,15 @@ fn delay_robust(
         }
         let level = delay_level(&p.scenario, &d, (error, &c), targets, bound, verifier)?;
         if level.iter().all(|k| k.met) {
+            // Slower channels must hold with the plant's A off as the kept design did.
+            let plant = plant_checks(&p.scenario, &d, (targets, &c), bound, verifier)?;
+            if let Some(miss) = plant.iter().find(|k| !k.met).map(plant_miss) {
+                plant_missed = format!(
+                    ", the first that did missing with the true plant's A off by ±{} ({miss})",
+                    percent(PLANT_ERROR)
+                );
+                break;
+            }
             mark_chosen(&mut candidates, speed, start);
             let slowed = format!(
                 "; then, {asked}, the channel poles halved until the delays off by it both ways meet the tail bound and the effort: {after}, kept ×{factor} of the kept candidate's channel poles{mu} (its worst tail {:.1e} of the bound), {} (candidates and their delay runs)",
@@ -1437,12 +1557,13 @@ fn delay_robust(
             slower.verification.relaxation = format!("{}{slowed}", auto.verification.relaxation);
             let tolerance = level.iter().map(|k| k.error).fold(f64::INFINITY, f64::min);
             (slower.verification.delay_check, slower.verification.delay_tolerance) = (level, tolerance);
+            slower.verification.plant_check = plant;
             return Ok(slower);
         }
     }
     let v = &mut auto.verification;
     v.relaxation.push_str(&format!(
-        "; {after}, the channel poles halved {asked} met it at none of the slower candidates tried ({})",
+        "; {after}, the channel poles halved {asked} met it at none of the slower candidates tried{plant_missed} ({})",
         crate::settings::count(verifier.runs - before, "more verifying run", "more verifying runs")
     ));
     (v.candidates, v.runs) = (candidates, verifier.runs);
@@ -1488,51 +1609,13 @@ fn delay_level(
     verifier: &mut Verifier,
 ) -> Result<Vec<DelayCheck>, AutoError> {
     let truth = s.true_plant();
-    let runs = [1.0 + level, 1.0 - level]
-        .map(|factor| (factor, truth.delays.iter().map(|&d| d * factor).collect::<Vec<f64>>()));
-    // A run past a study's default runaway factor times the verified run's peaks ends there, as a
-    // study's draw does (one diverging at +10 % had filled the history's budget first and been
-    // reported by it).
-    let peak_factor = crate::study::Runaway::default().peak;
-    let xi_bound = Run::of(s, design).divergence_bounds().0[Peaks::index_of("xihat")];
-    let runaway = verified.peaks.runaway(peak_factor, xi_bound);
-    let divergence_bound = crate::sim::RunSettings::of(s).divergence_bound;
     let mut level_checks = Vec::new();
-    for (factor, delays) in runs {
-        let (mut scenario, mut plant) = (s.clone(), truth.clone());
+    for factor in [1.0 + level, 1.0 - level] {
+        let delays: Vec<f64> = truth.delays.iter().map(|&d| d * factor).collect();
+        let mut plant = truth.clone();
         plant.delays.clone_from(&delays);
-        scenario.truth = Some(plant);
-        let ended = |why: String| (Some(why), vec!["ended"], Vec::new(), Vec::new());
-        let (ended, missed, tail_max_e, max_uf) =
-            match verifier.check_within(&scenario, design, verified.speed, Some(runaway)) {
-                Ok(c) => {
-                    let tests = [
-                        ("tail", c.tail_within(bound, 1.0)),
-                        ("effort", c.effort_within(&verified.max_uf)),
-                        ("u_limit", c.within_limit(targets)),
-                    ];
-                    let missed = tests.iter().filter(|(_, within)| !within).map(|(what, _)| *what).collect();
-                    (None, missed, c.tail_max_e, c.max_uf)
-                }
-                // Below every divergence bound, what ended it is the runaway rule: a run that
-                // diverges, or a transient that large, which may yet settle (a tokamak's ±1 % runs,
-                // read as "diverged", complete within their tail bound when run whole; helper
-                // tryout, 2026-12-07).
-                Err(AutoError::Run(Outcome::Diverged { t, signal, value })) if value.abs() < divergence_bound => {
-                    ended(format!(
-                        "{signal} reached {value:.3e} at t = {} {}, past {peak_factor}× the verified run's peak of that signal, where the check ends a run as a study's runaway rule does (it diverges, or its transient is that much larger and may yet settle)",
-                        crate::settings::fmt_instant(t),
-                        s.plant.time_unit
-                    ))
-                }
-                Err(AutoError::Run(o @ Outcome::Diverged { .. })) => ended(format!(
-                    "{o} (the divergence bound, or {peak_factor}× the verified run's peak of that signal)"
-                )),
-                Err(AutoError::Run(o)) => ended(o.to_string()),
-                Err(AutoError::Departed(how)) => ended(format!("departed from its continuous loop: {how}")),
-                Err(AutoError::Sim(e)) => ended(e.to_string()),
-                Err(e) => return Err(e),
-            };
+        let Judged { ended, missed, tail_max_e, max_uf } =
+            judged(s, plant, design, (verified, targets, bound), verifier)?;
         // The error run: the largest relative change of a delay.
         let change = delays.iter().zip(&truth.delays).filter(|(_, t)| **t > 0.0).map(|(d, t)| (d / t - 1.0).abs());
         let actual = change.fold(0.0, f64::max);
@@ -1540,6 +1623,86 @@ fn delay_level(
         level_checks.push(DelayCheck { factor, delays, error: actual, ended, tail_max_e, max_uf, met, missed });
     }
     Ok(level_checks)
+}
+
+/// A check's run judged: why it ended early, what it missed (of "ended", "tail", "effort",
+/// "u_limit") and its tails and peaks ([`judged`]).
+struct Judged {
+    ended: Option<String>,
+    missed: Vec<&'static str>,
+    tail_max_e: Vec<f64>,
+    max_uf: Vec<f64>,
+}
+
+/// The design verified by run `verified` run again on the true plant `truth` (the delay and plant
+/// checks'): within the tail bound, its max|u_f,i| within [`EFFORT_GROWTH`]× the verified run's and
+/// within the actuator limits.
+fn judged(
+    s: &Scenario,
+    truth: crate::plant::Plant,
+    design: &Design,
+    (verified, targets, bound): (&Candidate, &Targets, &[f64]),
+    verifier: &mut Verifier,
+) -> Result<Judged, AutoError> {
+    // A run past a study's default runaway factor times the verified run's peaks ends there, as a
+    // study's draw does (one diverging at +10 % had filled the history's budget first and been
+    // reported by it).
+    let peak_factor = crate::study::Runaway::default().peak;
+    let xi_bound = Run::of(s, design).divergence_bounds().0[Peaks::index_of("xihat")];
+    let runaway = verified.peaks.runaway(peak_factor, xi_bound);
+    let divergence_bound = crate::sim::RunSettings::of(s).divergence_bound;
+    let scenario = Scenario { truth: Some(truth), ..s.clone() };
+    let ended =
+        |why: String| Judged { ended: Some(why), missed: vec!["ended"], tail_max_e: Vec::new(), max_uf: Vec::new() };
+    Ok(match verifier.check_within(&scenario, design, verified.speed, Some(runaway)) {
+        Ok(c) => {
+            let tests = [
+                ("tail", c.tail_within(bound, 1.0)),
+                ("effort", c.effort_within(&verified.max_uf)),
+                ("u_limit", c.within_limit(targets)),
+            ];
+            let missed = tests.iter().filter(|(_, within)| !within).map(|(what, _)| *what).collect();
+            Judged { ended: None, missed, tail_max_e: c.tail_max_e, max_uf: c.max_uf }
+        }
+        // Below every divergence bound, what ended it is the runaway rule: a run that diverges, or
+        // a transient that large, which may yet settle (a tokamak's ±1 % runs, read as "diverged",
+        // complete within their tail bound when run whole; helper tryout, 2026-12-07).
+        Err(AutoError::Run(Outcome::Diverged { t, signal, value })) if value.abs() < divergence_bound => ended(format!(
+            "{signal} reached {value:.3e} at t = {} {}, past {peak_factor}× the verified run's peak of that signal, where the check ends a run as a study's runaway rule does (it diverges, or its transient is that much larger and may yet settle)",
+            crate::settings::fmt_instant(t),
+            s.plant.time_unit
+        )),
+        Err(AutoError::Run(o @ Outcome::Diverged { .. })) => {
+            ended(format!("{o} (the divergence bound, or {peak_factor}× the verified run's peak of that signal)"))
+        }
+        Err(AutoError::Run(o)) => ended(o.to_string()),
+        Err(AutoError::Departed(how)) => ended(format!("departed from its continuous loop: {how}")),
+        Err(AutoError::Sim(e)) => ended(e.to_string()),
+        Err(e) => return Err(e),
+    })
+}
+
+/// [`PlantCheck`]s of the design verified by run `verified`: the true plant's A ×(1 ±
+/// [`PLANT_ERROR`]). None inside a horizon's repeat.
+fn plant_checks(
+    s: &Scenario,
+    design: &Design,
+    (targets, verified): (&Targets, &Candidate),
+    bound: &[f64],
+    verifier: &mut Verifier,
+) -> Result<Vec<PlantCheck>, AutoError> {
+    let mut checks = Vec::new();
+    if verifier.nested {
+        return Ok(checks);
+    }
+    for factor in [1.0 + PLANT_ERROR, 1.0 - PLANT_ERROR] {
+        let mut plant = s.true_plant().clone();
+        plant.A *= factor;
+        let Judged { ended, missed, tail_max_e, max_uf } =
+            judged(s, plant, design, (verified, targets, bound), verifier)?;
+        checks.push(PlantCheck { factor, met: missed.is_empty(), missed, ended, tail_max_e, max_uf });
+    }
+    Ok(checks)
 }
 
 /// How much a halving of the channel and observer poles must lower the loop's rate ρ to go on
@@ -1986,6 +2149,7 @@ fn finish(
             uf_cancellation: c.uf_cancellation,
             delay_check: Vec::new(),
             delay_tolerance: f64::NAN,
+            plant_check: Vec::new(),
         },
     }
 }
