@@ -32,6 +32,9 @@ use crate::errors::Kind;
 ///     The input delays τ_i ≥ 0 (m), in the plant's unit of time; default zeros.
 /// x0 : array_like, optional
 ///     The initial state x(0) (n); default zeros.
+/// xhat0 : array_like, optional
+///     The controller's initial estimate x̂(0) of it, where the observer (6) starts and a reset
+///     returns (n); default zeros.
 /// inputs, outputs, states : list of str, optional
 ///     The signals' names (m, m and n distinct names); default a system's labels, else
 ///     `u_f[i]`, `y[i]`, `x[j]`.
@@ -90,11 +93,12 @@ fn names(obj: Option<&Bound<'_, PyAny>>, name: &str, count: usize) -> PyResult<O
     Ok(Some(given))
 }
 
-/// With a `control.TransferFunction` as A, the keywords that name its states (`D`, `x0`, `states`)
+/// With a `control.TransferFunction` as A, the keywords that name its states (`D`, `x0`, `states`,
+/// `xhat0`)
 /// refused: its states are those of the minimal realization, which the user did not choose (a D
 /// given with one had been read in the realization's coordinates: a disturbance's DC gain 5e8
 /// where 2 was meant; helper tryout, 2026-12-07). Zeros mean the same in any coordinates.
-fn refuse_state_keys(py: Python<'_>, [D, x0, states]: [Option<&Bound<'_, PyAny>>; 3]) -> PyResult<()> {
+fn refuse_state_keys(py: Python<'_>, [D, x0, states, xhat0]: [Option<&Bound<'_, PyAny>>; 4]) -> PyResult<()> {
     let k = Kind::Scenario;
     let nonzero =
         |values: Option<PyResult<Vec<f64>>>| values.is_some_and(|v| v.map_or(true, |v| v.iter().any(|&x| x != 0.0)));
@@ -103,7 +107,8 @@ fn refuse_state_keys(py: Python<'_>, [D, x0, states]: [Option<&Bound<'_, PyAny>>
     }
     let d = nonzero(present(D).map(|v| matrix(v, "D", k).map(|m| m.as_slice().to_vec())));
     let x = nonzero(present(x0).map(|v| vector(v, "x0", k)));
-    match [("D", d), ("x0", x), ("states", present(states).is_some())].iter().find(|(_, r)| *r) {
+    let xhat = nonzero(present(xhat0).map(|v| vector(v, "xhat0", k)));
+    match [("D", d), ("x0", x), ("states", present(states).is_some()), ("xhat0", xhat)].iter().find(|(_, r)| *r) {
         Some((name, _)) => Err(k.err(py, format!("{name}: refers to the plant's states, but with a control.TransferFunction as A the states are those of its minimal realization (control.minreal, then control.ss), which you did not choose; give the plant as a control.StateSpace, or A, B, C, in the coordinates {name} is written in"))),
         None => Ok(()),
     }
@@ -211,7 +216,7 @@ fn feedthrough_rounding(A: &DMatrix<f64>, B: &DMatrix<f64>, C: &DMatrix<f64>) ->
 #[pymethods]
 impl PyPlant {
     #[new]
-    #[pyo3(signature = (A, B=None, C=None, D=None, Q=None, delays=None, x0=None, inputs=None, outputs=None, states=None, time_unit=None))]
+    #[pyo3(signature = (A, B=None, C=None, D=None, Q=None, delays=None, x0=None, inputs=None, outputs=None, states=None, time_unit=None, xhat0=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         A: &Bound<'_, PyAny>,
@@ -225,6 +230,7 @@ impl PyPlant {
         outputs: Option<&Bound<'_, PyAny>>,
         states: Option<&Bound<'_, PyAny>>,
         time_unit: Option<&Bound<'_, PyAny>>,
+        xhat0: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let py = A.py();
         let k = Kind::Scenario;
@@ -235,7 +241,7 @@ impl PyPlant {
         // D, x0 or state name can refer to.
         let realized;
         let A = if type_name(A) == "TransferFunction" {
-            refuse_state_keys(py, [D, x0, states])?;
+            refuse_state_keys(py, [D, x0, states, xhat0])?;
             realized = py.import("quell._control")?.call_method1("state_space", (A,))?;
             &realized
         } else {
@@ -266,8 +272,13 @@ impl PyPlant {
             None => vec![0.0; m],
         };
         let x0 = x0.map(|x| vector(x, "x0", k)).transpose()?.map(quell::nalgebra::DVector::from_vec);
+        let xhat0 = xhat0
+            .filter(|v| !v.is_none())
+            .map(|x| vector(x, "xhat0", k))
+            .transpose()?
+            .map(quell::nalgebra::DVector::from_vec);
         let (dims, measured) = ((n, m, D.ncols()), C.nrows());
-        let inner = quell::Plant::new(A, B, C, D, Q, delays, x0).map_err(|e| {
+        let inner = quell::Plant::new(A, B, C, D, Q, delays, x0).and_then(|p| p.with_xhat0(xhat0)).map_err(|e| {
             let (key, message) = e.explained(dims, "");
             k.err(py, format!("{key}: {message}{}", system_hint(system.is_some(), &key, dims, measured)))
         })?;
@@ -321,6 +332,11 @@ impl PyPlant {
     fn x0<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
         vec_numpy(py, self.inner.x0.as_slice()).into_any()
     }
+    /// The controller's initial estimate x̂(0) (n,), where the observer starts.
+    #[getter]
+    fn xhat0<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        vec_numpy(py, self.inner.xhat0.as_slice()).into_any()
+    }
     /// State dimension n.
     #[getter]
     fn n(&self) -> usize {
@@ -362,11 +378,11 @@ impl PyPlant {
         let p = &self.inner;
         format!("Plant(n={}, m={}, k={}, delays={:?})", p.n(), p.m(), p.k(), p.delays)
     }
-    /// Equal plants: the same matrices, delays, x0 and signal names, entry for entry.
+    /// Equal plants: the same matrices, delays, x0, x̂0 and signal names, entry for entry.
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
         other.cast::<PyPlant>().is_ok_and(|o| o.get().inner == self.inner && o.get().labels == self.labels)
     }
-    /// Pickles as `Plant(A, B, C, D, Q, delays, x0, inputs, outputs, states, time_unit)` (D and
+    /// Pickles as `Plant(A, B, C, D, Q, delays, x0, inputs, outputs, states, time_unit, xhat0)` (D and
     /// Q omitted without a disturbance, names and unit without them).
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
         let py = slf.py();
@@ -387,6 +403,7 @@ impl PyPlant {
                 l.outputs.clone().into_pyobject(py)?,
                 l.states.clone().into_pyobject(py)?,
                 p.time_unit.symbol().into_pyobject(py)?.into_any(),
+                me.xhat0(py),
             ],
         )?;
         Ok((slf.get_type().into_any(), args))

@@ -52,6 +52,26 @@ def test_scenario_round_trips_through_toml():
     assert quell.Scenario.load(EXAMPLES / "paper.toml").to_toml() == quell.paper_example().to_toml()
 
 
+def test_the_observer_starts_at_xhat0():
+    """Plant(xhat0=...): the controller's initial estimate, kept by the scenario's TOML and pickling;
+    a run starts its x̂ there (recorded with states=True), as the real-time Controller does."""
+    import pickle
+
+    x0 = [0.5, -0.3, 0.2]
+    plant = quell.Plant(A, B, C, D, Q=Q, delays=[1.0, 3.0], x0=x0, xhat0=x0)
+    assert list(plant.xhat0) == x0 and pickle.loads(pickle.dumps(plant)) == plant
+    assert plant != quell.Plant(A, B, C, D, Q=Q, delays=[1.0, 3.0], x0=x0)
+    s = quell.Scenario(plant, reference=REFERENCE, disturbance=DISTURBANCE, **dict(PAPER_DESIGN, observer_gain=L, t_end=1.0))
+    assert "xhat0 = [0.5, -0.3, 0.2]" in s.to_toml()
+    assert list(quell.Scenario.from_toml(s.to_toml()).plant.xhat0) == x0
+    r = quell.simulate(s, states=True)
+    np.testing.assert_array_equal(r.x_hat[0], x0)
+    c = quell.Controller(s.design(), 0.01)
+    np.testing.assert_array_equal(c.x_hat(), x0)
+    with pytest.raises(quell.ScenarioError, match=r"^xhat0: expected 3 entries"):
+        quell.Plant(A, B, C, D, Q=Q, delays=[1.0, 3.0], xhat0=[1.0])
+
+
 def test_truth_differs_from_the_design_model():
     """[truth]: the simulated plant; the design (and so scenario.design()) keeps [plant]."""
     true_plant = quell.Plant(A, B, C, D, Q=Q, delays=[1.0, 3.2])

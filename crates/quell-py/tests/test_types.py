@@ -29,7 +29,7 @@ def _valid():
     tuned = quell.tune(**tuning)
     return {
         "Plant": (quell.Plant, dict(A=A, B=B, C=C, D=D, Q=Q, delays=[1.0, 3.0], x0=[0, 0, 0], inputs=["a", "b"],
-                                    outputs=["c", "d"], states=["x", "y", "z"], time_unit="min")),
+                                    outputs=["c", "d"], states=["x", "y", "z"], time_unit="min", xhat0=[0, 0, 0])),
         "design": (quell.design, dict(plant=plant, observer_gain=L, observer_poles=None, relative_degrees=[2, 1],
                                       regressor_scaling="paper", reference_sizes=[3.0, 2.0],
                                       disturbance_sizes=[1.0, 3.0], **PAPER_DESIGN)),

@@ -31,6 +31,10 @@ pub struct Plant {
     pub delays: Vec<f64>,
     /// Initial state x(0).
     pub x0: DVector<f64>,
+    /// The controller's initial estimate x̂(0) of it, the observer's state (6) at t = 0 and after a
+    /// reset (`plant.xhat0`; 0 unless given): a plant that starts away from 0 is otherwise met by
+    /// an observer that starts at 0.
+    pub xhat0: DVector<f64>,
     /// The unit of time A, the delays and every time and frequency of a run are in: a label
     /// ([`TimeUnit`]); seconds unless given.
     pub time_unit: TimeUnit,
@@ -63,8 +67,8 @@ impl PlantError {
     /// program's arguments): a wrong shape names what n, m and k were taken from.
     pub fn explained(&self, (n, m, k): (usize, usize, usize), prefix: &str) -> (String, String) {
         let entry = |name: &str, row: usize, col: usize| {
-            if name == "x0" {
-                format!("{prefix}x0[{row}]")
+            if name == "x0" || name == "xhat0" {
+                format!("{prefix}{name}[{row}]")
             } else {
                 format!("{prefix}{name}[{row}][{col}]")
             }
@@ -86,7 +90,7 @@ impl PlantError {
                 format!("expected a finite delay ≥ 0, found {}", crate::settings::fmt_short(value)),
             ),
             PlantError::Length { name, per, expected, found } => {
-                let of = if name == "x0" {
+                let of = if name == "x0" || name == "xhat0" {
                     format!("n = {n} rows of {prefix}A")
                 } else {
                     format!("m = {m} columns of {prefix}B")
@@ -214,9 +218,20 @@ impl Plant {
         x0: Option<DVector<f64>>,
     ) -> Result<Self, PlantError> {
         let x0 = x0.unwrap_or_else(|| DVector::zeros(A.nrows()));
-        let plant = Plant { A, B, C, D, Q, delays, x0, time_unit: TimeUnit::default() };
+        let xhat0 = DVector::zeros(A.nrows());
+        let plant = Plant { A, B, C, D, Q, delays, x0, xhat0, time_unit: TimeUnit::default() };
         plant.validate()?;
         Ok(plant)
+    }
+
+    /// The plant with the controller's initial estimate `xhat0` of its state (`None`: 0), checked as
+    /// x0 is.
+    pub fn with_xhat0(mut self, xhat0: Option<DVector<f64>>) -> Result<Self, PlantError> {
+        if let Some(x) = xhat0 {
+            self.xhat0 = x;
+            self.validate()?;
+        }
+        Ok(self)
     }
 
     /// The plant with its unit of time `unit` (a label: nothing is rescaled).
@@ -242,10 +257,13 @@ impl Plant {
         if let Some((index, &value)) = self.delays.iter().enumerate().find(|(_, d)| !(d.is_finite() && **d >= 0.0)) {
             return Err(PlantError::BadDelay { index, value });
         }
-        if self.x0.len() != n {
-            return Err(PlantError::Length { name: "x0", per: "state", expected: n, found: self.x0.len() });
+        for (name, x) in [("x0", &self.x0), ("xhat0", &self.xhat0)] {
+            if x.len() != n {
+                return Err(PlantError::Length { name, per: "state", expected: n, found: x.len() });
+            }
+            check(name, &DMatrix::from_column_slice(n, 1, x.as_slice()), n, 1)?;
         }
-        check("x0", &DMatrix::from_column_slice(n, 1, self.x0.as_slice()), n, 1)
+        Ok(())
     }
 
     /// State dimension n.

@@ -540,6 +540,18 @@ fn same_controller_as_rust_on_random_sequences() {
     let mut c = CController::build(&code, "quell", Precision::F64, (2, 8, 3), "-O2");
     let dev = compare(&d, 1e-3, &mut c, random_inputs(2, 20_000, 4));
     assert!(dev.iter().all(|&e| e <= 1e-12), "no delay: {dev:?}");
+    // An initial estimate x̂(0) (plant.xhat0): <p>_init starts there as Controller::new and reset
+    // do (its first u_f = −K x̂(0) + F u_d tells it), and only then is it written.
+    let text = text.replace("x0 = [0.0, 0.0, 0.0]", "x0 = [0.0, 0.0, 0.0]\nxhat0 = [0.5, -0.3, 0.2]");
+    let d = Scenario::from_toml(&text).unwrap().design().unwrap();
+    let code = export(&d, 1e-3, "quell", Precision::F64);
+    assert!(code.source.contains("s->z[QUELL_Q + i] = quell_xhat0[i];"), "{}", code.source);
+    let mut c = CController::build(&code, "quell", Precision::F64, (2, 8, 3), "-O2");
+    for seed in [5, 6] {
+        let dev = compare(&d, 1e-3, &mut c, random_inputs(2, 5_000, seed));
+        assert!(dev.iter().all(|&e| e <= 1e-12), "x̂(0): {dev:?}");
+        c.reset();
+    }
 }
 
 /// The Rust controller, recording the y and g it is given.

@@ -209,6 +209,8 @@ pub struct Controller {
     u_f: Vec<f64>,
     /// η̂_1, …, η̂_m, concatenated.
     eta: Vec<f64>,
+    /// x̂ at the start and after [`Controller::reset`] (the design plant's `xhat0`).
+    xhat0: Vec<f64>,
 }
 
 fn suggestion(nearest: Option<f64>, output_step: Option<f64>, unit: TimeUnit) -> String {
@@ -552,13 +554,17 @@ impl Controller {
             })
             .collect::<Result<_, _>>()?;
         let a = (-T / eq.beta).exp();
+        let xhat0 = design.plant().xhat0.as_slice().to_vec();
+        let mut zv = vec![0.0; nz + 3 * m];
+        zv[q..nz].copy_from_slice(&xhat0);
         Ok(Controller {
             T,
             PhiGamma_z,
             a,
             b: 1.0 - a,
             channels,
-            zv: vec![0.0; nz + 3 * m],
+            zv,
+            xhat0,
             z_next: vec![0.0; nz],
             xi: vec![0.0; q],
             Delta: vec![0.0; q],
@@ -659,10 +665,13 @@ impl Controller {
         (self.eq.m, self.eq.q)
     }
 
-    /// Back to the initial state: every controller state and delay line zero, and so the last
-    /// step's u and u_f (all of [`Controller::state`]).
+    /// Back to the initial state: every controller state and delay line zero but x̂, which starts
+    /// at the design plant's `xhat0` (0 unless given), and so the last step's u and u_f (all of
+    /// [`Controller::state`]).
     pub fn reset(&mut self) {
         self.zv.fill(0.0);
+        let (q, nz) = (self.eq.q, self.eq.nz);
+        self.zv[q..nz].copy_from_slice(&self.xhat0);
         self.eta.fill(0.0);
         self.u.fill(0.0);
         self.u_f.fill(0.0);
@@ -797,6 +806,8 @@ pub(crate) struct Discretized<'c> {
     pub b: f64,
     /// Per channel: its G_ii filter bank and delay line.
     pub channels: Vec<DiscreteChannel<'c>>,
+    /// x̂ at the start and after a reset.
+    pub xhat0: &'c [f64],
 }
 
 /// One channel of [`Discretized`].
@@ -823,6 +834,7 @@ impl Controller {
                 .iter()
                 .map(|ch| DiscreteChannel { Phi: &ch.Phi, gamma: &ch.gamma, c: ch.c, delay_samples: ch.line.len - 1 })
                 .collect(),
+            xhat0: &self.xhat0,
         }
     }
 }

@@ -195,6 +195,12 @@ fn constants(view: &Discretized, layout: &Layout, P: &str) -> Vec<Constant> {
         eq.beta
     )));
     constants.push(Constant::new("b", vec![], 1, vec![view.b]));
+    if view.xhat0.iter().any(|&x| x != 0.0) {
+        constants.push(
+            Constant::new("xhat0", vec![dim("N")], n, view.xhat0.to_vec())
+                .with_comment("The observer's initial estimate x_hat(0) (plant.xhat0), set by init."),
+        );
+    }
     constants
 }
 
@@ -368,8 +374,23 @@ fn source(constants: &[Constant], layout: &Layout, o: &ExportOptions) -> String 
         Precision::F32 => "FLT_EPSILON",
     };
     let implicit_from = number(crate::controller::discrete::IMPLICIT_FROM, o.precision);
-    let values =
-        [("calls", calls.trim_end()), ("p", p), ("P", &P), ("R", R), ("eps", eps), ("implicit_from", &implicit_from)];
+    // x̂(0) where the scenario gives one (plant.xhat0); else z stays 0.
+    let xhat0 = match constants.iter().any(|k| k.name == "xhat0") {
+        true => fill(
+            "\n    for (unsigned i = 0; i < {P}_N; i++)\n        s->z[{P}_Q + i] = {p}_xhat0[i];",
+            &[("p", p), ("P", &P)],
+        ),
+        false => String::new(),
+    };
+    let values = [
+        ("calls", calls.trim_end()),
+        ("p", p),
+        ("P", &P),
+        ("R", R),
+        ("eps", eps),
+        ("implicit_from", &implicit_from),
+        ("xhat0", &xhat0),
+    ];
     c.push_str(&fill(FUNCTIONS, &values));
     c
 }
@@ -441,7 +462,7 @@ extern "C" {
 
 {defines}
 
-/* Everything that changes; {p}_init zeroes it. */
+/* Everything that changes; {p}_init zeroes it (x_hat to plant.xhat0 where the scenario gives one). */
 typedef struct {
 {fields}
 } {p}_state;
@@ -483,7 +504,7 @@ void {p}_init({p}_state *s)
     if (!s)
         return;
     for (unsigned i = 0; i < {P}_NZ; i++)
-        s->z[i] = 0;
+        s->z[i] = 0;{xhat0}
     for (unsigned r = 0; r < {P}_SIGMA_SUM; r++)
         for (unsigned j = 0; j < {P}_Q + 1; j++)
             s->W[r][j] = 0;

@@ -160,7 +160,8 @@ pub fn load_and_design(text: &str) -> Result<(Scenario, Design), LoadError> {
 }
 
 const TOP_KEYS: &[&str] = &["name", "plant", "design", "reference", "disturbance", "simulation", "noise", "truth"];
-const PLANT_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0", "inputs", "outputs", "states", "time_unit"];
+const PLANT_KEYS: &[&str] =
+    &["A", "B", "C", "D", "Q", "delays", "x0", "xhat0", "inputs", "outputs", "states", "time_unit"];
 /// The keys of `[truth]`.
 pub(crate) const TRUTH_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0", "actuator_delays", "u_max"];
 /// The keys of `[design]`.
@@ -378,6 +379,7 @@ fn plant(v: Value, disturbance: Option<&Signal>) -> Result<(Plant, SignalNames),
     let Q = t.get("Q", |v| v.matrix(k_of_D.map(|k| (k, "k, from plant.D"))))?;
     let delays = t.require("delays", "one input delay τ_i ≥ 0 per input", |v| v.numbers())?;
     let x0 = t.get("x0", |v| v.numbers())?.map(DVector::from_vec);
+    let xhat0 = t.get("xhat0", |v| v.numbers())?.map(DVector::from_vec);
     let m = B.ncols();
     let k_signal = disturbance.map_or(0, Signal::len);
     // `D = []` (no rows) means no disturbance columns, like an absent D.
@@ -406,7 +408,8 @@ fn plant(v: Value, disturbance: Option<&Signal>) -> Result<(Plant, SignalNames),
         _ => DMatrix::zeros(m, 0),
     };
     let time_unit = t.get("time_unit", |v| TimeUnit::from_name(&v.string()?).map_err(|message| err(v.key, message)))?;
-    let plant = Plant::new(A, B, C, D, Q, delays, x0).map_err(|e| plant_error(e, n, m, k))?;
+    let plant =
+        Plant::new(A, B, C, D, Q, delays, x0).and_then(|p| p.with_xhat0(xhat0)).map_err(|e| plant_error(e, n, m, k))?;
     Ok((plant.with_time_unit(time_unit.unwrap_or_default()), SignalNames::read(&t, n, m)?))
 }
 

@@ -137,6 +137,9 @@ pub fn plant_table(p: &Plant) -> Table {
     }
     t.insert("delays".into(), numbers(&p.delays));
     t.insert("x0".into(), numbers(p.x0.as_slice()));
+    if p.xhat0.iter().any(|&v| v != 0.0) {
+        t.insert("xhat0".into(), numbers(p.xhat0.as_slice()));
+    }
     if p.time_unit != TimeUnit::Seconds {
         t.insert("time_unit".into(), Value::String(p.time_unit.symbol().into()));
     }

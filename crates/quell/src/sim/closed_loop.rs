@@ -76,6 +76,8 @@ pub struct ContinuousLoop<'a> {
     eq: Equations,
     C: &'a DMatrix<f64>,
     Q: &'a DMatrix<f64>,
+    /// The controller's initial estimate x̂(0) (the design plant's `xhat0`).
+    xhat0: &'a DVector<f64>,
     /// Plant (1) with input (5) and the core, as one sparse operator (see [`LinearPart`]).
     linear: LinearPart,
     /// g and ω, evaluated together.
@@ -189,6 +191,7 @@ impl<'a> ContinuousLoop<'a> {
             actuator: None,
             C: &truth.C,
             Q: &truth.Q,
+            xhat0: &design.plant().xhat0,
             signals: SignalBank::new(&[reference, disturbance]),
             delays,
             y: vec![0.0; m],
@@ -207,8 +210,9 @@ impl<'a> ContinuousLoop<'a> {
         })
     }
 
-    /// Initial state: x(0) = x0, every controller state 0 (the paper's filters and observers start at rest). An x0 that
-    /// is not n long is [`PlantError::Length`].
+    /// Initial state: x(0) = x0, x̂(0) = the design plant's `xhat0` (0 unless given), every other
+    /// controller state 0 (the paper's filters and observers start at rest). An x0 that is not n
+    /// long is [`PlantError::Length`].
     pub fn initial_state(&self, x0: &DVector<f64>) -> Result<Vec<f64>, PlantError> {
         let n = self.eq.n;
         if x0.len() != n {
@@ -216,6 +220,8 @@ impl<'a> ContinuousLoop<'a> {
         }
         let mut s = vec![0.0; self.layout.dim];
         s[self.layout.x..self.layout.x + n].copy_from_slice(x0.as_slice());
+        // [z, η̂] = [ξ̂, x̂, …]: x̂ follows ξ̂'s q entries.
+        s[self.layout.q..self.layout.q + n].copy_from_slice(self.xhat0.as_slice());
         Ok(s)
     }
 
