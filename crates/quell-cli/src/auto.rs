@@ -35,10 +35,15 @@ pub struct DesignArgs {
     pub u_limit: Vec<f64>,
     /// With --auto: a target, the relative error of the input delays the design aims to hold at
     /// (its channel poles, where chosen, slowed until the delays this much longer and shorter
-    /// meet the tail bound; where none does, the design is kept and the report says so); without
+    /// meet the tail bound; where none does, nothing is written and the exit code is 2); without
     /// it 0.1 is checked and reported only; 0 for no check.
     #[arg(long, value_name = "FRACTION", allow_hyphen_values = true, value_parser = crate::parse_real)]
     pub delay_error: Option<f64>,
+    /// With --auto: the time scale r (rad per the plant's unit of time) every chosen pole is placed
+    /// from, instead of the fastest of the signals' frequencies, the plant's eigenvalues and
+    /// 20/t_end: for a fast stable mode (an actuator's) far above the rates the loop must follow.
+    #[arg(long, value_name = "RATE", allow_hyphen_values = true, value_parser = crate::parse_real)]
+    pub time_scale: Option<f64>,
 }
 
 impl DesignArgs {
@@ -49,6 +54,7 @@ impl DesignArgs {
             ("--convergence-time", self.convergence_time.is_some()),
             ("--u-limit", !self.u_limit.is_empty()),
             ("--delay-error", self.delay_error.is_some()),
+            ("--time-scale", self.time_scale.is_some()),
         ]
         .into_iter()
         .find_map(|(flag, given)| given.then_some(flag))
@@ -60,6 +66,7 @@ pub fn auto(args: &DesignArgs) -> Result<(), Failure> {
         convergence_time: args.convergence_time,
         u_limit: args.u_limit.clone(),
         delay_error: args.delay_error,
+        time_scale: args.time_scale,
     };
     // The text is kept: --write writes it back with the chosen [design].
     let input = quell::scenario::read_text(&args.scenario).map_err(|e| Failure::Input(e.to_string()))?;

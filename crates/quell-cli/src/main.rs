@@ -122,7 +122,7 @@ fn main() -> ExitCode {
 }
 
 /// Library keys that a flag sets, as the CLI names them.
-const FLAGS: [(&str, &str); 11] = [
+const FLAGS: [(&str, &str); 12] = [
     ("simulation.sample_time", "simulation.sample_time (--sample-time)"),
     ("simulation.precision", "simulation.precision (--precision)"),
     ("simulation.t_end", "simulation.t_end (--t-end)"),
@@ -130,6 +130,7 @@ const FLAGS: [(&str, &str); 11] = [
     ("u_limit", "--u-limit"),
     ("convergence_time", "--convergence-time"),
     ("delay_error", "--delay-error"),
+    ("time_scale", "--time-scale"),
     ("prefix", "--prefix"),
     ("precision", "--precision"),
     ("compiler", "--compiler"),

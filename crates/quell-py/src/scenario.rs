@@ -406,7 +406,8 @@ fn unknown_keyword(py: Python<'_>, name: String, (function, own): (&str, &[&str]
 }
 
 /// `auto_design`'s own arguments, which a misspelt keyword is matched against too.
-const AUTO_ARGUMENTS: [&str; 6] = ["text", "reference", "disturbance", "convergence_time", "u_limit", "delay_error"];
+const AUTO_ARGUMENTS: [&str; 7] =
+    ["text", "reference", "disturbance", "convergence_time", "u_limit", "delay_error", "time_scale"];
 
 /// The `[design]` table from keyword arguments: pole lists in the file's form, the rest as values;
 /// a keyword that is no design key is refused naming the nearest keyword.
@@ -1016,6 +1017,10 @@ fn auto_document<'py>(
 ///     The relative error of the input delays the chosen design is also run with, longer and
 ///     shorter, then 0.3 and 0.1 of it until both ways meet the tail bound (default 0.1; 0 for
 ///     none): the report's ``verification["delay_check"]`` and ``["delay_tolerance"]``.
+/// time_scale : float, optional
+///     The time scale r (rad per the plant's unit of time) every chosen pole is placed from,
+///     instead of the fastest of the signals' frequencies, the plant's eigenvalues and 20/t_end:
+///     for a fast stable mode (an actuator's) far above the rates the loop must follow.
 ///
 /// Returns
 /// -------
@@ -1047,7 +1052,7 @@ fn auto_document<'py>(
 /// >>> report["passed"], s.simulation["t_end"]
 /// (True, 60.0)
 #[pyfunction]
-#[pyo3(signature = (text, reference=None, disturbance=None, *, convergence_time=None, u_limit=None, delay_error=None, **scenario))]
+#[pyo3(signature = (text, reference=None, disturbance=None, *, convergence_time=None, u_limit=None, delay_error=None, time_scale=None, **scenario))]
 #[allow(clippy::too_many_arguments)]
 pub fn auto_design<'py>(
     py: Python<'py>,
@@ -1057,6 +1062,7 @@ pub fn auto_design<'py>(
     convergence_time: Option<&Bound<'py, PyAny>>,
     u_limit: Option<&Bound<'py, PyAny>>,
     delay_error: Option<&Bound<'py, PyAny>>,
+    time_scale: Option<&Bound<'py, PyAny>>,
     scenario: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<(PyScenario, Bound<'py, PyAny>)> {
     let doc = auto_document(py, text, (reference, disturbance), scenario)?;
@@ -1073,7 +1079,8 @@ pub fn auto_design<'py>(
     let u_limit = u_limit.unwrap_or_default();
     let delay_error = given(delay_error).map(|v| number(&v, "delay_error", Kind::Design, "delay_error")).transpose()?;
     // Their ranges are checked by auto_design (AutoError::Target: a DesignError below).
-    let targets = quell::auto::Targets { convergence_time, u_limit, delay_error };
+    let time_scale = given(time_scale).map(|v| number(&v, "time_scale", Kind::Design, "time_scale")).transpose()?;
+    let targets = quell::auto::Targets { convergence_time, u_limit, delay_error, time_scale };
     // With a quell.Plant the scenario is Python's values: messages name the arguments (`beta`).
     let from_values = !text.is_instance_of::<PyString>();
     let auto =

@@ -356,7 +356,7 @@ def test_python_control_shapes_get_hints_in_its_own_terms():
 def test_a_misspelt_auto_design_keyword_is_matched_against_its_own_arguments():
     p = quell.paper_example()
     for typo, meant in (("convergence_tim", "convergence_time"), ("u_limt", "u_limit"), ("delay_eror", "delay_error")):
-        with pytest.raises(quell.ScenarioError, match=rf"^{typo}: unknown keyword \(did you mean `{meant}`\?\); quell.auto_design takes text, reference, disturbance, convergence_time, u_limit, delay_error, the keywords"):
+        with pytest.raises(quell.ScenarioError, match=rf"^{typo}: unknown keyword \(did you mean `{meant}`\?\); quell.auto_design takes text, reference, disturbance, convergence_time, u_limit, delay_error, time_scale, the keywords"):
             quell.auto_design(p.plant, p.reference, p.disturbance, t_end=60.0, **{typo: 3.0})
         # With TOML text too (it had read as a keyword the text leaves out).
         with pytest.raises(quell.ScenarioError, match=rf"^{typo}: unknown keyword \(did you mean `{meant}`\?\)"):

@@ -222,3 +222,14 @@ def test_auto_design_reports_how_well_the_delays_must_be_known():
     assert none["verification"]["delay_check"] == [] and none["verification"]["delay_tolerance"] is None
     with pytest.raises(quell.DesignError, match=r"^delay_error: expected a relative error from 0 \(no check\) to 0.5"):
         quell.auto_design(p.plant, p.reference, p.disturbance, t_end=60.0, delay_error=0.6)
+
+
+def test_a_time_scale_places_the_chosen_poles_from_it():
+    """time_scale=r: every chosen pole from r (the CLI's --time-scale), said in the choice's
+    reason; a rate that is not > 0 is a DesignError naming it."""
+    p = quell.paper_example()
+    _, report = quell.auto_design(p.plant, p.reference, p.disturbance, t_end=60.0, time_scale=3.0, delay_error=0.0)
+    why = next(c["why"] for c in report["choices"] if c["key"] == "design.channel_poles")
+    assert "r = 3.0000e0 rad/s: the time scale given (time_scale)" in why, why
+    with pytest.raises(quell.DesignError, match=r"^time_scale: expected a finite rate > 0 in rad per s, found -1"):
+        quell.auto_design(p.plant, p.reference, p.disturbance, t_end=60.0, time_scale=-1.0)

@@ -35,7 +35,7 @@ def _valid():
                                       disturbance_sizes=[1.0, 3.0], **PAPER_DESIGN)),
         "place": (quell.place, dict(A=A, B=B, poles=[-1, -2, -3])),
         "auto_design": (quell.auto_design, dict(text=s.to_toml(), reference=None, disturbance=None, convergence_time=10.0,
-                                                u_limit=100.0, delay_error=0.0)),
+                                                u_limit=100.0, delay_error=0.0, time_scale=2.0)),
         "Scenario": (quell.Scenario, dict(plant=plant, reference=REFERENCE, disturbance=DISTURBANCE, name="x",
                                           t_end=1.0, output_step=0.1, rtol=1e-6, atol=1e-6, sample_time=None,
                                           method="auto", precision="f64", noise={"std": [0.0, 0.0]}, truth=plant,

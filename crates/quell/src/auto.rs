@@ -140,6 +140,12 @@ pub struct Targets {
     /// chosen channel poles are slowed until it holds ([`Verification::relaxation`] says how); 0
     /// for none.
     pub delay_error: Option<f64>,
+    /// The time scale r the rules place every pole from (rad per unit of time), instead of the
+    /// fastest of the signals' frequencies, the plant's eigenvalue magnitudes and 20/t_end: for a
+    /// plant with a fast stable mode (an actuator's, a servo's) far above the rates the loop must
+    /// follow, which would otherwise set every pole (a HIMAT aircraft's 30 rad/s servo pole had
+    /// asked 460° of elevon; helper tryout, 2026-12-07).
+    pub time_scale: Option<f64>,
 }
 
 /// The default [`Targets::delay_error`]: the delays 10 % longer and shorter. The adaptive loop's μ
@@ -181,6 +187,11 @@ impl Targets {
             (
                 "u_limit",
                 format!("expected limits > 0 (inf for none on an input), found {}", crate::settings::fmt_short(*l)),
+            )
+        } else if let Some(r) = self.time_scale.filter(|r| !(r.is_finite() && *r > 0.0)) {
+            (
+                "time_scale",
+                format!("expected a finite rate > 0 in rad per {unit}, found {}", crate::settings::fmt_short(r)),
             )
         } else if let Some(e) = self.delay_error.filter(|e| !(0.0..=MAX_DELAY_ERROR).contains(e)) {
             (
@@ -2263,8 +2274,11 @@ fn spread(r: f64, count: usize, factor: f64, centred: bool) -> Vec<Complex<f64>>
     (0..count).map(|j| Complex::new(-ten_digits(r * factor.powf(j as f64 - shift)), 0.0)).collect()
 }
 
-/// The time scale r of the scenario (module docs).
-fn time_scale(s: &Scenario) -> Result<f64, AutoError> {
+/// The time scale r of the scenario (module docs), or the one given ([`Targets::time_scale`]).
+fn time_scale(s: &Scenario, targets: &Targets) -> Result<f64, AutoError> {
+    if let Some(r) = targets.time_scale {
+        return Ok(r);
+    }
     let comps = || s.reference.components.iter().chain(&s.disturbance.components);
     let w_max = comps().flat_map(Component::frequencies).fold(0.0, f64::max);
     let plant = eigenvalues(&s.plant.A)
@@ -2956,13 +2970,19 @@ fn choose(
     choices: &mut Vec<Choice>,
     mu_caps: &mut Option<Vec<f64>>,
 ) -> Result<DesignSpec, AutoError> {
-    let r = time_scale(s)?;
+    let r = time_scale(s, targets)?;
     let mut note = |key: &str, value: String, why: String| choices.push(Choice { key: key.into(), value, why });
     let regressor_scaling = choose_scaling(&partial, s, &mut note);
     let [reference_sizes, disturbance_sizes] = choose_sizes(&partial, s, &mut note);
     let channel_poles = match partial.channel_poles {
         Some(c) => c,
-        None => choose_channel_poles(s, partial.relative_degrees.as_deref(), r, speed.channel, &mut note)?,
+        None => choose_channel_poles(
+            s,
+            partial.relative_degrees.as_deref(),
+            (r, targets.time_scale.is_some()),
+            speed.channel,
+            &mut note,
+        )?,
     };
     let reference_filter_poles = choose_filters(
         partial.reference_filter_poles,
@@ -3023,7 +3043,7 @@ fn choose(
 fn choose_channel_poles(
     s: &Scenario,
     given: Option<&[usize]>,
-    r: f64,
+    (r, r_given): (f64, bool),
     speed: f64,
     note: &mut Note,
 ) -> Result<PoleLists, AutoError> {
@@ -3037,7 +3057,15 @@ fn choose_channel_poles(
             .collect(),
     };
     let c: PoleLists = sigma.iter().map(|&k| spread(2.0 * r * speed, k, 1.5, false)).collect();
-    note("design.channel_poles", pole_lists(&c).to_string(), format!("σ = {sigma:?}; real poles from −2r (r = {r:.4e} rad/{}: the fastest of the signals' frequencies, the plant's eigenvalue magnitudes and 20/t_end), ×1.5 apart", p.time_unit));
+    let source = match r_given {
+        true => "the time scale given (time_scale)",
+        false => "the fastest of the signals' frequencies, the plant's eigenvalue magnitudes and 20/t_end",
+    };
+    note(
+        "design.channel_poles",
+        pole_lists(&c).to_string(),
+        format!("σ = {sigma:?}; real poles from −2r (r = {r:.4e} rad/{}: {source}), ×1.5 apart", p.time_unit),
+    );
     Ok(c)
 }
 
@@ -3399,7 +3427,7 @@ mod tests {
         );
         let s = Scenario::from_toml(&text).unwrap();
         let design = s.design().unwrap();
-        let (_, caps, _) = choose_mu(&s, &design, &Targets::default(), time_scale(&s).unwrap());
+        let (_, caps, _) = choose_mu(&s, &design, &Targets::default(), time_scale(&s, &Targets::default()).unwrap());
         let (mu, why) = raised_mu(&s, &design, Some(&caps)).expect("raised");
         assert_eq!(mu, [2.1e8], "{why}");
         assert!(why.ends_with("channel 1: 2.579e7 → 2.1e8"), "{why}");

@@ -2177,3 +2177,33 @@ fn a_kept_candidate_that_misses_with_the_plant_off_gives_way_to_one_that_holds()
         paper.verification.plant_check.iter().all(|c| c.met) && !paper.verification.relaxation.contains("A off by")
     );
 }
+
+/// A time scale given (`--time-scale`, [`Targets::time_scale`]) places every chosen pole from it:
+/// HIMAT's 30 rad/s servos set the rules' r, whose design asked 8 rad of elevon and failed its
+/// verification in 31 s (helper tryout, 2026-12-07); from r = 2 rad/s (the short period's and the
+/// signals' rates) it passes with channel poles from −4 /s, under 1 rad of either surface, and
+/// holds with A ±10 %. Checked apart from the verification: the written scenario, run plainly,
+/// meets every tail bound. A time scale that is not a rate > 0 is refused naming it.
+#[test]
+fn a_time_scale_given_places_the_poles_from_it() {
+    let doc = without_design(&data("himat.toml"));
+    let a = auto_design(&doc, &Targets { time_scale: Some(2.0), ..Targets::default() }).unwrap();
+    let v = &a.verification;
+    assert!(v.passed && v.max_uf.iter().all(|&u| u < 1.0), "{v:?}");
+    assert!(v.plant_check.iter().all(|c| c.met), "{:?}", v.plant_check);
+    let why = &a.choices.iter().find(|c| c.key == "design.channel_poles").unwrap().why;
+    assert!(why.contains("real poles from −2r (r = 2.0000e0 rad/s: the time scale given (time_scale))"), "{why}");
+    let written = Scenario::from_toml(&a.scenario.to_toml()).unwrap();
+    let r = Run::of(&written, &written.design().unwrap()).simulate(|_| ControlFlow::Continue(())).unwrap();
+    for (c, b) in r.summary().iter().zip(&v.bound) {
+        assert!(c.figures.tail_max_e <= *b, "{} against {b}", c.figures.tail_max_e);
+    }
+    for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        match auto_design(&doc, &Targets { time_scale: Some(bad), ..Targets::default() }) {
+            Err(AutoError::Target { argument: "time_scale", message }) => {
+                assert!(message.starts_with("expected a finite rate > 0 in rad per s, found "), "{message}")
+            }
+            other => panic!("{bad}: {other:?}"),
+        }
+    }
+}

@@ -438,5 +438,6 @@ def auto_design(
     convergence_time: Optional[float] = None,
     u_limit: Optional[Union[float, Sequence[float]]] = None,
     delay_error: Optional[float] = None,
+    time_scale: Optional[float] = None,
     **scenario: Any,
 ) -> Tuple[Scenario, Dict[str, Any]]: ...
