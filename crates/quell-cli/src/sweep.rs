@@ -448,7 +448,7 @@ fn resumed(dir: &Path, meta: &StudyMeta, n: usize, study: &Study) -> Result<(Vec
 
 /// A shard's directory for `--merge`: refused while it holds a journal (a shard killed outright, to
 /// be resumed, not merged), else [`read_sweep_dir`].
-fn shard_to_merge(dir: &Path) -> Result<(StudyMeta, Vec<Row>, bool), Failure> {
+fn shard_to_merge(dir: &Path) -> Result<SweepDir, Failure> {
     if dir.join(JOURNAL).exists() {
         return Err(Failure::Input(format!(
             "--merge {}: holds the journal {JOURNAL} of a sweep that did not finish; run `quell sweep STUDY --shard I/N --resume` into it (it keeps the rows done and runs the others), then merge",
@@ -458,13 +458,17 @@ fn shard_to_merge(dir: &Path) -> Result<(StudyMeta, Vec<Row>, bool), Failure> {
     read_sweep_dir(dir, "--merge")
 }
 
+/// A sweep's directory read ([`read_sweep_dir`]): its summary's study identity, its rows and
+/// whether it is partial.
+type SweepDir = (StudyMeta, Vec<Row>, bool);
+
 /// What a directory read as a sweep's must be.
 const WHAT_TO_GIVE: &str =
     "give the output directory of a `quell sweep` (its --out), which holds summary.json and runs.csv";
 
 /// Reads one sweep's directory (a shard for `--merge`, an interrupted sweep for `--resume`, the
 /// `flag` its messages name): its summary's study identity, its rows and whether it is partial.
-fn read_sweep_dir(dir: &Path, flag: &str) -> Result<(StudyMeta, Vec<Row>, bool), Failure> {
+fn read_sweep_dir(dir: &Path, flag: &str) -> Result<SweepDir, Failure> {
     let bad = |what: &str, e: String| Failure::Input(format!("{flag} {}: {what}: {e}", dir.display()));
     // Not text: damaged, not edited; the shard's own run writes it anew.
     let unreadable = |what: &str, e: std::io::Error| match e.kind() {
@@ -502,11 +506,12 @@ fn same_sweep(old: &StudyMeta, meta: &StudyMeta) -> bool {
 }
 
 /// The first key of `study` in summary.json, its shard aside (checked on its own), where `a` and
-/// `b` differ.
+/// `b` differ, either holding it (a key one leaves out, `drawn` of a sweep before 2026-12-07, had
+/// been seen from one side only: merging two shards depended on their order; diff review).
 fn differing_key(a: &StudyMeta, b: &StudyMeta) -> Option<String> {
     let (a, b) = (serde_json::to_value(a).ok()?, serde_json::to_value(b).ok()?);
     let (a, b) = (a.as_object()?, b.as_object()?);
-    a.iter().find(|(key, value)| *key != "shard" && b.get(*key) != Some(*value)).map(|(key, _)| key.clone())
+    a.keys().chain(b.keys()).find(|key| *key != "shard" && a.get(*key) != b.get(*key)).cloned()
 }
 
 /// Shard `index` of a split into `count` was not given to `--merge`.
@@ -517,31 +522,12 @@ fn missing_shard(index: usize, count: usize) -> Failure {
     ))
 }
 
-/// `--merge DIR…`: the shards of one study (same fingerprint, every shard I/N once, none
-/// partial) into one directory whose rows are those of an unsharded sweep.
-fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
-    let same = |a: &Path, b: &Path| a.canonicalize().ok().is_some_and(|a| b.canonicalize().ok() == Some(a));
-    if let Some(dir) = dirs.iter().find(|d| same(d, out)) {
-        return Err(Failure::Input(format!(
-            "--out {}: is one of the --merge directories ({}); merging into it would replace that shard's rows; choose a new output directory",
-            out.display(),
-            dir.display()
-        )));
-    }
-    let mut shards = Vec::new();
-    for dir in dirs {
-        shards.push((dir, shard_to_merge(dir)?));
-    }
-    let (first_dir, first) = (shards[0].0, shards[0].1 .0.clone());
+/// The shards to merge (each directory with its study identity, rows and whether partial), held
+/// to the first's (`first_dir`, `first`): one study and one split, none partial, every shard once.
+fn check_shards(shards: &[(&PathBuf, SweepDir)], (first_dir, first): (&Path, &StudyMeta)) -> Result<(), Failure> {
     let count = first.shard.count;
-    // More shards than directories: one of the first len + 1 is missing. Named before the table of
-    // shards is allocated, as a count from an edited file or a huge split may be beyond memory.
-    if count > shards.len() {
-        let given = |i: usize| shards.iter().any(|(_, (m, ..))| m.shard.index == i);
-        return Err(missing_shard((0..=shards.len()).find(|&i| !given(i)).unwrap_or(0), count));
-    }
     let mut seen = vec![None; count];
-    for (dir, (meta, _, partial)) in &shards {
+    for (dir, (meta, _, partial)) in shards {
         let here = format!("--merge {}", dir.display());
         if meta.fingerprint != first.fingerprint {
             return Err(Failure::Input(format!(
@@ -551,7 +537,15 @@ fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
                 first.fingerprint
             )));
         }
-        if let Some(key) = differing_key(meta, &first) {
+        if differing_key(meta, first).as_deref() == Some("drawn") {
+            let older = if meta.drawn.is_empty() { dir } else { first_dir };
+            return Err(Failure::Input(format!(
+                "{here}: one of it and {} holds the drawn values' columns in runs.csv and the other not: {} was written by a quell before 2026-12-07; run that shard again (quell sweep STUDY --shard I/N) into it, then merge",
+                first_dir.display(),
+                older.display()
+            )));
+        }
+        if let Some(key) = differing_key(meta, first) {
             return Err(Failure::Input(format!(
                 "{here}: its summary.json's study.{key} differs from {}'s; merge only the shards of one study, as `quell sweep --shard` wrote them",
                 first_dir.display()
@@ -582,6 +576,33 @@ fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
     if let Some(index) = seen.iter().position(Option::is_none) {
         return Err(missing_shard(index, count));
     }
+    Ok(())
+}
+
+/// `--merge DIR…`: the shards of one study (same fingerprint, every shard I/N once, none
+/// partial) into one directory whose rows are those of an unsharded sweep.
+fn merge(dirs: &[PathBuf], out: &Path, plots: bool) -> Result<(), Failure> {
+    let same = |a: &Path, b: &Path| a.canonicalize().ok().is_some_and(|a| b.canonicalize().ok() == Some(a));
+    if let Some(dir) = dirs.iter().find(|d| same(d, out)) {
+        return Err(Failure::Input(format!(
+            "--out {}: is one of the --merge directories ({}); merging into it would replace that shard's rows; choose a new output directory",
+            out.display(),
+            dir.display()
+        )));
+    }
+    let mut shards = Vec::new();
+    for dir in dirs {
+        shards.push((dir, shard_to_merge(dir)?));
+    }
+    let (first_dir, first) = (shards[0].0, shards[0].1 .0.clone());
+    let count = first.shard.count;
+    // More shards than directories: one of the first len + 1 is missing. Named before the table of
+    // shards is allocated, as a count from an edited file or a huge split may be beyond memory.
+    if count > shards.len() {
+        let given = |i: usize| shards.iter().any(|(_, (m, ..))| m.shard.index == i);
+        return Err(missing_shard((0..=shards.len()).find(|&i| !given(i)).unwrap_or(0), count));
+    }
+    check_shards(&shards, (first_dir, &first))?;
     let total = usize::try_from(first.runs).unwrap_or(usize::MAX);
     for (dir, (meta, rows, _)) in &shards {
         check_shard_rows(dir, meta.shard, rows, total)?;

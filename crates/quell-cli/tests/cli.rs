@@ -1868,7 +1868,14 @@ fn an_unmet_delay_error_writes_nothing_and_exits_2() {
     let o =
         quell(&["design", input.to_str().unwrap(), "--auto", "--delay-error", "0.3", "--write", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(stderr(&o).contains("error: --delay-error 0.3: the automatic design meets its tail bounds with the input delays off by up to ±3 %, not ±30 %"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("error: --delay-error 0.3: the automatic design does not hold at ±30 % (its delay check: the tail bound and the effort"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(
+            "by up to 3 %, not at 30 %: know the delays that well); nothing written; ask for a smaller --delay-error"
+        ),
+        "{}",
+        stderr(&o)
+    );
     assert!(
         stdout(&o).contains("  delays (the --delay-error 0.3 asked for is a condition of writing the design): "),
         "{}",

@@ -275,6 +275,25 @@ fn the_drawn_values_are_columns_and_an_older_sweep_resumes_with_them() {
     assert!(resumed.status.success(), "{}", stderr(&resumed));
     assert!(stderr(&resumed).contains("resumed: 3 rows kept, 3 runs run"), "{}", stderr(&resumed));
     assert_eq!(rows_without_wall_time(&dir.join("old")), rows_without_wall_time(&dir.join("full")));
+    // Shards of the two versions are refused, in either order, naming the older one (merging had
+    // depended on their order and filled the older's columns with blanks; diff review).
+    for (shard, name) in [("0/2", "s0"), ("1/2", "s1")] {
+        let o = quell(&["sweep", &study, "--no-plots", "--shard", shard, "--out", &out(name)]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let csv = fs::read_to_string(dir.join("s1/runs.csv")).unwrap();
+    let stripped: Vec<&str> = csv.lines().map(|l| l.rsplit_once(',').unwrap().0).collect();
+    fs::write(dir.join("s1/runs.csv"), stripped.join("\n") + "\n").unwrap();
+    let mut summary: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(dir.join("s1/summary.json")).unwrap()).unwrap();
+    summary["study"].as_object_mut().unwrap().remove("drawn");
+    fs::write(dir.join("s1/summary.json"), summary.to_string()).unwrap();
+    for pair in [["s0", "s1"], ["s1", "s0"]] {
+        let o = quell(&["sweep", "--merge", &out(pair[0]), &out(pair[1]), "--out", &out("m"), "--no-plots"]);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        let older = format!("{} was written by a quell before 2026-12-07", out("s1"));
+        assert!(stderr(&o).contains(&older), "{}", stderr(&o));
+    }
 }
 
 /// An interrupted sweep resumed with `--resume` ends with the rows of an uninterrupted one (every

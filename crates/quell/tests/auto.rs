@@ -2176,6 +2176,18 @@ fn a_kept_candidate_that_misses_with_the_plant_off_gives_way_to_one_that_holds()
     assert!(
         paper.verification.plant_check.iter().all(|c| c.met) && !paper.verification.relaxation.contains("A off by")
     );
+    // The plant check's runs are not held to an actuator limit (A ×1.1 asks 31.6 kW of any design
+    // against the kept run's 29.2): under 30 kW the same robust candidate is kept (the fragile one
+    // had been, in silence; diff review, 2026-12-07), and a kept design that misses is warned of.
+    let limited = Targets { u_limit: vec![30.0], ..Targets::default() };
+    let b = auto_design(&without_design(&data("two-zone-building.toml")), &limited).unwrap();
+    let speed = |x: &quell::auto::AutoDesign| x.verification.candidates.iter().find(|c| c.chosen).unwrap().speed;
+    assert_eq!(speed(&b), speed(&a));
+    assert!(
+        b.verification.plant_check.iter().all(|c| c.met) && b.plant_warning().is_none(),
+        "{:?}",
+        b.verification.plant_check
+    );
 }
 
 /// A time scale given (`--time-scale`, [`Targets::time_scale`]) places every chosen pole from it:
@@ -2198,6 +2210,13 @@ fn a_time_scale_given_places_the_poles_from_it() {
     for (c, b) in r.summary().iter().zip(&v.bound) {
         assert!(c.figures.tail_max_e <= *b, "{} against {b}", c.figures.tail_max_e);
     }
+    // From 1 rad/s it passes too, but misses with A ×1.1 (tails 355× the bound) at every candidate
+    // tried: kept, and warned of.
+    let slow = auto_design(&doc, &Targets { time_scale: Some(1.0), ..Targets::default() }).unwrap();
+    assert!(slow.verification.passed && slow.verification.plant_check.iter().any(|c| !c.met));
+    let warning =
+        slow.warnings().find(|w| w.starts_with("the design misses with the true plant's A off by ±10 % (A ×1.1: "));
+    assert!(warning.is_some_and(|w| w.contains("it leans on the model")), "{:?}", slow.warnings().collect::<Vec<_>>());
     for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
         match auto_design(&doc, &Targets { time_scale: Some(bad), ..Targets::default() }) {
             Err(AutoError::Target { argument: "time_scale", message }) => {

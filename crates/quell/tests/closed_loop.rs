@@ -563,6 +563,20 @@ fn the_observer_starts_at_the_estimate_given() {
         let back = quell::Scenario::from_toml(&s.to_toml()).unwrap();
         assert_eq!(back.plant.xhat0, s.plant.xhat0);
     }
+    // The divergence bound scales with x̂(0) as with x(0): an estimate of 2e9 beside a true plant
+    // that starts there (plant.x0 left at 0) is no divergence at t = 0 (diff review, 2026-12-07).
+    let big = format!(
+        "{}\n[truth]\nx0 = [2e9, 0.0, 0.0]\n",
+        base.replacen("[plant]\n", "[plant]\nxhat0 = [2e9, 0.0, 0.0]\n", 1)
+    );
+    let s = quell::Scenario::from_toml(&big).unwrap();
+    let d = s.design().unwrap();
+    let st = RunSettings::continuous(1.0, 0.1, 1e-8, 1e-8);
+    let r = Run::new(&d, &s.reference, &s.disturbance, st)
+        .truth(s.true_plant())
+        .simulate(|_| ControlFlow::Continue(()))
+        .unwrap();
+    assert_eq!(r.outcome, Some(Outcome::Completed));
     let wrong = base.replacen("[plant]\n", "[plant]\nxhat0 = [0.1, 0.2]\n", 1);
     let e = quell::Scenario::from_toml(&wrong).unwrap_err().to_string();
     assert!(e.starts_with("plant.xhat0: expected 3 entries (one per state, n = 3 rows of plant.A), found 2"), "{e}");

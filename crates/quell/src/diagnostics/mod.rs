@@ -496,27 +496,27 @@ pub fn truth_differences(s: &crate::Scenario) -> Vec<String> {
 /// `truth.KEY` against `plant.KEY` in a phrase: by ‖Δ‖/‖·‖, or led by its largest entry's relative
 /// change where that is more than 1.5× the norm's (a station's gravity-gradient terms 7.5 % off had
 /// read as 0.003 %, the norm set by exact 1.0 entries; a power system's inertia 43 % off, as
-/// 0.058 % beside a governor's −100), or with an entry new to the truth named with its value.
+/// 0.058 % beside a governor's −100), and with the largest entry new to the truth named with its
+/// value. Entries within 1e-6 of the matrices' largest are rounding's, not the model's: a 1e-9
+/// entry set to 0 had been named "100 % off" over a 25 % change (diff review, 2026-12-07).
 fn matrix_difference(key: &str, t: &nalgebra::DMatrix<f64>, m: &nalgebra::DMatrix<f64>) -> String {
+    type Entry = (f64, usize, usize);
     let relative = (t - m).norm() / m.norm().max(f64::MIN_POSITIVE);
     let norm = format!("‖Δ{key}‖/‖{key}‖");
     let pct = |r: f64| crate::settings::fmt_4(100.0 * r);
-    let mut largest: Option<(f64, usize, usize)> = None;
+    let floor = 1e-6 * m.amax().max(t.amax());
+    // (relative change, i, j) of the largest; (|value|, i, j) of the largest new entry.
+    let (mut largest, mut new): (Option<Entry>, Option<Entry>) = (None, None);
     for ((i, j), &mv) in m.iter().enumerate().map(|(k, v)| ((k % m.nrows(), k / m.nrows()), v)) {
         let tv = t[(i, j)];
-        if mv == 0.0 && tv != 0.0 {
-            let v = crate::settings::fmt_short(tv);
-            return format!(
-                "truth.{key} is {} % off plant.{key} ({norm}), entry [{i}][{j}], 0 in the model, is {v}",
-                pct(relative)
-            );
-        }
-        let r = if mv == 0.0 { 0.0 } else { ((tv - mv) / mv).abs() };
-        if largest.is_none_or(|(l, ..)| r > l) {
-            largest = Some((r, i, j));
+        if mv.abs() > floor {
+            let r = ((tv - mv) / mv).abs();
+            largest = largest.filter(|&(l, ..)| l >= r).or(Some((r, i, j)));
+        } else if tv.abs() > floor {
+            new = new.filter(|&(v, ..)| v >= tv.abs()).or(Some((tv.abs(), i, j)));
         }
     }
-    match largest {
+    let lead = match largest {
         Some((r, i, j)) if r > 1.5 * relative => {
             format!(
                 "truth.{key} is up to {} % off plant.{key}, in entry [{i}][{j}] ({} % by {norm})",
@@ -525,6 +525,13 @@ fn matrix_difference(key: &str, t: &nalgebra::DMatrix<f64>, m: &nalgebra::DMatri
             )
         }
         _ => format!("truth.{key} is {} % off plant.{key} ({norm})", pct(relative)),
+    };
+    match new {
+        Some((_, i, j)) => {
+            let (v, was) = (crate::settings::fmt_short(t[(i, j)]), crate::settings::fmt_short(m[(i, j)]));
+            format!("{lead}, entry [{i}][{j}], {was} in the model, is {v}")
+        }
+        None => lead,
     }
 }
 
@@ -1738,6 +1745,11 @@ mod tests {
             matrix_difference("B", &new, &m),
             "truth.B is 50 % off plant.B (‖ΔB‖/‖B‖), entry [0][0], 0 in the model, is 0.5"
         );
+        // Entries within 1e-6 of the largest are rounding's: the 25 % change sets the phrase
+        // (0.8/√11.24 = 23.86 %), not a 1e-9 entry set to 0, nor a 1e-12 one new to the truth.
+        let m = nalgebra::DMatrix::from_row_slice(2, 2, &[-3.2, 1.0, 1e-9, 0.0]);
+        let t = nalgebra::DMatrix::from_row_slice(2, 2, &[-4.0, 1.0, 0.0, 1e-12]);
+        assert_eq!(matrix_difference("A", &t, &m), "truth.A is 23.86 % off plant.A (‖ΔA‖/‖A‖)");
         let s = Scenario::from_toml(&format!("{PAPER_EXAMPLE}\n[truth]\nx0 = [0.1, 0.0, 0.0]\n")).unwrap();
         assert_eq!(truth_differences(&s), ["truth.x0 [0.1, 0, 0] against plant.x0 [0, 0, 0]"]);
     }

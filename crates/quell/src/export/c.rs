@@ -467,7 +467,8 @@ typedef struct {
 {fields}
 } {p}_state;
 
-/* The Controller's zero state (also to restart it); nothing when s is NULL. */
+/* The Controller's initial state: zero, but x_hat at plant.xhat0 where the scenario gives one (also
+ * to restart it); nothing when s is NULL. */
 void {p}_init({p}_state *s);
 /* One sample: reads y(k) and g(k), writes the plant input u_f(k) = -K x_hat + F u_d (5), to hold
  * until the next sample, and returns 0; u_f may be the array y or g (both are read first). An

@@ -145,12 +145,17 @@ impl Peaks {
 }
 
 /// The plant state's scale in its own coordinates, by which the divergence bound on x and x̂ is
-/// multiplied: max(1, |x(0)|∞, 1/σ_min(C)), σ_min(C) C's smallest nonzero singular value. An output
+/// multiplied: max(1, |x(0)|∞, |x̂(0)|∞, 1/σ_min(C)), σ_min(C) C's smallest nonzero singular value. An output
 /// of size 1 needs a state of at least 1/σ_min(C), so the bound is one on the outputs' scale:
 /// states in 1e9 times the outputs' units (C = 1e-9 I) are judged as states in those units are,
 /// and a plant whose outputs read its states with gains of 1 or more (the paper's) keeps 1.
 pub(crate) fn state_scale(plant: &Plant) -> f64 {
-    [1.0 / smallest_gain(&plant.C), plant.x0.amax()].into_iter().filter(|v| v.is_finite()).fold(1.0, f64::max)
+    // x̂ starts at xhat0, which a run may give beside an x0 left at 0 ([truth] x0 holding the
+    // plant's own): 2e9 there had read as diverged at t = 0 (diff review, 2026-12-07).
+    [1.0 / smallest_gain(&plant.C), plant.x0.amax(), plant.xhat0.amax()]
+        .into_iter()
+        .filter(|v| v.is_finite())
+        .fold(1.0, f64::max)
 }
 
 /// σ_min(C): C's smallest singular value above 1e-12 of its largest (+∞ for C = 0).

@@ -1194,6 +1194,38 @@ fn misspelt_draw_key(key: &str, at: &str) -> Result<(), StudyError> {
 }
 
 /// `[monte_carlo]`: `runs`, `seed` and one perturbation law per scenario key path.
+/// The law `{ name = size }` of the Monte Carlo key at `at`.
+fn read_law(at: &str, v: &toml::Value) -> Result<Law, StudyError> {
+    let law = table(at, v).map_err(|_| StudyError {
+        wrong_type: true,
+        ..err(at, format!("expected a distribution, one of {LAWS}; found {}", kind(v)))
+    })?;
+    let [(name, size)] = law.iter().collect::<Vec<_>>()[..] else {
+        return Err(err(at, format!("expected exactly one distribution, one of {LAWS}; found {} keys", law.len())));
+    };
+    let size_key = format!("{at}.{name}");
+    let size = non_negative(&size_key, size, "a finite spread ≥ 0")?;
+    match name.as_str() {
+        "relative" => Ok(Law::Relative(size)),
+        "relative_uniform" => Ok(Law::RelativeUniform(size)),
+        "normal" => Ok(Law::Normal(size)),
+        "uniform" => Ok(Law::Uniform(size)),
+        _ => Err(err(size_key, format!("unknown distribution; expected one of {LAWS}"))),
+    }
+}
+
+/// A number drawn twice would be perturbed twice and named twice in runs.csv (diff review,
+/// 2026-12-07): the key at `at` (`path`) may overlap none drawn before it.
+fn drawn_once(before: &[Perturbation], path: &KeyPath, at: &str) -> Result<(), StudyError> {
+    match before.iter().find(|p| p.path.overlaps(path)) {
+        Some(other) => Err(err(
+            at,
+            format!("overlaps monte_carlo.\"{}\", which draws some of the same numbers; draw each number once: the whole key, or its entries, not both", other.key),
+        )),
+        None => Ok(()),
+    }
+}
+
 fn monte_carlo(base: &toml::Table, t: &toml::Table, source: &str) -> Result<MonteCarlo, StudyError> {
     let runs = match t.get("runs") {
         None => {
@@ -1227,28 +1259,7 @@ fn monte_carlo(base: &toml::Table, t: &toml::Table, source: &str) -> Result<Mont
         let at = format!("monte_carlo.\"{key}\"");
         misspelt_draw_key(key, &at)?;
         let path = KeyPath::parse(key).map_err(|m| err(&at, m))?;
-        let law = table(&at, v).map_err(|_| StudyError {
-            wrong_type: true,
-            ..err(&at, format!("expected a distribution, one of {LAWS}; found {}", kind(v)))
-        })?;
-        let (name, size) = match law.iter().collect::<Vec<_>>()[..] {
-            [(name, size)] => (name, size),
-            _ => {
-                return Err(err(
-                    &at,
-                    format!("expected exactly one distribution, one of {LAWS}; found {} keys", law.len()),
-                ))
-            }
-        };
-        let size_key = format!("{at}.{name}");
-        let size = non_negative(&size_key, size, "a finite spread ≥ 0")?;
-        let law = match name.as_str() {
-            "relative" => Law::Relative(size),
-            "relative_uniform" => Law::RelativeUniform(size),
-            "normal" => Law::Normal(size),
-            "uniform" => Law::Uniform(size),
-            _ => return Err(err(size_key, format!("unknown distribution; expected one of {LAWS}"))),
-        };
+        let law = read_law(&at, v)?;
         let mut doc = base.clone();
         fill_default(&mut doc, &path);
         let current = path.get(&doc).map_err(|m| {
@@ -1263,6 +1274,7 @@ fn monte_carlo(base: &toml::Table, t: &toml::Table, source: &str) -> Result<Mont
         if contains_integer_key(&path) {
             return Err(err(&at, format!("{path} is an integer setting; draws perturb real numbers only")));
         }
+        drawn_once(&perturbations, &path, &at)?;
         perturbations.push(Perturbation { key: key.clone(), path, law });
     }
     // Draws reseed nothing else (not [noise]): without a law every draw repeats the nominal run.

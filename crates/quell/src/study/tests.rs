@@ -694,3 +694,17 @@ fn runs_csv_holds_each_draws_values() {
     let e = read_runs_csv(&cut, &meta).unwrap_err();
     assert!(e.contains("and 3 drawn values"), "{e}");
 }
+
+/// A number drawn by two Monte Carlo keys is refused: perturbed twice and named twice in runs.csv
+/// (diff review, 2026-12-07); distinct entries of one key are fine.
+#[test]
+fn overlapping_draw_keys_are_refused() {
+    let e = error(
+        "[monte_carlo]\nruns = 2\n\"truth.delays\" = { uniform = 0.1 }\n\"truth.delays[1]\" = { uniform = 0.1 }\n",
+    );
+    assert!(e.contains("overlaps monte_carlo.\"truth.delays\", which draws some of the same numbers"), "{e}");
+    assert!(study(
+        "[monte_carlo]\nruns = 2\n\"truth.delays[0]\" = { uniform = 0.1 }\n\"truth.delays[1]\" = { uniform = 0.1 }\n"
+    )
+    .is_ok());
+}
