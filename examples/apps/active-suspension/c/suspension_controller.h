@@ -21,9 +21,9 @@
 
 /* The linked names carry this export's layout id: an object compiled with another export's
  * header does not link with this source. */
-#define suspension_init suspension_init_6b64e14e90c2b8b2
-#define suspension_step suspension_step_6b64e14e90c2b8b2
-#define suspension_command suspension_command_6b64e14e90c2b8b2
+#define suspension_init suspension_init_f5a89bcd0718f9a8
+#define suspension_step suspension_step_f5a89bcd0718f9a8
+#define suspension_command suspension_command_f5a89bcd0718f9a8
 
 #include <stdint.h>
 
@@ -41,7 +41,7 @@ extern "C" {
 #define SUSPENSION_DELAY_MAX   5            /* longest input delay in samples */
 #define SUSPENSION_INPUT_BOUND 1e100        /* largest |y_i|, |g_i| a step takes */
 
-/* Everything that changes; suspension_init zeroes it. */
+/* Everything that changes; suspension_init zeroes it (x_hat to plant.xhat0 where the scenario gives one). */
 typedef struct {
     double z[SUSPENSION_NZ];                                            /* core: observers (14), (20), (6) */
     double W[SUSPENSION_SIGMA_SUM][SUSPENSION_Q + 1];                   /* G_ii filter banks, channel by channel */
@@ -53,7 +53,8 @@ typedef struct {
     uint32_t head;                                                      /* row of line holding sample k */
 } suspension_state;
 
-/* The Controller's zero state (also to restart it); nothing when s is NULL. */
+/* The Controller's initial state: zero, but x_hat at plant.xhat0 where the scenario gives one (also
+ * to restart it); nothing when s is NULL. */
 void suspension_init(suspension_state *s);
 /* One sample: reads y(k) and g(k), writes the plant input u_f(k) = -K x_hat + F u_d (5), to hold
  * until the next sample, and returns 0; u_f may be the array y or g (both are read first). An
@@ -72,6 +73,6 @@ void suspension_command(const suspension_state *s, double u[SUSPENSION_M]);
 #endif
 
 /* Identifies this header's source: suspension_controller.c compiles only with it. */
-#define SUSPENSION_LAYOUT_ID 0x6b64e14e90c2b8b2u
+#define SUSPENSION_LAYOUT_ID 0xf5a89bcd0718f9a8u
 
 #endif /* SUSPENSION_CONTROLLER_H */

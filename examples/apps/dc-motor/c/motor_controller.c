@@ -2,7 +2,7 @@
 #include "motor_controller.h"
 
 /* A header from another export fails here (size -1): regenerate both files together. */
-typedef char motor_header_matches_source[MOTOR_LAYOUT_ID == 0x48b7c3d73b31a9d1u ? 1 : -1];
+typedef char motor_header_matches_source[MOTOR_LAYOUT_ID == 0x351624cc5a7cb6adu ? 1 : -1];
 #include <float.h>
 #if defined(__FAST_MATH__) || (defined(__FINITE_MATH_ONLY__) && __FINITE_MATH_ONLY__)
 #error "quell's checks of its inputs and state need NaN and infinities: build without -ffast-math, -Ofast or -ffinite-math-only"

@@ -21,9 +21,9 @@
 
 /* The linked names carry this export's layout id: an object compiled with another export's
  * header does not link with this source. */
-#define motor_init motor_init_48b7c3d73b31a9d1
-#define motor_step motor_step_48b7c3d73b31a9d1
-#define motor_command motor_command_48b7c3d73b31a9d1
+#define motor_init motor_init_351624cc5a7cb6ad
+#define motor_step motor_step_351624cc5a7cb6ad
+#define motor_command motor_command_351624cc5a7cb6ad
 
 #include <stdint.h>
 
@@ -41,7 +41,7 @@ extern "C" {
 #define MOTOR_DELAY_MAX   1            /* longest input delay in samples */
 #define MOTOR_INPUT_BOUND 1e100        /* largest |y_i|, |g_i| a step takes */
 
-/* Everything that changes; motor_init zeroes it. */
+/* Everything that changes; motor_init zeroes it (x_hat to plant.xhat0 where the scenario gives one). */
 typedef struct {
     double z[MOTOR_NZ];                                  /* core: observers (14), (20), (6) */
     double W[MOTOR_SIGMA_SUM][MOTOR_Q + 1];              /* G_ii filter banks, channel by channel */
@@ -53,7 +53,8 @@ typedef struct {
     uint32_t head;                                       /* row of line holding sample k */
 } motor_state;
 
-/* The Controller's zero state (also to restart it); nothing when s is NULL. */
+/* The Controller's initial state: zero, but x_hat at plant.xhat0 where the scenario gives one (also
+ * to restart it); nothing when s is NULL. */
 void motor_init(motor_state *s);
 /* One sample: reads y(k) and g(k), writes the plant input u_f(k) = -K x_hat + F u_d (5), to hold
  * until the next sample, and returns 0; u_f may be the array y or g (both are read first). An
@@ -72,6 +73,6 @@ void motor_command(const motor_state *s, double u[MOTOR_M]);
 #endif
 
 /* Identifies this header's source: motor_controller.c compiles only with it. */
-#define MOTOR_LAYOUT_ID 0x48b7c3d73b31a9d1u
+#define MOTOR_LAYOUT_ID 0x351624cc5a7cb6adu
 
 #endif /* MOTOR_CONTROLLER_H */

@@ -2,7 +2,7 @@
 #include "supply_controller.h"
 
 /* A header from another export fails here (size -1): regenerate both files together. */
-typedef char supply_header_matches_source[SUPPLY_LAYOUT_ID == 0x00ff05314fa833cdu ? 1 : -1];
+typedef char supply_header_matches_source[SUPPLY_LAYOUT_ID == 0x36dd8ec1ab0b90a9u ? 1 : -1];
 #include <float.h>
 #if defined(__FAST_MATH__) || (defined(__FINITE_MATH_ONLY__) && __FINITE_MATH_ONLY__)
 #error "quell's checks of its inputs and state need NaN and infinities: build without -ffast-math, -Ofast or -ffinite-math-only"

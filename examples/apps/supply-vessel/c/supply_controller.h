@@ -21,9 +21,9 @@
 
 /* The linked names carry this export's layout id: an object compiled with another export's
  * header does not link with this source. */
-#define supply_init supply_init_00ff05314fa833cd
-#define supply_step supply_step_00ff05314fa833cd
-#define supply_command supply_command_00ff05314fa833cd
+#define supply_init supply_init_36dd8ec1ab0b90a9
+#define supply_step supply_step_36dd8ec1ab0b90a9
+#define supply_command supply_command_36dd8ec1ab0b90a9
 
 #include <stdint.h>
 
@@ -41,7 +41,7 @@ extern "C" {
 #define SUPPLY_DELAY_MAX   10           /* longest input delay in samples */
 #define SUPPLY_INPUT_BOUND 1e100        /* largest |y_i|, |g_i| a step takes */
 
-/* Everything that changes; supply_init zeroes it. */
+/* Everything that changes; supply_init zeroes it (x_hat to plant.xhat0 where the scenario gives one). */
 typedef struct {
     double z[SUPPLY_NZ];                                    /* core: observers (14), (20), (6) */
     double W[SUPPLY_SIGMA_SUM][SUPPLY_Q + 1];               /* G_ii filter banks, channel by channel */
@@ -53,7 +53,8 @@ typedef struct {
     uint32_t head;                                          /* row of line holding sample k */
 } supply_state;
 
-/* The Controller's zero state (also to restart it); nothing when s is NULL. */
+/* The Controller's initial state: zero, but x_hat at plant.xhat0 where the scenario gives one (also
+ * to restart it); nothing when s is NULL. */
 void supply_init(supply_state *s);
 /* One sample: reads y(k) and g(k), writes the plant input u_f(k) = -K x_hat + F u_d (5), to hold
  * until the next sample, and returns 0; u_f may be the array y or g (both are read first). An
@@ -72,6 +73,6 @@ void supply_command(const supply_state *s, double u[SUPPLY_M]);
 #endif
 
 /* Identifies this header's source: supply_controller.c compiles only with it. */
-#define SUPPLY_LAYOUT_ID 0x00ff05314fa833cdu
+#define SUPPLY_LAYOUT_ID 0x36dd8ec1ab0b90a9u
 
 #endif /* SUPPLY_CONTROLLER_H */
