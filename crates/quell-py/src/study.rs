@@ -238,7 +238,7 @@ impl PyStudy {
         let study = &self.inner;
         let inner =
             spec_interruptibly(py, &CtrlC::new(), study, index)?.ok_or_else(|| out_of_range(index as i128, len))?;
-        Ok(PyRunSpec { inner, drawn: study.drawn_keys() })
+        Ok(PyRunSpec { inner })
     }
 
     /// Every run, in parallel on `jobs` threads with the GIL released; Ctrl-C stops the sweep.
@@ -401,7 +401,7 @@ impl PyStudy {
 /// json : str
 ///     Its JSON form (`spec.to_json()`).
 /// drawn : list of str, optional
-///     The keys its study's draws perturb (for `drawn`).
+///     The keys its study's draws perturb (for `drawn`), where the JSON, from before 2026-12-07, has none.
 ///
 /// Raises
 /// ------
@@ -420,9 +420,8 @@ impl PyStudy {
 /// True
 #[pyclass(module = "quell", name = "RunSpec", frozen)]
 pub struct PyRunSpec {
+    /// With the keys its study's draws perturb (`drawn_keys`).
     inner: RunSpec,
-    /// The keys its study's draws perturb.
-    drawn: Vec<String>,
 }
 
 /// `run` as an index below `len` (an int; negative counts from the end, as in a list).
@@ -486,9 +485,12 @@ impl PyRunSpec {
         let drawn = drawn
             .filter(|d| !d.is_none())
             .map(|d| crate::convert::strings(d, "drawn", "a list of study keys (str)", "a str (a study key)"));
-        let drawn = drawn.transpose()?.unwrap_or_default();
+        let drawn = drawn.transpose()?;
+        // `drawn` given (a pickle before 2026-12-07, whose JSON had no drawn_keys) sets them.
         serde_json::from_str(&json)
-            .map(|inner| PyRunSpec { inner, drawn })
+            .map(|inner: RunSpec| PyRunSpec {
+                inner: RunSpec { drawn_keys: drawn.unwrap_or(inner.drawn_keys.clone()), ..inner },
+            })
             .map_err(|e| Kind::Scenario.err(py, format!("json: not a quell run specification ({e})")))
     }
     /// The values the run's draw gave each perturbed key, flattened (`truth.A[0][1]`), as the
@@ -496,7 +498,7 @@ impl PyRunSpec {
     #[getter]
     fn drawn<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
-        for (k, v) in drawn_values(&self.drawn, &self.inner) {
+        for (k, v) in drawn_values(&self.inner.drawn_keys, &self.inner) {
             d.set_item(k, v)?;
         }
         Ok(d)
@@ -536,7 +538,7 @@ impl PyRunSpec {
     }
     /// Equal specifications: the same run of the same study.
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
-        other.cast::<PyRunSpec>().is_ok_and(|o| o.get().inner == self.inner && o.get().drawn == self.drawn)
+        other.cast::<PyRunSpec>().is_ok_and(|o| o.get().inner == self.inner)
     }
     /// The JSON form of the specification.
     ///
@@ -559,10 +561,7 @@ impl PyRunSpec {
     }
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
         let py = slf.py();
-        let args = PyTuple::new(
-            py,
-            [slf.get().to_json().into_pyobject(py)?.into_any(), PyList::new(py, &slf.get().drawn)?.into_any()],
-        )?;
+        let args = PyTuple::new(py, [slf.get().to_json().into_pyobject(py)?.into_any()])?;
         PyTuple::new(py, [slf.get_type().into_any(), args.into_any()])
     }
     /// Run index (point × draws + draw).
@@ -696,7 +695,7 @@ pub fn run_one<'py>(py: Python<'py>, spec: &Bound<'py, PyAny>) -> PyResult<Bound
     let row = crate::interrupt::interruptible_with(py, |stop| study::run_one_until(s, &|| stop.load(Relaxed)))?
         .ok_or_else(|| pyo3::exceptions::PyKeyboardInterrupt::new_err("the run was stopped"))?;
     let d = row_dict(py, s, &row)?;
-    for (k, v) in drawn_values(&spec.drawn, s) {
+    for (k, v) in drawn_values(&s.drawn_keys, s) {
         d.set_item(k, v)?;
     }
     Ok(d)
@@ -787,7 +786,7 @@ impl PyRunSpecs {
         let mut turn = self.next.take(py, &ctrl_c)?;
         let Some(inner) = spec_interruptibly(py, &ctrl_c, &self.study, turn.index)? else { return Ok(None) };
         turn.advanced = true;
-        Ok(Some(PyRunSpec { inner, drawn: self.study.drawn_keys() }))
+        Ok(Some(PyRunSpec { inner }))
     }
     fn __len__(&self) -> usize {
         let next = self.next.lock().0;

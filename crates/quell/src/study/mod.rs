@@ -597,6 +597,7 @@ impl Study {
             max_steps: self.max_steps,
             runaway: self.runaway,
             nominal: self.nominal_until(point, stop).ok()?,
+            drawn_keys: self.drawn_keys(),
         })
     }
 

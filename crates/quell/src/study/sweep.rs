@@ -46,6 +46,11 @@ pub struct RunSpec {
     pub runaway: Runaway,
     #[serde(default)]
     pub nominal: Option<Nominal>,
+    /// The keys the study's draws perturb ([`super::Study::drawn_keys`]): its row's drawn values
+    /// are their numbers in `scenario` ([`super::drawn_values`]), so a run carried out alone (a
+    /// cluster's worker) has the row a sweep writes.
+    #[serde(default)]
+    pub drawn_keys: Vec<String>,
 }
 
 impl RunSpec {
@@ -287,6 +292,11 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
         drawn: Vec::new(),
         explicit_stiff: false,
     };
+    if !spec.drawn_keys.is_empty() {
+        let grid: Vec<String> = spec.grid.iter().map(|(k, _)| k.clone()).collect();
+        row.drawn =
+            super::drawn_values(&spec.drawn_keys, &grid, &spec.scenario).into_iter().map(|(_, v)| Some(v)).collect();
+    }
     match spec.simulate_within_limits(stop) {
         Err(reason) => row.reason = reason,
         // `_memory` stays held until the row is made.
@@ -456,7 +466,6 @@ pub fn sweep(study: &Study, opts: &SweepOptions<'_>) -> Sweep {
     let done = |k: usize| opts.done.get(k).copied().unwrap_or(false);
     // `None` only when stopped, which ends the iteration: the runs not started are not visited (a
     // Ctrl-C on a study of 1e9 runs had taken 4.6 s to skip them one by one).
-    let columns = study.drawn_columns();
     let rows: Vec<Row> = (0..shard.len(runs))
         .into_par_iter()
         .filter(|&k| !done(k))
@@ -465,9 +474,7 @@ pub fn sweep(study: &Study, opts: &SweepOptions<'_>) -> Sweep {
             if stopped() {
                 return None;
             }
-            let spec = study.spec_with_nominal_until(i, &stopped)?;
-            let mut row = execute(&spec, &stopped)?;
-            row.drawn = study.drawn(&spec.scenario, &columns);
+            let row = execute(&study.spec_with_nominal_until(i, &stopped)?, &stopped)?;
             if let Some(f) = opts.on_row {
                 f(&row);
             }

@@ -532,6 +532,7 @@ fn run_with(study: &Study, mu: &[f64], stop: &dyn Fn() -> bool) -> Option<Row> {
         max_steps: study.max_steps,
         runaway: study.runaway,
         nominal: None,
+        drawn_keys: Vec::new(),
     };
     execute(&spec, stop)
 }
