@@ -54,6 +54,13 @@ pub struct RunSpec {
 }
 
 impl RunSpec {
+    /// The row's drawn values: the numbers of [`RunSpec::drawn_keys`] in its scenario, in
+    /// runs.csv's order ([`super::drawn_values`]); none without Monte Carlo.
+    pub fn drawn(&self) -> Vec<Option<f64>> {
+        let grid: Vec<String> = self.grid.iter().map(|(k, _)| k.clone()).collect();
+        super::drawn_values(&self.drawn_keys, &grid, &self.scenario).into_iter().map(|(_, v)| Some(v)).collect()
+    }
+
     /// The runaway rules' limits of this run against its nominal run (`None` without one): at most
     /// ⌈runaway.steps · (the nominal run's steps, or the floor this run's shortest delay sets
     /// when that is more, + the breakpoints its delays add)⌉ solver steps, and runaway.peak · the
@@ -289,14 +296,9 @@ pub(super) fn execute(spec: &RunSpec, stop: &dyn Fn() -> bool) -> Option<Row> {
         channels: Vec::new(),
         steps: 0,
         wall_ms: 0.0,
-        drawn: Vec::new(),
+        drawn: spec.drawn(),
         explicit_stiff: false,
     };
-    if !spec.drawn_keys.is_empty() {
-        let grid: Vec<String> = spec.grid.iter().map(|(k, _)| k.clone()).collect();
-        row.drawn =
-            super::drawn_values(&spec.drawn_keys, &grid, &spec.scenario).into_iter().map(|(_, v)| Some(v)).collect();
-    }
     match spec.simulate_within_limits(stop) {
         Err(reason) => row.reason = reason,
         // `_memory` stays held until the row is made.
