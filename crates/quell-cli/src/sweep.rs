@@ -421,7 +421,7 @@ fn resumed(dir: &Path, meta: &StudyMeta, n: usize, study: &Study) -> Result<(Vec
     let (old, mut rows) =
         (if old.drawn.is_empty() { StudyMeta { drawn: meta.drawn.clone(), ..old } } else { old }, rows);
     for row in rows.iter_mut().filter(|r| r.drawn.is_empty() && !meta.drawn.is_empty()) {
-        row.drawn = study.run_document(row.run).map_or_else(Vec::new, |doc| study.drawn(&doc, &meta.drawn));
+        row.drawn = study.run_document(row.run).map_or_else(Vec::new, |doc| study.drawn(&doc));
     }
     if !same_sweep(&old, meta) {
         return Err(Failure::Input(format!(

@@ -115,12 +115,6 @@ fn dict_arg(obj: &Bound<'_, PyAny>, name: &str, what: &str) -> PyResult<Table> {
     Ok(t)
 }
 
-/// The values a run's draw gave each perturbed key of `keys` ([`study::drawn_values`]).
-fn drawn_values(keys: &[String], spec: &RunSpec) -> Vec<(String, f64)> {
-    let grid: Vec<String> = spec.grid.iter().map(|(k, _)| k.clone()).collect();
-    study::drawn_values(keys, &grid, &spec.scenario)
-}
-
 /// A study document from a Scenario and the dict arguments of `quell.Study(...)` (grid,
 /// monte_carlo, settle, runaway, simulation, each None for none) and `max_steps`.
 pub fn study_document(
@@ -498,7 +492,7 @@ impl PyRunSpec {
     #[getter]
     fn drawn<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
-        for (k, v) in drawn_values(&self.inner.drawn_keys, &self.inner) {
+        for (k, v) in self.inner.drawn_named() {
             d.set_item(k, v)?;
         }
         Ok(d)
@@ -695,7 +689,7 @@ pub fn run_one<'py>(py: Python<'py>, spec: &Bound<'py, PyAny>) -> PyResult<Bound
     let row = crate::interrupt::interruptible_with(py, |stop| study::run_one_until(s, &|| stop.load(Relaxed)))?
         .ok_or_else(|| pyo3::exceptions::PyKeyboardInterrupt::new_err("the run was stopped"))?;
     let d = row_dict(py, s, &row)?;
-    for (k, v) in drawn_values(&s.drawn_keys, s) {
+    for (k, v) in s.drawn_named() {
         d.set_item(k, v)?;
     }
     Ok(d)

@@ -1461,7 +1461,10 @@ fn plant_robust(
     let (mut candidates, mut missed, mut tried) = (v.candidates.clone(), vec![chosen.2.speed], 0);
     for c in order {
         let slower = |m: &Speed| c.speed.channel <= m.channel && c.speed.observer <= m.observer;
-        if tried == PLANT_TRIES || missed.iter().any(slower) {
+        if tried == PLANT_TRIES {
+            break;
+        }
+        if missed.iter().any(slower) {
             continue;
         }
         tried += 1;

@@ -548,12 +548,10 @@ impl Study {
         self.grid.iter().map(|a| a.key.clone()).collect()
     }
 
-    /// The drawn values of a run's scenario document `scenario` ([`RunSpec::scenario`],
-    /// [`Study::run_document`]) in the order of `columns` ([`Study::drawn_columns`]); `None` for a
-    /// column it does not have (a grid value of another shape).
-    pub fn drawn(&self, scenario: &toml::Table, columns: &[String]) -> Vec<Option<f64>> {
-        let values = drawn_values(&self.drawn_keys(), &self.grid_keys(), scenario);
-        columns.iter().map(|c| values.iter().find(|(n, _)| n == c).map(|&(_, v)| v)).collect()
+    /// The drawn values of a run's scenario document `scenario` ([`Study::run_document`]), as
+    /// [`RunSpec::drawn`] gives them for the run's row.
+    pub fn drawn(&self, scenario: &toml::Table) -> Vec<Option<f64>> {
+        drawn_values(&self.drawn_keys(), &self.grid_keys(), scenario).into_iter().map(|(_, v)| Some(v)).collect()
     }
 
     /// Run `index`'s grid point, draw and seed (`None` without Monte Carlo).

@@ -54,11 +54,16 @@ pub struct RunSpec {
 }
 
 impl RunSpec {
-    /// The row's drawn values: the numbers of [`RunSpec::drawn_keys`] in its scenario, in
+    /// The numbers of [`RunSpec::drawn_keys`] in its scenario with their columns' names, in
     /// runs.csv's order ([`super::drawn_values`]); none without Monte Carlo.
-    pub fn drawn(&self) -> Vec<Option<f64>> {
+    pub fn drawn_named(&self) -> Vec<(String, f64)> {
         let grid: Vec<String> = self.grid.iter().map(|(k, _)| k.clone()).collect();
-        super::drawn_values(&self.drawn_keys, &grid, &self.scenario).into_iter().map(|(_, v)| Some(v)).collect()
+        super::drawn_values(&self.drawn_keys, &grid, &self.scenario)
+    }
+
+    /// The row's drawn values ([`RunSpec::drawn_named`] without the names).
+    pub fn drawn(&self) -> Vec<Option<f64>> {
+        self.drawn_named().into_iter().map(|(_, v)| Some(v)).collect()
     }
 
     /// The runaway rules' limits of this run against its nominal run (`None` without one): at most
