@@ -244,7 +244,7 @@ fn report_text(a: &AutoDesign, delay_error: Option<f64>) -> String {
             crate::run::fixed_or_sci(v.max_uf[i], 4)
         ));
         if let Some(f) = v.limited_fraction.get(i).filter(|f| **f > 0.0) {
-            let line = crate::run::clipped(i, *f);
+            let line = crate::run::clipped(i, *f, a.scenario.actuator.as_ref());
             s.push_str(&format!("  {line} (the design was verified through the saturating actuator)\n"));
         }
     }

@@ -1,7 +1,6 @@
 //! One figure per channel, like the paper's Figs. 1 and 2: y_i with g_i, e_i, u_i and η̂_i against t.
 
 use quell::study::QUANTILES as Q;
-use std::fmt::Write as _;
 use std::io;
 use std::path::Path;
 use std::sync::Once;
@@ -90,17 +89,18 @@ fn tick_label(v: f64, lo: f64, hi: f64) -> String {
 }
 
 /// One panel of a run's figure: `series` against t (in `time`, the plant's unit of time), with
-/// dashed lines at ±`limit` (its label, its value) and the view widened to show them, the time
+/// dashed lines at `limit`'s levels (its label, u_min and u_max; an infinite one not drawn) and the
+/// view widened to show them, the time
 /// axis to `t_right` where that is later, and `column` px right of the plotting area for legends
 /// that do not fit beside the data (a figure's panels share both, so that their axes line up).
 fn panel<DB: DrawingBackend + Strokes>(
     area: &DrawingArea<DB, Shift>,
     (title, ylabel): (&str, &str),
     series: &[Series],
-    (limit, t_right, column): (Option<(&str, f64)>, Option<f64>, u32),
+    (limit, t_right, column): (Option<Limit<'_>>, Option<f64>, u32),
     time: TimeUnit,
 ) -> Result<(), String> {
-    let levels = limit.map_or(vec![], |(_, u)| vec![-u, u]);
+    let levels = limit_levels(limit);
     let (((t0, t1), (y0, y1)), legend) = panel_view(area, series, limit, (t_right, column));
     let mut chart = run_panel(area, title, column).build_cartesian_2d(t0..t1, y0..y1).map_err(|e| e.to_string())?;
     chart
@@ -231,13 +231,13 @@ fn legend_box(series: &[Series], limit: Option<&str>, (w, h): (f64, f64)) -> Opt
 /// A panel's view ((t0, t1), (y0, y1)).
 type View = ((f64, f64), (f64, f64));
 
-/// A panel's view ((t0, t1), (y0, y1)) over `series` (and ±`limit`'s value), its time axis
+/// A panel's view ((t0, t1), (y0, y1)) over `series` (and `limit`'s levels), its time axis
 /// reaching `t_right` at least, with room above the data for its legend or the legend placed right
 /// of the plotting area ([`with_headroom`]; `column` px are kept there).
 fn panel_view<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     series: &[Series],
-    limit: Option<(&str, f64)>,
+    limit: Option<Limit<'_>>,
     (t_right, column): (Option<f64>, u32),
 ) -> (View, Legend) {
     let (t0, t1) = series
@@ -246,7 +246,7 @@ fn panel_view<DB: DrawingBackend>(
         .fold((f64::MAX, f64::MIN), |(a, b), t| (a.min(t), b.max(t)));
     let (t0, t1) = if t0 < t1 { (t0, t1) } else { (0.0, 1.0) };
     let t1 = t_right.map_or(t1, |t| t1.max(t));
-    let levels = limit.map_or(vec![], |(_, u)| vec![-u, u]);
+    let levels = limit_levels(limit);
     let (lo, hi) = value_range(series.iter().flat_map(|(_, p)| p.iter().map(|(_, v)| *v)).chain(levels));
     let pad = 0.05 * (hi - lo);
     let view = ((t0, t1), (lo - pad, hi + pad));
@@ -439,6 +439,14 @@ fn label_entries<'a, DB: DrawingBackend + 'a>(
     Ok(())
 }
 
+/// An actuator limit drawn on a panel: its legend label and its levels (u_min, u_max).
+type Limit<'a> = (&'a str, [f64; 2]);
+
+/// The finite levels of `limit`.
+fn limit_levels(limit: Option<Limit<'_>>) -> Vec<f64> {
+    limit.map_or(vec![], |(_, levels)| levels.into_iter().filter(|u| u.is_finite()).collect())
+}
+
 /// The colour of a limit's dashed lines and their legend entry.
 const LIMIT_GREY: RGBColor = RGBColor(90, 90, 90);
 
@@ -575,22 +583,8 @@ fn draw<DB: DrawingBackend + Strokes>(
     // (newtons, volts) it can be 1e5 times u. The true actuator's limit is drawn where u_f's peak
     // reaches a tenth of it, and its distance told otherwise (the lines would flatten the curve).
     let uf = held(&r.u_f);
-    let u_max = r.u_max.get(i).copied().filter(|u| u.is_finite());
-    let peak = uf.iter().map(|(_, v)| v.abs()).filter(|v| v.is_finite()).fold(0.0, f64::max);
-    let mut uf_title = format!("{input}: plant input u_f (5), what the actuator delivers");
-    let label = u_max.map(|u| format!("±truth.u_max[{i}] = {}", crate::run::short(u)));
-    let limit = label.as_deref().zip(u_max).filter(|&(_, u)| peak >= 0.1 * u);
-    if let (None, Some(u)) = (limit, u_max) {
-        // Two significant digits below 0.1 % ("0.0 %" hid a peak of 0.0018 %).
-        let share = quell::settings::fmt_percent(peak / u);
-        write!(uf_title, "; peak {share} of truth.u_max").map_err(|e| e.to_string())?;
-    }
-    // Where the limit clipped it, how much the controller asked for (summary.json's max_uf).
-    let asked = r.max_uf(i);
-    if u_max.is_some_and(|u| asked > u) {
-        write!(uf_title, "; the controller asked for up to {}", quell::settings::fmt_4(asked))
-            .map_err(|e| e.to_string())?;
-    }
+    let (uf_title, label, levels) = uf_panel(r, i, &input, &uf);
+    let limit = label.as_deref().map(|label| (label, levels));
     let plant_input = [(format!("uf{c}"), uf)];
     let (etas, eta_title) = eta_panel(r, i, span, &channel);
     let panels: [PanelSpec; 5] = [
@@ -684,8 +678,43 @@ fn eta_panel(r: &SimResult, i: usize, span: (f64, f64), channel: &str) -> (Vec<S
     (etas, title)
 }
 
+/// The u_f panel's title, and its limit's label and levels (u_min, u_max) where it draws them:
+/// where u_f's peak reaches a tenth of them, its share of them in the title otherwise (the lines
+/// would flatten the curve), and where the limit clipped u_f what the controller asked for.
+fn uf_panel(r: &SimResult, i: usize, input: &str, uf: &[(f64, f64)]) -> (String, Option<String>, [f64; 2]) {
+    let levels =
+        [r.u_min.get(i).copied().unwrap_or(f64::NEG_INFINITY), r.u_max.get(i).copied().unwrap_or(f64::INFINITY)];
+    // u_f's share of its limits: of u_max above 0, of u_min below.
+    let share = (uf.iter())
+        .map(|&(_, v)| if v >= 0.0 { v / levels[1] } else { v / levels[0] })
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
+    let mut title = format!("{input}: plant input u_f (5), what the actuator delivers");
+    let symmetric = levels[0] == -levels[1];
+    let label = match levels.map(|u| u.is_finite()) {
+        [false, false] => None,
+        _ if symmetric => Some(format!("±truth.u_max[{i}] = {}", crate::run::short(levels[1]))),
+        _ => Some(format!(
+            "truth.u_min[{i}], u_max[{i}] = {}, {}",
+            crate::run::short(levels[0]),
+            crate::run::short(levels[1])
+        )),
+    };
+    if label.is_some() && share < 0.1 {
+        // Two significant digits below 0.1 % ("0.0 %" hid a peak of 0.0018 %).
+        let of = if symmetric { "truth.u_max" } else { "truth.u_min, u_max" };
+        title += &format!("; peak {} of {of}", quell::settings::fmt_percent(share));
+    }
+    // Where the limit clipped it, how much the controller asked for (summary.json's max_uf).
+    let asked = r.max_uf(i);
+    if r.limited.get(i).is_some_and(|&n| n > 0) || levels[1].max(-levels[0]) < asked {
+        title += &format!("; the controller asked for up to {}", quell::settings::fmt_4(asked));
+    }
+    (title, label.filter(|_| share >= 0.1), levels)
+}
+
 /// A panel of a channel's figure: its title, value axis label, series and actuator limit.
-type PanelSpec<'a> = (String, &'a str, &'a [Series], Option<(&'a str, f64)>);
+type PanelSpec<'a> = (String, &'a str, &'a [Series], Option<Limit<'a>>);
 
 /// Channel i's samples (t, value) of `signal`, a signal of m columns.
 fn samples<'a>(r: &'a SimResult, signal: &'a [f64], i: usize) -> impl Iterator<Item = (f64, f64)> + 'a {

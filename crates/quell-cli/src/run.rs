@@ -236,10 +236,11 @@ pub(crate) fn fixed_or_sci(x: f64, decimals: usize) -> String {
 
 /// Input i's share `f` of the recorded samples that the true actuator's limit clipped, as a line
 /// (its channel's max|u_f| is then what the controller asked for, [`quell::sim::SimResult::peak_demand`]).
-pub(crate) fn clipped(i: usize, f: f64) -> String {
+pub(crate) fn clipped(i: usize, f: f64, actuator: Option<&quell::settings::Actuator>) -> String {
     format!(
-        "input {}: clipped by truth.u_max[{i}] at {} of the recorded samples (max|u_f| is what the controller asked for)",
+        "input {}: clipped by {} at {} of the recorded samples (max|u_f| is what the controller asked for)",
         i + 1,
+        actuator.map_or_else(|| format!("truth.u_max[{i}]"), |a| a.limit_keys(i)),
         quell::settings::fmt_percent(f)
     )
 }
@@ -345,7 +346,9 @@ fn write_data(dir: &Path, done: &Finished<'_>) -> std::io::Result<()> {
 
 /// Channel i's convergence figures and advice, under its line of figures.
 fn report_diagnostics(d: &ChannelDiagnostics, time: TimeUnit, text: &mut String) {
-    let trend = d.tail_trend.map_or(String::new(), |r| format!(", tail RMS ratio (last two tenths) {r:.2}"));
+    let trend = d.tail_trend.zip(d.tail_window).map_or(String::new(), |(r, w)| {
+        format!(", tail RMS ratio (last two windows of {} {time}) {r:.2}", quell::settings::fmt_4(w))
+    });
     // A singular Ω̄ (fewer excited directions than q) gives 1/(μλ_min) = ∞; the error does not depend
     // on the unexcited directions, so the excited ones' slowest time is the one that matters.
     let convergence = if d.convergence_time.is_finite() {
@@ -385,7 +388,7 @@ fn report_outcome(done: &Finished<'_>, out: &Path) -> Result<(), Failure> {
         .iter()
         .enumerate()
         .filter(|(_, &f)| f > 0.0)
-        .map(|(i, &f)| clipped(i, f) + "\n")
+        .map(|(i, &f)| clipped(i, f, scenario.actuator.as_ref()) + "\n")
         .collect();
     match result.outcome.as_ref().unwrap_or(&Outcome::Completed) {
         Outcome::Completed => {

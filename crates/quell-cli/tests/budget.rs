@@ -115,7 +115,7 @@ fn a_run_ended_by_its_budget_names_a_rate_far_faster_than_the_loop() {
     let (code, stderr) = run_into(dir, &["--max-steps", "2000"], &scenario);
     assert_eq!(code, Some(1), "stderr: {stderr}");
     assert!(
-        stderr.contains("raise --max-steps if the run is sound); by then x_hat (observer state) had reached 8.85e3 in magnitude, 8.9e-6 of its divergence bound; the observer (A − LC) sets the loop's fastest rate, 1.500e4/s, 1700× the next fastest"),
+        stderr.contains("raise --max-steps if the run is sound); by then xhat (observer state) had reached 8.85e3 in magnitude, 8.9e-6 of its divergence bound; the observer (A − LC) sets the loop's fastest rate, 1.500e4/s, 1700× the next fastest"),
         "{stderr}"
     );
 }

@@ -1480,6 +1480,32 @@ fn run_figures_show_the_actuator_limit_or_how_far_u_f_stays_from_it() {
     assert!(!svg1.contains("the controller asked for"));
 }
 
+/// A range that is not symmetric (`[truth] u_min`): input 1 of the paper's loop (u_f,1 from −12.5 to
+/// 14.9 over 20 s unclipped) held within −10 … 30 is clipped below only; the clipping line names
+/// both keys, the figure draws a dashed line at each end and says how much the controller asked for.
+#[test]
+fn a_range_that_is_not_symmetric_is_drawn_and_named_at_both_ends() {
+    let dir = temp_dir("u-min");
+    let body = fs::read_to_string(paper()).unwrap().replace("t_end = 100.0", "t_end = 20.0");
+    let file = dir.path().join("heater.toml");
+    fs::write(&file, format!("{body}\n[truth]\nu_max = [30.0, inf]\nu_min = [-10.0, -inf]\n")).unwrap();
+    let out = dir.path().join("out");
+    let o = quell(&["run", file.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let report = stdout(&o);
+    assert!(report.contains("input 1: clipped by truth.u_min[0] … u_max[0] at "), "{report}");
+    assert!(!report.contains("input 2: clipped"), "{report}");
+    let signals = fs::read_to_string(out.join("signals.csv")).unwrap();
+    let header: Vec<&str> = signals.lines().next().unwrap().split(',').collect();
+    let col = header.iter().position(|c| *c == "uf1").unwrap();
+    let uf1: Vec<f64> = signals.lines().skip(1).map(|l| l.split(',').nth(col).unwrap().parse().unwrap()).collect();
+    assert!(uf1.iter().all(|u| (-10.0..=30.0).contains(u)) && uf1.contains(&-10.0));
+    let svg1 = fs::read_to_string(out.join("channel1.svg")).unwrap();
+    assert!(svg1.contains("truth.u_min[0], u_max[0] = -10, 30") && svg1.contains("the controller asked for up to "));
+    let svg2 = fs::read_to_string(out.join("channel2.svg")).unwrap();
+    assert!(!svg2.contains("truth.u_m"), "input 2 has no limit");
+}
+
 /// A run that fails under the true actuator's limits says how much they clipped before the failure
 /// (the clipping is likely why): the paper's loop with |u_f| ≤ 2 on both inputs.
 #[test]

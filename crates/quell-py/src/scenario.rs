@@ -55,8 +55,9 @@ use crate::plant::{plant_arg, Labels, PyPlant};
 ///     plant (its delays and x0 as it holds them: 0 unless given), or a dict of `[truth]`'s keys
 ///     (`{"A": A_true}`), the others from `plant` as in a file.
 /// actuator : dict, optional
-///     The true plant's actuator between u_f and the plant, `{"u_max": [..], "delays": [..]}`
-///     (either key; one entry per input): `[truth] u_max` (|u_f,i| clipped, inf for none) and
+///     The true plant's actuator between u_f and the plant, `{"u_max": [..], "u_min": [..],
+///     "delays": [..]}` (any of the keys; one entry per input): `[truth] u_max` (u_f,i clipped
+///     above, inf for none), `u_min` (clipped below, ≤ 0, -inf for none; -u_max unless given) and
 ///     `actuator_delays` (u_f,i delayed as a whole).
 /// **design
 ///     The `[design]` keys: channel_poles, reference_filter_poles, disturbance_filter_poles, mu,
@@ -495,18 +496,19 @@ fn truth_arg(py: Python<'_>, t: &Bound<'_, PyAny>, plant: &quell::Plant) -> PyRe
     Ok(truth_table(&truth.inner))
 }
 
-/// The `actuator` argument `{"u_max": [..], "delays": [..]}` as `[truth]`'s keys u_max and
-/// actuator_delays.
+/// The `actuator` argument `{"u_max": [..], "u_min": [..], "delays": [..]}` as `[truth]`'s keys
+/// u_max, u_min and actuator_delays.
 fn actuator_keys(py: Python<'_>, a: &Bound<'_, PyAny>) -> PyResult<Vec<(String, Value)>> {
-    let a = a.cast::<PyDict>().map_err(|_| type_error("actuator", "a dict {u_max, delays}", a))?;
+    let a = a.cast::<PyDict>().map_err(|_| type_error("actuator", "a dict {u_max, u_min, delays}", a))?;
     let mut keys = Vec::new();
     for (k, v) in a.iter() {
         let k: String = k.extract().map_err(|_| type_error("actuator", "a dict with str keys", &k))?;
         let key = match k.as_str() {
             "u_max" => "u_max",
+            "u_min" => "u_min",
             "delays" => "actuator_delays",
             _ => {
-                let message = format!("actuator: unknown key {k:?}; expected u_max (the limits on |u_f,i|) or delays (u_f's delays), one entry per input");
+                let message = format!("actuator: unknown key {k:?}; expected u_max, u_min (u_f,i's upper and lower limits) or delays (u_f's delays), one entry per input");
                 return Err(Kind::Scenario.err(py, message));
             }
         };
@@ -583,7 +585,7 @@ fn scenario_document(
                 // One value per key: truth={"u_max": ...} and actuator={"u_max": ...} together
                 // had the actuator's win in silence.
                 if truth.contains_key(&key) {
-                    let name = if key == "u_max" { "u_max" } else { "delays" };
+                    let name = if key == "actuator_delays" { "delays" } else { key.as_str() };
                     let message = format!(
                         "actuator[{name:?}] and truth[{key:?}]: both given; give the actuator's {name} in one of them"
                     );

@@ -73,6 +73,7 @@ fn consistent(r: &quell::sim::SimResult) -> Result<(), &'static str> {
     let per_channel = [
         r.limited.len(),
         r.u_max.len(),
+        r.u_min.len(),
         r.peak_u.len(),
         r.peak_uf.len(),
         r.peak_demand.len(),
@@ -389,7 +390,7 @@ impl PySimResult {
     /// dict
     ///     `{"channels": [...], "observer_fidelity": [...], "advice": [...]}`; per channel
     ///     lambda_min_omega, lambda_max_omega, convergence_time, adaptation_rate,
-    ///     predicted_final_rms_e, tail_trend, excitation and advice.
+    ///     predicted_final_rms_e, tail_trend, tail_window, excitation and advice.
     ///
     /// Raises
     /// ------
@@ -494,7 +495,8 @@ impl PySimResult {
         let f = slf.py().import("quell._frames")?.getattr("plot")?;
         let me = slf.get();
         let names = (me.labels.inputs.clone(), me.labels.outputs.clone());
-        Ok(f.call1((slf, channel, fig, ax, figsize, names, me.inner.u_max.clone()))?.unbind())
+        let limits = (me.inner.u_max.clone(), me.inner.u_min.clone());
+        Ok(f.call1((slf, channel, fig, ax, figsize, names, limits.0, limits.1))?.unbind())
     }
     fn __len__(&self) -> usize {
         self.of_samples.len
@@ -513,6 +515,7 @@ impl PySimResult {
             && same(&a.peaks.0, &b.peaks.0)
             && a.limited == b.limited
             && a.u_max == b.u_max
+            && a.u_min == b.u_min
             && self.labels == o.get().labels
             && a.time_unit == b.time_unit)
     }
@@ -535,6 +538,7 @@ impl PySimResult {
         d.set_item("peaks", r.peaks.0.to_vec())?;
         d.set_item("limited", r.limited.clone())?;
         d.set_item("u_max", r.u_max.clone())?;
+        d.set_item("u_min", r.u_min.clone())?;
         d.set_item("peak_u", r.peak_u.clone())?;
         d.set_item("peak_uf", r.peak_uf.clone())?;
         d.set_item("peak_demand", r.peak_demand.clone())?;
@@ -580,6 +584,16 @@ impl PySimResult {
             limited: item("limited")?.extract()?,
             // Results pickled before `u_max` have none.
             u_max: state.get_item("u_max")?.map_or(Ok(vec![]), |v| v.extract())?,
+            // Results pickled before `u_min` have none: the range was −u_max … u_max.
+            u_min: match state.get_item("u_min")? {
+                Some(v) => v.extract()?,
+                None => state
+                    .get_item("u_max")?
+                    .map_or(Ok(vec![]), |v| v.extract::<Vec<f64>>())?
+                    .iter()
+                    .map(|u| -u)
+                    .collect(),
+            },
             // Results pickled before the peaks between rows have none.
             peak_u: state.get_item("peak_u")?.map_or(Ok(vec![]), |v| v.extract())?,
             peak_uf: state.get_item("peak_uf")?.map_or(Ok(vec![]), |v| v.extract())?,

@@ -69,6 +69,36 @@ def test_an_actuator_limit_clips_u_f_and_is_counted():
         quell.Scenario(p, REFERENCE, DISTURBANCE, observer_gain=L, actuator={"umax": u_max}, **PAPER_DESIGN)
 
 
+def test_a_range_that_is_not_symmetric_clips_each_side_at_its_own_limit():
+    """actuator={"u_min": ...} is [truth]'s u_min: u_f clipped to [u_min, u_max] (computed here from
+    the controller's own formula, as above), the panel's dashed lines at both ends, and a pickled
+    result keeps them; a positive u_min is refused naming the key."""
+    import pickle
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from test_api import DISTURBANCE, L, PAPER_DESIGN, REFERENCE
+
+    p = quell.paper_example().plant
+    lower, upper = np.array([-10.0, -float("inf")]), np.array([30.0, 6.0])
+    s = quell.Scenario(p, REFERENCE, DISTURBANCE, t_end=20.0, observer_gain=L,
+                       actuator={"u_max": list(upper), "u_min": list(lower)}, **PAPER_DESIGN)
+    r = pickle.loads(pickle.dumps(quell.simulate(s, states=True)))
+    d = s.design()
+    u_d = np.column_stack([delayed(r.t, r.u[:, i], tau) for i, tau in enumerate(p.delays)])
+    want = np.clip(u_d @ d.F.T - r.x_hat @ d.K.T, lower, upper)
+    np.testing.assert_allclose(r.u_f, want, rtol=0, atol=1e-9 * 30.0)
+    assert r.u_f[:, 0].min() == -10.0 and r.u_f[:, 0].max() < 30.0, "input 1 clipped below only"
+    assert r.u_f[:, 1].min() < -6.0, "input 2 has no lower limit"
+    panel = r.plot(channel=1).axes[3]
+    levels = sorted(line.get_ydata()[0] for line in panel.get_lines() if line.get_linestyle() == "--")
+    assert levels == [-10.0, 30.0]
+    assert "truth.u_min[0], u_max[0] = -10, 30" in [t.get_text() for t in panel.get_legend().get_texts()]
+    with pytest.raises(quell.ScenarioError, match=r"^truth.u_min\[1\]: expected a lower limit ≤ 0"):
+        quell.Scenario(p, REFERENCE, DISTURBANCE, observer_gain=L, actuator={"u_min": [-1.0, 0.5]}, **PAPER_DESIGN)
+
+
 def test_the_plot_shows_the_actuator_limit_or_how_far_u_f_stays_from_it():
     """u_f's panel draws ±u_max where u_f comes within a tenth of the limit, and gives the peak's share
     of it in the title otherwise (a pickled result keeps its limits)."""

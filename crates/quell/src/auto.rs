@@ -2008,10 +2008,12 @@ fn limit_advice(
             limits_to_raise(targets, closest, STEADY_LESS)
         ),
     };
-    let beyond: Vec<String> = (actuator.map_or(&[][..], |a| &a.limits[..]).iter().enumerate())
-        .filter(|&(i, &u)| closest.max_uf.get(i).is_some_and(|&asked| asked > u))
-        .map(|(i, &u)| format!("truth.u_max[{i}] = {}", crate::settings::fmt_short(u)))
-        .collect();
+    let beyond: Vec<String> = actuator.map_or(vec![], |a| {
+        (0..a.limits.len())
+            .filter(|&i| closest.max_uf.get(i).is_some_and(|&asked| asked > a.magnitude_limit(i)))
+            .map(|i| a.limits_text(i))
+            .collect()
+    });
     if beyond.is_empty() {
         return advice;
     }
@@ -3572,7 +3574,7 @@ mod tests {
         let targets = Targets { u_limit: vec![0.45], ..Targets::default() };
         let mut closest = Candidate::ended(Speed::FIRST, 1);
         closest.max_uf = vec![0.5156];
-        let drive = |u: f64| crate::settings::Actuator { delays: vec![0.0], limits: vec![u] };
+        let drive = |u: f64| crate::settings::Actuator { delays: vec![0.0], limits: vec![u], lower: None };
         let advice = limit_advice(&targets, &closest, Some(&drive(0.45)), (&[], false), &[]);
         assert!(advice.contains("raise the actuator limit (u_limit) to at least 0.52"), "{advice}");
         assert!(advice.ends_with("; but truth.u_max[0] = 0.45 clips the true plant's input below that, so asking less of the loop is the way there (a raised limit is met only through the clip, which the method does not model)"), "{advice}");

@@ -132,14 +132,28 @@ fn weight(w: f64) -> f64 {
 }
 
 /// The disturbance observer's input gain T(jw) = N L [C (jwI − A + LC)⁻¹ (D − LQ) + Q]
-/// (q_ω × k); equal to N D = L_ω when the observer reproduces x.
+/// (q_ω × k); equal to N D = L_ω when the observer reproduces x. An entry within rounding of the
+/// sum of its terms' magnitudes, |N L| (|C| |(jwI − A + LC)⁻¹| |D − LQ| + |Q|), is 0: a
+/// disturbance whose path to y has a zero at w (a missile's gust bias, D = A e_α, moves α and
+/// leaves the pitch rate at 0) is then unseen, where its rounding (1e-19) had counted as an
+/// excited direction of Ω̄ and asked for μ = 1.6e38 (helper tryout, 2026-12-08).
 pub fn disturbance_observer_gain(design: &Design, w: f64) -> DMatrix<C64> {
     let p = design.plant();
     let (L, N) = (design.L(), design.N());
     let A_o = &p.A - L * &p.C;
     let E = complex(&(&p.D - L * &p.Q));
-    complex(&(N * L)) * (complex(&p.C) * resolvent(&A_o, w, &E) + complex(&p.Q))
+    let R = resolvent(&A_o, w, &DMatrix::identity(p.n(), p.n()).map(|x| C64::new(x, 0.0)));
+    let NL = complex(&(N * L));
+    let T = &NL * (complex(&p.C) * resolvent(&A_o, w, &E) + complex(&p.Q));
+    let abs = |M: &DMatrix<C64>| M.map(|z| z.norm());
+    let scale = abs(&NL) * (p.C.abs() * abs(&R) * abs(&E) + p.Q.abs());
+    let rounding = ROUNDING_FACTOR * f64::EPSILON * (p.n() + 1) as f64;
+    T.zip_map(&scale, |t, s| if t.norm() <= rounding * s { C64::new(0.0, 0.0) } else { t })
 }
+
+/// How many times ε·(n + 1) of its terms' magnitudes an entry of T may be and still read as
+/// rounding ([`disturbance_observer_gain`]).
+const ROUNDING_FACTOR: f64 = 16.0;
 
 /// How faithfully the disturbance observer (20) passes one frequency of ω: with T = L_ω (I + E),
 /// E(jw) the error of the estimate of ω that T passes (k × k, in ω's coordinates), the relative

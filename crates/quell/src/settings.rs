@@ -287,15 +287,20 @@ impl MeasurementNoise {
     }
 }
 
-/// The true plant's actuator beyond the model (1) (`[truth]` `actuator_delays`, `u_max`): the plant
-/// receives sat(u_f(t − τ_a,i)) on input i, where u_f = −K x̂ + F u_d is the controller's input (5),
-/// sat clips input i to [−u_max,i, u_max,i]. The controller knows neither.
+/// The true plant's actuator beyond the model (1) (`[truth]` `actuator_delays`, `u_max`, `u_min`):
+/// the plant receives sat(u_f(t − τ_a,i)) on input i, where u_f = −K x̂ + F u_d is the controller's
+/// input (5), sat clips input i to [u_min,i, u_max,i] (u_min = −u_max unless given). The controller
+/// knows neither.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Actuator {
     /// τ_a,i ≥ 0 per input: a delay on the whole u_f,i (actuator or network), not only on u_i.
     pub delays: Vec<f64>,
     /// u_max,i > 0 per input (∞: no limit).
     pub limits: Vec<f64>,
+    /// u_min,i ≤ 0 per input (−∞: no limit) where the range is not symmetric: u_f is the deviation
+    /// from the operating point, so a heater at P₀ of 0 … P has u_min = −P₀ and u_max = P − P₀.
+    /// `None`: u_min = −u_max.
+    pub lower: Option<Vec<f64>>,
 }
 
 impl Actuator {
@@ -321,18 +326,77 @@ impl Actuator {
                 format!("expected a limit > 0 (inf for none), found {}", fmt_short(*u)),
             ));
         }
-        Ok(())
+        let Some(lower) = &self.lower else { return Ok(()) };
+        if lower.len() != m {
+            return Err(KeyError::new(
+                "truth.u_min",
+                format!("expected {} (one per input), found {}", entries(m), lower.len()),
+            ));
+        }
+        match lower.iter().enumerate().find(|(_, u)| u.is_nan() || **u > 0.0) {
+            Some((i, u)) => Err(KeyError::new(
+                format!("truth.u_min[{i}]"),
+                format!(
+                    "expected a lower limit ≤ 0 (-inf for none), found {}; u_f is the deviation from the operating point (u_f = 0), which the actuator's range must hold: a heater run at P₀ within 0 … P has u_min = −P₀ and u_max = P − P₀",
+                    fmt_short(*u)
+                ),
+            )),
+            None => Ok(()),
+        }
     }
 
-    /// sat_i(v): input i clipped to ±u_max,i, and whether the limit was active.
+    /// u_min,i: the lower limit on input i (−u_max,i unless `u_min` is given).
+    pub fn lower_limit(&self, i: usize) -> f64 {
+        self.lower.as_ref().map_or(-self.limits[i], |l| l[i])
+    }
+
+    /// min(u_max,i, −u_min,i): the largest |u_f,i| that neither limit clips, what a judgment of
+    /// max |u_f,i| alone can be held to.
+    pub fn magnitude_limit(&self, i: usize) -> f64 {
+        self.limits[i].min(-self.lower_limit(i))
+    }
+
+    /// Input i's limits as keys: `truth.u_max[i] = 12`, or `truth.u_min[i] … u_max[i] = −2 … 10`
+    /// where the range is not symmetric.
+    pub fn limits_text(&self, i: usize) -> String {
+        match self.asymmetric(i) {
+            None => format!("{} = {}", self.limit_keys(i), fmt_short(self.limits[i])),
+            Some(l) => format!("{} = {} … {}", self.limit_keys(i), fmt_short(l), fmt_short(self.limits[i])),
+        }
+    }
+
+    /// Input i's limits' keys: `truth.u_max[i]`, or `truth.u_min[i] … u_max[i]` where the range
+    /// is not symmetric.
+    pub fn limit_keys(&self, i: usize) -> String {
+        limit_keys(i, self.asymmetric(i).is_none())
+    }
+
+    /// u_min,i where it is not −u_max,i.
+    fn asymmetric(&self, i: usize) -> Option<f64> {
+        self.lower.as_ref().map(|l| l[i]).filter(|&l| l != -self.limits[i])
+    }
+
+    /// sat_i(v): input i clipped to [u_min,i, u_max,i], and whether a limit was active.
     pub(crate) fn clip(&self, i: usize, v: f64) -> (f64, bool) {
-        let limit = self.limits[i];
-        (v.clamp(-limit, limit), v.abs() > limit)
+        let (lo, hi) = (self.lower_limit(i), self.limits[i]);
+        (v.clamp(lo, hi), v > hi || v < lo)
     }
 
     /// True when the actuator changes nothing (no delay, no finite limit).
     pub fn is_ideal(&self) -> bool {
-        self.delays.iter().all(|&d| d == 0.0) && self.limits.iter().all(|u| u.is_infinite())
+        self.delays.iter().all(|&d| d == 0.0)
+            && self.limits.iter().all(|u| u.is_infinite())
+            && self.lower.iter().flatten().all(|u| u.is_infinite())
+    }
+}
+
+/// Input i's actuator limits' keys: `truth.u_max[i]` for a `symmetric` range, else
+/// `truth.u_min[i] … u_max[i]`.
+pub fn limit_keys(i: usize, symmetric: bool) -> String {
+    if symmetric {
+        format!("truth.u_max[{i}]")
+    } else {
+        format!("truth.u_min[{i}] … u_max[{i}]")
     }
 }
 

@@ -115,23 +115,35 @@ impl Component {
     /// A harmonic of frequency 0 is the constant a·sin φ, part of the bias (`amplitude = 50,
     /// frequency = 0` is g ≡ 0, whose peak had read 50; helper tryout, 2026-12-06).
     pub fn peak(&self) -> f64 {
+        self.extreme(|v| v.abs())
+    }
+
+    /// (min, max) of the value over all t, as [`Component::peak`] finds its largest |value|
+    /// (−∞ … ∞ bounds become the sums where the frequencies are not whole multiples of one).
+    pub fn range(&self) -> (f64, f64) {
+        (-self.extreme(|v| -v), self.extreme(|v| v))
+    }
+
+    /// The supremum of `of(value)` over all t, for `of` = |·|, the identity or its negation:
+    /// `of(constant)` + Σ|amplitude|, or the maximum over the common period ([`Component::peak`]).
+    fn extreme(&self, of: impl Fn(f64) -> f64) -> f64 {
         let still = self.harmonics.iter().filter(|h| h.frequency == 0.0);
         let constant = still.fold(self.bias, |acc, h| acc + h.amplitude * h.phase.sin());
         let moving = self.harmonics.iter().filter(|h| h.frequency != 0.0);
-        let sum = moving.fold(constant.abs(), |acc, h| acc + h.amplitude.abs());
+        let sum = moving.fold(of(constant), |acc, h| acc + h.amplitude.abs());
         let active: Vec<&Harmonic> =
             self.harmonics.iter().filter(|h| h.amplitude != 0.0 && h.frequency > 0.0).collect();
         match active.len() {
             0 | 1 => sum,
-            _ => self.period_peak(&active).map_or(sum, |p| p.min(sum)),
+            _ => self.period_peak(&active, &of).map_or(sum, |p| p.min(sum)),
         }
     }
 
-    /// The maximum of |value| over one period 2π/ω₀ where every frequency of `active` is k·ω₀ for
-    /// a whole k ≤ [`PEAK_MAX_INDEX`] (ω₀ = ω_min/d, d ≤ 16, each ratio whole to [`WHOLE_RATIO`]), found on
-    /// 64 samples per period of the highest harmonic and refined by golden section around the
-    /// largest; `None` otherwise.
-    fn period_peak(&self, active: &[&Harmonic]) -> Option<f64> {
+    /// The maximum of `of(value)` over one period 2π/ω₀ where every frequency of `active` is k·ω₀
+    /// for a whole k ≤ [`PEAK_MAX_INDEX`] (ω₀ = ω_min/d, d ≤ 16, each ratio whole to [`WHOLE_RATIO`]),
+    /// found on 64 samples per period of the highest harmonic and refined by golden section around
+    /// the largest; `None` otherwise.
+    fn period_peak(&self, active: &[&Harmonic], of: &dyn Fn(f64) -> f64) -> Option<f64> {
         let lowest = active.iter().map(|h| h.frequency).fold(f64::INFINITY, f64::min);
         let whole = |x: f64| (x - x.round()).abs() <= WHOLE_RATIO * x.max(1.0);
         let base = (1..=16)
@@ -140,7 +152,7 @@ impl Component {
         let top = active.iter().map(|h| (h.frequency / base).round()).fold(1.0, f64::max);
         let samples = (64.0 * top) as usize;
         let step = std::f64::consts::TAU / base / samples as f64;
-        let at = |t: f64| self.eval(t).abs();
+        let at = |t: f64| of(self.eval(t));
         let best = (0..samples).map(|k| k as f64 * step).max_by(|a, b| at(*a).total_cmp(&at(*b)))?;
         // Golden section on the bracket around the best sample, where |value| is unimodal.
         let (mut lo, mut hi) = (best - step, best + step);
@@ -477,5 +489,27 @@ mod tests {
             harmonics: vec![h(1.5, 0.261799), h(0.5, 0.523599), h(0.3, 0.785398), h(0.2, 1.047198)],
         };
         assert!((rounded.peak() - 2.785963).abs() < 1e-5, "{}", rounded.peak());
+    }
+
+    /// The range's ends against independent answers: one harmonic about a bias is bias ± a; the
+    /// four harmonics of 2π/24 about 1 reach −0.785973 (SciPy's `minimize_scalar` from the lowest
+    /// of 4e6 samples of a period) and 2.785963; sin t + sin 2t is odd, so ± its peak; the ends of
+    /// incommensurate frequencies are the sums.
+    #[test]
+    #[allow(clippy::approx_constant)] // π/6, π/4, π/3 written to six digits, as users write them
+    fn the_range_holds_the_lowest_and_the_highest_value() {
+        let h = |amplitude: f64, frequency: f64| Harmonic { amplitude, frequency, phase: 0.0 };
+        assert_eq!(Component { bias: -1.0, harmonics: vec![h(0.5, 3.0)] }.range(), (-1.5, -0.5));
+        let rounded = Component {
+            bias: 1.0,
+            harmonics: vec![h(1.5, 0.261799), h(0.5, 0.523599), h(0.3, 0.785398), h(0.2, 1.047198)],
+        };
+        let (lo, hi) = rounded.range();
+        assert!((lo + 0.785973).abs() < 1e-5 && (hi - 2.785963).abs() < 1e-5, "{lo} {hi}");
+        let two = Component { bias: 0.0, harmonics: vec![h(1.0, 1.0), h(1.0, 2.0)] };
+        let (lo, hi) = two.range();
+        assert!((lo + two.peak()).abs() < 1e-12 && (hi - two.peak()).abs() < 1e-12, "{lo} {hi}");
+        let apart = Component { bias: 0.5, harmonics: vec![h(1.0, 1.0), h(1.0, 2f64.sqrt())] };
+        assert_eq!(apart.range(), (-1.5, 2.5));
     }
 }

@@ -115,7 +115,8 @@ fn a_clipped_plant_input_reports_what_the_controller_asked_for() {
     let d = Design::new(&paper_plant(), &paper_spec()).unwrap();
     let (g, w) = paper_signals();
     let limit = 10.0;
-    let actuator = Some(quell::settings::Actuator { delays: vec![0.0; 2], limits: vec![limit, f64::INFINITY] });
+    let actuator =
+        Some(quell::settings::Actuator { delays: vec![0.0; 2], limits: vec![limit, f64::INFINITY], lower: None });
     let loops = [
         (RunSettings::continuous(20.0, 0.05, 1e-9, 1e-9), [20, 60], 1e-9),
         (RunSettings::sampled(20.0, 0.01, 0.01), [100, 300], 1e-12),

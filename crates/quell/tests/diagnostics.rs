@@ -677,6 +677,30 @@ fn the_excited_rank_does_not_depend_on_one_components_amplitude() {
     }
 }
 
+/// A disturbance part that does not reach y excites nothing: the missile's gust bias
+/// (`tests/data/missile-pitch.toml`, D = A e_α: a steady gust moves α and leaves the pitch rate at
+/// 0, so C (−A)⁻¹ D = 0 exactly, and the observer's T(0) too) adds no direction, and the excited
+/// rank is the reference's two tones and the gust's one, 4 + 2 = 6 of q = 7. Its rounding (1e-19)
+/// had counted as a seventh direction with λ = 4.7e-39, and the advice asked for μ = 1.6e38 and
+/// smaller units for ω (helper tryout, 2026-12-08); now it names the gust's 2 rad/s.
+#[test]
+fn a_disturbance_part_that_does_not_reach_y_excites_nothing() {
+    let s = Scenario::from_toml(include_str!("data/missile-pitch.toml")).unwrap();
+    let d = s.design().unwrap();
+    let p = d.plant();
+    let a_inv = p.A.clone().try_inverse().unwrap();
+    assert!((&p.C * a_inv * &p.D)[(0, 0)].abs() < 1e-15, "the bias's path to y has a zero at 0");
+    let c = &Averaged::new(&d, &s.reference, &s.disturbance).channels[0];
+    assert_eq!((c.excited().count(), d.q()), (6, 7), "{:?}", c.lambda);
+    let bias = c.excitation.iter().find(|e| e.frequency == 0.0).unwrap();
+    assert_eq!(bias.excitation, 0.0);
+    assert!(c.excited().fold(f64::INFINITY, f64::min) > 1e-9, "{:?}", c.lambda);
+    let report = quell::diagnostics::estimate(&d, s.true_plant(), &s.reference, &s.disturbance, 20.0);
+    let advice = report[0].advice.join("\n");
+    assert!(advice.contains("Ω̄_1 is weakly excited at 2 rad/s"), "{advice}");
+    assert!(!advice.contains("e38") && !advice.contains("e37"), "{advice}");
+}
+
 /// A course-unstable tanker (Nomoto, T = −60 s; tests/data/tanker.toml) has no zeros of (A, D, C)
 /// to place (D = B, a plant without zeros): the advice names the speed-up of its observer poles that
 /// brings the disturbance observer's error at the 0.6 rad/s waves within 0.1, which takes 500×

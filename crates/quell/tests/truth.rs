@@ -168,6 +168,13 @@ fn truth_mistakes_name_their_key() {
             "truth.actuator_delays[0]: expected a finite delay ≥ 0 (in the plant model's unit of time), found -0.1",
         ),
         ("u_max = [1.0, 0.0]", "truth.u_max[1]: expected a limit > 0 (inf for none), found 0"),
+        ("u_min = [-1.0]", "truth.u_min: expected 2 entries (one per input), found 1"),
+        (
+            "u_min = [-1.0, 0.5]",
+            "truth.u_min[1]: expected a lower limit ≤ 0 (-inf for none), found 0.5; u_f is the deviation",
+        ),
+        ("u_min = [-1.0, inf]", "truth.u_min[1]: expected a finite number or -inf (no limit), found inf"),
+        ("u_max = [-inf, 1.0]", "truth.u_max[0]: expected a finite number or inf (no limit), found -inf"),
     ];
     for (truth, expected) in cases {
         let e = Scenario::from_toml(&format!("{PAPER_EXAMPLE}\n[truth]\n{truth}\n")).unwrap_err().to_string();
@@ -335,4 +342,52 @@ fn a_fractional_true_delay_moves_the_command_within_the_sample() {
         // The commands moved within the samples, so the check covers the switch.
         assert!(moved > 1e-6 * peak, "x{}: {moved}", i + 1);
     }
+}
+
+/// A room heated by a 0 … 3 kW heater run at 1 kW (x' = (2 u − x)/600, x in °C from the operating
+/// point, u in kW from 1 kW): u_f ranges over [−1, 2], `[truth] u_min` and `u_max`. `reference`
+/// is g's component.
+fn heater(reference: &str, range: &str) -> Scenario {
+    let text = format!(
+        "[plant]\nA = [[-0.0016666666666666668]]\nB = [[0.0033333333333333335]]\nC = [[1.0]]\ndelays = [30.0]\n[design]\nobserver_poles = [-0.02]\nchannel_poles = [[-0.005]]\nreference_filter_poles = [[-0.002]]\nmu = [1.0]\nbeta = 1.0\n[reference]\ncomponents = [{reference}]\n[simulation]\nt_end = 9000.0\noutput_step = 10.0\nsample_time = 10.0\n[truth]\n{range}\n"
+    );
+    Scenario::from_toml(&text).unwrap()
+}
+
+/// A range that is not symmetric: the heater cools the room by at most 2 °C (u_f ≥ −1 kW, the
+/// steady gain being 2 °C/kW) and heats it by up to 4 °C. Its steady input for g = −3 °C is
+/// −1.5 kW, within ±2 but below u_min: the steady-state advice says so (and not for ±2); the run
+/// is clipped at −1 and never below, so y settles at −2 °C (the DC gain × u_min, to 1e-3); the
+/// written scenario keeps the range, and a symmetric one writes no u_min.
+#[test]
+fn a_range_that_is_not_symmetric_clips_each_side_at_its_own_limit() {
+    let cool = "{ bias = -3.0 }";
+    let steady = heater(cool, "u_max = [2.0]\nu_min = [-1.0]").steady_input();
+    // −3 °C / 2 °C/kW, to rounding.
+    assert!(steady.range[0].iter().all(|u| (u + 1.5).abs() < 1e-12), "{:?}", steady.range);
+    assert_eq!(steady.advice.len(), 1, "{:?}", steady.advice);
+    assert!(
+        steady.advice[0].starts_with("u_f[1]: the steady-state input (RMS 1.5, from -1.5 to -1.5) against the actuator range truth.u_min … u_max = -1 … 2 exceeds it: tracking g and rejecting ω exactly is impossible"),
+        "{}",
+        steady.advice[0]
+    );
+    assert!(heater(cool, "u_max = [2.0]").steady_input().advice.is_empty());
+    let s = heater(cool, "u_max = [2.0]\nu_min = [-1.0]");
+    let r = Run::of(&s, &s.design().unwrap()).simulate(|_| ControlFlow::Continue(())).unwrap();
+    assert_eq!(r.outcome, Some(Outcome::Completed));
+    assert!(r.u_f.iter().all(|&u| (-1.0..=2.0).contains(&u)), "{:?}", r.u_f);
+    assert!(r.u_f.contains(&-1.0) && r.limited[0] > 0, "u_f reaches u_min");
+    assert!((r.y.last().unwrap() + 2.0).abs() < 1e-3, "y settles at 2 u_min: {}", r.y.last().unwrap());
+    assert_eq!((r.u_min.clone(), r.u_max.clone()), (vec![-1.0], vec![2.0]));
+    let written = Scenario::from_toml(&s.to_toml()).unwrap();
+    assert_eq!(written.actuator, s.actuator);
+    let symmetric = heater(cool, "u_max = [2.0]");
+    assert!(!symmetric.to_toml().contains("u_min"));
+    assert_eq!(symmetric.actuator.as_ref().unwrap().lower_limit(0), -2.0);
+    // No upper limit, only a lower one: u_max defaults to ∞.
+    let floor = heater(cool, "u_min = [-1.0]");
+    assert_eq!(
+        floor.actuator.as_ref().map(|a| (a.limits.clone(), a.lower_limit(0))),
+        Some((vec![f64::INFINITY], -1.0))
+    );
 }

@@ -46,7 +46,7 @@ fn continuous(s: &Scenario, t_end: f64, actuator: Option<Actuator>, noise: Optio
 
 /// RK4 of x' = x + sat(−3 x̂(t − τ_a)), x̂' = x̂ − 3 x̂ + 6 (x + n(t) − x̂) (observer (6) with the
 /// controller's undelayed u_f = −3 x̂), x(0) = 0.5, x̂(0) = 0, x̂ = 0 before 0; y at t = 0.1 k.
-fn reference_rk4(tau_a: f64, limit: f64, noise: Option<&Signal>, t_end: f64) -> Vec<f64> {
+fn reference_rk4(tau_a: f64, (lower, upper): (f64, f64), noise: Option<&Signal>, t_end: f64) -> Vec<f64> {
     let h = 1e-4;
     let n_steps = (t_end / h).round() as usize;
     let lag = (tau_a / h).round() as usize;
@@ -73,7 +73,7 @@ fn reference_rk4(tau_a: f64, limit: f64, noise: Option<&Signal>, t_end: f64) -> 
         let t = k as f64 * h;
         let f = |frac: f64, x: f64, xh: f64| {
             let xd = if lag == 0 { xh } else { delayed(&hist, &rate, k, frac) };
-            let u = (-3.0 * xd).clamp(-limit, limit);
+            let u = (-3.0 * xd).clamp(lower, upper);
             (x + u, xh_rate(t + frac * h, x, xh))
         };
         let k1 = f(0.0, x, xh);
@@ -101,16 +101,29 @@ fn actuator_delay_limits_and_noise_match_an_independent_integration() {
     let s = Scenario::from_toml(SCALAR).unwrap();
     let noise = Noise { std: vec![0.05], seed: 3, bandwidth: Some(4.0) };
     let signal = band_limited(&noise).unwrap();
-    // (τ_a, u_max, noise): the delay alone, with a limit that clips, and with the noise.
-    let cases = [(0.2, f64::INFINITY, false), (0.2, 0.8, false), (0.0, 0.8, true), (0.2, 0.8, true)];
-    for (tau_a, limit, noisy) in cases {
-        let act = Actuator { delays: vec![tau_a], limits: vec![limit] };
+    // (τ_a, (u_min, u_max), noise): the delay alone, with a limit that clips, with the noise, and
+    // a range that is not symmetric (u_f starts at −1.5 and clips at −0.3, a heater at 0.3 of its
+    // range: none given).
+    let inf = f64::INFINITY;
+    let cases = [
+        (0.2, (-inf, inf), false),
+        (0.2, (-0.8, 0.8), false),
+        (0.0, (-0.8, 0.8), true),
+        (0.2, (-0.8, 0.8), true),
+        (0.2, (-0.3, 0.8), false),
+        (0.0, (-0.3, inf), true),
+    ];
+    for (tau_a, (lower, limit), noisy) in cases {
+        let symmetric = lower == -limit;
+        let act = Actuator { delays: vec![tau_a], limits: vec![limit], lower: (!symmetric).then(|| vec![lower]) };
         let r = continuous(&s, 4.0, Some(act), noisy.then(|| noise.clone()));
-        let reference = reference_rk4(tau_a, limit, noisy.then_some(&signal), 4.0);
+        let reference = reference_rk4(tau_a, (lower, limit), noisy.then_some(&signal), 4.0);
         // RK4 at h = 1e-4 with a kink where the limit starts or stops clipping: errors ~1e-9; the
         // solver runs at 1e-10. 1e-6 is far below the effect of each physics item (below).
         let err = max_diff(&r.y, &reference);
-        assert!(err < 1e-6, "τ_a = {tau_a}, u_max = {limit}, noise {noisy}: max |Δy| = {err:e}");
+        assert!(err < 1e-6, "τ_a = {tau_a}, u_f in [{lower}, {limit}], noise {noisy}: max |Δy| = {err:e}");
+        assert!(r.u_f.iter().all(|u| (lower..=limit).contains(u)), "the plant receives u_f within its range");
+        assert_eq!((r.u_min.clone(), r.u_max.clone()), (vec![lower], vec![limit]));
         assert!(r.u.iter().all(|&u| u == 0.0), "g = 0 and k = 0 leave the adaptive command at 0");
         if limit.is_finite() {
             let fraction = r.limited_fraction()[0];
@@ -118,10 +131,10 @@ fn actuator_delay_limits_and_noise_match_an_independent_integration() {
         }
     }
     // Each item changes y by far more than the tolerance above.
-    let ideal = reference_rk4(0.0, f64::INFINITY, None, 4.0);
+    let ideal = reference_rk4(0.0, (-inf, inf), None, 4.0);
     for (tau_a, limit, noisy) in cases {
         let other = reference_rk4(tau_a, limit, noisy.then_some(&signal), 4.0);
-        assert!(max_diff(&ideal, &other) > 1e-2, "case ({tau_a}, {limit}, {noisy}) is visible");
+        assert!(max_diff(&ideal, &other) > 1e-2, "case ({tau_a}, {limit:?}, {noisy}) is visible");
     }
 }
 
@@ -185,7 +198,7 @@ fn an_actuator_without_delay_or_clipping_reproduces_the_design_input() {
         let text = format!("{PAPER_EXAMPLE}\n[truth]\n{truth}\n").replace("t_end = 100.0", "t_end = 20.0");
         let s = Scenario::from_toml(&text).unwrap();
         let base = continuous(&s, 20.0, None, None);
-        let act = Actuator { delays: vec![0.0, 0.0], limits: vec![1e12, 1e12] };
+        let act = Actuator { delays: vec![0.0, 0.0], limits: vec![1e12, 1e12], lower: None };
         let explicit = continuous(&s, 20.0, Some(act), None);
         // rtol = atol = 1e-10 over 20 s of an unstable plant: 1e-6 absolute on y of order 1.
         assert!(max_diff(&base.y, &explicit.y) < 1e-6, "{truth}: {:e}", max_diff(&base.y, &explicit.y));
@@ -201,7 +214,7 @@ fn the_breakpoints_counted_before_a_run_are_the_ones_it_lands_on() {
     let text = format!("{PAPER_EXAMPLE}\n[truth]\ndelays = [1.1, 2.9]\n").replace("t_end = 100.0", "t_end = 20.0");
     let s = Scenario::from_toml(&text).unwrap();
     let d = s.design().unwrap();
-    for actuator in [None, Some(Actuator { delays: vec![0.1, 0.05], limits: vec![f64::INFINITY, 8.0] })] {
+    for actuator in [None, Some(Actuator { delays: vec![0.1, 0.05], limits: vec![f64::INFINITY, 8.0], lower: None })] {
         let settings = RunSettings { actuator, ..RunSettings::continuous(20.0, 0.1, 1e-8, 1e-8) };
         let run = || Run::new(&d, &s.reference, &s.disturbance, settings.clone()).truth(s.true_plant());
         let counted = run().breakpoints();

@@ -74,7 +74,7 @@ MAX_FIGSIZE = 100
 """The largest width or height, in inches, ``plot`` draws a figure of."""
 
 
-def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None), u_max=()):
+def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None), u_max=(), u_min=()):
     """Channel ``channel`` (1-based; None is 1) in the six panels of the CLI's figure, like the paper's
     Figs. 1 and 2: y_i with g_i, e_i = y_i - g_i, the command u_i (25), the plant input u_f,i (5),
     eta_i, and the largest |e_i| from each t on (log scale: convergence over decades) against t.
@@ -83,9 +83,10 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
     (all but the last) or four (u_f,i then shares the third panel on a second y axis of its own
     scale); otherwise a new figure of ``figsize`` (default (10, 16.5)), or the panels are added to
     ``fig``. ``names``: the
-    plant's (inputs, outputs) names or None, shown in the titles. ``u_max``: the true actuator's
-    limits per input (empty without one), drawn on u_f,i's panel where u_f,i comes within a tenth of
-    its limit and told in the title otherwise. Returns the Figure."""
+    plant's (inputs, outputs) names or None, shown in the titles. ``u_max``, ``u_min``: the true
+    actuator's upper and lower limits per input (empty without one; ``u_min`` -u_max where empty),
+    drawn on u_f,i's panel where u_f,i comes within a tenth of them and told in the title
+    otherwise. Returns the Figure."""
     try:
         import matplotlib.pyplot as plt
     except ImportError as e:
@@ -171,23 +172,29 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
             axes[2].set(title=f"{channel_title}: adaptive command (25) and plant input (5, right axis)")
         uf_ax.plot(t, result.u_f[:, i], color="C1", label=f"uf{c}", **held)
         uf_ax.set(ylabel="u_f")
-        limit = u_max[i] if i < len(u_max) and np.isfinite(u_max[i]) else None
-        if limit is not None:
+        upper = u_max[i] if i < len(u_max) else np.inf
+        lower = u_min[i] if i < len(u_min) else -upper
+        if np.isfinite(upper) or np.isfinite(lower):
             title_ax = uf_ax if len(axes) >= 5 else axes[2]
-            finite = np.abs(result.u_f[:, i][np.isfinite(result.u_f[:, i])])
-            peak = finite.max() if finite.size else 0.0
-            if peak >= 0.1 * limit:
-                for level in (limit, -limit):
+            symmetric = lower == -upper
+            uf = result.u_f[:, i][np.isfinite(result.u_f[:, i])]
+            # u_f's share of its limits: of u_max above 0, of u_min below.
+            share = max((uf[uf >= 0] / upper).max(initial=0.0), (uf[uf < 0] / lower).max(initial=0.0))
+            if share >= 0.1:
+                label = (f"±truth.u_max[{i}] = {upper:.6g}" if symmetric
+                         else f"truth.u_min[{i}], u_max[{i}] = {lower:.6g}, {upper:.6g}")
+                for k, level in enumerate(v for v in (upper, lower) if np.isfinite(v)):
                     uf_ax.axhline(level, color="0.35", linestyle="--", linewidth=1,
-                                  label=f"±truth.u_max[{i}] = {limit:.6g}" if level > 0 else None)
+                                  label=label if k == 0 else None)
             else:
-                share = 100 * peak / limit
+                share = 100 * share
                 # Two significant digits below 0.1 %, as the CLI ("0.0 %" hid a peak of 0.0018 %).
                 share = f"{share:.2g}".replace("e-0", "e-") if 0 < share < 0.1 else f"{share:.1f}"
-                title_ax.set_title(f"{title_ax.get_title()}; peak {share} % of truth.u_max")
+                of = "truth.u_max" if symmetric else "truth.u_min, u_max"
+                title_ax.set_title(f"{title_ax.get_title()}; peak {share} % of {of}")
             # Where the limit clipped it, how much the controller asked for (summary()'s max_uf).
             asked = result.summary()[i]["max_uf"]
-            if asked is not None and asked > limit:
+            if asked is not None and asked > max(upper, -lower):
                 title_ax.set_title(f"{title_ax.get_title()}; the controller asked for up to {asked:.4g}")
         eta_ax = axes[4] if len(axes) == 6 else axes[-1]
         # As the CLI's figure: beyond MAX_LEGEND entries a legend hides the traces (q = 33 covered a

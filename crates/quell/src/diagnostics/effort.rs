@@ -18,7 +18,7 @@ use serde::Serialize;
 use crate::averaged::{complex, resolvent};
 use crate::linalg::eigenvalues;
 use crate::plant::Plant;
-use crate::settings::{fmt_4, fmt_short, TimeUnit};
+use crate::settings::{fmt_4, fmt_short, Actuator, TimeUnit};
 use crate::signal::{Component, Harmonic, Signal};
 
 use super::TAIL_BOUND;
@@ -105,6 +105,9 @@ pub struct SteadyInput {
     /// frequencies are incommensurate) or, where they are whole multiples of one, the maximum
     /// over that period ([`Component::peak`]); ∞ at a transmission zero.
     pub peak: Vec<f64>,
+    /// Per input: [min, max] of u_f,i in steady state, found as `peak` is ([`Component::range`]);
+    /// [−∞, ∞] at a transmission zero.
+    pub range: Vec<[f64; 2]>,
     /// Per input: the RMS of u_f,i in steady state, √(b² + Σ a²/2): a lower bound of the peak.
     pub rms: Vec<f64>,
     /// One line per transmission zero among the frequencies, per costly harmonic of ω
@@ -113,12 +116,12 @@ pub struct SteadyInput {
 }
 
 /// The steady-state input of `plant` under g = `reference`, ω = `disturbance`, against the
-/// actuator's `limits` (`truth.u_max`) where given. `names` labels the inputs and outputs in the
-/// advice.
+/// `actuator`'s limits (`truth.u_max`, `u_min`) where given. `names` labels the inputs and outputs
+/// in the advice.
 pub fn steady_input(
     plant: &Plant,
     (reference, disturbance): (&Signal, &Signal),
-    limits: Option<&[f64]>,
+    actuator: Option<&Actuator>,
     names: (&[String], &[String]),
 ) -> SteadyInput {
     let m = plant.B.ncols();
@@ -165,18 +168,21 @@ pub fn steady_input(
     }
     let any_zero = tones.iter().any(|t| t.transmission_zero);
     let peak = signals.iter().map(|c| if any_zero { f64::INFINITY } else { c.peak() }).collect();
+    let range = (signals.iter())
+        .map(|c| if any_zero { [f64::NEG_INFINITY, f64::INFINITY] } else { c.range().into() })
+        .collect();
     let rms = (0..m)
         .map(|i| {
             let power = |t: &InputTone| t.amplitude[i].powi(2) * if t.frequency == 0.0 { 1.0 } else { 0.5 };
             tones.iter().map(power).fold(0.0, |a, p| a + p).sqrt()
         })
         .collect();
-    let mut steady = SteadyInput { tones, peak, rms, advice: vec![] };
+    let mut steady = SteadyInput { tones, peak, range, rms, advice: vec![] };
     let unit = plant.time_unit;
     let mut advice: Vec<String> =
         steady.tones.iter().filter(|t| t.transmission_zero).map(|t| zero_advice(t.frequency, unit)).collect();
     advice.extend(costly_harmonics(&steady, reference, names, unit));
-    advice.extend(limits.into_iter().flat_map(|l| beyond_limits(&steady, l, names.0)));
+    advice.extend(actuator.into_iter().flat_map(|a| beyond_limits(&steady, a, names.0)));
     steady.advice = advice;
     steady
 }
@@ -253,25 +259,35 @@ fn forced_output(plant: &Plant, eigs: &[C64], w: f64, omega: &DVector<C64>) -> O
     Some(Y.iter().map(|y| y.norm()).collect())
 }
 
-/// Advice for each input whose steady state exceeds its actuator limit: its RMS (y = g cannot be
-/// held) or its peak (the loop saturates at times in steady state).
-fn beyond_limits(steady: &SteadyInput, limits: &[f64], inputs: &[String]) -> Vec<String> {
+/// Advice for each input whose steady state exceeds its actuator limits: its RMS or its mean
+/// (y = g cannot be held) or its range (the loop saturates at times in steady state).
+fn beyond_limits(steady: &SteadyInput, actuator: &Actuator, inputs: &[String]) -> Vec<String> {
     let mut advice = Vec::new();
-    for (i, &limit) in limits.iter().enumerate() {
-        let (rms, peak) = (steady.rms[i], steady.peak[i]);
-        let what = if rms > limit {
+    for (i, input) in inputs.iter().enumerate().take(actuator.limits.len()) {
+        let (rms, [low, high]) = (steady.rms[i], steady.range[i]);
+        let (lower, upper) = (actuator.lower_limit(i), actuator.limits[i]);
+        // Always beyond one limit (a heater's input below 0 throughout) is as impossible as an RMS
+        // beyond both.
+        let what = if rms > upper.max(-lower) || high < lower || low > upper {
             "exceeds it: tracking g and rejecting ω exactly is impossible with this actuator, whatever the design; ask less of the loop (fewer harmonics, smaller references) or a stronger actuator"
-        } else if peak > limit {
+        } else if high > upper || low < lower {
             "exceeds it at its peaks: the loop saturates at times in steady state"
         } else {
             continue;
         };
+        let limit = if lower == -upper {
+            format!("limit truth.u_max = {}", fmt_short(upper))
+        } else {
+            format!("range truth.u_min … u_max = {} … {}", fmt_short(lower), fmt_short(upper))
+        };
         advice.push(format!(
-            "{}: the steady-state input (RMS {}, peak {}) against the actuator limit truth.u_max = {} {what}",
-            inputs[i],
+            "{input}: the steady-state input (RMS {}, {}) against the actuator {limit} {what}",
             fmt_4(rms),
-            fmt_4(peak),
-            fmt_short(limit)
+            if lower == -upper {
+                format!("peak {}", fmt_4(steady.peak[i]))
+            } else {
+                format!("from {} to {}", fmt_4(low), fmt_4(high))
+            },
         ));
     }
     advice
@@ -330,22 +346,30 @@ fn costly_harmonics(
 /// and was told to give slower poles or a smaller μ by hand (helper tryout, 2026-12-06); a ball on a
 /// plate whose run diverged through a 0.3 V clip was told only of the clipping (2026-12-07).
 pub(crate) fn saturation_advice(s: &crate::Scenario) -> Option<String> {
-    let limits = &s.actuator.as_ref()?.limits;
+    let actuator = s.actuator.as_ref()?;
     let steady = s.steady_input();
-    let over: Vec<String> = (steady.peak.iter().zip(limits).enumerate())
-        .filter(|(_, (peak, limit))| peak > limit)
-        .map(|(i, (peak, limit))| {
-            format!(
-                "u_f,{} peaks at {} against truth.u_max[{i}] = {}",
-                i + 1,
-                crate::settings::fmt_4(*peak),
-                crate::settings::fmt_short(*limit)
-            )
+    let over: Vec<String> = (0..actuator.limits.len())
+        .filter_map(|i| {
+            let [low, high] = steady.range[i];
+            let (lower, upper) = (actuator.lower_limit(i), actuator.limits[i]);
+            let fmt = crate::settings::fmt_4;
+            let short = crate::settings::fmt_short;
+            let peak = steady.peak[i];
+            if lower == -upper {
+                (peak > upper).then(|| {
+                    format!("u_f,{} peaks at {} against truth.u_max[{i}] = {}", i + 1, fmt(peak), short(upper))
+                })
+            } else if high > upper {
+                Some(format!("u_f,{} peaks at {} against truth.u_max[{i}] = {}", i + 1, fmt(high), short(upper)))
+            } else {
+                (low < lower)
+                    .then(|| format!("u_f,{} falls to {} against truth.u_min[{i}] = {}", i + 1, fmt(low), short(lower)))
+            }
         })
         .collect();
     (!over.is_empty()).then(|| {
         format!(
-            "the steady state itself asks more than the true actuator gives ({}; the design report's steady-state section): the plant needs that input for y = g whatever the controller, so no poles or μ meet the tail bound, and the clip, which the method does not model, can drive the runs away; ask less of the loop (smaller references, a disturbance the actuator can hold) or raise truth.u_max",
+            "the steady state itself asks more than the true actuator gives ({}; the design report's steady-state section): the plant needs that input for y = g whatever the controller, so no poles or μ meet the tail bound, and the clip, which the method does not model, can drive the runs away; ask less of the loop (smaller references, a disturbance the actuator can hold) or widen the actuator's range (truth.u_max, u_min)",
             over.join(", ")
         )
     })

@@ -81,10 +81,15 @@ pub struct ChannelDiagnostics {
     pub convergence_time_excited: f64,
     /// The averaged law's RMS error at the end of the horizon ([`ChannelAverage::predicted_error`]).
     pub predicted_final_rms_e: f64,
-    /// RMS of e_i over the last 10 % of the run divided by that over the 10 % before; `None` when
-    /// the run is too short for two windows or the earlier one is 0. Advice on it only when the
-    /// tail is not [`NEGLIGIBLE`].
+    /// RMS of e_i over the last window of the run divided by that over the window before, the
+    /// windows a tenth of the run or the shortest longer ones that resolve the signals' slowest
+    /// period and beats (`tail_window`); `None` when none does, the run is too short for two windows
+    /// or the earlier one is 0. Advice on it only when the tail is not [`NEGLIGIBLE`]. Tenths of
+    /// 3000 s had read 2.04 on a spacecraft whose slowest signal has a period of 5712 s (helper
+    /// tryout, 2026-12-08); its windows of 4500 s read 0.99.
     pub tail_trend: Option<f64>,
+    /// The length of `tail_trend`'s windows, in the plant's unit of time.
+    pub tail_window: Option<f64>,
     /// Per frequency of g and ω ([`Excitation`]).
     pub excitation: Vec<Excitation>,
     /// One line per problem found: which knob, which way.
@@ -489,6 +494,9 @@ pub fn truth_differences(s: &crate::Scenario) -> Vec<String> {
         if a.limits.iter().any(|l| l.is_finite()) {
             diffs.push(format!("truth.u_max [{}] clipping u_f", fmt_short_list(&a.limits)));
         }
+        if let Some(lower) = a.lower.as_ref().filter(|l| l.iter().any(|u| u.is_finite())) {
+            diffs.push(format!("truth.u_min [{}] clipping u_f", fmt_short_list(lower)));
+        }
     }
     diffs
 }
@@ -880,7 +888,15 @@ fn held_zeros_advice(held: &[Complex<f64>], t_end: f64, unit: TimeUnit) -> Optio
 fn clipping_advice(result: &SimResult, missed: bool) -> Option<String> {
     let clipped: Vec<String> = (result.limited_fraction().iter().enumerate())
         .filter(|(_, f)| **f > CLIPPED_SHARE)
-        .map(|(i, f)| format!("input {} at {:.1} % of the samples (truth.u_max[{i}])", i + 1, 100.0 * f))
+        .map(|(i, f)| {
+            let symmetric = result.u_min.get(i).zip(result.u_max.get(i)).is_none_or(|(lo, hi)| *lo == -hi);
+            format!(
+                "input {} at {:.1} % of the samples ({})",
+                i + 1,
+                100.0 * f,
+                crate::settings::limit_keys(i, symmetric)
+            )
+        })
         .collect();
     (missed && !clipped.is_empty()).then(|| {
         format!(
@@ -1279,7 +1295,9 @@ pub(crate) fn slow_direction_advice(
     let key = format!("design.mu[{i}]");
     let relevant = c.slowest_relevant(RELEVANT_SHARE);
     too_small_for_the_horizon(c, mu, t_end)?;
-    let weakest = c.excitation.iter().min_by(|a, b| a.excitation.total_cmp(&b.excitation));
+    // A frequency that excites nothing (ω's part there does not reach y) adds no direction.
+    let weakest =
+        c.excitation.iter().filter(|e| e.excitation > 0.0).min_by(|a, b| a.excitation.total_cmp(&b.excitation));
     let poor =
         weakest.and_then(|w| fidelity.iter().find(|f| f.frequency == w.frequency && f.relative_error > FIDELITY_LIMIT));
     let mu_advice = horizon_advice(&key, mu, (relevant, c.lambda_max()), (t_end, stiff), unit);
@@ -1620,9 +1638,8 @@ fn channel(
     let mu = design.mu()[i];
     let key = format!("design.mu[{i}]");
     let windows = tail_windows(result, i);
-    let trend = windows.and_then(trend);
-    // The trend read for advice only over windows that span the signals' slowest beat: a
-    // microgrid's windows of 10 ms, half its 20 ms beat, read a bounded ripple as growing (1.33).
+    // The trend read only over windows that span the signals' slowest beat: a microgrid's windows
+    // of 10 ms, half its 20 ms beat, read a bounded ripple as growing (1.33).
     let judged = judged_trend(result, i, remedy.signals);
     let unit = design.plant().time_unit;
     // A run that ended early (diverged, failed, interrupted) says nothing of its horizon: advice
@@ -1683,7 +1700,7 @@ fn channel(
         advice.push(estimate::stiff_advice(design, (i, mu), c, pace, remedy.signals));
     }
     advice.extend(residual_advice(i, c));
-    ChannelDiagnostics::of(i, c, mu, (t_end, trend), advice)
+    ChannelDiagnostics::of(i, c, mu, (t_end, judged.as_ref()), advice)
 }
 
 /// Where more than 1e-3 of channel i's open-loop error lies outside the regressor's span: which
@@ -1698,7 +1715,7 @@ fn residual_advice(i: usize, c: &ChannelAverage) -> Option<String> {
 impl ChannelDiagnostics {
     /// Channel i's figures from its averaged law `c` at `mu` over `t_end`, with the run's tail trend
     /// and the advice.
-    fn of(i: usize, c: &ChannelAverage, mu: f64, (t_end, trend): (f64, Option<f64>), advice: Vec<String>) -> Self {
+    fn of(i: usize, c: &ChannelAverage, mu: f64, (t_end, trend): (f64, Option<&Trend>), advice: Vec<String>) -> Self {
         ChannelDiagnostics {
             channel: i + 1,
             lambda_min_omega: c.lambda_min(),
@@ -1714,7 +1731,8 @@ impl ChannelDiagnostics {
             lambda_min_excited_omega: c.excited().fold(f64::INFINITY, f64::min),
             convergence_time_excited: 1.0 / (mu * c.excited().fold(f64::INFINITY, f64::min)),
             predicted_final_rms_e: c.predicted_error(mu, t_end),
-            tail_trend: trend,
+            tail_trend: trend.map(|r| r.ratio),
+            tail_window: trend.map(|r| r.fraction * r.span),
             excitation: c.excitation.clone(),
             advice,
         }
@@ -1919,10 +1937,11 @@ mod tests {
     /// The paper's signals: frequencies 1 and 2 rad/s, beating at 1 rad/s. A run of 48 s has
     /// windows of 4.8 s, 0.76 of the period 2π s, and its tenths' ratio is advised on; one of 40 s
     /// has tenths of 4 s (0.64 of the period), so its trend is read over two windows of 6 s (0.15
-    /// of the run, 0.95 of the period): exp(6/8) = 2.12 for e = e^(t/8) (the tenths' e^0.5 is still
-    /// reported). One of 11 s resolves the period with no window up to a quarter of the run, so a
-    /// bounded wave e = sin t, whose tenths read 2.64, gets no advice (a quadrotor's tenths of 0.5 s
-    /// over its 3.1 s reference had read 2.10 as growth where the run converged).
+    /// of the run, 0.95 of the period): exp(6/8) = 2.12 for e = e^(t/8), the `tail_trend` reported
+    /// with its windows (the tenths' e^0.5 had been). One of 11 s resolves the period with no
+    /// window up to a quarter of the run, so a bounded wave e = sin t, whose tenths read 2.64, gets
+    /// no advice and no trend (a quadrotor's tenths of 0.5 s over its 3.1 s reference had read 2.10
+    /// as growth where the run converged).
     #[test]
     fn a_trend_is_advised_on_only_over_windows_that_span_the_slowest_beat() {
         for c in diagnosed_over(48.0, PAPER_EXAMPLE, 1.0, |t| 1e-3 * (t / 9.6).exp()).channels {
@@ -1933,12 +1952,13 @@ mod tests {
             );
         }
         for c in diagnosed_over(40.0, PAPER_EXAMPLE, 1.0, |t| 1e-3 * (t / 8.0).exp()).channels {
-            assert!((c.tail_trend.unwrap() - 0.5f64.exp()).abs() < 1e-12, "{:?}", c.tail_trend);
+            assert!((c.tail_trend.unwrap() - 0.75f64.exp()).abs() < 1e-12, "{:?}", c.tail_trend);
+            assert!((c.tail_window.unwrap() - 6.0).abs() < 1e-9, "{:?}", c.tail_window);
             let expected = "grows over the tail (RMS ratio 2.12 over the last two windows of 6 s, the shortest from a tenth of the run that resolve the signals' slowest period and beats)";
             assert!(trend_advice(&c)[0].contains(expected), "{:?}", c.advice);
         }
         for c in diagnosed_over(11.0, PAPER_EXAMPLE, 1.0, |t| 0.01 * t.sin()).channels {
-            assert!(c.tail_trend.unwrap() > 2.5, "{:?}", c.tail_trend);
+            assert_eq!((c.tail_trend, c.tail_window), (None, None));
             assert!(trend_advice(&c).is_empty(), "{:?}", c.advice);
         }
         // Growth that windows up to a quarter of the run cannot resolve is not advised on either:

@@ -163,7 +163,7 @@ const TOP_KEYS: &[&str] = &["name", "plant", "design", "reference", "disturbance
 const PLANT_KEYS: &[&str] =
     &["A", "B", "C", "D", "Q", "delays", "x0", "xhat0", "inputs", "outputs", "states", "time_unit"];
 /// The keys of `[truth]`.
-pub(crate) const TRUTH_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0", "actuator_delays", "u_max"];
+pub(crate) const TRUTH_KEYS: &[&str] = &["A", "B", "C", "D", "Q", "delays", "x0", "actuator_delays", "u_max", "u_min"];
 /// The keys of `[design]`.
 pub const DESIGN_KEYS: &[&str] = &[
     "observer_gain",
@@ -327,9 +327,13 @@ impl Scenario {
     /// plant, against its actuator limits ([`crate::diagnostics::steady_input`]).
     pub fn steady_input(&self) -> crate::diagnostics::SteadyInput {
         let m = self.plant.B.ncols();
-        let limits = self.actuator.as_ref().map(|a| a.limits.as_slice());
         let names = (&self.names.inputs(m)[..], &self.names.outputs(m)[..]);
-        crate::diagnostics::steady_input(self.true_plant(), (&self.reference, &self.disturbance), limits, names)
+        crate::diagnostics::steady_input(
+            self.true_plant(),
+            (&self.reference, &self.disturbance),
+            self.actuator.as_ref(),
+            names,
+        )
     }
 
     /// Whether the simulated plant differs from the design model (its matrices, delays, x0 or
@@ -414,15 +418,18 @@ fn plant(v: Value, disturbance: Option<&Signal>) -> Result<(Plant, SignalNames),
 }
 
 /// `[truth]`: each given matrix has its `[plant]` counterpart's shape, the rest is `plant`'s; and the
-/// actuator when `actuator_delays` or `u_max` is given (the other defaulting to 0 and ∞).
+/// actuator when `actuator_delays`, `u_max` or `u_min` is given (the others defaulting to 0, ∞ and
+/// −u_max).
 fn truth(v: Value, plant: &Plant) -> Result<(Plant, Option<Actuator>), ScenarioError> {
     let t = v.table(TRUTH_KEYS)?;
     let m = plant.m();
     let delays = t.get("actuator_delays", |v| v.numbers())?;
-    let limits = t.get("u_max", |v| v.limits())?;
-    let actuator = (delays.is_some() || limits.is_some()).then(|| Actuator {
+    let limits = t.get("u_max", |v| v.limits(f64::INFINITY))?;
+    let lower = t.get("u_min", |v| v.limits(f64::NEG_INFINITY))?;
+    let actuator = (delays.is_some() || limits.is_some() || lower.is_some()).then(|| Actuator {
         delays: delays.unwrap_or_else(|| vec![0.0; m]),
         limits: limits.unwrap_or_else(|| vec![f64::INFINITY; m]),
+        lower,
     });
     if let Some(a) = &actuator {
         a.check(m)?;

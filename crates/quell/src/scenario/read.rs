@@ -197,10 +197,17 @@ impl<'a> Value<'a, '_> {
         self.array("an array of numbers", |v| v.number())
     }
 
-    /// An array of numbers that may be `inf` (limits; NaN and −∞ are refused).
-    pub(crate) fn limits(&self) -> Result<Vec<f64>, ScenarioError> {
-        self.array("an array of numbers (inf for no limit)", |v| match v.value {
-            toml::Value::Float(x) if *x == f64::INFINITY => Ok(*x),
+    /// An array of numbers that may be `none`, `inf` or `-inf`, the infinity that stands for no
+    /// limit (upper limits `inf`, lower limits `-inf`; NaN and the other infinity are refused).
+    pub(crate) fn limits(&self, none: f64) -> Result<Vec<f64>, ScenarioError> {
+        let (what, each) = if none > 0.0 {
+            ("an array of numbers (inf for no limit)", "a finite number or inf (no limit)")
+        } else {
+            ("an array of numbers (-inf for no limit)", "a finite number or -inf (no limit)")
+        };
+        self.array(what, |v| match v.value {
+            toml::Value::Float(x) if *x == none => Ok(*x),
+            toml::Value::Float(_) | toml::Value::Integer(_) => v.finite(each),
             _ => v.number(),
         })
     }

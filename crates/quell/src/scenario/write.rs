@@ -44,6 +44,9 @@ impl Scenario {
             if let Some(a) = &self.actuator {
                 t.insert("actuator_delays".into(), numbers(&a.delays));
                 t.insert("u_max".into(), numbers(&a.limits));
+                if let Some(lower) = &a.lower {
+                    t.insert("u_min".into(), numbers(lower));
+                }
             }
             doc.insert("truth".into(), Value::Table(t));
         }

@@ -112,19 +112,18 @@ impl Peaks {
         peaks
     }
 
-    /// The watched signal nearest its bound in `bounds` (by its share of it), as "by then x_hat
+    /// The watched signal nearest its bound in `bounds` (by its share of it), as "by then xhat
     /// (observer state) had reached 3.20e9 in magnitude, 3.2e-3 of its divergence bound": what a run a budget
     /// ended was doing, blowing up or not. `None` before any peak was recorded.
     pub fn nearest_bound(&self, bounds: &Peaks) -> Option<String> {
-        const NAMES: [&str; 4] =
-            ["x (plant state)", "x_hat (observer state)", "xi_hat (regressor)", "eta (adaptive parameters)"];
         let share = |k: usize| self.0[k] / bounds.0[k];
         let k = (0..4)
             .filter(|&k| share(k).is_finite() && self.0[k] > 0.0)
             .max_by(|&a, &b| share(a).total_cmp(&share(b)))?;
         Some(format!(
-            "by then {} had reached {:.2e} in magnitude, {:.1e} of its divergence bound",
-            NAMES[k],
+            "by then {} ({}) had reached {:.2e} in magnitude, {:.1e} of its divergence bound",
+            WATCHED[k].0,
+            WATCHED[k].1,
             self.0[k],
             share(k)
         ))
@@ -224,7 +223,7 @@ mod tests {
     fn the_signal_nearest_its_bound_is_named_with_its_share() {
         let bounds = Peaks([1e9, 1e9, 1e4, f64::INFINITY]);
         let text = Peaks([2e6, 3e6, 50.0, 1e20]).nearest_bound(&bounds).unwrap();
-        assert_eq!(text, "by then xi_hat (regressor) had reached 5.00e1 in magnitude, 5.0e-3 of its divergence bound");
+        assert_eq!(text, "by then xihat (regressor) had reached 5.00e1 in magnitude, 5.0e-3 of its divergence bound");
         assert_eq!(Peaks([0.0; 4]).nearest_bound(&bounds), None);
         assert!(Peaks([1.0, f64::NAN, 0.0, 0.0])
             .nearest_bound(&bounds)

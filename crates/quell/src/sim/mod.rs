@@ -393,13 +393,15 @@ impl<'a> Run<'a> {
     }
 
     pub fn simulate(self, on_progress: impl FnMut(f64) -> ControlFlow<()>) -> Result<SimResult, SimError> {
-        let u_max = self.settings.actuator.as_ref().map_or(vec![], |a| a.limits.clone());
+        let actuator = self.settings.actuator.as_ref();
+        let u_max = actuator.map_or(vec![], |a| a.limits.clone());
+        let u_min = actuator.map_or(vec![], |a| (0..a.limits.len()).map(|i| a.lower_limit(i)).collect());
         let names = self.state_names;
         let mut result = match self.settings.mode.clone() {
             Loop::Continuous(integrator) => closed_loop::simulate(&self, &integrator, on_progress),
             Loop::Sampled { sample_time } => sampled::simulate(self, sample_time, on_progress),
         }?;
-        result.u_max = u_max;
+        (result.u_max, result.u_min) = (u_max, u_min);
         if let (Some(Outcome::Diverged { signal, .. }), Some(names)) = (&mut result.outcome, names) {
             *signal = divergence::with_state_name(signal, names);
         }

@@ -190,6 +190,9 @@ pub struct SimResult {
     /// Per input, the true plant's actuator limit (`[truth]` u_max, ∞ for none); empty without an
     /// actuator.
     pub u_max: Vec<f64>,
+    /// Per input, the true plant's lower actuator limit (`[truth]` u_min, −u_max unless given);
+    /// empty without an actuator.
+    pub u_min: Vec<f64>,
     /// The plant's unit of time, in which `t` and every time of the run are (a label).
     pub time_unit: TimeUnit,
 }
@@ -284,6 +287,7 @@ impl SimResult {
             uf_terms: Vec::new(),
             limited: Vec::new(),
             u_max: Vec::new(),
+            u_min: Vec::new(),
             time_unit: TimeUnit::default(),
         }
     }

@@ -236,8 +236,7 @@ pub struct Study {
     pub runaway: Runaway,
     /// Channels m of the scenario.
     pub m: usize,
-    /// The scenario's true actuator limits on u_f (`truth.u_max`, ∞ each without one), as it parsed
-    /// them.
+    /// Per input, the largest |u_f,i| the scenario's true actuator passes unclipped ([`Study::u_max`]).
     u_max: Vec<f64>,
     fingerprint: u64,
     /// The study as one self-contained document: `scenario` the scenario table, `[simulation]`'s
@@ -345,8 +344,8 @@ pub(crate) fn axis_indices(point: usize, lens: &[usize]) -> Vec<usize> {
 use crate::scenario::TRUTH_KEYS;
 
 /// Gives `doc` the value that `path` names when the scenario leaves it to a default: `truth.<X>`
-/// defaults to `plant.<X>`, `plant.x0` (or `truth.x0`) and `truth.actuator_delays` to zeros and
-/// `truth.u_max` to +∞ per input (a grid over a drive's limit had needed the scenario to give one
+/// defaults to `plant.<X>`, `plant.x0` (or `truth.x0`) and `truth.actuator_delays` to zeros,
+/// `truth.u_max` to +∞ per input and `truth.u_min` to −u_max (a grid over a drive's limit had needed the scenario to give one
 /// first). Other paths are left alone.
 fn fill_default(doc: &mut toml::Table, path: &KeyPath) {
     let section = path.section();
@@ -373,6 +372,13 @@ fn fill_default(doc: &mut toml::Table, path: &KeyPath) {
     let value = match (name, from_plant) {
         ("actuator_delays", _) => per_input(0.0),
         ("u_max", _) => per_input(f64::INFINITY),
+        // −u_max, the symmetric range the scenario had.
+        ("u_min", _) => match doc.get("truth").and_then(|t| t.get("u_max")).and_then(toml::Value::as_array) {
+            Some(upper) => toml::Value::Array(
+                upper.iter().map(|u| toml::Value::Float(-u.as_float().unwrap_or(f64::INFINITY))).collect(),
+            ),
+            None => per_input(f64::NEG_INFINITY),
+        },
         (_, Some(v)) => v,
         ("x0", None) => zeros(),
         (_, None) => return,
@@ -459,10 +465,10 @@ impl Study {
             max_steps,
             runaway: read_runaway(doc)?,
             m: scenario.plant.m(),
-            u_max: scenario
-                .actuator
-                .as_ref()
-                .map_or_else(|| vec![f64::INFINITY; scenario.plant.m()], |a| a.limits.clone()),
+            u_max: scenario.actuator.as_ref().map_or_else(
+                || vec![f64::INFINITY; scenario.plant.m()],
+                |a| (0..a.limits.len()).map(|i| a.magnitude_limit(i)).collect(),
+            ),
             document,
             nominal,
         })
@@ -747,7 +753,8 @@ impl Study {
         names.map_or_else(Vec::new, |a| a.iter().filter_map(|n| n.as_str().map(str::to_string)).collect())
     }
 
-    /// The scenario's true actuator limit on input i (`truth.u_max[i]`), ∞ for none.
+    /// The largest |u_f,i| the scenario's true actuator passes unclipped (`truth.u_max[i]`, or
+    /// −`truth.u_min[i]` where smaller), ∞ for none.
     pub fn u_max(&self, i: usize) -> f64 {
         self.u_max.get(i).copied().unwrap_or(f64::INFINITY)
     }
