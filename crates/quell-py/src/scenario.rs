@@ -57,7 +57,7 @@ use crate::plant::{plant_arg, Labels, PyPlant};
 /// actuator : dict, optional
 ///     The true plant's actuator between u_f and the plant, `{"u_max": [..], "u_min": [..],
 ///     "delays": [..]}` (any of the keys; one entry per input): `[truth] u_max` (u_f,i clipped
-///     above, inf for none), `u_min` (clipped below, ≤ 0, -inf for none; -u_max unless given) and
+///     above, inf for none), `u_min` (clipped below, < 0, -inf for none; -u_max unless given) and
 ///     `actuator_delays` (u_f,i delayed as a whole).
 /// **design
 ///     The `[design]` keys: channel_poles, reference_filter_poles, disturbance_filter_poles, mu,

@@ -297,7 +297,7 @@ pub struct Actuator {
     pub delays: Vec<f64>,
     /// u_max,i > 0 per input (∞: no limit).
     pub limits: Vec<f64>,
-    /// u_min,i ≤ 0 per input (−∞: no limit) where the range is not symmetric: u_f is the deviation
+    /// u_min,i < 0 per input (−∞: no limit) where the range is not symmetric: u_f is the deviation
     /// from the operating point, so a heater at P₀ of 0 … P has u_min = −P₀ and u_max = P − P₀.
     /// `None`: u_min = −u_max.
     pub lower: Option<Vec<f64>>,
@@ -333,11 +333,13 @@ impl Actuator {
                 format!("expected {} (one per input), found {}", entries(m), lower.len()),
             ));
         }
-        match lower.iter().enumerate().find(|(_, u)| u.is_nan() || **u > 0.0) {
+        // u_min = 0 is refused as u_max = 0 is: the loop needs room on both sides of its operating
+        // point, and a run pinned there had read "peak 0.0 % of the limits" (review, 2026-12-08).
+        match lower.iter().enumerate().find(|(_, u)| u.is_nan() || **u >= 0.0) {
             Some((i, u)) => Err(KeyError::new(
                 format!("truth.u_min[{i}]"),
                 format!(
-                    "expected a lower limit ≤ 0 (-inf for none), found {}; u_f is the deviation from the operating point (u_f = 0), which the actuator's range must hold: a heater run at P₀ within 0 … P has u_min = −P₀ and u_max = P − P₀",
+                    "expected a lower limit < 0 (-inf for none), found {}; u_f is the deviation from the operating point (u_f = 0), which the actuator's range must hold with room on both sides: a heater run at P₀ within 0 … P has u_min = −P₀ and u_max = P − P₀",
                     fmt_short(*u)
                 ),
             )),

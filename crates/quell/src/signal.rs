@@ -118,6 +118,12 @@ impl Component {
         self.extreme(|v| v.abs())
     }
 
+    /// The mean over all t: the bias and the harmonics of frequency 0 (the constants a·sin φ).
+    pub fn mean(&self) -> f64 {
+        let still = self.harmonics.iter().filter(|h| h.frequency == 0.0);
+        still.fold(self.bias, |acc, h| acc + h.amplitude * h.phase.sin())
+    }
+
     /// (min, max) of the value over all t, as [`Component::peak`] finds its largest |value|
     /// (−∞ … ∞ bounds become the sums where the frequencies are not whole multiples of one).
     pub fn range(&self) -> (f64, f64) {
@@ -127,10 +133,8 @@ impl Component {
     /// The supremum of `of(value)` over all t, for `of` = |·|, the identity or its negation:
     /// `of(constant)` + Σ|amplitude|, or the maximum over the common period ([`Component::peak`]).
     fn extreme(&self, of: impl Fn(f64) -> f64) -> f64 {
-        let still = self.harmonics.iter().filter(|h| h.frequency == 0.0);
-        let constant = still.fold(self.bias, |acc, h| acc + h.amplitude * h.phase.sin());
         let moving = self.harmonics.iter().filter(|h| h.frequency != 0.0);
-        let sum = moving.fold(of(constant), |acc, h| acc + h.amplitude.abs());
+        let sum = moving.fold(of(self.mean()), |acc, h| acc + h.amplitude.abs());
         let active: Vec<&Harmonic> =
             self.harmonics.iter().filter(|h| h.amplitude != 0.0 && h.frequency > 0.0).collect();
         match active.len() {

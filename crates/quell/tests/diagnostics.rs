@@ -699,6 +699,19 @@ fn a_disturbance_part_that_does_not_reach_y_excites_nothing() {
     let advice = report[0].advice.join("\n");
     assert!(advice.contains("Ω̄_1 is weakly excited at 2 rad/s"), "{advice}");
     assert!(!advice.contains("e38") && !advice.contains("e37"), "{advice}");
+    // The steady input asks nothing for the bias (it had printed 3.8e-19 rad of fin).
+    let steady = s.steady_input();
+    assert_eq!((steady.tones[0].frequency, steady.tones[0].for_disturbance[0]), (0.0, 0.0));
+    // Every disturbance part of the paper's example reaches y: a fast observer (poles ×1000, the
+    // last speed-up the advice tries), whose T has terms 1e10 times its entries, keeps its five
+    // directions (a rule on T's own terms had zeroed all of T there; review, 2026-12-08).
+    let paper = Scenario::from_toml(PAPER_EXAMPLE).unwrap().design().unwrap();
+    let fast: Vec<_> = paper.observer_eigenvalues().iter().map(|p| p * 1000.0).collect();
+    let fast = paper.with_observer_poles(&fast).unwrap();
+    let s = Scenario::from_toml(PAPER_EXAMPLE).unwrap();
+    for c in Averaged::new(&fast, &s.reference, &s.disturbance).channels {
+        assert_eq!(c.excited().count(), 5, "{:?}", c.lambda);
+    }
 }
 
 /// A course-unstable tanker (Nomoto, T = −60 s; tests/data/tanker.toml) has no zeros of (A, D, C)

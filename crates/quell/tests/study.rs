@@ -272,15 +272,17 @@ fn a_limit_on_u_f_is_judged_on_the_demand_where_the_true_actuator_clips() {
 }
 
 /// A tuning's limit on u_f above the true actuator's is cautioned before the searches: a μ within
-/// it may be clipped. At or below the clip, nothing is said.
+/// it may be clipped. At or below the clip, nothing is said. With a range that is not symmetric the
+/// clip is its nearer end (max |u_f| is held to both), and both keys are named.
 #[test]
 fn a_tuning_limit_above_the_true_actuators_is_cautioned() {
-    let cautions = |max_uf: &str| {
-        let scenario = quell::scenario::PAPER_EXAMPLE.to_string() + "\n[truth]\nu_max = [10.0, inf]\n";
+    let cautions_under = |max_uf: &str, truth: &str| {
+        let scenario = quell::scenario::PAPER_EXAMPLE.to_string() + "\n[truth]\n" + truth + "\n";
         let mut doc: toml::Table = format!("[tune]\nmu = [1.0, 100.0]\nmax_uf = {max_uf}\n").parse().unwrap();
         doc.insert("scenario".into(), toml::Value::Table(scenario.parse().unwrap()));
         quell::study::tune_cautions(&Study::from_table(&doc, None).unwrap())
     };
+    let cautions = |max_uf: &str| cautions_under(max_uf, "u_max = [10.0, inf]");
     let above = cautions("[12.0, inf]");
     assert_eq!(above.len(), 1, "{above:?}");
     assert!(
@@ -288,6 +290,14 @@ fn a_tuning_limit_above_the_true_actuators_is_cautioned() {
         "{above:?}"
     );
     assert!(cautions("[10.0, inf]").is_empty() && cautions("[5.0, 3.0]").is_empty());
+    let asymmetric = cautions_under("[12.0, inf]", "u_max = [20.0, inf]\nu_min = [-8.0, -inf]");
+    assert_eq!(asymmetric.len(), 1, "{asymmetric:?}");
+    assert!(
+        asymmetric[0].starts_with(
+            "tune.max_uf[0] = 12 is above the true actuator's truth.u_min[0] … u_max[0] = -8 … 20: a μ within"
+        ) && asymmetric[0].ends_with("give tune.max_uf[0] at most 8 to keep u_f within it"),
+        "{asymmetric:?}"
+    );
 }
 
 /// Stopping a tuning keeps the points evaluated so far: on one worker thread, a stop after the

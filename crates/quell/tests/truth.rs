@@ -171,8 +171,9 @@ fn truth_mistakes_name_their_key() {
         ("u_min = [-1.0]", "truth.u_min: expected 2 entries (one per input), found 1"),
         (
             "u_min = [-1.0, 0.5]",
-            "truth.u_min[1]: expected a lower limit ≤ 0 (-inf for none), found 0.5; u_f is the deviation",
+            "truth.u_min[1]: expected a lower limit < 0 (-inf for none), found 0.5; u_f is the deviation",
         ),
+        ("u_min = [-1.0, 0.0]", "truth.u_min[1]: expected a lower limit < 0 (-inf for none), found 0;"),
         ("u_min = [-1.0, inf]", "truth.u_min[1]: expected a finite number or -inf (no limit), found inf"),
         ("u_max = [-inf, 1.0]", "truth.u_max[0]: expected a finite number or inf (no limit), found -inf"),
     ];
@@ -348,8 +349,10 @@ fn a_fractional_true_delay_moves_the_command_within_the_sample() {
 /// point, u in kW from 1 kW): u_f ranges over [−1, 2], `[truth] u_min` and `u_max`. `reference`
 /// is g's component.
 fn heater(reference: &str, range: &str) -> Scenario {
+    // One filter pole for a bias, three for a bias and a harmonic.
+    let poles = if reference.contains("harmonics") { "[-0.002, -0.003, -0.004]" } else { "[-0.002]" };
     let text = format!(
-        "[plant]\nA = [[-0.0016666666666666668]]\nB = [[0.0033333333333333335]]\nC = [[1.0]]\ndelays = [30.0]\n[design]\nobserver_poles = [-0.02]\nchannel_poles = [[-0.005]]\nreference_filter_poles = [[-0.002]]\nmu = [1.0]\nbeta = 1.0\n[reference]\ncomponents = [{reference}]\n[simulation]\nt_end = 9000.0\noutput_step = 10.0\nsample_time = 10.0\n[truth]\n{range}\n"
+        "[plant]\nA = [[-0.0016666666666666668]]\nB = [[0.0033333333333333335]]\nC = [[1.0]]\ndelays = [30.0]\n[design]\nobserver_poles = [-0.02]\nchannel_poles = [[-0.005]]\nreference_filter_poles = [{poles}]\nmu = [1.0]\nbeta = 1.0\n[reference]\ncomponents = [{reference}]\n[simulation]\nt_end = 9000.0\noutput_step = 10.0\nsample_time = 10.0\n[truth]\n{range}\n"
     );
     Scenario::from_toml(&text).unwrap()
 }
@@ -372,6 +375,16 @@ fn a_range_that_is_not_symmetric_clips_each_side_at_its_own_limit() {
         steady.advice[0]
     );
     assert!(heater(cool, "u_max = [2.0]").steady_input().advice.is_empty());
+    // About the same mean, a wave of ±1 kW: the range −2.5 … −0.5 reaches within the limits, but a
+    // clipped input cannot average −1.5, so it is as impossible (it had read "at its peaks").
+    let wave = "{ bias = -3.0, harmonics = [{ amplitude = 0.33, frequency = 0.01 }] }";
+    let steady = heater(wave, "u_max = [2.0]\nu_min = [-1.0]").steady_input();
+    assert!((steady.mean[0] + 1.5).abs() < 1e-12 && steady.range[0][1] > -1.0, "{steady:?}");
+    assert!(
+        steady.advice[0].contains("exceeds it: tracking g and rejecting ω exactly is impossible"),
+        "{:?}",
+        steady.advice
+    );
     let s = heater(cool, "u_max = [2.0]\nu_min = [-1.0]");
     let r = Run::of(&s, &s.design().unwrap()).simulate(|_| ControlFlow::Continue(())).unwrap();
     assert_eq!(r.outcome, Some(Outcome::Completed));

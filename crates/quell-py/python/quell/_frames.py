@@ -194,7 +194,8 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
                 title_ax.set_title(f"{title_ax.get_title()}; peak {share} % of {of}")
             # Where the limit clipped it, how much the controller asked for (summary()'s max_uf).
             asked = result.summary()[i]["max_uf"]
-            if asked is not None and asked > max(upper, -lower):
+            clipped = (result.limited_fraction or [0.0] * (i + 1))[i] > 0
+            if asked is not None and (clipped or asked > max(upper, -lower)):
                 title_ax.set_title(f"{title_ax.get_title()}; the controller asked for up to {asked:.4g}")
         eta_ax = axes[4] if len(axes) == 6 else axes[-1]
         # As the CLI's figure: beyond MAX_LEGEND entries a legend hides the traces (q = 33 covered a

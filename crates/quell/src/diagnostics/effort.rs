@@ -15,7 +15,7 @@
 use nalgebra::{Complex, DMatrix, DVector};
 use serde::Serialize;
 
-use crate::averaged::{complex, resolvent};
+use crate::averaged::{complex, magnitudes, resolvent, without_rounding};
 use crate::linalg::eigenvalues;
 use crate::plant::Plant;
 use crate::settings::{fmt_4, fmt_short, Actuator, TimeUnit};
@@ -108,6 +108,8 @@ pub struct SteadyInput {
     /// Per input: [min, max] of u_f,i in steady state, found as `peak` is ([`Component::range`]);
     /// [−∞, ∞] at a transmission zero.
     pub range: Vec<[f64; 2]>,
+    /// Per input: the mean of u_f,i in steady state (its bias); NaN at a transmission zero.
+    pub mean: Vec<f64>,
     /// Per input: the RMS of u_f,i in steady state, √(b² + Σ a²/2): a lower bound of the peak.
     pub rms: Vec<f64>,
     /// One line per transmission zero among the frequencies, per costly harmonic of ω
@@ -177,7 +179,8 @@ pub fn steady_input(
             tones.iter().map(power).fold(0.0, |a, p| a + p).sqrt()
         })
         .collect();
-    let mut steady = SteadyInput { tones, peak, range, rms, advice: vec![] };
+    let mean = signals.iter().map(|c| if any_zero { f64::NAN } else { c.mean() }).collect();
+    let mut steady = SteadyInput { tones, peak, range, mean, rms, advice: vec![] };
     let unit = plant.time_unit;
     let mut advice: Vec<String> =
         steady.tones.iter().filter(|t| t.transmission_zero).map(|t| zero_advice(t.frequency, unit)).collect();
@@ -231,14 +234,20 @@ fn system_matrix(plant: &Plant, w: f64) -> DMatrix<C64> {
 
 /// U for g alone and for ω alone at one frequency, their phasors G and W, `S` the system matrix
 /// there: one LU, two right-hand sides [0; G] and [D W; −Q W]. A zero signal asks for nothing; an
-/// exactly singular S gives ∞.
+/// exactly singular S gives ∞; an entry within rounding of |S⁻¹| |rhs| is 0 (a missile's gust
+/// bias, which does not reach y, had asked 3.8e-19 rad of fin).
 fn input_phasors(plant: &Plant, S: DMatrix<C64>, g: &DVector<C64>, omega: &DVector<C64>) -> [DVector<C64>; 2] {
     let (n, m) = (plant.A.nrows(), plant.B.ncols());
     let mut rhs = DMatrix::<C64>::zeros(n + m, 2);
     rhs.view_mut((n, 0), (m, 1)).copy_from(g);
     rhs.view_mut((0, 1), (n, 1)).copy_from(&(complex(&plant.D) * omega));
     rhs.view_mut((n, 1), (m, 1)).copy_from(&-(complex(&plant.Q) * omega));
-    let solved = S.lu().solve(&rhs).filter(|x| x.iter().all(|z| z.re.is_finite() && z.im.is_finite()));
+    let lu = S.lu();
+    let identity = DMatrix::<C64>::identity(n + m, n + m);
+    let scale = lu.solve(&identity).map(|inverse| magnitudes(&inverse) * magnitudes(&rhs));
+    let solved = (lu.solve(&rhs).zip(scale))
+        .map(|(x, scale)| without_rounding(x, &scale, n + m))
+        .filter(|x| x.iter().all(|z| z.re.is_finite() && z.im.is_finite()));
     [0, 1].map(|k| match &solved {
         _ if rhs.column(k).iter().all(|z| *z == C64::new(0.0, 0.0)) => DVector::zeros(m),
         Some(x) => x.column(k).rows(n, m).into_owned(),
@@ -266,9 +275,10 @@ fn beyond_limits(steady: &SteadyInput, actuator: &Actuator, inputs: &[String]) -
     for (i, input) in inputs.iter().enumerate().take(actuator.limits.len()) {
         let (rms, [low, high]) = (steady.rms[i], steady.range[i]);
         let (lower, upper) = (actuator.lower_limit(i), actuator.limits[i]);
-        // Always beyond one limit (a heater's input below 0 throughout) is as impossible as an RMS
-        // beyond both.
-        let what = if rms > upper.max(-lower) || high < lower || low > upper {
+        // A mean beyond one limit (a heater asked to cool on average) is as impossible as an RMS
+        // beyond both: a clipped input cannot average it (review, 2026-12-08).
+        let mean = steady.mean[i];
+        let what = if rms > upper.max(-lower) || mean < lower || mean > upper {
             "exceeds it: tracking g and rejecting ω exactly is impossible with this actuator, whatever the design; ask less of the loop (fewer harmonics, smaller references) or a stronger actuator"
         } else if high > upper || low < lower {
             "exceeds it at its peaks: the loop saturates at times in steady state"

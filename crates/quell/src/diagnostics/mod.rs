@@ -1133,11 +1133,6 @@ fn faster_observer_design(design: &Design, signals: [&Signal; 2]) -> Option<Fast
     })
 }
 
-/// RMS of e_i over the last 10 % of the run against the 10 % before.
-pub fn tail_trend(result: &SimResult, i: usize) -> Option<f64> {
-    trend(tail_windows(result, i)?)
-}
-
 /// The ratio of the two windows' RMS ([`tail_windows`]); `None` when the earlier one is 0.
 fn trend((last, before): (f64, f64)) -> Option<f64> {
     (before > 0.0).then_some(last / before)

@@ -576,7 +576,7 @@ pub(super) fn loop_delays(design: &Plant, truth: &Plant, actuator: Option<&Actua
 
 /// The true plant's input through its actuator ([`Actuator`]):
 /// u_p,i(t) = sat_i(−K_i x̂(t − τ_a,i) + Σ_j F_ij u_j(t − τ_a,i − τ_j^true)), i.e. input (5) delayed
-/// by τ_a,i and clipped to ±u_max,i.
+/// by τ_a,i and clipped to [u_min,i, u_max,i].
 struct ActuatorPath {
     actuator: Actuator,
     /// τ_j^true: the true plant's delays of the adaptive command.

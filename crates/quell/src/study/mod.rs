@@ -236,8 +236,8 @@ pub struct Study {
     pub runaway: Runaway,
     /// Channels m of the scenario.
     pub m: usize,
-    /// Per input, the largest |u_f,i| the scenario's true actuator passes unclipped ([`Study::u_max`]).
-    u_max: Vec<f64>,
+    /// The scenario's true actuator, as it parsed it ([`Study::u_max`]).
+    actuator: Option<crate::settings::Actuator>,
     fingerprint: u64,
     /// The study as one self-contained document: `scenario` the scenario table, `[simulation]`'s
     /// overrides applied to it.
@@ -343,6 +343,35 @@ pub(crate) fn axis_indices(point: usize, lens: &[usize]) -> Vec<usize> {
 /// A key of `[truth]` that may be perturbed before the scenario gives it: every one.
 use crate::scenario::TRUTH_KEYS;
 
+/// `truth.u_max` of `doc` as numbers (integers too), +∞ per input where it is not given.
+fn upper_limits(doc: &toml::Table, m: usize) -> Vec<f64> {
+    let number = |v: &toml::Value| v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
+    match doc.get("truth").and_then(|t| t.get("u_max")).and_then(toml::Value::as_array) {
+        Some(upper) => upper.iter().map(|u| number(u).unwrap_or(f64::INFINITY)).collect(),
+        None => vec![f64::INFINITY; m],
+    }
+}
+
+/// Where the scenario leaves `truth.u_min` to its default (−u_max) and a run's axes or draws set
+/// some of it, the entries they do not set (`is_set` of the key path) follow that run's own u_max,
+/// as the scenario's default does: filled before the values are applied, they had kept the nominal
+/// −u_max beside a grid or a draw over u_max (review, 2026-12-08).
+fn lower_limits_follow(doc: &mut toml::Table, is_set: impl Fn(&str) -> bool) {
+    let Some(n) = doc.get("truth").and_then(|t| t.get("u_min")).and_then(toml::Value::as_array).map(Vec::len) else {
+        return;
+    };
+    let upper = upper_limits(doc, n);
+    let Some(toml::Value::Array(lower)) = doc.get_mut("truth").and_then(|t| t.get_mut("u_min")) else { return };
+    if is_set("truth.u_min") {
+        return;
+    }
+    for (i, (l, u)) in lower.iter_mut().zip(upper).enumerate() {
+        if !is_set(&format!("truth.u_min[{i}]")) {
+            *l = toml::Value::Float(-u);
+        }
+    }
+}
+
 /// Gives `doc` the value that `path` names when the scenario leaves it to a default: `truth.<X>`
 /// defaults to `plant.<X>`, `plant.x0` (or `truth.x0`) and `truth.actuator_delays` to zeros,
 /// `truth.u_max` to +∞ per input and `truth.u_min` to −u_max (a grid over a drive's limit had needed the scenario to give one
@@ -372,13 +401,8 @@ fn fill_default(doc: &mut toml::Table, path: &KeyPath) {
     let value = match (name, from_plant) {
         ("actuator_delays", _) => per_input(0.0),
         ("u_max", _) => per_input(f64::INFINITY),
-        // −u_max, the symmetric range the scenario had.
-        ("u_min", _) => match doc.get("truth").and_then(|t| t.get("u_max")).and_then(toml::Value::as_array) {
-            Some(upper) => toml::Value::Array(
-                upper.iter().map(|u| toml::Value::Float(-u.as_float().unwrap_or(f64::INFINITY))).collect(),
-            ),
-            None => per_input(f64::NEG_INFINITY),
-        },
+        // −u_max, the symmetric range the scenario had ([`lower_limits_follow`] keeps it so).
+        ("u_min", _) => toml::Value::Array(upper_limits(doc, m).into_iter().map(|u| toml::Value::Float(-u)).collect()),
         (_, Some(v)) => v,
         ("x0", None) => zeros(),
         (_, None) => return,
@@ -465,10 +489,7 @@ impl Study {
             max_steps,
             runaway: read_runaway(doc)?,
             m: scenario.plant.m(),
-            u_max: scenario.actuator.as_ref().map_or_else(
-                || vec![f64::INFINITY; scenario.plant.m()],
-                |a| (0..a.limits.len()).map(|i| a.magnitude_limit(i)).collect(),
-            ),
+            actuator: scenario.actuator.clone(),
             document,
             nominal,
         })
@@ -532,6 +553,12 @@ impl Study {
                     }
                 });
             }
+        }
+        if self.base.get("truth").and_then(|t| t.get("u_min")).is_none() {
+            let keys: Vec<String> = (self.grid.iter().map(|a| a.path.to_string()))
+                .chain(self.monte_carlo.iter().flat_map(|mc| mc.perturbations.iter().map(|p| p.path.to_string())))
+                .collect();
+            lower_limits_follow(&mut doc, |key| keys.iter().any(|k| k == key));
         }
         doc
     }
@@ -756,7 +783,13 @@ impl Study {
     /// The largest |u_f,i| the scenario's true actuator passes unclipped (`truth.u_max[i]`, or
     /// −`truth.u_min[i]` where smaller), ∞ for none.
     pub fn u_max(&self, i: usize) -> f64 {
-        self.u_max.get(i).copied().unwrap_or(f64::INFINITY)
+        self.actuator.as_ref().filter(|a| i < a.limits.len()).map_or(f64::INFINITY, |a| a.magnitude_limit(i))
+    }
+
+    /// Input i's true actuator limits as keys with their values (`truth.u_max[0] = 10`), where the
+    /// scenario has an actuator.
+    pub fn limits_text(&self, i: usize) -> Option<String> {
+        self.actuator.as_ref().filter(|a| i < a.limits.len()).map(|a| a.limits_text(i))
     }
 
     /// Whether some run's true plant differs from the design model: the scenario's `[truth]`

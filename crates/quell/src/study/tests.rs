@@ -659,6 +659,29 @@ fn the_true_actuators_keys_vary_without_a_truth_table() {
     assert!(rows[0] != rows[2] && rows[1] != rows[3], "{rows:?}");
 }
 
+/// A grid over one entry of `truth.u_min` where the scenario leaves it to its default (−u_max)
+/// leaves the other entries at −u_max of each run, integers in u_max included: they had been
+/// frozen at the nominal −u_max beside an axis over u_max, and at −∞ where u_max was written as
+/// integers (review, 2026-12-08).
+#[test]
+fn the_lower_limits_no_axis_sets_follow_each_runs_upper_ones() {
+    let text = format!("{}\n[truth]\nu_max = [20, 30]\n", crate::scenario::PAPER_EXAMPLE);
+    let mut doc: toml::Table =
+        "[grid]\n\"truth.u_min[1]\" = [-5.0]\n\"truth.u_max[0]\" = [2.0, 4.0]\n".parse().unwrap();
+    doc.insert("scenario".into(), toml::Value::Table(text.parse().unwrap()));
+    let s = Study::from_table(&doc, None).unwrap();
+    let lower = |i: usize| -> Vec<f64> {
+        let truth = &s.run_document(i).unwrap()["truth"];
+        truth["u_min"].as_array().unwrap().iter().map(|v| v.as_float().unwrap()).collect()
+    };
+    assert_eq!((lower(0), lower(1)), (vec![-2.0, -5.0], vec![-4.0, -5.0]));
+    // Without an axis over u_min, none is written: the scenario's default holds.
+    let mut doc: toml::Table = "[grid]\n\"truth.u_max[0]\" = [2.0]\n".parse().unwrap();
+    doc.insert("scenario".into(), toml::Value::Table(text.parse().unwrap()));
+    let s = Study::from_table(&doc, None).unwrap();
+    assert!(s.run_document(0).unwrap()["truth"].get("u_min").is_none());
+}
+
 /// runs.csv's last columns are the values each draw gave (a CLI sweep had only its seed, so which
 /// plants diverged could be learnt only from Python): named by key and index, `… (drawn)` where
 /// the grid sets the key too, each the number the run's own scenario holds and within its law

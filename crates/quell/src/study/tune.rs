@@ -293,7 +293,7 @@ impl TuneCurve {
         let reached = if reached.is_empty() { String::new() } else { format!(" ({})", reached.join("; ")) };
         let clipped = |p: &TunePoint| p.figures.is_none_or(|f| f.max_uf > clip);
         let clipping = if clip.is_finite() && self.curve.iter().any(clipped) {
-            "; the scenario's truth.u_max clips u_f and the method has no anti-windup, so a clipped loop may never settle: a run of the scenario reports how often it clips"
+            "; the scenario's true actuator limits (truth.u_max, u_min) clip u_f and the method has no anti-windup, so a clipped loop may never settle: a run of the scenario reports how often it clips"
         } else {
             ""
         };
@@ -585,9 +585,9 @@ pub(crate) fn limit_above_the_clip(study: &Study) -> Vec<String> {
         .filter(|&(_, (wanted, clip))| wanted > clip)
         .map(|(i, (wanted, clip))| {
             format!(
-                "tune.max_uf[{i}] = {} is above the true actuator's truth.u_max[{i}] = {}: a μ within the tuning's limit may ask more than the actuator gives and be clipped (the method has no anti-windup); give tune.max_uf[{i}] at most {} to keep u_f within it",
+                "tune.max_uf[{i}] = {} is above the true actuator's {}: a μ within the tuning's limit may ask more than the actuator gives and be clipped (the method has no anti-windup); give tune.max_uf[{i}] at most {} to keep u_f within it",
                 fmt(wanted),
-                fmt(clip),
+                study.limits_text(i).unwrap_or_default(),
                 fmt(clip)
             )
         })
