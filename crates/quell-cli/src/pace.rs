@@ -123,7 +123,7 @@ pub fn with_pace(mut design: Value, d: &Design, estimates: &[RateEstimate], stea
     design
 }
 
-/// The steady-state input as lines of text: per input its peak and RMS and each frequency's
+/// The steady-state input as lines of text: per input its peak, range, mean and RMS and each frequency's
 /// amplitude with the parts g alone and ω alone ask for, then the advice. `truth`: the simulated
 /// plant is `[truth]`, not the design model.
 pub fn steady_text(steady: &SteadyInput, inputs: &[String], time: TimeUnit, truth: bool) -> String {
@@ -134,7 +134,12 @@ pub fn steady_text(steady: &SteadyInput, inputs: &[String], time: TimeUnit, trut
     let mut s = format!(
         "\nsteady-state plant input u_f (y = g exactly: {plant} alone sets it, whatever the controller; per frequency in rad/{time}, the amplitude, and in brackets those g alone and ω alone ask for, which add as phasors):\n"
     );
-    let four = |v: f64| if v.is_finite() { fmt_4(v) } else { "∞".to_string() };
+    let four = |v: f64| match v {
+        _ if v.is_finite() => fmt_4(v),
+        _ if v < 0.0 => "−∞".to_string(),
+        _ if v > 0.0 => "∞".to_string(),
+        _ => "—".to_string(),
+    };
     for (i, name) in inputs.iter().enumerate() {
         let parts: Vec<String> = steady
             .tones
@@ -150,8 +155,18 @@ pub fn steady_text(steady: &SteadyInput, inputs: &[String], time: TimeUnit, trut
                 ),
             })
             .collect();
-        let _ =
-            writeln!(s, "  {name}: peak {} (RMS {}); {}", four(steady.peak[i]), four(steady.rms[i]), parts.join(", "));
+        // The signed ends and mean, which a range that is not symmetric ([truth] u_min) is held to.
+        let [low, high] = steady.range[i];
+        let _ = writeln!(
+            s,
+            "  {name}: peak {} (from {} to {}, mean {}; RMS {}); {}",
+            four(steady.peak[i]),
+            four(low),
+            four(high),
+            four(steady.mean[i]),
+            four(steady.rms[i]),
+            parts.join(", ")
+        );
     }
     for a in &steady.advice {
         let _ = writeln!(s, "    → {a}");

@@ -708,7 +708,9 @@ fn uf_panel(r: &SimResult, i: usize, input: &str, uf: &[(f64, f64)]) -> (String,
     // Where the limit clipped it, how much the controller asked for (summary.json's max_uf).
     let asked = r.max_uf(i);
     if r.limited.get(i).is_some_and(|&n| n > 0) || levels[1].max(-levels[0]) < asked {
-        title += &format!("; the controller asked for up to {}", quell::settings::fmt_4(asked));
+        // A magnitude: with a range that is not symmetric, which end it neared is not known.
+        let what = if symmetric { "" } else { "|u_f| " };
+        title += &format!("; the controller asked for {what}up to {}", quell::settings::fmt_4(asked));
     }
     (title, label.filter(|_| share >= 0.1), levels)
 }

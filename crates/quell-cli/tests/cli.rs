@@ -1501,7 +1501,9 @@ fn a_range_that_is_not_symmetric_is_drawn_and_named_at_both_ends() {
     let uf1: Vec<f64> = signals.lines().skip(1).map(|l| l.split(',').nth(col).unwrap().parse().unwrap()).collect();
     assert!(uf1.iter().all(|u| (-10.0..=30.0).contains(u)) && uf1.contains(&-10.0));
     let svg1 = fs::read_to_string(out.join("channel1.svg")).unwrap();
-    assert!(svg1.contains("truth.u_min[0], u_max[0] = -10, 30") && svg1.contains("the controller asked for up to "));
+    assert!(
+        svg1.contains("truth.u_min[0], u_max[0] = -10, 30") && svg1.contains("the controller asked for |u_f| up to ")
+    );
     let svg2 = fs::read_to_string(out.join("channel2.svg")).unwrap();
     assert!(!svg2.contains("truth.u_m"), "input 2 has no limit");
 }

@@ -96,7 +96,7 @@ def test_a_range_that_is_not_symmetric_clips_each_side_at_its_own_limit():
     assert levels == [-10.0, 30.0]
     assert "truth.u_min[0], u_max[0] = -10, 30" in [t.get_text() for t in panel.get_legend().get_texts()]
     # Clipped below only, at −10, where max|u_f| asked (12.5) is within u_max: still said.
-    assert "; the controller asked for up to " in panel.get_title(), panel.get_title()
+    assert "; the controller asked for |u_f| up to " in panel.get_title(), panel.get_title()
     with pytest.raises(quell.ScenarioError, match=r"^truth.u_min\[1\]: expected a lower limit < 0"):
         quell.Scenario(p, REFERENCE, DISTURBANCE, observer_gain=L, actuator={"u_min": [-1.0, 0.5]}, **PAPER_DESIGN)
 

@@ -16,7 +16,6 @@
 use nalgebra::{Complex, DMatrix, DVector};
 
 use crate::design::Design;
-use crate::plant::Plant;
 use crate::signal::Signal;
 
 type C64 = Complex<f64>;
@@ -133,67 +132,21 @@ fn weight(w: f64) -> f64 {
 }
 
 /// The disturbance observer's input gain T(jw) = N L [C (jwI − A + LC)⁻¹ (D − LQ) + Q]
-/// (q_ω × k); equal to N D = L_ω when the observer reproduces x. A component of ω whose path to y,
-/// P_ω(jw) = C (jwI − A)⁻¹ D + Q, is zero at w (each entry within rounding of its terms'
-/// magnitudes) has a zero column: T = N L (I + C (jwI − A)⁻¹ L)⁻¹ P_ω(jw), so it is exactly zero
-/// there, where its rounding (1e-19 for a missile's gust bias) had counted as an
-/// excited direction of Ω̄ and asked for μ = 1.6e38 (helper tryout, 2026-12-08).
+/// (q_ω × k); equal to N D = L_ω when the observer reproduces x. A component of ω that reaches no
+/// output at w (the steady input that holds y = 0 against it alone is zero) has a zero column: the innovation it
+/// drives is then exactly zero, where its rounding (1e-19 for a missile's gust bias) had counted
+/// as an excited direction of Ω̄ and asked for μ = 1.6e38 (helper tryout, 2026-12-08).
 pub fn disturbance_observer_gain(design: &Design, w: f64) -> DMatrix<C64> {
     let p = design.plant();
     let (L, N) = (design.L(), design.N());
     let A_o = &p.A - L * &p.C;
     let E = complex(&(&p.D - L * &p.Q));
     let mut T = complex(&(N * L)) * (complex(&p.C) * resolvent(&A_o, w, &E) + complex(&p.Q));
-    for j in unseen(p, w) {
+    for j in crate::diagnostics::effort::unreached(p, w) {
         T.column_mut(j).fill(C64::new(0.0, 0.0));
     }
     T
 }
-
-/// The components j of ω whose path to y, P_ω(jw) = C (jwI − A)⁻¹ D + Q, is zero at w: every entry
-/// of column j within rounding of its terms' magnitudes |C| |(jwI − A)⁻¹| |D| + |Q| (a missile's
-/// gust bias, D = A e_α, moves α and leaves the pitch rate at 0). The plant's own path, not T's
-/// terms, whose magnitudes grow with the observer's gain (a test on them zeroed the paper's whole
-/// T, 0.98 in size, at observer poles ×1000; review, 2026-12-08). Where jw is an eigenvalue of A,
-/// none. The inverse is formed only where a column is below 1e-8 of its norm-wise size.
-fn unseen(p: &Plant, w: f64) -> Vec<usize> {
-    let D = complex(&p.D);
-    let X = resolvent(&p.A, w, &D);
-    if X.iter().any(|z| !(z.re.is_finite() && z.im.is_finite())) {
-        return Vec::new();
-    }
-    let P = complex(&p.C) * &X + complex(&p.Q);
-    let small: Vec<usize> = (0..P.ncols())
-        .filter(|&j| {
-            let largest = |v: nalgebra::DVectorView<'_, C64>| v.iter().map(|z| z.norm()).fold(0.0, f64::max);
-            let size = p.C.abs().column_sum().max() * largest(X.column(j)) + p.Q.column(j).amax();
-            largest(P.column(j)) <= 1e-8 * size
-        })
-        .collect();
-    if small.is_empty() {
-        return small;
-    }
-    let R = resolvent(&p.A, w, &DMatrix::identity(p.n(), p.n()).map(|x| C64::new(x, 0.0)));
-    let scale = p.C.abs() * magnitudes(&R) * magnitudes(&D) + p.Q.abs();
-    let P = without_rounding(P, &scale, p.n());
-    small.into_iter().filter(|&j| P.column(j).iter().all(|z| z.norm() == 0.0)).collect()
-}
-
-/// |M|, entry by entry.
-pub(crate) fn magnitudes(M: &DMatrix<C64>) -> DMatrix<f64> {
-    M.map(|z| z.norm())
-}
-
-/// `M` with every entry within rounding of `scale`'s (the sum of its terms' magnitudes, a product
-/// through `n` dimensions) set to 0: what an exact zero computes to.
-pub(crate) fn without_rounding(M: DMatrix<C64>, scale: &DMatrix<f64>, n: usize) -> DMatrix<C64> {
-    let rounding = ROUNDING_FACTOR * f64::EPSILON * (n + 1) as f64;
-    M.zip_map(scale, |t, s| if t.norm() <= rounding * s { C64::new(0.0, 0.0) } else { t })
-}
-
-/// How many times ε·(n + 1) of its terms' magnitudes an entry may be and still read as rounding
-/// ([`without_rounding`]).
-const ROUNDING_FACTOR: f64 = 16.0;
 
 /// How faithfully the disturbance observer (20) passes one frequency of ω: with T = L_ω (I + E),
 /// E(jw) the error of the estimate of ω that T passes (k × k, in ω's coordinates), the relative

@@ -196,7 +196,9 @@ def plot(result, channel=1, fig=None, ax=None, figsize=None, names=(None, None),
             asked = result.summary()[i]["max_uf"]
             clipped = (result.limited_fraction or [0.0] * (i + 1))[i] > 0
             if asked is not None and (clipped or asked > max(upper, -lower)):
-                title_ax.set_title(f"{title_ax.get_title()}; the controller asked for up to {asked:.4g}")
+                # A magnitude: with a range that is not symmetric, which end it neared is not known.
+                what = "" if symmetric else "|u_f| "
+                title_ax.set_title(f"{title_ax.get_title()}; the controller asked for {what}up to {asked:.4g}")
         eta_ax = axes[4] if len(axes) == 6 else axes[-1]
         # As the CLI's figure: beyond MAX_LEGEND entries a legend hides the traces (q = 33 covered a
         # third of them) and the palette repeats, so the title names the range instead.

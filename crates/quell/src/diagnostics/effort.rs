@@ -15,7 +15,7 @@
 use nalgebra::{Complex, DMatrix, DVector};
 use serde::Serialize;
 
-use crate::averaged::{complex, magnitudes, resolvent, without_rounding};
+use crate::averaged::{complex, resolvent};
 use crate::linalg::eigenvalues;
 use crate::plant::Plant;
 use crate::settings::{fmt_4, fmt_short, Actuator, TimeUnit};
@@ -242,18 +242,61 @@ fn input_phasors(plant: &Plant, S: DMatrix<C64>, g: &DVector<C64>, omega: &DVect
     rhs.view_mut((n, 0), (m, 1)).copy_from(g);
     rhs.view_mut((0, 1), (n, 1)).copy_from(&(complex(&plant.D) * omega));
     rhs.view_mut((n, 1), (m, 1)).copy_from(&-(complex(&plant.Q) * omega));
-    let lu = S.lu();
-    let identity = DMatrix::<C64>::identity(n + m, n + m);
-    let scale = lu.solve(&identity).map(|inverse| magnitudes(&inverse) * magnitudes(&rhs));
-    let solved = (lu.solve(&rhs).zip(scale))
-        .map(|(x, scale)| without_rounding(x, &scale, n + m))
-        .filter(|x| x.iter().all(|z| z.re.is_finite() && z.im.is_finite()));
+    let solved = solve_without_rounding(S, &rhs);
     [0, 1].map(|k| match &solved {
         _ if rhs.column(k).iter().all(|z| *z == C64::new(0.0, 0.0)) => DVector::zeros(m),
         Some(x) => x.column(k).rows(n, m).into_owned(),
         None => DVector::from_element(m, C64::new(f64::INFINITY, 0.0)),
     })
 }
+
+/// The components j of ω that reach no output at w: the steady input that holds y = 0 against
+/// ω = e_j alone is zero to rounding (S [X; U] = [D e_j; −Q e_j], [`solve_without_rounding`]), so
+/// some X has (jwI − A) X = D e_j and C X = −Q e_j: C (jwI − A)⁻¹ D e_j + Q = 0 where A has no
+/// eigenvalue at jw, and the observer's innovation is 0 whatever L ((jwI − A + LC) X = (D − LQ) e_j).
+/// The system matrix stays regular where A has an eigenvalue at jw that ω's path does not pass (a
+/// plant with an integrator; a test on (jwI − A)⁻¹ had missed it: review, 2026-12-08). None at a
+/// transmission zero (S singular).
+pub(crate) fn unreached(plant: &Plant, w: f64) -> Vec<usize> {
+    let (n, k) = (plant.A.nrows(), plant.D.ncols());
+    if k == 0 {
+        return Vec::new();
+    }
+    let mut rhs = DMatrix::<C64>::zeros(n + plant.B.ncols(), k);
+    rhs.view_mut((0, 0), (n, k)).copy_from(&complex(&plant.D));
+    rhs.view_mut((n, 0), (plant.C.nrows(), k)).copy_from(&-complex(&plant.Q));
+    let Some(x) = solve_without_rounding(system_matrix(plant, w), &rhs) else { return Vec::new() };
+    (0..k)
+        .filter(|&j| {
+            rhs.column(j).iter().any(|z| z.norm() > 0.0)
+                && x.column(j).rows(n, x.nrows() - n).iter().all(|z| z.norm() == 0.0)
+        })
+        .collect()
+}
+
+/// S⁻¹ rhs with every entry within rounding of |S⁻¹| |rhs| (the sum of its terms' magnitudes)
+/// set to 0, what an exact zero computes to; the inverse is formed only where some entry is below
+/// 1e-8 of its column's largest. `None` where S is singular or the solution not finite.
+fn solve_without_rounding(S: DMatrix<C64>, rhs: &DMatrix<C64>) -> Option<DMatrix<C64>> {
+    let dim = S.nrows();
+    let lu = S.lu();
+    let x = lu.solve(rhs).filter(|x| x.iter().all(|z| z.re.is_finite() && z.im.is_finite()))?;
+    let small = x.column_iter().any(|c| {
+        let top = c.iter().map(|z| z.norm()).fold(0.0, f64::max);
+        c.iter().any(|z| z.norm() <= 1e-8 * top)
+    });
+    if !small {
+        return Some(x);
+    }
+    let magnitudes = |M: &DMatrix<C64>| M.map(|z| z.norm());
+    let scale = magnitudes(&lu.solve(&DMatrix::identity(dim, dim))?) * magnitudes(rhs);
+    let rounding = ROUNDING_FACTOR * f64::EPSILON * (dim + 1) as f64;
+    Some(x.zip_map(&scale, |z, s| if z.norm() <= rounding * s { C64::new(0.0, 0.0) } else { z }))
+}
+
+/// How many times ε·(dim + 1) of its terms' magnitudes an entry may be and still read as rounding
+/// ([`solve_without_rounding`]).
+const ROUNDING_FACTOR: f64 = 16.0;
 
 /// |C (jwI − A)⁻¹ D W + Q W| per output; `None` where jw is within 1e-9 (‖A‖ + w) of an
 /// eigenvalue of A, `eigs`.
@@ -389,6 +432,25 @@ pub(crate) fn saturation_advice(s: &crate::Scenario) -> Option<String> {
 mod tests {
     use super::{C64, TAIL_BOUND};
     use crate::scenario::Scenario;
+
+    /// A disturbance part that reaches no output is found where A has an eigenvalue at that
+    /// frequency: an integrator beside a washout path P_ω(s) = −0.5 s/((s + 1)(s + 2)) (by hand:
+    /// x₂ = ω/(s + 1), x₃ = x₂/(s + 2), y = x₁ − x₂/2 + x₃), zero at s = 0 where A is singular. The
+    /// bias adds no excited direction (rank 4 of q = 5: the reference's tone and ω's 1 rad/s), where
+    /// a test on (jwI − A)⁻¹ had found none and kept a direction of λ = 2.5e-26 (review,
+    /// 2026-12-08); ω's tone reaches y and is kept.
+    #[test]
+    fn a_washout_beside_an_integrator_reaches_no_output_at_zero() {
+        let s = Scenario::from_toml(
+            "[plant]\nA = [[0.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 1.0, -2.0]]\nB = [[1.0], [1.0], [0.0]]\nC = [[1.0, -0.5, 1.0]]\nD = [[0.0], [1.0], [0.0]]\nQ = [[0.0]]\ndelays = [0.05]\n[design]\nobserver_poles = [-2.0, -3.0, -4.0]\nchannel_poles = [[-1.0]]\nreference_filter_poles = [[-1.0, -2.0]]\ndisturbance_filter_poles = [[-1.0, -2.0, -3.0]]\nmu = [1.0]\nbeta = 1.0\n[reference]\ncomponents = [ { harmonics = [{ amplitude = 1.0, frequency = 0.5 }] } ]\n[disturbance]\ncomponents = [ { bias = 0.5, harmonics = [{ amplitude = 0.3, frequency = 1.0 }] } ]\n",
+        )
+        .unwrap();
+        assert!(s.plant.A.determinant() == 0.0, "A is singular at s = 0");
+        assert_eq!((super::unreached(&s.plant, 0.0), super::unreached(&s.plant, 1.0)), (vec![0], vec![]));
+        let d = s.design().unwrap();
+        let c = &crate::averaged::Averaged::new(&d, &s.reference, &s.disturbance).channels[0];
+        assert_eq!((c.excited().count(), d.q()), (4, 5), "{:?}", c.lambda);
+    }
 
     /// Nomoto's ship (Fossen 2011, Mariner: T = 107.3 s, K = 0.185 /s) with a rudder servo of
     /// 2.5 s: ψ' = r, r' = −a r + b δ + d, δ' = −c δ + c u_f; a wave yaw moment d at 0.6 and

@@ -555,8 +555,9 @@ impl Study {
             }
         }
         if self.base.get("truth").and_then(|t| t.get("u_min")).is_none() {
-            let keys: Vec<String> = (self.grid.iter().map(|a| a.path.to_string()))
-                .chain(self.monte_carlo.iter().flat_map(|mc| mc.perturbations.iter().map(|p| p.path.to_string())))
+            // As the paths read, not as written (`truth.u_min[00]` had been undone; review).
+            let keys: Vec<String> = (self.grid.iter().map(|a| a.path.canonical()))
+                .chain(self.monte_carlo.iter().flat_map(|mc| mc.perturbations.iter().map(|p| p.path.canonical())))
                 .collect();
             lower_limits_follow(&mut doc, |key| keys.iter().any(|k| k == key));
         }

@@ -95,6 +95,20 @@ pub(super) fn same_numbers(a: &toml::Value, b: &toml::Value) -> bool {
 }
 
 impl KeyPath {
+    /// The path as its steps read, whatever the text it was parsed from (`truth.u_min[00]` and
+    /// `truth.u_min[+0]` are `truth.u_min[0]`): what two paths are compared by.
+    pub fn canonical(&self) -> String {
+        let mut text = String::new();
+        for step in &self.steps {
+            match step {
+                Step::Key(k) if text.is_empty() => text.push_str(k),
+                Step::Key(k) => text = format!("{text}.{k}"),
+                Step::Index(i) => text = format!("{text}[{i}]"),
+            }
+        }
+        text
+    }
+
     /// Parses `a.b[0][1].c`; the message says what is wrong.
     pub fn parse(text: &str) -> Result<KeyPath, String> {
         let mut steps = Vec::new();

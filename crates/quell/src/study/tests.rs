@@ -662,12 +662,13 @@ fn the_true_actuators_keys_vary_without_a_truth_table() {
 /// A grid over one entry of `truth.u_min` where the scenario leaves it to its default (−u_max)
 /// leaves the other entries at −u_max of each run, integers in u_max included: they had been
 /// frozen at the nominal −u_max beside an axis over u_max, and at −∞ where u_max was written as
-/// integers (review, 2026-12-08).
+/// integers; the axis's own entry is kept however its index is written (`[01]` had been undone;
+/// review, 2026-12-08).
 #[test]
 fn the_lower_limits_no_axis_sets_follow_each_runs_upper_ones() {
     let text = format!("{}\n[truth]\nu_max = [20, 30]\n", crate::scenario::PAPER_EXAMPLE);
     let mut doc: toml::Table =
-        "[grid]\n\"truth.u_min[1]\" = [-5.0]\n\"truth.u_max[0]\" = [2.0, 4.0]\n".parse().unwrap();
+        "[grid]\n\"truth.u_min[01]\" = [-5.0]\n\"truth.u_max[0]\" = [2.0, 4.0]\n".parse().unwrap();
     doc.insert("scenario".into(), toml::Value::Table(text.parse().unwrap()));
     let s = Study::from_table(&doc, None).unwrap();
     let lower = |i: usize| -> Vec<f64> {
