@@ -682,8 +682,7 @@ fn eta_panel(r: &SimResult, i: usize, span: (f64, f64), channel: &str) -> (Vec<S
 /// where u_f's peak reaches a tenth of them, its share of them in the title otherwise (the lines
 /// would flatten the curve), and where the limit clipped u_f what the controller asked for.
 fn uf_panel(r: &SimResult, i: usize, input: &str, uf: &[(f64, f64)]) -> (String, Option<String>, [f64; 2]) {
-    let levels =
-        [r.u_min.get(i).copied().unwrap_or(f64::NEG_INFINITY), r.u_max.get(i).copied().unwrap_or(f64::INFINITY)];
+    let levels = r.limits(i);
     // u_f's share of its limits: of u_max above 0, of u_min below.
     let share = (uf.iter())
         .map(|&(_, v)| if v >= 0.0 { v / levels[1] } else { v / levels[0] })

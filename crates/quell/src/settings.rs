@@ -370,12 +370,17 @@ impl Actuator {
     /// Input i's limits' keys: `truth.u_max[i]`, or `truth.u_min[i] … u_max[i]` where the range
     /// is not symmetric.
     pub fn limit_keys(&self, i: usize) -> String {
-        limit_keys(i, self.asymmetric(i).is_none())
+        limit_keys(i, self.symmetric(i))
+    }
+
+    /// Whether input i's range is symmetric, u_min,i = −u_max,i.
+    pub fn symmetric(&self, i: usize) -> bool {
+        self.lower_limit(i) == -self.limits[i]
     }
 
     /// u_min,i where it is not −u_max,i.
     fn asymmetric(&self, i: usize) -> Option<f64> {
-        self.lower.as_ref().map(|l| l[i]).filter(|&l| l != -self.limits[i])
+        Some(self.lower_limit(i)).filter(|_| !self.symmetric(i))
     }
 
     /// sat_i(v): input i clipped to [u_min,i, u_max,i], and whether a limit was active.

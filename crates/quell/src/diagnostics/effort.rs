@@ -328,7 +328,8 @@ fn beyond_limits(steady: &SteadyInput, actuator: &Actuator, inputs: &[String]) -
         } else {
             continue;
         };
-        let limit = if lower == -upper {
+        let symmetric = actuator.symmetric(i);
+        let limit = if symmetric {
             format!("limit truth.u_max = {}", fmt_short(upper))
         } else {
             format!("range truth.u_min … u_max = {} … {}", fmt_short(lower), fmt_short(upper))
@@ -336,7 +337,7 @@ fn beyond_limits(steady: &SteadyInput, actuator: &Actuator, inputs: &[String]) -
         advice.push(format!(
             "{input}: the steady-state input (RMS {}, {}) against the actuator {limit} {what}",
             fmt_4(rms),
-            if lower == -upper {
+            if symmetric {
                 format!("peak {}", fmt_4(steady.peak[i]))
             } else {
                 format!("from {} to {}", fmt_4(low), fmt_4(high))
@@ -403,16 +404,12 @@ pub(crate) fn saturation_advice(s: &crate::Scenario) -> Option<String> {
     let steady = s.steady_input();
     let over: Vec<String> = (0..actuator.limits.len())
         .filter_map(|i| {
-            let [low, high] = steady.range[i];
             let (lower, upper) = (actuator.lower_limit(i), actuator.limits[i]);
             let fmt = crate::settings::fmt_4;
             let short = crate::settings::fmt_short;
-            let peak = steady.peak[i];
-            if lower == -upper {
-                (peak > upper).then(|| {
-                    format!("u_f,{} peaks at {} against truth.u_max[{i}] = {}", i + 1, fmt(peak), short(upper))
-                })
-            } else if high > upper {
+            // A symmetric range is held to the peak magnitude, named as u_max's; another to each end.
+            let [low, high] = if actuator.symmetric(i) { [-steady.peak[i], steady.peak[i]] } else { steady.range[i] };
+            if high > upper {
                 Some(format!("u_f,{} peaks at {} against truth.u_max[{i}] = {}", i + 1, fmt(high), short(upper)))
             } else {
                 (low < lower)

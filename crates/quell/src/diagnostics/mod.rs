@@ -889,7 +889,8 @@ fn clipping_advice(result: &SimResult, missed: bool) -> Option<String> {
     let clipped: Vec<String> = (result.limited_fraction().iter().enumerate())
         .filter(|(_, f)| **f > CLIPPED_SHARE)
         .map(|(i, f)| {
-            let symmetric = result.u_min.get(i).zip(result.u_max.get(i)).is_none_or(|(lo, hi)| *lo == -hi);
+            let [lower, upper] = result.limits(i);
+            let symmetric = lower == -upper;
             format!(
                 "input {} at {:.1} % of the samples ({})",
                 i + 1,

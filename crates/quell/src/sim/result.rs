@@ -191,7 +191,7 @@ pub struct SimResult {
     /// actuator.
     pub u_max: Vec<f64>,
     /// Per input, the true plant's lower actuator limit (`[truth]` u_min, −u_max unless given);
-    /// empty without an actuator.
+    /// empty without an actuator ([`SimResult::limits`]).
     pub u_min: Vec<f64>,
     /// The plant's unit of time, in which `t` and every time of the run are (a label).
     pub time_unit: TimeUnit,
@@ -326,6 +326,12 @@ impl SimResult {
         for (c, on) in self.limited.iter_mut().zip(clipped) {
             *c += usize::from(on);
         }
+    }
+
+    /// Input i's true actuator limits [u_min, u_max] ([`SimResult::u_min`], [`SimResult::u_max`]);
+    /// [−∞, ∞] without an actuator.
+    pub fn limits(&self, i: usize) -> [f64; 2] {
+        [self.u_min.get(i).copied().unwrap_or(f64::NEG_INFINITY), self.u_max.get(i).copied().unwrap_or(f64::INFINITY)]
     }
 
     /// Per input, the fraction of the recorded samples at which its limit clipped it; empty when

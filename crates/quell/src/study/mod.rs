@@ -357,14 +357,14 @@ fn upper_limits(doc: &toml::Table, m: usize) -> Vec<f64> {
 /// as the scenario's default does: filled before the values are applied, they had kept the nominal
 /// −u_max beside a grid or a draw over u_max (review, 2026-12-08).
 fn lower_limits_follow(doc: &mut toml::Table, is_set: impl Fn(&str) -> bool) {
+    if is_set("truth.u_min") {
+        return;
+    }
     let Some(n) = doc.get("truth").and_then(|t| t.get("u_min")).and_then(toml::Value::as_array).map(Vec::len) else {
         return;
     };
     let upper = upper_limits(doc, n);
     let Some(toml::Value::Array(lower)) = doc.get_mut("truth").and_then(|t| t.get_mut("u_min")) else { return };
-    if is_set("truth.u_min") {
-        return;
-    }
     for (i, (l, u)) in lower.iter_mut().zip(upper).enumerate() {
         if !is_set(&format!("truth.u_min[{i}]")) {
             *l = toml::Value::Float(-u);
